@@ -1,0 +1,7 @@
+"""``python -m imageform`` runs the command-line tool."""
+
+import sys
+
+from imageform.cli import main
+
+sys.exit(main())

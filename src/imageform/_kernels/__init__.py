@@ -1,0 +1,3 @@
+"""imageform._kernels."""
+
+__all__: list[str] = []

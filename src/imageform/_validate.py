@@ -1,0 +1,251 @@
+"""Boundary checks: shapes, dtypes, finiteness, ranges and option names.
+
+Public functions validate once, here, and hand clean arrays to private helpers. Messages
+say what was expected and what came, e.g. ``expected points of shape (..., 3), got (4, 2)``;
+unknown option names list the valid ones.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Collection, Sequence
+from typing import Any
+
+import numpy as np
+
+from imageform._backend import (
+    COORD_INTEGER_DTYPE,
+    IMAGE_INTEGER_DTYPE,
+    asarray_like,
+    device_of,
+    float_dtype,
+    namespace,
+)
+from imageform.errors import InvalidInputError, UnknownOptionError
+
+__all__ = [
+    "as_float",
+    "as_image",
+    "as_matrix",
+    "as_points",
+    "check_finite",
+    "check_option",
+    "check_positive",
+    "check_rotation",
+    "format_shape",
+]
+
+
+def format_shape(shape: Sequence[int | None]) -> str:
+    """``(4, 2)`` for a tuple shape; ``(3,)`` for one element."""
+    dims = ["?" if d is None else str(d) for d in shape]
+    return "(" + ", ".join(dims) + ("," if len(dims) == 1 else "") + ")"
+
+
+def _raw(x: object, name: str, xp: Any, device: Any) -> Any:
+    if isinstance(x, str | bytes):
+        raise InvalidInputError(f"expected a numeric array for {name}, got {type(x).__name__}")
+    try:
+        arr = asarray_like(x, xp, device=device)
+    except (TypeError, ValueError) as exc:
+        raise InvalidInputError(f"expected a numeric array for {name}, got {x!r:.80}") from exc
+    dt = arr.dtype
+    if not (xp.isdtype(dt, "numeric") or xp.isdtype(dt, "bool")):
+        raise InvalidInputError(f"expected a numeric array for {name}, got dtype {dt}")
+    if xp.isdtype(dt, "complex floating"):
+        raise InvalidInputError(f"expected real values for {name}, got dtype {dt}")
+    return arr
+
+
+def check_finite(x: Any, name: str, xp: Any | None = None) -> None:
+    """Raise :class:`InvalidInputError` if ``x`` holds NaN or inf."""
+    xp = namespace(x) if xp is None else xp
+    if xp.isdtype(x.dtype, "real floating") and not bool(xp.all(xp.isfinite(x))):
+        raise InvalidInputError(f"{name} contains NaN or inf")
+
+
+def as_float(
+    x: object,
+    name: str,
+    *,
+    xp: Any | None = None,
+    dtype: Any = None,
+    device: Any = None,
+    integer: str = COORD_INTEGER_DTYPE,
+    finite: bool = True,
+) -> Any:
+    """``x`` as a floating array of namespace ``xp``.
+
+    ``dtype`` forces the result dtype (parameters follow their data argument); otherwise
+    the dtype policy of :func:`imageform._backend.float_dtype` applies.
+    """
+    xp = namespace(x) if xp is None else xp
+    if device is None:
+        device = device_of(x)
+    arr = _raw(x, name, xp, device)
+    target = float_dtype(arr, xp, integer=integer) if dtype is None else dtype
+    if arr.dtype != target:
+        arr = xp.astype(arr, target)
+    if finite:
+        check_finite(arr, name, xp)
+    return arr
+
+
+def as_points(
+    x: object,
+    name: str,
+    dim: int | Collection[int],
+    *,
+    xp: Any | None = None,
+    dtype: Any = None,
+    device: Any = None,
+    finite: bool = True,
+) -> Any:
+    """Points of shape ``(..., dim)`` as floats (integers compute in float64)."""
+    arr = as_float(x, name, xp=xp, dtype=dtype, device=device, finite=finite)
+    dims = (dim,) if isinstance(dim, int) else tuple(dim)
+    if arr.ndim < 1 or arr.shape[-1] not in dims:
+        want = " or ".join(f"(..., {d})" for d in dims)
+        raise InvalidInputError(
+            f"expected {name} of shape {want}, got {format_shape(tuple(arr.shape))}"
+        )
+    return arr
+
+
+def as_matrix(
+    x: object,
+    name: str,
+    shape: tuple[int, int],
+    *,
+    xp: Any | None = None,
+    dtype: Any = None,
+    device: Any = None,
+    batch: bool = True,
+    finite: bool = True,
+) -> Any:
+    """A matrix (or batch of matrices when ``batch``) of trailing shape ``shape``."""
+    arr = as_float(x, name, xp=xp, dtype=dtype, device=device, finite=finite)
+    ok = arr.ndim >= 2 and tuple(arr.shape[-2:]) == shape
+    if ok and not batch and arr.ndim != 2:
+        ok = False
+    if not ok:
+        want = format_shape(shape) if not batch else "(..., " + format_shape(shape)[1:]
+        raise InvalidInputError(
+            f"expected {name} of shape {want}, got {format_shape(tuple(arr.shape))}"
+        )
+    return arr
+
+
+def check_rotation(R: Any, name: str = "R", *, xp: Any | None = None, atol: float = 1e-6) -> None:
+    """Raise unless every ``R`` in the batch is orthonormal with determinant +1.
+
+    The tolerance applies to ``max |R Rᵀ - I|`` and ``|det R - 1|``; float32 input is checked
+    with ``max(atol, 1e-4)``.
+    """
+    xp = namespace(R) if xp is None else xp
+    if R.dtype == xp.float32:
+        atol = max(atol, 1e-4)
+    eye = xp.eye(3, dtype=R.dtype, device=device_of(R))
+    err = xp.max(xp.abs(R @ xp.matrix_transpose(R) - eye))
+    if float(err) > atol:
+        raise InvalidInputError(
+            f"expected {name} to be a rotation matrix (R Rᵀ = I), max |R Rᵀ - I| = {float(err):.3g}"
+        )
+    det = xp.linalg.det(R)
+    worst = float(xp.max(xp.abs(det - 1.0)))
+    if worst > max(atol, 10 * atol):
+        raise InvalidInputError(
+            f"expected {name} to be a proper rotation (det R = +1), got det R = "
+            f"{float(xp.min(det)):.6g} (a reflection)"
+        )
+
+
+def check_option(value: object, valid: Collection[str], what: str) -> str:
+    """Return ``value`` normalised (lower-case, ``_`` for ``-``) if valid, else raise.
+
+    >>> check_option("Gray-World", ["gray_world", "white_patch"], "white-balance method")
+    'gray_world'
+    """
+    if not isinstance(value, str):
+        raise UnknownOptionError(f"expected a {what} name (str), got {type(value).__name__}")
+    key = value.strip().lower().replace("-", "_").replace(" ", "_")
+    if key not in valid:
+        names = ", ".join(repr(v) for v in sorted(valid))
+        raise UnknownOptionError(f"unknown {what} {value!r}; valid: {names}")
+    return key
+
+
+def check_positive(value: object, name: str, *, allow_zero: bool = False) -> float:
+    """A finite scalar ``> 0`` (or ``>= 0`` with ``allow_zero``) as ``float``."""
+    try:
+        v = float(value)  # type: ignore[arg-type]
+    except (TypeError, ValueError) as exc:
+        raise InvalidInputError(f"expected a number for {name}, got {value!r}") from exc
+    if not np.isfinite(v) or v < 0 or (v == 0 and not allow_zero):
+        bound = ">= 0" if allow_zero else "> 0"
+        raise InvalidInputError(f"expected {name} {bound}, got {value!r}")
+    return v
+
+
+_INTEGER_SCALE = {"uint8": 255.0, "uint16": 65535.0}
+
+
+def as_image(
+    image: object,
+    name: str = "image",
+    *,
+    channels: int | None = 3,
+    channel_axis: int = -1,
+    xp: Any | None = None,
+    range_check: bool = True,
+    finite: bool = True,
+) -> Any:
+    """An image as floats, channels last, following DESIGN.md's colour conventions.
+
+    - ``uint8`` / ``uint16`` are full-range encoded values: divided by 255 / 65535, float32.
+    - other integer dtypes raise (their scale is a guess): pass uint8/uint16 or floats.
+    - float input that is plainly 0–255 (all values whole numbers, max > 1.5) raises with a
+      hint, when ``range_check``.
+    - ``channels`` (if given) must match the size of ``channel_axis``; the channel axis is
+      moved last. A 4th (alpha) channel is rejected with a hint to split it off.
+    """
+    xp = namespace(image) if xp is None else xp
+    arr = _raw(image, name, xp, device_of(image))
+    dt = arr.dtype
+    if xp.isdtype(dt, "integral") or xp.isdtype(dt, "bool"):
+        dname = str(dt).removeprefix("torch.")
+        if dname not in _INTEGER_SCALE:
+            raise InvalidInputError(
+                f"expected {name} as uint8, uint16 or floats in [0, 1], got dtype {dname}; "
+                "integer images other than uint8/uint16 have no known full range"
+            )
+        arr = xp.astype(arr, getattr(xp, IMAGE_INTEGER_DTYPE)) / _INTEGER_SCALE[dname]
+    else:
+        arr = xp.astype(arr, float_dtype(arr, xp), copy=False)
+        if finite:
+            check_finite(arr, name, xp)
+        if range_check and math.prod(arr.shape):
+            mx = float(xp.max(arr))
+            if mx > 1.5 and bool(xp.all(arr == xp.round(arr))):
+                raise InvalidInputError(
+                    f"{name} looks like 0-255 values stored as floats (max {mx:g}); "
+                    "divide by 255 or pass uint8"
+                )
+    if channels is not None:
+        if arr.ndim < 1:
+            raise InvalidInputError(f"expected {name} with a channel axis, got a scalar")
+        axis = channel_axis % arr.ndim
+        n = arr.shape[axis]
+        if n != channels:
+            hint = (
+                "; an alpha channel? split it off (image[..., :3]) and handle it separately"
+                if channels == 3 and n == 4
+                else ""
+            )
+            raise InvalidInputError(
+                f"expected {name} with {channels} channels on axis {channel_axis}, "
+                f"got shape {format_shape(tuple(arr.shape))}{hint}"
+            )
+        if axis != arr.ndim - 1:
+            arr = xp.moveaxis(arr, axis, -1)
+    return arr

@@ -1,0 +1,3 @@
+"""imageform.analysis."""
+
+__all__: list[str] = []

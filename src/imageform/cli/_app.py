@@ -1,0 +1,19 @@
+"""The typer application; command groups register themselves here."""
+
+from __future__ import annotations
+
+import typer
+
+from imageform.cli import geometry_cmds, lecture_cmd
+
+app = typer.Typer(
+    name="imageform",
+    help="Image formation: simulate a camera, measure colour, calibrate and project.",
+    no_args_is_help=True,
+    add_completion=False,
+    pretty_exceptions_enable=False,
+    rich_markup_mode=None,
+)
+
+for _module in (lecture_cmd, geometry_cmds):
+    _module.register(app)

@@ -1,0 +1,3 @@
+"""imageform.color."""
+
+__all__: list[str] = []

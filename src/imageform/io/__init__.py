@@ -1,0 +1,3 @@
+"""imageform.io."""
+
+__all__: list[str] = []

@@ -1,0 +1,3 @@
+"""imageform.optics."""
+
+__all__: list[str] = []

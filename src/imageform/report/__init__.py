@@ -1,0 +1,3 @@
+"""imageform.report."""
+
+__all__: list[str] = []

@@ -1,0 +1,3 @@
+"""imageform.sensor."""
+
+__all__: list[str] = []

@@ -1,0 +1,3 @@
+"""imageform.simulate."""
+
+__all__: list[str] = []

@@ -1,0 +1,3 @@
+"""imageform.spectral."""
+
+__all__: list[str] = []

@@ -1,0 +1,41 @@
+"""Shared fixtures: the reference data folder and the array backends under test."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+#: ../shared/data relative to the project root (DEVELOPERS guide); override with IMAGEFORM_DATA.
+DATA = Path(os.environ.get("IMAGEFORM_DATA", ROOT.parent / "shared" / "data"))
+
+
+@pytest.fixture(scope="session")
+def shared_data() -> Path:
+    """The shared reference images (Kodak, OpenCV chessboards); skips if absent."""
+    if not DATA.is_dir():
+        pytest.skip(f"reference data not found at {DATA}")
+    return DATA
+
+
+def _backends() -> list[str]:
+    names = ["numpy", "array_api_strict"]
+    try:
+        import torch  # noqa: F401
+
+        names.append("torch")
+    except ImportError:
+        pass
+    return names
+
+
+BACKENDS = _backends()
+
+
+@pytest.fixture(params=BACKENDS)
+def xp_name(request: pytest.FixtureRequest) -> str:
+    """Name of an array library under test: numpy, array_api_strict, torch (if installed)."""
+    return str(request.param)

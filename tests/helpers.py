@@ -1,0 +1,28 @@
+"""Test helpers: move arrays between backends."""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def to_backend(x: object, name: str, dtype: str = "float64") -> object:
+    """Convert a NumPy array to the backend ``name``."""
+    a = np.asarray(x, dtype=dtype)
+    if name == "numpy":
+        return a
+    if name == "array_api_strict":
+        import array_api_strict
+
+        return array_api_strict.asarray(a)
+    if name == "torch":
+        import torch
+
+        return torch.asarray(a)
+    raise ValueError(name)
+
+
+def to_np(x: object) -> np.ndarray:
+    """Any backend's array as NumPy."""
+    if hasattr(x, "detach"):
+        return x.detach().cpu().numpy()  # type: ignore[no-any-return]
+    return np.asarray(x)
