@@ -24,15 +24,12 @@ from imageform.errors import (
     InvalidInputError,
     UnknownOptionError,
 )
-from imageform.geometry import Camera, Intrinsics
 
 __version__ = "0.1.0"
 
 __all__ = [
-    "Camera",
     "DegenerateConfigurationError",
     "ImageformError",
-    "Intrinsics",
     "InvalidInputError",
     "UnknownOptionError",
     "__version__",

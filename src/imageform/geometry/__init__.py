@@ -1,0 +1,3 @@
+"""imageform.geometry — camera geometry."""
+
+__all__: list[str] = []
