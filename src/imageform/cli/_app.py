@@ -17,3 +17,15 @@ app = typer.Typer(
 
 for _module in (lecture_cmd,):
     _module.register(app)
+
+
+@app.callback()
+def _root(
+    version: bool = typer.Option(False, "--version", help="Print the version and exit."),
+) -> None:
+    """imageform: image formation, end to end."""
+    if version:
+        from imageform import __version__
+
+        typer.echo(f"imageform {__version__}")
+        raise typer.Exit(0)
