@@ -19,8 +19,9 @@ for _module in (lecture_cmd,):
     _module.register(app)
 
 
-@app.callback()
+@app.callback(invoke_without_command=True)
 def _root(
+    ctx: typer.Context,
     version: bool = typer.Option(False, "--version", help="Print the version and exit."),
 ) -> None:
     """imageform: image formation, end to end."""
@@ -28,4 +29,7 @@ def _root(
         from imageform import __version__
 
         typer.echo(f"imageform {__version__}")
+        raise typer.Exit(0)
+    if ctx.invoked_subcommand is None:
+        typer.echo(ctx.get_help())
         raise typer.Exit(0)
