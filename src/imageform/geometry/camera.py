@@ -1,0 +1,451 @@
+"""The pinhole camera: projection, back-projection and the 3×4 projection matrix.
+
+Conventions (DESIGN.md): ``X_cam = R @ X_world + t``; camera centre ``C = -Rᵀ t``;
+``P = K [R | t]``; pixel ``(u, v)`` = (column, row) with the top-left pixel centre at (0, 0).
+
+Points at or behind the camera (``z_cam <= 0``) have no image: they come back as NaN with
+``valid = False``. OpenCV's ``projectPoints`` and kornia mirror them into the image
+silently; a wrong-side point there looks like a valid one.
+
+Image planes: ``"virtual"`` (the default, in front of the pinhole, upright image, the
+convention of every computer-vision text) and ``"real"`` (behind the pinhole at distance f,
+where a camera obscura or a sensor sees it: the image is inverted, ``u' = 2 cx - u``,
+``v' = 2 cy - v`` for zero skew).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, Literal, NamedTuple
+
+import numpy as np
+
+from imageform._backend import device_of, namespace, use_numba
+from imageform._typing import Array, ArrayLike, FloatArray
+from imageform._validate import as_matrix, as_points, check_option, check_rotation
+from imageform.errors import DegenerateConfigurationError, InvalidInputError
+from imageform.geometry.intrinsics import Intrinsics
+
+__all__ = [
+    "Camera",
+    "ImagePlane",
+    "Projection",
+    "backproject",
+    "decompose_projection_matrix",
+    "project_points",
+    "projection_matrix",
+    "unproject",
+]
+
+ImagePlane = Literal["virtual", "real"]
+_PLANES = ("virtual", "real")
+#: Above this many points a single-camera NumPy projection runs the numba kernel.
+_KERNEL_MIN_POINTS = 20_000
+
+
+class Projection(NamedTuple):
+    """Result of a projection: pixel coordinates and which of them are real images.
+
+    ``uv`` is ``(..., N, 2)`` with NaN where ``valid`` is False (point at or behind the
+    camera, ``z_cam <= 0``, or not finite).
+    """
+
+    uv: Array
+    valid: Array
+
+
+def _plane_K(K: Array, plane: str, xp: Any) -> Array:
+    """The calibration matrix of the chosen image plane.
+
+    On the real plane (behind the pinhole) the image is inverted about the principal point:
+    ``u' = cx - (fx x + s y)``, ``v' = cy - fy y``, i.e. fx, fy and s change sign.
+    """
+    if plane == "virtual":
+        return K
+    sign = xp.asarray([[-1.0, -1.0, 1.0], [-1.0, -1.0, 1.0], [1.0, 1.0, 1.0]], dtype=K.dtype,
+                      device=device_of(K))
+    return K * sign
+
+
+def _prepare(points: ArrayLike, K: ArrayLike, R: ArrayLike | None, t: ArrayLike | None,
+             ) -> tuple[Any, Array, Array, Array, Array]:
+    xp = namespace(points, K, R, t)
+    X = as_points(points, "points", 3, xp=xp, finite=False)
+    dev = device_of(X)
+    Km = as_matrix(K, "K", (3, 3), xp=xp, dtype=X.dtype, device=dev)
+    _check_K(Km, xp)
+    if R is None:
+        Rm = xp.eye(3, dtype=X.dtype, device=dev)
+    else:
+        Rm = as_matrix(R, "R", (3, 3), xp=xp, dtype=X.dtype, device=dev)
+        check_rotation(Rm, "R", xp=xp)
+    tv = (xp.zeros(3, dtype=X.dtype, device=dev) if t is None
+          else as_points(t, "t", 3, xp=xp, dtype=X.dtype, device=dev))
+    return xp, X, Km, Rm, tv
+
+
+def _check_K(K: Array, xp: Any) -> None:
+    if bool(xp.any(K[..., 2, 0] != 0)) or bool(xp.any(K[..., 2, 1] != 0)) or bool(
+        xp.any(K[..., 1, 0] != 0)
+    ):
+        raise InvalidInputError("expected an upper-triangular K with last row (0, 0, k33)")
+    if bool(xp.any(K[..., 0, 0] * K[..., 1, 1] * K[..., 2, 2] == 0)):
+        raise InvalidInputError("K is singular (fx, fy or K[2, 2] is zero)")
+
+
+def _project_xp(X: Array, K: Array, R: Array, t: Array, xp: Any) -> tuple[Array, Array]:
+    """Array-API twin of the numba kernel; broadcasts K, R, t over leading dimensions."""
+    Xc = X @ xp.matrix_transpose(R) + t[..., None, :] if X.ndim >= 2 else R @ X + t
+    z = Xc[..., 2]
+    valid = (z > 0) & xp.all(xp.isfinite(Xc), axis=-1)
+    zs = xp.where(valid, z, xp.ones_like(z))  # no division by zero; gradients stay finite
+    x = Xc[..., 0] / zs
+    y = Xc[..., 1] / zs
+    Kb = K[..., None, :, :] if (X.ndim >= 2 and K.ndim > 2) else K
+    u = Kb[..., 0, 0] * x + Kb[..., 0, 1] * y + Kb[..., 0, 2]
+    v = Kb[..., 1, 1] * y + Kb[..., 1, 2]
+    k22 = Kb[..., 2, 2]
+    uv = xp.stack((u / k22, v / k22), axis=-1)
+    uv = xp.where(valid[..., None], uv, xp.full_like(uv, float("nan")))
+    return uv, valid
+
+
+def project_points(
+    points: ArrayLike,
+    K: ArrayLike,
+    R: ArrayLike | None = None,
+    t: ArrayLike | None = None,
+    *,
+    image_plane: ImagePlane = "virtual",
+) -> Projection:
+    """Project world points to pixels, ``(u, v, 1)ᵀ ~ K (R X + t)``.
+
+    .. math::
+        x = X_c / Z_c,\\; y = Y_c / Z_c, \\quad
+        u = f_x x + s\\, y + c_x, \\quad v = f_y y + c_y
+
+    with ``(X_c, Y_c, Z_c) = R X + t`` (Hartley & Zisserman eq. 6.11). The skew ``s`` is
+    honoured (OpenCV's ``projectPoints`` ignores ``K[0, 1]``).
+
+    Parameters
+    ----------
+    points : array_like, shape (..., N, 3) or (..., 3)
+        World points (camera frame when ``R`` and ``t`` are omitted).
+    K : array_like, shape (..., 3, 3)
+    R : array_like, shape (..., 3, 3), optional
+        World-to-camera rotation (orthonormal, det +1; checked).
+    t : array_like, shape (..., 3), optional
+    image_plane : {"virtual", "real"}
+        ``"real"`` gives the inverted image of a camera obscura.
+
+    Returns
+    -------
+    Projection
+        ``uv`` ``(..., N, 2)`` with NaN where ``valid`` is False: points with ``z_cam <= 0``
+        are never projected as if in front.
+
+    Preconditions: ``K`` upper-triangular and non-singular. NumPy input of a single camera
+    with more than 20 000 points runs a parallel numba kernel (same numbers).
+
+    Examples
+    --------
+    The lecture: P = (3, -1, 5) with f = 100 px (principal point at the origin).
+
+    >>> uv, valid = project_points([3.0, -1.0, 5.0], [[100, 0, 0], [0, 100, 0], [0, 0, 1]])
+    >>> uv, bool(valid)
+    (array([ 60., -20.]), True)
+    >>> project_points([0.0, 0.0, -1.0], [[100, 0, 0], [0, 100, 0], [0, 0, 1]]).uv
+    array([nan, nan])
+    """
+    plane = check_option(image_plane, _PLANES, "image plane")
+    xp, X, Km, Rm, tv = _prepare(points, K, R, t)
+    Km = _plane_K(Km, plane, xp)
+    if (
+        X.ndim == 2
+        and Km.ndim == 2
+        and Rm.ndim == 2
+        and tv.ndim == 1
+        and X.shape[0] >= _KERNEL_MIN_POINTS
+        and use_numba(X, Km, Rm, tv)
+    ):
+        from imageform._kernels.project import project_pinhole
+
+        k = Km / Km[2, 2]
+        return Projection(*project_pinhole(X, k, Rm, tv))
+    return Projection(*_project_xp(X, Km, Rm, tv, xp))
+
+
+def projection_matrix(K: ArrayLike, R: ArrayLike | None = None, t: ArrayLike | None = None) -> Array:
+    """The 3×4 camera matrix ``P = K [R | t]``.
+
+    P has 12 entries but is defined up to scale: 11 degrees of freedom (5 intrinsic: fx, fy,
+    cx, cy, skew; 6 extrinsic: 3 rotation, 3 translation), Hartley & Zisserman §6.1.
+
+    Examples
+    --------
+    >>> projection_matrix([[100, 0, 0], [0, 100, 0], [0, 0, 1]], t=[0, 0, 5])
+    array([[100.,   0.,   0.,   0.],
+           [  0., 100.,   0.,   0.],
+           [  0.,   0.,   1.,   5.]])
+    """
+    xp = namespace(K, R, t)
+    Km = as_matrix(K, "K", (3, 3), xp=xp)
+    dev = device_of(Km)
+    Rm = xp.eye(3, dtype=Km.dtype, device=dev) if R is None else as_matrix(
+        R, "R", (3, 3), xp=xp, dtype=Km.dtype, device=dev)
+    if R is not None:
+        check_rotation(Rm, "R", xp=xp)
+    tv = xp.zeros(3, dtype=Km.dtype, device=dev) if t is None else as_points(
+        t, "t", 3, xp=xp, dtype=Km.dtype, device=dev)
+    batch = np.broadcast_shapes(tuple(Rm.shape[:-2]), tuple(tv.shape[:-1]))
+    Rm = xp.broadcast_to(Rm, (*batch, 3, 3))
+    tcol = xp.broadcast_to(tv[..., None], (*batch, 3, 1))
+    Rt = xp.concat((Rm, tcol), axis=-1)
+    return Km @ Rt
+
+
+def decompose_projection_matrix(P: ArrayLike) -> tuple[Array, Array, Array]:
+    """Split ``P = λ K [R | t]`` into K (``K[2, 2] = 1``, positive focal lengths), R, t.
+
+    RQ decomposition of the left 3×3 block ``M = K R`` (Hartley & Zisserman §6.2.4); the
+    overall sign of P is chosen so that ``det R = +1``, then the signs of K's diagonal are
+    made positive (``K D · D R`` with ``D = diag(±1)``), and ``t = K⁻¹ p₄ / λ``.
+
+    Raises
+    ------
+    DegenerateConfigurationError
+        If the left 3×3 block is singular (a camera at infinity, not a finite pinhole).
+
+    Examples
+    --------
+    >>> P = projection_matrix([[500, 0, 320], [0, 500, 240], [0, 0, 1]], t=[1.0, 2.0, 3.0])
+    >>> K, R, t = decompose_projection_matrix(2.0 * P)
+    >>> K.round(9) + 0.0, t.round(9) + 0.0
+    (array([[500.,   0., 320.],
+           [  0., 500., 240.],
+           [  0.,   0.,   1.]]), array([1., 2., 3.]))
+    """
+    xp = namespace(P)
+    Pm = as_matrix(P, "P", (3, 4), xp=xp)
+    M = Pm[..., :3]
+    det = xp.linalg.det(M)
+    scale = xp.max(xp.abs(M), axis=(-2, -1))
+    if bool(xp.any(xp.abs(det) <= 1e-12 * scale**3)):
+        raise DegenerateConfigurationError(
+            "the left 3x3 block of P is singular: not a finite projective camera"
+        )
+    sgn = xp.sign(det)[..., None, None]
+    Pm = Pm * sgn
+    M = Pm[..., :3]
+    # RQ via QR of the row-reversed transpose.
+    Mf = xp.flip(M, axis=-2)
+    Q, U = xp.linalg.qr(xp.matrix_transpose(Mf))
+    Kq = xp.flip(xp.flip(xp.matrix_transpose(U), axis=-2), axis=-1)
+    Rq = xp.flip(xp.matrix_transpose(Q), axis=-2)
+    d = xp.sign(xp.stack((Kq[..., 0, 0], Kq[..., 1, 1], Kq[..., 2, 2]), axis=-1))
+    Kq = Kq * d[..., None, :]
+    Rq = Rq * d[..., :, None]
+    lam = Kq[..., 2, 2]
+    K = Kq / lam[..., None, None]
+    t = xp.linalg.solve(Kq, Pm[..., 3:])[..., 0]
+    # exact zeros below the diagonal (RQ leaves rounding there)
+    mask = xp.asarray([[1.0, 1.0, 1.0], [0.0, 1.0, 1.0], [0.0, 0.0, 1.0]], dtype=K.dtype,
+                      device=device_of(K))
+    return K * mask, Rq, t
+
+
+def _Kinv_apply(uv: Array, K: Array, xp: Any) -> Array:
+    """``K⁻¹ (u, v, 1)`` for upper-triangular K, ``(..., 3)``."""
+    k = K / K[..., 2:3, 2:3]
+    fx, s, cx = k[..., 0, 0], k[..., 0, 1], k[..., 0, 2]
+    fy, cy = k[..., 1, 1], k[..., 1, 2]
+    if uv.ndim >= 2 and K.ndim > 2:
+        fx, s, cx, fy, cy = (v[..., None] for v in (fx, s, cx, fy, cy))
+    y = (uv[..., 1] - cy) / fy
+    x = (uv[..., 0] - cx - s * y) / fx
+    return xp.stack((x, y, xp.ones_like(x)), axis=-1)
+
+
+def backproject(
+    uv: ArrayLike, K: ArrayLike, R: ArrayLike | None = None, *, image_plane: ImagePlane = "virtual"
+) -> Array:
+    """Unit ray directions through pixels, in the world frame (``Rᵀ K⁻¹ (u, v, 1)``).
+
+    The ray starts at the camera centre ``C = -Rᵀ t`` (not needed here: directions only).
+
+    Examples
+    --------
+    >>> backproject([320.0, 240.0], [[500, 0, 320], [0, 500, 240], [0, 0, 1]])
+    array([0., 0., 1.])
+    """
+    plane = check_option(image_plane, _PLANES, "image plane")
+    xp = namespace(uv, K, R)
+    p = as_points(uv, "uv", 2, xp=xp)
+    Km = as_matrix(K, "K", (3, 3), xp=xp, dtype=p.dtype, device=device_of(p))
+    _check_K(Km, xp)
+    Km = _plane_K(Km, plane, xp)
+    d = _Kinv_apply(p, Km, xp)
+    if R is not None:
+        Rm = as_matrix(R, "R", (3, 3), xp=xp, dtype=p.dtype, device=device_of(p))
+        check_rotation(Rm, "R", xp=xp)
+        d = d @ Rm  # row vectors: (Rᵀ d)ᵀ = dᵀ R
+    return d / xp.sqrt(xp.sum(d * d, axis=-1, keepdims=True))
+
+
+def unproject(
+    uv: ArrayLike,
+    depth: ArrayLike,
+    K: ArrayLike,
+    R: ArrayLike | None = None,
+    t: ArrayLike | None = None,
+    *,
+    image_plane: ImagePlane = "virtual",
+) -> Array:
+    """World points that image at ``uv`` with camera-frame depth ``z_cam = depth``.
+
+    ``X_cam = depth · K⁻¹ (u, v, 1)``, ``X_world = Rᵀ (X_cam - t)``; the inverse of
+    :func:`project_points` for ``depth > 0`` (checked).
+
+    Examples
+    --------
+    >>> unproject([60.0, -20.0], 5.0, [[100, 0, 0], [0, 100, 0], [0, 0, 1]])
+    array([ 3., -1.,  5.])
+    """
+    plane = check_option(image_plane, _PLANES, "image plane")
+    xp = namespace(uv, depth, K, R, t)
+    p = as_points(uv, "uv", 2, xp=xp)
+    dev = device_of(p)
+    z = xp.asarray(depth, dtype=p.dtype, device=dev) if not hasattr(depth, "dtype") else xp.astype(
+        depth, p.dtype)
+    if bool(xp.any(~(z > 0))):
+        raise InvalidInputError("expected depth > 0 (points in front of the camera)")
+    Km = as_matrix(K, "K", (3, 3), xp=xp, dtype=p.dtype, device=dev)
+    _check_K(Km, xp)
+    Km = _plane_K(Km, plane, xp)
+    Xc = _Kinv_apply(p, Km, xp) * z[..., None]
+    if t is not None:
+        Xc = Xc - as_points(t, "t", 3, xp=xp, dtype=p.dtype, device=dev)
+    if R is not None:
+        Rm = as_matrix(R, "R", (3, 3), xp=xp, dtype=p.dtype, device=dev)
+        check_rotation(Rm, "R", xp=xp)
+        Xc = Xc @ Rm
+    return Xc
+
+
+@dataclass(frozen=True)
+class Camera:
+    """A pinhole camera: intrinsics K, pose (R, t) world-to-camera, optional image size.
+
+    ``X_cam = R @ X_world + t``; ``P = K [R | t]``. The methods call the public pure
+    functions of this module. ``image_plane="real"`` models the camera obscura: the image
+    behind the pinhole, inverted.
+
+    Examples
+    --------
+    >>> cam = Camera(K=[[500, 0, 320], [0, 500, 240], [0, 0, 1]], t=[0, 0, 2])
+    >>> cam.center
+    array([ 0.,  0., -2.])
+    >>> cam.project([[1.0, 0.0, 2.0], [0.0, 0.0, -3.0]])
+    Projection(uv=array([[445., 240.],
+           [ nan,  nan]]), valid=array([ True, False]))
+    """
+
+    K: FloatArray
+    R: FloatArray = field(default_factory=lambda: np.eye(3))
+    t: FloatArray = field(default_factory=lambda: np.zeros(3))
+    image_size: tuple[int, int] | None = None
+    image_plane: ImagePlane = "virtual"
+
+    def __post_init__(self) -> None:
+        K = self.K.K if isinstance(self.K, Intrinsics) else self.K
+        if isinstance(self.K, Intrinsics) and self.image_size is None:
+            object.__setattr__(self, "image_size", self.K.image_size)
+        xp = namespace(K, self.R, self.t)
+        Km = as_matrix(K, "K", (3, 3), xp=xp, batch=False)
+        _check_K(Km, xp)
+        Rm = as_matrix(self.R, "R", (3, 3), xp=xp, batch=False, dtype=Km.dtype)
+        check_rotation(Rm, "R", xp=xp)
+        tv = as_points(self.t, "t", 3, xp=xp, dtype=Km.dtype)
+        if tv.ndim != 1:
+            raise InvalidInputError(f"expected t of shape (3,), got {tuple(tv.shape)}")
+        object.__setattr__(self, "K", Km / Km[2, 2])
+        object.__setattr__(self, "R", Rm)
+        object.__setattr__(self, "t", tv)
+        object.__setattr__(self, "image_plane", check_option(self.image_plane, _PLANES, "image plane"))
+        if self.image_size is not None:
+            w, h = self.image_size
+            if int(w) <= 0 or int(h) <= 0:
+                raise InvalidInputError(f"expected a positive image_size (width, height), got {self.image_size}")
+            object.__setattr__(self, "image_size", (int(w), int(h)))
+
+    # -- constructors --------------------------------------------------------------------
+    @classmethod
+    def from_projection_matrix(cls, P: ArrayLike, image_size: tuple[int, int] | None = None) -> Camera:
+        """Camera of a finite 3×4 projection matrix (see :func:`decompose_projection_matrix`)."""
+        K, R, t = decompose_projection_matrix(P)
+        return cls(K, R, t, image_size)
+
+    @classmethod
+    def look_at(
+        cls,
+        K: ArrayLike | Intrinsics,
+        eye: ArrayLike,
+        target: ArrayLike,
+        up: ArrayLike = (0.0, -1.0, 0.0),
+        image_size: tuple[int, int] | None = None,
+    ) -> Camera:
+        """A camera at ``eye`` looking at ``target`` (see :func:`~imageform.geometry.look_at`)."""
+        from imageform.geometry.rotations import look_at
+
+        R, t = look_at(eye, target, up)
+        return cls(K, R, t, image_size)  # type: ignore[arg-type]
+
+    # -- properties ----------------------------------------------------------------------
+    @property
+    def intrinsics(self) -> Intrinsics:
+        """K as an :class:`Intrinsics` (NumPy cameras)."""
+        return Intrinsics.from_matrix(np.asarray(self.K), self.image_size)
+
+    @property
+    def center(self) -> Array:
+        """Camera centre in the world, ``C = -Rᵀ t``."""
+        xp = namespace(self.R, self.t)
+        return 0.0 - xp.matrix_transpose(self.R) @ self.t  # 0.0 - x: no negative zeros
+
+    @property
+    def projection_matrix(self) -> Array:
+        """``P = K [R | t]`` (3×4; for ``image_plane="real"`` the inverted image's K)."""
+        xp = namespace(self.K)
+        return projection_matrix(_plane_K(self.K, self.image_plane, xp), self.R, self.t)
+
+    # -- maps ----------------------------------------------------------------------------
+    def world_to_camera(self, points: ArrayLike) -> Array:
+        """``X_cam = R X + t`` for points ``(..., 3)``."""
+        xp = namespace(points, self.R)
+        X = as_points(points, "points", 3, xp=xp)
+        R = xp.asarray(self.R, dtype=X.dtype, device=device_of(X))
+        return X @ xp.matrix_transpose(R) + xp.asarray(self.t, dtype=X.dtype, device=device_of(X))
+
+    def project(self, points: ArrayLike) -> Projection:
+        """Project world points; see :func:`project_points` (NaN + ``valid`` for z ≤ 0)."""
+        return project_points(points, self.K, self.R, self.t, image_plane=self.image_plane)
+
+    def backproject(self, uv: ArrayLike) -> Array:
+        """Unit world-frame directions of the rays through pixels ``uv`` (from ``center``)."""
+        return backproject(uv, self.K, self.R, image_plane=self.image_plane)
+
+    def unproject(self, uv: ArrayLike, depth: ArrayLike) -> Array:
+        """World points imaged at ``uv`` with camera-frame depth ``depth`` (> 0)."""
+        return unproject(uv, depth, self.K, self.R, self.t, image_plane=self.image_plane)
+
+    def in_image(self, uv: ArrayLike) -> Array:
+        """Whether pixel coordinates fall inside the image (pixel-centre convention).
+
+        Inside means ``-0.5 <= u < w - 0.5`` and ``-0.5 <= v < h - 0.5``; NaN is outside.
+        """
+        if self.image_size is None:
+            raise InvalidInputError("in_image needs the camera's image_size")
+        xp = namespace(uv)
+        p = as_points(uv, "uv", 2, xp=xp, finite=False)
+        w, h = self.image_size
+        return (p[..., 0] >= -0.5) & (p[..., 0] < w - 0.5) & (p[..., 1] >= -0.5) & (p[..., 1] < h - 0.5)
