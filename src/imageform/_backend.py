@@ -26,8 +26,8 @@ from array_api_compat import numpy as compat_numpy
 
 __all__ = [
     "COORD_INTEGER_DTYPE",
-    "IMAGE_INTEGER_DTYPE",
     "HAVE_NUMBA",
+    "IMAGE_INTEGER_DTYPE",
     "Array",
     "asarray_like",
     "device_of",
@@ -111,7 +111,7 @@ def asarray_like(x: object, xp: Any, dtype: Any = None, device: Any = None) -> A
 def to_numpy(x: object) -> np.ndarray:
     """A NumPy view/copy of any array (moves GPU tensors to host, detaches gradients)."""
     if array_api_compat.is_torch_array(x):
-        return x.detach().cpu().numpy()  # type: ignore[attr-defined, no-any-return]
+        return np.asarray(x.detach().cpu().numpy())
     return np.asarray(x)
 
 

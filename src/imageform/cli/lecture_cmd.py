@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 import typer
 
 __all__ = ["register"]
@@ -19,7 +21,7 @@ def lecture(
     from imageform.report.lecture import all_examples
 
     examples = [e for e in all_examples() if topic.lower() in e.topic.lower()]
-    rows = []
+    rows: list[dict[str, Any]] = []
     for e in examples:
         rows.append(
             {

@@ -8,6 +8,7 @@ top-left pixel centre at (0, 0); points are row vectors ``(..., N, 3)``; points 
 
 from imageform.geometry.camera import (
     Camera,
+    ImagePlane,
     Projection,
     backproject,
     decompose_projection_matrix,
@@ -15,6 +16,7 @@ from imageform.geometry.camera import (
     projection_matrix,
     unproject,
 )
+from imageform.geometry.dlt import estimate_projection_matrix
 from imageform.geometry.homogeneous import (
     are_collinear,
     cross_ratio,
@@ -23,7 +25,15 @@ from imageform.geometry.homogeneous import (
     line_through,
     to_homogeneous,
 )
+from imageform.geometry.homography import apply_homography, estimate_homography
 from imageform.geometry.intrinsics import Intrinsics, intrinsic_matrix, projected_size
+from imageform.geometry.projection_models import (
+    ConeBeamGeometry,
+    orthographic_matrix,
+    orthographic_project,
+    weak_perspective_matrix,
+    weak_perspective_project,
+)
 from imageform.geometry.rotations import (
     axis_rotation,
     camera_rotation,
@@ -36,27 +46,48 @@ from imageform.geometry.rotations import (
     quaternion_to_matrix,
     rvec_to_matrix,
 )
+from imageform.geometry.vanishing import (
+    focal_from_vanishing_points,
+    horizon_line,
+    intrinsics_from_vanishing_points,
+    lines_from_segments,
+    perspective_type,
+    vanishing_point,
+    vanishing_point_from_lines,
+)
 
 __all__ = [
     "Camera",
+    "ConeBeamGeometry",
+    "ImagePlane",
     "Intrinsics",
     "Projection",
+    "apply_homography",
     "are_collinear",
     "axis_rotation",
     "backproject",
     "camera_rotation",
     "cross_ratio",
     "decompose_projection_matrix",
+    "estimate_homography",
+    "estimate_projection_matrix",
     "euler_to_matrix",
+    "focal_from_vanishing_points",
     "from_homogeneous",
+    "horizon_line",
     "intersect_lines",
     "intrinsic_matrix",
+    "intrinsics_from_vanishing_points",
     "is_rotation",
     "line_through",
+    "lines_from_segments",
     "look_at",
     "matrix_to_euler",
     "matrix_to_quaternion",
     "matrix_to_rvec",
+    "orthographic_matrix",
+    "orthographic_project",
+    "perspective_type",
     "project_points",
     "projected_size",
     "projection_matrix",
@@ -64,4 +95,8 @@ __all__ = [
     "rvec_to_matrix",
     "to_homogeneous",
     "unproject",
+    "vanishing_point",
+    "vanishing_point_from_lines",
+    "weak_perspective_matrix",
+    "weak_perspective_project",
 ]

@@ -62,13 +62,18 @@ def _plane_K(K: Array, plane: str, xp: Any) -> Array:
     """
     if plane == "virtual":
         return K
-    sign = xp.asarray([[-1.0, -1.0, 1.0], [-1.0, -1.0, 1.0], [1.0, 1.0, 1.0]], dtype=K.dtype,
-                      device=device_of(K))
+    sign = xp.asarray(
+        [[-1.0, -1.0, 1.0], [-1.0, -1.0, 1.0], [1.0, 1.0, 1.0]], dtype=K.dtype, device=device_of(K)
+    )
     return K * sign
 
 
-def _prepare(points: ArrayLike, K: ArrayLike, R: ArrayLike | None, t: ArrayLike | None,
-             ) -> tuple[Any, Array, Array, Array, Array]:
+def _prepare(
+    points: ArrayLike,
+    K: ArrayLike,
+    R: ArrayLike | None,
+    t: ArrayLike | None,
+) -> tuple[Any, Array, Array, Array, Array]:
     xp = namespace(points, K, R, t)
     X = as_points(points, "points", 3, xp=xp, finite=False)
     dev = device_of(X)
@@ -79,14 +84,19 @@ def _prepare(points: ArrayLike, K: ArrayLike, R: ArrayLike | None, t: ArrayLike 
     else:
         Rm = as_matrix(R, "R", (3, 3), xp=xp, dtype=X.dtype, device=dev)
         check_rotation(Rm, "R", xp=xp)
-    tv = (xp.zeros(3, dtype=X.dtype, device=dev) if t is None
-          else as_points(t, "t", 3, xp=xp, dtype=X.dtype, device=dev))
+    tv = (
+        xp.zeros(3, dtype=X.dtype, device=dev)
+        if t is None
+        else as_points(t, "t", 3, xp=xp, dtype=X.dtype, device=dev)
+    )
     return xp, X, Km, Rm, tv
 
 
 def _check_K(K: Array, xp: Any) -> None:
-    if bool(xp.any(K[..., 2, 0] != 0)) or bool(xp.any(K[..., 2, 1] != 0)) or bool(
-        xp.any(K[..., 1, 0] != 0)
+    if (
+        bool(xp.any(K[..., 2, 0] != 0))
+        or bool(xp.any(K[..., 2, 1] != 0))
+        or bool(xp.any(K[..., 1, 0] != 0))
     ):
         raise InvalidInputError("expected an upper-triangular K with last row (0, 0, k33)")
     if bool(xp.any(K[..., 0, 0] * K[..., 1, 1] * K[..., 2, 2] == 0)):
@@ -175,7 +185,9 @@ def project_points(
     return Projection(*_project_xp(X, Km, Rm, tv, xp))
 
 
-def projection_matrix(K: ArrayLike, R: ArrayLike | None = None, t: ArrayLike | None = None) -> Array:
+def projection_matrix(
+    K: ArrayLike, R: ArrayLike | None = None, t: ArrayLike | None = None
+) -> Array:
     """The 3×4 camera matrix ``P = K [R | t]``.
 
     P has 12 entries but is defined up to scale: 11 degrees of freedom (5 intrinsic: fx, fy,
@@ -191,12 +203,18 @@ def projection_matrix(K: ArrayLike, R: ArrayLike | None = None, t: ArrayLike | N
     xp = namespace(K, R, t)
     Km = as_matrix(K, "K", (3, 3), xp=xp)
     dev = device_of(Km)
-    Rm = xp.eye(3, dtype=Km.dtype, device=dev) if R is None else as_matrix(
-        R, "R", (3, 3), xp=xp, dtype=Km.dtype, device=dev)
+    Rm = (
+        xp.eye(3, dtype=Km.dtype, device=dev)
+        if R is None
+        else as_matrix(R, "R", (3, 3), xp=xp, dtype=Km.dtype, device=dev)
+    )
     if R is not None:
         check_rotation(Rm, "R", xp=xp)
-    tv = xp.zeros(3, dtype=Km.dtype, device=dev) if t is None else as_points(
-        t, "t", 3, xp=xp, dtype=Km.dtype, device=dev)
+    tv = (
+        xp.zeros(3, dtype=Km.dtype, device=dev)
+        if t is None
+        else as_points(t, "t", 3, xp=xp, dtype=Km.dtype, device=dev)
+    )
     batch = np.broadcast_shapes(tuple(Rm.shape[:-2]), tuple(tv.shape[:-1]))
     Rm = xp.broadcast_to(Rm, (*batch, 3, 3))
     tcol = xp.broadcast_to(tv[..., None], (*batch, 3, 1))
@@ -249,8 +267,9 @@ def decompose_projection_matrix(P: ArrayLike) -> tuple[Array, Array, Array]:
     K = Kq / lam[..., None, None]
     t = xp.linalg.solve(Kq, Pm[..., 3:])[..., 0]
     # exact zeros below the diagonal (RQ leaves rounding there)
-    mask = xp.asarray([[1.0, 1.0, 1.0], [0.0, 1.0, 1.0], [0.0, 0.0, 1.0]], dtype=K.dtype,
-                      device=device_of(K))
+    mask = xp.asarray(
+        [[1.0, 1.0, 1.0], [0.0, 1.0, 1.0], [0.0, 0.0, 1.0]], dtype=K.dtype, device=device_of(K)
+    )
     return K * mask, Rq, t
 
 
@@ -315,8 +334,11 @@ def unproject(
     xp = namespace(uv, depth, K, R, t)
     p = as_points(uv, "uv", 2, xp=xp)
     dev = device_of(p)
-    z = xp.asarray(depth, dtype=p.dtype, device=dev) if not hasattr(depth, "dtype") else xp.astype(
-        depth, p.dtype)
+    z = (
+        xp.asarray(depth, dtype=p.dtype, device=dev)
+        if not hasattr(depth, "dtype")
+        else xp.astype(depth, p.dtype)
+    )
     if bool(xp.any(~(z > 0))):
         raise InvalidInputError("expected depth > 0 (points in front of the camera)")
     Km = as_matrix(K, "K", (3, 3), xp=xp, dtype=p.dtype, device=dev)
@@ -371,16 +393,22 @@ class Camera:
         object.__setattr__(self, "K", Km / Km[2, 2])
         object.__setattr__(self, "R", Rm)
         object.__setattr__(self, "t", tv)
-        object.__setattr__(self, "image_plane", check_option(self.image_plane, _PLANES, "image plane"))
+        object.__setattr__(
+            self, "image_plane", check_option(self.image_plane, _PLANES, "image plane")
+        )
         if self.image_size is not None:
             w, h = self.image_size
             if int(w) <= 0 or int(h) <= 0:
-                raise InvalidInputError(f"expected a positive image_size (width, height), got {self.image_size}")
+                raise InvalidInputError(
+                    f"expected a positive image_size (width, height), got {self.image_size}"
+                )
             object.__setattr__(self, "image_size", (int(w), int(h)))
 
     # -- constructors --------------------------------------------------------------------
     @classmethod
-    def from_projection_matrix(cls, P: ArrayLike, image_size: tuple[int, int] | None = None) -> Camera:
+    def from_projection_matrix(
+        cls, P: ArrayLike, image_size: tuple[int, int] | None = None
+    ) -> Camera:
         """Camera of a finite 3×4 projection matrix (see :func:`decompose_projection_matrix`)."""
         K, R, t = decompose_projection_matrix(P)
         return cls(K, R, t, image_size)
@@ -448,4 +476,9 @@ class Camera:
         xp = namespace(uv)
         p = as_points(uv, "uv", 2, xp=xp, finite=False)
         w, h = self.image_size
-        return (p[..., 0] >= -0.5) & (p[..., 0] < w - 0.5) & (p[..., 1] >= -0.5) & (p[..., 1] < h - 0.5)
+        return (
+            (p[..., 0] >= -0.5)
+            & (p[..., 0] < w - 0.5)
+            & (p[..., 1] >= -0.5)
+            & (p[..., 1] < h - 0.5)
+        )

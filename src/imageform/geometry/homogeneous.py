@@ -136,9 +136,7 @@ def line_through(p: ArrayLike, q: ArrayLike) -> Array:
         raise DegenerateConfigurationError("the two points coincide: no unique line through them")
     line = line / norm[..., None]
     # Fix the sign so the representation is unique: first non-zero of (a, b) positive.
-    sign = xp.where(
-        line[..., 0] != 0, xp.sign(line[..., 0]), xp.sign(line[..., 1])
-    )
+    sign = xp.where(line[..., 0] != 0, xp.sign(line[..., 0]), xp.sign(line[..., 1]))
     return line * sign[..., None]
 
 

@@ -37,7 +37,10 @@ def intrinsic_matrix(
            [  0.,   0.,   1.]])
     """
     xp = namespace(fx, fy, cx, cy, skew)
-    vals = [as_float(v, n, xp=xp) for v, n in zip((fx, fy, cx, cy, skew), ("fx", "fy", "cx", "cy", "skew"), strict=True)]
+    vals = [
+        as_float(v, n, xp=xp)
+        for v, n in zip((fx, fy, cx, cy, skew), ("fx", "fy", "cx", "cy", "skew"), strict=True)
+    ]
     dtype = xp.result_type(*vals)
     vals = [xp.astype(v, dtype) for v in vals]
     fx_, fy_, cx_, cy_, s_ = xp.broadcast_arrays(*vals)
@@ -102,15 +105,15 @@ class Intrinsics:
         if self.image_size is not None:
             w, h = self.image_size
             if int(w) <= 0 or int(h) <= 0:
-                raise InvalidInputError(f"expected a positive image_size (width, height), got {self.image_size}")
+                raise InvalidInputError(
+                    f"expected a positive image_size (width, height), got {self.image_size}"
+                )
             object.__setattr__(self, "image_size", (int(w), int(h)))
 
     @property
     def K(self) -> FloatArray:
         """The 3×3 calibration matrix (float64)."""
-        return np.array(
-            [[self.fx, self.skew, self.cx], [0.0, self.fy, self.cy], [0.0, 0.0, 1.0]]
-        )
+        return np.array([[self.fx, self.skew, self.cx], [0.0, self.fy, self.cy], [0.0, 0.0, 1.0]])
 
     @classmethod
     def from_matrix(cls, K: ArrayLike, image_size: tuple[int, int] | None = None) -> Intrinsics:
@@ -145,7 +148,10 @@ class Intrinsics:
 
     @classmethod
     def from_sensor(
-        cls, focal_length_mm: float, sensor_size_mm: tuple[float, float], image_size: tuple[int, int]
+        cls,
+        focal_length_mm: float,
+        sensor_size_mm: tuple[float, float],
+        image_size: tuple[int, int],
     ) -> Intrinsics:
         """From a focal length and the sensor's active area (width, height) in mm."""
         sw = check_positive(sensor_size_mm[0], "sensor width")
@@ -174,7 +180,8 @@ class Intrinsics:
     def fov_x(self) -> float:
         """Horizontal field of view in radians across the full image width.
 
-        .. math:: \\mathrm{FOV}_x = \\arctan\\frac{c_x + 1/2}{f_x} + \\arctan\\frac{w - 1/2 - c_x}{f_x}
+        .. math::
+            \\mathrm{FOV}_x = \\arctan\\frac{c_x + 1/2}{f_x} + \\arctan\\frac{w - 1/2 - c_x}{f_x}
 
         (the outer edges of the border pixels; ``2 arctan(w / 2 f)`` for a centred principal
         point).
@@ -193,7 +200,9 @@ class Intrinsics:
         """Diagonal field of view in radians (centred principal point, no skew assumed)."""
         w, h = self._size()
         if self.fx != self.fy:
-            raise DegenerateConfigurationError("the diagonal field of view needs square pixels (fx = fy)")
+            raise DegenerateConfigurationError(
+                "the diagonal field of view needs square pixels (fx = fy)"
+            )
         return 2.0 * math.atan(math.hypot(w, h) / (2.0 * self.fx))
 
     def scaled(self, factor: float) -> Intrinsics:
@@ -203,6 +212,10 @@ class Intrinsics:
         if self.image_size is not None:
             size = (round(self.image_size[0] * s), round(self.image_size[1] * s))
         return Intrinsics(
-            self.fx * s, self.fy * s, (self.cx + 0.5) * s - 0.5, (self.cy + 0.5) * s - 0.5,
-            self.skew * s, size,
+            self.fx * s,
+            self.fy * s,
+            (self.cx + 0.5) * s - 0.5,
+            (self.cy + 0.5) * s - 0.5,
+            self.skew * s,
+            size,
         )

@@ -229,7 +229,11 @@ def _skew(v: Array, xp: Any) -> Array:
     z = xp.zeros_like(v[..., 0])
     x, y, w = v[..., 0], v[..., 1], v[..., 2]
     return xp.stack(
-        (xp.stack((z, -w, y), axis=-1), xp.stack((w, z, -x), axis=-1), xp.stack((-y, x, z), axis=-1)),
+        (
+            xp.stack((z, -w, y), axis=-1),
+            xp.stack((w, z, -x), axis=-1),
+            xp.stack((-y, x, z), axis=-1),
+        ),
         axis=-2,
     )
 
@@ -310,26 +314,51 @@ def matrix_to_quaternion(R: ArrayLike) -> Array:
     tr = m00 + m11 + m22
     cands = xp.stack((tr, m00, m11, m22), axis=-1)
     best = xp.argmax(cands, axis=-1)
+
     # four branches, each well-conditioned where it is chosen
     def norm_sqrt(v: Array) -> Array:
         return xp.sqrt(xp.clip(v, 1e-300, None))
 
     s0 = 2.0 * norm_sqrt(1.0 + tr)
     q0 = xp.stack(
-        (0.25 * s0, (M[..., 2, 1] - M[..., 1, 2]) / s0, (M[..., 0, 2] - M[..., 2, 0]) / s0,
-         (M[..., 1, 0] - M[..., 0, 1]) / s0), axis=-1)
+        (
+            0.25 * s0,
+            (M[..., 2, 1] - M[..., 1, 2]) / s0,
+            (M[..., 0, 2] - M[..., 2, 0]) / s0,
+            (M[..., 1, 0] - M[..., 0, 1]) / s0,
+        ),
+        axis=-1,
+    )
     s1 = 2.0 * norm_sqrt(1.0 + m00 - m11 - m22)
     q1 = xp.stack(
-        ((M[..., 2, 1] - M[..., 1, 2]) / s1, 0.25 * s1, (M[..., 0, 1] + M[..., 1, 0]) / s1,
-         (M[..., 0, 2] + M[..., 2, 0]) / s1), axis=-1)
+        (
+            (M[..., 2, 1] - M[..., 1, 2]) / s1,
+            0.25 * s1,
+            (M[..., 0, 1] + M[..., 1, 0]) / s1,
+            (M[..., 0, 2] + M[..., 2, 0]) / s1,
+        ),
+        axis=-1,
+    )
     s2 = 2.0 * norm_sqrt(1.0 + m11 - m00 - m22)
     q2 = xp.stack(
-        ((M[..., 0, 2] - M[..., 2, 0]) / s2, (M[..., 0, 1] + M[..., 1, 0]) / s2, 0.25 * s2,
-         (M[..., 1, 2] + M[..., 2, 1]) / s2), axis=-1)
+        (
+            (M[..., 0, 2] - M[..., 2, 0]) / s2,
+            (M[..., 0, 1] + M[..., 1, 0]) / s2,
+            0.25 * s2,
+            (M[..., 1, 2] + M[..., 2, 1]) / s2,
+        ),
+        axis=-1,
+    )
     s3 = 2.0 * norm_sqrt(1.0 + m22 - m00 - m11)
     q3 = xp.stack(
-        ((M[..., 1, 0] - M[..., 0, 1]) / s3, (M[..., 0, 2] + M[..., 2, 0]) / s3,
-         (M[..., 1, 2] + M[..., 2, 1]) / s3, 0.25 * s3), axis=-1)
+        (
+            (M[..., 1, 0] - M[..., 0, 1]) / s3,
+            (M[..., 0, 2] + M[..., 2, 0]) / s3,
+            (M[..., 1, 2] + M[..., 2, 1]) / s3,
+            0.25 * s3,
+        ),
+        axis=-1,
+    )
     b = best[..., None]
     q = xp.where(b == 0, q0, xp.where(b == 1, q1, xp.where(b == 2, q2, q3)))
     q = q / xp.sqrt(xp.sum(q * q, axis=-1, keepdims=True))
@@ -401,4 +430,3 @@ def look_at(
     R = xp.stack((x, y, z), axis=-2)
     t = -(R @ e[..., None])[..., 0]
     return R, t
-

@@ -47,7 +47,8 @@ class WorkedExample:
     def agrees(self) -> bool:
         got, want = self.computed(), self.expected_values()
         return len(got) == len(want) and all(
-            math.isclose(g, w, rel_tol=0.0, abs_tol=self.tol) for g, w in zip(got, want, strict=True)
+            math.isclose(g, w, rel_tol=0.0, abs_tol=self.tol)
+            for g, w in zip(got, want, strict=True)
         )
 
 

@@ -1,0 +1,127 @@
+"""Planar homographies: estimation by the normalised DLT and application to points.
+
+A homography ``H`` maps ``x' ~ H x`` between two images of a plane (or two views of a
+rotating camera). Four correspondences, no three collinear, determine it (8 degrees of
+freedom); more are fitted by least squares on the algebraic error after Hartley
+normalisation (Hartley & Zisserman Algorithm 4.2).
+"""
+
+from __future__ import annotations
+
+from itertools import combinations
+from typing import Any
+
+from imageform._backend import device_of, namespace
+from imageform._typing import Array, ArrayLike
+from imageform._validate import as_matrix, as_points
+from imageform.errors import DegenerateConfigurationError, InvalidInputError
+from imageform.geometry._normalize import similarity_normalization
+from imageform.geometry.homogeneous import are_collinear, from_homogeneous
+
+__all__ = ["apply_homography", "estimate_homography"]
+
+
+def _check_pairs(src: Array, dst: Array, n_min: int) -> None:
+    if src.shape != dst.shape:
+        raise InvalidInputError(
+            f"expected src and dst of the same shape, got {tuple(src.shape)} and {tuple(dst.shape)}"
+        )
+    if src.ndim < 2 or src.shape[-2] < n_min:
+        raise InvalidInputError(
+            f"expected at least {n_min} correspondences of shape (..., N, {src.shape[-1]}), "
+            f"got {tuple(src.shape)}"
+        )
+
+
+def _check_not_collinear(p: Array, name: str, xp: Any) -> None:
+    if bool(xp.any(are_collinear(p, tol=1e-9))):
+        raise DegenerateConfigurationError(f"the {name} points are collinear: no unique homography")
+    if p.shape[-2] == 4:
+        for idx in combinations(range(4), 3):
+            tri = xp.stack([p[..., i, :] for i in idx], axis=-2)
+            if bool(xp.any(are_collinear(tri, tol=1e-9))):
+                raise DegenerateConfigurationError(
+                    f"three of the four {name} points are collinear: no unique homography"
+                )
+
+
+def estimate_homography(src: ArrayLike, dst: ArrayLike) -> Array:
+    """Homography ``H`` with ``dst ~ H src`` by the normalised DLT.
+
+    .. math::
+        \\begin{pmatrix} 0^T & -\\tilde x_i^T & y'_i \\tilde x_i^T \\\\
+        \\tilde x_i^T & 0^T & -x'_i \\tilde x_i^T \\end{pmatrix} h = 0
+
+    stacked for all correspondences, solved by SVD after normalising both point sets
+    (Hartley & Zisserman Algorithm 4.2), then de-normalised and scaled to ``H[2, 2] = 1``
+    (or unit Frobenius norm if ``H[2, 2] = 0``).
+
+    Parameters
+    ----------
+    src, dst : array_like, shape (..., N, 2)
+        N >= 4 corresponding points.
+
+    Raises
+    ------
+    DegenerateConfigurationError
+        If the points are collinear (or, for N = 4, three of them are), or the system is
+        rank-deficient for another reason.
+
+    Examples
+    --------
+    >>> src = [[0, 0], [1, 0], [1, 1], [0, 1]]
+    >>> dst = [[10, 20], [12, 20], [12, 23], [10, 23]]
+    >>> estimate_homography(src, dst).round(9) + 0.0
+    array([[ 2.,  0., 10.],
+           [ 0.,  3., 20.],
+           [ 0.,  0.,  1.]])
+    """
+    xp = namespace(src, dst)
+    s = as_points(src, "src", 2, xp=xp)
+    d = as_points(dst, "dst", 2, xp=xp, dtype=s.dtype)
+    _check_pairs(s, d, 4)
+    _check_not_collinear(s, "source", xp)
+    _check_not_collinear(d, "destination", xp)
+    sn, Ts = similarity_normalization(s, xp)
+    dn, Td = similarity_normalization(d, xp)
+    x, y = sn[..., 0], sn[..., 1]
+    u, v = dn[..., 0], dn[..., 1]
+    one, zero = xp.ones_like(x), xp.zeros_like(x)
+    r1 = xp.stack((zero, zero, zero, -x, -y, -one, v * x, v * y, v), axis=-1)
+    r2 = xp.stack((x, y, one, zero, zero, zero, -u * x, -u * y, -u), axis=-1)
+    A = xp.concat((r1, r2), axis=-2)
+    # full V when there are fewer equations than unknowns (N = 4 gives 8 x 9)
+    _, sv, Vt = xp.linalg.svd(A, full_matrices=A.shape[-2] < A.shape[-1])
+    if bool(xp.any(sv[..., 7] <= 1e-12 * sv[..., 0])):
+        raise DegenerateConfigurationError(
+            "the correspondences do not determine a unique homography"
+        )
+    Hn = xp.reshape(Vt[..., -1, :], (*Vt.shape[:-2], 3, 3))
+    H = xp.linalg.inv(Td) @ Hn @ Ts
+    h22 = H[..., 2, 2]
+    fro = xp.sqrt(xp.sum(H * H, axis=(-2, -1)))
+    tiny = xp.abs(h22) <= 1e-12 * fro
+    scale = xp.where(tiny, fro, h22)
+    return H / scale[..., None, None]
+
+
+def apply_homography(H: ArrayLike, points: ArrayLike) -> Array:
+    """Map points ``(..., N, 2)`` through ``H``: ``x' = (H x̃)₁₂ / (H x̃)₃``.
+
+    Points that map to infinity (``(H x̃)₃ = 0``, on the line ``H``'s vanishing line) come
+    back as NaN (never a division by zero); use :func:`from_homogeneous` on
+    ``to_homogeneous(points) @ H.T`` for their homogeneous images.
+
+    Examples
+    --------
+    >>> H = [[2, 0, 10], [0, 3, 20], [0, 0, 1]]
+    >>> apply_homography(H, [[1.0, 1.0], [0.5, 0.0]])
+    array([[12., 23.],
+           [11., 20.]])
+    """
+    xp = namespace(H, points)
+    p = as_points(points, "points", 2, xp=xp)
+    Hm = as_matrix(H, "H", (3, 3), xp=xp, dtype=p.dtype, device=device_of(p))
+    ones = xp.ones((*p.shape[:-1], 1), dtype=p.dtype, device=device_of(p))
+    ph = xp.concat((p, ones), axis=-1) @ xp.matrix_transpose(Hm)
+    return from_homogeneous(ph, at_infinity="nan")

@@ -1,0 +1,311 @@
+"""Vanishing points, the horizon, perspective type, and intrinsics from vanishing points.
+
+Parallel scene lines with direction ``d`` (world frame) meet in the image at the vanishing
+point ``v ~ K R d`` — independent of where the lines are (Hartley & Zisserman §8.6.1,
+Result 8.20). A direction parallel to the image plane (``(R d)_z = 0``) vanishes at
+infinity: it is returned as a homogeneous point with ``w = 0``, never divided by zero.
+A plane with normal ``n`` has the vanishing line ``l ~ K⁻ᵀ R n`` (Result 8.22); the horizon
+is the vanishing line of the ground plane, whose normal is the world's up direction.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from imageform._backend import device_of, namespace
+from imageform._typing import Array, ArrayLike, FloatArray
+from imageform._validate import as_float, as_matrix, as_points, check_rotation
+from imageform.errors import DegenerateConfigurationError, InvalidInputError
+from imageform.geometry.homogeneous import _normalize_homogeneous_point, line_through
+
+__all__ = [
+    "focal_from_vanishing_points",
+    "horizon_line",
+    "intrinsics_from_vanishing_points",
+    "lines_from_segments",
+    "perspective_type",
+    "vanishing_point",
+    "vanishing_point_from_lines",
+]
+
+
+def _k_r(K: ArrayLike, R: ArrayLike | None, xp: Any, dtype: Any = None) -> tuple[Array, Array]:
+    Km = as_matrix(K, "K", (3, 3), xp=xp, dtype=dtype)
+    from imageform.geometry.camera import _check_K
+
+    _check_K(Km, xp)
+    if R is None:
+        Rm = xp.eye(3, dtype=Km.dtype, device=device_of(Km))
+    else:
+        Rm = as_matrix(R, "R", (3, 3), xp=xp, dtype=Km.dtype, device=device_of(Km))
+        check_rotation(Rm, "R", xp=xp)
+    return Km, Rm
+
+
+def vanishing_point(K: ArrayLike, direction: ArrayLike, R: ArrayLike | None = None) -> Array:
+    """Vanishing point of the scene direction ``d``: ``v ~ K R d``, homogeneous ``(..., 3)``.
+
+    Finite vanishing points are scaled to ``w = 1`` (so ``v[..., :2]`` are pixels); a
+    direction parallel to the image plane gives a point at infinity ``(dx, dy, 0)`` with a
+    unit image direction. ``d`` and ``-d`` give the same point.
+
+    Parameters
+    ----------
+    K : array_like, shape (..., 3, 3)
+    direction : array_like, shape (..., 3)
+        Scene direction (world frame when ``R`` is given, else camera frame); not zero.
+    R : array_like, shape (..., 3, 3), optional
+
+    Examples
+    --------
+    The lecture: K = [[500, 0, 320], [0, 500, 240], [0, 0, 1]], d = (1, 0, 2).
+
+    >>> vanishing_point([[500, 0, 320], [0, 500, 240], [0, 0, 1]], [1, 0, 2])
+    array([570., 240.,   1.])
+    >>> vanishing_point([[500, 0, 320], [0, 500, 240], [0, 0, 1]], [1, 0, 0])
+    array([1., 0., 0.])
+    """
+    xp = namespace(K, direction, R)
+    d = as_points(direction, "direction", 3, xp=xp)
+    Km, Rm = _k_r(K, R, xp, d.dtype)
+    if bool(xp.any(xp.sum(d * d, axis=-1) == 0)):
+        raise InvalidInputError("expected a non-zero direction")
+    dc = d @ xp.matrix_transpose(Rm) if d.ndim >= 1 else d
+    v = dc @ xp.matrix_transpose(Km)
+    return _normalize_homogeneous_point(v, xp, what="zero direction")
+
+
+def horizon_line(
+    K: ArrayLike, R: ArrayLike | None = None, up: ArrayLike = (0.0, -1.0, 0.0)
+) -> Array:
+    """The horizon: vanishing line ``l ~ K⁻ᵀ R n`` of planes perpendicular to ``up``.
+
+    Returned as ``(a, b, c)`` with ``a u + b v + c = 0``, normalised to ``a² + b² = 1``
+    (then ``l · (u, v, 1)`` is a signed distance in pixels) and ``b >= 0`` (horizon of an
+    upright camera: ``v = -(a u + c) / b``). A camera looking straight along ``up`` has its
+    horizon at infinity: the line at infinity ``(0, 0, 1)`` is returned.
+
+    A level camera's horizon passes through the principal point; tilting the camera up
+    moves the horizon down the image (larger v).
+
+    Examples
+    --------
+    >>> K = [[500, 0, 320], [0, 500, 240], [0, 0, 1]]
+    >>> horizon_line(K)            # level camera: v = 240
+    array([   0.,    1., -240.])
+    """
+    xp = namespace(K, R, up)
+    n = as_points(up, "up", 3, xp=xp)
+    Km, Rm = _k_r(K, R, xp, n.dtype)
+    if bool(xp.any(xp.sum(n * n, axis=-1) == 0)):
+        raise InvalidInputError("expected a non-zero up direction")
+    nc = n @ xp.matrix_transpose(Rm)
+    # K^{-T} m for upper-triangular K: solve K^T l = m
+    l = xp.linalg.solve(xp.matrix_transpose(Km), nc[..., None])[..., 0]
+    ab = xp.sqrt(l[..., 0] ** 2 + l[..., 1] ** 2)
+    scale = xp.sqrt(xp.sum(l * l, axis=-1))
+    at_inf = ab <= 8 * xp.finfo(l.dtype).eps * scale
+    ab_safe = xp.where(at_inf, xp.ones_like(ab), ab)
+    sign = xp.where(l[..., 1] != 0, xp.sign(l[..., 1]), xp.sign(l[..., 0]))
+    sign = xp.where(sign == 0, xp.ones_like(sign), sign)
+    finite = l * (sign / ab_safe)[..., None]
+    inf_line = xp.zeros_like(l) + xp.asarray([0.0, 0.0, 1.0], dtype=l.dtype, device=device_of(l))
+    return xp.where(at_inf[..., None], inf_line, finite) + 0.0
+
+
+def perspective_type(
+    directions: ArrayLike, R: ArrayLike | None = None, *, tol: float = 1e-9
+) -> int:
+    """One-, two- or three-point perspective: how many scene directions vanish in the image.
+
+    A direction has a finite vanishing point unless it is parallel to the image plane
+    (``|(R d)_z| <= tol ‖d‖``). For a box-like scene with three orthogonal directions: a camera
+    looking along one of them sees one-point perspective, one whose image plane is parallel
+    to one of them (e.g. a level camera and vertical edges) two-point, any other three-point.
+
+    Parameters
+    ----------
+    directions : array_like, shape (N, 3)
+        Scene directions in the world frame (typically the three axes of a building or room).
+    R : array_like, shape (3, 3), optional
+        World-to-camera rotation.
+
+    Returns
+    -------
+    int
+        The number of finite vanishing points (1, 2 or 3 for three independent directions).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from imageform.geometry import camera_rotation
+    >>> perspective_type(np.eye(3))                                   # looking down a corridor
+    1
+    >>> perspective_type(np.eye(3), camera_rotation(pitch=0.0, yaw=0.6))   # level, turned
+    2
+    >>> perspective_type(np.eye(3), camera_rotation(pitch=0.3, yaw=0.6))   # tilted up too
+    3
+    """
+    xp = namespace(directions, R)
+    D = as_points(directions, "directions", 3, xp=xp)
+    if D.ndim != 2:
+        raise InvalidInputError(f"expected directions of shape (N, 3), got {tuple(D.shape)}")
+    Rm = (
+        xp.eye(3, dtype=D.dtype, device=device_of(D))
+        if R is None
+        else as_matrix(R, "R", (3, 3), xp=xp, dtype=D.dtype, batch=False)
+    )
+    if R is not None:
+        check_rotation(Rm, "R", xp=xp)
+    norms = xp.sqrt(xp.sum(D * D, axis=-1))
+    if bool(xp.any(norms == 0)):
+        raise InvalidInputError("expected non-zero directions")
+    dz = (D @ xp.matrix_transpose(Rm))[..., 2]
+    return int(xp.sum(xp.astype(xp.abs(dz) > tol * norms, xp.int64)))
+
+
+def _as_finite_vps(v: ArrayLike, name: str) -> FloatArray:
+    p = np.asarray(as_points(v, name, (2, 3)), dtype=np.float64)
+    if p.shape[-1] == 3:
+        if np.any(p[..., 2] == 0):
+            raise DegenerateConfigurationError(
+                f"{name} is at infinity; this needs finite vanishing points"
+            )
+        p = p[..., :2] / p[..., 2:]
+    return p
+
+
+def focal_from_vanishing_points(
+    v1: ArrayLike, v2: ArrayLike, principal_point: ArrayLike
+) -> FloatArray:
+    """Focal length (pixels) from the vanishing points of two orthogonal directions.
+
+    With square pixels and zero skew, ``(v1 - p) · (v2 - p) = -f²`` for orthogonal
+    directions (Hartley & Zisserman §8.8, from ``v1ᵀ ω v2 = 0``).
+
+    Raises
+    ------
+    DegenerateConfigurationError
+        If ``(v1 - p) · (v2 - p) >= 0``: the points cannot come from orthogonal directions
+        seen by this principal point.
+
+    Examples
+    --------
+    >>> float(focal_from_vanishing_points([820, 240], [-180, 240], [320, 240]))
+    500.0
+    """
+    a = _as_finite_vps(v1, "v1")
+    b = _as_finite_vps(v2, "v2")
+    p = np.asarray(as_points(principal_point, "principal_point", 2), dtype=np.float64)
+    f2 = -np.sum((a - p) * (b - p), axis=-1)
+    if np.any(f2 <= 0):
+        raise DegenerateConfigurationError(
+            "(v1 - p)·(v2 - p) >= 0: these vanishing points are not of orthogonal directions "
+            "for this principal point"
+        )
+    return np.sqrt(f2)
+
+
+def intrinsics_from_vanishing_points(v1: ArrayLike, v2: ArrayLike, v3: ArrayLike) -> FloatArray:
+    """K (square pixels, zero skew) from the vanishing points of three orthogonal directions.
+
+    The principal point is the orthocentre of the triangle ``v1 v2 v3`` and
+    ``f² = -(v1 - p)·(v2 - p)`` (Caprile & Torre 1990; Hartley & Zisserman Example 8.27).
+    The triangle must be acute (every angle < 90°).
+
+    Raises
+    ------
+    DegenerateConfigurationError
+        If a vanishing point is at infinity, the points are collinear, or the triangle is not
+        acute.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from imageform.geometry import camera_rotation, vanishing_point
+    >>> K = np.array([[800.0, 0, 640], [0, 800, 360], [0, 0, 1]])
+    >>> R = camera_rotation(pitch=0.4, yaw=0.7)
+    >>> vps = [vanishing_point(K, d, R) for d in np.eye(3)]
+    >>> intrinsics_from_vanishing_points(*vps).round(6) + 0.0
+    array([[800.,   0., 640.],
+           [  0., 800., 360.],
+           [  0.,   0.,   1.]])
+    """
+    a, b, c = (_as_finite_vps(v, n) for v, n in ((v1, "v1"), (v2, "v2"), (v3, "v3")))
+    if a.ndim != 1 or b.ndim != 1 or c.ndim != 1:
+        raise InvalidInputError("expected three single vanishing points of shape (2,) or (3,)")
+    # orthocentre: intersection of the altitudes from a and b
+    A = np.array([c - b, c - a])
+    rhs = np.array([np.dot(c - b, a), np.dot(c - a, b)])
+    if abs(np.linalg.det(A)) <= 1e-12 * np.linalg.norm(A) ** 2:
+        raise DegenerateConfigurationError("the three vanishing points are collinear")
+    p = np.linalg.solve(A, rhs)
+    f2 = [-np.dot(x - p, y - p) for x, y in ((a, b), (b, c), (a, c))]
+    if min(f2) <= 0:
+        raise DegenerateConfigurationError(
+            "the vanishing-point triangle is not acute: not three orthogonal directions"
+        )
+    f = float(np.sqrt(np.mean(f2)))
+    return np.array([[f, 0.0, p[0]], [0.0, f, p[1]], [0.0, 0.0, 1.0]])
+
+
+def lines_from_segments(segments: ArrayLike) -> Array:
+    """Homogeneous lines ``(..., N, 3)`` through segments ``(..., N, 2, 2)`` of ``(u, v)`` ends."""
+    xp = namespace(segments)
+    s = as_points(segments, "segments", 2, xp=xp)
+    if s.ndim < 2 or s.shape[-2] != 2:
+        raise InvalidInputError(f"expected segments of shape (..., 2, 2), got {tuple(s.shape)}")
+    return line_through(s[..., 0, :], s[..., 1, :])
+
+
+def vanishing_point_from_lines(lines: ArrayLike, weights: ArrayLike | None = None) -> Array:
+    """Least-squares vanishing point of many image lines, homogeneous ``(3,)``.
+
+    Minimises ``Σ wᵢ (lᵢ · v)²`` over unit ``v`` (the smallest right singular vector of the
+    stacked, normalised lines), after a similarity that centres and scales the lines'
+    closest points to the origin (Hartley normalisation), so the answer does not depend on
+    pixel units. With ``a² + b² = 1`` lines, ``lᵢ · v`` is the distance of a finite ``v``
+    to line i. Finite results have ``w = 1``; near-parallel lines give ``w = 0``.
+
+    Parameters
+    ----------
+    lines : array_like, shape (N, 3)
+        N >= 2 lines ``(a, b, c)`` (e.g. from :func:`lines_from_segments`).
+    weights : array_like, shape (N,), optional
+        Non-negative weights (e.g. segment lengths).
+
+    Examples
+    --------
+    >>> L = lines_from_segments([[[0, 0], [2, 1]], [[0, 2], [2, 2]], [[0, 4], [2, 3]]])
+    >>> vanishing_point_from_lines(L).round(9) + 0.0
+    array([4., 2., 1.])
+    """
+    xp = namespace(lines, weights)
+    L = as_points(lines, "lines", 3, xp=xp)
+    if L.ndim != 2 or L.shape[0] < 2:
+        raise InvalidInputError(f"expected lines of shape (N, 3) with N >= 2, got {tuple(L.shape)}")
+    ab = xp.sqrt(L[:, 0] ** 2 + L[:, 1] ** 2)
+    if bool(xp.any(ab == 0)):
+        raise InvalidInputError("a line at infinity (a = b = 0) has no direction")
+    L = L / ab[:, None]
+    # closest points of each line to the origin: -c (a, b)
+    foot = -L[:, 2:3] * L[:, :2]
+    centre = xp.mean(foot, axis=0)
+    spread = xp.mean(xp.sqrt(xp.sum((foot - centre) ** 2, axis=-1)))
+    s = xp.where(spread > 0, spread / np.sqrt(2.0), xp.ones_like(spread))
+    # point transform x' = (x - centre) / s  ->  line transform l' = T^{-T} l
+    a, b, c = L[:, 0], L[:, 1], L[:, 2]
+    c2 = (c + a * centre[0] + b * centre[1]) / s
+    Ln = xp.stack((a, b, c2), axis=-1)
+    if weights is not None:
+        w = as_float(weights, "weights", xp=xp, dtype=L.dtype)
+        w = xp.reshape(w, (-1,))
+        if w.shape[0] != L.shape[0] or bool(xp.any(w < 0)):
+            raise InvalidInputError("expected one non-negative weight per line")
+        Ln = Ln * xp.sqrt(w)[:, None]
+    _, _, Vt = xp.linalg.svd(Ln, full_matrices=False)
+    vn = Vt[-1, :]
+    v = xp.stack((vn[0] * s + centre[0] * vn[2], vn[1] * s + centre[1] * vn[2], vn[2]))
+    return _normalize_homogeneous_point(v, xp, what="no vanishing point")
