@@ -105,7 +105,9 @@ def _check_K(K: Array, xp: Any) -> None:
 
 def _project_xp(X: Array, K: Array, R: Array, t: Array, xp: Any) -> tuple[Array, Array]:
     """Array-API twin of the numba kernel; broadcasts K, R, t over leading dimensions."""
-    Xc = X @ xp.matrix_transpose(R) + t[..., None, :] if X.ndim >= 2 else R @ X + t
+    # rows with inf give NaN in the product; they are masked out below, so silence NumPy
+    with np.errstate(invalid="ignore"):
+        Xc = X @ xp.matrix_transpose(R) + t[..., None, :] if X.ndim >= 2 else R @ X + t
     z = Xc[..., 2]
     valid = (z > 0) & xp.all(xp.isfinite(Xc), axis=-1)
     zs = xp.where(valid, z, xp.ones_like(z))  # no division by zero; gradients stay finite

@@ -305,7 +305,7 @@ def vanishing_point_from_lines(lines: ArrayLike, weights: ArrayLike | None = Non
         if w.shape[0] != L.shape[0] or bool(xp.any(w < 0)):
             raise InvalidInputError("expected one non-negative weight per line")
         Ln = Ln * xp.sqrt(w)[:, None]
-    _, _, Vt = xp.linalg.svd(Ln, full_matrices=False)
+    _, _, Vt = xp.linalg.svd(Ln, full_matrices=Ln.shape[0] < 3)  # 2 lines: need the full V
     vn = Vt[-1, :]
     v = xp.stack((vn[0] * s + centre[0] * vn[2], vn[1] * s + centre[1] * vn[2], vn[2]))
     return _normalize_homogeneous_point(v, xp, what="no vanishing point")
