@@ -34,6 +34,7 @@ __all__ = [
     "float_dtype",
     "is_numpy_namespace",
     "namespace",
+    "scalar",
     "to_numpy",
     "use_numba",
 ]
@@ -101,11 +102,21 @@ def asarray_like(x: object, xp: Any, dtype: Any = None, device: Any = None) -> A
     """Convert ``x`` to an array of namespace ``xp`` (optionally with ``dtype``/``device``)."""
     if array_api_compat.is_numpy_array(x) and not is_numpy_namespace(xp):
         x = np.asarray(x)
+    elif _is_array(x) and namespace(x) is xp and (device is None or device == device_of(x)):
+        # already an array of this namespace: no copy, the autograd graph is kept
+        return x if dtype is None or x.dtype == dtype else xp.astype(x, dtype)  # type: ignore[attr-defined]
     if dtype is None:
         return xp.asarray(x, device=device) if device is not None else xp.asarray(x)
     if device is not None:
         return xp.asarray(x, dtype=dtype, device=device)
     return xp.asarray(x, dtype=dtype)
+
+
+def scalar(x: Any) -> float:
+    """A 0-d array (any library, any device, with or without gradient) as a Python float."""
+    if hasattr(x, "detach"):
+        x = x.detach()
+    return float(x)
 
 
 def to_numpy(x: object) -> np.ndarray:

@@ -20,6 +20,7 @@ from imageform._backend import (
     device_of,
     float_dtype,
     namespace,
+    scalar,
 )
 from imageform.errors import InvalidInputError, UnknownOptionError
 
@@ -147,16 +148,16 @@ def check_rotation(R: Any, name: str = "R", *, xp: Any | None = None, atol: floa
         atol = max(atol, 1e-4)
     eye = xp.eye(3, dtype=R.dtype, device=device_of(R))
     err = xp.max(xp.abs(R @ xp.matrix_transpose(R) - eye))
-    if float(err) > atol:
+    if scalar(err) > atol:
         raise InvalidInputError(
-            f"expected {name} to be a rotation matrix (R Rᵀ = I), max |R Rᵀ - I| = {float(err):.3g}"
+            f"expected {name} to be a rotation matrix (R Rᵀ = I), max |R Rᵀ - I| = {scalar(err):.3g}"
         )
     det = xp.linalg.det(R)
-    worst = float(xp.max(xp.abs(det - 1.0)))
+    worst = scalar(xp.max(xp.abs(det - 1.0)))
     if worst > max(atol, 10 * atol):
         raise InvalidInputError(
             f"expected {name} to be a proper rotation (det R = +1), got det R = "
-            f"{float(xp.min(det)):.6g} (a reflection)"
+            f"{scalar(xp.min(det)):.6g} (a reflection)"
         )
 
 
@@ -225,7 +226,7 @@ def as_image(
         if finite:
             check_finite(arr, name, xp)
         if range_check and math.prod(arr.shape):
-            mx = float(xp.max(arr))
+            mx = scalar(xp.max(arr))
             if mx > 1.5 and bool(xp.all(arr == xp.round(arr))):
                 raise InvalidInputError(
                     f"{name} looks like 0-255 values stored as floats (max {mx:g}); "

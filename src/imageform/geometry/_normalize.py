@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from typing import Any
 
-import numpy as np
+import math
 
 from imageform._backend import device_of
 from imageform._typing import Array
@@ -24,7 +24,7 @@ def similarity_normalization(points: Array, xp: Any) -> tuple[Array, Array]:
     mean_d = xp.mean(d, axis=-1)
     s = xp.where(
         mean_d > 0,
-        np.sqrt(n) / xp.where(mean_d > 0, mean_d, xp.ones_like(mean_d)),
+        math.sqrt(n) / xp.where(mean_d > 0, mean_d, xp.ones_like(mean_d)),
         xp.ones_like(mean_d),
     )
     normed = (points - centre) * s[..., None, None]
