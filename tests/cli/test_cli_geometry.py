@@ -1,0 +1,70 @@
+"""The ``imageform`` command: lecture, project, exit codes and output safety."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import pytest
+
+from imageform.cli import main
+
+
+def test_lecture_table_and_json(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["lecture"]) == 0
+    assert "570" in capsys.readouterr().out
+    assert main(["lecture", "--json", "--topic", "vanishing"]) == 0
+    rows = json.loads(capsys.readouterr().out)
+    assert rows and all(r["agrees"] for r in rows)
+
+
+def test_version(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["--version"]) == 0
+    assert capsys.readouterr().out.startswith("imageform ")
+
+
+def test_project_csv(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    pts = tmp_path / "points.csv"
+    pts.write_text("X,Y,Z\n3,-1,5\n0,0,-2\n")
+    out = tmp_path / "uv.csv"
+    assert main(["project", str(pts), "--fx", "100", "--out", str(out), "--json"]) == 0
+    summary = json.loads(capsys.readouterr().out)
+    assert summary == {"points": 2, "valid": 1, "output": str(out)}
+    lines = out.read_text().splitlines()
+    assert lines[0] == "u,v,valid"
+    assert [float(v) for v in lines[1].split(",")] == [60.0, -20.0, 1.0]
+    u, v, ok = lines[2].split(",")
+    assert math.isnan(float(u)) and ok == "0"
+    # existing output needs --force; an input is never overwritten
+    assert main(["project", str(pts), "--fx", "100", "--out", str(out)]) == 1
+    assert "--force" in capsys.readouterr().err
+    assert main(["project", str(pts), "--fx", "100", "--out", str(pts), "--force"]) == 1
+    assert "also an input" in capsys.readouterr().err
+    assert main(["project", str(pts), "--fx", "100", "--out", str(out), "--force"]) == 0
+
+
+def test_project_camera_toml(tmp_path: Path) -> None:
+    cam = tmp_path / "cam.toml"
+    cam.write_text("[camera]\nfx = 500\nfy = 500\ncx = 320\ncy = 240\nrvec = [0, 0, 0]\nt = [0, 0, 2]\n")
+    pts = tmp_path / "p.csv"
+    pts.write_text("1,0,2\n")
+    out = tmp_path / "o.csv"
+    assert main(["project", str(pts), "--camera", str(cam), "--out", str(out)]) == 0
+    assert out.read_text().splitlines()[1].startswith("445.0,240.0,1")
+
+
+def test_project_errors(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    pts = tmp_path / "p.csv"
+    pts.write_text("1,2\n")
+    out = tmp_path / "o.csv"
+    assert main(["project", str(pts), "--fx", "100", "--out", str(out)]) == 1
+    assert "expected 3 columns" in capsys.readouterr().err
+    cam = tmp_path / "cam.toml"
+    cam.write_text("fx = 1\nfy = 1\ncx = 0\ncy = 0\nfocal = 3\n")
+    pts.write_text("1,2,3\n")
+    assert main(["project", str(pts), "--camera", str(cam), "--out", str(out)]) == 1
+    assert "unknown camera key" in capsys.readouterr().err
+    assert main(["project", str(pts), "--out", str(out)]) == 1
+    assert main(["project", str(pts), "--no-such-flag"]) == 2
+    assert main(["project", str(tmp_path / "missing.csv"), "--fx", "1", "--out", str(out)]) == 1
