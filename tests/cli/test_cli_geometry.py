@@ -34,7 +34,7 @@ def test_project_csv(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None
     lines = out.read_text().splitlines()
     assert lines[0] == "u,v,valid"
     assert [float(v) for v in lines[1].split(",")] == [60.0, -20.0, 1.0]
-    u, v, ok = lines[2].split(",")
+    u, _v, ok = lines[2].split(",")
     assert math.isnan(float(u)) and ok == "0"
     # existing output needs --force; an input is never overwritten
     assert main(["project", str(pts), "--fx", "100", "--out", str(out)]) == 1
@@ -46,7 +46,9 @@ def test_project_csv(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None
 
 def test_project_camera_toml(tmp_path: Path) -> None:
     cam = tmp_path / "cam.toml"
-    cam.write_text("[camera]\nfx = 500\nfy = 500\ncx = 320\ncy = 240\nrvec = [0, 0, 0]\nt = [0, 0, 2]\n")
+    cam.write_text(
+        "[camera]\nfx = 500\nfy = 500\ncx = 320\ncy = 240\nrvec = [0, 0, 0]\nt = [0, 0, 2]\n"
+    )
     pts = tmp_path / "p.csv"
     pts.write_text("1,0,2\n")
     out = tmp_path / "o.csv"

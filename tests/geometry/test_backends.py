@@ -31,7 +31,10 @@ def test_projection_same_numbers(xp_name: str) -> None:
     X[3, 2] = -10.0  # behind the camera
     ref_uv, ref_valid = g.project_points(X, K, R, T)
     uv, valid = g.project_points(
-        to_backend(X, xp_name), to_backend(K, xp_name), to_backend(R, xp_name), to_backend(T, xp_name)
+        to_backend(X, xp_name),
+        to_backend(K, xp_name),
+        to_backend(R, xp_name),
+        to_backend(T, xp_name),
     )
     assert isinstance(uv, _xp_type(xp_name))
     np.testing.assert_allclose(to_np(uv), ref_uv, atol=1e-12)
@@ -78,7 +81,9 @@ def test_estimate_projection_matrix_strict() -> None:
     X = rng.uniform(-1, 1, size=(10, 3))
     uv = g.project_points(X, K, R, T).uv
     ref = g.estimate_projection_matrix(X, uv)
-    out = g.estimate_projection_matrix(to_backend(X, "array_api_strict"), to_backend(uv, "array_api_strict"))
+    out = g.estimate_projection_matrix(
+        to_backend(X, "array_api_strict"), to_backend(uv, "array_api_strict")
+    )
     np.testing.assert_allclose(to_np(out), ref, atol=1e-10)
 
 
@@ -92,7 +97,11 @@ def test_torch_gradients_flow_through_projection() -> None:
     loss.backward()
     assert valid.tolist() == [True, False]
     # finite gradients everywhere, zero for the point behind the camera
-    assert torch.isfinite(X.grad).all() and torch.isfinite(Kt.grad).all() and torch.isfinite(rvec.grad).all()
+    assert (
+        torch.isfinite(X.grad).all()
+        and torch.isfinite(Kt.grad).all()
+        and torch.isfinite(rvec.grad).all()
+    )
     assert torch.all(X.grad[1] == 0)
     # d(u)/d(fx) = x = X_c / Z_c for the valid point
     Xc = g.rvec_to_matrix(rvec.detach().numpy()) @ X.detach().numpy()[0] + T

@@ -30,7 +30,11 @@ K0 = np.array([[500.0, 0.0, 320.0], [0.0, 500.0, 240.0], [0.0, 0.0, 1.0]])
 
 def random_camera(rng: np.random.Generator, skew: float = 0.0) -> tuple[np.ndarray, ...]:
     K = intrinsic_matrix(
-        rng.uniform(300, 1500), rng.uniform(300, 1500), rng.uniform(200, 800), rng.uniform(100, 600), skew
+        rng.uniform(300, 1500),
+        rng.uniform(300, 1500),
+        rng.uniform(200, 800),
+        rng.uniform(100, 600),
+        skew,
     )
     rvec = rng.normal(size=3) * 0.5
     t = rng.normal(size=3) + [0, 0, 8.0]
@@ -204,7 +208,13 @@ def test_project_unproject_property(u: float, v: float, z: float, skew: float) -
     scale=st.floats(-100, 100).filter(lambda s: abs(s) > 1e-3),
 )
 def test_decompose_compose_property(
-    f: float, aspect: float, cx: float, cy: float, skew: float, r: list[float], t: list[float],
+    f: float,
+    aspect: float,
+    cx: float,
+    cy: float,
+    skew: float,
+    r: list[float],
+    t: list[float],
     scale: float,
 ) -> None:
     K = intrinsic_matrix(f, f * aspect, cx, cy, skew)
@@ -256,7 +266,9 @@ def test_camera_center_projection_matrix_and_rays() -> None:
     cam2 = Camera.from_projection_matrix(7.0 * P)
     np.testing.assert_allclose(cam2.K, cam.K, atol=1e-9)
     assert cam.intrinsics.fx == 500.0
-    np.testing.assert_array_equal(cam.in_image([[0.0, 0.0], [640.0, 10.0], [np.nan, 1.0]]), [True, False, False])
+    np.testing.assert_array_equal(
+        cam.in_image([[0.0, 0.0], [640.0, 10.0], [np.nan, 1.0]]), [True, False, False]
+    )
 
 
 def test_camera_look_at() -> None:
@@ -275,7 +287,9 @@ def test_camera_bad_inputs() -> None:
         Camera(np.eye(4))
     with pytest.raises(InvalidInputError, match="upper-triangular"):
         Camera(np.array([[500.0, 0, 320], [1, 500, 240], [0, 0, 1]]))
-    with pytest.raises(InvalidInputError, match=r"expected points of shape \(\.\.\., 3\), got \(4, 2\)"):
+    with pytest.raises(
+        InvalidInputError, match=r"expected points of shape \(\.\.\., 3\), got \(4, 2\)"
+    ):
         Camera(K0).project(np.zeros((4, 2)))
     with pytest.raises(InvalidInputError, match="NaN"):
         Camera(K0, t=[0.0, np.nan, 1.0])
@@ -298,7 +312,9 @@ def test_intrinsics_physical_and_fov() -> None:
     fov = Intrinsics.from_fov(math.radians(90), (1000, 800))
     assert fov.fx == pytest.approx(500.0)
     assert math.degrees(fov.fov_x) == pytest.approx(90.0)
-    assert math.degrees(fov.fov_diagonal) == pytest.approx(2 * math.degrees(math.atan(math.hypot(1000, 800) / 1000)))
+    assert math.degrees(fov.fov_diagonal) == pytest.approx(
+        2 * math.degrees(math.atan(math.hypot(1000, 800) / 1000))
+    )
     half = intr.scaled(0.5)
     assert half.cx == pytest.approx((2999.5 + 0.5) * 0.5 - 0.5) and half.image_size == (3000, 2000)
 
@@ -309,7 +325,7 @@ def test_intrinsics_bad() -> None:
     with pytest.raises(InvalidInputError, match="pixel_pitch_um > 0"):
         Intrinsics.from_physical(50.0, -5.0, (10, 10))
     with pytest.raises(InvalidInputError, match="image_size"):
-        Intrinsics(1.0, 1.0, 0.0, 0.0).fov_x
+        _ = Intrinsics(1.0, 1.0, 0.0, 0.0).fov_x
     with pytest.raises(InvalidInputError, match="0 < fov_x < pi"):
         Intrinsics.from_fov(4.0, (10, 10))
     with pytest.raises(InvalidInputError, match="depth > 0"):

@@ -110,7 +110,9 @@ def test_collinear_bad_shape() -> None:
 def test_cross_ratio_textbook_value() -> None:
     # equally spaced points 0, 1, 2, 3: CR = (2 * 2) / (1 * 3) = 4/3
     # (Hartley & Zisserman eq. 2.18 with |x_i x_j| signed distances)
-    assert float(cross_ratio([0.0, 0.0], [1.0, 0.0], [2.0, 0.0], [3.0, 0.0])) == pytest.approx(4 / 3)
+    assert float(cross_ratio([0.0, 0.0], [1.0, 0.0], [2.0, 0.0], [3.0, 0.0])) == pytest.approx(
+        4 / 3
+    )
 
 
 def test_cross_ratio_needs_collinear_points() -> None:
@@ -142,7 +144,9 @@ def test_cross_ratio_invariant_under_homography(t: list[float], h: list[float]) 
         return
     origin, direction = np.array([1.0, 2.0]), np.array([0.6, 0.8])
     pts = origin + ts[:, None] * direction
-    H = np.eye(3) + np.array([*h, 0.0]).reshape(3, 3) * np.array([[1, 1, 1], [1, 1, 1], [0.01, 0.01, 0]])
+    H = np.eye(3) + np.array([*h, 0.0]).reshape(3, 3) * np.array(
+        [[1, 1, 1], [1, 1, 1], [0.01, 0.01, 0]]
+    )
     if abs(np.linalg.det(H)) < 0.1:
         return
     mapped = apply_homography(H, pts)

@@ -34,7 +34,9 @@ def test_homography_matches_opencv_findhomography() -> None:
         ours = estimate_homography(src, dst)
         ref = cv2.findHomography(src, dst, 0)[0]
         # compare by the mapping they define (both fit the same noisy data)
-        np.testing.assert_allclose(apply_homography(ours, src), apply_homography(ref, src), atol=0.05)
+        np.testing.assert_allclose(
+            apply_homography(ours, src), apply_homography(ref, src), atol=0.05
+        )
         np.testing.assert_allclose(apply_homography(ours, src), apply_homography(H, src), atol=0.5)
 
 
@@ -42,7 +44,9 @@ def test_homography_exact_four_points_and_batch() -> None:
     rng = np.random.default_rng(21)
     H = random_h(rng)
     src = np.array([[0.0, 0.0], [100.0, 0.0], [100.0, 80.0], [0.0, 80.0]])
-    np.testing.assert_allclose(estimate_homography(src, apply_homography(H, src)), H, rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(
+        estimate_homography(src, apply_homography(H, src)), H, rtol=1e-9, atol=1e-12
+    )
     Hs = np.stack([random_h(rng) for _ in range(5)])
     srcs = rng.uniform(0, 100, size=(5, 8, 2))
     dsts = np.stack([apply_homography(Hs[i], srcs[i]) for i in range(5)])
@@ -82,7 +86,9 @@ def test_resection_recovers_camera() -> None:
     X = rng.uniform(-1, 1, size=(20, 3))
     uv = project_points(X, K, R, t).uv
     P = estimate_projection_matrix(X, uv)
-    np.testing.assert_allclose(P / P[2, 3], projection_matrix(K, R, t) / t[2], rtol=1e-8, atol=1e-10)
+    np.testing.assert_allclose(
+        P / P[2, 3], projection_matrix(K, R, t) / t[2], rtol=1e-8, atol=1e-10
+    )
     Kd, Rd, td = decompose_projection_matrix(P)
     np.testing.assert_allclose(Kd, K, rtol=1e-7)
     np.testing.assert_allclose(Rd, R, atol=1e-9)

@@ -35,7 +35,9 @@ def test_weak_perspective_approaches_perspective_far_away() -> None:
         assert err < tol
     P = weak_perspective_matrix(K, 2.0)
     h = np.c_[obj + [0, 0, 2.0], np.ones(50)] @ P.T
-    np.testing.assert_allclose(h[:, :2] / h[:, 2:], weak_perspective_project(obj + [0, 0, 2.0], K, depth=2.0))
+    np.testing.assert_allclose(
+        h[:, :2] / h[:, 2:], weak_perspective_project(obj + [0, 0, 2.0], K, depth=2.0)
+    )
     with pytest.raises(InvalidInputError, match="Z0 > 0"):
         weak_perspective_project([[0.0, 0.0, -1.0]], K)
 

@@ -36,7 +36,9 @@ def test_direction_parallel_to_image_plane_is_ideal() -> None:
 
 
 def test_opposite_directions_same_point() -> None:
-    np.testing.assert_allclose(vanishing_point(K, [1.0, 2.0, 3.0]), vanishing_point(K, [-1.0, -2.0, -3.0]))
+    np.testing.assert_allclose(
+        vanishing_point(K, [1.0, 2.0, 3.0]), vanishing_point(K, [-1.0, -2.0, -3.0])
+    )
 
 
 def test_vanishing_point_zero_direction() -> None:
