@@ -150,7 +150,8 @@ def check_rotation(R: Any, name: str = "R", *, xp: Any | None = None, atol: floa
     err = xp.max(xp.abs(R @ xp.matrix_transpose(R) - eye))
     if scalar(err) > atol:
         raise InvalidInputError(
-            f"expected {name} to be a rotation matrix (R Rᵀ = I), max |R Rᵀ - I| = {scalar(err):.3g}"
+            f"expected {name} to be a rotation matrix (R Rᵀ = I), "
+            f"max |R Rᵀ - I| = {scalar(err):.3g}"
         )
     det = xp.linalg.det(R)
     worst = scalar(xp.max(xp.abs(det - 1.0)))

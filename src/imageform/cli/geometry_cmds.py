@@ -41,7 +41,8 @@ def load_camera_toml(path: Path) -> Any:
     if "rvec" in cam and "R" in cam:
         raise InvalidInputError(f"{path}: give the rotation as rvec or R, not both")
     K = intrinsic_matrix(cam["fx"], cam["fy"], cam["cx"], cam["cy"], cam.get("skew", 0.0))
-    R = rvec_to_matrix(cam["rvec"]) if "rvec" in cam else cam.get("R", [[1, 0, 0], [0, 1, 0], [0, 0, 1]])
+    identity = [[1, 0, 0], [0, 1, 0], [0, 0, 1]]
+    R = rvec_to_matrix(cam["rvec"]) if "rvec" in cam else cam.get("R", identity)
     size = (cam["width"], cam["height"]) if "width" in cam and "height" in cam else None
     return Camera(K, R, cam.get("t", [0.0, 0.0, 0.0]), size, cam.get("image_plane", "virtual"))
 
@@ -63,7 +64,9 @@ def _read_points(path: Path) -> Any:
                     continue  # a header line
                 raise InvalidInputError(f"{path}:{lineno}: expected numbers, got {row}") from None
             if len(vals) != 3:
-                raise InvalidInputError(f"{path}:{lineno}: expected 3 columns (X, Y, Z), got {len(vals)}")
+                raise InvalidInputError(
+                    f"{path}:{lineno}: expected 3 columns (X, Y, Z), got {len(vals)}"
+                )
             rows.append(vals)
     if not rows:
         raise InvalidInputError(f"{path}: no points")
@@ -82,7 +85,7 @@ def project(
     force: bool = typer.Option(False, "--force", help="Overwrite an existing output."),
     json_out: bool = typer.Option(False, "--json", help="Print a JSON summary."),
 ) -> None:
-    """Project 3-D points through a pinhole camera; points with z <= 0 are written as NaN, valid=0."""
+    """Project 3-D points through a pinhole camera; z <= 0 is written as NaN with valid=0."""
     import numpy as np
 
     from imageform.cli._common import check_output_path, print_json
@@ -106,7 +109,7 @@ def project(
         w.writerow(["u", "v", "valid"])
         for (u, v), ok in zip(uv, valid, strict=True):
             w.writerow([repr(float(u)), repr(float(v)), int(ok)])
-    summary = {"points": int(len(X)), "valid": int(np.sum(valid)), "output": str(out)}
+    summary = {"points": len(X), "valid": int(np.sum(valid)), "output": str(out)}
     if json_out:
         print_json(summary)
     else:

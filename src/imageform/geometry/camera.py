@@ -374,9 +374,9 @@ class Camera:
            [ nan,  nan]]), valid=array([ True, False]))
     """
 
-    K: FloatArray
-    R: FloatArray = field(default_factory=lambda: np.eye(3))
-    t: FloatArray = field(default_factory=lambda: np.zeros(3))
+    K: Array  # 3x3 (an Intrinsics is accepted and converted)
+    R: Array = field(default_factory=lambda: np.eye(3))
+    t: Array = field(default_factory=lambda: np.zeros(3))
     image_size: tuple[int, int] | None = None
     image_plane: ImagePlane = "virtual"
 
