@@ -21,7 +21,7 @@ from typing import Any, Literal, NamedTuple
 import numpy as np
 
 from imageform._backend import device_of, namespace, use_numba
-from imageform._typing import Array, ArrayLike, FloatArray
+from imageform._typing import Array, ArrayLike
 from imageform._validate import as_matrix, as_points, check_option, check_rotation
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
 from imageform.geometry.intrinsics import Intrinsics
@@ -428,7 +428,7 @@ class Camera:
         from imageform.geometry.rotations import look_at
 
         R, t = look_at(eye, target, up)
-        return cls(K, R, t, image_size)  # type: ignore[arg-type]
+        return cls(K, R, t, image_size)
 
     # -- properties ----------------------------------------------------------------------
     @property
