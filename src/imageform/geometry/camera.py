@@ -272,7 +272,7 @@ def decompose_projection_matrix(P: ArrayLike) -> tuple[Array, Array, Array]:
     mask = xp.asarray(
         [[1.0, 1.0, 1.0], [0.0, 1.0, 1.0], [0.0, 0.0, 1.0]], dtype=K.dtype, device=device_of(K)
     )
-    return K * mask, Rq, t
+    return K * mask + 0.0, Rq, t  # + 0.0: no negative zeros
 
 
 def _Kinv_apply(uv: Array, K: Array, xp: Any) -> Array:
