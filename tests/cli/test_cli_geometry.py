@@ -70,3 +70,28 @@ def test_project_errors(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> N
     assert main(["project", str(pts), "--out", str(out)]) == 1
     assert main(["project", str(pts), "--no-such-flag"]) == 2
     assert main(["project", str(tmp_path / "missing.csv"), "--fx", "1", "--out", str(out)]) == 1
+
+
+def test_vanishing_command(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    import numpy as np
+    from PIL import Image
+
+    from imageform.geometry import camera_rotation
+    from tests.geometry.scene_render import render_manhattan
+
+    K = np.array([[700.0, 0.0, 383.5], [0.0, 700.0, 255.5], [0.0, 0.0, 1.0]])
+    img = render_manhattan(K, camera_rotation(0.25, 0.5, 0.03), np.zeros(3), seed=3)
+    src = tmp_path / "scene.png"
+    Image.fromarray((img * 255).round().astype(np.uint8)).save(src)
+    out = tmp_path / "overlay.png"
+    assert main(["vanishing", str(src), "--out", str(out), "--json"]) == 0
+    payload = json.loads(capsys.readouterr().out)
+    assert payload["perspective"] == 3
+    assert abs(payload["K"][0][0] - 700.0) < 21.0
+    with Image.open(out) as ov:
+        assert ov.size == (768, 512) and ov.mode == "RGB"
+    assert main(["vanishing", str(src), "--out", str(out)]) == 1  # exists, no --force
+    bad = tmp_path / "bad.png"
+    bad.write_bytes(b"not an image")
+    assert main(["vanishing", str(bad)]) == 1
+    assert "not a readable image" in capsys.readouterr().err

@@ -27,6 +27,7 @@ from imageform.geometry.homogeneous import (
 )
 from imageform.geometry.homography import apply_homography, estimate_homography
 from imageform.geometry.intrinsics import Intrinsics, intrinsic_matrix, projected_size
+from imageform.geometry.line_segments import LineSegments, detect_line_segments
 from imageform.geometry.projection_models import (
     ConeBeamGeometry,
     orthographic_matrix,
@@ -55,13 +56,16 @@ from imageform.geometry.vanishing import (
     vanishing_point,
     vanishing_point_from_lines,
 )
+from imageform.geometry.vp_detection import VanishingPointResult, detect_vanishing_points
 
 __all__ = [
     "Camera",
     "ConeBeamGeometry",
     "ImagePlane",
     "Intrinsics",
+    "LineSegments",
     "Projection",
+    "VanishingPointResult",
     "apply_homography",
     "are_collinear",
     "axis_rotation",
@@ -69,6 +73,8 @@ __all__ = [
     "camera_rotation",
     "cross_ratio",
     "decompose_projection_matrix",
+    "detect_line_segments",
+    "detect_vanishing_points",
     "estimate_homography",
     "estimate_projection_matrix",
     "euler_to_matrix",

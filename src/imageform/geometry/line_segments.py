@@ -1,0 +1,185 @@
+"""Straight line-segment detection: LSD-style gradient grouping with an a-contrario test.
+
+Algorithm (after von Gioi, Jakubowicz, Morel & Randall, "LSD: a Line Segment Detector",
+IPOL 2012):
+
+1. Grey image, Gaussian smoothing (σ = 0.6 px), the 2×2 gradient of LSD; each pixel's
+   *level-line angle* ``atan2(g_x, -g_y)`` is the direction of the edge through it. Pixels
+   with ``|∇I| < ρ = q / sin τ`` (q = 2 grey levels of 255) are NOTDEF.
+2. Pixels are visited by decreasing gradient magnitude; each unused one seeds a *line-support
+   region*: 8-connected neighbours whose level-line angle is within τ (22.5°) of the
+   region's mean angle join it.
+3. Each region is approximated by a rectangle: the magnitude-weighted centroid, the principal
+   axis of inertia, and the extents of the region's pixels.
+4. Validation: among the n pixels of the rectangle, k are aligned (within τ) with it. Under
+   the a-contrario noise model each is aligned with probability p = τ/π, so the number of
+   false alarms is ``NFA = (W H)^{5/2} · P[Binomial(n, p) ≥ k]``; the segment is kept when
+   ``NFA ≤ ε`` (ε = 1: less than one false detection per image on noise).
+
+Differences from LSD: no 0.8 down-scaling and no rectangle refinement step (regions whose
+aligned-point density is below 0.7 are rejected instead of refined); enough for vanishing
+point work on photographs, and measured on synthetic renders in the tests.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import ndimage, stats
+
+from imageform._typing import ArrayLike, FloatArray
+from imageform._validate import as_image, check_positive
+from imageform.errors import InvalidInputError
+
+__all__ = ["LineSegments", "detect_line_segments"]
+
+_Q = 2.0 / 255.0  # LSD's gradient quantisation bound, 2 grey levels of 255
+
+
+@dataclass(frozen=True)
+class LineSegments:
+    """Detected segments: end points ``(N, 2, 2)`` as ``(u, v)`` pixels, widths and log10 NFA.
+
+    ``lengths`` and ``lines`` (homogeneous, ``a² + b² = 1``) are derived.
+    """
+
+    endpoints: FloatArray
+    widths: FloatArray
+    log10_nfa: FloatArray
+
+    def __len__(self) -> int:
+        return int(self.endpoints.shape[0])
+
+    @property
+    def lengths(self) -> FloatArray:
+        d = self.endpoints[:, 1] - self.endpoints[:, 0]
+        return np.hypot(d[:, 0], d[:, 1])
+
+    @property
+    def midpoints(self) -> FloatArray:
+        return 0.5 * (self.endpoints[:, 0] + self.endpoints[:, 1])
+
+    @property
+    def lines(self) -> FloatArray:
+        from imageform.geometry.vanishing import lines_from_segments
+
+        return np.asarray(lines_from_segments(self.endpoints))
+
+
+def _grey(image: ArrayLike) -> FloatArray:
+    arr = np.asarray(image)
+    if arr.ndim == 2:
+        img = as_image(arr[..., None], channels=1)[..., 0]
+    elif arr.ndim == 3 and arr.shape[-1] == 3:
+        rgb = as_image(arr)
+        img = rgb[..., 0] * 0.299 + rgb[..., 1] * 0.587 + rgb[..., 2] * 0.114  # Rec. 601 luma
+    elif arr.ndim == 3 and arr.shape[-1] == 1:
+        img = as_image(arr, channels=1)[..., 0]
+    else:
+        raise InvalidInputError(
+            f"expected a grey (H, W) or RGB (H, W, 3) image, got shape {arr.shape}"
+        )
+    return np.asarray(img, dtype=np.float64)
+
+
+def _gradient(img: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """LSD's 2×2 gradient at the pixel's lower-right corner; level-line angle and magnitude."""
+    a = img[:-1, :-1]
+    b = img[:-1, 1:]
+    c = img[1:, :-1]
+    d = img[1:, 1:]
+    gx = 0.5 * (b + d - a - c)
+    gy = 0.5 * (c + d - a - b)
+    mag = np.hypot(gx, gy)
+    ang = np.arctan2(gx, -gy)
+    out_a = np.full(img.shape, np.nan)
+    out_m = np.zeros(img.shape)
+    out_a[:-1, :-1] = ang
+    out_m[:-1, :-1] = mag
+    return out_a, out_m
+
+
+def detect_line_segments(
+    image: ArrayLike,
+    *,
+    sigma: float = 0.6,
+    angle_tolerance: float = math.radians(22.5),
+    min_length: float = 10.0,
+    log10_eps: float = 0.0,
+    min_density: float = 0.7,
+) -> LineSegments:
+    """Detect straight line segments in an image (LSD-style; see the module docstring).
+
+    Parameters
+    ----------
+    image : array_like, shape (H, W) or (H, W, 3)
+        Grey or RGB; uint8/uint16 or floats in [0, 1].
+    sigma : float
+        Gaussian smoothing before the gradient, in pixels (0 disables it).
+    angle_tolerance : float
+        τ in radians: the region-growing and alignment tolerance.
+    min_length : float
+        Shorter segments are dropped (pixels).
+    log10_eps : float
+        Keep segments with ``log10 NFA <= log10_eps`` (0: ε = 1 false alarm per image).
+    min_density : float
+        Minimum fraction of aligned pixels in a rectangle (LSD's 0.7).
+
+    Returns
+    -------
+    LineSegments
+        Sorted by decreasing length; end points are pixel-centre coordinates ``(u, v)``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> img = np.zeros((64, 64)); img[:, 32:] = 1.0          # one vertical step edge
+    >>> seg = detect_line_segments(img)
+    >>> len(seg), bool(abs(seg.endpoints[0, 0, 0] - 31.5) < 0.6)
+    (1, True)
+    """
+    from imageform._kernels.lsd import grow_regions, rect_alignment_counts, region_rectangles
+
+    check_positive(angle_tolerance, "angle_tolerance")
+    if not angle_tolerance < math.pi / 2:
+        raise InvalidInputError(f"expected angle_tolerance < pi/2, got {angle_tolerance}")
+    check_positive(sigma, "sigma", allow_zero=True)
+    img = _grey(image)
+    if min(img.shape) < 3:
+        raise InvalidInputError(f"expected an image of at least 3x3 pixels, got {img.shape}")
+    if sigma > 0:
+        img = ndimage.gaussian_filter(img, sigma, mode="nearest")
+    ang, mag = _gradient(img)
+    rho = _Q / math.sin(angle_tolerance)
+    ang[mag <= rho] = np.nan
+    valid = ~np.isnan(ang)
+    order = np.argsort(-mag, axis=None, kind="stable").astype(np.int64)
+    order = order[valid.ravel()[order]]
+    p = angle_tolerance / math.pi
+    H, W = img.shape
+    log_ntests = 2.5 * math.log10(W * H)
+    # a region can only pass if even all its pixels aligned give NFA <= eps
+    min_size = max(2, math.ceil((log_ntests - log10_eps) / -math.log10(p)))
+    labels, n_regions = grow_regions(ang, order, angle_tolerance, min_size)
+    if n_regions == 0:
+        empty = np.zeros((0, 2, 2))
+        return LineSegments(empty, np.zeros(0), np.zeros(0))
+    rects = region_rectangles(labels, n_regions, mag)
+    counts = rect_alignment_counts(rects, ang, angle_tolerance)
+    n, k = counts[:, 0], counts[:, 1]
+    log10_nfa = log_ntests + stats.binom.logsf(k - 1, n, p) / math.log(10.0)
+    density = k / np.maximum(n, 1)
+    theta = rects[:, 2]
+    direction = np.stack((np.cos(theta), np.sin(theta)), axis=-1)
+    centre = rects[:, :2]
+    p0 = centre + rects[:, 3:4] * direction
+    p1 = centre + rects[:, 4:5] * direction
+    # the 2x2 gradient sits at the lower-right pixel corner: shift by half a pixel
+    ends = np.stack((p0, p1), axis=1) + 0.5
+    widths = rects[:, 6] - rects[:, 5] + 1.0
+    lengths = np.hypot(*(ends[:, 1] - ends[:, 0]).T)
+    keep = (log10_nfa <= log10_eps) & (density >= min_density) & (lengths >= min_length)
+    order_out = np.argsort(-lengths[keep], kind="stable")
+    return LineSegments(ends[keep][order_out], widths[keep][order_out], log10_nfa[keep][order_out])
