@@ -33,6 +33,7 @@ __all__ = [
     "check_option",
     "check_positive",
     "check_rotation",
+    "det3",
     "format_shape",
 ]
 
@@ -153,13 +154,25 @@ def check_rotation(R: Any, name: str = "R", *, xp: Any | None = None, atol: floa
             f"expected {name} to be a rotation matrix (R Rᵀ = I), "
             f"max |R Rᵀ - I| = {scalar(err):.3g}"
         )
-    det = xp.linalg.det(R)
+    det = det3(R)
     worst = scalar(xp.max(xp.abs(det - 1.0)))
     if worst > max(atol, 10 * atol):
         raise InvalidInputError(
             f"expected {name} to be a proper rotation (det R = +1), got det R = "
             f"{scalar(xp.min(det)):.6g} (a reflection)"
         )
+
+
+def det3(M: Any) -> Any:
+    """Determinant of (a batch of) 3×3 matrices by cofactor expansion.
+
+    Works in every Array-API namespace, including those without ``linalg.det`` (Dask).
+    """
+    return (
+        M[..., 0, 0] * (M[..., 1, 1] * M[..., 2, 2] - M[..., 1, 2] * M[..., 2, 1])
+        - M[..., 0, 1] * (M[..., 1, 0] * M[..., 2, 2] - M[..., 1, 2] * M[..., 2, 0])
+        + M[..., 0, 2] * (M[..., 1, 0] * M[..., 2, 1] - M[..., 1, 1] * M[..., 2, 0])
+    )
 
 
 def check_option(value: object, valid: Collection[str], what: str) -> str:

@@ -123,3 +123,16 @@ def test_float32_torch_stays_float32() -> None:
     X = torch.zeros((2, 3), dtype=torch.float32) + torch.tensor([0.0, 0.0, 2.0])
     uv, _ = g.project_points(X, K)
     assert uv.dtype == torch.float32
+
+
+def test_dask_projection_is_lazy_and_chunkwise() -> None:
+    da = pytest.importorskip("dask.array")
+    rng = np.random.default_rng(42)
+    Xn = rng.uniform(-1, 1, size=(40_000, 3)) + [0, 0, 3]
+    Xn[::9, 2] = -1.0
+    X = da.from_array(Xn, chunks=(10_000, 3))
+    uv, valid = g.project_points(X, K, R, T)
+    assert isinstance(uv, da.Array) and uv.chunks[0] == X.chunks[0]
+    ref_uv, ref_valid = g.project_points(Xn, K, R, T)
+    np.testing.assert_allclose(uv.compute(), ref_uv, atol=1e-9)
+    np.testing.assert_array_equal(valid.compute(), ref_valid)

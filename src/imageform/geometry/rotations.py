@@ -15,7 +15,7 @@ from typing import Any
 
 from imageform._backend import device_of, namespace
 from imageform._typing import Array, ArrayLike
-from imageform._validate import as_matrix, as_points, check_rotation
+from imageform._validate import as_matrix, as_points, check_rotation, det3
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
 
 __all__ = [
@@ -377,7 +377,7 @@ def is_rotation(R: ArrayLike, *, atol: float = 1e-6) -> Array:
     M = as_matrix(R, "R", (3, 3), xp=xp)
     eye = xp.eye(3, dtype=M.dtype, device=device_of(M))
     orth = xp.max(xp.abs(M @ xp.matrix_transpose(M) - eye), axis=(-2, -1)) <= atol
-    det = xp.abs(xp.linalg.det(M) - 1.0) <= max(atol, 10 * atol)
+    det = xp.abs(det3(M) - 1.0) <= max(atol, 10 * atol)
     return orth & det
 
 
