@@ -1,0 +1,423 @@
+"""Checkerboard (chessboard) inner-corner detection with sub-pixel refinement.
+
+:func:`find_checkerboard` finds the ``cols x rows`` inner corners of a checkerboard in one
+image and returns them in OpenCV's order; :func:`refine_corners` is the sub-pixel step on
+its own (the gradient-orthogonality least squares of OpenCV's ``cornerSubPix``).
+
+Pipeline (helpers in ``checkerboard_candidates`` and ``checkerboard_grid``): saddle
+response ``I_uv² - I_uu I_vv`` of the Gaussian-smoothed image → local maxima → ring test
+(four alternating sectors, two edge directions) → neighbour graph along the edge directions
+→ lattice labels → the largest complete rectangle → lattice and colour checks → order →
+sub-pixel refinement. A grid that is not exactly ``cols x rows`` or fails a check is reported
+as not found, with the reason; a wrong grid is never returned.
+
+Order convention (OpenCV's, verified on its 13 ``left*.jpg`` views)
+-------------------------------------------------------------------
+``pattern_size = (cols, rows)`` counts inner corners per row and per column; corners come
+row by row, ``corners[r * cols + c]``. Which end of the board is "first" is ambiguous
+geometrically (a rectangular grid has a 180° symmetry), so the rule is:
+
+1. rows run along the side with ``cols`` corners;
+2. the row direction ``x = corners[1] - corners[0]`` and the column direction
+   ``y = corners[cols] - corners[0]`` turn clockwise on screen (image ``v`` down):
+   ``x_u y_v - x_v y_u > 0`` (a board seen from its front);
+3. when ``cols + rows`` is odd (e.g. 9 x 6) the board's colours break the 180° symmetry:
+   the first cell (between corners ``0, 1, cols, cols + 1``) is the **dark** one. This is
+   what OpenCV 5.0 returns on all 13 views (tested) — the first corner is *not* always the
+   one nearest the image's top-left (on ``left02`` it is the bottom-left one);
+4. when ``cols + rows`` is even the colours are symmetric too; then, as OpenCV does for
+   even x even boards, the first row is the upper one (``corners[(rows-1)*cols]`` has a
+   ``v`` not smaller than ``corners[0]``); for square patterns the first corner is the one
+   with the smallest ``u + v`` among the four rotations.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+import numpy.typing as npt
+from numpy.typing import NDArray
+
+from imageform._backend import to_numpy, use_numba
+from imageform._kernels.checkerboard import refine_corners_numba, refine_corners_numpy
+from imageform._validate import as_image, as_points, format_shape
+from imageform.errors import InvalidInputError
+from imageform.geometry.checkerboard_candidates import find_candidates
+from imageform.geometry.checkerboard_grid import (
+    cell_means,
+    cell_parity_ok,
+    grow_rectangle,
+    label_lattice,
+    lattice_problem,
+    neighbours,
+)
+
+__all__ = ["CheckerboardResult", "find_checkerboard", "refine_corners"]
+
+#: Smoothing scales (pixels) tried in turn until the board is found.
+DEFAULT_SIGMAS = (2.0, 1.2, 3.5)
+#: Seeds (strongest candidates) tried per scale.
+MAX_SEEDS = 40
+
+# ITU-R BT.601 luma weights (the grey conversion OpenCV's cvtColor uses)
+_LUMA = np.array([0.299, 0.587, 0.114])
+
+
+@dataclass(frozen=True)
+class CheckerboardResult:
+    """The outcome of :func:`find_checkerboard`.
+
+    Attributes
+    ----------
+    found : bool
+        True when the full ``cols x rows`` grid was found and passed the checks.
+    corners : ndarray (cols*rows, 2) float64 or None
+        Inner corners ``(u, v)`` in pixels (centre of the top-left pixel = (0, 0)), row by
+        row in the module's order convention; None when not found.
+    reason : str
+        Why the board was not found ("" when found).
+    pattern_size : tuple of int
+        ``(cols, rows)`` as asked.
+    status : ndarray (cols*rows,) int64 or None
+        Sub-pixel status per corner (0 converged, 1 ``max_iter`` reached, 2 flat window,
+        3 left the image, 4 moved farther than the window — kept unrefined); None when not
+        refined or not found.
+    sigma : float or None
+        The smoothing scale at which the board was found.
+    """
+
+    found: bool
+    corners: NDArray[np.float64] | None
+    reason: str = ""
+    pattern_size: tuple[int, int] = (0, 0)
+    status: NDArray[np.int64] | None = field(default=None, repr=False)
+    sigma: float | None = None
+
+    def grid(self) -> NDArray[np.float64]:
+        """The corners as ``(rows, cols, 2)``; raises when not found."""
+        if self.corners is None:
+            raise InvalidInputError(f"no checkerboard was found: {self.reason}")
+        cols, rows = self.pattern_size
+        return self.corners.reshape(rows, cols, 2)
+
+
+def _as_gray(image: object) -> NDArray[np.float64]:
+    arr = as_image(image, "image", channels=None, range_check=False)
+    arr = np.asarray(to_numpy(arr), dtype=np.float64)
+    if arr.ndim == 3 and arr.shape[-1] == 1:
+        arr = arr[..., 0]
+    elif arr.ndim == 3 and arr.shape[-1] == 3:
+        arr = arr @ _LUMA
+    elif arr.ndim != 2:
+        raise InvalidInputError(
+            "expected image of shape (H, W), (H, W, 1) or (H, W, 3), "
+            f"got {format_shape(tuple(arr.shape))}"
+        )
+    if min(arr.shape) < 16:
+        raise InvalidInputError(
+            f"expected an image of at least 16 x 16 pixels, got {format_shape(arr.shape)}"
+        )
+    return arr
+
+
+def _check_pattern(pattern_size: object) -> tuple[int, int]:
+    try:
+        cols, rows = pattern_size  # type: ignore[misc]
+    except (TypeError, ValueError) as exc:
+        raise InvalidInputError(
+            f"expected pattern_size as (cols, rows) inner corners, got {pattern_size!r}"
+        ) from exc
+    out = []
+    for v in (cols, rows):
+        if isinstance(v, bool) or not isinstance(v, int | np.integer) or v < 2:
+            raise InvalidInputError(
+                "expected pattern_size as two integers >= 2 (inner corners per row, per "
+                f"column), got {pattern_size!r}"
+            )
+        out.append(int(v))
+    return out[0], out[1]
+
+
+def _orient(
+    grid: NDArray[np.float64], gray: NDArray[np.float64], cols: int, rows: int
+) -> NDArray[np.float64]:
+    """Apply the module's order convention to a ``(rows, cols, 2)`` or ``(cols, rows, 2)`` grid."""
+    if grid.shape[:2] != (rows, cols):
+        grid = grid.transpose(1, 0, 2)
+    x = grid[0, 1] - grid[0, 0]
+    y = grid[1, 0] - grid[0, 0]
+    if x[0] * y[1] - x[1] * y[0] < 0:
+        grid = grid[:, ::-1]
+    if (cols + rows) % 2 == 1:
+        means = cell_means(gray, grid)
+        flip = 1 - 2 * (np.add.outer(np.arange(rows - 1), np.arange(cols - 1)) % 2)
+        # > 0 when the parity-0 cells (the first cell among them) are the bright ones
+        if float(np.mean(means * flip)) > 0:
+            grid = grid[::-1, ::-1]
+    elif rows != cols:
+        if grid[-1, 0, 1] < grid[0, 0, 1]:
+            grid = grid[::-1, ::-1]
+    else:
+        options = [np.rot90(grid, k, axes=(0, 1)) for k in range(4)]
+        grid = min(options, key=lambda g: float(g[0, 0, 0] + g[0, 0, 1]))
+    return np.ascontiguousarray(grid)
+
+
+def _detect(
+    gray: NDArray[np.float64], cols: int, rows: int, sigma: float
+) -> tuple[NDArray[np.float64] | None, str, int]:
+    """One scale: the ordered grid or (None, reason, size of the best partial grid)."""
+    cand = find_candidates(gray, sigma)
+    n = cand.xy.shape[0]
+    if n < cols * rows:
+        return None, f"{n} corner candidates, fewer than the {cols * rows} inner corners", n
+    nbr = neighbours(cand, min_dist=2.0 * sigma)
+    tried = np.zeros(n, dtype=bool)
+    best_reason, best_size = "no grid of corners found", 0
+    want = sorted((cols, rows))
+    for seed in range(min(n, MAX_SEEDS)):
+        if tried[seed] or np.any(nbr[seed] < 0):
+            continue
+        node_at = label_lattice(seed, cand, nbr)
+        rect = grow_rectangle(node_at, cand.xy)
+        if rect.size == 0:
+            continue
+        tried[rect.ravel()] = True
+        shape = sorted(rect.shape)
+        grid = cand.xy[rect]
+        if shape != want:
+            if rect.size > best_size:
+                best_size = rect.size
+                if shape[0] >= want[0] and shape[1] >= want[1]:
+                    best_reason = (
+                        f"found a grid of {rect.shape[1]} x {rect.shape[0]} corners, larger "
+                        f"than the pattern {cols} x {rows}: wrong pattern_size?"
+                    )
+                else:
+                    best_reason = (
+                        f"largest grid found has {rect.shape[1]} x {rect.shape[0]} corners, "
+                        f"pattern {cols} x {rows} asked: board not fully visible or missed"
+                    )
+            continue
+        problem = lattice_problem(grid)
+        if problem is None and not cell_parity_ok(cell_means(gray, grid)):
+            problem = "the cells of the grid do not alternate dark and bright"
+        if problem is not None:
+            if rect.size >= best_size:
+                best_size, best_reason = rect.size, f"grid rejected: {problem}"
+            continue
+        return _orient(grid, gray, cols, rows), "", rect.size
+    return None, best_reason, best_size
+
+
+def refine_corners(
+    image: npt.ArrayLike,
+    corners: npt.ArrayLike,
+    *,
+    half_window: int | tuple[int, int] = 11,
+    max_iter: int = 30,
+    eps: float = 1e-3,
+) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
+    """Sub-pixel corner positions by gradient orthogonality (OpenCV's ``cornerSubPix``).
+
+    Each corner ``q`` is moved to the point to which the image gradients ``g_p`` in a
+    window around it are orthogonal, iterating on a bilinearly resampled window:
+
+    .. math::
+
+        q' = \\Big(\\sum_p w_p\\, g_p g_p^\\top\\Big)^{-1} \\sum_p w_p\\, g_p g_p^\\top\\, p,
+        \\qquad w_p = e^{-(x_p/h_x)^2} e^{-(y_p/h_y)^2}
+
+    with central-difference gradients, window offsets ``x_p ∈ [-h_x, h_x]``; it stops after
+    ``max_iter`` iterations or when a step is ``<= eps`` pixels. A corner that ends more than
+    the half window away from its start keeps its start (status 4), as in OpenCV.
+
+    Parameters
+    ----------
+    image : array_like (H, W) or (H, W, 3)
+        Grey or RGB image (uint8, uint16 or floats of any scale).
+    corners : array_like (N, 2)
+        Starting positions ``(u, v)``, centre of the top-left pixel = (0, 0).
+    half_window : int or (int, int)
+        ``h`` or ``(h_x, h_y)``: the window is ``(2 h_y + 1) x (2 h_x + 1)`` pixels; OpenCV's
+        ``winSize``. Must be smaller than half the square size of the board.
+    max_iter, eps : int, float
+        OpenCV's ``TermCriteria(EPS + COUNT, max_iter, eps)``.
+
+    Returns
+    -------
+    corners : ndarray (N, 2) float64
+        Refined positions.
+    status : ndarray (N,) int64
+        0 converged, 1 ``max_iter`` reached, 2 flat window (singular), 3 left the image,
+        4 moved farther than the half window (start kept).
+
+    Notes
+    -----
+    Förstner & Gülch (1987), "A fast operator for detection and precise location of distinct
+    points, corners and centres of circular features"; the iteration, window weights and
+    stopping rule of OpenCV's ``cornerSubPix`` (agrees with OpenCV 5.0 to 1e-4 px on its
+    ``left*.jpg`` views, tested).
+
+    Examples
+    --------
+    An ideal corner at (20.3, 19.6), blurred:
+
+    >>> import numpy as np
+    >>> from scipy.ndimage import gaussian_filter
+    >>> v, u = np.mgrid[0:40, 0:40] * 1.0
+    >>> img = gaussian_filter(((u - 20.3) * (v - 19.6) > 0) * 1.0, 1.0)
+    >>> xy, status = refine_corners(img, [[19.0, 21.0]], half_window=5)
+    >>> np.round(xy, 1), status
+    (array([[20.3, 19.6]]), array([0]))
+    """
+    gray = _as_gray(image)
+    pts = np.asarray(to_numpy(as_points(corners, "corners", 2, dtype=None)), dtype=np.float64)
+    if pts.ndim != 2:
+        raise InvalidInputError(
+            f"expected corners of shape (N, 2), got {format_shape(tuple(pts.shape))}"
+        )
+    hx, hy = (half_window, half_window) if isinstance(half_window, int) else half_window
+    for h in (hx, hy):
+        if isinstance(h, bool) or not isinstance(h, int | np.integer) or h < 1:
+            raise InvalidInputError(f"expected half_window as integers >= 1, got {half_window!r}")
+    if isinstance(max_iter, bool) or not isinstance(max_iter, int) or max_iter < 1:
+        raise InvalidInputError(f"expected max_iter an integer >= 1, got {max_iter!r}")
+    if not (math.isfinite(eps) and eps >= 0):
+        raise InvalidInputError(f"expected eps >= 0, got {eps!r}")
+    return _refine(gray, pts, int(hx), int(hy), max_iter, float(eps))
+
+
+def _refine(
+    gray: NDArray[np.float64], pts: NDArray[np.float64], hx: int, hy: int, max_iter: int, eps: float
+) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
+    if pts.shape[0] == 0:
+        return pts.copy(), np.zeros(0, dtype=np.int64)
+    kernel = refine_corners_numba if use_numba(gray) else refine_corners_numpy
+    return kernel(np.ascontiguousarray(gray), np.ascontiguousarray(pts), hx, hy, max_iter, eps)
+
+
+def find_checkerboard(
+    image: npt.ArrayLike,
+    pattern_size: tuple[int, int],
+    *,
+    refine: bool = True,
+    sigma: float | None = None,
+    half_window: int | None = None,
+    max_iter: int = 30,
+    eps: float = 1e-3,
+) -> CheckerboardResult:
+    """Find the inner corners of a ``cols x rows`` checkerboard, sub-pixel refined.
+
+    Corners are saddle points of the smoothed intensity; candidates are local maxima of
+
+    .. math::  s = I_{uv}^2 - I_{uu} I_{vv}  \\quad (= -\\det \\nabla^2 I)
+
+    that show four alternating dark/bright sectors on a ring; their edge directions link
+    them into a lattice, which must be exactly ``cols x rows``, nearly straight and evenly
+    spaced locally, with convex cells of one orientation and alternating cell colours.
+    The corners are then refined with :func:`refine_corners`.
+
+    Parameters
+    ----------
+    image : array_like (H, W), (H, W, 1) or (H, W, 3)
+        Grey or RGB image (RGB is turned grey with BT.601 luma weights); uint8, uint16 or
+        floats of any scale (detection does not depend on the scale); finite. Arrays of
+        other libraries are converted to NumPy: detection runs on NumPy.
+    pattern_size : (int, int)
+        ``(cols, rows)``: inner corners per row and per column, each >= 2 (OpenCV's
+        ``patternSize``; the OpenCV sample board is ``(9, 6)``).
+    refine : bool
+        Run the sub-pixel refinement (otherwise positions are the response peaks, ~0.5 px).
+    sigma : float, optional
+        Smoothing scale in pixels; by default 2.0, then 1.2, then 3.5 are tried until found.
+        Squares must be at least about ``5 sigma`` pixels wide.
+    half_window : int, optional
+        Half size of the refinement window (OpenCV's ``winSize``); by default
+        ``min(11, max(2, floor(0.4 * shortest grid step)))`` so that the window never
+        reaches the neighbouring corners.
+    max_iter, eps : int, float
+        Refinement stopping rule (OpenCV's ``TermCriteria(EPS + COUNT, 30, 0.001)``).
+
+    Returns
+    -------
+    CheckerboardResult
+        ``found``, ``corners`` (cols*rows, 2) in the order of the module docstring (row by
+        row; first cell dark when ``cols + rows`` is odd) or None, ``reason`` when not found.
+
+    Notes
+    -----
+    Saddle response: Chen & Zhang (2005), "Accurate calibration for a camera-projector
+    measurement system based on structured light projection" (eq. 3); the ring test and
+    grid growing follow Geiger et al. (2012), "Automatic camera and range sensor calibration
+    using a single shot", ICRA, sec. III; refinement: Förstner & Gülch (1987) as in OpenCV's
+    ``cornerSubPix``. On OpenCV's ``left*.jpg`` views the corners agree with OpenCV 5.0's
+    ``findChessboardCorners`` + ``cornerSubPix`` to about 1e-5 px (median; tested).
+
+    Examples
+    --------
+    A synthetic 5 x 4 board of 20-pixel squares whose first inner corner is at (39.5, 29.5):
+
+    >>> import numpy as np
+    >>> v, u = np.mgrid[0:140, 0:160] + 0.5
+    >>> board = (((u - 20) // 20 + (v - 10) // 20) % 2 == 1) * 0.8 + 0.1
+    >>> res = find_checkerboard(board, (5, 4))
+    >>> res.found, res.corners.shape
+    (True, (20, 2))
+    >>> np.round(res.corners[0], 2)
+    array([39.5, 29.5])
+    """
+    gray = _as_gray(image)
+    cols, rows = _check_pattern(pattern_size)
+    if sigma is not None:
+        sig = float(sigma)
+        if not (math.isfinite(sig) and sig > 0):
+            raise InvalidInputError(f"expected sigma > 0, got {sigma!r}")
+    if half_window is not None and (
+        isinstance(half_window, bool) or not isinstance(half_window, int) or half_window < 1
+    ):
+        raise InvalidInputError(f"expected half_window an integer >= 1, got {half_window!r}")
+    if isinstance(max_iter, bool) or not isinstance(max_iter, int) or max_iter < 1:
+        raise InvalidInputError(f"expected max_iter an integer >= 1, got {max_iter!r}")
+    if not (math.isfinite(eps) and eps >= 0):
+        raise InvalidInputError(f"expected eps >= 0, got {eps!r}")
+    size = (cols, rows)
+    if float(gray.max() - gray.min()) == 0.0:
+        return CheckerboardResult(False, None, "the image is constant (no contrast)", size)
+    sigmas: tuple[float, ...] = DEFAULT_SIGMAS if sigma is None else (float(sigma),)
+    reason, best = "no checkerboard found", -1
+    for s in sigmas:
+        grid, why, n = _detect(gray, cols, rows, s)
+        if grid is not None:
+            return _finish(gray, grid, size, s, refine, half_window, max_iter, eps)
+        if n > best:
+            reason, best = why, n
+    return CheckerboardResult(False, None, reason, size)
+
+
+def _finish(
+    gray: NDArray[np.float64],
+    grid: NDArray[np.float64],
+    size: tuple[int, int],
+    sigma: float,
+    refine: bool,
+    half_window: int | None,
+    max_iter: int,
+    eps: float,
+) -> CheckerboardResult:
+    pts = grid.reshape(-1, 2)
+    if not refine:
+        return CheckerboardResult(True, pts.copy(), "", size, None, sigma)
+    if half_window is None:
+        step = min(
+            float(np.linalg.norm(np.diff(grid, axis=0), axis=-1).min()),
+            float(np.linalg.norm(np.diff(grid, axis=1), axis=-1).min()),
+        )
+        half_window = min(11, max(2, math.floor(0.4 * step)))
+    refined, status = _refine(gray, pts, half_window, half_window, max_iter, eps)
+    problem = lattice_problem(refined.reshape(grid.shape))
+    if problem is not None:
+        return CheckerboardResult(False, None, f"refined grid rejected: {problem}", size)
+    return CheckerboardResult(True, refined, "", size, status, sigma)

@@ -1,0 +1,215 @@
+"""Checkerboard structure recovery: neighbour graph, lattice labels, rectangle growing, checks.
+
+Private helpers of :mod:`imageform.geometry.checkerboard`.
+
+The inner corners of a checkerboard lie on two families of straight lines (the square edges;
+nearly straight under lens distortion), and each corner's two edge directions point at its
+four grid neighbours. So:
+
+1. **Neighbour graph.** For each candidate and each of its two edge directions ``d`` and
+   signs ``±``, the neighbour is the nearest candidate within a small angle of ``±d`` that
+   itself has an edge direction along the joining vector (the edge is shared).
+2. **Lattice labels.** A breadth-first walk from a seed gives each reached candidate integer
+   coordinates ``(i, j)``, carrying an oriented basis from node to node (Geiger et al. 2012,
+   sec. III-B grow a grid the same way, by energy; here only complete rows are accepted).
+3. **Rectangle growing.** From the seed, the rectangle of labels grows one full row or
+   column at a time while the new row or column is complete; partial rows (spurious
+   corners at the board's border) never enter.
+4. **Checks.** The final grid must be a consistent lattice: every row and column nearly
+   straight and evenly spaced locally (second differences small against the spacing), every
+   cell a convex quadrilateral of the same orientation, and the cells' brightness must
+   alternate like a checkerboard's.
+"""
+
+from __future__ import annotations
+
+from collections import deque
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy import ndimage
+
+from imageform.geometry.checkerboard_candidates import Candidates
+
+__all__ = ["cell_parity_ok", "grow_rectangle", "label_lattice", "lattice_problem", "neighbours"]
+
+#: Largest angle (radians) between an edge direction and the vector to a neighbour.
+ANGLE_TOL = 0.3
+
+
+def neighbours(cand: Candidates, min_dist: float) -> NDArray[np.int64]:
+    """Neighbour table ``(N, 2, 2)``: ``[n, k, s]`` the neighbour along ``(+d_k, -d_k)[s]``, or -1."""
+    xy, dirs = cand.xy, cand.dirs
+    n = xy.shape[0]
+    out = np.full((n, 2, 2), -1, dtype=np.int64)
+    if n < 2:
+        return out
+    vec = xy[None, :, :] - xy[:, None, :]  # vec[a, b] = xy[b] - xy[a]
+    dist = np.linalg.norm(vec, axis=2)
+    np.fill_diagonal(dist, np.inf)
+    unit = vec / np.where(dist > 0, dist, np.inf)[:, :, None]
+    cos_tol = np.cos(ANGLE_TOL)
+    # the candidate b must have an edge along the joining vector (shared edge)
+    shared = np.max(np.abs(np.einsum("abk,bdk->abd", unit, dirs)), axis=2) > cos_tol
+    usable = shared & (dist > min_dist)
+    for k in range(2):
+        along = np.einsum("abk,ak->ab", unit, dirs[:, k])
+        for s, sign in enumerate((1.0, -1.0)):
+            ok = usable & (sign * along > cos_tol)
+            d = np.where(ok, dist, np.inf)
+            best = np.argmin(d, axis=1)
+            found = np.isfinite(d[np.arange(n), best])
+            out[found, k, s] = best[found]
+    # keep mutual links only: b must list a among its own neighbours
+    flat = out.reshape(n, 4)
+    b = np.where(flat >= 0, flat, 0)
+    mutual = np.any(flat[b] == np.arange(n)[:, None, None], axis=2)
+    flat[~mutual] = -1
+    return out
+
+
+def label_lattice(
+    seed: int, cand: Candidates, nbr: NDArray[np.int64]
+) -> dict[tuple[int, int], int]:
+    """Breadth-first lattice coordinates of the component of ``seed``; conflicts are dropped."""
+    dirs = cand.dirs
+    coord_of: dict[int, tuple[int, int]] = {seed: (0, 0)}
+    node_at: dict[tuple[int, int], int] = {(0, 0): seed}
+    basis: dict[int, tuple[NDArray[np.float64], NDArray[np.float64]]] = {
+        seed: (dirs[seed, 0], dirs[seed, 1])
+    }
+    queue = deque([seed])
+    while queue:
+        a = queue.popleft()
+        ei, ej = basis[a]
+        ia, ja = coord_of[a]
+        for k in range(2):
+            for s, sign in enumerate((1.0, -1.0)):
+                b = int(nbr[a, k, s])
+                if b < 0:
+                    continue
+                v = sign * dirs[a, k]
+                di, dj = float(v @ ei), float(v @ ej)
+                step = (int(np.sign(di)), 0) if abs(di) >= abs(dj) else (0, int(np.sign(dj)))
+                c = (ia + step[0], ja + step[1])
+                if b in coord_of:
+                    continue
+                if c in node_at:
+                    continue
+                # the neighbour's basis: its edge directions matched to ours, same sense
+                db = dirs[b]
+                ki = int(np.argmax(np.abs(db @ ei)))
+                bi = db[ki] * np.sign(db[ki] @ ei)
+                bj = db[1 - ki] * np.sign(db[1 - ki] @ ej)
+                coord_of[b] = c
+                node_at[c] = b
+                basis[b] = (bi, bj)
+                queue.append(b)
+    return node_at
+
+
+def grow_rectangle(
+    node_at: dict[tuple[int, int], int], xy: NDArray[np.float64], max_error: float = 0.35
+) -> NDArray[np.int64]:
+    """The largest complete rectangle grown from the 3 x 3 block around ``(0, 0)``.
+
+    A new row (or column) is accepted when all its labels exist and every new point lies
+    within ``max_error`` grid steps of its linear prediction ``2 p_k - p_{k-1}``. Returns
+    node indices ``(n_i, n_j)`` (first axis ``i``); empty when the 3 x 3 block is incomplete.
+    """
+    if not all((i, j) in node_at for i in (-1, 0, 1) for j in (-1, 0, 1)):
+        return np.zeros((0, 0), dtype=np.int64)
+
+    def fits(new: list[tuple[int, int]], last: list[tuple[int, int]], prev: list[tuple[int, int]]) -> bool:
+        if not all(c in node_at for c in new):
+            return False
+        p_new = xy[[node_at[c] for c in new]]
+        p_last = xy[[node_at[c] for c in last]]
+        p_prev = xy[[node_at[c] for c in prev]]
+        step = np.linalg.norm(p_last - p_prev, axis=1)
+        err = np.linalg.norm(p_new - (2.0 * p_last - p_prev), axis=1)
+        return bool(np.all(err < max_error * step))
+
+    i0, i1, j0, j1 = -1, 1, -1, 1
+    grew = True
+    while grew:
+        grew = False
+        js = range(j0, j1 + 1)
+        if fits([(i1 + 1, j) for j in js], [(i1, j) for j in js], [(i1 - 1, j) for j in js]):
+            i1, grew = i1 + 1, True
+        if fits([(i0 - 1, j) for j in js], [(i0, j) for j in js], [(i0 + 1, j) for j in js]):
+            i0, grew = i0 - 1, True
+        is_ = range(i0, i1 + 1)
+        if fits([(i, j1 + 1) for i in is_], [(i, j1) for i in is_], [(i, j1 - 1) for i in is_]):
+            j1, grew = j1 + 1, True
+        if fits([(i, j0 - 1) for i in is_], [(i, j0) for i in is_], [(i, j0 + 1) for i in is_]):
+            j0, grew = j0 - 1, True
+    return np.array(
+        [[node_at[(i, j)] for j in range(j0, j1 + 1)] for i in range(i0, i1 + 1)], dtype=np.int64
+    )
+
+
+def lattice_problem(grid: NDArray[np.float64], max_bend: float = 0.3) -> str | None:
+    """Why ``grid`` (R, C, 2) is not a consistent lattice, or None when it is.
+
+    Second differences along rows and columns must stay below ``max_bend`` times the local
+    spacing; all cells must be convex with one orientation.
+    """
+    for axis, name in ((1, "row"), (0, "column")):
+        g = np.moveaxis(grid, axis, 0)
+        if g.shape[0] < 3:
+            continue
+        second = np.linalg.norm(g[2:] - 2.0 * g[1:-1] + g[:-2], axis=-1)
+        spacing = 0.5 * np.linalg.norm(g[2:] - g[:-2], axis=-1)
+        ratio = second / spacing
+        if not np.all(ratio < max_bend):
+            return f"a {name} of the grid bends or jumps (second difference {ratio.max():.2f} x spacing)"
+        steps = np.linalg.norm(g[1:] - g[:-1], axis=-1)
+        jump = steps[1:] / steps[:-1]
+        if not np.all((jump > 0.5) & (jump < 2.0)):
+            return f"spacing along a {name} changes abruptly (ratio {jump.min():.2f}-{jump.max():.2f})"
+    p00, p01, p10, p11 = grid[:-1, :-1], grid[:-1, 1:], grid[1:, :-1], grid[1:, 1:]
+
+    def cross(a: NDArray, b: NDArray) -> NDArray:
+        return a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]  # type: ignore[no-any-return]
+
+    turns = np.stack(
+        [
+            cross(p01 - p00, p11 - p01),
+            cross(p11 - p01, p10 - p11),
+            cross(p10 - p11, p00 - p10),
+            cross(p00 - p10, p01 - p00),
+        ]
+    )
+    if not (np.all(turns > 0) or np.all(turns < 0)):
+        return "the grid's cells are not convex quadrilaterals of one orientation"
+    return None
+
+
+def cell_means(gray: NDArray[np.float64], grid: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Mean brightness of each cell ``(R-1, C-1)`` sampled around the cell centre."""
+    centre = 0.25 * (grid[:-1, :-1] + grid[:-1, 1:] + grid[1:, :-1] + grid[1:, 1:])
+    # samples a third of the way from the centre to each corner
+    pts = [centre]
+    for corner in (grid[:-1, :-1], grid[:-1, 1:], grid[1:, :-1], grid[1:, 1:]):
+        pts.append(centre + (corner - centre) / 3.0)
+    p = np.stack(pts)  # (5, R-1, C-1, 2)
+    vals = ndimage.map_coordinates(
+        gray, [p[..., 1].ravel(), p[..., 0].ravel()], order=1, mode="nearest"
+    ).reshape(p.shape[:-1])
+    return vals.mean(axis=0)  # type: ignore[no-any-return]
+
+
+def cell_parity_ok(means: NDArray[np.float64]) -> bool:
+    """Whether adjacent cells alternate dark/bright like a checkerboard's.
+
+    With cell parity ``P = (i + j) mod 2``, the difference (parity-1 cell minus parity-0
+    cell) over every pair of adjacent cells must have one sign.
+    """
+    flip = 1 - 2 * (np.add.outer(np.arange(means.shape[0]), np.arange(means.shape[1])) % 2)
+    dx = np.diff(means, axis=1) * flip[:, :-1]
+    dy = np.diff(means, axis=0) * flip[:-1, :]
+    diffs = np.concatenate([dx.ravel(), dy.ravel()])
+    if diffs.size == 0:
+        return True
+    return bool(np.all(diffs > 0) or np.all(diffs < 0))
