@@ -23,10 +23,19 @@ The kernel (:func:`refine_corners_numba`) loops per corner; the twin
 from __future__ import annotations
 
 import numpy as np
-from numba import njit, prange
+from numba import njit
 from numpy.typing import NDArray
 
-__all__ = ["corner_window_weights", "refine_corners_numba", "refine_corners_numpy"]
+__all__ = [
+    "corner_window_weights",
+    "gaussian_weights",
+    "local_maxima_numba",
+    "local_maxima_numpy",
+    "refine_corners_numba",
+    "refine_corners_numpy",
+    "smooth_saddle_numba",
+    "smooth_saddle_numpy",
+]
 
 
 def corner_window_weights(hx: int, hy: int) -> NDArray[np.float64]:
@@ -36,9 +45,9 @@ def corner_window_weights(hx: int, hy: int) -> NDArray[np.float64]:
     return np.exp(-(y**2))[:, None] * np.exp(-(x**2))[None, :]
 
 
-@njit(cache=True, fastmath=False, parallel=True)
+@njit(cache=True, fastmath=False)
 def refine_corners_numba(
-    image: NDArray[np.float64],
+    image: NDArray[np.floating],
     corners: NDArray[np.float64],
     hx: int,
     hy: int,
@@ -59,7 +68,7 @@ def refine_corners_numba(
             x = (j - hx) / hx
             mask[i, j] = np.exp(-y * y) * np.exp(-x * x)
     eps2 = eps * eps
-    for k in prange(n):
+    for k in range(n):
         patch = np.empty((wh + 2, ww + 2))
         cx = corners[k, 0]
         cy = corners[k, 1]
@@ -129,7 +138,7 @@ def refine_corners_numba(
 
 
 def refine_corners_numpy(
-    image: NDArray[np.float64],
+    image: NDArray[np.floating],
     corners: NDArray[np.float64],
     hx: int,
     hy: int,
@@ -194,3 +203,119 @@ def refine_corners_numpy(
     cur[far] = start[far]
     status[far] = 4
     return cur, status
+
+
+def gaussian_weights(sigma: float, truncate: float = 3.0) -> NDArray[np.float64]:
+    """Normalised 1-D Gaussian taps ``exp(-x²/(2σ²))``, radius ``int(truncate σ + 0.5)``.
+
+    The same taps as :func:`scipy.ndimage.gaussian_filter` with this ``truncate``.
+    """
+    radius = int(truncate * sigma + 0.5)
+    x = np.arange(-radius, radius + 1, dtype=np.float64)
+    w = np.exp(-0.5 * (x / sigma) ** 2)
+    return w / w.sum()
+
+
+@njit(cache=True, fastmath=False)
+def smooth_saddle_numba(
+    gray: NDArray[np.floating], taps: NDArray[np.floating]
+) -> tuple[NDArray[np.floating], NDArray[np.floating]]:  # pragma: no cover - numba-compiled
+    """Separable Gaussian (edges replicated) and the saddle response ``I_uv² - I_uu I_vv``.
+
+    Computes in the dtype of ``gray`` (the detector passes float32: 5x faster than float64).
+    """
+    h, w = gray.shape
+    r = taps.shape[0] // 2
+    pad = np.empty((h + 2 * r, w + 2 * r), dtype=gray.dtype)
+    for y in range(h + 2 * r):
+        yy = min(max(y - r, 0), h - 1)
+        for x in range(w + 2 * r):
+            xx = min(max(x - r, 0), w - 1)
+            pad[y, x] = gray[yy, xx]
+    tmp = np.zeros((h + 2 * r, w), dtype=gray.dtype)
+    for y in range(h + 2 * r):
+        for k in range(2 * r + 1):
+            wk = taps[k]
+            for x in range(w):
+                tmp[y, x] += wk * pad[y, x + k]
+    smooth = np.zeros((h, w), dtype=gray.dtype)
+    for y in range(h):
+        for k in range(2 * r + 1):
+            wk = taps[k]
+            for x in range(w):
+                smooth[y, x] += wk * tmp[y + k, x]
+    resp = np.zeros((h, w), dtype=gray.dtype)
+    for y in range(1, h - 1):
+        for x in range(1, w - 1):
+            s = smooth[y, x]
+            ixx = smooth[y, x + 1] - 2.0 * s + smooth[y, x - 1]
+            iyy = smooth[y + 1, x] - 2.0 * s + smooth[y - 1, x]
+            ixy = 0.25 * (
+                smooth[y + 1, x + 1]
+                - smooth[y + 1, x - 1]
+                - smooth[y - 1, x + 1]
+                + smooth[y - 1, x - 1]
+            )
+            resp[y, x] = ixy * ixy - ixx * iyy
+    return smooth, resp
+
+
+def smooth_saddle_numpy(
+    gray: NDArray[np.floating], taps: NDArray[np.floating]
+) -> tuple[NDArray[np.floating], NDArray[np.floating]]:
+    """Plain twin of :func:`smooth_saddle_numba` (scipy.ndimage separable correlation)."""
+    from scipy import ndimage
+
+    taps = taps.astype(gray.dtype)
+    tmp = ndimage.correlate1d(gray, taps, axis=1, mode="nearest")
+    s = ndimage.correlate1d(tmp, taps, axis=0, mode="nearest")
+    resp = np.zeros_like(s)
+    c = s[1:-1, 1:-1]
+    ixx = s[1:-1, 2:] - 2.0 * c + s[1:-1, :-2]
+    iyy = s[2:, 1:-1] - 2.0 * c + s[:-2, 1:-1]
+    ixy = 0.25 * (s[2:, 2:] - s[2:, :-2] - s[:-2, 2:] + s[:-2, :-2])
+    resp[1:-1, 1:-1] = ixy * ixy - ixx * iyy
+    return s, resp
+
+
+@njit(cache=True, fastmath=False)
+def local_maxima_numba(
+    resp: NDArray[np.floating], radius: int, threshold: float, border: int
+) -> tuple[NDArray[np.int64], NDArray[np.int64]]:  # pragma: no cover - numba-compiled
+    """Rows and columns of pixels ``> threshold`` and ``>=`` all others in their window."""
+    h, w = resp.shape
+    ys = []
+    xs = []
+    for y in range(border, h - border):
+        for x in range(border, w - border):
+            v = resp[y, x]
+            if v <= threshold:
+                continue
+            keep = True
+            for yy in range(max(y - radius, 0), min(y + radius + 1, h)):
+                for xx in range(max(x - radius, 0), min(x + radius + 1, w)):
+                    if resp[yy, xx] > v:
+                        keep = False
+                        break
+                if not keep:
+                    break
+            if keep:
+                ys.append(y)
+                xs.append(x)
+    return np.array(ys, dtype=np.int64), np.array(xs, dtype=np.int64)
+
+
+def local_maxima_numpy(
+    resp: NDArray[np.floating], radius: int, threshold: float, border: int
+) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
+    """Plain twin of :func:`local_maxima_numba` (scipy.ndimage.maximum_filter)."""
+    from scipy import ndimage
+
+    local_max = ndimage.maximum_filter(resp, size=2 * radius + 1, mode="nearest")
+    mask = (resp >= local_max) & (resp > threshold)
+    mask[:border] = False
+    mask[resp.shape[0] - border :] = False
+    mask[:, :border] = False
+    mask[:, resp.shape[1] - border :] = False
+    ys, xs = np.nonzero(mask)
+    return ys.astype(np.int64), xs.astype(np.int64)

@@ -28,7 +28,16 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy import ndimage
 
-__all__ = ["Candidates", "find_candidates", "saddle_response"]
+from imageform._backend import use_numba
+from imageform._kernels.checkerboard import (
+    gaussian_weights,
+    local_maxima_numba,
+    local_maxima_numpy,
+    smooth_saddle_numba,
+    smooth_saddle_numpy,
+)
+
+__all__ = ["Candidates", "find_candidates", "ring_test"]
 
 #: Number of samples on the ring of the ring test.
 RING_SAMPLES = 32
@@ -48,33 +57,19 @@ class Candidates:
     contrast: NDArray[np.float64]
 
 
-def saddle_response(
-    smooth: NDArray[np.float64],
-) -> NDArray[np.float64]:
-    """``I_uv² - I_uu I_vv`` of an already smoothed image, by central differences."""
-    s = smooth
-    ixx = np.zeros_like(s)
-    iyy = np.zeros_like(s)
-    ixy = np.zeros_like(s)
-    ixx[:, 1:-1] = s[:, 2:] - 2.0 * s[:, 1:-1] + s[:, :-2]
-    iyy[1:-1, :] = s[2:, :] - 2.0 * s[1:-1, :] + s[:-2, :]
-    ixy[1:-1, 1:-1] = 0.25 * (s[2:, 2:] - s[2:, :-2] - s[:-2, 2:] + s[:-2, :-2])
-    return ixy * ixy - ixx * iyy  # type: ignore[no-any-return]
-
-
 def _ring_offsets(radius: float) -> NDArray[np.float64]:
     ang = 2.0 * np.pi * np.arange(RING_SAMPLES) / RING_SAMPLES
     return np.stack([radius * np.cos(ang), radius * np.sin(ang)], axis=1)
 
 
-def _bilinear(img: NDArray[np.float64], x: NDArray[np.float64], y: NDArray[np.float64]) -> NDArray:
+def _bilinear(img: NDArray[np.floating], x: NDArray[np.float64], y: NDArray[np.float64]) -> NDArray:
     return ndimage.map_coordinates(img, [y.ravel(), x.ravel()], order=1, mode="nearest").reshape(
         x.shape
     )
 
 
 def ring_test(
-    smooth: NDArray[np.float64],
+    smooth: NDArray[np.floating],
     xy: NDArray[np.float64],
     radius: float,
     min_contrast: float,
@@ -118,45 +113,48 @@ def ring_test(
     return ok, dirs, contrast
 
 
+def _peak_offset(minus: NDArray, centre: NDArray, plus: NDArray) -> NDArray[np.float64]:
+    """Vertex of the parabola through three samples (0 where it is not a maximum)."""
+    curv = minus - 2.0 * centre + plus
+    ok = curv < 0
+    off = np.zeros(centre.shape)
+    off[ok] = 0.5 * (minus[ok] - plus[ok]) / curv[ok]
+    # a maximum sample has |offset| <= 1/2; ties on plateaus may give up to 1/2 exactly
+    return off
+
+
 def find_candidates(
-    gray: NDArray[np.float64],
+    gray: NDArray[np.floating],
     sigma: float,
     *,
     relative_threshold: float = 0.02,
-    max_candidates: int = 600,
+    max_candidates: int = 400,
 ) -> Candidates:
     """Saddle-response maxima of ``gray`` that pass the ring test."""
-    smooth = ndimage.gaussian_filter(gray, sigma, mode="nearest", truncate=3.0)
-    resp = saddle_response(smooth)
-    nms = max(2, round(1.5 * sigma))
-    peak = float(resp.max()) if resp.size else 0.0
+    taps = gaussian_weights(sigma).astype(np.float32)
+    fast = use_numba(gray)
+    # float32 is ample for a detector (the refinement runs on the float64 image)
+    g32 = gray.astype(np.float32)
+    smooth, resp = (smooth_saddle_numba if fast else smooth_saddle_numpy)(g32, taps)
     empty = Candidates(np.zeros((0, 2)), np.zeros((0, 2, 2)), np.zeros(0), np.zeros(0))
+    peak = float(resp.max())
     if not peak > 0.0:
         return empty
-    local_max = ndimage.maximum_filter(resp, size=2 * nms + 1, mode="constant", cval=0.0)
-    border = int(np.ceil(3 * sigma)) + 1
-    mask = (resp == local_max) & (resp > relative_threshold * peak)
-    mask[:border] = False
-    mask[-border:] = False
-    mask[:, :border] = False
-    mask[:, -border:] = False
-    ys, xs = np.nonzero(mask)
+    nms = max(2, round(1.5 * sigma))
+    border = taps.size // 2 + 1
+    ys, xs = (local_maxima_numba if fast else local_maxima_numpy)(
+        resp, nms, relative_threshold * peak, border
+    )
     if ys.size == 0:
         return empty
     r = resp[ys, xs]
-    order = np.argsort(-r)[:max_candidates]
+    order = np.argsort(-r, kind="stable")[:max_candidates]
     ys, xs, r = ys[order], xs[order], r[order]
-    # sub-pixel peak of the response by a separable quadratic fit (start for the grid search)
-    h, w = resp.shape
-    xm, xp_ = np.clip(xs - 1, 0, w - 1), np.clip(xs + 1, 0, w - 1)
-    ym, yp = np.clip(ys - 1, 0, h - 1), np.clip(ys + 1, 0, h - 1)
-    dx_den = resp[ys, xm] - 2 * r + resp[ys, xp_]
-    dy_den = resp[ym, xs] - 2 * r + resp[yp, xs]
-    dx = np.where(dx_den < 0, 0.5 * (resp[ys, xm] - resp[ys, xp_]) / np.where(dx_den < 0, dx_den, -1), 0)
-    dy = np.where(dy_den < 0, 0.5 * (resp[ym, xs] - resp[yp, xs]) / np.where(dy_den < 0, dy_den, -1), 0)
-    xy = np.stack([xs + np.clip(dx, -0.5, 0.5), ys + np.clip(dy, -0.5, 0.5)], axis=1).astype(float)
-    # ring test on the image smoothed at a fraction of sigma (keeps small squares readable)
-    lo, hi = np.percentile(gray, [1.0, 99.0])
+    dx = _peak_offset(resp[ys, xs - 1], r, resp[ys, xs + 1])
+    dy = _peak_offset(resp[ys - 1, xs], r, resp[ys + 1, xs])
+    xy = np.stack([xs + dx, ys + dy], axis=1).astype(np.float64)
+    # contrast scale of the image from a subsample (robust to a few hot pixels)
+    lo, hi = np.percentile(smooth[::8, ::8], [1.0, 99.0])
     min_contrast = 0.15 * float(hi - lo)
     ok, dirs, contrast = ring_test(smooth, xy, 2.5 * sigma, min_contrast)
-    return Candidates(xy[ok], dirs[ok], r[ok], contrast[ok])
+    return Candidates(xy[ok], dirs[ok], r[ok].astype(np.float64), contrast[ok])

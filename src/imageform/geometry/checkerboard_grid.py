@@ -28,6 +28,7 @@ from collections import deque
 import numpy as np
 from numpy.typing import NDArray
 from scipy import ndimage
+from scipy.spatial import cKDTree
 
 from imageform.geometry.checkerboard_candidates import Candidates
 
@@ -37,29 +38,43 @@ __all__ = ["cell_parity_ok", "grow_rectangle", "label_lattice", "lattice_problem
 ANGLE_TOL = 0.3
 
 
-def neighbours(cand: Candidates, min_dist: float) -> NDArray[np.int64]:
-    """Neighbour table ``(N, 2, 2)``: ``[n, k, s]`` the neighbour along ``(+d_k, -d_k)[s]``, or -1."""
+def neighbours(cand: Candidates, min_dist: float, k_nearest: int = 16) -> NDArray[np.int64]:
+    """Neighbour table ``(N, 2, 2)``: ``[n, k, s]`` the neighbour along ``(+d_k, -d_k)[s]``, or -1.
+
+    Only the ``k_nearest`` nearest candidates of each are considered (a grid neighbour is
+    among the 8 nearest on a board); links are kept only when mutual.
+    """
     xy, dirs = cand.xy, cand.dirs
     n = xy.shape[0]
     out = np.full((n, 2, 2), -1, dtype=np.int64)
     if n < 2:
         return out
-    vec = xy[None, :, :] - xy[:, None, :]  # vec[a, b] = xy[b] - xy[a]
-    dist = np.linalg.norm(vec, axis=2)
-    np.fill_diagonal(dist, np.inf)
-    unit = vec / np.where(dist > 0, dist, np.inf)[:, :, None]
+    kq = min(n, k_nearest + 1)
+    dist, idx = cKDTree(xy).query(xy, k=kq)
+    dist, idx = dist[:, 1:], idx[:, 1:]  # drop self
+    dx = xy[idx, 0] - xy[:, None, 0]
+    dy = xy[idx, 1] - xy[:, None, 1]
+    safe = np.where(dist > 0, dist, np.inf)
+    ux, uy = dx / safe, dy / safe
     cos_tol = np.cos(ANGLE_TOL)
     # the candidate b must have an edge along the joining vector (shared edge)
-    shared = np.max(np.abs(np.einsum("abk,bdk->abd", unit, dirs)), axis=2) > cos_tol
+    db = dirs[idx]  # (N, K, 2, 2)
+    shared = (
+        np.maximum(
+            np.abs(ux * db[..., 0, 0] + uy * db[..., 0, 1]),
+            np.abs(ux * db[..., 1, 0] + uy * db[..., 1, 1]),
+        )
+        > cos_tol
+    )
     usable = shared & (dist > min_dist)
+    rows = np.arange(n)
     for k in range(2):
-        along = np.einsum("abk,ak->ab", unit, dirs[:, k])
+        along = ux * dirs[:, None, k, 0] + uy * dirs[:, None, k, 1]
         for s, sign in enumerate((1.0, -1.0)):
-            ok = usable & (sign * along > cos_tol)
-            d = np.where(ok, dist, np.inf)
+            d = np.where(usable & (sign * along > cos_tol), dist, np.inf)
             best = np.argmin(d, axis=1)
-            found = np.isfinite(d[np.arange(n), best])
-            out[found, k, s] = best[found]
+            found = np.isfinite(d[rows, best])
+            out[found, k, s] = idx[rows, best][found]
     # keep mutual links only: b must list a among its own neighbours
     flat = out.reshape(n, 4)
     b = np.where(flat >= 0, flat, 0)
@@ -69,41 +84,56 @@ def neighbours(cand: Candidates, min_dist: float) -> NDArray[np.int64]:
 
 
 def label_lattice(
-    seed: int, cand: Candidates, nbr: NDArray[np.int64]
+    seed: int, cand: Candidates, nbr: NDArray[np.int64], max_hops: int = 10**9
 ) -> dict[tuple[int, int], int]:
-    """Breadth-first lattice coordinates of the component of ``seed``; conflicts are dropped."""
-    dirs = cand.dirs
+    """Breadth-first lattice coordinates of the component of ``seed``; conflicts are dropped.
+
+    Each reached node carries an oriented basis ``(e_i, e_j)`` (its own edge directions,
+    matched in order and sense to its parent's) that maps its links to lattice steps.
+    The walk stops ``max_hops`` links from the seed.
+    """
+    dirs = cand.dirs.tolist()
+    links = nbr.tolist()
     coord_of: dict[int, tuple[int, int]] = {seed: (0, 0)}
     node_at: dict[tuple[int, int], int] = {(0, 0): seed}
-    basis: dict[int, tuple[NDArray[np.float64], NDArray[np.float64]]] = {
-        seed: (dirs[seed, 0], dirs[seed, 1])
+    d0 = dirs[seed]
+    basis: dict[int, tuple[float, float, float, float]] = {
+        seed: (d0[0][0], d0[0][1], d0[1][0], d0[1][1])
     }
     queue = deque([seed])
     while queue:
         a = queue.popleft()
-        ei, ej = basis[a]
+        eix, eiy, ejx, ejy = basis[a]
         ia, ja = coord_of[a]
+        if abs(ia) + abs(ja) >= max_hops:
+            continue
         for k in range(2):
+            vx, vy = dirs[a][k]
             for s, sign in enumerate((1.0, -1.0)):
-                b = int(nbr[a, k, s])
-                if b < 0:
+                b = links[a][k][s]
+                if b < 0 or b in coord_of:
                     continue
-                v = sign * dirs[a, k]
-                di, dj = float(v @ ei), float(v @ ej)
-                step = (int(np.sign(di)), 0) if abs(di) >= abs(dj) else (0, int(np.sign(dj)))
-                c = (ia + step[0], ja + step[1])
-                if b in coord_of:
-                    continue
+                di = sign * (vx * eix + vy * eiy)
+                dj = sign * (vx * ejx + vy * ejy)
+                if abs(di) >= abs(dj):
+                    c = (ia + (1 if di > 0 else -1), ja)
+                else:
+                    c = (ia, ja + (1 if dj > 0 else -1))
                 if c in node_at:
                     continue
                 # the neighbour's basis: its edge directions matched to ours, same sense
-                db = dirs[b]
-                ki = int(np.argmax(np.abs(db @ ei)))
-                bi = db[ki] * np.sign(db[ki] @ ei)
-                bj = db[1 - ki] * np.sign(db[1 - ki] @ ej)
+                (p0x, p0y), (p1x, p1y) = dirs[b]
+                c0 = p0x * eix + p0y * eiy
+                c1 = p1x * eix + p1y * eiy
+                if abs(c0) >= abs(c1):
+                    (bix, biy), (bjx, bjy), ci = (p0x, p0y), (p1x, p1y), c0
+                else:
+                    (bix, biy), (bjx, bjy), ci = (p1x, p1y), (p0x, p0y), c1
+                si = 1.0 if ci >= 0 else -1.0
+                sj = 1.0 if bjx * ejx + bjy * ejy >= 0 else -1.0
                 coord_of[b] = c
                 node_at[c] = b
-                basis[b] = (bi, bj)
+                basis[b] = (si * bix, si * biy, sj * bjx, sj * bjy)
                 queue.append(b)
     return node_at
 
@@ -120,7 +150,9 @@ def grow_rectangle(
     if not all((i, j) in node_at for i in (-1, 0, 1) for j in (-1, 0, 1)):
         return np.zeros((0, 0), dtype=np.int64)
 
-    def fits(new: list[tuple[int, int]], last: list[tuple[int, int]], prev: list[tuple[int, int]]) -> bool:
+    def fits(
+        new: list[tuple[int, int]], last: list[tuple[int, int]], prev: list[tuple[int, int]]
+    ) -> bool:
         if not all(c in node_at for c in new):
             return False
         p_new = xy[[node_at[c] for c in new]]
@@ -163,15 +195,20 @@ def lattice_problem(grid: NDArray[np.float64], max_bend: float = 0.3) -> str | N
         spacing = 0.5 * np.linalg.norm(g[2:] - g[:-2], axis=-1)
         ratio = second / spacing
         if not np.all(ratio < max_bend):
-            return f"a {name} of the grid bends or jumps (second difference {ratio.max():.2f} x spacing)"
+            return (
+                f"a {name} of the grid bends or jumps "
+                f"(second difference {ratio.max():.2f} x spacing)"
+            )
         steps = np.linalg.norm(g[1:] - g[:-1], axis=-1)
         jump = steps[1:] / steps[:-1]
         if not np.all((jump > 0.5) & (jump < 2.0)):
-            return f"spacing along a {name} changes abruptly (ratio {jump.min():.2f}-{jump.max():.2f})"
+            return (
+                f"spacing along a {name} changes abruptly (ratio {jump.min():.2f}-{jump.max():.2f})"
+            )
     p00, p01, p10, p11 = grid[:-1, :-1], grid[:-1, 1:], grid[1:, :-1], grid[1:, 1:]
 
     def cross(a: NDArray, b: NDArray) -> NDArray:
-        return a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]  # type: ignore[no-any-return]
+        return a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
 
     turns = np.stack(
         [
@@ -186,7 +223,7 @@ def lattice_problem(grid: NDArray[np.float64], max_bend: float = 0.3) -> str | N
     return None
 
 
-def cell_means(gray: NDArray[np.float64], grid: NDArray[np.float64]) -> NDArray[np.float64]:
+def cell_means(gray: NDArray[np.floating], grid: NDArray[np.float64]) -> NDArray[np.float64]:
     """Mean brightness of each cell ``(R-1, C-1)`` sampled around the cell centre."""
     centre = 0.25 * (grid[:-1, :-1] + grid[:-1, 1:] + grid[1:, :-1] + grid[1:, 1:])
     # samples a third of the way from the centre to each corner
@@ -197,7 +234,7 @@ def cell_means(gray: NDArray[np.float64], grid: NDArray[np.float64]) -> NDArray[
     vals = ndimage.map_coordinates(
         gray, [p[..., 1].ravel(), p[..., 0].ravel()], order=1, mode="nearest"
     ).reshape(p.shape[:-1])
-    return vals.mean(axis=0)  # type: ignore[no-any-return]
+    return vals.mean(axis=0)
 
 
 def cell_parity_ok(means: NDArray[np.float64]) -> bool:
