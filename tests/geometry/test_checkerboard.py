@@ -15,7 +15,6 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from scipy import ndimage
 
 from imageform.errors import InvalidInputError
 from imageform.geometry.checkerboard import CheckerboardResult, find_checkerboard, refine_corners
@@ -185,6 +184,7 @@ def test_refine_corners_matches_cornersubpix(views: dict[str, np.ndarray]) -> No
     """Cross-check: refine_corners from OpenCV's start points = cornerSubPix to 1e-3 px."""
     img = views["left03.jpg"]
     ok, start = cv2.findChessboardCorners(img, PATTERN, None)
+    assert ok
     ref = cv2.cornerSubPix(img, start.copy(), (11, 11), (-1, -1), CRITERIA).reshape(-1, 2)
     xy, status = refine_corners(img, start.reshape(-1, 2), half_window=11)
     assert np.abs(xy - ref).max() < 1e-3
