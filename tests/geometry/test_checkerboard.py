@@ -17,7 +17,13 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from imageform.errors import InvalidInputError
-from imageform.geometry.checkerboard import CheckerboardResult, find_checkerboard, refine_corners
+from imageform.geometry.checkerboard import (
+    CheckerboardNotFoundWarning,
+    CheckerboardResult,
+    find_checkerboard,
+    find_checkerboards,
+    refine_corners,
+)
 from tests.helpers import to_backend
 
 cv2 = pytest.importorskip("cv2")
@@ -429,3 +435,47 @@ def test_refine_corners_flat_window_status() -> None:
     xy, status = refine_corners(np.full((40, 40), 0.5), [[20.0, 20.0]], half_window=5)
     assert status.tolist() == [2]
     assert xy.tolist() == [[20.0, 20.0]]
+
+
+# --------------------------------------------------------------------------- sets of views
+
+
+def test_find_checkerboards_on_the_opencv_set(views: dict[str, np.ndarray]) -> None:
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # no warning: every view has the board
+        res = find_checkerboards(list(views.values()), PATTERN, names=list(views))
+    assert [r.found for r in res] == [True] * 13
+
+
+def test_find_checkerboards_warns_for_views_without_board(views: dict[str, np.ndarray]) -> None:
+    imgs = [views["left01.jpg"], views["left01.jpg"][:, ::-1] * 0 + 128, views["left02.jpg"]]
+    with pytest.warns(CheckerboardNotFoundWarning, match=r"1 of 3 views: blank.png \(the image"):
+        res = find_checkerboards(imgs, PATTERN, names=["a.png", "blank.png", "c.png"])
+    assert [r.found for r in res] == [True, False, True]
+
+
+def test_find_checkerboards_different_sizes(views: dict[str, np.ndarray]) -> None:
+    imgs = [views["left01.jpg"], views["left02.jpg"][:240, :320]]
+    with pytest.raises(InvalidInputError, match=r"one size.*view 1 of 320 x 240 px"):
+        find_checkerboards(imgs, PATTERN)
+
+
+@pytest.mark.parametrize(
+    ("images", "match"),
+    [
+        ([], "at least one image"),
+        (np.zeros((3, 40, 40)), "list or tuple of images"),
+        ([np.zeros((40, 40)), np.zeros((40, 40, 2))], r"view 1: expected image of shape"),
+        ([np.zeros((40, 40)), "not-an-image.jpg"], r"view 1: expected a numeric array"),
+    ],
+)
+def test_find_checkerboards_bad_sets(images: object, match: str) -> None:
+    with pytest.raises(InvalidInputError, match=match):
+        find_checkerboards(images, (3, 3))  # type: ignore[arg-type]
+
+
+def test_find_checkerboards_names_length() -> None:
+    with pytest.raises(InvalidInputError, match="2 names"):
+        find_checkerboards([np.zeros((40, 40))] * 2, (3, 3), names=["a"])

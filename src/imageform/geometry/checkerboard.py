@@ -34,6 +34,8 @@ geometrically (a rectangular grid has a 180° symmetry), so the rule is:
 from __future__ import annotations
 
 import math
+import warnings
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -54,12 +56,22 @@ from imageform.geometry.checkerboard_grid import (
 from imageform.geometry.checkerboard_subpix import as_gray, refine_corners
 from imageform.geometry.checkerboard_subpix import refine as refine_clean
 
-__all__ = ["CheckerboardResult", "find_checkerboard", "refine_corners"]
+__all__ = [
+    "CheckerboardNotFoundWarning",
+    "CheckerboardResult",
+    "find_checkerboard",
+    "find_checkerboards",
+    "refine_corners",
+]
 
 #: Smoothing scales (pixels) tried in turn until the board is found.
 DEFAULT_SIGMAS = (2.0, 1.2, 3.5)
 #: Seeds (strongest candidates) tried per scale.
 MAX_SEEDS = 40
+
+
+class CheckerboardNotFoundWarning(UserWarning):
+    """Some views of a set show no complete checkerboard (each is named with its reason)."""
 
 
 @dataclass(frozen=True)
@@ -319,3 +331,103 @@ def _finish(
     if problem is not None:
         return CheckerboardResult(False, None, f"refined grid rejected: {problem}", size)
     return CheckerboardResult(True, refined, "", size, status, sigma)
+
+
+def find_checkerboards(
+    images: Sequence[npt.ArrayLike],
+    pattern_size: tuple[int, int],
+    *,
+    names: Sequence[str] | None = None,
+    **options: Any,
+) -> list[CheckerboardResult]:
+    """:func:`find_checkerboard` on every view of a calibration set, with the set's checks.
+
+    All views must have the same size ``(H, W)`` (one camera, one resolution); views without
+    a complete board are reported in one :class:`CheckerboardNotFoundWarning` naming each
+    view and its reason (their results have ``found=False``), never silently dropped.
+
+    .. math::  \text{result}_k = \\operatorname{find\\_checkerboard}(\text{image}_k), \\quad
+               k = 0 \\ldots N-1
+
+    Parameters
+    ----------
+    images : sequence of array_like (H, W) or (H, W, 3)
+        The views (a list or tuple; a single array is refused as ambiguous).
+    pattern_size : (int, int)
+        ``(cols, rows)`` inner corners, the same for every view.
+    names : sequence of str, optional
+        Names of the views (file names) used in messages; default ``view 0``, ``view 1`` ...
+    **options
+        Passed to :func:`find_checkerboard` (``refine``, ``sigma``, ``half_window``, ...).
+
+    Returns
+    -------
+    list of CheckerboardResult
+        One per view, in order.
+
+    Raises
+    ------
+    InvalidInputError
+        No views, a bad view (its name in the message), views of different sizes,
+        ``names`` of the wrong length, a bad ``pattern_size``.
+
+    Notes
+    -----
+    The set-level checks mirror what calibration needs (Zhang 2000, "A flexible new
+    technique for camera calibration", sec. 3: one camera, several views of one planar
+    pattern).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> v, u = np.mgrid[0:140, 0:160]
+    >>> i, j = (u - 20) // 20, (v - 20) // 20
+    >>> dark = (i >= 0) & (i < 6) & (j >= 0) & (j < 5) & ((i + j) % 2 == 0)
+    >>> board = np.where(dark, 0.1, 0.9)
+    >>> import warnings
+    >>> with warnings.catch_warnings(record=True) as caught:
+    ...     warnings.simplefilter("always")
+    ...     res = find_checkerboards([board, np.full((140, 160), 0.5)], (5, 4))
+    >>> [r.found for r in res], caught[0].category.__name__
+    ([True, False], 'CheckerboardNotFoundWarning')
+    """
+    if isinstance(images, str | bytes) or not isinstance(images, Sequence):
+        raise InvalidInputError(
+            "expected images as a list or tuple of images, got "
+            f"{type(images).__name__}; wrap a single image in a list"
+        )
+    if len(images) == 0:
+        raise InvalidInputError("expected at least one image, got an empty sequence")
+    if names is None:
+        labels = [f"view {k}" for k in range(len(images))]
+    else:
+        labels = [str(n) for n in names]
+        if len(labels) != len(images):
+            raise InvalidInputError(
+                f"expected {len(images)} names (one per image), got {len(labels)}"
+            )
+    size = _check_pattern(pattern_size)
+    grays = []
+    for label, image in zip(labels, images, strict=True):
+        try:
+            grays.append(as_gray(image))
+        except InvalidInputError as exc:
+            raise InvalidInputError(f"{label}: {exc}") from exc
+    shapes = [g.shape for g in grays]
+    if len(set(shapes)) > 1:
+        odd = next(k for k, sh in enumerate(shapes) if sh != shapes[0])
+        raise InvalidInputError(
+            "expected all images of one size (one camera, one resolution), got "
+            f"{labels[0]} of {shapes[0][1]} x {shapes[0][0]} px and {labels[odd]} of "
+            f"{shapes[odd][1]} x {shapes[odd][0]} px"
+        )
+    results = [find_checkerboard(g, size, **options) for g in grays]
+    missing = [f"{lab} ({r.reason})" for lab, r in zip(labels, results, strict=True) if not r.found]
+    if missing:
+        warnings.warn(
+            f"no complete {size[0]} x {size[1]} checkerboard in {len(missing)} of "
+            f"{len(results)} views: " + "; ".join(missing),
+            CheckerboardNotFoundWarning,
+            stacklevel=2,
+        )
+    return results
