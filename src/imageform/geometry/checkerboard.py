@@ -192,7 +192,8 @@ def _detect(
                 else:
                     best_reason = (
                         f"largest grid found has {rect.shape[1]} x {rect.shape[0]} corners, "
-                        f"pattern {cols} x {rows} asked: board not fully visible or missed"
+                        f"pattern {cols} x {rows} asked: board not fully visible, corners missed, "
+                        "or pattern_size too large"
                     )
             continue
         problem = lattice_problem(grid)
