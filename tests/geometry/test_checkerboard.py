@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from scipy import ndimage
 
 from imageform.errors import InvalidInputError
 from imageform.geometry.checkerboard import (
@@ -479,3 +480,36 @@ def test_find_checkerboards_bad_sets(images: object, match: str) -> None:
 def test_find_checkerboards_names_length() -> None:
     with pytest.raises(InvalidInputError, match="2 names"):
         find_checkerboards([np.zeros((40, 40))] * 2, (3, 3), names=["a"])
+
+
+# --------------------------------------------------------------------------- harder views
+
+
+def test_largest_of_two_boards(
+    views: dict[str, np.ndarray], opencv_corners: dict[str, np.ndarray]
+) -> None:
+    """left08 at 2x: the 9 x 6 board on the monitor behind becomes detectable too; the
+    target (the larger board) is returned. cv2.resize x2 maps u -> 2u + 0.5."""
+    big = cv2.resize(views["left08.jpg"], None, fx=2, fy=2, interpolation=cv2.INTER_CUBIC)
+    res = find_checkerboard(big, PATTERN)
+    assert res.found, res.reason
+    expected = 2.0 * opencv_corners["left08.jpg"] + 0.5
+    assert np.median(np.linalg.norm(res.corners - expected, axis=1)) < 0.5
+
+
+@pytest.mark.parametrize("kind", ["noise", "gradient", "blur", "half"])
+def test_degraded_views_still_found(views: dict[str, np.ndarray], kind: str) -> None:
+    rng = np.random.default_rng(0)
+    for name in ("left02.jpg", "left13.jpg"):
+        g = views[name].astype(np.float64)
+        if kind == "noise":
+            g = g + rng.normal(0, 10, g.shape)
+        elif kind == "gradient":
+            g = g * (0.3 + 0.7 * np.arange(g.shape[1]) / g.shape[1])
+        elif kind == "blur":
+            g = ndimage.gaussian_filter(g, 3.0)
+        else:
+            g = cv2.resize(views[name], None, fx=0.5, fy=0.5, interpolation=cv2.INTER_AREA)
+        img = np.clip(np.round(g), 0, 255).astype(np.uint8)
+        res = find_checkerboard(img, PATTERN)
+        assert res.found, f"{name}: {res.reason}"

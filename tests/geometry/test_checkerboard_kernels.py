@@ -19,6 +19,8 @@ from imageform._kernels.checkerboard import (
     local_maxima_numpy,
     refine_corners_numba,
     refine_corners_numpy,
+    sample_bilinear_numba,
+    sample_bilinear_numpy,
     smooth_saddle_numba,
     smooth_saddle_numpy,
 )
@@ -82,3 +84,13 @@ def test_refine_twin(image: np.ndarray) -> None:
     b, sb = refine_corners_numpy(image, pts, 5, 4, 30, 1e-3)
     assert np.abs(a - b).max() < 1e-9
     assert sa.tolist() == sb.tolist()
+
+
+def test_sample_bilinear_twin(image: np.ndarray) -> None:
+    rng = np.random.default_rng(5)
+    u = rng.uniform(-3, 163, size=(50, 8))
+    v = rng.uniform(-3, 123, size=(50, 8))
+    a = sample_bilinear_numba(image, u, v)
+    b = sample_bilinear_numpy(image, u, v)
+    assert a.shape == (50, 8)
+    assert np.abs(a - b).max() < 1e-12

@@ -33,6 +33,8 @@ __all__ = [
     "local_maxima_numpy",
     "refine_corners_numba",
     "refine_corners_numpy",
+    "sample_bilinear_numba",
+    "sample_bilinear_numpy",
     "smooth_saddle_numba",
     "smooth_saddle_numpy",
 ]
@@ -291,6 +293,9 @@ def local_maxima_numba(
             v = resp[y, x]
             if v <= threshold:
                 continue
+            # quick rejection by the 4-neighbours before the full window
+            if resp[y, x - 1] > v or resp[y, x + 1] > v or resp[y - 1, x] > v or resp[y + 1, x] > v:
+                continue
             keep = True
             for yy in range(max(y - radius, 0), min(y + radius + 1, h)):
                 for xx in range(max(x - radius, 0), min(x + radius + 1, w)):
@@ -319,3 +324,39 @@ def local_maxima_numpy(
     mask[:, resp.shape[1] - border :] = False
     ys, xs = np.nonzero(mask)
     return ys.astype(np.int64), xs.astype(np.int64)
+
+
+@njit(cache=True, fastmath=False)
+def sample_bilinear_numba(
+    image: NDArray[np.floating], u: NDArray[np.float64], v: NDArray[np.float64]
+) -> NDArray[np.float64]:  # pragma: no cover - numba-compiled
+    """Bilinear samples of ``image`` at ``(u, v)`` (any equal shapes), edges replicated."""
+    h, w = image.shape
+    uf = u.ravel()
+    vf = v.ravel()
+    out = np.empty(uf.size)
+    for k in range(uf.size):
+        x = min(max(uf[k], 0.0), w - 1.0)
+        y = min(max(vf[k], 0.0), h - 1.0)
+        x0 = min(int(np.floor(x)), w - 2) if w > 1 else 0
+        y0 = min(int(np.floor(y)), h - 2) if h > 1 else 0
+        ax = x - x0
+        ay = y - y0
+        x1 = min(x0 + 1, w - 1)
+        y1 = min(y0 + 1, h - 1)
+        out[k] = (1.0 - ay) * ((1.0 - ax) * image[y0, x0] + ax * image[y0, x1]) + ay * (
+            (1.0 - ax) * image[y1, x0] + ax * image[y1, x1]
+        )
+    return out.reshape(u.shape)
+
+
+def sample_bilinear_numpy(
+    image: NDArray[np.floating], u: NDArray[np.float64], v: NDArray[np.float64]
+) -> NDArray[np.float64]:
+    """Plain twin of :func:`sample_bilinear_numba` (scipy.ndimage.map_coordinates, order 1)."""
+    from scipy import ndimage
+
+    vals = ndimage.map_coordinates(
+        image.astype(np.float64), [v.ravel(), u.ravel()], order=1, mode="nearest"
+    )
+    return vals.reshape(u.shape)

@@ -29,6 +29,9 @@ geometrically (a rectangular grid has a 180° symmetry), so the rule is:
    even x even boards, the first row is the upper one (``corners[(rows-1)*cols]`` has a
    ``v`` not smaller than ``corners[0]``); for square patterns the first corner is the one
    with the smallest ``u + v`` among the four rotations.
+
+When several complete boards of the asked size are visible, the largest (image area) is
+returned.
 """
 
 from __future__ import annotations
@@ -162,7 +165,11 @@ def _orient(
 def _detect(
     gray: NDArray[np.floating], cols: int, rows: int, sigma: float
 ) -> tuple[NDArray[np.float64] | None, str, int]:
-    """One scale: the ordered grid or (None, reason, size of the best partial grid)."""
+    """One scale: the ordered grid or (None, reason, size of the best partial grid).
+
+    When several complete boards pass the checks (a board on a monitor behind the target),
+    the one covering the largest image area is returned.
+    """
     cand = find_candidates(gray, sigma)
     n = cand.xy.shape[0]
     if n < cols * rows:
@@ -171,6 +178,7 @@ def _detect(
     tried = np.zeros(n, dtype=bool)
     best_reason, best_size = "no grid of corners found", 0
     want = sorted((cols, rows))
+    boards: list[NDArray[np.float64]] = []
     for seed in range(min(n, MAX_SEEDS)):
         if tried[seed] or np.any(nbr[seed] < 0):
             continue
@@ -203,8 +211,17 @@ def _detect(
             if rect.size >= best_size:
                 best_size, best_reason = rect.size, f"grid rejected: {problem}"
             continue
-        return _orient(grid, gray, cols, rows), "", rect.size
+        boards.append(grid)
+    if boards:
+        return _orient(max(boards, key=_area), gray, cols, rows), "", cols * rows
     return None, best_reason, best_size
+
+
+def _area(grid: NDArray[np.float64]) -> float:
+    """Image area of the quadrilateral of a grid's four outer corners (shoelace)."""
+    q = np.array([grid[0, 0], grid[0, -1], grid[-1, -1], grid[-1, 0]])
+    x, y = q[:, 0], q[:, 1]
+    return 0.5 * abs(float(x @ np.roll(y, -1) - y @ np.roll(x, -1)))
 
 
 def find_checkerboard(
