@@ -49,6 +49,7 @@ from numpy.typing import NDArray
 from imageform.errors import InvalidInputError
 from imageform.geometry.checkerboard_candidates import find_candidates
 from imageform.geometry.checkerboard_grid import (
+    board_continues,
     cell_means,
     cell_parity_ok,
     grow_rectangle,
@@ -207,6 +208,13 @@ def _detect(
         problem = lattice_problem(grid)
         if problem is None and not cell_parity_ok(cell_means(gray, grid)):
             problem = "the cells of the grid do not alternate dark and bright"
+        if problem is None:
+            side = board_continues(gray, grid)
+            if side is not None:
+                problem = (
+                    f"the checkerboard continues {side} of the {cols} x {rows} grid (a "
+                    "larger board cut by the image border? check pattern_size)"
+                )
         if problem is not None:
             if rect.size >= best_size:
                 best_size, best_reason = rect.size, f"grid rejected: {problem}"

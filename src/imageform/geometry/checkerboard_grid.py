@@ -250,3 +250,57 @@ def cell_parity_ok(means: NDArray[np.float64]) -> bool:
     if diffs.size == 0:
         return True
     return bool(np.all(diffs > 0) or np.all(diffs < 0))
+
+
+def board_continues(gray: NDArray[np.floating], grid: NDArray[np.float64]) -> str | None:
+    """Which side of ``grid`` (R, C, 2) the checkerboard visibly continues past, or None.
+
+    A complete ``cols x rows`` grid can still be the wrong one: a sub-grid of a larger
+    board whose extra rows are cut by the image border. Past each side the next row of
+    inner corners ``k + 1`` is extrapolated (quadratically) and the image is read a quarter
+    to a half cell beyond it, in the middle of each cell. Past a real board's last inner
+    row lie its outer squares and then the margin or background, which do not alternate;
+    if instead three or more neighbouring cells there (inside the image) alternate with the
+    board's own parity by at least a sixth of its contrast, the board goes on.
+    A board cut within a quarter cell of row ``k + 1`` cannot be told from a smaller one.
+    """
+    h, w = gray.shape
+    sides = {
+        "after the last row": grid,
+        "before the first row": grid[::-1],
+        "after the last column": grid.transpose(1, 0, 2),
+        "before the first column": grid.transpose(1, 0, 2)[::-1],
+    }
+    fractions = np.array([0.25, 0.35, 0.45])
+    for name, g in sides.items():
+        if g.shape[0] < 3 or g.shape[1] < 3:
+            continue
+        p1 = 3.0 * g[-1] - 3.0 * g[-2] + g[-3]  # inner-corner row k + 1
+        base = 0.5 * (p1[:-1] + p1[1:])  # (C - 1, 2) middle of each cell's near side
+        step = 0.5 * ((p1 - g[-1])[:-1] + (p1 - g[-1])[1:])
+        pts = base[None] + fractions[:, None, None] * step[None]  # (3, C - 1, 2)
+        inside = np.all((pts >= 0) & (pts <= [w - 1, h - 1]), axis=(0, 2))
+        if inside.sum() < 3:
+            continue
+        vals = ndimage.map_coordinates(
+            gray, [pts[..., 1].ravel(), pts[..., 0].ravel()], order=1, mode="nearest"
+        ).reshape(pts.shape[:-1])
+        m = vals.mean(axis=0)
+        own = cell_means(gray, g)
+        flip = 1 - 2 * (np.add.outer(np.arange(own.shape[0]), np.arange(own.shape[1])) % 2)
+        sense = 1.0 if float(np.mean(own * flip)) > 0 else -1.0  # +1: flip=+1 cells bright
+        mid = float(np.mean(own))
+        contrast = float(np.mean(np.abs(np.diff(own, axis=1))))  # bright - dark
+        # these cells are two cell rows past the board's last: the same parity as it
+        agree = ((m - mid) * flip[-1] * sense > contrast / 3.0) & inside
+        if _longest_run(agree) >= 3:
+            return name
+    return None
+
+
+def _longest_run(flags: NDArray[np.bool_]) -> int:
+    best = run = 0
+    for f in flags.tolist():
+        run = run + 1 if f else 0
+        best = max(best, run)
+    return best
