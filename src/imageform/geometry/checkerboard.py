@@ -171,7 +171,7 @@ def _detect(
     When several complete boards pass the checks (a board on a monitor behind the target),
     the one covering the largest image area is returned.
     """
-    cand = find_candidates(gray, sigma)
+    cand = find_candidates(gray, sigma, max_candidates=max(300, 4 * cols * rows))
     n = cand.xy.shape[0]
     if n < cols * rows:
         return None, f"{n} corner candidates, fewer than the {cols * rows} inner corners", n

@@ -130,7 +130,7 @@ def find_candidates(
     sigma: float,
     *,
     relative_threshold: float = 0.02,
-    max_candidates: int = 400,
+    max_candidates: int = 300,
 ) -> Candidates:
     """Saddle-response maxima of ``gray`` that pass the ring test."""
     taps = gaussian_weights(sigma).astype(np.float32)

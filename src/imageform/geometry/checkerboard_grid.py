@@ -265,14 +265,21 @@ def board_continues(gray: NDArray[np.floating], grid: NDArray[np.float64]) -> st
     A board cut within a quarter cell of row ``k + 1`` cannot be told from a smaller one.
     """
     h, w = gray.shape
+    own = cell_means(gray, grid)
+    flip = 1 - 2 * (np.add.outer(np.arange(own.shape[0]), np.arange(own.shape[1])) % 2)
+    sense = 1.0 if float(np.mean(own * flip)) > 0 else -1.0  # +1: flip=+1 cells bright
+    mid = float(np.mean(own))
+    contrast = float(np.mean(np.abs(np.diff(own, axis=1))))  # bright - dark
+    # each side: the grid seen from it (its last row is the side) and the parity of the
+    # board's cell row along that side (cells two rows further out have the same parity)
     sides = {
-        "after the last row": grid,
-        "before the first row": grid[::-1],
-        "after the last column": grid.transpose(1, 0, 2),
-        "before the first column": grid.transpose(1, 0, 2)[::-1],
+        "after the last row": (grid, flip[-1]),
+        "before the first row": (grid[::-1], flip[0]),
+        "after the last column": (grid.transpose(1, 0, 2), flip[:, -1]),
+        "before the first column": (grid.transpose(1, 0, 2)[::-1], flip[:, 0]),
     }
     fractions = np.array([0.25, 0.35, 0.45])
-    for name, g in sides.items():
+    for name, (g, parity) in sides.items():
         if g.shape[0] < 3 or g.shape[1] < 3:
             continue
         p1 = 3.0 * g[-1] - 3.0 * g[-2] + g[-3]  # inner-corner row k + 1
@@ -286,13 +293,7 @@ def board_continues(gray: NDArray[np.floating], grid: NDArray[np.float64]) -> st
             gray, [pts[..., 1].ravel(), pts[..., 0].ravel()], order=1, mode="nearest"
         ).reshape(pts.shape[:-1])
         m = vals.mean(axis=0)
-        own = cell_means(gray, g)
-        flip = 1 - 2 * (np.add.outer(np.arange(own.shape[0]), np.arange(own.shape[1])) % 2)
-        sense = 1.0 if float(np.mean(own * flip)) > 0 else -1.0  # +1: flip=+1 cells bright
-        mid = float(np.mean(own))
-        contrast = float(np.mean(np.abs(np.diff(own, axis=1))))  # bright - dark
-        # these cells are two cell rows past the board's last: the same parity as it
-        agree = ((m - mid) * flip[-1] * sense > contrast / 3.0) & inside
+        agree = ((m - mid) * parity * sense > contrast / 3.0) & inside
         if _longest_run(agree) >= 3:
             return name
     return None
