@@ -150,17 +150,21 @@ def grow_rectangle(
     if not all((i, j) in node_at for i in (-1, 0, 1) for j in (-1, 0, 1)):
         return np.zeros((0, 0), dtype=np.int64)
 
+    pts = xy.tolist()  # plain floats: rows of <= a few dozen points, no array overhead
+    limit2 = max_error * max_error
+
     def fits(
         new: list[tuple[int, int]], last: list[tuple[int, int]], prev: list[tuple[int, int]]
     ) -> bool:
         if not all(c in node_at for c in new):
             return False
-        p_new = xy[[node_at[c] for c in new]]
-        p_last = xy[[node_at[c] for c in last]]
-        p_prev = xy[[node_at[c] for c in prev]]
-        step = np.linalg.norm(p_last - p_prev, axis=1)
-        err = np.linalg.norm(p_new - (2.0 * p_last - p_prev), axis=1)
-        return bool(np.all(err < max_error * step))
+        for cn, cl, cp in zip(new, last, prev, strict=True):
+            (xn, yn), (xl, yl), (xp, yp) = pts[node_at[cn]], pts[node_at[cl]], pts[node_at[cp]]
+            step2 = (xl - xp) ** 2 + (yl - yp) ** 2
+            err2 = (xn - 2.0 * xl + xp) ** 2 + (yn - 2.0 * yl + yp) ** 2
+            if not err2 < limit2 * step2:
+                return False
+        return True
 
     i0, i1, j0, j1 = -1, 1, -1, 1
     grew = True
