@@ -4,7 +4,8 @@ Times, in the same run and interleaved, the detection of the 9 x 6 board in all 
 
 - imageform ``find_checkerboard(img, (9, 6), half_window=11)`` (detection + sub-pixel);
 - OpenCV ``findChessboardCorners(img, (9, 6))`` (default flags, as in the calibration
-  tutorial) + ``cornerSubPix(winSize (11, 11), zeroZone (-1, -1), EPS + COUNT 30, 0.001)``.
+  tutorial) + ``cornerSubPix(winSize (11, 11), zeroZone (-1, -1), EPS + COUNT 30, 0.001)``,
+  with OpenCV's default thread count and with ``cv2.setNumThreads(1)``.
 
 Reports the median over repetitions of the total time for the 13 views, the ratio, and the
 median corner distance between the two. Images are read once (not timed), as uint8.
@@ -76,12 +77,17 @@ def main() -> None:
     run_imageform(images)
     run_opencv(images)
 
-    t_if, t_cv = [], []
+    threads = cv2.getNumThreads()
+    t_if, t_cv, t_cv1 = [], [], []
     for _ in range(args.repeat):
         dt, ours = timed(run_imageform, images)
         t_if.append(dt)
         dt, theirs = timed(run_opencv, images)
         t_cv.append(dt)
+        cv2.setNumThreads(1)  # like for like: imageform runs on one thread
+        dt, _ = timed(run_opencv, images)
+        t_cv1.append(dt)
+        cv2.setNumThreads(threads)
     found_if = sum(c is not None for c in ours)
     found_cv = sum(c is not None for c in theirs)
     dists = [
@@ -92,6 +98,7 @@ def main() -> None:
     med_d = float(np.median(np.concatenate(dists)))
     max_d = float(max(d.max() for d in dists))
     m_if, m_cv = float(np.median(t_if)), float(np.median(t_cv))
+    m_cv1 = float(np.median(t_cv1))
     ratio = m_if / m_cv
 
     lines = [
@@ -100,18 +107,24 @@ def main() -> None:
         f"OpenCV's 13 `left*.jpg` views (640 x 480, 9 x 6 inner corners); median of "
         f"{args.repeat} interleaved repetitions of the whole set, same run.",
         "",
-        "| method | found | total, 13 views (ms) | per view (ms) | ratio to OpenCV |",
+        "| method | found | total, 13 views (ms) | per view (ms) | time / OpenCV |",
         "|---|---|---|---|---|",
         f"| imageform `find_checkerboard` (half_window=11) | {found_if}/13 | {m_if * 1e3:.1f} "
         f"| {m_if / 13 * 1e3:.2f} | {ratio:.2f} |",
         f"| OpenCV {cv2.__version__} `findChessboardCorners` + `cornerSubPix` | {found_cv}/13 "
         f"| {m_cv * 1e3:.1f} | {m_cv / 13 * 1e3:.2f} | 1.00 |",
+        f"| same, `cv2.setNumThreads(1)` | {found_cv}/13 | {m_cv1 * 1e3:.1f} "
+        f"| {m_cv1 / 13 * 1e3:.2f} | {m_cv1 / m_cv:.2f} |",
+        "",
+        f"imageform / OpenCV: **{ratio:.2f}** (OpenCV default threads, {threads}); "
+        f"{m_if / m_cv1:.2f} against single-threaded OpenCV (imageform is single-threaded).",
         "",
         f"Corner agreement (all 702 corners): median {med_d:.2e} px, max {max_d:.2e} px.",
         "",
-        f"Machine: {platform.machine()}, {os.cpu_count()} cores (shared), Python "
+        f"Machine: {platform.machine()}, {os.cpu_count()} cores, load average "
+        f"{os.getloadavg()[0]:.1f} at the end (shared machine), Python "
         f"{platform.python_version()}, numpy {np.__version__}, OpenCV threads "
-        f"{cv2.getNumThreads()}, OPENBLAS_NUM_THREADS="
+        f"{threads}, OPENBLAS_NUM_THREADS="
         f"{os.environ.get('OPENBLAS_NUM_THREADS', 'unset')}.",
         "",
         "Command: `OPENBLAS_NUM_THREADS=1 python benchmarks/bench_checkerboard.py "
