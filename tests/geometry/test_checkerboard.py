@@ -563,3 +563,19 @@ def test_sub_grid_of_a_partly_hidden_larger_board_is_refused(
     print(f"refused: imageform {ours_refused}/52, OpenCV {cv_refused}/52")
     assert ours_refused >= 35
     assert ours_refused >= cv_refused - 2
+
+
+def test_public_surface() -> None:
+    """Removing a public name is a deliberate act."""
+    import imageform.geometry.checkerboard as mod
+
+    assert sorted(mod.__all__) == [
+        "CheckerboardNotFoundWarning",
+        "CheckerboardResult",
+        "find_checkerboard",
+        "find_checkerboards",
+        "refine_corners",
+    ]
+    res = find_checkerboard(np.full((40, 40), 0.5), (3, 3))
+    with pytest.raises(AttributeError):
+        res.found = True  # type: ignore[misc]  # frozen
