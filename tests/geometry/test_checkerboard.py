@@ -579,3 +579,29 @@ def test_public_surface() -> None:
     res = find_checkerboard(np.full((40, 40), 0.5), (3, 3))
     with pytest.raises(AttributeError):
         res.found = True  # type: ignore[misc]  # frozen
+
+
+def test_square_pattern_first_corner_nearest_top_left() -> None:
+    """6 x 6 (symmetric in every way): the documented tie-break, smallest u + v first."""
+    H = homography(30.0, (200.0, 160.0), 2.0, 0.03, 6, 6)
+    img = render_board(6, 6, H, (320, 400), blur=1.0)
+    truth = board_corners(6, 6, H)
+    res = find_checkerboard(img, (6, 6))
+    assert res.found, res.reason
+    first = res.corners[0]
+    assert first.sum() == pytest.approx(truth.sum(axis=1).min(), abs=0.1)
+    # every corner is a true corner, and the turn from row to column is clockwise
+    assert np.linalg.norm(res.corners[:, None] - truth[None], axis=2).min(axis=1).max() < 0.05
+    g = res.grid()
+    x, y = g[0, 1] - g[0, 0], g[1, 0] - g[0, 0]
+    assert x[0] * y[1] - x[1] * y[0] > 0
+
+
+def test_unrefined_and_explicit_sigma(synthetic: tuple[np.ndarray, np.ndarray]) -> None:
+    img, truth = synthetic
+    raw = find_checkerboard(img, (7, 5), refine=False)
+    assert raw.found and raw.status is None
+    assert np.linalg.norm(raw.corners - truth, axis=1).max() < 1.0
+    fine = find_checkerboard(img, (7, 5), sigma=1.5, half_window=5)
+    assert fine.found and fine.sigma == 1.5
+    assert np.linalg.norm(fine.corners - truth, axis=1).max() < 0.05
