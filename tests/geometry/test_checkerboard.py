@@ -1,142 +1,33 @@
-"""Tests of imageform.geometry.checkerboard (find_checkerboard, refine_corners).
+"""Tests of imageform.geometry.checkerboard: find_checkerboard and refine_corners.
 
-Sources of truth:
-- synthetic boards rendered here under a chosen homography (exact corner positions known);
-- OpenCV 5.0 ``findChessboardCorners`` + ``cornerSubPix`` on OpenCV's own ``left*.jpg``
-  views (a labelled cross-check with the tutorial's settings: winSize (11, 11), zeroZone
-  (-1, -1), criteria EPS + COUNT, 30, 0.001), not the truth.
+OpenCV's views (cross-check with OpenCV 5.0), synthetic boards (exact truth), not-found
+cases, dtypes, backends, bad input. Support: tests/geometry/checkerboard_support.py.
 """
 
 from __future__ import annotations
-
-from pathlib import Path
 
 import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from scipy import ndimage
 
 from imageform.errors import InvalidInputError
 from imageform.geometry.checkerboard import (
-    CheckerboardNotFoundWarning,
     CheckerboardResult,
     find_checkerboard,
-    find_checkerboards,
     refine_corners,
+)
+from tests.geometry.checkerboard_support import (
+    CRITERIA,
+    PATTERN,
+    VIEWS,
+    board_corners,
+    homography,
+    render_board,
 )
 from tests.helpers import to_backend
 
 cv2 = pytest.importorskip("cv2")
-
-VIEWS = [f"left{i:02d}.jpg" for i in (1, 2, 3, 4, 5, 6, 7, 8, 9, 11, 12, 13, 14)]
-PATTERN = (9, 6)
-CRITERIA = (3, 30, 0.001)  # cv2.TERM_CRITERIA_EPS + cv2.TERM_CRITERIA_MAX_ITER, 30, 0.001
-
-
-# --------------------------------------------------------------------------- helpers
-
-
-def render_board(
-    cols: int,
-    rows: int,
-    H: np.ndarray,
-    shape: tuple[int, int],
-    *,
-    blur: float = 1.0,
-    noise: float = 0.0,
-    seed: int = 0,
-) -> np.ndarray:
-    """A board of (cols+1) x (rows+1) squares seen through homography ``H``, blurred.
-
-    Board coordinates (X, Y) in squares; inner corner (c, r) is at (c + 1, r + 1); square
-    (i, j) = (floor X, floor Y) is dark when i + j is even, so the first cell (between inner
-    corners 0, 1, cols, cols+1) is dark. ``H`` maps (X, Y, 1) to image (u, v, w), pixel
-    centres at integers.
-
-    Rendered analytically: each edge is a Gaussian-blurred step (σ² = blur² + 1/12, the
-    optics plus the pixel's box), ``erf(d / (σ √2))`` of the signed image distance ``d`` to
-    the nearest grid line (first order in the homography). A checker corner is then
-    ``0.5 + 0.5 erf(d_x) erf(d_y)``, exact for a blurred corner and point-symmetric about it,
-    so the true corner is where an unbiased detector must land. (Supersampling quantises
-    edge positions to 1/S px: too coarse for a 0.05 px test.)
-    """
-    from scipy.special import erf
-
-    h, w = shape
-    vv, uu = np.mgrid[0:h, 0:w].astype(np.float64)
-    Hinv = np.linalg.inv(H)
-    W = Hinv[2, 0] * uu + Hinv[2, 1] * vv + Hinv[2, 2]
-    X = (Hinv[0, 0] * uu + Hinv[0, 1] * vv + Hinv[0, 2]) / W
-    Y = (Hinv[1, 0] * uu + Hinv[1, 1] * vv + Hinv[1, 2]) / W
-    gX = np.hypot(*np.gradient(X))  # board units per pixel across a line X = const
-    gY = np.hypot(*np.gradient(Y))
-    sig = np.sqrt(blur**2 + 1.0 / 12.0) * np.sqrt(2.0)
-
-    def soft(d_board: np.ndarray, g: np.ndarray) -> np.ndarray:
-        return erf(d_board / g / sig)  # type: ignore[no-any-return]
-
-    nX, nY = np.round(X), np.round(Y)
-    cx = (-1.0) ** nX * soft(X - nX, gX)  # +1 on even columns (just right of an even line)
-    cy = (-1.0) ** nY * soft(Y - nY, gY)
-    checker = 0.475 - 0.375 * cx * cy  # dark (0.1) where floor X + floor Y is even
-
-    def inside(lo: float, hi: float, V: np.ndarray, g: np.ndarray) -> np.ndarray:
-        return 0.25 * (1 + soft(V - lo, g)) * (1 + soft(hi - V, g))
-
-    on_board = inside(0, cols + 1, X, gX) * inside(0, rows + 1, Y, gY)
-    on_paper = inside(-0.6, cols + 1.6, X, gX) * inside(-0.6, rows + 1.6, Y, gY)
-    img = 0.35 + on_paper * (0.85 - 0.35)
-    img = on_board * checker + (1 - on_board) * img
-    if noise > 0:
-        img = img + np.random.default_rng(seed).normal(0, noise, img.shape)
-    return img
-
-
-def board_corners(cols: int, rows: int, H: np.ndarray) -> np.ndarray:
-    """Exact image positions of the inner corners, row by row."""
-    r, c = np.mgrid[1 : rows + 1, 1 : cols + 1]
-    P = np.stack([c.ravel(), r.ravel(), np.ones(c.size)], axis=1) @ H.T
-    return P[:, :2] / P[:, 2:]
-
-
-def homography(
-    square: float, centre: tuple[float, float], angle: float, tilt: float, cols: int, rows: int
-) -> np.ndarray:
-    """Board -> image: scale, rotate by ``angle``, perspective ``tilt``, centre the board."""
-    c, s = np.cos(angle), np.sin(angle)
-    T0 = np.array([[1, 0, -(cols + 1) / 2], [0, 1, -(rows + 1) / 2], [0, 0, 1.0]])
-    A = np.array([[square * c, -square * s, 0], [square * s, square * c, 0], [0, 0, 1.0]])
-    P = np.array([[1, 0, 0], [0, 1, 0], [tilt / square, 0.3 * tilt / square, 1.0]])
-    T1 = np.array([[1, 0, centre[0]], [0, 1, centre[1]], [0, 0, 1.0]])
-    return T1 @ P @ A @ T0
-
-
-@pytest.fixture(scope="module")
-def views(shared_data: Path) -> dict[str, np.ndarray]:
-    folder = shared_data / "opencv-left"
-    out = {}
-    for name in VIEWS:
-        img = cv2.imread(str(folder / name), cv2.IMREAD_GRAYSCALE)
-        assert img is not None, name
-        out[name] = img
-    return out
-
-
-@pytest.fixture(scope="module")
-def opencv_corners(views: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
-    """Cross-check reference: OpenCV 5.0 findChessboardCorners + cornerSubPix (tutorial)."""
-    out = {}
-    for name, img in views.items():
-        ok, c = cv2.findChessboardCorners(img, PATTERN, None)
-        assert ok, name
-        out[name] = cv2.cornerSubPix(img, c, (11, 11), (-1, -1), CRITERIA).reshape(-1, 2)
-    return out
-
-
-@pytest.fixture(scope="module")
-def ours(views: dict[str, np.ndarray]) -> dict[str, CheckerboardResult]:
-    return {name: find_checkerboard(img, PATTERN, half_window=11) for name, img in views.items()}
 
 
 # --------------------------------------------------------------------------- OpenCV views
@@ -436,133 +327,6 @@ def test_refine_corners_flat_window_status() -> None:
     xy, status = refine_corners(np.full((40, 40), 0.5), [[20.0, 20.0]], half_window=5)
     assert status.tolist() == [2]
     assert xy.tolist() == [[20.0, 20.0]]
-
-
-# --------------------------------------------------------------------------- sets of views
-
-
-def test_find_checkerboards_on_the_opencv_set(views: dict[str, np.ndarray]) -> None:
-    import warnings
-
-    with warnings.catch_warnings():
-        warnings.simplefilter("error")  # no warning: every view has the board
-        res = find_checkerboards(list(views.values()), PATTERN, names=list(views))
-    assert [r.found for r in res] == [True] * 13
-
-
-def test_find_checkerboards_warns_for_views_without_board(views: dict[str, np.ndarray]) -> None:
-    imgs = [views["left01.jpg"], views["left01.jpg"][:, ::-1] * 0 + 128, views["left02.jpg"]]
-    with pytest.warns(CheckerboardNotFoundWarning, match=r"1 of 3 views: blank.png \(the image"):
-        res = find_checkerboards(imgs, PATTERN, names=["a.png", "blank.png", "c.png"])
-    assert [r.found for r in res] == [True, False, True]
-
-
-def test_find_checkerboards_different_sizes(views: dict[str, np.ndarray]) -> None:
-    imgs = [views["left01.jpg"], views["left02.jpg"][:240, :320]]
-    with pytest.raises(InvalidInputError, match=r"one size.*view 1 of 320 x 240 px"):
-        find_checkerboards(imgs, PATTERN)
-
-
-@pytest.mark.parametrize(
-    ("images", "match"),
-    [
-        ([], "at least one image"),
-        (np.zeros((3, 40, 40)), "list or tuple of images"),
-        ([np.zeros((40, 40)), np.zeros((40, 40, 2))], r"view 1: expected image of shape"),
-        ([np.zeros((40, 40)), "not-an-image.jpg"], r"view 1: expected a numeric array"),
-    ],
-)
-def test_find_checkerboards_bad_sets(images: object, match: str) -> None:
-    with pytest.raises(InvalidInputError, match=match):
-        find_checkerboards(images, (3, 3))  # type: ignore[arg-type]
-
-
-def test_find_checkerboards_names_length() -> None:
-    with pytest.raises(InvalidInputError, match="2 names"):
-        find_checkerboards([np.zeros((40, 40))] * 2, (3, 3), names=["a"])
-
-
-# --------------------------------------------------------------------------- harder views
-
-
-def test_largest_of_two_boards(
-    views: dict[str, np.ndarray], opencv_corners: dict[str, np.ndarray]
-) -> None:
-    """left08 at 2x: the 9 x 6 board on the monitor behind becomes detectable too; the
-    target (the larger board) is returned. cv2.resize x2 maps u -> 2u + 0.5."""
-    big = cv2.resize(views["left08.jpg"], None, fx=2, fy=2, interpolation=cv2.INTER_CUBIC)
-    res = find_checkerboard(big, PATTERN)
-    assert res.found, res.reason
-    expected = 2.0 * opencv_corners["left08.jpg"] + 0.5
-    assert np.median(np.linalg.norm(res.corners - expected, axis=1)) < 0.5
-
-
-@pytest.mark.parametrize("kind", ["noise", "gradient", "blur", "half"])
-def test_degraded_views_still_found(views: dict[str, np.ndarray], kind: str) -> None:
-    rng = np.random.default_rng(0)
-    for name in ("left02.jpg", "left13.jpg"):
-        g = views[name].astype(np.float64)
-        if kind == "noise":
-            g = g + rng.normal(0, 10, g.shape)
-        elif kind == "gradient":
-            g = g * (0.3 + 0.7 * np.arange(g.shape[1]) / g.shape[1])
-        elif kind == "blur":
-            g = ndimage.gaussian_filter(g, 3.0)
-        else:
-            g = cv2.resize(views[name], None, fx=0.5, fy=0.5, interpolation=cv2.INTER_AREA)
-        img = np.clip(np.round(g), 0, 255).astype(np.uint8)
-        res = find_checkerboard(img, PATTERN)
-        assert res.found, f"{name}: {res.reason}"
-
-
-def _hide_half_of_outer_line(img: np.ndarray, grid: np.ndarray, side: str) -> tuple:
-    """Black out the far half of one outer row/column of inner corners (and beyond)."""
-    line, prev, pattern = {
-        "last_row": (grid[-1], grid[-2], (9, 5)),
-        "first_row": (grid[0], grid[1], (9, 5)),
-        "last_col": (grid[:, -1], grid[:, -2], (8, 6)),
-        "first_col": (grid[:, 0], grid[:, 1], (8, 6)),
-    }[side]
-    a, b = line[0], line[-1]
-    along = (b - a) / np.linalg.norm(b - a)
-    normal = line.mean(0) - prev.mean(0)
-    vv, uu = np.mgrid[0 : img.shape[0], 0 : img.shape[1]]
-    beyond = (uu - prev.mean(0)[0]) * normal[0] + (vv - prev.mean(0)[1]) * normal[1]
-    far = (uu - (a[0] + b[0]) / 2) * along[0] + (vv - (a[1] + b[1]) / 2) * along[1]
-    out = img.copy()
-    out[(beyond > 0.5 * normal @ normal) & (far > 0)] = 0
-    return out, pattern
-
-
-@pytest.mark.parametrize("side", ["last_row", "first_row"])
-def test_sub_grid_of_a_partly_hidden_board_is_refused_left04(
-    views: dict[str, np.ndarray], ours: dict[str, CheckerboardResult], side: str
-) -> None:
-    hidden, pattern = _hide_half_of_outer_line(views["left04.jpg"], ours["left04.jpg"].grid(), side)
-    res = find_checkerboard(hidden, pattern)
-    assert not res.found
-    assert "continues" in res.reason
-
-
-@pytest.mark.slow
-def test_sub_grid_of_a_partly_hidden_larger_board_is_refused(
-    views: dict[str, np.ndarray], ours: dict[str, CheckerboardResult]
-) -> None:
-    """Half of one outer row (or column) of inner corners hidden in black, the pattern asked
-    one row (column) short: the complete 9 x 5 (8 x 6) grid left is a sub-grid of a larger
-    board. 13 views x 4 sides; imageform refuses most of them (measured 38 of 52; 3 of 52
-    without its "board continues" check), and at least as many as OpenCV 5.0 (labelled
-    cross-check; it refuses 38)."""
-    ours_refused = cv_refused = 0
-    for name, img in views.items():
-        for side in ("last_row", "first_row", "last_col", "first_col"):
-            hidden, pattern = _hide_half_of_outer_line(img, ours[name].grid(), side)
-            res = find_checkerboard(hidden, pattern)
-            ours_refused += not res.found
-            cv_refused += not cv2.findChessboardCorners(hidden, pattern, None)[0]
-    print(f"refused: imageform {ours_refused}/52, OpenCV {cv_refused}/52")
-    assert ours_refused >= 35
-    assert ours_refused >= cv_refused - 2
 
 
 def test_public_surface() -> None:
