@@ -21,9 +21,7 @@ from tests.helpers import to_backend, to_np
 cv2 = pytest.importorskip("cv2")
 
 # OpenCV tutorial calibration of the shared left*.jpg set (shared/data/README.md).
-LEFT_K = np.array(
-    [[536.07345314, 0, 342.37046827], [0, 536.01636274, 235.53687064], [0, 0, 1.0]]
-)
+LEFT_K = np.array([[536.07345314, 0, 342.37046827], [0, 536.01636274, 235.53687064], [0, 0, 1.0]])
 LEFT_D = np.array([-0.26509039, -0.0467422, 0.00183302, -0.00031469, 0.25231221])
 RATIONAL = BrownConrady(k1=0.1, k2=-0.05, p1=0.001, p2=-0.0005, k3=0.01, k4=0.2, k5=-0.02, k6=0.005)
 
@@ -206,8 +204,13 @@ def test_kernels_match_twins() -> None:
     xy = np.ascontiguousarray(_grid(31, 0.6))
     for model, fwd, inv, twin_f, twin_i in (
         (RATIONAL, brown_conrady_distort, brown_conrady_undistort, bc_distort_xp, bc_undistort_xp),
-        (KannalaBrandt(0.05, -0.01, 0.002, 0.0), kannala_brandt_distort, kannala_brandt_undistort,
-         kb_distort_xp, kb_undistort_xp),
+        (
+            KannalaBrandt(0.05, -0.01, 0.002, 0.0),
+            kannala_brandt_distort,
+            kannala_brandt_undistort,
+            kb_distort_xp,
+            kb_undistort_xp,
+        ),
     ):
         c = np.asarray(model.coeffs)
         out = np.empty_like(xy)
@@ -286,7 +289,9 @@ def test_backends(model: object, xp_name: str) -> None:
     xy = _grid(7, 0.4)
     ref = np.asarray(model.distort(xy))  # type: ignore[attr-defined]
     got = model.distort(to_backend(xy, xp_name))  # type: ignore[attr-defined]
-    assert type(got).__module__.split(".")[0] == type(to_backend(xy, xp_name)).__module__.split(".")[0]
+    assert (
+        type(got).__module__.split(".")[0] == type(to_backend(xy, xp_name)).__module__.split(".")[0]
+    )
     np.testing.assert_allclose(to_np(got), ref, atol=1e-14)
     back, ok = model.undistort(got)  # type: ignore[attr-defined]
     assert to_np(ok).all()
@@ -304,7 +309,9 @@ def test_torch_gradient_flows_through_distort() -> None:
 # -- bad input --------------------------------------------------------------------------------
 def test_bad_inputs() -> None:
     m = BrownConrady(k1=0.1)
-    with pytest.raises(InvalidInputError, match=r"expected xy of shape \(\.\.\., 2\), got \(4, 3\)"):
+    with pytest.raises(
+        InvalidInputError, match=r"expected xy of shape \(\.\.\., 2\), got \(4, 3\)"
+    ):
         m.distort(np.zeros((4, 3)))
     with pytest.raises(InvalidInputError, match="NaN or inf"):
         m.distort([np.nan, 0.0])

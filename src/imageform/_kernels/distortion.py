@@ -38,7 +38,9 @@ def bc_distort_point(x: float, y: float, c: np.ndarray) -> tuple[float, float]:
 
 
 @njit(cache=True, parallel=True)
-def brown_conrady_distort(xy: np.ndarray, c: np.ndarray, out: np.ndarray) -> None:  # pragma: no cover
+def brown_conrady_distort(
+    xy: np.ndarray, c: np.ndarray, out: np.ndarray
+) -> None:  # pragma: no cover
     for i in prange(xy.shape[0]):
         xd, yd = bc_distort_point(xy[i, 0], xy[i, 1], c)
         out[i, 0] = xd
@@ -93,7 +95,9 @@ def brown_conrady_undistort(
 
 
 @njit(cache=True, parallel=True)
-def kannala_brandt_distort(xy: np.ndarray, c: np.ndarray, out: np.ndarray) -> None:  # pragma: no cover
+def kannala_brandt_distort(
+    xy: np.ndarray, c: np.ndarray, out: np.ndarray
+) -> None:  # pragma: no cover
     k1, k2, k3, k4 = c[0], c[1], c[2], c[3]
     for i in prange(xy.shape[0]):
         x = xy[i, 0]

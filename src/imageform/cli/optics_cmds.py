@@ -78,8 +78,13 @@ def lens(
     for n in stops:
         d = depth_of_field(f, n, s, c)
         table.append(
-            {"f_number": n, "near_m": d.near, "far_m": d.far, "total_m": d.total,
-             "hyperfocal_m": d.hyperfocal}
+            {
+                "f_number": n,
+                "near_m": d.near,
+                "far_m": d.far,
+                "total_m": d.total,
+                "hyperfocal_m": d.hyperfocal,
+            }
         )
     result = {
         "focal_length_m": f,
@@ -119,12 +124,32 @@ def lens(
         t.add_column(col, justify="right")
     for row in table:
         mark = " *" if row["f_number"] == float(f_number) else ""
-        t.add_row(f"f/{row['f_number']:g}{mark}", _fmt(row["near_m"]), _fmt(row["far_m"]),
-                  _fmt(row["total_m"]), _fmt(row["hyperfocal_m"]))
+        t.add_row(
+            f"f/{row['f_number']:g}{mark}",
+            _fmt(row["near_m"]),
+            _fmt(row["far_m"]),
+            _fmt(row["total_m"]),
+            _fmt(row["hyperfocal_m"]),
+        )
     con.print(t)
 
 
-_CAMERA_KEYS = {"fx", "fy", "cx", "cy", "skew", "model", "k1", "k2", "k3", "k4", "k5", "k6", "p1", "p2"}
+_CAMERA_KEYS = {
+    "fx",
+    "fy",
+    "cx",
+    "cy",
+    "skew",
+    "model",
+    "k1",
+    "k2",
+    "k3",
+    "k4",
+    "k5",
+    "k6",
+    "p1",
+    "p2",
+}
 _MODELS = {
     "brown_conrady": ("k1", "k2", "p1", "p2", "k3", "k4", "k5", "k6"),
     "kannala_brandt": ("k1", "k2", "k3", "k4"),
@@ -182,7 +207,11 @@ def load_camera_toml(path: Path) -> tuple[Any, Any]:
     if vals["fx"] <= 0 or vals["fy"] <= 0:
         raise InvalidInputError(f"{path}: fx and fy must be > 0 pixels")
     coeffs = {k: vals.get(k, 0.0) for k in _MODELS[model]}
-    cls = {"brown_conrady": BrownConrady, "kannala_brandt": KannalaBrandt, "division": DivisionModel}
+    cls = {
+        "brown_conrady": BrownConrady,
+        "kannala_brandt": KannalaBrandt,
+        "division": DivisionModel,
+    }
     return K, cls[model](**coeffs)
 
 
@@ -207,8 +236,13 @@ def undistort(
     write_image(output_path, out, bits=16 if img.dtype == np.uint16 else 8)
     if json_out:
         print_json(
-            {"input": str(input_path), "output": str(output_path), "shape": list(out.shape),
-             "model": type(model).__name__, "coefficients": list(model.coeffs)}
+            {
+                "input": str(input_path),
+                "output": str(output_path),
+                "shape": list(out.shape),
+                "model": type(model).__name__,
+                "coefficients": list(model.coeffs),
+            }
         )
     else:
         typer.echo(f"wrote {output_path} ({out.shape[1]}x{out.shape[0]}, {type(model).__name__})")

@@ -64,9 +64,9 @@ def bc_undistort_xp(
         a = 1.0 + k1 * r2 + k2 * r4 + k3 * r6
         b = 1.0 + k4 * r2 + k5 * r4 + k6 * r6
         rad = a / b
-        drad = ((k1 + 2.0 * k2 * r2 + 3.0 * k3 * r4) * b - a * (k4 + 2.0 * k5 * r2 + 3.0 * k6 * r4)) / (
-            b * b
-        )
+        drad = (
+            (k1 + 2.0 * k2 * r2 + 3.0 * k3 * r4) * b - a * (k4 + 2.0 * k5 * r2 + 3.0 * k6 * r4)
+        ) / (b * b)
         fx = x * rad + 2.0 * p1 * x * y + p2 * (r2 + 2.0 * x * x) - xd
         fy = y * rad + p1 * (r2 + 2.0 * y * y) + 2.0 * p2 * x * y - yd
         j11 = rad + 2.0 * x * x * drad + 2.0 * p1 * y + 6.0 * p2 * x

@@ -24,7 +24,9 @@ __all__ = ["remap_bilinear", "undistort_image", "undistortion_map"]
 
 
 def _as_batch(image: Any) -> tuple[np.ndarray, tuple[int, ...], bool]:
-    arr = np.asarray(to_numpy(as_image(image, "image", channels=None)))
+    arr = np.asarray(
+        to_numpy(as_image(image, "image", channels=None, range_check=False, finite=False))
+    )
     if arr.ndim < 2:
         raise InvalidInputError(
             f"expected image of shape (H, W) or (..., H, W, C), got {format_shape(arr.shape)}"
@@ -72,7 +74,8 @@ def remap_bilinear(image: Any, map_uv: Any, *, fill: float = 0.0) -> np.ndarray:
     Parameters
     ----------
     image : array (H, W) or (..., H, W, C)
-        uint8/uint16 (read as full range) or floats.
+        uint8/uint16 (read as full range) or floats (any range; NaN marks missing data and
+        propagates to the output pixels that use it).
     map_uv : array (H', W', 2)
         Source ``(u, v)`` = (column, row) for every output pixel; pixel centres at integers.
     fill : float

@@ -196,7 +196,9 @@ class SensorModel:
             raise InvalidInputError(
                 f"wavelength {lam:g} nm is outside the QE curves' range {wl[0]:g}-{wl[-1]:g} nm"
             )
-        return np.array([np.interp(lam, wl, np.asarray(c, dtype=np.float64)) for c in self.qe_curves])
+        return np.array(
+            [np.interp(lam, wl, np.asarray(c, dtype=np.float64)) for c in self.qe_curves]
+        )
 
     def fixed_pattern(self, height: int, width: int) -> FixedPattern:
         """This chip's fixed-pattern maps for an ``(height, width)`` frame (from ``fpn_seed``)."""
@@ -360,4 +362,6 @@ class SensorModel:
 
     def dynamic_range_db(self) -> float:
         """Dynamic range ``20 log10(Q_FW / σ_read)`` (dB); ``inf`` without read noise."""
-        return math.inf if self.read_noise == 0 else 20 * math.log10(self.full_well / self.read_noise)
+        return (
+            math.inf if self.read_noise == 0 else 20 * math.log10(self.full_well / self.read_noise)
+        )

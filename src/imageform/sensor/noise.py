@@ -71,9 +71,7 @@ def fixed_pattern(
     return FixedPattern(gain=gain, offset=offset, column=cols)
 
 
-def temporal_noise_dn(
-    mean_electrons: float, *, system_gain: float, dark_noise_e: float
-) -> float:
+def temporal_noise_dn(mean_electrons: float, *, system_gain: float, dark_noise_e: float) -> float:
     """Temporal noise of the digital signal (DN rms) by EMVA 1288's linear model.
 
     .. math::

@@ -40,7 +40,11 @@ def _curves(color: bool, scale: float) -> tuple[tuple[float, ...], ...]:
     if not color:
         return (_qe(550.0, 110.0, 0.70 * scale),)
     # Gaussian stand-ins for the R, G, B filter × silicon responses of a Bayer sensor.
-    return (_qe(600.0, 35.0, 0.45 * scale), _qe(535.0, 40.0, 0.55 * scale), _qe(460.0, 30.0, 0.45 * scale))
+    return (
+        _qe(600.0, 35.0, 0.45 * scale),
+        _qe(535.0, 40.0, 0.55 * scale),
+        _qe(460.0, 30.0, 0.45 * scale),
+    )
 
 
 def ccd_preset(*, color: bool = False, **changes: Any) -> SensorModel:
@@ -118,14 +122,24 @@ class ComparisonRow:
 
 #: The lecture's comparison (after Litwiller 2001, Table 1).
 CCD_VS_CMOS: tuple[ComparisonRow, ...] = (
-    ComparisonRow("readout", "charge packets shifted to one output amplifier", "charge to voltage in each pixel; column-parallel ADCs"),
+    ComparisonRow(
+        "readout",
+        "charge packets shifted to one output amplifier",
+        "charge to voltage in each pixel; column-parallel ADCs",
+    ),
     ComparisonRow("speed", "moderate (serial read-out)", "high (parallel read-out, windowing)"),
     ComparisonRow("noise", "low", "moderate (more fixed-pattern noise: column FPN, PRNU)"),
     ComparisonRow("uniformity", "high", "low to moderate"),
     ComparisonRow("power", "high (several clock voltages)", "low (single low voltage)"),
-    ComparisonRow("shutter", "global (interline / frame transfer)", "rolling by default; global costs a storage node"),
+    ComparisonRow(
+        "shutter",
+        "global (interline / frame transfer)",
+        "rolling by default; global costs a storage node",
+    ),
     ComparisonRow("fill factor", "high", "moderate (transistors in the pixel)"),
-    ComparisonRow("integration", "camera electronics off-chip", "ADC, timing and processing on-chip"),
+    ComparisonRow(
+        "integration", "camera electronics off-chip", "ADC, timing and processing on-chip"
+    ),
 )
 
 
@@ -140,8 +154,10 @@ def comparison_table(rows: int = 1000) -> list[dict[str, str]]:
     out = [{"aspect": r.aspect, "ccd": r.ccd, "cmos": r.cmos} for r in CCD_VS_CMOS]
     numbers = {
         "speed": lambda s: f"{1 / s.frame_readout_time(rows):.0f} frames/s at {rows} rows",
-        "noise": lambda s: f"read {s.read_noise:g} e-, DSNU {s.dsnu:g} e-, PRNU {100 * s.prnu:g} %, "
-        f"column FPN {s.column_fpn:g} e-",
+        "noise": lambda s: (
+            f"read {s.read_noise:g} e-, DSNU {s.dsnu:g} e-, PRNU {100 * s.prnu:g} %, "
+            f"column FPN {s.column_fpn:g} e-"
+        ),
         "power": lambda s: f"{s.power:g} W",
         "shutter": lambda s: s.shutter,
     }
