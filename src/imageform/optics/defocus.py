@@ -107,7 +107,7 @@ def blur_by_radius(image: Any, radius_px: Any, *, step: float = 0.5, max_layers:
     img, gray = _prep(image)
     r = np.asarray(to_numpy(radius_px), dtype=np.float64)
     if not np.all(np.isfinite(r)) or np.any(r < 0):
-        raise InvalidInputError("expected finite blur radii >= 0 pixels")
+        raise InvalidInputError("expected radius_px finite and >= 0 (pixels)")
     h, w, c = img.shape
     if r.ndim == 0:
         r = np.full((h, w, 1), float(r))
