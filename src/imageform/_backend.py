@@ -26,8 +26,8 @@ from array_api_compat import numpy as compat_numpy
 
 __all__ = [
     "COORD_INTEGER_DTYPE",
-    "IMAGE_INTEGER_DTYPE",
     "HAVE_NUMBA",
+    "IMAGE_INTEGER_DTYPE",
     "Array",
     "asarray_like",
     "device_of",

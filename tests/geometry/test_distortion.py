@@ -135,7 +135,7 @@ def test_undistort_max_iter_too_small_is_reported() -> None:
 
 def test_fisheye_beyond_90_degrees_not_converged() -> None:
     # θ_d > the polynomial's maximum over [0, π/2) cannot be inverted to a finite (x, y)
-    xy, ok = KannalaBrandt(k1=-0.2).undistort([[2.5, 0.0]])
+    _, ok = KannalaBrandt(k1=-0.2).undistort([[2.5, 0.0]])
     assert not ok[0]
 
 
@@ -156,7 +156,7 @@ def test_cross_check_cv2_project_points_5_coeffs() -> None:
 def test_cross_check_cv2_project_points_rational(n: int) -> None:
     rng = np.random.default_rng(1)
     pts = np.c_[rng.uniform(-1, 1, (n, 2)), rng.uniform(2, 6, n)]
-    uv, ok = project_points_distorted(pts, LEFT_K, np.eye(3), np.zeros(3), RATIONAL)
+    uv, _ = project_points_distorted(pts, LEFT_K, np.eye(3), np.zeros(3), RATIONAL)
     ref = cv2.projectPoints(pts, np.zeros(3), np.zeros(3), LEFT_K, np.array(RATIONAL.coeffs))[0]
     np.testing.assert_allclose(uv, ref.reshape(-1, 2), atol=1e-9)
 
@@ -191,6 +191,8 @@ def test_cross_check_cv2_fisheye() -> None:
 
 # -- numba kernels against their plain twins --------------------------------------------------
 def test_kernels_match_twins() -> None:
+    import array_api_compat.numpy as xp
+
     from imageform._kernels.distortion import (
         brown_conrady_distort,
         brown_conrady_undistort,
@@ -198,8 +200,6 @@ def test_kernels_match_twins() -> None:
         kannala_brandt_undistort,
     )
     from imageform.geometry._distortion_xp import bc_distort_xp, kb_distort_xp
-
-    import array_api_compat.numpy as xp
 
     xy = np.ascontiguousarray(_grid(31, 0.6))
     for model, fwd, inv, twin_f, twin_i in (

@@ -80,7 +80,8 @@ def test_hyperfocal_textbook() -> None:
 
 
 def test_depth_of_field_dofmaster() -> None:
-    # DOFMaster online calculator, 50 mm f/2.8 at 2 m, c = 0.03 mm: near 1.88 m, far 2.14 m, total 0.26 m
+    # DOFMaster online calculator, 50 mm f/2.8 at 2 m, c = 0.03 mm:
+    # near 1.88 m, far 2.14 m, total 0.26 m
     d = depth_of_field(0.05, 2.8, 2.0, 0.03e-3)
     assert d.near == pytest.approx(1.88, abs=0.005)
     assert d.far == pytest.approx(2.14, abs=0.005)

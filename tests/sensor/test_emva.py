@@ -60,7 +60,7 @@ def test_ptc_shape_linear_then_drops_at_saturation() -> None:
 
 def test_snr_formula_matches_simulation() -> None:
     s = cmos_preset(prnu=0.0)
-    d, r, eta = _run(s, seed=5)
+    d, _, eta = _run(s, seed=5)
     k = 10
     snr_meas = (d.mean_dn[k] - d.dark_mean_dn[k]) / np.sqrt(d.var_dn[k])
     snr_model = emva_snr(

@@ -32,8 +32,8 @@ def remap_bilinear(
                     for c in range(nc):
                         out[b, i, j, c] = fill
                 continue
-            x0 = min(int(math.floor(u)), w - 1)
-            y0 = min(int(math.floor(v)), h - 1)
+            x0 = min(math.floor(u), w - 1)
+            y0 = min(math.floor(v), h - 1)
             x1 = min(x0 + 1, w - 1)
             y1 = min(y0 + 1, h - 1)
             ax = u - x0

@@ -1,11 +1,11 @@
-"""``imageform lens`` (depth-of-field table) and ``imageform undistort`` (remove lens distortion)."""
+"""``imageform lens`` (depth-of-field table) and ``imageform undistort`` (remove distortion)."""
 
 from __future__ import annotations
 
 import math
 import re
 from pathlib import Path
-from typing import Any
+from typing import Annotated, Any
 
 import typer
 
@@ -112,7 +112,8 @@ def lens(
 
     con = Console(width=110)
     con.print(
-        f"f = {f * 1e3:g} mm, N = {f_number:g} (D = {result['aperture_diameter_m'] * 1e3:.2f} mm), "
+        f"f = {f * 1e3:g} mm, N = {f_number:g} "
+        f"(D = {aperture_diameter(f, f_number) * 1e3:.2f} mm), "
         f"focus {s:g} m, c = {c * 1e3:g} mm\n"
         f"image distance {sol.d_i * 1e3:.3f} mm, magnification {sol.magnification:.5f}\n"
         f"hyperfocal {dof.hyperfocal:.3f} m; sharp from {_fmt(dof.near)} to {_fmt(dof.far)} "
@@ -216,11 +217,15 @@ def load_camera_toml(path: Path) -> tuple[Any, Any]:
 
 
 def undistort(
-    input_path: Path = typer.Argument(..., metavar="IN", help="Distorted image (PNG, JPEG, TIFF)."),
-    output_path: Path = typer.Argument(..., metavar="OUT", help="Where to write the result."),
-    camera: Path = typer.Option(..., "--camera", help="Camera TOML: fx, fy, cx, cy, k1, ..."),
-    force: bool = typer.Option(False, "--force", help="Overwrite OUT if it exists."),
-    json_out: bool = typer.Option(False, "--json", help="Print machine-readable results."),
+    input_path: Annotated[
+        Path, typer.Argument(metavar="IN", help="Distorted image (PNG, JPEG, TIFF).")
+    ],
+    output_path: Annotated[Path, typer.Argument(metavar="OUT", help="Where to write the result.")],
+    camera: Annotated[Path, typer.Option("--camera", help="Camera TOML: fx, fy, cx, cy, k1, ...")],
+    force: Annotated[bool, typer.Option("--force", help="Overwrite OUT if it exists.")] = False,
+    json_out: Annotated[
+        bool, typer.Option("--json", help="Print machine-readable results.")
+    ] = False,
 ) -> None:
     """Remove lens distortion (bilinear remap with the camera's K and distortion model)."""
     import numpy as np

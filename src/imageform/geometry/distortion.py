@@ -55,8 +55,8 @@ NUMBA_MIN_POINTS = 4096
 DistortionModel = Any  # BrownConrady | DivisionModel | KannalaBrandt (structural)
 
 
-def _check_coeffs(obj: object) -> None:
-    for name, v in zip(obj.__dataclass_fields__, astuple(obj), strict=True):  # type: ignore[call-overload]
+def _check_coeffs(obj: Any) -> None:
+    for name, v in zip(obj.__dataclass_fields__, astuple(obj), strict=True):
         try:
             fv = float(v)
         except (TypeError, ValueError) as exc:

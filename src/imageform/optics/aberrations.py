@@ -125,7 +125,8 @@ def lateral_chromatic_aberration(
 
     .. math::
 
-        I'_c(\\mathbf{p}) = I_c\\!\\left(\\mathbf{c} + \\frac{\\mathbf{p} - \\mathbf{c}}{m_c}\\right)
+        I'_c(\\mathbf{p}) = I_c\\!\\left(\\mathbf{c}
+            + \\frac{\\mathbf{p} - \\mathbf{c}}{m_c}\\right)
 
     A feature at distance ``r`` from the centre ``c`` appears in channel ``c`` at ``m_c r``.
     Typical lenses have ``|m_c - 1|`` of 1e-4 … 3e-3 relative to green.
@@ -173,7 +174,8 @@ def chromatic_focal_lengths(focal_length: float, abbe_number: float) -> tuple[fl
 
     .. math::
 
-        f_R = f\\left(1 + \\frac{1}{2V}\\right),\\ f_G = f,\\ f_B = f\\left(1 - \\frac{1}{2V}\\right)
+        f_R = f\\left(1 + \\frac{1}{2V}\\right),\\ f_G = f,\\
+        f_B = f\\left(1 - \\frac{1}{2V}\\right)
 
     Source: Hecht, *Optics*, 5th ed., §6.3.2 (longitudinal chromatic aberration, Abbe number).
 

@@ -73,8 +73,10 @@ def _convolve(img: np.ndarray, kernel: np.ndarray) -> np.ndarray:
     if kernel.shape == (1, 1):
         return img.copy()
     p = kernel.shape[0] // 2
-    mode = "reflect" if min(img.shape[:2]) > p else "symmetric"
-    padded = np.pad(img, ((p, p), (p, p), (0, 0)), mode=mode)
+    if min(img.shape[:2]) > p:
+        padded = np.pad(img, ((p, p), (p, p), (0, 0)), mode="reflect")
+    else:
+        padded = np.pad(img, ((p, p), (p, p), (0, 0)), mode="symmetric")
     out = fftconvolve(padded, kernel[..., None].astype(img.dtype), mode="valid", axes=(0, 1))
     return out.astype(img.dtype, copy=False)
 

@@ -31,7 +31,7 @@ from imageform.sensor.shutter import (
     shutter_capture,
 )
 
-_MODEL_EXPORTS = [
+__all__ = [  # branch `sensor` names; the CFA/demosaic branch adds its own
     "CCD_VS_CMOS",
     "QUANTISATION_NOISE_DN",
     "ComparisonRow",
@@ -54,5 +54,3 @@ _MODEL_EXPORTS = [
     "temporal_noise_dn",
 ]
 # --- end of branch `sensor` block -------------------------------------------------------------
-
-__all__: list[str] = [*_MODEL_EXPORTS]

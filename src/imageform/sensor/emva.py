@@ -199,7 +199,7 @@ def fit_photon_transfer(data: PhotonTransferData, *, fit_fraction: float = 0.7) 
         raise DegenerateConfigurationError(f"photon-transfer slope is not positive ({k:.3g})")
     mp = data.photons[use]
     responsivity = float(np.dot(mp, sig[use]) / np.dot(mp, mp)) if np.any(mp > 0) else math.nan
-    slope_d, icpt_d = np.polyfit(t, data.dark_var_dn, 1)
+    icpt_d = float(np.polyfit(t, data.dark_var_dn, 1)[1])
     dark_mean_slope = float(np.polyfit(t, data.dark_mean_dn, 1)[0])
     temporal = icpt_d - QUANTISATION_NOISE_DN**2
     read = math.sqrt(temporal) / k if temporal > 0 else math.nan

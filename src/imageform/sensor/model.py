@@ -252,7 +252,8 @@ class SensorModel:
         if wavelength_nm is not None:
             if arr.ndim < 2:
                 raise InvalidInputError(
-                    f"expected monochromatic {kind} of shape (..., H, W), got {format_shape(arr.shape)}"
+                    f"expected monochromatic {kind} of shape (..., H, W), "
+                    f"got {format_shape(arr.shape)}"
                 )
             qe = self.quantum_efficiency(wavelength_nm)
             mp = (

@@ -76,7 +76,8 @@ def temporal_noise_dn(mean_electrons: float, *, system_gain: float, dark_noise_e
 
     .. math::
 
-        \\sigma_y^2 = K^2 (\\sigma_d^2 + \\mu_e) + \\sigma_q^2,\\quad \\sigma_q^2 = 1/12\\ \\mathrm{DN}^2
+        \\sigma_y^2 = K^2 (\\sigma_d^2 + \\mu_e) + \\sigma_q^2,\\quad
+        \\sigma_q^2 = 1/12\\ \\mathrm{DN}^2
 
     Source: EMVA Standard 1288, Release 4.0 (2021), eq. (9).
 

@@ -16,7 +16,7 @@ import numpy as np
 from imageform._validate import check_option, check_positive
 from imageform.errors import InvalidInputError
 
-__all__ = ["row_start_times", "rolling_shutter_points", "rolling_shutter_skew", "shutter_capture"]
+__all__ = ["rolling_shutter_points", "rolling_shutter_skew", "row_start_times", "shutter_capture"]
 
 
 def rolling_shutter_skew(velocity: float, line_time: float) -> float:
