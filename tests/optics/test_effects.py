@@ -182,3 +182,32 @@ def test_mechanical_vignetting_overlap() -> None:
     img = np.ones((1, 201, 3))
     out = apply_vignetting(img, v * cos4_falloff((1, 201), 100.0))
     assert out[0, 200, 0] < out[0, 150, 0] < out[0, 100, 0] == 1.0
+
+
+@pytest.mark.parametrize(
+    ("dtype", "want"), [(np.uint8, np.float32), (np.float32, np.float32), (np.float64, np.float64)]
+)
+def test_effects_dtype_policy(dtype: type, want: type) -> None:
+    rng = np.random.default_rng(1)
+    base = rng.random((24, 32, 3))
+    img = (base * 255).astype(np.uint8) if dtype is np.uint8 else base.astype(dtype)
+    outs = [
+        lateral_chromatic_aberration(img, (1.01, 1.0, 0.99)),
+        spherical_aberration(
+            img, focal_length=0.05, f_number=2, pixel_pitch=10e-6, sa_coefficient=0.2
+        ),
+        defocus_blur(img, 3.0, f=0.05, f_number=2, focus=2.0, pixel_pitch=20e-6),
+        axial_chromatic_aberration(
+            img,
+            3.0,
+            focal_lengths=chromatic_focal_lengths(0.05, 60),
+            f_number=2,
+            focus=2.0,
+            pixel_pitch=20e-6,
+        ),
+        apply_vignetting(img, cos4_falloff((24, 32), 30.0)),
+    ]
+    for out in outs:
+        assert out.dtype == want and out.shape == img.shape
+    with pytest.raises(InvalidInputError, match="0-255"):
+        defocus_blur(np.round(base * 255), 3.0, f=0.05, f_number=2, focus=2.0, pixel_pitch=20e-6)
