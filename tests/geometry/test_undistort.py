@@ -132,3 +132,17 @@ def test_bad_inputs() -> None:
         undistort_image(np.zeros((5, 5)), np.zeros((3, 3)), None)
     with pytest.raises(InvalidInputError, match="map_uv"):
         remap_bilinear(np.zeros((5, 5)), np.zeros((5, 5)))
+
+
+def test_fused_brown_conrady_kernel_matches_map_twin(monkeypatch: pytest.MonkeyPatch) -> None:
+    img = _smooth_image(60, 80)
+    K = np.array([[70.0, 0.3, 39.5], [0, 72, 29.5], [0, 0, 1]])
+    new_K = np.array([[60.0, 0, 40.0], [0, 60, 30.0], [0, 0, 1]])
+    model = BrownConrady(k1=-0.2, k2=0.03, p1=0.002, p2=-0.001, k3=0.01, k4=0.05)
+    fused = undistort_image(img, K, model, new_K=new_K, out_shape=(50, 70), fill=-1.0)
+    m = undistortion_map((50, 70), K, model, new_K=new_K)
+    twin = _remap_bilinear_numpy(img[None], m[..., 0], m[..., 1], -1.0)[0]
+    np.testing.assert_allclose(fused, twin, atol=1e-12)
+    monkeypatch.setenv("IMAGEFORM_DISABLE_NUMBA", "1")
+    plain = undistort_image(img, K, model, new_K=new_K, out_shape=(50, 70), fill=-1.0)
+    np.testing.assert_allclose(plain, twin, atol=1e-12)

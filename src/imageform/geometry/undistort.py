@@ -18,7 +18,7 @@ import numpy as np
 from imageform._backend import to_numpy, use_numba
 from imageform._validate import as_image, as_matrix, format_shape
 from imageform.errors import InvalidInputError
-from imageform.geometry.distortion import DistortionModel, _check_model
+from imageform.geometry.distortion import BrownConrady, DistortionModel, _check_model
 
 __all__ = ["remap_bilinear", "undistort_image", "undistortion_map"]
 
@@ -115,6 +115,22 @@ def _inverse_k(Km: np.ndarray, u: np.ndarray, v: np.ndarray) -> np.ndarray:
     return np.stack([x, y], axis=-1)
 
 
+def _intrinsics(K: Any, new_K: Any) -> tuple[np.ndarray, np.ndarray]:
+    """``K`` and ``new_K`` (default ``K``) as float64 ``(3, 3)``, checked upper triangular."""
+    Km = np.asarray(to_numpy(as_matrix(K, "K", (3, 3), batch=False)), dtype=np.float64)
+    Kn = (
+        Km
+        if new_K is None
+        else np.asarray(to_numpy(as_matrix(new_K, "new_K", (3, 3), batch=False)), np.float64)
+    )
+    for name, M in (("K", Km), ("new_K", Kn)):
+        if M[0, 0] == 0 or M[1, 1] == 0 or M[1, 0] != 0 or M[2].tolist() != [0.0, 0.0, 1.0]:
+            raise InvalidInputError(
+                f"expected {name} upper triangular with non-zero fx, fy and last row (0, 0, 1)"
+            )
+    return Km, Kn
+
+
 def undistortion_map(
     shape: tuple[int, int],
     K: Any,
@@ -139,17 +155,7 @@ def undistortion_map(
     h, w = (int(shape[0]), int(shape[1]))
     if h < 1 or w < 1:
         raise InvalidInputError(f"expected a positive output shape (H, W), got {shape!r}")
-    Km = np.asarray(to_numpy(as_matrix(K, "K", (3, 3), batch=False)), dtype=np.float64)
-    Kn = (
-        Km
-        if new_K is None
-        else np.asarray(to_numpy(as_matrix(new_K, "new_K", (3, 3), batch=False)), np.float64)
-    )
-    for name, M in (("K", Km), ("new_K", Kn)):
-        if M[0, 0] == 0 or M[1, 1] == 0 or M[1, 0] != 0 or M[2].tolist() != [0.0, 0.0, 1.0]:
-            raise InvalidInputError(
-                f"expected {name} upper triangular with non-zero fx, fy and last row (0, 0, 1)"
-            )
+    Km, Kn = _intrinsics(K, new_K)
     _check_model(distortion)
     v, u = np.mgrid[0:h, 0:w].astype(np.float64)
     xy = _inverse_k(Kn, u, v)
@@ -212,5 +218,19 @@ def undistort_image(
         )
     hw = batch_shape[:2] if len(batch_shape) == 2 else batch_shape[-3:-1]
     shape = hw if out_shape is None else out_shape
-    m = undistortion_map((int(shape[0]), int(shape[1])), K, distortion, new_K=new_K)
+    out_hw = (int(shape[0]), int(shape[1]))
+    if out_hw[0] < 1 or out_hw[1] < 1:
+        raise InvalidInputError(f"expected a positive output shape (H, W), got {shape!r}")
+    if isinstance(distortion, BrownConrady):
+        batch, full_shape, gray = _as_batch(image)
+        if use_numba(batch):
+            # fused kernel: source position and sampling in one pass (no (H, W, 2) map)
+            from imageform._kernels.remap import undistort_brown_conrady
+
+            Km, Kn = _intrinsics(K, new_K)
+            out = np.empty((batch.shape[0], *out_hw, batch.shape[-1]), dtype=batch.dtype)
+            undistort_brown_conrady(batch, Kn, Km, np.asarray(distortion.coeffs), float(fill), out)
+            out = out.reshape(*full_shape[:-3], *out_hw, full_shape[-1])
+            return out[..., 0] if gray else out
+    m = undistortion_map(out_hw, K, distortion, new_K=new_K)
     return remap_bilinear(image, m, fill=fill)
