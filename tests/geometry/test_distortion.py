@@ -354,3 +354,16 @@ def test_projection_speed_vs_cv2() -> None:
     ref = cv2.projectPoints(pts, np.zeros(3), np.zeros(3), LEFT_K, LEFT_D)[0].reshape(-1, 2)
     assert np.max(np.abs(uv - ref)) < 1e-9
     assert t_cv / t_if >= 5.0
+
+
+@pytest.mark.parametrize("model", MODELS, ids=lambda m: type(m).__name__)
+def test_dask_run(model: object) -> None:
+    da = pytest.importorskip("dask.array")
+    xy = _grid(21, 0.5)
+    lazy = da.from_array(xy, chunks=(100, 2))
+    out = model.distort(lazy)  # type: ignore[attr-defined]
+    assert isinstance(out, da.Array)
+    np.testing.assert_allclose(np.asarray(out), model.distort(xy), atol=1e-15)  # type: ignore[attr-defined]
+    back, ok = model.undistort(out)  # type: ignore[attr-defined]
+    assert isinstance(back, da.Array) and bool(np.asarray(ok).all())
+    np.testing.assert_allclose(np.asarray(back), xy, atol=1e-12)
