@@ -69,8 +69,16 @@ def lens(
     c = parse_length(coc, "--coc", default_unit="mm")
     if math.isinf(s):
         raise InvalidInputError("--focus must be finite; for infinity focus use the hyperfocal row")
-    if s <= f:
-        thin_lens(f=f, d_o=s)  # raises the explanatory virtual-image / infinity error
+    if s == f:
+        raise InvalidInputError(
+            f"--focus {s:g} m equals the focal length: the image forms at infinity"
+        )
+    if s < f:
+        raise InvalidInputError(
+            f"--focus {s:g} m is inside the focal length {f:g} m: the lens forms no real image "
+            "there, only a virtual upright one on the object's side (as a magnifying glass), "
+            "which no sensor can record; focus beyond the focal length"
+        )
     dof = depth_of_field(f, f_number, s, c)
     sol = thin_lens(f=f, d_o=s)
     stops = sorted({*_STOPS, float(f_number)})
