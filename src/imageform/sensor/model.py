@@ -189,7 +189,12 @@ class SensorModel:
         return self.pixel_pitch**2
 
     def quantum_efficiency(self, wavelength_nm: float) -> np.ndarray:
-        """QE of every channel at ``wavelength_nm`` (linear interpolation), shape ``(C,)``."""
+        """QE of every channel at ``wavelength_nm`` (linear interpolation), shape ``(C,)``.
+
+        >>> s = SensorModel(qe_wavelengths=(500.0, 600.0), qe_curves=((0.4, 0.6),))
+        >>> s.quantum_efficiency(550.0).tolist()
+        [0.5]
+        """
         lam = check_positive(wavelength_nm, "wavelength_nm")
         wl = np.asarray(self.qe_wavelengths, dtype=np.float64)
         if wl.size > 1 and not wl[0] <= lam <= wl[-1]:
@@ -356,13 +361,23 @@ class SensorModel:
         return (arr - self.black_level) / (self.max_dn - self.black_level)
 
     def frame_readout_time(self, rows: int) -> float:
-        """Time to read ``rows`` rows, ``rows × line_time`` (s)."""
+        """Time to read ``rows`` rows, ``rows × line_time`` (s).
+
+        >>> round(SensorModel(line_time=10e-6).frame_readout_time(1080), 6)
+        0.0108
+        """
         if int(rows) < 1:
             raise InvalidInputError(f"expected rows >= 1, got {rows!r}")
         return int(rows) * self.line_time
 
     def dynamic_range_db(self) -> float:
-        """Dynamic range ``20 log10(Q_FW / σ_read)`` (dB); ``inf`` without read noise."""
+        """Dynamic range ``20 log10(Q_FW / σ_read)`` (dB); ``inf`` without read noise.
+
+        .. math:: DR = 20 \\log_{10}(Q_{FW} / \\sigma_{read})
+
+        >>> round(SensorModel(full_well=10000, read_noise=2.0).dynamic_range_db(), 2)
+        73.98
+        """
         return (
             math.inf if self.read_noise == 0 else 20 * math.log10(self.full_well / self.read_noise)
         )
