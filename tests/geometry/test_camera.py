@@ -338,3 +338,27 @@ def test_backproject_principal_point_and_float32() -> None:
     d = backproject(np.array([320.0, 240.0], dtype=np.float32), K0)
     assert d.dtype == np.float32
     np.testing.assert_allclose(d, [0, 0, 1])
+
+
+def test_camera_with_distortion_round_trip() -> None:
+    """Camera(distortion=...) projects like cv2.projectPoints with coefficients, and
+    unproject inverts it (Newton inverse of the model)."""
+    from imageform.geometry import BrownConrady
+
+    dist = BrownConrady(k1=-0.25, k2=0.05, p1=1e-3, p2=-5e-4, k3=0.01)
+    R = rvec_to_matrix([0.05, -0.1, 0.02])
+    t = np.array([0.1, 0.0, 3.0])
+    cam = Camera(K0, R, t, distortion=dist)
+    X = np.random.default_rng(7).uniform(-1, 1, size=(50, 3))
+    uv, valid = cam.project(X)
+    ref = cv2.projectPoints(X, cv2.Rodrigues(R)[0], t, K0, np.array(dist.coeffs))[0][:, 0]
+    assert valid.all()
+    np.testing.assert_allclose(uv, ref, atol=1e-9)
+    depth = (X @ R.T + t)[:, 2]
+    np.testing.assert_allclose(cam.unproject(uv, depth), X, atol=1e-9)
+    rays = cam.backproject(uv)
+    np.testing.assert_allclose(
+        rays, (X - cam.center) / np.linalg.norm(X - cam.center, axis=1)[:, None], atol=1e-10
+    )
+    with pytest.raises(InvalidInputError, match="virtual"):
+        Camera(K0, distortion=dist, image_plane="real")

@@ -16,6 +16,20 @@ from imageform.geometry.camera import (
     projection_matrix,
     unproject,
 )
+from imageform.geometry.checkerboard import (
+    CheckerboardNotFoundWarning,
+    CheckerboardResult,
+    find_checkerboard,
+    find_checkerboards,
+)
+from imageform.geometry.checkerboard_subpix import refine_corners
+from imageform.geometry.distortion import (
+    BrownConrady,
+    DistortionModel,
+    DivisionModel,
+    KannalaBrandt,
+    project_points_distorted,
+)
 from imageform.geometry.dlt import estimate_projection_matrix
 from imageform.geometry.homogeneous import (
     are_collinear,
@@ -47,6 +61,7 @@ from imageform.geometry.rotations import (
     quaternion_to_matrix,
     rvec_to_matrix,
 )
+from imageform.geometry.undistort import remap_bilinear, undistort_image, undistortion_map
 from imageform.geometry.vanishing import (
     focal_from_vanishing_points,
     horizon_line,
@@ -59,10 +74,16 @@ from imageform.geometry.vanishing import (
 from imageform.geometry.vp_detection import VanishingPointResult, detect_vanishing_points
 
 __all__ = [
+    "BrownConrady",
     "Camera",
+    "CheckerboardNotFoundWarning",
+    "CheckerboardResult",
     "ConeBeamGeometry",
+    "DistortionModel",
+    "DivisionModel",
     "ImagePlane",
     "Intrinsics",
+    "KannalaBrandt",
     "LineSegments",
     "Projection",
     "VanishingPointResult",
@@ -78,6 +99,8 @@ __all__ = [
     "estimate_homography",
     "estimate_projection_matrix",
     "euler_to_matrix",
+    "find_checkerboard",
+    "find_checkerboards",
     "focal_from_vanishing_points",
     "from_homogeneous",
     "horizon_line",
@@ -95,11 +118,16 @@ __all__ = [
     "orthographic_project",
     "perspective_type",
     "project_points",
+    "project_points_distorted",
     "projected_size",
     "projection_matrix",
     "quaternion_to_matrix",
+    "refine_corners",
+    "remap_bilinear",
     "rvec_to_matrix",
     "to_homogeneous",
+    "undistort_image",
+    "undistortion_map",
     "unproject",
     "vanishing_point",
     "vanishing_point_from_lines",

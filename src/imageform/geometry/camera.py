@@ -356,6 +356,11 @@ def unproject(
     return Xc
 
 
+def _identity_like(K: Array) -> Array:
+    xp = namespace(K)
+    return xp.eye(3, dtype=K.dtype, device=device_of(K))
+
+
 @dataclass(frozen=True)
 class Camera:
     """A pinhole camera: intrinsics K, pose (R, t) world-to-camera, optional image size.
@@ -379,6 +384,8 @@ class Camera:
     t: Array = field(default_factory=lambda: np.zeros(3))
     image_size: tuple[int, int] | None = None
     image_plane: ImagePlane = "virtual"
+    #: Lens distortion on normalised coordinates (BrownConrady, DivisionModel, KannalaBrandt).
+    distortion: Any = None
 
     def __post_init__(self) -> None:
         K = self.K.K if isinstance(self.K, Intrinsics) else self.K
@@ -405,6 +412,12 @@ class Camera:
                     f"expected a positive image_size (width, height), got {self.image_size}"
                 )
             object.__setattr__(self, "image_size", (int(w), int(h)))
+        if self.distortion is not None:
+            from imageform.geometry.distortion import _check_model
+
+            _check_model(self.distortion)
+            if self.image_plane != "virtual":
+                raise InvalidInputError("a distorted camera needs image_plane='virtual'")
 
     # -- constructors --------------------------------------------------------------------
     @classmethod
@@ -457,15 +470,45 @@ class Camera:
         return X @ xp.matrix_transpose(R) + xp.asarray(self.t, dtype=X.dtype, device=device_of(X))
 
     def project(self, points: ArrayLike) -> Projection:
-        """Project world points; see :func:`project_points` (NaN + ``valid`` for z ≤ 0)."""
+        """Project world points; see :func:`project_points` (NaN + ``valid`` for z ≤ 0).
+
+        With a ``distortion`` model the normalised coordinates are distorted before K
+        (:func:`~imageform.geometry.project_points_distorted`).
+        """
+        if self.distortion is not None:
+            from imageform.geometry.distortion import project_points_distorted
+
+            return Projection(
+                *project_points_distorted(points, self.K, self.R, self.t, self.distortion)
+            )
         return project_points(points, self.K, self.R, self.t, image_plane=self.image_plane)
+
+    def undistort_pixels(self, uv: ArrayLike) -> Array:
+        """Ideal (undistorted) normalised coordinates ``(..., 2)`` of distorted pixels.
+
+        NaN where the distortion model's inverse did not converge. Without a distortion
+        model this is ``K⁻¹ (u, v, 1)``.
+        """
+        xp = namespace(uv, self.K)
+        p = as_points(uv, "uv", 2, xp=xp)
+        K = xp.asarray(self.K, dtype=p.dtype, device=device_of(p))
+        xy = _Kinv_apply(p, K, xp)[..., :2]
+        if self.distortion is None:
+            return xy
+        ideal, ok = self.distortion.undistort(xy)
+        return xp.where(ok[..., None], ideal, xp.full_like(ideal, float("nan")))
 
     def backproject(self, uv: ArrayLike) -> Array:
         """Unit world-frame directions of the rays through pixels ``uv`` (from ``center``)."""
+        if self.distortion is not None:
+            return backproject(self.undistort_pixels(uv), _identity_like(self.K), self.R)
         return backproject(uv, self.K, self.R, image_plane=self.image_plane)
 
     def unproject(self, uv: ArrayLike, depth: ArrayLike) -> Array:
         """World points imaged at ``uv`` with camera-frame depth ``depth`` (> 0)."""
+        if self.distortion is not None:
+            xy = self.undistort_pixels(uv)
+            return unproject(xy, depth, _identity_like(self.K), self.R, self.t)
         return unproject(uv, depth, self.K, self.R, self.t, image_plane=self.image_plane)
 
     def in_image(self, uv: ArrayLike) -> Array:

@@ -52,7 +52,10 @@ class WorkedExample:
         )
 
 
-_MODULES = ("imageform.report.lecture_geometry",)
+_MODULES = (
+    "imageform.report.lecture_geometry",
+    "imageform.report.lecture_optics",
+)
 
 
 def all_examples() -> list[WorkedExample]:
