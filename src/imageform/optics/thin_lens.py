@@ -1,0 +1,198 @@
+"""The thin lens: Gaussian lens equation, magnification and f-number, in SI units (metres).
+
+Sign convention: *real is positive*. A converging lens has ``f > 0``; a real object in front
+of the lens has ``d_o > 0``; a real image behind the lens (where a sensor can sit) has
+``d_i > 0``. An object inside the focal length (``d_o < f``) has no real image: the rays
+leave the lens diverging and only appear to come from a *virtual*, upright, magnified image
+on the object's side (``d_i < 0``, the magnifying-glass case). :func:`thin_lens` raises for
+it unless ``allow_virtual=True``, when it returns that image with ``virtual=True``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from imageform._validate import check_positive
+from imageform.errors import InvalidInputError
+
+__all__ = [
+    "ThinLensSolution",
+    "aperture_diameter",
+    "f_number",
+    "magnification",
+    "thin_lens",
+]
+
+
+@dataclass(frozen=True)
+class ThinLensSolution:
+    """A solved thin lens: focal length, object and image distances (m), magnification.
+
+    ``magnification`` is the lateral magnification ``m = -d_i / d_o`` (negative: inverted).
+    ``virtual`` is True when the image is virtual (``d_i < 0``, object inside ``f``).
+    """
+
+    f: float
+    d_o: float
+    d_i: float
+    magnification: float
+    virtual: bool
+
+
+def _number(value: object, name: str) -> float:
+    try:
+        v = float(value)  # type: ignore[arg-type]
+    except (TypeError, ValueError) as exc:
+        raise InvalidInputError(f"expected a number (metres) for {name}, got {value!r}") from exc
+    if not math.isfinite(v):
+        raise InvalidInputError(f"expected a finite {name}, got {value!r}")
+    return v
+
+
+def _virtual_error(f: float, d_o: float) -> InvalidInputError:
+    d_i = f * d_o / (d_o - f)
+    return InvalidInputError(
+        f"object distance d_o = {d_o:g} m is inside the focal length f = {f:g} m: the lens "
+        f"forms no real image, only a virtual upright one on the object's side "
+        f"(d_i = {d_i:g} m, as a magnifying glass); a sensor cannot record it. Move the object "
+        "beyond f, or pass allow_virtual=True to get the virtual image"
+    )
+
+
+def thin_lens(
+    *,
+    f: float | None = None,
+    d_o: float | None = None,
+    d_i: float | None = None,
+    allow_virtual: bool = False,
+) -> ThinLensSolution:
+    """Solve the Gaussian thin-lens equation for whichever of ``f``, ``d_o``, ``d_i`` is missing.
+
+    .. math::
+
+        \\frac{1}{f} = \\frac{1}{d_o} + \\frac{1}{d_i}, \\qquad m = -\\frac{d_i}{d_o}
+
+    Parameters
+    ----------
+    f, d_o, d_i : float
+        Exactly two of them, in metres (real-is-positive convention, module docstring).
+    allow_virtual : bool
+        Return the virtual image (``d_i < 0``, ``virtual=True``) of an object inside the
+        focal length instead of raising.
+
+    Returns
+    -------
+    ThinLensSolution
+
+    Raises
+    ------
+    InvalidInputError
+        Not exactly two values; ``f <= 0``; ``d_o <= 0``; an object at the focal plane (image
+        at infinity); an object inside the focal length (virtual image) without
+        ``allow_virtual``; a given ``d_i <= f`` or ``d_i < 0`` (no real object images there).
+
+    Notes
+    -----
+    Source: E. Hecht, *Optics*, 5th ed., eq. (5.17) (Gaussian lens formula) and (5.24)
+    (transverse magnification).
+
+    >>> s = thin_lens(f=0.05, d_o=2.0)
+    >>> round(s.d_i * 1000, 4), round(s.magnification, 5)
+    (51.2821, -0.02564)
+    """
+    given = {k: v for k, v in (("f", f), ("d_o", d_o), ("d_i", d_i)) if v is not None}
+    if len(given) != 2:
+        raise InvalidInputError(
+            f"expected exactly two of f, d_o, d_i, got {sorted(given) or 'none'}"
+        )
+    vals = {k: _number(v, k) for k, v in given.items()}
+    if "f" in vals and vals["f"] <= 0:
+        raise InvalidInputError(
+            f"expected a converging lens, f > 0 m, got f = {vals['f']:g} (a diverging lens "
+            "forms no real image)"
+        )
+    if "d_o" in vals and vals["d_o"] <= 0:
+        raise InvalidInputError(f"expected an object in front of the lens, d_o > 0 m, got {d_o!r}")
+    if "d_i" in vals and vals["d_i"] == 0:
+        raise InvalidInputError("expected d_i != 0 m, got 0")
+
+    if "d_i" not in vals:
+        fv, do = vals["f"], vals["d_o"]
+        if do == fv:
+            raise InvalidInputError(
+                f"object at the focal plane (d_o = f = {fv:g} m): the rays leave parallel and "
+                "the image forms at infinity"
+            )
+        if do < fv and not allow_virtual:
+            raise _virtual_error(fv, do)
+        di = fv * do / (do - fv)
+    elif "d_o" not in vals:
+        fv, di = vals["f"], vals["d_i"]
+        if di < 0 and not allow_virtual:
+            raise InvalidInputError(
+                f"d_i = {di:g} m < 0 is a virtual image; pass allow_virtual=True to solve for "
+                "the object inside the focal length that forms it"
+            )
+        if 0 < di <= fv:
+            raise InvalidInputError(
+                f"image distance d_i = {di:g} m is not beyond f = {fv:g} m: no real object "
+                "images there (a real image always lies beyond the focal length)"
+            )
+        do = fv * di / (di - fv)
+    else:
+        do, di = vals["d_o"], vals["d_i"]
+        if di < 0 and not allow_virtual:
+            raise InvalidInputError(
+                f"d_i = {di:g} m < 0 is a virtual image; pass allow_virtual=True"
+            )
+        if di < 0 and -di <= do:
+            raise InvalidInputError(
+                f"a virtual image at d_i = {di:g} m must lie farther than the object "
+                f"(d_o = {do:g} m) for a converging lens"
+            )
+        fv = do * di / (do + di)
+    return ThinLensSolution(f=fv, d_o=do, d_i=di, magnification=-di / do, virtual=di < 0)
+
+
+def magnification(f: float, d_o: float, *, allow_virtual: bool = False) -> float:
+    """Lateral magnification of an object at ``d_o`` through a thin lens of focal length ``f``.
+
+    .. math::
+
+        m = -\\frac{d_i}{d_o} = \\frac{f}{f - d_o}
+
+    Negative values mean an inverted real image. Source: Hecht, *Optics*, 5th ed., eq. (5.24).
+
+    >>> round(magnification(0.05, 0.1), 12)  # object at 2f: life-size, inverted
+    -1.0
+    """
+    return thin_lens(f=f, d_o=d_o, allow_virtual=allow_virtual).magnification
+
+
+def f_number(f: float, aperture_diameter: float) -> float:
+    """The f-number ``N = f / D`` of a lens with entrance-pupil diameter ``D`` (metres).
+
+    .. math::
+
+        N = \\frac{f}{D}
+
+    Source: Hecht, *Optics*, 5th ed., §5.3.3.
+
+    >>> round(f_number(0.05, 0.05 / 2.8), 12)
+    2.8
+    """
+    fv = check_positive(f, "f (focal length, m)")
+    d = check_positive(aperture_diameter, "aperture_diameter (m)")
+    return fv / d
+
+
+def aperture_diameter(f: float, f_number: float) -> float:
+    """Entrance-pupil diameter ``D = f / N`` (metres).
+
+    >>> round(aperture_diameter(0.05, 2.0), 6)
+    0.025
+    """
+    fv = check_positive(f, "f (focal length, m)")
+    n = check_positive(f_number, "f_number")
+    return fv / n

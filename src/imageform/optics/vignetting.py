@@ -1,0 +1,144 @@
+"""Vignetting: the natural cos⁴ law and mechanical vignetting by a lens barrel.
+
+Field angle of pixel ``(u, v)``: ``tan θ = r / f_px`` with ``r`` its distance from the optical
+centre ``(c_u, c_v)`` in pixels and ``f_px`` the focal length in pixels.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from imageform._backend import to_numpy
+from imageform._validate import as_image, check_positive, format_shape
+from imageform.errors import InvalidInputError
+
+__all__ = [
+    "apply_vignetting",
+    "cos4_falloff",
+    "field_angle",
+    "mechanical_vignetting",
+    "pupil_overlap_fraction",
+]
+
+
+def field_angle(
+    shape: tuple[int, int], focal_length_px: float, centre: tuple[float, float] | None = None
+) -> np.ndarray:
+    """Field angle θ (radians) of every pixel: ``θ = atan(r / f_px)``; shape ``(H, W)``.
+
+    ``centre`` is ``(c_u, c_v)`` (column, row); default the image centre ``((W-1)/2, (H-1)/2)``.
+
+    >>> round(float(field_angle((1, 3), 1.0)[0, 0]), 6)  # one pixel off-centre, f = 1 px
+    0.785398
+    """
+    h, w = int(shape[0]), int(shape[1])
+    if h < 1 or w < 1:
+        raise InvalidInputError(f"expected a positive shape (H, W), got {shape!r}")
+    f = check_positive(focal_length_px, "focal_length_px")
+    cu, cv = ((w - 1) / 2, (h - 1) / 2) if centre is None else (float(centre[0]), float(centre[1]))
+    v, u = np.mgrid[0:h, 0:w].astype(np.float64)
+    return np.arctan(np.hypot(u - cu, v - cv) / f)
+
+
+def cos4_falloff(
+    shape: tuple[int, int], focal_length_px: float, centre: tuple[float, float] | None = None
+) -> np.ndarray:
+    """Relative illumination of the natural vignetting law, ``cos⁴ θ``; shape ``(H, W)``.
+
+    .. math::
+
+        \\frac{E(\\theta)}{E(0)} = \\cos^4\\theta = \\left(\\frac{f^2}{f^2 + r^2}\\right)^2
+
+    One cosine from the obliquity of the pupil seen from the pixel, one from the tilt of the
+    sensor, two from the inverse-square distance to the pupil. Source: E. Hecht, *Optics*,
+    5th ed., §5.7.4 (cos⁴ law); S. F. Ray, *Applied Photographic Optics*, §23.
+
+    >>> f = cos4_falloff((1, 3), 1.0)  # the outer pixels are at 45°
+    >>> round(float(f[0, 0]), 6), float(f[0, 1])
+    (0.25, 1.0)
+    """
+    return np.cos(field_angle(shape, focal_length_px, centre)) ** 4
+
+
+def pupil_overlap_fraction(pupil_radius: float, stop_radius: float, offset: Any) -> Any:
+    """Fraction of a circular pupil (radius ``a``) inside a circle of radius ``b`` at ``offset``.
+
+    .. math::
+
+        \\frac{A(a, b, d)}{\\pi a^2},\\ A = a^2 \\cos^{-1}\\frac{d^2 + a^2 - b^2}{2da}
+        + b^2 \\cos^{-1}\\frac{d^2 + b^2 - a^2}{2db}
+        - \\tfrac12\\sqrt{(-d+a+b)(d+a-b)(d-a+b)(d+a+b)}
+
+    (the area of intersection of two circles, Weisstein, MathWorld "Circle-Circle
+    Intersection", eq. 14). 1 when the pupil lies inside, 0 when they do not overlap.
+
+    >>> round(float(pupil_overlap_fraction(1.0, 1.0, 1.0)), 6)
+    0.391002
+    """
+    a = check_positive(pupil_radius, "pupil_radius")
+    b = check_positive(stop_radius, "stop_radius")
+    d = np.abs(np.asarray(to_numpy(offset), dtype=np.float64))
+    full = d <= b - a
+    none = d >= a + b
+    inner = d <= a - b  # stop entirely inside the pupil
+    ds = np.where(full | none | inner | (d == 0), 1.0, d)
+    ca = np.clip((ds**2 + a * a - b * b) / (2 * ds * a), -1.0, 1.0)
+    cb = np.clip((ds**2 + b * b - a * a) / (2 * ds * b), -1.0, 1.0)
+    prod = (-ds + a + b) * (ds + a - b) * (ds - a + b) * (ds + a + b)
+    lens = a * a * np.arccos(ca) + b * b * np.arccos(cb) - 0.5 * np.sqrt(np.maximum(prod, 0.0))
+    frac = lens / (math.pi * a * a)
+    frac = np.where(inner, (b * b) / (a * a), frac)
+    frac = np.where(full, 1.0, np.where(none, 0.0, frac))
+    return frac
+
+
+def mechanical_vignetting(
+    shape: tuple[int, int],
+    focal_length_px: float,
+    *,
+    pupil_radius: float,
+    barrel_radius: float,
+    barrel_distance: float,
+    centre: tuple[float, float] | None = None,
+) -> np.ndarray:
+    """Relative illumination when a lens barrel clips the oblique beam; shape ``(H, W)``.
+
+    At field angle θ the beam that fills the aperture stop (radius ``a = pupil_radius``) is
+    displaced by ``d = L tan θ`` where it passes the barrel's opening (radius
+    ``b = barrel_radius``) a distance ``L = barrel_distance`` from the stop; the transmitted
+    fraction is the overlap of the two circles (:func:`pupil_overlap_fraction`).
+
+    .. math::
+
+        V(\\theta) = \\frac{A(a, b, L\\tan\\theta)}{\\pi a^2}
+
+    Lengths in one unit (e.g. metres). Source: S. F. Ray, *Applied Photographic Optics*,
+    §23 ("mechanical vignetting"); geometry of the oblique beam.
+
+    >>> v = mechanical_vignetting((1, 3), 1.0, pupil_radius=1, barrel_radius=1,
+    ...                           barrel_distance=1)
+    >>> round(float(v[0, 0]), 6), float(v[0, 1])
+    (0.391002, 1.0)
+    """
+    L = check_positive(barrel_distance, "barrel_distance", allow_zero=True)
+    theta = field_angle(shape, focal_length_px, centre)
+    return np.asarray(pupil_overlap_fraction(pupil_radius, barrel_radius, L * np.tan(theta)))
+
+
+def apply_vignetting(image: Any, falloff: Any) -> Any:
+    """Multiply an image ``(H, W)`` or ``(H, W, C)`` by a relative-illumination map ``(H, W)``.
+
+    >>> apply_vignetting(np.ones((1, 3)), cos4_falloff((1, 3), 1.0)).round(12).tolist()
+    [[0.25, 1.0, 0.25]]
+    """
+    img = np.asarray(to_numpy(as_image(image, "image", channels=None)))
+    f = np.asarray(to_numpy(falloff), dtype=img.dtype)
+    if img.ndim not in (2, 3) or f.shape != img.shape[:2]:
+        raise InvalidInputError(
+            f"expected image (H, W[, C]) and falloff (H, W), got {format_shape(img.shape)} "
+            f"and {format_shape(f.shape)}"
+        )
+    return img * (f if img.ndim == 2 else f[..., None])

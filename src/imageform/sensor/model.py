@@ -1,0 +1,368 @@
+"""A linear image-sensor model in the sense of EMVA 1288, with fixed-pattern noise and an ADC.
+
+The signal chain of one pixel, for one exposure of ``t`` seconds:
+
+1. photons on the pixel area ``μ_p`` (from spectral or monochromatic irradiance, or given);
+2. mean photo-electrons ``μ_e = FF · Σ_λ QE_c(λ) μ_p(λ)``, times the pixel's PRNU gain;
+3. photon shot noise: ``Poisson(μ_e)``; dark current: ``Poisson(I_dark t)``;
+4. saturation at the full-well capacity;
+5. read noise ``N(0, σ_read²)``, DSNU and CMOS column offsets (electrons);
+6. system gain ``K = G_conv · G_analog · (2^b - 1) / V_ADC`` (DN/e⁻), black level, and an
+   ``b``-bit ADC that rounds and saturates at ``0`` and ``2^b - 1``.
+
+Saturation at full well and at the ADC's range is physics, not a repair; everything else is
+linear. Source: EMVA Standard 1288, Release 4.0 (2021), §2 (the linear camera model).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from imageform._backend import to_numpy
+from imageform._validate import check_option, check_positive, format_shape
+from imageform.errors import InvalidInputError
+from imageform.sensor.noise import FixedPattern, fixed_pattern
+
+__all__ = ["PLANCK", "SPEED_OF_LIGHT", "SensorModel", "photons_per_pixel"]
+
+#: Planck constant, J s (exact, SI 2019 definition).
+PLANCK = 6.62607015e-34
+#: Speed of light in vacuum, m/s (exact, SI definition).
+SPEED_OF_LIGHT = 299792458.0
+
+_INPUTS = ("electrons", "photons", "irradiance")
+
+
+def _positive_field(obj: object, name: str, *, allow_zero: bool = False) -> None:
+    check_positive(getattr(obj, name), name, allow_zero=allow_zero)
+
+
+def photons_per_pixel(
+    irradiance: Any, wavelength_nm: float, *, pixel_area: float, exposure_time: float
+) -> np.ndarray:
+    """Mean photons reaching a pixel: irradiance × area × time over the photon energy.
+
+    .. math::
+
+        \\mu_p = \\frac{E A t \\lambda}{h c}
+
+    ``irradiance`` in W/m², ``pixel_area`` in m², ``exposure_time`` in s. Source: EMVA 1288
+    4.0, eq. (2).
+
+    >>> round(float(photons_per_pixel(1e-3, 550, pixel_area=25e-12, exposure_time=1e-3)), 2)
+    69.22
+    """
+    lam = check_positive(wavelength_nm, "wavelength_nm") * 1e-9
+    a = check_positive(pixel_area, "pixel_area (m²)")
+    t = check_positive(exposure_time, "exposure_time (s)", allow_zero=True)
+    e = np.asarray(to_numpy(irradiance), dtype=np.float64)
+    return e * a * t * lam / (PLANCK * SPEED_OF_LIGHT)
+
+
+@dataclass(frozen=True)
+class SensorModel:
+    """Parameters of an image sensor; :meth:`capture` turns light into digital numbers.
+
+    Lengths in metres, times in seconds, charges in electrons (e⁻), voltages in volts.
+
+    Attributes
+    ----------
+    name : str
+    architecture : {"cmos", "ccd"}
+    shutter : {"global", "rolling"}
+    pixel_pitch : float
+        Pixel pitch (m).
+    fill_factor : float
+        Photosensitive fraction of the pixel area, ``0 < FF <= 1`` (microlenses raise it).
+    qe_wavelengths : tuple of float
+        Wavelengths (nm) at which the quantum-efficiency curves are sampled, increasing.
+    qe_curves : tuple of tuple of float
+        One QE curve per output channel (``C`` curves, values in [0, 1]).
+    full_well : float
+        Full-well capacity (e⁻).
+    conversion_gain : float
+        Sense-node conversion gain (V/e⁻), e.g. ``60e-6``.
+    adc_range : float
+        Input range of the ADC (V).
+    analog_gain : float
+        Programmable gain before the ADC (the "ISO" setting), ``>= 1`` typically.
+    bit_depth : int
+        ADC resolution (1 … 16 bits).
+    black_level : float
+        Offset added before the ADC (DN).
+    dark_current : float
+        Mean dark current (e⁻/s per pixel).
+    read_noise : float
+        Temporal read noise (e⁻ rms).
+    dsnu, prnu, column_fpn : float
+        Dark-signal non-uniformity (e⁻ rms), photo-response non-uniformity (fraction) and
+        column offsets of column-parallel CMOS read-out (e⁻ rms).
+    line_time : float
+        Time between the read-out of consecutive rows (s); a rolling shutter starts each row
+        this much later than the one above.
+    power : float
+        Typical power consumption (W), for the CCD/CMOS comparison.
+    fpn_seed : int
+        Seed of the chip's fixed pattern (the same chip in every frame).
+
+    >>> s = SensorModel(conversion_gain=50e-6, adc_range=1.0, bit_depth=12)
+    >>> round(s.system_gain, 5)  # DN per electron
+    0.20475
+    """
+
+    name: str = "sensor"
+    architecture: str = "cmos"
+    shutter: str = "rolling"
+    pixel_pitch: float = 3.45e-6
+    fill_factor: float = 1.0
+    qe_wavelengths: tuple[float, ...] = (550.0,)
+    qe_curves: tuple[tuple[float, ...], ...] = ((0.6,),)
+    full_well: float = 10000.0
+    conversion_gain: float = 60e-6
+    adc_range: float = 1.0
+    analog_gain: float = 1.0
+    bit_depth: int = 12
+    black_level: float = 64.0
+    dark_current: float = 5.0
+    read_noise: float = 3.0
+    dsnu: float = 1.0
+    prnu: float = 0.01
+    column_fpn: float = 0.0
+    line_time: float = 10e-6
+    power: float = 0.5
+    fpn_seed: int = 0
+
+    def __post_init__(self) -> None:
+        check_option(self.architecture, ("cmos", "ccd"), "sensor architecture")
+        check_option(self.shutter, ("global", "rolling"), "shutter")
+        for name in ("pixel_pitch", "full_well", "conversion_gain", "adc_range", "analog_gain"):
+            _positive_field(self, name)
+        for name in ("black_level", "dark_current", "read_noise", "dsnu", "prnu"):
+            _positive_field(self, name, allow_zero=True)
+        for name in ("column_fpn", "line_time", "power"):
+            _positive_field(self, name, allow_zero=True)
+        if not 0 < self.fill_factor <= 1:
+            raise InvalidInputError(f"expected 0 < fill_factor <= 1, got {self.fill_factor!r}")
+        if not isinstance(self.bit_depth, int) or not 1 <= self.bit_depth <= 16:
+            raise InvalidInputError(f"expected bit_depth an int in 1..16, got {self.bit_depth!r}")
+        if self.black_level > self.max_dn:
+            raise InvalidInputError(
+                f"black_level {self.black_level} exceeds the ADC's range 0..{self.max_dn}"
+            )
+        wl = np.asarray(self.qe_wavelengths, dtype=np.float64)
+        qe = np.asarray(self.qe_curves, dtype=np.float64)
+        if wl.ndim != 1 or wl.size < 1 or np.any(np.diff(wl) <= 0):
+            raise InvalidInputError("expected qe_wavelengths a non-empty increasing sequence (nm)")
+        if qe.ndim != 2 or qe.shape[1] != wl.size:
+            raise InvalidInputError(
+                f"expected qe_curves of shape (C, {wl.size}), got {format_shape(qe.shape)}"
+            )
+        if not np.all((qe >= 0) & (qe <= 1)):
+            raise InvalidInputError("expected quantum efficiencies in [0, 1]")
+
+    # -- derived quantities ---------------------------------------------------------------
+    @property
+    def n_channels(self) -> int:
+        """Number of output channels (QE curves)."""
+        return len(self.qe_curves)
+
+    @property
+    def max_dn(self) -> int:
+        """Largest ADC code, ``2^b - 1``."""
+        return int(2**self.bit_depth - 1)
+
+    @property
+    def system_gain(self) -> float:
+        """Overall system gain ``K`` (DN/e⁻), EMVA 1288's ``K``.
+
+        .. math:: K = G_{conv}\\, G_{analog}\\, \\frac{2^b - 1}{V_{ADC}}
+        """
+        return self.conversion_gain * self.analog_gain * self.max_dn / self.adc_range
+
+    @property
+    def pixel_area(self) -> float:
+        """Pixel area ``p²`` (m²)."""
+        return self.pixel_pitch**2
+
+    def quantum_efficiency(self, wavelength_nm: float) -> np.ndarray:
+        """QE of every channel at ``wavelength_nm`` (linear interpolation), shape ``(C,)``."""
+        lam = check_positive(wavelength_nm, "wavelength_nm")
+        wl = np.asarray(self.qe_wavelengths, dtype=np.float64)
+        if wl.size > 1 and not wl[0] <= lam <= wl[-1]:
+            raise InvalidInputError(
+                f"wavelength {lam:g} nm is outside the QE curves' range {wl[0]:g}-{wl[-1]:g} nm"
+            )
+        return np.array(
+            [np.interp(lam, wl, np.asarray(c, dtype=np.float64)) for c in self.qe_curves]
+        )
+
+    def fixed_pattern(self, height: int, width: int) -> FixedPattern:
+        """This chip's fixed-pattern maps for an ``(height, width)`` frame (from ``fpn_seed``)."""
+        col = self.column_fpn if self.architecture == "cmos" else 0.0
+        return fixed_pattern(
+            (int(height), int(width), self.n_channels),
+            prnu=self.prnu,
+            dsnu=self.dsnu,
+            column_fpn=col,
+            seed=self.fpn_seed,
+        )
+
+    # -- light to electrons ---------------------------------------------------------------
+    def mean_electrons(
+        self,
+        signal: Any,
+        *,
+        exposure_time: float,
+        input: str = "electrons",
+        wavelength_nm: float | None = None,
+    ) -> np.ndarray:
+        """Mean photo-electrons per pixel and channel, ``(..., H, W, C)``, before any noise.
+
+        ``input`` says what ``signal`` holds:
+
+        - ``"electrons"``: mean photo-electrons, ``(..., H, W, C)`` (returned as is);
+        - ``"photons"``: mean photons on the pixel area during the exposure — monochromatic
+          ``(..., H, W)`` with ``wavelength_nm``, or per wavelength bin ``(..., H, W, L)``
+          on ``qe_wavelengths``;
+        - ``"irradiance"``: W/m² at ``wavelength_nm`` ``(..., H, W)``, or spectral
+          irradiance W m⁻² nm⁻¹ ``(..., H, W, L)`` on ``qe_wavelengths`` (integrated with
+          the trapezoidal rule).
+
+        .. math:: \\mu_{e,c} = FF \\sum_\\lambda QE_c(\\lambda)\\, \\mu_p(\\lambda)
+        """
+        t = check_positive(exposure_time, "exposure_time (s)", allow_zero=True)
+        kind = check_option(input, _INPUTS, "capture input")
+        arr = np.asarray(to_numpy(signal), dtype=np.float64)
+        if not np.all(np.isfinite(arr)):
+            raise InvalidInputError("signal contains NaN or inf")
+        if np.any(arr < 0):
+            raise InvalidInputError(f"expected a non-negative {kind} signal, got min {arr.min():g}")
+        if kind == "electrons":
+            if arr.ndim < 3 or arr.shape[-1] != self.n_channels:
+                raise InvalidInputError(
+                    f"expected electrons of shape (..., H, W, {self.n_channels}), got "
+                    f"{format_shape(arr.shape)}"
+                )
+            return arr
+        ff = self.fill_factor
+        if wavelength_nm is not None:
+            if arr.ndim < 2:
+                raise InvalidInputError(
+                    f"expected monochromatic {kind} of shape (..., H, W), "
+                    f"got {format_shape(arr.shape)}"
+                )
+            qe = self.quantum_efficiency(wavelength_nm)
+            mp = (
+                arr
+                if kind == "photons"
+                else photons_per_pixel(
+                    arr, wavelength_nm, pixel_area=self.pixel_area, exposure_time=t
+                )
+            )
+            return ff * mp[..., None] * qe
+        wl = np.asarray(self.qe_wavelengths, dtype=np.float64)
+        if arr.ndim < 3 or arr.shape[-1] != wl.size:
+            raise InvalidInputError(
+                f"expected spectral {kind} of shape (..., H, W, {wl.size}) on qe_wavelengths, "
+                f"got {format_shape(arr.shape)}; pass wavelength_nm for monochromatic light"
+            )
+        qe = np.asarray(self.qe_curves, dtype=np.float64)  # (C, L)
+        if kind == "photons":
+            return ff * arr @ qe.T
+        if wl.size < 2:
+            raise InvalidInputError("spectral irradiance needs QE curves on >= 2 wavelengths")
+        weights = np.zeros(wl.size)  # trapezoidal-rule weights (nm) on the QE grid
+        weights[:-1] += np.diff(wl) / 2
+        weights[1:] += np.diff(wl) / 2
+        photon_energy = PLANCK * SPEED_OF_LIGHT / (wl * 1e-9)  # J per photon
+        per_bin = arr * (weights * self.pixel_area * t / photon_energy)  # photons per bin
+        return ff * per_bin @ qe.T
+
+    # -- electrons to digital numbers -------------------------------------------------------
+    def capture(
+        self,
+        signal: Any,
+        *,
+        exposure_time: float,
+        rng: np.random.Generator | int,
+        input: str = "electrons",
+        wavelength_nm: float | None = None,
+    ) -> np.ndarray:
+        """Simulate one exposure: shot, dark and read noise, FPN, gain, black level, ADC.
+
+        .. math::
+
+            y = \\mathrm{clip}_{[0, 2^b - 1]}\\Big(\\mathrm{round}\\big(K\\,[\\min(
+            \\mathcal{P}(g \\mu_e) + \\mathcal{P}(I_d t),\\ Q_{FW}) + o + n_r] + y_0\\big)\\Big)
+
+        Parameters
+        ----------
+        signal : array
+            See :meth:`mean_electrons` for the shapes of each ``input`` kind.
+        exposure_time : float
+            Seconds, ``>= 0``.
+        rng : numpy.random.Generator or int
+            The per-frame temporal noise source (an int seeds a new Generator).
+        input : {"electrons", "photons", "irradiance"}
+        wavelength_nm : float, optional
+            For monochromatic photons or irradiance.
+
+        Returns
+        -------
+        uint16 array (..., H, W, C)
+            Raw digital numbers.
+
+        Source: EMVA 1288 4.0, §2, eqs. (1)–(9).
+
+        >>> s = SensorModel(read_noise=0, dark_current=0, dsnu=0, prnu=0, black_level=0)
+        >>> s.capture(np.full((1, 2, 1), 0.0), exposure_time=0.01, rng=0).ravel().tolist()
+        [0, 0]
+        """
+        mu = self.mean_electrons(
+            signal, exposure_time=exposure_time, input=input, wavelength_nm=wavelength_nm
+        )
+        if mu.ndim < 3:
+            raise InvalidInputError(f"expected (..., H, W, C), got {format_shape(mu.shape)}")
+        gen = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(int(rng))
+        h, w = mu.shape[-3], mu.shape[-2]
+        fp = self.fixed_pattern(h, w)
+        t = float(exposure_time)
+        electrons = gen.poisson(mu * fp.gain).astype(np.float64)
+        if self.dark_current > 0 and t > 0:
+            electrons += gen.poisson(self.dark_current * t, size=mu.shape)
+        electrons = np.minimum(electrons, self.full_well)  # full-well saturation (physics)
+        electrons += fp.offset
+        if self.read_noise > 0:
+            electrons += self.read_noise * gen.standard_normal(mu.shape)
+        analog = self.system_gain * electrons + self.black_level
+        dn = np.clip(np.floor(analog + 0.5), 0, self.max_dn)  # the ADC's range (physics)
+        return dn.astype(np.uint16)
+
+    def normalise(self, dn: Any) -> np.ndarray:
+        """Raw DN to floats: black level subtracted, white (``2^b - 1``) mapped to 1.
+
+        .. math:: \\frac{y - y_0}{(2^b - 1) - y_0}
+
+        Values below the black level stay negative (noise is not clipped).
+
+        >>> SensorModel(black_level=64, bit_depth=12).normalise([64, 4095]).tolist()
+        [0.0, 1.0]
+        """
+        arr = np.asarray(to_numpy(dn), dtype=np.float64)
+        return (arr - self.black_level) / (self.max_dn - self.black_level)
+
+    def frame_readout_time(self, rows: int) -> float:
+        """Time to read ``rows`` rows, ``rows × line_time`` (s)."""
+        if int(rows) < 1:
+            raise InvalidInputError(f"expected rows >= 1, got {rows!r}")
+        return int(rows) * self.line_time
+
+    def dynamic_range_db(self) -> float:
+        """Dynamic range ``20 log10(Q_FW / σ_read)`` (dB); ``inf`` without read noise."""
+        return (
+            math.inf if self.read_noise == 0 else 20 * math.log10(self.full_well / self.read_noise)
+        )
