@@ -1,0 +1,139 @@
+"""Sub-pixel corner refinement (OpenCV's ``cornerSubPix``) and the grey conversion.
+
+Part of :mod:`imageform.geometry.checkerboard`; :func:`refine_corners` is public there.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import numpy.typing as npt
+from numpy.typing import NDArray
+
+from imageform._backend import to_numpy, use_numba
+from imageform._kernels.checkerboard import refine_corners_numba, refine_corners_numpy
+from imageform._validate import as_image, as_points, format_shape
+from imageform.errors import InvalidInputError
+
+__all__ = ["as_gray", "refine", "refine_corners"]
+
+# ITU-R BT.601 luma weights (the grey conversion OpenCV's cvtColor uses)
+_LUMA = np.array([0.299, 0.587, 0.114])
+
+
+def as_gray(image: object) -> NDArray[np.floating]:
+    """A grey NumPy image (H, W): float32 for integer/float32 input, float64 for float64."""
+    arr = as_image(image, "image", channels=None, range_check=False)
+    # float32 (integer and float32 input) or float64 (float64 input), as DESIGN.md's policy
+    arr = np.asarray(to_numpy(arr))
+    if arr.ndim == 3 and arr.shape[-1] == 1:
+        arr = arr[..., 0]
+    elif arr.ndim == 3 and arr.shape[-1] == 3:
+        arr = arr @ _LUMA.astype(arr.dtype)
+    elif arr.ndim != 2:
+        raise InvalidInputError(
+            "expected image of shape (H, W), (H, W, 1) or (H, W, 3), "
+            f"got {format_shape(tuple(arr.shape))}"
+        )
+    if min(arr.shape) < 16:
+        raise InvalidInputError(
+            f"expected an image of at least 16 x 16 pixels, got {format_shape(arr.shape)}"
+        )
+    return arr
+
+
+def refine_corners(
+    image: npt.ArrayLike,
+    corners: npt.ArrayLike,
+    *,
+    half_window: int | tuple[int, int] = 11,
+    max_iter: int = 30,
+    eps: float = 1e-3,
+) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
+    """Sub-pixel corner positions by gradient orthogonality (OpenCV's ``cornerSubPix``).
+
+    Each corner ``q`` is moved to the point to which the image gradients ``g_p`` in a
+    window around it are orthogonal, iterating on a bilinearly resampled window:
+
+    .. math::
+
+        q' = \\Big(\\sum_p w_p\\, g_p g_p^\\top\\Big)^{-1} \\sum_p w_p\\, g_p g_p^\\top\\, p,
+        \\qquad w_p = e^{-(x_p/h_x)^2} e^{-(y_p/h_y)^2}
+
+    with central-difference gradients, window offsets ``x_p ∈ [-h_x, h_x]``; it stops after
+    ``max_iter`` iterations or when a step is ``<= eps`` pixels. A corner that ends more than
+    the half window away from its start keeps its start (status 4), as in OpenCV.
+
+    Parameters
+    ----------
+    image : array_like (H, W) or (H, W, 3)
+        Grey or RGB image (uint8, uint16 or floats of any scale).
+    corners : array_like (N, 2)
+        Starting positions ``(u, v)``, centre of the top-left pixel = (0, 0).
+    half_window : int or (int, int)
+        ``h`` or ``(h_x, h_y)``: the window is ``(2 h_y + 1) x (2 h_x + 1)`` pixels; OpenCV's
+        ``winSize``. Must be smaller than half the square size of the board.
+    max_iter, eps : int, float
+        OpenCV's ``TermCriteria(EPS + COUNT, max_iter, eps)``.
+
+    Returns
+    -------
+    corners : ndarray (N, 2) float64
+        Refined positions.
+    status : ndarray (N,) int64
+        0 converged, 1 ``max_iter`` reached, 2 flat window (singular), 3 left the image,
+        4 moved farther than the half window (start kept).
+
+    Notes
+    -----
+    Förstner & Gülch (1987), "A fast operator for detection and precise location of distinct
+    points, corners and centres of circular features"; the iteration, window weights and
+    stopping rule of OpenCV's ``cornerSubPix`` (agrees with OpenCV 5.0 to 1e-4 px on its
+    ``left*.jpg`` views, tested).
+
+    Examples
+    --------
+    An ideal corner at (20.3, 19.6), rendered with exact pixel coverage and a lens blur
+    (on a perfectly sharp corner the method, like OpenCV's, is biased by up to ~0.07 px):
+
+    >>> import numpy as np
+    >>> from scipy.ndimage import gaussian_filter
+    >>> v, u = np.mgrid[0:40, 0:40] * 1.0
+    >>> a = np.clip(u - 20.3 + 0.5, 0, 1)  # fraction of each pixel right of u = 20.3
+    >>> b = np.clip(v - 19.6 + 0.5, 0, 1)  # ... below v = 19.6
+    >>> img = gaussian_filter(a * b + (1 - a) * (1 - b), 1.5)
+    >>> xy, status = refine_corners(img, [[19.0, 21.0]], half_window=5)
+    >>> np.round(xy, 1), status
+    (array([[20.3, 19.6]]), array([0]))
+    """
+    gray = as_gray(image)
+    pts = np.asarray(to_numpy(as_points(corners, "corners", 2, dtype=None)), dtype=np.float64)
+    if pts.ndim != 2:
+        raise InvalidInputError(
+            f"expected corners of shape (N, 2), got {format_shape(tuple(pts.shape))}"
+        )
+    hx, hy = (half_window, half_window) if isinstance(half_window, int) else half_window
+    for h in (hx, hy):
+        if isinstance(h, bool) or not isinstance(h, int | np.integer) or h < 1:
+            raise InvalidInputError(f"expected half_window as integers >= 1, got {half_window!r}")
+    if isinstance(max_iter, bool) or not isinstance(max_iter, int) or max_iter < 1:
+        raise InvalidInputError(f"expected max_iter an integer >= 1, got {max_iter!r}")
+    if not (math.isfinite(eps) and eps >= 0):
+        raise InvalidInputError(f"expected eps >= 0, got {eps!r}")
+    return refine(gray, pts, int(hx), int(hy), max_iter, float(eps))
+
+
+def refine(
+    gray: NDArray[np.floating],
+    pts: NDArray[np.float64],
+    hx: int,
+    hy: int,
+    max_iter: int,
+    eps: float,
+) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
+    """:func:`refine_corners` on clean input (kernel or twin by :func:`use_numba`)."""
+    if pts.shape[0] == 0:
+        return pts.copy(), np.zeros(0, dtype=np.int64)
+    kernel = refine_corners_numba if use_numba(gray) else refine_corners_numpy
+    return kernel(np.ascontiguousarray(gray), np.ascontiguousarray(pts), hx, hy, max_iter, eps)
