@@ -6,6 +6,11 @@ top-left pixel centre at (0, 0); points are row vectors ``(..., N, 3)``; points 
 ``z_cam <= 0`` are NaN with ``valid = False``.
 """
 
+from imageform.geometry.calibration import (
+    CalibrationResult,
+    calibrate_camera,
+    checkerboard_points,
+)
 from imageform.geometry.camera import (
     Camera,
     ImagePlane,
@@ -27,6 +32,8 @@ from imageform.geometry.homogeneous import (
 )
 from imageform.geometry.homography import apply_homography, estimate_homography
 from imageform.geometry.intrinsics import Intrinsics, intrinsic_matrix, projected_size
+from imageform.geometry.pnp import PnPResult, solve_pnp
+from imageform.geometry.pnp_ransac import solve_pnp_ransac
 from imageform.geometry.projection_models import (
     ConeBeamGeometry,
     orthographic_matrix,
@@ -46,6 +53,7 @@ from imageform.geometry.rotations import (
     quaternion_to_matrix,
     rvec_to_matrix,
 )
+from imageform.geometry.triangulation import TriangulationResult, triangulate_points
 from imageform.geometry.vanishing import (
     focal_from_vanishing_points,
     horizon_line,
@@ -57,16 +65,21 @@ from imageform.geometry.vanishing import (
 )
 
 __all__ = [
+    "CalibrationResult",
     "Camera",
     "ConeBeamGeometry",
     "ImagePlane",
     "Intrinsics",
+    "PnPResult",
     "Projection",
+    "TriangulationResult",
     "apply_homography",
     "are_collinear",
     "axis_rotation",
     "backproject",
+    "calibrate_camera",
     "camera_rotation",
+    "checkerboard_points",
     "cross_ratio",
     "decompose_projection_matrix",
     "estimate_homography",
@@ -93,7 +106,10 @@ __all__ = [
     "projection_matrix",
     "quaternion_to_matrix",
     "rvec_to_matrix",
+    "solve_pnp",
+    "solve_pnp_ransac",
     "to_homogeneous",
+    "triangulate_points",
     "unproject",
     "vanishing_point",
     "vanishing_point_from_lines",
