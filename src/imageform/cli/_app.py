@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import typer
 
-from imageform.cli import geometry_cmds, lecture_cmd, optics_cmds
+from imageform.cli import calibration_cmds, geometry_cmds, lecture_cmd, optics_cmds
 
 app = typer.Typer(
     name="imageform",
@@ -15,7 +15,7 @@ app = typer.Typer(
     rich_markup_mode=None,
 )
 
-for _module in (lecture_cmd, geometry_cmds, optics_cmds):
+for _module in (lecture_cmd, geometry_cmds, optics_cmds, calibration_cmds):
     _module.register(app)
 
 

@@ -123,7 +123,8 @@ class CalibrationResult:
         }
         lines = ["[camera]"]
         lines += [f"{k} = {float(v)!r}" for k, v in vals.items()]
-        lines += [f"width = {self.image_size[0]}", f"height = {self.image_size[1]}"]
+        if min(self.image_size) > 0:  # (0, 0): unknown, e.g. read from a file without it
+            lines += [f"width = {self.image_size[0]}", f"height = {self.image_size[1]}"]
         lines += [f"{k} = {float(getattr(self.distortion, k))!r}" for k in _DIST]
         lines += ["", "[calibration]", f"rms = {self.rms!r}", f"views = {len(self.rvecs)}"]
         text = "\n".join(lines) + "\n"
