@@ -111,7 +111,6 @@ def calibrate(
         check_output_path(plot, inputs=tuple(files), force=force)
     shape0: tuple[int, ...] | None = None
     corners, names = [], []
-    opts = {} if half_window is None else {"half_window": half_window}
     with typer.progressbar(files, label="detecting", file=sys.stderr) as bar:
         for f in bar:
             img = read_image(f)
@@ -122,13 +121,13 @@ def calibrate(
                     f"expected all images of one size, got {files[0]} of {shape0[1]} x "
                     f"{shape0[0]} px and {f} of {img.shape[1]} x {img.shape[0]} px"
                 )
-            r = find_checkerboard(img, size, **opts)
-            if r.found:
-                assert r.corners is not None
-                corners.append(r.corners)
+            det = find_checkerboard(img, size, half_window=half_window)
+            if det.found:
+                assert det.corners is not None
+                corners.append(det.corners)
                 names.append(f.name)
             else:
-                _warn(f"{f}: no {board} board found ({r.reason})")
+                _warn(f"{f}: no {board} board found ({det.reason})")
     if not corners:
         raise DegenerateConfigurationError(
             f"no {size[0]}x{size[1]} checkerboard found in any of the {len(files)} images "

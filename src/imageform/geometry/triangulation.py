@@ -183,4 +183,4 @@ def triangulate_points(
         cov = s**2 * np.linalg.pinv(np.swapaxes(J, 1, 2) @ J)
     rms = np.sqrt(cost / n_seen)
     valid = np.all((depth > 0) | ~seen, axis=1) & np.all(np.isfinite(X), axis=1)
-    return TriangulationResult(X, cov, rms, valid)
+    return TriangulationResult(X, np.asarray(cov, dtype=np.float64), rms, valid)
