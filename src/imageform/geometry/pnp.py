@@ -93,18 +93,21 @@ def _linear_dlt(X: F64, xy: F64) -> tuple[F64, F64]:
     O = (Xh[..., :, None] * Xh[..., None, :]).reshape(B, N, 16)
     wts = np.stack([np.ones_like(x), x, y, x * x + y * y], axis=1)  # (B, 4, N)
     S = (wts @ O).reshape(B, 4, 4, 4)
-    AtA = np.zeros((B, 12, 12))
-    AtA[:, 0:4, 0:4] = S[:, 0]
-    AtA[:, 4:8, 4:8] = S[:, 0]
-    AtA[:, 0:4, 8:12] = -S[:, 1]
-    AtA[:, 8:12, 0:4] = -S[:, 1]
-    AtA[:, 4:8, 8:12] = -S[:, 2]
-    AtA[:, 8:12, 4:8] = -S[:, 2]
-    AtA[:, 8:12, 8:12] = S[:, 3]
-    P = np.linalg.eigh(AtA)[1][..., 0].reshape(B, 3, 4)
+    # AᵀA = [[S0, 0, -S1], [0, S0, -S2], [-S1, -S2, S3]] acting on p = (p1, p2, p3), the rows
+    # of P. For fixed p3 the minimum over p1, p2 is p1 = S0⁻¹ S1 p3, p2 = S0⁻¹ S2 p3, leaving
+    # p3ᵀ (S3 - S1 S0⁻¹ S1 - S2 S0⁻¹ S2) p3 -> a 4x4 eigenproblem with |p3| = 1 (the scale of
+    # the depth row) instead of a 12x12 one with |p| = 1; exact for noise-free data.
+    S0i = np.linalg.inv(S[:, 0])
+    G1, G2 = S0i @ S[:, 1], S0i @ S[:, 2]
+    Mred = S[:, 3] - S[:, 1] @ G1 - S[:, 2] @ G2
+    p3 = np.linalg.eigh(0.5 * (Mred + np.swapaxes(Mred, 1, 2)))[1][..., 0]
+    P = np.stack([(G1 @ p3[..., None])[..., 0], (G2 @ p3[..., None])[..., 0], p3], axis=1)
     P = P * np.sign(np.linalg.det(P[:, :, :3]))[:, None, None]
-    R = _procrustes(P[:, :, :3])
-    lam = np.linalg.svd(P[:, :, :3], compute_uv=False).mean(axis=-1) / s[:, 0, 0]
+    U, sv, Vt = np.linalg.svd(P[:, :, :3])
+    D = np.ones((B, 3))
+    D[:, 2] = np.linalg.det(U @ Vt)
+    R = (U * D[:, None, :]) @ Vt
+    lam = sv.mean(axis=-1) / s[:, 0, 0]
     t = P[:, :, 3] / lam[:, None] - (R @ c[:, 0, :, None])[..., 0]
     return R, t
 
@@ -351,8 +354,8 @@ def solve_pnp(
     else:
         r, _ = _residuals(R, t, Xf, uv_ideal, Km)
         rms = np.sqrt(np.mean(np.sum(r * r, -1), -1))
-    _, cam = _residuals(R, t, Xf, uv_ideal, Km)
-    valid = np.all(cam[..., 2] > 0, axis=-1) & np.isfinite(rms)
+    depth = np.einsum("bnj,bj->bn", Xf, R[:, 2, :]) + t[:, 2:3]
+    valid = np.all(depth > 0, axis=-1) & np.isfinite(rms)
     rvec = np.asarray(matrix_to_rvec(R), dtype=np.float64)
     return PnPResult(
         rvec.reshape(*batch, 3),
