@@ -22,13 +22,13 @@ import numpy.typing as npt
 from numpy.typing import NDArray
 
 from imageform._backend import to_numpy
-from imageform._validate import as_points, check_option
+from imageform._validate import as_points, check_option, check_positive
 from imageform.errors import (
     DegenerateConfigurationError,
     IllConditionedWarning,
     InvalidInputError,
 )
-from imageform.geometry.calibration_refine import GLOBAL_NAMES, refine
+from imageform.geometry.calibration_refine import GLOBAL_NAMES, refine, rodrigues
 from imageform.geometry.calibration_result import CalibrationResult
 from imageform.geometry.calibration_zhang import (
     dlt_init,
@@ -70,8 +70,6 @@ def checkerboard_points(pattern_size: tuple[int, int], square_size: float = 1.0)
             f"expected pattern_size (cols, rows), each >= 2, got {pattern_size!r}"
         )
     cols, rows = (int(n) for n in pattern_size)
-    from imageform._validate import check_positive
-
     s = check_positive(square_size, "square_size")
     r, c = np.mgrid[0:rows, 0:cols]
     return np.stack([c.ravel() * s, r.ravel() * s, np.zeros(rows * cols)], axis=-1).astype(float)
@@ -132,7 +130,7 @@ def _warn_conditioning(
             "(10-20 recommended) at different tilts"
         )
     if planar:
-        R = np.stack([np.asarray(_rot(r)) for r in rvecs])
+        R = rodrigues(rvecs)
         tilt = np.degrees(np.arccos(np.clip(np.abs(R[:, 2, 2]), 0.0, 1.0)))
         if float(tilt.max()) < MIN_TILT_DEG:
             notes.append(
@@ -152,12 +150,6 @@ def _warn_conditioning(
     for n in notes:
         warnings.warn(n, IllConditionedWarning, stacklevel=3)
     return tuple(notes)
-
-
-def _rot(r: F64) -> F64:
-    from imageform.geometry.calibration_refine import rodrigues
-
-    return rodrigues(r[None])[0]
 
 
 def calibrate_camera(

@@ -131,7 +131,8 @@ def solve_pnp_ransac(
     R, t = best_R[None], best_t[None]
     if inliers.sum() >= s:
         for _ in range(2):
-            R, t, _rms = refine_pose(R, t, X[None], uvi[None], Km, inliers[None].astype(np.float64), max_iter)
+            w = inliers[None].astype(np.float64)
+            R, t, _rms = refine_pose(R, t, X[None], uvi[None], Km, w, max_iter)
             r, cam = _residuals(R, t, X[None], uvi[None], Km)
             inliers = (np.hypot(r[0, :, 0], r[0, :, 1]) < thr) & (cam[0, :, 2] > 0)
     n_in = int(inliers.sum())
