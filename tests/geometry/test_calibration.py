@@ -252,6 +252,16 @@ def test_bad_inputs() -> None:
         calibrate_camera([OBJ + [0, 0, 1.0]] * 6, uv, (640, 480), method="zhang")
 
 
+def test_degenerate_point_sets() -> None:
+    uv = synth()
+    line = np.c_[np.linspace(0, 200, 54), np.zeros(54), np.zeros(54)]
+    with pytest.raises(DegenerateConfigurationError, match="collinear"):
+        calibrate_camera([line] * 6, uv, (640, 480))
+    flat = OBJ + [0.0, 0.0, 5.0]  # planar but not Z = 0: the DLT needs a 3-D rig
+    with pytest.raises(DegenerateConfigurationError):
+        calibrate_camera([flat] * 6, uv, (640, 480))
+
+
 def test_too_few_observations_is_an_error() -> None:
     uv = synth()
     with pytest.raises(DegenerateConfigurationError, match="equations for"):

@@ -165,6 +165,11 @@ def test_bad_inputs() -> None:
     Xp[:, 2] = 0
     with pytest.raises(DegenerateConfigurationError, match="at least 4 points"):
         solve_pnp(Xp[:3], uv[0, :3], K)
+    line = np.c_[np.linspace(0, 1, 10), np.zeros(10), np.zeros(10)]
+    with pytest.raises(DegenerateConfigurationError, match="collinear"):
+        solve_pnp(line, uv[0], K)
+    with pytest.raises(DegenerateConfigurationError, match="collinear"):
+        solve_pnp_ransac(line, uv[0], K)
     with pytest.raises(InvalidInputError, match="distortion"):
         solve_pnp(X[0], uv[0], K, distortion="k1")
     with pytest.raises(InvalidInputError, match="one problem"):

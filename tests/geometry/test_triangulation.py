@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
 from imageform.geometry import triangulate_points
@@ -98,6 +100,29 @@ def test_point_behind_a_camera_is_invalid() -> None:
     Xb = np.array([[0.3, 0.2, -5.0]])  # behind both cameras: pixels still exist
     res = triangulate_points(P, np.concatenate([uv, project(P, Xb)], axis=1))
     assert res.valid.tolist() == [True, True, True, False]
+
+
+def test_zero_and_small_baseline() -> None:
+    """No baseline: no finite point (NaN, invalid); a tiny one: a huge depth uncertainty."""
+    P = cameras(1)
+    X = points(2, seed=10)
+    res = triangulate_points(np.concatenate([P, P]), project(np.concatenate([P, P]), X))
+    assert not res.valid.any() and np.isnan(res.points).all() and np.isinf(res.covariance).all()
+    P2 = P.copy()
+    P2[0, :, 3] -= K @ [1e-3, 0.0, 0.0]  # 1 mm baseline
+    Ps = np.concatenate([P, P2])
+    res = triangulate_points(Ps, project(Ps, X))
+    sd = np.sqrt(np.diagonal(res.covariance, axis1=1, axis2=2))
+    assert res.valid.all() and np.all(sd[:, 2] > 10.0)  # metres, at 6-10 m depth
+
+
+@settings(max_examples=25, deadline=None)
+@given(x=st.floats(-2, 2), y=st.floats(-2, 2), z=st.floats(2.0, 50.0), views=st.integers(2, 5))
+def test_property_project_triangulate_round_trip(x: float, y: float, z: float, views: int) -> None:
+    P = cameras(views)
+    X = np.array([[x, y, z]])
+    res = triangulate_points(P, project(P, X))
+    np.testing.assert_allclose(res.points, X, rtol=1e-7, atol=1e-7)
 
 
 def test_backends(xp_name: str) -> None:

@@ -142,8 +142,16 @@ def _linear_planar(X: F64, xy: F64) -> tuple[F64, F64]:
 
 
 def _is_planar(X: F64) -> NDArray[np.bool_]:
+    """Whether each point set (B, N, 3) is planar; raises if one is collinear or a point."""
     Xc = X - X.mean(axis=-2, keepdims=True)
     ev = np.linalg.eigvalsh(np.swapaxes(Xc, -1, -2) @ Xc)  # squared singular values
+    line = ev[..., 1] <= PLANAR_RTOL**2 * ev[..., 2]
+    if np.any(line):
+        first = np.unravel_index(int(np.flatnonzero(line.ravel())[0]), line.shape)
+        raise DegenerateConfigurationError(
+            f"the object points of problem {tuple(int(i) for i in first)} are collinear (or "
+            "all equal): the rotation about their line is undetermined"
+        )
     return ev[..., 0] <= PLANAR_RTOL**2 * ev[..., 2]
 
 

@@ -25,7 +25,8 @@ F64 = NDArray[np.float64]
 class TriangulationResult(NamedTuple):
     """Triangulated points ``(M, 3)``, their covariances ``(M, 3, 3)`` (world units²), the
     reprojection RMS per point ``(M,)`` in pixels, and ``valid (M,)``: in front of every
-    camera that sees it, finite, and seen by at least two views."""
+    camera that sees it and finite. A point whose rays are parallel (no baseline) has no
+    finite solution: NaN, covariance inf, ``valid`` False."""
 
     points: F64
     covariance: F64
@@ -36,7 +37,8 @@ class TriangulationResult(NamedTuple):
 def _project(P: F64, X: F64) -> tuple[F64, F64]:
     """Pixels (M, V, 2) and depths (M, V) of points X (M, 3) in cameras P (V, 3, 4)."""
     h = np.einsum("vij,mj->mvi", P[:, :, :3], X) + P[None, :, :, 3]
-    return h[..., :2] / h[..., 2:3], h[..., 2]
+    with np.errstate(divide="ignore", invalid="ignore"):  # depth 0: NaN, judged by callers
+        return h[..., :2] / h[..., 2:3], h[..., 2]
 
 
 def _linear(P: F64, uv: F64, seen: NDArray[np.bool_]) -> F64:
@@ -50,7 +52,8 @@ def _linear(P: F64, uv: F64, seen: NDArray[np.bool_]) -> F64:
     A = A / np.linalg.norm(A, axis=-1, keepdims=True)
     A = A * np.concatenate([seen, seen], axis=1)[..., None]
     w = np.linalg.eigh(np.swapaxes(A, 1, 2) @ A)[1][..., 0]
-    return w[:, :3] / w[:, 3:4]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return w[:, :3] / w[:, 3:4]  # inf/NaN: a point at infinity (parallel rays)
 
 
 def triangulate_points(
@@ -142,6 +145,8 @@ def triangulate_points(
     obs = np.where(seen[..., None], obs, 0.0)
     wgt = seen.astype(float)
     X = _linear(P, obs, seen)
+    finite = np.all(np.isfinite(X), axis=1)  # False: rays parallel (e.g. no baseline)
+    X = np.where(finite[:, None], X, 0.0)
     M = X.shape[0]
 
     def cost_of(Xc: F64) -> tuple[F64, F64, F64]:
@@ -157,7 +162,7 @@ def triangulate_points(
     cost, r, depth = cost_of(X)
     if refine:
         lam = np.full(M, 1e-3)
-        active = np.ones(M, dtype=bool)
+        active = finite.copy()
         for _ in range(max_iter):
             J = jacobian(X)
             A = np.swapaxes(J, 1, 2) @ J
@@ -179,8 +184,12 @@ def triangulate_points(
             if not np.any(active):
                 break
     J = jacobian(X)
-    with np.errstate(all="ignore"):
-        cov = s**2 * np.linalg.pinv(np.swapaxes(J, 1, 2) @ J)
+    cov = np.full((M, 3, 3), np.inf)
+    JtJ = np.swapaxes(J, 1, 2) @ J
+    ok = finite & np.all(np.isfinite(JtJ), axis=(1, 2))
+    cov[ok] = s**2 * np.linalg.pinv(JtJ[ok])
     rms = np.sqrt(cost / n_seen)
-    valid = np.all((depth > 0) | ~seen, axis=1) & np.all(np.isfinite(X), axis=1)
+    valid = np.all((depth > 0) | ~seen, axis=1) & finite
+    X[~finite] = np.nan
+    rms[~finite] = np.nan
     return TriangulationResult(X, np.asarray(cov, dtype=np.float64), rms, valid)
