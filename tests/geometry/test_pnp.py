@@ -148,6 +148,8 @@ def test_float32_and_int_inputs() -> None:
     X, uv, _R, t = make(2, 10, seed=14)
     res = solve_pnp(X.astype(np.float32), uv.astype(np.float32), K)
     np.testing.assert_allclose(res.tvec, t, atol=1e-3)
+    assert res.tvec.dtype == res.R.dtype == res.rms.dtype == np.float32  # float32 in, out
+    res = solve_pnp(np.round(X * 1000).astype(int), uv, K)  # integers: float64
     assert res.tvec.dtype == np.float64
 
 

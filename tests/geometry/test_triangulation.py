@@ -125,6 +125,13 @@ def test_property_project_triangulate_round_trip(x: float, y: float, z: float, v
     np.testing.assert_allclose(res.points, X, rtol=1e-7, atol=1e-7)
 
 
+def test_float32_in_float32_out() -> None:
+    P, X = cameras(2), points(5, seed=11)
+    res = triangulate_points(P, project(P, X).astype(np.float32))
+    assert res.points.dtype == res.covariance.dtype == np.float32
+    np.testing.assert_allclose(res.points, X, rtol=1e-4)
+
+
 def test_backends(xp_name: str) -> None:
     P, X = cameras(2), points(5, seed=9)
     res = triangulate_points(to_backend(P, xp_name), to_backend(project(P, X), xp_name))

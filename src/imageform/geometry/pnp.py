@@ -265,9 +265,13 @@ def _refine_pose_np(
 
 def _validate(
     object_points: Any, image_points: Any, K: Any, distortion: Any
-) -> tuple[F64, F64, F64, tuple[int, ...]]:
-    X = np.asarray(to_numpy(as_points(object_points, "object_points", 3)), dtype=np.float64)
-    uv = np.asarray(to_numpy(as_points(image_points, "image_points", 2)), dtype=np.float64)
+) -> tuple[F64, F64, F64, tuple[int, ...], Any]:
+    X0 = to_numpy(as_points(object_points, "object_points", 3))
+    uv0 = to_numpy(as_points(image_points, "image_points", 2))
+    # float32 in -> float32 out (computation in float64 either way)
+    out_dtype = np.float32 if X0.dtype == uv0.dtype == np.float32 else np.float64
+    X = np.asarray(X0, dtype=np.float64)
+    uv = np.asarray(uv0, dtype=np.float64)
     Km = np.asarray(to_numpy(as_matrix(K, "K", (3, 3), batch=False)), dtype=np.float64)
     if X.ndim < 2 or X.shape[:-1] != uv.shape[:-1]:
         raise InvalidInputError(
@@ -278,7 +282,7 @@ def _validate(
         raise InvalidInputError(f"expected K upper triangular with fx, fy > 0, got {Km.tolist()}")
     Km = Km / Km[2, 2]
     _check_model(distortion)
-    return X, uv, Km, X.shape[:-2]
+    return X, uv, Km, X.shape[:-2], out_dtype
 
 
 def solve_pnp(
@@ -343,7 +347,7 @@ def solve_pnp(
     >>> (res.tvec.round(9) + 0.0).tolist(), bool(res.valid)
     ([0.0, 0.0, 5.0], True)
     """
-    X, uv, Km, batch = _validate(object_points, image_points, K, distortion)
+    X, uv, Km, batch, out_dtype = _validate(object_points, image_points, K, distortion)
     N = X.shape[-2]
     Xf = X.reshape(-1, N, 3)
     uvf = uv.reshape(-1, N, 2)
@@ -366,10 +370,10 @@ def solve_pnp(
     valid = np.all(depth > 0, axis=-1) & np.isfinite(rms)
     rvec = np.asarray(matrix_to_rvec(R), dtype=np.float64)
     return PnPResult(
-        rvec.reshape(*batch, 3),
-        t.reshape(*batch, 3),
-        R.reshape(*batch, 3, 3),
-        rms.reshape(batch),
+        rvec.reshape(*batch, 3).astype(out_dtype),
+        t.reshape(*batch, 3).astype(out_dtype),
+        R.reshape(*batch, 3, 3).astype(out_dtype),
+        rms.reshape(batch).astype(out_dtype),
         valid.reshape(batch),
         np.ones(X.shape[:-1], dtype=bool),
     )

@@ -85,7 +85,7 @@ def solve_pnp_ransac(
     >>> int(res.inliers.sum()), (res.tvec.round(9) + 0.0).tolist()
     (32, [0.0, 0.0, 6.0])
     """
-    X, uv, Km, batch = _validate(object_points, image_points, K, distortion)
+    X, uv, Km, batch, out_dtype = _validate(object_points, image_points, K, distortion)
     if batch != ():
         raise InvalidInputError(
             f"expected one problem of shape (N, 3), (N, 2), got object_points {X.shape}; "
@@ -139,10 +139,10 @@ def solve_pnp_ransac(
     rms = np.sqrt(np.sum(r[0][inliers] ** 2) / max(n_in, 1))
     valid = n_in >= s and bool(np.all(cam[0, inliers, 2] > 0))
     return PnPResult(
-        np.asarray(matrix_to_rvec(R[0]), dtype=np.float64),
-        t[0],
-        R[0],
-        np.asarray(rms),
+        np.asarray(matrix_to_rvec(R[0]), dtype=out_dtype),
+        t[0].astype(out_dtype),
+        R[0].astype(out_dtype),
+        np.asarray(rms, dtype=out_dtype),
         np.asarray(valid),
         inliers,
     )

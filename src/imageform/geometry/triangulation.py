@@ -119,7 +119,9 @@ def triangulate_points(
     ([[0.2, -0.1, 5.0]], True)
     """
     P = np.asarray(to_numpy(as_matrix(projection_matrices, "projection_matrices", (3, 4))), float)
-    uv = np.asarray(to_numpy(as_points(image_points, "image_points", 2, finite=False)), float)
+    uv0 = to_numpy(as_points(image_points, "image_points", 2, finite=False))
+    out_dtype = np.float32 if uv0.dtype == np.float32 else np.float64  # float32 in -> out
+    uv = np.asarray(uv0, dtype=np.float64)
     if P.ndim != 3 or uv.ndim != 3 or uv.shape[0] != P.shape[0]:
         raise InvalidInputError(
             "expected projection_matrices (V, 3, 4) and image_points (V, M, 2) with the same V, "
@@ -192,4 +194,6 @@ def triangulate_points(
     valid = np.all((depth > 0) | ~seen, axis=1) & finite
     X[~finite] = np.nan
     rms[~finite] = np.nan
-    return TriangulationResult(X, np.asarray(cov, dtype=np.float64), rms, valid)
+    return TriangulationResult(
+        X.astype(out_dtype), cov.astype(out_dtype), rms.astype(out_dtype), valid
+    )
