@@ -11,6 +11,8 @@ import typer
 __all__ = ["load_camera_toml", "register"]
 
 _CAMERA_KEYS = {"fx", "fy", "cx", "cy", "skew", "width", "height", "rvec", "R", "t", "image_plane"}
+# distortion written by `imageform calibrate` (accepted; `project` ignores it for now)
+_CAMERA_KEYS |= {"k1", "k2", "p1", "p2", "k3"}
 
 
 def load_camera_toml(path: Path) -> Any:

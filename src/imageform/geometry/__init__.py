@@ -6,6 +6,11 @@ top-left pixel centre at (0, 0); points are row vectors ``(..., N, 3)``; points 
 ``z_cam <= 0`` are NaN with ``valid = False``.
 """
 
+from imageform.geometry.calibration import (
+    CalibrationResult,
+    calibrate_camera,
+    checkerboard_points,
+)
 from imageform.geometry.camera import (
     Camera,
     ImagePlane,
@@ -42,6 +47,8 @@ from imageform.geometry.homogeneous import (
 from imageform.geometry.homography import apply_homography, estimate_homography
 from imageform.geometry.intrinsics import Intrinsics, intrinsic_matrix, projected_size
 from imageform.geometry.line_segments import LineSegments, detect_line_segments
+from imageform.geometry.pnp import PnPResult, solve_pnp
+from imageform.geometry.pnp_ransac import solve_pnp_ransac
 from imageform.geometry.projection_models import (
     ConeBeamGeometry,
     orthographic_matrix,
@@ -61,6 +68,7 @@ from imageform.geometry.rotations import (
     quaternion_to_matrix,
     rvec_to_matrix,
 )
+from imageform.geometry.triangulation import TriangulationResult, triangulate_points
 from imageform.geometry.undistort import remap_bilinear, undistort_image, undistortion_map
 from imageform.geometry.vanishing import (
     focal_from_vanishing_points,
@@ -75,6 +83,7 @@ from imageform.geometry.vp_detection import VanishingPointResult, detect_vanishi
 
 __all__ = [
     "BrownConrady",
+    "CalibrationResult",
     "Camera",
     "CheckerboardNotFoundWarning",
     "CheckerboardResult",
@@ -85,13 +94,17 @@ __all__ = [
     "Intrinsics",
     "KannalaBrandt",
     "LineSegments",
+    "PnPResult",
     "Projection",
+    "TriangulationResult",
     "VanishingPointResult",
     "apply_homography",
     "are_collinear",
     "axis_rotation",
     "backproject",
+    "calibrate_camera",
     "camera_rotation",
+    "checkerboard_points",
     "cross_ratio",
     "decompose_projection_matrix",
     "detect_line_segments",
@@ -125,7 +138,10 @@ __all__ = [
     "refine_corners",
     "remap_bilinear",
     "rvec_to_matrix",
+    "solve_pnp",
+    "solve_pnp_ransac",
     "to_homogeneous",
+    "triangulate_points",
     "undistort_image",
     "undistortion_map",
     "unproject",

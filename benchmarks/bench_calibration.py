@@ -1,0 +1,134 @@
+"""Calibration and PnP: imageform vs OpenCV, timed in the same run, interleaved.
+
+1. Detection + calibration of OpenCV's 13 ``left*.jpg`` views (9 x 6, square 1):
+   imageform ``find_checkerboard(half_window=11)`` + ``calibrate_camera`` vs OpenCV
+   ``findChessboardCorners`` + ``cornerSubPix((11, 11))`` + ``calibrateCamera`` (default
+   flags, as the tutorial). Also the calibration alone on the same (imageform) corners.
+2. PnP, 1000 problems of 50 points (non-planar, 0.5 px noise): imageform ``solve_pnp``
+   (batched linear + LM refinement, numba kernel) vs ``cv2.solvePnP(SOLVEPNP_EPNP)`` called
+   in a Python loop (EPnP without refinement), and vs ``SOLVEPNP_ITERATIVE``.
+
+Medians over repetitions; ratios in the same run. Run from the project root::
+
+    OPENBLAS_NUM_THREADS=1 python benchmarks/bench_calibration.py [--repeat 7] [--out FILE]
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "src"))
+sys.path.insert(0, str(ROOT))
+
+import cv2  # noqa: E402  (oracle only)
+from PIL import Image  # noqa: E402
+
+from benchmarks._common import header, markdown_table, median_time  # noqa: E402
+from imageform.geometry import calibrate_camera, checkerboard_points, solve_pnp  # noqa: E402
+from imageform.geometry.calibration_refine import rodrigues  # noqa: E402
+from imageform.geometry.checkerboard import find_checkerboard  # noqa: E402
+
+DATA = Path(os.environ.get("IMAGEFORM_DATA", ROOT.parent / "shared" / "data")) / "opencv-left"
+PATTERN = (9, 6)
+CRITERIA = (cv2.TERM_CRITERIA_EPS + cv2.TERM_CRITERIA_MAX_ITER, 30, 0.001)
+
+
+def ours_detect(images: list[np.ndarray]) -> list[np.ndarray]:
+    return [find_checkerboard(im, PATTERN, half_window=11).corners for im in images]  # type: ignore[misc]
+
+
+def ours_calibrate(corners: list[np.ndarray]) -> object:
+    obj = checkerboard_points(PATTERN)
+    return calibrate_camera([obj] * len(corners), corners, (640, 480))
+
+
+def cv_detect(images: list[np.ndarray]) -> list[np.ndarray]:
+    out = []
+    for im in images:
+        _ok, c = cv2.findChessboardCorners(im, PATTERN, None)
+        out.append(cv2.cornerSubPix(im, c, (11, 11), (-1, -1), CRITERIA))
+    return out
+
+
+def cv_calibrate(corners: list[np.ndarray]) -> tuple:
+    obj = checkerboard_points(PATTERN).astype(np.float32)
+    pts = [np.asarray(c, np.float32).reshape(-1, 1, 2) for c in corners]
+    return cv2.calibrateCamera([obj] * len(pts), pts, (640, 480), None, None)
+
+
+def pnp_problems(B: int = 1000, N: int = 50) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    rng = np.random.default_rng(0)
+    K = np.array([[800.0, 0, 320], [0, 800, 240], [0, 0, 1]])
+    X = rng.uniform(-1, 1, (B, N, 3))
+    R = rodrigues(rng.normal(0, 0.5, (B, 3)))
+    t = np.c_[rng.uniform(-0.5, 0.5, (B, 2)), rng.uniform(4, 8, B)]
+    cam = X @ np.swapaxes(R, 1, 2) + t[:, None]
+    uv = cam[..., :2] / cam[..., 2:] * 800 + [320, 240]
+    return X, uv + rng.normal(0, 0.5, uv.shape), K
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--repeat", type=int, default=7)
+    ap.add_argument("--out", type=Path, default=None)
+    args = ap.parse_args()
+    files = sorted(DATA.glob("left*.jpg"))
+    images = [np.asarray(Image.open(f).convert("L")) for f in files]
+    r = args.repeat
+
+    t_od = median_time(lambda: ours_detect(images), r)
+    t_cd = median_time(lambda: cv_detect(images), r)
+    corners = ours_detect(images)
+    t_oc = median_time(lambda: ours_calibrate(corners), r)
+    t_cc = median_time(lambda: cv_calibrate(corners), r)
+    res = ours_calibrate(corners)
+    rms_cv, K_cv, *_ = cv_calibrate(cv_detect(images))
+
+    X, uv, K = pnp_problems()
+    X32 = [np.ascontiguousarray(x) for x in X]
+    uv32 = [np.ascontiguousarray(u) for u in uv]
+
+    def cv_loop(flag: int) -> None:
+        for x, u in zip(X32, uv32, strict=True):
+            cv2.solvePnP(x, u, K, None, flags=flag)
+
+    t_op = median_time(lambda: solve_pnp(X, uv, K), r)
+    t_cp = median_time(lambda: cv_loop(cv2.SOLVEPNP_EPNP), r)
+    t_ci = median_time(lambda: cv_loop(cv2.SOLVEPNP_ITERATIVE), r)
+
+    ms = lambda s: f"{1000 * s:.1f}"  # noqa: E731
+    rows = [
+        ["detect 13 views", ms(t_od), ms(t_cd), f"{t_od / t_cd:.2f}"],
+        ["calibrate (13 views, same corners)", ms(t_oc), ms(t_cc), f"{t_oc / t_cc:.2f}"],
+        [
+            "**detect + calibrate**",
+            ms(t_od + t_oc),
+            ms(t_cd + t_cc),
+            f"**{(t_od + t_oc) / (t_cd + t_cc):.2f}**",
+        ],
+        ["**PnP 1000 x 50** vs solvePnP EPnP loop", ms(t_op), ms(t_cp), f"**{t_op / t_cp:.2f}**"],
+        ["PnP 1000 x 50 vs solvePnP ITERATIVE loop", ms(t_op), ms(t_ci), f"{t_op / t_ci:.2f}"],
+    ]
+    K = res.K  # type: ignore[attr-defined]
+    text = header("Calibration and PnP benchmark: imageform vs OpenCV")
+    text += f"\nmedian of {r} runs (after 1 warm-up), times in ms\n\n"
+    text += markdown_table(["task", "imageform", "OpenCV", "ratio"], rows)
+    text += (
+        f"\nimageform on its own corners: fx {K[0, 0]:.4f}, fy {K[1, 1]:.4f}, cx {K[0, 2]:.4f}, "
+        f"cy {K[1, 2]:.4f}, RMS {res.rms:.4f} px"  # type: ignore[attr-defined]
+        f"\nOpenCV on its own corners: fx {K_cv[0, 0]:.4f}, fy {K_cv[1, 1]:.4f}, "
+        f"cx {K_cv[0, 2]:.4f}, cy {K_cv[1, 2]:.4f}, RMS {rms_cv:.4f} px\n"
+    )
+    print(text)
+    if args.out is not None:
+        args.out.write_text(text)
+
+
+if __name__ == "__main__":
+    main()
