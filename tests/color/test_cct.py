@@ -91,7 +91,7 @@ def test_cross_check_colour_science_robertson_and_daylight() -> None:
 def test_shapes_and_dtypes() -> None:
     xy = cct_to_xy(np.full((2, 3), 5000.0))
     assert xy.shape == (2, 3, 2)
-    cct, duv = xy_to_cct(xy.astype(np.float32))
+    cct, _duv = xy_to_cct(xy.astype(np.float32))
     assert cct.shape == (2, 3) and cct.dtype == np.float32
     np.testing.assert_allclose(cct, 5000.0, rtol=1e-4)
 
