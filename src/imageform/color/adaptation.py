@@ -118,7 +118,8 @@ def chromatic_adaptation_matrix(
             f"source white {tuple(ws.tolist())} has a zero {key} response; cannot adapt from it"
         )
     gain = D * (ws[1] / wd[1]) * (rho_d / rho_s) + (1.0 - D)
-    return np.linalg.solve(m, gain[:, None] * m)  # type: ignore[no-any-return]
+    out: np.ndarray = np.linalg.solve(m, gain[:, None] * m)
+    return out
 
 
 def chromatic_adaptation(
