@@ -251,6 +251,8 @@ def rec709_to_linear(values: object) -> Any:
     """Inverse of the Rec. 709 OETF (breakpoint 4.5 x 0.018 = 0.081).
 
     Note: this inverts the camera OETF; a Rec. 709 *display* decodes with the BT.1886 EOTF.
+    The rounded constants make the OETF jump from 0.081 to 0.081243 at L = 0.018: encoded
+    values inside that gap decode to L >= 0.018 but do not re-encode to themselves.
 
     >>> round(float(rec709_to_linear(0.409008)), 5)
     0.18
