@@ -173,3 +173,68 @@ __all__ = [
 ]
 
 # ---- names from the colour-difference / adaptation / white-balance work (3b) go below ----
+from imageform.color.adaptation import (
+    CAT_MATRICES,
+    chromatic_adaptation,
+    chromatic_adaptation_matrix,
+)
+from imageform.color.cct import (
+    CCT_METHODS,
+    ROBERTSON_1968,
+    cct_to_xy,
+    uv1960_to_xy,
+    xy_to_cct,
+    xy_to_uv1960,
+)
+from imageform.color.delta_e import (
+    DELTA_E_METHODS,
+    delta_e,
+    delta_e_cie76,
+    delta_e_cie94,
+    delta_e_ciede2000,
+    delta_e_cmc,
+    describe_delta_e,
+)
+from imageform.color.subsampling import (
+    CHROMA_SCHEMES,
+    CHROMA_SITINGS,
+    chroma_subsample,
+    chroma_upsample,
+    subsample_round_trip,
+    subsampling_delta_e,
+)
+from imageform.color.white_balance import (
+    WHITE_BALANCE_METHODS,
+    WhiteBalanceResult,
+    estimate_illuminant,
+    white_balance,
+)
+
+__all__ += [
+    "CAT_MATRICES",
+    "CCT_METHODS",
+    "CHROMA_SCHEMES",
+    "CHROMA_SITINGS",
+    "DELTA_E_METHODS",
+    "ROBERTSON_1968",
+    "WHITE_BALANCE_METHODS",
+    "WhiteBalanceResult",
+    "cct_to_xy",
+    "chroma_subsample",
+    "chroma_upsample",
+    "chromatic_adaptation",
+    "chromatic_adaptation_matrix",
+    "delta_e",
+    "delta_e_cie76",
+    "delta_e_cie94",
+    "delta_e_ciede2000",
+    "delta_e_cmc",
+    "describe_delta_e",
+    "estimate_illuminant",
+    "subsample_round_trip",
+    "subsampling_delta_e",
+    "uv1960_to_xy",
+    "white_balance",
+    "xy_to_cct",
+    "xy_to_uv1960",
+]

@@ -51,7 +51,10 @@ class WorkedExample:
         )
 
 
-_MODULES = ("imageform.report.lecture_geometry",)
+_MODULES = (
+    "imageform.report.lecture_geometry",
+    "imageform.report.lecture_color_measure",
+)
 
 
 def all_examples() -> list[WorkedExample]:
