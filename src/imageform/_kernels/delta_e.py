@@ -7,7 +7,8 @@ that the hue terms need no trigonometry on hue angles:
   ``ΔH' = 2 sqrt(C1' C2') sin(Δh'/2)``; with ``p = C1'C2'``, ``d = a1'a2' + b1 b2`` and
   ``x = a1'b2 - a2'b1`` (so ``d = p cos Δh'``, ``x = p sin Δh'``) this is
   ``x sqrt(2 / (p + d))`` where ``d >= 0`` and ``±sqrt(2 (p - d))`` where ``d < 0``; each form is
-  free of cancellation on its side.
+  free of cancellation on its side (the kernel writes the first as ``2 x sqrt(p) / |v|`` with
+  the bisector ``v`` below, ``|v|² = 2 p (p + d)``, to share its division).
 - the mean hue ``h̄'`` as the direction of the bisector of the two unit hue vectors (their sum
   where ``Δh'`` is acute, the normal of their difference where it is obtuse, which is exact at
   ``|Δh'| = 180°`` where Sharma's rule takes ``(h1' + h2')/2``, i.e. ``min(h1', h2') + 90°``).
@@ -17,6 +18,8 @@ that the hue terms need no trigonometry on hue angles:
   ``|z| <= tan(π/8)``, max error 2.2e-16; exp: Taylor of degree 14 on ``y/256`` then 8 squarings;
   sin: Taylor of degree 17 on ``[0, π/3]``) so that LLVM vectorises the loop; the twin calls the
   library's ``atan2``, ``exp`` and ``sin``. They agree to about 1e-12 (tested).
+- the kernel folds the divisions by ``S_L``, ``S_C``, ``S_H`` and ``R_C``'s denominator into one
+  reciprocal: square roots and divisions dominate its cost once the loop is vectorised.
 
 The twin is the reference for the kernel and the path for non-NumPy arrays (PyTorch gradients
 flow through it). Inputs here are clean float arrays of shape ``(..., 3)``.
@@ -167,11 +170,6 @@ def _de00(
     low1 = (b1 > 0.0) or (b1 == 0.0 and a1p > 0.0)
     sgn = 1.0 if (cross > 0.0 or (cross == 0.0 and low1)) else -1.0
     acute = dot >= 0.0
-    den = pr + dot
-    # ΔH' = x sqrt(2/(p + d)) (acute) or ±sqrt(2 (p - d)) (obtuse): one sqrt, one division
-    q_acute = 2.0 / den if den > 0.0 else 0.0
-    q = q_acute if acute else max(2.0 * (pr - dot), 0.0)
-    dH = (cross if acute else sgn) * math.sqrt(q)
     # bisector of the unit hue vectors, scaled by C1' C2' (a zero chroma gets weight 1 so
     # that the other hue is the mean, Sharma's rule for C1' C2' = 0)
     w1 = C2p if C2p > 0.0 else 1.0
@@ -182,6 +180,10 @@ def _de00(
     inv = 1.0 / n if n > 0.0 else 0.0
     c = vx * inv if n > 0.0 else 1.0
     s = vy * inv
+    # ΔH' = x sqrt(2/(p + d)) = 2 x sqrt(p)/|v| (acute, |v|² = 2p(p + d)) or ±sqrt(2(p - d))
+    # (obtuse): each side free of cancellation, one sqrt and no division of its own
+    sq = math.sqrt(pr if acute else max(2.0 * (pr - dot), 0.0))
+    dH = 2.0 * cross * sq * inv if acute else sgn * sq
     c2 = c * c - s * s
     s2 = 2.0 * c * s
     c3 = c * c2 - s * s2
@@ -200,18 +202,21 @@ def _de00(
     dtheta_rad = (30.0 / _DEG) * _exp_neg(-(x * x))
     Lb = 0.5 * (L1 + L2) - 50.0
     Lb2 = Lb * Lb
-    SL = 1.0 + 0.015 * Lb2 / math.sqrt(20.0 + Lb2)
+    sl = math.sqrt(20.0 + Lb2)
+    SLn = sl + 0.015 * Lb2  # S_L = SLn / sl
     Cbp = 0.5 * (C1p + C2p)
     SC = 1.0 + 0.045 * Cbp
     SH = 1.0 + 0.015 * Cbp * T
     Cbp3 = Cbp * Cbp * Cbp
     Cbp7 = Cbp3 * Cbp3 * Cbp
-    RC = 2.0 * math.sqrt(Cbp7 / (Cbp7 + _P25_7))
+    E = Cbp7 + _P25_7  # R_C = 2 sqrt(Cbp7 E) / E
+    # one division for 1/S_L, 1/S_C, 1/S_H and 1/E
+    r = 1.0 / (SLn * SC * SH * E)
+    RC = 2.0 * math.sqrt(Cbp7 * E) * (SLn * SC * SH) * r
     RT = -_sin_small(2.0 * dtheta_rad) * RC
-    r = 1.0 / (SL * SC * SH)
-    tl = dL * ikL * (SC * SH) * r
-    tc = dC * ikC * (SL * SH) * r
-    th = dH * ikH * (SL * SC) * r
+    tl = dL * ikL * sl * (SC * SH * E) * r
+    tc = dC * ikC * (SLn * SH * E) * r
+    th = dH * ikH * (SLn * SC * E) * r
     return math.sqrt(tl * tl + tc * tc + th * th + RT * tc * th)
 
 
