@@ -356,3 +356,20 @@ def test_describe_delta_e_lecture_bands() -> None:
     assert describe_delta_e(10.5) == "obviously different"
     with pytest.raises(InvalidInputError, match="ΔE >= 0"):
         describe_delta_e(-1.0)
+
+
+def test_disable_numba_gives_the_twin(monkeypatch: pytest.MonkeyPatch) -> None:
+    """IMAGEFORM_DISABLE_NUMBA=1 forces the plain twin: same numbers to 1e-12."""
+    rng = np.random.default_rng(8)
+    a, b = _random_lab(rng, 20000), _random_lab(rng, 20000)
+    fast = delta_e_ciede2000(a, b)
+    monkeypatch.setenv("IMAGEFORM_DISABLE_NUMBA", "1")
+    np.testing.assert_allclose(delta_e_ciede2000(a, b), fast, atol=1e-12, rtol=0)
+
+
+def test_dask_chunks() -> None:
+    da = pytest.importorskip("dask.array")
+    rng = np.random.default_rng(9)
+    a, b = _random_lab(rng, 4000).reshape(40, 100, 3), _random_lab(rng, 4000).reshape(40, 100, 3)
+    got = delta_e(da.from_array(a, chunks=(10, 100, 3)), da.from_array(b, chunks=(10, 100, 3)))
+    np.testing.assert_allclose(np.asarray(got), delta_e(a, b), atol=1e-12, rtol=0)

@@ -159,3 +159,13 @@ def test_bad_inputs() -> None:
     with pytest.raises(UnknownOptionError, match="gain normalisation"):
         white_balance(img, normalize="max")
     assert set(ESTIMATORS) < set(WHITE_BALANCE_METHODS)
+
+
+def test_dask_gray_world_is_a_global_reduction() -> None:
+    """Dask: chunked images give the gains of the whole image (DESIGN: real global reductions)."""
+    da = pytest.importorskip("dask.array")
+    img = np.random.default_rng(7).uniform(0, 1, (64, 80, 3))
+    out, gains = white_balance(da.from_array(img, chunks=(16, 80, 3)), "gray_world")
+    ref_img, ref_g = white_balance(img, "gray_world")
+    np.testing.assert_allclose(np.asarray(gains), ref_g, rtol=1e-12)
+    np.testing.assert_allclose(np.asarray(out), ref_img, atol=1e-12)
