@@ -26,7 +26,7 @@ from typing import Any
 
 from imageform._backend import namespace
 from imageform._validate import as_float, as_image, check_option
-from imageform.errors import InvalidInputError
+from imageform.errors import InvalidInputError, UnknownOptionError
 
 __all__ = [
     "CHROMA_SCHEMES",
@@ -46,7 +46,7 @@ CHROMA_SITINGS = {"left": (0.5, 0.0), "center": (0.5, 0.5), "top_left": (0.0, 0.
 def _scheme(scheme: str) -> tuple[str, tuple[int, int]]:
     if not isinstance(scheme, str) or scheme.strip() not in CHROMA_SCHEMES:
         names = ", ".join(repr(s) for s in CHROMA_SCHEMES)
-        raise InvalidInputError(f"unknown chroma subsampling scheme {scheme!r}; valid: {names}")
+        raise UnknownOptionError(f"unknown chroma subsampling scheme {scheme!r}; valid: {names}")
     return scheme.strip(), CHROMA_SCHEMES[scheme.strip()]
 
 
