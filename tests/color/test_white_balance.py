@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from imageform.color.transfer import linear_to_srgb, srgb_to_linear
 from imageform.color.white_balance import (
@@ -169,3 +171,17 @@ def test_dask_gray_world_is_a_global_reduction() -> None:
     ref_img, ref_g = white_balance(img, "gray_world")
     np.testing.assert_allclose(np.asarray(gains), ref_g, rtol=1e-12)
     np.testing.assert_allclose(np.asarray(out), ref_img, atol=1e-12)
+
+
+@settings(max_examples=25, deadline=None)
+@given(st.floats(0.05, 20.0), st.sampled_from(ESTIMATORS), st.integers(0, 10_000))
+def test_gains_scale_invariant_and_idempotent(k: float, method: str, seed: int) -> None:
+    """Every estimator is homogeneous of degree 1 in linear light, so the gains do not depend
+    on exposure; and a balanced image needs no further gains (all ones)."""
+    img = np.random.default_rng(seed).uniform(0.01, 1.0, (12, 13, 3)) * [1.0, 0.7, 0.4]
+    _, g1 = white_balance(img, method, transfer="linear")
+    _, gk = white_balance(k * img, method, transfer="linear")
+    np.testing.assert_allclose(gk, g1, rtol=1e-9)
+    out, _ = white_balance(img, method, transfer="linear")
+    _, again = white_balance(out, method, transfer="linear")
+    np.testing.assert_allclose(again, 1.0, rtol=1e-9)
