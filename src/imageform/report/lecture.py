@@ -53,6 +53,7 @@ class WorkedExample:
 
 _MODULES = (
     "imageform.report.lecture_geometry",
+    "imageform.report.lecture_color",
     "imageform.report.lecture_color_measure",
 )
 
