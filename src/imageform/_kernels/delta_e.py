@@ -18,6 +18,9 @@ that the hue terms need no trigonometry on hue angles:
   ``|z| <= tan(π/8)``, max error 2.2e-16; exp: Taylor of degree 14 on ``y/256`` then 8 squarings;
   sin: Taylor of degree 17 on ``[0, π/3]``) so that LLVM vectorises the loop; the twin calls the
   library's ``atan2``, ``exp`` and ``sin``. They agree to about 1e-12 (tested).
+- the polynomial helpers allow FMA contraction (``fastmath={"contract"}``; LLVM inlines them
+  and keeps their flags), the main body does not: a fused ``a1'b2 - a2'b1`` would not be
+  exactly 0 for exactly opposite hues (Sharma's pair 14);
 - the kernel folds the divisions by ``S_L``, ``S_C``, ``S_H`` and ``R_C``'s denominator into one
   reciprocal: square roots and divisions dominate its cost once the loop is vectorised.
 
@@ -66,7 +69,7 @@ _ATAN_COEF = (
 _A0, _A1, _A2, _A3, _A4, _A5, _A6, _A7, _A8, _A9, _A10, _A11 = _ATAN_COEF
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(cache=True, error_model="numpy", fastmath={"contract"})
 def _atan2_deg(y: float, x: float) -> float:  # pragma: no cover - numba
     """atan2(y, x) in degrees in [0, 360), branch-free polynomial."""
     ax = abs(x)
@@ -99,7 +102,7 @@ def _atan2_deg(y: float, x: float) -> float:  # pragma: no cover - numba
     return a * _DEG
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(cache=True, error_model="numpy", fastmath={"contract"})
 def _exp_neg(y: float) -> float:  # pragma: no cover - numba
     """exp(y) for y in [-130, 0]: Taylor on y/256 (degree 14), then 8 squarings."""
     r = y * (1.0 / 256.0)
@@ -123,7 +126,7 @@ def _exp_neg(y: float) -> float:  # pragma: no cover - numba
     return p
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(cache=True, error_model="numpy", fastmath={"contract"})
 def _sin_small(x: float) -> float:  # pragma: no cover - numba
     """sin(x) for x in [0, π/3]: Taylor series to x**17 (error < 3e-17)."""
     x2 = x * x
