@@ -146,3 +146,34 @@ def test_cross_check_opencv_gray() -> None:
     np.testing.assert_allclose(
         srgb_to_gray(x)[..., 0], cv2.cvtColor(x, cv2.COLOR_RGB2GRAY), atol=2e-6
     )
+
+
+@pytest.mark.parametrize(
+    ("std", "cs_key"),
+    [("bt601", "ITU-R BT.601"), ("bt709", "ITU-R BT.709"), ("bt2020", "ITU-R BT.2020")],
+)
+@pytest.mark.parametrize(
+    ("rng", "bits", "legal"), [("limited", 8, True), ("limited", 10, True), ("full", 10, False)]
+)
+def test_cross_check_colour_science_ycbcr(
+    std: str, cs_key: str, rng: str, bits: int, legal: bool
+) -> None:
+    # Cross-check: colour-science RGB_to_YCbCr with the same K and quantisation (float codes).
+    colour = pytest.importorskip("colour")
+    x = np.random.default_rng(8).uniform(0, 1, (200, 3))
+    ref = colour.RGB_to_YCbCr(
+        x,
+        K=colour.WEIGHTS_YCBCR[cs_key],
+        in_bits=10,
+        in_legal=False,
+        in_int=False,
+        out_bits=bits,
+        out_legal=legal,
+        out_int=False,
+    )
+    # colour returns normalised values (code / (2^n - 1)): compare code values. For full
+    # range colour keeps chroma centred on 0; H.273 full-range codes (ours) add 2^(n-1).
+    ref = ref * (2**bits - 1)
+    if not legal:
+        ref[:, 1:] += 2 ** (bits - 1)
+    np.testing.assert_allclose(rgb_to_ycbcr(x, std, range=rng, bits=bits), ref, atol=1e-9)
