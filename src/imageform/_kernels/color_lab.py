@@ -180,16 +180,15 @@ def _srgb_to_lab_f32_serial(src, dst, m, scale, stats, c):  # type: ignore[no-un
 
 
 @nb.njit(**_JIT)
-def _srgb_to_lab_f32_fixup(src, dst, m, scale):  # type: ignore[no-untyped-def]
-    """Values outside [0, 1] take the exact float64 path. A separate function, run only
-    when the input's min/max say it is needed (a call inside the hot loop's function
-    stops LLVM from vectorising it, and this scan is slow)."""
-    for i in range(src.shape[0] // 3):
+def _srgb_to_lab_f32_fixup(src, dst, m, scale, idx):  # type: ignore[no-untyped-def]
+    """Pixels ``idx`` (a value outside [0, 1]) take the exact float64 path. A separate
+    function over the few listed pixels: a call inside the hot loop's function would stop
+    LLVM from vectorising it."""
+    for i in idx:
         v0, v1, v2 = src[3 * i] * scale, src[3 * i + 1] * scale, src[3 * i + 2] * scale
-        if not (v0 >= 0 and v0 <= 1 and v1 >= 0 and v1 <= 1 and v2 >= 0 and v2 <= 1):
-            _lab_exact_pixel(
-                _dec_exact(float(v0)), _dec_exact(float(v1)), _dec_exact(float(v2)), m, dst, 3 * i
-            )
+        _lab_exact_pixel(
+            _dec_exact(float(v0)), _dec_exact(float(v1)), _dec_exact(float(v2)), m, dst, 3 * i
+        )
 
 
 @nb.njit(**_JIT)
@@ -250,14 +249,13 @@ def _lab_to_srgb_f32_serial(src, dst, mi):  # type: ignore[no-untyped-def]
 
 
 @nb.njit(**_JIT)
-def _lab_to_srgb_f32_fixup(src, dst, mi):  # type: ignore[no-untyped-def]
-    """Results beyond the float32 cube root's range (linear > 1.2, encoded > 1.08: far out
-    of gamut) take the exact float64 path."""
-    for i in range(src.shape[0] // 3):
-        if dst[3 * i] > _ENC_MAX or dst[3 * i + 1] > _ENC_MAX or dst[3 * i + 2] > _ENC_MAX:
-            _lab_exact_rgb(
-                float(src[3 * i]), float(src[3 * i + 1]), float(src[3 * i + 2]), mi, dst, 3 * i
-            )
+def _lab_to_srgb_f32_fixup(src, dst, mi, idx):  # type: ignore[no-untyped-def]
+    """Pixels ``idx``, beyond the float32 cube root's range (linear > 1.2, encoded > 1.08:
+    far out of gamut), take the exact float64 path."""
+    for i in idx:
+        _lab_exact_rgb(
+            float(src[3 * i]), float(src[3 * i + 1]), float(src[3 * i + 2]), mi, dst, 3 * i
+        )
 
 
 @nb.njit(**_JIT)
@@ -330,7 +328,9 @@ def srgb_to_lab(image: np.ndarray, m: np.ndarray) -> tuple[np.ndarray, np.ndarra
     _srgb_to_lab_f32(src, dst, m32, scale, stats)
     outside, finite = summarize(stats)
     if finite and outside:
-        _srgb_to_lab_f32_fixup(src, dst, m32, scale)
+        px = src.reshape(-1, 3).astype(np.float32) * scale
+        idx = np.flatnonzero(((px < 0) | (px > 1)).any(axis=1))
+        _srgb_to_lab_f32_fixup(src, dst, m32, scale, idx)
     return dst.reshape(image.shape), stats
 
 
@@ -344,5 +344,6 @@ def lab_to_srgb(lab: np.ndarray, mi: np.ndarray) -> np.ndarray:
         mi32 = mi.astype(np.float32)
         _lab_to_srgb_f32(src, dst, mi32)
         if dst.size and dst.max() > _ENC_MAX:
-            _lab_to_srgb_f32_fixup(src, dst, mi32)
+            idx = np.flatnonzero((dst.reshape(-1, 3) > _ENC_MAX).any(axis=1))
+            _lab_to_srgb_f32_fixup(src, dst, mi32, idx)
     return dst.reshape(lab.shape)
