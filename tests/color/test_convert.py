@@ -109,7 +109,7 @@ _SAMPLE = {
 
 
 @pytest.mark.parametrize("edge", EDGES, ids=lambda e: f"{e.src}->{e.dst}")
-@settings(max_examples=8, deadline=None)
+@settings(max_examples=8, deadline=None, derandomize=True)
 @given(seed=st.integers(0, 2**32 - 1))
 def test_every_edge_round_trips(edge, seed: int) -> None:  # type: ignore[no-untyped-def]
     # Property: A -> B -> A for every edge of the graph (the inverse edge exists for each),
