@@ -55,6 +55,8 @@ class WorkedExample:
 _MODULES = (
     "imageform.report.lecture_geometry",
     "imageform.report.lecture_optics",
+    "imageform.report.lecture_color",
+    "imageform.report.lecture_color_measure",
 )
 
 

@@ -1,0 +1,77 @@
+"""Dispatch of :func:`imageform.color.convert` to the fused numba colour kernels.
+
+Only NumPy arrays reach here (``_backend.use_numba``); a pair of spaces without a kernel
+returns ``None`` and ``convert`` runs its array path (the twin).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+__all__ = ["dispatch"]
+
+_KERNEL_PAIRS = {
+    ("srgb", "lab"),
+    ("lab", "srgb"),
+    ("srgb", "hsv"),
+    ("srgb", "ycbcr"),
+    ("ycbcr", "srgb"),
+}
+
+
+def dispatch(image: np.ndarray, s: str, d: str, p: dict[str, Any]) -> np.ndarray | None:
+    """Run the kernel for ``s -> d`` on a validated-shape NumPy array, or return None."""
+    if (s, d) not in _KERNEL_PAIRS or image.dtype not in (np.float32, np.float64, np.uint8):
+        return None
+    from imageform._kernels import color_lab, color_simple
+    from imageform._validate import as_image, check_finite
+    from imageform.color import ycbcr
+    from imageform.color.rgb_spaces import rgb_to_xyz_matrix, xyz_to_rgb_matrix
+    from imageform.color.whitepoints import resolve_white
+
+    if image.dtype == np.uint8 and s != "srgb":
+        return None  # integer Lab / code values: the array path explains or handles them
+    if image.size == 0:
+        return None
+
+    stats = None
+    if (s, d) == ("srgb", "lab"):
+        w = resolve_white(p["white"], p.get("observer", 2))
+        m = rgb_to_xyz_matrix("srgb") / w[:, None]
+        if image.dtype == np.float64:
+            as_image(image, "srgb image")
+        out, stats = color_lab.srgb_to_lab(image, m)
+    elif (s, d) == ("lab", "srgb"):
+        check_finite(image, "lab image")
+        w = resolve_white(p["white"], p.get("observer", 2))
+        out = color_lab.lab_to_srgb(image, xyz_to_rgb_matrix("srgb") * w[None, :])
+    elif (s, d) == ("srgb", "hsv"):
+        out, stats = color_simple.srgb_to_hsv(image)
+    else:
+        _, kr, kb = ycbcr._coeffs(p.get("standard", "bt601"))
+        yg, yo, cg, co = ycbcr._scale(p.get("range", "full"), p.get("bits"))
+        kg = 1.0 - kr - kb
+        a = np.array(
+            [
+                [kr, kg, kb],
+                [-kr / (2 * (1 - kb)), -kg / (2 * (1 - kb)), 0.5],
+                [0.5, -kg / (2 * (1 - kr)), -kb / (2 * (1 - kr))],
+            ]
+        )
+        gain = np.array([yg, cg, cg])
+        off = np.array([yo, co, co])
+        if d == "ycbcr":
+            out, stats = color_simple.ycbcr_affine(image, a * gain[:, None], off)
+        else:
+            ainv = np.linalg.inv(a * gain[:, None])
+            out, stats = color_simple.ycbcr_affine(image, ainv, -ainv @ off)
+    if stats is not None and image.dtype != np.uint8:
+        # the boundary checks of as_image, from the statistics the kernel gathered
+        outside, finite = color_simple.summarize(stats)
+        if not finite:
+            check_finite(image, f"{s} image")  # confirms (a non-finite sum may be overflow)
+        if s == "srgb" and outside:
+            as_image(image, "srgb image")  # raises for plainly 0-255 floats
+    return out
