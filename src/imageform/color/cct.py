@@ -1,0 +1,349 @@
+"""Correlated colour temperature (CCT) and Duv: Robertson (1968) and the CIE daylight locus.
+
+- :func:`xy_to_cct` — CIE 1931 ``xy`` to ``(CCT, Duv)``; Robertson's method interpolates
+  between his 31 isotemperature lines (table below, no colour-matching functions needed);
+  ``"daylight"`` inverts the CIE daylight locus.
+- :func:`cct_to_xy` — ``(CCT, Duv)`` to ``xy`` on (or off, by Duv) the Planckian locus, or on the
+  CIE daylight locus (the chromaticity of the D illuminants).
+
+Duv is the signed distance from the Planckian locus in the CIE 1960 UCS ``(u, v)`` along the
+isotemperature line, positive above the locus (greenish), negative below (pinkish), as in
+ANSI C78.377. Ohno (2013) needs the Planckian locus from the CIE 1931 colour-matching
+functions, which arrive with :mod:`imageform.spectral`; it is not offered yet.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from imageform._backend import device_of, namespace
+from imageform._validate import as_float, as_points, check_option
+from imageform.errors import InvalidInputError
+
+__all__ = [
+    "CCT_METHODS",
+    "ROBERTSON_1968",
+    "cct_to_xy",
+    "uv1960_to_xy",
+    "xy_to_cct",
+    "xy_to_uv1960",
+]
+
+#: Methods of :func:`xy_to_cct` and :func:`cct_to_xy`.
+CCT_METHODS = ("robertson1968", "daylight")
+
+#: Robertson (1968) isotemperature lines: reciprocal megakelvin (mired), CIE 1960 u, v of the
+#: Planckian locus and the slope t of the isotemperature line. Wyszecki & Stiles (1982),
+#: Color Science, 2nd ed., Table 1(3.11); u at 325 mired corrected from 0.24702 to 0.24792
+#: (B. Lindbloom; the smooth run of the column confirms it).
+ROBERTSON_1968 = np.array(
+    [
+        (0, 0.18006, 0.26352, -0.24341),
+        (10, 0.18066, 0.26589, -0.25479),
+        (20, 0.18133, 0.26846, -0.26876),
+        (30, 0.18208, 0.27119, -0.28539),
+        (40, 0.18293, 0.27407, -0.30470),
+        (50, 0.18388, 0.27709, -0.32675),
+        (60, 0.18494, 0.28021, -0.35156),
+        (70, 0.18611, 0.28342, -0.37915),
+        (80, 0.18740, 0.28668, -0.40955),
+        (90, 0.18880, 0.28997, -0.44278),
+        (100, 0.19032, 0.29326, -0.47888),
+        (125, 0.19462, 0.30141, -0.58204),
+        (150, 0.19962, 0.30921, -0.70471),
+        (175, 0.20525, 0.31647, -0.84901),
+        (200, 0.21142, 0.32312, -1.0182),
+        (225, 0.21807, 0.32909, -1.2168),
+        (250, 0.22511, 0.33439, -1.4512),
+        (275, 0.23247, 0.33904, -1.7298),
+        (300, 0.24010, 0.34308, -2.0637),
+        (325, 0.24792, 0.34655, -2.4681),
+        (350, 0.25591, 0.34951, -2.9641),
+        (375, 0.26400, 0.35200, -3.5814),
+        (400, 0.27218, 0.35407, -4.3633),
+        (425, 0.28039, 0.35577, -5.3762),
+        (450, 0.28863, 0.35714, -6.7262),
+        (475, 0.29685, 0.35823, -8.5955),
+        (500, 0.30505, 0.35907, -11.324),
+        (525, 0.31320, 0.35968, -15.628),
+        (550, 0.32129, 0.36011, -23.325),
+        (575, 0.32931, 0.36038, -40.770),
+        (600, 0.33724, 0.36051, -116.45),
+    ]
+)
+ROBERTSON_1968.setflags(write=False)
+
+# Robertson's table spans 0-600 mired: CCT from 1e6/600 = 1666.7 K to infinity.
+_ROBERTSON_MIN_CCT = 1.0e6 / 600.0
+# CIE 15:2004 eq. (3.3): the daylight locus is defined from 4000 K to 25000 K, with one cubic
+# in 1/T below 7000 K and another above.
+_DAYLIGHT_RANGE = (4000.0, 25000.0)
+_DAYLIGHT_LOW = (-4.6070e9, 2.9678e6, 0.09911e3, 0.244063)  # 4000 K <= T <= 7000 K
+_DAYLIGHT_HIGH = (-2.0064e9, 1.9018e6, 0.24748e3, 0.237040)  # 7000 K < T <= 25000 K
+
+
+def _uv_from_xy(xp: Any, xy: Any) -> tuple[Any, Any]:
+    x, y = xy[..., 0], xy[..., 1]
+    d = -2.0 * x + 12.0 * y + 3.0
+    return 4.0 * x / d, 6.0 * y / d
+
+
+def _xy_from_uv(xp: Any, u: Any, v: Any) -> Any:
+    d = 2.0 * u - 8.0 * v + 4.0
+    return xp.stack([3.0 * u / d, 2.0 * v / d], axis=-1)
+
+
+def xy_to_uv1960(xy: object) -> Any:
+    r"""CIE 1931 ``xy`` to CIE 1960 UCS ``uv``.
+
+    .. math:: u = \frac{4x}{-2x + 12y + 3},\quad v = \frac{6y}{-2x + 12y + 3}
+
+    Parameters
+    ----------
+    xy : array_like, shape (..., 2)
+
+    Returns
+    -------
+    array, shape (..., 2)
+
+    References
+    ----------
+    CIE 15:2004, §8.1 (the 1960 UCS; v = 2/3 v').
+
+    Examples
+    --------
+    >>> [round(float(c), 5) for c in xy_to_uv1960([0.31271, 0.32902])]
+    [0.19783, 0.31222]
+    """
+    xp = namespace(xy)
+    a = as_points(xy, "xy", 2, xp=xp)
+    u, v = _uv_from_xy(xp, a)
+    return xp.stack([u, v], axis=-1)
+
+
+def uv1960_to_xy(uv: object) -> Any:
+    r"""CIE 1960 UCS ``uv`` to CIE 1931 ``xy``.
+
+    .. math:: x = \frac{3u}{2u - 8v + 4},\quad y = \frac{2v}{2u - 8v + 4}
+
+    Parameters
+    ----------
+    uv : array_like, shape (..., 2)
+
+    Returns
+    -------
+    array, shape (..., 2)
+
+    Examples
+    --------
+    >>> [round(float(c), 5) for c in uv1960_to_xy([0.19783, 0.31222])]
+    [0.31271, 0.32902]
+    """
+    xp = namespace(uv)
+    a = as_points(uv, "uv", 2, xp=xp)
+    return _xy_from_uv(xp, a[..., 0], a[..., 1])
+
+
+def _table(xp: Any, like: Any) -> tuple[Any, Any, Any, Any, Any, Any]:
+    t = xp.asarray(ROBERTSON_1968.copy(), dtype=like.dtype, device=device_of(like))
+    r, u, v, s = t[:, 0], t[:, 1], t[:, 2], t[:, 3]
+    length = xp.sqrt(1.0 + s * s)
+    return r, u, v, s, 1.0 / length, s / length
+
+
+def _robertson_inverse(xp: Any, xy: Any) -> tuple[Any, Any]:
+    u, v = _uv_from_xy(xp, xy)
+    r, ut, vt, _, du, dv = _table(xp, xy)
+    # signed distance of (u, v) from each isotemperature line (Wyszecki & Stiles, eq. 3(3.11))
+    d = (v[..., None] - vt) * du - (u[..., None] - ut) * dv  # (..., 31)
+    neg = d <= 0
+    if bool(xp.any(d[..., 0] < 0)) or not bool(xp.all(xp.any(neg[..., 1:], axis=-1))):
+        raise InvalidInputError(
+            "xy outside the range of Robertson's method (CCT 1667 K to infinity)"
+        )
+    # first line j >= 1 on the far side: the point lies between lines j-1 and j
+    idx = xp.arange(31, device=device_of(xy))
+    first = xp.argmax(xp.astype(neg[..., 1:], xp.int8), axis=-1) + 1
+    onehot_j = xp.astype(idx == first[..., None], xy.dtype)
+    onehot_i = xp.astype(idx == (first - 1)[..., None], xy.dtype)
+
+    def pick(arr: Any, onehot: Any) -> Any:
+        return xp.sum(arr * onehot, axis=-1)
+
+    di, dj = pick(d, onehot_i), pick(d, onehot_j)
+    f = di / (di - dj)
+    mired = pick(r, onehot_i) + f * (pick(r, onehot_j) - pick(r, onehot_i))
+    cct = 1.0e6 / mired
+    uL = pick(ut, onehot_i) + f * (pick(ut, onehot_j) - pick(ut, onehot_i))
+    vL = pick(vt, onehot_i) + f * (pick(vt, onehot_j) - pick(vt, onehot_i))
+    ddu = pick(du, onehot_i) + f * (pick(du, onehot_j) - pick(du, onehot_i))
+    ddv = pick(dv, onehot_i) + f * (pick(dv, onehot_j) - pick(dv, onehot_i))
+    n = xp.sqrt(ddu * ddu + ddv * ddv)
+    duv = -((u - uL) * ddu + (v - vL) * ddv) / n
+    return cct, duv
+
+
+def _robertson_forward(xp: Any, cct: Any, duv: Any) -> Any:
+    r, ut, vt, _, du, dv = _table(xp, cct)
+    mired = 1.0e6 / cct
+    idx = xp.arange(30, device=device_of(cct))
+    # segment i with r_i <= mired < r_{i+1} (the last segment includes 600 mired)
+    lower = xp.sum(xp.astype(mired[..., None] >= r[1:30], xp.int64), axis=-1)
+    oh_i = xp.astype(idx == lower[..., None], cct.dtype)
+
+    def seg(arr: Any) -> tuple[Any, Any]:
+        return xp.sum(arr[:30] * oh_i, axis=-1), xp.sum(arr[1:] * oh_i, axis=-1)
+
+    r0, r1 = seg(r)
+    f = (mired - r0) / (r1 - r0)
+    (u0, u1), (v0, v1) = seg(ut), seg(vt)
+    (a0, a1), (b0, b1) = seg(du), seg(dv)
+    uL, vL = u0 + f * (u1 - u0), v0 + f * (v1 - v0)
+    ddu, ddv = a0 + f * (a1 - a0), b0 + f * (b1 - b0)
+    n = xp.sqrt(ddu * ddu + ddv * ddv)
+    return _xy_from_uv(xp, uL - duv * ddu / n, vL - duv * ddv / n)
+
+
+def _daylight_x(xp: Any, cct: Any) -> Any:
+    s = 1.0 / cct
+    lo = _DAYLIGHT_LOW
+    hi = _DAYLIGHT_HIGH
+    x_lo = ((lo[0] * s + lo[1]) * s + lo[2]) * s + lo[3]
+    x_hi = ((hi[0] * s + hi[1]) * s + hi[2]) * s + hi[3]
+    return xp.where(cct <= 7000.0, x_lo, x_hi)
+
+
+def _daylight_xy(xp: Any, cct: Any) -> Any:
+    x = _daylight_x(xp, cct)
+    # CIE 15:2004 eq. (3.4)
+    y = -3.000 * x * x + 2.870 * x - 0.275
+    return xp.stack([x, y], axis=-1)
+
+
+def _check_cct_range(xp: Any, cct: Any, lo: float, hi: float, method: str) -> None:
+    if bool(xp.any(cct < lo)) or bool(xp.any(cct > hi)):
+        bad = float(xp.min(cct)) if bool(xp.any(cct < lo)) else float(xp.max(cct))
+        raise InvalidInputError(
+            f"CCT {bad:g} K outside the range of the {method} method ({lo:g} K to {hi:g} K)"
+        )
+
+
+def cct_to_xy(cct: object, duv: object = 0.0, *, method: str = "robertson1968") -> Any:
+    r"""Chromaticity ``xy`` of a correlated colour temperature (and Duv).
+
+    ``"robertson1968"``: the point at ``cct`` on the Planckian locus, interpolated linearly
+    in mired between Robertson's isotemperature lines, then moved by ``duv`` along the
+    isotemperature line in the CIE 1960 UCS (positive above the locus).
+    ``"daylight"``: the CIE daylight locus,
+
+    .. math::
+        x_D = a_3 \frac{10^9}{T^3} + a_2 \frac{10^6}{T^2} + a_1 \frac{10^3}{T} + a_0,\quad
+        y_D = -3.000 x_D^2 + 2.870 x_D - 0.275
+
+    (``duv`` must be 0; the daylight locus lies about 0.003 above the Planckian locus).
+
+    Parameters
+    ----------
+    cct : array_like, shape (...)
+        Kelvin; Robertson: 1666.7 K (600 mired) or above; daylight: 4000 K to 25000 K.
+    duv : array_like, shape (...)
+        Distance from the Planckian locus (broadcast against ``cct``).
+    method : {"robertson1968", "daylight"}
+
+    Returns
+    -------
+    array, shape (..., 2)
+
+    References
+    ----------
+    A. R. Robertson (1968), J. Opt. Soc. Am. 58(11), 1528-1535; Wyszecki & Stiles (1982),
+    §3.11. CIE 15:2004, eqs. (3.3)-(3.4) (daylight locus).
+
+    Examples
+    --------
+    D65 is daylight at 6500 K x 1.4388/1.4380 (the revised c2) = 6503.6 K:
+
+    >>> [round(float(c), 4) for c in cct_to_xy(6500 * 1.4388 / 1.4380, method="daylight")]
+    [0.3127, 0.3291]
+    """
+    m = check_option(method, CCT_METHODS, "CCT method")
+    xp = namespace(cct, duv)
+    T = as_float(cct, "cct", xp=xp)
+    D = as_float(duv, "duv", xp=xp, dtype=T.dtype)
+    T, D = xp.broadcast_arrays(T, D)
+    if m == "daylight":
+        if bool(xp.any(D != 0)):
+            raise InvalidInputError("the daylight method takes no duv (the locus is a curve)")
+        _check_cct_range(xp, T, *_DAYLIGHT_RANGE, "daylight")
+        return _daylight_xy(xp, T)
+    _check_cct_range(xp, T, _ROBERTSON_MIN_CCT, math.inf, "robertson1968")
+    return _robertson_forward(xp, T, D)
+
+
+def xy_to_cct(xy: object, *, method: str = "robertson1968", iterations: int = 20) -> Any:
+    r"""Correlated colour temperature and Duv of chromaticities ``xy``.
+
+    ``"robertson1968"``: with the signed distances
+    :math:`d_j = ((v - v_j) - t_j (u - u_j))/\sqrt{1 + t_j^2}` of ``(u, v)`` from the
+    isotemperature lines, the point lies between lines ``i`` and ``j = i + 1`` where the sign
+    changes, and
+
+    .. math:: \frac{1}{T} = \frac{1}{T_i} + \frac{d_i}{d_i - d_j}
+        \left(\frac{1}{T_j} - \frac{1}{T_i}\right)
+
+    ``"daylight"``: the temperature whose CIE daylight-locus ``x_D`` equals ``x`` (Newton on
+    the cubic in :math:`1/T`); Duv is measured from the Planckian locus as always.
+
+    Parameters
+    ----------
+    xy : array_like, shape (..., 2)
+        CIE 1931 chromaticities; Robertson covers 1667 K to infinity; daylight 4000-25000 K.
+    method : {"robertson1968", "daylight"}
+    iterations : int
+        Newton steps of the daylight inversion (converges to 1e-12 K in < 10).
+
+    Returns
+    -------
+    cct, duv : arrays, shape (...)
+
+    References
+    ----------
+    A. R. Robertson (1968), J. Opt. Soc. Am. 58(11), 1528-1535; CIE 15:2004, eq. (3.3).
+
+    Examples
+    --------
+    CIE illuminant A (2856 K by definition) and D65 (about 6504 K):
+
+    >>> cct, duv = xy_to_cct([0.44757, 0.40745])
+    >>> round(float(cct)), round(float(duv), 4)
+    (2856, 0.0)
+    >>> round(float(xy_to_cct([0.31271, 0.32902])[0]))
+    6503
+    """
+    m = check_option(method, CCT_METHODS, "CCT method")
+    xp = namespace(xy)
+    a = as_points(xy, "xy", 2, xp=xp)
+    cct, duv = _robertson_inverse(xp, a)
+    if m == "robertson1968":
+        return cct, duv
+    x = a[..., 0]
+    lo_x = float(_daylight_x(np, np.asarray(_DAYLIGHT_RANGE[1])))
+    hi_x = float(_daylight_x(np, np.asarray(_DAYLIGHT_RANGE[0])))
+    if bool(xp.any(x < lo_x)) or bool(xp.any(x > hi_x)):
+        raise InvalidInputError(
+            f"x outside the daylight locus (x from {lo_x:.5f} at 25000 K to {hi_x:.5f} at 4000 K)"
+        )
+    T = xp.clip(cct, 4000.0, 25000.0)  # start from Robertson's estimate, inside the domain
+    for _ in range(int(iterations)):
+        s = 1.0 / T
+        c = xp.where(T <= 7000.0, xp.ones_like(T), xp.zeros_like(T))
+        lo, hi = _DAYLIGHT_LOW, _DAYLIGHT_HIGH
+        dx_ds = c * ((3 * lo[0] * s + 2 * lo[1]) * s + lo[2]) + (1 - c) * (
+            (3 * hi[0] * s + 2 * hi[1]) * s + hi[2]
+        )
+        s = s - (_daylight_x(xp, T) - x) / dx_ds
+        T = 1.0 / s
+    return T, duv

@@ -1,0 +1,310 @@
+"""The conversion graph: ``convert(image, src, dst, **params)``.
+
+One explicit edge per pair of neighbouring spaces (both directions), each a direct function
+of this package; :func:`convert` finds the shortest path (breadth-first) and applies the
+edges in turn, validating the input once. :data:`EDGES` lists them and :func:`path` shows
+the route, so ``convert`` is never magic::
+
+    srgb ─ linear_srgb ─ xyz ─ lab ─ lch          (and xyz ─ luv, xyz ─ xyy)
+     │ ╲                  │
+     │  bgr, gray,        ├─ linear_<space> ─ <space>  for adobe_rgb, display_p3,
+     │  hsv, hsl, hsi,    │                            rec2020, rec709, prophoto
+     │  ycbcr, cmy ─ cmyk
+
+Parameters (keyword-only, used only by the edges that need them; a parameter no edge of
+the path uses is an error):
+
+- ``white`` (lab, lch, luv, xyy): reference white, default the white of the RGB space on
+  the path (so RGB white maps to L* = 100, a* = b* = 0), else CIE D65.
+- ``observer`` (2 or 10) for a named ``white``.
+- ``standard``, ``range``, ``bits`` (ycbcr): see :mod:`imageform.color.ycbcr`.
+- ``method`` (gray): ``"rec601"`` luma or ``"rec709"`` luminance.
+- ``alpha``: ``"reject"`` (default) or ``"keep"`` — an extra last channel is carried through
+  unchanged, never mixed into the colour.
+
+RGB spaces with different whites (ProPhoto's D50, the others' D65) are joined through XYZ
+*without* chromatic adaptation (an absolute-colorimetric conversion).
+"""
+
+from __future__ import annotations
+
+from collections import deque
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from imageform._backend import device_of, namespace, use_numba
+from imageform._validate import as_float, as_image, check_option
+from imageform.errors import InvalidInputError, UnknownOptionError
+
+from . import cielab, cmyk, gray, hsv, ycbcr
+from .opencv import _flip
+from .rgb_spaces import RGB_SPACES, _apply_matrix, rgb_to_xyz_matrix, xyz_to_rgb_matrix
+from .transfer import _decode_clean, _encode_clean
+from .whitepoints import resolve_white
+
+__all__ = ["EDGES", "SPACES", "Edge", "convert", "path"]
+
+Fn = Callable[[Any, Any, dict[str, Any]], Any]
+
+
+@dataclass(frozen=True)
+class Edge:
+    """One conversion step: ``fn(xp, values, params)`` from ``src`` to ``dst``.
+
+    ``function`` names the public function that computes the same step.
+    """
+
+    src: str
+    dst: str
+    fn: Fn
+    params: tuple[str, ...]
+    function: str
+
+
+#: Spaces: name -> (channels, description).
+SPACES: dict[str, tuple[int, str]] = {
+    "srgb": (3, "sRGB, encoded, [0, 1] (IEC 61966-2-1)"),
+    "linear_srgb": (3, "sRGB primaries, linear light"),
+    "bgr": (3, "sRGB, encoded, channels in B, G, R order (OpenCV)"),
+    "gray": (1, "encoded grey (Rec. 601 luma or Rec. 709 luminance re-encoded)"),
+    "hsv": (3, "hue [0, 360), saturation, value from encoded sRGB"),
+    "hsl": (3, "hue [0, 360), saturation, lightness from encoded sRGB"),
+    "hsi": (3, "hue [0, 360), saturation, intensity from encoded sRGB (Gonzalez & Woods)"),
+    "cmy": (3, "1 - encoded sRGB"),
+    "cmyk": (4, "CMY with K = min(C, M, Y)"),
+    "ycbcr": (3, "Y'CbCr of the encoded values (BT.601/709/2020)"),
+    "xyz": (3, "CIE XYZ, Y = 1 at the white"),
+    "xyy": (3, "CIE xyY"),
+    "lab": (3, "CIELAB, L* in [0, 100]"),
+    "lch": (3, "CIELCh_ab, hue in degrees [0, 360)"),
+    "luv": (3, "CIELUV"),
+}
+for _k, _sp in RGB_SPACES.items():
+    if _k != "srgb":
+        SPACES[_k] = (3, f"{_sp.name}, encoded, [0, 1]")
+        SPACES[f"linear_{_k}"] = (3, f"{_sp.name} primaries, linear light")
+
+_ENCODED_RGB = {"srgb", "bgr", "gray", "cmy", "cmyk", *(k for k in RGB_SPACES if k != "srgb")}
+_WHITE_SPACES = ("lab", "lch", "luv", "xyy")
+
+
+def _w(xp: Any, x: Any, p: dict[str, Any]) -> Any:
+    w = resolve_white(p["white"], p.get("observer", 2))
+    return xp.asarray(w.tolist(), dtype=x.dtype, device=device_of(x))
+
+
+def _rgb_edges(key: str) -> list[Edge]:
+    sp = RGB_SPACES[key]
+    lin = f"linear_{key}"
+    tf = sp.transfer
+    m, mi = rgb_to_xyz_matrix(key), xyz_to_rgb_matrix(key)
+    named = "srgb" if key == "srgb" else "rgb"
+    return [
+        Edge(key, lin, lambda xp, x, p: _decode_clean(xp, x, tf), (), f"{tf}_to_linear"),
+        Edge(lin, key, lambda xp, x, p: _encode_clean(xp, x, tf), (), f"linear_to_{tf}"),
+        Edge(lin, "xyz", lambda xp, x, p: _apply_matrix(x, m), (), f"linear_{named}_to_xyz"),
+        Edge("xyz", lin, lambda xp, x, p: _apply_matrix(x, mi), (), f"xyz_to_linear_{named}"),
+    ]
+
+
+def _ycc(p: dict[str, Any]) -> tuple[float, float, tuple[float, ...]]:
+    _, kr, kb = ycbcr._coeffs(p.get("standard", "bt601"))
+    return kr, kb, ycbcr._scale(p.get("range", "full"), p.get("bits"))
+
+
+_YP = ("standard", "range", "bits")
+_WP = ("white", "observer")
+
+EDGES: list[Edge] = [
+    *(e for k in RGB_SPACES for e in _rgb_edges(k)),
+    Edge("srgb", "bgr", lambda xp, x, p: _flip(xp, x), (), "srgb_to_bgr"),
+    Edge("bgr", "srgb", lambda xp, x, p: _flip(xp, x), (), "bgr_to_srgb"),
+    Edge(
+        "srgb",
+        "gray",
+        lambda xp, x, p: gray._srgb_to_gray(xp, x, p["method"]),
+        ("method",),
+        "srgb_to_gray",
+    ),
+    Edge("gray", "srgb", lambda xp, x, p: gray._gray_to_srgb(xp, x), (), "gray_to_srgb"),
+    Edge("srgb", "hsv", lambda xp, x, p: hsv._srgb_to_hsv(xp, x), (), "srgb_to_hsv"),
+    Edge("hsv", "srgb", lambda xp, x, p: hsv._hsv_to_srgb(xp, x), (), "hsv_to_srgb"),
+    Edge("srgb", "hsl", lambda xp, x, p: hsv._srgb_to_hsl(xp, x), (), "srgb_to_hsl"),
+    Edge("hsl", "srgb", lambda xp, x, p: hsv._hsl_to_srgb(xp, x), (), "hsl_to_srgb"),
+    Edge("srgb", "hsi", lambda xp, x, p: hsv._srgb_to_hsi(xp, x), (), "srgb_to_hsi"),
+    Edge("hsi", "srgb", lambda xp, x, p: hsv._hsi_to_srgb(xp, x), (), "hsi_to_srgb"),
+    Edge("srgb", "cmy", lambda xp, x, p: 1.0 - x, (), "srgb_to_cmy"),
+    Edge("cmy", "srgb", lambda xp, x, p: 1.0 - x, (), "cmy_to_srgb"),
+    Edge("cmy", "cmyk", lambda xp, x, p: cmyk._cmy_to_cmyk(xp, x), (), "cmy_to_cmyk"),
+    Edge("cmyk", "cmy", lambda xp, x, p: cmyk._cmyk_to_cmy(xp, x), (), "cmyk_to_cmy"),
+    Edge(
+        "srgb",
+        "ycbcr",
+        lambda xp, x, p: ycbcr._rgb_to_ycbcr(xp, x, *_ycc(p)),
+        _YP,
+        "srgb_to_ycbcr",
+    ),
+    Edge(
+        "ycbcr",
+        "srgb",
+        lambda xp, x, p: ycbcr._ycbcr_to_rgb(xp, x, *_ycc(p)),
+        _YP,
+        "ycbcr_to_srgb",
+    ),
+    Edge("xyz", "lab", lambda xp, x, p: cielab._xyz_to_lab(xp, x, _w(xp, x, p)), _WP, "xyz_to_lab"),
+    Edge("lab", "xyz", lambda xp, x, p: cielab._lab_to_xyz(xp, x, _w(xp, x, p)), _WP, "lab_to_xyz"),
+    Edge("lab", "lch", lambda xp, x, p: cielab._lab_to_lch(xp, x), (), "lab_to_lch"),
+    Edge("lch", "lab", lambda xp, x, p: cielab._lch_to_lab(xp, x), (), "lch_to_lab"),
+    Edge("xyz", "luv", lambda xp, x, p: cielab._xyz_to_luv(xp, x, _w(xp, x, p)), _WP, "xyz_to_luv"),
+    Edge("luv", "xyz", lambda xp, x, p: cielab._luv_to_xyz(xp, x, _w(xp, x, p)), _WP, "luv_to_xyz"),
+    Edge("xyz", "xyy", lambda xp, x, p: cielab._xyz_to_xyy(xp, x, _w(xp, x, p)), _WP, "xyz_to_xyy"),
+    Edge("xyy", "xyz", lambda xp, x, p: cielab._xyy_to_xyz(xp, x), (), "xyy_to_xyz"),
+]
+
+_ADJ: dict[str, list[Edge]] = {s: [] for s in SPACES}
+for _e in EDGES:
+    _ADJ[_e.src].append(_e)
+
+_GLOBAL_PARAMS = ("alpha",)
+_SPACE_ALIASES = {"grey": "gray", "rgb": "srgb", "cielab": "lab", "ycrcb": "ycbcr", "ciexyz": "xyz"}
+
+
+def _space(name: object, what: str) -> str:
+    if isinstance(name, str):
+        key = name.strip().lower().replace("-", "_").replace(" ", "_")
+        key = _SPACE_ALIASES.get(key, key)
+        if key in SPACES:
+            return key
+    return check_option(name, SPACES, f"colour space ({what})")
+
+
+def path(src: str, dst: str) -> list[Edge]:
+    """The edges :func:`convert` applies from ``src`` to ``dst`` (shortest path).
+
+    >>> [e.function for e in path("srgb", "lab")]
+    ['srgb_to_linear', 'linear_srgb_to_xyz', 'xyz_to_lab']
+    """
+    s, d = _space(src, "src"), _space(dst, "dst")
+    prev: dict[str, Edge | None] = {s: None}
+    queue = deque([s])
+    while queue:
+        node = queue.popleft()
+        if node == d:
+            break
+        for e in _ADJ[node]:
+            if e.dst not in prev:
+                prev[e.dst] = e
+                queue.append(e.dst)
+    out: list[Edge] = []
+    step = prev[d]
+    while step is not None:
+        out.append(step)
+        step = prev[step.src]
+    return out[::-1]
+
+
+def _validate(image: object, src: str) -> Any:
+    n = SPACES[src][0]
+    if src in _ENCODED_RGB:
+        return as_image(image, f"{src} image", channels=n)
+    if src == "ycbcr":
+        x = as_float(image, "ycbcr image", integer="float32")
+    else:
+        raw = np.asarray(image) if not hasattr(image, "dtype") else image
+        kind = getattr(getattr(raw, "dtype", None), "kind", "f")
+        if kind in "iub":
+            raise InvalidInputError(
+                f"expected {src} values as floats, got integer dtype {raw.dtype}; 8-bit OpenCV "
+                "layouts are read with imageform.color.from_opencv"
+            )
+        x = as_image(image, f"{src} image", channels=None, range_check=False)
+    if x.ndim < 1 or x.shape[-1] != n:
+        raise InvalidInputError(
+            f"expected {src} image with {n} channels on axis -1, got shape {tuple(x.shape)}"
+        )
+    return x
+
+
+def convert(image: object, src: str, dst: str, **params: Any) -> Any:
+    """Convert ``image`` from colour space ``src`` to ``dst`` along the conversion graph.
+
+    Parameters
+    ----------
+    image : array_like, shape (..., C)
+        Values of ``src`` (C = 3; 1 for gray, 4 for cmyk; one more with ``alpha="keep"``).
+        Encoded RGB-like spaces take floats in [0, 1] or uint8/uint16 code values.
+    src, dst : str
+        Keys of :data:`SPACES`; an unknown name raises and lists the valid ones.
+    **params
+        ``white``, ``observer``, ``standard``, ``range``, ``bits``, ``method``, ``alpha``
+        (see the module docstring); only those the path uses are accepted.
+
+    Returns
+    -------
+    array, shape (..., C_dst)
+        Same namespace and float dtype as the input (float32 for integer input).
+
+    >>> convert([1.0, 1.0, 1.0], "srgb", "lab").round(10).tolist()
+    [100.0, 0.0, 0.0]
+    >>> convert([1.0, 0.0, 0.0], "srgb", "lab").round(2).tolist()
+    [53.24, 80.09, 67.2]
+    """
+    s, d = _space(src, "src"), _space(dst, "dst")
+    route = path(s, d)
+    allowed = {p for e in route for p in e.params} | set(_GLOBAL_PARAMS)
+    extra = sorted(set(params) - allowed)
+    if extra:
+        names = ", ".join(sorted(allowed)) or "none"
+        raise UnknownOptionError(
+            f"parameter(s) {', '.join(extra)} not used converting {s} -> {d}; valid here: {names}"
+        )
+    p = dict(params)
+    alpha = check_option(p.pop("alpha", "reject"), ("reject", "keep"), "alpha handling")
+    if "method" in allowed:
+        p["method"] = check_option(p.get("method", "rec601"), gray.GRAY_METHODS, "grey method")
+    if "white" in allowed and p.get("white") is None:
+        rgb = [
+            k for k in RGB_SPACES for e in route if e.src == f"linear_{k}" or e.dst == f"linear_{k}"
+        ]
+        p["white"] = rgb[0] if rgb else "D65"
+
+    extra_chan = None
+    n = SPACES[s][0]
+    arr: Any = image if hasattr(image, "shape") else np.asarray(image)
+    shape = tuple(arr.shape)
+    if alpha == "keep" and len(shape) >= 1 and shape[-1] == n + 1:
+        image, extra_chan = arr[..., :n], arr[..., n:]
+    elif len(shape) >= 1 and shape[-1] == n + 1:
+        raise InvalidInputError(
+            f"expected {s} image with {n} channels, got shape {tuple(shape)}; an alpha channel? "
+            "pass alpha='keep' to carry it through unchanged, or split it off"
+        )
+
+    fast = _fast_path(image, s, d, p)
+    if fast is not None:
+        out = fast
+    else:
+        x = _validate(image, s)
+        xp = namespace(x)
+        for e in route:
+            x = e.fn(xp, x, p)
+        out = x
+    if extra_chan is not None:
+        xp = namespace(out)
+        a = as_image(extra_chan, "alpha", channels=None, range_check=False)
+        out = xp.concat([out, xp.astype(a, out.dtype)], axis=-1)
+    return out
+
+
+def _fast_path(image: object, s: str, d: str, p: dict[str, Any]) -> Any:
+    """Fused numba kernels for the hot NumPy paths; None when none applies."""
+    if not isinstance(image, np.ndarray) or image.ndim < 1 or image.shape[-1] != 3:
+        return None
+    if not use_numba(image, min_size=3 * 4096):
+        return None
+    from imageform._kernels import color_fast
+
+    return color_fast.dispatch(image, s, d, p)

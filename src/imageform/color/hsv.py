@@ -1,0 +1,295 @@
+"""HSV, HSL and HSI from encoded RGB, and hue helpers that wrap around 0/360.
+
+All three take *encoded* RGB in [0, 1] (as the lecture and OpenCV do: these are
+perceptual re-arrangements of the display values, not colorimetric spaces). Hue is in
+degrees [0, 360); saturation, value, lightness and intensity in [0, 1].
+
+**Undefined hue.** When the colour is achromatic (S = 0: R = G = B) the hue is undefined.
+imageform returns H = 0 there (as OpenCV, scikit-image and ``colorsys`` do) and offers
+:func:`hue_undefined_mask` to find those pixels; never threshold hue without it.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+from imageform._backend import namespace
+from imageform._validate import as_float, as_image
+from imageform.errors import InvalidInputError
+
+__all__ = [
+    "hsi_to_srgb",
+    "hsl_to_srgb",
+    "hsv_to_srgb",
+    "hue_difference",
+    "hue_distance",
+    "hue_in_range",
+    "hue_undefined_mask",
+    "srgb_to_hsi",
+    "srgb_to_hsl",
+    "srgb_to_hsv",
+]
+
+
+def _hue(xp: Any, r: Any, g: Any, b: Any, mx: Any, delta: Any) -> Any:
+    """Hexcone hue in degrees from RGB, max and chroma (delta); 0 where delta = 0."""
+    zero = delta == 0
+    d = xp.where(zero, xp.ones_like(delta), delta)
+    hr = (g - b) / d
+    hg = (b - r) / d + 2.0
+    hb = (r - g) / d + 4.0
+    h = xp.where(mx == r, hr, xp.where(mx == g, hg, hb)) * 60.0
+    h = xp.where(h < 0, h + 360.0, h)
+    h = xp.where(h >= 360.0, h - 360.0, h)
+    return xp.where(zero, xp.zeros_like(h), h)
+
+
+def _srgb_to_hsv(xp: Any, rgb: Any) -> Any:
+    r, g, b = rgb[..., 0], rgb[..., 1], rgb[..., 2]
+    mx = xp.maximum(xp.maximum(r, g), b)
+    mn = xp.minimum(xp.minimum(r, g), b)
+    delta = mx - mn
+    s = xp.where(mx == 0, xp.zeros_like(mx), delta / xp.where(mx == 0, xp.ones_like(mx), mx))
+    return xp.stack([_hue(xp, r, g, b, mx, delta), s, mx], axis=-1)
+
+
+def _hsv_to_srgb(xp: Any, hsv: Any) -> Any:
+    h, s, v = hsv[..., 0], hsv[..., 1], hsv[..., 2]
+    # the "k" formulation: f(n) = V - V S max(0, min(k, 4 - k, 1)), k = (n + H/60) mod 6
+    out = []
+    for n in (5.0, 3.0, 1.0):
+        k = xp.remainder(n + h / 60.0, 6.0)
+        t = xp.clip(xp.minimum(k, 4.0 - k), 0.0, 1.0)
+        out.append(v - v * s * t)
+    return xp.stack(out, axis=-1)
+
+
+def _srgb_to_hsl(xp: Any, rgb: Any) -> Any:
+    r, g, b = rgb[..., 0], rgb[..., 1], rgb[..., 2]
+    mx = xp.maximum(xp.maximum(r, g), b)
+    mn = xp.minimum(xp.minimum(r, g), b)
+    delta = mx - mn
+    light = (mx + mn) / 2.0
+    den = 1.0 - xp.abs(2.0 * light - 1.0)
+    s = xp.where(den == 0, xp.zeros_like(den), delta / xp.where(den == 0, xp.ones_like(den), den))
+    return xp.stack([_hue(xp, r, g, b, mx, delta), s, light], axis=-1)
+
+
+def _hsl_to_srgb(xp: Any, hsl: Any) -> Any:
+    h, s, light = hsl[..., 0], hsl[..., 1], hsl[..., 2]
+    a = s * xp.minimum(light, 1.0 - light)
+    out = []
+    for n in (0.0, 8.0, 4.0):
+        k = xp.remainder(n + h / 30.0, 12.0)
+        t = xp.clip(xp.minimum(k - 3.0, 9.0 - k), -1.0, 1.0)
+        out.append(light - a * t)
+    return xp.stack(out, axis=-1)
+
+
+def _srgb_to_hsi(xp: Any, rgb: Any) -> Any:
+    r, g, b = rgb[..., 0], rgb[..., 1], rgb[..., 2]
+    i = (r + g + b) / 3.0
+    mn = xp.minimum(xp.minimum(r, g), b)
+    s = xp.where(i == 0, xp.zeros_like(i), 1.0 - mn / xp.where(i == 0, xp.ones_like(i), i))
+    # θ = atan2(√3 (G - B), 2R - G - B): the same angle as G&W's arccos form, without its
+    # division by zero and with full precision near 0° and 180°.
+    h = xp.atan2(math.sqrt(3.0) * (g - b), 2.0 * r - g - b) * (180.0 / math.pi)
+    h = xp.where(h < 0, h + 360.0, h)
+    h = xp.where(h >= 360.0, h - 360.0, h)
+    h = xp.where(s == 0, xp.zeros_like(h), h)
+    return xp.stack([h, s, i], axis=-1)
+
+
+def _hsi_to_srgb(xp: Any, hsi: Any) -> Any:
+    h, s, i = hsi[..., 0], hsi[..., 1], hsi[..., 2]
+    # Gonzalez & Woods, eq. (6-20)..(6-30), sector by sector (RG, GB, BR).
+    sector = xp.floor(h / 120.0)
+    hh = (h - 120.0 * sector) * (math.pi / 180.0)
+    x = i * (1.0 - s)
+    y = i * (1.0 + s * xp.cos(hh) / xp.cos(math.pi / 3.0 - hh))
+    z = 3.0 * i - (x + y)
+    r = xp.where(sector == 0, y, xp.where(sector == 1, x, z))
+    g = xp.where(sector == 0, z, xp.where(sector == 1, y, x))
+    b = xp.where(sector == 0, x, xp.where(sector == 1, z, y))
+    return xp.stack([r, g, b], axis=-1)
+
+
+def _rgb_in(image: object) -> tuple[Any, Any]:
+    x = as_image(image, "sRGB image")
+    return namespace(x), x
+
+
+def srgb_to_hsv(image: object) -> Any:
+    """Encoded RGB to HSV (hexcone model).
+
+    .. math::
+        V = \\max(R,G,B), \\; S = (V - \\min) / V, \\;
+        H = 60° \\times \\begin{cases} (G-B)/\\Delta & V = R \\\\ (B-R)/\\Delta + 2 & V = G
+        \\\\ (R-G)/\\Delta + 4 & V = B \\end{cases} \\bmod 360
+
+    Parameters
+    ----------
+    image : array_like, shape (..., 3)
+        Encoded RGB in [0, 1], or uint8/uint16.
+
+    Returns
+    -------
+    array, shape (..., 3)
+        H in degrees [0, 360) (0 where S = 0, see :func:`hue_undefined_mask`), S and V in
+        [0, 1].
+
+    Source: A. R. Smith, "Color gamut transform pairs", SIGGRAPH 1978.
+
+    >>> srgb_to_hsv([1.0, 0.5, 0.0]).round(6).tolist()
+    [30.0, 1.0, 1.0]
+    """
+    xp, x = _rgb_in(image)
+    return _srgb_to_hsv(xp, x)
+
+
+def hsv_to_srgb(hsv: object) -> Any:
+    """HSV to encoded RGB: :math:`f(n) = V - VS\\max(0, \\min(k, 4 - k, 1))`,
+    :math:`k = (n + H/60) \\bmod 6` for n = 5, 3, 1.
+
+    Hue may be any real number (taken modulo 360).
+
+    >>> hsv_to_srgb([30.0, 1.0, 1.0]).round(6).tolist()
+    [1.0, 0.5, 0.0]
+    """
+    x = as_image(hsv, "HSV", range_check=False)
+    return _hsv_to_srgb(namespace(x), x)
+
+
+def srgb_to_hsl(image: object) -> Any:
+    """Encoded RGB to HSL (double hexcone): L = (max + min)/2,
+    :math:`S = \\Delta / (1 - |2L - 1|)`, H as in HSV.
+
+    Source: A. R. Smith (1978); Joblove & Greenberg, "Color spaces for computer graphics",
+    SIGGRAPH 1978.
+
+    >>> srgb_to_hsl([1.0, 0.5, 0.0]).round(6).tolist()
+    [30.0, 1.0, 0.5]
+    """
+    xp, x = _rgb_in(image)
+    return _srgb_to_hsl(xp, x)
+
+
+def hsl_to_srgb(hsl: object) -> Any:
+    """HSL to encoded RGB: :math:`f(n) = L - a \\max(-1, \\min(k - 3, 9 - k, 1))`,
+    :math:`a = S \\min(L, 1 - L)`, :math:`k = (n + H/30) \\bmod 12` for n = 0, 8, 4.
+
+    >>> hsl_to_srgb([30.0, 1.0, 0.5]).round(6).tolist()
+    [1.0, 0.5, 0.0]
+    """
+    x = as_image(hsl, "HSL", range_check=False)
+    return _hsl_to_srgb(namespace(x), x)
+
+
+def srgb_to_hsi(image: object) -> Any:
+    """Encoded RGB to HSI (Gonzalez & Woods).
+
+    .. math::
+        I = \\frac{R+G+B}{3}, \\quad S = 1 - \\frac{\\min(R,G,B)}{I}, \\quad
+        H = \\begin{cases}\\theta & B \\le G \\\\ 360° - \\theta & B > G\\end{cases}, \\;
+        \\theta = \\arccos \\frac{\\tfrac12[(R-G)+(R-B)]}{\\sqrt{(R-G)^2+(R-B)(G-B)}}
+
+    θ is computed as :math:`\\operatorname{atan2}(\\sqrt3 (G-B), 2R-G-B)`, the same angle.
+    H = 0 where S = 0; S = 0 for black.
+
+    Source: R. C. Gonzalez & R. E. Woods, *Digital Image Processing*, 4th ed., eq. (6-16)-(6-19).
+
+    >>> srgb_to_hsi([0.0, 1.0, 0.0]).round(6).tolist()
+    [120.0, 1.0, 0.333333]
+    """
+    xp, x = _rgb_in(image)
+    return _srgb_to_hsi(xp, x)
+
+
+def hsi_to_srgb(hsi: object) -> Any:
+    """HSI to encoded RGB, sector by sector (Gonzalez & Woods eq. (6-20)-(6-30)).
+
+    Hue must be in [0, 360). Not every HSI triple is an RGB colour in [0, 1]; nothing is
+    clipped.
+
+    >>> hsi_to_srgb([120.0, 1.0, 1.0 / 3.0]).round(6).tolist()
+    [0.0, 1.0, 0.0]
+    """
+    x = as_image(hsi, "HSI", range_check=False)
+    return _hsi_to_srgb(namespace(x), x)
+
+
+# ---------------------------------------------------------------- hue helpers
+def hue_undefined_mask(values: object, *, atol: float = 0.0) -> Any:
+    """Boolean mask of pixels whose hue is undefined: saturation (channel 1) ``<= atol``.
+
+    Works for HSV, HSL and HSI arrays (saturation is channel 1 in all three).
+
+    Parameters
+    ----------
+    values : array_like, shape (..., 3)
+    atol : float
+        Saturations at or below this count as achromatic (noise on grey pixels makes hue
+        meaningless long before S is exactly 0).
+
+    Returns
+    -------
+    array of bool, shape (...)
+
+    >>> hue_undefined_mask([[0.0, 0.0, 0.5], [30.0, 0.2, 0.5]]).tolist()
+    [True, False]
+    """
+    x = as_image(values, "HSV/HSL/HSI", range_check=False)
+    return x[..., 1] <= atol
+
+
+def hue_difference(h1: object, h2: object) -> Any:
+    """Signed hue difference ``h2 - h1`` wrapped to [-180, 180) degrees.
+
+    .. math:: \\Delta h = ((h_2 - h_1 + 180) \\bmod 360) - 180
+
+    >>> float(hue_difference(350.0, 10.0))
+    20.0
+    """
+    a = as_float(h1, "h1", integer="float64")
+    xp = namespace(a)
+    b = as_float(h2, "h2", xp=xp, dtype=a.dtype)
+    return xp.remainder(b - a + 180.0, 360.0) - 180.0
+
+
+def hue_distance(h1: object, h2: object) -> Any:
+    """Unsigned angular distance between hues in degrees, in [0, 180].
+
+    .. math:: d = \\min(|h_1 - h_2| \\bmod 360,\\; 360 - |h_1 - h_2| \\bmod 360)
+
+    >>> float(hue_distance(350.0, 10.0))
+    20.0
+    """
+    d = hue_difference(h1, h2)
+    xp = namespace(d)
+    return xp.abs(d)
+
+
+def hue_in_range(hue: object, start: float, stop: float) -> Any:
+    """Mask of hues inside the arc from ``start`` to ``stop`` degrees, counter-clockwise.
+
+    The arc may wrap around 0/360: ``hue_in_range(h, 340, 20)`` selects reds from 340° to
+    20°. Both ends are inclusive; ``start == stop`` selects that single hue.
+
+    >>> hue_in_range([350.0, 10.0, 30.0, 180.0], 340, 20).tolist()
+    [True, True, False, False]
+    """
+    h = as_float(hue, "hue", integer="float64")
+    xp = namespace(h)
+    try:
+        s, e = float(start) % 360.0, float(stop) % 360.0
+    except (TypeError, ValueError) as exc:
+        raise InvalidInputError(
+            f"expected numeric start/stop hues, got {start!r}, {stop!r}"
+        ) from exc
+    if not (math.isfinite(s) and math.isfinite(e)):
+        raise InvalidInputError(f"expected finite start/stop hues, got {start!r}, {stop!r}")
+    hm = xp.remainder(h, 360.0)
+    if s <= e:
+        return (hm >= s) & (hm <= e)
+    return (hm >= s) | (hm <= e)

@@ -1,0 +1,195 @@
+"""Y'CbCr (BT.601, BT.709, BT.2020): analog values and 8/10-bit code values.
+
+The input is *encoded* R'G'B' in [0, 1] (the standards' E'R, E'G, E'B). The luma
+coefficients Kr, Kb are those each standard writes; Kg = 1 - Kr - Kb:
+
+.. math::
+    E'_Y = K_r R' + K_g G' + K_b B', \\quad
+    E'_{Cb} = \\frac{B' - E'_Y}{2 (1 - K_b)}, \\quad
+    E'_{Cr} = \\frac{R' - E'_Y}{2 (1 - K_r)}
+
+``range`` chooses the output scale:
+
+- ``"full"`` with ``bits=None`` (default): the analog values, E'Y in [0, 1], E'Cb and E'Cr in
+  [-0.5, 0.5].
+- ``"full"`` with ``bits=n``: full-range code values, :math:`D_Y = (2^n - 1) E'_Y`,
+  :math:`D_C = (2^n - 1) E'_C + 2^{n-1}` (ITU-T H.273, eq. for VideoFullRangeFlag = 1;
+  JPEG/JFIF uses n = 8 with BT.601 weights).
+- ``"limited"`` (``bits`` 8 unless given): studio range,
+  :math:`D_Y = (219 E'_Y + 16) 2^{n-8}`, :math:`D_C = (224 E'_C + 128) 2^{n-8}`
+  (BT.601-7 item 2.5.3, BT.709-6 item 4.6, BT.2020-2 Table 5).
+
+Code values are returned as unrounded floats (so that round trips are exact); round and
+cast them for storage (``np.round(d).astype(np.uint16)``). :func:`ycbcr_to_rgb` reads code
+values as numbers of the given range, integer dtypes included (not divided by 255).
+"""
+
+from __future__ import annotations
+
+import math
+from types import MappingProxyType
+from typing import Any
+
+from imageform._backend import namespace
+from imageform._validate import as_float, as_image, check_option
+from imageform.errors import InvalidInputError
+
+__all__ = [
+    "YCBCR_STANDARDS",
+    "rgb_to_ycbcr",
+    "srgb_to_ycbcr",
+    "ycbcr_to_rgb",
+    "ycbcr_to_srgb",
+]
+
+#: Luma coefficients (Kr, Kb) as each standard writes them.
+YCBCR_STANDARDS: MappingProxyType[str, tuple[float, float]] = MappingProxyType(
+    {
+        "bt601": (0.299, 0.114),  # ITU-R BT.601-7, item 2.5.1
+        "bt709": (0.2126, 0.0722),  # ITU-R BT.709-6, Part 1, item 3.2
+        "bt2020": (0.2627, 0.0593),  # ITU-R BT.2020-2, Table 4
+    }
+)
+_RANGES = ("full", "limited")
+
+
+def _coeffs(standard: str) -> tuple[str, float, float]:
+    key = check_option(
+        standard.replace(".", "") if isinstance(standard, str) else standard,
+        YCBCR_STANDARDS,
+        "Y'CbCr standard",
+    )
+    kr, kb = YCBCR_STANDARDS[key]
+    return key, kr, kb
+
+
+def _scale(range_: str, bits: int | None) -> tuple[float, float, float, float]:
+    """(y_gain, y_offset, c_gain, c_offset) from analog to the requested scale."""
+    rng = check_option(range_, _RANGES, "Y'CbCr range")
+    if bits is not None and (isinstance(bits, bool) or bits not in (8, 10, 12)):
+        raise InvalidInputError(f"expected bits 8, 10 or 12 (or None), got {bits!r}")
+    if rng == "full":
+        if bits is None:
+            return 1.0, 0.0, 1.0, 0.0
+        top = float(2**bits - 1)
+        return top, 0.0, top, float(2 ** (bits - 1))
+    n = 8 if bits is None else bits
+    k = float(2 ** (n - 8))
+    return 219.0 * k, 16.0 * k, 224.0 * k, 128.0 * k
+
+
+def _check_codes(values: object, range_: str, bits: int | None) -> None:
+    """Integer code values must fit ``bits`` (no wrap-around, no guessing of the scale)."""
+    dt = getattr(values, "dtype", None)
+    if dt is None or getattr(dt, "kind", "f") not in "iu":
+        return
+    if bits is None and range_ == "full":
+        raise InvalidInputError(
+            f"integer Y'CbCr ({dt}) are code values: pass bits=8 or bits=10 (or floats)"
+        )
+    n = 8 if bits is None else bits
+    xp = namespace(values)
+    if math.prod(values.shape) and int(xp.max(values)) > 2**n - 1:  # type: ignore[attr-defined]
+        raise InvalidInputError(
+            f"Y'CbCr code values exceed the {n}-bit range (max {int(xp.max(values))} > {2**n - 1})"
+        )
+
+
+def _rgb_to_ycbcr(xp: Any, rgb: Any, kr: float, kb: float, sc: tuple[float, ...]) -> Any:
+    kg = 1.0 - kr - kb
+    r, g, b = rgb[..., 0], rgb[..., 1], rgb[..., 2]
+    y = kr * r + kg * g + kb * b
+    cb = (b - y) / (2.0 * (1.0 - kb))
+    cr = (r - y) / (2.0 * (1.0 - kr))
+    yg, yo, cg, co = sc
+    return xp.stack([yg * y + yo, cg * cb + co, cg * cr + co], axis=-1)
+
+
+def _ycbcr_to_rgb(xp: Any, ycc: Any, kr: float, kb: float, sc: tuple[float, ...]) -> Any:
+    kg = 1.0 - kr - kb
+    yg, yo, cg, co = sc
+    y = (ycc[..., 0] - yo) / yg
+    cb = (ycc[..., 1] - co) / cg
+    cr = (ycc[..., 2] - co) / cg
+    r = y + 2.0 * (1.0 - kr) * cr
+    b = y + 2.0 * (1.0 - kb) * cb
+    g = (y - kr * r - kb * b) / kg
+    return xp.stack([r, g, b], axis=-1)
+
+
+def rgb_to_ycbcr(
+    image: object, standard: str = "bt601", *, range: str = "full", bits: int | None = None
+) -> Any:
+    """Encoded R'G'B' to Y'CbCr (analog or code values), see the module docstring.
+
+    Parameters
+    ----------
+    image : array_like, shape (..., 3)
+        Encoded R'G'B' in [0, 1] or uint8/uint16.
+    standard : {"bt601", "bt709", "bt2020"}
+    range : {"full", "limited"}
+    bits : {None, 8, 10, 12}
+
+    Returns
+    -------
+    array, shape (..., 3)
+        (Y', Cb, Cr) in the requested scale.
+
+    Source: ITU-R BT.601-7 items 2.5.1-2.5.3; BT.709-6 items 3.2-4.6; BT.2020-2 Tables 4-5;
+    ITU-T H.273 (full range).
+
+    >>> rgb_to_ycbcr([1.0, 0.0, 0.0], "bt709", range="limited", bits=8).round(2).tolist()
+    [62.56, 102.34, 240.0]
+    """
+    _, kr, kb = _coeffs(standard)
+    sc = _scale(range, bits)
+    x = as_image(image, "R'G'B' image")
+    return _rgb_to_ycbcr(namespace(x), x, kr, kb, sc)
+
+
+def ycbcr_to_rgb(
+    ycbcr: object, standard: str = "bt601", *, range: str = "full", bits: int | None = None
+) -> Any:
+    """Y'CbCr (analog or code values) to encoded R'G'B'; inverse of :func:`rgb_to_ycbcr`.
+
+    Integer code values (e.g. uint8, uint16 for 10-bit) are read as numbers, not rescaled.
+    Codes outside the nominal range (footroom/headroom) give R'G'B' outside [0, 1]; nothing
+    is clipped.
+
+    >>> ycbcr_to_rgb([235.0, 128.0, 128.0], "bt709", range="limited").round(6).tolist()
+    [1.0, 1.0, 1.0]
+    """
+    _, kr, kb = _coeffs(standard)
+    sc = _scale(range, bits)
+    _check_codes(ycbcr, range, bits)
+    x = as_float(ycbcr, "Y'CbCr", integer="float32")
+    if x.ndim < 1 or x.shape[-1] != 3:
+        raise InvalidInputError(
+            f"expected Y'CbCr with 3 channels on axis -1, got shape {tuple(x.shape)}"
+        )
+    return _ycbcr_to_rgb(namespace(x), x, kr, kb, sc)
+
+
+def srgb_to_ycbcr(
+    image: object, standard: str = "bt601", *, range: str = "full", bits: int | None = None
+) -> Any:
+    """sRGB-encoded values to Y'CbCr: :func:`rgb_to_ycbcr` applied to the sRGB values.
+
+    This is what JPEG (BT.601, full range, 8 bits) and OpenCV's ``COLOR_RGB2YCrCb`` do with
+    sRGB pixels (OpenCV orders the result Y, Cr, Cb: see :mod:`imageform.color.opencv`).
+
+    >>> srgb_to_ycbcr([1.0, 1.0, 1.0], bits=8).round(6).tolist()
+    [255.0, 128.0, 128.0]
+    """
+    return rgb_to_ycbcr(image, standard, range=range, bits=bits)
+
+
+def ycbcr_to_srgb(
+    ycbcr: object, standard: str = "bt601", *, range: str = "full", bits: int | None = None
+) -> Any:
+    """Y'CbCr to sRGB-encoded values; inverse of :func:`srgb_to_ycbcr`.
+
+    >>> ycbcr_to_srgb([0.5, 0.0, 0.0]).round(6).tolist()
+    [0.5, 0.5, 0.5]
+    """
+    return ycbcr_to_rgb(ycbcr, standard, range=range, bits=bits)

@@ -1,0 +1,72 @@
+"""CLI tests: ``imageform delta-e`` and ``imageform white-balance``."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from imageform.cli import main
+
+
+def _png(path: Path, arr: np.ndarray) -> Path:
+    Image.fromarray(arr).save(path)
+    return path
+
+
+@pytest.fixture
+def pair(tmp_path: Path) -> tuple[Path, Path]:
+    rng = np.random.default_rng(0)
+    a = rng.integers(0, 256, (16, 20, 3), dtype=np.uint8)
+    b = a.copy()
+    b[:, :10, 0] = np.clip(b[:, :10, 0].astype(int) + 40, 0, 255).astype(np.uint8)
+    return _png(tmp_path / "a.png", a), _png(tmp_path / "b.png", b)
+
+
+def test_delta_e_json_and_heatmap(pair, tmp_path, capsys) -> None:  # type: ignore[no-untyped-def]
+    a, b = pair
+    heat = tmp_path / "heat.png"
+    assert main(["delta-e", str(a), str(b), "--json", "--heatmap", str(heat)]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["method"] == "ciede2000" and out["pixels"] == 320
+    assert 0 < out["mean"] <= out["max"]
+    assert set(out["percentiles"]) == {"p50", "p90", "p95", "p99"}
+    assert np.asarray(Image.open(heat)).shape == (16, 20, 3)
+    # same image: zero difference, the lecture's "imperceptible"
+    assert main(["delta-e", str(a), str(a), "--json", "--method", "cie76"]) == 0
+    same = json.loads(capsys.readouterr().out)
+    assert same["max"] == 0.0 and same["reading"] == "imperceptible"
+
+
+def test_delta_e_text_and_errors(pair, tmp_path, capsys) -> None:  # type: ignore[no-untyped-def]
+    a, b = pair
+    assert main(["delta-e", str(a), str(b)]) == 0
+    assert "mean" in capsys.readouterr().out
+    small = _png(tmp_path / "small.png", np.zeros((4, 4, 3), np.uint8))
+    assert main(["delta-e", str(a), str(small)]) == 1
+    assert "differ in size" in capsys.readouterr().err
+    assert main(["delta-e", str(a), str(b), "--method", "cie2001"]) == 1
+    assert "valid: 'cie76'" in capsys.readouterr().err
+    assert main(["delta-e", str(a), str(b), "--heatmap", str(a)]) == 1
+    assert "also an input" in capsys.readouterr().err
+
+
+def test_white_balance_command(pair, tmp_path, capsys) -> None:  # type: ignore[no-untyped-def]
+    a, _ = pair
+    out = tmp_path / "wb.png"
+    assert main(["white-balance", str(a), str(out), "--method", "gray-world", "--json"]) == 0
+    res = json.loads(capsys.readouterr().out)
+    assert len(res["gains"]) == 3 and out.exists()
+    assert main(["white-balance", str(a), str(out)]) == 1
+    assert "--force" in capsys.readouterr().err
+    tif = tmp_path / "wb.tif"
+    assert main(["white-balance", str(a), str(tif), "--method", "white-patch"]) == 0
+    assert "gains" in capsys.readouterr().out
+    assert main(["white-balance", str(a), str(tmp_path / "x.png"), "--method", "shades-of-gray",
+                 "--p", "0.5"]) == 1  # fmt: skip
+    assert "p >= 1" in capsys.readouterr().err
+    assert main(["white-balance", str(a), str(tmp_path / "y.png"), "--method", "nope"]) == 1
+    assert "gray_world" in capsys.readouterr().err

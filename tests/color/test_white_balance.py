@@ -1,0 +1,161 @@
+"""Tests of imageform.color.white_balance: estimators on scenes with a known illuminant."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from imageform.color.transfer import linear_to_srgb, srgb_to_linear
+from imageform.color.white_balance import (
+    WHITE_BALANCE_METHODS,
+    estimate_illuminant,
+    white_balance,
+)
+from imageform.errors import DegenerateConfigurationError, InvalidInputError, UnknownOptionError
+from tests.helpers import to_backend, to_np
+
+ESTIMATORS = ["gray_world", "white_patch", "shades_of_gray", "gray_edge"]
+ILLUM = np.array([0.9, 0.6, 0.3])  # a warm light, linear RGB
+
+
+def _grey_scene(seed: int = 0, shape: tuple[int, int] = (40, 50)) -> np.ndarray:
+    """A scene of achromatic reflectances (smooth + edges) under ILLUM, linear RGB."""
+    rng = np.random.default_rng(seed)
+    refl = rng.uniform(0.05, 0.95, shape)
+    refl[:, : shape[1] // 2] *= 0.5  # a step edge
+    return refl[..., None] * ILLUM
+
+
+@pytest.mark.parametrize("method", ESTIMATORS)
+def test_every_estimator_recovers_the_illuminant_of_a_grey_scene(method: str) -> None:
+    """Under the diagonal model, a grey scene's statistics are proportional to the light
+    (van de Weijer et al. 2007, eq. 9 with achromatic reflectance): each estimate is ∝ ILLUM,
+    and the balanced image is neutral."""
+    img = _grey_scene()
+    e = estimate_illuminant(img, method, transfer="linear")
+    np.testing.assert_allclose(e / np.linalg.norm(e), ILLUM / np.linalg.norm(ILLUM), atol=1e-12)
+    out, _ = white_balance(img, method, transfer="linear")
+    np.testing.assert_allclose(out[..., 0], out[..., 1], atol=1e-12)
+    np.testing.assert_allclose(out[..., 2], out[..., 1], atol=1e-12)
+
+
+def test_gray_world_the_lecture_formula() -> None:
+    """The lecture's grey world: each channel scaled so its mean equals the mean grey."""
+    rng = np.random.default_rng(1)
+    img = rng.uniform(0, 1, (30, 20, 3)) * [1.0, 0.8, 0.5]
+    means = img.reshape(-1, 3).mean(0)
+    out, gains = white_balance(img, "gray_world", transfer="linear")
+    np.testing.assert_allclose(gains, means.mean() / means, rtol=1e-12)
+    np.testing.assert_allclose(out.reshape(-1, 3).mean(0), means.mean(), rtol=1e-12)
+    _, g_green = white_balance(img, "gray_world", transfer="linear", normalize="green")
+    np.testing.assert_allclose(g_green, means[1] / means, rtol=1e-12)
+
+
+def test_white_patch_percentiles_and_max_rgb() -> None:
+    """Cross-check: NumPy's percentile (linear interpolation) and max."""
+    rng = np.random.default_rng(2)
+    img = rng.uniform(0, 1, (25, 31, 3))
+    for q in (0.0, 50.0, 99.0, 100.0):
+        e = estimate_illuminant(img, "white_patch", transfer="linear", percentile=q)
+        np.testing.assert_allclose(e, np.percentile(img.reshape(-1, 3), q, axis=0), rtol=1e-12)
+    np.testing.assert_allclose(
+        estimate_illuminant(img, "max_rgb", transfer="linear"), img.reshape(-1, 3).max(0)
+    )
+
+
+def test_shades_of_gray_limits() -> None:
+    """Finlayson & Trezzi (2004): p = 1 is grey world; large p tends to max-RGB."""
+    rng = np.random.default_rng(3)
+    img = rng.uniform(0, 1, (20, 20, 3))
+    np.testing.assert_allclose(
+        estimate_illuminant(img, "shades_of_gray", transfer="linear", p=1),
+        estimate_illuminant(img, "gray_world", transfer="linear"),
+        rtol=1e-12,
+    )
+    big = estimate_illuminant(img, "shades_of_gray", transfer="linear", p=200)
+    np.testing.assert_allclose(big, img.reshape(-1, 3).max(0), rtol=0.05)
+
+
+def test_applied_in_linear_light() -> None:
+    """sRGB input: the gains multiply decoded values, and the output is re-encoded."""
+    lin = _grey_scene(4)
+    enc = np.asarray(linear_to_srgb(lin))
+    out, gains = white_balance(enc, "gray_world")
+    _, gains_lin = white_balance(lin, "gray_world", transfer="linear")
+    np.testing.assert_allclose(gains, gains_lin, rtol=1e-9)
+    np.testing.assert_allclose(srgb_to_linear(out), lin * gains, rtol=1e-9, atol=1e-12)
+
+
+def test_manual_from_white_and_cct() -> None:
+    """Manual: the sRGB white itself needs no gains; illuminant A's RGB is made neutral."""
+    img = np.full((4, 4, 3), 0.5)
+    _, g = white_balance(img, "manual", illuminant="srgb")
+    np.testing.assert_allclose(g, 1.0, atol=1e-12)
+    _, g = white_balance(img, "manual", illuminant="D65")  # CIE D65 vs IEC's 4-digit white
+    np.testing.assert_allclose(g, 1.0, atol=1e-3)
+    from imageform.color.rgb_spaces import xyz_to_linear_rgb
+    from imageform.color.whitepoints import whitepoint_xyz
+
+    rgb_a = np.asarray(xyz_to_linear_rgb(whitepoint_xyz("A")))
+    _, g = white_balance(img, "manual", illuminant="A", transfer="linear")
+    np.testing.assert_allclose(g * rgb_a, np.mean(rgb_a), rtol=1e-12)
+    e_cct = estimate_illuminant(img, "manual", cct=2856.0)
+    np.testing.assert_allclose(e_cct / e_cct[1], rgb_a / rgb_a[1], rtol=2e-3)  # A ≈ 2856 K
+
+
+def test_batch_dtypes_channel_axis() -> None:
+    img = (np.random.default_rng(5).uniform(0, 1, (2, 8, 9, 3)) * 255).astype(np.uint8)
+    out, gains = white_balance(img)
+    assert out.shape == (2, 8, 9, 3) and out.dtype == np.float32
+    assert gains.shape == (2, 3) and gains.dtype == np.float32
+    f64 = img[0].astype(np.float64) / 255
+    assert white_balance(f64).image.dtype == np.float64
+    chw = np.moveaxis(f64, -1, 0)
+    np.testing.assert_allclose(
+        white_balance(chw, channel_axis=0).gains, white_balance(f64).gains, rtol=1e-12
+    )
+
+
+@pytest.mark.parametrize("method", ESTIMATORS)
+def test_backends(xp_name: str, method: str) -> None:
+    img = np.asarray(linear_to_srgb(_grey_scene(6, (12, 14)) * 0.9))
+    ref_img, ref_g = white_balance(img, method)
+    out, g = white_balance(to_backend(img, xp_name), method)
+    np.testing.assert_allclose(to_np(g), ref_g, rtol=1e-10)
+    np.testing.assert_allclose(to_np(out), ref_img, rtol=1e-10, atol=1e-12)
+
+
+def test_clip_only_when_asked() -> None:
+    img = np.ones((4, 4, 3)) * [0.9, 0.5, 0.2]
+    img[0, 0] = [1.0, 1.0, 1.0]
+    out, _ = white_balance(img, transfer="linear")
+    assert out.max() > 1.0
+    out, _ = white_balance(img, transfer="linear", clip=True)
+    assert out.max() == 1.0
+
+
+def test_bad_inputs() -> None:
+    img = np.full((5, 5, 3), 0.5)
+    with pytest.raises(InvalidInputError, match="NaN"):
+        white_balance(np.full((5, 5, 3), np.nan))
+    with pytest.raises(InvalidInputError, match="alpha channel"):
+        white_balance(np.full((5, 5, 4), 0.5))
+    with pytest.raises(InvalidInputError, match=r"\(\.\.\., H, W, 3\)"):
+        white_balance(np.full((5, 3), 0.5))
+    with pytest.raises(UnknownOptionError, match=r"valid: .*'gray_world'"):
+        white_balance(img, "retinex")
+    with pytest.raises(InvalidInputError, match=r"percentile in \[0, 100\]"):
+        white_balance(img, "white_patch", percentile=-1)
+    with pytest.raises(InvalidInputError, match="p >= 1"):
+        white_balance(img, "shades_of_gray", p=0.5)
+    with pytest.raises(InvalidInputError, match="sigma >= 0"):
+        white_balance(img, "gray_edge", sigma=-1)
+    with pytest.raises(InvalidInputError, match="outside the range"):
+        white_balance(img, "manual", cct=1000.0)
+    with pytest.raises(InvalidInputError, match="exactly one of"):
+        white_balance(img, "manual")
+    with pytest.raises(DegenerateConfigurationError, match="zero"):
+        white_balance(np.full((5, 5, 3), 0.5) * np.array([1.0, 1.0, 0.0]))
+    with pytest.raises(UnknownOptionError, match="gain normalisation"):
+        white_balance(img, normalize="max")
+    assert set(ESTIMATORS) < set(WHITE_BALANCE_METHODS)

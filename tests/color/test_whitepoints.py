@@ -1,0 +1,78 @@
+"""White points: CIE 15:2004 Table T.3 values, XYZ derivation, the white= argument forms."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from imageform.color import WHITEPOINTS_XY, resolve_white, whitepoint_xy, whitepoint_xyz
+from imageform.errors import InvalidInputError, UnknownOptionError
+
+NAMES = ["A", "D50", "D55", "D65", "D75", "E", "F2", "F7", "F11"]
+
+
+def test_table_has_every_listed_illuminant_for_both_observers() -> None:
+    for obs in (2, 10):
+        assert sorted(WHITEPOINTS_XY[obs]) == sorted(NAMES)
+
+
+@pytest.mark.parametrize(
+    ("name", "observer", "xy"),
+    [
+        # Gold: CIE 15:2004, Table T.3 (five decimals as printed).
+        ("A", 2, (0.44757, 0.40745)),
+        ("D65", 2, (0.31271, 0.32902)),
+        ("D50", 2, (0.34567, 0.35850)),
+        ("D65", 10, (0.31382, 0.33100)),
+        ("F11", 10, (0.38541, 0.37123)),
+    ],
+)
+def test_gold_cie15(name: str, observer: int, xy: tuple[float, float]) -> None:
+    assert whitepoint_xy(name, observer) == pytest.approx(xy, abs=5e-6)
+
+
+@pytest.mark.parametrize("observer", [2, 10])
+def test_cross_check_colour_science(observer: int) -> None:
+    # Cross-check (colour-science 0.4.7, CCS_ILLUMINANTS). colour rounds several 2° values
+    # to four decimals (D65 0.3127, 0.3290; FL11 y 0.3769 vs CIE 15 0.37713): tolerance 3e-4.
+    colour = pytest.importorskip("colour")
+    key = (
+        "CIE 1931 2 Degree Standard Observer"
+        if observer == 2
+        else ("CIE 1964 10 Degree Standard Observer")
+    )
+    for name in NAMES:
+        cname = "FL" + name[1:] if name.startswith("F") else name
+        ref = colour.CCS_ILLUMINANTS[key][cname]
+        assert whitepoint_xy(name, observer) == pytest.approx(tuple(ref), abs=3e-4)
+
+
+def test_xyz_has_unit_y_and_matches_xy() -> None:
+    for name in NAMES:
+        xyz = whitepoint_xyz(name)
+        assert xyz[1] == 1.0
+        x, y = whitepoint_xy(name)
+        assert xyz[0] / xyz.sum() == pytest.approx(x, abs=1e-12)
+        assert xyz[1] / xyz.sum() == pytest.approx(y, abs=1e-12)
+
+
+def test_names_are_forgiving_and_unknown_lists_valid() -> None:
+    assert whitepoint_xy("d65") == whitepoint_xy("D65")
+    assert whitepoint_xy("FL11") == whitepoint_xy("F11")
+    with pytest.raises(UnknownOptionError, match="valid: 'A', 'D50'"):
+        whitepoint_xy("D66")
+    with pytest.raises(UnknownOptionError, match="observer"):
+        whitepoint_xy("D65", observer=5)
+
+
+def test_resolve_white_forms() -> None:
+    np.testing.assert_allclose(resolve_white("D65"), whitepoint_xyz("D65"))
+    np.testing.assert_allclose(resolve_white("srgb"), [0.3127 / 0.329, 1, 0.3583 / 0.329])
+    np.testing.assert_allclose(resolve_white((0.3127, 0.329)), resolve_white("srgb"))
+    np.testing.assert_allclose(resolve_white([0.9, 1.0, 1.1]), [0.9, 1.0, 1.1])
+    with pytest.raises(UnknownOptionError, match="unknown white 'nope'"):
+        resolve_white("nope")
+    with pytest.raises(InvalidInputError, match="Y > 0"):
+        resolve_white([1.0, 0.0, 1.0])
+    with pytest.raises(InvalidInputError, match="y > 0"):
+        resolve_white([0.3, 0.0])
