@@ -33,7 +33,9 @@ def write(name: str, wl: np.ndarray, cols: dict[str, np.ndarray], source: str, n
 
 
 def msds(name: str, obj: object, source: str, note: str) -> None:
-    write(name, obj.wavelengths, {k: obj.values[:, i] for i, k in enumerate(obj.labels)}, source, note)  # type: ignore[attr-defined]
+    write(
+        name, obj.wavelengths, {k: obj.values[:, i] for i, k in enumerate(obj.labels)}, source, note
+    )  # type: ignore[attr-defined]
 
 
 def sds(name: str, objs: dict[str, object], source: str, note: str) -> None:
@@ -101,7 +103,20 @@ def main() -> None:
     )
     sds(
         "led_cie2018.csv",
-        {k: I[k] for k in ("LED-B1", "LED-B2", "LED-B3", "LED-B4", "LED-B5", "LED-BH1", "LED-RGB1", "LED-V1", "LED-V2")},
+        {
+            k: I[k]
+            for k in (
+                "LED-B1",
+                "LED-B2",
+                "LED-B3",
+                "LED-B4",
+                "LED-B5",
+                "LED-BH1",
+                "LED-RGB1",
+                "LED-V1",
+                "LED-V2",
+            )
+        },
         "CIE 015:2018 Table 11 (typical white-LED illuminants LED-B1..LED-V2), 5 nm",
         "relative spectral power, normalised as in the table (560 nm = 100)",
     )
@@ -134,7 +149,23 @@ def main() -> None:
     b = colour.CCS_COLOURCHECKERS["ColorChecker24 - After November 2014"].data
     for (k, v), w in zip(a.items(), b.values(), strict=True):
         lines.append(",".join([k, *(f"{float(t):.8g}" for t in (*v, *w))]))
-    (OUT / "colorchecker_published_xyY_d50.csv").write_text("\n".join(lines) + "\n", encoding="utf-8")
+    (OUT / "colorchecker_published_xyY_d50.csv").write_text(
+        "\n".join(lines) + "\n", encoding="utf-8"
+    )
+    # Machado, Oliveira & Fernandes (2009) pre-computed CVD matrices (linear RGB).
+    mm = colour.blindness.CVD_MATRICES_MACHADO2010
+    lines = [
+        "# source: Machado, Oliveira & Fernandes (2009) IEEE TVCG 15(6):1291-1298, "
+        "supplementary table of pre-computed matrices (severity 0.0-1.0 step 0.1)",
+        f"# {VIA}",
+        "# 3x3 matrices applied to linear RGB column vectors, row-major m00..m22",
+        "deficiency,severity," + ",".join(f"m{i}{j}" for i in range(3) for j in range(3)),
+    ]
+    for key, short in (("Protanomaly", "protan"), ("Deuteranomaly", "deutan"), ("Tritanomaly", "tritan")):
+        for sev, mat in mm[key].items():
+            vals = ",".join(f"{float(v):.6f}" for v in np.asarray(mat).ravel())
+            lines.append(f"{short},{sev:.1f},{vals}")
+    (OUT / "cvd_machado2009.csv").write_text("\n".join(lines) + "\n", encoding="utf-8")
     # viridis from matplotlib (CC0: van der Walt & Smith, 2015)
     from matplotlib import colormaps
 
