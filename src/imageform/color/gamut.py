@@ -18,7 +18,6 @@ import numpy as np
 
 from imageform._validate import as_points, check_option
 from imageform.color.chromaticity import (
-    _points_in_polygon,
     polygon_area,
     spectral_locus,
     visible_area,
@@ -97,7 +96,9 @@ def _clip_polygon(subject: np.ndarray, clip: np.ndarray) -> np.ndarray:
     return np.array(out).reshape(-1, 2)
 
 
-def gamut_coverage(space: str | RGBSpace = "srgb", coords: str = "xy", *, observer: int = 2) -> float:
+def gamut_coverage(
+    space: str | RGBSpace = "srgb", coords: str = "xy", *, observer: int = 2
+) -> float:
     """Percentage of the visible region (spectral locus, 380-780 nm) the gamut covers.
 
     .. math:: \\mathrm{coverage} = 100\\,\\frac{A(T \\cap V)}{A(V)}
