@@ -173,3 +173,92 @@ __all__ = [
 ]
 
 # ---- names from the colour-difference / adaptation / white-balance work (3b) go below ----
+
+# ---- names from the spectra / vision / chromaticity / gamut work (issue 4) ----
+from imageform.color.chromaticity import (
+    CHROMATICITY_COORDS,
+    check_in_locus,
+    in_locus,
+    polygon_area,
+    spectral_locus,
+    uv_prime_to_xy,
+    visible_area,
+    xy_to_uv_prime,
+    xyz_to_uv_prime,
+    xyz_to_xy,
+)
+from imageform.color.cvd import (
+    CVD_DEFICIENCIES,
+    CVD_METHODS,
+    brettel_planes,
+    cvd_matrix,
+    machado_matrix,
+    simulate_cvd,
+)
+from imageform.color.gamut import (
+    GAMUT_MAPPING_METHODS,
+    GamutFigures,
+    gamut_area,
+    gamut_coverage,
+    gamut_figures,
+    gamut_map,
+    gamut_triangle,
+    in_gamut,
+)
+from imageform.color.metamerism import (
+    are_metamers,
+    match_with_primaries,
+    metamer,
+    metamerism_index,
+    tristimulus,
+)
+from imageform.color.palettes import (
+    OKABE_ITO,
+    PALETTES,
+    RED_GREEN,
+    PaletteCheck,
+    palette,
+    palette_check,
+    parse_colors,
+    viridis,
+)
+
+__all__ += [
+    "CHROMATICITY_COORDS",
+    "CVD_DEFICIENCIES",
+    "CVD_METHODS",
+    "GAMUT_MAPPING_METHODS",
+    "OKABE_ITO",
+    "PALETTES",
+    "RED_GREEN",
+    "GamutFigures",
+    "PaletteCheck",
+    "are_metamers",
+    "brettel_planes",
+    "check_in_locus",
+    "cvd_matrix",
+    "gamut_area",
+    "gamut_coverage",
+    "gamut_figures",
+    "gamut_map",
+    "gamut_triangle",
+    "in_gamut",
+    "in_locus",
+    "machado_matrix",
+    "match_with_primaries",
+    "metamer",
+    "metamerism_index",
+    "palette",
+    "palette_check",
+    "parse_colors",
+    "polygon_area",
+    "simulate_cvd",
+    "spectral_locus",
+    "tristimulus",
+    "uv_prime_to_xy",
+    "viridis",
+    "visible_area",
+    "xy_to_uv_prime",
+    "xyz_to_uv_prime",
+    "xyz_to_xy",
+]

@@ -254,7 +254,8 @@ def match_with_primaries(
     --------
     >>> import numpy as np
     >>> wl = np.arange(380.0, 781.0)
-    >>> prim = Spectrum.from_columns(wl, [np.exp(-0.5 * ((wl - c) / 15) ** 2) for c in (610, 540, 450)])
+    >>> bumps = [np.exp(-0.5 * ((wl - c) / 15) ** 2) for c in (610, 540, 450)]
+    >>> prim = Spectrum.from_columns(wl, bumps)
     >>> w = match_with_primaries(Spectrum(wl, np.ones_like(wl)), prim)
     >>> bool(np.all(w > 0))
     True
