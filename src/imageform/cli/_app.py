@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import typer
 
-from imageform.cli import color_analysis_cmds, geometry_cmds, lecture_cmd
+from imageform.cli import color_analysis_cmds, geometry_cmds, lecture_cmd, vision_cmds
 
 app = typer.Typer(
     name="imageform",
@@ -15,7 +15,7 @@ app = typer.Typer(
     rich_markup_mode=None,
 )
 
-for _module in (lecture_cmd, color_analysis_cmds, geometry_cmds):
+for _module in (lecture_cmd, color_analysis_cmds, geometry_cmds, vision_cmds):
     _module.register(app)
 
 
