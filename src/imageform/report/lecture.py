@@ -52,7 +52,7 @@ class WorkedExample:
         )
 
 
-_MODULES = ("imageform.report.lecture_geometry",)
+_MODULES = ("imageform.report.lecture_geometry", "imageform.report.lecture_vision")
 
 
 def all_examples() -> list[WorkedExample]:

@@ -25,6 +25,7 @@ from imageform.spectral.illuminants import (
     daylight_spectrum,
     illuminant,
     planck,
+    planckian_cct,
 )
 from imageform.spectral.integrate import (
     INTEGRATION_METHODS,
@@ -67,6 +68,7 @@ __all__ = [
     "luminous_efficiency",
     "observer_functions",
     "planck",
+    "planckian_cct",
     "spectrum_to_camera_rgb",
     "spectrum_to_lms",
     "spectrum_to_xyz",

@@ -37,6 +37,7 @@ __all__ = [
     "daylight_spectrum",
     "illuminant",
     "planck",
+    "planckian_cct",
 ]
 
 C1 = 3.741771e-16  # W m², first radiation constant, CIE 015:2018 eq. 4.1 note
@@ -146,3 +147,46 @@ def illuminant(name: str) -> Spectrum:
         return daylight_spectrum(float(key[1:]) * 100.0 * 1.4388 / 1.4380)
     valid = [*ILLUMINANT_TABLES, "E", *LED_SPECTRA, "D<cct/100> (e.g. D75)", "bb<T> (e.g. bb3200)"]
     raise InvalidInputError(f"unknown illuminant {name!r}; valid: {', '.join(valid)}")
+
+
+def planckian_cct(xyz: npt.ArrayLike, *, observer: int = 2) -> tuple[float, float]:
+    r"""CCT and Duv of one XYZ by direct search along the Planckian locus.
+
+    The locus point :math:`(u_T, v_T)` (CIE 1960 UCS) of a black body at T is integrated from
+    Planck's law and the CIE colour-matching functions (360-830 nm, 1 nm); the CCT minimises
+    :math:`(u - u_T)^2 + (v - v_T)^2` over the mired scale 1e6/T in [10, 2000] (Brent).
+    CIE 015:2018 §9.5 defines the CCT this way; this avoids Robertson's table interpolation
+    (:func:`imageform.color.cct.xy_to_cct`) and is its reference. Duv is signed positive above
+    the locus.
+
+    >>> t, duv = planckian_cct([1.09850, 1.0, 0.35585])  # CIE illuminant A
+    >>> round(t)
+    2856
+    """
+    from scipy.optimize import minimize_scalar
+
+    from imageform.color.cct import xy_to_uv1960
+    from imageform.spectral.data import cmfs
+
+    v = np.asarray(xyz, dtype=np.float64)
+    if v.shape != (3,) or not np.all(np.isfinite(v)) or v.sum() <= 0:
+        raise InvalidInputError(f"expected one XYZ of shape (3,) with X+Y+Z > 0, got {xyz!r}")
+    c = cmfs(observer)
+    wl = c.wavelengths
+
+    def uv_of(t: float) -> np.ndarray:
+        s = planck(wl, t) @ c.values
+        return np.asarray(xy_to_uv1960(s[:2] / s.sum()))
+
+    uv = np.asarray(xy_to_uv1960(v[:2] / v.sum()))
+    res = minimize_scalar(
+        lambda m: float(np.sum((uv_of(1e6 / m) - uv) ** 2)),
+        bounds=(10.0, 2000.0),
+        method="bounded",
+        options={"xatol": 1e-9},
+    )
+    t = 1e6 / float(res.x)
+    d = uv - uv_of(t)
+    tangent = uv_of(t * 1.0001) - uv_of(t)
+    sign = 1.0 if tangent[0] * d[1] - tangent[1] * d[0] < 0 else -1.0
+    return t, sign * float(np.hypot(*d))
