@@ -90,7 +90,8 @@ def main() -> None:
         ("FL2", "illuminant_F2.csv", "CIE 015:2018 Table 10.1 (illuminant F2 / FL2), 5 nm"),
         ("FL11", "illuminant_F11.csv", "CIE 015:2018 Table 10.1 (illuminant F11 / FL11), 5 nm"),
     ):
-        sds(fname, {key: I[key]}, src, "relative spectral power, 100 at 560 nm")
+        note = "relative spectral power" + (", 100 at 560 nm" if key[0] != "F" else "")
+        sds(fname, {key: I[key]}, src, note)
     from colour.colorimetry.datasets.illuminants.sds_d_illuminant_series import (
         SDS_BASIS_FUNCTIONS_CIE_ILLUMINANT_D_SERIES as B,
     )
