@@ -119,7 +119,7 @@ def main() -> None:
             )
         },
         "CIE 015:2018 Table 11 (typical white-LED illuminants LED-B1..LED-V2), 5 nm",
-        "relative spectral power, normalised as in the table (560 nm = 100)",
+        "relative spectral power as tabulated (not normalised at 560 nm)",
     )
     cc = colour.SDS_COLOURCHECKERS["BabelColor Average"]
     sds(

@@ -88,7 +88,11 @@ def test_reflectances_and_camera() -> None:
     assert 0 < r.values.min() and r.values.max() < 1
     cam = camera_sensitivities()
     assert cam.labels == ("red", "green", "blue")
-    assert cam["blue"].peak_wavelength() < cam["green"].peak_wavelength() < cam["red"].peak_wavelength()
+    assert (
+        cam["blue"].peak_wavelength()
+        < cam["green"].peak_wavelength()
+        < cam["red"].peak_wavelength()
+    )
     assert colorchecker_published_xyy("xrite2014").shape == (24, 3)
     with pytest.raises(UnknownOptionError):
         colorchecker_published_xyy("ohta")
