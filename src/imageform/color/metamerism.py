@@ -51,7 +51,9 @@ def _setup(
     f = observer_functions(observer)
     ill = _as_illuminant(illuminant)
     grid, w = integration_weights(f, ill, method="cie015")
-    r = spectrum.interpolate(grid, method="linear", extrapolate="constant").values
+    # reflectances extend by their end values (CIE 015 §7.2.2); lights are zero outside
+    ext = "zero" if ill is None else "constant"
+    r = spectrum.interpolate(grid, method="linear", extrapolate=ext).values
     return grid, w, r
 
 
