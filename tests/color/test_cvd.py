@@ -54,7 +54,11 @@ def test_machado_all_tenths_match_colour_science() -> None:
     """Cross-check: every pre-computed matrix equals colour-science's transcription."""
     colour = pytest.importorskip("colour")
     table = colour.blindness.CVD_MATRICES_MACHADO2010
-    for ours, theirs in (("protan", "Protanomaly"), ("deutan", "Deuteranomaly"), ("tritan", "Tritanomaly")):
+    for ours, theirs in (
+        ("protan", "Protanomaly"),
+        ("deutan", "Deuteranomaly"),
+        ("tritan", "Tritanomaly"),
+    ):
         for s, mat in table[theirs].items():
             assert np.array_equal(machado_matrix(ours, s), np.asarray(mat) + 0.0), (ours, s)
 
@@ -101,7 +105,9 @@ def test_dichromat_projection_is_idempotent() -> None:
         h1, h2, n = brettel_planes(d)
         assert np.allclose(h1 @ h1, h1, atol=1e-12) and np.allclose(h2 @ h2, h2, atol=1e-12)
         once = simulate_cvd(rgb, d, method="brettel1997", linear=True)
-        assert np.allclose(simulate_cvd(once, d, method="brettel1997", linear=True), once, atol=1e-9)
+        assert np.allclose(
+            simulate_cvd(once, d, method="brettel1997", linear=True), once, atol=1e-9
+        )
 
 
 @settings(max_examples=25, deadline=None)
@@ -130,7 +136,10 @@ def test_backends(xp_name: str) -> None:
     for method in ("machado2009", "brettel1997"):
         want = simulate_cvd(rgb, "deutan", 0.7, method)
         got = simulate_cvd(to_backend(rgb, xp_name), "deutan", 0.7, method)
-        assert type(got).__module__.split(".")[0] == type(to_backend(rgb, xp_name)).__module__.split(".")[0]
+        assert (
+            type(got).__module__.split(".")[0]
+            == type(to_backend(rgb, xp_name)).__module__.split(".")[0]
+        )
         assert np.allclose(to_np(got), want, atol=1e-12)
 
 
