@@ -102,7 +102,7 @@ def test_dichromat_projection_is_idempotent() -> None:
     for d in ("protan", "deutan", "tritan"):
         m = cvd_matrix(d, 1.0, "vienot1999")
         assert np.allclose(m @ m, m, atol=1e-12)
-        h1, h2, n = brettel_planes(d)
+        h1, h2, _ = brettel_planes(d)
         assert np.allclose(h1 @ h1, h1, atol=1e-12) and np.allclose(h2 @ h2, h2, atol=1e-12)
         once = simulate_cvd(rgb, d, method="brettel1997", linear=True)
         assert np.allclose(
@@ -145,7 +145,7 @@ def test_backends(xp_name: str) -> None:
 
 def test_bad_input() -> None:
     rgb = np.zeros((2, 3))
-    with pytest.raises(InvalidInputError, match="severity in \\[0, 1\\], got 1.5"):
+    with pytest.raises(InvalidInputError, match=r"severity in \[0, 1\], got 1.5"):
         simulate_cvd(rgb, "deutan", 1.5)
     with pytest.raises(InvalidInputError, match="severity"):
         simulate_cvd(rgb, "deutan", -0.1)

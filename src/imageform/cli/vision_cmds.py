@@ -47,7 +47,8 @@ def cvd_cmd(
     else:
         typer.echo(
             f"wrote {output} ({method}, {deficiency}, severity {severity:g}); "
-            f"{outside} values outside [0, 1]" + (f", {clipped} clipped on write" if clipped else "")
+            f"{outside} values outside [0, 1]"
+            + (f", {clipped} clipped on write" if clipped else "")
         )
 
 

@@ -28,7 +28,7 @@ def planckian_locus(
     with the CIE colour-matching functions.
 
     >>> [round(float(v), 4) for v in planckian_locus([2856.0])[0]]
-    [0.4476, 0.4074]
+    [0.4475, 0.4074]
     """
     from imageform.color.chromaticity import xy_to_uv_prime
     from imageform.spectral.illuminants import blackbody_spectrum
@@ -106,9 +106,7 @@ def plot_chromaticity_diagram(
     try:
         import matplotlib.pyplot as plt
     except ImportError as exc:  # pragma: no cover - the plot extra is installed in tests
-        raise InvalidInputError(
-            "plotting needs matplotlib: pip install 'imageform[plot]'"
-        ) from exc
+        raise InvalidInputError("plotting needs matplotlib: pip install 'imageform[plot]'") from exc
     from imageform.color.chromaticity import spectral_locus
     from imageform.color.gamut import gamut_triangle
     from imageform.color.rgb_spaces import _get_space

@@ -151,7 +151,7 @@ def cone_fundamentals() -> Spectrum:
 
 
 def illuminant_table(name: str) -> Spectrum:
-    """A tabulated CIE illuminant (A, D50, D65: 100 at 560 nm; F2, F11: relative as tabulated), 5 nm."""
+    """A tabulated CIE illuminant, 5 nm: A, D50, D65 (100 at 560 nm); F2, F11 (relative)."""
     key = name.strip().upper().replace("FL", "F")
     if key not in ILLUMINANT_TABLES:
         raise InvalidInputError(

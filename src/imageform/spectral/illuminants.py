@@ -75,7 +75,7 @@ def planck(wavelength_nm: npt.ArrayLike, temperature: float) -> np.ndarray:
         raise InvalidInputError("expected wavelengths > 0 nm")
     m = lam * 1e-9
     with np.errstate(over="ignore"):
-        return C1 / m**5 / np.expm1(C2 / (m * t))  # type: ignore[no-any-return]
+        return np.asarray(C1 / m**5 / np.expm1(C2 / (m * t)))
 
 
 def blackbody_spectrum(

@@ -61,7 +61,7 @@ INTEGRATION_METHODS = ("cie015", "astm_e308")
 OBSERVER_NAMES = ("2", "10", "cones")
 
 
-def observer_functions(observer: int | str = 2) -> Spectrum:
+def observer_functions(observer: int | str | Spectrum = 2) -> Spectrum:
     """The three sensitivity curves of an observer: CIE 1931 2° (``2``), CIE 1964 10° (``10``)
     or the Stockman & Sharpe (2000) 2° cone fundamentals (``"cones"``, alias ``"lms"``).
 
@@ -198,10 +198,11 @@ def spectrum_to_xyz(
     ill = _as_illuminant(illuminant)
     out, white = _integrate(s, f, ill, method, interpolation)
     if ill is None:
-        k = KM_PHOTOPIC if absolute else 1.0 / (out[..., 1:2] if out.ndim == 2 else out[1])
-        if not absolute and np.any(out[..., 1] == 0):
+        if absolute:
+            return np.asarray(out * KM_PHOTOPIC)
+        if np.any(out[..., 1] == 0):
             raise InvalidInputError("the light has zero luminance; cannot normalise to Y = 1")
-        return np.asarray(out * k)
+        return np.asarray(out / (out[..., 1:2] if out.ndim == 2 else out[1]))
     if absolute:
         raise InvalidInputError("absolute=True applies to lights (illuminant=None) only")
     return np.asarray(out / white[1])
@@ -254,11 +255,8 @@ def spectrum_to_camera_rgb(
     """
     s = _as_spectrum(spectrum, "spectrum")
     sens = camera if isinstance(camera, Spectrum) else camera_sensitivities(camera)
-    sens = observer_functions(sens)
+    sens = observer_functions(sens)  # checks the shape (N, 3)
     ill = _as_illuminant(illuminant)
-    if ill is not None:
-        # camera data cover 380-780 nm; integrate where both are defined
-        pass
     out, white = _integrate(s, sens, ill, method, interpolation)
     return np.asarray(out if ill is None else out / white[1])
 

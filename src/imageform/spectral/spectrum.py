@@ -279,12 +279,12 @@ class Spectrum:
             return v
         if isinstance(other, int | float | np.floating | np.integer):
             return float(other)
-        return NotImplemented  # type: ignore[no-any-return]
+        return NotImplemented
 
     def _binary(self, other: Any, op: str, f: Any) -> Spectrum:
         v = self._other(other, op)
         if v is NotImplemented:
-            return NotImplemented  # type: ignore[no-any-return]
+            return NotImplemented
         with np.errstate(divide="raise", invalid="raise"):
             try:
                 out = f(self.values, v)
