@@ -162,7 +162,11 @@ def main() -> None:
         "# 3x3 matrices applied to linear RGB column vectors, row-major m00..m22",
         "deficiency,severity," + ",".join(f"m{i}{j}" for i in range(3) for j in range(3)),
     ]
-    for key, short in (("Protanomaly", "protan"), ("Deuteranomaly", "deutan"), ("Tritanomaly", "tritan")):
+    for key, short in (
+        ("Protanomaly", "protan"),
+        ("Deuteranomaly", "deutan"),
+        ("Tritanomaly", "tritan"),
+    ):
         for sev, mat in mm[key].items():
             vals = ",".join(f"{float(v):.6f}" for v in np.asarray(mat).ravel())
             lines.append(f"{short},{sev:.1f},{vals}")
