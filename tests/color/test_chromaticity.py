@@ -84,3 +84,17 @@ def test_in_locus() -> None:
         check_in_locus([[0.3127, 0.329], [0.7, 0.7]])
     with pytest.raises(InvalidInputError, match="shape"):
         in_locus([0.3, 0.3, 0.3])
+
+
+def test_xy_to_xyz_refuses_colours_outside_the_locus() -> None:
+    from imageform.color import xy_to_xyz
+
+    assert xy_to_xyz([0.31271, 0.32902], 0.5)[1] == 0.5
+    assert xy_to_xyz([[0.64, 0.33], [0.3, 0.6]]).shape == (2, 3)
+    with pytest.raises(InvalidInputError, match=r"\(0.8, 0.8\) lies outside the spectral locus"):
+        xy_to_xyz([0.8, 0.8])
+    assert xy_to_xyz([0.8, 0.8], check_locus=False)[0] == pytest.approx(1.0)
+    with pytest.raises(InvalidInputError, match="Y >= 0"):
+        xy_to_xyz([0.3, 0.3], -1.0)
+    with pytest.raises(InvalidInputError, match="y > 0"):
+        xy_to_xyz([0.3, 0.0], check_locus=False)

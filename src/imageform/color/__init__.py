@@ -184,6 +184,7 @@ from imageform.color.chromaticity import (
     uv_prime_to_xy,
     visible_area,
     xy_to_uv_prime,
+    xy_to_xyz,
     xyz_to_uv_prime,
     xyz_to_xy,
 )
@@ -259,6 +260,7 @@ __all__ += [
     "viridis",
     "visible_area",
     "xy_to_uv_prime",
+    "xy_to_xyz",
     "xyz_to_uv_prime",
     "xyz_to_xy",
 ]

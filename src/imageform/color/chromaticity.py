@@ -29,6 +29,7 @@ __all__ = [
     "uv_prime_to_xy",
     "visible_area",
     "xy_to_uv_prime",
+    "xy_to_xyz",
     "xyz_to_uv_prime",
     "xyz_to_xy",
 ]
@@ -196,3 +197,23 @@ def check_in_locus(points: object, coords: str = "xy", *, observer: int = 2) -> 
             f"locus ({int(np.count_nonzero(~ok))} of {ok.size} points): no real colour has it"
         )
     return p
+
+
+def xy_to_xyz(
+    xy: object, Y: float = 1.0, *, check_locus: bool = True, observer: int = 2
+) -> np.ndarray:
+    r"""XYZ of a chromaticity at luminance ``Y``: :math:`X = xY/y,\ Z = (1 - x - y)Y/y`.
+
+    With ``check_locus`` (default) a chromaticity outside the spectral locus raises
+    :class:`InvalidInputError`: no real colour has it (CIE 015:2018 §7.3).
+
+    >>> xy_to_xyz([0.31271, 0.32902]).round(5).tolist()
+    [0.95043, 1.0, 1.0889]
+    """
+    p = check_in_locus(xy, observer=observer) if check_locus else np.asarray(xy, dtype=float)
+    if not (np.isfinite(Y) and Y >= 0):
+        raise InvalidInputError(f"expected Y >= 0, got {Y!r}")
+    if np.any(p[..., 1] <= 0):
+        raise InvalidInputError("expected y > 0 (y = 0 has no finite XYZ)")
+    x, y = p[..., 0], p[..., 1]
+    return np.stack([x * Y / y, np.full_like(x, Y), (1.0 - x - y) * Y / y], axis=-1)
