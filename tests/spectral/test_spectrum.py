@@ -131,3 +131,26 @@ def test_linear_interpolation_is_linear(vals: list[float], k: float) -> None:
     grid = np.linspace(wl[0], wl[-1], 37)
     assert np.allclose((k * s).interpolate(grid).values, k * s.interpolate(grid).values)
     assert np.allclose(s.interpolate(wl).values, vals)
+
+
+def test_sprague() -> None:
+    """Sprague reproduces polynomials up to degree 4 exactly inside the data and its nodes."""
+    wl = np.arange(400.0, 501.0, 10.0)
+    poly = 1e-8 * (wl - 430) ** 3 * (wl - 480) + 0.5
+    s = Spectrum(wl, poly)
+    grid = np.arange(420.0, 481.0, 1.0)
+    want = 1e-8 * (grid - 430) ** 3 * (grid - 480) + 0.5
+    assert np.allclose(s.interpolate(grid, method="sprague").values, want, atol=1e-12)
+    assert np.allclose(s.interpolate(wl, method="sprague").values, poly, atol=1e-12)
+    with pytest.raises(InvalidInputError, match="uniformly spaced"):
+        Spectrum([400, 410, 430, 440, 450, 460], np.ones(6)).interpolate([405], method="sprague")
+
+
+def test_sprague_cross_check_colour() -> None:
+    colour = pytest.importorskip("colour")
+    from imageform.spectral import colorchecker_reflectances
+
+    r = colorchecker_reflectances()["blue sky"]
+    grid = np.arange(380.0, 731.0, 1.0)
+    ref = colour.SpragueInterpolator(r.wavelengths, r.values)(grid)
+    assert np.allclose(r.interpolate(grid, method="sprague").values, ref, atol=1e-12)

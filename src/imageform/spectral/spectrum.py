@@ -21,7 +21,7 @@ from imageform.errors import InvalidInputError
 __all__ = ["EXTRAPOLATION_METHODS", "INTERPOLATION_METHODS", "Spectrum"]
 
 #: Interpolation methods of :meth:`Spectrum.interpolate`.
-INTERPOLATION_METHODS = ("linear", "cubic", "pchip", "nearest")
+INTERPOLATION_METHODS = ("linear", "cubic", "pchip", "nearest", "sprague")
 #: What happens outside the sampled range: ``"constant"`` repeats the end values (CIE 015:2018
 #: §7.2.2 recommendation), ``"zero"``, or ``"error"``.
 EXTRAPOLATION_METHODS = ("constant", "zero", "error")
@@ -45,6 +45,47 @@ def _as_wavelengths(wl: npt.ArrayLike, min_size: int = 1) -> np.ndarray:
             f"{w[i]:g} nm followed by {w[i + 1]:g} nm at index {i}"
         )
     return w
+
+
+# CIE 167:2005 Table 2 / Westland, Ripamonti & Cheung (2012) §5: Sprague (1880) boundary
+# coefficients (÷ 209) that extend uniform data by two points at each end.
+_SPRAGUE_C = np.array(
+    [
+        [884, -1960, 3033, -2648, 1080, -180],
+        [508, -540, 488, -367, 144, -24],
+        [-24, 144, -367, 488, -540, 508],
+        [-180, 1080, -2648, 3033, -1960, 884],
+    ],
+    dtype=np.float64,
+)
+# Sprague's fifth-order polynomial coefficients (÷ 24) on p_{-2} .. p_{3}.
+_SPRAGUE_A = np.array(
+    [
+        [0, 0, 24, 0, 0, 0],
+        [2, -16, 0, 16, -2, 0],
+        [-1, 16, -30, 16, -1, 0],
+        [-9, 39, -70, 66, -33, 7],
+        [13, -64, 126, -124, 61, -12],
+        [-5, 25, -50, 50, -25, 5],
+    ],
+    dtype=np.float64,
+)
+
+
+def _sprague(x: np.ndarray, y: np.ndarray, xi: np.ndarray) -> np.ndarray:
+    """Sprague (1880) interpolation of uniformly spaced ``y`` (N >= 6) at ``xi`` (in range)."""
+    h = x[1] - x[0]
+    yy = y if y.ndim == 2 else y[:, None]
+    head = _SPRAGUE_C[:2] @ yy[:6] / 209.0
+    tail = _SPRAGUE_C[2:] @ yy[-6:] / 209.0
+    ext = np.concatenate([head, yy, tail])  # index j + 2 holds y_j
+    i = np.clip(np.floor((xi - x[0]) / h + 1e-12).astype(int), 0, len(x) - 2)
+    t = (xi - x[i]) / h
+    window = np.stack([ext[i + k] for k in range(6)], axis=1)  # p_{-2}..p_{3}: (M, 6, K)
+    coef = np.einsum("ak,mkc->mac", _SPRAGUE_A, window) / 24.0  # (M, 6, K)
+    powers = t[:, None] ** np.arange(6)[None, :]  # (M, 6)
+    out = np.einsum("ma,mac->mc", powers, coef)
+    return out if y.ndim == 2 else out[:, 0]
 
 
 @dataclass(frozen=True, eq=False)
@@ -181,7 +222,10 @@ class Spectrum:
 
         ``"linear"`` is piecewise linear; ``"cubic"`` a natural-free not-a-knot cubic spline
         (SciPy ``CubicSpline``); ``"pchip"`` shape-preserving (no overshoot: keeps a
-        reflectance inside [0, 1]); ``"nearest"`` nearest sample. Outside the sampled range:
+        reflectance inside [0, 1]); ``"nearest"`` nearest sample; ``"sprague"`` the
+        fifth-order Sprague (1880) polynomial CIE 167:2005 recommends for uniformly spaced
+        spectral data (>= 6 uniform samples; two points extended at each end with CIE 167's
+        coefficients; exact for polynomials up to degree 4). Outside the sampled range:
         ``extrapolate="constant"`` repeats the end values (CIE 015:2018 §7.2.2), ``"zero"``
         gives 0, ``"error"`` raises.
         """
@@ -203,6 +247,12 @@ class Spectrum:
                 if y.ndim == 1
                 else np.stack([np.interp(wc, x, y[:, k]) for k in range(y.shape[1])], axis=1)
             )
+        elif m == "sprague":
+            if self.interval is None or len(x) < 6:
+                raise InvalidInputError(
+                    "Sprague interpolation needs uniformly spaced data with >= 6 samples"
+                )
+            yy = _sprague(x, y, wc)
         elif m == "nearest":
             j = np.clip(np.searchsorted(x, wc), 1, len(x) - 1)
             j = np.where(np.abs(x[j - 1] - wc) <= np.abs(x[j] - wc), j - 1, j)
