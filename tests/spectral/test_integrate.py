@@ -82,6 +82,17 @@ def test_colorchecker_d65_cross_check_colour_science() -> None:
         assert de.max() < 0.5, (ours_m, de.max())
 
 
+def test_sprague_path_matches_colour_science_closely() -> None:
+    """Cross-check: with Sprague interpolation (as colour-science's "Integration" method does)
+    the CIE 015 path agrees with colour-science's sd_to_XYZ to 1e-5 in XYZ."""
+    colour = pytest.importorskip("colour")
+    cmf = colour.MSDS_CMFS["CIE 1931 2 Degree Standard Observer"]
+    sds = list(colour.SDS_COLOURCHECKERS["BabelColor Average"].values())
+    ref = np.array([colour.sd_to_XYZ(sd, cmf, colour.SDS_ILLUMINANTS["D65"]) / 100 for sd in sds])
+    ours = spectrum_to_xyz(colorchecker_reflectances(), "D65", interpolation="sprague")
+    assert np.max(np.abs(ours - ref)) < 1e-5
+
+
 def test_colorchecker_white_and_grey_under_d65() -> None:
     """The greys are neutral under D65 (a* and b* small) and L* falls along the scale."""
     r = colorchecker_reflectances()
