@@ -98,3 +98,12 @@ def test_xy_to_xyz_refuses_colours_outside_the_locus() -> None:
         xy_to_xyz([0.3, 0.3], -1.0)
     with pytest.raises(InvalidInputError, match="y > 0"):
         xy_to_xyz([0.3, 0.0], check_locus=False)
+
+
+def test_dtypes() -> None:
+    xy32 = np.array([[0.3127, 0.329]], dtype=np.float32)
+    assert xy_to_uv_prime(xy32).dtype == np.float32
+    assert uv_prime_to_xy(xy_to_uv_prime(xy32)).dtype == np.float32
+    assert xy_to_uv_prime(np.array([[1, 2]], dtype=np.int64)).dtype == np.float64
+    with pytest.raises(InvalidInputError, match="NaN"):
+        xy_to_uv_prime([np.nan, 0.3])

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from imageform.color import (
     gamut_area,
@@ -106,3 +108,14 @@ def test_gamut_map_bad_input() -> None:
         gamut_map([0.1, 0.2, 0.3], iterations=0)
     with pytest.raises(InvalidInputError, match="shape"):
         gamut_map([0.1, 0.2])
+
+
+@settings(max_examples=25, deadline=None)
+@given(st.lists(st.floats(-0.3, 1.3), min_size=3, max_size=3))
+def test_lch_mapping_is_idempotent(rgb2020: list[float]) -> None:
+    """Property: a mapped colour is in gamut, so mapping it again leaves it unchanged."""
+    xyz = linear_rgb_to_xyz(np.array(rgb2020), "rec2020")
+    once = gamut_map(xyz, "srgb")
+    assert in_gamut(once, kind="linear_rgb")
+    twice = gamut_map(linear_rgb_to_xyz(once, "srgb"), "srgb")
+    assert np.allclose(twice, once, atol=1e-9)
