@@ -7,7 +7,7 @@ exported once by ``tools/extract_spectral_tables.py``; nothing is downloaded at 
 
 from __future__ import annotations
 
-from functools import cache
+from functools import cache, lru_cache
 from importlib import resources
 from types import MappingProxyType
 
@@ -106,15 +106,23 @@ def table_source(key: str) -> str:
 
 
 def load_table(key: str, name: str = "") -> Spectrum:
-    """A shipped wavelength table as a :class:`Spectrum` (one curve or K labelled curves)."""
+    """A shipped wavelength table as a :class:`Spectrum` (one curve or K labelled curves).
+
+    Spectra are immutable (read-only arrays), so one cached object per table is shared.
+    """
     k = key if key in TABLES else check_option(key, TABLES, "spectral table")
+    return _load_table(k, name)
+
+
+@lru_cache(maxsize=64)
+def _load_table(k: str, name: str) -> Spectrum:
     _, header, arr, _ = _parse(k)
     if header[0] != "wavelength_nm":
-        raise InvalidInputError(f"table {key!r} is not a wavelength table")
+        raise InvalidInputError(f"table {k!r} is not a wavelength table")
     labels = header[1:]
     if len(labels) == 1:
         return Spectrum(arr[:, 0], arr[:, 1], name=name or labels[0])
-    return Spectrum(arr[:, 0], arr[:, 1:], name=name or key, labels=labels)
+    return Spectrum(arr[:, 0], arr[:, 1:], name=name or k, labels=labels)
 
 
 def cmfs(observer: int | str = 2) -> Spectrum:

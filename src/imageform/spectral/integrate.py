@@ -126,14 +126,24 @@ def integration_weights(
         step = sample.interval
         first = sample.wavelengths[0]
         lo = first + step * np.ceil((lo - first) / step - 1e-9)
-    grid = _grid(float(lo), float(hi), float(step))
+    return _weights(functions, illuminant, float(lo), float(hi), float(step))
+
+
+@lru_cache(maxsize=128)
+def _weights(
+    functions: Spectrum, illuminant: Spectrum | None, lo: float, hi: float, step: float
+) -> tuple[np.ndarray, np.ndarray]:
+    # cached per (immutable) Spectrum object: the shipped tables are shared objects
+    grid = _grid(lo, hi, step)
     f = functions.interpolate(grid, extrapolate="error").values
     s = (
         np.ones_like(grid)
         if illuminant is None
         else illuminant.interpolate(grid, extrapolate="error").values
     )
-    return grid, f * (s * step)[:, None]
+    w = f * (s * step)[:, None]
+    w.setflags(write=False)
+    return grid, w
 
 
 def _integrate(

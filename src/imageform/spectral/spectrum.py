@@ -73,19 +73,23 @@ _SPRAGUE_A = np.array(
 
 
 def _sprague(x: np.ndarray, y: np.ndarray, xi: np.ndarray) -> np.ndarray:
-    """Sprague (1880) interpolation of uniformly spaced ``y`` (N >= 6) at ``xi`` (in range)."""
+    """Sprague (1880) interpolation of uniformly spaced ``y`` (N >= 6) at ``xi`` (in range).
+
+    Linear in ``y``: built as the matrix ``S = L E`` (E extends the data by two points at each
+    end, L holds the quintic's weights on p_{-2} .. p_{3}), then ``S @ y``.
+    """
+    n, m = len(x), len(xi)
     h = x[1] - x[0]
-    yy = y if y.ndim == 2 else y[:, None]
-    head = _SPRAGUE_C[:2] @ yy[:6] / 209.0
-    tail = _SPRAGUE_C[2:] @ yy[-6:] / 209.0
-    ext = np.concatenate([head, yy, tail])  # index j + 2 holds y_j
-    i = np.clip(np.floor((xi - x[0]) / h + 1e-12).astype(int), 0, len(x) - 2)
+    i = np.clip(np.floor((xi - x[0]) / h + 1e-12).astype(int), 0, n - 2)
     t = (xi - x[i]) / h
-    window = np.stack([ext[i + k] for k in range(6)], axis=1)  # p_{-2}..p_{3}: (M, 6, K)
-    coef = np.einsum("ak,mkc->mac", _SPRAGUE_A, window) / 24.0  # (M, 6, K)
-    powers = t[:, None] ** np.arange(6)[None, :]  # (M, 6)
-    out = np.einsum("ma,mac->mc", powers, coef)
-    return out if y.ndim == 2 else out[:, 0]
+    w = (t[:, None] ** np.arange(6)[None, :]) @ _SPRAGUE_A / 24.0  # (M, 6)
+    ext = np.zeros((n + 4, n))
+    ext[:2, :6] = _SPRAGUE_C[:2] / 209.0
+    ext[2 : n + 2] = np.eye(n)
+    ext[n + 2 :, n - 6 :] = _SPRAGUE_C[2:] / 209.0
+    lmat = np.zeros((m, n + 4))
+    lmat[np.arange(m)[:, None], i[:, None] + np.arange(6)[None, :]] = w
+    return np.asarray((lmat @ ext) @ y)
 
 
 @dataclass(frozen=True, eq=False)
