@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 import os
+from collections.abc import Iterator
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -38,3 +40,14 @@ BACKENDS = _backends()
 def xp_name(request: pytest.FixtureRequest) -> str:
     """Name of an array library under test: numpy, array_api_strict, torch (if installed)."""
     return str(request.param)
+
+
+_NUMPY_PRINT_OPTIONS = np.get_printoptions()
+
+
+@pytest.fixture(autouse=True)
+def _restore_numpy_print_options() -> Iterator[None]:
+    """colour-science sets ``np.set_printoptions(legacy="1.13")`` on import (colour/__init__.py),
+    which breaks every later doctest's array repr; restore the options after each test."""
+    yield
+    np.set_printoptions(**_NUMPY_PRINT_OPTIONS)

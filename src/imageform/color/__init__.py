@@ -1,9 +1,37 @@
-"""imageform.color: colour spaces, the conversion graph, transfer functions, white points.
+"""imageform.color: colour spaces and the conversion graph, transfer functions, white points,
+colour difference, chromatic adaptation, white balance, CCT, chroma subsampling, colour vision
+(metamerism, colour-vision deficiency, palettes), chromaticity and gamut.
 
 Conventions (DESIGN.md): channels-last ``(..., 3)`` arrays; encoded RGB in [0, 1]; XYZ with
 Y = 1 at the reference white; L* in [0, 100]; hue in degrees [0, 360).
 """
 
+from imageform.color.adaptation import (
+    CAT_MATRICES,
+    chromatic_adaptation,
+    chromatic_adaptation_matrix,
+)
+from imageform.color.cct import (
+    CCT_METHODS,
+    ROBERTSON_1968,
+    cct_to_xy,
+    uv1960_to_xy,
+    xy_to_cct,
+    xy_to_uv1960,
+)
+from imageform.color.chromaticity import (
+    CHROMATICITY_COORDS,
+    check_in_locus,
+    in_locus,
+    polygon_area,
+    spectral_locus,
+    uv_prime_to_xy,
+    visible_area,
+    xy_to_uv_prime,
+    xy_to_xyz,
+    xyz_to_uv_prime,
+    xyz_to_xy,
+)
 from imageform.color.cielab import (
     lab_to_lch,
     lab_to_xyz,
@@ -22,8 +50,45 @@ from imageform.color.cmyk import (
     srgb_to_cmy,
     srgb_to_cmyk,
 )
-from imageform.color.convert import EDGES, SPACES, convert, path
-from imageform.color.gray import GRAY_METHODS, gray_to_srgb, linear_srgb_to_luminance, srgb_to_gray
+from imageform.color.convert import (
+    EDGES,
+    SPACES,
+    convert,
+    path,
+)
+from imageform.color.cvd import (
+    CVD_DEFICIENCIES,
+    CVD_METHODS,
+    brettel_planes,
+    cvd_matrix,
+    machado_matrix,
+    simulate_cvd,
+)
+from imageform.color.delta_e import (
+    DELTA_E_METHODS,
+    delta_e,
+    delta_e_cie76,
+    delta_e_cie94,
+    delta_e_ciede2000,
+    delta_e_cmc,
+    describe_delta_e,
+)
+from imageform.color.gamut import (
+    GAMUT_MAPPING_METHODS,
+    GamutFigures,
+    gamut_area,
+    gamut_coverage,
+    gamut_figures,
+    gamut_map,
+    gamut_triangle,
+    in_gamut,
+)
+from imageform.color.gray import (
+    GRAY_METHODS,
+    gray_to_srgb,
+    linear_srgb_to_luminance,
+    srgb_to_gray,
+)
 from imageform.color.hsv import (
     hsi_to_srgb,
     hsl_to_srgb,
@@ -42,12 +107,29 @@ from imageform.color.linear_light import (
     linear_light_error,
     mean_linear_light,
 )
+from imageform.color.metamerism import (
+    are_metamers,
+    match_with_primaries,
+    metamer,
+    metamerism_index,
+    tristimulus,
+)
 from imageform.color.opencv import (
     OPENCV_CONVENTIONS,
     bgr_to_srgb,
     from_opencv,
     srgb_to_bgr,
     to_opencv,
+)
+from imageform.color.palettes import (
+    OKABE_ITO,
+    PALETTES,
+    RED_GREEN,
+    PaletteCheck,
+    palette,
+    palette_check,
+    parse_colors,
+    viridis,
 )
 from imageform.color.rgb_spaces import (
     RGB_SPACES,
@@ -58,6 +140,14 @@ from imageform.color.rgb_spaces import (
     xyz_to_linear_rgb,
     xyz_to_linear_srgb,
     xyz_to_rgb_matrix,
+)
+from imageform.color.subsampling import (
+    CHROMA_SCHEMES,
+    CHROMA_SITINGS,
+    chroma_subsample,
+    chroma_upsample,
+    subsample_round_trip,
+    subsampling_delta_e,
 )
 from imageform.color.transfer import (
     ADOBE_RGB_GAMMA,
@@ -77,6 +167,12 @@ from imageform.color.transfer import (
     rec2020_to_linear,
     srgb_to_linear,
 )
+from imageform.color.white_balance import (
+    WHITE_BALANCE_METHODS,
+    WhiteBalanceResult,
+    estimate_illuminant,
+    white_balance,
+)
 from imageform.color.whitepoints import (
     OBSERVERS,
     WHITEPOINTS_XY,
@@ -95,29 +191,67 @@ from imageform.color.ycbcr import (
 
 __all__ = [
     "ADOBE_RGB_GAMMA",
+    "CAT_MATRICES",
+    "CCT_METHODS",
+    "CHROMATICITY_COORDS",
+    "CHROMA_SCHEMES",
+    "CHROMA_SITINGS",
+    "CVD_DEFICIENCIES",
+    "CVD_METHODS",
+    "DELTA_E_METHODS",
     "EDGES",
+    "GAMUT_MAPPING_METHODS",
     "GRAY_METHODS",
     "OBSERVERS",
+    "OKABE_ITO",
     "OPENCV_CONVENTIONS",
+    "PALETTES",
+    "RED_GREEN",
     "RGB_SPACES",
+    "ROBERTSON_1968",
     "SPACES",
     "TRANSFER_FUNCTIONS",
     "WHITEPOINTS_XY",
+    "WHITE_BALANCE_METHODS",
     "YCBCR_STANDARDS",
+    "GamutFigures",
     "LinearLightComparison",
+    "PaletteCheck",
     "RGBSpace",
+    "WhiteBalanceResult",
     "adobe_rgb_to_linear",
+    "are_metamers",
     "bgr_to_srgb",
+    "brettel_planes",
+    "cct_to_xy",
+    "check_in_locus",
+    "chroma_subsample",
+    "chroma_upsample",
+    "chromatic_adaptation",
+    "chromatic_adaptation_matrix",
     "cmy_to_cmyk",
     "cmy_to_srgb",
     "cmyk_to_cmy",
     "cmyk_to_srgb",
     "convert",
+    "cvd_matrix",
     "decode",
+    "delta_e",
+    "delta_e_cie76",
+    "delta_e_cie94",
+    "delta_e_ciede2000",
+    "delta_e_cmc",
+    "describe_delta_e",
     "downsample",
     "encode",
+    "estimate_illuminant",
     "from_opencv",
     "gamma_to_linear",
+    "gamut_area",
+    "gamut_coverage",
+    "gamut_figures",
+    "gamut_map",
+    "gamut_triangle",
     "gray_to_srgb",
     "hsi_to_srgb",
     "hsl_to_srgb",
@@ -126,6 +260,8 @@ __all__ = [
     "hue_distance",
     "hue_in_range",
     "hue_undefined_mask",
+    "in_gamut",
+    "in_locus",
     "lab_to_lch",
     "lab_to_xyz",
     "lch_to_lab",
@@ -140,14 +276,24 @@ __all__ = [
     "linear_to_rec2020",
     "linear_to_srgb",
     "luv_to_xyz",
+    "machado_matrix",
+    "match_with_primaries",
     "mean_linear_light",
+    "metamer",
+    "metamerism_index",
+    "palette",
+    "palette_check",
+    "parse_colors",
     "path",
+    "polygon_area",
     "prophoto_to_linear",
     "rec709_to_linear",
     "rec2020_to_linear",
     "resolve_white",
     "rgb_to_xyz_matrix",
     "rgb_to_ycbcr",
+    "simulate_cvd",
+    "spectral_locus",
     "srgb_to_bgr",
     "srgb_to_cmy",
     "srgb_to_cmyk",
@@ -157,9 +303,21 @@ __all__ = [
     "srgb_to_hsv",
     "srgb_to_linear",
     "srgb_to_ycbcr",
+    "subsample_round_trip",
+    "subsampling_delta_e",
     "to_opencv",
+    "tristimulus",
+    "uv1960_to_xy",
+    "uv_prime_to_xy",
+    "viridis",
+    "visible_area",
+    "white_balance",
     "whitepoint_xy",
     "whitepoint_xyz",
+    "xy_to_cct",
+    "xy_to_uv1960",
+    "xy_to_uv_prime",
+    "xy_to_xyz",
     "xy_to_xyz_white",
     "xyy_to_xyz",
     "xyz_to_lab",
@@ -167,74 +325,9 @@ __all__ = [
     "xyz_to_linear_srgb",
     "xyz_to_luv",
     "xyz_to_rgb_matrix",
+    "xyz_to_uv_prime",
+    "xyz_to_xy",
     "xyz_to_xyy",
     "ycbcr_to_rgb",
     "ycbcr_to_srgb",
-]
-
-# ---- names from the colour-difference / adaptation / white-balance work (3b) go below ----
-from imageform.color.adaptation import (
-    CAT_MATRICES,
-    chromatic_adaptation,
-    chromatic_adaptation_matrix,
-)
-from imageform.color.cct import (
-    CCT_METHODS,
-    ROBERTSON_1968,
-    cct_to_xy,
-    uv1960_to_xy,
-    xy_to_cct,
-    xy_to_uv1960,
-)
-from imageform.color.delta_e import (
-    DELTA_E_METHODS,
-    delta_e,
-    delta_e_cie76,
-    delta_e_cie94,
-    delta_e_ciede2000,
-    delta_e_cmc,
-    describe_delta_e,
-)
-from imageform.color.subsampling import (
-    CHROMA_SCHEMES,
-    CHROMA_SITINGS,
-    chroma_subsample,
-    chroma_upsample,
-    subsample_round_trip,
-    subsampling_delta_e,
-)
-from imageform.color.white_balance import (
-    WHITE_BALANCE_METHODS,
-    WhiteBalanceResult,
-    estimate_illuminant,
-    white_balance,
-)
-
-__all__ += [
-    "CAT_MATRICES",
-    "CCT_METHODS",
-    "CHROMA_SCHEMES",
-    "CHROMA_SITINGS",
-    "DELTA_E_METHODS",
-    "ROBERTSON_1968",
-    "WHITE_BALANCE_METHODS",
-    "WhiteBalanceResult",
-    "cct_to_xy",
-    "chroma_subsample",
-    "chroma_upsample",
-    "chromatic_adaptation",
-    "chromatic_adaptation_matrix",
-    "delta_e",
-    "delta_e_cie76",
-    "delta_e_cie94",
-    "delta_e_ciede2000",
-    "delta_e_cmc",
-    "describe_delta_e",
-    "estimate_illuminant",
-    "subsample_round_trip",
-    "subsampling_delta_e",
-    "uv1960_to_xy",
-    "white_balance",
-    "xy_to_cct",
-    "xy_to_uv1960",
 ]

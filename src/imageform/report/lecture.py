@@ -57,6 +57,7 @@ _MODULES = (
     "imageform.report.lecture_optics",
     "imageform.report.lecture_color",
     "imageform.report.lecture_color_measure",
+    "imageform.report.lecture_vision",
 )
 
 

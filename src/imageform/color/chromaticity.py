@@ -1,0 +1,219 @@
+r"""Chromaticity coordinates xy and u'v', the spectral locus and the visible region.
+
+.. math:: x = \frac{X}{X+Y+Z},\ y = \frac{Y}{X+Y+Z};\qquad
+          u' = \frac{4x}{-2x + 12y + 3},\ v' = \frac{9y}{-2x + 12y + 3}
+
+(CIE 015:2018 eqs. 7.4 and 8.1-8.2). The spectral locus is the chromaticity of monochromatic
+stimuli from the colour-matching functions; closed by the purple line it bounds the region of
+all physically realisable chromaticities.
+"""
+
+from __future__ import annotations
+
+from functools import lru_cache
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+
+from imageform._backend import namespace
+from imageform._validate import as_points, check_option
+from imageform.errors import InvalidInputError
+
+__all__ = [
+    "CHROMATICITY_COORDS",
+    "check_in_locus",
+    "in_locus",
+    "polygon_area",
+    "spectral_locus",
+    "uv_prime_to_xy",
+    "visible_area",
+    "xy_to_uv_prime",
+    "xy_to_xyz",
+    "xyz_to_uv_prime",
+    "xyz_to_xy",
+]
+
+#: Chromaticity diagrams: CIE 1931 ``"xy"`` and CIE 1976 UCS ``"uv"`` (u', v').
+CHROMATICITY_COORDS = ("xy", "uv")
+#: Default locus range: 380-780 nm (beyond, the 1 nm CMF chromaticities wander by < 1e-3 in
+#: the red corner and the violet end hardly moves; CIE 015:2018 §7.2 integrates 360-830 nm).
+LOCUS_RANGE = (380.0, 780.0)
+
+
+def xyz_to_xy(xyz: object, white: Any = "D65") -> Any:
+    """Chromaticity ``(x, y)`` of XYZ, shape (..., 3) -> (..., 2).
+
+    Black (X + Y + Z = 0) has no chromaticity; it gets the white's, as
+    :func:`imageform.color.xyz_to_xyy` does (CIE 015:2018 eq. 7.4).
+
+    >>> [round(float(v), 4) for v in xyz_to_xy([0.95047, 1.0, 1.08883])]
+    [0.3127, 0.329]
+    """
+    from imageform.color.cielab import xyz_to_xyy
+
+    return xyz_to_xyy(xyz, white)[..., :2]
+
+
+def xy_to_uv_prime(xy: object) -> Any:
+    r"""CIE 1976 UCS :math:`(u', v')` from :math:`(x, y)`, shape (..., 2).
+
+    .. math:: u' = \frac{4x}{-2x + 12y + 3},\quad v' = \frac{9y}{-2x + 12y + 3}
+
+    Source: CIE 015:2018 eqs. 8.1-8.2.
+
+    >>> [round(float(v), 4) for v in xy_to_uv_prime([0.3127, 0.3290])]
+    [0.1978, 0.4683]
+    """
+    p = as_points(xy, "xy", 2)
+    xp = namespace(p)
+    x, y = p[..., 0], p[..., 1]
+    d = -2.0 * x + 12.0 * y + 3.0
+    return xp.stack([4.0 * x / d, 9.0 * y / d], axis=-1)
+
+
+def uv_prime_to_xy(uv: object) -> Any:
+    r"""Inverse of :func:`xy_to_uv_prime`: :math:`x = 9u'/(6u' - 16v' + 12)`,
+    :math:`y = 4v'/(6u' - 16v' + 12)` (CIE 015:2018 eq. 8.3).
+
+    >>> [round(float(v), 4) for v in uv_prime_to_xy([0.19783, 0.46832])]
+    [0.3127, 0.329]
+    """
+    p = as_points(uv, "u'v'", 2)
+    xp = namespace(p)
+    u, v = p[..., 0], p[..., 1]
+    d = 6.0 * u - 16.0 * v + 12.0
+    return xp.stack([9.0 * u / d, 4.0 * v / d], axis=-1)
+
+
+def xyz_to_uv_prime(xyz: object, white: Any = "D65") -> Any:
+    """:math:`(u', v')` of XYZ, shape (..., 3) -> (..., 2) (black gets the white's).
+
+    >>> [round(float(v), 4) for v in xyz_to_uv_prime([0.95047, 1.0, 1.08883])]
+    [0.1978, 0.4683]
+    """
+    return xy_to_uv_prime(xyz_to_xy(xyz, white))
+
+
+@lru_cache(maxsize=16)
+def _locus(observer: str, coords: str, lo: float, hi: float) -> tuple[np.ndarray, np.ndarray]:
+    from imageform.spectral.data import cmfs
+
+    c = cmfs(int(observer)).trim(lo, hi)
+    xyz = c.values
+    xy = xyz[:, :2] / xyz.sum(axis=1, keepdims=True)
+    pts = xy if coords == "xy" else np.asarray(xy_to_uv_prime(xy))
+    wl, pts = c.wavelengths.copy(), np.asarray(pts, dtype=np.float64)
+    wl.setflags(write=False)
+    pts.setflags(write=False)
+    return wl, pts
+
+
+def spectral_locus(
+    observer: int = 2,
+    coords: str = "xy",
+    wavelength_range: tuple[float, float] = LOCUS_RANGE,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Wavelengths (N,) and chromaticities (N, 2) of the spectral locus at 1 nm.
+
+    From the CIE colour-matching functions (CIE 015:2018 Tables 4-5):
+    :math:`x(\\lambda) = \\bar x/(\\bar x + \\bar y + \\bar z)`.
+
+    >>> wl, xy = spectral_locus()
+    >>> [round(float(v), 4) for v in xy[wl == 520][0]]
+    [0.0743, 0.8338]
+    """
+    c = check_option(coords, CHROMATICITY_COORDS, "chromaticity diagram")
+    o = check_option(str(observer), ("2", "10"), "observer")
+    lo, hi = (float(v) for v in wavelength_range)
+    if not lo < hi:
+        raise InvalidInputError(f"expected a wavelength range lo < hi, got {wavelength_range}")
+    return _locus(o, c, lo, hi)
+
+
+def polygon_area(vertices: npt.ArrayLike) -> float:
+    r"""Area of a simple polygon by the shoelace formula,
+    :math:`A = \tfrac12 |\sum_i (x_i y_{i+1} - x_{i+1} y_i)|`.
+
+    >>> polygon_area([[0, 0], [1, 0], [0, 1]])
+    0.5
+    """
+    v = np.asarray(vertices, dtype=np.float64)
+    if v.ndim != 2 or v.shape[1] != 2 or v.shape[0] < 3:
+        raise InvalidInputError(f"expected polygon vertices of shape (N >= 3, 2), got {v.shape}")
+    x, y = v[:, 0], v[:, 1]
+    return float(0.5 * abs(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y)))
+
+
+def visible_area(coords: str = "xy", observer: int = 2) -> float:
+    """Area of the region bounded by the spectral locus and the purple line.
+
+    >>> round(visible_area("xy"), 4)
+    0.3342
+    """
+    return polygon_area(spectral_locus(observer, coords)[1])
+
+
+def _points_in_polygon(pts: np.ndarray, poly: np.ndarray) -> np.ndarray:
+    """Even-odd ray casting, vectorised over points (boundary counts as inside up to 1e-12)."""
+    x, y = pts[..., 0][..., None], pts[..., 1][..., None]
+    x1, y1 = poly[:, 0], poly[:, 1]
+    x2, y2 = np.roll(x1, -1), np.roll(y1, -1)
+    crosses = (y1 > y) != (y2 > y)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        xint = x1 + (y - y1) * (x2 - x1) / (y2 - y1)
+    inside = np.count_nonzero(crosses & (x < xint), axis=-1) % 2 == 1
+    return np.asarray(inside)
+
+
+def in_locus(points: object, coords: str = "xy", *, observer: int = 2) -> np.ndarray:
+    """True where chromaticities lie inside the spectral locus (physically realisable).
+
+    Parameters
+    ----------
+    points : array_like, shape (..., 2)
+        xy or u'v' chromaticities.
+
+    Returns
+    -------
+    ndarray of bool, shape (...)
+
+    >>> in_locus([[0.3127, 0.3290], [0.7, 0.7]]).tolist()
+    [True, False]
+    """
+    p = np.asarray(as_points(np.asarray(points, dtype=np.float64), "chromaticities", 2))
+    return _points_in_polygon(p, spectral_locus(observer, coords)[1])
+
+
+def check_in_locus(points: object, coords: str = "xy", *, observer: int = 2) -> np.ndarray:
+    """``points`` as an array, raising :class:`InvalidInputError` if any lies outside the locus."""
+    p = np.asarray(as_points(np.asarray(points, dtype=np.float64), "chromaticities", 2))
+    ok = in_locus(p, coords, observer=observer)
+    if not np.all(ok):
+        bad = p[~ok][0]
+        name = "(x, y)" if coords == "xy" else "(u', v')"
+        raise InvalidInputError(
+            f"chromaticity {name} = ({bad[0]:.4g}, {bad[1]:.4g}) lies outside the spectral "
+            f"locus ({int(np.count_nonzero(~ok))} of {ok.size} points): no real colour has it"
+        )
+    return p
+
+
+def xy_to_xyz(
+    xy: object, Y: float = 1.0, *, check_locus: bool = True, observer: int = 2
+) -> np.ndarray:
+    r"""XYZ of a chromaticity at luminance ``Y``: :math:`X = xY/y,\ Z = (1 - x - y)Y/y`.
+
+    With ``check_locus`` (default) a chromaticity outside the spectral locus raises
+    :class:`InvalidInputError`: no real colour has it (CIE 015:2018 §7.3).
+
+    >>> xy_to_xyz([0.31271, 0.32902]).round(5).tolist()
+    [0.95043, 1.0, 1.0889]
+    """
+    p = check_in_locus(xy, observer=observer) if check_locus else np.asarray(xy, dtype=float)
+    if not (np.isfinite(Y) and Y >= 0):
+        raise InvalidInputError(f"expected Y >= 0, got {Y!r}")
+    if np.any(p[..., 1] <= 0):
+        raise InvalidInputError("expected y > 0 (y = 0 has no finite XYZ)")
+    x, y = p[..., 0], p[..., 1]
+    return np.stack([x * Y / y, np.full_like(x, Y), (1.0 - x - y) * Y / y], axis=-1)

@@ -1,0 +1,161 @@
+"""The chromaticity diagram: horseshoe in locus colours, gamut triangles, Planckian locus.
+
+matplotlib is imported inside :func:`plot_chromaticity_diagram` (the optional ``plot`` extra:
+``pip install imageform[plot]``).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from imageform._validate import check_option
+from imageform.errors import InvalidInputError
+
+__all__ = ["CCT_TICKS", "planckian_locus", "plot_chromaticity_diagram"]
+
+#: Temperatures (K) marked on the Planckian locus.
+CCT_TICKS = (1500.0, 2000.0, 2856.0, 4000.0, 5000.0, 6500.0, 10000.0)
+
+
+def planckian_locus(
+    temperatures: Sequence[float] | np.ndarray, coords: str = "xy", *, observer: int = 2
+) -> np.ndarray:
+    """Chromaticities (N, 2) of black bodies, integrated from Planck's law (CIE 015:2018 eq. 4.1)
+    with the CIE colour-matching functions.
+
+    >>> [round(float(v), 4) for v in planckian_locus([2856.0])[0]]
+    [0.4475, 0.4074]
+    """
+    from imageform.color.chromaticity import xy_to_uv_prime
+    from imageform.spectral.illuminants import blackbody_spectrum
+    from imageform.spectral.integrate import spectrum_to_xyz
+
+    c = check_option(coords, ("xy", "uv"), "chromaticity diagram")
+    out = []
+    for t in np.asarray(temperatures, dtype=np.float64).ravel():
+        xyz = spectrum_to_xyz(
+            blackbody_spectrum(float(t), np.arange(360.0, 831.0)), None, observer=observer
+        )
+        out.append(xyz[:2] / xyz.sum())
+    xy = np.array(out)
+    return xy if c == "xy" else np.asarray(xy_to_uv_prime(xy))
+
+
+def _horseshoe_image(coords: str, n: int) -> tuple[np.ndarray, tuple[float, float, float, float]]:
+    """RGBA image of the visible region, each point in its (brightest in-gamut) sRGB colour."""
+    from imageform.color.chromaticity import in_locus, uv_prime_to_xy
+    from imageform.color.rgb_spaces import xyz_to_rgb_matrix
+    from imageform.color.transfer import linear_to_srgb
+
+    ext = (0.0, 0.8, 0.0, 0.9) if coords == "xy" else (0.0, 0.65, 0.0, 0.65)
+    xs = np.linspace(ext[0], ext[1], n)
+    ys = np.linspace(ext[2], ext[3], n)
+    gx, gy = np.meshgrid(xs, ys)
+    pts = np.stack([gx, gy], axis=-1)
+    inside = in_locus(pts, coords)
+    xy = pts if coords == "xy" else np.asarray(uv_prime_to_xy(pts))
+    y = np.where(xy[..., 1] > 1e-6, xy[..., 1], 1e-6)
+    xyz = np.stack([xy[..., 0] / y, np.ones_like(y), (1 - xy[..., 0] - xy[..., 1]) / y], -1)
+    rgb = xyz @ xyz_to_rgb_matrix("srgb").T
+    # Display only: out-of-gamut chromaticities are shown desaturated towards white and
+    # scaled to the brightest displayable value (a picture cannot show them).
+    rgb = rgb - np.minimum(rgb.min(axis=-1, keepdims=True), 0.0)
+    rgb = rgb / np.max(rgb, axis=-1, keepdims=True)
+    img = np.concatenate([np.asarray(linear_to_srgb(rgb)), inside[..., None] * 1.0], axis=-1)
+    return np.clip(img, 0.0, 1.0), ext
+
+
+def plot_chromaticity_diagram(
+    spaces: Sequence[str] = ("srgb", "display_p3", "rec2020"),
+    *,
+    coords: str = "xy",
+    points: Any = None,
+    point_labels: Sequence[str] | None = None,
+    planckian: bool = True,
+    observer: int = 2,
+    resolution: int = 300,
+    ax: Any = None,
+    path: str | Path | None = None,
+) -> Any:
+    """Draw the CIE 1931 xy (or 1976 u'v') chromaticity diagram; returns the Figure.
+
+    The spectral locus (CIE 015:2018 CMFs) is filled with approximate colours (display only:
+    outside sRGB they are desaturated), wavelengths are marked every 20 nm from 460 to 620 nm,
+    each RGB space's gamut triangle is drawn, the Planckian locus carries CCT ticks, and
+    user ``points`` (shape (n, 2) in the same coordinates) are plotted.
+
+    Parameters
+    ----------
+    spaces : names of RGB spaces (``imageform.color.RGB_SPACES``).
+    coords : ``"xy"`` or ``"uv"``.
+    points : array_like (n, 2), optional.
+    path : where to save a PNG/SVG/PDF (optional).
+
+    Examples
+    --------
+    >>> import matplotlib
+    >>> matplotlib.use("Agg")
+    >>> fig = plot_chromaticity_diagram(["srgb"], points=[[0.3127, 0.3290]])
+    >>> len(fig.axes)
+    1
+    """
+    try:
+        import matplotlib.pyplot as plt
+    except ImportError as exc:  # pragma: no cover - the plot extra is installed in tests
+        raise InvalidInputError("plotting needs matplotlib: pip install 'imageform[plot]'") from exc
+    from imageform.color.chromaticity import spectral_locus
+    from imageform.color.gamut import gamut_triangle
+    from imageform.color.rgb_spaces import _get_space
+
+    c = check_option(coords, ("xy", "uv"), "chromaticity diagram")
+    space_objs = [_get_space(s) for s in spaces]
+    pts = None
+    if points is not None:
+        pts = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+        if not np.all(np.isfinite(pts)):
+            raise InvalidInputError("points contain NaN or inf")
+    if ax is None:
+        fig, ax = plt.subplots(figsize=(6.5, 6.5))
+    else:
+        fig = ax.figure
+    img, ext = _horseshoe_image(c, int(resolution))
+    ax.imshow(img, origin="lower", extent=ext, interpolation="bilinear")
+    wl, locus = spectral_locus(observer, c)
+    closed = np.vstack([locus, locus[:1]])
+    ax.plot(closed[:, 0], closed[:, 1], color="k", lw=1.0)
+    for w in range(460, 621, 20):
+        p = locus[np.argmin(np.abs(wl - w))]
+        ax.annotate(f"{w}", p, textcoords="offset points", xytext=(4, 2), fontsize=7)
+    styles = ["-", "--", "-.", ":"]
+    for i, sp in enumerate(space_objs):
+        tri = gamut_triangle(sp, c)
+        t = np.vstack([tri, tri[:1]])
+        ax.plot(t[:, 0], t[:, 1], styles[i % 4], color="k", lw=1.2, label=sp.name)
+    if planckian:
+        temps = np.geomspace(1000.0, 25000.0, 60)
+        pl = planckian_locus(temps, c, observer=observer)
+        ax.plot(pl[:, 0], pl[:, 1], color="0.25", lw=1.0, label="Planckian locus")
+        ticks = planckian_locus(CCT_TICKS, c, observer=observer)
+        ax.plot(ticks[:, 0], ticks[:, 1], "o", ms=2.5, color="0.25")
+        for t_k, p in zip(CCT_TICKS, ticks, strict=True):
+            ax.annotate(f"{t_k:g} K", p, textcoords="offset points", xytext=(3, -9), fontsize=6)
+    if pts is not None:
+        ax.plot(pts[:, 0], pts[:, 1], "o", mfc="w", mec="k", ms=5, label="points")
+        for lab, p in zip(point_labels or [], pts, strict=False):
+            ax.annotate(lab, p, textcoords="offset points", xytext=(4, 4), fontsize=7)
+    ax.set_xlabel("x" if c == "xy" else "u'")
+    ax.set_ylabel("y" if c == "xy" else "v'")
+    ax.set_xlim(ext[0], ext[1])
+    ax.set_ylim(ext[2], ext[3])
+    ax.set_aspect("equal")
+    ax.legend(loc="upper right", fontsize=7)
+    ax.set_title(
+        f"CIE {'1931 xy' if c == 'xy' else '1976 u′v′'} chromaticity diagram ({observer}° observer)"
+    )
+    if path is not None:
+        fig.savefig(path, dpi=150, bbox_inches="tight")
+    return fig

@@ -1,0 +1,192 @@
+r"""Illuminants: Planck's law for any temperature, the CIE daylight series, the CIE tables.
+
+Planck's law (CIE 015:2018 eq. 4.1, with the radiation constants of CODATA as CIE 015 writes
+them, :math:`c_1 = 3.741771\times10^{-16}` W m², :math:`c_2 = 1.4388\times10^{-2}` m K):
+
+.. math:: S(\lambda, T) = \frac{c_1}{\lambda^5}\,\frac{1}{e^{c_2/(\lambda T)} - 1}
+
+Daylight (CIE 015:2018 §4.1.2, eqs. 4.3-4.5): :math:`S_D = S_0 + M_1 S_1 + M_2 S_2` with
+
+.. math:: M_1 = \frac{-1.3515 - 1.7703 x_D + 5.9114 y_D}{0.0241 + 0.2562 x_D - 0.7341 y_D},\quad
+          M_2 = \frac{0.0300 - 31.4424 x_D + 30.0717 y_D}{0.0241 + 0.2562 x_D - 0.7341 y_D}
+
+and :math:`(x_D, y_D)` the daylight locus at the CCT
+(:func:`imageform.color.cct.cct_to_xy` with ``method="daylight"``).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import numpy.typing as npt
+
+from imageform._validate import check_positive
+from imageform.errors import InvalidInputError
+from imageform.spectral.data import (
+    ILLUMINANT_TABLES,
+    LED_SPECTRA,
+    illuminant_table,
+    led_spectrum,
+    load_table,
+)
+from imageform.spectral.spectrum import Spectrum
+
+__all__ = [
+    "C1",
+    "C2",
+    "blackbody_spectrum",
+    "daylight_spectrum",
+    "illuminant",
+    "planck",
+    "planckian_cct",
+]
+
+C1 = 3.741771e-16  # W m², first radiation constant, CIE 015:2018 eq. 4.1 note
+C2 = 1.4388e-2  # m K, second radiation constant as CIE 015:2018 uses it (ITS-90)
+
+_DEFAULT_GRID = np.arange(300.0, 831.0, 1.0)
+
+
+def planck(wavelength_nm: npt.ArrayLike, temperature: float) -> np.ndarray:
+    r"""Spectral radiant exitance of a black body, W m⁻² m⁻¹, at wavelengths in nm.
+
+    .. math:: M_e(\lambda, T) = \frac{c_1}{\lambda^5}\,\frac{1}{e^{c_2/(\lambda T)} - 1}
+
+    Source: CIE 015:2018 eq. 4.1 (Planck, 1901), constants as above.
+
+    Parameters
+    ----------
+    wavelength_nm : array_like, shape (...)
+        Wavelengths in nm (> 0).
+    temperature : float
+        Temperature in kelvin (> 0).
+
+    Returns
+    -------
+    ndarray, shape (...)
+
+    Examples
+    --------
+    >>> round(float(planck(500.0, 5000.0) / planck(560.0, 5000.0)), 4)
+    0.9487
+    """
+    t = check_positive(temperature, "temperature (K)")
+    lam = np.asarray(wavelength_nm, dtype=np.float64)
+    if np.any(~np.isfinite(lam)) or np.any(lam <= 0):
+        raise InvalidInputError("expected wavelengths > 0 nm")
+    m = lam * 1e-9
+    with np.errstate(over="ignore"):
+        return np.asarray(C1 / m**5 / np.expm1(C2 / (m * t)))
+
+
+def blackbody_spectrum(
+    temperature: float, wavelengths: npt.ArrayLike | None = None, *, normalize_at: float = 560.0
+) -> Spectrum:
+    """A black body as a :class:`Spectrum`, scaled to 100 at ``normalize_at`` nm.
+
+    The default grid is 300-830 nm at 1 nm.
+
+    >>> round(float(blackbody_spectrum(2856).interpolate([400]).values[0]), 3)
+    14.717
+    """
+    wl = _DEFAULT_GRID if wavelengths is None else np.asarray(wavelengths, dtype=np.float64)
+    s = planck(wl, temperature)
+    ref = planck(np.array([normalize_at]), temperature)[0]
+    return Spectrum(wl, 100.0 * s / ref, name=f"blackbody {float(temperature):g} K")
+
+
+def daylight_spectrum(cct: float, *, round_m: bool = True) -> Spectrum:
+    r"""CIE daylight illuminant at correlated colour temperature ``cct`` (4000-25000 K), 5 nm.
+
+    :math:`S_D = S_0 + M_1 S_1 + M_2 S_2` (CIE 015:2018 eqs. 4.3-4.5). The nominal CCTs of
+    D50 and D65 are 5000 and 6500 K on the 1931 scale of :math:`c_2`; on today's scale they
+    are :math:`T \cdot 1.4388/1.4380` (5003 K, 6504 K). ``round_m=True`` rounds
+    :math:`M_1, M_2` to three decimals as CIE 015:2018 §4.1.2 prescribes for the tabulated
+    illuminants, which reproduces Table 1's D65 exactly.
+
+    >>> d65 = daylight_spectrum(6500 * 1.4388 / 1.4380)
+    >>> round(float(d65.interpolate([560]).values[0]), 3)
+    100.0
+    """
+    from imageform.color.cct import cct_to_xy
+
+    t = check_positive(cct, "CCT (K)")
+    if not 4000.0 <= t <= 25000.0:
+        raise InvalidInputError(f"expected a daylight CCT in [4000, 25000] K, got {t:g} K")
+    xd, yd = (float(v) for v in np.asarray(cct_to_xy(t, method="daylight")))
+    den = 0.0241 + 0.2562 * xd - 0.7341 * yd
+    m1 = (-1.3515 - 1.7703 * xd + 5.9114 * yd) / den
+    m2 = (0.0300 - 31.4424 * xd + 30.0717 * yd) / den
+    if round_m:
+        m1, m2 = round(m1, 3), round(m2, 3)
+    b = load_table("daylight_basis")
+    v = b.values[:, 0] + m1 * b.values[:, 1] + m2 * b.values[:, 2]
+    return Spectrum(b.wavelengths, v, name=f"CIE daylight {t:g} K")
+
+
+def illuminant(name: str) -> Spectrum:
+    """An illuminant by name: a CIE table (A, D50, D65, F2, F11), ``"E"`` (equal energy),
+    a CIE LED (LED-B1 ... LED-V2), ``"D<cct>"`` (daylight series, e.g. ``"D75"`` is 7500 K on
+    the 1931 scale, i.e. ``daylight_spectrum(7500 * 1.4388 / 1.4380)``), or ``"bb<T>"``
+    (black body at T kelvin, e.g. ``"bb3200"``).
+
+    >>> illuminant("d65").name
+    'CIE D65'
+    """
+    if not isinstance(name, str):
+        raise InvalidInputError(f"expected an illuminant name, got {type(name).__name__}")
+    key = name.strip().upper().replace("_", "-")
+    if key.replace("FL", "F") in ILLUMINANT_TABLES:
+        return illuminant_table(key)
+    if key == "E":
+        return Spectrum(_DEFAULT_GRID, np.full(_DEFAULT_GRID.shape, 100.0), name="CIE E")
+    if key in LED_SPECTRA:
+        return led_spectrum(key)
+    if key.startswith("BB") and key[2:].replace(".", "", 1).isdigit():
+        return blackbody_spectrum(float(key[2:]))
+    if key.startswith("D") and key[1:].isdigit() and len(key) in (3, 4):
+        return daylight_spectrum(float(key[1:]) * 100.0 * 1.4388 / 1.4380)
+    valid = [*ILLUMINANT_TABLES, "E", *LED_SPECTRA, "D<cct/100> (e.g. D75)", "bb<T> (e.g. bb3200)"]
+    raise InvalidInputError(f"unknown illuminant {name!r}; valid: {', '.join(valid)}")
+
+
+def planckian_cct(xyz: npt.ArrayLike, *, observer: int = 2) -> tuple[float, float]:
+    r"""CCT and Duv of one XYZ by direct search along the Planckian locus.
+
+    The locus point :math:`(u_T, v_T)` (CIE 1960 UCS) of a black body at T is integrated from
+    Planck's law and the CIE colour-matching functions (360-830 nm, 1 nm); the CCT minimises
+    :math:`(u - u_T)^2 + (v - v_T)^2` over the mired scale 1e6/T in [10, 2000] (Brent).
+    CIE 015:2018 §9.5 defines the CCT this way; this avoids Robertson's table interpolation
+    (:func:`imageform.color.cct.xy_to_cct`) and is its reference. Duv is signed positive above
+    the locus.
+
+    >>> t, duv = planckian_cct([1.09850, 1.0, 0.35585])  # CIE illuminant A
+    >>> round(t)
+    2856
+    """
+    from scipy.optimize import minimize_scalar
+
+    from imageform.color.cct import xy_to_uv1960
+    from imageform.spectral.data import cmfs
+
+    v = np.asarray(xyz, dtype=np.float64)
+    if v.shape != (3,) or not np.all(np.isfinite(v)) or v.sum() <= 0:
+        raise InvalidInputError(f"expected one XYZ of shape (3,) with X+Y+Z > 0, got {xyz!r}")
+    c = cmfs(observer)
+    wl = c.wavelengths
+
+    def uv_of(t: float) -> np.ndarray:
+        s = planck(wl, t) @ c.values
+        return np.asarray(xy_to_uv1960(s[:2] / s.sum()))
+
+    uv = np.asarray(xy_to_uv1960(v[:2] / v.sum()))
+    res = minimize_scalar(
+        lambda m: float(np.sum((uv_of(1e6 / m) - uv) ** 2)),
+        bounds=(10.0, 2000.0),
+        method="bounded",
+        options={"xatol": 1e-9},
+    )
+    t = 1e6 / float(res.x)
+    d = uv - uv_of(t)
+    tangent = uv_of(t * 1.0001) - uv_of(t)
+    sign = 1.0 if tangent[0] * d[1] - tangent[1] * d[0] < 0 else -1.0
+    return t, sign * float(np.hypot(*d))
