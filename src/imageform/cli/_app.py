@@ -4,7 +4,16 @@ from __future__ import annotations
 
 import typer
 
-from imageform.cli import calibration_cmds, color_analysis_cmds, color_cmds, geometry_cmds, lecture_cmd, optics_cmds, vanishing_cmd, vision_cmds
+from imageform.cli import (
+    calibration_cmds,
+    color_analysis_cmds,
+    color_cmds,
+    geometry_cmds,
+    lecture_cmd,
+    optics_cmds,
+    vanishing_cmd,
+    vision_cmds,
+)
 
 app = typer.Typer(
     name="imageform",
@@ -15,7 +24,16 @@ app = typer.Typer(
     rich_markup_mode=None,
 )
 
-for _module in (lecture_cmd, calibration_cmds, color_analysis_cmds, color_cmds, geometry_cmds, optics_cmds, vanishing_cmd, vision_cmds):
+for _module in (
+    lecture_cmd,
+    calibration_cmds,
+    color_analysis_cmds,
+    color_cmds,
+    geometry_cmds,
+    optics_cmds,
+    vanishing_cmd,
+    vision_cmds,
+):
     _module.register(app)
 
 
