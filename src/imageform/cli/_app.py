@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import typer
 
-from imageform.cli import lecture_cmd
+from imageform.cli import lecture_cmd, sensor_cmds
 
 app = typer.Typer(
     name="imageform",
@@ -15,7 +15,7 @@ app = typer.Typer(
     rich_markup_mode=None,
 )
 
-for _module in (lecture_cmd,):
+for _module in (lecture_cmd, sensor_cmds):
     _module.register(app)
 
 

@@ -1,0 +1,308 @@
+"""Menon-Andriani-Calvagno (2007) DDFAPD demosaicing: numba kernel and its NumPy twin.
+
+Directional filtering with a posteriori decision (DDFAPD):
+
+1. green is interpolated twice at red/blue sites, horizontally and vertically, with the
+   filter ``h0 + h1 = [-1/4, 1/2, 1/2, 1/2, -1/4]`` (paper eq. 3, Adams' filter);
+2. the chrominances :math:`C_H = X - \\hat G_H`, :math:`C_V = X - \\hat G_V` (X the
+   measured red or blue) give gradients :math:`D_H(y, x) = |C_H(y, x) - C_H(y, x + 2)|`,
+   :math:`D_V` likewise, summed over a 5×5 window with weights
+   ``[[1,0,1,0,1]... 3 ...]`` (eq. 9); green is taken from the direction with the smaller
+   sum (:math:`\\delta_V \\ge \\delta_H` chooses horizontal);
+3. red and blue are filled with colour differences: at green sites the mean of the two
+   neighbours' differences along the row or column that holds the colour, at blue (red)
+   sites along the direction chosen in step 2;
+4. refinement (sec. IV): the green at red/blue sites is re-estimated from the 3-tap mean of
+   the colour difference along the chosen direction, then red/blue at green sites and at
+   blue/red sites are recomputed from the refined differences.
+
+``soft=True`` (imageform's ``"menon_soft"``) replaces the hard choice of step 2 by a blend
+weighted by the *other* direction's squared gradient sum,
+
+.. math::
+
+    \\hat G = \\frac{\\delta_V^2 \\hat G_H + \\delta_H^2 \\hat G_V}{\\delta_H^2 + \\delta_V^2}
+
+(the plain mean where both are 0); the direction used by steps 3-4 stays the hard decision.
+On Kodak this gains about 0.7 dB CPSNR over the hard decision (benchmarks/results).
+
+The hard version follows the paper and colour-demosaicing's
+``demosaicing_CFA_Bayer_Menon2007`` (same filters, window and decision rule), on a mosaic
+padded with a phase-preserving mirror.
+
+Source: D. Menon, S. Andriani, G. Calvagno, "Demosaicing with directional filtering and a
+posteriori decision", IEEE Trans. Image Process. 16(1), 132-141 (2007). Radius: 11 pixels.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit, prange
+
+from imageform._kernels.demosaic_common import crop, phase_masks, shift
+
+__all__ = ["RADIUS", "menon_numba", "menon_numpy", "menon_soft_numba", "menon_soft_numpy"]
+
+RADIUS = 11
+
+
+def menon_numpy(
+    P: np.ndarray, oy: int, ox: int, h: int, w: int, refine: bool = True, soft: bool = False
+) -> np.ndarray:
+    """Twin of :func:`menon_numba` with whole-plane array operations."""
+
+    def s(a: np.ndarray, dy: int, dx: int) -> np.ndarray:
+        return shift(a, dy, dx)
+
+    r_m, g1, g2, b_m = phase_masks(P.shape)
+    g_m = g1 | g2
+    rb_m = r_m | b_m
+    # 1. directional green
+    gh = np.where(
+        g_m, P, 0.5 * (s(P, 0, -1) + s(P, 0, 1)) + 0.5 * P - 0.25 * (s(P, 0, -2) + s(P, 0, 2))
+    )
+    gv = np.where(
+        g_m, P, 0.5 * (s(P, -1, 0) + s(P, 1, 0)) + 0.5 * P - 0.25 * (s(P, -2, 0) + s(P, 2, 0))
+    )
+    # 2. decision
+    ch = np.where(rb_m, P - gh, 0)
+    cv = np.where(rb_m, P - gv, 0)
+    Dh = np.abs(ch - s(ch, 0, 2))
+    Dv = np.abs(cv - s(cv, 2, 0))
+    dh = (
+        3 * (Dh + s(Dh, 0, -2))
+        + s(Dh, -1, -1)
+        + s(Dh, 1, -1)
+        + s(Dh, -2, 0)
+        + s(Dh, 2, 0)
+        + s(Dh, -2, -2)
+        + s(Dh, 2, -2)
+    )
+    dv = (
+        3 * (Dv + s(Dv, -2, 0))
+        + s(Dv, -1, -1)
+        + s(Dv, -1, 1)
+        + s(Dv, 0, -2)
+        + s(Dv, 0, 2)
+        + s(Dv, -2, -2)
+        + s(Dv, -2, 2)
+    )
+    hor = dv >= dh
+    if soft:
+        a, b = dh * dh, dv * dv
+        t = a + b
+        tie = t == 0
+        G = np.where(tie, 0.5 * (gh + gv), (b * gh + a * gv) / np.where(tie, 1, t))
+    else:
+        G = np.where(hor, gh, gv)
+    # 3. red and blue
+    D = P - G  # R - G at red sites, B - G at blue sites
+    dh_avg = 0.5 * (s(D, 0, -1) + s(D, 0, 1))
+    dv_avg = 0.5 * (s(D, -1, 0) + s(D, 1, 0))
+    R = np.select([r_m, g1, g2], [P, G + dh_avg, G + dv_avg], 0)
+    B = np.select([b_m, g1, g2], [P, G + dv_avg, G + dh_avg], 0)
+    RB = R - B
+    rb_h = 0.5 * (s(RB, 0, -1) + s(RB, 0, 1))
+    rb_v = 0.5 * (s(RB, -1, 0) + s(RB, 1, 0))
+    rb_dir = np.where(hor, rb_h, rb_v)
+    R = np.where(b_m, B + rb_dir, R)
+    B = np.where(r_m, R - rb_dir, B)
+    if refine:
+        R, G, B = _refine_numpy(R, G, B, hor, r_m, g1, g2, b_m)
+    out = np.stack([R, G, B], axis=-1).astype(P.dtype, copy=False)
+    return crop(out, oy, ox, h, w)
+
+
+def _refine_numpy(R, G, B, hor, r_m, g1, g2, b_m):  # type: ignore[no-untyped-def]
+    def s(a: np.ndarray, dy: int, dx: int) -> np.ndarray:
+        return shift(a, dy, dx)
+
+    def fir3(a: np.ndarray) -> np.ndarray:
+        return np.where(hor, s(a, 0, -1) + a + s(a, 0, 1), s(a, -1, 0) + a + s(a, 1, 0)) / 3
+
+    # green at red/blue sites from the directional 3-tap mean of the colour difference
+    G = np.select([r_m, b_m], [R - fir3(R - G), B - fir3(B - G)], G)
+    # red/blue at green sites from the refined differences
+    RG = R - G
+    BG = B - G
+    R = np.select(
+        [g1, g2],
+        [G + 0.5 * (s(RG, 0, -1) + s(RG, 0, 1)), G + 0.5 * (s(RG, -1, 0) + s(RG, 1, 0))],
+        R,
+    )
+    B = np.select(
+        [g1, g2],
+        [G + 0.5 * (s(BG, -1, 0) + s(BG, 1, 0)), G + 0.5 * (s(BG, 0, -1) + s(BG, 0, 1))],
+        B,
+    )
+    # red at blue, blue at red
+    rb = fir3(R - B)
+    R2 = np.where(b_m, B + rb, R)
+    B2 = np.where(r_m, R - rb, B)
+    return R2, G, B2
+
+
+@njit(cache=True, parallel=True, fastmath=False)
+def _menon(P: np.ndarray, oy: int, ox: int, h: int, w: int, refine: bool, soft: bool) -> np.ndarray:
+    # Each pass computes a band that shrinks by the radius of what it reads, so that no pass
+    # reads a value the previous one did not write; the output window lies inside margin 11.
+    H, W = P.shape
+    ch = np.empty_like(P)  # X - G_H at red/blue sites
+    cv = np.empty_like(P)  # X - G_V
+    Dh = np.empty_like(P)
+    Dv = np.empty_like(P)
+    G = np.empty_like(P)
+    R = np.empty_like(P)
+    B = np.empty_like(P)
+    hor = np.empty(P.shape, dtype=np.uint8)
+    # 1. directional green (as chrominance) at red/blue sites, margin 2
+    for y in prange(2, H - 2):
+        for x in range(2 + (2 + y) % 2, W - 2, 2):
+            c = P[y, x]
+            gh = 0.5 * (P[y, x - 1] + P[y, x + 1]) + 0.5 * c - 0.25 * (P[y, x - 2] + P[y, x + 2])
+            gv = 0.5 * (P[y - 1, x] + P[y + 1, x]) + 0.5 * c - 0.25 * (P[y - 2, x] + P[y + 2, x])
+            ch[y, x] = c - gh
+            cv[y, x] = c - gv
+    # 2. chrominance gradients, margin 4
+    for y in prange(4, H - 4):
+        for x in range(4 + (4 + y) % 2, W - 4, 2):
+            Dh[y, x] = abs(ch[y, x] - ch[y, x + 2])
+            Dv[y, x] = abs(cv[y, x] - cv[y + 2, x])
+    # 3. decision over the 5x5 window (eq. 9) and green, margin 6
+    for y in prange(6, H - 6):
+        for x in range(6 + 1 - (6 + y) % 2, W - 6, 2):
+            G[y, x] = P[y, x]
+        for x in range(6 + (6 + y) % 2, W - 6, 2):
+            dh = (
+                3.0 * (Dh[y, x] + Dh[y, x - 2])
+                + Dh[y - 1, x - 1]
+                + Dh[y + 1, x - 1]
+                + Dh[y - 2, x]
+                + Dh[y + 2, x]
+                + Dh[y - 2, x - 2]
+                + Dh[y + 2, x - 2]
+            )
+            dv = (
+                3.0 * (Dv[y, x] + Dv[y - 2, x])
+                + Dv[y - 1, x - 1]
+                + Dv[y - 1, x + 1]
+                + Dv[y, x - 2]
+                + Dv[y, x + 2]
+                + Dv[y - 2, x - 2]
+                + Dv[y - 2, x + 2]
+            )
+            hor[y, x] = 1 if dv >= dh else 0
+            if soft:  # weights dv^2 : dh^2 for the horizontal : vertical estimates
+                a = dh * dh
+                b = dv * dv
+                if a + b == 0.0:
+                    G[y, x] = P[y, x] - 0.5 * (ch[y, x] + cv[y, x])
+                else:
+                    G[y, x] = P[y, x] - (b * ch[y, x] + a * cv[y, x]) / (a + b)
+            elif dv >= dh:
+                G[y, x] = P[y, x] - ch[y, x]
+            else:
+                G[y, x] = P[y, x] - cv[y, x]
+    # 4. red and blue at green sites from colour differences, margin 7
+    for y in prange(7, H - 7):
+        red_row = y % 2 == 0
+        for x in range(7 + (7 + y) % 2, W - 7, 2):  # red/blue sites keep their sample
+            if red_row:
+                R[y, x] = P[y, x]
+            else:
+                B[y, x] = P[y, x]
+        for x in range(7 + 1 - (7 + y) % 2, W - 7, 2):
+            g = G[y, x]
+            dhz = 0.5 * (P[y, x - 1] - G[y, x - 1] + P[y, x + 1] - G[y, x + 1])
+            dvt = 0.5 * (P[y - 1, x] - G[y - 1, x] + P[y + 1, x] - G[y + 1, x])
+            if red_row:
+                R[y, x] = g + dhz
+                B[y, x] = g + dvt
+            else:
+                R[y, x] = g + dvt
+                B[y, x] = g + dhz
+    # 5. red at blue sites, blue at red sites along the chosen direction, margin 8
+    for y in prange(8, H - 8):
+        red_row = y % 2 == 0
+        for x in range(8 + (8 + y) % 2, W - 8, 2):
+            if hor[y, x]:
+                d = 0.5 * (R[y, x - 1] - B[y, x - 1] + R[y, x + 1] - B[y, x + 1])
+            else:
+                d = 0.5 * (R[y - 1, x] - B[y - 1, x] + R[y + 1, x] - B[y + 1, x])
+            if red_row:
+                B[y, x] = P[y, x] - d
+            else:
+                R[y, x] = P[y, x] + d
+    if refine:
+        # 6. green at red/blue sites from the directional 3-tap mean of X - G, margin 9
+        for y in prange(9, H - 9):
+            X = R if y % 2 == 0 else B
+            for x in range(9 + (9 + y) % 2, W - 9, 2):
+                if hor[y, x]:
+                    m = (
+                        (X[y, x - 1] - G[y, x - 1])
+                        + (X[y, x] - G[y, x])
+                        + (X[y, x + 1] - G[y, x + 1])
+                    ) / 3.0
+                else:
+                    m = (
+                        (X[y - 1, x] - G[y - 1, x])
+                        + (X[y, x] - G[y, x])
+                        + (X[y + 1, x] - G[y + 1, x])
+                    ) / 3.0
+                G[y, x] = P[y, x] - m
+        # 7. red and blue at green sites from the refined differences, margin 10
+        for y in prange(10, H - 10):
+            red_row = y % 2 == 0
+            for x in range(10 + 1 - (10 + y) % 2, W - 10, 2):
+                g = G[y, x]
+                if red_row:
+                    R[y, x] = g + 0.5 * (R[y, x - 1] - G[y, x - 1] + R[y, x + 1] - G[y, x + 1])
+                    B[y, x] = g + 0.5 * (B[y - 1, x] - G[y - 1, x] + B[y + 1, x] - G[y + 1, x])
+                else:
+                    R[y, x] = g + 0.5 * (R[y - 1, x] - G[y - 1, x] + R[y + 1, x] - G[y + 1, x])
+                    B[y, x] = g + 0.5 * (B[y, x - 1] - G[y, x - 1] + B[y, x + 1] - G[y, x + 1])
+    out = np.empty((h, w, 3), dtype=P.dtype)
+    # 8. output; with refinement, red (blue) at blue (red) sites from the 3-tap mean of R - B
+    for i in prange(h):
+        y = i + oy
+        red_row = y % 2 == 0
+        for j in range(w):
+            x = j + ox
+            out[i, j, 1] = G[y, x]
+            if (x + y) % 2 == 1 or not refine:
+                out[i, j, 0] = R[y, x]
+                out[i, j, 2] = B[y, x]
+                continue
+            if hor[y, x]:
+                d = (
+                    (R[y, x - 1] - B[y, x - 1]) + (R[y, x] - B[y, x]) + (R[y, x + 1] - B[y, x + 1])
+                ) / 3.0
+            else:
+                d = (
+                    (R[y - 1, x] - B[y - 1, x]) + (R[y, x] - B[y, x]) + (R[y + 1, x] - B[y + 1, x])
+                ) / 3.0
+            if red_row:
+                out[i, j, 0] = P[y, x]
+                out[i, j, 2] = P[y, x] - d
+            else:
+                out[i, j, 0] = P[y, x] + d
+                out[i, j, 2] = P[y, x]
+    return out
+
+
+def menon_numba(
+    P: np.ndarray, oy: int, ox: int, h: int, w: int, refine: bool = True, soft: bool = False
+) -> np.ndarray:
+    """DDFAPD on an RGGB-phased padded mosaic (needs ``RADIUS`` pixels of padding)."""
+    return _menon(P, oy, ox, h, w, refine, soft)
+
+
+def menon_soft_numba(P: np.ndarray, oy: int, ox: int, h: int, w: int) -> np.ndarray:
+    """DDFAPD with the soft green decision (see the module docstring)."""
+    return _menon(P, oy, ox, h, w, True, True)
+
+
+def menon_soft_numpy(P: np.ndarray, oy: int, ox: int, h: int, w: int) -> np.ndarray:
+    """Twin of :func:`menon_soft_numba`."""
+    return menon_numpy(P, oy, ox, h, w, True, True)
