@@ -29,6 +29,10 @@ RADIUS = 2
 @njit(cache=True, parallel=True, fastmath=False)
 def malvar_numba(P: np.ndarray, oy: int, ox: int, h: int, w: int) -> np.ndarray:
     out = np.empty((h, w, 3), dtype=P.dtype)
+    t = P.dtype.type
+    c2, c4, c5, c6 = t(2.0), t(4.0), t(5.0), t(6.0)
+    half, c15, eighth = t(0.5), t(1.5), t(0.125)
+    j_even = ox % 2  # first j whose padded column is even
     for i in prange(h):
         y = i + oy
         u2 = P[y - 2]
@@ -36,43 +40,30 @@ def malvar_numba(P: np.ndarray, oy: int, ox: int, h: int, w: int) -> np.ndarray:
         c0 = P[y]
         d1 = P[y + 1]
         d2 = P[y + 2]
+        o = out[i]
         red_row = y % 2 == 0
-        for j in range(w):
+        # red (red rows) or blue (blue rows) sites: even columns in red rows, odd in blue
+        k = 0 if red_row else 2  # channel measured here
+        for j in range((j_even if red_row else 1 - j_even), w, 2):
             x = j + ox
             c = c0[x]
-            if (x % 2 == 0) == red_row:  # red or blue site
-                cross4 = u2[x] + d2[x] + c0[x - 2] + c0[x + 2]
-                g = (4.0 * c + 2.0 * (u1[x] + d1[x] + c0[x - 1] + c0[x + 1]) - cross4) * 0.125
-                o = (
-                    6.0 * c + 2.0 * (u1[x - 1] + u1[x + 1] + d1[x - 1] + d1[x + 1]) - 1.5 * cross4
-                ) * 0.125
-                if red_row:
-                    out[i, j, 0] = c
-                    out[i, j, 1] = g
-                    out[i, j, 2] = o
-                else:
-                    out[i, j, 0] = o
-                    out[i, j, 1] = g
-                    out[i, j, 2] = c
-            else:  # green site
-                diag = u1[x - 1] + u1[x + 1] + d1[x - 1] + d1[x + 1]
-                base = 5.0 * c - diag
-                hor = (
-                    base
-                    + 4.0 * (c0[x - 1] + c0[x + 1])
-                    - (c0[x - 2] + c0[x + 2])
-                    + 0.5 * (u2[x] + d2[x])
-                ) * 0.125
-                ver = (
-                    base + 4.0 * (u1[x] + d1[x]) - (u2[x] + d2[x]) + 0.5 * (c0[x - 2] + c0[x + 2])
-                ) * 0.125
-                out[i, j, 1] = c
-                if red_row:
-                    out[i, j, 0] = hor
-                    out[i, j, 2] = ver
-                else:
-                    out[i, j, 0] = ver
-                    out[i, j, 2] = hor
+            cross4 = u2[x] + d2[x] + c0[x - 2] + c0[x + 2]
+            diag = u1[x - 1] + u1[x + 1] + d1[x - 1] + d1[x + 1]
+            o[j, k] = c
+            o[j, 1] = (c4 * c + c2 * (u1[x] + d1[x] + c0[x - 1] + c0[x + 1]) - cross4) * eighth
+            o[j, 2 - k] = (c6 * c + c2 * diag - c15 * cross4) * eighth
+        # green sites: the colour of this row comes from left/right, the other from above/below
+        kh = 0 if red_row else 2
+        for j in range((1 - j_even if red_row else j_even), w, 2):
+            x = j + ox
+            c = c0[x]
+            diag = u1[x - 1] + u1[x + 1] + d1[x - 1] + d1[x + 1]
+            base = c5 * c - diag
+            h2 = c0[x - 2] + c0[x + 2]
+            v2 = u2[x] + d2[x]
+            o[j, 1] = c
+            o[j, kh] = (base + c4 * (c0[x - 1] + c0[x + 1]) - h2 + half * v2) * eighth
+            o[j, 2 - kh] = (base + c4 * (u1[x] + d1[x]) - v2 + half * h2) * eighth
     return out
 
 

@@ -147,34 +147,47 @@ def _menon(P: np.ndarray, oy: int, ox: int, h: int, w: int, refine: bool, soft: 
     # Each pass computes a band that shrinks by the radius of what it reads, so that no pass
     # reads a value the previous one did not write; the output window lies inside margin 11.
     H, W = P.shape
-    ch = np.empty_like(P)  # X - G_H at red/blue sites
-    cv = np.empty_like(P)  # X - G_V
+    t = P.dtype.type
+    half, quarter, third = t(0.5), t(0.25), t(1.0 / 3.0)
+    three, zero, one = t(3.0), t(0.0), t(1.0)
     Dh = np.empty_like(P)
     Dv = np.empty_like(P)
     G = np.empty_like(P)
     R = np.empty_like(P)
     B = np.empty_like(P)
     hor = np.empty(P.shape, dtype=np.uint8)
-    # 1. directional green (as chrominance) at red/blue sites, margin 2
-    for y in prange(2, H - 2):
-        for x in range(2 + (2 + y) % 2, W - 2, 2):
-            c = P[y, x]
-            gh = 0.5 * (P[y, x - 1] + P[y, x + 1]) + 0.5 * c - 0.25 * (P[y, x - 2] + P[y, x + 2])
-            gv = 0.5 * (P[y - 1, x] + P[y + 1, x]) + 0.5 * c - 0.25 * (P[y - 2, x] + P[y + 2, x])
-            ch[y, x] = c - gh
-            cv[y, x] = c - gv
-    # 2. chrominance gradients, margin 4
+    # 1-2. chrominance gradients at red/blue sites, margin 4. The chrominance X - G_H is
+    # X/2 - (left + right)/2 + (left2 + right2)/4 (eq. 3), computed on the fly.
     for y in prange(4, H - 4):
+        r0 = P[y]
         for x in range(4 + (4 + y) % 2, W - 4, 2):
-            Dh[y, x] = abs(ch[y, x] - ch[y, x + 2])
-            Dv[y, x] = abs(cv[y, x] - cv[y + 2, x])
+            ch0 = half * r0[x] - half * (r0[x - 1] + r0[x + 1]) + quarter * (r0[x - 2] + r0[x + 2])
+            x2 = x + 2
+            ch2 = (
+                half * r0[x2]
+                - half * (r0[x2 - 1] + r0[x2 + 1])
+                + quarter * (r0[x2 - 2] + r0[x2 + 2])
+            )
+            cv0 = (
+                half * r0[x]
+                - half * (P[y - 1, x] + P[y + 1, x])
+                + quarter * (P[y - 2, x] + P[y + 2, x])
+            )
+            cv2 = (
+                half * P[y + 2, x]
+                - half * (P[y + 1, x] + P[y + 3, x])
+                + quarter * (r0[x] + P[y + 4, x])
+            )
+            Dh[y, x] = abs(ch0 - ch2)
+            Dv[y, x] = abs(cv0 - cv2)
     # 3. decision over the 5x5 window (eq. 9) and green, margin 6
     for y in prange(6, H - 6):
+        r0 = P[y]
         for x in range(6 + 1 - (6 + y) % 2, W - 6, 2):
-            G[y, x] = P[y, x]
+            G[y, x] = r0[x]
         for x in range(6 + (6 + y) % 2, W - 6, 2):
             dh = (
-                3.0 * (Dh[y, x] + Dh[y, x - 2])
+                three * (Dh[y, x] + Dh[y, x - 2])
                 + Dh[y - 1, x - 1]
                 + Dh[y + 1, x - 1]
                 + Dh[y - 2, x]
@@ -183,7 +196,7 @@ def _menon(P: np.ndarray, oy: int, ox: int, h: int, w: int, refine: bool, soft: 
                 + Dh[y + 2, x - 2]
             )
             dv = (
-                3.0 * (Dv[y, x] + Dv[y - 2, x])
+                three * (Dv[y, x] + Dv[y - 2, x])
                 + Dv[y - 1, x - 1]
                 + Dv[y - 1, x + 1]
                 + Dv[y, x - 2]
@@ -191,103 +204,108 @@ def _menon(P: np.ndarray, oy: int, ox: int, h: int, w: int, refine: bool, soft: 
                 + Dv[y - 2, x - 2]
                 + Dv[y - 2, x + 2]
             )
-            hor[y, x] = 1 if dv >= dh else 0
+            c = r0[x]
+            gh = half * (r0[x - 1] + r0[x + 1]) + half * c - quarter * (r0[x - 2] + r0[x + 2])
+            gv = (
+                half * (P[y - 1, x] + P[y + 1, x])
+                + half * c
+                - quarter * (P[y - 2, x] + P[y + 2, x])
+            )
+            is_h = dv >= dh
+            hor[y, x] = 1 if is_h else 0
             if soft:  # weights dv^2 : dh^2 for the horizontal : vertical estimates
                 a = dh * dh
                 b = dv * dv
-                if a + b == 0.0:
-                    G[y, x] = P[y, x] - 0.5 * (ch[y, x] + cv[y, x])
-                else:
-                    G[y, x] = P[y, x] - (b * ch[y, x] + a * cv[y, x]) / (a + b)
-            elif dv >= dh:
-                G[y, x] = P[y, x] - ch[y, x]
+                ab = a + b
+                blend = (b * gh + a * gv) / (ab if ab != zero else one)
+                G[y, x] = blend if ab != zero else half * (gh + gv)
             else:
-                G[y, x] = P[y, x] - cv[y, x]
+                G[y, x] = gh if is_h else gv
     # 4. red and blue at green sites from colour differences, margin 7
     for y in prange(7, H - 7):
         red_row = y % 2 == 0
+        pu, p0, pd = P[y - 1], P[y], P[y + 1]
+        gu, g0, gd = G[y - 1], G[y], G[y + 1]
+        Rh, Rv = (R[y], B[y]) if red_row else (B[y], R[y])  # colour of this row, the other
         for x in range(7 + (7 + y) % 2, W - 7, 2):  # red/blue sites keep their sample
-            if red_row:
-                R[y, x] = P[y, x]
-            else:
-                B[y, x] = P[y, x]
+            Rh[x] = p0[x]
         for x in range(7 + 1 - (7 + y) % 2, W - 7, 2):
-            g = G[y, x]
-            dhz = 0.5 * (P[y, x - 1] - G[y, x - 1] + P[y, x + 1] - G[y, x + 1])
-            dvt = 0.5 * (P[y - 1, x] - G[y - 1, x] + P[y + 1, x] - G[y + 1, x])
-            if red_row:
-                R[y, x] = g + dhz
-                B[y, x] = g + dvt
-            else:
-                R[y, x] = g + dvt
-                B[y, x] = g + dhz
+            g = g0[x]
+            Rh[x] = g + half * ((p0[x - 1] - g0[x - 1]) + (p0[x + 1] - g0[x + 1]))
+            Rv[x] = g + half * ((pu[x] - gu[x]) + (pd[x] - gd[x]))
     # 5. red at blue sites, blue at red sites along the chosen direction, margin 8
     for y in prange(8, H - 8):
         red_row = y % 2 == 0
+        ru, r0, rd = R[y - 1], R[y], R[y + 1]
+        bu, b0, bd = B[y - 1], B[y], B[y + 1]
+        p0 = P[y]
+        o0 = b0 if red_row else r0
+        hr = hor[y]
+        sign = -half if red_row else half
         for x in range(8 + (8 + y) % 2, W - 8, 2):
-            if hor[y, x]:
-                d = 0.5 * (R[y, x - 1] - B[y, x - 1] + R[y, x + 1] - B[y, x + 1])
-            else:
-                d = 0.5 * (R[y - 1, x] - B[y - 1, x] + R[y + 1, x] - B[y + 1, x])
-            if red_row:
-                B[y, x] = P[y, x] - d
-            else:
-                R[y, x] = P[y, x] + d
+            dh = (r0[x - 1] - b0[x - 1]) + (r0[x + 1] - b0[x + 1])
+            dv = (ru[x] - bu[x]) + (rd[x] - bd[x])
+            d = dh if hr[x] else dv  # both computed: a select, not a branch
+            o0[x] = p0[x] + sign * d
     if refine:
         # 6. green at red/blue sites from the directional 3-tap mean of X - G, margin 9
         for y in prange(9, H - 9):
             X = R if y % 2 == 0 else B
+            xu, x0, xd = X[y - 1], X[y], X[y + 1]
+            gu, g0, gd = G[y - 1], G[y], G[y + 1]
+            p0 = P[y]
+            hr = hor[y]
             for x in range(9 + (9 + y) % 2, W - 9, 2):
-                if hor[y, x]:
-                    m = (
-                        (X[y, x - 1] - G[y, x - 1])
-                        + (X[y, x] - G[y, x])
-                        + (X[y, x + 1] - G[y, x + 1])
-                    ) / 3.0
-                else:
-                    m = (
-                        (X[y - 1, x] - G[y - 1, x])
-                        + (X[y, x] - G[y, x])
-                        + (X[y + 1, x] - G[y + 1, x])
-                    ) / 3.0
-                G[y, x] = P[y, x] - m
+                c = x0[x] - g0[x]
+                mh = (x0[x - 1] - g0[x - 1]) + c + (x0[x + 1] - g0[x + 1])
+                mv = (xu[x] - gu[x]) + c + (xd[x] - gd[x])
+                m = mh if hr[x] else mv
+                g0[x] = p0[x] - m * third
         # 7. red and blue at green sites from the refined differences, margin 10
         for y in prange(10, H - 10):
             red_row = y % 2 == 0
+            gu, g0, gd = G[y - 1], G[y], G[y + 1]
+            if red_row:  # red left/right, blue above/below
+                h0, vu, vd = R[y], B[y - 1], B[y + 1]
+                v0 = B[y]
+            else:
+                h0, vu, vd = B[y], R[y - 1], R[y + 1]
+                v0 = R[y]
             for x in range(10 + 1 - (10 + y) % 2, W - 10, 2):
-                g = G[y, x]
-                if red_row:
-                    R[y, x] = g + 0.5 * (R[y, x - 1] - G[y, x - 1] + R[y, x + 1] - G[y, x + 1])
-                    B[y, x] = g + 0.5 * (B[y - 1, x] - G[y - 1, x] + B[y + 1, x] - G[y + 1, x])
-                else:
-                    R[y, x] = g + 0.5 * (R[y - 1, x] - G[y - 1, x] + R[y + 1, x] - G[y + 1, x])
-                    B[y, x] = g + 0.5 * (B[y, x - 1] - G[y, x - 1] + B[y, x + 1] - G[y, x + 1])
+                g = g0[x]
+                h0[x] = g + half * ((h0[x - 1] - g0[x - 1]) + (h0[x + 1] - g0[x + 1]))
+                v0[x] = g + half * ((vu[x] - gu[x]) + (vd[x] - gd[x]))
     out = np.empty((h, w, 3), dtype=P.dtype)
     # 8. output; with refinement, red (blue) at blue (red) sites from the 3-tap mean of R - B
+    j_even = ox % 2
     for i in prange(h):
         y = i + oy
         red_row = y % 2 == 0
-        for j in range(w):
+        ru, r0, rd = R[y - 1], R[y], R[y + 1]
+        bu, b0, bd = B[y - 1], B[y], B[y + 1]
+        g0, p0, hr = G[y], P[y], hor[y]
+        o = out[i]
+        jg = 1 - j_even if red_row else j_even  # first green column
+        for j in range(jg, w, 2):
             x = j + ox
-            out[i, j, 1] = G[y, x]
-            if (x + y) % 2 == 1 or not refine:
-                out[i, j, 0] = R[y, x]
-                out[i, j, 2] = B[y, x]
+            o[j, 0] = r0[x]
+            o[j, 1] = g0[x]
+            o[j, 2] = b0[x]
+        k = 0 if red_row else 2  # the channel measured at the other sites
+        sign = -third if red_row else third
+        for j in range(1 - jg, w, 2):
+            x = j + ox
+            o[j, 1] = g0[x]
+            if not refine:
+                o[j, 0] = r0[x]
+                o[j, 2] = b0[x]
                 continue
-            if hor[y, x]:
-                d = (
-                    (R[y, x - 1] - B[y, x - 1]) + (R[y, x] - B[y, x]) + (R[y, x + 1] - B[y, x + 1])
-                ) / 3.0
-            else:
-                d = (
-                    (R[y - 1, x] - B[y - 1, x]) + (R[y, x] - B[y, x]) + (R[y + 1, x] - B[y + 1, x])
-                ) / 3.0
-            if red_row:
-                out[i, j, 0] = P[y, x]
-                out[i, j, 2] = P[y, x] - d
-            else:
-                out[i, j, 0] = P[y, x] + d
-                out[i, j, 2] = P[y, x]
+            c = r0[x] - b0[x]
+            dh = (r0[x - 1] - b0[x - 1]) + c + (r0[x + 1] - b0[x + 1])
+            dv = (ru[x] - bu[x]) + c + (rd[x] - bd[x])
+            d = dh if hr[x] else dv
+            o[j, k] = p0[x]
+            o[j, 2 - k] = p0[x] + sign * d
     return out
 
 
