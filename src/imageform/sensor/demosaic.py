@@ -141,8 +141,8 @@ def demosaic(
     Borders are reconstructed from a phase-preserving mirror padding (see the module
     docstring), so edge pixels are interpolated by the same filter as interior pixels.
     On the 24 Kodak images (RGGB, CPSNR with a 10-pixel crop) the methods reach
-    30.3 (bilinear), 35.8 (malvar), 37.6 (hamilton_adams) and 39.3 dB (menon); see
-    ``docs/demosaicing.md`` and ``benchmarks/results``.
+    30.25 (bilinear), 35.79 (malvar), 37.04 (hamilton_adams), 39.31 (menon) and 40.03 dB
+    (menon_soft); see ``docs/demosaicing.md`` and ``benchmarks/results``.
 
     Examples
     --------
