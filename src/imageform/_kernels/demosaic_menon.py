@@ -142,10 +142,13 @@ def _refine_numpy(R, G, B, hor, r_m, g1, g2, b_m):  # type: ignore[no-untyped-de
     return R2, G, B2
 
 
-@njit(cache=True, parallel=True, fastmath=False)
-def _menon(P: np.ndarray, oy: int, ox: int, h: int, w: int, refine: bool, soft: bool) -> np.ndarray:
-    # Each pass computes a band that shrinks by the radius of what it reads, so that no pass
-    # reads a value the previous one did not write; the output window lies inside margin 11.
+@njit(cache=True, fastmath=False)
+def _menon_slab(
+    P: np.ndarray, oy: int, ox: int, h: int, w: int, refine: bool, soft: bool, out: np.ndarray
+) -> None:
+    # All passes on one slab of rows (P starts at an even padded row, so the RGGB phase
+    # holds). Each pass computes a band that shrinks by the radius of what it reads, so no
+    # pass reads a value the previous one did not write; the output rows lie inside margin 11.
     H, W = P.shape
     t = P.dtype.type
     half, quarter, third = t(0.5), t(0.25), t(1.0 / 3.0)
@@ -158,7 +161,7 @@ def _menon(P: np.ndarray, oy: int, ox: int, h: int, w: int, refine: bool, soft: 
     hor = np.empty(P.shape, dtype=np.uint8)
     # 1-2. chrominance gradients at red/blue sites, margin 4. The chrominance X - G_H is
     # X/2 - (left + right)/2 + (left2 + right2)/4 (eq. 3), computed on the fly.
-    for y in prange(4, H - 4):
+    for y in range(4, H - 4):
         r0 = P[y]
         for x in range(4 + (4 + y) % 2, W - 4, 2):
             ch0 = half * r0[x] - half * (r0[x - 1] + r0[x + 1]) + quarter * (r0[x - 2] + r0[x + 2])
@@ -181,7 +184,7 @@ def _menon(P: np.ndarray, oy: int, ox: int, h: int, w: int, refine: bool, soft: 
             Dh[y, x] = abs(ch0 - ch2)
             Dv[y, x] = abs(cv0 - cv2)
     # 3. decision over the 5x5 window (eq. 9) and green, margin 6
-    for y in prange(6, H - 6):
+    for y in range(6, H - 6):
         r0 = P[y]
         for x in range(6 + 1 - (6 + y) % 2, W - 6, 2):
             G[y, x] = r0[x]
@@ -222,7 +225,7 @@ def _menon(P: np.ndarray, oy: int, ox: int, h: int, w: int, refine: bool, soft: 
             else:
                 G[y, x] = gh if is_h else gv
     # 4. red and blue at green sites from colour differences, margin 7
-    for y in prange(7, H - 7):
+    for y in range(7, H - 7):
         red_row = y % 2 == 0
         pu, p0, pd = P[y - 1], P[y], P[y + 1]
         gu, g0, gd = G[y - 1], G[y], G[y + 1]
@@ -234,7 +237,7 @@ def _menon(P: np.ndarray, oy: int, ox: int, h: int, w: int, refine: bool, soft: 
             Rh[x] = g + half * ((p0[x - 1] - g0[x - 1]) + (p0[x + 1] - g0[x + 1]))
             Rv[x] = g + half * ((pu[x] - gu[x]) + (pd[x] - gd[x]))
     # 5. red at blue sites, blue at red sites along the chosen direction, margin 8
-    for y in prange(8, H - 8):
+    for y in range(8, H - 8):
         red_row = y % 2 == 0
         ru, r0, rd = R[y - 1], R[y], R[y + 1]
         bu, b0, bd = B[y - 1], B[y], B[y + 1]
@@ -249,7 +252,7 @@ def _menon(P: np.ndarray, oy: int, ox: int, h: int, w: int, refine: bool, soft: 
             o0[x] = p0[x] + sign * d
     if refine:
         # 6. green at red/blue sites from the directional 3-tap mean of X - G, margin 9
-        for y in prange(9, H - 9):
+        for y in range(9, H - 9):
             X = R if y % 2 == 0 else B
             xu, x0, xd = X[y - 1], X[y], X[y + 1]
             gu, g0, gd = G[y - 1], G[y], G[y + 1]
@@ -262,7 +265,7 @@ def _menon(P: np.ndarray, oy: int, ox: int, h: int, w: int, refine: bool, soft: 
                 m = mh if hr[x] else mv
                 g0[x] = p0[x] - m * third
         # 7. red and blue at green sites from the refined differences, margin 10
-        for y in prange(10, H - 10):
+        for y in range(10, H - 10):
             red_row = y % 2 == 0
             gu, g0, gd = G[y - 1], G[y], G[y + 1]
             if red_row:  # red left/right, blue above/below
@@ -275,10 +278,9 @@ def _menon(P: np.ndarray, oy: int, ox: int, h: int, w: int, refine: bool, soft: 
                 g = g0[x]
                 h0[x] = g + half * ((h0[x - 1] - g0[x - 1]) + (h0[x + 1] - g0[x + 1]))
                 v0[x] = g + half * ((vu[x] - gu[x]) + (vd[x] - gd[x]))
-    out = np.empty((h, w, 3), dtype=P.dtype)
     # 8. output; with refinement, red (blue) at blue (red) sites from the 3-tap mean of R - B
     j_even = ox % 2
-    for i in prange(h):
+    for i in range(h):
         y = i + oy
         red_row = y % 2 == 0
         ru, r0, rd = R[y - 1], R[y], R[y + 1]
@@ -306,19 +308,44 @@ def _menon(P: np.ndarray, oy: int, ox: int, h: int, w: int, refine: bool, soft: 
             d = dh if hr[x] else dv
             o[j, k] = p0[x]
             o[j, 2 - k] = p0[x] + sign * d
+
+
+@njit(cache=True, parallel=True, fastmath=False)
+def _menon(
+    P: np.ndarray, oy: int, ox: int, h: int, w: int, refine: bool, soft: bool, block: int
+) -> np.ndarray:
+    # One parallel region over slabs of ``block`` output rows (each slab recomputes its
+    # 11-row halo): fewer barriers and cache-sized working sets than one region per pass.
+    out = np.empty((h, w, 3), dtype=P.dtype)
+    nb = (h + block - 1) // block
+    for b in prange(nb):
+        y0 = b * block
+        y1 = min(h, y0 + block)
+        s = y0 + oy - RADIUS - 1
+        s -= s % 2
+        e = y1 + oy + RADIUS + 1
+        _menon_slab(P[s:e], y0 + oy - s, ox, y1 - y0, w, refine, soft, out[y0:y1])
     return out
+
+
+def _block_rows(h: int) -> int:
+    """Rows per slab: about two slabs per thread, at least 64 rows (the halo is 2 x 12)."""
+    import numba
+
+    threads = numba.get_num_threads()
+    return h if threads == 1 else max(64, -(-h // (2 * threads)))
 
 
 def menon_numba(
     P: np.ndarray, oy: int, ox: int, h: int, w: int, refine: bool = True, soft: bool = False
 ) -> np.ndarray:
     """DDFAPD on an RGGB-phased padded mosaic (needs ``RADIUS`` pixels of padding)."""
-    return _menon(P, oy, ox, h, w, refine, soft)
+    return _menon(P, oy, ox, h, w, refine, soft, _block_rows(h))
 
 
 def menon_soft_numba(P: np.ndarray, oy: int, ox: int, h: int, w: int) -> np.ndarray:
     """DDFAPD with the soft green decision (see the module docstring)."""
-    return _menon(P, oy, ox, h, w, True, True)
+    return _menon(P, oy, ox, h, w, True, True, _block_rows(h))
 
 
 def menon_soft_numpy(P: np.ndarray, oy: int, ox: int, h: int, w: int) -> np.ndarray:
