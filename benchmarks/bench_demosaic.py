@@ -131,14 +131,11 @@ def main() -> None:
     rows = []
     cpu_ms: dict[str, float] = {}
     for name, (fn, prep) in table.items():
-        crop = [
-            cpsnr(np.asarray(fn(r), dtype=np.float64), im, 10)
-            for r, im in zip(raws, images, strict=True)
-        ]
-        full = [
-            cpsnr(np.asarray(fn(r), dtype=np.float64), im)
-            for r, im in zip(raws, images, strict=True)
-        ]
+        crop, full = [], []
+        for r, im in zip(raws, images, strict=True):
+            out = np.asarray(fn(r), dtype=np.float64)
+            crop.append(cpsnr(out, im, 10))
+            full.append(cpsnr(out, im))
         speeds, cpus = [], []
         for r in raws[: args.time_images]:
             mp = r.shape[0] * r.shape[1] / 1e6

@@ -2,8 +2,9 @@
 
 :func:`demosaic` validates the mosaic once, pads it with a **phase-preserving mirror** and
 dispatches to one of the methods in :data:`DEMOSAIC_METHODS`. Each method is a numba kernel
-in ``imageform._kernels.demosaic_*`` with a plain NumPy twin (used for non-NumPy input and
-when ``IMAGEFORM_DISABLE_NUMBA=1``).
+in ``imageform._kernels.demosaic_*`` with a plain NumPy twin (used when
+``IMAGEFORM_DISABLE_NUMBA=1``). Arrays of other libraries are computed through NumPy on the
+host and converted back.
 
 Borders. A demosaicing filter near the image edge needs samples outside the image. Padding
 the mosaic with ``mode="reflect"`` (mirror about the edge pixel: pixel ``-k`` takes the
@@ -170,11 +171,18 @@ def demosaic(
     pad = radius + (radius % 2)  # even: the mirror then keeps the RGGB phase
     ry, rx = _red_offset(pattern)
     flat = a.reshape((-1, h, w))
-    out = np.empty((flat.shape[0], h, w, 3), dtype=a.dtype)
-    for k in range(flat.shape[0]):
-        P = np.pad(flat[k], ((pad + ry, pad), (pad + rx, pad)), mode="reflect")
-        out[k] = kernel(P, pad + ry, pad + rx, h, w)
-    res = out.reshape((*shape[:-2], h, w, 3))
+    results = [
+        kernel(
+            np.pad(flat[k], ((pad + ry, pad), (pad + rx, pad)), mode="reflect"),
+            pad + ry,
+            pad + rx,
+            h,
+            w,
+        )
+        for k in range(flat.shape[0])
+    ]
+    res = results[0] if len(results) == 1 else np.stack(results)
+    res = res.reshape((*shape[:-2], h, w, 3))
     if clip:
         np.clip(res, 0.0, 1.0, out=res)
     if is_numpy_namespace(xp):
