@@ -102,18 +102,33 @@ def methods() -> dict[
     return table
 
 
-def time_ms_per_mp(
-    fn: Callable[[object], object], arg: object, mp: float, reps: int
-) -> tuple[float, float]:
-    """Median wall-clock and CPU (all threads of this process) time, in ms per MP."""
-    fn(arg)  # warm-up (numba compilation, caches)
-    wall, cpu = [], []
+def time_round_robin(
+    table: dict[str, tuple[Callable[[np.ndarray], np.ndarray], Callable[[np.ndarray], object]]],
+    raws: list[np.ndarray],
+    reps: int,
+) -> tuple[dict[str, float], dict[str, float]]:
+    """Median wall-clock and CPU (all threads of this process) ms per MP of every method.
+
+    The methods take turns within each repetition, so that a change in the load of this
+    shared machine hits all of them alike (ratios are then comparable).
+    """
+    args = {name: [prep(r) for r in raws] for name, (_, prep) in table.items()}
+    for name, (fn, _) in table.items():  # warm-up: numba compilation, caches
+        fn(args[name][0])  # type: ignore[arg-type]
+    wall: dict[str, list[float]] = {n: [] for n in table}
+    cpu: dict[str, list[float]] = {n: [] for n in table}
     for _ in range(reps):
-        t0, c0 = time.perf_counter(), time.process_time()
-        fn(arg)
-        wall.append(time.perf_counter() - t0)
-        cpu.append(time.process_time() - c0)
-    return float(np.median(wall)) * 1e3 / mp, float(np.median(cpu)) * 1e3 / mp
+        for name, (fn, _) in table.items():
+            for r, arg in zip(raws, args[name], strict=True):
+                mp = r.shape[0] * r.shape[1] / 1e6
+                t0, c0 = time.perf_counter(), time.process_time()
+                fn(arg)  # type: ignore[arg-type]
+                wall[name].append((time.perf_counter() - t0) * 1e3 / mp)
+                cpu[name].append((time.process_time() - c0) * 1e3 / mp)
+    return (
+        {n: float(np.median(v)) for n, v in wall.items()},
+        {n: float(np.median(v)) for n, v in cpu.items()},
+    )
 
 
 def main() -> None:
@@ -121,43 +136,32 @@ def main() -> None:
     ap.add_argument("--write", type=Path, help="write the markdown table to this file")
     ap.add_argument("--reps", type=int, default=7, help="timing repetitions per method")
     ap.add_argument("--time-images", type=int, default=3, help="images used for timing")
+    ap.add_argument("--threads", type=int, default=0, help="numba threads (0: numba's default)")
     args = ap.parse_args()
+
+    import numba
+
+    if args.threads:
+        numba.set_num_threads(args.threads)
 
     from imageform.sensor import mosaic
 
     images = load_kodak()
     raws = [mosaic(img, "RGGB") for img in images]
     table = methods()
-    rows = []
-    cpu_ms: dict[str, float] = {}
-    for name, (fn, prep) in table.items():
+    quality = {}
+    for name, (fn, _) in table.items():
         crop, full = [], []
         for r, im in zip(raws, images, strict=True):
             out = np.asarray(fn(r), dtype=np.float64)
             crop.append(cpsnr(out, im, 10))
             full.append(cpsnr(out, im))
-        speeds, cpus = [], []
-        for r in raws[: args.time_images]:
-            mp = r.shape[0] * r.shape[1] / 1e6
-            arg = prep(r)
-            wall_t, cpu_t = time_ms_per_mp(fn, arg, mp, args.reps)  # type: ignore[arg-type]
-            speeds.append(wall_t)
-            cpus.append(cpu_t)
-        cpu_ms[name] = float(np.median(cpus))
-        rows.append(
-            (
-                name,
-                float(np.mean(crop)),
-                float(np.mean(full)),
-                float(np.median(speeds)),
-                np.array(crop),
-            )
-        )
-        print(
-            f"{name:34s} crop {rows[-1][1]:7.3f}  full {rows[-1][2]:7.3f}  "
-            f"{rows[-1][3]:8.2f} ms/MP (CPU {cpu_ms[name]:8.2f})",
-            flush=True,
-        )
+        quality[name] = (float(np.mean(crop)), float(np.mean(full)), np.array(crop))
+        print(f"{name:34s} crop {np.mean(crop):7.3f}  full {np.mean(full):7.3f}", flush=True)
+    wall_ms, cpu_ms = time_round_robin(table, raws[: args.time_images], args.reps)
+    rows = [(n, quality[n][0], quality[n][1], wall_ms[n], quality[n][2]) for n in table]
+    for n, _, _, t, _ in rows:
+        print(f"{n:34s} {t:8.2f} ms/MP (CPU {cpu_ms[n]:8.2f})")
 
     speed = {r[0]: r[3] for r in rows}
     ratios = [
@@ -189,14 +193,12 @@ def main() -> None:
         print(f"{label}: {v:.1f} (CPU time: {c:.1f})")
 
     if args.write:
-        import numba
-
         lines = [
             "# Demosaicing benchmark, 2026-11-22",
             "",
             f"Command: `OPENBLAS_NUM_THREADS=1 PYTHONPATH=src python benchmarks/bench_demosaic.py "
-            f"--write {args.write}` (one run; {args.reps} repetitions on {args.time_images} "
-            "images, median).",
+            f"--write {args.write}` (one run; {args.reps} round-robin repetitions on "
+            f"{args.time_images} images, median).",
             f"Machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores "
             f"shared with other jobs; numba threads {numba.get_num_threads()}; "
             f"Python {platform.python_version()}.",

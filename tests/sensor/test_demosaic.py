@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 from hypothesis import given, settings
@@ -170,7 +172,7 @@ def test_smooth_image_error_is_small(method: str) -> None:
 
 
 @pytest.mark.parametrize("method", DEMOSAIC_METHODS)
-def test_borders_not_much_worse_than_with_context(method: str, shared_data) -> None:  # type: ignore[no-untyped-def]
+def test_borders_not_much_worse_than_with_context(method: str, shared_data: Path) -> None:
     """The phase-preserving mirror: border pixels of a crop (4-pixel band) are reconstructed
     nearly as well as the same pixels with real neighbours (measured ratios 1.1-2.3 on
     these crops; colour-demosaicing's bilinear, which mirrors across the CFA phase, gives
