@@ -21,39 +21,43 @@ RADIUS = 1
 
 @njit(cache=True, parallel=True, fastmath=False)
 def bilinear_numba(P: np.ndarray, oy: int, ox: int, h: int, w: int) -> np.ndarray:
+    # Unit-stride row views indexed from 0 (vectorisable), the phase selects, then the three
+    # results are interleaved into the output (as in demosaic_malvar).
     out = np.empty((h, w, 3), dtype=P.dtype)
-    q = P.dtype.type(0.25)
-    half = P.dtype.type(0.5)
+    t = P.dtype.type
+    q = t(0.25)
+    half = t(0.5)
     for i in prange(h):
         y = i + oy
-        up = P[y - 1]
-        row = P[y]
-        dn = P[y + 1]
+        u1m = P[y - 1, ox - 1 : ox - 1 + w]
+        u1 = P[y - 1, ox : ox + w]
+        u1p = P[y - 1, ox + 1 : ox + 1 + w]
+        d1m = P[y + 1, ox - 1 : ox - 1 + w]
+        d1 = P[y + 1, ox : ox + w]
+        d1p = P[y + 1, ox + 1 : ox + 1 + w]
+        cm1 = P[y, ox - 1 : ox - 1 + w]
+        c0 = P[y, ox : ox + w]
+        cp1 = P[y, ox + 1 : ox + 1 + w]
+        bg = np.empty(w, P.dtype)
+        bk = np.empty(w, P.dtype)
+        bo = np.empty(w, P.dtype)
+        red_row = y % 2 == 0
+        rb_parity = 0 if red_row else 1
+        for j in range(w):
+            c = c0[j]
+            s1h = cm1[j] + cp1[j]
+            s1v = u1[j] + d1[j]
+            dg = u1m[j] + u1p[j] + d1m[j] + d1p[j]
+            is_rb = ((j + ox) & 1) == rb_parity
+            bg[j] = q * (s1h + s1v) if is_rb else c
+            bk[j] = c if is_rb else half * s1h
+            bo[j] = q * dg if is_rb else half * s1v
         o = out[i]
-        # columns whose padded index is even, then odd (no per-pixel branch)
-        j0 = ox % 2  # first j with (j + ox) even
-        if y % 2 == 0:  # R G R G ...
-            for j in range(j0, w, 2):  # red sites
-                x = j + ox
-                o[j, 0] = row[x]
-                o[j, 1] = q * (row[x - 1] + row[x + 1] + up[x] + dn[x])
-                o[j, 2] = q * (up[x - 1] + up[x + 1] + dn[x - 1] + dn[x + 1])
-            for j in range(1 - j0, w, 2):  # green in a red row
-                x = j + ox
-                o[j, 0] = half * (row[x - 1] + row[x + 1])
-                o[j, 1] = row[x]
-                o[j, 2] = half * (up[x] + dn[x])
-        else:  # G B G B ...
-            for j in range(j0, w, 2):  # green in a blue row
-                x = j + ox
-                o[j, 0] = half * (up[x] + dn[x])
-                o[j, 1] = row[x]
-                o[j, 2] = half * (row[x - 1] + row[x + 1])
-            for j in range(1 - j0, w, 2):  # blue sites
-                x = j + ox
-                o[j, 0] = q * (up[x - 1] + up[x + 1] + dn[x - 1] + dn[x + 1])
-                o[j, 1] = q * (row[x - 1] + row[x + 1] + up[x] + dn[x])
-                o[j, 2] = row[x]
+        k = 0 if red_row else 2
+        for j in range(w):
+            o[j, 1] = bg[j]
+            o[j, k] = bk[j]
+            o[j, 2 - k] = bo[j]
     return out
 
 
