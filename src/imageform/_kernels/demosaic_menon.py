@@ -159,71 +159,78 @@ def _menon_slab(
     R = np.empty_like(P)
     B = np.empty_like(P)
     hor = np.empty(P.shape, dtype=np.uint8)
-    # 1-2. chrominance gradients at red/blue sites, margin 4. The chrominance X - G_H is
-    # X/2 - (left + right)/2 + (left2 + right2)/4 (eq. 3), computed on the fly.
+    # Passes 1-3 and 8 evaluate every pixel of a row from unit-stride row views indexed from
+    # 0 (vectorisable; the values at green sites are discarded by the phase select).
+    # 1-2. chrominance gradients, margin 4. The chrominance X - G_H is
+    # X/2 - (left + right)/2 + (left2 + right2)/4 (eq. 3).
+    n = W - 8
     for y in range(4, H - 4):
-        r0 = P[y]
-        for x in range(4 + (4 + y) % 2, W - 4, 2):
-            ch0 = half * r0[x] - half * (r0[x - 1] + r0[x + 1]) + quarter * (r0[x - 2] + r0[x + 2])
-            x2 = x + 2
-            ch2 = (
-                half * r0[x2]
-                - half * (r0[x2 - 1] + r0[x2 + 1])
-                + quarter * (r0[x2 - 2] + r0[x2 + 2])
-            )
-            cv0 = (
-                half * r0[x]
-                - half * (P[y - 1, x] + P[y + 1, x])
-                + quarter * (P[y - 2, x] + P[y + 2, x])
-            )
-            cv2 = (
-                half * P[y + 2, x]
-                - half * (P[y + 1, x] + P[y + 3, x])
-                + quarter * (r0[x] + P[y + 4, x])
-            )
-            Dh[y, x] = abs(ch0 - ch2)
-            Dv[y, x] = abs(cv0 - cv2)
+        c = P[y, 4 : 4 + n]
+        cm1, cp1 = P[y, 3 : 3 + n], P[y, 5 : 5 + n]
+        cm2, cp2 = P[y, 2 : 2 + n], P[y, 6 : 6 + n]
+        cp3, cp4 = P[y, 7 : 7 + n], P[y, 8 : 8 + n]
+        u1, d1 = P[y - 1, 4 : 4 + n], P[y + 1, 4 : 4 + n]
+        u2, d2 = P[y - 2, 4 : 4 + n], P[y + 2, 4 : 4 + n]
+        d3, d4 = P[y + 3, 4 : 4 + n], P[y + 4, 4 : 4 + n]
+        dhr, dvr = Dh[y, 4 : 4 + n], Dv[y, 4 : 4 + n]
+        for k in range(n):
+            ch0 = half * c[k] - half * (cm1[k] + cp1[k]) + quarter * (cm2[k] + cp2[k])
+            ch2 = half * cp2[k] - half * (cp1[k] + cp3[k]) + quarter * (c[k] + cp4[k])
+            cv0 = half * c[k] - half * (u1[k] + d1[k]) + quarter * (u2[k] + d2[k])
+            cv2 = half * d2[k] - half * (d1[k] + d3[k]) + quarter * (c[k] + d4[k])
+            dhr[k] = abs(ch0 - ch2)
+            dvr[k] = abs(cv0 - cv2)
     # 3. decision over the 5x5 window (eq. 9) and green, margin 6
+    n = W - 12
     for y in range(6, H - 6):
-        r0 = P[y]
-        for x in range(6 + 1 - (6 + y) % 2, W - 6, 2):
-            G[y, x] = r0[x]
-        for x in range(6 + (6 + y) % 2, W - 6, 2):
+        h00, h0m2 = Dh[y, 6 : 6 + n], Dh[y, 4 : 4 + n]
+        hu1m1, hd1m1 = Dh[y - 1, 5 : 5 + n], Dh[y + 1, 5 : 5 + n]
+        hu2, hd2 = Dh[y - 2, 6 : 6 + n], Dh[y + 2, 6 : 6 + n]
+        hu2m2, hd2m2 = Dh[y - 2, 4 : 4 + n], Dh[y + 2, 4 : 4 + n]
+        v00, vu2 = Dv[y, 6 : 6 + n], Dv[y - 2, 6 : 6 + n]
+        vu1m1, vu1p1 = Dv[y - 1, 5 : 5 + n], Dv[y - 1, 7 : 7 + n]
+        v0m2, v0p2 = Dv[y, 4 : 4 + n], Dv[y, 8 : 8 + n]
+        vu2m2, vu2p2 = Dv[y - 2, 4 : 4 + n], Dv[y - 2, 8 : 8 + n]
+        c = P[y, 6 : 6 + n]
+        cm1, cp1 = P[y, 5 : 5 + n], P[y, 7 : 7 + n]
+        cm2, cp2 = P[y, 4 : 4 + n], P[y, 8 : 8 + n]
+        u1, d1 = P[y - 1, 6 : 6 + n], P[y + 1, 6 : 6 + n]
+        u2, d2 = P[y - 2, 6 : 6 + n], P[y + 2, 6 : 6 + n]
+        gr, hr = G[y, 6 : 6 + n], hor[y, 6 : 6 + n]
+        par = (6 + y) & 1  # (k + par) even: a red/blue site
+        for k in range(n):
             dh = (
-                three * (Dh[y, x] + Dh[y, x - 2])
-                + Dh[y - 1, x - 1]
-                + Dh[y + 1, x - 1]
-                + Dh[y - 2, x]
-                + Dh[y + 2, x]
-                + Dh[y - 2, x - 2]
-                + Dh[y + 2, x - 2]
+                three * (h00[k] + h0m2[k])
+                + hu1m1[k]
+                + hd1m1[k]
+                + hu2[k]
+                + hd2[k]
+                + hu2m2[k]
+                + hd2m2[k]
             )
             dv = (
-                three * (Dv[y, x] + Dv[y - 2, x])
-                + Dv[y - 1, x - 1]
-                + Dv[y - 1, x + 1]
-                + Dv[y, x - 2]
-                + Dv[y, x + 2]
-                + Dv[y - 2, x - 2]
-                + Dv[y - 2, x + 2]
+                three * (v00[k] + vu2[k])
+                + vu1m1[k]
+                + vu1p1[k]
+                + v0m2[k]
+                + v0p2[k]
+                + vu2m2[k]
+                + vu2p2[k]
             )
-            c = r0[x]
-            gh = half * (r0[x - 1] + r0[x + 1]) + half * c - quarter * (r0[x - 2] + r0[x + 2])
-            gv = (
-                half * (P[y - 1, x] + P[y + 1, x])
-                + half * c
-                - quarter * (P[y - 2, x] + P[y + 2, x])
-            )
+            ck = c[k]
+            gh = half * (cm1[k] + cp1[k]) + half * ck - quarter * (cm2[k] + cp2[k])
+            gv = half * (u1[k] + d1[k]) + half * ck - quarter * (u2[k] + d2[k])
             is_h = dv >= dh
-            hor[y, x] = 1 if is_h else 0
+            hr[k] = 1 if is_h else 0
             if soft:  # weights dv^2 : dh^2 for the horizontal : vertical estimates
                 a = dh * dh
                 b = dv * dv
                 ab = a + b
                 blend = (b * gh + a * gv) / (ab if ab != zero else one)
-                G[y, x] = blend if ab != zero else half * (gh + gv)
+                g = blend if ab != zero else half * (gh + gv)
             else:
-                G[y, x] = gh if is_h else gv
+                g = gh if is_h else gv
+            gr[k] = g if ((k + par) & 1) == 0 else ck
     # 4. red and blue at green sites from colour differences, margin 7
     for y in range(7, H - 7):
         red_row = y % 2 == 0
@@ -279,35 +286,32 @@ def _menon_slab(
                 h0[x] = g + half * ((h0[x - 1] - g0[x - 1]) + (h0[x + 1] - g0[x + 1]))
                 v0[x] = g + half * ((vu[x] - gu[x]) + (vd[x] - gd[x]))
     # 8. output; with refinement, red (blue) at blue (red) sites from the 3-tap mean of R - B
-    j_even = ox % 2
+    rbuf = np.empty(w, P.dtype)
+    bbuf = np.empty(w, P.dtype)
     for i in range(h):
         y = i + oy
         red_row = y % 2 == 0
-        ru, r0, rd = R[y - 1], R[y], R[y + 1]
-        bu, b0, bd = B[y - 1], B[y], B[y + 1]
-        g0, p0, hr = G[y], P[y], hor[y]
+        r0, rm, rp = R[y, ox : ox + w], R[y, ox - 1 : ox - 1 + w], R[y, ox + 1 : ox + 1 + w]
+        ru, rd = R[y - 1, ox : ox + w], R[y + 1, ox : ox + w]
+        b0, bm, bp = B[y, ox : ox + w], B[y, ox - 1 : ox - 1 + w], B[y, ox + 1 : ox + 1 + w]
+        bu, bd = B[y - 1, ox : ox + w], B[y + 1, ox : ox + w]
+        g0, p0, hr = G[y, ox : ox + w], P[y, ox : ox + w], hor[y, ox : ox + w]
+        par = (ox + y) & 1  # (j + par) even: a red/blue site
+        sr = zero if red_row else third  # R = P + sr * d at blue sites
+        sb = -third if red_row else zero  # B = P + sb * d at red sites
+        for j in range(w):
+            cd = r0[j] - b0[j]
+            dh = (rm[j] - bm[j]) + cd + (rp[j] - bp[j])
+            dv = (ru[j] - bu[j]) + cd + (rd[j] - bd[j])
+            d = dh if hr[j] else dv
+            rb_site = refine and ((j + par) & 1) == 0
+            rbuf[j] = p0[j] + sr * d if rb_site else r0[j]
+            bbuf[j] = p0[j] + sb * d if rb_site else b0[j]
         o = out[i]
-        jg = 1 - j_even if red_row else j_even  # first green column
-        for j in range(jg, w, 2):
-            x = j + ox
-            o[j, 0] = r0[x]
-            o[j, 1] = g0[x]
-            o[j, 2] = b0[x]
-        k = 0 if red_row else 2  # the channel measured at the other sites
-        sign = -third if red_row else third
-        for j in range(1 - jg, w, 2):
-            x = j + ox
-            o[j, 1] = g0[x]
-            if not refine:
-                o[j, 0] = r0[x]
-                o[j, 2] = b0[x]
-                continue
-            c = r0[x] - b0[x]
-            dh = (r0[x - 1] - b0[x - 1]) + c + (r0[x + 1] - b0[x + 1])
-            dv = (ru[x] - bu[x]) + c + (rd[x] - bd[x])
-            d = dh if hr[x] else dv
-            o[j, k] = p0[x]
-            o[j, 2 - k] = p0[x] + sign * d
+        for j in range(w):
+            o[j, 0] = rbuf[j]
+            o[j, 1] = g0[j]
+            o[j, 2] = bbuf[j]
 
 
 @njit(cache=True, parallel=True, fastmath=False)
