@@ -231,60 +231,86 @@ def _menon_slab(
             else:
                 g = gh if is_h else gv
             gr[k] = g if ((k + par) & 1) == 0 else ck
-    # 4. red and blue at green sites from colour differences, margin 7
+    # Passes 5-7 update a plane in place: each row is computed into a buffer first and
+    # merged at the sites it updates, so that the loops carry no dependence (vectorisable).
+    t1 = np.empty(W, P.dtype)
+    t2 = np.empty(W, P.dtype)
+    # 4. red and blue at green sites from colour differences, margin 7 (the value written
+    # for the other colour at red/blue sites is replaced in pass 5 wherever it is read)
+    n = W - 14
     for y in range(7, H - 7):
         red_row = y % 2 == 0
-        pu, p0, pd = P[y - 1], P[y], P[y + 1]
-        gu, g0, gd = G[y - 1], G[y], G[y + 1]
-        Rh, Rv = (R[y], B[y]) if red_row else (B[y], R[y])  # colour of this row, the other
-        for x in range(7 + (7 + y) % 2, W - 7, 2):  # red/blue sites keep their sample
-            Rh[x] = p0[x]
-        for x in range(7 + 1 - (7 + y) % 2, W - 7, 2):
-            g = g0[x]
-            Rh[x] = g + half * ((p0[x - 1] - g0[x - 1]) + (p0[x + 1] - g0[x + 1]))
-            Rv[x] = g + half * ((pu[x] - gu[x]) + (pd[x] - gd[x]))
+        pu, pd = P[y - 1, 7 : 7 + n], P[y + 1, 7 : 7 + n]
+        p0, pm, pp = P[y, 7 : 7 + n], P[y, 6 : 6 + n], P[y, 8 : 8 + n]
+        gu, gd = G[y - 1, 7 : 7 + n], G[y + 1, 7 : 7 + n]
+        g0, gm, gp = G[y, 7 : 7 + n], G[y, 6 : 6 + n], G[y, 8 : 8 + n]
+        own, oth = (R[y], B[y]) if red_row else (B[y], R[y])  # colour of this row, the other
+        Rh, Rv = own[7 : 7 + n], oth[7 : 7 + n]
+        par = (7 + y) & 1
+        for k in range(n):
+            g = g0[k]
+            hz = g + half * ((pm[k] - gm[k]) + (pp[k] - gp[k]))
+            Rh[k] = p0[k] if ((k + par) & 1) == 0 else hz
+            Rv[k] = g + half * ((pu[k] - gu[k]) + (pd[k] - gd[k]))
     # 5. red at blue sites, blue at red sites along the chosen direction, margin 8
+    n = W - 16
     for y in range(8, H - 8):
         red_row = y % 2 == 0
-        ru, r0, rd = R[y - 1], R[y], R[y + 1]
-        bu, b0, bd = B[y - 1], B[y], B[y + 1]
-        p0 = P[y]
+        r0, rm, rp = R[y, 8 : 8 + n], R[y, 7 : 7 + n], R[y, 9 : 9 + n]
+        b0, bm, bp = B[y, 8 : 8 + n], B[y, 7 : 7 + n], B[y, 9 : 9 + n]
+        ru, rd = R[y - 1, 8 : 8 + n], R[y + 1, 8 : 8 + n]
+        bu, bd = B[y - 1, 8 : 8 + n], B[y + 1, 8 : 8 + n]
+        p0, hr = P[y, 8 : 8 + n], hor[y, 8 : 8 + n]
         o0 = b0 if red_row else r0
-        hr = hor[y]
         sign = -half if red_row else half
-        for x in range(8 + (8 + y) % 2, W - 8, 2):
-            dh = (r0[x - 1] - b0[x - 1]) + (r0[x + 1] - b0[x + 1])
-            dv = (ru[x] - bu[x]) + (rd[x] - bd[x])
-            d = dh if hr[x] else dv  # both computed: a select, not a branch
-            o0[x] = p0[x] + sign * d
+        par = (8 + y) & 1
+        for k in range(n):
+            dh = (rm[k] - bm[k]) + (rp[k] - bp[k])
+            dv = (ru[k] - bu[k]) + (rd[k] - bd[k])
+            d = dh if hr[k] else dv  # both computed: a select, not a branch
+            t1[k] = p0[k] + sign * d
+        for k in range(n):
+            o0[k] = t1[k] if ((k + par) & 1) == 0 else o0[k]
     if refine:
         # 6. green at red/blue sites from the directional 3-tap mean of X - G, margin 9
+        n = W - 18
         for y in range(9, H - 9):
             X = R if y % 2 == 0 else B
-            xu, x0, xd = X[y - 1], X[y], X[y + 1]
-            gu, g0, gd = G[y - 1], G[y], G[y + 1]
-            p0 = P[y]
-            hr = hor[y]
-            for x in range(9 + (9 + y) % 2, W - 9, 2):
-                c = x0[x] - g0[x]
-                mh = (x0[x - 1] - g0[x - 1]) + c + (x0[x + 1] - g0[x + 1])
-                mv = (xu[x] - gu[x]) + c + (xd[x] - gd[x])
-                m = mh if hr[x] else mv
-                g0[x] = p0[x] - m * third
+            x0, xm, xp = X[y, 9 : 9 + n], X[y, 8 : 8 + n], X[y, 10 : 10 + n]
+            xu, xd = X[y - 1, 9 : 9 + n], X[y + 1, 9 : 9 + n]
+            g0, gm, gp = G[y, 9 : 9 + n], G[y, 8 : 8 + n], G[y, 10 : 10 + n]
+            gu, gd = G[y - 1, 9 : 9 + n], G[y + 1, 9 : 9 + n]
+            p0, hr = P[y, 9 : 9 + n], hor[y, 9 : 9 + n]
+            par = (9 + y) & 1
+            for k in range(n):
+                c = x0[k] - g0[k]
+                mh = (xm[k] - gm[k]) + c + (xp[k] - gp[k])
+                mv = (xu[k] - gu[k]) + c + (xd[k] - gd[k])
+                m = mh if hr[k] else mv
+                t1[k] = p0[k] - m * third
+            for k in range(n):
+                g0[k] = t1[k] if ((k + par) & 1) == 0 else g0[k]
         # 7. red and blue at green sites from the refined differences, margin 10
+        n = W - 20
         for y in range(10, H - 10):
             red_row = y % 2 == 0
-            gu, g0, gd = G[y - 1], G[y], G[y + 1]
+            g0, gm, gp = G[y, 10 : 10 + n], G[y, 9 : 9 + n], G[y, 11 : 11 + n]
+            gu, gd = G[y - 1, 10 : 10 + n], G[y + 1, 10 : 10 + n]
             if red_row:  # red left/right, blue above/below
-                h0, vu, vd = R[y], B[y - 1], B[y + 1]
-                v0 = B[y]
+                hp, vp = R, B
             else:
-                h0, vu, vd = B[y], R[y - 1], R[y + 1]
-                v0 = R[y]
-            for x in range(10 + 1 - (10 + y) % 2, W - 10, 2):
-                g = g0[x]
-                h0[x] = g + half * ((h0[x - 1] - g0[x - 1]) + (h0[x + 1] - g0[x + 1]))
-                v0[x] = g + half * ((vu[x] - gu[x]) + (vd[x] - gd[x]))
+                hp, vp = B, R
+            h0, hm, hpp = hp[y, 10 : 10 + n], hp[y, 9 : 9 + n], hp[y, 11 : 11 + n]
+            v0, vu, vd = vp[y, 10 : 10 + n], vp[y - 1, 10 : 10 + n], vp[y + 1, 10 : 10 + n]
+            par = (10 + y) & 1
+            for k in range(n):
+                g = g0[k]
+                t1[k] = g + half * ((hm[k] - gm[k]) + (hpp[k] - gp[k]))
+                t2[k] = g + half * ((vu[k] - gu[k]) + (vd[k] - gd[k]))
+            for k in range(n):
+                is_g = ((k + par) & 1) == 1
+                h0[k] = t1[k] if is_g else h0[k]
+                v0[k] = t2[k] if is_g else v0[k]
     # 8. output; with refinement, red (blue) at blue (red) sites from the 3-tap mean of R - B
     rbuf = np.empty(w, P.dtype)
     bbuf = np.empty(w, P.dtype)
