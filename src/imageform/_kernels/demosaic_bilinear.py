@@ -27,37 +27,39 @@ def bilinear_numba(P: np.ndarray, oy: int, ox: int, h: int, w: int) -> np.ndarra
     t = P.dtype.type
     q = t(0.25)
     half = t(0.5)
-    for i in prange(h):
-        y = i + oy
-        u1m = P[y - 1, ox - 1 : ox - 1 + w]
-        u1 = P[y - 1, ox : ox + w]
-        u1p = P[y - 1, ox + 1 : ox + 1 + w]
-        d1m = P[y + 1, ox - 1 : ox - 1 + w]
-        d1 = P[y + 1, ox : ox + w]
-        d1p = P[y + 1, ox + 1 : ox + 1 + w]
-        cm1 = P[y, ox - 1 : ox - 1 + w]
-        c0 = P[y, ox : ox + w]
-        cp1 = P[y, ox + 1 : ox + 1 + w]
-        bg = np.empty(w, P.dtype)
-        bk = np.empty(w, P.dtype)
-        bo = np.empty(w, P.dtype)
-        red_row = y % 2 == 0
-        rb_parity = 0 if red_row else 1
-        for j in range(w):
-            c = c0[j]
-            s1h = cm1[j] + cp1[j]
-            s1v = u1[j] + d1[j]
-            dg = u1m[j] + u1p[j] + d1m[j] + d1p[j]
-            is_rb = ((j + ox) & 1) == rb_parity
-            bg[j] = q * (s1h + s1v) if is_rb else c
-            bk[j] = c if is_rb else half * s1h
-            bo[j] = q * dg if is_rb else half * s1v
-        o = out[i]
-        k = 0 if red_row else 2
-        for j in range(w):
-            o[j, 1] = bg[j]
-            o[j, k] = bk[j]
-            o[j, 2 - k] = bo[j]
+    # rows in chunks of 16, so that each chunk allocates its row buffers once
+    for chunk in prange((h + 15) // 16):
+        bg = np.empty(w, P.dtype)  # green
+        bk = np.empty(w, P.dtype)  # the colour of this row (red in red rows)
+        bo = np.empty(w, P.dtype)  # the other one
+        for i in range(chunk * 16, min(h, chunk * 16 + 16)):
+            y = i + oy
+            u1m = P[y - 1, ox - 1 : ox - 1 + w]
+            u1 = P[y - 1, ox : ox + w]
+            u1p = P[y - 1, ox + 1 : ox + 1 + w]
+            d1m = P[y + 1, ox - 1 : ox - 1 + w]
+            d1 = P[y + 1, ox : ox + w]
+            d1p = P[y + 1, ox + 1 : ox + 1 + w]
+            cm1 = P[y, ox - 1 : ox - 1 + w]
+            c0 = P[y, ox : ox + w]
+            cp1 = P[y, ox + 1 : ox + 1 + w]
+            red_row = y % 2 == 0
+            rb_parity = 0 if red_row else 1
+            for j in range(w):
+                c = c0[j]
+                s1h = cm1[j] + cp1[j]
+                s1v = u1[j] + d1[j]
+                dg = u1m[j] + u1p[j] + d1m[j] + d1p[j]
+                is_rb = ((j + ox) & 1) == rb_parity
+                bg[j] = q * (s1h + s1v) if is_rb else c
+                bk[j] = c if is_rb else half * s1h
+                bo[j] = q * dg if is_rb else half * s1v
+            o = out[i]
+            k = 0 if red_row else 2
+            for j in range(w):
+                o[j, 1] = bg[j]
+                o[j, k] = bk[j]
+                o[j, 2 - k] = bo[j]
     return out
 
 

@@ -35,48 +35,50 @@ def malvar_numba(P: np.ndarray, oy: int, ox: int, h: int, w: int) -> np.ndarray:
     t = P.dtype.type
     c2, c4, c5, c6 = t(2.0), t(4.0), t(5.0), t(6.0)
     half, c15, eighth = t(0.5), t(1.5), t(0.125)
-    for i in prange(h):
-        y = i + oy
-        u2 = P[y - 2, ox : ox + w]
-        u1m = P[y - 1, ox - 1 : ox - 1 + w]
-        u1 = P[y - 1, ox : ox + w]
-        u1p = P[y - 1, ox + 1 : ox + 1 + w]
-        d1m = P[y + 1, ox - 1 : ox - 1 + w]
-        d1 = P[y + 1, ox : ox + w]
-        d1p = P[y + 1, ox + 1 : ox + 1 + w]
-        d2 = P[y + 2, ox : ox + w]
-        cm2 = P[y, ox - 2 : ox - 2 + w]
-        cm1 = P[y, ox - 1 : ox - 1 + w]
-        c0 = P[y, ox : ox + w]
-        cp1 = P[y, ox + 1 : ox + 1 + w]
-        cp2 = P[y, ox + 2 : ox + 2 + w]
+    # rows in chunks of 16, so that each chunk allocates its row buffers once
+    for chunk in prange((h + 15) // 16):
         bg = np.empty(w, P.dtype)  # green
         bk = np.empty(w, P.dtype)  # the colour of this row (red in red rows)
         bo = np.empty(w, P.dtype)  # the other one
-        red_row = y % 2 == 0
-        rb_parity = 0 if red_row else 1  # column parity of the red (blue) sites of this row
-        for j in range(w):
-            c = c0[j]
-            s1h = cm1[j] + cp1[j]
-            s1v = u1[j] + d1[j]
-            s2h = cm2[j] + cp2[j]
-            s2v = u2[j] + d2[j]
-            dg = u1m[j] + u1p[j] + d1m[j] + d1p[j]
-            g_rb = (c4 * c + c2 * (s1h + s1v) - (s2h + s2v)) * eighth  # G at R/B
-            o_rb = (c6 * c + c2 * dg - c15 * (s2h + s2v)) * eighth  # B at R, R at B
-            base = c5 * c - dg
-            hor = (base + c4 * s1h - s2h + half * s2v) * eighth  # neighbours left/right
-            ver = (base + c4 * s1v - s2v + half * s2h) * eighth  # neighbours above/below
-            is_rb = ((j + ox) & 1) == rb_parity
-            bg[j] = g_rb if is_rb else c
-            bk[j] = c if is_rb else hor
-            bo[j] = o_rb if is_rb else ver
-        o = out[i]
-        k = 0 if red_row else 2
-        for j in range(w):
-            o[j, 1] = bg[j]
-            o[j, k] = bk[j]
-            o[j, 2 - k] = bo[j]
+        for i in range(chunk * 16, min(h, chunk * 16 + 16)):
+            y = i + oy
+            u2 = P[y - 2, ox : ox + w]
+            u1m = P[y - 1, ox - 1 : ox - 1 + w]
+            u1 = P[y - 1, ox : ox + w]
+            u1p = P[y - 1, ox + 1 : ox + 1 + w]
+            d1m = P[y + 1, ox - 1 : ox - 1 + w]
+            d1 = P[y + 1, ox : ox + w]
+            d1p = P[y + 1, ox + 1 : ox + 1 + w]
+            d2 = P[y + 2, ox : ox + w]
+            cm2 = P[y, ox - 2 : ox - 2 + w]
+            cm1 = P[y, ox - 1 : ox - 1 + w]
+            c0 = P[y, ox : ox + w]
+            cp1 = P[y, ox + 1 : ox + 1 + w]
+            cp2 = P[y, ox + 2 : ox + 2 + w]
+            red_row = y % 2 == 0
+            rb_parity = 0 if red_row else 1  # column parity of the red (blue) sites of this row
+            for j in range(w):
+                c = c0[j]
+                s1h = cm1[j] + cp1[j]
+                s1v = u1[j] + d1[j]
+                s2h = cm2[j] + cp2[j]
+                s2v = u2[j] + d2[j]
+                dg = u1m[j] + u1p[j] + d1m[j] + d1p[j]
+                g_rb = (c4 * c + c2 * (s1h + s1v) - (s2h + s2v)) * eighth  # G at R/B
+                o_rb = (c6 * c + c2 * dg - c15 * (s2h + s2v)) * eighth  # B at R, R at B
+                base = c5 * c - dg
+                hor = (base + c4 * s1h - s2h + half * s2v) * eighth  # neighbours left/right
+                ver = (base + c4 * s1v - s2v + half * s2h) * eighth  # neighbours above/below
+                is_rb = ((j + ox) & 1) == rb_parity
+                bg[j] = g_rb if is_rb else c
+                bk[j] = c if is_rb else hor
+                bo[j] = o_rb if is_rb else ver
+            o = out[i]
+            k = 0 if red_row else 2
+            for j in range(w):
+                o[j, 1] = bg[j]
+                o[j, k] = bk[j]
+                o[j, 2 - k] = bo[j]
     return out
 
 
