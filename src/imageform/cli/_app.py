@@ -11,6 +11,7 @@ from imageform.cli import (
     geometry_cmds,
     lecture_cmd,
     optics_cmds,
+    sensor_cmds,
     vanishing_cmd,
     vision_cmds,
 )
@@ -26,12 +27,13 @@ app = typer.Typer(
 
 for _module in (
     lecture_cmd,
-    calibration_cmds,
-    color_analysis_cmds,
-    color_cmds,
     geometry_cmds,
-    optics_cmds,
     vanishing_cmd,
+    calibration_cmds,
+    optics_cmds,
+    sensor_cmds,
+    color_cmds,
+    color_analysis_cmds,
     vision_cmds,
 ):
     _module.register(app)

@@ -1,8 +1,10 @@
-"""imageform.sensor — sensor model, noise, shutter, CCD/CMOS presets, EMVA 1288."""
+"""imageform.sensor — colour filter arrays and demosaicing, the sensor model, noise, shutter,
+CCD/CMOS presets, EMVA 1288 photon transfer."""
 
 from __future__ import annotations
 
-# --- sensor model, noise, shutter, presets, EMVA 1288 (branch `sensor`) ---------------------
+from imageform.sensor.cfa import CFA_PATTERNS, cfa_masks, cfa_pattern, mosaic
+from imageform.sensor.demosaic import DEMOSAIC_METHODS, demosaic
 from imageform.sensor.emva import (
     EmvaResult,
     PhotonTransferData,
@@ -31,8 +33,10 @@ from imageform.sensor.shutter import (
     shutter_capture,
 )
 
-__all__ = [  # branch `sensor` names; the CFA/demosaic branch adds its own
+__all__ = [
     "CCD_VS_CMOS",
+    "CFA_PATTERNS",
+    "DEMOSAIC_METHODS",
     "QUANTISATION_NOISE_DN",
     "ComparisonRow",
     "EmvaResult",
@@ -40,11 +44,15 @@ __all__ = [  # branch `sensor` names; the CFA/demosaic branch adds its own
     "PhotonTransferData",
     "SensorModel",
     "ccd_preset",
+    "cfa_masks",
+    "cfa_pattern",
     "cmos_preset",
     "comparison_table",
+    "demosaic",
     "emva_snr",
     "fit_photon_transfer",
     "fixed_pattern",
+    "mosaic",
     "photons_per_pixel",
     "rolling_shutter_points",
     "rolling_shutter_skew",

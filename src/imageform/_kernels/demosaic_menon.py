@@ -1,0 +1,383 @@
+"""Menon-Andriani-Calvagno (2007) DDFAPD demosaicing: numba kernel and its NumPy twin.
+
+Directional filtering with a posteriori decision (DDFAPD):
+
+1. green is interpolated twice at red/blue sites, horizontally and vertically, with the
+   filter ``h0 + h1 = [-1/4, 1/2, 1/2, 1/2, -1/4]`` (paper eq. 3, Adams' filter);
+2. the chrominances :math:`C_H = X - \\hat G_H`, :math:`C_V = X - \\hat G_V` (X the
+   measured red or blue) give gradients :math:`D_H(y, x) = |C_H(y, x) - C_H(y, x + 2)|`,
+   :math:`D_V` likewise, summed over a 5×5 window with weights
+   ``[[1,0,1,0,1]... 3 ...]`` (eq. 9); green is taken from the direction with the smaller
+   sum (:math:`\\delta_V \\ge \\delta_H` chooses horizontal);
+3. red and blue are filled with colour differences: at green sites the mean of the two
+   neighbours' differences along the row or column that holds the colour, at blue (red)
+   sites along the direction chosen in step 2;
+4. refinement (sec. IV): the green at red/blue sites is re-estimated from the 3-tap mean of
+   the colour difference along the chosen direction, then red/blue at green sites and at
+   blue/red sites are recomputed from the refined differences.
+
+``soft=True`` (imageform's ``"menon_soft"``) replaces the hard choice of step 2 by a blend
+weighted by the *other* direction's squared gradient sum,
+
+.. math::
+
+    \\hat G = \\frac{\\delta_V^2 \\hat G_H + \\delta_H^2 \\hat G_V}{\\delta_H^2 + \\delta_V^2}
+
+(the plain mean where both are 0); the direction used by steps 3-4 stays the hard decision.
+On Kodak this gains about 0.7 dB CPSNR over the hard decision (benchmarks/results).
+
+The hard version follows the paper and colour-demosaicing's
+``demosaicing_CFA_Bayer_Menon2007`` (same filters, window and decision rule), on a mosaic
+padded with a phase-preserving mirror.
+
+Source: D. Menon, S. Andriani, G. Calvagno, "Demosaicing with directional filtering and a
+posteriori decision", IEEE Trans. Image Process. 16(1), 132-141 (2007). Radius: 11 pixels.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit, prange
+
+from imageform._kernels.demosaic_common import crop, phase_masks, shift
+
+__all__ = ["RADIUS", "menon_numba", "menon_numpy", "menon_soft_numba", "menon_soft_numpy"]
+
+RADIUS = 11
+
+
+def menon_numpy(
+    P: np.ndarray, oy: int, ox: int, h: int, w: int, refine: bool = True, soft: bool = False
+) -> np.ndarray:
+    """Twin of :func:`menon_numba` with whole-plane array operations."""
+
+    def s(a: np.ndarray, dy: int, dx: int) -> np.ndarray:
+        return shift(a, dy, dx)
+
+    r_m, g1, g2, b_m = phase_masks(P.shape)
+    g_m = g1 | g2
+    rb_m = r_m | b_m
+    # 1. directional green
+    gh = np.where(
+        g_m, P, 0.5 * (s(P, 0, -1) + s(P, 0, 1)) + 0.5 * P - 0.25 * (s(P, 0, -2) + s(P, 0, 2))
+    )
+    gv = np.where(
+        g_m, P, 0.5 * (s(P, -1, 0) + s(P, 1, 0)) + 0.5 * P - 0.25 * (s(P, -2, 0) + s(P, 2, 0))
+    )
+    # 2. decision
+    ch = np.where(rb_m, P - gh, 0)
+    cv = np.where(rb_m, P - gv, 0)
+    Dh = np.abs(ch - s(ch, 0, 2))
+    Dv = np.abs(cv - s(cv, 2, 0))
+    dh = (
+        3 * (Dh + s(Dh, 0, -2))
+        + s(Dh, -1, -1)
+        + s(Dh, 1, -1)
+        + s(Dh, -2, 0)
+        + s(Dh, 2, 0)
+        + s(Dh, -2, -2)
+        + s(Dh, 2, -2)
+    )
+    dv = (
+        3 * (Dv + s(Dv, -2, 0))
+        + s(Dv, -1, -1)
+        + s(Dv, -1, 1)
+        + s(Dv, 0, -2)
+        + s(Dv, 0, 2)
+        + s(Dv, -2, -2)
+        + s(Dv, -2, 2)
+    )
+    hor = dv >= dh
+    if soft:
+        a, b = dh * dh, dv * dv
+        t = a + b
+        tie = t == 0
+        G = np.where(tie, 0.5 * (gh + gv), (b * gh + a * gv) / np.where(tie, 1, t))
+    else:
+        G = np.where(hor, gh, gv)
+    # 3. red and blue
+    D = P - G  # R - G at red sites, B - G at blue sites
+    dh_avg = 0.5 * (s(D, 0, -1) + s(D, 0, 1))
+    dv_avg = 0.5 * (s(D, -1, 0) + s(D, 1, 0))
+    R = np.select([r_m, g1, g2], [P, G + dh_avg, G + dv_avg], 0)
+    B = np.select([b_m, g1, g2], [P, G + dv_avg, G + dh_avg], 0)
+    RB = R - B
+    rb_h = 0.5 * (s(RB, 0, -1) + s(RB, 0, 1))
+    rb_v = 0.5 * (s(RB, -1, 0) + s(RB, 1, 0))
+    rb_dir = np.where(hor, rb_h, rb_v)
+    R = np.where(b_m, B + rb_dir, R)
+    B = np.where(r_m, R - rb_dir, B)
+    if refine:
+        R, G, B = _refine_numpy(R, G, B, hor, r_m, g1, g2, b_m)
+    out = np.stack([R, G, B], axis=-1).astype(P.dtype, copy=False)
+    return crop(out, oy, ox, h, w)
+
+
+def _refine_numpy(R, G, B, hor, r_m, g1, g2, b_m):  # type: ignore[no-untyped-def]
+    def s(a: np.ndarray, dy: int, dx: int) -> np.ndarray:
+        return shift(a, dy, dx)
+
+    def fir3(a: np.ndarray) -> np.ndarray:
+        return np.where(hor, s(a, 0, -1) + a + s(a, 0, 1), s(a, -1, 0) + a + s(a, 1, 0)) / 3
+
+    # green at red/blue sites from the directional 3-tap mean of the colour difference
+    G = np.select([r_m, b_m], [R - fir3(R - G), B - fir3(B - G)], G)
+    # red/blue at green sites from the refined differences
+    RG = R - G
+    BG = B - G
+    R = np.select(
+        [g1, g2],
+        [G + 0.5 * (s(RG, 0, -1) + s(RG, 0, 1)), G + 0.5 * (s(RG, -1, 0) + s(RG, 1, 0))],
+        R,
+    )
+    B = np.select(
+        [g1, g2],
+        [G + 0.5 * (s(BG, -1, 0) + s(BG, 1, 0)), G + 0.5 * (s(BG, 0, -1) + s(BG, 0, 1))],
+        B,
+    )
+    # red at blue, blue at red
+    rb = fir3(R - B)
+    R2 = np.where(b_m, B + rb, R)
+    B2 = np.where(r_m, R - rb, B)
+    return R2, G, B2
+
+
+@njit(cache=True, fastmath=False)
+def _menon_slab(
+    P: np.ndarray, oy: int, ox: int, h: int, w: int, refine: bool, soft: bool, out: np.ndarray
+) -> None:
+    # All passes on one slab of rows (P starts at an even padded row, so the RGGB phase
+    # holds). Each pass computes a band that shrinks by the radius of what it reads, so no
+    # pass reads a value the previous one did not write; the output rows lie inside margin 11.
+    H, W = P.shape
+    t = P.dtype.type
+    half, quarter, third = t(0.5), t(0.25), t(1.0 / 3.0)
+    three, zero, one = t(3.0), t(0.0), t(1.0)
+    Dh = np.empty_like(P)
+    Dv = np.empty_like(P)
+    G = np.empty_like(P)
+    R = np.empty_like(P)
+    B = np.empty_like(P)
+    hor = np.empty(P.shape, dtype=np.uint8)
+    # Passes 1-3 and 8 evaluate every pixel of a row from unit-stride row views indexed from
+    # 0 (vectorisable; the values at green sites are discarded by the phase select).
+    # 1-2. chrominance gradients, margin 4. The chrominance X - G_H is
+    # X/2 - (left + right)/2 + (left2 + right2)/4 (eq. 3).
+    n = W - 8
+    for y in range(4, H - 4):
+        c = P[y, 4 : 4 + n]
+        cm1, cp1 = P[y, 3 : 3 + n], P[y, 5 : 5 + n]
+        cm2, cp2 = P[y, 2 : 2 + n], P[y, 6 : 6 + n]
+        cp3, cp4 = P[y, 7 : 7 + n], P[y, 8 : 8 + n]
+        u1, d1 = P[y - 1, 4 : 4 + n], P[y + 1, 4 : 4 + n]
+        u2, d2 = P[y - 2, 4 : 4 + n], P[y + 2, 4 : 4 + n]
+        d3, d4 = P[y + 3, 4 : 4 + n], P[y + 4, 4 : 4 + n]
+        dhr, dvr = Dh[y, 4 : 4 + n], Dv[y, 4 : 4 + n]
+        for k in range(n):
+            ch0 = half * c[k] - half * (cm1[k] + cp1[k]) + quarter * (cm2[k] + cp2[k])
+            ch2 = half * cp2[k] - half * (cp1[k] + cp3[k]) + quarter * (c[k] + cp4[k])
+            cv0 = half * c[k] - half * (u1[k] + d1[k]) + quarter * (u2[k] + d2[k])
+            cv2 = half * d2[k] - half * (d1[k] + d3[k]) + quarter * (c[k] + d4[k])
+            dhr[k] = abs(ch0 - ch2)
+            dvr[k] = abs(cv0 - cv2)
+    # 3. decision over the 5x5 window (eq. 9) and green, margin 6
+    n = W - 12
+    for y in range(6, H - 6):
+        h00, h0m2 = Dh[y, 6 : 6 + n], Dh[y, 4 : 4 + n]
+        hu1m1, hd1m1 = Dh[y - 1, 5 : 5 + n], Dh[y + 1, 5 : 5 + n]
+        hu2, hd2 = Dh[y - 2, 6 : 6 + n], Dh[y + 2, 6 : 6 + n]
+        hu2m2, hd2m2 = Dh[y - 2, 4 : 4 + n], Dh[y + 2, 4 : 4 + n]
+        v00, vu2 = Dv[y, 6 : 6 + n], Dv[y - 2, 6 : 6 + n]
+        vu1m1, vu1p1 = Dv[y - 1, 5 : 5 + n], Dv[y - 1, 7 : 7 + n]
+        v0m2, v0p2 = Dv[y, 4 : 4 + n], Dv[y, 8 : 8 + n]
+        vu2m2, vu2p2 = Dv[y - 2, 4 : 4 + n], Dv[y - 2, 8 : 8 + n]
+        c = P[y, 6 : 6 + n]
+        cm1, cp1 = P[y, 5 : 5 + n], P[y, 7 : 7 + n]
+        cm2, cp2 = P[y, 4 : 4 + n], P[y, 8 : 8 + n]
+        u1, d1 = P[y - 1, 6 : 6 + n], P[y + 1, 6 : 6 + n]
+        u2, d2 = P[y - 2, 6 : 6 + n], P[y + 2, 6 : 6 + n]
+        gr, hr = G[y, 6 : 6 + n], hor[y, 6 : 6 + n]
+        par = (6 + y) & 1  # (k + par) even: a red/blue site
+        for k in range(n):
+            dh = (
+                three * (h00[k] + h0m2[k])
+                + hu1m1[k]
+                + hd1m1[k]
+                + hu2[k]
+                + hd2[k]
+                + hu2m2[k]
+                + hd2m2[k]
+            )
+            dv = (
+                three * (v00[k] + vu2[k])
+                + vu1m1[k]
+                + vu1p1[k]
+                + v0m2[k]
+                + v0p2[k]
+                + vu2m2[k]
+                + vu2p2[k]
+            )
+            ck = c[k]
+            gh = half * (cm1[k] + cp1[k]) + half * ck - quarter * (cm2[k] + cp2[k])
+            gv = half * (u1[k] + d1[k]) + half * ck - quarter * (u2[k] + d2[k])
+            is_h = dv >= dh
+            hr[k] = 1 if is_h else 0
+            if soft:  # weights dv^2 : dh^2 for the horizontal : vertical estimates
+                a = dh * dh
+                b = dv * dv
+                ab = a + b
+                blend = (b * gh + a * gv) / (ab if ab != zero else one)
+                g = blend if ab != zero else half * (gh + gv)
+            else:
+                g = gh if is_h else gv
+            gr[k] = g if ((k + par) & 1) == 0 else ck
+    # Passes 5-7 update a plane in place: each row is computed into a buffer first and
+    # merged at the sites it updates, so that the loops carry no dependence (vectorisable).
+    t1 = np.empty(W, P.dtype)
+    t2 = np.empty(W, P.dtype)
+    # 4. red and blue at green sites from colour differences, margin 7 (the value written
+    # for the other colour at red/blue sites is replaced in pass 5 wherever it is read)
+    n = W - 14
+    for y in range(7, H - 7):
+        red_row = y % 2 == 0
+        pu, pd = P[y - 1, 7 : 7 + n], P[y + 1, 7 : 7 + n]
+        p0, pm, pp = P[y, 7 : 7 + n], P[y, 6 : 6 + n], P[y, 8 : 8 + n]
+        gu, gd = G[y - 1, 7 : 7 + n], G[y + 1, 7 : 7 + n]
+        g0, gm, gp = G[y, 7 : 7 + n], G[y, 6 : 6 + n], G[y, 8 : 8 + n]
+        own, oth = (R[y], B[y]) if red_row else (B[y], R[y])  # colour of this row, the other
+        Rh, Rv = own[7 : 7 + n], oth[7 : 7 + n]
+        par = (7 + y) & 1
+        for k in range(n):
+            g = g0[k]
+            hz = g + half * ((pm[k] - gm[k]) + (pp[k] - gp[k]))
+            Rh[k] = p0[k] if ((k + par) & 1) == 0 else hz
+            Rv[k] = g + half * ((pu[k] - gu[k]) + (pd[k] - gd[k]))
+    # 5. red at blue sites, blue at red sites along the chosen direction, margin 8
+    n = W - 16
+    for y in range(8, H - 8):
+        red_row = y % 2 == 0
+        r0, rm, rp = R[y, 8 : 8 + n], R[y, 7 : 7 + n], R[y, 9 : 9 + n]
+        b0, bm, bp = B[y, 8 : 8 + n], B[y, 7 : 7 + n], B[y, 9 : 9 + n]
+        ru, rd = R[y - 1, 8 : 8 + n], R[y + 1, 8 : 8 + n]
+        bu, bd = B[y - 1, 8 : 8 + n], B[y + 1, 8 : 8 + n]
+        p0, hr = P[y, 8 : 8 + n], hor[y, 8 : 8 + n]
+        o0 = b0 if red_row else r0
+        sign = -half if red_row else half
+        par = (8 + y) & 1
+        for k in range(n):
+            dh = (rm[k] - bm[k]) + (rp[k] - bp[k])
+            dv = (ru[k] - bu[k]) + (rd[k] - bd[k])
+            d = dh if hr[k] else dv  # both computed: a select, not a branch
+            t1[k] = p0[k] + sign * d
+        for k in range(n):
+            o0[k] = t1[k] if ((k + par) & 1) == 0 else o0[k]
+    if refine:
+        # 6. green at red/blue sites from the directional 3-tap mean of X - G, margin 9
+        n = W - 18
+        for y in range(9, H - 9):
+            X = R if y % 2 == 0 else B
+            x0, xm, xp = X[y, 9 : 9 + n], X[y, 8 : 8 + n], X[y, 10 : 10 + n]
+            xu, xd = X[y - 1, 9 : 9 + n], X[y + 1, 9 : 9 + n]
+            g0, gm, gp = G[y, 9 : 9 + n], G[y, 8 : 8 + n], G[y, 10 : 10 + n]
+            gu, gd = G[y - 1, 9 : 9 + n], G[y + 1, 9 : 9 + n]
+            p0, hr = P[y, 9 : 9 + n], hor[y, 9 : 9 + n]
+            par = (9 + y) & 1
+            for k in range(n):
+                c = x0[k] - g0[k]
+                mh = (xm[k] - gm[k]) + c + (xp[k] - gp[k])
+                mv = (xu[k] - gu[k]) + c + (xd[k] - gd[k])
+                m = mh if hr[k] else mv
+                t1[k] = p0[k] - m * third
+            for k in range(n):
+                g0[k] = t1[k] if ((k + par) & 1) == 0 else g0[k]
+        # 7. red and blue at green sites from the refined differences, margin 10
+        n = W - 20
+        for y in range(10, H - 10):
+            red_row = y % 2 == 0
+            g0, gm, gp = G[y, 10 : 10 + n], G[y, 9 : 9 + n], G[y, 11 : 11 + n]
+            gu, gd = G[y - 1, 10 : 10 + n], G[y + 1, 10 : 10 + n]
+            if red_row:  # red left/right, blue above/below
+                hp, vp = R, B
+            else:
+                hp, vp = B, R
+            h0, hm, hpp = hp[y, 10 : 10 + n], hp[y, 9 : 9 + n], hp[y, 11 : 11 + n]
+            v0, vu, vd = vp[y, 10 : 10 + n], vp[y - 1, 10 : 10 + n], vp[y + 1, 10 : 10 + n]
+            par = (10 + y) & 1
+            for k in range(n):
+                g = g0[k]
+                t1[k] = g + half * ((hm[k] - gm[k]) + (hpp[k] - gp[k]))
+                t2[k] = g + half * ((vu[k] - gu[k]) + (vd[k] - gd[k]))
+            for k in range(n):
+                is_g = ((k + par) & 1) == 1
+                h0[k] = t1[k] if is_g else h0[k]
+                v0[k] = t2[k] if is_g else v0[k]
+    # 8. output; with refinement, red (blue) at blue (red) sites from the 3-tap mean of R - B
+    rbuf = np.empty(w, P.dtype)
+    bbuf = np.empty(w, P.dtype)
+    for i in range(h):
+        y = i + oy
+        red_row = y % 2 == 0
+        r0, rm, rp = R[y, ox : ox + w], R[y, ox - 1 : ox - 1 + w], R[y, ox + 1 : ox + 1 + w]
+        ru, rd = R[y - 1, ox : ox + w], R[y + 1, ox : ox + w]
+        b0, bm, bp = B[y, ox : ox + w], B[y, ox - 1 : ox - 1 + w], B[y, ox + 1 : ox + 1 + w]
+        bu, bd = B[y - 1, ox : ox + w], B[y + 1, ox : ox + w]
+        g0, p0, hr = G[y, ox : ox + w], P[y, ox : ox + w], hor[y, ox : ox + w]
+        par = (ox + y) & 1  # (j + par) even: a red/blue site
+        sr = zero if red_row else third  # R = P + sr * d at blue sites
+        sb = -third if red_row else zero  # B = P + sb * d at red sites
+        for j in range(w):
+            cd = r0[j] - b0[j]
+            dh = (rm[j] - bm[j]) + cd + (rp[j] - bp[j])
+            dv = (ru[j] - bu[j]) + cd + (rd[j] - bd[j])
+            d = dh if hr[j] else dv
+            rb_site = refine and ((j + par) & 1) == 0
+            rbuf[j] = p0[j] + sr * d if rb_site else r0[j]
+            bbuf[j] = p0[j] + sb * d if rb_site else b0[j]
+        o = out[i]
+        for j in range(w):
+            o[j, 0] = rbuf[j]
+            o[j, 1] = g0[j]
+            o[j, 2] = bbuf[j]
+
+
+@njit(cache=True, parallel=True, fastmath=False)
+def _menon(
+    P: np.ndarray, oy: int, ox: int, h: int, w: int, refine: bool, soft: bool, block: int
+) -> np.ndarray:
+    # One parallel region over slabs of ``block`` output rows (each slab recomputes its
+    # 11-row halo): fewer barriers and cache-sized working sets than one region per pass.
+    out = np.empty((h, w, 3), dtype=P.dtype)
+    nb = (h + block - 1) // block
+    for b in prange(nb):
+        y0 = b * block
+        y1 = min(h, y0 + block)
+        s = y0 + oy - RADIUS - 1
+        s -= s % 2
+        e = y1 + oy + RADIUS + 1
+        _menon_slab(P[s:e], y0 + oy - s, ox, y1 - y0, w, refine, soft, out[y0:y1])
+    return out
+
+
+def _block_rows(h: int) -> int:
+    """Rows per slab: about two slabs per thread, at least 64 rows (the halo is 2 x 12)."""
+    import numba
+
+    threads = numba.get_num_threads()
+    return h if threads == 1 else max(64, -(-h // (2 * threads)))
+
+
+def menon_numba(
+    P: np.ndarray, oy: int, ox: int, h: int, w: int, refine: bool = True, soft: bool = False
+) -> np.ndarray:
+    """DDFAPD on an RGGB-phased padded mosaic (needs ``RADIUS`` pixels of padding)."""
+    return _menon(P, oy, ox, h, w, refine, soft, _block_rows(h))
+
+
+def menon_soft_numba(P: np.ndarray, oy: int, ox: int, h: int, w: int) -> np.ndarray:
+    """DDFAPD with the soft green decision (see the module docstring)."""
+    return _menon(P, oy, ox, h, w, True, True, _block_rows(h))
+
+
+def menon_soft_numpy(P: np.ndarray, oy: int, ox: int, h: int, w: int) -> np.ndarray:
+    """Twin of :func:`menon_soft_numba`."""
+    return menon_numpy(P, oy, ox, h, w, True, True)

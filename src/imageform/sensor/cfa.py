@@ -1,0 +1,198 @@
+"""Bayer colour filter arrays: pattern names, sampling masks and mosaicing.
+
+A single-sensor camera puts one colour filter over each photosite, so each pixel measures
+one of R, G, B. The Bayer array (B. E. Bayer, *Color imaging array*, US patent 3,971,065,
+1976) tiles the sensor with a 2×2 cell holding one red, one blue and **two green** filters:
+half the photosites are green. Bayer chose this because the eye's luminance (detail) signal
+is mostly green: the luminance weights of Rec. 709 / sRGB are
+:math:`Y = 0.2126 R + 0.7152 G + 0.0722 B`, so sampling green on a quincunx (checkerboard)
+lattice, twice as dense as red and blue, gives the luminance the finest sampling, while the
+eye's coarser colour (chrominance) resolution is served by red and blue on rectangular
+lattices of half the density in each direction.
+
+The four names say the colours of the 2×2 cell read row by row from the top-left pixel
+(pixel centre ``(0, 0)``, DESIGN.md):
+
+======  ==============  ============
+name    row 0           row 1
+======  ==============  ============
+RGGB    R G R G ...     G B G B ...
+BGGR    B G B G ...     G R G R ...
+GRBG    G R G R ...     B G B G ...
+GBRG    G B G B ...     R G R G ...
+======  ==============  ============
+
+OpenCV names the same layouts by the colours of the second row's 2nd and 3rd pixel: an
+RGGB mosaic is ``cv2.COLOR_BayerBG2RGB`` (alias ``COLOR_BayerRGGB2RGB``).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from imageform._backend import device_of, namespace
+from imageform._typing import Array, ArrayLike
+from imageform._validate import as_image, format_shape
+from imageform.errors import InvalidInputError, UnknownOptionError
+
+__all__ = ["CFA_PATTERNS", "cfa_masks", "cfa_pattern", "mosaic"]
+
+#: The Bayer patterns imageform knows, as the colours of the 2×2 cell read row by row.
+CFA_PATTERNS: tuple[str, ...] = ("RGGB", "BGGR", "GRBG", "GBRG")
+
+_CHANNEL = {"R": 0, "G": 1, "B": 2}
+
+
+def cfa_pattern(pattern: object) -> str:
+    """Validate a Bayer pattern name and return it in upper case.
+
+    Parameters
+    ----------
+    pattern : str
+        One of ``"RGGB"``, ``"BGGR"``, ``"GRBG"``, ``"GBRG"`` (case-insensitive).
+
+    Returns
+    -------
+    str
+        The canonical (upper-case) name.
+
+    Raises
+    ------
+    UnknownOptionError
+        If ``pattern`` is not one of the four names; the message lists them.
+
+    Examples
+    --------
+    >>> cfa_pattern("rggb")
+    'RGGB'
+    """
+    if not isinstance(pattern, str):
+        raise UnknownOptionError(f"expected a CFA pattern name (str), got {type(pattern).__name__}")
+    key = pattern.strip().upper()
+    if key not in CFA_PATTERNS:
+        names = ", ".join(repr(p) for p in CFA_PATTERNS)
+        raise UnknownOptionError(f"unknown CFA pattern {pattern!r}; valid: {names}")
+    return key
+
+
+def _red_offset(pattern: str) -> tuple[int, int]:
+    """(row, column) of the red pixel in the 2×2 cell of a canonical pattern name."""
+    i = pattern.index("R")
+    return i // 2, i % 2
+
+
+def _cell_channels(pattern: str) -> np.ndarray:
+    """The 2×2 cell as channel indices (0 R, 1 G, 2 B)."""
+    return np.array([_CHANNEL[c] for c in pattern], dtype=np.intp).reshape(2, 2)
+
+
+def cfa_masks(shape: tuple[int, int], pattern: str = "RGGB") -> np.ndarray:
+    """Boolean sampling masks of a Bayer array, one per channel.
+
+    ``masks[y, x, c]`` is true where the photosite at row ``y``, column ``x`` has a filter
+    of colour ``c`` (0 red, 1 green, 2 blue). Exactly one channel is true per pixel; the
+    green mask covers half the pixels (see the module docstring for why).
+
+    .. math::
+
+        m_c(y, x) = [\\,\\mathrm{cell}(y \\bmod 2,\\, x \\bmod 2) = c\\,]
+
+    Parameters
+    ----------
+    shape : tuple of int
+        ``(H, W)``, each at least 1 (odd sizes cut the 2×2 cell at the right/bottom edge).
+    pattern : str
+        Bayer pattern name (:data:`CFA_PATTERNS`).
+
+    Returns
+    -------
+    ndarray of bool, shape (H, W, 3)
+
+    Source: Bayer, US patent 3,971,065 (1976), fig. 6.
+
+    Examples
+    --------
+    >>> m = cfa_masks((4, 6), "RGGB")
+    >>> float(m[..., 1].mean()), bool(m[0, 0, 0]), bool(m[1, 1, 2])
+    (0.5, True, True)
+    """
+    pattern = cfa_pattern(pattern)
+    if (
+        not isinstance(shape, tuple | list)
+        or len(shape) != 2
+        or not all(isinstance(s, int | np.integer) and s >= 1 for s in shape)
+    ):
+        raise InvalidInputError(f"expected shape (H, W) with H, W >= 1, got {shape!r}")
+    h, w = int(shape[0]), int(shape[1])
+    cell = _cell_channels(pattern)
+    idx = np.tile(cell, ((h + 1) // 2, (w + 1) // 2))[:h, :w]
+    return idx[..., None] == np.arange(3)
+
+
+def mosaic(rgb: ArrayLike, pattern: str = "RGGB") -> Array:
+    """Sample an RGB image through a Bayer colour filter array (the forward model).
+
+    Each output pixel keeps the one channel its filter passes:
+
+    .. math::
+
+        \\mathrm{raw}(y, x) = \\sum_{c \\in \\{R,G,B\\}} m_c(y, x)\\, I_c(y, x)
+
+    with :math:`m_c` from :func:`cfa_masks`. Half the pixels keep green, a quarter red,
+    a quarter blue: green is sampled twice as densely because the luminance that carries
+    image detail is mostly green (:math:`Y = 0.2126 R + 0.7152 G + 0.0722 B`, Rec. 709).
+
+    Parameters
+    ----------
+    rgb : array, shape (..., H, W, 3)
+        Image, channels last. uint8/uint16 are read as full-range values (/255, /65535,
+        float32); floats keep their dtype.
+    pattern : str
+        ``"RGGB"`` (default), ``"BGGR"``, ``"GRBG"`` or ``"GBRG"``. Odd ``H`` or ``W`` are
+        allowed: the 2×2 cell is cut at the bottom/right edge.
+
+    Returns
+    -------
+    array, shape (..., H, W)
+        The mosaic, same namespace and float dtype as the (converted) input.
+
+    Raises
+    ------
+    InvalidInputError
+        If ``rgb`` does not have 3 channels last or holds NaN/inf.
+    UnknownOptionError
+        If ``pattern`` is not a known Bayer pattern.
+
+    Source: Bayer, US patent 3,971,065 (1976).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> img = np.zeros((2, 2, 3)); img[..., 0], img[..., 1], img[..., 2] = 0.9, 0.5, 0.1
+    >>> mosaic(img, "RGGB").tolist()
+    [[0.9, 0.5], [0.5, 0.1]]
+    """
+    pattern = cfa_pattern(pattern)
+    xp = namespace(rgb)
+    img = as_image(rgb, "rgb", channels=3, xp=xp)
+    if img.ndim < 3:
+        raise InvalidInputError(
+            f"expected rgb of shape (..., H, W, 3), got {format_shape(tuple(img.shape))}"
+        )
+    h, w = int(img.shape[-3]), int(img.shape[-2])
+    if h < 1 or w < 1:
+        raise InvalidInputError(
+            f"expected rgb with H, W >= 1, got {format_shape(tuple(img.shape))}"
+        )
+    masks = _as_xp(cfa_masks((h, w), pattern), xp, img)
+    return xp.sum(img * masks, axis=-1)
+
+
+def _as_xp(mask: np.ndarray, xp: Any, like: Any) -> Any:
+    """A NumPy bool mask as a float array of ``like``'s namespace, dtype and device."""
+    dev = device_of(like)
+    m = mask.astype(np.float64)
+    arr = xp.asarray(m) if dev is None else xp.asarray(m, device=dev)
+    return xp.astype(arr, like.dtype)
