@@ -30,15 +30,18 @@ def read_image(path: Path) -> tuple[np.ndarray, int | None]:
         arr = np.load(path, allow_pickle=False)
         bits = {np.dtype(np.uint8): 8, np.dtype(np.uint16): 16}.get(arr.dtype)
         return arr, bits
+    if path.suffix.lower() == ".png":  # imageform's codec keeps 16-bit colour PNGs
+        from imageform.io.png import read_png
+
+        png = read_png(path)
+        if png.shape[-1] in (2, 4):
+            raise InvalidInputError(f"{path} has an alpha channel; save it without alpha")
+        data = png[..., 0] if png.shape[-1] == 1 else png
+        return data, 8 if data.dtype == np.uint8 else 16
     from PIL import Image
 
     with Image.open(path) as im:
         mode = im.mode
-        if im.format == "PNG" and _png_bit_depth(path) == 16 and mode in ("RGB", "RGBA"):
-            raise InvalidInputError(
-                f"{path}: 16-bit colour PNG input is not supported yet (pillow reads it as "
-                "8 bits); convert it to .npy"
-            )
         if mode in ("I;16", "I;16B", "I;16L", "I"):
             arr = np.asarray(im, dtype=np.int64)
             if arr.min() < 0 or arr.max() > 65535:
@@ -76,36 +79,9 @@ def write_image(path: Path, image: np.ndarray, bits: int | None) -> None:
 
     if data.ndim == 2 or bits == 8:
         im = Image.fromarray(data)  # uint8 (H, W) -> L, uint16 -> I;16, uint8 (H, W, 3) -> RGB
-    else:  # pillow cannot write 48-bit RGB PNG: encode it directly
-        path.write_bytes(_png_rgb48(data))
+    else:  # pillow cannot write 48-bit RGB PNG: imageform's own encoder
+        from imageform.io.png import write_png
+
+        write_png(path, data)
         return
     im.save(path)
-
-
-def _png_bit_depth(path: Path) -> int:
-    """Bit depth from a PNG's IHDR chunk (byte 24 of the file)."""
-    with path.open("rb") as f:
-        head = f.read(25)
-    return head[24] if len(head) == 25 else 0
-
-
-def _png_rgb48(data: np.ndarray) -> bytes:
-    """A 16-bit-per-channel RGB PNG (colour type 2, no filtering), per the PNG spec (W3C)."""
-    import struct
-    import zlib
-
-    h, w, _ = data.shape
-
-    def chunk(tag: bytes, payload: bytes) -> bytes:
-        crc = zlib.crc32(tag + payload) & 0xFFFFFFFF
-        return struct.pack(">I", len(payload)) + tag + payload + struct.pack(">I", crc)
-
-    rows = data.astype(">u2").reshape(h, w * 6 // 2).view(np.uint8).reshape(h, w * 6)
-    raw = np.concatenate([np.zeros((h, 1), np.uint8), rows], axis=1).tobytes()
-    ihdr = struct.pack(">IIBBBBB", w, h, 16, 2, 0, 0, 0)
-    return (
-        b"\x89PNG\r\n\x1a\n"
-        + chunk(b"IHDR", ihdr)
-        + chunk(b"IDAT", zlib.compress(raw, 6))
-        + chunk(b"IEND", b"")
-    )

@@ -54,9 +54,9 @@ def _write_rgb(path: Path, rgb: Any, *, sixteen: bool) -> int:
     clipped = int(np.count_nonzero((arr < 0.0) | (arr > 1.0)))
     arr = np.clip(arr, 0.0, 1.0)
     if sixteen and path.suffix.lower() == ".png":
-        import cv2  # PIL cannot write 16-bit RGB PNG
+        from imageform.io.png import write_png  # Pillow cannot write 16-bit RGB PNG
 
-        cv2.imwrite(str(path), np.round(arr * 65535)[..., ::-1].astype(np.uint16))
+        write_png(path, np.round(arr * 65535).astype(np.uint16))
     else:
         Image.fromarray(np.round(arr * 255).astype(np.uint8)).save(path)
     return clipped
