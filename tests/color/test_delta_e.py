@@ -381,3 +381,14 @@ def test_dask_chunks() -> None:
     a, b = _random_lab(rng, 4000).reshape(40, 100, 3), _random_lab(rng, 4000).reshape(40, 100, 3)
     got = delta_e(da.from_array(a, chunks=(10, 100, 3)), da.from_array(b, chunks=(10, 100, 3)))
     np.testing.assert_allclose(np.asarray(got), delta_e(a, b), atol=1e-12, rtol=0)
+
+
+def test_ciede2000_subnormal_chroma_is_finite() -> None:
+    """Regression (found by hypothesis): a subnormal a* made the array path's reciprocals
+    overflow to inf and return NaN; a chroma that small counts as zero."""
+    x = np.array([0.0, 2.2250738585e-313, 0.0])
+    y = np.array([0.0, 1.0, 0.0])
+    d = float(delta_e_ciede2000(x, y))
+    assert np.isfinite(d)
+    assert d == pytest.approx(float(delta_e_ciede2000(np.zeros(3), y)), abs=1e-12)
+    assert float(delta_e_ciede2000(y, x)) == pytest.approx(d, abs=1e-12)

@@ -305,13 +305,16 @@ def ciede2000_twin(xp: Any, lab1: Any, lab2: Any, kL: float, kC: float, kH: floa
     sgn = xp.where((cross > 0) | ((cross == 0) & low1), one, -one)
     acute = dot >= 0
     den = pr + dot
-    den_ok = den > 0
+    # below sqrt(smallest normal) the reciprocals would overflow; there ΔH' <= 2 sqrt(C1'C2')
+    # is below 1e-76 (float64), and a chroma that small is treated as zero (Sharma's rule)
+    tiny = float(xp.finfo(L1.dtype).smallest_normal) ** 0.5
+    den_ok = den > tiny
     dh_acute = xp.where(den_ok, cross * xp.sqrt(2.0 / xp.where(den_ok, den, one)), zero)
     obt = 2.0 * (pr - dot)
     dh_obtuse = sgn * xp.sqrt(xp.where(obt > 0, obt, zero))
     dH = xp.where(acute, dh_acute, dh_obtuse)
-    i1 = xp.where(C1p > 0, 1.0 / xp.where(C1p > 0, C1p, one), zero)
-    i2 = xp.where(C2p > 0, 1.0 / xp.where(C2p > 0, C2p, one), zero)
+    i1 = xp.where(C1p > tiny, 1.0 / xp.where(C1p > tiny, C1p, one), zero)
+    i2 = xp.where(C2p > tiny, 1.0 / xp.where(C2p > tiny, C2p, one), zero)
     u1x, u1y, u2x, u2y = a1p * i1, b1 * i1, a2p * i2, b2 * i2
     vx = xp.where(acute, u1x + u2x, sgn * (u2y - u1y))
     vy = xp.where(acute, u1y + u2y, -sgn * (u2x - u1x))
