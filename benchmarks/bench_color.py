@@ -25,6 +25,7 @@ import argparse
 import os
 import platform
 import statistics
+import sys
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -33,6 +34,9 @@ from typing import Any
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))  # run as a script or as a module
+from benchmarks._common import markdown_table  # noqa: E402
+
 KODAK = ROOT.parent / "shared" / "data" / "kodak"
 
 
@@ -42,11 +46,6 @@ def _image() -> np.ndarray:
     src = read_image(KODAK / "kodim23.png")[..., :3]
     reps = (-(-2160 // src.shape[0]), -(-3840 // src.shape[1]), 1)
     return np.ascontiguousarray(np.tile(src, reps)[:2160, :3840])
-
-
-def _table(headers: list[str], rows: list[list[str]]) -> str:
-    lines = ["| " + " | ".join(headers) + " |", "|" + "---|" * len(headers)]
-    return "\n".join(lines + ["| " + " | ".join(r) + " |" for r in rows])
 
 
 def _round_robin(fns: dict[str, Callable[[], Any]], repeat: int) -> dict[str, float]:
@@ -195,20 +194,22 @@ def main() -> None:
         "",
         "## Speed (ms), ratio to OpenCV cvtColor in the same rounds",
         "",
-        _table(["conversion", "input", "imageform", "OpenCV", "ratio", "target", "met"], rows),
+        markdown_table(
+            ["conversion", "input", "imageform", "OpenCV", "ratio", "target", "met"], rows
+        ),
         "",
         "imageform's time includes its boundary checks (NaN/inf, 0-255 floats).",
         "",
         "## Accuracy of sRGB -> Lab: ΔE00 against the float64 reference (1 Mpx subset)",
         "",
-        _table(["method", "max ΔE00", "mean ΔE00", "p99 ΔE00"], acc_rows),
+        markdown_table(["method", "max ΔE00", "mean ΔE00", "p99 ΔE00"], acc_rows),
         "",
     ]
     if peer_rows:
         head += [
             "## sRGB -> Lab float32 against the other peers (one run each, s)",
             "",
-            _table(["implementation", "s", "vs imageform"], peer_rows),
+            markdown_table(["implementation", "s", "vs imageform"], peer_rows),
             "",
         ]
     text = "\n".join(head)

@@ -17,7 +17,7 @@ from __future__ import annotations
 import argparse
 import os
 import platform
-import statistics
+import sys
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -26,24 +26,10 @@ from typing import Any
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))  # run as a script or as a module
+from benchmarks._common import markdown_table, median_time  # noqa: E402
+
 KODAK = ROOT.parent / "shared" / "data" / "kodak"
-
-
-def _median_time(fn: Callable[[], Any], repeat: int, warmup: int = 1) -> float:
-    for _ in range(warmup):
-        fn()
-    times = []
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
-    return statistics.median(times)
-
-
-def _table(headers: list[str], rows: list[list[str]]) -> str:
-    lines = ["| " + " | ".join(headers) + " |", "|" + "---|" * len(headers)]
-    lines += ["| " + " | ".join(r) + " |" for r in rows]
-    return "\n".join(lines)
 
 
 def _header() -> str:
@@ -108,7 +94,7 @@ def bench_ciede2000(height: int, width: int, repeat: int) -> str:
         "scikit-image deltaE_ciede2000": lambda: deltaE_ciede2000(lab1, lab2),
         "colour-science delta_E_CIE2000": lambda: colour.difference.delta_E_CIE2000(lab1, lab2),
     }
-    times = {name: _median_time(fn, repeat) for name, fn in runs.items()}
+    times = {name: median_time(fn, repeat) for name, fn in runs.items()}
     ref = colour.difference.delta_E_CIE2000(lab1, lab2)
     sk = deltaE_ciede2000(lab1, lab2)
     t_sk = times["scikit-image deltaE_ciede2000"]
@@ -130,7 +116,7 @@ def bench_ciede2000(height: int, width: int, repeat: int) -> str:
         f"## CIEDE2000, two {height}x{width} Lab images (float64), median of {repeat} runs\n\n"
         "Lab1: L* U(0, 100), a*, b* U(-100, 100); Lab2 = Lab1 + N(0, 3²) per channel.\n\n"
     )
-    return title + _table(
+    return title + markdown_table(
         [
             "implementation",
             "s",
@@ -193,7 +179,7 @@ def bench_kodak_subsampling() -> str:
         "float32 (uint8 input). No quantisation or compression: the cost of the chroma\n"
         "resolution alone.\n\n"
     )
-    text += _table(
+    text += markdown_table(
         [
             "scheme",
             "siting",
@@ -207,7 +193,7 @@ def bench_kodak_subsampling() -> str:
         rows,
     )
     text += "\n\nPer image, 4:2:0, centred chroma (JFIF), bilinear:\n\n"
-    text += _table(["image", "mean ΔE00", "p95", "max"], per_image)
+    text += markdown_table(["image", "mean ΔE00", "p95", "max"], per_image)
     return text
 
 
