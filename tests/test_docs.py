@@ -1,7 +1,8 @@
 """Every ```python block in docs/*.md runs (blocks of one page share a namespace, in order).
 
-Examples run from the repository root, so ``../shared/data/...`` paths work as in the docs;
-they must not write files (use a temporary directory if they need to).
+Examples run in a temporary folder whose ``../shared`` links to the reference data, so the
+docs' ``../shared/data/...`` paths work as from the repository root and files an example
+writes land in the temporary folder, never in the repository.
 """
 
 from __future__ import annotations
@@ -17,14 +18,16 @@ _BLOCK = re.compile(r"```python\n(.*?)```", re.DOTALL)
 
 
 @pytest.mark.parametrize("page", PAGES, ids=[p.name for p in PAGES])
-def test_doc_examples_run(page: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+def test_doc_examples_run(page: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     blocks = _BLOCK.findall(page.read_text())
-    monkeypatch.chdir(DOCS.parent)
-    if (
-        "../shared/data" in page.read_text()
-        and not (DOCS.parent.parent / "shared" / "data").is_dir()
-    ):
+    shared = DOCS.parent.parent / "shared"
+    if "../shared/data" in page.read_text() and not (shared / "data").is_dir():
         pytest.skip("reference data not found")
+    work = tmp_path / "repo"
+    work.mkdir()
+    if shared.is_dir():
+        (tmp_path / "shared").symlink_to(shared.resolve(), target_is_directory=True)
+    monkeypatch.chdir(work)
     namespace: dict[str, object] = {"__name__": f"docs_{page.stem}"}
     for i, code in enumerate(blocks):
         if "torch" in code:
