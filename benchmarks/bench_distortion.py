@@ -21,9 +21,7 @@ import argparse
 import datetime as _dt
 import os
 import platform
-import statistics
-import time
-from collections.abc import Callable
+import sys
 from pathlib import Path
 
 import cv2
@@ -34,20 +32,13 @@ from imageform.geometry.distortion import BrownConrady, project_points_distorted
 from imageform.geometry.undistort import undistort_image
 
 ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))  # run as a script or as a module
+from benchmarks._common import median_time  # noqa: E402
+
 # OpenCV tutorial calibration of the left*.jpg views (shared/data/README.md)
 K = np.array([[536.07345314, 0, 342.37046827], [0, 536.01636274, 235.53687064], [0, 0, 1.0]])
 D5 = np.array([-0.26509039, -0.0467422, 0.00183302, -0.00031469, 0.25231221])
 D8 = np.array([0.1, -0.05, 0.001, -0.0005, 0.01, 0.2, -0.02, 0.005])
-
-
-def median_time(fn: Callable[[], object], reps: int) -> float:
-    fn()  # warm-up (JIT compilation, caches)
-    times = []
-    for _ in range(reps):
-        t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
-    return statistics.median(times)
 
 
 def bench_projection(n: int, reps: int, rows: list[list[str]]) -> None:

@@ -30,6 +30,7 @@ __all__ = [
     "as_matrix",
     "as_points",
     "check_finite",
+    "check_image_size",
     "check_option",
     "check_positive",
     "check_rotation",
@@ -188,6 +189,18 @@ def check_option(value: object, valid: Collection[str], what: str) -> str:
         names = ", ".join(repr(v) for v in sorted(valid))
         raise UnknownOptionError(f"unknown {what} {value!r}; valid: {names}")
     return key
+
+
+def check_image_size(size: object, name: str = "image_size") -> tuple[int, int]:
+    """A ``(width, height)`` pair of positive integers, as a tuple of ``int``.
+
+    >>> check_image_size((640.0, 480))
+    (640, 480)
+    """
+    w, h = (int(v) for v in size)  # type: ignore[attr-defined]
+    if w <= 0 or h <= 0:
+        raise InvalidInputError(f"expected a positive {name} (width, height), got {size}")
+    return w, h
 
 
 def check_positive(value: object, name: str, *, allow_zero: bool = False) -> float:

@@ -22,7 +22,7 @@ import numpy as np
 
 from imageform._backend import device_of, namespace, use_numba
 from imageform._typing import Array, ArrayLike
-from imageform._validate import as_matrix, as_points, check_option, check_rotation
+from imageform._validate import as_matrix, as_points, check_image_size, check_option, check_rotation
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
 from imageform.geometry.intrinsics import Intrinsics
 
@@ -406,12 +406,7 @@ class Camera:
             self, "image_plane", check_option(self.image_plane, _PLANES, "image plane")
         )
         if self.image_size is not None:
-            w, h = self.image_size
-            if int(w) <= 0 or int(h) <= 0:
-                raise InvalidInputError(
-                    f"expected a positive image_size (width, height), got {self.image_size}"
-                )
-            object.__setattr__(self, "image_size", (int(w), int(h)))
+            object.__setattr__(self, "image_size", check_image_size(self.image_size))
         if self.distortion is not None:
             from imageform.geometry.distortion import _check_model
 

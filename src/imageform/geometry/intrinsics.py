@@ -18,7 +18,7 @@ import numpy as np
 
 from imageform._backend import namespace
 from imageform._typing import Array, ArrayLike, FloatArray
-from imageform._validate import as_float, as_matrix, check_positive
+from imageform._validate import as_float, as_matrix, check_image_size, check_positive
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
 
 __all__ = ["Intrinsics", "intrinsic_matrix", "projected_size"]
@@ -103,12 +103,7 @@ class Intrinsics:
         if self.fx == 0 or self.fy == 0:
             raise InvalidInputError("expected non-zero focal lengths fx, fy (K would be singular)")
         if self.image_size is not None:
-            w, h = self.image_size
-            if int(w) <= 0 or int(h) <= 0:
-                raise InvalidInputError(
-                    f"expected a positive image_size (width, height), got {self.image_size}"
-                )
-            object.__setattr__(self, "image_size", (int(w), int(h)))
+            object.__setattr__(self, "image_size", check_image_size(self.image_size))
 
     @property
     def K(self) -> FloatArray:

@@ -23,7 +23,13 @@ import numpy as np
 
 from imageform._backend import device_of, namespace
 from imageform._typing import Array, ArrayLike, FloatArray
-from imageform._validate import as_matrix, as_points, check_positive, check_rotation
+from imageform._validate import (
+    as_matrix,
+    as_points,
+    check_image_size,
+    check_positive,
+    check_rotation,
+)
 from imageform.errors import InvalidInputError
 from imageform.geometry.camera import Projection, project_points
 
@@ -182,11 +188,7 @@ class ConeBeamGeometry:
             raise InvalidInputError(
                 f"the object must lie between source and detector: SOD {sod} > SDD {sdd}"
             )
-        w, h = self.detector_shape
-        if int(w) <= 0 or int(h) <= 0:
-            raise InvalidInputError(
-                f"expected a positive detector_shape, got {self.detector_shape}"
-            )
+        check_image_size(self.detector_shape, "detector_shape")
 
     @property
     def magnification(self) -> float:
