@@ -1,3 +1,19 @@
-"""imageform.simulate."""
+"""imageform.simulate: the scene-to-image simulator (scene, renderer, camera pipeline)."""
 
-__all__: list[str] = []
+from imageform.simulate.result import (
+    STAGE_KINDS,
+    ColorCheckerTruth,
+    SceneQuad,
+    SimulationResult,
+    Stage,
+    VanishingTruth,
+)
+
+__all__ = [
+    "STAGE_KINDS",
+    "ColorCheckerTruth",
+    "SceneQuad",
+    "SimulationResult",
+    "Stage",
+    "VanishingTruth",
+]
