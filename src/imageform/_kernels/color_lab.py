@@ -6,12 +6,14 @@ Plain twin: the array path of :func:`imageform.color.convert` (``srgb_to_linear`
 
 Accuracy design of the fast path (float32 / uint8 input, float32 arithmetic):
 
-- sRGB decode (uint8 read as v / 255): :math:`w^{2.4} = w^2 \cdot w^{0.4}` with a cubic
-  seed for :math:`w^{0.4}` in :math:`w^{1/4}` and one Newton step (relative error ~1e-7);
+- sRGB decode (uint8 read as v / 255): :math:`w^{2.4} = w^2 \cdot u^{0.8}`,
+  :math:`u = \sqrt{w}`, :math:`u^{0.8}` a degree-7 minimax polynomial (relative error 5.4e-7);
   pixels with a value outside [0, 1] are recomputed with the exact float64 formulas.
-- the cube root of CIELAB and the 1/2.4 power of the sRGB encode
-  (:math:`x^{5/12} = \sqrt[3]{x \cdot x^{1/4}}`): a cubic seed in :math:`t^{1/4}` and two
-  Halley steps (relative error ~1e-7, float32 rounding).
+- the cube root of CIELAB: a degree-4 seed in :math:`\sqrt{t}` and one Halley step
+  (relative error ~2e-8). One square root each: on AVX2 a vector square root costs as much as
+  several multiplies, and these two account for most of the kernel's time.
+- the 1/2.4 power of the sRGB encode (:math:`x^{5/12} = \sqrt[3]{x \cdot x^{1/4}}`): a cubic
+  seed in :math:`t^{1/4}` and two Halley steps (relative error ~1e-7, float32 rounding).
 - Lab -> sRGB results above 1 (out of gamut) are recomputed in float64.
 
 The hot loops have no calls and no data-dependent branches (selects only) and use
@@ -93,19 +95,22 @@ def _cbrt32(t):  # type: ignore[no-untyped-def]
     return y * (y3 + _F32(2) * t) / (_F32(2) * y3 + t)
 
 
-# w^0.4 = u^1.6 = u * u^0.6 (u = w^(1/4)): u^0.6 as a degree-6 polynomial in u,
-# least-squares on u in [0.54, 1] (w in [0.09, 1], the power branch of the sRGB decode);
-# max relative error 1.7e-7, at float32 resolution (no iteration needed).
+# The decode and the cube root each take ONE square root (a vector square root costs as much as
+# ~6 multiplies; the previous fourth-root seeds took two): coefficients from
+# tools/fit_color_kernels.py (Lawson minimax fits of the relative error).
+# sRGB decode, power branch: w^2.4 = w^2 * w^0.4 = w^2 * u^0.8 with u = sqrt(w), u^0.8 as a
+# degree-7 polynomial on u in [0.3, 1] (w in [0.09, 1]); max relative error 5.4e-7.
 _DEC = tuple(
     np.float32(c)
-    for c in (-0.07641082, 0.43150605, -1.06320656, 1.51866227, -1.46593695, 1.52963766, 0.12574827)
-)
-# t^(1/3) = u^(4/3), u = t^(1/4): u^(1/3) as a degree-5 polynomial on u in [0.30, 1.05]
-# (t in [ε, 1.2], CIELAB's cube-root branch; max relative error 1.3e-4), then one Halley
-# step (cubic convergence: ~1e-12, i.e. float32 rounding).
-_CBL = tuple(
-    np.float32(c) for c in (0.26912232, -1.1360816, 2.01165847, -2.00670019, 1.51089217, 0.3510903)
-)
+    for c in (
+        0.15700797, -0.82108816, 1.86790406, -2.44337878,
+        2.07281963, -1.29600726, 1.43510551, 0.02763756,
+    )
+)  # fmt: skip
+# CIELAB cube root: t^(1/3) = s^(2/3) with s = sqrt(t), a degree-4 polynomial on s in
+# [sqrt(eps), sqrt(1.2)] (t in [eps, 1.2]; max relative error 2.7e-3), then one Halley step
+# (cubic convergence: 2e-8, float32 rounding).
+_CBL = tuple(np.float32(c) for c in (-0.53410316, 1.52206240, -1.73456023, 1.68579010, 0.06292927))
 
 
 @nb.njit(inline="always", **_JIT)
@@ -113,19 +118,19 @@ def _dec32(v):  # type: ignore[no-untyped-def]
     """sRGB decode in float32 for v in [0, 1] (callers fix up values outside)."""
     w = (v + _F32(_A)) / _F32(1.0 + _A)
     w = w if w > _F32(0.09) else _F32(0.09)
-    u = np.sqrt(np.sqrt(w))
-    c6, c5, c4, c3, c2, c1, c0 = _DEC
-    p = c0 + u * (c1 + u * (c2 + u * (c3 + u * (c4 + u * (c5 + u * c6)))))
-    lin = w * w * u * p
+    u = np.sqrt(w)
+    c7, c6, c5, c4, c3, c2, c1, c0 = _DEC
+    p = c0 + u * (c1 + u * (c2 + u * (c3 + u * (c4 + u * (c5 + u * (c6 + u * c7))))))
+    lin = w * w * p
     return lin if v > _ENC_T32 else v / _SLOPE32
 
 
 @nb.njit(inline="always", **_JIT)
 def _cbrt32_lab(t):  # type: ignore[no-untyped-def]
-    """Cube root for t in [ε, 1.2] (CIELAB): polynomial seed + one Halley step."""
-    u = np.sqrt(np.sqrt(t))
-    c5, c4, c3, c2, c1, c0 = _CBL
-    y = u * (c0 + u * (c1 + u * (c2 + u * (c3 + u * (c4 + u * c5)))))
+    """Cube root for t in [eps, 1.2] (CIELAB): polynomial seed in sqrt(t) + one Halley step."""
+    s = np.sqrt(t)
+    c4, c3, c2, c1, c0 = _CBL
+    y = c0 + s * (c1 + s * (c2 + s * (c3 + s * c4)))
     y3 = y * y * y
     return y * (y3 + _F32(2) * t) / (_F32(2) * y3 + t)
 
