@@ -17,6 +17,7 @@ import numpy as np
 import numpy.typing as npt
 
 from imageform._backend import device_of, namespace, to_numpy
+from imageform._dask import chunkwise
 from imageform._validate import as_points, check_option
 from imageform.errors import InvalidInputError
 
@@ -41,6 +42,7 @@ CHROMATICITY_COORDS = ("xy", "uv")
 LOCUS_RANGE = (380.0, 780.0)
 
 
+@chunkwise(1)
 def xyz_to_xy(xyz: object, white: Any = "D65") -> Any:
     """Chromaticity ``(x, y)`` of XYZ, shape (..., 3) -> (..., 2).
 
@@ -55,6 +57,7 @@ def xyz_to_xy(xyz: object, white: Any = "D65") -> Any:
     return xyz_to_xyy(xyz, white)[..., :2]
 
 
+@chunkwise(1)
 def xy_to_uv_prime(xy: object) -> Any:
     r"""CIE 1976 UCS :math:`(u', v')` from :math:`(x, y)`, shape (..., 2).
 
@@ -72,6 +75,7 @@ def xy_to_uv_prime(xy: object) -> Any:
     return xp.stack([4.0 * x / d, 9.0 * y / d], axis=-1)
 
 
+@chunkwise(1)
 def uv_prime_to_xy(uv: object) -> Any:
     r"""Inverse of :func:`xy_to_uv_prime`: :math:`x = 9u'/(6u' - 16v' + 12)`,
     :math:`y = 4v'/(6u' - 16v' + 12)` (CIE 015:2018 eq. 8.3).
@@ -86,6 +90,7 @@ def uv_prime_to_xy(uv: object) -> Any:
     return xp.stack([9.0 * u / d, 4.0 * v / d], axis=-1)
 
 
+@chunkwise(1)
 def xyz_to_uv_prime(xyz: object, white: Any = "D65") -> Any:
     """:math:`(u', v')` of XYZ, shape (..., 3) -> (..., 2) (black gets the white's).
 
@@ -170,6 +175,7 @@ def _points_in_polygon(pts: Any, poly: np.ndarray, xp: Any) -> Any:
     return n % 2 == 1
 
 
+@chunkwise(1)
 def in_locus(points: object, coords: str = "xy", *, observer: int = 2) -> Any:
     """True where chromaticities lie inside the spectral locus (physically realisable).
 
@@ -206,6 +212,7 @@ def check_in_locus(points: object, coords: str = "xy", *, observer: int = 2) -> 
     return p
 
 
+@chunkwise(1)
 def xy_to_xyz(
     xy: object, Y: float = 1.0, *, check_locus: bool = True, observer: int = 2
 ) -> Any:

@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 
 from imageform._backend import device_of, namespace
+from imageform._dask import chunkwise
 from imageform._validate import as_points, check_option
 from imageform.color.chromaticity import (
     polygon_area,
@@ -157,6 +158,7 @@ def gamut_figures(spaces: Sequence[str] = ("srgb", "display_p3", "rec2020")) -> 
     return out
 
 
+@chunkwise(1)
 def in_gamut(
     values: object,
     space: str | RGBSpace = "srgb",
@@ -199,6 +201,7 @@ def _const(m: np.ndarray, like: Any, xp: Any) -> Any:
     return xp.asarray(np.asarray(m, dtype=np.float64), dtype=like.dtype, device=device_of(like))
 
 
+@chunkwise(1)
 def gamut_map(
     xyz: object,
     space: str | RGBSpace = "srgb",

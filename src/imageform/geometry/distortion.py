@@ -361,8 +361,8 @@ def project_points_distorted(
     _check_model(distortion)
     if (
         isinstance(distortion, BrownConrady)
-        and pts.dtype == np.float64
         and use_numba(pts, min_size=3 * NUMBA_MIN_POINTS)
+        and pts.dtype == np.float64
     ):
         from imageform._kernels.project_distort import project_brown_conrady
 
