@@ -72,7 +72,7 @@ def _map_chunks(
     if ndim < core:
         return fn(*arrays, *rest, **kwargs)  # let the function's own validation speak
     batch = ndim - core
-    first = arrays[0].rechunk({i: -1 for i in range(batch, ndim)})
+    first = arrays[0].rechunk(dict.fromkeys(range(batch, ndim), -1))
     arrays = (first, *(a.rechunk(first.chunks) for a in arrays[1:]))
     # a one-pixel probe: checks shapes and options now, and gives the output's layout
     probes = [np.full((1,) * batch + tuple(a.shape[batch:]), _PROBE, dtype=a.dtype) for a in arrays]

@@ -13,10 +13,8 @@ from __future__ import annotations
 import math
 from typing import Any
 
-import numpy as np
-
 from imageform._backend import device_of, linalg, namespace
-from imageform._typing import Array, ArrayLike, FloatArray
+from imageform._typing import Array, ArrayLike
 from imageform._validate import as_float, as_matrix, as_points, check_rotation
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
 from imageform.geometry.homogeneous import _normalize_homogeneous_point, line_through
