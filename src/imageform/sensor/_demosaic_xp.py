@@ -67,7 +67,7 @@ def demosaic_xp(raw: Any, ry: int, rx: int, method: str, xp: Any) -> Any:
     cols = xp.arange(w, device=dev) + ox
     red_row = (rows % 2 == 0)[:, None]  # (h, 1)
     # red (blue) sites: even columns of red rows, odd columns of blue rows
-    is_rb = (cols[None, :] % 2) == xp.where(red_row, 0, 1)
+    is_rb = (cols[None, :] % 2) == (rows[:, None] % 2)
 
     c = S(0, 0)
     s1h = S(0, -1) + S(0, 1)
