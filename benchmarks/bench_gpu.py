@@ -35,8 +35,6 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))  # run as a script or as a module
 from benchmarks._common import markdown_table  # noqa: E402
@@ -80,7 +78,9 @@ def _row(name: str, impl: str, t: float, nbytes: int, ceiling: float, extra: str
     return [name, impl, f"{t * 1e3:.2f}", f"{gbs:.2f}", f"{100 * gbs / ceiling:.0f} %", extra]
 
 
-def bench_lab(device: Any, dtype: Any, h: int, w: int, repeat: int, ceiling: float) -> list[list[str]]:
+def bench_lab(
+    device: Any, dtype: Any, h: int, w: int, repeat: int, ceiling: float
+) -> list[list[str]]:
     import kornia
     import torch
 
@@ -228,9 +228,7 @@ def main() -> None:
     rows = []
     rows += bench_lab(device, dtype, h, w, args.repeat, ceiling)
     rows += bench_ciede2000(device, dtype, h, w, args.repeat, ceiling)
-    rows += bench_projection(
-        device, dtype, int(args.points), int(args.chunk), args.repeat, ceiling
-    )
+    rows += bench_projection(device, dtype, int(args.points), int(args.chunk), args.repeat, ceiling)
     rows += bench_demosaic(device, dtype, h, w, args.repeat, ceiling)
     cols = ["operation", "implementation", "median ms", "GB/s moved", "of copy BW", "notes"]
     text = "# GPU / array benchmarks (issue 9)\n\n"

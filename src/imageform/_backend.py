@@ -129,7 +129,7 @@ class _DaskLinalg:
     def svd(self, a: Any, full_matrices: bool = True) -> tuple[Any, Any, Any]:
         m, n = int(a.shape[-2]), int(a.shape[-1])
         k = min(m, n)
-        return tuple(  # type: ignore[return-value]
+        return tuple(
             self._gufunc(
                 lambda x: tuple(np.linalg.svd(x, full_matrices=full_matrices)),
                 "(m,n)->(m,p),(k),(q,n)",
@@ -146,7 +146,7 @@ class _DaskLinalg:
     def qr(self, a: Any) -> tuple[Any, Any]:
         m, n = int(a.shape[-2]), int(a.shape[-1])
         k = min(m, n)
-        return tuple(  # type: ignore[return-value]
+        return tuple(
             self._gufunc(
                 lambda x: tuple(np.linalg.qr(x)),
                 "(m,n)->(m,k),(k,n)",

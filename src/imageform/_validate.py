@@ -272,9 +272,7 @@ def as_image(
         if is_dask_namespace(xp):
             # lazily: each chunk is checked when it is computed (nothing computed here)
             if finite or range_check:
-                arr = arr.map_blocks(
-                    _check_image_block, name, finite, range_check, dtype=arr.dtype
-                )
+                arr = arr.map_blocks(_check_image_block, name, finite, range_check, dtype=arr.dtype)
         elif finite:
             check_finite(arr, name, xp)
         if range_check and math.prod(arr.shape) and not is_dask_namespace(xp):

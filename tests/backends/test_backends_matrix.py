@@ -54,7 +54,9 @@ XYN = _rng.uniform(-0.4, 0.4, size=(7, 2))
 SQ = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0], [0.3, 0.7]])
 HOM = np.array([[1.1, 0.1, 3.0], [0.05, 0.9, -2.0], [1e-3, 2e-3, 1.0]])
 LINES = np.array([[1.0, 0.2, -3.0], [0.1, 1.0, -2.0], [1.0, -1.0, 0.5]])
-SEGS = np.array([[0.0, 0.0, 10.0, 1.0], [0.0, 5.0, 10.0, 5.5], [0.0, 9.0, 10.0, 9.7]]).reshape(3, 2, 2)
+SEGS = np.array([[0.0, 0.0, 10.0, 1.0], [0.0, 5.0, 10.0, 5.5], [0.0, 9.0, 10.0, 9.7]]).reshape(
+    3, 2, 2
+)
 QUAT = np.array([0.9, 0.1, 0.2, 0.3]) / np.linalg.norm([0.9, 0.1, 0.2, 0.3])
 VPS = (np.array([900.0, 250.0]), np.array([-300.0, 230.0]), np.array([310.0, 9000.0]))
 BC = g.BrownConrady(k1=-0.2, k2=0.05, p1=1e-3, p2=-2e-3, k3=0.01)
@@ -219,8 +221,11 @@ CASES: list[Case] = [
     Case("look_at", lambda e, t: g.look_at(e, t)[0], (T, PTS3[0])),
     Case("intrinsic_matrix", g.intrinsic_matrix, tuple(np.array(v) for v in (5.0, 6, 1, 2))),
     Case("projection_matrix", g.projection_matrix, (K, R, T)),
-    Case("decompose_projection_matrix", lambda p: g.decompose_projection_matrix(p)[0],
-         (g.projection_matrix(K, R, T),)),
+    Case(
+        "decompose_projection_matrix",
+        lambda p: g.decompose_projection_matrix(p)[0],
+        (g.projection_matrix(K, R, T),),
+    ),
     Case("project_points", lambda *a: g.project_points(*a).uv, (PTS3 + [0, 0, 3], K, R, T)),
     Case("backproject", g.backproject, (UV, K, R)),
     Case("unproject", lambda uv, d: g.unproject(uv, d, K, R, T), (UV, PTS3[:, 2] + 3)),
@@ -230,8 +235,11 @@ CASES: list[Case] = [
     Case("horizon_line", g.horizon_line, (K,)),
     Case("vanishing_point_from_lines", g.vanishing_point_from_lines, (LINES,), atol=1e-9),
     Case("lines_from_segments", g.lines_from_segments, (SEGS,)),
-    Case("focal_from_vanishing_points", g.focal_from_vanishing_points,
-         (VPS[0], VPS[1], np.array([320.0, 240.0]))),
+    Case(
+        "focal_from_vanishing_points",
+        g.focal_from_vanishing_points,
+        (VPS[0], VPS[1], np.array([320.0, 240.0])),
+    ),
     Case("intrinsics_from_vanishing_points", g.intrinsics_from_vanishing_points, VPS, atol=1e-8),
     Case("BrownConrady.distort", BC.distort, (XYN,)),
     Case("BrownConrady.undistort", lambda x: BC.undistort(x)[0], (BC.distort(XYN),), atol=1e-9),
@@ -239,13 +247,20 @@ CASES: list[Case] = [
     Case("KannalaBrandt.undistort", lambda x: KB.undistort(x)[0], (KB.distort(XYN),), atol=1e-9),
     Case("DivisionModel.distort", DIV.distort, (XYN,), atol=1e-9),
     Case("DivisionModel.undistort", lambda x: DIV.undistort(x)[0], (XYN,)),
-    Case("project_points_distorted",
-         lambda *a: g.project_points_distorted(*a, BC)[0], (PTS3 + [0, 0, 3], K, R, T)),
+    Case(
+        "project_points_distorted",
+        lambda *a: g.project_points_distorted(*a, BC)[0],
+        (PTS3 + [0, 0, 3], K, R, T),
+    ),
     Case("undistortion_map", lambda k: g.undistortion_map((5, 7), k, BC), (KSMALL,)),
     Case("remap_bilinear", g.remap_bilinear, (IMG8, g.undistortion_map((8, 8), KSMALL, BC))),
     Case("undistort_image", lambda im: g.undistort_image(im, KSMALL, BC), (IMG8,)),
-    Case("undistort_image[kannala_brandt]", lambda im: g.undistort_image(im, KSMALL, KB),
-         (IMG8,), covers=("undistort_image",)),
+    Case(
+        "undistort_image[kannala_brandt]",
+        lambda im: g.undistort_image(im, KSMALL, KB),
+        (IMG8,),
+        covers=("undistort_image",),
+    ),
 ]
 
 #: Public names that are not in the matrix, and why.
@@ -346,10 +361,11 @@ def test_same_kind_and_numbers(case: Case, backend: str) -> None:
     np.testing.assert_allclose(got, ref_np, atol=case.atol, rtol=1e-12, equal_nan=True)
 
 
-@pytest.mark.parametrize("case", [cs for cs in CASES if cs.name in ("srgb_to_linear",
-                                                                      "xyz_to_lab",
-                                                                      "project_points")],
-                         ids=lambda cs: cs.name)
+@pytest.mark.parametrize(
+    "case",
+    [cs for cs in CASES if cs.name in ("srgb_to_linear", "xyz_to_lab", "project_points")],
+    ids=lambda cs: cs.name,
+)
 def test_float32_stays_float32(case: Case) -> None:
     torch = pytest.importorskip("torch")
     out = case.fn(*[to_backend(a, "torch", "float32") for a in case.args])
@@ -361,12 +377,7 @@ def test_every_public_function_is_covered() -> None:
     covered = set()
     for cs in CASES:
         covered.update(cs.covers or (cs.name.split(".")[0].split("[")[0],))
-    public = {
-        n
-        for m in (c, g)
-        for n in m.__all__
-        if inspect.isfunction(getattr(m, n))
-    }
+    public = {n for m in (c, g) for n in m.__all__ if inspect.isfunction(getattr(m, n))}
     missing = public - covered - set(EXCLUDED)
     assert not missing, f"public functions neither in the matrix nor excluded: {sorted(missing)}"
     stale = set(EXCLUDED) - public

@@ -213,9 +213,7 @@ def check_in_locus(points: object, coords: str = "xy", *, observer: int = 2) -> 
 
 
 @chunkwise(1)
-def xy_to_xyz(
-    xy: object, Y: float = 1.0, *, check_locus: bool = True, observer: int = 2
-) -> Any:
+def xy_to_xyz(xy: object, Y: float = 1.0, *, check_locus: bool = True, observer: int = 2) -> Any:
     r"""XYZ of a chromaticity at luminance ``Y``: :math:`X = xY/y,\ Z = (1 - x - y)Y/y`.
 
     With ``check_locus`` (default) a chromaticity outside the spectral locus raises

@@ -177,9 +177,7 @@ def _as_finite_vps(v: ArrayLike, name: str, xp: Any, like: Any = None) -> Array:
     return p
 
 
-def focal_from_vanishing_points(
-    v1: ArrayLike, v2: ArrayLike, principal_point: ArrayLike
-) -> Array:
+def focal_from_vanishing_points(v1: ArrayLike, v2: ArrayLike, principal_point: ArrayLike) -> Array:
     """Focal length (pixels) from the vanishing points of two orthogonal directions.
 
     With square pixels and zero skew, ``(v1 - p) · (v2 - p) = -f²`` for orthogonal
