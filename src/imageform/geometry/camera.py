@@ -103,11 +103,19 @@ def _check_K(K: Array, xp: Any) -> None:
         raise InvalidInputError("K is singular (fx, fy or K[2, 2] is zero)")
 
 
-def _project_xp(X: Array, K: Array, R: Array, t: Array, xp: Any) -> tuple[Array, Array]:
-    """Array-API twin of the numba kernel; broadcasts K, R, t over leading dimensions."""
-    # rows with inf give NaN in the product; they are masked out below, so silence NumPy
-    with np.errstate(invalid="ignore"):
-        Xc = X @ xp.matrix_transpose(R) + t[..., None, :] if X.ndim >= 2 else R @ X + t
+def _project_xp(
+    X: Array, K: Array, R: Array, t: Array, xp: Any, *, identity: bool = False
+) -> tuple[Array, Array]:
+    """Array-API twin of the numba kernel; broadcasts K, R, t over leading dimensions.
+
+    ``identity``: R and t were not given (camera-frame points), so the ``(N, 3) x (3, 3)``
+    product, a full pass over the points, is skipped."""
+    if identity:
+        Xc = X
+    else:
+        # rows with inf give NaN in the product; they are masked out below: silence NumPy
+        with np.errstate(invalid="ignore"):
+            Xc = X @ xp.matrix_transpose(R) + t[..., None, :] if X.ndim >= 2 else R @ X + t
     z = Xc[..., 2]
     valid = (z > 0) & xp.all(xp.isfinite(Xc), axis=-1)
     zs = xp.where(valid, z, xp.ones_like(z))  # no division by zero; gradients stay finite
@@ -184,7 +192,7 @@ def project_points(
 
         k = Km / Km[2, 2]
         return Projection(*project_pinhole(X, k, Rm, tv))
-    return Projection(*_project_xp(X, Km, Rm, tv, xp))
+    return Projection(*_project_xp(X, Km, Rm, tv, xp, identity=R is None and t is None))
 
 
 def projection_matrix(
