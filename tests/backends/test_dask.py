@@ -154,3 +154,21 @@ def test_white_balance_zero_channel_raises_at_compute() -> None:
     out, _ = c.white_balance(x)
     with pytest.raises(DegenerateConfigurationError, match="zero"):
         out.compute()
+
+
+@pytest.mark.parametrize(
+    "model",
+    [g.BrownConrady(k1=-0.2, p1=1e-3), g.KannalaBrandt(k1=0.05), g.DivisionModel(k1=-0.1)],
+    ids=["brown_conrady", "kannala_brandt", "division"],
+)
+def test_distortion_models_lazy_chunkwise(model: object) -> None:
+    pts = RNG.uniform(-0.5, 0.5, (1000, 2))
+    x = da.from_array(pts, chunks=(250, 2))
+    with no_compute():
+        d = model.distort(x)  # type: ignore[attr-defined]
+        u, ok = model.undistort(d)  # type: ignore[attr-defined]
+    assert d.npartitions == u.npartitions == ok.npartitions == 4
+    np.testing.assert_allclose(d.compute(), model.distort(pts), atol=1e-13)  # type: ignore[attr-defined]
+    ref_u, ref_ok = model.undistort(model.distort(pts))  # type: ignore[attr-defined]
+    np.testing.assert_allclose(u.compute(), ref_u, atol=1e-13)
+    np.testing.assert_array_equal(ok.compute(), ref_ok)
