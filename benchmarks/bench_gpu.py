@@ -148,7 +148,7 @@ def bench_projection(
     nbytes = n_chunks * chunk * (5 * X.element_size() + 1)
     t_i = timed(ours, device, repeat)
     t_k = timed(theirs, device, repeat)
-    label = f"projection {n_chunks * chunk:.0e} pts ({n_chunks} x {chunk:.0e})"
+    label = f"projection {n_chunks * chunk:.1e} pts ({n_chunks} x {chunk:.1e})"
     return [
         _row(label, "imageform", t_i, nbytes, ceiling, f"{t_k / t_i:.2f}x kornia"),
         _row(label, "kornia", t_k, nbytes - n_chunks * chunk, ceiling, f"max |Δuv| {diff:.1e}"),
