@@ -30,6 +30,12 @@ def _backends() -> list[str]:
         names.append("torch")
     except ImportError:
         pass
+    try:
+        import dask.array  # noqa: F401
+
+        names.append("dask")
+    except ImportError:
+        pass
     return names
 
 
@@ -38,7 +44,9 @@ BACKENDS = _backends()
 
 @pytest.fixture(params=BACKENDS)
 def xp_name(request: pytest.FixtureRequest) -> str:
-    """Name of an array library under test: numpy, array_api_strict, torch (if installed)."""
+    """Name of an array library under test: numpy, array_api_strict, torch, dask (if
+    installed). A test that does not apply to one of them skips it with a reason
+    (:func:`tests.helpers.skip_backend`)."""
     return str(request.param)
 
 

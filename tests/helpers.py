@@ -18,6 +18,13 @@ def to_backend(x: object, name: str, dtype: str = "float64") -> object:
         import torch
 
         return torch.asarray(a)
+    if name == "dask":
+        import dask.array as da
+
+        # the leading axes in two chunks each, the last (channel / coordinate) axis whole:
+        # functions must work across chunk boundaries
+        chunks = tuple(max(1, (n + 1) // 2) for n in a.shape[:-1]) + a.shape[-1:]
+        return da.from_array(a, chunks=chunks)
     raise ValueError(name)
 
 
@@ -25,4 +32,6 @@ def to_np(x: object) -> np.ndarray:
     """Any backend's array as NumPy."""
     if hasattr(x, "detach"):
         return x.detach().cpu().numpy()  # type: ignore[no-any-return]
+    if hasattr(x, "compute"):
+        return np.asarray(x.compute())
     return np.asarray(x)

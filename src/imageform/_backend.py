@@ -32,7 +32,9 @@ __all__ = [
     "asarray_like",
     "device_of",
     "float_dtype",
+    "is_dask_namespace",
     "is_numpy_namespace",
+    "linalg",
     "namespace",
     "scalar",
     "to_numpy",
@@ -75,6 +77,94 @@ def is_numpy_namespace(xp: Any) -> bool:
     return bool(array_api_compat.is_numpy_namespace(xp))
 
 
+def is_dask_namespace(xp: Any) -> bool:
+    """True when ``xp`` is Dask's array namespace (through array-api-compat)."""
+    return bool(array_api_compat.is_dask_namespace(xp))
+
+
+class _DaskLinalg:
+    """The Array-API ``linalg`` functions imageform uses, lazily on Dask arrays.
+
+    ``dask.array.linalg`` covers only tall-and-skinny SVDs and square-chunked LU, and has no
+    ``cross``; imageform's matrices are small stacks (``(..., 3, 3)``, DLT systems), so each
+    function runs NumPy's on every batch block with the core (matrix) axes in one chunk
+    (:func:`dask.array.apply_gufunc` with ``allow_rechunk``): still lazy, one task per block.
+    """
+
+    @staticmethod
+    def _gufunc(fn: Any, signature: str, *args: Any, **kwargs: Any) -> Any:
+        import dask.array as da
+
+        return da.apply_gufunc(fn, signature, *args, allow_rechunk=True, **kwargs)
+
+    @staticmethod
+    def cross(a: Any, b: Any, axis: int = -1) -> Any:
+        if axis != -1:
+            raise NotImplementedError("cross on Dask arrays: axis=-1 only")
+        import dask.array as da
+
+        a1, a2, a3 = a[..., 0], a[..., 1], a[..., 2]
+        b1, b2, b3 = b[..., 0], b[..., 1], b[..., 2]
+        return da.stack([a2 * b3 - a3 * b2, a3 * b1 - a1 * b3, a1 * b2 - a2 * b1], axis=-1)
+
+    def det(self, a: Any) -> Any:
+        return self._gufunc(np.linalg.det, "(i,j)->()", a, output_dtypes=a.dtype)
+
+    def inv(self, a: Any) -> Any:
+        return self._gufunc(np.linalg.inv, "(i,j)->(i,j)", a, output_dtypes=a.dtype)
+
+    def solve(self, a: Any, b: Any) -> Any:
+        return self._gufunc(np.linalg.solve, "(i,j),(j,k)->(i,k)", a, b, output_dtypes=a.dtype)
+
+    def svdvals(self, a: Any) -> Any:
+        m, n = int(a.shape[-2]), int(a.shape[-1])
+        return self._gufunc(
+            lambda x: np.linalg.svd(x, compute_uv=False),
+            "(m,n)->(k)",
+            a,
+            output_dtypes=a.dtype,
+            output_sizes={"k": min(m, n)},
+        )
+
+    def svd(self, a: Any, full_matrices: bool = True) -> tuple[Any, Any, Any]:
+        m, n = int(a.shape[-2]), int(a.shape[-1])
+        k = min(m, n)
+        return tuple(
+            self._gufunc(
+                lambda x: tuple(np.linalg.svd(x, full_matrices=full_matrices)),
+                "(m,n)->(m,p),(k),(q,n)",
+                a,
+                output_dtypes=(a.dtype, a.dtype, a.dtype),
+                output_sizes={
+                    "p": m if full_matrices else k,
+                    "k": k,
+                    "q": n if full_matrices else k,
+                },
+            )
+        )
+
+    def qr(self, a: Any) -> tuple[Any, Any]:
+        m, n = int(a.shape[-2]), int(a.shape[-1])
+        k = min(m, n)
+        return tuple(
+            self._gufunc(
+                lambda x: tuple(np.linalg.qr(x)),
+                "(m,n)->(m,k),(k,n)",
+                a,
+                output_dtypes=(a.dtype, a.dtype),
+                output_sizes={"k": k},
+            )
+        )
+
+
+_DASK_LINALG = _DaskLinalg()
+
+
+def linalg(xp: Any) -> Any:
+    """``xp.linalg``, or for Dask a lazy stand-in covering small stacked matrices."""
+    return _DASK_LINALG if is_dask_namespace(xp) else xp.linalg
+
+
 def device_of(x: object) -> Any:
     """Device of an array, or ``None`` for non-arrays and NumPy."""
     if _is_array(x) and not array_api_compat.is_numpy_array(x):
@@ -100,7 +190,11 @@ def float_dtype(x: Any, xp: Any, *, integer: str = IMAGE_INTEGER_DTYPE) -> Any:
 
 def asarray_like(x: object, xp: Any, dtype: Any = None, device: Any = None) -> Any:
     """Convert ``x`` to an array of namespace ``xp`` (optionally with ``dtype``/``device``)."""
-    if array_api_compat.is_numpy_array(x) and not is_numpy_namespace(xp):
+    if not is_numpy_namespace(xp) and (
+        array_api_compat.is_numpy_array(x) or isinstance(x, list | tuple | float | int)
+    ):
+        # Python numbers and lists are read by NumPy's rules (a float list is float64), as
+        # on the NumPy path, not by the other library's default dtype (torch: float32)
         x = np.asarray(x)
     elif _is_array(x) and namespace(x) is xp and (device is None or device == device_of(x)):
         # already an array of this namespace: no copy, the autograd graph is kept

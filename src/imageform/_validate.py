@@ -19,6 +19,7 @@ from imageform._backend import (
     asarray_like,
     device_of,
     float_dtype,
+    is_dask_namespace,
     namespace,
     scalar,
 )
@@ -218,6 +219,22 @@ def check_positive(value: object, name: str, *, allow_zero: bool = False) -> flo
 _INTEGER_SCALE = {"uint8": 255.0, "uint16": 65535.0}
 
 
+def _check_image_block(a: Any, name: str, finite: bool, range_check: bool) -> Any:
+    """:func:`as_image`'s value checks on one NumPy chunk of a Dask image."""
+    import numpy as np
+
+    if finite and not np.all(np.isfinite(a)):
+        raise InvalidInputError(f"{name} contains NaN or inf")
+    if range_check and a.size:
+        mx = float(np.max(a))
+        if mx > 1.5 and np.all(a == np.round(a)):
+            raise InvalidInputError(
+                f"{name} looks like 0-255 values stored as floats (max {mx:g}); "
+                "divide by 255 or pass uint8"
+            )
+    return a
+
+
 def as_image(
     image: object,
     name: str = "image",
@@ -236,6 +253,8 @@ def as_image(
       hint, when ``range_check``.
     - ``channels`` (if given) must match the size of ``channel_axis``; the channel axis is
       moved last. A 4th (alpha) channel is rejected with a hint to split it off.
+    - Dask arrays stay lazy: the value checks (finite, 0–255) run on each chunk when it is
+      computed.
     """
     xp = namespace(image) if xp is None else xp
     arr = _raw(image, name, xp, device_of(image))
@@ -250,9 +269,13 @@ def as_image(
         arr = xp.astype(arr, getattr(xp, IMAGE_INTEGER_DTYPE)) / _INTEGER_SCALE[dname]
     else:
         arr = xp.astype(arr, float_dtype(arr, xp), copy=False)
-        if finite:
+        if is_dask_namespace(xp):
+            # lazily: each chunk is checked when it is computed (nothing computed here)
+            if finite or range_check:
+                arr = arr.map_blocks(_check_image_block, name, finite, range_check, dtype=arr.dtype)
+        elif finite:
             check_finite(arr, name, xp)
-        if range_check and math.prod(arr.shape):
+        if range_check and math.prod(arr.shape) and not is_dask_namespace(xp):
             mx = scalar(xp.max(arr))
             if mx > 1.5 and bool(xp.all(arr == xp.round(arr))):
                 raise InvalidInputError(

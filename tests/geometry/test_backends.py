@@ -22,6 +22,10 @@ def _xp_type(name: str) -> type:
         import array_api_strict
 
         return type(array_api_strict.asarray([1.0]))
+    if name == "dask":
+        import dask.array as da
+
+        return da.Array
     return np.ndarray
 
 

@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 
 from imageform._backend import device_of, namespace
+from imageform._dask import chunkwise
 from imageform._validate import as_points, check_option
 from imageform.color.whitepoints import resolve_white
 from imageform.errors import InvalidInputError
@@ -122,6 +123,7 @@ def chromatic_adaptation_matrix(
     return out
 
 
+@chunkwise(1)
 def chromatic_adaptation(
     xyz: object,
     src_white: Any,

@@ -20,6 +20,7 @@ from typing import Any
 import numpy as np
 
 from imageform._backend import device_of, namespace
+from imageform._dask import chunkwise
 from imageform._validate import as_float, as_points, check_option
 from imageform.errors import InvalidInputError
 
@@ -96,6 +97,7 @@ def _xy_from_uv(xp: Any, u: Any, v: Any) -> Any:
     return xp.stack([3.0 * u / d, 2.0 * v / d], axis=-1)
 
 
+@chunkwise(1)
 def xy_to_uv1960(xy: object) -> Any:
     r"""CIE 1931 ``xy`` to CIE 1960 UCS ``uv``.
 
@@ -124,6 +126,7 @@ def xy_to_uv1960(xy: object) -> Any:
     return xp.stack([u, v], axis=-1)
 
 
+@chunkwise(1)
 def uv1960_to_xy(uv: object) -> Any:
     r"""CIE 1960 UCS ``uv`` to CIE 1931 ``xy``.
 

@@ -16,7 +16,8 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from imageform._backend import namespace
+from imageform._backend import device_of, namespace, to_numpy
+from imageform._dask import chunkwise
 from imageform._validate import as_points, check_option
 from imageform.errors import InvalidInputError
 
@@ -41,6 +42,7 @@ CHROMATICITY_COORDS = ("xy", "uv")
 LOCUS_RANGE = (380.0, 780.0)
 
 
+@chunkwise(1)
 def xyz_to_xy(xyz: object, white: Any = "D65") -> Any:
     """Chromaticity ``(x, y)`` of XYZ, shape (..., 3) -> (..., 2).
 
@@ -55,6 +57,7 @@ def xyz_to_xy(xyz: object, white: Any = "D65") -> Any:
     return xyz_to_xyy(xyz, white)[..., :2]
 
 
+@chunkwise(1)
 def xy_to_uv_prime(xy: object) -> Any:
     r"""CIE 1976 UCS :math:`(u', v')` from :math:`(x, y)`, shape (..., 2).
 
@@ -72,6 +75,7 @@ def xy_to_uv_prime(xy: object) -> Any:
     return xp.stack([4.0 * x / d, 9.0 * y / d], axis=-1)
 
 
+@chunkwise(1)
 def uv_prime_to_xy(uv: object) -> Any:
     r"""Inverse of :func:`xy_to_uv_prime`: :math:`x = 9u'/(6u' - 16v' + 12)`,
     :math:`y = 4v'/(6u' - 16v' + 12)` (CIE 015:2018 eq. 8.3).
@@ -86,6 +90,7 @@ def uv_prime_to_xy(uv: object) -> Any:
     return xp.stack([9.0 * u / d, 4.0 * v / d], axis=-1)
 
 
+@chunkwise(1)
 def xyz_to_uv_prime(xyz: object, white: Any = "D65") -> Any:
     """:math:`(u', v')` of XYZ, shape (..., 3) -> (..., 2) (black gets the white's).
 
@@ -154,54 +159,61 @@ def visible_area(coords: str = "xy", observer: int = 2) -> float:
     return polygon_area(spectral_locus(observer, coords)[1])
 
 
-def _points_in_polygon(pts: np.ndarray, poly: np.ndarray) -> np.ndarray:
+def _points_in_polygon(pts: Any, poly: np.ndarray, xp: Any) -> Any:
     """Even-odd ray casting, vectorised over points (boundary counts as inside up to 1e-12)."""
+    dev = device_of(pts)
     x, y = pts[..., 0][..., None], pts[..., 1][..., None]
-    x1, y1 = poly[:, 0], poly[:, 1]
-    x2, y2 = np.roll(x1, -1), np.roll(y1, -1)
+    x1 = xp.asarray(poly[:, 0], dtype=pts.dtype, device=dev)
+    y1 = xp.asarray(poly[:, 1], dtype=pts.dtype, device=dev)
+    x2 = xp.asarray(np.roll(poly[:, 0], -1), dtype=pts.dtype, device=dev)
+    y2 = xp.asarray(np.roll(poly[:, 1], -1), dtype=pts.dtype, device=dev)
     crosses = (y1 > y) != (y2 > y)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        xint = x1 + (y - y1) * (x2 - x1) / (y2 - y1)
-    inside = np.count_nonzero(crosses & (x < xint), axis=-1) % 2 == 1
-    return np.asarray(inside)
+    dy = y2 - y1
+    # edges with dy = 0 never cross (crosses is False there): any finite divisor will do
+    xint = x1 + (y - y1) * (x2 - x1) / xp.where(dy == 0, xp.ones_like(dy), dy)
+    n = xp.sum(xp.astype(crosses & (x < xint), xp.int32), axis=-1)
+    return n % 2 == 1
 
 
-def in_locus(points: object, coords: str = "xy", *, observer: int = 2) -> np.ndarray:
+@chunkwise(1)
+def in_locus(points: object, coords: str = "xy", *, observer: int = 2) -> Any:
     """True where chromaticities lie inside the spectral locus (physically realisable).
 
     Parameters
     ----------
     points : array_like, shape (..., 2)
-        xy or u'v' chromaticities.
+        xy or u'v' chromaticities (any Array-API array; the result is of the same kind).
 
     Returns
     -------
-    ndarray of bool, shape (...)
+    bool array, shape (...)
 
     >>> in_locus([[0.3127, 0.3290], [0.7, 0.7]]).tolist()
     [True, False]
     """
-    p = np.asarray(as_points(np.asarray(points, dtype=np.float64), "chromaticities", 2))
-    return _points_in_polygon(p, spectral_locus(observer, coords)[1])
+    xp = namespace(points)
+    p = as_points(points, "chromaticities", 2, xp=xp)
+    return _points_in_polygon(p, spectral_locus(observer, coords)[1], xp)
 
 
-def check_in_locus(points: object, coords: str = "xy", *, observer: int = 2) -> np.ndarray:
+def check_in_locus(points: object, coords: str = "xy", *, observer: int = 2) -> Any:
     """``points`` as an array, raising :class:`InvalidInputError` if any lies outside the locus."""
-    p = np.asarray(as_points(np.asarray(points, dtype=np.float64), "chromaticities", 2))
+    xp = namespace(points)
+    p = as_points(points, "chromaticities", 2, xp=xp)
     ok = in_locus(p, coords, observer=observer)
-    if not np.all(ok):
-        bad = p[~ok][0]
+    if not bool(xp.all(ok)):
+        pn, okn = to_numpy(p), to_numpy(ok)
+        bad = pn[~okn][0]
         name = "(x, y)" if coords == "xy" else "(u', v')"
         raise InvalidInputError(
             f"chromaticity {name} = ({bad[0]:.4g}, {bad[1]:.4g}) lies outside the spectral "
-            f"locus ({int(np.count_nonzero(~ok))} of {ok.size} points): no real colour has it"
+            f"locus ({int(np.count_nonzero(~okn))} of {okn.size} points): no real colour has it"
         )
     return p
 
 
-def xy_to_xyz(
-    xy: object, Y: float = 1.0, *, check_locus: bool = True, observer: int = 2
-) -> np.ndarray:
+@chunkwise(1)
+def xy_to_xyz(xy: object, Y: float = 1.0, *, check_locus: bool = True, observer: int = 2) -> Any:
     r"""XYZ of a chromaticity at luminance ``Y``: :math:`X = xY/y,\ Z = (1 - x - y)Y/y`.
 
     With ``check_locus`` (default) a chromaticity outside the spectral locus raises
@@ -210,10 +222,14 @@ def xy_to_xyz(
     >>> xy_to_xyz([0.31271, 0.32902]).round(5).tolist()
     [0.95043, 1.0, 1.0889]
     """
-    p = check_in_locus(xy, observer=observer) if check_locus else np.asarray(xy, dtype=float)
+    xp = namespace(xy)
+    p = as_points(xy, "xy", 2, xp=xp)
+    if check_locus:
+        check_in_locus(p, observer=observer)
     if not (np.isfinite(Y) and Y >= 0):
         raise InvalidInputError(f"expected Y >= 0, got {Y!r}")
-    if np.any(p[..., 1] <= 0):
+    if bool(xp.any(p[..., 1] <= 0)):
         raise InvalidInputError("expected y > 0 (y = 0 has no finite XYZ)")
     x, y = p[..., 0], p[..., 1]
-    return np.stack([x * Y / y, np.full_like(x, Y), (1.0 - x - y) * Y / y], axis=-1)
+    Yf = float(Y)
+    return xp.stack([x * Yf / y, xp.full_like(x, Yf), (1.0 - x - y) * Yf / y], axis=-1)

@@ -17,6 +17,7 @@ import math
 from typing import Any
 
 from imageform._backend import device_of, namespace
+from imageform._dask import chunkwise
 from imageform._validate import as_image
 
 from .whitepoints import resolve_white
@@ -69,6 +70,7 @@ def _lab_to_xyz(xp: Any, lab: Any, w: Any) -> Any:
     return _f_inv(xp, xp.stack([fx, fy, fz], axis=-1)) * w
 
 
+@chunkwise(1)
 def xyz_to_lab(xyz: object, white: Any = "D65", *, observer: int = 2) -> Any:
     """CIE XYZ to CIELAB.
 
@@ -104,6 +106,7 @@ def xyz_to_lab(xyz: object, white: Any = "D65", *, observer: int = 2) -> Any:
     return _xyz_to_lab(xp, x, _white_arr(white, observer, x))
 
 
+@chunkwise(1)
 def lab_to_xyz(lab: object, white: Any = "D65", *, observer: int = 2) -> Any:
     """CIELAB to CIE XYZ; inverse of :func:`xyz_to_lab`.
 
@@ -142,6 +145,7 @@ def _lch_to_lab(xp: Any, lch: Any) -> Any:
     return xp.stack([lch[..., 0], c * xp.cos(h), c * xp.sin(h)], axis=-1)
 
 
+@chunkwise(1)
 def lab_to_lch(lab: object) -> Any:
     """CIELAB to CIELCh_ab: chroma and hue angle in degrees [0, 360).
 
@@ -158,6 +162,7 @@ def lab_to_lch(lab: object) -> Any:
     return _lab_to_lch(namespace(x), x)
 
 
+@chunkwise(1)
 def lch_to_lab(lch: object) -> Any:
     """CIELCh_ab to CIELAB: :math:`a^* = C^* \\cos h`, :math:`b^* = C^* \\sin h`.
 
@@ -188,6 +193,7 @@ def _xyy_to_xyz(xp: Any, xyy: Any) -> Any:
     return xp.stack([x, yy, z], axis=-1)
 
 
+@chunkwise(1)
 def xyz_to_xyy(xyz: object, white: Any = "D65", *, observer: int = 2) -> Any:
     """CIE XYZ to chromaticity and luminance xyY.
 
@@ -205,6 +211,7 @@ def xyz_to_xyy(xyz: object, white: Any = "D65", *, observer: int = 2) -> Any:
     return _xyz_to_xyy(namespace(x), x, _white_arr(white, observer, x))
 
 
+@chunkwise(1)
 def xyy_to_xyz(xyy: object) -> Any:
     """Chromaticity xyY to CIE XYZ: :math:`X = xY/y`, :math:`Z = (1 - x - y) Y / y`.
 
@@ -253,6 +260,7 @@ def _luv_to_xyz(xp: Any, luv: Any, w: Any) -> Any:
     return xp.stack([X, Y, Z], axis=-1)
 
 
+@chunkwise(1)
 def xyz_to_luv(xyz: object, white: Any = "D65", *, observer: int = 2) -> Any:
     """CIE XYZ to CIELUV.
 
@@ -272,6 +280,7 @@ def xyz_to_luv(xyz: object, white: Any = "D65", *, observer: int = 2) -> Any:
     return _xyz_to_luv(namespace(x), x, _white_arr(white, observer, x))
 
 
+@chunkwise(1)
 def luv_to_xyz(luv: object, white: Any = "D65", *, observer: int = 2) -> Any:
     """CIELUV to CIE XYZ; inverse of :func:`xyz_to_luv` (L* = 0 gives black).
 

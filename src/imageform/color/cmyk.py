@@ -14,6 +14,7 @@ from __future__ import annotations
 from typing import Any
 
 from imageform._backend import namespace
+from imageform._dask import chunkwise
 from imageform._validate import as_image
 
 __all__ = [
@@ -40,6 +41,7 @@ def _cmyk_to_cmy(xp: Any, cmyk: Any) -> Any:
     return cmyk[..., :3] * (1.0 - k) + k
 
 
+@chunkwise(1)
 def srgb_to_cmy(image: object) -> Any:
     """Encoded RGB to CMY: :math:`(C, M, Y) = 1 - (R, G, B)`.
 
@@ -61,6 +63,7 @@ def srgb_to_cmy(image: object) -> Any:
     return 1.0 - x
 
 
+@chunkwise(1)
 def cmy_to_srgb(cmy: object) -> Any:
     """CMY to encoded RGB: :math:`(R, G, B) = 1 - (C, M, Y)`.
 
@@ -71,6 +74,7 @@ def cmy_to_srgb(cmy: object) -> Any:
     return 1.0 - x
 
 
+@chunkwise(1)
 def cmy_to_cmyk(cmy: object) -> Any:
     """CMY to CMYK with K = min(C, M, Y) and the remaining inks rescaled by 1/(1 - K).
 
@@ -85,6 +89,7 @@ def cmy_to_cmyk(cmy: object) -> Any:
     return _cmy_to_cmyk(namespace(x), x)
 
 
+@chunkwise(1)
 def cmyk_to_cmy(cmyk: object) -> Any:
     """CMYK to CMY: :math:`C = C'(1 - K) + K` (and likewise M, Y).
 
@@ -95,6 +100,7 @@ def cmyk_to_cmy(cmyk: object) -> Any:
     return _cmyk_to_cmy(namespace(x), x)
 
 
+@chunkwise(1)
 def srgb_to_cmyk(image: object) -> Any:
     """Encoded RGB to CMYK (via CMY), shape (..., 4).
 
@@ -105,6 +111,7 @@ def srgb_to_cmyk(image: object) -> Any:
     return _cmy_to_cmyk(namespace(x), 1.0 - x)
 
 
+@chunkwise(1)
 def cmyk_to_srgb(cmyk: object) -> Any:
     """CMYK to encoded RGB: :math:`R = (1 - C')(1 - K)` (and likewise G, B).
 

@@ -36,6 +36,7 @@ from typing import Any
 import numpy as np
 
 from imageform._backend import device_of, namespace, use_numba
+from imageform._dask import chunkwise
 from imageform._validate import as_float, as_image, check_option
 from imageform.errors import InvalidInputError, UnknownOptionError
 
@@ -228,6 +229,7 @@ def _validate(image: object, src: str) -> Any:
     return x
 
 
+@chunkwise(1)
 def convert(image: object, src: str, dst: str, **params: Any) -> Any:
     """Convert ``image`` from colour space ``src`` to ``dst`` along the conversion graph.
 

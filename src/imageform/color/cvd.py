@@ -33,6 +33,7 @@ from typing import Any
 import numpy as np
 
 from imageform._backend import device_of, namespace
+from imageform._dask import chunkwise
 from imageform._validate import as_image, check_option
 from imageform.errors import InvalidInputError
 
@@ -208,6 +209,7 @@ def cvd_matrix(deficiency: str, severity: float = 1.0, method: str = "machado200
     return np.asarray((1.0 - s) * np.eye(3) + s * _vienot_matrix(d))
 
 
+@chunkwise(1)
 def simulate_cvd(
     image: object,
     deficiency: str,

@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 
 from imageform._backend import namespace, use_numba
+from imageform._dask import chunkwise
 from imageform._kernels.delta_e import ciede2000_numba, ciede2000_twin
 from imageform._validate import as_points, check_option, check_positive, format_shape
 from imageform.errors import InvalidInputError
@@ -80,6 +81,7 @@ def _delta_h_sq(xp: Any, a1: Any, b1: Any, a2: Any, b2: Any, C1: Any, C2: Any) -
     return xp.where(d >= 0, acute, xp.where(obtuse > 0, obtuse, xp.zeros_like(obtuse)))
 
 
+@chunkwise(1)
 def delta_e_cie76(lab1: object, lab2: object) -> Any:
     r"""CIE 1976 colour difference ΔE*ab: the Euclidean distance in CIELAB.
 
@@ -108,6 +110,7 @@ def delta_e_cie76(lab1: object, lab2: object) -> Any:
     return xp.sqrt(xp.sum(d * d, axis=-1))
 
 
+@chunkwise(1)
 def delta_e_cie94(
     lab1: object,
     lab2: object,
@@ -164,6 +167,7 @@ def delta_e_cie94(
     return xp.sqrt(tl * tl + tc * tc + dH2 / (sh * sh))
 
 
+@chunkwise(1)
 def delta_e_cmc(lab1: object, lab2: object, *, l: float = 2.0, c: float = 1.0) -> Any:
     r"""CMC l:c colour difference (``lab1`` is the reference).
 
@@ -224,6 +228,7 @@ def delta_e_cmc(lab1: object, lab2: object, *, l: float = 2.0, c: float = 1.0) -
     return xp.sqrt(tl * tl + tc * tc + dH2 / (SH * SH))
 
 
+@chunkwise(1)
 def delta_e_ciede2000(
     lab1: object, lab2: object, *, kL: float = 1.0, kC: float = 1.0, kH: float = 1.0
 ) -> Any:
@@ -277,6 +282,7 @@ def delta_e_ciede2000(
     return ciede2000_twin(xp, a, b, kL_, kC_, kH_)
 
 
+@chunkwise(1)
 def delta_e(
     lab1: object,
     lab2: object,

@@ -16,6 +16,8 @@ from typing import Any
 
 import numpy as np
 
+from imageform._backend import device_of, namespace
+from imageform._dask import chunkwise
 from imageform._validate import as_points, check_option
 from imageform.color.chromaticity import (
     polygon_area,
@@ -156,13 +158,14 @@ def gamut_figures(spaces: Sequence[str] = ("srgb", "display_p3", "rec2020")) -> 
     return out
 
 
+@chunkwise(1)
 def in_gamut(
     values: object,
     space: str | RGBSpace = "srgb",
     *,
     kind: str = "xyz",
     tol: float = 1e-9,
-) -> np.ndarray:
+) -> Any:
     """True where colours lie inside an RGB space's gamut.
 
     ``kind="xyz"`` (shape (..., 3), white Y = 1): linear RGB of the space in
@@ -177,27 +180,35 @@ def in_gamut(
     """
     k = check_option(kind, _KINDS, "gamut test kind")
     sp = _get_space(space)
+    xp = namespace(values)
     if k == "xy":
-        p = np.asarray(as_points(np.asarray(values, dtype=np.float64), "xy", 2))
+        p = as_points(values, "xy", 2, xp=xp)
         tri = gamut_triangle(sp)
-        # barycentric test (closed triangle, tolerance tol)
+        # barycentric test (closed triangle, tolerance tol): lam = M^-1 (p - a)
         a, b, c = tri
-        m = np.array([b - a, c - a]).T
-        lam = np.linalg.solve(m, (p - a).reshape(-1, 2).T).T.reshape(p.shape)
+        minv = np.linalg.inv(np.array([b - a, c - a]).T)
+        d = p - _const(a, p, xp)
+        lam = d @ _const(minv.T, p, xp)
         l0 = 1.0 - lam[..., 0] - lam[..., 1]
-        return np.asarray((lam[..., 0] >= -tol) & (lam[..., 1] >= -tol) & (l0 >= -tol))
-    v = np.asarray(as_points(np.asarray(values, dtype=np.float64), kind, 3))
-    rgb = v if k == "linear_rgb" else v @ np.linalg.inv(sp.matrix_to_xyz()).T
-    return np.asarray(np.all((rgb >= -tol) & (rgb <= 1.0 + tol), axis=-1))
+        return (lam[..., 0] >= -tol) & (lam[..., 1] >= -tol) & (l0 >= -tol)
+    v = as_points(values, kind, 3, xp=xp)
+    rgb = v if k == "linear_rgb" else v @ _const(np.linalg.inv(sp.matrix_to_xyz()).T, v, xp)
+    return xp.all((rgb >= -tol) & (rgb <= 1.0 + tol), axis=-1)
 
 
+def _const(m: np.ndarray, like: Any, xp: Any) -> Any:
+    """A NumPy constant in ``like``'s namespace, dtype and device."""
+    return xp.asarray(np.asarray(m, dtype=np.float64), dtype=like.dtype, device=device_of(like))
+
+
+@chunkwise(1)
 def gamut_map(
     xyz: object,
     space: str | RGBSpace = "srgb",
     *,
     method: str = "lch_chroma",
     iterations: int = 40,
-) -> np.ndarray:
+) -> Any:
     """Map XYZ (white Y = 1) into an RGB space's gamut; returns linear RGB in [0, 1].
 
     ``"clip"`` clips each linear RGB channel to [0, 1] (simple; shifts hue and lightness).
@@ -216,35 +227,36 @@ def gamut_map(
 
     m = check_option(method, GAMUT_MAPPING_METHODS, "gamut mapping method")
     sp = _get_space(space)
-    v = np.asarray(as_points(np.asarray(xyz, dtype=np.float64), "xyz", 3))
-    to_rgb = np.linalg.inv(sp.matrix_to_xyz())
-    rgb = v @ to_rgb.T
+    xp = namespace(xyz)
+    v = as_points(xyz, "xyz", 3, xp=xp)
+    to_rgb_t = _const(np.linalg.inv(sp.matrix_to_xyz()).T, v, xp)
+    rgb = v @ to_rgb_t
     if m == "clip":
-        return np.clip(rgb, 0.0, 1.0)
+        return xp.clip(rgb, 0.0, 1.0)
     if iterations < 1:
         raise InvalidInputError(f"expected iterations >= 1, got {iterations}")
     white = sp.white_xy
-    lch = np.asarray(lab_to_lch(xyz_to_lab(v, white)))
-    inside = np.all((rgb >= 0.0) & (rgb <= 1.0), axis=-1)
-    L = np.clip(lch[..., 0], 0.0, 100.0)
+    lch = lab_to_lch(xyz_to_lab(v, white))
+    inside = xp.all((rgb >= 0.0) & (rgb <= 1.0), axis=-1)
+    L = xp.clip(lch[..., 0], 0.0, 100.0)
     h = lch[..., 2]
 
-    def rgb_of(c: np.ndarray) -> np.ndarray:
-        lab = np.asarray(lch_to_lab(np.stack([L, c, h], axis=-1)))
-        return np.asarray(lab_to_xyz(lab, white)) @ to_rgb.T
+    def rgb_of(c: Any) -> Any:
+        lab = lch_to_lab(xp.stack([L, c, h], axis=-1))
+        return lab_to_xyz(lab, white) @ to_rgb_t
 
-    lo = np.zeros_like(L)
-    hi = lch[..., 1].copy()
+    lo = xp.zeros_like(L)
+    hi = lch[..., 1]
     for _ in range(iterations):
         mid = 0.5 * (lo + hi)
         r = rgb_of(mid)
-        ok = np.all((r >= -1e-12) & (r <= 1.0 + 1e-12), axis=-1)
-        lo = np.where(ok, mid, lo)
-        hi = np.where(ok, hi, mid)
+        ok = xp.all((r >= -1e-12) & (r <= 1.0 + 1e-12), axis=-1)
+        lo = xp.where(ok, mid, lo)
+        hi = xp.where(ok, hi, mid)
     mapped = rgb_of(lo)
     # lo is in gamut to 1e-12 by construction: the clip below removes rounding only.
-    mapped = np.clip(mapped, 0.0, 1.0)
-    return np.where(inside[..., None], rgb, mapped)
+    mapped = xp.clip(mapped, 0.0, 1.0)
+    return xp.where(inside[..., None], rgb, mapped)
 
 
 def _names() -> tuple[str, ...]:

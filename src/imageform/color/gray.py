@@ -18,6 +18,7 @@ from __future__ import annotations
 from typing import Any
 
 from imageform._backend import namespace
+from imageform._dask import chunkwise
 from imageform._validate import as_image, check_option
 
 from .transfer import _srgb_decode, _srgb_encode
@@ -52,6 +53,7 @@ def _gray_to_srgb(xp: Any, g: Any) -> Any:
     return xp.concat([g, g, g], axis=-1)
 
 
+@chunkwise(1)
 def srgb_to_gray(image: object, method: str = "rec601") -> Any:
     """Encoded sRGB to an encoded grey image, shape (..., 1).
 
@@ -82,6 +84,7 @@ def srgb_to_gray(image: object, method: str = "rec601") -> Any:
     return _srgb_to_gray(namespace(x), x, m)
 
 
+@chunkwise(1)
 def gray_to_srgb(gray: object) -> Any:
     """A grey image (..., 1) to sRGB (..., 3) by repeating the value (R = G = B).
 
@@ -92,6 +95,7 @@ def gray_to_srgb(gray: object) -> Any:
     return _gray_to_srgb(namespace(x), x)
 
 
+@chunkwise(1)
 def linear_srgb_to_luminance(image: object) -> Any:
     """Relative luminance Y of linear sRGB, shape (..., 1): the Y of CIE XYZ.
 

@@ -15,6 +15,7 @@ import math
 from typing import Any
 
 from imageform._backend import namespace
+from imageform._dask import chunkwise
 from imageform._validate import as_float, as_image
 from imageform.errors import InvalidInputError
 
@@ -120,6 +121,7 @@ def _rgb_in(image: object) -> tuple[Any, Any]:
     return namespace(x), x
 
 
+@chunkwise(1)
 def srgb_to_hsv(image: object) -> Any:
     """Encoded RGB to HSV (hexcone model).
 
@@ -148,6 +150,7 @@ def srgb_to_hsv(image: object) -> Any:
     return _srgb_to_hsv(xp, x)
 
 
+@chunkwise(1)
 def hsv_to_srgb(hsv: object) -> Any:
     """HSV to encoded RGB: :math:`f(n) = V - VS\\max(0, \\min(k, 4 - k, 1))`,
     :math:`k = (n + H/60) \\bmod 6` for n = 5, 3, 1.
@@ -161,6 +164,7 @@ def hsv_to_srgb(hsv: object) -> Any:
     return _hsv_to_srgb(namespace(x), x)
 
 
+@chunkwise(1)
 def srgb_to_hsl(image: object) -> Any:
     """Encoded RGB to HSL (double hexcone): L = (max + min)/2,
     :math:`S = \\Delta / (1 - |2L - 1|)`, H as in HSV.
@@ -175,6 +179,7 @@ def srgb_to_hsl(image: object) -> Any:
     return _srgb_to_hsl(xp, x)
 
 
+@chunkwise(1)
 def hsl_to_srgb(hsl: object) -> Any:
     """HSL to encoded RGB: :math:`f(n) = L - a \\max(-1, \\min(k - 3, 9 - k, 1))`,
     :math:`a = S \\min(L, 1 - L)`, :math:`k = (n + H/30) \\bmod 12` for n = 0, 8, 4.
@@ -186,6 +191,7 @@ def hsl_to_srgb(hsl: object) -> Any:
     return _hsl_to_srgb(namespace(x), x)
 
 
+@chunkwise(1)
 def srgb_to_hsi(image: object) -> Any:
     """Encoded RGB to HSI (Gonzalez & Woods).
 
@@ -206,6 +212,7 @@ def srgb_to_hsi(image: object) -> Any:
     return _srgb_to_hsi(xp, x)
 
 
+@chunkwise(1)
 def hsi_to_srgb(hsi: object) -> Any:
     """HSI to encoded RGB, sector by sector (Gonzalez & Woods eq. (6-20)-(6-30)).
 
@@ -220,6 +227,7 @@ def hsi_to_srgb(hsi: object) -> Any:
 
 
 # ---------------------------------------------------------------- hue helpers
+@chunkwise(1)
 def hue_undefined_mask(values: object, *, atol: float = 0.0) -> Any:
     """Boolean mask of pixels whose hue is undefined: saturation (channel 1) ``<= atol``.
 
@@ -243,6 +251,7 @@ def hue_undefined_mask(values: object, *, atol: float = 0.0) -> Any:
     return x[..., 1] <= atol
 
 
+@chunkwise(0)
 def hue_difference(h1: object, h2: object) -> Any:
     """Signed hue difference ``h2 - h1`` wrapped to [-180, 180) degrees.
 
@@ -257,6 +266,7 @@ def hue_difference(h1: object, h2: object) -> Any:
     return xp.remainder(b - a + 180.0, 360.0) - 180.0
 
 
+@chunkwise(0)
 def hue_distance(h1: object, h2: object) -> Any:
     """Unsigned angular distance between hues in degrees, in [0, 180].
 
@@ -270,6 +280,7 @@ def hue_distance(h1: object, h2: object) -> Any:
     return xp.abs(d)
 
 
+@chunkwise(0)
 def hue_in_range(hue: object, start: float, stop: float) -> Any:
     """Mask of hues inside the arc from ``start`` to ``stop`` degrees, counter-clockwise.
 

@@ -21,6 +21,7 @@ from __future__ import annotations
 from typing import Any
 
 from imageform._backend import namespace
+from imageform._dask import chunkwise
 from imageform._validate import as_float, as_image, check_option
 from imageform.errors import InvalidInputError
 
@@ -42,6 +43,7 @@ def _flip(xp: Any, x: Any) -> Any:
     return xp.stack([x[..., 2], x[..., 1], x[..., 0]], axis=-1)
 
 
+@chunkwise(1)
 def srgb_to_bgr(image: object) -> Any:
     """Reverse the channel order RGB -> BGR (values unchanged).
 
@@ -52,6 +54,7 @@ def srgb_to_bgr(image: object) -> Any:
     return _flip(namespace(x), x)
 
 
+@chunkwise(1)
 def bgr_to_srgb(image: object) -> Any:
     """Reverse the channel order BGR -> RGB (``cv2.imread`` output to imageform's order).
 
@@ -67,6 +70,7 @@ def _round_u8(xp: Any, x: Any) -> Any:
     return xp.astype(xp.clip(xp.round(x), 0, 255), xp.uint8)
 
 
+@chunkwise(1)
 def to_opencv(values: object, convention: str) -> Any:
     """imageform values (float, RGB order, degrees) in OpenCV's layout ``convention``.
 
@@ -112,6 +116,7 @@ def to_opencv(values: object, convention: str) -> Any:
     return xp.stack([h, b + 0.5, a + 0.5], axis=-1)  # ycrcb (float)
 
 
+@chunkwise(1)
 def from_opencv(values: object, convention: str) -> Any:
     """OpenCV's layout ``convention`` back to imageform values (float, RGB order, degrees).
 

@@ -25,6 +25,7 @@ from typing import Any
 import numpy as np
 
 from imageform._backend import device_of, namespace
+from imageform._dask import chunkwise
 from imageform._validate import as_image, check_option
 from imageform.errors import DegenerateConfigurationError
 
@@ -210,6 +211,7 @@ def _apply_matrix(x: Any, m: np.ndarray) -> Any:
     return x @ mt
 
 
+@chunkwise(1)
 def linear_rgb_to_xyz(rgb: object, space: str | RGBSpace = "srgb") -> Any:
     """Linear RGB of ``space`` to CIE XYZ (relative to the space's white, Y = 1 there).
 
@@ -233,6 +235,7 @@ def linear_rgb_to_xyz(rgb: object, space: str | RGBSpace = "srgb") -> Any:
     return _apply_matrix(x, m)
 
 
+@chunkwise(1)
 def xyz_to_linear_rgb(xyz: object, space: str | RGBSpace = "srgb") -> Any:
     """CIE XYZ to linear RGB of ``space`` (the inverse of :func:`linear_rgb_to_xyz`).
 
@@ -246,6 +249,7 @@ def xyz_to_linear_rgb(xyz: object, space: str | RGBSpace = "srgb") -> Any:
     return _apply_matrix(x, m)
 
 
+@chunkwise(1)
 def linear_srgb_to_xyz(rgb: object) -> Any:
     """Linear sRGB to CIE XYZ with the derived IEC 61966-2-1 matrix (D65, Y = 1).
 
@@ -272,6 +276,7 @@ def linear_srgb_to_xyz(rgb: object) -> Any:
     return linear_rgb_to_xyz(rgb, "srgb")
 
 
+@chunkwise(1)
 def xyz_to_linear_srgb(xyz: object) -> Any:
     """CIE XYZ (D65, Y = 1) to linear sRGB; inverse of :func:`linear_srgb_to_xyz`.
 

@@ -19,6 +19,7 @@ from __future__ import annotations
 from typing import Any
 
 from imageform._backend import namespace
+from imageform._dask import chunkwise
 from imageform._validate import as_image, check_option, check_positive
 
 __all__ = [
@@ -123,6 +124,7 @@ def _prep(values: object, name: str) -> tuple[Any, Any]:
 
 
 # ---------------------------------------------------------------- public functions
+@chunkwise(1)
 def srgb_to_linear(values: object) -> Any:
     """Decode sRGB values to linear light (the IEC 61966-2-1 piecewise curve, exact).
 
@@ -152,6 +154,7 @@ def srgb_to_linear(values: object) -> Any:
     return _srgb_decode(xp, v)
 
 
+@chunkwise(1)
 def linear_to_srgb(values: object) -> Any:
     """Encode linear light as sRGB (IEC 61966-2-1, exact).
 
@@ -177,6 +180,7 @@ def linear_to_srgb(values: object) -> Any:
     return _srgb_encode(xp, x)
 
 
+@chunkwise(1)
 def gamma_to_linear(values: object, gamma: float = 2.2) -> Any:
     """Decode a pure power law: :math:`L = \\operatorname{sign}(V) |V|^{\\gamma}`.
 
@@ -198,6 +202,7 @@ def gamma_to_linear(values: object, gamma: float = 2.2) -> Any:
     return _gamma_decode(xp, v, g)
 
 
+@chunkwise(1)
 def linear_to_gamma(values: object, gamma: float = 2.2) -> Any:
     """Encode with a pure power law: :math:`V = \\operatorname{sign}(L) |L|^{1/\\gamma}`.
 
@@ -209,6 +214,7 @@ def linear_to_gamma(values: object, gamma: float = 2.2) -> Any:
     return _gamma_encode(xp, x, g)
 
 
+@chunkwise(1)
 def adobe_rgb_to_linear(values: object) -> Any:
     """Decode Adobe RGB (1998): :math:`L = V^{563/256}` (odd extension below 0).
 
@@ -221,6 +227,7 @@ def adobe_rgb_to_linear(values: object) -> Any:
     return _gamma_decode(xp, v, ADOBE_RGB_GAMMA)
 
 
+@chunkwise(1)
 def linear_to_adobe_rgb(values: object) -> Any:
     """Encode Adobe RGB (1998): :math:`V = L^{256/563}`.
 
@@ -231,6 +238,7 @@ def linear_to_adobe_rgb(values: object) -> Any:
     return _gamma_encode(xp, x, ADOBE_RGB_GAMMA)
 
 
+@chunkwise(1)
 def linear_to_rec709(values: object) -> Any:
     """Rec. 709 OETF (camera encoding).
 
@@ -247,6 +255,7 @@ def linear_to_rec709(values: object) -> Any:
     return _bt_encode(xp, x, _BT709_ALPHA, _BT709_BETA)
 
 
+@chunkwise(1)
 def rec709_to_linear(values: object) -> Any:
     """Inverse of the Rec. 709 OETF (breakpoint 4.5 x 0.018 = 0.081).
 
@@ -261,6 +270,7 @@ def rec709_to_linear(values: object) -> Any:
     return _bt_decode(xp, v, _BT709_ALPHA, _BT709_BETA)
 
 
+@chunkwise(1)
 def linear_to_rec2020(values: object) -> Any:
     """Rec. 2020 OETF: Rec. 709's curve with α = 1.09929682680944, β = 0.018053968510807.
 
@@ -276,6 +286,7 @@ def linear_to_rec2020(values: object) -> Any:
     return _bt_encode(xp, x, _BT2020_ALPHA, _BT2020_BETA)
 
 
+@chunkwise(1)
 def rec2020_to_linear(values: object) -> Any:
     """Inverse of the Rec. 2020 OETF.
 
@@ -286,6 +297,7 @@ def rec2020_to_linear(values: object) -> Any:
     return _bt_decode(xp, v, _BT2020_ALPHA, _BT2020_BETA)
 
 
+@chunkwise(1)
 def linear_to_prophoto(values: object) -> Any:
     """ProPhoto (ROMM RGB) encoding: 16 L below 1/512, :math:`L^{1/1.8}` above.
 
@@ -298,6 +310,7 @@ def linear_to_prophoto(values: object) -> Any:
     return _romm_encode(xp, x)
 
 
+@chunkwise(1)
 def prophoto_to_linear(values: object) -> Any:
     """ProPhoto (ROMM RGB) decoding: V / 16 below 1/32, :math:`V^{1.8}` above.
 
@@ -352,6 +365,7 @@ def _encode_clean(xp: Any, x: Any, name: str, gamma: float = 2.2) -> Any:
     return x
 
 
+@chunkwise(1)
 def decode(values: object, transfer: str = "srgb", *, gamma: float = 2.2) -> Any:
     """Decode encoded values to linear light with the transfer function named ``transfer``.
 
@@ -372,6 +386,7 @@ def decode(values: object, transfer: str = "srgb", *, gamma: float = 2.2) -> Any
     return _decode_clean(xp, v, name, g)
 
 
+@chunkwise(1)
 def encode(values: object, transfer: str = "srgb", *, gamma: float = 2.2) -> Any:
     """Encode linear light with the transfer function named ``transfer`` (see :func:`decode`).
 

@@ -23,6 +23,12 @@ Estimators (van de Weijer, Gevers & Gijsenij 2007 unify them as
   Weijer et al. 2007, first order).
 - ``"manual"`` — the linear RGB of a known illuminant: a white point (name, ``(x, y)`` or
   ``XYZ``) or a correlated colour temperature on the Planckian locus.
+
+Dask images are balanced lazily: the estimate is a Dask reduction over the whole image (a
+mean, a Minkowski mean, or for ``"white_patch"`` an exact percentile from
+:func:`dask.array.topk` of the ``n - floor((n - 1) q / 100)`` largest values per channel),
+the image is decoded, scaled and re-encoded chunk-wise, and nothing is computed until
+``.compute()``; a zero channel estimate then raises at compute time.
 """
 
 from __future__ import annotations
@@ -30,7 +36,9 @@ from __future__ import annotations
 import math
 from typing import Any, NamedTuple
 
-from imageform._backend import device_of, namespace
+import numpy as np
+
+from imageform._backend import device_of, is_dask_namespace, namespace
 from imageform._validate import as_image, check_option
 from imageform.color.rgb_spaces import xyz_to_linear_rgb
 from imageform.color.transfer import TRANSFER_FUNCTIONS, decode, encode
@@ -78,6 +86,8 @@ def _flat(xp: Any, lin: Any) -> Any:
 
 def _percentile(xp: Any, lin: Any, q: float) -> Any:
     """Per-channel percentile over pixels, linear interpolation (NumPy's default)."""
+    if is_dask_namespace(xp):
+        return _percentile_dask(lin, q)
     s = xp.sort(_flat(xp, lin), axis=-2)
     n = s.shape[-2]
     pos = (n - 1) * q / 100.0
@@ -85,6 +95,22 @@ def _percentile(xp: Any, lin: Any, q: float) -> Any:
     hi = min(lo + 1, n - 1)
     frac = pos - lo
     return s[..., lo, :] * (1.0 - frac) + s[..., hi, :] * frac
+
+
+def _percentile_dask(lin: Any, q: float) -> Any:
+    """Exact percentile of a Dask image: the sorted values at ``lo`` and ``lo + 1`` are the
+    ``(n - lo)``-th and ``(n - lo - 1)``-th largest, from one ``topk`` reduction."""
+    import dask.array as da
+
+    shape = tuple(lin.shape)
+    n = shape[-3] * shape[-2]
+    flat = da.reshape(lin, (*shape[:-3], n, 3), merge_chunks=True)
+    pos = (n - 1) * q / 100.0
+    lo = math.floor(pos)
+    hi = min(lo + 1, n - 1)
+    frac = pos - lo
+    top = da.topk(flat, n - lo, axis=-2)  # largest first
+    return top[..., n - lo - 1, :] * (1.0 - frac) + top[..., n - hi - 1, :] * frac
 
 
 def _gauss_smooth(xp: Any, x: Any, sigma: float, axis: int) -> Any:
@@ -116,6 +142,10 @@ def _gray_edge(xp: Any, lin: Any, p: float, sigma: float) -> Any:
 
 
 def _minkowski(xp: Any, x: Any, p: float) -> Any:
+    if is_dask_namespace(xp):  # a reduction over the pixel axes, no reshape of the chunks
+        if p == 1.0:
+            return xp.mean(x, axis=(-3, -2))
+        return xp.mean(x**p, axis=(-3, -2)) ** (1.0 / p)
     f = _flat(xp, x)
     if p == 1.0:
         return xp.mean(f, axis=-2)
@@ -134,6 +164,15 @@ def _manual(xp: Any, like: Any, illuminant: Any, cct: float | None, space: str) 
     rgb = xyz_to_linear_rgb(xyz, space)
     e = xp.asarray([float(v) for v in rgb], dtype=like.dtype, device=device_of(like))
     return xp.broadcast_to(e, (*tuple(like.shape[:-3]), 3))
+
+
+def _check_estimate(e: np.ndarray) -> np.ndarray:
+    if not np.all(e > 0):
+        raise DegenerateConfigurationError(
+            f"illuminant estimate {e!r} has a zero (or negative) channel: no gain balances it "
+            "(an empty channel?)"
+        )
+    return e
 
 
 def _check_params(method: str, percentile: float, p: float, sigma: float) -> None:
@@ -234,6 +273,8 @@ def _estimate(
     space: str,
 ) -> Any:
     if m == "gray_world":
+        if is_dask_namespace(xp):
+            return xp.mean(lin, axis=(-3, -2))
         return xp.mean(_flat(xp, lin), axis=-2)
     if m == "white_patch":
         return _percentile(xp, lin, float(percentile))
@@ -314,7 +355,9 @@ def white_balance(
     _check_params(m, percentile, p, sigma)
     xp, lin, tname = _linear(image, transfer, channel_axis)
     e = _estimate(xp, lin, m, percentile, p, sigma, illuminant, cct, space)
-    if not bool(xp.all(e > 0)):
+    if is_dask_namespace(xp):
+        e = e.map_blocks(_check_estimate, dtype=e.dtype)  # lazily: raises at compute
+    elif not bool(xp.all(e > 0)):
         raise DegenerateConfigurationError(
             f"illuminant estimate {e!r} has a zero (or negative) channel: no gain balances it "
             "(an empty channel?)"

@@ -31,6 +31,7 @@ from types import MappingProxyType
 from typing import Any
 
 from imageform._backend import namespace
+from imageform._dask import chunkwise
 from imageform._validate import as_float, as_image, check_option
 from imageform.errors import InvalidInputError
 
@@ -117,6 +118,7 @@ def _ycbcr_to_rgb(xp: Any, ycc: Any, kr: float, kb: float, sc: tuple[float, ...]
     return xp.stack([r, g, b], axis=-1)
 
 
+@chunkwise(1)
 def rgb_to_ycbcr(
     image: object, standard: str = "bt601", *, range: str = "full", bits: int | None = None
 ) -> Any:
@@ -147,6 +149,7 @@ def rgb_to_ycbcr(
     return _rgb_to_ycbcr(namespace(x), x, kr, kb, sc)
 
 
+@chunkwise(1)
 def ycbcr_to_rgb(
     ycbcr: object, standard: str = "bt601", *, range: str = "full", bits: int | None = None
 ) -> Any:
@@ -170,6 +173,7 @@ def ycbcr_to_rgb(
     return _ycbcr_to_rgb(namespace(x), x, kr, kb, sc)
 
 
+@chunkwise(1)
 def srgb_to_ycbcr(
     image: object, standard: str = "bt601", *, range: str = "full", bits: int | None = None
 ) -> Any:
@@ -184,6 +188,7 @@ def srgb_to_ycbcr(
     return rgb_to_ycbcr(image, standard, range=range, bits=bits)
 
 
+@chunkwise(1)
 def ycbcr_to_srgb(
     ycbcr: object, standard: str = "bt601", *, range: str = "full", bits: int | None = None
 ) -> Any:

@@ -20,7 +20,7 @@ from typing import Any, Literal, NamedTuple
 
 import numpy as np
 
-from imageform._backend import device_of, namespace, use_numba
+from imageform._backend import device_of, linalg, namespace, use_numba
 from imageform._typing import Array, ArrayLike
 from imageform._validate import as_matrix, as_points, check_image_size, check_option, check_rotation
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
@@ -103,11 +103,19 @@ def _check_K(K: Array, xp: Any) -> None:
         raise InvalidInputError("K is singular (fx, fy or K[2, 2] is zero)")
 
 
-def _project_xp(X: Array, K: Array, R: Array, t: Array, xp: Any) -> tuple[Array, Array]:
-    """Array-API twin of the numba kernel; broadcasts K, R, t over leading dimensions."""
-    # rows with inf give NaN in the product; they are masked out below, so silence NumPy
-    with np.errstate(invalid="ignore"):
-        Xc = X @ xp.matrix_transpose(R) + t[..., None, :] if X.ndim >= 2 else R @ X + t
+def _project_xp(
+    X: Array, K: Array, R: Array, t: Array, xp: Any, *, identity: bool = False
+) -> tuple[Array, Array]:
+    """Array-API twin of the numba kernel; broadcasts K, R, t over leading dimensions.
+
+    ``identity``: R and t were not given (camera-frame points), so the ``(N, 3) x (3, 3)``
+    product, a full pass over the points, is skipped."""
+    if identity:
+        Xc = X
+    else:
+        # rows with inf give NaN in the product; they are masked out below: silence NumPy
+        with np.errstate(invalid="ignore"):
+            Xc = X @ xp.matrix_transpose(R) + t[..., None, :] if X.ndim >= 2 else R @ X + t
     z = Xc[..., 2]
     valid = (z > 0) & xp.all(xp.isfinite(Xc), axis=-1)
     zs = xp.where(valid, z, xp.ones_like(z))  # no division by zero; gradients stay finite
@@ -184,7 +192,7 @@ def project_points(
 
         k = Km / Km[2, 2]
         return Projection(*project_pinhole(X, k, Rm, tv))
-    return Projection(*_project_xp(X, Km, Rm, tv, xp))
+    return Projection(*_project_xp(X, Km, Rm, tv, xp, identity=R is None and t is None))
 
 
 def projection_matrix(
@@ -248,7 +256,7 @@ def decompose_projection_matrix(P: ArrayLike) -> tuple[Array, Array, Array]:
     xp = namespace(P)
     Pm = as_matrix(P, "P", (3, 4), xp=xp)
     M = Pm[..., :3]
-    det = xp.linalg.det(M)
+    det = linalg(xp).det(M)
     scale = xp.max(xp.abs(M), axis=(-2, -1))
     if bool(xp.any(xp.abs(det) <= 1e-12 * scale**3)):
         raise DegenerateConfigurationError(
@@ -259,7 +267,7 @@ def decompose_projection_matrix(P: ArrayLike) -> tuple[Array, Array, Array]:
     M = Pm[..., :3]
     # RQ via QR of the row-reversed transpose.
     Mf = xp.flip(M, axis=-2)
-    Q, U = xp.linalg.qr(xp.matrix_transpose(Mf))
+    Q, U = linalg(xp).qr(xp.matrix_transpose(Mf))
     Kq = xp.flip(xp.flip(xp.matrix_transpose(U), axis=-2), axis=-1)
     Rq = xp.flip(xp.matrix_transpose(Q), axis=-2)
     d = xp.sign(xp.stack((Kq[..., 0, 0], Kq[..., 1, 1], Kq[..., 2, 2]), axis=-1))
@@ -267,7 +275,7 @@ def decompose_projection_matrix(P: ArrayLike) -> tuple[Array, Array, Array]:
     Rq = Rq * d[..., :, None]
     lam = Kq[..., 2, 2]
     K = Kq / lam[..., None, None]
-    t = xp.linalg.solve(Kq, Pm[..., 3:])[..., 0]
+    t = linalg(xp).solve(Kq, Pm[..., 3:])[..., 0]
     # exact zeros below the diagonal (RQ leaves rounding there)
     mask = xp.asarray(
         [[1.0, 1.0, 1.0], [0.0, 1.0, 1.0], [0.0, 0.0, 1.0]], dtype=K.dtype, device=device_of(K)

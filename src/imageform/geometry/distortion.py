@@ -28,6 +28,7 @@ from typing import Any
 import numpy as np
 
 from imageform._backend import namespace, use_numba
+from imageform._dask import is_dask_array
 from imageform._validate import as_matrix, as_points, check_positive, check_rotation
 from imageform.errors import InvalidInputError
 from imageform.geometry._distortion_xp import (
@@ -53,6 +54,28 @@ __all__ = [
 NUMBA_MIN_POINTS = 4096
 
 DistortionModel = Any  # BrownConrady | DivisionModel | KannalaBrandt (structural)
+
+
+def _dask_in(xy: Any) -> tuple[Any, Any]:
+    """Dask points checked for shape ``(..., 2)`` (values are checked per chunk)."""
+    if xy.ndim < 1 or int(xy.shape[-1]) != 2:
+        raise InvalidInputError(f"expected xy of shape (..., 2), got {tuple(xy.shape)}")
+    dtype = np.float32 if xy.dtype == np.float32 else np.float64
+    return xy.rechunk({xy.ndim - 1: -1}), dtype
+
+
+def _dask_points(fn: Any, xy: Any) -> Any:
+    """``fn`` (NumPy ``(..., 2)`` -> ``(..., 2)``) chunk-wise on Dask points."""
+    xy, dtype = _dask_in(xy)
+    return xy.map_blocks(fn, dtype=dtype)
+
+
+def _dask_pair(fn: Any, xy: Any) -> tuple[Any, Any]:
+    """``fn`` (NumPy -> ``(points (..., 2), mask (...))``) chunk-wise on Dask points."""
+    xy, dtype = _dask_in(xy)
+    pts = xy.map_blocks(lambda b: fn(b)[0], dtype=dtype)
+    ok = xy.map_blocks(lambda b: fn(b)[1], drop_axis=xy.ndim - 1, dtype=bool)
+    return pts, ok
 
 
 def _check_coeffs(obj: Any) -> None:
@@ -126,6 +149,8 @@ class BrownConrady:
 
     def distort(self, xy: Any) -> Any:
         """Distort ideal normalised coordinates ``(..., 2)``; see the class docstring."""
+        if is_dask_array(xy):  # pointwise: lazily, one task per chunk
+            return _dask_points(lambda b: self.distort(b), xy)
         xp = namespace(xy)
         arr = as_points(xy, "xy", 2, xp=xp)
         if use_numba(arr, min_size=2 * NUMBA_MIN_POINTS):
@@ -149,6 +174,8 @@ class BrownConrady:
         >>> round(float(xy[0]), 12), bool(ok)
         (0.5, True)
         """
+        if is_dask_array(xy):  # pointwise: lazily, one task per chunk
+            return _dask_pair(lambda b: self.undistort(b, max_iter, tol), xy)
         xp = namespace(xy)
         arr = as_points(xy, "xy", 2, xp=xp)
         it, t = _iter_args(max_iter, tol, xp, arr.dtype)
@@ -195,6 +222,8 @@ class DivisionModel:
 
     def distort(self, xy: Any, max_iter: int = 30, tol: float | None = None) -> Any:
         """Distort ideal coordinates ``(..., 2)``; NaN where no distorted point exists."""
+        if is_dask_array(xy):  # pointwise: lazily, one task per chunk
+            return _dask_points(lambda b: self.distort(b, max_iter, tol), xy)
         xp = namespace(xy)
         arr = as_points(xy, "xy", 2, xp=xp)
         it, t = _iter_args(max_iter, tol, xp, arr.dtype)
@@ -206,6 +235,8 @@ class DivisionModel:
 
         ``max_iter`` and ``tol`` are accepted for a uniform interface and unused.
         """
+        if is_dask_array(xy):  # pointwise: lazily, one task per chunk
+            return _dask_pair(lambda b: self.undistort(b, max_iter, tol), xy)
         xp = namespace(xy)
         arr = as_points(xy, "xy", 2, xp=xp)
         _iter_args(max_iter, tol, xp, arr.dtype)
@@ -245,6 +276,8 @@ class KannalaBrandt:
 
     def distort(self, xy: Any) -> Any:
         """Distort ideal normalised coordinates ``(..., 2)``."""
+        if is_dask_array(xy):  # pointwise: lazily, one task per chunk
+            return _dask_points(lambda b: self.distort(b), xy)
         xp = namespace(xy)
         arr = as_points(xy, "xy", 2, xp=xp)
         if use_numba(arr, min_size=2 * NUMBA_MIN_POINTS):
@@ -263,6 +296,8 @@ class KannalaBrandt:
         >>> bool(ok), round(float(KannalaBrandt(k1=0.1).distort(xy)[0]), 12)
         (True, 0.8)
         """
+        if is_dask_array(xy):  # pointwise: lazily, one task per chunk
+            return _dask_pair(lambda b: self.undistort(b, max_iter, tol), xy)
         xp = namespace(xy)
         arr = as_points(xy, "xy", 2, xp=xp)
         it, t = _iter_args(max_iter, tol, xp, arr.dtype)
@@ -361,8 +396,8 @@ def project_points_distorted(
     _check_model(distortion)
     if (
         isinstance(distortion, BrownConrady)
-        and pts.dtype == np.float64
         and use_numba(pts, min_size=3 * NUMBA_MIN_POINTS)
+        and pts.dtype == np.float64
     ):
         from imageform._kernels.project_distort import project_brown_conrady
 

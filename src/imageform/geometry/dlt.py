@@ -9,7 +9,7 @@ Zisserman Algorithm 7.1).
 
 from __future__ import annotations
 
-from imageform._backend import namespace
+from imageform._backend import linalg, namespace
 from imageform._typing import Array, ArrayLike
 from imageform._validate import as_points
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
@@ -64,7 +64,7 @@ def estimate_projection_matrix(points_3d: ArrayLike, points_2d: ArrayLike) -> Ar
             f"expected at least 6 correspondences of shape (..., N, 3), got {tuple(X.shape)}"
         )
     centred = X - xp.mean(X, axis=-2, keepdims=True)
-    sv3 = xp.linalg.svdvals(centred)
+    sv3 = linalg(xp).svdvals(centred)
     if bool(xp.any(sv3[..., 2] <= 1e-9 * sv3[..., 0])):
         raise DegenerateConfigurationError(
             "the 3-D points are coplanar: a plane does not determine P (use estimate_homography)"
@@ -79,11 +79,11 @@ def estimate_projection_matrix(points_3d: ArrayLike, points_2d: ArrayLike) -> Ar
     r2 = xp.concat((zero, Xh, -v * Xh), axis=-1)
     A = xp.concat((r1, r2), axis=-2)
     # full V when there are fewer equations than unknowns (N = 4 gives 8 x 9)
-    _, sv, Vt = xp.linalg.svd(A, full_matrices=A.shape[-2] < A.shape[-1])
+    _, sv, Vt = linalg(xp).svd(A, full_matrices=A.shape[-2] < A.shape[-1])
     if bool(xp.any(sv[..., 10] <= 1e-12 * sv[..., 0])):
         raise DegenerateConfigurationError("the correspondences do not determine a unique P")
     Pn = xp.reshape(Vt[..., -1, :], (*Vt.shape[:-2], 3, 4))
-    P = xp.linalg.inv(T2) @ Pn @ T3
+    P = linalg(xp).inv(T2) @ Pn @ T3
     m3 = xp.sqrt(xp.sum(P[..., 2, :3] ** 2, axis=-1))
-    sign = xp.sign(xp.linalg.det(P[..., :3]))
+    sign = xp.sign(linalg(xp).det(P[..., :3]))
     return P * (sign / m3)[..., None, None]

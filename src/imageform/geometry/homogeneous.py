@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from typing import Any, Literal
 
-from imageform._backend import namespace
+from imageform._backend import linalg, namespace
 from imageform._typing import Array, ArrayLike
 from imageform._validate import as_points, check_option
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
@@ -130,7 +130,7 @@ def line_through(p: ArrayLike, q: ArrayLike) -> Array:
     xp = namespace(p, q)
     hp, hq = _homog2(p, "p", xp), _homog2(q, "q", xp)
     hp, hq = xp.broadcast_arrays(hp, hq)
-    line = xp.linalg.cross(hp, hq)
+    line = linalg(xp).cross(hp, hq)
     norm = xp.sqrt(line[..., 0] ** 2 + line[..., 1] ** 2)
     if bool(xp.any(norm == 0)):
         raise DegenerateConfigurationError("the two points coincide: no unique line through them")
@@ -163,7 +163,7 @@ def intersect_lines(l1: ArrayLike, l2: ArrayLike) -> Array:
     a = as_points(l1, "l1", 3, xp=xp)
     b = as_points(l2, "l2", 3, xp=xp)
     a, b = xp.broadcast_arrays(a, b)
-    x = xp.linalg.cross(a, b)
+    x = linalg(xp).cross(a, b)
     return _normalize_homogeneous_point(x, xp, what="the two lines are identical")
 
 
@@ -212,7 +212,7 @@ def are_collinear(points: ArrayLike, *, tol: float = 1e-9) -> Array:
             f"expected points of shape (..., N, 2) with N >= 2, got {tuple(p.shape)}"
         )
     centred = p - xp.mean(p, axis=-2, keepdims=True)
-    s = xp.linalg.svdvals(centred)
+    s = linalg(xp).svdvals(centred)
     return s[..., -1] <= tol * xp.where(s[..., 0] == 0, xp.ones_like(s[..., 0]), s[..., 0])
 
 

@@ -11,7 +11,7 @@ from __future__ import annotations
 from itertools import combinations
 from typing import Any
 
-from imageform._backend import device_of, namespace
+from imageform._backend import device_of, linalg, namespace
 from imageform._typing import Array, ArrayLike
 from imageform._validate import as_matrix, as_points
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
@@ -91,13 +91,13 @@ def estimate_homography(src: ArrayLike, dst: ArrayLike) -> Array:
     r2 = xp.stack((x, y, one, zero, zero, zero, -u * x, -u * y, -u), axis=-1)
     A = xp.concat((r1, r2), axis=-2)
     # full V when there are fewer equations than unknowns (N = 4 gives 8 x 9)
-    _, sv, Vt = xp.linalg.svd(A, full_matrices=A.shape[-2] < A.shape[-1])
+    _, sv, Vt = linalg(xp).svd(A, full_matrices=A.shape[-2] < A.shape[-1])
     if bool(xp.any(sv[..., 7] <= 1e-12 * sv[..., 0])):
         raise DegenerateConfigurationError(
             "the correspondences do not determine a unique homography"
         )
     Hn = xp.reshape(Vt[..., -1, :], (*Vt.shape[:-2], 3, 3))
-    H = xp.linalg.inv(Td) @ Hn @ Ts
+    H = linalg(xp).inv(Td) @ Hn @ Ts
     h22 = H[..., 2, 2]
     fro = xp.sqrt(xp.sum(H * H, axis=(-2, -1)))
     tiny = xp.abs(h22) <= 1e-12 * fro

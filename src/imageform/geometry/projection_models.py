@@ -126,7 +126,7 @@ def weak_perspective_project(
     if depth is None:
         z0 = xp.mean(X[..., 2], axis=-1, keepdims=True) if X.ndim >= 2 else X[..., 2]
     else:
-        z0 = xp.asarray(float(depth), dtype=X.dtype)
+        z0 = xp.asarray(float(depth), dtype=X.dtype, device=device_of(X))
     if bool(xp.any(~(z0 > 0))):
         raise InvalidInputError("weak perspective needs a reference depth Z0 > 0 (object in front)")
     x = X[..., 0] / z0

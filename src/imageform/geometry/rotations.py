@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from imageform._backend import device_of, namespace
+from imageform._backend import device_of, linalg, namespace
 from imageform._typing import Array, ArrayLike
 from imageform._validate import as_matrix, as_points, check_rotation, det3
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
@@ -418,7 +418,7 @@ def look_at(
         raise DegenerateConfigurationError("look_at: eye and target coincide")
     z = z / zn
     down = -u
-    x = xp.linalg.cross(down, z)
+    x = linalg(xp).cross(down, z)
     xn = xp.sqrt(xp.sum(x * x, axis=-1, keepdims=True))
     un = xp.sqrt(xp.sum(u * u, axis=-1, keepdims=True))
     if bool(xp.any(xn <= 1e-12 * un)):
@@ -426,7 +426,7 @@ def look_at(
             "look_at: the viewing direction is parallel to 'up'; choose another up vector"
         )
     x = x / xn
-    y = xp.linalg.cross(z, x)
+    y = linalg(xp).cross(z, x)
     R = xp.stack((x, y, z), axis=-2)
     t = -(R @ e[..., None])[..., 0]
     return R, t

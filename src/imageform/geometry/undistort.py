@@ -6,7 +6,10 @@ to a source pixel, and the source image is sampled there bilinearly. This is the
 formulation of OpenCV's ``initUndistortRectifyMap`` + ``remap`` (which quantise the sampling
 position to 1/32 pixel; this module does not).
 
-NumPy in, NumPy out (images are not Array-API generic here); a numba kernel does the sampling.
+NumPy images run numba kernels (a fused Brown-Conrady kernel, a remap kernel). Other
+Array-API arrays (PyTorch, CuPy, array-api-strict) run the same arithmetic in their own
+namespace and on their own device (:mod:`imageform.geometry._remap_xp`); Dask images are
+undistorted lazily, block by block, each output block from the source window it needs.
 """
 
 from __future__ import annotations
@@ -15,9 +18,17 @@ from typing import Any
 
 import numpy as np
 
-from imageform._backend import to_numpy, use_numba
+from imageform._backend import (
+    device_of,
+    is_dask_namespace,
+    is_numpy_namespace,
+    namespace,
+    to_numpy,
+    use_numba,
+)
 from imageform._validate import as_image, as_matrix, format_shape
 from imageform.errors import InvalidInputError
+from imageform.geometry._remap_xp import map_grid, remap_dask, remap_xp
 from imageform.geometry.distortion import BrownConrady, DistortionModel, _check_model
 
 __all__ = ["remap_bilinear", "undistort_image", "undistortion_map"]
@@ -63,7 +74,7 @@ def _remap_bilinear_numpy(
     return out.astype(img.dtype, copy=False)
 
 
-def remap_bilinear(image: Any, map_uv: Any, *, fill: float = 0.0) -> np.ndarray:
+def remap_bilinear(image: Any, map_uv: Any, *, fill: float = 0.0) -> Any:
     """Sample ``image`` at the source positions ``map_uv`` by bilinear interpolation.
 
     .. math::
@@ -84,12 +95,18 @@ def remap_bilinear(image: Any, map_uv: Any, *, fill: float = 0.0) -> np.ndarray:
 
     Returns
     -------
-    array (H', W') or (..., H', W', C), the image's float dtype.
+    array (H', W') or (..., H', W', C), the image's float dtype and array kind (PyTorch in,
+    PyTorch out on the same device, differentiable; Dask in, a lazy Dask array out).
 
     >>> img = np.array([[0.0, 1.0], [2.0, 3.0]])
     >>> remap_bilinear(img, [[[0.5, 0.5]]]).tolist()
     [[1.5]]
     """
+    xp = namespace(image, map_uv)
+    if is_dask_namespace(xp):
+        return _remap_dask_public(image, map_uv, float(fill))
+    if not is_numpy_namespace(xp):
+        return _remap_generic(image, map_uv, float(fill), xp)
     batch, full_shape, gray = _as_batch(image)
     m = np.asarray(to_numpy(map_uv), dtype=np.float64)
     if m.ndim != 3 or m.shape[-1] != 2:
@@ -137,7 +154,7 @@ def undistortion_map(
     distortion: DistortionModel,
     *,
     new_K: Any = None,
-) -> np.ndarray:
+) -> Any:
     """Source pixel ``(u, v)`` in the distorted image for every pixel of the ideal image.
 
     .. math::
@@ -146,7 +163,7 @@ def undistortion_map(
         (u_s, v_s, 1)^T = K\\,(\\mathrm{distort}(x, y), 1)^T
 
     ``shape`` is the output ``(H, W)``; ``new_K`` defaults to ``K``. Returns ``(H, W, 2)``
-    float64; NaN where the model has no distorted point.
+    float64 (of ``K``'s array kind and device); NaN where the model has no distorted point.
 
     >>> m = undistortion_map((3, 3), [[2.0, 0, 1], [0, 2, 1], [0, 0, 1]], None)
     >>> m[0, 0].tolist()
@@ -157,6 +174,10 @@ def undistortion_map(
         raise InvalidInputError(f"expected a positive output shape (H, W), got {shape!r}")
     Km, Kn = _intrinsics(K, new_K)
     _check_model(distortion)
+    xp = namespace(K, new_K)
+    if not is_numpy_namespace(xp):
+        dev = device_of(K) if device_of(K) is not None else device_of(new_K)
+        return map_grid((0, h), (0, w), Km, Kn, distortion, xp, xp.float64, dev)
     v, u = np.mgrid[0:h, 0:w].astype(np.float64)
     xy = _inverse_k(Kn, u, v)
     if distortion is not None:
@@ -174,7 +195,7 @@ def undistort_image(
     new_K: Any = None,
     out_shape: tuple[int, int] | None = None,
     fill: float = 0.0,
-) -> np.ndarray:
+) -> Any:
     """Remove lens distortion from an image by inverse mapping and bilinear sampling.
 
     .. math::
@@ -199,7 +220,10 @@ def undistort_image(
     Returns
     -------
     array
-        The undistorted image, float (float32 for integer input).
+        The undistorted image, float (float32 for integer input), of the input's array
+        kind and device. A Dask image gives a lazy Dask array with the input's row and
+        column chunks (for the default ``out_shape``): each output block is remapped from
+        the source window it reads, and equals the in-memory result.
 
     Notes
     -----
@@ -211,7 +235,10 @@ def undistort_image(
     >>> float(undistort_image(img, K, None)[2, 2])
     1.0
     """
-    batch_shape = np.shape(to_numpy(image))
+    xp = namespace(image)
+    batch_shape = tuple(int(n) for n in image.shape) if hasattr(image, "shape") else None
+    if batch_shape is None:
+        batch_shape = np.shape(np.asarray(image))
     if len(batch_shape) < 2:
         raise InvalidInputError(
             f"expected image of shape (H, W) or (..., H, W, C), got {format_shape(batch_shape)}"
@@ -221,6 +248,15 @@ def undistort_image(
     out_hw = (int(shape[0]), int(shape[1]))
     if out_hw[0] < 1 or out_hw[1] < 1:
         raise InvalidInputError(f"expected a positive output shape (H, W), got {shape!r}")
+    if is_dask_namespace(xp):
+        return _undistort_dask(image, K, distortion, new_K, out_hw, float(fill))
+    if not is_numpy_namespace(xp):
+        Km, Kn = _intrinsics(K, new_K)
+        _check_model(distortion)
+        m = map_grid(
+            (0, out_hw[0]), (0, out_hw[1]), Km, Kn, distortion, xp, xp.float64, device_of(image)
+        )
+        return _remap_generic(image, m, float(fill), xp)
     if isinstance(distortion, BrownConrady):
         batch, full_shape, gray = _as_batch(image)
         if use_numba(batch):
@@ -234,3 +270,96 @@ def undistort_image(
             return out[..., 0] if gray else out
     m = undistortion_map(out_hw, K, distortion, new_K=new_K)
     return remap_bilinear(image, m, fill=fill)
+
+
+def _remap_generic(image: Any, map_uv: Any, fill: float, xp: Any) -> Any:
+    """remap_bilinear for non-NumPy Array-API arrays (same namespace and device out)."""
+    img = as_image(image, "image", channels=None, xp=xp, range_check=False, finite=False)
+    if img.ndim < 2:
+        raise InvalidInputError(
+            f"expected image of shape (H, W) or (..., H, W, C), got {format_shape(img.shape)}"
+        )
+    m = xp.asarray(map_uv, device=device_of(img))
+    if m.ndim != 3 or m.shape[-1] != 2:
+        raise InvalidInputError(f"expected map_uv of shape (H, W, 2), got {format_shape(m.shape)}")
+    m = xp.astype(m, xp.float64) if m.dtype != xp.float64 else m
+    gray = img.ndim == 2
+    x = img[..., None] if gray else img
+    *lead, h, w, c = (int(n) for n in x.shape)
+    out = remap_xp(xp.reshape(x, (-1, h, w, c)), m, fill, xp)
+    out = xp.reshape(out, (*lead, int(m.shape[0]), int(m.shape[1]), c))
+    return out[..., 0] if gray else out
+
+
+def _dask_image(image: Any) -> tuple[Any, bool]:
+    img = as_image(image, "image", channels=None, range_check=False, finite=False)
+    if img.ndim < 2:
+        raise InvalidInputError(
+            f"expected image of shape (H, W) or (..., H, W, C), got {format_shape(img.shape)}"
+        )
+    gray = img.ndim == 2
+    return (img[..., None] if gray else img), gray
+
+
+def _remap_dask_public(image: Any, map_uv: Any, fill: float) -> Any:
+    """remap_bilinear on a Dask image: per block of the map, its source window."""
+    img, gray = _dask_image(image)
+    m = np.asarray(map_uv, dtype=np.float64)  # a Dask map is computed (it is (H', W', 2))
+    if m.ndim != 3 or m.shape[-1] != 2:
+        raise InvalidInputError(f"expected map_uv of shape (H, W, 2), got {format_shape(m.shape)}")
+    chunks = _out_chunks(img, (m.shape[0], m.shape[1]))
+
+    def block_map(rows: tuple[int, int], cols: tuple[int, int]) -> np.ndarray:
+        return m[rows[0] : rows[1], cols[0] : cols[1]]
+
+    def block_fn(win: np.ndarray, rows: Any, cols: Any, origin: tuple[int, int]) -> np.ndarray:
+        local = block_map(rows, cols) - np.array([origin[1], origin[0]], dtype=np.float64)
+        return np.asarray(remap_bilinear(win, local, fill=fill))
+
+    out = remap_dask(img, (m.shape[0], m.shape[1]), block_map, block_fn, chunks)
+    return out[..., 0] if gray else out
+
+
+def _out_chunks(img: Any, out_hw: tuple[int, int]) -> tuple[tuple[int, ...], tuple[int, ...]]:
+    """The input's row/column chunks when the output has its size, else the same chunk size."""
+    res = []
+    for axis, n in ((-3, out_hw[0]), (-2, out_hw[1])):
+        ch = img.chunks[axis]
+        if sum(ch) == n:
+            res.append(tuple(ch))
+        else:
+            size = max(ch)
+            res.append(tuple(min(size, n - i) for i in range(0, n, size)))
+    return res[0], res[1]
+
+
+def _undistort_dask(
+    image: Any, K: Any, distortion: Any, new_K: Any, out_hw: tuple[int, int], fill: float
+) -> Any:
+    """undistort_image on a Dask image: each output block from the source window it reads."""
+    from array_api_compat import numpy as cnp
+
+    img, gray = _dask_image(image)
+    Km, Kn = _intrinsics(K, new_K)
+    _check_model(distortion)
+    chunks = _out_chunks(img, out_hw)
+
+    def block_map(rows: tuple[int, int], cols: tuple[int, int]) -> np.ndarray:
+        return np.asarray(map_grid(rows, cols, Km, Kn, distortion, cnp, np.float64))
+
+    def block_fn(win: np.ndarray, rows: Any, cols: Any, origin: tuple[int, int]) -> np.ndarray:
+        # the same in-memory function on the window: shift K by the window's origin and
+        # new_K by the block's, so that local pixels map to the same source pixels
+        Ks = Km.copy()
+        Ks[0, 2] -= origin[1]
+        Ks[1, 2] -= origin[0]
+        Kb = Kn.copy()
+        Kb[0, 2] -= cols[0]
+        Kb[1, 2] -= rows[0]
+        shape = (rows[1] - rows[0], cols[1] - cols[0])
+        return np.asarray(
+            undistort_image(win, Ks, distortion, new_K=Kb, out_shape=shape, fill=fill)
+        )
+
+    out = remap_dask(img, out_hw, block_map, block_fn, chunks)
+    return out[..., 0] if gray else out

@@ -10,12 +10,11 @@ is the vanishing line of the ground plane, whose normal is the world's up direct
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
-import numpy as np
-
-from imageform._backend import device_of, namespace
-from imageform._typing import Array, ArrayLike, FloatArray
+from imageform._backend import device_of, linalg, namespace
+from imageform._typing import Array, ArrayLike
 from imageform._validate import as_float, as_matrix, as_points, check_rotation
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
 from imageform.geometry.homogeneous import _normalize_homogeneous_point, line_through
@@ -103,7 +102,7 @@ def horizon_line(
         raise InvalidInputError("expected a non-zero up direction")
     nc = n @ xp.matrix_transpose(Rm)
     # K^{-T} m for upper-triangular K: solve K^T l = m
-    l = xp.linalg.solve(xp.matrix_transpose(Km), nc[..., None])[..., 0]
+    l = linalg(xp).solve(xp.matrix_transpose(Km), nc[..., None])[..., 0]
     ab = xp.sqrt(l[..., 0] ** 2 + l[..., 1] ** 2)
     scale = xp.sqrt(xp.sum(l * l, axis=-1))
     at_inf = ab <= 8 * xp.finfo(l.dtype).eps * scale
@@ -166,10 +165,11 @@ def perspective_type(
     return int(xp.sum(xp.astype(xp.abs(dz) > tol * norms, xp.int64)))
 
 
-def _as_finite_vps(v: ArrayLike, name: str) -> FloatArray:
-    p = np.asarray(as_points(v, name, (2, 3)), dtype=np.float64)
+def _as_finite_vps(v: ArrayLike, name: str, xp: Any, like: Any = None) -> Array:
+    dtype = None if like is None else like.dtype
+    p = as_points(v, name, (2, 3), xp=xp, dtype=dtype, device=device_of(like))
     if p.shape[-1] == 3:
-        if np.any(p[..., 2] == 0):
+        if bool(xp.any(p[..., 2] == 0)):
             raise DegenerateConfigurationError(
                 f"{name} is at infinity; this needs finite vanishing points"
             )
@@ -177,13 +177,13 @@ def _as_finite_vps(v: ArrayLike, name: str) -> FloatArray:
     return p
 
 
-def focal_from_vanishing_points(
-    v1: ArrayLike, v2: ArrayLike, principal_point: ArrayLike
-) -> FloatArray:
+def focal_from_vanishing_points(v1: ArrayLike, v2: ArrayLike, principal_point: ArrayLike) -> Array:
     """Focal length (pixels) from the vanishing points of two orthogonal directions.
 
     With square pixels and zero skew, ``(v1 - p) · (v2 - p) = -f²`` for orthogonal
     directions (Hartley & Zisserman §8.8, from ``v1ᵀ ω v2 = 0``).
+
+    Returns a 0-d (or batch) array of the inputs' namespace.
 
     Raises
     ------
@@ -196,24 +196,26 @@ def focal_from_vanishing_points(
     >>> float(focal_from_vanishing_points([820, 240], [-180, 240], [320, 240]))
     500.0
     """
-    a = _as_finite_vps(v1, "v1")
-    b = _as_finite_vps(v2, "v2")
-    p = np.asarray(as_points(principal_point, "principal_point", 2), dtype=np.float64)
-    f2 = -np.sum((a - p) * (b - p), axis=-1)
-    if np.any(f2 <= 0):
+    xp = namespace(v1, v2, principal_point)
+    a = _as_finite_vps(v1, "v1", xp)
+    b = _as_finite_vps(v2, "v2", xp, a)
+    p = as_points(principal_point, "principal_point", 2, xp=xp, dtype=a.dtype)
+    f2 = -xp.sum((a - p) * (b - p), axis=-1)
+    if bool(xp.any(f2 <= 0)):
         raise DegenerateConfigurationError(
             "(v1 - p)·(v2 - p) >= 0: these vanishing points are not of orthogonal directions "
             "for this principal point"
         )
-    return np.sqrt(f2)
+    return xp.sqrt(f2)
 
 
-def intrinsics_from_vanishing_points(v1: ArrayLike, v2: ArrayLike, v3: ArrayLike) -> FloatArray:
+def intrinsics_from_vanishing_points(v1: ArrayLike, v2: ArrayLike, v3: ArrayLike) -> Array:
     """K (square pixels, zero skew) from the vanishing points of three orthogonal directions.
 
     The principal point is the orthocentre of the triangle ``v1 v2 v3`` and
     ``f² = -(v1 - p)·(v2 - p)`` (Caprile & Torre 1990; Hartley & Zisserman Example 8.27).
-    The triangle must be acute (every angle < 90°).
+    The triangle must be acute (every angle < 90°). ``f`` is the root of the mean of the
+    three estimates of ``f²``. Returns a ``(3, 3)`` array of the inputs' namespace.
 
     Raises
     ------
@@ -233,22 +235,31 @@ def intrinsics_from_vanishing_points(v1: ArrayLike, v2: ArrayLike, v3: ArrayLike
            [  0., 800., 360.],
            [  0.,   0.,   1.]])
     """
-    a, b, c = (_as_finite_vps(v, n) for v, n in ((v1, "v1"), (v2, "v2"), (v3, "v3")))
+    xp = namespace(v1, v2, v3)
+    a = _as_finite_vps(v1, "v1", xp)
+    b = _as_finite_vps(v2, "v2", xp, a)
+    c = _as_finite_vps(v3, "v3", xp, a)
     if a.ndim != 1 or b.ndim != 1 or c.ndim != 1:
         raise InvalidInputError("expected three single vanishing points of shape (2,) or (3,)")
-    # orthocentre: intersection of the altitudes from a and b
-    A = np.array([c - b, c - a])
-    rhs = np.array([np.dot(c - b, a), np.dot(c - a, b)])
-    if abs(np.linalg.det(A)) <= 1e-12 * np.linalg.norm(A) ** 2:
+    # orthocentre: intersection of the altitudes from a and b, the 2x2 system
+    # [c - b; c - a] p = [(c - b)·a; (c - a)·b] solved by Cramer's rule
+    r1, r2 = c - b, c - a
+    det = r1[0] * r2[1] - r1[1] * r2[0]
+    norm2 = xp.sum(r1 * r1) + xp.sum(r2 * r2)
+    if bool(xp.abs(det) <= 1e-12 * norm2):
         raise DegenerateConfigurationError("the three vanishing points are collinear")
-    p = np.linalg.solve(A, rhs)
-    f2 = [-np.dot(x - p, y - p) for x, y in ((a, b), (b, c), (a, c))]
-    if min(f2) <= 0:
+    s1, s2 = xp.sum(r1 * a), xp.sum(r2 * b)
+    p = xp.stack([(s1 * r2[1] - r1[1] * s2) / det, (r1[0] * s2 - s1 * r2[0]) / det])
+    f2 = xp.stack([-xp.sum((x - p) * (y - p)) for x, y in ((a, b), (b, c), (a, c))])
+    if bool(xp.any(f2 <= 0)):
         raise DegenerateConfigurationError(
             "the vanishing-point triangle is not acute: not three orthogonal directions"
         )
-    f = float(np.sqrt(np.mean(f2)))
-    return np.array([[f, 0.0, p[0]], [0.0, f, p[1]], [0.0, 0.0, 1.0]])
+    f = xp.sqrt(xp.mean(f2))
+    zero, one = xp.zeros_like(f), xp.ones_like(f)
+    return xp.stack(
+        [xp.stack([f, zero, p[0]]), xp.stack([zero, f, p[1]]), xp.stack([zero, zero, one])]
+    )
 
 
 def lines_from_segments(segments: ArrayLike) -> Array:
@@ -294,7 +305,7 @@ def vanishing_point_from_lines(lines: ArrayLike, weights: ArrayLike | None = Non
     foot = -L[:, 2:3] * L[:, :2]
     centre = xp.mean(foot, axis=0)
     spread = xp.mean(xp.sqrt(xp.sum((foot - centre) ** 2, axis=-1)))
-    s = xp.where(spread > 0, spread / np.sqrt(2.0), xp.ones_like(spread))
+    s = xp.where(spread > 0, spread / math.sqrt(2.0), xp.ones_like(spread))
     # point transform x' = (x - centre) / s  ->  line transform l' = T^{-T} l
     a, b, c = L[:, 0], L[:, 1], L[:, 2]
     c2 = (c + a * centre[0] + b * centre[1]) / s
@@ -305,7 +316,7 @@ def vanishing_point_from_lines(lines: ArrayLike, weights: ArrayLike | None = Non
         if w.shape[0] != L.shape[0] or bool(xp.any(w < 0)):
             raise InvalidInputError("expected one non-negative weight per line")
         Ln = Ln * xp.sqrt(w)[:, None]
-    _, _, Vt = xp.linalg.svd(Ln, full_matrices=Ln.shape[0] < 3)  # 2 lines: need the full V
+    _, _, Vt = linalg(xp).svd(Ln, full_matrices=Ln.shape[0] < 3)  # 2 lines: need the full V
     vn = Vt[-1, :]
     v = xp.stack((vn[0] * s + centre[0] * vn[2], vn[1] * s + centre[1] * vn[2], vn[2]))
     return _normalize_homogeneous_point(v, xp, what="no vanishing point")

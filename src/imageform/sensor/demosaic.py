@@ -22,10 +22,18 @@ from typing import Any
 
 import numpy as np
 
-from imageform._backend import device_of, is_numpy_namespace, namespace, to_numpy, use_numba
+from imageform._backend import (
+    device_of,
+    is_dask_namespace,
+    is_numpy_namespace,
+    namespace,
+    to_numpy,
+    use_numba,
+)
 from imageform._typing import Array, ArrayLike
 from imageform._validate import as_image, check_option, format_shape
 from imageform.errors import InvalidInputError
+from imageform.sensor._demosaic_xp import XP_METHODS, demosaic_dask, demosaic_xp
 from imageform.sensor.cfa import _red_offset, cfa_pattern
 
 __all__ = ["DEMOSAIC_METHODS", "demosaic"]
@@ -135,8 +143,14 @@ def demosaic(
     -------
     array, shape (..., H, W, 3)
         RGB, float32 for integer and float32 input, float64 for float64 input; same
-        array namespace as ``raw`` (non-NumPy arrays are computed on the host through
-        NumPy and moved back: the result is not differentiable).
+        array namespace and device as ``raw``. NumPy runs numba kernels. Other Array-API
+        arrays (PyTorch CPU/CUDA, CuPy ...) run ``"bilinear"`` and ``"malvar"`` in their own
+        namespace, on their device (differentiable in PyTorch), equal to the NumPy path;
+        the other methods are computed on the host through NumPy and moved back (not
+        differentiable). A Dask mosaic gives a lazy Dask array: blocks with an even
+        overlap (chunks made even so that every block keeps the CFA phase), each
+        demosaiced in memory and trimmed, equal to the in-memory result; values are
+        validated when the blocks are computed.
 
     Raises
     ------
@@ -167,6 +181,8 @@ def demosaic(
     pattern = cfa_pattern(pattern)
     method = check_option(method, DEMOSAIC_METHODS, "demosaicing method")
     xp = namespace(raw)
+    if is_dask_namespace(xp):
+        return _demosaic_dask(raw, pattern, method, clip, allow_odd)
     arr = _as_raw(raw, xp)
     shape = tuple(arr.shape)
     h, w = int(shape[-2]), int(shape[-1])
@@ -180,6 +196,10 @@ def demosaic(
             f"expected a raw mosaic of whole 2x2 Bayer cells (even height and width), got "
             f"{format_shape(shape)}; pass allow_odd=True to demosaic a cut cell at the edge"
         )
+    if not is_numpy_namespace(xp) and method in XP_METHODS:
+        ry, rx = _red_offset(pattern)
+        out = demosaic_xp(arr, ry, rx, method, xp)
+        return xp.clip(out, 0.0, 1.0) if clip else out
     a = to_numpy(arr)
     numba = use_numba(a)
     kernel, radius = _kernels(method, numba)
@@ -204,3 +224,29 @@ def demosaic(
         return res
     dev = device_of(arr)
     return xp.asarray(res) if dev is None else xp.asarray(res, device=dev)
+
+
+def _demosaic_dask(raw: Any, pattern: str, method: str, clip: bool, allow_odd: bool) -> Any:
+    """Lazy demosaicing of a Dask mosaic (shape checks now, values per block)."""
+    shape = tuple(int(n) for n in raw.shape)
+    if len(shape) >= 3 and shape[-1] == 1:
+        raw = raw[..., 0]
+        shape = shape[:-1]
+    elif len(shape) != 2:
+        _as_raw(np.zeros(shape[-3:] if len(shape) >= 3 else shape), namespace())  # raises
+    if raw.dtype not in (np.uint8, np.uint16, np.float32, np.float64):
+        raise InvalidInputError(
+            f"expected a uint8, uint16, float32 or float64 raw mosaic, got dtype {raw.dtype}"
+        )
+    h, w = shape[-2:]
+    if h < 2 or w < 2 or ((h % 2 or w % 2) and not allow_odd):
+        demosaic(np.zeros((h, w)), pattern, method, allow_odd=allow_odd)  # raises the message
+    _, radius = _kernels(method, False)
+    depth = radius + (radius % 2)
+    out_dtype = np.float64 if raw.dtype == np.float64 else np.float32
+
+    def block(b: np.ndarray) -> np.ndarray:
+        x = b[..., None] if b.ndim > 2 else b  # a batch of mosaics takes a trailing axis
+        return np.asarray(demosaic(x, pattern, method, clip=clip, allow_odd=allow_odd))
+
+    return demosaic_dask(raw, depth, block, out_dtype)
