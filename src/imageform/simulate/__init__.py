@@ -8,12 +8,19 @@ from imageform.simulate.result import (
     Stage,
     VanishingTruth,
 )
+from imageform.simulate.scene import Scene, SceneObject, default_scene, load_scene
+from imageform.simulate.schema import SCENE_SCHEMA
 
 __all__ = [
+    "SCENE_SCHEMA",
     "STAGE_KINDS",
     "ColorCheckerTruth",
+    "Scene",
+    "SceneObject",
     "SceneQuad",
     "SimulationResult",
     "Stage",
     "VanishingTruth",
+    "default_scene",
+    "load_scene",
 ]
