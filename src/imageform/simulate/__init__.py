@@ -1,5 +1,6 @@
 """imageform.simulate: the scene-to-image simulator (scene, renderer, camera pipeline)."""
 
+from imageform.simulate.pipeline import simulate
 from imageform.simulate.result import (
     STAGE_KINDS,
     ColorCheckerTruth,
@@ -23,4 +24,5 @@ __all__ = [
     "VanishingTruth",
     "default_scene",
     "load_scene",
+    "simulate",
 ]
