@@ -41,6 +41,7 @@ class Field:
     choices: tuple[str, ...] = ()
     minimum: float | None = None
     maximum: float | None = None
+    positive: bool = False
 
 
 # Conversion of a unit to the key's base unit (m, s, rad ... deg is kept for *_deg keys).
@@ -85,14 +86,14 @@ SCENE_SCHEMA: dict[str, Any] = {
                                minimum=1000.0, maximum=25000.0),
         "file": Field("str", None, "CSV file: wavelength (nm), relative power (two columns)"),
         "illuminance_lux": Field("float", 1000.0, "illuminance on every surface (lx)",
-                                 minimum=0.0),
+                                 minimum=0.0, positive=True),
     },
     "camera": {
         "image_plane": Field("str", "virtual", "'real' is the camera obscura (inverted image)",
                              choices=("virtual", "real")),
-        "focal_length_mm": Field("float", 1.0, "lens focal length (mm)", "length", minimum=0.0),
+        "focal_length_mm": Field("float", 1.0, "lens focal length (mm)", "length", minimum=0.0, positive=True),
         "pixel_pitch_um": Field("float", None, "pixel pitch (µm); default the sensor's",
-                                "length", minimum=0.0),
+                                "length", minimum=0.0, positive=True),
         "fx_px": Field("float", None, "focal length in pixels (overrides focal_length_mm)"),
         "fy_px": Field("float", None, "vertical focal length in pixels (default fx_px)"),
         "cx_px": Field("float", None, "principal point column (default (width - 1) / 2)"),
@@ -112,7 +113,7 @@ SCENE_SCHEMA: dict[str, Any] = {
     },
     "lens": {
         "f_number": Field("float", 8.0, "aperture f-number N = f / D", minimum=0.5),
-        "focus_distance_m": Field("float", 0.1, "distance in focus (m)", "length", minimum=0.0),
+        "focus_distance_m": Field("float", 0.1, "distance in focus (m)", "length", minimum=0.0, positive=True),
         "defocus": Field("bool", True, "blur by the circle of confusion of each pixel's depth"),
         "vignetting": Field("str", "cos4", "natural vignetting", choices=("cos4", "none")),
         "lateral_ca": Field("vec3", (1.0, 1.0, 1.0), "magnification of R, G, B (lateral colour)",
@@ -134,18 +135,18 @@ SCENE_SCHEMA: dict[str, Any] = {
         "shutter": Field("str", None, "global or rolling (a static scene looks the same)",
                          choices=("global", "rolling")),
         "noise": Field("bool", True, "shot, dark and read noise, FPN (false: mean signal)"),
-        "pixel_pitch_um": Field("float", None, "pixel pitch (µm)", "length", minimum=0.0),
+        "pixel_pitch_um": Field("float", None, "pixel pitch (µm)", "length", minimum=0.0, positive=True),
         "fill_factor": Field("float", None, "photosensitive fraction of the pixel", minimum=0.0,
                              maximum=1.0),
-        "full_well_e": Field("float", None, "full-well capacity (e-)", minimum=0.0),
+        "full_well_e": Field("float", None, "full-well capacity (e-)", minimum=0.0, positive=True),
         "read_noise_e": Field("float", None, "read noise (e- rms)", minimum=0.0),
         "dark_current_e_per_s": Field("float", None, "dark current (e-/s)", minimum=0.0),
         "dsnu_e": Field("float", None, "dark-signal non-uniformity (e- rms)", minimum=0.0),
         "prnu": Field("float", None, "photo-response non-uniformity (fraction)", minimum=0.0),
         "column_fpn_e": Field("float", None, "column offsets, CMOS (e- rms)", minimum=0.0),
         "conversion_gain_uV_per_e": Field("float", None, "conversion gain (µV/e-)",
-                                          minimum=0.0),
-        "analog_gain": Field("float", None, "gain before the ADC", minimum=0.0),
+                                          minimum=0.0, positive=True),
+        "analog_gain": Field("float", None, "gain before the ADC", minimum=0.0, positive=True),
         "bit_depth": Field("int", None, "ADC bits", minimum=1, maximum=16),
         "black_level_dn": Field("float", None, "offset (DN)", minimum=0.0),
         "fpn_seed": Field("int", None, "seed of the chip's fixed pattern"),
@@ -164,7 +165,7 @@ SCENE_SCHEMA: dict[str, Any] = {
         "checkerboard": {
             **_POSE,
             "squares": Field("ivec2", (8, 6), "squares (columns, rows); inner corners one fewer"),
-            "square_size_m": Field("float", 0.005, "side of a square (m)", "length", minimum=0),
+            "square_size_m": Field("float", 0.005, "side of a square (m)", "length", minimum=0.0, positive=True),
             "margin_squares": Field("float", 1.0, "white border, in squares", minimum=0.0),
             "dark_reflectance": Field("reflectance", 0.03, "dark squares"),
             "light_reflectance": Field("reflectance", 0.85, "light squares and border"),
@@ -172,7 +173,7 @@ SCENE_SCHEMA: dict[str, Any] = {
         "colorchecker": {
             **_POSE,
             "width_m": Field("float", 0.0635, "chart width (m); height is 2/3 of it", "length",
-                             minimum=0.0),
+                             minimum=0.0, positive=True),
             "gap_fraction": Field("float", 0.2, "black gap between patches (of a cell)",
                                   minimum=0.0, maximum=0.9),
             "frame_reflectance": Field("reflectance", 0.03, "the chart's frame"),
@@ -198,7 +199,7 @@ SCENE_SCHEMA: dict[str, Any] = {
             **_POSE,
             "path": Field("str", None, "image file (relative to the scene file)"),
             "width_m": Field("float", 0.06, "width (m); height from the aspect ratio",
-                             "length", minimum=0.0),
+                             "length", minimum=0.0, positive=True),
         },
         "plane": {
             **_POSE,
@@ -294,9 +295,10 @@ def _number(v: Any, f: Field, key: str, path: tuple[Any, ...], ctx: _Ctx) -> flo
 
 
 def _bounds(x: float, f: Field, path: tuple[Any, ...], ctx: _Ctx) -> None:
-    if f.minimum is not None and (x < f.minimum or (f.minimum == 0 and x == 0 and
-                                                     f.kind == "float" and f.dimension)):
-        ctx.fail(path, f"expected a value > {f.minimum:g}, got {x:g}")
+    if f.positive and x <= 0:
+        ctx.fail(path, f"expected a value > 0, got {x:g}")
+    if f.minimum is not None and x < f.minimum:
+        ctx.fail(path, f"expected a value >= {f.minimum:g}, got {x:g}")
     if f.maximum is not None and x > f.maximum:
         ctx.fail(path, f"expected a value <= {f.maximum:g}, got {x:g}")
 
