@@ -15,8 +15,8 @@ second of channel c in a pixel of area A and fill factor FF are
 .. math:: \\dot e_c = FF\\, A \\sum_\\lambda \\frac{\\rho(\\lambda) E(\\lambda)}{4 N^2}\\,
     QE_c(\\lambda)\\, \\frac{\\lambda}{h c}\\, \\Delta\\lambda
 
-on the sensor's QE grid (trapezoidal weights). Reflectances and the illuminant are linearly
-interpolated onto that grid (constant beyond their ends, CIE 015:2018 §7.2.2).
+on a 1 nm grid over the sensor's QE range (trapezoidal weights). The QE curves,
+reflectances and the illuminant are linearly interpolated onto that grid (constant beyond their ends, CIE 015:2018 §7.2.2).
 """
 
 from __future__ import annotations
@@ -84,8 +84,9 @@ def electron_rates(
     >>> r.shape, bool(r[0, 1] > r[0, 0])
     ((1, 3), True)
     """
-    wl = np.asarray(sensor.qe_wavelengths, dtype=np.float64)
-    qe = np.asarray(sensor.qe_curves, dtype=np.float64)  # (C, L)
+    qe_wl = np.asarray(sensor.qe_wavelengths, dtype=np.float64)
+    wl = np.arange(qe_wl[0], qe_wl[-1] + 0.5, 1.0) if qe_wl.size > 1 else qe_wl
+    qe = np.stack([np.interp(wl, qe_wl, c) for c in np.asarray(sensor.qe_curves, float)])
     rho = Spectrum(wl_reflectance, reflectances).interpolate(wl).values
     rho = rho.reshape(wl.size, -1)
     E = scene_irradiance(illuminant, illuminance_lux, wl)

@@ -135,9 +135,11 @@ def _optics(r: RenderOutput, scene: Scene) -> np.ndarray:
         img = np.where(np.isnan(shifted), img, shifted)
     if lens["defocus"]:
         f = scene.config["camera"]["focal_length_mm"] * 1e-3
+        # the pitch at which the lens's image is sampled: f / fx (the camera's pixels)
+        pitch = f / float(np.asarray(cam.K)[0, 0])
         rad = defocus_radius_px(
             r.depth, f=f, f_number=lens["f_number"], focus=lens["focus_distance_m"],
-            pixel_pitch=scene.sensor.pixel_pitch,
+            pixel_pitch=pitch,
         )
         if float(np.max(rad)) >= 0.25:
             img = blur_by_radius(img, rad, step=0.5, max_layers=12)

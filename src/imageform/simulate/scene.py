@@ -96,6 +96,34 @@ class Scene:
                 cfg[sec] = changes
         return _build(_plain(cfg), None, "scene", self.base_dir)
 
+    def resized(self, width: int, height: int | None = None) -> Scene:
+        """The same view at another image size: intrinsics scaled with the image.
+
+        The camera's pixel pitch (or ``fx_px``, ``fy_px``, ``cx_px``, ``cy_px``) is scaled by
+        ``width / current width``; ``height`` defaults to keeping the aspect ratio. The
+        sensor (pixel area, noise) is unchanged.
+
+        >>> small = default_scene().resized(160)
+        >>> small.image_size, round(float(small.camera.K[0, 0]), 3)
+        ((160, 90), 71.429)
+        """
+        w0, h0 = self.image_size
+        f = int(width) / w0
+        h = int(height) if height is not None else max(2, round(h0 * f))
+        cam = dict(self.config["camera"])
+        changes: dict[str, Any] = {}
+        if cam["fx_px"] is not None:
+            changes["fx_px"] = cam["fx_px"] * f
+            if cam["fy_px"] is not None:
+                changes["fy_px"] = cam["fy_px"] * f
+        else:
+            pitch = cam["pixel_pitch_um"] or self.sensor.pixel_pitch * 1e6
+            changes["pixel_pitch_um"] = pitch / f
+        for key in ("cx_px", "cy_px"):
+            if cam[key] is not None:
+                changes[key] = (cam[key] + 0.5) * f - 0.5
+        return self.with_changes(render={"width": int(width), "height": h}, camera=changes)
+
 
 def _plain(cfg: Any) -> Any:
     """Validated config back to TOML-like data (tuples to lists, None dropped)."""

@@ -55,7 +55,8 @@ def colorchecker_truth(obj: SceneObject, camera: Camera) -> ColorCheckerTruth:
     cv = np.asarray(camera.project(corner2).uv)
     half_px = np.minimum(np.linalg.norm(cu - uv, axis=1), np.linalg.norm(cv - uv, axis=1))
     radius = float(np.nanmin(half_px)) / 2.0 if np.any(np.isfinite(half_px)) else 0.0
-    return ColorCheckerTruth(COLORCHECKER_PATCHES, lab, uv, max(radius, 0.0))
+    # at least 0.5 px: every window then holds the pixel nearest its centre
+    return ColorCheckerTruth(COLORCHECKER_PATCHES, lab, uv, max(radius, 0.5))
 
 
 def _windows(truth: ColorCheckerTruth, h: int, w: int) -> list[tuple[slice, slice] | None]:
@@ -105,13 +106,21 @@ def xy_of_linear_srgb(rgb: np.ndarray) -> np.ndarray:
     >>> xy_of_linear_srgb(np.array([1.0, 1.0, 1.0])).round(4).tolist()
     [0.3127, 0.329]
     """
-    return np.asarray(xyz_to_xy(linear_srgb_to_xyz(np.asarray(rgb, dtype=np.float64))))
+    arr = np.asarray(rgb, dtype=np.float64)
+    out = np.full((*arr.shape[:-1], 2), np.nan)
+    ok = np.all(np.isfinite(arr), axis=-1)
+    out[ok] = np.asarray(xyz_to_xy(linear_srgb_to_xyz(arr[ok])))
+    return out
 
 
 def delta_e_patches(linear_srgb: np.ndarray, lab_truth: np.ndarray) -> np.ndarray:
     """CIEDE2000 of linear-sRGB patch colours ``(24, 3)`` against ``lab_truth`` (D65)."""
-    lab = np.asarray(xyz_to_lab(linear_srgb_to_xyz(linear_srgb), white="D65"))
-    return np.asarray(delta_e_ciede2000(lab, lab_truth))
+    rgb = np.asarray(linear_srgb, dtype=np.float64)
+    out = np.full(rgb.shape[0], np.nan)
+    ok = np.all(np.isfinite(rgb), axis=-1)
+    lab = np.asarray(xyz_to_lab(linear_srgb_to_xyz(rgb[ok]), white="D65"))
+    out[ok] = np.asarray(delta_e_ciede2000(lab, np.asarray(lab_truth)[ok]))
+    return out
 
 
 def _finite_vp(camera: Camera, d_world: np.ndarray) -> np.ndarray:
