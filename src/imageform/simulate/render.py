@@ -51,15 +51,23 @@ def load_texture(path: str, base: Path | None) -> np.ndarray:
 
 @lru_cache(maxsize=8)
 def _texture(path: str) -> np.ndarray:
+    from imageform._validate import as_image
     from imageform.color import srgb_to_linear
     from imageform.io import read_image
 
-    img = np.asarray(read_image(path), dtype=np.float64)
-    if img.ndim == 2:
-        img = np.repeat(img[..., None], 3, axis=-1)
-    if img.shape[-1] == 4:
-        img = img[..., :3]
-    lin = np.asarray(srgb_to_linear(np.clip(img, 0.0, 1.0)))
+    raw = np.asarray(read_image(path))
+    if raw.ndim == 2:
+        raw = raw[..., None]
+    if raw.shape[-1] == 1:
+        raw = np.repeat(raw, 3, axis=-1)
+    if raw.shape[-1] == 4:
+        raw = raw[..., :3]  # alpha is ignored: the texture is opaque
+    img = np.asarray(as_image(raw, "texture"), dtype=np.float64)  # uint8/16 -> [0, 1]
+    if img.min() < 0 or img.max() > 1:
+        raise InvalidInputError(
+            f"texture {path}: expected encoded sRGB in [0, 1], got {img.min():g}..{img.max():g}"
+        )
+    lin = np.asarray(srgb_to_linear(img))
     lin.setflags(write=False)
     return lin
 

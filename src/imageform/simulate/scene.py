@@ -237,14 +237,27 @@ def _illuminant(cfg: dict[str, Any], base: Path | None) -> Spectrum:
             )
         return daylight_spectrum(il["temperature_K"])
     path = _resolve(il["file"], base)
-    try:
-        arr = np.loadtxt(path, delimiter=",", comments="#", ndmin=2)
-    except ValueError:
-        arr = np.loadtxt(path, delimiter=",", comments="#", ndmin=2, skiprows=1)
-    if arr.shape[1] != 2:
-        raise InvalidInputError(
-            f"illuminant file {path}: expected two columns (nm, power), got {arr.shape[1]}"
-        )
+    rows = []
+    for no, line in enumerate(path.read_text(encoding="utf-8").splitlines(), 1):
+        line = line.split("#", 1)[0].strip()
+        if not line:
+            continue
+        cells = [c.strip() for c in line.replace(";", ",").split(",")]
+        try:
+            values = [float(c) for c in cells]
+        except ValueError:
+            if not rows:  # a header line
+                continue
+            raise InvalidInputError(f"illuminant file {path}, line {no}: not numbers: {line!r}")
+        if len(values) != 2:
+            raise InvalidInputError(
+                f"illuminant file {path}, line {no}: expected two columns (nm, power), "
+                f"got {len(values)}"
+            )
+        rows.append(values)
+    if len(rows) < 2:
+        raise InvalidInputError(f"illuminant file {path}: expected at least two rows (nm, power)")
+    arr = np.asarray(rows)
     return Spectrum(arr[:, 0], arr[:, 1], name=Path(path).name)
 
 
