@@ -9,24 +9,50 @@ K1, K2 = -0.18, 0.03
 SIZE = (640, 480)
 
 
-def calibration_view(eye: tuple[float, float, float], up: tuple[float, float, float],
-                     target: tuple[float, float, float] = (0.0, 0.0, 0.0),
-                     supersampling: int = 2, noise: bool = True) -> dict[str, Any]:
+def calibration_view(
+    eye: tuple[float, float, float],
+    up: tuple[float, float, float],
+    target: tuple[float, float, float] = (0.0, 0.0, 0.0),
+    supersampling: int = 2,
+    noise: bool = True,
+) -> dict[str, Any]:
     """A 9x6-inner-corner board (20 mm squares) at the origin, seen from ``eye``."""
     return {
         "name": "calibration view",
-        "render": {"width": SIZE[0], "height": SIZE[1], "supersampling": supersampling,
-                   "background_reflectance": 0.3},
+        "render": {
+            "width": SIZE[0],
+            "height": SIZE[1],
+            "supersampling": supersampling,
+            "background_reflectance": 0.3,
+        },
         "illuminant": {"type": "cie", "name": "D65", "illuminance_lux": 1000.0},
-        "camera": {"fx_px": FX, "fy_px": FY, "cx_px": CX, "cy_px": CY, "eye_m": list(eye),
-                   "target_m": list(target), "up": list(up),
-                   "distortion": {"k1": K1, "k2": K2}},
+        "camera": {
+            "fx_px": FX,
+            "fy_px": FY,
+            "cx_px": CX,
+            "cy_px": CY,
+            "eye_m": list(eye),
+            "target_m": list(target),
+            "up": list(up),
+            "distortion": {"k1": K1, "k2": K2},
+        },
         "lens": {"defocus": False, "vignetting": "none", "f_number": 4.0},
         "sensor": {"noise": noise},
-        "processing": {"demosaic": "malvar", "white_balance": "none", "color_correction": "none",
-                       "lens_shading_correction": False},
-        "objects": [{"type": "checkerboard", "centre_m": [0.0, 0.0, 0.0],
-                     "normal": [0.0, -1.0, 0.0], "squares": [10, 7], "square_size_m": 0.02}],
+        "processing": {
+            "demosaic": "malvar",
+            "white_balance": "none",
+            "color_correction": "none",
+            "lens_shading_correction": False,
+        },
+        "objects": [
+            {
+                "type": "checkerboard",
+                "centre_m": [0.0, 0.0, 0.0],
+                "normal": [0.0, -1.0, 0.0],
+                "squares": [10, 7],
+                "square_size_m": 0.02,
+            }
+        ],
     }
 
 
@@ -50,15 +76,27 @@ def rails_scene(width: int = 640, height: int = 360) -> dict[str, Any]:
         "name": "rails",
         "render": {"width": width, "height": height, "supersampling": 2},
         "illuminant": {"type": "daylight", "temperature_K": 6504.0},
-        "camera": {"focal_length_mm": 1.0, "pixel_pitch_um": 2.0, "eye_m": [0.004, -0.06, 0.03],
-                   "target_m": [-0.01, 0.1, 0.0]},
+        "camera": {
+            "focal_length_mm": 1.0,
+            "pixel_pitch_um": 2.0,
+            "eye_m": [0.004, -0.06, 0.03],
+            "target_m": [-0.01, 0.1, 0.0],
+        },
         "lens": {"f_number": 8.0, "focus_distance_m": 0.1},
         # bilinear: Menon's and Malvar's zipper on thin diagonal rails breaks the LSD segments
         "processing": {"color_correction": "none", "demosaic": "bilinear"},
         # sleepers between the rails only, so that the rails' outer edges stay unbroken
-        "objects": [{"type": "ground", "centre_m": [0.0, 2.9, 0.0], "size_m": [0.3, 6.0],
-                     "rail_count": 2, "rail_width_m": 0.002, "sleeper_spacing_m": 0.01,
-                     "sleeper_length_m": 0.008}],
+        "objects": [
+            {
+                "type": "ground",
+                "centre_m": [0.0, 2.9, 0.0],
+                "size_m": [0.3, 6.0],
+                "rail_count": 2,
+                "rail_width_m": 0.002,
+                "sleeper_spacing_m": 0.01,
+                "sleeper_length_m": 0.008,
+            }
+        ],
     }
 
 

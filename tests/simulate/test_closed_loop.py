@@ -36,7 +36,7 @@ def _calibrate(views: list, supersampling: int) -> tuple[np.ndarray, float, int]
     for eye, up, target in views:
         res = simulate(load_scene(calibration_view(eye, up, target, supersampling)))
         found = find_checkerboard(res.stages[-1].image, (9, 6))
-        if found.found:
+        if found.found and found.corners is not None:
             img.append(found.corners)
             obj.append(checkerboard_points((9, 6), 0.02))
     cal = calibrate_camera(obj, img, SIZE, fix=("k3",))

@@ -32,12 +32,20 @@ def small() -> SimulationResult:
 
 def test_stages_in_order(small: SimulationResult) -> None:
     names = [s.name for s in small.stages]
-    assert names == ["rendered", "optics", "raw", "demosaiced", "shading_corrected",
-                     "white_balanced", "color_corrected", "output"]
+    assert names == [
+        "rendered",
+        "optics",
+        "raw",
+        "demosaiced",
+        "shading_corrected",
+        "white_balanced",
+        "color_corrected",
+        "output",
+    ]
     assert all(s.kind in STAGE_KINDS for s in small.stages)
     out = small.stages[-1]
     assert out.kind == "srgb" and out.image.shape == (180, 320, 3)
-    assert 0.0 <= out.image.min() and out.image.max() <= 1.0
+    assert out.image.min() >= 0.0 and out.image.max() <= 1.0
     raw = small.stage("raw")
     assert raw.image.shape == (180, 320) and raw.image.dtype == np.uint16
     assert raw.white_level == 4095.0 and raw.image.max() <= raw.white_level
@@ -46,25 +54,36 @@ def test_stages_in_order(small: SimulationResult) -> None:
 
 def test_every_field_is_filled(small: SimulationResult) -> None:
     assert small.image_size == (320, 180) and small.scene_name == "default"
-    assert {q.name for q in small.quads} == {"ground with rails", "ColorChecker",
-                                            "checkerboard"}
+    assert {q.name for q in small.quads} == {"ground with rails", "ColorChecker", "checkerboard"}
     assert all(q.corners.shape == (4, 3) for q in small.quads)
     cc = small.colorchecker
     assert cc is not None and cc.lab_d65.shape == (24, 3) and cc.centres_uv.shape == (24, 2)
     assert cc.sample_radius_px > 1
     # ColorChecker "white 9.5" under D65: L* = 96.5 (BabelColor average, ±0.5)
     assert cc.lab_d65[18, 0] == pytest.approx(96.5, abs=0.6)
-    assert set(small.patch_xy) == {"before_white_balance", "after_white_balance",
-                                   "after_color_correction"}
+    assert set(small.patch_xy) == {
+        "before_white_balance",
+        "after_white_balance",
+        "after_color_correction",
+    }
     assert all(v.shape == (24, 2) for v in small.patch_xy.values())
     vp = small.vanishing
     assert vp is not None and vp.vanishing_point.shape == (3,) and vp.horizon.shape == (3,)
     assert small.photon_transfer is not None and small.photon_transfer.mean_dn.size >= 10
     m = small.metrics
-    for key in ("delta_e00_per_patch", "delta_e00_mean", "delta_e00_max", "snr_db_per_patch",
-                "vanishing_point_error_px", "horizon_angle_error_deg", "exposure_time_s",
-                "white_balance_gains", "color_correction_matrix", "stage_seconds",
-                "total_seconds"):
+    for key in (
+        "delta_e00_per_patch",
+        "delta_e00_mean",
+        "delta_e00_max",
+        "snr_db_per_patch",
+        "vanishing_point_error_px",
+        "horizon_angle_error_deg",
+        "exposure_time_s",
+        "white_balance_gains",
+        "color_correction_matrix",
+        "stage_seconds",
+        "total_seconds",
+    ):
         assert key in m, key
     assert len(m["delta_e00_per_patch"]) == 24 and len(m["snr_db_per_patch"]) == 24
     json.dumps(m)

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 import pytest
 
@@ -10,18 +12,22 @@ from imageform.simulate.render import raycast_quads_numpy, render_scene
 from imageform.spectral import Spectrum, colorchecker_reflectances, spectrum_to_camera_rgb
 
 
-def _plane_scene(**changes: dict) -> dict:
+def _plane_scene(**changes: Any) -> dict[str, Any]:
     d: dict = {
         "render": {"width": 64, "height": 48, "supersampling": 1},
         "illuminant": {"type": "cie", "name": "D65", "illuminance_lux": 1000.0},
         "camera": {"fx_px": 40.0, "eye_m": [0.0, -1.0, 0.0], "target_m": [0.0, 0.0, 0.0]},
-        "lens": {"defocus": False, "vignetting": "cos4", "f_number": 4.0,
-                 "focus_distance_m": 1.0},
+        "lens": {"defocus": False, "vignetting": "cos4", "f_number": 4.0, "focus_distance_m": 1.0},
         "sensor": {"noise": False, "exposure_time_s": 0.002},
-        "processing": {"white_balance": "none", "color_correction": "none",
-                       "demosaic": "bilinear"},
-        "objects": [{"type": "plane", "centre_m": [0.0, 0.0, 0.0], "size_m": [20.0, 20.0],
-                     "reflectance": 0.5}],
+        "processing": {"white_balance": "none", "color_correction": "none", "demosaic": "bilinear"},
+        "objects": [
+            {
+                "type": "plane",
+                "centre_m": [0.0, 0.0, 0.0],
+                "size_m": [20.0, 20.0],
+                "reflectance": 0.5,
+            }
+        ],
     }
     for k, v in changes.items():
         d[k] = {**d.get(k, {}), **v} if isinstance(v, dict) else v
@@ -52,9 +58,10 @@ def test_raycast_kernel_matches_its_numpy_twin() -> None:
 
 
 def test_camera_obscura_inverts_the_image() -> None:
-    d = _plane_scene(render={"supersampling": 2},
-                     objects=[{"type": "colorchecker", "centre_m": [0.0, 0.0, 0.0],
-                               "width_m": 1.5}])
+    d = _plane_scene(
+        render={"supersampling": 2},
+        objects=[{"type": "colorchecker", "centre_m": [0.0, 0.0, 0.0], "width_m": 1.5}],
+    )
     virtual = render_scene(load_scene(d)).rate
     d["camera"]["image_plane"] = "real"
     real = render_scene(load_scene(d)).rate
@@ -85,8 +92,7 @@ def test_vignetting_follows_cos4() -> None:
 def test_doubling_exposure_doubles_the_raw_signal(noise: bool) -> None:
     means = []
     for t in (0.01, 0.02):
-        d = _plane_scene(sensor={"noise": noise, "exposure_time_s": t},
-                         lens={"vignetting": "none"})
+        d = _plane_scene(sensor={"noise": noise, "exposure_time_s": t}, lens={"vignetting": "none"})
         scene = load_scene(d)
         raw = simulate(scene, seed=3).stage("raw").image.astype(float)
         s = scene.sensor
@@ -96,9 +102,11 @@ def test_doubling_exposure_doubles_the_raw_signal(noise: bool) -> None:
 
 
 def test_rendered_patches_match_spectral_integration() -> None:
-    d = _plane_scene(objects=[{"type": "colorchecker", "centre_m": [0.0, 0.0, 0.0],
-                               "width_m": 1.5}], lens={"vignetting": "none"},
-                     illuminant={"type": "cie", "name": "A"})
+    d = _plane_scene(
+        objects=[{"type": "colorchecker", "centre_m": [0.0, 0.0, 0.0], "width_m": 1.5}],
+        lens={"vignetting": "none"},
+        illuminant={"type": "cie", "name": "A"},
+    )
     scene = load_scene(d)
     from imageform.simulate.truth import colorchecker_truth, patch_means
 
@@ -116,9 +124,18 @@ def test_rendered_patches_match_spectral_integration() -> None:
 
 
 def test_distortion_bends_straight_lines_barrel() -> None:
-    base = _plane_scene(objects=[{"type": "checkerboard", "centre_m": [0.0, 0.0, 0.0],
-                                  "squares": [8, 6], "square_size_m": 0.25}],
-                        lens={"vignetting": "none"}, render={"supersampling": 2})
+    base = _plane_scene(
+        objects=[
+            {
+                "type": "checkerboard",
+                "centre_m": [0.0, 0.0, 0.0],
+                "squares": [8, 6],
+                "square_size_m": 0.25,
+            }
+        ],
+        lens={"vignetting": "none"},
+        render={"supersampling": 2},
+    )
     plain = render_scene(load_scene(base))
     base["camera"]["distortion"] = {"k1": -0.3}
     bent = render_scene(load_scene(base))

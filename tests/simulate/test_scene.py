@@ -51,8 +51,11 @@ def test_load_string_dict_and_path_agree(tmp_path: Path) -> None:
 
 def test_unknown_key_names_the_key_and_its_line() -> None:
     bad = GOOD.replace("squares = [6, 4]", "squares = [6, 4]\nsquare_sise_m = 0.01")
-    with pytest.raises(UnknownOptionError, match=r"objects\[1\]\.square_sise_m .*line 17.*"
-                                                 r"did you mean 'square_size_m'"):
+    with pytest.raises(
+        UnknownOptionError,
+        match=r"objects\[1\]\.square_sise_m .*line 17.*"
+        r"did you mean 'square_size_m'",
+    ):
         load_scene(bad)
 
 
@@ -64,8 +67,11 @@ def test_unknown_section_key_line() -> None:
 
 def test_wrong_unit_in_the_key_name() -> None:
     bad = GOOD.replace("focal_length_mm = 1.0", "focal_length_m = 0.001")
-    with pytest.raises(UnknownOptionError, match=r"line 7.*wrong unit\? this key is "
-                                                 r"'focal_length_mm'"):
+    with pytest.raises(
+        UnknownOptionError,
+        match=r"line 7.*wrong unit\? this key is "
+        r"'focal_length_mm'",
+    ):
         load_scene(bad)
 
 
@@ -74,8 +80,11 @@ def test_unit_strings_convert_and_wrong_units_are_named() -> None:
     assert s.config["camera"]["focal_length_mm"] == pytest.approx(1.5)
     s = load_scene(GOOD + '\n[sensor]\nexposure_time_s = "10 ms"\n')
     assert s.config["sensor"]["exposure_time_s"] == pytest.approx(0.01)
-    with pytest.raises(InvalidInputError, match=r"camera\.focal_length_mm .*line 7.*expected a "
-                                                r"length.*got unit 'ms' \(a time\)"):
+    with pytest.raises(
+        InvalidInputError,
+        match=r"camera\.focal_length_mm .*line 7.*expected a "
+        r"length.*got unit 'ms' \(a time\)",
+    ):
         load_scene(GOOD.replace("focal_length_mm = 1.0", 'focal_length_mm = "2 ms"'))
 
 
@@ -99,17 +108,23 @@ def test_bad_choices_list_the_valid_ones() -> None:
     with pytest.raises(UnknownOptionError, match=r"processing\.demosaic .*valid: .*menon"):
         load_scene({"processing": {"demosaic": "magic"}})
     with pytest.raises(UnknownOptionError, match=r"unknown ColorChecker patch 'reddish'"):
-        load_scene({"objects": [{"type": "plane", "centre_m": [0, 0, 0],
-                                 "reflectance": "reddish"}]})
+        load_scene(
+            {"objects": [{"type": "plane", "centre_m": [0, 0, 0], "reflectance": "reddish"}]}
+        )
 
 
 def test_missing_files_and_keys(tmp_path: Path) -> None:
     with pytest.raises(InvalidInputError, match="scene file not found"):
         load_scene(tmp_path / "nope.toml")
-    with pytest.raises(InvalidInputError, match="file not found: .*missing.png"):
-        load_scene({"objects": [{"type": "image", "centre_m": [0, 0, 0],
-                                 "path": str(tmp_path / "missing.png")}]})
-    with pytest.raises(InvalidInputError, match="file not found: .*spd.csv"):
+    with pytest.raises(InvalidInputError, match=r"file not found: .*missing\.png"):
+        load_scene(
+            {
+                "objects": [
+                    {"type": "image", "centre_m": [0, 0, 0], "path": str(tmp_path / "missing.png")}
+                ]
+            }
+        )
+    with pytest.raises(InvalidInputError, match=r"file not found: .*spd\.csv"):
         load_scene({"illuminant": {"type": "file", "file": str(tmp_path / "spd.csv")}})
     with pytest.raises(InvalidInputError, match=r"objects\[0\].*missing key 'centre_m'"):
         load_scene({"objects": [{"type": "plane"}]})
@@ -124,10 +139,18 @@ def test_missing_files_and_keys(tmp_path: Path) -> None:
 def test_camera_options() -> None:
     with pytest.raises(InvalidInputError, match="give both R and t_m"):
         load_scene({"camera": {"R": [[1, 0, 0], [0, 1, 0], [0, 0, 1]]}})
-    s = load_scene({"camera": {"R": [[1, 0, 0], [0, 0, -1], [0, 1, 0]], "t_m": [0, 0, 0.2],
-                               "fx_px": 300.0, "cx_px": 10.0}})
+    s = load_scene(
+        {
+            "camera": {
+                "R": [[1, 0, 0], [0, 0, -1], [0, 1, 0]],
+                "t_m": [0, 0, 0.2],
+                "fx_px": 300.0,
+                "cx_px": 10.0,
+            }
+        }
+    )
     np.testing.assert_allclose(np.asarray(s.camera.K)[0], [300.0, 0.0, 10.0])
-    with pytest.raises(InvalidInputError, match="camera obscura.*remove camera.distortion"):
+    with pytest.raises(InvalidInputError, match=r"camera obscura.*remove camera\.distortion"):
         load_scene({"camera": {"image_plane": "real", "distortion": {"k1": -0.1}}})
 
 

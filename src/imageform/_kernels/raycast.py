@@ -38,7 +38,11 @@ def _raycast_kernel(xy, origin, normal, ga, gb, idx, a_out, b_out, depth):  # ty
                 den = normal[q, 0] * dx + normal[q, 1] * dy + normal[q, 2]
                 if den == 0.0:
                     continue
-                num = normal[q, 0] * origin[q, 0] + normal[q, 1] * origin[q, 1] + normal[q, 2] * origin[q, 2]
+                num = (
+                    normal[q, 0] * origin[q, 0]
+                    + normal[q, 1] * origin[q, 1]
+                    + normal[q, 2] * origin[q, 2]
+                )
                 s = num / den
                 if s <= 0.0 or s >= best:
                     continue
@@ -71,6 +75,8 @@ def raycast_quads(
     a = np.empty(n)
     b = np.empty(n)
     depth = np.empty(n)
-    args = [np.ascontiguousarray(v, dtype=np.float64) for v in (origin, normal, dual_a, dual_b)]
-    _raycast_kernel(pts, *args, idx, a, b, depth)
+    o, nq, ga, gb = (
+        np.ascontiguousarray(v, dtype=np.float64) for v in (origin, normal, dual_a, dual_b)
+    )
+    _raycast_kernel(pts, o, nq, ga, gb, idx, a, b, depth)
     return idx, a, b, depth

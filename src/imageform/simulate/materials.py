@@ -16,7 +16,8 @@ second of channel c in a pixel of area A and fill factor FF are
     QE_c(\\lambda)\\, \\frac{\\lambda}{h c}\\, \\Delta\\lambda
 
 on a 1 nm grid over the sensor's QE range (trapezoidal weights). The QE curves,
-reflectances and the illuminant are linearly interpolated onto that grid (constant beyond their ends, CIE 015:2018 §7.2.2).
+reflectances and the illuminant are linearly interpolated onto that grid (constant beyond
+their ends, CIE 015:2018 §7.2.2).
 """
 
 from __future__ import annotations

@@ -138,7 +138,10 @@ def _optics(r: RenderOutput, scene: Scene) -> np.ndarray:
         # the pitch at which the lens's image is sampled: f / fx (the camera's pixels)
         pitch = f / float(np.asarray(cam.K)[0, 0])
         rad = defocus_radius_px(
-            r.depth, f=f, f_number=lens["f_number"], focus=lens["focus_distance_m"],
+            r.depth,
+            f=f,
+            f_number=lens["f_number"],
+            focus=lens["focus_distance_m"],
             pixel_pitch=pitch,
         )
         if float(np.max(rad)) >= 0.25:
@@ -196,32 +199,55 @@ def simulate(scene: Scene, *, progress: Progress | None = None, seed: int = 0) -
     clock = _Clock(progress)
     stages: list[Stage] = []
 
-    def add(name: str, title: str, desc: str, image: np.ndarray, kind: str, step: str,
-            white: float | None = None) -> None:
+    def add(
+        name: str,
+        title: str,
+        desc: str,
+        image: np.ndarray,
+        kind: str,
+        step: str,
+        white: float | None = None,
+    ) -> None:
         dt = clock.tick(step, name)
         stages.append(Stage(name, title, desc, image, kind, white, dt))  # type: ignore[arg-type]
 
     w8 = _WEIGHTS["render"]
     r = render_scene(scene, progress=lambda f: clock.report("render", f * w8))
     S = cfg["render"]["supersampling"]
-    add("rendered", "Rendered scene",
+    add(
+        "rendered",
+        "Rendered scene",
         f"Ray casting, {S}x{S} rays per pixel: electrons/s = FF A sum rho E QE lambda/(hc) "
         f"/(4N^2), times cos^4(theta), through the lens distortion.",
-        r.rate.astype(np.float32), "linear", "render")
+        r.rate.astype(np.float32),
+        "linear",
+        "render",
+    )
 
     optical = _optics(r, scene)
-    add("optics", "Lens: chromatic aberration and defocus",
+    add(
+        "optics",
+        "Lens: chromatic aberration and defocus",
         "Each channel scaled by its magnification (lateral colour); each pixel blurred by the "
         "disc of its circle of confusion c = (f/N)|d - s|/d f/(s - f).",
-        optical.astype(np.float32), "linear", "optics")
+        optical.astype(np.float32),
+        "linear",
+        "optics",
+    )
 
     t_exp = _auto_exposure(optical, scene)
     raw = _sensor(optical * t_exp, scene, t_exp, seed)
-    add("raw", "Raw sensor image",
+    add(
+        "raw",
+        "Raw sensor image",
         f"Exposure {t_exp * 1e3:.3g} ms: photo-electrons with shot, dark and read noise and "
         f"fixed pattern, {cfg['sensor']['cfa']} mosaic, {sensor.bit_depth}-bit ADC "
         f"(K = {sensor.system_gain:.3g} DN/e-).",
-        raw, "raw", "sensor", float(sensor.max_dn))
+        raw,
+        "raw",
+        "sensor",
+        float(sensor.max_dn),
+    )
 
     from imageform.sensor.demosaic import demosaic
 
@@ -232,24 +258,40 @@ def simulate(scene: Scene, *, progress: Progress | None = None, seed: int = 0) -
     cam_rgb = np.asarray(
         demosaic(norm, cfg["sensor"]["cfa"], proc["demosaic"], allow_odd=True), dtype=np.float64
     )
-    add("demosaiced", "Demosaiced camera RGB",
+    add(
+        "demosaiced",
+        "Demosaiced camera RGB",
         f"Black level and mean dark signal subtracted, scaled to [0, 1], "
-        f"{proc['demosaic']} demosaicing.", cam_rgb.astype(np.float32), "linear", "demosaic")
+        f"{proc['demosaic']} demosaicing.",
+        cam_rgb.astype(np.float32),
+        "linear",
+        "demosaic",
+    )
 
     img = cam_rgb
     if proc["lens_shading_correction"] and cfg["lens"]["vignetting"] != "none":
         img = img / r.falloff[..., None]
-        add("shading_corrected", "Lens-shading correction",
+        add(
+            "shading_corrected",
+            "Lens-shading correction",
             "Divided by the lens's cos^4 vignetting map (a flat-field correction).",
-            img.astype(np.float32), "linear", "isp")
+            img.astype(np.float32),
+            "linear",
+            "isp",
+        )
 
     truth = colorchecker_truth(checkers[0], cam) if checkers else None
     cc_before = patch_means(img, truth) if truth is not None else None
     balanced, gains = _white_balance(img, proc["white_balance"], cc_before)
-    add("white_balanced", "White balance",
+    add(
+        "white_balanced",
+        "White balance",
         f"{proc['white_balance']}: each channel multiplied by its gain "
         f"({', '.join(f'{g:.3g}' for g in np.ravel(gains))}).",
-        np.asarray(balanced, dtype=np.float32), "linear", "isp")
+        np.asarray(balanced, dtype=np.float32),
+        "linear",
+        "isp",
+    )
 
     from imageform.color import xyz_to_linear_srgb
     from imageform.spectral import colorchecker_reflectances, spectrum_to_xyz
@@ -260,14 +302,25 @@ def simulate(scene: Scene, *, progress: Progress | None = None, seed: int = 0) -
     if proc["color_correction"] == "colorchecker" and cc_wb is not None:
         M = fit_color_correction(cc_wb, target)
     corrected = apply_color_correction(balanced, M)
-    add("color_corrected", "Colour correction",
+    add(
+        "color_corrected",
+        "Colour correction",
         "Linear sRGB = camera RGB @ M, M (3x3) fitted by least squares on the ColorChecker "
-        "patches against their D65 ground truth.", corrected.astype(np.float32), "linear", "isp")
+        "patches against their D65 ground truth.",
+        corrected.astype(np.float32),
+        "linear",
+        "isp",
+    )
 
     out, tf = _encode(corrected, proc["output_space"], proc["transfer"])
-    add("output", "Output image",
+    add(
+        "output",
+        "Output image",
         f"{proc['output_space']} primaries, {tf} transfer function, clipped to [0, 1].",
-        out.astype(np.float32), "srgb", "isp")
+        out.astype(np.float32),
+        "srgb",
+        "isp",
+    )
 
     metrics: dict[str, Any] = {
         "exposure_time_s": t_exp,
@@ -327,14 +380,20 @@ def _photon_transfer(sensor: Any, seed: int) -> Any:
     from imageform.sensor.model import photons_per_pixel
 
     irradiance = 0.05  # W/m²
-    per_s = float(photons_per_pixel(irradiance, 550.0, pixel_area=sensor.pixel_area,
-                                    exposure_time=1.0))
+    per_s = float(
+        photons_per_pixel(irradiance, 550.0, pixel_area=sensor.pixel_area, exposure_time=1.0)
+    )
     qe = float(sensor.quantum_efficiency(550.0)[1]) * sensor.fill_factor
     t_sat = sensor.full_well / max(per_s * qe, 1e-300)
     times = t_sat * np.geomspace(1e-3, 1.3, 20)
     return simulate_photon_transfer(
-        sensor, irradiance=irradiance, wavelength_nm=550.0, exposure_times=times,
-        rng=seed, shape=(48, 48), channel=1,
+        sensor,
+        irradiance=irradiance,
+        wavelength_nm=550.0,
+        exposure_times=times,
+        rng=seed,
+        shape=(48, 48),
+        channel=1,
     )
 
 

@@ -164,15 +164,23 @@ class _Shader:
         for o in scene.objects:
             p = o.params
             if o.kind == "checkerboard":
-                self.plan.append((o.kind, (self._mat(p["dark_reflectance"]),
-                                           self._mat(p["light_reflectance"]))))
+                self.plan.append(
+                    (o.kind, (self._mat(p["dark_reflectance"]), self._mat(p["light_reflectance"])))
+                )
             elif o.kind == "colorchecker":
                 mats = [self._mat(n) for n in COLORCHECKER_PATCHES]
                 self.plan.append((o.kind, (mats, self._mat(p["frame_reflectance"]))))
             elif o.kind == "ground":
-                self.plan.append((o.kind, (self._mat(p["reflectance"]),
-                                           self._mat(p["rail_reflectance"]),
-                                           self._mat(p["sleeper_reflectance"]))))
+                self.plan.append(
+                    (
+                        o.kind,
+                        (
+                            self._mat(p["reflectance"]),
+                            self._mat(p["rail_reflectance"]),
+                            self._mat(p["sleeper_reflectance"]),
+                        ),
+                    )
+                )
             elif o.kind == "plane":
                 self.plan.append((o.kind, self._mat(p["reflectance"])))
             else:
@@ -220,7 +228,7 @@ def _materials(kind: str, data: Any, p: dict[str, Any], a: np.ndarray, b: np.nda
         m = p["margin_squares"]
         X = a * (c + 2 * m) - m
         Y = b * (r + 2 * m) - m
-        inside = (X >= 0) & (X < c) & (Y >= 0) & (Y < r)
+        inside = (X >= 0) & (c > X) & (Y >= 0) & (r > Y)
         parity = (np.floor(X) + np.floor(Y)).astype(np.int64) % 2
         return np.where(inside & (parity == 0), dark, light)
     if kind == "colorchecker":
@@ -243,16 +251,14 @@ def _materials(kind: str, data: Any, p: dict[str, Any], a: np.ndarray, b: np.nda
             np.abs(x) < p["sleeper_length_m"] / 2
         )
         out = np.where(on, sleeper, out)
-    n = p["rail_count"]
-    for k in range(n):
-        xk = (k - (n - 1) / 2) * p["rail_gauge_m"]
+    count = int(p["rail_count"])
+    for kr in range(count):
+        xk = (kr - (count - 1) / 2) * p["rail_gauge_m"]
         out = np.where(np.abs(x - xk) < p["rail_width_m"] / 2, rail, out)
     return out
 
 
-def render_scene(
-    scene: Scene, *, progress: Any = None, rows_per_chunk: int = 180
-) -> RenderOutput:
+def render_scene(scene: Scene, *, progress: Any = None, rows_per_chunk: int = 180) -> RenderOutput:
     """Ray-cast the scene: mean photo-electrons per second per pixel and channel.
 
     See the module docstring for the model. ``progress(fraction)`` is called after each
@@ -275,6 +281,7 @@ def render_scene(
     falloff = np.ones((h, w))
     obj = np.full((h, w), -1, dtype=np.int32)
     if progress is None:
+
         def progress(_f: float) -> None:
             return None
 

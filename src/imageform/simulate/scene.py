@@ -25,7 +25,7 @@ from imageform.sensor.presets import ccd_preset, cmos_preset
 from imageform.simulate.schema import validate_scene_dict
 from imageform.spectral.spectrum import Spectrum
 
-__all__ = ["SceneObject", "Scene", "default_scene", "load_scene"]
+__all__ = ["Scene", "SceneObject", "default_scene", "load_scene"]
 
 _DEFAULT_TOML = Path(__file__).with_name("scenes") / "default.toml"
 
@@ -237,7 +237,7 @@ def _illuminant(cfg: dict[str, Any], base: Path | None) -> Spectrum:
             )
         return daylight_spectrum(il["temperature_K"])
     path = _resolve(il["file"], base)
-    rows = []
+    rows: list[list[float]] = []
     for no, line in enumerate(path.read_text(encoding="utf-8").splitlines(), 1):
         line = line.split("#", 1)[0].strip()
         if not line:
@@ -245,10 +245,12 @@ def _illuminant(cfg: dict[str, Any], base: Path | None) -> Spectrum:
         cells = [c.strip() for c in line.replace(";", ",").split(",")]
         try:
             values = [float(c) for c in cells]
-        except ValueError:
+        except ValueError as exc:
             if not rows:  # a header line
                 continue
-            raise InvalidInputError(f"illuminant file {path}, line {no}: not numbers: {line!r}")
+            raise InvalidInputError(
+                f"illuminant file {path}, line {no}: not numbers: {line!r}"
+            ) from exc
         if len(values) != 2:
             raise InvalidInputError(
                 f"illuminant file {path}, line {no}: expected two columns (nm, power), "
@@ -266,7 +268,9 @@ def _resolve(path: str, base: Path | None) -> Path:
     if not p.is_absolute() and base is not None:
         p = base / p
     if not p.is_file():
-        raise InvalidInputError(f"file not found: {str(p)!r} (paths are relative to the scene file)")
+        raise InvalidInputError(
+            f"file not found: {str(p)!r} (paths are relative to the scene file)"
+        )
     return p
 
 
@@ -276,7 +280,9 @@ def _camera(cfg: dict[str, Any], sensor: SensorModel) -> Camera:
     if c["fx_px"] is not None:
         fx = float(c["fx_px"])
     else:
-        pitch = c["pixel_pitch_um"] * 1e-6 if c["pixel_pitch_um"] is not None else sensor.pixel_pitch
+        pitch = (
+            c["pixel_pitch_um"] * 1e-6 if c["pixel_pitch_um"] is not None else sensor.pixel_pitch
+        )
         fx = c["focal_length_mm"] * 1e-3 / pitch
     fy = float(c["fy_px"]) if c["fy_px"] is not None else fx
     cx = float(c["cx_px"]) if c["cx_px"] is not None else (w - 1) / 2
@@ -333,8 +339,9 @@ def load_scene(source: str | Path | dict[str, Any]) -> Scene:
     """
     if isinstance(source, dict):
         return _build(copy.deepcopy(source), None, "scene dict", None)
-    if isinstance(source, Path) or (isinstance(source, str) and "\n" not in source
-                                    and source.strip().endswith(".toml")):
+    if isinstance(source, Path) or (
+        isinstance(source, str) and "\n" not in source and source.strip().endswith(".toml")
+    ):
         path = Path(source)
         if not path.is_file():
             raise InvalidInputError(f"scene file not found: {str(path)!r}")

@@ -79,21 +79,40 @@ SCENE_SCHEMA: dict[str, Any] = {
         ),
     },
     "illuminant": {
-        "type": Field("str", "cie", "how the light is given", choices=("cie", "blackbody",
-                                                                         "daylight", "file")),
+        "type": Field(
+            "str", "cie", "how the light is given", choices=("cie", "blackbody", "daylight", "file")
+        ),
         "name": Field("str", "A", "CIE illuminant name (A, D50, D65, F2, F11, E, LED-B3 ...)"),
-        "temperature_K": Field("float", 6504.0, "colour temperature (K) for blackbody/daylight",
-                               minimum=1000.0, maximum=25000.0),
+        "temperature_K": Field(
+            "float",
+            6504.0,
+            "colour temperature (K) for blackbody/daylight",
+            minimum=1000.0,
+            maximum=25000.0,
+        ),
         "file": Field("str", None, "CSV file: wavelength (nm), relative power (two columns)"),
-        "illuminance_lux": Field("float", 1000.0, "illuminance on every surface (lx)",
-                                 minimum=0.0, positive=True),
+        "illuminance_lux": Field(
+            "float", 1000.0, "illuminance on every surface (lx)", minimum=0.0, positive=True
+        ),
     },
     "camera": {
-        "image_plane": Field("str", "virtual", "'real' is the camera obscura (inverted image)",
-                             choices=("virtual", "real")),
-        "focal_length_mm": Field("float", 1.0, "lens focal length (mm)", "length", minimum=0.0, positive=True),
-        "pixel_pitch_um": Field("float", None, "pixel pitch (µm); default the sensor's",
-                                "length", minimum=0.0, positive=True),
+        "image_plane": Field(
+            "str",
+            "virtual",
+            "'real' is the camera obscura (inverted image)",
+            choices=("virtual", "real"),
+        ),
+        "focal_length_mm": Field(
+            "float", 1.0, "lens focal length (mm)", "length", minimum=0.0, positive=True
+        ),
+        "pixel_pitch_um": Field(
+            "float",
+            None,
+            "pixel pitch (µm); default the sensor's",
+            "length",
+            minimum=0.0,
+            positive=True,
+        ),
         "fx_px": Field("float", None, "focal length in pixels (overrides focal_length_mm)"),
         "fy_px": Field("float", None, "vertical focal length in pixels (default fx_px)"),
         "cx_px": Field("float", None, "principal point column (default (width - 1) / 2)"),
@@ -113,39 +132,63 @@ SCENE_SCHEMA: dict[str, Any] = {
     },
     "lens": {
         "f_number": Field("float", 8.0, "aperture f-number N = f / D", minimum=0.5),
-        "focus_distance_m": Field("float", 0.1, "distance in focus (m)", "length", minimum=0.0, positive=True),
+        "focus_distance_m": Field(
+            "float", 0.1, "distance in focus (m)", "length", minimum=0.0, positive=True
+        ),
         "defocus": Field("bool", True, "blur by the circle of confusion of each pixel's depth"),
         "vignetting": Field("str", "cos4", "natural vignetting", choices=("cos4", "none")),
-        "lateral_ca": Field("vec3", (1.0, 1.0, 1.0), "magnification of R, G, B (lateral colour)",
-                            minimum=0.5, maximum=2.0),
+        "lateral_ca": Field(
+            "vec3",
+            (1.0, 1.0, 1.0),
+            "magnification of R, G, B (lateral colour)",
+            minimum=0.5,
+            maximum=2.0,
+        ),
     },
     "sensor": {
         "preset": Field("str", "cmos", "starting parameters", choices=("cmos", "ccd")),
         "spectral_sensitivity": Field(
-            "str", "preset", "QE curves: the preset's or measured camera curves",
-            choices=("preset", "nikon_d5100")),
-        "peak_qe": Field("float", 0.5, "peak QE of measured curves (nikon_d5100)", minimum=0.0,
-                         maximum=1.0),
+            "str",
+            "preset",
+            "QE curves: the preset's or measured camera curves",
+            choices=("preset", "nikon_d5100"),
+        ),
+        "peak_qe": Field(
+            "float", 0.5, "peak QE of measured curves (nikon_d5100)", minimum=0.0, maximum=1.0
+        ),
         "cfa": Field("str", "RGGB", "Bayer pattern", choices=CFA_PATTERNS),
-        "exposure_time_s": Field("float_or_auto", "auto",
-                                 "seconds, or 'auto' (brightest pixels at auto_exposure_level)",
-                                 "time", minimum=0.0),
-        "auto_exposure_level": Field("float", 0.6, "fraction of full well for 'auto'",
-                                     minimum=0.01, maximum=1.0),
-        "shutter": Field("str", None, "global or rolling (a static scene looks the same)",
-                         choices=("global", "rolling")),
+        "exposure_time_s": Field(
+            "float_or_auto",
+            "auto",
+            "seconds, or 'auto' (brightest pixels at auto_exposure_level)",
+            "time",
+            minimum=0.0,
+        ),
+        "auto_exposure_level": Field(
+            "float", 0.6, "fraction of full well for 'auto'", minimum=0.01, maximum=1.0
+        ),
+        "shutter": Field(
+            "str",
+            None,
+            "global or rolling (a static scene looks the same)",
+            choices=("global", "rolling"),
+        ),
         "noise": Field("bool", True, "shot, dark and read noise, FPN (false: mean signal)"),
-        "pixel_pitch_um": Field("float", None, "pixel pitch (µm)", "length", minimum=0.0, positive=True),
-        "fill_factor": Field("float", None, "photosensitive fraction of the pixel", minimum=0.0,
-                             maximum=1.0),
+        "pixel_pitch_um": Field(
+            "float", None, "pixel pitch (µm)", "length", minimum=0.0, positive=True
+        ),
+        "fill_factor": Field(
+            "float", None, "photosensitive fraction of the pixel", minimum=0.0, maximum=1.0
+        ),
         "full_well_e": Field("float", None, "full-well capacity (e-)", minimum=0.0, positive=True),
         "read_noise_e": Field("float", None, "read noise (e- rms)", minimum=0.0),
         "dark_current_e_per_s": Field("float", None, "dark current (e-/s)", minimum=0.0),
         "dsnu_e": Field("float", None, "dark-signal non-uniformity (e- rms)", minimum=0.0),
         "prnu": Field("float", None, "photo-response non-uniformity (fraction)", minimum=0.0),
         "column_fpn_e": Field("float", None, "column offsets, CMOS (e- rms)", minimum=0.0),
-        "conversion_gain_uV_per_e": Field("float", None, "conversion gain (µV/e-)",
-                                          minimum=0.0, positive=True),
+        "conversion_gain_uV_per_e": Field(
+            "float", None, "conversion gain (µV/e-)", minimum=0.0, positive=True
+        ),
         "analog_gain": Field("float", None, "gain before the ADC", minimum=0.0, positive=True),
         "bit_depth": Field("int", None, "ADC bits", minimum=1, maximum=16),
         "black_level_dn": Field("float", None, "offset (DN)", minimum=0.0),
@@ -155,42 +198,60 @@ SCENE_SCHEMA: dict[str, Any] = {
         "demosaic": Field("str", "menon", "demosaicing method", choices=DEMOSAIC_METHODS),
         "lens_shading_correction": Field("bool", True, "divide out the vignetting map"),
         "white_balance": Field("str", "gray_world", "white-balance method", choices=_WB),
-        "color_correction": Field("str", "colorchecker", "3x3 matrix fitted on the chart",
-                                  choices=("colorchecker", "none")),
+        "color_correction": Field(
+            "str",
+            "colorchecker",
+            "3x3 matrix fitted on the chart",
+            choices=("colorchecker", "none"),
+        ),
         "output_space": Field("str", "srgb", "output RGB space", choices=tuple(RGB_SPACES)),
-        "transfer": Field("str", "space", "output encoding; 'space' = the space's own",
-                          choices=("space", *TRANSFER_FUNCTIONS)),
+        "transfer": Field(
+            "str",
+            "space",
+            "output encoding; 'space' = the space's own",
+            choices=("space", *TRANSFER_FUNCTIONS),
+        ),
     },
     "objects": {
         "checkerboard": {
             **_POSE,
             "squares": Field("ivec2", (8, 6), "squares (columns, rows); inner corners one fewer"),
-            "square_size_m": Field("float", 0.005, "side of a square (m)", "length", minimum=0.0, positive=True),
+            "square_size_m": Field(
+                "float", 0.005, "side of a square (m)", "length", minimum=0.0, positive=True
+            ),
             "margin_squares": Field("float", 1.0, "white border, in squares", minimum=0.0),
             "dark_reflectance": Field("reflectance", 0.03, "dark squares"),
             "light_reflectance": Field("reflectance", 0.85, "light squares and border"),
         },
         "colorchecker": {
             **_POSE,
-            "width_m": Field("float", 0.0635, "chart width (m); height is 2/3 of it", "length",
-                             minimum=0.0, positive=True),
-            "gap_fraction": Field("float", 0.2, "black gap between patches (of a cell)",
-                                  minimum=0.0, maximum=0.9),
+            "width_m": Field(
+                "float",
+                0.0635,
+                "chart width (m); height is 2/3 of it",
+                "length",
+                minimum=0.0,
+                positive=True,
+            ),
+            "gap_fraction": Field(
+                "float", 0.2, "black gap between patches (of a cell)", minimum=0.0, maximum=0.9
+            ),
             "frame_reflectance": Field("reflectance", 0.03, "the chart's frame"),
         },
         "ground": {
             **_POSE,
             "normal": Field("vec3", (0.0, 0.0, 1.0), "ground normal (up)"),
-            "size_m": Field("vec2", (0.2, 0.6), "extent across and along the rails (m)",
-                            "length"),
+            "size_m": Field("vec2", (0.2, 0.6), "extent across and along the rails (m)", "length"),
             "reflectance": Field("reflectance", 0.25, "the ground"),
             "rail_count": Field("int", 2, "number of parallel rails", minimum=0),
-            "rail_gauge_m": Field("float", 0.0165, "distance between rails (m)", "length",
-                                  minimum=0.0),
+            "rail_gauge_m": Field(
+                "float", 0.0165, "distance between rails (m)", "length", minimum=0.0
+            ),
             "rail_width_m": Field("float", 0.002, "rail width (m)", "length", minimum=0.0),
             "rail_reflectance": Field("reflectance", 0.8, "the rails"),
-            "sleeper_spacing_m": Field("float", 0.01, "distance between sleepers (0: none)",
-                                       "length", minimum=0.0),
+            "sleeper_spacing_m": Field(
+                "float", 0.01, "distance between sleepers (0: none)", "length", minimum=0.0
+            ),
             "sleeper_width_m": Field("float", 0.003, "sleeper width (m)", "length", minimum=0),
             "sleeper_length_m": Field("float", 0.03, "sleeper length (m)", "length", minimum=0),
             "sleeper_reflectance": Field("reflectance", 0.06, "the sleepers"),
@@ -198,8 +259,14 @@ SCENE_SCHEMA: dict[str, Any] = {
         "image": {
             **_POSE,
             "path": Field("str", None, "image file (relative to the scene file)"),
-            "width_m": Field("float", 0.06, "width (m); height from the aspect ratio",
-                             "length", minimum=0.0, positive=True),
+            "width_m": Field(
+                "float",
+                0.06,
+                "width (m); height from the aspect ratio",
+                "length",
+                minimum=0.0,
+                positive=True,
+            ),
         },
         "plane": {
             **_POSE,
@@ -278,8 +345,9 @@ def _quantity(v: str, f: Field, key: str, path: tuple[Any, ...], ctx: _Ctx) -> f
     if unit not in table:
         kinds = [d for d, t in _UNITS.items() if unit in t]
         got = f" (a {kinds[0]})" if kinds else ""
-        ctx.fail(path, f"expected a {f.dimension} in one of {sorted(table)}, got unit "
-                       f"{unit!r}{got}")
+        ctx.fail(
+            path, f"expected a {f.dimension} in one of {sorted(table)}, got unit {unit!r}{got}"
+        )
     suffix = next((s for s in _SUFFIX_SCALE if key.endswith(s)), "")
     return num * table[unit] * _SUFFIX_SCALE.get(suffix, 1.0)
 
@@ -344,8 +412,9 @@ def _check_value(v: Any, f: Field, key: str, path: tuple[Any, ...], ctx: _Ctx) -
         return x
     n = {"vec2": 2, "vec3": 3, "ivec2": 2, "mat3": 3}[kind]
     if not isinstance(v, list) or len(v) != n:
-        ctx.fail(path, f"expected a list of {n} {'rows' if kind == 'mat3' else 'numbers'}, "
-                       f"got {v!r}")
+        ctx.fail(
+            path, f"expected a list of {n} {'rows' if kind == 'mat3' else 'numbers'}, got {v!r}"
+        )
     if kind == "mat3":
         rows = []
         for r in v:
@@ -376,8 +445,9 @@ def _table(data: Any, schema: dict[str, Any], path: tuple[Any, ...], ctx: _Ctx) 
             same = [k for k in schema if re.sub(r"_(m|mm|um|s|deg|K|lux|px|e)$", "", k) == stem]
             if same and key not in same:
                 unit_hint = f" (wrong unit? this key is {same[0]!r})"
-            ctx.fail((*path, key), f"unknown key{unit_hint}{hint}; valid: {', '.join(schema)}",
-                     True)
+            ctx.fail(
+                (*path, key), f"unknown key{unit_hint}{hint}; valid: {', '.join(schema)}", True
+            )
         f = schema[key]
         if isinstance(f, dict):
             out[key] = _table(value, f, (*path, key), ctx)
