@@ -27,7 +27,7 @@ def fit_color_correction(measured: np.ndarray, target: np.ndarray) -> np.ndarray
         With fewer than 3 usable patches or a rank-deficient C.
 
     >>> C = np.array([[1.0, 0, 0], [0, 1, 0], [0, 0, 1], [1, 1, 1]])
-    >>> fit_color_correction(C, 2 * C).round(12).tolist()[0]
+    >>> (fit_color_correction(C, 2 * C).round(12) + 0.0).tolist()[0]
     [2.0, 0.0, 0.0]
     """
     C = np.asarray(measured, dtype=np.float64)

@@ -181,7 +181,7 @@ def simulate(scene: Scene, *, progress: Progress | None = None, seed: int = 0) -
         ``stage_seconds`` and ``total_seconds``.
 
     >>> from imageform.simulate import default_scene
-    >>> res = simulate(default_scene().with_changes(render={"width": 160, "height": 90}))
+    >>> res = simulate(default_scene().resized(160))
     >>> res.stages[-1].kind, res.stages[-1].image.shape
     ('srgb', (90, 160, 3))
     """
