@@ -253,7 +253,7 @@ SCENE_SCHEMA: dict[str, Any] = {
                 "float", 0.01, "distance between sleepers (0: none)", "length", minimum=0.0
             ),
             "sleeper_width_m": Field("float", 0.003, "sleeper width (m)", "length", minimum=0),
-            "sleeper_length_m": Field("float", 0.03, "sleeper length (m)", "length", minimum=0),
+            "sleeper_length_m": Field("float", 0.012, "sleeper length (m)", "length", minimum=0),
             "sleeper_reflectance": Field("reflectance", 0.06, "the sleepers"),
         },
         "image": {
