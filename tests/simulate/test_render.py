@@ -143,3 +143,40 @@ def test_distortion_bends_straight_lines_barrel() -> None:
     board = plain.rate[..., 1] > 0.5 * plain.rate[..., 1].max()
     board_b = bent.rate[..., 1] > 0.5 * bent.rate[..., 1].max()
     assert board_b.sum() < board.sum()
+
+
+def test_defocus_blurs_only_out_of_focus_depths() -> None:
+    board = [
+        {
+            "type": "checkerboard",
+            "centre_m": [0.0, 0.0, 0.0],
+            "squares": [8, 6],
+            "square_size_m": 0.2,
+        }
+    ]
+    sharp = _plane_scene(
+        objects=board,
+        lens={"vignetting": "none", "defocus": True, "focus_distance_m": 1.0, "f_number": 2.0},
+        camera={"focal_length_mm": 50.0, "fx_px": 40.0},
+    )
+    res = simulate(load_scene(sharp))
+    # in focus (board at 1 m): the circle of confusion is 0, the image is unchanged
+    np.testing.assert_array_equal(res.stage("optics").image, res.stage("rendered").image)
+    sharp["lens"]["focus_distance_m"] = 0.3
+    res = simulate(load_scene(sharp))
+    a, b = res.stage("rendered").image, res.stage("optics").image
+    # out of focus: the edges soften, the light is kept
+    assert np.abs(np.diff(b[..., 1], axis=1)).max() < 0.8 * np.abs(np.diff(a[..., 1], axis=1)).max()
+    assert b[10:-10, 10:-10].mean() == pytest.approx(a[10:-10, 10:-10].mean(), rel=0.02)
+
+
+def test_lateral_chromatic_aberration_magnifies_red() -> None:
+    board = [{"type": "plane", "centre_m": [0.0, 0.0, 0.0], "size_m": [1.0, 1.0]}]
+    d = _plane_scene(
+        objects=board,
+        lens={"vignetting": "none", "defocus": False, "lateral_ca": [1.05, 1.0, 0.95]},
+        render={"background_reflectance": 0.0},
+    )
+    img = simulate(load_scene(d)).stage("optics").image
+    width = (img > 0.5 * img.max(axis=(0, 1))).sum(axis=1)[24]  # the plane's width per channel
+    assert width[0] > width[1] > width[2]

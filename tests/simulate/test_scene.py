@@ -7,6 +7,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from imageform.errors import InvalidInputError, UnknownOptionError
 from imageform.simulate import SCENE_SCHEMA, Scene, default_scene, load_scene
@@ -211,3 +213,13 @@ def test_examples_load(path: Path) -> None:
         pytest.skip("reference data not found")
     s = load_scene(path)
     assert s.objects and re.fullmatch(r"[\w \-]+", s.name)
+
+
+@given(st.floats(0.01, 1000.0), st.sampled_from([("mm", 1.0), ("cm", 10.0), ("m", 1000.0)]))
+@settings(max_examples=25, deadline=None)
+def test_unit_strings_convert_lengths(value: float, unit: tuple[str, float]) -> None:
+    from imageform.simulate.schema import validate_scene_dict
+
+    name, to_mm = unit
+    cfg = validate_scene_dict({"camera": {"focal_length_mm": f"{value!r} {name}"}})
+    assert cfg["camera"]["focal_length_mm"] == pytest.approx(value * to_mm, rel=1e-12)

@@ -340,7 +340,7 @@ def load_scene(source: str | Path | dict[str, Any]) -> Scene:
     if isinstance(source, dict):
         return _build(copy.deepcopy(source), None, "scene dict", None)
     if isinstance(source, Path) or (
-        isinstance(source, str) and "\n" not in source and source.strip().endswith(".toml")
+        isinstance(source, str) and "\n" not in source and "=" not in source
     ):
         path = Path(source)
         if not path.is_file():
