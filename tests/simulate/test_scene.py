@@ -12,7 +12,8 @@ from hypothesis import strategies as st
 
 from imageform.errors import InvalidInputError, UnknownOptionError
 from imageform.simulate import SCENE_SCHEMA, Scene, default_scene, load_scene
-from imageform.simulate.schema import Field, find_line
+from imageform.simulate.schema import Field
+from imageform.simulate.validation import find_line
 
 ROOT = Path(__file__).resolve().parents[2]
 EXAMPLES = sorted((ROOT / "examples" / "scenes").glob("*.toml"))
@@ -218,7 +219,7 @@ def test_examples_load(path: Path) -> None:
 @given(st.floats(0.01, 1000.0), st.sampled_from([("mm", 1.0), ("cm", 10.0), ("m", 1000.0)]))
 @settings(max_examples=25, deadline=None)
 def test_unit_strings_convert_lengths(value: float, unit: tuple[str, float]) -> None:
-    from imageform.simulate.schema import validate_scene_dict
+    from imageform.simulate.validation import validate_scene_dict
 
     name, to_mm = unit
     cfg = validate_scene_dict({"camera": {"focal_length_mm": f"{value!r} {name}"}})

@@ -22,7 +22,7 @@ from imageform.geometry.distortion import BrownConrady
 from imageform.geometry.rotations import look_at
 from imageform.sensor.model import SensorModel
 from imageform.sensor.presets import ccd_preset, cmos_preset
-from imageform.simulate.schema import validate_scene_dict
+from imageform.simulate.validation import validate_scene_dict
 from imageform.spectral.spectrum import Spectrum
 
 __all__ = ["Scene", "SceneObject", "default_scene", "load_scene"]
