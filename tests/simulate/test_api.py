@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 import imageform.simulate as sim
+from imageform.errors import InvalidInputError
 
 PUBLIC = {
     "SCENE_SCHEMA",
@@ -53,3 +54,19 @@ def test_fit_color_correction_errors() -> None:
     C = rng.uniform(0, 1, (24, 3))
     M = rng.normal(size=(3, 3))
     np.testing.assert_allclose(sim.fit_color_correction(C, C @ M), M, atol=1e-12)
+
+
+@pytest.mark.parametrize("dtype", [np.float32, np.float64, np.uint8])
+def test_color_correction_dtypes(dtype: type) -> None:
+    rng = np.random.default_rng(1)
+    C = rng.uniform(0, 1, (24, 3))
+    C32 = C.astype(np.float32)
+    M = sim.fit_color_correction(C32, C32 @ np.eye(3, dtype=np.float32))
+    assert M.dtype == np.float32
+    img = (rng.uniform(0, 1, (4, 5, 3)) * (255 if dtype == np.uint8 else 1)).astype(dtype)
+    out = sim.apply_color_correction(img, 2 * np.eye(3))
+    assert out.dtype == (np.float64 if dtype == np.float64 else np.float32)
+    ref = img / 255.0 if dtype == np.uint8 else img
+    np.testing.assert_allclose(out, 2 * ref, rtol=1e-6)
+    with pytest.raises(InvalidInputError, match=r"\(3, 3\) matrix"):
+        sim.apply_color_correction(img, np.eye(2))

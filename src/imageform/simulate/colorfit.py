@@ -30,7 +30,7 @@ def fit_color_correction(measured: np.ndarray, target: np.ndarray) -> np.ndarray
     >>> (fit_color_correction(C, 2 * C).round(12) + 0.0).tolist()[0]
     [2.0, 0.0, 0.0]
     """
-    C = np.asarray(measured, dtype=np.float64)
+    C = np.asarray(measured, dtype=np.float64)  # the fit itself runs in float64
     T = np.asarray(target, dtype=np.float64)
     if C.ndim != 2 or C.shape[1] != 3 or T.shape != C.shape:
         raise InvalidInputError(
@@ -43,13 +43,25 @@ def fit_color_correction(measured: np.ndarray, target: np.ndarray) -> np.ndarray
             f"got {int(ok.sum())} usable"
         )
     M, *_ = np.linalg.lstsq(C[ok], T[ok], rcond=None)
-    return np.asarray(M)
+    dtype = np.result_type(np.asarray(measured).dtype, np.asarray(target).dtype, np.float32)
+    return np.asarray(M, dtype=dtype if dtype == np.float32 else np.float64)
 
 
 def apply_color_correction(image: np.ndarray, M: np.ndarray) -> np.ndarray:
-    """``image @ M`` for an image ``(..., 3)`` (row-vector convention, DESIGN.md).
+    r"""``image @ M`` for a linear image ``(..., 3)`` (row-vector convention, DESIGN.md).
+
+    .. math:: \mathbf{c}' = \mathbf{c}\, M
+
+    uint8/uint16 images are read as full range (float32); float32 stays float32, float64
+    stays float64.
 
     >>> apply_color_correction(np.ones((1, 1, 3)), 2 * np.eye(3)).tolist()
     [[[2.0, 2.0, 2.0]]]
     """
-    return np.asarray(image, dtype=np.float64) @ np.asarray(M, dtype=np.float64)
+    from imageform._validate import as_image
+
+    img = np.asarray(as_image(image, "image", range_check=False))
+    Mm = np.asarray(M, dtype=np.float64)
+    if Mm.shape != (3, 3):
+        raise InvalidInputError(f"expected a (3, 3) matrix M, got {Mm.shape}")
+    return np.asarray(img @ Mm.astype(img.dtype))
