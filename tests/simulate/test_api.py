@@ -63,7 +63,9 @@ def test_color_correction_dtypes(dtype: type) -> None:
     C32 = C.astype(np.float32)
     M = sim.fit_color_correction(C32, C32 @ np.eye(3, dtype=np.float32))
     assert M.dtype == np.float32
-    img = (rng.uniform(0, 1, (4, 5, 3)) * (255 if dtype == np.uint8 else 1)).astype(dtype)
+    img: np.ndarray = (rng.uniform(0, 1, (4, 5, 3)) * (255 if dtype == np.uint8 else 1)).astype(
+        dtype
+    )
     out = sim.apply_color_correction(img, 2 * np.eye(3))
     assert out.dtype == (np.float64 if dtype == np.float64 else np.float32)
     ref = img / 255.0 if dtype == np.uint8 else img
