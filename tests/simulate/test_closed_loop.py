@@ -46,7 +46,7 @@ def _calibrate(views: list, supersampling: int) -> tuple[np.ndarray, float, int]
 @pytest.mark.filterwarnings("ignore::UserWarning")
 def test_calibration_recovers_the_rendering_camera() -> None:
     # 8 rendered views (640x480, 2x2 rays per pixel, sensor noise on), fx=560, fy=555,
-    # cx=322, cy=236, k1=-0.18, k2=0.03: measured -0.24 %, -0.19 %, +0.11 %, -0.19 %, k1 +0.7 %.
+    # cx=322, cy=236, k1=-0.18, k2=0.03: measured -0.15 %, -0.10 %, +0.04 %, -0.09 %, k1 +0.04 %.
     K, k1, n = _calibrate(VIEWS, 2)
     assert n >= 7
     for est, true in ((K[0, 0], FX), (K[1, 1], FY), (K[0, 2], CX), (K[1, 2], CY)):
@@ -59,7 +59,7 @@ def test_rails_vanishing_point_and_horizon() -> None:
     vp = res.vanishing
     assert vp is not None and vp.detected_vanishing_point is not None
     err = res.metrics["vanishing_point_error_px"]
-    assert err < 2.0, err  # measured 0.96 px
+    assert err < 2.0, err  # measured 0.95 px
     # the horizon: level like the true one and through the true vanishing point (< 2 px)
     assert vp.detected_horizon is not None
     assert res.metrics["horizon_angle_error_deg"] < 0.5
@@ -74,7 +74,7 @@ def test_colorchecker_under_a_corrected_to_d65_truth() -> None:
     res = simulate(load_scene(colorchecker_scene()), seed=0)
     de = np.asarray(res.metrics["delta_e00_per_patch"])
     assert de.shape == (24,) and np.all(np.isfinite(de))
-    assert res.metrics["delta_e00_mean"] <= 3.0  # measured 2.24
+    assert res.metrics["delta_e00_mean"] <= 3.0  # measured 2.37
     assert res.metrics["delta_e00_mean"] == pytest.approx(float(de.mean()))
     # white balance moved the patches towards D65 neutral: the grey patches' chromaticity
     xy_before = res.patch_xy["before_white_balance"][19:23]
