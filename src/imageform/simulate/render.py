@@ -1,0 +1,321 @@
+"""The renderer: per-pixel ray casting with supersampling, through the lens model.
+
+For each of the ``S x S`` sub-pixel positions of every pixel the ray is found by undoing
+the camera model: :math:`(x, y) = \\mathrm{undistort}(K^{-1}(u, v, 1))` (for the camera
+obscura, the image plane is behind the pinhole and :math:`x = (c_x - u)/f_x`,
+:math:`y = (c_y - v)/f_y`: the image is inverted). The ray :math:`s\\,(x, y, 1)` is
+intersected with every planar object (nearest hit wins), the hit's texture coordinates
+give its material, the material's precomputed electron rate (:mod:`.materials`) is looked
+up and multiplied by the natural vignetting :math:`\\cos^4\\theta = (1 + x^2 + y^2)^{-2}`;
+the samples of a pixel are averaged (a box filter over the pixel's area).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import lru_cache
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from imageform._backend import use_numba
+from imageform.errors import InvalidInputError
+from imageform.geometry.camera import Camera
+from imageform.simulate.materials import electron_rates, reflectance_spectrum, texture_basis
+from imageform.simulate.scene import Scene, SceneObject
+from imageform.spectral import COLORCHECKER_PATCHES
+
+__all__ = ["RenderOutput", "load_texture", "pixel_rays", "raycast_quads_numpy", "render_scene"]
+
+
+@dataclass(frozen=True)
+class RenderOutput:
+    """What the renderer produced: ``rate`` ``(H, W, 3)`` mean photo-electrons per second
+    (vignetted), ``depth`` ``(H, W)`` camera-frame depth (m; ``inf`` where nothing was hit),
+    ``falloff`` ``(H, W)`` the cos⁴ vignetting at pixel centres (1 when disabled) and
+    ``object_index`` ``(H, W)`` the object at each pixel centre (-1: background)."""
+
+    rate: np.ndarray
+    depth: np.ndarray
+    falloff: np.ndarray
+    object_index: np.ndarray
+
+
+def load_texture(path: str, base: Path | None) -> np.ndarray:
+    """An image texture as linear sRGB ``(H, W, 3)`` float64 (decoded from sRGB)."""
+    from imageform.simulate.scene import _resolve
+
+    return _texture(str(_resolve(path, base).resolve()))
+
+
+@lru_cache(maxsize=8)
+def _texture(path: str) -> np.ndarray:
+    from imageform._validate import as_image
+    from imageform.color import srgb_to_linear
+    from imageform.io import read_image
+
+    raw = np.asarray(read_image(path))
+    if raw.ndim == 2:
+        raw = raw[..., None]
+    if raw.shape[-1] == 1:
+        raw = np.repeat(raw, 3, axis=-1)
+    if raw.shape[-1] == 4:
+        raw = raw[..., :3]  # alpha is ignored: the texture is opaque
+    img = np.asarray(as_image(raw, "texture"), dtype=np.float64)  # uint8/16 -> [0, 1]
+    if img.min() < 0 or img.max() > 1:
+        raise InvalidInputError(
+            f"texture {path}: expected encoded sRGB in [0, 1], got {img.min():g}..{img.max():g}"
+        )
+    lin = np.asarray(srgb_to_linear(img))
+    lin.setflags(write=False)
+    return lin
+
+
+def raycast_quads_numpy(
+    xy: np.ndarray, origin: np.ndarray, normal: np.ndarray, dual_a: np.ndarray, dual_b: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Plain NumPy twin of :func:`imageform._kernels.raycast.raycast_quads` (same outputs)."""
+    n = xy.shape[0]
+    best = np.full(n, np.inf)
+    idx = np.full(n, -1, dtype=np.int32)
+    a_out = np.zeros(n)
+    b_out = np.zeros(n)
+    finite = np.isfinite(xy).all(axis=1)
+    d = np.concatenate([np.where(finite[:, None], xy, 0.0), np.ones((n, 1))], axis=1)
+    for q in range(origin.shape[0]):
+        den = d @ normal[q]
+        num = float(normal[q] @ origin[q])
+        with np.errstate(divide="ignore", invalid="ignore"):
+            s = np.where(den != 0, num / np.where(den != 0, den, 1.0), -1.0)
+        rel = s[:, None] * d - origin[q]
+        a = rel @ dual_a[q]
+        b = rel @ dual_b[q]
+        hit = finite & (s > 0) & (s < best) & (a >= 0) & (a < 1) & (b >= 0) & (b < 1)
+        best = np.where(hit, s, best)
+        idx = np.where(hit, q, idx).astype(np.int32)
+        a_out = np.where(hit, a, a_out)
+        b_out = np.where(hit, b, b_out)
+    return idx, a_out, b_out, best
+
+
+def _raycast(xy: np.ndarray, *quads: np.ndarray) -> tuple[np.ndarray, ...]:
+    if use_numba(xy):
+        from imageform._kernels.raycast import raycast_quads
+
+        return raycast_quads(xy, *quads)
+    return raycast_quads_numpy(xy, *quads)
+
+
+def _quads_camera(objects: tuple[SceneObject, ...], camera: Camera) -> tuple[np.ndarray, ...]:
+    """Origin, normal and dual edge vectors of each object in the camera frame."""
+    R = np.asarray(camera.R, dtype=np.float64)
+    t = np.asarray(camera.t, dtype=np.float64)
+    origin, normal, ga, gb = [], [], [], []
+    for o in objects:
+        e1 = R @ o.edge_right
+        e2 = R @ o.edge_down
+        n = np.cross(e1, e2)
+        # dual basis: (X - O) . g_a = a, (X - O) . g_b = b for X = O + a e1 + b e2
+        g1 = np.cross(e2, n) / float(e1 @ np.cross(e2, n))
+        g2 = np.cross(n, e1) / float(e2 @ np.cross(n, e1))
+        origin.append(R @ o.origin + t)
+        normal.append(n / np.linalg.norm(n))
+        ga.append(g1)
+        gb.append(g2)
+    if not objects:
+        z = np.zeros((0, 3))
+        return z, z, z, z
+    return np.array(origin), np.array(normal), np.array(ga), np.array(gb)
+
+
+def pixel_rays(camera: Camera, u: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """Ideal normalised ray coordinates ``(N, 2)`` ``(x, y)`` of pixels ``(u, v)``.
+
+    NaN where the distortion model cannot be inverted (outside its valid radius).
+
+    >>> cam = Camera([[100.0, 0, 50], [0, 100.0, 40], [0, 0, 1]], image_plane="real")
+    >>> pixel_rays(cam, np.array([60.0]), np.array([40.0])).tolist()
+    [[-0.1, -0.0]]
+    """
+    K = np.asarray(camera.K, dtype=np.float64)
+    fx, s, cx, fy, cy = K[0, 0], K[0, 1], K[0, 2], K[1, 1], K[1, 2]
+    y = (v - cy) / fy
+    x = (u - cx - s * y) / fx
+    xy = np.stack([x, y], axis=-1)
+    if camera.image_plane == "real":
+        return -xy
+    if camera.distortion is not None:
+        ideal, ok = camera.distortion.undistort(xy)
+        return np.where(np.asarray(ok)[:, None], np.asarray(ideal), np.nan)
+    return xy
+
+
+class _Shader:
+    """Material look-up for each object: texture coordinates -> electrons per second."""
+
+    def __init__(self, scene: Scene, f_number: float) -> None:
+        cfg = scene.config
+        self.scene = scene
+        self.keys: list[float | str] = []
+        il, lux = scene.illuminant, cfg["illuminant"]["illuminance_lux"]
+        self.plan: list[tuple[str, Any]] = []
+        bg = self._mat(cfg["render"]["background_reflectance"])
+        for o in scene.objects:
+            p = o.params
+            if o.kind == "checkerboard":
+                self.plan.append(
+                    (o.kind, (self._mat(p["dark_reflectance"]), self._mat(p["light_reflectance"])))
+                )
+            elif o.kind == "colorchecker":
+                mats = [self._mat(n) for n in COLORCHECKER_PATCHES]
+                self.plan.append((o.kind, (mats, self._mat(p["frame_reflectance"]))))
+            elif o.kind == "ground":
+                self.plan.append(
+                    (
+                        o.kind,
+                        (
+                            self._mat(p["reflectance"]),
+                            self._mat(p["rail_reflectance"]),
+                            self._mat(p["sleeper_reflectance"]),
+                        ),
+                    )
+                )
+            elif o.kind == "plane":
+                self.plan.append((o.kind, self._mat(p["reflectance"])))
+            else:
+                self.plan.append((o.kind, load_texture(p["path"], scene.base_dir)))
+        spectra = [reflectance_spectrum(k) for k in self.keys]
+        wl = spectra[0][0]
+        refl = np.stack([s[1] for s in spectra], axis=1)
+        self.table = electron_rates(refl, wl, il, lux, scene.sensor, f_number)  # (M, 3)
+        bwl, B = texture_basis()
+        self.texture_matrix = electron_rates(B, bwl, il, lux, scene.sensor, f_number)  # (3, 3)
+        self.background = self.table[bg]
+
+    def _mat(self, key: float | str) -> int:
+        if key not in self.keys:
+            self.keys.append(key)
+        return self.keys.index(key)
+
+    def shade(self, idx: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        out = np.empty((idx.size, 3))
+        out[:] = self.background
+        for q, (kind, data) in enumerate(self.plan):
+            sel = np.flatnonzero(idx == q)
+            if sel.size == 0:
+                continue
+            aq, bq = a[sel], b[sel]
+            p = self.scene.objects[q].params
+            if kind == "image":
+                tex = data
+                th, tw = tex.shape[:2]
+                r = np.minimum((bq * th).astype(np.int64), th - 1)
+                c = np.minimum((aq * tw).astype(np.int64), tw - 1)
+                out[sel] = tex[r, c] @ self.texture_matrix
+                continue
+            out[sel] = self.table[_materials(kind, data, p, aq, bq)]
+        return out
+
+
+def _materials(kind: str, data: Any, p: dict[str, Any], a: np.ndarray, b: np.ndarray) -> Any:
+    """Material index of each texture coordinate ``(a, b)`` in [0, 1)² of an object."""
+    if kind == "plane":
+        return np.full(a.shape, data)
+    if kind == "checkerboard":
+        dark, light = data
+        c, r = p["squares"]
+        m = p["margin_squares"]
+        X = a * (c + 2 * m) - m
+        Y = b * (r + 2 * m) - m
+        inside = (X >= 0) & (c > X) & (Y >= 0) & (r > Y)
+        parity = (np.floor(X) + np.floor(Y)).astype(np.int64) % 2
+        return np.where(inside & (parity == 0), dark, light)
+    if kind == "colorchecker":
+        mats, frame = data
+        g = p["gap_fraction"] / 2
+        X, Y = a * 6.0, b * 4.0
+        i, j = np.floor(X), np.floor(Y)
+        fx, fy = X - i, Y - j
+        inside = (fx >= g) & (fx < 1 - g) & (fy >= g) & (fy < 1 - g)
+        k = (j * 6 + i).astype(np.int64).clip(0, 23)
+        return np.where(inside, np.asarray(mats)[k], frame)
+    # ground with rails and sleepers
+    ground, rail, sleeper = data
+    w, length = p["size_m"]
+    x = (a - 0.5) * w
+    along = b * length
+    out = np.full(a.shape, ground)
+    if p["sleeper_spacing_m"] > 0 and p["sleeper_width_m"] > 0:
+        on = (np.mod(along, p["sleeper_spacing_m"]) < p["sleeper_width_m"]) & (
+            np.abs(x) < p["sleeper_length_m"] / 2
+        )
+        out = np.where(on, sleeper, out)
+    count = int(p["rail_count"])
+    for kr in range(count):
+        xk = (kr - (count - 1) / 2) * p["rail_gauge_m"]
+        out = np.where(np.abs(x - xk) < p["rail_width_m"] / 2, rail, out)
+    return out
+
+
+def render_scene(scene: Scene, *, progress: Any = None, rows_per_chunk: int = 180) -> RenderOutput:
+    """Ray-cast the scene: mean photo-electrons per second per pixel and channel.
+
+    See the module docstring for the model. ``progress(fraction)`` is called after each
+    band of rows.
+
+    >>> from imageform.simulate import default_scene
+    >>> out = render_scene(default_scene().with_changes(render={"width": 64, "height": 36}))
+    >>> out.rate.shape, bool(out.rate.min() >= 0)
+    ((36, 64, 3), True)
+    """
+    cfg = scene.config
+    w, h = scene.image_size
+    S = int(cfg["render"]["supersampling"])
+    vignette = cfg["lens"]["vignetting"] == "cos4"
+    shader = _Shader(scene, float(cfg["lens"]["f_number"]))
+    quads = _quads_camera(scene.objects, scene.camera)
+    offsets = (np.arange(S) + 0.5) / S - 0.5
+    rate = np.zeros((h, w, 3))
+    inv_depth = np.zeros((h, w))
+    falloff = np.ones((h, w))
+    obj = np.full((h, w), -1, dtype=np.int32)
+    if progress is None:
+
+        def progress(_f: float) -> None:
+            return None
+
+    for r0 in range(0, h, rows_per_chunk):
+        r1 = min(h, r0 + rows_per_chunk)
+        vv, uu = np.mgrid[r0:r1, 0:w].astype(np.float64)
+        uu, vv = uu.ravel(), vv.ravel()
+        acc = np.zeros((uu.size, 3))
+        acc_inv = np.zeros(uu.size)
+        for oy in offsets:
+            for ox in offsets:
+                xy = pixel_rays(scene.camera, uu + ox, vv + oy)
+                idx, a, b, depth = _raycast(xy, *quads)
+                val = shader.shade(idx, a, b)
+                if vignette:
+                    r2 = np.where(np.isfinite(xy[:, 0]), xy[:, 0] ** 2 + xy[:, 1] ** 2, np.inf)
+                    val *= (1.0 / (1.0 + r2) ** 2)[:, None]
+                acc += val
+                acc_inv += np.where(np.isfinite(depth), 1.0 / depth, 0.0)
+        rate[r0:r1] = (acc / S**2).reshape(r1 - r0, w, 3)
+        inv_depth[r0:r1] = (acc_inv / S**2).reshape(r1 - r0, w)
+        xy0 = pixel_rays(scene.camera, uu, vv)
+        idx0 = _raycast(xy0, *quads)[0]
+        obj[r0:r1] = idx0.reshape(r1 - r0, w)
+        if vignette:
+            r2 = xy0[:, 0] ** 2 + xy0[:, 1] ** 2
+            f = np.where(np.isfinite(r2), 1.0 / (1.0 + r2) ** 2, np.nan)
+            falloff[r0:r1] = f.reshape(r1 - r0, w)
+        progress(r1 / h)
+    if not np.all(np.isfinite(falloff)):
+        raise InvalidInputError(
+            "the distortion model cannot be inverted at some pixels (outside its valid "
+            "radius): reduce camera.distortion or widen the focal length"
+        )
+    with np.errstate(divide="ignore"):
+        depth_map = np.where(inv_depth > 0, 1.0 / inv_depth, np.inf)
+    return RenderOutput(rate=rate, depth=depth_map, falloff=falloff, object_index=obj)

@@ -1,0 +1,266 @@
+"""Checking a scene against :data:`~imageform.simulate.schema.SCENE_SCHEMA`.
+
+Errors name the key and, for a file or TOML string, the line it is on (``tomllib`` gives no
+line numbers for values, so :func:`find_line` finds the key's line in the text).
+"""
+
+from __future__ import annotations
+
+import difflib
+import math
+import re
+from typing import Any
+
+from imageform.errors import InvalidInputError, UnknownOptionError
+from imageform.simulate.schema import (
+    _POSE,
+    _SUFFIX_SCALE,
+    OBJECT_TYPES,
+    SCENE_SCHEMA,
+    UNITS,
+    Field,
+)
+
+__all__ = ["find_line", "validate_scene_dict"]
+
+
+# ---- locating keys in the TOML text ---------------------------------------------------------
+_HEADER = re.compile(r"^\s*(\[\[?)\s*([^\]]+?)\s*\]\]?\s*(#.*)?$")
+_KEY = re.compile(r"^\s*([A-Za-z0-9_\-\.\"' ]+?)\s*=")
+
+
+def _split_key(k: str) -> tuple[str, ...]:
+    return tuple(p.strip().strip("\"'") for p in k.split("."))
+
+
+def find_line(text: str | None, path: tuple[Any, ...]) -> int | None:
+    """1-based line of the key (or table) at ``path`` (e.g. ``("objects", 1, "squares")``) in
+    TOML ``text``; None if not found. Array-of-tables entries count from 0.
+
+    >>> find_line("a = 1\\n[camera]\\nf = 2\\n", ("camera", "f"))
+    3
+    """
+    if not text:
+        return None
+    section: tuple[Any, ...] = ()
+    counts: dict[tuple[str, ...], int] = {}
+    for no, line in enumerate(text.splitlines(), 1):
+        m = _HEADER.match(line)
+        if m and "=" not in line.split("]")[0]:
+            names = _split_key(m.group(2))
+            if m.group(1) == "[[":
+                counts[names] = counts.get(names, -1) + 1
+                section = (*names, counts[names])
+            else:
+                section = names
+            if section == tuple(path):
+                return no
+            continue
+        k = _KEY.match(line)
+        if k:
+            full = (*section, *_split_key(k.group(1)))
+            if full == tuple(path) or full[: len(path)] == tuple(path):
+                return no
+    return None
+
+
+# ---- value checks ------------------------------------------------------------------------
+class _Ctx:
+    def __init__(self, text: str | None, origin: str) -> None:
+        self.text = text
+        self.origin = origin
+
+    def where(self, path: tuple[Any, ...]) -> str:
+        dotted = ".".join(f"[{p}]" if isinstance(p, int) else str(p) for p in path)
+        dotted = dotted.replace(".[", "[")
+        line = find_line(self.text, path)
+        at = f" ({self.origin}, line {line})" if line else f" ({self.origin})"
+        return f"{dotted}{at}"
+
+    def fail(self, path: tuple[Any, ...], msg: str, unknown: bool = False) -> None:
+        cls = UnknownOptionError if unknown else InvalidInputError
+        raise cls(f"scene key {self.where(path)}: {msg}")
+
+
+def _quantity(v: str, f: Field, key: str, path: tuple[Any, ...], ctx: _Ctx) -> float:
+    m = re.fullmatch(r"\s*([-+0-9.eE]+)\s*([A-Za-zµ]+)\s*", v)
+    if m is None or f.dimension is None:
+        ctx.fail(path, f"expected a number, got {v!r}")
+        raise AssertionError  # unreachable (for type checkers)
+    num, unit = float(m.group(1)), m.group(2)
+    table = UNITS[f.dimension]
+    if unit not in table:
+        kinds = [d for d, t in UNITS.items() if unit in t]
+        got = f" (a {kinds[0]})" if kinds else ""
+        ctx.fail(
+            path, f"expected a {f.dimension} in one of {sorted(table)}, got unit {unit!r}{got}"
+        )
+    suffix = next((s for s in _SUFFIX_SCALE if key.endswith(s)), "")
+    return num * table[unit] * _SUFFIX_SCALE.get(suffix, 1.0)
+
+
+def _number(v: Any, f: Field, key: str, path: tuple[Any, ...], ctx: _Ctx) -> float:
+    if isinstance(v, bool):
+        ctx.fail(path, f"expected a number, got {v!r}")
+    if isinstance(v, str):
+        return _quantity(v, f, key, path, ctx)
+    if not isinstance(v, int | float) or not math.isfinite(v):
+        ctx.fail(path, f"expected a finite number, got {v!r}")
+    return float(v)
+
+
+def _bounds(x: float, f: Field, path: tuple[Any, ...], ctx: _Ctx) -> None:
+    if f.positive and x <= 0:
+        ctx.fail(path, f"expected a value > 0, got {x:g}")
+    if f.minimum is not None and x < f.minimum:
+        ctx.fail(path, f"expected a value >= {f.minimum:g}, got {x:g}")
+    if f.maximum is not None and x > f.maximum:
+        ctx.fail(path, f"expected a value <= {f.maximum:g}, got {x:g}")
+
+
+def _check_value(v: Any, f: Field, key: str, path: tuple[Any, ...], ctx: _Ctx) -> Any:
+    from imageform.spectral import COLORCHECKER_PATCHES
+
+    kind = f.kind
+    if kind == "str":
+        if not isinstance(v, str):
+            ctx.fail(path, f"expected a string, got {v!r}")
+        if f.choices:
+            key_ = v.strip().lower().replace("-", "_")
+            valid = {c.lower(): c for c in f.choices}
+            if key_ not in valid and v not in f.choices:
+                ctx.fail(path, f"unknown value {v!r}; valid: {', '.join(f.choices)}", True)
+            return valid.get(key_, v)
+        return v
+    if kind == "bool":
+        if not isinstance(v, bool):
+            ctx.fail(path, f"expected true or false, got {v!r}")
+        return v
+    if kind == "int":
+        if isinstance(v, bool) or not isinstance(v, int):
+            ctx.fail(path, f"expected an integer, got {v!r}")
+        _bounds(float(v), f, path, ctx)
+        return int(v)
+    if kind == "float_or_auto" and isinstance(v, str) and v.strip().lower() == "auto":
+        return "auto"
+    if kind in ("float", "float_or_auto"):
+        x = _number(v, f, key, path, ctx)
+        _bounds(x, f, path, ctx)
+        return x
+    if kind == "reflectance":
+        if isinstance(v, str):
+            if v not in COLORCHECKER_PATCHES:
+                near = difflib.get_close_matches(v, COLORCHECKER_PATCHES, 3)
+                ctx.fail(path, f"unknown ColorChecker patch {v!r}; close: {near}", True)
+            return v
+        x = _number(v, f, key, path, ctx)
+        if not 0.0 <= x <= 1.0:
+            ctx.fail(path, f"expected a reflectance in [0, 1], got {x:g}")
+        return x
+    n = {"vec2": 2, "vec3": 3, "ivec2": 2, "mat3": 3}[kind]
+    if not isinstance(v, list) or len(v) != n:
+        ctx.fail(
+            path, f"expected a list of {n} {'rows' if kind == 'mat3' else 'numbers'}, got {v!r}"
+        )
+    if kind == "mat3":
+        rows = []
+        for r in v:
+            if not isinstance(r, list) or len(r) != 3:
+                ctx.fail(path, f"expected 3 rows of 3 numbers, got {v!r}")
+            rows.append(tuple(_number(x, f, key, path, ctx) for x in r))
+        return tuple(rows)
+    if kind == "ivec2":
+        if not all(isinstance(x, int) and not isinstance(x, bool) and x >= 2 for x in v):
+            ctx.fail(path, f"expected two integers >= 2, got {v!r}")
+        return tuple(int(x) for x in v)
+    out = tuple(_number(x, f, key, path, ctx) for x in v)
+    for x in out:
+        _bounds(x, f, path, ctx)
+    return out
+
+
+def _table(data: Any, schema: dict[str, Any], path: tuple[Any, ...], ctx: _Ctx) -> dict[str, Any]:
+    if not isinstance(data, dict):
+        ctx.fail(path, f"expected a table, got {data!r:.60}")
+    out: dict[str, Any] = {}
+    for key, value in data.items():
+        if key not in schema:
+            near = difflib.get_close_matches(key, list(schema), 1)
+            hint = f"; did you mean {near[0]!r}?" if near else ""
+            unit_hint = ""
+            stem = re.sub(r"_(m|mm|um|cm|s|ms|us|deg|rad)$", "", key)
+            same = [k for k in schema if re.sub(r"_(m|mm|um|s|deg|K|lux|px|e)$", "", k) == stem]
+            if same and key not in same:
+                unit_hint = f" (wrong unit? this key is {same[0]!r})"
+            ctx.fail(
+                (*path, key), f"unknown key{unit_hint}{hint}; valid: {', '.join(schema)}", True
+            )
+        f = schema[key]
+        if isinstance(f, dict):
+            out[key] = _table(value, f, (*path, key), ctx)
+        else:
+            out[key] = _check_value(value, f, key, (*path, key), ctx)
+    for key, f in schema.items():
+        if key in out:
+            continue
+        if isinstance(f, dict):
+            out[key] = _table({}, f, (*path, key), ctx)
+        else:
+            out[key] = f.default
+    return out
+
+
+def validate_scene_dict(
+    data: dict[str, Any], text: str | None = None, origin: str = "scene"
+) -> dict[str, Any]:
+    """Check a parsed scene against :data:`SCENE_SCHEMA`; return it with every default filled.
+
+    Raises
+    ------
+    UnknownOptionError
+        An unknown key or choice (with the valid ones and the line in ``text``).
+    InvalidInputError
+        A value of the wrong type, range or unit.
+
+    >>> cfg = validate_scene_dict({"render": {"width": 320, "height": 180}})
+    >>> cfg["render"]["supersampling"], cfg["lens"]["f_number"]
+    (2, 8.0)
+    """
+    ctx = _Ctx(text, origin)
+    if not isinstance(data, dict):
+        raise InvalidInputError(f"expected a scene table (dict), got {type(data).__name__}")
+    sections = {k: v for k, v in SCENE_SCHEMA.items() if k not in ("", "objects")}
+    top = {**SCENE_SCHEMA[""], **sections, "objects": None}
+    out: dict[str, Any] = {}
+    for key in data:
+        if key not in top:
+            near = difflib.get_close_matches(key, list(top), 1)
+            hint = f"; did you mean {near[0]!r}?" if near else ""
+            ctx.fail((key,), f"unknown key{hint}; valid: {', '.join(top)}", True)
+    for key, f in SCENE_SCHEMA[""].items():
+        out[key] = _check_value(data[key], f, key, (key,), ctx) if key in data else f.default
+    for sec, schema in sections.items():
+        out[sec] = _table(data.get(sec, {}), schema, (sec,), ctx)
+    objs = data.get("objects", [])
+    if not isinstance(objs, list):
+        ctx.fail(("objects",), "expected an array of tables ([[objects]])")
+    out["objects"] = []
+    for i, obj in enumerate(objs):
+        if not isinstance(obj, dict) or "type" not in obj:
+            ctx.fail(("objects", i), f"expected a table with a 'type' ({', '.join(OBJECT_TYPES)})")
+        t = _check_value(obj["type"], _POSE["type"], "type", ("objects", i, "type"), ctx)
+        checked = _table(obj, SCENE_SCHEMA["objects"][t], ("objects", i), ctx)
+        if checked["centre_m"] is None:
+            ctx.fail(("objects", i), "missing key 'centre_m' (the object's position, m)")
+        if t == "image" and checked["path"] is None:
+            ctx.fail(("objects", i), "missing key 'path' (the image file)")
+        if not checked["name"]:
+            checked["name"] = f"{t}{i}"
+        out["objects"].append(checked)
+    ill = out["illuminant"]
+    if ill["type"] == "file" and ill["file"] is None:
+        ctx.fail(("illuminant", "type"), "type 'file' needs the key 'file' (a CSV path)")
+    cam = out["camera"]
+    if (cam["R"] is None) != (cam["t_m"] is None):
+        ctx.fail(("camera", "R" if cam["R"] is not None else "t_m"), "give both R and t_m")
+    return out
