@@ -61,6 +61,35 @@ def truth_xy(measurements: PatchMeasurements) -> np.ndarray:
     return np.asarray(xyz_to_xy(lab_to_xyz(measurements.lab_truth, white="srgb"), white="srgb"))
 
 
+def _zoom_background(ax: Any) -> None:
+    """The lines of the chromaticity diagram (spectral locus, sRGB gamut, Planckian locus with
+    CCT ticks) without the coloured fill, for the zoomed panel."""
+    from imageform.color.chromaticity import spectral_locus
+    from imageform.color.gamut import gamut_triangle
+    from imageform.color.rgb_spaces import _get_space
+    from imageform.report.chromaticity_plot import CCT_TICKS, planckian_locus
+
+    _, locus = spectral_locus(2, "xy")
+    ring = np.vstack([locus, locus[:1]])
+    ax.plot(ring[:, 0], ring[:, 1], color="k", lw=1.0)
+    tri = gamut_triangle(_get_space("srgb"), "xy")
+    ring = np.vstack([tri, tri[:1]])
+    ax.plot(ring[:, 0], ring[:, 1], "-", color="k", lw=1.2, label="sRGB")
+    pl = planckian_locus(np.geomspace(1500.0, 20000.0, 40))
+    ax.plot(pl[:, 0], pl[:, 1], color="0.4", lw=1.0, label="Planckian locus")
+    ticks = planckian_locus(CCT_TICKS)
+    ax.plot(ticks[:, 0], ticks[:, 1], "o", ms=2.5, color="0.4")
+    for t_k, p in zip(CCT_TICKS, ticks, strict=True):
+        ax.annotate(
+            f"{t_k:g} K",
+            p,
+            textcoords="offset points",
+            xytext=(3, -9),
+            fontsize=6,
+            annotation_clip=True,
+        )
+
+
 def plot_patch_chromaticity(
     result: SimulationResult, measurements: PatchMeasurements | None = None
 ) -> Any:
@@ -68,21 +97,34 @@ def plot_patch_chromaticity(
     before and after white balance, after colour correction), a thin line joining each
     patch's positions in order, and the ground truth (from ``lab_d65``) when
     ``measurements`` is given. Left: the whole diagram; right: zoomed on the patches.
-    ``None`` when ``patch_xy`` is empty."""
+    ``None`` when ``patch_xy`` is empty.
+
+    Raises
+    ------
+    InvalidInputError
+        The ``patch_xy`` arrays are not all of one shape ``(n, 2)``.
+    """
+    from imageform.errors import InvalidInputError
     from imageform.report.chromaticity_plot import plot_chromaticity_diagram
 
-    sets = {k: np.asarray(v, dtype=np.float64).reshape(-1, 2) for k, v in result.patch_xy.items()}
+    sets = {k: np.asarray(v, dtype=np.float64) for k, v in result.patch_xy.items()}
     if not sets:
         return None
+    shapes = {v.shape for v in sets.values()}
+    if len(shapes) != 1 or next(iter(shapes))[-1:] != (2,) or len(next(iter(shapes))) != 2:
+        raise InvalidInputError(
+            f"expected every patch_xy array of one shape (n, 2), got {sorted(shapes)}"
+        )
+    stages = dict(sets)
     if measurements is not None:
-        sets = {**sets, "ground truth (D65)": truth_xy(measurements)}
+        sets["ground truth (D65)"] = truth_xy(measurements)
     plt = _pyplot()
     fig, axes = plt.subplots(1, 2, figsize=(12.5, 6.2))
-    stacked = np.concatenate(list(sets.values()), axis=0)
-    finite = stacked[np.all(np.isfinite(stacked), axis=1)]
+    fig.subplots_adjust(left=0.06, right=0.98, bottom=0.09, top=0.94, wspace=0.18)
+    plot_chromaticity_diagram(("srgb",), ax=axes[0], resolution=160)
+    _zoom_background(axes[1])
+    paths = np.stack(list(stages.values()), axis=0)
     for ax in axes:
-        plot_chromaticity_diagram(("srgb",), ax=ax, resolution=160)
-        paths = np.stack([v for k, v in sets.items() if not k.startswith("ground")], axis=0)
         for j in range(paths.shape[1]):
             ax.plot(paths[:, j, 0], paths[:, j, 1], "-", color="0.35", lw=0.6, zorder=3)
         for i, (name, xy) in enumerate(sets.items()):
@@ -98,13 +140,18 @@ def plot_patch_chromaticity(
                 ls="none",
             )
         ax.legend(loc="upper right", fontsize=7)
+    stacked = np.concatenate(list(sets.values()), axis=0)
+    finite = stacked[np.all(np.isfinite(stacked), axis=1)]
     if finite.size:
         lo, hi = finite.min(axis=0), finite.max(axis=0)
         pad = 0.08 * max(float((hi - lo).max()), 0.05)
         axes[1].set_xlim(lo[0] - pad, hi[0] + pad)
         axes[1].set_ylim(lo[1] - pad, hi[1] + pad)
+    axes[1].set_aspect("equal")
+    axes[1].set_xlabel("x")
+    axes[1].set_ylabel("y")
+    axes[1].grid(True, lw=0.3)
     axes[1].set_title("zoomed on the patches")
-    fig.tight_layout()
     return fig
 
 
@@ -136,7 +183,7 @@ def plot_delta_e(measurements: PatchMeasurements | None) -> Any:
     ax.set_ylim(0, top)
     ax.set_ylabel("CIEDE2000 ΔE00")
     ax.set_title("Colour error of each ColorChecker patch against the D65 ground truth")
-    fig.tight_layout()
+    fig.subplots_adjust(left=0.06, right=0.99, bottom=0.22, top=0.92)
     return fig
 
 
@@ -161,7 +208,7 @@ def plot_patch_snr(measurements: PatchMeasurements | None) -> Any:
     ax.set_xticks(x, m.names, rotation=60, ha="right", fontsize=7)
     ax.set_ylabel("SNR (dB) = 20 log10(mean / std)")
     ax.set_title(f"Signal-to-noise ratio per patch, measured on stage '{m.snr_stage}'")
-    fig.tight_layout()
+    fig.subplots_adjust(left=0.06, right=0.99, bottom=0.24, top=0.91)
     return fig
 
 

@@ -68,6 +68,8 @@ def _check_result(result: Any) -> SimulationResult:
             f"expected the last stage to be the encoded 'srgb' output, got kind "
             f"{result.stages[-1].kind!r} ({result.stages[-1].name!r})"
         )
+    to_json_value(result.metrics, "metrics")  # fail before drawing anything
+    to_json_value(result.config, "config")
     return result
 
 
