@@ -12,6 +12,7 @@
 from __future__ import annotations
 
 from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 import pytest
@@ -162,6 +163,15 @@ def sim_result() -> SimulationResult:
 def bare_result() -> SimulationResult:
     """Stages and camera only: no ColorChecker, rails, quads or photon transfer."""
     return make_result(full=False)
+
+
+@pytest.fixture(scope="session")
+def full_report(sim_result: SimulationResult, tmp_path_factory: pytest.TempPathFactory) -> Any:
+    """The report of the full synthetic result, written once (a ReportPaths)."""
+    pytest.importorskip("matplotlib")
+    from imageform.report import write_report
+
+    return write_report(sim_result, tmp_path_factory.mktemp("full") / "report")
 
 
 @pytest.fixture(scope="session")

@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from imageform.report import write_report
+from imageform.report import ReportPaths, write_report
 from imageform.simulate.result import SimulationResult
 
 CHROMIUM = Path(os.environ.get("IMAGEFORM_CHROMIUM", "/usr/bin/chromium"))
@@ -71,12 +71,11 @@ def _not_blank(png: bytes) -> np.ndarray:
 def test_report_in_headless_chromium(
     browser_page,  # type: ignore[no-untyped-def]
     which: str,
-    sim_result: SimulationResult,
+    full_report: ReportPaths,
     bare_result: SimulationResult,
     tmp_path: Path,
 ) -> None:
-    result = sim_result if which == "full" else bare_result
-    paths = write_report(result, tmp_path / "report")
+    paths = full_report if which == "full" else write_report(bare_result, tmp_path / "report")
     page = browser_page
     seen = _open(page, paths.html)
     images = page.evaluate(

@@ -25,8 +25,8 @@ _PNG_URI = re.compile(r'src="data:image/png;base64,([A-Za-z0-9+/=]+)"')
 
 
 @pytest.fixture(scope="module")
-def written(sim_result: SimulationResult, tmp_path_factory: pytest.TempPathFactory) -> ReportPaths:
-    return write_report(sim_result, tmp_path_factory.mktemp("rep") / "out")
+def written(full_report: ReportPaths) -> ReportPaths:
+    return full_report
 
 
 def test_files_written(written: ReportPaths, sim_result: SimulationResult) -> None:
