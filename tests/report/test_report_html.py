@@ -177,3 +177,26 @@ def test_metrics_that_are_not_json_are_an_error(
     r = dataclasses.replace(bare_result, metrics={"f": object()})
     with pytest.raises(InvalidInputError, match=r"metrics\.f"):
         write_report(r, tmp_path)
+
+
+def _noisy(stage: Stage, rng: np.random.Generator) -> Stage:
+    """The stage with camera-like noise (noise is what makes PNGs big and slow)."""
+    a = np.asarray(stage.image, dtype=np.float64)
+    if stage.kind == "raw":
+        img = np.clip(a + rng.normal(0, 30, a.shape), 0, 4095).astype(np.uint16)
+    else:
+        img = np.clip(a + rng.normal(0, 0.02, a.shape), 0, None if stage.kind == "linear" else 1)
+    return dataclasses.replace(stage, image=img)
+
+
+@pytest.mark.slow
+def test_report_of_a_noisy_1280x720_result(result_factory, tmp_path: Path) -> None:  # type: ignore[no-untyped-def]
+    """The report of a full-size result is a small part of the 60 s budget of the default
+    run (measured: a few seconds on the 2-core machine)."""
+    r = result_factory(width=1280, height=720)
+    rng = np.random.default_rng(0)
+    noisy = dataclasses.replace(r, stages=tuple(_noisy(s, rng) for s in r.stages))
+    paths = write_report(noisy, tmp_path)
+    assert paths.seconds < 30.0
+    assert read_image(paths.stages[0]).shape == (720, 1280, 3)
+    assert read_image(paths.raw_files[0]).dtype == np.uint16
