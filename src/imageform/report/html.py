@@ -242,7 +242,7 @@ def _geometry_section(
     else:
         im = vanishing_overlay(result, shown)
         buf = io.BytesIO()
-        im.save(buf, format="PNG")
+        im.save(buf, format="PNG", compress_level=1)
         t = vp["vanishing_point"]
         det = vp["detected_vanishing_point"]
         where = f"({t[0]:.1f}, {t[1]:.1f}) px" if t[2] == 1 else "at infinity"

@@ -72,7 +72,8 @@ def figure_png(fig: Any, dpi: int = 100) -> bytes:
 
     buf = io.BytesIO()
     try:
-        fig.savefig(buf, format="png", dpi=dpi)
+        # zlib level 1: a little larger, several times faster to write than the default 6
+        fig.savefig(buf, format="png", dpi=dpi, pil_kwargs={"compress_level": 1})
     finally:
         plt.close(fig)
     return buf.getvalue()
