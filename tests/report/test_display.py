@@ -4,6 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from hypothesis.extra.numpy import arrays
 
 from imageform.errors import InvalidInputError, UnknownOptionError
 from imageform.report.display import raw_to_uint16, stage_display_image
@@ -72,3 +75,43 @@ def test_raw_to_uint16() -> None:
     assert raw_to_uint16(np.array([[70000]], dtype=np.int32)) is None
     assert raw_to_uint16(np.array([[-1.0]])) is None
     assert raw_to_uint16(np.array([[3.0, 4095.0]], dtype=np.float32)).dtype == np.uint16
+
+
+@settings(max_examples=40, deadline=None)
+@given(
+    arrays(np.float64, (4, 5, 3), elements=st.floats(0.0, 1e4, allow_nan=False)),
+    st.floats(50.0, 100.0),
+)
+def test_linear_display_is_monotone(img: np.ndarray, pct: float) -> None:
+    """Brighter light never shows darker: the display map is one increasing function."""
+    out = stage_display_image(img, "linear", percentile=pct).astype(int)
+    order = np.argsort(img.ravel(), kind="stable")
+    assert np.all(np.diff(out.ravel()[order]) >= 0)
+
+
+_json_leaf = st.one_of(
+    st.none(),
+    st.booleans(),
+    st.integers(-(2**40), 2**40),
+    st.floats(allow_nan=True),
+    st.text(max_size=5),
+)
+_json_tree = st.recursive(
+    _json_leaf,
+    lambda kids: (
+        st.lists(kids, max_size=3) | st.dictionaries(st.text(max_size=4), kids, max_size=3)
+    ),
+    max_leaves=12,
+)
+
+
+@settings(max_examples=60, deadline=None)
+@given(_json_tree)
+def test_json_values_round_trip(value: object) -> None:
+    import json
+
+    from imageform.report.metrics import to_json_value
+
+    plain = to_json_value(value)
+    assert json.loads(json.dumps(plain, allow_nan=False)) == plain
+    assert to_json_value(plain) == plain

@@ -157,6 +157,8 @@ def test_bad_results(sim_result: SimulationResult, tmp_path: Path) -> None:
     odd = Stage("x", "x", "x", np.zeros((2, 2)), "log")  # type: ignore[arg-type]
     with pytest.raises(InvalidInputError, match="kind 'log'"):
         write_report(dataclasses.replace(sim_result, stages=(odd, *sim_result.stages)), tmp_path)
+    with pytest.raises(InvalidInputError, match=r"image_size \(100, 128\)"):
+        write_report(dataclasses.replace(sim_result, image_size=(100, 128)), tmp_path)
     (tmp_path / "file").write_text("")
     with pytest.raises(InvalidInputError, match="not a folder"):
         write_report(sim_result, tmp_path / "file")

@@ -68,6 +68,12 @@ def _check_result(result: Any) -> SimulationResult:
             f"expected the last stage to be the encoded 'srgb' output, got kind "
             f"{result.stages[-1].kind!r} ({result.stages[-1].name!r})"
         )
+    w, h = result.image_size
+    if tuple(np.shape(result.stages[-1].image)[:2]) != (h, w):
+        raise InvalidInputError(
+            f"expected the output image to be {h}x{w} (image_size {(w, h)}), got shape "
+            f"{np.shape(result.stages[-1].image)}"
+        )
     to_json_value(result.metrics, "metrics")  # fail before drawing anything
     to_json_value(result.config, "config")
     return result
