@@ -139,7 +139,10 @@ def make_result(*, full: bool = True, width: int = W, height: int = H) -> Simula
             "after_color_correction": xy - [0.01, 0.0],
         },
         vanishing=VanishingTruth(
-            TRUE_VP * [sx, sy, 1], HORIZON, DETECTED_VP * [sx, sy, 1], HORIZON + [0, 0, -4]
+            TRUE_VP * [sx, sy, 1],
+            HORIZON * [1, 1, sy],
+            DETECTED_VP * [sx, sy, 1],
+            (HORIZON + [0, 0, -4]) * [1, 1, sy],
         ),
         photon_transfer=_ptc(),
         metrics={

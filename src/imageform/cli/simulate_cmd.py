@@ -76,7 +76,9 @@ def simulate_command(
     show_bar = not json_out and sys.stderr.isatty()
     with _progress_bar(show_bar) as progress:
         result = simulate(sc, progress=progress, seed=seed)
-    paths = write_report(result, out, force=force)
+        if progress is not None:
+            progress("writing the report", 1.0)
+        paths = write_report(result, out, force=force)
     wall = time.perf_counter() - t0
     s = paths.summary
     if json_out:

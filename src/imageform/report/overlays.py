@@ -46,12 +46,13 @@ def _line_in_box(line: ArrayLike, w: float, h: float) -> list[tuple[float, float
 
 
 def _draw_line(
-    draw: Any, line: ArrayLike, w: float, h: float, colour: tuple[int, int, int]
+    draw: Any, line: ArrayLike, w: float, h: float, colour: tuple[int, int, int], k: int = 1
 ) -> None:
+    """The line, ``2k`` px wide in ``colour`` over ``5k`` px of black."""
     pts = _line_in_box(line, w, h)
     if pts is not None:
-        draw.line(pts, fill=(0, 0, 0), width=5)
-        draw.line(pts, fill=colour, width=2)
+        draw.line(pts, fill=(0, 0, 0), width=5 * k)
+        draw.line(pts, fill=colour, width=2 * k)
 
 
 def draw_vanishing_overlay(image: ArrayLike, result: Any) -> Any:
@@ -105,6 +106,7 @@ def draw_vanishing_truth_overlay(
 
     arr = _to_rgb8(image)
     h, w = arr.shape[:2]
+    k = max(1, round(max(w, h) / 640))  # marks grow with the image (1 up to 960 px wide)
     pts: list[tuple[np.ndarray, tuple[int, int, int]]] = []
     for p, colour in ((vanishing_point, TRUE_COLOUR), (detected_vanishing_point, DETECTED_COLOUR)):
         if p is None:
@@ -119,8 +121,9 @@ def draw_vanishing_truth_overlay(
                 and -max_margin * h - 0.5 <= uv[1] < (1 + max_margin) * h - 0.5
             ):
                 pts.append((uv, colour))
-    lo = np.minimum(np.min([uv for uv, _ in pts], axis=0) - 12, 0) if pts else np.zeros(2)
-    hi = np.maximum(np.max([uv for uv, _ in pts], axis=0) + 12, [w - 1, h - 1]) if pts else None
+    pad = 12 * k
+    lo = np.minimum(np.min([uv for uv, _ in pts], axis=0) - pad, 0) if pts else np.zeros(2)
+    hi = np.maximum(np.max([uv for uv, _ in pts], axis=0) + pad, [w - 1, h - 1]) if pts else None
     ox, oy = int(np.ceil(-lo[0])), int(np.ceil(-lo[1]))
     cw = w + ox + (int(np.ceil(hi[0] - (w - 1))) if hi is not None else 0)
     ch = h + oy + (int(np.ceil(hi[1] - (h - 1))) if hi is not None else 0)
@@ -131,13 +134,14 @@ def draw_vanishing_truth_overlay(
     for line, colour in ((detected_horizon, DETECTED_COLOUR), (horizon, TRUE_COLOUR)):
         if line is not None:
             a, b, c = np.asarray(line, dtype=np.float64).ravel()[:3]
-            _draw_line(draw, (a, b, c - a * ox - b * oy), cw, ch, colour)
+            _draw_line(draw, (a, b, c - a * ox - b * oy), cw, ch, colour, k)
     for uv, colour in reversed(pts):
         x, y = uv[0] + ox + 0.5, uv[1] + oy + 0.5
-        draw.ellipse([x - 9, y - 9, x + 9, y + 9], outline=(0, 0, 0), width=5)
-        draw.ellipse([x - 8, y - 8, x + 8, y + 8], outline=colour, width=3)
+        r0, r1, c0 = 9 * k, 8 * k, 4 * k
+        draw.ellipse([x - r0, y - r0, x + r0, y + r0], outline=(0, 0, 0), width=5 * k)
+        draw.ellipse([x - r1, y - r1, x + r1, y + r1], outline=colour, width=3 * k)
         if colour == TRUE_COLOUR:
-            draw.line([(x - 4, y), (x + 4, y)], fill=colour, width=2)
-            draw.line([(x, y - 4), (x, y + 4)], fill=colour, width=2)
+            draw.line([(x - c0, y), (x + c0, y)], fill=colour, width=2 * k)
+            draw.line([(x, y - c0), (x, y + c0)], fill=colour, width=2 * k)
     canvas.info["offset"] = (ox, oy)
     return canvas
