@@ -12,6 +12,7 @@ from imageform.cli import (
     lecture_cmd,
     optics_cmds,
     sensor_cmds,
+    simulate_cmd,
     vanishing_cmd,
     vision_cmds,
 )
@@ -26,6 +27,7 @@ app = typer.Typer(
 )
 
 for _module in (
+    simulate_cmd,
     lecture_cmd,
     geometry_cmds,
     vanishing_cmd,

@@ -1,3 +1,5 @@
-"""imageform.report."""
+"""imageform.report: figures and the self-contained simulation report (report.html)."""
 
-__all__: list[str] = []
+from imageform.report.html import ReportPaths, write_report
+
+__all__ = ["ReportPaths", "write_report"]

@@ -8,11 +8,51 @@ import numpy as np
 
 from imageform._typing import ArrayLike
 
-__all__ = ["draw_vanishing_overlay"]
+__all__ = [
+    "DETECTED_COLOUR",
+    "TRUE_COLOUR",
+    "draw_vanishing_overlay",
+    "draw_vanishing_truth_overlay",
+]
 
 #: Okabe-Ito colours for VP groups (colour-blind safe); grey for unassigned segments.
 _COLOURS = [(230, 159, 0), (86, 180, 233), (0, 158, 115), (204, 121, 167), (213, 94, 0)]
 _GREY = (150, 150, 150)
+#: Colours of the true (bluish green) and detected (vermillion) vanishing point and horizon.
+TRUE_COLOUR = (0, 158, 115)
+DETECTED_COLOUR = (213, 94, 0)
+
+
+def _to_rgb8(image: ArrayLike) -> np.ndarray:
+    arr = np.asarray(image)
+    if arr.dtype != np.uint8:
+        arr = np.clip(np.asarray(arr, dtype=np.float64) * 255.0 + 0.5, 0, 255).astype(np.uint8)
+    if arr.ndim == 2:
+        arr = np.repeat(arr[..., None], 3, axis=-1)
+    return arr
+
+
+def _line_in_box(line: ArrayLike, w: float, h: float) -> list[tuple[float, float]] | None:
+    """The two PIL points (pixel centre at +0.5) where the line ``a u + b v + c = 0`` crosses
+    the canvas' left and right edges (top and bottom edges for a steep line)."""
+    a, b, c = (float(x) for x in np.asarray(line, dtype=np.float64))
+    if abs(b) >= abs(a) and abs(b) > 1e-12:
+        us = (-0.5, w - 0.5)
+        return [(u + 0.5, -(a * u + c) / b + 0.5) for u in us]
+    if abs(a) > 1e-12:
+        vs = (-0.5, h - 0.5)
+        return [(-(b * v + c) / a + 0.5, v + 0.5) for v in vs]
+    return None
+
+
+def _draw_line(
+    draw: Any, line: ArrayLike, w: float, h: float, colour: tuple[int, int, int], k: int = 1
+) -> None:
+    """The line, ``2k`` px wide in ``colour`` over ``5k`` px of black."""
+    pts = _line_in_box(line, w, h)
+    if pts is not None:
+        draw.line(pts, fill=(0, 0, 0), width=5 * k)
+        draw.line(pts, fill=colour, width=2 * k)
 
 
 def draw_vanishing_overlay(image: ArrayLike, result: Any) -> Any:
@@ -21,12 +61,7 @@ def draw_vanishing_overlay(image: ArrayLike, result: Any) -> Any:
     :class:`~imageform.geometry.VanishingPointResult`."""
     from PIL import Image, ImageDraw
 
-    arr = np.asarray(image)
-    if arr.dtype != np.uint8:
-        arr = np.clip(np.asarray(arr, dtype=np.float64) * 255.0 + 0.5, 0, 255).astype(np.uint8)
-    if arr.ndim == 2:
-        arr = np.repeat(arr[..., None], 3, axis=-1)
-    base = Image.fromarray(arr, "RGB")
+    base = Image.fromarray(_to_rgb8(image), "RGB")
     # dim the photo so the drawing stands out
     canvas = Image.blend(base, Image.new("RGB", base.size, (0, 0, 0)), 0.35)
     draw = ImageDraw.Draw(canvas)
@@ -41,10 +76,72 @@ def draw_vanishing_overlay(image: ArrayLike, result: Any) -> Any:
             c = _COLOURS[j % len(_COLOURS)]
             draw.ellipse([x - 7, y - 7, x + 7, y + 7], outline=c, width=3)
     if result.horizon is not None:
-        a, b, c = result.horizon
-        if abs(b) > 1e-9:
-            ys = [-(a * u + c) / b for u in (0.0, w - 1.0)]
-            pts = [(0.5, ys[0] + 0.5), (w - 0.5, ys[1] + 0.5)]
-            draw.line(pts, fill=(0, 0, 0), width=5)
-            draw.line(pts, fill=(255, 255, 255), width=2)
+        _draw_line(draw, result.horizon, w, h, (255, 255, 255))
+    return canvas
+
+
+def draw_vanishing_truth_overlay(
+    image: ArrayLike,
+    vanishing_point: ArrayLike,
+    horizon: ArrayLike | None = None,
+    *,
+    detected_vanishing_point: ArrayLike | None = None,
+    detected_horizon: ArrayLike | None = None,
+    max_margin: float = 0.5,
+) -> Any:
+    """An RGB PIL image: the true vanishing point (bluish-green ring and cross) and horizon
+    (bluish-green over black), and the detected ones (vermillion), on ``image``.
+
+    Points and lines are homogeneous pixel coordinates (``(u, v, w)``; ``a u + b v + c = 0``),
+    pixel centre of the top-left pixel at (0, 0). A vanishing point outside the image gets a
+    grey margin around the image so that it shows, up to ``max_margin`` times the image size
+    on each side (farther ones, and points at infinity, are not drawn); the image's top-left
+    pixel then sits at ``canvas.info["offset"]`` ``(ox, oy)`` (``(0, 0)`` without margin).
+
+    >>> im = draw_vanishing_truth_overlay(np.zeros((40, 60, 3)), [30.0, 20.0, 1.0], [0, 1, -20])
+    >>> im.getpixel((30, 20)) == TRUE_COLOUR, im.info["offset"]
+    (True, (0, 0))
+    """
+    from PIL import Image, ImageDraw
+
+    arr = _to_rgb8(image)
+    h, w = arr.shape[:2]
+    k = max(1, round(max(w, h) / 640))  # marks grow with the image (1 up to 960 px wide)
+    pts: list[tuple[np.ndarray, tuple[int, int, int]]] = []
+    for p, colour in ((vanishing_point, TRUE_COLOUR), (detected_vanishing_point, DETECTED_COLOUR)):
+        if p is None:
+            continue
+        v = np.asarray(p, dtype=np.float64).ravel()
+        if v.size == 2:
+            v = np.append(v, 1.0)
+        if v[2] != 0 and np.all(np.isfinite(v)):
+            uv = v[:2] / v[2]
+            if (
+                -max_margin * w - 0.5 <= uv[0] < (1 + max_margin) * w - 0.5
+                and -max_margin * h - 0.5 <= uv[1] < (1 + max_margin) * h - 0.5
+            ):
+                pts.append((uv, colour))
+    pad = 12 * k
+    lo = np.minimum(np.min([uv for uv, _ in pts], axis=0) - pad, 0) if pts else np.zeros(2)
+    hi = np.maximum(np.max([uv for uv, _ in pts], axis=0) + pad, [w - 1, h - 1]) if pts else None
+    ox, oy = int(np.ceil(-lo[0])), int(np.ceil(-lo[1]))
+    cw = w + ox + (int(np.ceil(hi[0] - (w - 1))) if hi is not None else 0)
+    ch = h + oy + (int(np.ceil(hi[1] - (h - 1))) if hi is not None else 0)
+    base = Image.fromarray(arr, "RGB")
+    canvas = Image.new("RGB", (cw, ch), (128, 128, 128))
+    canvas.paste(Image.blend(base, Image.new("RGB", base.size, (0, 0, 0)), 0.25), (ox, oy))
+    draw = ImageDraw.Draw(canvas)
+    for line, colour in ((detected_horizon, DETECTED_COLOUR), (horizon, TRUE_COLOUR)):
+        if line is not None:
+            a, b, c = np.asarray(line, dtype=np.float64).ravel()[:3]
+            _draw_line(draw, (a, b, c - a * ox - b * oy), cw, ch, colour, k)
+    for uv, colour in reversed(pts):
+        x, y = uv[0] + ox + 0.5, uv[1] + oy + 0.5
+        r0, r1, c0 = 9 * k, 8 * k, 4 * k
+        draw.ellipse([x - r0, y - r0, x + r0, y + r0], outline=(0, 0, 0), width=5 * k)
+        draw.ellipse([x - r1, y - r1, x + r1, y + r1], outline=colour, width=3 * k)
+        if colour == TRUE_COLOUR:
+            draw.line([(x - c0, y), (x + c0, y)], fill=colour, width=2 * k)
+            draw.line([(x, y - c0), (x, y + c0)], fill=colour, width=2 * k)
+    canvas.info["offset"] = (ox, oy)
     return canvas

@@ -1,0 +1,132 @@
+"""Turning a simulation stage into something to look at (8-bit sRGB) or to keep (16-bit raw).
+
+One function, :func:`stage_display_image`, decides how every stage kind is displayed, so
+that the report, the stage files and the figures agree. The kinds are documented in
+:mod:`imageform.simulate.result`.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from imageform._validate import check_option
+from imageform.errors import InvalidInputError
+
+__all__ = ["DISPLAY_PERCENTILE", "raw_to_uint16", "stage_display_image"]
+
+#: The percentile of a linear stage that is shown as white (display only).
+DISPLAY_PERCENTILE = 99.0
+
+
+def _as_rgb(a: np.ndarray, name: str) -> np.ndarray:
+    """(H, W), (H, W, 1) or (H, W, 3) -> (H, W, 3)."""
+    if a.ndim == 3 and a.shape[-1] == 1:
+        a = a[..., 0]
+    if a.ndim == 2:
+        return np.repeat(a[..., None], 3, axis=-1)
+    if a.ndim == 3 and a.shape[-1] == 3:
+        return a
+    raise InvalidInputError(
+        f"expected {name} of shape (H, W), (H, W, 1) or (H, W, 3), got {a.shape}"
+    )
+
+
+def stage_display_image(
+    image: np.ndarray,
+    kind: str,
+    *,
+    white_level: float | None = None,
+    percentile: float = DISPLAY_PERCENTILE,
+) -> np.ndarray:
+    """The 8-bit sRGB picture ``(H, W, 3)`` uint8 of one stage of the chain.
+
+    - ``"linear"`` (linear light, any scale): divide by the ``percentile``-th percentile
+      ``p`` of all values, then sRGB-encode:
+
+      .. math:: V = \\mathrm{sRGB}\\big(\\min(\\max(L / p, 0), 1)\\big)
+
+      (an all-zero image stays black).
+    - ``"raw"`` (digital numbers, ``(H, W)``): grey ``V = DN / white_level``.
+    - ``"srgb"``: shown as it is.
+
+    Then ``round(255 V)``. This is a picture only: values outside [0, 1] after the scaling
+    (highlights above the percentile, negative noise, out-of-gamut colours) are clipped for
+    display, never in the data (the stage files and metrics keep the arrays as they are).
+
+    Parameters
+    ----------
+    image : ndarray, shape (H, W), (H, W, 1) or (H, W, 3)
+        Finite values.
+    kind : {"linear", "raw", "srgb"}
+    white_level : float, optional
+        Largest code of a raw stage (required for ``"raw"``).
+    percentile : float
+        For ``"linear"``: which percentile becomes white (99 by default).
+
+    Source: IEC 61966-2-1:1999, clause 5.3 (the sRGB encoding).
+
+    Examples
+    --------
+    >>> stage_display_image(np.array([[0.0, 0.18, 1.0]]), "linear", percentile=100)[0, 1]
+    array([118, 118, 118], dtype=uint8)
+    >>> stage_display_image(np.array([[0, 2048, 4095]]), "raw", white_level=4095)[0, :, 0]
+    array([  0, 128, 255], dtype=uint8)
+    """
+    from imageform.color.transfer import linear_to_srgb
+
+    k = check_option(kind, ("linear", "raw", "srgb"), "stage kind")
+    a = np.asarray(image)
+    if a.size == 0:
+        raise InvalidInputError(f"expected a non-empty stage image, got shape {a.shape}")
+    if a.dtype.kind not in "biuf":
+        raise InvalidInputError(f"expected a numeric stage image, got dtype {a.dtype}")
+    a = a.astype(np.float32)  # a picture: float32 is plenty
+    if not np.all(np.isfinite(a)):
+        raise InvalidInputError("stage image contains NaN or inf; cannot display it")
+    if k == "raw":
+        if a.ndim != 2:
+            raise InvalidInputError(f"expected a raw stage of shape (H, W), got {a.shape}")
+        if white_level is None or not np.isfinite(white_level) or white_level <= 0:
+            raise InvalidInputError(f"a raw stage needs white_level > 0, got {white_level!r}")
+        v = a / np.float32(white_level)
+    elif k == "linear":
+        if not 0 < percentile <= 100:
+            raise InvalidInputError(f"expected percentile in (0, 100], got {percentile}")
+        flat = a.ravel()
+        if flat.size > 1_000_000:  # a regular subsample gives the same percentile to display
+            flat = flat[:: flat.size // 500_000]
+        p = float(np.percentile(flat, percentile))
+        if p <= 0:
+            p = float(a.max())
+        v = a / np.float32(p) if p > 0 else np.zeros_like(a)
+        v = np.asarray(linear_to_srgb(np.clip(v, 0.0, 1.0)))
+    else:
+        v = a
+    rgb = _as_rgb(np.asarray(v), f"a {k} stage")
+    return np.asarray(np.round(np.clip(rgb, 0.0, 1.0) * 255.0), dtype=np.uint8)
+
+
+def raw_to_uint16(image: np.ndarray) -> np.ndarray | None:
+    """The raw digital numbers as uint16 when they are whole numbers in [0, 65535], else None
+    (the caller then keeps them as a float TIFF: nothing is rounded or clipped).
+
+    >>> raw_to_uint16(np.array([[0.0, 4095.0]])).dtype
+    dtype('uint16')
+    >>> raw_to_uint16(np.array([[0.5]])) is None
+    True
+    """
+    a = np.asarray(image)
+    if a.dtype == np.uint16:
+        return a
+    if a.dtype.kind in "biu":
+        ok = a.size == 0 or (int(a.min()) >= 0 and int(a.max()) <= 65535)
+        return a.astype(np.uint16) if ok else None
+    if (
+        a.dtype.kind == "f"
+        and np.all(np.isfinite(a))
+        and float(a.min()) >= 0
+        and float(a.max()) <= 65535
+        and np.all(a == np.round(a))
+    ):
+        return a.astype(np.uint16)
+    return None

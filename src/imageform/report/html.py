@@ -1,0 +1,478 @@
+"""The simulation report: one self-contained ``report.html``, ``metrics.json`` and every stage
+as a PNG file.
+
+:func:`write_report` turns a :class:`~imageform.simulate.SimulationResult` into::
+
+    out_dir/report.html            figures embedded as base64 PNG data: URIs, inline CSS,
+                                   no external URL, no script
+    out_dir/metrics.json           the numbers (layout: imageform.report.metrics)
+    out_dir/stages/NN-name.png     each stage as displayed (8-bit sRGB)
+    out_dir/stages/NN-name-dn.png  raw stages' digital numbers as 16-bit PNG
+                                   (a float TIFF ``-dn.tif`` when they are not whole numbers)
+"""
+
+from __future__ import annotations
+
+import json
+import re
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from imageform.errors import InvalidInputError
+from imageform.report import html_parts as hp
+from imageform.report.metrics import to_json_value
+from imageform.simulate.result import STAGE_KINDS, SimulationResult, Stage
+
+__all__ = ["ReportPaths", "write_report"]
+
+_OUR_STAGE_FILE = re.compile(r"^\d{2,}-[A-Za-z0-9_.-]+\.(png|tif)$")
+
+
+@dataclass(frozen=True)
+class ReportPaths:
+    """What :func:`write_report` wrote: ``html`` (report.html), ``metrics`` (metrics.json),
+    ``stages`` (one display PNG per stage, in order), ``raw_files`` (the raw stages' digital
+    numbers), ``summary`` (the headline numbers, as in metrics.json) and ``seconds`` (how
+    long writing took)."""
+
+    out_dir: Path
+    html: Path
+    metrics: Path
+    stages: tuple[Path, ...]
+    raw_files: tuple[Path, ...] = ()
+    summary: dict[str, Any] = field(default_factory=dict)
+    seconds: float = 0.0
+
+
+def _slug(name: str) -> str:
+    s = re.sub(r"[^A-Za-z0-9_.-]+", "-", name).strip("-.")
+    return s or "stage"
+
+
+def _check_result(result: Any) -> SimulationResult:
+    if not isinstance(result, SimulationResult):
+        raise InvalidInputError(f"expected a SimulationResult, got {type(result).__name__}")
+    if not result.stages:
+        raise InvalidInputError("expected at least one stage in the SimulationResult, got none")
+    for i, s in enumerate(result.stages):
+        if s.kind not in STAGE_KINDS:
+            raise InvalidInputError(
+                f"stage {i} ({s.name!r}) has kind {s.kind!r}; valid: {', '.join(STAGE_KINDS)}"
+            )
+    if result.stages[-1].kind != "srgb":
+        raise InvalidInputError(
+            f"expected the last stage to be the encoded 'srgb' output, got kind "
+            f"{result.stages[-1].kind!r} ({result.stages[-1].name!r})"
+        )
+    w, h = result.image_size
+    if tuple(np.shape(result.stages[-1].image)[:2]) != (h, w):
+        raise InvalidInputError(
+            f"expected the output image to be {h}x{w} (image_size {(w, h)}), got shape "
+            f"{np.shape(result.stages[-1].image)}"
+        )
+    to_json_value(result.metrics, "metrics")  # fail before drawing anything
+    to_json_value(result.config, "config")
+    return result
+
+
+def _prepare_out_dir(out_dir: Path, force: bool) -> Path:
+    if out_dir.exists() and not out_dir.is_dir():
+        raise InvalidInputError(f"output {out_dir} exists and is not a folder")
+    existing = [p for p in (out_dir / "report.html", out_dir / "metrics.json") if p.exists()]
+    if existing and not force:
+        raise InvalidInputError(
+            f"a report exists in {out_dir} ({existing[0].name}); pass force=True (--force) "
+            "to overwrite it"
+        )
+    stages = out_dir / "stages"
+    stages.mkdir(parents=True, exist_ok=True)
+    for p in stages.iterdir():  # stale stage files of an earlier report (only ours)
+        if p.is_file() and _OUR_STAGE_FILE.match(p.name):
+            p.unlink()
+    return stages
+
+
+def _write_stage(stage: Stage, index: int, folder: Path) -> tuple[Path, Path | None, bytes]:
+    from PIL import Image
+
+    from imageform.io.image_io import write_image
+    from imageform.io.png import write_png
+    from imageform.report.display import raw_to_uint16, stage_display_image
+
+    shown = stage_display_image(stage.image, stage.kind, white_level=stage.white_level)
+    base = f"{index:02d}-{_slug(stage.name)}"
+    path = folder / f"{base}.png"
+    # zlib level 1: noisy camera images hardly compress further, and level 6 costs 3x the time
+    Image.fromarray(shown, "RGB").save(path, format="PNG", compress_level=1)
+    raw_path = None
+    if stage.kind == "raw":
+        dn = raw_to_uint16(stage.image)
+        if dn is not None:
+            raw_path = folder / f"{base}-dn.png"
+            write_png(raw_path, dn)
+        else:
+            raw_path = folder / f"{base}-dn.tif"
+            write_image(raw_path, np.asarray(stage.image, dtype=np.float32))
+    return path, raw_path, path.read_bytes()
+
+
+def _stage_section(result: SimulationResult, pngs: list[bytes], files: list[Path]) -> str:
+    parts = []
+    for i, (s, png, f) in enumerate(zip(result.stages, pngs, files, strict=True)):
+        shape = "×".join(str(d) for d in np.shape(s.image))
+        extra = f", white level {s.white_level:g} DN" if s.white_level is not None else ""
+        cap = (
+            f"<b>{i}. {hp.e(s.title)}</b> — {hp.e(s.description)}"
+            f'<br><span class="meta">{s.seconds:.3f} s · kind {hp.e(s.kind)}{hp.e(extra)} · '
+            f"{hp.e(shape)} "
+            f"{hp.e(np.asarray(s.image).dtype)} · stages/{hp.e(f.name)}</span>"
+        )
+        parts.append(hp.figure(png, s.title, cap, fig_id=f"stage-{i}", photo=True))
+    intro = (
+        "<p>Every stage of the chain in order. Linear-light stages are shown with their 99th "
+        "percentile as white and the sRGB transfer function; raw stages as grey, digital "
+        "number over white level; the output as it is.</p>"
+    )
+    return hp.section("stages", "Stages of the image formation", intro + "".join(parts))
+
+
+def _colour_section(result: SimulationResult, m: Any, notes: list[str]) -> str:
+    from imageform.report.figures_color import (
+        plot_delta_e,
+        plot_patch_chromaticity,
+        plot_patch_snr,
+    )
+
+    body = []
+    fig = plot_patch_chromaticity(result, m)
+    if fig is None:
+        n = "No patch chromaticities in this result: the chromaticity diagram is left out."
+        notes.append(n)
+        body.append(hp.note(n))
+    else:
+        body.append(
+            hp.figure(
+                hp.figure_png(fig),
+                "chromaticity diagram",
+                "ColorChecker patches on the CIE 1931 xy diagram at each stage "
+                f"({hp.e(', '.join(k.replace('_', ' ') for k in result.patch_xy))})"
+                + (", and the ground truth" if m is not None else "")
+                + "; a thin line joins each patch's positions.",
+                "chromaticity",
+            )
+        )
+    if m is None:
+        n = "No ColorChecker in this scene: ΔE00 and SNR per patch are left out."
+        notes.append(n)
+        body.append(hp.note(n))
+        return hp.section("colour", "Colour", "".join(body))
+    body.append(
+        hp.figure(
+            hp.figure_png(plot_delta_e(m)),
+            "CIEDE2000 per patch",
+            f"CIEDE2000 of every patch of the output against the D65 ground truth: mean "
+            f"{m.mean_delta_e00:.2f}, max {m.max_delta_e00:.2f}.",
+            "delta-e",
+        )
+    )
+    rows = []
+    for i, name in enumerate(m.names):
+        sw = "#" + "".join(f"{round(float(c) * 255):02x}" for c in np.clip(m.truth_srgb[i], 0, 1))
+        rows.append(
+            [
+                i + 1,
+                hp.Markup(f'<span class="swatch" style="background:{sw}"></span> {hp.e(name)}'),
+                " ".join(f"{v:.1f}" for v in m.lab_truth[i]),
+                " ".join(f"{v:.1f}" for v in m.lab_measured[i])
+                if np.all(np.isfinite(m.lab_measured[i]))
+                else "—",
+                f"{m.delta_e00[i]:.2f}" if np.isfinite(m.delta_e00[i]) else "—",
+                m.readings[i],
+                f"{m.snr_db[i]:.1f}"
+                if np.isfinite(m.snr_db[i])
+                else ("∞" if m.snr_db[i] > 0 else "—"),
+            ]
+        )
+    body.append(
+        hp.table(
+            ["#", "patch", "L* a* b* truth", "L* a* b* measured", "ΔE00", "reading", "SNR (dB)"],
+            rows,
+            left=(1, 5),
+        )
+    )
+    body.append(
+        "<p>Readings follow the lecture: below 1 imperceptible, about 2 just noticeable, "
+        "above 10 obviously different.</p>"
+    )
+    body.append(
+        hp.figure(
+            hp.figure_png(plot_patch_snr(m)),
+            "SNR per patch",
+            f"Signal-to-noise ratio of each patch window on stage '{hp.e(m.snr_stage)}'.",
+            "snr",
+        )
+    )
+    return hp.section("colour", "Colour", "".join(body))
+
+
+def _geometry_section(
+    result: SimulationResult,
+    top: dict[str, Any],
+    vp: dict[str, Any] | None,
+    shown: np.ndarray,
+    notes: list[str],
+) -> str:
+    import io
+
+    from imageform.report.figures_geometry import plot_top_view, vanishing_overlay
+
+    c = top["camera_center"]
+    body = [
+        hp.figure(
+            hp.figure_png(plot_top_view(top)),
+            "top view",
+            f"The scene from above (x–z plane): {len(top['quads'])} objects, the camera centre "
+            f"at ({c[0]:.3f}, {c[1]:.3f}, {c[2]:.3f}) m and the frustum rays through the image "
+            "corners.",
+            "top-view",
+        )
+    ]
+    if vp is None:
+        n = "No rails in this scene: the vanishing point and horizon are left out."
+        notes.append(n)
+        body.append(hp.note(n))
+    else:
+        im = vanishing_overlay(result, shown)
+        buf = io.BytesIO()
+        im.save(buf, format="PNG", compress_level=1)
+        t = vp["vanishing_point"]
+        det = vp["detected_vanishing_point"]
+        where = f"({t[0]:.1f}, {t[1]:.1f}) px" if t[2] == 1 else "at infinity"
+        if det is None:
+            found = "The detector found no vanishing point."
+        elif det[2] != 1:
+            found = "The detector put it at infinity."
+        else:
+            found = (
+                f"Detected at ({det[0]:.1f}, {det[1]:.1f}) px, "
+                f"{vp['error_px']:.2f} px from the truth."
+            )
+        body.append(
+            hp.figure(
+                buf.getvalue(),
+                "vanishing point and horizon",
+                "The output image with the rails' true vanishing point and horizon (green) and "
+                f"the detected ones (orange). True vanishing point {hp.e(where)}. {hp.e(found)}",
+                "vanishing",
+                photo=True,
+            )
+        )
+    return hp.section("geometry", "Geometry", "".join(body))
+
+
+def _sensor_section(ptc: dict[str, Any] | None, notes: list[str]) -> str:
+    from imageform.report.figures_color import plot_photon_transfer
+
+    if ptc is None:
+        n = "No photon-transfer measurement in this result: the sensor section is left out."
+        notes.append(n)
+        return hp.section("sensor", "Sensor", hp.note(n))
+    cap = "Temporal variance against mean signal of flat-field pairs (EMVA 1288)."
+    if ptc["fit"] is None:
+        n = f"The photon-transfer fit failed: {ptc.get('fit_error', '')}"
+        notes.append(n)
+        cap += " " + hp.e(n)
+    fig = plot_photon_transfer(ptc)
+    return hp.section(
+        "sensor", "Sensor", hp.figure(hp.figure_png(fig), "photon transfer", cap, "ptc")
+    )
+
+
+def write_report(
+    result: SimulationResult, out_dir: str | Path, *, force: bool = False
+) -> ReportPaths:
+    """Write the simulation report of ``result`` into ``out_dir`` (created if needed).
+
+    Writes ``report.html`` (one self-contained file: every figure a base64 PNG ``data:``
+    URI, inline CSS, no external URL, nothing to run), ``metrics.json`` (see
+    :mod:`imageform.report.metrics`) and ``stages/NN-name.png`` for every stage (displayed
+    with :func:`imageform.report.display.stage_display_image`), plus ``NN-name-dn.png``
+    (16-bit) with the digital numbers of raw stages.
+
+    Sections: the stages; colour (the patches on the chromaticity diagram at each stage of
+    ``patch_xy``, CIEDE2000 per patch with the lecture's reading, SNR per patch); geometry
+    (the scene and frustum from above, the true and detected vanishing point and horizon);
+    sensor (the photon-transfer curve and its EMVA 1288 fit). A part the result lacks
+    (no ColorChecker, no rails, no photon-transfer data) is left out with a note.
+
+    Raises
+    ------
+    InvalidInputError
+        ``report.html`` or ``metrics.json`` exists in ``out_dir`` and ``force`` is False;
+        a stage of unknown kind; a last stage that is not ``"srgb"``.
+    """
+    import matplotlib
+
+    from imageform.report.display import stage_display_image
+    from imageform.report.figures_color import photon_transfer_summary
+    from imageform.report.figures_geometry import top_view_data, vanishing_summary
+    from imageform.report.patches import measure_patches
+
+    t0 = time.perf_counter()
+    res = _check_result(result)
+    out = Path(out_dir)
+    folder = _prepare_out_dir(out, force)
+    if matplotlib.get_backend().lower() != "agg":
+        matplotlib.use("Agg")
+    files, raws, pngs = [], [], []
+    for i, s in enumerate(res.stages):
+        f, r, png = _write_stage(s, i, folder)
+        files.append(f)
+        pngs.append(png)
+        if r is not None:
+            raws.append(r)
+    final = res.stages[-1]
+    shown = stage_display_image(final.image, final.kind)
+    m = measure_patches(res)
+    top = top_view_data(res)
+    vp = vanishing_summary(res)
+    ptc = photon_transfer_summary(res)
+    notes: list[str] = []
+    sections = [
+        _stage_section(res, pngs, files),
+        _colour_section(res, m, notes),
+        _geometry_section(res, top, vp, shown, notes),
+        _sensor_section(ptc, notes),
+    ]
+    total = float(sum(s.seconds for s in res.stages))
+    summary = {
+        "total_seconds": total,
+        "mean_delta_e00": m.mean_delta_e00 if m is not None else None,
+        "max_delta_e00": m.max_delta_e00 if m is not None else None,
+        "vanishing_point_error_px": vp["error_px"] if vp is not None else None,
+        "system_gain_dn_per_e": (
+            ptc["fit"]["system_gain_dn_per_e"] if ptc is not None and ptc["fit"] else None
+        ),
+    }
+    metrics = _metrics(res, files, raws, summary, m, top, vp, ptc, notes)
+    metrics_path = out / "metrics.json"
+    metrics_path.write_text(json.dumps(metrics, indent=2, ensure_ascii=False, allow_nan=False))
+    sections.append(_numbers_section(metrics))
+    w, h = res.image_size
+    sub = (
+        f"<p>Scene <b>{hp.e(res.scene_name)}</b> · {w}×{h} px · {len(res.stages)} stages · "
+        f"{total:.2f} s of simulation"
+        + (f" · mean ΔE00 {m.mean_delta_e00:.2f}" if m is not None else "")
+        + (
+            f" · vanishing-point error {vp['error_px']:.2f} px"
+            if vp is not None and vp["error_px"] is not None
+            else ""
+        )
+        + "</p>"
+    )
+    nav = [
+        ("stages", "Stages"),
+        ("colour", "Colour"),
+        ("geometry", "Geometry"),
+        ("sensor", "Sensor"),
+        ("numbers", "Numbers"),
+    ]
+    html_path = out / "report.html"
+    html_path.write_text(
+        hp.page(f"imageform simulation: {res.scene_name}", sub, nav, "".join(sections)),
+        encoding="utf-8",
+    )
+    return ReportPaths(
+        out_dir=out,
+        html=html_path,
+        metrics=metrics_path,
+        stages=tuple(files),
+        raw_files=tuple(raws),
+        summary=to_json_value(summary),
+        seconds=time.perf_counter() - t0,
+    )
+
+
+def _metrics(
+    res: SimulationResult,
+    files: list[Path],
+    raws: list[Path],
+    summary: dict[str, Any],
+    m: Any,
+    top: dict[str, Any],
+    vp: dict[str, Any] | None,
+    ptc: dict[str, Any] | None,
+    notes: list[str],
+) -> dict[str, Any]:
+    raw_iter = iter(raws)
+    stages = []
+    for i, (s, f) in enumerate(zip(res.stages, files, strict=True)):
+        stages.append(
+            {
+                "index": i,
+                "name": s.name,
+                "title": s.title,
+                "description": s.description,
+                "kind": s.kind,
+                "seconds": s.seconds,
+                "white_level": s.white_level,
+                "shape": list(np.shape(s.image)),
+                "dtype": str(np.asarray(s.image).dtype),
+                "file": f"stages/{f.name}",
+                "raw_file": f"stages/{next(raw_iter).name}" if s.kind == "raw" else None,
+            }
+        )
+    cc = None
+    if m is not None:
+        cc = {
+            "snr_stage": m.snr_stage,
+            "patches": [
+                {
+                    "name": n,
+                    "lab_truth": m.lab_truth[i],
+                    "lab_measured": m.lab_measured[i],
+                    "delta_e00": m.delta_e00[i],
+                    "reading": m.readings[i],
+                    "snr_db": m.snr_db[i],
+                    "xy": {k: np.asarray(v)[i] for k, v in res.patch_xy.items()},
+                }
+                for i, n in enumerate(m.names)
+            ],
+        }
+    w, h = res.image_size
+    out = {
+        "scene_name": res.scene_name,
+        "image_size": {"width": w, "height": h},
+        "summary": summary,
+        "stages": stages,
+        "metrics": res.metrics,
+        "colorchecker": cc,
+        "patch_xy": dict(res.patch_xy),
+        "top_view": top,
+        "vanishing": vp,
+        "photon_transfer": ptc,
+        "config": res.config,
+        "notes": notes,
+    }
+    return dict(to_json_value(out))
+
+
+def _numbers_section(metrics: dict[str, Any]) -> str:
+    rows = [
+        [k, "—" if v is None else (f"{v:.4g}" if isinstance(v, float) else v)]
+        for k, v in metrics["metrics"].items()
+        if v is None or isinstance(v, int | float | str)
+    ]
+    body = ""
+    if rows:
+        body += "<p>The pipeline's own numbers:</p>" + hp.table(
+            ["metric", "value"], rows, left=(0,)
+        )
+    body += hp.json_block(metrics, "metrics.json (everything above as numbers)")
+    if metrics["config"]:
+        body += hp.json_block(metrics["config"], "the scene description")
+    return hp.section("numbers", "Numbers", body)

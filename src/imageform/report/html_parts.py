@@ -1,0 +1,140 @@
+"""Building blocks of the self-contained simulation report: the page skeleton with inline CSS,
+figures as base64 ``data:`` URIs, tables and notes. Every text is HTML-escaped here."""
+
+from __future__ import annotations
+
+import base64
+import html
+import io
+import json
+from collections.abc import Sequence
+from typing import Any
+
+__all__ = [
+    "CSS",
+    "Markup",
+    "e",
+    "figure",
+    "figure_png",
+    "img_tag",
+    "json_block",
+    "note",
+    "page",
+    "section",
+    "table",
+]
+
+CSS = """
+:root { color-scheme: light; }
+body { font: 15px/1.45 system-ui, -apple-system, "Segoe UI", Roboto, sans-serif; margin: 0;
+       color: #1d1d1f; background: #fafafa; }
+main { max-width: 1320px; margin: 0 auto; padding: 1.2em 1.6em 4em; }
+h1 { font-size: 1.7em; margin: 0.2em 0 0.1em; }
+h2 { border-bottom: 2px solid #ddd; padding-bottom: 0.2em; margin-top: 2.2em; }
+nav a { margin-right: 1em; }
+figure { margin: 1.2em 0; background: #fff; border: 1px solid #e3e3e3; border-radius: 6px;
+         padding: 0.8em; }
+figure img { display: block; max-width: 100%; height: auto; margin: 0 auto;
+             image-rendering: auto; }
+figure img.photo { width: 100%; }
+figcaption { font-size: 0.92em; color: #333; margin-top: 0.5em; }
+figcaption .meta { color: #666; font-size: 0.9em; }
+table { border-collapse: collapse; margin: 0.8em 0; font-size: 0.9em; background: #fff; }
+th, td { border: 1px solid #ddd; padding: 0.25em 0.6em; text-align: right; }
+th { background: #f0f0f0; }
+td.l, th.l { text-align: left; }
+.swatch { display: inline-block; width: 1.1em; height: 1.1em; border: 1px solid #555;
+          vertical-align: middle; }
+.note { background: #fff7e0; border-left: 4px solid #e0a800; padding: 0.5em 0.8em; }
+pre { background: #fff; border: 1px solid #e3e3e3; padding: 0.8em; overflow: auto;
+      font-size: 0.85em; }
+.grid { display: grid; grid-template-columns: repeat(auto-fill, minmax(560px, 1fr));
+        gap: 0 1.2em; }
+"""
+
+
+def e(text: Any) -> str:
+    """HTML-escaped ``str(text)``."""
+    return html.escape(str(text), quote=True)
+
+
+def img_tag(png: bytes, alt: str, *, photo: bool = False) -> str:
+    """An ``<img>`` whose source is the PNG itself, base64 in a ``data:`` URI; a ``photo``
+    (a stage image) is shown as wide as the page."""
+    b64 = base64.b64encode(png).decode("ascii")
+    cls = ' class="photo"' if photo else ""
+    return f'<img{cls} src="data:image/png;base64,{b64}" alt="{e(alt)}">'
+
+
+def figure_png(fig: Any, dpi: int = 100) -> bytes:
+    """The matplotlib figure as PNG bytes; the figure is closed."""
+    import matplotlib.pyplot as plt
+
+    buf = io.BytesIO()
+    try:
+        # zlib level 1: a little larger, several times faster to write than the default 6
+        fig.savefig(buf, format="png", dpi=dpi, pil_kwargs={"compress_level": 1})
+    finally:
+        plt.close(fig)
+    return buf.getvalue()
+
+
+def figure(
+    png: bytes, alt: str, caption_html: str, fig_id: str | None = None, *, photo: bool = False
+) -> str:
+    """A ``<figure>`` with the embedded image and a caption (``caption_html`` is trusted:
+    build it from escaped parts)."""
+    ident = f' id="{e(fig_id)}"' if fig_id else ""
+    img = img_tag(png, alt, photo=photo)
+    return f"<figure{ident}>{img}<figcaption>{caption_html}</figcaption></figure>"
+
+
+def note(text: str) -> str:
+    """A highlighted note (escaped)."""
+    return f'<p class="note">{e(text)}</p>'
+
+
+def section(ident: str, title: str, body: str) -> str:
+    """A ``<section>`` with an anchor and a heading."""
+    return f'<section id="{e(ident)}"><h2>{e(title)}</h2>{body}</section>'
+
+
+def table(header: Sequence[str], rows: Sequence[Sequence[Any]], left: Sequence[int] = ()) -> str:
+    """An HTML table; cells are escaped unless they are ``Markup`` (a str subclass marking
+    trusted HTML); columns listed in ``left`` are left-aligned."""
+
+    def cell(tag: str, j: int, v: Any) -> str:
+        cls = ' class="l"' if j in left else ""
+        return f"<{tag}{cls}>{v if isinstance(v, Markup) else e(v)}</{tag}>"
+
+    head = "".join(cell("th", j, h) for j, h in enumerate(header))
+    body = "".join(
+        "<tr>" + "".join(cell("td", j, v) for j, v in enumerate(r)) + "</tr>" for r in rows
+    )
+    return f"<table><thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>"
+
+
+class Markup(str):
+    """Trusted HTML (already escaped) for :func:`table` cells."""
+
+    __slots__ = ()
+
+
+def json_block(value: Any, summary: str) -> str:
+    """Collapsible pretty-printed JSON."""
+    text = json.dumps(value, indent=2, ensure_ascii=False, allow_nan=False)
+    return f"<details><summary>{e(summary)}</summary><pre>{e(text)}</pre></details>"
+
+
+def page(title: str, subtitle_html: str, nav: Sequence[tuple[str, str]], body: str) -> str:
+    """The whole document: no external resource, no script needed to view it."""
+    links = " ".join(f'<a href="#{e(i)}">{e(t)}</a>' for i, t in nav)
+    return (
+        "<!DOCTYPE html>\n"
+        '<html lang="en"><head><meta charset="utf-8">'
+        '<meta name="viewport" content="width=device-width, initial-scale=1">'
+        '<link rel="icon" href="data:,">'
+        f"<title>{e(title)}</title><style>{CSS}</style></head>"
+        f"<body><main><header><h1>{e(title)}</h1>{subtitle_html}"
+        f"<nav>{links}</nav></header>{body}</main></body></html>\n"
+    )
