@@ -302,7 +302,7 @@ def fit_color_correction(
             f"expected measured and reference of the same shape, got {format_shape(a.shape)} "
             f"and {format_shape(b.shape)}"
         )
-    sat = (a >= saturation).any(axis=1) | (b >= saturation).any(axis=1)
+    sat = ((a >= saturation).any(axis=1) | (b >= saturation).any(axis=1)) & va & vb
     use = va & vb & ~sat
     if sat.any():
         warnings.warn(
