@@ -54,17 +54,20 @@ def test_chart_patches_exact_on_synthetic(charts) -> None:  # type: ignore[no-un
     assert p.valid.all() and p.std.max() < 1e-12
 
 
-@pytest.mark.parametrize(("method", "degree", "max_mean_after"),
-                         [("linear", 1, 2.0), ("root_polynomial", 2, 1.5),
-                          ("root_polynomial", 3, 1.2)])
+@pytest.mark.parametrize(
+    ("method", "degree", "max_mean_after"),
+    [("linear", 1, 2.0), ("root_polynomial", 2, 1.5), ("root_polynomial", 3, 1.2)],
+)
 def test_correction_reduces_delta_e(charts, method, degree, max_mean_after) -> None:  # type: ignore[no-untyped-def]
     chart_a, chart_b = charts
     pa, pb = chart_patches(chart_a), chart_patches(chart_b)
     corr = fit_color_correction(pa, pb, method, degree)
     rep = correction_report(pa, pb, corr)
     s = rep.summary()
-    print(f"{method} deg {degree}: ΔE00 mean {s['mean_before']:.2f} -> {s['mean_after']:.2f}, "
-          f"max {s['max_before']:.2f} -> {s['max_after']:.2f}")
+    print(
+        f"{method} deg {degree}: ΔE00 mean {s['mean_before']:.2f} -> {s['mean_after']:.2f}, "
+        f"max {s['max_before']:.2f} -> {s['max_after']:.2f}"
+    )
     assert s["mean_before"] > 7.0  # the two devices disagree visibly
     assert s["mean_after"] < max_mean_after  # measured 1.60 / 1.23 / 0.92
     assert rep.delta_e_after.shape == (24,)
@@ -102,21 +105,28 @@ def test_cross_check_colour_science_finlayson2015() -> None:
         ref_terms = colour.characterisation.polynomial_expansion_Finlayson2015(
             lin_a, degree=degree, root_polynomial_expansion=True
         )
-        np.testing.assert_allclose(root_polynomial_terms(lin_a, degree) @ ours.T,
-                                   ref_terms @ theirs.T, atol=1e-8)
+        np.testing.assert_allclose(
+            root_polynomial_terms(lin_a, degree) @ ours.T, ref_terms @ theirs.T, atol=1e-8
+        )
 
 
 @given(arrays(np.float64, (5, 3), elements=st.floats(0.0, 1.0)), st.floats(0.05, 20.0))
 def test_root_polynomial_exposure_invariance(rgb: np.ndarray, k: float) -> None:
     """Finlayson et al. 2015: every root-polynomial term scales linearly with exposure."""
     for degree in (1, 2, 3):
-        np.testing.assert_allclose(root_polynomial_terms(k * rgb, degree),
-                                   k * root_polynomial_terms(rgb, degree), rtol=1e-9, atol=1e-12)
+        np.testing.assert_allclose(
+            root_polynomial_terms(k * rgb, degree),
+            k * root_polynomial_terms(rgb, degree),
+            rtol=1e-9,
+            atol=1e-12,
+        )
 
 
 def test_json_round_trip(tmp_path: Path, charts) -> None:  # type: ignore[no-untyped-def]
     chart_a, chart_b = charts
-    corr = fit_color_correction(chart_patches(chart_a), chart_patches(chart_b), "root_polynomial", 3)
+    corr = fit_color_correction(
+        chart_patches(chart_a), chart_patches(chart_b), "root_polynomial", 3
+    )
     p = tmp_path / "corr.json"
     corr.to_json(p)
     back = ColorCorrection.from_json(p)

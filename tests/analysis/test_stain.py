@@ -101,8 +101,9 @@ def test_macenko_on_skimage_ihc(ihc: np.ndarray) -> None:
 
 
 def test_macenko_normalize_matches_target() -> None:
-    a, _, _ = synthetic_stain_image(0, stains=(RUIFROK_HEMATOXYLIN, RUIFROK_DAB),
-                                    max_concentration=(0.6, 1.4))
+    a, _, _ = synthetic_stain_image(
+        0, stains=(RUIFROK_HEMATOXYLIN, RUIFROK_DAB), max_concentration=(0.6, 1.4)
+    )
     b, _, _ = synthetic_stain_image(1, stains=(RUIFROK_HEMATOXYLIN, RUIFROK_EOSIN))
     tb = macenko_stains(b, transparent="norm")
     out = macenko_normalize(a, tb)
@@ -117,7 +118,10 @@ def test_macenko_normalize_ihc_to_itself_is_identity(ihc: np.ndarray) -> None:
     out = macenko_normalize(x, x)
     # 2 stains cannot represent the residual OD off their plane: compare in the plane
     st = macenko_stains(x)
-    c_in, c_out = stain_concentrations(x, st.stain_matrix), stain_concentrations(out, st.stain_matrix)
+    c_in, c_out = (
+        stain_concentrations(x, st.stain_matrix),
+        stain_concentrations(out, st.stain_matrix),
+    )
     np.testing.assert_allclose(c_out, c_in, atol=1e-4)
 
 
@@ -130,8 +134,9 @@ def test_macenko_json_round_trip_and_path_target(tmp_path: Path) -> None:
     np.testing.assert_array_equal(back.stain_matrix, st.stain_matrix)
     np.testing.assert_array_equal(back.max_concentrations, st.max_concentrations)
     a, _, _ = synthetic_stain_image(2)
-    np.testing.assert_array_equal(macenko_normalize(a, p, transparent="norm"),
-                                  macenko_normalize(a, st, transparent="norm"))
+    np.testing.assert_array_equal(
+        macenko_normalize(a, p, transparent="norm"), macenko_normalize(a, st, transparent="norm")
+    )
 
 
 def test_macenko_without_tissue_raises() -> None:

@@ -65,9 +65,15 @@ def root_polynomial_terms(rgb: Any, degree: int) -> Any:
     if degree >= 2:
         terms += [root(r * g, 2), root(g * b, 2), root(r * b, 2)]
     if degree >= 3:
-        terms += [root(r * g * g, 3), root(g * b * b, 3), root(r * b * b, 3),
-                  root(g * r * r, 3), root(b * g * g, 3), root(b * r * r, 3),
-                  root(r * g * b, 3)]
+        terms += [
+            root(r * g * g, 3),
+            root(g * b * b, 3),
+            root(r * b * b, 3),
+            root(g * r * r, 3),
+            root(b * g * g, 3),
+            root(b * r * r, 3),
+            root(r * g * b, 3),
+        ]
     return np.stack(terms, axis=-1)
 
 
@@ -106,10 +112,17 @@ class ColorCorrection:
 
     def to_json(self, path: str | Path) -> None:
         """Save as JSON (``kind: "color_correction"``)."""
-        write_json(path, {"kind": "color_correction", "space": "linear_srgb",
-                          "method": self.method, "degree": int(self.degree),
-                          "matrix": np.asarray(self.matrix).tolist(),
-                          "n_patches": int(self.n_patches)})
+        write_json(
+            path,
+            {
+                "kind": "color_correction",
+                "space": "linear_srgb",
+                "method": self.method,
+                "degree": int(self.degree),
+                "matrix": np.asarray(self.matrix).tolist(),
+                "n_patches": int(self.n_patches),
+            },
+        )
 
     @classmethod
     def from_json(cls, path: str | Path) -> ColorCorrection:
@@ -213,7 +226,7 @@ def chart_patches(
         means, stds, sat = dask.compute(means, stds, sat)
     m, sd = np.asarray(means), np.asarray(stds)
     saturated = np.asarray(sat) > max_saturated_fraction
-    missing = (sd > max_std).any(axis=1)
+    missing = np.asarray((sd > max_std).any(axis=1))
     bad = {"saturated": np.flatnonzero(saturated), "missing": np.flatnonzero(missing)}
     if not (~saturated & ~missing).any():
         raise InvalidInputError(
@@ -344,8 +357,9 @@ class CorrectionReport:
         return out
 
 
-def correction_report(measured: object, reference: object,
-                      correction: ColorCorrection) -> CorrectionReport:
+def correction_report(
+    measured: object, reference: object, correction: ColorCorrection
+) -> CorrectionReport:
     """CIEDE2000 per patch, :math:`\\Delta E_{00}(\\mathrm{Lab}(b_i), \\mathrm{Lab}(a_i))`
     before and :math:`\\Delta E_{00}(\\mathrm{Lab}(b_i), \\mathrm{Lab}(f(a_i)))` after.
 

@@ -15,14 +15,14 @@ from typing import Any
 
 import numpy as np
 
-from imageform._validate import as_matrix, check_option
+from imageform._validate import as_float, as_matrix, check_option, format_shape
 from imageform.analysis._arrays import exact_quantile, image_in, is_dask, read_json, write_json
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
 
 __all__ = [
     "MIN_INTENSITY",
-    "MacenkoStains",
     "TRANSPARENT_RULES",
+    "MacenkoStains",
     "macenko_normalize",
     "macenko_stains",
     "optical_density",
@@ -89,10 +89,15 @@ class MacenkoStains:
 
     def to_json(self, path: str | Path) -> None:
         """Save as JSON (``kind: "macenko_stains"``)."""
-        write_json(path, {"kind": "macenko_stains",
-                          "stain_matrix": np.asarray(self.stain_matrix).tolist(),
-                          "max_concentrations": np.asarray(self.max_concentrations).tolist(),
-                          "n_pixels": int(self.n_pixels)})
+        write_json(
+            path,
+            {
+                "kind": "macenko_stains",
+                "stain_matrix": np.asarray(self.stain_matrix).tolist(),
+                "max_concentrations": np.asarray(self.max_concentrations).tolist(),
+                "n_pixels": int(self.n_pixels),
+            },
+        )
 
     @classmethod
     def from_json(cls, path: str | Path) -> MacenkoStains:
@@ -109,8 +114,9 @@ class MacenkoStains:
         return cls(np.asarray(s, dtype=np.float64), m, n)
 
 
-def stain_concentrations(image: object, stain_matrix: object,
-                         *, min_intensity: float = MIN_INTENSITY) -> Any:
+def stain_concentrations(
+    image: object, stain_matrix: object, *, min_intensity: float = MIN_INTENSITY
+) -> Any:
     """Colour deconvolution: least-squares concentrations :math:`C = OD\\, S^+`.
 
     Parameters
@@ -130,8 +136,11 @@ def stain_concentrations(image: object, stain_matrix: object,
     >>> stain_concentrations(img, S).round(6).tolist()
     [0.5, 0.25]
     """
-    s = np.asarray(as_matrix(stain_matrix, "stain_matrix", (2, 3)) if np.shape(stain_matrix)[0] == 2
-                   else as_matrix(stain_matrix, "stain_matrix", (3, 3)), dtype=np.float64)
+    s = np.asarray(as_float(stain_matrix, "stain_matrix"), dtype=np.float64)
+    if s.shape not in ((2, 3), (3, 3)):
+        raise InvalidInputError(
+            f"expected stain_matrix of shape (2, 3) or (3, 3), got {format_shape(s.shape)}"
+        )
     od = optical_density(image, min_intensity=min_intensity)
     pinv = np.linalg.pinv(s).astype(od.dtype)  # (3, k)
     return od @ pinv
@@ -144,8 +153,7 @@ TRANSPARENT_RULES = {
 }
 
 
-def _fit(od: Any, beta: float, alpha: float, min_pixels: int,
-         rule: str) -> tuple[np.ndarray, int]:
+def _fit(od: Any, beta: float, alpha: float, min_pixels: int, rule: str) -> tuple[np.ndarray, int]:
     """Stain matrix (2, 3) from OD pixels, NumPy or Dask (same formulas, same order)."""
     flat = od.reshape((-1, 3)).astype(np.float64)
     if rule == "any_channel":
@@ -264,8 +272,11 @@ def macenko_stains(
     >>> [round(stain_angle(est.stain_matrix[i], S[i]), 1) for i in range(2)]
     [0.4, 0.3]
     """
-    for name, val, lo, hi in (("beta", beta, 0.0, 10.0), ("alpha", alpha, 0.0, 50.0),
-                              ("max_percentile", max_percentile, 0.0, 100.0)):
+    for name, val, lo, hi in (
+        ("beta", beta, 0.0, 10.0),
+        ("alpha", alpha, 0.0, 50.0),
+        ("max_percentile", max_percentile, 0.0, 100.0),
+    ):
         if not lo <= float(val) <= hi:  # also rejects NaN
             raise InvalidInputError(f"expected {name} in [{lo:g}, {hi:g}], got {val!r}")
     rule = check_option(transparent, TRANSPARENT_RULES, "transparent-pixel rule")
@@ -283,8 +294,9 @@ def _target(target: object, **kw: Any) -> MacenkoStains:
     return macenko_stains(target, **kw)
 
 
-def _reconstruct(od: np.ndarray, pinv_src: np.ndarray, scale: np.ndarray,
-                 stains_t: np.ndarray) -> np.ndarray:
+def _reconstruct(
+    od: np.ndarray, pinv_src: np.ndarray, scale: np.ndarray, stains_t: np.ndarray
+) -> np.ndarray:
     c = od.astype(np.float64) @ pinv_src * scale
     return np.asarray(10.0 ** (-(c @ stains_t)), dtype=od.dtype)
 
@@ -335,9 +347,14 @@ def macenko_normalize(
     >>> np.round(ratio, 2).tolist()
     [1.0, 0.99]
     """
-    kw = {"beta": beta, "alpha": alpha, "max_percentile": max_percentile,
-          "min_pixels": min_pixels, "min_intensity": min_intensity,
-          "transparent": transparent}
+    kw: dict[str, Any] = {
+        "beta": beta,
+        "alpha": alpha,
+        "max_percentile": max_percentile,
+        "min_pixels": min_pixels,
+        "min_intensity": min_intensity,
+        "transparent": transparent,
+    }
     tgt = _target(target, **kw)
     od = optical_density(image, min_intensity=min_intensity)
     src = macenko_stains(image, **kw) if source is None else source

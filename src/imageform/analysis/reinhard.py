@@ -39,9 +39,16 @@ class ReinhardStats:
 
     def to_json(self, path: str | Path) -> None:
         """Save as JSON (``kind: "reinhard_stats"``)."""
-        write_json(path, {"kind": "reinhard_stats", "space": self.space,
-                          "mean": list(self.mean), "std": list(self.std),
-                          "n_pixels": self.n_pixels})
+        write_json(
+            path,
+            {
+                "kind": "reinhard_stats",
+                "space": self.space,
+                "mean": list(self.mean),
+                "std": list(self.std),
+                "n_pixels": self.n_pixels,
+            },
+        )
 
     @classmethod
     def from_json(cls, path: str | Path) -> ReinhardStats:
@@ -59,7 +66,7 @@ class ReinhardStats:
             raise InvalidInputError(f"malformed Reinhard statistics in {path}: {exc}") from exc
         if len(mean) != 3 or len(std) != 3:
             raise InvalidInputError(f"expected 3 means and 3 stds in {path}")
-        return cls(mean, std, n)  # type: ignore[arg-type]
+        return cls(mean, std, n)
 
 
 def _lab(rgb: Any) -> Any:
@@ -96,6 +103,7 @@ def reinhard_stats(image: object, mask: object = None) -> ReinhardStats:
     """
     rgb = image_in(image)
     lab = _lab(rgb)
+    w: Any
     if mask is None:
         w = None
     else:
@@ -147,8 +155,9 @@ def _target_stats(target: object) -> ReinhardStats:
     return reinhard_stats(target)
 
 
-def _transfer(rgb: np.ndarray, mu_s: np.ndarray, gain: np.ndarray, mu_t: np.ndarray,
-              clip: bool) -> np.ndarray:
+def _transfer(
+    rgb: np.ndarray, mu_s: np.ndarray, gain: np.ndarray, mu_t: np.ndarray, clip: bool
+) -> np.ndarray:
     lab = np.asarray(convert(rgb, "srgb", "lab"))
     out = (lab - mu_s.astype(lab.dtype)) * gain.astype(lab.dtype) + mu_t.astype(lab.dtype)
     res = np.asarray(convert(out, "lab", "srgb"))

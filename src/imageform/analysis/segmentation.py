@@ -87,14 +87,13 @@ def _pair(value: object, name: str, lo: float, hi: float, unit: str) -> tuple[fl
     return a, b
 
 
-def _threshold(rgb: np.ndarray, h: tuple[float, float], s: tuple[float, float],
-               v: tuple[float, float]) -> np.ndarray:
+def _threshold(
+    rgb: np.ndarray, h: tuple[float, float], s: tuple[float, float], v: tuple[float, float]
+) -> np.ndarray:
     hsv = _srgb_to_hsv(np, rgb)
     hue, sat, val = hsv[..., 0], hsv[..., 1], hsv[..., 2]
-    if h[0] <= h[1]:
-        in_h = (hue >= h[0]) & (hue <= h[1])
-    else:  # wraps through 0°: [h0, 360) ∪ [0, h1]
-        in_h = (hue >= h[0]) | (hue <= h[1])
+    lo, hi = hue >= h[0], hue <= h[1]
+    in_h = (lo & hi) if h[0] <= h[1] else (lo | hi)  # wrap: [h0, 360) ∪ [0, h1]
     return np.asarray(in_h & (sat >= s[0]) & (sat <= s[1]) & (val >= v[0]) & (val <= v[1]))
 
 
@@ -207,8 +206,11 @@ def segment_hsv(
         if a > b:
             raise InvalidInputError(f"expected {name} low <= high, got {a:g} > {b:g}")
     radii = []
-    for name, val in (("open_radius", open_radius), ("close_radius", close_radius),
-                      ("min_area", min_area)):
+    for name, val in (
+        ("open_radius", open_radius),
+        ("close_radius", close_radius),
+        ("min_area", min_area),
+    ):
         if isinstance(val, bool) or not isinstance(val, int | np.integer) or val < 0:
             raise InvalidInputError(f"expected {name} as an integer >= 0, got {val!r}")
         radii.append(int(val))
@@ -219,8 +221,15 @@ def segment_hsv(
         if depth == 0:
             mask = raw
         else:
-            mask = raw.map_overlap(_clean, depth=depth, boundary="none", dtype=bool,
-                                   open_radius=ro, close_radius=rc, min_area=area)
+            mask = raw.map_overlap(
+                _clean,
+                depth=depth,
+                boundary="none",
+                dtype=bool,
+                open_radius=ro,
+                close_radius=rc,
+                min_area=area,
+            )
     else:
         raw = _threshold(rgb, hh, ss, vv)
         mask = _clean(raw, ro, rc, area)
@@ -235,7 +244,7 @@ def segment_hsv(
 
 
 def _mask_in(mask: object, name: str) -> Any:
-    m = mask if is_dask(mask) else np.asarray(mask)
+    m: Any = mask if is_dask(mask) else np.asarray(mask)
     if m.ndim != 2:
         raise InvalidInputError(f"expected {name} of shape (H, W), got {format_shape(m.shape)}")
     if np.dtype(m.dtype) != np.bool_:

@@ -35,11 +35,30 @@ RUIFROK_DAB = (0.27, 0.57, 0.78)
 # D50 -> D65 Bradford), as published by X-Rite. Approximate reflectances rendered for a
 # synthetic chart: a reference for tests, not a measurement standard.
 COLORCHECKER_SRGB8 = (
-    (115, 82, 68), (194, 150, 130), (98, 122, 157), (87, 108, 67), (133, 128, 177),
-    (103, 189, 170), (214, 126, 44), (80, 91, 166), (193, 90, 99), (94, 60, 108),
-    (157, 188, 64), (224, 163, 46), (56, 61, 150), (70, 148, 73), (175, 54, 60),
-    (231, 199, 31), (187, 86, 149), (8, 133, 161), (243, 243, 242), (200, 200, 200),
-    (160, 160, 160), (122, 122, 121), (85, 85, 85), (52, 52, 52),
+    (115, 82, 68),
+    (194, 150, 130),
+    (98, 122, 157),
+    (87, 108, 67),
+    (133, 128, 177),
+    (103, 189, 170),
+    (214, 126, 44),
+    (80, 91, 166),
+    (193, 90, 99),
+    (94, 60, 108),
+    (157, 188, 64),
+    (224, 163, 46),
+    (56, 61, 150),
+    (70, 148, 73),
+    (175, 54, 60),
+    (231, 199, 31),
+    (187, 86, 149),
+    (8, 133, 161),
+    (243, 243, 242),
+    (200, 200, 200),
+    (160, 160, 160),
+    (122, 122, 121),
+    (85, 85, 85),
+    (52, 52, 52),
 )
 
 
@@ -89,8 +108,11 @@ def synthetic_endoscopy_image(
     truth &= ~lumen
     # bluish instrument: a bar from the lower-left corner
     inst = (np.abs((yn - 0.9) + 0.8 * (xn + 0.9)) < 0.12) & (xn < -0.2)
-    hue, sat, val = (np.where(inst, 210.0, hue), np.where(inst, 0.35, sat),
-                     np.where(inst, 0.7, val))
+    hue, sat, val = (
+        np.where(inst, 210.0, hue),
+        np.where(inst, 0.35, sat),
+        np.where(inst, 0.7, val),
+    )
     truth &= ~inst
     # whitish mucus patch
     my, mx = rng.uniform(0.35, 0.6, 2) * rng.choice([-1, 1], 2)
