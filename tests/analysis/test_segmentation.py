@@ -195,3 +195,13 @@ def test_no_warning_for_a_normal_image() -> None:
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         segment_hsv(img, (170, 20), **LECTURE)
+
+
+def test_default_ranges_are_the_lectures_in_either_unit() -> None:
+    img, _ = synthetic_endoscopy_image(0, (64, 64))
+    a = segment_hsv(img)
+    b = segment_hsv(img, opencv_ranges=True)
+    c = segment_hsv(img, (0, 20), (30, 255), (80, 255), opencv_ranges=True)
+    assert a.h == b.h == c.h == (0.0, 40.0)
+    np.testing.assert_array_equal(a.mask, c.mask)
+    np.testing.assert_array_equal(b.mask, c.mask)

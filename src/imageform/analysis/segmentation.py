@@ -21,6 +21,7 @@ from imageform.color.hsv import _srgb_to_hsv
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
 
 __all__ = [
+    "LECTURE_OPENCV",
     "EmptyMaskWarning",
     "HsvSegmentation",
     "disc",
@@ -28,6 +29,10 @@ __all__ = [
     "overlay_mask",
     "segment_hsv",
 ]
+
+
+#: The lecture's endoscopy thresholds in OpenCV 8-bit units: H, S, V (low, high).
+LECTURE_OPENCV = ((0.0, 20.0), (30.0, 255.0), (80.0, 255.0))
 
 
 class EmptyMaskWarning(UserWarning):
@@ -123,9 +128,9 @@ def _clean(mask: np.ndarray, open_radius: int, close_radius: int, min_area: int)
 
 def segment_hsv(
     image: object,
-    h: tuple[float, float] = (0.0, 40.0),
-    s: tuple[float, float] = (30 / 255, 1.0),
-    v: tuple[float, float] = (80 / 255, 1.0),
+    h: tuple[float, float] | None = None,
+    s: tuple[float, float] | None = None,
+    v: tuple[float, float] | None = None,
     *,
     opencv_ranges: bool = False,
     open_radius: int = 2,
@@ -150,8 +155,9 @@ def segment_hsv(
         Inclusive ranges. Hue in degrees [0, 360], S and V in [0, 1] by default; with
         ``opencv_ranges=True`` OpenCV's 8-bit units: H in [0, 180], S and V in [0, 255].
         ``h[0] > h[1]`` wraps through red (340:20 degrees, 170:10 in OpenCV units).
-        The defaults are the lecture's case study, H ∈ [0, 20], S ∈ [30, 255],
-        V ∈ [80, 255] in OpenCV units.
+        ``None`` takes the lecture's case study, H ∈ [0, 20], S ∈ [30, 255],
+        V ∈ [80, 255] in OpenCV units (0°..40°, 30/255..1, 80/255..1), whichever units
+        the other ranges are given in.
     opencv_ranges : bool
         Read ``h``, ``s``, ``v`` in OpenCV's units (``cv2.COLOR_RGB2HSV`` on uint8).
     open_radius, close_radius : int
@@ -192,6 +198,7 @@ def segment_hsv(
             f"expected image of shape (H, W, 3), got {format_shape(tuple(rgb.shape))}"
         )
     if opencv_ranges:
+        h, s, v = (LECTURE_OPENCV[i] if r is None else r for i, r in enumerate((h, s, v)))
         hh = _pair(h, "h", 0.0, 180.0, "OpenCV hue units")
         ss = _pair(s, "s", 0.0, 255.0, "OpenCV units")
         vv = _pair(v, "v", 0.0, 255.0, "OpenCV units")
@@ -199,6 +206,9 @@ def segment_hsv(
         ss = (ss[0] / 255.0, ss[1] / 255.0)
         vv = (vv[0] / 255.0, vv[1] / 255.0)
     else:
+        h = (2.0 * LECTURE_OPENCV[0][0], 2.0 * LECTURE_OPENCV[0][1]) if h is None else h
+        s = (LECTURE_OPENCV[1][0] / 255, LECTURE_OPENCV[1][1] / 255) if s is None else s
+        v = (LECTURE_OPENCV[2][0] / 255, LECTURE_OPENCV[2][1] / 255) if v is None else v
         hh = _pair(h, "h", 0.0, 360.0, "degrees")
         ss = _pair(s, "s", 0.0, 1.0, "unit range")
         vv = _pair(v, "v", 0.0, 1.0, "unit range")

@@ -79,11 +79,10 @@ def segment_cmd(
     img = _read(image_in)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        # defaults: the lecture's H 0-20, S 30-255, V 80-255 (OpenCV units), in either unit
-        k = (2.0, 255.0) if opencv_ranges else (1.0, 1.0)
-        hh = _range(h, "h") if h is not None else (0.0, 40.0 / k[0])
-        ss = _range(s, "s") if s is not None else (30.0 / 255.0 * k[1], k[1])
-        vv = _range(v, "v") if v is not None else (80.0 / 255.0 * k[1], k[1])
+        # a range not given: the lecture's (H 0-20, S 30-255, V 80-255 in OpenCV units)
+        hh = None if h is None else _range(h, "h")
+        ss = None if s is None else _range(s, "s")
+        vv = None if v is None else _range(v, "v")
         seg = segment_hsv(
             img,
             hh,
