@@ -203,3 +203,15 @@ def test_bad_input() -> None:
         fit_color_correction(grey, grey)
     with pytest.raises(InvalidInputError, match="at least 2 pixels per cell"):
         chart_patches(np.zeros((6, 6, 3)))
+
+
+def test_report_summary_skips_flagged_patches(charts) -> None:  # type: ignore[no-untyped-def]
+    chart_a, chart_b = charts
+    img = chart_a.copy()
+    img[33:57, 40:50] = 0.0  # patch 7 misaligned
+    with pytest.warns(ChartWarning, match="missing"):
+        pa = chart_patches(img)
+    pb = chart_patches(chart_b)
+    rep = correction_report(pa, pb, fit_color_correction(pa, pb))
+    assert not rep.valid[7] and rep.valid.sum() == 23
+    assert rep.summary()["max_after"] == pytest.approx(rep.delta_e_after[rep.valid].max())

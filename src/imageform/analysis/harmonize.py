@@ -342,15 +342,21 @@ def fit_color_correction(
 
 @dataclass(frozen=True)
 class CorrectionReport:
-    """CIEDE2000 per patch between device B's chart and device A's, before and after."""
+    """CIEDE2000 per patch between device B's chart and device A's, before and after.
+
+    ``valid`` marks the patches usable on both charts (not saturated or missing when
+    :class:`ChartPatches` were given); :meth:`summary` is taken over those.
+    """
 
     delta_e_before: np.ndarray
     delta_e_after: np.ndarray
+    valid: np.ndarray
 
     def summary(self) -> dict[str, float]:
-        """Mean, median and maximum ΔE00 before and after."""
+        """Mean, median and maximum ΔE00 before and after, over the valid patches."""
         out: dict[str, float] = {}
         for key, v in (("before", self.delta_e_before), ("after", self.delta_e_after)):
+            v = v[self.valid]
             out[f"mean_{key}"] = float(np.mean(v))
             out[f"median_{key}"] = float(np.median(v))
             out[f"max_{key}"] = float(np.max(v))
@@ -373,8 +379,8 @@ def correction_report(
     >>> r.delta_e_before.tolist(), r.delta_e_after.tolist()
     ([0.0, 0.0, 0.0], [0.0, 0.0, 0.0])
     """
-    a, _ = _patches_in(measured, "measured")
-    b, _ = _patches_in(reference, "reference")
+    a, va = _patches_in(measured, "measured")
+    b, vb = _patches_in(reference, "reference")
     if a.shape != b.shape:
         raise InvalidInputError(
             f"expected measured and reference of the same shape, got {format_shape(a.shape)} "
@@ -384,4 +390,4 @@ def correction_report(
     before = np.asarray(delta_e(lab_b, np.asarray(convert(a, "srgb", "lab"))))
     fixed = correction.apply(a[:, None, :])[:, 0, :]
     after = np.asarray(delta_e(lab_b, np.asarray(convert(fixed, "srgb", "lab"))))
-    return CorrectionReport(before, after)
+    return CorrectionReport(before, after, np.asarray(va & vb))

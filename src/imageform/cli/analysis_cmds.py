@@ -257,7 +257,7 @@ def harmonize_cmd(
         else:
             raise InvalidInputError("expected --chart-a and --chart-b, or --patches-csv")
         corr = fit_color_correction(pa, pb, method.replace("-", "_"), degree)
-    rep = correction_report(a, b, corr)
+    rep = correction_report(pa, pb, corr)
     summary = rep.summary()
     if save is not None:
         corr.to_json(save)
@@ -274,6 +274,7 @@ def harmonize_cmd(
                 "patches_fitted": corr.n_patches,
                 "delta_e00_before": rep.delta_e_before,
                 "delta_e00_after": rep.delta_e_after,
+                "patch_valid": rep.valid,
                 **summary,
                 "matrix": corr.matrix,
                 "saved": None if save is None else str(save),
@@ -289,7 +290,8 @@ def harmonize_cmd(
     )
     typer.echo("patch  ΔE00 before  after")
     for i, (x, y) in enumerate(zip(rep.delta_e_before, rep.delta_e_after, strict=True)):
-        typer.echo(f"{i:5d}  {x:11.3f}  {y:5.3f}")
+        flag = "" if rep.valid[i] else "  (left out: saturated or missing)"
+        typer.echo(f"{i:5d}  {x:11.3f}  {y:5.3f}{flag}")
     typer.echo(f"mean   {summary['mean_before']:11.3f}  {summary['mean_after']:5.3f}")
     typer.echo(f"max    {summary['max_before']:11.3f}  {summary['max_after']:5.3f}")
     for w in caught:
