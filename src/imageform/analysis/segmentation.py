@@ -15,6 +15,7 @@ from typing import Any
 
 import numpy as np
 
+from imageform._backend import use_numba
 from imageform._validate import format_shape
 from imageform.analysis._arrays import image_in, is_dask
 from imageform.color.hsv import _srgb_to_hsv
@@ -95,7 +96,12 @@ def _pair(value: object, name: str, lo: float, hi: float, unit: str) -> tuple[fl
 def _threshold(
     rgb: np.ndarray, h: tuple[float, float], s: tuple[float, float], v: tuple[float, float]
 ) -> np.ndarray:
-    hsv = _srgb_to_hsv(np, rgb)
+    if use_numba(rgb):  # the colour module's kernel, for any size: chunks = whole image
+        from imageform._kernels import color_simple
+
+        hsv, _ = color_simple.srgb_to_hsv(rgb)
+    else:
+        hsv = _srgb_to_hsv(np, rgb)
     hue, sat, val = hsv[..., 0], hsv[..., 1], hsv[..., 2]
     lo, hi = hue >= h[0], hue <= h[1]
     in_h = (lo & hi) if h[0] <= h[1] else (lo | hi)  # wrap: [h0, 360) ∪ [0, h1]
