@@ -1,3 +1,77 @@
-"""imageform.analysis."""
+"""imageform.analysis: applied colour analysis for biomedical images.
 
-__all__: list[str] = []
+- HSV tissue segmentation (the lecture's endoscopy case study): :func:`segment_hsv`,
+  :func:`overlay_mask`, :func:`mask_iou`.
+- Stain normalisation for pathology: :func:`reinhard_normalize` (CIELAB statistics),
+  :func:`macenko_normalize` (optical density, stain vectors by SVD).
+- Colour harmonisation between devices from a chart: :func:`fit_color_correction`,
+  :func:`chart_patches`, :func:`correction_report`.
+- Labelled synthetic images to test them (:mod:`imageform.analysis.synthetic`).
+
+Every tool accepts NumPy arrays (uint8/uint16/floats) and Dask arrays (lazy, chunk-wise,
+with exact global statistics).
+"""
+
+from imageform.analysis.harmonize import (
+    CORRECTION_METHODS,
+    ChartPatches,
+    ChartWarning,
+    ColorCorrection,
+    CorrectionReport,
+    chart_patches,
+    correction_report,
+    fit_color_correction,
+    root_polynomial_terms,
+)
+from imageform.analysis.macenko import (
+    MacenkoStains,
+    macenko_normalize,
+    macenko_stains,
+    optical_density,
+    stain_angle,
+    stain_concentrations,
+)
+from imageform.analysis.reinhard import ReinhardStats, reinhard_normalize, reinhard_stats
+from imageform.analysis.segmentation import (
+    EmptyMaskWarning,
+    HsvSegmentation,
+    mask_iou,
+    overlay_mask,
+    segment_hsv,
+)
+from imageform.analysis.synthetic import (
+    synthetic_chart_image,
+    synthetic_endoscopy_image,
+    synthetic_shading_scene,
+    synthetic_stain_image,
+)
+
+__all__ = [
+    "CORRECTION_METHODS",
+    "ChartPatches",
+    "ChartWarning",
+    "ColorCorrection",
+    "CorrectionReport",
+    "EmptyMaskWarning",
+    "HsvSegmentation",
+    "MacenkoStains",
+    "ReinhardStats",
+    "chart_patches",
+    "correction_report",
+    "fit_color_correction",
+    "macenko_normalize",
+    "macenko_stains",
+    "mask_iou",
+    "optical_density",
+    "overlay_mask",
+    "reinhard_normalize",
+    "reinhard_stats",
+    "root_polynomial_terms",
+    "segment_hsv",
+    "stain_angle",
+    "stain_concentrations",
+    "synthetic_chart_image",
+    "synthetic_endoscopy_image",
+    "synthetic_shading_scene",
+    "synthetic_stain_image",
+]

@@ -5,6 +5,7 @@ from __future__ import annotations
 import typer
 
 from imageform.cli import (
+    analysis_cmds,
     calibration_cmds,
     color_analysis_cmds,
     color_cmds,
@@ -37,6 +38,7 @@ for _module in (
     color_cmds,
     color_analysis_cmds,
     vision_cmds,
+    analysis_cmds,
 ):
     _module.register(app)
 

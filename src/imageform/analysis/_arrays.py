@@ -1,0 +1,116 @@
+"""Input handling shared by the analysis tools: in-memory NumPy or lazy Dask.
+
+The analysis recipes are NumPy computations (``scipy.ndimage`` morphology, small SVDs).
+Large images arrive as Dask arrays and stay lazy: pointwise steps run chunk by chunk
+(``map_blocks``), neighbourhood steps with an overlap (``map_overlap``) and global
+statistics as real Dask reductions (sums, an exact two-pass quantile). Other array
+libraries (PyTorch, array-api-strict) are converted to NumPy at the boundary.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from imageform._backend import to_numpy
+from imageform._validate import as_image, format_shape
+from imageform.errors import InvalidInputError
+
+__all__ = [
+    "exact_quantile",
+    "image_in",
+    "is_dask",
+    "read_json",
+    "write_json",
+]
+
+_INTEGER_SCALE = {np.dtype(np.uint8): 255.0, np.dtype(np.uint16): 65535.0}
+
+
+def is_dask(x: object) -> bool:
+    """True for a Dask array (checked without importing Dask)."""
+    return type(x).__module__.startswith("dask.") and hasattr(x, "map_blocks")
+
+
+def image_in(image: object, name: str = "image", *, channels: int | None = 3) -> Any:
+    """An RGB image as floats in [0, 1]: NumPy through ``as_image``, Dask kept lazy.
+
+    Dask input: uint8/uint16 are divided by 255/65535 lazily (float32), float32/float64
+    are kept; the 0-255-floats range check of ``as_image`` needs a pass over the data and
+    is skipped to stay lazy (documented in the tools that accept Dask).
+    """
+    if is_dask(image):
+        arr: Any = image
+        if channels is not None and (arr.ndim < 1 or arr.shape[-1] != channels):
+            raise InvalidInputError(
+                f"expected {name} with {channels} channels on axis -1, "
+                f"got shape {format_shape(tuple(arr.shape))}"
+            )
+        dt = np.dtype(arr.dtype)
+        if dt in _INTEGER_SCALE:
+            return arr.astype(np.float32) / np.float32(_INTEGER_SCALE[dt])
+        if dt.kind == "f":
+            return arr if dt in (np.float32, np.float64) else arr.astype(np.float32)
+        raise InvalidInputError(
+            f"expected {name} as uint8, uint16 or floats in [0, 1], got dtype {dt}"
+        )
+    if not isinstance(image, np.ndarray) and hasattr(image, "__array_namespace__"):
+        image = to_numpy(image)
+    return np.asarray(as_image(image, name, channels=channels))
+
+
+def exact_quantile(values: Any, q: float, *, bins: int = 4096) -> float:
+    """The ``q``-th percentile (NumPy's default linear interpolation) of a 1-D Dask array.
+
+    Exact, in two passes of reductions: a histogram locates the bins holding the two order
+    statistics that the linear rule interpolates between, then only the values inside
+    those bins are gathered and sorted. The result equals ``np.percentile`` on the
+    computed array (same order statistics, same interpolation).
+    """
+    import dask
+    import dask.array as da
+
+    n, lo, hi = dask.compute(da.isfinite(values).sum(), values.min(), values.max())
+    n = int(n)
+    if n == 0:
+        raise InvalidInputError("cannot take a percentile of no values")
+    lo, hi = float(lo), float(hi)
+    pos = q / 100.0 * (n - 1)
+    k = int(np.floor(pos))
+    frac = pos - k
+    if hi == lo:
+        return lo
+    # one bin index expression for counting and for gathering, so the two always agree
+    idx = da.minimum(da.floor((values - lo) * (bins / (hi - lo))), bins - 1).astype(np.int64)
+    counts = np.asarray(da.bincount(idx, minlength=bins).compute())
+    cum = np.cumsum(counts)
+    out = []
+    for r in (k, min(k + 1, n - 1)):
+        b = int(np.searchsorted(cum, r, side="right"))
+        below = int(cum[b - 1]) if b > 0 else 0
+        inside = np.sort(np.asarray(values[idx == b].compute()))
+        out.append(float(inside[r - below]))
+    return out[0] + frac * (out[1] - out[0])
+
+
+def write_json(path: str | Path, payload: dict[str, Any]) -> None:
+    """Write ``payload`` as indented JSON (arrays as nested lists)."""
+    Path(path).write_text(json.dumps(payload, indent=2) + "\n")
+
+
+def read_json(path: str | Path, kind: str) -> dict[str, Any]:
+    """Read a JSON file written by ``write_json`` and check its ``kind`` field."""
+    p = Path(path)
+    if not p.is_file():
+        raise InvalidInputError(f"{kind} file {p} does not exist")
+    try:
+        data = json.loads(p.read_text())
+    except json.JSONDecodeError as exc:
+        raise InvalidInputError(f"{p} is not valid JSON: {exc}") from exc
+    if not isinstance(data, dict) or data.get("kind") != kind:
+        got = data.get("kind") if isinstance(data, dict) else type(data).__name__
+        raise InvalidInputError(f"expected a {kind!r} JSON file in {p}, got kind {got!r}")
+    return data

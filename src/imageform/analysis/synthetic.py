@@ -1,0 +1,246 @@
+"""Labelled synthetic images for testing and demonstrating the analysis tools.
+
+Each generator is seeded and returns the ground truth with the image: an endoscopy-like
+frame with its tissue mask, an H&E mixture with its stain vectors (Beer-Lambert), a colour
+chart image, and a two-material scene under a shading gradient.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from imageform.color.hsv import _hsv_to_srgb
+from imageform.errors import InvalidInputError
+
+__all__ = [
+    "COLORCHECKER_SRGB8",
+    "RUIFROK_DAB",
+    "RUIFROK_EOSIN",
+    "RUIFROK_HEMATOXYLIN",
+    "synthetic_chart_image",
+    "synthetic_endoscopy_image",
+    "synthetic_shading_scene",
+    "synthetic_stain_image",
+]
+
+# Optical-density stain vectors (R, G, B), before normalisation to unit length.
+# Source: A. C. Ruifrok & D. A. Johnston, "Quantification of histochemical staining by
+# color deconvolution", Anal. Quant. Cytol. Histol. 23(4), 2001, p. 294 (H&E, H DAB).
+RUIFROK_HEMATOXYLIN = (0.65, 0.70, 0.29)
+RUIFROK_EOSIN = (0.07, 0.99, 0.11)
+RUIFROK_DAB = (0.27, 0.57, 0.78)
+
+# The 24 patches of the ColorChecker as 8-bit sRGB (row by row, dark skin .. black).
+# Source: X-Rite, "ColorChecker Classic" sRGB values (post-November 2014 formulation,
+# D50 -> D65 Bradford), as published by X-Rite. Approximate reflectances rendered for a
+# synthetic chart: a reference for tests, not a measurement standard.
+COLORCHECKER_SRGB8 = (
+    (115, 82, 68),
+    (194, 150, 130),
+    (98, 122, 157),
+    (87, 108, 67),
+    (133, 128, 177),
+    (103, 189, 170),
+    (214, 126, 44),
+    (80, 91, 166),
+    (193, 90, 99),
+    (94, 60, 108),
+    (157, 188, 64),
+    (224, 163, 46),
+    (56, 61, 150),
+    (70, 148, 73),
+    (175, 54, 60),
+    (231, 199, 31),
+    (187, 86, 149),
+    (8, 133, 161),
+    (243, 243, 242),
+    (200, 200, 200),
+    (160, 160, 160),
+    (122, 122, 121),
+    (85, 85, 85),
+    (52, 52, 52),
+)
+
+
+def _smooth_noise(rng: np.random.Generator, shape: tuple[int, int], scale: float) -> np.ndarray:
+    """Smooth noise in [-1, 1]: Gaussian-filtered white noise, normalised."""
+    from scipy import ndimage
+
+    n = ndimage.gaussian_filter(rng.standard_normal(shape), scale)
+    return n / np.max(np.abs(n))
+
+
+def synthetic_endoscopy_image(
+    seed: int = 0, shape: tuple[int, int] = (256, 256)
+) -> tuple[np.ndarray, np.ndarray]:
+    """An endoscopy-like frame and its tissue mask.
+
+    Reddish/pink mucosa (hue 350°..12°, S 0.35..0.7) with smooth texture, a dark lumen
+    (V < 0.15), specular highlights (S < 0.1, V ≈ 1), a bluish instrument (hue ≈ 210°)
+    and a whitish mucus patch (S < 0.12), all under vignetting (V × 0.55 at the corners)
+    and Gaussian noise (σ = 0.03). The mask is True on mucosa not covered by the rest.
+
+    Returns
+    -------
+    image : ndarray, shape (H, W, 3), float64
+        Encoded sRGB in [0, 1].
+    true_mask : ndarray of bool, shape (H, W)
+
+    >>> img, m = synthetic_endoscopy_image(0)
+    >>> img.shape, round(float(m.mean()), 3)
+    ((256, 256, 3), 0.887)
+    """
+    hgt, wid = (int(v) for v in shape)
+    if hgt < 32 or wid < 32:
+        raise InvalidInputError(f"expected shape of at least (32, 32), got {shape}")
+    rng = np.random.default_rng(seed)
+    y, x = np.mgrid[0:hgt, 0:wid].astype(np.float64)
+    yn, xn = (y - hgt / 2) / (hgt / 2), (x - wid / 2) / (wid / 2)
+    # mucosa: hue wanders 350°..12° (through red), saturation 0.35..0.7
+    hue = np.mod(1.0 + 11.0 * _smooth_noise(rng, (hgt, wid), hgt / 12), 360.0)
+    sat = 0.525 + 0.175 * _smooth_noise(rng, (hgt, wid), hgt / 16)
+    val = 0.85 + 0.1 * _smooth_noise(rng, (hgt, wid), hgt / 20)
+    truth = np.ones((hgt, wid), dtype=bool)
+    # dark lumen: an ellipse off centre
+    cy, cx = rng.uniform(-0.3, 0.3, 2)
+    lumen = ((yn - cy) / 0.28) ** 2 + ((xn - cx) / 0.2) ** 2 <= 1.0
+    val = np.where(lumen, 0.08, val)
+    truth &= ~lumen
+    # bluish instrument: a bar from the lower-left corner
+    inst = (np.abs((yn - 0.9) + 0.8 * (xn + 0.9)) < 0.12) & (xn < -0.2)
+    hue, sat, val = (
+        np.where(inst, 210.0, hue),
+        np.where(inst, 0.35, sat),
+        np.where(inst, 0.7, val),
+    )
+    truth &= ~inst
+    # whitish mucus patch
+    my, mx = rng.uniform(0.35, 0.6, 2) * rng.choice([-1, 1], 2)
+    mucus = ((yn - my) / 0.12) ** 2 + ((xn - mx) / 0.18) ** 2 <= 1.0
+    mucus &= ~inst & ~lumen
+    sat, val = np.where(mucus, 0.06, sat), np.where(mucus, 0.92, val)
+    truth &= ~mucus
+    # specular highlights: small discs
+    for _ in range(12):
+        py, px = rng.uniform(0, hgt), rng.uniform(0, wid)
+        r = rng.uniform(2.0, 5.0)
+        spot = (y - py) ** 2 + (x - px) ** 2 <= r * r
+        sat, val = np.where(spot, 0.03, sat), np.where(spot, 1.0, val)
+        truth &= ~spot
+    # vignetting on V (cos^4-like falloff to 0.55 at the corners), except the highlights
+    vig = 1.0 - 0.45 * (xn**2 + yn**2) / 2.0
+    val = np.where(val >= 1.0, val, val * vig)
+    rgb = _hsv_to_srgb(np, np.stack([hue, sat, val], axis=-1))
+    rgb = rgb + rng.normal(0.0, 0.03, rgb.shape)
+    return np.clip(rgb, 0.0, 1.0), truth
+
+
+def synthetic_stain_image(
+    seed: int = 0,
+    shape: tuple[int, int] = (128, 128),
+    stains: tuple[tuple[float, float, float], ...] = (RUIFROK_HEMATOXYLIN, RUIFROK_EOSIN),
+    max_concentration: tuple[float, float] = (1.2, 0.8),
+    noise: float = 0.002,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A two-stain mixture by Beer-Lambert: :math:`I = 10^{-C S}` (I₀ = 1).
+
+    A third of the pixels holds the first stain only, a third the second only, a
+    quarter both, the rest is faintly stained background (OD < 0.1).
+
+    Returns
+    -------
+    image : ndarray, shape (H, W, 3), float64 in (0, 1]
+    stain_matrix : ndarray, shape (2, 3)
+        The unit-length optical-density vectors used (rows).
+    concentrations : ndarray, shape (H, W, 2)
+
+    Source: Ruifrok & Johnston 2001 (stain vectors, Beer-Lambert model).
+
+    >>> img, S, C = synthetic_stain_image(0)
+    >>> S.round(3).tolist()[0]
+    [0.651, 0.701, 0.29]
+    """
+    rng = np.random.default_rng(seed)
+    s = np.asarray(stains, dtype=np.float64)
+    s = s / np.linalg.norm(s, axis=1, keepdims=True)
+    hgt, wid = shape
+    kind = rng.choice(4, size=(hgt, wid), p=[1 / 3, 1 / 3, 1 / 4, 1 - 1 / 3 - 1 / 3 - 1 / 4])
+    c = rng.uniform(0.15, 1.0, (hgt, wid, 2)) * np.asarray(max_concentration)
+    c[kind == 0, 1] = 0.0
+    c[kind == 1, 0] = 0.0
+    c[kind == 3] = rng.uniform(0.0, 0.04, (int((kind == 3).sum()), 2))
+    od = c @ s
+    img = 10.0 ** (-od) + rng.normal(0.0, noise, od.shape)
+    return np.clip(img, 1 / 255, 1.0), s, c
+
+
+def synthetic_chart_image(
+    srgb: object = None,
+    rows: int = 4,
+    cols: int = 6,
+    patch: int = 24,
+    gap: int = 6,
+    background: float = 0.05,
+) -> np.ndarray:
+    """A chart image that fills the frame: ``rows × cols`` flat patches on a dark surround.
+
+    Parameters
+    ----------
+    srgb : array_like, shape (rows*cols, 3), optional
+        Encoded sRGB patch values in [0, 1] (row by row); default the ColorChecker
+        (:data:`COLORCHECKER_SRGB8` / 255).
+
+    Returns
+    -------
+    ndarray, shape (rows*(patch+gap), cols*(patch+gap), 3), float64
+
+    >>> synthetic_chart_image().shape
+    (120, 180, 3)
+    """
+    vals = np.asarray(COLORCHECKER_SRGB8, float) / 255 if srgb is None else np.asarray(srgb, float)
+    if vals.shape != (rows * cols, 3):
+        raise InvalidInputError(f"expected srgb of shape ({rows * cols}, 3), got {vals.shape}")
+    cell = patch + gap
+    img = np.full((rows * cell, cols * cell, 3), background)
+    for i in range(rows):
+        for j in range(cols):
+            y0, x0 = i * cell + gap // 2, j * cell + gap // 2
+            img[y0 : y0 + patch, x0 : x0 + patch] = vals[i * cols + j]
+    return img
+
+
+def synthetic_shading_scene(
+    seed: int = 0, shape: tuple[int, int] = (128, 192), shading: tuple[float, float] = (1.0, 0.2)
+) -> tuple[np.ndarray, np.ndarray]:
+    """Red blobs on a yellow-green background under a left-to-right illumination ramp.
+
+    The illumination multiplies *linear* light from ``shading[0]`` at the left edge to
+    ``shading[1]`` at the right (a shadow), then the image is sRGB-encoded.
+
+    Returns
+    -------
+    image : ndarray, shape (H, W, 3), float64 encoded sRGB
+    true_mask : ndarray of bool, shape (H, W) (the red objects)
+
+    >>> img, m = synthetic_shading_scene(0)
+    >>> img.shape, bool(m.any())
+    ((128, 192, 3), True)
+    """
+    from imageform.color.transfer import _srgb_decode, _srgb_encode
+
+    rng = np.random.default_rng(seed)
+    hgt, wid = shape
+    y, x = np.mgrid[0:hgt, 0:wid].astype(np.float64)
+    truth = np.zeros((hgt, wid), dtype=bool)
+    for k in range(8):
+        cy = rng.uniform(0.2, 0.8) * hgt
+        cx = (k + 0.5) / 8 * wid
+        r = rng.uniform(0.07, 0.12) * hgt
+        truth |= (y - cy) ** 2 + (x - cx) ** 2 <= r * r
+    red = np.array([0.78, 0.22, 0.2])
+    bg = np.array([0.62, 0.66, 0.3])
+    enc = np.where(truth[..., None], red, bg) + 0.02 * _smooth_noise(rng, shape, 3.0)[..., None]
+    lin = _srgb_decode(np, np.clip(enc, 0, 1))
+    ramp = np.linspace(shading[0], shading[1], wid)[None, :, None]
+    out = _srgb_encode(np, lin * ramp) + rng.normal(0, 0.004, lin.shape)
+    return np.clip(out, 0.0, 1.0), truth
