@@ -5,6 +5,7 @@ from __future__ import annotations
 import typer
 
 from imageform.cli import (
+    batch_cmd,
     calibration_cmds,
     color_analysis_cmds,
     color_cmds,
@@ -35,6 +36,7 @@ for _module in (
     color_cmds,
     color_analysis_cmds,
     vision_cmds,
+    batch_cmd,
 ):
     _module.register(app)
 

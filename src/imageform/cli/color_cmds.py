@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Any
 
 import typer
 
@@ -93,7 +93,7 @@ def convert_file(
     *,
     bits: int = 0,
     clip: bool = False,
-) -> dict[str, object]:
+) -> dict[str, Any]:
     """Convert the image file ``input`` from ``src`` to ``dst`` and write ``output``.
 
     The file-level step of ``imageform convert`` (also run by ``imageform batch convert``):
