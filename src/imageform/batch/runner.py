@@ -271,7 +271,7 @@ def _client(scheduler: str | None, n_workers: int) -> Iterator[Any]:
 
     if scheduler:
         try:
-            client = Client(scheduler, timeout="10s")
+            client = Client(scheduler)  # timeout: distributed.comm.timeouts.connect
         except (OSError, TimeoutError) as exc:
             raise InvalidInputError(f"cannot reach the scheduler {scheduler}: {exc}") from exc
         with client:
@@ -282,7 +282,9 @@ def _client(scheduler: str | None, n_workers: int) -> Iterator[Any]:
         threads_per_worker=1,
         processes=True,
         host="127.0.0.1",
-        dashboard_address=None,
+        # ":0", not None: with None the scheduler's HTTP server still binds :8787, and two
+        # clusters (two runs, pytest-xdist) collide on it
+        dashboard_address=":0",
         silence_logs=logging.ERROR,
     )
     with cluster, Client(cluster) as client:
@@ -415,7 +417,8 @@ def _run_on(
 
 
 def print_summary(report: BatchReport, console: Any = None) -> None:
-    """Print the counts and a table of the failures (input and reason) with rich."""
+    """Print the counts and the failures (input and reason): a rich table on a terminal,
+    one ``failed: INPUT: REASON`` line each otherwise."""
     from rich.console import Console
     from rich.table import Table
 
@@ -424,7 +427,10 @@ def print_summary(report: BatchReport, console: Any = None) -> None:
         f"batch {report.command}: {report.count('done')} done, "
         f"{report.count('skipped')} skipped (already finished), {report.count('failed')} failed"
     )
-    if report.failed:
+    if report.failed and not console.is_terminal:  # logs and pipes: one line per failure
+        for r in report.failed:
+            console.print(f"failed: {r.input}: {r.error}", soft_wrap=True)
+    elif report.failed:
         table = Table(title="failures", show_lines=False)
         table.add_column("input", overflow="fold")
         table.add_column("reason", overflow="fold")

@@ -79,7 +79,7 @@ def batch_cmd(
     if json_out:
         print_json(report.to_dict())
     else:
-        print_summary(report, Console(highlight=False, soft_wrap=True))
+        print_summary(report, Console(highlight=False))
     if not report.ok:
         raise typer.Exit(1)
 
