@@ -195,4 +195,4 @@ def test_default_local_cluster_cli(tmp_path: Path, capsys: pytest.CaptureFixture
 
     assert json.loads(capsys.readouterr().out)["done"] == 3
     lab = np.load(next((tmp_path / "o").rglob("*.npy")))
-    assert lab.shape == (24, 32, 3) and 0 <= lab[..., 0].min() and lab[..., 0].max() <= 100
+    assert lab.shape == (24, 32, 3) and lab[..., 0].min() >= 0 and lab[..., 0].max() <= 100

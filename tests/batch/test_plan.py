@@ -82,7 +82,7 @@ def test_command_options_checked(tmp_path: Path) -> None:
         get_command("convert").validate({"to": "lab"}, ".png")
     with pytest.raises(InvalidInputError, match="needs --to"):
         get_command("convert").validate({}, ".png")
-    with pytest.raises(InvalidInputError, match="writes .png, .npy"):
+    with pytest.raises(InvalidInputError, match=r"writes \.png, \.npy"):
         get_command("demosaic").validate({}, ".tif")
     with pytest.raises(InvalidInputError, match="needs --target"):
         get_command("stain-normalize").validate({}, ".png")
