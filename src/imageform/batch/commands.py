@@ -101,7 +101,8 @@ def run_convert(in_path: Path, out_path: Path, options: Options) -> dict[str, An
 
 
 def _wb_params(options: Options) -> dict[str, Any]:
-    return {k: options[k] for k in ("normalize", "percentile", "p", "clip") if k in options}
+    keys = ("normalize", "percentile", "p", "sigma", "illuminant", "cct", "clip")
+    return {k: options[k] for k in keys if k in options}
 
 
 def _check_white_balance(options: Options, out_suffix: str) -> None:
@@ -253,7 +254,7 @@ COMMANDS: dict[str, BatchCommand] = {
         BatchCommand(
             "white-balance",
             run_white_balance,
-            ("method", "normalize", "percentile", "p", "clip"),
+            ("method", "normalize", "percentile", "p", "sigma", "illuminant", "cct", "clip"),
             _IMAGES,
             _check_white_balance,
         ),

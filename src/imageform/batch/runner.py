@@ -335,6 +335,20 @@ def run_batch(
     -------
     BatchReport
         One :class:`JobResult` per file; ``report.ok`` is False when a job failed.
+
+    Examples
+    --------
+    A re-run where every output exists skips them all (and starts no cluster):
+
+    >>> import tempfile, pathlib, numpy as np
+    >>> from imageform.io import write_image
+    >>> d = pathlib.Path(tempfile.mkdtemp())
+    >>> for sub in ("in", "out"):
+    ...     (d / sub).mkdir()
+    ...     write_image(d / sub / "x.png", np.zeros((2, 2, 3), np.uint8))
+    >>> report = run_batch("convert", f"{d}/in/*.png", d / "out", {"to": "linear_srgb"})
+    >>> report.count("skipped"), report.ok
+    (1, True)
     """
     cmd = get_command(command)
     key = cmd.name.replace("-", "_")
@@ -418,7 +432,13 @@ def _run_on(
 
 def print_summary(report: BatchReport, console: Any = None) -> None:
     """Print the counts and the failures (input and reason): a rich table on a terminal,
-    one ``failed: INPUT: REASON`` line each otherwise."""
+    one ``failed: INPUT: REASON`` line each otherwise.
+
+    >>> r = JobResult(Path("a.png"), Path("out/a.png"), "failed", "OSError: truncated")
+    >>> print_summary(BatchReport("convert", (r,)))
+    batch convert: 0 done, 0 skipped (already finished), 1 failed
+    failed: a.png: OSError: truncated
+    """
     from rich.console import Console
     from rich.table import Table
 
