@@ -39,6 +39,9 @@ def test_plan_refuses_outputs_over_inputs(tmp_path: Path) -> None:
         plan_jobs(f"{tmp_path}/in/**/*.png", tmp_path / "in" / "out")
     # a non-recursive glob does not reach in/out/: allowed
     assert len(plan_jobs(f"{tmp_path}/in/*.png", tmp_path / "in" / "out")) == 1
+    write_image(tmp_path / "in" / "x.tif", np.zeros((2, 2, 3), np.uint8))
+    with pytest.raises(InvalidInputError, match="would both write"):
+        plan_jobs(f"{tmp_path}/in/x.*", tmp_path / "out", out_suffix=".npy")
     with pytest.raises(InvalidInputError, match="no files match"):
         plan_jobs(f"{tmp_path}/nothing/*.png", tmp_path / "out")
 

@@ -179,8 +179,8 @@ def plan_jobs(pattern: str, out_dir: str | Path, *, out_suffix: str | None = Non
     Raises
     ------
     InvalidInputError
-        No file matches; or an output would be an input or match ``pattern`` (``out_dir``
-        inside the input tree where the glob reaches).
+        No file matches; an output would be an input or match ``pattern`` (``out_dir``
+        inside the input tree where the glob reaches); two inputs would write one output.
 
     Examples
     --------
@@ -213,6 +213,14 @@ def plan_jobs(pattern: str, out_dir: str | Path, *, out_suffix: str | None = Non
                 f"choose an OUT_DIR outside the inputs (got {out_dir})"
             )
         jobs.append(Job(p, out))
+    seen: dict[Path, Path] = {}
+    for job in jobs:
+        if job.output in seen:
+            raise InvalidInputError(
+                f"inputs {seen[job.output]} and {job.input} would both write {job.output}; "
+                "narrow the glob or keep the inputs' suffixes"
+            )
+        seen[job.output] = job.input
     return jobs
 
 
