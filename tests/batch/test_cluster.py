@@ -120,14 +120,13 @@ def test_worker_killed_mid_run(cluster: Any, client: Any, tmp_path: Path) -> Non
     killed: dict[str, Any] = {}
 
     def kill_one(res: JobResult) -> None:
-        if killed:
-            return
+        temps = _leftover_temps(out)
         busy = [w for w, keys in client.processing().items() if keys]
-        victim = busy[0]
-        pid = client.run(os.getpid, workers=[victim])[victim]
-        killed["temps"] = _leftover_temps(out)
+        if killed or not busy or not temps:
+            return  # wait for a result at which a job is mid-write
+        pid = client.run(os.getpid, workers=[busy[0]])[busy[0]]
         os.kill(pid, signal.SIGKILL)
-        killed["pid"] = pid
+        killed.update(pid=pid, temps=temps)
 
     report = run_batch(
         "convert",
