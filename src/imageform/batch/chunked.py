@@ -140,10 +140,6 @@ def _quantize(block: np.ndarray, dtype: str) -> np.ndarray:
     return np.round(np.clip(block, 0.0, 1.0) * top).astype(dtype)
 
 
-def _out_of_range(block: np.ndarray) -> np.ndarray:
-    return np.array([[[np.count_nonzero((block < 0) | (block > 1))]]], dtype=np.int64)
-
-
 def _temp(path: Path) -> Path:
     return path.with_name(f".{path.name}.{uuid.uuid4().hex[:12]}.tmp{path.suffix}")
 
@@ -232,21 +228,19 @@ def process_chunked(
                 raise InvalidInputError("chunked convert needs the option to (a colour space)")
             s, d = _space(opts.get("from", "srgb"), "--from"), _space(opts["to"], "--to")
             params = {k: opts[k] for k in ("white",) if k in opts}
-            f = x.map_blocks(_convert_block, s, d, params, dtype=np.float32)
+            op: tuple[Any, ...] = (_convert_block, s, d, params)
             displayable = d in _DISPLAYABLE
         else:
             gains = _wb_gains(x, opts)
-            f = x.map_blocks(_balance_block, gains, dtype=np.float32)
+            op = (_balance_block, gains)
             displayable = True
         out_dtype = dtype or (str(x.dtype) if in_int and displayable else "float32")
         check_option(out_dtype, _OUT_DTYPES, "output dtype")
         if out_dtype != "float32" and not displayable:
             raise InvalidInputError(f"{opts.get('to')} values are not in [0, 1]: use float32")
-        q = f.map_blocks(_quantize, out_dtype, dtype=out_dtype)
-        n_bad = f.map_blocks(_out_of_range, dtype=np.int64, chunks=(1, 1, 1))
         tmp = _temp(dst_p)
         try:
-            clipped = _write(tmp, out_kind, q, n_bad, out_dtype, chunk, tile)
+            clipped = _write(tmp, out_kind, x, op, out_dtype, chunk, tile)
             if dst_p.exists():
                 shutil.rmtree(dst_p) if dst_p.is_dir() else dst_p.unlink()
             os.replace(tmp, dst_p)
@@ -264,40 +258,54 @@ def process_chunked(
     )
 
 
-def _bands(q: Any, n_bad: Any) -> Any:
-    """Yield (row0, computed band, out-of-range count) one block row at a time."""
+def _finish(block: np.ndarray, op: tuple[Any, ...], dtype: str) -> tuple[np.ndarray, int]:
+    """One block: the operation in float32, then the output samples and the out-of-range
+    count, so that no float block outlives its task."""
+    f = op[0](block, *op[1:])
+    n = int(np.count_nonzero((f < 0) | (f > 1))) if dtype != "float32" else 0
+    return _quantize(f, dtype), n
+
+
+def _rows(x: Any, op: tuple[Any, ...], dtype: str) -> Any:
+    """Yield (row0, output blocks of one block row, out-of-range count), row by row; the
+    blocks of a row run in parallel on dask's threaded scheduler."""
     import dask
 
+    blocks = x.to_delayed()
     r0 = 0
-    for i, h in enumerate(q.chunks[0]):
-        band, bad = dask.compute(q.blocks[i], n_bad.blocks[i].sum())
-        yield r0, band, int(bad)
+    for i, h in enumerate(x.chunks[0]):
+        parts = dask.compute(*[dask.delayed(_finish)(b, op, dtype) for b in blocks[i, :, 0]])
+        yield r0, [q for q, _ in parts], sum(n for _, n in parts)
         r0 += h
 
 
-def _write(tmp: Path, kind: str, q: Any, n_bad: Any, dtype: str, chunk: int, tile: int) -> int:
-    shape = tuple(int(v) for v in q.shape)
-    clipped = 0
+def _write(
+    tmp: Path, kind: str, x: Any, op: tuple[Any, ...], dtype: str, chunk: int, tile: int
+) -> int:
+    shape = tuple(int(v) for v in x.shape)
+    counts: list[int] = []
     if kind == "zarr":
         import zarr
 
         z = zarr.create_array(
             store=str(tmp), shape=shape, chunks=(chunk, chunk, shape[-1]), dtype=dtype
         )
-        for r0, band, bad in _bands(q, n_bad):
-            z[r0 : r0 + band.shape[0]] = band
-            clipped += bad
-        return clipped
+        for r0, row, bad in _rows(x, op, dtype):
+            c0 = 0
+            for q in row:
+                z[r0 : r0 + q.shape[0], c0 : c0 + q.shape[1]] = q
+                c0 += q.shape[1]
+            counts.append(bad)
+        return sum(counts)
     import tifffile
 
-    counts: list[int] = []
-
-    def tiles() -> Any:
-        for _, band, bad in _bands(q, n_bad):
+    def tiles() -> Any:  # row-major tiles, as TIFF stores them
+        for _, row, bad in _rows(x, op, dtype):
             counts.append(bad)
-            for tr in range(0, band.shape[0], tile):
-                for tc in range(0, band.shape[1], tile):
-                    yield band[tr : tr + tile, tc : tc + tile]
+            for tr in range(0, row[0].shape[0], tile):
+                for q in row:
+                    for tc in range(0, q.shape[1], tile):
+                        yield q[tr : tr + tile, tc : tc + tile]
 
     nbytes = int(np.prod(shape)) * np.dtype(dtype).itemsize
     tifffile.imwrite(
