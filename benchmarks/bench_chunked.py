@@ -124,13 +124,25 @@ def main() -> None:
     ap.add_argument("--commands", nargs="+", default=["convert", "white_balance"])
     ap.add_argument("--dir", type=Path, default=None, help="scratch folder (default: tmp)")
     ap.add_argument("--out", type=Path, default=None, help="write the Markdown table here")
+    ap.add_argument(
+        "--input", type=Path, default=None, help="an existing N x N tiled TIFF (kept) instead"
+    )
+    ap.add_argument("--make-input", type=Path, default=None, help="only write --sizes[0] here")
     args = ap.parse_args()
+    if args.make_input:
+        print(f"wrote in {write_tiled(args.make_input, args.sizes[0]):.1f} s")
+        return
+    if args.input:
+        import tifffile
+
+        with tifffile.TiffFile(args.input) as tf:
+            args.sizes = [tf.pages[0].shape[0]]
     scratch = Path(tempfile.mkdtemp(prefix="bench-chunked-", dir=args.dir))
     rows = []
     try:
         for n in args.sizes:
-            src = scratch / f"in-{n}.tif"
-            t_write = write_tiled(src, n)
+            src = args.input or scratch / f"in-{n}.tif"
+            t_write = 0.0 if args.input else write_tiled(src, n)
             for command in args.commands:
                 out = scratch / f"out-{n}-{command}.tif"
                 m = run_child(src, out, command, args.chunk)
@@ -151,7 +163,8 @@ def main() -> None:
                 )
                 print(rows[-1], f"(input written in {t_write:.1f} s)", flush=True)
                 out.unlink()
-            src.unlink()
+            if not args.input:
+                src.unlink()
     finally:
         shutil.rmtree(scratch, ignore_errors=True)
     cols = [
