@@ -174,7 +174,8 @@ def _read_float_rgb(path: Path) -> tuple[Any, Any]:
 
 
 def _write_like(path: Path, image: Any, dtype: Any, clip: bool) -> int:
-    """Write ``image`` (floats in [0, 1]) to ``path`` with the input's bit depth for PNG."""
+    """Write ``image`` to ``path`` (PNG: the input's bit depth; TIFF: float32); returns how
+    many values lie outside [0, 1] (clipped for PNG with ``clip``, an error without)."""
     import numpy as np
 
     from imageform.io import image_format, write_image
@@ -217,7 +218,7 @@ def run_stain_normalize(in_path: Path, out_path: Path, options: Options) -> dict
     target = _stain_target(method, Path(options["target"]))
     fn = analysis.reinhard_normalize if method == "reinhard" else analysis.macenko_normalize
     out = fn(img, target)
-    return {"clipped": _write_like(out_path, out, dtype, bool(options.get("clip", False)))}
+    return {"out_of_range": _write_like(out_path, out, dtype, bool(options.get("clip", False)))}
 
 
 def _check_harmonize(options: Options, out_suffix: str) -> None:
@@ -235,7 +236,7 @@ def run_harmonize(in_path: Path, out_path: Path, options: Options) -> dict[str, 
     img, dtype = _read_float_rgb(in_path)
     corr = analysis.ColorCorrection.from_json(Path(options["correction"]))
     out = corr.apply(img)
-    return {"clipped": _write_like(out_path, out, dtype, bool(options.get("clip", False)))}
+    return {"out_of_range": _write_like(out_path, out, dtype, bool(options.get("clip", False)))}
 
 
 _IMAGES = (".png", ".tif", ".tiff")
