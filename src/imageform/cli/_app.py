@@ -6,6 +6,7 @@ import typer
 
 from imageform.cli import (
     analysis_cmds,
+    batch_cmd,
     calibration_cmds,
     color_analysis_cmds,
     color_cmds,
@@ -39,6 +40,7 @@ for _module in (
     color_analysis_cmds,
     vision_cmds,
     analysis_cmds,
+    batch_cmd,
 ):
     _module.register(app)
 

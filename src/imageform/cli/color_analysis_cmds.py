@@ -7,7 +7,7 @@ from typing import Any
 
 import typer
 
-__all__ = ["register"]
+__all__ = ["register", "white_balance_file"]
 
 _PERCENTILES = (50.0, 90.0, 95.0, 99.0)
 
@@ -138,15 +138,12 @@ def white_balance_cmd(
     json_out: bool = typer.Option(False, "--json", help="Print machine-readable results."),
 ) -> None:
     """White-balance an sRGB image in linear light; print the gains."""
-    import numpy as np
-
     from imageform.cli._common import check_output_path, print_json
-    from imageform.color.white_balance import white_balance
 
     check_output_path(image_out, inputs=(image_in,), force=force)
-    img = _read_rgb(image_in)
-    out, gains = white_balance(
-        img,
+    info = white_balance_file(
+        image_in,
+        image_out,
         method,
         normalize=normalize,
         percentile=percentile,
@@ -156,8 +153,7 @@ def white_balance_cmd(
         cct=cct,
         clip=clip,
     )
-    clipped = _write_rgb(image_out, out, sixteen=img.dtype == np.uint16)
-    g = [float(v) for v in np.asarray(gains)]
+    g, clipped = info["gains"], info["values_clipped_for_integer_output"]
     if json_out:
         print_json(
             {
@@ -175,6 +171,31 @@ def white_balance_cmd(
             "(write a .tif to keep them)"
         )
     typer.echo(f"wrote {image_out}")
+
+
+def white_balance_file(
+    image_in: Path, image_out: Path, method: str = "gray-world", **params: Any
+) -> dict[str, Any]:
+    """White-balance the sRGB image file ``image_in`` and write ``image_out``.
+
+    The file-level step of ``imageform white-balance`` (also run by ``imageform batch
+    white-balance``): ``params`` are :func:`imageform.color.white_balance`'s keywords;
+    16-bit input gives 16-bit PNG output, integer output clips values above 1 and counts them,
+    TIFF output is float32. The caller checks the output path. Returns the ``--json`` summary.
+    """
+    import numpy as np
+
+    from imageform.color.white_balance import white_balance
+
+    img = _read_rgb(image_in)
+    out, gains = white_balance(img, method, **params)
+    clipped = _write_rgb(image_out, out, sixteen=img.dtype == np.uint16)
+    return {
+        "method": method,
+        "gains": [float(v) for v in np.asarray(gains)],
+        "output": str(image_out),
+        "values_clipped_for_integer_output": clipped,
+    }
 
 
 def register(app: typer.Typer) -> None:

@@ -9,11 +9,11 @@ output and the count is reported; ``.npy`` output keeps them unless ``--clip``.
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Any
 
 import typer
 
-__all__ = ["register"]
+__all__ = ["demosaic_file", "register"]
 
 
 def mosaic_cmd(
@@ -64,18 +64,41 @@ def demosaic_cmd(
     json_out: bool = typer.Option(False, "--json", help="Print machine-readable results."),
 ) -> None:
     """Reconstruct an RGB image from a Bayer mosaic (demosaicing)."""
-    import time
-
-    import numpy as np
-
     from imageform._validate import check_option
     from imageform.cli._common import check_output_path, print_json
-    from imageform.cli._imageio_demosaic import read_image, write_image
-    from imageform.sensor import DEMOSAIC_METHODS, cfa_pattern, demosaic
+    from imageform.sensor import DEMOSAIC_METHODS, cfa_pattern
 
     pattern = cfa_pattern(pattern)
     method = check_option(method, DEMOSAIC_METHODS, "demosaicing method")
     check_output_path(out, inputs=(raw,), force=force)
+    info = demosaic_file(raw, out, pattern, method, bits=bits, clip=clip)
+    n_clipped = info["out_of_range_values"]
+    to_png = out.suffix.lower() != ".npy"
+    rgb_shape = info["shape"]
+    if json_out:
+        print_json(info)
+    else:
+        note = f", {n_clipped} values clipped to [0, 1]" if (to_png or clip) and n_clipped else ""
+        typer.echo(f"wrote {out} ({method}, {rgb_shape[1]}x{rgb_shape[0]}{note})")
+
+
+def demosaic_file(
+    raw: Path, out: Path, pattern: str, method: str, *, bits: int = 0, clip: bool = False
+) -> dict[str, Any]:
+    """Demosaic the mosaic file ``raw`` (grey PNG 8/16-bit or ``.npy``) and write ``out``.
+
+    The file-level step of ``imageform demosaic`` (also run by ``imageform batch demosaic``):
+    PNG output keeps the input's bit depth unless ``bits`` is given and is clipped to [0, 1]
+    (the count is reported); ``.npy`` output keeps overshoots unless ``clip``. The caller
+    validates ``pattern``/``method`` and checks the output path. Returns the ``--json`` summary.
+    """
+    import time
+
+    import numpy as np
+
+    from imageform.cli._imageio_demosaic import read_image, write_image
+    from imageform.sensor import demosaic
+
     arr, in_bits = read_image(raw)
     t0 = time.perf_counter()
     rgb = demosaic(arr, pattern, method)
@@ -85,7 +108,7 @@ def demosaic_cmd(
     if to_png or clip:
         np.clip(rgb, 0.0, 1.0, out=rgb)
     write_image(out, rgb, bits or in_bits)
-    info = {
+    return {
         "input": str(raw),
         "output": str(out),
         "pattern": pattern,
@@ -95,11 +118,6 @@ def demosaic_cmd(
         "out_of_range_values": n_clipped,
         "seconds": round(seconds, 4),
     }
-    if json_out:
-        print_json(info)
-    else:
-        note = f", {n_clipped} values clipped to [0, 1]" if (to_png or clip) and n_clipped else ""
-        typer.echo(f"wrote {out} ({method}, {rgb.shape[1]}x{rgb.shape[0]}{note})")
 
 
 def register(app: typer.Typer) -> None:

@@ -1,0 +1,320 @@
+r"""One image larger than memory: a pointwise colour operation, chunk by chunk.
+
+The input (a tiled TIFF through tifffile's Zarr store, or a Zarr array) is opened as a dask
+array of ``chunk x chunk`` blocks; the operation runs block by block; the output (a tiled
+TIFF or a Zarr array) is written one band of block rows at a time. Global statistics (the
+grey-world and shades-of-grey illuminant of white balance) are real dask reductions over the
+whole image, a first pass before the pointwise pass. Peak memory is bounded by one output
+band plus a few blocks per thread, independent of the image's height:
+
+.. math:: M \approx c\,W\,C\,b_{out} + T\,k\,c^2 C\,4
+
+(``c`` the chunk size, ``W`` the width, ``C`` channels, ``b_out`` bytes per output sample,
+``T`` threads, ``k`` ~ 6 float32 temporaries per block). benchmarks/bench_chunked.py
+measures it.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import time
+import uuid
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from imageform._validate import check_option
+from imageform.errors import InvalidInputError
+
+__all__ = ["CHUNKED_COMMANDS", "ChunkedResult", "open_lazy", "process_chunked"]
+
+#: Commands :func:`process_chunked` runs.
+CHUNKED_COMMANDS = ("convert", "white_balance")
+#: White-balance methods whose illuminant is a streaming reduction (or needs none).
+_WB_METHODS = ("gray_world", "shades_of_gray", "manual")
+_OUT_DTYPES = ("uint8", "uint16", "float32")
+
+
+@dataclass(frozen=True)
+class ChunkedResult:
+    """What :func:`process_chunked` did.
+
+    ``clipped`` counts the values outside [0, 1] clipped to fit an integer output (0 for
+    float32); ``gains`` are the white-balance gains (None for convert).
+    """
+
+    output: Path
+    shape: tuple[int, ...]
+    dtype: str
+    chunk: int
+    clipped: int
+    gains: tuple[float, ...] | None
+    seconds: float
+
+
+def _kind(path: Path) -> str:
+    suffix = path.suffix.lower()
+    if suffix in (".tif", ".tiff"):
+        return "tiff"
+    if suffix == ".zarr":
+        return "zarr"
+    raise InvalidInputError(f"expected a tiled .tif/.tiff or a .zarr array, got {path}")
+
+
+def open_lazy(path: str | Path, chunk: int = 1024) -> Any:
+    """Open a tiled TIFF (tifffile's Zarr store) or a Zarr array as a dask array.
+
+    Nothing is read until the array is computed. Blocks are ``chunk x chunk`` pixels with all
+    channels (choose a multiple of the TIFF's tile size).
+    """
+    import dask.array as da
+    import zarr
+
+    p = Path(path)
+    if not p.exists():
+        raise InvalidInputError(f"input {p} does not exist")
+    if _kind(p) == "tiff":
+        import tifffile
+
+        z: Any = zarr.open(tifffile.imread(p, aszarr=True), mode="r")
+    else:
+        z = zarr.open(str(p), mode="r")
+    if isinstance(z, zarr.Group):  # a pyramid: level 0 is the full resolution
+        z = z["0"]
+    if z.ndim != 3 or z.shape[-1] != 3:
+        raise InvalidInputError(f"{p}: expected an RGB image (H, W, 3), got shape {z.shape}")
+    return da.from_zarr(z, chunks=(chunk, chunk, z.shape[-1]))
+
+
+def _convert_block(block: np.ndarray, src: str, dst: str, params: dict[str, Any]) -> np.ndarray:
+    from imageform.color import convert
+
+    return np.asarray(convert(block, src, dst, **params), dtype=np.float32)
+
+
+def _balance_block(block: np.ndarray, gains: np.ndarray) -> np.ndarray:
+    from imageform._validate import as_image
+    from imageform.color.transfer import decode, encode
+
+    lin = decode(as_image(block, "image", channels=3), "srgb")
+    return np.asarray(encode(lin * gains, "srgb"), dtype=np.float32)
+
+
+def _linear_block(block: np.ndarray, p: float) -> np.ndarray:
+    from imageform._validate import as_image
+    from imageform.color.transfer import decode
+
+    lin = np.asarray(decode(as_image(block, "image", channels=3), "srgb"), dtype=np.float64)
+    return lin if p == 1.0 else lin**p
+
+
+def _wb_gains(x: Any, options: dict[str, Any]) -> np.ndarray:
+    """White-balance gains in linear light; the illuminant is a reduction over all blocks."""
+    from imageform.color.white_balance import _method, white_balance
+
+    method, _ = _method(options.get("method", "gray_world"), None)
+    check_option(method, _WB_METHODS, "white-balance method for chunked processing")
+    normalize = check_option(options.get("normalize", "mean"), ("mean", "green"), "normalize")
+    if method == "manual":  # the gains do not depend on the image
+        probe = np.full((1, 1, 3), 0.5, dtype=np.float32)
+        kw = {k: options[k] for k in ("illuminant", "cct") if k in options}
+        return np.asarray(white_balance(probe, "manual", normalize=normalize, **kw).gains)
+    p = float(options.get("p", 6.0)) if method == "shades_of_gray" else 1.0
+    if p < 1.0:
+        raise InvalidInputError(f"expected Minkowski p >= 1, got {p!r}")
+    powered = x.map_blocks(_linear_block, p, dtype=np.float64)
+    e = np.asarray(powered.mean(axis=(0, 1)).compute()) ** (1.0 / p)
+    if not np.all(e > 0):
+        raise InvalidInputError(f"illuminant estimate {e.tolist()} has an empty channel")
+    ref = e.mean() if normalize == "mean" else e[1]
+    return (ref / e).astype(np.float32)
+
+
+def _quantize(block: np.ndarray, dtype: str) -> np.ndarray:
+    if dtype == "float32":
+        return block
+    top = 255.0 if dtype == "uint8" else 65535.0
+    return np.round(np.clip(block, 0.0, 1.0) * top).astype(dtype)
+
+
+def _temp(path: Path) -> Path:
+    return path.with_name(f".{path.name}.{uuid.uuid4().hex[:12]}.tmp{path.suffix}")
+
+
+def process_chunked(
+    src: str | Path,
+    dst: str | Path,
+    command: str,
+    options: dict[str, Any] | None = None,
+    *,
+    chunk: int = 1024,
+    dtype: str | None = None,
+    tile: int = 256,
+    force: bool = False,
+    num_workers: int | None = None,
+) -> ChunkedResult:
+    r"""Apply ``convert`` or ``white_balance`` to an image larger than memory, chunk-wise.
+
+    .. math:: \text{out}[b] = f(\text{in}[b];\ \theta),\qquad
+        \theta = \text{gains } \bar e / e_c,\ e_c = \big(\operatorname{mean}_{\text{all}}
+        \rho_c^p\big)^{1/p}
+
+    Pointwise, so each block ``b`` gives the same numbers as the whole image in memory; the
+    white-balance illuminant ``e`` is a reduction over every block (a first pass).
+
+    Parameters
+    ----------
+    src : path
+        A tiled TIFF (read through ``tifffile.imread(aszarr=True)``) or a ``.zarr`` array,
+        shape (H, W, 3), encoded RGB (uint8/uint16 full range, or floats in [0, 1]).
+    dst : path
+        ``.tif``/``.tiff`` (tiled, ``tile`` pixels, BigTIFF when needed) or ``.zarr``; written
+        under a temporary name in the same folder and renamed when complete.
+    command : {"convert", "white_balance"}
+        ``convert`` takes options ``from`` (default ``srgb``), ``to``, ``white``;
+        ``white_balance`` takes ``method`` (gray_world, shades_of_gray, manual), ``p``,
+        ``normalize``, ``illuminant``/``cct`` (manual).
+    chunk : int
+        Block size in pixels (a multiple of ``tile`` and, for speed, of the input's tiles).
+    dtype : {"uint8", "uint16", "float32"}, optional
+        Output samples; by default the input's integer type (float32 for float input or for
+        a destination space that is not displayable RGB). Integer output clips values
+        outside [0, 1]; how many is reported in ``clipped``.
+    force : bool
+        Replace an existing ``dst``.
+    num_workers : int, optional
+        Threads of dask's threaded scheduler (default: CPU count).
+
+    Returns
+    -------
+    ChunkedResult
+
+    Examples
+    --------
+    >>> import tempfile, pathlib, tifffile
+    >>> d = pathlib.Path(tempfile.mkdtemp())
+    >>> img = np.full((300, 400, 3), 128, dtype=np.uint8)
+    >>> tifffile.imwrite(d / "in.tif", img, tile=(256, 256), photometric="rgb")
+    >>> r = process_chunked(d / "in.tif", d / "out.zarr", "convert", {"to": "linear_srgb"},
+    ...                     chunk=256, dtype="float32")
+    >>> import zarr; round(float(zarr.open(str(r.output), mode="r")[0, 0, 0]), 6)
+    0.215861
+    """
+    import dask
+
+    from imageform.cli.color_cmds import _DISPLAYABLE
+    from imageform.color.convert import _space
+
+    t0 = time.perf_counter()
+    src_p, dst_p = Path(src), Path(dst)
+    cmd = check_option(command, CHUNKED_COMMANDS, "chunked command")
+    opts = dict(options or {})
+    out_kind = _kind(dst_p)
+    if chunk <= 0 or tile <= 0 or chunk % tile:
+        raise InvalidInputError(f"expected chunk a positive multiple of tile, got {chunk}, {tile}")
+    if dst_p.resolve() == src_p.resolve():
+        raise InvalidInputError(f"output {dst_p} is the input; choose another path")
+    if dst_p.exists() and not force:
+        raise InvalidInputError(f"output {dst_p} exists; pass --force to overwrite it")
+    x = open_lazy(src_p, chunk)
+    in_int = x.dtype in (np.uint8, np.uint16)
+    gains: np.ndarray | None = None
+    with dask.config.set(scheduler="threads", num_workers=num_workers or os.cpu_count()):
+        if cmd == "convert":
+            if "to" not in opts:
+                raise InvalidInputError("chunked convert needs the option to (a colour space)")
+            s, d = _space(opts.get("from", "srgb"), "--from"), _space(opts["to"], "--to")
+            params = {k: opts[k] for k in ("white",) if k in opts}
+            op: tuple[Any, ...] = (_convert_block, s, d, params)
+            displayable = d in _DISPLAYABLE
+        else:
+            gains = _wb_gains(x, opts)
+            op = (_balance_block, gains)
+            displayable = True
+        out_dtype = dtype or (str(x.dtype) if in_int and displayable else "float32")
+        check_option(out_dtype, _OUT_DTYPES, "output dtype")
+        if out_dtype != "float32" and not displayable:
+            raise InvalidInputError(f"{opts.get('to')} values are not in [0, 1]: use float32")
+        tmp = _temp(dst_p)
+        try:
+            clipped = _write(tmp, out_kind, x, op, out_dtype, chunk, tile)
+            if dst_p.exists():
+                shutil.rmtree(dst_p) if dst_p.is_dir() else dst_p.unlink()
+            os.replace(tmp, dst_p)
+        except BaseException:
+            shutil.rmtree(tmp, ignore_errors=True) if tmp.is_dir() else tmp.unlink(missing_ok=True)
+            raise
+    return ChunkedResult(
+        dst_p,
+        tuple(int(v) for v in x.shape),
+        out_dtype,
+        chunk,
+        clipped if out_dtype != "float32" else 0,
+        None if gains is None else tuple(float(g) for g in gains),
+        time.perf_counter() - t0,
+    )
+
+
+def _finish(block: np.ndarray, op: tuple[Any, ...], dtype: str) -> tuple[np.ndarray, int]:
+    """One block: the operation in float32, then the output samples and the out-of-range
+    count, so that no float block outlives its task."""
+    f = op[0](block, *op[1:])
+    n = int(np.count_nonzero((f < 0) | (f > 1))) if dtype != "float32" else 0
+    return _quantize(f, dtype), n
+
+
+def _rows(x: Any, op: tuple[Any, ...], dtype: str) -> Any:
+    """Yield (row0, output blocks of one block row, out-of-range count), row by row; the
+    blocks of a row run in parallel on dask's threaded scheduler."""
+    import dask
+
+    blocks = x.to_delayed()
+    r0 = 0
+    for i, h in enumerate(x.chunks[0]):
+        parts = dask.compute(*[dask.delayed(_finish)(b, op, dtype) for b in blocks[i, :, 0]])
+        yield r0, [q for q, _ in parts], sum(n for _, n in parts)
+        r0 += h
+
+
+def _write(
+    tmp: Path, kind: str, x: Any, op: tuple[Any, ...], dtype: str, chunk: int, tile: int
+) -> int:
+    shape = tuple(int(v) for v in x.shape)
+    counts: list[int] = []
+    if kind == "zarr":
+        import zarr
+
+        z = zarr.create_array(
+            store=str(tmp), shape=shape, chunks=(chunk, chunk, shape[-1]), dtype=dtype
+        )
+        for r0, row, bad in _rows(x, op, dtype):
+            c0 = 0
+            for q in row:
+                z[r0 : r0 + q.shape[0], c0 : c0 + q.shape[1]] = q
+                c0 += q.shape[1]
+            counts.append(bad)
+        return sum(counts)
+    import tifffile
+
+    def tiles() -> Any:  # row-major tiles, as TIFF stores them
+        for _, row, bad in _rows(x, op, dtype):
+            counts.append(bad)
+            for tr in range(0, row[0].shape[0], tile):
+                for q in row:
+                    for tc in range(0, q.shape[1], tile):
+                        yield q[tr : tr + tile, tc : tc + tile]
+
+    nbytes = int(np.prod(shape)) * np.dtype(dtype).itemsize
+    tifffile.imwrite(
+        tmp,
+        tiles(),
+        shape=shape,
+        dtype=dtype,
+        tile=(tile, tile),
+        photometric="rgb",
+        bigtiff=nbytes > 2**32 - 2**26,
+    )
+    return sum(counts)

@@ -1,0 +1,197 @@
+"""imageform batch on a loopback dask cluster: results equal the in-process command,
+resumability, a worker killed mid-run, failures, --scheduler and the default local cluster."""
+
+from __future__ import annotations
+
+import os
+import signal
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+from imageform.batch import JobResult, get_command, run_batch
+from imageform.cli import main
+from imageform.io import read_image, write_image
+
+pytest.importorskip("distributed")
+
+N_IMAGES = 12
+
+
+def _rgb_tree(root: Path, n: int = N_IMAGES, size: tuple[int, int] = (24, 32)) -> Path:
+    """``n`` random 8-bit RGB PNGs in nested folders under ``root/in``."""
+    rng = np.random.default_rng(7)
+    for i in range(n):
+        sub = root / "in" / f"site{i % 3}" / ("deep" if i % 2 else "")
+        sub.mkdir(parents=True, exist_ok=True)
+        write_image(sub / f"img{i:02d}.png", rng.integers(1, 256, (*size, 3), dtype=np.uint8))
+    return root / "in"
+
+
+def _mosaic_tree(root: Path, n: int = N_IMAGES) -> Path:
+    rng = np.random.default_rng(8)
+    for i in range(n):
+        sub = root / "raw" / f"s{i % 2}"
+        sub.mkdir(parents=True, exist_ok=True)
+        write_image(sub / f"m{i:02d}.png", rng.integers(0, 65536, (16, 20), dtype=np.uint16))
+    return root / "raw"
+
+
+def _check_equal_in_process(report: Any, command: str, options: dict[str, Any], tmp: Path) -> None:
+    """Each output decodes and equals the command run in this process on the same input."""
+    run = get_command(command).run
+    assert report.count("done") + report.count("skipped") == len(report.results)
+    for i, r in enumerate(report.results):
+        ref = tmp / f"ref{i}{r.output.suffix}"
+        run(r.input, ref, options)
+        np.testing.assert_array_equal(read_image(r.output), read_image(ref))
+
+
+def _leftover_temps(out: Path) -> list[Path]:
+    return [p for p in out.rglob(".*") if ".tmp" in p.name]
+
+
+@pytest.mark.parametrize(
+    ("command", "options", "tree"),
+    [
+        ("convert", {"to": "linear_srgb"}, _rgb_tree),
+        ("white-balance", {"method": "gray-world"}, _rgb_tree),
+        ("demosaic", {"pattern": "RGGB", "method": "bilinear"}, _mosaic_tree),
+    ],
+)
+def test_outputs_equal_in_process(
+    cluster: Any, tmp_path: Path, command: str, options: dict[str, Any], tree: Any
+) -> None:
+    src = tree(tmp_path)
+    out = tmp_path / "out"
+    report = run_batch(
+        command, f"{src}/**/*.png", out, options, scheduler=cluster.scheduler_address
+    )
+    assert report.ok and report.count("done") == N_IMAGES
+    assert {r.output.relative_to(out) for r in report.results} == {
+        r.input.relative_to(src) for r in report.results
+    }
+    _check_equal_in_process(report, command, options, tmp_path)
+    assert not _leftover_temps(out)
+
+
+def test_resumable(cluster: Any, tmp_path: Path) -> None:
+    src = _rgb_tree(tmp_path)
+    out = tmp_path / "out"
+    glob_ = f"{src}/**/*.png"
+    addr = cluster.scheduler_address
+    first = run_batch("convert", glob_, out, {"to": "rec2020"}, scheduler=addr)
+    assert first.count("done") == N_IMAGES
+    mtimes = {r.output: r.output.stat().st_mtime_ns for r in first.results}
+    # second run: everything finished, nothing redone (no cluster needed at all)
+    second = run_batch("convert", glob_, out, {"to": "rec2020"}, scheduler="tcp://127.0.0.1:1")
+    assert second.count("skipped") == N_IMAGES and second.count("done") == 0
+    # a deleted output is redone; a stale temporary file is never taken as finished
+    gone, partial = first.results[3].output, first.results[5].output
+    gone.unlink()
+    partial.unlink()
+    stale = partial.with_name(f".{partial.name}.deadbeef0000.tmp{partial.suffix}")
+    stale.write_bytes(partial.name.encode())  # a truncated write left by a dead worker
+    third = run_batch("convert", glob_, out, {"to": "rec2020"}, scheduler=addr)
+    assert {r.output for r in third.results if r.status == "done"} == {gone, partial}
+    assert third.count("skipped") == N_IMAGES - 2
+    assert not stale.exists() and not _leftover_temps(out)
+    _check_equal_in_process(third, "convert", {"to": "rec2020"}, tmp_path)
+    for r in third.results:
+        if r.status == "skipped":
+            assert r.output.stat().st_mtime_ns == mtimes[r.output]
+    # --force redoes everything
+    assert (
+        run_batch("convert", glob_, out, {"to": "rec2020"}, scheduler=addr, force=True).count(
+            "done"
+        )
+        == N_IMAGES
+    )
+
+
+def test_worker_killed_mid_run(cluster: Any, client: Any, tmp_path: Path) -> None:
+    """SIGKILL one worker process while jobs are in flight (each job holds its temporary
+    file for 0.4 s before the rename); the scheduler re-runs its job elsewhere, the batch
+    completes, every output is correct and no partial or temporary file remains."""
+    src = _rgb_tree(tmp_path)
+    out = tmp_path / "out"
+    killed: dict[str, Any] = {}
+
+    def kill_one(res: JobResult) -> None:
+        temps = _leftover_temps(out)
+        busy = [w for w, keys in client.processing().items() if keys]
+        if killed or not busy or not temps:
+            return  # wait for a result at which a job is mid-write
+        pid = client.run(os.getpid, workers=[busy[0]])[busy[0]]
+        os.kill(pid, signal.SIGKILL)
+        killed.update(pid=pid, temps=temps)
+
+    report = run_batch(
+        "convert",
+        f"{src}/**/*.png",
+        out,
+        {"to": "linear_srgb"},
+        scheduler=cluster.scheduler_address,
+        on_result=kill_one,
+        hold_s=0.4,
+    )
+    assert killed, "the kill never happened"
+    assert killed["temps"], "no job was mid-write when the worker was killed"
+    assert report.ok, [r.error for r in report.failed]
+    assert report.count("done") == N_IMAGES
+    _check_equal_in_process(report, "convert", {"to": "linear_srgb"}, tmp_path)
+    assert not _leftover_temps(out)
+    client.wait_for_workers(2, timeout=60)  # the nanny restarts the worker
+    assert killed["pid"] not in client.run(os.getpid).values()
+
+
+def test_failures_reported_cli(
+    cluster: Any, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    src = _rgb_tree(tmp_path, n=4)
+    (src / "site0" / "corrupt.png").write_bytes(b"\x89PNG\r\n\x1a\n truncated")
+    out = tmp_path / "out"
+    argv = ["batch", "white-balance", f"{src}/**/*.png", str(out)]
+    code = main([*argv, "--scheduler", cluster.scheduler_address])
+    text = capsys.readouterr().out
+    assert code == 1
+    assert "4 done, 0 skipped (already finished), 1 failed" in text
+    (line,) = [ln for ln in text.splitlines() if ln.startswith("failed: ")]
+    assert line.endswith("corrupt.png: OSError: Truncated File Read")  # Pillow's reason
+    assert len(list(out.rglob("*.png"))) == 4 and not _leftover_temps(out)
+    code = main([*argv, "--scheduler", cluster.scheduler_address, "--json"])
+    import json
+
+    payload = json.loads(capsys.readouterr().out)
+    assert code == 1 and (payload["skipped"], payload["failed"]) == (4, 1)
+    (bad,) = [j for j in payload["jobs"] if j["status"] == "failed"]
+    assert bad["input"].endswith("corrupt.png") and bad["error"].startswith("OSError")
+
+
+def test_bad_scheduler_address(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    import dask
+
+    src = _rgb_tree(tmp_path, n=1)
+    with dask.config.set({"distributed.comm.timeouts.connect": "1s"}):
+        code = main(
+            ["batch", "convert", f"{src}/**/*.png", str(tmp_path / "o"), "--to", "srgb"]
+            + ["--scheduler", "tcp://127.0.0.1:9"]
+        )
+    assert code == 1 and "cannot reach the scheduler" in capsys.readouterr().err
+
+
+def test_default_local_cluster_cli(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """No --scheduler: a LocalCluster of worker processes is started and shut down."""
+    src = _rgb_tree(tmp_path, n=3)
+    code = main(
+        ["batch", "convert", f"{src}/**/*.png", str(tmp_path / "o"), "--to", "lab"]
+        + ["--suffix", ".npy", "--workers", "1", "--json"]
+    )
+    assert code == 0
+    import json
+
+    assert json.loads(capsys.readouterr().out)["done"] == 3
+    lab = np.load(next((tmp_path / "o").rglob("*.npy")))
+    assert lab.shape == (24, 32, 3) and lab[..., 0].min() >= 0 and lab[..., 0].max() <= 100

@@ -1,0 +1,94 @@
+"""Planning, atomic single jobs and option checks of imageform.batch (no cluster needed)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from imageform.batch import COMMANDS, get_command, plan_jobs, run_job
+from imageform.batch.runner import temp_pattern
+from imageform.errors import InvalidInputError, UnknownOptionError
+from imageform.io import read_image, write_image
+
+
+def _tree(root: Path) -> list[Path]:
+    rng = np.random.default_rng(1)
+    paths = [root / "in" / "x.png", root / "in" / "a" / "y.png", root / "in" / "a" / "b" / "z.png"]
+    for p in paths:
+        p.parent.mkdir(parents=True, exist_ok=True)
+        write_image(p, rng.integers(0, 256, (6, 8, 3), dtype=np.uint8))
+    return paths
+
+
+def test_plan_keeps_relative_folders(tmp_path: Path) -> None:
+    _tree(tmp_path)
+    jobs = plan_jobs(f"{tmp_path}/in/**/*.png", tmp_path / "out")
+    rel = sorted(str(j.output.relative_to(tmp_path / "out")) for j in jobs)
+    assert rel == ["a/b/z.png", "a/y.png", "x.png"]
+    jobs = plan_jobs(f"{tmp_path}/in/a/*.png", tmp_path / "out", out_suffix="tif")
+    assert [j.output.relative_to(tmp_path / "out").as_posix() for j in jobs] == ["y.tif"]
+
+
+def test_plan_refuses_outputs_over_inputs(tmp_path: Path) -> None:
+    _tree(tmp_path)
+    with pytest.raises(InvalidInputError, match="overwrite an input or match the input glob"):
+        plan_jobs(f"{tmp_path}/in/**/*.png", tmp_path / "in")
+    with pytest.raises(InvalidInputError, match="match the input glob"):
+        plan_jobs(f"{tmp_path}/in/**/*.png", tmp_path / "in" / "out")
+    # a non-recursive glob does not reach in/out/: allowed
+    assert len(plan_jobs(f"{tmp_path}/in/*.png", tmp_path / "in" / "out")) == 1
+    write_image(tmp_path / "in" / "x.tif", np.zeros((2, 2, 3), np.uint8))
+    with pytest.raises(InvalidInputError, match="would both write"):
+        plan_jobs(f"{tmp_path}/in/x.*", tmp_path / "out", out_suffix=".npy")
+    with pytest.raises(InvalidInputError, match="no files match"):
+        plan_jobs(f"{tmp_path}/nothing/*.png", tmp_path / "out")
+
+
+def test_temp_files_are_hidden_from_the_glob(tmp_path: Path) -> None:
+    (tmp_path / "in").mkdir()
+    write_image(tmp_path / "in" / "x.png", np.zeros((2, 2, 3), np.uint8))
+    stale = tmp_path / "in" / ".x.png.0123456789ab.tmp.png"
+    stale.write_bytes(b"partial")
+    assert stale.match(temp_pattern(tmp_path / "in" / "x.png"))
+    assert [j.input.name for j in plan_jobs(f"{tmp_path}/in/**/*.png", tmp_path / "o")] == ["x.png"]
+
+
+def test_run_job_atomic_and_failure(tmp_path: Path) -> None:
+    (src,) = _tree(tmp_path)[:1]
+    out = tmp_path / "out" / "deep" / "x.png"
+    res = run_job("convert", str(src), str(out), {"to": "linear_srgb"})
+    assert res["ok"] and out.is_file() and res["metrics"]["shape"] == [6, 8, 3]
+    bad = tmp_path / "bad.png"
+    bad.write_bytes(b"\x89PNG garbage")
+    res = run_job("convert", str(bad), str(tmp_path / "out" / "bad.png"), {"to": "srgb"})
+    assert not res["ok"] and res["error"].startswith("InvalidInputError:")
+    assert sorted(p.name for p in (tmp_path / "out").iterdir()) == ["deep"]  # no temp left
+    assert sorted(p.name for p in (tmp_path / "out" / "deep").iterdir()) == ["x.png"]
+    assert read_image(src).dtype == np.uint8  # input untouched and readable
+
+
+def test_command_options_checked(tmp_path: Path) -> None:
+    assert set(COMMANDS) == {
+        "convert",
+        "white_balance",
+        "demosaic",
+        "stain_normalize",
+        "harmonize",
+    }
+    with pytest.raises(UnknownOptionError, match="valid: 'convert'"):
+        get_command("convrt")
+    with pytest.raises(UnknownOptionError, match="option of batch demosaic"):
+        get_command("demosaic").validate({"to": "lab"}, ".png")
+    with pytest.raises(InvalidInputError, match="not displayable"):
+        get_command("convert").validate({"to": "lab"}, ".png")
+    with pytest.raises(InvalidInputError, match="needs --to"):
+        get_command("convert").validate({}, ".png")
+    with pytest.raises(InvalidInputError, match=r"writes \.png, \.npy"):
+        get_command("demosaic").validate({}, ".tif")
+    with pytest.raises(InvalidInputError, match="needs --target"):
+        get_command("stain-normalize").validate({}, ".png")
+    with pytest.raises(InvalidInputError, match="does not exist"):
+        get_command("harmonize").validate({"correction": str(tmp_path / "no.json")}, ".png")
+    get_command("white-balance").validate({"method": "gray-world"}, ".tif")
