@@ -173,6 +173,21 @@ def test_dask_gray_world_is_a_global_reduction() -> None:
     np.testing.assert_allclose(np.asarray(out), ref_img, atol=1e-12)
 
 
+@pytest.mark.parametrize("method", ["gray_world", "shades_of_gray"])
+def test_float32_means_accumulate_in_float64(method: str) -> None:
+    """A float32 mean over a strided pixel axis is a running sum whose error grows with the
+    pixel count; the estimators accumulate in float64, so float32, float64 and chunked Dask
+    agree to float32 rounding (measured before the fix: 4e-5 relative on a random 4K image)."""
+    img = np.random.default_rng(3).uniform(0, 1, (1024, 1536, 3)).astype(np.float32)
+    e32 = estimate_illuminant(img, method, transfer="linear")
+    e64 = estimate_illuminant(img.astype(np.float64), method, transfer="linear")
+    assert np.asarray(e32).dtype == np.float32
+    np.testing.assert_allclose(e32, e64, rtol=1e-6)
+    da = pytest.importorskip("dask.array")
+    ed = estimate_illuminant(da.from_array(img, chunks=(256, 512, 3)), method, transfer="linear")
+    np.testing.assert_allclose(np.asarray(ed), e64, rtol=1e-6)
+
+
 @settings(max_examples=25, deadline=None)
 @given(st.floats(0.05, 20.0), st.sampled_from(ESTIMATORS), st.integers(0, 10_000))
 def test_gains_scale_invariant_and_idempotent(k: float, method: str, seed: int) -> None:

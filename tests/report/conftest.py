@@ -46,7 +46,7 @@ def patch_linear_rgb() -> np.ndarray:
 
     rng = np.random.default_rng(7)
     rgb = rng.uniform(0.05, 0.85, size=(24, 3))
-    rgb[0] = np.asarray(xyz_to_linear_srgb(lab_to_xyz([49.0, 0.0, 0.0], white="srgb")))
+    rgb[0] = np.asarray(xyz_to_linear_srgb(lab_to_xyz([49.0, 0.0, 0.0], white="D65")))
     return rgb
 
 
@@ -112,7 +112,7 @@ def make_result(*, full: bool = True, width: int = W, height: int = H) -> Simula
     camera = Camera.look_at(K, [0.5, -1.0, -1.0], [0.5, 0.0, 3.0], image_size=(width, height))
     if not full:
         return SimulationResult(stages=stages, camera=camera, image_size=(width, height))
-    lab_meas = np.asarray(xyz_to_lab(linear_srgb_to_xyz(rgb), white="srgb"))
+    lab_meas = np.asarray(xyz_to_lab(linear_srgb_to_xyz(rgb), white="D65"))
     truth = lab_meas.copy()
     truth[0, 0] = 51.0  # measured 49: ΔE00 = 2.0 at L̄ = 50
     quads = (
@@ -180,3 +180,41 @@ def full_report(sim_result: SimulationResult, tmp_path_factory: pytest.TempPathF
 @pytest.fixture(scope="session")
 def result_factory() -> Callable[..., SimulationResult]:
     return make_result
+
+
+SMALL_SCENE_EDITS = {  # the built-in scene at a quarter of the size, same field of view
+    "width = 1280": "width = 320",
+    "height = 720": "height = 180",
+    "pixel_pitch_um = 1.75": "pixel_pitch_um = 7.0",
+    "supersampling = 2": "supersampling = 1",
+}
+
+
+@pytest.fixture(scope="session")
+def real_run(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
+    """``imageform simulate --scene small.toml --json`` for real (no fakes): the built-in
+    scene's TOML edited to 320 x 180 with the same field of view. Returns the printed JSON
+    with ``"out"`` (the output folder) added."""
+    pytest.importorskip("matplotlib")
+    import contextlib
+    import io
+    import json
+    from importlib.resources import files
+
+    from imageform.cli import main
+
+    text = files("imageform.simulate").joinpath("scenes/default.toml").read_text()
+    for old, new in SMALL_SCENE_EDITS.items():
+        assert old in text, old
+        text = text.replace(old, new)
+    root = tmp_path_factory.mktemp("e2e")
+    scene = root / "small.toml"
+    scene.write_text(text)
+    out = root / "run"
+    buf = io.StringIO()
+    with contextlib.redirect_stdout(buf):
+        rc = main(["simulate", "--scene", str(scene), "-o", str(out), "--json"])
+    assert rc == 0
+    data: dict[str, Any] = json.loads(buf.getvalue())
+    data["out"] = out
+    return data

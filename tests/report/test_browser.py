@@ -12,6 +12,7 @@ from __future__ import annotations
 import io
 import os
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -92,3 +93,22 @@ def test_report_in_headless_chromium(
         # a figure further down renders too (scrolled into view)
         _not_blank(page.locator("#chromaticity img").screenshot())
         assert page.title() == "imageform simulation: synthetic"
+
+
+def test_real_simulation_report_in_headless_chromium(
+    browser_page,  # type: ignore[no-untyped-def]
+    real_run: dict[str, Any],
+) -> None:
+    """The report of a real ``imageform simulate`` run (not the synthetic result)."""
+    page = browser_page
+    seen = _open(page, real_run["out"] / "report.html")
+    images = page.evaluate(
+        "Array.from(document.images).map(i => [i.alt, i.complete, i.naturalWidth])"
+    )
+    assert len(images) >= 12  # 8 stages, chromaticity, ΔE, SNR, top view, VP, PTC
+    broken = [alt for alt, complete, width in images if not (complete and width > 0)]
+    assert broken == [], f"images that did not load: {broken}"
+    assert seen["console_errors"] == [] and seen["page_errors"] == []
+    others = [u for u in seen["requests"] if not u.startswith(("file:", "data:"))]
+    assert others == [], f"the report asked for {others}"
+    _not_blank(page.screenshot(full_page=True))

@@ -237,9 +237,11 @@ def segment_hsv(
         if depth == 0:
             mask = raw
         else:
+            # dask refuses an overlap deeper than the array; deeper than that changes nothing
+            depth_ax = {ax: min(depth, int(n)) for ax, n in enumerate(raw.shape)}
             mask = raw.map_overlap(
                 _clean,
-                depth=depth,
+                depth=depth_ax,
                 boundary="none",
                 dtype=bool,
                 open_radius=ro,

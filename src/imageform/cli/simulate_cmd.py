@@ -58,11 +58,7 @@ def simulate_command(
     from imageform.cli._common import print_json
     from imageform.errors import InvalidInputError
     from imageform.report.html import write_report
-    from imageform.simulate import (  # type: ignore[attr-defined, unused-ignore]
-        default_scene,
-        load_scene,
-        simulate,
-    )
+    from imageform.simulate import default_scene, load_scene, simulate
 
     for name in ("report.html", "metrics.json"):
         if (out / name).exists() and not force:

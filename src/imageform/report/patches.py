@@ -102,8 +102,8 @@ def measure_patches(result: SimulationResult) -> PatchMeasurements | None:
     ColorChecker).
 
     Colour: the final (``"srgb"``) stage is decoded to linear sRGB, averaged over each
-    patch window, converted to XYZ and CIELAB (white: sRGB's D65) and compared with
-    ``lab_d65`` by CIEDE2000:
+    patch window, converted to XYZ and CIELAB (white: CIE D65, the ground truth's) and
+    compared with ``lab_d65`` by CIEDE2000:
 
     .. math:: \\Delta E_{00}\\big(\\mathrm{Lab}(\\overline{\\mathrm{sRGB}^{-1}(V)}),
               \\mathrm{Lab}_{truth}\\big)
@@ -140,7 +140,7 @@ def measure_patches(result: SimulationResult) -> PatchMeasurements | None:
     lab = np.full((n, 3), np.nan)
     de = np.full(n, np.nan)
     if ok.any():
-        lab[ok] = np.asarray(xyz_to_lab(linear_srgb_to_xyz(rgb[ok]), white="srgb"))
+        lab[ok] = np.asarray(xyz_to_lab(linear_srgb_to_xyz(rgb[ok]), white="D65"))
         de[ok] = np.asarray(delta_e_ciede2000(lab[ok], lab_truth[ok]))
     readings = tuple(describe_delta_e(d) if np.isfinite(d) else "not measured" for d in de)
 
@@ -157,7 +157,7 @@ def measure_patches(result: SimulationResult) -> PatchMeasurements | None:
             snr[i] = 20.0 * np.log10(mu / sd)
         elif sd == 0 and mu > 0:
             snr[i] = np.inf
-    truth_lin = np.asarray(xyz_to_linear_srgb(lab_to_xyz(lab_truth, white="srgb")))
+    truth_lin = np.asarray(xyz_to_linear_srgb(lab_to_xyz(lab_truth, white="D65")))
     truth_srgb = np.asarray(linear_to_srgb(np.clip(truth_lin, 0.0, 1.0)))
     return PatchMeasurements(
         names=tuple(cc.names),
