@@ -77,6 +77,107 @@ def test_outputs_equal_in_process(
     assert not _leftover_temps(out)
 
 
+def _stain_tree(root: Path, n: int = 6) -> Path:
+    """``n`` synthetic H&E tiles (known stains, different seeds) as 8-bit PNGs."""
+    from imageform.analysis import synthetic_stain_image
+
+    for i in range(n):
+        sub = root / "slides" / f"scanner{i % 2}"
+        sub.mkdir(parents=True, exist_ok=True)
+        img, _, _ = synthetic_stain_image(i, (40, 48), max_concentration=(0.8 + 0.1 * i, 0.6))
+        write_image(sub / f"tile{i}.png", img)
+    return root / "slides"
+
+
+def _expected_png(out: Path, result: np.ndarray) -> np.ndarray:
+    """What an 8-bit PNG of ``result`` (clipped) decodes to, written the library's way."""
+    write_image(out, np.clip(result, 0.0, 1.0))
+    return read_image(out)
+
+
+@pytest.mark.parametrize(
+    ("method", "target_kind"),
+    [("reinhard", "image"), ("macenko", "image"), ("reinhard", "json"), ("macenko", "json")],
+)
+def test_stain_normalize_on_the_cluster(
+    cluster: Any, tmp_path: Path, method: str, target_kind: str
+) -> None:
+    """batch stain-normalize gives, file by file, what imageform.analysis's normaliser gives
+    (target as an image or as saved statistics), never touching the inputs."""
+    from imageform import analysis
+
+    src = _stain_tree(tmp_path)
+    target_img, _, _ = analysis.synthetic_stain_image(99, (48, 48), max_concentration=(1.4, 1.0))
+    target_png = tmp_path / "target.png"
+    write_image(target_png, target_img)
+    target_arr = read_image(target_png) / 255.0
+    target: Path = target_png
+    if target_kind == "json":
+        target = tmp_path / "target.json"
+        stats = (
+            analysis.reinhard_stats(target_arr)
+            if method == "reinhard"
+            else analysis.macenko_stains(target_arr)
+        )
+        stats.to_json(target)
+    before = {p: p.read_bytes() for p in src.rglob("*.png")}
+    out = tmp_path / "out"
+    options = {"method": method, "target": str(target), "clip": True}
+    report = run_batch(
+        "stain-normalize", f"{src}/**/*.png", out, options, scheduler=cluster.scheduler_address
+    )
+    assert report.ok and report.count("done") == len(before), [r.error for r in report.failed]
+    fn = analysis.reinhard_normalize if method == "reinhard" else analysis.macenko_normalize
+    for i, r in enumerate(report.results):
+        expected = fn(read_image(r.input) / 255.0, target_arr)
+        got = read_image(r.output)
+        assert got.dtype == np.uint8 and got.shape == (40, 48, 3)
+        diff = np.abs(got.astype(int) - _expected_png(tmp_path / f"e{i}.png", expected))
+        assert diff.max() <= 1  # statistics from JSON round to the same 8-bit codes
+    assert {p: p.read_bytes() for p in src.rglob("*.png")} == before
+
+
+def test_harmonize_on_the_cluster(cluster: Any, tmp_path: Path) -> None:
+    """batch harmonize applies a correction fitted on two charts (device B -> device A) to
+    every file, as ColorCorrection.apply does, and brings device B's images to device A's."""
+    from imageform.analysis import fit_color_correction
+    from imageform.analysis.synthetic import COLORCHECKER_SRGB8
+    from imageform.color import linear_to_srgb, srgb_to_linear
+
+    def device_b(encoded: np.ndarray) -> np.ndarray:  # a 3x3 crosstalk in linear light
+        m = np.array([[0.9, 0.08, 0.02], [0.05, 0.85, 0.1], [0.02, 0.1, 0.8]])
+        return np.asarray(linear_to_srgb(np.asarray(srgb_to_linear(encoded)) @ m.T))
+
+    chart_a = np.asarray(COLORCHECKER_SRGB8, dtype=np.float64) / 255.0
+    corr = fit_color_correction(device_b(chart_a), chart_a, method="linear")
+    corr_json = tmp_path / "corr.json"
+    corr.to_json(corr_json)
+    rng = np.random.default_rng(5)
+    src = tmp_path / "site_b"
+    src.mkdir()
+    truth = {}
+    for i in range(6):
+        img_a = rng.uniform(0.1, 0.9, (24, 32, 3))
+        write_image(src / f"b{i}.png", device_b(img_a), bits=16)
+        truth[f"b{i}.png"] = img_a
+    out = tmp_path / "out"
+    report = run_batch(
+        "harmonize",
+        f"{src}/*.png",
+        out,
+        {"correction": str(corr_json), "clip": True},
+        scheduler=cluster.scheduler_address,
+    )
+    assert report.ok and report.count("done") == 6, [r.error for r in report.failed]
+    for r in report.results:
+        got = read_image(r.output)
+        assert got.dtype == np.uint16  # the input's bit depth
+        expected = np.clip(corr.apply(read_image(r.input) / 65535.0), 0, 1)
+        np.testing.assert_allclose(got / 65535.0, expected, atol=1.0 / 65535)
+        # and the correction undoes device B: back to device A's colours
+        np.testing.assert_allclose(got / 65535.0, truth[r.input.name], atol=2e-3)
+
+
 def test_resumable(cluster: Any, tmp_path: Path) -> None:
     src = _rgb_tree(tmp_path)
     out = tmp_path / "out"
