@@ -148,17 +148,10 @@ def run_demosaic(in_path: Path, out_path: Path, options: Options) -> dict[str, A
 
 
 # ---------------------------------------------------------------- analysis recipes
-# imageform.analysis (stain normalisation, colour correction) is written on another branch;
-# these entries import it lazily, by the names it publishes.
+# imageform.analysis (stain normalisation, colour correction) is imported inside the jobs so
+# that `imageform batch convert` does not pay for scipy.ndimage at start-up.
 
 _STAIN_METHODS = ("reinhard", "macenko")
-
-
-def _analysis() -> Any:
-    """``imageform.analysis``, imported when a job needs it (typed loosely on purpose)."""
-    import importlib
-
-    return importlib.import_module("imageform.analysis")
 
 
 def _read_float_rgb(path: Path) -> tuple[Any, Any]:
@@ -200,7 +193,7 @@ def _check_stain(options: Options, out_suffix: str) -> None:
 
 
 def _stain_target(method: str, target: Path) -> Any:
-    analysis = _analysis()
+    from imageform import analysis
 
     if target.suffix.lower() == ".json":
         kind = analysis.ReinhardStats if method == "reinhard" else analysis.MacenkoStains
@@ -211,7 +204,7 @@ def _stain_target(method: str, target: Path) -> Any:
 def run_stain_normalize(in_path: Path, out_path: Path, options: Options) -> dict[str, Any]:
     """Stain normalisation of one file (``imageform.analysis.reinhard_normalize`` or
     ``macenko_normalize``) towards ``target`` (an image, or statistics saved as JSON)."""
-    analysis = _analysis()
+    from imageform import analysis
 
     method = check_option(options.get("method", "reinhard"), _STAIN_METHODS, "stain method")
     img, dtype = _read_float_rgb(in_path)
@@ -231,7 +224,7 @@ def _check_harmonize(options: Options, out_suffix: str) -> None:
 def run_harmonize(in_path: Path, out_path: Path, options: Options) -> dict[str, Any]:
     """Apply a colour correction between devices (``imageform.analysis.ColorCorrection``,
     loaded from ``correction``, a JSON file) to one file."""
-    analysis = _analysis()
+    from imageform import analysis
 
     img, dtype = _read_float_rgb(in_path)
     corr = analysis.ColorCorrection.from_json(Path(options["correction"]))
