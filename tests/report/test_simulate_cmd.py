@@ -176,3 +176,17 @@ def test_failures_exit_1(
 def test_bad_usage_exits_2(capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["simulate", "--seed", "many"]) == 2
     assert main(["simulate", "--colour"]) == 2
+
+
+def test_without_matplotlib_says_which_extra(
+    monkeypatch: pytest.MonkeyPatch, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    import importlib.util
+
+    real = importlib.util.find_spec
+    monkeypatch.setattr(
+        importlib.util, "find_spec", lambda name, *a: None if name == "matplotlib" else real(name)
+    )
+    assert main(["simulate", "-o", str(tmp_path / "o")]) == 1
+    assert "pip install 'imageform[plot]'" in capsys.readouterr().err
+    assert not (tmp_path / "o").exists()

@@ -53,6 +53,7 @@ def simulate_command(
     seed: int = typer.Option(0, "--seed", help="Seed of the sensor noise."),
 ) -> None:
     """Render a scene through the whole image-formation chain and write an HTML report."""
+    import importlib.util
     import time
 
     from imageform.cli._common import print_json
@@ -60,6 +61,11 @@ def simulate_command(
     from imageform.report.html import write_report
     from imageform.simulate import default_scene, load_scene, simulate
 
+    if importlib.util.find_spec("matplotlib") is None:  # the report's figures
+        raise InvalidInputError(
+            "imageform simulate draws its report with matplotlib, which is not installed: "
+            "pip install 'imageform[plot]'"
+        )
     for name in ("report.html", "metrics.json"):
         if (out / name).exists() and not force:
             raise InvalidInputError(f"output {out / name} exists; pass --force to overwrite it")
