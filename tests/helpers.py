@@ -35,3 +35,20 @@ def to_np(x: object) -> np.ndarray:
     if hasattr(x, "compute"):
         return np.asarray(x.compute())
     return np.asarray(x)
+
+
+def array_type(name: str) -> type:
+    """The array class of backend ``name`` (as in ``to_backend``)."""
+    if name == "torch":
+        import torch
+
+        return torch.Tensor
+    if name == "array_api_strict":
+        import array_api_strict
+
+        return type(array_api_strict.asarray([1.0]))
+    if name == "dask":
+        import dask.array as da
+
+        return da.Array
+    return np.ndarray

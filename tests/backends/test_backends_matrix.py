@@ -20,7 +20,7 @@ import pytest
 
 from imageform import color as c
 from imageform import geometry as g
-from tests.helpers import to_backend, to_np
+from tests.helpers import array_type, to_backend, to_np
 
 BACKENDS = ("numpy", "array_api_strict", "torch", "dask")
 
@@ -313,22 +313,6 @@ EXCLUDED: dict[str, str] = {
 _NO_STRICT_DASK_INPUT = "not applicable"
 
 
-def _array_type(name: str) -> type:
-    if name == "torch":
-        import torch
-
-        return torch.Tensor
-    if name == "array_api_strict":
-        import array_api_strict
-
-        return type(array_api_strict.asarray([1.0]))
-    if name == "dask":
-        import dask.array as da
-
-        return da.Array
-    return np.ndarray
-
-
 def _result(case: Case, out: Any) -> Any:
     return case.pick(out) if case.pick is not None else out
 
@@ -354,7 +338,7 @@ def test_same_kind_and_numbers(case: Case, backend: str) -> None:
     got = to_np(out)
     assert got.shape == ref_np.shape
     if case.same_kind:
-        assert isinstance(out, _array_type(backend)), type(out)
+        assert isinstance(out, array_type(backend)), type(out)
         if backend == "torch":
             assert out.device.type == "cpu"
         assert _dtype_name(out) == ref_np.dtype.name

@@ -6,27 +6,11 @@ import numpy as np
 import pytest
 
 from imageform import geometry as g
-from tests.helpers import to_backend, to_np
+from tests.helpers import array_type, to_backend, to_np
 
 K = np.array([[500.0, 2.0, 320.0], [0.0, 510.0, 240.0], [0.0, 0.0, 1.0]])
 R = g.rvec_to_matrix([0.1, -0.2, 0.3])
 T = np.array([0.2, -0.1, 4.0])
-
-
-def _xp_type(name: str) -> type:
-    if name == "torch":
-        import torch
-
-        return torch.Tensor
-    if name == "array_api_strict":
-        import array_api_strict
-
-        return type(array_api_strict.asarray([1.0]))
-    if name == "dask":
-        import dask.array as da
-
-        return da.Array
-    return np.ndarray
 
 
 def test_projection_same_numbers(xp_name: str) -> None:
@@ -40,7 +24,7 @@ def test_projection_same_numbers(xp_name: str) -> None:
         to_backend(R, xp_name),
         to_backend(T, xp_name),
     )
-    assert isinstance(uv, _xp_type(xp_name))
+    assert isinstance(uv, array_type(xp_name))
     np.testing.assert_allclose(to_np(uv), ref_uv, atol=1e-12)
     np.testing.assert_array_equal(to_np(valid), ref_valid)
 
@@ -48,7 +32,7 @@ def test_projection_same_numbers(xp_name: str) -> None:
 def test_numpy_parameters_with_foreign_points(xp_name: str) -> None:
     X = to_backend([[0.1, 0.2, 3.0]], xp_name)
     uv, _ = g.project_points(X, K, R, T)
-    assert isinstance(uv, _xp_type(xp_name))
+    assert isinstance(uv, array_type(xp_name))
 
 
 @pytest.mark.parametrize(
@@ -76,7 +60,7 @@ def test_numpy_parameters_with_foreign_points(xp_name: str) -> None:
 def test_functions_same_numbers(xp_name: str, fn: object, args: tuple[object, ...]) -> None:
     ref = fn(*[np.asarray(a, dtype=float) for a in args])  # type: ignore[operator]
     out = fn(*[to_backend(a, xp_name) for a in args])  # type: ignore[operator]
-    assert isinstance(out, _xp_type(xp_name))
+    assert isinstance(out, array_type(xp_name))
     np.testing.assert_allclose(to_np(out), ref, atol=1e-10)
 
 

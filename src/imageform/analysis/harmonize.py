@@ -256,6 +256,20 @@ def _patches_in(x: object, name: str) -> tuple[np.ndarray, np.ndarray]:
     return arr, np.ones(arr.shape[0], dtype=bool)
 
 
+def _paired_patches(
+    measured: object, reference: object
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Both charts' patch values and validity masks, checked to be the same patches."""
+    a, va = _patches_in(measured, "measured")
+    b, vb = _patches_in(reference, "reference")
+    if a.shape != b.shape:
+        raise InvalidInputError(
+            f"expected measured and reference of the same shape, got {format_shape(a.shape)} "
+            f"and {format_shape(b.shape)}"
+        )
+    return a, va, b, vb
+
+
 def fit_color_correction(
     measured: object,
     reference: object,
@@ -308,13 +322,7 @@ def fit_color_correction(
         raise InvalidInputError(
             f"expected degree in {CORRECTION_METHODS[key]} for {key}, got {degree!r}"
         )
-    a, va = _patches_in(measured, "measured")
-    b, vb = _patches_in(reference, "reference")
-    if a.shape != b.shape:
-        raise InvalidInputError(
-            f"expected measured and reference of the same shape, got {format_shape(a.shape)} "
-            f"and {format_shape(b.shape)}"
-        )
+    a, va, b, vb = _paired_patches(measured, reference)
     sat = ((a >= saturation).any(axis=1) | (b >= saturation).any(axis=1)) & va & vb
     use = va & vb & ~sat
     if sat.any():
@@ -379,13 +387,7 @@ def correction_report(
     >>> r.delta_e_before.tolist(), r.delta_e_after.tolist()
     ([0.0, 0.0, 0.0], [0.0, 0.0, 0.0])
     """
-    a, va = _patches_in(measured, "measured")
-    b, vb = _patches_in(reference, "reference")
-    if a.shape != b.shape:
-        raise InvalidInputError(
-            f"expected measured and reference of the same shape, got {format_shape(a.shape)} "
-            f"and {format_shape(b.shape)}"
-        )
+    a, va, b, vb = _paired_patches(measured, reference)
     lab_b = np.asarray(convert(b, "srgb", "lab"))
     before = np.asarray(delta_e(lab_b, np.asarray(convert(a, "srgb", "lab"))))
     fixed = correction.apply(a[:, None, :])[:, 0, :]
