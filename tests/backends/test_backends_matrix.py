@@ -367,3 +367,23 @@ def test_every_public_function_is_covered() -> None:
     stale = set(EXCLUDED) - public
     assert not stale, f"excluded names that are not public functions: {sorted(stale)}"
     assert not (covered & set(EXCLUDED) & public)
+
+
+@pytest.mark.parametrize("backend", ["numpy", "array_api_strict", "torch"])
+@pytest.mark.parametrize("bad", [np.nan, np.inf, -np.inf])
+def test_non_finite_values_are_refused_on_every_backend(backend: str, bad: float) -> None:
+    # the finiteness check is a min/max reduction (NaN propagates through both by the
+    # standard); every backend must still refuse NaN and either infinity, wherever it sits
+    if backend == "torch":
+        pytest.importorskip("torch")
+    from imageform.errors import InvalidInputError
+
+    for pos in [(0, 0, 0), (3, 5, 2), (2, 1, 1)]:
+        rgb = RGB.copy()
+        rgb[pos] = bad
+        with pytest.raises(InvalidInputError, match="NaN or inf"):
+            c.convert(to_backend(rgb, backend), "srgb", "lab")
+        pts = PTS3.copy()
+        pts[pos[0], pos[2] % 2] = bad
+        with pytest.raises(InvalidInputError, match="NaN or inf"):
+            g.to_homogeneous(to_backend(pts[:, :2], backend))

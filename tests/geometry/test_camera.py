@@ -132,6 +132,25 @@ def test_points_behind_camera_are_nan_never_mirrored() -> None:
     np.testing.assert_allclose(mirrored, [320 - 100, 240 - 100])
 
 
+def test_projection_that_overflows_is_invalid_on_both_paths() -> None:
+    # finite in the camera frame, but x / z overflows float32: no inf pixel, valid = False
+    X = np.zeros((30_000, 3), dtype=np.float32)
+    X[:, 2] = 1.0
+    X[0] = [3e38, 0.0, 1e-3]
+    X[1] = [np.nan, 0.0, 1.0]
+    X[2] = [0.0, 0.0, np.inf]
+    K = K0.astype(np.float32)
+    kernel_uv, kernel_valid = project_points(X, K)  # numba kernel (>= 20 000 points)
+    from array_api_compat import numpy as xp
+
+    twin_uv, twin_valid = camera_mod._project_xp(
+        X, K, np.eye(3, dtype=np.float32), np.zeros(3, np.float32), xp, identity=True
+    )
+    for uv, valid in ((kernel_uv, kernel_valid), (twin_uv, twin_valid)):
+        np.testing.assert_array_equal(valid[:4], [False, False, False, True])
+        assert np.isnan(uv[:3]).all() and np.isfinite(uv[3:]).all()
+
+
 def test_real_image_plane_is_inverted() -> None:
     X = np.array([[1.0, 0.5, 5.0]])
     virt = project_points(X, K0).uv[0]

@@ -2,7 +2,7 @@
 
 ``project_pinhole(points, P3x4_K, R, t)`` computes, for each row ``X`` of ``points``::
 
-    Xc = R @ X + t;  valid = Xc_z > 0 (and finite);  u = (fx x + s y + cx), v = fy y + cy
+    Xc = R @ X + t;  valid = Xc_z > 0, Xc and (u, v) finite;  u = fx x + s y + cx, v = fy y + cy
 
 with ``x = Xc_x / Xc_z``, ``y = Xc_y / Xc_z``; invalid points get NaN. The twin is
 :func:`imageform.geometry.camera._project_xp`; ``tests/geometry/test_camera.py`` checks that
@@ -37,16 +37,17 @@ def _project_kernel(pts, K, R, t, uv, valid):  # type: ignore[no-untyped-def]  #
         xc = r00 * X + r01 * Y + r02 * Z + t0
         yc = r10 * X + r11 * Y + r12 * Z + t1
         zc = r20 * X + r21 * Y + r22 * Z + t2
+        u = nan
+        v = nan
         if zc > 0.0 and np.isfinite(xc) and np.isfinite(yc) and np.isfinite(zc):
             x = xc / zc
             y = yc / zc
-            uv[i, 0] = fx * x + s * y + cx
-            uv[i, 1] = fy * y + cy
-            valid[i] = True
-        else:
-            uv[i, 0] = nan
-            uv[i, 1] = nan
-            valid[i] = False
+            u = fx * x + s * y + cx
+            v = fy * y + cy
+        ok = np.isfinite(u) and np.isfinite(v)  # a projection that overflows is invalid
+        uv[i, 0] = u if ok else nan
+        uv[i, 1] = v if ok else nan
+        valid[i] = ok
 
 
 def project_pinhole(

@@ -49,7 +49,7 @@ def _white_arr(white: Any, observer: int, like: Any) -> Any:
 
 
 def _f(xp: Any, t: Any) -> Any:
-    cube = xp.pow(xp.where(t > _EPS, t, xp.ones_like(t)), 1.0 / 3.0)
+    cube = xp.pow(xp.clip(t, min=_EPS), 1.0 / 3.0)  # below ε the branch is unused
     return xp.where(t > _EPS, cube, _LIN_SLOPE * t + _LIN_OFFSET)
 
 

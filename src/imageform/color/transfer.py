@@ -72,8 +72,11 @@ _ROMM_SLOPE = 16.0
 
 
 def _pos_pow(xp: Any, x: Any, p: float) -> Any:
-    """``x ** p`` for the branch where x > 0; other elements are fed 1 (their branch is unused)."""
-    return xp.pow(xp.where(x > 0, x, xp.ones_like(x)), p)
+    """``x ** p`` for the branch where x is above a breakpoint > 1e-30.
+
+    Elements below are clipped to 1e-30 (their branch is unused): no NaN from a negative
+    base, and gradients stay finite, in one pass (a ``where`` on ``x > 0`` took three)."""
+    return xp.pow(xp.clip(x, min=1e-30), p)
 
 
 # ---------------------------------------------------------------- private kernels (clean arrays)

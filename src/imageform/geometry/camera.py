@@ -15,6 +15,7 @@ where a camera obscura or a sensor sees it: the image is inverted, ``u' = 2 cx -
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from typing import Any, Literal, NamedTuple
 
@@ -116,17 +117,22 @@ def _project_xp(
         # rows with inf give NaN in the product; they are masked out below: silence NumPy
         with np.errstate(invalid="ignore"):
             Xc = X @ xp.matrix_transpose(R) + t[..., None, :] if X.ndim >= 2 else R @ X + t
+    # A point is valid when 0 < z < inf and its pixel coordinates are finite: the same as
+    # "z > 0 and X_c finite" except that a finite point whose projection overflows is
+    # invalid too. No isfinite over (N, 3) (PyTorch runs it as several passes) and every
+    # pass on contiguous (N,) vectors: ``w - w == 0`` is the finiteness test, K is divided
+    # by K[2, 2] (9 numbers) rather than u and v (2N).
     z = Xc[..., 2]
-    valid = (z > 0) & xp.all(xp.isfinite(Xc), axis=-1)
-    zs = xp.where(valid, z, xp.ones_like(z))  # no division by zero; gradients stay finite
+    front = (z > 0) & (z < math.inf)
+    zs = xp.where(front, z, xp.ones_like(z))  # no division by zero; gradients stay finite
     x = Xc[..., 0] / zs
     y = Xc[..., 1] / zs
-    Kb = K[..., None, :, :] if (X.ndim >= 2 and K.ndim > 2) else K
-    u = Kb[..., 0, 0] * x + Kb[..., 0, 1] * y + Kb[..., 0, 2]
-    v = Kb[..., 1, 1] * y + Kb[..., 1, 2]
-    k22 = Kb[..., 2, 2]
-    uv = xp.stack((u / k22, v / k22), axis=-1)
-    uv = xp.where(valid[..., None], uv, xp.full_like(uv, float("nan")))
+    k = K / K[..., 2:3, 2:3]
+    kb = k[..., None, :, :] if (X.ndim >= 2 and K.ndim > 2) else k
+    u = kb[..., 0, 0] * x + kb[..., 0, 1] * y + kb[..., 0, 2]
+    v = kb[..., 1, 1] * y + kb[..., 1, 2]
+    valid = front & (u - u == 0) & (v - v == 0)
+    uv = xp.stack((xp.where(valid, u, math.nan), xp.where(valid, v, math.nan)), axis=-1)
     return uv, valid
 
 
@@ -162,7 +168,8 @@ def project_points(
     -------
     Projection
         ``uv`` ``(..., N, 2)`` with NaN where ``valid`` is False: points with ``z_cam <= 0``
-        are never projected as if in front.
+        are never projected as if in front; points with NaN/inf coordinates, and finite
+        points whose pixel coordinates overflow the dtype, are invalid too.
 
     Preconditions: ``K`` upper-triangular and non-singular. NumPy input of a single camera
     with more than 20 000 points runs a parallel numba kernel (same numbers).
