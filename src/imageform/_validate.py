@@ -11,6 +11,7 @@ import math
 from collections.abc import Collection, Sequence
 from typing import Any
 
+import array_api_compat
 import numpy as np
 
 from imageform._backend import (
@@ -71,25 +72,34 @@ def _min_max(x: Any, xp: Any) -> tuple[float, float]:
     passes plus a boolean temporary) and gives the maximum for the 0-255 check in the same
     pass.
     """
-    if hasattr(x, "aminmax") and hasattr(x, "detach"):  # torch
+    if array_api_compat.is_torch_array(x):
         lo, hi = x.detach().aminmax()
         pair = xp.stack((lo, hi)).cpu().tolist()
         return float(pair[0]), float(pair[1])
-    return float(xp.min(x)), float(xp.max(x))
+    return scalar(xp.min(x)), scalar(xp.max(x))
 
 
-def _all_finite(x: Any, xp: Any) -> bool:
-    if math.prod(x.shape) == 0:
-        return True
-    lo, hi = _min_max(x, xp)
-    return math.isfinite(lo) and math.isfinite(hi)
+def _check_values(x: Any, xp: Any, name: str, *, finite: bool, range_check: bool) -> None:
+    """The value checks of :func:`check_finite` and :func:`as_image` on a float array:
+    NaN/inf (``finite``) and 0-255 values stored as floats (``range_check``), from one
+    min/max reduction."""
+    if not (finite or range_check) or math.prod(x.shape) == 0:
+        return
+    lo, mx = _min_max(x, xp)
+    if finite and not (math.isfinite(lo) and math.isfinite(mx)):
+        raise InvalidInputError(f"{name} contains NaN or inf")
+    if range_check and mx > 1.5 and bool(xp.all(x == xp.round(x))):
+        raise InvalidInputError(
+            f"{name} looks like 0-255 values stored as floats (max {mx:g}); "
+            "divide by 255 or pass uint8"
+        )
 
 
 def check_finite(x: Any, name: str, xp: Any | None = None) -> None:
     """Raise :class:`InvalidInputError` if ``x`` holds NaN or inf."""
     xp = namespace(x) if xp is None else xp
-    if xp.isdtype(x.dtype, "real floating") and not _all_finite(x, xp):
-        raise InvalidInputError(f"{name} contains NaN or inf")
+    if xp.isdtype(x.dtype, "real floating"):
+        _check_values(x, xp, name, finite=True, range_check=False)
 
 
 def as_float(
@@ -245,17 +255,7 @@ _INTEGER_SCALE = {"uint8": 255.0, "uint16": 65535.0}
 
 def _check_image_block(a: Any, name: str, finite: bool, range_check: bool) -> Any:
     """:func:`as_image`'s value checks on one NumPy chunk of a Dask image."""
-    import numpy as np
-
-    if finite and not np.all(np.isfinite(a)):
-        raise InvalidInputError(f"{name} contains NaN or inf")
-    if range_check and a.size:
-        mx = float(np.max(a))
-        if mx > 1.5 and np.all(a == np.round(a)):
-            raise InvalidInputError(
-                f"{name} looks like 0-255 values stored as floats (max {mx:g}); "
-                "divide by 255 or pass uint8"
-            )
+    _check_values(a, np, name, finite=finite, range_check=range_check)
     return a
 
 
@@ -297,15 +297,8 @@ def as_image(
             # lazily: each chunk is checked when it is computed (nothing computed here)
             if finite or range_check:
                 arr = arr.map_blocks(_check_image_block, name, finite, range_check, dtype=arr.dtype)
-        elif math.prod(arr.shape) and (finite or range_check):
-            lo, mx = _min_max(arr, xp)  # one pass for both checks
-            if finite and not (math.isfinite(lo) and math.isfinite(mx)):
-                raise InvalidInputError(f"{name} contains NaN or inf")
-            if range_check and mx > 1.5 and bool(xp.all(arr == xp.round(arr))):
-                raise InvalidInputError(
-                    f"{name} looks like 0-255 values stored as floats (max {mx:g}); "
-                    "divide by 255 or pass uint8"
-                )
+        else:
+            _check_values(arr, xp, name, finite=finite, range_check=range_check)
     if channels is not None:
         if arr.ndim < 1:
             raise InvalidInputError(f"expected {name} with a channel axis, got a scalar")

@@ -39,7 +39,7 @@ def _project_kernel(pts, K, R, t, uv, valid):  # type: ignore[no-untyped-def]  #
         zc = r20 * X + r21 * Y + r22 * Z + t2
         u = nan
         v = nan
-        if zc > 0.0 and np.isfinite(xc) and np.isfinite(yc) and np.isfinite(zc):
+        if 0.0 < zc < np.inf:  # a NaN/inf xc or yc gives a NaN/inf u or v (fx, fy != 0)
             x = xc / zc
             y = yc / zc
             u = fx * x + s * y + cx
