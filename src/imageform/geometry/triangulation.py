@@ -51,9 +51,16 @@ def _linear(P: F64, uv: F64, seen: NDArray[np.bool_]) -> F64:
     A = np.concatenate([r1, r2], axis=1)  # (M, 2V, 4)
     A = A / np.linalg.norm(A, axis=-1, keepdims=True)
     A = A * np.concatenate([seen, seen], axis=1)[..., None]
-    w = np.linalg.eigh(np.swapaxes(A, 1, 2) @ A)[1][..., 0]
+    lam, vec = np.linalg.eigh(np.swapaxes(A, 1, 2) @ A)
+    w = vec[..., 0]
+    # Parallel rays (no baseline) leave a null space of dimension 2 (the ray and the camera
+    # centre): any vector in it solves the DLT, so the solution is undefined, not the camera
+    # centre that eigh may happen to return. Rank is judged at rounding level.
+    rank_deficient = lam[:, 1] <= 64 * np.finfo(float).eps * lam[:, 3]
     with np.errstate(divide="ignore", invalid="ignore"):
-        return w[:, :3] / w[:, 3:4]  # inf/NaN: a point at infinity (parallel rays)
+        X = w[:, :3] / w[:, 3:4]  # inf/NaN: a point at infinity (parallel rays)
+    X[rank_deficient] = np.nan
+    return X
 
 
 def triangulate_points(
