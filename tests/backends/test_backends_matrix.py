@@ -303,6 +303,7 @@ EXCLUDED: dict[str, str] = {
     "parse_colors": "parses colour strings (hex, names) -> NumPy",
     "describe_delta_e": "a Python float -> a sentence",
     "path": "conversion-graph query (space names -> edge list)",
+    "space_name": "a space name -> its canonical spelling",
     "are_metamers": "Spectrum objects (NumPy-backed spectral module)",
     "match_with_primaries": "Spectrum objects (NumPy-backed spectral module)",
     "metamer": "Spectrum objects (NumPy-backed spectral module)",

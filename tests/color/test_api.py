@@ -7,6 +7,7 @@ import imageform.color as color
 CONVERSION_NAMES = {
     "convert",
     "path",
+    "space_name",
     "SPACES",
     "EDGES",
     "RGB_SPACES",

@@ -21,7 +21,7 @@ from imageform.analysis._arrays import image_in, is_dask, read_json, write_json
 from imageform.color.convert import convert
 from imageform.color.delta_e import delta_e
 from imageform.color.transfer import _srgb_decode, _srgb_encode
-from imageform.errors import DegenerateConfigurationError, InvalidInputError
+from imageform.errors import DegenerateConfigurationError, ImageformWarning, InvalidInputError
 
 __all__ = [
     "CORRECTION_METHODS",
@@ -39,7 +39,7 @@ __all__ = [
 CORRECTION_METHODS = {"linear": (1,), "root_polynomial": (1, 2, 3)}
 
 
-class ChartWarning(UserWarning):
+class ChartWarning(ImageformWarning):
     """Chart patches were saturated or missing and are left out of the fit."""
 
 

@@ -19,7 +19,7 @@ from imageform._backend import use_numba
 from imageform._validate import format_shape
 from imageform.analysis._arrays import image_in, is_dask
 from imageform.color.hsv import _srgb_to_hsv
-from imageform.errors import DegenerateConfigurationError, InvalidInputError
+from imageform.errors import DegenerateConfigurationError, ImageformWarning, InvalidInputError
 
 __all__ = [
     "LECTURE_OPENCV",
@@ -36,7 +36,7 @@ __all__ = [
 LECTURE_OPENCV = ((0.0, 20.0), (30.0, 255.0), (80.0, 255.0))
 
 
-class EmptyMaskWarning(UserWarning):
+class EmptyMaskWarning(ImageformWarning):
     """A segmentation selected no pixel (check the thresholds and their units)."""
 
 

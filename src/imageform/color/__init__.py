@@ -55,6 +55,7 @@ from imageform.color.convert import (
     SPACES,
     convert,
     path,
+    space_name,
 )
 from imageform.color.cvd import (
     CVD_DEFICIENCIES,
@@ -293,6 +294,7 @@ __all__ = [
     "rgb_to_xyz_matrix",
     "rgb_to_ycbcr",
     "simulate_cvd",
+    "space_name",
     "spectral_locus",
     "srgb_to_bgr",
     "srgb_to_cmy",

@@ -46,7 +46,7 @@ from .rgb_spaces import RGB_SPACES, _apply_matrix, rgb_to_xyz_matrix, xyz_to_rgb
 from .transfer import _decode_clean, _encode_clean
 from .whitepoints import resolve_white
 
-__all__ = ["EDGES", "SPACES", "Edge", "convert", "path"]
+__all__ = ["EDGES", "SPACES", "Edge", "convert", "path", "space_name"]
 
 Fn = Callable[[Any, Any, dict[str, Any]], Any]
 
@@ -180,6 +180,17 @@ def _space(name: object, what: str) -> str:
         if key in SPACES:
             return key
     return check_option(name, SPACES, f"colour space ({what})")
+
+
+def space_name(name: object, what: str = "colour space") -> str:
+    """The canonical name of a colour space (``"Display-P3"`` -> ``"display_p3"``, ``"grey"``
+    -> ``"gray"``); an unknown name raises, listing the valid ones, with ``what`` naming the
+    argument (``--to``).
+
+    >>> space_name("CIELab"), space_name("grey")
+    ('lab', 'gray')
+    """
+    return _space(name, what)
 
 
 def path(src: str, dst: str) -> list[Edge]:
