@@ -13,7 +13,6 @@ from imageform.cli import (
     batch_cmd,
     calibration_cmds,
     geometry_cmds,
-    lecture_cmd,
     optics_cmds,
     sensor_cmds,
     simulate_cmd,
@@ -31,7 +30,6 @@ app = typer.Typer(
 
 for _module in (
     simulate_cmd,
-    lecture_cmd,
     geometry_cmds,
     vanishing_cmd,
     calibration_cmds,
