@@ -203,3 +203,15 @@ def test_backends(xp_name: str, dst: str) -> None:
     np.testing.assert_allclose(got, convert(x, "srgb", dst), atol=1e-9)
     back = to_np(convert(to_backend(got, xp_name), dst, "srgb"))
     np.testing.assert_allclose(back, x, atol=1e-9)
+
+
+def test_python_integers_are_8bit_codes() -> None:
+    """One documented rule: a tuple or list of Python ints is 8-bit codes 0-255."""
+    np.testing.assert_array_equal(
+        convert((200, 50, 50), "srgb", "hsv"),
+        convert(np.array([200, 50, 50], np.uint8), "srgb", "hsv"),
+    )
+    with pytest.raises(InvalidInputError, match=r"Python integers 0-255.*got values 0\.\.300"):
+        convert((300, 0, 0), "srgb", "hsv")
+    with pytest.raises(InvalidInputError, match="int64"):  # an int64 array has no known range
+        convert(np.array([200, 50, 50]), "srgb", "hsv")
