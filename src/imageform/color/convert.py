@@ -318,6 +318,6 @@ def _fast_path(image: object, s: str, d: str, p: dict[str, Any]) -> Any:
         return None
     if not use_numba(image, min_size=3 * 4096):
         return None
-    from imageform._kernels import color_fast
+    from imageform.color import _fast
 
-    return color_fast.dispatch(image, s, d, p)
+    return _fast.dispatch(image, s, d, p)
