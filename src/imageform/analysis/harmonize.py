@@ -16,11 +16,11 @@ from typing import Any
 
 import numpy as np
 
+from imageform._colormath import srgb_decode, srgb_encode
 from imageform._validate import as_float, check_option, format_shape
 from imageform.analysis._arrays import image_in, is_dask, read_json, write_json
 from imageform.color.convert import convert
 from imageform.color.delta_e import delta_e
-from imageform.color.transfer import _srgb_decode, _srgb_encode
 from imageform.errors import DegenerateConfigurationError, ImageformWarning, InvalidInputError
 
 __all__ = [
@@ -78,9 +78,9 @@ def root_polynomial_terms(rgb: Any, degree: int) -> Any:
 
 
 def _apply_block(rgb: np.ndarray, matrix: np.ndarray, degree: int, clip: bool) -> np.ndarray:
-    lin = _srgb_decode(np, rgb)
+    lin = srgb_decode(np, rgb)
     out = root_polynomial_terms(lin, degree) @ matrix.T.astype(rgb.dtype)
-    enc = np.asarray(_srgb_encode(np, out), dtype=rgb.dtype)
+    enc = np.asarray(srgb_encode(np, out), dtype=rgb.dtype)
     return np.clip(enc, 0.0, 1.0) if clip else enc
 
 
@@ -332,7 +332,7 @@ def fit_color_correction(
             ChartWarning,
             stacklevel=2,
         )
-    terms = root_polynomial_terms(_srgb_decode(np, a[use]), deg)
+    terms = root_polynomial_terms(srgb_decode(np, a[use]), deg)
     n_terms = terms.shape[1]
     if terms.shape[0] < n_terms:
         raise DegenerateConfigurationError(
@@ -344,7 +344,7 @@ def fit_color_correction(
             f"the chart does not determine a {key} correction of degree {deg}: its patches "
             "span too few colours (rank-deficient design)"
         )
-    sol, *_ = np.linalg.lstsq(terms, _srgb_decode(np, b[use]), rcond=None)
+    sol, *_ = np.linalg.lstsq(terms, srgb_decode(np, b[use]), rcond=None)
     return ColorCorrection(key, deg, sol.T.copy(), int(use.sum()))
 
 

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from imageform.color.hsv import _hsv_to_srgb
+from imageform._colormath import hsv_to_rgb, srgb_decode, srgb_encode
 from imageform.errors import InvalidInputError
 
 __all__ = [
@@ -130,7 +130,7 @@ def synthetic_endoscopy_image(
     # vignetting on V (cos^4-like falloff to 0.55 at the corners), except the highlights
     vig = 1.0 - 0.45 * (xn**2 + yn**2) / 2.0
     val = np.where(val >= 1.0, val, val * vig)
-    rgb = _hsv_to_srgb(np, np.stack([hue, sat, val], axis=-1))
+    rgb = hsv_to_rgb(np, np.stack([hue, sat, val], axis=-1))
     rgb = rgb + rng.normal(0.0, 0.03, rgb.shape)
     return np.clip(rgb, 0.0, 1.0), truth
 
@@ -226,8 +226,6 @@ def synthetic_shading_scene(
     >>> img.shape, bool(m.any())
     ((128, 192, 3), True)
     """
-    from imageform.color.transfer import _srgb_decode, _srgb_encode
-
     rng = np.random.default_rng(seed)
     hgt, wid = shape
     y, x = np.mgrid[0:hgt, 0:wid].astype(np.float64)
@@ -240,7 +238,7 @@ def synthetic_shading_scene(
     red = np.array([0.78, 0.22, 0.2])
     bg = np.array([0.62, 0.66, 0.3])
     enc = np.where(truth[..., None], red, bg) + 0.02 * _smooth_noise(rng, shape, 3.0)[..., None]
-    lin = _srgb_decode(np, np.clip(enc, 0, 1))
+    lin = srgb_decode(np, np.clip(enc, 0, 1))
     ramp = np.linspace(shading[0], shading[1], wid)[None, :, None]
-    out = _srgb_encode(np, lin * ramp) + rng.normal(0, 0.004, lin.shape)
+    out = srgb_encode(np, lin * ramp) + rng.normal(0, 0.004, lin.shape)
     return np.clip(out, 0.0, 1.0), truth

@@ -23,6 +23,7 @@ from imageform.spectral.data import (
 from imageform.spectral.illuminants import (
     blackbody_spectrum,
     daylight_spectrum,
+    daylight_spectrum_from_xy,
     illuminant,
     planck,
     planckian_cct,
@@ -59,6 +60,7 @@ __all__ = [
     "colorchecker_reflectances",
     "cone_fundamentals",
     "daylight_spectrum",
+    "daylight_spectrum_from_xy",
     "illuminant",
     "illuminant_table",
     "integration_weights",
