@@ -286,6 +286,7 @@ EXCLUDED: dict[str, str] = {
     "cvd_matrix": "no array input (deficiency name -> NumPy matrix)",
     "machado_matrix": "no array input (deficiency name -> NumPy matrix)",
     "rgb_to_xyz_matrix": "no array input (space name -> NumPy matrix)",
+    "rgb_space": "no array input (space name -> RGBSpace record)",
     "xyz_to_rgb_matrix": "no array input (space name -> NumPy matrix)",
     "resolve_white": "no array input (white name / tuple -> NumPy XYZ)",
     "whitepoint_xy": "no array input (name -> Python floats)",
