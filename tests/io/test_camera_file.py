@@ -387,3 +387,24 @@ def test_camera_file_refuses_bad_fields() -> None:
     with pytest.raises(UnknownOptionError, match="unknown key"):
         CameraFile(Camera(K0), std={"focal": 1.0})
     assert set(DISTORTION_MODELS) == {"none", "brown_conrady", "kannala_brandt", "division"}
+
+
+DOCS = Path(__file__).resolve().parents[2] / "docs"
+
+
+@pytest.mark.parametrize("page", sorted(DOCS.glob("*.md")), ids=lambda p: p.name)
+def test_camera_files_in_the_docs_are_valid(page: Path, tmp_path: Path) -> None:
+    """Every complete camera file shown in the docs (a TOML block with the format marker)
+    is read without error."""
+    import re
+
+    blocks = [
+        b
+        for b in re.findall(r"```toml\n(.*?)```", page.read_text(), re.DOTALL)
+        if 'format = "imageform-camera"' in b
+    ]
+    for i, block in enumerate(blocks):
+        path = tmp_path / f"{page.stem}-{i}.toml"
+        path.write_text(block)
+        cf = read_camera(path)
+        assert cf.version == CAMERA_FILE_VERSION and cf.camera.image_size == (640, 480)

@@ -76,9 +76,10 @@ def project(run: Run, opts: ProjectOptions, *, out: Path, points: Path) -> Resul
 
     from imageform.geometry import Camera, intrinsic_matrix
 
+    has_pose = False
     if opts.camera is not None:
         cf = camera_from(opts.camera)
-        cam, model = cf.camera, cf.distortion_model
+        cam, model, has_pose = cf.camera, cf.distortion_model, cf.has_pose
     else:
         assert opts.fx is not None
         K = intrinsic_matrix(
@@ -115,6 +116,7 @@ def project(run: Run, opts: ProjectOptions, *, out: Path, points: Path) -> Resul
         "output": out,
         "camera": opts.camera,
         "distortion": model,
+        "pose": has_pose,
         "points": n,
         "valid": n_valid,
         "invalid": n - n_valid,
@@ -129,7 +131,10 @@ def project(run: Run, opts: ProjectOptions, *, out: Path, points: Path) -> Resul
             f"{summary['not_finite']} not finite, {behind} at or behind the camera)"
         )
     if outside:
-        text.append(f"{outside} valid points fall outside the {cam.image_size} image")
+        w, h = cam.image_size or (0, 0)
+        text.append(f"{outside} valid points fall outside the {w} x {h} px image")
+    if not has_pose:
+        text.append("the camera has no pose: X, Y, Z are taken in the camera frame")
     return Result(summary, tuple(text))
 
 
@@ -303,18 +308,24 @@ def _observations(table: Any, n_cams: int, views: str | None) -> Any:
     if None in cols:
         raise InvalidInputError(f"{table.path}: expected columns image, X, Y, Z, u, v")
     keys: dict[tuple[str, ...], int] = {}
-    cells: dict[tuple[int, int], tuple[int, ...]] = {}
+    cells: dict[tuple[int, int], int] = {}
     for i, row in enumerate(table.rows):
         if row[img] not in names:
             continue
         key = tuple(row[c].strip() for c in cols[:3])
         keys.setdefault(key, len(keys))
-        cells[(keys[key], names.index(row[img]))] = (i,)
+        cell = (keys[key], names.index(row[img]))
+        if cell in cells:
+            raise InvalidInputError(
+                f"{table.path}:{table.lines[i]}: point ({', '.join(key)}) of image "
+                f"{row[img]!r} appears twice (first on line {table.lines[cells[cell]]})"
+            )
+        cells[cell] = i
     for name in names:
         if not any(table.rows[i][img] == name for i in range(len(table.rows))):
             raise InvalidInputError(f"{table.path}: no rows of image {name!r}")
     uv = np.full((len(keys), 2 * n_cams), np.nan)
-    for (m, k), (i,) in cells.items():
+    for (m, k), i in cells.items():
         uv[m, 2 * k : 2 * k + 2] = table.numbers(cols[3:], finite=False, rows=[i])[0]
     return uv
 
