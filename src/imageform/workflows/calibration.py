@@ -73,9 +73,9 @@ class CalibrateOptions(ImageIn):
 
     board: str = option(help="Inner corners COLSxROWS, e.g. 9x6 (not squares).", metavar="CxR")
     square: str = option(
-        "1mm",
-        help="Side of a square with unit (25mm, 2.5cm, 1in; bare number: mm). Sets the unit "
-        "of every pose and of --corners.",
+        "1",
+        help="Side of a square with unit (25mm, 2.5cm, 1in; bare number: mm). Only poses and "
+        "--corners depend on it (the default counts them in squares).",
     )
     plot: Path | None = option(
         None, help="Also write a reprojection-error plot (PNG, SVG or PDF).", output=True
