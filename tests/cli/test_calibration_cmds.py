@@ -10,10 +10,11 @@ import numpy as np
 import pytest
 
 from imageform.cli import main
-from imageform.cli.calibration_cmds import parse_board, parse_length_mm
 from imageform.errors import InvalidInputError
-from imageform.geometry import CalibrationResult
+from imageform.geometry import Camera, KannalaBrandt
 from imageform.geometry.calibration_refine import rodrigues
+from imageform.io import read_camera, write_camera
+from imageform.workflows.calibration import MAX_BOARD_CORNERS, MIN_VIEWS, parse_board
 
 K = np.array([[800.0, 0.0, 320.0], [0.0, 800.0, 240.0], [0.0, 0.0, 1.0]])
 
@@ -23,106 +24,158 @@ def test_calibrate_opencv_left(
 ) -> None:
     pattern = str(shared_data / "opencv-left" / "left0[1-6].jpg")
     out, plot = tmp_path / "cam.toml", tmp_path / "err.png"
-    code = main(
-        ["calibrate", pattern, "--board", "9x6", "--square", "25mm", "--out", str(out),
-         "--plot", str(plot)]
-    )  # fmt: skip
+    code = main(["calibrate", pattern, "--board", "9x6", "--square", "25mm", "-o", str(out),
+                 "--plot", str(plot)])  # fmt: skip
     captured = capsys.readouterr()
     assert code == 0, captured.err
     assert "left03.jpg" in captured.out and "RMS" in captured.out
     assert plot.stat().st_size > 1000
-    cal = CalibrationResult.from_toml(out)
-    assert 500 < cal.K[0, 0] < 570 and cal.image_size == (640, 480)
+    cf = read_camera(out)
+    assert 500 < cf.camera.K[0, 0] < 570 and cf.camera.image_size == (640, 480)
+    assert cf.distortion_model == "brown_conrady" and not cf.has_pose
+    assert cf.provenance.views_used == 6 and cf.provenance.images[2] == "left03.jpg"
+    assert cf.provenance.rms_px is not None and cf.provenance.rms_px < 0.5
+    assert cf.std["fx"] > 0 and cf.std["skew"] == 0.0 and "skew" in cf.provenance.fixed
+    assert "--board 9x6 --square 25mm" in (cf.provenance.command or "")
     # output exists now: refused without --force
-    assert main(["calibrate", pattern, "--board", "9x6", "--out", str(out)]) == 1
+    assert main(["calibrate", pattern, "--board", "9x6", "-o", str(out)]) == 1
     assert "--force" in capsys.readouterr().err
-    assert (
-        main(["calibrate", pattern, "--board", "9x6", "--out", str(out), "--force", "--json"]) == 0
-    )
+    assert main(["calibrate", pattern, "--board", "9x6", "-o", str(out), "--force", "--json"]) == 0
     summary = json.loads(capsys.readouterr().out)
     assert summary["views_used"] == 6 and len(summary["per_view"]) == 6
+    assert summary["distortion"]["model"] == "brown_conrady"
+
+
+def test_calibrate_square_units_and_corners(
+    shared_data: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """--square goes through the one unit table: 2.5cm is 25 mm in the corner table; the
+    camera does not depend on the unit."""
+    pattern = str(shared_data / "opencv-left" / "left0[1-4].jpg")
+    corners = tmp_path / "c.csv"
+    args = ["calibrate", pattern, "--board", "9x6", "-o", str(tmp_path / "a.toml")]
+    assert main([*args, "--square", "2.5cm", "--corners", str(corners)]) == 0
+    rows = corners.read_text().splitlines()
+    assert rows[0] == "image,X,Y,Z,u,v" and len(rows) == 1 + 4 * 54
+    assert [float(v) for v in rows[2].split(",")[1:4]] == [25.0, 0.0, 0.0]
+    a = read_camera(tmp_path / "a.toml").camera
+    args[-1] = str(tmp_path / "b.toml")
+    assert main([*args, "--square", "1in"]) == 0
+    b = read_camera(tmp_path / "b.toml").camera
+    np.testing.assert_allclose(np.asarray(a.K), np.asarray(b.K), rtol=1e-7)
+    capsys.readouterr()
+    assert main([*args, "--square", "25 furlongs", "--force"]) == 2
+    assert "unknown unit 'furlongs' for --square; valid: m, cm, mm" in capsys.readouterr().err
+    assert main([*args, "--square", "-25mm", "--force"]) == 2
+    assert "expected --square > 0" in capsys.readouterr().err
 
 
 def test_calibrate_bad_input(
     shared_data: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     out = str(tmp_path / "cam.toml")
-    assert main(["calibrate", str(tmp_path / "*.jpg"), "--board", "9x6", "--out", out]) == 1
+    assert main(["calibrate", str(tmp_path / "*.jpg"), "--board", "9x6", "-o", out]) == 1
     assert "no files match" in capsys.readouterr().err
     bad = tmp_path / "bad.jpg"
     bad.write_bytes(b"not an image")
-    assert main(["calibrate", str(bad), "--board", "9x6", "--out", out]) == 1
+    assert main(["calibrate", str(bad), "--board", "9x6", "-o", out]) == 1
     assert "cannot read" in capsys.readouterr().err
     # no board: the pattern size is wrong for every view
     one = str(shared_data / "opencv-left" / "left01.jpg")
-    assert main(["calibrate", one, "--board", "7x7", "--out", out]) == 1
+    assert main(["calibrate", one, "--board", "7x7", "-o", out]) == 1
     err = capsys.readouterr().err
-    assert "no 7x7 checkerboard found" in err and "warning" in err
+    assert "no 7x7 checkerboard found in any of the 1 images (left01.jpg: " in err
     # images of different sizes
     from PIL import Image
 
     small = tmp_path / "small.png"
     Image.open(one).resize((320, 240)).save(small)
-    assert main(["calibrate", one, str(small), "--board", "9x6", "--out", out]) == 1
+    assert main(["calibrate", one, str(small), "--board", "9x6", "-o", out]) == 1
     assert "one size" in capsys.readouterr().err
-    assert main(["calibrate", one, "--board", "nine", "--out", out]) == 1
-    assert "COLSxROWS" in capsys.readouterr().err
-    # one view: too few for the full model
+    # patterns that cannot be a board: bad usage (exit 2)
+    for board in ("nine", "1x5", "0x0", "9x1", f"{MAX_BOARD_CORNERS + 1}x6", "9x6x2"):
+        assert main(["calibrate", one, "--board", board, "-o", out]) == 2, board
+        assert "COLSxROWS" in capsys.readouterr().err
+    # a board too fine for the image: each square needs pixels
+    assert main(["calibrate", one, "--board", "190x120", "-o", out]) == 1
+    assert "cannot be seen in 640 x 480 px images" in capsys.readouterr().err
+    # too few views for the full model: an error, no file
     copy = tmp_path / "only.jpg"
     shutil.copy(one, copy)
-    code = main(["calibrate", str(copy), "--board", "9x6", "--out", out])
+    assert main(["calibrate", str(copy), "--board", "9x6", "-o", out]) == 1
     err = capsys.readouterr().err
-    assert code == 0 and "only 1 view" in err
+    assert f"in 1 view(s) (only.jpg) of 1; calibrate needs at least {MIN_VIEWS}" in err
+    two = [one, str(shared_data / "opencv-left" / "left02.jpg")]
+    assert main(["calibrate", *two, "--board", "9x6", "-o", out]) == 1
+    assert "in 2 view(s)" in capsys.readouterr().err
+    assert not Path(out).exists()
+    assert main(["calibrate", one, "--board", "9x6", "-o", out, "--fix", "focal"]) == 2
+    assert "unknown --fix 'focal'; valid: fx, fy" in capsys.readouterr().err
 
 
-def test_parsers() -> None:
-    assert parse_board("9x6") == (9, 6)
-    assert parse_length_mm("2.5cm") == 25.0 and parse_length_mm("1in") == 25.4
-    assert parse_length_mm("30") == 30.0
-    with pytest.raises(InvalidInputError, match="unit"):
-        parse_length_mm("25 furlongs")
-    with pytest.raises(InvalidInputError, match="COLSxROWS"):
-        parse_board("1x6")
+def test_calibrate_literal_bracket_names(
+    shared_data: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A file called ``view[1].jpg`` that exists is that file, not a glob pattern."""
+    names = []
+    for i in (1, 2, 3):
+        dst = tmp_path / f"view[{i}].jpg"
+        shutil.copy(shared_data / "opencv-left" / f"left0{i}.jpg", dst)
+        names.append(str(dst))
+    out = tmp_path / "cam.toml"
+    assert main(["calibrate", *names, "--board", "9x6", "-o", str(out), "--json"]) == 0
+    summary = json.loads(capsys.readouterr().out)
+    assert summary["views_used"] == 3
+    assert read_camera(out).provenance.images == ("view[1].jpg", "view[2].jpg", "view[3].jpg")
 
 
-def _camera_toml(path: Path, rvec: list[float], t: list[float]) -> None:
-    path.write_text(
-        f"[camera]\nfx = 800.0\nfy = 800.0\ncx = 320.0\ncy = 240.0\nrvec = {rvec}\nt = {t}\n"
-    )
+def test_parse_board() -> None:
+    assert parse_board("9x6") == (9, 6) and parse_board(" 8 X 5 ") == (8, 5)
+    for bad in ("1x6", "0x0", "9", "x6", f"{MAX_BOARD_CORNERS + 1}x2"):
+        with pytest.raises(InvalidInputError, match="COLSxROWS"):
+            parse_board(bad)
+
+
+def _camera_file(path: Path, rvec: list[float], t: list[float], model: object = None) -> Path:
+    cam = Camera(K, rodrigues(np.array([rvec]))[0], t, (640, 480), distortion=model)
+    return write_camera(path, cam, has_pose=True)
 
 
 def _row(a: np.ndarray, b: np.ndarray) -> str:
     return ",".join(repr(float(v)) for v in (*a, *b))
 
 
-def test_pose_and_triangulate(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+POSES = [([0.0, 0.0, 0.0], [0.0, 0.0, 0.0]), ([0.0, -0.15, 0.0], [-1.0, 0.0, 0.1])]
+
+
+@pytest.mark.parametrize("model", [None, KannalaBrandt(0.05, -0.01, 2e-3, -1e-4)])
+def test_pose_and_triangulate(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], model: object
+) -> None:
+    """Pose from correspondences, then triangulation with the written camera: both use the
+    camera file's distortion model (a fisheye here, not only Brown-Conrady)."""
     rng = np.random.default_rng(0)
     X = rng.uniform(-1, 1, (20, 3)) + [0, 0, 6]
-    poses = [([0.0, 0.0, 0.0], [0.0, 0.0, 0.0]), ([0.0, -0.15, 0.0], [-1.0, 0.0, 0.1])]
-    uvs = []
-    for rv, t in poses:
-        cam = X @ rodrigues(np.array([rv]))[0].T + t
-        uvs.append(cam[:, :2] / cam[:, 2:] * 800 + [320, 240])
-    cam_toml = tmp_path / "cam.toml"
-    _camera_toml(cam_toml, *poses[0])
+    cams = [Camera(K, rodrigues(np.array([r]))[0], t, distortion=model) for r, t in POSES]
+    uvs = [np.asarray(c.project(X).uv) for c in cams]
+    cam_toml = _camera_file(tmp_path / "cam.toml", *POSES[0], model)
     pts = tmp_path / "pairs.csv"
     pts.write_text("X,Y,Z,u,v\n" + "\n".join(_row(a, b) for a, b in zip(X, uvs[1], strict=True)))
     out = tmp_path / "posed.toml"
-    assert (
-        main(["pose", "--camera", str(cam_toml), "--points", str(pts), "--out", str(out), "--json"])
-        == 0
-    )
+    assert main(["pose", str(cam_toml), str(pts), "-o", str(out), "--json"]) == 0
     s = json.loads(capsys.readouterr().out)
-    np.testing.assert_allclose(s["t"], poses[1][1], atol=1e-8)
-    assert s["valid"] and s["inliers"] == 20
-    assert main(["pose", "--camera", str(cam_toml), "--points", str(pts), "--ransac"]) == 0
+    np.testing.assert_allclose(s["t"], POSES[1][1], atol=1e-8)
+    assert s["inliers"] == 20 and s["rms_px"] < 1e-6
+    posed = read_camera(out)
+    assert posed.has_pose and posed.camera.distortion == model
+    assert posed.provenance.based_on == "cam.toml" and posed.provenance.points_used == 20
+    assert main(["pose", str(cam_toml), str(pts), "--ransac"]) == 0
     assert "20/20 inliers" in capsys.readouterr().out
     # triangulate with the camera written by `pose`
     obs = tmp_path / "obs.csv"
     obs.write_text("\n".join(_row(a, b) for a, b in zip(uvs[0], uvs[1], strict=True)))
     res_csv = tmp_path / "X.csv"
-    cams = ["--camera", str(cam_toml), "--camera", str(out)]
-    code = main(["triangulate", *cams, "--points", str(obs), "--out", str(res_csv)])
+    code = main(["triangulate", str(obs), str(cam_toml), str(out), "-o", str(res_csv)])
     assert code == 0, capsys.readouterr().err
     got = np.loadtxt(res_csv, delimiter=",", skiprows=1)
     np.testing.assert_allclose(got[:, :3], X, atol=1e-7)
@@ -130,17 +183,36 @@ def test_pose_and_triangulate(tmp_path: Path, capsys: pytest.CaptureFixture[str]
 
 
 def test_pose_triangulate_bad_input(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    cam_toml = tmp_path / "cam.toml"
-    _camera_toml(cam_toml, [0.0, 0.0, 0.0], [0.0, 0.0, 0.0])
+    cam_toml = _camera_file(tmp_path / "cam.toml", [0.0, 0.0, 0.0], [0.0, 0.0, 0.0])
     pts = tmp_path / "p.csv"
     pts.write_text("1,2,3,4\n")
-    assert main(["pose", "--camera", str(cam_toml), "--points", str(pts)]) == 1
+    assert main(["pose", str(cam_toml), str(pts)]) == 1
     assert "5 columns" in capsys.readouterr().err
     pts.write_text("0,0,5,320,240\n1,0,5,480,240\n0,1,5,320,400\n")
-    assert main(["pose", "--camera", str(cam_toml), "--points", str(pts)]) == 1
+    assert main(["pose", str(cam_toml), str(pts)]) == 1
     assert "at least 4 points" in capsys.readouterr().err
+    pts.write_text("0,0,5,320,240\nnan,0,5,480,240\n0,1,5,320,400\n1,1,5,480,400\n")
+    assert main(["pose", str(cam_toml), str(pts)]) == 1
+    assert "p.csv:2: expected finite numbers" in capsys.readouterr().err
     obs = tmp_path / "obs.csv"
-    obs.write_text("1,2,3,4\n")
+    obs.write_text("1,2,3\n")
     out = str(tmp_path / "X.csv")
-    assert main(["triangulate", "--camera", str(cam_toml), "--points", str(obs), "--out", out]) == 1
-    assert "2 columns" in capsys.readouterr().err
+    other = _camera_file(tmp_path / "b.toml", [0.0, 0.1, 0.0], [-1.0, 0.0, 0.0])
+    assert main(["triangulate", str(obs), str(cam_toml), str(other), "-o", out]) == 1
+    assert "expected 4 columns" in capsys.readouterr().err
+    # one camera, cameras without a pose, cameras at one place: errors, not "0 valid"
+    obs.write_text("320,240,300,240\n")
+    assert main(["triangulate", str(obs), str(cam_toml), "-o", out]) == 1
+    assert "2 or more camera files" in capsys.readouterr().err
+    nopose = write_camera(tmp_path / "nopose.toml", Camera(K))
+    assert main(["triangulate", str(obs), str(nopose), str(other), "-o", out]) == 1
+    assert "nopose.toml has no pose" in capsys.readouterr().err
+    same = _camera_file(tmp_path / "same.toml", [0.0, 0.3, 0.0], [0.0, 0.0, 0.0])
+    assert main(["triangulate", str(obs), str(cam_toml), str(same), "-o", out]) == 1
+    assert "same centre" in capsys.readouterr().err
+    # every point behind the cameras: nothing to triangulate is a failure
+    side = _camera_file(tmp_path / "side.toml", [0.0, 0.0, 0.0], [-1.0, 0.0, 0.0])
+    obs.write_text("240,240,400,240\n")  # rays that meet only at z = -5
+    assert main(["triangulate", str(obs), str(cam_toml), str(side), "-o", out]) == 1
+    assert "none of the 1 points could be triangulated" in capsys.readouterr().err
+    assert not Path(out).exists()

@@ -29,16 +29,25 @@ def test_version(capsys: pytest.CaptureFixture[str]) -> None:
 
 def test_project_csv(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     pts = tmp_path / "points.csv"
-    pts.write_text("X,Y,Z\n3,-1,5\n0,0,-2\n")
+    pts.write_text("X,Y,Z\n3,-1,5\n0,0,-2\nnan,0,1\n1,,2\n")
     out = tmp_path / "uv.csv"
     assert main(["project", str(pts), "--fx", "100", "--out", str(out), "--json"]) == 0
     summary = json.loads(capsys.readouterr().out)
-    assert summary == {"points": 2, "valid": 1, "output": str(out)}
+    assert {k: summary[k] for k in ("points", "valid", "output")} == {
+        "points": 4,
+        "valid": 1,
+        "output": str(out),
+    }
+    assert summary["invalid"] == 3 and summary["not_finite"] == 2
+    assert summary["behind_camera"] == 1
     lines = out.read_text().splitlines()
     assert lines[0] == "u,v,valid"
     assert [float(v) for v in lines[1].split(",")] == [60.0, -20.0, 1.0]
-    u, _v, ok = lines[2].split(",")
-    assert math.isnan(float(u)) and ok == "0"
+    for line in lines[2:]:  # behind the camera, NaN, an empty cell: nan with valid = 0
+        u, v, ok = line.split(",")
+        assert math.isnan(float(u)) and math.isnan(float(v)) and ok == "0"
+    assert main(["project", str(pts), "--fx", "100", "-o", str(out), "--force"]) == 0
+    assert "3 invalid" in capsys.readouterr().out
     # existing output needs --force; an input is never overwritten
     assert main(["project", str(pts), "--fx", "100", "--out", str(out)]) == 1
     assert "--force" in capsys.readouterr().err
@@ -69,8 +78,19 @@ def test_project_errors(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> N
     cam.write_text("fx = 1\nfy = 1\ncx = 0\ncy = 0\nfocal = 3\n")
     pts.write_text("1,2,3\n")
     assert main(["project", str(pts), "--camera", str(cam), "--out", str(out)]) == 1
-    assert "unknown camera key" in capsys.readouterr().err
-    assert main(["project", str(pts), "--out", str(out)]) == 1
+    assert "unknown key(s) focal; valid: fx, fy" in capsys.readouterr().err
+    # physically meaningless focal lengths: refused at the boundary, nothing written
+    for bad in (["--fx", "-500"], ["--fx", "0"], ["--fx", "500", "--fy", "-1"], ["--fx", "nan"]):
+        assert main(["project", str(pts), *bad, "--out", str(out)]) == 2, bad
+        assert "expected --f" in capsys.readouterr().err
+    cam.write_text("fx = -500\nfy = 500\ncx = 0\ncy = 0\n")
+    assert main(["project", str(pts), "--camera", str(cam), "--out", str(out)]) == 1
+    assert "fx: expected a focal length in pixels > 0, got -500" in capsys.readouterr().err
+    assert not out.exists()
+    assert main(["project", str(pts), "--camera", str(cam), "--fx", "5", "-o", str(out)]) == 2
+    assert "not both" in capsys.readouterr().err
+    assert main(["project", str(pts), "--out", str(out)]) == 2  # no camera at all
+    assert "--camera FILE or --fx" in capsys.readouterr().err
     assert main(["project", str(pts), "--no-such-flag"]) == 2
     assert main(["project", str(tmp_path / "missing.csv"), "--fx", "1", "--out", str(out)]) == 1
 
@@ -97,4 +117,4 @@ def test_vanishing_command(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -
     bad = tmp_path / "bad.png"
     bad.write_bytes(b"not an image")
     assert main(["vanishing", str(bad)]) == 1
-    assert "not a readable image" in capsys.readouterr().err
+    assert "cannot read" in capsys.readouterr().err

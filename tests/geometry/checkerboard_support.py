@@ -21,6 +21,7 @@ __all__ = [
     "board_corners",
     "homography",
     "render_board",
+    "render_board_through",
 ]
 
 VIEWS = [f"left{i:02d}.jpg" for i in (1, 2, 3, 4, 5, 6, 7, 8, 9, 11, 12, 13, 14)]
@@ -52,14 +53,21 @@ def render_board(
     so the true corner is where an unbiased detector must land. (Supersampling quantises
     edge positions to 1/S px: too coarse for a 0.05 px test.)
     """
-    from scipy.special import erf
-
     h, w = shape
     vv, uu = np.mgrid[0:h, 0:w].astype(np.float64)
     Hinv = np.linalg.inv(H)
     W = Hinv[2, 0] * uu + Hinv[2, 1] * vv + Hinv[2, 2]
     X = (Hinv[0, 0] * uu + Hinv[0, 1] * vv + Hinv[0, 2]) / W
     Y = (Hinv[1, 0] * uu + Hinv[1, 1] * vv + Hinv[1, 2]) / W
+    return _shade(X, Y, cols, rows, blur=blur, noise=noise, seed=seed)
+
+
+def _shade(
+    X: np.ndarray, Y: np.ndarray, cols: int, rows: int, *, blur: float, noise: float, seed: int
+) -> np.ndarray:
+    """The board seen at board coordinates (X, Y) (in squares) per pixel; NaN is paper."""
+    from scipy.special import erf
+
     gX = np.hypot(*np.gradient(X))  # board units per pixel across a line X = const
     gY = np.hypot(*np.gradient(Y))
     sig = np.sqrt(blur**2 + 1.0 / 12.0) * np.sqrt(2.0)
@@ -79,9 +87,39 @@ def render_board(
     on_paper = inside(-0.6, cols + 1.6, X, gX) * inside(-0.6, rows + 1.6, Y, gY)
     img = 0.35 + on_paper * (0.85 - 0.35)
     img = on_board * checker + (1 - on_board) * img
+    img = np.where(np.isfinite(img), img, 0.35)
     if noise > 0:
         img = img + np.random.default_rng(seed).normal(0, noise, img.shape)
     return img
+
+
+def render_board_through(
+    camera: object,
+    cols: int,
+    rows: int,
+    square: float,
+    *,
+    blur: float = 0.8,
+    noise: float = 0.0,
+    seed: int = 0,
+) -> np.ndarray:
+    """The board of :func:`~imageform.geometry.checkerboard_points` ``((cols, rows), square)``
+    (world plane Z = 0, inner corner (c, r) at (c square, r square, 0)) seen through an
+    :class:`~imageform.geometry.Camera`, lens distortion included: each pixel's ray (the
+    camera's own undistortion) meets the plane at board coordinates that are shaded as in
+    :func:`render_board`. Image of the camera's ``image_size``."""
+    w, h = camera.image_size  # type: ignore[attr-defined]
+    vv, uu = np.mgrid[0:h, 0:w].astype(np.float64)
+    xy = np.asarray(camera.undistort_pixels(np.stack([uu, vv], -1)))  # type: ignore[attr-defined]
+    d = np.concatenate([xy, np.ones((h, w, 1))], -1)
+    R, t = np.asarray(camera.R), np.asarray(camera.t)  # type: ignore[attr-defined]
+    dw, o = d @ R, -R.T @ t  # world ray directions (rows: (Rᵀ d)ᵀ = dᵀ R) and the centre
+    with np.errstate(divide="ignore", invalid="ignore"):
+        s = -o[2] / dw[..., 2]
+        s = np.where(s > 0, s, np.nan)  # the plane behind the camera is not seen
+    P = o + s[..., None] * dw
+    return _shade(P[..., 0] / square + 1, P[..., 1] / square + 1, cols, rows,
+                  blur=blur, noise=noise, seed=seed)  # fmt: skip
 
 
 def board_corners(cols: int, rows: int, H: np.ndarray) -> np.ndarray:

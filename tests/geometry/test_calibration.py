@@ -192,20 +192,26 @@ def test_opencv_left_matches_published_result(shared_data: Path) -> None:
 # ---------------------------------------------------------------- TOML
 
 
-def test_toml_round_trip_and_project_loader(tmp_path: Path) -> None:
+def test_toml_round_trip_and_camera_file_reader(tmp_path: Path) -> None:
+    """The deprecated to_toml/from_toml still round-trip, and the one camera-file reader
+    (imageform.io.read_camera) reads what to_toml wrote."""
     res = calibrate_camera([OBJ] * len(POSES), synth(), (640, 480))
     path = tmp_path / "cam.toml"
-    res.to_toml(path)
-    back = CalibrationResult.from_toml(path)
+    with pytest.warns(DeprecationWarning):
+        res.to_toml(path)
+    with pytest.warns(DeprecationWarning):
+        back = CalibrationResult.from_toml(path)
     np.testing.assert_array_equal(back.K, res.K)
     assert back.distortion == res.distortion
     assert back.image_size == (640, 480) and back.rms == res.rms
-    from imageform.cli.geometry_cmds import load_camera_toml
+    from imageform.io import read_camera
 
-    cam = load_camera_toml(path)
+    cam = read_camera(path).camera
     np.testing.assert_allclose(np.asarray(cam.K), res.K)
+    assert cam.distortion == res.distortion and res.camera.image_size == (640, 480)
 
 
+@pytest.mark.filterwarnings("ignore::DeprecationWarning")
 def test_from_toml_errors(tmp_path: Path) -> None:
     with pytest.raises(InvalidInputError, match="missing camera key"):
         CalibrationResult.from_toml("fx = 1.0\nfy = 1.0")

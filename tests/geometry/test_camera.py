@@ -333,6 +333,24 @@ def test_camera_bad_inputs() -> None:
         Camera(K0).in_image([1.0, 1.0])
 
 
+@pytest.mark.parametrize("sign", [(-1.0, 1.0), (1.0, -1.0), (-1.0, -1.0)])
+def test_negative_focal_lengths_are_refused(sign: tuple[float, float]) -> None:
+    """A negative focal length mirrors the image: refused by Camera, Intrinsics and
+    intrinsic_matrix (the inverted image of a camera obscura is image_plane="real")."""
+    fx, fy = 500.0 * sign[0], 500.0 * sign[1]
+    K = np.array([[fx, 0.0, 320.0], [0.0, fy, 240.0], [0.0, 0.0, 1.0]])
+    with pytest.raises(InvalidInputError, match=r"fx > 0 and fy > 0.* mirrors"):
+        Camera(K)
+    with pytest.raises(InvalidInputError, match=r"fx > 0 and fy > 0.*mirrors"):
+        Intrinsics(fx, fy, 320.0, 240.0)
+    with pytest.raises(InvalidInputError, match=r"fx > 0 and fy > 0.*mirrors"):
+        intrinsic_matrix(fx, fy, 320.0, 240.0)
+    with pytest.raises(InvalidInputError, match=r"fx > 0 and fy > 0"):
+        intrinsic_matrix(np.array([500.0, fx]), np.array([500.0, fy]), 0.0, 0.0)
+    # K scaled by -1 overall is the same camera: accepted, normalised to K[2, 2] = 1
+    np.testing.assert_allclose(np.asarray(Camera(-K0).K), K0)
+
+
 # -- Intrinsics ----------------------------------------------------------------------------
 
 

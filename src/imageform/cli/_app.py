@@ -11,12 +11,8 @@ import typer
 from imageform.cli import (
     analysis_cmds,
     batch_cmd,
-    calibration_cmds,
-    geometry_cmds,
-    optics_cmds,
     sensor_cmds,
     simulate_cmd,
-    vanishing_cmd,
 )
 
 app = typer.Typer(
@@ -30,10 +26,6 @@ app = typer.Typer(
 
 for _module in (
     simulate_cmd,
-    geometry_cmds,
-    vanishing_cmd,
-    calibration_cmds,
-    optics_cmds,
     sensor_cmds,
     analysis_cmds,
     batch_cmd,

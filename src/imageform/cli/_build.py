@@ -38,6 +38,7 @@ EXIT_CODES = {
 _GROUPS = {
     "simulation": "Simulate a camera",
     "geometry": "Camera geometry",
+    "optics": "Optics",
     "colour": "Colour",
     "sensor": "Sensor",
     "analysis": "Biomedical colour analysis",

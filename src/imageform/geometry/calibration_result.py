@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import tomllib
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -12,6 +13,7 @@ from numpy.typing import NDArray
 
 from imageform.errors import InvalidInputError
 from imageform.geometry.calibration_refine import GLOBAL_NAMES, RefineOutput, rodrigues
+from imageform.geometry.camera import Camera
 from imageform.geometry.distortion import BrownConrady
 
 __all__ = ["CalibrationResult"]
@@ -107,12 +109,31 @@ class CalibrationResult:
         """``‖u - û‖`` (N_k,) of each view, in pixels."""
         return tuple(np.hypot(r[:, 0], r[:, 1]) for r in self.residuals)
 
-    def to_toml(self, path: str | Path | None = None) -> str:
-        """The camera as TOML (``fx, fy, cx, cy, skew, width, height, k1 ... k3``, RMS).
+    @property
+    def camera(self) -> Camera:
+        """The calibrated camera: K, the distortion and the image size, no pose.
 
-        The keys are those read by ``imageform project --camera``; written to ``path`` when
-        given. Poses and statistics are not stored.
+        The camera file of a calibration (K, distortion, standard deviations, RMS) is
+        ``imageform.io.CameraFile.from_calibration(result)``, written by
+        ``imageform.io.write_camera``.
         """
+        size = self.image_size if min(self.image_size) > 0 else None
+        return Camera(self.K, image_size=size, distortion=self.distortion)
+
+    def to_toml(self, path: str | Path | None = None) -> str:
+        """The camera as TOML in the format before the versioned camera file (deprecated).
+
+        .. deprecated::
+            Use ``imageform.io.write_camera(path, CameraFile.from_calibration(result))``:
+            the one camera file (docs/camera-file.md), which every command reads. Files
+            written here are still read by ``imageform.io.read_camera``.
+        """
+        warnings.warn(
+            "CalibrationResult.to_toml is deprecated: use imageform.io.write_camera(path, "
+            "imageform.io.CameraFile.from_calibration(result))",
+            DeprecationWarning,
+            stacklevel=2,
+        )
         K = self.K
         vals: dict[str, float] = {
             "fx": K[0, 0],
@@ -134,17 +155,21 @@ class CalibrationResult:
 
     @classmethod
     def from_toml(cls, source: str | Path) -> CalibrationResult:
-        """The camera written by :meth:`to_toml` (a path, or the TOML text itself).
+        """The camera written by :meth:`to_toml` (a path, or the TOML text itself; deprecated).
+
+        .. deprecated::
+            Use ``imageform.io.read_camera(path)``, which reads this format, the versioned
+            camera file and every distortion model, with full validation.
 
         Keys at the top level or in a ``[camera]`` table; ``skew``, ``k1 ... k3`` default to 0.
         Poses and residuals are not stored: ``rvecs``/``tvecs`` come back empty, ``rms`` from
         the ``[calibration]`` table (NaN if absent), ``image_size`` (0, 0) if absent.
-
-        >>> cal = CalibrationResult.from_toml(
-        ...     "fx = 500.0\\nfy = 500.0\\ncx = 320.0\\ncy = 240.0\\nk1 = -0.1")
-        >>> float(cal.K[0, 0]), cal.distortion.k1
-        (500.0, -0.1)
         """
+        warnings.warn(
+            "CalibrationResult.from_toml is deprecated: use imageform.io.read_camera(path)",
+            DeprecationWarning,
+            stacklevel=2,
+        )
         if isinstance(source, Path) or "=" not in str(source):
             p = Path(source)
             if not p.is_file():

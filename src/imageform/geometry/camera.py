@@ -380,9 +380,10 @@ def _identity_like(K: Array) -> Array:
 class Camera:
     """A pinhole camera: intrinsics K, pose (R, t) world-to-camera, optional image size.
 
-    ``X_cam = R @ X_world + t``; ``P = K [R | t]``. The methods call the public pure
-    functions of this module. ``image_plane="real"`` models the camera obscura: the image
-    behind the pinhole, inverted.
+    ``X_cam = R @ X_world + t``; ``P = K [R | t]``. K's focal lengths must be positive
+    (``fx, fy > 0`` after scaling ``K[2, 2]`` to 1; InvalidInputError otherwise). The
+    methods call the public pure functions of this module. ``image_plane="real"`` models
+    the camera obscura: the image behind the pinhole, inverted.
 
     Examples
     --------
@@ -409,6 +410,13 @@ class Camera:
         xp = namespace(K, self.R, self.t)
         Km = as_matrix(K, "K", (3, 3), xp=xp, batch=False)
         _check_K(Km, xp)
+        fx, fy = float(Km[0, 0] / Km[2, 2]), float(Km[1, 1] / Km[2, 2])
+        if not (fx > 0 and fy > 0):
+            raise InvalidInputError(
+                f"expected focal lengths fx > 0 and fy > 0 in K, got fx = {fx:g}, fy = {fy:g} "
+                "(a negative focal length mirrors the image; the inverted image of a camera "
+                "obscura is image_plane='real')"
+            )
         Rm = as_matrix(self.R, "R", (3, 3), xp=xp, batch=False, dtype=Km.dtype)
         check_rotation(Rm, "R", xp=xp)
         tv = as_points(self.t, "t", 3, xp=xp, dtype=Km.dtype)

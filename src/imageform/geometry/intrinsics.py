@@ -29,6 +29,9 @@ def intrinsic_matrix(
 ) -> Array:
     """The 3×3 calibration matrix K (batched if the parameters are arrays).
 
+    ``fx`` and ``fy`` must be > 0 (zero makes K singular, a negative value mirrors the
+    image): InvalidInputError otherwise.
+
     Examples
     --------
     >>> intrinsic_matrix(500, 500, 320, 240)
@@ -46,6 +49,11 @@ def intrinsic_matrix(
     fx_, fy_, cx_, cy_, s_ = xp.broadcast_arrays(*vals)
     if bool(xp.any(fx_ == 0)) or bool(xp.any(fy_ == 0)):
         raise InvalidInputError("expected non-zero focal lengths fx, fy (K would be singular)")
+    if bool(xp.any(fx_ < 0)) or bool(xp.any(fy_ < 0)):
+        raise InvalidInputError(
+            f"expected focal lengths fx > 0 and fy > 0, got fx min {float(xp.min(fx_)):g}, "
+            f"fy min {float(xp.min(fy_)):g} (a negative focal length mirrors the image)"
+        )
     zero, one = xp.zeros_like(fx_), xp.ones_like(fx_)
     rows = ((fx_, s_, cx_), (zero, fy_, cy_), (zero, zero, one))
     return xp.stack([xp.stack(r, axis=-1) for r in rows], axis=-2)
@@ -102,6 +110,11 @@ class Intrinsics:
             object.__setattr__(self, name, v)
         if self.fx == 0 or self.fy == 0:
             raise InvalidInputError("expected non-zero focal lengths fx, fy (K would be singular)")
+        if self.fx < 0 or self.fy < 0:
+            raise InvalidInputError(
+                f"expected focal lengths fx > 0 and fy > 0, got fx = {self.fx:g}, "
+                f"fy = {self.fy:g} (a negative focal length mirrors the image)"
+            )
         if self.image_size is not None:
             object.__setattr__(self, "image_size", check_image_size(self.image_size))
 

@@ -6,13 +6,25 @@ from __future__ import annotations
 from types import MappingProxyType
 
 from imageform.errors import UnknownOptionError
-from imageform.workflows import color, lecture
+from imageform.workflows import calibration, color, geometry, lecture, optics, vanishing
 from imageform.workflows._spec import Workflow
 
 __all__ = ["WORKFLOWS", "get_workflow"]
 
 #: Workflows by command name, in the order ``imageform --help`` lists them within a group.
-WORKFLOWS = MappingProxyType({w.name: w for w in (*lecture.WORKFLOWS, *color.WORKFLOWS)})
+WORKFLOWS = MappingProxyType(
+    {
+        w.name: w
+        for w in (
+            *lecture.WORKFLOWS,
+            *color.WORKFLOWS,
+            *geometry.WORKFLOWS,
+            *calibration.WORKFLOWS,
+            *vanishing.WORKFLOWS,
+            *optics.WORKFLOWS,
+        )
+    }
+)
 
 
 def get_workflow(name: str) -> Workflow:

@@ -1,0 +1,359 @@
+"""Calibration workflows: calibrate (checkerboard views to a camera file) and undistort."""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from imageform.errors import DegenerateConfigurationError, InvalidInputError
+from imageform.workflows._images import ImageIn, ImageOut, read, write
+from imageform.workflows._spec import (
+    IMAGE_SUFFIXES,
+    Input,
+    Output,
+    Result,
+    Run,
+    Workflow,
+    normalize_choice,
+    option,
+)
+
+__all__ = [
+    "MAX_BOARD_CORNERS",
+    "MIN_VIEWS",
+    "WORKFLOWS",
+    "CalibrateOptions",
+    "UndistortOptions",
+    "parse_board",
+]
+
+#: Fewest views with the board that ``imageform calibrate`` accepts: Zhang's method gets two
+#: constraints on K per view of a plane, so three views determine fx, fy, cx, cy (and skew)
+#: with redundancy left for the distortion.
+MIN_VIEWS = 3
+#: Most inner corners per row or column of a board.
+MAX_BOARD_CORNERS = 200
+#: Fewest pixels a square of the board may span (the detector needs about 5 sigma).
+_MIN_SQUARE_PX = 4
+_PARAMETERS = ("fx", "fy", "cx", "cy", "skew", "k1", "k2", "p1", "p2", "k3")
+
+
+def parse_board(text: str) -> tuple[int, int]:
+    """``"9x6"`` -> ``(9, 6)``: inner corners per row x per column (OpenCV's patternSize).
+
+    Each count must be 2 to :data:`MAX_BOARD_CORNERS`: a row of one corner has no squares on
+    both sides, and larger boards are not made.
+
+    >>> parse_board("9x6")
+    (9, 6)
+    """
+    m = re.fullmatch(r"\s*(\d+)\s*[xX×]\s*(\d+)\s*", str(text))
+    if not m:
+        raise InvalidInputError(
+            f"expected --board COLSxROWS of inner corners (e.g. 9x6), got {text!r}"
+        )
+    cols, rows = int(m.group(1)), int(m.group(2))
+    for n in (cols, rows):
+        if not 2 <= n <= MAX_BOARD_CORNERS:
+            raise InvalidInputError(
+                f"expected --board COLSxROWS with 2 to {MAX_BOARD_CORNERS} inner corners each "
+                f"(a checkerboard of 3 x 3 squares has 2x2), got {text!r}"
+            )
+    return cols, rows
+
+
+# ---------------------------------------------------------------- calibrate
+
+
+@dataclass(frozen=True, kw_only=True)
+class CalibrateOptions(ImageIn):
+    """Options of ``imageform calibrate``."""
+
+    board: str = option(help="Inner corners COLSxROWS, e.g. 9x6 (not squares).", metavar="CxR")
+    square: str = option(
+        "1",
+        help="Side of a square with unit (25mm, 2.5cm, 1in; bare number: mm). Only poses and "
+        "--corners depend on it (the default counts them in squares).",
+    )
+    plot: Path | None = option(
+        None, help="Also write a reprojection-error plot (PNG, SVG or PDF).", output=True
+    )
+    corners: Path | None = option(
+        None,
+        help="Also write the detected corners: CSV of image, X, Y, Z (board, in mm), u, v; "
+        "imageform pose and triangulate read it.",
+        output=True,
+    )
+    half_window: int | None = option(
+        None, help="Sub-pixel window half size (OpenCV's tutorial: 11); default adaptive."
+    )
+    fix: tuple[str, ...] = option(
+        (),
+        help="Hold a parameter at its initial value (repeatable): fx, fy, cx, cy, skew, k1, "
+        "k2, p1, p2, k3.",
+        metavar="NAME",
+    )
+    skew: bool = option(False, help="Estimate the skew (default: 0, as OpenCV).")
+
+    def check(self) -> None:
+        super().check()
+        parse_board(self.board)
+        self.square_mm()
+        fixed = tuple(normalize_choice(f, _PARAMETERS, "--fix") for f in self.fix)
+        object.__setattr__(self, "fix", fixed)
+        if self.skew and "skew" in fixed:
+            raise InvalidInputError("--skew estimates the skew; --fix skew holds it: not both")
+        if self.half_window is not None and not 1 <= self.half_window <= 50:
+            raise InvalidInputError(
+                f"expected --half-window 1 to 50 pixels, got {self.half_window}"
+            )
+
+    def square_mm(self) -> float:
+        """The square size in millimetres."""
+        from imageform._units import parse_length
+
+        return parse_length(self.square, "--square", default_unit="mm", unit="mm")
+
+
+def _plot(path: Path, res: Any, names: list[str]) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import numpy as np
+
+    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(10, 4.5))
+    for name, r in zip(names, res.residuals, strict=True):
+        ax1.scatter(r[:, 0], r[:, 1], s=6, label=name)
+    ax1.set_xlabel("u error (px)")
+    ax1.set_ylabel("v error (px)")
+    ax1.set_aspect("equal")
+    ax1.set_title(f"reprojection errors (RMS {res.rms:.4f} px)")
+    ax2.bar(np.arange(len(names)), res.per_view_rms)
+    ax2.set_xticks(np.arange(len(names)), names, rotation=60, ha="right", fontsize=7)
+    ax2.set_ylabel("RMS per view (px)")
+    fig.tight_layout()
+    fig.savefig(path, dpi=100, format=path.suffix.lstrip(".").lower() or "png")
+    plt.close(fig)
+
+
+def calibrate(run: Run, opts: CalibrateOptions, *, out: Path, images: list[Path]) -> Result:
+    """``imageform calibrate``: a camera file from checkerboard views (Zhang, then
+    Levenberg-Marquardt on every reprojection error)."""
+    import numpy as np
+
+    from imageform.geometry import calibrate_camera, checkerboard_points
+    from imageform.geometry.checkerboard import find_checkerboard
+    from imageform.io import CameraFile, write_camera
+    from imageform.workflows._tables import write_table
+
+    cols, rows = parse_board(opts.board)
+    square = opts.square_mm()
+    shape0: tuple[int, int] | None = None
+    corners, names = [], []
+    missed: list[str] = []
+    for i, f in enumerate(images):
+        if run.progress is not None:
+            run.progress("detecting", i / max(len(images), 1))
+        img = read(f, opts)
+        if shape0 is None:
+            shape0 = (int(img.shape[0]), int(img.shape[1]))
+            h, w = shape0
+            if (cols + 1) * _MIN_SQUARE_PX > w or (rows + 1) * _MIN_SQUARE_PX > h:
+                raise InvalidInputError(
+                    f"a {cols}x{rows} board cannot be seen in {w} x {h} px images "
+                    f"({f}): each of its {cols + 1} x {rows + 1} squares needs at least "
+                    f"{_MIN_SQUARE_PX} px; check --board (inner corners, not squares)"
+                )
+        elif img.shape[:2] != shape0:
+            raise InvalidInputError(
+                f"expected all images of one size, got {images[0]} of {shape0[1]} x "
+                f"{shape0[0]} px and {f} of {img.shape[1]} x {img.shape[0]} px"
+            )
+        grey = img[..., 0] if img.shape[-1] == 1 else img
+        det = find_checkerboard(grey, (cols, rows), half_window=opts.half_window)
+        if det.found:
+            assert det.corners is not None
+            corners.append(det.corners)
+            names.append(f.name)
+        else:
+            run.note(f"warning: {f}: no {cols}x{rows} board found ({det.reason})")
+            missed.append(f"{f.name}: {det.reason}")
+    if run.progress is not None:
+        run.progress("calibrating", 1.0)
+    if not corners:
+        raise DegenerateConfigurationError(
+            f"no {cols}x{rows} checkerboard found in any of the {len(images)} images "
+            f"({missed[0]}{'; ...' if len(missed) > 1 else ''}; check --board: inner corners, "
+            "not squares)"
+        )
+    if len(corners) < MIN_VIEWS:
+        raise DegenerateConfigurationError(
+            f"found the {cols}x{rows} board in {len(corners)} view(s) ({', '.join(names)}) of "
+            f"{len(images)}; "
+            f"calibrate needs at least {MIN_VIEWS} (one view of a plane gives two constraints "
+            "on K: fewer views leave the focal length and the principal point undetermined)"
+        )
+    assert shape0 is not None
+    obj = checkerboard_points((cols, rows), square)
+    res = calibrate_camera(
+        [obj] * len(corners),
+        corners,
+        (shape0[1], shape0[0]),
+        skew=opts.skew,
+        fix=opts.fix,
+    )
+    command = f"imageform calibrate --board {cols}x{rows} --square {opts.square}"
+    command += "".join(f" --fix {p}" for p in opts.fix) + (" --skew" if opts.skew else "")
+    cf = CameraFile.from_calibration(res, images=names, command=command)
+    write_camera(run.file(out), cf)
+    if opts.plot is not None:
+        _plot(run.file(opts.plot), res, names)
+    if opts.corners is not None:
+        write_table(
+            run.file(opts.corners),
+            ("image", "X", "Y", "Z", "u", "v"),
+            (
+                (n, *X, *uv)
+                for n, c in zip(names, corners, strict=True)
+                for X, uv in zip(obj, c, strict=True)
+            ),
+        )
+    per_view = [
+        {"view": n, "rms_px": float(e), "max_px": float(np.max(p))}
+        for n, e, p in zip(names, res.per_view_rms, res.per_point_errors, strict=True)
+    ]
+    K, d = res.K, res.distortion
+    summary = {
+        "output": out,
+        "views_used": len(names),
+        "views_total": len(images),
+        "image_size": list(res.image_size),
+        "rms_px": res.rms,
+        "fx": K[0, 0],
+        "fy": K[1, 1],
+        "cx": K[0, 2],
+        "cy": K[1, 2],
+        "skew": K[0, 1],
+        "distortion": {
+            "model": "brown_conrady",
+            **dict(zip(("k1", "k2", "p1", "p2", "k3"), d.coeffs[:5], strict=True)),
+        },
+        "std": res.std,
+        "fixed": list(res.fixed),
+        "per_view": per_view,
+        "plot": opts.plot,
+        "corners": opts.corners,
+    }
+    text = [f"{'view':<24} {'RMS px':>8} {'max px':>8}"]
+    text += [f"{r['view']:<24} {r['rms_px']:8.4f} {r['max_px']:8.4f}" for r in per_view]
+    text.append(
+        f"RMS {res.rms:.4f} px over {len(names)} views; fx {K[0, 0]:.3f} ± {res.std['fx']:.3f}, "
+        f"fy {K[1, 1]:.3f} ± {res.std['fy']:.3f}, cx {K[0, 2]:.3f}, cy {K[1, 2]:.3f}"
+    )
+    text.append(f"k1, k2, p1, p2, k3: {', '.join(f'{c:.6g}' for c in d.coeffs[:5])}")
+    text.append(f"wrote {out}")
+    return Result(summary, tuple(text))
+
+
+# ---------------------------------------------------------------- undistort
+
+
+@dataclass(frozen=True, kw_only=True)
+class UndistortOptions(ImageIn, ImageOut):
+    """Options of ``imageform undistort``."""
+
+    camera: Path = option(
+        help="Camera file (docs/camera-file.md) of the input image: K and distortion.",
+        metavar="FILE",
+        input=True,
+    )
+    camera_out: Path | None = option(
+        None,
+        help="Also write the camera file of the output: the same camera without distortion "
+        "(for imageform vanishing --camera, project, ...).",
+        metavar="FILE",
+        output=True,
+    )
+
+
+def undistort(run: Run, opts: UndistortOptions, *, out: Path, image: Path) -> Result:
+    """``imageform undistort``: remove lens distortion with the camera file's K and model
+    (inverse mapping, bilinear sampling; the output keeps K)."""
+    import numpy as np
+
+    from imageform.geometry.undistort import undistort_image
+    from imageform.io import read_camera, write_camera
+
+    cf = read_camera(opts.camera)
+    cam = cf.camera
+    img = read(image, opts)
+    h, w = int(img.shape[0]), int(img.shape[1])
+    if cam.image_size is not None and tuple(cam.image_size) != (w, h):
+        raise InvalidInputError(
+            f"camera file {opts.camera} is for {cam.image_size[0]} x {cam.image_size[1]} px "
+            f"images, {image} is {w} x {h} px"
+        )
+    model = cf.distortion_model
+    if cam.distortion is None:
+        run.note(f"note: {opts.camera} has no distortion (model none): the image is copied")
+        result = img
+    else:
+        result = undistort_image(img, np.asarray(cam.K), cam.distortion)
+    n_out = write(run, out, np.asarray(result), opts, like=img)
+    if opts.camera_out is not None:
+        from dataclasses import replace
+
+        from imageform.geometry import Camera
+
+        flat = Camera(cam.K, cam.R, cam.t, (w, h), cam.image_plane, None)
+        prov = replace(cf.provenance, command="imageform undistort", based_on=opts.camera.name)
+        std = {
+            k: v for k, v in cf.std.items() if k in ("fx", "fy", "cx", "cy", "skew", "rvec", "t")
+        }
+        write_camera(run.file(opts.camera_out), replace(cf, camera=flat, std=std, provenance=prov))
+    coeffs = list(cam.distortion.coeffs) if cam.distortion is not None else []
+    summary = {
+        "input": image,
+        "output": out,
+        "camera": opts.camera,
+        "camera_out": opts.camera_out,
+        "shape": list(np.shape(result)),
+        "model": model,
+        "coefficients": coeffs,
+        "values_clipped": n_out,
+    }
+    text = [f"wrote {out} ({w} x {h}, {model} distortion removed)"]
+    if opts.camera_out is not None:
+        text.append(f"wrote {opts.camera_out} (the same camera, distortion none)")
+    return Result(summary, tuple(text))
+
+
+WORKFLOWS = (
+    Workflow(
+        "calibrate",
+        "Calibrate a camera from checkerboard views: writes the camera file.",
+        "imageform.workflows.calibration:calibrate",
+        CalibrateOptions,
+        (Input("images", "Image files or quoted glob patterns ('views/*.jpg').", many=True),),
+        Output("Camera file to write (TOML, docs/camera-file.md)."),
+        suffixes=(".toml",),
+        group="geometry",
+        description=f"Needs the board in at least {MIN_VIEWS} views. Zhang's closed form, then "
+        "Levenberg-Marquardt on all reprojection errors; K, Brown-Conrady k1, k2, p1, p2, k3, "
+        "their standard deviations and the RMS go to the camera file.",
+    ),
+    Workflow(
+        "undistort",
+        "Remove lens distortion from an image with a camera file (any distortion model).",
+        "imageform.workflows.calibration:undistort",
+        UndistortOptions,
+        (Input("image", "Distorted image (PNG, JPEG, TIFF or .npy)."),),
+        Output("Undistorted image to write (same size and K)."),
+        batch=True,
+        suffixes=IMAGE_SUFFIXES,
+        group="geometry",
+    ),
+)

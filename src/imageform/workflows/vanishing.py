@@ -1,0 +1,216 @@
+"""``imageform vanishing``: vanishing points, K and the horizon of a photograph.
+
+Without a camera file, K is estimated from the orthogonal triplet of vanishing points
+(Caprile & Torre 1990). With ``--camera`` the file's camera is the truth: the image is
+undistorted with its model first (lines are straight only without distortion), the vertical
+direction and the horizon come from its K, and the K estimated from the vanishing points is
+reported with its error against the file's.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+from pathlib import Path
+from typing import Any
+
+from imageform.errors import InvalidInputError
+from imageform.workflows._images import ImageIn, read, write
+from imageform.workflows._spec import Input, Output, Result, Run, Workflow, option
+
+__all__ = ["WORKFLOWS", "VanishingOptions"]
+
+
+@dataclass(frozen=True, kw_only=True)
+class VanishingOptions(ImageIn):
+    """Options of ``imageform vanishing``."""
+
+    camera: Path | None = option(
+        None,
+        help="Camera file of the photograph: its K gives the vertical and the horizon (the "
+        "K from the vanishing points is reported against it); its distortion is removed "
+        "first; with a pose, each vanishing point is matched to a world axis.",
+        metavar="FILE",
+        input=True,
+    )
+    seed: int = option(0, help="RANSAC seed (results are reproducible).")
+
+
+def _directions(K: Any, vps: Any) -> Any:
+    import numpy as np
+
+    d = np.linalg.solve(K, np.asarray(vps, dtype=np.float64).T).T
+    return d / np.linalg.norm(d, axis=1, keepdims=True)
+
+
+def _with_known_K(res: Any, K: Any) -> tuple[Any, dict[str, Any]]:
+    """The result with the vertical and the horizon from a known K, and the angles between
+    the vanishing directions (90 degrees for a Manhattan scene)."""
+    import numpy as np
+
+    from imageform.geometry import horizon_line
+
+    vps = res.vanishing_points
+    extra: dict[str, Any] = {"vp_angles_deg": []}
+    if len(vps) < 2:
+        return replace(res, K=K, vertical=None, horizon=None), extra
+    dirs = _directions(K, vps)
+    vertical = int(np.argmax(np.abs(dirs[:, 1])))
+    up = dirs[vertical] * (-1.0 if dirs[vertical, 1] > 0 else 1.0)  # image up is -y
+    horizon = np.asarray(horizon_line(K, None, up))
+    pairs = [(i, j) for i in range(len(dirs)) for j in range(i + 1, len(dirs))]
+    extra["vp_angles_deg"] = [
+        {
+            "pair": [i, j],
+            "angle": float(np.degrees(np.arccos(min(1.0, abs(float(dirs[i] @ dirs[j])))))),
+        }
+        for i, j in pairs
+    ]
+    return replace(res, K=K, vertical=vertical, horizon=horizon), extra
+
+
+def _world_axes(res: Any, K: Any, R: Any) -> list[dict[str, Any]]:
+    """For each vanishing point, the world axis whose direction it is closest to (the
+    vanishing point of world axis i is ``K R e_i``)."""
+    import numpy as np
+
+    if not len(res.vanishing_points):
+        return []
+    dirs = _directions(K, res.vanishing_points)
+    axes = np.asarray(R, dtype=np.float64).T  # rows: world x, y, z in the camera frame
+    cos = np.abs(dirs @ axes.T)
+    out = []
+    for k, row in enumerate(cos):
+        i = int(np.argmax(row))
+        out.append(
+            {
+                "vanishing_point": k,
+                "axis": "xyz"[i],
+                "angle_deg": float(np.degrees(np.arccos(min(1.0, float(row[i]))))),
+            }
+        )
+    return out
+
+
+def vanishing(run: Run, opts: VanishingOptions, *, out: Path | None, image: Path) -> Result:
+    """``imageform vanishing``: line segments, vanishing points, K and the horizon."""
+    import numpy as np
+
+    from imageform.geometry import detect_vanishing_points
+
+    img = read(image, opts)
+    arr = img[..., 0] if img.shape[-1] == 1 else img[..., :3]
+    if arr.dtype == np.uint16:
+        arr = arr.astype(np.float64) / 65535.0
+    h, w = int(arr.shape[0]), int(arr.shape[1])
+    cf = None
+    if opts.camera is not None:
+        from imageform.io import read_camera
+
+        cf = read_camera(opts.camera)
+        size = cf.camera.image_size
+        if size is not None and tuple(size) != (w, h):
+            raise InvalidInputError(
+                f"camera file {opts.camera} is for {size[0]} x {size[1]} px images, {image} "
+                f"is {w} x {h} px"
+            )
+        if cf.camera.distortion is not None:
+            from imageform.geometry.undistort import undistort_image
+
+            arr = np.asarray(undistort_image(arr, np.asarray(cf.camera.K), cf.camera.distortion))
+            run.note(
+                f"note: {image} was undistorted with the {cf.distortion_model} model of "
+                f"{opts.camera} before finding lines"
+            )
+    res = detect_vanishing_points(arr, seed=opts.seed)
+    K_est = res.K
+    summary: dict[str, Any] = {
+        "image": image,
+        "camera": opts.camera,
+        "segments": len(res.segments),
+    }
+    extra: dict[str, Any] = {}
+    if cf is not None:
+        K_file = np.asarray(cf.camera.K, dtype=np.float64)
+        res, extra = _with_known_K(res, K_file)
+        extra["K_source"] = "camera file"
+        extra["K_estimated"] = K_est
+        if K_est is not None:
+            extra["focal_error_px"] = float(K_est[0, 0] - (K_file[0, 0] + K_file[1, 1]) / 2)
+            extra["principal_point_error_px"] = float(np.hypot(*(K_est[:2, 2] - K_file[:2, 2])))
+        if cf.has_pose:
+            extra["world_axes"] = _world_axes(res, K_file, cf.camera.R)
+    else:
+        extra["K_source"] = "vanishing points" if K_est is not None else None
+    summary.update(
+        {
+            "vanishing_points": res.vanishing_points,
+            "support_px": res.scores,
+            "vertical_index": res.vertical,
+            "perspective": res.perspective,
+            "K": res.K,
+            "horizon": res.horizon,
+            **extra,
+            "overlay": out,
+        }
+    )
+    if out is not None:
+        from imageform.report.overlays import draw_vanishing_overlay
+
+        write(run, out, np.asarray(draw_vanishing_overlay(arr, res)), opts)
+    text = [f"{len(res.segments)} line segments; {len(res.vanishing_points)} vanishing points"]
+    for j, v in enumerate(res.vanishing_points):
+        tag = " (vertical)" if j == res.vertical else ""
+        where = (
+            f"({v[0]:.1f}, {v[1]:.1f})"
+            if v[2] != 0
+            else f"at infinity, direction ({v[0]:.3f}, {v[1]:.3f})"
+        )
+        text.append(f"  v{j}: {where}, support {res.scores[j]:.0f} px{tag}")
+    text.append(f"perspective: {res.perspective}-point")
+    if res.K is not None:
+        k = res.K
+        src = f" (from {opts.camera})" if cf is not None else " (from the vanishing points)"
+        text.append(f"K: f = {k[0, 0]:.1f} px, principal point ({k[0, 2]:.1f}, {k[1, 2]:.1f}){src}")
+    if "focal_error_px" in extra:
+        text.append(
+            f"K from the vanishing points: f = {K_est[0, 0]:.1f} px ("  # type: ignore[index]
+            f"{extra['focal_error_px']:+.1f} px), principal point off by "
+            f"{extra['principal_point_error_px']:.1f} px"
+        )
+    for a in extra.get("vp_angles_deg", []):
+        i, j = a["pair"]
+        text.append(f"  angle v{i}-v{j}: {a['angle']:.2f} deg")
+    for a in extra.get("world_axes", []):
+        text.append(
+            f"  v{a['vanishing_point']}: world {a['axis']} axis, {a['angle_deg']:.2f} deg off"
+        )
+    if res.horizon is not None:
+        a, b, c = res.horizon
+        if abs(b) > 1e-12:
+            text.append(
+                f"horizon: v = {-c / b:.1f} at u = 0, {-(a * (w - 1) + c) / b:.1f} at u = {w - 1}"
+            )
+        else:
+            text.append(f"horizon: vertical line u = {-c / a:.1f}")
+    if out is not None:
+        text.append(f"overlay -> {out}")
+    return Result(summary, tuple(text))
+
+
+WORKFLOWS = (
+    Workflow(
+        "vanishing",
+        "Vanishing points, K and the horizon of a photograph; -o draws them on it.",
+        "imageform.workflows.vanishing:vanishing",
+        VanishingOptions,
+        (Input("image", "A photograph (PNG, JPEG, TIFF or .npy)."),),
+        Output(
+            "Overlay image to write (segments by vanishing point, the horizon).", required=False
+        ),
+        suffixes=(".png", ".jpg", ".jpeg", ".tif", ".tiff"),
+        group="geometry",
+        description="Without --camera, K is estimated from three orthogonal vanishing points "
+        "(square pixels, no skew). With --camera, the file's K and distortion are used and "
+        "the estimated K is reported against them.",
+    ),
+)
