@@ -4,14 +4,13 @@
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
 from datetime import UTC, date, datetime
 from typing import Any, Literal
 
 import numpy as np
 
-from imageform.errors import InvalidInputError, UnknownOptionError
-from imageform.io.camera_file import (
+from imageform.errors import UnknownOptionError
+from imageform.io._camera_model import (
     _CLASSES,
     _LEGACY_CALIBRATION,
     _LEGACY_KEYS,
@@ -22,83 +21,24 @@ from imageform.io.camera_file import (
     DISTORTION_MODELS,
     CameraFile,
     Provenance,
+    Reader,
+    _nonneg,
+    _show,
+    check_std,
     distortion_name,
 )
 
-__all__ = ["check_std", "parse"]
-
-
-class _Reader:
-    """Checks values of one file; every message names the file and the key."""
-
-    def __init__(self, where: str) -> None:
-        self.where = where
-
-    def fail(self, key: str, problem: str) -> InvalidInputError:
-        return InvalidInputError(f"{self.where}: {key}: {problem}")
-
-    def number(self, value: Any, key: str) -> float:
-        if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
-            raise self.fail(key, f"expected a number, got {_show(value)}")
-        v = float(value)
-        if not math.isfinite(v):
-            raise self.fail(key, f"expected a finite number, got {value}")
-        return v
-
-    def positive(self, value: Any, key: str, what: str = "") -> float:
-        v = self.number(value, key)
-        if v <= 0:
-            raise self.fail(key, f"expected {what or 'a number'} > 0, got {value:g}")
-        return v
-
-    def count(self, value: Any, key: str, *, minimum: int = 0) -> int:
-        if isinstance(value, bool) or not isinstance(value, int) or value < minimum:
-            raise self.fail(key, f"expected an integer >= {minimum}, got {_show(value)}")
-        return int(value)
-
-    def text(self, value: Any, key: str) -> str:
-        if not isinstance(value, str):
-            raise self.fail(key, f"expected a string, got {_show(value)}")
-        return value
-
-    def vector(self, value: Any, key: str, n: int = 3) -> tuple[float, ...]:
-        if not isinstance(value, list) or len(value) != n:
-            raise self.fail(key, f"expected a list of {n} numbers, got {_show(value)}")
-        return tuple(self.number(v, f"{key}[{i}]") for i, v in enumerate(value))
-
-    def matrix(self, value: Any, key: str) -> np.ndarray:
-        if not isinstance(value, list) or len(value) != 3:
-            raise self.fail(key, f"expected 3 rows of 3 numbers, got {_show(value)}")
-        return np.array([self.vector(row, f"{key}[{i}]") for i, row in enumerate(value)])
-
-    def table(self, data: Mapping[str, Any], name: str) -> dict[str, Any]:
-        value = data.get(name, {})
-        if not isinstance(value, dict):
-            raise self.fail(name, f"expected a table [{name}], got {_show(value)}")
-        return value
-
-    def known(self, table: Mapping[str, Any], valid: tuple[str, ...], where: str) -> None:
-        unknown = [k for k in table if k not in valid]
-        if unknown:
-            raise UnknownOptionError(
-                f"{self.where}: unknown key(s) {', '.join(where + k for k in unknown)}; "
-                f"valid{' in [' + where[:-1] + ']' if where else ''}: {', '.join(valid)}"
-            )
-
-
-def _show(value: Any) -> str:
-    text = repr(value)
-    return text if len(text) <= 60 else text[:57] + "..."
+__all__ = ["parse"]
 
 
 def parse(data: dict[str, Any], where: str) -> CameraFile:
     """The camera file of parsed TOML ``data`` (``where`` names it in messages)."""
-    r = _Reader(where)
+    r = Reader(where)
     versioned = "format" in data or "version" in data
     return _read_v1(data, r) if versioned else _read_legacy(data, r)
 
 
-def _read_v1(data: dict[str, Any], r: _Reader) -> CameraFile:
+def _read_v1(data: dict[str, Any], r: Reader) -> CameraFile:
     fmt = data.get("format")
     if fmt != CAMERA_FILE_FORMAT:
         raise r.fail("format", f"expected {CAMERA_FILE_FORMAT!r}, got {_show(fmt)}")
@@ -134,7 +74,7 @@ def _read_v1(data: dict[str, Any], r: _Reader) -> CameraFile:
     return _build(intr, image, dist, pose, tables["std"], prov, version, r, "")
 
 
-def _read_legacy(data: dict[str, Any], r: _Reader) -> CameraFile:
+def _read_legacy(data: dict[str, Any], r: Reader) -> CameraFile:
     """Files of imageform before the versioned format (keys at the top level or in
     ``[camera]``; ``[calibration]`` with ``rms`` and ``views``)."""
     cal = data.get("calibration", {})
@@ -188,13 +128,6 @@ def _read_legacy(data: dict[str, Any], r: _Reader) -> CameraFile:
     return _build(intr, image, dist, pose, {}, prov, 0, r, prefix)
 
 
-def _nonneg(r: _Reader, value: Any, key: str) -> float:
-    v = r.number(value, key)
-    if v < 0:
-        raise r.fail(key, f"expected a number >= 0, got {value:g}")
-    return v
-
-
 def _build(
     intr: dict[str, Any],
     image: dict[str, Any],
@@ -203,7 +136,7 @@ def _build(
     std: dict[str, Any],
     prov: Provenance,
     version: int,
-    r: _Reader,
+    r: Reader,
     prefix: str,
 ) -> CameraFile:
     from imageform.geometry import Camera, rvec_to_matrix
@@ -272,7 +205,7 @@ def _build(
     return CameraFile(camera, bool(pose), std_checked, prov, version)
 
 
-def _check_rotation(R: np.ndarray, key: str, r: _Reader) -> None:
+def _check_rotation(R: np.ndarray, key: str, r: Reader) -> None:
     err = float(np.max(np.abs(R @ R.T - np.eye(3))))
     if err > 1e-6:
         raise r.fail(key, f"expected a rotation matrix (R Rᵀ = I), max |R Rᵀ - I| = {err:.3g}")
@@ -281,27 +214,7 @@ def _check_rotation(R: np.ndarray, key: str, r: _Reader) -> None:
         raise r.fail(key, f"expected a proper rotation (det R = +1), got det R = {det:.6g}")
 
 
-def check_std(std: dict[str, Any], where: str, r: _Reader | None = None) -> dict[str, Any]:
-    rr = r if r is not None else _Reader("camera")
-    out: dict[str, Any] = {}
-    for name, value in std.items():
-        key = f"{where}.{name}"
-        if name not in _TABLES["std"]:
-            raise UnknownOptionError(
-                f"{rr.where}: unknown key(s) {key}; valid in [std]: {', '.join(_TABLES['std'])}"
-            )
-        if name in ("rvec", "t"):
-            seq = list(value) if isinstance(value, (list, tuple, np.ndarray)) else value
-            vals = rr.vector(seq, key)
-            if any(v < 0 for v in vals):
-                raise rr.fail(key, f"expected standard deviations >= 0, got {list(vals)}")
-            out[name] = vals
-        else:
-            out[name] = _nonneg(rr, value, key)
-    return out
-
-
-def _provenance(table: dict[str, Any], r: _Reader) -> Provenance:
+def _provenance(table: dict[str, Any], r: Reader) -> Provenance:
     def opt(key: str, fn: Any) -> Any:
         return fn(table[key], "provenance." + key) if key in table else None
 

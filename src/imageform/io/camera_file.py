@@ -27,19 +27,28 @@ from __future__ import annotations
 import math
 import tomllib
 from collections.abc import Mapping
-from dataclasses import dataclass, field, replace
+from dataclasses import replace
 from datetime import UTC, datetime
 from pathlib import Path
-from types import MappingProxyType
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from imageform._files import atomic_write
 from imageform.errors import InvalidInputError
+from imageform.io._camera_model import (
+    _ALWAYS,
+    _TABLES,
+    CAMERA_FILE_FORMAT,
+    CAMERA_FILE_VERSION,
+    DISTORTION_MODELS,
+    CameraFile,
+    Provenance,
+    distortion_name,
+)
 
 if TYPE_CHECKING:
-    from imageform.geometry import CalibrationResult, Camera
+    from imageform.geometry import Camera
 
 __all__ = [
     "CAMERA_FILE_FORMAT",
@@ -51,204 +60,6 @@ __all__ = [
     "read_camera",
     "write_camera",
 ]
-
-#: The value of the ``format`` key that marks a camera file.
-CAMERA_FILE_FORMAT = "imageform-camera"
-#: The version this imageform writes (and the newest it reads).
-CAMERA_FILE_VERSION = 1
-#: Distortion models by name, with their coefficients in the library's (OpenCV's) order.
-DISTORTION_MODELS: Mapping[str, tuple[str, ...]] = MappingProxyType(
-    {
-        "none": (),
-        "brown_conrady": ("k1", "k2", "p1", "p2", "k3", "k4", "k5", "k6"),
-        "kannala_brandt": ("k1", "k2", "k3", "k4"),
-        "division": ("k1", "k2"),
-    }
-)
-_CLASSES = {
-    "brown_conrady": "BrownConrady",
-    "kannala_brandt": "KannalaBrandt",
-    "division": "DivisionModel",
-}
-# coefficients always written for a model (the others only when non-zero)
-_ALWAYS = {"brown_conrady": ("k1", "k2", "p1", "p2", "k3")}
-
-_TABLES: dict[str, tuple[str, ...]] = {
-    "image": ("width", "height"),
-    "intrinsics": ("fx", "fy", "cx", "cy", "skew", "image_plane"),
-    "distortion": ("model", "k1", "k2", "k3", "k4", "k5", "k6", "p1", "p2"),
-    "pose": ("R", "rvec", "t"),
-    "std": ("fx", "fy", "cx", "cy", "skew", "k1", "k2", "k3", "k4", "k5", "k6", "p1", "p2")
-    + ("rvec", "t"),
-    "provenance": (
-        "imageform_version",
-        "date",
-        "command",
-        "based_on",
-        "rms_px",
-        "views_used",
-        "points_used",
-        "images",
-        "fixed",
-    ),
-}
-_TOP = ("format", "version", *_TABLES)
-_LEGACY_KEYS = ("fx", "fy", "cx", "cy", "skew", "width", "height", "image_plane", "model") + (
-    "k1",
-    "k2",
-    "k3",
-    "k4",
-    "k5",
-    "k6",
-    "p1",
-    "p2",
-    "rvec",
-    "R",
-    "t",
-)
-_LEGACY_CALIBRATION = ("rms", "views")
-
-
-@dataclass(frozen=True)
-class Provenance:
-    """Where a camera came from (every field optional).
-
-    Attributes
-    ----------
-    imageform_version : str
-        The imageform that wrote the file.
-    date : datetime
-        When it was written (UTC).
-    command : str
-        The command that estimated the camera (``imageform calibrate --board 9x6 ...``).
-    based_on : str
-        The camera file it was derived from (``imageform pose`` keeps the intrinsics of one).
-    rms_px : float
-        RMS reprojection error of the estimate, in pixels.
-    views_used, points_used : int
-        Views (images) and point correspondences the estimate used.
-    images : tuple of str
-        Names of the images used.
-    fixed : tuple of str
-        Parameters held fixed during the estimate.
-    """
-
-    imageform_version: str | None = None
-    date: datetime | None = None
-    command: str | None = None
-    based_on: str | None = None
-    rms_px: float | None = None
-    views_used: int | None = None
-    points_used: int | None = None
-    images: tuple[str, ...] = ()
-    fixed: tuple[str, ...] = ()
-
-
-@dataclass(frozen=True)
-class CameraFile:
-    """A camera file's content: the camera, whether its pose is known, uncertainties, origin.
-
-    Attributes
-    ----------
-    camera : Camera
-        K, pose (R, t; identity and zero when ``has_pose`` is False), ``image_size``,
-        ``image_plane`` and ``distortion`` (None for the model ``none``).
-    has_pose : bool
-        The file gives a pose (world to camera). Commands that need one refuse a camera
-        without it.
-    std : mapping
-        Standard deviations by parameter name (``fx``, ``k1``, ... floats; ``rvec``, ``t``
-        3-tuples); 0 marks a parameter held fixed.
-    provenance : Provenance
-    version : int
-        The file's format version (0 for a file from before the versioned format).
-    path : Path or None
-        The file it was read from.
-    """
-
-    camera: Camera
-    has_pose: bool = False
-    std: Mapping[str, Any] = field(default_factory=lambda: MappingProxyType({}))
-    provenance: Provenance = field(default_factory=Provenance)
-    version: int = CAMERA_FILE_VERSION
-    path: Path | None = None
-
-    def __post_init__(self) -> None:
-        from imageform.geometry import Camera
-
-        if not isinstance(self.camera, Camera):
-            raise InvalidInputError(
-                f"expected camera to be an imageform.geometry.Camera, got "
-                f"{type(self.camera).__name__}"
-            )
-        from imageform.io._camera_read import check_std
-
-        object.__setattr__(self, "std", MappingProxyType(check_std(dict(self.std), "std")))
-
-    @property
-    def distortion_model(self) -> str:
-        """The distortion model's name in the file (``none``, ``brown_conrady`` ...)."""
-        return distortion_name(self.camera.distortion)
-
-    @classmethod
-    def from_calibration(
-        cls,
-        result: CalibrationResult,
-        *,
-        images: tuple[str, ...] | list[str] = (),
-        command: str | None = None,
-    ) -> CameraFile:
-        """The camera file of a :func:`~imageform.geometry.calibrate_camera` result.
-
-        K, the Brown-Conrady coefficients, the image size, the standard deviations of every
-        intrinsic parameter (0 for fixed ones) and the RMS, views used and fixed parameters.
-        No pose: a calibration has one per view.
-        """
-        from imageform.geometry import Camera
-
-        width, height = result.image_size
-        size = (int(width), int(height)) if min(result.image_size) > 0 else None
-        camera = Camera(result.K, image_size=size, distortion=result.distortion)
-        prov = Provenance(
-            command=command,
-            rms_px=float(result.rms),
-            views_used=len(result.rvecs),
-            images=tuple(str(i) for i in images),
-            fixed=tuple(result.fixed),
-        )
-        std = {k: float(v) for k, v in result.std.items() if math.isfinite(v)}
-        return cls(camera, False, std, prov)
-
-    def with_pose(self, R: Any, t: Any, **provenance: Any) -> CameraFile:
-        """The same camera with the pose ``X_cam = R X_world + t``; pose standard deviations
-        are dropped, provenance fields replaced by ``provenance``."""
-        from imageform.geometry import Camera
-
-        c = self.camera
-        cam = Camera(c.K, R, t, c.image_size, c.image_plane, c.distortion)
-        std = {k: v for k, v in self.std.items() if k not in ("rvec", "t")}
-        return replace(
-            self, camera=cam, has_pose=True, std=std, provenance=replace(Provenance(), **provenance)
-        )
-
-
-def distortion_name(model: Any) -> str:
-    """The camera-file name of a distortion model object (``none`` for None).
-
-    >>> from imageform.geometry import KannalaBrandt
-    >>> distortion_name(KannalaBrandt(k1=0.1)), distortion_name(None)
-    ('kannala_brandt', 'none')
-    """
-    if model is None:
-        return "none"
-    name = type(model).__name__
-    for key, cls in _CLASSES.items():
-        if cls == name:
-            return key
-    raise InvalidInputError(
-        f"expected a BrownConrady, KannalaBrandt or DivisionModel distortion, got {name}"
-    )
-
 
 # ---------------------------------------------------------------- reading
 

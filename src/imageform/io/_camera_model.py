@@ -1,0 +1,315 @@
+"""The camera file's model: its constants, :class:`CameraFile`, :class:`Provenance` and the
+checks of values that reading and building share (internal to :mod:`imageform.io`)."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field, replace
+from datetime import datetime
+from pathlib import Path
+from types import MappingProxyType
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from imageform.errors import InvalidInputError, UnknownOptionError
+
+if TYPE_CHECKING:
+    from imageform.geometry import CalibrationResult, Camera
+
+__all__ = [
+    "CAMERA_FILE_FORMAT",
+    "CAMERA_FILE_VERSION",
+    "DISTORTION_MODELS",
+    "CameraFile",
+    "Provenance",
+    "Reader",
+    "check_std",
+    "distortion_name",
+]
+
+#: The value of the ``format`` key that marks a camera file.
+CAMERA_FILE_FORMAT = "imageform-camera"
+#: The version this imageform writes (and the newest it reads).
+CAMERA_FILE_VERSION = 1
+#: Distortion models by name, with their coefficients in the library's (OpenCV's) order.
+DISTORTION_MODELS: Mapping[str, tuple[str, ...]] = MappingProxyType(
+    {
+        "none": (),
+        "brown_conrady": ("k1", "k2", "p1", "p2", "k3", "k4", "k5", "k6"),
+        "kannala_brandt": ("k1", "k2", "k3", "k4"),
+        "division": ("k1", "k2"),
+    }
+)
+_CLASSES = {
+    "brown_conrady": "BrownConrady",
+    "kannala_brandt": "KannalaBrandt",
+    "division": "DivisionModel",
+}
+# coefficients always written for a model (the others only when non-zero)
+_ALWAYS = {"brown_conrady": ("k1", "k2", "p1", "p2", "k3")}
+
+_TABLES: dict[str, tuple[str, ...]] = {
+    "image": ("width", "height"),
+    "intrinsics": ("fx", "fy", "cx", "cy", "skew", "image_plane"),
+    "distortion": ("model", "k1", "k2", "k3", "k4", "k5", "k6", "p1", "p2"),
+    "pose": ("R", "rvec", "t"),
+    "std": ("fx", "fy", "cx", "cy", "skew", "k1", "k2", "k3", "k4", "k5", "k6", "p1", "p2")
+    + ("rvec", "t"),
+    "provenance": (
+        "imageform_version",
+        "date",
+        "command",
+        "based_on",
+        "rms_px",
+        "views_used",
+        "points_used",
+        "images",
+        "fixed",
+    ),
+}
+_TOP = ("format", "version", *_TABLES)
+_LEGACY_KEYS = ("fx", "fy", "cx", "cy", "skew", "width", "height", "image_plane", "model") + (
+    "k1",
+    "k2",
+    "k3",
+    "k4",
+    "k5",
+    "k6",
+    "p1",
+    "p2",
+    "rvec",
+    "R",
+    "t",
+)
+_LEGACY_CALIBRATION = ("rms", "views")
+
+
+@dataclass(frozen=True)
+class Provenance:
+    """Where a camera came from (every field optional).
+
+    Attributes
+    ----------
+    imageform_version : str
+        The imageform that wrote the file.
+    date : datetime
+        When it was written (UTC).
+    command : str
+        The command that estimated the camera (``imageform calibrate --board 9x6 ...``).
+    based_on : str
+        The camera file it was derived from (``imageform pose`` keeps the intrinsics of one).
+    rms_px : float
+        RMS reprojection error of the estimate, in pixels.
+    views_used, points_used : int
+        Views (images) and point correspondences the estimate used.
+    images : tuple of str
+        Names of the images used.
+    fixed : tuple of str
+        Parameters held fixed during the estimate.
+    """
+
+    imageform_version: str | None = None
+    date: datetime | None = None
+    command: str | None = None
+    based_on: str | None = None
+    rms_px: float | None = None
+    views_used: int | None = None
+    points_used: int | None = None
+    images: tuple[str, ...] = ()
+    fixed: tuple[str, ...] = ()
+
+
+@dataclass(frozen=True)
+class CameraFile:
+    """A camera file's content: the camera, whether its pose is known, uncertainties, origin.
+
+    Attributes
+    ----------
+    camera : Camera
+        K, pose (R, t; identity and zero when ``has_pose`` is False), ``image_size``,
+        ``image_plane`` and ``distortion`` (None for the model ``none``).
+    has_pose : bool
+        The file gives a pose (world to camera). Commands that need one refuse a camera
+        without it.
+    std : mapping
+        Standard deviations by parameter name (``fx``, ``k1``, ... floats; ``rvec``, ``t``
+        3-tuples); 0 marks a parameter held fixed.
+    provenance : Provenance
+    version : int
+        The file's format version (0 for a file from before the versioned format).
+    path : Path or None
+        The file it was read from.
+    """
+
+    camera: Camera
+    has_pose: bool = False
+    std: Mapping[str, Any] = field(default_factory=lambda: MappingProxyType({}))
+    provenance: Provenance = field(default_factory=Provenance)
+    version: int = CAMERA_FILE_VERSION
+    path: Path | None = None
+
+    def __post_init__(self) -> None:
+        from imageform.geometry import Camera
+
+        if not isinstance(self.camera, Camera):
+            raise InvalidInputError(
+                f"expected camera to be an imageform.geometry.Camera, got "
+                f"{type(self.camera).__name__}"
+            )
+        object.__setattr__(self, "std", MappingProxyType(check_std(dict(self.std), "std")))
+
+    @property
+    def distortion_model(self) -> str:
+        """The distortion model's name in the file (``none``, ``brown_conrady`` ...)."""
+        return distortion_name(self.camera.distortion)
+
+    @classmethod
+    def from_calibration(
+        cls,
+        result: CalibrationResult,
+        *,
+        images: tuple[str, ...] | list[str] = (),
+        command: str | None = None,
+    ) -> CameraFile:
+        """The camera file of a :func:`~imageform.geometry.calibrate_camera` result.
+
+        K, the Brown-Conrady coefficients, the image size, the standard deviations of every
+        intrinsic parameter (0 for fixed ones) and the RMS, views used and fixed parameters.
+        No pose: a calibration has one per view.
+        """
+        from imageform.geometry import Camera
+
+        width, height = result.image_size
+        size = (int(width), int(height)) if min(result.image_size) > 0 else None
+        camera = Camera(result.K, image_size=size, distortion=result.distortion)
+        prov = Provenance(
+            command=command,
+            rms_px=float(result.rms),
+            views_used=len(result.rvecs),
+            images=tuple(str(i) for i in images),
+            fixed=tuple(result.fixed),
+        )
+        std = {k: float(v) for k, v in result.std.items() if math.isfinite(v)}
+        return cls(camera, False, std, prov)
+
+    def with_pose(self, R: Any, t: Any, **provenance: Any) -> CameraFile:
+        """The same camera with the pose ``X_cam = R X_world + t``; pose standard deviations
+        are dropped, provenance fields replaced by ``provenance``."""
+        from imageform.geometry import Camera
+
+        c = self.camera
+        cam = Camera(c.K, R, t, c.image_size, c.image_plane, c.distortion)
+        std = {k: v for k, v in self.std.items() if k not in ("rvec", "t")}
+        return replace(
+            self, camera=cam, has_pose=True, std=std, provenance=replace(Provenance(), **provenance)
+        )
+
+
+def distortion_name(model: Any) -> str:
+    """The camera-file name of a distortion model object (``none`` for None).
+
+    >>> from imageform.geometry import KannalaBrandt
+    >>> distortion_name(KannalaBrandt(k1=0.1)), distortion_name(None)
+    ('kannala_brandt', 'none')
+    """
+    if model is None:
+        return "none"
+    name = type(model).__name__
+    for key, cls in _CLASSES.items():
+        if cls == name:
+            return key
+    raise InvalidInputError(
+        f"expected a BrownConrady, KannalaBrandt or DivisionModel distortion, got {name}"
+    )
+
+
+class Reader:
+    """Checks values of one file; every message names the file and the key."""
+
+    def __init__(self, where: str) -> None:
+        self.where = where
+
+    def fail(self, key: str, problem: str) -> InvalidInputError:
+        return InvalidInputError(f"{self.where}: {key}: {problem}")
+
+    def number(self, value: Any, key: str) -> float:
+        if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+            raise self.fail(key, f"expected a number, got {_show(value)}")
+        v = float(value)
+        if not math.isfinite(v):
+            raise self.fail(key, f"expected a finite number, got {value}")
+        return v
+
+    def positive(self, value: Any, key: str, what: str = "") -> float:
+        v = self.number(value, key)
+        if v <= 0:
+            raise self.fail(key, f"expected {what or 'a number'} > 0, got {value:g}")
+        return v
+
+    def count(self, value: Any, key: str, *, minimum: int = 0) -> int:
+        if isinstance(value, bool) or not isinstance(value, int) or value < minimum:
+            raise self.fail(key, f"expected an integer >= {minimum}, got {_show(value)}")
+        return int(value)
+
+    def text(self, value: Any, key: str) -> str:
+        if not isinstance(value, str):
+            raise self.fail(key, f"expected a string, got {_show(value)}")
+        return value
+
+    def vector(self, value: Any, key: str, n: int = 3) -> tuple[float, ...]:
+        if not isinstance(value, list) or len(value) != n:
+            raise self.fail(key, f"expected a list of {n} numbers, got {_show(value)}")
+        return tuple(self.number(v, f"{key}[{i}]") for i, v in enumerate(value))
+
+    def matrix(self, value: Any, key: str) -> np.ndarray:
+        if not isinstance(value, list) or len(value) != 3:
+            raise self.fail(key, f"expected 3 rows of 3 numbers, got {_show(value)}")
+        return np.array([self.vector(row, f"{key}[{i}]") for i, row in enumerate(value)])
+
+    def table(self, data: Mapping[str, Any], name: str) -> dict[str, Any]:
+        value = data.get(name, {})
+        if not isinstance(value, dict):
+            raise self.fail(name, f"expected a table [{name}], got {_show(value)}")
+        return value
+
+    def known(self, table: Mapping[str, Any], valid: tuple[str, ...], where: str) -> None:
+        unknown = [k for k in table if k not in valid]
+        if unknown:
+            raise UnknownOptionError(
+                f"{self.where}: unknown key(s) {', '.join(where + k for k in unknown)}; "
+                f"valid{' in [' + where[:-1] + ']' if where else ''}: {', '.join(valid)}"
+            )
+
+
+def _show(value: Any) -> str:
+    text = repr(value)
+    return text if len(text) <= 60 else text[:57] + "..."
+
+
+def _nonneg(r: Reader, value: Any, key: str) -> float:
+    v = r.number(value, key)
+    if v < 0:
+        raise r.fail(key, f"expected a number >= 0, got {value:g}")
+    return v
+
+
+def check_std(std: dict[str, Any], where: str, r: Reader | None = None) -> dict[str, Any]:
+    rr = r if r is not None else Reader("camera")
+    out: dict[str, Any] = {}
+    for name, value in std.items():
+        key = f"{where}.{name}"
+        if name not in _TABLES["std"]:
+            raise UnknownOptionError(
+                f"{rr.where}: unknown key(s) {key}; valid in [std]: {', '.join(_TABLES['std'])}"
+            )
+        if name in ("rvec", "t"):
+            seq = list(value) if isinstance(value, (list, tuple, np.ndarray)) else value
+            vals = rr.vector(seq, key)
+            if any(v < 0 for v in vals):
+                raise rr.fail(key, f"expected standard deviations >= 0, got {list(vals)}")
+            out[name] = vals
+        else:
+            out[name] = _nonneg(rr, value, key)
+    return out
