@@ -116,7 +116,7 @@ def test_rendered_patches_match_spectral_integration() -> None:
     s = scene.sensor
     wl = np.asarray(s.qe_wavelengths)
     sens = Spectrum(wl, (np.asarray(s.qe_curves) * wl).T)
-    ref = spectrum_to_camera_rgb(colorchecker_reflectances(), "A", camera=sens)
+    ref = spectrum_to_camera_rgb(colorchecker_reflectances(), illuminant="A", camera=sens)
     ratio = (rgb / rgb[:, 1:2]) / (ref / ref[:, 1:2])
     np.testing.assert_allclose(ratio, 1.0, rtol=0.01)
     scale = rgb[:, 1] / ref[:, 1]

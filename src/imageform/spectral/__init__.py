@@ -21,6 +21,7 @@ from imageform.spectral.data import (
     table_source,
 )
 from imageform.spectral.illuminants import (
+    PlanckianCCT,
     blackbody_spectrum,
     daylight_spectrum,
     illuminant,
@@ -31,6 +32,7 @@ from imageform.spectral.integrate import (
     INTEGRATION_METHODS,
     KM_PHOTOPIC,
     KM_SCOTOPIC,
+    IntegrationWeights,
     integration_weights,
     luminance,
     observer_functions,
@@ -51,6 +53,8 @@ __all__ = [
     "KM_SCOTOPIC",
     "LED_SPECTRA",
     "TABLES",
+    "IntegrationWeights",
+    "PlanckianCCT",
     "Spectrum",
     "blackbody_spectrum",
     "camera_sensitivities",
