@@ -29,6 +29,7 @@ from imageform.geometry.intrinsics import Intrinsics
 
 __all__ = [
     "Camera",
+    "DecomposedProjection",
     "ImagePlane",
     "Projection",
     "backproject",
@@ -42,6 +43,17 @@ ImagePlane = Literal["virtual", "real"]
 _PLANES = ("virtual", "real")
 #: Above this many points a single-camera NumPy projection runs the numba kernel.
 _KERNEL_MIN_POINTS = 20_000
+
+
+class DecomposedProjection(NamedTuple):
+    """Result of :func:`decompose_projection_matrix`: ``P = λ K [R | t]``."""
+
+    #: Intrinsics (3, 3), ``K[2, 2] = 1``, positive focal lengths.
+    K: Array
+    #: World-to-camera rotation (3, 3), ``det R = +1``.
+    R: Array
+    #: World-to-camera translation (3,).
+    t: Array
 
 
 class Projection(NamedTuple):
@@ -239,7 +251,7 @@ def projection_matrix(
     return Km @ Rt
 
 
-def decompose_projection_matrix(P: ArrayLike) -> tuple[Array, Array, Array]:
+def decompose_projection_matrix(P: ArrayLike) -> DecomposedProjection:
     """Split ``P = λ K [R | t]`` into K (``K[2, 2] = 1``, positive focal lengths), R, t.
 
     RQ decomposition of the left 3×3 block ``M = K R`` (Hartley & Zisserman §6.2.4); the
@@ -287,7 +299,7 @@ def decompose_projection_matrix(P: ArrayLike) -> tuple[Array, Array, Array]:
     mask = xp.asarray(
         [[1.0, 1.0, 1.0], [0.0, 1.0, 1.0], [0.0, 0.0, 1.0]], dtype=K.dtype, device=device_of(K)
     )
-    return K * mask + 0.0, Rq, t  # + 0.0: no negative zeros
+    return DecomposedProjection(K * mask + 0.0, Rq, t)  # + 0.0: no negative zeros
 
 
 def _Kinv_apply(uv: Array, K: Array, xp: Any) -> Array:
