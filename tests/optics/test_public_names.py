@@ -8,6 +8,7 @@ import pytest
 
 PUBLIC = {
     "imageform.optics": {
+        "ChromaticFocalLengths",
         "DepthOfField",
         "ThinLensSolution",
         "aperture_diameter",
@@ -39,6 +40,7 @@ PUBLIC = {
         "DistortionModel",
         "DivisionModel",
         "KannalaBrandt",
+        "Undistorted",
         "project_points_distorted",
     },
     "imageform.geometry.undistort": {"remap_bilinear", "undistort_image", "undistortion_map"},
