@@ -48,7 +48,7 @@ PUBLIC = {
 
 SENSOR_MODEL_NAMES = {
     "CCD_VS_CMOS",
-    "QUANTISATION_NOISE_DN",
+    "QUANTIZATION_NOISE_DN",
     "ComparisonRow",
     "EmvaResult",
     "FixedPattern",
