@@ -40,7 +40,7 @@ from imageform.analysis.segmentation import (
     segment_hsv,
 )
 from imageform.analysis.synthetic import (
-    LabelledImage,
+    LabeledImage,
     StainMixture,
     synthetic_chart_image,
     synthetic_endoscopy_image,
@@ -56,7 +56,7 @@ __all__ = [
     "CorrectionReport",
     "EmptyMaskWarning",
     "HsvSegmentation",
-    "LabelledImage",
+    "LabeledImage",
     "MacenkoStains",
     "ReinhardStats",
     "StainMixture",

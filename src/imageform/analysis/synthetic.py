@@ -24,7 +24,7 @@ __all__ = [
     "RUIFROK_DAB",
     "RUIFROK_EOSIN",
     "RUIFROK_HEMATOXYLIN",
-    "LabelledImage",
+    "LabeledImage",
     "StainMixture",
     "synthetic_chart_image",
     "synthetic_endoscopy_image",
@@ -79,7 +79,7 @@ def _smooth_noise(rng: np.random.Generator, shape: tuple[int, int], scale: float
     return n / np.max(np.abs(n))
 
 
-class LabelledImage(NamedTuple):
+class LabeledImage(NamedTuple):
     """A synthetic image and its ground-truth mask."""
 
     #: Encoded sRGB in [0, 1], shape (H, W, 3), float64.
@@ -127,7 +127,7 @@ def _seed_first(fn: Any) -> Any:
 @_seed_first
 def synthetic_endoscopy_image(
     shape: tuple[int, int] = (256, 256), *, rng: RNGLike = 0
-) -> LabelledImage:
+) -> LabeledImage:
     """An endoscopy-like frame and its tissue mask.
 
     Reddish/pink mucosa (hue 350°..12°, S 0.35..0.7) with smooth texture, a dark lumen
@@ -137,7 +137,7 @@ def synthetic_endoscopy_image(
 
     Returns
     -------
-    LabelledImage
+    LabeledImage
         ``image`` : ndarray (H, W, 3) float64, encoded sRGB in [0, 1]; ``mask`` : ndarray of
         bool (H, W), the true tissue mask.
 
@@ -187,7 +187,7 @@ def synthetic_endoscopy_image(
     val = np.where(val >= 1.0, val, val * vig)
     rgb = _hsv_to_srgb(np, np.stack([hue, sat, val], axis=-1))
     rgb = rgb + gen.normal(0.0, 0.03, rgb.shape)
-    return LabelledImage(np.clip(rgb, 0.0, 1.0), truth)
+    return LabeledImage(np.clip(rgb, 0.0, 1.0), truth)
 
 
 @_seed_first
@@ -272,7 +272,7 @@ def synthetic_shading_scene(
     shading: tuple[float, float] = (1.0, 0.2),
     *,
     rng: RNGLike = 0,
-) -> LabelledImage:
+) -> LabeledImage:
     """Red blobs on a yellow-green background under a left-to-right illumination ramp.
 
     The illumination multiplies *linear* light from ``shading[0]`` at the left edge to
@@ -280,7 +280,7 @@ def synthetic_shading_scene(
 
     Returns
     -------
-    LabelledImage
+    LabeledImage
         ``image`` : ndarray (H, W, 3) float64, encoded sRGB; ``mask`` : ndarray of bool
         (H, W), the red objects.
 
@@ -305,4 +305,4 @@ def synthetic_shading_scene(
     lin = _srgb_decode(np, np.clip(enc, 0, 1))
     ramp = np.linspace(shading[0], shading[1], wid)[None, :, None]
     out = _srgb_encode(np, lin * ramp) + gen.normal(0, 0.004, lin.shape)
-    return LabelledImage(np.clip(out, 0.0, 1.0), truth)
+    return LabeledImage(np.clip(out, 0.0, 1.0), truth)
