@@ -179,4 +179,5 @@ def module_getattr(module: str, renames: Mapping[str, tuple[str, Any]]) -> Calla
             return value
         raise AttributeError(f"module {module!r} has no attribute {name!r}")
 
+    __getattr__.__deprecated_names__ = {old: new for old, (new, _) in renames.items()}  # type: ignore[attr-defined]
     return __getattr__

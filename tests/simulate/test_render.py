@@ -180,3 +180,15 @@ def test_lateral_chromatic_aberration_magnifies_red() -> None:
     img = simulate(load_scene(d)).stage("optics").image
     width = (img > 0.5 * img.max(axis=(0, 1))).sum(axis=1)[24]  # the plane's width per channel
     assert width[0] > width[1] > width[2]
+
+
+def test_render_twin_path_matches_kernel_path(monkeypatch: pytest.MonkeyPatch) -> None:
+    from imageform.simulate import default_scene
+
+    scene = default_scene().resized(48)
+    fast = render_scene(scene)
+    monkeypatch.setenv("IMAGEFORM_DISABLE_NUMBA", "1")
+    plain = render_scene(scene)
+    np.testing.assert_array_equal(fast.object_index, plain.object_index)
+    np.testing.assert_allclose(fast.rate, plain.rate, rtol=1e-9, atol=1e-9 * fast.rate.max())
+    np.testing.assert_allclose(fast.depth, plain.depth, rtol=1e-9)
