@@ -149,8 +149,10 @@ def renamed(new: F, old_name: str, *, instead: str | None = None) -> F:
         warn(old_name, advice)
         return new(*args, **kwargs)
 
-    wrapper.__name__ = old_name.rsplit(".", 1)[-1]
-    wrapper.__qualname__ = ".".join(old_name.split(".")[2:]) or wrapper.__name__
+    short = old_name.rsplit(".", 1)[-1]
+    owner = new.__qualname__.rpartition(".")[0]  # the class of a method, "" for a function
+    wrapper.__name__ = short
+    wrapper.__qualname__ = f"{owner}.{short}" if owner else short
     wrapper.__doc__ = f"Deprecated alias: {advice}."
     wrapper.__deprecated__ = advice  # type: ignore[attr-defined]
     return cast(F, wrapper)
