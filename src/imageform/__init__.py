@@ -12,12 +12,21 @@ with one set of conventions (see ``docs/conventions.md``):
 
 Subpackages: :mod:`imageform.geometry`, :mod:`imageform.color`, :mod:`imageform.spectral`,
 :mod:`imageform.optics`, :mod:`imageform.sensor`, :mod:`imageform.simulate`,
-:mod:`imageform.analysis`, :mod:`imageform.io`, :mod:`imageform.report`.
+:mod:`imageform.analysis`, :mod:`imageform.io`, :mod:`imageform.report`,
+:mod:`imageform.workflows` (file-level operations), :mod:`imageform.batch` and
+:mod:`imageform.cli`.
+
+The namespace is lazy (PEP 562): ``import imageform`` loads only :mod:`imageform.errors`;
+each subpackage is imported the first time it is used, so ``imageform.color.convert(...)``
+works after a bare ``import imageform`` and costs only what the colour package needs.
 """
 
 from __future__ import annotations
 
-from imageform import errors, geometry
+import importlib
+from typing import TYPE_CHECKING, Any
+
+from imageform import errors
 from imageform.errors import (
     DegenerateConfigurationError,
     ImageformError,
@@ -25,7 +34,40 @@ from imageform.errors import (
     UnknownOptionError,
 )
 
+if TYPE_CHECKING:  # the lazy subpackages, for type checkers and IDEs
+    from imageform import (
+        analysis,
+        batch,
+        cli,
+        color,
+        geometry,
+        io,
+        optics,
+        report,
+        sensor,
+        simulate,
+        spectral,
+        workflows,
+    )
+
 __version__ = "0.1.0"
+
+#: The subpackages reachable as attributes, imported on first use (``tests/test_lazy_import.py``
+#: checks that this lists every public subpackage on disk).
+_SUBPACKAGES = (
+    "analysis",
+    "batch",
+    "cli",
+    "color",
+    "geometry",
+    "io",
+    "optics",
+    "report",
+    "sensor",
+    "simulate",
+    "spectral",
+    "workflows",
+)
 
 __all__ = [
     "DegenerateConfigurationError",
@@ -33,6 +75,30 @@ __all__ = [
     "InvalidInputError",
     "UnknownOptionError",
     "__version__",
+    "analysis",
+    "batch",
+    "cli",
+    "color",
     "errors",
     "geometry",
+    "io",
+    "optics",
+    "report",
+    "sensor",
+    "simulate",
+    "spectral",
+    "workflows",
 ]
+
+
+def __getattr__(name: str) -> Any:
+    """Import the subpackage ``name`` on first access (PEP 562)."""
+    if name in _SUBPACKAGES:
+        # import_module also binds the subpackage as an attribute of this module, so the
+        # next access is an ordinary attribute lookup
+        return importlib.import_module(f"{__name__}.{name}")
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted({*globals(), *_SUBPACKAGES})

@@ -18,20 +18,20 @@ Hot NumPy paths dispatch to numba kernels in :mod:`imageform._kernels` when
 from __future__ import annotations
 
 import os
+from functools import cache
 from typing import Any, Literal
 
 import array_api_compat
 import numpy as np
-from array_api_compat import numpy as compat_numpy
 
 __all__ = [
     "COORD_INTEGER_DTYPE",
-    "HAVE_NUMBA",
     "IMAGE_INTEGER_DTYPE",
     "Array",
     "asarray_like",
     "device_of",
     "float_dtype",
+    "have_numba",
     "is_dask_namespace",
     "is_numpy_namespace",
     "linalg",
@@ -47,16 +47,32 @@ Array = Any
 IMAGE_INTEGER_DTYPE: Literal["float32"] = "float32"
 COORD_INTEGER_DTYPE: Literal["float64"] = "float64"
 
-try:  # numba is a hard dependency, but a broken install should degrade, not crash imports.
-    import numba  # noqa: F401
 
-    HAVE_NUMBA = True
-except Exception:  # pragma: no cover - exercised only on broken installs
-    HAVE_NUMBA = False
+@cache
+def have_numba() -> bool:
+    """Whether numba imports (checked on first use, not when imageform is imported).
+
+    numba is a hard dependency, but a broken install should degrade to the plain array
+    twins, not crash; importing it costs about 0.1 s, paid only by the first hot path.
+    """
+    try:
+        import numba  # noqa: F401
+    except Exception:  # pragma: no cover - exercised only on broken installs
+        return False
+    return True
 
 
 def _is_array(x: object) -> bool:
     return bool(array_api_compat.is_array_api_obj(x)) and not isinstance(x, np.generic)
+
+
+@cache
+def _compat_numpy() -> Any:
+    # array-api-compat's NumPy namespace costs about 0.1 s to import (it touches NumPy's
+    # lazy submodules): paid by the first computation, not by importing imageform
+    from array_api_compat import numpy as compat_numpy
+
+    return compat_numpy
 
 
 def namespace(*arrays: object) -> Any:
@@ -68,7 +84,7 @@ def namespace(*arrays: object) -> Any:
     """
     foreign = [a for a in arrays if _is_array(a) and not array_api_compat.is_numpy_array(a)]
     if not foreign:
-        return compat_numpy
+        return _compat_numpy()
     return array_api_compat.array_namespace(*foreign)
 
 
@@ -227,8 +243,10 @@ def use_numba(*arrays: object, min_size: int = 0) -> bool:
     imports, ``IMAGEFORM_DISABLE_NUMBA`` is not set, and the first array has at least
     ``min_size`` elements (below that, compilation and call overhead dominate).
     """
-    if not HAVE_NUMBA or os.environ.get("IMAGEFORM_DISABLE_NUMBA", "") not in ("", "0"):
+    if os.environ.get("IMAGEFORM_DISABLE_NUMBA", "") not in ("", "0"):
         return False
     if not all(isinstance(a, np.ndarray) for a in arrays):
+        return False
+    if not have_numba():
         return False
     return bool(arrays) and arrays[0].size >= min_size  # type: ignore[attr-defined]

@@ -272,6 +272,8 @@ def as_image(
     """An image as floats, channels last, following DESIGN.md's colour conventions.
 
     - ``uint8`` / ``uint16`` are full-range encoded values: divided by 255 / 65535, float32.
+    - Python integers (a list or tuple such as ``(200, 50, 50)``) are 8-bit codes 0-255, read
+      as uint8; a Python integer outside 0-255 raises (pass a uint16 array for 16-bit codes).
     - other integer dtypes raise (their scale is a guess): pass uint8/uint16 or floats.
     - float input that is plainly 0–255 (all values whole numbers, max > 1.5) raises with a
       hint, when ``range_check``.
@@ -283,6 +285,15 @@ def as_image(
     xp = namespace(image) if xp is None else xp
     arr = _raw(image, name, xp, device_of(image))
     dt = arr.dtype
+    if isinstance(image, list | tuple) and xp.isdtype(dt, "integral") and math.prod(arr.shape):
+        lo, hi = _min_max(arr, xp)
+        if lo < 0 or hi > 255:
+            raise InvalidInputError(
+                f"expected {name} as Python integers 0-255 (8-bit codes), got values "
+                f"{lo:g}..{hi:g}; pass a uint16 array for 16-bit codes or floats in [0, 1]"
+            )
+        arr = xp.astype(arr, xp.uint8)
+        dt = arr.dtype
     if xp.isdtype(dt, "integral") or xp.isdtype(dt, "bool"):
         dname = str(dt).removeprefix("torch.")
         if dname not in _INTEGER_SCALE:

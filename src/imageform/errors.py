@@ -10,6 +10,10 @@ working for callers who do not know about imageform.
   the answer (coplanar points for a 3-D DLT, collinear points for a homography, too few views,
   a singular matrix); the message names the cause.
 - :class:`ConvergenceError` — an iterative solver did not reach its tolerance in ``max_iter``.
+
+Every warning imageform issues is an :class:`ImageformWarning` (a ``UserWarning``), so that
+``warnings.filterwarnings("ignore", category=ImageformWarning)`` silences them all and the
+command line turns each into one ``imageform: warning: ...`` line.
 """
 
 from __future__ import annotations
@@ -20,6 +24,7 @@ __all__ = [
     "DegenerateConfigurationError",
     "IllConditionedWarning",
     "ImageformError",
+    "ImageformWarning",
     "InvalidInputError",
     "UnknownOptionError",
 ]
@@ -45,9 +50,13 @@ class ConvergenceError(ImageformError, RuntimeError):
     """An iterative solver did not converge within ``max_iter`` iterations."""
 
 
-class ConvergenceWarning(UserWarning):
+class ImageformWarning(UserWarning):
+    """Base class of every warning imageform issues."""
+
+
+class ConvergenceWarning(ImageformWarning):
     """Some elements of a batched iterative solve did not converge (see the returned mask)."""
 
 
-class IllConditionedWarning(UserWarning):
+class IllConditionedWarning(ImageformWarning):
     """The input is valid but poorly conditioned: results will be uncertain."""

@@ -15,8 +15,11 @@ def test_lecture_table_and_json(capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["lecture"]) == 0
     assert "570" in capsys.readouterr().out
     assert main(["lecture", "--json", "--topic", "vanishing"]) == 0
-    rows = json.loads(capsys.readouterr().out)
-    assert rows and all(r["agrees"] for r in rows)
+    result = json.loads(capsys.readouterr().out)
+    rows = result["examples"]
+    assert rows and all(r["agrees"] for r in rows) and result["all_agree"] is True
+    assert main(["lecture", "--topic", "no such topic"]) == 2  # never an empty table
+    assert "valid: pinhole" in capsys.readouterr().err
 
 
 def test_version(capsys: pytest.CaptureFixture[str]) -> None:

@@ -48,8 +48,8 @@ def test_delta_e_text_and_errors(pair, tmp_path, capsys) -> None:  # type: ignor
     small = _png(tmp_path / "small.png", np.zeros((4, 4, 3), np.uint8))
     assert main(["delta-e", str(a), str(small)]) == 1
     assert "differ in size" in capsys.readouterr().err
-    assert main(["delta-e", str(a), str(b), "--method", "cie2001"]) == 1
-    assert "valid: 'cie76'" in capsys.readouterr().err
+    assert main(["delta-e", str(a), str(b), "--method", "cie2001"]) == 2
+    assert "valid: ciede2000, cie76" in capsys.readouterr().err
     assert main(["delta-e", str(a), str(b), "--heatmap", str(a)]) == 1
     assert "also an input" in capsys.readouterr().err
 
@@ -57,16 +57,17 @@ def test_delta_e_text_and_errors(pair, tmp_path, capsys) -> None:  # type: ignor
 def test_white_balance_command(pair, tmp_path, capsys) -> None:  # type: ignore[no-untyped-def]
     a, _ = pair
     out = tmp_path / "wb.png"
-    assert main(["white-balance", str(a), str(out), "--method", "gray-world", "--json"]) == 0
+    assert main(["white-balance", str(a), "-o", str(out), "--method", "gray-world", "--json"]) == 0
     res = json.loads(capsys.readouterr().out)
     assert len(res["gains"]) == 3 and out.exists()
-    assert main(["white-balance", str(a), str(out)]) == 1
+    assert main(["white-balance", str(a), "-o", str(out)]) == 1
     assert "--force" in capsys.readouterr().err
     tif = tmp_path / "wb.tif"
-    assert main(["white-balance", str(a), str(tif), "--method", "white-patch"]) == 0
+    assert main(["white-balance", str(a), "-o", str(tif), "--method", "white-patch"]) == 0
     assert "gains" in capsys.readouterr().out
-    assert main(["white-balance", str(a), str(tmp_path / "x.png"), "--method", "shades-of-gray",
-                 "--p", "0.5"]) == 1  # fmt: skip
+    x = str(tmp_path / "x.png")
+    assert main(["white-balance", str(a), "-o", x, "--method", "shades-of-gray", "--p", "0.5"]) == 1
     assert "p >= 1" in capsys.readouterr().err
-    assert main(["white-balance", str(a), str(tmp_path / "y.png"), "--method", "nope"]) == 1
-    assert "gray_world" in capsys.readouterr().err
+    y = str(tmp_path / "y.png")
+    assert main(["white-balance", str(a), "-o", y, "--method", "nope"]) == 2
+    assert "gray-world" in capsys.readouterr().err

@@ -24,25 +24,33 @@ def test_convert_to_lab_tiff_and_back(
     rgb_png: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     out = tmp_path / "lab.tif"
-    assert main(["convert", str(rgb_png), str(out), "--from", "srgb", "--to", "lab", "--json"]) == 0
+    assert (
+        main(["convert", str(rgb_png), "-o", str(out), "--from", "srgb", "--to", "lab", "--json"])
+        == 0
+    )
     payload = json.loads(capsys.readouterr().out)
     assert payload["path"] == ["srgb_to_linear", "linear_srgb_to_xyz", "xyz_to_lab"]
     lab = read_image(out)
     assert lab.dtype == np.float32
     np.testing.assert_allclose(lab, convert(read_image(rgb_png), "srgb", "lab"), atol=1e-4)
     back = tmp_path / "back.png"
-    assert main(["convert", str(out), str(back), "--from", "lab", "--to", "srgb", "--clip"]) == 0
+    assert (
+        main(["convert", str(out), "-o", str(back), "--from", "lab", "--to", "srgb", "--clip"]) == 0
+    )
     np.testing.assert_array_equal(read_image(back), read_image(rgb_png))
 
 
 def test_16bit_png_and_ycbcr_params(rgb_png: Path, tmp_path: Path) -> None:
     out = tmp_path / "p3.png"
-    assert main(["convert", str(rgb_png), str(out), "--to", "display_p3", "--bits", "16"]) == 0
+    assert (
+        main(["convert", str(rgb_png), "-o", str(out), "--to", "display_p3", "--bits", "16"]) == 0
+    )
     assert read_image(out).dtype == np.uint16
     ycc = tmp_path / "ycc.npy"
     args = [
         "convert",
         str(rgb_png),
+        "-o",
         str(ycc),
         "--to",
         "ycbcr",
@@ -58,20 +66,23 @@ def test_16bit_png_and_ycbcr_params(rgb_png: Path, tmp_path: Path) -> None:
 
 
 def test_errors(rgb_png: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    assert main(["convert", str(rgb_png), str(tmp_path / "lab.png"), "--to", "lab"]) == 1
-    assert "not displayable" in capsys.readouterr().err
-    assert main(["convert", str(rgb_png), str(rgb_png), "--to", "hsv"]) == 1
+    assert main(["convert", str(rgb_png), "-o", str(tmp_path / "lab.png"), "--to", "lab"]) == 1
+    assert "do not fit an integer image" in capsys.readouterr().err
+    assert main(["convert", str(rgb_png), "-o", str(rgb_png), "--to", "hsv"]) == 1
     assert "also an input" in capsys.readouterr().err
-    assert main(["convert", str(rgb_png), str(tmp_path / "x.npy"), "--to", "labx"]) == 1
-    assert "valid:" in capsys.readouterr().err
+    assert main(["convert", str(rgb_png), "-o", str(tmp_path / "x.npy"), "--to", "labx"]) == 2
+    assert "valid:" in capsys.readouterr().err  # bad usage: exit 2, the valid names listed
     (tmp_path / "exists.npy").write_bytes(b"")
-    assert main(["convert", str(rgb_png), str(tmp_path / "exists.npy"), "--to", "hsv"]) == 1
+    assert main(["convert", str(rgb_png), "-o", str(tmp_path / "exists.npy"), "--to", "hsv"]) == 1
     assert "--force" in capsys.readouterr().err
     rgba = tmp_path / "rgba.png"
     write_image(rgba, np.zeros((4, 4, 4), np.uint8))
-    assert main(["convert", str(rgba), str(tmp_path / "a.npy"), "--to", "hsv"]) == 1
-    assert "alpha" in capsys.readouterr().err
+    assert main(["convert", str(rgba), "-o", str(tmp_path / "a.npy"), "--to", "hsv"]) == 1
+    assert "transparent pixels" in capsys.readouterr().err
     assert (
-        main(["convert", str(rgba), str(tmp_path / "a.npy"), "--to", "hsv", "--alpha", "keep"]) == 0
+        main(
+            ["convert", str(rgba), "-o", str(tmp_path / "a.npy"), "--to", "hsv", "--alpha", "keep"]
+        )
+        == 0
     )
     assert read_image(tmp_path / "a.npy").shape == (4, 4, 4)

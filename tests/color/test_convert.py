@@ -218,3 +218,15 @@ def test_registries_are_read_only() -> None:
     with pytest.raises(TypeError):
         SPACES["mine"] = (3, "")  # type: ignore[index]
     assert isinstance(EDGES, tuple)
+
+
+def test_python_integers_are_8bit_codes() -> None:
+    """One documented rule: a tuple or list of Python ints is 8-bit codes 0-255."""
+    np.testing.assert_array_equal(
+        convert((200, 50, 50), "srgb", "hsv"),
+        convert(np.array([200, 50, 50], np.uint8), "srgb", "hsv"),
+    )
+    with pytest.raises(InvalidInputError, match=r"Python integers 0-255.*got values 0\.\.300"):
+        convert((300, 0, 0), "srgb", "hsv")
+    with pytest.raises(InvalidInputError, match="int64"):  # an int64 array has no known range
+        convert(np.array([200, 50, 50]), "srgb", "hsv")

@@ -104,3 +104,21 @@ def test_errors() -> None:
     bad = RGBSpace("bad", ((0.1, 0.1), (0.2, 0.2), (0.3, 0.3)), (0.3127, 0.329), "srgb", "-")
     with pytest.raises(DegenerateConfigurationError, match="collinear"):
         rgb_to_xyz_matrix(bad)
+
+
+def test_rgb_space_by_name_and_alias() -> None:
+    from imageform.color import RGB_SPACES, rgb_space
+
+    assert rgb_space("srgb") is RGB_SPACES["srgb"]
+    for alias, key in (
+        ("Display-P3", "display_p3"),
+        ("p3", "display_p3"),
+        ("Adobe-RGB-1998", "adobe_rgb"),
+        ("BT.2020", "rec2020"),
+        ("ROMM", "prophoto"),
+    ):
+        assert rgb_space(alias) is RGB_SPACES[key], alias
+    custom = RGBSpace("mine", ((0.7, 0.3), (0.2, 0.7), (0.15, 0.05)), (0.3127, 0.329), "srgb", "-")
+    assert rgb_space(custom) is custom
+    with pytest.raises(UnknownOptionError, match="unknown RGB space 'cmyk'; valid: "):
+        rgb_space("cmyk")

@@ -162,6 +162,21 @@ def test_real_image_plane_is_inverted() -> None:
         project_points(X, K0, image_plane="mirror")  # type: ignore[arg-type]
 
 
+def test_image_plane_K() -> None:
+    K = intrinsic_matrix(500.0, 480.0, 320.0, 240.0, 2.0)
+    R, t = rvec_to_matrix([0.1, -0.2, 0.05]), np.array([0.2, -0.1, 4.0])
+    np.testing.assert_array_equal(Camera(K, R, t).image_plane_K, K)
+    real = Camera(K, R, t, image_plane="real")
+    # fx, fy and the skew change sign, the principal point does not
+    want = np.array([[-500.0, -2.0, 320.0], [0.0, -480.0, 240.0], [0.0, 0.0, 1.0]])
+    np.testing.assert_array_equal(real.image_plane_K, want)
+    np.testing.assert_array_equal(real.projection_matrix, projection_matrix(want, R, t))
+    # P = image_plane_K [R | t] projects like the camera: the inverted image
+    X = np.array([[0.3, -0.2, 1.0], [-0.5, 0.4, 2.0]])
+    h = np.c_[X, np.ones(2)] @ real.projection_matrix.T
+    np.testing.assert_allclose(h[:, :2] / h[:, 2:], real.project(X).uv, rtol=0, atol=1e-9)
+
+
 # -- numba kernel vs array twin --------------------------------------------------------------
 
 

@@ -1,14 +1,16 @@
-"""Image IO: PNG 8/16-bit round trips (own codec and Pillow), TIFF float, .npy, errors."""
+"""imageform.io images: one rule for shape, alpha, orientation and memory; round trips;
+corrupt, truncated and oversized files refused from their header in one line."""
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-from imageform.errors import InvalidInputError
-from imageform.io import read_image, read_png, write_image, write_png
+from imageform.errors import InvalidInputError, UnknownOptionError
+from imageform.io import image_info, read_image, read_png, write_image, write_png
 
 RNG = np.random.default_rng(40)
 
@@ -35,25 +37,101 @@ def test_png_16bit_cross_check_opencv(tmp_path: Path) -> None:
     np.testing.assert_array_equal(read_png(tmp_path / "b.png"), a)
 
 
-def test_png_8bit_read_by_pillow(tmp_path: Path) -> None:
+def test_grey_is_one_channel_in_every_format(tmp_path: Path) -> None:
+    from PIL import Image
+
+    g = RNG.integers(0, 256, (5, 4)).astype(np.uint8)
+    Image.fromarray(g).save(tmp_path / "g.png")
+    Image.fromarray(g).save(tmp_path / "g.jpg", quality=100)
+    write_image(tmp_path / "g.tif", g)
+    np.save(tmp_path / "g.npy", g)
+    for name in ("g.png", "g.tif", "g.npy", "g.jpg"):
+        a = read_image(tmp_path / name)
+        assert a.shape == (5, 4, 1) and a.dtype == np.uint8, name
+        if name != "g.jpg":
+            np.testing.assert_array_equal(a[..., 0], g)
+
+
+def test_png_8bit_read_by_pillow_and_palette(tmp_path: Path) -> None:
     from PIL import Image
 
     a = RNG.integers(0, 256, (5, 4, 3)).astype(np.uint8)
     Image.fromarray(a).save(tmp_path / "p.png")
     np.testing.assert_array_equal(read_image(tmp_path / "p.png"), a)
+    pal = Image.fromarray(a).quantize(8)
+    pal.save(tmp_path / "pal.png")
+    np.testing.assert_array_equal(read_image(tmp_path / "pal.png"), np.asarray(pal.convert("RGB")))
+
+
+def test_alpha_rule(tmp_path: Path) -> None:
+    """Opaque alpha is dropped; any transparency is refused unless dropped or kept."""
+    from PIL import Image
+
+    rgba = RNG.integers(0, 256, (4, 4, 4)).astype(np.uint8)
+    rgba[..., 3] = 255
+    write_png(tmp_path / "opaque.png", rgba)
+    assert read_image(tmp_path / "opaque.png").shape == (4, 4, 3)
+    rgba[0, 0, 3] = 10
+    write_png(tmp_path / "t.png", rgba)
+    with pytest.raises(InvalidInputError, match=r"t\.png has transparent pixels \(1 with"):
+        read_image(tmp_path / "t.png")
+    np.testing.assert_array_equal(read_image(tmp_path / "t.png", alpha="drop"), rgba[..., :3])
+    np.testing.assert_array_equal(read_image(tmp_path / "t.png", alpha="keep"), rgba)
+    la = np.stack([rgba[..., 0], rgba[..., 3]], -1)  # grey + alpha follows the same rule
+    Image.fromarray(la, "LA").save(tmp_path / "la.png")
+    with pytest.raises(InvalidInputError, match="transparent"):
+        read_image(tmp_path / "la.png")
+    assert read_image(tmp_path / "la.png", alpha="drop").shape == (4, 4, 1)
+    pal = Image.fromarray(rgba[..., :3]).quantize(4)
+    pal.info["transparency"] = 0
+    pal.save(tmp_path / "palt.png", transparency=0)  # palette transparency: the same rule
+    with pytest.raises(InvalidInputError, match="transparent"):
+        read_image(tmp_path / "palt.png")
+    with pytest.raises(UnknownOptionError, match="alpha handling"):
+        read_image(tmp_path / "t.png", alpha="blend")
+    write_image(tmp_path / "t.tif", rgba)  # TIFF: an extra sample is alpha, the same rule
+    with pytest.raises(InvalidInputError, match="transparent"):
+        read_image(tmp_path / "t.tif")
+    np.save(tmp_path / "cmyk.npy", rgba)  # .npy has no alpha: four channels come back
+    assert read_image(tmp_path / "cmyk.npy").shape == (4, 4, 4)
+
+
+def test_exif_orientation_applied(tmp_path: Path) -> None:
+    from PIL import Image
+
+    a = np.zeros((8, 16, 3), np.uint8)
+    a[:, :8] = 255  # white on the left of the stored pixels
+    exif = Image.Exif()
+    exif[0x0112] = 6  # viewer rotates 90 degrees clockwise
+    Image.fromarray(a).save(tmp_path / "o.jpg", exif=exif.tobytes(), quality=100)
+    Image.fromarray(a).save(tmp_path / "o.png", exif=exif.tobytes())
+    for name in ("o.jpg", "o.png"):
+        b = read_image(tmp_path / name)
+        assert b.shape == (16, 8, 3), name  # upright: taller than wide
+        assert b[:8].mean() > 200 and b[8:].mean() < 50, name  # left became top
 
 
 def test_float_quantisation_and_no_silent_clipping(tmp_path: Path) -> None:
-    write_image(tmp_path / "q.png", np.array([[[0.0, 0.5, 1.0]]]), bits=8)
+    assert write_image(tmp_path / "q.png", np.array([[[0.0, 0.5, 1.0]]]), bits=8) == (8, 0)
     assert read_image(tmp_path / "q.png").tolist() == [[[0, 128, 255]]]
-    with pytest.raises(InvalidInputError, match="outside"):
+    with pytest.raises(InvalidInputError, match=r"1 values outside \[0, 1\].*--out-of-range"):
         write_image(tmp_path / "r.png", np.array([[[0.0, 1.2, 1.0]]]))
-    write_image(tmp_path / "r.png", np.array([[[0.0, 1.2, -1.0]]]), clip=True)
-    assert read_image(tmp_path / "r.png").tolist() == [[[0, 255, 0]]]
+    assert not (tmp_path / "r.png").exists()
+    w = write_image(tmp_path / "r.png", np.array([[[0.0, 1.2, -1.0]]]), out_of_range="clip")
+    assert w.out_of_range == 2 and read_image(tmp_path / "r.png").tolist() == [[[0, 255, 0]]]
+    with pytest.warns(DeprecationWarning, match="out_of_range"):
+        write_image(tmp_path / "r2.png", np.array([[[1.5, 0, 0]]]), clip=True)
     with pytest.raises(InvalidInputError, match="NaN"):
         write_image(tmp_path / "s.png", np.array([[[0.0, np.nan, 1.0]]]))
-    with pytest.raises(InvalidInputError, match="PNG bit depth"):
+    with pytest.raises(InvalidInputError, match="bits 8 or 16"):
         write_image(tmp_path / "s.png", np.zeros((2, 2, 3)), bits=12)
+    with pytest.raises(InvalidInputError, match="JPEG holds 8 bits"):
+        write_image(tmp_path / "s.jpg", np.zeros((2, 2, 3), np.uint16))
+    with pytest.raises(InvalidInputError, match="JPEG has no alpha"):
+        write_image(tmp_path / "s.jpg", np.zeros((2, 2, 4)))
+    # 16-bit data written as 8 bits is rescaled, not cut
+    write_image(tmp_path / "d.png", np.array([[65535, 32896, 0]], np.uint16), bits=8)
+    assert read_image(tmp_path / "d.png")[..., 0].tolist() == [[255, 128, 0]]
 
 
 def test_tiff_and_npy_exact(tmp_path: Path) -> None:
@@ -62,15 +140,85 @@ def test_tiff_and_npy_exact(tmp_path: Path) -> None:
     np.testing.assert_array_equal(read_image(tmp_path / "a.tif"), a)
     write_image(tmp_path / "a.npy", a.astype(np.float64))
     np.testing.assert_array_equal(read_image(tmp_path / "a.npy"), a.astype(np.float64))
+    write_image(tmp_path / "b.tif", np.clip(a / 100 + 0.5, 0, 1), bits=16)  # integer on request
+    assert read_image(tmp_path / "b.tif").dtype == np.uint16
+
+
+def test_pixel_limit_checked_from_the_header(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    a = np.zeros((30, 40, 3), np.uint8)
+    for name in ("a.png", "a.jpg", "a.tif", "a.npy"):
+        write_image(tmp_path / name, a)
+        assert image_info(tmp_path / name)[:3] == (40, 30, 3)
+        with pytest.raises(InvalidInputError, match=r"40 x 30 = 0\.0 Mpx, above the limit"):
+            read_image(tmp_path / name, max_pixels=1000)
+        monkeypatch.setenv("IMAGEFORM_MAX_PIXELS", "1199")
+        with pytest.raises(InvalidInputError, match="IMAGEFORM_MAX_PIXELS"):
+            read_image(tmp_path / name)
+        monkeypatch.setenv("IMAGEFORM_MAX_PIXELS", "1200")
+        assert read_image(tmp_path / name).shape == (30, 40, 3)
+        monkeypatch.delenv("IMAGEFORM_MAX_PIXELS")
+
+
+def test_npy_header_is_not_trusted(tmp_path: Path) -> None:
+    p = tmp_path / "big.npy"
+    with p.open("wb") as fh:  # a header promising 12000 x 12000 x 3 float64, and no data
+        np.lib.format.write_array_header_1_0(
+            fh, {"descr": "<f8", "fortran_order": False, "shape": (12000, 12000, 3)}
+        )
+    with pytest.raises(InvalidInputError, match="above the limit"):
+        read_image(p)
+    with pytest.raises(InvalidInputError, match="truncated"):
+        read_image(p, max_pixels=10**9)
+    (tmp_path / "empty.npy").write_bytes(b"")
+    with pytest.raises(InvalidInputError, match=r"empty\.npy: not a \.npy file"):
+        read_image(tmp_path / "empty.npy")
+    np.save(tmp_path / "obj.npy", np.array([[1, None]], dtype=object), allow_pickle=True)
+    with pytest.raises(InvalidInputError, match="object arrays"):
+        read_image(tmp_path / "obj.npy")
+
+
+@pytest.mark.parametrize("name", ["a.png", "a.jpg", "a.tif"])
+def test_truncated_and_corrupt_files(tmp_path: Path, name: str) -> None:
+    a = RNG.integers(0, 256, (64, 64, 3)).astype(np.uint8)
+    write_image(tmp_path / name, a)
+    data = (tmp_path / name).read_bytes()
+    cut = tmp_path / ("cut" + Path(name).suffix)
+    cut.write_bytes(data[: len(data) // 2])
+    with pytest.raises(InvalidInputError, match=rf"cannot read {cut}") as info:
+        read_image(cut)
+    assert "\n" not in str(info.value)
+    junk = tmp_path / ("junk" + Path(name).suffix)
+    junk.write_bytes(b"not an image at all")
+    with pytest.raises(InvalidInputError, match="cannot read"):
+        read_image(junk)
 
 
 def test_errors(tmp_path: Path) -> None:
-    with pytest.raises(InvalidInputError, match=r"unknown image file type '\.jpg'"):
-        read_image(tmp_path / "a.jpg")
+    with pytest.raises(InvalidInputError, match=r"unknown image file type '\.gif'"):
+        read_image(tmp_path / "a.gif")
     with pytest.raises(InvalidInputError, match="does not exist"):
         read_image(tmp_path / "missing.png")
+    (tmp_path / "dir.png").mkdir()
+    with pytest.raises(InvalidInputError, match="is not a file"):
+        read_image(tmp_path / "dir.png")
     (tmp_path / "fake.png").write_bytes(b"not a png")
     with pytest.raises(InvalidInputError, match="not a PNG"):
         read_image(tmp_path / "fake.png")
     with pytest.raises(InvalidInputError, match="uint8 or uint16"):
         write_png(tmp_path / "x.png", np.zeros((2, 2, 3), np.int32))
+    with pytest.raises(InvalidInputError, match="1 to 4 channels"):
+        write_image(tmp_path / "x.png", np.zeros((2, 2, 5)))
+    with pytest.raises(InvalidInputError, match="expected a file path"):
+        read_image(None)  # type: ignore[arg-type]
+
+
+def test_write_is_atomic(tmp_path: Path) -> None:
+    """A failed write leaves the previous file and no temporary behind."""
+    p = tmp_path / "a.png"
+    write_image(p, np.zeros((2, 2, 3)))
+    before = p.read_bytes()
+    with pytest.raises(InvalidInputError):
+        write_image(p, np.full((2, 2, 3), 2.0))
+    assert p.read_bytes() == before and os.listdir(tmp_path) == ["a.png"]

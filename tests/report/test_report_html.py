@@ -170,7 +170,7 @@ def test_float_raw_kept_as_tiff(bare_result: SimulationResult, tmp_path: Path) -
     r = dataclasses.replace(bare_result, stages=(half, bare_result.stages[-1]))
     paths = write_report(r, tmp_path)
     assert [p.name for p in paths.raw_files] == ["00-raw-dn.tif"]
-    assert np.array_equal(read_image(paths.raw_files[0]), half.image.astype(np.float32))
+    assert np.array_equal(read_image(paths.raw_files[0])[..., 0], half.image.astype(np.float32))
 
 
 def test_metrics_that_are_not_json_are_an_error(

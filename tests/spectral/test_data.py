@@ -109,3 +109,33 @@ def test_tables_match_colour_science() -> None:
     assert np.allclose(cmfs(2).values, ref.values, atol=1e-10)
     ref = colour.SDS_ILLUMINANTS["D65"]
     assert np.allclose(illuminant_table("D65").values, ref.values, atol=1e-10)
+
+
+def test_read_table_gives_any_shipped_table() -> None:
+    """read_table: comments, columns, numeric values and first-column labels of a CSV."""
+    from imageform.spectral import read_table
+
+    cvd = read_table("cvd_machado2009")
+    assert cvd.comments[0].startswith("source: Machado, Oliveira & Fernandes (2009)")
+    assert cvd.columns == (
+        "deficiency",
+        "severity",
+        *(f"m{i}{j}" for i in range(3) for j in range(3)),
+    )
+    assert cvd.labels[:2] == ("protan", "protan") and set(cvd.labels) == {
+        "protan",
+        "deutan",
+        "tritan",
+    }
+    # Machado et al. (2009), protanomaly at severity 0.1, first row of the matrix
+    assert cvd.values[1, :4].tolist() == [0.1, 0.856167, 0.182038, -0.038205]
+    assert cvd.values.shape == (33, 10) and not cvd.values.flags.writeable
+    viridis = read_table("viridis")  # all columns numeric: values keep the first column
+    assert viridis.columns == ("r", "g", "b")
+    assert viridis.values[0].tolist() == [0.267004, 0.004874, 0.329415]
+    # a wavelength table reads the same as load_table
+    d65 = read_table("D65")
+    np.testing.assert_array_equal(d65.values[:, 1], load_table("D65").values)
+    assert read_table("D65").values is d65.values  # cached, read-only
+    with pytest.raises(UnknownOptionError, match="unknown spectral table 'd66'"):
+        read_table("d66")

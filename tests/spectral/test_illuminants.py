@@ -97,3 +97,42 @@ def test_cct_of_a_and_d65() -> None:
     )
     with pytest.raises(InvalidInputError, match="X\\+Y\\+Z > 0"):
         planckian_cct([0.0, 0.0, 0.0])
+
+
+@pytest.mark.parametrize(
+    "xy", [(0.31272, 0.32903), (0.34567, 0.35850), (0.29902, 0.31485), (0.38, 0.38)]
+)
+@pytest.mark.parametrize("round_m", [True, False])
+def test_daylight_from_xy_equals_colour_science(xy: tuple[float, float], round_m: bool) -> None:
+    """CIE 015:2018 eq. 4.5 from a chromaticity, as colour-science's
+    sd_CIE_illuminant_D_series computes it (same basis table, same M rounding): equal."""
+    colour = pytest.importorskip("colour")
+    from imageform.spectral import daylight_spectrum_from_xy
+
+    ref = colour.sd_CIE_illuminant_D_series(np.array(xy), M1_M2_rounding=round_m)
+    ours = daylight_spectrum_from_xy(xy, round_m=round_m)
+    np.testing.assert_array_equal(ours.wavelengths, ref.wavelengths)
+    np.testing.assert_allclose(ours.values, ref.values, rtol=1e-14, atol=0)
+
+
+def test_daylight_spectrum_is_the_d_series_at_the_daylight_locus() -> None:
+    """daylight_spectrum(T) = daylight_spectrum_from_xy(cct_to_xy(T, method="daylight"))."""
+    from imageform.color import cct_to_xy
+    from imageform.spectral import daylight_spectrum_from_xy
+
+    for t in (4000.0, 5003.0, 6504.0, 7000.0, 9300.0, 25000.0):
+        xy = np.asarray(cct_to_xy(t, method="daylight"))
+        np.testing.assert_array_equal(
+            daylight_spectrum(t).values, daylight_spectrum_from_xy(xy).values
+        )
+
+
+def test_daylight_from_xy_bad_input() -> None:
+    from imageform.spectral import daylight_spectrum_from_xy
+
+    for bad in ([0.3], [0.3, np.nan], "xy", [[0.3, 0.3]]):
+        with pytest.raises(InvalidInputError, match="expected xy as two finite numbers"):
+            daylight_spectrum_from_xy(bad)  # type: ignore[arg-type]
+    # 0.0241 + 0.2562 x - 0.7341 y = 0 at x = 0, y = 0.0241 / 0.7341
+    with pytest.raises(InvalidInputError, match="M1, M2 are undefined"):
+        daylight_spectrum_from_xy([0.0, 0.0241 / 0.7341])

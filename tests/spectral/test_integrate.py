@@ -179,3 +179,19 @@ def test_bad_input() -> None:
         spectrum_to_xyz(r, illuminant="D93x")
     with pytest.raises(InvalidInputError, match="single-curve illuminant"):
         spectrum_to_xyz(r, illuminant=Spectrum([400, 500], [[1, 1], [1, 1]]))
+
+
+def test_resolve_illuminant() -> None:
+    """A name, a single-curve Spectrum or None (a light on its own) as the illuminant."""
+    from imageform.spectral import resolve_illuminant
+
+    d65 = resolve_illuminant("D65")
+    assert d65 is not None
+    np.testing.assert_array_equal(d65.values, illuminant("D65").values)
+    assert resolve_illuminant(d65) is d65
+    assert resolve_illuminant(None) is None
+    two = Spectrum(np.array([400.0, 500.0]), np.ones((2, 2)))
+    with pytest.raises(InvalidInputError, match="single-curve illuminant, got"):
+        resolve_illuminant(two)
+    with pytest.raises(InvalidInputError, match="unknown illuminant 'D6'"):
+        resolve_illuminant("D6")

@@ -1,6 +1,6 @@
 """Numba kernels for sRGB -> HSV and sRGB <-> Y'CbCr (float32 / float64 / uint8), parallel.
 
-Plain twins: ``imageform.color.hsv._srgb_to_hsv`` and ``imageform.color.ycbcr._rgb_to_ycbcr``
+Plain twins: ``imageform._colormath.rgb_to_hsv`` and ``imageform.color.ycbcr._rgb_to_ycbcr``
 / ``_ycbcr_to_rgb`` (the array path of :func:`imageform.color.convert`); the kernels
 evaluate the same expressions per pixel (``tests/color/test_kernels.py``).
 uint8 input is read as v / 255 (full range) and gives float32.

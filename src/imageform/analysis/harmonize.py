@@ -22,12 +22,12 @@ from typing import Any
 
 import numpy as np
 
+from imageform._colormath import srgb_decode, srgb_encode
 from imageform._validate import as_float, check_option, format_shape
 from imageform.analysis._arrays import image_in, is_dask, read_json, write_json
 from imageform.color.convert import convert
 from imageform.color.delta_e import delta_e
-from imageform.color.transfer import _srgb_decode, _srgb_encode
-from imageform.errors import DegenerateConfigurationError, InvalidInputError
+from imageform.errors import DegenerateConfigurationError, ImageformWarning, InvalidInputError
 
 __all__ = [
     "CORRECTION_METHODS",
@@ -50,7 +50,7 @@ CORRECTION_METHODS: MappingProxyType[str, tuple[int, ...]] = MappingProxyType(
 )
 
 
-class ChartWarning(UserWarning):
+class ChartWarning(ImageformWarning):
     """Chart patches were saturated or missing and are left out of the fit."""
 
 
@@ -90,7 +90,7 @@ def root_polynomial_terms(rgb: Any, degree: int) -> Any:
 
 def _linear_light(x: np.ndarray, transfer: str) -> np.ndarray:
     """Values in linear light: as they are (``"linear"``) or decoded from sRGB."""
-    return x if transfer == "linear" else np.asarray(_srgb_decode(np, x))
+    return x if transfer == "linear" else np.asarray(srgb_decode(np, x))
 
 
 def _apply_block(
@@ -98,7 +98,7 @@ def _apply_block(
 ) -> np.ndarray:
     lin = _linear_light(rgb, transfer)
     out = root_polynomial_terms(lin, degree) @ matrix.T.astype(rgb.dtype)
-    enc = out if transfer == "linear" else np.asarray(_srgb_encode(np, out), dtype=rgb.dtype)
+    enc = out if transfer == "linear" else np.asarray(srgb_encode(np, out), dtype=rgb.dtype)
     return np.clip(enc, 0.0, 1.0) if clip else enc
 
 

@@ -16,10 +16,10 @@ from typing import Any
 import numpy as np
 
 from imageform._backend import use_numba
+from imageform._colormath import rgb_to_hsv
 from imageform._validate import format_shape
 from imageform.analysis._arrays import image_in, is_dask
-from imageform.color.hsv import _srgb_to_hsv
-from imageform.errors import DegenerateConfigurationError, InvalidInputError
+from imageform.errors import DegenerateConfigurationError, ImageformWarning, InvalidInputError
 
 __all__ = [
     "LECTURE_OPENCV",
@@ -36,7 +36,7 @@ __all__ = [
 LECTURE_OPENCV = ((0.0, 20.0), (30.0, 255.0), (80.0, 255.0))
 
 
-class EmptyMaskWarning(UserWarning):
+class EmptyMaskWarning(ImageformWarning):
     """A segmentation selected no pixel (check the thresholds and their units)."""
 
 
@@ -101,7 +101,7 @@ def _threshold(
 
         hsv, _ = color_simple.srgb_to_hsv(rgb)
     else:
-        hsv = _srgb_to_hsv(np, rgb)
+        hsv = rgb_to_hsv(np, rgb)
     hue, sat, val = hsv[..., 0], hsv[..., 1], hsv[..., 2]
     lo, hi = hue >= h[0], hue <= h[1]
     in_h = (lo & hi) if h[0] <= h[1] else (lo | hi)  # wrap: [h0, 360) ∪ [0, h1]

@@ -15,8 +15,8 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from imageform import _deprecate
+from imageform._colormath import hsv_to_rgb, srgb_decode, srgb_encode
 from imageform._random import RNGLike, as_rng
-from imageform.color.hsv import _hsv_to_srgb
 from imageform.errors import InvalidInputError
 
 __all__ = [
@@ -185,7 +185,7 @@ def synthetic_endoscopy_image(
     # vignetting on V (cos^4-like falloff to 0.55 at the corners), except the highlights
     vig = 1.0 - 0.45 * (xn**2 + yn**2) / 2.0
     val = np.where(val >= 1.0, val, val * vig)
-    rgb = _hsv_to_srgb(np, np.stack([hue, sat, val], axis=-1))
+    rgb = hsv_to_rgb(np, np.stack([hue, sat, val], axis=-1))
     rgb = rgb + gen.normal(0.0, 0.03, rgb.shape)
     return LabeledImage(np.clip(rgb, 0.0, 1.0), truth)
 
@@ -288,8 +288,6 @@ def synthetic_shading_scene(
     >>> img.shape, bool(m.any())
     ((128, 192, 3), True)
     """
-    from imageform.color.transfer import _srgb_decode, _srgb_encode
-
     gen = as_rng(rng)
     hgt, wid = shape
     y, x = np.mgrid[0:hgt, 0:wid].astype(np.float64)
@@ -302,7 +300,7 @@ def synthetic_shading_scene(
     red = np.array([0.78, 0.22, 0.2])
     bg = np.array([0.62, 0.66, 0.3])
     enc = np.where(truth[..., None], red, bg) + 0.02 * _smooth_noise(gen, shape, 3.0)[..., None]
-    lin = _srgb_decode(np, np.clip(enc, 0, 1))
+    lin = srgb_decode(np, np.clip(enc, 0, 1))
     ramp = np.linspace(shading[0], shading[1], wid)[None, :, None]
-    out = _srgb_encode(np, lin * ramp) + gen.normal(0, 0.004, lin.shape)
+    out = srgb_encode(np, lin * ramp) + gen.normal(0, 0.004, lin.shape)
     return LabeledImage(np.clip(out, 0.0, 1.0), truth)

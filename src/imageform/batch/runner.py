@@ -353,7 +353,7 @@ def run_batch(
     >>> d = pathlib.Path(tempfile.mkdtemp())
     >>> for sub in ("in", "out"):
     ...     (d / sub).mkdir()
-    ...     write_image(d / sub / "x.png", np.zeros((2, 2, 3), np.uint8))
+    ...     _ = write_image(d / sub / "x.png", np.zeros((2, 2, 3), np.uint8))
     >>> report = run_batch("convert", f"{d}/in/*.png", d / "out", {"to": "linear_srgb"})
     >>> report.count("skipped"), report.ok
     (1, True)

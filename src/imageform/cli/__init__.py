@@ -1,31 +1,83 @@
 """The ``imageform`` command.
 
-One module per command group; each defines ``register(app)``. Exit codes: 0 success,
-1 failure with a one-line reason on stderr, 2 bad usage (unknown option, bad value).
-Outputs never overwrite inputs; existing outputs need ``--force``.
+Generated from the workflow registry (:mod:`imageform.workflows`): inputs are positional, the
+main output is ``-o/--out``, ``--force`` overwrites, ``--json`` prints the result. Exit codes:
+0 success, 1 failure with a one-line reason on stderr, 2 bad usage, 3 a check that failed,
+130 interrupted. No traceback reaches the user unless ``--traceback`` is given (or
+``IMAGEFORM_TRACEBACK=1``).
 """
 
 from __future__ import annotations
 
+import os
+import signal
 import sys
+import threading
 from collections.abc import Sequence
+from types import FrameType
 
-from imageform.cli._app import app
+from imageform.cli._build import EXIT_CODES, CommandExit, root
 
-__all__ = ["app", "main"]
+__all__ = ["EXIT_CODES", "main", "root"]
+
+
+def _first_line(exc: BaseException) -> str:
+    text = str(exc).strip().splitlines()
+    return text[0] if text else type(exc).__name__
+
+
+def _os_error(exc: OSError) -> str:
+    name = exc.filename if exc.filename is not None else None
+    reason = exc.strerror or _first_line(exc)
+    return f"{name}: {reason}" if name else reason
+
+
+def _on_sigterm(signum: int, frame: FrameType | None) -> None:
+    raise KeyboardInterrupt
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``imageform`` console script; returns the exit code."""
+    import click
+
     from imageform.errors import ImageformError
 
+    args = list(sys.argv[1:] if argv is None else argv)
+    traceback = "--traceback" in args or os.environ.get("IMAGEFORM_TRACEBACK", "") not in ("", "0")
+    in_main = threading.current_thread() is threading.main_thread()
+    old = signal.signal(signal.SIGTERM, _on_sigterm) if in_main else None
     try:
-        app(args=list(argv) if argv is not None else None, prog_name="imageform")
-    except SystemExit as exc:
-        code = exc.code
-        return code if isinstance(code, int) else (0 if code is None else 1)
-    except (ImageformError, OSError) as exc:
-        msg = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        rv = root.main(args=args, prog_name="imageform", standalone_mode=False)
+        return rv if isinstance(rv, int) else 0
+    except CommandExit as exc:
+        return exc.code
+    except click.exceptions.Exit as exc:
+        return int(exc.exit_code)
+    except click.ClickException as exc:
+        exc.show()
+        return 2 if isinstance(exc, click.UsageError) else 1
+    except (KeyboardInterrupt, click.exceptions.Abort):
+        print("imageform: interrupted; nothing new was written", file=sys.stderr)
+        return 130
+    except BaseException as exc:
+        if isinstance(exc, SystemExit):
+            return exc.code if isinstance(exc.code, int) else (0 if exc.code is None else 1)
+        if traceback:
+            import traceback as tb
+
+            tb.print_exc()
+        if isinstance(exc, ImageformError):
+            msg = _first_line(exc)
+        elif isinstance(exc, OSError):
+            msg = _os_error(exc)
+        elif isinstance(exc, MemoryError):
+            msg = "not enough memory (use smaller inputs, --max-pixels, or imageform chunked)"
+        else:
+            msg = f"unexpected {type(exc).__name__}: {_first_line(exc)}"
+            if not traceback:
+                msg += " (run again with --traceback to see where)"
         print(f"imageform: error: {msg}", file=sys.stderr)
         return 1
-    return 0
+    finally:
+        if old is not None:
+            signal.signal(signal.SIGTERM, old)

@@ -2,21 +2,21 @@
 
 from __future__ import annotations
 
+import functools
+from collections.abc import Callable
+
+import click
 import typer
 
 from imageform.cli import (
     analysis_cmds,
     batch_cmd,
     calibration_cmds,
-    color_analysis_cmds,
-    color_cmds,
     geometry_cmds,
-    lecture_cmd,
     optics_cmds,
     sensor_cmds,
     simulate_cmd,
     vanishing_cmd,
-    vision_cmds,
 )
 
 app = typer.Typer(
@@ -30,19 +30,54 @@ app = typer.Typer(
 
 for _module in (
     simulate_cmd,
-    lecture_cmd,
     geometry_cmds,
     vanishing_cmd,
     calibration_cmds,
     optics_cmds,
     sensor_cmds,
-    color_cmds,
-    color_analysis_cmds,
-    vision_cmds,
     analysis_cmds,
     batch_cmd,
 ):
     _module.register(app)
+
+
+def legacy_commands() -> dict[str, Callable[[], click.Command]]:
+    """The hand-written typer commands not yet moved to the workflow registry, bridged into
+    the click root (typer bundles its own click)."""
+    group = typer.main.get_command(app)
+
+    def bridge(name: str, short: str) -> click.Command:
+        def callback(args: tuple[str, ...]) -> None:
+            from imageform.cli._build import CommandExit
+
+            try:
+                rv = app(args=[name, *args], prog_name="imageform", standalone_mode=False)
+            except Exception as exc:  # typer's bundled click exceptions -> ours
+                kind = type(exc).__name__
+                if kind == "Exit":
+                    raise CommandExit(int(getattr(exc, "exit_code", 0))) from None
+                if kind == "Abort":
+                    raise KeyboardInterrupt from None
+                if hasattr(exc, "format_message") and hasattr(exc, "exit_code"):
+                    raise click.UsageError(exc.format_message()) from None
+                raise
+            if isinstance(rv, int) and rv:
+                raise CommandExit(rv)
+
+        return click.Command(
+            name,
+            callback=callback,
+            params=[click.Argument(["args"], nargs=-1, type=click.UNPROCESSED)],
+            context_settings={"ignore_unknown_options": True, "allow_extra_args": True},
+            add_help_option=False,
+            short_help=short,
+        )
+
+    out: dict[str, Callable[[], click.Command]] = {}
+    for name, cmd in group.commands.items():  # type: ignore[attr-defined]
+        short = (cmd.help or "").strip().splitlines()[0] if cmd.help else ""
+        out[name] = functools.partial(bridge, name, short)
+    return out
 
 
 @app.callback(invoke_without_command=True)

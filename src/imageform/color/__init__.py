@@ -56,6 +56,7 @@ from imageform.color.convert import (
     SPACES,
     convert,
     path,
+    space_name,
 )
 from imageform.color.cvd import (
     CVD_DEFICIENCIES,
@@ -138,6 +139,7 @@ from imageform.color.rgb_spaces import (
     RGBSpace,
     linear_rgb_to_xyz,
     linear_srgb_to_xyz,
+    rgb_space,
     rgb_to_xyz_matrix,
     xyz_to_linear_rgb,
     xyz_to_linear_srgb,
@@ -296,9 +298,11 @@ __all__ = [
     "rec709_to_linear",
     "rec2020_to_linear",
     "resolve_white",
+    "rgb_space",
     "rgb_to_xyz_matrix",
     "rgb_to_ycbcr",
     "simulate_cvd",
+    "space_name",
     "spectral_locus",
     "srgb_to_bgr",
     "srgb_to_cmy",

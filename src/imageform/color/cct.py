@@ -20,6 +20,12 @@ from typing import Any
 import numpy as np
 
 from imageform._backend import device_of, namespace
+from imageform._colormath import DAYLIGHT_HIGH as _DAYLIGHT_HIGH
+from imageform._colormath import DAYLIGHT_LOW as _DAYLIGHT_LOW
+from imageform._colormath import DAYLIGHT_RANGE as _DAYLIGHT_RANGE
+from imageform._colormath import daylight_x as _daylight_x
+from imageform._colormath import daylight_xy as _daylight_xy
+from imageform._colormath import uv1960_from_xy as _uv_from_xy
 from imageform._dask import chunkwise
 from imageform._validate import as_float, as_points, check_option
 from imageform.errors import InvalidInputError
@@ -79,17 +85,6 @@ ROBERTSON_1968.setflags(write=False)
 
 # Robertson's table spans 0-600 mired: CCT from 1e6/600 = 1666.7 K to infinity.
 _ROBERTSON_MIN_CCT = 1.0e6 / 600.0
-# CIE 15:2004 eq. (3.3): the daylight locus is defined from 4000 K to 25000 K, with one cubic
-# in 1/T below 7000 K and another above.
-_DAYLIGHT_RANGE = (4000.0, 25000.0)
-_DAYLIGHT_LOW = (-4.6070e9, 2.9678e6, 0.09911e3, 0.244063)  # 4000 K <= T <= 7000 K
-_DAYLIGHT_HIGH = (-2.0064e9, 1.9018e6, 0.24748e3, 0.237040)  # 7000 K < T <= 25000 K
-
-
-def _uv_from_xy(xp: Any, xy: Any) -> tuple[Any, Any]:
-    x, y = xy[..., 0], xy[..., 1]
-    d = -2.0 * x + 12.0 * y + 3.0
-    return 4.0 * x / d, 6.0 * y / d
 
 
 def _xy_from_uv(xp: Any, u: Any, v: Any) -> Any:
@@ -208,22 +203,6 @@ def _robertson_forward(xp: Any, cct: Any, duv: Any) -> Any:
     ddu, ddv = a0 + f * (a1 - a0), b0 + f * (b1 - b0)
     n = xp.sqrt(ddu * ddu + ddv * ddv)
     return _xy_from_uv(xp, uL - duv * ddu / n, vL - duv * ddv / n)
-
-
-def _daylight_x(xp: Any, cct: Any) -> Any:
-    s = 1.0 / cct
-    lo = _DAYLIGHT_LOW
-    hi = _DAYLIGHT_HIGH
-    x_lo = ((lo[0] * s + lo[1]) * s + lo[2]) * s + lo[3]
-    x_hi = ((hi[0] * s + hi[1]) * s + hi[2]) * s + hi[3]
-    return xp.where(cct <= 7000.0, x_lo, x_hi)
-
-
-def _daylight_xy(xp: Any, cct: Any) -> Any:
-    x = _daylight_x(xp, cct)
-    # CIE 15:2004 eq. (3.4)
-    y = -3.000 * x * x + 2.870 * x - 0.275
-    return xp.stack([x, y], axis=-1)
 
 
 def _check_cct_range(xp: Any, cct: Any, lo: float, hi: float, method: str) -> None:

@@ -49,7 +49,7 @@ from .rgb_spaces import RGB_SPACES, _apply_matrix, rgb_to_xyz_matrix, xyz_to_rgb
 from .transfer import _decode_clean, _encode_clean
 from .whitepoints import resolve_white
 
-__all__ = ["EDGES", "SPACES", "Edge", "convert", "path"]
+__all__ = ["EDGES", "SPACES", "Edge", "convert", "path", "space_name"]
 
 Fn = Callable[[Any, Any, dict[str, Any]], Any]
 
@@ -187,6 +187,17 @@ def _space(name: object, what: str) -> str:
     return check_option(name, SPACES, f"colour space ({what})")
 
 
+def space_name(name: object, what: str = "colour space") -> str:
+    """The canonical name of a colour space (``"Display-P3"`` -> ``"display_p3"``, ``"grey"``
+    -> ``"gray"``); an unknown name raises, listing the valid ones, with ``what`` naming the
+    argument (``--to``).
+
+    >>> space_name("CIELab"), space_name("grey")
+    ('lab', 'gray')
+    """
+    return _space(name, what)
+
+
 def path(src: str, dst: str) -> list[Edge]:
     """The edges :func:`convert` applies from ``src`` to ``dst`` (shortest path).
 
@@ -317,6 +328,6 @@ def _fast_path(image: object, s: str, d: str, p: dict[str, Any]) -> Any:
         return None
     if not use_numba(image, min_size=3 * 4096):
         return None
-    from imageform._kernels import color_fast
+    from imageform.color import _fast
 
-    return color_fast.dispatch(image, s, d, p)
+    return _fast.dispatch(image, s, d, p)

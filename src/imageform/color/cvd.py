@@ -104,16 +104,16 @@ def _severity(severity: object) -> float:
 
 @lru_cache(maxsize=1)
 def _machado_table() -> dict[str, np.ndarray]:
-    from imageform.spectral.data import _text
+    from imageform.spectral.data import read_table
 
-    rows = [
-        ln.split(",")
-        for ln in _text("cvd_machado2009.csv").splitlines()
-        if ln and not ln.startswith("#")
-    ][1:]
+    table = read_table("cvd_machado2009")  # columns: deficiency, severity, m00 ... m22
     out: dict[str, np.ndarray] = {}
     for d in CVD_DEFICIENCIES:
-        mats = [np.array([float(v) for v in r[2:]]).reshape(3, 3) for r in rows if r[0] == d]
+        mats = [
+            row[1:].reshape(3, 3)
+            for name, row in zip(table.labels, table.values, strict=True)
+            if name == d
+        ]
         arr = np.stack(mats)
         arr.setflags(write=False)
         out[d] = arr

@@ -17,7 +17,6 @@ import numpy as np
 
 from imageform._backend import namespace, use_numba
 from imageform._dask import chunkwise
-from imageform._kernels.delta_e import ciede2000_numba, ciede2000_twin
 from imageform._validate import as_points, check_option, check_positive, format_shape
 from imageform.errors import InvalidInputError
 
@@ -276,6 +275,9 @@ def delta_e_ciede2000(
     kC_ = check_positive(kC, "kC")
     kH_ = check_positive(kH, "kH")
     xp, a, b = _prepare(lab1, lab2)
+    # the kernels module (kernel and twin) imports numba: loaded on first use
+    from imageform._kernels.delta_e import ciede2000_numba, ciede2000_twin
+
     if use_numba(a, b, min_size=3 * _NUMBA_MIN_SIZE):
         out = ciede2000_numba(a, b, kL_, kC_, kH_)
         return out.astype(a.dtype, copy=False)

@@ -25,7 +25,7 @@ from imageform.color.chromaticity import (
     visible_area,
     xy_to_uv_prime,
 )
-from imageform.color.rgb_spaces import RGB_SPACES, RGBSpace, _get_space
+from imageform.color.rgb_spaces import RGB_SPACES, RGBSpace, rgb_space
 from imageform.errors import InvalidInputError
 
 __all__ = [
@@ -52,7 +52,7 @@ def gamut_triangle(space: str | RGBSpace = "srgb", coords: str = "xy") -> np.nda
     [[0.64, 0.33], [0.3, 0.6], [0.15, 0.06]]
     """
     c = check_option(coords, ("xy", "uv"), "chromaticity diagram")
-    tri = np.array(_get_space(space).primaries_xy, dtype=np.float64)
+    tri = np.array(rgb_space(space).primaries_xy, dtype=np.float64)
     return tri if c == "xy" else np.asarray(xy_to_uv_prime(tri))
 
 
@@ -142,7 +142,7 @@ def gamut_figures(spaces: Sequence[str] = ("srgb", "display_p3", "rec2020")) -> 
     out = []
     vxy, vuv = visible_area("xy"), visible_area("uv")
     for s in spaces:
-        sp = _get_space(s)
+        sp = rgb_space(s)
         axy, auv = gamut_area(sp, "xy"), gamut_area(sp, "uv")
         out.append(
             GamutFigures(
@@ -179,7 +179,7 @@ def in_gamut(
     [True, False]
     """
     k = check_option(kind, _KINDS, "gamut test kind")
-    sp = _get_space(space)
+    sp = rgb_space(space)
     xp = namespace(values)
     if k == "xy":
         p = as_points(values, "xy", 2, xp=xp)
@@ -226,7 +226,7 @@ def gamut_map(
     from imageform.color.cielab import lab_to_lch, lab_to_xyz, lch_to_lab, xyz_to_lab
 
     m = check_option(method, GAMUT_MAPPING_METHODS, "gamut mapping method")
-    sp = _get_space(space)
+    sp = rgb_space(space)
     xp = namespace(xyz)
     v = as_points(xyz, "xyz", 3, xp=xp)
     to_rgb_t = _const(np.linalg.inv(sp.matrix_to_xyz()).T, v, xp)

@@ -15,6 +15,9 @@ import math
 from typing import Any
 
 from imageform._backend import namespace
+from imageform._colormath import hexcone_hue as _hue
+from imageform._colormath import hsv_to_rgb as _hsv_to_srgb
+from imageform._colormath import rgb_to_hsv as _srgb_to_hsv
 from imageform._dask import chunkwise
 from imageform._validate import as_float, as_image
 from imageform.errors import InvalidInputError
@@ -31,39 +34,6 @@ __all__ = [
     "srgb_to_hsl",
     "srgb_to_hsv",
 ]
-
-
-def _hue(xp: Any, r: Any, g: Any, b: Any, mx: Any, delta: Any) -> Any:
-    """Hexcone hue in degrees from RGB, max and chroma (delta); 0 where delta = 0."""
-    zero = delta == 0
-    d = xp.where(zero, xp.ones_like(delta), delta)
-    hr = (g - b) / d
-    hg = (b - r) / d + 2.0
-    hb = (r - g) / d + 4.0
-    h = xp.where(mx == r, hr, xp.where(mx == g, hg, hb)) * 60.0
-    h = xp.where(h < 0, h + 360.0, h)
-    h = xp.where(h >= 360.0, h - 360.0, h)
-    return xp.where(zero, xp.zeros_like(h), h)
-
-
-def _srgb_to_hsv(xp: Any, rgb: Any) -> Any:
-    r, g, b = rgb[..., 0], rgb[..., 1], rgb[..., 2]
-    mx = xp.maximum(xp.maximum(r, g), b)
-    mn = xp.minimum(xp.minimum(r, g), b)
-    delta = mx - mn
-    s = xp.where(mx == 0, xp.zeros_like(mx), delta / xp.where(mx == 0, xp.ones_like(mx), mx))
-    return xp.stack([_hue(xp, r, g, b, mx, delta), s, mx], axis=-1)
-
-
-def _hsv_to_srgb(xp: Any, hsv: Any) -> Any:
-    h, s, v = hsv[..., 0], hsv[..., 1], hsv[..., 2]
-    # the "k" formulation: f(n) = V - V S max(0, min(k, 4 - k, 1)), k = (n + H/60) mod 6
-    out = []
-    for n in (5.0, 3.0, 1.0):
-        k = xp.remainder(n + h / 60.0, 6.0)
-        t = xp.clip(xp.minimum(k, 4.0 - k), 0.0, 1.0)
-        out.append(v - v * s * t)
-    return xp.stack(out, axis=-1)
 
 
 def _srgb_to_hsl(xp: Any, rgb: Any) -> Any:

@@ -21,9 +21,9 @@ from imageform import _deprecate
 from imageform._validate import check_option
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
 from imageform.spectral.integrate import (
-    _as_illuminant,
     integration_weights,
     observer_functions,
+    resolve_illuminant,
     spectrum_to_xyz,
 )
 from imageform.spectral.spectrum import Spectrum
@@ -50,7 +50,7 @@ def _setup(
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(grid, weights W (M, 3), r on the grid) for the CIE 015 1 nm summation."""
     f = observer_functions(observer)
-    ill = _as_illuminant(illuminant)
+    ill = resolve_illuminant(illuminant)
     grid, w = integration_weights(f, illuminant=ill, method="cie015")
     # reflectances extend by their end values (CIE 015 §7.2.2); lights are zero outside
     ext = "zero" if ill is None else "constant"
@@ -230,7 +230,7 @@ def metamerism_index(
         if np.any(x2r == 0):
             raise DegenerateConfigurationError("s2 has a zero tristimulus value: cannot correct")
         x2t = x2t * x1r / x2r
-    ill = _as_illuminant(test)
+    ill = resolve_illuminant(test)
     ones = Spectrum(ill.wavelengths, np.ones(len(ill))) if ill is not None else None
     white = spectrum_to_xyz(ones, illuminant=test, observer=observer) if ones is not None else None
     lab1 = xyz_to_lab(x1t, white, observer=observer)

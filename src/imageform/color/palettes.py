@@ -52,9 +52,9 @@ PALETTES = ("viridis", "okabe_ito", "red_green")
 
 @lru_cache(maxsize=1)
 def _viridis() -> np.ndarray:
-    from imageform.spectral.data import _parse
+    from imageform.spectral.data import read_table
 
-    arr = np.array(_parse("viridis")[2])
+    arr = np.array(read_table("viridis").values)
     arr.setflags(write=False)
     return arr
 

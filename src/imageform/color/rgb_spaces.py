@@ -34,6 +34,7 @@ __all__ = [
     "RGBSpace",
     "linear_rgb_to_xyz",
     "linear_srgb_to_xyz",
+    "rgb_space",
     "rgb_to_xyz_matrix",
     "xyz_to_linear_rgb",
     "xyz_to_linear_srgb",
@@ -136,7 +137,14 @@ def _space_key(name: str) -> str:
     return _ALIASES.get(key, key)
 
 
-def _get_space(space: str | RGBSpace) -> RGBSpace:
+def rgb_space(space: str | RGBSpace) -> RGBSpace:
+    """The :class:`RGBSpace` named ``space`` (a key of :data:`RGB_SPACES`, any case, with
+    ``-``, spaces or dots, or an alias such as ``"p3"``, ``"bt2020"``, ``"romm"``); an
+    :class:`RGBSpace` is returned as it is.
+
+    >>> rgb_space("Display-P3").name
+    'Display P3'
+    """
     if isinstance(space, RGBSpace):
         return space
     if isinstance(space, str):
@@ -191,7 +199,7 @@ def rgb_to_xyz_matrix(space: str | RGBSpace = "srgb") -> np.ndarray:
     >>> rgb_to_xyz_matrix("srgb")[1].round(6).tolist()
     [0.212639, 0.715169, 0.072192]
     """
-    sp = _get_space(space)
+    sp = rgb_space(space)
     return _npm(sp.primaries_xy, sp.white_xy).copy()
 
 

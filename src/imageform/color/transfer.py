@@ -19,6 +19,9 @@ from __future__ import annotations
 from typing import Any
 
 from imageform._backend import namespace
+from imageform._colormath import pos_pow as _pos_pow
+from imageform._colormath import srgb_decode as _srgb_decode
+from imageform._colormath import srgb_encode as _srgb_encode
 from imageform._dask import chunkwise
 from imageform._validate import as_image, check_option, check_positive
 
@@ -41,15 +44,6 @@ __all__ = [
     "srgb_to_linear",
 ]
 
-# IEC 61966-2-1:1999, clause 5.2 (eq. 5) and 5.3 (eq. 8): the sRGB curve.
-_SRGB_A = 0.055
-_SRGB_GAMMA = 2.4
-_SRGB_SLOPE = 12.92
-_SRGB_LIN_THRESHOLD = 0.0031308  # linear-side breakpoint, IEC 61966-2-1 eq. (8)
-# Encoded-side breakpoint derived from the forward function: 12.92 * 0.0031308 = 0.040449936
-# (the standard rounds it to 0.04045; the derived value makes the two pieces invertible).
-_SRGB_ENC_THRESHOLD = _SRGB_SLOPE * _SRGB_LIN_THRESHOLD
-
 # ITU-R BT.709-6, item 1.2: V = 1.099 L^0.45 - 0.099 for L >= 0.018, V = 4.500 L below.
 _BT709_ALPHA = 1.099
 _BT709_BETA = 0.018
@@ -71,25 +65,7 @@ _ROMM_GAMMA = 1.8
 _ROMM_SLOPE = 16.0
 
 
-def _pos_pow(xp: Any, x: Any, p: float) -> Any:
-    """``x ** p`` for the branch where x is above a breakpoint > 1e-30.
-
-    Elements below are clipped to 1e-30 (their branch is unused): no NaN from a negative
-    base, and gradients stay finite, in one pass (a ``where`` on ``x > 0`` took three)."""
-    return xp.pow(xp.clip(x, min=1e-30), p)
-
-
 # ---------------------------------------------------------------- private kernels (clean arrays)
-def _srgb_decode(xp: Any, v: Any) -> Any:
-    hi = _pos_pow(xp, (v + _SRGB_A) / (1.0 + _SRGB_A), _SRGB_GAMMA)
-    return xp.where(v <= _SRGB_ENC_THRESHOLD, v / _SRGB_SLOPE, hi)
-
-
-def _srgb_encode(xp: Any, lin: Any) -> Any:
-    hi = (1.0 + _SRGB_A) * _pos_pow(xp, lin, 1.0 / _SRGB_GAMMA) - _SRGB_A
-    return xp.where(lin <= _SRGB_LIN_THRESHOLD, lin * _SRGB_SLOPE, hi)
-
-
 def _gamma_decode(xp: Any, v: Any, gamma: float) -> Any:
     return xp.sign(v) * xp.pow(xp.abs(v), gamma)
 

@@ -25,6 +25,7 @@ from imageform._backend import device_of, linalg, namespace, use_numba
 from imageform._typing import Array, ArrayLike
 from imageform._validate import as_matrix, as_points, check_image_size, check_option, check_rotation
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
+from imageform.geometry._results import Projection
 from imageform.geometry.intrinsics import Intrinsics
 
 __all__ = [
@@ -54,17 +55,6 @@ class DecomposedProjection(NamedTuple):
     R: Array
     #: World-to-camera translation (3,).
     t: Array
-
-
-class Projection(NamedTuple):
-    """Result of a projection: pixel coordinates and which of them are real images.
-
-    ``uv`` is ``(..., N, 2)`` with NaN where ``valid`` is False (point at or behind the
-    camera, ``z_cam <= 0``, or not finite).
-    """
-
-    uv: Array
-    valid: Array
 
 
 def _plane_K(K: Array, plane: str, xp: Any) -> Array:
@@ -478,10 +468,19 @@ class Camera:
         return 0.0 - xp.matrix_transpose(self.R) @ self.t  # 0.0 - x: no negative zeros
 
     @property
+    def image_plane_K(self) -> Array:
+        """The calibration matrix of the chosen image plane (3×3).
+
+        ``K`` itself for ``image_plane="virtual"``; for ``"real"`` (behind the pinhole, the
+        image inverted about the principal point: ``u' = cx - (fx x + s y)``,
+        ``v' = cy - fy y``) K with fx, fy and s negated. ``P = image_plane_K [R | t]``.
+        """
+        return _plane_K(self.K, self.image_plane, namespace(self.K))
+
+    @property
     def projection_matrix(self) -> Array:
         """``P = K [R | t]`` (3×4; for ``image_plane="real"`` the inverted image's K)."""
-        xp = namespace(self.K)
-        return projection_matrix(_plane_K(self.K, self.image_plane, xp), self.R, self.t)
+        return projection_matrix(self.image_plane_K, self.R, self.t)
 
     # -- maps ----------------------------------------------------------------------------
     def world_to_camera(self, points: ArrayLike) -> Array:

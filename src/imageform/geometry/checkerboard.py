@@ -46,7 +46,7 @@ import numpy as np
 import numpy.typing as npt
 from numpy.typing import NDArray
 
-from imageform.errors import InvalidInputError
+from imageform.errors import ImageformWarning, InvalidInputError
 from imageform.geometry.checkerboard_candidates import find_candidates
 from imageform.geometry.checkerboard_grid import (
     board_continues,
@@ -74,7 +74,7 @@ DEFAULT_SIGMAS = (2.0, 1.2, 3.5)
 MAX_SEEDS = 40
 
 
-class CheckerboardNotFoundWarning(UserWarning):
+class CheckerboardNotFoundWarning(ImageformWarning):
     """Some views of a set show no complete checkerboard (each is named with its reason)."""
 
 

@@ -28,17 +28,6 @@ import numpy as np
 from numpy.typing import NDArray
 
 from imageform._backend import use_numba
-from imageform._kernels.checkerboard import (
-    gaussian_weights,
-    local_maxima_numba,
-    local_maxima_numpy,
-    refine_corners_numba,
-    refine_corners_numpy,
-    sample_bilinear_numba,
-    sample_bilinear_numpy,
-    smooth_saddle_numba,
-    smooth_saddle_numpy,
-)
 
 __all__ = ["Candidates", "find_candidates", "ring_test"]
 
@@ -66,6 +55,9 @@ def _ring_offsets(radius: float) -> NDArray[np.float64]:
 
 
 def _bilinear(img: NDArray[np.floating], x: NDArray[np.float64], y: NDArray[np.float64]) -> NDArray:
+    # the kernels module imports numba: loaded on first use, not with imageform.geometry
+    from imageform._kernels.checkerboard import sample_bilinear_numba, sample_bilinear_numpy
+
     fn = sample_bilinear_numba if use_numba(img) else sample_bilinear_numpy
     return fn(img, np.ascontiguousarray(x), np.ascontiguousarray(y))
 
@@ -133,6 +125,16 @@ def find_candidates(
     max_candidates: int = 300,
 ) -> Candidates:
     """Saddle-response maxima of ``gray`` that pass the ring test."""
+    from imageform._kernels.checkerboard import (
+        gaussian_weights,
+        local_maxima_numba,
+        local_maxima_numpy,
+        refine_corners_numba,
+        refine_corners_numpy,
+        smooth_saddle_numba,
+        smooth_saddle_numpy,
+    )
+
     taps = gaussian_weights(sigma).astype(np.float32)
     fast = use_numba(gray)
     # float32 is ample for a detector (the refinement runs on the float64 image)

@@ -27,8 +27,6 @@ from collections import deque
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy import ndimage
-from scipy.spatial import cKDTree
 
 from imageform import _deprecate
 from imageform.geometry.checkerboard_candidates import Candidates
@@ -50,6 +48,8 @@ def neighbors(cand: Candidates, min_dist: float, k_nearest: int = 16) -> NDArray
     out = np.full((n, 2, 2), -1, dtype=np.int64)
     if n < 2:
         return out
+    from scipy.spatial import cKDTree  # imported on use, not with imageform.geometry
+
     kq = min(n, k_nearest + 1)
     dist, idx = cKDTree(xy).query(xy, k=kq)
     dist, idx = dist[:, 1:], idx[:, 1:]  # drop self
@@ -237,6 +237,8 @@ def lattice_problem(grid: NDArray[np.float64], max_bend: float = 0.3) -> str | N
 
 def cell_means(gray: NDArray[np.floating], grid: NDArray[np.float64]) -> NDArray[np.float64]:
     """Mean brightness of each cell ``(R-1, C-1)`` sampled around the cell centre."""
+    from scipy import ndimage
+
     centre = 0.25 * (grid[:-1, :-1] + grid[:-1, 1:] + grid[1:, :-1] + grid[1:, 1:])
     # samples a third of the way from the centre to each corner
     pts = [centre]
@@ -276,6 +278,8 @@ def board_continues(gray: NDArray[np.floating], grid: NDArray[np.float64]) -> st
     board's own parity by at least a sixth of its contrast, the board goes on.
     A board cut within a quarter cell of row ``k + 1`` cannot be told from a smaller one.
     """
+    from scipy import ndimage
+
     h, w = gray.shape
     own = cell_means(gray, grid)
     flip = 1 - 2 * (np.add.outer(np.arange(own.shape[0]), np.arange(own.shape[1])) % 2)

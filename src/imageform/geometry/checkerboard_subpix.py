@@ -13,7 +13,6 @@ import numpy.typing as npt
 from numpy.typing import NDArray
 
 from imageform._backend import to_numpy, use_numba
-from imageform._kernels.checkerboard import refine_corners_numba, refine_corners_numpy
 from imageform._validate import as_image, as_points, format_shape
 from imageform.errors import InvalidInputError
 
@@ -145,5 +144,7 @@ def refine(
     """:func:`refine_corners` on clean input (kernel or twin by :func:`use_numba`)."""
     if pts.shape[0] == 0:
         return pts.copy(), np.zeros(0, dtype=np.int64)
+    from imageform._kernels.checkerboard import refine_corners_numba, refine_corners_numpy
+
     kernel = refine_corners_numba if use_numba(gray) else refine_corners_numpy
     return kernel(np.ascontiguousarray(gray), np.ascontiguousarray(pts), hx, hy, max_iter, eps)

@@ -40,7 +40,7 @@ from imageform.geometry._distortion_xp import (
     kb_distort_xp,
     kb_undistort_xp,
 )
-from imageform.geometry.camera import Projection
+from imageform.geometry._results import Projection
 
 __all__ = [
     "NUMBA_MIN_POINTS",

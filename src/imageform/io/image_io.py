@@ -1,93 +1,593 @@
-"""Read and write images for the CLI: 8/16-bit PNG, float TIFF (tifffile), NumPy .npy.
+"""The one image reader and writer: PNG, JPEG, TIFF and NumPy ``.npy``.
 
-- PNG holds displayable encoded values: uint8 / uint16 code values. Writing floats
-  quantises ``round(v * (2^bits - 1))``; values outside [0, 1] are an error unless
-  ``clip=True`` (no silent clipping), NaN always.
-- TIFF (``.tif``, ``.tiff``) holds any float array (float32 by default) or integers.
-- ``.npy`` holds any array exactly.
+One rule for every format:
+
+- **Shape**: an image is ``(H, W, C)``, channels last; a grey image has ``C = 1`` (a 2-D
+  TIFF or ``.npy`` comes back as ``(H, W, 1)``).
+- **Values**: integers as stored (uint8 / uint16, full-range encoded values), floats as stored
+  (float16 is widened to float32). Other sample types are refused.
+- **Alpha** (grey+alpha, RGBA, a palette with transparency in PNG; extra samples in TIFF):
+  dropped when every pixel is opaque; otherwise refused unless ``alpha="drop"`` (ignore it)
+  or ``alpha="keep"``. A ``.npy`` array has no alpha: its channels come back as stored (four
+  channels may be CMYK).
+- **Orientation**: the EXIF orientation of JPEG, PNG and TIFF files is applied, so the array
+  is upright as viewers show it.
+- **Bounded memory**: the pixel count is read from the file's header and checked against a
+  limit (:func:`max_pixels`, 100 Mpx by default, ``IMAGEFORM_MAX_PIXELS`` or ``max_pixels=``)
+  before anything is decoded; a header that promises more bytes than the file holds is refused.
+- **Errors**: a missing, truncated or corrupt file is an :class:`InvalidInputError` naming the
+  file, in one line.
+- **Writing** is atomic (a temporary sibling renamed at the end). PNG stores 8 or 16 bits,
+  JPEG 8; floats are quantised ``round(v * (2^bits - 1))`` and values outside [0, 1] are an
+  error unless ``out_of_range="clip"``. TIFF and ``.npy`` store the array as it is.
+
+16-bit PNG is decoded and encoded with imagecodecs (libpng), JPEG with Pillow, TIFF with
+tifffile.
 """
 
 from __future__ import annotations
 
+import os
+import struct
+import threading
+import warnings
 from pathlib import Path
+from types import MappingProxyType
+from typing import Any, NamedTuple
 
 import numpy as np
 
+from imageform._files import atomic_write
 from imageform._validate import check_option
 from imageform.errors import InvalidInputError
 
-from .png import read_png, write_png
-
-__all__ = ["IMAGE_FORMATS", "image_format", "read_image", "write_image"]
+__all__ = [
+    "DEFAULT_MAX_PIXELS",
+    "IMAGE_FORMATS",
+    "ImageInfo",
+    "WrittenImage",
+    "image_format",
+    "image_info",
+    "max_pixels",
+    "read_image",
+    "write_image",
+]
 
 #: File suffixes and their formats.
-IMAGE_FORMATS = {".png": "png", ".tif": "tiff", ".tiff": "tiff", ".npy": "npy"}
+IMAGE_FORMATS = MappingProxyType(
+    {
+        ".png": "png",
+        ".jpg": "jpeg",
+        ".jpeg": "jpeg",
+        ".tif": "tiff",
+        ".tiff": "tiff",
+        ".npy": "npy",
+    }
+)
+
+#: Default limit on the pixels of an image read into memory (10000 x 10000); larger images
+#: go through ``imageform chunked``, or raise the limit with ``IMAGEFORM_MAX_PIXELS``.
+DEFAULT_MAX_PIXELS = 100_000_000
+
+_ALPHA = ("reject", "drop", "keep")
+_OUT_OF_RANGE = ("error", "clip")
+_PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
+_pillow_lock = threading.Lock()
+
+
+class ImageInfo(NamedTuple):
+    """What a file's header says: ``width``, ``height``, ``channels``, sample ``dtype`` and
+    ``format`` (png, jpeg, tiff, npy)."""
+
+    width: int
+    height: int
+    channels: int
+    dtype: str
+    format: str
+
+
+class WrittenImage(NamedTuple):
+    """What :func:`write_image` stored: ``bits`` per sample for integer formats (None for
+    float data), and how many values were ``out_of_range`` (outside [0, 1], clipped)."""
+
+    bits: int | None
+    out_of_range: int
+
+
+def max_pixels() -> int:
+    """The pixel limit for reading: ``IMAGEFORM_MAX_PIXELS`` if set, else 100 Mpx."""
+    text = os.environ.get("IMAGEFORM_MAX_PIXELS", "").strip()
+    if not text:
+        return DEFAULT_MAX_PIXELS
+    try:
+        value = int(float(text))
+    except (ValueError, OverflowError):
+        raise InvalidInputError(
+            f"expected IMAGEFORM_MAX_PIXELS as a positive number of pixels, got {text!r}"
+        ) from None
+    if value <= 0:
+        raise InvalidInputError(f"expected IMAGEFORM_MAX_PIXELS > 0, got {text!r}")
+    return value
 
 
 def image_format(path: str | Path) -> str:
-    """The format of ``path`` from its suffix ("png", "tiff", "npy"); others raise."""
+    """The format of ``path`` from its suffix (png, jpeg, tiff, npy); others raise.
+
+    >>> image_format("a.JPG")
+    'jpeg'
+    """
     suffix = Path(path).suffix.lower()
     if suffix not in IMAGE_FORMATS:
-        valid = ", ".join(sorted(IMAGE_FORMATS))
+        valid = ", ".join(IMAGE_FORMATS)
         raise InvalidInputError(f"unknown image file type {suffix!r} of {path}; valid: {valid}")
     return IMAGE_FORMATS[suffix]
 
 
-def read_image(path: str | Path) -> np.ndarray:
-    """Read an image: PNG as uint8/uint16 (H, W, C); TIFF and .npy as stored.
+# ---------------------------------------------------------------- headers
 
-    Grey PNGs come back with a channel axis of size 1.
+
+def _png_header(path: Path, data: bytes) -> ImageInfo:
+    if len(data) < 33 or not data.startswith(_PNG_SIGNATURE) or data[12:16] != b"IHDR":
+        raise InvalidInputError(f"cannot read {path}: not a PNG file")
+    width, height, depth, ctype = struct.unpack(">IIBB", data[16:26])
+    channels = {0: 1, 2: 3, 3: 3, 4: 2, 6: 4}.get(ctype)
+    if channels is None or width == 0 or height == 0:
+        raise InvalidInputError(f"cannot read {path}: corrupt PNG header")
+    return ImageInfo(width, height, channels, "uint16" if depth == 16 else "uint8", "png")
+
+
+def _npy_header(
+    path: Path, limit: int | None = None
+) -> tuple[ImageInfo, tuple[int, ...], np.dtype[Any]]:
+    try:
+        with path.open("rb") as fh:
+            version = np.lib.format.read_magic(fh)
+            if version == (1, 0):
+                shape, _, dtype = np.lib.format.read_array_header_1_0(fh)
+            else:
+                shape, _, dtype = np.lib.format.read_array_header_2_0(fh)
+            offset = fh.tell()
+    except (ValueError, OSError, EOFError) as exc:
+        raise InvalidInputError(f"cannot read {path}: not a .npy file ({_one_line(exc)})") from None
+    if dtype.hasobject:
+        raise InvalidInputError(f"cannot read {path}: object arrays are not images")
+    if len(shape) not in (2, 3):
+        raise InvalidInputError(
+            f"cannot read {path}: expected an image of shape (H, W) or (H, W, C), got {shape}"
+        )
+    channels = shape[2] if len(shape) == 3 else 1
+    info = ImageInfo(shape[1], shape[0], channels, str(dtype), "npy")
+    if limit is not None:
+        _check_pixels(path, info, limit)
+    need = int(np.prod(shape, dtype=np.float64)) * dtype.itemsize
+    if path.stat().st_size - offset < need:
+        raise InvalidInputError(f"cannot read {path}: the file is truncated")
+    return info, shape, dtype
+
+
+def _tiff_series(tif: Any, path: Path) -> tuple[Any, ImageInfo]:
+    if not tif.series:
+        raise InvalidInputError(f"cannot read {path}: the TIFF holds no image")
+    series = tif.series[0]
+    axes = series.axes
+    shape = series.shape
+    channels = shape[axes.index("S")] if "S" in axes else 1
+    if "Y" not in axes or "X" not in axes or len(shape) > 3:
+        raise InvalidInputError(
+            f"cannot read {path}: expected one image (H, W) or (H, W, C), got axes {axes} "
+            f"of shape {shape}"
+        )
+    width, height = shape[axes.index("X")], shape[axes.index("Y")]
+    info = ImageInfo(width, height, channels, str(series.dtype), "tiff")
+    return series, info
+
+
+def image_info(path: str | Path) -> ImageInfo:
+    """Width, height, channels and sample type from the file's header, without decoding.
+
+    Raises
+    ------
+    InvalidInputError
+        The file is missing or not an image of a known format.
     """
-    p = Path(path)
-    fmt = image_format(p)
-    if not p.is_file():
-        raise InvalidInputError(f"input file {p} does not exist")
+    fmt = image_format(path) if isinstance(path, (str, os.PathLike)) else ""
+    p = _existing(path)
     if fmt == "png":
-        return read_png(p)
+        with p.open("rb") as fh:
+            return _png_header(p, fh.read(33))
     if fmt == "npy":
-        return np.load(p, allow_pickle=False)
+        return _npy_header(p)[0]
+    if fmt == "tiff":
+        tifffile = _tifffile()
+        try:
+            with tifffile.TiffFile(p) as tif:
+                return _tiff_series(tif, p)[1]
+        except InvalidInputError:
+            raise
+        except Exception as exc:
+            raise InvalidInputError(f"cannot read {p}: {_one_line(exc)}") from None
+    from PIL import Image, UnidentifiedImageError
+
+    try:
+        with Image.open(p) as im:
+            w, h = im.size
+            return ImageInfo(w, h, len(im.getbands()), "uint8", "jpeg")
+    except (UnidentifiedImageError, OSError) as exc:
+        raise InvalidInputError(f"cannot read {p}: {_one_line(exc)}") from None
+
+
+# ---------------------------------------------------------------- reading
+
+
+def _one_line(exc: BaseException) -> str:
+    text = str(exc).strip().splitlines()
+    return text[0] if text else type(exc).__name__
+
+
+def _existing(path: str | Path) -> Path:
+    if not isinstance(path, (str, os.PathLike)):
+        raise InvalidInputError(f"expected a file path, got {type(path).__name__}")
+    p = Path(path)
+    if not p.exists():
+        raise InvalidInputError(f"input file {p} does not exist")
+    if not p.is_file():
+        raise InvalidInputError(f"input {p} is not a file")
+    return p
+
+
+def _check_pixels(path: Path, info: ImageInfo, limit: int) -> None:
+    n = info.width * info.height
+    if n > limit:
+        raise InvalidInputError(
+            f"{path} is {info.width} x {info.height} = {n / 1e6:.1f} Mpx, above the limit of "
+            f"{limit / 1e6:.1f} Mpx (raise it with --max-pixels or IMAGEFORM_MAX_PIXELS, or "
+            "process it block by block with imageform chunked)"
+        )
+
+
+def _orient(a: np.ndarray, orientation: int) -> np.ndarray:
+    """Apply EXIF orientation 1-8 to an (H, W, ...) array (the viewer's upright image)."""
+    if orientation == 2:
+        return a[:, ::-1]
+    if orientation == 3:
+        return a[::-1, ::-1]
+    if orientation == 4:
+        return a[::-1]
+    if orientation == 5:
+        return np.swapaxes(a, 0, 1)
+    if orientation == 6:
+        return np.swapaxes(a, 0, 1)[:, ::-1]
+    if orientation == 7:
+        return np.swapaxes(a, 0, 1)[::-1, ::-1]
+    if orientation == 8:
+        return np.swapaxes(a, 0, 1)[::-1]
+    return a
+
+
+def _png_orientation(data: bytes) -> int:
+    """The EXIF orientation stored in a PNG's eXIf chunk (1 when there is none)."""
+    pos = len(_PNG_SIGNATURE)
+    while pos + 8 <= len(data):
+        length, kind = struct.unpack(">I4s", data[pos : pos + 8])
+        if kind == b"eXIf":
+            from PIL import Image
+
+            exif = Image.Exif()
+            try:
+                exif.load(data[pos + 8 : pos + 8 + length])
+            except Exception:
+                return 1
+            return int(exif.get(0x0112, 1) or 1)
+        if kind == b"IEND":
+            break
+        pos += 12 + length
+    return 1
+
+
+def _read_png(p: Path, limit: int) -> np.ndarray:
+    import imagecodecs
+
+    data = p.read_bytes()
+    info = _png_header(p, data)
+    _check_pixels(p, info, limit)
+    try:
+        arr = imagecodecs.png_decode(data)
+    except Exception as exc:
+        raise InvalidInputError(f"cannot read {p}: {_one_line(exc)}") from None
+    return _orient(np.asarray(arr), _png_orientation(data))
+
+
+def _read_pillow(p: Path, limit: int) -> np.ndarray:
+    from PIL import Image, UnidentifiedImageError
+
+    try:
+        with Image.open(p) as im:
+            w, h = im.size
+            _check_pixels(p, ImageInfo(w, h, len(im.getbands()), "uint8", "jpeg"), limit)
+            orientation = int(im.getexif().get(0x0112, 1) or 1)
+            with _pillow_lock, warnings.catch_warnings():
+                warnings.simplefilter("ignore", Image.DecompressionBombWarning)
+                saved, Image.MAX_IMAGE_PIXELS = Image.MAX_IMAGE_PIXELS, None
+                try:
+                    im.load()
+                finally:
+                    Image.MAX_IMAGE_PIXELS = saved
+            if im.mode in ("I;16", "I;16L", "I;16B"):
+                arr = np.asarray(im, dtype=np.uint16)
+            elif im.mode in ("L", "RGB", "LA", "RGBA"):
+                arr = np.asarray(im)
+            elif im.mode == "P":
+                arr = np.asarray(im.convert("RGBA" if "transparency" in im.info else "RGB"))
+            elif im.mode == "PA":
+                arr = np.asarray(im.convert("RGBA"))
+            elif im.mode == "1":
+                arr = np.asarray(im.convert("L"))
+            elif im.mode in ("CMYK", "YCbCr"):
+                arr = np.asarray(im.convert("RGB"))
+            else:
+                raise InvalidInputError(f"cannot read {p}: unsupported image mode {im.mode}")
+    except (UnidentifiedImageError, OSError, SyntaxError, ValueError) as exc:
+        if isinstance(exc, InvalidInputError):
+            raise
+        raise InvalidInputError(f"cannot read {p}: {_one_line(exc)}") from None
+    return _orient(arr, orientation)
+
+
+def _tifffile() -> Any:
     import tifffile
 
-    return np.asarray(tifffile.imread(p))
+    return tifffile
 
 
-def write_image(path: str | Path, image: np.ndarray, *, bits: int = 8, clip: bool = False) -> None:
-    """Write ``image``; PNG quantises floats in [0, 1] to ``bits`` (8 or 16).
+def _read_tiff(p: Path, limit: int) -> tuple[np.ndarray, bool]:
+    tifffile = _tifffile()
+    try:
+        with tifffile.TiffFile(p) as tif:
+            series, info = _tiff_series(tif, p)
+            _check_pixels(p, info, limit)
+            arr = np.asarray(series.asarray())
+            page = tif.pages[0]
+            tag = page.tags.get(274)
+            orientation = int(tag.value) if tag is not None else 1
+            axes = series.axes
+            extra = len(getattr(page, "extrasamples", ()) or ())
+    except InvalidInputError:
+        raise
+    except MemoryError:
+        raise InvalidInputError(f"cannot read {p}: not enough memory to decode it") from None
+    except Exception as exc:  # tifffile, zlib, imagecodecs errors: one line naming the file
+        raise InvalidInputError(f"cannot read {p}: {_one_line(exc)}") from None
+    if arr.ndim == 3 and "S" in axes and axes.index("S") < axes.index("Y"):
+        arr = np.moveaxis(arr, 0, -1)
+    return _orient(arr, orientation), extra > 0
 
+
+def _read_npy(p: Path, limit: int) -> np.ndarray:
+    _npy_header(p, limit)
+    try:
+        return np.load(p, allow_pickle=False)
+    except (ValueError, OSError, EOFError) as exc:
+        raise InvalidInputError(f"cannot read {p}: {_one_line(exc)}") from None
+
+
+def _normalise(p: Path, arr: np.ndarray, alpha: str, has_alpha: bool) -> np.ndarray:
+    if arr.ndim == 2:
+        arr = arr[:, :, None]
+    if arr.ndim != 3 or not 1 <= arr.shape[-1] <= 4:
+        raise InvalidInputError(
+            f"{p}: expected an image (H, W) or (H, W, C) with 1 to 4 channels, got {arr.shape}"
+        )
+    if arr.dtype == np.float16:
+        arr = arr.astype(np.float32)
+    if arr.dtype not in (np.uint8, np.uint16, np.float32, np.float64):
+        raise InvalidInputError(
+            f"{p}: unsupported sample type {arr.dtype}; expected uint8, uint16 or float"
+        )
+    if arr.shape[0] == 0 or arr.shape[1] == 0:
+        raise InvalidInputError(f"{p}: the image is empty ({arr.shape[1]} x {arr.shape[0]} px)")
+    if has_alpha and arr.shape[-1] in (2, 4) and alpha != "keep":
+        a = arr[..., -1]
+        opaque_value = 1.0 if arr.dtype.kind == "f" else np.iinfo(arr.dtype).max
+        transparent = int(np.count_nonzero(a != opaque_value))
+        if transparent and alpha == "reject":
+            raise InvalidInputError(
+                f"{p} has transparent pixels ({transparent} with alpha < 1); flatten it, or "
+                "pass --alpha drop to ignore the alpha channel"
+            )
+        arr = arr[..., :-1]
+    return np.ascontiguousarray(arr)
+
+
+def read_image(
+    path: str | Path, *, alpha: str = "reject", max_pixels: int | None = None
+) -> np.ndarray:
+    """Read an image file as ``(H, W, C)``: uint8/uint16 as stored, floats as stored.
+
+    Parameters
+    ----------
+    path : str or Path
+        A ``.png``, ``.jpg``/``.jpeg``, ``.tif``/``.tiff`` or ``.npy`` file.
+    alpha : {"reject", "drop", "keep"}
+        An alpha channel with any transparent pixel: an error (``reject``), ignored
+        (``drop``), or returned as the last channel (``keep``). A fully opaque alpha channel
+        is dropped unless ``keep``.
+    max_pixels : int, optional
+        Refuse images with more pixels (default :func:`max_pixels`), checked from the header
+        before decoding.
+
+    Returns
+    -------
+    ndarray (H, W, C)
+        ``C`` is 1 (grey) or 3 (RGB), plus alpha with ``alpha="keep"``.
+
+    Raises
+    ------
+    InvalidInputError
+        Missing, unreadable, truncated or corrupt file; too many pixels; transparent pixels
+        with ``alpha="reject"``; an unsupported sample type or shape.
+    UnknownOptionError
+        An unknown ``alpha``.
+
+    Examples
+    --------
+    >>> import tempfile, os
+    >>> p = os.path.join(tempfile.mkdtemp(), "grey.png")
+    >>> _ = write_image(p, np.array([[0.0, 1.0]]))
+    >>> read_image(p).shape, read_image(p).dtype
+    ((1, 2, 1), dtype('uint8'))
+    """
+    alpha = check_option(alpha, _ALPHA, "alpha handling")
+    limit = _pixel_limit(max_pixels)
+    fmt = image_format(path) if isinstance(path, (str, os.PathLike)) else ""
+    p = _existing(path)
+    has_alpha = False
+    if fmt == "png":
+        arr = _read_png(p, limit)
+        has_alpha = arr.ndim == 3 and arr.shape[-1] in (2, 4)
+    elif fmt == "jpeg":
+        arr = _read_pillow(p, limit)
+    elif fmt == "tiff":
+        arr, has_alpha = _read_tiff(p, limit)
+    else:
+        arr = _read_npy(p, limit)
+    return _normalise(p, arr, alpha, has_alpha)
+
+
+def _pixel_limit(value: object) -> int:
+    if value is None:
+        return max_pixels()
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or int(value) <= 0:
+        raise InvalidInputError(f"expected max_pixels as a positive integer, got {value!r}")
+    return int(value)
+
+
+# ---------------------------------------------------------------- writing
+
+
+def _quantise(a: np.ndarray, bits: int, out_of_range: str, path: Path) -> tuple[np.ndarray, int]:
+    dtype = np.uint8 if bits == 8 else np.uint16
+    top = 2**bits - 1
+    if a.dtype in (np.uint8, np.uint16):
+        src_top = np.iinfo(a.dtype).max
+        if src_top == top:
+            return a, 0
+        return np.round(a.astype(np.float64) * (top / src_top)).astype(dtype), 0
+    if a.dtype.kind != "f":
+        raise InvalidInputError(
+            f"expected floats in [0, 1], uint8 or uint16 to write {path}, got {a.dtype}"
+        )
+    if not np.all(np.isfinite(a)):
+        raise InvalidInputError(f"the image to write to {path} contains NaN or inf")
+    outside = int(np.count_nonzero((a < 0) | (a > 1)))
+    if outside and out_of_range == "error":
+        lo, hi = float(a.min()), float(a.max())
+        raise InvalidInputError(
+            f"{outside} values outside [0, 1] (min {lo:.4g}, max {hi:.4g}) cannot be stored in "
+            f"the {bits}-bit {path.name}; keep them in a float .tif or .npy, or clip them "
+            "(--out-of-range clip)"
+        )
+    q = np.round(np.clip(a, 0.0, 1.0) * top).astype(dtype)
+    return q, outside
+
+
+def write_image(
+    path: str | Path,
+    image: Any,
+    *,
+    bits: int | None = None,
+    out_of_range: str = "error",
+    quality: int = 95,
+    clip: bool | None = None,
+) -> WrittenImage:
+    """Write an image atomically; the format follows the suffix.
+
+    Parameters
+    ----------
+    path : str or Path
+        ``.png``, ``.jpg``/``.jpeg``, ``.tif``/``.tiff`` or ``.npy``.
+    image : array_like (H, W) or (H, W, C), C in 1..4
+        Floats in [0, 1] (encoded values), uint8 or uint16.
+    bits : {8, 16}, optional
+        Bits per sample for PNG (JPEG: 8 only) and for integer TIFF. Default: the integer
+        input's depth, 8 for floats in PNG/JPEG; TIFF and ``.npy`` store floats as floats.
+    out_of_range : {"error", "clip"}
+        Float values outside [0, 1] when quantising: an error, or clip them (the count is
+        returned).
+    quality : int
+        JPEG quality, 1 to 100.
+    clip : bool, optional
+        Deprecated: ``clip=True`` is ``out_of_range="clip"``.
+
+    Returns
+    -------
+    WrittenImage
+        ``(bits, out_of_range)``.
+
+    Raises
+    ------
+    InvalidInputError
+        Unknown suffix, bad shape or dtype, NaN/inf, values outside [0, 1] with
+        ``out_of_range="error"``, 16 bits or alpha in JPEG.
+
+    Examples
+    --------
     >>> import tempfile, os
     >>> p = os.path.join(tempfile.mkdtemp(), "a.png")
     >>> write_image(p, np.array([[[0.0, 0.5, 1.0]]]), bits=16)
+    WrittenImage(bits=16, out_of_range=0)
     >>> read_image(p).tolist()
     [[[0, 32768, 65535]]]
     """
+    if clip is not None:
+        warnings.warn(
+            "write_image(clip=...) is deprecated; use out_of_range='clip' or 'error'",
+            DeprecationWarning,
+            stacklevel=2,
+        )
+        out_of_range = "clip" if clip else "error"
     p = Path(path)
     fmt = image_format(p)
+    out_of_range = check_option(out_of_range, _OUT_OF_RANGE, "out-of-range policy")
+    if bits is not None and (isinstance(bits, bool) or bits not in (8, 16)):
+        raise InvalidInputError(f"expected bits 8 or 16, got {bits!r}")
     a = np.asarray(image)
+    if a.ndim == 3 and a.shape[-1] == 1 and fmt != "npy":
+        a = a[..., 0]
+    if a.ndim not in (2, 3) or (a.ndim == 3 and not 1 <= a.shape[-1] <= 4) or a.size == 0:
+        raise InvalidInputError(
+            f"expected an image (H, W) or (H, W, C) with 1 to 4 channels to write {p}, "
+            f"got shape {a.shape}"
+        )
+    if a.dtype.kind not in "fu" or a.dtype.itemsize > 8:
+        raise InvalidInputError(f"expected floats, uint8 or uint16 to write {p}, got {a.dtype}")
     if fmt == "npy":
-        np.save(p, a, allow_pickle=False)
-        return
+        atomic_write(p, lambda t: np.save(t, a, allow_pickle=False))
+        return WrittenImage(None, 0)
     if fmt == "tiff":
-        import tifffile
+        tifffile = _tifffile()
+        n_out = 0
+        if bits is not None:
+            a, n_out = _quantise(a, bits, out_of_range, p)
+        channels = a.shape[-1] if a.ndim == 3 else 1
+        extra = {"extrasamples": ["unassalpha"]} if channels in (2, 4) else {}
+        photometric = "rgb" if channels in (3, 4) else "minisblack"
+        atomic_write(p, lambda t: tifffile.imwrite(t, a, photometric=photometric, **extra))
+        return WrittenImage(bits if a.dtype.kind == "u" else None, n_out)
+    depth = bits if bits is not None else (16 if a.dtype == np.uint16 else 8)
+    if fmt == "jpeg":
+        if depth != 8:
+            raise InvalidInputError(f"JPEG holds 8 bits per sample; write {p.stem}.png for 16")
+        if a.ndim == 3 and a.shape[-1] in (2, 4):
+            raise InvalidInputError(f"JPEG has no alpha channel; write {p.stem}.png to keep it")
+    q, n_out = _quantise(a, depth, out_of_range, p)
+    if fmt == "png":
+        import imagecodecs
 
-        rgb = a.ndim == 3 and a.shape[-1] == 3
-        tifffile.imwrite(p, a, photometric="rgb" if rgb else "minisblack")
-        return
-    check_option(str(bits), ("8", "16"), "PNG bit depth")
-    if a.dtype in (np.uint8, np.uint16):
-        write_png(p, a)
-        return
-    if a.dtype.kind != "f":
-        raise InvalidInputError(
-            f"expected floats in [0, 1], uint8 or uint16 for PNG, got {a.dtype}"
-        )
-    if not np.all(np.isfinite(a)):
-        raise InvalidInputError("image contains NaN or inf; PNG cannot store it")
-    lo, hi = float(a.min()), float(a.max())
-    if (lo < 0 or hi > 1) and not clip:
-        raise InvalidInputError(
-            f"values outside [0, 1] (min {lo:.4g}, max {hi:.4g}) cannot be stored in PNG; "
-            "write .tif/.npy, or pass clip=True (--clip) to clip them"
-        )
-    top = 2**bits - 1
-    q = np.round(np.clip(a, 0.0, 1.0) * top)
-    write_png(p, q.astype(np.uint8 if bits == 8 else np.uint16))
+        atomic_write(p, lambda t: t.write_bytes(imagecodecs.png_encode(q, level=6)))
+    else:
+        from PIL import Image
+
+        if not isinstance(quality, int) or not 1 <= quality <= 100:
+            raise InvalidInputError(f"expected JPEG quality 1 to 100, got {quality!r}")
+        atomic_write(p, lambda t: Image.fromarray(q).save(t, format="JPEG", quality=quality))
+    return WrittenImage(depth, n_out)

@@ -16,7 +16,6 @@ import math
 from typing import Any
 
 import numpy as np
-from scipy.signal import fftconvolve
 
 from imageform import _deprecate
 from imageform._backend import to_numpy
@@ -73,6 +72,8 @@ def _convolve(img: np.ndarray, kernel: np.ndarray) -> np.ndarray:
     """``img (H, W, C)`` convolved with ``kernel`` with reflected borders, same size."""
     if kernel.shape == (1, 1):
         return img.copy()
+    from scipy.signal import fftconvolve  # imported on use, not with imageform.optics
+
     p = kernel.shape[0] // 2
     if min(img.shape[:2]) > p:
         padded = np.pad(img, ((p, p), (p, p), (0, 0)), mode="reflect")

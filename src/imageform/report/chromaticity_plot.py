@@ -109,10 +109,10 @@ def plot_chromaticity_diagram(
         raise InvalidInputError("plotting needs matplotlib: pip install 'imageform[plot]'") from exc
     from imageform.color.chromaticity import spectral_locus
     from imageform.color.gamut import gamut_triangle
-    from imageform.color.rgb_spaces import _get_space
+    from imageform.color.rgb_spaces import rgb_space
 
     c = check_option(coords, ("xy", "uv"), "chromaticity diagram")
-    space_objs = [_get_space(s) for s in spaces]
+    space_objs = [rgb_space(s) for s in spaces]
     pts = None
     if points is not None:
         pts = np.asarray(points, dtype=np.float64).reshape(-1, 2)

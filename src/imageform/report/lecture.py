@@ -14,7 +14,7 @@ import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
-__all__ = ["WorkedExample", "all_examples"]
+__all__ = ["WorkedExample", "all_examples", "lecture_topics"]
 
 
 @dataclass(frozen=True)
@@ -67,3 +67,12 @@ def all_examples() -> list[WorkedExample]:
     for name in _MODULES:
         out.extend(importlib.import_module(name).EXAMPLES)
     return out
+
+
+def lecture_topics() -> tuple[str, ...]:
+    """The topics of the worked examples, in lecture order, each once.
+
+    >>> "pinhole" in lecture_topics()
+    True
+    """
+    return tuple(dict.fromkeys(e.topic for e in all_examples()))

@@ -13,8 +13,6 @@ the samples of a pixel are averaged (a box filter over the pixel's area).
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import lru_cache
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -22,6 +20,7 @@ import numpy as np
 from imageform._backend import use_numba
 from imageform.errors import InvalidInputError
 from imageform.geometry.camera import Camera
+from imageform.simulate.files import load_texture
 from imageform.simulate.materials import electron_rates, reflectance_spectrum, texture_basis
 from imageform.simulate.scene import Scene, SceneObject
 from imageform.spectral import COLORCHECKER_PATCHES
@@ -40,36 +39,6 @@ class RenderOutput:
     depth: np.ndarray
     falloff: np.ndarray
     object_index: np.ndarray
-
-
-def load_texture(path: str, base: Path | None) -> np.ndarray:
-    """An image texture as linear sRGB ``(H, W, 3)`` float64 (decoded from sRGB)."""
-    from imageform.simulate.scene import _resolve
-
-    return _texture(str(_resolve(path, base).resolve()))
-
-
-@lru_cache(maxsize=8)
-def _texture(path: str) -> np.ndarray:
-    from imageform._validate import as_image
-    from imageform.color import srgb_to_linear
-    from imageform.io import read_image
-
-    raw = np.asarray(read_image(path))
-    if raw.ndim == 2:
-        raw = raw[..., None]
-    if raw.shape[-1] == 1:
-        raw = np.repeat(raw, 3, axis=-1)
-    if raw.shape[-1] == 4:
-        raw = raw[..., :3]  # alpha is ignored: the texture is opaque
-    img = np.asarray(as_image(raw, "texture"), dtype=np.float64)  # uint8/16 -> [0, 1]
-    if img.min() < 0 or img.max() > 1:
-        raise InvalidInputError(
-            f"texture {path}: expected encoded sRGB in [0, 1], got {img.min():g}..{img.max():g}"
-        )
-    lin = np.asarray(srgb_to_linear(img))
-    lin.setflags(write=False)
-    return lin
 
 
 def raycast_quads_numpy(

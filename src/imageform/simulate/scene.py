@@ -22,6 +22,7 @@ from imageform.geometry.distortion import BrownConrady
 from imageform.geometry.rotations import look_at
 from imageform.sensor.model import SensorModel
 from imageform.sensor.presets import ccd_preset, cmos_preset
+from imageform.simulate.files import load_texture, resolve_path
 from imageform.simulate.validation import validate_scene_dict
 from imageform.spectral.spectrum import Spectrum
 
@@ -164,8 +165,6 @@ def _object_size(kind: str, p: dict[str, Any], base: Path | None) -> tuple[float
     if kind == "colorchecker":
         return p["width_m"], p["width_m"] * 2.0 / 3.0
     if kind == "image":
-        from imageform.simulate.render import load_texture
-
         tex = load_texture(p["path"], base)
         return p["width_m"], p["width_m"] * tex.shape[0] / tex.shape[1]
     return float(p["size_m"][0]), float(p["size_m"][1])
@@ -236,7 +235,7 @@ def _illuminant(cfg: dict[str, Any], base: Path | None) -> Spectrum:
                 f"got {il['temperature_K']:g}"
             )
         return daylight_spectrum(il["temperature_K"])
-    path = _resolve(il["file"], base)
+    path = resolve_path(il["file"], base)
     rows: list[list[float]] = []
     for no, line in enumerate(path.read_text(encoding="utf-8").splitlines(), 1):
         line = line.split("#", 1)[0].strip()
@@ -261,17 +260,6 @@ def _illuminant(cfg: dict[str, Any], base: Path | None) -> Spectrum:
         raise InvalidInputError(f"illuminant file {path}: expected at least two rows (nm, power)")
     arr = np.asarray(rows)
     return Spectrum(arr[:, 0], arr[:, 1], name=Path(path).name)
-
-
-def _resolve(path: str, base: Path | None) -> Path:
-    p = Path(path).expanduser()
-    if not p.is_absolute() and base is not None:
-        p = base / p
-    if not p.is_file():
-        raise InvalidInputError(
-            f"file not found: {str(p)!r} (paths are relative to the scene file)"
-        )
-    return p
 
 
 def _camera(cfg: dict[str, Any], sensor: SensorModel) -> Camera:

@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 
 from imageform.color import delta_e_ciede2000, linear_srgb_to_xyz, xyz_to_lab, xyz_to_xy
-from imageform.geometry.camera import Camera, _plane_K
+from imageform.geometry.camera import Camera
 from imageform.geometry.vanishing import horizon_line
 from imageform.simulate.result import ColorCheckerTruth, VanishingTruth
 from imageform.simulate.scene import SceneObject
@@ -125,7 +125,7 @@ def delta_e_patches(linear_srgb: np.ndarray, lab_truth: np.ndarray) -> np.ndarra
 
 def _finite_vp(camera: Camera, d_world: np.ndarray) -> np.ndarray:
     R = np.asarray(camera.R, dtype=np.float64)
-    K = _plane_K(np.asarray(camera.K, dtype=np.float64), camera.image_plane, np)
+    K = np.asarray(camera.image_plane_K, dtype=np.float64)
     dc = R @ d_world
     if camera.distortion is not None and dc[2] > 0:
         xy = np.asarray(camera.distortion.distort(dc[:2] / dc[2]))
@@ -145,7 +145,7 @@ def rails_truth(ground: SceneObject, camera: Camera) -> VanishingTruth:
     d = -ground.edge_down / np.linalg.norm(ground.edge_down)
     n = np.cross(ground.edge_right, ground.edge_down)
     n = -n / np.linalg.norm(n)  # right x down points into the ground; the normal is up
-    K = _plane_K(np.asarray(camera.K, dtype=np.float64), camera.image_plane, np)
+    K = np.asarray(camera.image_plane_K, dtype=np.float64)
     hor = np.asarray(horizon_line(K, np.asarray(camera.R), n))
     return VanishingTruth(vanishing_point=_finite_vp(camera, d), horizon=hor)
 

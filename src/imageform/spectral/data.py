@@ -10,6 +10,7 @@ from __future__ import annotations
 from functools import cache, lru_cache
 from importlib import resources
 from types import MappingProxyType
+from typing import NamedTuple
 
 import numpy as np
 
@@ -23,6 +24,7 @@ __all__ = [
     "ILLUMINANT_TABLES",
     "LED_SPECTRA",
     "TABLES",
+    "DataTable",
     "camera_sensitivities",
     "cmfs",
     "colorchecker_published_xyy",
@@ -32,6 +34,7 @@ __all__ = [
     "led_spectrum",
     "load_table",
     "luminous_efficiency",
+    "read_table",
     "table_source",
 ]
 
@@ -54,6 +57,7 @@ TABLES = MappingProxyType(
         "colorchecker_published": "colorchecker_published_xyY_d50.csv",
         "nikon_d5100": "camera_nikon_d5100_npl.csv",
         "viridis": "viridis.csv",
+        "cvd_machado2009": "cvd_machado2009.csv",
     }
 )
 #: Tabulated CIE illuminants (CIE 015:2018 Tables 1 and 10.1).
@@ -93,6 +97,31 @@ def _parse(key: str) -> tuple[tuple[str, ...], tuple[str, ...], np.ndarray, tupl
         arr = np.array([[float(v) for v in r[1:]] for r in rows])
     arr.setflags(write=False)
     return comments, header, arr, first
+
+
+class DataTable(NamedTuple):
+    """A shipped CSV table as read: ``comments`` (its ``#`` header lines: source and notes),
+    ``columns`` (the column names), ``values`` (the numeric columns, read-only float64;
+    every column when the first is numeric, else all but the first) and ``labels`` (the
+    first column's entries as strings)."""
+
+    comments: tuple[str, ...]
+    columns: tuple[str, ...]
+    values: np.ndarray
+    labels: tuple[str, ...]
+
+
+def read_table(key: str) -> DataTable:
+    """Any shipped table by its key in :data:`TABLES`, including those that are not
+    wavelength tables (the viridis colour map, the Machado et al. (2009) CVD matrices);
+    :func:`load_table` gives a wavelength table as a :class:`Spectrum`.
+
+    >>> t = read_table("cvd_machado2009")
+    >>> t.columns[:3], t.labels[0], t.values.shape
+    (('deficiency', 'severity', 'm00'), 'protan', (33, 10))
+    """
+    k = key if key in TABLES else check_option(key, TABLES, "spectral table")
+    return DataTable(*_parse(k))
 
 
 def table_source(key: str) -> str:

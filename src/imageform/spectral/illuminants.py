@@ -10,8 +10,9 @@ Daylight (CIE 015:2018 §4.1.2, eqs. 4.3-4.5): :math:`S_D = S_0 + M_1 S_1 + M_2 
 .. math:: M_1 = \frac{-1.3515 - 1.7703 x_D + 5.9114 y_D}{0.0241 + 0.2562 x_D - 0.7341 y_D},\quad
           M_2 = \frac{0.0300 - 31.4424 x_D + 30.0717 y_D}{0.0241 + 0.2562 x_D - 0.7341 y_D}
 
-and :math:`(x_D, y_D)` the daylight locus at the CCT
-(:func:`imageform.color.cct.cct_to_xy` with ``method="daylight"``).
+and :math:`(x_D, y_D)` the chromaticity of the daylight, from the CCT by the CIE daylight
+locus (CIE 015:2018 eqs. 4.3-4.4, the same formula as
+:func:`imageform.color.cct.cct_to_xy` with ``method="daylight"``).
 """
 
 from __future__ import annotations
@@ -21,6 +22,7 @@ from typing import NamedTuple
 import numpy as np
 import numpy.typing as npt
 
+from imageform._colormath import DAYLIGHT_RANGE, daylight_xy, uv1960_from_xy
 from imageform._validate import check_positive
 from imageform.errors import InvalidInputError
 from imageform.spectral.data import (
@@ -38,6 +40,7 @@ __all__ = [
     "PlanckianCCT",
     "blackbody_spectrum",
     "daylight_spectrum",
+    "daylight_spectrum_from_xy",
     "illuminant",
     "planck",
     "planckian_cct",
@@ -110,12 +113,59 @@ def daylight_spectrum(cct: float, *, round_m: bool = True) -> Spectrum:
     >>> round(float(d65.interpolate([560]).values[0]), 3)
     100.0
     """
-    from imageform.color.cct import cct_to_xy
-
     t = check_positive(cct, "CCT (K)")
-    if not 4000.0 <= t <= 25000.0:
-        raise InvalidInputError(f"expected a daylight CCT in [4000, 25000] K, got {t:g} K")
-    xd, yd = (float(v) for v in np.asarray(cct_to_xy(t, method="daylight")))
+    lo, hi = DAYLIGHT_RANGE
+    if not lo <= t <= hi:
+        raise InvalidInputError(f"expected a daylight CCT in [{lo:g}, {hi:g}] K, got {t:g} K")
+    xd, yd = (float(v) for v in daylight_xy(np, np.asarray(t, dtype=np.float64)))
+    return _d_series(xd, yd, round_m, f"CIE daylight {t:g} K")
+
+
+def daylight_spectrum_from_xy(xy: npt.ArrayLike, *, round_m: bool = True) -> Spectrum:
+    r"""CIE D-series illuminant of chromaticity ``xy`` (300-830 nm, 5 nm).
+
+    :math:`S_D = S_0 + M_1 S_1 + M_2 S_2` with :math:`M_1, M_2` from :math:`(x_D, y_D)`
+    (CIE 015:2018 eq. 4.5), as colour-science's ``sd_CIE_illuminant_D_series`` computes it;
+    ``round_m`` as in :func:`daylight_spectrum`. The CIE defines the series for
+    chromaticities on the daylight locus (:func:`imageform.color.cct_to_xy` with
+    ``method="daylight"``, 4000-25000 K); other ``xy`` give the spectrum of the same
+    formula, whose chromaticity is not ``xy``.
+
+    Parameters
+    ----------
+    xy : array_like, shape (2,)
+        CIE 1931 chromaticity ``(x_D, y_D)``.
+    round_m : bool
+        Round :math:`M_1, M_2` to three decimals (CIE 015:2018 §4.1.2).
+
+    Returns
+    -------
+    Spectrum
+        Relative spectral power, 100 near 560 nm for daylight chromaticities.
+
+    Examples
+    --------
+    >>> d65 = daylight_spectrum_from_xy([0.31272, 0.32903])
+    >>> round(float(d65.interpolate([560]).values[0]), 3)
+    100.0
+    """
+    try:
+        v = np.asarray(xy, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise InvalidInputError(f"expected xy as two finite numbers, got {xy!r}") from exc
+    if v.shape != (2,) or not np.all(np.isfinite(v)):
+        raise InvalidInputError(f"expected xy as two finite numbers, got {xy!r}")
+    xd, yd = float(v[0]), float(v[1])
+    if 0.0241 + 0.2562 * xd - 0.7341 * yd == 0.0:
+        raise InvalidInputError(
+            f"xy = ({xd:g}, {yd:g}) lies on 0.0241 + 0.2562 x - 0.7341 y = 0, where the CIE "
+            "daylight weights M1, M2 are undefined"
+        )
+    return _d_series(xd, yd, round_m, f"CIE D series x={xd:.5f} y={yd:.5f}")
+
+
+def _d_series(xd: float, yd: float, round_m: bool, name: str) -> Spectrum:
+    """S0 + M1 S1 + M2 S2 (CIE 015:2018 eq. 4.5) at the daylight chromaticity (xd, yd)."""
     den = 0.0241 + 0.2562 * xd - 0.7341 * yd
     m1 = (-1.3515 - 1.7703 * xd + 5.9114 * yd) / den
     m2 = (0.0300 - 31.4424 * xd + 30.0717 * yd) / den
@@ -123,7 +173,7 @@ def daylight_spectrum(cct: float, *, round_m: bool = True) -> Spectrum:
         m1, m2 = round(m1, 3), round(m2, 3)
     b = load_table("daylight_basis")
     v = b.values[:, 0] + m1 * b.values[:, 1] + m2 * b.values[:, 2]
-    return Spectrum(b.wavelengths, v, name=f"CIE daylight {t:g} K")
+    return Spectrum(b.wavelengths, v, name=name)
 
 
 def illuminant(name: str) -> Spectrum:
@@ -177,7 +227,6 @@ def planckian_cct(xyz: npt.ArrayLike, *, observer: int = 2) -> PlanckianCCT:
     """
     from scipy.optimize import minimize_scalar
 
-    from imageform.color.cct import xy_to_uv1960
     from imageform.spectral.data import cmfs
 
     v = np.asarray(xyz, dtype=np.float64)
@@ -188,9 +237,9 @@ def planckian_cct(xyz: npt.ArrayLike, *, observer: int = 2) -> PlanckianCCT:
 
     def uv_of(t: float) -> np.ndarray:
         s = planck(wl, t) @ c.values
-        return np.asarray(xy_to_uv1960(s[:2] / s.sum()))
+        return np.stack(uv1960_from_xy(np, s[:2] / s.sum()))
 
-    uv = np.asarray(xy_to_uv1960(v[:2] / v.sum()))
+    uv = np.stack(uv1960_from_xy(np, v[:2] / v.sum()))
     res = minimize_scalar(
         lambda m: float(np.sum((uv_of(1e6 / m) - uv) ** 2)),
         bounds=(10.0, 2000.0),

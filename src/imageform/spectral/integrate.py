@@ -52,6 +52,7 @@ __all__ = [
     "integration_weights",
     "luminance",
     "observer_functions",
+    "resolve_illuminant",
     "spectrum_to_camera_rgb",
     "spectrum_to_lms",
     "spectrum_to_xyz",
@@ -83,12 +84,21 @@ def observer_functions(observer: int | str | Spectrum = 2) -> Spectrum:
     return cone_fundamentals() if key == "cones" else cmfs(int(key))
 
 
-def _as_illuminant(ill: str | Spectrum | None) -> Spectrum | None:
-    if ill is None or isinstance(ill, Spectrum):
-        if isinstance(ill, Spectrum) and ill.values.ndim != 1:
-            raise InvalidInputError(f"expected a single-curve illuminant, got {ill.shape}")
-        return ill
-    return _illuminant(ill)
+def resolve_illuminant(illuminant: str | Spectrum | None) -> Spectrum | None:
+    """An ``illuminant`` argument as a :class:`Spectrum`: a name is looked up with
+    :func:`~imageform.spectral.illuminant`, a single-curve Spectrum is returned as it is, and
+    ``None`` (a light source measured on its own, no illuminant) stays ``None``.
+
+    >>> resolve_illuminant("D65").name
+    'CIE D65'
+    >>> resolve_illuminant(None) is None
+    True
+    """
+    if illuminant is None or isinstance(illuminant, Spectrum):
+        if isinstance(illuminant, Spectrum) and illuminant.values.ndim != 1:
+            raise InvalidInputError(f"expected a single-curve illuminant, got {illuminant.shape}")
+        return illuminant
+    return _illuminant(illuminant)
 
 
 def _as_spectrum(s: object, name: str) -> Spectrum:
@@ -220,7 +230,7 @@ def spectrum_to_xyz(
     f = observer_functions(observer)
     if str(observer).strip().lower() in ("cones", "lms"):
         raise InvalidInputError("spectrum_to_xyz needs observer 2 or 10; use spectrum_to_lms")
-    ill = _as_illuminant(illuminant)
+    ill = resolve_illuminant(illuminant)
     out, white = _integrate(s, f, ill, method, interpolation)
     if ill is None:
         if absolute:
@@ -256,7 +266,7 @@ def spectrum_to_lms(
     [0.141, 0.073, 0.046]
     """
     s = _as_spectrum(spectrum, "spectrum")
-    ill = _as_illuminant(illuminant)
+    ill = resolve_illuminant(illuminant)
     out, white = _integrate(s, cone_fundamentals(), ill, method, interpolation)
     return np.asarray(out if ill is None else out / white)
 
@@ -283,7 +293,7 @@ def spectrum_to_camera_rgb(
     s = _as_spectrum(spectrum, "spectrum")
     sens = camera if isinstance(camera, Spectrum) else camera_sensitivities(camera)
     sens = observer_functions(sens)  # checks the shape (N, 3)
-    ill = _as_illuminant(illuminant)
+    ill = resolve_illuminant(illuminant)
     out, white = _integrate(s, sens, ill, method, interpolation)
     return np.asarray(out if ill is None else out / white[1])
 

@@ -1,7 +1,10 @@
 """Dispatch of :func:`imageform.color.convert` to the fused numba colour kernels.
 
 Only NumPy arrays reach here (``_backend.use_numba``); a pair of spaces without a kernel
-returns ``None`` and ``convert`` runs its array path (the twin).
+returns ``None`` and ``convert`` runs its array path (the twin). This module belongs to the
+colour package: it turns the colour parameters (white, RGB space, Y'CbCr standard and
+range) into the numbers and matrices the kernels of :mod:`imageform._kernels` take, so that
+the kernels never import the domain packages.
 """
 
 from __future__ import annotations

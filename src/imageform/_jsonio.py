@@ -1,0 +1,57 @@
+"""The one JSON writer (internal core module, shared by every package).
+
+JSON has no NaN or infinity. imageform writes them as ``null`` (a missing value) by walking
+the object, never by rewriting the text, so a string such as ``"NaNa.png"`` stays intact.
+NumPy arrays and scalars become lists and numbers, paths become strings, tuples lists,
+dataclasses and NamedTuples objects.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+from collections.abc import Mapping
+from pathlib import PurePath
+from typing import Any
+
+__all__ = ["dumps", "json_ready"]
+
+
+def json_ready(obj: Any) -> Any:
+    """``obj`` as plain JSON values: NaN and ±inf become ``None``.
+
+    >>> import numpy as np
+    >>> json_ready({"a": np.array([1.0, np.nan]), "b": ("NaNa.png", float("inf"))})
+    {'a': [1.0, None], 'b': ['NaNa.png', None]}
+    """
+    if obj is None or isinstance(obj, (bool, str)):
+        return obj
+    if isinstance(obj, int):
+        return int(obj)
+    if isinstance(obj, float):
+        return obj if math.isfinite(obj) else None
+    if isinstance(obj, PurePath):
+        return str(obj)
+    if isinstance(obj, Mapping):
+        return {str(k): json_ready(v) for k, v in obj.items()}
+    if isinstance(obj, tuple) and hasattr(obj, "_asdict"):  # NamedTuple
+        return json_ready(obj._asdict())
+    if dataclasses.is_dataclass(obj) and not isinstance(obj, type):
+        return json_ready({f.name: getattr(obj, f.name) for f in dataclasses.fields(obj)})
+    if isinstance(obj, (list, tuple, set, frozenset)):
+        return [json_ready(v) for v in obj]
+    if hasattr(obj, "tolist"):  # numpy arrays and scalars (and array-likes that offer it)
+        return json_ready(obj.tolist())
+    if hasattr(obj, "item"):
+        return json_ready(obj.item())
+    raise TypeError(f"cannot write a {type(obj).__name__} as JSON")
+
+
+def dumps(obj: Any, *, indent: int | None = 2) -> str:
+    """JSON text of ``obj`` (see :func:`json_ready`), UTF-8 characters kept.
+
+    >>> dumps({"x": float("nan"), "name": "NaNa.png"}, indent=None)
+    '{"x": null, "name": "NaNa.png"}'
+    """
+    return json.dumps(json_ready(obj), indent=indent, ensure_ascii=False, allow_nan=False)

@@ -1,0 +1,359 @@
+"""The ``imageform`` command line, generated from the workflow registry.
+
+One grammar for every command: inputs are positional; the main output is ``-o/--out``;
+``--force`` overwrites existing outputs; ``--json`` prints the machine-readable result;
+method and option names may be spelt with ``-`` or ``_``. Commands are built only when used,
+so ``imageform --help`` imports no numerical code.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import glob
+import os
+import sys
+import types
+import typing
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Any
+
+import click
+
+from imageform.errors import ImageformError, InvalidInputError
+from imageform.workflows._spec import Result, Workflow, choice_names, flag_of
+
+__all__ = ["EXIT_CODES", "CommandExit", "build_command", "emit", "expand_inputs", "root"]
+
+#: Exit codes of every command.
+EXIT_CODES = {
+    0: "success",
+    1: "failure (one line on stderr says why)",
+    2: "bad usage (unknown option or value)",
+    3: "a check the command performs failed (palette-check, lecture)",
+    130: "interrupted (Ctrl-C); nothing new was left behind",
+}
+
+_GROUPS = {
+    "simulation": "Simulate a camera",
+    "geometry": "Camera geometry",
+    "colour": "Colour",
+    "sensor": "Sensor",
+    "analysis": "Biomedical colour analysis",
+    "scale": "Scale out",
+    "tools": "Other",
+}
+
+
+class CommandExit(Exception):
+    """Leave a command with an exit code (caught by :func:`imageform.cli.main`)."""
+
+    def __init__(self, code: int) -> None:
+        super().__init__(code)
+        self.code = code
+
+
+# ---------------------------------------------------------------- parameters from options
+
+
+def _unwrap(tp: Any) -> tuple[Any, bool]:
+    """(type, optional) from ``X | None``."""
+    origin = typing.get_origin(tp)
+    if origin in (typing.Union, types.UnionType):
+        args = [a for a in typing.get_args(tp) if a is not type(None)]
+        if len(args) == 1:
+            return args[0], True
+    return tp, False
+
+
+def _click_type(tp: Any) -> Any:
+    if tp is Path:
+        return click.Path(path_type=Path, dir_okay=True)
+    return {int: click.INT, float: click.FLOAT, str: click.STRING}.get(tp, click.STRING)
+
+
+def _choices_text(choices: Any) -> str:
+    try:
+        names = choice_names(choices)
+    except Exception:  # pragma: no cover - a broken reference shows no list
+        return ""
+    return " [" + "|".join(n.replace("_", "-") for n in names) + "]"
+
+
+def _option_params(wf: Workflow) -> list[click.Parameter]:
+    params: list[click.Parameter] = []
+    hints = wf.options.types()
+    for f in wf.options.fields():
+        tp, optional = _unwrap(hints[f.name])
+        meta = f.metadata
+        decls = [flag_of(f), f.name]
+        if meta.get("short"):
+            decls.append(meta["short"])
+        help_text = meta.get("help", "")
+        default = None if f.default is dataclasses.MISSING else f.default
+        kw: dict[str, Any] = {"help": help_text, "hidden": bool(meta.get("hidden"))}
+        if meta.get("metavar"):
+            kw["metavar"] = meta["metavar"]
+        elif meta.get("choices") is not None:
+            kw["metavar"] = _choices_text(meta["choices"]).strip()
+        origin = typing.get_origin(tp)
+        if tp is bool:
+            if default:
+                decls = [f"{flag_of(f)}/--no-{flag_of(f)[2:]}", f.name]
+            params.append(click.Option(decls, is_flag=True, default=bool(default), **kw))
+            continue
+        if origin is tuple:
+            args = typing.get_args(tp)
+            if len(args) == 2 and args[1] is Ellipsis:
+                params.append(click.Option(decls, type=_click_type(args[0]), multiple=True, **kw))
+            else:
+                params.append(
+                    click.Option(
+                        decls, type=_click_type(args[0]), nargs=len(args), default=default, **kw
+                    )
+                )
+            continue
+        shown = default is not None and not isinstance(default, Path)
+        if isinstance(default, str):
+            default = default.replace("_", "-") if meta.get("choices") is not None else default
+        params.append(
+            click.Option(
+                decls,
+                type=_click_type(tp),
+                default=default,
+                show_default=shown,
+                required=f.default is dataclasses.MISSING and not optional,
+                **kw,
+            )
+        )
+    return params
+
+
+# ---------------------------------------------------------------- running
+
+
+def expand_inputs(patterns: tuple[str, ...] | list[str]) -> list[Path]:
+    """Files named or matched by glob patterns (a name that exists is taken literally, so a
+    file called ``scan[1].png`` works); no match is an error naming the pattern."""
+    files: list[Path] = []
+    for p in patterns:
+        if os.path.exists(p) or not any(c in p for c in "*?["):
+            files.append(Path(p))
+            continue
+        hits = sorted(glob.glob(p, recursive=True))
+        if not hits:
+            raise InvalidInputError(f"no files match {p!r}")
+        files += [Path(h) for h in hits]
+    return files
+
+
+@contextmanager
+def progress_bar(enabled: bool) -> Iterator[Callable[[str, float], None] | None]:
+    """A progress bar on stderr driven by ``progress(stage, fraction)``; None when disabled."""
+    if not enabled:
+        yield None
+        return
+    from rich.console import Console
+    from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
+
+    with Progress(
+        TextColumn("{task.description:<24}"),
+        BarColumn(),
+        TextColumn("{task.percentage:>3.0f} %"),
+        TimeElapsedColumn(),
+        console=Console(stderr=True),
+        transient=True,
+    ) as bar:
+        task = bar.add_task("working", total=1.0)
+
+        def progress(stage: str, fraction: float) -> None:
+            done = min(max(float(fraction), 0.0), 1.0)
+            bar.update(task, completed=done, description=str(stage)[:24])
+
+        yield progress
+
+
+def emit(result: Result, as_json: bool) -> None:
+    """Print a result: JSON or text on stdout, notes on stderr (one line each)."""
+    from imageform._jsonio import dumps
+
+    if as_json:
+        click.echo(dumps(result.summary))
+    else:
+        console = None
+        for line in result.text:
+            if isinstance(line, str):
+                click.echo(line)
+            else:
+                if console is None:
+                    from rich.console import Console
+
+                    console = Console(width=max(100, min(160, _terminal_width())), highlight=False)
+                console.print(line)
+    for note in result.notes:
+        click.echo(f"imageform: {note}", err=True)
+
+
+def _terminal_width() -> int:
+    import shutil
+
+    return shutil.get_terminal_size((120, 24)).columns
+
+
+def build_command(wf: Workflow) -> click.Command:
+    """The click command of a workflow: its inputs, ``-o/--out``, options, ``--force``,
+    ``--json``."""
+    params: list[click.Parameter] = []
+    for inp in wf.inputs:
+        ptype = click.STRING if inp.kind == "text" or inp.many else click.Path(path_type=Path)
+        params.append(
+            click.Argument(
+                [inp.name],
+                type=ptype,
+                nargs=-1 if inp.many else 1,
+                required=True,
+                metavar=inp.metavar or inp.name.upper() + ("..." if inp.many else ""),
+            )
+        )
+    if wf.output is not None:
+        params.append(
+            click.Option(
+                ["-o", "--out", "out"],
+                type=click.Path(path_type=Path),
+                default=Path(wf.output.default) if wf.output.default else None,
+                show_default=wf.output.default is not None,
+                required=wf.output.required and wf.output.default is None,
+                help=wf.output.help,
+            )
+        )
+    params += _option_params(wf)
+    has_outputs = wf.output is not None or any(
+        f.metadata.get("output") for f in wf.options.fields()
+    )
+    if has_outputs:
+        params.append(click.Option(["--force"], is_flag=True, help="Overwrite existing outputs."))
+    params.append(
+        click.Option(["--json", "json_out"], is_flag=True, help="Print the result as JSON.")
+    )
+
+    def callback(**kw: Any) -> None:
+        force = bool(kw.pop("force", False))
+        as_json = bool(kw.pop("json_out", False))
+        out = kw.pop("out", None)
+        inputs: dict[str, Any] = {}
+        for inp in wf.inputs:
+            value = kw.pop(inp.name)
+            inputs[inp.name] = expand_inputs(value) if inp.many else value
+        try:
+            opts = wf.make_options(**kw)
+        except ImageformError as exc:
+            raise click.UsageError(str(exc)) from None
+        from imageform.workflows import execute
+
+        show = not as_json and sys.stderr.isatty()
+        with progress_bar(show) as progress:
+            result = execute(wf, options=opts, out=out, force=force, progress=progress, **inputs)
+        emit(result, as_json)
+        if result.check_failed:
+            raise CommandExit(3)
+
+    help_text = wf.summary + ("\n\n" + wf.description if wf.description else "")
+    return click.Command(
+        wf.name,
+        params=params,
+        callback=callback,
+        help=help_text,
+        short_help=wf.summary,
+        no_args_is_help=bool(wf.inputs),
+    )
+
+
+# ---------------------------------------------------------------- the root group
+
+
+def _extra_commands() -> dict[str, Callable[[], click.Command]]:
+    """Commands that are not single workflows: batch, chunked (and, while the move to the
+    registry lasts, the remaining hand-written commands)."""
+    from imageform.cli._app import legacy_commands
+
+    return legacy_commands()
+
+
+class _Root(click.Group):
+    """The root group: commands built on first use, listed by section."""
+
+    def list_commands(self, ctx: click.Context) -> list[str]:
+        from imageform.workflows.registry import WORKFLOWS
+
+        return [*WORKFLOWS, *_extra_commands()]
+
+    def get_command(self, ctx: click.Context, cmd_name: str) -> click.Command | None:
+        from imageform.workflows.registry import WORKFLOWS
+
+        key = cmd_name.replace("_", "-")
+        if key in WORKFLOWS:
+            return build_command(WORKFLOWS[key])
+        extra = _extra_commands()
+        if key in extra:
+            return extra[key]()
+        return None
+
+    def format_commands(self, ctx: click.Context, formatter: click.HelpFormatter) -> None:
+        from imageform.workflows.registry import WORKFLOWS
+
+        sections: dict[str, list[tuple[str, str]]] = {}
+        for wf in WORKFLOWS.values():
+            sections.setdefault(wf.group, []).append((wf.name, wf.summary))
+        for name, make in _extra_commands().items():
+            cmd = make()
+            sections.setdefault("scale" if name in ("batch", "chunked") else "tools", []).append(
+                (name, cmd.get_short_help_str(limit=200))
+            )
+        for key, title in _GROUPS.items():
+            rows = sections.get(key)
+            if rows:
+                with formatter.section(title):
+                    formatter.write_dl(rows)
+
+
+def _version(ctx: click.Context, param: click.Parameter, value: bool) -> None:
+    if value and not ctx.resilient_parsing:
+        from imageform import __version__
+
+        click.echo(f"imageform {__version__}")
+        ctx.exit(0)
+
+
+_EPILOG = (
+    "Every command: inputs are positional, the output is -o/--out (an existing output needs "
+    "--force; outputs are written all or nothing), --json prints the result as JSON, and "
+    "names may be spelt with - or _. Exit codes: "
+    + "; ".join(f"{k} {v}" for k, v in EXIT_CODES.items())
+    + "."
+)
+
+root = _Root(
+    "imageform",
+    help="Image formation, end to end: simulate a camera, measure colour, calibrate and "
+    "project. The main job: imageform simulate.",
+    epilog=_EPILOG,
+    params=[
+        click.Option(
+            ["--version"],
+            is_flag=True,
+            expose_value=False,
+            is_eager=True,
+            callback=_version,
+            help="Print the version and exit.",
+        ),
+        click.Option(
+            ["--traceback"],
+            is_flag=True,
+            expose_value=False,
+            help="On an error, print the full Python traceback.",
+        ),
+    ],
+    context_settings={"help_option_names": ["-h", "--help"], "max_content_width": 100},
+    no_args_is_help=True,
+)

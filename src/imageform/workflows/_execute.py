@@ -1,0 +1,118 @@
+"""Running a workflow: outputs checked first and written all or nothing, warnings turned
+into one-line notes."""
+
+from __future__ import annotations
+
+import warnings
+from collections.abc import Callable
+from dataclasses import replace
+from pathlib import Path
+from typing import Any
+
+from imageform._files import Outputs
+from imageform.errors import InvalidInputError
+from imageform.workflows._spec import Options, Result, Run, Workflow, resolve
+
+__all__ = ["execute", "run_file"]
+
+
+def _as_paths(value: Any) -> list[Path]:
+    if value is None:
+        return []
+    if isinstance(value, (list, tuple)):
+        return [Path(v) for v in value]
+    return [Path(value)]
+
+
+def _note_of(w: warnings.WarningMessage) -> str:
+    text = str(w.message).strip().splitlines()
+    return "warning: " + (text[0] if text else w.category.__name__)
+
+
+def execute(
+    workflow: Workflow | str,
+    *,
+    options: Options | None = None,
+    out: str | Path | None = None,
+    force: bool = False,
+    progress: Callable[[str, float], None] | None = None,
+    **inputs: Any,
+) -> Result:
+    """Run ``workflow`` on files: check its outputs, compute, write them all or nothing.
+
+    Parameters
+    ----------
+    workflow : Workflow or str
+        The workflow or its command name (``"white-balance"``).
+    options : Options, optional
+        Its options (default: all defaults).
+    out : path, optional
+        The main output (``-o/--out``).
+    force : bool
+        Overwrite existing outputs.
+    progress : callable, optional
+        ``progress(stage, fraction_done)``.
+    **inputs
+        The positional inputs by name (a path, or a list of paths for ``many`` inputs).
+
+    Returns
+    -------
+    Result
+        The summary, the text for a person and the notes (warnings included).
+
+    Raises
+    ------
+    InvalidInputError
+        An output that is an input, exists without ``force``, or whose folder is missing; a
+        missing input; anything the workflow refuses.
+    """
+    from imageform.workflows.registry import get_workflow
+
+    wf = get_workflow(workflow) if isinstance(workflow, str) else workflow
+    opts = options if options is not None else wf.make_options()
+    if not isinstance(opts, wf.options):
+        raise InvalidInputError(
+            f"expected {wf.options.__name__} for {wf.name}, got {type(opts).__name__}"
+        )
+    names = {i.name for i in wf.inputs}
+    if set(inputs) != names:
+        raise InvalidInputError(
+            f"{wf.name} takes the input(s) {', '.join(sorted(names)) or 'none'}, "
+            f"got {', '.join(sorted(inputs)) or 'none'}"
+        )
+    files = [i.name for i in wf.inputs if i.kind == "file"]
+    in_paths = [p for n in files for p in _as_paths(inputs[n])] + list(opts.paths("input"))
+    if wf.output is not None and out is None:
+        if wf.output.default is None and wf.output.required:
+            raise InvalidInputError(f"{wf.name} needs an output: -o/--out")
+        out = wf.output.default
+    with Outputs(inputs=in_paths, force=force) as outputs:
+        run = Run(outputs, progress=progress)
+        if out is not None:  # checked before any work starts
+            (run.folder if wf.output is not None and wf.output.folder else run.file)(out)
+        for extra in opts.paths("output"):
+            run.file(extra)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("ignore", DeprecationWarning)
+            warnings.simplefilter("ignore", PendingDeprecationWarning)
+            warnings.simplefilter("always", UserWarning)
+            warnings.simplefilter("always", RuntimeWarning)
+            function = resolve(wf.function)
+            result: Result = function(run, opts, out=None if out is None else Path(out), **inputs)
+    notes = tuple(run.notes) + tuple(dict.fromkeys(_note_of(w) for w in caught))
+    return replace(result, notes=result.notes + notes)
+
+
+def run_file(name: str, input_path: Path, output_path: Path, options: Options) -> Result:
+    """One file through a workflow marked ``batch`` (what ``imageform batch`` runs per job).
+
+    The output is overwritten (the batch runner decides what to redo) and written
+    atomically.
+    """
+    from imageform.workflows.registry import get_workflow
+
+    wf = get_workflow(name)
+    if not wf.batch:
+        raise InvalidInputError(f"{name} does not run file by file in imageform batch")
+    inputs: dict[str, Any] = {wf.inputs[0].name: input_path}
+    return execute(wf, options=options, out=output_path, force=True, **inputs)

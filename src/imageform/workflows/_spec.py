@@ -1,0 +1,292 @@
+"""How a workflow is declared: typed options, positional inputs, outputs, and its result.
+
+A workflow is a file-level operation (read, compute, write). Its options are a frozen
+dataclass whose fields carry their command-line help in ``metadata`` (see :func:`option`);
+the command line and ``imageform batch`` are both generated from these declarations, so a
+default, a valid value or a help text exists once.
+
+This module imports nothing heavy: ``imageform --help`` reads every declaration.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import importlib
+import typing
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from imageform.errors import InvalidInputError, UnknownOptionError
+
+__all__ = [
+    "IMAGE_SUFFIXES",
+    "Input",
+    "Options",
+    "Output",
+    "Result",
+    "Run",
+    "Workflow",
+    "choice_names",
+    "normalize_choice",
+    "option",
+    "resolve",
+]
+
+#: Image file suffixes that workflows read and write.
+IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".tif", ".tiff", ".npy")
+
+
+def option(
+    default: Any = dataclasses.MISSING,
+    *,
+    help: str,
+    flag: str | None = None,
+    short: str | None = None,
+    choices: Sequence[str] | str | None = None,
+    metavar: str | None = None,
+    hidden: bool = False,
+    output: bool = False,
+    input: bool = False,
+) -> Any:
+    """A field of an options dataclass, with what the command line needs to know.
+
+    Parameters
+    ----------
+    default
+        The default (the one default for the API, the command and ``imageform batch``).
+    help : str
+        One sentence for ``--help``.
+    flag : str, optional
+        The long flag; default ``--`` + the field name with ``-`` for ``_``.
+    short : str, optional
+        A short flag (``-m``).
+    choices : sequence of str, or "module:NAME"
+        Valid names (or where to find them, imported only when needed). Values are
+        normalised (lower case, ``_`` for ``-``), so ``gray-world`` and ``gray_world`` are one.
+    metavar : str, optional
+        The placeholder shown in ``--help``.
+    hidden : bool
+        Accepted but not listed in ``--help``.
+    output, input : bool
+        The field is a path the workflow writes (checked and written all or nothing with the
+        main output) or reads (never overwritten by an output).
+    """
+    meta = {
+        "help": help,
+        "flag": flag,
+        "short": short,
+        "choices": choices,
+        "metavar": metavar,
+        "hidden": hidden,
+        "output": output,
+        "input": input,
+    }
+    if isinstance(default, (list, dict, set)):
+        raise TypeError("use a tuple for a sequence default")
+    return field(default=default, metadata=meta)
+
+
+def resolve(ref: str) -> Any:
+    """The object named by ``"package.module:attribute"`` (imported on first use)."""
+    module, _, attr = ref.partition(":")
+    obj: Any = importlib.import_module(module)
+    for part in attr.split("."):
+        obj = getattr(obj, part)
+    return obj
+
+
+def choice_names(choices: Sequence[str] | str | Mapping[str, Any]) -> tuple[str, ...]:
+    """The valid names of a ``choices`` declaration, in their normalised spelling."""
+    names = resolve(choices) if isinstance(choices, str) else choices
+    return tuple(_norm(n) for n in names)
+
+
+def _norm(value: str) -> str:
+    return value.strip().lower().replace("-", "_").replace(" ", "_")
+
+
+def normalize_choice(value: object, choices: Sequence[str] | str, what: str) -> str:
+    """``value`` in its normalised spelling if it is one of ``choices``, else raise.
+
+    >>> normalize_choice("Gray-World", ("gray_world", "white_patch"), "--method")
+    'gray_world'
+    """
+    if not isinstance(value, str):
+        raise UnknownOptionError(f"expected {what} as a name, got {type(value).__name__}")
+    names = choice_names(choices)
+    key = _norm(value)
+    if key not in names:
+        shown = ", ".join(n.replace("_", "-") for n in names)
+        raise UnknownOptionError(f"unknown {what} {value!r}; valid: {shown}")
+    return key
+
+
+def flag_of(f: dataclasses.Field[Any]) -> str:
+    """The long command-line flag of an options field."""
+    return f.metadata.get("flag") or "--" + f.name.replace("_", "-")
+
+
+@dataclass(frozen=True)
+class Options:
+    """Base of every workflow's options: normalises names given as ``choices``.
+
+    Subclasses add cross-field checks in ``check()``; both run when the options are made,
+    whoever makes them (the API, the command line or ``imageform batch``).
+    """
+
+    def __post_init__(self) -> None:
+        for f in dataclasses.fields(self):
+            choices = f.metadata.get("choices")
+            value = getattr(self, f.name)
+            if choices is not None and value is not None:
+                object.__setattr__(self, f.name, normalize_choice(value, choices, flag_of(f)))
+        self.check()
+
+    def check(self) -> None:
+        """Cross-field checks (raise :class:`~imageform.errors.InvalidInputError`)."""
+
+    @classmethod
+    def fields(cls) -> tuple[dataclasses.Field[Any], ...]:
+        """The dataclass fields, in declaration order."""
+        return dataclasses.fields(cls)
+
+    @classmethod
+    def types(cls) -> dict[str, Any]:
+        """The evaluated type of each field."""
+        return typing.get_type_hints(cls)
+
+    def paths(self, kind: str) -> tuple[Path, ...]:
+        """The paths in fields declared ``output=True`` (``kind="output"``) or ``input=True``."""
+        out: list[Path] = []
+        for f in dataclasses.fields(self):
+            if f.metadata.get(kind):
+                v = getattr(self, f.name)
+                if isinstance(v, (tuple, list)):
+                    out += [Path(x) for x in v if x is not None]
+                elif v is not None:
+                    out.append(Path(v))
+        return tuple(out)
+
+
+@dataclass(frozen=True)
+class Input:
+    """A positional input of a command: a file (``many``: one or more, glob patterns
+    expanded), or a value (``kind="text"``)."""
+
+    name: str
+    help: str
+    many: bool = False
+    metavar: str | None = None
+    kind: str = "file"
+
+
+@dataclass(frozen=True)
+class Output:
+    """The main output of a command, always ``-o/--out``."""
+
+    help: str
+    required: bool = True
+    default: str | None = None
+    folder: bool = False
+
+
+@dataclass(frozen=True)
+class Result:
+    """What a workflow did.
+
+    Attributes
+    ----------
+    summary : mapping
+        The machine-readable result (``--json`` prints it; ``imageform batch`` keeps it).
+    text : tuple
+        Lines for a person (str, or a rich renderable such as a table).
+    notes : tuple of str
+        One-line notes and warnings, printed on stderr.
+    check_failed : bool
+        A check the command performs failed (exit code 3).
+    """
+
+    summary: Mapping[str, Any]
+    text: tuple[Any, ...] = ()
+    notes: tuple[str, ...] = ()
+    check_failed: bool = False
+
+
+@dataclass
+class Run:
+    """What a running workflow may use: its outputs (written all or nothing), notes for the
+    user, and a progress callback."""
+
+    outputs: Any  # imageform._files.Outputs (imported lazily: it is cheap, but keep --help lean)
+    notes: list[str] = field(default_factory=list)
+    progress: Callable[[str, float], None] | None = None
+
+    def file(self, path: str | Path) -> Path:
+        """The temporary path to write for the output ``path`` (checked on first use)."""
+        part = self.outputs.part(path)
+        return Path(part) if part is not None else Path(self.outputs.file(path))
+
+    def folder(self, path: str | Path) -> Path:
+        """A temporary folder to fill for the output folder ``path``."""
+        part = self.outputs.part(path)
+        return Path(part) if part is not None else Path(self.outputs.folder(path))
+
+    def note(self, text: str) -> None:
+        """A one-line note for the user (stderr)."""
+        self.notes.append(text)
+
+
+@dataclass(frozen=True)
+class Workflow:
+    """A file-level operation: its name on the command line, its options and its function.
+
+    Attributes
+    ----------
+    name : str
+        Command name (``white-balance``).
+    summary : str
+        One line for ``imageform --help``.
+    function : str
+        ``"module:function"`` called as ``function(run, options, out=..., **inputs)``.
+    options : type
+        The :class:`Options` dataclass.
+    inputs : tuple of Input
+        Positional inputs, in order.
+    output : Output or None
+        The main output (``-o/--out``).
+    batch : bool
+        Runs file by file in ``imageform batch`` (one image in, one image out).
+    suffixes : tuple of str
+        Output suffixes it can write.
+    group : str
+        Section of ``imageform --help``.
+    description : str
+        More help for ``imageform NAME --help``.
+    """
+
+    name: str
+    summary: str
+    function: str
+    options: type[Options]
+    inputs: tuple[Input, ...] = ()
+    output: Output | None = None
+    batch: bool = False
+    suffixes: tuple[str, ...] = IMAGE_SUFFIXES
+    group: str = "tools"
+    description: str = ""
+
+    def make_options(self, **values: Any) -> Options:
+        """The options from keyword values (unknown names are refused, with the valid ones)."""
+        known = {f.name for f in self.options.fields()}
+        unknown = sorted(set(values) - known)
+        if unknown:
+            raise UnknownOptionError(
+                f"unknown option(s) {', '.join(unknown)} of {self.name}; valid: "
+                f"{', '.join(sorted(known)) or 'none'}"
+            )
+        try:
+            return self.options(**values)
+        except TypeError as exc:
+            raise InvalidInputError(f"{self.name}: {exc}") from None

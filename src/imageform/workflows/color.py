@@ -1,0 +1,450 @@
+"""Colour workflows: convert, white-balance, delta-e, cvd, gamut, palette-check."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from imageform.errors import InvalidInputError
+from imageform.workflows._images import ImageIn, ImageOut, read, write
+from imageform.workflows._spec import Input, Options, Output, Result, Run, Workflow, option
+
+__all__ = [
+    "WORKFLOWS",
+    "ConvertOptions",
+    "CvdOptions",
+    "DeltaEOptions",
+    "GamutOptions",
+    "PaletteCheckOptions",
+    "WhiteBalanceOptions",
+]
+
+# spaces whose values are encoded (or linear) RGB-like in [0, 1]: integer images can hold them
+_DISPLAYABLE = (
+    "srgb",
+    "linear_srgb",
+    "bgr",
+    "gray",
+    "cmy",
+    "rec709",
+    "adobe_rgb",
+    "display_p3",
+    "rec2020",
+    "prophoto",
+    "linear_rec709",
+    "linear_adobe_rgb",
+    "linear_display_p3",
+    "linear_rec2020",
+    "linear_prophoto",
+)
+
+
+# ---------------------------------------------------------------- convert
+
+
+@dataclass(frozen=True, kw_only=True)
+class ConvertOptions(ImageIn, ImageOut):
+    """Options of ``imageform convert``."""
+
+    src: str = option("srgb", flag="--from", help="Colour space of the input.", metavar="SPACE")
+    dst: str = option(
+        "srgb",
+        flag="--to",
+        help="Colour space of the output (see imageform.color.SPACES).",
+        metavar="SPACE",
+    )
+    white: str | None = option(None, help="Reference white for lab, luv, lch, xyy (e.g. D65).")
+    standard: str | None = option(
+        None, help="Y'CbCr standard.", choices=("bt601", "bt709", "bt2020")
+    )
+    ycc_range: str | None = option(
+        None, flag="--range", help="Y'CbCr range.", choices=("full", "limited")
+    )
+    code_bits: int | None = option(None, help="Y'CbCr code-value bits (8, 10).", metavar="N")
+    gray_method: str | None = option(
+        None, flag="--gray-method", help="Grey conversion.", choices=("rec601", "rec709")
+    )
+
+    def check(self) -> None:
+        super().check()
+        from imageform.color import space_name
+
+        object.__setattr__(self, "src", space_name(self.src, "--from"))
+        object.__setattr__(self, "dst", space_name(self.dst, "--to"))
+
+    def params(self) -> dict[str, Any]:
+        """The keyword parameters of :func:`imageform.color.convert`."""
+        p: dict[str, Any] = {"alpha": "keep" if self.alpha == "keep" else "reject"}
+        for key, val in (
+            ("white", self.white),
+            ("standard", self.standard),
+            ("range", self.ycc_range),
+            ("bits", self.code_bits),
+            ("method", self.gray_method),
+        ):
+            if val is not None:
+                p[key] = val
+        return p
+
+
+def convert(run: Run, opts: ConvertOptions, *, out: Path, image: Path) -> Result:
+    """``imageform convert``: one image file from one colour space to another."""
+    import numpy as np
+
+    from imageform.color import SPACES, convert, path
+    from imageform.io import image_format
+
+    src, dst = opts.src, opts.dst
+    edges = path(src, dst)
+    if image_format(out) in ("png", "jpeg") and dst not in _DISPLAYABLE:
+        raise InvalidInputError(
+            f"{dst} values do not fit an integer image: write {out.stem}.tif or "
+            f"{out.stem}.npy (PNG and JPEG hold RGB-like spaces: {', '.join(_DISPLAYABLE)})"
+        )
+    img = read(image, opts)
+    if src != "gray" and img.shape[-1] == 1:
+        raise InvalidInputError(f"{image} is a grey image; convert it with --from gray")
+    result = np.asarray(convert(img, src, dst, **opts.params()))
+    n_out = write(run, out, result, opts, like=img)
+    flat = result.reshape(-1, result.shape[-1])
+    summary = {
+        "input": image,
+        "output": out,
+        "from": src,
+        "to": dst,
+        "path": [e.function for e in edges],
+        "shape": list(result.shape),
+        "dtype": str(result.dtype),
+        "channels": SPACES[dst][1],
+        "min": flat.min(axis=0),
+        "max": flat.max(axis=0),
+        "values_clipped": n_out,
+    }
+    how = " -> ".join(summary["path"]) or "copy"
+    return Result(summary, (f"{image} ({src}) -> {out} ({dst}): {how}",))
+
+
+# ---------------------------------------------------------------- white balance
+
+_WB_METHODS = ("gray_world", "white_patch", "max_rgb", "shades_of_gray", "gray_edge", "manual")
+
+
+@dataclass(frozen=True, kw_only=True)
+class WhiteBalanceOptions(ImageIn, ImageOut):
+    """Options of ``imageform white-balance``."""
+
+    method: str = option("gray-world", help="Illuminant estimate.", choices=_WB_METHODS)
+    percentile: float | None = option(
+        None, help="white-patch: percentile of each channel (0-100; default 99, max-rgb 100)."
+    )
+    p: float = option(6.0, help="shades-of-gray / gray-edge: Minkowski norm p >= 1.")
+    sigma: float = option(1.0, help="gray-edge: Gaussian scale in pixels.")
+    illuminant: str | None = option(None, help="manual: illuminant name, e.g. A, D50, F2.")
+    cct: float | None = option(None, help="manual: correlated colour temperature in kelvin.")
+    normalize: str = option(
+        "mean", help="Keep the mean grey level or the green channel.", choices=("mean", "green")
+    )
+
+    def params(self) -> dict[str, Any]:
+        """Keywords of :func:`imageform.color.white_balance`."""
+        return {
+            "normalize": self.normalize,
+            "percentile": self.percentile,
+            "p": self.p,
+            "sigma": self.sigma,
+            "illuminant": self.illuminant,
+            "cct": self.cct,
+        }
+
+
+def white_balance(run: Run, opts: WhiteBalanceOptions, *, out: Path, image: Path) -> Result:
+    """``imageform white-balance``: estimate the illuminant and divide it out in linear light."""
+    import numpy as np
+
+    from imageform.color.white_balance import white_balance as balance
+
+    img = read(image, opts)
+    if img.shape[-1] != 3:
+        raise InvalidInputError(f"{image}: expected an RGB image, got {img.shape[-1]} channel(s)")
+    balanced, gains = balance(img, opts.method, **opts.params())
+    n_out = write(run, out, np.asarray(balanced), opts, like=img)
+    g = [float(v) for v in np.asarray(gains)]
+    summary = {
+        "input": image,
+        "output": out,
+        "method": opts.method,
+        "gains": g,
+        "values_clipped": n_out,
+    }
+    text = (
+        f"gains (R, G, B) in linear light: {g[0]:.4f} {g[1]:.4f} {g[2]:.4f}",
+        f"wrote {out}",
+    )
+    return Result(summary, text)
+
+
+# ---------------------------------------------------------------- delta E
+
+_PERCENTILES = (50.0, 90.0, 95.0, 99.0)
+
+
+@dataclass(frozen=True, kw_only=True)
+class DeltaEOptions(ImageIn):
+    """Options of ``imageform delta-e``."""
+
+    method: str = option(
+        "ciede2000",
+        help="Colour-difference formula.",
+        choices=("ciede2000", "cie76", "cie94", "cmc"),
+    )
+    heatmap: Path | None = option(
+        None, help="Also write a heat map of ΔE (PNG, colour scale 0 to 10).", output=True
+    )
+
+
+def delta_e(run: Run, opts: DeltaEOptions, *, out: None, reference: Path, test: Path) -> Result:
+    """``imageform delta-e``: ΔE between two sRGB images of the same size."""
+    import numpy as np
+
+    from imageform.color.convert import convert
+    from imageform.color.delta_e import delta_e as de_fn
+    from imageform.color.delta_e import describe_delta_e
+
+    a, b = read(reference, opts), read(test, opts)
+    for path, arr in ((reference, a), (test, b)):
+        if arr.shape[-1] != 3:
+            raise InvalidInputError(
+                f"{path}: expected an RGB image, got {arr.shape[-1]} channel(s)"
+            )
+    if a.shape != b.shape:
+        raise InvalidInputError(
+            f"images differ in size: {reference} is {a.shape[1]} x {a.shape[0]} px, "
+            f"{test} {b.shape[1]} x {b.shape[0]} px"
+        )
+    de = np.asarray(de_fn(convert(a, "srgb", "lab"), convert(b, "srgb", "lab"), opts.method))
+    mean, worst = float(de.mean()), float(de.max())
+    pct = {f"p{q:g}": float(np.percentile(de, q)) for q in _PERCENTILES}
+    above1, above10 = float(np.mean(de > 1.0)), float(np.mean(de > 10.0))
+    if opts.heatmap is not None:
+        from matplotlib import colormaps
+
+        from imageform.io import write_image
+
+        rgb = colormaps["magma"](np.clip(de / 10.0, 0.0, 1.0))[..., :3]
+        write_image(run.file(opts.heatmap), rgb)
+    summary = {
+        "reference": reference,
+        "test": test,
+        "method": opts.method,
+        "pixels": int(de.size),
+        "mean": mean,
+        "max": worst,
+        "percentiles": pct,
+        "reading": describe_delta_e(mean),
+        "fraction_above_1": above1,
+        "fraction_above_10": above10,
+        "heatmap": opts.heatmap,
+    }
+    text = [
+        f"ΔE ({opts.method}) over {de.size} pixels",
+        f"  mean {mean:.4f}   max {worst:.4f}   ({describe_delta_e(mean)})",
+        *(f"  {k:>4} {v:.4f}" for k, v in pct.items()),
+        f"  above 1 (perceptible): {100 * above1:.2f} %   above 10 (obvious): "
+        f"{100 * above10:.2f} %",
+    ]
+    if opts.heatmap is not None:
+        text.append(f"  heat map (0 to 10): {opts.heatmap}")
+    return Result(summary, tuple(text))
+
+
+# ---------------------------------------------------------------- colour-vision deficiency
+
+
+@dataclass(frozen=True, kw_only=True)
+class CvdOptions(ImageIn, ImageOut):
+    """Options of ``imageform cvd``."""
+
+    deficiency: str = option(
+        flag="--type",
+        help="protan, deutan or tritan (also protanopia, deuteranomaly ...).",
+    )
+    severity: float = option(1.0, help="0 (normal vision) to 1 (dichromat).")
+    method: str = option(
+        "machado2009",
+        help="Simulation model.",
+        choices=("machado2009", "brettel1997", "vienot1999"),
+    )
+
+
+def cvd(run: Run, opts: CvdOptions, *, out: Path, image: Path) -> Result:
+    """``imageform cvd``: what a colour-vision deficient observer sees (in linear RGB)."""
+    import numpy as np
+
+    from imageform.color.cvd import simulate_cvd
+
+    arr = read(image, opts)
+    if arr.shape[-1] != 3:
+        raise InvalidInputError(f"{image}: expected an RGB image, got {arr.shape[-1]} channel(s)")
+    sim = np.asarray(simulate_cvd(arr, opts.deficiency, opts.severity, opts.method))
+    n_out = write(run, out, sim, opts, like=arr)
+    summary = {
+        "input": image,
+        "output": out,
+        "deficiency": opts.deficiency,
+        "severity": opts.severity,
+        "method": opts.method,
+        "values_clipped": n_out,
+    }
+    text = (f"wrote {out} ({opts.method}, {opts.deficiency}, severity {opts.severity:g})",)
+    return Result(summary, text)
+
+
+# ---------------------------------------------------------------- gamut
+
+
+@dataclass(frozen=True, kw_only=True)
+class GamutOptions(Options):
+    """Options of ``imageform gamut``."""
+
+    spaces: str = option(
+        "srgb,display-p3,rec2020", help="Comma-separated RGB spaces (srgb, adobe-rgb, ...)."
+    )
+    coords: str = option(
+        "xy", help="Diagram coordinates for -o: xy or uv (u'v').", choices=("xy", "uv")
+    )
+
+    def names(self) -> list[str]:
+        """The spaces, split."""
+        names = [s.strip() for s in self.spaces.split(",") if s.strip()]
+        if not names:
+            raise InvalidInputError("expected --spaces as one or more RGB space names")
+        return names
+
+
+def gamut(run: Run, opts: GamutOptions, *, out: Path | None) -> Result:
+    """``imageform gamut``: gamut areas and coverage; with -o, the chromaticity diagram."""
+    from imageform.color.chromaticity import visible_area
+    from imageform.color.gamut import gamut_figures
+
+    figs = gamut_figures(opts.names())
+    vxy, vuv = visible_area("xy"), visible_area("uv")
+    text = [
+        f"visible region (380-780 nm locus): area xy {vxy:.4f}, u'v' {vuv:.4f}",
+        f"{'space':<22}{'area xy':>9}{'cover xy':>10}{'area uv':>9}{'cover uv':>10}",
+        *(
+            f"{f.space:<22}{f.area_xy:>9.4f}{f.coverage_xy:>9.1f}%"
+            f"{f.area_uv:>9.4f}{f.coverage_uv:>9.1f}%"
+            for f in figs
+        ),
+    ]
+    if out is not None:
+        import matplotlib
+
+        matplotlib.use("Agg")
+        from imageform.report.chromaticity_plot import plot_chromaticity_diagram
+
+        plot_chromaticity_diagram(opts.names(), coords=opts.coords, path=run.file(out))
+        text.append(f"wrote {out}")
+    summary = {
+        "visible_area_xy": vxy,
+        "visible_area_uv": vuv,
+        "spaces": [f.as_dict() for f in figs],
+        "plot": out,
+    }
+    return Result(summary, tuple(text))
+
+
+# ---------------------------------------------------------------- palette check
+
+
+@dataclass(frozen=True, kw_only=True)
+class PaletteCheckOptions(Options):
+    """Options of ``imageform palette-check``."""
+
+    threshold: float = option(10.0, help="Smallest acceptable ΔE00 between two colours.")
+    method: str = option(
+        "machado2009",
+        help="Colour-vision-deficiency model.",
+        choices=("machado2009", "brettel1997", "vienot1999"),
+    )
+
+
+def palette_check(run: Run, opts: PaletteCheckOptions, *, out: None, colors: str) -> Result:
+    """``imageform palette-check``: smallest pairwise ΔE00, normal and for each deficiency;
+    the check fails (exit 3) when a condition is under the threshold."""
+    from imageform.color.palettes import palette_check as check
+
+    r = check(colors, threshold=opts.threshold, method=opts.method)
+    text = [f"{len(r.colors)} colours, threshold ΔE00 {r.threshold:g} ({opts.method})"]
+    for cond, v in r.min_delta_e.items():
+        i, j = r.closest_pair[cond]
+        verdict = "pass" if r.passes[cond] else "FAIL"
+        text.append(f"  {cond:<7} min ΔE00 {v:6.2f}  (colours {i} and {j})  {verdict}")
+    ok = all(r.passes.values())
+    return Result(r.as_dict(), tuple(text), check_failed=not ok)
+
+
+_IMG = Input("image", "Input image (PNG, JPEG, TIFF or .npy).")
+
+WORKFLOWS = (
+    Workflow(
+        "convert",
+        "Convert an image between colour spaces (sRGB, Lab, HSV, Y'CbCr, XYZ ...).",
+        "imageform.workflows.color:convert",
+        ConvertOptions,
+        (_IMG,),
+        Output("Output image (.png/.jpg for RGB-like spaces; .tif/.npy for any)."),
+        batch=True,
+        group="colour",
+    ),
+    Workflow(
+        "white-balance",
+        "White-balance an sRGB image in linear light and print the gains.",
+        "imageform.workflows.color:white_balance",
+        WhiteBalanceOptions,
+        (_IMG,),
+        Output("Output image (PNG/JPEG integer, TIFF float32, .npy)."),
+        batch=True,
+        group="colour",
+    ),
+    Workflow(
+        "delta-e",
+        "Colour difference (ΔE) between two sRGB images: mean, max, percentiles, heat map.",
+        "imageform.workflows.color:delta_e",
+        DeltaEOptions,
+        (Input("reference", "Reference image (sRGB)."), Input("test", "Test image, same size.")),
+        None,
+        group="colour",
+    ),
+    Workflow(
+        "cvd",
+        "Simulate colour-vision deficiency (protan, deutan, tritan) on an sRGB image.",
+        "imageform.workflows.color:cvd",
+        CvdOptions,
+        (_IMG,),
+        Output("Output image."),
+        batch=True,
+        group="colour",
+    ),
+    Workflow(
+        "gamut",
+        "Gamut areas and coverage of RGB spaces (xy and u'v'); -o draws the diagram.",
+        "imageform.workflows.color:gamut",
+        GamutOptions,
+        (),
+        Output("Chromaticity diagram to write (PNG, SVG or PDF).", required=False),
+        suffixes=(".png", ".svg", ".pdf"),
+        group="colour",
+    ),
+    Workflow(
+        "palette-check",
+        "Check that a palette stays distinguishable for colour-vision-deficient observers.",
+        "imageform.workflows.color:palette_check",
+        PaletteCheckOptions,
+        (Input("colors", 'Comma-separated hex colours, e.g. "#E69F00,#56B4E9".', kind="text"),),
+        None,
+        group="colour",
+        description="Exit code 3 when any condition is under the threshold.",
+    ),
+)

@@ -1,0 +1,113 @@
+"""One command-line grammar for every command, checked on the registry itself.
+
+Inputs positional, the main output ``-o/--out``, ``--force`` where anything is written,
+``--json`` everywhere, names with ``-`` or ``_`` alike, full summaries in ``imageform --help``,
+and every ``imageform ...`` line of the docs parses.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import re
+import shlex
+from pathlib import Path
+
+import click
+import pytest
+
+from imageform.cli import EXIT_CODES, main, root
+from imageform.cli._build import build_command
+from imageform.workflows import WORKFLOWS
+from imageform.workflows._spec import choice_names
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def _flags(cmd: click.Command) -> set[str]:
+    return {o for p in cmd.params if isinstance(p, click.Option) for o in p.opts}
+
+
+@pytest.mark.parametrize("name", list(WORKFLOWS))
+def test_every_command_has_the_common_flags(name: str) -> None:
+    wf = WORKFLOWS[name]
+    cmd = build_command(wf)
+    flags = _flags(cmd)
+    assert "--json" in flags
+    writes = wf.output is not None or any(f.metadata.get("output") for f in wf.options.fields())
+    assert ("--force" in flags) == writes
+    if wf.output is not None:
+        assert {"-o", "--out"} <= flags
+    assert not flags & {"--output", "--plot"}, "the main output is -o/--out"
+    if wf.batch:  # one file in, one image out: what imageform batch runs per file
+        assert len(wf.inputs) == 1 and wf.inputs[0].kind == "file" and wf.output is not None
+
+
+@pytest.mark.parametrize("name", list(WORKFLOWS))
+def test_names_accept_both_spellings(name: str) -> None:
+    """Every valid name of every option is accepted as written with - and with _."""
+    wf = WORKFLOWS[name]
+    required = {f.name: "x" for f in wf.options.fields() if f.default is dataclasses.MISSING}
+    for f in wf.options.fields():
+        if f.metadata.get("choices") is None:
+            continue
+        for valid in choice_names(f.metadata["choices"]):
+            for spelt in (valid.replace("_", "-"), valid.upper()):
+                opts = wf.make_options(**{**required, f.name: spelt})
+                assert getattr(opts, f.name) == valid
+
+
+def test_root_help_lists_every_command_in_full(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["--help"]) == 0
+    text = "".join(capsys.readouterr().out.split())
+    for wf in WORKFLOWS.values():
+        assert "".join(wf.summary.split()) in text, wf.name  # wrapped, never cut off
+    for code, meaning in EXIT_CODES.items():
+        assert f"{code}{''.join(meaning.split())}" in text
+
+
+def test_unknown_values_and_commands_are_usage_errors(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["white-balance", "x.png", "-o", "y.png", "--method", "nope"]) == 2
+    assert "valid: gray-world, white-patch" in capsys.readouterr().err
+    assert main(["no-such-command"]) == 2
+    assert main(["convert", "x.png", "-o", "y.png", "--no-such-flag"]) == 2
+
+
+def _doc_commands() -> list[tuple[str, str]]:
+    lines: list[tuple[str, str]] = []
+    pages = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
+    for page in pages:
+        in_block, pending = False, ""
+        for raw in page.read_text(encoding="utf-8").splitlines():
+            if raw.startswith("```"):
+                in_block = raw.strip() in ("```bash", "```sh", "```console", "```shell")
+                continue
+            line = pending + " " + raw.split(" #")[0].strip().removeprefix("$ ")
+            line = line.strip()
+            if line.endswith("\\"):
+                pending = line[:-1]
+                continue
+            pending = ""
+            if in_block and line.startswith("imageform "):
+                lines.append((page.name, line))
+        for inline in re.findall(r"`(imageform [^`]+)`", page.read_text(encoding="utf-8")):
+            lines.append((page.name, inline))
+    return lines
+
+
+@pytest.mark.parametrize(("page", "line"), _doc_commands())
+def test_doc_command_lines_parse(page: str, line: str) -> None:
+    """Each shell example in the docs names a real command and valid options."""
+    args = shlex.split(line.replace("\\\n", " "))[1:]
+    if not args or args[0].startswith("-") or "..." in line or "COMMAND" in line:
+        return
+    ctx = root.make_context("imageform", [args[0]], resilient_parsing=True)
+    cmd = root.get_command(ctx, args[0])
+    assert cmd is not None, f"{page}: unknown command in `{line}`"
+    if isinstance(cmd, click.Group) or not args[1:]:
+        return
+    try:
+        cmd.make_context(args[0], args[1:], parent=ctx)
+    except click.exceptions.Exit:
+        pass
+    except click.UsageError as exc:
+        pytest.fail(f"{page}: `{line}`: {exc.format_message()}")
