@@ -46,7 +46,7 @@ def main() -> None:
     msds = colour.MultiSpectralDistributions(r.values, r.wavelengths)
 
     def ours_xyz() -> np.ndarray:
-        return spectrum_to_xyz(r, "D65", interpolation="sprague")
+        return spectrum_to_xyz(r, illuminant="D65", interpolation="sprague")
 
     def colour_xyz() -> np.ndarray:
         return np.asarray(colour.msds_to_XYZ(msds, cmf, d65, method="Integration")) / 100

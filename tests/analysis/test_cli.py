@@ -27,7 +27,7 @@ def _u8(path: Path, img: np.ndarray) -> Path:
 
 
 def test_segment(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    img, truth = synthetic_endoscopy_image(0, (128, 128))
+    img, truth = synthetic_endoscopy_image((128, 128), rng=0)
     src = _u8(tmp_path / "endo.png", img)
     out, ov = tmp_path / "mask.png", tmp_path / "overlay.png"
     argv = [
@@ -63,7 +63,7 @@ def test_segment(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
 
 
 def test_segment_refuses_to_overwrite_input(tmp_path: Path, capsys) -> None:  # type: ignore[no-untyped-def]
-    src = _u8(tmp_path / "endo.png", synthetic_endoscopy_image(0, (64, 64))[0])
+    src = _u8(tmp_path / "endo.png", synthetic_endoscopy_image((64, 64), rng=0)[0])
     assert main(["segment", str(src), "--out", str(src), "--force"]) == 1
     assert "also an input" in capsys.readouterr().err
     assert main(["segment", str(src), "--h", "a:b", "--out", str(tmp_path / "m.png")]) == 1
@@ -80,9 +80,9 @@ def test_segment_empty_mask_is_reported(tmp_path: Path, capsys) -> None:  # type
 @pytest.mark.parametrize("method", ["macenko", "reinhard"])
 def test_stain_normalize(tmp_path: Path, capsys, method: str) -> None:  # type: ignore[no-untyped-def]
     a, _, _ = synthetic_stain_image(
-        0, (64, 64), stains=(RUIFROK_HEMATOXYLIN, RUIFROK_DAB), max_concentration=(0.6, 1.0)
+        (64, 64), stains=(RUIFROK_HEMATOXYLIN, RUIFROK_DAB), max_concentration=(0.6, 1.0), rng=0
     )
-    b, _, _ = synthetic_stain_image(1, (64, 64), stains=(RUIFROK_HEMATOXYLIN, RUIFROK_DAB))
+    b, _, _ = synthetic_stain_image((64, 64), stains=(RUIFROK_HEMATOXYLIN, RUIFROK_DAB), rng=1)
     pa, pb = _u8(tmp_path / "a.png", a), _u8(tmp_path / "b.png", b)
     out, stats = tmp_path / "out.png", tmp_path / "stats.json"
     argv = [
@@ -122,7 +122,7 @@ def test_stain_normalize(tmp_path: Path, capsys, method: str) -> None:  # type: 
 
 
 def test_stain_normalize_errors(tmp_path: Path, capsys) -> None:  # type: ignore[no-untyped-def]
-    a, _, _ = synthetic_stain_image(0, (32, 32))
+    a, _, _ = synthetic_stain_image((32, 32), rng=0)
     pa = _u8(tmp_path / "a.png", a)
     white = _u8(tmp_path / "w.png", np.full((32, 32, 3), 0.98))
     assert (

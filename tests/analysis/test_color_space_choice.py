@@ -30,7 +30,7 @@ METHODS = {"rgb": segment_rgb, "hsv": segment_hsv_hs, "lab": segment_lab_a}
 
 
 def iou_table(shading: tuple[float, float]) -> dict[str, float]:
-    img, truth = synthetic_shading_scene(0, shading=shading)
+    img, truth = synthetic_shading_scene(shading=shading, rng=0)
     return {k: mask_iou(f(img), truth) for k, f in METHODS.items()}
 
 

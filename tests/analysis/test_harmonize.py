@@ -131,6 +131,7 @@ def test_json_round_trip(tmp_path: Path, charts) -> None:  # type: ignore[no-unt
     corr.to_json(p)
     back = ColorCorrection.from_json(p)
     assert back.method == "root_polynomial" and back.degree == 3 and back.n_patches == 24
+    assert back.transfer == "srgb"
     np.testing.assert_array_equal(back.matrix, corr.matrix)
 
 
@@ -215,3 +216,64 @@ def test_report_summary_skips_flagged_patches(charts) -> None:  # type: ignore[n
     rep = correction_report(pa, pb, fit_color_correction(pa, pb))
     assert not rep.valid[7] and rep.valid.sum() == 23
     assert rep.summary()["max_after"] == pytest.approx(rep.delta_e_after[rep.valid].max())
+
+
+# -- linear patch values (the simulator's camera RGB -> linear sRGB fit) ---------------------
+def test_linear_transfer_recovers_row_vector_matrix(tmp_path: Path) -> None:
+    """``transfer="linear"``: no decoding; the matrix applies to row vectors,
+    ``reference = measured @ matrix.T`` (DESIGN.md's convention), recovered exactly."""
+    rng = np.random.default_rng(0)
+    C = rng.uniform(0, 1, (24, 3))
+    M = rng.normal(size=(3, 3))
+    corr = fit_color_correction(C, C @ M.T, transfer="linear", saturation=None)
+    assert corr.transfer == "linear" and corr.n_patches == 24
+    np.testing.assert_allclose(corr.matrix, M, atol=1e-12)
+    img = rng.uniform(0, 2, (4, 5, 3))  # linear light may exceed 1
+    np.testing.assert_allclose(corr.apply(img), img @ M.T, atol=1e-12)
+    corr.to_json(tmp_path / "lin.json")
+    back = ColorCorrection.from_json(tmp_path / "lin.json")
+    assert back.transfer == "linear"
+    np.testing.assert_array_equal(back.apply(img), corr.apply(img))
+
+
+def test_linear_transfer_saturation_none_keeps_bright_patches() -> None:
+    rng = np.random.default_rng(1)
+    C = rng.uniform(0.05, 1.1, (12, 3))  # linear camera RGB above 1 is not clipped
+    with pytest.warns(ChartWarning, match="saturated"):
+        assert fit_color_correction(C, 0.5 * C, transfer="linear").n_patches < 12
+    assert fit_color_correction(C, 0.5 * C, transfer="linear", saturation=None).n_patches == 12
+
+
+def test_linear_transfer_missing_rows_and_errors() -> None:
+    """Non-finite rows are left out through ChartPatches(missing=...); bad input raises."""
+    from imageform.analysis import ChartPatches
+
+    rng = np.random.default_rng(2)
+    C = rng.uniform(0, 1, (10, 3))
+    M = rng.normal(size=(3, 3))
+    C[3] = np.nan
+    missing = ~np.isfinite(C).all(axis=1)
+    flags = np.zeros(10, dtype=bool)
+    pa = ChartPatches(C, np.zeros_like(C), flags, missing)
+    pb = ChartPatches(C @ M.T, np.zeros_like(C), flags, missing)
+    corr = fit_color_correction(pa, pb, transfer="linear", saturation=None)
+    assert corr.n_patches == 9
+    np.testing.assert_allclose(corr.matrix, M, atol=1e-12)
+    with pytest.raises(InvalidInputError, match=r"shape \(N, 3\)"):
+        fit_color_correction(np.ones((4, 2)), np.ones((4, 2)), transfer="linear")
+    with pytest.raises(DegenerateConfigurationError, match="independent colours"):
+        fit_color_correction(np.ones((5, 3)), np.ones((5, 3)), transfer="linear", saturation=None)
+    with pytest.raises(UnknownOptionError, match="'linear', 'srgb'"):
+        fit_color_correction(C[:3], C[:3], transfer="gamma")
+
+
+@pytest.mark.parametrize("dtype", [np.float32, np.float64, np.uint8])
+def test_linear_apply_dtypes(dtype: type) -> None:
+    """float32 stays float32, float64 stays float64, uint8 is read as full range (float32)."""
+    rng = np.random.default_rng(1)
+    corr = ColorCorrection("linear", 1, 2 * np.eye(3), transfer="linear")
+    img = (rng.uniform(0, 1, (4, 5, 3)) * (255 if dtype == np.uint8 else 1)).astype(dtype)
+    out = corr.apply(img)
+    assert out.dtype == (np.float64 if dtype == np.float64 else np.float32)
+    ref = img / 255.0 if dtype == np.uint8 else img
+    np.testing.assert_allclose(out, 2 * ref, rtol=1e-6)

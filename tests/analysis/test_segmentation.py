@@ -29,7 +29,7 @@ LECTURE = {"s": (30, 255), "v": (80, 255), "opencv_ranges": True}
 
 @pytest.mark.parametrize("seed", [0, 1, 2])
 def test_iou_on_synthetic_endoscopy(seed: int) -> None:
-    img, truth = synthetic_endoscopy_image(seed)
+    img, truth = synthetic_endoscopy_image(rng=seed)
     seg = segment_hsv(img, (170, 20), **LECTURE)  # the lecture's H in [0, 20], wrapped to 170
     iou = mask_iou(seg.mask, truth)
     raw = mask_iou(seg.raw_mask, truth)
@@ -43,7 +43,7 @@ def test_iou_on_synthetic_endoscopy(seed: int) -> None:
 
 def test_wrap_matters_for_red_tissue() -> None:
     """The lecture's non-wrapping H in [0, 20] misses the pink mucosa at 350-360°."""
-    img, truth = synthetic_endoscopy_image(0)
+    img, truth = synthetic_endoscopy_image(rng=0)
     plain = mask_iou(segment_hsv(img, (0, 20), **LECTURE).mask, truth)
     wrapped = mask_iou(segment_hsv(img, (170, 20), **LECTURE).mask, truth)
     print(f"IoU H in [0, 20]: {plain:.3f}; H in [170, 20] (wrapped): {wrapped:.3f}")
@@ -51,7 +51,7 @@ def test_wrap_matters_for_red_tissue() -> None:
 
 
 def test_degrees_equal_opencv_units() -> None:
-    img, _ = synthetic_endoscopy_image(1)
+    img, _ = synthetic_endoscopy_image(rng=1)
     a = segment_hsv(img, (170, 20), **LECTURE)
     b = segment_hsv(img, (340, 40), (30 / 255, 1.0), (80 / 255, 1.0))
     np.testing.assert_array_equal(a.mask, b.mask)
@@ -61,7 +61,7 @@ def test_degrees_equal_opencv_units() -> None:
 def test_cross_check_opencv_inrange() -> None:
     """Peer cross-check: OpenCV 8-bit HSV + inRange on the same uint8 frame."""
     cv2 = pytest.importorskip("cv2")
-    img, _ = synthetic_endoscopy_image(2)
+    img, _ = synthetic_endoscopy_image(rng=2)
     u8 = np.round(img * 255).astype(np.uint8)
     hsv = cv2.cvtColor(u8, cv2.COLOR_RGB2HSV)
     cv = (cv2.inRange(hsv, (0, 30, 80), (20, 255, 255)) > 0) | (
@@ -81,7 +81,7 @@ def test_cross_check_opencv_inrange() -> None:
 
 @pytest.mark.parametrize("dtype", ["uint8", "uint16", "float32", "float64"])
 def test_dtypes(dtype: str) -> None:
-    img, truth = synthetic_endoscopy_image(0, (96, 96))
+    img, truth = synthetic_endoscopy_image((96, 96), rng=0)
     if dtype.startswith("uint"):
         top = np.iinfo(dtype).max
         x = np.round(img * top).astype(dtype)
@@ -120,7 +120,7 @@ def test_empty_mask_warns() -> None:
 
 def test_chunked_matches_in_memory() -> None:
     da = pytest.importorskip("dask.array")
-    img, _ = synthetic_endoscopy_image(3, (200, 170))
+    img, _ = synthetic_endoscopy_image((200, 170), rng=3)
     u8 = np.round(img * 255).astype(np.uint8)
     lazy = da.from_array(u8, chunks=(90, 80, 3))  # 3 x 3 chunks
     seg_d = segment_hsv(lazy, (170, 20), **LECTURE, min_area=40)
@@ -191,14 +191,14 @@ def test_bad_shapes() -> None:
 
 
 def test_no_warning_for_a_normal_image() -> None:
-    img, _ = synthetic_endoscopy_image(0, (64, 64))
+    img, _ = synthetic_endoscopy_image((64, 64), rng=0)
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         segment_hsv(img, (170, 20), **LECTURE)
 
 
 def test_default_ranges_are_the_lectures_in_either_unit() -> None:
-    img, _ = synthetic_endoscopy_image(0, (64, 64))
+    img, _ = synthetic_endoscopy_image((64, 64), rng=0)
     a = segment_hsv(img)
     b = segment_hsv(img, opencv_ranges=True)
     c = segment_hsv(img, (0, 20), (30, 255), (80, 255), opencv_ranges=True)

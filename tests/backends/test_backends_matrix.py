@@ -199,6 +199,12 @@ CASES: list[Case] = [
     # ---- geometry
     Case("to_homogeneous", g.to_homogeneous, (PTS2,)),
     Case("from_homogeneous", g.from_homogeneous, (PTS3 + [0, 0, 2],)),
+    Case(
+        "from_homogeneous_masked",
+        g.from_homogeneous_masked,
+        (PTS3 * [1, 1, 0] + [0, 0, 1] * (np.arange(7) % 2)[:, None],),  # some at infinity
+        pick=lambda r: r.points,
+    ),
     Case("line_through", g.line_through, (PTS2, PTS2 + [0.5, 0.1])),
     Case("intersect_lines", g.intersect_lines, (LINES, LINES[[1, 2, 0]])),
     Case("are_collinear", g.are_collinear, (PTS2[:3],)),

@@ -84,7 +84,7 @@ def _stain_tree(root: Path, n: int = 6) -> Path:
     for i in range(n):
         sub = root / "slides" / f"scanner{i % 2}"
         sub.mkdir(parents=True, exist_ok=True)
-        img, _, _ = synthetic_stain_image(i, (40, 48), max_concentration=(0.8 + 0.1 * i, 0.6))
+        img, _, _ = synthetic_stain_image((40, 48), max_concentration=(0.8 + 0.1 * i, 0.6), rng=i)
         write_image(sub / f"tile{i}.png", img)
     return root / "slides"
 
@@ -107,7 +107,9 @@ def test_stain_normalize_on_the_cluster(
     from imageform import analysis
 
     src = _stain_tree(tmp_path)
-    target_img, _, _ = analysis.synthetic_stain_image(99, (48, 48), max_concentration=(1.4, 1.0))
+    target_img, _, _ = analysis.synthetic_stain_image(
+        (48, 48), max_concentration=(1.4, 1.0), rng=99
+    )
     target_png = tmp_path / "target.png"
     write_image(target_png, target_img)
     target_arr = read_image(target_png) / 255.0

@@ -58,7 +58,7 @@ def test_spectral_locus_values() -> None:
         (450, (0.15664, 0.01771)),
     ):
         assert xy[wl == w][0] == pytest.approx(want, abs=1e-4)
-    _, xy10 = spectral_locus(10, "uv")
+    _, xy10 = spectral_locus(observer=10, coords="uv")
     assert xy10.shape == (401, 2)
     with pytest.raises(UnknownOptionError):
         spectral_locus(coords="lab")

@@ -151,7 +151,7 @@ def test_parameters_checked() -> None:
         convert([0.5, 0.5, 0.5], "srgb", "lab", standard="bt709")
     with pytest.raises(UnknownOptionError, match="grey method"):
         convert([0.5, 0.5, 0.5], "srgb", "gray", method="mean")
-    got = convert([1.0, 0, 0], "srgb", "ycbcr", standard="bt709", range="limited", bits=10)
+    got = convert([1.0, 0, 0], "srgb", "ycbcr", standard="bt709", signal_range="limited", bits=10)
     np.testing.assert_allclose(got, [250.24, 409.34, 960], atol=0.01)
 
 
@@ -203,6 +203,21 @@ def test_backends(xp_name: str, dst: str) -> None:
     np.testing.assert_allclose(got, convert(x, "srgb", dst), atol=1e-9)
     back = to_np(convert(to_backend(got, xp_name), dst, "srgb"))
     np.testing.assert_allclose(back, x, atol=1e-9)
+
+
+def test_every_edge_names_a_public_function() -> None:
+    """Each graph edge says which public function computes the same step (``path`` shows it)."""
+    import imageform.color as color
+
+    for e in EDGES:
+        assert e.function in color.__all__, (e.src, e.dst, e.function)
+        assert callable(getattr(color, e.function))
+
+
+def test_registries_are_read_only() -> None:
+    with pytest.raises(TypeError):
+        SPACES["mine"] = (3, "")  # type: ignore[index]
+    assert isinstance(EDGES, tuple)
 
 
 def test_python_integers_are_8bit_codes() -> None:

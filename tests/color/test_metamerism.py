@@ -36,7 +36,7 @@ def test_metamer_matches_and_differs(patch: str, observer: object) -> None:
     """The issue's criteria: ΔXYZ (or ΔLMS) < 1e-6 and spectral RMS > 0.05; physically
     valid: reflectance within [0, 1]."""
     r = R[patch]
-    m = metamer(r, observer)  # type: ignore[arg-type]
+    m = metamer(r, observer=observer)  # type: ignore[arg-type]
     assert m.values.min() >= 0.0 and m.values.max() <= 1.0
     assert _rms(m, r) > 0.05
     if observer == "cones":
@@ -44,14 +44,14 @@ def test_metamer_matches_and_differs(patch: str, observer: object) -> None:
     else:
         d = spectrum_to_xyz(m, observer=observer) - spectrum_to_xyz(r, observer=observer)  # type: ignore[arg-type]
     assert np.max(np.abs(d)) < 1e-6
-    assert are_metamers(r, m, observer)  # type: ignore[arg-type]
+    assert are_metamers(r, m, observer=observer)  # type: ignore[arg-type]
 
 
 def test_metamer_breaks_under_another_illuminant() -> None:
     """A metamer under D65 is (in general) not one under A: the metamerism index is > 0."""
     r = R["blue sky"]
     m = metamer(r)
-    assert not are_metamers(r, m, 2, "A")
+    assert not are_metamers(r, m, observer=2, illuminant="A")
     assert metamerism_index(r, m, "D65", "A") > 0.5
     assert metamerism_index(r, m, "D65", "D65") == pytest.approx(0.0, abs=1e-9)
     assert metamerism_index(r, m, "D65", "F11", correct=False) > 0.5
@@ -66,10 +66,14 @@ def test_are_metamers_needs_different_spectra() -> None:
 def test_light_metamer() -> None:
     """Lights (illuminant=None) need only non-negativity."""
     d65 = illuminant("D65").trim(380, 780)
-    m = metamer(d65, 2, None, kind="light")
+    m = metamer(d65, observer=2, illuminant=None, kind="light")
     assert m.values.min() >= 0
-    assert np.allclose(tristimulus(m, 2, None), tristimulus(d65, 2, None), rtol=1e-12)
-    assert are_metamers(d65, m, 2, None)
+    assert np.allclose(
+        tristimulus(m, observer=2, illuminant=None),
+        tristimulus(d65, observer=2, illuminant=None),
+        rtol=1e-12,
+    )
+    assert are_metamers(d65, m, observer=2, illuminant=None)
 
 
 def test_three_primaries_match_any_in_gamut_stimulus() -> None:
@@ -86,7 +90,7 @@ def test_three_primaries_match_any_in_gamut_stimulus() -> None:
         w = match_with_primaries(light, prim)
         assert np.all(w > 0)
         mix = Spectrum(wl, prim.values @ w)
-        assert are_metamers(light, mix, 2, None)
+        assert are_metamers(light, mix, observer=2, illuminant=None)
     mono = Spectrum([499.0, 500.0, 501.0], [0.0, 1.0, 0.0])
     assert np.any(match_with_primaries(mono, prim) < 0)
 

@@ -28,7 +28,7 @@ def test_table_has_every_listed_illuminant_for_both_observers() -> None:
     ],
 )
 def test_gold_cie15(name: str, observer: int, xy: tuple[float, float]) -> None:
-    assert whitepoint_xy(name, observer) == pytest.approx(xy, abs=5e-6)
+    assert whitepoint_xy(name, observer=observer) == pytest.approx(xy, abs=5e-6)
 
 
 @pytest.mark.parametrize("observer", [2, 10])
@@ -44,7 +44,7 @@ def test_cross_check_colour_science(observer: int) -> None:
     for name in NAMES:
         cname = "FL" + name[1:] if name.startswith("F") else name
         ref = colour.CCS_ILLUMINANTS[key][cname]
-        assert whitepoint_xy(name, observer) == pytest.approx(tuple(ref), abs=3e-4)
+        assert whitepoint_xy(name, observer=observer) == pytest.approx(tuple(ref), abs=3e-4)
 
 
 def test_xyz_has_unit_y_and_matches_xy() -> None:

@@ -13,6 +13,7 @@ from imageform.geometry import (
     are_collinear,
     cross_ratio,
     from_homogeneous,
+    from_homogeneous_masked,
     intersect_lines,
     line_through,
     to_homogeneous,
@@ -38,12 +39,12 @@ def test_from_homogeneous_at_infinity_raises_by_default() -> None:
 
 
 def test_from_homogeneous_at_infinity_nan_and_mask() -> None:
-    out, finite = from_homogeneous(
-        [[1.0, 2.0, 0.0], [2.0, 4.0, 2.0]], at_infinity="nan", return_mask=True
-    )
+    out, finite = from_homogeneous_masked([[1.0, 2.0, 0.0], [2.0, 4.0, 2.0]])
     assert np.isnan(out[0]).all()
     np.testing.assert_array_equal(out[1], [1.0, 2.0])
     np.testing.assert_array_equal(finite, [False, True])
+    nan_only = from_homogeneous([[1.0, 2.0, 0.0], [2.0, 4.0, 2.0]], at_infinity="nan")
+    np.testing.assert_array_equal(nan_only, out)
 
 
 def test_from_homogeneous_bad_policy() -> None:

@@ -54,8 +54,8 @@ def test_disc_kernel_normalised_and_radius(r: float) -> None:
 def test_defocus_blur_diameter_equals_circle_of_confusion() -> None:
     f, n, s, p = 0.05, 2.0, 2.0, 10e-6
     depth = 2.5
-    coc = circle_of_confusion(depth, f=f, f_number=n, focus=s)  # metres, a diameter
-    out = defocus_blur(_point(), depth, f=f, f_number=n, focus=s, pixel_pitch=p)
+    coc = circle_of_confusion(depth, focal_length=f, f_number=n, focus=s)  # metres, a diameter
+    out = defocus_blur(_point(), depth, focal_length=f, f_number=n, focus=s, pixel_pitch=p)
     measured_diameter_px = 2 * _radius_of_disc(out, (40, 40))
     assert measured_diameter_px == pytest.approx(coc / p, rel=0.03)
     assert out.sum() == pytest.approx(1.0, abs=1e-9)  # light conserved
@@ -66,7 +66,7 @@ def test_defocus_depth_map_sharp_in_focus_blurred_elsewhere() -> None:
     img[20, 20] = img[20, 60] = 1.0
     depth = np.full(img.shape, 2.0)
     depth[:, 40:] = 3.0
-    out = defocus_blur(img, depth, f=0.05, f_number=2, focus=2.0, pixel_pitch=10e-6)
+    out = defocus_blur(img, depth, focal_length=0.05, f_number=2, focus=2.0, pixel_pitch=10e-6)
     assert out[20, 20] == pytest.approx(1.0)
     assert out[20, 60] < 0.05
 
@@ -82,15 +82,15 @@ def test_blur_by_radius_shapes_and_dtype() -> None:
 # -- spherical aberration ---------------------------------------------------------------------
 def test_spherical_blur_grows_with_cube_of_aperture() -> None:
     # TSA ∝ h³ (Smith, Modern Optical Engineering §3.4): halving N → 8 × blur
-    r1 = spherical_blur_radius(0.05, 4.0, 0.5)
-    r2 = spherical_blur_radius(0.05, 2.0, 0.5)
+    r1 = spherical_blur_radius(focal_length=0.05, f_number=4.0, sa_coefficient=0.5)
+    r2 = spherical_blur_radius(focal_length=0.05, f_number=2.0, sa_coefficient=0.5)
     assert r2 / r1 == pytest.approx(8.0)
     assert r1 == pytest.approx(0.5 * 0.05 / (32 * 4.0**3))
 
 
 def test_spherical_aberration_image_blur_radius_and_field_growth() -> None:
     p = 5e-6
-    r0 = spherical_blur_radius(0.05, 2.0, 0.25) / p  # 9.77 px
+    r0 = spherical_blur_radius(focal_length=0.05, f_number=2.0, sa_coefficient=0.25) / p  # 9.77 px
     img = np.zeros((121, 121))
     img[60, 60] = 1.0
     out = spherical_aberration(
@@ -130,12 +130,12 @@ def test_lateral_ca_magnifies_channels_about_centre() -> None:
 
 def test_chromatic_focal_lengths_abbe() -> None:
     # f_R - f_B = f / V (Hecht §6.3.2); N-BK7 V_d = 64.17 (Schott datasheet)
-    fr, fg, fb = chromatic_focal_lengths(0.05, 64.17)
+    fr, fg, fb = chromatic_focal_lengths(focal_length=0.05, abbe_number=64.17)
     assert fr - fb == pytest.approx(0.05 / 64.17, rel=1e-12) and fg == 0.05
 
 
 def test_axial_ca_defocus_differs_by_channel() -> None:
-    fl = chromatic_focal_lengths(0.05, 30.0)
+    fl = chromatic_focal_lengths(focal_length=0.05, abbe_number=30.0)
     b = axial_chromatic_blur_diameters(
         np.array([2.0, 5.0]), focal_lengths=fl, f_number=2, focus=2.0
     )
@@ -143,7 +143,7 @@ def test_axial_ca_defocus_differs_by_channel() -> None:
     # equal focal lengths reduce to the circle of confusion
     same = axial_chromatic_blur_diameters(5.0, focal_lengths=(0.05,) * 3, f_number=2, focus=2.0)
     np.testing.assert_allclose(
-        same, circle_of_confusion(5.0, f=0.05, f_number=2, focus=2.0), rtol=1e-12
+        same, circle_of_confusion(5.0, focal_length=0.05, f_number=2, focus=2.0), rtol=1e-12
     )
     img = np.zeros((81, 81, 3))
     img[40, 40] = 1.0
@@ -159,12 +159,12 @@ def test_axial_ca_defocus_differs_by_channel() -> None:
 # -- vignetting -------------------------------------------------------------------------------
 def test_cos4_at_known_field_angle() -> None:
     # a pixel 100 px off-centre with f = 100 px is at 45°: cos⁴ 45° = 0.25 (Hecht §5.7.4)
-    fall = cos4_falloff((1, 201), 100.0)
+    fall = cos4_falloff((1, 201), focal_length=100.0)
     assert fall[0, 100] == 1.0
     assert fall[0, 200] == pytest.approx(0.25, abs=1e-12)
     # 30°: tan 30° · f off-centre → cos⁴ 30° = 9/16
     f = 100.0
-    fall2 = cos4_falloff((1, 1), f, centre=(-f * math.tan(math.pi / 6), 0.0))
+    fall2 = cos4_falloff((1, 1), focal_length=f, center=(-f * math.tan(math.pi / 6), 0.0))
     assert fall2[0, 0] == pytest.approx(9 / 16, abs=1e-12)
 
 
@@ -176,11 +176,11 @@ def test_mechanical_vignetting_overlap() -> None:
         (2 * math.pi / 3 - math.sqrt(3) / 2) / math.pi
     )
     v = mechanical_vignetting(
-        (1, 201), 100.0, pupil_radius=1.0, barrel_radius=1.2, barrel_distance=1.0
+        (1, 201), focal_length=100.0, pupil_radius=1.0, barrel_radius=1.2, barrel_distance=1.0
     )
     assert v[0, 100] == 1.0 and np.all(np.diff(v[0, 100:]) <= 0)
     img = np.ones((1, 201, 3))
-    out = apply_vignetting(img, v * cos4_falloff((1, 201), 100.0))
+    out = apply_vignetting(img, v * cos4_falloff((1, 201), focal_length=100.0))
     assert out[0, 200, 0] < out[0, 150, 0] < out[0, 100, 0] == 1.0
 
 
@@ -196,18 +196,20 @@ def test_effects_dtype_policy(dtype: type, want: type) -> None:
         spherical_aberration(
             img, focal_length=0.05, f_number=2, pixel_pitch=10e-6, sa_coefficient=0.2
         ),
-        defocus_blur(img, 3.0, f=0.05, f_number=2, focus=2.0, pixel_pitch=20e-6),
+        defocus_blur(img, 3.0, focal_length=0.05, f_number=2, focus=2.0, pixel_pitch=20e-6),
         axial_chromatic_aberration(
             img,
             3.0,
-            focal_lengths=chromatic_focal_lengths(0.05, 60),
+            focal_lengths=chromatic_focal_lengths(focal_length=0.05, abbe_number=60),
             f_number=2,
             focus=2.0,
             pixel_pitch=20e-6,
         ),
-        apply_vignetting(img, cos4_falloff((24, 32), 30.0)),
+        apply_vignetting(img, cos4_falloff((24, 32), focal_length=30.0)),
     ]
     for out in outs:
         assert out.dtype == want and out.shape == img.shape
     with pytest.raises(InvalidInputError, match="0-255"):
-        defocus_blur(np.round(base * 255), 3.0, f=0.05, f_number=2, focus=2.0, pixel_pitch=20e-6)
+        defocus_blur(
+            np.round(base * 255), 3.0, focal_length=0.05, f_number=2, focus=2.0, pixel_pitch=20e-6
+        )

@@ -9,7 +9,7 @@ import pytest
 
 from imageform.errors import InvalidInputError, UnknownOptionError
 from imageform.sensor import (
-    QUANTISATION_NOISE_DN,
+    QUANTIZATION_NOISE_DN,
     SensorModel,
     ccd_preset,
     cmos_preset,
@@ -49,7 +49,7 @@ def test_poisson_shot_noise_only() -> None:
     y = s.capture(np.full((128, 128, 1), 400.0), exposure_time=0.0, rng=3).astype(float)
     assert s.system_gain == pytest.approx(1.0)
     assert y.mean() == pytest.approx(400, rel=5e-3)
-    assert y.var() == pytest.approx(400 + QUANTISATION_NOISE_DN**2, rel=0.05)
+    assert y.var() == pytest.approx(400 + QUANTIZATION_NOISE_DN**2, rel=0.05)
 
 
 def test_saturation_at_full_well_and_adc() -> None:
@@ -91,26 +91,26 @@ def test_spectral_and_monochromatic_inputs_agree() -> None:
     s = cmos_preset(color=True, **QUIET)
     wl = np.asarray(s.qe_wavelengths)
     e_mono = s.mean_electrons(
-        np.full((2, 2), 1e-3), exposure_time=1e-3, input="irradiance", wavelength_nm=550.0
+        np.full((2, 2), 1e-3), exposure_time=1e-3, quantity="irradiance", wavelength_nm=550.0
     )
     qe = s.quantum_efficiency(550.0)
     mp = photons_per_pixel(1e-3, 550, pixel_area=s.pixel_area, exposure_time=1e-3)
     np.testing.assert_allclose(e_mono[0, 0], s.fill_factor * mp * qe)
     # a flat spectrum of 1e-5 W/m²/nm: electrons = FF Σ QE(λ) E λ Δλ A t / (h c)
     spec = np.full((2, 2, wl.size), 1e-5)
-    e_spec = s.mean_electrons(spec, exposure_time=1e-3, input="irradiance")
+    e_spec = s.mean_electrons(spec, exposure_time=1e-3, quantity="irradiance")
     w = np.full(wl.size, 10.0)
     w[[0, -1]] = 5.0
     ph = 1e-5 * w * s.pixel_area * 1e-3 * wl * 1e-9 / (6.62607015e-34 * 299792458.0)
     want = s.fill_factor * np.asarray(s.qe_curves) @ ph
     np.testing.assert_allclose(e_spec[0, 0], want, rtol=1e-12)
-    assert s.capture(spec, exposure_time=1e-3, input="irradiance", rng=0).shape == (2, 2, 3)
+    assert s.capture(spec, exposure_time=1e-3, quantity="irradiance", rng=0).shape == (2, 2, 3)
     assert e_spec[0, 0, 1] > e_spec[0, 0, 2]  # green channel collects most of a flat spectrum
 
 
-def test_normalise() -> None:
+def test_normalize() -> None:
     s = SensorModel(black_level=64.0, bit_depth=12)
-    np.testing.assert_allclose(s.normalise([64, 4095, 0]), [0.0, 1.0, -64 / 4031])
+    np.testing.assert_allclose(s.normalize([64, 4095, 0]), [0.0, 1.0, -64 / 4031])
 
 
 @pytest.mark.parametrize(
@@ -137,13 +137,13 @@ def test_normalise() -> None:
             r"\(\.\.\., H, W, 1\)",
         ),
         (
-            lambda s: s.capture(np.ones((2, 2, 1)), exposure_time=1.0, rng=0, input="lux"),
+            lambda s: s.capture(np.ones((2, 2, 1)), exposure_time=1.0, rng=0, quantity="lux"),
             UnknownOptionError,
             "valid: 'electrons', 'irradiance', 'photons'",
         ),
         (
             lambda s: s.capture(
-                np.ones((2, 2)), exposure_time=1.0, rng=0, input="photons", wavelength_nm=-5
+                np.ones((2, 2)), exposure_time=1.0, rng=0, quantity="photons", wavelength_nm=-5
             ),
             InvalidInputError,
             "wavelength_nm",

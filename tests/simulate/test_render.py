@@ -116,7 +116,7 @@ def test_rendered_patches_match_spectral_integration() -> None:
     s = scene.sensor
     wl = np.asarray(s.qe_wavelengths)
     sens = Spectrum(wl, (np.asarray(s.qe_curves) * wl).T)
-    ref = spectrum_to_camera_rgb(colorchecker_reflectances(), "A", camera=sens)
+    ref = spectrum_to_camera_rgb(colorchecker_reflectances(), illuminant="A", camera=sens)
     ratio = (rgb / rgb[:, 1:2]) / (ref / ref[:, 1:2])
     np.testing.assert_allclose(ratio, 1.0, rtol=0.01)
     scale = rgb[:, 1] / ref[:, 1]
@@ -180,3 +180,15 @@ def test_lateral_chromatic_aberration_magnifies_red() -> None:
     img = simulate(load_scene(d)).stage("optics").image
     width = (img > 0.5 * img.max(axis=(0, 1))).sum(axis=1)[24]  # the plane's width per channel
     assert width[0] > width[1] > width[2]
+
+
+def test_render_twin_path_matches_kernel_path(monkeypatch: pytest.MonkeyPatch) -> None:
+    from imageform.simulate import default_scene
+
+    scene = default_scene().resized(48)
+    fast = render_scene(scene)
+    monkeypatch.setenv("IMAGEFORM_DISABLE_NUMBA", "1")
+    plain = render_scene(scene)
+    np.testing.assert_array_equal(fast.object_index, plain.object_index)
+    np.testing.assert_allclose(fast.rate, plain.rate, rtol=1e-9, atol=1e-9 * fast.rate.max())
+    np.testing.assert_allclose(fast.depth, plain.depth, rtol=1e-9)

@@ -84,13 +84,15 @@ def test_cct_of_a_and_d65() -> None:
 
     for name, want in (("A", 2856.0), ("D65", 6504.0)):
         for method in ("cie015", "astm_e308"):
-            xyz = spectrum_to_xyz(illuminant(name), None, method=method)
+            xyz = spectrum_to_xyz(illuminant(name), illuminant=None, method=method)
             assert planckian_cct(xyz)[0] == pytest.approx(want, abs=2.0)
             cct, _ = xy_to_cct(xyz[:2] / xyz.sum())
             assert float(cct) == pytest.approx(want, abs=2.0)
     # Duv of A is 0 (a Planckian radiator); D65 lies above the locus (Duv ≈ +0.0032)
-    assert planckian_cct(spectrum_to_xyz(illuminant("A"), None))[1] == pytest.approx(0, abs=2e-5)
-    assert planckian_cct(spectrum_to_xyz(illuminant("D65"), None))[1] == pytest.approx(
+    assert planckian_cct(spectrum_to_xyz(illuminant("A"), illuminant=None))[1] == pytest.approx(
+        0, abs=2e-5
+    )
+    assert planckian_cct(spectrum_to_xyz(illuminant("D65"), illuminant=None))[1] == pytest.approx(
         0.0032, abs=2e-4
     )
     with pytest.raises(InvalidInputError, match="X\\+Y\\+Z > 0"):

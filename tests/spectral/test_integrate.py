@@ -44,7 +44,7 @@ def test_white_points_cie015_table_t3(
 ) -> None:
     """The perfect diffuser under each illuminant gives the white of CIE 015:2018 Table T.3.
     The 1 nm CIE 015 path interpolates the 5 nm table linearly: within 0.02 (of 100)."""
-    xyz = 100 * spectrum_to_xyz(_perfect_white(), name, observer=observer, method=method)
+    xyz = 100 * spectrum_to_xyz(_perfect_white(), illuminant=name, observer=observer, method=method)
     assert xyz == pytest.approx(want, abs=tol)
 
 
@@ -56,7 +56,7 @@ def test_colorchecker_matches_babelcolor_published_lab_d50() -> None:
     r = colorchecker_reflectances()
     lab_pub = xyz_to_lab(xyy_to_xyz(colorchecker_published_xyy("babelcolor")), D50_TABLE_WHITE)
     for method in ("cie015", "astm_e308"):
-        lab = xyz_to_lab(spectrum_to_xyz(r, "D50", method=method), D50_TABLE_WHITE)
+        lab = xyz_to_lab(spectrum_to_xyz(r, illuminant="D50", method=method), D50_TABLE_WHITE)
         de = delta_e_ciede2000(lab, lab_pub)
         assert de.max() < 0.5, (method, de.max())
 
@@ -69,7 +69,7 @@ def test_colorchecker_d65_cross_check_colour_science() -> None:
     r = colorchecker_reflectances()
     cmf = colour.MSDS_CMFS["CIE 1931 2 Degree Standard Observer"]
     d65 = colour.SDS_ILLUMINANTS["D65"]
-    white = spectrum_to_xyz(_perfect_white(), "D65")
+    white = spectrum_to_xyz(_perfect_white(), illuminant="D65")
     for ours_m, ref_m in (("cie015", "Integration"), ("astm_e308", "ASTM E308")):
         ref = np.array(
             [
@@ -77,7 +77,7 @@ def test_colorchecker_d65_cross_check_colour_science() -> None:
                 for sd in colour.SDS_COLOURCHECKERS["BabelColor Average"].values()
             ]
         )
-        ours = spectrum_to_xyz(r, "D65", method=ours_m)
+        ours = spectrum_to_xyz(r, illuminant="D65", method=ours_m)
         de = delta_e_ciede2000(xyz_to_lab(ours, white), xyz_to_lab(ref, white))
         assert de.max() < 0.5, (ours_m, de.max())
 
@@ -90,15 +90,15 @@ def test_sprague_path_matches_colour_science_closely() -> None:
     sds = list(colour.SDS_COLOURCHECKERS["BabelColor Average"].values())
     d65 = colour.SDS_ILLUMINANTS["D65"]
     ref = np.array([colour.sd_to_XYZ(sd, cmf, d65, method="Integration") / 100 for sd in sds])
-    ours = spectrum_to_xyz(colorchecker_reflectances(), "D65", interpolation="sprague")
+    ours = spectrum_to_xyz(colorchecker_reflectances(), illuminant="D65", interpolation="sprague")
     assert np.max(np.abs(ours - ref)) < 1e-5
 
 
 def test_colorchecker_white_and_grey_under_d65() -> None:
     """The greys are neutral under D65 (a* and b* small) and L* falls along the scale."""
     r = colorchecker_reflectances()
-    white = spectrum_to_xyz(_perfect_white(), "D65")
-    lab = xyz_to_lab(spectrum_to_xyz(r, "D65"), white)
+    white = spectrum_to_xyz(_perfect_white(), illuminant="D65")
+    lab = xyz_to_lab(spectrum_to_xyz(r, illuminant="D65"), white)
     greys = lab[18:]
     assert np.all(np.abs(greys[:, 1:]) < 3.0)  # the white patch is slightly yellow: b* 2.7
     assert np.all(np.diff(greys[:, 0]) < 0)  # white 9.5 ... black 2
@@ -112,15 +112,17 @@ def test_multi_and_single_curves_agree() -> None:
 
 def test_lights() -> None:
     d65 = illuminant("D65")
-    xyz = spectrum_to_xyz(d65, None)
+    xyz = spectrum_to_xyz(d65, illuminant=None)
     assert xyz[1] == pytest.approx(1.0)
     # absolute: Km ∫ S ȳ dλ equals the photopic luminance (ȳ = V(λ) by definition)
     s = Spectrum(np.arange(360.0, 831.0), np.full(471, 0.01))
-    assert spectrum_to_xyz(s, None, absolute=True)[1] == pytest.approx(luminance(s), rel=1e-6)
+    assert spectrum_to_xyz(s, illuminant=None, absolute=True)[1] == pytest.approx(
+        luminance(s), rel=1e-6
+    )
     with pytest.raises(InvalidInputError, match="zero luminance"):
-        spectrum_to_xyz(Spectrum([400.0, 500.0], [0.0, 0.0]), None)
+        spectrum_to_xyz(Spectrum([400.0, 500.0], [0.0, 0.0]), illuminant=None)
     with pytest.raises(InvalidInputError, match="lights"):
-        spectrum_to_xyz(s, "D65", absolute=True)
+        spectrum_to_xyz(s, illuminant="D65", absolute=True)
 
 
 def test_luminance_monochromatic_555() -> None:
@@ -138,22 +140,24 @@ def test_lms_and_rod_cone_peaks() -> None:
     """Monochromatic lights excite L most at long, S most at short wavelengths; the
     scotopic/photopic ratio peaks in the blue-green (the Purkinje shift)."""
     wl = np.arange(400.0, 701.0, 10.0)
-    lms = np.array([spectrum_to_lms(Spectrum([w - 1, w, w + 1], [0, 1, 0]), None) for w in wl])
+    lms = np.array(
+        [spectrum_to_lms(Spectrum([w - 1, w, w + 1], [0, 1, 0]), illuminant=None) for w in wl]
+    )
     assert wl[np.argmax(lms[:, 0])] in (560.0, 570.0)
     assert wl[np.argmax(lms[:, 2])] in (440.0, 450.0)
     v, vp = luminous_efficiency(), luminous_efficiency("scotopic")
     assert vp.peak_wavelength() < v.peak_wavelength()
-    white_lms = spectrum_to_lms(_perfect_white(), "D65")
+    white_lms = spectrum_to_lms(_perfect_white(), illuminant="D65")
     assert white_lms == pytest.approx([1.0, 1.0, 1.0])
 
 
 def test_camera_rgb() -> None:
     r = colorchecker_reflectances()
-    rgb = spectrum_to_camera_rgb(r, "D65")
+    rgb = spectrum_to_camera_rgb(r, illuminant="D65")
     assert rgb.shape == (24, 3)
     red, green, blue = rgb[14], rgb[13], rgb[12]  # chart patches 15 red, 14 green, 13 blue
     assert np.argmax(red) == 0 and np.argmax(green) == 1 and np.argmax(blue) == 2
-    white = spectrum_to_camera_rgb(_perfect_white(), "D65")
+    white = spectrum_to_camera_rgb(_perfect_white(), illuminant="D65")
     assert white[1] == pytest.approx(1.0)
     with pytest.raises(UnknownOptionError, match="camera"):
         spectrum_to_camera_rgb(r, camera="canon")
@@ -172,9 +176,9 @@ def test_bad_input() -> None:
     with pytest.raises(InvalidInputError, match="uniformly sampled"):
         spectrum_to_xyz(Spectrum([400.0, 410.0, 430.0], [1, 1, 1]), method="astm_e308")
     with pytest.raises(InvalidInputError, match="unknown illuminant"):
-        spectrum_to_xyz(r, "D93x")
+        spectrum_to_xyz(r, illuminant="D93x")
     with pytest.raises(InvalidInputError, match="single-curve illuminant"):
-        spectrum_to_xyz(r, Spectrum([400, 500], [[1, 1], [1, 1]]))
+        spectrum_to_xyz(r, illuminant=Spectrum([400, 500], [[1, 1], [1, 1]]))
 
 
 def test_resolve_illuminant() -> None:

@@ -40,6 +40,8 @@ from imageform.analysis.segmentation import (
     segment_hsv,
 )
 from imageform.analysis.synthetic import (
+    LabeledImage,
+    StainMixture,
     synthetic_chart_image,
     synthetic_endoscopy_image,
     synthetic_shading_scene,
@@ -54,8 +56,10 @@ __all__ = [
     "CorrectionReport",
     "EmptyMaskWarning",
     "HsvSegmentation",
+    "LabeledImage",
     "MacenkoStains",
     "ReinhardStats",
+    "StainMixture",
     "chart_patches",
     "correction_report",
     "fit_color_correction",

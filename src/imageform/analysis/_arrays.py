@@ -35,8 +35,12 @@ def is_dask(x: object) -> bool:
     return type(x).__module__.startswith("dask.") and hasattr(x, "map_blocks")
 
 
-def image_in(image: object, name: str = "image", *, channels: int | None = 3) -> Any:
+def image_in(
+    image: object, name: str = "image", *, channels: int | None = 3, range_check: bool = True
+) -> Any:
     """An RGB image as floats in [0, 1]: NumPy through ``as_image``, Dask kept lazy.
+
+    ``range_check=False`` for linear-light values, which may exceed 1.
 
     Dask input: uint8/uint16 are divided by 255/65535 lazily (float32), float32/float64
     are kept; the 0-255-floats range check of ``as_image`` needs a pass over the data and
@@ -59,7 +63,7 @@ def image_in(image: object, name: str = "image", *, channels: int | None = 3) ->
         )
     if not isinstance(image, np.ndarray) and hasattr(image, "__array_namespace__"):
         image = to_numpy(image)
-    return np.asarray(as_image(image, name, channels=channels))
+    return np.asarray(as_image(image, name, channels=channels, range_check=range_check))
 
 
 def exact_quantile(values: Any, q: float, *, bins: int = 4096) -> float:

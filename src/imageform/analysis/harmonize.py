@@ -1,10 +1,15 @@
-"""Colour harmonisation between two devices from a colour chart imaged on both.
+"""Colour correction from a colour chart: one device to another, or camera RGB to sRGB.
 
 The lecture's question 14: the same tissue scanned at two sites gives different RGB. Image
 one chart on both devices, fit a correction from device A's patch values to device B's
 (the reference) in linear light, check CIEDE2000 per patch before and after, and apply it
 to A's images. Two models: a 3×3 matrix, and the root-polynomial expansion of Finlayson,
 Mackiewicz & Hurlbert (2015), whose terms all scale linearly with exposure.
+
+:func:`fit_color_correction` is imageform's one colour-correction fit: the simulator's
+camera-RGB-to-linear-sRGB matrix is the same fit on linear patch values
+(``transfer="linear"``). The matrix applies to row vectors, ``terms @ matrix.T`` (the
+project's convention for points and colours).
 """
 
 from __future__ import annotations
@@ -12,6 +17,7 @@ from __future__ import annotations
 import warnings
 from dataclasses import dataclass
 from pathlib import Path
+from types import MappingProxyType
 from typing import Any
 
 import numpy as np
@@ -35,8 +41,13 @@ __all__ = [
     "root_polynomial_terms",
 ]
 
-#: Correction models and the degrees they accept.
-CORRECTION_METHODS = {"linear": (1,), "root_polynomial": (1, 2, 3)}
+#: Encodings of the patch values (and of the images a correction applies to).
+_TRANSFERS = ("srgb", "linear")
+
+#: Correction models and the degrees they accept (read-only).
+CORRECTION_METHODS: MappingProxyType[str, tuple[int, ...]] = MappingProxyType(
+    {"linear": (1,), "root_polynomial": (1, 2, 3)}
+)
 
 
 class ChartWarning(ImageformWarning):
@@ -77,35 +88,53 @@ def root_polynomial_terms(rgb: Any, degree: int) -> Any:
     return np.stack(terms, axis=-1)
 
 
-def _apply_block(rgb: np.ndarray, matrix: np.ndarray, degree: int, clip: bool) -> np.ndarray:
-    lin = srgb_decode(np, rgb)
+def _linear_light(x: np.ndarray, transfer: str) -> np.ndarray:
+    """Values in linear light: as they are (``"linear"``) or decoded from sRGB."""
+    return x if transfer == "linear" else np.asarray(srgb_decode(np, x))
+
+
+def _apply_block(
+    rgb: np.ndarray, matrix: np.ndarray, degree: int, clip: bool, transfer: str
+) -> np.ndarray:
+    lin = _linear_light(rgb, transfer)
     out = root_polynomial_terms(lin, degree) @ matrix.T.astype(rgb.dtype)
-    enc = np.asarray(srgb_encode(np, out), dtype=rgb.dtype)
+    enc = out if transfer == "linear" else np.asarray(srgb_encode(np, out), dtype=rgb.dtype)
     return np.clip(enc, 0.0, 1.0) if clip else enc
 
 
 @dataclass(frozen=True)
 class ColorCorrection:
-    """A fitted correction: ``matrix`` (3, n_terms) maps the expanded linear sRGB of device A
-    to linear sRGB of device B (row vectors: ``terms @ matrix.T``)."""
+    """A fitted correction: ``matrix`` (3, n_terms) maps the expanded linear RGB of device A
+    to linear RGB of the reference (row vectors: ``terms @ matrix.T``).
+
+    ``transfer`` is the encoding of the values it was fitted on and applies to: ``"srgb"``
+    (decoded to linear light, corrected, re-encoded) or ``"linear"`` (corrected as is).
+    """
 
     method: str
     degree: int
     matrix: np.ndarray
     n_patches: int = 0
+    transfer: str = "srgb"
 
     def apply(self, image: object, *, clip: bool = False) -> Any:
-        """Correct an encoded sRGB image from device A (NumPy, uint8/uint16, or Dask chunk-wise).
+        """Correct an image from device A (NumPy, uint8/uint16, or Dask chunk-wise).
 
-        Decodes to linear light, applies the model, re-encodes; values outside [0, 1] are
-        kept unless ``clip=True``.
+        With ``transfer="srgb"`` the encoded sRGB image is decoded to linear light,
+        corrected and re-encoded; with ``"linear"`` the linear image is corrected as is
+        (``image @ matrix.T`` for the 3×3 model). Values outside [0, 1] are kept unless
+        ``clip=True``.
 
         >>> c = ColorCorrection("linear", 1, np.eye(3) * 0.5)
         >>> c.apply(np.array([[[1.0, 1.0, 1.0]]])).round(4).tolist()
         [[[0.7354, 0.7354, 0.7354]]]
+        >>> ColorCorrection("linear", 1, np.eye(3) * 0.5, transfer="linear").apply(
+        ...     np.array([[[1.0, 1.0, 1.0]]])).tolist()
+        [[[0.5, 0.5, 0.5]]]
         """
-        rgb = image_in(image)
-        args = (np.asarray(self.matrix, dtype=np.float64), int(self.degree), bool(clip))
+        tf = check_option(self.transfer, _TRANSFERS, "correction transfer")
+        rgb = image_in(image, range_check=tf == "srgb")
+        args = (np.asarray(self.matrix, dtype=np.float64), int(self.degree), bool(clip), tf)
         if is_dask(rgb):
             return rgb.map_blocks(_apply_block, *args, dtype=rgb.dtype)
         return _apply_block(rgb, *args)
@@ -117,6 +146,7 @@ class ColorCorrection:
             {
                 "kind": "color_correction",
                 "space": "linear_srgb",
+                "transfer": self.transfer,
                 "method": self.method,
                 "degree": int(self.degree),
                 "matrix": np.asarray(self.matrix).tolist(),
@@ -132,6 +162,7 @@ class ColorCorrection:
             method = check_option(d["method"], CORRECTION_METHODS, "correction method")
             degree = int(d["degree"])
             matrix = np.asarray(d["matrix"], dtype=np.float64)
+            transfer = check_option(d.get("transfer", "srgb"), _TRANSFERS, "correction transfer")
         except (KeyError, TypeError, ValueError) as exc:
             raise InvalidInputError(f"malformed colour correction in {path}: {exc}") from exc
         n_terms = root_polynomial_terms(np.ones(3), degree).shape[-1]
@@ -139,7 +170,7 @@ class ColorCorrection:
             raise InvalidInputError(
                 f"expected a matrix of shape (3, {n_terms}) in {path}, got {matrix.shape}"
             )
-        return cls(method, degree, matrix, int(d.get("n_patches", 0)))
+        return cls(method, degree, matrix, int(d.get("n_patches", 0)), transfer)
 
 
 @dataclass(frozen=True)
@@ -276,30 +307,42 @@ def fit_color_correction(
     method: str = "linear",
     degree: int = 2,
     *,
-    saturation: float = 1.0,
+    transfer: str = "srgb",
+    saturation: float | None = 1.0,
 ) -> ColorCorrection:
-    """Least-squares colour correction from device A's chart (``measured``) to device B's.
+    """Least-squares colour correction from device A's chart (``measured``) to the reference.
 
     .. math:: \\hat M = \\arg\\min_M \\sum_i \\lVert \\rho(a_i) M^T - b_i \\rVert^2
-        = (\\rho(A)^T \\rho(A))^{-1} \\rho(A)^T B
+        = \\big((\\rho(A)^T \\rho(A))^{-1} \\rho(A)^T B\\big)^T
 
-    with :math:`a_i, b_i` the linear-light sRGB of patch *i* (decoded from the encoded
-    values), :math:`\\rho` the identity (``"linear"``, 3×3) or the root-polynomial expansion
-    of ``degree`` (:func:`root_polynomial_terms`).
+    with :math:`a_i, b_i` the linear-light RGB of patch *i* (rows of A and B),
+    :math:`\\rho` the identity (``"linear"``, 3×3) or the root-polynomial expansion of
+    ``degree`` (:func:`root_polynomial_terms`). The fitted ``matrix`` is :math:`\\hat M`
+    for row vectors: the corrected colour is ``rho(a) @ matrix.T``.
 
     Parameters
     ----------
     measured, reference : array_like, shape (N, 3), or ChartPatches
-        Encoded sRGB patch values in [0, 1] of the same N patches. Patches flagged in a
-        :class:`ChartPatches`, and patches where either side reaches ``saturation`` in any
-        channel, are left out with a :class:`ChartWarning`.
+        Patch values of the same N patches, encoded as ``transfer`` says. Patches flagged
+        in a :class:`ChartPatches` (saturated, missing: mark non-finite rows as missing),
+        and patches where either side reaches ``saturation`` in any channel, are left out
+        (the latter with a :class:`ChartWarning`).
     method : {"linear", "root_polynomial"}
     degree : int
         Root-polynomial degree (1, 2 or 3); ignored for ``"linear"``.
+    transfer : {"srgb", "linear"}, keyword-only
+        ``"srgb"``: encoded sRGB values in [0, 1], decoded to linear light for the fit
+        (device to device). ``"linear"``: linear values, fitted as they are (e.g. the
+        white-balanced camera RGB of a chart against its linear sRGB ground truth).
+    saturation : float or None, keyword-only
+        The clipping level; ``None`` leaves no patch out for saturation (linear data above
+        1 is not clipped).
 
     Returns
     -------
     ColorCorrection
+        Its ``transfer`` is the patches'; :meth:`ColorCorrection.apply` takes images in the
+        same encoding.
 
     Raises
     ------
@@ -315,7 +358,12 @@ def fit_color_correction(
     >>> b = fit_color_correction(a, a).apply(a)
     >>> float(np.abs(b - a).max()) < 1e-9
     True
+    >>> M = np.array([[0.9, 0.1, 0.0], [0.05, 0.9, 0.05], [0.0, 0.2, 0.8]])
+    >>> c = fit_color_correction(a, a @ M.T, transfer="linear")
+    >>> bool(np.allclose(c.matrix, M))  # row vectors: reference = measured @ matrix.T
+    True
     """
+    tf = check_option(transfer, _TRANSFERS, "patch encoding (transfer)")
     key = check_option(method, CORRECTION_METHODS, "correction method")
     deg = 1 if key == "linear" else int(degree)
     if deg not in CORRECTION_METHODS[key]:
@@ -323,7 +371,10 @@ def fit_color_correction(
             f"expected degree in {CORRECTION_METHODS[key]} for {key}, got {degree!r}"
         )
     a, va, b, vb = _paired_patches(measured, reference)
-    sat = ((a >= saturation).any(axis=1) | (b >= saturation).any(axis=1)) & va & vb
+    if saturation is None:
+        sat = np.zeros(a.shape[0], dtype=bool)
+    else:
+        sat = ((a >= saturation).any(axis=1) | (b >= saturation).any(axis=1)) & va & vb
     use = va & vb & ~sat
     if sat.any():
         warnings.warn(
@@ -332,7 +383,7 @@ def fit_color_correction(
             ChartWarning,
             stacklevel=2,
         )
-    terms = root_polynomial_terms(srgb_decode(np, a[use]), deg)
+    terms = root_polynomial_terms(_linear_light(a[use], tf), deg)
     n_terms = terms.shape[1]
     if terms.shape[0] < n_terms:
         raise DegenerateConfigurationError(
@@ -342,10 +393,10 @@ def fit_color_correction(
     if np.linalg.matrix_rank(terms) < n_terms:
         raise DegenerateConfigurationError(
             f"the chart does not determine a {key} correction of degree {deg}: its patches "
-            "span too few colours (rank-deficient design)"
+            "span too few independent colours (rank-deficient design)"
         )
-    sol, *_ = np.linalg.lstsq(terms, srgb_decode(np, b[use]), rcond=None)
-    return ColorCorrection(key, deg, sol.T.copy(), int(use.sum()))
+    sol, *_ = np.linalg.lstsq(terms, _linear_light(b[use], tf), rcond=None)
+    return ColorCorrection(key, deg, sol.T.copy(), int(use.sum()), tf)
 
 
 @dataclass(frozen=True)

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
+from types import MappingProxyType
 from typing import Any
 
 import numpy as np
@@ -147,10 +148,12 @@ def stain_concentrations(
 
 
 #: Rules for transparent (background) pixels: drop a pixel when ...
-TRANSPARENT_RULES = {
-    "any_channel": "any channel's OD < beta (Macenko's reference code)",
-    "norm": "the OD vector's length ||OD||_2 < beta (keeps pure stains of any hue)",
-}
+TRANSPARENT_RULES: MappingProxyType[str, str] = MappingProxyType(
+    {
+        "any_channel": "any channel's OD < beta (Macenko's reference code)",
+        "norm": "the OD vector's length ||OD||_2 < beta (keeps pure stains of any hue)",
+    }
+)
 
 
 def _fit(od: Any, beta: float, alpha: float, min_pixels: int, rule: str) -> tuple[np.ndarray, int]:
@@ -267,7 +270,7 @@ def macenko_stains(
     analysis", ISBI 2009, pp. 1107-1110, sec. 2 and Fig. 1.
 
     >>> from imageform.analysis.synthetic import synthetic_stain_image
-    >>> img, S, _ = synthetic_stain_image(0)
+    >>> img, S, _ = synthetic_stain_image(rng=0)
     >>> est = macenko_stains(img, transparent="norm")
     >>> [round(stain_angle(est.stain_matrix[i], S[i]), 1) for i in range(2)]
     [0.4, 0.3]
@@ -340,8 +343,8 @@ def macenko_normalize(
     Source: Macenko et al. 2009, sec. 2 (normalisation step).
 
     >>> from imageform.analysis.synthetic import synthetic_stain_image
-    >>> a, _, _ = synthetic_stain_image(0, max_concentration=(0.6, 1.0))
-    >>> b, _, _ = synthetic_stain_image(1)
+    >>> a, _, _ = synthetic_stain_image(max_concentration=(0.6, 1.0), rng=0)
+    >>> b, _, _ = synthetic_stain_image(rng=1)
     >>> out = macenko_normalize(a, b)
     >>> ratio = macenko_stains(out).max_concentrations / macenko_stains(b).max_concentrations
     >>> np.round(ratio, 2).tolist()

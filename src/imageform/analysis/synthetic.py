@@ -1,15 +1,22 @@
 """Labelled synthetic images for testing and demonstrating the analysis tools.
 
-Each generator is seeded and returns the ground truth with the image: an endoscopy-like
-frame with its tissue mask, an H&E mixture with its stain vectors (Beer-Lambert), a colour
-chart image, and a two-material scene under a shading gradient.
+Each generator is seeded (keyword-only ``rng``, SPEC 7: an int seed, a NumPy Generator or
+None) and returns the ground truth with the image: an endoscopy-like frame with its tissue
+mask, an H&E mixture with its stain vectors (Beer-Lambert), a colour chart image, and a
+two-material scene under a shading gradient.
 """
 
 from __future__ import annotations
 
+import functools
+import numbers
+from typing import Any, NamedTuple
+
 import numpy as np
 
+from imageform import _deprecate
 from imageform._colormath import hsv_to_rgb, srgb_decode, srgb_encode
+from imageform._random import RNGLike, as_rng
 from imageform.errors import InvalidInputError
 
 __all__ = [
@@ -17,6 +24,8 @@ __all__ = [
     "RUIFROK_DAB",
     "RUIFROK_EOSIN",
     "RUIFROK_HEMATOXYLIN",
+    "LabeledImage",
+    "StainMixture",
     "synthetic_chart_image",
     "synthetic_endoscopy_image",
     "synthetic_shading_scene",
@@ -70,9 +79,55 @@ def _smooth_noise(rng: np.random.Generator, shape: tuple[int, int], scale: float
     return n / np.max(np.abs(n))
 
 
+class LabeledImage(NamedTuple):
+    """A synthetic image and its ground-truth mask."""
+
+    #: Encoded sRGB in [0, 1], shape (H, W, 3), float64.
+    image: np.ndarray
+    #: The true segmentation, bool, shape (H, W).
+    mask: np.ndarray
+
+
+class StainMixture(NamedTuple):
+    """A synthetic stained slide and the stains that made it (:func:`synthetic_stain_image`)."""
+
+    #: Transmitted light in (0, 1], shape (H, W, 3), float64.
+    image: np.ndarray
+    #: The unit-length optical-density vectors used (rows), shape (2, 3).
+    stain_matrix: np.ndarray
+    #: Stain concentrations per pixel, shape (H, W, 2).
+    concentrations: np.ndarray
+
+
+def _seed_first(fn: Any) -> Any:
+    """The old calls (``synthetic_...(0, shape)``, ``seed=0``) warn and still work."""
+    name = f"imageform.analysis.{fn.__name__}"
+
+    @functools.wraps(fn)
+    def wrapper(*args: Any, **kwargs: Any) -> Any:
+        if "seed" in kwargs:
+            if "rng" in kwargs:
+                raise TypeError(f"{name}() got both seed= (deprecated) and rng=")
+            _deprecate.warn(f"{name}(seed=...)", "use rng= instead")
+            kwargs["rng"] = kwargs.pop("seed")
+        if args and isinstance(args[0], numbers.Integral) and not isinstance(args[0], bool):
+            if "rng" in kwargs:
+                raise TypeError(f"{name}() got the seed twice (first argument and rng=)")
+            _deprecate.warn(
+                f"passing the seed first to {name}()",
+                "pass it as rng=<seed> (the first parameter is now shape)",
+            )
+            kwargs["rng"] = args[0]
+            args = args[1:]
+        return fn(*args, **kwargs)
+
+    return wrapper
+
+
+@_seed_first
 def synthetic_endoscopy_image(
-    seed: int = 0, shape: tuple[int, int] = (256, 256)
-) -> tuple[np.ndarray, np.ndarray]:
+    shape: tuple[int, int] = (256, 256), *, rng: RNGLike = 0
+) -> LabeledImage:
     """An endoscopy-like frame and its tissue mask.
 
     Reddish/pink mucosa (hue 350°..12°, S 0.35..0.7) with smooth texture, a dark lumen
@@ -82,27 +137,27 @@ def synthetic_endoscopy_image(
 
     Returns
     -------
-    image : ndarray, shape (H, W, 3), float64
-        Encoded sRGB in [0, 1].
-    true_mask : ndarray of bool, shape (H, W)
+    LabeledImage
+        ``image`` : ndarray (H, W, 3) float64, encoded sRGB in [0, 1]; ``mask`` : ndarray of
+        bool (H, W), the true tissue mask.
 
-    >>> img, m = synthetic_endoscopy_image(0)
+    >>> img, m = synthetic_endoscopy_image(rng=0)
     >>> img.shape, round(float(m.mean()), 3)
     ((256, 256, 3), 0.887)
     """
     hgt, wid = (int(v) for v in shape)
     if hgt < 32 or wid < 32:
         raise InvalidInputError(f"expected shape of at least (32, 32), got {shape}")
-    rng = np.random.default_rng(seed)
+    gen = as_rng(rng)
     y, x = np.mgrid[0:hgt, 0:wid].astype(np.float64)
     yn, xn = (y - hgt / 2) / (hgt / 2), (x - wid / 2) / (wid / 2)
     # mucosa: hue wanders 350°..12° (through red), saturation 0.35..0.7
-    hue = np.mod(1.0 + 11.0 * _smooth_noise(rng, (hgt, wid), hgt / 12), 360.0)
-    sat = 0.525 + 0.175 * _smooth_noise(rng, (hgt, wid), hgt / 16)
-    val = 0.85 + 0.1 * _smooth_noise(rng, (hgt, wid), hgt / 20)
+    hue = np.mod(1.0 + 11.0 * _smooth_noise(gen, (hgt, wid), hgt / 12), 360.0)
+    sat = 0.525 + 0.175 * _smooth_noise(gen, (hgt, wid), hgt / 16)
+    val = 0.85 + 0.1 * _smooth_noise(gen, (hgt, wid), hgt / 20)
     truth = np.ones((hgt, wid), dtype=bool)
     # dark lumen: an ellipse off centre
-    cy, cx = rng.uniform(-0.3, 0.3, 2)
+    cy, cx = gen.uniform(-0.3, 0.3, 2)
     lumen = ((yn - cy) / 0.28) ** 2 + ((xn - cx) / 0.2) ** 2 <= 1.0
     val = np.where(lumen, 0.08, val)
     truth &= ~lumen
@@ -115,15 +170,15 @@ def synthetic_endoscopy_image(
     )
     truth &= ~inst
     # whitish mucus patch
-    my, mx = rng.uniform(0.35, 0.6, 2) * rng.choice([-1, 1], 2)
+    my, mx = gen.uniform(0.35, 0.6, 2) * gen.choice([-1, 1], 2)
     mucus = ((yn - my) / 0.12) ** 2 + ((xn - mx) / 0.18) ** 2 <= 1.0
     mucus &= ~inst & ~lumen
     sat, val = np.where(mucus, 0.06, sat), np.where(mucus, 0.92, val)
     truth &= ~mucus
     # specular highlights: small discs
     for _ in range(12):
-        py, px = rng.uniform(0, hgt), rng.uniform(0, wid)
-        r = rng.uniform(2.0, 5.0)
+        py, px = gen.uniform(0, hgt), gen.uniform(0, wid)
+        r = gen.uniform(2.0, 5.0)
         spot = (y - py) ** 2 + (x - px) ** 2 <= r * r
         sat, val = np.where(spot, 0.03, sat), np.where(spot, 1.0, val)
         truth &= ~spot
@@ -131,17 +186,19 @@ def synthetic_endoscopy_image(
     vig = 1.0 - 0.45 * (xn**2 + yn**2) / 2.0
     val = np.where(val >= 1.0, val, val * vig)
     rgb = hsv_to_rgb(np, np.stack([hue, sat, val], axis=-1))
-    rgb = rgb + rng.normal(0.0, 0.03, rgb.shape)
-    return np.clip(rgb, 0.0, 1.0), truth
+    rgb = rgb + gen.normal(0.0, 0.03, rgb.shape)
+    return LabeledImage(np.clip(rgb, 0.0, 1.0), truth)
 
 
+@_seed_first
 def synthetic_stain_image(
-    seed: int = 0,
     shape: tuple[int, int] = (128, 128),
     stains: tuple[tuple[float, float, float], ...] = (RUIFROK_HEMATOXYLIN, RUIFROK_EOSIN),
     max_concentration: tuple[float, float] = (1.2, 0.8),
     noise: float = 0.002,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    *,
+    rng: RNGLike = 0,
+) -> StainMixture:
     """A two-stain mixture by Beer-Lambert: :math:`I = 10^{-C S}` (I₀ = 1).
 
     A third of the pixels holds the first stain only, a third the second only, a
@@ -149,29 +206,29 @@ def synthetic_stain_image(
 
     Returns
     -------
-    image : ndarray, shape (H, W, 3), float64 in (0, 1]
-    stain_matrix : ndarray, shape (2, 3)
-        The unit-length optical-density vectors used (rows).
-    concentrations : ndarray, shape (H, W, 2)
+    StainMixture
+        ``image`` : ndarray (H, W, 3) float64 in (0, 1]; ``stain_matrix`` : ndarray (2, 3),
+        the unit-length optical-density vectors used (rows); ``concentrations`` : ndarray
+        (H, W, 2).
 
     Source: Ruifrok & Johnston 2001 (stain vectors, Beer-Lambert model).
 
-    >>> img, S, C = synthetic_stain_image(0)
+    >>> img, S, C = synthetic_stain_image(rng=0)
     >>> S.round(3).tolist()[0]
     [0.651, 0.701, 0.29]
     """
-    rng = np.random.default_rng(seed)
+    gen = as_rng(rng)
     s = np.asarray(stains, dtype=np.float64)
     s = s / np.linalg.norm(s, axis=1, keepdims=True)
     hgt, wid = shape
-    kind = rng.choice(4, size=(hgt, wid), p=[1 / 3, 1 / 3, 1 / 4, 1 - 1 / 3 - 1 / 3 - 1 / 4])
-    c = rng.uniform(0.15, 1.0, (hgt, wid, 2)) * np.asarray(max_concentration)
+    kind = gen.choice(4, size=(hgt, wid), p=[1 / 3, 1 / 3, 1 / 4, 1 - 1 / 3 - 1 / 3 - 1 / 4])
+    c = gen.uniform(0.15, 1.0, (hgt, wid, 2)) * np.asarray(max_concentration)
     c[kind == 0, 1] = 0.0
     c[kind == 1, 0] = 0.0
-    c[kind == 3] = rng.uniform(0.0, 0.04, (int((kind == 3).sum()), 2))
+    c[kind == 3] = gen.uniform(0.0, 0.04, (int((kind == 3).sum()), 2))
     od = c @ s
-    img = 10.0 ** (-od) + rng.normal(0.0, noise, od.shape)
-    return np.clip(img, 1 / 255, 1.0), s, c
+    img = 10.0 ** (-od) + gen.normal(0.0, noise, od.shape)
+    return StainMixture(np.clip(img, 1 / 255, 1.0), s, c)
 
 
 def synthetic_chart_image(
@@ -209,9 +266,13 @@ def synthetic_chart_image(
     return img
 
 
+@_seed_first
 def synthetic_shading_scene(
-    seed: int = 0, shape: tuple[int, int] = (128, 192), shading: tuple[float, float] = (1.0, 0.2)
-) -> tuple[np.ndarray, np.ndarray]:
+    shape: tuple[int, int] = (128, 192),
+    shading: tuple[float, float] = (1.0, 0.2),
+    *,
+    rng: RNGLike = 0,
+) -> LabeledImage:
     """Red blobs on a yellow-green background under a left-to-right illumination ramp.
 
     The illumination multiplies *linear* light from ``shading[0]`` at the left edge to
@@ -219,26 +280,27 @@ def synthetic_shading_scene(
 
     Returns
     -------
-    image : ndarray, shape (H, W, 3), float64 encoded sRGB
-    true_mask : ndarray of bool, shape (H, W) (the red objects)
+    LabeledImage
+        ``image`` : ndarray (H, W, 3) float64, encoded sRGB; ``mask`` : ndarray of bool
+        (H, W), the red objects.
 
-    >>> img, m = synthetic_shading_scene(0)
+    >>> img, m = synthetic_shading_scene(rng=0)
     >>> img.shape, bool(m.any())
     ((128, 192, 3), True)
     """
-    rng = np.random.default_rng(seed)
+    gen = as_rng(rng)
     hgt, wid = shape
     y, x = np.mgrid[0:hgt, 0:wid].astype(np.float64)
     truth = np.zeros((hgt, wid), dtype=bool)
     for k in range(8):
-        cy = rng.uniform(0.2, 0.8) * hgt
+        cy = gen.uniform(0.2, 0.8) * hgt
         cx = (k + 0.5) / 8 * wid
-        r = rng.uniform(0.07, 0.12) * hgt
+        r = gen.uniform(0.07, 0.12) * hgt
         truth |= (y - cy) ** 2 + (x - cx) ** 2 <= r * r
     red = np.array([0.78, 0.22, 0.2])
     bg = np.array([0.62, 0.66, 0.3])
-    enc = np.where(truth[..., None], red, bg) + 0.02 * _smooth_noise(rng, shape, 3.0)[..., None]
+    enc = np.where(truth[..., None], red, bg) + 0.02 * _smooth_noise(gen, shape, 3.0)[..., None]
     lin = srgb_decode(np, np.clip(enc, 0, 1))
     ramp = np.linspace(shading[0], shading[1], wid)[None, :, None]
-    out = srgb_encode(np, lin * ramp) + rng.normal(0, 0.004, lin.shape)
-    return np.clip(out, 0.0, 1.0), truth
+    out = srgb_encode(np, lin * ramp) + gen.normal(0, 0.004, lin.shape)
+    return LabeledImage(np.clip(out, 0.0, 1.0), truth)

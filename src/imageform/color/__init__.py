@@ -21,6 +21,7 @@ from imageform.color.cct import (
 )
 from imageform.color.chromaticity import (
     CHROMATICITY_COORDS,
+    SpectralLocus,
     check_in_locus,
     in_locus,
     polygon_area,
@@ -60,6 +61,7 @@ from imageform.color.convert import (
 from imageform.color.cvd import (
     CVD_DEFICIENCIES,
     CVD_METHODS,
+    BrettelPlanes,
     brettel_planes,
     cvd_matrix,
     machado_matrix,
@@ -146,6 +148,7 @@ from imageform.color.rgb_spaces import (
 from imageform.color.subsampling import (
     CHROMA_SCHEMES,
     CHROMA_SITINGS,
+    SubsampledChroma,
     chroma_subsample,
     chroma_upsample,
     subsample_round_trip,
@@ -216,10 +219,13 @@ __all__ = [
     "WHITEPOINTS_XY",
     "WHITE_BALANCE_METHODS",
     "YCBCR_STANDARDS",
+    "BrettelPlanes",
     "GamutFigures",
     "LinearLightComparison",
     "PaletteCheck",
     "RGBSpace",
+    "SpectralLocus",
+    "SubsampledChroma",
     "WhiteBalanceResult",
     "adobe_rgb_to_linear",
     "are_metamers",

@@ -41,20 +41,20 @@ def dispatch(image: np.ndarray, s: str, d: str, p: dict[str, Any]) -> np.ndarray
 
     stats = None
     if (s, d) == ("srgb", "lab"):
-        w = resolve_white(p["white"], p.get("observer", 2))
+        w = resolve_white(p["white"], observer=p.get("observer", 2))
         m = rgb_to_xyz_matrix("srgb") / w[:, None]
         if image.dtype == np.float64:
             as_image(image, "srgb image")
         out, stats = color_lab.srgb_to_lab(image, m)
     elif (s, d) == ("lab", "srgb"):
         check_finite(image, "lab image")
-        w = resolve_white(p["white"], p.get("observer", 2))
+        w = resolve_white(p["white"], observer=p.get("observer", 2))
         out = color_lab.lab_to_srgb(image, xyz_to_rgb_matrix("srgb") * w[None, :])
     elif (s, d) == ("srgb", "hsv"):
         out, stats = color_simple.srgb_to_hsv(image)
     else:
         _, kr, kb = ycbcr._coeffs(p.get("standard", "bt601"))
-        yg, yo, cg, co = ycbcr._scale(p.get("range", "full"), p.get("bits"))
+        yg, yo, cg, co = ycbcr._scale(p.get("signal_range", "full"), p.get("bits"))
         kg = 1.0 - kr - kb
         a = np.array(
             [

@@ -109,8 +109,8 @@ def chromatic_adaptation_matrix(
     D = float(degree)
     if not 0.0 <= D <= 1.0:
         raise InvalidInputError(f"expected degree of adaptation D in [0, 1], got {degree!r}")
-    ws = resolve_white(src_white, observer)
-    wd = resolve_white(dst_white, observer)
+    ws = resolve_white(src_white, observer=observer)
+    wd = resolve_white(dst_white, observer=observer)
     m = _CAT[key]
     rho_s = m @ ws
     rho_d = m @ wd

@@ -11,11 +11,12 @@ all physically realisable chromaticities.
 from __future__ import annotations
 
 from functools import lru_cache
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 import numpy.typing as npt
 
+from imageform import _deprecate
 from imageform._backend import device_of, namespace, to_numpy
 from imageform._dask import chunkwise
 from imageform._validate import as_points, check_option
@@ -23,6 +24,7 @@ from imageform.errors import InvalidInputError
 
 __all__ = [
     "CHROMATICITY_COORDS",
+    "SpectralLocus",
     "check_in_locus",
     "in_locus",
     "polygon_area",
@@ -114,15 +116,28 @@ def _locus(observer: str, coords: str, lo: float, hi: float) -> tuple[np.ndarray
     return wl, pts
 
 
+class SpectralLocus(NamedTuple):
+    """The result of :func:`spectral_locus` (read-only arrays)."""
+
+    #: Wavelengths, shape (N,), nm.
+    wavelengths: np.ndarray
+    #: Chromaticities (x, y) or (u', v'), shape (N, 2).
+    chromaticities: np.ndarray
+
+
+@_deprecate.parameters(positional=("observer", "coords", "wavelength_range"))
 def spectral_locus(
+    *,
     observer: int = 2,
     coords: str = "xy",
     wavelength_range: tuple[float, float] = LOCUS_RANGE,
-) -> tuple[np.ndarray, np.ndarray]:
+) -> SpectralLocus:
     """Wavelengths (N,) and chromaticities (N, 2) of the spectral locus at 1 nm.
 
     From the CIE colour-matching functions (CIE 015:2018 Tables 4-5):
-    :math:`x(\\lambda) = \\bar x/(\\bar x + \\bar y + \\bar z)`.
+    :math:`x(\\lambda) = \\bar x/(\\bar x + \\bar y + \\bar z)`. Every parameter is
+    keyword-only: ``observer`` (2 or 10), ``coords`` (``"xy"`` or ``"uv"``) and the
+    ``wavelength_range`` (nm).
 
     >>> wl, xy = spectral_locus()
     >>> [round(float(v), 4) for v in xy[wl == 520][0]]
@@ -133,7 +148,7 @@ def spectral_locus(
     lo, hi = (float(v) for v in wavelength_range)
     if not lo < hi:
         raise InvalidInputError(f"expected a wavelength range lo < hi, got {wavelength_range}")
-    return _locus(o, c, lo, hi)
+    return SpectralLocus(*_locus(o, c, lo, hi))
 
 
 def polygon_area(vertices: npt.ArrayLike) -> float:
@@ -150,13 +165,15 @@ def polygon_area(vertices: npt.ArrayLike) -> float:
     return float(0.5 * abs(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y)))
 
 
-def visible_area(coords: str = "xy", observer: int = 2) -> float:
-    """Area of the region bounded by the spectral locus and the purple line.
+@_deprecate.parameters(positional=("observer",))
+def visible_area(coords: str = "xy", *, observer: int = 2) -> float:
+    """Area of the region bounded by the spectral locus and the purple line (``observer``
+    keyword-only).
 
     >>> round(visible_area("xy"), 4)
     0.3342
     """
-    return polygon_area(spectral_locus(observer, coords)[1])
+    return polygon_area(spectral_locus(observer=observer, coords=coords).chromaticities)
 
 
 def _points_in_polygon(pts: Any, poly: np.ndarray, xp: Any) -> Any:
@@ -193,7 +210,9 @@ def in_locus(points: object, coords: str = "xy", *, observer: int = 2) -> Any:
     """
     xp = namespace(points)
     p = as_points(points, "chromaticities", 2, xp=xp)
-    return _points_in_polygon(p, spectral_locus(observer, coords)[1], xp)
+    return _points_in_polygon(
+        p, spectral_locus(observer=observer, coords=coords).chromaticities, xp
+    )
 
 
 def check_in_locus(points: object, coords: str = "xy", *, observer: int = 2) -> Any:

@@ -44,7 +44,7 @@ _KAPPA = 116.0 * _LIN_SLOPE  # 24389/27 = 903.296..., L* = κ Y/Yn below ε
 
 def _white_arr(white: Any, observer: int, like: Any) -> Any:
     xp = namespace(like)
-    w = resolve_white(white, observer)
+    w = resolve_white(white, observer=observer)
     return xp.asarray(w.tolist(), dtype=like.dtype, device=device_of(like))
 
 

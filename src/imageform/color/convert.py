@@ -17,7 +17,8 @@ the path uses is an error):
 - ``white`` (lab, lch, luv, xyy): reference white, default the white of the RGB space on
   the path (so RGB white maps to L* = 100, a* = b* = 0), else CIE D65.
 - ``observer`` (2 or 10) for a named ``white``.
-- ``standard``, ``range``, ``bits`` (ycbcr): see :mod:`imageform.color.ycbcr`.
+- ``standard``, ``signal_range``, ``bits`` (ycbcr): see :mod:`imageform.color.ycbcr`
+  (``range`` is the deprecated name of ``signal_range``).
 - ``method`` (gray): ``"rec601"`` luma or ``"rec709"`` luminance.
 - ``alpha``: ``"reject"`` (default) or ``"keep"`` — an extra last channel is carried through
   unchanged, never mixed into the colour.
@@ -31,10 +32,12 @@ from __future__ import annotations
 from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass
+from types import MappingProxyType
 from typing import Any
 
 import numpy as np
 
+from imageform import _deprecate
 from imageform._backend import device_of, namespace, use_numba
 from imageform._dask import chunkwise
 from imageform._validate import as_float, as_image, check_option
@@ -65,8 +68,7 @@ class Edge:
     function: str
 
 
-#: Spaces: name -> (channels, description).
-SPACES: dict[str, tuple[int, str]] = {
+_SPACES: dict[str, tuple[int, str]] = {
     "srgb": (3, "sRGB, encoded, [0, 1] (IEC 61966-2-1)"),
     "linear_srgb": (3, "sRGB primaries, linear light"),
     "bgr": (3, "sRGB, encoded, channels in B, G, R order (OpenCV)"),
@@ -85,15 +87,17 @@ SPACES: dict[str, tuple[int, str]] = {
 }
 for _k, _sp in RGB_SPACES.items():
     if _k != "srgb":
-        SPACES[_k] = (3, f"{_sp.name}, encoded, [0, 1]")
-        SPACES[f"linear_{_k}"] = (3, f"{_sp.name} primaries, linear light")
+        _SPACES[_k] = (3, f"{_sp.name}, encoded, [0, 1]")
+        _SPACES[f"linear_{_k}"] = (3, f"{_sp.name} primaries, linear light")
+#: Spaces: name -> (channels, description) (read-only).
+SPACES: MappingProxyType[str, tuple[int, str]] = MappingProxyType(_SPACES)
 
 _ENCODED_RGB = {"srgb", "bgr", "gray", "cmy", "cmyk", *(k for k in RGB_SPACES if k != "srgb")}
 _WHITE_SPACES = ("lab", "lch", "luv", "xyy")
 
 
 def _w(xp: Any, x: Any, p: dict[str, Any]) -> Any:
-    w = resolve_white(p["white"], p.get("observer", 2))
+    w = resolve_white(p["white"], observer=p.get("observer", 2))
     return xp.asarray(w.tolist(), dtype=x.dtype, device=device_of(x))
 
 
@@ -113,13 +117,14 @@ def _rgb_edges(key: str) -> list[Edge]:
 
 def _ycc(p: dict[str, Any]) -> tuple[float, float, tuple[float, ...]]:
     _, kr, kb = ycbcr._coeffs(p.get("standard", "bt601"))
-    return kr, kb, ycbcr._scale(p.get("range", "full"), p.get("bits"))
+    return kr, kb, ycbcr._scale(p.get("signal_range", "full"), p.get("bits"))
 
 
-_YP = ("standard", "range", "bits")
+_YP = ("standard", "signal_range", "bits")
 _WP = ("white", "observer")
 
-EDGES: list[Edge] = [
+#: Every conversion step of the graph (a tuple: the graph is fixed).
+EDGES: tuple[Edge, ...] = (
     *(e for k in RGB_SPACES for e in _rgb_edges(k)),
     Edge("srgb", "bgr", lambda xp, x, p: _flip(xp, x), (), "srgb_to_bgr"),
     Edge("bgr", "srgb", lambda xp, x, p: _flip(xp, x), (), "bgr_to_srgb"),
@@ -163,7 +168,7 @@ EDGES: list[Edge] = [
     Edge("luv", "xyz", lambda xp, x, p: cielab._luv_to_xyz(xp, x, _w(xp, x, p)), _WP, "luv_to_xyz"),
     Edge("xyz", "xyy", lambda xp, x, p: cielab._xyz_to_xyy(xp, x, _w(xp, x, p)), _WP, "xyz_to_xyy"),
     Edge("xyy", "xyz", lambda xp, x, p: cielab._xyy_to_xyz(xp, x), (), "xyy_to_xyz"),
-]
+)
 
 _ADJ: dict[str, list[Edge]] = {s: [] for s in SPACES}
 for _e in EDGES:
@@ -252,8 +257,8 @@ def convert(image: object, src: str, dst: str, **params: Any) -> Any:
     src, dst : str
         Keys of :data:`SPACES`; an unknown name raises and lists the valid ones.
     **params
-        ``white``, ``observer``, ``standard``, ``range``, ``bits``, ``method``, ``alpha``
-        (see the module docstring); only those the path uses are accepted.
+        ``white``, ``observer``, ``standard``, ``signal_range``, ``bits``, ``method``,
+        ``alpha`` (see the module docstring); only those the path uses are accepted.
 
     Returns
     -------
@@ -265,6 +270,11 @@ def convert(image: object, src: str, dst: str, **params: Any) -> Any:
     >>> convert([1.0, 0.0, 0.0], "srgb", "lab").round(2).tolist()
     [53.24, 80.09, 67.2]
     """
+    if "range" in params:
+        if "signal_range" in params:
+            raise TypeError("convert() got both range= (deprecated) and signal_range=")
+        _deprecate.warn("imageform.color.convert(range=...)", "use signal_range= instead")
+        params["signal_range"] = params.pop("range")
     s, d = _space(src, "src"), _space(dst, "dst")
     route = path(s, d)
     allowed = {p for e in route for p in e.params} | set(_GLOBAL_PARAMS)

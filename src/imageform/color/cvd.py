@@ -28,7 +28,7 @@ models blend linearly: :math:`(1 - s)\,\mathrm{rgb} + s\,\mathrm{sim}(\mathrm{rg
 from __future__ import annotations
 
 from functools import lru_cache
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -40,6 +40,7 @@ from imageform.errors import InvalidInputError
 __all__ = [
     "CVD_DEFICIENCIES",
     "CVD_METHODS",
+    "BrettelPlanes",
     "brettel_planes",
     "cvd_matrix",
     "machado_matrix",
@@ -156,8 +157,19 @@ def _projection(missing: int, white: np.ndarray, anchor: np.ndarray) -> np.ndarr
     return p
 
 
+class BrettelPlanes(NamedTuple):
+    """The result of :func:`brettel_planes` (linear sRGB)."""
+
+    #: Projection (3, 3) on the half-plane of the long-wavelength anchor.
+    H1: np.ndarray
+    #: Projection (3, 3) on the other half-plane.
+    H2: np.ndarray
+    #: Normal (3,) of the separating plane: ``H1`` where ``n @ rgb >= 0``.
+    n: np.ndarray
+
+
 @lru_cache(maxsize=8)
-def brettel_planes(deficiency: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def brettel_planes(deficiency: str) -> BrettelPlanes:
     """Brettel et al. (1997) in linear sRGB: ``(H1, H2, n)``, (3, 3), (3, 3), (3,).
 
     A colour ``rgb`` maps to ``H1 @ rgb`` where ``n @ rgb >= 0`` and to ``H2 @ rgb`` elsewhere;
@@ -180,7 +192,7 @@ def brettel_planes(deficiency: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]
     # orient n_sep so that the long-wavelength anchor lies on its positive side
     if n_sep @ long_ < 0:
         n_sep = -n_sep
-    return t_inv @ p_long @ t, t_inv @ p_short @ t, t.T @ n_sep
+    return BrettelPlanes(t_inv @ p_long @ t, t_inv @ p_short @ t, t.T @ n_sep)
 
 
 @lru_cache(maxsize=8)

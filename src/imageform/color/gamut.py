@@ -111,10 +111,10 @@ def gamut_coverage(
     33.5
     """
     tri = _ccw(gamut_triangle(space, coords))
-    locus = spectral_locus(observer, coords)[1]
+    locus = spectral_locus(observer=observer, coords=coords).chromaticities
     inter = _clip_polygon(locus, tri)
     a = polygon_area(inter) if len(inter) >= 3 else 0.0
-    return 100.0 * a / visible_area(coords, observer)
+    return 100.0 * a / visible_area(coords, observer=observer)
 
 
 @dataclass(frozen=True)

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from imageform import _deprecate
 from imageform._validate import check_option
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
 from imageform.spectral.integrate import (
@@ -50,20 +51,22 @@ def _setup(
     """(grid, weights W (M, 3), r on the grid) for the CIE 015 1 nm summation."""
     f = observer_functions(observer)
     ill = resolve_illuminant(illuminant)
-    grid, w = integration_weights(f, ill, method="cie015")
+    grid, w = integration_weights(f, illuminant=ill, method="cie015")
     # reflectances extend by their end values (CIE 015 §7.2.2); lights are zero outside
     ext = "zero" if ill is None else "constant"
     r = spectrum.interpolate(grid, method="linear", extrapolate=ext).values
     return grid, w, r
 
 
+@_deprecate.parameters(positional=("observer", "illuminant"))
 def tristimulus(
-    spectrum: Spectrum, observer: int | str = 2, illuminant: str | Spectrum | None = "D65"
+    spectrum: Spectrum, *, observer: int | str = 2, illuminant: str | Spectrum | None = "D65"
 ) -> np.ndarray:
     r"""Raw tristimulus sums :math:`W^\mathsf{T} r` (CIE 015 1 nm grid), shape (3,).
 
-    ``observer`` 2, 10 (CIE XYZ) or ``"cones"`` (Stockman & Sharpe LMS). Unnormalised: the
-    quantity whose equality defines a metameric match.
+    ``observer`` 2, 10 (CIE XYZ) or ``"cones"`` (Stockman & Sharpe LMS); ``observer`` and
+    ``illuminant`` are keyword-only. Unnormalised: the quantity whose equality defines a
+    metameric match.
 
     >>> from imageform.spectral import colorchecker_reflectances
     >>> t = tristimulus(colorchecker_reflectances()["red"])
@@ -74,17 +77,18 @@ def tristimulus(
     return np.asarray(r @ w)
 
 
+@_deprecate.parameters(positional=("observer", "illuminant"))
 def are_metamers(
     s1: Spectrum,
     s2: Spectrum,
+    *,
     observer: int | str = 2,
     illuminant: str | Spectrum | None = "D65",
-    *,
     tol: float = 1e-6,
     spectral_tol: float = 1e-9,
 ) -> bool:
     r"""True when two *different* spectra give the same responses for ``observer`` under
-    ``illuminant`` (``None``: the spectra are lights).
+    ``illuminant`` (keyword-only; ``illuminant=None``: the spectra are lights).
 
     Match: :math:`\max_c |t_{1c} - t_{2c}| / t_{\mathrm{white},Y} <` ``tol`` (relative to the
     white's Y, so the scale is that of XYZ with white Y = 1). Different: spectral RMS on the
@@ -104,11 +108,12 @@ def are_metamers(
     return bool(match and differ)
 
 
+@_deprecate.parameters(positional=("observer", "illuminant"))
 def metamer(
     spectrum: Spectrum,
+    *,
     observer: int | str = 2,
     illuminant: str | Spectrum | None = "D65",
-    *,
     kind: str = "reflectance",
     strength: float = 0.95,
     max_frequency: int = 8,
@@ -127,8 +132,8 @@ def metamer(
     ----------
     spectrum : Spectrum, values (N,)
         A reflectance (within [0, 1]) or a light (non-negative).
-    observer : 2, 10 or "cones"
-    illuminant : str, Spectrum or None
+    observer : 2, 10 or "cones", keyword-only
+    illuminant : str, Spectrum or None, keyword-only
         The light the match holds under (``None`` for lights).
     strength : float in (0, 1]
         Fraction of the largest valid step.
@@ -217,24 +222,25 @@ def metamerism_index(
     a, b = _check(s1, "s1"), _check(s2, "s2")
     if str(observer) not in ("2", "10"):
         raise InvalidInputError(f"expected observer 2 or 10, got {observer!r}")
-    x1t = spectrum_to_xyz(a, test, observer=observer)
-    x2t = spectrum_to_xyz(b, test, observer=observer)
+    x1t = spectrum_to_xyz(a, illuminant=test, observer=observer)
+    x2t = spectrum_to_xyz(b, illuminant=test, observer=observer)
     if correct:
-        x1r = spectrum_to_xyz(a, reference, observer=observer)
-        x2r = spectrum_to_xyz(b, reference, observer=observer)
+        x1r = spectrum_to_xyz(a, illuminant=reference, observer=observer)
+        x2r = spectrum_to_xyz(b, illuminant=reference, observer=observer)
         if np.any(x2r == 0):
             raise DegenerateConfigurationError("s2 has a zero tristimulus value: cannot correct")
         x2t = x2t * x1r / x2r
     ill = resolve_illuminant(test)
     ones = Spectrum(ill.wavelengths, np.ones(len(ill))) if ill is not None else None
-    white = spectrum_to_xyz(ones, test, observer=observer) if ones is not None else None
+    white = spectrum_to_xyz(ones, illuminant=test, observer=observer) if ones is not None else None
     lab1 = xyz_to_lab(x1t, white, observer=observer)
     lab2 = xyz_to_lab(x2t, white, observer=observer)
     return float(delta_e_ciede2000(lab1, lab2))
 
 
+@_deprecate.parameters(positional=("observer",))
 def match_with_primaries(
-    target: Spectrum, primaries: Spectrum, observer: int | str = 2
+    target: Spectrum, primaries: Spectrum, *, observer: int | str = 2
 ) -> np.ndarray:
     r"""Weights of three primary lights whose mixture matches a target light, shape (3,).
 

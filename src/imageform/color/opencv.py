@@ -18,6 +18,7 @@ OpenCV does); :func:`from_opencv` reads OpenCV's layout back into imageform's.
 
 from __future__ import annotations
 
+from types import MappingProxyType
 from typing import Any
 
 from imageform._backend import namespace
@@ -28,15 +29,17 @@ from imageform.errors import InvalidInputError
 __all__ = ["OPENCV_CONVENTIONS", "bgr_to_srgb", "from_opencv", "srgb_to_bgr", "to_opencv"]
 
 #: Convention names accepted by :func:`to_opencv` / :func:`from_opencv`, with the imageform
-#: space each one is a layout of.
-OPENCV_CONVENTIONS: dict[str, str] = {
-    "bgr": "srgb",
-    "hsv8": "hsv",
-    "hsv8_full": "hsv",
-    "lab8": "lab",
-    "ycrcb8": "ycbcr",
-    "ycrcb": "ycbcr",
-}
+#: space each one is a layout of (read-only).
+OPENCV_CONVENTIONS: MappingProxyType[str, str] = MappingProxyType(
+    {
+        "bgr": "srgb",
+        "hsv8": "hsv",
+        "hsv8_full": "hsv",
+        "lab8": "lab",
+        "ycrcb8": "ycbcr",
+        "ycrcb": "ycbcr",
+    }
+)
 
 
 def _flip(xp: Any, x: Any) -> Any:

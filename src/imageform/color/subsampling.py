@@ -22,7 +22,8 @@ repeats, ``method="nearest"``); edges are replicated.
 
 from __future__ import annotations
 
-from typing import Any
+from types import MappingProxyType
+from typing import Any, NamedTuple
 
 from imageform._backend import namespace
 from imageform._validate import as_float, as_image, check_option
@@ -31,6 +32,7 @@ from imageform.errors import InvalidInputError, UnknownOptionError
 __all__ = [
     "CHROMA_SCHEMES",
     "CHROMA_SITINGS",
+    "SubsampledChroma",
     "chroma_subsample",
     "chroma_upsample",
     "subsample_round_trip",
@@ -38,9 +40,13 @@ __all__ = [
 ]
 
 #: Subsampling factors (vertical, horizontal) of each scheme.
-CHROMA_SCHEMES = {"4:4:4": (1, 1), "4:2:2": (1, 2), "4:2:0": (2, 2)}
+CHROMA_SCHEMES: MappingProxyType[str, tuple[int, int]] = MappingProxyType(
+    {"4:4:4": (1, 1), "4:2:2": (1, 2), "4:2:0": (2, 2)}
+)
 #: Chroma siting: offsets (vertical for 4:2:0, horizontal) of chroma sample 0 in luma pixels.
-CHROMA_SITINGS = {"left": (0.5, 0.0), "center": (0.5, 0.5), "top_left": (0.0, 0.0)}
+CHROMA_SITINGS: MappingProxyType[str, tuple[float, float]] = MappingProxyType(
+    {"left": (0.5, 0.0), "center": (0.5, 0.5), "top_left": (0.0, 0.0)}
+)
 
 
 def _scheme(scheme: str) -> tuple[str, tuple[int, int]]:
@@ -102,9 +108,18 @@ def _up2(xp: Any, c: Any, axis: int, offset: float, n: int, method: str) -> Any:
     return _interleave(xp, even, odd, axis, n)
 
 
+class SubsampledChroma(NamedTuple):
+    """The result of :func:`chroma_subsample`."""
+
+    #: Full-resolution Y', shape (..., H, W).
+    luma: Any
+    #: Subsampled (Cb, Cr), shape (..., ceil(H/fv), ceil(W/fh), 2).
+    chroma: Any
+
+
 def chroma_subsample(
     ycbcr: object, scheme: str = "4:2:0", *, siting: str = "left"
-) -> tuple[Any, Any]:
+) -> SubsampledChroma:
     r"""Split Y'CbCr into full-resolution luma and subsampled chroma.
 
     .. math:: C_{sub}[k] = \tfrac12 (C[2k] + C[2k+1]) \ (\text{interstitial}),\quad
@@ -120,8 +135,9 @@ def chroma_subsample(
 
     Returns
     -------
-    luma : array, shape (..., H, W)
-    chroma : array, shape (..., ceil(H/fv), ceil(W/fh), 2)
+    SubsampledChroma
+        ``luma`` : array, shape (..., H, W); ``chroma`` : array, shape
+        (..., ceil(H/fv), ceil(W/fh), 2).
 
     References
     ----------
@@ -148,7 +164,7 @@ def chroma_subsample(
         chroma = _down2(xp, chroma, -2, oh)
     if fv == 2:
         chroma = _down2(xp, chroma, -3, ov)
-    return luma, chroma
+    return SubsampledChroma(luma, chroma)
 
 
 def chroma_upsample(

@@ -21,6 +21,7 @@ from typing import Any
 
 import numpy as np
 
+from imageform import _deprecate
 from imageform.errors import InvalidInputError, UnknownOptionError
 
 __all__ = [
@@ -80,14 +81,15 @@ def _check_observer(observer: object) -> int:
     return int(observer)
 
 
-def whitepoint_xy(name: str, observer: int = 2) -> tuple[float, float]:
+@_deprecate.parameters(positional=("observer",))
+def whitepoint_xy(name: str, *, observer: int = 2) -> tuple[float, float]:
     """Chromaticity ``(x, y)`` of a CIE illuminant.
 
     Parameters
     ----------
     name : str
         One of A, D50, D55, D65, D75, E, F2, F7, F11 (case-insensitive; ``FL2`` also accepted).
-    observer : {2, 10}
+    observer : {2, 10}, keyword-only
         CIE 1931 2° or CIE 1964 10° standard observer.
 
     Returns
@@ -128,7 +130,8 @@ def xy_to_xyz_white(xy: Sequence[float]) -> np.ndarray:
     return np.array([x / y, 1.0, (1.0 - x - y) / y], dtype=np.float64)
 
 
-def whitepoint_xyz(name: str, observer: int = 2) -> np.ndarray:
+@_deprecate.parameters(positional=("observer",))
+def whitepoint_xyz(name: str, *, observer: int = 2) -> np.ndarray:
     """Tristimulus values ``(X, Y, Z)`` of a CIE illuminant's white, scaled to Y = 1.
 
     .. math:: X = x / y, \\quad Y = 1, \\quad Z = (1 - x - y) / y
@@ -137,7 +140,7 @@ def whitepoint_xyz(name: str, observer: int = 2) -> np.ndarray:
     ----------
     name : str
         Illuminant name, see :func:`whitepoint_xy`.
-    observer : {2, 10}
+    observer : {2, 10}, keyword-only
         Standard observer in degrees.
 
     Returns
@@ -152,16 +155,18 @@ def whitepoint_xyz(name: str, observer: int = 2) -> np.ndarray:
     >>> whitepoint_xyz("E").round(12).tolist()
     [1.0, 1.0, 1.0]
     """
-    return xy_to_xyz_white(whitepoint_xy(name, observer))
+    return xy_to_xyz_white(whitepoint_xy(name, observer=observer))
 
 
-def resolve_white(white: Any, observer: int = 2) -> np.ndarray:
+@_deprecate.parameters(positional=("observer",))
+def resolve_white(white: Any, *, observer: int = 2) -> np.ndarray:
     """A ``white=`` argument as XYZ (float64, shape (3,), Y as given or 1).
 
     Accepted forms: an illuminant name (``"D65"``, see :data:`WHITEPOINTS_XY`); an RGB space
     name (``"srgb"``, ``"prophoto"`` ...: the white its standard writes, see
     :data:`imageform.color.rgb_spaces.RGB_SPACES`); a chromaticity ``(x, y)``; a tristimulus
-    ``(X, Y, Z)`` with ``Y > 0`` (used as given).
+    ``(X, Y, Z)`` with ``Y > 0`` (used as given). ``observer`` (keyword-only, 2 or 10) picks
+    the illuminant table for a name.
 
     >>> resolve_white("srgb").round(6).tolist()
     [0.950456, 1.0, 1.089058]
@@ -170,7 +175,7 @@ def resolve_white(white: Any, observer: int = 2) -> np.ndarray:
     """
     if isinstance(white, str):
         if _canonical(white) in WHITEPOINTS_XY[_check_observer(observer)]:
-            return whitepoint_xyz(white, observer)
+            return whitepoint_xyz(white, observer=observer)
         from imageform.color.rgb_spaces import RGB_SPACES, _space_key
 
         key = _space_key(white)

@@ -8,7 +8,7 @@ coefficients Kr, Kb are those each standard writes; Kg = 1 - Kr - Kb:
     E'_{Cb} = \\frac{B' - E'_Y}{2 (1 - K_b)}, \\quad
     E'_{Cr} = \\frac{R' - E'_Y}{2 (1 - K_r)}
 
-``range`` chooses the output scale:
+``signal_range`` chooses the output scale:
 
 - ``"full"`` with ``bits=None`` (default): the analog values, E'Y in [0, 1], E'Cb and E'Cr in
   [-0.5, 0.5].
@@ -21,7 +21,7 @@ coefficients Kr, Kb are those each standard writes; Kg = 1 - Kr - Kb:
 
 Code values are returned as unrounded floats (so that round trips are exact); round and
 cast them for storage (``np.round(d).astype(np.uint16)``). :func:`ycbcr_to_rgb` reads code
-values as numbers of the given range, integer dtypes included (not divided by 255).
+values as numbers of the given signal range, integer dtypes included (not divided by 255).
 """
 
 from __future__ import annotations
@@ -30,6 +30,7 @@ import math
 from types import MappingProxyType
 from typing import Any
 
+from imageform import _deprecate
 from imageform._backend import namespace
 from imageform._dask import chunkwise
 from imageform._validate import as_float, as_image, check_option
@@ -51,6 +52,7 @@ YCBCR_STANDARDS: MappingProxyType[str, tuple[float, float]] = MappingProxyType(
         "bt2020": (0.2627, 0.0593),  # ITU-R BT.2020-2, Table 4
     }
 )
+#: The signal ranges: "full" (0 ... 2^n - 1) and "limited" (studio: 16-235, 16-240 at 8 bits).
 _RANGES = ("full", "limited")
 
 
@@ -64,9 +66,9 @@ def _coeffs(standard: str) -> tuple[str, float, float]:
     return key, kr, kb
 
 
-def _scale(range_: str, bits: int | None) -> tuple[float, float, float, float]:
+def _scale(signal_range: str, bits: int | None) -> tuple[float, float, float, float]:
     """(y_gain, y_offset, c_gain, c_offset) from analog to the requested scale."""
-    rng = check_option(range_, _RANGES, "Y'CbCr range")
+    rng = check_option(signal_range, _RANGES, "Y'CbCr signal_range")
     if bits is not None and (isinstance(bits, bool) or bits not in (8, 10, 12)):
         raise InvalidInputError(f"expected bits 8, 10 or 12 (or None), got {bits!r}")
     if rng == "full":
@@ -79,12 +81,12 @@ def _scale(range_: str, bits: int | None) -> tuple[float, float, float, float]:
     return 219.0 * k, 16.0 * k, 224.0 * k, 128.0 * k
 
 
-def _check_codes(values: object, range_: str, bits: int | None) -> None:
+def _check_codes(values: object, signal_range: str, bits: int | None) -> None:
     """Integer code values must fit ``bits`` (no wrap-around, no guessing of the scale)."""
     dt = getattr(values, "dtype", None)
     if dt is None or getattr(dt, "kind", "f") not in "iu":
         return
-    if bits is None and range_ == "full":
+    if bits is None and signal_range == "full":
         raise InvalidInputError(
             f"integer Y'CbCr ({dt}) are code values: pass bits=8 or bits=10 (or floats)"
         )
@@ -118,9 +120,14 @@ def _ycbcr_to_rgb(xp: Any, ycc: Any, kr: float, kb: float, sc: tuple[float, ...]
     return xp.stack([r, g, b], axis=-1)
 
 
+@_deprecate.parameters(renamed={"range": "signal_range"})
 @chunkwise(1)
 def rgb_to_ycbcr(
-    image: object, standard: str = "bt601", *, range: str = "full", bits: int | None = None
+    image: object,
+    standard: str = "bt601",
+    *,
+    signal_range: str = "full",
+    bits: int | None = None,
 ) -> Any:
     """Encoded R'G'B' to Y'CbCr (analog or code values), see the module docstring.
 
@@ -129,7 +136,8 @@ def rgb_to_ycbcr(
     image : array_like, shape (..., 3)
         Encoded R'G'B' in [0, 1] or uint8/uint16.
     standard : {"bt601", "bt709", "bt2020"}
-    range : {"full", "limited"}
+    signal_range : {"full", "limited"}
+        Full-range or limited ("studio", "narrow") code values; see the module docstring.
     bits : {None, 8, 10, 12}
 
     Returns
@@ -140,18 +148,23 @@ def rgb_to_ycbcr(
     Source: ITU-R BT.601-7 items 2.5.1-2.5.3; BT.709-6 items 3.2-4.6; BT.2020-2 Tables 4-5;
     ITU-T H.273 (full range).
 
-    >>> rgb_to_ycbcr([1.0, 0.0, 0.0], "bt709", range="limited", bits=8).round(2).tolist()
+    >>> rgb_to_ycbcr([1.0, 0.0, 0.0], "bt709", signal_range="limited", bits=8).round(2).tolist()
     [62.56, 102.34, 240.0]
     """
     _, kr, kb = _coeffs(standard)
-    sc = _scale(range, bits)
+    sc = _scale(signal_range, bits)
     x = as_image(image, "R'G'B' image")
     return _rgb_to_ycbcr(namespace(x), x, kr, kb, sc)
 
 
+@_deprecate.parameters(renamed={"range": "signal_range"})
 @chunkwise(1)
 def ycbcr_to_rgb(
-    ycbcr: object, standard: str = "bt601", *, range: str = "full", bits: int | None = None
+    ycbcr: object,
+    standard: str = "bt601",
+    *,
+    signal_range: str = "full",
+    bits: int | None = None,
 ) -> Any:
     """Y'CbCr (analog or code values) to encoded R'G'B'; inverse of :func:`rgb_to_ycbcr`.
 
@@ -159,12 +172,12 @@ def ycbcr_to_rgb(
     Codes outside the nominal range (footroom/headroom) give R'G'B' outside [0, 1]; nothing
     is clipped.
 
-    >>> ycbcr_to_rgb([235.0, 128.0, 128.0], "bt709", range="limited").round(6).tolist()
+    >>> ycbcr_to_rgb([235.0, 128.0, 128.0], "bt709", signal_range="limited").round(6).tolist()
     [1.0, 1.0, 1.0]
     """
     _, kr, kb = _coeffs(standard)
-    sc = _scale(range, bits)
-    _check_codes(ycbcr, range, bits)
+    sc = _scale(signal_range, bits)
+    _check_codes(ycbcr, signal_range, bits)
     x = as_float(ycbcr, "Y'CbCr", integer="float32")
     if x.ndim < 1 or x.shape[-1] != 3:
         raise InvalidInputError(
@@ -173,9 +186,14 @@ def ycbcr_to_rgb(
     return _ycbcr_to_rgb(namespace(x), x, kr, kb, sc)
 
 
+@_deprecate.parameters(renamed={"range": "signal_range"})
 @chunkwise(1)
 def srgb_to_ycbcr(
-    image: object, standard: str = "bt601", *, range: str = "full", bits: int | None = None
+    image: object,
+    standard: str = "bt601",
+    *,
+    signal_range: str = "full",
+    bits: int | None = None,
 ) -> Any:
     """sRGB-encoded values to Y'CbCr: :func:`rgb_to_ycbcr` applied to the sRGB values.
 
@@ -185,16 +203,21 @@ def srgb_to_ycbcr(
     >>> srgb_to_ycbcr([1.0, 1.0, 1.0], bits=8).round(6).tolist()
     [255.0, 128.0, 128.0]
     """
-    return rgb_to_ycbcr(image, standard, range=range, bits=bits)
+    return rgb_to_ycbcr(image, standard, signal_range=signal_range, bits=bits)
 
 
+@_deprecate.parameters(renamed={"range": "signal_range"})
 @chunkwise(1)
 def ycbcr_to_srgb(
-    ycbcr: object, standard: str = "bt601", *, range: str = "full", bits: int | None = None
+    ycbcr: object,
+    standard: str = "bt601",
+    *,
+    signal_range: str = "full",
+    bits: int | None = None,
 ) -> Any:
     """Y'CbCr to sRGB-encoded values; inverse of :func:`srgb_to_ycbcr`.
 
     >>> ycbcr_to_srgb([0.5, 0.0, 0.0]).round(6).tolist()
     [0.5, 0.5, 0.5]
     """
-    return ycbcr_to_rgb(ycbcr, standard, range=range, bits=bits)
+    return ycbcr_to_rgb(ycbcr, standard, signal_range=signal_range, bits=bits)

@@ -13,6 +13,7 @@ from imageform.geometry.calibration import (
 )
 from imageform.geometry.camera import (
     Camera,
+    DecomposedProjection,
     ImagePlane,
     Projection,
     backproject,
@@ -27,19 +28,22 @@ from imageform.geometry.checkerboard import (
     find_checkerboard,
     find_checkerboards,
 )
-from imageform.geometry.checkerboard_subpix import refine_corners
+from imageform.geometry.checkerboard_subpix import RefinedCorners, refine_corners
 from imageform.geometry.distortion import (
     BrownConrady,
     DistortionModel,
     DivisionModel,
     KannalaBrandt,
+    Undistorted,
     project_points_distorted,
 )
 from imageform.geometry.dlt import estimate_projection_matrix
 from imageform.geometry.homogeneous import (
+    Dehomogenized,
     are_collinear,
     cross_ratio,
     from_homogeneous,
+    from_homogeneous_masked,
     intersect_lines,
     line_through,
     to_homogeneous,
@@ -57,6 +61,7 @@ from imageform.geometry.projection_models import (
     weak_perspective_project,
 )
 from imageform.geometry.rotations import (
+    Pose,
     axis_rotation,
     camera_rotation,
     euler_to_matrix,
@@ -88,6 +93,8 @@ __all__ = [
     "CheckerboardNotFoundWarning",
     "CheckerboardResult",
     "ConeBeamGeometry",
+    "DecomposedProjection",
+    "Dehomogenized",
     "DistortionModel",
     "DivisionModel",
     "ImagePlane",
@@ -95,8 +102,11 @@ __all__ = [
     "KannalaBrandt",
     "LineSegments",
     "PnPResult",
+    "Pose",
     "Projection",
+    "RefinedCorners",
     "TriangulationResult",
+    "Undistorted",
     "VanishingPointResult",
     "apply_homography",
     "are_collinear",
@@ -116,6 +126,7 @@ __all__ = [
     "find_checkerboards",
     "focal_from_vanishing_points",
     "from_homogeneous",
+    "from_homogeneous_masked",
     "horizon_line",
     "intersect_lines",
     "intrinsic_matrix",

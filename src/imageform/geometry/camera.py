@@ -25,10 +25,12 @@ from imageform._backend import device_of, linalg, namespace, use_numba
 from imageform._typing import Array, ArrayLike
 from imageform._validate import as_matrix, as_points, check_image_size, check_option, check_rotation
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
+from imageform.geometry._results import Projection
 from imageform.geometry.intrinsics import Intrinsics
 
 __all__ = [
     "Camera",
+    "DecomposedProjection",
     "ImagePlane",
     "Projection",
     "backproject",
@@ -44,15 +46,15 @@ _PLANES = ("virtual", "real")
 _KERNEL_MIN_POINTS = 20_000
 
 
-class Projection(NamedTuple):
-    """Result of a projection: pixel coordinates and which of them are real images.
+class DecomposedProjection(NamedTuple):
+    """Result of :func:`decompose_projection_matrix`: ``P = λ K [R | t]``."""
 
-    ``uv`` is ``(..., N, 2)`` with NaN where ``valid`` is False (point at or behind the
-    camera, ``z_cam <= 0``, or not finite).
-    """
-
-    uv: Array
-    valid: Array
+    #: Intrinsics (3, 3), ``K[2, 2] = 1``, positive focal lengths.
+    K: Array
+    #: World-to-camera rotation (3, 3), ``det R = +1``.
+    R: Array
+    #: World-to-camera translation (3,).
+    t: Array
 
 
 def _plane_K(K: Array, plane: str, xp: Any) -> Array:
@@ -239,7 +241,7 @@ def projection_matrix(
     return Km @ Rt
 
 
-def decompose_projection_matrix(P: ArrayLike) -> tuple[Array, Array, Array]:
+def decompose_projection_matrix(P: ArrayLike) -> DecomposedProjection:
     """Split ``P = λ K [R | t]`` into K (``K[2, 2] = 1``, positive focal lengths), R, t.
 
     RQ decomposition of the left 3×3 block ``M = K R`` (Hartley & Zisserman §6.2.4); the
@@ -287,7 +289,7 @@ def decompose_projection_matrix(P: ArrayLike) -> tuple[Array, Array, Array]:
     mask = xp.asarray(
         [[1.0, 1.0, 1.0], [0.0, 1.0, 1.0], [0.0, 0.0, 1.0]], dtype=K.dtype, device=device_of(K)
     )
-    return K * mask + 0.0, Rq, t  # + 0.0: no negative zeros
+    return DecomposedProjection(K * mask + 0.0, Rq, t)  # + 0.0: no negative zeros
 
 
 def _Kinv_apply(uv: Array, K: Array, xp: Any) -> Array:

@@ -55,7 +55,7 @@ from imageform.geometry.checkerboard_grid import (
     grow_rectangle,
     label_lattice,
     lattice_problem,
-    neighbours,
+    neighbors,
 )
 from imageform.geometry.checkerboard_subpix import as_gray, refine_corners
 from imageform.geometry.checkerboard_subpix import refine as refine_clean
@@ -175,7 +175,7 @@ def _detect(
     n = cand.xy.shape[0]
     if n < cols * rows:
         return None, f"{n} corner candidates, fewer than the {cols * rows} inner corners", n
-    nbr = neighbours(cand, min_dist=2.0 * sigma)
+    nbr = neighbors(cand, min_dist=2.0 * sigma)
     tried = np.zeros(n, dtype=bool)
     best_reason, best_size = "no grid of corners found", 0
     want = sorted((cols, rows))

@@ -28,15 +28,16 @@ from collections import deque
 import numpy as np
 from numpy.typing import NDArray
 
+from imageform import _deprecate
 from imageform.geometry.checkerboard_candidates import Candidates
 
-__all__ = ["cell_parity_ok", "grow_rectangle", "label_lattice", "lattice_problem", "neighbours"]
+__all__ = ["cell_parity_ok", "grow_rectangle", "label_lattice", "lattice_problem", "neighbors"]
 
 #: Largest angle (radians) between an edge direction and the vector to a neighbour.
 ANGLE_TOL = 0.3
 
 
-def neighbours(cand: Candidates, min_dist: float, k_nearest: int = 16) -> NDArray[np.int64]:
+def neighbors(cand: Candidates, min_dist: float, k_nearest: int = 16) -> NDArray[np.int64]:
     """Neighbour table ``(N, 2, 2)``: ``[n, k, s]`` the neighbour along ``(+d_k, -d_k)[s]``, or -1.
 
     Only the ``k_nearest`` nearest candidates of each are considered (a grid neighbour is
@@ -81,6 +82,13 @@ def neighbours(cand: Candidates, min_dist: float, k_nearest: int = 16) -> NDArra
     mutual = np.any(flat[b] == np.arange(n)[:, None, None], axis=2)
     flat[~mutual] = -1
     return out
+
+
+neighbours = _deprecate.renamed(
+    neighbors,
+    "imageform.geometry.checkerboard_grid.neighbours",
+    instead="use imageform.geometry.checkerboard_grid.neighbors instead",
+)
 
 
 def label_lattice(

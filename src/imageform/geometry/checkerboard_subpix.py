@@ -6,6 +6,7 @@ Part of :mod:`imageform.geometry.checkerboard`; :func:`refine_corners` is public
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 import numpy.typing as npt
@@ -15,10 +16,20 @@ from imageform._backend import to_numpy, use_numba
 from imageform._validate import as_image, as_points, format_shape
 from imageform.errors import InvalidInputError
 
-__all__ = ["as_gray", "refine", "refine_corners"]
+__all__ = ["RefinedCorners", "as_gray", "refine", "refine_corners"]
 
 # ITU-R BT.601 luma weights (the grey conversion OpenCV's cvtColor uses)
 _LUMA = np.array([0.299, 0.587, 0.114])
+
+
+class RefinedCorners(NamedTuple):
+    """Result of :func:`refine_corners`."""
+
+    #: Refined positions (N, 2), float64.
+    corners: NDArray[np.float64]
+    #: Per corner (N,) int64: 0 converged, 1 ``max_iter`` reached, 2 flat window (singular),
+    #: 3 left the image, 4 moved farther than the half window (start kept).
+    status: NDArray[np.int64]
 
 
 def as_gray(image: object) -> NDArray[np.floating]:
@@ -49,7 +60,7 @@ def refine_corners(
     half_window: int | tuple[int, int] = 11,
     max_iter: int = 30,
     eps: float = 1e-3,
-) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
+) -> RefinedCorners:
     """Sub-pixel corner positions by gradient orthogonality (OpenCV's ``cornerSubPix``).
 
     Each corner ``q`` is moved to the point to which the image gradients ``g_p`` in a
@@ -78,11 +89,10 @@ def refine_corners(
 
     Returns
     -------
-    corners : ndarray (N, 2) float64
-        Refined positions.
-    status : ndarray (N,) int64
-        0 converged, 1 ``max_iter`` reached, 2 flat window (singular), 3 left the image,
-        4 moved farther than the half window (start kept).
+    RefinedCorners
+        ``corners`` : ndarray (N, 2) float64, the refined positions; ``status`` : ndarray
+        (N,) int64, 0 converged, 1 ``max_iter`` reached, 2 flat window (singular), 3 left
+        the image, 4 moved farther than the half window (start kept).
 
     Notes
     -----
@@ -120,7 +130,7 @@ def refine_corners(
         raise InvalidInputError(f"expected max_iter an integer >= 1, got {max_iter!r}")
     if not (math.isfinite(eps) and eps >= 0):
         raise InvalidInputError(f"expected eps >= 0, got {eps!r}")
-    return refine(gray, pts, int(hx), int(hy), max_iter, float(eps))
+    return RefinedCorners(*refine(gray, pts, int(hx), int(hy), max_iter, float(eps)))
 
 
 def refine(

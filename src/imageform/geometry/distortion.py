@@ -2,9 +2,9 @@
 
 All models act on normalised image coordinates ``(x, y) = (X/Z, Y/Z)`` of shape ``(..., 2)``,
 as OpenCV does: ``distort`` maps ideal (pinhole) coordinates to distorted ones, ``undistort``
-inverts it, iteratively where no closed form exists, with ``max_iter`` and ``tol`` and a
-boolean mask of the points that converged (the others come back as NaN, never as a silent
-best guess).
+inverts it, iteratively where no closed form exists, with ``max_iter`` and ``tol``, and
+returns :class:`Undistorted` ``(xy, valid)``: ``valid`` marks the points that converged (the
+others come back as NaN, never as a silent best guess).
 
 - :class:`BrownConrady` — radial ``k1, k2, k3`` (optionally rational ``k4, k5, k6``) and
   tangential ``p1, p2`` (Brown 1966; Conrady 1919; OpenCV's ``calib3d`` model and order).
@@ -23,7 +23,7 @@ least :data:`NUMBA_MIN_POINTS` points run numba kernels from
 from __future__ import annotations
 
 from dataclasses import astuple, dataclass
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -40,6 +40,7 @@ from imageform.geometry._distortion_xp import (
     kb_distort_xp,
     kb_undistort_xp,
 )
+from imageform.geometry._results import Projection
 
 __all__ = [
     "NUMBA_MIN_POINTS",
@@ -47,6 +48,7 @@ __all__ = [
     "DistortionModel",
     "DivisionModel",
     "KannalaBrandt",
+    "Undistorted",
     "project_points_distorted",
 ]
 
@@ -54,6 +56,17 @@ __all__ = [
 NUMBA_MIN_POINTS = 4096
 
 DistortionModel = Any  # BrownConrady | DivisionModel | KannalaBrandt (structural)
+
+
+class Undistorted(NamedTuple):
+    """Result of ``undistort``: ideal coordinates and which of them are trustworthy.
+
+    ``xy`` is ``(..., 2)`` with NaN where ``valid`` is False (the inverse did not converge,
+    or the model is not invertible there).
+    """
+
+    xy: Any
+    valid: Any
 
 
 def _dask_in(xy: Any) -> tuple[Any, Any]:
@@ -70,12 +83,12 @@ def _dask_points(fn: Any, xy: Any) -> Any:
     return xy.map_blocks(fn, dtype=dtype)
 
 
-def _dask_pair(fn: Any, xy: Any) -> tuple[Any, Any]:
+def _dask_pair(fn: Any, xy: Any) -> Undistorted:
     """``fn`` (NumPy -> ``(points (..., 2), mask (...))``) chunk-wise on Dask points."""
     xy, dtype = _dask_in(xy)
     pts = xy.map_blocks(lambda b: fn(b)[0], dtype=dtype)
     ok = xy.map_blocks(lambda b: fn(b)[1], drop_axis=xy.ndim - 1, dtype=bool)
-    return pts, ok
+    return Undistorted(pts, ok)
 
 
 def _check_coeffs(obj: Any) -> None:
@@ -162,11 +175,11 @@ class BrownConrady:
             return out.reshape(shape)
         return bc_distort_xp(arr, self.coeffs, xp)
 
-    def undistort(self, xy: Any, max_iter: int = 20, tol: float | None = None) -> tuple[Any, Any]:
-        """Invert :meth:`distort` by Newton's method; returns ``(xy (..., 2), converged (...))``.
+    def undistort(self, xy: Any, max_iter: int = 20, tol: float | None = None) -> Undistorted:
+        """Invert :meth:`distort` by Newton's method: :class:`Undistorted` ``(xy, valid)``.
 
         Starts from ``x = x_d`` and stops when ``|distort(x) - x_d| <= tol (1 + |x_d|)`` in
-        both coordinates (``tol`` defaults to 64 ulp of the dtype). A point is *converged*
+        both coordinates (``tol`` defaults to 64 ulp of the dtype). A point is *valid* (converged)
         only if, in addition, the Jacobian of the model is positive there (the model is
         invertible at the solution, inside its valid radius); other points are NaN.
 
@@ -186,8 +199,8 @@ class BrownConrady:
             out = np.empty_like(flat)
             ok = np.empty(flat.shape[0], dtype=np.bool_)
             brown_conrady_undistort(flat, np.asarray(self.coeffs), it, t, out, ok)
-            return out.reshape(shape), ok.reshape(shape[:-1])
-        return bc_undistort_xp(arr, self.coeffs, xp, it, t)
+            return Undistorted(out.reshape(shape), ok.reshape(shape[:-1]))
+        return Undistorted(*bc_undistort_xp(arr, self.coeffs, xp, it, t))
 
 
 @dataclass(frozen=True)
@@ -230,8 +243,8 @@ class DivisionModel:
         out, _ = division_distort_xp(arr, self.coeffs, xp, it, t)
         return out
 
-    def undistort(self, xy: Any, max_iter: int = 30, tol: float | None = None) -> tuple[Any, Any]:
-        """Closed-form undistortion; ``converged`` is False where ``1 + k1 r² + k2 r⁴ <= 0``.
+    def undistort(self, xy: Any, max_iter: int = 30, tol: float | None = None) -> Undistorted:
+        """Closed-form undistortion; ``valid`` is False where ``1 + k1 r² + k2 r⁴ <= 0``.
 
         ``max_iter`` and ``tol`` are accepted for a uniform interface and unused.
         """
@@ -240,7 +253,7 @@ class DivisionModel:
         xp = namespace(xy)
         arr = as_points(xy, "xy", 2, xp=xp)
         _iter_args(max_iter, tol, xp, arr.dtype)
-        return division_undistort_xp(arr, self.coeffs, xp)
+        return Undistorted(*division_undistort_xp(arr, self.coeffs, xp))
 
 
 @dataclass(frozen=True)
@@ -289,8 +302,8 @@ class KannalaBrandt:
             return out.reshape(shape)
         return kb_distort_xp(arr, self.coeffs, xp)
 
-    def undistort(self, xy: Any, max_iter: int = 20, tol: float | None = None) -> tuple[Any, Any]:
-        """Invert :meth:`distort`; returns ``(xy (..., 2), converged (...))``, NaN where not.
+    def undistort(self, xy: Any, max_iter: int = 20, tol: float | None = None) -> Undistorted:
+        """Invert :meth:`distort`: :class:`Undistorted` ``(xy, valid)``, NaN where not valid.
 
         >>> xy, ok = KannalaBrandt(k1=0.1).undistort([0.8, 0.0])
         >>> bool(ok), round(float(KannalaBrandt(k1=0.1).distort(xy)[0]), 12)
@@ -308,8 +321,8 @@ class KannalaBrandt:
             out = np.empty_like(flat)
             ok = np.empty(flat.shape[0], dtype=np.bool_)
             kannala_brandt_undistort(flat, np.asarray(self.coeffs), it, t, out, ok)
-            return out.reshape(shape), ok.reshape(shape[:-1])
-        return kb_undistort_xp(arr, self.coeffs, xp, it, t)
+            return Undistorted(out.reshape(shape), ok.reshape(shape[:-1]))
+        return Undistorted(*kb_undistort_xp(arr, self.coeffs, xp, it, t))
 
 
 def _check_model(distortion: object) -> None:
@@ -341,7 +354,7 @@ def _project_xp(points: Any, K: Any, R: Any, t: Any, distortion: Any, xp: Any) -
 
 def project_points_distorted(
     points: Any, K: Any, R: Any, t: Any, distortion: DistortionModel | None
-) -> tuple[Any, Any]:
+) -> Projection:
     """Project world points through ``[R | t]``, a distortion model and ``K`` to pixels.
 
     .. math::
@@ -366,10 +379,9 @@ def project_points_distorted(
 
     Returns
     -------
-    uv : array (..., 2)
-        Pixel coordinates; NaN where ``valid`` is False.
-    valid : bool array (...)
-        ``Z_c > 0``: points at or behind the camera are never projected.
+    Projection
+        ``uv`` (..., 2): pixel coordinates, NaN where ``valid`` is False; ``valid`` (...)
+        bool: ``Z_c > 0``, points at or behind the camera are never projected.
 
     Notes
     -----
@@ -405,5 +417,5 @@ def project_points_distorted(
         uv, valid = project_brown_conrady(
             pts.reshape(-1, 3), Km, Rm, tv, np.asarray(distortion.coeffs)
         )
-        return uv.reshape(*shape[:-1], 2), valid.reshape(shape[:-1])
-    return _project_xp(pts, Km, Rm, tv, distortion, xp)
+        return Projection(uv.reshape(*shape[:-1], 2), valid.reshape(shape[:-1]))
+    return Projection(*_project_xp(pts, Km, Rm, tv, distortion, xp))

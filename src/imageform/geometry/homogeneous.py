@@ -8,17 +8,21 @@ The line through two points and the intersection of two lines are both cross pro
 
 from __future__ import annotations
 
-from typing import Any, Literal
+import functools
+from typing import Any, Literal, NamedTuple
 
+from imageform import _deprecate
 from imageform._backend import linalg, namespace
 from imageform._typing import Array, ArrayLike
 from imageform._validate import as_points, check_option
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
 
 __all__ = [
+    "Dehomogenized",
     "are_collinear",
     "cross_ratio",
     "from_homogeneous",
+    "from_homogeneous_masked",
     "intersect_lines",
     "line_through",
     "to_homogeneous",
@@ -50,40 +54,17 @@ def to_homogeneous(points: ArrayLike, w: float = 1.0) -> Array:
     return xp.concat((p, ones), axis=-1)
 
 
-def from_homogeneous(
-    points: ArrayLike,
-    *,
-    at_infinity: Literal["raise", "nan"] = "raise",
-    return_mask: bool = False,
-) -> Array | tuple[Array, Array]:
-    """Divide by the last coordinate: ``(..., n + 1)`` → ``(..., n)``.
+class Dehomogenized(NamedTuple):
+    """Result of :func:`from_homogeneous_masked`: Euclidean points and which are finite.
 
-    .. math:: (x_1, \\dots, x_n, w) \\mapsto (x_1 / w, \\dots, x_n / w)
-
-    A point with ``w = 0`` lies at infinity and has no Euclidean coordinates. It is never
-    divided by zero silently: ``at_infinity="raise"`` (default) raises
-    :class:`~imageform.errors.DegenerateConfigurationError`; ``at_infinity="nan"`` returns NaN
-    for those points, and ``return_mask=True`` also returns the mask of finite points.
-
-    Parameters
-    ----------
-    points : array_like, shape (..., n + 1)
-    at_infinity : {"raise", "nan"}
-    return_mask : bool
-
-    Returns
-    -------
-    points : array, shape (..., n)
-    finite : bool array, shape (...), only with ``return_mask=True``
-
-    Examples
-    --------
-    >>> from_homogeneous([1140.0, 480.0, 2.0])
-    array([570., 240.])
-    >>> from_homogeneous([[1.0, 0.0, 0.0], [2.0, 4.0, 2.0]], at_infinity="nan")
-    array([[nan, nan],
-           [ 1.,  2.]])
+    ``points`` is ``(..., n)`` with NaN where ``valid`` is False (``w = 0``, at infinity).
     """
+
+    points: Array
+    valid: Array
+
+
+def _dehomogenize(points: ArrayLike, at_infinity: str) -> Dehomogenized:
     check_option(at_infinity, ("raise", "nan"), "at_infinity policy")
     xp = namespace(points)
     p = as_points(points, "homogeneous points", range(2, 1 << 16), xp=xp)
@@ -93,12 +74,93 @@ def from_homogeneous(
         n_inf = int(xp.sum(xp.astype(~finite, xp.int64)))
         raise DegenerateConfigurationError(
             f"{n_inf} point(s) have w = 0 (at infinity) and no Euclidean coordinates; "
-            "pass at_infinity='nan' to get NaN and a mask"
+            "pass at_infinity='nan' to get NaN, or use from_homogeneous_masked for a mask"
         )
     safe_w = xp.where(w != 0, w, xp.ones_like(w))
     out = p[..., :-1] / safe_w
     out = xp.where(w != 0, out, xp.full_like(out, float("nan")))
-    return (out, finite) if return_mask else out
+    return Dehomogenized(out, finite)
+
+
+def _return_mask_shim(fn: Any) -> Any:
+    """``from_homogeneous(..., return_mask=True)`` (deprecated) -> from_homogeneous_masked."""
+
+    @functools.wraps(fn)
+    def wrapper(points: ArrayLike, **kwargs: Any) -> Any:
+        if "return_mask" in kwargs:
+            flag = kwargs.pop("return_mask")
+            _deprecate.warn(
+                "imageform.geometry.from_homogeneous(return_mask=...)",
+                "use from_homogeneous_masked(points) for (points, valid), "
+                "from_homogeneous(points, at_infinity='nan') for the points alone",
+            )
+            if flag:
+                return _dehomogenize(points, kwargs.get("at_infinity", "raise"))
+        return fn(points, **kwargs)
+
+    return wrapper
+
+
+@_return_mask_shim
+def from_homogeneous(
+    points: ArrayLike,
+    *,
+    at_infinity: Literal["raise", "nan"] = "raise",
+) -> Array:
+    """Divide by the last coordinate: ``(..., n + 1)`` → ``(..., n)``.
+
+    .. math:: (x_1, \\dots, x_n, w) \\mapsto (x_1 / w, \\dots, x_n / w)
+
+    A point with ``w = 0`` lies at infinity and has no Euclidean coordinates. It is never
+    divided by zero silently: ``at_infinity="raise"`` (default) raises
+    :class:`~imageform.errors.DegenerateConfigurationError`; ``at_infinity="nan"`` returns NaN
+    for those points. :func:`from_homogeneous_masked` also returns the mask of finite points.
+
+    Parameters
+    ----------
+    points : array_like, shape (..., n + 1)
+    at_infinity : {"raise", "nan"}
+
+    Returns
+    -------
+    array, shape (..., n)
+
+    Examples
+    --------
+    >>> from_homogeneous([1140.0, 480.0, 2.0])
+    array([570., 240.])
+    >>> from_homogeneous([[1.0, 0.0, 0.0], [2.0, 4.0, 2.0]], at_infinity="nan")
+    array([[nan, nan],
+           [ 1.,  2.]])
+    """
+    return _dehomogenize(points, at_infinity).points
+
+
+def from_homogeneous_masked(points: ArrayLike) -> Dehomogenized:
+    """Divide by the last coordinate and say which points are finite.
+
+    .. math:: (x_1, \\dots, x_n, w) \\mapsto (x_1 / w, \\dots, x_n / w), \\quad
+        \\mathrm{valid} = (w \\ne 0)
+
+    Points at infinity (``w = 0``) come back as NaN with ``valid`` False, never divided by
+    zero.
+
+    Parameters
+    ----------
+    points : array_like, shape (..., n + 1)
+
+    Returns
+    -------
+    Dehomogenized
+        ``points`` (..., n) and ``valid`` (...) bool.
+
+    Examples
+    --------
+    >>> p, valid = from_homogeneous_masked([[1.0, 2.0, 0.0], [2.0, 4.0, 2.0]])
+    >>> p.tolist(), valid.tolist()
+    ([[nan, nan], [1.0, 2.0]], [False, True])
+    """
+    return _dehomogenize(points, "nan")
 
 
 def _homog2(points: ArrayLike, name: str, xp: Any) -> Array:

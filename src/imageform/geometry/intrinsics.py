@@ -16,6 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from imageform import _deprecate
 from imageform._backend import namespace
 from imageform._typing import Array, ArrayLike, FloatArray
 from imageform._validate import as_float, as_matrix, check_image_size, check_positive
@@ -59,17 +60,23 @@ def intrinsic_matrix(
     return xp.stack([xp.stack(r, axis=-1) for r in rows], axis=-2)
 
 
-def projected_size(size: float, depth: float, focal_length: float) -> float:
+@_deprecate.parameters(positional=("focal_length",))
+def projected_size(size: float, depth: float, *, focal_length: float) -> float:
     """Size of an object's image on the image plane by similar triangles, ``h = f H / Z``.
 
-    Units are the caller's (all lengths in the same unit, or ``h`` comes in ``focal_length``'s
-    unit when ``size`` and ``depth`` share one).
+    Parameters
+    ----------
+    size, depth : float
+        The object's size ``H`` and its distance ``Z`` from the camera, in one unit.
+    focal_length : float, keyword-only
+        The focal length ``f``, in any unit: ``h`` comes in that unit (all three lengths
+        may also share one unit).
 
     Examples
     --------
     The lecture: a 30 m building 100 m away through a 50 mm lens images at 15 mm.
 
-    >>> projected_size(30.0, 100.0, 50.0)
+    >>> projected_size(30.0, 100.0, focal_length=50.0)
     15.0
     """
     h = check_positive(size, "size", allow_zero=True)
@@ -88,7 +95,9 @@ class Intrinsics:
 
     Examples
     --------
-    >>> cam = Intrinsics.from_physical(50.0, 5.0, image_size=(6000, 4000))
+    >>> cam = Intrinsics.from_physical(
+    ...     focal_length=50.0, pixel_pitch_um=5.0, image_size=(6000, 4000)
+    ... )
     >>> cam.fx, cam.cx, cam.cy
     (10000.0, 2999.5, 1999.5)
     >>> round(math.degrees(cam.fov_x), 3)
@@ -133,20 +142,28 @@ class Intrinsics:
         return cls(M[0, 0], M[1, 1], M[0, 2], M[1, 2], M[0, 1], image_size)
 
     @classmethod
+    @_deprecate.parameters(
+        renamed={"focal_length_mm": "focal_length"},
+        positional=("focal_length", "pixel_pitch_um", "image_size", "principal_point"),
+    )
     def from_physical(
         cls,
-        focal_length_mm: float,
+        *,
+        focal_length: float,
         pixel_pitch_um: float | tuple[float, float],
         image_size: tuple[int, int],
         principal_point: tuple[float, float] | None = None,
     ) -> Intrinsics:
         """From a lens focal length (mm) and a sensor pixel pitch (µm): ``fx = f / pitch``.
 
+        ``focal_length`` is in **millimetres**, ``pixel_pitch_um`` in micrometres (one value,
+        or ``(x, y)``); every parameter is keyword-only.
+
         The principal point defaults to the image centre ``((w - 1) / 2, (h - 1) / 2)``
         (pixel-centre convention). The lecture: f = 50 mm at 5 µm pitch is 10 000 px, so
         a 15 mm image is 3000 px.
         """
-        f = check_positive(focal_length_mm, "focal_length_mm")
+        f = check_positive(focal_length, "focal_length (mm)")
         px, py = (pixel_pitch_um, pixel_pitch_um) if np.isscalar(pixel_pitch_um) else pixel_pitch_um  # type: ignore[misc]
         px = check_positive(px, "pixel_pitch_um")
         py = check_positive(py, "pixel_pitch_um")
@@ -155,17 +172,29 @@ class Intrinsics:
         return cls(f * 1000.0 / px, f * 1000.0 / py, cx, cy, 0.0, (w, h))
 
     @classmethod
+    @_deprecate.parameters(
+        renamed={"focal_length_mm": "focal_length"},
+        positional=("focal_length", "sensor_size_mm", "image_size"),
+    )
     def from_sensor(
         cls,
-        focal_length_mm: float,
+        *,
+        focal_length: float,
         sensor_size_mm: tuple[float, float],
         image_size: tuple[int, int],
     ) -> Intrinsics:
-        """From a focal length and the sensor's active area (width, height) in mm."""
+        """From a focal length (mm) and the sensor's active area (width, height) in mm.
+
+        Every parameter is keyword-only.
+        """
         sw = check_positive(sensor_size_mm[0], "sensor width")
         sh = check_positive(sensor_size_mm[1], "sensor height")
         w, h = image_size
-        return cls.from_physical(focal_length_mm, (sw / w * 1000.0, sh / h * 1000.0), (w, h))
+        return cls.from_physical(
+            focal_length=focal_length,
+            pixel_pitch_um=(sw / w * 1000.0, sh / h * 1000.0),
+            image_size=(w, h),
+        )
 
     @classmethod
     def from_fov(cls, fov_x: float, image_size: tuple[int, int]) -> Intrinsics:

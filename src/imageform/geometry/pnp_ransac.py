@@ -7,6 +7,8 @@ import math
 import numpy as np
 import numpy.typing as npt
 
+from imageform import _deprecate
+from imageform._random import RNGLike, as_rng
 from imageform._validate import check_positive
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
 from imageform.geometry.distortion import DistortionModel
@@ -27,6 +29,7 @@ __all__ = ["solve_pnp_ransac"]
 BATCH = 64
 
 
+@_deprecate.parameters(renamed={"seed": "rng"})
 def solve_pnp_ransac(
     object_points: npt.ArrayLike,
     image_points: npt.ArrayLike,
@@ -36,7 +39,7 @@ def solve_pnp_ransac(
     threshold: float = 2.0,
     confidence: float = 0.999,
     max_hypotheses: int = 2000,
-    seed: int | None = 0,
+    rng: RNGLike = 0,
     max_iter: int = 20,
 ) -> PnPResult:
     """Pose of a calibrated camera from correspondences with outliers (RANSAC + LM).
@@ -63,8 +66,9 @@ def solve_pnp_ransac(
         Probability ``p`` of drawing at least one outlier-free sample, in (0, 1).
     max_hypotheses : int
         Upper bound on the number of samples.
-    seed : int or None
-        Seed of the sampler (reproducible by default).
+    rng : int, numpy.random.Generator or None
+        The sampler's random source (SPEC 7): an int seeds a new Generator (reproducible
+        by default, ``rng=0``), a Generator is used as is, None draws fresh entropy.
     max_iter : int
         LM iterations of the final refinement.
 
@@ -106,11 +110,11 @@ def solve_pnp_ransac(
     uvi = np.stack(
         [Km[0, 0] * xy[:, 0] + Km[0, 1] * xy[:, 1] + Km[0, 2], Km[1, 1] * xy[:, 1] + Km[1, 2]], -1
     )
-    rng = np.random.default_rng(seed)
+    gen = as_rng(rng)
     best_count, best_R, best_t = -1, np.eye(3), np.zeros(3)
     needed, drawn = float(max_hypotheses), 0
     while drawn < min(needed, max_hypotheses):
-        idx = np.argsort(rng.random((BATCH, N)), axis=1)[:, :s]
+        idx = np.argsort(gen.random((BATCH, N)), axis=1)[:, :s]
         with np.errstate(all="ignore"):
             R, t = linear_pose(X[idx], xy[idx])
             r, cam = _residuals(R, t, np.broadcast_to(X, (BATCH, N, 3)), uvi[None], Km)

@@ -11,7 +11,7 @@ Euler orders follow SciPy's ``Rotation.from_euler`` spelling: lower-case ``"xyz"
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, NamedTuple
 
 from imageform._backend import device_of, linalg, namespace
 from imageform._typing import Array, ArrayLike
@@ -19,6 +19,7 @@ from imageform._validate import as_matrix, as_points, check_rotation, det3
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
 
 __all__ = [
+    "Pose",
     "axis_rotation",
     "camera_rotation",
     "euler_to_matrix",
@@ -381,9 +382,16 @@ def is_rotation(R: ArrayLike, *, atol: float = 1e-6) -> Array:
     return orth & det
 
 
-def look_at(
-    eye: ArrayLike, target: ArrayLike, up: ArrayLike = (0.0, -1.0, 0.0)
-) -> tuple[Array, Array]:
+class Pose(NamedTuple):
+    """A world-to-camera pose, ``X_cam = R @ X_world + t`` (the result of :func:`look_at`)."""
+
+    #: Rotation (..., 3, 3).
+    R: Array
+    #: Translation (..., 3).
+    t: Array
+
+
+def look_at(eye: ArrayLike, target: ArrayLike, up: ArrayLike = (0.0, -1.0, 0.0)) -> Pose:
     """World-to-camera ``(R, t)`` of a camera at ``eye`` looking at ``target``.
 
     The camera's z axis points from ``eye`` to ``target``; its y axis points *down*, i.e.
@@ -429,4 +437,4 @@ def look_at(
     y = linalg(xp).cross(z, x)
     R = xp.stack((x, y, z), axis=-2)
     t = -(R @ e[..., None])[..., 0]
-    return R, t
+    return Pose(R, t)

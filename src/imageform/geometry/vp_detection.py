@@ -19,6 +19,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from imageform import _deprecate
+from imageform._random import RNGLike, as_rng
 from imageform._typing import ArrayLike, FloatArray
 from imageform._validate import check_positive
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
@@ -156,6 +158,7 @@ def _triplet_K(
     return K
 
 
+@_deprecate.parameters(renamed={"seed": "rng"})
 def detect_vanishing_points(
     image: ArrayLike | None = None,
     *,
@@ -165,7 +168,7 @@ def detect_vanishing_points(
     n_candidates: int = 6,
     iterations: int = 600,
     infinity_factor: float = 20.0,
-    seed: int = 0,
+    rng: RNGLike = 0,
 ) -> VanishingPointResult:
     """Find the vanishing points of a photograph, its orthogonal triplet, K and the horizon.
 
@@ -184,8 +187,9 @@ def detect_vanishing_points(
         RANSAC hypotheses per candidate.
     infinity_factor : float
         A point farther than this many image diagonals from the centre counts as at infinity.
-    seed : int
-        RANSAC's random seed (results are reproducible).
+    rng : int, numpy.random.Generator or None
+        RANSAC's random source (SPEC 7): an int seeds a new Generator (reproducible by
+        default, ``rng=0``), a Generator is used as is, None draws fresh entropy.
 
     Raises
     ------
@@ -213,8 +217,7 @@ def detect_vanishing_points(
     centre = np.array([(w - 1) / 2, (h - 1) / 2])
     diag = math.hypot(w, h)
     far = infinity_factor * diag
-    rng = np.random.default_rng(seed)
-    cands = _ransac_candidates(segments, rng, n_candidates, angle_threshold, iterations)
+    cands = _ransac_candidates(segments, as_rng(rng), n_candidates, angle_threshold, iterations)
     cands = [(_normalise(v, far), inl, sc) for v, inl, sc in cands]
     best: tuple[float, tuple[int, ...], FloatArray | None] = (-1.0, (), None)
     for r in (3, 2):

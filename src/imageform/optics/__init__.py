@@ -1,8 +1,13 @@
-"""imageform.optics — thin lens, depth of field, defocus, vignetting and aberrations (SI units)."""
+"""imageform.optics — thin lens, depth of field, defocus, vignetting and aberrations (SI units).
+
+The focal length is always the keyword-only ``focal_length``: in metres, except where a
+function works on pixels (the vignetting maps take it in pixels, as ``fx`` of K).
+"""
 
 from __future__ import annotations
 
 from imageform.optics.aberrations import (
+    ChromaticFocalLengths,
     axial_chromatic_aberration,
     axial_chromatic_blur_diameters,
     chromatic_focal_lengths,
@@ -33,6 +38,7 @@ from imageform.optics.vignetting import (
 )
 
 __all__ = [
+    "ChromaticFocalLengths",
     "DepthOfField",
     "ThinLensSolution",
     "aperture_diameter",

@@ -17,10 +17,11 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
+from imageform import _deprecate
 from imageform._backend import to_numpy
 from imageform._validate import as_image, check_positive, format_shape
 from imageform.errors import InvalidInputError
@@ -28,6 +29,7 @@ from imageform.geometry.undistort import remap_bilinear
 from imageform.optics.defocus import blur_by_radius
 
 __all__ = [
+    "ChromaticFocalLengths",
     "axial_chromatic_aberration",
     "axial_chromatic_blur_diameters",
     "chromatic_focal_lengths",
@@ -37,13 +39,16 @@ __all__ = [
 ]
 
 
-def _centre(shape: tuple[int, ...], centre: tuple[float, float] | None) -> tuple[float, float]:
+def _center(shape: tuple[int, ...], center: tuple[float, float] | None) -> tuple[float, float]:
     h, w = shape[0], shape[1]
-    return ((w - 1) / 2, (h - 1) / 2) if centre is None else (float(centre[0]), float(centre[1]))
+    return ((w - 1) / 2, (h - 1) / 2) if center is None else (float(center[0]), float(center[1]))
 
 
-def spherical_blur_radius(focal_length: float, f_number: float, sa_coefficient: float) -> float:
+@_deprecate.parameters(positional=("focal_length", "f_number", "sa_coefficient"))
+def spherical_blur_radius(*, focal_length: float, f_number: float, sa_coefficient: float) -> float:
     """Radius (m) of the circle of least confusion of a lens with spherical aberration.
+
+    ``focal_length`` in metres; every parameter is keyword-only.
 
     The marginal ray (height ``h = f / 2N`` in the pupil) focuses ``LSA = S h² / f`` short of
     the paraxial focus (longitudinal aberration ∝ h²); it meets the paraxial image plane at
@@ -59,7 +64,8 @@ def spherical_blur_radius(focal_length: float, f_number: float, sa_coefficient: 
     4th ed., §3.4 (LSA ∝ h², TSA ∝ h³, least confusion at 3/4 LSA with diameter TSA/2);
     Hecht, *Optics*, 5th ed., §6.3.1.
 
-    >>> round(spherical_blur_radius(0.05, 2.0, 0.5) * 1e6, 4)  # micrometres
+    >>> r = spherical_blur_radius(focal_length=0.05, f_number=2.0, sa_coefficient=0.5)
+    >>> round(r * 1e6, 4)  # micrometres
     97.6562
     """
     f = check_positive(focal_length, "focal_length (m)")
@@ -68,6 +74,7 @@ def spherical_blur_radius(focal_length: float, f_number: float, sa_coefficient: 
     return s * f / (32.0 * n**3)
 
 
+@_deprecate.parameters(renamed={"centre": "center"})
 def spherical_aberration(
     image: Any,
     *,
@@ -76,9 +83,12 @@ def spherical_aberration(
     pixel_pitch: float,
     sa_coefficient: float,
     field_coefficient: float = 0.0,
-    centre: tuple[float, float] | None = None,
+    center: tuple[float, float] | None = None,
 ) -> Any:
     """Blur an image by spherical aberration at a given aperture, growing across the field.
+
+    ``focal_length`` and ``pixel_pitch`` in metres; ``center`` ``(c_u, c_v)`` in pixels
+    (default the image center).
 
     .. math::
 
@@ -105,20 +115,26 @@ def spherical_aberration(
         )
     p = check_positive(pixel_pitch, "pixel_pitch (m)")
     g = check_positive(field_coefficient, "field_coefficient", allow_zero=True)
-    r0 = spherical_blur_radius(focal_length, f_number, sa_coefficient) / p
+    r0 = (
+        spherical_blur_radius(
+            focal_length=focal_length, f_number=f_number, sa_coefficient=sa_coefficient
+        )
+        / p
+    )
     h, w = arr.shape[:2]
-    cu, cv = _centre(arr.shape, centre)
+    cu, cv = _center(arr.shape, center)
     v, u = np.mgrid[0:h, 0:w].astype(np.float64)
     corner = max(math.hypot(x - cu, y - cv) for x in (0, w - 1) for y in (0, h - 1)) or 1.0
     rho2 = ((u - cu) ** 2 + (v - cv) ** 2) / corner**2
     return blur_by_radius(arr, r0 * (1.0 + g * rho2))
 
 
+@_deprecate.parameters(renamed={"centre": "center"})
 def lateral_chromatic_aberration(
     image: Any,
     magnification: Sequence[float],
     *,
-    centre: tuple[float, float] | None = None,
+    center: tuple[float, float] | None = None,
     fill: float = 0.0,
 ) -> Any:
     """Scale each channel about the optical centre by its own magnification (colour fringes).
@@ -135,8 +151,8 @@ def lateral_chromatic_aberration(
     ----------
     image : array (H, W, C)
     magnification : sequence of C floats ``> 0`` (e.g. ``(1.002, 1.0, 0.998)`` for R, G, B)
-    centre : (c_u, c_v), optional
-        The optical centre (column, row); default the image centre.
+    center : (c_u, c_v), optional
+        The optical center (column, row); default the image center.
     fill : float
         Value where a shrunk channel samples outside the image.
 
@@ -156,7 +172,7 @@ def lateral_chromatic_aberration(
             f"expected {arr.shape[-1]} magnifications (one per channel), got {len(mags)}"
         )
     h, w = arr.shape[:2]
-    cu, cv = _centre(arr.shape, centre)
+    cu, cv = _center(arr.shape, center)
     v, u = np.mgrid[0:h, 0:w].astype(np.float64)
     out = np.empty_like(arr)
     for c, m in enumerate(mags):
@@ -165,8 +181,19 @@ def lateral_chromatic_aberration(
     return out
 
 
-def chromatic_focal_lengths(focal_length: float, abbe_number: float) -> tuple[float, float, float]:
+class ChromaticFocalLengths(NamedTuple):
+    """Result of :func:`chromatic_focal_lengths` (m); a sequence for ``focal_lengths=``."""
+
+    red: float
+    green: float
+    blue: float
+
+
+@_deprecate.parameters(positional=("focal_length", "abbe_number"))
+def chromatic_focal_lengths(*, focal_length: float, abbe_number: float) -> ChromaticFocalLengths:
     """Focal lengths for red, green, blue of a singlet of Abbe number ``V`` (d-line focus ``f``).
+
+    ``focal_length`` (the d-line focal length, metres) and ``abbe_number`` are keyword-only.
 
     A thin lens has ``1/f ∝ n(λ) - 1``, so ``f_C - f_F ≈ f / V`` between the C (656 nm) and
     F (486 nm) lines. Taking red ≈ C, green ≈ d (588 nm), blue ≈ F and splitting the spread
@@ -179,12 +206,13 @@ def chromatic_focal_lengths(focal_length: float, abbe_number: float) -> tuple[fl
 
     Source: Hecht, *Optics*, 5th ed., §6.3.2 (longitudinal chromatic aberration, Abbe number).
 
-    >>> [round(x * 1e3, 4) for x in chromatic_focal_lengths(0.05, 64.17)]  # N-BK7
+    >>> fl = chromatic_focal_lengths(focal_length=0.05, abbe_number=64.17)  # N-BK7
+    >>> [round(x * 1e3, 4) for x in fl]
     [50.3896, 50.0, 49.6104]
     """
     f = check_positive(focal_length, "focal_length (m)")
     v = check_positive(abbe_number, "abbe_number")
-    return (f * (1 + 0.5 / v), f, f * (1 - 0.5 / v))
+    return ChromaticFocalLengths(f * (1 + 0.5 / v), f, f * (1 - 0.5 / v))
 
 
 def axial_chromatic_blur_diameters(
@@ -209,7 +237,7 @@ def axial_chromatic_blur_diameters(
     (with all ``f_c`` equal this is the circle of confusion). Source: thin-lens geometry,
     Hecht §5.2; Wikipedia "Circle of confusion".
 
-    >>> fl = chromatic_focal_lengths(0.05, 64.17)
+    >>> fl = chromatic_focal_lengths(focal_length=0.05, abbe_number=64.17)
     >>> b = axial_chromatic_blur_diameters(2.0, focal_lengths=fl, f_number=2, focus=2)
     >>> [round(float(x) * 1e6, 2) for x in b]  # µm: green sharp, red and blue blurred
     [198.25, 0.0, 201.36]
@@ -267,7 +295,7 @@ def axial_chromatic_aberration(
         The channel in focus at ``focus`` (default 1, green).
 
     >>> img = np.zeros((31, 31, 3)); img[15, 15] = 1.0
-    >>> fl = chromatic_focal_lengths(0.05, 64.17)
+    >>> fl = chromatic_focal_lengths(focal_length=0.05, abbe_number=64.17)
     >>> out = axial_chromatic_aberration(img, 2.0, focal_lengths=fl, f_number=2, focus=2,
     ...                                  pixel_pitch=20e-6)
     >>> float(out[15, 15, 1]), bool(out[15, 15, 0] < 0.1)  # green sharp, red blurred

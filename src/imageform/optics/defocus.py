@@ -17,6 +17,7 @@ from typing import Any
 
 import numpy as np
 
+from imageform import _deprecate
 from imageform._backend import to_numpy
 from imageform._validate import as_image, check_positive, format_shape
 from imageform.errors import InvalidInputError
@@ -139,27 +140,33 @@ def blur_by_radius(image: Any, radius_px: Any, *, step: float = 0.5, max_layers:
     return out[..., 0] if gray else out
 
 
+@_deprecate.parameters(renamed={"f": "focal_length"})
 def defocus_radius_px(
-    depth: Any, *, f: float, f_number: float, focus: float, pixel_pitch: float
+    depth: Any, *, focal_length: float, f_number: float, focus: float, pixel_pitch: float
 ) -> Any:
     """Radius in pixels of the defocus disc of points at ``depth``: half the CoC over the pitch.
+
+    ``depth``, ``focal_length``, ``focus`` and ``pixel_pitch`` in metres.
 
     .. math::
 
         R_{px}(d) = \\frac{c(d)}{2 p}
 
-    >>> round(float(defocus_radius_px(4.0, f=0.05, f_number=2, focus=2, pixel_pitch=5e-6)), 3)
+    >>> r = defocus_radius_px(4.0, focal_length=0.05, f_number=2, focus=2, pixel_pitch=5e-6)
+    >>> round(float(r), 3)
     32.051
     """
     p = check_positive(pixel_pitch, "pixel_pitch (m)")
-    return circle_of_confusion(depth, f=f, f_number=f_number, focus=focus) / (2 * p)
+    coc = circle_of_confusion(depth, focal_length=focal_length, f_number=f_number, focus=focus)
+    return coc / (2 * p)
 
 
+@_deprecate.parameters(renamed={"f": "focal_length"})
 def defocus_blur(
     image: Any,
     depth: Any,
     *,
-    f: float,
+    focal_length: float,
     f_number: float,
     focus: float,
     pixel_pitch: float,
@@ -178,14 +185,14 @@ def defocus_blur(
         The all-in-focus image.
     depth : float or array (H, W)
         Distance of the scene point seen at each pixel (m).
-    f, f_number, focus, pixel_pitch : float
+    focal_length, f_number, focus, pixel_pitch : float
         Focal length (m), f-number, focus distance (m), sensor pixel pitch (m).
 
     Source: geometric defocus with the thin-lens CoC (Wikipedia "Circle of confusion");
     layered rendering as in :func:`blur_by_radius`.
 
     >>> img = np.zeros((21, 21)); img[10, 10] = 1.0
-    >>> out = defocus_blur(img, 2.0, f=0.05, f_number=2, focus=2.0, pixel_pitch=5e-6)
+    >>> out = defocus_blur(img, 2.0, focal_length=0.05, f_number=2, focus=2.0, pixel_pitch=5e-6)
     >>> float(out[10, 10])  # in focus: unchanged
     1.0
     """
@@ -195,5 +202,7 @@ def defocus_blur(
         raise InvalidInputError(
             f"expected depth scalar or of shape {img.shape[:2]}, got {format_shape(d.shape)}"
         )
-    r = defocus_radius_px(d, f=f, f_number=f_number, focus=focus, pixel_pitch=pixel_pitch)
+    r = defocus_radius_px(
+        d, focal_length=focal_length, f_number=f_number, focus=focus, pixel_pitch=pixel_pitch
+    )
     return blur_by_radius(image, r, step=step)

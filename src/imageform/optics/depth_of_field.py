@@ -1,7 +1,9 @@
 """Depth of field, hyperfocal distance and the circle of confusion of a thin lens (metres).
 
-Distances are measured from the lens (thin-lens model, object side). ``coc`` is the largest
-acceptable blur-spot *diameter* on the sensor (0.03 mm is the usual value for 35 mm film).
+Distances are measured from the lens (thin-lens model, object side); every function takes the
+focal length as the keyword-only ``focal_length`` (m), written ``f`` in the equations. ``coc``
+is the largest acceptable blur-spot *diameter* on the sensor (0.03 mm is the usual value for
+35 mm film).
 """
 
 from __future__ import annotations
@@ -10,6 +12,7 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
+from imageform import _deprecate
 from imageform._backend import namespace
 from imageform._validate import as_float, check_positive
 from imageform.errors import InvalidInputError
@@ -23,7 +26,7 @@ __all__ = [
 
 
 def _lens(f: float, n: float) -> tuple[float, float]:
-    return check_positive(f, "f (focal length, m)"), check_positive(n, "f_number")
+    return check_positive(f, "focal_length (m)"), check_positive(n, "f_number")
 
 
 def _focus(focus: float, f: float) -> float:
@@ -36,7 +39,10 @@ def _focus(focus: float, f: float) -> float:
     return s
 
 
-def hyperfocal_distance(f: float, f_number: float, coc: float) -> float:
+@_deprecate.parameters(
+    renamed={"f": "focal_length"}, positional=("focal_length", "f_number", "coc")
+)
+def hyperfocal_distance(*, focal_length: float, f_number: float, coc: float) -> float:
     """Hyperfocal distance: focused there, everything from ``H/2`` to infinity is sharp.
 
     .. math::
@@ -45,20 +51,21 @@ def hyperfocal_distance(f: float, f_number: float, coc: float) -> float:
 
     Parameters
     ----------
-    f : float
-        Focal length (m).
-    f_number : float
+    focal_length : float, keyword-only
+        Focal length ``f`` (m).
+    f_number : float, keyword-only
         ``N = f / D``.
-    coc : float
+    coc : float, keyword-only
         Acceptable circle-of-confusion diameter on the sensor (m).
 
     Source: S. F. Ray, *Applied Photographic Optics*, 3rd ed., §6.3; Wikipedia "Hyperfocal
     distance" (definition 1).
 
-    >>> round(hyperfocal_distance(0.050, 8, 0.03e-3), 2)  # 50 mm f/8, c = 0.03 mm
+    >>> h = hyperfocal_distance(focal_length=0.050, f_number=8, coc=0.03e-3)  # 50 mm f/8
+    >>> round(h, 2)
     10.47
     """
-    fv, n = _lens(f, f_number)
+    fv, n = _lens(focal_length, f_number)
     c = check_positive(coc, "coc (circle of confusion, m)")
     return fv * fv / (n * c) + fv
 
@@ -88,8 +95,16 @@ class DepthOfField:
         return self.far - self.focus
 
 
-def depth_of_field(f: float, f_number: float, focus: float, coc: float) -> DepthOfField:
+@_deprecate.parameters(
+    renamed={"f": "focal_length"}, positional=("focal_length", "f_number", "focus", "coc")
+)
+def depth_of_field(
+    *, focal_length: float, f_number: float, focus: float, coc: float
+) -> DepthOfField:
     """Near and far limits of the depth of field of a thin lens.
+
+    ``focal_length``, ``focus`` (the distance ``s``) and ``coc`` in metres; every parameter is
+    keyword-only.
 
     .. math::
 
@@ -102,19 +117,20 @@ def depth_of_field(f: float, f_number: float, focus: float, coc: float) -> Depth
     Source: Wikipedia "Depth of field", §"Derivation of the DOF formulae" (exact thin-lens
     forms); S. F. Ray, *Applied Photographic Optics*, 3rd ed., §6.3.
 
-    >>> d = depth_of_field(0.050, 2.8, 2.0, 0.03e-3)  # DOFMaster: 1.88 m – 2.14 m
-    >>> round(d.near, 3), round(d.far, 3)
+    >>> d = depth_of_field(focal_length=0.050, f_number=2.8, focus=2.0, coc=0.03e-3)
+    >>> round(d.near, 3), round(d.far, 3)  # DOFMaster: 1.88 m - 2.14 m
     (1.877, 2.14)
     """
-    fv, n = _lens(f, f_number)
+    fv, n = _lens(focal_length, f_number)
     s = _focus(focus, fv)
-    h = hyperfocal_distance(fv, n, coc)
+    h = hyperfocal_distance(focal_length=fv, f_number=n, coc=coc)
     near = s * (h - fv) / (h + s - 2 * fv)
     far = s * (h - fv) / (h - s) if s < h else math.inf
     return DepthOfField(focus=s, near=near, far=far, hyperfocal=h)
 
 
-def circle_of_confusion(depth: Any, *, f: float, f_number: float, focus: float) -> Any:
+@_deprecate.parameters(renamed={"f": "focal_length"})
+def circle_of_confusion(depth: Any, *, focal_length: float, f_number: float, focus: float) -> Any:
     """Blur-spot diameter on the sensor (m) of a point at ``depth`` when focused at ``focus``.
 
     .. math::
@@ -126,8 +142,8 @@ def circle_of_confusion(depth: Any, *, f: float, f_number: float, focus: float) 
     depth : float or array (...)
         Distances of the points from the lens (m), ``> 0``; ``inf`` is allowed (the limit
         ``f² / (N (s - f))``).
-    f, f_number, focus : float
-        Focal length (m), f-number, focus distance ``s > f`` (m).
+    focal_length, f_number, focus : float, keyword-only
+        Focal length ``f`` (m), f-number, focus distance ``s > f`` (m).
 
     Returns
     -------
@@ -136,10 +152,11 @@ def circle_of_confusion(depth: Any, *, f: float, f_number: float, focus: float) 
     Source: Wikipedia "Circle of confusion", §"Determining a circle of confusion diameter
     from the object field"; the aperture diameter is ``A = f / N``.
 
-    >>> round(float(circle_of_confusion(4.0, f=0.05, f_number=2.0, focus=2.0)) * 1e3, 6)
+    >>> c = circle_of_confusion(4.0, focal_length=0.05, f_number=2.0, focus=2.0)
+    >>> round(float(c) * 1e3, 6)
     0.320513
     """
-    fv, n = _lens(f, f_number)
+    fv, n = _lens(focal_length, f_number)
     s = _focus(focus, fv)
     scalar = isinstance(depth, int | float)
     xp = namespace(depth)

@@ -1,11 +1,13 @@
 """The thin lens: Gaussian lens equation, magnification and f-number, in SI units (metres).
 
-Sign convention: *real is positive*. A converging lens has ``f > 0``; a real object in front
-of the lens has ``d_o > 0``; a real image behind the lens (where a sensor can sit) has
-``d_i > 0``. An object inside the focal length (``d_o < f``) has no real image: the rays
-leave the lens diverging and only appear to come from a *virtual*, upright, magnified image
-on the object's side (``d_i < 0``, the magnifying-glass case). :func:`thin_lens` raises for
-it unless ``allow_virtual=True``, when it returns that image with ``virtual=True``.
+Every function takes the focal length as the keyword-only ``focal_length`` (metres), written
+``f`` in the equations. Sign convention: *real is positive*. A converging lens has ``f > 0``;
+a real object in front of the lens has ``d_o > 0``; a real image behind the lens (where a
+sensor can sit) has ``d_i > 0``. An object inside the focal length (``d_o < f``) has no real
+image: the rays leave the lens diverging and only appear to come from a *virtual*, upright,
+magnified image on the object's side (``d_i < 0``, the magnifying-glass case).
+:func:`thin_lens` raises for it unless ``allow_virtual=True``, when it returns that image
+with ``virtual=True``.
 """
 
 from __future__ import annotations
@@ -13,6 +15,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from imageform import _deprecate
 from imageform._validate import check_positive
 from imageform.errors import InvalidInputError
 
@@ -33,11 +36,13 @@ class ThinLensSolution:
     ``virtual`` is True when the image is virtual (``d_i < 0``, object inside ``f``).
     """
 
-    f: float
+    focal_length: float
     d_o: float
     d_i: float
     magnification: float
     virtual: bool
+
+    f = _deprecate.renamed_property("focal_length", "imageform.optics.ThinLensSolution.f")
 
 
 def _number(value: object, name: str) -> float:
@@ -60,9 +65,10 @@ def _virtual_error(f: float, d_o: float) -> InvalidInputError:
     )
 
 
+@_deprecate.parameters(renamed={"f": "focal_length"})
 def thin_lens(
     *,
-    f: float | None = None,
+    focal_length: float | None = None,
     d_o: float | None = None,
     d_i: float | None = None,
     allow_virtual: bool = False,
@@ -75,7 +81,7 @@ def thin_lens(
 
     Parameters
     ----------
-    f, d_o, d_i : float
+    focal_length, d_o, d_i : float
         Exactly two of them, in metres (real-is-positive convention, module docstring).
     allow_virtual : bool
         Return the virtual image (``d_i < 0``, ``virtual=True``) of an object inside the
@@ -88,8 +94,8 @@ def thin_lens(
     Raises
     ------
     InvalidInputError
-        Not exactly two values; ``f <= 0``; ``d_o <= 0``; an object at the focal plane (image
-        at infinity); an object inside the focal length (virtual image) without
+        Not exactly two values; ``focal_length <= 0``; ``d_o <= 0``; an object at the focal
+        plane (image at infinity); an object inside the focal length (virtual image) without
         ``allow_virtual``; a given ``d_i <= f`` or ``d_i < 0`` (no real object images there).
 
     Notes
@@ -97,20 +103,24 @@ def thin_lens(
     Source: E. Hecht, *Optics*, 5th ed., eq. (5.17) (Gaussian lens formula) and (5.24)
     (transverse magnification).
 
-    >>> s = thin_lens(f=0.05, d_o=2.0)
+    >>> s = thin_lens(focal_length=0.05, d_o=2.0)
     >>> round(s.d_i * 1000, 4), round(s.magnification, 5)
     (51.2821, -0.02564)
     """
-    given = {k: v for k, v in (("f", f), ("d_o", d_o), ("d_i", d_i)) if v is not None}
+    given = {
+        k: v
+        for k, v in (("focal_length", focal_length), ("d_o", d_o), ("d_i", d_i))
+        if v is not None
+    }
     if len(given) != 2:
         raise InvalidInputError(
-            f"expected exactly two of f, d_o, d_i, got {sorted(given) or 'none'}"
+            f"expected exactly two of focal_length, d_o, d_i, got {sorted(given) or 'none'}"
         )
     vals = {k: _number(v, k) for k, v in given.items()}
-    if "f" in vals and vals["f"] <= 0:
+    if "focal_length" in vals and vals["focal_length"] <= 0:
         raise InvalidInputError(
-            f"expected a converging lens, f > 0 m, got f = {vals['f']:g} (a diverging lens "
-            "forms no real image)"
+            f"expected a converging lens, focal_length > 0 m, got {vals['focal_length']:g} "
+            "(a diverging lens forms no real image)"
         )
     if "d_o" in vals and vals["d_o"] <= 0:
         raise InvalidInputError(f"expected an object in front of the lens, d_o > 0 m, got {d_o!r}")
@@ -118,7 +128,7 @@ def thin_lens(
         raise InvalidInputError("expected d_i != 0 m, got 0")
 
     if "d_i" not in vals:
-        fv, do = vals["f"], vals["d_o"]
+        fv, do = vals["focal_length"], vals["d_o"]
         if do == fv:
             raise InvalidInputError(
                 f"object at the focal plane (d_o = f = {fv:g} m): the rays leave parallel and "
@@ -128,7 +138,7 @@ def thin_lens(
             raise _virtual_error(fv, do)
         di = fv * do / (do - fv)
     elif "d_o" not in vals:
-        fv, di = vals["f"], vals["d_i"]
+        fv, di = vals["focal_length"], vals["d_i"]
         if di < 0 and not allow_virtual:
             raise InvalidInputError(
                 f"d_i = {di:g} m < 0 is a virtual image; pass allow_virtual=True to solve for "
@@ -152,11 +162,14 @@ def thin_lens(
                 f"(d_o = {do:g} m) for a converging lens"
             )
         fv = do * di / (do + di)
-    return ThinLensSolution(f=fv, d_o=do, d_i=di, magnification=-di / do, virtual=di < 0)
+    return ThinLensSolution(focal_length=fv, d_o=do, d_i=di, magnification=-di / do, virtual=di < 0)
 
 
-def magnification(f: float, d_o: float, *, allow_virtual: bool = False) -> float:
+@_deprecate.parameters(renamed={"f": "focal_length"}, positional=("focal_length", "d_o"))
+def magnification(*, focal_length: float, d_o: float, allow_virtual: bool = False) -> float:
     """Lateral magnification of an object at ``d_o`` through a thin lens of focal length ``f``.
+
+    ``focal_length`` and ``d_o`` in metres, keyword-only.
 
     .. math::
 
@@ -164,14 +177,19 @@ def magnification(f: float, d_o: float, *, allow_virtual: bool = False) -> float
 
     Negative values mean an inverted real image. Source: Hecht, *Optics*, 5th ed., eq. (5.24).
 
-    >>> round(magnification(0.05, 0.1), 12)  # object at 2f: life-size, inverted
+    >>> round(magnification(focal_length=0.05, d_o=0.1), 12)  # object at 2f: life-size
     -1.0
     """
-    return thin_lens(f=f, d_o=d_o, allow_virtual=allow_virtual).magnification
+    return thin_lens(focal_length=focal_length, d_o=d_o, allow_virtual=allow_virtual).magnification
 
 
-def f_number(f: float, aperture_diameter: float) -> float:
+@_deprecate.parameters(
+    renamed={"f": "focal_length"}, positional=("focal_length", "aperture_diameter")
+)
+def f_number(*, focal_length: float, aperture_diameter: float) -> float:
     """The f-number ``N = f / D`` of a lens with entrance-pupil diameter ``D`` (metres).
+
+    ``focal_length`` and ``aperture_diameter`` in metres, keyword-only.
 
     .. math::
 
@@ -179,20 +197,21 @@ def f_number(f: float, aperture_diameter: float) -> float:
 
     Source: Hecht, *Optics*, 5th ed., §5.3.3.
 
-    >>> round(f_number(0.05, 0.05 / 2.8), 12)
+    >>> round(f_number(focal_length=0.05, aperture_diameter=0.05 / 2.8), 12)
     2.8
     """
-    fv = check_positive(f, "f (focal length, m)")
+    fv = check_positive(focal_length, "focal_length (m)")
     d = check_positive(aperture_diameter, "aperture_diameter (m)")
     return fv / d
 
 
-def aperture_diameter(f: float, f_number: float) -> float:
-    """Entrance-pupil diameter ``D = f / N`` (metres).
+@_deprecate.parameters(renamed={"f": "focal_length"}, positional=("focal_length", "f_number"))
+def aperture_diameter(*, focal_length: float, f_number: float) -> float:
+    """Entrance-pupil diameter ``D = f / N`` (metres); ``focal_length`` in metres, keyword-only.
 
-    >>> round(aperture_diameter(0.05, 2.0), 6)
+    >>> round(aperture_diameter(focal_length=0.05, f_number=2.0), 6)
     0.025
     """
-    fv = check_positive(f, "f (focal length, m)")
+    fv = check_positive(focal_length, "focal_length (m)")
     n = check_positive(f_number, "f_number")
     return fv / n

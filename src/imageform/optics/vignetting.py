@@ -1,7 +1,8 @@
 """Vignetting: the natural cos⁴ law and mechanical vignetting by a lens barrel.
 
 Field angle of pixel ``(u, v)``: ``tan θ = r / f_px`` with ``r`` its distance from the optical
-centre ``(c_u, c_v)`` in pixels and ``f_px`` the focal length in pixels.
+center ``(c_u, c_v)`` in pixels and ``f_px`` the focal length in pixels: here the keyword-only
+``focal_length`` is in **pixels** (the focal length divided by the pixel pitch, ``fx`` of K).
 """
 
 from __future__ import annotations
@@ -11,6 +12,7 @@ from typing import Any
 
 import numpy as np
 
+from imageform import _deprecate
 from imageform._backend import to_numpy
 from imageform._validate import as_image, check_positive, format_shape
 from imageform.errors import InvalidInputError
@@ -24,29 +26,42 @@ __all__ = [
 ]
 
 
+_RENAMED = {"focal_length_px": "focal_length", "centre": "center"}
+
+
+@_deprecate.parameters(renamed=_RENAMED, positional=("focal_length", "center"))
 def field_angle(
-    shape: tuple[int, int], focal_length_px: float, centre: tuple[float, float] | None = None
+    shape: tuple[int, int], *, focal_length: float, center: tuple[float, float] | None = None
 ) -> np.ndarray:
     """Field angle θ (radians) of every pixel: ``θ = atan(r / f_px)``; shape ``(H, W)``.
 
-    ``centre`` is ``(c_u, c_v)`` (column, row); default the image centre ``((W-1)/2, (H-1)/2)``.
+    Parameters
+    ----------
+    shape : (H, W)
+    focal_length : float, keyword-only
+        Focal length in **pixels** (``fx``).
+    center : (c_u, c_v), keyword-only, optional
+        The optical center (column, row); default the image center ``((W-1)/2, (H-1)/2)``.
 
-    >>> round(float(field_angle((1, 3), 1.0)[0, 0]), 6)  # one pixel off-centre, f = 1 px
+    >>> round(float(field_angle((1, 3), focal_length=1.0)[0, 0]), 6)  # one pixel off, f = 1 px
     0.785398
     """
     h, w = int(shape[0]), int(shape[1])
     if h < 1 or w < 1:
         raise InvalidInputError(f"expected a positive shape (H, W), got {shape!r}")
-    f = check_positive(focal_length_px, "focal_length_px")
-    cu, cv = ((w - 1) / 2, (h - 1) / 2) if centre is None else (float(centre[0]), float(centre[1]))
+    f = check_positive(focal_length, "focal_length (px)")
+    cu, cv = ((w - 1) / 2, (h - 1) / 2) if center is None else (float(center[0]), float(center[1]))
     v, u = np.mgrid[0:h, 0:w].astype(np.float64)
     return np.arctan(np.hypot(u - cu, v - cv) / f)
 
 
+@_deprecate.parameters(renamed=_RENAMED, positional=("focal_length", "center"))
 def cos4_falloff(
-    shape: tuple[int, int], focal_length_px: float, centre: tuple[float, float] | None = None
+    shape: tuple[int, int], *, focal_length: float, center: tuple[float, float] | None = None
 ) -> np.ndarray:
     """Relative illumination of the natural vignetting law, ``cos⁴ θ``; shape ``(H, W)``.
+
+    ``focal_length`` (keyword-only) is in pixels, ``center`` as in :func:`field_angle`.
 
     .. math::
 
@@ -56,11 +71,11 @@ def cos4_falloff(
     sensor, two from the inverse-square distance to the pupil. Source: E. Hecht, *Optics*,
     5th ed., §5.7.4 (cos⁴ law); S. F. Ray, *Applied Photographic Optics*, §23.
 
-    >>> f = cos4_falloff((1, 3), 1.0)  # the outer pixels are at 45°
+    >>> f = cos4_falloff((1, 3), focal_length=1.0)  # the outer pixels are at 45°
     >>> round(float(f[0, 0]), 6), float(f[0, 1])
     (0.25, 1.0)
     """
-    return np.cos(field_angle(shape, focal_length_px, centre)) ** 4
+    return np.cos(field_angle(shape, focal_length=focal_length, center=center)) ** 4
 
 
 def pupil_overlap_fraction(pupil_radius: float, stop_radius: float, offset: Any) -> Any:
@@ -95,14 +110,15 @@ def pupil_overlap_fraction(pupil_radius: float, stop_radius: float, offset: Any)
     return frac
 
 
+@_deprecate.parameters(renamed=_RENAMED, positional=("focal_length",))
 def mechanical_vignetting(
     shape: tuple[int, int],
-    focal_length_px: float,
     *,
+    focal_length: float,
     pupil_radius: float,
     barrel_radius: float,
     barrel_distance: float,
-    centre: tuple[float, float] | None = None,
+    center: tuple[float, float] | None = None,
 ) -> np.ndarray:
     """Relative illumination when a lens barrel clips the oblique beam; shape ``(H, W)``.
 
@@ -115,23 +131,24 @@ def mechanical_vignetting(
 
         V(\\theta) = \\frac{A(a, b, L\\tan\\theta)}{\\pi a^2}
 
-    Lengths in one unit (e.g. metres). Source: S. F. Ray, *Applied Photographic Optics*,
-    §23 ("mechanical vignetting"); geometry of the oblique beam.
+    ``focal_length`` is in pixels and ``center`` as in :func:`field_angle`; the other lengths
+    in one unit (e.g. metres). Source: S. F. Ray, *Applied Photographic Optics*, §23
+    ("mechanical vignetting"); geometry of the oblique beam.
 
-    >>> v = mechanical_vignetting((1, 3), 1.0, pupil_radius=1, barrel_radius=1,
+    >>> v = mechanical_vignetting((1, 3), focal_length=1.0, pupil_radius=1, barrel_radius=1,
     ...                           barrel_distance=1)
     >>> round(float(v[0, 0]), 6), float(v[0, 1])
     (0.391002, 1.0)
     """
     L = check_positive(barrel_distance, "barrel_distance", allow_zero=True)
-    theta = field_angle(shape, focal_length_px, centre)
+    theta = field_angle(shape, focal_length=focal_length, center=center)
     return np.asarray(pupil_overlap_fraction(pupil_radius, barrel_radius, L * np.tan(theta)))
 
 
 def apply_vignetting(image: Any, falloff: Any) -> Any:
     """Multiply an image ``(H, W)`` or ``(H, W, C)`` by a relative-illumination map ``(H, W)``.
 
-    >>> apply_vignetting(np.ones((1, 3)), cos4_falloff((1, 3), 1.0)).round(12).tolist()
+    >>> apply_vignetting(np.ones((1, 3)), cos4_falloff((1, 3), focal_length=1.0)).round(12).tolist()
     [[0.25, 1.0, 0.25]]
     """
     img = np.asarray(to_numpy(as_image(image, "image", channels=None)))

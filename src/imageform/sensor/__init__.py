@@ -3,6 +3,7 @@ CCD/CMOS presets, EMVA 1288 photon transfer."""
 
 from __future__ import annotations
 
+from imageform import _deprecate
 from imageform.sensor.cfa import CFA_PATTERNS, cfa_masks, cfa_pattern, mosaic
 from imageform.sensor.demosaic import DEMOSAIC_METHODS, demosaic
 from imageform.sensor.emva import (
@@ -13,7 +14,7 @@ from imageform.sensor.emva import (
 )
 from imageform.sensor.model import SensorModel, photons_per_pixel
 from imageform.sensor.noise import (
-    QUANTISATION_NOISE_DN,
+    QUANTIZATION_NOISE_DN,
     FixedPattern,
     emva_snr,
     fixed_pattern,
@@ -37,7 +38,7 @@ __all__ = [
     "CCD_VS_CMOS",
     "CFA_PATTERNS",
     "DEMOSAIC_METHODS",
-    "QUANTISATION_NOISE_DN",
+    "QUANTIZATION_NOISE_DN",
     "ComparisonRow",
     "EmvaResult",
     "FixedPattern",
@@ -61,4 +62,8 @@ __all__ = [
     "simulate_photon_transfer",
     "temporal_noise_dn",
 ]
+
+__getattr__ = _deprecate.module_getattr(
+    "imageform.sensor", {"QUANTISATION_NOISE_DN": ("QUANTIZATION_NOISE_DN", QUANTIZATION_NOISE_DN)}
+)
 # --- end of branch `sensor` block -------------------------------------------------------------

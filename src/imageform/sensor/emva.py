@@ -19,10 +19,11 @@ from typing import Any
 
 import numpy as np
 
+from imageform._random import RNGLike, as_rng
 from imageform._validate import check_positive
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
 from imageform.sensor.model import SensorModel, photons_per_pixel
-from imageform.sensor.noise import QUANTISATION_NOISE_DN
+from imageform.sensor.noise import QUANTIZATION_NOISE_DN
 
 __all__ = [
     "EmvaResult",
@@ -76,7 +77,7 @@ def simulate_photon_transfer(
     irradiance: float,
     wavelength_nm: float,
     exposure_times: Any,
-    rng: np.random.Generator | int,
+    rng: RNGLike,
     shape: tuple[int, int] = (64, 64),
     channel: int = 0,
 ) -> PhotonTransferData:
@@ -95,7 +96,8 @@ def simulate_photon_transfer(
     wavelength_nm : float
     exposure_times : array (n,)
         Seconds, ``>= 0``.
-    rng : numpy.random.Generator or int
+    rng : int, numpy.random.Generator or None
+        The temporal noise source (SPEC 7): an int seeds a new Generator.
     shape : (H, W)
         Size of the simulated region of interest.
     channel : int
@@ -116,7 +118,7 @@ def simulate_photon_transfer(
         raise InvalidInputError("expected exposure_times: finite, >= 0 seconds, at least one")
     if not 0 <= channel < sensor.n_channels:
         raise InvalidInputError(f"expected channel in [0, {sensor.n_channels - 1}], got {channel}")
-    gen = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(int(rng))
+    gen = as_rng(rng)
     h, w = int(shape[0]), int(shape[1])
     flat = np.full((h, w), e)
     dark = np.zeros((h, w))
@@ -127,7 +129,7 @@ def simulate_photon_transfer(
                 img,
                 exposure_time=float(t),
                 rng=gen,
-                input="irradiance",
+                quantity="irradiance",
                 wavelength_nm=wavelength_nm,
             )[..., channel]
             for img in (flat, flat, dark, dark)
@@ -201,7 +203,7 @@ def fit_photon_transfer(data: PhotonTransferData, *, fit_fraction: float = 0.7) 
     responsivity = float(np.dot(mp, sig[use]) / np.dot(mp, mp)) if np.any(mp > 0) else math.nan
     icpt_d = float(np.polyfit(t, data.dark_var_dn, 1)[1])
     dark_mean_slope = float(np.polyfit(t, data.dark_mean_dn, 1)[0])
-    temporal = icpt_d - QUANTISATION_NOISE_DN**2
+    temporal = icpt_d - QUANTIZATION_NOISE_DN**2
     read = math.sqrt(temporal) / k if temporal > 0 else math.nan
     return EmvaResult(
         system_gain=float(k),

@@ -22,7 +22,9 @@ from typing import Any
 
 import numpy as np
 
+from imageform import _deprecate
 from imageform._backend import to_numpy
+from imageform._random import RNGLike, as_rng
 from imageform._validate import check_option, check_positive, format_shape
 from imageform.errors import InvalidInputError
 from imageform.sensor.noise import FixedPattern, fixed_pattern
@@ -34,7 +36,8 @@ PLANCK = 6.62607015e-34
 #: Speed of light in vacuum, m/s (exact, SI definition).
 SPEED_OF_LIGHT = 299792458.0
 
-_INPUTS = ("electrons", "photons", "irradiance")
+#: What a signal given to :meth:`SensorModel.capture` holds (its ``quantity=``).
+_QUANTITIES = ("electrons", "photons", "irradiance")
 
 
 def _positive_field(obj: object, name: str, *, allow_zero: bool = False) -> None:
@@ -107,7 +110,8 @@ class SensorModel:
     power : float
         Typical power consumption (W), for the CCD/CMOS comparison.
     fpn_seed : int
-        Seed of the chip's fixed pattern (the same chip in every frame).
+        Seed of the chip's fixed pattern (the same chip in every frame). An int on purpose,
+        not an ``rng``: it is part of the chip's identity, drawn again identically each time.
 
     >>> s = SensorModel(conversion_gain=50e-6, adc_range=1.0, bit_depth=12)
     >>> round(s.system_gain, 5)  # DN per electron
@@ -213,21 +217,22 @@ class SensorModel:
             prnu=self.prnu,
             dsnu=self.dsnu,
             column_fpn=col,
-            seed=self.fpn_seed,
+            rng=self.fpn_seed,
         )
 
     # -- light to electrons ---------------------------------------------------------------
+    @_deprecate.parameters(renamed={"input": "quantity"})
     def mean_electrons(
         self,
         signal: Any,
         *,
         exposure_time: float,
-        input: str = "electrons",
+        quantity: str = "electrons",
         wavelength_nm: float | None = None,
     ) -> np.ndarray:
         """Mean photo-electrons per pixel and channel, ``(..., H, W, C)``, before any noise.
 
-        ``input`` says what ``signal`` holds:
+        ``quantity`` says what ``signal`` holds:
 
         - ``"electrons"``: mean photo-electrons, ``(..., H, W, C)`` (returned as is);
         - ``"photons"``: mean photons on the pixel area during the exposure — monochromatic
@@ -240,7 +245,7 @@ class SensorModel:
         .. math:: \\mu_{e,c} = FF \\sum_\\lambda QE_c(\\lambda)\\, \\mu_p(\\lambda)
         """
         t = check_positive(exposure_time, "exposure_time (s)", allow_zero=True)
-        kind = check_option(input, _INPUTS, "capture input")
+        kind = check_option(quantity, _QUANTITIES, "signal quantity")
         arr = np.asarray(to_numpy(signal), dtype=np.float64)
         if not np.all(np.isfinite(arr)):
             raise InvalidInputError("signal contains NaN or inf")
@@ -288,13 +293,14 @@ class SensorModel:
         return ff * per_bin @ qe.T
 
     # -- electrons to digital numbers -------------------------------------------------------
+    @_deprecate.parameters(renamed={"input": "quantity"})
     def capture(
         self,
         signal: Any,
         *,
         exposure_time: float,
-        rng: np.random.Generator | int,
-        input: str = "electrons",
+        rng: RNGLike,
+        quantity: str = "electrons",
         wavelength_nm: float | None = None,
     ) -> np.ndarray:
         """Simulate one exposure: shot, dark and read noise, FPN, gain, black level, ADC.
@@ -307,12 +313,14 @@ class SensorModel:
         Parameters
         ----------
         signal : array
-            See :meth:`mean_electrons` for the shapes of each ``input`` kind.
+            See :meth:`mean_electrons` for the shapes of each ``quantity``.
         exposure_time : float
             Seconds, ``>= 0``.
-        rng : numpy.random.Generator or int
-            The per-frame temporal noise source (an int seeds a new Generator).
-        input : {"electrons", "photons", "irradiance"}
+        rng : int, numpy.random.Generator or None
+            The per-frame temporal noise source (SPEC 7: an int seeds a new Generator, a
+            Generator is used and advanced, None draws fresh entropy).
+        quantity : {"electrons", "photons", "irradiance"}
+            What ``signal`` holds.
         wavelength_nm : float, optional
             For monochromatic photons or irradiance.
 
@@ -328,11 +336,11 @@ class SensorModel:
         [0, 0]
         """
         mu = self.mean_electrons(
-            signal, exposure_time=exposure_time, input=input, wavelength_nm=wavelength_nm
+            signal, exposure_time=exposure_time, quantity=quantity, wavelength_nm=wavelength_nm
         )
         if mu.ndim < 3:
             raise InvalidInputError(f"expected (..., H, W, C), got {format_shape(mu.shape)}")
-        gen = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(int(rng))
+        gen = as_rng(rng)
         h, w = mu.shape[-3], mu.shape[-2]
         fp = self.fixed_pattern(h, w)
         t = float(exposure_time)
@@ -347,18 +355,20 @@ class SensorModel:
         dn = np.clip(np.floor(analog + 0.5), 0, self.max_dn)  # the ADC's range (physics)
         return dn.astype(np.uint16)
 
-    def normalise(self, dn: Any) -> np.ndarray:
+    def normalize(self, dn: Any) -> np.ndarray:
         """Raw DN to floats: black level subtracted, white (``2^b - 1``) mapped to 1.
 
         .. math:: \\frac{y - y_0}{(2^b - 1) - y_0}
 
         Values below the black level stay negative (noise is not clipped).
 
-        >>> SensorModel(black_level=64, bit_depth=12).normalise([64, 4095]).tolist()
+        >>> SensorModel(black_level=64, bit_depth=12).normalize([64, 4095]).tolist()
         [0.0, 1.0]
         """
         arr = np.asarray(to_numpy(dn), dtype=np.float64)
         return (arr - self.black_level) / (self.max_dn - self.black_level)
+
+    normalise = _deprecate.renamed(normalize, "imageform.sensor.SensorModel.normalise")
 
     def frame_readout_time(self, rows: int) -> float:
         """Time to read ``rows`` rows, ``rows × line_time`` (s).

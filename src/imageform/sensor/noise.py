@@ -3,7 +3,8 @@
 Temporal noise (photon shot noise, dark-current shot noise, read noise, quantisation) changes
 from frame to frame; fixed-pattern noise (PRNU, DSNU, CMOS column offsets) is a property of
 the chip and is the same in every frame, so its maps are drawn from the sensor's own
-``fpn_seed``, never from the per-frame generator.
+``fpn_seed``, never from the per-frame generator. (``fpn_seed`` stays an int, not an ``rng``:
+it is the chip's identity, the same pattern every time the model is used.)
 """
 
 from __future__ import annotations
@@ -13,18 +14,25 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from imageform import _deprecate
+from imageform._random import RNGLike, as_rng
 from imageform._validate import check_positive
 
 __all__ = [
-    "QUANTISATION_NOISE_DN",
+    "QUANTIZATION_NOISE_DN",
     "FixedPattern",
     "emva_snr",
     "fixed_pattern",
     "temporal_noise_dn",
 ]
 
-#: Standard deviation of uniform quantisation noise, ``1/√12`` DN (EMVA 1288 4.0, eq. 8).
-QUANTISATION_NOISE_DN = 1.0 / math.sqrt(12.0)
+#: Standard deviation of uniform quantization noise, ``1/√12`` DN (EMVA 1288 4.0, eq. 8).
+QUANTIZATION_NOISE_DN = 1.0 / math.sqrt(12.0)
+
+__getattr__ = _deprecate.module_getattr(
+    "imageform.sensor.noise",
+    {"QUANTISATION_NOISE_DN": ("QUANTIZATION_NOISE_DN", QUANTIZATION_NOISE_DN)},
+)
 
 
 @dataclass(frozen=True)
@@ -41,8 +49,9 @@ class FixedPattern:
     column: np.ndarray
 
 
+@_deprecate.parameters(renamed={"seed": "rng"})
 def fixed_pattern(
-    shape: tuple[int, int, int], *, prnu: float, dsnu: float, column_fpn: float, seed: int
+    shape: tuple[int, int, int], *, prnu: float, dsnu: float, column_fpn: float, rng: RNGLike
 ) -> FixedPattern:
     """Draw the fixed-pattern maps of a chip: Gaussian PRNU, DSNU and column offsets.
 
@@ -52,11 +61,13 @@ def fixed_pattern(
         o_{ijc} = \\sigma_{DSNU} z'_{ijc} + \\sigma_{col} z''_j,\\quad z \\sim N(0, 1)
 
     ``prnu`` is a fraction (0.01 = 1 %), ``dsnu`` and ``column_fpn`` are electrons rms.
-    The same ``seed`` and shape always give the same chip. Source: EMVA 1288 4.0, §4.2
+    ``rng`` (SPEC 7): an int seeds the draw together with the shape, so the same seed and
+    shape always give the same chip; a Generator is drawn from (and advanced); None draws
+    fresh entropy. Source: EMVA 1288 4.0, §4.2
     (DSNU, PRNU definitions); column FPN of column-parallel CMOS read-out (A. El Gamal and
     H. Eltoukhy, "CMOS image sensors", IEEE Circuits & Devices 21(3), 2005).
 
-    >>> fp = fixed_pattern((2, 3, 1), prnu=0.0, dsnu=0.0, column_fpn=0.0, seed=0)
+    >>> fp = fixed_pattern((2, 3, 1), prnu=0.0, dsnu=0.0, column_fpn=0.0, rng=0)
     >>> bool((fp.gain == 1).all()), bool((fp.offset == 0).all())
     (True, True)
     """
@@ -64,10 +75,10 @@ def fixed_pattern(
     p = check_positive(prnu, "prnu", allow_zero=True)
     d = check_positive(dsnu, "dsnu (e-)", allow_zero=True)
     col = check_positive(column_fpn, "column_fpn (e-)", allow_zero=True)
-    rng = np.random.default_rng(np.random.SeedSequence([int(seed), h, w, c]))
-    gain = 1.0 + p * rng.standard_normal((h, w, c))
-    cols = col * rng.standard_normal(w)
-    offset = d * rng.standard_normal((h, w, c)) + cols[None, :, None]
+    gen = as_rng(rng, mix=(h, w, c))
+    gain = 1.0 + p * gen.standard_normal((h, w, c))
+    cols = col * gen.standard_normal(w)
+    offset = d * gen.standard_normal((h, w, c)) + cols[None, :, None]
     return FixedPattern(gain=gain, offset=offset, column=cols)
 
 
@@ -87,7 +98,7 @@ def temporal_noise_dn(mean_electrons: float, *, system_gain: float, dark_noise_e
     k = check_positive(system_gain, "system_gain (DN/e-)")
     mu = check_positive(mean_electrons, "mean_electrons", allow_zero=True)
     sd = check_positive(dark_noise_e, "dark_noise_e", allow_zero=True)
-    return math.sqrt(k * k * (sd * sd + mu) + QUANTISATION_NOISE_DN**2)
+    return math.sqrt(k * k * (sd * sd + mu) + QUANTIZATION_NOISE_DN**2)
 
 
 def emva_snr(
@@ -110,4 +121,4 @@ def emva_snr(
     sd = check_positive(dark_noise_e, "dark_noise_e", allow_zero=True)
     k = check_positive(system_gain, "system_gain (DN/e-)")
     sig = eta * mp
-    return sig / math.sqrt(sd * sd + QUANTISATION_NOISE_DN**2 / (k * k) + sig)
+    return sig / math.sqrt(sd * sd + QUANTIZATION_NOISE_DN**2 / (k * k) + sig)

@@ -23,6 +23,7 @@ from imageform.spectral.data import (
     table_source,
 )
 from imageform.spectral.illuminants import (
+    PlanckianCCT,
     blackbody_spectrum,
     daylight_spectrum,
     daylight_spectrum_from_xy,
@@ -34,6 +35,7 @@ from imageform.spectral.integrate import (
     INTEGRATION_METHODS,
     KM_PHOTOPIC,
     KM_SCOTOPIC,
+    IntegrationWeights,
     integration_weights,
     luminance,
     observer_functions,
@@ -56,6 +58,8 @@ __all__ = [
     "LED_SPECTRA",
     "TABLES",
     "DataTable",
+    "IntegrationWeights",
+    "PlanckianCCT",
     "Spectrum",
     "blackbody_spectrum",
     "camera_sensitivities",

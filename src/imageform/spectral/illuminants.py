@@ -17,6 +17,8 @@ locus (CIE 015:2018 eqs. 4.3-4.4, the same formula as
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 import numpy.typing as npt
 
@@ -35,6 +37,7 @@ from imageform.spectral.spectrum import Spectrum
 __all__ = [
     "C1",
     "C2",
+    "PlanckianCCT",
     "blackbody_spectrum",
     "daylight_spectrum",
     "daylight_spectrum_from_xy",
@@ -199,7 +202,16 @@ def illuminant(name: str) -> Spectrum:
     raise InvalidInputError(f"unknown illuminant {name!r}; valid: {', '.join(valid)}")
 
 
-def planckian_cct(xyz: npt.ArrayLike, *, observer: int = 2) -> tuple[float, float]:
+class PlanckianCCT(NamedTuple):
+    """The result of :func:`planckian_cct`."""
+
+    #: Correlated colour temperature, K.
+    cct: float
+    #: Signed distance from the Planckian locus in CIE 1960 (u, v), positive above it.
+    duv: float
+
+
+def planckian_cct(xyz: npt.ArrayLike, *, observer: int = 2) -> PlanckianCCT:
     r"""CCT and Duv of one XYZ by direct search along the Planckian locus.
 
     The locus point :math:`(u_T, v_T)` (CIE 1960 UCS) of a black body at T is integrated from
@@ -238,4 +250,4 @@ def planckian_cct(xyz: npt.ArrayLike, *, observer: int = 2) -> tuple[float, floa
     d = uv - uv_of(t)
     tangent = uv_of(t * 1.0001) - uv_of(t)
     sign = 1.0 if tangent[0] * d[1] - tangent[1] * d[0] < 0 else -1.0
-    return t, sign * float(np.hypot(*d))
+    return PlanckianCCT(t, sign * float(np.hypot(*d)))

@@ -27,9 +27,11 @@ Methods:
 from __future__ import annotations
 
 from functools import lru_cache
+from typing import NamedTuple
 
 import numpy as np
 
+from imageform import _deprecate
 from imageform._validate import check_option
 from imageform.errors import InvalidInputError
 from imageform.spectral.data import (
@@ -46,6 +48,7 @@ __all__ = [
     "KM_PHOTOPIC",
     "KM_SCOTOPIC",
     "OBSERVER_NAMES",
+    "IntegrationWeights",
     "integration_weights",
     "luminance",
     "observer_functions",
@@ -110,18 +113,29 @@ def _grid(lo: float, hi: float, step: float) -> np.ndarray:
     return lo + step * np.arange(n + 1, dtype=np.float64)
 
 
+class IntegrationWeights(NamedTuple):
+    """The result of :func:`integration_weights`."""
+
+    #: The integration grid, shape (M,), nm.
+    wavelengths: np.ndarray
+    #: :math:`W_{\lambda,c}`, shape (M, 3).
+    weights: np.ndarray
+
+
+@_deprecate.parameters(positional=("illuminant",))
 def integration_weights(
     functions: Spectrum,
-    illuminant: Spectrum | None,
     *,
+    illuminant: Spectrum | None,
     method: str = "cie015",
     sample: Spectrum | None = None,
-) -> tuple[np.ndarray, np.ndarray]:
+) -> IntegrationWeights:
     r"""The grid and the weights :math:`W_{\lambda,c} = S(\lambda) f_c(\lambda)\Delta\lambda`.
 
-    Returns ``(grid (M,), weights (M, 3))``: ``X_c = sum_l R(l) W_{l,c}``. ``sample`` fixes the
-    interval for ``"astm_e308"``. The illuminant is interpolated linearly (CIE 015:2018 §7.2.1
-    for the D series).
+    Returns ``IntegrationWeights(wavelengths (M,), weights (M, 3))``:
+    ``X_c = sum_l R(l) W_{l,c}``. ``illuminant`` (keyword-only; ``None`` for a light) is
+    interpolated linearly (CIE 015:2018 §7.2.1 for the D series); ``sample`` fixes the
+    interval for ``"astm_e308"``.
     """
     m = check_option(method, INTEGRATION_METHODS, "integration method")
     lo, hi = functions.range
@@ -136,7 +150,7 @@ def integration_weights(
         step = sample.interval
         first = sample.wavelengths[0]
         lo = first + step * np.ceil((lo - first) / step - 1e-9)
-    return _weights(functions, illuminant, float(lo), float(hi), float(step))
+    return IntegrationWeights(*_weights(functions, illuminant, float(lo), float(hi), float(step)))
 
 
 @lru_cache(maxsize=128)
@@ -164,16 +178,17 @@ def _integrate(
     interpolation: str,
 ) -> tuple[np.ndarray, np.ndarray]:
     """(values (..., 3), white (3,)): raw sums for the sample and for the perfect white."""
-    grid, w = integration_weights(functions, illuminant, method=method, sample=spectrum)
+    grid, w = integration_weights(functions, illuminant=illuminant, method=method, sample=spectrum)
     r = spectrum.interpolate(grid, method=interpolation, extrapolate="constant").values
     out = r.T @ w if r.ndim == 2 else r @ w
     return out, w.sum(axis=0)
 
 
+@_deprecate.parameters(positional=("illuminant",))
 def spectrum_to_xyz(
     spectrum: Spectrum,
-    illuminant: str | Spectrum | None = "D65",
     *,
+    illuminant: str | Spectrum | None = "D65",
     observer: int | str = 2,
     method: str = "cie015",
     interpolation: str = "linear",
@@ -187,7 +202,7 @@ def spectrum_to_xyz(
     ----------
     spectrum : Spectrum, values (N,) or (N, K)
         Reflectance factors (or a spectral power distribution when ``illuminant is None``).
-    illuminant : str, Spectrum or None
+    illuminant : str, Spectrum or None, keyword-only
         Name (see :func:`imageform.spectral.illuminant`) or spectrum.
     observer : 2, 10
         CIE 1931 2° or CIE 1964 10° standard observer.
@@ -228,10 +243,11 @@ def spectrum_to_xyz(
     return np.asarray(out / white[1])
 
 
+@_deprecate.parameters(positional=("illuminant",))
 def spectrum_to_lms(
     spectrum: Spectrum,
-    illuminant: str | Spectrum | None = "D65",
     *,
+    illuminant: str | Spectrum | None = "D65",
     method: str = "cie015",
     interpolation: str = "linear",
 ) -> np.ndarray:
@@ -255,10 +271,11 @@ def spectrum_to_lms(
     return np.asarray(out if ill is None else out / white)
 
 
+@_deprecate.parameters(positional=("illuminant",))
 def spectrum_to_camera_rgb(
     spectrum: Spectrum,
-    illuminant: str | Spectrum | None = "D65",
     *,
+    illuminant: str | Spectrum | None = "D65",
     camera: str | Spectrum = "nikon_d5100",
     method: str = "cie015",
     interpolation: str = "linear",
