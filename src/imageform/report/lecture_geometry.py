@@ -19,7 +19,9 @@ __all__ = ["EXAMPLES"]
 
 
 def _building_pixels() -> float:
-    cam = Camera(Intrinsics.from_physical(50.0, 5.0, image_size=(6000, 4000)))
+    cam = Camera(
+        Intrinsics.from_physical(focal_length=50.0, pixel_pitch_um=5.0, image_size=(6000, 4000))
+    )
     top, bottom = cam.project([[0.0, -15.0, 100.0], [0.0, 15.0, 100.0]]).uv
     return float(bottom[1] - top[1])
 
@@ -44,7 +46,7 @@ EXAMPLES: list[WorkedExample] = [
         "pinhole",
         "A 30 m building 100 m away, f = 50 mm: height of its image?",
         "h = f H / Z",
-        lambda: projected_size(30.0, 100.0, 50.0),
+        lambda: projected_size(30.0, 100.0, focal_length=50.0),
         15.0,
         "mm",
     ),
@@ -61,7 +63,7 @@ EXAMPLES: list[WorkedExample] = [
         "pinhole",
         "A 20 m building 80 m away, f = 35 mm: height of its image?",
         "h = f H / Z",
-        lambda: projected_size(20.0, 80.0, 35.0),
+        lambda: projected_size(20.0, 80.0, focal_length=35.0),
         8.75,
         "mm",
     ),

@@ -12,7 +12,7 @@ EXAMPLES: list[WorkedExample] = [
         topic="optics: depth of field",
         question="Hyperfocal distance of a 50 mm lens at f/8 with a 0.03 mm circle of confusion?",
         formula="H = f² / (N c) + f",
-        compute=lambda: hyperfocal_distance(0.050, 8.0, 0.03e-3),
+        compute=lambda: hyperfocal_distance(focal_length=0.050, f_number=8.0, coc=0.03e-3),
         expected=10.47,
         unit="m",
         tol=0.005,

@@ -50,7 +50,7 @@ def _srgb_coverage() -> float:
 def _cct(name: str) -> float:
     from imageform.spectral import illuminant, planckian_cct, spectrum_to_xyz
 
-    return planckian_cct(spectrum_to_xyz(illuminant(name), None, method="astm_e308"))[0]
+    return planckian_cct(spectrum_to_xyz(illuminant(name), illuminant=None, method="astm_e308"))[0]
 
 
 EXAMPLES: list[WorkedExample] = [

@@ -79,7 +79,7 @@ class ConvertOptions(ImageIn, ImageOut):
         for key, val in (
             ("white", self.white),
             ("standard", self.standard),
-            ("range", self.ycc_range),
+            ("signal_range", self.ycc_range),
             ("bits", self.code_bits),
             ("method", self.gray_method),
         ):

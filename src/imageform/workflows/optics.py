@@ -63,11 +63,11 @@ def lens(run: Run, opts: LensOptions, *, out: None) -> Result:
             "there, only a virtual upright one on the object's side (as a magnifying glass), "
             "which no sensor can record; focus beyond the focal length"
         )
-    dof = depth_of_field(f, n, s, c)
-    sol = thin_lens(f=f, d_o=s)
+    dof = depth_of_field(focal_length=f, f_number=n, focus=s, coc=c)
+    sol = thin_lens(focal_length=f, d_o=s)
     rows: list[dict[str, Any]] = []
     for stop in sorted({*STOPS, n}):
-        d = depth_of_field(f, stop, s, c)
+        d = depth_of_field(focal_length=f, f_number=stop, focus=s, coc=c)
         rows.append(
             {
                 "f_number": stop,
@@ -82,7 +82,7 @@ def lens(run: Run, opts: LensOptions, *, out: None) -> Result:
         "f_number": n,
         "focus_m": s,
         "coc_m": c,
-        "aperture_diameter_m": aperture_diameter(f, n),
+        "aperture_diameter_m": aperture_diameter(focal_length=f, f_number=n),
         "image_distance_m": sol.d_i,
         "magnification": sol.magnification,
         "hyperfocal_m": dof.hyperfocal,
@@ -94,7 +94,7 @@ def lens(run: Run, opts: LensOptions, *, out: None) -> Result:
         "table": rows,
     }
     head = [
-        f"f = {f * 1e3:g} mm, N = {n:g} (D = {aperture_diameter(f, n) * 1e3:.2f} mm), "
+        f"f = {f * 1e3:g} mm, N = {n:g} (D = {aperture_diameter(focal_length=f, f_number=n) * 1e3:.2f} mm), "
         f"focus {s:g} m, c = {c * 1e3:g} mm",
         f"image distance {sol.d_i * 1e3:.3f} mm, magnification {sol.magnification:.5f}",
         f"hyperfocal {dof.hyperfocal:.3f} m; sharp from {_fmt(dof.near)} to {_fmt(dof.far)} "

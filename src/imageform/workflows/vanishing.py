@@ -121,7 +121,7 @@ def vanishing(run: Run, opts: VanishingOptions, *, out: Path | None, image: Path
                 f"note: {image} was undistorted with the {cf.distortion_model} model of "
                 f"{opts.camera} before finding lines"
             )
-    res = detect_vanishing_points(arr, seed=opts.seed)
+    res = detect_vanishing_points(arr, rng=opts.seed)
     K_est = res.K
     summary: dict[str, Any] = {
         "image": image,
