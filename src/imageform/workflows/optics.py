@@ -77,12 +77,13 @@ def lens(run: Run, opts: LensOptions, *, out: None) -> Result:
                 "hyperfocal_m": d.hyperfocal,
             }
         )
+    diameter = aperture_diameter(focal_length=f, f_number=n)
     summary = {
         "focal_length_m": f,
         "f_number": n,
         "focus_m": s,
         "coc_m": c,
-        "aperture_diameter_m": aperture_diameter(focal_length=f, f_number=n),
+        "aperture_diameter_m": diameter,
         "image_distance_m": sol.d_i,
         "magnification": sol.magnification,
         "hyperfocal_m": dof.hyperfocal,
@@ -94,7 +95,7 @@ def lens(run: Run, opts: LensOptions, *, out: None) -> Result:
         "table": rows,
     }
     head = [
-        f"f = {f * 1e3:g} mm, N = {n:g} (D = {aperture_diameter(focal_length=f, f_number=n) * 1e3:.2f} mm), "
+        f"f = {f * 1e3:g} mm, N = {n:g} (D = {diameter * 1e3:.2f} mm), "
         f"focus {s:g} m, c = {c * 1e3:g} mm",
         f"image distance {sol.d_i * 1e3:.3f} mm, magnification {sol.magnification:.5f}",
         f"hyperfocal {dof.hyperfocal:.3f} m; sharp from {_fmt(dof.near)} to {_fmt(dof.far)} "
