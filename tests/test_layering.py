@@ -85,12 +85,8 @@ ALLOWED: set[tuple[str, str, str]] = {
     ("cli/batch_cmd.py", "imageform.batch.print_summary", "package cycle batch <-> cli"),
     ("cli/batch_cmd.py", "imageform.batch.run_batch", "package cycle batch <-> cli"),
     ("cli/batch_cmd.py", "imageform.batch.process_chunked", "package cycle batch <-> cli"),
-    # the generated CLI: workflows' spec module is private, and _app and _build import
-    # each other
-    ("cli/_build.py", "imageform.workflows._spec.Result", "private module"),
-    ("cli/_build.py", "imageform.workflows._spec.Workflow", "private module"),
-    ("cli/_build.py", "imageform.workflows._spec.choice_names", "private module"),
-    ("cli/_build.py", "imageform.workflows._spec.flag_of", "private module"),
+    # the generated CLI bridges the typer commands not yet moved (_app and _build import
+    # each other until they are)
     (
         "cli/_app.py",
         "imageform.cli._build.CommandExit",

@@ -17,8 +17,7 @@ import pytest
 
 from imageform.cli import EXIT_CODES, main, root
 from imageform.cli._build import build_command
-from imageform.workflows import WORKFLOWS
-from imageform.workflows._spec import choice_names
+from imageform.workflows import WORKFLOWS, choice_names
 
 ROOT = Path(__file__).resolve().parents[2]
 

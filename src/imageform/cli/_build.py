@@ -22,7 +22,7 @@ from typing import Any
 import click
 
 from imageform.errors import ImageformError, InvalidInputError
-from imageform.workflows._spec import Result, Workflow, choice_names, flag_of
+from imageform.workflows import Result, Workflow, choice_names, flag_of
 
 __all__ = ["EXIT_CODES", "CommandExit", "build_command", "emit", "expand_inputs", "root"]
 

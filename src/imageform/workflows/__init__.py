@@ -12,7 +12,17 @@ generated from :data:`WORKFLOWS`; from Python, :func:`execute` runs one by name:
 """
 
 from imageform.workflows._execute import execute, run_file
-from imageform.workflows._spec import Input, Options, Output, Result, Run, Workflow
+from imageform.workflows._spec import (
+    Input,
+    Options,
+    Output,
+    Result,
+    Run,
+    Workflow,
+    choice_names,
+    flag_of,
+    normalize_choice,
+)
 from imageform.workflows.registry import WORKFLOWS, get_workflow
 
 __all__ = [
@@ -23,7 +33,10 @@ __all__ = [
     "Result",
     "Run",
     "Workflow",
+    "choice_names",
     "execute",
+    "flag_of",
     "get_workflow",
+    "normalize_choice",
     "run_file",
 ]

@@ -29,6 +29,7 @@ __all__ = [
     "Run",
     "Workflow",
     "choice_names",
+    "flag_of",
     "normalize_choice",
     "option",
     "resolve",
