@@ -8,6 +8,8 @@ unknown option names list the valid ones.
 from __future__ import annotations
 
 import math
+import numbers
+import os
 from collections.abc import Collection, Sequence
 from typing import Any
 
@@ -27,17 +29,24 @@ from imageform._backend import (
 from imageform.errors import InvalidInputError, UnknownOptionError
 
 __all__ = [
+    "as_bool",
     "as_float",
     "as_image",
+    "as_int",
     "as_matrix",
     "as_points",
+    "as_real",
+    "as_size",
     "check_finite",
     "check_image_size",
+    "check_memory",
     "check_option",
     "check_positive",
     "check_rotation",
+    "describe",
     "det3",
     "format_shape",
+    "memory_limit",
 ]
 
 
@@ -226,28 +235,187 @@ def check_option(value: object, valid: Collection[str], what: str) -> str:
     return key
 
 
+def describe(value: object, width: int = 40) -> str:
+    """A short description of a value for an error message: its repr cut to ``width``
+    characters (arrays as their type, shape and dtype, never their contents).
+
+    >>> describe("x" * 100)[:12], describe(np.zeros((300, 400)))
+    ("'xxxxxxxxxxx", 'ndarray of shape (300, 400), float64')
+    """
+    shape = getattr(value, "shape", None)
+    if shape is not None and getattr(value, "ndim", 0):
+        dtype = getattr(value, "dtype", "")
+        return f"{type(value).__name__} of shape {format_shape(tuple(shape))}, {dtype}"
+    text = repr(value)
+    return text if len(text) <= width else text[: width - 3] + "..."
+
+
+def _as_number(value: object, name: str) -> float:
+    """A real number from a Python or NumPy scalar (or a 0-d real array or tensor); never a
+    bool, string, complex, None or a sequence."""
+    item = value
+    if getattr(value, "ndim", None) == 0 and hasattr(value, "item"):
+        item = value.item()  # type: ignore[attr-defined]
+    if isinstance(item, bool | np.bool_) or item is None or isinstance(item, str | bytes):
+        raise InvalidInputError(f"expected {name} as a number, got {describe(value)}")
+    if isinstance(item, numbers.Real):
+        return float(item)
+    if isinstance(item, numbers.Complex):
+        raise InvalidInputError(f"expected {name} as a real number, got {describe(value)}")
+    raise InvalidInputError(
+        f"expected {name} as a number, got {type(value).__name__} {describe(value)}"
+    )
+
+
+def as_real(
+    value: object,
+    name: str,
+    *,
+    minimum: float | None = None,
+    maximum: float | None = None,
+    positive: bool = False,
+    nonnegative: bool = False,
+    allow_inf: bool = False,
+) -> float:
+    """A finite real scalar (Python or NumPy number, 0-d array) as ``float``.
+
+    Refuses bool, None, strings, complex numbers, NaN, inf (unless ``allow_inf``) and values
+    outside the bounds, in one line naming ``name``.
+
+    >>> as_real(np.float32(2.5), "sigma", positive=True)
+    2.5
+    >>> as_real("5", "sigma")
+    Traceback (most recent call last):
+    ...
+    imageform.errors.InvalidInputError: expected sigma as a number, got '5'
+    """
+    v = _as_number(value, name)
+    if math.isnan(v) or (math.isinf(v) and not allow_inf):
+        raise InvalidInputError(f"expected {name} as a finite number, got {v:g}")
+    if positive and v <= 0:
+        raise InvalidInputError(f"expected {name} > 0, got {v:g}")
+    if nonnegative and v < 0:
+        raise InvalidInputError(f"expected {name} >= 0, got {v:g}")
+    if minimum is not None and v < minimum:
+        raise InvalidInputError(f"expected {name} >= {minimum:g}, got {v:g}")
+    if maximum is not None and v > maximum:
+        raise InvalidInputError(f"expected {name} <= {maximum:g}, got {v:g}")
+    return v
+
+
+def as_int(
+    value: object, name: str, *, minimum: int | None = None, maximum: int | None = None
+) -> int:
+    """An integer (Python ``int`` or any NumPy integer; a 0-d integer array) as ``int``.
+
+    Floats are refused even when whole (``2.0``), as are bool, None, strings and inf.
+
+    >>> as_int(np.int64(3), "max_iter", minimum=1)
+    3
+    >>> as_int(2.0, "n")
+    Traceback (most recent call last):
+    ...
+    imageform.errors.InvalidInputError: expected n as an integer, got 2.0
+    """
+    if isinstance(value, bool | np.bool_):
+        raise InvalidInputError(f"expected {name} as an integer, got {value!r}")
+    item = value
+    if getattr(value, "ndim", None) == 0 and hasattr(value, "item"):
+        item = value.item()  # type: ignore[attr-defined]
+    if isinstance(item, numbers.Integral) and not isinstance(item, bool):
+        v = int(item)
+    else:
+        raise InvalidInputError(f"expected {name} as an integer, got {describe(value)}")
+    if minimum is not None and v < minimum:
+        raise InvalidInputError(f"expected {name} >= {minimum}, got {v}")
+    if maximum is not None and v > maximum:
+        raise InvalidInputError(f"expected {name} <= {maximum}, got {v}")
+    return v
+
+
+def as_bool(value: object, name: str) -> bool:
+    """A bool (Python or NumPy); 0/1 and strings are refused.
+
+    >>> as_bool(np.True_, "clip")
+    True
+    """
+    if isinstance(value, bool | np.bool_):
+        return bool(value)
+    raise InvalidInputError(f"expected {name} as True or False, got {describe(value)}")
+
+
+def as_size(
+    value: object, name: str, n: int = 2, *, minimum: int = 1, maximum: int | None = None
+) -> tuple[int, ...]:
+    """A tuple of ``n`` integers (a shape or an image size), each ``>= minimum``.
+
+    >>> as_size((640, np.int64(480)), "image_size")
+    (640, 480)
+    """
+    if (
+        isinstance(value, str | bytes)
+        or not hasattr(value, "__len__")
+        or not hasattr(value, "__iter__")
+    ):
+        raise InvalidInputError(f"expected {name} as {n} integers, got {describe(value)}")
+    items = list(value)  # type: ignore[call-overload]
+    if len(items) != n:
+        raise InvalidInputError(
+            f"expected {name} as {n} integers, got {len(items)} value(s): {describe(value)}"
+        )
+    return tuple(
+        as_int(v, f"{name}[{i}]", minimum=minimum, maximum=maximum) for i, v in enumerate(items)
+    )
+
+
+def memory_limit() -> int:
+    """The most bytes one allocation may ask for: ``IMAGEFORM_MAX_MEMORY`` (bytes; suffixes
+    K, M, G accepted) if set, else half of this machine's physical memory."""
+    text = os.environ.get("IMAGEFORM_MAX_MEMORY", "").strip().upper()
+    if text:
+        scale = {"K": 2**10, "M": 2**20, "G": 2**30}.get(text[-1:], 1)
+        try:
+            return int(float(text.rstrip("KMG")) * scale)
+        except ValueError:
+            raise InvalidInputError(
+                f"expected IMAGEFORM_MAX_MEMORY as bytes (e.g. 8G), got {text!r}"
+            ) from None
+    try:
+        total = os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
+    except (ValueError, OSError, AttributeError):  # pragma: no cover - non-POSIX
+        total = 16 * 2**30
+    return int(total // 2)
+
+
+def check_memory(n_bytes: float, name: str, what: str = "the result") -> None:
+    """Refuse, before allocating, what would need more than :func:`memory_limit` bytes.
+
+    >>> check_memory(1e15, "shape", "an image of 1e15 bytes")
+    Traceback (most recent call last):
+    ...
+    imageform.errors.InvalidInputError: shape: an image of 1e15 bytes would need 931322.6 GiB, ...
+    """
+    limit = memory_limit()
+    if not n_bytes <= limit:  # NaN too
+        raise InvalidInputError(
+            f"{name}: {what} would need {n_bytes / 2**30:.1f} GiB, more than the "
+            f"{limit / 2**30:.1f} GiB allowed (IMAGEFORM_MAX_MEMORY)"
+        )
+
+
 def check_image_size(size: object, name: str = "image_size") -> tuple[int, int]:
     """A ``(width, height)`` pair of positive integers, as a tuple of ``int``.
 
-    >>> check_image_size((640.0, 480))
+    >>> check_image_size((640, 480))
     (640, 480)
     """
-    w, h = (int(v) for v in size)  # type: ignore[attr-defined]
-    if w <= 0 or h <= 0:
-        raise InvalidInputError(f"expected a positive {name} (width, height), got {size}")
+    w, h = as_size(size, f"{name} (width, height)")
     return w, h
 
 
 def check_positive(value: object, name: str, *, allow_zero: bool = False) -> float:
     """A finite scalar ``> 0`` (or ``>= 0`` with ``allow_zero``) as ``float``."""
-    try:
-        v = float(value)  # type: ignore[arg-type]
-    except (TypeError, ValueError) as exc:
-        raise InvalidInputError(f"expected a number for {name}, got {value!r}") from exc
-    if not np.isfinite(v) or v < 0 or (v == 0 and not allow_zero):
-        bound = ">= 0" if allow_zero else "> 0"
-        raise InvalidInputError(f"expected {name} {bound}, got {value!r}")
-    return v
+    return as_real(value, name, positive=not allow_zero, nonnegative=allow_zero)
 
 
 _INTEGER_SCALE = {"uint8": 255.0, "uint16": 65535.0}
