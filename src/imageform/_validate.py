@@ -243,7 +243,7 @@ def describe(value: object, width: int = 40) -> str:
     ("'xxxxxxxxxxx", 'ndarray of shape (300, 400), float64')
     """
     shape = getattr(value, "shape", None)
-    if shape is not None and getattr(value, "ndim", 0):
+    if shape is not None and getattr(value, "ndim", None):
         dtype = getattr(value, "dtype", "")
         return f"{type(value).__name__} of shape {format_shape(tuple(shape))}, {dtype}"
     text = repr(value)
@@ -255,7 +255,7 @@ def _as_number(value: object, name: str) -> float:
     bool, string, complex, None or a sequence."""
     item = value
     if getattr(value, "ndim", None) == 0 and hasattr(value, "item"):
-        item = value.item()  # type: ignore[attr-defined]
+        item = value.item()
     if isinstance(item, bool | np.bool_) or item is None or isinstance(item, str | bytes):
         raise InvalidInputError(f"expected {name} as a number, got {describe(value)}")
     if isinstance(item, numbers.Real):
@@ -321,7 +321,7 @@ def as_int(
         raise InvalidInputError(f"expected {name} as an integer, got {value!r}")
     item = value
     if getattr(value, "ndim", None) == 0 and hasattr(value, "item"):
-        item = value.item()  # type: ignore[attr-defined]
+        item = value.item()
     if isinstance(item, numbers.Integral) and not isinstance(item, bool):
         v = int(item)
     else:
@@ -358,7 +358,7 @@ def as_size(
         or not hasattr(value, "__iter__")
     ):
         raise InvalidInputError(f"expected {name} as {n} integers, got {describe(value)}")
-    items = list(value)  # type: ignore[call-overload]
+    items = list(value)
     if len(items) != n:
         raise InvalidInputError(
             f"expected {name} as {n} integers, got {len(items)} value(s): {describe(value)}"
