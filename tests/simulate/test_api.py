@@ -11,9 +11,13 @@ from imageform.errors import InvalidInputError
 PUBLIC = {
     "SCENE_SCHEMA",
     "STAGE_KINDS",
+    "WORLD_UP",
+    "CameraConfig",
     "ColorCheckerTruth",
+    "PatchMeasurements",
     "RenderOutput",
     "Scene",
+    "SceneConfig",
     "SceneObject",
     "SceneQuad",
     "SimulationResult",

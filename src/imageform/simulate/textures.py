@@ -1,0 +1,60 @@
+"""Files a scene refers to: paths relative to the scene file, and image textures.
+
+Shared by the scene builder (an image object's aspect ratio) and the renderer (its pixels);
+it imports neither, so neither imports the other for it.
+"""
+
+from __future__ import annotations
+
+from functools import lru_cache
+from pathlib import Path
+
+import numpy as np
+
+from imageform.errors import InvalidInputError
+
+__all__ = ["load_texture", "resolve_path"]
+
+
+def resolve_path(path: str, base: Path | None) -> Path:
+    """``path`` relative to the scene file's folder ``base`` (the working folder when
+    ``None``); an error naming the file when it does not exist."""
+    p = Path(path).expanduser()
+    if not p.is_absolute() and base is not None:
+        p = base / p
+    if not p.is_file():
+        raise InvalidInputError(
+            f"file not found: {str(p)!r} (paths are relative to the scene file)"
+        )
+    return p
+
+
+def load_texture(path: str, base: Path | None) -> np.ndarray:
+    """An image texture as linear sRGB ``(H, W, 3)`` float64 (decoded from sRGB), read-only.
+
+    Grey images are repeated to three channels; alpha is ignored (the texture is opaque).
+    """
+    return _texture(str(resolve_path(path, base).resolve()))
+
+
+@lru_cache(maxsize=8)
+def _texture(path: str) -> np.ndarray:
+    from imageform._validate import as_image
+    from imageform.color import srgb_to_linear
+    from imageform.io import read_image
+
+    raw = np.asarray(read_image(path))
+    if raw.ndim == 2:
+        raw = raw[..., None]
+    if raw.shape[-1] == 1:
+        raw = np.repeat(raw, 3, axis=-1)
+    if raw.shape[-1] == 4:
+        raw = raw[..., :3]  # alpha is ignored: the texture is opaque
+    img = np.asarray(as_image(raw, "texture"), dtype=np.float64)  # uint8/16 -> [0, 1]
+    if img.min() < 0 or img.max() > 1:
+        raise InvalidInputError(
+            f"texture {path}: expected encoded sRGB in [0, 1], got {img.min():g}..{img.max():g}"
+        )
+    lin = np.asarray(srgb_to_linear(img))
+    lin.setflags(write=False)
+    return lin
