@@ -126,7 +126,9 @@ def plot_top_view(data: dict[str, Any]) -> Any:
         p = top_view_project(np.vstack([corners, corners[:1]]), data)
         ax.plot(p[:, 0], p[:, 1], "-", color=f"C{i % 10}", lw=2, label=name)
         m = p[:-1].mean(axis=0)
-        ax.annotate(name, (m[0], m[1]), fontsize=7, ha="center", color=f"C{i % 10}")
+        # labels of objects left of the camera end at them, of the others start there
+        ha = "right" if m[0] < -1e-9 else ("left" if m[0] > 1e-9 else "center")
+        ax.annotate(name, (m[0], m[1]), fontsize=7, ha=ha, va="bottom", color=f"C{i % 10}")
     far = data["frustum_far_corners_m"]
     ok = np.all(np.isfinite(far), axis=1)
     for j, q in enumerate(top_view_project(far[ok], data)):
@@ -156,23 +158,26 @@ def plot_top_view(data: dict[str, Any]) -> Any:
 
 
 def _world_axes(ax: Any, data: dict[str, Any]) -> None:
-    """Two small arrows in the lower left showing the world axes that lie in the ground."""
+    """Small arrows in the lower left showing the world axes that lie in the ground plane."""
     up = data["world_up"] / np.linalg.norm(data["world_up"])
+    tail = np.array([0.12, 0.12])
     for k, name in enumerate("xyz"):
         e = np.zeros(3)
         e[k] = 1.0
         if abs(float(e @ up)) > 1e-6:
             continue  # the up axis (or one not in the ground plane)
         d = np.array([e @ data["view_right"], e @ data["view_ahead"]])
+        head = tail + 0.07 * d
+        arrow = {"arrowstyle": "->", "color": "0.35", "lw": 0.9}
+        ax.annotate("", xy=head, xytext=tail, xycoords="axes fraction", arrowprops=arrow)
         ax.annotate(
             f"world {name}",
-            xy=(0.1 + 0.07 * d[0], 0.1 + 0.07 * d[1]),
-            xytext=(0.1, 0.1),
+            xy=tail + 0.1 * d,
             xycoords="axes fraction",
-            textcoords="axes fraction",
             fontsize=7,
             color="0.35",
-            arrowprops={"arrowstyle": "->", "color": "0.35", "lw": 0.8},
+            ha="center",
+            va="center",
         )
 
 
