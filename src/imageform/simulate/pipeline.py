@@ -15,11 +15,13 @@ from imageform.simulate._rng import RNGLike, random_source
 from imageform.simulate.config import GroundConfig
 from imageform.simulate.render import render_scene
 from imageform.simulate.result import (
+    ColorCheckerTruth,
     PatchMeasurements,
     SceneQuad,
     SimulationResult,
     Stage,
     StageKind,
+    VanishingTruth,
 )
 from imageform.simulate.scene import Scene, SceneObject
 from imageform.simulate.stages import (
@@ -262,24 +264,13 @@ def simulate(
     }
     patches, patch_xy = None, {}
     if truth is not None and cc_before is not None and cc_wb is not None:
-        patch_xy = {
-            "before_white_balance": xy_of_linear_srgb(cc_before),
-            "after_white_balance": xy_of_linear_srgb(cc_wb),
-            "after_color_correction": xy_of_linear_srgb(patch_means(cc.image, truth)),
-        }
         lin_out = decode_output(out, proc.output_space)
         patches = measure_colorchecker(lin_out, cc.image, truth, snr_stage="color_corrected")
+        patch_xy = _patch_chromaticities(truth, cc_before, cc_wb, cc.image)
         metrics |= _patch_metrics(patches)
     run.tick("isp", "colorchecker")
-
-    vanishing = None
-    grounds = [
-        o for o in scene.objects if isinstance(o.config, GroundConfig) and o.config.rail_count
-    ]
-    if grounds:
-        rails = rails_truth(grounds[0], scene.camera)
-        vanishing, errors = detect_vanishing(out.image, rails, rng=source.int_seed())
-        metrics |= errors
+    vanishing, errors = _vanishing(scene, out.image, source.int_seed())
+    metrics |= errors
     run.tick("vanishing", "vanishing_points")
     ptc = measure_photon_transfer(sensor, source.for_step())
     run.tick("photon_transfer", "photon_transfer")
@@ -300,6 +291,30 @@ def simulate(
         config=_jsonable(cfg.to_dict()),
         patches=patches,
     )
+
+
+def _patch_chromaticities(
+    truth: ColorCheckerTruth, before: np.ndarray, balanced: np.ndarray, corrected: np.ndarray
+) -> dict[str, np.ndarray]:
+    """Chromaticity xy of the patch means (read as linear sRGB) at three steps."""
+    return {
+        "before_white_balance": xy_of_linear_srgb(before),
+        "after_white_balance": xy_of_linear_srgb(balanced),
+        "after_color_correction": xy_of_linear_srgb(patch_means(corrected, truth)),
+    }
+
+
+def _vanishing(
+    scene: Scene, output: np.ndarray, seed: int
+) -> tuple[VanishingTruth | None, dict[str, Any]]:
+    """The first railed ground's true and detected vanishing point and horizon, and the
+    errors (nothing without rails)."""
+    grounds = [
+        o for o in scene.objects if isinstance(o.config, GroundConfig) and o.config.rail_count
+    ]
+    if not grounds:
+        return None, {}
+    return detect_vanishing(output, rails_truth(grounds[0], scene.camera), rng=seed)
 
 
 def _patch_metrics(m: PatchMeasurements) -> dict[str, Any]:
