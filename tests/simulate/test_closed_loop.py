@@ -96,8 +96,8 @@ def test_colorchecker_without_correction_is_far_from_truth() -> None:
 
 @pytest.mark.slow
 def test_default_scene_full_size() -> None:
-    # the built-in scene at 1280x720 (about 13 s on the 2-core machine once numba has
-    # compiled): the chart is corrected to mean ΔE00 <= 3 and the rails' point is found
+    # the built-in scene at 1280x720 (run times: docs/simulate.md, Speed): the chart is
+    # corrected to mean ΔE00 <= 3 and the rails' point is found
     import time
 
     from imageform.simulate import default_scene
