@@ -66,13 +66,12 @@ def _zoom_background(ax: Any) -> None:
     CCT ticks) without the coloured fill, for the zoomed panel."""
     from imageform.color.chromaticity import spectral_locus
     from imageform.color.gamut import gamut_triangle
-    from imageform.color.rgb_spaces import _get_space
     from imageform.report.chromaticity_plot import CCT_TICKS, planckian_locus
 
     _, locus = spectral_locus(2, "xy")
     ring = np.vstack([locus, locus[:1]])
     ax.plot(ring[:, 0], ring[:, 1], color="k", lw=1.0)
-    tri = gamut_triangle(_get_space("srgb"), "xy")
+    tri = gamut_triangle("srgb", "xy")
     ring = np.vstack([tri, tri[:1]])
     ax.plot(ring[:, 0], ring[:, 1], "-", color="k", lw=1.2, label="sRGB")
     pl = planckian_locus(np.geomspace(1500.0, 20000.0, 40))

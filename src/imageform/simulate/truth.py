@@ -28,7 +28,7 @@ from imageform.color import (
     xyz_to_xy,
 )
 from imageform.errors import InvalidInputError
-from imageform.geometry.camera import Camera, _plane_K
+from imageform.geometry.camera import Camera
 from imageform.geometry.vanishing import horizon_line
 from imageform.simulate._rng import RNGLike, random_source
 from imageform.simulate.config import ColorCheckerConfig
@@ -255,9 +255,18 @@ def light_cct(spd: Spectrum) -> tuple[float, float]:
     return float(cct), float(duv)
 
 
+def _image_plane_K(camera: Camera) -> np.ndarray:
+    """K of the camera's image plane: for the camera obscura (``"real"``, behind the pinhole)
+    the image is inverted about the principal point, fx, fy and the skew change sign."""
+    K = np.asarray(camera.K, dtype=np.float64)
+    if camera.image_plane == "virtual":
+        return K
+    return K * np.array([[-1.0, -1.0, 1.0], [-1.0, -1.0, 1.0], [1.0, 1.0, 1.0]])
+
+
 def _finite_vp(camera: Camera, d_world: np.ndarray) -> np.ndarray:
     R = np.asarray(camera.R, dtype=np.float64)
-    K = _plane_K(np.asarray(camera.K, dtype=np.float64), camera.image_plane, np)
+    K = _image_plane_K(camera)
     dc = R @ d_world
     if camera.distortion is not None and dc[2] > 0:
         xy = np.asarray(camera.distortion.distort(dc[:2] / dc[2]))
@@ -278,8 +287,7 @@ def rails_truth(ground: SceneObject, camera: Camera) -> VanishingTruth:
     d = -ground.edge_down / np.linalg.norm(ground.edge_down)
     n = np.cross(ground.edge_right, ground.edge_down)
     n = -n / np.linalg.norm(n)  # right x down points into the ground; the normal is up
-    K = _plane_K(np.asarray(camera.K, dtype=np.float64), camera.image_plane, np)
-    hor = np.asarray(horizon_line(K, np.asarray(camera.R), up=n))
+    hor = np.asarray(horizon_line(_image_plane_K(camera), np.asarray(camera.R), up=n))
     return VanishingTruth(vanishing_point=_finite_vp(camera, d), horizon=hor)
 
 
