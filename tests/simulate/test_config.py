@@ -187,13 +187,21 @@ def test_supersampling_has_a_limit() -> None:
         load_scene("[render]\nwidth = 64\nsupersampling = 17\n")
 
 
-def test_an_image_too_large_for_memory_is_refused_with_the_estimate() -> None:
+def test_an_image_too_large_for_memory_is_refused_with_the_estimate(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    if budget.available_memory_bytes() is not None:  # this machine, as it is: refused
+        with pytest.raises(InvalidInputError, match=r"render\.width .* of memory"):
+            load_scene({"render": {"width": 10**6, "height": 10**6}})  # 450 TB
+    monkeypatch.setattr(  # the same on any machine: 16 GB available
+        "imageform.simulate.validation.available_memory_bytes", lambda: 16_000_000_000
+    )
     text = "[render]\nwidth = 200000\nheight = 150000\n"
     with pytest.raises(InvalidInputError) as err:
         load_scene(text)
     msg = str(err.value)
     assert msg.startswith("scene key render.width (scene string, line 2): a 200000x150000")
-    assert "needs about 13500 GB of memory" in msg and "available" in msg
+    assert "needs about 13500 GB of memory" in msg and "the 16 GB this machine has" in msg
     assert "\n" not in msg
 
 
