@@ -7,6 +7,8 @@
   level μ: SNR = 20 log10(μ/δ) dB exactly.
 - The vanishing point is detected 3 px right and 4 px below the truth: error 5 px.
 - The photon-transfer data are ideal: σ² = K μ with K = 0.5 DN/e⁻ below saturation.
+- The world is y-down (``world_up = (0, -1, 0)``, not the simulator's z-up): the camera looks
+  along +z from above the ground y = 0.5; the report's top view must follow ``world_up``.
 """
 
 from __future__ import annotations
@@ -37,6 +39,7 @@ GAIN = 0.5  # DN/e-
 TRUE_VP = np.array([120.0, 40.0, 1.0])
 DETECTED_VP = np.array([123.0, 44.0, 1.0])
 HORIZON = np.array([0.0, 1.0, -40.0])  # v = 40
+WORLD_UP = (0.0, -1.0, 0.0)  # this synthetic world is y-down (the camera frame's convention)
 
 
 def patch_linear_rgb() -> np.ndarray:
@@ -111,7 +114,9 @@ def make_result(*, full: bool = True, width: int = W, height: int = H) -> Simula
     K = np.array([[200.0 * sx, 0, (width - 1) / 2], [0, 200.0 * sy, (height - 1) / 2], [0, 0, 1]])
     camera = Camera.look_at(K, [0.5, -1.0, -1.0], [0.5, 0.0, 3.0], image_size=(width, height))
     if not full:
-        return SimulationResult(stages=stages, camera=camera, image_size=(width, height))
+        return SimulationResult(
+            stages=stages, camera=camera, image_size=(width, height), world_up=WORLD_UP
+        )
     lab_meas = np.asarray(xyz_to_lab(linear_srgb_to_xyz(rgb), white="D65"))
     truth = lab_meas.copy()
     truth[0, 0] = 51.0  # measured 49: ΔE00 = 2.0 at L̄ = 50
@@ -146,13 +151,14 @@ def make_result(*, full: bool = True, width: int = W, height: int = H) -> Simula
         ),
         photon_transfer=_ptc(),
         metrics={
-            "delta_e00_mean": 1.5,
+            "simulation_time_s": 1.0,
             "vp_error_px": 5.0,
             "per_patch": list(range(24)),
             "nan": float("nan"),
         },
         scene_name="synthetic",
         config={"scene": {"name": "synthetic"}, "camera": {"fx": 200.0}},
+        world_up=WORLD_UP,
     )
 
 

@@ -10,6 +10,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+import pytest
 
 from imageform.io import read_image
 
@@ -43,19 +44,32 @@ def test_every_stage_is_written(real_run: dict[str, Any]) -> None:
 def test_metrics_json_matches_the_summary(real_run: dict[str, Any]) -> None:
     metrics = json.loads((real_run["out"] / "metrics.json").read_text())
     summary = real_run["summary"]
-    assert metrics["summary"] == summary
-    assert metrics["image_size"] == {"width": 320, "height": 180}
+    cc = metrics["colorchecker"]
+    assert summary == {
+        "simulation_time_s": metrics["simulation_time_s"],
+        "delta_e00_mean": cc["delta_e00_mean"],
+        "delta_e00_max": cc["delta_e00_max"],
+        "vanishing_point_error_px": metrics["vanishing"]["vanishing_point_error_px"],
+        "system_gain_dn_per_e": metrics["photon_transfer"]["fit"]["system_gain_dn_per_e"],
+    }
+    assert metrics["image_size_px"] == {"width": 320, "height": 180}
     assert metrics["scene_name"] == "default"
-    per_patch = metrics["metrics"]["delta_e00_per_patch"]
+    per_patch = [p["delta_e00"] for p in cc["patches"]]
     assert len(per_patch) == 24 and all(math.isfinite(x) for x in per_patch)
-    # the report measures the patches itself, from the written stage: same figures
-    assert np.isclose(np.mean(per_patch), summary["mean_delta_e00"], rtol=1e-6)
+    assert np.isclose(np.mean(per_patch), cc["delta_e00_mean"], rtol=1e-12)
     # At a quarter of the size the closed-loop figures stay in the same range as at 1280 x 720
     # (mean ΔE00 2.3, vanishing point 1.5 px): the pipeline works, not just runs.
-    assert summary["mean_delta_e00"] < 4.0
+    assert summary["delta_e00_mean"] < 4.0
     assert summary["vanishing_point_error_px"] < 8.0
     assert summary["system_gain_dn_per_e"] > 0
-    assert len(metrics["metrics"]["snr_db_per_patch"]) == 24
+    snr = [p["snr_luminance_db"] for p in cc["patches"]]
+    assert len(snr) == 24 and all(10.0 < x < 60.0 for x in snr)
+    # one total time: the run's wall time, which contains every step
+    assert metrics["simulation_time_s"] >= sum(metrics["step_times_s"].values())
+    assert [s["name"] for s in metrics["stages"]] == list(metrics["step_times_s"])[:8]
+    # the light is CIE illuminant A: 2856 K, computed from its spectrum
+    assert metrics["illuminant_cct_K"] == pytest.approx(2856.0, abs=1.0)
+    assert metrics["config"]["illuminant"]["temperature_K"] is None
 
 
 def test_report_embeds_every_stage(real_run: dict[str, Any]) -> None:

@@ -8,8 +8,11 @@ import math
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
-from imageform.simulate.result import ColorCheckerTruth, SimulationResult
+from imageform.simulate.result import ColorCheckerTruth, SceneQuad, SimulationResult, Stage
+from imageform.simulate.scene import Scene
 
 mpl = pytest.importorskip("matplotlib")
 mpl.use("Agg")
@@ -26,7 +29,9 @@ from imageform.report.figures_color import (  # noqa: E402
 from imageform.report.figures_geometry import (  # noqa: E402
     image_corner_pixels,
     plot_top_view,
+    top_view_axes,
     top_view_data,
+    top_view_project,
     vanishing_overlay,
     vanishing_summary,
 )
@@ -53,15 +58,16 @@ def test_delta_e_gold_and_readings(sim_result: SimulationResult) -> None:
     assert m.delta_e00[0] == pytest.approx(2.0, abs=1e-6)
     assert np.allclose(m.delta_e00[1:], 0.0, atol=1e-6)
     assert m.readings[0] == "just noticeable" and set(m.readings[1:]) == {"imperceptible"}
-    assert m.mean_delta_e00 == pytest.approx(2.0 / 24, abs=1e-6)
-    assert m.max_delta_e00 == pytest.approx(2.0, abs=1e-6)
+    assert m.delta_e00_mean == pytest.approx(2.0 / 24, abs=1e-6)
+    assert m.delta_e00_max == pytest.approx(2.0, abs=1e-6)
 
 
 def test_snr_per_patch(sim_result: SimulationResult) -> None:
     m = measure_patches(sim_result)
     assert m is not None and m.snr_stage == "white_balanced"
     # a ±δ checker on μ: std = δ (population), SNR = 20 log10(μ/δ)
-    assert np.allclose(m.snr_db, 20 * math.log10(SNR_MU / SNR_DELTA), atol=0.05)
+    # (the weights of the luminance sum to 1: Y of a grey μ ± δ is μ ± δ)
+    assert np.allclose(m.snr_luminance_db, 20 * math.log10(SNR_MU / SNR_DELTA), atol=0.05)
 
 
 def test_measurements_absent_without_colorchecker(bare_result: SimulationResult) -> None:
@@ -86,7 +92,7 @@ def test_patch_outside_image_is_not_measured(sim_result: SimulationResult) -> No
     r = dataclasses.replace(sim_result, colorchecker=dataclasses.replace(cc, centres_uv=centres))
     m = measure_patches(r)
     assert m is not None and np.isnan(m.delta_e00[3]) and m.readings[3] == "not measured"
-    assert np.isnan(m.snr_db[3]) and np.isfinite(m.mean_delta_e00)
+    assert np.isnan(m.snr_luminance_db[3]) and np.isfinite(m.delta_e00_mean)
     assert plot_delta_e(m) is not None and plot_patch_snr(m) is not None
 
 
@@ -114,16 +120,13 @@ def test_delta_e_bars_hold_the_values(sim_result: SimulationResult) -> None:
 
 def test_top_view_places_camera_centre_and_frustum(sim_result: SimulationResult) -> None:
     data = top_view_data(sim_result)
-    c = np.asarray(sim_result.camera.center)
-    assert np.allclose(data["camera_center"], [0.5, -1.0, -1.0])
+    assert np.allclose(data["camera_center_m"], [0.5, -1.0, -1.0])
     fig = plot_top_view(data)
     centre = next(ln for ln in fig.axes[0].lines if ln.get_label() == "camera centre")
-    assert centre.get_xdata()[0] == pytest.approx(c[0]) and centre.get_ydata()[0] == pytest.approx(
-        c[2]
-    )
+    assert centre.get_xdata()[0] == 0.0 and centre.get_ydata()[0] == 0.0
     # the far corners re-project onto the image corners at the frustum depth
     cam = sim_result.camera
-    far = data["frustum_far_corners"]
+    far = data["frustum_far_corners_m"]
     uv = np.asarray(cam.project(far).uv)
     w, h = sim_result.image_size
     assert np.allclose(uv, image_corner_pixels(w, h), atol=1e-6)
@@ -134,12 +137,90 @@ def test_top_view_places_camera_centre_and_frustum(sim_result: SimulationResult)
     assert data["frustum_depth_m"] == pytest.approx(
         np.asarray(cam.world_to_camera(corners))[:, 2].max()
     )
-    assert set(data["quads"]) == {"colorchecker", "ground"}
+    assert set(data["quads_m"]) == {"colorchecker", "ground"}
+    # this synthetic world is y-down: seen from above (along -y), the camera looks along +z
+    assert np.allclose(data["view_ahead"], [0.0, 0.0, 1.0])
+    assert np.allclose(data["view_right"], [1.0, 0.0, 0.0])
+
+
+def test_top_view_figure_draws_the_projection(sim_result: SimulationResult) -> None:
+    data = top_view_data(sim_result)
+    fig = plot_top_view(data)
+    lines = {ln.get_label(): ln for ln in fig.axes[0].lines}
+    for name, corners in data["quads_m"].items():
+        ring = top_view_project(np.vstack([corners, corners[:1]]), data)
+        assert np.allclose(lines[name].get_xydata(), ring)
+    axis = lines["optical axis"].get_xydata()
+    assert np.allclose(axis[1], top_view_project(data["optical_axis_end_m"], data)[0])
+    assert fig.axes[0].get_title().startswith("Scene and camera frustum from above")
+
+
+def _top_view_of_scene(scene: Scene) -> dict:
+    """The top view of a scene's objects seen by its camera (no simulation needed)."""
+    w, h = scene.image_size
+    result = SimulationResult(
+        stages=(Stage("o", "o", "o", np.zeros((h, w, 3)), "srgb"),),
+        camera=scene.camera,
+        image_size=(w, h),
+        quads=tuple(SceneQuad(o.name, o.corners) for o in scene.objects),
+    )
+    return top_view_data(result)
+
+
+def test_top_view_of_the_default_scene_is_seen_from_above() -> None:
+    from imageform.simulate import default_scene
+
+    scene = default_scene().resized(64)
+    data = _top_view_of_scene(scene)
+    assert np.allclose(data["world_up"], [0.0, 0.0, 1.0])  # the simulator's z-up world
+    centre = {n: top_view_project(c, data).mean(axis=0) for n, c in data["quads_m"].items()}
+    # the ColorChecker (x = -5 cm) stands left of the camera, the checkerboard (+5 cm) right
+    assert centre["ColorChecker"][0] < 0 < centre["checkerboard"][0]
+    # both stand nearer than the middle of the 60 cm ground: drawn lower
+    assert centre["ColorChecker"][1] < centre["ground with rails"][1]
+    # the ground is a 0.2 x 0.6 m rectangle seen from above, not a line (a front view)
+    g = top_view_project(data["quads_m"]["ground with rails"], data)
+    x, y = g[:, 0], g[:, 1]
+    area = 0.5 * abs(np.dot(x, np.roll(y, 1)) - np.dot(y, np.roll(x, 1)))
+    assert area == pytest.approx(0.2 * 0.6, rel=1e-9)
+
+
+@given(
+    yaw=st.floats(-math.pi, math.pi),
+    pitch=st.floats(-1.2, 1.2),
+    pts=st.lists(st.tuples(st.floats(-2.0, 2.0), st.floats(-2.0, 2.0)), min_size=2, max_size=6),
+)
+@settings(max_examples=60, deadline=None)
+def test_top_view_left_is_left_and_nearer_is_lower(
+    yaw: float, pitch: float, pts: list[tuple[float, float]]
+) -> None:
+    # a level (unrolled) camera at any heading and tilt over the z = 0 ground: a ground point
+    # left of the camera (camera x < 0) is drawn left (x < 0); of two ground points in front,
+    # the nearer (smaller camera depth) is drawn lower
+    from imageform.geometry import Camera
+
+    eye = np.array([0.3, -0.2, 1.0])
+    d = np.array([np.cos(pitch) * np.cos(yaw), np.cos(pitch) * np.sin(yaw), np.sin(pitch)])
+    cam = Camera.look_at(np.diag([100.0, 100.0, 1.0]), eye, eye + d, up=(0.0, 0.0, 1.0))
+    data = {
+        "camera_center_m": np.asarray(cam.center),
+        **dict(zip(("view_right", "view_ahead"), top_view_axes(cam.R, (0, 0, 1)), strict=True)),
+    }
+    X = np.array([[x, y, 0.0] for x, y in pts])
+    xy = top_view_project(X, data)
+    Xc = np.asarray(cam.world_to_camera(X))
+    ok = np.abs(Xc[:, 0]) > 1e-9
+    assert np.array_equal(np.sign(xy[ok, 0]), np.sign(Xc[ok, 0]))
+    front = np.flatnonzero(Xc[:, 2] > 1e-6)
+    for i in front:
+        for j in front:
+            if Xc[i, 2] < Xc[j, 2] - 1e-9:
+                assert xy[i, 1] < xy[j, 1]
 
 
 def test_top_view_without_quads(bare_result: SimulationResult) -> None:
     data = top_view_data(bare_result)
-    assert data["frustum_depth_m"] == 1.0 and data["quads"] == {}
+    assert data["frustum_depth_m"] == 1.0 and data["quads_m"] == {}
     assert plot_top_view(data) is not None
 
 
@@ -176,8 +257,9 @@ def test_vanishing_summary_and_overlay(
     sim_result: SimulationResult, bare_result: SimulationResult
 ) -> None:
     s = vanishing_summary(sim_result)
-    assert s is not None and s["error_px"] == pytest.approx(5.0)
-    assert np.allclose(s["vanishing_point"], TRUE_VP)
+    assert s is not None and s["vanishing_point_error_px"] == pytest.approx(5.0)
+    assert s["horizon_angle_error_deg"] == pytest.approx(0.0)
+    assert np.allclose(s["vanishing_point_px"], TRUE_VP)
     shown = (np.asarray(sim_result.stages[-1].image) * 255).astype(np.uint8)
     im = vanishing_overlay(sim_result, shown)
     assert im.getpixel((int(TRUE_VP[0]), int(TRUE_VP[1]))) == TRUE_COLOUR
@@ -186,7 +268,7 @@ def test_vanishing_summary_and_overlay(
         sim_result,
         vanishing=dataclasses.replace(sim_result.vanishing, detected_vanishing_point=None),
     )
-    assert vanishing_summary(no_det)["error_px"] is None
+    assert vanishing_summary(no_det)["vanishing_point_error_px"] is None
 
 
 def test_photon_transfer_fit_and_plot(

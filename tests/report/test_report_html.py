@@ -15,7 +15,7 @@ import pytest
 from imageform.errors import InvalidInputError
 from imageform.io import read_image
 from imageform.report import ReportPaths, write_report
-from imageform.report.metrics import METRICS_KEYS, SUMMARY_KEYS, to_json_value
+from imageform.report.metrics import METRICS_KEYS, SUMMARY_KEYS
 from imageform.simulate.result import SimulationResult, Stage
 
 pytest.importorskip("matplotlib")
@@ -77,29 +77,85 @@ def test_metrics_json_round_trips_with_every_key(
     raw = written.metrics.read_text()
     assert "NaN" not in raw and "Infinity" not in raw  # strict JSON
     data = json.loads(raw)
-    assert tuple(data) == METRICS_KEYS
+    assert tuple(data) == METRICS_KEYS and data["metrics_version"] == 2
     assert json.loads(json.dumps(data)) == data
-    assert tuple(data["summary"]) == SUMMARY_KEYS
-    assert data["scene_name"] == "synthetic" and data["image_size"] == {"width": 192, "height": 128}
-    s = data["summary"]
-    assert s["total_seconds"] == 1.0 and s["vanishing_point_error_px"] == pytest.approx(5.0)
-    assert s["max_delta_e00"] == pytest.approx(2.0, abs=1e-6)
+    assert tuple(written.summary) == SUMMARY_KEYS
+    assert data["scene_name"] == "synthetic"
+    assert data["image_size_px"] == {"width": 192, "height": 128}
+    # the summary repeats fields of metrics.json, same names, same values
+    s = written.summary
+    assert s["simulation_time_s"] == data["simulation_time_s"] == 1.0
+    assert s["vanishing_point_error_px"] == data["vanishing"]["vanishing_point_error_px"]
+    assert s["vanishing_point_error_px"] == pytest.approx(5.0)
+    assert s["delta_e00_max"] == data["colorchecker"]["delta_e00_max"]
+    assert s["delta_e00_max"] == pytest.approx(2.0, abs=1e-6)
+    assert s["delta_e00_mean"] == data["colorchecker"]["delta_e00_mean"]
+    assert s["system_gain_dn_per_e"] == data["photon_transfer"]["fit"]["system_gain_dn_per_e"]
     assert s["system_gain_dn_per_e"] == pytest.approx(0.5)
-    assert written.summary == s
-    assert data["metrics"] == {**to_json_value(sim_result.metrics), "nan": None}
+    # the result's metrics: a placed one (simulation_time_s) at the top, the others kept
+    assert data["other_metrics"] == {"vp_error_px": 5.0, "per_patch": list(range(24)), "nan": None}
+    assert data["step_times_s"] == {st.name: st.seconds for st in sim_result.stages}
     assert len(data["stages"]) == 5 and data["stages"][1]["raw_file"] == "stages/01-raw-dn.png"
-    assert data["stages"][1]["white_level"] == 4095.0 and data["stages"][1]["dtype"] == "uint16"
+    assert data["stages"][1]["white_level_dn"] == 4095.0 and data["stages"][1]["dtype"] == "uint16"
     p0 = data["colorchecker"]["patches"][0]
-    assert set(p0) == {"name", "lab_truth", "lab_measured", "delta_e00", "reading", "snr_db", "xy"}
+    assert set(p0) == {
+        "name",
+        "lab_truth",
+        "lab_measured",
+        "delta_e00",
+        "reading",
+        "snr_luminance_db",
+        "xy",
+    }
     assert p0["delta_e00"] == pytest.approx(2.0, abs=1e-6) and p0["reading"] == "just noticeable"
     assert set(p0["xy"]) == set(sim_result.patch_xy)
-    assert np.allclose(
-        data["patch_xy"]["after_white_balance"], sim_result.patch_xy["after_white_balance"]
-    )
-    assert np.allclose(data["top_view"]["camera_center"], sim_result.camera.center)
-    assert data["vanishing"]["error_px"] == pytest.approx(5.0)
+    xy = [pt["xy"]["after_white_balance"] for pt in data["colorchecker"]["patches"]]
+    assert np.allclose(xy, sim_result.patch_xy["after_white_balance"])
+    assert np.allclose(data["top_view"]["camera_center_m"], sim_result.camera.center)
     assert data["photon_transfer"]["fit"]["fit_points"] >= 2
     assert data["config"] == sim_result.config and data["notes"] == []
+
+
+def _field_paths(value: object, path: str, out: dict[str, list[str]]) -> None:
+    """Leaf fields of metrics.json as generic paths (list items ``[]``, maps keyed by
+    names ``{}``), grouped by the field's own name."""
+    if isinstance(value, list) and value and isinstance(value[0], dict):
+        for item in value:
+            _field_paths(item, f"{path}[]", out)
+        return
+    if isinstance(value, dict) and path.split(".")[-1] not in _NAME_MAPS:
+        for k, v in value.items():
+            _field_paths(v, f"{path}.{k}" if path else k, out)
+        return
+    name = path.split(".")[-1].removesuffix("[]")
+    if path not in out.setdefault(name, []):
+        out[name].append(path)
+
+
+# maps keyed by names (of steps, stages, objects), and the echoed input
+_NAME_MAPS = ("step_times_s", "xy", "quads_m", "config", "other_metrics", "image_size_px")
+
+
+def test_metrics_json_has_one_name_per_quantity(written: ReportPaths) -> None:
+    data = json.loads(written.metrics.read_text())
+    fields: dict[str, list[str]] = {}
+    _field_paths(data, "", fields)
+    # "name" labels different things (a patch, a stage); every quantity has one place
+    twice = {n: paths for n, paths in fields.items() if len(paths) > 1 and n != "name"}
+    assert not twice, twice
+    # the old names of quantities that had two (snr_db was two different SNRs)
+    for old in ("snr_db", "total_seconds", "mean_delta_e00", "error_px", "patch_xy", "summary"):
+        assert old not in fields, old
+
+
+def test_docs_define_every_metrics_field(written: ReportPaths) -> None:
+    data = json.loads(written.metrics.read_text())
+    fields: dict[str, list[str]] = {}
+    _field_paths(data, "", fields)
+    doc = (Path(__file__).resolve().parents[2] / "docs" / "simulate-report.md").read_text()
+    table = doc[doc.index("| field |") :]
+    missing = sorted(p for paths in fields.values() for p in paths if f"`{p}`" not in table)
+    assert not missing, missing
 
 
 def test_refuses_to_overwrite(written: ReportPaths, sim_result: SimulationResult) -> None:
@@ -132,7 +188,7 @@ def test_bare_result_leaves_sections_out_with_notes(
     data = json.loads(paths.metrics.read_text())
     assert data["colorchecker"] is None and data["vanishing"] is None
     assert data["photon_transfer"] is None and len(data["notes"]) == 4
-    assert data["summary"]["mean_delta_e00"] is None
+    assert paths.summary["delta_e00_mean"] is None and data["simulation_time_s"] is None
 
 
 def test_text_is_escaped(bare_result: SimulationResult, tmp_path: Path) -> None:

@@ -40,9 +40,9 @@ class FakePipeline:
         return "LOADED"
 
     def simulate(
-        self, scene: Any, *, progress: Callable[[str, float], None] | None = None, seed: int = 0
+        self, scene: Any, *, progress: Callable[[str, float], None] | None = None, rng: Any = None
     ) -> SimulationResult:
-        self.calls.append(("simulate", (scene, seed)))
+        self.calls.append(("simulate", (scene, rng)))
         self.progress = progress
         if progress is not None:
             for i, name in enumerate(("radiance", "raw", "output")):
@@ -91,9 +91,9 @@ def test_json_output(
     assert data["metrics"] == str(out_dir / "metrics.json")
     assert len(data["stages"]) == 5 and data["raw_files"] == [str(out_dir / "stages/01-raw-dn.png")]
     assert data["summary"] == {
-        "total_seconds": 1.0,
-        "mean_delta_e00": None,
-        "max_delta_e00": None,
+        "simulation_time_s": None,  # the bare result records no simulation time
+        "delta_e00_mean": None,
+        "delta_e00_max": None,
         "vanishing_point_error_px": None,
         "system_gain_dn_per_e": None,
     }

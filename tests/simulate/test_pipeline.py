@@ -25,7 +25,7 @@ EXAMPLES = sorted((ROOT / "examples" / "scenes").glob("*.toml"))
 def small() -> SimulationResult:
     calls: list[tuple[str, float]] = []
     scene = default_scene().resized(320, 180)
-    res = simulate(scene, progress=lambda name, f: calls.append((name, f)), seed=1)
+    res = simulate(scene, progress=lambda name, f: calls.append((name, f)), rng=1)
     object.__setattr__(res, "_calls", calls)
     return res
 
@@ -71,24 +71,87 @@ def test_every_field_is_filled(small: SimulationResult) -> None:
     assert vp is not None and vp.vanishing_point.shape == (3,) and vp.horizon.shape == (3,)
     assert small.photon_transfer is not None and small.photon_transfer.mean_dn.size >= 10
     m = small.metrics
-    for key in (
+    assert set(m) == {
         "delta_e00_per_patch",
         "delta_e00_mean",
         "delta_e00_max",
-        "snr_db_per_patch",
+        "snr_luminance_db_per_patch",
         "vanishing_point_error_px",
         "horizon_angle_error_deg",
         "exposure_time_s",
+        "illuminant_cct_K",
+        "illuminant_duv",
         "white_balance_gains",
         "color_correction_matrix",
-        "stage_seconds",
-        "total_seconds",
-    ):
-        assert key in m, key
-    assert len(m["delta_e00_per_patch"]) == 24 and len(m["snr_db_per_patch"]) == 24
+        "step_times_s",
+        "simulation_time_s",
+    }
+    assert len(m["delta_e00_per_patch"]) == 24 and len(m["snr_luminance_db_per_patch"]) == 24
     json.dumps(m)
     json.dumps(small.config)
     assert small.config["illuminant"]["name"] == "A"
+    assert small.config["illuminant"]["temperature_K"] is None  # not a setting of CIE A
+
+
+def test_metrics_agree_with_the_measurement(small: SimulationResult) -> None:
+    # one measurement: the metrics are the result's PatchMeasurements, number for number
+    p, m = small.patches, small.metrics
+    assert p is not None and p.snr_stage == "color_corrected"
+    assert m["delta_e00_per_patch"] == p.delta_e00.tolist()
+    assert m["delta_e00_mean"] == p.delta_e00_mean and m["delta_e00_max"] == p.delta_e00_max
+    assert m["snr_luminance_db_per_patch"] == p.snr_luminance_db.tolist()
+    # one total time, which holds every step
+    assert m["simulation_time_s"] >= sum(m["step_times_s"].values()) > 0
+    assert [s.seconds for s in small.stages] == [m["step_times_s"][s.name] for s in small.stages]
+
+
+def test_snr_is_the_luminance_snr_of_the_colour_corrected_patches(
+    small: SimulationResult,
+) -> None:
+    # recomputed here from the kept stage (float32) with the Rec. 709 weights
+    cc = small.colorchecker
+    assert cc is not None and small.patches is not None
+    img = small.stage("color_corrected").image.astype(np.float64)
+    y = img @ np.array([0.2126, 0.7152, 0.0722])
+    for k, (u, v) in enumerate(cc.centres_uv):
+        r = cc.sample_radius_px
+        win = y[
+            int(np.ceil(v - r)) : int(np.floor(v + r)) + 1,
+            int(np.ceil(u - r)) : int(np.floor(u + r)) + 1,
+        ]
+        snr = 20 * np.log10(win.mean() / win.std())
+        assert small.patches.snr_luminance_db[k] == pytest.approx(snr, abs=1e-4)
+
+
+def test_illuminant_cct_from_its_spectrum(small: SimulationResult) -> None:
+    # CIE A is a 2856 K Planckian radiator by definition (CIE 15:2004 §3.1); cross-checked
+    # with colour-science's Robertson (1968) on the same chromaticity
+    colour = pytest.importorskip("colour")
+    from imageform.spectral import illuminant, spectrum_to_xyz
+
+    assert small.metrics["illuminant_cct_K"] == pytest.approx(2856.0, abs=1.0)
+    assert abs(small.metrics["illuminant_duv"]) < 1e-3
+    xyz = np.asarray(spectrum_to_xyz(illuminant("A"), illuminant=None))
+    xy = xyz[:2] / xyz.sum()
+    peer = colour.temperature.uv_to_CCT(colour.xy_to_UCS_uv(xy), method="Robertson 1968")
+    assert small.metrics["illuminant_cct_K"] == pytest.approx(float(peer[0]), abs=0.01)
+    assert small.metrics["illuminant_duv"] == pytest.approx(float(peer[1]), abs=1e-6)
+
+
+@pytest.mark.parametrize(
+    ("light", "cct"),
+    [
+        ({"type": "cie", "name": "D65"}, 6504.0),
+        ({"type": "blackbody", "temperature_K": 3200.0}, 3200.0),
+        ({"type": "daylight", "temperature_K": 5000.0}, 5000.0),
+    ],
+)
+def test_illuminant_cct_of_other_lights(light: dict, cct: float) -> None:
+    scene = default_scene().resized(48).with_changes(illuminant=light)
+    res = simulate(scene, rng=0)
+    # D65 is 6504 K; a blackbody is its own temperature; the D-series sits near (±15 K) the
+    # nominal one (CIE 015:2018 §3.1: the nominal CCT of D50 is 5003 K)
+    assert res.metrics["illuminant_cct_K"] == pytest.approx(cct, abs=15.0)
 
 
 def test_progress_reports_monotone_to_one(small: SimulationResult) -> None:
@@ -98,13 +161,40 @@ def test_progress_reports_monotone_to_one(small: SimulationResult) -> None:
     assert fractions == sorted(fractions) and fractions[-1] == 1.0
 
 
-def test_seed_makes_runs_reproducible() -> None:
+def test_rng_makes_runs_reproducible() -> None:
     scene = default_scene().resized(64, 36)
-    a = simulate(scene, seed=5).stage("raw").image
-    b = simulate(scene, seed=5).stage("raw").image
-    c = simulate(scene, seed=6).stage("raw").image
+    a = simulate(scene, rng=5).stage("raw").image
+    b = simulate(scene, rng=5).stage("raw").image
+    c = simulate(scene, rng=6).stage("raw").image
     np.testing.assert_array_equal(a, b)
     assert not np.array_equal(a, c)
+    # a Generator is drawn from: two generators seeded alike give the same run
+    g1 = simulate(scene, rng=np.random.default_rng(9)).stage("raw").image
+    g2 = simulate(scene, rng=np.random.default_rng(9)).stage("raw").image
+    np.testing.assert_array_equal(g1, g2)
+    gen = np.random.default_rng(9)
+    simulate(scene, rng=gen)
+    assert not np.array_equal(simulate(scene, rng=gen).stage("raw").image, g1)  # advanced
+    # None: fresh entropy each time
+    assert not np.array_equal(
+        simulate(scene, rng=None).stage("raw").image, simulate(scene).stage("raw").image
+    )
+
+
+def test_seed_is_a_deprecated_alias_of_rng() -> None:
+    scene = default_scene().resized(64, 36)
+    with pytest.warns(DeprecationWarning, match=r"seed=.*deprecated.*use rng="):
+        old = simulate(scene, seed=5)
+    new = simulate(scene, rng=5)
+    for a, b in zip(old.stages, new.stages, strict=True):
+        np.testing.assert_array_equal(a.image, b.image)
+    assert old.metrics["vanishing_point_error_px"] == new.metrics["vanishing_point_error_px"]
+    with pytest.warns(DeprecationWarning), pytest.raises(InvalidInputError, match="not both"):
+        simulate(scene, rng=1, seed=2)
+    with pytest.raises(InvalidInputError, match="expected rng to be an int seed"):
+        simulate(scene, rng="7")  # type: ignore[arg-type]
+    with pytest.raises(InvalidInputError, match="rng >= 0"):
+        simulate(scene, rng=-1)
 
 
 def test_colorchecker_options_need_a_chart() -> None:
@@ -120,6 +210,6 @@ def test_examples_render(path: Path) -> None:
     if "kodak" in path.read_text() and not (ROOT.parent / "shared" / "data").is_dir():
         pytest.skip("reference data not found")
     scene = load_scene(path).resized(96, 64)
-    res = simulate(scene)
+    res = simulate(scene, rng=0)
     assert res.stages[-1].image.shape == (64, 96, 3)
     assert np.isfinite(res.stages[-1].image).all()

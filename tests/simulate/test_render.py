@@ -94,7 +94,7 @@ def test_doubling_exposure_doubles_the_raw_signal(noise: bool) -> None:
     for t in (0.01, 0.02):
         d = _plane_scene(sensor={"noise": noise, "exposure_time_s": t}, lens={"vignetting": "none"})
         scene = load_scene(d)
-        raw = simulate(scene, seed=3).stage("raw").image.astype(float)
+        raw = simulate(scene, rng=3).stage("raw").image.astype(float)
         s = scene.sensor
         means.append(raw.mean() - s.black_level - s.system_gain * s.dark_current * t)
     assert means[1] < 0.9 * scene.sensor.max_dn  # below saturation

@@ -80,9 +80,9 @@ def test_wrong_unit_in_the_key_name() -> None:
 
 def test_unit_strings_convert_and_wrong_units_are_named() -> None:
     s = load_scene(GOOD.replace("focal_length_mm = 1.0", 'focal_length_mm = "1500 um"'))
-    assert s.config["camera"]["focal_length_mm"] == pytest.approx(1.5)
+    assert s.config.camera.focal_length_mm == pytest.approx(1.5)
     s = load_scene(GOOD + '\n[sensor]\nexposure_time_s = "10 ms"\n')
-    assert s.config["sensor"]["exposure_time_s"] == pytest.approx(0.01)
+    assert s.config.sensor.exposure_time_s == pytest.approx(0.01)
     with pytest.raises(
         InvalidInputError,
         match=r"camera\.focal_length_mm .*line 7.*expected a "
@@ -181,7 +181,7 @@ def test_default_scene_is_the_packaged_toml() -> None:
     assert a.config == b.config and a.image_size == (1280, 720)
     kinds = sorted(o.kind for o in a.objects)
     assert kinds == ["checkerboard", "colorchecker", "ground"]
-    assert a.config["illuminant"]["name"] == "A"
+    assert a.config.illuminant.name == "A" and a.config.illuminant.temperature_K is None
 
 
 def test_with_changes_revalidates() -> None:

@@ -77,7 +77,7 @@ def simulate_command(
     sc = load_scene(scene) if scene is not None else default_scene()
     show_bar = not json_out and sys.stderr.isatty()
     with _progress_bar(show_bar) as progress:
-        result = simulate(sc, progress=progress, seed=seed)
+        result = simulate(sc, progress=progress, rng=seed)
         if progress is not None:
             progress("writing the report", 1.0)
         paths = write_report(result, out, force=force)
@@ -108,9 +108,9 @@ def simulate_command(
     typer.echo(f"report  -> {paths.html}")
     typer.echo(f"metrics -> {paths.metrics}")
     typer.echo(
-        f"mean ΔE00 {num(s['mean_delta_e00'], '.2f')} (max {num(s['max_delta_e00'], '.2f')}); "
+        f"mean ΔE00 {num(s['delta_e00_mean'], '.2f')} (max {num(s['delta_e00_max'], '.2f')}); "
         f"vanishing-point error {num(s['vanishing_point_error_px'], '.2f', ' px')}; "
-        f"simulation {num(s['total_seconds'], '.1f', ' s')}, report {paths.seconds:.1f} s, "
+        f"simulation {num(s['simulation_time_s'], '.1f', ' s')}, report {paths.seconds:.1f} s, "
         f"total {wall:.1f} s"
     )
 

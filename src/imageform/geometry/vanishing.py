@@ -20,6 +20,7 @@ from imageform.errors import DegenerateConfigurationError, InvalidInputError
 from imageform.geometry.homogeneous import _normalize_homogeneous_point, line_through
 
 __all__ = [
+    "UP_AXES",
     "focal_from_vanishing_points",
     "horizon_line",
     "intrinsics_from_vanishing_points",
@@ -76,9 +77,32 @@ def vanishing_point(K: ArrayLike, direction: ArrayLike, R: ArrayLike | None = No
     return _normalize_homogeneous_point(v, xp, what="zero direction")
 
 
-def horizon_line(
-    K: ArrayLike, R: ArrayLike | None = None, up: ArrayLike = (0.0, -1.0, 0.0)
-) -> Array:
+#: Axis names ``horizon_line``'s ``up`` accepts, and their unit vectors.
+UP_AXES: dict[str, tuple[float, float, float]] = {
+    "+x": (1.0, 0.0, 0.0),
+    "-x": (-1.0, 0.0, 0.0),
+    "+y": (0.0, 1.0, 0.0),
+    "-y": (0.0, -1.0, 0.0),
+    "+z": (0.0, 0.0, 1.0),
+    "-z": (0.0, 0.0, -1.0),
+}
+
+
+def _up_vector(up: ArrayLike | str) -> ArrayLike:
+    if not isinstance(up, str):
+        return up
+    key = up.strip().lower()
+    key = key if key[:1] in "+-" else "+" + key
+    if key not in UP_AXES:
+        from imageform.errors import UnknownOptionError
+
+        raise UnknownOptionError(
+            f"unknown up axis {up!r}; valid: {', '.join(UP_AXES)} (or a 3-vector)"
+        )
+    return UP_AXES[key]
+
+
+def horizon_line(K: ArrayLike, R: ArrayLike | None = None, up: ArrayLike | str = "-y") -> Array:
     """The horizon: vanishing line ``l ~ K⁻ᵀ R n`` of planes perpendicular to ``up``.
 
     Returned as ``(a, b, c)`` with ``a u + b v + c = 0``, normalised to ``a² + b² = 1``
@@ -89,12 +113,30 @@ def horizon_line(
     A level camera's horizon passes through the principal point; tilting the camera up
     moves the horizon down the image (larger v).
 
+    Parameters
+    ----------
+    K : array_like, shape (..., 3, 3)
+    R : array_like, shape (..., 3, 3), optional
+        World-to-camera rotation; ``None``: the world is the camera frame.
+    up : str or array_like, shape (..., 3)
+        The world's up direction, in world coordinates: an axis name (``"+z"``, ``"-y"``,
+        ...; ``"z"`` is ``"+z"``) or a vector. imageform has no world frame of its own, so
+        the default is the camera frame's up, ``"-y"`` (x right, y down, z forward), right
+        when ``R`` is None or the world is y-down. A world with another up axis names it:
+        the simulator's world is z-up (``imageform.simulate.WORLD_UP``, ``up="+z"``).
+
     Examples
     --------
     >>> K = [[500, 0, 320], [0, 500, 240], [0, 0, 1]]
     >>> horizon_line(K)            # level camera: v = 240
     array([   0.,    1., -240.])
+
+    The same camera in a z-up world (looking along +y: rows of R are x, -z, y):
+
+    >>> horizon_line(K, [[1, 0, 0], [0, 0, -1], [0, 1, 0]], up="+z")
+    array([   0.,    1., -240.])
     """
+    up = _up_vector(up)
     xp = namespace(K, R, up)
     n = as_points(up, "up", 3, xp=xp)
     Km, Rm = _k_r(K, R, xp, n.dtype)

@@ -38,7 +38,9 @@ def planckian_locus(
     out = []
     for t in np.asarray(temperatures, dtype=np.float64).ravel():
         xyz = spectrum_to_xyz(
-            blackbody_spectrum(float(t), np.arange(360.0, 831.0)), None, observer=observer
+            blackbody_spectrum(float(t), np.arange(360.0, 831.0)),
+            illuminant=None,
+            observer=observer,
         )
         out.append(xyz[:2] / xyz.sum())
     xy = np.array(out)
@@ -124,7 +126,7 @@ def plot_chromaticity_diagram(
         fig = ax.figure
     img, ext = _horseshoe_image(c, int(resolution))
     ax.imshow(img, origin="lower", extent=ext, interpolation="bilinear")
-    wl, locus = spectral_locus(observer, c)
+    wl, locus = spectral_locus(observer=observer, coords=c)
     closed = np.vstack([locus, locus[:1]])
     ax.plot(closed[:, 0], closed[:, 1], color="k", lw=1.0)
     for w in range(460, 621, 20):

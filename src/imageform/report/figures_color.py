@@ -66,13 +66,12 @@ def _zoom_background(ax: Any) -> None:
     CCT ticks) without the coloured fill, for the zoomed panel."""
     from imageform.color.chromaticity import spectral_locus
     from imageform.color.gamut import gamut_triangle
-    from imageform.color.rgb_spaces import rgb_space
     from imageform.report.chromaticity_plot import CCT_TICKS, planckian_locus
 
-    _, locus = spectral_locus(2, "xy")
+    _, locus = spectral_locus(observer=2, coords="xy")
     ring = np.vstack([locus, locus[:1]])
     ax.plot(ring[:, 0], ring[:, 1], color="k", lw=1.0)
-    tri = gamut_triangle(rgb_space("srgb"), "xy")
+    tri = gamut_triangle("srgb", "xy")
     ring = np.vstack([tri, tri[:1]])
     ax.plot(ring[:, 0], ring[:, 1], "-", color="k", lw=1.2, label="sRGB")
     pl = planckian_locus(np.geomspace(1500.0, 20000.0, 40))
@@ -175,9 +174,9 @@ def plot_delta_e(measurements: PatchMeasurements | None) -> Any:
         if level <= top:
             ax.axhline(level, color="0.4", ls=":", lw=0.8)
             ax.annotate(text, (len(x) - 0.5, level), ha="right", va="bottom", fontsize=7)
-    mean = m.mean_delta_e00
+    mean = m.delta_e00_mean
     if np.isfinite(mean):
-        ax.axhline(mean, color="C3", lw=1.2, label=f"mean ΔE00 = {mean:.2f}")
+        ax.axhline(mean, color="C3", lw=1.2, label=f"delta_e00_mean = {mean:.2f}")
         ax.legend(loc="upper left", fontsize=8)
     ax.set_xticks(x, m.names, rotation=60, ha="right", fontsize=7)
     ax.set_ylim(0, top)
@@ -188,26 +187,29 @@ def plot_delta_e(measurements: PatchMeasurements | None) -> Any:
 
 
 def plot_patch_snr(measurements: PatchMeasurements | None) -> Any:
-    """Bar chart of the SNR (dB) of every patch. ``None`` without measurements."""
+    """Bar chart of ``snr_luminance_db`` of every patch (the SNR of the window's luminance).
+    ``None`` without measurements."""
     if measurements is None:
         return None
     m = measurements
     plt = _pyplot()
     fig, ax = plt.subplots(figsize=(12, 3.8))
     x = np.arange(len(m.names))
-    finite = np.isfinite(m.snr_db)
-    ax.bar(x[finite], m.snr_db[finite], color=_bar_colours(m)[finite], edgecolor="k", lw=0.6)
+    finite = np.isfinite(m.snr_luminance_db)
+    ax.bar(
+        x[finite], m.snr_luminance_db[finite], color=_bar_colours(m)[finite], edgecolor="k", lw=0.6
+    )
     for i in np.flatnonzero(~finite):
         ax.annotate(
-            "∞" if m.snr_db[i] == np.inf else "n/a",
+            "∞" if m.snr_luminance_db[i] == np.inf else "n/a",
             (x[i], 0.0),
             ha="center",
             va="bottom",
             fontsize=8,
         )
     ax.set_xticks(x, m.names, rotation=60, ha="right", fontsize=7)
-    ax.set_ylabel("SNR (dB) = 20 log10(mean / std)")
-    ax.set_title(f"Signal-to-noise ratio per patch, measured on stage '{m.snr_stage}'")
+    ax.set_ylabel("snr_luminance_db = 20 log10(mean(Y) / std(Y))")
+    ax.set_title(f"Luminance signal-to-noise ratio per patch, on stage '{m.snr_stage}'")
     fig.subplots_adjust(left=0.06, right=0.99, bottom=0.24, top=0.91)
     return fig
 

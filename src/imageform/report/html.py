@@ -24,7 +24,12 @@ import numpy as np
 
 from imageform.errors import InvalidInputError
 from imageform.report import html_parts as hp
-from imageform.report.metrics import to_json_value
+from imageform.report.metrics import (
+    METRICS_VERSION,
+    PLACED_METRICS,
+    TOP_LEVEL_METRICS,
+    to_json_value,
+)
 from imageform.simulate.result import STAGE_KINDS, SimulationResult, Stage
 
 __all__ = ["ReportPaths", "write_report"]
@@ -174,8 +179,9 @@ def _colour_section(result: SimulationResult, m: Any, notes: list[str]) -> str:
         hp.figure(
             hp.figure_png(plot_delta_e(m)),
             "CIEDE2000 per patch",
-            f"CIEDE2000 of every patch of the output against the D65 ground truth: mean "
-            f"{m.mean_delta_e00:.2f}, max {m.max_delta_e00:.2f}.",
+            f"CIEDE2000 of every patch of the output against the D65 ground truth "
+            f"(delta_e00): delta_e00_mean {m.delta_e00_mean:.2f}, "
+            f"delta_e00_max {m.delta_e00_max:.2f}.",
             "delta-e",
         )
     )
@@ -192,14 +198,22 @@ def _colour_section(result: SimulationResult, m: Any, notes: list[str]) -> str:
                 else "—",
                 f"{m.delta_e00[i]:.2f}" if np.isfinite(m.delta_e00[i]) else "—",
                 m.readings[i],
-                f"{m.snr_db[i]:.1f}"
-                if np.isfinite(m.snr_db[i])
-                else ("∞" if m.snr_db[i] > 0 else "—"),
+                f"{m.snr_luminance_db[i]:.1f}"
+                if np.isfinite(m.snr_luminance_db[i])
+                else ("∞" if m.snr_luminance_db[i] > 0 else "—"),
             ]
         )
     body.append(
         hp.table(
-            ["#", "patch", "L* a* b* truth", "L* a* b* measured", "ΔE00", "reading", "SNR (dB)"],
+            [
+                "#",
+                "name",
+                "lab_truth (L* a* b*)",
+                "lab_measured (L* a* b*)",
+                "delta_e00",
+                "reading",
+                "snr_luminance_db",
+            ],
             rows,
             left=(1, 5),
         )
@@ -212,7 +226,9 @@ def _colour_section(result: SimulationResult, m: Any, notes: list[str]) -> str:
         hp.figure(
             hp.figure_png(plot_patch_snr(m)),
             "SNR per patch",
-            f"Signal-to-noise ratio of each patch window on stage '{hp.e(m.snr_stage)}'.",
+            "snr_luminance_db: the signal-to-noise ratio 20 log10(mean(Y) / std(Y)) of the "
+            "luminance Y = 0.2126 R + 0.7152 G + 0.0722 B of each patch window on stage "
+            f"'{hp.e(m.snr_stage)}' (the report's one SNR).",
             "snr",
         )
     )
@@ -230,14 +246,16 @@ def _geometry_section(
 
     from imageform.report.figures_geometry import plot_top_view, vanishing_overlay
 
-    c = top["camera_center"]
+    c = top["camera_center_m"]
+    up = ", ".join(f"{x:g}" for x in top["world_up"])
     body = [
         hp.figure(
             hp.figure_png(plot_top_view(top)),
             "top view",
-            f"The scene from above (x–z plane): {len(top['quads'])} objects, the camera centre "
-            f"at ({c[0]:.3f}, {c[1]:.3f}, {c[2]:.3f}) m and the frustum rays through the image "
-            "corners.",
+            f"The scene from above, looking down the world's up axis ({up}), the camera "
+            f"looking up the page: {len(top['quads_m'])} objects, the camera centre "
+            f"(camera_center_m) at ({c[0]:.3f}, {c[1]:.3f}, {c[2]:.3f}) m and the frustum "
+            "rays through the image corners.",
             "top-view",
         )
     ]
@@ -249,8 +267,8 @@ def _geometry_section(
         im = vanishing_overlay(result, shown)
         buf = io.BytesIO()
         im.save(buf, format="PNG", compress_level=1)
-        t = vp["vanishing_point"]
-        det = vp["detected_vanishing_point"]
+        t = vp["vanishing_point_px"]
+        det = vp["detected_vanishing_point_px"]
         where = f"({t[0]:.1f}, {t[1]:.1f}) px" if t[2] == 1 else "at infinity"
         if det is None:
             found = "The detector found no vanishing point."
@@ -259,7 +277,8 @@ def _geometry_section(
         else:
             found = (
                 f"Detected at ({det[0]:.1f}, {det[1]:.1f}) px, "
-                f"{vp['error_px']:.2f} px from the truth."
+                f"{vp['vanishing_point_error_px']:.2f} px from the truth "
+                "(vanishing_point_error_px)."
             )
         body.append(
             hp.figure(
@@ -348,28 +367,32 @@ def write_report(
         _geometry_section(res, top, vp, shown, notes),
         _sensor_section(ptc, notes),
     ]
-    total = float(sum(s.seconds for s in res.stages))
+    metrics = _metrics(res, files, raws, m, top, vp, ptc, notes)
     summary = {
-        "total_seconds": total,
-        "mean_delta_e00": m.mean_delta_e00 if m is not None else None,
-        "max_delta_e00": m.max_delta_e00 if m is not None else None,
-        "vanishing_point_error_px": vp["error_px"] if vp is not None else None,
+        "simulation_time_s": metrics["simulation_time_s"],
+        "delta_e00_mean": cc["delta_e00_mean"] if (cc := metrics["colorchecker"]) else None,
+        "delta_e00_max": cc["delta_e00_max"] if cc else None,
+        "vanishing_point_error_px": (
+            metrics["vanishing"]["vanishing_point_error_px"] if metrics["vanishing"] else None
+        ),
         "system_gain_dn_per_e": (
-            ptc["fit"]["system_gain_dn_per_e"] if ptc is not None and ptc["fit"] else None
+            fit["system_gain_dn_per_e"]
+            if (pt := metrics["photon_transfer"]) and (fit := pt["fit"])
+            else None
         ),
     }
-    metrics = _metrics(res, files, raws, summary, m, top, vp, ptc, notes)
     metrics_path = out / "metrics.json"
     metrics_path.write_text(json.dumps(metrics, indent=2, ensure_ascii=False, allow_nan=False))
     sections.append(_numbers_section(metrics))
     w, h = res.image_size
+    t_sim = summary["simulation_time_s"]
     sub = (
-        f"<p>Scene <b>{hp.e(res.scene_name)}</b> · {w}×{h} px · {len(res.stages)} stages · "
-        f"{total:.2f} s of simulation"
-        + (f" · mean ΔE00 {m.mean_delta_e00:.2f}" if m is not None else "")
+        f"<p>Scene <b>{hp.e(res.scene_name)}</b> · {w}×{h} px · {len(res.stages)} stages"
+        + (f" · simulation_time_s {t_sim:.2f}" if t_sim is not None else "")
+        + (f" · delta_e00_mean {m.delta_e00_mean:.2f}" if m is not None else "")
         + (
-            f" · vanishing-point error {vp['error_px']:.2f} px"
-            if vp is not None and vp["error_px"] is not None
+            f" · vanishing_point_error_px {vp['vanishing_point_error_px']:.2f}"
+            if vp is not None and vp["vanishing_point_error_px"] is not None
             else ""
         )
         + "</p>"
@@ -401,35 +424,35 @@ def _metrics(
     res: SimulationResult,
     files: list[Path],
     raws: list[Path],
-    summary: dict[str, Any],
     m: Any,
     top: dict[str, Any],
     vp: dict[str, Any] | None,
     ptc: dict[str, Any] | None,
     notes: list[str],
 ) -> dict[str, Any]:
+    """metrics.json (layout: :mod:`imageform.report.metrics`): each quantity once."""
     raw_iter = iter(raws)
-    stages = []
-    for i, (s, f) in enumerate(zip(res.stages, files, strict=True)):
-        stages.append(
-            {
-                "index": i,
-                "name": s.name,
-                "title": s.title,
-                "description": s.description,
-                "kind": s.kind,
-                "seconds": s.seconds,
-                "white_level": s.white_level,
-                "shape": list(np.shape(s.image)),
-                "dtype": str(np.asarray(s.image).dtype),
-                "file": f"stages/{f.name}",
-                "raw_file": f"stages/{next(raw_iter).name}" if s.kind == "raw" else None,
-            }
-        )
+    stages = [
+        {
+            "index": i,
+            "name": s.name,
+            "title": s.title,
+            "description": s.description,
+            "kind": s.kind,
+            "white_level_dn": s.white_level,
+            "shape": list(np.shape(s.image)),
+            "dtype": str(np.asarray(s.image).dtype),
+            "file": f"stages/{f.name}",
+            "raw_file": f"stages/{next(raw_iter).name}" if s.kind == "raw" else None,
+        }
+        for i, (s, f) in enumerate(zip(res.stages, files, strict=True))
+    ]
     cc = None
     if m is not None:
         cc = {
             "snr_stage": m.snr_stage,
+            "delta_e00_mean": m.delta_e00_mean,
+            "delta_e00_max": m.delta_e00_max,
             "patches": [
                 {
                     "name": n,
@@ -437,24 +460,28 @@ def _metrics(
                     "lab_measured": m.lab_measured[i],
                     "delta_e00": m.delta_e00[i],
                     "reading": m.readings[i],
-                    "snr_db": m.snr_db[i],
+                    "snr_luminance_db": m.snr_luminance_db[i],
                     "xy": {k: np.asarray(v)[i] for k, v in res.patch_xy.items()},
                 }
                 for i, n in enumerate(m.names)
             ],
         }
+    pipeline = res.metrics
+    top_level = {k: pipeline.get(k) for k in TOP_LEVEL_METRICS}
+    if top_level["step_times_s"] is None:  # a result without the simulator's timings
+        top_level["step_times_s"] = {s.name: s.seconds for s in res.stages}
     w, h = res.image_size
     out = {
+        "metrics_version": METRICS_VERSION,
         "scene_name": res.scene_name,
-        "image_size": {"width": w, "height": h},
-        "summary": summary,
-        "stages": stages,
-        "metrics": res.metrics,
+        "image_size_px": {"width": w, "height": h},
+        **top_level,
         "colorchecker": cc,
-        "patch_xy": dict(res.patch_xy),
-        "top_view": top,
         "vanishing": vp,
         "photon_transfer": ptc,
+        "top_view": top,
+        "stages": stages,
+        "other_metrics": {k: v for k, v in pipeline.items() if k not in PLACED_METRICS},
         "config": res.config,
         "notes": notes,
     }
@@ -462,16 +489,36 @@ def _metrics(
 
 
 def _numbers_section(metrics: dict[str, Any]) -> str:
+    scalars = {
+        k: v
+        for k, v in metrics.items()
+        if k not in ("metrics_version", "scene_name")
+        and (v is None or isinstance(v, int | float | str))
+    }
+    for part in ("colorchecker", "vanishing"):
+        if metrics[part]:
+            scalars |= {
+                f"{part}.{k}": v
+                for k, v in metrics[part].items()
+                if v is None or isinstance(v, int | float | str)
+            }
+    if metrics["photon_transfer"] and metrics["photon_transfer"]["fit"]:
+        scalars |= {
+            f"photon_transfer.fit.{k}": v for k, v in metrics["photon_transfer"]["fit"].items()
+        }
+    scalars |= {
+        f"other_metrics.{k}": v
+        for k, v in metrics["other_metrics"].items()
+        if v is None or isinstance(v, int | float | str)
+    }
     rows = [
         [k, "—" if v is None else (f"{v:.4g}" if isinstance(v, float) else v)]
-        for k, v in metrics["metrics"].items()
-        if v is None or isinstance(v, int | float | str)
+        for k, v in scalars.items()
     ]
-    body = ""
-    if rows:
-        body += "<p>The pipeline's own numbers:</p>" + hp.table(
-            ["metric", "value"], rows, left=(0,)
-        )
+    body = (
+        "<p>The numbers of metrics.json, by their field names (units in the names; "
+        "docs/simulate-report.md defines each):</p>" + hp.table(["field", "value"], rows, left=(0,))
+    )
     body += hp.json_block(metrics, "metrics.json (everything above as numbers)")
     if metrics["config"]:
         body += hp.json_block(metrics["config"], "the scene description")

@@ -1,11 +1,18 @@
-"""imageform.simulate: the scene-to-image simulator (scene, renderer, camera pipeline)."""
+"""imageform.simulate: the scene-to-image simulator (scene, renderer, camera pipeline).
+
+A scene file is validated once into a typed :class:`SceneConfig` (:mod:`.config`); the
+renderer (:mod:`.render`) and the camera's stages (:mod:`.stages`) turn it into images,
+composed by :func:`simulate`. The world is z up (:data:`WORLD_UP`).
+"""
 
 from imageform.simulate.colorfit import apply_color_correction, fit_color_correction
+from imageform.simulate.config import WORLD_UP, CameraConfig, SceneConfig
 from imageform.simulate.pipeline import simulate
 from imageform.simulate.render import RenderOutput, render_scene
 from imageform.simulate.result import (
     STAGE_KINDS,
     ColorCheckerTruth,
+    PatchMeasurements,
     SceneQuad,
     SimulationResult,
     Stage,
@@ -17,9 +24,13 @@ from imageform.simulate.schema import SCENE_SCHEMA
 __all__ = [
     "SCENE_SCHEMA",
     "STAGE_KINDS",
+    "WORLD_UP",
+    "CameraConfig",
     "ColorCheckerTruth",
+    "PatchMeasurements",
     "RenderOutput",
     "Scene",
+    "SceneConfig",
     "SceneObject",
     "SceneQuad",
     "SimulationResult",

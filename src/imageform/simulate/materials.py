@@ -126,6 +126,6 @@ def texture_basis() -> tuple[np.ndarray, np.ndarray]:
     from imageform.color import xyz_to_linear_srgb
 
     cc = colorchecker_reflectances()
-    rgb = np.asarray(xyz_to_linear_srgb(spectrum_to_xyz(cc, "D65")))
+    rgb = np.asarray(xyz_to_linear_srgb(spectrum_to_xyz(cc, illuminant="D65")))
     B = np.stack([nnls(rgb, cc.values[i])[0] for i in range(cc.values.shape[0])])
     return cc.wavelengths, B

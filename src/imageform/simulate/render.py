@@ -12,6 +12,7 @@ the samples of a pixel are averaged (a box filter over the pixel's area).
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -20,9 +21,17 @@ import numpy as np
 from imageform._backend import use_numba
 from imageform.errors import InvalidInputError
 from imageform.geometry.camera import Camera
-from imageform.simulate.files import load_texture
+from imageform.simulate.config import (
+    CheckerboardConfig,
+    ColorCheckerConfig,
+    GroundConfig,
+    ImageConfig,
+    ObjectConfig,
+    PlaneConfig,
+)
 from imageform.simulate.materials import electron_rates, reflectance_spectrum, texture_basis
 from imageform.simulate.scene import Scene, SceneObject
+from imageform.simulate.textures import load_texture
 from imageform.spectral import COLORCHECKER_PATCHES
 
 __all__ = ["RenderOutput", "load_texture", "pixel_rays", "raycast_quads_numpy", "render_scene"]
@@ -125,35 +134,30 @@ class _Shader:
 
     def __init__(self, scene: Scene, f_number: float) -> None:
         cfg = scene.config
-        self.scene = scene
+        self.objects = [o.config for o in scene.objects]
         self.keys: list[float | str] = []
-        il, lux = scene.illuminant, cfg["illuminant"]["illuminance_lux"]
-        self.plan: list[tuple[str, Any]] = []
-        bg = self._mat(cfg["render"]["background_reflectance"])
-        for o in scene.objects:
-            p = o.params
-            if o.kind == "checkerboard":
-                self.plan.append(
-                    (o.kind, (self._mat(p["dark_reflectance"]), self._mat(p["light_reflectance"])))
-                )
-            elif o.kind == "colorchecker":
+        il, lux = scene.illuminant, cfg.illuminant.illuminance_lux
+        self.plan: list[Any] = []
+        bg = self._mat(cfg.render.background_reflectance)
+        for o in self.objects:
+            if isinstance(o, CheckerboardConfig):
+                self.plan.append((self._mat(o.dark_reflectance), self._mat(o.light_reflectance)))
+            elif isinstance(o, ColorCheckerConfig):
                 mats = [self._mat(n) for n in COLORCHECKER_PATCHES]
-                self.plan.append((o.kind, (mats, self._mat(p["frame_reflectance"]))))
-            elif o.kind == "ground":
+                self.plan.append((mats, self._mat(o.frame_reflectance)))
+            elif isinstance(o, GroundConfig):
                 self.plan.append(
                     (
-                        o.kind,
-                        (
-                            self._mat(p["reflectance"]),
-                            self._mat(p["rail_reflectance"]),
-                            self._mat(p["sleeper_reflectance"]),
-                        ),
+                        self._mat(o.reflectance),
+                        self._mat(o.rail_reflectance),
+                        self._mat(o.sleeper_reflectance),
                     )
                 )
-            elif o.kind == "plane":
-                self.plan.append((o.kind, self._mat(p["reflectance"])))
+            elif isinstance(o, PlaneConfig):
+                self.plan.append(self._mat(o.reflectance))
             else:
-                self.plan.append((o.kind, load_texture(p["path"], scene.base_dir)))
+                assert isinstance(o, ImageConfig)
+                self.plan.append(load_texture(o.path, scene.base_dir))
         spectra = [reflectance_spectrum(k) for k in self.keys]
         wl = spectra[0][0]
         refl = np.stack([s[1] for s in spectra], axis=1)
@@ -170,64 +174,68 @@ class _Shader:
     def shade(self, idx: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
         out = np.empty((idx.size, 3))
         out[:] = self.background
-        for q, (kind, data) in enumerate(self.plan):
+        for q, (o, data) in enumerate(zip(self.objects, self.plan, strict=True)):
             sel = np.flatnonzero(idx == q)
             if sel.size == 0:
                 continue
             aq, bq = a[sel], b[sel]
-            p = self.scene.objects[q].params
-            if kind == "image":
+            if isinstance(o, ImageConfig):
                 tex = data
                 th, tw = tex.shape[:2]
                 r = np.minimum((bq * th).astype(np.int64), th - 1)
                 c = np.minimum((aq * tw).astype(np.int64), tw - 1)
                 out[sel] = tex[r, c] @ self.texture_matrix
                 continue
-            out[sel] = self.table[_materials(kind, data, p, aq, bq)]
+            out[sel] = self.table[_materials(o, data, aq, bq)]
         return out
 
 
-def _materials(kind: str, data: Any, p: dict[str, Any], a: np.ndarray, b: np.ndarray) -> Any:
+def _materials(o: ObjectConfig, data: Any, a: np.ndarray, b: np.ndarray) -> Any:
     """Material index of each texture coordinate ``(a, b)`` in [0, 1)² of an object."""
-    if kind == "plane":
+    if isinstance(o, PlaneConfig):
         return np.full(a.shape, data)
-    if kind == "checkerboard":
+    if isinstance(o, CheckerboardConfig):
         dark, light = data
-        c, r = p["squares"]
-        m = p["margin_squares"]
+        c, r = o.squares
+        m = o.margin_squares
         X = a * (c + 2 * m) - m
         Y = b * (r + 2 * m) - m
         inside = (X >= 0) & (c > X) & (Y >= 0) & (r > Y)
         parity = (np.floor(X) + np.floor(Y)).astype(np.int64) % 2
         return np.where(inside & (parity == 0), dark, light)
-    if kind == "colorchecker":
+    if isinstance(o, ColorCheckerConfig):
         mats, frame = data
-        g = p["gap_fraction"] / 2
+        g = o.gap_fraction / 2
         X, Y = a * 6.0, b * 4.0
         i, j = np.floor(X), np.floor(Y)
         fx, fy = X - i, Y - j
         inside = (fx >= g) & (fx < 1 - g) & (fy >= g) & (fy < 1 - g)
         k = (j * 6 + i).astype(np.int64).clip(0, 23)
         return np.where(inside, np.asarray(mats)[k], frame)
-    # ground with rails and sleepers
+    assert isinstance(o, GroundConfig)  # with rails and sleepers
     ground, rail, sleeper = data
-    w, length = p["size_m"]
+    w, length = o.size_m
     x = (a - 0.5) * w
     along = b * length
     out = np.full(a.shape, ground)
-    if p["sleeper_spacing_m"] > 0 and p["sleeper_width_m"] > 0:
-        on = (np.mod(along, p["sleeper_spacing_m"]) < p["sleeper_width_m"]) & (
-            np.abs(x) < p["sleeper_length_m"] / 2
+    if o.sleeper_spacing_m > 0 and o.sleeper_width_m > 0:
+        on = (np.mod(along, o.sleeper_spacing_m) < o.sleeper_width_m) & (
+            np.abs(x) < o.sleeper_length_m / 2
         )
         out = np.where(on, sleeper, out)
-    count = int(p["rail_count"])
+    count = int(o.rail_count)
     for kr in range(count):
-        xk = (kr - (count - 1) / 2) * p["rail_gauge_m"]
-        out = np.where(np.abs(x - xk) < p["rail_width_m"] / 2, rail, out)
+        xk = (kr - (count - 1) / 2) * o.rail_gauge_m
+        out = np.where(np.abs(x - xk) < o.rail_width_m / 2, rail, out)
     return out
 
 
-def render_scene(scene: Scene, *, progress: Any = None, rows_per_chunk: int = 180) -> RenderOutput:
+def render_scene(
+    scene: Scene,
+    *,
+    progress: Callable[[float], object] | None = None,
+    rows_per_chunk: int = 180,
+) -> RenderOutput:
     """Ray-cast the scene: mean photo-electrons per second per pixel and channel.
 
     See the module docstring for the model. ``progress(fraction)`` is called after each
@@ -240,20 +248,15 @@ def render_scene(scene: Scene, *, progress: Any = None, rows_per_chunk: int = 18
     """
     cfg = scene.config
     w, h = scene.image_size
-    S = int(cfg["render"]["supersampling"])
-    vignette = cfg["lens"]["vignetting"] == "cos4"
-    shader = _Shader(scene, float(cfg["lens"]["f_number"]))
+    S = int(cfg.render.supersampling)
+    vignette = cfg.lens.vignetting == "cos4"
+    shader = _Shader(scene, float(cfg.lens.f_number))
     quads = _quads_camera(scene.objects, scene.camera)
     offsets = (np.arange(S) + 0.5) / S - 0.5
     rate = np.zeros((h, w, 3))
     inv_depth = np.zeros((h, w))
     falloff = np.ones((h, w))
     obj = np.full((h, w), -1, dtype=np.int32)
-    if progress is None:
-
-        def progress(_f: float) -> None:
-            return None
-
     for r0 in range(0, h, rows_per_chunk):
         r1 = min(h, r0 + rows_per_chunk)
         vv, uu = np.mgrid[r0:r1, 0:w].astype(np.float64)
@@ -279,7 +282,8 @@ def render_scene(scene: Scene, *, progress: Any = None, rows_per_chunk: int = 18
             r2 = xy0[:, 0] ** 2 + xy0[:, 1] ** 2
             f = np.where(np.isfinite(r2), 1.0 / (1.0 + r2) ** 2, np.nan)
             falloff[r0:r1] = f.reshape(r1 - r0, w)
-        progress(r1 / h)
+        if progress is not None:
+            progress(r1 / h)
     if not np.all(np.isfinite(falloff)):
         raise InvalidInputError(
             "the distortion model cannot be inverted at some pixels (outside its valid "

@@ -15,6 +15,7 @@ Stage kinds (how a report turns the array into something to look at):
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
@@ -22,10 +23,12 @@ import numpy as np
 
 from imageform.geometry.camera import Camera
 from imageform.sensor.emva import PhotonTransferData
+from imageform.simulate.config import WORLD_UP
 
 __all__ = [
     "STAGE_KINDS",
     "ColorCheckerTruth",
+    "PatchMeasurements",
     "SceneQuad",
     "SimulationResult",
     "Stage",
@@ -75,6 +78,74 @@ class ColorCheckerTruth:
 
 
 @dataclass(frozen=True)
+class PatchMeasurements:
+    """The ColorChecker measured on a run's images, one row per patch (24):
+
+    - ``names``; ``lab_truth`` and ``lab_measured`` (CIELAB, D65 white) and ``delta_e00``
+      (CIEDE2000 between them; NaN for a patch outside the image);
+    - ``readings``: the lecture's words for each ΔE00 (``"not measured"`` where NaN);
+    - ``snr_luminance_db``: ``20 log10(mean(Y) / std(Y))`` of the luminance
+      ``Y = 0.2126 R + 0.7152 G + 0.0722 B`` of the pixels in the patch window on stage
+      ``snr_stage`` (``inf`` for a noise-free window, NaN outside the image or for a black
+      patch);
+    - ``truth_srgb``: the ground truth as encoded sRGB, clipped to [0, 1] (for display).
+
+    Computed by :func:`imageform.simulate.truth.measure_colorchecker`.
+    """
+
+    names: tuple[str, ...]
+    lab_truth: np.ndarray
+    lab_measured: np.ndarray
+    delta_e00: np.ndarray
+    readings: tuple[str, ...]
+    snr_luminance_db: np.ndarray
+    snr_stage: str
+    truth_srgb: np.ndarray
+
+    @property
+    def delta_e00_mean(self) -> float:
+        """Mean ΔE00 over the measured patches (NaN if none was measured)."""
+        d = self.delta_e00[np.isfinite(self.delta_e00)]
+        return float(d.mean()) if d.size else float("nan")
+
+    @property
+    def delta_e00_max(self) -> float:
+        """Largest ΔE00 over the measured patches (NaN if none was measured)."""
+        d = self.delta_e00[np.isfinite(self.delta_e00)]
+        return float(d.max()) if d.size else float("nan")
+
+    @property
+    def mean_delta_e00(self) -> float:
+        """Deprecated: :attr:`delta_e00_mean`."""
+        warnings.warn(
+            "PatchMeasurements.mean_delta_e00 is deprecated: use delta_e00_mean",
+            DeprecationWarning,
+            stacklevel=2,
+        )
+        return self.delta_e00_mean
+
+    @property
+    def max_delta_e00(self) -> float:
+        """Deprecated: :attr:`delta_e00_max`."""
+        warnings.warn(
+            "PatchMeasurements.max_delta_e00 is deprecated: use delta_e00_max",
+            DeprecationWarning,
+            stacklevel=2,
+        )
+        return self.delta_e00_max
+
+    @property
+    def snr_db(self) -> np.ndarray:
+        """Deprecated: :attr:`snr_luminance_db` (the one SNR the report gives)."""
+        warnings.warn(
+            "PatchMeasurements.snr_db is deprecated: use snr_luminance_db",
+            DeprecationWarning,
+            stacklevel=2,
+        )
+        return self.snr_luminance_db
+
+
+@dataclass(frozen=True)
 class VanishingTruth:
     """The rails' true vanishing point (homogeneous ``(3,)``, pixels) and the true horizon
     line (homogeneous ``(3,)``, ``a u + b v + c = 0``); ``detected_*`` what the detector found
@@ -96,15 +167,22 @@ class SimulationResult:
       ``image_size`` ``(width, height)``.
     - ``quads``: the scene's planar objects, for the top view with the camera frustum.
     - ``colorchecker``: patch ground truth and positions (``None`` if the scene has none);
+      ``patches``: the patches measured on the run's images (ΔE00, SNR; ``None`` when the
+      result carries no measurement: the report then measures the final stage itself);
       ``patch_xy``: chromaticity xy of every patch at named stages, e.g.
       ``{"before_white_balance": (24, 2), "after_white_balance": (24, 2),
       "after_color_correction": (24, 2)}``.
     - ``vanishing``: true and detected vanishing point and horizon (``None`` without rails).
     - ``photon_transfer``: the sensor's simulated photon-transfer measurement.
-    - ``metrics``: JSON-serialisable numbers (ΔE00 per patch and their mean/max, SNR per patch
-      in dB, vanishing-point error in px, timings...), written as metrics.json.
+    - ``metrics``: JSON-serialisable numbers, named with their unit (ΔE00 per patch and
+      their mean/max, ``snr_luminance_db_per_patch``, ``vanishing_point_error_px``,
+      ``illuminant_cct_K``, ``step_times_s``, ``simulation_time_s`` ...; the simulator's
+      keys are listed in ``docs/simulate-report.md``); the report writes each into
+      metrics.json once.
     - ``scene_name``, ``config``: the scene's name and its validated description as a plain
       dict (echoed into the report).
+    - ``world_up``: the world's up direction (world coordinates) that the report's top view
+      looks down along; the simulator's world is z up, ``(0, 0, 1)``.
     """
 
     stages: tuple[Stage, ...]
@@ -118,6 +196,8 @@ class SimulationResult:
     metrics: dict[str, Any] = field(default_factory=dict)
     scene_name: str = "scene"
     config: dict[str, Any] = field(default_factory=dict)
+    patches: PatchMeasurements | None = None
+    world_up: tuple[float, float, float] = WORLD_UP
 
     def stage(self, name: str) -> Stage:
         """The stage called ``name``; ``KeyError`` listing the names if there is none."""

@@ -9,8 +9,10 @@ The world frame is z-up (the ground is ``z = 0``); lengths are metres.
 from __future__ import annotations
 
 import copy
+import dataclasses
 import tomllib
-from dataclasses import dataclass, field, replace
+import warnings
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -18,11 +20,20 @@ import numpy as np
 
 from imageform.errors import InvalidInputError
 from imageform.geometry.camera import Camera
-from imageform.geometry.distortion import BrownConrady
-from imageform.geometry.rotations import look_at
 from imageform.sensor.model import SensorModel
-from imageform.sensor.presets import ccd_preset, cmos_preset
-from imageform.simulate.files import load_texture, resolve_path
+from imageform.simulate.config import (
+    WORLD_UP,
+    CameraConfig,
+    CheckerboardConfig,
+    ColorCheckerConfig,
+    GroundConfig,
+    IlluminantConfig,
+    ImageConfig,
+    ObjectConfig,
+    PlaneConfig,
+    SceneConfig,
+)
+from imageform.simulate.textures import load_texture, resolve_path
 from imageform.simulate.validation import validate_scene_dict
 from imageform.spectral.spectrum import Spectrum
 
@@ -34,13 +45,13 @@ _DEFAULT_TOML = Path(__file__).with_name("scenes") / "default.toml"
 @dataclass(frozen=True)
 class SceneObject:
     """A planar object: ``kind``, ``name``, its world ``corners`` ``(4, 3)`` (top-left,
-    top-right, bottom-right, bottom-left as seen from the front) and its validated
-    ``params`` (the schema keys of its type)."""
+    top-right, bottom-right, bottom-left as seen from the front) and its typed ``config``
+    (:class:`~imageform.simulate.config.ObjectConfig` of its kind)."""
 
     kind: str
     name: str
     corners: np.ndarray
-    params: dict[str, Any] = field(default_factory=dict, compare=False)
+    config: ObjectConfig = field(compare=False)
 
     @property
     def origin(self) -> np.ndarray:
@@ -57,17 +68,30 @@ class SceneObject:
         """Vector from the top-left to the bottom-left corner (``b`` from 0 to 1)."""
         return self.corners[3] - self.corners[0]
 
+    @property
+    def params(self) -> dict[str, Any]:
+        """Deprecated: the object's keys as a dict; use the typed :attr:`config`."""
+        warnings.warn(
+            "SceneObject.params is deprecated: use the typed SceneObject.config",
+            DeprecationWarning,
+            stacklevel=2,
+        )
+        return dataclasses.asdict(self.config)
+
 
 @dataclass(frozen=True)
 class Scene:
     """A validated scene (see ``docs/simulate.md`` for every key).
 
-    ``config`` is the validated description as plain data (every default filled in);
-    the other fields are what the renderer needs, built from it.
+    ``config`` is the typed description (:class:`~imageform.simulate.config.SceneConfig`,
+    every default filled in); the other fields are what the renderer needs, built from it
+    once: the objects' world corners, the :class:`~imageform.geometry.Camera`, the
+    :class:`~imageform.sensor.SensorModel` and the illuminant's spectrum. The world is z up
+    (:data:`~imageform.simulate.config.WORLD_UP`).
     """
 
     name: str
-    config: dict[str, Any] = field(compare=False)
+    config: SceneConfig = field(compare=False)
     objects: tuple[SceneObject, ...]
     camera: Camera
     sensor: SensorModel
@@ -77,25 +101,54 @@ class Scene:
     @property
     def image_size(self) -> tuple[int, int]:
         """``(width, height)`` in pixels."""
-        r = self.config["render"]
-        return int(r["width"]), int(r["height"])
+        r = self.config.render
+        return int(r.width), int(r.height)
 
-    def with_changes(self, **sections: dict[str, Any]) -> Scene:
+    def with_changes(self, **sections: dict[str, Any] | list[dict[str, Any]]) -> Scene:
         """A copy with some keys of some sections replaced, re-validated.
 
         >>> s = default_scene().with_changes(render={"width": 160, "height": 90})
         >>> s.image_size
         (160, 90)
         """
-        cfg = copy.deepcopy(self.config)
+        cfg = self.config.to_dict()
         for sec, changes in sections.items():
             if sec == "objects":
                 cfg["objects"] = changes
-            elif isinstance(cfg.get(sec), dict):
+            elif isinstance(cfg.get(sec), dict) and isinstance(changes, dict):
                 cfg[sec].update(changes)
             else:
                 cfg[sec] = changes
         return _build(_plain(cfg), None, "scene", self.base_dir)
+
+    def with_camera(self, camera: Camera, *, focal_length_mm: float | None = None) -> Scene:
+        """The same scene seen through ``camera`` (an :class:`imageform.geometry.Camera`:
+        K, R, t, distortion, image plane), re-validated.
+
+        The image size is the camera's ``image_size``; the camera section becomes
+        :meth:`~imageform.simulate.config.CameraConfig.from_camera` of ``camera``
+        (``focal_length_mm``, the lens's focal length for defocus, defaults to the scene's).
+        The scene's ``camera`` is then ``camera`` itself (the same K, R, t and distortion).
+
+        >>> from imageform.geometry import Camera
+        >>> cam = Camera([[100.0, 0, 79.5], [0, 100.0, 59.5], [0, 0, 1]],
+        ...              t=[0.0, 0.0, 0.3], image_size=(160, 120))
+        >>> default_scene().with_camera(cam).image_size
+        (160, 120)
+        """
+        if not isinstance(camera, Camera):
+            raise InvalidInputError(
+                f"expected an imageform.geometry.Camera, got {type(camera).__name__}"
+            )
+        if camera.image_size is None:
+            raise InvalidInputError(
+                "expected a camera with an image_size (width, height) to render, got None"
+            )
+        f = self.config.camera.focal_length_mm if focal_length_mm is None else focal_length_mm
+        cam_cfg = CameraConfig.from_camera(camera, focal_length_mm=f)
+        w, h = camera.image_size
+        cam = dataclasses.asdict(cam_cfg)
+        return self.with_changes(render={"width": int(w), "height": int(h)}, camera=cam)
 
     def resized(self, width: int, height: int | None = None) -> Scene:
         """The same view at another image size: intrinsics scaled with the image.
@@ -111,18 +164,21 @@ class Scene:
         w0, h0 = self.image_size
         f = int(width) / w0
         h = int(height) if height is not None else max(2, round(h0 * f))
-        cam = dict(self.config["camera"])
+        cam = self.config.camera
         changes: dict[str, Any] = {}
-        if cam["fx_px"] is not None:
-            changes["fx_px"] = cam["fx_px"] * f
-            if cam["fy_px"] is not None:
-                changes["fy_px"] = cam["fy_px"] * f
+        if cam.fx_px is not None:
+            changes["fx_px"] = cam.fx_px * f
+            if cam.fy_px is not None:
+                changes["fy_px"] = cam.fy_px * f
         else:
-            pitch = cam["pixel_pitch_um"] or self.sensor.pixel_pitch * 1e6
+            pitch = cam.pixel_pitch_um or self.sensor.pixel_pitch * 1e6
             changes["pixel_pitch_um"] = pitch / f
         for key in ("cx_px", "cy_px"):
-            if cam[key] is not None:
-                changes[key] = (cam[key] + 0.5) * f - 0.5
+            value = getattr(cam, key)
+            if value is not None:
+                changes[key] = (value + 0.5) * f - 0.5
+        if cam.skew_px:
+            changes["skew_px"] = cam.skew_px * f
         return self.with_changes(render={"width": int(width), "height": h}, camera=changes)
 
 
@@ -142,100 +198,64 @@ def _unit(v: np.ndarray, what: str) -> np.ndarray:
     return v / n
 
 
-def _object_frame(p: dict[str, Any]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _object_frame(o: ObjectConfig) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Unit vectors (right, down, normal) of an object from its normal and up hint."""
-    n = _unit(np.asarray(p["normal"], float), f"{p['name']}: normal")
-    if p["up"] is not None:
-        up = _unit(np.asarray(p["up"], float), f"{p['name']}: up")
+    n = _unit(np.asarray(o.normal, float), f"{o.name}: normal")
+    if o.up is not None:
+        up = _unit(np.asarray(o.up, float), f"{o.name}: up")
     else:
-        up = np.array([0.0, 0.0, 1.0]) if abs(n[2]) < 0.9 else np.array([0.0, 1.0, 0.0])
+        up = np.asarray(WORLD_UP) if abs(n[2]) < 0.9 else np.array([0.0, 1.0, 0.0])
     right = np.cross(up, n)
     if np.linalg.norm(right) < 1e-9:
-        raise InvalidInputError(f"{p['name']}: 'up' is parallel to the normal")
+        raise InvalidInputError(f"{o.name}: 'up' is parallel to the normal")
     right = right / np.linalg.norm(right)
     up_in = np.cross(n, right)
     return right, -up_in, n
 
 
-def _object_size(kind: str, p: dict[str, Any], base: Path | None) -> tuple[float, float]:
-    if kind == "checkerboard":
-        c, r = p["squares"]
-        m = 2 * p["margin_squares"]
-        return (c + m) * p["square_size_m"], (r + m) * p["square_size_m"]
-    if kind == "colorchecker":
-        return p["width_m"], p["width_m"] * 2.0 / 3.0
-    if kind == "image":
-        tex = load_texture(p["path"], base)
-        return p["width_m"], p["width_m"] * tex.shape[0] / tex.shape[1]
-    return float(p["size_m"][0]), float(p["size_m"][1])
+def _object_size(o: ObjectConfig, base: Path | None) -> tuple[float, float]:
+    if isinstance(o, CheckerboardConfig):
+        c, r = o.squares
+        m = 2 * o.margin_squares
+        return (c + m) * o.square_size_m, (r + m) * o.square_size_m
+    if isinstance(o, ColorCheckerConfig):
+        return o.width_m, o.width_m * 2.0 / 3.0
+    if isinstance(o, ImageConfig):
+        tex = load_texture(o.path, base)
+        return o.width_m, o.width_m * tex.shape[0] / tex.shape[1]
+    assert isinstance(o, GroundConfig | PlaneConfig)
+    return float(o.size_m[0]), float(o.size_m[1])
 
 
-def _objects(cfg: dict[str, Any], base: Path | None) -> tuple[SceneObject, ...]:
+def _objects(cfg: SceneConfig, base: Path | None) -> tuple[SceneObject, ...]:
     out = []
-    for p in cfg["objects"]:
-        kind = p["type"]
-        right, down, _ = _object_frame(p)
-        w, h = _object_size(kind, p, base)
-        c = np.asarray(p["centre_m"], float)
+    for o in cfg.objects:
+        right, down, _ = _object_frame(o)
+        w, h = _object_size(o, base)
+        c = np.asarray(o.centre_m, float)
         tl = c - right * w / 2 - down * h / 2
         corners = np.stack([tl, tl + right * w, tl + right * w + down * h, tl + down * h])
-        out.append(SceneObject(kind, p["name"], corners, p))
+        out.append(SceneObject(o.type, o.name, corners, o))
     return tuple(out)
 
 
-def _sensor(cfg: dict[str, Any]) -> SensorModel:
-    s = cfg["sensor"]
-    base = (cmos_preset if s["preset"] == "cmos" else ccd_preset)(color=True)
-    changes: dict[str, Any] = {}
-    table = {
-        "fill_factor": ("fill_factor", 1.0),
-        "full_well_e": ("full_well", 1.0),
-        "read_noise_e": ("read_noise", 1.0),
-        "dark_current_e_per_s": ("dark_current", 1.0),
-        "dsnu_e": ("dsnu", 1.0),
-        "prnu": ("prnu", 1.0),
-        "column_fpn_e": ("column_fpn", 1.0),
-        "conversion_gain_uV_per_e": ("conversion_gain", 1e-6),
-        "analog_gain": ("analog_gain", 1.0),
-        "black_level_dn": ("black_level", 1.0),
-        "pixel_pitch_um": ("pixel_pitch", 1e-6),
-    }
-    for key, (name, scale) in table.items():
-        if s[key] is not None:
-            changes[name] = float(s[key]) * scale
-    if s["bit_depth"] is not None:
-        changes["bit_depth"] = int(s["bit_depth"])
-    if s["fpn_seed"] is not None:
-        changes["fpn_seed"] = int(s["fpn_seed"])
-    if s["shutter"] is not None:
-        changes["shutter"] = s["shutter"]
-    if s["spectral_sensitivity"] == "nikon_d5100":
-        from imageform.spectral import camera_sensitivities
-
-        sens = camera_sensitivities("nikon_d5100")
-        vals = sens.values / sens.values.max() * float(s["peak_qe"])
-        changes["qe_wavelengths"] = tuple(float(w) for w in sens.wavelengths)
-        changes["qe_curves"] = tuple(tuple(float(x) for x in vals[:, c]) for c in range(3))
-        changes["name"] = f"{base.name}, Nikon D5100 spectral sensitivities"
-    return replace(base, **changes)
-
-
-def _illuminant(cfg: dict[str, Any], base: Path | None) -> Spectrum:
+def _illuminant(il: IlluminantConfig, base: Path | None) -> Spectrum:
     from imageform.spectral import blackbody_spectrum, daylight_spectrum, illuminant
 
-    il = cfg["illuminant"]
-    if il["type"] == "cie":
-        return illuminant(il["name"])
-    if il["type"] == "blackbody":
-        return blackbody_spectrum(il["temperature_K"])
-    if il["type"] == "daylight":
-        if not 4000 <= il["temperature_K"] <= 25000:
+    if il.type == "cie":
+        return illuminant(il.name)
+    if il.type in ("blackbody", "daylight"):
+        assert il.temperature_K is not None  # filled in by validation
+        if il.type == "blackbody":
+            return blackbody_spectrum(il.temperature_K)
+        if not 4000 <= il.temperature_K <= 25000:
             raise InvalidInputError(
                 f"illuminant.temperature_K: the CIE daylight series covers 4000-25000 K, "
-                f"got {il['temperature_K']:g}"
+                f"got {il.temperature_K:g}"
             )
-        return daylight_spectrum(il["temperature_K"])
-    path = resolve_path(il["file"], base)
+        return daylight_spectrum(il.temperature_K)
+    assert il.file is not None  # validation requires it for type 'file'
+    path = resolve_path(il.file, base)
     rows: list[list[float]] = []
     for no, line in enumerate(path.read_text(encoding="utf-8").splitlines(), 1):
         line = line.split("#", 1)[0].strip()
@@ -262,47 +282,19 @@ def _illuminant(cfg: dict[str, Any], base: Path | None) -> Spectrum:
     return Spectrum(arr[:, 0], arr[:, 1], name=Path(path).name)
 
 
-def _camera(cfg: dict[str, Any], sensor: SensorModel) -> Camera:
-    c = cfg["camera"]
-    w, h = int(cfg["render"]["width"]), int(cfg["render"]["height"])
-    if c["fx_px"] is not None:
-        fx = float(c["fx_px"])
-    else:
-        pitch = (
-            c["pixel_pitch_um"] * 1e-6 if c["pixel_pitch_um"] is not None else sensor.pixel_pitch
-        )
-        fx = c["focal_length_mm"] * 1e-3 / pitch
-    fy = float(c["fy_px"]) if c["fy_px"] is not None else fx
-    cx = float(c["cx_px"]) if c["cx_px"] is not None else (w - 1) / 2
-    cy = float(c["cy_px"]) if c["cy_px"] is not None else (h - 1) / 2
-    K = np.array([[fx, 0.0, cx], [0.0, fy, cy], [0.0, 0.0, 1.0]])
-    if c["R"] is not None:
-        R, t = np.asarray(c["R"], float), np.asarray(c["t_m"], float)
-    else:
-        R, t = look_at(np.asarray(c["eye_m"]), np.asarray(c["target_m"]), np.asarray(c["up"]))
-    d = c["distortion"]
-    dist = BrownConrady(d["k1"], d["k2"], d["p1"], d["p2"], d["k3"])
-    has = any(v != 0 for v in dist.coeffs)
-    if has and c["image_plane"] == "real":
-        raise InvalidInputError(
-            "camera.image_plane = 'real' (camera obscura) is a pinhole: remove camera.distortion"
-        )
-    return Camera(K, np.asarray(R), np.asarray(t), (w, h), c["image_plane"], dist if has else None)
-
-
 def _build(data: dict[str, Any], text: str | None, origin: str, base: Path | None) -> Scene:
-    cfg = validate_scene_dict(data, text, origin)
-    sensor = _sensor(cfg)
-    camera = _camera(cfg, sensor)
-    if cfg["lens"]["focus_distance_m"] * 1e3 <= cfg["camera"]["focal_length_mm"]:
+    cfg = SceneConfig.from_dict(validate_scene_dict(data, text, origin))
+    sensor = cfg.sensor.to_model()
+    camera = cfg.camera.to_camera((cfg.render.width, cfg.render.height), sensor.pixel_pitch)
+    if cfg.lens.focus_distance_m * 1e3 <= cfg.camera.focal_length_mm:
         raise InvalidInputError("lens.focus_distance_m must exceed the focal length")
     return Scene(
-        name=str(cfg["name"]),
+        name=cfg.name,
         config=cfg,
         objects=_objects(cfg, base),
         camera=camera,
         sensor=sensor,
-        illuminant=_illuminant(cfg, base),
+        illuminant=_illuminant(cfg.illuminant, base),
         base_dir=base,
     )
 

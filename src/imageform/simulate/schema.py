@@ -18,7 +18,16 @@ from imageform.color.transfer import TRANSFER_FUNCTIONS
 from imageform.sensor.cfa import CFA_PATTERNS
 from imageform.sensor.demosaic import DEMOSAIC_METHODS
 
-__all__ = ["OBJECT_TYPES", "SCENE_SCHEMA", "UNITS", "Field"]
+__all__ = [
+    "DEFAULT_LIGHT_TEMPERATURE_K",
+    "DISTORTION_COEFFICIENTS",
+    "DISTORTION_MODELS",
+    "MAX_SUPERSAMPLING",
+    "OBJECT_TYPES",
+    "SCENE_SCHEMA",
+    "UNITS",
+    "Field",
+]
 
 
 @dataclass(frozen=True)
@@ -51,6 +60,21 @@ _SUFFIX_SCALE = {"_m": 1.0, "_mm": 1e3, "_um": 1e6, "_s": 1.0, "_deg": 1.0}
 _WB = ("gray_world", "white_patch", "shades_of_gray", "gray_edge", "colorchecker", "none")
 OBJECT_TYPES: tuple[str, ...] = ("checkerboard", "colorchecker", "ground", "image", "plane")
 
+#: Largest ``render.supersampling``: 16 x 16 = 256 rays per pixel (the render time grows
+#: with S²; beyond this a box filter gains nothing visible).
+MAX_SUPERSAMPLING = 16
+#: ``illuminant.temperature_K`` of a blackbody or daylight light when the key is absent.
+DEFAULT_LIGHT_TEMPERATURE_K = 6504.0
+#: The distortion models of ``camera.distortion.model`` and the coefficients each one has
+#: (:mod:`imageform.geometry.distortion`: ``BrownConrady``, ``DivisionModel``,
+#: ``KannalaBrandt``); a coefficient the model lacks must be absent or 0.
+DISTORTION_COEFFICIENTS: dict[str, tuple[str, ...]] = {
+    "brown_conrady": ("k1", "k2", "p1", "p2", "k3", "k4", "k5", "k6"),
+    "division": ("k1", "k2"),
+    "kannala_brandt": ("k1", "k2", "k3", "k4"),
+}
+DISTORTION_MODELS: tuple[str, ...] = tuple(DISTORTION_COEFFICIENTS)
+
 _POSE = {
     "type": Field("str", None, "object kind", choices=OBJECT_TYPES),
     "name": Field("str", "", "label in the report (default: the type and its index)"),
@@ -68,7 +92,13 @@ SCENE_SCHEMA: dict[str, Any] = {
     "render": {
         "width": Field("int", 1280, "image width (pixels)", minimum=2),
         "height": Field("int", 720, "image height (pixels)", minimum=2),
-        "supersampling": Field("int", 2, "rays per pixel along each axis (S x S)", minimum=1),
+        "supersampling": Field(
+            "int",
+            2,
+            "rays per pixel along each axis (S x S)",
+            minimum=1,
+            maximum=MAX_SUPERSAMPLING,
+        ),
         "background_reflectance": Field(
             "reflectance", 0.02, "flat reflectance seen where no object is hit"
         ),
@@ -80,8 +110,8 @@ SCENE_SCHEMA: dict[str, Any] = {
         "name": Field("str", "A", "CIE illuminant name (A, D50, D65, F2, F11, E, LED-B3 ...)"),
         "temperature_K": Field(
             "float",
-            6504.0,
-            "colour temperature (K) for blackbody/daylight",
+            None,
+            "colour temperature (K) of a blackbody/daylight light (default 6504)",
             minimum=1000.0,
             maximum=25000.0,
         ),
@@ -112,17 +142,24 @@ SCENE_SCHEMA: dict[str, Any] = {
         "fy_px": Field("float", None, "vertical focal length in pixels (default fx_px)"),
         "cx_px": Field("float", None, "principal point column (default (width - 1) / 2)"),
         "cy_px": Field("float", None, "principal point row (default (height - 1) / 2)"),
+        "skew_px": Field("float", 0.0, "skew K[0, 1] (pixels; 0 for square pixels)"),
         "eye_m": Field("vec3", (0.0, -0.1, 0.05), "camera centre for look_at (m)", "length"),
         "target_m": Field("vec3", (0.0, 0.0, 0.0), "point looked at (m)", "length"),
         "up": Field("vec3", (0.0, 0.0, 1.0), "world up for look_at"),
         "R": Field("mat3", None, "world-to-camera rotation (replaces look_at, with t_m)"),
         "t_m": Field("vec3", None, "world-to-camera translation (m), X_cam = R X + t", "length"),
         "distortion": {
-            "k1": Field("float", 0.0, "radial r^2 (k1 < 0 barrel)"),
+            "model": Field(
+                "str", "brown_conrady", "lens distortion model", choices=DISTORTION_MODELS
+            ),
+            "k1": Field("float", 0.0, "radial r^2 (k1 < 0 barrel); every model's first"),
             "k2": Field("float", 0.0, "radial r^4"),
-            "p1": Field("float", 0.0, "tangential p1"),
-            "p2": Field("float", 0.0, "tangential p2"),
-            "k3": Field("float", 0.0, "radial r^6"),
+            "p1": Field("float", 0.0, "tangential p1 (brown_conrady)"),
+            "p2": Field("float", 0.0, "tangential p2 (brown_conrady)"),
+            "k3": Field("float", 0.0, "radial r^6 (brown_conrady, kannala_brandt)"),
+            "k4": Field("float", 0.0, "rational k4 (brown_conrady) or theta^9 (kannala_brandt)"),
+            "k5": Field("float", 0.0, "rational k5 (brown_conrady)"),
+            "k6": Field("float", 0.0, "rational k6 (brown_conrady)"),
         },
     },
     "lens": {

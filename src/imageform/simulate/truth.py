@@ -2,11 +2,14 @@
 
 - ColorChecker: CIELAB under D65 from the reflectances (CIE 015:2018 eqs. 7.1-7.3 via
   :func:`imageform.spectral.spectrum_to_xyz`, then :func:`imageform.color.xyz_to_lab`), the
-  patch centres projected through the camera, and the patch means of an image.
+  patch centres projected through the camera, the patch means of an image and
+  :func:`measure_colorchecker` (CIEDE2000 and luminance SNR per patch: the one measurement
+  the simulator and the report both give).
 - Rails: the true vanishing point :math:`v \\sim K R d` of the rail direction d (distorted
   like every image point when the camera has a distortion model) and the horizon, the
   vanishing line :math:`l \\sim K^{-T} R n` of the ground plane of normal n (Hartley &
-  Zisserman, 2nd ed., §8.6.1-8.6.2).
+  Zisserman, 2nd ed., §8.6.1-8.6.2), and :func:`vanishing_errors` against a detection.
+- The light: its correlated colour temperature from its spectrum (:func:`light_cct`).
 """
 
 from __future__ import annotations
@@ -16,21 +19,47 @@ from typing import Any
 
 import numpy as np
 
-from imageform.color import delta_e_ciede2000, linear_srgb_to_xyz, xyz_to_lab, xyz_to_xy
+from imageform.color import (
+    delta_e_ciede2000,
+    linear_srgb_to_luminance,
+    linear_srgb_to_xyz,
+    xy_to_cct,
+    xyz_to_lab,
+    xyz_to_xy,
+)
+from imageform.errors import InvalidInputError
 from imageform.geometry.camera import Camera
 from imageform.geometry.vanishing import horizon_line
-from imageform.simulate.result import ColorCheckerTruth, VanishingTruth
+from imageform.simulate._rng import RNGLike, random_source
+from imageform.simulate.config import ColorCheckerConfig
+from imageform.simulate.result import ColorCheckerTruth, PatchMeasurements, VanishingTruth
 from imageform.simulate.scene import SceneObject
 from imageform.spectral import COLORCHECKER_PATCHES, colorchecker_reflectances, spectrum_to_xyz
+from imageform.spectral.spectrum import Spectrum
 
 __all__ = [
+    "NEUTRAL_PATCHES",
     "colorchecker_truth",
+    "delta_e_patches",
     "detect_vanishing",
+    "light_cct",
+    "measure_colorchecker",
     "patch_means",
     "patch_stats",
+    "patch_windows",
     "rails_truth",
+    "vanishing_errors",
     "xy_of_linear_srgb",
 ]
+
+#: The ColorChecker patches a chart white balance averages: the four middle greys (the white
+#: may clip, the black is noisy).
+NEUTRAL_PATCHES: tuple[str, ...] = (
+    "neutral 8 (.23 D)",
+    "neutral 6.5 (.44 D)",
+    "neutral 5 (.70 D)",
+    "neutral 3.5 (1.05 D)",
+)
 
 
 def colorchecker_truth(obj: SceneObject, camera: Camera) -> ColorCheckerTruth:
@@ -39,14 +68,16 @@ def colorchecker_truth(obj: SceneObject, camera: Camera) -> ColorCheckerTruth:
     The sampling radius is a third of the smallest projected half-patch (so that windows stay
     inside the patches in perspective).
     """
-    xyz = spectrum_to_xyz(colorchecker_reflectances(), "D65")
+    if not isinstance(obj.config, ColorCheckerConfig):
+        raise InvalidInputError(f"expected a colorchecker object, got a {obj.kind}")
+    xyz = spectrum_to_xyz(colorchecker_reflectances(), illuminant="D65")
     lab = np.asarray(xyz_to_lab(xyz, white="D65"))
     i, j = np.meshgrid(np.arange(6), np.arange(4))
     a = (i.ravel() + 0.5) / 6.0
     b = (j.ravel() + 0.5) / 4.0
     centres = obj.origin + a[:, None] * obj.edge_right + b[:, None] * obj.edge_down
     uv = np.asarray(camera.project(centres).uv)
-    half = (1.0 - obj.params["gap_fraction"]) / 2
+    half = (1.0 - obj.config.gap_fraction) / 2
     da = half / 6.0
     corner = obj.origin + (a[:, None] + da) * obj.edge_right + b[:, None] * obj.edge_down
     cu = np.asarray(camera.project(corner).uv)
@@ -59,22 +90,37 @@ def colorchecker_truth(obj: SceneObject, camera: Camera) -> ColorCheckerTruth:
     return ColorCheckerTruth(COLORCHECKER_PATCHES, lab, uv, max(radius, 0.5))
 
 
-def _windows(truth: ColorCheckerTruth, h: int, w: int) -> list[tuple[slice, slice] | None]:
-    r = truth.sample_radius_px
+def patch_windows(
+    truth: ColorCheckerTruth, height: int, width: int
+) -> list[tuple[slice, slice] | None]:
+    """The square window ``(rows, cols)`` sampled around each patch centre: pixels whose
+    centres lie within ``sample_radius_px`` of the centre along both axes, cut to the image
+    (``None`` where nothing of the window is inside).
+
+    >>> t = ColorCheckerTruth(("a",), np.zeros((1, 3)), np.array([[10.0, 5.0]]), 2.0)
+    >>> patch_windows(t, 20, 20)
+    [(slice(3, 8, None), slice(8, 13, None))]
+    """
+    c = np.asarray(truth.centres_uv, dtype=np.float64)
+    r = float(truth.sample_radius_px)
+    if c.ndim != 2 or c.shape[1] != 2 or not np.isfinite(r) or r < 0:
+        raise InvalidInputError(
+            f"expected centres_uv of shape (n, 2) and sample_radius_px >= 0, "
+            f"got {c.shape} and {truth.sample_radius_px!r}"
+        )
     out: list[tuple[slice, slice] | None] = []
-    for u, v in np.asarray(truth.centres_uv):
+    for u, v in c:
         if not (np.isfinite(u) and np.isfinite(v)):
             out.append(None)
             continue
-        r0, r1 = max(math.ceil(v - r), 0), min(math.floor(v + r) + 1, h)
-        c0, c1 = max(math.ceil(u - r), 0), min(math.floor(u + r) + 1, w)
+        r0, r1 = max(math.ceil(v - r), 0), min(math.floor(v + r) + 1, height)
+        c0, c1 = max(math.ceil(u - r), 0), min(math.floor(u + r) + 1, width)
         out.append((slice(r0, r1), slice(c0, c1)) if r0 < r1 and c0 < c1 else None)
     return out
 
 
 def patch_means(image: np.ndarray, truth: ColorCheckerTruth) -> np.ndarray:
-    """Mean ``(24, C)`` of each patch window (pixels whose centres are within
-    ``sample_radius_px`` of the patch centre along both axes); NaN outside the image.
+    """Mean ``(24, C)`` of each patch window (:func:`patch_windows`); NaN outside the image.
 
     >>> t = ColorCheckerTruth(("a",), np.zeros((1, 3)), np.array([[1.0, 1.0]]), 1.0)
     >>> patch_means(np.arange(27.0).reshape(3, 3, 3), t).tolist()
@@ -91,7 +137,7 @@ def patch_stats(image: np.ndarray, truth: ColorCheckerTruth) -> tuple[np.ndarray
     h, w, c = img.shape
     mean = np.full((len(truth.names), c), np.nan)
     std = np.full((len(truth.names), c), np.nan)
-    for k, win in enumerate(_windows(truth, h, w)):
+    for k, win in enumerate(patch_windows(truth, h, w)):
         if win is None:
             continue
         block = img[win].reshape(-1, c)
@@ -115,12 +161,98 @@ def xy_of_linear_srgb(rgb: np.ndarray) -> np.ndarray:
 
 def delta_e_patches(linear_srgb: np.ndarray, lab_truth: np.ndarray) -> np.ndarray:
     """CIEDE2000 of linear-sRGB patch colours ``(24, 3)`` against ``lab_truth`` (D65)."""
+    return _lab_and_delta_e(linear_srgb, lab_truth)[1]
+
+
+def _lab_and_delta_e(linear_srgb: np.ndarray, lab_truth: np.ndarray) -> tuple[Any, Any]:
     rgb = np.asarray(linear_srgb, dtype=np.float64)
+    lab = np.full(rgb.shape, np.nan)
     out = np.full(rgb.shape[0], np.nan)
     ok = np.all(np.isfinite(rgb), axis=-1)
-    lab = np.asarray(xyz_to_lab(linear_srgb_to_xyz(rgb[ok]), white="D65"))
-    out[ok] = np.asarray(delta_e_ciede2000(lab, np.asarray(lab_truth)[ok]))
-    return out
+    if ok.any():
+        lab[ok] = np.asarray(xyz_to_lab(linear_srgb_to_xyz(rgb[ok]), white="D65"))
+        out[ok] = np.asarray(delta_e_ciede2000(lab[ok], np.asarray(lab_truth)[ok]))
+    return lab, out
+
+
+def measure_colorchecker(
+    output_linear_srgb: np.ndarray,
+    snr_linear_srgb: np.ndarray,
+    truth: ColorCheckerTruth,
+    *,
+    snr_stage: str,
+) -> PatchMeasurements:
+    r"""Measure every patch: colour on the output, noise on a linear stage.
+
+    Colour: the mean linear sRGB of each patch window (:func:`patch_windows`) of
+    ``output_linear_srgb`` (the output decoded to linear sRGB), converted to XYZ and CIELAB
+    (white: CIE D65, the ground truth's) and compared with ``truth.lab_d65`` by CIEDE2000:
+
+    .. math:: \Delta E_{00}\big(\mathrm{Lab}(\overline{\mathrm{RGB}}), \mathrm{Lab}_{truth}\big)
+
+    Noise: on ``snr_linear_srgb`` (the stage named ``snr_stage``), the luminance of each pixel
+    :math:`Y = 0.2126 R + 0.7152 G + 0.0722 B`
+    (:func:`imageform.color.linear_srgb_to_luminance`) gives
+
+    .. math:: \mathrm{SNR} = 20 \log_{10}\big(\overline{Y} / \sigma_Y\big)\ \mathrm{dB}
+
+    over the window (``inf`` where σ = 0, NaN where the mean is not positive).
+
+    Source: CIE 142-2001 / Sharma, Wu & Dalal (2005) for ΔE00; ITU-R BT.709-6 for Y;
+    ISO 15739:2013 §6 (the SNR of a uniform patch, on the luminance channel).
+    """
+    from imageform.color.cielab import lab_to_xyz
+    from imageform.color.delta_e import describe_delta_e
+    from imageform.color.rgb_spaces import xyz_to_linear_srgb
+    from imageform.color.transfer import linear_to_srgb
+
+    lab_truth = np.asarray(truth.lab_d65, dtype=np.float64)
+    n = len(truth.names)
+    if lab_truth.shape != (n, 3) or np.asarray(truth.centres_uv).shape != (n, 2):
+        raise InvalidInputError(
+            f"expected lab_d65 ({n}, 3) and centres_uv ({n}, 2) for {n} patch names, got "
+            f"{lab_truth.shape} and {np.asarray(truth.centres_uv).shape}"
+        )
+    rgb = patch_means(output_linear_srgb, truth)[:, :3]
+    lab, de = _lab_and_delta_e(rgb, lab_truth)
+    readings = tuple(describe_delta_e(d) if np.isfinite(d) else "not measured" for d in de)
+    lum = np.asarray(linear_srgb_to_luminance(np.asarray(snr_linear_srgb, dtype=np.float64)))
+    mean, std = patch_stats(lum, truth)
+    mu, sd = mean[:, 0], std[:, 0]
+    snr = np.full(n, np.nan)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ok = (mu > 0) & (sd > 0)
+        snr[ok] = 20.0 * np.log10(mu[ok] / sd[ok])
+    snr[(mu > 0) & (sd == 0)] = np.inf
+    truth_lin = np.asarray(xyz_to_linear_srgb(lab_to_xyz(lab_truth, white="D65")))
+    truth_srgb = np.asarray(linear_to_srgb(np.clip(truth_lin, 0.0, 1.0)))
+    return PatchMeasurements(
+        names=tuple(truth.names),
+        lab_truth=lab_truth,
+        lab_measured=lab,
+        delta_e00=de,
+        readings=readings,
+        snr_luminance_db=snr,
+        snr_stage=snr_stage,
+        truth_srgb=truth_srgb,
+    )
+
+
+def light_cct(spd: Spectrum) -> tuple[float, float]:
+    """Correlated colour temperature (K) and Duv of a light from its spectrum.
+
+    The light's chromaticity xy (CIE 1931 2°, :func:`imageform.spectral.spectrum_to_xyz`
+    with ``illuminant=None``) and Robertson's method
+    (:func:`imageform.color.xy_to_cct`; CIE 15:2004 eq. 3.3).
+
+    >>> from imageform.spectral import illuminant
+    >>> cct, duv = light_cct(illuminant("A"))
+    >>> round(cct), abs(duv) < 1e-3
+    (2856, True)
+    """
+    xy = np.asarray(xyz_to_xy(spectrum_to_xyz(spd, illuminant=None)))
+    cct, duv = xy_to_cct(xy)
+    return float(cct), float(duv)
 
 
 def _finite_vp(camera: Camera, d_world: np.ndarray) -> np.ndarray:
@@ -140,13 +272,15 @@ def rails_truth(ground: SceneObject, camera: Camera) -> VanishingTruth:
 
     The rails run along the object's ``-edge_down`` (towards its top edge). Under lens
     distortion the point is distorted like any image point; the horizon is the pinhole
-    line (a distorted horizon is a curve).
+    line (a distorted horizon is a curve): :func:`imageform.geometry.horizon_line` with the
+    ground's normal as ``up`` (the world's up axis, z, for a level ground).
     """
     d = -ground.edge_down / np.linalg.norm(ground.edge_down)
     n = np.cross(ground.edge_right, ground.edge_down)
     n = -n / np.linalg.norm(n)  # right x down points into the ground; the normal is up
-    K = np.asarray(camera.image_plane_K, dtype=np.float64)
-    hor = np.asarray(horizon_line(K, np.asarray(camera.R), n))
+    hor = np.asarray(
+        horizon_line(np.asarray(camera.image_plane_K, dtype=np.float64), np.asarray(camera.R), up=n)
+    )
     return VanishingTruth(vanishing_point=_finite_vp(camera, d), horizon=hor)
 
 
@@ -157,8 +291,37 @@ def _line_angle(l1: np.ndarray, l2: np.ndarray) -> float:
     return math.degrees(min(d, math.pi - d))
 
 
+def vanishing_errors(v: VanishingTruth) -> dict[str, float | None]:
+    """``vanishing_point_error_px``: the distance (pixels) between the detected and the true
+    vanishing point (both finite; else ``None``); ``horizon_angle_error_deg``: the angle
+    between the detected and the true horizon (``None`` without a detected horizon).
+
+    >>> vanishing_errors(VanishingTruth(np.array([3.0, 4.0, 1.0]), np.array([0.0, 1.0, -4.0]),
+    ...                                 np.array([0.0, 0.0, 1.0]), np.array([0.0, 1.0, -2.0])))
+    {'vanishing_point_error_px': 5.0, 'horizon_angle_error_deg': 0.0}
+    """
+    out: dict[str, float | None] = {
+        "vanishing_point_error_px": None,
+        "horizon_angle_error_deg": None,
+    }
+    t = np.asarray(v.vanishing_point, dtype=np.float64)
+    if v.detected_vanishing_point is not None:
+        d = np.asarray(v.detected_vanishing_point, dtype=np.float64)
+        if t[2] != 0 and d[2] != 0:
+            out["vanishing_point_error_px"] = float(np.hypot(*(d[:2] / d[2] - t[:2] / t[2])))
+    if v.detected_horizon is not None:
+        out["horizon_angle_error_deg"] = _line_angle(
+            np.asarray(v.detected_horizon, dtype=np.float64), np.asarray(v.horizon)
+        )
+    return out
+
+
 def detect_vanishing(
-    image: np.ndarray, truth: VanishingTruth, seed: int = 0
+    image: np.ndarray,
+    truth: VanishingTruth,
+    *,
+    rng: RNGLike = None,
+    seed: int | None = None,
 ) -> tuple[VanishingTruth, dict[str, Any]]:
     """Run :func:`imageform.geometry.detect_vanishing_points` on ``image`` and compare.
 
@@ -166,26 +329,29 @@ def detect_vanishing(
     detected horizon is the detector's own (from its K) when it found an orthogonal triplet;
     otherwise the line through the rails' point and the other detected point that makes the
     most level line (horizontal directions vanish on the horizon). Returns the filled truth
-    and ``{"vanishing_point_error_px", "horizon_angle_error_deg"}`` (None when not found).
+    and :func:`vanishing_errors` (``None`` where nothing was found).
+
+    ``rng`` seeds the detector's RANSAC (an int seed, a Generator to draw the seed from, or
+    None); ``seed`` is its deprecated name.
     """
     from imageform.errors import DegenerateConfigurationError
     from imageform.geometry import detect_vanishing_points
 
-    err: dict[str, Any] = {"vanishing_point_error_px": None, "horizon_angle_error_deg": None}
+    source = random_source(rng, seed, "detect_vanishing")
+    nothing = vanishing_errors(truth)
     try:
-        res = detect_vanishing_points(np.asarray(image), seed=seed)
+        res = detect_vanishing_points(np.asarray(image), rng=source.int_seed())
     except DegenerateConfigurationError:
-        return truth, err
+        return truth, nothing
     vps = np.asarray(res.vanishing_points, dtype=np.float64)
     t = truth.vanishing_point / truth.vanishing_point[2]
     finite = [k for k in range(len(vps)) if vps[k, 2] != 0]
     if not finite:
-        return truth, err
+        return truth, nothing
     pts = [vps[k] / vps[k, 2] for k in finite]
     dist = [float(np.hypot(*(p[:2] - t[:2]))) for p in pts]
     best = int(np.argmin(dist))
     vp = pts[best]
-    err["vanishing_point_error_px"] = dist[best]
     horizon = None
     if res.horizon is not None:
         horizon = np.asarray(res.horizon, dtype=np.float64)
@@ -195,9 +361,7 @@ def detect_vanishing(
         lines = [ln / math.hypot(ln[0], ln[1]) for ln in lines if math.hypot(ln[0], ln[1]) > 0]
         if lines:
             horizon = min(lines, key=lambda ln: abs(ln[0]))
-    if horizon is not None:
-        if horizon[1] < 0:
-            horizon = -horizon
-        err["horizon_angle_error_deg"] = _line_angle(horizon, truth.horizon)
+    if horizon is not None and horizon[1] < 0:
+        horizon = -horizon
     filled = VanishingTruth(truth.vanishing_point, truth.horizon, vp, horizon)
-    return filled, err
+    return filled, vanishing_errors(filled)

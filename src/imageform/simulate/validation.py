@@ -12,9 +12,17 @@ import re
 from typing import Any
 
 from imageform.errors import InvalidInputError, UnknownOptionError
+from imageform.simulate.budget import (
+    BYTES_PER_PIXEL,
+    available_memory_bytes,
+    estimate_memory_bytes,
+    format_bytes,
+)
 from imageform.simulate.schema import (
     _POSE,
     _SUFFIX_SCALE,
+    DEFAULT_LIGHT_TEMPERATURE_K,
+    DISTORTION_COEFFICIENTS,
     OBJECT_TYPES,
     SCENE_SCHEMA,
     UNITS,
@@ -257,10 +265,53 @@ def validate_scene_dict(
         if not checked["name"]:
             checked["name"] = f"{t}{i}"
         out["objects"].append(checked)
-    ill = out["illuminant"]
-    if ill["type"] == "file" and ill["file"] is None:
-        ctx.fail(("illuminant", "type"), "type 'file' needs the key 'file' (a CSV path)")
+    _check_illuminant(out["illuminant"], ctx)
     cam = out["camera"]
     if (cam["R"] is None) != (cam["t_m"] is None):
         ctx.fail(("camera", "R" if cam["R"] is not None else "t_m"), "give both R and t_m")
+    _check_distortion(cam["distortion"], ctx)
+    _check_memory(out["render"], ctx)
     return out
+
+
+def _check_illuminant(ill: dict[str, Any], ctx: _Ctx) -> None:
+    """``file`` needs a path; ``temperature_K`` belongs to blackbody and daylight lights only
+    (a CIE illuminant's or a file's temperature is not a setting: the report computes the
+    light's CCT from its spectrum)."""
+    if ill["type"] == "file" and ill["file"] is None:
+        ctx.fail(("illuminant", "type"), "type 'file' needs the key 'file' (a CSV path)")
+    if ill["type"] in ("blackbody", "daylight"):
+        if ill["temperature_K"] is None:
+            ill["temperature_K"] = DEFAULT_LIGHT_TEMPERATURE_K
+    elif ill["temperature_K"] is not None:
+        ctx.fail(
+            ("illuminant", "temperature_K"),
+            f"applies to type 'blackbody' or 'daylight', not {ill['type']!r} "
+            f"(a {ill['type']} light's spectrum is given; remove the key)",
+        )
+
+
+def _check_distortion(dist: dict[str, Any], ctx: _Ctx) -> None:
+    """A coefficient the chosen model does not have must be absent or 0."""
+    model = dist["model"]
+    has = DISTORTION_COEFFICIENTS[model]
+    for key, value in dist.items():
+        if key != "model" and key not in has and value != 0:
+            ctx.fail(
+                ("camera", "distortion", key),
+                f"the {model} model has no {key}; its coefficients: {', '.join(has)}",
+            )
+
+
+def _check_memory(render: dict[str, Any], ctx: _Ctx) -> None:
+    """Refuse an image that cannot fit in the memory available (before anything is made)."""
+    w, h = int(render["width"]), int(render["height"])
+    need = estimate_memory_bytes(w, h)
+    have = available_memory_bytes()
+    if have is not None and need > have:
+        ctx.fail(
+            ("render", "width"),
+            f"a {w}x{h} image needs about {format_bytes(need)} of memory to simulate "
+            f"({BYTES_PER_PIXEL} bytes per pixel), more than the {format_bytes(have)} this "
+            "machine has available; reduce render.width and render.height",
+        )

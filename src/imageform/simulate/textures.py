@@ -1,8 +1,7 @@
 """Files a scene refers to: paths relative to the scene file, and image textures.
 
-Shared by :mod:`.scene` (an image object's aspect ratio, a measured illuminant's file) and
-:mod:`.render` (the texture's pixels), so that neither of them imports the other's
-internals: the renderer imports the scene, never the other way round.
+Shared by the scene builder (an image object's aspect ratio) and the renderer (its pixels);
+it imports neither, so neither imports the other for it.
 """
 
 from __future__ import annotations
@@ -18,7 +17,8 @@ __all__ = ["load_texture", "resolve_path"]
 
 
 def resolve_path(path: str, base: Path | None) -> Path:
-    """``path`` (``~`` expanded) relative to the scene file's folder ``base``; it must exist."""
+    """``path`` relative to the scene file's folder ``base`` (the working folder when
+    ``None``); an error naming the file when it does not exist."""
     p = Path(path).expanduser()
     if not p.is_absolute() and base is not None:
         p = base / p
@@ -30,7 +30,10 @@ def resolve_path(path: str, base: Path | None) -> Path:
 
 
 def load_texture(path: str, base: Path | None) -> np.ndarray:
-    """An image texture as linear sRGB ``(H, W, 3)`` float64 (decoded from sRGB)."""
+    """An image texture as linear sRGB ``(H, W, 3)`` float64 (decoded from sRGB), read-only.
+
+    Grey images are repeated to three channels; alpha is ignored (the texture is opaque).
+    """
     return _texture(str(resolve_path(path, base).resolve()))
 
 

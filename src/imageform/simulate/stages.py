@@ -1,0 +1,288 @@
+"""The camera's stages after the renderer, one function each: typed inputs, typed outputs.
+
+:func:`imageform.simulate.simulate` composes them in this order (the stage names are those
+of :class:`~imageform.simulate.SimulationResult`'s stages):
+
+1. :func:`apply_lens` (``optics``): lateral chromatic aberration, then defocus blur.
+2. :func:`exposure_time` and :func:`capture_raw` (``raw``): photons to electrons with noise,
+   full-well clipping, gain, ADC (:meth:`imageform.sensor.SensorModel.capture`), the CFA.
+3. :func:`normalize_raw` and :func:`demosaic_raw` (``demosaiced``).
+4. :func:`correct_lens_shading` (``shading_corrected``).
+5. :func:`balance_white` (``white_balanced``).
+6. :func:`correct_color` (``color_corrected``).
+7. :func:`encode_output` (``output``), and :func:`decode_output` to measure it.
+
+:func:`measure_photon_transfer` is the sensor's EMVA 1288 measurement beside the chain.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from imageform.errors import InvalidInputError
+from imageform.geometry.camera import Camera
+from imageform.sensor.emva import PhotonTransferData
+from imageform.sensor.model import SensorModel
+from imageform.simulate.colorfit import _fit_matrix
+from imageform.simulate.config import LensConfig, SensorConfig
+from imageform.simulate.render import RenderOutput
+from imageform.simulate.truth import NEUTRAL_PATCHES
+from imageform.spectral import COLORCHECKER_PATCHES
+
+__all__ = [
+    "ColorCorrected",
+    "Encoded",
+    "WhiteBalanced",
+    "apply_lens",
+    "balance_white",
+    "capture_raw",
+    "correct_color",
+    "correct_lens_shading",
+    "decode_output",
+    "demosaic_raw",
+    "encode_output",
+    "exposure_time",
+    "measure_photon_transfer",
+    "normalize_raw",
+]
+
+
+@dataclass(frozen=True)
+class WhiteBalanced:
+    """:func:`balance_white`'s output: the ``image`` and the per-channel ``gains`` (3,)."""
+
+    image: np.ndarray
+    gains: np.ndarray
+
+
+@dataclass(frozen=True)
+class ColorCorrected:
+    """:func:`correct_color`'s output: linear sRGB ``image`` and the ``matrix`` M (3, 3)
+    with ``image = camera RGB @ M``."""
+
+    image: np.ndarray
+    matrix: np.ndarray
+
+
+@dataclass(frozen=True)
+class Encoded:
+    """:func:`encode_output`'s output: the encoded ``image`` in [0, 1] and the name of the
+    ``transfer`` function applied."""
+
+    image: np.ndarray
+    transfer: str
+
+
+def apply_lens(
+    rendered: RenderOutput, camera: Camera, lens: LensConfig, focal_length_mm: float
+) -> np.ndarray:
+    """Lateral chromatic aberration, then depth-dependent defocus, on the rendered rate.
+
+    Each channel is scaled by its magnification about the principal point
+    (:func:`imageform.optics.lateral_chromatic_aberration`); a channel shrunk by ``m < 1``
+    keeps its unshifted value where it would sample outside the frame. Each pixel is then
+    blurred by the disc of its circle of confusion
+    :math:`c = (f/N) |d - s| / d \\cdot f / (s - f)` at the pitch ``f / f_x``
+    (:func:`imageform.optics.defocus_radius_px`, :func:`imageform.optics.blur_by_radius`);
+    no blur when every radius is under 0.25 px.
+    """
+    from imageform.optics import blur_by_radius, defocus_radius_px, lateral_chromatic_aberration
+
+    img = rendered.rate
+    mags = tuple(lens.lateral_ca)
+    if any(m != 1.0 for m in mags):
+        K = np.asarray(camera.K)
+        shifted = lateral_chromatic_aberration(
+            img, mags, center=(float(K[0, 2]), float(K[1, 2])), fill=np.nan
+        )
+        # a channel shrunk by m < 1 samples outside the frame at the border: keep the
+        # unshifted value there (the lens would have imaged light from beyond the frame)
+        img = np.where(np.isnan(shifted), img, shifted)
+    if lens.defocus:
+        f = focal_length_mm * 1e-3
+        # the pitch at which the lens's image is sampled: f / fx (the camera's pixels)
+        pitch = f / float(np.asarray(camera.K)[0, 0])
+        rad = defocus_radius_px(
+            rendered.depth,
+            focal_length=f,
+            f_number=lens.f_number,
+            focus=lens.focus_distance_m,
+            pixel_pitch=pitch,
+        )
+        if float(np.max(rad)) >= 0.25:
+            img = blur_by_radius(img, rad, step=0.5, max_layers=12)
+            # the FFT convolution leaves round-off of ~1e-13 around zero; light is >= 0
+            img = np.maximum(img, 0.0)
+    return np.asarray(img)
+
+
+def exposure_time(rate: np.ndarray, config: SensorConfig, sensor: SensorModel) -> float:
+    """The exposure (s): ``config.exposure_time_s``, or for ``"auto"`` the time that brings
+    the 99.5th percentile of the brightest channel to ``auto_exposure_level`` of the full
+    well: :math:`t = a\\, FW / \\dot e_{99.5}`.
+
+    Raises
+    ------
+    InvalidInputError
+        ``"auto"`` on a black scene.
+    """
+    if config.exposure_time_s != "auto":
+        return float(config.exposure_time_s)
+    bright = float(np.percentile(rate.max(axis=-1), 99.5))
+    if bright <= 0:
+        raise InvalidInputError("the scene is black: auto exposure has nothing to measure")
+    return float(config.auto_exposure_level) * sensor.full_well / bright
+
+
+def capture_raw(
+    mean_electrons: np.ndarray,
+    sensor: SensorModel,
+    config: SensorConfig,
+    exposure_time_s: float,
+    rng: np.random.Generator,
+) -> np.ndarray:
+    """Mean electrons ``(H, W, 3)`` to the mosaicked raw image ``(H, W)`` uint16 (DN).
+
+    With ``config.noise``: :meth:`imageform.sensor.SensorModel.capture` (Poisson shot and
+    dark noise, full-well clipping, fixed pattern, read noise, gain, black level, ADC);
+    without: the mean signal, clipped to the full well, plus the mean dark signal, through
+    the gain and the ADC. Then the CFA keeps one channel per photosite.
+    """
+    from imageform.sensor.cfa import cfa_masks
+
+    if config.noise:
+        dn = sensor.capture(mean_electrons, exposure_time=exposure_time_s, rng=rng)
+    else:
+        e = np.minimum(mean_electrons, sensor.full_well) + sensor.dark_current * exposure_time_s
+        analog = sensor.system_gain * e + sensor.black_level
+        dn = np.clip(np.floor(analog + 0.5), 0, sensor.max_dn).astype(np.uint16)
+    masks = cfa_masks(mean_electrons.shape[:2], config.cfa)
+    return np.asarray((dn * masks).sum(axis=-1), dtype=np.uint16)
+
+
+def normalize_raw(raw: np.ndarray, sensor: SensorModel, exposure_time_s: float) -> np.ndarray:
+    """Raw DN to [0, 1]: black level and mean dark signal subtracted, divided by the range.
+
+    .. math:: x = (DN - B - K\\, I_{dark}\\, t) / (DN_{max} - B)
+    """
+    dark_dn = sensor.system_gain * sensor.dark_current * exposure_time_s
+    return (raw.astype(np.float64) - sensor.black_level - dark_dn) / (
+        sensor.max_dn - sensor.black_level
+    )
+
+
+def demosaic_raw(normalized: np.ndarray, cfa: str, method: str) -> np.ndarray:
+    """Camera RGB ``(H, W, 3)`` float64 from the normalised mosaic
+    (:func:`imageform.sensor.demosaic.demosaic`)."""
+    from imageform.sensor.demosaic import demosaic
+
+    return np.asarray(demosaic(normalized, cfa, method, allow_odd=True), dtype=np.float64)
+
+
+def correct_lens_shading(image: np.ndarray, falloff: np.ndarray) -> np.ndarray:
+    """Flat-field correction: ``image`` divided by the vignetting map ``falloff`` (H, W)."""
+    return np.asarray(image / falloff[..., None])
+
+
+def balance_white(
+    image: np.ndarray, method: str, chart_rgb: np.ndarray | None = None
+) -> WhiteBalanced:
+    """White balance in linear light, the green channel kept.
+
+    ``"none"``: gains 1. ``"colorchecker"``: the gains that make the mean of the chart's
+    :data:`~imageform.simulate.truth.NEUTRAL_PATCHES` grey, :math:`g_c = \\mathrm{mean}_p
+    (G_p / C_p)`, from ``chart_rgb`` (24, 3) (the patch means). Otherwise
+    :func:`imageform.color.white_balance` with that method.
+
+    Raises
+    ------
+    InvalidInputError
+        ``"colorchecker"`` without ``chart_rgb``.
+    """
+    from imageform.color import white_balance
+
+    if method == "none":
+        return WhiteBalanced(image, np.ones(3))
+    if method == "colorchecker":
+        if chart_rgb is None:
+            raise InvalidInputError("white_balance = 'colorchecker' needs a colorchecker object")
+        idx = [COLORCHECKER_PATCHES.index(name) for name in NEUTRAL_PATCHES]
+        neutral = np.asarray(chart_rgb)[idx]
+        gains = np.nanmean(neutral[:, 1:2] / neutral, axis=0)
+        return WhiteBalanced(image * gains, gains)
+    res = white_balance(image, method, transfer="linear", normalize="green")
+    return WhiteBalanced(np.asarray(res.image), np.asarray(res.gains))
+
+
+def correct_color(
+    image: np.ndarray, method: str, chart_rgb: np.ndarray | None = None
+) -> ColorCorrected:
+    """Camera RGB to linear sRGB by a 3x3 matrix: ``image @ M``.
+
+    ``"colorchecker"`` (with ``chart_rgb``, the white-balanced patch means (24, 3)): M is
+    the least-squares fit of the patches to their ground-truth linear sRGB under D65
+    (:func:`imageform.analysis.fit_color_correction` with ``transfer="linear"``; ``M`` is
+    its matrix transposed). ``"none"`` (or no chart): M = I.
+    """
+    from imageform.analysis import ColorCorrection
+    from imageform.color import xyz_to_linear_srgb
+    from imageform.spectral import colorchecker_reflectances, spectrum_to_xyz
+
+    M = np.eye(3)
+    if method == "colorchecker" and chart_rgb is not None:
+        target = np.asarray(
+            xyz_to_linear_srgb(spectrum_to_xyz(colorchecker_reflectances(), illuminant="D65"))
+        )
+        M = _fit_matrix(chart_rgb, target)
+    corrected = ColorCorrection("linear", 1, np.asarray(M, np.float64).T, transfer="linear")
+    return ColorCorrected(np.asarray(corrected.apply(image)), M)
+
+
+def encode_output(linear_srgb: np.ndarray, space: str, transfer: str) -> Encoded:
+    """Linear sRGB to the output ``space``'s primaries, clipped to [0, 1] (the display range:
+    an explicit step) and encoded with ``transfer`` (``"space"``: the space's own)."""
+    from imageform.color import RGB_SPACES, encode, linear_srgb_to_xyz, xyz_to_linear_rgb
+
+    lin = (
+        linear_srgb
+        if space == "srgb"
+        else xyz_to_linear_rgb(linear_srgb_to_xyz(linear_srgb), space)
+    )
+    tf = RGB_SPACES[space].transfer if transfer == "space" else transfer
+    clipped = np.clip(np.asarray(lin), 0.0, 1.0)
+    return Encoded(np.asarray(encode(clipped, tf)), tf)
+
+
+def decode_output(encoded: Encoded, space: str) -> np.ndarray:
+    """The encoded output back to linear sRGB (to measure it against the truth)."""
+    from imageform.color import decode, linear_rgb_to_xyz, xyz_to_linear_srgb
+
+    lin = np.asarray(decode(encoded.image, encoded.transfer))
+    return lin if space == "srgb" else np.asarray(xyz_to_linear_srgb(linear_rgb_to_xyz(lin, space)))
+
+
+def measure_photon_transfer(sensor: SensorModel, rng: np.random.Generator) -> PhotonTransferData:
+    """EMVA 1288 photon transfer of the green channel at 550 nm, dark to beyond saturation:
+    20 exposure times from 1e-3 to 1.3 times the saturation time, 48x48 flat-field pairs
+    at 0.05 W/m² (:func:`imageform.sensor.emva.simulate_photon_transfer`)."""
+    from imageform.sensor.emva import simulate_photon_transfer
+    from imageform.sensor.model import photons_per_pixel
+
+    irradiance = 0.05  # W/m²
+    per_s = float(
+        photons_per_pixel(irradiance, 550.0, pixel_area=sensor.pixel_area, exposure_time=1.0)
+    )
+    qe = float(sensor.quantum_efficiency(550.0)[1]) * sensor.fill_factor
+    t_sat = sensor.full_well / max(per_s * qe, 1e-300)
+    times = t_sat * np.geomspace(1e-3, 1.3, 20)
+    return simulate_photon_transfer(
+        sensor,
+        irradiance=irradiance,
+        wavelength_nm=550.0,
+        exposure_times=times,
+        rng=rng,
+        shape=(48, 48),
+        channel=1,
+    )
