@@ -12,7 +12,6 @@ from imageform.cli import (
     analysis_cmds,
     batch_cmd,
     sensor_cmds,
-    simulate_cmd,
 )
 
 app = typer.Typer(
@@ -25,7 +24,6 @@ app = typer.Typer(
 )
 
 for _module in (
-    simulate_cmd,
     sensor_cmds,
     analysis_cmds,
     batch_cmd,

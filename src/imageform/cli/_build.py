@@ -164,7 +164,7 @@ def progress_bar(enabled: bool) -> Iterator[Callable[[str, float], None] | None]
         TextColumn("{task.percentage:>3.0f} %"),
         TimeElapsedColumn(),
         console=Console(stderr=True),
-        transient=True,
+        transient=False,
     ) as bar:
         task = bar.add_task("working", total=1.0)
 

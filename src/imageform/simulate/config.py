@@ -49,6 +49,7 @@ __all__ = [
     "RenderConfig",
     "SceneConfig",
     "SensorConfig",
+    "ViewConfig",
 ]
 
 #: The simulator's world up axis: z (the ground is the plane z = 0). Named wherever the
@@ -437,9 +438,20 @@ _OBJECT_CLASSES: dict[str, type[ObjectConfig]] = {
 
 
 @dataclass(frozen=True)
+class ViewConfig:
+    """An extra view of the scene (``[[views]]``): the same camera, looking from ``eye_m``
+    at ``target_m`` with ``up`` up (look-at pose). ``imageform simulate`` renders each one
+    through the whole chain beside the main view (e.g. the views of a calibration board)."""
+
+    eye_m: Vec3
+    target_m: Vec3
+    up: Vec3
+
+
+@dataclass(frozen=True)
 class SceneConfig:
     """A whole validated scene description, typed: ``name``, ``description``, one section
-    dataclass per table and the ``objects`` in file order.
+    dataclass per table, the extra ``views`` and the ``objects`` in file order.
 
     Built by :func:`imageform.simulate.load_scene`; :meth:`to_dict` gives the validated plain
     description (every default filled in) back.
@@ -454,6 +466,7 @@ class SceneConfig:
     sensor: SensorConfig
     processing: ProcessingConfig
     objects: tuple[ObjectConfig, ...] = field(default=())
+    views: tuple[ViewConfig, ...] = field(default=())
 
     @classmethod
     def from_dict(cls, cfg: dict[str, Any]) -> SceneConfig:
@@ -471,12 +484,14 @@ class SceneConfig:
             sensor=_build(SensorConfig, cfg["sensor"]),
             processing=_build(ProcessingConfig, cfg["processing"]),
             objects=tuple(_build(_OBJECT_CLASSES[o["type"]], o) for o in cfg["objects"]),
+            views=tuple(_build(ViewConfig, v) for v in cfg.get("views", ())),
         )
 
     def to_dict(self) -> dict[str, Any]:
         """The description as plain data (sections as dicts, objects as a list of dicts)."""
         out = dataclasses.asdict(self)
         out["objects"] = list(out["objects"])
+        out["views"] = list(out["views"])
         return out
 
     def __getitem__(self, section: str) -> Any:

@@ -150,6 +150,25 @@ class Scene:
         cam = dataclasses.asdict(cam_cfg)
         return self.with_changes(render={"width": int(w), "height": int(h)}, camera=cam)
 
+    def view(self, index: int) -> Scene:
+        """The scene seen from its extra view ``index`` (``[[views]]``): the same camera
+        (intrinsics, distortion, sensor) at that view's look-at pose, without extra views.
+
+        >>> s = default_scene().with_changes(views=[{"eye_m": [0.0, -0.2, 0.05]}])
+        >>> [round(float(v), 3) for v in s.view(0).camera.center]
+        [0.0, -0.2, 0.05]
+        """
+        views = self.config.views
+        if isinstance(index, bool) or not isinstance(index, int) or not 0 <= index < len(views):
+            raise InvalidInputError(
+                f"expected a view index 0..{len(views) - 1}, got {index!r}"
+                if views
+                else "this scene has no [[views]]"
+            )
+        v = views[index]
+        pose = {"eye_m": list(v.eye_m), "target_m": list(v.target_m), "up": list(v.up)}
+        return self.with_changes(camera={**pose, "R": None, "t_m": None}, views=[])
+
     def resized(self, width: int, height: int | None = None) -> Scene:
         """The same view at another image size: intrinsics scaled with the image.
 

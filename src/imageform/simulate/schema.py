@@ -63,6 +63,8 @@ OBJECT_TYPES: tuple[str, ...] = ("checkerboard", "colorchecker", "ground", "imag
 #: Largest ``render.supersampling``: 16 x 16 = 256 rays per pixel (the render time grows
 #: with S²; beyond this a box filter gains nothing visible).
 MAX_SUPERSAMPLING = 16
+#: Most ``[[views]]`` of one scene (each is a whole extra simulation).
+MAX_VIEWS = 64
 #: ``illuminant.temperature_K`` of a blackbody or daylight light when the key is absent.
 DEFAULT_LIGHT_TEMPERATURE_K = 6504.0
 #: The distortion models of ``camera.distortion.model`` and the coefficients each one has
@@ -243,6 +245,11 @@ SCENE_SCHEMA: dict[str, Any] = {
             "output encoding; 'space' = the space's own",
             choices=("space", *TRANSFER_FUNCTIONS),
         ),
+    },
+    "views": {
+        "eye_m": Field("vec3", None, "camera centre of this extra view (m)", "length"),
+        "target_m": Field("vec3", (0.0, 0.0, 0.0), "point looked at (m)", "length"),
+        "up": Field("vec3", (0.0, 0.0, 1.0), "world up for look_at"),
     },
     "objects": {
         "checkerboard": {

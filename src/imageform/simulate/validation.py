@@ -23,6 +23,7 @@ from imageform.simulate.schema import (
     _SUFFIX_SCALE,
     DEFAULT_LIGHT_TEMPERATURE_K,
     DISTORTION_COEFFICIENTS,
+    MAX_VIEWS,
     OBJECT_TYPES,
     SCENE_SCHEMA,
     UNITS,
@@ -237,8 +238,8 @@ def validate_scene_dict(
     ctx = _Ctx(text, origin)
     if not isinstance(data, dict):
         raise InvalidInputError(f"expected a scene table (dict), got {type(data).__name__}")
-    sections = {k: v for k, v in SCENE_SCHEMA.items() if k not in ("", "objects")}
-    top = {**SCENE_SCHEMA[""], **sections, "objects": None}
+    sections = {k: v for k, v in SCENE_SCHEMA.items() if k not in ("", "objects", "views")}
+    top = {**SCENE_SCHEMA[""], **sections, "views": None, "objects": None}
     out: dict[str, Any] = {}
     for key in data:
         if key not in top:
@@ -265,6 +266,19 @@ def validate_scene_dict(
         if not checked["name"]:
             checked["name"] = f"{t}{i}"
         out["objects"].append(checked)
+    views = data.get("views", [])
+    if not isinstance(views, list):
+        ctx.fail(("views",), "expected an array of tables ([[views]])")
+    out["views"] = []
+    for i, view in enumerate(views):
+        if not isinstance(view, dict):
+            ctx.fail(("views", i), "expected a table with eye_m (and target_m, up)")
+        checked = _table(view, SCENE_SCHEMA["views"], ("views", i), ctx)
+        if checked["eye_m"] is None:
+            ctx.fail(("views", i), "missing key 'eye_m' (the view's camera centre, m)")
+        out["views"].append(checked)
+    if len(out["views"]) > MAX_VIEWS:
+        ctx.fail(("views",), f"expected at most {MAX_VIEWS} views, got {len(out['views'])}")
     _check_illuminant(out["illuminant"], ctx)
     cam = out["camera"]
     if (cam["R"] is None) != (cam["t_m"] is None):

@@ -11,7 +11,7 @@ from typing import Any
 
 from imageform._files import Outputs
 from imageform.errors import InvalidInputError
-from imageform.workflows._spec import Options, Result, Run, Workflow, resolve
+from imageform.workflows._spec import Options, Result, Run, Workflow, flag_of, resolve
 
 __all__ = ["execute", "run_file"]
 
@@ -81,7 +81,16 @@ def execute(
             f"got {', '.join(sorted(inputs)) or 'none'}"
         )
     files = [i.name for i in wf.inputs if i.kind == "file"]
-    in_paths = [p for n in files for p in _as_paths(inputs[n])] + list(opts.paths("input"))
+    named = [("input", p) for n in files for p in _as_paths(inputs[n])]
+    for f in opts.fields():
+        if f.metadata.get("input"):
+            named += [(flag_of(f), p) for p in _as_paths(getattr(opts, f.name))]
+    for what, p in named:  # before any work starts
+        if not p.exists():
+            raise InvalidInputError(f"{what} file {p} does not exist")
+        if p.is_dir():
+            raise InvalidInputError(f"{what} {p} is a folder; expected a file")
+    in_paths = [p for _, p in named]
     if wf.output is not None and out is None:
         if wf.output.default is None and wf.output.required:
             raise InvalidInputError(f"{wf.name} needs an output: -o/--out")

@@ -6,7 +6,15 @@ from __future__ import annotations
 from types import MappingProxyType
 
 from imageform.errors import UnknownOptionError
-from imageform.workflows import calibration, color, geometry, lecture, optics, vanishing
+from imageform.workflows import (
+    calibration,
+    color,
+    geometry,
+    lecture,
+    optics,
+    simulate,
+    vanishing,
+)
 from imageform.workflows._spec import Workflow
 
 __all__ = ["WORKFLOWS", "get_workflow"]
@@ -16,6 +24,7 @@ WORKFLOWS = MappingProxyType(
     {
         w.name: w
         for w in (
+            *simulate.WORKFLOWS,
             *lecture.WORKFLOWS,
             *color.WORKFLOWS,
             *geometry.WORKFLOWS,

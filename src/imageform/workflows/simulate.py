@@ -1,0 +1,188 @@
+"""``imageform simulate``: a scene through the whole image-formation chain, written as one
+output folder (report.html, metrics.json, the stage images and the ground-truth camera file)
+that replaces the previous one all at once."""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from imageform.errors import InvalidInputError
+from imageform.workflows._spec import Options, Output, Result, Run, Workflow, option
+
+__all__ = ["WORKFLOWS", "SimulateOptions"]
+
+#: The files that mark a folder as imageform simulate's output (only such a folder is
+#: replaced with --force: never a folder of the user's files).
+_MARKERS = ("report.html", "metrics.json")
+
+
+@dataclass(frozen=True, kw_only=True)
+class SimulateOptions(Options):
+    """Options of ``imageform simulate``."""
+
+    scene: Path | None = option(
+        None, help="Scene description (TOML); default: the built-in scene.", input=True
+    )
+    camera: Path | None = option(
+        None,
+        help="Render through this camera file (from imageform calibrate, or a simulation's "
+        "camera.toml): its intrinsics and distortion, and its pose if it has one (else the "
+        "scene's).",
+        input=True,
+    )
+    seed: int = option(0, help="Seed of the sensor noise (the same seed, the same pixels).")
+
+    def check(self) -> None:
+        super().check()
+        if isinstance(self.seed, bool) or not isinstance(self.seed, int) or self.seed < 0:
+            raise InvalidInputError(f"expected --seed as an integer >= 0, got {self.seed!r}")
+
+
+def _check_folder(out: Path, force: bool) -> None:
+    """With --force, replace only a folder that a simulation wrote."""
+    marked = any((out / m).exists() for m in _MARKERS)
+    if out.is_dir() and force and not marked and any(out.iterdir()):
+        raise InvalidInputError(
+            f"output folder {out} exists and is not an imageform simulate output; "
+            "choose a new folder (--force replaces only a previous simulation)"
+        )
+
+
+def simulate(run: Run, opts: SimulateOptions, *, out: Path) -> Result:
+    """Render the scene, write the report, the metrics, the stage images and the truth
+    camera file into a temporary folder that replaces ``out`` when everything is written."""
+    import importlib.util
+
+    if importlib.util.find_spec("matplotlib") is None:  # the report's figures
+        raise InvalidInputError(
+            "imageform simulate draws its report with matplotlib, which is not installed: "
+            'pip install "imageform[plot]"'
+        )
+    from imageform.io import CameraFile, Provenance, read_camera, write_camera
+    from imageform.report.html import write_report
+    from imageform.simulate import default_scene, load_scene
+    from imageform.simulate import simulate as simulate_scene
+
+    _check_folder(out, run.outputs.force)
+    folder = run.folder(out)
+    t0 = time.perf_counter()
+    scene = load_scene(opts.scene) if opts.scene is not None else default_scene()
+    if opts.camera is not None:
+        scene = scene.with_camera(_camera_for(read_camera(opts.camera), scene))
+    result = simulate_scene(scene, progress=run.progress, rng=opts.seed)
+    if run.progress is not None:
+        run.progress("writing the report", 1.0)
+    paths = write_report(result, folder, force=True)
+    views = _render_views(run, scene, folder, opts.seed)
+    camera_file = write_camera(
+        folder / "camera.toml",
+        CameraFile(
+            result.camera,
+            has_pose=True,
+            provenance=Provenance(
+                command="imageform simulate",
+                based_on=str(opts.scene) if opts.scene is not None else "built-in scene",
+            ),
+        ),
+    )
+    wall = time.perf_counter() - t0
+
+    def final(p: Path) -> Path:
+        return out / Path(p).relative_to(folder)
+
+    s: dict[str, Any] = dict(paths.summary)
+    summary = {
+        "scene": opts.scene,
+        "scene_name": result.scene_name,
+        "camera_file_in": opts.camera,
+        "image_size": list(result.image_size),
+        "report": final(paths.html),
+        "metrics": final(paths.metrics),
+        "camera": final(camera_file),
+        "stages": [final(p) for p in paths.stages],
+        "raw_files": [final(p) for p in paths.raw_files],
+        "views": [final(p) for p in views],
+        "summary": s,
+        "report_time_s": paths.seconds,
+        "total_time_s": wall,
+    }
+
+    def num(v: object, fmt: str, unit: str = "") -> str:
+        return "n/a" if v is None else f"{v:{fmt}}{unit}"
+
+    w, h = result.image_size
+    text = (
+        f"scene {result.scene_name!r}: {w}x{h} px, {len(result.stages)} stages",
+        f"report  -> {summary['report']}",
+        f"metrics -> {summary['metrics']}",
+        f"camera  -> {summary['camera']}",
+        *([f"views   -> {out / 'views'} ({len(views)} images)"] if views else []),
+        f"mean ΔE00 {num(s.get('delta_e00_mean'), '.2f')} "
+        f"(max {num(s.get('delta_e00_max'), '.2f')}); "
+        f"vanishing-point error {num(s.get('vanishing_point_error_px'), '.2f', ' px')}; "
+        f"simulation {num(s.get('simulation_time_s'), '.1f', ' s')}, "
+        f"report {paths.seconds:.1f} s, total {wall:.1f} s",
+    )
+    return Result(summary, text)
+
+
+def _camera_for(cf: Any, scene: Any) -> Any:
+    """The camera of a camera file, posed as the file says, or where the scene's camera is
+    when the file has no pose (a calibration gives intrinsics and distortion only)."""
+    from imageform.geometry import Camera
+
+    cam = cf.camera
+    if cam.image_size is None:
+        raise InvalidInputError(
+            f"{cf.path}: the camera file has no image size ([image] width, height) to render"
+        )
+    if cf.has_pose:
+        return cam
+    here = scene.camera
+    return Camera(cam.K, here.R, here.t, cam.image_size, cam.image_plane, distortion=cam.distortion)
+
+
+def _render_views(run: Run, scene: Any, folder: Path, seed: int) -> list[Path]:
+    """Each extra view of the scene (``[[views]]``) through the whole chain: its encoded
+    output as ``views/view-NN.png`` (the noise of view i seeded with ``seed + 1 + i``)."""
+    from imageform.io import write_image
+    from imageform.simulate import simulate as simulate_scene
+
+    n = len(scene.config.views)
+    if not n:
+        return []
+    (folder / "views").mkdir()
+    written = []
+    for i in range(n):
+        if run.progress is not None:
+            run.progress(f"view {i + 1} of {n}", (i + 0.5) / n)
+        res = simulate_scene(scene.view(i), rng=seed + 1 + i)
+        path = folder / "views" / f"view-{i + 1:02d}.png"
+        write_image(path, res.stages[-1].image)
+        written.append(path)
+    return written
+
+
+WORKFLOWS = (
+    Workflow(
+        "simulate",
+        "Render a scene through the whole image-formation chain and write an HTML report.",
+        "imageform.workflows.simulate:simulate",
+        SimulateOptions,
+        (),
+        Output(
+            "Output folder: report.html, metrics.json, stages/, camera.toml, views/ "
+            "(replaced whole).",
+            required=False,
+            default="simulation",
+            folder=True,
+        ),
+        group="simulation",
+        description="The built-in scene (or --scene FILE) through illumination, optics, "
+        "sensor and the camera's processing. The folder is written beside the old one and "
+        "swapped in at the end, so an interrupted run leaves the previous output untouched.",
+    ),
+)
