@@ -10,9 +10,12 @@ unit (:data:`UNITS`); a unit of the wrong kind (``"80 ms"`` for a length) is an 
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass
+from types import MappingProxyType
 from typing import Any
 
+from imageform._units import LENGTH_UNITS
 from imageform.color.rgb_spaces import RGB_SPACES
 from imageform.color.transfer import TRANSFER_FUNCTIONS
 from imageform.sensor.cfa import CFA_PATTERNS
@@ -48,12 +51,15 @@ class Field:
     positive: bool = False
 
 
-# Conversion of a unit to the key's base unit (m, s, rad ... deg is kept for *_deg keys).
-UNITS: dict[str, dict[str, float]] = {
-    "length": {"m": 1.0, "cm": 1e-2, "mm": 1e-3, "um": 1e-6, "µm": 1e-6, "nm": 1e-9},
-    "time": {"s": 1.0, "ms": 1e-3, "us": 1e-6, "µs": 1e-6},
-    "angle": {"deg": 1.0, "rad": 180.0 / math.pi},
-}
+# Conversion of a unit to the key's base unit (m, s, rad ... deg is kept for *_deg keys);
+# lengths are imageform's one table of length units (imageform._units).
+UNITS: Mapping[str, Mapping[str, float]] = MappingProxyType(
+    {
+        "length": LENGTH_UNITS,
+        "time": {"s": 1.0, "ms": 1e-3, "us": 1e-6, "µs": 1e-6},
+        "angle": {"deg": 1.0, "rad": 180.0 / math.pi},
+    }
+)
 # Base unit of each key suffix, as a factor from the dimension's SI unit.
 _SUFFIX_SCALE = {"_m": 1.0, "_mm": 1e3, "_um": 1e6, "_s": 1.0, "_deg": 1.0}
 
