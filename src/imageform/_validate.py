@@ -437,7 +437,7 @@ def as_image(
     range_check: bool = True,
     finite: bool = True,
 ) -> Any:
-    """An image as floats, channels last, following DESIGN.md's colour conventions.
+    """An image as floats, channels last, following the colour conventions of docs/conventions.md.
 
     - ``uint8`` / ``uint16`` are full-range encoded values: divided by 255 / 65535, float32.
     - Python integers (a list or tuple such as ``(200, 50, 50)``) are 8-bit codes 0-255, read

@@ -2,7 +2,7 @@
 
 A stop-gap until :mod:`imageform.io` lands (the lead merges them): 8/16-bit PNG (and
 other formats pillow reads) through pillow, float arrays through ``.npy``. Values follow
-DESIGN.md: uint8/uint16 are full-range encoded values, read as floats in [0, 1].
+docs/conventions.md: uint8/uint16 are full-range encoded values, read as floats in [0, 1].
 """
 
 from __future__ import annotations

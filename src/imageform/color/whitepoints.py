@@ -3,7 +3,7 @@
 The chromaticities are those of CIE 15:2004 *Colorimetry*, 3rd ed., Table T.3 ("Colorimetric
 data for CIE illuminants"), to the five decimals printed there; illuminant E is the
 equal-energy white, x = y = 1/3 exactly. XYZ values are derived from xy with Y = 1
-(DESIGN.md: XYZ scaled so that the reference white has Y = 1).
+(docs/conventions.md: XYZ scaled so that the reference white has Y = 1).
 
 Note on D65. CIE 15:2004 gives D65 (2°) as (0.31271, 0.32902). The RGB standards
 (IEC 61966-2-1 sRGB, ITU-R BT.709, BT.2020, SMPTE EG 432-1 Display P3, Adobe RGB (1998))

@@ -1,6 +1,6 @@
 """The pinhole camera: projection, back-projection and the 3×4 projection matrix.
 
-Conventions (DESIGN.md): ``X_cam = R @ X_world + t``; camera centre ``C = -Rᵀ t``;
+Conventions (docs/conventions.md): ``X_cam = R @ X_world + t``; camera centre ``C = -Rᵀ t``;
 ``P = K [R | t]``; pixel ``(u, v)`` = (column, row) with the top-left pixel centre at (0, 0).
 
 Points at or behind the camera (``z_cam <= 0``) have no image: they come back as NaN with

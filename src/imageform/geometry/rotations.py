@@ -2,7 +2,7 @@
 
 All functions are batched over leading dimensions and work on any Array-API array.
 Rotation matrices map world to camera coordinates when used as a camera's ``R``
-(``X_cam = R @ X_world + t``, DESIGN.md). Angles are radians.
+(``X_cam = R @ X_world + t``, docs/conventions.md). Angles are radians.
 
 Euler orders follow SciPy's ``Rotation.from_euler`` spelling: lower-case ``"xyz"`` is
 *extrinsic* (about the fixed axes x, then y, then z: ``R = Rz @ Ry @ Rx``), upper-case
@@ -396,7 +396,7 @@ def look_at(eye: ArrayLike, target: ArrayLike, up: ArrayLike = (0.0, -1.0, 0.0))
 
     The camera's z axis points from ``eye`` to ``target``; its y axis points *down*, i.e.
     opposite to the world ``up`` direction projected onto the image plane; x = y × z points
-    right (DESIGN.md camera frame). ``t = -R @ eye``.
+    right (camera frame of docs/conventions.md). ``t = -R @ eye``.
 
     The default ``up = (0, -1, 0)`` suits a world whose y axis points down like the camera's;
     for a z-up world pass ``up=(0, 0, 1)``.

@@ -11,7 +11,7 @@ eye's coarser colour (chrominance) resolution is served by red and blue on recta
 lattices of half the density in each direction.
 
 The four names say the colours of the 2×2 cell read row by row from the top-left pixel
-(pixel centre ``(0, 0)``, DESIGN.md):
+(pixel centre ``(0, 0)``, docs/conventions.md):
 
 ======  ==============  ============
 name    row 0           row 1

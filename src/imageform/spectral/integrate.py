@@ -6,7 +6,7 @@ For a reflectance :math:`R` under an illuminant :math:`S` with colour-matching f
 .. math:: X = k \sum_\lambda S(\lambda) R(\lambda) \bar x(\lambda)\,\Delta\lambda,\qquad
           k = \frac{1}{\sum_\lambda S(\lambda)\bar y(\lambda)\,\Delta\lambda}
 
-so the perfect reflecting diffuser has Y = 1 (DESIGN.md: XYZ with white Y = 1; CIE 015 writes
+so the perfect reflecting diffuser has Y = 1 (docs/conventions.md: XYZ with white Y = 1; CIE 015 writes
 k = 100/..., Y = 100). A light source (``illuminant=None``) is integrated as
 :math:`X = k\sum S \bar x \Delta\lambda` with Y = 1 for the source itself, or absolutely with
 :math:`k = K_m = 683` lm W⁻¹ (``absolute=True``).
