@@ -18,7 +18,7 @@ peaks = cones.wavelengths[np.argmax(cones.values, axis=0)]
 print("cone peaks (nm, energy units):", peaks)
 
 fig, ax = plt.subplots(figsize=(6, 3.5))
-for i, (name, colour) in enumerate(zip("LMS", ("tab:red", "tab:green", "tab:blue"))):
+for i, (name, colour) in enumerate(zip("LMS", ("tab:red", "tab:green", "tab:blue"), strict=True)):
     ax.plot(cones.wavelengths, cones.values[:, i], color=colour, label=name)
 ax.set_xlabel("wavelength (nm)")
 ax.set_ylabel("relative sensitivity")
@@ -33,7 +33,7 @@ palette = np.array(
     [[[0.85, 0.1, 0.1], [0.1, 0.6, 0.1], [0.1, 0.3, 0.85], [0.95, 0.8, 0.1], [0.6, 0.2, 0.7]]]
 )
 fig, axes = plt.subplots(4, 1, figsize=(5, 4))
-for ax, kind in zip(axes, ("normal", "protan", "deutan", "tritan")):
+for ax, kind in zip(axes, ("normal", "protan", "deutan", "tritan"), strict=True):
     img = palette if kind == "normal" else simulate_cvd(palette, kind, clip=True)
     ax.imshow(img, interpolation="nearest")
     ax.set_title(kind, fontsize=9)

@@ -22,6 +22,5 @@ fit = fit_color_correction(site_a, reference, saturation=None)
 corrected = np.clip(fit.apply(site_a), 0, 1)
 before = delta_e(convert(site_a, "srgb", "lab"), convert(reference, "srgb", "lab"))
 after = delta_e(convert(corrected, "srgb", "lab"), convert(reference, "srgb", "lab"))
-print(
-    f"mean ΔE00 between the sites: {float(np.mean(before)):.2f} before, {float(np.mean(after)):.2f} after the correction"
-)
+print(f"mean ΔE00 between the sites: {float(np.mean(before)):.2f} before the correction,")
+print(f"{float(np.mean(after)):.2f} after it")
