@@ -36,15 +36,15 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from benchmarks._common import header, markdown_table  # noqa: E402
-from imageform.analysis import (  # noqa: E402
+from benchmarks._common import header, markdown_table
+from imageform.analysis import (
     macenko_stains,
     optical_density,
     stain_angle,
     synthetic_he_tile,
     vahadane_stains,
 )
-from imageform.analysis.synthetic import (  # noqa: E402
+from imageform.analysis.synthetic import (
     MACENKO_REFERENCE_EOSIN,
     MACENKO_REFERENCE_HEMATOXYLIN,
     MACENKO_REFERENCE_MAX_CONCENTRATIONS,
@@ -182,7 +182,8 @@ def main() -> None:
         header("Stain vectors on H&E tiles: imageform vs torchstain"),
         f"torchstain {version('torchstain')}"
         f" (numpy backend); {args.tiles} synthetic {args.size}x{args.size} H&E tiles + "
-        "scikit-image's IHC slide. Kept = tissue pixels passing the transparent test / tissue pixels.",
+        "scikit-image's IHC slide. Kept = tissue pixels passing the transparent test / "
+        "tissue pixels.",
         "",
         markdown_table(cols, rows),
         "",

@@ -32,7 +32,6 @@ from imageform.analysis.macenko import (
     stain_angle,
     stain_concentrations,
 )
-from imageform.analysis.vahadane import vahadane_stains
 from imageform.analysis.reinhard import ReinhardStats, reinhard_normalize, reinhard_stats
 from imageform.analysis.segmentation import (
     EmptyMaskWarning,
@@ -50,6 +49,7 @@ from imageform.analysis.synthetic import (
     synthetic_shading_scene,
     synthetic_stain_image,
 )
+from imageform.analysis.vahadane import vahadane_stains
 
 __all__ = [
     "CORRECTION_METHODS",

@@ -222,9 +222,10 @@ def synthetic_he_tile(
 
     Glass (``background``, a fraction of the tile, :math:`C = 0`) around smooth tissue
     regions; in the tissue eosin varies smoothly (stroma, cytoplasm) over a faint
-    hematoxylin counterstain in about half of it, and round nuclei (``nuclei``, a fraction of the tissue)
-    carry hematoxylin with little eosin. The transmitted light is blurred (optics,
-    Gaussian σ = ``blur`` px), noisy (Gaussian, ``noise``) and quantised to 8 bits.
+    hematoxylin counterstain in about half of it, and round nuclei (``nuclei``, a
+    fraction of the tissue) carry hematoxylin with little eosin. The transmitted light
+    is blurred (optics, Gaussian σ = ``blur`` px), noisy (Gaussian, ``noise``) and
+    quantised to 8 bits.
 
     Returns
     -------
