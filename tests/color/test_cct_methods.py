@@ -87,7 +87,7 @@ def test_cross_check_colour_science_random() -> None:
     )
     np.testing.assert_allclose(
         cct_to_uv_ohno2013(t, d),
-        [temp.CCT_to_uv_Ohno2013([a, b]) for a, b in zip(t, d)],
+        [temp.CCT_to_uv_Ohno2013([a, b]) for a, b in zip(t, d, strict=True)],
         atol=1e-12,
     )
 
