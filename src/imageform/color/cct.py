@@ -8,8 +8,8 @@
 
 Duv is the signed distance from the Planckian locus in the CIE 1960 UCS ``(u, v)`` along the
 isotemperature line, positive above the locus (greenish), negative below (pinkish), as in
-ANSI C78.377. Ohno (2013) needs the Planckian locus from the CIE 1931 colour-matching
-functions, which arrive with :mod:`imageform.spectral`; it is not offered yet.
+ANSI C78.377. McCamy (1992), Hernández-Andrés (1999) and Ohno (2013) are in
+:mod:`imageform.color.cct_methods`, selectable here by ``method=``.
 """
 
 from __future__ import annotations
