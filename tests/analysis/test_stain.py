@@ -96,7 +96,8 @@ def test_macenko_on_skimage_ihc(ihc: np.ndarray) -> None:
     a_d = stain_angle(est.stain_matrix[1], RUIFROK_DAB)
     print(f"IHC: H {a_h:.1f}° from Ruifrok's H, DAB {a_d:.1f}° from Ruifrok's DAB")
     # Ruifrok's vectors were measured on other slides and stain batches; measured 4.8° and
-    # 6.9° here (9.0° and 4.9° with base="10", i0=1). The order heuristic must put hematoxylin first.
+    # 6.9° here (9.0° and 4.9° with base="10", i0=1). The order heuristic must put
+    # hematoxylin first.
     assert a_h < 12.0 and a_d < 8.0
     assert stain_angle(est.stain_matrix[0], RUIFROK_DAB) > a_d + 10
 
