@@ -106,6 +106,13 @@ def test_selectable_through_xy_to_cct(method: str) -> None:
 def test_ohno2013_bad_spacing() -> None:
     with pytest.raises(InvalidInputError, match="spacing > 1"):
         uv_to_cct_ohno2013([0.2, 0.3], spacing=1.0)
+    # the ends of the table are inside; beyond them, an error naming the range
+    t, _ = uv_to_cct_ohno2013(planckian_uv(np.array([1000.0, 100000.0])))
+    np.testing.assert_allclose(t, [1000.0, 100000.0], rtol=1e-6)
+    with pytest.raises(InvalidInputError, match="outside the range of the ohno2013 method"):
+        uv_to_cct_ohno2013(planckian_uv(800.0))
+    with pytest.raises(InvalidInputError, match="expected cct > 0"):
+        planckian_uv(-1.0)
 
 
 def test_daylight_accepts_the_ends_of_the_locus() -> None:

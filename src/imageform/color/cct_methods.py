@@ -15,7 +15,7 @@ from typing import Any
 
 import numpy as np
 
-from imageform._validate import as_points
+from imageform._validate import as_points, describe
 from imageform.errors import InvalidInputError
 
 __all__ = [
@@ -143,7 +143,7 @@ def planckian_uv(cct: object) -> np.ndarray:
     """
     t = np.asarray(cct, dtype=np.float64)
     if not np.all(np.isfinite(t) & (t > 0)):
-        raise InvalidInputError("expected cct > 0 kelvin (finite)")
+        raise InvalidInputError(f"expected cct > 0 kelvin (finite), got {describe(cct)}")
     wl, cmf = _cmf_1nm()
     lam = wl * 1e-9
     with np.errstate(over="ignore"):
@@ -244,6 +244,14 @@ def uv_to_cct_ohno2013(uv: object, *, spacing: float = 1.001) -> tuple[Any, Any]
         use_p = np.abs(d_t) >= 0.002
         cct[s : s + 256] = np.where(use_p, t_p, t_t)
         duv[s : s + 256] = np.where(use_p, d_p, d_t)
+    lo, hi = OHNO2013_RANGE
+    out = ~((cct >= lo * (1 - 1e-9)) & (cct <= hi * (1 + 1e-9)))
+    if np.any(out):
+        bad = flat[np.argmax(out)]
+        raise InvalidInputError(
+            f"uv ({bad[0]:.5f}, {bad[1]:.5f}) outside the range of the ohno2013 method "
+            f"({lo:g} K to {hi:g} K)"
+        )
     shape = a.shape[:-1]
     return cct.reshape(shape), duv.reshape(shape)
 
