@@ -61,32 +61,37 @@ def _rotate(v: np.ndarray, deg: float, rng: np.random.Generator) -> np.ndarray:
     return np.cos(t) * v + np.sin(t) * a
 
 
-def tiles(n: int, size: int) -> list[tuple[str, np.ndarray, np.ndarray | None, np.ndarray]]:
-    """(name, uint8 tile, true stains or None, tissue mask)."""
+def tiles(
+    n: int, size: int
+) -> list[tuple[str, np.ndarray, np.ndarray | None, np.ndarray, float | None]]:
+    """(name, uint8 tile, true stains or None, tissue mask, true I0 (of 255) or None)."""
     out = []
     for seed in range(n):
         rng = np.random.default_rng(1000 + seed)
         h = _rotate(np.asarray(MACENKO_REFERENCE_HEMATOXYLIN), rng.uniform(0, 6), rng)
         e = _rotate(np.asarray(MACENKO_REFERENCE_EOSIN), rng.uniform(0, 6), rng)
         k = rng.uniform(0.6, 1.3)
+        background, nuclei = rng.uniform(0.1, 0.6), rng.uniform(0.1, 0.35)
+        i0 = rng.uniform(228, 250)  # drawn in this order: the tiles of the results file
         t = synthetic_he_tile(
             (size, size),
             stains=(tuple(h), tuple(e)),
             max_concentration=tuple(k * np.asarray(MACENKO_REFERENCE_MAX_CONCENTRATIONS)),
-            background=rng.uniform(0.1, 0.6),
-            nuclei=rng.uniform(0.1, 0.35),
-            i0=rng.uniform(228, 250) / 255,
+            background=background,
+            nuclei=nuclei,
+            i0=i0 / 255,
             blur=rng.uniform(0.3, 1.2),
             noise=rng.uniform(0.5, 2.5) / 255,
             rng=rng,
         )
         img8 = np.round(t.image * 255).astype(np.uint8)
-        out.append((f"he-{seed}", img8, t.stain_matrix, t.concentrations.sum(axis=-1) > 0))
+        tissue = t.concentrations.sum(axis=-1) > 0
+        out.append((f"he-{seed}", img8, t.stain_matrix, tissue, i0))
     from skimage import data
 
     ihc = np.asarray(data.immunohistochemistry())
     od = optical_density(ihc, i0=240 / 255)
-    out.append(("ihc", ihc, None, np.linalg.norm(od, axis=-1) >= 0.15))
+    out.append(("ihc", ihc, None, np.linalg.norm(od, axis=-1) >= 0.15, None))
     return out
 
 
@@ -120,7 +125,7 @@ def main() -> None:
         k: [] for k in ("frac", "frac10", "truth_m", "truth_v", "ts_auto", "ts_240", "truth_ts")
     }
     times: dict[str, list[float]] = {"macenko": [], "vahadane": [], "torchstain": []}
-    for name, img8, truth, tissue in tiles(args.tiles, args.size):
+    for name, img8, truth, tissue, i0_true in tiles(args.tiles, args.size):
         n_tissue = int(tissue.sum())
         t0 = time.perf_counter()
         m = macenko_stains(img8)
@@ -154,6 +159,7 @@ def main() -> None:
             (
                 name,
                 f"{n_tissue / img8.shape[0] / img8.shape[1]:.0%}",
+                "-" if i0_true is None else f"{i0_true:.0f}",
                 " ".join(f"{255 * x:.0f}" for x in m.i0),
                 f"{frac:.1%}",
                 f"{frac10:.1%}",
@@ -168,7 +174,8 @@ def main() -> None:
     cols = (
         "tile",
         "tissue",
-        "I0 auto (of 255)",
+        "I0 true (of 255)",
+        "I0 auto",
         "kept, ln (default)",
         "kept, log10 I0=1 (old)",
         "kept, torchstain",

@@ -174,3 +174,12 @@ def test_chunked_auto_i0_matches_in_memory(ihc: np.ndarray) -> None:
     np.testing.assert_allclose(
         macenko_stains(lazy).stain_matrix, macenko_stains(x).stain_matrix, atol=1e-6
     )
+
+
+def test_vahadane_dask_matches_in_memory() -> None:
+    da = pytest.importorskip("dask.array")
+    x, _, _ = _tile(0)
+    x = x[:96, :96]
+    a, b = vahadane_stains(x), vahadane_stains(da.from_array(x, chunks=(32, 32, 3)))
+    np.testing.assert_allclose(b.stain_matrix, a.stain_matrix, atol=1e-12)
+    assert (b.i0, b.n_pixels) == (a.i0, a.n_pixels)
