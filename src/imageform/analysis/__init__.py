@@ -31,6 +31,7 @@ from imageform.analysis.macenko import (
     optical_density,
     stain_angle,
     stain_concentrations,
+    vahadane_stains,
 )
 from imageform.analysis.reinhard import ReinhardStats, reinhard_normalize, reinhard_stats
 from imageform.analysis.segmentation import (
@@ -49,7 +50,6 @@ from imageform.analysis.synthetic import (
     synthetic_shading_scene,
     synthetic_stain_image,
 )
-from imageform.analysis.vahadane import vahadane_stains
 
 __all__ = [
     "CORRECTION_METHODS",
