@@ -195,8 +195,9 @@ def uv_to_cct_ohno2013(
     builds it) the interpolation error is at most 2.5e-6 relative (median 7e-7, measured
     on 2000-20000 K, Duv up to 0.02) and no correction is needed. Ohno's table has 1 %
     steps; his correction :math:`T \\leftarrow 0.99991\\,T` (``correction=True``,
-    applied to both solutions) compensates its bias: with ``spacing=1.01`` the measured bias is +7e-5 to +8e-5
-    (median) and at most 1.2e-4, at most 5.8e-5 after the correction.
+    applied to both solutions) compensates its bias: with ``spacing=1.01`` the measured
+    bias is +7e-5 to +8e-5 (median) and at most 1.2e-4, at most 5.8e-5 after the
+    correction.
 
     Parameters
     ----------
