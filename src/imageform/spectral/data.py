@@ -47,6 +47,8 @@ TABLES = MappingProxyType(
         "v_photopic": "vlambda_photopic.csv",
         "v_scotopic": "vlambda_scotopic.csv",
         "A": "illuminant_A.csv",
+        "B": "illuminant_B.csv",
+        "C": "illuminant_C.csv",
         "D50": "illuminant_D50.csv",
         "D65": "illuminant_D65.csv",
         "F2": "illuminant_F2.csv",
@@ -60,8 +62,9 @@ TABLES = MappingProxyType(
         "cvd_machado2009": "cvd_machado2009.csv",
     }
 )
-#: Tabulated CIE illuminants (CIE 015:2018 Tables 1 and 10.1).
-ILLUMINANT_TABLES = ("A", "D50", "D65", "F2", "F11")
+#: Tabulated CIE illuminants (CIE 015:2018 Tables 1 and 10.1; B: CIE 15.2:1986 Table 1.1;
+#: C: CIE 15:2004 Table T.1).
+ILLUMINANT_TABLES = ("A", "B", "C", "D50", "D65", "F2", "F11")
 #: CIE 015:2018 Table 11 white-LED illuminants.
 LED_SPECTRA = (
     "LED-B1",
@@ -188,7 +191,12 @@ def cone_fundamentals() -> Spectrum:
 
 
 def illuminant_table(name: str) -> Spectrum:
-    """A tabulated CIE illuminant, 5 nm: A, D50, D65 (100 at 560 nm); F2, F11 (relative)."""
+    """A tabulated CIE illuminant, 5 nm: A, D50, D65 (100 at 560 nm); B, C (the old CIE
+    daylight simulators, as tabulated: 102.8 and 105.3 at 560 nm); F2, F11 (relative).
+
+    >>> illuminant_table("C").name
+    'CIE C'
+    """
     key = name.strip().upper().replace("FL", "F")
     if key not in ILLUMINANT_TABLES:
         raise InvalidInputError(

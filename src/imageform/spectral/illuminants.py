@@ -177,7 +177,7 @@ def _d_series(xd: float, yd: float, round_m: bool, name: str) -> Spectrum:
 
 
 def illuminant(name: str) -> Spectrum:
-    """An illuminant by name: a CIE table (A, D50, D65, F2, F11), ``"E"`` (equal energy),
+    """An illuminant by name: a CIE table (A, B, C, D50, D65, F2, F11), ``"E"`` (equal energy),
     a CIE LED (LED-B1 ... LED-V2), ``"D<cct>"`` (daylight series, e.g. ``"D75"`` is 7500 K on
     the 1931 scale, i.e. ``daylight_spectrum(7500 * 1.4388 / 1.4380)``), or ``"bb<T>"``
     (black body at T kelvin, e.g. ``"bb3200"``).
