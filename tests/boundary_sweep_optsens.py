@@ -38,10 +38,10 @@ from typing import Any
 
 os.environ.setdefault("IMAGEFORM_MAX_MEMORY", "512M")
 
-import numpy as np  # noqa: E402
+import numpy as np
 
-from imageform import optics, sensor  # noqa: E402
-from imageform.errors import ImageformError  # noqa: E402
+from imageform import optics, sensor
+from imageform.errors import ImageformError
 
 GOOD = ("clean", "ok")
 BAD = ("raw", "message", "unnamed", "nan", "warning", "refused", "timeout")
@@ -94,107 +94,271 @@ def cases() -> list[Case]:
         rng=1,
         shape=(8, 8),
     )
-    sm_fields = {
-        f.name: getattr(mono, f.name) for f in dataclasses.fields(sensor.SensorModel)
-    }
+    sm_fields = {f.name: getattr(mono, f.name) for f in dataclasses.fields(sensor.SensorModel)}
     out = [
         # ---- optics ----------------------------------------------------------------------
-        Case("aperture_diameter", optics.aperture_diameter, {"focal_length": 0.05, "f_number": 2.0}),
+        Case(
+            "aperture_diameter", optics.aperture_diameter, {"focal_length": 0.05, "f_number": 2.0}
+        ),
         Case("f_number", optics.f_number, {"focal_length": 0.05, "aperture_diameter": 0.02}),
-        Case("magnification", optics.magnification, {"focal_length": 0.05, "d_o": 2.0,
-                                                     "allow_virtual": False}),
-        Case("thin_lens", optics.thin_lens, {"focal_length": 0.05, "d_o": 2.0,
-                                             "allow_virtual": False}),
+        Case(
+            "magnification",
+            optics.magnification,
+            {"focal_length": 0.05, "d_o": 2.0, "allow_virtual": False},
+        ),
+        Case(
+            "thin_lens",
+            optics.thin_lens,
+            {"focal_length": 0.05, "d_o": 2.0, "allow_virtual": False},
+        ),
         Case("thin_lens(d_i)", optics.thin_lens, {"focal_length": 0.05, "d_i": 0.06}),
-        Case("hyperfocal_distance", optics.hyperfocal_distance,
-             {"focal_length": 0.05, "f_number": 8.0, "coc": 3e-5}),
-        Case("depth_of_field", optics.depth_of_field,
-             {"focal_length": 0.05, "f_number": 2.8, "focus": 2.0, "coc": 3e-5}),
-        Case("circle_of_confusion", optics.circle_of_confusion,
-             {"depth": np.array([1.0, 4.0]), "focal_length": 0.05, "f_number": 2.0,
-              "focus": 2.0}),
+        Case(
+            "hyperfocal_distance",
+            optics.hyperfocal_distance,
+            {"focal_length": 0.05, "f_number": 8.0, "coc": 3e-5},
+        ),
+        Case(
+            "depth_of_field",
+            optics.depth_of_field,
+            {"focal_length": 0.05, "f_number": 2.8, "focus": 2.0, "coc": 3e-5},
+        ),
+        Case(
+            "circle_of_confusion",
+            optics.circle_of_confusion,
+            {"depth": np.array([1.0, 4.0]), "focal_length": 0.05, "f_number": 2.0, "focus": 2.0},
+        ),
         Case("disc_kernel", optics.disc_kernel, {"radius": 3.0}),
-        Case("blur_by_radius", optics.blur_by_radius,
-             {"image": _img(), "radius_px": 1.5, "step": 0.5, "max_layers": 4}),
-        Case("defocus_radius_px", optics.defocus_radius_px,
-             {"depth": 4.0, "focal_length": 0.05, "f_number": 2.0, "focus": 2.0,
-              "pixel_pitch": 5e-4}),
-        Case("defocus_blur", optics.defocus_blur,
-             {"image": _img(), "depth": 4.0, "focal_length": 0.05, "f_number": 2.0,
-              "focus": 2.0, "pixel_pitch": 5e-4, "step": 0.5}),
-        Case("spherical_blur_radius", optics.spherical_blur_radius,
-             {"focal_length": 0.05, "f_number": 2.0, "sa_coefficient": 0.5}),
-        Case("spherical_aberration", optics.spherical_aberration,
-             {"image": _img(), "focal_length": 0.05, "f_number": 2.0, "pixel_pitch": 1e-4,
-              "sa_coefficient": 0.5, "field_coefficient": 0.5, "center": (3.0, 4.0)}),
-        Case("lateral_chromatic_aberration", optics.lateral_chromatic_aberration,
-             {"image": _img(), "magnification": (1.01, 1.0, 0.99), "center": (3.0, 4.0),
-              "fill": 0.0}),
-        Case("chromatic_focal_lengths", optics.chromatic_focal_lengths,
-             {"focal_length": 0.05, "abbe_number": 64.17}),
-        Case("axial_chromatic_blur_diameters", optics.axial_chromatic_blur_diameters,
-             {"depth": np.array([1.0, 3.0]), "focal_lengths": fl, "f_number": 2.0,
-              "focus": 2.0, "reference": 1}),
-        Case("axial_chromatic_aberration", optics.axial_chromatic_aberration,
-             {"image": _img(), "depth": 3.0, "focal_lengths": fl, "f_number": 2.0,
-              "focus": 2.0, "pixel_pitch": 1e-4, "reference": 1}),
-        Case("field_angle", optics.field_angle,
-             {"shape": (4, 6), "focal_length": 5.0, "center": (2.0, 1.5)}),
-        Case("cos4_falloff", optics.cos4_falloff,
-             {"shape": (4, 6), "focal_length": 5.0, "center": (2.0, 1.5)}),
-        Case("pupil_overlap_fraction", optics.pupil_overlap_fraction,
-             {"pupil_radius": 1.0, "stop_radius": 1.0, "offset": np.array([0.0, 0.5, 1.0, 3.0])}),
-        Case("mechanical_vignetting", optics.mechanical_vignetting,
-             {"shape": (4, 6), "focal_length": 5.0, "pupil_radius": 1.0, "barrel_radius": 1.2,
-              "barrel_distance": 2.0, "center": (2.0, 1.5)}),
-        Case("apply_vignetting", optics.apply_vignetting,
-             {"image": _img(), "falloff": np.full((8, 8), 0.5)}),
+        Case(
+            "blur_by_radius",
+            optics.blur_by_radius,
+            {"image": _img(), "radius_px": 1.5, "step": 0.5, "max_layers": 4},
+        ),
+        Case(
+            "defocus_radius_px",
+            optics.defocus_radius_px,
+            {
+                "depth": 4.0,
+                "focal_length": 0.05,
+                "f_number": 2.0,
+                "focus": 2.0,
+                "pixel_pitch": 5e-4,
+            },
+        ),
+        Case(
+            "defocus_blur",
+            optics.defocus_blur,
+            {
+                "image": _img(),
+                "depth": 4.0,
+                "focal_length": 0.05,
+                "f_number": 2.0,
+                "focus": 2.0,
+                "pixel_pitch": 5e-4,
+                "step": 0.5,
+            },
+        ),
+        Case(
+            "spherical_blur_radius",
+            optics.spherical_blur_radius,
+            {"focal_length": 0.05, "f_number": 2.0, "sa_coefficient": 0.5},
+        ),
+        Case(
+            "spherical_aberration",
+            optics.spherical_aberration,
+            {
+                "image": _img(),
+                "focal_length": 0.05,
+                "f_number": 2.0,
+                "pixel_pitch": 1e-4,
+                "sa_coefficient": 0.5,
+                "field_coefficient": 0.5,
+                "center": (3.0, 4.0),
+            },
+        ),
+        Case(
+            "lateral_chromatic_aberration",
+            optics.lateral_chromatic_aberration,
+            {
+                "image": _img(),
+                "magnification": (1.01, 1.0, 0.99),
+                "center": (3.0, 4.0),
+                "fill": 0.0,
+            },
+        ),
+        Case(
+            "chromatic_focal_lengths",
+            optics.chromatic_focal_lengths,
+            {"focal_length": 0.05, "abbe_number": 64.17},
+        ),
+        Case(
+            "axial_chromatic_blur_diameters",
+            optics.axial_chromatic_blur_diameters,
+            {
+                "depth": np.array([1.0, 3.0]),
+                "focal_lengths": fl,
+                "f_number": 2.0,
+                "focus": 2.0,
+                "reference": 1,
+            },
+        ),
+        Case(
+            "axial_chromatic_aberration",
+            optics.axial_chromatic_aberration,
+            {
+                "image": _img(),
+                "depth": 3.0,
+                "focal_lengths": fl,
+                "f_number": 2.0,
+                "focus": 2.0,
+                "pixel_pitch": 1e-4,
+                "reference": 1,
+            },
+        ),
+        Case(
+            "field_angle",
+            optics.field_angle,
+            {"shape": (4, 6), "focal_length": 5.0, "center": (2.0, 1.5)},
+        ),
+        Case(
+            "cos4_falloff",
+            optics.cos4_falloff,
+            {"shape": (4, 6), "focal_length": 5.0, "center": (2.0, 1.5)},
+        ),
+        Case(
+            "pupil_overlap_fraction",
+            optics.pupil_overlap_fraction,
+            {"pupil_radius": 1.0, "stop_radius": 1.0, "offset": np.array([0.0, 0.5, 1.0, 3.0])},
+        ),
+        Case(
+            "mechanical_vignetting",
+            optics.mechanical_vignetting,
+            {
+                "shape": (4, 6),
+                "focal_length": 5.0,
+                "pupil_radius": 1.0,
+                "barrel_radius": 1.2,
+                "barrel_distance": 2.0,
+                "center": (2.0, 1.5),
+            },
+        ),
+        Case(
+            "apply_vignetting",
+            optics.apply_vignetting,
+            {"image": _img(), "falloff": np.full((8, 8), 0.5)},
+        ),
         # ---- sensor ----------------------------------------------------------------------
         Case("cfa_pattern", sensor.cfa_pattern, {"pattern": "RGGB"}),
         Case("cfa_masks", sensor.cfa_masks, {"shape": (4, 6), "pattern": "RGGB"}),
         Case("mosaic", sensor.mosaic, {"rgb": _img(), "pattern": "RGGB"}),
-        Case("demosaic", sensor.demosaic,
-             {"raw": _img(c=None), "pattern": "RGGB", "method": "bilinear", "clip": False,
-              "allow_odd": False}),
+        Case(
+            "demosaic",
+            sensor.demosaic,
+            {
+                "raw": _img(c=None),
+                "pattern": "RGGB",
+                "method": "bilinear",
+                "clip": False,
+                "allow_odd": False,
+            },
+        ),
         Case("demosaic(menon)", sensor.demosaic, {"raw": _img(c=None), "method": "menon"}),
-        Case("photons_per_pixel", sensor.photons_per_pixel,
-             {"irradiance": np.array([1e-3, 2e-3]), "wavelength_nm": 550.0,
-              "pixel_area": 25e-12, "exposure_time": 1e-3}),
-        Case("emva_snr", sensor.emva_snr,
-             {"photons": 1000.0, "quantum_efficiency": 0.5, "dark_noise_e": 5.0,
-              "system_gain": 1.0}),
-        Case("temporal_noise_dn", sensor.temporal_noise_dn,
-             {"mean_electrons": 100.0, "system_gain": 0.5, "dark_noise_e": 2.0}),
-        Case("fixed_pattern", sensor.fixed_pattern,
-             {"shape": (4, 5, 1), "prnu": 0.01, "dsnu": 1.0, "column_fpn": 0.5, "rng": 3}),
+        Case(
+            "photons_per_pixel",
+            sensor.photons_per_pixel,
+            {
+                "irradiance": np.array([1e-3, 2e-3]),
+                "wavelength_nm": 550.0,
+                "pixel_area": 25e-12,
+                "exposure_time": 1e-3,
+            },
+        ),
+        Case(
+            "emva_snr",
+            sensor.emva_snr,
+            {"photons": 1000.0, "quantum_efficiency": 0.5, "dark_noise_e": 5.0, "system_gain": 1.0},
+        ),
+        Case(
+            "temporal_noise_dn",
+            sensor.temporal_noise_dn,
+            {"mean_electrons": 100.0, "system_gain": 0.5, "dark_noise_e": 2.0},
+        ),
+        Case(
+            "fixed_pattern",
+            sensor.fixed_pattern,
+            {"shape": (4, 5, 1), "prnu": 0.01, "dsnu": 1.0, "column_fpn": 0.5, "rng": 3},
+        ),
         Case("ccd_preset", sensor.ccd_preset, {"color": True, "read_noise": 3.0}),
         Case("cmos_preset", sensor.cmos_preset, {"color": False, "bit_depth": 10}),
         Case("comparison_table", sensor.comparison_table, {"rows": 1000}),
-        Case("rolling_shutter_skew", sensor.rolling_shutter_skew,
-             {"velocity": 1000.0, "line_time": 2e-5}),
-        Case("row_start_times", sensor.row_start_times,
-             {"rows": 3, "mode": "rolling", "line_time": 1e-3}),
-        Case("rolling_shutter_points", sensor.rolling_shutter_points,
-             {"points_uv": np.array([[10.0, 100.0]]), "velocity_uv": np.array([1000.0, 0.0]),
-              "line_time": 1e-5, "t0": 0.0}),
-        Case("shutter_capture", sensor.shutter_capture,
-             {"render": _render, "exposure_time": 1e-3, "mode": "rolling", "line_time": 1e-4,
-              "samples": 2}),
-        Case("simulate_photon_transfer", sensor.simulate_photon_transfer,
-             {"sensor": s, "irradiance": 0.05, "wavelength_nm": 550.0,
-              "exposure_times": np.array([1e-3, 2e-3]), "rng": 0, "shape": (8, 8),
-              "channel": 0}),
-        Case("fit_photon_transfer", sensor.fit_photon_transfer,
-             {"data": ptc, "fit_fraction": 0.7}),
+        Case(
+            "rolling_shutter_skew",
+            sensor.rolling_shutter_skew,
+            {"velocity": 1000.0, "line_time": 2e-5},
+        ),
+        Case(
+            "row_start_times",
+            sensor.row_start_times,
+            {"rows": 3, "mode": "rolling", "line_time": 1e-3},
+        ),
+        Case(
+            "rolling_shutter_points",
+            sensor.rolling_shutter_points,
+            {
+                "points_uv": np.array([[10.0, 100.0]]),
+                "velocity_uv": np.array([1000.0, 0.0]),
+                "line_time": 1e-5,
+                "t0": 0.0,
+            },
+        ),
+        Case(
+            "shutter_capture",
+            sensor.shutter_capture,
+            {
+                "render": _render,
+                "exposure_time": 1e-3,
+                "mode": "rolling",
+                "line_time": 1e-4,
+                "samples": 2,
+            },
+        ),
+        Case(
+            "simulate_photon_transfer",
+            sensor.simulate_photon_transfer,
+            {
+                "sensor": s,
+                "irradiance": 0.05,
+                "wavelength_nm": 550.0,
+                "exposure_times": np.array([1e-3, 2e-3]),
+                "rng": 0,
+                "shape": (8, 8),
+                "channel": 0,
+            },
+        ),
+        Case("fit_photon_transfer", sensor.fit_photon_transfer, {"data": ptc, "fit_fraction": 0.7}),
         Case("SensorModel", sensor.SensorModel, sm_fields),
         Case("SensorModel.quantum_efficiency", s.quantum_efficiency, {"wavelength_nm": 550.0}),
         Case("SensorModel.fixed_pattern", s.fixed_pattern, {"height": 4, "width": 5}),
-        Case("SensorModel.mean_electrons", s.mean_electrons,
-             {"signal": np.full((4, 5), 0.05), "exposure_time": 1e-3, "quantity": "irradiance",
-              "wavelength_nm": 550.0}),
-        Case("SensorModel.capture", s.capture,
-             {"signal": np.full((4, 5), 0.05), "exposure_time": 1e-3, "rng": 0,
-              "quantity": "irradiance", "wavelength_nm": 550.0}),
+        Case(
+            "SensorModel.mean_electrons",
+            s.mean_electrons,
+            {
+                "signal": np.full((4, 5), 0.05),
+                "exposure_time": 1e-3,
+                "quantity": "irradiance",
+                "wavelength_nm": 550.0,
+            },
+        ),
+        Case(
+            "SensorModel.capture",
+            s.capture,
+            {
+                "signal": np.full((4, 5), 0.05),
+                "exposure_time": 1e-3,
+                "rng": 0,
+                "quantity": "irradiance",
+                "wavelength_nm": 550.0,
+            },
+        ),
         Case("SensorModel.normalize", s.normalize, {"dn": np.array([64, 4095])}),
         Case("SensorModel.frame_readout_time", s.frame_readout_time, {"rows": 1080}),
         Case("SensorModel.dynamic_range_db", s.dynamic_range_db, {}),
@@ -302,8 +466,9 @@ class Outcome:
     detail: str
 
 
-def classify(case: Case, param: str, label: str, value: Any, must_succeed: bool,
-             timeout: float) -> Outcome:
+def classify(
+    case: Case, param: str, label: str, value: Any, must_succeed: bool, timeout: float
+) -> Outcome:
     kwargs = dict(case.kwargs)
     kwargs[param] = value
     old = signal.signal(signal.SIGALRM, _alarm)
@@ -316,7 +481,7 @@ def classify(case: Case, param: str, label: str, value: Any, must_succeed: bool,
             result = case.fn(**kwargs)
         except _Timeout:
             exc = _Timeout()
-        except Exception as e:  # noqa: BLE001 - classifying is the point
+        except Exception as e:
             exc = e
         finally:
             signal.setitimer(signal.ITIMER_REAL, 0)
@@ -360,7 +525,7 @@ def sweep(timeout: float = 5.0, only: str | None = None) -> list[Outcome]:
                 warnings.simplefilter("error")
                 warnings.simplefilter("ignore", DeprecationWarning)
                 r = case.fn(**case.kwargs)
-        except Exception as e:  # noqa: BLE001
+        except Exception as e:
             raise AssertionError(f"baseline of {case.name} fails: {e!r}") from e
         if case.name not in _INF_OK and not _finite(r):
             raise AssertionError(f"baseline of {case.name} is not finite")

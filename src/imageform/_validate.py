@@ -541,9 +541,7 @@ def as_real_array(
         try:
             arr = np.asarray(_to_numpy_host(x))
         except (TypeError, ValueError, RuntimeError) as exc:
-            raise InvalidInputError(
-                f"expected {name} as real numbers, got {describe(x)}"
-            ) from exc
+            raise InvalidInputError(f"expected {name} as real numbers, got {describe(x)}") from exc
     if arr.dtype.kind not in "iuf":
         what = "a boolean" if arr.dtype.kind == "b" else f"dtype {arr.dtype}"
         raise InvalidInputError(f"expected {name} as real numbers, got {what} ({describe(x)})")
@@ -589,7 +587,9 @@ def _to_numpy_host(x: object) -> Any:
     return x
 
 
-def as_reals(value: object, name: str, n: int | None = None, *, positive: bool = False) -> tuple[float, ...]:
+def as_reals(
+    value: object, name: str, n: int | None = None, *, positive: bool = False
+) -> tuple[float, ...]:
     """A sequence of finite real numbers (``n`` of them if given) as a tuple of floats.
 
     >>> as_reals((3, np.float32(1.5)), "center", 2)
@@ -609,9 +609,7 @@ def as_reals(value: object, name: str, n: int | None = None, *, positive: bool =
         )
     if not items:
         raise InvalidInputError(f"expected {name} as a non-empty sequence of numbers, got none")
-    return tuple(
-        as_real(v, f"{name}[{i}]", positive=positive) for i, v in enumerate(items)
-    )
+    return tuple(as_real(v, f"{name}[{i}]", positive=positive) for i, v in enumerate(items))
 
 
 def as_shape(
@@ -624,10 +622,14 @@ def as_shape(
     (4, 6)
     """
     if getattr(value, "ndim", None) == 0 or isinstance(value, np.ndarray):
-        raise InvalidInputError(f"expected {name} as a tuple of {n} integers, got {describe(value)}")
+        raise InvalidInputError(
+            f"expected {name} as a tuple of {n} integers, got {describe(value)}"
+        )
     shape = as_size(value, name, n)
     check_memory(
-        float(math.prod(shape)) * itemsize * copies, name, f"an array of shape {format_shape(shape)}"
+        float(math.prod(shape)) * itemsize * copies,
+        name,
+        f"an array of shape {format_shape(shape)}",
     )
     return shape
 

@@ -282,7 +282,12 @@ def axial_chromatic_blur_diameters(
     [198.25, 0.0, 201.36]
     """
     fs = list(as_reals(focal_lengths, "focal_lengths (m)", positive=True))
-    ref = as_int(reference, "reference", minimum=0, maximum=len(fs) - 1)
+    ref = as_int(reference, "reference")
+    if not 0 <= ref < len(fs):
+        raise InvalidInputError(
+            f"expected reference in [0, {len(fs) - 1}] (an index into the {len(fs)} "
+            f"focal_lengths), got {ref}"
+        )
     n = check_positive(f_number, "f_number")
     s = check_positive(focus, "focus (m)")
     fr = fs[ref]
@@ -307,9 +312,7 @@ def axial_chromatic_blur_diameters(
             out.append(a * np.abs(dc - ds) / dc)
         return np.stack(out, axis=-1)
 
-    return finite_result(
-        "the blur diameters", blur, focal_lengths=tuple(fs), f_number=n, focus=s
-    )
+    return finite_result("the blur diameters", blur, focal_lengths=tuple(fs), f_number=n, focus=s)
 
 
 def axial_chromatic_aberration(

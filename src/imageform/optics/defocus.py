@@ -42,8 +42,8 @@ _MAX_LAYERS = 4096
 def _kernel_bytes(radius: float) -> float:
     """Bytes :func:`disc_kernel` allocates for ``radius``: the sub-pixel grid's booleans and
     two float64 temporaries of ``(16 m)²`` with ``m = 2⌈R⌉ + 1``."""
-    m = 2.0 * math.ceil(radius) + 1.0
-    return (m * _SUPERSAMPLE) ** 2 * 17.0
+    x = (2.0 * math.ceil(radius) + 1.0) * _SUPERSAMPLE
+    return x * x * 17.0  # inf, not OverflowError, beyond the float range
 
 
 def _check_blur_radius(radius: float, shape: tuple[int, ...], names: str) -> None:
@@ -53,8 +53,10 @@ def _check_blur_radius(radius: float, shape: tuple[int, ...], names: str) -> Non
     p = math.ceil(radius) if math.isfinite(radius) else math.inf
     h, w = shape[0], shape[1]
     c = shape[2] if len(shape) > 2 else 1
-    need = max(_kernel_bytes(radius) if p < math.inf else math.inf,
-               (h + 2.0 * p) * (w + 2.0 * p) * c * 16.0 * 3.0)
+    need = max(
+        _kernel_bytes(radius) if p < math.inf else math.inf,
+        (h + 2.0 * p) * (w + 2.0 * p) * c * 16.0 * 3.0,
+    )
     limit = memory_limit()
     if not need <= limit:
         raise InvalidInputError(
@@ -98,8 +100,7 @@ def _prep(image: Any) -> tuple[np.ndarray, bool]:
     arr = np.asarray(to_numpy(as_image(image, "image", channels=None)))
     if arr.ndim not in (2, 3) or 0 in arr.shape:
         raise InvalidInputError(
-            f"expected image of shape (H, W) or (H, W, C), non-empty, got "
-            f"{format_shape(arr.shape)}"
+            f"expected image of shape (H, W) or (H, W, C), non-empty, got {format_shape(arr.shape)}"
         )
     gray = arr.ndim == 2
     return (arr[..., None] if gray else arr), gray

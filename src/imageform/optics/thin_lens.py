@@ -54,7 +54,8 @@ def _virtual_error(f: float, d_o: float) -> InvalidInputError:
     with np.errstate(all="ignore"):
         d_i = float(np.float64(f) * d_o / (np.float64(d_o) - f))
     return InvalidInputError(
-        f"object distance d_o = {d_o:g} m is inside the focal length f = {f:g} m: only a "
+        f"object distance d_o = {d_o:g} m is inside the focal length (focal_length = {f:g} m): "
+        "only a "
         f"virtual image forms (d_i = {d_i:g} m); move the object beyond f or pass "
         "allow_virtual=True"
     )
@@ -126,8 +127,8 @@ def thin_lens(
         fv, do = vals["focal_length"], vals["d_o"]
         if do == fv:
             raise InvalidInputError(
-                f"object at the focal plane (d_o = f = {fv:g} m): the rays leave parallel and "
-                "the image forms at infinity"
+                f"object at the focal plane (d_o = focal_length = {fv:g} m): the rays leave "
+                "parallel and the image forms at infinity"
             )
         if do < fv and not allow_virtual:
             raise _virtual_error(fv, do)
@@ -141,8 +142,8 @@ def thin_lens(
             )
         if 0 < di <= fv:
             raise InvalidInputError(
-                f"image distance d_i = {di:g} m is not beyond f = {fv:g} m: no real object "
-                "images there (a real image always lies beyond the focal length)"
+                f"image distance d_i = {di:g} m is not beyond f (focal_length = {fv:g} m): no "
+                "real object images there (a real image always lies beyond the focal length)"
             )
         do = finite_result("d_o = f d_i / (d_i - f)", lambda: fv * di / (di - fv), **vals)
     else:
@@ -157,9 +158,7 @@ def thin_lens(
                 f"(d_o = {do:g} m) for a converging lens"
             )
         fv = finite_result("f = d_o d_i / (d_o + d_i)", lambda: do * di / (do + di), **vals)
-    fv, do, di, m = finite_result(
-        "the thin-lens solution", lambda: (fv, do, di, -di / do), **vals
-    )
+    fv, do, di, m = finite_result("the thin-lens solution", lambda: (fv, do, di, -di / do), **vals)
     return ThinLensSolution(focal_length=fv, d_o=do, d_i=di, magnification=m, virtual=di < 0)
 
 

@@ -31,7 +31,7 @@ from imageform._backend import (
     use_numba,
 )
 from imageform._typing import Array, ArrayLike
-from imageform._validate import as_image, check_option, format_shape
+from imageform._validate import as_bool, as_image, check_option, format_shape
 from imageform.errors import InvalidInputError
 from imageform.sensor._demosaic_xp import XP_METHODS, demosaic_dask, demosaic_xp
 from imageform.sensor.cfa import _red_offset, cfa_pattern
@@ -81,10 +81,8 @@ def _as_raw(raw: ArrayLike, xp: Any) -> Any:
         return arr[..., 0]
     if arr.ndim >= 3:
         raise InvalidInputError(
-            f"expected a single-channel raw mosaic of shape (H, W) or (..., H, W, 1), got "
-            f"{format_shape(shape)} with {shape[-1]} channels; a colour image is not a "
-            "mosaic (make one with mosaic(rgb, pattern)), and a batch of (H, W) mosaics "
-            "needs a trailing axis: raw[..., None]"
+            f"expected raw as a single-channel raw mosaic (H, W) or (..., H, W, 1), got "
+            f"{format_shape(shape)} with {shape[-1]} channels; a batch needs raw[..., None]"
         )
     raise InvalidInputError(
         f"expected a raw mosaic of shape (H, W) or (..., H, W, 1), got {format_shape(shape)}"
@@ -180,6 +178,8 @@ def demosaic(
     """
     pattern = cfa_pattern(pattern)
     method = check_option(method, DEMOSAIC_METHODS, "demosaicing method")
+    clip = as_bool(clip, "clip")
+    allow_odd = as_bool(allow_odd, "allow_odd")
     xp = namespace(raw)
     if is_dask_namespace(xp):
         return _demosaic_dask(raw, pattern, method, clip, allow_odd)
