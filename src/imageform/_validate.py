@@ -645,10 +645,10 @@ def finite_result(what: str, compute: Any, /, **inputs: object) -> Any:
     a non-finite result is refused in one line naming ``inputs`` (a formula evaluated
     beyond the float range: refuse it rather than return inf or NaN).
 
-    >>> finite_result("the blur radius", lambda: 1e300 * 1e300, f_number=1e300)
+    >>> finite_result("the blur", lambda: 1e300 * 1e300, f_number=1e300)
     Traceback (most recent call last):
     ...
-    imageform.errors.InvalidInputError: the blur radius is out of the float range for f_number=1e+300
+    imageform.errors.InvalidInputError: the blur is out of the float range for f_number=1e+300
     """
     try:
         with np.errstate(all="ignore"):
@@ -665,7 +665,9 @@ def finite_result(what: str, compute: Any, /, **inputs: object) -> Any:
 def _all_finite(out: Any) -> bool:
     if isinstance(out, tuple | list):
         return all(_all_finite(v) for v in out)
-    if isinstance(out, int | float | np.generic | np.ndarray):
+    if isinstance(out, int):  # a Python int is exact (np.isfinite refuses a big one)
+        return True
+    if isinstance(out, float | np.generic | np.ndarray):
         return bool(np.all(np.isfinite(out)))
     xp = namespace(out)
     if is_dask_namespace(xp):

@@ -31,7 +31,7 @@ from imageform._validate import (
 )
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
 from imageform.sensor._guard import check_electrons, check_rng
-from imageform.sensor.model import SensorModel, photons_per_pixel
+from imageform.sensor.model import PLANCK, SPEED_OF_LIGHT, SensorModel, photons_per_pixel
 from imageform.sensor.noise import QUANTIZATION_NOISE_DN
 
 __all__ = [
@@ -137,15 +137,13 @@ def simulate_photon_transfer(
         raise InvalidInputError(f"expected channel in [0, {sensor.n_channels - 1}], got {ch}")
     h, w = as_shape(shape, "shape (H, W)", 2, copies=12 * sensor.n_channels)
     sensor.quantum_efficiency(wavelength_nm)  # checks wavelength_nm before anything runs
+    t_max = float(times.max())
+    lam = float(wavelength_nm) * 1e-9
     mp_max = finite_result(
         "the photon count",
-        lambda: float(
-            photons_per_pixel(
-                e, wavelength_nm, pixel_area=sensor.pixel_area, exposure_time=float(times.max())
-            )
-        ),
+        lambda: e * sensor.pixel_area * t_max * lam / (PLANCK * SPEED_OF_LIGHT),
         irradiance=e,
-        exposure_times=float(times.max()),
+        exposure_times=t_max,
     )
     check_electrons(mp_max, "irradiance and exposure_times")
     gen = as_rng(check_rng(rng))

@@ -178,8 +178,8 @@ class SensorModel:
         object.__setattr__(self, "fpn_seed", as_int(self.fpn_seed, "fpn_seed", minimum=0))
         if self.black_level >= self.max_dn:
             raise InvalidInputError(
-                f"expected black_level below the ADC's largest code {self.max_dn}, "
-                f"got {self.black_level:g}"
+                f"expected black_level below the ADC's largest code {self.max_dn} "
+                f"(bit_depth {bits}), got {self.black_level:g}"
             )
         wl = as_real_array(self.qe_wavelengths, "qe_wavelengths (nm)", ndim=1, positive=True)
         if wl.size < 1 or np.any(np.diff(wl) <= 0):
@@ -187,7 +187,8 @@ class SensorModel:
         qe = as_real_array(self.qe_curves, "qe_curves", check=False)
         if qe.ndim != 2 or qe.shape[1] != wl.size or qe.shape[0] < 1:
             raise InvalidInputError(
-                f"expected qe_curves of shape (C, {wl.size}), got {format_shape(qe.shape)}"
+                f"expected qe_curves of shape (C, {wl.size}) (one value per qe_wavelengths), "
+                f"got {format_shape(qe.shape)}"
             )
         check_real_values(qe, "qe_curves")
         if not np.all((qe >= 0) & (qe <= 1)):
@@ -399,6 +400,10 @@ class SensorModel:
             )
         gen = as_rng(check_rng(rng))
         h, w = mu.shape[-3], mu.shape[-2]
+        if h < 1 or w < 1:
+            raise InvalidInputError(
+                f"expected signal with H, W >= 1, got shape {format_shape(mu.shape[:-1])}"
+            )
         fp = self.fixed_pattern(h, w)
         t = float(exposure_time)
         lam = mu * fp.gain
