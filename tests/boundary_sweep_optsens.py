@@ -50,6 +50,7 @@ MEMORY_LIMIT = "512M"
 GOOD = ("clean", "ok")
 BAD = ("raw", "message", "unnamed", "nan", "warning", "refused", "timeout")
 
+torch: Any
 try:  # a 0-d tensor is one of the malformed values when PyTorch is there
     import torch
 except ImportError:  # pragma: no cover - torch is installed in the dev environment

@@ -583,7 +583,7 @@ def check_real_values(
 
 def _to_numpy_host(x: object) -> Any:
     if array_api_compat.is_torch_array(x):
-        return x.detach().cpu().numpy()  # type: ignore[attr-defined]
+        return x.detach().cpu().numpy()
     return x
 
 
@@ -602,7 +602,7 @@ def as_reals(
     ):
         want = f"{n} numbers" if n is not None else "a sequence of numbers"
         raise InvalidInputError(f"expected {name} as {want}, got {describe(value)}")
-    items = list(value)  # type: ignore[call-overload]
+    items = list(value)
     if n is not None and len(items) != n:
         raise InvalidInputError(
             f"expected {name} as {n} numbers, got {len(items)} value(s): {describe(value)}"
