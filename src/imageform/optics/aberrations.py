@@ -57,6 +57,10 @@ def _center(shape: tuple[int, ...], center: tuple[float, float] | None) -> tuple
     return cu, cv
 
 
+def _is_nan(value: object) -> bool:
+    return isinstance(value, float | np.floating) and math.isnan(value)
+
+
 def _image(image: Any, ndim: tuple[int, ...], want: str) -> np.ndarray:
     """The image as a NumPy float array of ``ndim`` dimensions, not empty."""
     arr = np.asarray(to_numpy(as_image(image, "image", channels=None)))
@@ -183,7 +187,8 @@ def lateral_chromatic_aberration(
     center : (c_u, c_v), optional
         The optical center (column, row); default the image center.
     fill : float
-        Value where a shrunk channel samples outside the image.
+        Value where a shrunk channel samples outside the image (finite, or NaN to mark
+        those pixels).
 
     Source: Hecht, *Optics*, 5th ed., §6.3.2 (lateral colour: magnification depends on
     wavelength); bilinear resampling as :func:`imageform.geometry.remap_bilinear`.
@@ -198,7 +203,9 @@ def lateral_chromatic_aberration(
         raise InvalidInputError(
             f"expected {arr.shape[-1]} magnifications (one per channel), got {len(mags)}"
         )
-    fv = as_real(fill, "fill")
+    # NaN is allowed: it marks the samples from outside the image (the simulator keeps the
+    # unshifted value there)
+    fv = math.nan if _is_nan(fill) else as_real(fill, "fill")
     h, w = arr.shape[:2]
     cu, cv = _center(arr.shape, center)
     v, u = np.mgrid[0:h, 0:w].astype(np.float64)
