@@ -321,10 +321,13 @@ def test_kernels_get_no_odd_values() -> None:
             shape=(10**5, 10**5),
         ),
         lambda: SensorModel().fixed_pattern(10**6, 10**6),
+        # inputs that exist but whose results would not fit (a 1 MiB limit below)
+        lambda: demosaic(np.zeros((512, 512), np.float32)),
+        lambda: SensorModel().capture(np.ones((512, 512, 1)), exposure_time=1e-3, rng=0),
     ],
 )
 def test_sizes_bounded(call, monkeypatch: pytest.MonkeyPatch) -> None:  # type: ignore[no-untyped-def]
-    monkeypatch.setenv("IMAGEFORM_MAX_MEMORY", "1G")
+    monkeypatch.setenv("IMAGEFORM_MAX_MEMORY", "1M")
     with pytest.raises(InvalidInputError) as exc:
         call()
     assert "GiB" in _one_line(exc)

@@ -17,6 +17,7 @@ pattern's red offset so that every kernel sees an RGGB phase.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from typing import Any
 
@@ -31,7 +32,7 @@ from imageform._backend import (
     use_numba,
 )
 from imageform._typing import Array, ArrayLike
-from imageform._validate import as_bool, as_image, check_option, format_shape
+from imageform._validate import as_bool, as_image, check_memory, check_option, format_shape
 from imageform.errors import InvalidInputError
 from imageform.sensor._demosaic_xp import XP_METHODS, demosaic_dask, demosaic_xp
 from imageform.sensor.cfa import _red_offset, cfa_pattern
@@ -200,6 +201,9 @@ def demosaic(
         ry, rx = _red_offset(pattern)
         out = demosaic_xp(arr, ry, rx, method, xp)
         return xp.clip(out, 0.0, 1.0) if clip else out
+    # the RGB result, the padded mosaic and the kernels' planes: about 8 float64 mosaics
+    n_bytes = 8.0 * 8.0 * math.prod(shape)
+    check_memory(n_bytes, "raw", f"demosaicing a mosaic of shape {format_shape(shape)}")
     a = to_numpy(arr)
     numba = use_numba(a)
     kernel, radius = _kernels(method, numba)

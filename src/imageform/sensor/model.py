@@ -29,6 +29,7 @@ from imageform._validate import (
     as_real,
     as_real_array,
     as_shape,
+    check_memory,
     check_option,
     check_positive,
     check_real_values,
@@ -302,6 +303,12 @@ class SensorModel:
                 f"{len(self.qe_wavelengths)}) on qe_wavelengths, got {format_shape(arr.shape)}; "
                 "pass wavelength_nm for monochromatic light"
             )
+        # the result (C channels a pixel) and one temporary of the signal's size
+        check_memory(
+            8.0 * arr.size * (self.n_channels + 1) * 2,
+            "signal",
+            f"the mean electrons of a signal of shape {format_shape(arr.shape)}",
+        )
         check_real_values(arr, f"signal ({kind})")
         if arr.size and float(arr.min()) < 0:
             raise InvalidInputError(
@@ -398,6 +405,8 @@ class SensorModel:
             raise InvalidInputError(
                 f"expected signal of shape (..., H, W, C), got {format_shape(mu.shape)}"
             )
+        # the fixed pattern (two maps) and the noise draws: about six frames of mu's size
+        check_memory(6.0 * mu.nbytes, "signal", f"a capture of shape {format_shape(mu.shape)}")
         gen = as_rng(check_rng(rng))
         h, w = mu.shape[-3], mu.shape[-2]
         if h < 1 or w < 1:
