@@ -621,7 +621,7 @@ def as_shape(
     >>> as_shape((np.int64(4), 6), "shape")
     (4, 6)
     """
-    if getattr(value, "ndim", None) == 0 or isinstance(value, np.ndarray):
+    if getattr(value, "ndim", 1) != 1:  # a 0-d tensor has a len() that raises
         raise InvalidInputError(
             f"expected {name} as a tuple of {n} integers, got {describe(value)}"
         )
