@@ -19,7 +19,8 @@ import numpy as np
 
 from imageform._backend import device_of, namespace
 from imageform._dask import chunkwise
-from imageform._validate import as_points, check_option
+from imageform._validate import check_option
+from imageform.color._guard import as_points
 from imageform.color.whitepoints import resolve_white
 from imageform.errors import InvalidInputError
 

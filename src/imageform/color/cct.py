@@ -27,7 +27,8 @@ from imageform._colormath import daylight_x as _daylight_x
 from imageform._colormath import daylight_xy as _daylight_xy
 from imageform._colormath import uv1960_from_xy as _uv_from_xy
 from imageform._dask import chunkwise
-from imageform._validate import as_float, as_points, check_option
+from imageform._validate import check_option
+from imageform.color._guard import as_float, as_points
 from imageform.errors import InvalidInputError
 
 __all__ = [

@@ -19,7 +19,8 @@ import numpy.typing as npt
 from imageform import _deprecate
 from imageform._backend import device_of, namespace, to_numpy
 from imageform._dask import chunkwise
-from imageform._validate import as_points, check_option
+from imageform._validate import check_option
+from imageform.color._guard import as_points
 from imageform.errors import InvalidInputError
 
 __all__ = [

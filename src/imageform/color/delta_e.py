@@ -17,7 +17,8 @@ import numpy as np
 
 from imageform._backend import namespace, use_numba
 from imageform._dask import chunkwise
-from imageform._validate import as_points, check_option, check_positive, format_shape
+from imageform._validate import check_option, check_positive, format_shape
+from imageform.color._guard import as_points
 from imageform.errors import InvalidInputError
 
 __all__ = [

@@ -17,7 +17,8 @@ from __future__ import annotations
 from typing import Any, NamedTuple
 
 from imageform._backend import namespace
-from imageform._validate import as_image, check_option
+from imageform._validate import check_option
+from imageform.color._guard import as_image
 from imageform.errors import InvalidInputError
 
 from .transfer import TRANSFER_FUNCTIONS, _decode_clean, _encode_clean

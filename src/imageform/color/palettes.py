@@ -16,7 +16,8 @@ from typing import Any
 
 import numpy as np
 
-from imageform._validate import as_image, check_option
+from imageform._validate import check_option
+from imageform.color._guard import as_image
 from imageform.errors import InvalidInputError
 
 __all__ = [

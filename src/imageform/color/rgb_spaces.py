@@ -26,7 +26,8 @@ import numpy as np
 
 from imageform._backend import device_of, namespace
 from imageform._dask import chunkwise
-from imageform._validate import as_image, check_option
+from imageform._validate import check_option
+from imageform.color._guard import as_image
 from imageform.errors import DegenerateConfigurationError
 
 __all__ = [

@@ -26,7 +26,8 @@ from types import MappingProxyType
 from typing import Any, NamedTuple
 
 from imageform._backend import namespace
-from imageform._validate import as_float, as_image, check_option
+from imageform._validate import check_option
+from imageform.color._guard import as_float, as_image
 from imageform.errors import InvalidInputError, UnknownOptionError
 
 __all__ = [

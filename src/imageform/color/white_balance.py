@@ -39,7 +39,8 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from imageform._backend import device_of, is_dask_namespace, namespace
-from imageform._validate import as_image, check_option
+from imageform._validate import check_option
+from imageform.color._guard import as_image
 from imageform.color.rgb_spaces import xyz_to_linear_rgb
 from imageform.color.transfer import TRANSFER_FUNCTIONS, decode, encode
 from imageform.color.whitepoints import resolve_white, xy_to_xyz_white

@@ -33,7 +33,8 @@ from typing import Any
 from imageform import _deprecate
 from imageform._backend import namespace
 from imageform._dask import chunkwise
-from imageform._validate import as_float, as_image, check_option
+from imageform._validate import check_option
+from imageform.color._guard import as_float, as_image
 from imageform.errors import InvalidInputError
 
 __all__ = [

@@ -1,0 +1,101 @@
+"""imageform.color's boundary checks: the shared ones of :mod:`imageform._validate` with the
+refusals of issue 16 in front (bool, complex, object and string input never converted), plus a
+magnitude bound for formulas whose powers would overflow.
+
+The wrappers keep the shared functions' signatures, so a module switches by its import line.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Collection
+from typing import Any
+
+from imageform import _validate as _v
+from imageform._backend import is_dask_namespace, namespace
+from imageform.errors import InvalidInputError, UnknownOptionError
+
+__all__ = [
+    "MAX_COLOR_MAGNITUDE",
+    "as_bool",
+    "as_float",
+    "as_image",
+    "as_points",
+    "check_magnitude",
+    "check_nonempty",
+    "check_option",
+]
+
+#: Largest magnitude a colour value (RGB, XYZ, Lab, Luv, hue, ...) may have: 1e15 in float64,
+#: 1e5 in float32. No colour is near it, and the formulas' powers of it (L*'s cube,
+#: CIEDE2000's C*⁷) stay finite below it; larger values are refused instead of overflowing to
+#: inf or NaN.
+MAX_COLOR_MAGNITUDE = {"float64": 1e15, "float32": 1e5}
+
+
+def as_points(x: object, name: str, dim: int | Collection[int], **kw: Any) -> Any:
+    """:func:`imageform._validate.as_points` that first refuses bool/complex/object/string."""
+    _v.refuse_non_real(x, name)
+    return _v.as_points(x, name, dim, **kw)
+
+
+def as_float(x: object, name: str, **kw: Any) -> Any:
+    """:func:`imageform._validate.as_float` that first refuses bool/complex/object/string."""
+    _v.refuse_non_real(x, name)
+    return _v.as_float(x, name, **kw)
+
+
+def as_image(image: object, name: str = "image", **kw: Any) -> Any:
+    """:func:`imageform._validate.as_image` that first refuses bool/complex/object/string."""
+    _v.refuse_non_real(image, name)
+    return _v.as_image(image, name, **kw)
+
+
+def as_bool(value: object, name: str) -> bool:
+    """A flag: Python or NumPy bool; anything else is a :class:`TypeError`."""
+    if value is True or value is False or type(value).__name__ == "bool_":
+        return bool(value)  # type: ignore[arg-type]
+    raise TypeError(f"expected {name} as True or False, got {_v.describe(value)}")
+
+
+def check_option(value: object, valid: Collection[str], what: str, name: str = "") -> str:
+    """:func:`imageform._validate.check_option` naming the parameter ``name`` and listing at
+    most ~120 characters of valid names (the message stays one line under 200 characters)."""
+    label = f"{what} ({name})" if name and name not in what else what
+    if not isinstance(value, str):
+        raise UnknownOptionError(f"expected a {label} name (str), got {_v.describe(value)}")
+    try:
+        return _v.check_option(value, valid, label)
+    except UnknownOptionError:
+        names = sorted(valid)
+        shown, size = [], 0
+        for n in names:
+            size += len(n) + 4
+            if size > 110:
+                break
+            shown.append(repr(n))
+        more = f", ... ({len(names) - len(shown)} more)" if len(shown) < len(names) else ""
+        raise UnknownOptionError(
+            f"unknown {label} {_v.describe(value, 30)}; valid: {', '.join(shown)}{more}"
+        ) from None
+
+
+def check_magnitude(arr: Any, name: str, xp: Any | None = None) -> None:
+    """Refuse values beyond :data:`MAX_COLOR_MAGNITUDE` (computed lazily for Dask: skipped)."""
+    xp = namespace(arr) if xp is None else xp
+    if is_dask_namespace(xp) or math.prod(arr.shape) == 0:
+        return
+    limit = MAX_COLOR_MAGNITUDE["float32" if arr.dtype == xp.float32 else "float64"]
+    lo, hi = float(xp.min(arr)), float(xp.max(arr))
+    if max(abs(lo), abs(hi)) > limit:
+        raise InvalidInputError(
+            f"expected {name} within ±{limit:g} (a colour value), got values {lo:.3g}..{hi:.3g}"
+        )
+
+
+def check_nonempty(arr: Any, name: str) -> None:
+    """Refuse an empty array where a statistic of it is computed (it would be NaN)."""
+    if math.prod(arr.shape) == 0:
+        raise InvalidInputError(
+            f"expected a non-empty {name}, got shape {_v.format_shape(tuple(arr.shape))}"
+        )
