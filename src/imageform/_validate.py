@@ -590,3 +590,27 @@ def as_real_array(
     if finite and arr.size and not np.isfinite(arr).all():
         raise InvalidInputError(f"{name} contains NaN or inf")
     return arr
+
+
+def check_name(value: object, valid: Collection[str], what: str, name: str = "") -> str:
+    """:func:`check_option` naming the parameter ``name`` (``"unknown spectral table 'x' for
+    key"``) and listing at most ~110 characters of the valid names, so that the message stays
+    one line under 200 characters however many names are valid; a non-str is a TypeError."""
+    if not isinstance(value, str):
+        raise TypeError(f"expected {name or what} as a {what} name (str), got {describe(value)}")
+    try:
+        return check_option(value, valid, what)
+    except UnknownOptionError:
+        names = sorted(valid)
+        shown: list[str] = []
+        size = 0
+        for n in names:
+            size += len(n) + 4
+            if size > 110:
+                break
+            shown.append(repr(n))
+        more = f", ... ({len(names) - len(shown)} more)" if len(shown) < len(names) else ""
+        where = f" for {name}" if name else ""
+        raise UnknownOptionError(
+            f"unknown {what} {describe(value, 30)}{where}; valid: {', '.join(shown)}{more}"
+        ) from None

@@ -479,6 +479,9 @@ _NONFINITE_OK = {
     ("are_metamers", "tol", "inf"),
     ("are_metamers", "spectral_tol", "inf"),
     ("in_gamut", "tol", "inf"),
+    # an unbounded end of the trimmed range
+    ("Spectrum.trim", "start", "-inf"),
+    ("Spectrum.trim", "stop", "inf"),
 }
 
 

@@ -13,7 +13,7 @@ from typing import Any
 
 from imageform import _validate as _v
 from imageform._backend import is_dask_namespace, namespace
-from imageform.errors import InvalidInputError, UnknownOptionError
+from imageform.errors import InvalidInputError
 
 __all__ = [
     "MAX_COLOR_MAGNITUDE",
@@ -59,25 +59,9 @@ def as_bool(value: object, name: str) -> bool:
 
 
 def check_option(value: object, valid: Collection[str], what: str, name: str = "") -> str:
-    """:func:`imageform._validate.check_option` naming the parameter ``name`` and listing at
-    most ~120 characters of valid names (the message stays one line under 200 characters)."""
-    label = f"{what} ({name})" if name and name not in what else what
-    if not isinstance(value, str):
-        raise UnknownOptionError(f"expected a {label} name (str), got {_v.describe(value)}")
-    try:
-        return _v.check_option(value, valid, label)
-    except UnknownOptionError:
-        names = sorted(valid)
-        shown, size = [], 0
-        for n in names:
-            size += len(n) + 4
-            if size > 110:
-                break
-            shown.append(repr(n))
-        more = f", ... ({len(names) - len(shown)} more)" if len(shown) < len(names) else ""
-        raise UnknownOptionError(
-            f"unknown {label} {_v.describe(value, 30)}; valid: {', '.join(shown)}{more}"
-        ) from None
+    """:func:`imageform._validate.check_name`: an option naming its parameter, listing a short
+    line of valid names."""
+    return _v.check_name(value, valid, what, name)
 
 
 def check_magnitude(arr: Any, name: str, xp: Any | None = None) -> None:

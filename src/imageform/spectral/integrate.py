@@ -32,7 +32,7 @@ from typing import NamedTuple
 import numpy as np
 
 from imageform import _deprecate
-from imageform._validate import check_option
+from imageform._validate import as_bool, check_option, describe
 from imageform.errors import InvalidInputError
 from imageform.spectral.data import (
     camera_sensitivities,
@@ -78,6 +78,8 @@ def observer_functions(observer: int | str | Spectrum = 2) -> Spectrum:
                 f"expected observer functions of shape (N, 3), got {observer.shape}"
             )
         return observer
+    if isinstance(observer, bool | np.bool_) or not isinstance(observer, int | np.integer | str):
+        raise TypeError(f"expected observer as 2, 10 or 'cones', got {describe(observer)}")
     key = str(observer).strip().lower().removesuffix("deg").removesuffix("°")
     key = {"lms": "cones", "ss2": "cones", "stockman_sharpe": "cones"}.get(key, key)
     key = check_option(key, OBSERVER_NAMES, "observer")
@@ -94,6 +96,10 @@ def resolve_illuminant(illuminant: str | Spectrum | None) -> Spectrum | None:
     >>> resolve_illuminant(None) is None
     True
     """
+    if not (illuminant is None or isinstance(illuminant, Spectrum | str)):
+        raise TypeError(
+            f"expected illuminant as a name, a Spectrum or None, got {describe(illuminant)}"
+        )
     if illuminant is None or isinstance(illuminant, Spectrum):
         if isinstance(illuminant, Spectrum) and illuminant.values.ndim != 1:
             raise InvalidInputError(f"expected a single-curve illuminant, got {illuminant.shape}")
@@ -103,7 +109,7 @@ def resolve_illuminant(illuminant: str | Spectrum | None) -> Spectrum | None:
 
 def _as_spectrum(s: object, name: str) -> Spectrum:
     if not isinstance(s, Spectrum):
-        raise InvalidInputError(f"expected {name} as a Spectrum, got {type(s).__name__}")
+        raise TypeError(f"expected {name} as a Spectrum, got {describe(s)}")
     return s
 
 
@@ -138,9 +144,18 @@ def integration_weights(
     interval for ``"astm_e308"``.
     """
     m = check_option(method, INTEGRATION_METHODS, "integration method")
+    functions = observer_functions(_as_spectrum(functions, "functions"))  # checks (N, 3)
+    illuminant = resolve_illuminant(illuminant)
+    if sample is not None:
+        _as_spectrum(sample, "sample")
     lo, hi = functions.range
     if illuminant is not None:
         lo, hi = max(lo, illuminant.range[0]), min(hi, illuminant.range[1])
+        if not hi > lo:
+            raise InvalidInputError(
+                f"expected an illuminant overlapping the functions' {functions.range[0]:g}-"
+                f"{functions.range[1]:g} nm, got {illuminant.range[0]:g}-{illuminant.range[1]:g} nm"
+            )
     if m == "cie015":
         step = 1.0
         lo = float(np.ceil(lo))
@@ -227,6 +242,7 @@ def spectrum_to_xyz(
     0.9123
     """
     s = _as_spectrum(spectrum, "spectrum")
+    absolute = as_bool(absolute, "absolute")
     f = observer_functions(observer)
     if str(observer).strip().lower() in ("cones", "lms"):
         raise InvalidInputError("spectrum_to_xyz needs observer 2 or 10; use spectrum_to_lms")
@@ -312,6 +328,7 @@ def luminance(spectrum: Spectrum, *, scotopic: bool = False) -> float | np.ndarr
     729.83
     """
     s = _as_spectrum(spectrum, "spectrum")
+    scotopic = as_bool(scotopic, "scotopic")
     v = luminous_efficiency("scotopic" if scotopic else "photopic")
     r = s.interpolate(v.wavelengths, extrapolate="zero").values
     km = KM_SCOTOPIC if scotopic else KM_PHOTOPIC
