@@ -109,7 +109,7 @@ def resolve_illuminant(illuminant: str | Spectrum | None) -> Spectrum | None:
 
 def _as_spectrum(s: object, name: str) -> Spectrum:
     if not isinstance(s, Spectrum):
-        raise TypeError(f"expected {name} as a Spectrum, got {describe(s)}")
+        raise InvalidInputError(f"expected {name} as a Spectrum, got {describe(s)}")
     return s
 
 
