@@ -46,9 +46,14 @@ def as_float(x: object, name: str, **kw: Any) -> Any:
 
 
 def as_image(image: object, name: str = "image", **kw: Any) -> Any:
-    """:func:`imageform._validate.as_image` that first refuses bool/complex/object/string."""
+    """:func:`imageform._validate.as_image` that first refuses bool/complex/object/string;
+    values read without the 0-1 range check (XYZ, Lab, HSV ...) are bounded by
+    :data:`MAX_COLOR_MAGNITUDE`."""
     _v.refuse_non_real(image, name)
-    return _v.as_image(image, name, **kw)
+    arr = _v.as_image(image, name, **kw)
+    if kw.get("range_check", True) is False:
+        check_magnitude(arr, name)
+    return arr
 
 
 def as_bool(value: object, name: str) -> bool:
