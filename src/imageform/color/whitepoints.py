@@ -133,7 +133,7 @@ def xy_to_xyz_white(xy: Sequence[float]) -> np.ndarray:
     x, y = float(v[0]), float(v[1])
     if not (np.isfinite(x) and np.isfinite(y)) or not 1e-9 <= y <= 1e3 or abs(x) > 1e3:
         raise InvalidInputError(
-            f"expected xy as a chromaticity (x, y) with 1e-9 <= y <= 1000, |x| <= 1000, got "
+            f"expected xy as a chromaticity (x, y) with y > 0 (1e-9 to 1000), |x| <= 1000, got "
             f"{describe(tuple(v.tolist()))}"
         )
     return np.array([x / y, 1.0, (1.0 - x - y) / y], dtype=np.float64)
