@@ -11,6 +11,8 @@ import math
 from collections.abc import Collection
 from typing import Any
 
+import numpy as np
+
 from imageform import _validate as _v
 from imageform._backend import is_dask_namespace, namespace
 from imageform.errors import InvalidInputError
@@ -58,8 +60,8 @@ def as_image(image: object, name: str = "image", **kw: Any) -> Any:
 
 def as_bool(value: object, name: str) -> bool:
     """A flag: Python or NumPy bool; anything else is a :class:`TypeError`."""
-    if value is True or value is False or type(value).__name__ == "bool_":
-        return bool(value)  # type: ignore[arg-type]
+    if isinstance(value, bool | np.bool_):
+        return bool(value)
     raise TypeError(f"expected {name} as True or False, got {_v.describe(value)}")
 
 

@@ -256,7 +256,15 @@ def cct_to_xy(cct: object, duv: object = 0.0, *, method: str = "robertson1968") 
     xp = namespace(cct, duv)
     T = as_float(cct, "cct", xp=xp)
     D = as_float(duv, "duv", xp=xp, dtype=T.dtype)
-    T, D = xp.broadcast_arrays(T, D)
+    if math.prod(D.shape) and float(xp.max(xp.abs(D))) > 1.0:
+        raise InvalidInputError("expected |duv| <= 1 (a distance in CIE 1960 uv)")
+    try:
+        T, D = xp.broadcast_arrays(T, D)
+    except ValueError:
+        raise InvalidInputError(
+            f"expected cct and duv of broadcastable shapes, got {tuple(T.shape)} and "
+            f"{tuple(D.shape)}"
+        ) from None
     if m == "daylight":
         if bool(xp.any(D != 0)):
             raise InvalidInputError("the daylight method takes no duv (the locus is a curve)")

@@ -35,7 +35,7 @@ import numpy as np
 from imageform._backend import device_of, namespace
 from imageform._dask import chunkwise
 from imageform._validate import check_option
-from imageform.color._guard import as_image
+from imageform.color._guard import as_bool, as_image
 from imageform.errors import InvalidInputError
 
 __all__ = [
@@ -273,6 +273,8 @@ def simulate_cvd(
     xp = namespace(img)
     from imageform.color.transfer import linear_to_srgb, srgb_to_linear
 
+    linear = as_bool(linear, "linear")
+    clip = as_bool(clip, "clip")
     lin = img if linear else srgb_to_linear(img)
     dev = device_of(lin)
 

@@ -18,7 +18,7 @@ import numpy as np
 
 from imageform._backend import device_of, namespace
 from imageform._dask import chunkwise
-from imageform._validate import check_option
+from imageform._validate import as_int, as_real, check_option
 from imageform.color._guard import as_points
 from imageform.color.chromaticity import (
     polygon_area,
@@ -180,6 +180,7 @@ def in_gamut(
     [True, False]
     """
     k = check_option(kind, _KINDS, "gamut test kind")
+    tol = as_real(tol, "tol", nonnegative=True, allow_inf=True)
     sp = rgb_space(space)
     xp = namespace(values)
     if k == "xy":
@@ -234,8 +235,7 @@ def gamut_map(
     rgb = v @ to_rgb_t
     if m == "clip":
         return xp.clip(rgb, 0.0, 1.0)
-    if iterations < 1:
-        raise InvalidInputError(f"expected iterations >= 1, got {iterations}")
+    iterations = as_int(iterations, "iterations", minimum=1, maximum=200)
     white = sp.white_xy
     lch = lab_to_lch(xyz_to_lab(v, white))
     inside = xp.all((rgb >= 0.0) & (rgb <= 1.0), axis=-1)
