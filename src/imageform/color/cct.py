@@ -27,7 +27,7 @@ from imageform._colormath import daylight_x as _daylight_x
 from imageform._colormath import daylight_xy as _daylight_xy
 from imageform._colormath import uv1960_from_xy as _uv_from_xy
 from imageform._dask import chunkwise
-from imageform._validate import check_option
+from imageform._validate import as_int, check_option
 from imageform.color._guard import as_float, as_points
 from imageform.errors import InvalidInputError
 
@@ -42,6 +42,9 @@ __all__ = [
 
 #: Methods of :func:`xy_to_cct` and :func:`cct_to_xy`.
 CCT_METHODS = ("robertson1968", "daylight")
+# How far (in x) beyond an end of the daylight locus xy_to_cct(method="daylight") still takes
+# a chromaticity, as that end: rounding (one ulp is 5.6e-17 at x = 0.38), not a colour.
+DAYLIGHT_X_TOLERANCE = 1e-9
 
 #: Robertson (1968) isotemperature lines: reciprocal megakelvin (mired), CIE 1960 u, v of the
 #: Planckian locus and the slope t of the isotemperature line. Wyszecki & Stiles (1982),
@@ -294,7 +297,11 @@ def xy_to_cct(xy: object, *, method: str = "robertson1968", iterations: int = 20
         CIE 1931 chromaticities; Robertson covers 1667 K to infinity; daylight 4000-25000 K.
     method : {"robertson1968", "daylight"}
     iterations : int
-        Newton steps of the daylight inversion (converges to 1e-12 K in < 10).
+        Newton steps of the daylight inversion (converges to 1e-12 K in < 10), 1 to 1000.
+
+    The daylight method takes ``x`` between the locus ends (25000 K and 4000 K); an ``x`` at
+    most 1e-9 (``DAYLIGHT_X_TOLERANCE``) beyond an end, from rounding, is taken as that
+    end (4000 K or 25000 K); farther out it raises.
 
     Returns
     -------
@@ -315,6 +322,7 @@ def xy_to_cct(xy: object, *, method: str = "robertson1968", iterations: int = 20
     6503
     """
     m = check_option(method, CCT_METHODS, "CCT method")
+    n_iter = as_int(iterations, "iterations", minimum=1, maximum=1000)
     xp = namespace(xy)
     a = as_points(xy, "xy", 2, xp=xp)
     cct, duv = _robertson_inverse(xp, a)
@@ -323,12 +331,16 @@ def xy_to_cct(xy: object, *, method: str = "robertson1968", iterations: int = 20
     x = a[..., 0]
     lo_x = float(_daylight_x(np, np.asarray(_DAYLIGHT_RANGE[1])))
     hi_x = float(_daylight_x(np, np.asarray(_DAYLIGHT_RANGE[0])))
-    if bool(xp.any(x < lo_x)) or bool(xp.any(x > hi_x)):
+    tol = DAYLIGHT_X_TOLERANCE
+    if bool(xp.any(x < lo_x - tol)) or bool(xp.any(x > hi_x + tol)):
         raise InvalidInputError(
-            f"x outside the daylight locus (x from {lo_x:.5f} at 25000 K to {hi_x:.5f} at 4000 K)"
+            f"expected xy with x on the daylight locus (x from {lo_x:.5f} at 25000 K to "
+            f"{hi_x:.5f} at 4000 K)"
         )
+    # an x within the tolerance outside an end (rounding) is the end itself
+    x = xp.clip(x, lo_x, hi_x)
     T = xp.clip(cct, 4000.0, 25000.0)  # start from Robertson's estimate, inside the domain
-    for _ in range(int(iterations)):
+    for _ in range(n_iter):
         s = 1.0 / T
         c = xp.where(T <= 7000.0, xp.ones_like(T), xp.zeros_like(T))
         lo, hi = _DAYLIGHT_LOW, _DAYLIGHT_HIGH

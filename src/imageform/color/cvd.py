@@ -34,7 +34,7 @@ import numpy as np
 
 from imageform._backend import device_of, namespace
 from imageform._dask import chunkwise
-from imageform._validate import check_option
+from imageform._validate import as_real, check_option
 from imageform.color._guard import as_bool, as_image
 from imageform.errors import InvalidInputError
 
@@ -94,10 +94,7 @@ def _method(name: object) -> str:
 
 
 def _severity(severity: object) -> float:
-    try:
-        s = float(severity)  # type: ignore[arg-type]
-    except (TypeError, ValueError) as exc:
-        raise InvalidInputError(f"expected a severity in [0, 1], got {severity!r}") from exc
+    s = as_real(severity, "severity")
     if not 0.0 <= s <= 1.0:
         raise InvalidInputError(f"expected a severity in [0, 1], got {severity!r}")
     return s
