@@ -59,10 +59,9 @@ def as_image(image: object, name: str = "image", **kw: Any) -> Any:
 
 
 def as_bool(value: object, name: str) -> bool:
-    """A flag: Python or NumPy bool; anything else is a :class:`TypeError`."""
-    if isinstance(value, bool | np.bool_):
-        return bool(value)
-    raise TypeError(f"expected {name} as True or False, got {_v.describe(value)}")
+    """A flag: Python or NumPy bool (:func:`imageform._validate.as_bool`); 0/1, strings and
+    arrays are refused."""
+    return _v.as_bool(value, name)
 
 
 def check_option(value: object, valid: Collection[str], what: str, name: str = "") -> str:

@@ -334,8 +334,8 @@ def xy_to_cct(xy: object, *, method: str = "robertson1968", iterations: int = 20
     tol = DAYLIGHT_X_TOLERANCE
     if bool(xp.any(x < lo_x - tol)) or bool(xp.any(x > hi_x + tol)):
         raise InvalidInputError(
-            f"expected xy with x on the daylight locus (x from {lo_x:.5f} at 25000 K to "
-            f"{hi_x:.5f} at 4000 K)"
+            f"expected xy on the daylight locus, got x outside the daylight locus (x from "
+            f"{lo_x:.5f} at 25000 K to {hi_x:.5f} at 4000 K)"
         )
     # an x within the tolerance outside an end (rounding) is the end itself
     x = xp.clip(x, lo_x, hi_x)

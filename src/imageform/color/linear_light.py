@@ -104,8 +104,8 @@ def downsample(
         raise InvalidInputError(f"expected an image of shape (..., H, W, C), got {tuple(x.shape)}")
     if x.shape[-3] < factor or x.shape[-2] < factor:
         raise InvalidInputError(
-            f"expected factor <= the image's height and width, got factor {factor} for an "
-            f"image of shape {tuple(x.shape)}"
+            f"expected factor <= the image's height and width: image {tuple(x.shape)} is "
+            f"smaller than one {factor}x{factor} block"
         )
     xp = namespace(x)
     if not linear_light:

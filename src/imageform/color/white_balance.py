@@ -55,9 +55,9 @@ __all__ = [
 
 #: Methods of :func:`white_balance` and :func:`estimate_illuminant`.
 WHITE_BALANCE_METHODS = ("gray_world", "white_patch", "shades_of_gray", "gray_edge", "manual")
-#: Largest Minkowski norm ``p`` (beyond it ``x**p`` underflows to 0 for any pixel < 1; the
-#: maximum, ``p = inf``, is the ``max_rgb`` / ``white_patch`` method).
-MAX_MINKOWSKI_P = 100.0
+#: Largest Minkowski norm ``p``: beyond it ``x**p`` underflows to 0 for most pixels < 1 and
+#: the estimate is the maximum anyway (``p = inf`` is the ``max_rgb`` method).
+MAX_MINKOWSKI_P = 1e4
 #: Largest ``sigma`` (pixels) of the grey-edge derivative filter (bounds the kernel size).
 MAX_SIGMA = 1000.0
 _ALIASES = {
