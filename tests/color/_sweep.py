@@ -345,7 +345,7 @@ def _variants(value: Any) -> Iterator[tuple[str, Any]]:
         yield "np-scalar", np.str_(value)
         yield "list", [value]
         return
-    if isinstance(value, int | float) and not isinstance(value, bool) or value is None:
+    if (isinstance(value, int | float) and not isinstance(value, bool)) or value is None:
         is_int = isinstance(value, int)
         v = 2 if value is None else value
         yield "nan", math.nan
@@ -486,7 +486,7 @@ _NONFINITE_OK = {
 
 
 def _names_param(msg: str, param: str, others: set[str]) -> str:
-    """"ok" if the message names ``param`` (or names no other parameter), else "misnamed"."""
+    """ "ok" if the message names ``param`` (or names no other parameter), else "misnamed"."""
     low = msg.lower()
     if param.lower() in low:
         return "ok"
@@ -512,9 +512,9 @@ def run_one(t: Target, param: str, kind: str, value: Any, timeout: float = 10.0)
             return Outcome(t.name, param, kind, "timeout")
         except (ImageformError, TypeError) as exc:
             msg = str(exc)
-            if isinstance(exc, TypeError) and not isinstance(exc, ImageformError):
-                if "argument" in msg and ("unexpected" in msg or "missing" in msg):
-                    return Outcome(t.name, param, kind, "raw", f"{type(exc).__name__}: {msg}")
+            signature_error = "argument" in msg and ("unexpected" in msg or "missing" in msg)
+            if not isinstance(exc, ImageformError) and signature_error:
+                return Outcome(t.name, param, kind, "raw", f"{type(exc).__name__}: {msg}")
             if "\n" in msg or len(msg) > MAX_LEN or not msg:
                 return Outcome(t.name, param, kind, "long", msg[:300])
             if kind.startswith("np-") and not isinstance(value, np.ndarray):
@@ -540,9 +540,9 @@ def run_one(t: Target, param: str, kind: str, value: Any, timeout: float = 10.0)
         return Outcome(t.name, param, kind, "accepted", f"{type(value).__name__} accepted")
     if kind in _REFUSE and kind not in ("string", "bytes") and isinstance(t.kwargs[param], str):
         return Outcome(t.name, param, kind, "accepted", f"{type(value).__name__} accepted")
-    if kind in _NONFINITE and (t.name, param, kind) not in _NONFINITE_OK:
-        if isinstance(t.kwargs[param], float | int) or t.kwargs[param] is None:
-            return Outcome(t.name, param, kind, "accepted", f"{kind} accepted")
+    numeric = isinstance(t.kwargs[param], float | int) or t.kwargs[param] is None
+    if kind in _NONFINITE and (t.name, param, kind) not in _NONFINITE_OK and numeric:
+        return Outcome(t.name, param, kind, "accepted", f"{kind} accepted")
     return Outcome(t.name, param, kind, "result")
 
 

@@ -30,8 +30,8 @@ def dispatch(image: np.ndarray, s: str, d: str, p: dict[str, Any]) -> np.ndarray
         return None
     from imageform._kernels import color_lab, color_simple
     from imageform._validate import check_finite
-    from imageform.color._guard import as_image
     from imageform.color import ycbcr
+    from imageform.color._guard import as_image
     from imageform.color.rgb_spaces import rgb_to_xyz_matrix, xyz_to_rgb_matrix
     from imageform.color.whitepoints import resolve_white
 

@@ -11,8 +11,6 @@ import math
 from collections.abc import Collection
 from typing import Any
 
-import numpy as np
-
 from imageform import _validate as _v
 from imageform._backend import is_dask_namespace, namespace
 from imageform.errors import InvalidInputError

@@ -27,7 +27,6 @@ from imageform.color.chromaticity import (
     xy_to_uv_prime,
 )
 from imageform.color.rgb_spaces import RGB_SPACES, RGBSpace, rgb_space
-from imageform.errors import InvalidInputError
 
 __all__ = [
     "GAMUT_MAPPING_METHODS",

@@ -39,7 +39,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from imageform._backend import device_of, is_dask_namespace, namespace
-from imageform._validate import as_int, as_real, check_option
+from imageform._validate import as_int, as_real, check_option, describe
 from imageform.color._guard import as_bool, as_image, check_nonempty
 from imageform.color.rgb_spaces import xyz_to_linear_rgb
 from imageform.color.transfer import TRANSFER_FUNCTIONS, decode, encode
@@ -222,9 +222,8 @@ def _linear(image: object, transfer: str, channel_axis: int) -> tuple[Any, Any, 
     except InvalidInputError as exc:
         if axis == -1 or "channels on axis" not in str(exc):
             raise
-        shape = tuple(getattr(image, "shape", np.shape(image)))
         raise InvalidInputError(
-            f"expected image with 3 channels on axis channel_axis={axis}, got shape {shape}"
+            f"expected image with 3 channels on axis channel_axis={axis}, got {describe(image)}"
         ) from None
     check_nonempty(img, "image")
     if img.ndim < 3:

@@ -120,7 +120,11 @@ def read_table(key: str) -> DataTable:
     >>> t.columns[:3], t.labels[0], t.values.shape
     (('deficiency', 'severity', 'm00'), 'protan', (33, 10))
     """
-    k = key if isinstance(key, str) and key in TABLES else check_name(key, TABLES, "spectral table", "key")
+    k = (
+        key
+        if isinstance(key, str) and key in TABLES
+        else check_name(key, TABLES, "spectral table", "key")
+    )
     return DataTable(*_parse(k))
 
 
@@ -130,7 +134,11 @@ def table_source(key: str) -> str:
     >>> table_source("cmf_2").startswith("source: CIE 015:2018")
     True
     """
-    k = key if isinstance(key, str) and key in TABLES else check_name(key, TABLES, "spectral table", "key")
+    k = (
+        key
+        if isinstance(key, str) and key in TABLES
+        else check_name(key, TABLES, "spectral table", "key")
+    )
     return "\n".join(_parse(k)[0])
 
 
@@ -139,7 +147,11 @@ def load_table(key: str, name: str = "") -> Spectrum:
 
     Spectra are immutable (read-only arrays), so one cached object per table is shared.
     """
-    k = key if isinstance(key, str) and key in TABLES else check_name(key, TABLES, "spectral table", "key")
+    k = (
+        key
+        if isinstance(key, str) and key in TABLES
+        else check_name(key, TABLES, "spectral table", "key")
+    )
     return _load_table(k, name)
 
 

@@ -60,9 +60,8 @@ PLANCK_MAX_TEMPERATURE = 1e12
 def _check_wavelengths_nm(lam: np.ndarray, name: str) -> None:
     lo, hi = PLANCK_WAVELENGTH_RANGE
     if lam.size and not (np.all(np.isfinite(lam)) and lam.min() >= lo and lam.max() <= hi):
-        raise InvalidInputError(
-            f"expected {name} in [{lo:g}, {hi:g}] nm, got values {np.nanmin(lam):g}..{np.nanmax(lam):g}"
-        )
+        got = f"{np.min(lam):g}..{np.max(lam):g}"
+        raise InvalidInputError(f"expected {name} in [{lo:g}, {hi:g}] nm, got values {got}")
 
 
 def _temperature(temperature: object, name: str = "temperature") -> float:
@@ -129,8 +128,8 @@ def blackbody_spectrum(
         out = 100.0 * s / ref if ref > 0 else np.full_like(s, np.inf)
     if not np.all(np.isfinite(out)):
         raise InvalidInputError(
-            f"cannot scale a black body of temperature {t:g} K to 100 at normalize_at {at:g} nm: its "
-            "exitance there underflows to 0 against the grid's; choose a closer normalize_at"
+            f"cannot scale a black body of temperature {t:g} K to 100 at normalize_at {at:g} nm: "
+            "its exitance there underflows to 0 against the grid's; choose a closer normalize_at"
         )
     return Spectrum(wl, out, name=f"blackbody {t:g} K")
 
@@ -190,7 +189,9 @@ def daylight_spectrum_from_xy(xy: npt.ArrayLike, *, round_m: bool = True) -> Spe
     if v.shape != (2,) or not np.all(np.isfinite(v)):
         raise InvalidInputError(f"expected xy as two finite numbers, got {describe(xy)}")
     if not np.all(np.abs(v) <= 1e3):
-        raise InvalidInputError(f"expected xy as a chromaticity (|x|, |y| <= 1000), got {describe(xy)}")
+        raise InvalidInputError(
+            f"expected xy as a chromaticity (|x|, |y| <= 1000), got {describe(xy)}"
+        )
     xd, yd = float(v[0]), float(v[1])
     if 0.0241 + 0.2562 * xd - 0.7341 * yd == 0.0:
         raise InvalidInputError(

@@ -290,7 +290,10 @@ class Spectrum:
             raise InvalidInputError(f"expected start < stop, got start {start:g}, stop {stop:g}")
         count = (stop - start) / step
         # the grid's memory is bounded before it is built (8 bytes a sample, x2 for the result)
-        check_memory(min(16.0 * (count + 1) * max(1, self.values.size // len(self)), 2.0**80), "the grid start..stop by step")
+        check_memory(
+            min(16.0 * (count + 1) * max(1, self.values.size // len(self)), 2.0**80),
+            "the grid start..stop by step",
+        )
         n = round(count)
         if not np.isclose(start + n * step, stop):
             raise InvalidInputError(
@@ -312,7 +315,9 @@ class Spectrum:
         """Scaled so the value at ``at`` nm (linear interpolation) or the peak is 1."""
         if isinstance(at, str):
             if at != "peak":
-                raise InvalidInputError(f"expected at as a wavelength (nm) or 'peak', got {at!r:.40}")
+                raise InvalidInputError(
+                    f"expected at as a wavelength (nm) or 'peak', got {at!r:.40}"
+                )
             ref = np.max(self.values, axis=0)
         else:
             nm = as_real(at, "at")
@@ -417,4 +422,6 @@ class Spectrum:
             )
         if isinstance(labels, str):
             raise TypeError(f"expected labels as a sequence of str, got {describe(labels)}")
-        return cls(as_real_array(wavelengths, "wavelengths"), np.stack(cols, 1), name, tuple(labels))
+        return cls(
+            as_real_array(wavelengths, "wavelengths"), np.stack(cols, 1), name, tuple(labels)
+        )
