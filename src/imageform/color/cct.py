@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from imageform._backend import device_of, namespace
+from imageform._backend import device_of, is_dask_namespace, namespace
 from imageform._colormath import DAYLIGHT_HIGH as _DAYLIGHT_HIGH
 from imageform._colormath import DAYLIGHT_LOW as _DAYLIGHT_LOW
 from imageform._colormath import DAYLIGHT_RANGE as _DAYLIGHT_RANGE
@@ -259,7 +259,7 @@ def cct_to_xy(cct: object, duv: object = 0.0, *, method: str = "robertson1968") 
     xp = namespace(cct, duv)
     T = as_float(cct, "cct", xp=xp)
     D = as_float(duv, "duv", xp=xp, dtype=T.dtype)
-    if math.prod(D.shape) and float(xp.max(xp.abs(D))) > 1.0:
+    if not is_dask_namespace(xp) and math.prod(D.shape) and float(xp.max(xp.abs(D))) > 1.0:
         raise InvalidInputError("expected |duv| <= 1 (a distance in CIE 1960 uv)")
     try:
         T, D = xp.broadcast_arrays(T, D)

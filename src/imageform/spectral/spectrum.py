@@ -15,7 +15,14 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from imageform._validate import as_real, as_real_array, check_memory, check_option, describe
+from imageform._validate import (
+    as_int,
+    as_real,
+    as_real_array,
+    check_memory,
+    check_option,
+    describe,
+)
 from imageform.errors import InvalidInputError
 
 __all__ = ["EXTRAPOLATION_METHODS", "INTERPOLATION_METHODS", "Spectrum"]
@@ -182,7 +189,9 @@ class Spectrum:
                 )
             i = self.labels.index(label)
         else:
-            i = int(label)
+            i = as_int(
+                label, "label", minimum=-self.values.shape[1], maximum=self.values.shape[1] - 1
+            )
         name = self.labels[i] if self.labels else f"{self.name}[{i}]"
         return Spectrum(self.wavelengths, self.values[:, i], name=name)
 
