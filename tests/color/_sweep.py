@@ -407,6 +407,10 @@ def _variants(value: Any) -> Iterator[tuple[str, Any]]:
     yield "negative", -a - 1.0
     yield "zero", np.zeros_like(a)
     yield "list", a.tolist()
+    yield "float32", a.astype(np.float32)
+    yield "huge-float32", (a * 1e30 + 1e30).astype(np.float32)
+    if torch is not None:
+        yield "torch", torch.from_numpy(a.copy())
     if a.ndim >= 1 and isinstance(value, tuple):
         yield "np-array", a
 

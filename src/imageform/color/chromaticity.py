@@ -189,6 +189,7 @@ def visible_area(coords: str = "xy", *, observer: int = 2) -> float:
 def _points_in_polygon(pts: Any, poly: np.ndarray, xp: Any) -> Any:
     """Even-odd ray casting, vectorised over points (boundary counts as inside up to 1e-12)."""
     dev = device_of(pts)
+    poly = np.array(poly, dtype=np.float64)  # a writable copy: torch warns on read-only input
     x, y = pts[..., 0][..., None], pts[..., 1][..., None]
     x1 = xp.asarray(poly[:, 0], dtype=pts.dtype, device=dev)
     y1 = xp.asarray(poly[:, 1], dtype=pts.dtype, device=dev)
