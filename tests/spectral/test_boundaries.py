@@ -121,3 +121,17 @@ def test_unknown_table_is_one_short_line_naming_key() -> None:
     with pytest.raises(UnknownOptionError) as exc:
         load_table("nope")
     _one_line(exc, "key", "more")
+
+
+def test_allocations_are_bounded_before_they_are_made(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setenv("IMAGEFORM_MAX_MEMORY", "64M")
+    wide = Spectrum([0.0, 1e12], np.ones((2, 3)))
+    with pytest.raises(InvalidInputError, match="integration grid") as exc:
+        integration_weights(wide, illuminant=None)
+    _one_line(exc, "functions")
+    dense = Spectrum(np.linspace(400, 700, 5000), np.ones(5000))
+    with pytest.raises(InvalidInputError, match="Sprague") as exc:
+        dense.interpolate(np.linspace(400, 700, 5000), method="sprague")
+    _one_line(exc, "wavelengths")
+    with pytest.raises(InvalidInputError, match="GiB"):
+        S.resample(400, 700, 1e-6)

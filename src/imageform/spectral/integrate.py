@@ -32,7 +32,7 @@ from typing import NamedTuple
 import numpy as np
 
 from imageform import _deprecate
-from imageform._validate import as_bool, check_option, describe
+from imageform._validate import as_bool, check_memory, check_option, describe
 from imageform.errors import InvalidInputError
 from imageform.spectral.data import (
     camera_sensitivities,
@@ -165,6 +165,10 @@ def integration_weights(
         step = sample.interval
         first = sample.wavelengths[0]
         lo = first + step * np.ceil((lo - first) / step - 1e-9)
+    # the grid and its (M, 3) weights are bounded before they are built
+    check_memory(
+        min(64.0 * ((hi - lo) / step + 1.0), 2.0**80), "functions", "the integration grid"
+    )
     return IntegrationWeights(*_weights(functions, illuminant, float(lo), float(hi), float(step)))
 
 

@@ -83,6 +83,8 @@ def _sprague(x: np.ndarray, y: np.ndarray, xi: np.ndarray) -> np.ndarray:
     end, L holds the quintic's weights on p_{-2} .. p_{3}), then ``S @ y``.
     """
     n, m = len(x), len(xi)
+    # the dense operator (m x (n + 4)) @ ((n + 4) x n) is bounded before it is built
+    check_memory(8.0 * (n + 4) * (m + n), "wavelengths", "Sprague interpolation")
     h = x[1] - x[0]
     i = np.clip(np.floor((xi - x[0]) / h + 1e-12).astype(int), 0, n - 2)
     t = (xi - x[i]) / h
