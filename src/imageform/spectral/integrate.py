@@ -166,9 +166,7 @@ def integration_weights(
         first = sample.wavelengths[0]
         lo = first + step * np.ceil((lo - first) / step - 1e-9)
     # the grid and its (M, 3) weights are bounded before they are built
-    check_memory(
-        min(64.0 * ((hi - lo) / step + 1.0), 2.0**80), "functions", "the integration grid"
-    )
+    check_memory(min(64.0 * ((hi - lo) / step + 1.0), 2.0**80), "functions", "the integration grid")
     return IntegrationWeights(*_weights(functions, illuminant, float(lo), float(hi), float(step)))
 
 
