@@ -33,9 +33,26 @@ __all__ = [
 MAX_COLOR_MAGNITUDE = {"float64": 1e15, "float32": 1e5}
 
 
+def _shape_of(x: object) -> tuple[int, ...] | None:
+    """The shape of an array-like that has one (NumPy, torch, Dask ...), without converting."""
+    shape = getattr(x, "shape", None)
+    if shape is None or getattr(x, "ndim", None) is None:
+        return None
+    try:
+        return tuple(int(d) for d in shape)
+    except (TypeError, ValueError):  # unknown (NaN) Dask chunk sizes
+        return None
+
+
 def as_points(x: object, name: str, dim: int | Collection[int], **kw: Any) -> Any:
-    """:func:`imageform._validate.as_points` that first refuses bool/complex/object/string."""
+    """:func:`imageform._validate.as_points` that first refuses bool/complex/object/string
+    and a wrong last axis (before any value is read: a misshaped array is refused at once)."""
     _v.refuse_non_real(x, name)
+    shape = _shape_of(x)
+    dims = (dim,) if isinstance(dim, int) else tuple(dim)
+    if shape is not None and (not shape or shape[-1] not in dims):
+        want = " or ".join(f"(..., {d})" for d in dims)
+        raise InvalidInputError(f"expected {name} of shape {want}, got {_v.format_shape(shape)}")
     return _v.as_points(x, name, dim, **kw)
 
 
@@ -50,6 +67,26 @@ def as_image(image: object, name: str = "image", **kw: Any) -> Any:
     values read without the 0-1 range check (XYZ, Lab, HSV ...) are bounded by
     :data:`MAX_COLOR_MAGNITUDE`."""
     _v.refuse_non_real(image, name)
+    channels = kw.get("channels", 3)
+    axis = kw.get("channel_axis", -1)
+    shape = _shape_of(image)
+    if (
+        channels is not None
+        and shape
+        and isinstance(axis, int)
+        and -len(shape) <= axis < len(shape)
+        and shape[axis] != channels
+    ):
+        # refused before any value is read; the message is as_image's
+        hint = (
+            "; an alpha channel? split it off (image[..., :3]) and handle it separately"
+            if channels == 3 and shape[axis] == 4
+            else ""
+        )
+        raise InvalidInputError(
+            f"expected {name} with {channels} channels on axis {axis}, "
+            f"got shape {_v.format_shape(shape)}{hint}"
+        )
     arr = _v.as_image(image, name, **kw)
     if kw.get("range_check", True) is False:
         check_magnitude(arr, name)
