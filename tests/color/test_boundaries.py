@@ -213,7 +213,7 @@ def test_messages_name_the_parameter() -> None:
 def test_misshaped_arrays_are_refused_before_their_values_are_read() -> None:
     """A wrong channel count is refused from the shape alone (NaN inside is never reached)."""
     rgba = np.full((64, 64, 4), np.nan)
-    with pytest.raises(InvalidInputError, match="3 channels on axis -1.*alpha"):
+    with pytest.raises(InvalidInputError, match=r"3 channels on axis -1.*alpha"):
         srgb_to_hsv(rgba)
     with pytest.raises(InvalidInputError, match=r"lab1 of shape \(\.\.\., 3\)"):
         delta_e(np.full((5, 4), np.nan), LAB[0])
