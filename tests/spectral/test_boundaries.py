@@ -135,3 +135,12 @@ def test_allocations_are_bounded_before_they_are_made(monkeypatch: pytest.Monkey
     _one_line(exc, "wavelengths")
     with pytest.raises(InvalidInputError, match="GiB"):
         S.resample(400, 700, 1e-6)
+
+
+def test_arithmetic_never_makes_inf_or_nan() -> None:
+    with pytest.raises(InvalidInputError, match="overflow"):
+        S * 1e308 * 10
+    with pytest.raises(InvalidInputError, match="finite"):
+        S * np.nan
+    with pytest.raises(InvalidInputError, match="division by zero"):
+        S / 0.0

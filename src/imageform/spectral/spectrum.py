@@ -369,11 +369,14 @@ class Spectrum:
         v = self._other(other, op)
         if v is NotImplemented:
             return NotImplemented
-        with np.errstate(divide="raise", invalid="raise"):
+        if isinstance(v, float) and not np.isfinite(v):
+            raise InvalidInputError(f"cannot {op} by {v}: expected a finite number")
+        with np.errstate(divide="raise", invalid="raise", over="raise"):
             try:
                 out = f(self.values, v)
             except FloatingPointError as exc:
-                raise InvalidInputError(f"cannot {op}: division by zero") from exc
+                what = "overflow" if "overflow" in str(exc) else "division by zero"
+                raise InvalidInputError(f"cannot {op}: {what}") from exc
         return Spectrum(self.wavelengths, out, self.name, self.labels)
 
     def __add__(self, other: Any) -> Spectrum:
