@@ -542,7 +542,7 @@ def _rect_improve(rec, angles, log_nt, log_eps):  # type: ignore[no-untyped-def]
 
 
 @njit(**_JIT)
-def _detect(angles, modgrad, list_x, list_y, prec, p, log_nt, log_eps, density_th):  # type: ignore[no-untyped-def]  # noqa: E501  # pragma: no cover
+def _detect(angles, modgrad, list_x, list_y, prec, p, log_nt, log_eps, density_th, validate):  # type: ignore[no-untyped-def]  # noqa: E501  # pragma: no cover
     ny, nx = angles.shape
     used = np.zeros((ny, nx), dtype=np.uint8)
     reg_x = np.empty(nx * ny, dtype=np.int32)
@@ -565,9 +565,12 @@ def _detect(angles, modgrad, list_x, list_y, prec, p, log_nt, log_eps, density_t
         )
         if not ok:
             continue
-        log_nfa = _rect_improve(rec, angles, log_nt, log_eps)
-        if log_nfa <= log_eps:
-            continue
+        if validate:
+            log_nfa = _rect_improve(rec, angles, log_nt, log_eps)
+            if log_nfa <= log_eps:
+                continue
+        else:  # OpenCV's LSD_REFINE_STD: every refined region, no NFA computed
+            log_nfa = math.nan
         if n_out == out.shape[0]:
             grown = np.empty((2 * n_out, 7))
             grown[:n_out] = out
@@ -584,11 +587,13 @@ def _detect(angles, modgrad, list_x, list_y, prec, p, log_nt, log_eps, density_t
 
 
 @njit(**_JIT)
-def lsd(img, scale, sigma_scale, quant, ang_th, log_eps, density_th, n_bins):  # type: ignore[no-untyped-def]  # noqa: E501  # pragma: no cover
+def lsd(img, scale, sigma_scale, quant, ang_th, log_eps, density_th, n_bins, validate=True):  # type: ignore[no-untyped-def]  # noqa: E501  # pragma: no cover
     """The LSD pipeline on a grey float64 image with values in [0, 255].
 
     Returns ``(n, 7)``: ``x1, y1, x2, y2, width, p, -log10 NFA`` per segment, in the input
-    image's pixel-centre coordinates (x column, y row).
+    image's pixel-centre coordinates (x column, y row). ``validate=False`` skips the
+    rectangle improvement and the NFA test (as OpenCV's default ``LSD_REFINE_STD`` does) and
+    reports NaN for the NFA.
     """
     if scale != 1.0:
         work = gaussian_sampler(img, scale, sigma_scale)
@@ -600,7 +605,9 @@ def lsd(img, scale, sigma_scale, quant, ang_th, log_eps, density_th, n_bins):  #
     angles, modgrad, list_x, list_y = ll_angle(work, rho, n_bins)
     ny, nx = angles.shape
     log_nt = 5.0 * (math.log10(nx) + math.log10(ny)) / 2.0 + math.log10(11.0)
-    out = _detect(angles, modgrad, list_x, list_y, prec, p, log_nt, log_eps, density_th)
+    out = _detect(
+        angles, modgrad, list_x, list_y, prec, p, log_nt, log_eps, density_th, validate
+    )
     if scale != 1.0:
         for i in range(out.shape[0]):
             for j in range(5):

@@ -40,7 +40,7 @@ import math
 import numpy as np
 
 from imageform._typing import ArrayLike, FloatArray
-from imageform._validate import as_int, as_real, check_positive
+from imageform._validate import as_bool, as_int, as_real, check_positive
 from imageform.errors import InvalidInputError
 
 __all__ = ["lsd_segments"]
@@ -69,6 +69,7 @@ def lsd_segments(
     density_th: float = 0.7,
     n_bins: int = 1024,
     min_length: float = 0.0,
+    validate: bool = True,
 ) -> tuple[FloatArray, FloatArray, FloatArray]:
     """LSD line segments (see the module docstring for the algorithm and its source).
 
@@ -93,6 +94,10 @@ def lsd_segments(
         Bins of the gradient pseudo-ordering.
     min_length : float
         Segments shorter than this (input pixels) are dropped afterwards (LSD: 0).
+    validate : bool
+        True: LSD's rectangle improvement and NFA test. False keeps every refined region
+        without computing its NFA (NaN), as OpenCV's default ``LSD_REFINE_STD`` does: more
+        and longer output, but no a-contrario guarantee (it detects segments in noise).
 
     Returns
     -------
@@ -101,7 +106,7 @@ def lsd_segments(
     widths : ndarray, shape (N,)
         Rectangle widths in input pixels.
     log10_nfa : ndarray, shape (N,)
-        log10 of each segment's NFA (all <= ``log10_eps``).
+        log10 of each segment's NFA (all <= ``log10_eps``; NaN without ``validate``).
     """
     from imageform._kernels.lsd_full import lsd
 
@@ -135,6 +140,7 @@ def lsd_segments(
         -float(log10_eps),
         float(density_th),
         int(n_bins),
+        as_bool(validate, "validate"),
     )
     ends = out[:, :4].reshape(-1, 2, 2)
     widths = out[:, 4]
