@@ -67,12 +67,8 @@ def match(ref: np.ndarray, ours: np.ndarray, tol: float = 1.0) -> tuple[float, f
     covered = 0.0
     total = 0.0
     for s in ref:
-        d_same = np.maximum(
-            np.hypot(*(ours[:, :2] - s[:2]).T), np.hypot(*(ours[:, 2:] - s[2:]).T)
-        )
-        d_swap = np.maximum(
-            np.hypot(*(ours[:, :2] - s[2:]).T), np.hypot(*(ours[:, 2:] - s[:2]).T)
-        )
+        d_same = np.maximum(np.hypot(*(ours[:, :2] - s[:2]).T), np.hypot(*(ours[:, 2:] - s[2:]).T))
+        d_swap = np.maximum(np.hypot(*(ours[:, :2] - s[2:]).T), np.hypot(*(ours[:, 2:] - s[:2]).T))
         n_ep += bool(min(d_same.min(), d_swap.min()) <= tol)
         length = float(np.hypot(s[2] - s[0], s[3] - s[1]))
         k = max(2, int(np.ceil(length / 0.5)) + 1)
@@ -192,25 +188,35 @@ def main() -> None:
     mn = {k: min(v) for k, v in agg.items()}
     mx = {k: max(v) for k, v in agg.items()}
     print(header("LSD line segments: imageform vs OpenCV createLineSegmentDetector"))
-    print(f"OpenCV {cv2.__version__}; {len(names)} Kodak images, uint8 grey (cv2 RGB2GRAY) to "
-          f"both; medians of {args.repeat} runs after a warm-up.\n")
-    print("## Full LSD: imageform `lsd_segments()` (the default of `detect_line_segments`) "
-          "vs OpenCV `LSD_REFINE_ADV`\n")
+    print(
+        f"OpenCV {cv2.__version__}; {len(names)} Kodak images, uint8 grey (cv2 RGB2GRAY) to "
+        f"both; medians of {args.repeat} runs after a warm-up.\n"
+    )
+    print(
+        "## Full LSD: imageform `lsd_segments()` (the default of `detect_line_segments`) "
+        "vs OpenCV `LSD_REFINE_ADV`\n"
+    )
     print(markdown_table(cols, rows_adv))
-    print("## Without NFA validation: imageform `lsd_segments(validate=False)` vs OpenCV "
-          "default (`LSD_REFINE_STD`)\n")
+    print(
+        "## Without NFA validation: imageform `lsd_segments(validate=False)` vs OpenCV "
+        "default (`LSD_REFINE_STD`)\n"
+    )
     print(markdown_table(cols, rows_std))
     print("## Summary (median, min-max over the images)\n")
     summary = []
+
+    def span(key: str, nd: int) -> str:
+        return f"{med[key]:.{nd}f} ({mn[key]:.{nd}f}-{mx[key]:.{nd}f})"
+
     for label, title in (("adv", "full LSD vs cv ADV"), ("std", "validate=False vs cv default")):
         summary.append(
             (
                 title,
-                f"{med[label + '_ratio']:.3f} ({mn[label + '_ratio']:.3f}-{mx[label + '_ratio']:.3f})",
+                span(label + "_ratio", 3),
                 f"{med[label + '_ep']:.2f}",
-                f"{med[label + '_cov']:.3f} ({mn[label + '_cov']:.3f}-{mx[label + '_cov']:.3f})",
+                span(label + "_cov", 3),
                 f"{med[label + '_ep_s']:.2f} / {med[label + '_cov_s']:.3f}",
-                f"{med[label + '_t']:.2f} ({mn[label + '_t']:.2f}-{mx[label + '_t']:.2f})",
+                span(label + "_t", 2),
             )
         )
     for key, title in (
@@ -220,11 +226,11 @@ def main() -> None:
         summary.append(
             (
                 title,
-                f"{med[key + '_ratio']:.3f} ({mn[key + '_ratio']:.3f}-{mx[key + '_ratio']:.3f})",
+                span(key + "_ratio", 3),
                 "",
                 f"{med[key + '_cov']:.3f}",
                 "",
-                f"{med[key + '_t']:.2f} ({mn[key + '_t']:.2f}-{mx[key + '_t']:.2f})",
+                span(key + "_t", 2),
             )
         )
     print(

@@ -20,6 +20,7 @@ column, y the row, the origin at the centre of pixel (0, 0).
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 from numba import njit
@@ -37,7 +38,7 @@ __all__ = [
 NOTDEF = -1024.0  # the level-line angle of pixels with a too small gradient
 _M_3_2_PI = 4.71238898038
 _M_2_PI = 6.28318530718
-_JIT = {"cache": True, "error_model": "numpy"}
+_JIT: dict[str, Any] = {"cache": True, "error_model": "numpy"}
 
 
 @njit(**_JIT)
@@ -49,10 +50,10 @@ def gaussian_sampler(img, scale, sigma_scale):  # type: ignore[no-untyped-def]  
     symmetric (mirror) boundary. Separable: x first, then y.
     """
     ysize, xsize = img.shape
-    nx = int(math.ceil(xsize * scale))
-    ny = int(math.ceil(ysize * scale))
+    nx = math.ceil(xsize * scale)
+    ny = math.ceil(ysize * scale)
     sigma = sigma_scale / scale if scale < 1.0 else sigma_scale
-    h = int(math.ceil(sigma * math.sqrt(2.0 * 3.0 * math.log(10.0))))
+    h = math.ceil(sigma * math.sqrt(2.0 * 3.0 * math.log(10.0)))
     n = 1 + 2 * h
     # x pass: per output column, its kernel and source columns
     kx = np.empty((nx, n))
@@ -60,7 +61,7 @@ def gaussian_sampler(img, scale, sigma_scale):  # type: ignore[no-untyped-def]  
     dbl = 2 * xsize
     for x in range(nx):
         xx = x / scale
-        xc = int(math.floor(xx + 0.5))
+        xc = math.floor(xx + 0.5)
         mean = h + xx - xc
         s = 0.0
         for i in range(n):
@@ -90,7 +91,7 @@ def gaussian_sampler(img, scale, sigma_scale):  # type: ignore[no-untyped-def]  
     dbl = 2 * ysize
     for y in range(ny):
         yy = y / scale
-        yc = int(math.floor(yy + 0.5))
+        yc = math.floor(yy + 0.5)
         mean = h + yy - yc
         s = 0.0
         for i in range(n):
@@ -293,8 +294,8 @@ def rect_nfa(rec, angles, log_nt):  # type: ignore[no-untyped-def]  # pragma: no
     vx3, vy3 = cx[(off + 3) % 4], cy[(off + 3) % 4]
     pts = 0
     alg = 0
-    x = int(math.ceil(vx0)) - 1
-    y = int(math.ceil(vy0))
+    x = math.ceil(vx0) - 1
+    y = math.ceil(vy0)
     ye = -1.7976931348623157e308
     while True:
         # ri_inc
@@ -312,7 +313,7 @@ def rect_nfa(rec, angles, log_nt):  # type: ignore[no-untyped-def]  # pragma: no
                 ye = _inter_hi(float(x), vx0, vy0, vx1, vy1)
             else:
                 ye = _inter_hi(float(x), vx1, vy1, vx2, vy2)
-            y = int(math.ceil(ys))
+            y = math.ceil(ys)
         if x > vx2:
             break
         if x >= 0 and y >= 0 and x < nx and y < ny:
@@ -382,10 +383,7 @@ def _region2rect(reg_x, reg_y, size, modgrad, reg_angle, prec, p, rec):  # type:
         iyy += ddx * ddx * w
         ixy -= ddx * ddy * w
     lam = 0.5 * (ixx + iyy - math.sqrt((ixx - iyy) * (ixx - iyy) + 4.0 * ixy * ixy))
-    if abs(ixx) > abs(iyy):
-        theta = math.atan2(lam - ixx, ixy)
-    else:
-        theta = math.atan2(ixy, lam - iyy)
+    theta = math.atan2(lam - ixx, ixy) if abs(ixx) > abs(iyy) else math.atan2(ixy, lam - iyy)
     if _angle_diff(theta, reg_angle) > prec:
         theta += math.pi
     dx = math.cos(theta)
@@ -427,7 +425,7 @@ def _density(size, rec):  # type: ignore[no-untyped-def]  # pragma: no cover
 
 
 @njit(**_JIT)
-def _reduce_region_radius(reg_x, reg_y, size, modgrad, reg_angle, prec, p, rec, used, density_th):  # type: ignore[no-untyped-def]  # noqa: E501  # pragma: no cover
+def _reduce_region_radius(reg_x, reg_y, size, modgrad, reg_angle, prec, p, rec, used, density_th):  # type: ignore[no-untyped-def]  # pragma: no cover
     density = _density(size, rec)
     if density >= density_th:
         return True, size
@@ -455,7 +453,7 @@ def _reduce_region_radius(reg_x, reg_y, size, modgrad, reg_angle, prec, p, rec, 
 
 
 @njit(**_JIT)
-def _refine(reg_x, reg_y, size, modgrad, reg_angle, prec, p, rec, used, angles, density_th):  # type: ignore[no-untyped-def]  # noqa: E501  # pragma: no cover
+def _refine(reg_x, reg_y, size, modgrad, reg_angle, prec, p, rec, used, angles, density_th):  # type: ignore[no-untyped-def]  # pragma: no cover
     """LSD's refinement: a region whose rectangle is less than ``density_th`` full is regrown
     from its seed with a tolerance adapted to the angles near the seed, then shrunk."""
     if _density(size, rec) >= density_th:
@@ -542,7 +540,7 @@ def _rect_improve(rec, angles, log_nt, log_eps):  # type: ignore[no-untyped-def]
 
 
 @njit(**_JIT)
-def _detect(angles, modgrad, list_x, list_y, prec, p, log_nt, log_eps, density_th, validate):  # type: ignore[no-untyped-def]  # noqa: E501  # pragma: no cover
+def _detect(angles, modgrad, list_x, list_y, prec, p, log_nt, log_eps, density_th, validate):  # type: ignore[no-untyped-def]  # pragma: no cover
     ny, nx = angles.shape
     used = np.zeros((ny, nx), dtype=np.uint8)
     reg_x = np.empty(nx * ny, dtype=np.int32)
@@ -587,7 +585,7 @@ def _detect(angles, modgrad, list_x, list_y, prec, p, log_nt, log_eps, density_t
 
 
 @njit(**_JIT)
-def lsd(img, scale, sigma_scale, quant, ang_th, log_eps, density_th, n_bins, validate=True):  # type: ignore[no-untyped-def]  # noqa: E501  # pragma: no cover
+def lsd(img, scale, sigma_scale, quant, ang_th, log_eps, density_th, n_bins, validate=True):  # type: ignore[no-untyped-def]  # pragma: no cover
     """The LSD pipeline on a grey float64 image with values in [0, 255].
 
     Returns ``(n, 7)``: ``x1, y1, x2, y2, width, p, -log10 NFA`` per segment, in the input
@@ -595,19 +593,14 @@ def lsd(img, scale, sigma_scale, quant, ang_th, log_eps, density_th, n_bins, val
     rectangle improvement and the NFA test (as OpenCV's default ``LSD_REFINE_STD`` does) and
     reports NaN for the NFA.
     """
-    if scale != 1.0:
-        work = gaussian_sampler(img, scale, sigma_scale)
-    else:
-        work = img
+    work = gaussian_sampler(img, scale, sigma_scale) if scale != 1.0 else img
     prec = math.pi * ang_th / 180.0
     p = ang_th / 180.0
     rho = quant / math.sin(prec)
     angles, modgrad, list_x, list_y = ll_angle(work, rho, n_bins)
     ny, nx = angles.shape
     log_nt = 5.0 * (math.log10(nx) + math.log10(ny)) / 2.0 + math.log10(11.0)
-    out = _detect(
-        angles, modgrad, list_x, list_y, prec, p, log_nt, log_eps, density_th, validate
-    )
+    out = _detect(angles, modgrad, list_x, list_y, prec, p, log_nt, log_eps, density_th, validate)
     if scale != 1.0:
         for i in range(out.shape[0]):
             for j in range(5):

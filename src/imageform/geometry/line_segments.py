@@ -1,5 +1,8 @@
 """Straight line-segment detection: LSD-style gradient grouping with an a-contrario test.
 
+``detect_line_segments`` runs the full LSD of :mod:`imageform.geometry.lsd` by default
+(``method="lsd"``); the simplified detector described below stays as ``method="simple"``.
+
 Algorithm (after von Gioi, Jakubowicz, Morel & Randall, "LSD: a Line Segment Detector",
 IPOL 2012):
 
