@@ -342,8 +342,9 @@ def detect_vanishing(
     try:
         # method="simple" keeps the simulator's figures as they were: the built-in scene's
         # barrel distortion curves the rails, which LSD finds along their whole length
-        # (27.7 px off the distorted truth, against 1.45 px; 0.28 px against 0.70 px with
-        # k1 = 0). Switching needs the image undistorted first.
+        # (27.7 px off the distorted truth, against 1.45 px; with the distortion off, 0.28 px
+        # against 0.70 px: benchmarks/check_vp_lsd.py). Switching needs the image undistorted
+        # first.
         arr = np.asarray(image)
         res = detect_vanishing_points(
             segments=detect_line_segments(arr, method="simple"),
