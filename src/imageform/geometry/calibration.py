@@ -22,12 +22,13 @@ import numpy.typing as npt
 from numpy.typing import NDArray
 
 from imageform._backend import to_numpy
-from imageform._validate import as_points, check_option, check_positive
+from imageform._validate import check_option, check_positive
 from imageform.errors import (
     DegenerateConfigurationError,
     IllConditionedWarning,
     InvalidInputError,
 )
+from imageform.geometry._checks import as_points
 from imageform.geometry.calibration_refine import GLOBAL_NAMES, refine, rodrigues
 from imageform.geometry.calibration_result import CalibrationResult
 from imageform.geometry.calibration_zhang import (

@@ -23,8 +23,9 @@ import numpy as np
 
 from imageform._backend import device_of, linalg, namespace, use_numba
 from imageform._typing import Array, ArrayLike
-from imageform._validate import as_matrix, as_points, check_image_size, check_option, check_rotation
+from imageform._validate import check_image_size, check_option, check_rotation
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
+from imageform.geometry._checks import as_matrix, as_points
 from imageform.geometry._results import Projection
 from imageform.geometry.intrinsics import Intrinsics
 

@@ -13,8 +13,9 @@ import numpy.typing as npt
 from numpy.typing import NDArray
 
 from imageform._backend import to_numpy, use_numba
-from imageform._validate import as_image, as_points, format_shape
+from imageform._validate import as_image, format_shape
 from imageform.errors import InvalidInputError
+from imageform.geometry._checks import as_points
 
 __all__ = ["RefinedCorners", "as_gray", "refine", "refine_corners"]
 

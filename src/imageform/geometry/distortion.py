@@ -29,8 +29,9 @@ import numpy as np
 
 from imageform._backend import namespace, use_numba
 from imageform._dask import is_dask_array
-from imageform._validate import as_matrix, as_points, check_positive, check_rotation
+from imageform._validate import check_positive, check_rotation
 from imageform.errors import InvalidInputError
+from imageform.geometry._checks import as_matrix, as_points
 from imageform.geometry._distortion_xp import (
     bc_distort_xp,
     bc_undistort_xp,

@@ -11,8 +11,8 @@ from __future__ import annotations
 
 from imageform._backend import linalg, namespace
 from imageform._typing import Array, ArrayLike
-from imageform._validate import as_points
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
+from imageform.geometry._checks import as_points
 from imageform.geometry._normalize import similarity_normalization
 
 __all__ = ["estimate_projection_matrix"]

@@ -14,8 +14,9 @@ from typing import Any, Literal, NamedTuple
 from imageform import _deprecate
 from imageform._backend import linalg, namespace
 from imageform._typing import Array, ArrayLike
-from imageform._validate import as_points, check_option
+from imageform._validate import check_option
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
+from imageform.geometry._checks import as_points
 
 __all__ = [
     "Dehomogenized",

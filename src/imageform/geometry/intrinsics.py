@@ -19,8 +19,9 @@ import numpy as np
 from imageform import _deprecate
 from imageform._backend import namespace
 from imageform._typing import Array, ArrayLike, FloatArray
-from imageform._validate import as_float, as_matrix, check_image_size, check_positive
+from imageform._validate import check_image_size, check_positive
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
+from imageform.geometry._checks import as_float, as_matrix
 
 __all__ = ["Intrinsics", "intrinsic_matrix", "projected_size"]
 

@@ -17,8 +17,8 @@ import numpy.typing as npt
 from numpy.typing import NDArray
 
 from imageform._backend import to_numpy, use_numba
-from imageform._validate import as_matrix, as_points
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
+from imageform.geometry._checks import as_matrix, as_points
 from imageform.geometry.calibration_refine import rodrigues
 from imageform.geometry.distortion import DistortionModel, _check_model
 from imageform.geometry.rotations import matrix_to_rvec

@@ -23,14 +23,9 @@ import numpy as np
 
 from imageform._backend import device_of, namespace
 from imageform._typing import Array, ArrayLike, FloatArray
-from imageform._validate import (
-    as_matrix,
-    as_points,
-    check_image_size,
-    check_positive,
-    check_rotation,
-)
+from imageform._validate import check_image_size, check_positive, check_rotation
 from imageform.errors import InvalidInputError
+from imageform.geometry._checks import as_matrix, as_points
 from imageform.geometry.camera import Projection, project_points
 
 __all__ = [

@@ -15,8 +15,9 @@ from typing import Any, NamedTuple
 
 from imageform._backend import device_of, linalg, namespace
 from imageform._typing import Array, ArrayLike
-from imageform._validate import as_matrix, as_points, check_rotation, det3
+from imageform._validate import check_rotation, det3
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
+from imageform.geometry._checks import as_matrix, as_points
 
 __all__ = [
     "Pose",

@@ -14,8 +14,9 @@ import numpy.typing as npt
 from numpy.typing import NDArray
 
 from imageform._backend import to_numpy
-from imageform._validate import as_matrix, as_points, check_positive
+from imageform._validate import check_positive
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
+from imageform.geometry._checks import as_matrix, as_points
 
 __all__ = ["TriangulationResult", "triangulate_points"]
 

@@ -26,8 +26,9 @@ from imageform._backend import (
     to_numpy,
     use_numba,
 )
-from imageform._validate import as_image, as_matrix, format_shape
+from imageform._validate import as_image, format_shape
 from imageform.errors import InvalidInputError
+from imageform.geometry._checks import as_matrix
 from imageform.geometry._remap_xp import map_grid, remap_dask, remap_xp
 from imageform.geometry.distortion import BrownConrady, DistortionModel, _check_model
 

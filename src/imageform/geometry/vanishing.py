@@ -15,8 +15,9 @@ from typing import Any
 
 from imageform._backend import device_of, linalg, namespace
 from imageform._typing import Array, ArrayLike
-from imageform._validate import as_float, as_matrix, as_points, check_rotation
+from imageform._validate import check_rotation
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
+from imageform.geometry._checks import as_float, as_matrix, as_points
 from imageform.geometry.homogeneous import _normalize_homogeneous_point, line_through
 
 __all__ = [
