@@ -196,3 +196,9 @@ def check_K(K: Any, xp: Any, name: str = "K", *, positive: bool = False) -> None
 def shape_text(x: Any) -> str:
     """``(4, 2)``: the shape of an array for a message."""
     return format_shape(tuple(x.shape))
+
+
+def check_image_size(size: object, name: str = "image_size") -> tuple[int, int]:
+    """A ``(width, height)`` pair of positive integers (a 0-d array or a string refused
+    in one line, as every other malformed pair)."""
+    return size_pair(size, f"{name} (width, height)")

@@ -23,9 +23,9 @@ import numpy as np
 
 from imageform._backend import device_of, linalg, namespace, use_numba
 from imageform._typing import Array, ArrayLike
-from imageform._validate import check_image_size, check_option, check_rotation
+from imageform._validate import check_option, check_rotation, format_shape
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
-from imageform.geometry._checks import as_matrix, as_points
+from imageform.geometry._checks import as_float, as_matrix, as_points, check_image_size
 from imageform.geometry._results import Projection
 from imageform.geometry.intrinsics import Intrinsics
 
@@ -354,11 +354,14 @@ def unproject(
     xp = namespace(uv, depth, K, R, t)
     p = as_points(uv, "uv", 2, xp=xp)
     dev = device_of(p)
-    z = (
-        xp.asarray(depth, dtype=p.dtype, device=dev)
-        if not hasattr(depth, "dtype")
-        else xp.astype(depth, p.dtype)
-    )
+    z = as_float(depth, "depth", xp=xp, dtype=p.dtype, device=dev)
+    try:
+        np.broadcast_shapes(tuple(z.shape), tuple(p.shape[:-1]))
+    except ValueError:
+        raise InvalidInputError(
+            f"expected depth broadcasting to uv's points {format_shape(tuple(p.shape[:-1]))}, "
+            f"got shape {format_shape(tuple(z.shape))}"
+        ) from None
     if bool(xp.any(~(z > 0))):
         raise InvalidInputError("expected depth > 0 (points in front of the camera)")
     Km = as_matrix(K, "K", (3, 3), xp=xp, dtype=p.dtype, device=dev)
