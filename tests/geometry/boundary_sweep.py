@@ -1,3 +1,4 @@
+# ruff: noqa: E501
 """A boundary sweep of :mod:`imageform.geometry` (issue 16): every public callable and public
 method, called with malformed values one parameter at a time, the outcome classified.
 
@@ -402,6 +403,13 @@ class Outcome:
     detail: str
 
 
+def _np(x: Any) -> Any:
+    if type(x).__module__.startswith("torch"):
+        with contextlib.suppress(Exception):
+            return x.detach().cpu().numpy()
+    return x
+
+
 def _nonfinite(x: Any, depth: int = 0) -> bool:
     """Whether a result holds NaN/inf that no ``valid`` mask or ``found=False`` explains."""
     if depth > 4 or x is None or isinstance(x, str | bool):
@@ -421,6 +429,7 @@ def _nonfinite(x: Any, depth: int = 0) -> bool:
             if dataclasses.is_dataclass(x)
             else x._asdict()
         )
+        fields = {k: _np(v) for k, v in fields.items()}
         if fields.get("found") is False:
             return False
         valid = fields.get("valid")
@@ -436,6 +445,8 @@ def _nonfinite(x: Any, depth: int = 0) -> bool:
                     if bad.any():
                         return True
                     continue
+            if k == "log10_nfa" and isinstance(v, np.ndarray):
+                v = np.where(v == -np.inf, 0.0, v)  # an NFA below float range
             if _nonfinite(v, depth + 1):
                 return True
         return False
@@ -527,7 +538,7 @@ def run_sweep(
                     kwargs = dict(base)
                     kwargs[p] = val
                     outcomes.append(
-                        classify(case.name, p, lab, lambda kw=kwargs: fn(**kw), guard)
+                        classify(case.name, p, lab, lambda kw=kwargs, f=fn: f(**kw), guard)
                     )
     finally:
         os.chdir(old_cwd)
