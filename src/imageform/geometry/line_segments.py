@@ -26,6 +26,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+import array_api_compat
 import numpy as np
 
 from imageform._backend import to_numpy
@@ -37,6 +38,11 @@ from imageform.geometry._checks import MAX_MAGNITUDE, as_float, shape_text
 __all__ = ["LineSegments", "detect_line_segments"]
 
 _Q = 2.0 / 255.0  # LSD's gradient quantisation bound, 2 grey levels of 255
+
+
+def _host(v: object) -> object:
+    """A tensor as a NumPy array (segments live on the host); anything else as is."""
+    return to_numpy(v) if array_api_compat.is_torch_array(v) else v
 
 
 @dataclass(frozen=True)
@@ -51,14 +57,20 @@ class LineSegments:
     log10_nfa: FloatArray
 
     def __post_init__(self) -> None:
-        e = np.asarray(to_numpy(as_float(self.endpoints, "endpoints", xp=np, dtype=np.float64)))
+        e = np.asarray(
+            to_numpy(as_float(_host(self.endpoints), "endpoints", xp=np, dtype=np.float64))
+        )
         if e.ndim != 3 or e.shape[1:] != (2, 2):
             raise InvalidInputError(f"expected endpoints of shape (N, 2, 2), got {shape_text(e)}")
         n = e.shape[0]
         out = {"endpoints": e}
         for name in ("widths", "log10_nfa"):
             v = np.asarray(
-                to_numpy(as_float(getattr(self, name), name, xp=np, dtype=np.float64, finite=False))
+                to_numpy(
+                    as_float(
+                        _host(getattr(self, name)), name, xp=np, dtype=np.float64, finite=False
+                    )
+                )
             )
             if v.shape != (n,):
                 raise InvalidInputError(
