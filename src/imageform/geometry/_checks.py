@@ -202,3 +202,14 @@ def check_image_size(size: object, name: str = "image_size") -> tuple[int, int]:
     """A ``(width, height)`` pair of positive integers (a 0-d array or a string refused
     in one line, as every other malformed pair)."""
     return size_pair(size, f"{name} (width, height)")
+
+
+def check_rng(value: object, name: str = "rng") -> object:
+    """Refuse an array for a seed before the shared :func:`imageform._random.as_rng` (whose
+    message would print it); return the value unchanged."""
+    if getattr(value, "ndim", 0) and not isinstance(value, str | bytes):
+        raise InvalidInputError(
+            f"expected {name} an int seed, a numpy.random.Generator or None, got "
+            + describe(value)
+        )
+    return value

@@ -24,7 +24,7 @@ from imageform._random import RNGLike, as_rng
 from imageform._typing import ArrayLike, FloatArray
 from imageform._validate import as_int, as_real, check_positive, describe
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
-from imageform.geometry._checks import check_image_size
+from imageform.geometry._checks import check_image_size, check_rng
 from imageform.geometry.line_segments import LineSegments, detect_line_segments
 from imageform.geometry.vanishing import (
     focal_from_vanishing_points,
@@ -227,7 +227,7 @@ def detect_vanishing_points(
     centre = np.array([(w - 1) / 2, (h - 1) / 2])
     diag = math.hypot(w, h)
     far = infinity_factor * diag
-    cands = _ransac_candidates(segments, as_rng(rng), n_candidates, angle_threshold, iterations)
+    cands = _ransac_candidates(segments, as_rng(check_rng(rng)), n_candidates, angle_threshold, iterations)
     cands = [(_normalise(v, far), inl, sc) for v, inl, sc in cands]
     best: tuple[float, tuple[int, ...], FloatArray | None] = (-1.0, (), None)
     for r in (3, 2):
