@@ -227,7 +227,9 @@ def detect_vanishing_points(
     centre = np.array([(w - 1) / 2, (h - 1) / 2])
     diag = math.hypot(w, h)
     far = infinity_factor * diag
-    cands = _ransac_candidates(segments, as_rng(check_rng(rng)), n_candidates, angle_threshold, iterations)
+    cands = _ransac_candidates(
+        segments, as_rng(check_rng(rng)), n_candidates, angle_threshold, iterations
+    )
     cands = [(_normalise(v, far), inl, sc) for v, inl, sc in cands]
     best: tuple[float, tuple[int, ...], FloatArray | None] = (-1.0, (), None)
     for r in (3, 2):
