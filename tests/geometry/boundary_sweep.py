@@ -15,7 +15,9 @@ Outcomes (the contract of issue 16):
 - ``warning``: a warning that is not an :class:`~imageform.errors.ImageformWarning`
   (RuntimeWarning, ComplexWarning ...);
 - ``message``: a clean error type whose message is multi-line or over 200 characters;
-- ``unnamed``: a clean error type whose message does not name the parameter;
+- ``unnamed``: a clean error type whose message does not name the parameter (a
+  ``DegenerateConfigurationError`` or ``ConvergenceError`` is about the data as a whole
+  and need not);
 - ``timeout``: the call ran past the time guard.
 
 Every call runs in this process under a time guard (``signal.setitimer``) with
@@ -898,7 +900,12 @@ def classify(
     nan_ok: bool = False,
 ) -> Outcome:
     """Call ``fn`` under the time guard and classify what happened."""
-    from imageform.errors import ImageformError, ImageformWarning
+    from imageform.errors import (
+        ConvergenceError,
+        DegenerateConfigurationError,
+        ImageformError,
+        ImageformWarning,
+    )
 
     def out(kind: str, detail: str) -> Outcome:
         return Outcome(case, param, label, kind, detail.replace("\n", "\\n")[:300])
@@ -919,7 +926,10 @@ def classify(
                 return out("warning", f"{stray[0].category.__name__}: {stray[0].message}")
             if "\n" in msg or len(msg) > 200:
                 return out("message", f"{type(exc).__name__}: {msg}")
-            if not _names(msg, param):
+            # a degenerate configuration or a solver that did not converge is about the
+            # data as a whole: its message names the cause, not one parameter
+            whole = isinstance(exc, DegenerateConfigurationError | ConvergenceError)
+            if not whole and not _names(msg, param):
                 return out("unnamed", f"{type(exc).__name__}: {msg}")
             return out("ok", f"{type(exc).__name__}: {msg}")
         except Exception as exc:
