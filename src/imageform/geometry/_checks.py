@@ -209,7 +209,6 @@ def check_rng(value: object, name: str = "rng") -> object:
     message would print it); return the value unchanged."""
     if getattr(value, "ndim", 0) and not isinstance(value, str | bytes):
         raise InvalidInputError(
-            f"expected {name} an int seed, a numpy.random.Generator or None, got "
-            + describe(value)
+            f"expected {name} an int seed, a numpy.random.Generator or None, got " + describe(value)
         )
     return value

@@ -286,6 +286,7 @@ def are_collinear(points: ArrayLike, *, tol: float = 1e-9) -> Array:
     >>> bool(are_collinear([[0.0, 0.0], [1.0, 1.0], [3.0, 3.1]]))
     False
     """
+    tol = as_real(tol, "tol", nonnegative=True, maximum=1e6)
     xp = namespace(points)
     p = as_points(points, "points", 2, xp=xp)
     if p.ndim < 2 or p.shape[-2] < 2:
