@@ -22,13 +22,20 @@ import numpy.typing as npt
 from numpy.typing import NDArray
 
 from imageform._backend import to_numpy
-from imageform._validate import as_bool, as_int, as_real, check_option, check_positive, describe
+from imageform._validate import as_bool, as_int, as_real, check_option, describe
 from imageform.errors import (
     DegenerateConfigurationError,
     IllConditionedWarning,
     InvalidInputError,
 )
-from imageform.geometry._checks import as_matrix, as_points, check_image_size, check_K
+from imageform.geometry._checks import (
+    as_matrix,
+    as_points,
+    check_image_size,
+    check_K,
+    check_memory,
+    size_pair,
+)
 from imageform.geometry.calibration_refine import GLOBAL_NAMES, refine, rodrigues
 from imageform.geometry.calibration_result import CalibrationResult
 from imageform.geometry.calibration_zhang import (
@@ -62,16 +69,9 @@ def checkerboard_points(pattern_size: tuple[int, int], square_size: float = 1.0)
     >>> checkerboard_points((3, 2), 25.0)[[0, 1, 3]].tolist()
     [[0.0, 0.0, 0.0], [25.0, 0.0, 0.0], [0.0, 25.0, 0.0]]
     """
-    if (
-        not isinstance(pattern_size, tuple | list)
-        or len(pattern_size) != 2
-        or not all(isinstance(n, int | np.integer) and n >= 2 for n in pattern_size)
-    ):
-        raise InvalidInputError(
-            f"expected pattern_size (cols, rows), each >= 2, got {pattern_size!r}"
-        )
-    cols, rows = (int(n) for n in pattern_size)
-    s = check_positive(square_size, "square_size")
+    cols, rows = size_pair(pattern_size, "pattern_size (cols, rows)", minimum=2)
+    check_memory(24.0 * cols * rows, "pattern_size", f"{cols} x {rows} board points")
+    s = as_real(square_size, "square_size", positive=True, maximum=1e90)
     r, c = np.mgrid[0:rows, 0:cols]
     return np.stack([c.ravel() * s, r.ravel() * s, np.zeros(rows * cols)], axis=-1).astype(float)
 
@@ -119,7 +119,7 @@ def _views(object_points: Any, image_points: Any) -> tuple[list[F64], list[F64]]
             )
         if oa.shape[0] < 4:
             raise DegenerateConfigurationError(
-                f"view {k}: expected at least 4 object_points, got {oa.shape[0]}"
+                f"view {k}: expected at least 4 points in object_points, got {oa.shape[0]}"
             )
         out_o.append(oa)
         out_i.append(ia)

@@ -46,7 +46,9 @@ import numpy as np
 import numpy.typing as npt
 from numpy.typing import NDArray
 
+from imageform._validate import as_int, as_real
 from imageform.errors import ImageformWarning, InvalidInputError
+from imageform.geometry._checks import size_pair
 from imageform.geometry.checkerboard_candidates import find_candidates
 from imageform.geometry.checkerboard_grid import (
     board_continues,
@@ -57,7 +59,7 @@ from imageform.geometry.checkerboard_grid import (
     lattice_problem,
     neighbors,
 )
-from imageform.geometry.checkerboard_subpix import as_gray, refine_corners
+from imageform.geometry.checkerboard_subpix import MAX_HALF_WINDOW, as_gray, refine_corners
 from imageform.geometry.checkerboard_subpix import refine as refine_clean
 
 __all__ = [
@@ -117,25 +119,13 @@ class CheckerboardResult:
 
 
 def _check_pattern(pattern_size: object) -> tuple[int, int]:
-    try:
-        pair: tuple[Any, ...] = tuple(pattern_size)  # type: ignore[arg-type]
-    except TypeError as exc:
+    # (cols, rows) inner corners, each >= 2, at most 10 000 (a board of 10^8 corners)
+    cols, rows = size_pair(pattern_size, "pattern_size (cols, rows) inner corners", minimum=2)
+    if max(cols, rows) > 10_000:
         raise InvalidInputError(
-            f"expected pattern_size as (cols, rows) inner corners, got {pattern_size!r}"
-        ) from exc
-    if len(pair) != 2:
-        raise InvalidInputError(
-            f"expected pattern_size as (cols, rows) inner corners, got {pattern_size!r}"
+            f"expected pattern_size (cols, rows) of at most 10000 each, got ({cols}, {rows})"
         )
-    out = []
-    for v in pair:
-        if isinstance(v, bool) or not isinstance(v, int | np.integer) or v < 2:
-            raise InvalidInputError(
-                "expected pattern_size as two integers >= 2 (inner corners per row, per "
-                f"column), got {pattern_size!r}"
-            )
-        out.append(int(v))
-    return out[0], out[1]
+    return cols, rows
 
 
 def _orient(
@@ -308,17 +298,12 @@ def find_checkerboard(
     gray = as_gray(image)
     cols, rows = _check_pattern(pattern_size)
     if sigma is not None:
-        sig = float(sigma)
-        if not (math.isfinite(sig) and sig > 0):
-            raise InvalidInputError(f"expected sigma > 0, got {sigma!r}")
-    if half_window is not None and (
-        isinstance(half_window, bool) or not isinstance(half_window, int) or half_window < 1
-    ):
-        raise InvalidInputError(f"expected half_window an integer >= 1, got {half_window!r}")
-    if isinstance(max_iter, bool) or not isinstance(max_iter, int) or max_iter < 1:
-        raise InvalidInputError(f"expected max_iter an integer >= 1, got {max_iter!r}")
-    if not (math.isfinite(eps) and eps >= 0):
-        raise InvalidInputError(f"expected eps >= 0, got {eps!r}")
+        # a Gaussian wider than 1000 px blurs any board away (and its kernel is 8 sigma)
+        sigma = as_real(sigma, "sigma", positive=True, maximum=1000.0)
+    if half_window is not None:
+        half_window = as_int(half_window, "half_window", minimum=1, maximum=MAX_HALF_WINDOW)
+    max_iter = as_int(max_iter, "max_iter", minimum=1, maximum=10**6)
+    eps = as_real(eps, "eps", nonnegative=True)
     size = (cols, rows)
     if float(gray.max() - gray.min()) == 0.0:
         return CheckerboardResult(False, None, "the image is constant (no contrast)", size)
