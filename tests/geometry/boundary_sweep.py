@@ -706,8 +706,9 @@ def _cases() -> list[Case]:
             },
         ),
         c("CheckerboardResult.grid", _m(_board_result, "grid"), lambda f: {}),
-        c("CalibrationResult.to_toml", _m(_calres, "to_toml"), lambda f: {"path": None}, slow=True),
-        c("Pose", _g("Pose"), lambda f: {"R": f["R"], "t": f["t"]}),
+        # Not swept: CalibrationResult.to_toml/from_toml (deprecated: their DeprecationWarning
+        # is the intended outcome) and the NamedTuple results (Pose, Projection, PnPResult,
+        # ...): plain records returned by the functions above, not validated.
     ]
 
 

@@ -22,7 +22,7 @@ from typing import Any
 import array_api_compat
 import numpy as np
 
-from imageform._backend import is_dask_namespace, namespace, scalar
+from imageform._backend import is_dask_namespace, namespace, scalar, to_numpy
 from imageform._validate import (
     as_float as _as_float,
 )
@@ -86,9 +86,16 @@ def check_bounded(x: Any, name: str, xp: Any | None = None, limit: float = MAX_M
         )
 
 
+def _host(x: object, kw: dict[str, Any]) -> object:
+    """A tensor asked for as NumPy (``xp=np``) is moved to the host first."""
+    if kw.get("xp") is np and array_api_compat.is_torch_array(x):
+        return to_numpy(x)
+    return x
+
+
 def as_float(x: object, name: str, *, finite: bool = True, **kw: Any) -> Any:
     """:func:`imageform._validate.as_float` with the magnitude bound when ``finite``."""
-    arr = _as_float(x, name, finite=False, **kw)
+    arr = _as_float(_host(x, kw), name, finite=False, **kw)
     if finite:
         check_bounded(arr, name, kw.get("xp"))
     return arr
@@ -96,7 +103,7 @@ def as_float(x: object, name: str, *, finite: bool = True, **kw: Any) -> Any:
 
 def as_points(x: object, name: str, dim: Any, *, finite: bool = True, **kw: Any) -> Any:
     """:func:`imageform._validate.as_points`, the shape checked before the values."""
-    arr = _as_points(x, name, dim, finite=False, **kw)
+    arr = _as_points(_host(x, kw), name, dim, finite=False, **kw)
     if finite:
         check_bounded(arr, name, kw.get("xp"))
     return arr
@@ -106,7 +113,7 @@ def as_matrix(
     x: object, name: str, shape: tuple[int, int], *, finite: bool = True, **kw: Any
 ) -> Any:
     """:func:`imageform._validate.as_matrix`, the shape checked before the values."""
-    arr = _as_matrix(x, name, shape, finite=False, **kw)
+    arr = _as_matrix(_host(x, kw), name, shape, finite=False, **kw)
     if finite:
         check_bounded(arr, name, kw.get("xp"))
     return arr

@@ -125,13 +125,18 @@ def _project_xp(
     # invalid too. No isfinite over (N, 3) (PyTorch runs it as several passes) and every
     # pass on contiguous (N,) vectors: ``w - w == 0`` is the finiteness test, K is divided
     # by K[2, 2] (9 numbers) rather than u and v (2N).
+    with np.errstate(invalid="ignore", over="ignore"):  # inf rows are masked out below
+        return _pixels(Xc, K, X.ndim, xp)
+
+
+def _pixels(Xc: Array, K: Array, ndim: int, xp: Any) -> tuple[Array, Array]:
     z = Xc[..., 2]
     front = (z > 0) & (z < math.inf)
     zs = xp.where(front, z, xp.ones_like(z))  # no division by zero; gradients stay finite
     x = Xc[..., 0] / zs
     y = Xc[..., 1] / zs
     k = K / K[..., 2:3, 2:3]
-    kb = k[..., None, :, :] if (X.ndim >= 2 and K.ndim > 2) else k
+    kb = k[..., None, :, :] if (ndim >= 2 and K.ndim > 2) else k
     u = kb[..., 0, 0] * x + kb[..., 0, 1] * y + kb[..., 0, 2]
     v = kb[..., 1, 1] * y + kb[..., 1, 2]
     valid = front & (u - u == 0) & (v - v == 0)

@@ -46,9 +46,10 @@ import numpy as np
 import numpy.typing as npt
 from numpy.typing import NDArray
 
-from imageform._validate import as_int, as_real
+from imageform._backend import to_numpy
+from imageform._validate import as_bool, as_int, as_real, describe, format_shape
 from imageform.errors import ImageformWarning, InvalidInputError
-from imageform.geometry._checks import size_pair
+from imageform.geometry._checks import as_float, size_pair
 from imageform.geometry.checkerboard_candidates import find_candidates
 from imageform.geometry.checkerboard_grid import (
     board_continues,
@@ -109,6 +110,34 @@ class CheckerboardResult:
     pattern_size: tuple[int, int] = (0, 0)
     status: NDArray[np.int64] | None = field(default=None, repr=False)
     sigma: float | None = None
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "found", as_bool(self.found, "found"))
+        if not isinstance(self.reason, str):
+            raise InvalidInputError(f"expected reason as a str, got {describe(self.reason)}")
+        object.__setattr__(
+            self, "pattern_size", size_pair(self.pattern_size, "pattern_size", minimum=0)
+        )
+        n = self.pattern_size[0] * self.pattern_size[1]
+        if self.corners is not None:
+            c = np.asarray(to_numpy(as_float(self.corners, "corners", xp=np, dtype=np.float64)))
+            if c.shape != (n, 2):
+                raise InvalidInputError(
+                    f"expected corners of shape ({n}, 2) for pattern_size {self.pattern_size}, "
+                    f"got {format_shape(c.shape)}"
+                )
+            object.__setattr__(self, "corners", c)
+        elif self.found:
+            raise InvalidInputError("expected corners (N, 2) when found is True, got None")
+        if self.status is not None:
+            st = np.asarray(to_numpy(as_float(self.status, "status", xp=np, finite=True)))
+            if st.shape != (n,) or np.any(st != np.round(st)):
+                raise InvalidInputError(
+                    f"expected status as ({n},) integers, got {describe(self.status)}"
+                )
+            object.__setattr__(self, "status", st.astype(np.int64))
+        if self.sigma is not None:
+            object.__setattr__(self, "sigma", as_real(self.sigma, "sigma", positive=True))
 
     def grid(self) -> NDArray[np.float64]:
         """The corners as ``(rows, cols, 2)``; raises when not found."""
@@ -412,10 +441,14 @@ def find_checkerboards(
     if names is None:
         labels = [f"view {k}" for k in range(len(images))]
     else:
+        if isinstance(names, str | bytes) or not isinstance(names, Sequence):
+            raise InvalidInputError(
+                f"expected names as a list of str, one per image, got {describe(names)}"
+            )
         labels = [str(n) for n in names]
         if len(labels) != len(images):
             raise InvalidInputError(
-                f"expected {len(images)} names (one per image), got {len(labels)}"
+                f"expected {len(images)} names (one per image of images), got {len(labels)}"
             )
     size = _check_pattern(pattern_size)
     grays = []

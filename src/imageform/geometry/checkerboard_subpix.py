@@ -14,7 +14,7 @@ from numpy.typing import NDArray
 from imageform._backend import to_numpy, use_numba
 from imageform._validate import as_image, as_int, as_real, format_shape
 from imageform.errors import InvalidInputError
-from imageform.geometry._checks import as_points, size_pair
+from imageform.geometry._checks import as_points, check_bounded, size_pair
 
 __all__ = ["RefinedCorners", "as_gray", "refine", "refine_corners"]
 
@@ -50,6 +50,8 @@ def as_gray(image: object) -> NDArray[np.floating]:
             "expected image of shape (H, W), (H, W, 1) or (H, W, 3), "
             f"got {format_shape(tuple(arr.shape))}"
         )
+    # values beyond 1e30 overflow float32 and the squared gradients: no image holds them
+    check_bounded(arr, "image", np, limit=1e30)
     if min(arr.shape) < 16:
         raise InvalidInputError(
             f"expected an image of at least 16 x 16 pixels, got {format_shape(arr.shape)}"

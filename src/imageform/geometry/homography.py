@@ -122,6 +122,8 @@ def apply_homography(H: ArrayLike, points: ArrayLike) -> Array:
     xp = namespace(H, points)
     p = as_points(points, "points", 2, xp=xp)
     Hm = as_matrix(H, "H", (3, 3), xp=xp, dtype=p.dtype, device=device_of(p))
+    if not bool(xp.any(Hm != 0)):
+        raise InvalidInputError("expected a non-zero H (a zero matrix maps every point nowhere)")
     ones = xp.ones((*p.shape[:-1], 1), dtype=p.dtype, device=device_of(p))
     ph = xp.concat((p, ones), axis=-1) @ xp.matrix_transpose(Hm)
     return from_homogeneous(ph, at_infinity="nan")

@@ -23,7 +23,7 @@ import numpy as np
 
 from imageform._backend import device_of, namespace
 from imageform._typing import Array, ArrayLike, FloatArray
-from imageform._validate import as_real, check_positive, check_rotation
+from imageform._validate import as_real, check_rotation
 from imageform.errors import InvalidInputError
 from imageform.geometry._checks import (
     MAX_MAGNITUDE,
@@ -157,7 +157,7 @@ def weak_perspective_matrix(K: ArrayLike, depth: float) -> FloatArray:
            [  0., 100.,   0.,   0.],
            [  0.,   0.,   0.,   5.]])
     """
-    z0 = check_positive(depth, "depth")
+    z0 = as_real(depth, "depth", positive=True, maximum=MAX_MAGNITUDE)
     Km = np.asarray(as_matrix(K, "K", (3, 3), batch=False), dtype=np.float64)
     return Km @ np.array([[1.0, 0, 0, 0], [0, 1, 0, 0], [0, 0, 0, z0]])
 

@@ -47,7 +47,8 @@ def _check_order(order: object) -> str:
     ):
         raise InvalidInputError(
             f"expected an Euler order of three axes from 'xyz' (lower-case extrinsic, "
-            f"upper-case intrinsic, no axis twice in a row), e.g. 'xyz' or 'ZYX'; got {order!r}"
+            f"upper-case intrinsic, no axis twice in a row), e.g. 'xyz' or 'ZYX'; got "
+            f"{describe(order)}"
         )
     return order
 
