@@ -179,7 +179,7 @@ def refine_corners_numpy(
     cur = corners.astype(np.float64).copy()
     start = cur.copy()
     status = np.ones(n, dtype=np.int64)
-    active = np.isfinite(cur).all(axis=1)  # a non-finite start has nothing to refine from
+    active: NDArray[np.bool_] = np.all(np.isfinite(cur), axis=1)  # non-finite: nothing to refine
     status[~active] = 2
     eps2 = eps * eps
     for _ in range(max_iter):

@@ -132,7 +132,7 @@ def _items(value: object, name: str, n: int, what: str) -> list[Any]:
         or getattr(value, "ndim", 1) != 1
     ):
         raise InvalidInputError(f"expected {name} as {n} {what}, got {describe(value)}")
-    items = list(value)  # type: ignore[call-overload]
+    items = list(value)
     if len(items) != n:
         raise InvalidInputError(
             f"expected {name} as {n} {what}, got {len(items)} value(s): {describe(value)}"
