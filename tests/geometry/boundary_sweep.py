@@ -971,6 +971,10 @@ def run_sweep(
                     continue
                 fn = case.make(fx)
                 base = case.kwargs(fx)
+                # one valid call first, unguarded: numba compiles there, not under the guard
+                with warnings.catch_warnings():
+                    warnings.simplefilter("ignore")
+                    fn(**base)
                 pairs = [
                     (p, lab, val)
                     for p, v in base.items()
