@@ -38,7 +38,7 @@ from imageform.geometry import (
     unproject,
     weak_perspective_project,
 )
-from tests.geometry.boundary_sweep import FAIL_CLASSES, run_sweep
+from tests.geometry.boundary_sweep import FAIL_CLASSES, baseline_failures, run_sweep
 
 K = np.array([[800.0, 0.0, 320.0], [0.0, 800.0, 240.0], [0.0, 0.0, 1.0]])
 REPO = Path(__file__).resolve().parents[2]
@@ -60,6 +60,12 @@ def _failures(outcomes: list) -> list[str]:
 
 
 # --- the sweep ------------------------------------------------------------------------------
+
+
+def test_sweep_baselines_are_valid() -> None:
+    """Every callable's unmodified arguments give a finite result (the sweep varies one
+    parameter at a time around them)."""
+    assert baseline_failures() == []
 
 
 def test_sweep_sample_is_clean() -> None:
