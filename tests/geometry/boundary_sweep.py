@@ -11,7 +11,8 @@ Outcomes (the contract of issue 16):
   an :class:`~imageform.errors.ImageformError` or ``TypeError`` in one line of at most 200
   characters naming the parameter;
 - ``raw``: any other exception (numpy's IndexError, LinAlgError, OverflowError ...);
-- ``nan``: a result holding NaN or inf that no mask explains;
+- ``nan``: a result holding NaN or inf that no mask explains (or an object or string
+  array where numbers belong);
 - ``warning``: a warning that is not an :class:`~imageform.errors.ImageformWarning`
   (RuntimeWarning, ComplexWarning ...);
 - ``message``: a clean error type whose message is multi-line or over 200 characters;
@@ -853,7 +854,7 @@ def _nonfinite(x: Any, depth: int = 0) -> bool:
     if isinstance(x, np.ndarray):
         if x.dtype.kind in "fc":
             return not bool(np.all(np.isfinite(x)))
-        return False
+        return x.dtype.kind in "OUS"  # an object or string array is no numeric result
     if dataclasses.is_dataclass(x) or hasattr(x, "_fields"):
         fields = (
             {f.name: getattr(x, f.name) for f in dataclasses.fields(x)}
@@ -876,7 +877,7 @@ def _nonfinite(x: Any, depth: int = 0) -> bool:
                     if bad.any():
                         return True
                     continue
-            if k == "log10_nfa" and isinstance(v, np.ndarray):
+            if k == "log10_nfa" and isinstance(v, np.ndarray) and v.dtype.kind == "f":
                 v = np.where(v == -np.inf, 0.0, v)  # an NFA below float range
             if _nonfinite(v, depth + 1):
                 return True
