@@ -269,9 +269,12 @@ def test_dask_map_with_numpy_image_refused() -> None:
     with pytest.raises(InvalidInputError) as exc:
         remap_bilinear(img, da.from_array(m, chunks=4))
     _one_line(exc, "map_uv", "image")
-    with pytest.raises(InvalidInputError) as exc:
-        remap_bilinear(da.from_array(img, chunks=4), m)
-    _one_line(exc, "map_uv", "image")
+    lazy = remap_bilinear(da.from_array(img, chunks=4), m)  # the lazy path: a NumPy map
+    assert np.array_equal(lazy.compute(), remap_bilinear(img, m))
+    # a lazy K with an eager image: the nine numbers are computed, the result is eager
+    eager = undistort_image(img, K, None, new_K=da.from_array(K))
+    assert isinstance(eager, np.ndarray)
+    assert np.array_equal(eager, undistort_image(img, K, None, new_K=K))
 
 
 def test_zero_d_tensor_and_huge_int_reach_no_kernel() -> None:

@@ -87,13 +87,14 @@ def _fill(fill: object) -> float:
 
 
 def _same_kind(image: Any, map_uv: Any) -> None:
-    """Refuse a Dask array mixed with an eager one (one would be computed whole)."""
-    kinds = [is_dask_namespace(namespace(a)) for a in (image, map_uv) if hasattr(a, "shape")]
-    if len(kinds) == 2 and kinds[0] != kinds[1]:
-        lazy, eager = ("image", "map_uv") if kinds[0] else ("map_uv", "image")
+    """Refuse a Dask map_uv with an eager image (a Dask image with an eager map is the lazy
+    path; the map is small)."""
+    lazy_map = hasattr(map_uv, "shape") and is_dask_namespace(namespace(map_uv))
+    lazy_image = hasattr(image, "shape") and is_dask_namespace(namespace(image))
+    if lazy_map and not lazy_image:
         raise InvalidInputError(
-            f"expected image and map_uv both Dask arrays or neither, got a Dask {lazy} and "
-            f"a {type(image if eager == 'image' else map_uv).__name__} {eager}"
+            f"expected a Dask image with a Dask map_uv, got a {type(image).__name__} image; "
+            "pass map_uv.compute() (or a Dask image)"
         )
 
 
@@ -292,6 +293,11 @@ def undistort_image(
     )
     if is_dask_namespace(xp):
         return _undistort_dask(image, K, distortion, new_K, out_hw, float(fill))
+    # a lazy 3x3 K with an eager image: computed here (nine numbers), the image stays eager
+    K, new_K = (
+        np.asarray(k) if hasattr(k, "shape") and is_dask_namespace(namespace(k)) else k
+        for k in (K, new_K)
+    )
     if not is_numpy_namespace(xp):
         Km, Kn = _intrinsics(K, new_K)
         _check_model(distortion)
