@@ -29,15 +29,23 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+import array_api_compat
 import numpy as np
 
+from imageform._backend import to_numpy
 from imageform._typing import ArrayLike, FloatArray
-from imageform._validate import as_image, check_positive
+from imageform._validate import as_image, as_real, check_positive
 from imageform.errors import InvalidInputError, UnknownOptionError
+from imageform.geometry._checks import MAX_MAGNITUDE, as_float, shape_text
 
 __all__ = ["LineSegments", "detect_line_segments"]
 
 _Q = 2.0 / 255.0  # LSD's gradient quantisation bound, 2 grey levels of 255
+
+
+def _host(v: object) -> object:
+    """A tensor as a NumPy array (segments live on the host); anything else as is."""
+    return to_numpy(v) if array_api_compat.is_torch_array(v) else v
 
 
 @dataclass(frozen=True)
@@ -50,6 +58,36 @@ class LineSegments:
     endpoints: FloatArray
     widths: FloatArray
     log10_nfa: FloatArray
+
+    def __post_init__(self) -> None:
+        e = np.asarray(
+            to_numpy(as_float(_host(self.endpoints), "endpoints", xp=np, dtype=np.float64))
+        )
+        if e.ndim != 3 or e.shape[1:] != (2, 2):
+            raise InvalidInputError(f"expected endpoints of shape (N, 2, 2), got {shape_text(e)}")
+        n = e.shape[0]
+        out = {"endpoints": e}
+        for name in ("widths", "log10_nfa"):
+            v = np.asarray(
+                to_numpy(
+                    as_float(
+                        _host(getattr(self, name)), name, xp=np, dtype=np.float64, finite=False
+                    )
+                )
+            )
+            if v.shape != (n,):
+                raise InvalidInputError(
+                    f"expected {name} of shape ({n},), one per segment of endpoints, got "
+                    f"{shape_text(v)}"
+                )
+            out[name] = v
+        lg = out["log10_nfa"]
+        if np.isnan(lg).any() or (lg == np.inf).any():  # -inf: an NFA below float range
+            raise InvalidInputError("expected log10_nfa without NaN or +inf")
+        if not np.all(np.isfinite(out["widths"])) or np.any(out["widths"] < 0):
+            raise InvalidInputError("expected widths finite and >= 0 (pixels)")
+        for k, v in out.items():
+            object.__setattr__(self, k, v)
 
     def __len__(self) -> int:
         return int(self.endpoints.shape[0])
@@ -153,17 +191,23 @@ def detect_line_segments(
 
     from imageform._kernels.lsd import grow_regions, rect_alignment_counts, region_rectangles
 
-    if method == "lsd":
-        return _detect_lsd(image, sigma, angle_tolerance, min_length, log10_eps, min_density)
-    if method != "simple":
+    if method not in ("lsd", "simple"):
         raise UnknownOptionError(
             f"unknown method {method!r} for detect_line_segments; valid: 'lsd', 'simple'"
         )
-    min_length = 10.0 if min_length is None else min_length
-    check_positive(angle_tolerance, "angle_tolerance")
+    if min_length is None:
+        min_length = 0.0 if method == "lsd" else 10.0
+    angle_tolerance = check_positive(angle_tolerance, "angle_tolerance")
     if not angle_tolerance < math.pi / 2:
-        raise InvalidInputError(f"expected angle_tolerance < pi/2, got {angle_tolerance}")
-    check_positive(sigma, "sigma", allow_zero=True)
+        raise InvalidInputError(f"expected angle_tolerance < pi/2, got {angle_tolerance:g}")
+    # a Gaussian wider than 1000 px blurs any image to a constant (its kernel alone
+    # would be 8 sigma wide)
+    sigma = as_real(sigma, "sigma", minimum=0.0, maximum=1000.0)
+    min_length = as_real(min_length, "min_length", minimum=0.0, maximum=MAX_MAGNITUDE)
+    log10_eps = as_real(log10_eps, "log10_eps", minimum=-1e6, maximum=1e6)
+    min_density = as_real(min_density, "min_density", minimum=0.0, maximum=1.0)
+    if method == "lsd":
+        return _detect_lsd(image, sigma, angle_tolerance, min_length, log10_eps, min_density)
     img = _grey(image)
     if min(img.shape) < 3:
         raise InvalidInputError(f"expected an image of at least 3x3 pixels, got {img.shape}")
