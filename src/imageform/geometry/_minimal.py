@@ -1,0 +1,187 @@
+"""Batched minimal and linear solvers of epipolar geometry (no input checks: callers check).
+
+- :func:`f8` normalised 8-point (Hartley 1997), :func:`f7` 7-point (cubic in the pencil),
+  :func:`e5` 5-point essential matrix (Nister 2004, solved by the action matrix of
+  Stewenius, Engels & Nister 2006), :func:`sampson_sq` the Sampson error.
+
+Internal to :mod:`imageform.geometry`.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+
+from imageform.geometry._robust_core import hartley
+
+__all__ = ["e5", "epipolar_rows", "f7", "f8", "rank2", "sampson_sq"]
+
+F64 = NDArray[np.float64]
+
+
+def epipolar_rows(p1: F64, p2: F64) -> F64:
+    """Rows ``x2 ⊗ x1`` (..., N, 9) of the linear system ``x2ᵀ F x1 = 0`` (F row-major)."""
+    h1 = np.concatenate([p1, np.ones(p1.shape[:-1] + (1,))], axis=-1)
+    h2 = np.concatenate([p2, np.ones(p2.shape[:-1] + (1,))], axis=-1)
+    return (h2[..., :, None] * h1[..., None, :]).reshape(*p1.shape[:-1], 9)
+
+
+def rank2(F: F64) -> F64:
+    """Nearest rank-2 matrix (Frobenius), batched."""
+    U, s, Vt = np.linalg.svd(F)
+    s[..., 2] = 0.0
+    return (U * s[..., None, :]) @ Vt
+
+
+def f8(p1: F64, p2: F64, w: F64 | None = None) -> F64:
+    """Fundamental matrices (B, 3, 3) from (B, N >= 8, 2) pairs by the normalised 8-point
+    algorithm (Hartley 1997; H&Z Algorithm 11.1); optional per-point weights ``w``."""
+    n1, T1 = hartley(p1)
+    n2, T2 = hartley(p2)
+    A = epipolar_rows(n1, n2)
+    if w is not None:
+        A = A * w[..., None]
+    f = np.linalg.eigh(np.swapaxes(A, -1, -2) @ A)[1][..., 0]
+    Fn = rank2(f.reshape(*f.shape[:-1], 3, 3))
+    F = np.swapaxes(T2, -1, -2) @ Fn @ T1
+    return F / np.linalg.norm(F, axis=(-2, -1), keepdims=True)
+
+
+# det(a F1 + (1 - a) F2) at a = 0, 1, -1, 2 -> cubic coefficients (c0, c1, c2, c3)
+_VAND_INV = np.linalg.inv(np.vander(np.array([0.0, 1.0, -1.0, 2.0]), 4, increasing=True))
+
+
+def f7(p1: F64, p2: F64) -> tuple[F64, NDArray[np.intp]]:
+    """Up to three fundamental matrices per 7-point sample (B, 7, 2).
+
+    The null space of the 7 x 9 system is a pencil ``F = a F1 + (1 - a) F2``; ``det F = 0``
+    is a cubic in ``a`` whose real roots are the solutions (H&Z sec. 11.1.2). Returns the
+    matrices (M, 3, 3), unit Frobenius norm, and the sample each comes from (M,).
+    """
+    n1, T1 = hartley(p1)
+    n2, T2 = hartley(p2)
+    A = epipolar_rows(n1, n2)
+    Vt = np.linalg.svd(A, full_matrices=True)[2]
+    F1 = Vt[:, -1, :].reshape(-1, 3, 3)
+    F2 = Vt[:, -2, :].reshape(-1, 3, 3)
+    alphas = np.array([0.0, 1.0, -1.0, 2.0])
+    dets = np.linalg.det(alphas[None, :, None, None] * F1[:, None] + (1 - alphas)[None, :, None, None] * F2[:, None])
+    c = dets @ _VAND_INV.T  # (B, 4): c0 + c1 a + c2 a² + c3 a³
+    B = c.shape[0]
+    scale = np.max(np.abs(c), axis=1)
+    lead_ok = np.abs(c[:, 3]) > 1e-10 * scale
+    comp = np.zeros((B, 3, 3))
+    c3 = np.where(lead_ok, c[:, 3], 1.0)
+    comp[:, 0, :] = -c[:, 2::-1] / c3[:, None]
+    comp[:, 1, 0] = comp[:, 2, 1] = 1.0
+    roots = np.linalg.eigvals(comp)
+    real = (np.abs(roots.imag) <= 1e-8 * (1 + np.abs(roots.real))) & lead_ok[:, None]
+    src, k = np.nonzero(real)
+    a = roots.real[src, k]
+    Fn = a[:, None, None] * F1[src] + (1 - a)[:, None, None] * F2[src]
+    F = np.swapaxes(T2[src], -1, -2) @ Fn @ T1[src]
+    F = F / np.linalg.norm(F, axis=(-2, -1), keepdims=True)
+    return F, src
+
+
+def sampson_sq(F: F64, p1: F64, p2: F64) -> F64:
+    """Squared Sampson distances (..., N) of pairs (N, 2) under ``F`` (..., 3, 3).
+
+    .. math:: d^2 = \\frac{(x_2^T F x_1)^2}{(F x_1)_1^2 + (F x_1)_2^2 + (F^T x_2)_1^2
+              + (F^T x_2)_2^2}
+
+    (H&Z eq. 11.9), the first-order geometric error in the units of the points.
+    """
+    Fx1 = p1 @ np.swapaxes(F[..., :, :2], -1, -2) + F[..., None, :, 2]  # (..., N, 3)
+    Ftx2 = p2 @ F[..., :2, :] + F[..., None, 2, :]
+    num = np.sum(np.concatenate([p2, np.ones(p2.shape[:-1] + (1,))], -1) * Fx1, axis=-1)
+    den = Fx1[..., 0] ** 2 + Fx1[..., 1] ** 2 + Ftx2[..., 0] ** 2 + Ftx2[..., 1] ** 2
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return num * num / den
+
+
+# ---- 5-point: polynomial arithmetic in (x, y, z) up to degree 3 -------------------------
+_CUBICS = [(3, 0, 0), (2, 1, 0), (2, 0, 1), (1, 2, 0), (1, 1, 1), (1, 0, 2), (0, 3, 0), (0, 2, 1), (0, 1, 2), (0, 0, 3)]
+_BASIS = [(2, 0, 0), (1, 1, 0), (1, 0, 1), (0, 2, 0), (0, 1, 1), (0, 0, 2), (1, 0, 0), (0, 1, 0), (0, 0, 1), (0, 0, 0)]
+_MONO = _CUBICS + _BASIS
+_IDX = {m: i for i, m in enumerate(_MONO)}
+_PROD = np.zeros((20, 20, 20))
+for _i, _a in enumerate(_MONO):
+    for _j, _b in enumerate(_MONO):
+        _m = (_a[0] + _b[0], _a[1] + _b[1], _a[2] + _b[2])
+        if sum(_m) <= 3:
+            _PROD[_i, _j, _IDX[_m]] = 1.0
+_PROD2 = _PROD.reshape(400, 20)
+# multiplication by x of each basis monomial, as an index into _MONO
+_XB = [_IDX[(b[0] + 1, b[1], b[2])] for b in _BASIS]
+
+
+def _mul(p: F64, q: F64) -> F64:
+    B = p.shape[0]
+    return (p[:, :, None] * q[:, None, :]).reshape(B, 400) @ _PROD2
+
+
+def e5(q1: F64, q2: F64) -> tuple[F64, NDArray[np.intp]]:
+    """Essential matrices from 5 normalised correspondences (B, 5, 2) per sample.
+
+    ``E = x X + y Y + z Z + W`` over the null space of the 5 x 9 system; the ten cubic
+    constraints ``det E = 0`` and ``2 E Eᵀ E - tr(E Eᵀ) E = 0`` (Nister 2004, eqs. 1-2) are
+    reduced by Gauss-Jordan elimination on the ten cubic monomials, and the solutions are the
+    eigenvectors of the 10 x 10 action matrix of multiplication by ``x`` on the basis
+    ``{x², xy, xz, y², yz, z², x, y, z, 1}`` (Stewenius, Engels & Nister 2006). Returns the
+    real solutions (M, 3, 3) with unit Frobenius norm and the sample each comes from (M,).
+    """
+    A = epipolar_rows(q1, q2)  # (B, 5, 9)
+    Vt = np.linalg.svd(A, full_matrices=True)[2]
+    Bn = A.shape[0]
+    basis = Vt[:, 5:, :]  # X, Y, Z, W (B, 4, 9)
+    # linear polynomial of each E entry: coefficients of x, y, z, 1
+    E = np.zeros((Bn, 9, 20))
+    for k, mono in enumerate([(1, 0, 0), (0, 1, 0), (0, 0, 1), (0, 0, 0)]):
+        E[:, :, _IDX[mono]] = basis[:, k, :]
+    e = [[E[:, 3 * i + j] for j in range(3)] for i in range(3)]
+    det = (
+        _mul(e[0][0], _mul(e[1][1], e[2][2]) - _mul(e[1][2], e[2][1]))
+        - _mul(e[0][1], _mul(e[1][0], e[2][2]) - _mul(e[1][2], e[2][0]))
+        + _mul(e[0][2], _mul(e[1][0], e[2][1]) - _mul(e[1][1], e[2][0]))
+    )
+    eet = [[sum(_mul(e[i][k], e[j][k]) for k in range(3)) for j in range(3)] for i in range(3)]
+    tr = eet[0][0] + eet[1][1] + eet[2][2]
+    rows = [det]
+    for i in range(3):
+        for j in range(3):
+            rows.append(
+                2 * sum(_mul(eet[i][k], e[k][j]) for k in range(3)) - _mul(tr, e[i][j])
+            )
+    M = np.stack(rows, axis=1)  # (B, 10, 20)
+    with np.errstate(all="ignore"):
+        try:
+            C = np.linalg.solve(M[:, :, :10], M[:, :, 10:])  # cubic_i = -C_i . basis
+        except np.linalg.LinAlgError:
+            C = np.stack([_lstsq(m[:, :10], m[:, 10:]) for m in M])
+    act = np.zeros((Bn, 10, 10))
+    for j in range(10):
+        t = _XB[j]
+        if t < 10:
+            act[:, j, :] = -C[:, t, :]
+        else:
+            act[:, j, t - 10] = 1.0
+    ok = np.all(np.isfinite(act), axis=(1, 2))
+    act[~ok] = 0.0
+    w, v = np.linalg.eig(act)
+    real = (np.abs(w.imag) <= 1e-8 * (1 + np.abs(w.real))) & ok[:, None]
+    src, k = np.nonzero(real)
+    vec = v[src, :, k].real  # (M, 10)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        x = w.real[src, k]
+        y = vec[:, 7] / vec[:, 9]
+        z = vec[:, 8] / vec[:, 9]
+    coef = np.stack([x, y, z, np.ones_like(x)], axis=-1)  # (M, 4)
+    Es = np.einsum("mk,mkj->mj", coef, basis[src]).reshape(-1, 3, 3)
+    Es = Es / np.linalg.norm(Es, axis=(-2, -1), keepdims=True)
+    good = np.all(np.isfinite(Es), axis=(-2, -1))
+    return Es[good], src[good]
+
+
+def _lstsq(a: F64, b: F64) -> F64:
+    return np.linalg.lstsq(a, b, rcond=None)[0]

@@ -1,0 +1,203 @@
+"""The RANSAC engine, a small Levenberg-Marquardt solver and input checks shared by the
+robust two-view estimators (:mod:`imageform.geometry.robust`, :mod:`.twoview`).
+
+Internal to :mod:`imageform.geometry`.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+
+import numpy as np
+from numpy.typing import NDArray
+
+from imageform._backend import to_numpy
+from imageform._validate import as_points, check_positive, describe
+from imageform.errors import InvalidInputError
+
+__all__ = [
+    "check_confidence",
+    "check_pairs",
+    "hartley",
+    "levenberg_marquardt",
+    "ransac",
+    "trials_needed",
+]
+
+F64 = NDArray[np.float64]
+
+#: Minimal samples drawn and solved together (one batched solve).
+BATCH = 32
+
+
+def check_pairs(a: object, b: object, name_a: str, name_b: str, n_min: int) -> tuple[F64, F64]:
+    """Two point sets ``(N, 2)`` of the same length ``N >= n_min``, finite, as float64."""
+    pa = np.asarray(to_numpy(as_points(a, name_a, 2)), dtype=np.float64)
+    pb = np.asarray(to_numpy(as_points(b, name_b, 2)), dtype=np.float64)
+    if pa.ndim != 2:
+        raise InvalidInputError(f"expected {name_a} of shape (N, 2), got {pa.shape}")
+    if pb.ndim != 2:
+        raise InvalidInputError(f"expected {name_b} of shape (N, 2), got {pb.shape}")
+    if pa.shape[0] != pb.shape[0]:
+        raise InvalidInputError(
+            f"expected {name_a} and {name_b} of the same length, got {pa.shape[0]} and {pb.shape[0]}"
+        )
+    if pa.shape[0] < n_min:
+        raise InvalidInputError(
+            f"expected at least {n_min} correspondences in {name_a}, {name_b}, got {pa.shape[0]}"
+        )
+    return pa, pb
+
+
+def check_confidence(confidence: object) -> float:
+    p = check_positive(confidence, "confidence")
+    if p >= 1.0:
+        raise InvalidInputError(f"expected confidence in (0, 1), got {describe(confidence)}")
+    return p
+
+
+def hartley(p: F64) -> tuple[F64, F64]:
+    """Points ``(..., N, 2)`` centred with mean distance sqrt(2), and ``T`` (..., 3, 3).
+
+    Hartley & Zisserman (2nd ed.) sec. 4.4.4; coincident points keep scale 1.
+    """
+    c = p.mean(axis=-2, keepdims=True)
+    d = np.sqrt(np.sum((p - c) ** 2, axis=-1)).mean(axis=-1)
+    s = np.where(d > 0, math.sqrt(2.0) / np.where(d > 0, d, 1.0), 1.0)
+    T = np.zeros((*p.shape[:-2], 3, 3))
+    T[..., 0, 0] = T[..., 1, 1] = s
+    T[..., :2, 2] = -c[..., 0, :] * s[..., None]
+    T[..., 2, 2] = 1.0
+    return (p - c) * s[..., None, None], T
+
+
+def trials_needed(n_inliers: int, n: int, s: int, confidence: float) -> float:
+    """Samples for probability ``confidence`` of one outlier-free sample of size ``s``.
+
+    .. math:: k = \\frac{\\log(1 - p)}{\\log(1 - \\varepsilon^s)}
+
+    (Fischler & Bolles 1981; Hartley & Zisserman 2nd ed., Algorithm 4.5.)
+    """
+    eps = n_inliers / n
+    if eps >= 1.0:
+        return 0.0
+    if eps <= 0.0:
+        return math.inf
+    denom = math.log1p(-(eps**s))
+    if denom == 0.0:
+        return math.inf
+    return math.log1p(-confidence) / denom
+
+
+def ransac(
+    n: int,
+    s: int,
+    solve: Callable[[NDArray[np.intp]], F64],
+    sq_errors: Callable[[F64], F64],
+    threshold: float,
+    confidence: float,
+    max_trials: int,
+    rng: np.random.Generator,
+    local_opt: Callable[[F64, NDArray[np.bool_]], F64] | None = None,
+) -> tuple[F64 | None, NDArray[np.bool_], int]:
+    """MSAC with adaptive trial count and LO-RANSAC local optimisation.
+
+    ``solve(idx (B, s))`` returns models ``(M, ...)`` (any number per sample, NaN-free);
+    ``sq_errors(models)`` their squared residuals ``(M, n)``. Each model is scored by the
+    truncated quadratic ``Σ min(e², τ²)`` (MSAC, Torr & Zisserman 2000); every new best model
+    is handed to ``local_opt(model, inliers)`` (LO-RANSAC, Chum, Matas & Kittler 2003), whose
+    result replaces it when it scores better. Returns ``(best model or None, inliers,
+    trials)``.
+    """
+    thr2 = threshold * threshold
+    best_model: F64 | None = None
+    best_score = math.inf
+    best_inl = np.zeros(n, dtype=bool)
+    needed = float(max_trials)
+    drawn = 0
+
+    def score(models: F64) -> tuple[F64, NDArray[np.bool_]]:
+        e = sq_errors(models)
+        e = np.where(np.isfinite(e), e, thr2)
+        return np.minimum(e, thr2).sum(axis=-1), e < thr2
+
+    while drawn < min(needed, max_trials):
+        b = int(min(BATCH, max(1, max_trials - drawn)))
+        idx = np.argsort(rng.random((b, n)), axis=1)[:, :s]
+        drawn += b
+        with np.errstate(all="ignore"):
+            models = solve(idx)
+        if models.shape[0] == 0:
+            continue
+        sc, inl = score(models)
+        k = int(np.argmin(sc))
+        if sc[k] >= best_score:
+            continue
+        best_model, best_score, best_inl = models[k], float(sc[k]), inl[k]
+        if local_opt is not None and best_inl.sum() > s:
+            with np.errstate(all="ignore"):
+                lo = local_opt(best_model, best_inl)
+            if lo is not None and np.all(np.isfinite(lo)):
+                sc2, inl2 = score(lo[None])
+                if sc2[0] < best_score:
+                    best_model, best_score, best_inl = lo, float(sc2[0]), inl2[0]
+        needed = trials_needed(int(best_inl.sum()), n, s, confidence)
+    return best_model, best_inl, drawn
+
+
+def levenberg_marquardt(
+    residual: Callable[[F64], F64],
+    p0: F64,
+    *,
+    max_iter: int = 50,
+    tol: float = 1e-12,
+    jacobian: Callable[[F64], F64] | None = None,
+) -> tuple[F64, float]:
+    """Minimise ``‖r(p)‖²`` by Levenberg-Marquardt (Marquardt 1963, scaled damping).
+
+    The Jacobian is ``jacobian(p)`` when given, else central differences. Returns the
+    parameters and the final cost ``‖r‖²``.
+    """
+    p = np.asarray(p0, dtype=np.float64).copy()
+    r = residual(p)
+    cost = float(r @ r)
+    lam = 1e-3
+    gain = 0.0
+
+    def num_jac(q: F64) -> F64:
+        cols = []
+        for i in range(q.size):
+            h = 1e-6 * max(1.0, abs(q[i]))
+            e = np.zeros_like(q)
+            e[i] = h
+            cols.append((residual(q + e) - residual(q - e)) / (2 * h))
+        return np.stack(cols, axis=-1)
+
+    jac = jacobian if jacobian is not None else num_jac
+    for _ in range(max_iter):
+        J = jac(p)
+        A = J.T @ J
+        g = J.T @ r
+        D = np.diag(A).copy()
+        D[D <= 0] = 1.0
+        improved = False
+        while lam < 1e10:
+            try:
+                step = -np.linalg.solve(A + lam * np.diag(D), g)
+            except np.linalg.LinAlgError:
+                lam *= 10.0
+                continue
+            pn = p + step
+            rn = residual(pn)
+            cn = float(rn @ rn)
+            if np.isfinite(cn) and cn <= cost:
+                gain = cost - cn
+                p, r, cost = pn, rn, cn
+                lam = max(lam / 10.0, 1e-12)
+                improved = True
+                break
+            lam *= 10.0
+        if not improved or gain <= tol * max(cost, 1e-300):
+            break
+    return p, cost
