@@ -111,14 +111,31 @@ for _i, _a in enumerate(_MONO):
         _m = (_a[0] + _b[0], _a[1] + _b[1], _a[2] + _b[2])
         if sum(_m) <= 3:
             _PROD[_i, _j, _IDX[_m]] = 1.0
-_PROD2 = _PROD.reshape(400, 20)
+_LIN = [_IDX[m] for m in [(1, 0, 0), (0, 1, 0), (0, 0, 1), (0, 0, 0)]]
+_QUAD = list(range(10, 20))
+# products of (linear x linear) -> quadratic (16, 10) and (quadratic x linear) -> cubic (40, 20)
+_T_LL = _PROD[np.ix_(_LIN, _LIN, _QUAD)].reshape(16, 10)
+_T_QL = _PROD[np.ix_(_QUAD, _LIN, list(range(20)))].reshape(40, 20)
 # multiplication by x of each basis monomial, as an index into _MONO
 _XB = [_IDX[(b[0] + 1, b[1], b[2])] for b in _BASIS]
 
 
-def _mul(p: F64, q: F64) -> F64:
-    B = p.shape[0]
-    return (p[:, :, None] * q[:, None, :]).reshape(B, 400) @ _PROD2
+def _constraints(L: F64) -> F64:
+    """The ten cubics (B, 10, 20) from the linear entries ``L`` (B, 3, 3, 4) of ``E``."""
+    B = L.shape[0]
+    # E Eᵀ (B, 3, 3, 10): sum_k E_ik E_jk
+    eet = np.einsum("bikp,bjkq->bijpq", L, L).reshape(B, 3, 3, 16) @ _T_LL
+    tr = eet[:, 0, 0] + eet[:, 1, 1] + eet[:, 2, 2]  # (B, 10)
+    eete = np.einsum("bikp,bkjq->bijpq", eet, L).reshape(B, 3, 3, 40) @ _T_QL
+    tre = np.einsum("bp,bijq->bijpq", tr, L).reshape(B, 3, 3, 40) @ _T_QL
+    trace_rows = (2.0 * eete - tre).reshape(B, 9, 20)
+    # det E = sum_j E_0j cof_0j, cofactors from the rows 1 and 2 (quadratics)
+    c = np.einsum("bp,bq->bpq", L[:, 1, 1], L[:, 2, 2]) - np.einsum("bp,bq->bpq", L[:, 1, 2], L[:, 2, 1])
+    c1 = np.einsum("bp,bq->bpq", L[:, 1, 2], L[:, 2, 0]) - np.einsum("bp,bq->bpq", L[:, 1, 0], L[:, 2, 2])
+    c2 = np.einsum("bp,bq->bpq", L[:, 1, 0], L[:, 2, 1]) - np.einsum("bp,bq->bpq", L[:, 1, 1], L[:, 2, 0])
+    cof = np.stack([c, c1, c2], axis=1).reshape(B, 3, 16) @ _T_LL  # (B, 3, 10)
+    det = np.einsum("bjp,bjq->bpq", cof, L[:, 0]).reshape(B, 40) @ _T_QL
+    return np.concatenate([det[:, None], trace_rows], axis=1)
 
 
 def e5(q1: F64, q2: F64) -> tuple[F64, NDArray[np.intp]]:
@@ -135,25 +152,9 @@ def e5(q1: F64, q2: F64) -> tuple[F64, NDArray[np.intp]]:
     Vt = np.linalg.svd(A, full_matrices=True)[2]
     Bn = A.shape[0]
     basis = Vt[:, 5:, :]  # X, Y, Z, W (B, 4, 9)
-    # linear polynomial of each E entry: coefficients of x, y, z, 1
-    E = np.zeros((Bn, 9, 20))
-    for k, mono in enumerate([(1, 0, 0), (0, 1, 0), (0, 0, 1), (0, 0, 0)]):
-        E[:, :, _IDX[mono]] = basis[:, k, :]
-    e = [[E[:, 3 * i + j] for j in range(3)] for i in range(3)]
-    det = (
-        _mul(e[0][0], _mul(e[1][1], e[2][2]) - _mul(e[1][2], e[2][1]))
-        - _mul(e[0][1], _mul(e[1][0], e[2][2]) - _mul(e[1][2], e[2][0]))
-        + _mul(e[0][2], _mul(e[1][0], e[2][1]) - _mul(e[1][1], e[2][0]))
-    )
-    eet = [[sum(_mul(e[i][k], e[j][k]) for k in range(3)) for j in range(3)] for i in range(3)]
-    tr = eet[0][0] + eet[1][1] + eet[2][2]
-    rows = [det]
-    for i in range(3):
-        for j in range(3):
-            rows.append(
-                2 * sum(_mul(eet[i][k], e[k][j]) for k in range(3)) - _mul(tr, e[i][j])
-            )
-    M = np.stack(rows, axis=1)  # (B, 10, 20)
+    # linear polynomial of each E entry: coefficients of x, y, z, 1 (B, 3, 3, 4)
+    L = np.moveaxis(basis, 1, 2).reshape(Bn, 3, 3, 4)
+    M = _constraints(L)
     with np.errstate(all="ignore"):
         try:
             C = np.linalg.solve(M[:, :, :10], M[:, :, 10:])  # cubic_i = -C_i . basis

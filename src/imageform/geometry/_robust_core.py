@@ -17,6 +17,7 @@ from imageform._validate import as_points, check_positive, describe
 from imageform.errors import InvalidInputError
 
 __all__ = [
+    "REFINE_FACTOR",
     "check_confidence",
     "check_pairs",
     "hartley",
@@ -29,6 +30,13 @@ F64 = NDArray[np.float64]
 
 #: Minimal samples drawn and solved together (one batched solve).
 BATCH = 32
+
+#: The final least-squares refinement uses the correspondences within this multiple of the
+#: inlier threshold: the consensus threshold clips the tail of the inlier distribution (at
+#: tau = 2 sigma a tenth of the true inliers lie beyond it), and a wider support for the
+#: least-squares step is Lebeda, Matas & Chum (2012), "Fixing the locally optimized RANSAC",
+#: BMVC (threshold multiplier K).
+REFINE_FACTOR = 2.0
 
 
 def check_pairs(a: object, b: object, name_a: str, name_b: str, n_min: int) -> tuple[F64, F64]:

@@ -24,6 +24,7 @@ from imageform.geometry._robust_core import (
     levenberg_marquardt,
     ransac,
 )
+from imageform.geometry import _robust_core
 
 __all__ = ["HomographyResult", "find_homography"]
 
@@ -214,12 +215,14 @@ def find_homography(
             f"no homography with at least 4 inliers within {thr:g} px after {drawn} samples"
         )
     if mode != "none" and inl.sum() > 4:
-        for _ in range(2):
-            H = _refine(H, s[inl], d[inl], mode, n_iter)
-            new = _sq_forward(H, s, d) < thr * thr
-            if new.sum() < 4 or np.array_equal(new, inl):
+        wide = thr * _robust_core.REFINE_FACTOR
+        sel = _sq_forward(H, s, d) < wide * wide
+        for _ in range(3):
+            H = _refine(H, s[sel], d[sel], mode, n_iter)
+            new = _sq_forward(H, s, d) < wide * wide
+            if new.sum() < 4 or np.array_equal(new, sel):
                 break
-            inl = new
+            sel = new
     H = _normalise_scale(H)
     e = _sq_forward(H, s, d)
     inl = e < thr * thr

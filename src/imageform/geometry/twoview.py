@@ -31,6 +31,7 @@ from imageform.geometry._robust_core import (
     levenberg_marquardt,
     ransac,
 )
+from imageform.geometry import _robust_core
 from imageform.geometry.calibration_refine import rodrigues
 
 __all__ = [
@@ -322,12 +323,14 @@ def find_fundamental_matrix(
             f"no fundamental matrix with at least 8 inliers within {thr:g} px after {drawn} samples"
         )
     F = rank2(F)
-    for _ in range(2):
-        F = _refine_f(F, p1[inl], p2[inl], n_iter)
-        new = sampson_sq(F, p1, p2) < thr * thr
-        if new.sum() < 8 or np.array_equal(new, inl):
+    wide = thr * _robust_core.REFINE_FACTOR
+    sel = sampson_sq(F, p1, p2) < wide * wide
+    for _ in range(3):
+        F = _refine_f(F, p1[sel], p2[sel], n_iter)
+        new = sampson_sq(F, p1, p2) < wide * wide
+        if new.sum() < 8 or np.array_equal(new, sel):
             break
-        inl = new
+        sel = new
     F = _unit(F)
     e = sampson_sq(F, p1, p2)
     inl = e < thr * thr
@@ -473,11 +476,11 @@ def find_essential_matrix(
         return E / np.linalg.norm(E)
 
     def local_opt(E: F64, inl: NDArray[np.bool_]) -> F64:
-        for m in (2.0, 1.5, 1.0):
+        for m in (2.0, 1.0):
             sel = sq(E) < (m * thr) ** 2
-            if sel.sum() < 8:
+            if sel.sum() < 6:
                 break
-            E = project_e(f8(q1[sel][None], q2[sel][None])[0])
+            E = _refine_e(E, q1[sel], q2[sel], Ka, Kb, p1[sel], p2[sel], 10)
         return E
 
     E, inl, drawn = ransac(n, 5, solve, sq, thr, p, trials, gen, local_opt)
@@ -486,12 +489,14 @@ def find_essential_matrix(
             f"no essential matrix with at least 5 inliers within {thr:g} px after {drawn} samples"
         )
     E = project_e(E)
-    for _ in range(2):
-        E = _refine_e(E, q1[inl], q2[inl], Ka, Kb, p1[inl], p2[inl], n_iter)
-        new = sq(E) < thr * thr
-        if new.sum() < 5 or np.array_equal(new, inl):
+    wide = thr * _robust_core.REFINE_FACTOR
+    sel = sq(E) < wide * wide
+    for _ in range(3):
+        E = _refine_e(E, q1[sel], q2[sel], Ka, Kb, p1[sel], p2[sel], n_iter)
+        new = sq(E) < wide * wide
+        if new.sum() < 5 or np.array_equal(new, sel):
             break
-        inl = new
+        sel = new
     E = _unit(project_e(E))
     e = sq(E)
     inl = e < thr * thr
