@@ -215,8 +215,9 @@ def find_homography(
             f"no homography with at least 4 inliers within {thr:g} px after {drawn} samples"
         )
     if mode != "none" and inl.sum() > 4:
-        wide = thr * _robust_core.REFINE_FACTOR
-        sel = _sq_forward(H, s, d) < wide * wide
+        e0 = _sq_forward(H, s, d)
+        wide = _robust_core.refine_support(e0[e0 < thr * thr], thr, 2)
+        sel = e0 < wide * wide
         for _ in range(3):
             H = _refine(H, s[sel], d[sel], mode, n_iter)
             new = _sq_forward(H, s, d) < wide * wide

@@ -323,8 +323,9 @@ def find_fundamental_matrix(
             f"no fundamental matrix with at least 8 inliers within {thr:g} px after {drawn} samples"
         )
     F = rank2(F)
-    wide = thr * _robust_core.REFINE_FACTOR
-    sel = sampson_sq(F, p1, p2) < wide * wide
+    e0 = sampson_sq(F, p1, p2)
+    wide = _robust_core.refine_support(e0[e0 < thr * thr], thr, 1)
+    sel = e0 < wide * wide
     for _ in range(3):
         F = _refine_f(F, p1[sel], p2[sel], n_iter)
         new = sampson_sq(F, p1, p2) < wide * wide
@@ -489,8 +490,9 @@ def find_essential_matrix(
             f"no essential matrix with at least 5 inliers within {thr:g} px after {drawn} samples"
         )
     E = project_e(E)
-    wide = thr * _robust_core.REFINE_FACTOR
-    sel = sq(E) < wide * wide
+    e0 = sq(E)
+    wide = _robust_core.refine_support(e0[e0 < thr * thr], thr, 1)
+    sel = e0 < wide * wide
     for _ in range(3):
         E = _refine_e(E, q1[sel], q2[sel], Ka, Kb, p1[sel], p2[sel], n_iter)
         new = sq(E) < wide * wide
