@@ -17,6 +17,7 @@ from imageform._validate import as_points, check_positive, describe
 from imageform.errors import InvalidInputError
 
 __all__ = [
+    "rotation",
     "REFINE_FACTOR",
     "refine_support",
     "check_confidence",
@@ -96,6 +97,16 @@ def trials_needed(n_inliers: int, n: int, s: int, confidence: float) -> float:
     return math.log1p(-confidence) / denom
 
 
+def _samples(rng: np.random.Generator, b: int, n: int, s: int) -> NDArray[np.intp]:
+    """``b`` samples of ``s`` distinct indices in ``[0, n)`` (rows with repeats redrawn)."""
+    out = np.empty((0, s), dtype=np.intp)
+    while out.shape[0] < b:
+        idx = rng.integers(0, n, (2 * b, s))
+        srt = np.sort(idx, axis=1)
+        out = np.concatenate([out, idx[np.all(srt[:, 1:] != srt[:, :-1], axis=1)]])
+    return out[:b]
+
+
 def ransac(
     n: int,
     s: int,
@@ -130,7 +141,7 @@ def ransac(
 
     while drawn < min(needed, max_trials):
         b = int(min(BATCH, max(1, max_trials - drawn)))
-        idx = np.argsort(rng.random((b, n)), axis=1)[:, :s]
+        idx = _samples(rng, b, n, s)
         drawn += b
         with np.errstate(all="ignore"):
             models = solve(idx)
@@ -253,3 +264,15 @@ def refine_support(sq_err: F64, threshold: float, dof: int) -> float:
             b = mid
     sigma = math.sqrt(a * b)
     return float(min(max(3.0 * sigma, threshold), REFINE_FACTOR * threshold))
+
+
+def rotation(w: F64) -> F64:
+    """``R = exp([w]ₓ)`` of one rotation vector (3,) (Rodrigues' formula, series near 0)."""
+    th2 = float(w @ w)
+    if th2 < 1e-12:
+        a, b = 1.0 - th2 / 6.0, 0.5 - th2 / 24.0
+    else:
+        th = math.sqrt(th2)
+        a, b = math.sin(th) / th, (1.0 - math.cos(th)) / th2
+    Kx = np.array([[0.0, -w[2], w[1]], [w[2], 0.0, -w[0]], [-w[1], w[0], 0.0]])
+    return np.eye(3) + a * Kx + b * (Kx @ Kx)

@@ -25,6 +25,7 @@ from imageform.geometry._robust_core import (
     ransac,
 )
 from imageform.geometry import _robust_core
+from imageform.geometry._minimal import null_space
 
 __all__ = ["HomographyResult", "find_homography"]
 
@@ -58,7 +59,7 @@ def _dlt(s: F64, d: F64, w: F64 | None = None) -> F64:
         r1, r2 = r1 * w[..., None], r2 * w[..., None]
     A = np.concatenate((r1, r2), axis=-2)
     if A.shape[-2] < 9:
-        h = np.linalg.svd(A, full_matrices=True)[2][..., -1, :]
+        h = null_space(A)[..., 0]
     else:
         h = np.linalg.eigh(np.swapaxes(A, -1, -2) @ A)[1][..., 0]
     return h.reshape(*h.shape[:-1], 3, 3)

@@ -30,9 +30,9 @@ from imageform.geometry._robust_core import (
     hartley,
     levenberg_marquardt,
     ransac,
+    rotation,
 )
 from imageform.geometry import _robust_core
-from imageform.geometry.calibration_refine import rodrigues
 
 __all__ = [
     "EssentialResult",
@@ -211,8 +211,8 @@ def _refine_f(F: F64, p1: F64, p2: F64, max_iter: int) -> F64:
     U0, V0, s0 = _rot_basis(Fn)
 
     def build(q: F64) -> F64:
-        U = rodrigues(q[None, :3])[0] @ U0
-        V = rodrigues(q[None, 3:6])[0] @ V0
+        U = rotation(q[:3]) @ U0
+        V = rotation(q[3:6]) @ V0
         return T2.T @ ((U * np.array([1.0, q[6], 0.0])) @ V.T) @ T1
 
     def residual(q: F64) -> F64:
@@ -370,7 +370,7 @@ def _refine_e(E: F64, q1: F64, q2: F64, K1: F64, K2: F64, p1: F64, p2: F64, max_
     K1i, K2i = np.linalg.inv(K1), np.linalg.inv(K2)
 
     def build(q: F64) -> F64:
-        R = rodrigues(q[None, :3])[0] @ R0
+        R = rotation(q[:3]) @ R0
         t = t0 + q[3] * b1 + q[4] * b2
         return _essential_from_rt(R, t / np.linalg.norm(t))
 
