@@ -41,9 +41,7 @@ def _project(X: np.ndarray, R: np.ndarray, t: np.ndarray) -> np.ndarray:
     return h[:, :2] / h[:, 2:]
 
 
-def scene(
-    seed: int, n: int, outliers: float, sigma: float, planar: bool
-) -> dict[str, Any]:
+def scene(seed: int, n: int, outliers: float, sigma: float, planar: bool) -> dict[str, Any]:
     """Noise-free and noisy correspondences of one random two-view scene."""
     rng = np.random.default_rng(seed)
     R = _rot(rng.normal(0.0, 0.15, 3))
@@ -86,7 +84,9 @@ def _timed(fn: Callable[[], Any], repeat: int) -> tuple[Any, float]:
     return out, statistics.median(times)
 
 
-def run(args: argparse.Namespace) -> str:
+def _one_scene(
+    s: int, args: argparse.Namespace, add: Callable[[str, str, float, float], None]
+) -> None:
     import cv2
 
     from imageform.geometry import (
@@ -98,92 +98,173 @@ def run(args: argparse.Namespace) -> str:
     )
     from imageform.geometry._minimal import sampson_sq
 
+    # --- homography (plane) -----------------------------------------------------
+    sc = scene(1000 + s, args.n, args.outliers, args.sigma, planar=True)
+    u1, u2, n1, n2 = sc["u1"], sc["u2"], sc["n1"], sc["n2"]
+
+    def h_err(Hm: np.ndarray) -> float:
+        q = np.c_[u1, np.ones(len(u1))] @ Hm.T
+        return float(np.sqrt(np.mean(np.sum((q[:, :2] / q[:, 2:] - u2) ** 2, -1))))
+
+    cv2.setRNGSeed(s)
+    Hc, t_c = _timed(lambda: cv2.findHomography(n1, n2, cv2.RANSAC, args.h_thr)[0], args.repeat)
+    add(
+        "homography: RMS transfer error of the true points (px)",
+        "OpenCV findHomography RANSAC",
+        h_err(Hc),
+        t_c,
+    )
+    cv2.setRNGSeed(s)
+    Hm, t_m = _timed(
+        lambda: cv2.findHomography(n1, n2, cv2.USAC_MAGSAC, args.h_thr)[0], args.repeat
+    )
+    add(
+        "homography: RMS transfer error of the true points (px)",
+        "OpenCV findHomography USAC_MAGSAC",
+        h_err(Hm),
+        t_m,
+    )
+    res, t_i = _timed(lambda: find_homography(n1, n2, threshold=args.h_thr, rng=s), args.repeat)
+    add(
+        "homography: RMS transfer error of the true points (px)",
+        "imageform find_homography",
+        h_err(res.H),
+        t_i,
+    )
+
+    # --- fundamental / essential / pose (general scene) ---------------------------
+    sc = scene(2000 + s, args.n, args.outliers, args.sigma, planar=False)
+    u1, u2, n1, n2 = sc["u1"], sc["u2"], sc["n1"], sc["n2"]
+
+    def f_err(F: np.ndarray) -> float:
+        return float(np.sqrt(np.mean(sampson_sq(F, u1, u2))))
+
+    cv2.setRNGSeed(s)
+    Fc, t_c = _timed(
+        lambda: cv2.findFundamentalMat(n1, n2, cv2.FM_RANSAC, args.f_thr, 0.999)[0], args.repeat
+    )
+    add(
+        "fundamental: RMS Sampson distance of the true points (px)",
+        "OpenCV findFundamentalMat FM_RANSAC",
+        f_err(Fc[:3]),
+        t_c,
+    )
+    cv2.setRNGSeed(s)
+    Fm, t_m = _timed(
+        lambda: cv2.findFundamentalMat(n1, n2, cv2.USAC_MAGSAC, args.f_thr, 0.999)[0],
+        args.repeat,
+    )
+    add(
+        "fundamental: RMS Sampson distance of the true points (px)",
+        "OpenCV findFundamentalMat USAC_MAGSAC",
+        f_err(Fm[:3]),
+        t_m,
+    )
+    resf, t_i = _timed(
+        lambda: find_fundamental_matrix(n1, n2, threshold=args.f_thr, rng=s), args.repeat
+    )
+    add(
+        "fundamental: RMS Sampson distance of the true points (px)",
+        "imageform find_fundamental_matrix",
+        f_err(resf.F),
+        t_i,
+    )
+
+    cv2.setRNGSeed(s)
+    (Ec, mc), t_c = _timed(
+        lambda: cv2.findEssentialMat(n1, n2, K, cv2.RANSAC, 0.999, args.f_thr), args.repeat
+    )
+    rese, t_i = _timed(
+        lambda: find_essential_matrix(n1, n2, K, threshold=args.f_thr, rng=s), args.repeat
+    )
+    mc = mc.ravel().astype(bool)
+    Ec = Ec[:3]
+    # pose of each library from its own E
+    (_, Rc, tc, _), t_pc = _timed(
+        lambda: cv2.recoverPose(Ec, n1, n2, K, mask=mc.astype(np.uint8).copy()), args.repeat
+    )
+    pose, t_pi = _timed(lambda: recover_pose(rese.E, n1, n2, K, inliers=rese.inliers), args.repeat)
+    add(
+        "essential + pose: rotation error (deg)",
+        "OpenCV findEssentialMat + recoverPose",
+        _angle_deg(Rc, sc["R"]),
+        t_c + t_pc,
+    )
+    add(
+        "essential + pose: rotation error (deg)",
+        "imageform find_essential_matrix + recover_pose",
+        _angle_deg(pose.R, sc["R"]),
+        t_i + t_pi,
+    )
+    add(
+        "essential + pose: translation direction error (deg)",
+        "OpenCV findEssentialMat + recoverPose",
+        _dir_deg(tc.ravel(), sc["t"]),
+        t_c + t_pc,
+    )
+    add(
+        "essential + pose: translation direction error (deg)",
+        "imageform find_essential_matrix + recover_pose",
+        _dir_deg(pose.t, sc["t"]),
+        t_i + t_pi,
+    )
+    # recoverPose alone, on the same (OpenCV's) E and mask
+    (_, Rc2, _tc2, _), t_c = _timed(
+        lambda: cv2.recoverPose(Ec, n1, n2, K, mask=mc.astype(np.uint8).copy()), args.repeat
+    )
+    pose2, t_i = _timed(lambda: recover_pose(Ec, n1, n2, K, inliers=mc), args.repeat)
+    add(
+        "recoverPose on the same E: rotation error (deg)",
+        "OpenCV recoverPose",
+        _angle_deg(Rc2, sc["R"]),
+        t_c,
+    )
+    add(
+        "recoverPose on the same E: rotation error (deg)",
+        "imageform recover_pose",
+        _angle_deg(pose2.R, sc["R"]),
+        t_i,
+    )
+
+    # --- triangulation (true cameras, noisy inlier pixels) -----------------------------
+    inl = ~sc["out"]
+    P1 = K @ np.hstack([np.eye(3), np.zeros((3, 1))])
+    P2 = K @ np.hstack([sc["R"], sc["t"][:, None]])
+    a, b = n1[inl], n2[inl]
+    Xt = sc["X"][inl]
+
+    def x_err(X: np.ndarray) -> float:
+        return float(np.median(np.linalg.norm(X - Xt, axis=-1)))
+
+    Xc, t_c = _timed(lambda: cv2.triangulatePoints(P1, P2, a.T, b.T), args.repeat)
+    add(
+        "triangulation: median 3-D error (baseline = 1)",
+        "OpenCV triangulatePoints",
+        x_err((Xc[:3] / Xc[3]).T),
+        t_c,
+    )
+    for method in ("linear", "midpoint", "optimal"):
+
+        def tri(m: str = method) -> Any:
+            return triangulate_two_view(P1, P2, a, b, method=m)
+
+        r, t_i = _timed(tri, args.repeat)
+        add(
+            "triangulation: median 3-D error (baseline = 1)",
+            f"imageform triangulate_two_view {method}",
+            x_err(r.points),
+            t_i,
+        )
+
+
+def run(args: argparse.Namespace) -> str:
     rec: dict[tuple[str, str], list[tuple[float, float]]] = {}
 
     def add(task: str, who: str, err: float, sec: float) -> None:
         rec.setdefault((task, who), []).append((err, sec))
 
     for s in range(args.scenes):
-        # --- homography (plane) -----------------------------------------------------
-        sc = scene(1000 + s, args.n, args.outliers, args.sigma, planar=True)
-        u1, u2, n1, n2 = sc["u1"], sc["u2"], sc["n1"], sc["n2"]
-
-        def h_err(Hm: np.ndarray) -> float:
-            q = np.c_[u1, np.ones(len(u1))] @ Hm.T
-            return float(np.sqrt(np.mean(np.sum((q[:, :2] / q[:, 2:] - u2) ** 2, -1))))
-
-        cv2.setRNGSeed(s)
-        Hc, t_c = _timed(lambda: cv2.findHomography(n1, n2, cv2.RANSAC, args.h_thr)[0], args.repeat)
-        add("homography: RMS transfer error of the true points (px)", "OpenCV findHomography RANSAC", h_err(Hc), t_c)
-        cv2.setRNGSeed(s)
-        Hm, t_m = _timed(lambda: cv2.findHomography(n1, n2, cv2.USAC_MAGSAC, args.h_thr)[0], args.repeat)
-        add("homography: RMS transfer error of the true points (px)", "OpenCV findHomography USAC_MAGSAC", h_err(Hm), t_m)
-        res, t_i = _timed(lambda: find_homography(n1, n2, threshold=args.h_thr, rng=s), args.repeat)
-        add("homography: RMS transfer error of the true points (px)", "imageform find_homography", h_err(res.H), t_i)
-
-        # --- fundamental / essential / pose (general scene) ---------------------------
-        sc = scene(2000 + s, args.n, args.outliers, args.sigma, planar=False)
-        u1, u2, n1, n2 = sc["u1"], sc["u2"], sc["n1"], sc["n2"]
-
-        def f_err(F: np.ndarray) -> float:
-            return float(np.sqrt(np.mean(sampson_sq(F, u1, u2))))
-
-        cv2.setRNGSeed(s)
-        Fc, t_c = _timed(
-            lambda: cv2.findFundamentalMat(n1, n2, cv2.FM_RANSAC, args.f_thr, 0.999)[0], args.repeat
-        )
-        add("fundamental: RMS Sampson distance of the true points (px)", "OpenCV findFundamentalMat FM_RANSAC", f_err(Fc[:3]), t_c)
-        cv2.setRNGSeed(s)
-        Fm, t_m = _timed(
-            lambda: cv2.findFundamentalMat(n1, n2, cv2.USAC_MAGSAC, args.f_thr, 0.999)[0], args.repeat
-        )
-        add("fundamental: RMS Sampson distance of the true points (px)", "OpenCV findFundamentalMat USAC_MAGSAC", f_err(Fm[:3]), t_m)
-        resf, t_i = _timed(
-            lambda: find_fundamental_matrix(n1, n2, threshold=args.f_thr, rng=s), args.repeat
-        )
-        add("fundamental: RMS Sampson distance of the true points (px)", "imageform find_fundamental_matrix", f_err(resf.F), t_i)
-
-        cv2.setRNGSeed(s)
-        (Ec, mc), t_c = _timed(
-            lambda: cv2.findEssentialMat(n1, n2, K, cv2.RANSAC, 0.999, args.f_thr), args.repeat
-        )
-        rese, t_i = _timed(
-            lambda: find_essential_matrix(n1, n2, K, threshold=args.f_thr, rng=s), args.repeat
-        )
-        mc = mc.ravel().astype(bool)
-        Ec = Ec[:3]
-        # pose of each library from its own E
-        (_, Rc, tc, _), t_pc = _timed(
-            lambda: cv2.recoverPose(Ec, n1, n2, K, mask=mc.astype(np.uint8).copy()), args.repeat
-        )
-        pose, t_pi = _timed(lambda: recover_pose(rese.E, n1, n2, K, inliers=rese.inliers), args.repeat)
-        add("essential + pose: rotation error (deg)", "OpenCV findEssentialMat + recoverPose", _angle_deg(Rc, sc["R"]), t_c + t_pc)
-        add("essential + pose: rotation error (deg)", "imageform find_essential_matrix + recover_pose", _angle_deg(pose.R, sc["R"]), t_i + t_pi)
-        add("essential + pose: translation direction error (deg)", "OpenCV findEssentialMat + recoverPose", _dir_deg(tc.ravel(), sc["t"]), t_c + t_pc)
-        add("essential + pose: translation direction error (deg)", "imageform find_essential_matrix + recover_pose", _dir_deg(pose.t, sc["t"]), t_i + t_pi)
-        # recoverPose alone, on the same (OpenCV's) E and mask
-        (_, Rc2, tc2, _), t_c = _timed(
-            lambda: cv2.recoverPose(Ec, n1, n2, K, mask=mc.astype(np.uint8).copy()), args.repeat
-        )
-        pose2, t_i = _timed(lambda: recover_pose(Ec, n1, n2, K, inliers=mc), args.repeat)
-        add("recoverPose on the same E: rotation error (deg)", "OpenCV recoverPose", _angle_deg(Rc2, sc["R"]), t_c)
-        add("recoverPose on the same E: rotation error (deg)", "imageform recover_pose", _angle_deg(pose2.R, sc["R"]), t_i)
-
-        # --- triangulation (true cameras, noisy inlier pixels) -----------------------------
-        inl = ~sc["out"]
-        P1 = K @ np.hstack([np.eye(3), np.zeros((3, 1))])
-        P2 = K @ np.hstack([sc["R"], sc["t"][:, None]])
-        a, b = n1[inl], n2[inl]
-        Xt = sc["X"][inl]
-
-        def x_err(X: np.ndarray) -> float:
-            return float(np.median(np.linalg.norm(X - Xt, axis=-1)))
-
-        Xc, t_c = _timed(lambda: cv2.triangulatePoints(P1, P2, a.T, b.T), args.repeat)
-        add("triangulation: median 3-D error (baseline = 1)", "OpenCV triangulatePoints", x_err((Xc[:3] / Xc[3]).T), t_c)
-        for method in ("linear", "midpoint", "optimal"):
-            r, t_i = _timed(lambda m=method: triangulate_two_view(P1, P2, a, b, method=m), args.repeat)
-            add("triangulation: median 3-D error (baseline = 1)", f"imageform triangulate_two_view {method}", x_err(r.points), t_i)
+        _one_scene(s, args, add)
 
     rows = []
     base: dict[str, tuple[float, float]] = {}
@@ -194,7 +275,14 @@ def run(args: argparse.Namespace) -> str:
             base[task] = (err, sec)
         b_err, b_sec = base[task]
         rows.append(
-            [task, who, f"{err:.4g}", f"{err / b_err:.3f}" if b_err > 0 else "-", f"{sec * 1e3:.3g}", f"{sec / b_sec:.2f}"]
+            [
+                task,
+                who,
+                f"{err:.4g}",
+                f"{err / b_err:.3f}" if b_err > 0 else "-",
+                f"{sec * 1e3:.3g}",
+                f"{sec / b_sec:.2f}",
+            ]
         )
     cols = ["task", "method", "median error", "error / OpenCV", "median ms", "time / OpenCV"]
     text = header("Robust two-view geometry: imageform vs OpenCV " + __import__("cv2").__version__)

@@ -72,7 +72,9 @@ def f7(p1: F64, p2: F64) -> tuple[F64, NDArray[np.intp]]:
     F1 = Nul[:, :, 1].reshape(-1, 3, 3)
     F2 = Nul[:, :, 0].reshape(-1, 3, 3)
     alphas = np.array([0.0, 1.0, -1.0, 2.0])
-    dets = np.linalg.det(alphas[None, :, None, None] * F1[:, None] + (1 - alphas)[None, :, None, None] * F2[:, None])
+    dets = np.linalg.det(
+        alphas[None, :, None, None] * F1[:, None] + (1 - alphas)[None, :, None, None] * F2[:, None]
+    )
     c = dets @ _VAND_INV.T  # (B, 4): c0 + c1 a + c2 a² + c3 a³
     B = c.shape[0]
     scale = np.max(np.abs(c), axis=1)
@@ -110,8 +112,30 @@ def sampson_sq(F: F64, p1: F64, p2: F64) -> F64:
 
 
 # ---- 5-point: polynomial arithmetic in (x, y, z) up to degree 3 -------------------------
-_CUBICS = [(3, 0, 0), (2, 1, 0), (2, 0, 1), (1, 2, 0), (1, 1, 1), (1, 0, 2), (0, 3, 0), (0, 2, 1), (0, 1, 2), (0, 0, 3)]
-_BASIS = [(2, 0, 0), (1, 1, 0), (1, 0, 1), (0, 2, 0), (0, 1, 1), (0, 0, 2), (1, 0, 0), (0, 1, 0), (0, 0, 1), (0, 0, 0)]
+_CUBICS = [
+    (3, 0, 0),
+    (2, 1, 0),
+    (2, 0, 1),
+    (1, 2, 0),
+    (1, 1, 1),
+    (1, 0, 2),
+    (0, 3, 0),
+    (0, 2, 1),
+    (0, 1, 2),
+    (0, 0, 3),
+]
+_BASIS = [
+    (2, 0, 0),
+    (1, 1, 0),
+    (1, 0, 1),
+    (0, 2, 0),
+    (0, 1, 1),
+    (0, 0, 2),
+    (1, 0, 0),
+    (0, 1, 0),
+    (0, 0, 1),
+    (0, 0, 0),
+]
 _MONO = _CUBICS + _BASIS
 _IDX = {m: i for i, m in enumerate(_MONO)}
 _PROD = np.zeros((20, 20, 20))
@@ -139,9 +163,15 @@ def _constraints(L: F64) -> F64:
     tre = np.einsum("bp,bijq->bijpq", tr, L).reshape(B, 3, 3, 40) @ _T_QL
     trace_rows = (2.0 * eete - tre).reshape(B, 9, 20)
     # det E = sum_j E_0j cof_0j, cofactors from the rows 1 and 2 (quadratics)
-    c = np.einsum("bp,bq->bpq", L[:, 1, 1], L[:, 2, 2]) - np.einsum("bp,bq->bpq", L[:, 1, 2], L[:, 2, 1])
-    c1 = np.einsum("bp,bq->bpq", L[:, 1, 2], L[:, 2, 0]) - np.einsum("bp,bq->bpq", L[:, 1, 0], L[:, 2, 2])
-    c2 = np.einsum("bp,bq->bpq", L[:, 1, 0], L[:, 2, 1]) - np.einsum("bp,bq->bpq", L[:, 1, 1], L[:, 2, 0])
+    c = np.einsum("bp,bq->bpq", L[:, 1, 1], L[:, 2, 2]) - np.einsum(
+        "bp,bq->bpq", L[:, 1, 2], L[:, 2, 1]
+    )
+    c1 = np.einsum("bp,bq->bpq", L[:, 1, 2], L[:, 2, 0]) - np.einsum(
+        "bp,bq->bpq", L[:, 1, 0], L[:, 2, 2]
+    )
+    c2 = np.einsum("bp,bq->bpq", L[:, 1, 0], L[:, 2, 1]) - np.einsum(
+        "bp,bq->bpq", L[:, 1, 1], L[:, 2, 0]
+    )
     cof = np.stack([c, c1, c2], axis=1).reshape(B, 3, 16) @ _T_LL  # (B, 3, 10)
     det = np.einsum("bjp,bjq->bpq", cof, L[:, 0]).reshape(B, 40) @ _T_QL
     return np.concatenate([det[:, None], trace_rows], axis=1)
@@ -199,4 +229,4 @@ _MIX = np.linalg.qr(np.random.default_rng(20041).normal(size=(4, 4)))[0]
 
 
 def _lstsq(a: F64, b: F64) -> F64:
-    return np.linalg.lstsq(a, b, rcond=None)[0]
+    return np.asarray(np.linalg.lstsq(a, b, rcond=None)[0], dtype=np.float64)

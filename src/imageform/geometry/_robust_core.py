@@ -17,14 +17,14 @@ from imageform._validate import as_points, check_positive, describe
 from imageform.errors import InvalidInputError
 
 __all__ = [
-    "rotation",
     "REFINE_FACTOR",
-    "refine_support",
     "check_confidence",
     "check_pairs",
     "hartley",
     "levenberg_marquardt",
     "ransac",
+    "refine_support",
+    "rotation",
     "trials_needed",
 ]
 
@@ -48,7 +48,8 @@ def check_pairs(a: object, b: object, name_a: str, name_b: str, n_min: int) -> t
         raise InvalidInputError(f"expected {name_b} of shape (N, 2), got {pb.shape}")
     if pa.shape[0] != pb.shape[0]:
         raise InvalidInputError(
-            f"expected {name_a} and {name_b} of the same length, got {pa.shape[0]} and {pb.shape[0]}"
+            f"expected {name_a} and {name_b} of the same length, "
+            f"got {pa.shape[0]} and {pb.shape[0]}"
         )
     if pa.shape[0] < n_min:
         raise InvalidInputError(

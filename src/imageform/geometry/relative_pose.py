@@ -88,10 +88,12 @@ def recover_pose(
     """Relative pose ``(R, t)`` from an essential matrix, chosen by the cheirality check.
 
     With ``E = U diag(1, 1, 0) Vᵀ`` (``U, V`` rotations) the four candidates are
-    ``R ∈ {U W Vᵀ, U Wᵀ Vᵀ}``, ``t = ±u₃`` (H&Z result 9.19); each correspondence is
-    triangulated (linear DLT on normalised coordinates) and the candidate with the most
-    points at positive depth in both cameras, nearer than ``max_depth`` (units of
-    ``‖t‖ = 1``; far points have no reliable sign), wins (as OpenCV's ``recoverPose``).
+    ``R ∈ {U W Vᵀ, U Wᵀ Vᵀ}``, ``t = ±u₃`` (H&Z result 9.19). For each, the depths
+    ``λ₁, λ₂`` of every correspondence follow from ``λ₂ x̃₂ ≈ λ₁ R x̃₁ + t`` (least squares on
+    normalised coordinates), and the candidate with the most points at positive depth in
+    both cameras, nearer than ``max_depth`` (units of ``‖t‖ = 1``; far points have no
+    reliable sign), wins. Its points and final mask come from the linear DLT, as OpenCV's
+    ``recoverPose`` computes them.
 
     Parameters
     ----------
@@ -126,8 +128,10 @@ def recover_pose(
     >>> u2 = (X + [-1, 0, 0]) @ K.T; u2 = u2[:, :2] / u2[:, 2:]
     >>> E = np.array([[0, 0, 0], [0, 0, 1], [0, -1, 0]])   # [t]x R, t = (-1, 0, 0), R = I
     >>> pose = recover_pose(E, u1, u2, K)
-    >>> (pose.t.round(9) + 0.0).tolist(), bool(np.allclose(pose.R, np.eye(3))), int(pose.inliers.sum())
-    ([-1.0, 0.0, 0.0], True, 20)
+    >>> (pose.t.round(9) + 0.0).tolist(), bool(np.allclose(pose.R, np.eye(3)))
+    ([-1.0, 0.0, 0.0], True)
+    >>> int(pose.inliers.sum())
+    20
     """
     Em = np.asarray(to_numpy(as_matrix(E, "E", (3, 3), batch=False)), dtype=np.float64)
     p1, p2 = check_pairs(points1, points2, "points1", "points2", 1)
@@ -151,22 +155,33 @@ def recover_pose(
         Vt = -Vt
     W = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
     P1 = np.hstack([np.eye(3), np.zeros((3, 1))])
-    best: tuple[int, F64, F64, NDArray[np.bool_], F64] | None = None
+    h1, h2 = np.c_[q1, np.ones(n)], np.c_[q2, np.ones(n)]
+    best: tuple[int, F64, F64] | None = None
     for R in (U @ W @ Vt, U @ W.T @ Vt):
         for t in (U[:, 2], -U[:, 2]):
-            P2 = np.hstack([R, t[:, None]])
-            Xh = _dlt(P1, P2, q1, q2)
-            Xh = Xh * np.sign(Xh[:, 3:])
-            with np.errstate(invalid="ignore"):
-                z1 = Xh[:, 2] / Xh[:, 3]
-                z2 = (Xh @ P2[2]) / Xh[:, 3]
+            # depths of the two rays' closest points: λ2 x2 ≈ λ1 R x1 + t (least squares)
+            a = h1 @ R.T
+            aa, ab, bb = np.sum(a * a, -1), np.sum(a * h2, -1), np.sum(h2 * h2, -1)
+            at, bt = a @ t, h2 @ t
+            det = aa * bb - ab * ab
+            with np.errstate(divide="ignore", invalid="ignore"):
+                z1 = (ab * bt - bb * at) / det
+                z2 = (aa * bt - ab * at) / det
                 good = mask & (z1 > 0) & (z2 > 0) & (z1 < dmax) & (z2 < dmax)
             count = int(good.sum())
             if best is None or count > best[0]:
-                best = (count, R, t, good, _dehom(Xh))
+                best = (count, R, t)
     assert best is not None
-    count, R, t, good, X = best
-    if count == 0:
+    _, R, t = best
+    # the winner's points and final mask by the linear DLT (as OpenCV's recoverPose)
+    Xh = _dlt(P1, np.hstack([R, t[:, None]]), q1, q2)
+    Xh = Xh * np.sign(Xh[:, 3:])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        z1 = Xh[:, 2] / Xh[:, 3]
+        z2 = (Xh @ np.r_[R[2], t[2]]) / Xh[:, 3]
+        good = mask & (z1 > 0) & (z2 > 0) & (z1 < dmax) & (z2 < dmax)
+    X = _dehom(Xh)
+    if not good.any():
         raise DegenerateConfigurationError(
             "no correspondence lies in front of both cameras for any factorisation of E"
         )

@@ -17,6 +17,8 @@ from numpy.typing import NDArray
 from imageform._random import RNGLike, as_rng
 from imageform._validate import as_int, check_option, check_positive
 from imageform.errors import DegenerateConfigurationError
+from imageform.geometry import _robust_core
+from imageform.geometry._minimal import null_space
 from imageform.geometry._robust_core import (
     check_confidence,
     check_pairs,
@@ -24,8 +26,6 @@ from imageform.geometry._robust_core import (
     levenberg_marquardt,
     ransac,
 )
-from imageform.geometry import _robust_core
-from imageform.geometry._minimal import null_space
 
 __all__ = ["HomographyResult", "find_homography"]
 
@@ -72,6 +72,21 @@ def _transfer(H: F64, p: F64) -> F64:
         return q[..., :2] / q[..., 2:3]
 
 
+def _transfer_jac(M: F64, p: F64) -> F64:
+    """Jacobian (2N, 9) of the flattened ``π(M x̃)`` (N, 2) with respect to ``M`` (row-major)."""
+    n = p.shape[0]
+    xh = np.c_[p, np.ones(n)]
+    q = xh @ M.T
+    iw = 1.0 / q[:, 2]
+    u, v = q[:, 0] * iw, q[:, 1] * iw
+    J = np.zeros((n, 2, 9))
+    J[:, 0, 0:3] = xh * iw[:, None]
+    J[:, 0, 6:9] = -xh * (u * iw)[:, None]
+    J[:, 1, 3:6] = xh * iw[:, None]
+    J[:, 1, 6:9] = -xh * (v * iw)[:, None]
+    return J.reshape(2 * n, 9)
+
+
 def _sq_forward(H: F64, src: F64, dst: F64) -> F64:
     r = _transfer(H, src) - dst
     return np.sum(r * r, axis=-1)
@@ -92,12 +107,22 @@ def _refine(H: F64, src: F64, dst: F64, mode: str, max_iter: int) -> F64:
         M = h.reshape(3, 3)
         r = (_transfer(M, sn) - dn).ravel() * sd
         if mode == "symmetric":
-            Mi = np.linalg.inv(M)
+            Mi = np.asarray(np.linalg.inv(M), dtype=np.float64)
             r = np.concatenate([r, (_transfer(Mi, dn) - sn).ravel() * ss])
         return r
 
+    def jacobian(h: F64) -> F64:
+        M = h.reshape(3, 3)
+        J = _transfer_jac(M, sn) * sd
+        if mode == "symmetric":
+            Mi = np.asarray(np.linalg.inv(M), dtype=np.float64)
+            # d(M⁻¹)/dM_kl = -M⁻¹ E_kl M⁻¹
+            G = -np.einsum("ik,lj->ijkl", Mi, Mi).reshape(9, 9)
+            J = np.concatenate([J, (_transfer_jac(Mi, dn) @ G) * ss])
+        return J
+
     with np.errstate(all="ignore"):
-        h, _ = levenberg_marquardt(residual, Hn.ravel(), max_iter=max_iter)
+        h, _ = levenberg_marquardt(residual, Hn.ravel(), max_iter=max_iter, jacobian=jacobian)
     out = Tdi @ h.reshape(3, 3) @ Ts
     return out
 

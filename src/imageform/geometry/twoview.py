@@ -23,6 +23,7 @@ from imageform._backend import to_numpy
 from imageform._random import RNGLike, as_rng
 from imageform._validate import as_int, as_matrix, check_positive, describe
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
+from imageform.geometry import _robust_core
 from imageform.geometry._minimal import e5, f7, f8, rank2, sampson_sq
 from imageform.geometry._robust_core import (
     check_confidence,
@@ -32,7 +33,6 @@ from imageform.geometry._robust_core import (
     ransac,
     rotation,
 )
-from imageform.geometry import _robust_core
 
 __all__ = [
     "EssentialResult",
@@ -141,7 +141,14 @@ def fundamental_7point(points1: npt.ArrayLike, points2: npt.ArrayLike) -> F64:
 
 def _check_K(K: object, name: str) -> F64:
     Km = np.asarray(to_numpy(as_matrix(K, name, (3, 3), batch=False)), dtype=np.float64)
-    if Km[0, 0] <= 0 or Km[1, 1] <= 0 or Km[1, 0] != 0 or Km[2, 0] != 0 or Km[2, 1] != 0 or Km[2, 2] == 0:
+    if (
+        Km[0, 0] <= 0
+        or Km[1, 1] <= 0
+        or Km[1, 0] != 0
+        or Km[2, 0] != 0
+        or Km[2, 1] != 0
+        or Km[2, 2] == 0
+    ):
         raise InvalidInputError(
             f"expected {name} upper triangular with fx, fy > 0, got {describe(Km.tolist())}"
         )
@@ -205,8 +212,7 @@ def _rot_basis(F: F64) -> tuple[F64, F64, float]:
 def _refine_f(F: F64, p1: F64, p2: F64, max_iter: int) -> F64:
     """LM on the Sampson distances over ``F = U diag(1, σ, 0) Vᵀ`` (7 parameters),
     parametrised in Hartley-normalised coordinates, residuals in pixels."""
-    n1, T1 = hartley(p1)
-    n2, T2 = hartley(p2)
+    T1, T2 = hartley(p1)[1], hartley(p2)[1]
     Fn = np.linalg.inv(T2).T @ F @ np.linalg.inv(T1)
     U0, V0, s0 = _rot_basis(Fn)
 
