@@ -243,12 +243,30 @@ def _one_scene(
         x_err((Xc[:3] / Xc[3]).T),
         t_c,
     )
+
+    def reproj(X: np.ndarray) -> float:
+        h1, h2 = X @ P1[:, :3].T + P1[:, 3], X @ P2[:, :3].T + P2[:, 3]
+        e = np.sum((h1[:, :2] / h1[:, 2:] - a) ** 2 + (h2[:, :2] / h2[:, 2:] - b) ** 2, -1)
+        return float(np.median(np.sqrt(e / 2.0)))
+
+    add(
+        "triangulation: median reprojection error, both views (px)",
+        "OpenCV triangulatePoints",
+        reproj((Xc[:3] / Xc[3]).T),
+        t_c,
+    )
     for method in ("linear", "midpoint", "optimal"):
 
         def tri(m: str = method) -> Any:
             return triangulate_two_view(P1, P2, a, b, method=m)
 
         r, t_i = _timed(tri, args.repeat)
+        add(
+            "triangulation: median reprojection error, both views (px)",
+            f"imageform triangulate_two_view {method}",
+            reproj(r.points),
+            t_i,
+        )
         add(
             "triangulation: median 3-D error (baseline = 1)",
             f"imageform triangulate_two_view {method}",

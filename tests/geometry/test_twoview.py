@@ -330,6 +330,19 @@ def test_triangulate_linear_matches_opencv_and_optimal_is_consistent() -> None:
     assert err(opt.points) <= 1.05 * err((Xc[:3] / Xc[3]).T)
 
 
+def test_triangulate_optimal_is_the_maximum_likelihood_point() -> None:
+    """Lindstrom's correction + DLT equals the minimiser of the two-view reprojection error
+    (imageform's triangulate_points: DLT then LM), H&Z sec. 12.5."""
+    from imageform.geometry import triangulate_points
+
+    _X, R, t, _u1, _u2, n1, n2, _ = scene(11, n=100, sigma=1.0)
+    P1 = K @ np.c_[np.eye(3), np.zeros(3)]
+    P2 = K @ np.c_[R, t]
+    opt = triangulate_two_view(P1, P2, n1, n2, method="optimal")
+    ml = triangulate_points(np.stack([P1, P2]), np.stack([n1, n2]), max_iter=50)
+    np.testing.assert_allclose(opt.points, ml.points, atol=1e-5)
+
+
 def test_triangulate_behind_camera_invalid_and_bad_inputs() -> None:
     P1 = K @ np.c_[np.eye(3), np.zeros(3)]
     P2 = K @ np.c_[np.eye(3), [-1.0, 0, 0]]
