@@ -285,23 +285,24 @@ def run(args: argparse.Namespace) -> str:
         _one_scene(s, args, add)
 
     rows = []
-    base: dict[str, tuple[float, float]] = {}
-    for (task, who), vals in rec.items():
-        err = statistics.median(v[0] for v in vals)
-        sec = statistics.median(v[1] for v in vals)
-        if who.startswith("OpenCV") and task not in base:
-            base[task] = (err, sec)
-        b_err, b_sec = base[task]
-        rows.append(
-            [
-                task,
-                who,
-                f"{err:.4g}",
-                f"{err / b_err:.3f}" if b_err > 0 else "-",
-                f"{sec * 1e3:.3g}",
-                f"{sec / b_sec:.2f}",
-            ]
-        )
+    tasks = list(dict.fromkeys(task for task, _ in rec))
+    for task in tasks:
+        entries = [(who, vals) for (t, who), vals in rec.items() if t == task]
+        b_err = statistics.median(v[0] for v in entries[0][1])
+        b_sec = statistics.median(v[1] for v in entries[0][1])
+        for who, vals in entries:
+            err = statistics.median(v[0] for v in vals)
+            sec = statistics.median(v[1] for v in vals)
+            rows.append(
+                [
+                    task,
+                    who,
+                    f"{err:.4g}",
+                    f"{err / b_err:.4f}" if b_err > 0 else "-",
+                    f"{sec * 1e3:.3g}",
+                    f"{sec / b_sec:.2f}",
+                ]
+            )
     cols = ["task", "method", "median error", "error / OpenCV", "median ms", "time / OpenCV"]
     text = header("Robust two-view geometry: imageform vs OpenCV " + __import__("cv2").__version__)
     text += (
