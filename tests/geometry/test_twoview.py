@@ -431,3 +431,20 @@ def test_pnp_batch_float32_in_float32_out() -> None:
     res = solve_pnp_batch(X.astype(np.float32), uv.astype(np.float32), Ks)
     assert res.tvec.dtype == np.float32 and res.R.dtype == np.float32
     np.testing.assert_allclose(res.tvec, t, atol=1e-4)
+
+
+def test_float32_in_float32_out() -> None:
+    _X, R, t, u1, u2, *_ = scene(12, n=60)
+    a, b = u1.astype(np.float32), u2.astype(np.float32)
+    assert find_homography(a, a + 1).H.dtype == np.float32
+    assert find_fundamental_matrix(a, b).F.dtype == np.float32
+    assert fundamental_8point(a, b).dtype == np.float32
+    res = find_essential_matrix(a, b, K)
+    assert res.E.dtype == np.float32
+    pose = recover_pose(res.E, a, b, K)
+    assert pose.R.dtype == pose.t.dtype == pose.points.dtype == np.float32
+    assert angle_deg(pose.R.astype(float), R) < 0.05
+    P1 = K @ np.c_[np.eye(3), np.zeros(3)]
+    assert triangulate_two_view(P1, K @ np.c_[R, t], a, b).points.dtype == np.float32
+    # float64 stays float64, and lists compute in float64
+    assert find_homography(u1.tolist(), (u1 + 1).tolist()).H.dtype == np.float64

@@ -24,6 +24,7 @@ __all__ = [
     "levenberg_marquardt",
     "ransac",
     "refine_support",
+    "result_dtype",
     "rotation",
     "trials_needed",
 ]
@@ -56,6 +57,14 @@ def check_pairs(a: object, b: object, name_a: str, name_b: str, n_min: int) -> t
             f"expected at least {n_min} correspondences in {name_a}, {name_b}, got {pa.shape[0]}"
         )
     return pa, pb
+
+
+def result_dtype(*inputs: object) -> type[np.floating]:
+    """float32 when every input is a float32 array (conventions: float32 in, float32 out),
+    else float64; the computation is float64 either way."""
+    if all(getattr(x, "dtype", None) == np.float32 for x in inputs):
+        return np.float32
+    return np.float64
 
 
 def check_confidence(confidence: object) -> float:

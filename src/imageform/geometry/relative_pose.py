@@ -18,7 +18,7 @@ from numpy.typing import NDArray
 from imageform._backend import to_numpy
 from imageform._validate import as_bool, as_matrix, check_option, check_positive
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
-from imageform.geometry._robust_core import check_pairs
+from imageform.geometry._robust_core import check_pairs, result_dtype
 from imageform.geometry.twoview import _check_K, _normalised
 
 __all__ = ["RelativePose", "TwoViewPoints", "recover_pose", "triangulate_two_view"]
@@ -186,7 +186,8 @@ def recover_pose(
             "no correspondence lies in front of both cameras for any factorisation of E"
         )
     X = np.where(good[:, None], X, np.nan)
-    return RelativePose(R, t / np.linalg.norm(t), good, X)
+    dt = result_dtype(points1, points2)
+    return RelativePose(R.astype(dt), (t / np.linalg.norm(t)).astype(dt), good, X.astype(dt))
 
 
 def _camera_centre(P: F64) -> F64:
@@ -301,4 +302,4 @@ def triangulate_two_view(
     if depth:
         with np.errstate(invalid="ignore"):
             valid &= (_depths(Pa, Xh) > 0) & (_depths(Pb, Xh) > 0)
-    return TwoViewPoints(X, valid)
+    return TwoViewPoints(X.astype(result_dtype(points1, points2)), valid)

@@ -25,6 +25,7 @@ from imageform.geometry._robust_core import (
     hartley,
     levenberg_marquardt,
     ransac,
+    result_dtype,
 )
 
 __all__ = ["HomographyResult", "find_homography"]
@@ -254,4 +255,4 @@ def find_homography(
     e = _sq_forward(H, s, d)
     inl = e < thr * thr
     rms = float(np.sqrt(np.mean(e[inl]))) if inl.any() else float("nan")
-    return HomographyResult(H, inl, rms, drawn)
+    return HomographyResult(H.astype(result_dtype(src, dst)), inl, rms, drawn)

@@ -31,6 +31,7 @@ from imageform.geometry._robust_core import (
     hartley,
     levenberg_marquardt,
     ransac,
+    result_dtype,
     rotation,
 )
 
@@ -106,7 +107,7 @@ def fundamental_8point(points1: npt.ArrayLike, points2: npt.ArrayLike) -> F64:
     F = f8(p1[None], p2[None])[0]
     if not np.all(np.isfinite(F)):
         raise DegenerateConfigurationError("the correspondences do not determine F")
-    return _unit(F)
+    return _unit(F).astype(result_dtype(points1, points2))
 
 
 def fundamental_7point(points1: npt.ArrayLike, points2: npt.ArrayLike) -> F64:
@@ -136,7 +137,7 @@ def fundamental_7point(points1: npt.ArrayLike, points2: npt.ArrayLike) -> F64:
     Fs, _ = f7(p1[None], p2[None])
     if Fs.shape[0] == 0:
         raise DegenerateConfigurationError("the 7 correspondences do not determine F")
-    return np.stack([_unit(F) for F in Fs])
+    return np.stack([_unit(F) for F in Fs]).astype(result_dtype(points1, points2))
 
 
 def _check_K(K: object, name: str) -> F64:
@@ -195,7 +196,8 @@ def essential_5point(points1: npt.ArrayLike, points2: npt.ArrayLike) -> F64:
     if p1.shape[0] != 5:
         raise InvalidInputError(f"expected exactly 5 correspondences, got {p1.shape[0]}")
     Es, _ = e5(p1[None], p2[None])
-    return np.stack([_unit(E) for E in Es]) if Es.shape[0] else np.zeros((0, 3, 3))
+    out = np.stack([_unit(E) for E in Es]) if Es.shape[0] else np.zeros((0, 3, 3))
+    return out.astype(result_dtype(points1, points2))
 
 
 def _rot_basis(F: F64) -> tuple[F64, F64, float]:
@@ -342,7 +344,7 @@ def find_fundamental_matrix(
     e = sampson_sq(F, p1, p2)
     inl = e < thr * thr
     rms = float(np.sqrt(np.mean(e[inl]))) if inl.any() else float("nan")
-    return FundamentalResult(F, inl, rms, drawn)
+    return FundamentalResult(F.astype(result_dtype(points1, points2)), inl, rms, drawn)
 
 
 def _skew(t: F64) -> F64:
@@ -509,4 +511,4 @@ def find_essential_matrix(
     e = sq(E)
     inl = e < thr * thr
     rms = float(np.sqrt(np.mean(e[inl]))) if inl.any() else float("nan")
-    return EssentialResult(E, inl, rms, drawn)
+    return EssentialResult(E.astype(result_dtype(points1, points2)), inl, rms, drawn)
