@@ -153,9 +153,11 @@ def find_homography(
 
     the number of samples adapting to the inlier ratio (``k = log(1-p) / log(1-ε⁴)``); each
     new best hypothesis is re-fitted by least squares on its inliers (LO-RANSAC). The final
-    ``H`` minimises, by Levenberg-Marquardt over its inliers, the symmetric transfer error
+    ``H`` minimises, by Levenberg-Marquardt, the symmetric transfer error
     ``Σ ‖x' - π(H x)‖² + ‖x - π(H⁻¹ x')‖²`` (``refine="symmetric"``, noise in both images)
-    or the forward one (``"forward"``, as OpenCV); inliers are then re-selected once.
+    or the forward one (``"forward"``, as OpenCV) of the correspondences within the
+    refinement support (``3σ̂`` with ``σ̂`` the noise estimated from the inliers, between
+    ``τ`` and ``2τ``); the inliers are those within ``τ`` of the final ``H``.
 
     Parameters
     ----------

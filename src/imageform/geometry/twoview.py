@@ -263,10 +263,11 @@ def find_fundamental_matrix(
     Minimal 7-point samples give one to three hypotheses each, scored by the truncated
     squared Sampson distance (MSAC) with an adaptive number of samples
     (``k = log(1 - p) / log(1 - ε⁷)``); every new best hypothesis is re-fitted by the
-    normalised 8-point algorithm on its inliers (LO-RANSAC). The final ``F`` minimises the
-    Sampson distances of its inliers by Levenberg-Marquardt over the orthonormal
-    representation ``F = U diag(1, σ, 0) Vᵀ`` (Bartoli & Sturm 2004, CVIU 97), which keeps
-    rank 2; the inliers are then re-selected.
+    normalised 8-point algorithm on its inliers (LO-RANSAC). The final ``F`` minimises, by
+    Levenberg-Marquardt over the orthonormal representation ``F = U diag(1, σ, 0) Vᵀ``
+    (Bartoli & Sturm 2004, CVIU 97), which keeps rank 2, the Sampson distances of the
+    correspondences within the refinement support (``3σ̂`` with ``σ̂`` the noise estimated
+    from the inliers, between ``τ`` and ``2τ``); the inliers are those within ``τ`` of it.
 
     Parameters
     ----------
@@ -413,10 +414,12 @@ def find_essential_matrix(
     The pixels are mapped to normalised coordinates ``K⁻¹ x``; minimal 5-point samples
     (:func:`essential_5point`, up to ten solutions each) are scored by the truncated squared
     Sampson distance *in pixels* of ``F = K2⁻ᵀ E K1⁻¹`` (MSAC, adaptive trial count
-    ``log(1 - p) / log(1 - ε⁵)``); each new best hypothesis is locally optimised (the
-    8-point fit on its inliers, projected onto the essential manifold, LO-RANSAC). The final
-    ``E = [t]ₓ R`` minimises the inliers' Sampson distances by Levenberg-Marquardt over
-    ``(R, t/‖t‖)`` (5 degrees of freedom).
+    ``log(1 - p) / log(1 - ε⁵)``); each new best hypothesis is locally optimised (LO-RANSAC:
+    a few Levenberg-Marquardt steps over ``(R, t/‖t‖)`` on the correspondences within
+    ``2τ``, then within ``τ``). The final ``E = [t]ₓ R`` minimises the Sampson distances of
+    the correspondences within the refinement support (``3σ̂``, between ``τ`` and ``2τ``,
+    see docs/two-view.md) by Levenberg-Marquardt over ``(R, t/‖t‖)`` (5 degrees of
+    freedom); the inliers are those within ``τ`` of it.
 
     Parameters
     ----------
