@@ -448,3 +448,35 @@ def test_float32_in_float32_out() -> None:
     assert triangulate_two_view(P1, K @ np.c_[R, t], a, b).points.dtype == np.float32
     # float64 stays float64, and lists compute in float64
     assert find_homography(u1.tolist(), (u1 + 1).tolist()).H.dtype == np.float64
+
+
+# ---------------------------------------------------------------- RANSAC internals
+@pytest.mark.parametrize(
+    ("s", "counts"),
+    [
+        (4, [3, 5, 9, 13, 17, 34, 72]),
+        (7, [4, 8, 20, 33, 54, 163, 588]),
+        (8, [5, 9, 26, 44, 78, 272, 1177]),
+    ],
+)
+def test_trials_needed_matches_hartley_zisserman_table_4_3(s: int, counts: list[int]) -> None:
+    """H&Z 2nd ed. Table 4.3: samples for p = 0.99 at 5, 10, 20, 25, 30, 40, 50 % outliers."""
+    import math
+
+    from imageform.geometry._robust_core import trials_needed
+
+    for e, want in zip([5, 10, 20, 25, 30, 40, 50], counts, strict=True):
+        assert math.ceil(trials_needed(100 - e, 100, s, 0.99)) == want
+
+
+@pytest.mark.parametrize(("dof", "sigma", "tau"), [(1, 1.0, 1.0), (1, 0.5, 1.0), (2, 1.4, 3.0)])
+def test_refine_support_recovers_the_noise_from_truncated_residuals(
+    dof: int, sigma: float, tau: float
+) -> None:
+    from imageform.geometry._robust_core import REFINE_FACTOR, refine_support
+
+    e2 = np.sum(np.random.default_rng(0).normal(0, sigma, (200_000, dof)) ** 2, axis=1)
+    got = refine_support(e2[e2 < tau * tau], tau, dof)
+    want = min(max(3 * sigma, tau), REFINE_FACTOR * tau)
+    assert got == pytest.approx(want, rel=0.02)
+    assert refine_support(np.zeros(10), tau, dof) == tau  # exact data keep the threshold
