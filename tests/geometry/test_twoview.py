@@ -9,6 +9,8 @@ labelled cross-check on the same noisy, outlier-laden data: median errors no wor
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -480,3 +482,36 @@ def test_refine_support_recovers_the_noise_from_truncated_residuals(
     want = min(max(3 * sigma, tau), REFINE_FACTOR * tau)
     assert got == pytest.approx(want, rel=0.02)
     assert refine_support(np.zeros(10), tau, dof) == tau  # exact data keep the threshold
+
+
+def test_homography_on_real_sift_matches_on_par_with_opencv(shared_data: Path) -> None:
+    """Kodak images matched (SIFT) with a copy warped by a known homography: real matching
+    outliers, known truth. Cross-check: cv2.findHomography(RANSAC) on the same matches."""
+    cv2 = pytest.importorskip("cv2")
+    sift = cv2.SIFT_create(nfeatures=800)
+    rng = np.random.default_rng(0)
+    ours, theirs = [], []
+    for k in (1, 5, 9, 13, 17, 21):
+        im = cv2.imread(str(shared_data / "kodak" / f"kodim{k:02d}.png"), cv2.IMREAD_GRAYSCALE)
+        h, w = im.shape
+        corners = np.array([[0, 0], [w, 0], [w, h], [0, h]], dtype=np.float32)
+        moved = (corners + rng.uniform(-0.12, 0.12, (4, 2)) * [w, h]).astype(np.float32)
+        Ht = cv2.getPerspectiveTransform(corners, moved)
+        im2 = cv2.warpPerspective(im, Ht, (w, h))
+        k1, d1 = sift.detectAndCompute(im, None)
+        k2, d2 = sift.detectAndCompute(im2, None)
+        pairs = cv2.BFMatcher().knnMatch(d1, d2, k=2)
+        good = [m for m, m2 in pairs if m.distance < 0.85 * m2.distance]
+        p1 = np.array([k1[g.queryIdx].pt for g in good])
+        p2 = np.array([k2[g.trainIdx].pt for g in good])
+        grid = np.stack(np.meshgrid(np.linspace(0, w - 1, 10), np.linspace(0, h - 1, 10)), -1)
+        grid = grid.reshape(-1, 2)
+        truth = cv2.perspectiveTransform(grid[None], Ht)[0]
+        cv2.setRNGSeed(0)
+        Hc = cv2.findHomography(p1, p2, cv2.RANSAC, 3.0)[0]
+        theirs.append(transfer_rms(Hc, grid, truth))
+        ours.append(transfer_rms(find_homography(p1, p2, threshold=3.0).H, grid, truth))
+    # on 6 images the medians differ by sampling luck (0.106 against 0.102 px here); on all
+    # 24 images with noise, benchmarks/bench_twoview.py --kodak measures 0.887x OpenCV's error
+    assert np.median(ours) <= 1.1 * np.median(theirs)
+    assert max(ours) < 1.0
