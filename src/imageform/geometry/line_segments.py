@@ -206,6 +206,8 @@ def detect_line_segments(
     min_length = as_real(min_length, "min_length", minimum=0.0, maximum=MAX_MAGNITUDE)
     log10_eps = as_real(log10_eps, "log10_eps", minimum=-1e6, maximum=1e6)
     min_density = as_real(min_density, "min_density", minimum=0.0, maximum=1.0)
+    if method == "lsd" and min_density <= 0.0:
+        raise InvalidInputError(f"expected min_density in (0, 1] for LSD, got {min_density:g}")
     if method == "lsd":
         return _detect_lsd(image, sigma, angle_tolerance, min_length, log10_eps, min_density)
     img = _grey(image)
