@@ -17,6 +17,7 @@ from __future__ import annotations
 import argparse
 import importlib.metadata
 import math
+import os
 import platform
 import sys
 import types
@@ -163,7 +164,10 @@ def bench_prysm() -> str:
     version = importlib.metadata.version("prysm")
     return (
         f"## Same pupil through prysm {version} (matrix DFT, focus_fixed_sampling)\n\n"
-        "imageform: pupil build + FFT + crop; prysm: propagation of the given pupil only.\n\n"
+        "imageform: pupil build + FFT + crop; prysm: propagation of the given pupil only\n"
+        "(its matrix DFT is cheaper for a small output). The two agree to rounding because\n"
+        "both evaluate the same DFT at the same image points: the check is of the sampling\n"
+        "(Q = lambda N / pitch), the centring and the normalisation, from prysm's own units.\n\n"
         + markdown_table(["pupil", "imageform ms", "prysm ms", "max |diff| / peak"], rows)
     )
 
@@ -176,7 +180,9 @@ def main() -> None:
     parts = [
         header("Diffraction PSF benchmark (issue 18)"),
         f"NumPy {np.__version__}, SciPy {importlib.metadata.version('scipy')}, "
-        f"{platform.processor() or platform.machine()}; median of {args.repeat} runs.",
+        f"{platform.processor() or platform.machine()}; median of {args.repeat} runs. "
+        f"Load average at start: {os.getloadavg()[0]:.1f} (a shared machine: times are "
+        "upper bounds).",
         bench_speed(args.repeat),
         bench_accuracy(),
         bench_prysm(),

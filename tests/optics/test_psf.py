@@ -209,6 +209,17 @@ def test_sampling_follows_the_pitch() -> None:
     assert under.shape == (9, 9) and under.argmax() == 40 and under[4, 4] > 0.9
 
 
+@pytest.mark.parametrize("pitch", [1e-6, 3e-6])  # Q = 2.2 and 0.73 (oversampled, then sampled)
+def test_cropped_psf_is_the_full_grid_cropped(pitch: float) -> None:
+    kw: dict[str, Any] = {"wavelength": LAM, "f_number": N, "pixel_pitch": pitch}
+    coef = {4: 40e-9, 7: 30e-9}
+    full = diffraction_psf(coef, size=None, **kw)
+    crop = diffraction_psf(coef, size=21, **kw)
+    c = full.shape[0] // 2
+    part = full[c - 10 : c + 11, c - 10 : c + 11]
+    np.testing.assert_allclose(crop, part / part.sum(), rtol=1e-9, atol=1e-15)
+
+
 def test_given_aperture_matches_the_circle() -> None:
     d = 200
     c = np.arange(d + 2) - (d + 2) // 2

@@ -337,8 +337,16 @@ def _sampled_psf(
         n_pad = fft.next_fast_len(max(round(qk * fixed_diameter), want, fixed_diameter + 2))
         diameter = fixed_diameter
         step = n_pad / (qk * fixed_diameter)  # fine-grid samples per (pitch / k)
-    h = psf_from_pupil(pupil_of(diameter), pad_to=n_pad)
     c = n_pad // 2
+    if step == 1.0 and size is not None:
+        # pruned FFT: transform the pupil's rows, keep the output columns, then those columns
+        check_memory(16.0 * n_pad * (diameter + 4) * 2, "pixel_pitch", "the padded pupil")
+        freq = ((np.arange(size) - size // 2) * k) % n_pad  # unshifted DFT indices
+        rows = fft.fft(pupil_of(diameter), n=n_pad, axis=1)[:, freq]
+        field = fft.fft(rows, n=n_pad, axis=0)[freq, :]
+        out = field.real**2 + field.imag**2
+        return out / out.sum()
+    h = psf_from_pupil(pupil_of(diameter), pad_to=n_pad)
     n_out = (n_pad // k if step == 1.0 else int(n_pad / (k * step))) if size is None else size
     idx = (np.arange(n_out) - n_out // 2) * (k * step) + c
     if step == 1.0:
@@ -377,8 +385,9 @@ def diffraction_psf(
     Fourier transform, :math:`f / D = N`). **Approach: the pupil is sized to the FFT.** ``M``
     is the next fast FFT length at or above ``Q n_pupil`` (and the output size), and the
     circular aperture is drawn ``D = M / Q`` samples wide (``D >= n_pupil``, not necessarily
-    whole), so the FFT grid spacing *equals* ``pixel_pitch``
-    exactly and no image-plane resampling is done. When ``Q < 2`` (pixels coarser than the
+    whole), so the FFT grid spacing *equals* ``pixel_pitch`` exactly and no image-plane
+    resampling is done (only the ``size`` output rows and columns are transformed: the
+    pupil's rows first, then the kept columns). When ``Q < 2`` (pixels coarser than the
     Nyquist spacing :math:`\\lambda N / 2`), the PSF is computed on a grid ``k = ceil(2/Q)``
     times finer and point-sampled every ``k``-th sample. A given ``aperture`` array keeps its
     own width ``D = M_a``; the PSF is then computed at the nearest FFT spacing and resampled
