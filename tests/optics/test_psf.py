@@ -29,6 +29,7 @@ from imageform.optics import (
     psf_from_pupil,
     pupil_function,
     zernike,
+    zernike_defocus,
     zernike_radial,
     zernike_wavefront,
 )
@@ -287,3 +288,19 @@ def test_refusals() -> None:
         zernike_radial(3, 0, 0.5)
     with pytest.raises(InvalidInputError, match=r"rows, cols, J"):
         field_psfs(np.zeros(8), **kw)
+
+
+def test_zernike_defocus_tends_to_the_geometric_disc() -> None:
+    # a large defocus: the PSF approaches the geometric disc of the circle of confusion
+    c, pitch = 120e-6, 1e-6
+    c4 = zernike_defocus(c, f_number=N)
+    assert c4 == pytest.approx(c / (16 * math.sqrt(3) * N))
+    h = diffraction_psf({4: c4}, wavelength=LAM, f_number=N, pixel_pitch=pitch, size=201)
+    y, x = np.indices(h.shape) - 100
+    r = np.hypot(x, y) * pitch
+    # a uniform disc holds frac of its light within sqrt(frac) R; diffraction softens its rim
+    # (the geometric shadow's edge has a quarter of the inner intensity), so looser there
+    for frac, tol in ((0.25, 0.02), (0.5, 0.02), (0.75, 0.08)):
+        assert h[r <= c / 2 * math.sqrt(frac)].sum() == pytest.approx(frac, abs=tol)
+    assert h[r <= 1.1 * c / 2].sum() > 0.95
+    np.testing.assert_allclose(zernike_defocus(np.array([0.0, c]), f_number=N), [0.0, c4])

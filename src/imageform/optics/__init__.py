@@ -35,6 +35,7 @@ from imageform.optics.psf import (
     psf_from_pupil,
     pupil_function,
     zernike,
+    zernike_defocus,
     zernike_radial,
     zernike_wavefront,
 )
@@ -90,6 +91,7 @@ __all__ = [
     "spherical_blur_radius",
     "thin_lens",
     "zernike",
+    "zernike_defocus",
     "zernike_radial",
     "zernike_wavefront",
 ]

@@ -38,6 +38,7 @@ __all__ = [
     "psf_from_pupil",
     "pupil_function",
     "zernike",
+    "zernike_defocus",
     "zernike_radial",
     "zernike_wavefront",
 ]
@@ -190,6 +191,33 @@ def zernike_wavefront(coefficients: Any, rho: Any, theta: Any) -> np.ndarray:
         if c != 0.0:
             out = out + c * zernike(j, r, t)
     return out
+
+
+def zernike_defocus(coc: Any, *, f_number: float) -> Any:
+    """The Zernike defocus coefficient (Noll ``j = 4``, metres RMS) of a geometric blur circle.
+
+    A focusing error ``dz`` behind a lens of working f-number ``N`` adds the wavefront
+    :math:`W_{020}\\rho^2` with :math:`W_{020} = dz / (8 N^2)` (Goodman eq. 6-42 at the
+    pupil's rim, paraxial); geometric optics images a point as a disc of diameter
+    ``c = dz / N`` (the circle of confusion, :func:`imageform.optics.circle_of_confusion`).
+    Since :math:`\\rho^2 = (1 + Z_4/\\sqrt{3}) / 2`, the Noll coefficient is
+
+    .. math::
+
+        c_4 = \\frac{W_{020}}{2\\sqrt{3}} = \\frac{c}{16\\sqrt{3}\\,N}
+
+    (piston dropped). ``coc`` in metres (scalar or array, >= 0); the sign of the defocus is
+    lost in ``c``, and the PSF of ``+c_4`` and ``-c_4`` are mirror images anyway.
+
+    >>> round(zernike_defocus(30e-6, f_number=4) * 1e9, 2)   # 30 um blur at f/4: nm RMS
+    270.63
+    """
+    fn = as_real(f_number, "f_number", positive=True)
+    c = np.asarray(coc, dtype=np.float64)
+    if not np.all(np.isfinite(c)) or np.any(c < 0):
+        raise InvalidInputError(f"expected coc finite and >= 0 (metres), got {describe(coc)}")
+    out = c / (16 * math.sqrt(3) * fn)
+    return float(out) if out.ndim == 0 else out
 
 
 # --- pupil and PSF ------------------------------------------------------------------------
