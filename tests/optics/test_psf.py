@@ -25,6 +25,7 @@ from imageform.optics import (
     mtf,
     noll_to_nm,
     otf,
+    pixel_mtf,
     polychromatic_psf,
     psf_from_pupil,
     pupil_function,
@@ -313,3 +314,16 @@ def test_zernike_defocus_tends_to_the_geometric_disc() -> None:
         assert h[r <= c / 2 * math.sqrt(frac)].sum() == pytest.approx(frac, abs=tol)
     assert h[r <= 1.1 * c / 2].sum() > 0.95
     np.testing.assert_allclose(zernike_defocus(np.array([0.0, c]), f_number=N), [0.0, c4])
+
+
+def test_pixel_mtf() -> None:
+    f = np.array([0.0, 125.0, 250.0, 500.0])  # cycles/mm for 2 um pixels: 0, 1/4, Nyquist, 1
+    np.testing.assert_allclose(
+        pixel_mtf(f, pixel_pitch=2e-6),
+        [1.0, math.sin(math.pi / 4) / (math.pi / 4), 2 / math.pi, 0],
+        atol=1e-15,
+    )
+    # a quarter fill factor halves the aperture's width: its first zero moves to 2 / p
+    assert pixel_mtf(1000.0, pixel_pitch=2e-6, fill_factor=0.25) < 1e-15
+    with pytest.raises(InvalidInputError, match="fill_factor"):
+        pixel_mtf(1.0, pixel_pitch=2e-6, fill_factor=1.5)

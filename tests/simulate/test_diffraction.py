@@ -7,7 +7,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-from imageform.optics import diffraction_limited_mtf, otf
+from imageform.optics import diffraction_limited_mtf, otf, pixel_mtf
 from imageform.simulate import default_scene, load_scene, simulate
 from imageform.simulate.stages import diffraction_blur, diffraction_psf_kernel
 
@@ -67,8 +67,8 @@ def test_kernel_is_the_pixel_integrated_airy_pattern() -> None:
     t = otf(k, pixel_pitch=pitch)
     c = k.shape[0] // 2
     f = t.fx[c:]
-    f_px = f * pitch * 1e3  # cycles per pixel
-    ref = diffraction_limited_mtf(f, wavelength=lam, f_number=fn) * np.sinc(f_px) ** 2
+    # kernel[n] = (PSF * pixel box)(n p): the optics' MTF times the pixel's (one sinc)
+    ref = diffraction_limited_mtf(f, wavelength=lam, f_number=fn) * pixel_mtf(f, pixel_pitch=pitch)
     assert np.abs(np.abs(t.value[c, c:]) - ref).max() < 0.025
 
 
