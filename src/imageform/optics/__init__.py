@@ -1,4 +1,5 @@
-"""imageform.optics — thin lens, depth of field, defocus, vignetting and aberrations (SI units).
+"""imageform.optics — thin lens, depth of field, defocus, vignetting, aberrations and
+diffraction PSFs (SI units).
 
 The focal length is always the keyword-only ``focal_length``: in metres, except where a
 function works on pixels (the vignetting maps take it in pixels, as ``fx`` of K).
@@ -22,6 +23,23 @@ from imageform.optics.depth_of_field import (
     depth_of_field,
     hyperfocal_distance,
 )
+from imageform.optics.psf import (
+    TransferFunction,
+    diffraction_limited_mtf,
+    diffraction_psf,
+    field_psfs,
+    mtf,
+    noll_to_nm,
+    otf,
+    pixel_mtf,
+    polychromatic_psf,
+    psf_from_pupil,
+    pupil_function,
+    zernike,
+    zernike_defocus,
+    zernike_radial,
+    zernike_wavefront,
+)
 from imageform.optics.thin_lens import (
     ThinLensSolution,
     aperture_diameter,
@@ -41,6 +59,7 @@ __all__ = [
     "ChromaticFocalLengths",
     "DepthOfField",
     "ThinLensSolution",
+    "TransferFunction",
     "aperture_diameter",
     "apply_vignetting",
     "axial_chromatic_aberration",
@@ -52,15 +71,29 @@ __all__ = [
     "defocus_blur",
     "defocus_radius_px",
     "depth_of_field",
+    "diffraction_limited_mtf",
+    "diffraction_psf",
     "disc_kernel",
     "f_number",
     "field_angle",
+    "field_psfs",
     "hyperfocal_distance",
     "lateral_chromatic_aberration",
     "magnification",
     "mechanical_vignetting",
+    "mtf",
+    "noll_to_nm",
+    "otf",
+    "pixel_mtf",
+    "polychromatic_psf",
+    "psf_from_pupil",
+    "pupil_function",
     "pupil_overlap_fraction",
     "spherical_aberration",
     "spherical_blur_radius",
     "thin_lens",
+    "zernike",
+    "zernike_defocus",
+    "zernike_radial",
+    "zernike_wavefront",
 ]

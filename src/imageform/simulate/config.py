@@ -269,13 +269,15 @@ class CameraConfig:
 @dataclass(frozen=True)
 class LensConfig:
     """``[lens]``: aperture ``f_number``, ``focus_distance_m``, whether to blur by defocus,
-    the natural ``vignetting`` and the per-channel magnification ``lateral_ca``."""
+    the natural ``vignetting``, the per-channel magnification ``lateral_ca`` and whether to
+    blur by ``diffraction`` (off by default)."""
 
     f_number: float
     focus_distance_m: float
     defocus: bool
     vignetting: str
     lateral_ca: Vec3
+    diffraction: bool = False
 
 
 @dataclass(frozen=True)

@@ -184,6 +184,9 @@ SCENE_SCHEMA: dict[str, Any] = {
             minimum=0.5,
             maximum=2.0,
         ),
+        "diffraction": Field(
+            "bool", False, "convolve each channel with the aperture's diffraction PSF (Airy)"
+        ),
     },
     "sensor": {
         "preset": Field("str", "cmos", "starting parameters", choices=("cmos", "ccd")),

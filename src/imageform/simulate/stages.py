@@ -17,6 +17,7 @@ of :class:`~imageform.simulate.SimulationResult`'s stages):
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -32,6 +33,7 @@ from imageform.simulate.truth import NEUTRAL_PATCHES
 from imageform.spectral import COLORCHECKER_PATCHES
 
 __all__ = [
+    "DIFFRACTION_BANDS",
     "ColorCorrected",
     "Encoded",
     "WhiteBalanced",
@@ -42,6 +44,8 @@ __all__ = [
     "correct_lens_shading",
     "decode_output",
     "demosaic_raw",
+    "diffraction_blur",
+    "diffraction_psf_kernel",
     "encode_output",
     "exposure_time",
     "measure_photon_transfer",
@@ -115,7 +119,70 @@ def apply_lens(
             img = blur_by_radius(img, rad, step=0.5, max_layers=12)
             # the FFT convolution leaves round-off of ~1e-13 around zero; light is >= 0
             img = np.maximum(img, 0.0)
+    if lens.diffraction:
+        pitch = focal_length_mm * 1e-3 / float(np.asarray(camera.K)[0, 0])
+        img = diffraction_blur(img, f_number=lens.f_number, pixel_pitch=pitch)
     return np.asarray(img)
+
+
+#: Wavelength bands (m) of the B, G, R channels for :func:`diffraction_blur`: 400-500,
+#: 500-600 and 600-700 nm, five wavelengths each, equal weights (a flat spectrum through
+#: box-shaped channel sensitivities).
+DIFFRACTION_BANDS = (
+    (420e-9, 440e-9, 460e-9, 480e-9, 500e-9),
+    (500e-9, 525e-9, 550e-9, 575e-9, 600e-9),
+    (600e-9, 625e-9, 650e-9, 675e-9, 700e-9),
+)
+
+
+def diffraction_psf_kernel(
+    wavelengths: tuple[float, ...], *, f_number: float, pixel_pitch: float
+) -> np.ndarray:
+    """The pixel-integrated diffraction PSF of a circular aperture over ``wavelengths``.
+
+    :func:`imageform.optics.polychromatic_psf` at a pitch ``k`` times finer than the
+    pixels (``k`` odd, at least 3 and enough for Nyquist), summed over ``k x k`` blocks
+    centred on each pixel, so the kernel is the Airy pattern integrated over each pixel's
+    area (the renderer's pixels are area averages). Odd size, half-width ``10 lambda N`` of
+    the longest wavelength (about 98 % of the light: the Airy pattern's wings fall slowly),
+    renormalised to sum to 1; its MTF is the circular pupil's times the pixel's sinc to 0.02.
+    """
+    from imageform.optics import polychromatic_psf
+
+    lam_n = max(wavelengths) * f_number
+    k = max(3, 2 * math.ceil(2 * pixel_pitch / (2 * min(wavelengths) * f_number) + 0.5) + 1)
+    half = max(1, math.ceil(10 * lam_n / pixel_pitch))  # ~98 % of the light
+    n = 2 * half + 1
+    fine = polychromatic_psf(
+        wavelengths=list(wavelengths),
+        f_number=f_number,
+        pixel_pitch=pixel_pitch / k,
+        size=n * k,
+        n_pupil=128,
+    )
+    kernel = fine.reshape(n, k, n, k).sum(axis=(1, 3))
+    return kernel / kernel.sum()
+
+
+def diffraction_blur(image: np.ndarray, *, f_number: float, pixel_pitch: float) -> np.ndarray:
+    """Each channel of ``image (H, W, 3)`` (R, G, B) convolved with its band's
+    pixel-integrated diffraction PSF (:func:`diffraction_psf_kernel`,
+    :data:`DIFFRACTION_BANDS`); borders reflected; light is kept >= 0.
+
+    An Airy disc well inside a pixel still moves a little light (its wings) to neighbours.
+    """
+    from scipy.signal import fftconvolve
+
+    out = np.empty_like(image)
+    for ch, band in enumerate(reversed(DIFFRACTION_BANDS)):  # R, G, B
+        kernel = diffraction_psf_kernel(band, f_number=f_number, pixel_pitch=pixel_pitch)
+        p = kernel.shape[0] // 2
+        if min(image.shape[:2]) > p:
+            padded = np.pad(image[..., ch], p, mode="reflect")
+        else:
+            padded = np.pad(image[..., ch], p, mode="symmetric")
+        out[..., ch] = fftconvolve(padded, kernel, mode="valid")
+    return np.maximum(out, 0.0)
 
 
 def exposure_time(rate: np.ndarray, config: SensorConfig, sensor: SensorModel) -> float:
