@@ -73,6 +73,13 @@ from imageform.geometry.rotations import (
     quaternion_to_matrix,
     rvec_to_matrix,
 )
+from imageform.geometry.stereo import (
+    StereoCalibrationResult,
+    StereoRectification,
+    rectification_map,
+    stereo_calibrate,
+    stereo_rectify,
+)
 from imageform.geometry.triangulation import TriangulationResult, triangulate_points
 from imageform.geometry.undistort import remap_bilinear, undistort_image, undistortion_map
 from imageform.geometry.vanishing import (
@@ -105,6 +112,8 @@ __all__ = [
     "Pose",
     "Projection",
     "RefinedCorners",
+    "StereoCalibrationResult",
+    "StereoRectification",
     "TriangulationResult",
     "Undistorted",
     "VanishingPointResult",
@@ -146,11 +155,14 @@ __all__ = [
     "projected_size",
     "projection_matrix",
     "quaternion_to_matrix",
+    "rectification_map",
     "refine_corners",
     "remap_bilinear",
     "rvec_to_matrix",
     "solve_pnp",
     "solve_pnp_ransac",
+    "stereo_calibrate",
+    "stereo_rectify",
     "to_homogeneous",
     "triangulate_points",
     "undistort_image",
