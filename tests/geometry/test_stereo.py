@@ -142,7 +142,7 @@ def test_joint_mode_matches_opencv(noisy: tuple, joint: StereoCalibrationResult)
     3e-7 relative, K within 4e-4 px."""
     objs, uvl, uvr, _, _ = noisy
     crit = (cv2.TERM_CRITERIA_COUNT + cv2.TERM_CRITERIA_EPS, 200, 1e-12)
-    rms, Kl, dl, Kr, dr, R, T, _, _ = cv2.stereoCalibrate(
+    rms, Kl, _, Kr, _, R, T, _, _ = cv2.stereoCalibrate(
         [o.astype(np.float32) for o in objs],
         [a.astype(np.float32) for a in uvl],
         [b.astype(np.float32) for b in uvr],
@@ -183,7 +183,7 @@ def test_rectify_matches_opencv(alpha: float, zero_disparity: bool) -> None:
 def test_rectify_vertical_pair_matches_opencv() -> None:
     T = np.array([1.5, -100.0, 2.0])
     ours = stereo_rectify(K1, D1, K2, D2, SIZE, R_TRUE, T)
-    R1, R2, P1, P2, Q, _, _ = cv2.stereoRectify(
+    R1, _, _, P2, Q, _, _ = cv2.stereoRectify(
         K1, _dist(D1), K2, _dist(D2), SIZE, R_TRUE, T.reshape(3, 1), alpha=-1
     )
     assert ours.vertical
