@@ -47,12 +47,12 @@ def _match(found: np.ndarray, truth: np.ndarray) -> np.ndarray:
 
 
 @pytest.fixture(scope="module")
-def rendered() -> tuple[list, list, list, list]:
+def rendered() -> tuple[list, list, list, list, list]:
     from imageform.simulate import load_scene, simulate
 
     scene = load_scene(ROOT / "examples" / "scenes" / "calibration_board.toml")
     base = scene.with_changes(views=[])
-    left, right, true_l, true_r = [], [], [], []
+    left, right, true_l, true_r, images = [], [], [], [], []
     for k in range(len(scene.config.views)):
         pose = scene.view(k).camera
         Rl, tl = np.asarray(pose.R), np.asarray(pose.t)
@@ -60,6 +60,7 @@ def rendered() -> tuple[list, list, list, list]:
         for K, d, Rc, tc in ((K1, D1, Rl, tl), (K2, D2, R_TRUE @ Rl, R_TRUE @ tl + T_TRUE)):
             cam = Camera(K, Rc, tc, SIZE, distortion=d)
             img = simulate(base.with_camera(cam), rng=k).stages[-1].image
+            images.append(img)
             res = find_checkerboard(img, (9, 6))
             assert res.found, (k, res.reason)
             truth = np.asarray(project_points_distorted(WORLD, K, Rc, tc, d)[0])
@@ -68,12 +69,12 @@ def rendered() -> tuple[list, list, list, list]:
         right.append(pair[1][0])
         true_l.append(pair[0][1])
         true_r.append(pair[1][1])
-    return left, right, true_l, true_r
+    return left, right, true_l, true_r, images
 
 
 def test_simulated_pair_gives_back_the_rig(rendered: tuple) -> None:
     cv2 = pytest.importorskip("cv2")
-    left, right, true_l, true_r = rendered
+    left, right, true_l, true_r, _ = rendered
     objs = [BOARD] * len(left)
     rig = stereo_calibrate(objs, left, right, SIZE, fix=("k3",))
     ang = np.degrees(np.linalg.norm(np.asarray(matrix_to_rvec(rig.R @ R_TRUE.T))))
@@ -121,3 +122,33 @@ def test_simulated_pair_gives_back_the_rig(rendered: tuple) -> None:
         K1, np.array(D1.coeffs[:5]), K2, np.array(D2.coeffs[:5]), SIZE, R_TRUE, T_TRUE.reshape(3, 1)
     )
     np.testing.assert_allclose(ours.P2, ref[3], rtol=1e-5, atol=1e-3)
+
+
+def test_stereo_calibrate_command(rendered: tuple, tmp_path: Path) -> None:
+    """``imageform stereo-calibrate`` on the rendered pairs (written as PNG) gives back the
+    rig and writes a stereo file that reads back."""
+    from imageform.cli import main
+    from imageform.io import read_stereo_camera, write_image
+
+    images = rendered[4]
+    for k in range(len(images) // 2):
+        for side, img in (("left", images[2 * k]), ("right", images[2 * k + 1])):
+            (tmp_path / side).mkdir(exist_ok=True)
+            write_image(tmp_path / side / f"{side}-{k:02d}.png", img)
+    out = tmp_path / "rig.toml"
+    args = ["stereo-calibrate", str(tmp_path / "left" / "*.png"), str(tmp_path / "right" / "*.png")]
+    args += ["--board", "9x6", "--square", "20mm", "--fix", "k3", "-o", str(out), "--json"]
+    assert main(args) == 0
+    sf = read_stereo_camera(out)
+    # T in mm (the square in mm), within 1 % of the truth
+    assert np.linalg.norm(sf.T - 1000 * T_TRUE) / np.linalg.norm(1000 * T_TRUE) < 0.01
+    ang = np.degrees(np.linalg.norm(np.asarray(matrix_to_rvec(sf.R @ R_TRUE.T))))
+    assert ang < 0.05
+    assert sf.provenance.views_used == 8
+    assert sf.provenance.command.startswith("imageform stereo-calibrate --board 9x6")
+    assert sf.left.provenance.images[0] == "left-00.png"
+    # mismatched pairs and missing files are errors (exit 1)
+    (tmp_path / "right" / "right-00.png").unlink()
+    assert main([*args[:-3], "-o", str(tmp_path / "b.toml")]) == 1
+    bad = ["stereo-calibrate", str(tmp_path / "none*.png"), str(tmp_path / "right" / "*.png")]
+    assert main([*bad, "--board", "9x6", "-o", str(tmp_path / "c.toml")]) == 1
