@@ -109,3 +109,39 @@ def test_import_costs_less_than_numpy() -> None:
     assert imageform_s <= 1.5 * numpy_s, (
         f"import imageform: {imageform_s * 1e3:.0f} ms, import numpy: {numpy_s * 1e3:.0f} ms"
     )
+
+
+def test_help_imports_no_numerical_code() -> None:
+    """``imageform --help`` and ``imageform COMMAND --help`` load the command definitions
+    only: no NumPy, SciPy, numba or plotting (issue 19: help under 0.5 s)."""
+    out = json.loads(
+        _python(
+            "import contextlib, io, json, sys\n"
+            "from imageform.cli import main\n"
+            "with contextlib.redirect_stdout(io.StringIO()) as text:\n"
+            "    codes = [main(['--help']), main(['simulate', '--help']),"
+            " main(['batch', '--help'])]\n"
+            f"loaded = [m for m in {HEAVY!r} if m in sys.modules]\n"
+            "print(json.dumps({'codes': codes, 'loaded': loaded,"
+            " 'help': text.getvalue()[:200]}))\n"
+        )
+    )
+    assert out["codes"] == [0, 0, 0]
+    assert "Usage: imageform" in out["help"]
+    assert out["loaded"] == [], f"imageform --help loaded {out['loaded']}"
+
+
+def test_help_is_quick() -> None:
+    """``imageform --help`` costs at most what ``import numpy`` costs (median of 5), which is
+    well under 0.5 s on the development machine."""
+    numpy_s = _median_import_seconds("import numpy", 5)
+    help_s = _median_import_seconds(
+        "import contextlib, io\n"
+        "from imageform.cli import main\n"
+        "with contextlib.redirect_stdout(io.StringIO()):\n"
+        "    main(['--help'])",
+        5,
+    )
+    assert help_s <= 1.5 * numpy_s, (
+        f"imageform --help: {help_s * 1e3:.0f} ms, import numpy: {numpy_s * 1e3:.0f} ms"
+    )

@@ -673,3 +673,121 @@ def _all_finite(out: Any) -> bool:
     if is_dask_namespace(xp):
         return True  # lazy: not computed here
     return bool(xp.all(xp.isfinite(out)))
+
+
+# --- h16color ---
+
+
+def _dtype_kind(value: object) -> str:
+    """NumPy's dtype kind of ``value`` (``"b"`` bool, ``"c"`` complex, ``"O"`` object, ``"U"``
+    string ...) without converting an array; ``""`` when it has none."""
+    dt = getattr(value, "dtype", None)
+    if dt is None:
+        if isinstance(value, bool | np.bool_):
+            return "b"
+        if isinstance(value, complex):
+            return "c"
+        if isinstance(value, str | bytes):
+            return "U"
+        if isinstance(value, list | tuple):
+            try:
+                return np.asarray(value).dtype.kind
+            except (TypeError, ValueError):
+                return "O"
+        return ""
+    text = str(dt).removeprefix("torch.")
+    if text == "bool":
+        return "b"
+    if text.startswith("complex"):
+        return "c"
+    return getattr(dt, "kind", "")
+
+
+def refuse_non_real(value: object, name: str) -> None:
+    """Refuse, before any conversion, values that are not real numbers: bool arrays and bools
+    (:class:`TypeError`: a mask is not a measurement), complex, object and string arrays
+    (:class:`InvalidInputError`). Never casts, so no ComplexWarning is ever issued.
+
+    >>> refuse_non_real(np.array([True, False]), "xyz")
+    Traceback (most recent call last):
+    ...
+    TypeError: expected xyz as real numbers, got bool values (cast with .astype(float) if meant)
+    """
+    kind = _dtype_kind(value)
+    if kind == "b":
+        raise TypeError(
+            f"expected {name} as real numbers, got bool values (cast with .astype(float) if meant)"
+        )
+    if kind == "c":
+        raise InvalidInputError(f"expected {name} as real numbers, got complex values")
+    if kind in ("O", "U", "S", "V", "M", "m"):
+        raise InvalidInputError(f"expected {name} as real numbers, got {describe(value)}")
+
+
+def as_real_ndarray(
+    value: object,
+    name: str,
+    *,
+    ndim: int | Collection[int] | None = None,
+    last: int | None = None,
+    min_size: int = 0,
+    finite: bool = True,
+) -> np.ndarray:
+    """``value`` as a float64 NumPy array of real numbers (no bool, complex, object, string),
+    with ``ndim`` dimensions (one of them), a last axis of ``last`` and ``>= min_size``
+    elements, finite unless ``finite=False``; every refusal is one line naming ``name``.
+
+    >>> as_real_ndarray([400, 500], "wavelengths", ndim=1).tolist()
+    [400.0, 500.0]
+    """
+    if value is None:
+        raise InvalidInputError(f"expected {name} as an array of numbers, got None")
+    refuse_non_real(value, name)
+    try:
+        arr = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise InvalidInputError(
+            f"expected {name} as an array of numbers, got {describe(value)}"
+        ) from exc
+    dims = None if ndim is None else ((ndim,) if isinstance(ndim, int) else tuple(ndim))
+    if dims is not None and arr.ndim not in dims:
+        want = " or ".join(f"{d}-d" for d in dims)
+        raise InvalidInputError(
+            f"expected {name} as a {want} array, got shape {format_shape(arr.shape)}"
+        )
+    if last is not None and (arr.ndim < 1 or arr.shape[-1] != last):
+        raise InvalidInputError(
+            f"expected {name} of shape (..., {last}), got {format_shape(arr.shape)}"
+        )
+    if arr.size < min_size:
+        raise InvalidInputError(
+            f"expected {name} with at least {min_size} value(s), got shape "
+            f"{format_shape(arr.shape)}"
+        )
+    if finite and arr.size and not np.isfinite(arr).all():
+        raise InvalidInputError(f"{name} contains NaN or inf")
+    return arr
+
+
+def check_name(value: object, valid: Collection[str], what: str, name: str = "") -> str:
+    """:func:`check_option` naming the parameter ``name`` (``"unknown spectral table 'x' for
+    key"``) and listing at most ~110 characters of the valid names, so that the message stays
+    one line under 200 characters however many names are valid; a non-str is a TypeError."""
+    if not isinstance(value, str):
+        raise TypeError(f"expected {name or what} as a {what} name (str), got {describe(value)}")
+    try:
+        return check_option(value, valid, what)
+    except UnknownOptionError:
+        names = sorted(valid)
+        shown: list[str] = []
+        size = 0
+        for n in names:
+            size += len(n) + 4
+            if size > 110:
+                break
+            shown.append(repr(n))
+        more = f", ... ({len(names) - len(shown)} more)" if len(shown) < len(names) else ""
+        where = f" for {name}" if name else ""
+        raise UnknownOptionError(
+            f"unknown {what} {describe(value, 30)}{where}; valid: {', '.join(shown)}{more}"
+        ) from None

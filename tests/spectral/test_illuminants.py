@@ -70,7 +70,7 @@ def test_named_illuminants() -> None:
 def test_bad_temperatures() -> None:
     with pytest.raises(InvalidInputError, match="temperature"):
         planck(500.0, -1.0)
-    with pytest.raises(InvalidInputError, match="wavelengths > 0"):
+    with pytest.raises(InvalidInputError, match=r"wavelength_nm in \[0.001, 1e\+12\] nm"):
         planck([0.0, 500.0], 5000.0)
     with pytest.raises(InvalidInputError, match=r"\[4000, 25000\]"):
         daylight_spectrum(3000)
@@ -131,7 +131,7 @@ def test_daylight_from_xy_bad_input() -> None:
     from imageform.spectral import daylight_spectrum_from_xy
 
     for bad in ([0.3], [0.3, np.nan], "xy", [[0.3, 0.3]]):
-        with pytest.raises(InvalidInputError, match="expected xy as two finite numbers"):
+        with pytest.raises(InvalidInputError, match=r"expected xy as (two finite|real) numbers"):
             daylight_spectrum_from_xy(bad)  # type: ignore[arg-type]
     # 0.0241 + 0.2562 x - 0.7341 y = 0 at x = 0, y = 0.0241 / 0.7341
     with pytest.raises(InvalidInputError, match="M1, M2 are undefined"):

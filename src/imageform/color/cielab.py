@@ -18,7 +18,7 @@ from typing import Any
 
 from imageform._backend import device_of, namespace
 from imageform._dask import chunkwise
-from imageform._validate import as_image
+from imageform.color._guard import as_image
 
 from .whitepoints import resolve_white
 

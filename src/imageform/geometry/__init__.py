@@ -52,6 +52,7 @@ from imageform.geometry.homography import apply_homography, estimate_homography
 from imageform.geometry.intrinsics import Intrinsics, intrinsic_matrix, projected_size
 from imageform.geometry.line_segments import LineSegments, detect_line_segments
 from imageform.geometry.pnp import PnPResult, solve_pnp
+from imageform.geometry.pnp_batch import solve_pnp_batch
 from imageform.geometry.pnp_ransac import solve_pnp_ransac
 from imageform.geometry.projection_models import (
     ConeBeamGeometry,
@@ -60,6 +61,13 @@ from imageform.geometry.projection_models import (
     weak_perspective_matrix,
     weak_perspective_project,
 )
+from imageform.geometry.relative_pose import (
+    RelativePose,
+    TwoViewPoints,
+    recover_pose,
+    triangulate_two_view,
+)
+from imageform.geometry.robust import HomographyResult, find_homography
 from imageform.geometry.rotations import (
     Pose,
     axis_rotation,
@@ -81,6 +89,15 @@ from imageform.geometry.stereo import (
     stereo_rectify,
 )
 from imageform.geometry.triangulation import TriangulationResult, triangulate_points
+from imageform.geometry.twoview import (
+    EssentialResult,
+    FundamentalResult,
+    essential_5point,
+    find_essential_matrix,
+    find_fundamental_matrix,
+    fundamental_7point,
+    fundamental_8point,
+)
 from imageform.geometry.undistort import remap_bilinear, undistort_image, undistortion_map
 from imageform.geometry.vanishing import (
     focal_from_vanishing_points,
@@ -104,6 +121,9 @@ __all__ = [
     "Dehomogenized",
     "DistortionModel",
     "DivisionModel",
+    "EssentialResult",
+    "FundamentalResult",
+    "HomographyResult",
     "ImagePlane",
     "Intrinsics",
     "KannalaBrandt",
@@ -112,9 +132,11 @@ __all__ = [
     "Pose",
     "Projection",
     "RefinedCorners",
+    "RelativePose",
     "StereoCalibrationResult",
     "StereoRectification",
     "TriangulationResult",
+    "TwoViewPoints",
     "Undistorted",
     "VanishingPointResult",
     "apply_homography",
@@ -128,14 +150,20 @@ __all__ = [
     "decompose_projection_matrix",
     "detect_line_segments",
     "detect_vanishing_points",
+    "essential_5point",
     "estimate_homography",
     "estimate_projection_matrix",
     "euler_to_matrix",
     "find_checkerboard",
     "find_checkerboards",
+    "find_essential_matrix",
+    "find_fundamental_matrix",
+    "find_homography",
     "focal_from_vanishing_points",
     "from_homogeneous",
     "from_homogeneous_masked",
+    "fundamental_7point",
+    "fundamental_8point",
     "horizon_line",
     "intersect_lines",
     "intrinsic_matrix",
@@ -155,16 +183,19 @@ __all__ = [
     "projected_size",
     "projection_matrix",
     "quaternion_to_matrix",
+    "recover_pose",
     "rectification_map",
     "refine_corners",
     "remap_bilinear",
     "rvec_to_matrix",
     "solve_pnp",
+    "solve_pnp_batch",
     "solve_pnp_ransac",
     "stereo_calibrate",
     "stereo_rectify",
     "to_homogeneous",
     "triangulate_points",
+    "triangulate_two_view",
     "undistort_image",
     "undistortion_map",
     "unproject",

@@ -14,7 +14,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from imageform._validate import check_option
+from imageform._validate import check_name, check_option, describe
 from imageform.errors import InvalidInputError
 from imageform.spectral.spectrum import Spectrum
 
@@ -123,7 +123,11 @@ def read_table(key: str) -> DataTable:
     >>> t.columns[:3], t.labels[0], t.values.shape
     (('deficiency', 'severity', 'm00'), 'protan', (33, 10))
     """
-    k = key if key in TABLES else check_option(key, TABLES, "spectral table")
+    k = (
+        key
+        if isinstance(key, str) and key in TABLES
+        else check_name(key, TABLES, "spectral table", "key")
+    )
     return DataTable(*_parse(k))
 
 
@@ -133,7 +137,11 @@ def table_source(key: str) -> str:
     >>> table_source("cmf_2").startswith("source: CIE 015:2018")
     True
     """
-    k = key if key in TABLES else check_option(key, TABLES, "spectral table")
+    k = (
+        key
+        if isinstance(key, str) and key in TABLES
+        else check_name(key, TABLES, "spectral table", "key")
+    )
     return "\n".join(_parse(k)[0])
 
 
@@ -142,7 +150,11 @@ def load_table(key: str, name: str = "") -> Spectrum:
 
     Spectra are immutable (read-only arrays), so one cached object per table is shared.
     """
-    k = key if key in TABLES else check_option(key, TABLES, "spectral table")
+    k = (
+        key
+        if isinstance(key, str) and key in TABLES
+        else check_name(key, TABLES, "spectral table", "key")
+    )
     return _load_table(k, name)
 
 
@@ -197,6 +209,8 @@ def illuminant_table(name: str) -> Spectrum:
     >>> illuminant_table("C").name
     'CIE C'
     """
+    if not isinstance(name, str):
+        raise TypeError(f"expected name as an illuminant table name (str), got {describe(name)}")
     key = name.strip().upper().replace("FL", "F")
     if key not in ILLUMINANT_TABLES:
         raise InvalidInputError(
@@ -207,6 +221,8 @@ def illuminant_table(name: str) -> Spectrum:
 
 def led_spectrum(name: str = "LED-B3") -> Spectrum:
     """A CIE 015:2018 Table 11 white-LED spectrum (LED-B1 ... LED-V2), 5 nm."""
+    if not isinstance(name, str):
+        raise TypeError(f"expected name as an LED spectrum name (str), got {describe(name)}")
     key = name.strip().upper().replace("_", "-")
     if key not in LED_SPECTRA:
         raise InvalidInputError(

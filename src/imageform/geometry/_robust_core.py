@@ -1,0 +1,288 @@
+"""The RANSAC engine, a small Levenberg-Marquardt solver and input checks shared by the
+robust two-view estimators (:mod:`imageform.geometry.robust`, :mod:`.twoview`).
+
+Internal to :mod:`imageform.geometry`.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+
+import numpy as np
+from numpy.typing import NDArray
+
+from imageform._backend import to_numpy
+from imageform._validate import as_points, check_positive, describe
+from imageform.errors import InvalidInputError
+
+__all__ = [
+    "REFINE_FACTOR",
+    "check_confidence",
+    "check_pairs",
+    "hartley",
+    "levenberg_marquardt",
+    "ransac",
+    "refine_support",
+    "result_dtype",
+    "rotation",
+    "trials_needed",
+]
+
+F64 = NDArray[np.float64]
+
+#: Minimal samples drawn and solved together (one batched solve).
+BATCH = 32
+
+#: Upper bound of the final least-squares support, as a multiple of the inlier threshold
+#: (see :func:`refine_support`).
+REFINE_FACTOR = 2.0
+
+
+def check_pairs(a: object, b: object, name_a: str, name_b: str, n_min: int) -> tuple[F64, F64]:
+    """Two point sets ``(N, 2)`` of the same length ``N >= n_min``, finite, as float64."""
+    pa = np.asarray(to_numpy(as_points(a, name_a, 2)), dtype=np.float64)
+    pb = np.asarray(to_numpy(as_points(b, name_b, 2)), dtype=np.float64)
+    if pa.ndim != 2:
+        raise InvalidInputError(f"expected {name_a} of shape (N, 2), got {pa.shape}")
+    if pb.ndim != 2:
+        raise InvalidInputError(f"expected {name_b} of shape (N, 2), got {pb.shape}")
+    if pa.shape[0] != pb.shape[0]:
+        raise InvalidInputError(
+            f"expected {name_a} and {name_b} of the same length, "
+            f"got {pa.shape[0]} and {pb.shape[0]}"
+        )
+    if pa.shape[0] < n_min:
+        raise InvalidInputError(
+            f"expected at least {n_min} correspondences in {name_a}, {name_b}, got {pa.shape[0]}"
+        )
+    return pa, pb
+
+
+def result_dtype(*inputs: object) -> type[np.floating]:
+    """float32 when every input is a float32 array (conventions: float32 in, float32 out),
+    else float64; the computation is float64 either way."""
+    if all(getattr(x, "dtype", None) == np.float32 for x in inputs):
+        return np.float32
+    return np.float64
+
+
+def check_confidence(confidence: object) -> float:
+    p = check_positive(confidence, "confidence")
+    if p >= 1.0:
+        raise InvalidInputError(f"expected confidence in (0, 1), got {describe(confidence)}")
+    return p
+
+
+def hartley(p: F64) -> tuple[F64, F64]:
+    """Points ``(..., N, 2)`` centred with mean distance sqrt(2), and ``T`` (..., 3, 3).
+
+    Hartley & Zisserman (2nd ed.) sec. 4.4.4; coincident points keep scale 1.
+    """
+    c = p.mean(axis=-2, keepdims=True)
+    d = np.sqrt(np.sum((p - c) ** 2, axis=-1)).mean(axis=-1)
+    s = np.where(d > 0, math.sqrt(2.0) / np.where(d > 0, d, 1.0), 1.0)
+    T = np.zeros((*p.shape[:-2], 3, 3))
+    T[..., 0, 0] = T[..., 1, 1] = s
+    T[..., :2, 2] = -c[..., 0, :] * s[..., None]
+    T[..., 2, 2] = 1.0
+    return (p - c) * s[..., None, None], T
+
+
+def trials_needed(n_inliers: int, n: int, s: int, confidence: float) -> float:
+    """Samples for probability ``confidence`` of one outlier-free sample of size ``s``.
+
+    .. math:: k = \\frac{\\log(1 - p)}{\\log(1 - \\varepsilon^s)}
+
+    (Fischler & Bolles 1981; Hartley & Zisserman 2nd ed., Algorithm 4.5.)
+    """
+    eps = n_inliers / n
+    if eps >= 1.0:
+        return 0.0
+    if eps <= 0.0:
+        return math.inf
+    denom = math.log1p(-(eps**s))
+    if denom == 0.0:
+        return math.inf
+    return math.log1p(-confidence) / denom
+
+
+def _samples(rng: np.random.Generator, b: int, n: int, s: int) -> NDArray[np.intp]:
+    """``b`` samples of ``s`` distinct indices in ``[0, n)`` (rows with repeats redrawn)."""
+    out = np.empty((0, s), dtype=np.intp)
+    while out.shape[0] < b:
+        idx = rng.integers(0, n, (2 * b, s))
+        srt = np.sort(idx, axis=1)
+        out = np.concatenate([out, idx[np.all(srt[:, 1:] != srt[:, :-1], axis=1)]])
+    return out[:b]
+
+
+def ransac(
+    n: int,
+    s: int,
+    solve: Callable[[NDArray[np.intp]], F64],
+    sq_errors: Callable[[F64], F64],
+    threshold: float,
+    confidence: float,
+    max_trials: int,
+    rng: np.random.Generator,
+    local_opt: Callable[[F64, NDArray[np.bool_]], F64] | None = None,
+) -> tuple[F64 | None, NDArray[np.bool_], int]:
+    """MSAC with adaptive trial count and LO-RANSAC local optimisation.
+
+    ``solve(idx (B, s))`` returns models ``(M, ...)`` (any number per sample, NaN-free);
+    ``sq_errors(models)`` their squared residuals ``(M, n)``. Each model is scored by the
+    truncated quadratic ``Σ min(e², τ²)`` (MSAC, Torr & Zisserman 2000); every new best model
+    is handed to ``local_opt(model, inliers)`` (LO-RANSAC, Chum, Matas & Kittler 2003), whose
+    result replaces it when it scores better. Returns ``(best model or None, inliers,
+    trials)``.
+    """
+    thr2 = threshold * threshold
+    best_model: F64 | None = None
+    best_score = math.inf
+    best_inl = np.zeros(n, dtype=bool)
+    needed = float(max_trials)
+    drawn = 0
+
+    def score(models: F64) -> tuple[F64, NDArray[np.bool_]]:
+        e = sq_errors(models)
+        e = np.where(np.isfinite(e), e, thr2)
+        return np.minimum(e, thr2).sum(axis=-1), e < thr2
+
+    while drawn < min(needed, max_trials):
+        b = int(min(BATCH, max(1, max_trials - drawn)))
+        idx = _samples(rng, b, n, s)
+        drawn += b
+        with np.errstate(all="ignore"):
+            models = solve(idx)
+        if models.shape[0] == 0:
+            continue
+        sc, inl = score(models)
+        k = int(np.argmin(sc))
+        if sc[k] >= best_score:
+            continue
+        best_model, best_score, best_inl = models[k], float(sc[k]), inl[k]
+        if local_opt is not None and best_inl.sum() > s:
+            with np.errstate(all="ignore"):
+                lo = local_opt(best_model, best_inl)
+            if lo is not None and np.all(np.isfinite(lo)):
+                sc2, inl2 = score(lo[None])
+                if sc2[0] < best_score:
+                    best_model, best_score, best_inl = lo, float(sc2[0]), inl2[0]
+        needed = trials_needed(int(best_inl.sum()), n, s, confidence)
+    return best_model, best_inl, drawn
+
+
+def levenberg_marquardt(
+    residual: Callable[[F64], F64],
+    p0: F64,
+    *,
+    max_iter: int = 50,
+    tol: float = 1e-12,
+    jacobian: Callable[[F64], F64] | None = None,
+) -> tuple[F64, float]:
+    """Minimise ``‖r(p)‖²`` by Levenberg-Marquardt (Marquardt 1963, scaled damping).
+
+    The Jacobian is ``jacobian(p)`` when given, else central differences. Returns the
+    parameters and the final cost ``‖r‖²``.
+    """
+    p = np.asarray(p0, dtype=np.float64).copy()
+    r = residual(p)
+    cost = float(r @ r)
+    lam = 1e-3
+    gain = 0.0
+
+    def num_jac(q: F64) -> F64:
+        cols = []
+        for i in range(q.size):
+            h = 1e-6 * max(1.0, abs(q[i]))
+            e = np.zeros_like(q)
+            e[i] = h
+            cols.append((residual(q + e) - residual(q - e)) / (2 * h))
+        return np.stack(cols, axis=-1)
+
+    jac = jacobian if jacobian is not None else num_jac
+    for _ in range(max_iter):
+        J = jac(p)
+        A = J.T @ J
+        g = J.T @ r
+        D = np.diag(A).copy()
+        D[D <= 0] = 1.0
+        improved = False
+        while lam < 1e10:
+            try:
+                step = -np.linalg.solve(A + lam * np.diag(D), g)
+            except np.linalg.LinAlgError:
+                lam *= 10.0
+                continue
+            pn = p + step
+            rn = residual(pn)
+            cn = float(rn @ rn)
+            if np.isfinite(cn) and cn <= cost:
+                gain = cost - cn
+                p, r, cost = pn, rn, cn
+                lam = max(lam / 10.0, 1e-12)
+                improved = True
+                break
+            lam *= 10.0
+        if not improved or gain <= tol * max(cost, 1e-300):
+            break
+    return p, cost
+
+
+def _chi2_cdf(c: float, k: int) -> float:
+    """``P(χ²_k < c)`` for k in {1, 2, 3, 4} (closed forms)."""
+    if k == 1:
+        return math.erf(math.sqrt(c / 2.0))
+    if k == 2:
+        return -math.expm1(-c / 2.0)
+    if k == 3:
+        return math.erf(math.sqrt(c / 2.0)) - math.sqrt(2.0 * c / math.pi) * math.exp(-c / 2.0)
+    return 1.0 - math.exp(-c / 2.0) * (1.0 + c / 2.0)
+
+
+def refine_support(sq_err: F64, threshold: float, dof: int) -> float:
+    """Residual bound of the correspondences used by the final least-squares refinement.
+
+    The consensus threshold ``τ`` clips the tail of the inlier distribution (at ``τ = σ``
+    a third of the inliers of a 1-D residual lie beyond it), which costs accuracy. The
+    noise ``σ̂`` is estimated from the inliers' mean squared residual ``m`` corrected for
+    the truncation, ``m = σ² k P(χ²_{k+2} < τ²/σ²) / P(χ²_k < τ²/σ²)`` for a residual
+    with ``k = dof`` Gaussian components, and the support is ``3 σ̂`` clipped to
+    ``[τ, REFINE_FACTOR τ]`` (a wider least-squares support than the consensus threshold,
+    as the threshold multiplier of Lebeda, Matas & Chum (2012), "Fixing the locally
+    optimized RANSAC", BMVC). Exact data (``σ̂ = 0``) keep ``τ``.
+    """
+    m = float(np.mean(sq_err)) if sq_err.size else 0.0
+    t2 = threshold * threshold
+    if not np.isfinite(m) or m <= 0.0:
+        return threshold
+    if m >= t2 * dof / (dof + 2.0) * (1.0 - 1e-9):
+        return threshold * REFINE_FACTOR
+
+    def mean_sq(sig: float) -> float:
+        c = t2 / (sig * sig)
+        lo = _chi2_cdf(c, dof)
+        return sig * sig * dof * _chi2_cdf(c, dof + 2) / lo if lo > 0 else t2 * dof / (dof + 2.0)
+
+    a, b = 1e-12 * threshold, 1e6 * threshold
+    for _ in range(100):
+        mid = math.sqrt(a * b)
+        if mean_sq(mid) < m:
+            a = mid
+        else:
+            b = mid
+    sigma = math.sqrt(a * b)
+    return float(min(max(3.0 * sigma, threshold), REFINE_FACTOR * threshold))
+
+
+def rotation(w: F64) -> F64:
+    """``R = exp([w]ₓ)`` of one rotation vector (3,) (Rodrigues' formula, series near 0)."""
+    th2 = float(w @ w)
+    if th2 < 1e-12:
+        a, b = 1.0 - th2 / 6.0, 0.5 - th2 / 24.0
+    else:
+        th = math.sqrt(th2)
+        a, b = math.sin(th) / th, (1.0 - math.cos(th)) / th2
+    Kx = np.array([[0.0, -w[2], w[1]], [w[2], 0.0, -w[0]], [-w[1], w[0], 0.0]])
+    return np.eye(3) + a * Kx + b * (Kx @ Kx)

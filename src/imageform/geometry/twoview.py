@@ -1,0 +1,517 @@
+"""Epipolar geometry of two views: fundamental and essential matrices, minimal and robust.
+
+Convention: ``x2ᵀ F x1 = 0`` for pixel ``x1`` in the first image and ``x2`` in the second
+(OpenCV's ``findFundamentalMat(points1, points2)``); ``E = [t]ₓ R`` with
+``X_cam2 = R X_cam1 + t`` and ``F = K2⁻ᵀ E K1⁻¹``.
+
+- :func:`fundamental_8point`, :func:`fundamental_7point`, :func:`essential_5point`: the
+  minimal / linear solvers on exact data.
+- :func:`find_fundamental_matrix`, :func:`find_essential_matrix`: RANSAC (MSAC scoring on
+  the Sampson error in pixels, LO-RANSAC, adaptive trials), then Levenberg-Marquardt on the
+  Sampson error of the inliers over a minimal parametrisation.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+import numpy.typing as npt
+from numpy.typing import NDArray
+
+from imageform._backend import to_numpy
+from imageform._random import RNGLike, as_rng
+from imageform._validate import as_int, as_matrix, check_positive, describe
+from imageform.errors import DegenerateConfigurationError, InvalidInputError
+from imageform.geometry import _robust_core
+from imageform.geometry._minimal import e5, f7, f8, rank2, sampson_sq
+from imageform.geometry._robust_core import (
+    check_confidence,
+    check_pairs,
+    hartley,
+    levenberg_marquardt,
+    ransac,
+    result_dtype,
+    rotation,
+)
+
+__all__ = [
+    "EssentialResult",
+    "FundamentalResult",
+    "essential_5point",
+    "find_essential_matrix",
+    "find_fundamental_matrix",
+    "fundamental_7point",
+    "fundamental_8point",
+]
+
+F64 = NDArray[np.float64]
+
+
+class FundamentalResult(NamedTuple):
+    """A robustly estimated fundamental matrix (``x2ᵀ F x1 = 0``, rank 2, ``‖F‖_F = 1``),
+    the inlier mask ``(N,)`` (Sampson distance below the threshold), the Sampson RMS of the
+    inliers in pixels and the number of minimal samples drawn."""
+
+    F: F64
+    inliers: NDArray[np.bool_]
+    rms: float
+    trials: int
+
+
+class EssentialResult(NamedTuple):
+    """A robustly estimated essential matrix (singular values ``(1, 1, 0)/√2``,
+    ``‖E‖_F = 1``), the inlier mask ``(N,)``, the Sampson RMS of the inliers in pixels and
+    the number of minimal samples drawn."""
+
+    E: F64
+    inliers: NDArray[np.bool_]
+    rms: float
+    trials: int
+
+
+def _unit(F: F64) -> F64:
+    """Unit Frobenius norm, sign fixed so that the entry of largest magnitude is positive."""
+    F = F / np.linalg.norm(F)
+    return F if F.flat[np.argmax(np.abs(F))] > 0 else -F
+
+
+def fundamental_8point(points1: npt.ArrayLike, points2: npt.ArrayLike) -> F64:
+    """Fundamental matrix from N >= 8 correspondences by the normalised 8-point algorithm.
+
+    Both point sets are Hartley-normalised, ``f`` is the least-squares null vector of the
+    rows ``x2 ⊗ x1`` (``x2ᵀ F x1 = 0``), rank 2 is enforced by zeroing the smallest
+    singular value, and the normalisation is undone: ``F = T2ᵀ F̂ T1`` (Hartley 1997, "In
+    defense of the eight-point algorithm", PAMI 19(6); H&Z Algorithm 11.1).
+
+    Parameters
+    ----------
+    points1, points2 : array_like (N, 2)
+        Pixels in the first and second image.
+
+    Returns
+    -------
+    ndarray (3, 3)
+        ``F`` with unit Frobenius norm, largest entry positive.
+
+    Examples
+    --------
+    >>> rng = np.random.default_rng(0)
+    >>> X = rng.uniform(-1, 1, (8, 3)) + [0, 0, 5]
+    >>> x1 = X[:, :2] / X[:, 2:]
+    >>> x2 = (X + [1, 0, 0])[:, :2] / X[:, 2:]    # pure translation along x
+    >>> (fundamental_8point(x1, x2).round(9) + 0.0).tolist()   # ∝ [t]x, t = (1, 0, 0)
+    [[0.0, 0.0, 0.0], [0.0, 0.0, 0.707106781], [0.0, -0.707106781, 0.0]]
+    """
+    p1, p2 = check_pairs(points1, points2, "points1", "points2", 8)
+    F = f8(p1[None], p2[None])[0]
+    if not np.all(np.isfinite(F)):
+        raise DegenerateConfigurationError("the correspondences do not determine F")
+    return _unit(F).astype(result_dtype(points1, points2))
+
+
+def fundamental_7point(points1: npt.ArrayLike, points2: npt.ArrayLike) -> F64:
+    """The one to three fundamental matrices through exactly 7 correspondences.
+
+    The null space of the 7 x 9 system ``x2ᵀ F x1 = 0`` is the pencil
+    ``F(α) = α F1 + (1 - α) F2``; the rank-2 condition ``det F(α) = 0`` is a cubic in
+    ``α`` whose one or three real roots give the solutions (H&Z sec. 11.1.2).
+
+    Returns
+    -------
+    ndarray (k, 3, 3)
+        ``k`` in {1, 2, 3} matrices, unit Frobenius norm, largest entry positive.
+
+    Examples
+    --------
+    >>> rng = np.random.default_rng(3)
+    >>> X = rng.uniform(-1, 1, (7, 3)) + [0, 0, 5]
+    >>> x1, x2 = X[:, :2] / X[:, 2:], (X + [1, 0.2, 0])[:, :2] / X[:, 2:]
+    >>> Fs = fundamental_7point(x1, x2)
+    >>> Fs.shape[0] in (1, 3), bool(np.allclose(np.linalg.det(Fs), 0, atol=1e-12))
+    (True, True)
+    """
+    p1, p2 = check_pairs(points1, points2, "points1", "points2", 7)
+    if p1.shape[0] != 7:
+        raise InvalidInputError(f"expected exactly 7 correspondences, got {p1.shape[0]}")
+    Fs, _ = f7(p1[None], p2[None])
+    if Fs.shape[0] == 0:
+        raise DegenerateConfigurationError("the 7 correspondences do not determine F")
+    return np.stack([_unit(F) for F in Fs]).astype(result_dtype(points1, points2))
+
+
+def _check_K(K: object, name: str) -> F64:
+    Km = np.asarray(to_numpy(as_matrix(K, name, (3, 3), batch=False)), dtype=np.float64)
+    if (
+        Km[0, 0] <= 0
+        or Km[1, 1] <= 0
+        or Km[1, 0] != 0
+        or Km[2, 0] != 0
+        or Km[2, 1] != 0
+        or Km[2, 2] == 0
+    ):
+        raise InvalidInputError(
+            f"expected {name} upper triangular with fx, fy > 0, got {describe(Km.tolist())}"
+        )
+    return Km / Km[2, 2]
+
+
+def _normalised(p: F64, K: F64) -> F64:
+    y = (p[:, 1] - K[1, 2]) / K[1, 1]
+    x = (p[:, 0] - K[0, 2] - K[0, 1] * y) / K[0, 0]
+    return np.stack([x, y], axis=-1)
+
+
+def essential_5point(points1: npt.ArrayLike, points2: npt.ArrayLike) -> F64:
+    """The up to ten essential matrices through exactly 5 correspondences (normalised
+    coordinates ``K⁻¹ x``).
+
+    ``E`` lies in the 4-dimensional null space of the 5 x 9 system ``x2ᵀ E x1 = 0``;
+    ``det E = 0`` and ``2 E Eᵀ E - tr(E Eᵀ) E = 0`` (Nister 2004, "An efficient solution to
+    the five-point relative pose problem", PAMI 26(6), eqs. 1-2) give ten cubics in three
+    unknowns, solved as the eigenproblem of a 10 x 10 action matrix (Stewenius, Engels &
+    Nister 2006, "Recent developments on direct relative orientation", ISPRS J. 60).
+
+    Parameters
+    ----------
+    points1, points2 : array_like (5, 2)
+        Normalised image coordinates ``K⁻¹ (u, v, 1)`` (not pixels).
+
+    Returns
+    -------
+    ndarray (k, 3, 3)
+        The real solutions (``k`` even, at most 10), unit Frobenius norm.
+
+    Examples
+    --------
+    >>> rng = np.random.default_rng(1)
+    >>> X = rng.uniform(-1, 1, (5, 3)) + [0, 0, 5]
+    >>> x1, x2 = X[:, :2] / X[:, 2:], (X + [1, 0, 0])[:, :2] / X[:, 2:]
+    >>> Es = essential_5point(x1, x2)
+    >>> E = np.array([[0, 0, 0], [0, 0, -1], [0, 1, 0]]) / np.sqrt(2)   # [t]x, R = I
+    >>> bool(min(min(np.abs(Ei - E).max(), np.abs(Ei + E).max()) for Ei in Es) < 1e-9)
+    True
+    """
+    p1, p2 = check_pairs(points1, points2, "points1", "points2", 5)
+    if p1.shape[0] != 5:
+        raise InvalidInputError(f"expected exactly 5 correspondences, got {p1.shape[0]}")
+    Es, _ = e5(p1[None], p2[None])
+    out = np.stack([_unit(E) for E in Es]) if Es.shape[0] else np.zeros((0, 3, 3))
+    return out.astype(result_dtype(points1, points2))
+
+
+def _rot_basis(F: F64) -> tuple[F64, F64, float]:
+    """``F = U diag(1, σ, 0) Vᵀ`` with U, V rotations (the orthonormal representation of
+    Bartoli & Sturm 2004)."""
+    U, s, Vt = np.linalg.svd(F)
+    if np.linalg.det(U) < 0:
+        U = -U
+    if np.linalg.det(Vt) < 0:
+        Vt = -Vt
+    return U, Vt.T, float(s[1] / s[0])
+
+
+def _refine_f(F: F64, p1: F64, p2: F64, max_iter: int) -> F64:
+    """LM on the Sampson distances over ``F = U diag(1, σ, 0) Vᵀ`` (7 parameters),
+    parametrised in Hartley-normalised coordinates, residuals in pixels."""
+    T1, T2 = hartley(p1)[1], hartley(p2)[1]
+    Fn = np.linalg.inv(T2).T @ F @ np.linalg.inv(T1)
+    U0, V0, s0 = _rot_basis(Fn)
+
+    def build(q: F64) -> F64:
+        U = rotation(q[:3]) @ U0
+        V = rotation(q[3:6]) @ V0
+        return T2.T @ ((U * np.array([1.0, q[6], 0.0])) @ V.T) @ T1
+
+    def residual(q: F64) -> F64:
+        Fq = build(q)
+        Fx1 = p1 @ Fq[:, :2].T + Fq[:, 2]
+        Ftx2 = p2 @ Fq[:2, :] + Fq[2, :]
+        num = np.sum(p2 * Fx1[:, :2], -1) + Fx1[:, 2]
+        den = np.sqrt(Fx1[:, 0] ** 2 + Fx1[:, 1] ** 2 + Ftx2[:, 0] ** 2 + Ftx2[:, 1] ** 2)
+        return num / den
+
+    with np.errstate(all="ignore"):
+        q, _ = levenberg_marquardt(residual, np.r_[np.zeros(6), s0], max_iter=max_iter)
+    Fr = build(q)
+    return Fr / np.linalg.norm(Fr) if np.all(np.isfinite(Fr)) else F
+
+
+def _robust_args(
+    threshold: object, confidence: object, max_trials: object, max_iter: object
+) -> tuple[float, float, int, int]:
+    return (
+        check_positive(threshold, "threshold"),
+        check_confidence(confidence),
+        as_int(max_trials, "max_trials", minimum=1),
+        as_int(max_iter, "max_iter", minimum=0),
+    )
+
+
+def find_fundamental_matrix(
+    points1: npt.ArrayLike,
+    points2: npt.ArrayLike,
+    *,
+    threshold: float = 1.0,
+    confidence: float = 0.999,
+    max_trials: int = 2000,
+    max_iter: int = 50,
+    rng: RNGLike = 0,
+) -> FundamentalResult:
+    """Fundamental matrix from correspondences with outliers (7-point RANSAC + LM).
+
+    Minimal 7-point samples give one to three hypotheses each, scored by the truncated
+    squared Sampson distance (MSAC) with an adaptive number of samples
+    (``k = log(1 - p) / log(1 - ε⁷)``); every new best hypothesis is re-fitted by the
+    normalised 8-point algorithm on its inliers (LO-RANSAC). The final ``F`` minimises, by
+    Levenberg-Marquardt over the orthonormal representation ``F = U diag(1, σ, 0) Vᵀ``
+    (Bartoli & Sturm 2004, CVIU 97), which keeps rank 2, the Sampson distances of the
+    correspondences within the refinement support (``3σ̂`` with ``σ̂`` the noise estimated
+    from the inliers, between ``τ`` and ``2τ``); the inliers are those within ``τ`` of it.
+
+    Parameters
+    ----------
+    points1, points2 : array_like (N, 2)
+        Corresponding pixels in the two images, N >= 8.
+    threshold : float
+        Inlier threshold on the Sampson distance, pixels.
+    confidence, max_trials, max_iter, rng
+        As :func:`~imageform.geometry.find_homography`.
+
+    Returns
+    -------
+    FundamentalResult
+        ``F``, ``inliers``, ``rms``, ``trials``.
+
+    Raises
+    ------
+    InvalidInputError
+        Shapes other than (N, 2), different lengths, N < 8, NaN or inf.
+    DegenerateConfigurationError
+        No hypothesis with 8 inliers was found.
+
+    References
+    ----------
+    Hartley & Zisserman 2nd ed., Algorithms 11.1, 11.6 and eq. 11.9 (Sampson); Chum, Matas &
+    Kittler (2003), LO-RANSAC; Torr & Zisserman (2000), MSAC.
+
+    Examples
+    --------
+    >>> rng = np.random.default_rng(0)
+    >>> X = rng.uniform(-1, 1, (60, 3)) + [0, 0, 5]
+    >>> K = np.array([[800.0, 0, 320], [0, 800, 240], [0, 0, 1]])
+    >>> u1 = X @ K.T; u1 = u1[:, :2] / u1[:, 2:]
+    >>> u2 = (X + [1, 0.1, 0]) @ K.T; u2 = u2[:, :2] / u2[:, 2:]
+    >>> u2[:12] += rng.uniform(-60, 60, (12, 2))   # 12 outliers
+    >>> res = find_fundamental_matrix(u1, u2)
+    >>> int(res.inliers[12:].sum()), bool(res.rms < 1e-9)
+    (48, True)
+    """
+    p1, p2 = check_pairs(points1, points2, "points1", "points2", 8)
+    thr, p, trials, n_iter = _robust_args(threshold, confidence, max_trials, max_iter)
+    gen = as_rng(rng)
+    n = p1.shape[0]
+
+    def solve(idx: NDArray[np.intp]) -> F64:
+        return f7(p1[idx], p2[idx])[0]
+
+    def sq(models: F64) -> F64:
+        return sampson_sq(models, p1, p2)
+
+    def local_opt(F: F64, inl: NDArray[np.bool_]) -> F64:
+        for m in (2.0, 1.5, 1.0):
+            sel = sampson_sq(F, p1, p2) < (m * thr) ** 2
+            if sel.sum() < 8:
+                break
+            F = f8(p1[sel][None], p2[sel][None])[0]
+        return F
+
+    F, inl, drawn = ransac(n, 7, solve, sq, thr, p, trials, gen, local_opt)
+    if F is None or inl.sum() < 8:
+        raise DegenerateConfigurationError(
+            f"no fundamental matrix with at least 8 inliers within {thr:g} px after {drawn} samples"
+        )
+    F = rank2(F)
+    e0 = sampson_sq(F, p1, p2)
+    wide = _robust_core.refine_support(e0[e0 < thr * thr], thr, 1)
+    sel = e0 < wide * wide
+    for _ in range(3):
+        F = _refine_f(F, p1[sel], p2[sel], n_iter)
+        new = sampson_sq(F, p1, p2) < wide * wide
+        if new.sum() < 8 or np.array_equal(new, sel):
+            break
+        sel = new
+    F = _unit(F)
+    e = sampson_sq(F, p1, p2)
+    inl = e < thr * thr
+    rms = float(np.sqrt(np.mean(e[inl]))) if inl.any() else float("nan")
+    return FundamentalResult(F.astype(result_dtype(points1, points2)), inl, rms, drawn)
+
+
+def _skew(t: F64) -> F64:
+    return np.array([[0.0, -t[2], t[1]], [t[2], 0.0, -t[0]], [-t[1], t[0], 0.0]])
+
+
+def _essential_from_rt(R: F64, t: F64) -> F64:
+    E = _skew(t) @ R
+    return E / np.linalg.norm(E)
+
+
+def _some_rt(E: F64) -> tuple[F64, F64]:
+    """One ``(R, t)`` with ``E ∝ [t]ₓ R`` (no cheirality: refinement only needs the pair)."""
+    U, _, Vt = np.linalg.svd(E)
+    if np.linalg.det(U) < 0:
+        U = -U
+    if np.linalg.det(Vt) < 0:
+        Vt = -Vt
+    W = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
+    return U @ W @ Vt, U[:, 2].copy()
+
+
+def _refine_e(E: F64, q1: F64, q2: F64, K1: F64, K2: F64, p1: F64, p2: F64, max_iter: int) -> F64:
+    """LM over ``(R, t̂)`` (3 + 2 parameters) on the pixel Sampson distances."""
+    R0, t0 = _some_rt(E)
+    # tangent basis of the unit sphere at t0
+    a = np.eye(3)[int(np.argmin(np.abs(t0)))]
+    b1 = np.cross(t0, a)
+    b1 /= np.linalg.norm(b1)
+    b2 = np.cross(t0, b1)
+    K1i, K2i = np.linalg.inv(K1), np.linalg.inv(K2)
+
+    def build(q: F64) -> F64:
+        R = rotation(q[:3]) @ R0
+        t = t0 + q[3] * b1 + q[4] * b2
+        return _essential_from_rt(R, t / np.linalg.norm(t))
+
+    def residual(q: F64) -> F64:
+        F = K2i.T @ build(q) @ K1i
+        Fx1 = p1 @ F[:, :2].T + F[:, 2]
+        Ftx2 = p2 @ F[:2, :] + F[2, :]
+        num = np.sum(p2 * Fx1[:, :2], -1) + Fx1[:, 2]
+        den = np.sqrt(Fx1[:, 0] ** 2 + Fx1[:, 1] ** 2 + Ftx2[:, 0] ** 2 + Ftx2[:, 1] ** 2)
+        return num / den
+
+    with np.errstate(all="ignore"):
+        q, _ = levenberg_marquardt(residual, np.zeros(5), max_iter=max_iter)
+    Er = build(q)
+    return Er if np.all(np.isfinite(Er)) else E
+
+
+def find_essential_matrix(
+    points1: npt.ArrayLike,
+    points2: npt.ArrayLike,
+    K1: npt.ArrayLike,
+    K2: npt.ArrayLike | None = None,
+    *,
+    threshold: float = 1.0,
+    confidence: float = 0.999,
+    max_trials: int = 2000,
+    max_iter: int = 50,
+    rng: RNGLike = 0,
+) -> EssentialResult:
+    """Essential matrix of two calibrated views from pixels with outliers (5-point RANSAC).
+
+    The pixels are mapped to normalised coordinates ``K⁻¹ x``; minimal 5-point samples
+    (:func:`essential_5point`, up to ten solutions each) are scored by the truncated squared
+    Sampson distance *in pixels* of ``F = K2⁻ᵀ E K1⁻¹`` (MSAC, adaptive trial count
+    ``log(1 - p) / log(1 - ε⁵)``); each new best hypothesis is locally optimised (LO-RANSAC:
+    a few Levenberg-Marquardt steps over ``(R, t/‖t‖)`` on the correspondences within
+    ``2τ``, then within ``τ``). The final ``E = [t]ₓ R`` minimises the Sampson distances of
+    the correspondences within the refinement support (``3σ̂``, between ``τ`` and ``2τ``,
+    see docs/two-view.md) by Levenberg-Marquardt over ``(R, t/‖t‖)`` (5 degrees of
+    freedom); the inliers are those within ``τ`` of it.
+
+    Parameters
+    ----------
+    points1, points2 : array_like (N, 2)
+        Corresponding pixels, N >= 5 (prefer N >= 8).
+    K1 : array_like (3, 3)
+        Intrinsics of the first camera (upper triangular).
+    K2 : array_like (3, 3), optional
+        Intrinsics of the second camera (default: ``K1``).
+    threshold : float
+        Inlier threshold on the Sampson distance, pixels.
+    confidence, max_trials, max_iter, rng
+        As :func:`~imageform.geometry.find_homography`.
+
+    Returns
+    -------
+    EssentialResult
+        ``E`` (singular values ``(1, 1, 0)/√2``), ``inliers``, ``rms``, ``trials``.
+
+    Raises
+    ------
+    InvalidInputError
+        Shapes, lengths, N < 5, NaN, a K that is not upper triangular with positive focal
+        lengths.
+    DegenerateConfigurationError
+        No hypothesis with 5 inliers was found.
+
+    References
+    ----------
+    Nister (2004), PAMI 26(6); Stewenius, Engels & Nister (2006), ISPRS J. 60; Chum, Matas &
+    Kittler (2003), LO-RANSAC.
+
+    Examples
+    --------
+    >>> rng = np.random.default_rng(0)
+    >>> K = np.array([[800.0, 0, 320], [0, 800, 240], [0, 0, 1]])
+    >>> X = rng.uniform(-1, 1, (50, 3)) + [0, 0, 5]
+    >>> u1 = X @ K.T; u1 = u1[:, :2] / u1[:, 2:]
+    >>> u2 = (X + [1, 0, 0]) @ K.T; u2 = u2[:, :2] / u2[:, 2:]
+    >>> u2[:10] += 30.0
+    >>> res = find_essential_matrix(u1, u2, K)
+    >>> int(res.inliers.sum()), (np.abs(res.E).round(9) + 0.0).tolist()[1]
+    (40, [0.0, 0.0, 0.707106781])
+    """
+    p1, p2 = check_pairs(points1, points2, "points1", "points2", 5)
+    Ka = _check_K(K1, "K1")
+    Kb = Ka if K2 is None else _check_K(K2, "K2")
+    thr, p, trials, n_iter = _robust_args(threshold, confidence, max_trials, max_iter)
+    gen = as_rng(rng)
+    n = p1.shape[0]
+    q1, q2 = _normalised(p1, Ka), _normalised(p2, Kb)
+    Kai, Kbi = np.linalg.inv(Ka), np.linalg.inv(Kb)
+
+    def to_f(E: F64) -> F64:
+        return Kbi.T @ E @ Kai
+
+    def solve(idx: NDArray[np.intp]) -> F64:
+        return e5(q1[idx], q2[idx])[0]
+
+    def sq(models: F64) -> F64:
+        return sampson_sq(to_f(models), p1, p2)
+
+    def project_e(M: F64) -> F64:
+        U, _, Vt = np.linalg.svd(M)
+        E = (U * np.array([1.0, 1.0, 0.0])) @ Vt
+        return E / np.linalg.norm(E)
+
+    def local_opt(E: F64, inl: NDArray[np.bool_]) -> F64:
+        for m in (2.0, 1.0):
+            sel = sq(E) < (m * thr) ** 2
+            if sel.sum() < 6:
+                break
+            E = _refine_e(E, q1[sel], q2[sel], Ka, Kb, p1[sel], p2[sel], 10)
+        return E
+
+    E, inl, drawn = ransac(n, 5, solve, sq, thr, p, trials, gen, local_opt)
+    if E is None or inl.sum() < 5:
+        raise DegenerateConfigurationError(
+            f"no essential matrix with at least 5 inliers within {thr:g} px after {drawn} samples"
+        )
+    E = project_e(E)
+    e0 = sq(E)
+    wide = _robust_core.refine_support(e0[e0 < thr * thr], thr, 1)
+    sel = e0 < wide * wide
+    for _ in range(3):
+        E = _refine_e(E, q1[sel], q2[sel], Ka, Kb, p1[sel], p2[sel], n_iter)
+        new = sq(E) < wide * wide
+        if new.sum() < 5 or np.array_equal(new, sel):
+            break
+        sel = new
+    E = _unit(project_e(E))
+    e = sq(E)
+    inl = e < thr * thr
+    rms = float(np.sqrt(np.mean(e[inl]))) if inl.any() else float("nan")
+    return EssentialResult(E.astype(result_dtype(points1, points2)), inl, rms, drawn)
