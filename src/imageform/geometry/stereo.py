@@ -88,7 +88,9 @@ class StereoCalibrationResult:
     left, right : CalibrationResult
         Each camera after the joint refinement: ``K``, ``distortion``, the standard
         deviations of its intrinsics (``std``; 0 where fixed), its per-view poses (the
-        right ones are ``R R_k, R t_k + T``) and its reprojection residuals.
+        right ones are ``R R_k, R t_k + T``) and its reprojection residuals. The per-view
+        poses are parameters of the left camera only: ``left.std_poses`` are their standard
+        deviations, ``right.std_poses`` are NaN (derived poses).
     R : ndarray (3, 3)
         Rotation from the left to the right camera frame: ``X_right = R X_left + T``.
     T : ndarray (3,)
