@@ -152,3 +152,39 @@ def test_stereo_calibrate_command(rendered: tuple, tmp_path: Path) -> None:
     assert main([*args[:-3], "-o", str(tmp_path / "b.toml")]) == 1
     bad = ["stereo-calibrate", str(tmp_path / "none*.png"), str(tmp_path / "right" / "*.png")]
     assert main([*bad, "--board", "9x6", "-o", str(tmp_path / "c.toml")]) == 1
+
+
+def _to_rectified(uv: np.ndarray, K: np.ndarray, d: BrownConrady, Rr: np.ndarray, P: np.ndarray):
+    x = (uv - K[:2, 2]) / np.diag(K)[:2]
+    xy = np.asarray(d.undistort(x).xy)
+    X = np.concatenate([xy, np.ones((len(xy), 1))], 1) @ Rr.T
+    return ((X / X[:, 2:]) @ P[:, :3].T)[:, :2]
+
+
+def test_rectified_renders_have_aligned_rows(rendered: tuple) -> None:
+    """The rendered images themselves, rectified by ``rectification_map`` + ``remap_bilinear``
+    with the true rig: the board found again in both has its corners on the same rows.
+    Measured on the 5 pairs where the board stays whole: mean row offset per pair at most
+    0.03 px; per corner median 0.08 px, max 0.51 px (the detector's own noise)."""
+    from imageform.geometry import rectification_map, remap_bilinear
+
+    _, _, true_l, true_r, images = rendered
+    rect = stereo_rectify(K1, D1, K2, D2, SIZE, R_TRUE, T_TRUE)
+    cams = ((K1, D1, rect.R1, rect.P1), (K2, D2, rect.R2, rect.P2))
+    maps = [rectification_map(K, d, Rr, P, SIZE) for K, d, Rr, P in cams]
+    dv = []
+    for k in range(len(images) // 2):
+        found = []
+        for side, truth in ((0, true_l[k]), (1, true_r[k])):
+            img = np.asarray(images[2 * k + side])
+            img = img / 255.0 if img.dtype.kind in "ui" else img
+            res = find_checkerboard(remap_bilinear(img, maps[side], fill=0.5), (9, 6))
+            if res.found:  # in the order of the true corners
+                found.append(_match(res.corners, _to_rectified(truth, *cams[side])))
+        if len(found) == 2:
+            dv.append(found[0][:, 1] - found[1][:, 1])
+    assert len(dv) >= 4, len(dv)
+    offsets = [float(np.mean(d)) for d in dv]  # per pair: the alignment, noise averaged out
+    dv_all = np.abs(np.concatenate(dv))
+    assert max(abs(o) for o in offsets) < 0.1, offsets
+    assert float(np.median(dv_all)) < 0.15 and float(np.max(dv_all)) < 1.0, dv_all
