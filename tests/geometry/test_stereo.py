@@ -192,6 +192,28 @@ def test_rectify_vertical_pair_matches_opencv() -> None:
     np.testing.assert_allclose(ours.Q, Q, rtol=1e-5, atol=1e-6)
 
 
+@pytest.mark.parametrize("alpha", [-1.0, 0.0, 1.0])
+@pytest.mark.parametrize("T", [T_TRUE, np.array([1.5, -100.0, 2.0])], ids=["horiz", "vert"])
+def test_rectify_new_image_size_matches_opencv(alpha: float, T: np.ndarray) -> None:
+    """``new_image_size`` (OpenCV's ``newImageSize``): measured within 1e-5 px of OpenCV."""
+    ours = stereo_rectify(K1, D1, K2, D2, SIZE, R_TRUE, T, alpha=alpha, new_image_size=(800, 500))
+    _, _, P1, P2, Q, _, _ = cv2.stereoRectify(
+        K1,
+        _dist(D1),
+        K2,
+        _dist(D2),
+        SIZE,
+        R_TRUE,
+        T.reshape(3, 1),
+        alpha=alpha,
+        newImageSize=(800, 500),
+    )
+    assert ours.image_size == (800, 500)
+    np.testing.assert_allclose(ours.P1, P1, rtol=1e-6, atol=1e-4)
+    np.testing.assert_allclose(ours.P2, P2, rtol=1e-6, atol=1e-4)
+    np.testing.assert_allclose(ours.Q, Q, rtol=1e-6, atol=1e-4)
+
+
 def _rectified(uv: np.ndarray, K: np.ndarray, d: BrownConrady, Rr: np.ndarray, P: np.ndarray):
     y = (uv[:, 1] - K[1, 2]) / K[1, 1]
     x = (uv[:, 0] - K[0, 2]) / K[0, 0]
