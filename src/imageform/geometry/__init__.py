@@ -81,6 +81,13 @@ from imageform.geometry.rotations import (
     quaternion_to_matrix,
     rvec_to_matrix,
 )
+from imageform.geometry.stereo import (
+    StereoCalibrationResult,
+    StereoRectification,
+    rectification_map,
+    stereo_calibrate,
+    stereo_rectify,
+)
 from imageform.geometry.triangulation import TriangulationResult, triangulate_points
 from imageform.geometry.twoview import (
     EssentialResult,
@@ -126,6 +133,8 @@ __all__ = [
     "Projection",
     "RefinedCorners",
     "RelativePose",
+    "StereoCalibrationResult",
+    "StereoRectification",
     "TriangulationResult",
     "TwoViewPoints",
     "Undistorted",
@@ -175,12 +184,15 @@ __all__ = [
     "projection_matrix",
     "quaternion_to_matrix",
     "recover_pose",
+    "rectification_map",
     "refine_corners",
     "remap_bilinear",
     "rvec_to_matrix",
     "solve_pnp",
     "solve_pnp_batch",
     "solve_pnp_ransac",
+    "stereo_calibrate",
+    "stereo_rectify",
     "to_homogeneous",
     "triangulate_points",
     "triangulate_two_view",

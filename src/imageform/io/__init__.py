@@ -26,6 +26,13 @@ from imageform.io.image_io import (
     write_image,
 )
 from imageform.io.png import read_png, write_png
+from imageform.io.stereo_file import (
+    STEREO_FILE_FORMAT,
+    STEREO_FILE_VERSION,
+    StereoCameraFile,
+    read_stereo_camera,
+    write_stereo_camera,
+)
 
 __all__ = [
     "CAMERA_FILE_FORMAT",
@@ -33,9 +40,12 @@ __all__ = [
     "DEFAULT_MAX_PIXELS",
     "DISTORTION_MODELS",
     "IMAGE_FORMATS",
+    "STEREO_FILE_FORMAT",
+    "STEREO_FILE_VERSION",
     "CameraFile",
     "ImageInfo",
     "Provenance",
+    "StereoCameraFile",
     "WrittenImage",
     "image_format",
     "image_info",
@@ -43,7 +53,9 @@ __all__ = [
     "read_camera",
     "read_image",
     "read_png",
+    "read_stereo_camera",
     "write_camera",
     "write_image",
     "write_png",
+    "write_stereo_camera",
 ]

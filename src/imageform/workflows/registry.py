@@ -13,6 +13,7 @@ from imageform.workflows import (
     lecture,
     optics,
     simulate,
+    stereo,
     vanishing,
 )
 from imageform.workflows._spec import Workflow
@@ -29,6 +30,7 @@ WORKFLOWS = MappingProxyType(
             *color.WORKFLOWS,
             *geometry.WORKFLOWS,
             *calibration.WORKFLOWS,
+            *stereo.WORKFLOWS,
             *vanishing.WORKFLOWS,
             *optics.WORKFLOWS,
         )

@@ -1,0 +1,239 @@
+"""Stereo workflow: ``imageform stereo-calibrate`` (checkerboard pairs to a stereo camera file)."""
+
+from __future__ import annotations
+
+import glob
+import os
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from imageform.errors import DegenerateConfigurationError, InvalidInputError
+from imageform.workflows._images import ImageIn, read
+from imageform.workflows._spec import (
+    Input,
+    Output,
+    Result,
+    Run,
+    Workflow,
+    normalize_choice,
+    option,
+)
+from imageform.workflows.calibration import MIN_VIEWS, parse_board
+
+__all__ = ["WORKFLOWS", "StereoCalibrateOptions"]
+
+_PARAMETERS = ("fx", "fy", "cx", "cy", "skew", "k1", "k2", "p1", "p2", "k3")
+
+
+@dataclass(frozen=True, kw_only=True)
+class StereoCalibrateOptions(ImageIn):
+    """Options of ``imageform stereo-calibrate``."""
+
+    board: str = option(help="Inner corners COLSxROWS, e.g. 9x6 (not squares).", metavar="CxR")
+    square: str = option(
+        "1",
+        help="Side of a square with unit (25mm, 2.5cm, 1in; bare number: mm): the unit of T "
+        "(the default counts it in squares).",
+    )
+    fix: tuple[str, ...] = option(
+        (),
+        help="Hold a parameter of both cameras at its initial value (repeatable): fx, fy, cx, "
+        "cy, skew, k1, k2, p1, p2, k3.",
+        metavar="NAME",
+    )
+    fix_intrinsics: bool = option(
+        False,
+        help="Keep both cameras' single-camera intrinsics and distortion; refine only the poses "
+        "(OpenCV's CALIB_FIX_INTRINSIC).",
+    )
+    skew: bool = option(False, help="Estimate the skew of both cameras (default: 0).")
+    half_window: int | None = option(
+        None, help="Sub-pixel window half size (OpenCV's tutorial: 11); default adaptive."
+    )
+
+    def check(self) -> None:
+        super().check()
+        parse_board(self.board)
+        self.square_mm()
+        fixed = tuple(normalize_choice(f, _PARAMETERS, "--fix") for f in self.fix)
+        object.__setattr__(self, "fix", fixed)
+        if self.skew and "skew" in fixed:
+            raise InvalidInputError("--skew estimates the skew; --fix skew holds it: not both")
+        if self.half_window is not None and not 1 <= self.half_window <= 50:
+            raise InvalidInputError(
+                f"expected --half-window 1 to 50 pixels, got {self.half_window}"
+            )
+
+    def square_mm(self) -> float:
+        """The square size in millimetres."""
+        from imageform._units import parse_length
+
+        return parse_length(self.square, "--square", default_unit="mm", unit="mm")
+
+
+def _expand(pattern: str, what: str) -> list[Path]:
+    """The files a name or a glob pattern names, sorted; none is an error."""
+    p = str(pattern)
+    if os.path.exists(p) or not any(c in p for c in "*?["):
+        path = Path(p)
+        if not path.is_file():
+            raise InvalidInputError(f"{what} file {path} does not exist")
+        return [path]
+    hits = sorted(glob.glob(p, recursive=True))
+    if not hits:
+        raise InvalidInputError(f"no files match {what} pattern {p!r}")
+    return [Path(h) for h in hits]
+
+
+def _detect(
+    run: Run, opts: StereoCalibrateOptions, files: list[Path], board: tuple[int, int]
+) -> tuple[tuple[int, int], list[Any]]:
+    from imageform.geometry.checkerboard import find_checkerboard
+
+    size: tuple[int, int] | None = None
+    found: list[Any] = []
+    for f in files:
+        img = read(f, opts)
+        if size is None:
+            size = (int(img.shape[1]), int(img.shape[0]))
+        elif (int(img.shape[1]), int(img.shape[0])) != size:
+            raise InvalidInputError(
+                f"expected all images of one camera of one size, got {files[0]} of {size[0]} x "
+                f"{size[1]} px and {f} of {img.shape[1]} x {img.shape[0]} px"
+            )
+        grey = img[..., 0] if img.shape[-1] == 1 else img
+        det = find_checkerboard(grey, board, half_window=opts.half_window)
+        found.append(det.corners if det.found else None)
+        if not det.found:
+            run.note(f"warning: {f}: no {board[0]}x{board[1]} board found ({det.reason})")
+    assert size is not None
+    return size, found
+
+
+def stereo_calibrate_cmd(
+    run: Run, opts: StereoCalibrateOptions, *, out: Path, left: str, right: str
+) -> Result:
+    """``imageform stereo-calibrate``: a stereo camera file from checkerboard pairs."""
+    import numpy as np
+
+    from imageform.geometry import checkerboard_points, stereo_calibrate
+    from imageform.io import StereoCameraFile, write_stereo_camera
+
+    lefts, rights = _expand(left, "left"), _expand(right, "right")
+    if len(lefts) != len(rights):
+        raise InvalidInputError(
+            f"expected as many right images as left ones (paired in sorted order), got "
+            f"{len(lefts)} left and {len(rights)} right"
+        )
+    board = parse_board(opts.board)
+    if run.progress is not None:
+        run.progress("detecting", 0.0)
+    size_l, found_l = _detect(run, opts, lefts, board)
+    if run.progress is not None:
+        run.progress("detecting", 0.5)
+    size_r, found_r = _detect(run, opts, rights, board)
+    pairs = [
+        (fl, fr, cl, cr)
+        for fl, fr, cl, cr in zip(lefts, rights, found_l, found_r, strict=True)
+        if cl is not None and cr is not None
+    ]
+    if len(pairs) < MIN_VIEWS:
+        raise DegenerateConfigurationError(
+            f"found the {board[0]}x{board[1]} board in both images of {len(pairs)} of the "
+            f"{len(lefts)} pairs; stereo-calibrate needs at least {MIN_VIEWS} (check --board: "
+            "inner corners, not squares)"
+        )
+    if run.progress is not None:
+        run.progress("calibrating", 1.0)
+    obj = checkerboard_points(board, opts.square_mm())
+    rig = stereo_calibrate(
+        [obj] * len(pairs),
+        [p[2] for p in pairs],
+        [p[3] for p in pairs],
+        size_l,
+        image_size_right=size_r,
+        fix_intrinsics=opts.fix_intrinsics,
+        fix=opts.fix,
+        skew=opts.skew,
+    )
+    command = f"imageform stereo-calibrate --board {board[0]}x{board[1]} --square {opts.square}"
+    command += "".join(f" --fix {p}" for p in opts.fix) + (" --skew" if opts.skew else "")
+    command += " --fix-intrinsics" if opts.fix_intrinsics else ""
+    sf = StereoCameraFile.from_calibration(
+        rig,
+        images_left=[p[0].name for p in pairs],
+        images_right=[p[1].name for p in pairs],
+        command=command,
+    )
+    write_stereo_camera(run.file(out), sf)
+    rvec_deg = np.degrees(rig.rvec)
+    std_deg = np.degrees(rig.std_rvec)
+    per_pair = [
+        {
+            "left": p[0].name,
+            "right": p[1].name,
+            "rms_left_px": float(e[0]),
+            "rms_right_px": float(e[1]),
+        }
+        for p, e in zip(pairs, rig.per_view_rms, strict=True)
+    ]
+    summary = {
+        "output": out,
+        "pairs_used": len(pairs),
+        "pairs_total": len(lefts),
+        "rms_px": rig.rms,
+        "R": rig.R.tolist(),
+        "rvec_deg": rvec_deg.tolist(),
+        "std_rvec_deg": std_deg.tolist(),
+        "T": rig.T.tolist(),
+        "std_T": rig.std_T.tolist(),
+        "baseline": rig.baseline,
+        "unit": "mm",
+        "left": {"K": rig.left.K.tolist(), "distortion": list(rig.left.distortion.coeffs[:5])},
+        "right": {"K": rig.right.K.tolist(), "distortion": list(rig.right.distortion.coeffs[:5])},
+        "per_pair": per_pair,
+    }
+    text = [f"{'left':<20} {'right':<20} {'RMS l px':>8} {'RMS r px':>8}"]
+    text += [
+        f"{r['left']:<20} {r['right']:<20} {r['rms_left_px']:8.4f} {r['rms_right_px']:8.4f}"
+        for r in per_pair
+    ]
+    text.append(f"RMS {rig.rms:.4f} px over {len(pairs)} pairs; baseline {rig.baseline:.3f} mm")
+    text.append(
+        "T (mm): " + ", ".join(f"{t:.3f} ± {s:.3f}" for t, s in zip(rig.T, rig.std_T, strict=True))
+    )
+    text.append(
+        "rvec (deg): "
+        + ", ".join(f"{r:.4f} ± {s:.4f}" for r, s in zip(rvec_deg, std_deg, strict=True))
+    )
+    text.append(f"wrote {out}")
+    return Result(summary, tuple(text))
+
+
+WORKFLOWS = (
+    Workflow(
+        "stereo-calibrate",
+        "Calibrate a stereo pair from checkerboard views: writes the stereo camera file.",
+        "imageform.workflows.stereo:stereo_calibrate_cmd",
+        StereoCalibrateOptions,
+        (
+            Input(
+                "left",
+                "The left camera's images: a file or a quoted glob pattern ('left/*.png').",
+                kind="text",
+            ),
+            Input(
+                "right",
+                "The right camera's images, paired with the left ones in sorted order.",
+                kind="text",
+            ),
+        ),
+        Output("Stereo camera file to write (TOML, docs/camera-file.md, 'Stereo rigs')."),
+        suffixes=(".toml",),
+        group="geometry",
+        description=f"Needs the board in both images of at least {MIN_VIEWS} pairs. Each camera "
+        "is calibrated alone, then one Levenberg-Marquardt refines both cameras, R and T "
+        "(X_right = R X_left + T) on all reprojection errors.",
+    ),
+)
