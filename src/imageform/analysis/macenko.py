@@ -16,8 +16,9 @@ from typing import Any
 
 import numpy as np
 
-from imageform._validate import as_float, as_matrix, check_option, format_shape
+from imageform._validate import as_float, as_int, as_matrix, as_real, check_option, format_shape
 from imageform.analysis._arrays import exact_quantile, image_in, is_dask, read_json, write_json
+from imageform.analysis._guard import count, real_array, unit_rows
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
 
 __all__ = [
@@ -58,7 +59,8 @@ def optical_density(image: object, *, min_intensity: float = MIN_INTENSITY) -> A
     [1.0, 0.30103, 2.0]
     """
     rgb = image_in(image)
-    if not 0.0 < float(min_intensity) <= 1.0:
+    min_intensity = as_real(min_intensity, "min_intensity")
+    if not 0.0 < min_intensity <= 1.0:
         raise InvalidInputError(f"expected min_intensity in (0, 1], got {min_intensity!r}")
     floor = rgb.dtype.type(min_intensity)
     if is_dask(rgb):
@@ -74,8 +76,15 @@ def stain_angle(u: object, v: object) -> float:
     >>> round(stain_angle([1, 0, 0], [1, 1, 0]), 6)
     45.0
     """
-    a, b = np.asarray(u, float), np.asarray(v, float)
-    c = a @ b / (np.linalg.norm(a) * np.linalg.norm(b))
+    a = real_array(u, "u", (3,))
+    b = real_array(v, "v", (3,))
+    na, nb = np.linalg.norm(a), np.linalg.norm(b)
+    for name, n in (("u", na), ("v", nb)):
+        if not n > 0.0:
+            raise InvalidInputError(f"expected {name} as a non-zero stain vector, got length 0")
+        if not np.isfinite(n):
+            raise InvalidInputError(f"expected {name} with a finite length, got {n:g}")
+    c = (a / na) @ (b / nb)
     return float(np.degrees(np.arccos(np.clip(c, -1.0, 1.0))))
 
 
@@ -87,6 +96,15 @@ class MacenkoStains:
     stain_matrix: np.ndarray
     max_concentrations: np.ndarray
     n_pixels: int = 0
+
+    def __post_init__(self) -> None:
+        """Two finite stain vectors of non-zero length, two finite concentrations."""
+        s = real_array(self.stain_matrix, "stain_matrix", (2, 3))
+        unit_rows(s, "stain_matrix")
+        m = real_array(self.max_concentrations, "max_concentrations", (2,))
+        object.__setattr__(self, "stain_matrix", s)
+        object.__setattr__(self, "max_concentrations", m)
+        object.__setattr__(self, "n_pixels", count(self.n_pixels, "n_pixels"))
 
     def to_json(self, path: str | Path) -> None:
         """Save as JSON (``kind: "macenko_stains"``)."""
@@ -280,11 +298,12 @@ def macenko_stains(
         ("alpha", alpha, 0.0, 50.0),
         ("max_percentile", max_percentile, 0.0, 100.0),
     ):
-        if not lo <= float(val) <= hi:  # also rejects NaN
+        if not lo <= as_real(val, name) <= hi:
             raise InvalidInputError(f"expected {name} in [{lo:g}, {hi:g}], got {val!r}")
+    min_pixels = as_int(min_pixels, "min_pixels", minimum=0)
     rule = check_option(transparent, TRANSPARENT_RULES, "transparent-pixel rule")
     od = optical_density(image, min_intensity=min_intensity)
-    stains, n = _fit(od, float(beta), float(alpha), max(int(min_pixels), 2), rule)
+    stains, n = _fit(od, float(beta), float(alpha), max(min_pixels, 2), rule)
     maxc = _max_conc(od, stains, float(max_percentile))
     return MacenkoStains(stains, maxc, n)
 
@@ -292,6 +311,8 @@ def macenko_stains(
 def _target(target: object, **kw: Any) -> MacenkoStains:
     if isinstance(target, MacenkoStains):
         return target
+    if target is None:
+        raise TypeError("expected target as an image, MacenkoStains or a JSON path, got None")
     if isinstance(target, str | Path):
         return MacenkoStains.from_json(target)
     return macenko_stains(target, **kw)
@@ -358,14 +379,23 @@ def macenko_normalize(
         "min_intensity": min_intensity,
         "transparent": transparent,
     }
+    if source is not None and not isinstance(source, MacenkoStains):
+        raise TypeError(f"expected source as MacenkoStains or None, got {type(source).__name__}")
     tgt = _target(target, **kw)
     od = optical_density(image, min_intensity=min_intensity)
     src = macenko_stains(image, **kw) if source is None else source
-    if np.any(np.asarray(src.max_concentrations) <= 0):
-        raise DegenerateConfigurationError(
-            f"Macenko: source max concentrations {src.max_concentrations} are not positive"
-        )
+    for name, st in (("source", src), ("target", tgt)):
+        if np.any(np.asarray(st.max_concentrations) <= 0):
+            raise DegenerateConfigurationError(
+                f"Macenko: {name} max concentrations "
+                f"{np.round(np.asarray(st.max_concentrations), 4).tolist()} are not positive"
+            )
     scale = np.asarray(tgt.max_concentrations) / np.asarray(src.max_concentrations)
+    sv = np.linalg.svd(np.asarray(src.stain_matrix, dtype=np.float64), compute_uv=False)
+    if not sv[-1] > 1e-6 * sv[0]:
+        raise DegenerateConfigurationError(
+            "Macenko: source stain_matrix is singular (its two stain vectors are parallel)"
+        )
     pinv_src = np.linalg.pinv(np.asarray(src.stain_matrix))
     args = (pinv_src, scale, np.asarray(tgt.stain_matrix, dtype=np.float64))
     if is_dask(od):
