@@ -344,7 +344,17 @@ def load_scene(source: str | Path | dict[str, Any]) -> Scene:
         path = Path(source)
         if not path.is_file():
             raise InvalidInputError(f"scene file not found: {str(path)!r}")
-        text = path.read_text(encoding="utf-8")
+        try:
+            text = path.read_text(encoding="utf-8")
+        except UnicodeDecodeError as exc:
+            raise InvalidInputError(
+                f"scene file {str(path)!r:.200} is not UTF-8 text (byte {exc.start}); "
+                "save it as UTF-8 TOML"
+            ) from None
+        except OSError as exc:
+            raise InvalidInputError(
+                f"cannot read scene file {str(path)!r:.200}: {exc.strerror}"
+            ) from None
         origin, base = str(path), path.resolve().parent
     elif isinstance(source, str):
         text, origin, base = source, "scene string", None
