@@ -15,7 +15,7 @@ BASE = 'name = "tiny"\n[render]\nwidth = 32\nheight = 18\n'
 def test_not_utf8_names_the_file(tmp_path: Path) -> None:
     path = tmp_path / "bad.toml"
     path.write_bytes(b'name = "t\xff\xfe"\n')
-    with pytest.raises(InvalidInputError, match="bad.toml.*not UTF-8") as info:
+    with pytest.raises(InvalidInputError, match=r"bad\.toml.*not UTF-8") as info:
         load_scene(path)
     assert "\n" not in str(info.value)
 

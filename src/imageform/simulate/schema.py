@@ -175,9 +175,7 @@ SCENE_SCHEMA: dict[str, Any] = {
         },
     },
     "lens": {
-        "f_number": Field(
-            "float", 8.0, "aperture f-number N = f / D", minimum=0.5, maximum=1000.0
-        ),
+        "f_number": Field("float", 8.0, "aperture f-number N = f / D", minimum=0.5, maximum=1000.0),
         "focus_distance_m": Field(
             "float", 0.1, "distance in focus (m)", "length", minimum=0.0, positive=True
         ),

@@ -188,7 +188,8 @@ def _check_value(v: Any, f: Field, key: str, path: tuple[Any, ...], ctx: _Ctx) -
     n = {"vec2": 2, "vec3": 3, "ivec2": 2, "mat3": 3}[kind]
     if not isinstance(v, list) or len(v) != n:
         ctx.fail(
-            path, f"expected a list of {n} {'rows' if kind == 'mat3' else 'numbers'}, got {_show(v)}"
+            path,
+            f"expected a list of {n} {'rows' if kind == 'mat3' else 'numbers'}, got {_show(v)}",
         )
     if kind == "mat3":
         rows = []
