@@ -61,6 +61,8 @@ KINDS = (
 )
 #: The memory one worker may add to what it holds after start (bytes, RLIMIT_AS).
 WORKER_MEMORY = 3 * 2**30
+#: Seconds a new worker may take to import imageform (not counted in a call's timeout).
+STARTUP_TIMEOUT = 300.0
 #: imageform's own allocation limit in the workers (IMAGEFORM_MAX_MEMORY).
 IMAGEFORM_MEMORY = "512M"
 
@@ -518,8 +520,17 @@ def tasks_for(name: str, func: Any, entry: C) -> list[Task]:
             muts = mutations(resolve(value))
         except Exception:
             continue
-        out.extend(Task(name, pname, kind) for kind in KINDS if kind in muts)
+        out.extend(Task(name, pname, kind) for kind in _kinds() if kind in muts)
     return out
+
+
+def _kinds() -> tuple[str, ...]:
+    """:data:`KINDS`, without ``torch0d`` where PyTorch is not installed."""
+    import importlib.util
+
+    if importlib.util.find_spec("torch") is None:
+        return tuple(k for k in KINDS if k != "torch0d")
+    return KINDS
 
 
 def all_tasks() -> list[Task]:
@@ -583,6 +594,7 @@ def _worker(conn: Any) -> None:
     with contextlib.suppress(ImportError):  # the torch0d values; imported before the limit
         import torch  # noqa: F401
     _limit_memory()
+    conn.send("ready")  # the call timeout starts after the imports
     while True:
         try:
             task = conn.recv()
@@ -629,6 +641,9 @@ def run(
         p = ctx.Process(target=_worker, args=(child,), daemon=True)
         p.start()
         child.close()
+        if not parent.poll(STARTUP_TIMEOUT) or parent.recv() != "ready":
+            p.kill()
+            raise RuntimeError(f"fuzz worker did not start within {STARTUP_TIMEOUT:g} s")
         return p, parent
 
     slots: list[dict[str, Any]] = []
@@ -686,8 +701,33 @@ def run(
 # --------------------------------------------------------------------------- results
 
 
+#: Outcomes that say the table or the harness is wrong, never listed in KNOWN.
+HARNESS_OUTCOMES = ("valid_fails", "table_error", "harness_error")
+
+
 def findings(outcomes: Iterable[Outcome]) -> dict[tuple[str, str, str], Outcome]:
+    """``{(callable, parameter, kind): outcome}`` of the calls that broke the contract."""
     return {(o.name, o.param, o.kind): o for o in outcomes if o.is_finding}
+
+
+def new_findings(
+    outcomes: Iterable[Outcome], known: dict[tuple[str, str, str], str]
+) -> dict[tuple[str, str, str], Outcome]:
+    """The findings not in ``known`` (harness and table errors always count)."""
+    return {
+        k: o
+        for k, o in findings(outcomes).items()
+        if k not in known or o.result in HARNESS_OUTCOMES
+    }
+
+
+def format_findings(found: dict[tuple[str, str, str], Outcome], limit: int = 40) -> str:
+    lines = [
+        f"{name} {param or '-'} {kind}: {o.result} {o.detail[:120]}"
+        for (name, param, kind), o in sorted(found.items())
+    ]
+    more = f"\n... and {len(lines) - limit} more" if len(lines) > limit else ""
+    return "\n".join(lines[:limit]) + more
 
 
 def package_of(name: str) -> str:

@@ -59,3 +59,15 @@ def test_render_scene_type_and_chunk() -> None:
 
     out = render_scene(scene, rows_per_chunk=np.int64(7))
     assert out.rate.shape == (18, 32, 3)
+
+
+def test_flat_patch_snr_not_silent() -> None:
+    import numpy as np
+
+    from imageform.errors import ImageformWarning
+    from imageform.simulate import default_scene, simulate
+
+    scene = default_scene().resized(96).with_changes(sensor={"noise": False})
+    with pytest.warns(ImageformWarning, match="SNR is infinite"):
+        res = simulate(scene, rng=0)
+    assert np.isposinf(res.metrics["snr_luminance_db_per_patch"]).any()
