@@ -279,7 +279,8 @@ def simulate(
         flat = np.flatnonzero(np.isposinf(patches.snr_luminance_db))
         if flat.size:
             warnings.warn(
-                f"simulate: {flat.size} ColorChecker patch(es) have no noise (σ = 0), their "
+                f"simulate: {flat.size} ColorChecker patch(es) have σ = 0 (no noise, or a window "
+                "of one pixel): their "
                 "SNR is infinite (null in metrics.json); set sensor.noise = true for a "
                 "measured SNR",
                 ImageformWarning,
