@@ -360,6 +360,8 @@ def _walk_finite(x: Any, depth: int = 0) -> bool:
     finite; objects imageform does not return as data are ignored."""
     if depth > 3:
         return True
+    if hasattr(x, "detach") and hasattr(x, "cpu"):  # a torch tensor (torch in, torch out)
+        x = x.detach().cpu().numpy()
     if isinstance(x, bool | np.bool_):
         return True
     if isinstance(x, float | np.floating):
@@ -435,7 +437,9 @@ def _invoke(func: Any, args: tuple[Any, ...], kwargs: dict[str, Any]) -> Any:
 
 
 def _shape(x: Any) -> int | None:
-    return x.ndim if isinstance(x, np.ndarray) else None
+    """The number of dimensions of an array result of any array library."""
+    nd = getattr(x, "ndim", None)
+    return nd if isinstance(nd, int) and hasattr(x, "shape") else None
 
 
 def run_task(state: _State, task: Task) -> Outcome:

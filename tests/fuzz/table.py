@@ -33,7 +33,7 @@ VALID: dict[str, C | Skip] = {
     "imageform.analysis.HsvSegmentation": Skip("a result dataclass built by segment_hsv"),
     "imageform.analysis.LabeledImage": call(image=V("rgb"), mask=np.ones((6, 8), dtype=bool)),
     "imageform.analysis.MacenkoStains": call(
-        np.array([[0.65, 0.07], [0.70, 0.99], [0.29, 0.11]]), np.array([1.5, 1.2])
+        np.array([[0.65, 0.70, 0.29], [0.07, 0.99, 0.11]]), np.array([1.5, 1.2])
     ),
     "imageform.analysis.MacenkoStains.from_json": Skip(
         "TODO: InvalidInputError: macenko_stains file /tmp/imageform-fuzz-jgg2mruj/out.png does not exist"
@@ -792,6 +792,18 @@ VALID: dict[str, C | Skip] = {
     "imageform.workflows.vanishing.VanishingOptions.fields": call(),
     "imageform.workflows.vanishing.VanishingOptions.types": call(),
 }
+
+#: Calls of a second or more each (matplotlib figures, whole simulations, report folders):
+#: in the slow run only.
+SLOW: frozenset[str] = frozenset(
+    {
+        "imageform.report.chromaticity_plot.plot_chromaticity_diagram",
+        "imageform.report.write_report",
+        "imageform.simulate.simulate",
+        "imageform.simulate.render_scene",
+        "imageform.report.figures_color.plot_patch_chromaticity",
+    }
+)
 
 # methods: the instance is built from the class's own entry above
 VALID.update(
