@@ -76,6 +76,7 @@ def known_source(outcomes: list[Outcome]) -> str:
 
     found = {k: o for k, o in findings(outcomes).items() if o.result not in HARNESS_OUTCOMES}
     out = [
+        "# ruff: noqa: E501",
         '"""Known findings of the fuzz test, not fixed yet (issue 16).',
         "",
         "One entry per ``(callable, parameter, kind)``: the outcome and why it is listed.",

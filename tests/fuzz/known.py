@@ -1,3 +1,4 @@
+# ruff: noqa: E501
 """Known findings of the fuzz test, not fixed yet (issue 16).
 
 One entry per ``(callable, parameter, kind)``: the outcome and why it is listed.

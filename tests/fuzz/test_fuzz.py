@@ -32,7 +32,7 @@ from tests.fuzz.table import SLOW as SLOW_CALLS
 from tests.fuzz.table import VALID
 
 #: Calls in the default run (all valid calls, then a sample of the malformed ones).
-BUDGET = 1200
+BUDGET = 1600
 SEED = 16
 #: Seconds per call; a call past this is a finding ("timeout").
 TIMEOUT = 30.0
@@ -59,8 +59,8 @@ def test_known_entries_are_well_formed() -> None:
     funcs = public_callables()
     for (name, param, kind), reason in KNOWN.items():
         assert name in funcs, f"KNOWN entry for a name no longer public: {name}"
-        assert kind in KINDS, (name, kind)
-        assert param and reason.strip(), (name, param, kind)
+        assert kind in KINDS or (kind == "valid" and not param), (name, kind)
+        assert reason.strip(), (name, param, kind)
 
 
 def _default_tasks() -> list:
