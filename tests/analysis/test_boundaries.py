@@ -126,3 +126,45 @@ def test_segment_hsv_ranges(h: object) -> None:
     img = np.full((8, 8, 3), 0.5)
     with pytest.raises(InvalidInputError, match=r"\bh\b"):
         segment_hsv(img, h, (0.0, 1.0), (0.0, 1.0))  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "match"),
+    [
+        ({"rows": float("inf")}, "rows"),
+        ({"cols": "6"}, "cols"),
+        ({"patch": 1j}, "patch"),
+        ({"gap": None}, "gap"),
+        ({"background": float("inf")}, "background"),
+    ],
+)
+def test_synthetic_chart_scalars(kwargs: dict, match: str) -> None:
+    from imageform.analysis import synthetic_chart_image
+
+    with pytest.raises(InvalidInputError, match=match):
+        synthetic_chart_image(**kwargs)
+
+
+def test_synthetic_shapes_bounded() -> None:
+    from imageform.analysis import synthetic_stain_image
+
+    with pytest.raises(InvalidInputError, match="shape"):
+        synthetic_stain_image((10**9, 10**9))
+    assert synthetic_stain_image((np.int64(8), 8)).image.shape == (8, 8, 3)
+
+
+@pytest.mark.parametrize("name", ["rows", "cols", "margin", "max_std", "saturation"])
+def test_chart_patches_scalars(name: str) -> None:
+    from imageform.analysis import chart_patches, synthetic_chart_image
+
+    with pytest.raises(InvalidInputError, match=name):
+        chart_patches(synthetic_chart_image(patch=6, gap=2), **{name: "1"})
+
+
+def test_report_functions_name_result() -> None:
+    from imageform.report.figures_geometry import top_view_data
+    from imageform.report.patches import measure_patches
+
+    for fn in (measure_patches, top_view_data):
+        with pytest.raises(TypeError, match="result"):
+            fn(None)  # type: ignore[arg-type]

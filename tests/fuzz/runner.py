@@ -645,9 +645,15 @@ def run(
         p = ctx.Process(target=_worker, args=(child,), daemon=True)
         p.start()
         child.close()
-        if not parent.poll(STARTUP_TIMEOUT) or parent.recv() != "ready":
+        try:
+            ready = parent.poll(STARTUP_TIMEOUT) and parent.recv() == "ready"
+        except (EOFError, OSError):
+            ready = False
+        if not ready:
             p.kill()
-            raise RuntimeError(f"fuzz worker did not start within {STARTUP_TIMEOUT:g} s")
+            raise RuntimeError(
+                f"fuzz worker did not start within {STARTUP_TIMEOUT:g} s (exit {p.exitcode})"
+            )
         return p, parent
 
     slots: list[dict[str, Any]] = []

@@ -288,7 +288,14 @@ def chart_patches(
         raise InvalidInputError(
             f"expected image of shape (H, W, 3), got {format_shape(tuple(rgb.shape))}"
         )
-    rows, cols = int(rows), int(cols)
+    rows = as_int(rows, "rows", minimum=1)
+    cols = as_int(cols, "cols", minimum=1)
+    margin = as_real(margin, "margin")
+    max_std = as_real(max_std, "max_std", nonnegative=True)
+    saturation = as_real(saturation, "saturation", positive=True)
+    max_saturated_fraction = as_real(
+        max_saturated_fraction, "max_saturated_fraction", minimum=0.0, maximum=1.0
+    )
     hgt, wid = int(rgb.shape[0]), int(rgb.shape[1])
     if rows < 1 or cols < 1 or hgt < 2 * rows or wid < 2 * cols:
         raise InvalidInputError(

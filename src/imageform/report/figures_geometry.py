@@ -21,6 +21,7 @@ from typing import Any
 import numpy as np
 
 from imageform.errors import InvalidInputError
+from imageform.report._checks import check_result
 from imageform.simulate.result import SimulationResult
 from imageform.simulate.truth import vanishing_errors
 
@@ -89,6 +90,7 @@ def top_view_data(result: SimulationResult) -> dict[str, Any]:
     ``view_right``, ``view_ahead`` (:func:`top_view_axes`). Rays whose corner pixel cannot
     be undistorted are NaN.
     """
+    check_result(result)
     cam = result.camera
     width, height = result.image_size
     centre = np.asarray(cam.center, dtype=np.float64)
@@ -198,6 +200,7 @@ def vanishing_summary(result: SimulationResult) -> dict[str, Any] | None:
     >>> vanishing_summary(r)["vanishing_point_error_px"]
     5.0
     """
+    check_result(result)
     v = result.vanishing
     if v is None:
         return None
@@ -224,6 +227,7 @@ def vanishing_overlay(result: SimulationResult, display: np.ndarray) -> Any:
     """The output picture ``display`` (uint8 RGB) with the true and detected vanishing point
     and horizon (:func:`imageform.report.overlays.draw_vanishing_truth_overlay`); ``None``
     without rails."""
+    check_result(result)
     from imageform.report.overlays import draw_vanishing_truth_overlay
 
     v = result.vanishing
