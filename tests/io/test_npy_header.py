@@ -31,3 +31,17 @@ def test_npy_memory_refused_from_header(tmp_path: Path, monkeypatch: pytest.Monk
     with pytest.raises(InvalidInputError, match="GiB") as info:
         read_image(path)
     assert "\n" not in str(info.value)
+
+
+def test_camera_file_fields_checked() -> None:
+    import numpy as np
+
+    from imageform.geometry import Camera
+    from imageform.io import CameraFile
+
+    cam = Camera(np.array([[500.0, 0, 4], [0, 500.0, 3], [0, 0, 1]]))
+    with pytest.raises(InvalidInputError, match="version"):
+        CameraFile(cam, version=float("nan"))  # type: ignore[arg-type]
+    with pytest.raises(InvalidInputError, match="has_pose"):
+        CameraFile(cam, has_pose="yes")  # type: ignore[arg-type]
+    assert CameraFile(cam, version=np.int64(1)).version == 1
