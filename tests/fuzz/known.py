@@ -277,6 +277,9 @@ KNOWN: dict[tuple[str, str, str], str] = {
         "noise",
         "wrong_shape",
     ): "raw:ValueError: ValueError: shape mismatch: objects cannot be broadcast to a single shape.  Mismatch is between arg 0 with shape (128, 128, 3) and arg 2 with sh",
+    ("imageform.color.SubsampledChroma", "chroma", "complex"): "nonfinite",
+    ("imageform.color.SubsampledChroma", "chroma", "inf"): "nonfinite",
+    ("imageform.color.SubsampledChroma", "chroma", "nan"): "nonfinite",
     ("imageform.color.WhiteBalanceResult", "gains", "complex"): "nonfinite",
     ("imageform.color.WhiteBalanceResult", "gains", "inf"): "nonfinite",
     ("imageform.color.WhiteBalanceResult", "gains", "nan"): "nonfinite",
@@ -368,6 +371,21 @@ KNOWN: dict[tuple[str, str, str], str] = {
     ): "long: UnknownOptionError: unknown chroma subsampling scheme 'xxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxx",
     (
         "imageform.color.chroma_subsample",
+        "siting",
+        "huge",
+    ): "long: UnknownOptionError: unknown chroma siting 'xxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxx",
+    (
+        "imageform.color.chroma_upsample",
+        "method",
+        "huge",
+    ): "long: UnknownOptionError: unknown chroma upsampling method 'xxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxx",
+    (
+        "imageform.color.chroma_upsample",
+        "scheme",
+        "huge",
+    ): "long: UnknownOptionError: unknown chroma subsampling scheme 'xxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxx",
+    (
+        "imageform.color.chroma_upsample",
         "siting",
         "huge",
     ): "long: UnknownOptionError: unknown chroma siting 'xxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxx",
@@ -962,6 +980,7 @@ KNOWN: dict[tuple[str, str, str], str] = {
         "h2",
         "wrong_shape",
     ): "raw:ValueError: ValueError: operands could not be broadcast together with shapes (3,) (2,)",
+    ("imageform.color.hue_in_range", "hue", "torch0d"): "wrong_result_shape",
     (
         "imageform.color.hue_undefined_mask",
         "atol",
@@ -2099,6 +2118,91 @@ KNOWN: dict[tuple[str, str, str], str] = {
         "wrong_shape",
     ): "unnamed: TypeError: float() argument must be a string or a real number, not 'list'",
     (
+        "imageform.geometry.Intrinsics.from_fov",
+        "fov_x",
+        "complex",
+    ): "unnamed: TypeError: '<' not supported between instances of 'int' and 'complex'",
+    (
+        "imageform.geometry.Intrinsics.from_fov",
+        "fov_x",
+        "empty",
+    ): "unnamed: TypeError: '<' not supported between instances of 'int' and 'list'",
+    (
+        "imageform.geometry.Intrinsics.from_fov",
+        "fov_x",
+        "none",
+    ): "unnamed: TypeError: '<' not supported between instances of 'int' and 'NoneType'",
+    (
+        "imageform.geometry.Intrinsics.from_fov",
+        "fov_x",
+        "object",
+    ): "unnamed: TypeError: '<' not supported between instances of 'int' and 'object'",
+    (
+        "imageform.geometry.Intrinsics.from_fov",
+        "fov_x",
+        "string",
+    ): "unnamed: TypeError: '<' not supported between instances of 'int' and 'str'",
+    (
+        "imageform.geometry.Intrinsics.from_fov",
+        "fov_x",
+        "wrong_shape",
+    ): "unnamed: TypeError: '<' not supported between instances of 'int' and 'list'",
+    (
+        "imageform.geometry.Intrinsics.from_fov",
+        "image_size",
+        "bool",
+    ): "unnamed: TypeError: cannot unpack non-iterable bool object",
+    (
+        "imageform.geometry.Intrinsics.from_fov",
+        "image_size",
+        "complex",
+    ): "unnamed: TypeError: float() argument must be a string or a real number, not 'complex'",
+    (
+        "imageform.geometry.Intrinsics.from_fov",
+        "image_size",
+        "empty",
+    ): "raw:ValueError: ValueError: not enough values to unpack (expected 2, got 0)",
+    (
+        "imageform.geometry.Intrinsics.from_fov",
+        "image_size",
+        "inf",
+    ): "unnamed: InvalidInputError: expected a finite fx, got inf",
+    (
+        "imageform.geometry.Intrinsics.from_fov",
+        "image_size",
+        "nan",
+    ): "unnamed: InvalidInputError: expected a finite fx, got nan",
+    (
+        "imageform.geometry.Intrinsics.from_fov",
+        "image_size",
+        "negative",
+    ): "unnamed: InvalidInputError: expected focal lengths fx > 0 and fy > 0, got fx = -8.23719, fy = -8.23719 (a negative focal length mirrors the image)",
+    (
+        "imageform.geometry.Intrinsics.from_fov",
+        "image_size",
+        "none",
+    ): "unnamed: TypeError: cannot unpack non-iterable NoneType object",
+    (
+        "imageform.geometry.Intrinsics.from_fov",
+        "image_size",
+        "object",
+    ): "unnamed: TypeError: cannot unpack non-iterable object object",
+    (
+        "imageform.geometry.Intrinsics.from_fov",
+        "image_size",
+        "string",
+    ): "raw:ValueError: ValueError: too many values to unpack (expected 2)",
+    (
+        "imageform.geometry.Intrinsics.from_fov",
+        "image_size",
+        "wrong_shape",
+    ): "raw:ValueError: ValueError: too many values to unpack (expected 2)",
+    (
+        "imageform.geometry.Intrinsics.from_fov",
+        "image_size",
+        "zero",
+    ): "unnamed: InvalidInputError: expected non-zero focal lengths fx, fy (K would be singular)",
+    (
         "imageform.geometry.Intrinsics.from_physical",
         "focal_length",
         "huge",
@@ -2169,6 +2273,121 @@ KNOWN: dict[tuple[str, str, str], str] = {
         "torch0d",
     ): "unnamed: TypeError: iteration over a 0-d tensor",
     (
+        "imageform.geometry.Intrinsics.from_sensor",
+        "focal_length",
+        "huge",
+    ): "unnamed: InvalidInputError: expected a finite fx, got inf",
+    (
+        "imageform.geometry.Intrinsics.from_sensor",
+        "image_size",
+        "bool",
+    ): "unnamed: TypeError: cannot unpack non-iterable bool object",
+    (
+        "imageform.geometry.Intrinsics.from_sensor",
+        "image_size",
+        "complex",
+    ): "unnamed: InvalidInputError: expected pixel_pitch_um as a real number, got (3200-3200j)",
+    (
+        "imageform.geometry.Intrinsics.from_sensor",
+        "image_size",
+        "empty",
+    ): "raw:ValueError: ValueError: not enough values to unpack (expected 2, got 0)",
+    (
+        "imageform.geometry.Intrinsics.from_sensor",
+        "image_size",
+        "inf",
+    ): "unnamed: InvalidInputError: expected pixel_pitch_um > 0, got 0",
+    (
+        "imageform.geometry.Intrinsics.from_sensor",
+        "image_size",
+        "nan",
+    ): "unnamed: InvalidInputError: expected pixel_pitch_um as a finite number, got nan",
+    (
+        "imageform.geometry.Intrinsics.from_sensor",
+        "image_size",
+        "negative",
+    ): "unnamed: InvalidInputError: expected pixel_pitch_um > 0, got -711.111",
+    (
+        "imageform.geometry.Intrinsics.from_sensor",
+        "image_size",
+        "none",
+    ): "unnamed: TypeError: cannot unpack non-iterable NoneType object",
+    (
+        "imageform.geometry.Intrinsics.from_sensor",
+        "image_size",
+        "object",
+    ): "unnamed: TypeError: cannot unpack non-iterable object object",
+    (
+        "imageform.geometry.Intrinsics.from_sensor",
+        "image_size",
+        "string",
+    ): "raw:ValueError: ValueError: too many values to unpack (expected 2)",
+    (
+        "imageform.geometry.Intrinsics.from_sensor",
+        "image_size",
+        "wrong_shape",
+    ): "raw:ValueError: ValueError: too many values to unpack (expected 2)",
+    (
+        "imageform.geometry.Intrinsics.from_sensor",
+        "image_size",
+        "zero",
+    ): "raw:ZeroDivisionError: ZeroDivisionError: float division by zero",
+    (
+        "imageform.geometry.Intrinsics.from_sensor",
+        "sensor_size_mm",
+        "bool",
+    ): "unnamed: TypeError: 'bool' object is not subscriptable",
+    (
+        "imageform.geometry.Intrinsics.from_sensor",
+        "sensor_size_mm",
+        "complex",
+    ): "unnamed: InvalidInputError: expected sensor width as a real number, got (1+1j)",
+    (
+        "imageform.geometry.Intrinsics.from_sensor",
+        "sensor_size_mm",
+        "empty",
+    ): "raw:IndexError: IndexError: tuple index out of range",
+    (
+        "imageform.geometry.Intrinsics.from_sensor",
+        "sensor_size_mm",
+        "huge",
+    ): "unnamed: InvalidInputError: expected pixel_pitch_um as a finite number, got inf",
+    (
+        "imageform.geometry.Intrinsics.from_sensor",
+        "sensor_size_mm",
+        "inf",
+    ): "unnamed: InvalidInputError: expected sensor width as a finite number, got inf",
+    (
+        "imageform.geometry.Intrinsics.from_sensor",
+        "sensor_size_mm",
+        "nan",
+    ): "unnamed: InvalidInputError: expected sensor width as a finite number, got nan",
+    (
+        "imageform.geometry.Intrinsics.from_sensor",
+        "sensor_size_mm",
+        "negative",
+    ): "unnamed: InvalidInputError: expected sensor width > 0, got -7.4",
+    (
+        "imageform.geometry.Intrinsics.from_sensor",
+        "sensor_size_mm",
+        "none",
+    ): "unnamed: TypeError: 'NoneType' object is not subscriptable",
+    (
+        "imageform.geometry.Intrinsics.from_sensor",
+        "sensor_size_mm",
+        "object",
+    ): "unnamed: TypeError: 'object' object is not subscriptable",
+    (
+        "imageform.geometry.Intrinsics.from_sensor",
+        "sensor_size_mm",
+        "string",
+    ): "unnamed: InvalidInputError: expected sensor width as a number, got 'a'",
+    (
+        "imageform.geometry.Intrinsics.from_sensor",
+        "sensor_size_mm",
+        "zero",
+    ): "unnamed: InvalidInputError: expected sensor width > 0, got 0",
+    (
         "imageform.geometry.are_collinear",
         "tol",
         "none",
@@ -2203,6 +2422,126 @@ KNOWN: dict[tuple[str, str, str], str] = {
         "image_plane",
         "huge",
     ): "long: UnknownOptionError: unknown image plane 'xxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxx",
+    (
+        "imageform.geometry.camera_rotation",
+        "pitch",
+        "complex",
+    ): "unnamed: InvalidInputError: expected real values for angle, got dtype complex128",
+    (
+        "imageform.geometry.camera_rotation",
+        "pitch",
+        "empty",
+    ): "raw:ValueError: ValueError: all input arrays must have the same shape",
+    (
+        "imageform.geometry.camera_rotation",
+        "pitch",
+        "inf",
+    ): "unnamed: InvalidInputError: angle contains NaN or inf",
+    (
+        "imageform.geometry.camera_rotation",
+        "pitch",
+        "nan",
+    ): "unnamed: InvalidInputError: angle contains NaN or inf",
+    (
+        "imageform.geometry.camera_rotation",
+        "pitch",
+        "none",
+    ): "unnamed: InvalidInputError: expected a numeric array for angle, got dtype object",
+    (
+        "imageform.geometry.camera_rotation",
+        "pitch",
+        "object",
+    ): "unnamed: InvalidInputError: expected a numeric array for angle, got dtype object",
+    (
+        "imageform.geometry.camera_rotation",
+        "pitch",
+        "string",
+    ): "unnamed: InvalidInputError: expected a numeric array for angle, got str",
+    (
+        "imageform.geometry.camera_rotation",
+        "pitch",
+        "wrong_shape",
+    ): "raw:ValueError: ValueError: all input arrays must have the same shape",
+    (
+        "imageform.geometry.camera_rotation",
+        "roll",
+        "complex",
+    ): "unnamed: InvalidInputError: expected real values for angle, got dtype complex128",
+    (
+        "imageform.geometry.camera_rotation",
+        "roll",
+        "empty",
+    ): "raw:ValueError: ValueError: all input arrays must have the same shape",
+    (
+        "imageform.geometry.camera_rotation",
+        "roll",
+        "inf",
+    ): "unnamed: InvalidInputError: angle contains NaN or inf",
+    (
+        "imageform.geometry.camera_rotation",
+        "roll",
+        "nan",
+    ): "unnamed: InvalidInputError: angle contains NaN or inf",
+    (
+        "imageform.geometry.camera_rotation",
+        "roll",
+        "none",
+    ): "unnamed: InvalidInputError: expected a numeric array for angle, got dtype object",
+    (
+        "imageform.geometry.camera_rotation",
+        "roll",
+        "object",
+    ): "unnamed: InvalidInputError: expected a numeric array for angle, got dtype object",
+    (
+        "imageform.geometry.camera_rotation",
+        "roll",
+        "string",
+    ): "unnamed: InvalidInputError: expected a numeric array for angle, got str",
+    (
+        "imageform.geometry.camera_rotation",
+        "roll",
+        "wrong_shape",
+    ): "raw:ValueError: ValueError: all input arrays must have the same shape",
+    (
+        "imageform.geometry.camera_rotation",
+        "yaw",
+        "complex",
+    ): "unnamed: InvalidInputError: expected real values for angle, got dtype complex128",
+    (
+        "imageform.geometry.camera_rotation",
+        "yaw",
+        "empty",
+    ): "raw:ValueError: ValueError: all input arrays must have the same shape",
+    (
+        "imageform.geometry.camera_rotation",
+        "yaw",
+        "inf",
+    ): "unnamed: InvalidInputError: angle contains NaN or inf",
+    (
+        "imageform.geometry.camera_rotation",
+        "yaw",
+        "nan",
+    ): "unnamed: InvalidInputError: angle contains NaN or inf",
+    (
+        "imageform.geometry.camera_rotation",
+        "yaw",
+        "none",
+    ): "unnamed: InvalidInputError: expected a numeric array for angle, got dtype object",
+    (
+        "imageform.geometry.camera_rotation",
+        "yaw",
+        "object",
+    ): "unnamed: InvalidInputError: expected a numeric array for angle, got dtype object",
+    (
+        "imageform.geometry.camera_rotation",
+        "yaw",
+        "string",
+    ): "unnamed: InvalidInputError: expected a numeric array for angle, got str",
+    (
+        "imageform.geometry.camera_rotation",
+        "yaw",
+        "wrong_shape",
+    ): "raw:ValueError: ValueError: all input arrays must have the same shape",
     (
         "imageform.geometry.checkerboard_candidates.find_candidates",
         "gray",
@@ -2314,6 +2653,22 @@ KNOWN: dict[tuple[str, str, str], str] = {
         "wrong_shape",
     ): "unnamed: TypeError: can't multiply sequence by non-int of type 'float'",
     (
+        "imageform.geometry.checkerboard_points",
+        "pattern_size",
+        "huge",
+    ): "raw:ValueError: ValueError: Maximum allowed dimension exceeded",
+    ("imageform.geometry.checkerboard_points", "square_size", "huge"): "nonfinite",
+    (
+        "imageform.geometry.cross_ratio",
+        "b",
+        "negative",
+    ): "unnamed: DegenerateConfigurationError: cross_ratio needs four collinear points",
+    (
+        "imageform.geometry.cross_ratio",
+        "b",
+        "zero",
+    ): "unnamed: DegenerateConfigurationError: cross_ratio needs four collinear points",
+    (
         "imageform.geometry.detect_line_segments",
         "angle_tolerance",
         "torch0d",
@@ -2369,6 +2724,46 @@ KNOWN: dict[tuple[str, str, str], str] = {
         "torch0d",
     ): "raw:ValueError: ValueError: step must be greater than zero",
     (
+        "imageform.geometry.euler_to_matrix",
+        "order",
+        "huge",
+    ): "long: InvalidInputError: expected an Euler order of three axes from 'xyz' (lower-case extrinsic, upper-case intrinsic, no axis twice in a row), e.g. 'xyz' or 'Z",
+    (
+        "imageform.geometry.find_checkerboard",
+        "eps",
+        "complex",
+    ): "unnamed: TypeError: must be real number, not complex",
+    (
+        "imageform.geometry.find_checkerboard",
+        "eps",
+        "empty",
+    ): "unnamed: TypeError: must be real number, not list",
+    (
+        "imageform.geometry.find_checkerboard",
+        "eps",
+        "none",
+    ): "unnamed: TypeError: must be real number, not NoneType",
+    (
+        "imageform.geometry.find_checkerboard",
+        "eps",
+        "object",
+    ): "unnamed: TypeError: must be real number, not object",
+    (
+        "imageform.geometry.find_checkerboard",
+        "eps",
+        "string",
+    ): "unnamed: TypeError: must be real number, not str",
+    (
+        "imageform.geometry.find_checkerboard",
+        "eps",
+        "wrong_shape",
+    ): "unnamed: TypeError: must be real number, not list",
+    (
+        "imageform.geometry.find_checkerboard",
+        "max_iter",
+        "np_scalar",
+    ): "np_scalar_refused: expected max_iter an integer >= 1, got np.int64(30)",
+    (
         "imageform.geometry.from_homogeneous",
         "at_infinity",
         "huge",
@@ -2399,6 +2794,16 @@ KNOWN: dict[tuple[str, str, str], str] = {
         "huge",
     ): "long: UnknownOptionError: unknown up axis 'xxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxx",
     (
+        "imageform.geometry.intersect_lines",
+        "l1",
+        "zero",
+    ): "unnamed: DegenerateConfigurationError: the two lines are identical",
+    (
+        "imageform.geometry.intersect_lines",
+        "l2",
+        "zero",
+    ): "unnamed: DegenerateConfigurationError: the two lines are identical",
+    (
         "imageform.geometry.is_rotation",
         "atol",
         "complex",
@@ -2428,6 +2833,11 @@ KNOWN: dict[tuple[str, str, str], str] = {
         "eye",
         "huge",
     ): "unnamed: DegenerateConfigurationError: look_at: the viewing direction is parallel to 'up'; choose another up vector",
+    (
+        "imageform.geometry.matrix_to_euler",
+        "order",
+        "huge",
+    ): "long: InvalidInputError: expected an Euler order of three axes from 'xyz' (lower-case extrinsic, upper-case intrinsic, no axis twice in a row), e.g. 'xyz' or 'Z",
     (
         "imageform.geometry.orthographic_matrix",
         "principal_point",
@@ -2550,10 +2960,160 @@ KNOWN: dict[tuple[str, str, str], str] = {
         "torch0d",
     ): "unnamed: TypeError: iteration over a 0-d tensor",
     (
+        "imageform.geometry.perspective_type",
+        "tol",
+        "empty",
+    ): "raw:ValueError: ValueError: operands could not be broadcast together with shapes (0,) (3,)",
+    (
+        "imageform.geometry.perspective_type",
+        "tol",
+        "none",
+    ): "unnamed: TypeError: unsupported operand type(s) for *: 'NoneType' and 'float'",
+    (
+        "imageform.geometry.perspective_type",
+        "tol",
+        "object",
+    ): "unnamed: TypeError: unsupported operand type(s) for *: 'object' and 'float'",
+    (
+        "imageform.geometry.perspective_type",
+        "tol",
+        "string",
+    ): "unnamed: UFuncTypeError: ufunc 'multiply' did not contain a loop with signature matching types (dtype('<U5'), dtype('float64')) -> None",
+    (
+        "imageform.geometry.perspective_type",
+        "tol",
+        "torch0d",
+    ): "unnamed: TypeError: '>' not supported between instances of 'numpy.ndarray' and 'Tensor'",
+    (
+        "imageform.geometry.perspective_type",
+        "tol",
+        "wrong_shape",
+    ): "raw:ValueError: ValueError: operands could not be broadcast together with shapes (2,) (3,)",
+    (
         "imageform.geometry.project_points",
         "image_plane",
         "huge",
     ): "long: UnknownOptionError: unknown image plane 'xxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxx",
+    (
+        "imageform.geometry.refine_corners",
+        "eps",
+        "complex",
+    ): "unnamed: TypeError: must be real number, not complex",
+    (
+        "imageform.geometry.refine_corners",
+        "eps",
+        "empty",
+    ): "unnamed: TypeError: must be real number, not list",
+    (
+        "imageform.geometry.refine_corners",
+        "eps",
+        "none",
+    ): "unnamed: TypeError: must be real number, not NoneType",
+    (
+        "imageform.geometry.refine_corners",
+        "eps",
+        "object",
+    ): "unnamed: TypeError: must be real number, not object",
+    (
+        "imageform.geometry.refine_corners",
+        "eps",
+        "string",
+    ): "unnamed: TypeError: must be real number, not str",
+    (
+        "imageform.geometry.refine_corners",
+        "eps",
+        "wrong_shape",
+    ): "unnamed: TypeError: must be real number, not list",
+    (
+        "imageform.geometry.refine_corners",
+        "half_window",
+        "complex",
+    ): "unnamed: TypeError: cannot unpack non-iterable complex object",
+    (
+        "imageform.geometry.refine_corners",
+        "half_window",
+        "empty",
+    ): "raw:ValueError: ValueError: not enough values to unpack (expected 2, got 0)",
+    (
+        "imageform.geometry.refine_corners",
+        "half_window",
+        "huge",
+    ): "raw:OverflowError: OverflowError: int too big to convert",
+    (
+        "imageform.geometry.refine_corners",
+        "half_window",
+        "inf",
+    ): "unnamed: TypeError: cannot unpack non-iterable float object",
+    (
+        "imageform.geometry.refine_corners",
+        "half_window",
+        "nan",
+    ): "unnamed: TypeError: cannot unpack non-iterable float object",
+    (
+        "imageform.geometry.refine_corners",
+        "half_window",
+        "none",
+    ): "unnamed: TypeError: cannot unpack non-iterable NoneType object",
+    (
+        "imageform.geometry.refine_corners",
+        "half_window",
+        "np_scalar",
+    ): "unnamed: TypeError: cannot unpack non-iterable numpy.int64 object",
+    (
+        "imageform.geometry.refine_corners",
+        "half_window",
+        "object",
+    ): "unnamed: TypeError: cannot unpack non-iterable object object",
+    (
+        "imageform.geometry.refine_corners",
+        "half_window",
+        "torch0d",
+    ): "unnamed: TypeError: iteration over a 0-d tensor",
+    (
+        "imageform.geometry.refine_corners",
+        "max_iter",
+        "huge",
+    ): "raw:OverflowError: OverflowError: int too big to convert",
+    (
+        "imageform.geometry.refine_corners",
+        "max_iter",
+        "np_scalar",
+    ): "np_scalar_refused: expected max_iter an integer >= 1, got np.int64(30)",
+    (
+        "imageform.geometry.remap_bilinear",
+        "fill",
+        "complex",
+    ): "unnamed: TypeError: float() argument must be a string or a real number, not 'complex'",
+    (
+        "imageform.geometry.remap_bilinear",
+        "fill",
+        "empty",
+    ): "unnamed: TypeError: float() argument must be a string or a real number, not 'list'",
+    (
+        "imageform.geometry.remap_bilinear",
+        "fill",
+        "none",
+    ): "unnamed: TypeError: float() argument must be a string or a real number, not 'NoneType'",
+    (
+        "imageform.geometry.remap_bilinear",
+        "fill",
+        "object",
+    ): "unnamed: TypeError: float() argument must be a string or a real number, not 'object'",
+    (
+        "imageform.geometry.remap_bilinear",
+        "fill",
+        "wrong_shape",
+    ): "unnamed: TypeError: float() argument must be a string or a real number, not 'list'",
+    (
+        "imageform.geometry.remap_bilinear",
+        "map_uv",
+        "complex",
+    ): "raw:ComplexWarning: ComplexWarning: Casting complex values to real discards the imaginary part",
+    (
+        "imageform.geometry.remap_bilinear",
+        "map_uv",
+        "string",
+    ): "raw:ValueError: ValueError: could not convert string to float: np.str_('abc')",
     (
         "imageform.geometry.to_homogeneous",
         "points",
@@ -2587,6 +3147,76 @@ KNOWN: dict[tuple[str, str, str], str] = {
         "w",
         "wrong_shape",
     ): "raw:ValueError: ValueError: could not broadcast input array from shape (2,) into shape (6,1)",
+    (
+        "imageform.geometry.undistort_image",
+        "fill",
+        "complex",
+    ): "unnamed: TypeError: float() argument must be a string or a real number, not 'complex'",
+    (
+        "imageform.geometry.undistort_image",
+        "fill",
+        "empty",
+    ): "unnamed: TypeError: float() argument must be a string or a real number, not 'list'",
+    (
+        "imageform.geometry.undistort_image",
+        "fill",
+        "none",
+    ): "unnamed: TypeError: float() argument must be a string or a real number, not 'NoneType'",
+    (
+        "imageform.geometry.undistort_image",
+        "fill",
+        "object",
+    ): "unnamed: TypeError: float() argument must be a string or a real number, not 'object'",
+    (
+        "imageform.geometry.undistort_image",
+        "fill",
+        "wrong_shape",
+    ): "unnamed: TypeError: float() argument must be a string or a real number, not 'list'",
+    (
+        "imageform.geometry.undistortion_map",
+        "shape",
+        "bool",
+    ): "unnamed: TypeError: 'bool' object is not subscriptable",
+    (
+        "imageform.geometry.undistortion_map",
+        "shape",
+        "complex",
+    ): "unnamed: TypeError: int() argument must be a string, a bytes-like object or a real number, not 'complex'",
+    (
+        "imageform.geometry.undistortion_map",
+        "shape",
+        "empty",
+    ): "raw:IndexError: IndexError: tuple index out of range",
+    (
+        "imageform.geometry.undistortion_map",
+        "shape",
+        "huge",
+    ): "raw:ValueError: ValueError: Maximum allowed dimension exceeded",
+    (
+        "imageform.geometry.undistortion_map",
+        "shape",
+        "inf",
+    ): "raw:OverflowError: OverflowError: cannot convert float infinity to integer",
+    (
+        "imageform.geometry.undistortion_map",
+        "shape",
+        "nan",
+    ): "raw:ValueError: ValueError: cannot convert float NaN to integer",
+    (
+        "imageform.geometry.undistortion_map",
+        "shape",
+        "none",
+    ): "unnamed: TypeError: 'NoneType' object is not subscriptable",
+    (
+        "imageform.geometry.undistortion_map",
+        "shape",
+        "object",
+    ): "unnamed: TypeError: 'object' object is not subscriptable",
+    (
+        "imageform.geometry.undistortion_map",
+        "shape",
+        "string",
+    ): "raw:ValueError: ValueError: invalid literal for int() with base 10: 'a'",
     (
         "imageform.geometry.unproject",
         "depth",
@@ -2623,6 +3253,56 @@ KNOWN: dict[tuple[str, str, str], str] = {
     (
         "imageform.optics.apply_vignetting",
         "falloff",
+        "string",
+    ): "raw:ValueError: ValueError: could not convert string to float: np.str_('abc')",
+    (
+        "imageform.optics.blur_by_radius",
+        "max_layers",
+        "complex",
+    ): "unnamed: TypeError: int() argument must be a string, a bytes-like object or a real number, not 'complex'",
+    (
+        "imageform.optics.blur_by_radius",
+        "max_layers",
+        "empty",
+    ): "unnamed: TypeError: int() argument must be a string, a bytes-like object or a real number, not 'list'",
+    (
+        "imageform.optics.blur_by_radius",
+        "max_layers",
+        "inf",
+    ): "raw:OverflowError: OverflowError: cannot convert float infinity to integer",
+    (
+        "imageform.optics.blur_by_radius",
+        "max_layers",
+        "nan",
+    ): "raw:ValueError: ValueError: cannot convert float NaN to integer",
+    (
+        "imageform.optics.blur_by_radius",
+        "max_layers",
+        "none",
+    ): "unnamed: TypeError: int() argument must be a string, a bytes-like object or a real number, not 'NoneType'",
+    (
+        "imageform.optics.blur_by_radius",
+        "max_layers",
+        "object",
+    ): "unnamed: TypeError: int() argument must be a string, a bytes-like object or a real number, not 'object'",
+    (
+        "imageform.optics.blur_by_radius",
+        "max_layers",
+        "wrong_shape",
+    ): "unnamed: TypeError: int() argument must be a string, a bytes-like object or a real number, not 'list'",
+    (
+        "imageform.optics.blur_by_radius",
+        "radius_px",
+        "complex",
+    ): "raw:ComplexWarning: ComplexWarning: Casting complex values to real discards the imaginary part",
+    (
+        "imageform.optics.blur_by_radius",
+        "radius_px",
+        "huge",
+    ): "raw:ValueError: ValueError: Maximum allowed size exceeded",
+    (
+        "imageform.optics.blur_by_radius",
+        "radius_px",
         "string",
     ): "raw:ValueError: ValueError: could not convert string to float: np.str_('abc')",
     (
@@ -2688,6 +3368,7 @@ KNOWN: dict[tuple[str, str, str], str] = {
         "radius",
         "huge",
     ): "raw:ValueError: ValueError: Maximum allowed size exceeded",
+    ("imageform.optics.f_number", "focal_length", "huge"): "nonfinite",
     (
         "imageform.optics.field_angle",
         "shape",
@@ -2739,6 +3420,131 @@ KNOWN: dict[tuple[str, str, str], str] = {
         "focal_length",
         "huge",
     ): "long: InvalidInputError: object distance d_o = 2 m is inside the focal length f = 1e+308 m: the lens forms no real image, only a virtual upright one on the obje",
+    (
+        "imageform.optics.mechanical_vignetting",
+        "barrel_radius",
+        "bool",
+    ): "unnamed: InvalidInputError: expected stop_radius as a number, got True",
+    (
+        "imageform.optics.mechanical_vignetting",
+        "barrel_radius",
+        "complex",
+    ): "unnamed: InvalidInputError: expected stop_radius as a real number, got (1.2+1j)",
+    (
+        "imageform.optics.mechanical_vignetting",
+        "barrel_radius",
+        "empty",
+    ): "unnamed: InvalidInputError: expected stop_radius as a number, got list []",
+    (
+        "imageform.optics.mechanical_vignetting",
+        "barrel_radius",
+        "inf",
+    ): "unnamed: InvalidInputError: expected stop_radius as a finite number, got inf",
+    (
+        "imageform.optics.mechanical_vignetting",
+        "barrel_radius",
+        "nan",
+    ): "unnamed: InvalidInputError: expected stop_radius as a finite number, got nan",
+    (
+        "imageform.optics.mechanical_vignetting",
+        "barrel_radius",
+        "negative",
+    ): "unnamed: InvalidInputError: expected stop_radius > 0, got -2.2",
+    (
+        "imageform.optics.mechanical_vignetting",
+        "barrel_radius",
+        "none",
+    ): "unnamed: InvalidInputError: expected stop_radius as a number, got None",
+    (
+        "imageform.optics.mechanical_vignetting",
+        "barrel_radius",
+        "object",
+    ): "unnamed: InvalidInputError: expected stop_radius as a number, got object <object object at 0x7f8b8a128080>",
+    (
+        "imageform.optics.mechanical_vignetting",
+        "barrel_radius",
+        "string",
+    ): "unnamed: InvalidInputError: expected stop_radius as a number, got '1.2'",
+    (
+        "imageform.optics.mechanical_vignetting",
+        "barrel_radius",
+        "wrong_shape",
+    ): "unnamed: InvalidInputError: expected stop_radius as a number, got list [1.2, 1.2]",
+    (
+        "imageform.optics.mechanical_vignetting",
+        "barrel_radius",
+        "zero",
+    ): "unnamed: InvalidInputError: expected stop_radius > 0, got 0",
+    (
+        "imageform.optics.mechanical_vignetting",
+        "shape",
+        "bool",
+    ): "unnamed: TypeError: 'bool' object is not subscriptable",
+    (
+        "imageform.optics.mechanical_vignetting",
+        "shape",
+        "complex",
+    ): "unnamed: TypeError: int() argument must be a string, a bytes-like object or a real number, not 'complex'",
+    (
+        "imageform.optics.mechanical_vignetting",
+        "shape",
+        "empty",
+    ): "raw:IndexError: IndexError: tuple index out of range",
+    (
+        "imageform.optics.mechanical_vignetting",
+        "shape",
+        "huge",
+    ): "raw:ValueError: ValueError: Maximum allowed dimension exceeded",
+    (
+        "imageform.optics.mechanical_vignetting",
+        "shape",
+        "inf",
+    ): "raw:OverflowError: OverflowError: cannot convert float infinity to integer",
+    (
+        "imageform.optics.mechanical_vignetting",
+        "shape",
+        "nan",
+    ): "raw:ValueError: ValueError: cannot convert float NaN to integer",
+    (
+        "imageform.optics.mechanical_vignetting",
+        "shape",
+        "none",
+    ): "unnamed: TypeError: 'NoneType' object is not subscriptable",
+    (
+        "imageform.optics.mechanical_vignetting",
+        "shape",
+        "object",
+    ): "unnamed: TypeError: 'object' object is not subscriptable",
+    (
+        "imageform.optics.mechanical_vignetting",
+        "shape",
+        "string",
+    ): "raw:ValueError: ValueError: invalid literal for int() with base 10: 'a'",
+    (
+        "imageform.optics.spherical_aberration",
+        "f_number",
+        "huge",
+    ): "raw:OverflowError: OverflowError: (34, 'Numerical result out of range')",
+    (
+        "imageform.optics.spherical_aberration",
+        "field_coefficient",
+        "huge",
+    ): "raw:OverflowError: OverflowError: cannot convert float infinity to integer",
+    (
+        "imageform.optics.spherical_aberration",
+        "focal_length",
+        "huge",
+    ): "unnamed: InvalidInputError: expected radius_px finite and >= 0 (pixels)",
+    (
+        "imageform.optics.spherical_aberration",
+        "sa_coefficient",
+        "huge",
+    ): "unnamed: InvalidInputError: expected radius_px finite and >= 0 (pixels)",
+    (
+        "imageform.optics.spherical_blur_radius",
+        "f_number",
+        "huge",
+    ): "raw:OverflowError: OverflowError: (34, 'Numerical result out of range')",
     (
         "imageform.report.chromaticity_plot.planckian_locus",
         "coords",
@@ -3388,6 +4194,291 @@ KNOWN: dict[tuple[str, str, str], str] = {
         "pattern",
         "huge",
     ): "long: UnknownOptionError: unknown CFA pattern 'xxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxx",
+    ("imageform.sensor.photons_per_pixel", "exposure_time", "huge"): "nonfinite",
+    (
+        "imageform.sensor.photons_per_pixel",
+        "irradiance",
+        "complex",
+    ): "raw:ComplexWarning: ComplexWarning: Casting complex values to real discards the imaginary part",
+    ("imageform.sensor.photons_per_pixel", "irradiance", "huge"): "nonfinite",
+    ("imageform.sensor.photons_per_pixel", "irradiance", "inf"): "nonfinite",
+    ("imageform.sensor.photons_per_pixel", "irradiance", "nan"): "nonfinite",
+    ("imageform.sensor.photons_per_pixel", "irradiance", "none"): "nonfinite",
+    (
+        "imageform.sensor.photons_per_pixel",
+        "irradiance",
+        "object",
+    ): "unnamed: TypeError: float() argument must be a string or a real number, not 'object'",
+    ("imageform.sensor.photons_per_pixel", "pixel_area", "huge"): "nonfinite",
+    ("imageform.sensor.photons_per_pixel", "wavelength_nm", "huge"): "nonfinite",
+    ("imageform.sensor.rolling_shutter_points", "line_time", "huge"): "nonfinite",
+    (
+        "imageform.sensor.rolling_shutter_points",
+        "points_uv",
+        "bool",
+    ): "raw:ValueError: ValueError: cannot broadcast a non-scalar to a scalar array",
+    (
+        "imageform.sensor.rolling_shutter_points",
+        "points_uv",
+        "none",
+    ): "raw:ValueError: ValueError: cannot broadcast a non-scalar to a scalar array",
+    (
+        "imageform.sensor.rolling_shutter_points",
+        "points_uv",
+        "object",
+    ): "unnamed: TypeError: float() argument must be a string or a real number, not 'object'",
+    (
+        "imageform.sensor.rolling_shutter_points",
+        "points_uv",
+        "string",
+    ): "raw:ValueError: ValueError: could not convert string to float: 'abc'",
+    (
+        "imageform.sensor.rolling_shutter_points",
+        "points_uv",
+        "zero",
+    ): "raw:ValueError: ValueError: cannot broadcast a non-scalar to a scalar array",
+    ("imageform.sensor.rolling_shutter_points", "t0", "complex"): "nonfinite",
+    (
+        "imageform.sensor.rolling_shutter_points",
+        "t0",
+        "empty",
+    ): "raw:ValueError: ValueError: operands could not be broadcast together with shapes (4,) (0,)",
+    ("imageform.sensor.rolling_shutter_points", "t0", "huge"): "nonfinite",
+    ("imageform.sensor.rolling_shutter_points", "t0", "inf"): "nonfinite",
+    ("imageform.sensor.rolling_shutter_points", "t0", "nan"): "nonfinite",
+    (
+        "imageform.sensor.rolling_shutter_points",
+        "t0",
+        "none",
+    ): "unnamed: TypeError: unsupported operand type(s) for *: 'float' and 'NoneType'",
+    (
+        "imageform.sensor.rolling_shutter_points",
+        "t0",
+        "object",
+    ): "unnamed: TypeError: unsupported operand type(s) for *: 'float' and 'object'",
+    (
+        "imageform.sensor.rolling_shutter_points",
+        "t0",
+        "string",
+    ): "unnamed: UFuncTypeError: ufunc 'multiply' did not contain a loop with signature matching types (dtype('float64'), dtype('<U3')) -> None",
+    (
+        "imageform.sensor.rolling_shutter_points",
+        "t0",
+        "torch0d",
+    ): "unnamed: TypeError: unsupported operand type(s) for *: 'numpy.ndarray' and 'Tensor'",
+    (
+        "imageform.sensor.rolling_shutter_points",
+        "t0",
+        "wrong_shape",
+    ): "raw:ValueError: ValueError: operands could not be broadcast together with shapes (4,) (2,)",
+    (
+        "imageform.sensor.rolling_shutter_points",
+        "velocity_uv",
+        "complex",
+    ): "unnamed: TypeError: float() argument must be a string or a real number, not 'complex'",
+    (
+        "imageform.sensor.rolling_shutter_points",
+        "velocity_uv",
+        "empty",
+    ): "raw:ValueError: ValueError: operands could not be broadcast together with remapped shapes [original->remapped]: (0,)  and requested shape (4,2)",
+    ("imageform.sensor.rolling_shutter_points", "velocity_uv", "inf"): "nonfinite",
+    ("imageform.sensor.rolling_shutter_points", "velocity_uv", "nan"): "nonfinite",
+    ("imageform.sensor.rolling_shutter_points", "velocity_uv", "none"): "nonfinite",
+    (
+        "imageform.sensor.rolling_shutter_points",
+        "velocity_uv",
+        "object",
+    ): "unnamed: TypeError: float() argument must be a string or a real number, not 'object'",
+    (
+        "imageform.sensor.rolling_shutter_points",
+        "velocity_uv",
+        "string",
+    ): "raw:ValueError: ValueError: could not convert string to float: 'abc'",
+    (
+        "imageform.sensor.rolling_shutter_points",
+        "velocity_uv",
+        "wrong_shape",
+    ): "raw:ValueError: ValueError: operands could not be broadcast together with remapped shapes [original->remapped]: (3,)  and requested shape (4,2)",
+    ("imageform.sensor.rolling_shutter_skew", "line_time", "huge"): "nonfinite",
+    ("imageform.sensor.rolling_shutter_skew", "velocity", "inf"): "nonfinite",
+    ("imageform.sensor.rolling_shutter_skew", "velocity", "nan"): "nonfinite",
+    ("imageform.sensor.row_start_times", "line_time", "huge"): "nonfinite",
+    (
+        "imageform.sensor.row_start_times",
+        "mode",
+        "huge",
+    ): "long: UnknownOptionError: unknown shutter mode 'xxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxx",
+    (
+        "imageform.sensor.row_start_times",
+        "rows",
+        "complex",
+    ): "unnamed: TypeError: int() argument must be a string, a bytes-like object or a real number, not 'complex'",
+    (
+        "imageform.sensor.row_start_times",
+        "rows",
+        "empty",
+    ): "unnamed: TypeError: int() argument must be a string, a bytes-like object or a real number, not 'list'",
+    (
+        "imageform.sensor.row_start_times",
+        "rows",
+        "huge",
+    ): "raw:ValueError: ValueError: Maximum allowed size exceeded",
+    (
+        "imageform.sensor.row_start_times",
+        "rows",
+        "inf",
+    ): "raw:OverflowError: OverflowError: cannot convert float infinity to integer",
+    (
+        "imageform.sensor.row_start_times",
+        "rows",
+        "nan",
+    ): "raw:ValueError: ValueError: cannot convert float NaN to integer",
+    (
+        "imageform.sensor.row_start_times",
+        "rows",
+        "none",
+    ): "unnamed: TypeError: int() argument must be a string, a bytes-like object or a real number, not 'NoneType'",
+    (
+        "imageform.sensor.row_start_times",
+        "rows",
+        "object",
+    ): "unnamed: TypeError: int() argument must be a string, a bytes-like object or a real number, not 'object'",
+    (
+        "imageform.sensor.row_start_times",
+        "rows",
+        "wrong_shape",
+    ): "unnamed: TypeError: int() argument must be a string, a bytes-like object or a real number, not 'list'",
+    (
+        "imageform.sensor.simulate_photon_transfer",
+        "channel",
+        "complex",
+    ): "unnamed: TypeError: '<=' not supported between instances of 'int' and 'complex'",
+    (
+        "imageform.sensor.simulate_photon_transfer",
+        "channel",
+        "empty",
+    ): "unnamed: TypeError: '<=' not supported between instances of 'int' and 'list'",
+    (
+        "imageform.sensor.simulate_photon_transfer",
+        "channel",
+        "none",
+    ): "unnamed: TypeError: '<=' not supported between instances of 'int' and 'NoneType'",
+    (
+        "imageform.sensor.simulate_photon_transfer",
+        "channel",
+        "object",
+    ): "unnamed: TypeError: '<=' not supported between instances of 'int' and 'object'",
+    (
+        "imageform.sensor.simulate_photon_transfer",
+        "channel",
+        "string",
+    ): "unnamed: TypeError: '<=' not supported between instances of 'int' and 'str'",
+    (
+        "imageform.sensor.simulate_photon_transfer",
+        "channel",
+        "wrong_shape",
+    ): "unnamed: TypeError: '<=' not supported between instances of 'int' and 'list'",
+    (
+        "imageform.sensor.simulate_photon_transfer",
+        "exposure_times",
+        "complex",
+    ): "raw:ComplexWarning: ComplexWarning: Casting complex values to real discards the imaginary part",
+    (
+        "imageform.sensor.simulate_photon_transfer",
+        "exposure_times",
+        "huge",
+    ): "raw:ValueError: ValueError: lam value too large",
+    (
+        "imageform.sensor.simulate_photon_transfer",
+        "exposure_times",
+        "string",
+    ): "raw:ValueError: ValueError: could not convert string to float: 'abc'",
+    (
+        "imageform.sensor.simulate_photon_transfer",
+        "irradiance",
+        "huge",
+    ): "raw:ValueError: ValueError: lam value too large",
+    (
+        "imageform.sensor.simulate_photon_transfer",
+        "sensor",
+        "bool",
+    ): "raw:AttributeError: AttributeError: 'bool' object has no attribute 'n_channels'",
+    (
+        "imageform.sensor.simulate_photon_transfer",
+        "sensor",
+        "none",
+    ): "raw:AttributeError: AttributeError: 'NoneType' object has no attribute 'n_channels'",
+    (
+        "imageform.sensor.simulate_photon_transfer",
+        "sensor",
+        "object",
+    ): "raw:AttributeError: AttributeError: 'object' object has no attribute 'n_channels'",
+    (
+        "imageform.sensor.simulate_photon_transfer",
+        "sensor",
+        "string",
+    ): "raw:AttributeError: AttributeError: 'str' object has no attribute 'n_channels'",
+    (
+        "imageform.sensor.simulate_photon_transfer",
+        "sensor",
+        "zero",
+    ): "raw:AttributeError: AttributeError: 'int' object has no attribute 'n_channels'",
+    (
+        "imageform.sensor.simulate_photon_transfer",
+        "shape",
+        "bool",
+    ): "unnamed: TypeError: 'bool' object is not subscriptable",
+    (
+        "imageform.sensor.simulate_photon_transfer",
+        "shape",
+        "complex",
+    ): "unnamed: TypeError: int() argument must be a string, a bytes-like object or a real number, not 'complex'",
+    (
+        "imageform.sensor.simulate_photon_transfer",
+        "shape",
+        "empty",
+    ): "raw:IndexError: IndexError: tuple index out of range",
+    (
+        "imageform.sensor.simulate_photon_transfer",
+        "shape",
+        "huge",
+    ): "raw:ValueError: ValueError: Maximum allowed dimension exceeded",
+    (
+        "imageform.sensor.simulate_photon_transfer",
+        "shape",
+        "inf",
+    ): "raw:OverflowError: OverflowError: cannot convert float infinity to integer",
+    (
+        "imageform.sensor.simulate_photon_transfer",
+        "shape",
+        "nan",
+    ): "raw:ValueError: ValueError: cannot convert float NaN to integer",
+    (
+        "imageform.sensor.simulate_photon_transfer",
+        "shape",
+        "negative",
+    ): "raw:ValueError: ValueError: negative dimensions are not allowed",
+    (
+        "imageform.sensor.simulate_photon_transfer",
+        "shape",
+        "none",
+    ): "unnamed: TypeError: 'NoneType' object is not subscriptable",
+    (
+        "imageform.sensor.simulate_photon_transfer",
+        "shape",
+        "object",
+    ): "unnamed: TypeError: 'object' object is not subscriptable",
+    (
+        "imageform.sensor.simulate_photon_transfer",
+        "shape",
+        "string",
+    ): "raw:ValueError: ValueError: invalid literal for int() with base 10: 'a'",
+    ("imageform.sensor.simulate_photon_transfer", "shape", "zero"): "nonfinite",
+    (
+        "imageform.sensor.simulate_photon_transfer",
+        "wavelength_nm",
+        "huge",
+    ): "raw:ValueError: ValueError: lam value too large",
     (
         "imageform.simulate.CameraConfig.from_camera",
         "focal_length_mm",
@@ -4071,6 +5162,21 @@ KNOWN: dict[tuple[str, str, str], str] = {
         "huge",
     ): "long: UnknownOptionError: unknown integration method 'xxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxx",
     (
+        "imageform.workflows.calibration.CalibrateOptions",
+        "alpha",
+        "huge",
+    ): "long: UnknownOptionError: unknown --alpha 'xxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxx",
+    (
+        "imageform.workflows.calibration.CalibrateOptions",
+        "board",
+        "huge",
+    ): "long: InvalidInputError: expected --board COLSxROWS of inner corners (e.g. 9x6), got 'xxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxx",
+    (
+        "imageform.workflows.calibration.CalibrateOptions",
+        "square",
+        "huge",
+    ): "long: InvalidInputError: expected --square as a number with a unit (e.g. 50mm, 2m, 0.03mm), got 'xxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxx",
+    (
         "imageform.workflows.calibration.UndistortOptions",
         "alpha",
         "huge",
@@ -4080,6 +5186,31 @@ KNOWN: dict[tuple[str, str, str], str] = {
         "out_of_range",
         "huge",
     ): "long: UnknownOptionError: unknown --out-of-range 'xxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxx",
+    (
+        "imageform.workflows.choice_names",
+        "choices",
+        "bool",
+    ): "unnamed: TypeError: 'bool' object is not iterable",
+    (
+        "imageform.workflows.choice_names",
+        "choices",
+        "none",
+    ): "unnamed: TypeError: 'NoneType' object is not iterable",
+    (
+        "imageform.workflows.choice_names",
+        "choices",
+        "object",
+    ): "unnamed: TypeError: 'object' object is not iterable",
+    (
+        "imageform.workflows.choice_names",
+        "choices",
+        "string",
+    ): "raw:AttributeError: AttributeError: module 'abc' has no attribute ''",
+    (
+        "imageform.workflows.choice_names",
+        "choices",
+        "zero",
+    ): "unnamed: TypeError: 'int' object is not iterable",
     (
         "imageform.workflows.color.ConvertOptions",
         "alpha",
@@ -4287,6 +5418,46 @@ KNOWN: dict[tuple[str, str, str], str] = {
         "sigma",
         "wrong_shape",
     ): "unnamed: TypeError: must be real number, not list",
+    (
+        "imageform.workflows.optics.LensOptions",
+        "coc",
+        "huge",
+    ): "long: InvalidInputError: expected --coc as a number with a unit (e.g. 50mm, 2m, 0.03mm), got 'xxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxx",
+    (
+        "imageform.workflows.optics.LensOptions",
+        "f_number",
+        "complex",
+    ): "unnamed: TypeError: must be real number, not complex",
+    (
+        "imageform.workflows.optics.LensOptions",
+        "f_number",
+        "empty",
+    ): "unnamed: TypeError: must be real number, not list",
+    (
+        "imageform.workflows.optics.LensOptions",
+        "f_number",
+        "none",
+    ): "unnamed: TypeError: must be real number, not NoneType",
+    (
+        "imageform.workflows.optics.LensOptions",
+        "f_number",
+        "object",
+    ): "unnamed: TypeError: must be real number, not object",
+    (
+        "imageform.workflows.optics.LensOptions",
+        "f_number",
+        "string",
+    ): "unnamed: TypeError: must be real number, not str",
+    (
+        "imageform.workflows.optics.LensOptions",
+        "f_number",
+        "wrong_shape",
+    ): "unnamed: TypeError: must be real number, not list",
+    (
+        "imageform.workflows.optics.LensOptions",
+        "focal",
+        "huge",
+    ): "long: InvalidInputError: expected --focal as a number with a unit (e.g. 50mm, 2m, 0.03mm), got 'xxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxx",
     (
         "imageform.workflows.simulate.SimulateOptions",
         "seed",

@@ -130,7 +130,7 @@ VALID: dict[str, C | Skip] = {
     "imageform.color.RGBSpace": Skip("TODO: no guess for primaries_xy, white_xy"),
     "imageform.color.RGBSpace.matrix_to_xyz": Skip("no valid instance of RGBSpace"),
     "imageform.color.SpectralLocus": Skip("TODO: no guess for chromaticities"),
-    "imageform.color.SubsampledChroma": Skip("TODO: no guess for chroma"),
+    "imageform.color.SubsampledChroma": call(luma=V("gray"), chroma=np.full((3, 4, 2), 0.1)),
     "imageform.color.WhiteBalanceResult": call(image=V("rgb"), gains=np.array([1.0, 1.1, 0.9])),
     "imageform.color.adobe_rgb_to_linear": call(values=V("rgb4")),
     "imageform.color.are_metamers": call(s1=V("spectrum"), s2=V("spectrum")),
@@ -141,7 +141,7 @@ VALID: dict[str, C | Skip] = {
         "TODO: InvalidInputError: expected chromaticities of shape (..., 2), got (6, 3)"
     ),
     "imageform.color.chroma_subsample": call(ycbcr=V("rgb")),
-    "imageform.color.chroma_upsample": Skip("TODO: no guess for chroma"),
+    "imageform.color.chroma_upsample": call(luma=V("gray"), chroma=np.full((3, 4, 2), 0.1)),
     "imageform.color.chromatic_adaptation": call(xyz=V("xyz"), src_white="D65", dst_white="A"),
     "imageform.color.chromatic_adaptation_matrix": call(src_white="D65", dst_white="A"),
     "imageform.color.cmy_to_cmyk": call(cmy=V("rgb4")),
@@ -176,7 +176,7 @@ VALID: dict[str, C | Skip] = {
     "imageform.color.hsv_to_srgb": call(hsv=V("rgb4")),
     "imageform.color.hue_difference": call(h1=np.array([10.0, 200.0]), h2=np.array([350.0, 20.0])),
     "imageform.color.hue_distance": call(h1=np.array([10.0, 200.0]), h2=np.array([350.0, 20.0])),
-    "imageform.color.hue_in_range": Skip("TODO: no guess for start, stop"),
+    "imageform.color.hue_in_range": call(hue=np.array([10.0, 200.0]), start=10.0, stop=200.0),
     "imageform.color.hue_undefined_mask": call(values=V("rgb4")),
     "imageform.color.in_gamut": call(values=V("rgb4")),
     "imageform.color.in_locus": call(points=V("points2")),
@@ -195,7 +195,7 @@ VALID: dict[str, C | Skip] = {
     "imageform.color.linear_to_srgb": call(values=V("rgb4")),
     "imageform.color.luv_to_xyz": call(luv=V("lab")),
     "imageform.color.machado_matrix": call(deficiency="protan"),
-    "imageform.color.match_with_primaries": Skip("TODO: no guess for primaries"),
+    "imageform.color.match_with_primaries": call(target=V("spectrum"), primaries=V("spectrum3")),
     "imageform.color.mean_linear_light": call(image=V("rgb")),
     "imageform.color.metamer": call(spectrum=V("spectrum")),
     "imageform.color.metamerism_index": call(s1=V("spectrum"), s2=V("spectrum")),
@@ -282,12 +282,14 @@ VALID: dict[str, C | Skip] = {
     "imageform.geometry.DivisionModel": call(),
     "imageform.geometry.ImagePlane": Skip("a typing.Literal alias, not a callable"),
     "imageform.geometry.Intrinsics": call(fx=500.0, fy=500.0, cx=4.0, cy=3.0),
-    "imageform.geometry.Intrinsics.from_fov": Skip("TODO: no guess for fov_x"),
+    "imageform.geometry.Intrinsics.from_fov": call(fov_x=1.0, image_size=(8, 6)),
     "imageform.geometry.Intrinsics.from_matrix": call(K=V("K")),
     "imageform.geometry.Intrinsics.from_physical": call(
         focal_length=0.05, pixel_pitch_um=3.0, image_size=(8, 6)
     ),
-    "imageform.geometry.Intrinsics.from_sensor": Skip("TODO: no guess for sensor_size_mm"),
+    "imageform.geometry.Intrinsics.from_sensor": call(
+        focal_length=0.05, sensor_size_mm=(6.4, 4.8), image_size=(8, 6)
+    ),
     "imageform.geometry.KannalaBrandt": call(),
     "imageform.geometry.LineSegments": Skip("TODO: no guess for endpoints, widths, log10_nfa"),
     "imageform.geometry.PnPResult": Skip("TODO: no guess for tvec, rms, valid, inliers"),
@@ -325,7 +327,7 @@ VALID: dict[str, C | Skip] = {
         "TODO: IndexError: too many indices for array: array is 2-dimensional, but 3 were indexed"
     ),
     "imageform.geometry.calibration_zhang.zhang_intrinsics": Skip("TODO: no guess for skew"),
-    "imageform.geometry.camera_rotation": Skip("TODO: no guess for pitch"),
+    "imageform.geometry.camera_rotation": call(pitch=0.1),
     "imageform.geometry.checkerboard_candidates.Candidates": Skip(
         "TODO: no guess for dirs, response, contrast"
     ),
@@ -340,12 +342,17 @@ VALID: dict[str, C | Skip] = {
     ),
     "imageform.geometry.checkerboard_grid.lattice_problem": Skip("TODO: no guess for grid"),
     "imageform.geometry.checkerboard_grid.neighbors": Skip("TODO: no guess for cand, min_dist"),
-    "imageform.geometry.checkerboard_points": Skip("TODO: no guess for pattern_size"),
+    "imageform.geometry.checkerboard_points": call(pattern_size=(4, 3)),
     "imageform.geometry.checkerboard_subpix.as_gray": call(image=V("rgb_big")),
     "imageform.geometry.checkerboard_subpix.refine": Skip(
         "TODO: no guess for pts, hx, hy, max_iter, eps"
     ),
-    "imageform.geometry.cross_ratio": Skip("TODO: no guess for c, d"),
+    "imageform.geometry.cross_ratio": call(
+        a=np.array([1.0, 2.0]),
+        b=np.array([2.0, 3.0]),
+        c=np.array([3.0, 4.0]),
+        d=np.array([4.0, 5.0]),
+    ),
     "imageform.geometry.decompose_projection_matrix": call(P=V("P")),
     "imageform.geometry.detect_line_segments": call(image=V("rgb")),
     "imageform.geometry.detect_vanishing_points": Skip(
@@ -357,14 +364,16 @@ VALID: dict[str, C | Skip] = {
     "imageform.geometry.estimate_projection_matrix": Skip(
         "TODO: no guess for points_3d, points_2d"
     ),
-    "imageform.geometry.euler_to_matrix": Skip("TODO: no guess for angles, order"),
-    "imageform.geometry.find_checkerboard": Skip("TODO: no guess for pattern_size"),
-    "imageform.geometry.find_checkerboards": Skip("TODO: no guess for images, pattern_size"),
+    "imageform.geometry.euler_to_matrix": call(angles=np.array([0.1, 0.2, 0.3]), order="xyz"),
+    "imageform.geometry.find_checkerboard": call(image=V("rgb_big"), pattern_size=(4, 3)),
+    "imageform.geometry.find_checkerboards": call(images=[V("rgb_big")], pattern_size=(4, 3)),
     "imageform.geometry.focal_from_vanishing_points": Skip("TODO: no guess for principal_point"),
     "imageform.geometry.from_homogeneous": call(points=V("points3")),
     "imageform.geometry.from_homogeneous_masked": call(points=V("points3")),
     "imageform.geometry.horizon_line": call(K=V("K")),
-    "imageform.geometry.intersect_lines": Skip("TODO: no guess for l1, l2"),
+    "imageform.geometry.intersect_lines": call(
+        l1=np.array([1.0, 0.0, -2.0]), l2=np.array([0.0, 1.0, -3.0])
+    ),
     "imageform.geometry.intrinsic_matrix": call(fx=500.0, fy=500.0, cx=4.0, cy=3.0),
     "imageform.geometry.intrinsics_from_vanishing_points": Skip("TODO: no guess for v3"),
     "imageform.geometry.is_rotation": call(R=V("R")),
@@ -373,19 +382,21 @@ VALID: dict[str, C | Skip] = {
         "TODO: InvalidInputError: expected a numeric array for segments, got dtype object"
     ),
     "imageform.geometry.look_at": call(eye=(0.0, 0.0, -5.0), target=V("rgb")),
-    "imageform.geometry.matrix_to_euler": Skip("TODO: no guess for order"),
+    "imageform.geometry.matrix_to_euler": call(R=V("R"), order="xyz"),
     "imageform.geometry.matrix_to_quaternion": call(R=V("R")),
     "imageform.geometry.matrix_to_rvec": call(R=V("R")),
     "imageform.geometry.orthographic_matrix": call(),
     "imageform.geometry.orthographic_project": call(points=V("points3")),
-    "imageform.geometry.perspective_type": Skip("TODO: no guess for directions"),
+    "imageform.geometry.perspective_type": call(directions=np.eye(3)),
     "imageform.geometry.project_points": call(points=V("points3"), K=V("K")),
-    "imageform.geometry.project_points_distorted": Skip("TODO: no guess for distortion"),
-    "imageform.geometry.projected_size": Skip("TODO: no guess for size"),
+    "imageform.geometry.project_points_distorted": call(
+        points=V("points3"), K=V("K"), R=V("R"), t=V("t"), distortion=V("brown")
+    ),
+    "imageform.geometry.projected_size": call(size=1.0, depth=4.0, focal_length=0.05),
     "imageform.geometry.projection_matrix": call(K=V("K")),
-    "imageform.geometry.quaternion_to_matrix": Skip("TODO: no guess for q"),
-    "imageform.geometry.refine_corners": Skip("TODO: no guess for corners"),
-    "imageform.geometry.remap_bilinear": Skip("TODO: no guess for map_uv"),
+    "imageform.geometry.quaternion_to_matrix": call(q=np.array([1.0, 0.0, 0.0, 0.0])),
+    "imageform.geometry.refine_corners": call(image=V("rgb_big"), corners=V("uv")),
+    "imageform.geometry.remap_bilinear": call(image=V("rgb"), map_uv=np.zeros((6, 8, 2))),
     "imageform.geometry.rvec_to_matrix": call(rvec=V("rvec")),
     "imageform.geometry.solve_pnp": Skip(
         "TODO: InvalidInputError: expected object_points (..., N, 3) and image_points (..., N, 2) with the same leading shape, got (6, "
@@ -395,10 +406,10 @@ VALID: dict[str, C | Skip] = {
     ),
     "imageform.geometry.to_homogeneous": call(points=V("points3")),
     "imageform.geometry.triangulate_points": Skip("TODO: no guess for projection_matrices"),
-    "imageform.geometry.undistort_image": Skip("TODO: no guess for distortion"),
-    "imageform.geometry.undistortion_map": Skip("TODO: no guess for distortion"),
+    "imageform.geometry.undistort_image": call(image=V("rgb"), K=V("K"), distortion=V("brown")),
+    "imageform.geometry.undistortion_map": call(shape=(6, 8), K=V("K"), distortion=V("brown")),
     "imageform.geometry.unproject": call(uv=V("uv"), depth=V("depth"), K=V("K")),
-    "imageform.geometry.vanishing_point": Skip("TODO: no guess for direction"),
+    "imageform.geometry.vanishing_point": call(K=V("K"), direction=np.array([0.0, 0.0, 1.0])),
     "imageform.geometry.vanishing_point_from_lines": call(lines=V("lines")),
     "imageform.geometry.weak_perspective_matrix": call(K=V("K"), depth=4.0),
     "imageform.geometry.weak_perspective_project": call(points=V("points3"), K=V("K")),
@@ -426,8 +437,8 @@ VALID: dict[str, C | Skip] = {
     "imageform.optics.apply_vignetting": call(image=V("rgb"), falloff=np.full((6, 8), 0.8)),
     "imageform.optics.axial_chromatic_aberration": Skip("TODO: no guess for focal_lengths"),
     "imageform.optics.axial_chromatic_blur_diameters": Skip("TODO: no guess for focal_lengths"),
-    "imageform.optics.blur_by_radius": Skip("TODO: no guess for radius_px"),
-    "imageform.optics.chromatic_focal_lengths": Skip("TODO: no guess for abbe_number"),
+    "imageform.optics.blur_by_radius": call(image=V("rgb"), radius_px=np.full((6, 8), 1.0)),
+    "imageform.optics.chromatic_focal_lengths": call(focal_length=0.05, abbe_number=60.0),
     "imageform.optics.circle_of_confusion": call(
         depth=V("depth"), focal_length=0.05, f_number=2.8, focus=2.0
     ),
@@ -440,21 +451,25 @@ VALID: dict[str, C | Skip] = {
     ),
     "imageform.optics.depth_of_field": call(focal_length=0.05, f_number=2.8, focus=2.0, coc=3e-5),
     "imageform.optics.disc_kernel": call(radius=2),
-    "imageform.optics.f_number": Skip("TODO: no guess for aperture_diameter"),
+    "imageform.optics.f_number": call(focal_length=0.05, aperture_diameter=0.01),
     "imageform.optics.field_angle": call(shape=(6, 8), focal_length=0.05),
     "imageform.optics.hyperfocal_distance": call(focal_length=0.05, f_number=2.8, coc=3e-5),
     "imageform.optics.lateral_chromatic_aberration": Skip(
         "TODO: TypeError: 'float' object is not iterable"
     ),
     "imageform.optics.magnification": call(focal_length=0.05, d_o=2.0),
-    "imageform.optics.mechanical_vignetting": Skip(
-        "TODO: no guess for pupil_radius, barrel_radius, barrel_distance"
+    "imageform.optics.mechanical_vignetting": call(
+        shape=(6, 8), focal_length=0.05, pupil_radius=1.0, barrel_radius=1.2, barrel_distance=0.5
     ),
     "imageform.optics.pupil_overlap_fraction": Skip(
         "TODO: no guess for pupil_radius, stop_radius, offset"
     ),
-    "imageform.optics.spherical_aberration": Skip("TODO: no guess for sa_coefficient"),
-    "imageform.optics.spherical_blur_radius": Skip("TODO: no guess for sa_coefficient"),
+    "imageform.optics.spherical_aberration": call(
+        image=V("rgb"), focal_length=0.05, f_number=2.8, pixel_pitch=5e-6, sa_coefficient=0.1
+    ),
+    "imageform.optics.spherical_blur_radius": call(
+        focal_length=0.05, f_number=2.8, sa_coefficient=0.1
+    ),
     "imageform.optics.thin_lens": Skip(
         "TODO: InvalidInputError: expected exactly two of focal_length, d_o, d_i, got none"
     ),
@@ -534,12 +549,22 @@ VALID: dict[str, C | Skip] = {
     "imageform.sensor.fit_photon_transfer": Skip("TODO: no guess for data"),
     "imageform.sensor.fixed_pattern": Skip("TODO: no guess for prnu, dsnu, column_fpn, rng"),
     "imageform.sensor.mosaic": call(rgb=V("rgb")),
-    "imageform.sensor.photons_per_pixel": Skip("TODO: no guess for pixel_area"),
-    "imageform.sensor.rolling_shutter_points": Skip("TODO: no guess for points_uv, velocity_uv"),
-    "imageform.sensor.rolling_shutter_skew": Skip("TODO: no guess for velocity"),
-    "imageform.sensor.row_start_times": Skip("TODO: no guess for mode"),
+    "imageform.sensor.photons_per_pixel": call(
+        irradiance=1.0, wavelength_nm=550.0, pixel_area=1e-11, exposure_time=0.01
+    ),
+    "imageform.sensor.rolling_shutter_points": call(
+        points_uv=V("uv"), velocity_uv=(10.0, 0.0), line_time=1e-5
+    ),
+    "imageform.sensor.rolling_shutter_skew": call(velocity=10.0, line_time=1e-5),
+    "imageform.sensor.row_start_times": call(rows=6, mode="rolling", line_time=1e-5),
     "imageform.sensor.shutter_capture": Skip("TODO: no guess for render, mode"),
-    "imageform.sensor.simulate_photon_transfer": Skip("TODO: no guess for exposure_times, rng"),
+    "imageform.sensor.simulate_photon_transfer": call(
+        sensor=V("sensor"),
+        irradiance=1.0,
+        wavelength_nm=550.0,
+        exposure_times=np.array([0.001, 0.002, 0.004]),
+        rng=0,
+    ),
     "imageform.sensor.temporal_noise_dn": Skip("TODO: no guess for mean_electrons, dark_noise_e"),
     "imageform.simulate.CameraConfig": Skip(
         "TODO: no guess for image_plane, fx_px, fy_px, cx_px, cy_px, skew_px, eye_m, target_m, t_m, distortion"
@@ -566,7 +591,7 @@ VALID: dict[str, C | Skip] = {
     ),
     "imageform.simulate.SceneConfig.to_dict": Skip("no valid instance of SceneConfig"),
     "imageform.simulate.SceneObject": Skip("TODO: no guess for corners, config"),
-    "imageform.simulate.SceneQuad": Skip("TODO: no guess for corners"),
+    "imageform.simulate.SceneQuad": call(name="D65", corners=V("uv")),
     "imageform.simulate.SimulationResult": call(stages=(), camera=V("camera"), image_size=(8, 6)),
     "imageform.simulate.SimulationResult.stage": Skip("no valid instance of SimulationResult"),
     "imageform.simulate.Stage": Skip("TODO: no guess for description"),
@@ -703,19 +728,19 @@ VALID: dict[str, C | Skip] = {
     "imageform.spectral.spectrum_to_lms": call(spectrum=V("spectrum")),
     "imageform.spectral.spectrum_to_xyz": call(spectrum=V("spectrum")),
     "imageform.spectral.table_source": Skip("TODO: no guess for key"),
-    "imageform.workflows.Input": Skip("TODO: no guess for help"),
+    "imageform.workflows.Input": call(name="D65", help="help"),
     "imageform.workflows.Options": call(),
     "imageform.workflows.Options.fields": call(),
     "imageform.workflows.Options.types": call(),
-    "imageform.workflows.Output": Skip("TODO: no guess for help"),
-    "imageform.workflows.Result": Skip("TODO: no guess for summary"),
+    "imageform.workflows.Output": call(help="help"),
+    "imageform.workflows.Result": call(summary="summary"),
     "imageform.workflows.Run": Skip("TODO: no guess for outputs"),
     "imageform.workflows.Run.file": Skip("no valid instance of Run"),
     "imageform.workflows.Run.folder": Skip("no valid instance of Run"),
     "imageform.workflows.Run.note": Skip("no valid instance of Run"),
     "imageform.workflows.Workflow": Skip("TODO: no guess for summary, function, options"),
     "imageform.workflows.Workflow.make_options": Skip("no valid instance of Workflow"),
-    "imageform.workflows.calibration.CalibrateOptions": Skip("TODO: no guess for board"),
+    "imageform.workflows.calibration.CalibrateOptions": call(board="9x6"),
     "imageform.workflows.calibration.CalibrateOptions.check": Skip(
         "no valid instance of CalibrateOptions"
     ),
@@ -733,7 +758,7 @@ VALID: dict[str, C | Skip] = {
     "imageform.workflows.calibration.parse_board": Skip(
         "TODO: InvalidInputError: expected --board COLSxROWS of inner corners (e.g. 9x6), got 'hello'"
     ),
-    "imageform.workflows.choice_names": Skip("TODO: no guess for choices"),
+    "imageform.workflows.choice_names": call(choices=("a", "b")),
     "imageform.workflows.color.ConvertOptions": call(),
     "imageform.workflows.color.ConvertOptions.fields": call(),
     "imageform.workflows.color.ConvertOptions.types": call(),
@@ -778,7 +803,7 @@ VALID: dict[str, C | Skip] = {
     "imageform.workflows.lecture.LectureOptions.fields": call(),
     "imageform.workflows.lecture.LectureOptions.types": call(),
     "imageform.workflows.normalize_choice": Skip("TODO: no guess for choices, what"),
-    "imageform.workflows.optics.LensOptions": Skip("TODO: no guess for focal"),
+    "imageform.workflows.optics.LensOptions": call(focal="50mm", f_number=2.8, focus=2.0),
     "imageform.workflows.optics.LensOptions.check": Skip("no valid instance of LensOptions"),
     "imageform.workflows.optics.LensOptions.fields": call(),
     "imageform.workflows.optics.LensOptions.lengths": Skip("no valid instance of LensOptions"),

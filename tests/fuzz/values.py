@@ -55,6 +55,20 @@ def _spectrum() -> Any:
     return Spectrum(wl, 0.2 + 0.6 * np.exp(-(((wl - 550.0) / 80.0) ** 2)), name="fuzz")
 
 
+def _spectrum3() -> Any:
+    from imageform.spectral import Spectrum
+
+    wl = np.arange(380.0, 781.0, 10.0)
+    cols = [np.exp(-(((wl - c) / 30.0) ** 2)) for c in (450.0, 540.0, 610.0)]
+    return Spectrum(wl, np.column_stack(cols), name="primaries")
+
+
+def _brown() -> Any:
+    from imageform.geometry import BrownConrady
+
+    return BrownConrady(k1=-0.1, k2=0.01)
+
+
 def _sensor() -> Any:
     from imageform.sensor import SensorModel
 
@@ -157,6 +171,8 @@ FIXTURES: dict[str, Callable[[], Any]] = {
     "camera": _camera,
     "sensor": _sensor,
     "segments": _segments,
+    "spectrum3": _spectrum3,
+    "brown": _brown,
     "scene": _scene,
     "result": _result,
     "tmpdir": _tmpdir,
