@@ -20,6 +20,7 @@ from typing import Any
 
 import numpy as np
 
+from imageform._validate import as_int
 from imageform.errors import InvalidInputError
 from imageform.report._checks import check_result
 from imageform.simulate.result import SimulationResult
@@ -43,7 +44,8 @@ def image_corner_pixels(width: int, height: int) -> np.ndarray:
     >>> image_corner_pixels(4, 3).tolist()
     [[-0.5, -0.5], [3.5, -0.5], [3.5, 2.5], [-0.5, 2.5]]
     """
-    w, h = float(width), float(height)
+    w = float(as_int(width, "width", minimum=1))
+    h = float(as_int(height, "height", minimum=1))
     return np.array([[-0.5, -0.5], [w - 0.5, -0.5], [w - 0.5, h - 0.5], [-0.5, h - 0.5]])
 
 
