@@ -38,7 +38,7 @@ def real_triple(x: object, name: str, *, nonnegative: bool = False) -> tuple[flo
     """Three finite real numbers (a tuple, list or array of length 3)."""
     if isinstance(x, str | bytes) or not hasattr(x, "__len__") or not hasattr(x, "__iter__"):
         raise InvalidInputError(f"expected {name} as 3 numbers, got {describe(x)}")
-    items = list(x)  # type: ignore[call-overload]
+    items = list(x)
     if len(items) != 3:
         raise InvalidInputError(f"expected {name} as 3 numbers, got {len(items)}: {describe(x)}")
     a, b, c = (as_real(v, f"{name}[{i}]", nonnegative=nonnegative) for i, v in enumerate(items))

@@ -328,7 +328,7 @@ def synthetic_shading_scene(
     bg = np.array([0.62, 0.66, 0.3])
     enc = np.where(truth[..., None], red, bg) + 0.02 * _smooth_noise(gen, shape, 3.0)[..., None]
     lin = srgb_decode(np, np.clip(enc, 0, 1))
-    if isinstance(shading, str | bytes) or len(shading) != 2:  # type: ignore[arg-type]
+    if isinstance(shading, str | bytes) or len(shading) != 2:
         raise InvalidInputError(f"expected shading as 2 numbers, got {shading!r:.60}")
     lo, hi = (as_real(v, "shading", nonnegative=True) for v in shading)
     ramp = np.linspace(lo, hi, wid)[None, :, None]
