@@ -147,7 +147,7 @@ GUESS: dict[str, list[str]] = {
     "start": ["10.0"],
     "stop": ["200.0"],
     "convention": ['"cv2_lab_8u"', '"lab_8u"', '"hsv_8u"', '"hsv_full_8u"'],
-    "chroma": ['np.full((3, 4, 2), 0.1)'],
+    "chroma": ["np.full((3, 4, 2), 0.1)"],
     "primaries": ['V("spectrum3")'],
     "p": ["np.array([1.0, 2.0])"],
     "c": ["np.array([3.0, 4.0])"],
