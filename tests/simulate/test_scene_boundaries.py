@@ -71,3 +71,18 @@ def test_flat_patch_snr_not_silent() -> None:
     with pytest.warns(ImageformWarning, match="SNR is infinite"):
         res = simulate(scene, rng=0)
     assert np.isposinf(res.metrics["snr_luminance_db_per_patch"]).any()
+
+
+@pytest.mark.parametrize(
+    ("extra", "match"),
+    [
+        ("[lens]\nfocus_distance_m = 0.0001\n", r"lens\.focus_distance_m \(scene string, line 6\)"),
+        (
+            '[illuminant]\ntype = "file"\nfile = "nope.csv"\n',
+            r"illuminant \(scene string, line 5\)",
+        ),
+    ],
+)
+def test_build_errors_name_key_and_line(extra: str, match: str) -> None:
+    with pytest.raises(InvalidInputError, match=match):
+        load_scene(BASE + extra)
