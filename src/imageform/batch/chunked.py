@@ -16,6 +16,7 @@ measures it.
 
 from __future__ import annotations
 
+import glob
 import os
 import shutil
 import time
@@ -28,6 +29,7 @@ import numpy as np
 
 from imageform._validate import check_option
 from imageform.errors import InvalidInputError
+from imageform.workflows.color import DISPLAYABLE_SPACES
 
 __all__ = ["CHUNKED_COMMANDS", "ChunkedResult", "open_lazy", "process_chunked"]
 
@@ -70,9 +72,10 @@ def open_lazy(path: str | Path, chunk: int = 1024) -> Any:
     Nothing is read until the array is computed. Blocks are ``chunk x chunk`` pixels with all
     channels (choose a multiple of the TIFF's tile size).
     """
-    import dask.array as da
-    import zarr
+    from imageform._optional import require
 
+    da = require("dask.array", what="imageform chunked")
+    zarr = require("zarr", what="imageform chunked")
     p = Path(path)
     if not p.exists():
         raise InvalidInputError(f"input {p} does not exist")
@@ -113,14 +116,15 @@ def _linear_block(block: np.ndarray, p: float) -> np.ndarray:
 
 def _wb_gains(x: Any, options: dict[str, Any]) -> np.ndarray:
     """White-balance gains in linear light; the illuminant is a reduction over all blocks."""
-    from imageform.color.white_balance import _method, white_balance
+    from imageform.color.white_balance import white_balance
 
-    method, _ = _method(options.get("method", "gray_world"), None)
-    check_option(method, _WB_METHODS, "white-balance method for chunked processing")
+    method = check_option(
+        options.get("method", "gray_world"), _WB_METHODS, "white-balance method for chunked processing"
+    )
     normalize = check_option(options.get("normalize", "mean"), ("mean", "green"), "normalize")
     if method == "manual":  # the gains do not depend on the image
         probe = np.full((1, 1, 3), 0.5, dtype=np.float32)
-        kw = {k: options[k] for k in ("illuminant", "cct") if k in options}
+        kw = {k: options[k] for k in ("illuminant", "cct") if options.get(k) is not None}
         return np.asarray(white_balance(probe, "manual", normalize=normalize, **kw).gains)
     p = float(options.get("p", 6.0)) if method == "shades_of_gray" else 1.0
     if p < 1.0:
@@ -142,6 +146,61 @@ def _quantize(block: np.ndarray, dtype: str) -> np.ndarray:
 
 def _temp(path: Path) -> Path:
     return path.with_name(f".{path.name}.{uuid.uuid4().hex[:12]}.tmp{path.suffix}")
+
+
+def _remove_stale(path: Path) -> None:
+    """Remove the temporaries of ``path`` that a killed run left behind."""
+    for stale in path.parent.glob(f".{glob.escape(path.name)}.*.tmp{glob.escape(path.suffix)}"):
+        shutil.rmtree(stale, ignore_errors=True) if stale.is_dir() else stale.unlink(
+            missing_ok=True
+        )
+
+
+#: Options of each command that chunked processing honours (the others must keep their
+#: default).
+_HONOURED = {
+    "convert": {"src": "from", "dst": "to", "white": "white"},
+    "white_balance": {
+        "method": "method",
+        "p": "p",
+        "normalize": "normalize",
+        "illuminant": "illuminant",
+        "cct": "cct",
+    },
+}
+
+
+def _options(cmd: str, options: Any) -> dict[str, Any]:
+    """The options of ``cmd`` with the single command's defaults (its options dataclass, or
+    a mapping by field name or flag), as the names the block functions use."""
+    import dataclasses
+
+    from imageform.batch.runner import batch_options
+
+    given = options
+    if isinstance(options, dict) and cmd == "white_balance" and "method" in options:
+        # the methods chunked processing can stream, checked before the dataclass's own list
+        method = str(options["method"]).lower().replace("-", "_")
+        check_option(method, _WB_METHODS, "white-balance method for chunked processing")
+    opts = batch_options(cmd, given)
+    out: dict[str, Any] = {}
+    honoured = _HONOURED[cmd]
+    for f in dataclasses.fields(opts):
+        value = getattr(opts, f.name)
+        if f.name in honoured:
+            out[honoured[f.name]] = value
+        elif f.name in ("alpha", "max_pixels", "bits", "out_of_range", "clip"):
+            continue  # reading and writing are chunked's own (--dtype)
+        elif value != f.default:
+            from imageform.workflows import flag_of
+
+            raise InvalidInputError(
+                f"imageform chunked {cmd.replace('_', '-')} does not take {flag_of(f)}; it "
+                f"takes {', '.join('--' + v for v in honoured.values())}"
+            )
+    if cmd == "white_balance":
+        check_option(out["method"], _WB_METHODS, "white-balance method for chunked processing")
+    return out
 
 
 def process_chunked(
@@ -203,15 +262,12 @@ def process_chunked(
     >>> import zarr; round(float(zarr.open(str(r.output), mode="r")[0, 0, 0]), 6)
     0.215861
     """
-    import dask
-
-    from imageform.cli.color_cmds import _DISPLAYABLE
-    from imageform.color.convert import _space
+    from imageform._optional import require
 
     t0 = time.perf_counter()
     src_p, dst_p = Path(src), Path(dst)
     cmd = check_option(command, CHUNKED_COMMANDS, "chunked command")
-    opts = dict(options or {})
+    opts = _options(cmd, options)
     out_kind = _kind(dst_p)
     if chunk <= 0 or tile <= 0 or chunk % tile:
         raise InvalidInputError(f"expected chunk a positive multiple of tile, got {chunk}, {tile}")
@@ -219,17 +275,19 @@ def process_chunked(
         raise InvalidInputError(f"output {dst_p} is the input; choose another path")
     if dst_p.exists() and not force:
         raise InvalidInputError(f"output {dst_p} exists; pass --force to overwrite it")
+    if not dst_p.parent.is_dir():
+        raise InvalidInputError(f"output folder {dst_p.parent} does not exist")
+    dask = require("dask", what="imageform chunked")
+    _remove_stale(dst_p)  # left by a run killed mid-write (SIGKILL cannot be caught)
     x = open_lazy(src_p, chunk)
     in_int = x.dtype in (np.uint8, np.uint16)
     gains: np.ndarray | None = None
     with dask.config.set(scheduler="threads", num_workers=num_workers or os.cpu_count()):
         if cmd == "convert":
-            if "to" not in opts:
-                raise InvalidInputError("chunked convert needs the option to (a colour space)")
-            s, d = _space(opts.get("from", "srgb"), "--from"), _space(opts["to"], "--to")
-            params = {k: opts[k] for k in ("white",) if k in opts}
+            s, d = opts["from"], opts["to"]
+            params = {k: opts[k] for k in ("white",) if opts.get(k) is not None}
             op: tuple[Any, ...] = (_convert_block, s, d, params)
-            displayable = d in _DISPLAYABLE
+            displayable = d in DISPLAYABLE_SPACES
         else:
             gains = _wb_gains(x, opts)
             op = (_balance_block, gains)

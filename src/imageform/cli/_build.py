@@ -274,11 +274,11 @@ def build_command(wf: Workflow) -> click.Command:
 
 
 def _extra_commands() -> dict[str, Callable[[], click.Command]]:
-    """Commands that are not single workflows: batch, chunked (and, while the move to the
-    registry lasts, the remaining hand-written commands)."""
-    from imageform.cli._app import legacy_commands
+    """Commands that are not single workflows: batch and chunked (generated from the same
+    registry)."""
+    from imageform.cli._batch import batch_group, chunked_group
 
-    return legacy_commands()
+    return {"batch": batch_group, "chunked": chunked_group}
 
 
 class _Root(click.Group):

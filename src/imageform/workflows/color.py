@@ -11,6 +11,7 @@ from imageform.workflows._images import ImageIn, ImageOut, read, write
 from imageform.workflows._spec import Input, Options, Output, Result, Run, Workflow, option
 
 __all__ = [
+    "DISPLAYABLE_SPACES",
     "WORKFLOWS",
     "ConvertOptions",
     "CvdOptions",
@@ -39,6 +40,8 @@ _DISPLAYABLE = (
     "linear_prophoto",
 )
 
+#: Colour spaces whose values are RGB-like in [0, 1] (an integer image can hold them).
+DISPLAYABLE_SPACES = _DISPLAYABLE
 
 # ---------------------------------------------------------------- convert
 

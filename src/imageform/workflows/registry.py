@@ -7,11 +7,13 @@ from types import MappingProxyType
 
 from imageform.errors import UnknownOptionError
 from imageform.workflows import (
+    analysis,
     calibration,
     color,
     geometry,
     lecture,
     optics,
+    sensor,
     simulate,
     vanishing,
 )
@@ -31,6 +33,8 @@ WORKFLOWS = MappingProxyType(
             *calibration.WORKFLOWS,
             *vanishing.WORKFLOWS,
             *optics.WORKFLOWS,
+            *sensor.WORKFLOWS,
+            *analysis.WORKFLOWS,
         )
     }
 )
