@@ -36,10 +36,10 @@ def require(module: str, *, what: str) -> ModuleType:
     >>> require("numpy", what="a test").__name__
     'numpy'
     >>> try:
-    ...     require("dask_not_installed_x", what="imageform batch")
+    ...     require("no_such_module_x", what="a test")
     ... except MissingExtraError as exc:
     ...     print(exc)
-    imageform batch needs dask_not_installed_x, which is not installed: pip install dask_not_installed_x
+    a test needs no_such_module_x, which is not installed: pip install no_such_module_x
     """
     try:
         return importlib.import_module(module)
@@ -48,6 +48,4 @@ def require(module: str, *, what: str) -> ModuleType:
         missing = (getattr(exc, "name", None) or top).split(".")[0]
         extra = EXTRAS.get(missing) or EXTRAS.get(top)
         how = f'pip install "imageform[{extra}]"' if extra else f"pip install {missing}"
-        raise MissingExtraError(
-            f"{what} needs {missing}, which is not installed: {how}"
-        ) from None
+        raise MissingExtraError(f"{what} needs {missing}, which is not installed: {how}") from None

@@ -119,7 +119,9 @@ def _wb_gains(x: Any, options: dict[str, Any]) -> np.ndarray:
     from imageform.color.white_balance import white_balance
 
     method = check_option(
-        options.get("method", "gray_world"), _WB_METHODS, "white-balance method for chunked processing"
+        options.get("method", "gray_world"),
+        _WB_METHODS,
+        "white-balance method for chunked processing",
     )
     normalize = check_option(options.get("normalize", "mean"), ("mean", "green"), "normalize")
     if method == "manual":  # the gains do not depend on the image

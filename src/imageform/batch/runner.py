@@ -175,9 +175,13 @@ def batch_options(command: str | Workflow, options: Options | Mapping[str, Any] 
     """
     wf = batch_workflow(command)
     if isinstance(options, Options):
-        return wf.make_options(
-            **{f.name: getattr(options, f.name) for f in dataclasses.fields(options)}
-        ) if not isinstance(options, wf.options) else options
+        return (
+            wf.make_options(
+                **{f.name: getattr(options, f.name) for f in dataclasses.fields(options)}
+            )
+            if not isinstance(options, wf.options)
+            else options
+        )
     by_flag = {_key(flag_of(f)): f.name for f in wf.options.fields()}
     by_flag.update({f.name: f.name for f in wf.options.fields()})
     values: dict[str, Any] = {}
@@ -541,7 +545,15 @@ def run_batch(
         try:
             with _client(scheduler, workers) as client:
                 _run_on(
-                    client, wf.name, todo, opts, hold_s, results, progress, on_result, state,
+                    client,
+                    wf.name,
+                    todo,
+                    opts,
+                    hold_s,
+                    results,
+                    progress,
+                    on_result,
+                    state,
                     worker_timeout_s,
                 )
         except KeyboardInterrupt:

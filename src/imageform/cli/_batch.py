@@ -14,7 +14,7 @@ from typing import Any
 
 import click
 
-from imageform.cli._build import CommandExit, _option_params
+from imageform.cli._build import CommandExit, option_params
 from imageform.errors import ImageformError
 from imageform.workflows import Workflow
 
@@ -38,14 +38,14 @@ def _options(wf: Workflow, kw: dict[str, Any]) -> Any:
 
 def _batch_command(wf: Workflow) -> click.Command:
     params: list[click.Parameter] = [
-        click.Argument(["pattern"], metavar="'GLOB'", required=True),
+        click.Argument(["glob_pattern"], metavar="'GLOB'", required=True),
         click.Option(
             ["-o", "--out", "out"],
             type=click.Path(path_type=Path, file_okay=False),
             required=True,
             help="Output folder (keeps the inputs' folders relative to the glob's fixed part).",
         ),
-        *_option_params(wf),
+        *option_params(wf),
         click.Option(
             ["--scheduler"], default=None, help="Address of a running dask scheduler (tcp://...)."
         ),
@@ -61,7 +61,7 @@ def _batch_command(wf: Workflow) -> click.Command:
         from imageform._jsonio import dumps
         from imageform.batch import BatchInterrupted, print_summary, run_batch
 
-        pattern, out = kw.pop("pattern"), kw.pop("out")
+        pattern, out = kw.pop("glob_pattern"), kw.pop("out")
         scheduler, workers, suffix = kw.pop("scheduler"), kw.pop("workers"), kw.pop("suffix")
         force, as_json = bool(kw.pop("force")), bool(kw.pop("json_out"))
         opts = _options(wf, kw)
@@ -108,11 +108,21 @@ def _chunked_command(wf: Workflow) -> click.Command:
             required=True,
             help="Output: a tiled .tif or a .zarr array.",
         ),
-        *[p for p in _option_params(wf) if p.name not in ("bits", "out_of_range", "clip")],
-        click.Option(["--chunk"], type=click.INT, default=1024, show_default=True,
-                     help="Block size in pixels (a multiple of --tile)."),
-        click.Option(["--tile"], type=click.INT, default=256, show_default=True,
-                     help="Tile size of a TIFF output."),
+        *[p for p in option_params(wf) if p.name not in ("bits", "out_of_range", "clip")],
+        click.Option(
+            ["--chunk"],
+            type=click.INT,
+            default=1024,
+            show_default=True,
+            help="Block size in pixels (a multiple of --tile).",
+        ),
+        click.Option(
+            ["--tile"],
+            type=click.INT,
+            default=256,
+            show_default=True,
+            help="Tile size of a TIFF output.",
+        ),
         click.Option(
             ["--dtype"],
             type=click.Choice(["uint8", "uint16", "float32"]),

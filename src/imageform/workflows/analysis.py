@@ -46,9 +46,7 @@ def _range(text: str | None, flag: str) -> tuple[float, float] | None:
     try:
         lo, hi = (float(p) for p in parts)
     except ValueError:
-        raise InvalidInputError(
-            f"expected {flag} as LOW:HIGH (e.g. 0:20), got {text!r}"
-        ) from None
+        raise InvalidInputError(f"expected {flag} as LOW:HIGH (e.g. 0:20), got {text!r}") from None
     return lo, hi
 
 
@@ -57,7 +55,9 @@ class SegmentOptions(ImageIn):
     """Options of ``imageform segment``."""
 
     h: str | None = option(
-        None, help="Hue range LOW:HIGH in degrees (LOW > HIGH wraps); default 0:40.", metavar="LO:HI"
+        None,
+        help="Hue range LOW:HIGH in degrees (LOW > HIGH wraps); default 0:40.",
+        metavar="LO:HI",
     )
     s: str | None = option(None, help="Saturation LOW:HIGH; default 30/255:1.", metavar="LO:HI")
     v: str | None = option(None, help="Value LOW:HIGH; default 80/255:1.", metavar="LO:HI")
@@ -152,7 +152,9 @@ def _stain_target(opts: StainNormalizeOptions) -> Any:
         kind = analysis.MacenkoStains if opts.method == "macenko" else analysis.ReinhardStats
         return kind.from_json(opts.target)
     ref = _rgb(opts.target, opts)
-    return analysis.macenko_stains(ref) if opts.method == "macenko" else analysis.reinhard_stats(ref)
+    return (
+        analysis.macenko_stains(ref) if opts.method == "macenko" else analysis.reinhard_stats(ref)
+    )
 
 
 def stain_normalize(run: Run, opts: StainNormalizeOptions, *, out: Path, image: Path) -> Result:

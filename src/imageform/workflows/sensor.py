@@ -28,7 +28,9 @@ _DEMOSAIC_METHODS = ("bilinear", "malvar", "hamilton_adams", "menon", "menon_sof
 class MosaicOptions(ImageIn, ImageOut):
     """Options of ``imageform mosaic``."""
 
-    pattern: str = option("rggb", help="Bayer pattern of the colour filter array.", choices=_PATTERNS)
+    pattern: str = option(
+        "rggb", help="Bayer pattern of the colour filter array.", choices=_PATTERNS
+    )
 
 
 def mosaic(run: Run, opts: MosaicOptions, *, out: Path, image: Path) -> Result:
