@@ -106,7 +106,7 @@ def test_zarr_input_and_cli(tmp_path: Path, capsys: pytest.CaptureFixture[str]) 
     z = zarr.create_array(store=str(src), shape=img.shape, chunks=(128, 128, 3), dtype="uint8")
     z[...] = img
     out = tmp_path / "out.tif"
-    argv = ["chunked", "white-balance", str(src), str(out), "--chunk", "256", "--json"]
+    argv = ["chunked", "white-balance", str(src), "-o", str(out), "--chunk", "256", "--json"]
     assert main(argv) == 0
     info = json.loads(capsys.readouterr().out)
     expected, _ = white_balance(img / 255.0)

@@ -31,7 +31,9 @@ def test_mosaic_then_demosaic_png(tmp_path: Path, capsys: pytest.CaptureFixture[
     assert mosaic_u8.dtype == np.uint8 and mosaic_u8.shape == (24, 32)
     assert mosaic_u8[0, 0] == img[0, 0, 1] and mosaic_u8[0, 1] == img[0, 1, 0]  # G R / B G
     capsys.readouterr()
-    rc = main(["demosaic", str(raw), "-o", str(out), "--pattern", "GRBG", "--method", "menon", "--json"])
+    rc = main(
+        ["demosaic", str(raw), "-o", str(out), "--pattern", "GRBG", "--method", "menon", "--json"]
+    )
     assert rc == 0
     info = json.loads(capsys.readouterr().out)
     assert info["pattern"] == "GRBG" and info["shape"] == [24, 32, 3]

@@ -523,6 +523,7 @@ def run_batch(
                 f"batch {wf.name} writes {', '.join(wf.suffixes)} files, got output suffix "
                 f"{suffix!r}"
             )
+        opts.check_output(Path("output" + suffix))
     for p in opts.paths("input"):
         if not p.is_file():
             raise InvalidInputError(f"{p} does not exist (an input file named by an option)")
@@ -635,7 +636,10 @@ def _run_on(
         with bar:
             task = bar.add_task(f"batch {name}", total=len(futures))
             while pending:
-                finished, pending = wait(pending, timeout=1.0, return_when="FIRST_COMPLETED")
+                try:
+                    finished, pending = wait(pending, timeout=1.0, return_when="FIRST_COMPLETED")
+                except TimeoutError:  # distributed raises rather than returning nothing
+                    finished = set()
                 if not finished:
                     if client.scheduler_info().get("workers"):
                         no_worker_since = None
