@@ -452,6 +452,7 @@ def _client(scheduler: str | None, n_workers: int) -> Iterator[Any]:
         # clusters (two runs, pytest-xdist) collide on it
         dashboard_address=":0",
         silence_logs=logging.CRITICAL,
+        preload=["imageform.batch._worker_setup"],
     )
     with cluster, distributed.Client(cluster) as client:
         yield client
