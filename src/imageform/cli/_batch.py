@@ -194,7 +194,7 @@ class _Lazy(click.Group):
         key = cmd_name.replace("_", "-")
         if key not in self._names():
             return None
-        return self._make(WORKFLOWS[key])  # type: ignore[no-any-return]
+        return self._make(WORKFLOWS[key])
 
 
 def batch_group() -> click.Group:
