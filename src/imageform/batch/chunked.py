@@ -66,11 +66,66 @@ def _kind(path: Path) -> str:
     raise InvalidInputError(f"expected a tiled .tif/.tiff or a .zarr array, got {path}")
 
 
-def open_lazy(path: str | Path, chunk: int = 1024) -> Any:
-    """Open a tiled TIFF (tifffile's Zarr store) or a Zarr array as a dask array.
+class _ContiguousRows:
+    """The pixels of an uncompressed, contiguous (strip or single-strip) TIFF page, read
+    row band by row band with ``pread``: a block of rows ``r0:r1`` costs ``(r1 - r0) W C``
+    samples, never the whole strip (tifffile's Zarr store has one chunk per strip, and an
+    uncompressed TIFF is often one strip: the whole image)."""
 
-    Nothing is read until the array is computed. Blocks are ``chunk x chunk`` pixels with all
-    channels (choose a multiple of the TIFF's tile size).
+    def __init__(self, path: Path, offset: int, shape: tuple[int, ...], dtype: Any) -> None:
+        self.path, self.offset = path, offset
+        self.shape, self.dtype, self.ndim = shape, np.dtype(dtype), len(shape)
+
+    def __getitem__(self, key: Any) -> np.ndarray:
+        if not isinstance(key, tuple):
+            key = (key,)
+        rows = key[0] if key and isinstance(key[0], slice) else slice(None)
+        r0, r1, step = rows.indices(self.shape[0])
+        r1 = max(r1, r0)
+        row_bytes = int(np.prod(self.shape[1:])) * self.dtype.itemsize
+        with open(self.path, "rb") as fh:
+            buf = os.pread(fh.fileno(), (r1 - r0) * row_bytes, self.offset + r0 * row_bytes)
+        if len(buf) != (r1 - r0) * row_bytes:
+            raise InvalidInputError(f"{self.path} is truncated (rows {r0} to {r1} missing)")
+        band = np.frombuffer(buf, dtype=self.dtype).reshape((r1 - r0, *self.shape[1:]))
+        return np.array(band[(slice(None, None, step), *key[1:])])
+
+
+def _tiff_lazy(p: Path, chunk: int, da: Any, zarr: Any) -> Any:
+    import tifffile
+
+    with tifffile.TiffFile(p) as tf:
+        page = tf.pages[0]
+        strips = (
+            not page.is_tiled
+            and page.compression == 1
+            and page.planarconfig == 1
+            and page.is_contiguous
+            and len(tf.series[0].levels) == 1
+        )
+        if strips:
+            src = _ContiguousRows(p, int(page.dataoffsets[0]), tuple(page.shape), page.dtype)
+    if strips:
+        if len(src.shape) != 3 or src.shape[-1] != 3:
+            raise InvalidInputError(f"{p}: expected an RGB image (H, W, 3), got {src.shape}")
+        st = p.stat()
+        return da.from_array(
+            src,
+            chunks=(chunk, chunk, 3),
+            name=f"imageform-strips-{p}-{st.st_size}-{st.st_mtime_ns}",
+            asarray=False,
+            fancy=False,
+        )
+    return zarr.open(tifffile.imread(p, aszarr=True), mode="r")
+
+
+def open_lazy(path: str | Path, chunk: int = 1024) -> Any:
+    """Open a TIFF or a Zarr array as a dask array of ``chunk x chunk`` blocks.
+
+    Nothing is read until the array is computed. A tiled (or compressed strip) TIFF is read
+    through tifffile's Zarr store, tile by tile (strip by strip: a compressed strip is
+    decoded whole); an uncompressed strip TIFF (one strip or many) row band by row band from
+    the file. Blocks have all channels (choose a multiple of the TIFF's tile size).
     """
     from imageform._optional import require
 
@@ -80,9 +135,9 @@ def open_lazy(path: str | Path, chunk: int = 1024) -> Any:
     if not p.exists():
         raise InvalidInputError(f"input {p} does not exist")
     if _kind(p) == "tiff":
-        import tifffile
-
-        z: Any = zarr.open(tifffile.imread(p, aszarr=True), mode="r")
+        z: Any = _tiff_lazy(p, chunk, da, zarr)
+        if not isinstance(z, (zarr.Array, zarr.Group)):
+            return z  # an uncompressed strip TIFF, already a dask array
     else:
         z = zarr.open(str(p), mode="r")
     if isinstance(z, zarr.Group):  # a pyramid: level 0 is the full resolution
