@@ -97,7 +97,8 @@ def _tiff_lazy(p: Path, chunk: int, da: Any, zarr: Any) -> Any:
     with tifffile.TiffFile(p) as tf:
         page = tf.pages[0]
         strips = (
-            not page.is_tiled
+            isinstance(page, tifffile.TiffPage)
+            and not page.is_tiled
             and page.compression == 1
             and page.planarconfig == 1
             and page.is_contiguous
