@@ -68,7 +68,7 @@ def _kind(path: Path) -> str:
 
 class _ContiguousRows:
     """The pixels of an uncompressed, contiguous (strip or single-strip) TIFF page, read
-    row band by row band with ``pread``: a block of rows ``r0:r1`` costs ``(r1 - r0) W C``
+    block by block with ``pread`` (one read per row of the block): a block costs its own
     samples, never the whole strip (tifffile's Zarr store has one chunk per strip, and an
     uncompressed TIFF is often one strip: the whole image)."""
 
@@ -79,16 +79,23 @@ class _ContiguousRows:
     def __getitem__(self, key: Any) -> np.ndarray:
         if not isinstance(key, tuple):
             key = (key,)
-        rows = key[0] if key and isinstance(key[0], slice) else slice(None)
-        r0, r1, step = rows.indices(self.shape[0])
-        r1 = max(r1, r0)
-        row_bytes = int(np.prod(self.shape[1:])) * self.dtype.itemsize
-        with open(self.path, "rb") as fh:
-            buf = os.pread(fh.fileno(), (r1 - r0) * row_bytes, self.offset + r0 * row_bytes)
-        if len(buf) != (r1 - r0) * row_bytes:
-            raise InvalidInputError(f"{self.path} is truncated (rows {r0} to {r1} missing)")
-        band = np.frombuffer(buf, dtype=self.dtype).reshape((r1 - r0, *self.shape[1:]))
-        return np.array(band[(slice(None, None, step), *key[1:])])
+        key = key + (slice(None),) * (self.ndim - len(key))
+        if not all(isinstance(k, slice) for k in key[:2]):
+            raise TypeError("expected slices of rows and columns")
+        r0, r1, rstep = key[0].indices(self.shape[0])
+        c0, c1, cstep = key[1].indices(self.shape[1])
+        r1, c1 = max(r1, r0), max(c1, c0)
+        pixel = int(np.prod(self.shape[2:])) * self.dtype.itemsize
+        row_bytes, width = self.shape[1] * pixel, (c1 - c0) * pixel
+        out = np.empty((r1 - r0, c1 - c0, *self.shape[2:]), dtype=self.dtype)
+        flat = out.reshape(r1 - r0, -1).view(np.uint8)
+        with open(self.path, "rb") as fh:  # one read per row: only this block's columns
+            for i in range(r1 - r0):
+                buf = os.pread(fh.fileno(), width, self.offset + (r0 + i) * row_bytes + c0 * pixel)
+                if len(buf) != width:
+                    raise InvalidInputError(f"{self.path} is truncated (row {r0 + i} missing)")
+                flat[i] = np.frombuffer(buf, dtype=np.uint8)
+        return out[(slice(None, None, rstep), slice(None, None, cstep), *key[2:])]
 
 
 def _tiff_lazy(p: Path, chunk: int, da: Any, zarr: Any) -> Any:
