@@ -173,3 +173,69 @@ def test_missing_extra_is_one_line(tmp_path: Path, command: str) -> None:
         f"{'distributed' if command == 'batch' else 'dask'}, which is not installed: "
         'pip install "imageform[scale]"'
     ]
+
+
+def test_bad_input_is_one_line(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """Refused before any cluster starts: one line on stderr, a non-zero exit."""
+    from imageform.cli import main
+
+    (tmp_path / "in").mkdir()
+    write_image(tmp_path / "in" / "a.png", np.zeros((4, 4, 3), np.uint8))
+    out = str(tmp_path / "out")
+    cases = [
+        (["batch", "convert", f"{tmp_path}/none/*.png", "-o", out], 1, "no files match"),
+        (
+            ["batch", "convert", f"{tmp_path}/in/*.png", "-o", out, "--to", "lab"],
+            1,
+            "do not fit an integer image",
+        ),
+        (
+            ["batch", "demosaic", f"{tmp_path}/in/*.png", "-o", out, "--method", "vng"],
+            2,
+            "valid: bilinear",
+        ),
+        (
+            [
+                "batch",
+                "harmonize",
+                f"{tmp_path}/in/*.png",
+                "-o",
+                out,
+                "--correction",
+                str(tmp_path / "no.json"),
+            ],
+            1,
+            "does not exist",
+        ),
+        (["batch", "delta-e", f"{tmp_path}/in/*.png", "-o", out], 2, "No such command"),
+        (
+            ["batch", "convert", f"{tmp_path}/in/**/*.png", "-o", str(tmp_path / "in" / "o")],
+            1,
+            "match the input glob",
+        ),
+        (
+            ["chunked", "convert", str(tmp_path / "in" / "a.png"), "-o", str(tmp_path / "o.tif")],
+            1,
+            "expected a tiled .tif/.tiff or a .zarr",
+        ),
+        (
+            [
+                "chunked",
+                "white-balance",
+                str(tmp_path / "in" / "a.png"),
+                "-o",
+                str(tmp_path / "o.tif"),
+                "--method",
+                "white-patch",
+            ],
+            1,
+            "'gray_world', 'manual'",
+        ),
+    ]
+    for argv, code, text in cases:
+        assert main(argv) == code, argv
+        err = capsys.readouterr().err
+        assert text in err, (argv, err)
+        if code == 1:
+            assert len(err.strip().splitlines()) == 1 and "Traceback" not in err, err
+    assert not (tmp_path / "out").exists()
