@@ -89,6 +89,8 @@ def test_command_options_checked(tmp_path: Path) -> None:
     assert batch_options("convert", {"--to": "lab"}) == batch_options("convert", {"dst": "lab"})
     assert batch_options("stain-normalize", {"target": "t.png"}).method == "macenko"
     assert batch_options("white-balance", {}).method == "gray_world"
+    with pytest.raises(InvalidInputError, match="does not take --save-target"):
+        batch_options("stain-normalize", {"target": "t.png", "save_target": "s.json"})
     _tree(tmp_path)
     glob_ = f"{tmp_path}/in/*.png"
     with pytest.raises(InvalidInputError, match="do not fit an integer image"):

@@ -26,7 +26,6 @@
 from __future__ import annotations
 
 import contextlib
-import dataclasses
 import glob
 import json
 import os
@@ -175,13 +174,12 @@ def batch_options(command: str | Workflow, options: Options | Mapping[str, Any] 
     """
     wf = batch_workflow(command)
     if isinstance(options, Options):
-        return (
-            wf.make_options(
-                **{f.name: getattr(options, f.name) for f in dataclasses.fields(options)}
+        if not isinstance(options, wf.options):
+            raise InvalidInputError(
+                f"expected {wf.options.__name__} for batch {wf.name}, got {type(options).__name__}"
             )
-            if not isinstance(options, wf.options)
-            else options
-        )
+        _no_extra_outputs(wf, options)
+        return options
     by_flag = {_key(flag_of(f)): f.name for f in wf.options.fields()}
     by_flag.update({f.name: f.name for f in wf.options.fields()})
     values: dict[str, Any] = {}
@@ -191,7 +189,19 @@ def batch_options(command: str | Workflow, options: Options | Mapping[str, Any] 
             valid = ", ".join(sorted(flag_of(f) for f in wf.options.fields()))
             raise UnknownOptionError(f"unknown option {k!r} of batch {wf.name}; valid: {valid}")
         values[name] = v
-    return wf.make_options(**values)
+    opts = wf.make_options(**values)
+    _no_extra_outputs(wf, opts)
+    return opts
+
+
+def _no_extra_outputs(wf: Workflow, opts: Options) -> None:
+    """An extra output (``--save-target``) is one file per run: every job would write it."""
+    for f in wf.options.fields():
+        if f.metadata.get("output") and getattr(opts, f.name) is not None:
+            raise InvalidInputError(
+                f"batch {wf.name} does not take {flag_of(f)} (one file, written once: run "
+                f"imageform {wf.name} on one input for it)"
+            )
 
 
 def _stamp(path: Path) -> list[Any]:

@@ -29,6 +29,10 @@ def _batch_workflows() -> dict[str, Workflow]:
     return {n: w for n, w in WORKFLOWS.items() if w.batch}
 
 
+def _extra_outputs(wf: Workflow) -> set[str]:
+    return {f.name for f in wf.options.fields() if f.metadata.get("output")}
+
+
 def _options(wf: Workflow, kw: dict[str, Any]) -> Any:
     try:
         return wf.make_options(**kw)
@@ -45,7 +49,8 @@ def _batch_command(wf: Workflow) -> click.Command:
             required=True,
             help="Output folder (keeps the inputs' folders relative to the glob's fixed part).",
         ),
-        *option_params(wf),
+        # an extra output (--save-target, --overlay) is one file per run, not per input
+        *[p for p in option_params(wf) if p.name not in _extra_outputs(wf)],
         click.Option(
             ["--scheduler"], default=None, help="Address of a running dask scheduler (tcp://...)."
         ),
