@@ -57,7 +57,6 @@ def test_ctrl_c_prints_one_line_and_the_rerun_resumes(tmp_path: Path) -> None:
         str(out),
         "--workers",
         "1",
-        "--json",
     )
     proc = subprocess.Popen(
         argv,
@@ -87,7 +86,9 @@ def test_ctrl_c_prints_one_line_and_the_rerun_resumes(tmp_path: Path) -> None:
     assert done >= 1 and done + remaining == n and remaining > 0
     assert not [p for p in out.rglob(".*") if ".tmp" in p.name or ".part" in p.name]
     # the same command again: what was recorded is skipped, the rest is done
-    rerun = subprocess.run(argv, env=_env(), capture_output=True, text=True, timeout=300)
+    rerun = subprocess.run(
+        [*argv, "--json"], env=_env(), capture_output=True, text=True, timeout=300
+    )
     assert rerun.returncode == 0, rerun.stderr
     summary = json.loads(rerun.stdout)
     assert summary["skipped"] >= done and summary["skipped"] + summary["done"] == n

@@ -505,7 +505,7 @@ def run_batch(
         Redo every output (otherwise an output made by the same command, options and input
         is skipped: the run resumes).
     progress : bool
-        Show a progress bar (rich, on stderr).
+        Show a progress bar (rich, on stderr, when it is a terminal).
     on_result : callable, optional
         Called on the client with each :class:`JobResult` as it completes.
     hold_s : float
@@ -633,13 +633,14 @@ def _run_on(
         )
         by_key[fut.key] = job
         futures.append(fut)
+    console = Console(stderr=True)
     bar = Progress(
         "[progress.description]{task.description}",
         BarColumn(),
         MofNCompleteColumn(),
         TimeRemainingColumn(),
-        console=Console(stderr=True),
-        disable=not progress,
+        console=console,
+        disable=not progress or not console.is_terminal,  # logs and pipes: no bar
     )
     pending = set(futures)
     no_worker_since: float | None = None
