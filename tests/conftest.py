@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
-#: ../shared/data relative to the project root (DEVELOPERS guide); override with IMAGEFORM_DATA.
+#: ../shared/data relative to the project root; override with IMAGEFORM_DATA.
 DATA = Path(os.environ.get("IMAGEFORM_DATA", ROOT.parent / "shared" / "data"))
 
 

@@ -6,7 +6,7 @@ JAX, Dask and array-api-strict arrays come back as the same kind, on the same de
 gradients flowing where the library supports them. Python scalars, lists and tuples are
 NumPy input.
 
-dtype policy (DESIGN.md): float32 in → float32 out, float64 in → float64 out. Integer
+dtype policy (docs/conventions.md): float32 in → float32 out, float64 in → float64 out. Integer
 *images* compute in float32 (:data:`IMAGE_INTEGER_DTYPE`); integer *coordinates* compute in
 float64 (:data:`COORD_INTEGER_DTYPE`), because hand-typed integer points (``[3, -1, 5]``)
 are exact numbers whose answers should not lose digits to float32.

@@ -437,7 +437,7 @@ def as_image(
     range_check: bool = True,
     finite: bool = True,
 ) -> Any:
-    """An image as floats, channels last, following DESIGN.md's colour conventions.
+    """An image as floats, channels last, following the colour conventions of docs/conventions.md.
 
     - ``uint8`` / ``uint16`` are full-range encoded values: divided by 255 / 65535, float32.
     - Python integers (a list or tuple such as ``(200, 50, 50)``) are 8-bit codes 0-255, read
@@ -496,3 +496,298 @@ def as_image(
         if axis != arr.ndim - 1:
             arr = xp.moveaxis(arr, axis, -1)
     return arr
+
+
+# --- h16optsens ---
+# Shared by imageform.optics and imageform.sensor (issue 16): real arrays that refuse
+# None/complex/object/strings before any value is read, shapes bounded by the memory
+# limit, fixed-length tuples of reals, and formulas whose overflow is refused in one line.
+
+
+def as_real_array(
+    x: object,
+    name: str,
+    *,
+    finite: bool = True,
+    nonnegative: bool = False,
+    positive: bool = False,
+    ndim: int | Collection[int] | None = None,
+    check: bool = True,
+) -> np.ndarray:
+    """``x`` (a real number, sequence, NumPy array or tensor) as a float64 NumPy array.
+
+    Refuses None, bool, strings, complex, object and string arrays; then the number of
+    dimensions (``ndim``), before any value is read; then (``check``) NaN, inf (unless
+    ``finite=False``) and signs: with ``check=False`` the caller checks the shape first and
+    then calls :func:`check_real_values`.
+
+    >>> as_real_array([1, 2], "depth").tolist()
+    [1.0, 2.0]
+    >>> as_real_array(None, "depth")
+    Traceback (most recent call last):
+    ...
+    imageform.errors.InvalidInputError: expected depth as real numbers, got None
+    """
+    if x is None or isinstance(x, str | bytes | bool | np.bool_):
+        raise InvalidInputError(f"expected {name} as real numbers, got {describe(x)}")
+    if isinstance(x, numbers.Real) and not isinstance(x, np.generic):
+        try:
+            arr = np.asarray(float(x))
+        except OverflowError:
+            raise InvalidInputError(
+                f"expected {name} within the float range, got {describe(x)}"
+            ) from None
+    else:
+        try:
+            arr = np.asarray(_to_numpy_host(x))
+        except (TypeError, ValueError, RuntimeError) as exc:
+            raise InvalidInputError(f"expected {name} as real numbers, got {describe(x)}") from exc
+    if arr.dtype.kind not in "iuf":
+        what = "a boolean" if arr.dtype.kind == "b" else f"dtype {arr.dtype}"
+        raise InvalidInputError(f"expected {name} as real numbers, got {what} ({describe(x)})")
+    if ndim is not None:
+        dims = (ndim,) if isinstance(ndim, int) else tuple(ndim)
+        if arr.ndim not in dims:
+            want = " or ".join(str(d) for d in dims)
+            raise InvalidInputError(
+                f"expected {name} with {want} dimension(s), got shape {format_shape(arr.shape)}"
+            )
+    arr = arr.astype(np.float64, copy=False)
+    if check:
+        check_real_values(arr, name, finite=finite, nonnegative=nonnegative, positive=positive)
+    return arr
+
+
+def check_real_values(
+    arr: np.ndarray,
+    name: str,
+    *,
+    finite: bool = True,
+    nonnegative: bool = False,
+    positive: bool = False,
+) -> None:
+    """The value checks of :func:`as_real_array` on a float NumPy array (one min/max pass):
+    NaN always, inf unless ``finite=False``, and the sign."""
+    if not arr.size:
+        return
+    lo, hi = float(np.min(arr)), float(np.max(arr))
+    if math.isnan(lo) or math.isnan(hi):
+        raise InvalidInputError(f"{name} contains NaN")
+    if finite and not (math.isfinite(lo) and math.isfinite(hi)):
+        raise InvalidInputError(f"{name} contains inf")
+    if positive and lo <= 0:
+        raise InvalidInputError(f"expected {name} > 0, got min {lo:g}")
+    if nonnegative and lo < 0:
+        raise InvalidInputError(f"expected {name} >= 0, got min {lo:g}")
+
+
+def _to_numpy_host(x: object) -> Any:
+    if array_api_compat.is_torch_array(x):
+        return x.detach().cpu().numpy()
+    return x
+
+
+def as_reals(
+    value: object, name: str, n: int | None = None, *, positive: bool = False
+) -> tuple[float, ...]:
+    """A sequence of finite real numbers (``n`` of them if given) as a tuple of floats.
+
+    >>> as_reals((3, np.float32(1.5)), "center", 2)
+    (3.0, 1.5)
+    """
+    if (
+        isinstance(value, str | bytes)
+        or not hasattr(value, "__iter__")
+        or getattr(value, "ndim", 1) != 1
+    ):
+        want = f"{n} numbers" if n is not None else "a sequence of numbers"
+        raise InvalidInputError(f"expected {name} as {want}, got {describe(value)}")
+    items = list(value)
+    if n is not None and len(items) != n:
+        raise InvalidInputError(
+            f"expected {name} as {n} numbers, got {len(items)} value(s): {describe(value)}"
+        )
+    if not items:
+        raise InvalidInputError(f"expected {name} as a non-empty sequence of numbers, got none")
+    return tuple(as_real(v, f"{name}[{i}]", positive=positive) for i, v in enumerate(items))
+
+
+def as_shape(
+    value: object, name: str, n: int = 2, *, itemsize: int = 8, copies: int = 1
+) -> tuple[int, ...]:
+    """A shape of ``n`` positive integers whose arrays (``copies`` of ``itemsize``-byte
+    elements) fit :func:`memory_limit`; checked before anything is allocated.
+
+    >>> as_shape((np.int64(4), 6), "shape")
+    (4, 6)
+    """
+    if getattr(value, "ndim", 1) != 1:  # a 0-d tensor has a len() that raises
+        raise InvalidInputError(
+            f"expected {name} as a tuple of {n} integers, got {describe(value)}"
+        )
+    shape = as_size(value, name, n)
+    check_memory(
+        float(math.prod(shape)) * itemsize * copies,
+        name,
+        f"an array of shape {format_shape(shape)}",
+    )
+    return shape
+
+
+def _short(value: object) -> str:
+    if isinstance(value, float | np.floating):
+        return f"{float(value):.4g}"
+    return describe(value, 24)
+
+
+def finite_result(what: str, compute: Any, /, **inputs: object) -> Any:
+    """``compute()`` with floating-point warnings off; an overflow, a division by zero or
+    a non-finite result is refused in one line naming ``inputs`` (a formula evaluated
+    beyond the float range: refuse it rather than return inf or NaN).
+
+    >>> finite_result("the blur", lambda: 1e300 * 1e300, f_number=1e300)
+    Traceback (most recent call last):
+    ...
+    imageform.errors.InvalidInputError: the blur is out of the float range for f_number=1e+300
+    """
+    try:
+        with np.errstate(all="ignore"):
+            out = compute()
+        ok = _all_finite(out)
+    except (ZeroDivisionError, OverflowError):
+        ok = False
+    if not ok:
+        args = ", ".join(f"{k}={_short(v)}" for k, v in inputs.items())
+        raise InvalidInputError(f"{what} is out of the float range for {args}"[:200])
+    return out
+
+
+def _all_finite(out: Any) -> bool:
+    if isinstance(out, tuple | list):
+        return all(_all_finite(v) for v in out)
+    if isinstance(out, int):  # a Python int is exact (np.isfinite refuses a big one)
+        return True
+    if isinstance(out, float | np.generic | np.ndarray):
+        return bool(np.all(np.isfinite(out)))
+    xp = namespace(out)
+    if is_dask_namespace(xp):
+        return True  # lazy: not computed here
+    return bool(xp.all(xp.isfinite(out)))
+
+
+# --- h16color ---
+
+
+def _dtype_kind(value: object) -> str:
+    """NumPy's dtype kind of ``value`` (``"b"`` bool, ``"c"`` complex, ``"O"`` object, ``"U"``
+    string ...) without converting an array; ``""`` when it has none."""
+    dt = getattr(value, "dtype", None)
+    if dt is None:
+        if isinstance(value, bool | np.bool_):
+            return "b"
+        if isinstance(value, complex):
+            return "c"
+        if isinstance(value, str | bytes):
+            return "U"
+        if isinstance(value, list | tuple):
+            try:
+                return np.asarray(value).dtype.kind
+            except (TypeError, ValueError):
+                return "O"
+        return ""
+    text = str(dt).removeprefix("torch.")
+    if text == "bool":
+        return "b"
+    if text.startswith("complex"):
+        return "c"
+    return getattr(dt, "kind", "")
+
+
+def refuse_non_real(value: object, name: str) -> None:
+    """Refuse, before any conversion, values that are not real numbers: bool arrays and bools
+    (:class:`TypeError`: a mask is not a measurement), complex, object and string arrays
+    (:class:`InvalidInputError`). Never casts, so no ComplexWarning is ever issued.
+
+    >>> refuse_non_real(np.array([True, False]), "xyz")
+    Traceback (most recent call last):
+    ...
+    TypeError: expected xyz as real numbers, got bool values (cast with .astype(float) if meant)
+    """
+    kind = _dtype_kind(value)
+    if kind == "b":
+        raise TypeError(
+            f"expected {name} as real numbers, got bool values (cast with .astype(float) if meant)"
+        )
+    if kind == "c":
+        raise InvalidInputError(f"expected {name} as real numbers, got complex values")
+    if kind in ("O", "U", "S", "V", "M", "m"):
+        raise InvalidInputError(f"expected {name} as real numbers, got {describe(value)}")
+
+
+def as_real_ndarray(
+    value: object,
+    name: str,
+    *,
+    ndim: int | Collection[int] | None = None,
+    last: int | None = None,
+    min_size: int = 0,
+    finite: bool = True,
+) -> np.ndarray:
+    """``value`` as a float64 NumPy array of real numbers (no bool, complex, object, string),
+    with ``ndim`` dimensions (one of them), a last axis of ``last`` and ``>= min_size``
+    elements, finite unless ``finite=False``; every refusal is one line naming ``name``.
+
+    >>> as_real_ndarray([400, 500], "wavelengths", ndim=1).tolist()
+    [400.0, 500.0]
+    """
+    if value is None:
+        raise InvalidInputError(f"expected {name} as an array of numbers, got None")
+    refuse_non_real(value, name)
+    try:
+        arr = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise InvalidInputError(
+            f"expected {name} as an array of numbers, got {describe(value)}"
+        ) from exc
+    dims = None if ndim is None else ((ndim,) if isinstance(ndim, int) else tuple(ndim))
+    if dims is not None and arr.ndim not in dims:
+        want = " or ".join(f"{d}-d" for d in dims)
+        raise InvalidInputError(
+            f"expected {name} as a {want} array, got shape {format_shape(arr.shape)}"
+        )
+    if last is not None and (arr.ndim < 1 or arr.shape[-1] != last):
+        raise InvalidInputError(
+            f"expected {name} of shape (..., {last}), got {format_shape(arr.shape)}"
+        )
+    if arr.size < min_size:
+        raise InvalidInputError(
+            f"expected {name} with at least {min_size} value(s), got shape "
+            f"{format_shape(arr.shape)}"
+        )
+    if finite and arr.size and not np.isfinite(arr).all():
+        raise InvalidInputError(f"{name} contains NaN or inf")
+    return arr
+
+
+def check_name(value: object, valid: Collection[str], what: str, name: str = "") -> str:
+    """:func:`check_option` naming the parameter ``name`` (``"unknown spectral table 'x' for
+    key"``) and listing at most ~110 characters of the valid names, so that the message stays
+    one line under 200 characters however many names are valid; a non-str is a TypeError."""
+    if not isinstance(value, str):
+        raise TypeError(f"expected {name or what} as a {what} name (str), got {describe(value)}")
+    try:
+        return check_option(value, valid, what)
+    except UnknownOptionError:
+        names = sorted(valid)
+        shown: list[str] = []
+        size = 0
+        for n in names:
+            size += len(n) + 4
+            if size > 110:
+                break
+            shown.append(repr(n))
+        more = f", ... ({len(names) - len(shown)} more)" if len(shown) < len(names) else ""
+        where = f" for {name}" if name else ""
+        raise UnknownOptionError(
+            f"unknown {what} {describe(value, 30)}{where}; valid: {', '.join(shown)}{more}"
+        ) from None

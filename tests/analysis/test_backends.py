@@ -50,7 +50,9 @@ pixels = arrays(np.float64, (6, 5, 3), elements=st.floats(1 / 255, 1.0))
 
 @given(pixels)
 def test_optical_density_round_trip(img: np.ndarray) -> None:
-    np.testing.assert_allclose(10.0 ** -optical_density(img), img, rtol=1e-12)
+    np.testing.assert_allclose(np.exp(-optical_density(img)), img, rtol=1e-12)
+    np.testing.assert_allclose(10.0 ** -optical_density(img, base="10"), img, rtol=1e-12)
+    np.testing.assert_allclose(0.9 * np.exp(-optical_density(img, i0=0.9)), img, rtol=1e-12)
 
 
 @given(arrays(np.float64, (6, 5, 3), elements=st.floats(0.05, 0.95)))

@@ -221,7 +221,7 @@ def test_report_summary_skips_flagged_patches(charts) -> None:  # type: ignore[n
 # -- linear patch values (the simulator's camera RGB -> linear sRGB fit) ---------------------
 def test_linear_transfer_recovers_row_vector_matrix(tmp_path: Path) -> None:
     """``transfer="linear"``: no decoding; the matrix applies to row vectors,
-    ``reference = measured @ matrix.T`` (DESIGN.md's convention), recovered exactly."""
+    ``reference = measured @ matrix.T`` (docs/conventions.md), recovered exactly."""
     rng = np.random.default_rng(0)
     C = rng.uniform(0, 1, (24, 3))
     M = rng.normal(size=(3, 3))

@@ -117,7 +117,7 @@ def test_bad_inputs() -> None:
         xy_to_cct([0.6, 0.38])  # redder than 1667 K
     with pytest.raises(InvalidInputError, match="outside the daylight locus"):
         xy_to_cct(XY_A, method="daylight")
-    with pytest.raises(UnknownOptionError, match="'daylight', 'robertson1968'"):
+    with pytest.raises(UnknownOptionError, match="'daylight', 'hernandez1999', 'mccamy1992'"):
         xy_to_cct(XY_D65, method="mccamy")
     with pytest.raises(InvalidInputError, match="NaN"):
         xy_to_cct([np.nan, 0.3])

@@ -362,7 +362,7 @@ def test_describe_delta_e_lecture_bands() -> None:
     assert describe_delta_e(2.0) == "just noticeable"
     assert describe_delta_e(5.0) == "perceptible"
     assert describe_delta_e(10.5) == "obviously different"
-    with pytest.raises(InvalidInputError, match="ΔE >= 0"):
+    with pytest.raises(InvalidInputError, match="value as a ΔE >= 0"):
         describe_delta_e(-1.0)
 
 

@@ -164,7 +164,7 @@ def test_bad_inputs() -> None:
 
 
 def test_dask_gray_world_is_a_global_reduction() -> None:
-    """Dask: chunked images give the gains of the whole image (DESIGN: real global reductions)."""
+    """Dask: chunked images give the gains of the whole image (real global reductions)."""
     da = pytest.importorskip("dask.array")
     img = np.random.default_rng(7).uniform(0, 1, (64, 80, 3))
     out, gains = white_balance(da.from_array(img, chunks=(16, 80, 3)), "gray_world")

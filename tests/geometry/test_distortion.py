@@ -319,7 +319,7 @@ def test_bad_inputs() -> None:
         m.undistort([0.1, 0.1], max_iter=0)
     with pytest.raises(InvalidInputError, match="tol"):
         m.undistort([0.1, 0.1], tol=-1.0)
-    with pytest.raises(InvalidInputError, match="finite k1"):
+    with pytest.raises(InvalidInputError, match="k1 as a finite number"):
         BrownConrady(k1=float("inf"))
     with pytest.raises(InvalidInputError, match="4, 5 or 8"):
         BrownConrady.from_opencv([0.1, 0.2, 0.3])

@@ -64,7 +64,7 @@ def test_object_inside_focal_length_explains_virtual_image() -> None:
         ({"focal_length": 0.05, "d_o": 1.0, "d_i": 0.1}, "exactly two"),
         ({"focal_length": 0.05, "d_i": 0.03}, "not beyond f"),
         ({"focal_length": 0.05, "d_i": -0.1}, "virtual image"),
-        ({"focal_length": "fifty", "d_o": 1.0}, "expected a number"),
+        ({"focal_length": "fifty", "d_o": 1.0}, "as a number"),
         ({"focal_length": math.nan, "d_o": 1.0}, "finite"),
     ],
 )

@@ -89,10 +89,15 @@ def refine_corners_numba(
         sx = cx
         sy = cy
         st = 1
+        if not (np.isfinite(cx) and np.isfinite(cy)):  # nothing to refine from
+            status[k] = 2
+            continue
         for _ in range(max_iter):
-            # bilinear resampling of the (wh+2, ww+2) patch centred on (cx, cy)
-            fx = np.floor(cx)
-            fy = np.floor(cy)
+            # bilinear resampling of the (wh+2, ww+2) patch centred on (cx, cy); the centre
+            # is clamped in float before int(): beyond the clamp every sample is an edge
+            # pixel either way, and int() of a value beyond int64 is undefined
+            fx = np.floor(min(max(cx, -hx - 2.0), width + hx + 1.0))
+            fy = np.floor(min(max(cy, -hy - 2.0), height + hy + 1.0))
             ax = cx - fx
             ay = cy - fy
             x0 = int(fx) - hx - 1
@@ -127,11 +132,16 @@ def refine_corners_numba(
                     bb1 += gxx * px + gxy * py
                     bb2 += gxy * px + gyy * py
             det = a * c - b * b
-            if abs(det) <= 2.220446049250313e-16**2:
+            if not abs(det) > 2.220446049250313e-16**2:  # NaN too
                 st = 2
                 break
             nx = cx + (c * bb1 - b * bb2) / det
             ny = cy + (-b * bb1 + a * bb2) / det
+            if not (np.isfinite(nx) and np.isfinite(ny)):  # stop on NaN/inf: start kept
+                cx = sx
+                cy = sy
+                st = 2
+                break
             step = (nx - cx) ** 2 + (ny - cy) ** 2
             cx = nx
             cy = ny
@@ -169,14 +179,18 @@ def refine_corners_numpy(
     cur = corners.astype(np.float64).copy()
     start = cur.copy()
     status = np.ones(n, dtype=np.int64)
-    active = np.ones(n, dtype=bool)
+    active: NDArray[np.bool_] = np.all(np.isfinite(cur), axis=1)  # non-finite: nothing to refine
+    status[~active] = 2
     eps2 = eps * eps
     for _ in range(max_iter):
         idx = np.flatnonzero(active)
         if idx.size == 0:
             break
         c = cur[idx]
-        f = np.floor(c)
+        # clamped before the integer cast, as in the kernel (no sample changes)
+        lo = np.array([-hx - 2.0, -hy - 2.0])
+        hi = np.array([width + hx + 1.0, height + hy + 1.0])
+        f = np.floor(np.clip(c, lo, hi))
         ax = (c[:, 0] - f[:, 0])[:, None, None]
         ay = (c[:, 1] - f[:, 1])[:, None, None]
         ys = f[:, 1].astype(np.int64)[:, None] + oy[None, :]
@@ -199,10 +213,14 @@ def refine_corners_numpy(
         bb1 = (gxx * px + gxy * py).sum(axis=(1, 2))
         bb2 = (gxy * px + gyy * py).sum(axis=(1, 2))
         det = a * cc - b * b
-        singular = np.abs(det) <= np.finfo(np.float64).eps ** 2
+        singular = ~(np.abs(det) > np.finfo(np.float64).eps ** 2)  # NaN too
         safe = np.where(singular, 1.0, det)
-        nx = c[:, 0] + (cc * bb1 - b * bb2) / safe
-        ny = c[:, 1] + (-b * bb1 + a * bb2) / safe
+        with np.errstate(all="ignore"):
+            nx = c[:, 0] + (cc * bb1 - b * bb2) / safe
+            ny = c[:, 1] + (-b * bb1 + a * bb2) / safe
+        bad = ~singular & ~(np.isfinite(nx) & np.isfinite(ny))  # stop on NaN: start kept
+        cur[idx[bad]] = start[idx[bad]]
+        singular |= bad
         step = (nx - c[:, 0]) ** 2 + (ny - c[:, 1]) ** 2
         moved = ~singular
         cur[idx[moved], 0] = nx[moved]
@@ -213,7 +231,8 @@ def refine_corners_numpy(
         status[idx[outside]] = 3
         status[idx[done]] = 0
         active[idx[singular | outside | done]] = False
-    far = (np.abs(cur[:, 0] - start[:, 0]) > hx) | (np.abs(cur[:, 1] - start[:, 1]) > hy)
+    with np.errstate(invalid="ignore"):
+        far = (np.abs(cur[:, 0] - start[:, 0]) > hx) | (np.abs(cur[:, 1] - start[:, 1]) > hy)
     cur[far] = start[far]
     status[far] = 4
     return cur, status

@@ -25,11 +25,13 @@ from imageform.analysis.harmonize import (
 )
 from imageform.analysis.macenko import (
     MacenkoStains,
+    background_intensity,
     macenko_normalize,
     macenko_stains,
     optical_density,
     stain_angle,
     stain_concentrations,
+    vahadane_stains,
 )
 from imageform.analysis.reinhard import ReinhardStats, reinhard_normalize, reinhard_stats
 from imageform.analysis.segmentation import (
@@ -44,6 +46,7 @@ from imageform.analysis.synthetic import (
     StainMixture,
     synthetic_chart_image,
     synthetic_endoscopy_image,
+    synthetic_he_tile,
     synthetic_shading_scene,
     synthetic_stain_image,
 )
@@ -60,6 +63,7 @@ __all__ = [
     "MacenkoStains",
     "ReinhardStats",
     "StainMixture",
+    "background_intensity",
     "chart_patches",
     "correction_report",
     "fit_color_correction",
@@ -76,6 +80,8 @@ __all__ = [
     "stain_concentrations",
     "synthetic_chart_image",
     "synthetic_endoscopy_image",
+    "synthetic_he_tile",
     "synthetic_shading_scene",
     "synthetic_stain_image",
+    "vahadane_stains",
 ]

@@ -37,8 +37,24 @@ def _on_sigterm(signum: int, frame: FrameType | None) -> None:
     raise KeyboardInterrupt
 
 
+_INTERRUPTED = "imageform: interrupted; nothing new was written"
+
+
 def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point of the ``imageform`` console script; returns the exit code."""
+    """Entry point of the ``imageform`` console script; returns the exit code.
+
+    Ctrl-C (SIGINT) and SIGTERM end a command with exit code 130 and one line on stderr, even
+    when the signal lands while the command is already finishing (a signal held back during
+    the final renames is delivered when they are done).
+    """
+    try:
+        return _main(argv)
+    except KeyboardInterrupt:
+        print(_INTERRUPTED, file=sys.stderr)
+        return 130
+
+
+def _main(argv: Sequence[str] | None) -> int:
     import click
 
     from imageform.errors import ImageformError
@@ -58,7 +74,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         exc.show()
         return 2 if isinstance(exc, click.UsageError) else 1
     except (KeyboardInterrupt, click.exceptions.Abort):
-        print("imageform: interrupted; nothing new was written", file=sys.stderr)
+        print(_INTERRUPTED, file=sys.stderr)
         return 130
     except BaseException as exc:
         if isinstance(exc, SystemExit):

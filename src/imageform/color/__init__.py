@@ -2,8 +2,8 @@
 colour difference, chromatic adaptation, white balance, CCT, chroma subsampling, colour vision
 (metamerism, colour-vision deficiency, palettes), chromaticity and gamut.
 
-Conventions (DESIGN.md): channels-last ``(..., 3)`` arrays; encoded RGB in [0, 1]; XYZ with
-Y = 1 at the reference white; L* in [0, 100]; hue in degrees [0, 360).
+Conventions (docs/conventions.md): channels-last ``(..., 3)`` arrays; encoded RGB in
+[0, 1]; XYZ with Y = 1 at the reference white; L* in [0, 100]; hue in degrees [0, 360).
 """
 
 from imageform.color.adaptation import (

@@ -19,7 +19,8 @@ import numpy as np
 
 from imageform._backend import device_of, namespace
 from imageform._dask import chunkwise
-from imageform._validate import as_points, check_option
+from imageform._validate import as_real, check_option
+from imageform.color._guard import as_points
 from imageform.color.whitepoints import resolve_white
 from imageform.errors import InvalidInputError
 
@@ -106,7 +107,7 @@ def chromatic_adaptation_matrix(
     [1.0478112, 0.0228866, -0.050127]
     """
     key = check_option(method, _CAT, "chromatic adaptation method")
-    D = float(degree)
+    D = as_real(degree, "degree")
     if not 0.0 <= D <= 1.0:
         raise InvalidInputError(f"expected degree of adaptation D in [0, 1], got {degree!r}")
     ws = resolve_white(src_white, observer=observer)

@@ -8,8 +8,8 @@
 
 Duv is the signed distance from the Planckian locus in the CIE 1960 UCS ``(u, v)`` along the
 isotemperature line, positive above the locus (greenish), negative below (pinkish), as in
-ANSI C78.377. Ohno (2013) needs the Planckian locus from the CIE 1931 colour-matching
-functions, which arrive with :mod:`imageform.spectral`; it is not offered yet.
+ANSI C78.377. McCamy (1992), Hernández-Andrés (1999) and Ohno (2013) are in
+:mod:`imageform.color.cct_methods`, selectable here by ``method=``.
 """
 
 from __future__ import annotations
@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from imageform._backend import device_of, namespace
+from imageform._backend import device_of, is_dask_namespace, namespace, to_numpy
 from imageform._colormath import DAYLIGHT_HIGH as _DAYLIGHT_HIGH
 from imageform._colormath import DAYLIGHT_LOW as _DAYLIGHT_LOW
 from imageform._colormath import DAYLIGHT_RANGE as _DAYLIGHT_RANGE
@@ -27,7 +27,14 @@ from imageform._colormath import daylight_x as _daylight_x
 from imageform._colormath import daylight_xy as _daylight_xy
 from imageform._colormath import uv1960_from_xy as _uv_from_xy
 from imageform._dask import chunkwise
-from imageform._validate import as_float, as_points, check_option
+from imageform._validate import as_int, check_option
+from imageform.color._guard import as_float, as_points
+from imageform.color.cct_methods import (
+    XY_TO_CCT_METHODS,
+    uv_to_cct_ohno2013,
+    xy_to_cct_hernandez1999,
+    xy_to_cct_mccamy1992,
+)
 from imageform.errors import InvalidInputError
 
 __all__ = [
@@ -41,6 +48,9 @@ __all__ = [
 
 #: Methods of :func:`xy_to_cct` and :func:`cct_to_xy`.
 CCT_METHODS = ("robertson1968", "daylight")
+# How far (in x) beyond an end of the daylight locus xy_to_cct(method="daylight") still takes
+# a chromaticity, as that end: rounding (one ulp is 5.6e-17 at x = 0.38), not a colour.
+DAYLIGHT_X_TOLERANCE = 1e-9
 
 #: Robertson (1968) isotemperature lines: reciprocal megakelvin (mired), CIE 1960 u, v of the
 #: Planckian locus and the slope t of the isotemperature line. Wyszecki & Stiles (1982),
@@ -255,7 +265,15 @@ def cct_to_xy(cct: object, duv: object = 0.0, *, method: str = "robertson1968") 
     xp = namespace(cct, duv)
     T = as_float(cct, "cct", xp=xp)
     D = as_float(duv, "duv", xp=xp, dtype=T.dtype)
-    T, D = xp.broadcast_arrays(T, D)
+    if not is_dask_namespace(xp) and math.prod(D.shape) and float(xp.max(xp.abs(D))) > 1.0:
+        raise InvalidInputError("expected |duv| <= 1 (a distance in CIE 1960 uv)")
+    try:
+        T, D = xp.broadcast_arrays(T, D)
+    except ValueError:
+        raise InvalidInputError(
+            f"expected cct and duv of broadcastable shapes, got {tuple(T.shape)} and "
+            f"{tuple(D.shape)}"
+        ) from None
     if m == "daylight":
         if bool(xp.any(D != 0)):
             raise InvalidInputError("the daylight method takes no duv (the locus is a curve)")
@@ -283,9 +301,15 @@ def xy_to_cct(xy: object, *, method: str = "robertson1968", iterations: int = 20
     ----------
     xy : array_like, shape (..., 2)
         CIE 1931 chromaticities; Robertson covers 1667 K to infinity; daylight 4000-25000 K.
-    method : {"robertson1968", "daylight"}
+    method : {"robertson1968", "daylight", "mccamy1992", "hernandez1999", "ohno2013"}
+        The last three are in :mod:`imageform.color.cct_methods` (NumPy results; the two
+        closed-form fits return Robertson's Duv, Ohno's its own).
     iterations : int
-        Newton steps of the daylight inversion (converges to 1e-12 K in < 10).
+        Newton steps of the daylight inversion (converges to 1e-12 K in < 10), 1 to 1000.
+
+    The daylight method takes ``x`` between the locus ends (25000 K and 4000 K); an ``x`` at
+    most 1e-9 (``DAYLIGHT_X_TOLERANCE``) beyond an end, from rounding, is taken as that
+    end (4000 K or 25000 K); farther out it raises.
 
     Returns
     -------
@@ -305,21 +329,31 @@ def xy_to_cct(xy: object, *, method: str = "robertson1968", iterations: int = 20
     >>> round(float(xy_to_cct([0.31271, 0.32902])[0]))
     6503
     """
-    m = check_option(method, CCT_METHODS, "CCT method")
+    m = check_option(method, (*CCT_METHODS, *XY_TO_CCT_METHODS), "CCT method")
+    n_iter = as_int(iterations, "iterations", minimum=1, maximum=1000)
     xp = namespace(xy)
     a = as_points(xy, "xy", 2, xp=xp)
+    if m == "ohno2013":  # CCT and Duv from the Planckian locus of the 1931 CMFs
+        return uv_to_cct_ohno2013(xy_to_uv1960(np.asarray(to_numpy(a), dtype=np.float64)))
     cct, duv = _robertson_inverse(xp, a)
+    if m in XY_TO_CCT_METHODS:  # closed-form CCT (NumPy), Robertson's Duv
+        fit = xy_to_cct_mccamy1992 if m == "mccamy1992" else xy_to_cct_hernandez1999
+        return fit(np.asarray(to_numpy(a), dtype=np.float64)), duv
     if m == "robertson1968":
         return cct, duv
     x = a[..., 0]
     lo_x = float(_daylight_x(np, np.asarray(_DAYLIGHT_RANGE[1])))
     hi_x = float(_daylight_x(np, np.asarray(_DAYLIGHT_RANGE[0])))
-    if bool(xp.any(x < lo_x)) or bool(xp.any(x > hi_x)):
+    tol = DAYLIGHT_X_TOLERANCE
+    if bool(xp.any(x < lo_x - tol)) or bool(xp.any(x > hi_x + tol)):
         raise InvalidInputError(
-            f"x outside the daylight locus (x from {lo_x:.5f} at 25000 K to {hi_x:.5f} at 4000 K)"
+            f"expected xy on the daylight locus, got x outside the daylight locus (x from "
+            f"{lo_x:.5f} at 25000 K to {hi_x:.5f} at 4000 K)"
         )
+    # an x within the tolerance outside an end (rounding) is the end itself
+    x = xp.clip(x, lo_x, hi_x)
     T = xp.clip(cct, 4000.0, 25000.0)  # start from Robertson's estimate, inside the domain
-    for _ in range(int(iterations)):
+    for _ in range(n_iter):
         s = 1.0 / T
         c = xp.where(T <= 7000.0, xp.ones_like(T), xp.zeros_like(T))
         lo, hi = _DAYLIGHT_LOW, _DAYLIGHT_HIGH

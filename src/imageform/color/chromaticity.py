@@ -19,7 +19,8 @@ import numpy.typing as npt
 from imageform import _deprecate
 from imageform._backend import device_of, namespace, to_numpy
 from imageform._dask import chunkwise
-from imageform._validate import as_points, check_option
+from imageform._validate import as_real, as_real_ndarray, check_option, describe
+from imageform.color._guard import as_bool, as_points
 from imageform.errors import InvalidInputError
 
 __all__ = [
@@ -145,7 +146,12 @@ def spectral_locus(
     """
     c = check_option(coords, CHROMATICITY_COORDS, "chromaticity diagram")
     o = check_option(str(observer), ("2", "10"), "observer")
-    lo, hi = (float(v) for v in wavelength_range)
+    rng = as_real_ndarray(wavelength_range, "wavelength_range")
+    if rng.shape != (2,):
+        raise InvalidInputError(
+            f"expected wavelength_range as (lo, hi) in nm, got {describe(wavelength_range)}"
+        )
+    lo, hi = float(rng[0]), float(rng[1])
     if not lo < hi:
         raise InvalidInputError(f"expected a wavelength range lo < hi, got {wavelength_range}")
     return SpectralLocus(*_locus(o, c, lo, hi))
@@ -158,9 +164,13 @@ def polygon_area(vertices: npt.ArrayLike) -> float:
     >>> polygon_area([[0, 0], [1, 0], [0, 1]])
     0.5
     """
-    v = np.asarray(vertices, dtype=np.float64)
+    v = as_real_ndarray(vertices, "vertices")
     if v.ndim != 2 or v.shape[1] != 2 or v.shape[0] < 3:
-        raise InvalidInputError(f"expected polygon vertices of shape (N >= 3, 2), got {v.shape}")
+        raise InvalidInputError(f"expected vertices of shape (N >= 3, 2), got {v.shape}")
+    if np.abs(v).max() > 1e100:
+        raise InvalidInputError(
+            f"expected vertices within ±1e100 (the area would overflow), got {np.abs(v).max():g}"
+        )
     x, y = v[:, 0], v[:, 1]
     return float(0.5 * abs(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y)))
 
@@ -179,6 +189,7 @@ def visible_area(coords: str = "xy", *, observer: int = 2) -> float:
 def _points_in_polygon(pts: Any, poly: np.ndarray, xp: Any) -> Any:
     """Even-odd ray casting, vectorised over points (boundary counts as inside up to 1e-12)."""
     dev = device_of(pts)
+    poly = np.array(poly, dtype=np.float64)  # a writable copy: torch warns on read-only input
     x, y = pts[..., 0][..., None], pts[..., 1][..., None]
     x1 = xp.asarray(poly[:, 0], dtype=pts.dtype, device=dev)
     y1 = xp.asarray(poly[:, 1], dtype=pts.dtype, device=dev)
@@ -243,10 +254,9 @@ def xy_to_xyz(xy: object, Y: float = 1.0, *, check_locus: bool = True, observer:
     """
     xp = namespace(xy)
     p = as_points(xy, "xy", 2, xp=xp)
-    if check_locus:
+    Y = as_real(Y, "Y", nonnegative=True)
+    if as_bool(check_locus, "check_locus"):
         check_in_locus(p, observer=observer)
-    if not (np.isfinite(Y) and Y >= 0):
-        raise InvalidInputError(f"expected Y >= 0, got {Y!r}")
     if bool(xp.any(p[..., 1] <= 0)):
         raise InvalidInputError("expected y > 0 (y = 0 has no finite XYZ)")
     x, y = p[..., 0], p[..., 1]

@@ -1,6 +1,6 @@
 """CIE XYZ to xyY, CIELAB (L*a*b*), CIELCh (L*C*h_ab) and CIELUV (L*u*v*), and back.
 
-XYZ is scaled so that the reference white has Y = 1 (DESIGN.md); L* is in [0, 100]; hue
+XYZ is scaled so that the reference white has Y = 1 (docs/conventions.md); L* is in [0, 100]; hue
 angles are degrees in [0, 360). The reference white is the ``white=`` parameter: an
 illuminant name (``"D65"``, CIE 15:2004), an RGB space name (``"srgb"``: the white its
 standard writes), an ``(x, y)`` pair or an ``(X, Y, Z)`` triple (see
@@ -18,7 +18,7 @@ from typing import Any
 
 from imageform._backend import device_of, namespace
 from imageform._dask import chunkwise
-from imageform._validate import as_image
+from imageform.color._guard import as_image
 
 from .whitepoints import resolve_white
 

@@ -40,7 +40,8 @@ import numpy as np
 from imageform import _deprecate
 from imageform._backend import device_of, namespace, use_numba
 from imageform._dask import chunkwise
-from imageform._validate import as_float, as_image, check_option
+from imageform._validate import check_name, check_option
+from imageform.color._guard import as_float, as_image
 from imageform.errors import InvalidInputError, UnknownOptionError
 
 from . import cielab, cmyk, gray, hsv, ycbcr
@@ -184,7 +185,7 @@ def _space(name: object, what: str) -> str:
         key = _SPACE_ALIASES.get(key, key)
         if key in SPACES:
             return key
-    return check_option(name, SPACES, f"colour space ({what})")
+    return check_name(name, SPACES, "colour space", what)
 
 
 def space_name(name: object, what: str = "colour space") -> str:

@@ -34,7 +34,8 @@ import numpy as np
 
 from imageform._backend import device_of, namespace
 from imageform._dask import chunkwise
-from imageform._validate import as_image, check_option
+from imageform._validate import as_real, check_option
+from imageform.color._guard import as_bool, as_image
 from imageform.errors import InvalidInputError
 
 __all__ = [
@@ -93,10 +94,7 @@ def _method(name: object) -> str:
 
 
 def _severity(severity: object) -> float:
-    try:
-        s = float(severity)  # type: ignore[arg-type]
-    except (TypeError, ValueError) as exc:
-        raise InvalidInputError(f"expected a severity in [0, 1], got {severity!r}") from exc
+    s = as_real(severity, "severity")
     if not 0.0 <= s <= 1.0:
         raise InvalidInputError(f"expected a severity in [0, 1], got {severity!r}")
     return s
@@ -272,6 +270,8 @@ def simulate_cvd(
     xp = namespace(img)
     from imageform.color.transfer import linear_to_srgb, srgb_to_linear
 
+    linear = as_bool(linear, "linear")
+    clip = as_bool(clip, "clip")
     lin = img if linear else srgb_to_linear(img)
     dev = device_of(lin)
 

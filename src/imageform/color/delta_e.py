@@ -17,7 +17,8 @@ import numpy as np
 
 from imageform._backend import namespace, use_numba
 from imageform._dask import chunkwise
-from imageform._validate import as_points, check_option, check_positive, format_shape
+from imageform._validate import as_real, check_option, format_shape
+from imageform.color._guard import as_points, check_magnitude
 from imageform.errors import InvalidInputError
 
 __all__ = [
@@ -42,11 +43,26 @@ _CIE94_APPLICATIONS = {
 #: Below this many pixels the NumPy path stays in NumPy (compilation/call overhead).
 _NUMBA_MIN_SIZE = 4096
 
+#: The parametric factors (kL, kC, kH, l, c) are taken in [1e-3, 1e3]: the published ones are
+#: 1 and 2, and outside this band the quotients overflow or vanish.
+FACTOR_RANGE = (1e-3, 1e3)
+
+
+def check_positive(value: object, name: str) -> float:
+    """A parametric factor within :data:`FACTOR_RANGE`."""
+    v = as_real(value, name, positive=True)
+    lo, hi = FACTOR_RANGE
+    if not lo <= v <= hi:
+        raise InvalidInputError(f"expected {name} in [{lo:g}, {hi:g}], got {v:g}")
+    return v
+
 
 def _prepare(lab1: object, lab2: object) -> tuple[Any, Any, Any]:
     xp = namespace(lab1, lab2)
     a = as_points(lab1, "lab1", 3, xp=xp)
     b = as_points(lab2, "lab2", 3, xp=xp, device=None)
+    check_magnitude(a, "lab1", xp)
+    check_magnitude(b, "lab2", xp)
     dtype = xp.result_type(a.dtype, b.dtype)
     a = xp.astype(a, dtype, copy=False)
     b = xp.astype(b, dtype, copy=False)
@@ -327,6 +343,12 @@ def delta_e(
     5.0
     """
     m = check_option(method, DELTA_E_METHODS, "ΔE method")
+    # every parameter is checked, also those the chosen method does not use
+    if kL is not None:
+        check_positive(kL, "kL")
+    for value, name in ((kC, "kC"), (kH, "kH"), (l, "l"), (c, "c")):
+        check_positive(value, name)
+    check_option(application, _CIE94_APPLICATIONS, "CIE94 application")
     if m == "cie76":
         return delta_e_cie76(lab1, lab2)
     if m == "cie94":
@@ -348,9 +370,7 @@ def describe_delta_e(value: float) -> str:
     >>> describe_delta_e(0.4), describe_delta_e(2.1), describe_delta_e(25.0)
     ('imperceptible', 'just noticeable', 'obviously different')
     """
-    v = float(value)
-    if not math.isfinite(v) or v < 0:
-        raise InvalidInputError(f"expected a ΔE >= 0, got {value!r}")
+    v = as_real(value, "value as a ΔE", nonnegative=True)
     if v < 1.0:
         return "imperceptible"
     if v < 3.0:

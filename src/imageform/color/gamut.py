@@ -18,7 +18,8 @@ import numpy as np
 
 from imageform._backend import device_of, namespace
 from imageform._dask import chunkwise
-from imageform._validate import as_points, check_option
+from imageform._validate import as_int, as_real, check_option
+from imageform.color._guard import as_points
 from imageform.color.chromaticity import (
     polygon_area,
     spectral_locus,
@@ -26,7 +27,6 @@ from imageform.color.chromaticity import (
     xy_to_uv_prime,
 )
 from imageform.color.rgb_spaces import RGB_SPACES, RGBSpace, rgb_space
-from imageform.errors import InvalidInputError
 
 __all__ = [
     "GAMUT_MAPPING_METHODS",
@@ -179,6 +179,7 @@ def in_gamut(
     [True, False]
     """
     k = check_option(kind, _KINDS, "gamut test kind")
+    tol = as_real(tol, "tol", nonnegative=True, allow_inf=True)
     sp = rgb_space(space)
     xp = namespace(values)
     if k == "xy":
@@ -233,8 +234,7 @@ def gamut_map(
     rgb = v @ to_rgb_t
     if m == "clip":
         return xp.clip(rgb, 0.0, 1.0)
-    if iterations < 1:
-        raise InvalidInputError(f"expected iterations >= 1, got {iterations}")
+    iterations = as_int(iterations, "iterations", minimum=1, maximum=200)
     white = sp.white_xy
     lch = lab_to_lch(xyz_to_lab(v, white))
     inside = xp.all((rgb >= 0.0) & (rgb <= 1.0), axis=-1)

@@ -14,12 +14,15 @@ from __future__ import annotations
 import math
 from typing import Any
 
+import numpy as np
+
 from imageform._backend import namespace
 from imageform._colormath import hexcone_hue as _hue
 from imageform._colormath import hsv_to_rgb as _hsv_to_srgb
 from imageform._colormath import rgb_to_hsv as _srgb_to_hsv
 from imageform._dask import chunkwise
-from imageform._validate import as_float, as_image
+from imageform._validate import as_real
+from imageform.color._guard import as_float, as_image
 from imageform.errors import InvalidInputError
 
 __all__ = [
@@ -218,6 +221,7 @@ def hue_undefined_mask(values: object, *, atol: float = 0.0) -> Any:
     [True, False]
     """
     x = as_image(values, "HSV/HSL/HSI", range_check=False)
+    atol = as_real(atol, "atol", nonnegative=True)
     return x[..., 1] <= atol
 
 
@@ -233,6 +237,12 @@ def hue_difference(h1: object, h2: object) -> Any:
     a = as_float(h1, "h1", integer="float64")
     xp = namespace(a)
     b = as_float(h2, "h2", xp=xp, dtype=a.dtype)
+    try:
+        np.broadcast_shapes(tuple(a.shape), tuple(b.shape))
+    except ValueError:
+        raise InvalidInputError(
+            f"expected h1 and h2 of broadcastable shapes, got {tuple(a.shape)} and {tuple(b.shape)}"
+        ) from None
     return xp.remainder(b - a + 180.0, 360.0) - 180.0
 
 
@@ -262,14 +272,8 @@ def hue_in_range(hue: object, start: float, stop: float) -> Any:
     """
     h = as_float(hue, "hue", integer="float64")
     xp = namespace(h)
-    try:
-        s, e = float(start) % 360.0, float(stop) % 360.0
-    except (TypeError, ValueError) as exc:
-        raise InvalidInputError(
-            f"expected numeric start/stop hues, got {start!r}, {stop!r}"
-        ) from exc
-    if not (math.isfinite(s) and math.isfinite(e)):
-        raise InvalidInputError(f"expected finite start/stop hues, got {start!r}, {stop!r}")
+    s = as_real(start, "start (a hue)") % 360.0
+    e = as_real(stop, "stop (a hue)") % 360.0
     hm = xp.remainder(h, 360.0)
     if s <= e:
         return (hm >= s) & (hm <= e)

@@ -17,7 +17,8 @@ from __future__ import annotations
 from typing import Any, NamedTuple
 
 from imageform._backend import namespace
-from imageform._validate import as_image, check_option
+from imageform._validate import as_int, check_option
+from imageform.color._guard import as_bool, as_image
 from imageform.errors import InvalidInputError
 
 from .transfer import TRANSFER_FUNCTIONS, _decode_clean, _encode_clean
@@ -48,6 +49,16 @@ def mean_linear_light(
     """
     name = check_option(transfer, TRANSFER_FUNCTIONS, "transfer function")
     x = as_image(image, "image", channels=None)
+    if axis is None:
+        axes: tuple[int, ...] = tuple(range(x.ndim))
+    else:
+        items = axis if isinstance(axis, tuple) else (axis,)
+        axes = tuple(as_int(a, "axis", minimum=-x.ndim, maximum=x.ndim - 1) for a in items)
+        axis = axes if isinstance(axis, tuple) else axes[0]
+    if any(x.shape[a] == 0 for a in axes):
+        raise InvalidInputError(
+            f"expected a non-empty image along the averaged axes, got shape {tuple(x.shape)}"
+        )
     xp = namespace(x)
     return _encode_clean(xp, xp.mean(_decode_clean(xp, x, name), axis=axis), name)
 
@@ -86,14 +97,15 @@ def downsample(
     (0.7354, 0.5)
     """
     name = check_option(transfer, TRANSFER_FUNCTIONS, "transfer function")
-    if isinstance(factor, bool) or not isinstance(factor, int) or factor < 1:
-        raise InvalidInputError(f"expected an integer factor >= 1, got {factor!r}")
+    factor = as_int(factor, "factor", minimum=1)
+    linear_light = as_bool(linear_light, "linear_light")
     x = as_image(image, "image", channels=None)
     if x.ndim < 3:
         raise InvalidInputError(f"expected an image of shape (..., H, W, C), got {tuple(x.shape)}")
     if x.shape[-3] < factor or x.shape[-2] < factor:
         raise InvalidInputError(
-            f"image {tuple(x.shape)} is smaller than one {factor}x{factor} block"
+            f"expected factor <= the image's height and width: image {tuple(x.shape)} is "
+            f"smaller than one {factor}x{factor} block"
         )
     xp = namespace(x)
     if not linear_light:

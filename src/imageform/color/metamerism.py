@@ -18,7 +18,8 @@ from __future__ import annotations
 import numpy as np
 
 from imageform import _deprecate
-from imageform._validate import check_option
+from imageform._validate import as_int, as_real, check_option
+from imageform.color._guard import as_bool
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
 from imageform.spectral.integrate import (
     integration_weights,
@@ -100,6 +101,8 @@ def are_metamers(
     True
     """
     a, b = _check(s1, "s1"), _check(s2, "s2")
+    tol = as_real(tol, "tol", nonnegative=True, allow_inf=True)
+    spectral_tol = as_real(spectral_tol, "spectral_tol", nonnegative=True, allow_inf=True)
     _, w, r1 = _setup(a, observer, illuminant)
     _, _, r2 = _setup(b, observer, illuminant)
     scale = float(np.max(w.sum(axis=0)))
@@ -159,9 +162,16 @@ def metamer(
     """
     s = _check(spectrum, "spectrum")
     k = check_option(kind, _KINDS, "spectrum kind")
+    strength = as_real(strength, "strength")
     if not 0.0 < strength <= 1.0:
         raise InvalidInputError(f"expected 0 < strength <= 1, got {strength}")
+    max_frequency = as_int(max_frequency, "max_frequency", minimum=1)
     grid, w, r = _setup(s, observer, illuminant)
+    if max_frequency > len(grid) // 2:
+        raise InvalidInputError(
+            f"expected max_frequency <= {len(grid) // 2} (half the {len(grid)} grid samples), "
+            f"got {max_frequency}"
+        )
     if np.any(r < 0) or (k == "reflectance" and np.any(r > 1)):
         raise InvalidInputError(
             f"expected a {k} with values in {'[0, 1]' if k == 'reflectance' else '[0, inf)'}, "
@@ -220,6 +230,7 @@ def metamerism_index(
     from imageform.color.delta_e import delta_e_ciede2000
 
     a, b = _check(s1, "s1"), _check(s2, "s2")
+    correct = as_bool(correct, "correct")
     if str(observer) not in ("2", "10"):
         raise InvalidInputError(f"expected observer 2 or 10, got {observer!r}")
     x1t = spectrum_to_xyz(a, illuminant=test, observer=observer)

@@ -16,7 +16,8 @@ from typing import Any
 
 import numpy as np
 
-from imageform._validate import as_image, check_option
+from imageform._validate import as_int, as_real, check_option
+from imageform.color._guard import as_image
 from imageform.errors import InvalidInputError
 
 __all__ = [
@@ -65,7 +66,7 @@ def viridis(n: int = 256) -> np.ndarray:
     >>> viridis(2).round(4).tolist()
     [[0.267, 0.0049, 0.3294], [0.9932, 0.9062, 0.1439]]
     """
-    if not isinstance(n, int | np.integer) or not 1 <= n <= 256:
+    if isinstance(n, bool | np.bool_) or not isinstance(n, int | np.integer) or not 1 <= n <= 256:
         raise InvalidInputError(f"expected 1 <= n <= 256 viridis colours, got {n!r}")
     idx = np.round(np.linspace(0, 255, int(n))).astype(int)
     return np.array(_viridis()[idx])
@@ -107,6 +108,8 @@ def palette(name: str, n: int | None = None) -> np.ndarray:
     [[0.0, 0.0, 0.0], [0.902, 0.624, 0.0]]
     """
     key = check_option(name, PALETTES, "palette")
+    if n is not None:
+        n = as_int(n, "n", minimum=1)
     if key == "viridis":
         return viridis(8 if n is None else n)
     colors = list(OKABE_ITO.values()) if key == "okabe_ito" else list(RED_GREEN)
@@ -182,7 +185,12 @@ def palette_check(
     from imageform.color.cvd import CVD_DEFICIENCIES, simulate_cvd
     from imageform.color.delta_e import delta_e_ciede2000
 
+    threshold = as_real(threshold, "threshold", nonnegative=True)
     rgb = parse_colors(colors)
+    if rgb.shape[0] > 4096:
+        raise InvalidInputError(
+            f"expected colors with at most 4096 colours (pairwise ΔE), got {rgb.shape[0]}"
+        )
     if rgb.shape[0] < 2:
         raise InvalidInputError(f"expected at least 2 colours to compare, got {rgb.shape[0]}")
     i, j = np.triu_indices(rgb.shape[0], 1)

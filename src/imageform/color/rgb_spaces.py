@@ -26,8 +26,9 @@ import numpy as np
 
 from imageform._backend import device_of, namespace
 from imageform._dask import chunkwise
-from imageform._validate import as_image, check_option
-from imageform.errors import DegenerateConfigurationError
+from imageform._validate import as_real_ndarray, check_option, describe
+from imageform.color._guard import as_image
+from imageform.errors import DegenerateConfigurationError, InvalidInputError
 
 __all__ = [
     "RGB_SPACES",
@@ -55,6 +56,36 @@ class RGBSpace:
     white_xy: tuple[float, float]
     transfer: str
     source: str
+
+    def __post_init__(self) -> None:
+        # validated here, so that a space built by hand cannot give NaN matrices later
+        from imageform.color.transfer import TRANSFER_FUNCTIONS
+
+        for field_name in ("name", "source"):
+            if not isinstance(getattr(self, field_name), str):
+                raise TypeError(
+                    f"expected {field_name} as a str, got {describe(getattr(self, field_name))}"
+                )
+        prim = as_real_ndarray(self.primaries_xy, "primaries_xy")
+        if prim.shape != (3, 2):
+            raise InvalidInputError(
+                f"expected primaries_xy as three (x, y) pairs, got shape {prim.shape}"
+            )
+        white = as_real_ndarray(self.white_xy, "white_xy")
+        if white.shape != (2,):
+            raise InvalidInputError(f"expected white_xy as (x, y), got shape {white.shape}")
+        for arr, what in ((prim, "primaries_xy"), (white, "white_xy")):
+            if not (np.abs(arr).max() <= 10.0 and np.all(arr[..., 1] != 0)):
+                raise InvalidInputError(
+                    f"expected {what} as chromaticities (|x|, |y| <= 10, y != 0), got "
+                    f"{describe(arr.tolist(), 60)}"
+                )
+        if not white[1] > 0:
+            raise InvalidInputError(f"expected white_xy with y > 0, got {white.tolist()}")
+        check_option(self.transfer, TRANSFER_FUNCTIONS, "transfer function")
+        pairs = tuple((float(x), float(y)) for x, y in prim)
+        object.__setattr__(self, "primaries_xy", pairs)
+        object.__setattr__(self, "white_xy", (float(white[0]), float(white[1])))
 
     def matrix_to_xyz(self) -> np.ndarray:
         """The derived RGB -> XYZ matrix (float64, (3, 3)); see :func:`rgb_to_xyz_matrix`."""

@@ -26,7 +26,8 @@ from types import MappingProxyType
 from typing import Any, NamedTuple
 
 from imageform._backend import namespace
-from imageform._validate import as_float, as_image, check_option
+from imageform._validate import check_option
+from imageform.color._guard import as_bool, as_float, as_image
 from imageform.errors import InvalidInputError, UnknownOptionError
 
 __all__ = [
@@ -269,7 +270,7 @@ def subsample_round_trip(
     ycc = srgb_to_ycbcr(image, standard)
     y, c = chroma_subsample(ycc, scheme, siting=siting)
     rgb = ycbcr_to_srgb(chroma_upsample(y, c, scheme, siting=siting, method=method), standard)
-    if clip:
+    if as_bool(clip, "clip"):
         rgb = namespace(rgb).clip(rgb, 0.0, 1.0)
     return rgb
 

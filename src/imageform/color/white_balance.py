@@ -39,7 +39,8 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from imageform._backend import device_of, is_dask_namespace, namespace
-from imageform._validate import as_image, check_option
+from imageform._validate import as_int, as_real, check_option, describe
+from imageform.color._guard import as_bool, as_image, check_nonempty
 from imageform.color.rgb_spaces import xyz_to_linear_rgb
 from imageform.color.transfer import TRANSFER_FUNCTIONS, decode, encode
 from imageform.color.whitepoints import resolve_white, xy_to_xyz_white
@@ -54,6 +55,11 @@ __all__ = [
 
 #: Methods of :func:`white_balance` and :func:`estimate_illuminant`.
 WHITE_BALANCE_METHODS = ("gray_world", "white_patch", "shades_of_gray", "gray_edge", "manual")
+#: Largest Minkowski norm ``p``: beyond it ``x**p`` underflows to 0 for most pixels < 1 and
+#: the estimate is the maximum anyway (``p = inf`` is the ``max_rgb`` method).
+MAX_MINKOWSKI_P = 1e4
+#: Largest ``sigma`` (pixels) of the grey-edge derivative filter (bounds the kernel size).
+MAX_SIGMA = 1000.0
 _ALIASES = {
     "grey_world": "gray_world",
     "max_rgb": "white_patch",
@@ -75,7 +81,7 @@ def _method(method: str, percentile: float | None) -> tuple[str, float]:
     key = check_option(method, valid, "white-balance method")
     if percentile is None:
         percentile = 100.0 if key == "max_rgb" else 99.0
-    return _ALIASES.get(key, key), float(percentile)
+    return _ALIASES.get(key, key), as_real(percentile, "percentile")
 
 
 def _flat(xp: Any, lin: Any) -> Any:
@@ -179,24 +185,47 @@ def _manual(xp: Any, like: Any, illuminant: Any, cct: float | None, space: str) 
 def _check_estimate(e: np.ndarray) -> np.ndarray:
     if not np.all(e > 0):
         raise DegenerateConfigurationError(
-            f"illuminant estimate {e!r} has a zero (or negative) channel: no gain balances it "
-            "(an empty channel?)"
+            f"the image's illuminant estimate {np.round(e, 6).tolist()!s:.60} has a zero (or "
+            "negative) channel: no gain balances it (an empty channel?)"
         )
     return e
 
 
-def _check_params(method: str, percentile: float, p: float, sigma: float) -> None:
-    if method == "white_patch" and not (0.0 <= float(percentile) <= 100.0):
-        raise InvalidInputError(f"expected percentile in [0, 100], got {percentile!r}")
-    if method in ("shades_of_gray", "gray_edge") and not (float(p) >= 1.0):
-        raise InvalidInputError(f"expected Minkowski p >= 1, got {p!r}")
-    if method == "gray_edge" and not (math.isfinite(float(sigma)) and float(sigma) >= 0.0):
-        raise InvalidInputError(f"expected sigma >= 0 (pixels), got {sigma!r}")
+def _check_params(
+    method: str,
+    percentile: float,
+    p: float,
+    sigma: float,
+    illuminant: Any = None,
+    cct: float | None = None,
+) -> None:
+    """Every parameter is checked, also those the chosen method does not use."""
+    percentile = as_real(percentile, "percentile")
+    if not 0.0 <= percentile <= 100.0:
+        raise InvalidInputError(f"expected percentile in [0, 100], got {percentile:g}")
+    p = as_real(p, "Minkowski p", minimum=1.0, maximum=MAX_MINKOWSKI_P)
+    sigma = as_real(sigma, "sigma", nonnegative=True, maximum=MAX_SIGMA)
+    if cct is not None:
+        as_real(cct, "cct (K)", positive=True)
+    if illuminant is not None:
+        try:
+            resolve_white(illuminant)
+        except InvalidInputError as exc:
+            raise type(exc)(f"illuminant: {exc}") from None
 
 
 def _linear(image: object, transfer: str, channel_axis: int) -> tuple[Any, Any, str]:
     tname = check_option(transfer, TRANSFER_FUNCTIONS, "transfer function")
-    img = as_image(image, "image", channels=3, channel_axis=channel_axis)
+    axis = as_int(channel_axis, "channel_axis")
+    try:
+        img = as_image(image, "image", channels=3, channel_axis=axis)
+    except InvalidInputError as exc:
+        if axis == -1 or "channels on axis" not in str(exc):
+            raise
+        raise InvalidInputError(
+            f"expected image with 3 channels on axis channel_axis={axis}, got {describe(image)}"
+        ) from None
+    check_nonempty(img, "image")
     if img.ndim < 3:
         raise InvalidInputError(
             f"expected an image of shape (..., H, W, 3), got shape {tuple(img.shape)}"
@@ -266,7 +295,7 @@ def estimate_illuminant(
     [0.4, 0.5, 0.6]
     """
     m, percentile = _method(method, percentile)
-    _check_params(m, percentile, p, sigma)
+    _check_params(m, percentile, p, sigma, illuminant, cct)
     xp, lin, _ = _linear(image, transfer, channel_axis)
     return _estimate(xp, lin, m, percentile, p, sigma, illuminant, cct, space)
 
@@ -360,20 +389,17 @@ def white_balance(
     """
     m, percentile = _method(method, percentile)
     norm = check_option(normalize, ("mean", "green"), "gain normalisation")
-    _check_params(m, percentile, p, sigma)
+    _check_params(m, percentile, p, sigma, illuminant, cct)
     xp, lin, tname = _linear(image, transfer, channel_axis)
     e = _estimate(xp, lin, m, percentile, p, sigma, illuminant, cct, space)
     if is_dask_namespace(xp):
         e = e.map_blocks(_check_estimate, dtype=e.dtype)  # lazily: raises at compute
     elif not bool(xp.all(e > 0)):
-        raise DegenerateConfigurationError(
-            f"illuminant estimate {e!r} has a zero (or negative) channel: no gain balances it "
-            "(an empty channel?)"
-        )
+        _check_estimate(np.asarray(e))
     ref = xp.mean(e, axis=-1, keepdims=True) if norm == "mean" else e[..., 1:2]
     gains = ref / e
     out = lin * gains[..., None, None, :]
-    if clip:
+    if as_bool(clip, "clip"):
         out = xp.clip(out, 0.0, 1.0)
     if tname != "linear":
         out = encode(out, tname)

@@ -3,7 +3,7 @@
 The chromaticities are those of CIE 15:2004 *Colorimetry*, 3rd ed., Table T.3 ("Colorimetric
 data for CIE illuminants"), to the five decimals printed there; illuminant E is the
 equal-energy white, x = y = 1/3 exactly. XYZ values are derived from xy with Y = 1
-(DESIGN.md: XYZ scaled so that the reference white has Y = 1).
+(docs/conventions.md: XYZ scaled so that the reference white has Y = 1).
 
 Note on D65. CIE 15:2004 gives D65 (2°) as (0.31271, 0.32902). The RGB standards
 (IEC 61966-2-1 sRGB, ITU-R BT.709, BT.2020, SMPTE EG 432-1 Display P3, Adobe RGB (1998))
@@ -22,6 +22,7 @@ from typing import Any
 import numpy as np
 
 from imageform import _deprecate
+from imageform._validate import as_real_ndarray, describe, refuse_non_real
 from imageform.errors import InvalidInputError, UnknownOptionError
 
 __all__ = [
@@ -76,7 +77,9 @@ def _canonical(name: str) -> str:
 
 
 def _check_observer(observer: object) -> int:
-    if observer not in OBSERVERS or isinstance(observer, bool):
+    if isinstance(observer, bool | np.bool_) or not isinstance(observer, int | np.integer):
+        raise TypeError(f"expected observer as 2 or 10 (degrees), got {describe(observer)}")
+    if observer not in OBSERVERS:
         raise UnknownOptionError(f"unknown observer {observer!r}; valid: 2, 10 (degrees)")
     return int(observer)
 
@@ -124,9 +127,15 @@ def xy_to_xyz_white(xy: Sequence[float]) -> np.ndarray:
     >>> xy_to_xyz_white((0.3127, 0.3290)).round(6).tolist()
     [0.950456, 1.0, 1.089058]
     """
-    x, y = (float(v) for v in xy)
-    if not (np.isfinite(x) and np.isfinite(y)) or y <= 0.0:
-        raise InvalidInputError(f"expected a chromaticity (x, y) with y > 0, got {tuple(xy)!r}")
+    v = as_real_ndarray(xy, "xy", finite=False)
+    if v.shape != (2,):
+        raise InvalidInputError(f"expected xy as a chromaticity (x, y), got {describe(xy)}")
+    x, y = float(v[0]), float(v[1])
+    if not (np.isfinite(x) and np.isfinite(y)) or not 1e-9 <= y <= 1e3 or abs(x) > 1e3:
+        raise InvalidInputError(
+            f"expected xy as a chromaticity (x, y) with y > 0 (1e-9 to 1000), |x| <= 1000, got "
+            f"{describe(tuple(v.tolist()))}"
+        )
     return np.array([x / y, 1.0, (1.0 - x - y) / y], dtype=np.float64)
 
 
@@ -183,14 +192,15 @@ def resolve_white(white: Any, *, observer: int = 2) -> np.ndarray:
             return xy_to_xyz_white(RGB_SPACES[key].white_xy)
         names = [*WHITEPOINTS_XY[2], *RGB_SPACES]
         raise UnknownOptionError(
-            f"unknown white {white!r}; valid: {', '.join(repr(n) for n in names)}, "
-            "an (x, y) pair or an (X, Y, Z) triple"
+            f"unknown white {describe(white, 30)}; valid: a white point or RGB space name "
+            f"({', '.join(repr(n) for n in names[:6])}, ...), (x, y) or (X, Y, Z)"
         )
+    refuse_non_real(white, "white")
     try:
         arr = np.asarray(white, dtype=np.float64)
     except (TypeError, ValueError) as exc:
         raise InvalidInputError(
-            f"expected a white point name, (x, y) or (X, Y, Z), got {white!r}"
+            f"expected white as a white point name, (x, y) or (X, Y, Z), got {describe(white)}"
         ) from exc
     if arr.shape == (2,):
         return xy_to_xyz_white(arr.tolist())
@@ -199,8 +209,10 @@ def resolve_white(white: Any, *, observer: int = 2) -> np.ndarray:
         and bool(np.all(np.isfinite(arr)))
         and arr[1] > 0
         and bool(np.all(arr >= 0))
+        and bool(np.all(arr <= 1e6))
     ):
         return arr.copy()
     raise InvalidInputError(
-        f"expected a white point name, (x, y) or (X, Y, Z) with Y > 0, got {white!r}"
+        f"expected white as a name, (x, y) or (X, Y, Z) with Y > 0, all in [0, 1e6], "
+        f"got {describe(white)}"
     )

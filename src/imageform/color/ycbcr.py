@@ -30,10 +30,13 @@ import math
 from types import MappingProxyType
 from typing import Any
 
+import numpy as np
+
 from imageform import _deprecate
 from imageform._backend import namespace
 from imageform._dask import chunkwise
-from imageform._validate import as_float, as_image, check_option
+from imageform._validate import check_option
+from imageform.color._guard import as_float, as_image
 from imageform.errors import InvalidInputError
 
 __all__ = [
@@ -69,7 +72,11 @@ def _coeffs(standard: str) -> tuple[str, float, float]:
 def _scale(signal_range: str, bits: int | None) -> tuple[float, float, float, float]:
     """(y_gain, y_offset, c_gain, c_offset) from analog to the requested scale."""
     rng = check_option(signal_range, _RANGES, "Y'CbCr signal_range")
-    if bits is not None and (isinstance(bits, bool) or bits not in (8, 10, 12)):
+    if bits is not None and (
+        isinstance(bits, bool | np.bool_)
+        or not isinstance(bits, int | np.integer)
+        or bits not in (8, 10, 12)
+    ):
         raise InvalidInputError(f"expected bits 8, 10 or 12 (or None), got {bits!r}")
     if rng == "full":
         if bits is None:

@@ -22,11 +22,19 @@ import numpy.typing as npt
 from numpy.typing import NDArray
 
 from imageform._backend import to_numpy
-from imageform._validate import as_points, check_option, check_positive
+from imageform._validate import as_bool, as_int, as_real, check_option, describe
 from imageform.errors import (
     DegenerateConfigurationError,
     IllConditionedWarning,
     InvalidInputError,
+)
+from imageform.geometry._checks import (
+    as_matrix,
+    as_points,
+    check_image_size,
+    check_K,
+    check_memory,
+    size_pair,
 )
 from imageform.geometry.calibration_refine import GLOBAL_NAMES, refine, rodrigues
 from imageform.geometry.calibration_result import CalibrationResult
@@ -61,44 +69,57 @@ def checkerboard_points(pattern_size: tuple[int, int], square_size: float = 1.0)
     >>> checkerboard_points((3, 2), 25.0)[[0, 1, 3]].tolist()
     [[0.0, 0.0, 0.0], [25.0, 0.0, 0.0], [0.0, 25.0, 0.0]]
     """
-    if (
-        not isinstance(pattern_size, tuple | list)
-        or len(pattern_size) != 2
-        or not all(isinstance(n, int | np.integer) and n >= 2 for n in pattern_size)
-    ):
-        raise InvalidInputError(
-            f"expected pattern_size (cols, rows), each >= 2, got {pattern_size!r}"
-        )
-    cols, rows = (int(n) for n in pattern_size)
-    s = check_positive(square_size, "square_size")
+    cols, rows = size_pair(pattern_size, "pattern_size (cols, rows)", minimum=2)
+    check_memory(24.0 * cols * rows, "pattern_size", f"{cols} x {rows} board points")
+    s = as_real(square_size, "square_size", positive=True, maximum=1e90)
     r, c = np.mgrid[0:rows, 0:cols]
     return np.stack([c.ravel() * s, r.ravel() * s, np.zeros(rows * cols)], axis=-1).astype(float)
 
 
+#: The most views one calibration takes (each adds six unknowns to the solve).
+MAX_VIEWS = 10_000
+
+
 def _views(object_points: Any, image_points: Any) -> tuple[list[F64], list[F64]]:
-    if isinstance(object_points, str | bytes) or isinstance(image_points, str | bytes):
-        raise InvalidInputError("expected sequences of point arrays, got a string")
+    for value, name, dim in (
+        (object_points, "object_points", 3),
+        (image_points, "image_points", 2),
+    ):
+        if (
+            isinstance(value, str | bytes)
+            or not hasattr(value, "__len__")
+            or not hasattr(value, "__getitem__")
+            or getattr(value, "ndim", 1) == 0
+        ):
+            raise InvalidInputError(
+                f"expected {name} as a sequence of (N, {dim}) arrays, one per view, got "
+                + describe(value)
+            )
+    if len(object_points) > MAX_VIEWS:
+        raise InvalidInputError(
+            f"expected object_points for at most {MAX_VIEWS} views, got {len(object_points)}"
+        )
     objs = [object_points[k] for k in range(len(object_points))]
     imgs = [image_points[k] for k in range(len(image_points))]
     if len(objs) != len(imgs):
         raise InvalidInputError(
-            f"expected one object-point array per view of image points, got {len(objs)} "
-            f"object-point and {len(imgs)} image-point arrays"
+            f"expected one object-point array per view of image points (object_points and "
+            f"image_points of the same length), got {len(objs)} and {len(imgs)}"
         )
     if not objs:
-        raise InvalidInputError("expected at least one view, got none")
+        raise InvalidInputError("expected object_points of at least one view, got none")
     out_o, out_i = [], []
     for k, (o, i) in enumerate(zip(objs, imgs, strict=True)):
         oa = np.asarray(to_numpy(as_points(o, f"object_points[{k}]", 3)), dtype=np.float64)
         ia = np.asarray(to_numpy(as_points(i, f"image_points[{k}]", 2)), dtype=np.float64)
         if oa.ndim != 2 or ia.ndim != 2 or oa.shape[0] != ia.shape[0]:
             raise InvalidInputError(
-                f"view {k}: expected object points (N, 3) and image points (N, 2) with the same "
+                f"view {k}: expected object_points (N, 3) and image_points (N, 2) with the same "
                 f"N, got {oa.shape} and {ia.shape}"
             )
         if oa.shape[0] < 4:
             raise DegenerateConfigurationError(
-                f"view {k}: expected at least 4 points, got {oa.shape[0]}"
+                f"view {k}: expected at least 4 points in object_points, got {oa.shape[0]}"
             )
         out_o.append(oa)
         out_i.append(ia)
@@ -113,7 +134,13 @@ def _is_planar_z0(objs: list[F64]) -> bool:
 def _check_fix(fix: Collection[str], skew: bool) -> NDArray[np.bool_]:
     if isinstance(fix, str):
         fix = (fix,)
-    names = {check_option(f, GLOBAL_NAMES, "calibration parameter") for f in fix}
+    if not hasattr(fix, "__iter__") or getattr(fix, "ndim", 1) == 0:
+        raise InvalidInputError(f"expected fix as parameter names, got {describe(fix)}")
+    items = list(fix)
+    for f in items:
+        if not isinstance(f, str):
+            raise InvalidInputError(f"expected fix as parameter names (str), got {describe(f)}")
+    names = {check_option(f, GLOBAL_NAMES, "calibration parameter in fix") for f in items}
     free = np.array([n not in names for n in GLOBAL_NAMES])
     if not skew:
         free[GLOBAL_NAMES.index("skew")] = False
@@ -249,13 +276,16 @@ def calibrate_camera(
     (800.0, -0.1)
     """
     objs, imgs = _views(object_points, image_points)
-    if (
-        not isinstance(image_size, tuple | list)
-        or len(image_size) != 2
-        or not all(isinstance(n, int | np.integer) and n > 0 for n in image_size)
-    ):
-        raise InvalidInputError(f"expected image_size (width, height) > 0, got {image_size!r}")
-    size = (int(image_size[0]), int(image_size[1]))
+    size = check_image_size(image_size)
+    skew = as_bool(skew, "skew")
+    max_iter = as_int(max_iter, "max_iter", minimum=1, maximum=10**6)
+    tol = as_real(tol, "tol", minimum=0.0, maximum=1.0)
+    if K_init is not None:
+        K_given = np.asarray(
+            to_numpy(as_matrix(K_init, "K_init", (3, 3), batch=False)), dtype=np.float64
+        )
+        check_K(K_given, np, "K_init", positive=True)
+        K_given = K_given / K_given[2, 2]
     method = check_option(method, ("auto", "zhang", "dlt"), "calibration method")
     planar = _is_planar_z0(objs)
     if method == "auto":
@@ -280,15 +310,12 @@ def calibrate_camera(
         )
     if method == "zhang":
         H = homographies(objs, imgs)
-        if K_init is None:
-            K0 = zhang_intrinsics(H, size, skew=skew)
-        else:
-            K0 = np.asarray(to_numpy(K_init), dtype=np.float64)
+        K0 = zhang_intrinsics(H, size, skew=skew) if K_init is None else K_given
         rv0, tv0 = poses_from_homographies(H, K0)
     else:
         K0, rv0, tv0 = dlt_init(objs, imgs)
         if K_init is not None:
-            K0 = np.asarray(to_numpy(K_init), dtype=np.float64)
+            K0 = K_given
     if not skew:
         K0 = K0.copy()
         K0[0, 1] = 0.0

@@ -1,6 +1,6 @@
 """The pinhole camera: projection, back-projection and the 3×4 projection matrix.
 
-Conventions (DESIGN.md): ``X_cam = R @ X_world + t``; camera centre ``C = -Rᵀ t``;
+Conventions (docs/conventions.md): ``X_cam = R @ X_world + t``; camera centre ``C = -Rᵀ t``;
 ``P = K [R | t]``; pixel ``(u, v)`` = (column, row) with the top-left pixel centre at (0, 0).
 
 Points at or behind the camera (``z_cam <= 0``) have no image: they come back as NaN with
@@ -23,8 +23,9 @@ import numpy as np
 
 from imageform._backend import device_of, linalg, namespace, use_numba
 from imageform._typing import Array, ArrayLike
-from imageform._validate import as_matrix, as_points, check_image_size, check_option, check_rotation
+from imageform._validate import check_option, check_rotation, format_shape
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
+from imageform.geometry._checks import as_float, as_matrix, as_points, check_image_size
 from imageform.geometry._results import Projection
 from imageform.geometry.intrinsics import Intrinsics
 
@@ -124,13 +125,18 @@ def _project_xp(
     # invalid too. No isfinite over (N, 3) (PyTorch runs it as several passes) and every
     # pass on contiguous (N,) vectors: ``w - w == 0`` is the finiteness test, K is divided
     # by K[2, 2] (9 numbers) rather than u and v (2N).
+    with np.errstate(invalid="ignore", over="ignore"):  # inf rows are masked out below
+        return _pixels(Xc, K, X.ndim, xp)
+
+
+def _pixels(Xc: Array, K: Array, ndim: int, xp: Any) -> tuple[Array, Array]:
     z = Xc[..., 2]
     front = (z > 0) & (z < math.inf)
     zs = xp.where(front, z, xp.ones_like(z))  # no division by zero; gradients stay finite
     x = Xc[..., 0] / zs
     y = Xc[..., 1] / zs
     k = K / K[..., 2:3, 2:3]
-    kb = k[..., None, :, :] if (X.ndim >= 2 and K.ndim > 2) else k
+    kb = k[..., None, :, :] if (ndim >= 2 and K.ndim > 2) else k
     u = kb[..., 0, 0] * x + kb[..., 0, 1] * y + kb[..., 0, 2]
     v = kb[..., 1, 1] * y + kb[..., 1, 2]
     valid = front & (u - u == 0) & (v - v == 0)
@@ -353,11 +359,14 @@ def unproject(
     xp = namespace(uv, depth, K, R, t)
     p = as_points(uv, "uv", 2, xp=xp)
     dev = device_of(p)
-    z = (
-        xp.asarray(depth, dtype=p.dtype, device=dev)
-        if not hasattr(depth, "dtype")
-        else xp.astype(depth, p.dtype)
-    )
+    z = as_float(depth, "depth", xp=xp, dtype=p.dtype, device=dev)
+    try:
+        np.broadcast_shapes(tuple(z.shape), tuple(p.shape[:-1]))
+    except ValueError:
+        raise InvalidInputError(
+            f"expected depth broadcasting to uv's points {format_shape(tuple(p.shape[:-1]))}, "
+            f"got shape {format_shape(tuple(z.shape))}"
+        ) from None
     if bool(xp.any(~(z > 0))):
         raise InvalidInputError("expected depth > 0 (points in front of the camera)")
     Km = as_matrix(K, "K", (3, 3), xp=xp, dtype=p.dtype, device=dev)

@@ -46,7 +46,10 @@ import numpy as np
 import numpy.typing as npt
 from numpy.typing import NDArray
 
+from imageform._backend import to_numpy
+from imageform._validate import as_bool, as_int, as_real, describe, format_shape
 from imageform.errors import ImageformWarning, InvalidInputError
+from imageform.geometry._checks import as_float, size_pair
 from imageform.geometry.checkerboard_candidates import find_candidates
 from imageform.geometry.checkerboard_grid import (
     board_continues,
@@ -57,7 +60,7 @@ from imageform.geometry.checkerboard_grid import (
     lattice_problem,
     neighbors,
 )
-from imageform.geometry.checkerboard_subpix import as_gray, refine_corners
+from imageform.geometry.checkerboard_subpix import MAX_HALF_WINDOW, as_gray, refine_corners
 from imageform.geometry.checkerboard_subpix import refine as refine_clean
 
 __all__ = [
@@ -108,6 +111,34 @@ class CheckerboardResult:
     status: NDArray[np.int64] | None = field(default=None, repr=False)
     sigma: float | None = None
 
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "found", as_bool(self.found, "found"))
+        if not isinstance(self.reason, str):
+            raise InvalidInputError(f"expected reason as a str, got {describe(self.reason)}")
+        object.__setattr__(
+            self, "pattern_size", size_pair(self.pattern_size, "pattern_size", minimum=0)
+        )
+        n = self.pattern_size[0] * self.pattern_size[1]
+        if self.corners is not None:
+            c = np.asarray(to_numpy(as_float(self.corners, "corners", xp=np, dtype=np.float64)))
+            if c.shape != (n, 2):
+                raise InvalidInputError(
+                    f"expected corners of shape ({n}, 2) for pattern_size {self.pattern_size}, "
+                    f"got {format_shape(c.shape)}"
+                )
+            object.__setattr__(self, "corners", c)
+        elif self.found:
+            raise InvalidInputError("expected corners (N, 2) when found is True, got None")
+        if self.status is not None:
+            st = np.asarray(to_numpy(as_float(self.status, "status", xp=np, finite=True)))
+            if st.shape != (n,) or np.any(st != np.round(st)):
+                raise InvalidInputError(
+                    f"expected status as ({n},) integers, got {describe(self.status)}"
+                )
+            object.__setattr__(self, "status", st.astype(np.int64))
+        if self.sigma is not None:
+            object.__setattr__(self, "sigma", as_real(self.sigma, "sigma", positive=True))
+
     def grid(self) -> NDArray[np.float64]:
         """The corners as ``(rows, cols, 2)``; raises when not found."""
         if self.corners is None:
@@ -117,25 +148,13 @@ class CheckerboardResult:
 
 
 def _check_pattern(pattern_size: object) -> tuple[int, int]:
-    try:
-        pair: tuple[Any, ...] = tuple(pattern_size)  # type: ignore[arg-type]
-    except TypeError as exc:
+    # (cols, rows) inner corners, each >= 2, at most 10 000 (a board of 10^8 corners)
+    cols, rows = size_pair(pattern_size, "pattern_size (cols, rows) inner corners", minimum=2)
+    if max(cols, rows) > 10_000:
         raise InvalidInputError(
-            f"expected pattern_size as (cols, rows) inner corners, got {pattern_size!r}"
-        ) from exc
-    if len(pair) != 2:
-        raise InvalidInputError(
-            f"expected pattern_size as (cols, rows) inner corners, got {pattern_size!r}"
+            f"expected pattern_size (cols, rows) of at most 10000 each, got ({cols}, {rows})"
         )
-    out = []
-    for v in pair:
-        if isinstance(v, bool) or not isinstance(v, int | np.integer) or v < 2:
-            raise InvalidInputError(
-                "expected pattern_size as two integers >= 2 (inner corners per row, per "
-                f"column), got {pattern_size!r}"
-            )
-        out.append(int(v))
-    return out[0], out[1]
+    return cols, rows
 
 
 def _orient(
@@ -308,17 +327,12 @@ def find_checkerboard(
     gray = as_gray(image)
     cols, rows = _check_pattern(pattern_size)
     if sigma is not None:
-        sig = float(sigma)
-        if not (math.isfinite(sig) and sig > 0):
-            raise InvalidInputError(f"expected sigma > 0, got {sigma!r}")
-    if half_window is not None and (
-        isinstance(half_window, bool) or not isinstance(half_window, int) or half_window < 1
-    ):
-        raise InvalidInputError(f"expected half_window an integer >= 1, got {half_window!r}")
-    if isinstance(max_iter, bool) or not isinstance(max_iter, int) or max_iter < 1:
-        raise InvalidInputError(f"expected max_iter an integer >= 1, got {max_iter!r}")
-    if not (math.isfinite(eps) and eps >= 0):
-        raise InvalidInputError(f"expected eps >= 0, got {eps!r}")
+        # a Gaussian wider than 1000 px blurs any board away (and its kernel is 8 sigma)
+        sigma = as_real(sigma, "sigma", positive=True, maximum=1000.0)
+    if half_window is not None:
+        half_window = as_int(half_window, "half_window", minimum=1, maximum=MAX_HALF_WINDOW)
+    max_iter = as_int(max_iter, "max_iter", minimum=1, maximum=10**6)
+    eps = as_real(eps, "eps", nonnegative=True)
     size = (cols, rows)
     if float(gray.max() - gray.min()) == 0.0:
         return CheckerboardResult(False, None, "the image is constant (no contrast)", size)
@@ -427,10 +441,14 @@ def find_checkerboards(
     if names is None:
         labels = [f"view {k}" for k in range(len(images))]
     else:
+        if isinstance(names, str | bytes) or not isinstance(names, Sequence):
+            raise InvalidInputError(
+                f"expected names as a list of str, one per image, got {describe(names)}"
+            )
         labels = [str(n) for n in names]
         if len(labels) != len(images):
             raise InvalidInputError(
-                f"expected {len(images)} names (one per image), got {len(labels)}"
+                f"expected {len(images)} names (one per image of images), got {len(labels)}"
             )
     size = _check_pattern(pattern_size)
     grays = []

@@ -5,7 +5,6 @@ Part of :mod:`imageform.geometry.checkerboard`; :func:`refine_corners` is public
 
 from __future__ import annotations
 
-import math
 from typing import NamedTuple
 
 import numpy as np
@@ -13,13 +12,18 @@ import numpy.typing as npt
 from numpy.typing import NDArray
 
 from imageform._backend import to_numpy, use_numba
-from imageform._validate import as_image, as_points, format_shape
+from imageform._validate import as_image, as_int, as_real, format_shape
 from imageform.errors import InvalidInputError
+from imageform.geometry._checks import as_points, check_bounded, size_pair
 
 __all__ = ["RefinedCorners", "as_gray", "refine", "refine_corners"]
 
 # ITU-R BT.601 luma weights (the grey conversion OpenCV's cvtColor uses)
 _LUMA = np.array([0.299, 0.587, 0.114])
+
+
+#: The largest refinement half-window (pixels): a (2h+1)^2 window per corner.
+MAX_HALF_WINDOW = 1000
 
 
 class RefinedCorners(NamedTuple):
@@ -35,7 +39,7 @@ class RefinedCorners(NamedTuple):
 def as_gray(image: object) -> NDArray[np.floating]:
     """A grey NumPy image (H, W): float32 for integer/float32 input, float64 for float64."""
     arr = as_image(image, "image", channels=None, range_check=False)
-    # float32 (integer and float32 input) or float64 (float64 input), as DESIGN.md's policy
+    # float32 (integer and float32 input) or float64 (float64 input): docs/conventions.md
     arr = np.asarray(to_numpy(arr))
     if arr.ndim == 3 and arr.shape[-1] == 1:
         arr = arr[..., 0]
@@ -46,6 +50,8 @@ def as_gray(image: object) -> NDArray[np.floating]:
             "expected image of shape (H, W), (H, W, 1) or (H, W, 3), "
             f"got {format_shape(tuple(arr.shape))}"
         )
+    # values beyond 1e30 overflow float32 and the squared gradients: no image holds them
+    check_bounded(arr, "image", np, limit=1e30)
     if min(arr.shape) < 16:
         raise InvalidInputError(
             f"expected an image of at least 16 x 16 pixels, got {format_shape(arr.shape)}"
@@ -122,14 +128,14 @@ def refine_corners(
         raise InvalidInputError(
             f"expected corners of shape (N, 2), got {format_shape(tuple(pts.shape))}"
         )
-    hx, hy = (half_window, half_window) if isinstance(half_window, int) else half_window
-    for h in (hx, hy):
-        if isinstance(h, bool) or not isinstance(h, int | np.integer) or h < 1:
-            raise InvalidInputError(f"expected half_window as integers >= 1, got {half_window!r}")
-    if isinstance(max_iter, bool) or not isinstance(max_iter, int) or max_iter < 1:
-        raise InvalidInputError(f"expected max_iter an integer >= 1, got {max_iter!r}")
-    if not (math.isfinite(eps) and eps >= 0):
-        raise InvalidInputError(f"expected eps >= 0, got {eps!r}")
+    if isinstance(half_window, int | np.integer) and not isinstance(half_window, bool):
+        hx = hy = as_int(half_window, "half_window", minimum=1, maximum=MAX_HALF_WINDOW)
+    else:
+        hx, hy = size_pair(half_window, "half_window")
+        if max(hx, hy) > MAX_HALF_WINDOW:
+            raise InvalidInputError(f"expected half_window <= {MAX_HALF_WINDOW}, got {(hx, hy)}")
+    max_iter = as_int(max_iter, "max_iter", minimum=1, maximum=10**6)
+    eps = as_real(eps, "eps", nonnegative=True)
     return RefinedCorners(*refine(gray, pts, int(hx), int(hy), max_iter, float(eps)))
 
 

@@ -27,10 +27,11 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from imageform._backend import namespace, use_numba
+from imageform._backend import namespace, to_numpy, use_numba
 from imageform._dask import is_dask_array
-from imageform._validate import as_matrix, as_points, check_positive, check_rotation
+from imageform._validate import as_int, as_real, check_rotation
 from imageform.errors import InvalidInputError
+from imageform.geometry._checks import as_float, as_matrix, as_points
 from imageform.geometry._distortion_xp import (
     bc_distort_xp,
     bc_undistort_xp,
@@ -93,18 +94,13 @@ def _dask_pair(fn: Any, xy: Any) -> Undistorted:
 
 def _check_coeffs(obj: Any) -> None:
     for name, v in zip(obj.__dataclass_fields__, astuple(obj), strict=True):
-        try:
-            fv = float(v)
-        except (TypeError, ValueError) as exc:
-            raise InvalidInputError(f"expected a number for {name}, got {v!r}") from exc
-        if not np.isfinite(fv):
-            raise InvalidInputError(f"expected a finite {name}, got {v!r}")
+        # |k| <= 1e6: a larger coefficient has no lens behind it, and r^6 k overflows
+        as_real(v, name, minimum=-1e6, maximum=1e6)
 
 
 def _iter_args(max_iter: int, tol: float | None, xp: Any, dtype: Any) -> tuple[int, float]:
-    if not isinstance(max_iter, int | np.integer) or max_iter < 1:
-        raise InvalidInputError(f"expected max_iter >= 1 (int), got {max_iter!r}")
-    t = default_tol(xp, dtype) if tol is None else check_positive(tol, "tol")
+    max_iter = as_int(max_iter, "max_iter", minimum=1, maximum=10**6)
+    t = default_tol(xp, dtype) if tol is None else as_real(tol, "tol", positive=True, maximum=1.0)
     return int(max_iter), t
 
 
@@ -153,10 +149,13 @@ class BrownConrady:
     @classmethod
     def from_opencv(cls, dist_coeffs: Any) -> BrownConrady:
         """From OpenCV's 4, 5 or 8 ``distCoeffs`` ``(k1, k2, p1, p2[, k3[, k4, k5, k6]])``."""
-        d = np.asarray(dist_coeffs, dtype=np.float64).ravel()
+        d = np.asarray(
+            to_numpy(as_float(dist_coeffs, "dist_coeffs", xp=np, dtype=np.float64)),
+            dtype=np.float64,
+        ).ravel()
         if d.size not in (4, 5, 8):
             raise InvalidInputError(
-                f"expected 4, 5 or 8 OpenCV distortion coefficients, got {d.size}"
+                f"expected dist_coeffs as 4, 5 or 8 OpenCV distortion coefficients, got {d.size}"
             )
         return cls(*(float(v) for v in d))
 

@@ -11,8 +11,8 @@ from __future__ import annotations
 
 from imageform._backend import linalg, namespace
 from imageform._typing import Array, ArrayLike
-from imageform._validate import as_points
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
+from imageform.geometry._checks import as_points
 from imageform.geometry._normalize import similarity_normalization
 
 __all__ = ["estimate_projection_matrix"]
@@ -57,7 +57,7 @@ def estimate_projection_matrix(points_3d: ArrayLike, points_2d: ArrayLike) -> Ar
     x = as_points(points_2d, "points_2d", 2, xp=xp, dtype=X.dtype)
     if X.shape[:-1] != x.shape[:-1]:
         raise InvalidInputError(
-            f"expected as many 3-D as 2-D points, got {tuple(X.shape)} and {tuple(x.shape)}"
+            f"expected as many points_3d as points_2d, got {tuple(X.shape)} and {tuple(x.shape)}"
         )
     if X.ndim < 2 or X.shape[-2] < 6:
         raise InvalidInputError(

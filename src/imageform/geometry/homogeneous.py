@@ -14,8 +14,15 @@ from typing import Any, Literal, NamedTuple
 from imageform import _deprecate
 from imageform._backend import linalg, namespace
 from imageform._typing import Array, ArrayLike
-from imageform._validate import as_points, check_option
+from imageform._validate import as_real, check_option
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
+from imageform.geometry._checks import (
+    MAX_MAGNITUDE,
+    as_float,
+    as_points,
+    check_bounded,
+    shape_text,
+)
 
 __all__ = [
     "Dehomogenized",
@@ -27,6 +34,17 @@ __all__ = [
     "line_through",
     "to_homogeneous",
 ]
+
+
+def _any_dim(points: ArrayLike, name: str, n_min: int, xp: Any) -> Array:
+    """Points ``(..., n)`` with ``n >= n_min`` (the shape checked before the values)."""
+    p = as_float(points, name, xp=xp, finite=False)
+    if p.ndim < 1 or not n_min <= p.shape[-1] <= 1 << 16:
+        raise InvalidInputError(
+            f"expected {name} of shape (..., n) with n >= {n_min}, got {shape_text(p)}"
+        )
+    check_bounded(p, name, xp)
+    return p
 
 
 def to_homogeneous(points: ArrayLike, w: float = 1.0) -> Array:
@@ -48,9 +66,10 @@ def to_homogeneous(points: ArrayLike, w: float = 1.0) -> Array:
     >>> to_homogeneous([60.0, -20.0])
     array([ 60., -20.,   1.])
     """
+    wv = as_real(w, "w", minimum=-MAX_MAGNITUDE, maximum=MAX_MAGNITUDE)
     xp = namespace(points)
-    p = as_points(points, "points", range(1, 1 << 16), xp=xp)
-    ones = xp.full((*p.shape[:-1], 1), w, dtype=p.dtype, device=getattr(p, "device", None))
+    p = _any_dim(points, "points", 1, xp)
+    ones = xp.full((*p.shape[:-1], 1), wv, dtype=p.dtype, device=getattr(p, "device", None))
     return xp.concat((p, ones), axis=-1)
 
 
@@ -67,13 +86,13 @@ class Dehomogenized(NamedTuple):
 def _dehomogenize(points: ArrayLike, at_infinity: str) -> Dehomogenized:
     check_option(at_infinity, ("raise", "nan"), "at_infinity policy")
     xp = namespace(points)
-    p = as_points(points, "homogeneous points", range(2, 1 << 16), xp=xp)
+    p = _any_dim(points, "homogeneous points", 2, xp)
     w = p[..., -1:]
     finite = w[..., 0] != 0
     if at_infinity == "raise" and not bool(xp.all(finite)):
         n_inf = int(xp.sum(xp.astype(~finite, xp.int64)))
         raise DegenerateConfigurationError(
-            f"{n_inf} point(s) have w = 0 (at infinity) and no Euclidean coordinates; "
+            f"{n_inf} of the points have w = 0 (at infinity) and no Euclidean coordinates; "
             "pass at_infinity='nan' to get NaN, or use from_homogeneous_masked for a mask"
         )
     safe_w = xp.where(w != 0, w, xp.ones_like(w))
@@ -267,6 +286,7 @@ def are_collinear(points: ArrayLike, *, tol: float = 1e-9) -> Array:
     >>> bool(are_collinear([[0.0, 0.0], [1.0, 1.0], [3.0, 3.1]]))
     False
     """
+    tol = as_real(tol, "tol", nonnegative=True, maximum=1e6)
     xp = namespace(points)
     p = as_points(points, "points", 2, xp=xp)
     if p.ndim < 2 or p.shape[-2] < 2:

@@ -13,8 +13,8 @@ from typing import Any
 
 from imageform._backend import device_of, linalg, namespace
 from imageform._typing import Array, ArrayLike
-from imageform._validate import as_matrix, as_points
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
+from imageform.geometry._checks import as_matrix, as_points
 from imageform.geometry._normalize import similarity_normalization
 from imageform.geometry.homogeneous import are_collinear, from_homogeneous
 
@@ -122,6 +122,8 @@ def apply_homography(H: ArrayLike, points: ArrayLike) -> Array:
     xp = namespace(H, points)
     p = as_points(points, "points", 2, xp=xp)
     Hm = as_matrix(H, "H", (3, 3), xp=xp, dtype=p.dtype, device=device_of(p))
+    if not bool(xp.any(Hm != 0)):
+        raise InvalidInputError("expected a non-zero H (a zero matrix maps every point nowhere)")
     ones = xp.ones((*p.shape[:-1], 1), dtype=p.dtype, device=device_of(p))
     ph = xp.concat((p, ones), axis=-1) @ xp.matrix_transpose(Hm)
     return from_homogeneous(ph, at_infinity="nan")

@@ -17,10 +17,19 @@ from dataclasses import dataclass
 import numpy as np
 
 from imageform import _deprecate
-from imageform._backend import namespace
+from imageform._backend import namespace, to_numpy
 from imageform._typing import Array, ArrayLike, FloatArray
-from imageform._validate import as_float, as_matrix, check_image_size, check_positive
+from imageform._validate import as_real, check_positive
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
+from imageform.geometry._checks import (
+    MAX_MAGNITUDE,
+    MAX_SIDE,
+    as_float,
+    as_matrix,
+    check_image_size,
+    check_K,
+    real_pair,
+)
 
 __all__ = ["Intrinsics", "intrinsic_matrix", "projected_size"]
 
@@ -113,9 +122,7 @@ class Intrinsics:
 
     def __post_init__(self) -> None:
         for name in ("fx", "fy", "cx", "cy", "skew"):
-            v = float(getattr(self, name))
-            if not math.isfinite(v):
-                raise InvalidInputError(f"expected a finite {name}, got {v}")
+            v = as_real(getattr(self, name), name, minimum=-MAX_MAGNITUDE, maximum=MAX_MAGNITUDE)
             object.__setattr__(self, name, v)
         if self.fx == 0 or self.fy == 0:
             raise InvalidInputError("expected non-zero focal lengths fx, fy (K would be singular)")
@@ -135,9 +142,8 @@ class Intrinsics:
     @classmethod
     def from_matrix(cls, K: ArrayLike, image_size: tuple[int, int] | None = None) -> Intrinsics:
         """From a 3×3 K with ``K[2] = (0, 0, 1)`` (scale it first if not)."""
-        M = np.asarray(as_matrix(K, "K", (3, 3), batch=False))
-        if M[2, 0] != 0 or M[2, 1] != 0 or M[1, 0] != 0 or M[2, 2] == 0:
-            raise InvalidInputError(f"expected an upper-triangular K, got\n{M}")
+        M = np.asarray(to_numpy(as_matrix(K, "K", (3, 3), batch=False)), dtype=np.float64)
+        check_K(M, np, "K", positive=True)
         M = M / M[2, 2]
         return cls(M[0, 0], M[1, 1], M[0, 2], M[1, 2], M[0, 1], image_size)
 
@@ -164,12 +170,20 @@ class Intrinsics:
         a 15 mm image is 3000 px.
         """
         f = check_positive(focal_length, "focal_length (mm)")
-        px, py = (pixel_pitch_um, pixel_pitch_um) if np.isscalar(pixel_pitch_um) else pixel_pitch_um  # type: ignore[misc]
-        px = check_positive(px, "pixel_pitch_um")
-        py = check_positive(py, "pixel_pitch_um")
-        w, h = image_size
-        cx, cy = principal_point if principal_point is not None else ((w - 1) / 2, (h - 1) / 2)
-        return cls(f * 1000.0 / px, f * 1000.0 / py, cx, cy, 0.0, (w, h))
+        px, py = real_pair(pixel_pitch_um, "pixel_pitch_um", positive=True, scalar_ok=True)
+        w, h = check_image_size(image_size)
+        cx, cy = (
+            real_pair(principal_point, "principal_point")
+            if principal_point is not None
+            else ((w - 1) / 2, (h - 1) / 2)
+        )
+        fx, fy = f * 1000.0 / px, f * 1000.0 / py
+        if max(fx, fy) > MAX_MAGNITUDE:
+            raise InvalidInputError(
+                f"expected focal_length / pixel_pitch_um <= {MAX_MAGNITUDE:g} pixels, got "
+                f"{max(fx, fy):g} (focal_length {f:g} mm, pixel_pitch_um ({px:g}, {py:g}))"
+            )
+        return cls(fx, fy, cx, cy, 0.0, (w, h))
 
     @classmethod
     @_deprecate.parameters(
@@ -187,9 +201,8 @@ class Intrinsics:
 
         Every parameter is keyword-only.
         """
-        sw = check_positive(sensor_size_mm[0], "sensor width")
-        sh = check_positive(sensor_size_mm[1], "sensor height")
-        w, h = image_size
+        sw, sh = real_pair(sensor_size_mm, "sensor_size_mm (width, height)", positive=True)
+        w, h = check_image_size(image_size)
         return cls.from_physical(
             focal_length=focal_length,
             pixel_pitch_um=(sw / w * 1000.0, sh / h * 1000.0),
@@ -202,10 +215,13 @@ class Intrinsics:
 
         ``fx = (w / 2) / tan(fov_x / 2)``.
         """
-        if not 0 < fov_x < math.pi:
-            raise InvalidInputError(f"expected 0 < fov_x < pi radians, got {fov_x}")
-        w, h = image_size
-        f = (w / 2) / math.tan(fov_x / 2)
+        fov = as_real(fov_x, "fov_x")
+        if not 0 < fov < math.pi:
+            raise InvalidInputError(f"expected 0 < fov_x < pi radians, got {fov:g}")
+        w, h = check_image_size(image_size)
+        f = (w / 2) / math.tan(fov / 2)
+        if f > MAX_MAGNITUDE:
+            raise InvalidInputError(f"expected fov_x giving fx <= {MAX_MAGNITUDE:g}, got {fov:g}")
         return cls(f, f, (w - 1) / 2, (h - 1) / 2, 0.0, (w, h))
 
     def _size(self) -> tuple[int, int]:
@@ -247,7 +263,15 @@ class Intrinsics:
         s = check_positive(factor, "factor")
         size = None
         if self.image_size is not None:
-            size = (round(self.image_size[0] * s), round(self.image_size[1] * s))
+            w, h = self.image_size[0] * s, self.image_size[1] * s
+            if not (0.5 <= w <= MAX_SIDE and 0.5 <= h <= MAX_SIDE):
+                raise InvalidInputError(
+                    f"expected factor giving an image of 1 to {MAX_SIDE} pixels a side, got "
+                    f"factor {s:g} for image_size {self.image_size}"
+                )
+            size = (round(w), round(h))
+        if s * max(abs(self.fx), abs(self.fy), abs(self.cx), abs(self.cy)) > MAX_MAGNITUDE:
+            raise InvalidInputError(f"expected a factor <= {MAX_MAGNITUDE:g} / fx, got {s:g}")
         return Intrinsics(
             self.fx * s,
             self.fy * s,

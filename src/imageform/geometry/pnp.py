@@ -17,8 +17,9 @@ import numpy.typing as npt
 from numpy.typing import NDArray
 
 from imageform._backend import to_numpy, use_numba
-from imageform._validate import as_matrix, as_points
+from imageform._validate import as_bool, as_int
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
+from imageform.geometry._checks import as_matrix, as_points, check_K
 from imageform.geometry.calibration_refine import rodrigues
 from imageform.geometry.distortion import DistortionModel, _check_model
 from imageform.geometry.rotations import matrix_to_rvec
@@ -278,8 +279,7 @@ def _validate(
             "expected object_points (..., N, 3) and image_points (..., N, 2) with the same "
             f"leading shape, got {X.shape} and {uv.shape}"
         )
-    if Km[0, 0] <= 0 or Km[1, 1] <= 0 or Km[1, 0] != 0 or Km[2, 0] != 0 or Km[2, 1] != 0:
-        raise InvalidInputError(f"expected K upper triangular with fx, fy > 0, got {Km.tolist()}")
+    check_K(Km, np, "K", positive=True)
     Km = Km / Km[2, 2]
     _check_model(distortion)
     return X, uv, Km, X.shape[:-2], out_dtype
@@ -347,6 +347,8 @@ def solve_pnp(
     >>> (res.tvec.round(9) + 0.0).tolist(), bool(res.valid)
     ([0.0, 0.0, 5.0], True)
     """
+    refine = as_bool(refine, "refine")
+    max_iter = as_int(max_iter, "max_iter", minimum=1, maximum=10**6)
     X, uv, Km, batch, out_dtype = _validate(object_points, image_points, K, distortion)
     N = X.shape[-2]
     Xf = X.reshape(-1, N, 3)

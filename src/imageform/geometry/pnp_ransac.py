@@ -9,8 +9,9 @@ import numpy.typing as npt
 
 from imageform import _deprecate
 from imageform._random import RNGLike, as_rng
-from imageform._validate import check_positive
+from imageform._validate import as_int, check_positive
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
+from imageform.geometry._checks import check_rng
 from imageform.geometry.distortion import DistortionModel
 from imageform.geometry.pnp import (
     PnPResult,
@@ -95,6 +96,8 @@ def solve_pnp_ransac(
             f"expected one problem of shape (N, 3), (N, 2), got object_points {X.shape}; "
             "call solve_pnp_ransac per problem"
         )
+    max_hypotheses = as_int(max_hypotheses, "max_hypotheses", minimum=1, maximum=10**8)
+    max_iter = as_int(max_iter, "max_iter", minimum=1, maximum=10**6)
     thr = check_positive(threshold, "threshold")
     p = check_positive(confidence, "confidence")
     if p >= 1.0:
@@ -110,7 +113,7 @@ def solve_pnp_ransac(
     uvi = np.stack(
         [Km[0, 0] * xy[:, 0] + Km[0, 1] * xy[:, 1] + Km[0, 2], Km[1, 1] * xy[:, 1] + Km[1, 2]], -1
     )
-    gen = as_rng(rng)
+    gen = as_rng(check_rng(rng))
     best_count, best_R, best_t = -1, np.eye(3), np.zeros(3)
     needed, drawn = float(max_hypotheses), 0
     while drawn < min(needed, max_hypotheses):

@@ -23,14 +23,17 @@ import numpy as np
 
 from imageform._backend import device_of, namespace
 from imageform._typing import Array, ArrayLike, FloatArray
-from imageform._validate import (
+from imageform._validate import as_real, check_rotation
+from imageform.errors import InvalidInputError
+from imageform.geometry._checks import (
+    MAX_MAGNITUDE,
     as_matrix,
     as_points,
     check_image_size,
-    check_positive,
-    check_rotation,
+    check_K,
+    real_pair,
+    shape_text,
 )
-from imageform.errors import InvalidInputError
 from imageform.geometry.camera import Projection, project_points
 
 __all__ = [
@@ -42,8 +45,10 @@ __all__ = [
 ]
 
 
-def _world_to_cam(points: ArrayLike, R: ArrayLike | None, t: ArrayLike | None) -> tuple[Any, Array]:
-    xp = namespace(points, R, t)
+def _world_to_cam(
+    points: ArrayLike, R: ArrayLike | None, t: ArrayLike | None, K: ArrayLike | None = None
+) -> tuple[Any, Array]:
+    xp = namespace(points, R, t, K)
     X = as_points(points, "points", 3, xp=xp)
     if R is not None:
         Rm = as_matrix(R, "R", (3, 3), xp=xp, dtype=X.dtype, device=device_of(X))
@@ -74,11 +79,9 @@ def orthographic_project(
     array([[80.,  0.],
            [80.,  0.]])
     """
+    sx, sy = real_pair(scale, "scale", positive=True, scalar_ok=True)
+    cx, cy = real_pair(principal_point, "principal_point")
     xp, X = _world_to_cam(points, R, t)
-    sx, sy = (scale, scale) if np.isscalar(scale) else scale  # type: ignore[misc]
-    sx = check_positive(sx, "scale")
-    sy = check_positive(sy, "scale")
-    cx, cy = (float(c) for c in principal_point)
     return xp.stack((sx * X[..., 0] + cx, sy * X[..., 1] + cy), axis=-1)
 
 
@@ -94,8 +97,8 @@ def orthographic_matrix(
            [ 0.,  2.,  0.,  5.],
            [ 0.,  0.,  0.,  1.]])
     """
-    sx, sy = (scale, scale) if np.isscalar(scale) else scale  # type: ignore[misc]
-    cx, cy = principal_point
+    sx, sy = real_pair(scale, "scale", positive=True, scalar_ok=True)
+    cx, cy = real_pair(principal_point, "principal_point")
     return np.array([[sx, 0, 0, cx], [0, sy, 0, cy], [0, 0, 0, 1.0]], dtype=np.float64)
 
 
@@ -121,12 +124,19 @@ def weak_perspective_project(
     array([[ 60., -20.],
            [ 60., -20.]])
     """
-    xp, X = _world_to_cam(points, R, t)
+    xp, X = _world_to_cam(points, R, t, K)
     Km = as_matrix(K, "K", (3, 3), xp=xp, dtype=X.dtype, device=device_of(X))
+    check_K(Km, xp)
     if depth is None:
+        if X.ndim >= 2 and X.shape[-2] == 0:
+            raise InvalidInputError(
+                "expected points with at least one point for the mean depth Z0 (or pass "
+                "depth=), got shape " + shape_text(X)
+            )
         z0 = xp.mean(X[..., 2], axis=-1, keepdims=True) if X.ndim >= 2 else X[..., 2]
     else:
-        z0 = xp.asarray(float(depth), dtype=X.dtype, device=device_of(X))
+        d = as_real(depth, "depth", positive=True, maximum=MAX_MAGNITUDE)
+        z0 = xp.asarray(d, dtype=X.dtype, device=device_of(X))
     if bool(xp.any(~(z0 > 0))):
         raise InvalidInputError("weak perspective needs a reference depth Z0 > 0 (object in front)")
     x = X[..., 0] / z0
@@ -147,7 +157,7 @@ def weak_perspective_matrix(K: ArrayLike, depth: float) -> FloatArray:
            [  0., 100.,   0.,   0.],
            [  0.,   0.,   0.,   5.]])
     """
-    z0 = check_positive(depth, "depth")
+    z0 = as_real(depth, "depth", positive=True, maximum=MAX_MAGNITUDE)
     Km = np.asarray(as_matrix(K, "K", (3, 3), batch=False), dtype=np.float64)
     return Km @ np.array([[1.0, 0, 0, 0], [0, 1, 0, 0], [0, 0, 0, z0]])
 
@@ -181,14 +191,30 @@ class ConeBeamGeometry:
     principal_point: tuple[float, float] | None = None
 
     def __post_init__(self) -> None:
-        sdd = check_positive(self.source_to_detector, "source_to_detector")
-        sod = check_positive(self.source_to_object, "source_to_object")
-        check_positive(self.pixel_pitch, "pixel_pitch")
+        sdd = as_real(self.source_to_detector, "source_to_detector", positive=True, maximum=1e50)
+        sod = as_real(self.source_to_object, "source_to_object", positive=True, maximum=1e50)
+        pitch = as_real(self.pixel_pitch, "pixel_pitch", positive=True, maximum=1e50)
         if sod > sdd:
             raise InvalidInputError(
-                f"the object must lie between source and detector: SOD {sod} > SDD {sdd}"
+                f"expected source_to_object <= source_to_detector (the object between source "
+                f"and detector), got source_to_object {sod:g} > source_to_detector {sdd:g}"
             )
-        check_image_size(self.detector_shape, "detector_shape")
+        if sdd / pitch > MAX_MAGNITUDE or sdd / sod > MAX_MAGNITUDE:
+            raise InvalidInputError(
+                f"expected source_to_detector / pixel_pitch and / source_to_object <= "
+                f"{MAX_MAGNITUDE:g}, got source_to_detector {sdd:g}, pixel_pitch {pitch:g}, "
+                f"source_to_object {sod:g}"
+            )
+        object.__setattr__(self, "source_to_detector", sdd)
+        object.__setattr__(self, "source_to_object", sod)
+        object.__setattr__(self, "pixel_pitch", pitch)
+        object.__setattr__(
+            self, "detector_shape", check_image_size(self.detector_shape, "detector_shape")
+        )
+        if self.principal_point is not None:
+            object.__setattr__(
+                self, "principal_point", real_pair(self.principal_point, "principal_point")
+            )
 
     @property
     def magnification(self) -> float:
@@ -202,7 +228,7 @@ class ConeBeamGeometry:
 
     def penumbra(self, focal_spot_size: float) -> float:
         """Geometric unsharpness ``U = F (SDD - SOD) / SOD`` at the detector (mm)."""
-        f = check_positive(focal_spot_size, "focal_spot_size")
+        f = as_real(focal_spot_size, "focal_spot_size", positive=True, maximum=MAX_MAGNITUDE)
         return f * (self.source_to_detector - self.source_to_object) / self.source_to_object
 
     @property

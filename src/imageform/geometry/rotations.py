@@ -2,7 +2,7 @@
 
 All functions are batched over leading dimensions and work on any Array-API array.
 Rotation matrices map world to camera coordinates when used as a camera's ``R``
-(``X_cam = R @ X_world + t``, DESIGN.md). Angles are radians.
+(``X_cam = R @ X_world + t``, docs/conventions.md). Angles are radians.
 
 Euler orders follow SciPy's ``Rotation.from_euler`` spelling: lower-case ``"xyz"`` is
 *extrinsic* (about the fixed axes x, then y, then z: ``R = Rz @ Ry @ Rx``), upper-case
@@ -15,8 +15,9 @@ from typing import Any, NamedTuple
 
 from imageform._backend import device_of, linalg, namespace
 from imageform._typing import Array, ArrayLike
-from imageform._validate import as_matrix, as_points, check_rotation, det3
+from imageform._validate import as_real, check_rotation, describe, det3, format_shape
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
+from imageform.geometry._checks import as_float, as_matrix, as_points
 
 __all__ = [
     "Pose",
@@ -46,7 +47,8 @@ def _check_order(order: object) -> str:
     ):
         raise InvalidInputError(
             f"expected an Euler order of three axes from 'xyz' (lower-case extrinsic, "
-            f"upper-case intrinsic, no axis twice in a row), e.g. 'xyz' or 'ZYX'; got {order!r}"
+            f"upper-case intrinsic, no axis twice in a row), e.g. 'xyz' or 'ZYX'; got "
+            f"{describe(order)}"
         )
     return order
 
@@ -67,16 +69,14 @@ def axis_rotation(axis: str, angle: ArrayLike) -> Array:
            [ 1.,  0.,  0.],
            [ 0.,  0.,  1.]])
     """
-    if axis not in _AXES:
-        raise InvalidInputError(f"expected axis 'x', 'y' or 'z', got {axis!r}")
+    if not isinstance(axis, str) or axis not in _AXES:
+        raise InvalidInputError(f"expected axis 'x', 'y' or 'z', got {describe(axis)}")
     xp = namespace(angle)
     return _axis_rotation(_AXES[axis], _as_angle(angle, xp), xp)
 
 
-def _as_angle(angle: ArrayLike, xp: Any) -> Array:
-    from imageform._validate import as_float
-
-    return as_float(angle, "angle", xp=xp)
+def _as_angle(angle: ArrayLike, xp: Any, name: str = "angle") -> Array:
+    return as_float(angle, name, xp=xp)
 
 
 def _axis_rotation(i: int, a: Array, xp: Any) -> Array:
@@ -194,7 +194,14 @@ def camera_rotation(pitch: float, yaw: float = 0.0, roll: float = 0.0) -> Array:
     """
     angles = [yaw, pitch, roll]
     xp = namespace(*angles)
-    a = xp.stack([_as_angle(v, xp) for v in angles], axis=-1)
+    arrs = [_as_angle(v, xp, n) for v, n in zip(angles, ("yaw", "pitch", "roll"), strict=True)]
+    shapes = {tuple(v.shape) for v in arrs}
+    if len(shapes) != 1:
+        raise InvalidInputError(
+            "expected yaw, pitch and roll of one shape, got "
+            + ", ".join(format_shape(tuple(v.shape)) for v in arrs)
+        )
+    a = xp.stack(arrs, axis=-1)
     return xp.matrix_transpose(euler_to_matrix(a, "YXZ"))
 
 
@@ -377,6 +384,7 @@ def is_rotation(R: ArrayLike, *, atol: float = 1e-6) -> Array:
     xp = namespace(R)
     M = as_matrix(R, "R", (3, 3), xp=xp)
     eye = xp.eye(3, dtype=M.dtype, device=device_of(M))
+    atol = as_real(atol, "atol", nonnegative=True, maximum=1.0)
     orth = xp.max(xp.abs(M @ xp.matrix_transpose(M) - eye), axis=(-2, -1)) <= atol
     det = xp.abs(det3(M) - 1.0) <= max(atol, 10 * atol)
     return orth & det
@@ -396,7 +404,7 @@ def look_at(eye: ArrayLike, target: ArrayLike, up: ArrayLike = (0.0, -1.0, 0.0))
 
     The camera's z axis points from ``eye`` to ``target``; its y axis points *down*, i.e.
     opposite to the world ``up`` direction projected onto the image plane; x = y × z points
-    right (DESIGN.md camera frame). ``t = -R @ eye``.
+    right (camera frame of docs/conventions.md). ``t = -R @ eye``.
 
     The default ``up = (0, -1, 0)`` suits a world whose y axis points down like the camera's;
     for a z-up world pass ``up=(0, 0, 1)``.

@@ -14,8 +14,9 @@ import numpy.typing as npt
 from numpy.typing import NDArray
 
 from imageform._backend import to_numpy
-from imageform._validate import as_matrix, as_points, check_positive
+from imageform._validate import as_bool, as_int, as_real
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
+from imageform.geometry._checks import MAX_MAGNITUDE, as_matrix, as_points
 
 __all__ = ["TriangulationResult", "triangulate_points"]
 
@@ -135,10 +136,19 @@ def triangulate_points(
             f"got {P.shape} and {uv.shape}"
         )
     if P.shape[0] < 2:
-        raise InvalidInputError(f"expected at least 2 views, got {P.shape[0]}")
+        raise InvalidInputError(
+            f"expected projection_matrices of at least 2 views, got {P.shape[0]}"
+        )
     if np.any(np.isinf(uv)):
         raise InvalidInputError("image_points contains inf (use NaN for a missing observation)")
-    s = check_positive(sigma, "sigma")
+    if uv.size and not np.all(np.isnan(uv)) and float(np.nanmax(np.abs(uv))) > MAX_MAGNITUDE:
+        raise InvalidInputError(
+            f"expected image_points with magnitudes <= {MAX_MAGNITUDE:g}, got "
+            f"{float(np.nanmax(np.abs(uv))):g}"
+        )
+    s = as_real(sigma, "sigma", positive=True, maximum=1e100)
+    refine = as_bool(refine, "refine")
+    max_iter = as_int(max_iter, "max_iter", minimum=0, maximum=10**6)
     det = np.linalg.det(P[:, :, :3])
     if np.any(det == 0):
         raise DegenerateConfigurationError("a projection matrix has a singular left 3x3 block")

@@ -14,6 +14,7 @@ undistorted lazily, block by block, each output block from the source window it 
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
@@ -26,8 +27,9 @@ from imageform._backend import (
     to_numpy,
     use_numba,
 )
-from imageform._validate import as_image, as_matrix, format_shape
+from imageform._validate import as_image, as_real, check_memory, format_shape
 from imageform.errors import InvalidInputError
+from imageform.geometry._checks import MAX_MAGNITUDE, as_float, as_matrix, size_pair
 from imageform.geometry._remap_xp import map_grid, remap_dask, remap_xp
 from imageform.geometry.distortion import BrownConrady, DistortionModel, _check_model
 
@@ -74,6 +76,28 @@ def _remap_bilinear_numpy(
     return out.astype(img.dtype, copy=False)
 
 
+def _fill(fill: object) -> float:
+    """The fill value: a finite real or NaN (to mark pixels with no source)."""
+    try:
+        if isinstance(fill, float | np.floating) and math.isnan(fill):
+            return math.nan
+    except TypeError:  # pragma: no cover
+        pass
+    return as_real(fill, "fill", minimum=-MAX_MAGNITUDE, maximum=MAX_MAGNITUDE)
+
+
+def _same_kind(image: Any, map_uv: Any) -> None:
+    """Refuse a Dask map_uv with an eager image (a Dask image with an eager map is the lazy
+    path; the map is small)."""
+    lazy_map = hasattr(map_uv, "shape") and is_dask_namespace(namespace(map_uv))
+    lazy_image = hasattr(image, "shape") and is_dask_namespace(namespace(image))
+    if lazy_map and not lazy_image:
+        raise InvalidInputError(
+            f"expected a Dask image with a Dask map_uv, got a {type(image).__name__} image; "
+            "pass map_uv.compute() (or a Dask image)"
+        )
+
+
 def remap_bilinear(image: Any, map_uv: Any, *, fill: float = 0.0) -> Any:
     """Sample ``image`` at the source positions ``map_uv`` by bilinear interpolation.
 
@@ -102,15 +126,26 @@ def remap_bilinear(image: Any, map_uv: Any, *, fill: float = 0.0) -> Any:
     >>> remap_bilinear(img, [[[0.5, 0.5]]]).tolist()
     [[1.5]]
     """
+    fill = _fill(fill)
+    _same_kind(image, map_uv)
+    if hasattr(image, "shape") and math.prod(tuple(image.shape)) == 0:
+        raise InvalidInputError(
+            f"expected a non-empty image, got shape {format_shape(tuple(image.shape))}"
+        )
     xp = namespace(image, map_uv)
     if is_dask_namespace(xp):
         return _remap_dask_public(image, map_uv, float(fill))
     if not is_numpy_namespace(xp):
         return _remap_generic(image, map_uv, float(fill), xp)
     batch, full_shape, gray = _as_batch(image)
-    m = np.asarray(to_numpy(map_uv), dtype=np.float64)
+    m = np.asarray(to_numpy(as_float(map_uv, "map_uv", xp=np, finite=False)), dtype=np.float64)
     if m.ndim != 3 or m.shape[-1] != 2:
         raise InvalidInputError(f"expected map_uv of shape (H, W, 2), got {format_shape(m.shape)}")
+    check_memory(
+        8.0 * m.shape[0] * m.shape[1] * max(1, math.prod(batch.shape[:1] + batch.shape[3:])),
+        "map_uv",
+        "the remapped image",
+    )
     fill_v = float(fill)
     map_u = np.ascontiguousarray(m[..., 0])
     map_v = np.ascontiguousarray(m[..., 1])
@@ -169,9 +204,8 @@ def undistortion_map(
     >>> m[0, 0].tolist()
     [0.0, 0.0]
     """
-    h, w = (int(shape[0]), int(shape[1]))
-    if h < 1 or w < 1:
-        raise InvalidInputError(f"expected a positive output shape (H, W), got {shape!r}")
+    h, w = size_pair(shape, "shape (H, W)")
+    check_memory(16.0 * h * w, "shape", f"a ({h}, {w}, 2) float64 map")
     Km, Kn = _intrinsics(K, new_K)
     _check_model(distortion)
     xp = namespace(K, new_K)
@@ -244,12 +278,26 @@ def undistort_image(
             f"expected image of shape (H, W) or (..., H, W, C), got {format_shape(batch_shape)}"
         )
     hw = batch_shape[:2] if len(batch_shape) == 2 else batch_shape[-3:-1]
-    shape = hw if out_shape is None else out_shape
-    out_hw = (int(shape[0]), int(shape[1]))
-    if out_hw[0] < 1 or out_hw[1] < 1:
-        raise InvalidInputError(f"expected a positive output shape (H, W), got {shape!r}")
+    if math.prod(batch_shape) == 0:
+        raise InvalidInputError(
+            f"expected a non-empty image, got shape {format_shape(batch_shape)}"
+        )
+    fill = _fill(fill)
+    out_hw = (
+        (int(hw[0]), int(hw[1])) if out_shape is None else size_pair(out_shape, "out_shape (H, W)")
+    )
+    check_memory(
+        16.0 * out_hw[0] * out_hw[1] * max(1, math.prod(batch_shape) // max(1, hw[0] * hw[1])),
+        "out_shape",
+        f"an undistorted image of {out_hw[0]} x {out_hw[1]} pixels",
+    )
     if is_dask_namespace(xp):
         return _undistort_dask(image, K, distortion, new_K, out_hw, float(fill))
+    # a lazy 3x3 K with an eager image: computed here (nine numbers), the image stays eager
+    K, new_K = (
+        np.asarray(k) if hasattr(k, "shape") and is_dask_namespace(namespace(k)) else k
+        for k in (K, new_K)
+    )
     if not is_numpy_namespace(xp):
         Km, Kn = _intrinsics(K, new_K)
         _check_model(distortion)

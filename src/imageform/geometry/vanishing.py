@@ -15,8 +15,9 @@ from typing import Any
 
 from imageform._backend import device_of, linalg, namespace
 from imageform._typing import Array, ArrayLike
-from imageform._validate import as_float, as_matrix, as_points, check_rotation
+from imageform._validate import as_real, check_rotation, format_shape
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
+from imageform.geometry._checks import as_float, as_matrix, as_points
 from imageform.geometry.homogeneous import _normalize_homogeneous_point, line_through
 
 __all__ = [
@@ -200,6 +201,7 @@ def perspective_type(
     )
     if R is not None:
         check_rotation(Rm, "R", xp=xp)
+    tol = as_real(tol, "tol", nonnegative=True, maximum=1e6)
     norms = xp.sqrt(xp.sum(D * D, axis=-1))
     if bool(xp.any(norms == 0)):
         raise InvalidInputError("expected non-zero directions")
@@ -341,7 +343,9 @@ def vanishing_point_from_lines(lines: ArrayLike, weights: ArrayLike | None = Non
         raise InvalidInputError(f"expected lines of shape (N, 3) with N >= 2, got {tuple(L.shape)}")
     ab = xp.sqrt(L[:, 0] ** 2 + L[:, 1] ** 2)
     if bool(xp.any(ab == 0)):
-        raise InvalidInputError("a line at infinity (a = b = 0) has no direction")
+        raise InvalidInputError(
+            "expected lines with (a, b) != (0, 0): a line at infinity has no direction"
+        )
     L = L / ab[:, None]
     # closest points of each line to the origin: -c (a, b)
     foot = -L[:, 2:3] * L[:, :2]
@@ -356,7 +360,10 @@ def vanishing_point_from_lines(lines: ArrayLike, weights: ArrayLike | None = Non
         w = as_float(weights, "weights", xp=xp, dtype=L.dtype)
         w = xp.reshape(w, (-1,))
         if w.shape[0] != L.shape[0] or bool(xp.any(w < 0)):
-            raise InvalidInputError("expected one non-negative weight per line")
+            raise InvalidInputError(
+                f"expected weights: one non-negative weight per line ({L.shape[0]}), got "
+                f"shape {format_shape(tuple(w.shape))}"
+            )
         Ln = Ln * xp.sqrt(w)[:, None]
     _, _, Vt = linalg(xp).svd(Ln, full_matrices=Ln.shape[0] < 3)  # 2 lines: need the full V
     vn = Vt[-1, :]

@@ -22,8 +22,9 @@ import numpy as np
 from imageform import _deprecate
 from imageform._random import RNGLike, as_rng
 from imageform._typing import ArrayLike, FloatArray
-from imageform._validate import check_positive
+from imageform._validate import as_int, as_real, check_positive, describe
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
+from imageform.geometry._checks import check_image_size, check_rng
 from imageform.geometry.line_segments import LineSegments, detect_line_segments
 from imageform.geometry.vanishing import (
     focal_from_vanishing_points,
@@ -208,7 +209,16 @@ def detect_vanishing_points(
         image_size = (arr.shape[1], arr.shape[0])
     elif image_size is None:
         raise InvalidInputError("segments need image_size=(width, height)")
-    check_positive(angle_threshold, "angle_threshold")
+    elif not isinstance(segments, LineSegments):
+        raise TypeError(
+            "expected segments as a LineSegments (from detect_line_segments), got "
+            + describe(segments)
+        )
+    image_size = check_image_size(image_size)
+    angle_threshold = check_positive(angle_threshold, "angle_threshold")
+    n_candidates = as_int(n_candidates, "n_candidates", minimum=1, maximum=1000)
+    iterations = as_int(iterations, "iterations", minimum=1, maximum=10**7)
+    infinity_factor = as_real(infinity_factor, "infinity_factor", positive=True, maximum=1e50)
     if len(segments) < 2:
         raise DegenerateConfigurationError(
             f"found {len(segments)} line segment(s); vanishing points need at least two"
@@ -217,7 +227,9 @@ def detect_vanishing_points(
     centre = np.array([(w - 1) / 2, (h - 1) / 2])
     diag = math.hypot(w, h)
     far = infinity_factor * diag
-    cands = _ransac_candidates(segments, as_rng(rng), n_candidates, angle_threshold, iterations)
+    cands = _ransac_candidates(
+        segments, as_rng(check_rng(rng)), n_candidates, angle_threshold, iterations
+    )
     cands = [(_normalise(v, far), inl, sc) for v, inl, sc in cands]
     best: tuple[float, tuple[int, ...], FloatArray | None] = (-1.0, (), None)
     for r in (3, 2):

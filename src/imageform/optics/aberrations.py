@@ -23,10 +23,20 @@ import numpy as np
 
 from imageform import _deprecate
 from imageform._backend import to_numpy
-from imageform._validate import as_image, check_positive, format_shape
+from imageform._validate import (
+    as_image,
+    as_int,
+    as_real,
+    as_real_array,
+    as_reals,
+    check_positive,
+    check_real_values,
+    finite_result,
+    format_shape,
+)
 from imageform.errors import InvalidInputError
 from imageform.geometry.undistort import remap_bilinear
-from imageform.optics.defocus import blur_by_radius
+from imageform.optics.defocus import _check_blur_radius, blur_by_radius
 
 __all__ = [
     "ChromaticFocalLengths",
@@ -41,7 +51,24 @@ __all__ = [
 
 def _center(shape: tuple[int, ...], center: tuple[float, float] | None) -> tuple[float, float]:
     h, w = shape[0], shape[1]
-    return ((w - 1) / 2, (h - 1) / 2) if center is None else (float(center[0]), float(center[1]))
+    if center is None:
+        return (w - 1) / 2, (h - 1) / 2
+    cu, cv = as_reals(center, "center", 2)
+    return cu, cv
+
+
+def _is_nan(value: object) -> bool:
+    return isinstance(value, float | np.floating) and math.isnan(value)
+
+
+def _image(image: Any, ndim: tuple[int, ...], want: str) -> np.ndarray:
+    """The image as a NumPy float array of ``ndim`` dimensions, not empty."""
+    arr = np.asarray(to_numpy(as_image(image, "image", channels=None)))
+    if arr.ndim not in ndim or 0 in arr.shape:
+        raise InvalidInputError(
+            f"expected image of shape {want}, non-empty, got {format_shape(arr.shape)}"
+        )
+    return arr
 
 
 @_deprecate.parameters(positional=("focal_length", "f_number", "sa_coefficient"))
@@ -71,7 +98,15 @@ def spherical_blur_radius(*, focal_length: float, f_number: float, sa_coefficien
     f = check_positive(focal_length, "focal_length (m)")
     n = check_positive(f_number, "f_number")
     s = check_positive(sa_coefficient, "sa_coefficient", allow_zero=True)
-    return s * f / (32.0 * n**3)
+    return float(
+        finite_result(
+            "the blur radius S f / (32 N³)",
+            lambda: s * f / (32.0 * n**3),
+            focal_length=f,
+            f_number=n,
+            sa_coefficient=s,
+        )
+    )
 
 
 @_deprecate.parameters(renamed={"centre": "center"})
@@ -107,20 +142,18 @@ def spherical_aberration(
     >>> round(float(out.sum()), 9)  # light is conserved
     1.0
     """
-    img = as_image(image, "image", channels=None)
-    arr = np.asarray(to_numpy(img))
-    if arr.ndim not in (2, 3):
-        raise InvalidInputError(
-            f"expected image of shape (H, W) or (H, W, C), got {format_shape(arr.shape)}"
-        )
+    arr = _image(image, (2, 3), "(H, W) or (H, W, C)")
     p = check_positive(pixel_pitch, "pixel_pitch (m)")
     g = check_positive(field_coefficient, "field_coefficient", allow_zero=True)
-    r0 = (
-        spherical_blur_radius(
-            focal_length=focal_length, f_number=f_number, sa_coefficient=sa_coefficient
-        )
-        / p
+    r_lc = spherical_blur_radius(
+        focal_length=focal_length, f_number=f_number, sa_coefficient=sa_coefficient
     )
+    names = "focal_length, f_number, sa_coefficient, field_coefficient and pixel_pitch"
+    r0 = finite_result(f"the blur radius from {names}", lambda: r_lc / p, pixel_pitch=p)
+    rmax = finite_result(
+        f"the blur radius from {names}", lambda: r0 * (1.0 + g), field_coefficient=g
+    )
+    _check_blur_radius(rmax, arr.shape, names)
     h, w = arr.shape[:2]
     cu, cv = _center(arr.shape, center)
     v, u = np.mgrid[0:h, 0:w].astype(np.float64)
@@ -154,7 +187,8 @@ def lateral_chromatic_aberration(
     center : (c_u, c_v), optional
         The optical center (column, row); default the image center.
     fill : float
-        Value where a shrunk channel samples outside the image.
+        Value where a shrunk channel samples outside the image (finite, or NaN to mark
+        those pixels).
 
     Source: Hecht, *Optics*, 5th ed., §6.3.2 (lateral colour: magnification depends on
     wavelength); bilinear resampling as :func:`imageform.geometry.remap_bilinear`.
@@ -163,21 +197,27 @@ def lateral_chromatic_aberration(
     >>> lateral_chromatic_aberration(img, (1.0, 2.0))[0, :, 1].tolist()  # x = 3 → 4
     [0.0, 0.0, 0.0, 0.5, 1.0]
     """
-    arr = np.asarray(to_numpy(as_image(image, "image", channels=None)))
-    if arr.ndim != 3:
-        raise InvalidInputError(f"expected image of shape (H, W, C), got {format_shape(arr.shape)}")
-    mags = [check_positive(m, "magnification") for m in magnification]
+    arr = _image(image, (3,), "(H, W, C)")
+    mags = as_reals(magnification, "magnification", positive=True)
     if len(mags) != arr.shape[-1]:
         raise InvalidInputError(
             f"expected {arr.shape[-1]} magnifications (one per channel), got {len(mags)}"
         )
+    # NaN is allowed: it marks the samples from outside the image (the simulator keeps the
+    # unshifted value there)
+    fv = math.nan if _is_nan(fill) else as_real(fill, "fill")
     h, w = arr.shape[:2]
     cu, cv = _center(arr.shape, center)
     v, u = np.mgrid[0:h, 0:w].astype(np.float64)
     out = np.empty_like(arr)
     for c, m in enumerate(mags):
-        mp = np.stack([cu + (u - cu) / m, cv + (v - cv) / m], axis=-1)
-        out[..., c] = remap_bilinear(arr[..., c], mp, fill=fill)
+        mp = finite_result(
+            "the sampling positions c + (p - c) / m",
+            lambda m=m: np.stack([cu + (u - cu) / m, cv + (v - cv) / m], axis=-1),
+            magnification=m,
+            center=(cu, cv),
+        )
+        out[..., c] = remap_bilinear(arr[..., c], mp, fill=fv)
     return out
 
 
@@ -212,7 +252,13 @@ def chromatic_focal_lengths(*, focal_length: float, abbe_number: float) -> Chrom
     """
     f = check_positive(focal_length, "focal_length (m)")
     v = check_positive(abbe_number, "abbe_number")
-    return ChromaticFocalLengths(f * (1 + 0.5 / v), f, f * (1 - 0.5 / v))
+    red, blue = finite_result(
+        "the focal lengths f (1 ± 1/(2V))",
+        lambda: (f * (1 + 0.5 / v), f * (1 - 0.5 / v)),
+        focal_length=f,
+        abbe_number=v,
+    )
+    return ChromaticFocalLengths(red, f, blue)
 
 
 def axial_chromatic_blur_diameters(
@@ -242,29 +288,38 @@ def axial_chromatic_blur_diameters(
     >>> [round(float(x) * 1e6, 2) for x in b]  # µm: green sharp, red and blue blurred
     [198.25, 0.0, 201.36]
     """
-    fs = [check_positive(x, "focal length (m)") for x in focal_lengths]
-    if not 0 <= reference < len(fs):
-        raise InvalidInputError(f"expected reference in [0, {len(fs) - 1}], got {reference}")
+    fs = list(as_reals(focal_lengths, "focal_lengths (m)", positive=True))
+    ref = as_int(reference, "reference")
+    if not 0 <= ref < len(fs):
+        raise InvalidInputError(
+            f"expected reference in [0, {len(fs) - 1}] (an index into the {len(fs)} "
+            f"focal_lengths), got {ref}"
+        )
     n = check_positive(f_number, "f_number")
     s = check_positive(focus, "focus (m)")
-    fr = fs[reference]
+    fr = fs[ref]
     if s <= max(fs):
         raise InvalidInputError(
-            f"focus distance {s:g} m is inside a focal length ({max(fs):g} m): no real image"
+            f"focus distance {s:g} m is inside a focal length ({max(fs):g} m of "
+            "focal_lengths): no real image"
         )
-    d = np.asarray(to_numpy(depth), dtype=np.float64)
+    d = as_real_array(depth, "depth (m)", finite=False)
     if np.any(~(d > max(fs))):
         raise InvalidInputError(
             f"expected depth beyond every focal length (> {max(fs):g} m) so that each channel "
             "forms a real image"
         )
-    a = fr / n
-    ds = fr * s / (s - fr)
-    out = []
-    for f in fs:
-        dc = f * d / (d - f)
-        out.append(a * np.abs(dc - ds) / dc)
-    return np.stack(out, axis=-1)
+
+    def blur() -> np.ndarray:
+        a = fr / n
+        ds = fr * s / (s - fr)
+        out = []
+        for f in fs:
+            dc = np.where(np.isinf(d), f, f * d / (d - f))  # d = inf: the image at f
+            out.append(a * np.abs(dc - ds) / dc)
+        return np.stack(out, axis=-1)
+
+    return finite_result("the blur diameters", blur, focal_lengths=tuple(fs), f_number=n, focus=s)
 
 
 def axial_chromatic_aberration(
@@ -301,20 +356,25 @@ def axial_chromatic_aberration(
     >>> float(out[15, 15, 1]), bool(out[15, 15, 0] < 0.1)  # green sharp, red blurred
     (1.0, True)
     """
-    arr = np.asarray(to_numpy(as_image(image, "image", channels=None)))
-    if arr.ndim != 3 or arr.shape[-1] != len(focal_lengths):
+    fls = as_reals(focal_lengths, "focal_lengths (m)", positive=True)
+    arr = _image(image, (3,), f"(H, W, {len(fls)})")
+    if arr.shape[-1] != len(fls):
         raise InvalidInputError(
-            f"expected image (H, W, {len(focal_lengths)}) for {len(focal_lengths)} focal "
-            f"lengths, got {format_shape(arr.shape)}"
+            f"expected image (H, W, {len(fls)}) for {len(fls)} focal_lengths, "
+            f"got {format_shape(arr.shape)}"
         )
     p = check_positive(pixel_pitch, "pixel_pitch (m)")
-    d = np.asarray(to_numpy(depth), dtype=np.float64)
+    d = as_real_array(depth, "depth", check=False)
     if d.ndim not in (0, 2) or (d.ndim == 2 and d.shape != arr.shape[:2]):
         raise InvalidInputError(
             f"expected depth scalar or of shape {arr.shape[:2]}, got {format_shape(d.shape)}"
         )
+    check_real_values(d, "depth (m)", finite=False)
     b = axial_chromatic_blur_diameters(
-        d, focal_lengths=focal_lengths, f_number=f_number, focus=focus, reference=reference
+        d, focal_lengths=fls, f_number=f_number, focus=focus, reference=reference
     )
-    r = np.broadcast_to(b / (2 * p), (*arr.shape[:2], arr.shape[-1]))
+    names = "depth, focal_lengths, f_number, focus and pixel_pitch"
+    rr = finite_result(f"the blur radius from {names}", lambda: b / (2 * p), pixel_pitch=p)
+    _check_blur_radius(float(np.max(rr)), arr.shape, names)
+    r = np.broadcast_to(rr, (*arr.shape[:2], arr.shape[-1]))
     return blur_by_radius(arr, np.ascontiguousarray(r))

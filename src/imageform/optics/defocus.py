@@ -19,13 +19,50 @@ import numpy as np
 
 from imageform import _deprecate
 from imageform._backend import to_numpy
-from imageform._validate import as_image, check_positive, format_shape
+from imageform._validate import (
+    as_image,
+    as_int,
+    as_real_array,
+    check_positive,
+    check_real_values,
+    finite_result,
+    format_shape,
+    memory_limit,
+)
 from imageform.errors import InvalidInputError
 from imageform.optics.depth_of_field import circle_of_confusion
 
 __all__ = ["blur_by_radius", "defocus_blur", "defocus_radius_px", "disc_kernel"]
 
 _SUPERSAMPLE = 16
+#: The most layers :func:`blur_by_radius` convolves (each one is a full-image convolution).
+_MAX_LAYERS = 4096
+
+
+def _kernel_bytes(radius: float) -> float:
+    """Bytes :func:`disc_kernel` allocates for ``radius``: the sub-pixel grid's booleans and
+    two float64 temporaries of ``(16 m)²`` with ``m = 2⌈R⌉ + 1``."""
+    x = (2.0 * math.ceil(radius) + 1.0) * _SUPERSAMPLE
+    return x * x * 17.0  # inf, not OverflowError, beyond the float range
+
+
+def _check_blur_radius(radius: float, shape: tuple[int, ...], names: str) -> None:
+    """Refuse a blur radius whose disc kernel or padded FFT convolution of an image of
+    ``shape`` (H, W, C) would not fit :func:`memory_limit`; ``names`` says which
+    arguments made the radius."""
+    p = math.ceil(radius) if math.isfinite(radius) else math.inf
+    h, w = shape[0], shape[1]
+    c = shape[2] if len(shape) > 2 else 1
+    need = max(
+        _kernel_bytes(radius) if p < math.inf else math.inf,
+        (h + 2.0 * p) * (w + 2.0 * p) * c * 16.0 * 3.0,
+    )
+    limit = memory_limit()
+    if not need <= limit:
+        raise InvalidInputError(
+            f"{names}: a blur radius of {radius:.3g} px would need {need / 2**30:.3g} GiB, "
+            f"more than the {limit / 2**30:.1f} GiB allowed (IMAGEFORM_MAX_MEMORY)"
+        )
 
 
 def disc_kernel(radius: float) -> np.ndarray:
@@ -45,6 +82,7 @@ def disc_kernel(radius: float) -> np.ndarray:
     ((7, 7), 1.0)
     """
     r = check_positive(radius, "radius (pixels)", allow_zero=True)
+    _check_blur_radius(r, (1, 1), "radius")
     if r == 0:
         return np.ones((1, 1))
     n = math.ceil(r)
@@ -60,9 +98,9 @@ def disc_kernel(radius: float) -> np.ndarray:
 
 def _prep(image: Any) -> tuple[np.ndarray, bool]:
     arr = np.asarray(to_numpy(as_image(image, "image", channels=None)))
-    if arr.ndim not in (2, 3):
+    if arr.ndim not in (2, 3) or 0 in arr.shape:
         raise InvalidInputError(
-            f"expected image of shape (H, W) or (H, W, C), got {format_shape(arr.shape)}"
+            f"expected image of shape (H, W) or (H, W, C), non-empty, got {format_shape(arr.shape)}"
         )
     gray = arr.ndim == 2
     return (arr[..., None] if gray else arr), gray
@@ -109,21 +147,23 @@ def blur_by_radius(image: Any, radius_px: Any, *, step: float = 0.5, max_layers:
     (1.0, 0.0793)
     """
     img, gray = _prep(image)
-    r = np.asarray(to_numpy(radius_px), dtype=np.float64)
-    if not np.all(np.isfinite(r)) or np.any(r < 0):
-        raise InvalidInputError("expected radius_px finite and >= 0 (pixels)")
+    r = as_real_array(radius_px, "radius_px", check=False)
     h, w, c = img.shape
+    if r.ndim != 0 and r.shape not in ((h, w), (h, w, c)):
+        raise InvalidInputError(
+            f"expected radius_px scalar, ({h}, {w}) or ({h}, {w}, {c}), got {format_shape(r.shape)}"
+        )
+    check_real_values(r, "radius_px (pixels)", nonnegative=True)
+    st = check_positive(step, "step (pixels)")
+    layers = as_int(max_layers, "max_layers", minimum=1, maximum=_MAX_LAYERS)
     if r.ndim == 0:
         r = np.full((h, w, 1), float(r))
     elif r.shape == (h, w):
         r = r[..., None]
-    elif r.shape != (h, w, c):
-        raise InvalidInputError(
-            f"expected radius_px scalar, ({h}, {w}) or ({h}, {w}, {c}), got {format_shape(r.shape)}"
-        )
-    st = check_positive(step, "step (pixels)")
     lo, hi = float(r.min()), float(r.max())
-    n = max(2, min(int(max_layers), math.ceil((hi - lo) / st) + 1))
+    _check_blur_radius(hi, img.shape, "radius_px")
+    q = (hi - lo) / st  # may be inf for a tiny step: then max_layers applies
+    n = max(2, layers if q >= layers else min(layers, math.ceil(q) + 1))
     ladder = np.linspace(lo, hi, n) if hi > lo else np.array([lo, lo])
     rb = np.broadcast_to(r, img.shape)
     out = np.zeros_like(img)
@@ -158,7 +198,9 @@ def defocus_radius_px(
     """
     p = check_positive(pixel_pitch, "pixel_pitch (m)")
     coc = circle_of_confusion(depth, focal_length=focal_length, f_number=f_number, focus=focus)
-    return coc / (2 * p)
+    return finite_result(
+        "the defocus radius", lambda: coc / (2 * p), pixel_pitch=p, depth=depth, f_number=f_number
+    )
 
 
 @_deprecate.parameters(renamed={"f": "focal_length"})
@@ -197,12 +239,15 @@ def defocus_blur(
     1.0
     """
     img, _ = _prep(image)
-    d = np.asarray(to_numpy(depth), dtype=np.float64)
+    d = as_real_array(depth, "depth", check=False)
     if d.ndim not in (0, 2) or (d.ndim == 2 and d.shape != img.shape[:2]):
         raise InvalidInputError(
             f"expected depth scalar or of shape {img.shape[:2]}, got {format_shape(d.shape)}"
         )
     r = defocus_radius_px(
         d, focal_length=focal_length, f_number=f_number, focus=focus, pixel_pitch=pixel_pitch
+    )
+    _check_blur_radius(
+        float(np.max(r)), img.shape, "depth, focal_length, f_number, focus and pixel_pitch"
     )
     return blur_by_radius(image, r, step=step)

@@ -14,7 +14,7 @@ from typing import Any
 
 from imageform import _deprecate
 from imageform._backend import namespace
-from imageform._validate import as_float, check_positive
+from imageform._validate import as_float, check_positive, finite_result
 from imageform.errors import InvalidInputError
 
 __all__ = [
@@ -33,8 +33,8 @@ def _focus(focus: float, f: float) -> float:
     s = check_positive(focus, "focus distance (m)")
     if s <= f:
         raise InvalidInputError(
-            f"focus distance {s:g} m is not beyond the focal length {f:g} m: a thin lens "
-            "cannot focus a real image of a point inside its focal length (virtual image)"
+            f"expected focus beyond focal_length, got focus {s:g} m <= focal_length {f:g} m: "
+            "a thin lens cannot focus a real image of a point inside its focal length"
         )
     return s
 
@@ -67,7 +67,15 @@ def hyperfocal_distance(*, focal_length: float, f_number: float, coc: float) -> 
     """
     fv, n = _lens(focal_length, f_number)
     c = check_positive(coc, "coc (circle of confusion, m)")
-    return fv * fv / (n * c) + fv
+    return float(
+        finite_result(
+            "the hyperfocal distance",
+            lambda: fv * fv / (n * c) + fv,
+            focal_length=fv,
+            f_number=n,
+            coc=c,
+        )
+    )
 
 
 @dataclass(frozen=True)
@@ -124,8 +132,14 @@ def depth_of_field(
     fv, n = _lens(focal_length, f_number)
     s = _focus(focus, fv)
     h = hyperfocal_distance(focal_length=fv, f_number=n, coc=coc)
-    near = s * (h - fv) / (h + s - 2 * fv)
-    far = s * (h - fv) / (h - s) if s < h else math.inf
+    near = finite_result(
+        "the near limit", lambda: s * (h - fv) / (h + s - 2 * fv), focus=s, hyperfocal=h
+    )
+    far = (
+        finite_result("the far limit", lambda: s * (h - fv) / (h - s), focus=s, hyperfocal=h)
+        if s < h
+        else math.inf
+    )
     return DepthOfField(focus=s, near=near, far=far, hyperfocal=h)
 
 
@@ -163,7 +177,13 @@ def circle_of_confusion(depth: Any, *, focal_length: float, f_number: float, foc
     d = as_float(depth, "depth", xp=xp, finite=False)
     if bool(xp.any(xp.isnan(d))) or bool(xp.any(d <= 0)):
         raise InvalidInputError("expected depth > 0 m (inf allowed), got a NaN or value <= 0")
-    k = fv * fv / (n * (s - fv))
+    k = finite_result(
+        "the circle of confusion at infinity f²/(N (s - f))",
+        lambda: fv * fv / (n * (s - fv)),
+        focal_length=fv,
+        f_number=n,
+        focus=s,
+    )
     infinite = xp.isinf(d)
     safe = xp.where(infinite, xp.ones_like(d), d)
     c = xp.where(infinite, xp.full_like(d, k), k * xp.abs(safe - s) / safe)

@@ -12,11 +12,12 @@ with ``virtual=True``.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
+import numpy as np
+
 from imageform import _deprecate
-from imageform._validate import check_positive
+from imageform._validate import as_real, check_positive, finite_result
 from imageform.errors import InvalidInputError
 
 __all__ = [
@@ -46,22 +47,17 @@ class ThinLensSolution:
 
 
 def _number(value: object, name: str) -> float:
-    try:
-        v = float(value)  # type: ignore[arg-type]
-    except (TypeError, ValueError) as exc:
-        raise InvalidInputError(f"expected a number (metres) for {name}, got {value!r}") from exc
-    if not math.isfinite(v):
-        raise InvalidInputError(f"expected a finite {name}, got {value!r}")
-    return v
+    return as_real(value, f"{name} (metres)")
 
 
 def _virtual_error(f: float, d_o: float) -> InvalidInputError:
-    d_i = f * d_o / (d_o - f)
+    with np.errstate(all="ignore"):
+        d_i = float(np.float64(f) * d_o / (np.float64(d_o) - f))
     return InvalidInputError(
-        f"object distance d_o = {d_o:g} m is inside the focal length f = {f:g} m: the lens "
-        f"forms no real image, only a virtual upright one on the object's side "
-        f"(d_i = {d_i:g} m, as a magnifying glass); a sensor cannot record it. Move the object "
-        "beyond f, or pass allow_virtual=True to get the virtual image"
+        f"object distance d_o = {d_o:g} m is inside the focal length (focal_length = {f:g} m): "
+        "only a "
+        f"virtual image forms (d_i = {d_i:g} m); move the object beyond f or pass "
+        "allow_virtual=True"
     )
 
 
@@ -131,12 +127,12 @@ def thin_lens(
         fv, do = vals["focal_length"], vals["d_o"]
         if do == fv:
             raise InvalidInputError(
-                f"object at the focal plane (d_o = f = {fv:g} m): the rays leave parallel and "
-                "the image forms at infinity"
+                f"object at the focal plane (d_o = focal_length = {fv:g} m): the rays leave "
+                "parallel and the image forms at infinity"
             )
         if do < fv and not allow_virtual:
             raise _virtual_error(fv, do)
-        di = fv * do / (do - fv)
+        di = finite_result("d_i = f d_o / (d_o - f)", lambda: fv * do / (do - fv), **vals)
     elif "d_o" not in vals:
         fv, di = vals["focal_length"], vals["d_i"]
         if di < 0 and not allow_virtual:
@@ -146,10 +142,10 @@ def thin_lens(
             )
         if 0 < di <= fv:
             raise InvalidInputError(
-                f"image distance d_i = {di:g} m is not beyond f = {fv:g} m: no real object "
-                "images there (a real image always lies beyond the focal length)"
+                f"image distance d_i = {di:g} m is not beyond f (focal_length = {fv:g} m): no "
+                "real object images there (a real image always lies beyond the focal length)"
             )
-        do = fv * di / (di - fv)
+        do = finite_result("d_o = f d_i / (d_i - f)", lambda: fv * di / (di - fv), **vals)
     else:
         do, di = vals["d_o"], vals["d_i"]
         if di < 0 and not allow_virtual:
@@ -161,8 +157,9 @@ def thin_lens(
                 f"a virtual image at d_i = {di:g} m must lie farther than the object "
                 f"(d_o = {do:g} m) for a converging lens"
             )
-        fv = do * di / (do + di)
-    return ThinLensSolution(focal_length=fv, d_o=do, d_i=di, magnification=-di / do, virtual=di < 0)
+        fv = finite_result("f = d_o d_i / (d_o + d_i)", lambda: do * di / (do + di), **vals)
+    fv, do, di, m = finite_result("the thin-lens solution", lambda: (fv, do, di, -di / do), **vals)
+    return ThinLensSolution(focal_length=fv, d_o=do, d_i=di, magnification=m, virtual=di < 0)
 
 
 @_deprecate.parameters(renamed={"f": "focal_length"}, positional=("focal_length", "d_o"))
@@ -202,7 +199,9 @@ def f_number(*, focal_length: float, aperture_diameter: float) -> float:
     """
     fv = check_positive(focal_length, "focal_length (m)")
     d = check_positive(aperture_diameter, "aperture_diameter (m)")
-    return fv / d
+    return float(
+        finite_result("the f-number", lambda: fv / d, focal_length=fv, aperture_diameter=d)
+    )
 
 
 @_deprecate.parameters(renamed={"f": "focal_length"}, positional=("focal_length", "f_number"))
@@ -214,4 +213,6 @@ def aperture_diameter(*, focal_length: float, f_number: float) -> float:
     """
     fv = check_positive(focal_length, "focal_length (m)")
     n = check_positive(f_number, "f_number")
-    return fv / n
+    return float(
+        finite_result("the aperture diameter", lambda: fv / n, focal_length=fv, f_number=n)
+    )

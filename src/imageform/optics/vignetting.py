@@ -14,7 +14,16 @@ import numpy as np
 
 from imageform import _deprecate
 from imageform._backend import to_numpy
-from imageform._validate import as_image, check_positive, format_shape
+from imageform._validate import (
+    as_image,
+    as_real_array,
+    as_reals,
+    as_shape,
+    check_positive,
+    check_real_values,
+    finite_result,
+    format_shape,
+)
 from imageform.errors import InvalidInputError
 
 __all__ = [
@@ -46,13 +55,12 @@ def field_angle(
     >>> round(float(field_angle((1, 3), focal_length=1.0)[0, 0]), 6)  # one pixel off, f = 1 px
     0.785398
     """
-    h, w = int(shape[0]), int(shape[1])
-    if h < 1 or w < 1:
-        raise InvalidInputError(f"expected a positive shape (H, W), got {shape!r}")
+    h, w = as_shape(shape, "shape (H, W)", 2, itemsize=8, copies=6)
     f = check_positive(focal_length, "focal_length (px)")
-    cu, cv = ((w - 1) / 2, (h - 1) / 2) if center is None else (float(center[0]), float(center[1]))
+    cu, cv = ((w - 1) / 2, (h - 1) / 2) if center is None else as_reals(center, "center", 2)
     v, u = np.mgrid[0:h, 0:w].astype(np.float64)
-    return np.arctan(np.hypot(u - cu, v - cv) / f)
+    with np.errstate(over="ignore"):  # a far centre: r = inf gives θ = π/2
+        return np.arctan(np.hypot(u - cu, v - cv) / f)
 
 
 @_deprecate.parameters(renamed=_RENAMED, positional=("focal_length", "center"))
@@ -95,7 +103,17 @@ def pupil_overlap_fraction(pupil_radius: float, stop_radius: float, offset: Any)
     """
     a = check_positive(pupil_radius, "pupil_radius")
     b = check_positive(stop_radius, "stop_radius")
-    d = np.abs(np.asarray(to_numpy(offset), dtype=np.float64))
+    d = as_real_array(offset, "offset")
+    return finite_result(
+        "the overlap fraction",
+        lambda: _overlap(a, b, np.abs(d)),
+        pupil_radius=a,
+        stop_radius=b,
+    )
+
+
+def _overlap(a: float, b: float, d: np.ndarray) -> np.ndarray:
+    """:func:`pupil_overlap_fraction` on checked values (``d >= 0``)."""
     full = d <= b - a
     none = d >= a + b
     inner = d <= a - b  # stop entirely inside the pupil
@@ -141,8 +159,12 @@ def mechanical_vignetting(
     (0.391002, 1.0)
     """
     L = check_positive(barrel_distance, "barrel_distance", allow_zero=True)
+    a = check_positive(pupil_radius, "pupil_radius")
+    b = check_positive(barrel_radius, "barrel_radius")
     theta = field_angle(shape, focal_length=focal_length, center=center)
-    return np.asarray(pupil_overlap_fraction(pupil_radius, barrel_radius, L * np.tan(theta)))
+    names = {"pupil_radius": a, "barrel_radius": b, "barrel_distance": L}
+    d = finite_result("the beam offset L tan θ", lambda: L * np.tan(theta), **names)
+    return np.asarray(finite_result("the vignetting", lambda: _overlap(a, b, d), **names))
 
 
 def apply_vignetting(image: Any, falloff: Any) -> Any:
@@ -152,10 +174,14 @@ def apply_vignetting(image: Any, falloff: Any) -> Any:
     [[0.25, 1.0, 0.25]]
     """
     img = np.asarray(to_numpy(as_image(image, "image", channels=None)))
-    f = np.asarray(to_numpy(falloff), dtype=img.dtype)
+    f = as_real_array(falloff, "falloff", check=False)
     if img.ndim not in (2, 3) or f.shape != img.shape[:2]:
         raise InvalidInputError(
             f"expected image (H, W[, C]) and falloff (H, W), got {format_shape(img.shape)} "
-            f"and {format_shape(f.shape)}"
+            f"and falloff {format_shape(f.shape)}"
         )
-    return img * (f if img.ndim == 2 else f[..., None])
+    check_real_values(f, "falloff")
+    f = f.astype(img.dtype, copy=False)
+    return finite_result(
+        "image × falloff", lambda: img * (f if img.ndim == 2 else f[..., None]), falloff=f
+    )

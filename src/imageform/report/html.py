@@ -13,7 +13,6 @@ as a PNG file.
 
 from __future__ import annotations
 
-import json
 import re
 import time
 from dataclasses import dataclass, field
@@ -22,6 +21,7 @@ from typing import Any
 
 import numpy as np
 
+from imageform._jsonio import dumps
 from imageform.errors import InvalidInputError
 from imageform.report import html_parts as hp
 from imageform.report.metrics import (
@@ -382,7 +382,7 @@ def write_report(
         ),
     }
     metrics_path = out / "metrics.json"
-    metrics_path.write_text(json.dumps(metrics, indent=2, ensure_ascii=False, allow_nan=False))
+    metrics_path.write_text(dumps(metrics), encoding="utf-8")
     sections.append(_numbers_section(metrics))
     w, h = res.image_size
     t_sim = summary["simulation_time_s"]

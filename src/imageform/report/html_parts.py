@@ -6,9 +6,10 @@ from __future__ import annotations
 import base64
 import html
 import io
-import json
 from collections.abc import Sequence
 from typing import Any
+
+from imageform._jsonio import dumps
 
 __all__ = [
     "CSS",
@@ -122,7 +123,7 @@ class Markup(str):
 
 def json_block(value: Any, summary: str) -> str:
     """Collapsible pretty-printed JSON."""
-    text = json.dumps(value, indent=2, ensure_ascii=False, allow_nan=False)
+    text = dumps(value)
     return f"<details><summary>{e(summary)}</summary><pre>{e(text)}</pre></details>"
 
 

@@ -1,4 +1,5 @@
-"""The lecture's colour-measurement examples: the ΔE*ab formula and its reading, grey world.
+"""The lecture's colour-measurement examples: the ΔE*ab formula, the practice questions on
+HSV, chroma subsampling and the Bayer pattern, grey world.
 
 The lecture states the formulas (ΔE*ab as the Euclidean distance in CIELAB; grey-world
 gains that scale every channel mean to the mean grey) and the reading of a ΔE (below 1
@@ -21,14 +22,28 @@ def _delta_e_345() -> float:
     return float(delta_e([50.0, 0.0, 0.0], [50.0, 3.0, 4.0], method="cie76"))
 
 
-def _reading() -> tuple[float, float, float]:
-    from imageform.color.delta_e import describe_delta_e
+def _hsv_200_50_50() -> tuple[float, float]:
+    from imageform.color import convert
 
-    return (
-        float(describe_delta_e(0.5) == "imperceptible"),
-        float(describe_delta_e(2.0) == "just noticeable"),
-        float(describe_delta_e(15.0) == "obviously different"),
-    )
+    _, s, v = convert((200, 50, 50), "srgb", "hsv")
+    return float(v), float(s)
+
+
+def _bayer_green_share() -> float:
+    from imageform.sensor import cfa_masks
+
+    masks = np.asarray(cfa_masks((4, 4), "RGGB"), dtype=np.float64)
+    green = masks[..., 1] if masks.shape[-1] == 3 else masks[1]
+    return float(green.mean())
+
+
+def _chroma_420_data() -> float:
+    from imageform.color import chroma_subsample, srgb_to_ycbcr
+
+    ycc = srgb_to_ycbcr(np.full((4, 4, 3), 0.5))
+    sub = chroma_subsample(ycc, "4:2:0")
+    kept = int(np.asarray(sub.luma).size) + int(np.asarray(sub.chroma).size)
+    return kept / ycc.size
 
 
 def _gray_world() -> tuple[float, ...]:
@@ -49,12 +64,28 @@ EXAMPLES: list[WorkedExample] = [
         tol=1e-12,
     ),
     WorkedExample(
-        topic="colour difference",
-        question="Reading of ΔE = 0.5, 2 and 15 (1 = imperceptible / just noticeable / "
-        "obviously different as the lecture says)",
-        formula="< 1 imperceptible; about 2 just noticeable; > 10 obviously different",
-        compute=_reading,
-        expected=(1.0, 1.0, 1.0),
+        topic="colour representation",
+        question="Practice question 9: V and S of the 8-bit pixel (200, 50, 50)?",
+        formula="V = max / 255, S = (max - min) / max",
+        compute=_hsv_200_50_50,
+        expected=(200 / 255, 0.75),
+        tol=1e-6,
+    ),
+    WorkedExample(
+        topic="colour representation",
+        question="Practice question 13: 4:2:0 keeps which share of the samples of 4:4:4?",
+        formula="(1 + 2 x 1/4) / 3",
+        compute=_chroma_420_data,
+        expected=0.5,
+        tol=1e-12,
+    ),
+    WorkedExample(
+        topic="vision",
+        question="Practice question 6: which share of a Bayer sensor's pixels are green?",
+        formula="2 of every 2 x 2 tile of 4",
+        compute=_bayer_green_share,
+        expected=0.5,
+        tol=1e-12,
     ),
     WorkedExample(
         topic="white balance",

@@ -11,7 +11,7 @@ eye's coarser colour (chrominance) resolution is served by red and blue on recta
 lattices of half the density in each direction.
 
 The four names say the colours of the 2×2 cell read row by row from the top-left pixel
-(pixel centre ``(0, 0)``, DESIGN.md):
+(pixel centre ``(0, 0)``, docs/conventions.md):
 
 ======  ==============  ============
 name    row 0           row 1
@@ -34,7 +34,7 @@ import numpy as np
 
 from imageform._backend import device_of, namespace
 from imageform._typing import Array, ArrayLike
-from imageform._validate import as_image, format_shape
+from imageform._validate import as_image, as_shape, format_shape
 from imageform.errors import InvalidInputError, UnknownOptionError
 
 __all__ = ["CFA_PATTERNS", "cfa_masks", "cfa_pattern", "mosaic"]
@@ -119,13 +119,8 @@ def cfa_masks(shape: tuple[int, int], pattern: str = "RGGB") -> np.ndarray:
     (0.5, True, True)
     """
     pattern = cfa_pattern(pattern)
-    if (
-        not isinstance(shape, tuple | list)
-        or len(shape) != 2
-        or not all(isinstance(s, int | np.integer) and s >= 1 for s in shape)
-    ):
-        raise InvalidInputError(f"expected shape (H, W) with H, W >= 1, got {shape!r}")
-    h, w = int(shape[0]), int(shape[1])
+    # the tiled int cell and the boolean masks (3 per pixel): 16 bytes a pixel
+    h, w = as_shape(shape, "shape (H, W)", 2, itemsize=16)
     cell = _cell_channels(pattern)
     idx = np.tile(cell, ((h + 1) // 2, (w + 1) // 2))[:h, :w]
     return idx[..., None] == np.arange(3)

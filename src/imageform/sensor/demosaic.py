@@ -17,6 +17,7 @@ pattern's red offset so that every kernel sees an RGGB phase.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from typing import Any
 
@@ -31,7 +32,7 @@ from imageform._backend import (
     use_numba,
 )
 from imageform._typing import Array, ArrayLike
-from imageform._validate import as_image, check_option, format_shape
+from imageform._validate import as_bool, as_image, check_memory, check_option, format_shape
 from imageform.errors import InvalidInputError
 from imageform.sensor._demosaic_xp import XP_METHODS, demosaic_dask, demosaic_xp
 from imageform.sensor.cfa import _red_offset, cfa_pattern
@@ -81,10 +82,8 @@ def _as_raw(raw: ArrayLike, xp: Any) -> Any:
         return arr[..., 0]
     if arr.ndim >= 3:
         raise InvalidInputError(
-            f"expected a single-channel raw mosaic of shape (H, W) or (..., H, W, 1), got "
-            f"{format_shape(shape)} with {shape[-1]} channels; a colour image is not a "
-            "mosaic (make one with mosaic(rgb, pattern)), and a batch of (H, W) mosaics "
-            "needs a trailing axis: raw[..., None]"
+            f"expected raw as a single-channel raw mosaic (H, W) or (..., H, W, 1), got "
+            f"{format_shape(shape)} with {shape[-1]} channels; a batch needs raw[..., None]"
         )
     raise InvalidInputError(
         f"expected a raw mosaic of shape (H, W) or (..., H, W, 1), got {format_shape(shape)}"
@@ -180,6 +179,8 @@ def demosaic(
     """
     pattern = cfa_pattern(pattern)
     method = check_option(method, DEMOSAIC_METHODS, "demosaicing method")
+    clip = as_bool(clip, "clip")
+    allow_odd = as_bool(allow_odd, "allow_odd")
     xp = namespace(raw)
     if is_dask_namespace(xp):
         return _demosaic_dask(raw, pattern, method, clip, allow_odd)
@@ -200,6 +201,9 @@ def demosaic(
         ry, rx = _red_offset(pattern)
         out = demosaic_xp(arr, ry, rx, method, xp)
         return xp.clip(out, 0.0, 1.0) if clip else out
+    # the RGB result, the padded mosaic and the kernels' planes: about 8 float64 mosaics
+    n_bytes = 8.0 * 8.0 * math.prod(shape)
+    check_memory(n_bytes, "raw", f"demosaicing a mosaic of shape {format_shape(shape)}")
     a = to_numpy(arr)
     numba = use_numba(a)
     kernel, radius = _kernels(method, numba)

@@ -20,9 +20,18 @@ from typing import Any
 import numpy as np
 
 from imageform._random import RNGLike, as_rng
-from imageform._validate import check_positive
+from imageform._validate import (
+    as_int,
+    as_real,
+    as_real_array,
+    as_shape,
+    check_positive,
+    describe,
+    finite_result,
+)
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
-from imageform.sensor.model import SensorModel, photons_per_pixel
+from imageform.sensor._guard import check_electrons, check_rng
+from imageform.sensor.model import PLANCK, SPEED_OF_LIGHT, SensorModel, photons_per_pixel
 from imageform.sensor.noise import QUANTIZATION_NOISE_DN
 
 __all__ = [
@@ -112,14 +121,32 @@ def simulate_photon_transfer(
     >>> d.mean_dn.shape
     (1,)
     """
+    if not isinstance(sensor, SensorModel):
+        raise TypeError(f"expected sensor as a SensorModel, got {describe(sensor)}")
     e = check_positive(irradiance, "irradiance (W/m²)", allow_zero=True)
-    times = np.asarray(exposure_times, dtype=np.float64).ravel()
-    if times.size < 1 or not np.all(np.isfinite(times)) or np.any(times < 0):
+    times = as_real_array(exposure_times, "exposure_times (s)", ndim=(0, 1), nonnegative=True)
+    times = times.ravel()
+    if times.size < 1:
         raise InvalidInputError("expected exposure_times: finite, >= 0 seconds, at least one")
-    if not 0 <= channel < sensor.n_channels:
-        raise InvalidInputError(f"expected channel in [0, {sensor.n_channels - 1}], got {channel}")
-    gen = as_rng(rng)
-    h, w = int(shape[0]), int(shape[1])
+    if times.size > _MAX_EXPOSURES:
+        raise InvalidInputError(
+            f"expected at most {_MAX_EXPOSURES} exposure_times, got {times.size}"
+        )
+    ch = as_int(channel, "channel")
+    if not 0 <= ch < sensor.n_channels:
+        raise InvalidInputError(f"expected channel in [0, {sensor.n_channels - 1}], got {ch}")
+    h, w = as_shape(shape, "shape (H, W)", 2, copies=12 * sensor.n_channels)
+    sensor.quantum_efficiency(wavelength_nm)  # checks wavelength_nm before anything runs
+    t_max = float(times.max())
+    lam = float(wavelength_nm) * 1e-9
+    mp_max = finite_result(
+        "the photon count",
+        lambda: e * sensor.pixel_area * t_max * lam / (PLANCK * SPEED_OF_LIGHT),
+        irradiance=e,
+        exposure_times=t_max,
+    )
+    check_electrons(mp_max, "irradiance and exposure_times")
+    gen = as_rng(check_rng(rng))
     flat = np.full((h, w), e)
     dark = np.zeros((h, w))
     rows: list[tuple[float, float, float, float, float]] = []
@@ -131,7 +158,7 @@ def simulate_photon_transfer(
                 rng=gen,
                 quantity="irradiance",
                 wavelength_nm=wavelength_nm,
-            )[..., channel]
+            )[..., ch]
             for img in (flat, flat, dark, dark)
         ]
         mu, var = _pair_stats(frames[0], frames[1])
@@ -149,6 +176,24 @@ def simulate_photon_transfer(
         dark_mean_dn=arr[:, 3],
         dark_var_dn=arr[:, 4],
     )
+
+
+#: The most exposure times :func:`simulate_photon_transfer` records (four frames each).
+_MAX_EXPOSURES = 100_000
+
+_PTC_FIELDS = ("exposure_times", "photons", "mean_dn", "var_dn", "dark_mean_dn", "dark_var_dn")
+
+
+def _check_data(data: object) -> dict[str, np.ndarray]:
+    """The arrays of a :class:`PhotonTransferData`: 1-D, finite, all of one length."""
+    if not isinstance(data, PhotonTransferData):
+        raise TypeError(f"expected data as a PhotonTransferData, got {describe(data)}")
+    arrays = {f: as_real_array(getattr(data, f), f"data.{f}", ndim=1) for f in _PTC_FIELDS}
+    n = {a.size for a in arrays.values()}
+    if len(n) != 1:
+        sizes = ", ".join(f"{k} {v.size}" for k, v in arrays.items())
+        raise InvalidInputError(f"expected data's arrays of one length, got {sizes}")
+    return arrays
 
 
 def fit_photon_transfer(data: PhotonTransferData, *, fit_fraction: float = 0.7) -> EmvaResult:
@@ -180,21 +225,23 @@ def fit_photon_transfer(data: PhotonTransferData, *, fit_fraction: float = 0.7) 
     >>> abs(r.system_gain / s.system_gain - 1) < 0.05
     True
     """
-    ff = check_positive(fit_fraction, "fit_fraction")
-    t = np.asarray(data.exposure_times, dtype=np.float64)
+    arrays = _check_data(data)
+    ff = as_real(fit_fraction, "fit_fraction", positive=True, maximum=1.0)
+    t = arrays["exposure_times"]
     if t.size < 2 or np.unique(t).size < 2:
         raise DegenerateConfigurationError(
             "a photon-transfer fit needs at least two different exposure times"
         )
-    sig = data.mean_dn - data.dark_mean_dn
-    var = data.var_dn - data.dark_var_dn
-    i_sat = int(np.argmax(data.var_dn))
+    with np.errstate(all="ignore"):
+        sig = arrays["mean_dn"] - arrays["dark_mean_dn"]
+        var = arrays["var_dn"] - arrays["dark_var_dn"]
+    i_sat = int(np.argmax(arrays["var_dn"]))
     sat_sig = sig[i_sat]
     use = (sig > 0) & (sig <= ff * sat_sig)
     if int(use.sum()) < 2:
         raise DegenerateConfigurationError(
-            f"only {int(use.sum())} exposures lie between zero and {ff:.0%} of saturation; "
-            "record more exposure times below saturation"
+            f"only {int(use.sum())} exposures lie between zero and {ff:.0%} of saturation "
+            "(fit_fraction); record more exposure times below saturation"
         )
     k, _ = np.polyfit(sig[use], var[use], 1)
     if k <= 0:

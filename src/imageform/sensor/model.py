@@ -23,10 +23,22 @@ from typing import Any
 import numpy as np
 
 from imageform import _deprecate
-from imageform._backend import to_numpy
 from imageform._random import RNGLike, as_rng
-from imageform._validate import check_option, check_positive, format_shape
+from imageform._validate import (
+    as_int,
+    as_real,
+    as_real_array,
+    as_shape,
+    check_memory,
+    check_option,
+    check_positive,
+    check_real_values,
+    describe,
+    finite_result,
+    format_shape,
+)
 from imageform.errors import InvalidInputError
+from imageform.sensor._guard import check_electrons, check_rng
 from imageform.sensor.noise import FixedPattern, fixed_pattern
 
 __all__ = ["PLANCK", "SPEED_OF_LIGHT", "SensorModel", "photons_per_pixel"]
@@ -62,8 +74,15 @@ def photons_per_pixel(
     lam = check_positive(wavelength_nm, "wavelength_nm") * 1e-9
     a = check_positive(pixel_area, "pixel_area (m²)")
     t = check_positive(exposure_time, "exposure_time (s)", allow_zero=True)
-    e = np.asarray(to_numpy(irradiance), dtype=np.float64)
-    return e * a * t * lam / (PLANCK * SPEED_OF_LIGHT)
+    e = as_real_array(irradiance, "irradiance (W/m²)")
+    return finite_result(
+        "the photon count",
+        lambda: e * a * t * lam / (PLANCK * SPEED_OF_LIGHT),
+        irradiance=e,
+        wavelength_nm=lam * 1e9,
+        pixel_area=a,
+        exposure_time=t,
+    )
 
 
 @dataclass(frozen=True)
@@ -141,6 +160,8 @@ class SensorModel:
     fpn_seed: int = 0
 
     def __post_init__(self) -> None:
+        if not isinstance(self.name, str):
+            raise InvalidInputError(f"expected name as a str, got {describe(self.name)}")
         check_option(self.architecture, ("cmos", "ccd"), "sensor architecture")
         check_option(self.shutter, ("global", "rolling"), "shutter")
         for name in ("pixel_pitch", "full_well", "conversion_gain", "adc_range", "analog_gain"):
@@ -149,24 +170,38 @@ class SensorModel:
             _positive_field(self, name, allow_zero=True)
         for name in ("column_fpn", "line_time", "power"):
             _positive_field(self, name, allow_zero=True)
-        if not 0 < self.fill_factor <= 1:
-            raise InvalidInputError(f"expected 0 < fill_factor <= 1, got {self.fill_factor!r}")
-        if not isinstance(self.bit_depth, int) or not 1 <= self.bit_depth <= 16:
-            raise InvalidInputError(f"expected bit_depth an int in 1..16, got {self.bit_depth!r}")
-        if self.black_level > self.max_dn:
+        ff = as_real(self.fill_factor, "fill_factor")
+        if not 0 < ff <= 1:
+            raise InvalidInputError(f"expected 0 < fill_factor <= 1, got {ff:g}")
+        # NumPy integers are integers: stored as int so that 2**bit_depth stays exact
+        bits = as_int(self.bit_depth, "bit_depth (an int in 1..16)", minimum=1, maximum=16)
+        object.__setattr__(self, "bit_depth", bits)
+        object.__setattr__(self, "fpn_seed", as_int(self.fpn_seed, "fpn_seed", minimum=0))
+        if self.black_level >= self.max_dn:
             raise InvalidInputError(
-                f"black_level {self.black_level} exceeds the ADC's range 0..{self.max_dn}"
+                f"expected black_level below the ADC's largest code {self.max_dn} "
+                f"(bit_depth {bits}), got {self.black_level:g}"
             )
-        wl = np.asarray(self.qe_wavelengths, dtype=np.float64)
-        qe = np.asarray(self.qe_curves, dtype=np.float64)
-        if wl.ndim != 1 or wl.size < 1 or np.any(np.diff(wl) <= 0):
+        wl = as_real_array(self.qe_wavelengths, "qe_wavelengths (nm)", ndim=1, positive=True)
+        if wl.size < 1 or np.any(np.diff(wl) <= 0):
             raise InvalidInputError("expected qe_wavelengths a non-empty increasing sequence (nm)")
-        if qe.ndim != 2 or qe.shape[1] != wl.size:
+        qe = as_real_array(self.qe_curves, "qe_curves", check=False)
+        if qe.ndim != 2 or qe.shape[1] != wl.size or qe.shape[0] < 1:
             raise InvalidInputError(
-                f"expected qe_curves of shape (C, {wl.size}), got {format_shape(qe.shape)}"
+                f"expected qe_curves of shape (C, {wl.size}) (one value per qe_wavelengths), "
+                f"got {format_shape(qe.shape)}"
             )
+        check_real_values(qe, "qe_curves")
         if not np.all((qe >= 0) & (qe <= 1)):
-            raise InvalidInputError("expected quantum efficiencies in [0, 1]")
+            raise InvalidInputError("expected quantum efficiencies (qe_curves) in [0, 1]")
+        finite_result(
+            "the system gain",
+            lambda: self.system_gain,
+            conversion_gain=self.conversion_gain,
+            analog_gain=self.analog_gain,
+            adc_range=self.adc_range,
+        )
+        finite_result("the pixel area", lambda: self.pixel_area, pixel_pitch=self.pixel_pitch)
 
     # -- derived quantities ---------------------------------------------------------------
     @property
@@ -203,7 +238,7 @@ class SensorModel:
         wl = np.asarray(self.qe_wavelengths, dtype=np.float64)
         if wl.size > 1 and not wl[0] <= lam <= wl[-1]:
             raise InvalidInputError(
-                f"wavelength {lam:g} nm is outside the QE curves' range {wl[0]:g}-{wl[-1]:g} nm"
+                f"wavelength_nm {lam:g} nm is outside the QE curves' range {wl[0]:g}-{wl[-1]:g} nm"
             )
         return np.array(
             [np.interp(lam, wl, np.asarray(c, dtype=np.float64)) for c in self.qe_curves]
@@ -212,8 +247,11 @@ class SensorModel:
     def fixed_pattern(self, height: int, width: int) -> FixedPattern:
         """This chip's fixed-pattern maps for an ``(height, width)`` frame (from ``fpn_seed``)."""
         col = self.column_fpn if self.architecture == "cmos" else 0.0
+        h = as_int(height, "height", minimum=1)
+        w = as_int(width, "width", minimum=1)
+        as_shape((h, w, self.n_channels), "height and width", 3, copies=4)
         return fixed_pattern(
-            (int(height), int(width), self.n_channels),
+            (h, w, self.n_channels),
             prnu=self.prnu,
             dsnu=self.dsnu,
             column_fpn=col,
@@ -246,40 +284,65 @@ class SensorModel:
         """
         t = check_positive(exposure_time, "exposure_time (s)", allow_zero=True)
         kind = check_option(quantity, _QUANTITIES, "signal quantity")
-        arr = np.asarray(to_numpy(signal), dtype=np.float64)
-        if not np.all(np.isfinite(arr)):
-            raise InvalidInputError("signal contains NaN or inf")
-        if np.any(arr < 0):
-            raise InvalidInputError(f"expected a non-negative {kind} signal, got min {arr.min():g}")
+        arr = as_real_array(signal, "signal", check=False)
         if kind == "electrons":
             if arr.ndim < 3 or arr.shape[-1] != self.n_channels:
                 raise InvalidInputError(
-                    f"expected electrons of shape (..., H, W, {self.n_channels}), got "
+                    f"expected signal (electrons) of shape (..., H, W, {self.n_channels}), got "
                     f"{format_shape(arr.shape)}"
                 )
+        elif wavelength_nm is not None:
+            if arr.ndim < 2:
+                raise InvalidInputError(
+                    f"expected signal (monochromatic {kind}) of shape (..., H, W), "
+                    f"got {format_shape(arr.shape)}"
+                )
+        elif arr.ndim < 3 or arr.shape[-1] != len(self.qe_wavelengths):
+            raise InvalidInputError(
+                f"expected signal (spectral {kind}) of shape (..., H, W, "
+                f"{len(self.qe_wavelengths)}) on qe_wavelengths, got {format_shape(arr.shape)}; "
+                "pass wavelength_nm for monochromatic light"
+            )
+        # the result (C channels a pixel) and one temporary of the signal's size
+        check_memory(
+            8.0 * arr.size * (self.n_channels + 1) * 2,
+            "signal",
+            f"the mean electrons of a signal of shape {format_shape(arr.shape)}",
+        )
+        check_real_values(arr, f"signal ({kind})")
+        if arr.size and float(arr.min()) < 0:
+            raise InvalidInputError(
+                f"expected a non-negative signal ({kind}), got min {float(arr.min()):g}"
+            )
+        return finite_result(
+            "the mean electrons",
+            lambda: self._mean_electrons(arr, t, kind, wavelength_nm),
+            signal=arr,
+            exposure_time=t,
+            wavelength_nm=wavelength_nm,
+        )
+
+    def _mean_electrons(
+        self, arr: np.ndarray, t: float, kind: str, wavelength_nm: float | None
+    ) -> np.ndarray:
+        """:meth:`mean_electrons` on a checked signal."""
+        if kind == "electrons":
             return arr
         ff = self.fill_factor
         if wavelength_nm is not None:
-            if arr.ndim < 2:
-                raise InvalidInputError(
-                    f"expected monochromatic {kind} of shape (..., H, W), "
-                    f"got {format_shape(arr.shape)}"
-                )
             qe = self.quantum_efficiency(wavelength_nm)
             mp = (
                 arr
                 if kind == "photons"
-                else photons_per_pixel(
-                    arr, wavelength_nm, pixel_area=self.pixel_area, exposure_time=t
-                )
+                # photons_per_pixel's arithmetic, in its order (same rounding)
+                else arr
+                * self.pixel_area
+                * t
+                * (float(wavelength_nm) * 1e-9)
+                / (PLANCK * SPEED_OF_LIGHT)
             )
             return ff * mp[..., None] * qe
         wl = np.asarray(self.qe_wavelengths, dtype=np.float64)
-        if arr.ndim < 3 or arr.shape[-1] != wl.size:
-            raise InvalidInputError(
-                f"expected spectral {kind} of shape (..., H, W, {wl.size}) on qe_wavelengths, "
-                f"got {format_shape(arr.shape)}; pass wavelength_nm for monochromatic light"
-            )
         qe = np.asarray(self.qe_curves, dtype=np.float64)  # (C, L)
         if kind == "photons":
             return ff * arr @ qe.T
@@ -339,12 +402,27 @@ class SensorModel:
             signal, exposure_time=exposure_time, quantity=quantity, wavelength_nm=wavelength_nm
         )
         if mu.ndim < 3:
-            raise InvalidInputError(f"expected (..., H, W, C), got {format_shape(mu.shape)}")
-        gen = as_rng(rng)
+            raise InvalidInputError(
+                f"expected signal of shape (..., H, W, C), got {format_shape(mu.shape)}"
+            )
+        # the fixed pattern (two maps) and the noise draws: about six frames of mu's size
+        check_memory(6.0 * mu.nbytes, "signal", f"a capture of shape {format_shape(mu.shape)}")
+        gen = as_rng(check_rng(rng))
         h, w = mu.shape[-3], mu.shape[-2]
+        if h < 1 or w < 1:
+            raise InvalidInputError(
+                f"expected signal with H, W >= 1, got shape {format_shape(mu.shape[:-1])}"
+            )
         fp = self.fixed_pattern(h, w)
         t = float(exposure_time)
-        electrons = gen.poisson(mu * fp.gain).astype(np.float64)
+        lam = mu * fp.gain
+        if lam.size:
+            lo, hi = float(lam.min()), float(lam.max())
+            check_electrons(hi, "signal and exposure_time")
+            if lo < 0:  # a large PRNU draws gains below zero: no light is collected there
+                lam = np.maximum(lam, 0.0)
+        check_electrons(self.dark_current * t, "dark_current × exposure_time")
+        electrons = gen.poisson(lam).astype(np.float64)
         if self.dark_current > 0 and t > 0:
             electrons += gen.poisson(self.dark_current * t, size=mu.shape)
         electrons = np.minimum(electrons, self.full_well)  # full-well saturation (physics)
@@ -365,7 +443,7 @@ class SensorModel:
         >>> SensorModel(black_level=64, bit_depth=12).normalize([64, 4095]).tolist()
         [0.0, 1.0]
         """
-        arr = np.asarray(to_numpy(dn), dtype=np.float64)
+        arr = as_real_array(dn, "dn")
         return (arr - self.black_level) / (self.max_dn - self.black_level)
 
     normalise = _deprecate.renamed(normalize, "imageform.sensor.SensorModel.normalise")
@@ -376,9 +454,8 @@ class SensorModel:
         >>> round(SensorModel(line_time=10e-6).frame_readout_time(1080), 6)
         0.0108
         """
-        if int(rows) < 1:
-            raise InvalidInputError(f"expected rows >= 1, got {rows!r}")
-        return int(rows) * self.line_time
+        n = as_int(rows, "rows", minimum=1)
+        return float(finite_result("the read-out time", lambda: n * self.line_time, rows=n))
 
     def dynamic_range_db(self) -> float:
         """Dynamic range ``20 log10(Q_FW / σ_read)`` (dB); ``inf`` without read noise.

@@ -16,7 +16,8 @@ import numpy as np
 
 from imageform import _deprecate
 from imageform._random import RNGLike, as_rng
-from imageform._validate import check_positive
+from imageform._validate import as_real, as_shape, check_positive, finite_result
+from imageform.sensor._guard import check_rng
 
 __all__ = [
     "QUANTIZATION_NOISE_DN",
@@ -71,14 +72,19 @@ def fixed_pattern(
     >>> bool((fp.gain == 1).all()), bool((fp.offset == 0).all())
     (True, True)
     """
-    h, w, c = shape
+    h, w, c = as_shape(shape, "shape (H, W, C)", 3, copies=4)
     p = check_positive(prnu, "prnu", allow_zero=True)
     d = check_positive(dsnu, "dsnu (e-)", allow_zero=True)
     col = check_positive(column_fpn, "column_fpn (e-)", allow_zero=True)
-    gen = as_rng(rng, mix=(h, w, c))
-    gain = 1.0 + p * gen.standard_normal((h, w, c))
-    cols = col * gen.standard_normal(w)
-    offset = d * gen.standard_normal((h, w, c)) + cols[None, :, None]
+    gen = as_rng(check_rng(rng), mix=(h, w, c))
+
+    def draw() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        gain = 1.0 + p * gen.standard_normal((h, w, c))
+        cols = col * gen.standard_normal(w)
+        offset = d * gen.standard_normal((h, w, c)) + cols[None, :, None]
+        return gain, offset, cols
+
+    gain, offset, cols = finite_result("the fixed pattern", draw, prnu=p, dsnu=d, column_fpn=col)
     return FixedPattern(gain=gain, offset=offset, column=cols)
 
 
@@ -98,7 +104,15 @@ def temporal_noise_dn(mean_electrons: float, *, system_gain: float, dark_noise_e
     k = check_positive(system_gain, "system_gain (DN/e-)")
     mu = check_positive(mean_electrons, "mean_electrons", allow_zero=True)
     sd = check_positive(dark_noise_e, "dark_noise_e", allow_zero=True)
-    return math.sqrt(k * k * (sd * sd + mu) + QUANTIZATION_NOISE_DN**2)
+    return float(
+        finite_result(
+            "the temporal noise",
+            lambda: math.sqrt(k * k * (sd * sd + mu) + QUANTIZATION_NOISE_DN**2),
+            system_gain=k,
+            mean_electrons=mu,
+            dark_noise_e=sd,
+        )
+    )
 
 
 def emva_snr(
@@ -117,8 +131,19 @@ def emva_snr(
     21.8201
     """
     mp = check_positive(photons, "photons", allow_zero=True)
-    eta = check_positive(quantum_efficiency, "quantum_efficiency")
+    eta = as_real(quantum_efficiency, "quantum_efficiency", positive=True, maximum=1.0)
     sd = check_positive(dark_noise_e, "dark_noise_e", allow_zero=True)
     k = check_positive(system_gain, "system_gain (DN/e-)")
     sig = eta * mp
-    return sig / math.sqrt(sd * sd + QUANTIZATION_NOISE_DN**2 / (k * k) + sig)
+    # K² underflows to 0 for K below ~1e-154: the quantisation term is then infinite and the
+    # SNR its limit, 0 (and so when σ_d² overflows)
+    quant = QUANTIZATION_NOISE_DN**2 / (k * k) if k * k > 0 else math.inf
+    return float(
+        finite_result(
+            "the SNR",
+            lambda: sig / math.sqrt(sd * sd + quant + sig),
+            photons=mp,
+            dark_noise_e=sd,
+            system_gain=k,
+        )
+    )

@@ -16,6 +16,7 @@ from typing import Any
 
 import numpy as np
 
+from imageform._validate import as_bool, as_int
 from imageform.sensor.model import SensorModel
 
 __all__ = [
@@ -56,6 +57,7 @@ def ccd_preset(*, color: bool = False, **changes: Any) -> SensorModel:
     >>> s.architecture, s.shutter, s.read_noise
     ('ccd', 'global', 4.0)
     """
+    color = as_bool(color, "color")
     base = SensorModel(
         name="CCD (interline transfer)",
         architecture="ccd",
@@ -87,6 +89,7 @@ def cmos_preset(*, color: bool = False, **changes: Any) -> SensorModel:
     >>> s.architecture, s.shutter, round(s.system_gain, 4)
     ('cmos', 'rolling', 0.3276)
     """
+    color = as_bool(color, "color")
     base = SensorModel(
         name="CMOS (active pixel, column ADCs)",
         architecture="cmos",
@@ -150,6 +153,7 @@ def comparison_table(rows: int = 1000) -> list[dict[str, str]]:
     >>> [r["aspect"] for r in t][:3]
     ['readout', 'speed', 'noise']
     """
+    rows = as_int(rows, "rows", minimum=1)
     ccd, cmos = ccd_preset(), cmos_preset()
     out = [{"aspect": r.aspect, "ccd": r.ccd, "cmos": r.cmos} for r in CCD_VS_CMOS]
     numbers = {

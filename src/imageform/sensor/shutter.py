@@ -13,8 +13,22 @@ from typing import Any
 
 import numpy as np
 
-from imageform._validate import check_option, check_positive
+from imageform._validate import (
+    as_int,
+    as_real,
+    as_real_array,
+    check_memory,
+    check_option,
+    check_positive,
+    check_real_values,
+    describe,
+    finite_result,
+    format_shape,
+)
 from imageform.errors import InvalidInputError
+
+#: The most midpoint-rule instants :func:`shutter_capture` takes per row (each one renders).
+_MAX_SAMPLES = 100_000
 
 __all__ = ["rolling_shutter_points", "rolling_shutter_skew", "row_start_times", "shutter_capture"]
 
@@ -31,11 +45,8 @@ def rolling_shutter_skew(velocity: float, line_time: float) -> float:
     0.02
     """
     t = check_positive(line_time, "line_time (s)", allow_zero=True)
-    try:
-        v = float(velocity)
-    except (TypeError, ValueError) as exc:
-        raise InvalidInputError(f"expected a number for velocity, got {velocity!r}") from exc
-    return v * t
+    v = as_real(velocity, "velocity (px/s)")
+    return float(finite_result("the skew", lambda: v * t, velocity=v, line_time=t))
 
 
 def row_start_times(rows: int, *, mode: str, line_time: float) -> np.ndarray:
@@ -46,10 +57,12 @@ def row_start_times(rows: int, *, mode: str, line_time: float) -> np.ndarray:
     """
     m = check_option(mode, ("global", "rolling"), "shutter mode")
     t = check_positive(line_time, "line_time (s)", allow_zero=True)
-    if int(rows) < 1:
-        raise InvalidInputError(f"expected rows >= 1, got {rows!r}")
-    r = np.arange(int(rows), dtype=np.float64)
-    return r * t if m == "rolling" else np.zeros_like(r)
+    n = as_int(rows, "rows", minimum=1)
+    check_memory(n * 16.0, "rows", f"{n} row start times")
+    r = np.arange(n, dtype=np.float64)
+    if m != "rolling":
+        return np.zeros_like(r)
+    return finite_result("the row start times", lambda: r * t, rows=n, line_time=t)
 
 
 def rolling_shutter_points(
@@ -70,19 +83,39 @@ def rolling_shutter_points(
     >>> rolling_shutter_points([[10.0, 100.0]], [1000.0, 0.0], line_time=1e-5).tolist()
     [[11.0, 100.0]]
     """
-    p = np.asarray(points_uv, dtype=np.float64)
-    v = np.broadcast_to(np.asarray(velocity_uv, dtype=np.float64), p.shape)
-    if p.shape[-1] != 2:
-        raise InvalidInputError(f"expected points_uv of shape (..., 2), got {p.shape}")
-    tl = check_positive(line_time, "line_time (s)", allow_zero=True)
-    den = 1.0 - v[..., 1] * tl
-    if np.any(den <= 0):
+    p = as_real_array(points_uv, "points_uv", check=False)
+    if p.ndim < 1 or p.shape[-1] != 2:
         raise InvalidInputError(
-            "an object moving down at >= one row per line time outruns the shutter: no solution"
+            f"expected points_uv of shape (..., 2), got {format_shape(p.shape)}"
         )
-    r = (p[..., 1] - v[..., 1] * t0) / den
-    u = p[..., 0] + v[..., 0] * (r * tl - t0)
-    return np.stack([u, r], axis=-1)
+    vel = as_real_array(velocity_uv, "velocity_uv", check=False)
+    try:
+        v = np.broadcast_to(vel, p.shape)
+    except ValueError:
+        raise InvalidInputError(
+            f"expected velocity_uv of shape (..., 2) broadcastable to points_uv's "
+            f"{format_shape(p.shape)}, got {format_shape(vel.shape)}"
+        ) from None
+    check_real_values(p, "points_uv")
+    check_real_values(vel, "velocity_uv")
+    tl = check_positive(line_time, "line_time (s)", allow_zero=True)
+    t0v = as_real(t0, "t0 (s)")
+    with np.errstate(all="ignore"):
+        den = 1.0 - v[..., 1] * tl
+    if np.any(~(den > 0)):
+        raise InvalidInputError(
+            "an object moving down at >= one row per line time outruns the shutter: no solution "
+            "(velocity_uv, line_time)"
+        )
+
+    def solve() -> np.ndarray:
+        r = (p[..., 1] - v[..., 1] * t0v) / den
+        u = p[..., 0] + v[..., 0] * (r * tl - t0v)
+        return np.stack([u, r], axis=-1)
+
+    return finite_result(
+        "the recorded points", solve, points_uv=p, velocity_uv=vel, line_time=tl, t0=t0v
+    )
 
 
 def shutter_capture(
@@ -117,15 +150,17 @@ def shutter_capture(
     >>> img.argmax(axis=1).tolist()  # the bar moves 1 px per row: a skewed bar
     [2, 3, 4, 5]
     """
+    if not callable(render):
+        raise TypeError(f"expected render as a callable t -> image, got {describe(render)}")
     te = check_positive(exposure_time, "exposure_time (s)")
-    if not isinstance(samples, int) or samples < 1:
-        raise InvalidInputError(f"expected samples >= 1 (int), got {samples!r}")
-    first = np.asarray(render(0.0), dtype=np.float64)
-    if first.ndim not in (2, 3):
-        raise InvalidInputError(f"render(t) must return (H, W) or (H, W, C), got {first.shape}")
+    n_samples = as_int(samples, "samples", minimum=1, maximum=_MAX_SAMPLES)
     m = check_option(mode, ("global", "rolling"), "shutter mode")
+    check_positive(line_time, "line_time (s)", allow_zero=True)
+    first = _frame(render, 0.0, None)
+    if m == "global":  # every instant is cached: samples frames at once
+        check_memory(float(n_samples) * first.nbytes, "samples", f"{n_samples} cached frames")
     starts = row_start_times(first.shape[0], mode=m, line_time=line_time)
-    offsets = (np.arange(samples) + 0.5) / samples * te
+    offsets = (np.arange(n_samples) + 0.5) / n_samples * te
     out = np.zeros_like(first)
     cache: dict[float, np.ndarray] = {}
     for r, t_r in enumerate(starts):
@@ -133,9 +168,23 @@ def shutter_capture(
         for dt in offsets:
             t = float(t_r + dt)
             if t not in cache:
-                cache[t] = np.asarray(render(t), dtype=np.float64)
+                cache[t] = _frame(render, t, first.shape)
             acc += cache[t][r]
-        out[r] = acc / samples
+        out[r] = acc / n_samples
         if m == "rolling":
             cache.clear()
     return out
+
+
+def _frame(render: Callable[[float], Any], t: float, shape: tuple[int, ...] | None) -> np.ndarray:
+    """``render(t)`` as a finite float64 image ``(H, W)`` or ``(H, W, C)`` (of ``shape``)."""
+    name = f"render({t:g})"
+    img = as_real_array(render(t), name, check=False)
+    if img.ndim not in (2, 3) or 0 in img.shape or (shape is not None and img.shape != shape):
+        want = "(H, W) or (H, W, C), non-empty" if shape is None else format_shape(shape)
+        raise InvalidInputError(
+            f"expected render(t) to return an image of shape {want}, got "
+            f"{format_shape(img.shape)} at t = {t:g} s"
+        )
+    check_real_values(img, name)
+    return img

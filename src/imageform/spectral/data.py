@@ -14,7 +14,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from imageform._validate import check_option
+from imageform._validate import check_name, check_option, describe
 from imageform.errors import InvalidInputError
 from imageform.spectral.spectrum import Spectrum
 
@@ -47,6 +47,8 @@ TABLES = MappingProxyType(
         "v_photopic": "vlambda_photopic.csv",
         "v_scotopic": "vlambda_scotopic.csv",
         "A": "illuminant_A.csv",
+        "B": "illuminant_B.csv",
+        "C": "illuminant_C.csv",
         "D50": "illuminant_D50.csv",
         "D65": "illuminant_D65.csv",
         "F2": "illuminant_F2.csv",
@@ -60,8 +62,9 @@ TABLES = MappingProxyType(
         "cvd_machado2009": "cvd_machado2009.csv",
     }
 )
-#: Tabulated CIE illuminants (CIE 015:2018 Tables 1 and 10.1).
-ILLUMINANT_TABLES = ("A", "D50", "D65", "F2", "F11")
+#: Tabulated CIE illuminants (CIE 015:2018 Tables 1 and 10.1; B: CIE 15.2:1986 Table 1.1;
+#: C: CIE 15:2004 Table T.1).
+ILLUMINANT_TABLES = ("A", "B", "C", "D50", "D65", "F2", "F11")
 #: CIE 015:2018 Table 11 white-LED illuminants.
 LED_SPECTRA = (
     "LED-B1",
@@ -120,7 +123,11 @@ def read_table(key: str) -> DataTable:
     >>> t.columns[:3], t.labels[0], t.values.shape
     (('deficiency', 'severity', 'm00'), 'protan', (33, 10))
     """
-    k = key if key in TABLES else check_option(key, TABLES, "spectral table")
+    k = (
+        key
+        if isinstance(key, str) and key in TABLES
+        else check_name(key, TABLES, "spectral table", "key")
+    )
     return DataTable(*_parse(k))
 
 
@@ -130,7 +137,11 @@ def table_source(key: str) -> str:
     >>> table_source("cmf_2").startswith("source: CIE 015:2018")
     True
     """
-    k = key if key in TABLES else check_option(key, TABLES, "spectral table")
+    k = (
+        key
+        if isinstance(key, str) and key in TABLES
+        else check_name(key, TABLES, "spectral table", "key")
+    )
     return "\n".join(_parse(k)[0])
 
 
@@ -139,7 +150,11 @@ def load_table(key: str, name: str = "") -> Spectrum:
 
     Spectra are immutable (read-only arrays), so one cached object per table is shared.
     """
-    k = key if key in TABLES else check_option(key, TABLES, "spectral table")
+    k = (
+        key
+        if isinstance(key, str) and key in TABLES
+        else check_name(key, TABLES, "spectral table", "key")
+    )
     return _load_table(k, name)
 
 
@@ -188,7 +203,14 @@ def cone_fundamentals() -> Spectrum:
 
 
 def illuminant_table(name: str) -> Spectrum:
-    """A tabulated CIE illuminant, 5 nm: A, D50, D65 (100 at 560 nm); F2, F11 (relative)."""
+    """A tabulated CIE illuminant, 5 nm: A, D50, D65 (100 at 560 nm); B, C (the old CIE
+    daylight simulators, as tabulated: 102.8 and 105.3 at 560 nm); F2, F11 (relative).
+
+    >>> illuminant_table("C").name
+    'CIE C'
+    """
+    if not isinstance(name, str):
+        raise TypeError(f"expected name as an illuminant table name (str), got {describe(name)}")
     key = name.strip().upper().replace("FL", "F")
     if key not in ILLUMINANT_TABLES:
         raise InvalidInputError(
@@ -199,6 +221,8 @@ def illuminant_table(name: str) -> Spectrum:
 
 def led_spectrum(name: str = "LED-B3") -> Spectrum:
     """A CIE 015:2018 Table 11 white-LED spectrum (LED-B1 ... LED-V2), 5 nm."""
+    if not isinstance(name, str):
+        raise TypeError(f"expected name as an LED spectrum name (str), got {describe(name)}")
     key = name.strip().upper().replace("_", "-")
     if key not in LED_SPECTRA:
         raise InvalidInputError(

@@ -23,7 +23,7 @@ import numpy as np
 import numpy.typing as npt
 
 from imageform._colormath import DAYLIGHT_RANGE, daylight_xy, uv1960_from_xy
-from imageform._validate import check_positive
+from imageform._validate import as_bool, as_real, as_real_ndarray, check_positive, describe
 from imageform.errors import InvalidInputError
 from imageform.spectral.data import (
     ILLUMINANT_TABLES,
@@ -51,6 +51,22 @@ C2 = 1.4388e-2  # m K, second radiation constant as CIE 015:2018 uses it (ITS-90
 
 _DEFAULT_GRID = np.arange(300.0, 831.0, 1.0)
 
+#: The domain of :func:`planck`: wavelengths 1e-3 nm to 1e12 nm, temperatures up to 1e12 K;
+#: within it Planck's law is finite in float64 (beyond it, it would overflow to inf or NaN).
+PLANCK_WAVELENGTH_RANGE = (1e-3, 1e12)
+PLANCK_MAX_TEMPERATURE = 1e12
+
+
+def _check_wavelengths_nm(lam: np.ndarray, name: str) -> None:
+    lo, hi = PLANCK_WAVELENGTH_RANGE
+    if lam.size and not (np.all(np.isfinite(lam)) and lam.min() >= lo and lam.max() <= hi):
+        got = f"{np.min(lam):g}..{np.max(lam):g}"
+        raise InvalidInputError(f"expected {name} in [{lo:g}, {hi:g}] nm, got values {got}")
+
+
+def _temperature(temperature: object, name: str = "temperature") -> float:
+    return as_real(temperature, f"{name} (K)", positive=True, maximum=PLANCK_MAX_TEMPERATURE)
+
 
 def planck(wavelength_nm: npt.ArrayLike, temperature: float) -> np.ndarray:
     r"""Spectral radiant exitance of a black body, W m⁻² m⁻¹, at wavelengths in nm.
@@ -62,9 +78,10 @@ def planck(wavelength_nm: npt.ArrayLike, temperature: float) -> np.ndarray:
     Parameters
     ----------
     wavelength_nm : array_like, shape (...)
-        Wavelengths in nm (> 0).
+        Wavelengths in nm, within ``PLANCK_WAVELENGTH_RANGE`` (1e-3 to 1e12 nm).
     temperature : float
-        Temperature in kelvin (> 0).
+        Temperature in kelvin, > 0 and <= 1e12 (``PLANCK_MAX_TEMPERATURE``): within these
+        bounds the result is finite in float64.
 
     Returns
     -------
@@ -75,12 +92,15 @@ def planck(wavelength_nm: npt.ArrayLike, temperature: float) -> np.ndarray:
     >>> round(float(planck(500.0, 5000.0) / planck(560.0, 5000.0)), 4)
     0.9487
     """
-    t = check_positive(temperature, "temperature (K)")
-    lam = np.asarray(wavelength_nm, dtype=np.float64)
-    if np.any(~np.isfinite(lam)) or np.any(lam <= 0):
-        raise InvalidInputError("expected wavelengths > 0 nm")
+    t = _temperature(temperature)
+    lam = as_real_ndarray(wavelength_nm, "wavelength_nm", finite=False)
+    _check_wavelengths_nm(lam, "wavelength_nm")
+    return _planck(lam, t)
+
+
+def _planck(lam: np.ndarray, t: float) -> np.ndarray:
     m = lam * 1e-9
-    with np.errstate(over="ignore"):
+    with np.errstate(over="ignore", under="ignore"):
         return np.asarray(C1 / m**5 / np.expm1(C2 / (m * t)))
 
 
@@ -94,10 +114,24 @@ def blackbody_spectrum(
     >>> round(float(blackbody_spectrum(2856).interpolate([400]).values[0]), 3)
     14.717
     """
-    wl = _DEFAULT_GRID if wavelengths is None else np.asarray(wavelengths, dtype=np.float64)
-    s = planck(wl, temperature)
-    ref = planck(np.array([normalize_at]), temperature)[0]
-    return Spectrum(wl, 100.0 * s / ref, name=f"blackbody {float(temperature):g} K")
+    t = _temperature(temperature)
+    if wavelengths is None:
+        wl = _DEFAULT_GRID
+    else:
+        wl = as_real_ndarray(wavelengths, "wavelengths", ndim=1, min_size=1, finite=False)
+        _check_wavelengths_nm(wl, "wavelengths")
+    at = as_real(normalize_at, "normalize_at (nm)")
+    _check_wavelengths_nm(np.array([at]), "normalize_at")
+    s = _planck(wl, t)
+    ref = float(_planck(np.array([at]), t)[0])
+    with np.errstate(over="ignore", under="ignore"):
+        out = 100.0 * s / ref if ref > 0 else np.full_like(s, np.inf)
+    if not np.all(np.isfinite(out)):
+        raise InvalidInputError(
+            f"cannot scale a black body of temperature {t:g} K to 100 at normalize_at {at:g} nm: "
+            "its exitance there underflows to 0 against the grid's; choose a closer normalize_at"
+        )
+    return Spectrum(wl, out, name=f"blackbody {t:g} K")
 
 
 def daylight_spectrum(cct: float, *, round_m: bool = True) -> Spectrum:
@@ -113,7 +147,8 @@ def daylight_spectrum(cct: float, *, round_m: bool = True) -> Spectrum:
     >>> round(float(d65.interpolate([560]).values[0]), 3)
     100.0
     """
-    t = check_positive(cct, "CCT (K)")
+    t = check_positive(cct, "cct (K)")
+    round_m = as_bool(round_m, "round_m")
     lo, hi = DAYLIGHT_RANGE
     if not lo <= t <= hi:
         raise InvalidInputError(f"expected a daylight CCT in [{lo:g}, {hi:g}] K, got {t:g} K")
@@ -149,12 +184,14 @@ def daylight_spectrum_from_xy(xy: npt.ArrayLike, *, round_m: bool = True) -> Spe
     >>> round(float(d65.interpolate([560]).values[0]), 3)
     100.0
     """
-    try:
-        v = np.asarray(xy, dtype=np.float64)
-    except (TypeError, ValueError) as exc:
-        raise InvalidInputError(f"expected xy as two finite numbers, got {xy!r}") from exc
+    round_m = as_bool(round_m, "round_m")
+    v = as_real_ndarray(xy, "xy", finite=False)
     if v.shape != (2,) or not np.all(np.isfinite(v)):
-        raise InvalidInputError(f"expected xy as two finite numbers, got {xy!r}")
+        raise InvalidInputError(f"expected xy as two finite numbers, got {describe(xy)}")
+    if not np.all(np.abs(v) <= 1e3):
+        raise InvalidInputError(
+            f"expected xy as a chromaticity (|x|, |y| <= 1000), got {describe(xy)}"
+        )
     xd, yd = float(v[0]), float(v[1])
     if 0.0241 + 0.2562 * xd - 0.7341 * yd == 0.0:
         raise InvalidInputError(
@@ -177,7 +214,7 @@ def _d_series(xd: float, yd: float, round_m: bool, name: str) -> Spectrum:
 
 
 def illuminant(name: str) -> Spectrum:
-    """An illuminant by name: a CIE table (A, D50, D65, F2, F11), ``"E"`` (equal energy),
+    """An illuminant by name: a CIE table (A, B, C, D50, D65, F2, F11), ``"E"`` (equal energy),
     a CIE LED (LED-B1 ... LED-V2), ``"D<cct>"`` (daylight series, e.g. ``"D75"`` is 7500 K on
     the 1931 scale, i.e. ``daylight_spectrum(7500 * 1.4388 / 1.4380)``), or ``"bb<T>"``
     (black body at T kelvin, e.g. ``"bb3200"``).
@@ -229,14 +266,16 @@ def planckian_cct(xyz: npt.ArrayLike, *, observer: int = 2) -> PlanckianCCT:
 
     from imageform.spectral.data import cmfs
 
-    v = np.asarray(xyz, dtype=np.float64)
-    if v.shape != (3,) or not np.all(np.isfinite(v)) or v.sum() <= 0:
-        raise InvalidInputError(f"expected one XYZ of shape (3,) with X+Y+Z > 0, got {xyz!r}")
+    v = as_real_ndarray(xyz, "xyz", finite=False)
+    if v.shape != (3,) or not np.all(np.isfinite(v)) or not v.sum() > 0:
+        raise InvalidInputError(
+            f"expected xyz as one XYZ of shape (3,) with X+Y+Z > 0, got {describe(xyz)}"
+        )
     c = cmfs(observer)
     wl = c.wavelengths
 
     def uv_of(t: float) -> np.ndarray:
-        s = planck(wl, t) @ c.values
+        s = _planck(wl, t) @ c.values
         return np.stack(uv1960_from_xy(np, s[:2] / s.sum()))
 
     uv = np.stack(uv1960_from_xy(np, v[:2] / v.sum()))

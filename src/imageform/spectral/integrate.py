@@ -6,8 +6,8 @@ For a reflectance :math:`R` under an illuminant :math:`S` with colour-matching f
 .. math:: X = k \sum_\lambda S(\lambda) R(\lambda) \bar x(\lambda)\,\Delta\lambda,\qquad
           k = \frac{1}{\sum_\lambda S(\lambda)\bar y(\lambda)\,\Delta\lambda}
 
-so the perfect reflecting diffuser has Y = 1 (DESIGN.md: XYZ with white Y = 1; CIE 015 writes
-k = 100/..., Y = 100). A light source (``illuminant=None``) is integrated as
+so the perfect reflecting diffuser has Y = 1 (docs/conventions.md: XYZ with white Y = 1;
+CIE 015 writes k = 100/..., Y = 100). A light source (``illuminant=None``) is integrated as
 :math:`X = k\sum S \bar x \Delta\lambda` with Y = 1 for the source itself, or absolutely with
 :math:`k = K_m = 683` lm W⁻¹ (``absolute=True``).
 
@@ -32,7 +32,7 @@ from typing import NamedTuple
 import numpy as np
 
 from imageform import _deprecate
-from imageform._validate import check_option
+from imageform._validate import as_bool, check_memory, check_option, describe
 from imageform.errors import InvalidInputError
 from imageform.spectral.data import (
     camera_sensitivities,
@@ -78,6 +78,8 @@ def observer_functions(observer: int | str | Spectrum = 2) -> Spectrum:
                 f"expected observer functions of shape (N, 3), got {observer.shape}"
             )
         return observer
+    if isinstance(observer, bool | np.bool_) or not isinstance(observer, int | np.integer | str):
+        raise TypeError(f"expected observer as 2, 10 or 'cones', got {describe(observer)}")
     key = str(observer).strip().lower().removesuffix("deg").removesuffix("°")
     key = {"lms": "cones", "ss2": "cones", "stockman_sharpe": "cones"}.get(key, key)
     key = check_option(key, OBSERVER_NAMES, "observer")
@@ -94,6 +96,10 @@ def resolve_illuminant(illuminant: str | Spectrum | None) -> Spectrum | None:
     >>> resolve_illuminant(None) is None
     True
     """
+    if not (illuminant is None or isinstance(illuminant, Spectrum | str)):
+        raise TypeError(
+            f"expected illuminant as a name, a Spectrum or None, got {describe(illuminant)}"
+        )
     if illuminant is None or isinstance(illuminant, Spectrum):
         if isinstance(illuminant, Spectrum) and illuminant.values.ndim != 1:
             raise InvalidInputError(f"expected a single-curve illuminant, got {illuminant.shape}")
@@ -103,7 +109,7 @@ def resolve_illuminant(illuminant: str | Spectrum | None) -> Spectrum | None:
 
 def _as_spectrum(s: object, name: str) -> Spectrum:
     if not isinstance(s, Spectrum):
-        raise InvalidInputError(f"expected {name} as a Spectrum, got {type(s).__name__}")
+        raise InvalidInputError(f"expected {name} as a Spectrum, got {describe(s)}")
     return s
 
 
@@ -138,9 +144,18 @@ def integration_weights(
     interval for ``"astm_e308"``.
     """
     m = check_option(method, INTEGRATION_METHODS, "integration method")
+    functions = observer_functions(_as_spectrum(functions, "functions"))  # checks (N, 3)
+    illuminant = resolve_illuminant(illuminant)
+    if sample is not None:
+        _as_spectrum(sample, "sample")
     lo, hi = functions.range
     if illuminant is not None:
         lo, hi = max(lo, illuminant.range[0]), min(hi, illuminant.range[1])
+        if not hi > lo:
+            raise InvalidInputError(
+                f"expected an illuminant overlapping the functions' {functions.range[0]:g}-"
+                f"{functions.range[1]:g} nm, got {illuminant.range[0]:g}-{illuminant.range[1]:g} nm"
+            )
     if m == "cie015":
         step = 1.0
         lo = float(np.ceil(lo))
@@ -150,6 +165,8 @@ def integration_weights(
         step = sample.interval
         first = sample.wavelengths[0]
         lo = first + step * np.ceil((lo - first) / step - 1e-9)
+    # the grid and its (M, 3) weights are bounded before they are built
+    check_memory(min(64.0 * ((hi - lo) / step + 1.0), 2.0**80), "functions", "the integration grid")
     return IntegrationWeights(*_weights(functions, illuminant, float(lo), float(hi), float(step)))
 
 
@@ -227,6 +244,7 @@ def spectrum_to_xyz(
     0.9123
     """
     s = _as_spectrum(spectrum, "spectrum")
+    absolute = as_bool(absolute, "absolute")
     f = observer_functions(observer)
     if str(observer).strip().lower() in ("cones", "lms"):
         raise InvalidInputError("spectrum_to_xyz needs observer 2 or 10; use spectrum_to_lms")
@@ -312,6 +330,7 @@ def luminance(spectrum: Spectrum, *, scotopic: bool = False) -> float | np.ndarr
     729.83
     """
     s = _as_spectrum(spectrum, "spectrum")
+    scotopic = as_bool(scotopic, "scotopic")
     v = luminous_efficiency("scotopic" if scotopic else "photopic")
     r = s.interpolate(v.wavelengths, extrapolate="zero").values
     km = KM_SCOTOPIC if scotopic else KM_PHOTOPIC

@@ -15,7 +15,14 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from imageform._validate import check_option
+from imageform._validate import (
+    as_int,
+    as_real,
+    as_real_ndarray,
+    check_memory,
+    check_option,
+    describe,
+)
 from imageform.errors import InvalidInputError
 
 __all__ = ["EXTRAPOLATION_METHODS", "INTERPOLATION_METHODS", "Spectrum"]
@@ -27,17 +34,14 @@ INTERPOLATION_METHODS = ("linear", "cubic", "pchip", "nearest", "sprague")
 EXTRAPOLATION_METHODS = ("constant", "zero", "error")
 
 
-def _as_wavelengths(wl: npt.ArrayLike, min_size: int = 1) -> np.ndarray:
-    try:
-        w = np.asarray(wl, dtype=np.float64)
-    except (TypeError, ValueError) as exc:
-        raise InvalidInputError(f"expected numeric wavelengths, got {wl!r:.60}") from exc
+def _as_wavelengths(wl: npt.ArrayLike, min_size: int = 1, name: str = "wavelengths") -> np.ndarray:
+    w = as_real_ndarray(wl, name, finite=False)
     if w.ndim != 1 or w.size < min_size:
         raise InvalidInputError(
-            f"expected wavelengths of shape (N,) with N >= {min_size}, got {w.shape}"
+            f"expected {name} of shape (N,) with N >= {min_size}, got {w.shape}"
         )
     if not np.all(np.isfinite(w)):
-        raise InvalidInputError("wavelengths contain NaN or inf")
+        raise InvalidInputError(f"{name} contain NaN or inf")
     if np.any(np.diff(w) <= 0):
         i = int(np.argmax(np.diff(w) <= 0))
         raise InvalidInputError(
@@ -79,6 +83,8 @@ def _sprague(x: np.ndarray, y: np.ndarray, xi: np.ndarray) -> np.ndarray:
     end, L holds the quintic's weights on p_{-2} .. p_{3}), then ``S @ y``.
     """
     n, m = len(x), len(xi)
+    # the dense operator (m x (n + 4)) @ ((n + 4) x n) is bounded before it is built
+    check_memory(8.0 * (n + 4) * (m + n), "wavelengths", "Sprague interpolation")
     h = x[1] - x[0]
     i = np.clip(np.floor((xi - x[0]) / h + 1e-12).astype(int), 0, n - 2)
     t = (xi - x[i]) / h
@@ -123,12 +129,7 @@ class Spectrum:
 
     def __post_init__(self) -> None:
         w = _as_wavelengths(self.wavelengths, 1)
-        try:
-            v = np.array(self.values, dtype=np.float64)
-        except (TypeError, ValueError) as exc:
-            raise InvalidInputError(
-                f"expected numeric spectral values, got {self.values!r:.60}"
-            ) from exc
+        v = np.array(as_real_ndarray(self.values, "values", finite=False), copy=True)
         if v.ndim not in (1, 2) or v.shape[0] != w.shape[0]:
             raise InvalidInputError(
                 f"expected values of shape ({w.shape[0]},) or ({w.shape[0]}, K) to match "
@@ -136,7 +137,13 @@ class Spectrum:
             )
         if not np.all(np.isfinite(v)):
             raise InvalidInputError("spectral values contain NaN or inf")
+        if not isinstance(self.name, str):
+            raise TypeError(f"expected name as a str, got {describe(self.name)}")
+        if isinstance(self.labels, str) or not isinstance(self.labels, Sequence):
+            raise TypeError(f"expected labels as a tuple of str, got {describe(self.labels)}")
         labels = tuple(self.labels)
+        if not all(isinstance(lab, str) for lab in labels):
+            raise TypeError(f"expected labels as a tuple of str, got {describe(self.labels)}")
         if labels and (v.ndim != 2 or len(labels) != v.shape[1]):
             raise InvalidInputError(
                 f"expected {v.shape[1] if v.ndim == 2 else 0} labels, got {len(labels)}"
@@ -184,7 +191,9 @@ class Spectrum:
                 )
             i = self.labels.index(label)
         else:
-            i = int(label)
+            i = as_int(
+                label, "label", minimum=-self.values.shape[1], maximum=self.values.shape[1] - 1
+            )
         name = self.labels[i] if self.labels else f"{self.name}[{i}]"
         return Spectrum(self.wavelengths, self.values[:, i], name=name)
 
@@ -234,8 +243,8 @@ class Spectrum:
         gives 0, ``"error"`` raises.
         """
         m = check_option(method, INTERPOLATION_METHODS, "interpolation method")
-        e = check_option(extrapolate, EXTRAPOLATION_METHODS, "extrapolation method")
-        w = _as_wavelengths(np.atleast_1d(np.asarray(wavelengths, dtype=np.float64)), 1)
+        e = check_option(extrapolate, EXTRAPOLATION_METHODS, "extrapolation method (extrapolate)")
+        w = _as_wavelengths(np.atleast_1d(as_real_ndarray(wavelengths, "wavelengths")), 1)
         x, y = self.wavelengths, self.values
         lo, hi = x[0], x[-1]
         outside = (w < lo) | (w > hi)
@@ -285,18 +294,29 @@ class Spectrum:
         >>> Spectrum([400, 500], [0.0, 1.0]).resample(400, 500, 25).values.tolist()
         [0.0, 0.25, 0.5, 0.75, 1.0]
         """
-        if not step > 0 or not stop > start:
-            raise InvalidInputError(
-                f"expected start < stop and step > 0, got {start}, {stop}, {step}"
-            )
-        n = round((stop - start) / step)
+        start = as_real(start, "start")
+        stop = as_real(stop, "stop")
+        step = as_real(step, "step", positive=True)
+        if not stop > start:
+            raise InvalidInputError(f"expected start < stop, got start {start:g}, stop {stop:g}")
+        count = (stop - start) / step
+        # the grid's memory is bounded before it is built (8 bytes a sample, x2 for the result)
+        check_memory(
+            min(16.0 * (count + 1) * max(1, self.values.size // len(self)), 2.0**80),
+            "the grid start..stop by step",
+        )
+        n = round(count)
         if not np.isclose(start + n * step, stop):
-            raise InvalidInputError(f"(stop - start) = {stop - start} is not a multiple of {step}")
+            raise InvalidInputError(
+                f"expected (stop - start) = {stop - start:g} to be a multiple of step {step:g}"
+            )
         grid = start + step * np.arange(n + 1, dtype=np.float64)
         return self.interpolate(grid, method=method, extrapolate=extrapolate)
 
     def trim(self, start: float, stop: float) -> Spectrum:
-        """The samples with ``start <= wavelength <= stop``."""
+        """The samples with ``start <= wavelength <= stop`` (``-inf`` / ``inf`` for no bound)."""
+        start = as_real(start, "start", allow_inf=True)
+        stop = as_real(stop, "stop", allow_inf=True)
         keep = (self.wavelengths >= start) & (self.wavelengths <= stop)
         if keep.sum() < 2:
             raise InvalidInputError(f"fewer than 2 samples within {start:g}-{stop:g} nm")
@@ -304,10 +324,20 @@ class Spectrum:
 
     def normalize(self, at: float | str = "peak") -> Spectrum:
         """Scaled so the value at ``at`` nm (linear interpolation) or the peak is 1."""
-        if at == "peak":
+        if isinstance(at, str):
+            if at != "peak":
+                raise InvalidInputError(
+                    f"expected at as a wavelength (nm) or 'peak', got {at!r:.40}"
+                )
             ref = np.max(self.values, axis=0)
         else:
-            ref = self.interpolate([float(at)], extrapolate="error").values[0]
+            nm = as_real(at, "at")
+            lo, hi = self.range
+            if not lo <= nm <= hi:
+                raise InvalidInputError(
+                    f"expected at within the sampled range {lo:g}-{hi:g} nm, got {nm:g}"
+                )
+            ref = self.interpolate([nm], extrapolate="error").values[0]
         if np.any(ref == 0):
             raise InvalidInputError(f"cannot normalise: the value at {at} is 0")
         return Spectrum(self.wavelengths, self.values / ref, self.name, self.labels)
@@ -339,11 +369,14 @@ class Spectrum:
         v = self._other(other, op)
         if v is NotImplemented:
             return NotImplemented
-        with np.errstate(divide="raise", invalid="raise"):
+        if isinstance(v, float) and not np.isfinite(v):
+            raise InvalidInputError(f"cannot {op} by {v}: expected a finite number")
+        with np.errstate(divide="raise", invalid="raise", over="raise"):
             try:
                 out = f(self.values, v)
             except FloatingPointError as exc:
-                raise InvalidInputError(f"cannot {op}: division by zero") from exc
+                what = "overflow" if "overflow" in str(exc) else "division by zero"
+                raise InvalidInputError(f"cannot {op}: {what}") from exc
         return Spectrum(self.wavelengths, out, self.name, self.labels)
 
     def __add__(self, other: Any) -> Spectrum:
@@ -372,6 +405,9 @@ class Spectrum:
 
     def allclose(self, other: Spectrum, *, atol: float = 1e-12) -> bool:
         """Same grid and values within ``atol``."""
+        if not isinstance(other, Spectrum):
+            raise TypeError(f"expected other as a Spectrum, got {describe(other)}")
+        atol = as_real(atol, "atol", nonnegative=True)
         return bool(
             self.wavelengths.shape == other.wavelengths.shape
             and np.allclose(self.wavelengths, other.wavelengths, rtol=0, atol=1e-9)
@@ -389,9 +425,17 @@ class Spectrum:
         name: str = "",
     ) -> Spectrum:
         """K curves on one grid from K sequences."""
+        if isinstance(columns, str | bytes) or not isinstance(columns, Sequence) or not columns:
+            raise InvalidInputError(
+                f"expected columns as a non-empty sequence of arrays, got {describe(columns)}"
+            )
+        cols = [as_real_ndarray(c, f"columns[{i}]", ndim=1) for i, c in enumerate(columns)]
+        if len({c.shape for c in cols}) != 1:
+            raise InvalidInputError(
+                f"expected columns of equal length, got lengths {[len(c) for c in cols]}"
+            )
+        if isinstance(labels, str):
+            raise TypeError(f"expected labels as a sequence of str, got {describe(labels)}")
         return cls(
-            np.asarray(wavelengths),
-            np.stack([np.asarray(c, float) for c in columns], 1),
-            name,
-            tuple(labels),
+            as_real_ndarray(wavelengths, "wavelengths"), np.stack(cols, 1), name, tuple(labels)
         )
