@@ -7,11 +7,13 @@ from types import MappingProxyType
 
 from imageform.errors import UnknownOptionError
 from imageform.workflows import (
+    analysis,
     calibration,
     color,
     geometry,
     lecture,
     optics,
+    sensor,
     simulate,
     stereo,
     vanishing,
@@ -33,6 +35,8 @@ WORKFLOWS = MappingProxyType(
             *stereo.WORKFLOWS,
             *vanishing.WORKFLOWS,
             *optics.WORKFLOWS,
+            *sensor.WORKFLOWS,
+            *analysis.WORKFLOWS,
         )
     }
 )
