@@ -231,7 +231,16 @@ def check_option(value: object, valid: Collection[str], what: str) -> str:
     key = value.strip().lower().replace("-", "_").replace(" ", "_")
     if key not in valid:
         names = ", ".join(repr(v) for v in sorted(valid))
-        raise UnknownOptionError(f"unknown {what} {value!r}; valid: {names}")
+        if len(names) > 120:  # one line: list what fits, say how many more
+            shown = ""
+            for i, v in enumerate(sorted(valid)):
+                part = (", " if shown else "") + repr(v)
+                if len(shown) + len(part) > 110:
+                    shown += f", ... ({len(valid) - i} more)"
+                    break
+                shown += part
+            names = shown
+        raise UnknownOptionError(f"unknown {what} {describe(value, 60)}; valid: {names}")
     return key
 
 

@@ -278,7 +278,6 @@ def synthetic_he_tile(
     return StainMixture(img, s, c)
 
 
-@_seed_first
 def _shape(shape: object) -> tuple[int, int]:
     """``(height, width)``: two integers in [1, 16384], within the memory limit."""
     hgt, wid = as_size(shape, "shape", minimum=1, maximum=16384)
@@ -286,6 +285,7 @@ def _shape(shape: object) -> tuple[int, int]:
     return hgt, wid
 
 
+@_seed_first
 def synthetic_stain_image(
     shape: tuple[int, int] = (128, 128),
     stains: tuple[tuple[float, float, float], ...] = (RUIFROK_HEMATOXYLIN, RUIFROK_EOSIN),
