@@ -35,8 +35,11 @@ def _rgb_cam_libraw(cm: np.ndarray) -> np.ndarray:
     """LibRaw's rgb_cam from a DNG ColorMatrix (dcraw's cam_xyz_coeff): rows of
     cam_rgb = cm @ xyz_rgb normalised to sum 1, then inverted."""
     xyz_rgb = np.array(  # dcraw's sRGB (D65) matrix
-        [[0.412453, 0.357580, 0.180423], [0.212671, 0.715160, 0.072169],
-         [0.019334, 0.119193, 0.950227]]
+        [
+            [0.412453, 0.357580, 0.180423],
+            [0.212671, 0.715160, 0.072169],
+            [0.019334, 0.119193, 0.950227],
+        ]
     )
     cam_rgb = cm @ xyz_rgb
     cam_rgb /= cam_rgb.sum(axis=1, keepdims=True)
@@ -165,7 +168,7 @@ def test_develop_stages(simulated: tuple[Path, object, object]) -> None:
     assert dev.camera_rgb.shape == (h, w, 3)
     np.testing.assert_allclose(dev.camera_rgb[0::2, 0::2, r0], dev.white_balanced[0::2, 0::2])
     # 4. white-balanced white maps to the illuminant's white (D65, Y = 1)
-    from imageform.color import linear_srgb_to_xyz, xy_to_xyz_white, whitepoint_xy
+    from imageform.color import linear_srgb_to_xyz, whitepoint_xy, xy_to_xyz_white
 
     np.testing.assert_allclose(
         dev.camera_to_xyz @ np.ones(3), xy_to_xyz_white(whitepoint_xy("D65")), atol=1e-12

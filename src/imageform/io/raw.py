@@ -153,8 +153,16 @@ def write_dng(
 
     pattern = _pattern(cfa_pattern)
     arr = np.asarray(mosaic)
-    if arr.ndim != 2 or arr.shape[0] < 2 or arr.shape[1] < 2 or arr.shape[0] % 2 or arr.shape[1] % 2:
-        raise InvalidInputError(f"expected mosaic as an (H, W) array, H and W even, got {describe(arr)}")
+    if (
+        arr.ndim != 2
+        or arr.shape[0] < 2
+        or arr.shape[1] < 2
+        or arr.shape[0] % 2
+        or arr.shape[1] % 2
+    ):
+        raise InvalidInputError(
+            f"expected mosaic as an (H, W) array, H and W even, got {describe(arr)}"
+        )
     if arr.dtype.kind not in "ui" and not (
         arr.dtype.kind == "f" and np.all(np.isfinite(arr)) and np.all(arr == np.round(arr))
     ):
@@ -173,10 +181,14 @@ def write_dng(
         )
     cm = np.asarray(color_matrix, dtype=np.float64)
     if cm.shape != (3, 3) or not np.all(np.isfinite(cm)) or abs(np.linalg.det(cm)) < 1e-12:
-        raise InvalidInputError(f"expected color_matrix as an invertible (3, 3) matrix, got {describe(cm)}")
+        raise InvalidInputError(
+            f"expected color_matrix as an invertible (3, 3) matrix, got {describe(cm)}"
+        )
     neutral = np.asarray(as_shot_neutral, dtype=np.float64)
     if neutral.shape != (3,) or not np.all(np.isfinite(neutral)) or np.any(neutral <= 0):
-        raise InvalidInputError(f"expected as_shot_neutral as 3 positive numbers, got {describe(neutral)}")
+        raise InvalidInputError(
+            f"expected as_shot_neutral as 3 positive numbers, got {describe(neutral)}"
+        )
     ill = str(calibration_illuminant).upper()
     if ill not in CALIBRATION_ILLUMINANTS:
         raise InvalidInputError(
@@ -184,7 +196,9 @@ def write_dng(
             f"valid: {', '.join(CALIBRATION_ILLUMINANTS)}"
         )
     if not isinstance(camera_model, str) or not camera_model or not camera_model.isascii():
-        raise InvalidInputError(f"expected camera_model as a non-empty ASCII string, got {describe(camera_model)}")
+        raise InvalidInputError(
+            f"expected camera_model as a non-empty ASCII string, got {describe(camera_model)}"
+        )
     tags = [
         (_DNG_VERSION, _BYTE, 4, (1, 4, 0, 0), True),
         (_DNG_BACKWARD_VERSION, _BYTE, 4, (1, 1, 0, 0), True),
@@ -197,7 +211,13 @@ def write_dng(
         (_BLACK_LEVEL, _LONG, 1, int(black), True),
         (_WHITE_LEVEL, _LONG, 1, int(white), True),
         (_COLOR_MATRIX_1, _SRATIONAL, 9, _rationals(cm, "color_matrix", signed=True), True),
-        (_AS_SHOT_NEUTRAL, _RATIONAL, 3, _rationals(neutral, "as_shot_neutral", signed=False), True),
+        (
+            _AS_SHOT_NEUTRAL,
+            _RATIONAL,
+            3,
+            _rationals(neutral, "as_shot_neutral", signed=False),
+            True,
+        ),
         (_CALIBRATION_ILLUMINANT_1, _SHORT, 1, CALIBRATION_ILLUMINANTS[ill], True),
     ]
     out = Path(path)
@@ -482,7 +502,9 @@ def develop(
     if isinstance(raw, (str, Path)):
         raw = read_raw(raw)
     if not isinstance(raw, RawImage):
-        raise InvalidInputError(f"expected raw as a RawImage (read_raw) or a path, got {describe(raw)}")
+        raise InvalidInputError(
+            f"expected raw as a RawImage (read_raw) or a path, got {describe(raw)}"
+        )
     method = str(demosaic).lower().replace("-", "_")
     if method not in DEMOSAIC_METHODS:
         raise InvalidInputError(
