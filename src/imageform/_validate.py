@@ -62,7 +62,7 @@ def _raw(x: object, name: str, xp: Any, device: Any) -> Any:
     try:
         arr = asarray_like(x, xp, device=device)
     except (TypeError, ValueError) as exc:
-        raise InvalidInputError(f"expected a numeric array for {name}, got {x!r:.80}") from exc
+        raise InvalidInputError(f"expected a numeric array for {name}, got {describe(x)}") from exc
     dt = arr.dtype
     if not (xp.isdtype(dt, "numeric") or xp.isdtype(dt, "bool")):
         raise InvalidInputError(f"expected a numeric array for {name}, got dtype {dt}")

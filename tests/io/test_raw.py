@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from imageform.errors import InvalidInputError
+from imageform.errors import ImageformError, InvalidInputError
 from imageform.io import Development, RawImage, develop, read_raw, write_dng
 
 rawpy = pytest.importorskip("rawpy")
@@ -214,7 +214,7 @@ def test_missing_extra(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setitem(sys.modules, "rawpy", None)
     f = tmp_path / "x.dng"
     f.write_bytes(b"II*\x00")
-    with pytest.raises(InvalidInputError, match=r'pip install "imageform\[raw\]"') as e:
+    with pytest.raises(ImageformError, match=r'pip install "imageform\[raw\]"') as e:
         read_raw(f)
     assert "\n" not in str(e.value)
 

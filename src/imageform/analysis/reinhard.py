@@ -14,8 +14,9 @@ from typing import Any
 
 import numpy as np
 
-from imageform._validate import format_shape
+from imageform._validate import describe, format_shape
 from imageform.analysis._arrays import image_in, is_dask, read_json, write_json
+from imageform.analysis._guard import count, real_triple
 from imageform.color.convert import convert
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
 
@@ -36,6 +37,16 @@ class ReinhardStats:
     std: tuple[float, float, float]
     n_pixels: int
     space: str = REINHARD_SPACE
+
+    def __post_init__(self) -> None:
+        """Three finite means, three finite stds >= 0, a pixel count >= 0, the one space."""
+        object.__setattr__(self, "mean", real_triple(self.mean, "mean"))
+        object.__setattr__(self, "std", real_triple(self.std, "std", nonnegative=True))
+        object.__setattr__(self, "n_pixels", count(self.n_pixels, "n_pixels"))
+        if self.space != REINHARD_SPACE:
+            raise InvalidInputError(
+                f"expected space {REINHARD_SPACE!r}, got {describe(self.space)}"
+            )
 
     def to_json(self, path: str | Path) -> None:
         """Save as JSON (``kind: "reinhard_stats"``)."""
@@ -211,6 +222,10 @@ def reinhard_normalize(
     """
     rgb = image_in(image)
     tgt = _target_stats(target)
+    if source_stats is not None and not isinstance(source_stats, ReinhardStats):
+        raise TypeError(
+            f"expected source_stats as ReinhardStats or None, got {type(source_stats).__name__}"
+        )
     src = reinhard_stats(rgb, mask) if source_stats is None else source_stats
     sd_s = np.asarray(src.std)
     if np.any(sd_s == 0):

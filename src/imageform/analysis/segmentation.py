@@ -17,7 +17,7 @@ import numpy as np
 
 from imageform._backend import use_numba
 from imageform._colormath import rgb_to_hsv
-from imageform._validate import format_shape
+from imageform._validate import as_real, describe, format_shape
 from imageform.analysis._arrays import image_in, is_dask
 from imageform.errors import DegenerateConfigurationError, ImageformWarning, InvalidInputError
 
@@ -82,13 +82,16 @@ def disc(radius: int) -> np.ndarray:
 
 def _pair(value: object, name: str, lo: float, hi: float, unit: str) -> tuple[float, float]:
     try:
-        a, b = (float(v) for v in value)  # type: ignore[attr-defined]
-    except (TypeError, ValueError) as exc:
-        raise InvalidInputError(f"expected {name} as a (low, high) pair, got {value!r}") from exc
+        n = len(value)  # type: ignore[arg-type]
+    except TypeError:
+        n = -1
+    if isinstance(value, str | bytes) or n != 2:
+        raise InvalidInputError(f"expected {name} as a (low, high) pair, got {describe(value)}")
+    a, b = (as_real(v, name) for v in value)  # type: ignore[attr-defined]
     for v in (a, b):
         if not (math.isfinite(v) and lo <= v <= hi):
             raise InvalidInputError(
-                f"expected {name} bounds in [{lo:g}, {hi:g}] ({unit}), got {value!r}"
+                f"expected {name} bounds in [{lo:g}, {hi:g}] ({unit}), got {describe(value)}"
             )
     return a, b
 

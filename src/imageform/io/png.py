@@ -38,7 +38,7 @@ def write_png(path: str | Path, image: np.ndarray) -> None:
 
     a = np.asarray(image)
     if a.dtype not in (np.uint8, np.uint16):
-        raise InvalidInputError(f"expected uint8 or uint16 for PNG, got {a.dtype}")
+        raise InvalidInputError(f"expected image as uint8 or uint16 for PNG, got {a.dtype}")
     if Path(path).suffix.lower() != ".png":
         raise InvalidInputError(f"expected a .png file name, got {path}")
     write_image(path, a)

@@ -67,17 +67,12 @@ _PHOTOMETRIC_CFA = 32803
 _BYTE, _ASCII, _SHORT, _LONG, _RATIONAL, _SRATIONAL = 1, 2, 3, 4, 5, 10
 #: Denominator of the rationals written (ColorMatrix1, AsShotNeutral): 1e-6 resolution.
 _DEN = 1_000_000
-_RAW_EXTRA = 'pip install "imageform[raw]"'
 
 
 def _rawpy() -> Any:
-    try:
-        import rawpy
-    except ImportError:
-        raise InvalidInputError(
-            f"reading raw files needs rawpy (LibRaw), which is not installed: {_RAW_EXTRA}"
-        ) from None
-    return rawpy
+    from imageform._optional import require
+
+    return require("rawpy", what="reading raw files (LibRaw)")
 
 
 def _rationals(values: np.ndarray, what: str, *, signed: bool) -> list[int]:
@@ -324,7 +319,9 @@ def read_raw(path: str | Path) -> RawImage:
     Raises
     ------
     InvalidInputError
-        Missing file, a file LibRaw cannot read, a non-Bayer sensor, or rawpy missing.
+        Missing file, a file LibRaw cannot read, or a non-Bayer sensor.
+    imageform.errors.ImageformError
+        rawpy is not installed (the message names ``pip install "imageform[raw]"``).
     """
     p = Path(path)
     if not p.is_file():

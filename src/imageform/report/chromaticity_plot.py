@@ -12,7 +12,7 @@ from typing import Any
 
 import numpy as np
 
-from imageform._validate import check_option
+from imageform._validate import as_float, check_option
 from imageform.errors import InvalidInputError
 
 __all__ = ["CCT_TICKS", "planckian_locus", "plot_chromaticity_diagram"]
@@ -36,7 +36,10 @@ def planckian_locus(
 
     c = check_option(coords, ("xy", "uv"), "chromaticity diagram")
     out = []
-    for t in np.asarray(temperatures, dtype=np.float64).ravel():
+    temps = np.asarray(as_float(temperatures, "temperatures"), dtype=np.float64).ravel()
+    if np.any(temps <= 0) or np.any(temps > 1e6):
+        raise InvalidInputError("expected temperatures in (0, 1e6] K")
+    for t in temps:
         xyz = spectrum_to_xyz(
             blackbody_spectrum(float(t), np.arange(360.0, 831.0)),
             illuminant=None,

@@ -20,7 +20,9 @@ from typing import Any
 
 import numpy as np
 
+from imageform._validate import as_int
 from imageform.errors import InvalidInputError
+from imageform.report._checks import check_result
 from imageform.simulate.result import SimulationResult
 from imageform.simulate.truth import vanishing_errors
 
@@ -42,7 +44,8 @@ def image_corner_pixels(width: int, height: int) -> np.ndarray:
     >>> image_corner_pixels(4, 3).tolist()
     [[-0.5, -0.5], [3.5, -0.5], [3.5, 2.5], [-0.5, 2.5]]
     """
-    w, h = float(width), float(height)
+    w = float(as_int(width, "width", minimum=1))
+    h = float(as_int(height, "height", minimum=1))
     return np.array([[-0.5, -0.5], [w - 0.5, -0.5], [w - 0.5, h - 0.5], [-0.5, h - 0.5]])
 
 
@@ -89,6 +92,7 @@ def top_view_data(result: SimulationResult) -> dict[str, Any]:
     ``view_right``, ``view_ahead`` (:func:`top_view_axes`). Rays whose corner pixel cannot
     be undistorted are NaN.
     """
+    check_result(result)
     cam = result.camera
     width, height = result.image_size
     centre = np.asarray(cam.center, dtype=np.float64)
@@ -198,6 +202,7 @@ def vanishing_summary(result: SimulationResult) -> dict[str, Any] | None:
     >>> vanishing_summary(r)["vanishing_point_error_px"]
     5.0
     """
+    check_result(result)
     v = result.vanishing
     if v is None:
         return None
@@ -224,6 +229,7 @@ def vanishing_overlay(result: SimulationResult, display: np.ndarray) -> Any:
     """The output picture ``display`` (uint8 RGB) with the true and detected vanishing point
     and horizon (:func:`imageform.report.overlays.draw_vanishing_truth_overlay`); ``None``
     without rails."""
+    check_result(result)
     from imageform.report.overlays import draw_vanishing_truth_overlay
 
     v = result.vanishing

@@ -19,6 +19,8 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
+from imageform._validate import as_int
+
 __all__ = [
     "BYTES_PER_PIXEL",
     "available_memory_bytes",
@@ -37,7 +39,9 @@ def estimate_memory_bytes(width: int, height: int) -> int:
     >>> estimate_memory_bytes(1280, 720) / 1e9
     0.41472
     """
-    return int(width) * int(height) * BYTES_PER_PIXEL
+    w = as_int(width, "width", minimum=0)
+    h = as_int(height, "height", minimum=0)
+    return w * h * BYTES_PER_PIXEL
 
 
 def _meminfo_available(path: Path = Path("/proc/meminfo")) -> int | None:

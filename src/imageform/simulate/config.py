@@ -26,6 +26,7 @@ from typing import Any
 
 import numpy as np
 
+from imageform._validate import as_real, check_option
 from imageform.errors import InvalidInputError
 from imageform.geometry.camera import Camera
 from imageform.geometry.distortion import BrownConrady, DivisionModel, KannalaBrandt
@@ -114,6 +115,13 @@ class DistortionConfig:
     k4: float = 0.0
     k5: float = 0.0
     k6: float = 0.0
+
+    def __post_init__(self) -> None:
+        """A known model and finite coefficients."""
+        model = check_option(self.model, DISTORTION_COEFFICIENTS, "distortion model")
+        object.__setattr__(self, "model", model)
+        for key in ("k1", "k2", "p1", "p2", "k3", "k4", "k5", "k6"):
+            object.__setattr__(self, key, as_real(getattr(self, key), key))
 
     def to_model(self) -> BrownConrady | DivisionModel | KannalaBrandt | None:
         """The :mod:`imageform.geometry.distortion` model, ``None`` when every coefficient is 0.

@@ -12,6 +12,7 @@ import copy
 import dataclasses
 import tomllib
 import warnings
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -34,7 +35,7 @@ from imageform.simulate.config import (
     SceneConfig,
 )
 from imageform.simulate.textures import load_texture, resolve_path
-from imageform.simulate.validation import validate_scene_dict
+from imageform.simulate.validation import _Ctx, validate_scene_dict
 from imageform.spectral.spectrum import Spectrum
 
 __all__ = ["Scene", "SceneObject", "default_scene", "load_scene"]
@@ -303,17 +304,35 @@ def _illuminant(il: IlluminantConfig, base: Path | None) -> Spectrum:
 
 def _build(data: dict[str, Any], text: str | None, origin: str, base: Path | None) -> Scene:
     cfg = SceneConfig.from_dict(validate_scene_dict(data, text, origin))
-    sensor = cfg.sensor.to_model()
-    camera = cfg.camera.to_camera((cfg.render.width, cfg.render.height), sensor.pixel_pitch)
+    ctx = _Ctx(text, origin)
+
+    def at(path: tuple[str, ...], make: Callable[[], Any]) -> Any:
+        """``make()``; an error it raises names the scene key and line (issue 16)."""
+        try:
+            return make()
+        except InvalidInputError as exc:
+            if str(exc).startswith("scene key"):
+                raise
+            raise type(exc)(f"scene key {ctx.where(path)}: {exc}") from None
+
+    sensor = at(("sensor",), cfg.sensor.to_model)
+    camera = at(
+        ("camera",),
+        lambda: cfg.camera.to_camera((cfg.render.width, cfg.render.height), sensor.pixel_pitch),
+    )
     if cfg.lens.focus_distance_m * 1e3 <= cfg.camera.focal_length_mm:
-        raise InvalidInputError("lens.focus_distance_m must exceed the focal length")
+        ctx.fail(
+            ("lens", "focus_distance_m"),
+            f"expected more than the focal length ({cfg.camera.focal_length_mm:g} mm), got "
+            f"{cfg.lens.focus_distance_m:g} m",
+        )
     return Scene(
         name=cfg.name,
         config=cfg,
-        objects=_objects(cfg, base),
+        objects=at(("objects",), lambda: _objects(cfg, base)),
         camera=camera,
         sensor=sensor,
-        illuminant=_illuminant(cfg.illuminant, base),
+        illuminant=at(("illuminant",), lambda: _illuminant(cfg.illuminant, base)),
         base_dir=base,
     )
 
@@ -344,7 +363,17 @@ def load_scene(source: str | Path | dict[str, Any]) -> Scene:
         path = Path(source)
         if not path.is_file():
             raise InvalidInputError(f"scene file not found: {str(path)!r}")
-        text = path.read_text(encoding="utf-8")
+        try:
+            text = path.read_text(encoding="utf-8")
+        except UnicodeDecodeError as exc:
+            raise InvalidInputError(
+                f"scene file {str(path)!r:.200} is not UTF-8 text (byte {exc.start}); "
+                "save it as UTF-8 TOML"
+            ) from None
+        except OSError as exc:
+            raise InvalidInputError(
+                f"cannot read scene file {str(path)!r:.200}: {exc.strerror}"
+            ) from None
         origin, base = str(path), path.resolve().parent
     elif isinstance(source, str):
         text, origin, base = source, "scene string", None

@@ -148,6 +148,10 @@ class Options:
     def check(self) -> None:
         """Cross-field checks (raise :class:`~imageform.errors.InvalidInputError`)."""
 
+    def check_output(self, path: Path) -> None:
+        """Refuse a main output these options cannot write (``imageform batch`` checks every
+        output suffix with it before any job starts)."""
+
     @classmethod
     def fields(cls) -> tuple[dataclasses.Field[Any], ...]:
         """The dataclass fields, in declaration order."""

@@ -7,12 +7,14 @@ from types import MappingProxyType
 
 from imageform.errors import UnknownOptionError
 from imageform.workflows import (
+    analysis,
     calibration,
     color,
     geometry,
     lecture,
     optics,
     raw,
+    sensor,
     simulate,
     stereo,
     vanishing,
@@ -35,6 +37,8 @@ WORKFLOWS = MappingProxyType(
             *stereo.WORKFLOWS,
             *vanishing.WORKFLOWS,
             *optics.WORKFLOWS,
+            *sensor.WORKFLOWS,
+            *analysis.WORKFLOWS,
         )
     }
 )
