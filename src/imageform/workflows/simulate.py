@@ -37,7 +37,8 @@ class SimulateOptions(Options):
     raw: Path | None = option(
         None,
         help="Also write the raw mosaic as a DNG file with the simulated camera's colour "
-        "matrix and white balance (opens in LibRaw, darktable, RawTherapee).",
+        "matrix and white balance (opens in LibRaw, darktable, RawTherapee); a path outside the "
+        "output folder.",
         output=True,
         metavar="FILE.dng",
     )
