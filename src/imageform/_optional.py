@@ -22,6 +22,7 @@ EXTRAS = {
     "zarr": "scale",
     "matplotlib": "plot",
     "torch": "torch",
+    "rawpy": "raw",
 }
 
 
