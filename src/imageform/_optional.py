@@ -34,6 +34,8 @@ def require(module: str, *, what: str) -> ModuleType:
     """Import ``module`` (``"dask.array"``), or raise :class:`MissingExtraError` naming the
     extra to install and what needs it.
 
+    Examples
+    --------
     >>> require("numpy", what="a test").__name__
     'numpy'
     >>> try:

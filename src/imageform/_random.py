@@ -34,6 +34,8 @@ def as_rng(rng: object, name: str = "rng", *, mix: Sequence[int] = ()) -> np.ran
     a draw that must depend on, e.g., the shape as well as the seed. A Generator is returned
     unchanged whatever ``mix`` holds.
 
+    Examples
+    --------
     >>> float(as_rng(0).random()) == float(np.random.default_rng(0).random())
     True
     >>> g = np.random.default_rng(1)

@@ -76,6 +76,8 @@ def root_polynomial_terms(rgb: Any, degree: int) -> Any:
     one in exposure: :math:`t(kx) = k\\,t(x)`. Roots are sign-preserving
     (:math:`\\operatorname{sign}(p)|p|^{1/n}`) so small negative noise values stay finite.
 
+    Examples
+    --------
     >>> root_polynomial_terms(np.array([0.25, 1.0, 0.04]), 2).round(6).tolist()
     [0.25, 1.0, 0.04, 0.5, 0.2, 0.1]
     """
@@ -160,6 +162,8 @@ class ColorCorrection:
         (``image @ matrix.T`` for the 3×3 model). Values outside [0, 1] are kept unless
         ``clip=True``.
 
+        Examples
+        --------
         >>> c = ColorCorrection("linear", 1, np.eye(3) * 0.5)
         >>> c.apply(np.array([[[1.0, 1.0, 1.0]]])).round(4).tolist()
         [[[0.7354, 0.7354, 0.7354]]]
@@ -278,6 +282,8 @@ def chart_patches(
     -------
     ChartPatches
 
+    Examples
+    --------
     >>> from imageform.analysis.synthetic import synthetic_chart_image
     >>> p = chart_patches(synthetic_chart_image())
     >>> (p.means[0] * 255).round(3).tolist(), bool(p.valid.all())
@@ -415,9 +421,13 @@ def fit_color_correction(
         Fewer usable patches than model terms, or a rank-deficient design (e.g. grey
         patches only).
 
+    Notes
+    -----
     Source: G. D. Finlayson, M. Mackiewicz, A. Hurlbert, "Color correction using
     root-polynomial regression", IEEE TIP 24(5), 2015, eq. (9)-(12).
 
+    Examples
+    --------
     >>> rng = np.random.default_rng(1)
     >>> a = rng.uniform(0.05, 0.95, (24, 3))
     >>> b = fit_color_correction(a, a).apply(a)
@@ -500,6 +510,8 @@ def correction_report(
 
     Source: CIE 142:2001 / Sharma, Wu & Dalal 2005 (CIEDE2000).
 
+    Examples
+    --------
     >>> a = np.array([[0.5, 0.4, 0.3]] * 3); b = np.array([[0.5, 0.4, 0.3]] * 3)
     >>> r = correction_report(a, b, ColorCorrection("linear", 1, np.eye(3)))
     >>> r.delta_e_before.tolist(), r.delta_e_after.tolist()

@@ -112,9 +112,13 @@ def background_intensity(
     ndarray, shape (3,)
         :math:`I_0` as encoded intensity in (0, 1].
 
+    Notes
+    -----
     Source: Macenko et al. 2009, sec. 2 (I₀, "the intensity of the incident light"; the
     reference code fixes it at 240 of 255).
 
+    Examples
+    --------
     >>> img = np.full((10, 10, 3), 0.3); img[:2] = (0.95, 0.94, 0.96)
     >>> background_intensity(img).round(2).tolist()
     [0.95, 0.94, 0.96]
@@ -178,8 +182,12 @@ def optical_density(
     -------
     array, shape (..., 3)
 
+    Notes
+    -----
     Source: Ruifrok & Johnston 2001, eq. (1); Macenko et al. 2009, sec. 2.
 
+    Examples
+    --------
     >>> optical_density(np.array([0.1, 0.5, 0.01]), base="10").round(6).tolist()
     [1.0, 0.30103, 2.0]
     >>> optical_density(np.array([0.5, 1.0, 0.25])).round(6).tolist()
@@ -207,6 +215,8 @@ def optical_density(
 def stain_angle(u: object, v: object) -> float:
     """Angle in degrees between two stain (OD) vectors: :math:`\\arccos(\\hat u \\cdot \\hat v)`.
 
+    Examples
+    --------
     >>> round(stain_angle([1, 0, 0], [1, 1, 0]), 6)
     45.0
     """
@@ -311,8 +321,12 @@ def stain_concentrations(
     -------
     array, shape (..., k)
 
+    Notes
+    -----
     Source: Ruifrok & Johnston 2001, eq. (4)-(6); Macenko et al. 2009 (least squares).
 
+    Examples
+    --------
     >>> S = np.array([[0.6, 0.8, 0.0], [0.0, 0.6, 0.8]])
     >>> img = np.exp(-(np.array([0.5, 0.25]) @ S))
     >>> stain_concentrations(img, S).round(6).tolist()
@@ -484,10 +498,14 @@ def macenko_stains(
     -------
     MacenkoStains
 
+    Notes
+    -----
     Source: M. Macenko et al., "A method for normalizing histology slides for quantitative
     analysis", ISBI 2009, pp. 1107-1110, sec. 2 and Fig. 1; reference code
     github.com/mitkovetta/staining-normalization (Io = 240, beta = 0.15, alpha = 1).
 
+    Examples
+    --------
     >>> from imageform.analysis.synthetic import synthetic_stain_image
     >>> img, S, _ = synthetic_stain_image(rng=0)
     >>> est = macenko_stains(img, transparent="norm", i0=1.0)  # the generator's I0
@@ -589,8 +607,12 @@ def macenko_normalize(
         Transmitted intensity in (0, I₀,t] for non-negative concentrations (negative
         least-squares concentrations can give values above it; nothing is clipped).
 
+    Notes
+    -----
     Source: Macenko et al. 2009, sec. 2 (normalisation step).
 
+    Examples
+    --------
     >>> from imageform.analysis.synthetic import synthetic_stain_image
     >>> a, _, _ = synthetic_stain_image(max_concentration=(0.6, 1.0), rng=0)
     >>> b, _, _ = synthetic_stain_image(rng=1)
@@ -695,10 +717,14 @@ def vahadane_stains(
     MacenkoStains
         With ``method = "vahadane"``.
 
+    Notes
+    -----
     Source: A. Vahadane et al., "Structure-preserving color normalization and sparse stain
     separation for histological images", IEEE Trans. Med. Imaging 35(8), 2016,
     pp. 1962-1971, eq. (3)-(4) (λ = 0.1).
 
+    Examples
+    --------
     >>> from imageform.analysis.synthetic import synthetic_stain_image
     >>> img, S, _ = synthetic_stain_image(rng=0)
     >>> est = vahadane_stains(img)

@@ -105,9 +105,13 @@ def reinhard_stats(image: object, mask: object = None) -> ReinhardStats:
     -------
     ReinhardStats
 
+    Notes
+    -----
     Source: E. Reinhard, M. Ashikhmin, B. Gooch, P. Shirley, "Color transfer between
     images", IEEE CG&A 21(5), 2001, sec. 3 (statistics in lαβ; here CIELAB D65).
 
+    Examples
+    --------
     >>> s = reinhard_stats(np.array([[[1.0, 1.0, 1.0], [0.0, 0.0, 0.0]]]))
     >>> [round(v, 6) for v in s.mean], [round(v, 6) for v in s.std]
     ([50.0, 0.0, 0.0], [50.0, 0.0, 0.0])
@@ -212,8 +216,12 @@ def reinhard_normalize(
     DegenerateConfigurationError
         A channel of the source has zero standard deviation (a flat image).
 
+    Notes
+    -----
     Source: Reinhard et al. 2001, eq. (10)-(11) (there in lαβ; CIELAB here, as the lecture).
 
+    Examples
+    --------
     >>> rng = np.random.default_rng(0)
     >>> a, b = rng.uniform(0.2, 0.6, (8, 8, 3)), rng.uniform(0.4, 0.9, (8, 8, 3))
     >>> out = reinhard_normalize(a, b)

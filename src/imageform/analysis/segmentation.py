@@ -72,6 +72,8 @@ class HsvSegmentation:
 def disc(radius: int) -> np.ndarray:
     """Boolean disc structuring element of ``radius`` pixels: ``x² + y² <= r²``.
 
+    Examples
+    --------
     >>> disc(1).astype(int).tolist()
     [[0, 1, 0], [1, 1, 1], [0, 1, 0]]
     """
@@ -196,6 +198,8 @@ def segment_hsv(
     Source: the lecture's endoscopy case study (OpenCV thresholds); morphology as in
     Gonzalez & Woods, *Digital Image Processing*, 4th ed., sec. 9.3 (opening/closing).
 
+    Examples
+    --------
     >>> img = np.zeros((40, 40, 3)); img[10:30, 10:30] = (0.8, 0.3, 0.3)
     >>> seg = segment_hsv(img, (0, 20), (30, 255), (80, 255), opencv_ranges=True)
     >>> int(seg.mask.sum()), round(seg.fraction, 4)
@@ -296,6 +300,8 @@ def overlay_mask(
     array, shape (H, W, 3)
         Floats in [0, 1] (float32 for integer input); Dask when the image was.
 
+    Examples
+    --------
     >>> img = np.full((2, 2, 3), 0.5); m = np.array([[True, False], [False, False]])
     >>> overlay_mask(img, m, (1.0, 0.0, 0.0), 0.5)[0, 0].tolist()
     [0.75, 0.25, 0.25]
@@ -323,6 +329,8 @@ def mask_iou(a: object, b: object) -> float:
 
     Source: Jaccard index (P. Jaccard, 1901); the usual segmentation score.
 
+    Examples
+    --------
     >>> mask_iou(np.array([[True, True], [False, False]]), np.array([[True, False], [True, False]]))
     0.3333333333333333
     """

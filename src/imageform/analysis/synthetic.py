@@ -154,6 +154,8 @@ def synthetic_endoscopy_image(
         ``image`` : ndarray (H, W, 3) float64, encoded sRGB in [0, 1]; ``mask`` : ndarray of
         bool (H, W), the true tissue mask.
 
+    Examples
+    --------
     >>> img, m = synthetic_endoscopy_image(rng=0)
     >>> img.shape, round(float(m.mean()), 3)
     ((256, 256, 3), 0.887)
@@ -235,9 +237,13 @@ def synthetic_he_tile(
         is the 8-bit scan); ``stain_matrix`` : (2, 3) unit ln-OD vectors;
         ``concentrations`` : (H, W, 2) in ln-OD units, zero on glass.
 
+    Notes
+    -----
     Source: Beer-Lambert with the reference stain vectors and concentrations of Macenko's
     reference code (:data:`MACENKO_REFERENCE_HEMATOXYLIN`, ``..._EOSIN``).
 
+    Examples
+    --------
     >>> tile = synthetic_he_tile((64, 64), rng=0)
     >>> bool((tile.concentrations.sum(axis=-1) == 0).mean() > 0.2), tile.image.dtype.name
     (True, 'float64')
@@ -306,8 +312,12 @@ def synthetic_stain_image(
         the unit-length optical-density vectors used (rows); ``concentrations`` : ndarray
         (H, W, 2).
 
+    Notes
+    -----
     Source: Ruifrok & Johnston 2001 (stain vectors, Beer-Lambert model).
 
+    Examples
+    --------
     >>> img, S, C = synthetic_stain_image(rng=0)
     >>> S.round(3).tolist()[0]
     [0.651, 0.701, 0.29]
@@ -354,6 +364,8 @@ def synthetic_chart_image(
     -------
     ndarray, shape (rows*(patch+gap), cols*(patch+gap), 3), float64
 
+    Examples
+    --------
     >>> synthetic_chart_image().shape
     (120, 180, 3)
     """
@@ -397,6 +409,8 @@ def synthetic_shading_scene(
         ``image`` : ndarray (H, W, 3) float64, encoded sRGB; ``mask`` : ndarray of bool
         (H, W), the red objects.
 
+    Examples
+    --------
     >>> img, m = synthetic_shading_scene(rng=0)
     >>> img.shape, bool(m.any())
     ((128, 192, 3), True)

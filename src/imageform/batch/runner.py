@@ -149,6 +149,8 @@ class BatchReport:
 def batch_workflow(command: str | Workflow) -> Workflow:
     """The workflow ``command`` if it runs file by file in ``imageform batch``.
 
+    Examples
+    --------
     >>> batch_workflow("white_balance").name
     'white-balance'
     """
@@ -169,6 +171,8 @@ def batch_options(command: str | Workflow, options: Options | Mapping[str, Any] 
     """The options of ``command`` from its dataclass, or from a mapping whose keys are field
     names or flags (``{"to": "lab"}``, ``{"--to": "lab"}`` and ``{"dst": "lab"}`` alike).
 
+    Examples
+    --------
     >>> batch_options("convert", {"to": "lab"}).dst
     'lab'
     """
@@ -692,6 +696,8 @@ def print_summary(report: BatchReport, console: Any = None) -> None:
     """Print the counts and the failures (input and reason): a rich table on a terminal,
     one ``failed: INPUT: REASON`` line each otherwise.
 
+    Examples
+    --------
     >>> r = JobResult(Path("a.png"), Path("out/a.png"), "failed", "OSError: truncated")
     >>> print_summary(BatchReport("convert", (r,)))
     batch convert: 0 done, 0 skipped (already finished), 1 failed

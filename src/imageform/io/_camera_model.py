@@ -215,6 +215,8 @@ class CameraFile:
 def distortion_name(model: Any) -> str:
     """The camera-file name of a distortion model object (``none`` for None).
 
+    Examples
+    --------
     >>> from imageform.geometry import KannalaBrandt
     >>> distortion_name(KannalaBrandt(k1=0.1)), distortion_name(None)
     ('kannala_brandt', 'none')

@@ -113,6 +113,8 @@ def max_pixels() -> int:
 def image_format(path: str | Path) -> str:
     """The format of ``path`` from its suffix (png, jpeg, tiff, npy); others raise.
 
+    Examples
+    --------
     >>> image_format("a.JPG")
     'jpeg'
     """

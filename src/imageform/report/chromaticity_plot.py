@@ -27,6 +27,8 @@ def planckian_locus(
     """Chromaticities (N, 2) of black bodies, integrated from Planck's law (CIE 015:2018 eq. 4.1)
     with the CIE colour-matching functions.
 
+    Examples
+    --------
     >>> [round(float(v), 4) for v in planckian_locus([2856.0])[0]]
     [0.4475, 0.4074]
     """

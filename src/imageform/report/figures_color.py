@@ -50,6 +50,8 @@ def _pyplot() -> Any:
 def truth_xy(measurements: PatchMeasurements) -> np.ndarray:
     """Chromaticity xy ``(24, 2)`` of the ground-truth patches (CIELAB under D65 -> XYZ -> xy).
 
+    Examples
+    --------
     >>> from imageform.report.patches import PatchMeasurements
     >>> m = PatchMeasurements(("white",), np.array([[100.0, 0, 0]]), np.zeros((1, 3)),
     ...     np.zeros(1), ("imperceptible",), np.zeros(1), "s", np.ones((1, 3)))

@@ -41,6 +41,8 @@ def image_corner_pixels(width: int, height: int) -> np.ndarray:
     """The outer corners ``(4, 2)`` of the image (pixel edges, centre of the top-left pixel at
     (0, 0)), clockwise from the top left.
 
+    Examples
+    --------
     >>> image_corner_pixels(4, 3).tolist()
     [[-0.5, -0.5], [3.5, -0.5], [3.5, 2.5], [-0.5, 2.5]]
     """
@@ -54,6 +56,8 @@ def top_view_axes(R: Any, world_up: Any) -> tuple[np.ndarray, np.ndarray]:
     the camera's optical axis (or, looking straight down, its image-up direction) flattened
     onto the ground plane perpendicular to ``world_up``; ``right = ahead x up``.
 
+    Examples
+    --------
     >>> R = np.array([[1.0, 0, 0], [0, 0, -1], [0, 1, 0]])  # z-up world, looking along +y
     >>> [v.tolist() for v in top_view_axes(R, (0, 0, 1))]
     [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]
@@ -194,6 +198,8 @@ def vanishing_summary(result: SimulationResult) -> dict[str, Any] | None:
     (distance of the finite points; ``None`` without a detection) and
     ``horizon_angle_error_deg``. ``None`` without rails.
 
+    Examples
+    --------
     >>> from imageform.geometry import Camera
     >>> from imageform.simulate.result import Stage, VanishingTruth
     >>> r = SimulationResult((Stage("o", "o", "o", np.zeros((4, 4, 3)), "srgb"),),

@@ -217,6 +217,8 @@ def simulate(
         its SNR is infinite, ``inf`` in ``snr_luminance_db_per_patch`` and ``null`` in
         ``metrics.json``.
 
+    Examples
+    --------
     >>> from imageform.simulate import default_scene
     >>> res = simulate(default_scene().resized(160), rng=0)
     >>> res.stages[-1].kind, res.stages[-1].image.shape

@@ -114,6 +114,8 @@ def pixel_rays(camera: Camera, u: np.ndarray, v: np.ndarray) -> np.ndarray:
 
     NaN where the distortion model cannot be inverted (outside its valid radius).
 
+    Examples
+    --------
     >>> cam = Camera([[100.0, 0, 50], [0, 100.0, 40], [0, 0, 1]], image_plane="real")
     >>> pixel_rays(cam, np.array([60.0]), np.array([40.0])).tolist()
     [[-0.1, -0.0]]
@@ -243,6 +245,8 @@ def render_scene(
     See the module docstring for the model. ``progress(fraction)`` is called after each
     band of rows.
 
+    Examples
+    --------
     >>> from imageform.simulate import default_scene
     >>> out = render_scene(default_scene().with_changes(render={"width": 64, "height": 36}))
     >>> out.rate.shape, bool(out.rate.min() >= 0)

@@ -108,6 +108,8 @@ class Scene:
     def with_changes(self, **sections: dict[str, Any] | list[dict[str, Any]]) -> Scene:
         """A copy with some keys of some sections replaced, re-validated.
 
+        Examples
+        --------
         >>> s = default_scene().with_changes(render={"width": 160, "height": 90})
         >>> s.image_size
         (160, 90)
@@ -131,6 +133,8 @@ class Scene:
         (``focal_length_mm``, the lens's focal length for defocus, defaults to the scene's).
         The scene's ``camera`` is then ``camera`` itself (the same K, R, t and distortion).
 
+        Examples
+        --------
         >>> from imageform.geometry import Camera
         >>> cam = Camera([[100.0, 0, 79.5], [0, 100.0, 59.5], [0, 0, 1]],
         ...              t=[0.0, 0.0, 0.3], image_size=(160, 120))
@@ -155,6 +159,8 @@ class Scene:
         """The scene seen from its extra view ``index`` (``[[views]]``): the same camera
         (intrinsics, distortion, sensor) at that view's look-at pose, without extra views.
 
+        Examples
+        --------
         >>> s = default_scene().with_changes(views=[{"eye_m": [0.0, -0.2, 0.05]}])
         >>> [round(float(v), 3) for v in s.view(0).camera.center]
         [0.0, -0.2, 0.05]
@@ -177,6 +183,8 @@ class Scene:
         ``width / current width``; ``height`` defaults to keeping the aspect ratio. The
         sensor (pixel area, noise) is unchanged.
 
+        Examples
+        --------
         >>> small = default_scene().resized(160)
         >>> small.image_size, round(float(small.camera.K[0, 0]), 3)
         ((160, 90), 71.429)
@@ -351,6 +359,8 @@ def load_scene(source: str | Path | dict[str, Any]) -> Scene:
     UnknownOptionError
         An unknown key or choice, with the valid ones.
 
+    Examples
+    --------
     >>> s = load_scene('name = "tiny"\\n[render]\\nwidth = 160\\nheight = 90\\n')
     >>> s.name, s.image_size
     ('tiny', (160, 90))
@@ -392,6 +402,8 @@ def default_scene() -> Scene:
     """The built-in scene: a ColorChecker and a checkerboard standing on a ground with rails,
     under tungsten light (CIE A), seen by an endoscope-like camera at 1280x720.
 
+    Examples
+    --------
     >>> default_scene().image_size
     (1280, 720)
     """

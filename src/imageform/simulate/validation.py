@@ -46,6 +46,8 @@ def find_line(text: str | None, path: tuple[Any, ...]) -> int | None:
     """1-based line of the key (or table) at ``path`` (e.g. ``("objects", 1, "squares")``) in
     TOML ``text``; None if not found. Array-of-tables entries count from 0.
 
+    Examples
+    --------
     >>> find_line("a = 1\\n[camera]\\nf = 2\\n", ("camera", "f"))
     3
     """
@@ -251,6 +253,8 @@ def validate_scene_dict(
     InvalidInputError
         A value of the wrong type, range or unit.
 
+    Examples
+    --------
     >>> cfg = validate_scene_dict({"render": {"width": 320, "height": 180}})
     >>> cfg["render"]["supersampling"], cfg["lens"]["f_number"]
     (2, 8.0)

@@ -111,6 +111,8 @@ def _norm(value: str) -> str:
 def normalize_choice(value: object, choices: Sequence[str] | str, what: str) -> str:
     """``value`` in its normalised spelling if it is one of ``choices``, else raise.
 
+    Examples
+    --------
     >>> normalize_choice("Gray-World", ("gray_world", "white_patch"), "--method")
     'gray_world'
     """

@@ -47,6 +47,8 @@ WORKFLOWS = MappingProxyType(
 def get_workflow(name: str) -> Workflow:
     """The workflow called ``name`` (``-`` or ``_`` alike); unknown names list the valid ones.
 
+    Examples
+    --------
     >>> get_workflow("white_balance").name
     'white-balance'
     """
