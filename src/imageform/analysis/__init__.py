@@ -50,6 +50,7 @@ from imageform.analysis.sfr import (
     SlantedEdgeROI,
     find_slanted_edges,
     mtf_crossing,
+    render_sfr_chart,
     render_slanted_edge,
     slanted_edge_sfr,
 )
@@ -65,6 +66,7 @@ from imageform.analysis.synthetic import (
 
 __all__ = [
     "CORRECTION_METHODS",
+    "SFR_LUMINANCE_WEIGHTS",
     "ChartPatches",
     "ChartWarning",
     "ColorCorrection",
@@ -75,7 +77,6 @@ __all__ = [
     "MacenkoStains",
     "ReinhardStats",
     "SFRResult",
-    "SFR_LUMINANCE_WEIGHTS",
     "SlantedEdgeROI",
     "StainMixture",
     "background_intensity",
@@ -91,6 +92,7 @@ __all__ = [
     "overlay_mask",
     "reinhard_normalize",
     "reinhard_stats",
+    "render_sfr_chart",
     "render_slanted_edge",
     "root_polynomial_terms",
     "segment_hsv",

@@ -158,7 +158,9 @@ class SlantedEdgeROI(NamedTuple):
 def _as_image(image: Any, name: str = "image") -> np.ndarray:
     """A float64 image (H, W) or (H, W, 3) (a (H, W, 1) is squeezed); refuses the rest."""
     if image is None or isinstance(image, str | bytes):
-        raise InvalidInputError(f"expected {name} as a 2-d or (H, W, 3) array, got {describe(image)}")
+        raise InvalidInputError(
+            f"expected {name} as a 2-d or (H, W, 3) array, got {describe(image)}"
+        )
     arr = np.asarray(image)
     if arr.dtype.kind not in "uif":
         raise InvalidInputError(
@@ -167,7 +169,9 @@ def _as_image(image: Any, name: str = "image") -> np.ndarray:
     if arr.ndim == 3 and arr.shape[2] == 1:
         arr = arr[:, :, 0]
     if arr.ndim not in (2, 3) or (arr.ndim == 3 and arr.shape[2] != 3):
-        raise InvalidInputError(f"expected {name} of shape (H, W) or (H, W, 3), got {describe(image)}")
+        raise InvalidInputError(
+            f"expected {name} of shape (H, W) or (H, W, 3), got {describe(image)}"
+        )
     out = arr.astype(np.float64)
     if not np.isfinite(out).all():
         raise InvalidInputError(f"{name} contains NaN or inf")
@@ -183,7 +187,9 @@ def _crop(img: np.ndarray, roi: Any) -> np.ndarray:
     except (TypeError, ValueError):
         ok = False
     if not ok:
-        raise InvalidInputError(f"expected roi as 4 integers (x, y, width, height), got {describe(roi)}")
+        raise InvalidInputError(
+            f"expected roi as 4 integers (x, y, width, height), got {describe(roi)}"
+        )
     x, y, w, h = vals
     H, W = img.shape[:2]
     if x < 0 or y < 0 or w < 1 or h < 1 or x + w > W or y + h > H:
@@ -193,7 +199,7 @@ def _crop(img: np.ndarray, roi: Any) -> np.ndarray:
     return img[y : y + h, x : x + w]
 
 
-def _luminance(img: np.ndarray, weights: Sequence[float]) -> np.ndarray:
+def _luminance(img: np.ndarray, weights: Any) -> np.ndarray:
     if img.ndim == 2:
         return img
     w = np.asarray(weights, dtype=np.float64)
@@ -318,7 +324,8 @@ def mtf_crossing(frequency: Any, mtf: Any, level: float) -> float:
     m = np.asarray(mtf, dtype=np.float64)
     if f.ndim != 1 or m.shape != f.shape:
         raise InvalidInputError(
-            f"expected frequency and mtf as 1-d arrays of one length, got {describe(f)} and {describe(m)}"
+            "expected frequency and mtf as 1-d arrays of one length, got "
+            f"{describe(f)} and {describe(m)}"
         )
     lv = as_real(level, "level")
     below = np.nonzero(m <= lv)[0]
@@ -427,7 +434,7 @@ def slanted_edge_sfr(
                 f"the edge is too close to {orientation}: it moves {abs(slope) * h:.2f} px over "
                 f"{h} rows (needs >= 1); tilt it 2-10 deg"
             )
-        rows_used = max(8, min(h, int(round(math.floor(abs(slope) * h) / abs(slope)))))
+        rows_used = max(8, min(h, round(math.floor(abs(slope) * h) / abs(slope))))
     nfft = None
     fits, esfs, lsfs = [], [], []
     for a in planes:
@@ -607,7 +614,9 @@ def render_sfr_chart(
 # --- finding slanted edges in a chart ---------------------------------------------------------
 
 
-def _subpixel_side(g: np.ndarray, t: float, lines: np.ndarray, first: np.ndarray, step: int) -> np.ndarray:
+def _subpixel_side(
+    g: np.ndarray, t: float, lines: np.ndarray, first: np.ndarray, step: int
+) -> np.ndarray:
     """Threshold crossing along each line (row of ``g``) next to index ``first`` (the first
     dark pixel seen walking in direction ``step``)."""
     out = np.empty(lines.size)
@@ -731,15 +740,17 @@ def _side_roi(
     angle = math.degrees(math.atan(b))
     mid_line = 0.5 * (lines[0] + lines[-1]) + o_line
     mid_across = a + b * mid_line
-    length = max(8, int(round(frac * side)))
-    width = rw if rw is not None else max(16, min(64, int(round(0.6 * side))))
-    l0 = int(round(mid_line - (length - 1) / 2.0))
-    a0 = int(round(mid_across - (width - 1) / 2.0))
+    length = max(8, round(frac * side))
+    width = rw if rw is not None else max(16, min(64, round(0.6 * side)))
+    l0 = round(mid_line - (length - 1) / 2.0)
+    a0 = round(mid_across - (width - 1) / 2.0)
     H, W = g.shape if vertical else g.shape[::-1]
     if l0 < 0 or a0 < 0 or l0 + length > H or a0 + width > W:
         return None
     if vertical:
-        return SlantedEdgeROI(a0, l0, width, length, angle, "vertical", name, (mid_across, mid_line))
+        return SlantedEdgeROI(
+            a0, l0, width, length, angle, "vertical", name, (mid_across, mid_line)
+        )
     return SlantedEdgeROI(l0, a0, length, width, angle, "horizontal", name, (mid_line, mid_across))
 
 
