@@ -249,3 +249,41 @@ def test_find_edges_filters_by_angle_and_noise() -> None:
     assert len(find_slanted_edges(rgb)) == 4
     with pytest.raises(InvalidInputError, match="max_angle"):
         find_slanted_edges(img, min_angle=5.0, max_angle=3.0)
+
+
+# --- the simulator's lens stage ------------------------------------------------------------
+
+
+def _kernel_mtf(kernel: np.ndarray, f: np.ndarray, angle: float) -> np.ndarray:
+    """|DTFT| of a centred 2-D kernel along the edge normal (cos t, -sin t)."""
+    t = math.radians(angle)
+    n = kernel.shape[0]
+    i, j = np.mgrid[0:n, 0:n] - n // 2
+    arg = j.ravel()[None, :] * math.cos(t) - i.ravel()[None, :] * math.sin(t)
+    return np.abs(np.exp(-2j * np.pi * f[:, None] * arg) @ kernel.ravel())
+
+
+@pytest.mark.parametrize("f_number", [2.8, 4.0, 8.0])
+def test_simulator_diffraction_stage(f_number: float) -> None:
+    """A step edge integrated over the pixels (the renderer's supersampled pixels) through
+    imageform.simulate's diffraction stage: the stage's own MTF is the pixel box's times the
+    DTFT of its pixel-integrated kernel (a discrete convolution: periodic in f, so the Airy
+    MTF beyond 1 cycle/pixel folds back). Every channel's MTF50 within 3 % of it (measured
+    within 2.5 %)."""
+    from imageform.simulate.stages import (
+        DIFFRACTION_BANDS,
+        diffraction_blur,
+        diffraction_psf_kernel,
+    )
+
+    angle = 5.0
+    step = render_slanted_edge((160, 96), angle=angle, sigma=0.0, supersampling=16)
+    out = diffraction_blur(
+        np.repeat(step[:, :, None], 3, axis=2), f_number=f_number, pixel_pitch=PITCH
+    )
+    r = slanted_edge_sfr(out[16:-16, 16:-16])
+    f = np.linspace(0.0, 1.0, 1001)
+    for k, band in enumerate(reversed(DIFFRACTION_BANDS)):  # R, G, B
+        kernel = diffraction_psf_kernel(band, f_number=f_number, pixel_pitch=PITCH)
+        m = _kernel_mtf(kernel, f, angle) * _pixel(f, angle)
+        assert r.mtf50[k] == pytest.approx(mtf_crossing(f, m, 0.5), rel=0.03)

@@ -651,8 +651,9 @@ def find_slanted_edges(
     crossings of the middle half of its rows (left, right sides) and columns (top, bottom).
     A side whose angle from the vertical/horizontal is within ``[min_angle, max_angle]``
     degrees gets an ROI centred on its midpoint, ``roi_length`` of the side long (the middle
-    part, away from the corners) and ``roi_width`` pixels across (default: 60 % of the side,
-    at most 64); ROIs that leave the image, or in which a row (column) crosses the threshold
+    part, away from the corners; longer, up to 80 % of the side, where the edge would not
+    cross one whole pixel along it, else the side is skipped) and ``roi_width`` pixels
+    across (default: 60 % of the side, at most 64); ROIs that leave the image, or in which a row (column) crosses the threshold
     more than once (another square inside), are dropped.
 
     Returns
@@ -741,6 +742,12 @@ def _side_roi(
     mid_line = 0.5 * (lines[0] + lines[-1]) + o_line
     mid_across = a + b * mid_line
     length = max(8, round(frac * side))
+    # the e-SFR needs the edge to cross at least one pixel along the ROI (a phase cycle)
+    need = math.ceil(1.0 / max(abs(b), 1e-9)) + 2
+    if need > length:
+        if need > 0.8 * side:
+            return None
+        length = need
     width = rw if rw is not None else max(16, min(64, round(0.6 * side)))
     l0 = round(mid_line - (length - 1) / 2.0)
     a0 = round(mid_across - (width - 1) / 2.0)
