@@ -653,8 +653,8 @@ def find_slanted_edges(
     degrees gets an ROI centred on its midpoint, ``roi_length`` of the side long (the middle
     part, away from the corners; longer, up to 80 % of the side, where the edge would not
     cross one whole pixel along it, else the side is skipped) and ``roi_width`` pixels
-    across (default: 60 % of the side, at most 64); ROIs that leave the image, or in which a row (column) crosses the threshold
-    more than once (another square inside), are dropped.
+    across (default: 60 % of the side, at most 64); ROIs that leave the image, or in which a
+    row (column) crosses the threshold more than once (another square inside), are dropped.
 
     Returns
     -------
