@@ -12,6 +12,7 @@ from imageform.workflows import (
     geometry,
     lecture,
     optics,
+    sharpness,
     simulate,
     stereo,
     vanishing,
@@ -33,6 +34,7 @@ WORKFLOWS = MappingProxyType(
             *stereo.WORKFLOWS,
             *vanishing.WORKFLOWS,
             *optics.WORKFLOWS,
+            *sharpness.WORKFLOWS,
         )
     }
 )
