@@ -78,6 +78,7 @@ def sfr(run: Run, opts: SfrOptions, *, out: Path | None, image: Path) -> Result:
     from imageform.analysis import find_slanted_edges, slanted_edge_sfr
     from imageform.workflows._tables import write_table
 
+    image = Path(image)
     arr = _linear(read(image, opts), opts.transfer)
     roi = opts.region()
     if roi is not None:
