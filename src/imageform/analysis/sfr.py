@@ -24,8 +24,9 @@ the modulation transfer of a camera from one slightly slanted straight edge:
 Frequencies are in **cycles/pixel along the edge normal** (multiply by the pixel pitch's
 inverse for cycles/mm); Nyquist is 0.5. Colour images give R, G, B and the luminance record
 ``Y = 0.213 R + 0.715 G + 0.072 B`` (the ITU-R BT.709 weights as rounded in Burns's
-``sfrmat3``-``sfrmat5``, the ISO 12233 reference code). The pixel values must be linear in
-exposure (ISO applies the inverse OECF first): decode gamma-encoded images before measuring.
+``sfrmat3``-``sfrmat5``, implementations of the ISO 12233 e-SFR by one of its authors).
+The pixel values must be linear in exposure (ISO applies the inverse OECF first): decode
+gamma-encoded images before measuring.
 
 :func:`find_slanted_edges` finds measurable edges in a photograph of dark squares on a light
 background turned a few degrees (the motif of the ISO 12233:2014 e-SFR chart and of most
@@ -35,7 +36,9 @@ supersampled area integration, to test the method.
 References
 ----------
 - ISO 12233:2017, *Photography - Electronic still picture imaging - Resolution and spatial
-  frequency responses*, clause 6 (e-SFR) and its annexes on the e-SFR algorithm.
+  frequency responses*: the edge-based SFR (e-SFR) method and its annex on the algorithm
+  (the projection along the edge normal, i.e. the cos(theta) frequency correction; the
+  polynomial edge fit of ``sfrmat4``/``sfrmat5`` follows the later editions).
 - P. D. Burns, "Slanted-edge MTF for digital camera and scanner analysis", Proc. IS&T PICS
   Conference, 2000, pp. 135-138.
 - P. D. Burns, ``sfrmat3``/``sfrmat5`` (reference MATLAB implementations of ISO 12233).
