@@ -98,7 +98,8 @@ class SFRResult(NamedTuple):
         edge's column as a function of the row for a vertical edge (row of column for a
         horizontal one), in ROI pixel coordinates (pixel centres at integers).
     esf : ndarray, shape (m, k)
-        The oversampled edge spread functions (bins of ``1/oversampling`` pixel).
+        The oversampled edge spread functions (bins of ``1/oversampling`` pixel), each from
+        the first distance every row of the ROI reaches on its channel's own edge fit.
     lsf : ndarray, shape (m, k)
         The windowed line spread functions.
     oversampling : int
@@ -429,16 +430,15 @@ def slanted_edge_sfr(
         names = ("R", "G", "B", "Y")
 
     p_lum = _fit_edge(lum, order)
-    slope = float(p_lum[-2])
+    slope = float(np.polyval(np.polyder(p_lum), (h - 1) / 2.0))
+    if abs(slope) * h < 1.0:
+        raise DegenerateConfigurationError(
+            f"the edge is too close to {orientation}: it moves {abs(slope) * h:.2f} px over "
+            f"{h} rows (needs >= 1); tilt it 2-10 deg"
+        )
     rows_used = h
-    if order == 1:
-        if abs(slope) * h < 1.0:
-            raise DegenerateConfigurationError(
-                f"the edge is too close to {orientation}: it moves {abs(slope) * h:.2f} px over "
-                f"{h} rows (needs >= 1); tilt it 2-10 deg"
-            )
+    if order == 1:  # a whole number of phase cycles (sfrmat3)
         rows_used = max(8, min(h, round(math.floor(abs(slope) * h) / abs(slope))))
-    nfft = None
     fits, esfs, lsfs = [], [], []
     for a in planes:
         a = a[:rows_used]
@@ -450,9 +450,8 @@ def slanted_edge_sfr(
     esfs = [e[:m] for e in esfs]
     for e in esfs:
         lsfs.append(_lsf(e, deriv))
-    n = lsfs[0].size
-    nfft = n
-    fine = max(8 * n, 4096)
+    nfft = lsfs[0].size
+    fine = max(8 * nfft, 4096)
     freq = np.empty(0)
     curves, m50, m10 = [], [], []
     for lsf in lsfs:
