@@ -308,3 +308,78 @@ def test_curved_edge_needs_the_polynomial_fit() -> None:
     quad = slanted_edge_sfr(img, edge_order=2)
     assert quad.mtf50[0] == pytest.approx(f50, rel=0.02)
     assert quad.edge[0, 0] == pytest.approx(k, rel=0.05)
+
+
+def test_simulator_rendered_edge_within_3_percent_of_its_own_mtf() -> None:
+    """A dark square turned 5 deg on a light background, ray-cast by imageform.simulate's
+    renderer (S x S supersampling) and blurred by its lens stage (diffraction at f/8, 2 um
+    pixels; no defocus, vignetting or colour shift). The simulator's own MTF along the edge
+    normal is the S-point box of each axis, sin(pi x) / (S sin(pi x / S)) at x = f cos t and
+    f sin t, times the DTFT of the stage's pixel-integrated kernel. Every edge the finder
+    returns, every channel: MTF50 within 3 % (measured +0.9 to +2.5 %)."""
+    from imageform.simulate import load_scene
+    from imageform.simulate.render import render_scene
+    from imageform.simulate.stages import DIFFRACTION_BANDS, apply_lens, diffraction_psf_kernel
+
+    a, S, N = math.radians(5.0), 4, 8.0
+    scene = load_scene(
+        {
+            "name": "slanted edge",
+            "render": {
+                "width": 192,
+                "height": 144,
+                "supersampling": S,
+                "background_reflectance": 0.8,
+            },
+            "illuminant": {"type": "cie", "name": "D65", "illuminance_lux": 1000.0},
+            "camera": {
+                "focal_length_mm": 10.0,
+                "pixel_pitch_um": 2.0,
+                "eye_m": [0.0, -1.0, 0.0],
+                "target_m": [0.0, 0.0, 0.0],
+                "up": [0.0, 0.0, 1.0],
+            },
+            "lens": {
+                "f_number": N,
+                "focus_distance_m": 1.0,
+                "defocus": False,
+                "vignetting": "none",
+                "lateral_ca": [1.0, 1.0, 1.0],
+                "diffraction": True,
+            },
+            "objects": [
+                {
+                    "type": "plane",
+                    "name": "dark square",
+                    "centre_m": [0.0, 0.0, 0.0],
+                    "normal": [0.0, -1.0, 0.0],
+                    "up": [math.sin(a), 0.0, math.cos(a)],
+                    "size_m": [0.012, 0.012],
+                    "reflectance": 0.1,
+                }
+            ],
+        }
+    )
+    rendered = render_scene(scene)
+    img = apply_lens(rendered, scene.camera, scene.config.lens, scene.config.camera.focal_length_mm)
+    rois = find_slanted_edges(img, roi_width=56, roi_length=0.7)
+    assert sorted(r.side for r in rois) == ["bottom", "left", "right", "top"]
+    f = np.linspace(0.0, 1.0, 1001)
+
+    def box(x: np.ndarray) -> np.ndarray:
+        out = np.ones_like(x)
+        nz = np.abs(x) > 1e-12
+        out[nz] = np.sin(np.pi * x[nz]) / (S * np.sin(np.pi * x[nz] / S))
+        return np.abs(out)
+
+    kernels = [
+        diffraction_psf_kernel(band, f_number=N, pixel_pitch=PITCH)
+        for band in reversed(DIFFRACTION_BANDS)
+    ]
+    for roi in rois:
+        r = slanted_edge_sfr(img, roi.roi)
+        assert abs(r.angle) == pytest.approx(5.0, abs=0.1)
+        t = math.radians(abs(r.angle))
+        for k, kernel in enumerate(kernels):
+            own = _kernel_mtf(kernel, f, r.angle) * box(f * math.cos(t)) * box(f * math.sin(t))
+            assert r.mtf50[k] == pytest.approx(mtf_crossing(f, own, 0.5), rel=0.03)
