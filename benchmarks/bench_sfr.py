@@ -264,6 +264,99 @@ def main() -> int:
         )
     )
 
+    # a slanted square ray-cast by the simulator's renderer and blurred by its lens stage
+    from imageform.simulate import load_scene
+    from imageform.simulate.render import render_scene
+    from imageform.simulate.stages import apply_lens
+
+    rows = []
+    for ss in (4, 8):
+        a = math.radians(5.0)
+        scene = load_scene(
+            {
+                "name": "slanted edge",
+                "render": {
+                    "width": 192,
+                    "height": 144,
+                    "supersampling": ss,
+                    "background_reflectance": 0.8,
+                },
+                "illuminant": {"type": "cie", "name": "D65", "illuminance_lux": 1000.0},
+                "camera": {
+                    "focal_length_mm": 10.0,
+                    "pixel_pitch_um": 2.0,
+                    "eye_m": [0.0, -1.0, 0.0],
+                    "target_m": [0.0, 0.0, 0.0],
+                    "up": [0.0, 0.0, 1.0],
+                },
+                "lens": {
+                    "f_number": 8.0,
+                    "focus_distance_m": 1.0,
+                    "defocus": False,
+                    "vignetting": "none",
+                    "lateral_ca": [1.0, 1.0, 1.0],
+                    "diffraction": True,
+                },
+                "objects": [
+                    {
+                        "type": "plane",
+                        "name": "dark square",
+                        "centre_m": [0.0, 0.0, 0.0],
+                        "normal": [0.0, -1.0, 0.0],
+                        "up": [math.sin(a), 0.0, math.cos(a)],
+                        "size_m": [0.012, 0.012],
+                        "reflectance": 0.1,
+                    }
+                ],
+            }
+        )
+        rendered = render_scene(scene)
+        img = apply_lens(
+            rendered, scene.camera, scene.config.lens, scene.config.camera.focal_length_mm
+        )
+
+        def box(x: np.ndarray, ss: int = ss) -> np.ndarray:
+            out = np.ones_like(x)
+            nz = np.abs(x) > 1e-12
+            out[nz] = np.sin(np.pi * x[nz]) / (ss * np.sin(np.pi * x[nz] / ss))
+            return np.abs(out)
+
+        for roi in find_slanted_edges(img, roi_width=56, roi_length=0.7):
+            r = slanted_edge_sfr(img, roi.roi)
+            th = math.radians(r.angle)
+            t = abs(th)
+            for k, band in enumerate(reversed(DIFFRACTION_BANDS)):
+                ker = diffraction_psf_kernel(band, f_number=8.0, pixel_pitch=PITCH)
+                c = ker.shape[0] // 2
+                i, j = np.mgrid[0 : ker.shape[0], 0 : ker.shape[0]] - c
+                arg = j.ravel()[None, :] * math.cos(th) - i.ravel()[None, :] * math.sin(th)
+                kmtf = np.abs(np.exp(-2j * np.pi * fgrid[:, None] * arg) @ ker.ravel())
+                own = kmtf * box(fgrid * math.cos(t)) * box(fgrid * math.sin(t))
+                ref = mtf_crossing(fgrid, own, 0.5)
+                rows.append(
+                    [
+                        f"{ss}",
+                        roi.side,
+                        "RGB"[k],
+                        f"{r.angle:.2f}",
+                        f"{r.mtf50[k]:.4f}",
+                        f"{ref:.4f}",
+                        f"{100 * (r.mtf50[k] / ref - 1):+.2f}",
+                    ]
+                )
+    parts.append(
+        "## A slanted square rendered by the simulator\n\n"
+        "A dark plane (reflectance 0.1) turned 5 deg on a light background (0.8), ray-cast by "
+        "`imageform.simulate.render.render_scene` (S x S supersampling) and blurred by "
+        "`apply_lens` (diffraction at f/8, 2 um pixels; no defocus, vignetting or lateral "
+        "colour); edges found by `find_slanted_edges(img, roi_width=56, roi_length=0.7)`. The "
+        "simulator's own MTF: the S-point box per axis, sin(pi x) / (S sin(pi x / S)), times "
+        "the DTFT of the lens stage's kernel.\n\n"
+        + markdown_table(
+            ["S", "side", "channel", "angle", "MTF50", "simulator MTF50", "err %"], rows
+        )
+    )
+
     grey = render_slanted_edge((128, 64), angle=5.0, sigma=0.8)
     rgb = np.repeat(grey[:, :, None], 3, axis=2)
     chart = render_sfr_chart((480, 640), grid=(3, 4), angle=5.0, sigma=0.8, supersampling=2)
