@@ -32,6 +32,8 @@ def test_doc_examples_run(page: Path, tmp_path: Path, monkeypatch: pytest.Monkey
     for i, code in enumerate(blocks):
         if "torch" in code:
             pytest.importorskip("torch")
+        if "rawpy" in code:
+            pytest.importorskip("rawpy")
         try:
             exec(compile(code, f"{page.name}[block {i}]", "exec"), namespace)
         except Exception as exc:  # pragma: no cover - the message is the point
