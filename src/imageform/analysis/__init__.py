@@ -6,6 +6,9 @@
   :func:`macenko_normalize` (optical density, stain vectors by SVD).
 - Colour harmonisation between devices from a chart: :func:`fit_color_correction`,
   :func:`chart_patches`, :func:`correction_report`.
+- Sharpness as imaging labs measure it: the ISO 12233 slanted-edge e-SFR
+  (:func:`slanted_edge_sfr`: MTF per channel, MTF50, MTF10) and the edges of a slanted-edge
+  chart found by themselves (:func:`find_slanted_edges`), in :mod:`imageform.analysis.sfr`.
 - Labelled synthetic images to test them (:mod:`imageform.analysis.synthetic`).
 
 Every tool accepts NumPy arrays (uint8/uint16/floats) and Dask arrays (lazy, chunk-wise,
@@ -41,6 +44,16 @@ from imageform.analysis.segmentation import (
     overlay_mask,
     segment_hsv,
 )
+from imageform.analysis.sfr import (
+    SFR_LUMINANCE_WEIGHTS,
+    SFRResult,
+    SlantedEdgeROI,
+    find_slanted_edges,
+    mtf_crossing,
+    render_sfr_chart,
+    render_slanted_edge,
+    slanted_edge_sfr,
+)
 from imageform.analysis.synthetic import (
     LabeledImage,
     StainMixture,
@@ -53,6 +66,7 @@ from imageform.analysis.synthetic import (
 
 __all__ = [
     "CORRECTION_METHODS",
+    "SFR_LUMINANCE_WEIGHTS",
     "ChartPatches",
     "ChartWarning",
     "ColorCorrection",
@@ -62,20 +76,27 @@ __all__ = [
     "LabeledImage",
     "MacenkoStains",
     "ReinhardStats",
+    "SFRResult",
+    "SlantedEdgeROI",
     "StainMixture",
     "background_intensity",
     "chart_patches",
     "correction_report",
+    "find_slanted_edges",
     "fit_color_correction",
     "macenko_normalize",
     "macenko_stains",
     "mask_iou",
+    "mtf_crossing",
     "optical_density",
     "overlay_mask",
     "reinhard_normalize",
     "reinhard_stats",
+    "render_sfr_chart",
+    "render_slanted_edge",
     "root_polynomial_terms",
     "segment_hsv",
+    "slanted_edge_sfr",
     "stain_angle",
     "stain_concentrations",
     "synthetic_chart_image",

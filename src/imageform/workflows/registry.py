@@ -15,6 +15,7 @@ from imageform.workflows import (
     optics,
     raw,
     sensor,
+    sharpness,
     simulate,
     stereo,
     vanishing,
@@ -39,6 +40,7 @@ WORKFLOWS = MappingProxyType(
             *optics.WORKFLOWS,
             *sensor.WORKFLOWS,
             *analysis.WORKFLOWS,
+            *sharpness.WORKFLOWS,
         )
     }
 )

@@ -1,0 +1,59 @@
+"""``imageform sfr`` through the workflow layer (execute), on synthetic edges and charts."""
+
+from __future__ import annotations
+
+import csv
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from imageform.analysis import render_sfr_chart, render_slanted_edge, slanted_edge_sfr
+from imageform.errors import InvalidInputError
+from imageform.workflows import execute, get_workflow
+
+
+def test_sfr_chart_npy_to_csv(tmp_path: Path) -> None:
+    chart = render_sfr_chart((160, 200), grid=(1, 1), angle=5.0, sigma=0.8, supersampling=4)
+    src = tmp_path / "chart.npy"
+    np.save(src, chart.astype(np.float32))
+    out = tmp_path / "sfr.csv"
+    res = execute("sfr", image=src, out=out)
+    edges = res.summary["edges"]
+    assert len(edges) == 4
+    assert all(abs(abs(e["angle_deg"]) - 5.0) < 0.05 for e in edges)
+    m50 = [e["channels"]["Y"]["mtf50"] for e in edges]
+    assert np.allclose(m50, 0.2201, rtol=0.02)
+    with out.open() as fh:
+        rows = list(csv.reader(fh))
+    assert rows[0] == ["edge", "channel", "frequency_cy_per_px", "sfr"]
+    assert float(rows[1][3]) == pytest.approx(1.0)
+
+
+def test_sfr_roi_srgb_png(tmp_path: Path) -> None:
+    from imageform.color import linear_to_srgb
+    from imageform.io import write_image
+
+    lin = render_slanted_edge((96, 64), angle=4.0, sigma=0.8)
+    big = np.full((120, 100), 0.2)
+    big[10:106, 20:84] = lin
+    src = tmp_path / "edge.png"
+    write_image(src, np.round(np.asarray(linear_to_srgb(big)) * 65535).astype(np.uint16))
+    opts = get_workflow("sfr").make_options(roi="20,10,64,96")
+    res = execute("sfr", image=src, out=None, options=opts)
+    (edge,) = res.summary["edges"]
+    ref = float(slanted_edge_sfr(lin).mtf50[0])
+    assert edge["channels"]["Y"]["mtf50"] == pytest.approx(ref, rel=0.01)
+    # read as if linear, the sRGB curve bends the edge: a (slightly) different MTF50
+    opts = get_workflow("sfr").make_options(roi="20,10,64,96", transfer="linear")
+    bad = execute("sfr", image=src, out=None, options=opts).summary["edges"][0]
+    assert bad["channels"]["Y"]["mtf50"] != pytest.approx(ref, rel=0.01)
+
+
+def test_sfr_refusals(tmp_path: Path) -> None:
+    src = tmp_path / "flat.npy"
+    np.save(src, np.full((64, 64), 0.5, dtype=np.float32))
+    with pytest.raises(InvalidInputError, match="no slanted edge"):
+        execute("sfr", image=src, out=None)
+    with pytest.raises(InvalidInputError, match="--roi"):
+        get_workflow("sfr").make_options(roi="1,2,3").check()
