@@ -321,6 +321,8 @@ def mtf_crossing(frequency: Any, mtf: Any, level: float) -> float:
     gives :math:`f_i + (f_{i+1} - f_i)(m_i - \text{level})/(m_i - m_{i+1})`; NaN if the curve
     never falls to ``level``.
 
+    Examples
+    --------
     >>> round(mtf_crossing([0.0, 0.1, 0.2], [1.0, 0.6, 0.4], 0.5), 6)
     0.15
     """
@@ -513,6 +515,8 @@ def render_slanted_edge(
     normal is the ESF's times the pixel aperture's,
     :math:`\mathrm{sinc}(f\cos\theta)\,\mathrm{sinc}(f\sin\theta)`.
 
+    Examples
+    --------
     >>> render_slanted_edge((4, 6), angle=0.0).round(2)[0].tolist()
     [0.2, 0.2, 0.2, 0.8, 0.8, 0.8]
     """
@@ -567,6 +571,8 @@ def render_sfr_chart(
     [\Phi(\tfrac{t+a}{\sigma}) - \Phi(\tfrac{t-a}{\sigma})]`; away from the corners its
     edges have the MTF of :func:`render_slanted_edge` with the same ``sigma``.
 
+    Examples
+    --------
     >>> render_sfr_chart((60, 80), grid=(1, 1)).shape
     (60, 80)
     """
