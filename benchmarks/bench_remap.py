@@ -93,7 +93,8 @@ def _accuracy(img: np.ndarray, K: np.ndarray, model: BrownConrady) -> dict[str, 
     res = {
         "undistort": f"cv2 float maps {np.abs(ours_u - cv_u).max():.1e}; "
         f"f64 ref {np.abs(ours_u - ref_u).max():.1e}",
-        "remap": f"cv2 {np.abs(ours_r - cv_r).max():.1e}; f64 ref {np.abs(ours_r - ref_r).max():.1e}",
+        "remap": f"cv2 {np.abs(ours_r - cv_r).max():.1e}; "
+        f"f64 ref {np.abs(ours_r - ref_r).max():.1e}",
     }
     if img.dtype == np.uint8:
         u8 = cv2.undistort(img, K, D).astype(np.float64)
@@ -131,9 +132,9 @@ def main() -> None:
                         median_time(lambda i=img, k=K: cv2.undistort(i, k, D), args.reps),
                     ),
                     "remap": (
-                        median_time(lambda i=img: remap_bilinear(i, m32), args.reps),
+                        median_time(lambda i=img, m=m32: remap_bilinear(i, m), args.reps),
                         median_time(
-                            lambda i=img: cv2.remap(i, m32, None, cv2.INTER_LINEAR), args.reps
+                            lambda i=img, m=m32: cv2.remap(i, m, None, cv2.INTER_LINEAR), args.reps
                         ),
                     ),
                 }
