@@ -36,10 +36,23 @@ from imageform.geometry.distortion import BrownConrady, DistortionModel, _check_
 __all__ = ["remap_bilinear", "undistort_image", "undistortion_map"]
 
 
-def _as_batch(image: Any) -> tuple[np.ndarray, tuple[int, ...], bool]:
-    arr = np.asarray(
-        to_numpy(as_image(image, "image", channels=None, range_check=False, finite=False))
-    )
+_INT_SCALE = {np.dtype(np.uint8): 1.0 / 255.0, np.dtype(np.uint16): 1.0 / 65535.0}
+
+
+def _as_batch(image: Any) -> tuple[np.ndarray, tuple[int, ...], bool, float]:
+    """The image as a C-contiguous ``(B, H, W, C)`` batch, its full shape, whether it was
+    2-D, and the scale to floats: uint8/uint16 NumPy images are kept as they are (the kernels
+    sample them and scale by 1/255 or 1/65535, without a float copy of the image)."""
+    if isinstance(image, np.ndarray) and (
+        image.dtype in _INT_SCALE or image.dtype in (np.float32, np.float64)
+    ):
+        arr = image
+        scale = _INT_SCALE.get(arr.dtype, 1.0)
+    else:
+        arr = np.asarray(
+            to_numpy(as_image(image, "image", channels=None, range_check=False, finite=False))
+        )
+        scale = 1.0
     if arr.ndim < 2:
         raise InvalidInputError(
             f"expected image of shape (H, W) or (..., H, W, C), got {format_shape(arr.shape)}"
@@ -49,7 +62,12 @@ def _as_batch(image: Any) -> tuple[np.ndarray, tuple[int, ...], bool]:
         arr = arr[..., None]
     lead = arr.shape[:-3]
     h, w, c = arr.shape[-3:]
-    return np.ascontiguousarray(arr.reshape(-1, h, w, c)), (*lead, h, w, c), gray
+    return np.ascontiguousarray(arr.reshape(-1, h, w, c)), (*lead, h, w, c), gray, scale
+
+
+def _out_dtype(batch: np.ndarray) -> Any:
+    """float32 for uint8/uint16 images (as :func:`imageform._validate.as_image`), else theirs."""
+    return np.float32 if batch.dtype in _INT_SCALE else batch.dtype
 
 
 def _remap_bilinear_numpy(
@@ -139,8 +157,11 @@ def remap_bilinear(image: Any, map_uv: Any, *, fill: float = 0.0) -> Any:
         return _remap_dask_public(image, map_uv, float(fill))
     if not is_numpy_namespace(xp):
         return _remap_generic(image, map_uv, float(fill), xp)
-    batch, full_shape, gray = _as_batch(image)
-    m = np.asarray(to_numpy(as_float(map_uv, "map_uv", xp=np, finite=False)), dtype=np.float64)
+    batch, full_shape, gray, scale = _as_batch(image)
+    if isinstance(map_uv, np.ndarray) and map_uv.dtype in (np.float32, np.float64):
+        m = map_uv  # float32 maps are sampled as they are (no float64 copy)
+    else:
+        m = np.asarray(to_numpy(as_float(map_uv, "map_uv", xp=np, finite=False)), np.float64)
     if m.ndim != 3 or m.shape[-1] != 2:
         raise InvalidInputError(f"expected map_uv of shape (H, W, 2), got {format_shape(m.shape)}")
     check_memory(
@@ -149,17 +170,23 @@ def remap_bilinear(image: Any, map_uv: Any, *, fill: float = 0.0) -> Any:
         "the remapped image",
     )
     fill_v = float(fill)
-    map_u = np.ascontiguousarray(m[..., 0])
-    map_v = np.ascontiguousarray(m[..., 1])
+    hw = (int(m.shape[0]), int(m.shape[1]))
     if use_numba(batch):
         from imageform._kernels.remap import remap_bilinear as kernel
 
-        out = np.empty((batch.shape[0], *map_u.shape, batch.shape[-1]), dtype=batch.dtype)
-        kernel(batch, map_u, map_v, fill_v, out)
+        out = np.empty((batch.shape[0], *hw, batch.shape[-1]), dtype=_out_dtype(batch))
+        kernel(batch, np.ascontiguousarray(m), scale, fill_v, out)
     else:
-        out = _remap_bilinear_numpy(batch, map_u, map_v, fill_v)
-    out = out.reshape(*full_shape[:-3], *map_u.shape, full_shape[-1])
+        out = _remap_bilinear_numpy(_scaled(batch, scale), m[..., 0], m[..., 1], fill_v)
+    out = out.reshape(*full_shape[:-3], *hw, full_shape[-1])
     return out[..., 0] if gray else out
+
+
+def _scaled(batch: np.ndarray, scale: float) -> np.ndarray:
+    """An integer batch as float32 in [0, 1] (the plain path; the kernels scale on the fly)."""
+    if batch.dtype in _INT_SCALE:
+        return batch.astype(np.float32) * np.float32(scale)
+    return batch
 
 
 def _inverse_k(Km: np.ndarray, u: np.ndarray, v: np.ndarray) -> np.ndarray:
@@ -312,14 +339,15 @@ def undistort_image(
         )
         return _remap_generic(image, m, float(fill), xp)
     if isinstance(distortion, BrownConrady):
-        batch, full_shape, gray = _as_batch(image)
+        batch, full_shape, gray, scale = _as_batch(image)
         if use_numba(batch):
             # fused kernel: source position and sampling in one pass (no (H, W, 2) map)
             from imageform._kernels.remap import undistort_brown_conrady
 
             Km, Kn = _intrinsics(K, new_K)
-            out = np.empty((batch.shape[0], *out_hw, batch.shape[-1]), dtype=batch.dtype)
-            undistort_brown_conrady(batch, Kn, Km, np.asarray(distortion.coeffs), float(fill), out)
+            out = np.empty((batch.shape[0], *out_hw, batch.shape[-1]), dtype=_out_dtype(batch))
+            coeffs = np.asarray(distortion.coeffs, dtype=np.float64)
+            undistort_brown_conrady(batch, Kn, Km, coeffs, scale, float(fill), out)
             out = out.reshape(*full_shape[:-3], *out_hw, full_shape[-1])
             return out[..., 0] if gray else out
     m = undistortion_map(out_hw, K, distortion, new_K=new_K)
