@@ -33,9 +33,7 @@ _BLOCK = re.compile(r"^[ \t]*```(python|pycon)[ \t]*\n(.*?)^[ \t]*```", re.DOTAL
 _FLAGS = doctest.NORMALIZE_WHITESPACE | doctest.ELLIPSIS
 
 # a float as printed by Python or NumPy: 0.5, -2., 1e-06, 2.5e+03, nan/inf are left exact
-_FLOAT = re.compile(
-    r"(?<![\w.])[-+]?(?:\d+\.\d*|\.\d+|\d+(?=[eE]))(?:[eE][-+]?\d+)?(?![\w.])"
-)
+_FLOAT = re.compile(r"(?<![\w.])[-+]?(?:\d+\.\d*|\.\d+|\d+(?=[eE]))(?:[eE][-+]?\d+)?(?![\w.])")
 
 
 def _tolerance(text: str) -> float:
@@ -78,8 +76,7 @@ def _squeeze(text: str) -> str:
 def _blocks(text: str) -> list[tuple[str, str, int]]:
     """(kind, code, line of the block's first code line) in page order."""
     return [
-        (m.group(1), m.group(2), text.count("\n", 0, m.start(2)) + 1)
-        for m in _BLOCK.finditer(text)
+        (m.group(1), m.group(2), text.count("\n", 0, m.start(2)) + 1) for m in _BLOCK.finditer(text)
     ]
 
 
