@@ -13,6 +13,11 @@ uint8 image plus several float32 copies (``12 N^2`` bytes each).
 
 Run: ``OPENBLAS_NUM_THREADS=1 python benchmarks/bench_chunked.py --sizes 4096 20000
 --out benchmarks/results/chunked-2026-11-22.md`` (needs 2 x 3 N^2 bytes of disk in --dir).
+
+``--layout strip`` writes an uncompressed strip TIFF instead (tifffile's default layout: one
+strip per image, unless ``--rows-per-strip``), ``--layout strip-zlib`` zlib strips of
+``--rows-per-strip`` rows; ``--src`` runs another checkout's ``src`` (the code before a
+change) in the child.
 """
 
 from __future__ import annotations
@@ -72,6 +77,42 @@ _CHILD = textwrap.dedent(
 )
 
 
+def write_strips(path: Path, n: int, rows: int | None, compression: str | None) -> float:
+    """An n x n RGB uint8 strip TIFF, written band by band (``rows`` rows per strip; None:
+    one strip, uncompressed only)."""
+    import tifffile
+
+    band = 256
+    xx = np.arange(n)[None, :]
+
+    def bands():
+        for r0 in range(0, n, band):
+            yy = np.arange(r0, min(n, r0 + band))[:, None]
+            t = (xx * 7 + yy * 13) % 61
+            yield np.stack(
+                [t + 40 + (150 * yy) // n, t + 40 + (150 * xx) // n, t + 90 + 0 * xx], axis=-1
+            ).astype(np.uint8)
+
+    t0 = time.perf_counter()
+    if rows is None and compression is None:  # one contiguous strip, written band by band
+        with tifffile.TiffWriter(path, bigtiff=3 * n * n > 2**32 - 2**26) as tw:
+            tw.write(shape=(n, n, 3), dtype=np.uint8, photometric="rgb", rowsperstrip=n)
+            fh = tw.filehandle
+            for b in bands():
+                fh.write(b.tobytes())
+    else:
+        data = np.concatenate(list(bands()))  # small sizes only: held in memory while writing
+        tifffile.imwrite(
+            path,
+            data,
+            photometric="rgb",
+            rowsperstrip=rows,
+            compression=compression,
+            bigtiff=3 * n * n > 2**32 - 2**26,
+        )
+    return time.perf_counter() - t0
+
+
 def write_tiled(path: Path, n: int) -> float:
     """An n x n RGB uint8 tiled TIFF, written tile by tile (a colour ramp with texture)."""
     yy, xx = np.mgrid[0:TILE, 0:TILE]
@@ -101,10 +142,12 @@ def write_tiled(path: Path, n: int) -> float:
     return time.perf_counter() - t0
 
 
-def run_child(src: Path, out: Path, command: str, chunk: int) -> dict[str, float]:
+def run_child(
+    src: Path, out: Path, command: str, chunk: int, code: Path | None = None
+) -> dict[str, float]:
     import imageform
 
-    env = {**os.environ, "PYTHONPATH": str(Path(imageform.__file__).parents[1])}
+    env = {**os.environ, "PYTHONPATH": str(code or Path(imageform.__file__).parents[1])}
     proc = subprocess.run(
         [sys.executable, "-c", _CHILD, str(src), str(out), command, str(chunk)],
         env=env,
@@ -128,6 +171,9 @@ def main() -> None:
         "--input", type=Path, default=None, help="an existing N x N tiled TIFF (kept) instead"
     )
     ap.add_argument("--make-input", type=Path, default=None, help="only write --sizes[0] here")
+    ap.add_argument("--layout", choices=["tiled", "strip", "strip-zlib"], default="tiled")
+    ap.add_argument("--rows-per-strip", type=int, default=None)
+    ap.add_argument("--src", type=Path, default=None, help="the src folder the child imports")
     args = ap.parse_args()
     if args.make_input:
         print(f"wrote in {write_tiled(args.make_input, args.sizes[0]):.1f} s")
@@ -142,14 +188,22 @@ def main() -> None:
     try:
         for n in args.sizes:
             src = args.input or scratch / f"in-{n}.tif"
-            t_write = 0.0 if args.input else write_tiled(src, n)
+            if args.input:
+                t_write = 0.0
+            elif args.layout == "tiled":
+                t_write = write_tiled(src, n)
+            else:
+                zlib = args.layout == "strip-zlib"
+                t_write = write_strips(
+                    src, n, args.rows_per_strip or (16 if zlib else None), "zlib" if zlib else None
+                )
             for command in args.commands:
                 out = scratch / f"out-{n}-{command}.tif"
-                m = run_child(src, out, command, args.chunk)
+                m = run_child(src, out, command, args.chunk, args.src)
                 peak = max(m["after"], m["sampled"])
                 rows.append(
                     [
-                        f"{n} x {n}",
+                        f"{n} x {n} {args.layout}",
                         f"{3 * n * n / MIB:.0f}",
                         f"{12 * n * n / MIB:.0f}",
                         command,

@@ -98,6 +98,8 @@ def test_doc_examples_run(page: Path, tmp_path: Path, monkeypatch: pytest.Monkey
     for i, (kind, code, line) in enumerate(blocks):
         if "torch" in code:
             pytest.importorskip("torch")
+        if "rawpy" in code:
+            pytest.importorskip("rawpy")
         where = f"{page.name}:{line} (block {i})"
         if kind == "python":
             try:

@@ -56,48 +56,10 @@ LAYERS = {
 #: The namespace and the entry point: they may import anything.
 EXEMPT = {"imageform", "imageform.__main__"}
 
-#: Known violations in cli/ and batch/, which are being rewritten (issue 15, "One workflow
-#: layer"): ``(file under src/imageform, what is imported, rule)``. Delete each entry when
-#: its import goes; ``test_allowlist_is_current`` fails while an entry matches nothing, and
-#: no entry may be added for the other packages.
-ALLOWED: set[tuple[str, str, str]] = {
-    # batch and the CLI reach into the colour package's option checks
-    ("batch/chunked.py", "imageform.color.convert._space", "private name"),
-    ("batch/chunked.py", "imageform.color.white_balance._method", "private name"),
-    ("batch/commands.py", "imageform.color.convert._space", "private name"),
-    ("batch/commands.py", "imageform.color.white_balance._method", "private name"),
-    ("cli/color_cmds.py", "imageform.color.convert._space", "private name"),
-    # batch imports the CLI's commands, and the CLI's batch command imports batch
-    ("batch/chunked.py", "imageform.cli.color_cmds._DISPLAYABLE", "private name"),
-    ("batch/chunked.py", "imageform.cli.color_cmds._DISPLAYABLE", "package cycle batch <-> cli"),
-    (
-        "batch/commands.py",
-        "imageform.cli.color_cmds.check_png_space",
-        "package cycle batch <-> cli",
-    ),
-    ("batch/commands.py", "imageform.cli.color_cmds.convert_file", "package cycle batch <-> cli"),
-    (
-        "batch/commands.py",
-        "imageform.cli.color_analysis_cmds.white_balance_file",
-        "package cycle batch <-> cli",
-    ),
-    ("batch/commands.py", "imageform.cli.sensor_cmds.demosaic_file", "package cycle batch <-> cli"),
-    ("cli/batch_cmd.py", "imageform.batch.print_summary", "package cycle batch <-> cli"),
-    ("cli/batch_cmd.py", "imageform.batch.run_batch", "package cycle batch <-> cli"),
-    ("cli/batch_cmd.py", "imageform.batch.process_chunked", "package cycle batch <-> cli"),
-    # the generated CLI bridges the typer commands not yet moved (_app and _build import
-    # each other until they are)
-    (
-        "cli/_app.py",
-        "imageform.cli._build.CommandExit",
-        "module cycle imageform.cli._app <-> imageform.cli._build",
-    ),
-    (
-        "cli/_build.py",
-        "imageform.cli._app.legacy_commands",
-        "module cycle imageform.cli._app <-> imageform.cli._build",
-    ),
-}
+#: Known violations: ``(file under src/imageform, what is imported, rule)``. Empty since
+#: issue 15's workflow layer (cli/ and batch/ no longer import each other); an entry that
+#: matches nothing fails ``test_allowlist_is_current``.
+ALLOWED: set[tuple[str, str, str]] = set()
 
 
 @dataclass(frozen=True)

@@ -77,6 +77,8 @@ def parameters(
         after the parameters that are still positional. A call with extra positional
         arguments passes them on by these names.
 
+    Examples
+    --------
     >>> @parameters(renamed={"centre": "center"}, positional=("center",))
     ... def f(x, *, center=0.0):
     ...     return x - center

@@ -279,6 +279,8 @@ def atomic_write(final: str | Path, write: Callable[[Path], object]) -> None:
     """Call ``write(temporary_path)``, then rename the temporary onto ``final`` (overwriting
     it); on any error the temporary is removed and ``final`` is untouched.
 
+    Examples
+    --------
     >>> import tempfile
     >>> p = Path(tempfile.mkdtemp()) / "x.txt"
     >>> atomic_write(p, lambda t: t.write_text("hello"))

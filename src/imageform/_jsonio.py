@@ -21,6 +21,8 @@ __all__ = ["dumps", "json_ready"]
 def json_ready(obj: Any) -> Any:
     """``obj`` as plain JSON values: NaN and ±inf become ``None``.
 
+    Examples
+    --------
     >>> import numpy as np
     >>> json_ready({"a": np.array([1.0, np.nan]), "b": ("NaNa.png", float("inf"))})
     {'a': [1.0, None], 'b': ['NaNa.png', None]}
@@ -51,6 +53,8 @@ def json_ready(obj: Any) -> Any:
 def dumps(obj: Any, *, indent: int | None = 2) -> str:
     """JSON text of ``obj`` (see :func:`json_ready`), UTF-8 characters kept.
 
+    Examples
+    --------
     >>> dumps({"x": float("nan"), "name": "NaNa.png"}, indent=None)
     '{"x": null, "name": "NaNa.png"}'
     """

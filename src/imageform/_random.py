@@ -34,6 +34,8 @@ def as_rng(rng: object, name: str = "rng", *, mix: Sequence[int] = ()) -> np.ran
     a draw that must depend on, e.g., the shape as well as the seed. A Generator is returned
     unchanged whatever ``mix`` holds.
 
+    Examples
+    --------
     >>> float(as_rng(0).random()) == float(np.random.default_rng(0).random())
     True
     >>> g = np.random.default_rng(1)
@@ -49,11 +51,12 @@ def as_rng(rng: object, name: str = "rng", *, mix: Sequence[int] = ()) -> np.ran
     if isinstance(rng, numbers.Integral) and not isinstance(rng, bool):
         seed = int(rng)
         if seed < 0:
-            raise InvalidInputError(f"expected {name} a non-negative int seed, got {seed}")
+            raise InvalidInputError(f"expected {name} as a non-negative int seed, got {seed}")
         if mix:
             return np.random.default_rng(np.random.SeedSequence([seed, *(int(m) for m in mix)]))
         return np.random.default_rng(seed)
+    from imageform._validate import describe
+
     raise InvalidInputError(
-        f"expected {name} an int seed, a numpy.random.Generator or None, got "
-        f"{type(rng).__name__} {rng!r:.40}"
+        f"expected {name} as an int seed, a numpy.random.Generator or None, got {describe(rng)}"
     )

@@ -62,7 +62,7 @@ def _raw(x: object, name: str, xp: Any, device: Any) -> Any:
     try:
         arr = asarray_like(x, xp, device=device)
     except (TypeError, ValueError) as exc:
-        raise InvalidInputError(f"expected a numeric array for {name}, got {x!r:.80}") from exc
+        raise InvalidInputError(f"expected a numeric array for {name}, got {describe(x)}") from exc
     dt = arr.dtype
     if not (xp.isdtype(dt, "numeric") or xp.isdtype(dt, "bool")):
         raise InvalidInputError(f"expected a numeric array for {name}, got dtype {dt}")
@@ -223,6 +223,8 @@ def det3(M: Any) -> Any:
 def check_option(value: object, valid: Collection[str], what: str) -> str:
     """Return ``value`` normalised (lower-case, ``_`` for ``-``) if valid, else raise.
 
+    Examples
+    --------
     >>> check_option("Gray-World", ["gray_world", "white_patch"], "white-balance method")
     'gray_world'
     """
@@ -231,7 +233,16 @@ def check_option(value: object, valid: Collection[str], what: str) -> str:
     key = value.strip().lower().replace("-", "_").replace(" ", "_")
     if key not in valid:
         names = ", ".join(repr(v) for v in sorted(valid))
-        raise UnknownOptionError(f"unknown {what} {value!r}; valid: {names}")
+        if len(names) > 120:  # one line: list what fits, say how many more
+            shown = ""
+            for i, v in enumerate(sorted(valid)):
+                part = (", " if shown else "") + repr(v)
+                if len(shown) + len(part) > 110:
+                    shown += f", ... ({len(valid) - i} more)"
+                    break
+                shown += part
+            names = shown
+        raise UnknownOptionError(f"unknown {what} {describe(value, 60)}; valid: {names}")
     return key
 
 
@@ -239,6 +250,8 @@ def describe(value: object, width: int = 40) -> str:
     """A short description of a value for an error message: its repr cut to ``width``
     characters (arrays as their type, shape and dtype, never their contents).
 
+    Examples
+    --------
     >>> describe("x" * 100)[:12], describe(np.zeros((300, 400)))
     ("'xxxxxxxxxxx", 'ndarray of shape (300, 400), float64')
     """
@@ -282,6 +295,8 @@ def as_real(
     Refuses bool, None, strings, complex numbers, NaN, inf (unless ``allow_inf``) and values
     outside the bounds, in one line naming ``name``.
 
+    Examples
+    --------
     >>> as_real(np.float32(2.5), "sigma", positive=True)
     2.5
     >>> as_real("5", "sigma")
@@ -310,6 +325,8 @@ def as_int(
 
     Floats are refused even when whole (``2.0``), as are bool, None, strings and inf.
 
+    Examples
+    --------
     >>> as_int(np.int64(3), "max_iter", minimum=1)
     3
     >>> as_int(2.0, "n")
@@ -336,6 +353,8 @@ def as_int(
 def as_bool(value: object, name: str) -> bool:
     """A bool (Python or NumPy); 0/1 and strings are refused.
 
+    Examples
+    --------
     >>> as_bool(np.True_, "clip")
     True
     """
@@ -349,6 +368,8 @@ def as_size(
 ) -> tuple[int, ...]:
     """A tuple of ``n`` integers (a shape or an image size), each ``>= minimum``.
 
+    Examples
+    --------
     >>> as_size((640, np.int64(480)), "image_size")
     (640, 480)
     """
@@ -390,6 +411,8 @@ def memory_limit() -> int:
 def check_memory(n_bytes: float, name: str, what: str = "the result") -> None:
     """Refuse, before allocating, what would need more than :func:`memory_limit` bytes.
 
+    Examples
+    --------
     >>> check_memory(1e15, "shape", "an image of 1e15 bytes")
     Traceback (most recent call last):
     ...
@@ -406,6 +429,8 @@ def check_memory(n_bytes: float, name: str, what: str = "the result") -> None:
 def check_image_size(size: object, name: str = "image_size") -> tuple[int, int]:
     """A ``(width, height)`` pair of positive integers, as a tuple of ``int``.
 
+    Examples
+    --------
     >>> check_image_size((640, 480))
     (640, 480)
     """
@@ -521,6 +546,8 @@ def as_real_array(
     ``finite=False``) and signs: with ``check=False`` the caller checks the shape first and
     then calls :func:`check_real_values`.
 
+    Examples
+    --------
     >>> as_real_array([1, 2], "depth").tolist()
     [1.0, 2.0]
     >>> as_real_array(None, "depth")
@@ -592,6 +619,8 @@ def as_reals(
 ) -> tuple[float, ...]:
     """A sequence of finite real numbers (``n`` of them if given) as a tuple of floats.
 
+    Examples
+    --------
     >>> as_reals((3, np.float32(1.5)), "center", 2)
     (3.0, 1.5)
     """
@@ -618,6 +647,8 @@ def as_shape(
     """A shape of ``n`` positive integers whose arrays (``copies`` of ``itemsize``-byte
     elements) fit :func:`memory_limit`; checked before anything is allocated.
 
+    Examples
+    --------
     >>> as_shape((np.int64(4), 6), "shape")
     (4, 6)
     """
@@ -645,6 +676,8 @@ def finite_result(what: str, compute: Any, /, **inputs: object) -> Any:
     a non-finite result is refused in one line naming ``inputs`` (a formula evaluated
     beyond the float range: refuse it rather than return inf or NaN).
 
+    Examples
+    --------
     >>> finite_result("the blur", lambda: 1e300 * 1e300, f_number=1e300)
     Traceback (most recent call last):
     ...
@@ -708,6 +741,8 @@ def refuse_non_real(value: object, name: str) -> None:
     (:class:`TypeError`: a mask is not a measurement), complex, object and string arrays
     (:class:`InvalidInputError`). Never casts, so no ComplexWarning is ever issued.
 
+    Examples
+    --------
     >>> refuse_non_real(np.array([True, False]), "xyz")
     Traceback (most recent call last):
     ...
@@ -737,6 +772,8 @@ def as_real_ndarray(
     with ``ndim`` dimensions (one of them), a last axis of ``last`` and ``>= min_size``
     elements, finite unless ``finite=False``; every refusal is one line naming ``name``.
 
+    Examples
+    --------
     >>> as_real_ndarray([400, 500], "wavelengths", ndim=1).tolist()
     [400.0, 500.0]
     """

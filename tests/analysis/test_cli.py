@@ -1,4 +1,7 @@
-"""CLI: ``imageform segment``, ``stain-normalize`` and ``harmonize`` on files."""
+"""CLI: ``imageform segment``, ``stain-normalize``, ``fit-correction`` and ``harmonize`` on
+files (the generated grammar: output ``-o/--out``, an unknown method is a usage error, exit 2;
+the old ``harmonize --chart-a/--chart-b/--apply/--save`` is ``fit-correction`` then
+``harmonize --correction``)."""
 
 from __future__ import annotations
 
@@ -40,7 +43,7 @@ def test_segment(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
         "--v",
         "80:255",
         "--opencv-ranges",
-        "--out",
+        "-o",
         str(out),
         "--overlay",
         str(ov),
@@ -49,6 +52,7 @@ def test_segment(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     assert main(argv) == 0
     res = json.loads(capsys.readouterr().out)
     mask = read_image(out)[..., 0] == 255
+    assert res["mask"] == str(out) and res["overlay"] == str(ov)
     assert res["tissue_fraction"] == pytest.approx(mask.mean())
     assert res["h_degrees"] == [340.0, 40.0]
     assert mask_iou(mask, truth) > 0.98
@@ -66,8 +70,8 @@ def test_segment_refuses_to_overwrite_input(tmp_path: Path, capsys) -> None:  # 
     src = _u8(tmp_path / "endo.png", synthetic_endoscopy_image((64, 64), rng=0)[0])
     assert main(["segment", str(src), "--out", str(src), "--force"]) == 1
     assert "also an input" in capsys.readouterr().err
-    assert main(["segment", str(src), "--h", "a:b", "--out", str(tmp_path / "m.png")]) == 1
-    assert "LOW:HIGH" in capsys.readouterr().err
+    assert main(["segment", str(src), "--h", "a:b", "--out", str(tmp_path / "m.png")]) == 2
+    assert "LOW:HIGH" in capsys.readouterr().err  # checked with the options: a usage error
 
 
 def test_segment_empty_mask_is_reported(tmp_path: Path, capsys) -> None:  # type: ignore[no-untyped-def]
@@ -88,6 +92,7 @@ def test_stain_normalize(tmp_path: Path, capsys, method: str) -> None:  # type: 
     argv = [
         "stain-normalize",
         str(pa),
+        "-o",
         str(out),
         "--method",
         method,
@@ -95,7 +100,6 @@ def test_stain_normalize(tmp_path: Path, capsys, method: str) -> None:  # type: 
         str(pb),
         "--save-target",
         str(stats),
-        "--clip",
         "--json",
     ]
     assert main(argv) == 0
@@ -108,12 +112,12 @@ def test_stain_normalize(tmp_path: Path, capsys, method: str) -> None:  # type: 
             [
                 "stain-normalize",
                 str(pa),
+                "-o",
                 str(out2),
                 "--method",
                 method,
                 "--target",
                 str(stats),
-                "--clip",
             ]
         )
         == 0
@@ -130,6 +134,7 @@ def test_stain_normalize_errors(tmp_path: Path, capsys) -> None:  # type: ignore
             [
                 "stain-normalize",
                 str(pa),
+                "-o",
                 str(tmp_path / "o.png"),
                 "--method",
                 "vahadane",
@@ -137,52 +142,64 @@ def test_stain_normalize_errors(tmp_path: Path, capsys) -> None:  # type: ignore
                 str(pa),
             ]
         )
-        == 1
+        == 2
     )
-    assert "'macenko', 'reinhard'" in capsys.readouterr().err
-    assert main(["stain-normalize", str(pa), str(tmp_path / "o.png"), "--target", str(white)]) == 1
+    assert "valid: macenko, reinhard" in capsys.readouterr().err
+    o = str(tmp_path / "o.png")
+    assert main(["stain-normalize", str(pa), "-o", o, "--target", str(white)]) == 1
     assert "is there tissue" in capsys.readouterr().err
-    assert main(["stain-normalize", str(pa), str(pa), "--target", str(white), "--force"]) == 1
+    assert main(["stain-normalize", str(pa), "-o", str(pa), "--target", str(white), "--force"]) == 1
     assert "also an input" in capsys.readouterr().err
+    assert main(["stain-normalize", str(pa), "-o", o]) == 2  # --target is required
+    assert "--target" in capsys.readouterr().err
 
 
-def test_harmonize_charts_apply_save(tmp_path: Path, capsys) -> None:  # type: ignore[no-untyped-def]
+def test_stain_normalize_defaults_to_macenko_and_keeps_16_bit(tmp_path: Path, capsys) -> None:  # type: ignore[no-untyped-def]
+    a, _, _ = synthetic_stain_image((48, 48), max_concentration=(0.6, 1.0), rng=0)
+    b, _, _ = synthetic_stain_image((48, 48), rng=1)
+    pa, pb = tmp_path / "a.png", tmp_path / "b.png"
+    write_image(pa, np.round(a * 65535).astype(np.uint16))
+    write_image(pb, np.round(b * 65535).astype(np.uint16))
+    out = tmp_path / "o.png"
+    assert main(["stain-normalize", str(pa), "-o", str(out), "--target", str(pb), "--json"]) == 0
+    res = json.loads(capsys.readouterr().out)
+    assert res["method"] == "macenko" and len(res["target_stain_matrix"]) == 2
+    assert read_image(out).dtype == np.uint16
+
+
+def test_fit_correction_then_harmonize(tmp_path: Path, capsys) -> None:  # type: ignore[no-untyped-def]
+    """fit-correction writes the file harmonize --correction reads; the corrected chart is
+    device B's (ΔE00 7+ before, under 1.5 after), 16-bit in gives 16-bit out."""
     chart_b = synthetic_chart_image()
     ca, cb = _u8(tmp_path / "a.png", device_a(chart_b)), _u8(tmp_path / "b.png", chart_b)
     corr, out = tmp_path / "corr.json", tmp_path / "fixed.png"
-    assert (
-        main(
-            [
-                "harmonize",
-                "--chart-a",
-                str(ca),
-                "--chart-b",
-                str(cb),
-                "--method",
-                "root-polynomial",
-                "--apply",
-                str(ca),
-                str(out),
-                "--save",
-                str(corr),
-                "--clip",
-                "--json",
-            ]
-        )
-        == 0
-    )
+    argv = ["fit-correction", str(ca), str(cb), "-o", str(corr), "--method", "root-polynomial"]
+    assert main([*argv, "--json"]) == 0
     res = json.loads(capsys.readouterr().out)
     assert res["method"] == "root_polynomial" and res["patches_fitted"] == 24
     assert res["mean_before"] > 7 and res["mean_after"] < 1.5
     assert len(res["delta_e00_after"]) == 24
+    assert json.loads(corr.read_text())["kind"] == "color_correction"
+    assert main(argv) == 1 and "pass --force" in capsys.readouterr().err
+    assert main([*argv, "--force"]) == 0
+    assert "patch  ΔE00 before  after" in capsys.readouterr().out
+    assert main(["harmonize", str(ca), "-o", str(out), "--correction", str(corr)]) == 0
     fixed = read_image(out).astype(float) / 255
     assert np.abs(fixed - chart_b).mean() < np.abs(device_a(chart_b) - chart_b).mean() / 3
-    assert json.loads(corr.read_text())["kind"] == "color_correction"
-    assert main(["harmonize", "--chart-a", str(ca), "--chart-b", str(cb)]) == 0
-    assert "patch  ΔE00 before  after" in capsys.readouterr().out
+    a16 = tmp_path / "a16.png"
+    write_image(a16, np.round(device_a(chart_b) * 65535).astype(np.uint16))
+    out16 = tmp_path / "fixed16.png"
+    assert main(["harmonize", str(a16), "-o", str(out16), "--correction", str(corr)]) == 0
+    got = read_image(out16)
+    assert got.dtype == np.uint16
+    assert np.abs(got / 65535.0 - fixed).max() < 2.5 / 255  # the 8-bit run, one code apart
+    capsys.readouterr()
+    assert main(["harmonize", str(ca), "-o", str(tmp_path / "x.png"), "--correction", str(ca)]) == 1
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "imageform: error:" in err
 
 
-def test_harmonize_csv(tmp_path: Path, capsys) -> None:  # type: ignore[no-untyped-def]
+def test_fit_correction_csv(tmp_path: Path, capsys) -> None:  # type: ignore[no-untyped-def]
     from imageform.analysis.synthetic import COLORCHECKER_SRGB8
 
     ref = np.asarray(COLORCHECKER_SRGB8) / 255
@@ -192,11 +209,12 @@ def test_harmonize_csv(tmp_path: Path, capsys) -> None:  # type: ignore[no-untyp
         ",".join(f"{v:.6f}" for v in (*m, *r)) for m, r in zip(meas, ref, strict=True)
     ]
     csv.write_text("\n".join(lines) + "\n")
-    assert main(["harmonize", "--patches-csv", str(csv), "--json"]) == 0
+    assert main(["fit-correction", str(csv), "-o", str(tmp_path / "c.json"), "--json"]) == 0
     assert json.loads(capsys.readouterr().out)["mean_after"] < 2.0
     bad = tmp_path / "bad.csv"
     bad.write_text("r,g,b\n0.1,0.2,0.3\n")
-    assert main(["harmonize", "--patches-csv", str(bad)]) == 1
+    assert main(["fit-correction", str(bad), "-o", str(tmp_path / "d.json")]) == 1
     assert "expected CSV columns" in capsys.readouterr().err
-    assert main(["harmonize"]) == 1
-    assert "--chart-a and --chart-b" in capsys.readouterr().err
+    assert main(["fit-correction", str(csv), str(csv), "-o", str(tmp_path / "d.json")]) == 1
+    assert "CHART_A CHART_B" in capsys.readouterr().err
+    assert not (tmp_path / "d.json").exists()

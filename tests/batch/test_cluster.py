@@ -1,5 +1,7 @@
 """imageform batch on a loopback dask cluster: results equal the in-process command,
-resumability, a worker killed mid-run, failures, --scheduler and the default local cluster."""
+resumability keyed on the manifest, a worker killed mid-run, every worker gone, failures,
+Ctrl-C, --scheduler and the default local cluster. (Adapted to the registry: jobs run the
+workflows, ``run_file`` replaces ``get_command(...).run``, the output folder is -o/--out.)"""
 
 from __future__ import annotations
 
@@ -11,7 +13,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-from imageform.batch import JobResult, get_command, run_batch
+from imageform.batch import MANIFEST, JobResult, NoWorkersError, batch_options, run_batch
 from imageform.cli import main
 from imageform.io import read_image, write_image
 
@@ -41,11 +43,13 @@ def _mosaic_tree(root: Path, n: int = N_IMAGES) -> Path:
 
 def _check_equal_in_process(report: Any, command: str, options: dict[str, Any], tmp: Path) -> None:
     """Each output decodes and equals the command run in this process on the same input."""
-    run = get_command(command).run
+    from imageform.workflows import run_file
+
+    opts = batch_options(command, options)
     assert report.count("done") + report.count("skipped") == len(report.results)
     for i, r in enumerate(report.results):
         ref = tmp / f"ref{i}{r.output.suffix}"
-        run(r.input, ref, options)
+        run_file(command, r.input, ref, opts)
         np.testing.assert_array_equal(read_image(r.output), read_image(ref))
 
 
@@ -256,13 +260,13 @@ def test_failures_reported_cli(
     src = _rgb_tree(tmp_path, n=4)
     (src / "site0" / "corrupt.png").write_bytes(b"\x89PNG\r\n\x1a\n truncated")
     out = tmp_path / "out"
-    argv = ["batch", "white-balance", f"{src}/**/*.png", str(out)]
+    argv = ["batch", "white-balance", f"{src}/**/*.png", "-o", str(out)]
     code = main([*argv, "--scheduler", cluster.scheduler_address])
     text = capsys.readouterr().out
     assert code == 1
     assert "4 done, 0 skipped (already finished), 1 failed" in text
     (line,) = [ln for ln in text.splitlines() if ln.startswith("failed: ")]
-    assert line.endswith("corrupt.png: OSError: Truncated File Read")  # Pillow's reason
+    assert "corrupt.png: InvalidInputError:" in line and "corrupt" in line.split(": ", 2)[2]
     assert len(list(out.rglob("*.png"))) == 4 and not _leftover_temps(out)
     code = main([*argv, "--scheduler", cluster.scheduler_address, "--json"])
     import json
@@ -270,7 +274,7 @@ def test_failures_reported_cli(
     payload = json.loads(capsys.readouterr().out)
     assert code == 1 and (payload["skipped"], payload["failed"]) == (4, 1)
     (bad,) = [j for j in payload["jobs"] if j["status"] == "failed"]
-    assert bad["input"].endswith("corrupt.png") and bad["error"].startswith("OSError")
+    assert bad["input"].endswith("corrupt.png") and bad["error"].startswith("InvalidInputError")
 
 
 def test_bad_scheduler_address(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
@@ -279,7 +283,7 @@ def test_bad_scheduler_address(tmp_path: Path, capsys: pytest.CaptureFixture[str
     src = _rgb_tree(tmp_path, n=1)
     with dask.config.set({"distributed.comm.timeouts.connect": "1s"}):
         code = main(
-            ["batch", "convert", f"{src}/**/*.png", str(tmp_path / "o"), "--to", "srgb"]
+            ["batch", "convert", f"{src}/**/*.png", "-o", str(tmp_path / "o"), "--to", "srgb"]
             + ["--scheduler", "tcp://127.0.0.1:9"]
         )
     assert code == 1 and "cannot reach the scheduler" in capsys.readouterr().err
@@ -289,7 +293,7 @@ def test_default_local_cluster_cli(tmp_path: Path, capsys: pytest.CaptureFixture
     """No --scheduler: a LocalCluster of worker processes is started and shut down."""
     src = _rgb_tree(tmp_path, n=3)
     code = main(
-        ["batch", "convert", f"{src}/**/*.png", str(tmp_path / "o"), "--to", "lab"]
+        ["batch", "convert", f"{src}/**/*.png", "-o", str(tmp_path / "o"), "--to", "lab"]
         + ["--suffix", ".npy", "--workers", "1", "--json"]
     )
     assert code == 0
@@ -298,3 +302,79 @@ def test_default_local_cluster_cli(tmp_path: Path, capsys: pytest.CaptureFixture
     assert json.loads(capsys.readouterr().out)["done"] == 3
     lab = np.load(next((tmp_path / "o").rglob("*.npy")))
     assert lab.shape == (24, 32, 3) and lab[..., 0].min() >= 0 and lab[..., 0].max() <= 100
+
+
+def test_rerun_with_another_method_recomputes(
+    cluster: Any, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Resume is keyed on what produced an output (manifest): the same command skips every
+    finished file; another --method recomputes them all, and its outputs are the new
+    method's; a touched input is redone alone."""
+    import json
+
+    src = _rgb_tree(tmp_path, n=4)
+    out = tmp_path / "out"
+    base = ["batch", "white-balance", f"{src}/**/*.png", "-o", str(out), "--json"]
+    base += ["--scheduler", cluster.scheduler_address]
+    assert main([*base, "--method", "gray-world"]) == 0
+    assert json.loads(capsys.readouterr().out)["done"] == 4
+    manifest = json.loads((out / MANIFEST).read_text())
+    assert len(manifest["outputs"]) == 4
+    entry = next(iter(manifest["outputs"].values()))
+    assert entry["command"] == "white-balance" and entry["options"]["method"] == "gray_world"
+    first = {p: read_image(p) for p in out.rglob("*.png")}
+    assert main([*base, "--method", "gray_world"]) == 0  # the other spelling: same options
+    assert json.loads(capsys.readouterr().out)["skipped"] == 4
+    assert main([*base, "--method", "max-rgb"]) == 0
+    res = json.loads(capsys.readouterr().out)
+    assert (res["done"], res["skipped"]) == (4, 0)
+    _check_equal_in_process(
+        run_batch(
+            "white-balance",
+            f"{src}/**/*.png",
+            out,
+            {"method": "max-rgb"},
+            scheduler="tcp://127.0.0.1:1",
+        ),
+        "white-balance",
+        {"method": "max-rgb"},
+        tmp_path,
+    )
+    assert any(not np.array_equal(first[p], read_image(p)) for p in first)
+    # an input that changed (size or time) is redone, the others are not
+    touched = next(src.rglob("*.png"))
+    os.utime(touched, ns=(touched.stat().st_atime_ns, touched.stat().st_mtime_ns + 10**9))
+    assert main([*base, "--method", "max-rgb"]) == 0
+    res = json.loads(capsys.readouterr().out)
+    assert (res["done"], res["skipped"]) == (1, 3)
+    (done,) = [j for j in res["jobs"] if j["status"] == "done"]
+    assert done["input"] == str(touched)
+
+
+def test_every_worker_gone_stops_with_a_message(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A scheduler with no worker (all died, none restarted): the run stops after the
+    timeout with one line saying what is done, never hangs."""
+    import logging
+
+    import distributed
+
+    src = _rgb_tree(tmp_path, n=2)
+    with (
+        distributed.LocalCluster(
+            n_workers=0, processes=False, dashboard_address=":0", silence_logs=logging.ERROR
+        ) as empty,
+        pytest.raises(
+            NoWorkersError, match=r"every dask worker is gone .*\(0 jobs done, 2 remaining\)"
+        ),
+    ):
+        run_batch(
+            "convert",
+            f"{src}/**/*.png",
+            tmp_path / "o",
+            {"to": "srgb"},
+            scheduler=empty.scheduler_address,
+            worker_timeout_s=2,
+        )
+    assert not list((tmp_path / "o").rglob("*.png")) if (tmp_path / "o").exists() else True

@@ -1,4 +1,7 @@
-"""Planning, atomic single jobs and option checks of imageform.batch (no cluster needed)."""
+"""Planning, atomic single jobs and option checks of imageform.batch (no cluster needed).
+
+The commands are the registry's workflows that run file by file (``batch_workflow``); their
+options the workflow's dataclass (``batch_options``), the old ``COMMANDS`` table is gone."""
 
 from __future__ import annotations
 
@@ -7,7 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from imageform.batch import COMMANDS, get_command, plan_jobs, run_job
+from imageform.batch import batch_options, batch_workflow, plan_jobs, run_batch, run_job
 from imageform.batch.runner import temp_pattern
 from imageform.errors import InvalidInputError, UnknownOptionError
 from imageform.io import read_image, write_image
@@ -70,25 +73,47 @@ def test_run_job_atomic_and_failure(tmp_path: Path) -> None:
 
 
 def test_command_options_checked(tmp_path: Path) -> None:
-    assert set(COMMANDS) == {
-        "convert",
-        "white_balance",
-        "demosaic",
-        "stain_normalize",
-        "harmonize",
-    }
-    with pytest.raises(UnknownOptionError, match="valid: 'convert'"):
-        get_command("convrt")
-    with pytest.raises(UnknownOptionError, match="option of batch demosaic"):
-        get_command("demosaic").validate({"to": "lab"}, ".png")
-    with pytest.raises(InvalidInputError, match="not displayable"):
-        get_command("convert").validate({"to": "lab"}, ".png")
-    with pytest.raises(InvalidInputError, match="needs --to"):
-        get_command("convert").validate({}, ".png")
-    with pytest.raises(InvalidInputError, match=r"writes \.png, \.npy"):
-        get_command("demosaic").validate({}, ".tif")
-    with pytest.raises(InvalidInputError, match="needs --target"):
-        get_command("stain-normalize").validate({}, ".png")
+    from imageform.workflows import WORKFLOWS
+
+    batchable = {n for n, w in WORKFLOWS.items() if w.batch}
+    assert {"convert", "white-balance", "demosaic", "stain-normalize", "harmonize"} <= batchable
+    with pytest.raises(UnknownOptionError, match=r"valid: .*convert"):
+        batch_workflow("convrt")
+    with pytest.raises(UnknownOptionError, match="does not run in imageform batch"):
+        batch_workflow("delta-e")
+    with pytest.raises(UnknownOptionError, match="unknown option 'to' of batch demosaic"):
+        batch_options("demosaic", {"to": "lab"})
+    with pytest.raises(UnknownOptionError, match="valid: bilinear"):
+        batch_options("demosaic", {"method": "vng"})
+    # flags and field names alike; the single command's defaults
+    assert batch_options("convert", {"--to": "lab"}) == batch_options("convert", {"dst": "lab"})
+    assert batch_options("stain-normalize", {"target": "t.png"}).method == "macenko"
+    assert batch_options("white-balance", {}).method == "gray_world"
+    with pytest.raises(InvalidInputError, match="does not take --save-target"):
+        batch_options("stain-normalize", {"target": "t.png", "save_target": "s.json"})
+    _tree(tmp_path)
+    glob_ = f"{tmp_path}/in/*.png"
+    with pytest.raises(InvalidInputError, match="do not fit an integer image"):
+        run_batch("convert", glob_, tmp_path / "o", {"to": "lab"}, scheduler="tcp://127.0.0.1:1")
+    with pytest.raises(InvalidInputError, match=r"writes \.png"):
+        run_batch("mosaic", glob_, tmp_path / "o", {}, out_suffix=".json")
     with pytest.raises(InvalidInputError, match="does not exist"):
-        get_command("harmonize").validate({"correction": str(tmp_path / "no.json")}, ".png")
-    get_command("white-balance").validate({"method": "gray-world"}, ".tif")
+        run_batch("harmonize", glob_, tmp_path / "o", {"correction": str(tmp_path / "no.json")})
+    assert not (tmp_path / "o").exists()  # refused before anything ran
+
+
+def test_plan_refuses_an_output_folder_linked_into_the_inputs(tmp_path: Path) -> None:
+    """The self-input guard compares real paths: an output folder that is a symbolic link to
+    a folder the glob reaches is refused, as the folder itself would be."""
+    _tree(tmp_path)
+    (tmp_path / "out_link").symlink_to(tmp_path / "in" / "a", target_is_directory=True)
+    with pytest.raises(InvalidInputError, match="match the input glob"):
+        plan_jobs(f"{tmp_path}/in/**/*.png", tmp_path / "out_link")
+    # a link to a folder outside the inputs is fine
+    (tmp_path / "real_out").mkdir()
+    (tmp_path / "ok_link").symlink_to(tmp_path / "real_out", target_is_directory=True)
+    assert len(plan_jobs(f"{tmp_path}/in/**/*.png", tmp_path / "ok_link")) == 3
+    # and an input tree reached through a link is compared by its real path too
+    (tmp_path / "in_link").symlink_to(tmp_path / "in", target_is_directory=True)
+    with pytest.raises(InvalidInputError, match="match the input glob"):
+        plan_jobs(f"{tmp_path}/in_link/**/*.png", tmp_path / "in" / "out")

@@ -29,6 +29,8 @@ EXAMPLES = {
     "focal": "50mm",
     "f_number": 2.8,
     "focus": "2m",
+    "target": "ref.png",
+    "correction": "corr.json",
 }
 
 
@@ -116,11 +118,14 @@ def test_doc_command_lines_parse(page: str, line: str) -> None:
     ctx = root.make_context("imageform", [args[0]], resilient_parsing=True)
     cmd = root.get_command(ctx, args[0])
     assert cmd is not None, f"{page}: unknown command in `{line}`"
-    if isinstance(cmd, click.Group) or not args[1:]:
+    if not args[1:]:
         return
-    bridged = any(getattr(p, "type", None) is click.UNPROCESSED for p in cmd.params)
-    if inline and bridged:  # a command not yet generated from the registry
-        return
+    if isinstance(cmd, click.Group):  # imageform batch COMMAND ...: its subcommand parses
+        if args[1].startswith("-"):
+            return
+        sub = cmd.get_command(ctx, args[1])
+        assert sub is not None, f"{page}: unknown command in `{line}`"
+        cmd, args = sub, args[1:]
     if inline:
         known = _flags(cmd) | {"--help", "-h"}
         for token in args[1:]:
@@ -135,3 +140,51 @@ def test_doc_command_lines_parse(page: str, line: str) -> None:
         pass
     except click.UsageError as exc:
         pytest.fail(f"{page}: `{line}`: {exc.format_message()}")
+
+
+def _defaults(cmd: click.Command) -> dict[str, object]:
+    return {p.name: p.default for p in cmd.params if isinstance(p, click.Option) and p.name}
+
+
+@pytest.mark.parametrize("name", [n for n, w in WORKFLOWS.items() if w.batch])
+def test_batch_takes_the_commands_options_and_defaults(name: str) -> None:
+    """`imageform batch NAME` is generated from the same workflow: every option of the single
+    command, with the same default (Macenko for stain-normalize in both)."""
+    ctx = root.make_context("imageform", ["batch"], resilient_parsing=True)
+    group = root.get_command(ctx, "batch")
+    assert isinstance(group, click.Group) and name in group.list_commands(ctx)
+    sub = group.get_command(ctx, name)
+    assert sub is not None
+    wf = WORKFLOWS[name]
+    single = build_command(wf)
+    extra_outputs = {f.name for f in wf.options.fields() if f.metadata.get("output")}
+    per_run = {o for p in single.params if p.name in extra_outputs for o in p.opts}
+    assert _flags(single) - per_run <= _flags(sub)  # an extra output is one file per run
+    assert not per_run & _flags(sub)
+    defaults = _defaults(sub)
+    for key, value in _defaults(single).items():
+        if key not in ("out", "force", "json_out", *extra_outputs):
+            assert defaults[key] == value, key
+    assert {"--scheduler", "--workers", "--suffix", "--force", "--json", "-o"} <= _flags(sub)
+
+
+def test_stain_normalize_defaults_to_macenko_everywhere() -> None:
+    from imageform.batch import batch_options
+
+    wf = WORKFLOWS["stain-normalize"]
+    assert wf.make_options(target="t.png").method == "macenko"
+    assert batch_options("stain-normalize", {"target": "t.png"}).method == "macenko"
+
+
+def test_no_command_is_bridged() -> None:
+    """Every command is generated (no typer command passed through unparsed)."""
+    ctx = root.make_context("imageform", ["--help"], resilient_parsing=True)
+    for name in root.list_commands(ctx):
+        cmd = root.get_command(ctx, name)
+        assert cmd is not None
+        subs = [cmd]
+        if isinstance(cmd, click.Group):
+            subs = [cmd.get_command(ctx, n) for n in cmd.list_commands(ctx)]
+        for sub in subs:
+            assert sub is not None
+            assert not any(getattr(p, "type", None) is click.UNPROCESSED for p in sub.params)

@@ -23,8 +23,17 @@ from typing import Any
 import numpy as np
 
 from imageform._colormath import srgb_decode, srgb_encode
-from imageform._validate import as_float, check_option, format_shape
+from imageform._validate import (
+    as_bool,
+    as_float,
+    as_int,
+    as_real,
+    check_option,
+    describe,
+    format_shape,
+)
 from imageform.analysis._arrays import image_in, is_dask, read_json, write_json
+from imageform.analysis._guard import count, real_array
 from imageform.color.convert import convert
 from imageform.color.delta_e import delta_e
 from imageform.errors import DegenerateConfigurationError, ImageformWarning, InvalidInputError
@@ -50,6 +59,10 @@ CORRECTION_METHODS: MappingProxyType[str, tuple[int, ...]] = MappingProxyType(
 )
 
 
+#: Number of root-polynomial terms per degree (Finlayson et al. 2015).
+_N_TERMS = {1: 3, 2: 6, 3: 13}
+
+
 class ChartWarning(ImageformWarning):
     """Chart patches were saturated or missing and are left out of the fit."""
 
@@ -63,19 +76,26 @@ def root_polynomial_terms(rgb: Any, degree: int) -> Any:
     one in exposure: :math:`t(kx) = k\\,t(x)`. Roots are sign-preserving
     (:math:`\\operatorname{sign}(p)|p|^{1/n}`) so small negative noise values stay finite.
 
+    Examples
+    --------
     >>> root_polynomial_terms(np.array([0.25, 1.0, 0.04]), 2).round(6).tolist()
     [0.25, 1.0, 0.04, 0.5, 0.2, 0.1]
     """
-    x = np.asarray(rgb)
+    deg = as_int(degree, "degree", minimum=1, maximum=3)
+    x = rgb if isinstance(rgb, np.ndarray) and rgb.dtype.kind == "f" else real_array(rgb, "rgb")
+    if x.ndim < 1 or x.shape[-1] != 3:
+        raise InvalidInputError(
+            f"expected rgb of shape (..., 3), got {format_shape(tuple(np.shape(x)))}"
+        )
     r, g, b = x[..., 0], x[..., 1], x[..., 2]
 
     def root(p: Any, n: float) -> Any:
         return np.sign(p) * np.abs(p) ** (1.0 / n)
 
     terms = [r, g, b]
-    if degree >= 2:
+    if deg >= 2:
         terms += [root(r * g, 2), root(g * b, 2), root(r * b, 2)]
-    if degree >= 3:
+    if deg >= 3:
         terms += [
             root(r * g * g, 3),
             root(g * b * b, 3),
@@ -117,6 +137,23 @@ class ColorCorrection:
     n_patches: int = 0
     transfer: str = "srgb"
 
+    def __post_init__(self) -> None:
+        """A known method and degree, a finite matrix of the matching shape."""
+        key = check_option(self.method, CORRECTION_METHODS, "correction method")
+        deg = as_int(self.degree, "degree")
+        if deg not in CORRECTION_METHODS[key]:
+            raise InvalidInputError(
+                f"expected degree in {CORRECTION_METHODS[key]} for {key}, got {deg}"
+            )
+        n_terms = _N_TERMS[deg]
+        matrix = real_array(self.matrix, "matrix", (3, n_terms))
+        object.__setattr__(self, "method", key)
+        object.__setattr__(self, "degree", deg)
+        object.__setattr__(self, "matrix", matrix)
+        object.__setattr__(self, "n_patches", count(self.n_patches, "n_patches"))
+        tf = check_option(self.transfer, _TRANSFERS, "correction transfer")
+        object.__setattr__(self, "transfer", tf)
+
     def apply(self, image: object, *, clip: bool = False) -> Any:
         """Correct an image from device A (NumPy, uint8/uint16, or Dask chunk-wise).
 
@@ -125,6 +162,8 @@ class ColorCorrection:
         (``image @ matrix.T`` for the 3×3 model). Values outside [0, 1] are kept unless
         ``clip=True``.
 
+        Examples
+        --------
         >>> c = ColorCorrection("linear", 1, np.eye(3) * 0.5)
         >>> c.apply(np.array([[[1.0, 1.0, 1.0]]])).round(4).tolist()
         [[[0.7354, 0.7354, 0.7354]]]
@@ -134,7 +173,8 @@ class ColorCorrection:
         """
         tf = check_option(self.transfer, _TRANSFERS, "correction transfer")
         rgb = image_in(image, range_check=tf == "srgb")
-        args = (np.asarray(self.matrix, dtype=np.float64), int(self.degree), bool(clip), tf)
+        matrix = np.asarray(self.matrix, dtype=np.float64)
+        args = (matrix, int(self.degree), as_bool(clip, "clip"), tf)
         if is_dask(rgb):
             return rgb.map_blocks(_apply_block, *args, dtype=rgb.dtype)
         return _apply_block(rgb, *args)
@@ -183,6 +223,28 @@ class ChartPatches:
     saturated: np.ndarray
     missing: np.ndarray
 
+    def __post_init__(self) -> None:
+        """``means`` and ``std`` of shape (N, 3), the flags booleans of shape (N,)."""
+        means = real_array(self.means, "means", (None, 3), finite=False)
+        n = means.shape[0]
+        std = real_array(self.std, "std", (n, 3), finite=False)
+        object.__setattr__(self, "means", means)
+        object.__setattr__(self, "std", std)
+        for name in ("saturated", "missing"):
+            flag = getattr(self, name)
+            arr = np.asarray(flag) if not isinstance(flag, str | bytes) else None
+            if arr is None or arr.dtype != np.bool_ or arr.shape != (n,):
+                raise InvalidInputError(
+                    f"expected {name} as booleans of shape ({n},), got {describe(flag)}"
+                )
+            object.__setattr__(self, name, arr)
+        bad = ~np.all(np.isfinite(means), axis=1) & ~self.missing
+        if bad.any():
+            raise InvalidInputError(
+                f"means has NaN or inf in patch(es) {np.flatnonzero(bad).tolist()[:8]} "
+                "not marked missing"
+            )
+
     @property
     def valid(self) -> np.ndarray:
         """Patches usable for a fit: neither saturated nor missing."""
@@ -220,6 +282,8 @@ def chart_patches(
     -------
     ChartPatches
 
+    Examples
+    --------
     >>> from imageform.analysis.synthetic import synthetic_chart_image
     >>> p = chart_patches(synthetic_chart_image())
     >>> (p.means[0] * 255).round(3).tolist(), bool(p.valid.all())
@@ -230,7 +294,14 @@ def chart_patches(
         raise InvalidInputError(
             f"expected image of shape (H, W, 3), got {format_shape(tuple(rgb.shape))}"
         )
-    rows, cols = int(rows), int(cols)
+    rows = as_int(rows, "rows", minimum=1)
+    cols = as_int(cols, "cols", minimum=1)
+    margin = as_real(margin, "margin")
+    max_std = as_real(max_std, "max_std", nonnegative=True)
+    saturation = as_real(saturation, "saturation", positive=True)
+    max_saturated_fraction = as_real(
+        max_saturated_fraction, "max_saturated_fraction", minimum=0.0, maximum=1.0
+    )
     hgt, wid = int(rgb.shape[0]), int(rgb.shape[1])
     if rows < 1 or cols < 1 or hgt < 2 * rows or wid < 2 * cols:
         raise InvalidInputError(
@@ -350,9 +421,13 @@ def fit_color_correction(
         Fewer usable patches than model terms, or a rank-deficient design (e.g. grey
         patches only).
 
+    Notes
+    -----
     Source: G. D. Finlayson, M. Mackiewicz, A. Hurlbert, "Color correction using
     root-polynomial regression", IEEE TIP 24(5), 2015, eq. (9)-(12).
 
+    Examples
+    --------
     >>> rng = np.random.default_rng(1)
     >>> a = rng.uniform(0.05, 0.95, (24, 3))
     >>> b = fit_color_correction(a, a).apply(a)
@@ -365,11 +440,13 @@ def fit_color_correction(
     """
     tf = check_option(transfer, _TRANSFERS, "patch encoding (transfer)")
     key = check_option(method, CORRECTION_METHODS, "correction method")
-    deg = 1 if key == "linear" else int(degree)
+    deg = 1 if key == "linear" else as_int(degree, "degree")
     if deg not in CORRECTION_METHODS[key]:
         raise InvalidInputError(
             f"expected degree in {CORRECTION_METHODS[key]} for {key}, got {degree!r}"
         )
+    if saturation is not None:
+        saturation = as_real(saturation, "saturation", positive=True)
     a, va, b, vb = _paired_patches(measured, reference)
     if saturation is None:
         sat = np.zeros(a.shape[0], dtype=bool)
@@ -433,11 +510,17 @@ def correction_report(
 
     Source: CIE 142:2001 / Sharma, Wu & Dalal 2005 (CIEDE2000).
 
+    Examples
+    --------
     >>> a = np.array([[0.5, 0.4, 0.3]] * 3); b = np.array([[0.5, 0.4, 0.3]] * 3)
     >>> r = correction_report(a, b, ColorCorrection("linear", 1, np.eye(3)))
     >>> r.delta_e_before.tolist(), r.delta_e_after.tolist()
     ([0.0, 0.0, 0.0], [0.0, 0.0, 0.0])
     """
+    if not isinstance(correction, ColorCorrection):
+        raise TypeError(
+            f"expected correction as a ColorCorrection, got {type(correction).__name__}"
+        )
     a, va, b, vb = _paired_patches(measured, reference)
     lab_b = np.asarray(convert(b, "srgb", "lab"))
     before = np.asarray(delta_e(lab_b, np.asarray(convert(a, "srgb", "lab"))))

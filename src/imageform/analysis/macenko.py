@@ -23,8 +23,17 @@ from typing import Any
 
 import numpy as np
 
-from imageform._validate import as_float, as_int, as_matrix, check_option, describe, format_shape
+from imageform._validate import (
+    as_float,
+    as_int,
+    as_matrix,
+    as_real,
+    check_option,
+    describe,
+    format_shape,
+)
 from imageform.analysis._arrays import exact_quantile, image_in, is_dask, read_json, write_json
+from imageform.analysis._guard import count, real_array, unit_rows
 from imageform.analysis._sparse_nmf import sample_rows, sparse_nmf
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
 
@@ -103,9 +112,13 @@ def background_intensity(
     ndarray, shape (3,)
         :math:`I_0` as encoded intensity in (0, 1].
 
+    Notes
+    -----
     Source: Macenko et al. 2009, sec. 2 (I₀, "the intensity of the incident light"; the
     reference code fixes it at 240 of 255).
 
+    Examples
+    --------
     >>> img = np.full((10, 10, 3), 0.3); img[:2] = (0.95, 0.94, 0.96)
     >>> background_intensity(img).round(2).tolist()
     [0.95, 0.94, 0.96]
@@ -169,15 +182,20 @@ def optical_density(
     -------
     array, shape (..., 3)
 
+    Notes
+    -----
     Source: Ruifrok & Johnston 2001, eq. (1); Macenko et al. 2009, sec. 2.
 
+    Examples
+    --------
     >>> optical_density(np.array([0.1, 0.5, 0.01]), base="10").round(6).tolist()
     [1.0, 0.30103, 2.0]
     >>> optical_density(np.array([0.5, 1.0, 0.25])).round(6).tolist()
     [0.693147, 0.0, 1.386294]
     """
     rgb = image_in(image)
-    if not 0.0 < float(min_intensity) <= 1.0:
+    min_intensity = as_real(min_intensity, "min_intensity")
+    if not 0.0 < min_intensity <= 1.0:
         raise InvalidInputError(f"expected min_intensity in (0, 1], got {min_intensity!r}")
     key = _base(base)
     i0v = _resolve_i0(rgb, i0)
@@ -197,11 +215,20 @@ def optical_density(
 def stain_angle(u: object, v: object) -> float:
     """Angle in degrees between two stain (OD) vectors: :math:`\\arccos(\\hat u \\cdot \\hat v)`.
 
+    Examples
+    --------
     >>> round(stain_angle([1, 0, 0], [1, 1, 0]), 6)
     45.0
     """
-    a, b = np.asarray(u, float), np.asarray(v, float)
-    c = a @ b / (np.linalg.norm(a) * np.linalg.norm(b))
+    a = real_array(u, "u", (3,))
+    b = real_array(v, "v", (3,))
+    na, nb = np.linalg.norm(a), np.linalg.norm(b)
+    for name, n in (("u", na), ("v", nb)):
+        if not n > 0.0:
+            raise InvalidInputError(f"expected {name} as a non-zero stain vector, got length 0")
+        if not np.isfinite(n):
+            raise InvalidInputError(f"expected {name} with a finite length, got {n:g}")
+    c = (a / na) @ (b / nb)
     return float(np.degrees(np.arccos(np.clip(c, -1.0, 1.0))))
 
 
@@ -220,6 +247,15 @@ class MacenkoStains:
     base: str = "e"
     method: str = "macenko"
     n_total: int = 0
+
+    def __post_init__(self) -> None:
+        """Two finite stain vectors of non-zero length, two finite concentrations."""
+        s = real_array(self.stain_matrix, "stain_matrix", (2, 3))
+        unit_rows(s, "stain_matrix")
+        m = real_array(self.max_concentrations, "max_concentrations", (2,))
+        object.__setattr__(self, "stain_matrix", s)
+        object.__setattr__(self, "max_concentrations", m)
+        object.__setattr__(self, "n_pixels", count(self.n_pixels, "n_pixels"))
 
     def to_json(self, path: str | Path) -> None:
         """Save as JSON (``kind: "macenko_stains"``)."""
@@ -285,8 +321,12 @@ def stain_concentrations(
     -------
     array, shape (..., k)
 
+    Notes
+    -----
     Source: Ruifrok & Johnston 2001, eq. (4)-(6); Macenko et al. 2009 (least squares).
 
+    Examples
+    --------
     >>> S = np.array([[0.6, 0.8, 0.0], [0.0, 0.6, 0.8]])
     >>> img = np.exp(-(np.array([0.5, 0.25]) @ S))
     >>> stain_concentrations(img, S).round(6).tolist()
@@ -387,7 +427,7 @@ def _check_params(beta: float, alpha: float, max_percentile: float) -> None:
         ("alpha", alpha, 0.0, 50.0),
         ("max_percentile", max_percentile, 0.0, 100.0),
     ):
-        if not lo <= float(val) <= hi:  # also rejects NaN
+        if not lo <= as_real(val, name) <= hi:
             raise InvalidInputError(f"expected {name} in [{lo:g}, {hi:g}], got {val!r}")
 
 
@@ -458,10 +498,14 @@ def macenko_stains(
     -------
     MacenkoStains
 
+    Notes
+    -----
     Source: M. Macenko et al., "A method for normalizing histology slides for quantitative
     analysis", ISBI 2009, pp. 1107-1110, sec. 2 and Fig. 1; reference code
     github.com/mitkovetta/staining-normalization (Io = 240, beta = 0.15, alpha = 1).
 
+    Examples
+    --------
     >>> from imageform.analysis.synthetic import synthetic_stain_image
     >>> img, S, _ = synthetic_stain_image(rng=0)
     >>> est = macenko_stains(img, transparent="norm", i0=1.0)  # the generator's I0
@@ -480,12 +524,13 @@ def macenko_stains(
             base=base,
         )
     _check_params(beta, alpha, max_percentile)
+    min_pixels = as_int(min_pixels, "min_pixels", minimum=0)
     rule = check_option(transparent, TRANSPARENT_RULES, "transparent-pixel rule")
     key = _base(base)
     rgb = image_in(image)
     i0v = _resolve_i0(rgb, i0)
     od = optical_density(rgb, min_intensity=min_intensity, i0=i0v, base=key)
-    stains, n = _fit(od, float(beta), float(alpha), max(int(min_pixels), 2), rule)
+    stains, n = _fit(od, float(beta), float(alpha), max(min_pixels, 2), rule)
     maxc = _max_conc(od, stains, float(max_percentile))
     n_total = int(np.prod(rgb.shape[:-1]))
     i0t = (float(i0v[0]), float(i0v[1]), float(i0v[2]))
@@ -495,6 +540,8 @@ def macenko_stains(
 def _target(target: object, **kw: Any) -> MacenkoStains:
     if isinstance(target, MacenkoStains):
         return target
+    if target is None:
+        raise TypeError("expected target as an image, MacenkoStains or a JSON path, got None")
     if isinstance(target, str | Path):
         return MacenkoStains.from_json(target)
     return macenko_stains(target, **kw)
@@ -560,8 +607,12 @@ def macenko_normalize(
         Transmitted intensity in (0, I₀,t] for non-negative concentrations (negative
         least-squares concentrations can give values above it; nothing is clipped).
 
+    Notes
+    -----
     Source: Macenko et al. 2009, sec. 2 (normalisation step).
 
+    Examples
+    --------
     >>> from imageform.analysis.synthetic import synthetic_stain_image
     >>> a, _, _ = synthetic_stain_image(max_concentration=(0.6, 1.0), rng=0)
     >>> b, _, _ = synthetic_stain_image(rng=1)
@@ -581,16 +632,25 @@ def macenko_normalize(
         "base": base,
         "method": method,
     }
+    if source is not None and not isinstance(source, MacenkoStains):
+        raise TypeError(f"expected source as MacenkoStains or None, got {type(source).__name__}")
     tgt = _target(target, **kw)
     rgb = image_in(image)
     src = macenko_stains(rgb, **kw) if source is None else source
     od = optical_density(rgb, min_intensity=min_intensity, i0=np.asarray(src.i0), base="e")
     src_max, tgt_max = _ln_units(src), _ln_units(tgt)
-    if np.any(src_max <= 0):
-        raise DegenerateConfigurationError(
-            f"Macenko: source max concentrations {src.max_concentrations} are not positive"
-        )
+    for name, mx in (("source", src_max), ("target", tgt_max)):
+        if np.any(np.asarray(mx) <= 0):
+            raise DegenerateConfigurationError(
+                f"Macenko: {name} max concentrations "
+                f"{np.round(np.asarray(mx), 4).tolist()} are not positive"
+            )
     scale = tgt_max / src_max
+    sv = np.linalg.svd(np.asarray(src.stain_matrix, dtype=np.float64), compute_uv=False)
+    if not sv[-1] > 1e-6 * sv[0]:
+        raise DegenerateConfigurationError(
+            "Macenko: source stain_matrix is singular (its two stain vectors are parallel)"
+        )
     pinv_src = np.linalg.pinv(np.asarray(src.stain_matrix))
     args = (
         pinv_src,
@@ -657,10 +717,14 @@ def vahadane_stains(
     MacenkoStains
         With ``method = "vahadane"``.
 
+    Notes
+    -----
     Source: A. Vahadane et al., "Structure-preserving color normalization and sparse stain
     separation for histological images", IEEE Trans. Med. Imaging 35(8), 2016,
     pp. 1962-1971, eq. (3)-(4) (λ = 0.1).
 
+    Examples
+    --------
     >>> from imageform.analysis.synthetic import synthetic_stain_image
     >>> img, S, _ = synthetic_stain_image(rng=0)
     >>> est = vahadane_stains(img)

@@ -14,8 +14,9 @@ from typing import Any
 
 import numpy as np
 
-from imageform._validate import format_shape
+from imageform._validate import describe, format_shape
 from imageform.analysis._arrays import image_in, is_dask, read_json, write_json
+from imageform.analysis._guard import count, real_triple
 from imageform.color.convert import convert
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
 
@@ -36,6 +37,16 @@ class ReinhardStats:
     std: tuple[float, float, float]
     n_pixels: int
     space: str = REINHARD_SPACE
+
+    def __post_init__(self) -> None:
+        """Three finite means, three finite stds >= 0, a pixel count >= 0, the one space."""
+        object.__setattr__(self, "mean", real_triple(self.mean, "mean"))
+        object.__setattr__(self, "std", real_triple(self.std, "std", nonnegative=True))
+        object.__setattr__(self, "n_pixels", count(self.n_pixels, "n_pixels"))
+        if self.space != REINHARD_SPACE:
+            raise InvalidInputError(
+                f"expected space {REINHARD_SPACE!r}, got {describe(self.space)}"
+            )
 
     def to_json(self, path: str | Path) -> None:
         """Save as JSON (``kind: "reinhard_stats"``)."""
@@ -94,9 +105,13 @@ def reinhard_stats(image: object, mask: object = None) -> ReinhardStats:
     -------
     ReinhardStats
 
+    Notes
+    -----
     Source: E. Reinhard, M. Ashikhmin, B. Gooch, P. Shirley, "Color transfer between
     images", IEEE CG&A 21(5), 2001, sec. 3 (statistics in lαβ; here CIELAB D65).
 
+    Examples
+    --------
     >>> s = reinhard_stats(np.array([[[1.0, 1.0, 1.0], [0.0, 0.0, 0.0]]]))
     >>> [round(v, 6) for v in s.mean], [round(v, 6) for v in s.std]
     ([50.0, 0.0, 0.0], [50.0, 0.0, 0.0])
@@ -201,8 +216,12 @@ def reinhard_normalize(
     DegenerateConfigurationError
         A channel of the source has zero standard deviation (a flat image).
 
+    Notes
+    -----
     Source: Reinhard et al. 2001, eq. (10)-(11) (there in lαβ; CIELAB here, as the lecture).
 
+    Examples
+    --------
     >>> rng = np.random.default_rng(0)
     >>> a, b = rng.uniform(0.2, 0.6, (8, 8, 3)), rng.uniform(0.4, 0.9, (8, 8, 3))
     >>> out = reinhard_normalize(a, b)
@@ -211,6 +230,10 @@ def reinhard_normalize(
     """
     rgb = image_in(image)
     tgt = _target_stats(target)
+    if source_stats is not None and not isinstance(source_stats, ReinhardStats):
+        raise TypeError(
+            f"expected source_stats as ReinhardStats or None, got {type(source_stats).__name__}"
+        )
     src = reinhard_stats(rgb, mask) if source_stats is None else source_stats
     sd_s = np.asarray(src.std)
     if np.any(sd_s == 0):

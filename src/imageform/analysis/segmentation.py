@@ -17,7 +17,7 @@ import numpy as np
 
 from imageform._backend import use_numba
 from imageform._colormath import rgb_to_hsv
-from imageform._validate import format_shape
+from imageform._validate import as_real, describe, format_shape
 from imageform.analysis._arrays import image_in, is_dask
 from imageform.errors import DegenerateConfigurationError, ImageformWarning, InvalidInputError
 
@@ -72,6 +72,8 @@ class HsvSegmentation:
 def disc(radius: int) -> np.ndarray:
     """Boolean disc structuring element of ``radius`` pixels: ``x² + y² <= r²``.
 
+    Examples
+    --------
     >>> disc(1).astype(int).tolist()
     [[0, 1, 0], [1, 1, 1], [0, 1, 0]]
     """
@@ -82,13 +84,16 @@ def disc(radius: int) -> np.ndarray:
 
 def _pair(value: object, name: str, lo: float, hi: float, unit: str) -> tuple[float, float]:
     try:
-        a, b = (float(v) for v in value)  # type: ignore[attr-defined]
-    except (TypeError, ValueError) as exc:
-        raise InvalidInputError(f"expected {name} as a (low, high) pair, got {value!r}") from exc
+        n = len(value)  # type: ignore[arg-type]
+    except TypeError:
+        n = -1
+    if isinstance(value, str | bytes) or n != 2:
+        raise InvalidInputError(f"expected {name} as a (low, high) pair, got {describe(value)}")
+    a, b = (as_real(v, name) for v in value)  # type: ignore[attr-defined]
     for v in (a, b):
         if not (math.isfinite(v) and lo <= v <= hi):
             raise InvalidInputError(
-                f"expected {name} bounds in [{lo:g}, {hi:g}] ({unit}), got {value!r}"
+                f"expected {name} bounds in [{lo:g}, {hi:g}] ({unit}), got {describe(value)}"
             )
     return a, b
 
@@ -193,6 +198,8 @@ def segment_hsv(
     Source: the lecture's endoscopy case study (OpenCV thresholds); morphology as in
     Gonzalez & Woods, *Digital Image Processing*, 4th ed., sec. 9.3 (opening/closing).
 
+    Examples
+    --------
     >>> img = np.zeros((40, 40, 3)); img[10:30, 10:30] = (0.8, 0.3, 0.3)
     >>> seg = segment_hsv(img, (0, 20), (30, 255), (80, 255), opencv_ranges=True)
     >>> int(seg.mask.sum()), round(seg.fraction, 4)
@@ -293,6 +300,8 @@ def overlay_mask(
     array, shape (H, W, 3)
         Floats in [0, 1] (float32 for integer input); Dask when the image was.
 
+    Examples
+    --------
     >>> img = np.full((2, 2, 3), 0.5); m = np.array([[True, False], [False, False]])
     >>> overlay_mask(img, m, (1.0, 0.0, 0.0), 0.5)[0, 0].tolist()
     [0.75, 0.25, 0.25]
@@ -320,6 +329,8 @@ def mask_iou(a: object, b: object) -> float:
 
     Source: Jaccard index (P. Jaccard, 1901); the usual segmentation score.
 
+    Examples
+    --------
     >>> mask_iou(np.array([[True, True], [False, False]]), np.array([[True, False], [True, False]]))
     0.3333333333333333
     """

@@ -17,6 +17,7 @@ import numpy as np
 from imageform import _deprecate
 from imageform._colormath import hsv_to_rgb, srgb_decode, srgb_encode
 from imageform._random import RNGLike, as_rng
+from imageform._validate import as_float, as_int, as_real, as_size, check_memory
 from imageform.errors import InvalidInputError
 
 __all__ = [
@@ -153,11 +154,13 @@ def synthetic_endoscopy_image(
         ``image`` : ndarray (H, W, 3) float64, encoded sRGB in [0, 1]; ``mask`` : ndarray of
         bool (H, W), the true tissue mask.
 
+    Examples
+    --------
     >>> img, m = synthetic_endoscopy_image(rng=0)
     >>> img.shape, round(float(m.mean()), 3)
     ((256, 256, 3), 0.887)
     """
-    hgt, wid = (int(v) for v in shape)
+    hgt, wid = _shape(shape)
     if hgt < 32 or wid < 32:
         raise InvalidInputError(f"expected shape of at least (32, 32), got {shape}")
     gen = as_rng(rng)
@@ -234,9 +237,13 @@ def synthetic_he_tile(
         is the 8-bit scan); ``stain_matrix`` : (2, 3) unit ln-OD vectors;
         ``concentrations`` : (H, W, 2) in ln-OD units, zero on glass.
 
+    Notes
+    -----
     Source: Beer-Lambert with the reference stain vectors and concentrations of Macenko's
     reference code (:data:`MACENKO_REFERENCE_HEMATOXYLIN`, ``..._EOSIN``).
 
+    Examples
+    --------
     >>> tile = synthetic_he_tile((64, 64), rng=0)
     >>> bool((tile.concentrations.sum(axis=-1) == 0).mean() > 0.2), tile.image.dtype.name
     (True, 'float64')
@@ -277,6 +284,13 @@ def synthetic_he_tile(
     return StainMixture(img, s, c)
 
 
+def _shape(shape: object) -> tuple[int, int]:
+    """``(height, width)``: two integers in [1, 16384], within the memory limit."""
+    hgt, wid = as_size(shape, "shape", minimum=1, maximum=16384)
+    check_memory(hgt * wid * 3 * 8 * 8.0, "shape", f"a {hgt}x{wid} synthetic image")
+    return hgt, wid
+
+
 @_seed_first
 def synthetic_stain_image(
     shape: tuple[int, int] = (128, 128),
@@ -298,16 +312,28 @@ def synthetic_stain_image(
         the unit-length optical-density vectors used (rows); ``concentrations`` : ndarray
         (H, W, 2).
 
+    Notes
+    -----
     Source: Ruifrok & Johnston 2001 (stain vectors, Beer-Lambert model).
 
+    Examples
+    --------
     >>> img, S, C = synthetic_stain_image(rng=0)
     >>> S.round(3).tolist()[0]
     [0.651, 0.701, 0.29]
     """
     gen = as_rng(rng)
-    s = np.asarray(stains, dtype=np.float64)
+    s = np.asarray(as_float(stains, "stains"), dtype=np.float64)
+    if s.ndim != 2 or s.shape[1] != 3 or s.shape[0] not in (2, 3):
+        raise InvalidInputError(f"expected stains of shape (2, 3) or (3, 3), got {s.shape}")
+    mc = np.asarray(as_float(max_concentration, "max_concentration"), dtype=np.float64)
+    if mc.shape != (s.shape[0],) or np.any(mc < 0):
+        raise InvalidInputError(
+            f"expected max_concentration as {s.shape[0]} values >= 0, got shape {mc.shape}"
+        )
     s = s / np.linalg.norm(s, axis=1, keepdims=True)
-    hgt, wid = shape
+    hgt, wid = _shape(shape)
+    shape = (hgt, wid)
     kind = gen.choice(4, size=(hgt, wid), p=[1 / 3, 1 / 3, 1 / 4, 1 - 1 / 3 - 1 / 3 - 1 / 4])
     c = gen.uniform(0.15, 1.0, (hgt, wid, 2)) * np.asarray(max_concentration)
     c[kind == 0, 1] = 0.0
@@ -338,10 +364,22 @@ def synthetic_chart_image(
     -------
     ndarray, shape (rows*(patch+gap), cols*(patch+gap), 3), float64
 
+    Examples
+    --------
     >>> synthetic_chart_image().shape
     (120, 180, 3)
     """
-    vals = np.asarray(COLORCHECKER_SRGB8, float) / 255 if srgb is None else np.asarray(srgb, float)
+    rows = as_int(rows, "rows", minimum=1, maximum=1000)
+    cols = as_int(cols, "cols", minimum=1, maximum=1000)
+    patch = as_int(patch, "patch", minimum=1, maximum=10_000)
+    gap = as_int(gap, "gap", minimum=0, maximum=10_000)
+    background = as_real(background, "background", minimum=0.0, maximum=1.0)
+    check_memory(rows * (patch + gap) * cols * (patch + gap) * 24.0, "patch", "the chart image")
+    vals = (
+        np.asarray(COLORCHECKER_SRGB8, float) / 255
+        if srgb is None
+        else np.asarray(as_float(srgb, "srgb"), dtype=np.float64)
+    )
     if vals.shape != (rows * cols, 3):
         raise InvalidInputError(f"expected srgb of shape ({rows * cols}, 3), got {vals.shape}")
     cell = patch + gap
@@ -371,12 +409,15 @@ def synthetic_shading_scene(
         ``image`` : ndarray (H, W, 3) float64, encoded sRGB; ``mask`` : ndarray of bool
         (H, W), the red objects.
 
+    Examples
+    --------
     >>> img, m = synthetic_shading_scene(rng=0)
     >>> img.shape, bool(m.any())
     ((128, 192, 3), True)
     """
     gen = as_rng(rng)
-    hgt, wid = shape
+    hgt, wid = _shape(shape)
+    shape = (hgt, wid)
     y, x = np.mgrid[0:hgt, 0:wid].astype(np.float64)
     truth = np.zeros((hgt, wid), dtype=bool)
     for k in range(8):
@@ -388,6 +429,9 @@ def synthetic_shading_scene(
     bg = np.array([0.62, 0.66, 0.3])
     enc = np.where(truth[..., None], red, bg) + 0.02 * _smooth_noise(gen, shape, 3.0)[..., None]
     lin = srgb_decode(np, np.clip(enc, 0, 1))
-    ramp = np.linspace(shading[0], shading[1], wid)[None, :, None]
+    if isinstance(shading, str | bytes) or len(shading) != 2:
+        raise InvalidInputError(f"expected shading as 2 numbers, got {shading!r:.60}")
+    lo, hi = (as_real(v, "shading", nonnegative=True) for v in shading)
+    ramp = np.linspace(lo, hi, wid)[None, :, None]
     out = srgb_encode(np, lin * ramp) + gen.normal(0, 0.004, lin.shape)
     return LabeledImage(np.clip(out, 0.0, 1.0), truth)

@@ -16,6 +16,7 @@ measures it.
 
 from __future__ import annotations
 
+import glob
 import os
 import shutil
 import time
@@ -28,6 +29,7 @@ import numpy as np
 
 from imageform._validate import check_option
 from imageform.errors import InvalidInputError
+from imageform.workflows.color import DISPLAYABLE_SPACES
 
 __all__ = ["CHUNKED_COMMANDS", "ChunkedResult", "open_lazy", "process_chunked"]
 
@@ -64,22 +66,86 @@ def _kind(path: Path) -> str:
     raise InvalidInputError(f"expected a tiled .tif/.tiff or a .zarr array, got {path}")
 
 
+class _ContiguousRows:
+    """The pixels of an uncompressed, contiguous (strip or single-strip) TIFF page, read
+    block by block with ``pread`` (one read per row of the block): a block costs its own
+    samples, never the whole strip (tifffile's Zarr store has one chunk per strip, and an
+    uncompressed TIFF is often one strip: the whole image)."""
+
+    def __init__(self, path: Path, offset: int, shape: tuple[int, ...], dtype: Any) -> None:
+        self.path, self.offset = path, offset
+        self.shape, self.dtype, self.ndim = shape, np.dtype(dtype), len(shape)
+
+    def __getitem__(self, key: Any) -> np.ndarray:
+        if not isinstance(key, tuple):
+            key = (key,)
+        key = key + (slice(None),) * (self.ndim - len(key))
+        if not all(isinstance(k, slice) for k in key[:2]):
+            raise TypeError("expected slices of rows and columns")
+        r0, r1, rstep = key[0].indices(self.shape[0])
+        c0, c1, cstep = key[1].indices(self.shape[1])
+        r1, c1 = max(r1, r0), max(c1, c0)
+        pixel = int(np.prod(self.shape[2:])) * self.dtype.itemsize
+        row_bytes, width = self.shape[1] * pixel, (c1 - c0) * pixel
+        out = np.empty((r1 - r0, c1 - c0, *self.shape[2:]), dtype=self.dtype)
+        flat = out.reshape(r1 - r0, -1).view(np.uint8)
+        with open(self.path, "rb") as fh:  # one read per row: only this block's columns
+            for i in range(r1 - r0):
+                buf = os.pread(fh.fileno(), width, self.offset + (r0 + i) * row_bytes + c0 * pixel)
+                if len(buf) != width:
+                    raise InvalidInputError(f"{self.path} is truncated (row {r0 + i} missing)")
+                flat[i] = np.frombuffer(buf, dtype=np.uint8)
+        return out[(slice(None, None, rstep), slice(None, None, cstep), *key[2:])]
+
+
+def _tiff_lazy(p: Path, chunk: int, da: Any, zarr: Any) -> Any:
+    import tifffile
+
+    with tifffile.TiffFile(p) as tf:
+        page = tf.pages[0]
+        strips = (
+            isinstance(page, tifffile.TiffPage)
+            and not page.is_tiled
+            and page.compression == 1
+            and page.planarconfig == 1
+            and page.is_contiguous
+            and len(tf.series[0].levels) == 1
+        )
+        if strips:
+            src = _ContiguousRows(p, int(page.dataoffsets[0]), tuple(page.shape), page.dtype)
+    if strips:
+        if len(src.shape) != 3 or src.shape[-1] != 3:
+            raise InvalidInputError(f"{p}: expected an RGB image (H, W, 3), got {src.shape}")
+        st = p.stat()
+        return da.from_array(
+            src,
+            chunks=(chunk, chunk, 3),
+            name=f"imageform-strips-{p}-{st.st_size}-{st.st_mtime_ns}",
+            asarray=False,
+            fancy=False,
+        )
+    return zarr.open(tifffile.imread(p, aszarr=True), mode="r")
+
+
 def open_lazy(path: str | Path, chunk: int = 1024) -> Any:
-    """Open a tiled TIFF (tifffile's Zarr store) or a Zarr array as a dask array.
+    """Open a TIFF or a Zarr array as a dask array of ``chunk x chunk`` blocks.
 
-    Nothing is read until the array is computed. Blocks are ``chunk x chunk`` pixels with all
-    channels (choose a multiple of the TIFF's tile size).
+    Nothing is read until the array is computed. A tiled (or compressed strip) TIFF is read
+    through tifffile's Zarr store, tile by tile (strip by strip: a compressed strip is
+    decoded whole); an uncompressed strip TIFF (one strip or many) row band by row band from
+    the file. Blocks have all channels (choose a multiple of the TIFF's tile size).
     """
-    import dask.array as da
-    import zarr
+    from imageform._optional import require
 
+    da = require("dask.array", what="imageform chunked")
+    zarr = require("zarr", what="imageform chunked")
     p = Path(path)
     if not p.exists():
         raise InvalidInputError(f"input {p} does not exist")
     if _kind(p) == "tiff":
-        import tifffile
-
-        z: Any = zarr.open(tifffile.imread(p, aszarr=True), mode="r")
+        z: Any = _tiff_lazy(p, chunk, da, zarr)
+        if not isinstance(z, (zarr.Array, zarr.Group)):
+            return z  # an uncompressed strip TIFF, already a dask array
     else:
         z = zarr.open(str(p), mode="r")
     if isinstance(z, zarr.Group):  # a pyramid: level 0 is the full resolution
@@ -113,14 +179,17 @@ def _linear_block(block: np.ndarray, p: float) -> np.ndarray:
 
 def _wb_gains(x: Any, options: dict[str, Any]) -> np.ndarray:
     """White-balance gains in linear light; the illuminant is a reduction over all blocks."""
-    from imageform.color.white_balance import _method, white_balance
+    from imageform.color.white_balance import white_balance
 
-    method, _ = _method(options.get("method", "gray_world"), None)
-    check_option(method, _WB_METHODS, "white-balance method for chunked processing")
+    method = check_option(
+        options.get("method", "gray_world"),
+        _WB_METHODS,
+        "white-balance method for chunked processing",
+    )
     normalize = check_option(options.get("normalize", "mean"), ("mean", "green"), "normalize")
     if method == "manual":  # the gains do not depend on the image
         probe = np.full((1, 1, 3), 0.5, dtype=np.float32)
-        kw = {k: options[k] for k in ("illuminant", "cct") if k in options}
+        kw = {k: options[k] for k in ("illuminant", "cct") if options.get(k) is not None}
         return np.asarray(white_balance(probe, "manual", normalize=normalize, **kw).gains)
     p = float(options.get("p", 6.0)) if method == "shades_of_gray" else 1.0
     if p < 1.0:
@@ -142,6 +211,61 @@ def _quantize(block: np.ndarray, dtype: str) -> np.ndarray:
 
 def _temp(path: Path) -> Path:
     return path.with_name(f".{path.name}.{uuid.uuid4().hex[:12]}.tmp{path.suffix}")
+
+
+def _remove_stale(path: Path) -> None:
+    """Remove the temporaries of ``path`` that a killed run left behind."""
+    for stale in path.parent.glob(f".{glob.escape(path.name)}.*.tmp{glob.escape(path.suffix)}"):
+        shutil.rmtree(stale, ignore_errors=True) if stale.is_dir() else stale.unlink(
+            missing_ok=True
+        )
+
+
+#: Options of each command that chunked processing honours (the others must keep their
+#: default).
+_HONOURED = {
+    "convert": {"src": "from", "dst": "to", "white": "white"},
+    "white_balance": {
+        "method": "method",
+        "p": "p",
+        "normalize": "normalize",
+        "illuminant": "illuminant",
+        "cct": "cct",
+    },
+}
+
+
+def _options(cmd: str, options: Any) -> dict[str, Any]:
+    """The options of ``cmd`` with the single command's defaults (its options dataclass, or
+    a mapping by field name or flag), as the names the block functions use."""
+    import dataclasses
+
+    from imageform.batch.runner import batch_options
+
+    given = options
+    if isinstance(options, dict) and cmd == "white_balance" and "method" in options:
+        # the methods chunked processing can stream, checked before the dataclass's own list
+        method = str(options["method"]).lower().replace("-", "_")
+        check_option(method, _WB_METHODS, "white-balance method for chunked processing")
+    opts = batch_options(cmd, given)
+    out: dict[str, Any] = {}
+    honoured = _HONOURED[cmd]
+    for f in dataclasses.fields(opts):
+        value = getattr(opts, f.name)
+        if f.name in honoured:
+            out[honoured[f.name]] = value
+        elif f.name in ("alpha", "max_pixels", "bits", "out_of_range", "clip"):
+            continue  # reading and writing are chunked's own (--dtype)
+        elif value != f.default:
+            from imageform.workflows import flag_of
+
+            raise InvalidInputError(
+                f"imageform chunked {cmd.replace('_', '-')} does not take {flag_of(f)}; it "
+                f"takes {', '.join('--' + v for v in honoured.values())}"
+            )
+    if cmd == "white_balance":
+        check_option(out["method"], _WB_METHODS, "white-balance method for chunked processing")
+    return out
 
 
 def process_chunked(
@@ -203,15 +327,12 @@ def process_chunked(
     >>> import zarr; round(float(zarr.open(str(r.output), mode="r")[0, 0, 0]), 6)
     0.215861
     """
-    import dask
-
-    from imageform.cli.color_cmds import _DISPLAYABLE
-    from imageform.color.convert import _space
+    from imageform._optional import require
 
     t0 = time.perf_counter()
     src_p, dst_p = Path(src), Path(dst)
     cmd = check_option(command, CHUNKED_COMMANDS, "chunked command")
-    opts = dict(options or {})
+    opts = _options(cmd, options)
     out_kind = _kind(dst_p)
     if chunk <= 0 or tile <= 0 or chunk % tile:
         raise InvalidInputError(f"expected chunk a positive multiple of tile, got {chunk}, {tile}")
@@ -219,17 +340,19 @@ def process_chunked(
         raise InvalidInputError(f"output {dst_p} is the input; choose another path")
     if dst_p.exists() and not force:
         raise InvalidInputError(f"output {dst_p} exists; pass --force to overwrite it")
+    if not dst_p.parent.is_dir():
+        raise InvalidInputError(f"output folder {dst_p.parent} does not exist")
+    dask = require("dask", what="imageform chunked")
+    _remove_stale(dst_p)  # left by a run killed mid-write (SIGKILL cannot be caught)
     x = open_lazy(src_p, chunk)
     in_int = x.dtype in (np.uint8, np.uint16)
     gains: np.ndarray | None = None
     with dask.config.set(scheduler="threads", num_workers=num_workers or os.cpu_count()):
         if cmd == "convert":
-            if "to" not in opts:
-                raise InvalidInputError("chunked convert needs the option to (a colour space)")
-            s, d = _space(opts.get("from", "srgb"), "--from"), _space(opts["to"], "--to")
-            params = {k: opts[k] for k in ("white",) if k in opts}
+            s, d = opts["from"], opts["to"]
+            params = {k: opts[k] for k in ("white",) if opts.get(k) is not None}
             op: tuple[Any, ...] = (_convert_block, s, d, params)
-            displayable = d in _DISPLAYABLE
+            displayable = d in DISPLAYABLE_SPACES
         else:
             gains = _wb_gains(x, opts)
             op = (_balance_block, gains)

@@ -1,22 +1,33 @@
-"""Run one command over many files on a ``dask.distributed`` cluster.
+"""Run one workflow over many files on a ``dask.distributed`` cluster.
 
+- **One registry**: the commands are the workflows of :mod:`imageform.workflows` marked
+  ``batch`` (one image in, one image out); their options are the same dataclasses, with the
+  same defaults, as the single command's.
 - **Plan**: the files matching a glob (``**`` recursive) map to ``OUT_DIR`` keeping their folder
   structure relative to the glob's fixed prefix; an output may take another suffix.
-- **Resumable**: an output that exists is finished (outputs appear only by an atomic rename),
-  so a re-run skips it; ``force=True`` redoes everything.
+- **Resumable, keyed on what produced an output**: a manifest in the output folder
+  (:data:`MANIFEST`) records for each output the command, its options and the input's size
+  and modification time (and those of option files such as ``--target``). A re-run skips an
+  output only when all of these are the same: a re-run with another ``--method`` recomputes.
+  ``force=True`` redoes everything.
 - **Atomic**: each job writes ``.NAME.<random>.tmpSUFFIX`` in the output's folder, fsyncs it
   and ``os.replace``-s it onto the final name; a worker killed mid-write leaves only a
   temporary file, never taken as finished and removed at the start and end of a run.
 - **Inputs never modified**: a plan in which an output is an input, or would match the input
-  glob (a re-run would read outputs back as inputs), is refused.
+  glob (a re-run would read outputs back as inputs), is refused, also when the output folder
+  reaches the input tree through a symbolic link (real paths are compared).
 - **Failures** are collected with their reason (``ExceptionType: message``); the other jobs
-  still run. A job on a worker that dies is re-run elsewhere by the scheduler.
+  still run. A job on a worker that dies is re-run elsewhere by the scheduler; when no worker
+  is left for ``worker_timeout_s`` the run stops with a message (never hangs).
+- **Ctrl-C** cancels the jobs, keeps the manifest of the finished ones and raises
+  :class:`BatchInterrupted` (done, remaining): the same command resumes.
 """
 
 from __future__ import annotations
 
 import contextlib
 import glob
+import json
 import os
 import re
 import time
@@ -26,13 +37,18 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from imageform.batch.commands import get_command
-from imageform.errors import InvalidInputError
+from imageform.errors import ImageformError, InvalidInputError, UnknownOptionError
+from imageform.workflows import Options, Workflow, flag_of, get_workflow
 
 __all__ = [
+    "MANIFEST",
+    "BatchInterrupted",
     "BatchReport",
     "Job",
     "JobResult",
+    "NoWorkersError",
+    "batch_options",
+    "batch_workflow",
     "plan_jobs",
     "print_summary",
     "run_batch",
@@ -40,6 +56,29 @@ __all__ = [
 ]
 
 _WILDCARDS = re.compile(r"[*?\[]")
+#: The manifest of a batch output folder: what produced each output.
+MANIFEST = ".imageform-batch.json"
+_MANIFEST_VERSION = 1
+
+
+class BatchInterrupted(KeyboardInterrupt):
+    """Ctrl-C during a batch run: ``done`` outputs are finished (and recorded in the
+    manifest), ``remaining`` are not; running the same command again resumes."""
+
+    def __init__(self, done: int, remaining: int) -> None:
+        super().__init__(done, remaining)
+        self.done = done
+        self.remaining = remaining
+
+    def __str__(self) -> str:
+        return (
+            f"interrupted: {self.done} done, {self.remaining} remaining; run the same command "
+            "again to resume"
+        )
+
+
+class NoWorkersError(ImageformError):
+    """Every worker of the cluster is gone and none came back."""
 
 
 @dataclass(frozen=True)
@@ -102,6 +141,85 @@ class BatchReport:
                 for r in self.results
             ],
         }
+
+
+# ---------------------------------------------------------------- the commands and options
+
+
+def batch_workflow(command: str | Workflow) -> Workflow:
+    """The workflow ``command`` if it runs file by file in ``imageform batch``.
+
+    Examples
+    --------
+    >>> batch_workflow("white_balance").name
+    'white-balance'
+    """
+    from imageform.workflows import WORKFLOWS
+
+    wf = command if isinstance(command, Workflow) else get_workflow(command)
+    if not wf.batch:
+        valid = ", ".join(n for n, w in WORKFLOWS.items() if w.batch)
+        raise UnknownOptionError(f"{wf.name} does not run in imageform batch; valid: {valid}")
+    return wf
+
+
+def _key(name: str) -> str:
+    return name.strip().lstrip("-").lower().replace("-", "_")
+
+
+def batch_options(command: str | Workflow, options: Options | Mapping[str, Any] | None) -> Options:
+    """The options of ``command`` from its dataclass, or from a mapping whose keys are field
+    names or flags (``{"to": "lab"}``, ``{"--to": "lab"}`` and ``{"dst": "lab"}`` alike).
+
+    Examples
+    --------
+    >>> batch_options("convert", {"to": "lab"}).dst
+    'lab'
+    """
+    wf = batch_workflow(command)
+    if isinstance(options, Options):
+        if not isinstance(options, wf.options):
+            raise InvalidInputError(
+                f"expected {wf.options.__name__} for batch {wf.name}, got {type(options).__name__}"
+            )
+        _no_extra_outputs(wf, options)
+        return options
+    by_flag = {_key(flag_of(f)): f.name for f in wf.options.fields()}
+    by_flag.update({f.name: f.name for f in wf.options.fields()})
+    values: dict[str, Any] = {}
+    for k, v in dict(options or {}).items():
+        name = by_flag.get(_key(k))
+        if name is None:
+            valid = ", ".join(sorted(flag_of(f) for f in wf.options.fields()))
+            raise UnknownOptionError(f"unknown option {k!r} of batch {wf.name}; valid: {valid}")
+        values[name] = v
+    opts = wf.make_options(**values)
+    _no_extra_outputs(wf, opts)
+    return opts
+
+
+def _no_extra_outputs(wf: Workflow, opts: Options) -> None:
+    """An extra output (``--save-target``) is one file per run: every job would write it."""
+    for f in wf.options.fields():
+        if f.metadata.get("output") and getattr(opts, f.name) is not None:
+            raise InvalidInputError(
+                f"batch {wf.name} does not take {flag_of(f)} (one file, written once: run "
+                f"imageform {wf.name} on one input for it)"
+            )
+
+
+def _stamp(path: Path) -> list[Any]:
+    st = path.stat()
+    return [st.st_size, st.st_mtime_ns]
+
+
+def _producer(wf: Workflow, opts: Options) -> dict[str, Any]:
+    """What produces every output of a run, but the input file: command and options (with
+    the size and time of the files options name, such as ``--target``)."""
+    from imageform._jsonio import json_ready
+
+    files = {str(p): _stamp(p) for p in opts.paths("input") if p.is_file()}
+    return {"command": wf.name, "options": json_ready(opts), "option_files": files}
 
 
 # ---------------------------------------------------------------- planning
@@ -180,7 +298,8 @@ def plan_jobs(pattern: str, out_dir: str | Path, *, out_suffix: str | None = Non
     ------
     InvalidInputError
         No file matches; an output would be an input or match ``pattern`` (``out_dir``
-        inside the input tree where the glob reaches); two inputs would write one output.
+        inside the input tree where the glob reaches, also through a symbolic link); two
+        inputs would write one output.
 
     Examples
     --------
@@ -201,16 +320,27 @@ def plan_jobs(pattern: str, out_dir: str | Path, *, out_suffix: str | None = Non
     if not inputs:
         raise InvalidInputError(f"no files match {pattern!r}")
     matcher = _glob_regex(pattern)
-    input_set = set(inputs)
+    real_base = os.path.realpath(base)
+    rest = os.path.relpath(os.path.abspath(pattern), base)
+    real_matcher = _glob_regex(os.path.join(real_base, rest))
+    real_inputs = {os.path.realpath(p) for p in inputs}
+    real_out_root = Path(os.path.realpath(out_root))
     jobs = []
     for p in inputs:
-        out = out_root / p.relative_to(base)
+        rel = p.relative_to(base)
+        out = out_root / rel
+        real_out = real_out_root / rel
         if out_suffix is not None:
-            out = out.with_suffix(out_suffix)
-        if out in input_set or matcher.match(str(out)):
+            out, real_out = out.with_suffix(out_suffix), real_out.with_suffix(out_suffix)
+        if (
+            str(out) in {str(i) for i in inputs}
+            or matcher.match(str(out))
+            or str(real_out) in real_inputs
+            or real_matcher.match(str(real_out))
+        ):
             raise InvalidInputError(
                 f"output {out} would overwrite an input or match the input glob {pattern!r}; "
-                f"choose an OUT_DIR outside the inputs (got {out_dir})"
+                f"choose an output folder outside the inputs (got {out_dir})"
             )
         jobs.append(Job(p, out))
     seen: dict[Path, Path] = {}
@@ -224,6 +354,36 @@ def plan_jobs(pattern: str, out_dir: str | Path, *, out_suffix: str | None = Non
     return jobs
 
 
+# ---------------------------------------------------------------- the manifest
+
+
+def _read_manifest(out_root: Path) -> dict[str, Any]:
+    path = out_root / MANIFEST
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return {}
+    if not isinstance(data, dict) or data.get("version") != _MANIFEST_VERSION:
+        return {}
+    outputs = data.get("outputs")
+    return outputs if isinstance(outputs, dict) else {}
+
+
+def _write_manifest(out_root: Path, outputs: dict[str, Any]) -> None:
+    from imageform._files import atomic_write
+
+    out_root.mkdir(parents=True, exist_ok=True)
+    text = json.dumps({"version": _MANIFEST_VERSION, "outputs": outputs}, indent=1)
+    atomic_write(out_root / MANIFEST, lambda p: p.write_text(text, encoding="utf-8"))
+
+
+def _entry(job: Job, producer: dict[str, Any]) -> dict[str, Any] | None:
+    try:
+        return {**producer, "input": str(job.input), "input_stamp": _stamp(job.input)}
+    except OSError:
+        return None
+
+
 # ---------------------------------------------------------------- one job (on a worker)
 
 
@@ -235,27 +395,38 @@ def _fsync(path: Path, *, directory: bool = False) -> None:
         os.close(fd)
 
 
+def _metrics(summary: Mapping[str, Any]) -> dict[str, Any]:
+    from imageform._jsonio import json_ready
+
+    small = {k: v for k, v in summary.items() if k not in ("input", "output")}
+    out: dict[str, Any] = json_ready(small)
+    return out
+
+
 def run_job(
     command: str,
     in_path: str,
     out_path: str,
-    options: Mapping[str, Any],
+    options: Options | Mapping[str, Any] | None = None,
     hold_s: float = 0.0,
 ) -> dict[str, Any]:
     """Run ``command`` on one file and publish ``out_path`` atomically (runs on a worker).
 
-    The command writes a temporary file in the output's folder; it is fsync-ed and renamed
+    The workflow writes a temporary file in the output's folder; it is fsync-ed and renamed
     onto ``out_path`` (``os.replace``, atomic on POSIX), then the folder is fsync-ed. An
     exception removes the temporary file and comes back as ``{"ok": False, "error": ...}``.
     ``hold_s`` waits between writing and renaming (a test hook: it widens the window in
     which a killed worker leaves a partial file behind).
     """
+    from imageform.workflows import run_file
+
     out = Path(out_path)
-    out.parent.mkdir(parents=True, exist_ok=True)
     tmp = _temp_path(out)
     t0 = time.perf_counter()
     try:
-        metrics = get_command(command).run(Path(in_path), tmp, options)
+        opts = batch_options(command, options)
+        out.parent.mkdir(parents=True, exist_ok=True)
+        result = run_file(batch_workflow(command).name, Path(in_path), tmp, opts)
         if hold_s > 0:
             time.sleep(hold_s)
         _fsync(tmp)
@@ -265,7 +436,7 @@ def run_job(
         tmp.unlink(missing_ok=True)
         msg = str(exc).splitlines()[0] if str(exc) else ""
         return {"ok": False, "error": f"{type(exc).__name__}: {msg}".rstrip(": ")}
-    return {"ok": True, "metrics": metrics, "seconds": time.perf_counter() - t0}
+    return {"ok": True, "metrics": _metrics(result.summary), "seconds": time.perf_counter() - t0}
 
 
 # ---------------------------------------------------------------- the run (on the client)
@@ -275,17 +446,18 @@ def run_job(
 def _client(scheduler: str | None, n_workers: int) -> Iterator[Any]:
     import logging
 
-    from distributed import Client, LocalCluster
+    from imageform._optional import require
 
+    distributed = require("distributed", what="imageform batch")
     if scheduler:
         try:
-            client = Client(scheduler)  # timeout: distributed.comm.timeouts.connect
+            client = distributed.Client(scheduler)  # timeout: distributed.comm.timeouts.connect
         except (OSError, TimeoutError) as exc:
-            raise InvalidInputError(f"cannot reach the scheduler {scheduler}: {exc}") from exc
+            raise InvalidInputError(f"cannot reach the scheduler {scheduler}: {exc}") from None
         with client:
             yield client
         return
-    cluster = LocalCluster(
+    cluster = distributed.LocalCluster(
         n_workers=n_workers,
         threads_per_worker=1,
         processes=True,
@@ -293,9 +465,10 @@ def _client(scheduler: str | None, n_workers: int) -> Iterator[Any]:
         # ":0", not None: with None the scheduler's HTTP server still binds :8787, and two
         # clusters (two runs, pytest-xdist) collide on it
         dashboard_address=":0",
-        silence_logs=logging.ERROR,
+        silence_logs=logging.CRITICAL,
+        preload=["imageform.batch._worker_setup"],
     )
-    with cluster, Client(cluster) as client:
+    with cluster, distributed.Client(cluster) as client:
         yield client
 
 
@@ -303,7 +476,7 @@ def run_batch(
     command: str,
     pattern: str,
     out_dir: str | Path,
-    options: Mapping[str, Any] | None = None,
+    options: Options | Mapping[str, Any] | None = None,
     *,
     scheduler: str | None = None,
     n_workers: int | None = None,
@@ -312,18 +485,20 @@ def run_batch(
     progress: bool = False,
     on_result: Callable[[JobResult], None] | None = None,
     hold_s: float = 0.0,
+    worker_timeout_s: float = 60.0,
 ) -> BatchReport:
-    """Run a batch command over the files matching ``pattern`` on a dask cluster.
+    """Run a workflow over the files matching ``pattern`` on a dask cluster.
 
     Parameters
     ----------
     command : str
-        A name in :data:`imageform.batch.COMMANDS` (convert, white-balance, demosaic,
-        stain-normalize, harmonize).
+        A workflow that runs file by file (``convert``, ``white-balance``, ``demosaic``,
+        ``stain-normalize``, ``harmonize`` ...: :func:`batch_workflow`).
     pattern, out_dir, out_suffix :
         See :func:`plan_jobs`.
-    options : mapping, optional
-        The command's options (``{"to": "linear_srgb"}``); unknown names are refused.
+    options : Options or mapping, optional
+        The command's options (its dataclass, or ``{"to": "linear_srgb"}``: see
+        :func:`batch_options`); the defaults are the single command's.
     scheduler : str, optional
         Address of a running scheduler (``tcp://host:port``); the workers must see the same
         paths. By default a ``LocalCluster`` of ``n_workers`` processes, one thread each, on
@@ -331,68 +506,118 @@ def run_batch(
     n_workers : int, optional
         Worker processes of the local cluster (default: CPU count, at most one per job).
     force : bool
-        Redo outputs that exist (otherwise they are skipped: the run resumes).
+        Redo every output (otherwise an output made by the same command, options and input
+        is skipped: the run resumes).
     progress : bool
-        Show a progress bar (rich, on stderr).
+        Show a progress bar (rich, on stderr, when it is a terminal).
     on_result : callable, optional
         Called on the client with each :class:`JobResult` as it completes.
     hold_s : float
         Test hook, see :func:`run_job`.
+    worker_timeout_s : float
+        Stop with :class:`NoWorkersError` when the cluster has had no worker this long.
 
     Returns
     -------
     BatchReport
         One :class:`JobResult` per file; ``report.ok`` is False when a job failed.
 
-    Examples
-    --------
-    A re-run where every output exists skips them all (and starts no cluster):
-
-    >>> import tempfile, pathlib, numpy as np
-    >>> from imageform.io import write_image
-    >>> d = pathlib.Path(tempfile.mkdtemp())
-    >>> for sub in ("in", "out"):
-    ...     (d / sub).mkdir()
-    ...     _ = write_image(d / sub / "x.png", np.zeros((2, 2, 3), np.uint8))
-    >>> report = run_batch("convert", f"{d}/in/*.png", d / "out", {"to": "linear_srgb"})
-    >>> report.count("skipped"), report.ok
-    (1, True)
+    Raises
+    ------
+    BatchInterrupted
+        Ctrl-C: the finished outputs are kept and recorded; the same call resumes.
+    NoWorkersError
+        No worker for ``worker_timeout_s`` seconds.
     """
-    cmd = get_command(command)
-    key = cmd.name.replace("-", "_")
-    opts = dict(options or {})
+    wf = batch_workflow(command)
+    opts = batch_options(wf, options)
     jobs = plan_jobs(pattern, out_dir, out_suffix=out_suffix)
-    for suffix in sorted({j.output.suffix for j in jobs}):
-        cmd.validate(opts, suffix)
+    for suffix in sorted({j.output.suffix.lower() for j in jobs}):
+        if suffix not in wf.suffixes:
+            raise InvalidInputError(
+                f"batch {wf.name} writes {', '.join(wf.suffixes)} files, got output suffix "
+                f"{suffix!r}"
+            )
+        opts.check_output(Path("output" + suffix))
+    for p in opts.paths("input"):
+        if not p.is_file():
+            raise InvalidInputError(f"{p} does not exist (an input file named by an option)")
+    out_root = Path(os.path.abspath(out_dir))
+    producer = _producer(wf, opts)
+    manifest = _read_manifest(out_root)
     _remove_stale_temps(jobs)
     results: dict[Job, JobResult] = {}
     todo = []
     for job in jobs:
-        if job.output.exists() and not force:
+        rel = job.output.relative_to(out_root).as_posix()
+        if not force and job.output.exists() and manifest.get(rel) == _entry(job, producer):
             results[job] = JobResult(job.input, job.output, "skipped")
         else:
+            manifest.pop(rel, None)
             todo.append(job)
     if todo:
         workers = n_workers or min(os.cpu_count() or 1, len(todo))
+        state = _Manifest(out_root, manifest, producer)
         try:
             with _client(scheduler, workers) as client:
-                _run_on(client, key, todo, opts, hold_s, results, progress, on_result)
+                _run_on(
+                    client,
+                    wf.name,
+                    todo,
+                    opts,
+                    hold_s,
+                    results,
+                    progress,
+                    on_result,
+                    state,
+                    worker_timeout_s,
+                )
+        except KeyboardInterrupt:
+            state.save()
+            done = sum(r.status != "failed" for r in results.values())
+            raise BatchInterrupted(done, len(jobs) - done) from None
         finally:
+            state.save()
             _remove_stale_temps(todo)  # left by workers killed mid-write
-    return BatchReport(cmd.name, tuple(results[j] for j in jobs))
+    return BatchReport(wf.name, tuple(results[j] for j in jobs))
+
+
+class _Manifest:
+    """The manifest being updated as jobs finish (saved at most once a second)."""
+
+    def __init__(self, root: Path, outputs: dict[str, Any], producer: dict[str, Any]) -> None:
+        self.root, self.outputs, self.producer = root, outputs, producer
+        self.saved_at = 0.0
+        self.dirty = False
+
+    def done(self, job: Job) -> None:
+        entry = _entry(job, self.producer)
+        if entry is not None:
+            self.outputs[job.output.relative_to(self.root).as_posix()] = entry
+            self.dirty = True
+        if time.monotonic() - self.saved_at > 1.0:
+            self.save()
+
+    def save(self) -> None:
+        if self.dirty:
+            _write_manifest(self.root, self.outputs)
+            self.dirty = False
+        self.saved_at = time.monotonic()
 
 
 def _run_on(
     client: Any,
-    key: str,
+    name: str,
     todo: list[Job],
-    opts: dict[str, Any],
+    opts: Options,
     hold_s: float,
     results: dict[Job, JobResult],
     progress: bool,
     on_result: Callable[[JobResult], None] | None,
+    state: _Manifest,
+    worker_timeout_s: float,
 ) -> None:
-    from distributed import as_completed
+    from distributed import wait
     from rich.console import Console
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TimeRemainingColumn
 
@@ -402,46 +627,77 @@ def _run_on(
     for i, job in enumerate(todo):
         fut = client.submit(
             run_job,
-            key,
+            name,
             str(job.input),
             str(job.output),
             opts,
             hold_s,
-            key=f"imageform-batch-{key}-{run_id}-{i}",
+            key=f"imageform-batch-{name}-{run_id}-{i}",
             pure=False,
         )
         by_key[fut.key] = job
         futures.append(fut)
+    console = Console(stderr=True)
     bar = Progress(
         "[progress.description]{task.description}",
         BarColumn(),
         MofNCompleteColumn(),
         TimeRemainingColumn(),
-        console=Console(stderr=True),
-        disable=not progress,
+        console=console,
+        disable=not progress or not console.is_terminal,  # logs and pipes: no bar
     )
-    with bar:
-        task = bar.add_task(f"batch {key.replace('_', '-')}", total=len(futures))
-        for fut in as_completed(futures):
-            job = by_key[fut.key]
-            try:
-                out = fut.result()
-            except Exception as exc:  # the task itself died (e.g. KilledWorker)
-                out = {"ok": False, "error": f"{type(exc).__name__}: {exc}"}
-            if out["ok"]:
-                res = JobResult(job.input, job.output, "done", None, out["metrics"], out["seconds"])
-            else:
-                res = JobResult(job.input, job.output, "failed", out["error"])
-            results[job] = res
-            bar.advance(task)
-            if on_result is not None:
-                on_result(res)
+    pending = set(futures)
+    no_worker_since: float | None = None
+    try:
+        with bar:
+            task = bar.add_task(f"batch {name}", total=len(futures))
+            while pending:
+                try:
+                    finished, pending = wait(pending, timeout=1.0, return_when="FIRST_COMPLETED")
+                except TimeoutError:  # distributed raises rather than returning nothing
+                    finished = set()
+                if not finished:
+                    if client.scheduler_info().get("workers"):
+                        no_worker_since = None
+                    elif no_worker_since is None:
+                        no_worker_since = time.monotonic()
+                    elif time.monotonic() - no_worker_since > worker_timeout_s:
+                        done = sum(r.status != "failed" for r in results.values())
+                        raise NoWorkersError(
+                            f"every dask worker is gone and none came back in "
+                            f"{worker_timeout_s:g} s ({done} jobs done, {len(pending)} "
+                            "remaining); start workers and run the same command to resume"
+                        )
+                    continue
+                for fut in finished:
+                    job = by_key[fut.key]
+                    try:
+                        out = fut.result()
+                    except Exception as exc:  # the task itself died (e.g. KilledWorker)
+                        out = {"ok": False, "error": f"{type(exc).__name__}: {exc}"}
+                    if out["ok"]:
+                        res = JobResult(
+                            job.input, job.output, "done", None, out["metrics"], out["seconds"]
+                        )
+                        state.done(job)
+                    else:
+                        res = JobResult(job.input, job.output, "failed", out["error"])
+                    results[job] = res
+                    bar.advance(task)
+                    if on_result is not None:
+                        on_result(res)
+    finally:
+        if pending:
+            with contextlib.suppress(Exception):
+                client.cancel(list(pending), force=True)
 
 
 def print_summary(report: BatchReport, console: Any = None) -> None:
     """Print the counts and the failures (input and reason): a rich table on a terminal,
     one ``failed: INPUT: REASON`` line each otherwise.
 
+    Examples
+    --------
     >>> r = JobResult(Path("a.png"), Path("out/a.png"), "failed", "OSError: truncated")
     >>> print_summary(BatchReport("convert", (r,)))
     batch convert: 0 done, 0 skipped (already finished), 1 failed

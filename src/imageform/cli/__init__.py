@@ -16,7 +16,8 @@ import threading
 from collections.abc import Sequence
 from types import FrameType
 
-from imageform.cli._build import EXIT_CODES, CommandExit, root
+from imageform.cli._build import EXIT_CODES, CommandExit
+from imageform.cli._root import root
 
 __all__ = ["EXIT_CODES", "main", "root"]
 

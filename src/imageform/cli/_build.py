@@ -24,7 +24,14 @@ import click
 from imageform.errors import ImageformError, InvalidInputError
 from imageform.workflows import Result, Workflow, choice_names, flag_of
 
-__all__ = ["EXIT_CODES", "CommandExit", "build_command", "emit", "expand_inputs", "root"]
+__all__ = [
+    "EXIT_CODES",
+    "CommandExit",
+    "build_command",
+    "emit",
+    "expand_inputs",
+    "option_params",
+]
 
 #: Exit codes of every command.
 EXIT_CODES = {
@@ -33,17 +40,6 @@ EXIT_CODES = {
     2: "bad usage (unknown option or value)",
     3: "a check the command performs failed (palette-check, lecture)",
     130: "interrupted (Ctrl-C); nothing new was left behind",
-}
-
-_GROUPS = {
-    "simulation": "Simulate a camera",
-    "geometry": "Camera geometry",
-    "optics": "Optics",
-    "colour": "Colour",
-    "sensor": "Sensor",
-    "analysis": "Biomedical colour analysis",
-    "scale": "Scale out",
-    "tools": "Other",
 }
 
 
@@ -82,7 +78,8 @@ def _choices_text(choices: Any) -> str:
     return " [" + "|".join(n.replace("_", "-") for n in names) + "]"
 
 
-def _option_params(wf: Workflow) -> list[click.Parameter]:
+def option_params(wf: Workflow) -> list[click.Parameter]:
+    """The click options of a workflow's options dataclass (flags, types, defaults, help)."""
     params: list[click.Parameter] = []
     hints = wf.options.types()
     for f in wf.options.fields():
@@ -118,11 +115,12 @@ def _option_params(wf: Workflow) -> list[click.Parameter]:
         shown = default is not None and not isinstance(default, Path)
         if isinstance(default, str):
             default = default.replace("_", "-") if meta.get("choices") is not None else default
+        if f.default is not dataclasses.MISSING:  # click >= 8.3: default=None is a value
+            kw["default"] = default
         params.append(
             click.Option(
                 decls,
                 type=_click_type(tp),
-                default=default,
                 show_default=shown,
                 required=f.default is dataclasses.MISSING and not optional,
                 **kw,
@@ -228,7 +226,7 @@ def build_command(wf: Workflow) -> click.Command:
                 help=wf.output.help,
             )
         )
-    params += _option_params(wf)
+    params += option_params(wf)
     has_outputs = wf.output is not None or any(
         f.metadata.get("output") for f in wf.options.fields()
     )
@@ -268,93 +266,3 @@ def build_command(wf: Workflow) -> click.Command:
         short_help=wf.summary,
         no_args_is_help=bool(wf.inputs),
     )
-
-
-# ---------------------------------------------------------------- the root group
-
-
-def _extra_commands() -> dict[str, Callable[[], click.Command]]:
-    """Commands that are not single workflows: batch, chunked (and, while the move to the
-    registry lasts, the remaining hand-written commands)."""
-    from imageform.cli._app import legacy_commands
-
-    return legacy_commands()
-
-
-class _Root(click.Group):
-    """The root group: commands built on first use, listed by section."""
-
-    def list_commands(self, ctx: click.Context) -> list[str]:
-        from imageform.workflows.registry import WORKFLOWS
-
-        return [*WORKFLOWS, *_extra_commands()]
-
-    def get_command(self, ctx: click.Context, cmd_name: str) -> click.Command | None:
-        from imageform.workflows.registry import WORKFLOWS
-
-        key = cmd_name.replace("_", "-")
-        if key in WORKFLOWS:
-            return build_command(WORKFLOWS[key])
-        extra = _extra_commands()
-        if key in extra:
-            return extra[key]()
-        return None
-
-    def format_commands(self, ctx: click.Context, formatter: click.HelpFormatter) -> None:
-        from imageform.workflows.registry import WORKFLOWS
-
-        sections: dict[str, list[tuple[str, str]]] = {}
-        for wf in WORKFLOWS.values():
-            sections.setdefault(wf.group, []).append((wf.name, wf.summary))
-        for name, make in _extra_commands().items():
-            cmd = make()
-            sections.setdefault("scale" if name in ("batch", "chunked") else "tools", []).append(
-                (name, cmd.get_short_help_str(limit=200))
-            )
-        for key, title in _GROUPS.items():
-            rows = sections.get(key)
-            if rows:
-                with formatter.section(title):
-                    formatter.write_dl(rows)
-
-
-def _version(ctx: click.Context, param: click.Parameter, value: bool) -> None:
-    if value and not ctx.resilient_parsing:
-        from imageform import __version__
-
-        click.echo(f"imageform {__version__}")
-        ctx.exit(0)
-
-
-_EPILOG = (
-    "Every command: inputs are positional, the output is -o/--out (an existing output needs "
-    "--force; outputs are written all or nothing), --json prints the result as JSON, and "
-    "names may be spelt with - or _. Exit codes: "
-    + "; ".join(f"{k} {v}" for k, v in EXIT_CODES.items())
-    + "."
-)
-
-root = _Root(
-    "imageform",
-    help="Image formation, end to end: simulate a camera, measure colour, calibrate and "
-    "project. The main job: imageform simulate.",
-    epilog=_EPILOG,
-    params=[
-        click.Option(
-            ["--version"],
-            is_flag=True,
-            expose_value=False,
-            is_eager=True,
-            callback=_version,
-            help="Print the version and exit.",
-        ),
-        click.Option(
-            ["--traceback"],
-            is_flag=True,
-            expose_value=False,
-            help="On an error, print the full Python traceback.",
-        ),
-    ],
-    context_settings={"help_option_names": ["-h", "--help"], "max_content_width": 100},
-    no_args_is_help=True,
-)

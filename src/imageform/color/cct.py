@@ -306,10 +306,9 @@ def xy_to_cct(xy: object, *, method: str = "robertson1968", iterations: int = 20
         closed-form fits return Robertson's Duv, Ohno's its own).
     iterations : int
         Newton steps of the daylight inversion (converges to 1e-12 K in < 10), 1 to 1000.
-
-    The daylight method takes ``x`` between the locus ends (25000 K and 4000 K); an ``x`` at
-    most 1e-9 (``DAYLIGHT_X_TOLERANCE``) beyond an end, from rounding, is taken as that
-    end (4000 K or 25000 K); farther out it raises.
+        The daylight method takes ``x`` between the locus ends (25000 K and 4000 K); an
+        ``x`` at most 1e-9 (``DAYLIGHT_X_TOLERANCE``) beyond an end, from rounding, is taken
+        as that end (4000 K or 25000 K); farther out it raises.
 
     Returns
     -------

@@ -61,10 +61,14 @@ def xy_to_cct_mccamy1992(xy: object) -> Any:
     ndarray, shape (...)
         Kelvin.
 
+    Notes
+    -----
     Source: C. S. McCamy, "Correlated color temperature as an explicit function of
     chromaticity coordinates", Color Res. Appl. 17(2), 1992, pp. 142-144, eq. (3); the
     erratum in Color Res. Appl. 18(2), 1993, p. 150.
 
+    Examples
+    --------
     >>> round(float(xy_to_cct_mccamy1992([0.31270, 0.32900])), 5)  # colour-science: 6505.08059
     6505.08059
     """
@@ -94,10 +98,14 @@ def xy_to_cct_hernandez1999(xy: object) -> Any:
     ndarray, shape (...)
         Kelvin.
 
+    Notes
+    -----
     Source: J. Hernández-Andrés, R. L. Lee Jr., J. Romero, "Calculating correlated color
     temperatures across the entire gamut of daylight and skylight chromaticities",
     Appl. Opt. 38(27), 1999, pp. 5703-5709, eq. (3) and Table 1.
 
+    Examples
+    --------
     >>> round(float(xy_to_cct_hernandez1999([0.31270, 0.32900])), 5)  # colour-science
     6500.74204
     """
@@ -138,6 +146,8 @@ def planckian_uv(cct: object) -> np.ndarray:
 
     Source: Planck's law and CIE 15:2004, sec. 3.1 and 8.1 (c₂, CIE 1960 UCS).
 
+    Examples
+    --------
     >>> planckian_uv(6504).round(6).tolist()  # colour-science: [0.2004280, 0.3103334]
     [0.200428, 0.310333]
     """
@@ -212,9 +222,13 @@ def uv_to_cct_ohno2013(
     -------
     cct, duv : ndarrays, shape (...)
 
+    Notes
+    -----
     Source: Y. Ohno, "Practical use and calculation of CCT and Duv", LEUKOS 10(1), 2014,
     pp. 47-55 (CIE 2013 proceedings), eqs. (5)-(11).
 
+    Examples
+    --------
     >>> t, d = uv_to_cct_ohno2013([0.1978, 0.3122])  # colour-science: 6507.4748, 0.0032233
     >>> round(float(t), 2), round(float(d), 7)
     (6507.47, 0.0032233)
@@ -276,6 +290,8 @@ def cct_to_uv_ohno2013(cct: object, duv: object = 0.0) -> np.ndarray:
 
     Source: Ohno 2014, LEUKOS 10(1), eqs. (12)-(15).
 
+    Examples
+    --------
     >>> cct_to_uv_ohno2013(6507.4738046, 0.00322335).round(7).tolist()  # colour-science
     [0.1978, 0.3122]
     """

@@ -52,6 +52,8 @@ def xyz_to_xy(xyz: object, white: Any = "D65") -> Any:
     Black (X + Y + Z = 0) has no chromaticity; it gets the white's, as
     :func:`imageform.color.xyz_to_xyy` does (CIE 015:2018 eq. 7.4).
 
+    Examples
+    --------
     >>> [round(float(v), 4) for v in xyz_to_xy([0.95047, 1.0, 1.08883])]
     [0.3127, 0.329]
     """
@@ -68,6 +70,8 @@ def xy_to_uv_prime(xy: object) -> Any:
 
     Source: CIE 015:2018 eqs. 8.1-8.2.
 
+    Examples
+    --------
     >>> [round(float(v), 4) for v in xy_to_uv_prime([0.3127, 0.3290])]
     [0.1978, 0.4683]
     """
@@ -83,6 +87,8 @@ def uv_prime_to_xy(uv: object) -> Any:
     r"""Inverse of :func:`xy_to_uv_prime`: :math:`x = 9u'/(6u' - 16v' + 12)`,
     :math:`y = 4v'/(6u' - 16v' + 12)` (CIE 015:2018 eq. 8.3).
 
+    Examples
+    --------
     >>> [round(float(v), 4) for v in uv_prime_to_xy([0.19783, 0.46832])]
     [0.3127, 0.329]
     """
@@ -97,6 +103,8 @@ def uv_prime_to_xy(uv: object) -> Any:
 def xyz_to_uv_prime(xyz: object, white: Any = "D65") -> Any:
     """:math:`(u', v')` of XYZ, shape (..., 3) -> (..., 2) (black gets the white's).
 
+    Examples
+    --------
     >>> [round(float(v), 4) for v in xyz_to_uv_prime([0.95047, 1.0, 1.08883])]
     [0.1978, 0.4683]
     """
@@ -140,6 +148,8 @@ def spectral_locus(
     keyword-only: ``observer`` (2 or 10), ``coords`` (``"xy"`` or ``"uv"``) and the
     ``wavelength_range`` (nm).
 
+    Examples
+    --------
     >>> wl, xy = spectral_locus()
     >>> [round(float(v), 4) for v in xy[wl == 520][0]]
     [0.0743, 0.8338]
@@ -161,6 +171,8 @@ def polygon_area(vertices: npt.ArrayLike) -> float:
     r"""Area of a simple polygon by the shoelace formula,
     :math:`A = \tfrac12 |\sum_i (x_i y_{i+1} - x_{i+1} y_i)|`.
 
+    Examples
+    --------
     >>> polygon_area([[0, 0], [1, 0], [0, 1]])
     0.5
     """
@@ -180,6 +192,8 @@ def visible_area(coords: str = "xy", *, observer: int = 2) -> float:
     """Area of the region bounded by the spectral locus and the purple line (``observer``
     keyword-only).
 
+    Examples
+    --------
     >>> round(visible_area("xy"), 4)
     0.3342
     """
@@ -216,6 +230,8 @@ def in_locus(points: object, coords: str = "xy", *, observer: int = 2) -> Any:
     -------
     bool array, shape (...)
 
+    Examples
+    --------
     >>> in_locus([[0.3127, 0.3290], [0.7, 0.7]]).tolist()
     [True, False]
     """
@@ -249,6 +265,8 @@ def xy_to_xyz(xy: object, Y: float = 1.0, *, check_locus: bool = True, observer:
     With ``check_locus`` (default) a chromaticity outside the spectral locus raises
     :class:`InvalidInputError`: no real colour has it (CIE 015:2018 §7.3).
 
+    Examples
+    --------
     >>> xy_to_xyz([0.31271, 0.32902]).round(5).tolist()
     [0.95043, 1.0, 1.0889]
     """

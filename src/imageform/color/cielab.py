@@ -96,8 +96,12 @@ def xyz_to_lab(xyz: object, white: Any = "D65", *, observer: int = 2) -> Any:
     array, shape (..., 3)
         L* in [0, 100] for Y in [0, Yn]; a*, b* unbounded.
 
+    Notes
+    -----
     Source: CIE 15:2004, clause 8.2.1, eq. (8.3)-(8.5).
 
+    Examples
+    --------
     >>> xyz_to_lab([0.18, 0.18, 0.18], white="E").round(4).tolist()
     [49.4961, 0.0, 0.0]
     """
@@ -118,6 +122,8 @@ def lab_to_xyz(lab: object, white: Any = "D65", *, observer: int = 2) -> Any:
 
     Source: CIE 15:2004, clause 8.2.1 (inverse given in its note 5).
 
+    Examples
+    --------
     >>> lab_to_xyz([50.0, 0.0, 0.0], white="E").round(6).tolist()
     [0.184187, 0.184187, 0.184187]
     """
@@ -155,6 +161,8 @@ def lab_to_lch(lab: object) -> Any:
 
     Source: CIE 15:2004, clause 8.2.1.2, eq. (8.8)-(8.9).
 
+    Examples
+    --------
     >>> lab_to_lch([50.0, 0.0, 10.0]).round(6).tolist()
     [50.0, 10.0, 90.0]
     """
@@ -166,6 +174,8 @@ def lab_to_lch(lab: object) -> Any:
 def lch_to_lab(lch: object) -> Any:
     """CIELCh_ab to CIELAB: :math:`a^* = C^* \\cos h`, :math:`b^* = C^* \\sin h`.
 
+    Examples
+    --------
     >>> lch_to_lab([50.0, 10.0, 180.0]).round(6).tolist()
     [50.0, -10.0, 0.0]
     """
@@ -204,6 +214,8 @@ def xyz_to_xyy(xyz: object, white: Any = "D65", *, observer: int = 2) -> Any:
 
     Source: CIE 15:2004, clause 7.3, eq. (7.3).
 
+    Examples
+    --------
     >>> xyz_to_xyy([0.95047, 1.0, 1.08883]).round(4).tolist()
     [0.3127, 0.329, 1.0]
     """
@@ -219,6 +231,8 @@ def xyy_to_xyz(xyy: object) -> Any:
 
     Source: CIE 15:2004, clause 7.3.
 
+    Examples
+    --------
     >>> xyy_to_xyz([0.3127, 0.3290, 1.0]).round(6).tolist()
     [0.950456, 1.0, 1.089058]
     """
@@ -273,6 +287,8 @@ def xyz_to_luv(xyz: object, white: Any = "D65", *, observer: int = 2) -> Any:
 
     Source: CIE 15:2004, clause 8.2.2, eq. (8.14)-(8.18).
 
+    Examples
+    --------
     >>> xyz_to_luv([0.18, 0.18, 0.18], white="E").round(4).tolist()
     [49.4961, 0.0, 0.0]
     """
@@ -290,6 +306,8 @@ def luv_to_xyz(luv: object, white: Any = "D65", *, observer: int = 2) -> Any:
 
     Source: CIE 15:2004, clause 8.2.2 (inverted).
 
+    Examples
+    --------
     >>> luv_to_xyz([50.0, 0.0, 0.0], white="E").round(6).tolist()
     [0.184187, 0.184187, 0.184187]
     """

@@ -54,8 +54,12 @@ def srgb_to_cmy(image: object) -> Any:
     -------
     array, shape (..., 3)
 
+    Notes
+    -----
     Source: the lecture (CMY = 1 - RGB); Gonzalez & Woods, 4th ed., eq. (6-5).
 
+    Examples
+    --------
     >>> srgb_to_cmy([1.0, 0.25, 0.0]).tolist()
     [0.0, 0.75, 1.0]
     """
@@ -67,6 +71,8 @@ def srgb_to_cmy(image: object) -> Any:
 def cmy_to_srgb(cmy: object) -> Any:
     """CMY to encoded RGB: :math:`(R, G, B) = 1 - (C, M, Y)`.
 
+    Examples
+    --------
     >>> cmy_to_srgb([0.0, 0.75, 1.0]).tolist()
     [1.0, 0.25, 0.0]
     """
@@ -82,6 +88,8 @@ def cmy_to_cmyk(cmy: object) -> Any:
 
     Returns shape (..., 4). Source: the lecture; Gonzalez & Woods, 4th ed., eq. (6-6)-(6-9).
 
+    Examples
+    --------
     >>> cmy_to_cmyk([0.5, 0.75, 1.0]).tolist()
     [0.0, 0.5, 1.0, 0.5]
     """
@@ -93,6 +101,8 @@ def cmy_to_cmyk(cmy: object) -> Any:
 def cmyk_to_cmy(cmyk: object) -> Any:
     """CMYK to CMY: :math:`C = C'(1 - K) + K` (and likewise M, Y).
 
+    Examples
+    --------
     >>> cmyk_to_cmy([0.0, 0.5, 1.0, 0.5]).tolist()
     [0.5, 0.75, 1.0]
     """
@@ -104,6 +114,8 @@ def cmyk_to_cmy(cmyk: object) -> Any:
 def srgb_to_cmyk(image: object) -> Any:
     """Encoded RGB to CMYK (via CMY), shape (..., 4).
 
+    Examples
+    --------
     >>> srgb_to_cmyk([0.0, 0.0, 0.0]).tolist()
     [0.0, 0.0, 0.0, 1.0]
     """
@@ -115,6 +127,8 @@ def srgb_to_cmyk(image: object) -> Any:
 def cmyk_to_srgb(cmyk: object) -> Any:
     """CMYK to encoded RGB: :math:`R = (1 - C')(1 - K)` (and likewise G, B).
 
+    Examples
+    --------
     >>> cmyk_to_srgb([0.0, 0.5, 1.0, 0.5]).tolist()
     [0.5, 0.25, 0.0]
     """

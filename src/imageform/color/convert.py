@@ -193,6 +193,8 @@ def space_name(name: object, what: str = "colour space") -> str:
     -> ``"gray"``); an unknown name raises, listing the valid ones, with ``what`` naming the
     argument (``--to``).
 
+    Examples
+    --------
     >>> space_name("CIELab"), space_name("grey")
     ('lab', 'gray')
     """
@@ -202,6 +204,8 @@ def space_name(name: object, what: str = "colour space") -> str:
 def path(src: str, dst: str) -> list[Edge]:
     """The edges :func:`convert` applies from ``src`` to ``dst`` (shortest path).
 
+    Examples
+    --------
     >>> [e.function for e in path("srgb", "lab")]
     ['srgb_to_linear', 'linear_srgb_to_xyz', 'xyz_to_lab']
     """
@@ -266,6 +270,8 @@ def convert(image: object, src: str, dst: str, **params: Any) -> Any:
     array, shape (..., C_dst)
         Same namespace and float dtype as the input (float32 for integer input).
 
+    Examples
+    --------
     >>> convert([1.0, 1.0, 1.0], "srgb", "lab").round(10).tolist()
     [100.0, 0.0, 0.0]
     >>> convert([1.0, 0.0, 0.0], "srgb", "lab").round(2).tolist()

@@ -121,6 +121,8 @@ def _machado_table() -> dict[str, np.ndarray]:
 def machado_matrix(deficiency: str, severity: float = 1.0) -> np.ndarray:
     """Machado et al. (2009) linear-RGB matrix, interpolated between tenths of severity.
 
+    Examples
+    --------
     >>> machado_matrix("deutan", 1.0)[0].tolist()
     [0.367322, 0.860646, -0.227968]
     """
@@ -173,6 +175,8 @@ def brettel_planes(deficiency: str) -> BrettelPlanes:
     A colour ``rgb`` maps to ``H1 @ rgb`` where ``n @ rgb >= 0`` and to ``H2 @ rgb`` elsewhere;
     ``H1`` uses the long-wavelength anchor (575 nm, or 660 nm for tritan).
 
+    Examples
+    --------
     >>> h1, h2, n = brettel_planes("protan")
     >>> [round(float(v), 6) for v in h1 @ [1.0, 1.0, 1.0]]
     [1.0, 1.0, 1.0]
@@ -206,6 +210,8 @@ def cvd_matrix(deficiency: str, severity: float = 1.0, method: str = "machado200
 
     Brettel (1997) is piecewise linear: see :func:`brettel_planes`.
 
+    Examples
+    --------
     >>> [round(float(v), 4) for v in cvd_matrix("protan", 1.0, "vienot1999") @ [1.0, 0, 0]]
     [0.1089, 0.1089, 0.0045]
     """

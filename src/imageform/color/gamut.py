@@ -48,6 +48,8 @@ _KINDS = ("xyz", "xy", "linear_rgb")
 def gamut_triangle(space: str | RGBSpace = "srgb", coords: str = "xy") -> np.ndarray:
     """The primaries' chromaticities, shape (3, 2), in ``"xy"`` or ``"uv"`` (u', v').
 
+    Examples
+    --------
     >>> gamut_triangle("srgb").tolist()
     [[0.64, 0.33], [0.3, 0.6], [0.15, 0.06]]
     """
@@ -59,6 +61,8 @@ def gamut_triangle(space: str | RGBSpace = "srgb", coords: str = "xy") -> np.nda
 def gamut_area(space: str | RGBSpace = "srgb", coords: str = "xy") -> float:
     """Area of the gamut triangle in the xy or u'v' diagram.
 
+    Examples
+    --------
     >>> round(gamut_area("srgb"), 5)
     0.11205
     """
@@ -107,6 +111,8 @@ def gamut_coverage(
 
     with :math:`T` the triangle and :math:`V` the visible region (Sutherland-Hodgman clipping).
 
+    Examples
+    --------
     >>> round(gamut_coverage("srgb"), 1)
     33.5
     """
@@ -136,6 +142,8 @@ class GamutFigures:
 def gamut_figures(spaces: Sequence[str] = ("srgb", "display_p3", "rec2020")) -> list[GamutFigures]:
     """:class:`GamutFigures` for each named space (what ``imageform gamut`` prints).
 
+    Examples
+    --------
     >>> [round(f.coverage_uv, 1) for f in gamut_figures(["srgb"])]
     [33.2]
     """
@@ -173,6 +181,8 @@ def in_gamut(
     linear RGB; ``kind="xy"`` (shape (..., 2)): chromaticity inside the primaries' triangle
     (any luminance).
 
+    Examples
+    --------
     >>> in_gamut([[0.4, 0.4, 0.4], [0.1, 0.5, 0.9]]).tolist()
     [True, False]
     >>> in_gamut([[0.3127, 0.329], [0.17, 0.797]], kind="xy").tolist()
@@ -219,6 +229,8 @@ def gamut_map(
     unchanged. This is the hue-preserving chroma reduction of Morovič (2008), *Color Gamut
     Mapping*, §10.2 ("HPMINDE along lines of constant L* and h").
 
+    Examples
+    --------
     >>> from imageform.color.rgb_spaces import linear_rgb_to_xyz
     >>> p3_green = linear_rgb_to_xyz([0.0, 1.0, 0.0], "display_p3")
     >>> [round(float(v), 3) for v in gamut_map(p3_green, "srgb")]

@@ -73,8 +73,12 @@ def srgb_to_gray(image: object, method: str = "rec601") -> Any:
     -------
     array, shape (..., 1)
 
+    Notes
+    -----
     Source: ITU-R BT.601-7 item 2.5.1; ITU-R BT.709-6 item 3.2; IEC 61966-2-1 (the curve).
 
+    Examples
+    --------
     >>> srgb_to_gray([1.0, 0.0, 0.0]).tolist()
     [0.299]
     >>> round(float(srgb_to_gray([1.0, 0.0, 0.0], "rec709")[0]), 4)
@@ -89,6 +93,8 @@ def srgb_to_gray(image: object, method: str = "rec601") -> Any:
 def gray_to_srgb(gray: object) -> Any:
     """A grey image (..., 1) to sRGB (..., 3) by repeating the value (R = G = B).
 
+    Examples
+    --------
     >>> gray_to_srgb([0.5]).tolist()
     [0.5, 0.5, 0.5]
     """
@@ -104,6 +110,8 @@ def linear_srgb_to_luminance(image: object) -> Any:
 
     Source: ITU-R BT.709-6, Part 1, item 3.2.
 
+    Examples
+    --------
     >>> linear_srgb_to_luminance([0.0, 1.0, 0.0]).tolist()
     [0.7152]
     """

@@ -114,8 +114,12 @@ def srgb_to_hsv(image: object) -> Any:
         H in degrees [0, 360) (0 where S = 0, see :func:`hue_undefined_mask`), S and V in
         [0, 1].
 
+    Notes
+    -----
     Source: A. R. Smith, "Color gamut transform pairs", SIGGRAPH 1978.
 
+    Examples
+    --------
     >>> srgb_to_hsv([1.0, 0.5, 0.0]).round(6).tolist()
     [30.0, 1.0, 1.0]
     """
@@ -130,6 +134,8 @@ def hsv_to_srgb(hsv: object) -> Any:
 
     Hue may be any real number (taken modulo 360).
 
+    Examples
+    --------
     >>> hsv_to_srgb([30.0, 1.0, 1.0]).round(6).tolist()
     [1.0, 0.5, 0.0]
     """
@@ -145,6 +151,8 @@ def srgb_to_hsl(image: object) -> Any:
     Source: A. R. Smith (1978); Joblove & Greenberg, "Color spaces for computer graphics",
     SIGGRAPH 1978.
 
+    Examples
+    --------
     >>> srgb_to_hsl([1.0, 0.5, 0.0]).round(6).tolist()
     [30.0, 1.0, 0.5]
     """
@@ -157,6 +165,8 @@ def hsl_to_srgb(hsl: object) -> Any:
     """HSL to encoded RGB: :math:`f(n) = L - a \\max(-1, \\min(k - 3, 9 - k, 1))`,
     :math:`a = S \\min(L, 1 - L)`, :math:`k = (n + H/30) \\bmod 12` for n = 0, 8, 4.
 
+    Examples
+    --------
     >>> hsl_to_srgb([30.0, 1.0, 0.5]).round(6).tolist()
     [1.0, 0.5, 0.0]
     """
@@ -178,6 +188,8 @@ def srgb_to_hsi(image: object) -> Any:
 
     Source: R. C. Gonzalez & R. E. Woods, *Digital Image Processing*, 4th ed., eq. (6-16)-(6-19).
 
+    Examples
+    --------
     >>> srgb_to_hsi([0.0, 1.0, 0.0]).round(6).tolist()
     [120.0, 1.0, 0.333333]
     """
@@ -192,6 +204,8 @@ def hsi_to_srgb(hsi: object) -> Any:
     Hue must be in [0, 360). Not every HSI triple is an RGB colour in [0, 1]; nothing is
     clipped.
 
+    Examples
+    --------
     >>> hsi_to_srgb([120.0, 1.0, 1.0 / 3.0]).round(6).tolist()
     [0.0, 1.0, 0.0]
     """
@@ -217,6 +231,8 @@ def hue_undefined_mask(values: object, *, atol: float = 0.0) -> Any:
     -------
     array of bool, shape (...)
 
+    Examples
+    --------
     >>> hue_undefined_mask([[0.0, 0.0, 0.5], [30.0, 0.2, 0.5]]).tolist()
     [True, False]
     """
@@ -231,6 +247,8 @@ def hue_difference(h1: object, h2: object) -> Any:
 
     .. math:: \\Delta h = ((h_2 - h_1 + 180) \\bmod 360) - 180
 
+    Examples
+    --------
     >>> float(hue_difference(350.0, 10.0))
     20.0
     """
@@ -252,6 +270,8 @@ def hue_distance(h1: object, h2: object) -> Any:
 
     .. math:: d = \\min(|h_1 - h_2| \\bmod 360,\\; 360 - |h_1 - h_2| \\bmod 360)
 
+    Examples
+    --------
     >>> float(hue_distance(350.0, 10.0))
     20.0
     """
@@ -267,6 +287,8 @@ def hue_in_range(hue: object, start: float, stop: float) -> Any:
     The arc may wrap around 0/360: ``hue_in_range(h, 340, 20)`` selects reds from 340° to
     20°. Both ends are inclusive; ``start == stop`` selects that single hue.
 
+    Examples
+    --------
     >>> hue_in_range([350.0, 10.0, 30.0, 180.0], 340, 20).tolist()
     [True, True, False, False]
     """

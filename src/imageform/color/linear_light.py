@@ -8,6 +8,8 @@ sees from a distance, what a lens blur does) is 50 % of the light, encoded 0.735
 The lecture's rule, made easy: :func:`mean_linear_light` and :func:`downsample` decode,
 operate, re-encode; :func:`linear_light_error` shows how wrong the encoded-value way is.
 
+Examples
+--------
 >>> float(mean_linear_light([[0.0, 0.0, 0.0], [1.0, 1.0, 1.0]], axis=0)[0]).__round__(4)
 0.7354
 """
@@ -42,8 +44,12 @@ def mean_linear_light(
     transfer : str
         The transfer function of the encoding (:data:`imageform.color.TRANSFER_FUNCTIONS`).
 
+    Notes
+    -----
     Source: the lecture ("decode before any linear operation"); IEC 61966-2-1 for the curve.
 
+    Examples
+    --------
     >>> float(mean_linear_light([0.0, 1.0]).round(4))
     0.7354
     """
@@ -90,6 +96,8 @@ def downsample(
     -------
     array, shape (..., H // factor, W // factor, C)
 
+    Examples
+    --------
     >>> import numpy as np
     >>> checker = np.indices((2, 2)).sum(0)[..., None] % 2 * np.ones(3)  # black/white
     >>> float(downsample(checker, 2)[0, 0, 0].round(4)), float(downsample(checker, 2,
@@ -127,6 +135,8 @@ def linear_light_error(
 ) -> LinearLightComparison:
     """Downsample both ways and report the error of averaging encoded values.
 
+    Examples
+    --------
     >>> import numpy as np
     >>> checker = np.indices((4, 4)).sum(0)[..., None] % 2 * np.ones(3)
     >>> round(linear_light_error(checker).max_error, 4)

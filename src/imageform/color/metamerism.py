@@ -69,6 +69,8 @@ def tristimulus(
     ``illuminant`` are keyword-only. Unnormalised: the quantity whose equality defines a
     metameric match.
 
+    Examples
+    --------
     >>> from imageform.spectral import colorchecker_reflectances
     >>> t = tristimulus(colorchecker_reflectances()["red"])
     >>> round(float(t[1] / tristimulus(colorchecker_reflectances()["white 9.5 (.05 D)"])[1]), 4)
@@ -95,6 +97,8 @@ def are_metamers(
     white's Y, so the scale is that of XYZ with white Y = 1). Different: spectral RMS on the
     integration grid > ``spectral_tol``.
 
+    Examples
+    --------
     >>> from imageform.spectral import colorchecker_reflectances
     >>> r = colorchecker_reflectances()["neutral 5 (.70 D)"]
     >>> are_metamers(r, metamer(r))
@@ -221,6 +225,8 @@ def metamerism_index(
     applies the multiplicative correction :math:`X'_2 = X_2\,X_{1,r}/X_{2,r}` (per channel)
     before the difference. Lab white: the test illuminant (Y = 1).
 
+    Examples
+    --------
     >>> from imageform.spectral import colorchecker_reflectances
     >>> r = colorchecker_reflectances()["neutral 5 (.70 D)"]
     >>> round(metamerism_index(r, metamer(r), "D65", "D65"), 9)

@@ -51,6 +51,8 @@ def _flip(xp: Any, x: Any) -> Any:
 def srgb_to_bgr(image: object) -> Any:
     """Reverse the channel order RGB -> BGR (values unchanged).
 
+    Examples
+    --------
     >>> srgb_to_bgr([1.0, 0.5, 0.0]).tolist()
     [0.0, 0.5, 1.0]
     """
@@ -62,6 +64,8 @@ def srgb_to_bgr(image: object) -> Any:
 def bgr_to_srgb(image: object) -> Any:
     """Reverse the channel order BGR -> RGB (``cv2.imread`` output to imageform's order).
 
+    Examples
+    --------
     >>> bgr_to_srgb([0.0, 0.5, 1.0]).tolist()
     [1.0, 0.5, 0.0]
     """
@@ -92,8 +96,12 @@ def to_opencv(values: object, convention: str) -> Any:
     array, shape (..., 3)
         uint8 for the ``*8`` conventions (rounded and saturated as OpenCV does), else float.
 
+    Notes
+    -----
     Source: OpenCV 4.x/5.x documentation, "Color conversions" (imgproc module).
 
+    Examples
+    --------
     >>> to_opencv([200.0, 0.5, 1.0], "hsv8").tolist()
     [100, 128, 255]
     >>> to_opencv([60.0, -10.0, 20.0], "lab8").tolist()
@@ -127,6 +135,8 @@ def from_opencv(values: object, convention: str) -> Any:
     uint8 input is read as OpenCV's code values (not divided by 255 first). The result is
     float32 for integer input.
 
+    Examples
+    --------
     >>> from_opencv([100.0, 128.0, 255.0], "hsv8").round(4).tolist()
     [200.0, 0.502, 1.0]
     >>> from_opencv([153, 118, 148], "lab8").round(3).tolist()

@@ -63,6 +63,8 @@ def _viridis() -> np.ndarray:
 def viridis(n: int = 256) -> np.ndarray:
     """``n`` colours of viridis (van der Walt & Smith 2015), evenly spaced, encoded sRGB (n, 3).
 
+    Examples
+    --------
     >>> viridis(2).round(4).tolist()
     [[0.267, 0.0049, 0.3294], [0.9932, 0.9062, 0.1439]]
     """
@@ -77,6 +79,8 @@ def parse_colors(colors: object) -> np.ndarray:
     ``"#E90"``), one comma-separated string, or an array of shape (n, 3) (floats in [0, 1] or
     uint8).
 
+    Examples
+    --------
     >>> parse_colors("#E69F00,#56B4E9").round(4).tolist()
     [[0.902, 0.6235, 0.0], [0.3373, 0.7059, 0.9137]]
     """
@@ -104,6 +108,8 @@ def palette(name: str, n: int | None = None) -> np.ndarray:
     """A named palette as encoded sRGB (n, 3): ``viridis`` (n evenly spaced, default 8),
     ``okabe_ito`` (the first n of 8), ``red_green`` (ColorBrewer RdYlGn, 5).
 
+    Examples
+    --------
     >>> palette("okabe_ito", 2).round(3).tolist()
     [[0.0, 0.0, 0.0], [0.902, 0.624, 0.0]]
     """

@@ -173,6 +173,8 @@ def rgb_space(space: str | RGBSpace) -> RGBSpace:
     ``-``, spaces or dots, or an alias such as ``"p3"``, ``"bt2020"``, ``"romm"``); an
     :class:`RGBSpace` is returned as it is.
 
+    Examples
+    --------
     >>> rgb_space("Display-P3").name
     'Display P3'
     """
@@ -223,8 +225,12 @@ def rgb_to_xyz_matrix(space: str | RGBSpace = "srgb") -> np.ndarray:
     -------
     ndarray, shape (3, 3), float64
 
+    Notes
+    -----
     Source: SMPTE RP 177-1993; primaries and whites per :data:`RGB_SPACES` ``.source``.
 
+    Examples
+    --------
     >>> rgb_to_xyz_matrix("srgb").round(4)[0].tolist()
     [0.4124, 0.3576, 0.1805]
     >>> rgb_to_xyz_matrix("srgb")[1].round(6).tolist()
@@ -237,6 +243,8 @@ def rgb_to_xyz_matrix(space: str | RGBSpace = "srgb") -> np.ndarray:
 def xyz_to_rgb_matrix(space: str | RGBSpace = "srgb") -> np.ndarray:
     """The inverse of :func:`rgb_to_xyz_matrix` (XYZ to linear RGB), float64 (3, 3).
 
+    Examples
+    --------
     >>> xyz_to_rgb_matrix("srgb").round(4)[0].tolist()
     [3.241, -1.5374, -0.4986]
     """
@@ -266,6 +274,8 @@ def linear_rgb_to_xyz(rgb: object, space: str | RGBSpace = "srgb") -> Any:
     -------
     array, shape (..., 3)
 
+    Examples
+    --------
     >>> linear_rgb_to_xyz([1.0, 1.0, 1.0], "prophoto").round(4).tolist()
     [0.9643, 1.0, 0.8251]
     """
@@ -280,6 +290,8 @@ def xyz_to_linear_rgb(xyz: object, space: str | RGBSpace = "srgb") -> Any:
 
     Out-of-gamut colours give components below 0 or above 1; nothing is clipped.
 
+    Examples
+    --------
     >>> xyz_to_linear_rgb([0.950456, 1.0, 1.089058]).round(5).tolist()
     [1.0, 1.0, 1.0]
     """
@@ -307,8 +319,12 @@ def linear_srgb_to_xyz(rgb: object) -> Any:
     -------
     array, shape (..., 3)
 
+    Notes
+    -----
     Source: IEC 61966-2-1:1999, clause 5.2 (matrix derived from clause 5.1's primaries).
 
+    Examples
+    --------
     >>> linear_srgb_to_xyz([1.0, 0.0, 0.0]).round(4).tolist()
     [0.4124, 0.2126, 0.0193]
     """
@@ -321,6 +337,8 @@ def xyz_to_linear_srgb(xyz: object) -> Any:
 
     Source: IEC 61966-2-1:1999, clause 5.3 (matrix derived, not the printed 4-digit one).
 
+    Examples
+    --------
     >>> xyz_to_linear_srgb([0.9505, 1.0, 1.0891]).round(3).tolist()
     [1.0, 1.0, 1.0]
     """

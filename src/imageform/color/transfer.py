@@ -125,8 +125,12 @@ def srgb_to_linear(values: object) -> Any:
     array, shape (...)
         Linear values; float32 for float32/integer input, float64 for float64.
 
+    Notes
+    -----
     Source: IEC 61966-2-1:1999, clause 5.2, eq. (5)-(6).
 
+    Examples
+    --------
     >>> round(float(srgb_to_linear(0.5)), 6)
     0.214041
     """
@@ -151,8 +155,12 @@ def linear_to_srgb(values: object) -> Any:
     -------
     array, shape (...)
 
+    Notes
+    -----
     Source: IEC 61966-2-1:1999, clause 5.3, eq. (8)-(9).
 
+    Examples
+    --------
     >>> round(float(linear_to_srgb(0.18)), 6)
     0.461356
     """
@@ -172,8 +180,12 @@ def gamma_to_linear(values: object, gamma: float = 2.2) -> Any:
     gamma : float
         Exponent, > 0.
 
+    Notes
+    -----
     Source: the lecture ("gamma 2.2"); the odd extension to negatives is imageform's.
 
+    Examples
+    --------
     >>> round(float(gamma_to_linear(0.5)), 6)
     0.217638
     """
@@ -186,6 +198,8 @@ def gamma_to_linear(values: object, gamma: float = 2.2) -> Any:
 def linear_to_gamma(values: object, gamma: float = 2.2) -> Any:
     """Encode with a pure power law: :math:`V = \\operatorname{sign}(L) |L|^{1/\\gamma}`.
 
+    Examples
+    --------
     >>> round(float(linear_to_gamma(0.217638)), 5)
     0.5
     """
@@ -200,6 +214,8 @@ def adobe_rgb_to_linear(values: object) -> Any:
 
     Source: Adobe RGB (1998) Color Image Encoding, v2005-05, clause 4.3.1.2.
 
+    Examples
+    --------
     >>> round(float(adobe_rgb_to_linear(0.5)), 6)
     0.217756
     """
@@ -211,6 +227,8 @@ def adobe_rgb_to_linear(values: object) -> Any:
 def linear_to_adobe_rgb(values: object) -> Any:
     """Encode Adobe RGB (1998): :math:`V = L^{256/563}`.
 
+    Examples
+    --------
     >>> round(float(linear_to_adobe_rgb(0.217756)), 5)
     0.5
     """
@@ -228,6 +246,8 @@ def linear_to_rec709(values: object) -> Any:
 
     Source: ITU-R BT.709-6 (2015), Part 1, item 1.2.
 
+    Examples
+    --------
     >>> round(float(linear_to_rec709(0.18)), 6)
     0.409008
     """
@@ -243,6 +263,8 @@ def rec709_to_linear(values: object) -> Any:
     The rounded constants make the OETF jump from 0.081 to 0.081243 at L = 0.018: encoded
     values inside that gap decode to L >= 0.018 but do not re-encode to themselves.
 
+    Examples
+    --------
     >>> round(float(rec709_to_linear(0.409008)), 5)
     0.18
     """
@@ -259,6 +281,8 @@ def linear_to_rec2020(values: object) -> Any:
 
     Source: ITU-R BT.2020-2 (2015), Table 4.
 
+    Examples
+    --------
     >>> round(float(linear_to_rec2020(0.18)), 6)
     0.408848
     """
@@ -270,6 +294,8 @@ def linear_to_rec2020(values: object) -> Any:
 def rec2020_to_linear(values: object) -> Any:
     """Inverse of the Rec. 2020 OETF.
 
+    Examples
+    --------
     >>> round(float(rec2020_to_linear(0.5)), 6)
     0.259719
     """
@@ -283,6 +309,8 @@ def linear_to_prophoto(values: object) -> Any:
 
     Source: ISO 22028-2:2013, clause 5.3.
 
+    Examples
+    --------
     >>> round(float(linear_to_prophoto(0.18)), 6)
     0.385711
     """
@@ -294,6 +322,8 @@ def linear_to_prophoto(values: object) -> Any:
 def prophoto_to_linear(values: object) -> Any:
     """ProPhoto (ROMM RGB) decoding: V / 16 below 1/32, :math:`V^{1.8}` above.
 
+    Examples
+    --------
     >>> round(float(prophoto_to_linear(0.5)), 6)
     0.287175
     """
@@ -357,6 +387,8 @@ def decode(values: object, transfer: str = "srgb", *, gamma: float = 2.2) -> Any
     gamma : float
         Exponent for ``transfer="gamma"``.
 
+    Examples
+    --------
     >>> round(float(decode(0.5, "gamma", gamma=2.2)), 6)
     0.217638
     """
@@ -370,6 +402,8 @@ def decode(values: object, transfer: str = "srgb", *, gamma: float = 2.2) -> Any
 def encode(values: object, transfer: str = "srgb", *, gamma: float = 2.2) -> Any:
     """Encode linear light with the transfer function named ``transfer`` (see :func:`decode`).
 
+    Examples
+    --------
     >>> round(float(encode(0.214041, "srgb")), 5)
     0.5
     """

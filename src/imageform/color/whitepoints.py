@@ -100,8 +100,12 @@ def whitepoint_xy(name: str, *, observer: int = 2) -> tuple[float, float]:
     tuple of float
         ``(x, y)`` as CIE 15:2004 Table T.3 prints them.
 
+    Notes
+    -----
     Source: CIE 15:2004, Table T.3.
 
+    Examples
+    --------
     >>> whitepoint_xy("D65")
     (0.31271, 0.32902)
     >>> whitepoint_xy("d50", observer=10)
@@ -124,6 +128,8 @@ def xy_to_xyz_white(xy: Sequence[float]) -> np.ndarray:
 
     .. math:: X = x / y, \\quad Y = 1, \\quad Z = (1 - x - y) / y
 
+    Examples
+    --------
     >>> xy_to_xyz_white((0.3127, 0.3290)).round(6).tolist()
     [0.950456, 1.0, 1.089058]
     """
@@ -156,9 +162,13 @@ def whitepoint_xyz(name: str, *, observer: int = 2) -> np.ndarray:
     -------
     ndarray, shape (3,), float64
 
+    Notes
+    -----
     Source: CIE 15:2004, Table T.3 for ``(x, y)``; the XYZ follow from the definition of
     chromaticity, CIE 15:2004 eq. (7.3).
 
+    Examples
+    --------
     >>> whitepoint_xyz("D65").round(5).tolist()
     [0.95043, 1.0, 1.0889]
     >>> whitepoint_xyz("E").round(12).tolist()
@@ -177,6 +187,8 @@ def resolve_white(white: Any, *, observer: int = 2) -> np.ndarray:
     ``(X, Y, Z)`` with ``Y > 0`` (used as given). ``observer`` (keyword-only, 2 or 10) picks
     the illuminant table for a name.
 
+    Examples
+    --------
     >>> resolve_white("srgb").round(6).tolist()
     [0.950456, 1.0, 1.089058]
     >>> resolve_white((0.34567, 0.35850)).round(4).tolist()

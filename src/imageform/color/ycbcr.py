@@ -152,9 +152,13 @@ def rgb_to_ycbcr(
     array, shape (..., 3)
         (Y', Cb, Cr) in the requested scale.
 
+    Notes
+    -----
     Source: ITU-R BT.601-7 items 2.5.1-2.5.3; BT.709-6 items 3.2-4.6; BT.2020-2 Tables 4-5;
     ITU-T H.273 (full range).
 
+    Examples
+    --------
     >>> rgb_to_ycbcr([1.0, 0.0, 0.0], "bt709", signal_range="limited", bits=8).round(2).tolist()
     [62.56, 102.34, 240.0]
     """
@@ -179,6 +183,8 @@ def ycbcr_to_rgb(
     Codes outside the nominal range (footroom/headroom) give R'G'B' outside [0, 1]; nothing
     is clipped.
 
+    Examples
+    --------
     >>> ycbcr_to_rgb([235.0, 128.0, 128.0], "bt709", signal_range="limited").round(6).tolist()
     [1.0, 1.0, 1.0]
     """
@@ -207,6 +213,8 @@ def srgb_to_ycbcr(
     This is what JPEG (BT.601, full range, 8 bits) and OpenCV's ``COLOR_RGB2YCrCb`` do with
     sRGB pixels (OpenCV orders the result Y, Cr, Cb: see :mod:`imageform.color.opencv`).
 
+    Examples
+    --------
     >>> srgb_to_ycbcr([1.0, 1.0, 1.0], bits=8).round(6).tolist()
     [255.0, 128.0, 128.0]
     """
@@ -224,6 +232,8 @@ def ycbcr_to_srgb(
 ) -> Any:
     """Y'CbCr to sRGB-encoded values; inverse of :func:`srgb_to_ycbcr`.
 
+    Examples
+    --------
     >>> ycbcr_to_srgb([0.5, 0.0, 0.0]).round(6).tolist()
     [0.5, 0.5, 0.5]
     """

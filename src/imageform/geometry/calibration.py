@@ -66,6 +66,8 @@ def checkerboard_points(pattern_size: tuple[int, int], square_size: float = 1.0)
     The order of :func:`~imageform.geometry.checkerboard.find_checkerboard` and OpenCV's
     tutorial (``objp[:, :2] = np.mgrid[0:cols, 0:rows].T.reshape(-1, 2)``).
 
+    Examples
+    --------
     >>> checkerboard_points((3, 2), 25.0)[[0, 1, 3]].tolist()
     [[0.0, 0.0, 0.0], [25.0, 0.0, 0.0], [0.0, 25.0, 0.0]]
     """

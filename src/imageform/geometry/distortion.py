@@ -125,6 +125,8 @@ class BrownConrady:
     OpenCV ``calib3d`` documentation (``distCoeffs = (k1, k2, p1, p2, k3, k4, k5, k6)``).
     ``k1 < 0`` is barrel distortion, ``k1 > 0`` pincushion.
 
+    Examples
+    --------
     >>> BrownConrady(k1=-0.2).distort([0.5, 0.0]).round(6).tolist()
     [0.475, 0.0]
     """
@@ -182,6 +184,8 @@ class BrownConrady:
         only if, in addition, the Jacobian of the model is positive there (the model is
         invertible at the solution, inside its valid radius); other points are NaN.
 
+        Examples
+        --------
         >>> xy, ok = BrownConrady(k1=-0.2).undistort([0.475, 0.0])
         >>> round(float(xy[0]), 12), bool(ok)
         (0.5, True)
@@ -217,6 +221,8 @@ class DivisionModel:
     Source: A. W. Fitzgibbon, "Simultaneous linear estimation of multiple view geometry
     and lens distortion", CVPR 2001, eq. (3).
 
+    Examples
+    --------
     >>> xy, ok = DivisionModel(k1=-0.2).undistort([0.5, 0.0])
     >>> round(float(xy[0]), 6)
     0.526316
@@ -270,6 +276,8 @@ class KannalaBrandt:
     OpenCV fisheye module documentation. Undistortion solves for ``θ`` by Newton's method
     and is valid only for ``0 <= θ < π/2`` where the polynomial increases.
 
+    Examples
+    --------
     >>> KannalaBrandt().distort([1.0, 0.0]).round(6).tolist()  # θ_d = atan(1) = π/4
     [0.785398, 0.0]
     """
@@ -304,6 +312,8 @@ class KannalaBrandt:
     def undistort(self, xy: Any, max_iter: int = 20, tol: float | None = None) -> Undistorted:
         """Invert :meth:`distort`: :class:`Undistorted` ``(xy, valid)``, NaN where not valid.
 
+        Examples
+        --------
         >>> xy, ok = KannalaBrandt(k1=0.1).undistort([0.8, 0.0])
         >>> bool(ok), round(float(KannalaBrandt(k1=0.1).distort(xy)[0]), 12)
         (True, 0.8)
@@ -390,6 +400,8 @@ def project_points_distorted(
     :class:`BrownConrady` run one fused numba kernel
     (:func:`imageform._kernels.project_distort.project_brown_conrady`).
 
+    Examples
+    --------
     >>> K = [[500.0, 0, 320], [0, 500, 240], [0, 0, 1]]
     >>> uv, ok = project_points_distorted([[0.5, 0, 1]], K, np.eye(3), [0, 0, 0],
     ...                                   BrownConrady(k1=-0.2))

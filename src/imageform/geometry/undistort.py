@@ -122,6 +122,8 @@ def remap_bilinear(image: Any, map_uv: Any, *, fill: float = 0.0) -> Any:
     array (H', W') or (..., H', W', C), the image's float dtype and array kind (PyTorch in,
     PyTorch out on the same device, differentiable; Dask in, a lazy Dask array out).
 
+    Examples
+    --------
     >>> img = np.array([[0.0, 1.0], [2.0, 3.0]])
     >>> remap_bilinear(img, [[[0.5, 0.5]]]).tolist()
     [[1.5]]
@@ -200,6 +202,8 @@ def undistortion_map(
     ``shape`` is the output ``(H, W)``; ``new_K`` defaults to ``K``. Returns ``(H, W, 2)``
     float64 (of ``K``'s array kind and device); NaN where the model has no distorted point.
 
+    Examples
+    --------
     >>> m = undistortion_map((3, 3), [[2.0, 0, 1], [0, 2, 1], [0, 0, 1]], None)
     >>> m[0, 0].tolist()
     [0.0, 0.0]
@@ -264,6 +268,8 @@ def undistort_image(
     Equivalent to OpenCV's ``cv2.undistort`` (``initUndistortRectifyMap`` + ``remap`` with
     ``INTER_LINEAR``) up to OpenCV's 1/32-pixel quantisation of the sampling positions.
 
+    Examples
+    --------
     >>> img = np.zeros((5, 5)); img[2, 2] = 1.0
     >>> K = [[10.0, 0, 2], [0, 10, 2], [0, 0, 1]]
     >>> float(undistort_image(img, K, None)[2, 2])

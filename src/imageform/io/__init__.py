@@ -1,7 +1,8 @@
 """imageform.io: the one place where files are read and written.
 
 Images (PNG 8/16-bit, JPEG, TIFF, ``.npy``) with one rule for shape, alpha, orientation and
-memory bounds (:func:`read_image`, :func:`write_image`); the one camera file, versioned TOML
+memory bounds (:func:`read_image`, :func:`write_image`); raw files (:func:`write_dng`,
+:func:`read_raw`, :func:`develop`, docs/raw.md); the one camera file, versioned TOML
 (:func:`read_camera`, :func:`write_camera`, docs/camera-file.md).
 """
 
@@ -26,6 +27,14 @@ from imageform.io.image_io import (
     write_image,
 )
 from imageform.io.png import read_png, write_png
+from imageform.io.raw import (
+    CALIBRATION_ILLUMINANTS,
+    Development,
+    RawImage,
+    develop,
+    read_raw,
+    write_dng,
+)
 from imageform.io.stereo_file import (
     STEREO_FILE_FORMAT,
     STEREO_FILE_VERSION,
@@ -35,6 +44,7 @@ from imageform.io.stereo_file import (
 )
 
 __all__ = [
+    "CALIBRATION_ILLUMINANTS",
     "CAMERA_FILE_FORMAT",
     "CAMERA_FILE_VERSION",
     "DEFAULT_MAX_PIXELS",
@@ -43,18 +53,23 @@ __all__ = [
     "STEREO_FILE_FORMAT",
     "STEREO_FILE_VERSION",
     "CameraFile",
+    "Development",
     "ImageInfo",
     "Provenance",
+    "RawImage",
     "StereoCameraFile",
     "WrittenImage",
+    "develop",
     "image_format",
     "image_info",
     "max_pixels",
     "read_camera",
     "read_image",
     "read_png",
+    "read_raw",
     "read_stereo_camera",
     "write_camera",
+    "write_dng",
     "write_image",
     "write_png",
     "write_stereo_camera",

@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from imageform._validate import as_bool, as_int
 from imageform.errors import InvalidInputError, UnknownOptionError
 
 if TYPE_CHECKING:
@@ -159,6 +160,10 @@ class CameraFile:
                 f"{type(self.camera).__name__}"
             )
         object.__setattr__(self, "std", MappingProxyType(check_std(dict(self.std), "std")))
+        object.__setattr__(self, "has_pose", as_bool(self.has_pose, "has_pose"))
+        object.__setattr__(
+            self, "version", as_int(self.version, "version", minimum=0, maximum=CAMERA_FILE_VERSION)
+        )
 
     @property
     def distortion_model(self) -> str:
@@ -210,6 +215,8 @@ class CameraFile:
 def distortion_name(model: Any) -> str:
     """The camera-file name of a distortion model object (``none`` for None).
 
+    Examples
+    --------
     >>> from imageform.geometry import KannalaBrandt
     >>> distortion_name(KannalaBrandt(k1=0.1)), distortion_name(None)
     ('kannala_brandt', 'none')

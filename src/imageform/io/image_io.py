@@ -38,7 +38,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from imageform._files import atomic_write
-from imageform._validate import check_option
+from imageform._validate import check_memory, check_option, format_shape
 from imageform.errors import InvalidInputError
 
 __all__ = [
@@ -113,6 +113,8 @@ def max_pixels() -> int:
 def image_format(path: str | Path) -> str:
     """The format of ``path`` from its suffix (png, jpeg, tiff, npy); others raise.
 
+    Examples
+    --------
     >>> image_format("a.JPG")
     'jpeg'
     """
@@ -156,10 +158,16 @@ def _npy_header(
             f"cannot read {path}: expected an image of shape (H, W) or (H, W, C), got {shape}"
         )
     channels = shape[2] if len(shape) == 3 else 1
+    if not 1 <= channels <= 4:
+        raise InvalidInputError(
+            f"cannot read {path}: expected 1 to 4 channels, got {channels} (shape {shape})"
+        )
     info = ImageInfo(shape[1], shape[0], channels, str(dtype), "npy")
     if limit is not None:
         _check_pixels(path, info, limit)
     need = int(np.prod(shape, dtype=np.float64)) * dtype.itemsize
+    if limit is not None:  # before reading: the header is not trusted
+        check_memory(need, str(path), f"a {format_shape(tuple(shape))} {dtype} array")
     if path.stat().st_size - offset < need:
         raise InvalidInputError(f"cannot read {path}: the file is truncated")
     return info, shape, dtype

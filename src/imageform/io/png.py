@@ -28,6 +28,8 @@ def read_png(path: str | Path) -> np.ndarray:
 def write_png(path: str | Path, image: np.ndarray) -> None:
     """Write a uint8 or uint16 array ``(H, W)`` or ``(H, W, C)``, C in 1..4, as PNG (atomic).
 
+    Examples
+    --------
     >>> import tempfile, os
     >>> p = os.path.join(tempfile.mkdtemp(), "a.png")
     >>> write_png(p, np.array([[[0, 1000, 65535]]], np.uint16))
@@ -38,7 +40,7 @@ def write_png(path: str | Path, image: np.ndarray) -> None:
 
     a = np.asarray(image)
     if a.dtype not in (np.uint8, np.uint16):
-        raise InvalidInputError(f"expected uint8 or uint16 for PNG, got {a.dtype}")
+        raise InvalidInputError(f"expected image as uint8 or uint16 for PNG, got {a.dtype}")
     if Path(path).suffix.lower() != ".png":
         raise InvalidInputError(f"expected a .png file name, got {path}")
     write_image(path, a)

@@ -91,6 +91,8 @@ def spherical_blur_radius(*, focal_length: float, f_number: float, sa_coefficien
     4th ed., §3.4 (LSA ∝ h², TSA ∝ h³, least confusion at 3/4 LSA with diameter TSA/2);
     Hecht, *Optics*, 5th ed., §6.3.1.
 
+    Examples
+    --------
     >>> r = spherical_blur_radius(focal_length=0.05, f_number=2.0, sa_coefficient=0.5)
     >>> round(r * 1e6, 4)  # micrometres
     97.6562
@@ -136,6 +138,8 @@ def spherical_aberration(
     lets the blur grow off axis as real lenses' oblique spherical aberration and field
     curvature do (the lecture's "blur that grows with aperture and field").
 
+    Examples
+    --------
     >>> img = np.zeros((41, 41)); img[20, 20] = 1.0
     >>> out = spherical_aberration(img, focal_length=0.05, f_number=2, pixel_pitch=10e-6,
     ...                            sa_coefficient=0.5)
@@ -190,9 +194,13 @@ def lateral_chromatic_aberration(
         Value where a shrunk channel samples outside the image (finite, or NaN to mark
         those pixels).
 
+    Notes
+    -----
     Source: Hecht, *Optics*, 5th ed., §6.3.2 (lateral colour: magnification depends on
     wavelength); bilinear resampling as :func:`imageform.geometry.remap_bilinear`.
 
+    Examples
+    --------
     >>> img = np.zeros((1, 5, 2)); img[0, 3] = 1.0
     >>> lateral_chromatic_aberration(img, (1.0, 2.0))[0, :, 1].tolist()  # x = 3 → 4
     [0.0, 0.0, 0.0, 0.5, 1.0]
@@ -246,6 +254,8 @@ def chromatic_focal_lengths(*, focal_length: float, abbe_number: float) -> Chrom
 
     Source: Hecht, *Optics*, 5th ed., §6.3.2 (longitudinal chromatic aberration, Abbe number).
 
+    Examples
+    --------
     >>> fl = chromatic_focal_lengths(focal_length=0.05, abbe_number=64.17)  # N-BK7
     >>> [round(x * 1e3, 4) for x in fl]
     [50.3896, 50.0, 49.6104]
@@ -283,6 +293,8 @@ def axial_chromatic_blur_diameters(
     (with all ``f_c`` equal this is the circle of confusion). Source: thin-lens geometry,
     Hecht §5.2; Wikipedia "Circle of confusion".
 
+    Examples
+    --------
     >>> fl = chromatic_focal_lengths(focal_length=0.05, abbe_number=64.17)
     >>> b = axial_chromatic_blur_diameters(2.0, focal_lengths=fl, f_number=2, focus=2)
     >>> [round(float(x) * 1e6, 2) for x in b]  # µm: green sharp, red and blue blurred
@@ -349,6 +361,8 @@ def axial_chromatic_aberration(
     reference : int
         The channel in focus at ``focus`` (default 1, green).
 
+    Examples
+    --------
     >>> img = np.zeros((31, 31, 3)); img[15, 15] = 1.0
     >>> fl = chromatic_focal_lengths(focal_length=0.05, abbe_number=64.17)
     >>> out = axial_chromatic_aberration(img, 2.0, focal_lengths=fl, f_number=2, focus=2,

@@ -76,6 +76,8 @@ def disc_kernel(radius: float) -> np.ndarray:
     Coverage is integrated on a 16 × 16 sub-pixel grid; ``radius = 0`` gives the identity
     ``[[1.0]]``. Shape ``(2 ⌈R⌉ + 1, 2 ⌈R⌉ + 1)``; sums to 1.
 
+    Examples
+    --------
     >>> disc_kernel(0).tolist()
     [[1.0]]
     >>> k = disc_kernel(3.0); k.shape, round(float(k.sum()), 12)
@@ -141,6 +143,8 @@ def blur_by_radius(image: Any, radius_px: Any, *, step: float = 0.5, max_layers:
     -------
     array, the image's shape and float dtype.
 
+    Examples
+    --------
     >>> img = np.zeros((9, 9)); img[4, 4] = 1.0
     >>> out = blur_by_radius(img, 2.0)
     >>> round(float(out.sum()), 9), round(float(out[4, 4]), 4)
@@ -192,6 +196,8 @@ def defocus_radius_px(
 
         R_{px}(d) = \\frac{c(d)}{2 p}
 
+    Examples
+    --------
     >>> r = defocus_radius_px(4.0, focal_length=0.05, f_number=2, focus=2, pixel_pitch=5e-6)
     >>> round(float(r), 3)
     32.051
@@ -230,9 +236,13 @@ def defocus_blur(
     focal_length, f_number, focus, pixel_pitch : float
         Focal length (m), f-number, focus distance (m), sensor pixel pitch (m).
 
+    Notes
+    -----
     Source: geometric defocus with the thin-lens CoC (Wikipedia "Circle of confusion");
     layered rendering as in :func:`blur_by_radius`.
 
+    Examples
+    --------
     >>> img = np.zeros((21, 21)); img[10, 10] = 1.0
     >>> out = defocus_blur(img, 2.0, focal_length=0.05, f_number=2, focus=2.0, pixel_pitch=5e-6)
     >>> float(out[10, 10])  # in focus: unchanged

@@ -58,9 +58,13 @@ def hyperfocal_distance(*, focal_length: float, f_number: float, coc: float) -> 
     coc : float, keyword-only
         Acceptable circle-of-confusion diameter on the sensor (m).
 
+    Notes
+    -----
     Source: S. F. Ray, *Applied Photographic Optics*, 3rd ed., §6.3; Wikipedia "Hyperfocal
     distance" (definition 1).
 
+    Examples
+    --------
     >>> h = hyperfocal_distance(focal_length=0.050, f_number=8, coc=0.03e-3)  # 50 mm f/8
     >>> round(h, 2)
     10.47
@@ -125,6 +129,8 @@ def depth_of_field(
     Source: Wikipedia "Depth of field", §"Derivation of the DOF formulae" (exact thin-lens
     forms); S. F. Ray, *Applied Photographic Optics*, 3rd ed., §6.3.
 
+    Examples
+    --------
     >>> d = depth_of_field(focal_length=0.050, f_number=2.8, focus=2.0, coc=0.03e-3)
     >>> round(d.near, 3), round(d.far, 3)  # DOFMaster: 1.88 m - 2.14 m
     (1.877, 2.14)
@@ -163,9 +169,13 @@ def circle_of_confusion(depth: Any, *, focal_length: float, f_number: float, foc
     -------
     float or array (...), same namespace and dtype as ``depth``.
 
+    Notes
+    -----
     Source: Wikipedia "Circle of confusion", §"Determining a circle of confusion diameter
     from the object field"; the aperture diameter is ``A = f / N``.
 
+    Examples
+    --------
     >>> c = circle_of_confusion(4.0, focal_length=0.05, f_number=2.0, focus=2.0)
     >>> round(float(c) * 1e3, 6)
     0.320513

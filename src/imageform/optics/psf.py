@@ -68,6 +68,8 @@ def noll_to_nm(j: int) -> tuple[int, int]:
     ``m > 0``) and the odd ``j`` takes ``sin(|m| theta)`` (here ``m < 0``). Row ``n`` holds
     ``j`` from ``n(n+1)/2 + 1`` to ``(n+1)(n+2)/2``.
 
+    Examples
+    --------
     >>> [noll_to_nm(j) for j in (1, 2, 3, 4, 5, 6, 7, 8, 11, 22)]
     [(0, 0), (1, 1), (1, -1), (2, 0), (2, -2), (2, 2), (3, -1), (3, 1), (4, 0), (6, 0)]
     """
@@ -95,6 +97,8 @@ def zernike_radial(n: int, m: int, rho: Any) -> np.ndarray:
     (Noll 1976, eq. 2; Born & Wolf, *Principles of Optics*, sec. 9.2.) ``n - |m|`` must be even
     and non-negative.
 
+    Examples
+    --------
     >>> zernike_radial(4, 0, np.array([0.0, 1.0])).tolist()   # 6 rho^4 - 6 rho^2 + 1
     [1.0, 1.0]
     """
@@ -135,6 +139,8 @@ def zernike(j: int, rho: Any, theta: Any) -> np.ndarray:
     rho, theta : array_like
         Normalised pupil radius (1 at the rim) and azimuth in radians, broadcast together.
 
+    Examples
+    --------
     >>> round(float(zernike(4, 1.0, 0.0)), 6), round(float(zernike(4, 0.0, 0.0)), 6)
     (1.732051, -1.732051)
     """
@@ -181,6 +187,8 @@ def zernike_wavefront(coefficients: Any, rho: Any, theta: Any) -> np.ndarray:
     ``j = 1``; ``W`` is in the coefficients' unit (metres in this module; each ``c_j`` is that
     term's RMS over the pupil, so the total RMS is :math:`\\sqrt{\\sum_{j>1} c_j^2}`).
 
+    Examples
+    --------
     >>> round(float(zernike_wavefront({4: 1e-7}, 1.0, 0.0)) * 1e9, 3)   # nm at the rim
     173.205
     """
@@ -210,6 +218,8 @@ def zernike_defocus(coc: Any, *, f_number: float) -> Any:
     (piston dropped). ``coc`` in metres (scalar or array, >= 0); the sign of the defocus is
     lost in ``c``, and the PSF of ``+c_4`` and ``-c_4`` are mirror images anyway.
 
+    Examples
+    --------
     >>> round(zernike_defocus(30e-6, f_number=4) * 1e9, 2)   # 30 um blur at f/4: nm RMS
     270.63
     """
@@ -270,6 +280,8 @@ def pupil_function(
     -------
     complex array (M, M)
 
+    Examples
+    --------
     >>> p = pupil_function({4: 50e-9}, wavelength=550e-9, n_samples=64)
     >>> p.shape, p.dtype.name, bool(abs(abs(p[33, 33]) - 1) < 1e-12)
     ((66, 66), 'complex128', True)
@@ -326,6 +338,8 @@ def psf_from_pupil(pupil: Any, *, pad_to: int) -> np.ndarray:
     sample spacing is :math:`\\lambda N D / M = \\lambda N / Q` with ``Q = M / D`` (``Q >= 2``
     samples the PSF at or above Nyquist). The optical axis is at ``(M // 2, M // 2)``.
 
+    Examples
+    --------
     >>> h = psf_from_pupil(pupil_function(wavelength=5e-7, n_samples=32), pad_to=128)
     >>> h.shape, float(h.sum())   # the 797 samples of a 32-sample disc (pi 16^2 = 804.2)
     ((128, 128), 797.0)
@@ -444,6 +458,8 @@ def diffraction_psf(
     -------
     array (size, size), float64, sums to 1.
 
+    Examples
+    --------
     >>> h = diffraction_psf(wavelength=550e-9, f_number=4, pixel_pitch=1e-6, size=33)
     >>> h.shape, round(float(h.sum()), 12), bool(h.argmax() == 16 * 33 + 16)
     ((33, 33), 1.0, True)
@@ -490,6 +506,8 @@ def polychromatic_psf(
     sensitivity times the wavelength step. The Zernike coefficients are optical path
     differences (metres), the same for every wavelength. Returns ``(size, size)``, unit sum.
 
+    Examples
+    --------
     >>> h = polychromatic_psf(wavelengths=[450e-9, 550e-9, 650e-9], f_number=4,
     ...                       pixel_pitch=1e-6, size=33)
     >>> round(float(h.sum()), 12)
@@ -538,6 +556,8 @@ def field_psfs(
     image is then blurred zone by zone (tiled convolution), the usual approximation of an
     isoplanatic patch per zone (Goodman sec. 6.1).
 
+    Examples
+    --------
     >>> c = np.zeros((2, 3, 8)); c[..., 3] = 40e-9; c[1, 2, 7] = 80e-9   # defocus; coma
     >>> field_psfs(c, wavelength=550e-9, f_number=4, pixel_pitch=1e-6, size=17).shape
     (2, 3, 17, 17)
@@ -579,6 +599,8 @@ def otf(psf: Any, *, pixel_pitch: float) -> TransferFunction:
     with pixel ``(n // 2, n // 2)`` as the origin (Goodman eq. 6-28), on the DFT grid
     :math:`f = j / (n\\,\\Delta)`, shifted so that zero frequency is at ``(n // 2, n // 2)``.
 
+    Examples
+    --------
     >>> t = otf(diffraction_psf(wavelength=5e-7, f_number=4, pixel_pitch=5e-7, size=32),
     ...         pixel_pitch=5e-7)
     >>> float(t.value[16, 16].real), round(float(t.fx[17]), 3)   # 1 / (32 * 0.0005 mm)
@@ -605,6 +627,8 @@ def mtf(psf: Any, *, pixel_pitch: float) -> TransferFunction:
 
     Frequencies in cycles/mm, on the grid of :func:`otf`.
 
+    Examples
+    --------
     >>> t = mtf(diffraction_psf(wavelength=5e-7, f_number=4, pixel_pitch=5e-7, size=None),
     ...         pixel_pitch=5e-7)
     >>> c = t.value.shape[0] // 2
@@ -627,6 +651,8 @@ def diffraction_limited_mtf(frequency: Any, *, wavelength: float, f_number: floa
     and 0 for :math:`x \\ge 1` (Goodman eq. 6-31). ``frequency`` in cycles/mm (its absolute
     value is used), ``wavelength`` in metres.
 
+    Examples
+    --------
     >>> float(diffraction_limited_mtf(0.0, wavelength=5e-7, f_number=4))
     1.0
     >>> round(float(diffraction_limited_mtf(250.0, wavelength=5e-7, f_number=4)), 4)
@@ -653,6 +679,8 @@ def pixel_mtf(frequency: Any, *, pixel_pitch: float, fill_factor: float = 1.0) -
     cycles/mm, ``pixel_pitch`` in metres. The system MTF is the product of the optics' and
     the pixel's.
 
+    Examples
+    --------
     >>> round(float(pixel_mtf(250.0, pixel_pitch=2e-6)), 4)   # Nyquist: 2 / pi
     0.6366
     """

@@ -99,6 +99,8 @@ def thin_lens(
     Source: E. Hecht, *Optics*, 5th ed., eq. (5.17) (Gaussian lens formula) and (5.24)
     (transverse magnification).
 
+    Examples
+    --------
     >>> s = thin_lens(focal_length=0.05, d_o=2.0)
     >>> round(s.d_i * 1000, 4), round(s.magnification, 5)
     (51.2821, -0.02564)
@@ -174,6 +176,8 @@ def magnification(*, focal_length: float, d_o: float, allow_virtual: bool = Fals
 
     Negative values mean an inverted real image. Source: Hecht, *Optics*, 5th ed., eq. (5.24).
 
+    Examples
+    --------
     >>> round(magnification(focal_length=0.05, d_o=0.1), 12)  # object at 2f: life-size
     -1.0
     """
@@ -194,6 +198,8 @@ def f_number(*, focal_length: float, aperture_diameter: float) -> float:
 
     Source: Hecht, *Optics*, 5th ed., §5.3.3.
 
+    Examples
+    --------
     >>> round(f_number(focal_length=0.05, aperture_diameter=0.05 / 2.8), 12)
     2.8
     """
@@ -208,6 +214,8 @@ def f_number(*, focal_length: float, aperture_diameter: float) -> float:
 def aperture_diameter(*, focal_length: float, f_number: float) -> float:
     """Entrance-pupil diameter ``D = f / N`` (metres); ``focal_length`` in metres, keyword-only.
 
+    Examples
+    --------
     >>> round(aperture_diameter(focal_length=0.05, f_number=2.0), 6)
     0.025
     """

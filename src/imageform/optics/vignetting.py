@@ -52,6 +52,8 @@ def field_angle(
     center : (c_u, c_v), keyword-only, optional
         The optical center (column, row); default the image center ``((W-1)/2, (H-1)/2)``.
 
+    Examples
+    --------
     >>> round(float(field_angle((1, 3), focal_length=1.0)[0, 0]), 6)  # one pixel off, f = 1 px
     0.785398
     """
@@ -79,6 +81,8 @@ def cos4_falloff(
     sensor, two from the inverse-square distance to the pupil. Source: E. Hecht, *Optics*,
     5th ed., §5.7.4 (cos⁴ law); S. F. Ray, *Applied Photographic Optics*, §23.
 
+    Examples
+    --------
     >>> f = cos4_falloff((1, 3), focal_length=1.0)  # the outer pixels are at 45°
     >>> round(float(f[0, 0]), 6), float(f[0, 1])
     (0.25, 1.0)
@@ -98,6 +102,8 @@ def pupil_overlap_fraction(pupil_radius: float, stop_radius: float, offset: Any)
     (the area of intersection of two circles, Weisstein, MathWorld "Circle-Circle
     Intersection", eq. 14). 1 when the pupil lies inside, 0 when they do not overlap.
 
+    Examples
+    --------
     >>> round(float(pupil_overlap_fraction(1.0, 1.0, 1.0)), 6)
     0.391002
     """
@@ -153,6 +159,8 @@ def mechanical_vignetting(
     in one unit (e.g. metres). Source: S. F. Ray, *Applied Photographic Optics*, §23
     ("mechanical vignetting"); geometry of the oblique beam.
 
+    Examples
+    --------
     >>> v = mechanical_vignetting((1, 3), focal_length=1.0, pupil_radius=1, barrel_radius=1,
     ...                           barrel_distance=1)
     >>> round(float(v[0, 0]), 6), float(v[0, 1])
@@ -170,6 +178,8 @@ def mechanical_vignetting(
 def apply_vignetting(image: Any, falloff: Any) -> Any:
     """Multiply an image ``(H, W)`` or ``(H, W, C)`` by a relative-illumination map ``(H, W)``.
 
+    Examples
+    --------
     >>> apply_vignetting(np.ones((1, 3)), cos4_falloff((1, 3), focal_length=1.0)).round(12).tolist()
     [[0.25, 1.0, 0.25]]
     """

@@ -12,7 +12,7 @@ from typing import Any
 
 import numpy as np
 
-from imageform._validate import check_option
+from imageform._validate import as_float, check_option
 from imageform.errors import InvalidInputError
 
 __all__ = ["CCT_TICKS", "planckian_locus", "plot_chromaticity_diagram"]
@@ -27,6 +27,8 @@ def planckian_locus(
     """Chromaticities (N, 2) of black bodies, integrated from Planck's law (CIE 015:2018 eq. 4.1)
     with the CIE colour-matching functions.
 
+    Examples
+    --------
     >>> [round(float(v), 4) for v in planckian_locus([2856.0])[0]]
     [0.4475, 0.4074]
     """
@@ -36,7 +38,10 @@ def planckian_locus(
 
     c = check_option(coords, ("xy", "uv"), "chromaticity diagram")
     out = []
-    for t in np.asarray(temperatures, dtype=np.float64).ravel():
+    temps = np.asarray(as_float(temperatures, "temperatures"), dtype=np.float64).ravel()
+    if np.any(temps <= 0) or np.any(temps > 1e6):
+        raise InvalidInputError("expected temperatures in (0, 1e6] K")
+    for t in temps:
         xyz = spectrum_to_xyz(
             blackbody_spectrum(float(t), np.arange(360.0, 831.0)),
             illuminant=None,

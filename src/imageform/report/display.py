@@ -63,6 +63,8 @@ def stage_display_image(
     percentile : float
         For ``"linear"``: which percentile becomes white (99 by default).
 
+    Notes
+    -----
     Source: IEC 61966-2-1:1999, clause 5.3 (the sRGB encoding).
 
     Examples
@@ -110,6 +112,8 @@ def raw_to_uint16(image: np.ndarray) -> np.ndarray | None:
     """The raw digital numbers as uint16 when they are whole numbers in [0, 65535], else None
     (the caller then keeps them as a float TIFF: nothing is rounded or clipped).
 
+    Examples
+    --------
     >>> raw_to_uint16(np.array([[0.0, 4095.0]])).dtype
     dtype('uint16')
     >>> raw_to_uint16(np.array([[0.5]])) is None

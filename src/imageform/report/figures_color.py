@@ -12,6 +12,7 @@ from typing import Any
 
 import numpy as np
 
+from imageform.report._checks import check_result
 from imageform.report.patches import PatchMeasurements
 from imageform.simulate.result import SimulationResult
 
@@ -49,6 +50,8 @@ def _pyplot() -> Any:
 def truth_xy(measurements: PatchMeasurements) -> np.ndarray:
     """Chromaticity xy ``(24, 2)`` of the ground-truth patches (CIELAB under D65 -> XYZ -> xy).
 
+    Examples
+    --------
     >>> from imageform.report.patches import PatchMeasurements
     >>> m = PatchMeasurements(("white",), np.array([[100.0, 0, 0]]), np.zeros((1, 3)),
     ...     np.zeros(1), ("imperceptible",), np.zeros(1), "s", np.ones((1, 3)))
@@ -103,6 +106,7 @@ def plot_patch_chromaticity(
     InvalidInputError
         The ``patch_xy`` arrays are not all of one shape ``(n, 2)``.
     """
+    check_result(result)
     from imageform.errors import InvalidInputError
     from imageform.report.chromaticity_plot import plot_chromaticity_diagram
 
@@ -218,6 +222,7 @@ def photon_transfer_summary(result: SimulationResult) -> dict[str, Any] | None:
     """The photon-transfer data as plain numbers plus the EMVA 1288 fit
     (:func:`imageform.sensor.fit_photon_transfer`); ``fit`` is ``None`` with a ``fit_error``
     when the data cannot be fitted. ``None`` without data."""
+    check_result(result)
     from imageform.errors import ImageformError
     from imageform.sensor.emva import fit_photon_transfer
 

@@ -20,7 +20,9 @@ from typing import Any
 
 import numpy as np
 
+from imageform._validate import as_int
 from imageform.errors import InvalidInputError
+from imageform.report._checks import check_result
 from imageform.simulate.result import SimulationResult
 from imageform.simulate.truth import vanishing_errors
 
@@ -39,10 +41,13 @@ def image_corner_pixels(width: int, height: int) -> np.ndarray:
     """The outer corners ``(4, 2)`` of the image (pixel edges, centre of the top-left pixel at
     (0, 0)), clockwise from the top left.
 
+    Examples
+    --------
     >>> image_corner_pixels(4, 3).tolist()
     [[-0.5, -0.5], [3.5, -0.5], [3.5, 2.5], [-0.5, 2.5]]
     """
-    w, h = float(width), float(height)
+    w = float(as_int(width, "width", minimum=1))
+    h = float(as_int(height, "height", minimum=1))
     return np.array([[-0.5, -0.5], [w - 0.5, -0.5], [w - 0.5, h - 0.5], [-0.5, h - 0.5]])
 
 
@@ -51,6 +56,8 @@ def top_view_axes(R: Any, world_up: Any) -> tuple[np.ndarray, np.ndarray]:
     the camera's optical axis (or, looking straight down, its image-up direction) flattened
     onto the ground plane perpendicular to ``world_up``; ``right = ahead x up``.
 
+    Examples
+    --------
     >>> R = np.array([[1.0, 0, 0], [0, 0, -1], [0, 1, 0]])  # z-up world, looking along +y
     >>> [v.tolist() for v in top_view_axes(R, (0, 0, 1))]
     [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]
@@ -89,6 +96,7 @@ def top_view_data(result: SimulationResult) -> dict[str, Any]:
     ``view_right``, ``view_ahead`` (:func:`top_view_axes`). Rays whose corner pixel cannot
     be undistorted are NaN.
     """
+    check_result(result)
     cam = result.camera
     width, height = result.image_size
     centre = np.asarray(cam.center, dtype=np.float64)
@@ -190,6 +198,8 @@ def vanishing_summary(result: SimulationResult) -> dict[str, Any] | None:
     (distance of the finite points; ``None`` without a detection) and
     ``horizon_angle_error_deg``. ``None`` without rails.
 
+    Examples
+    --------
     >>> from imageform.geometry import Camera
     >>> from imageform.simulate.result import Stage, VanishingTruth
     >>> r = SimulationResult((Stage("o", "o", "o", np.zeros((4, 4, 3)), "srgb"),),
@@ -198,6 +208,7 @@ def vanishing_summary(result: SimulationResult) -> dict[str, Any] | None:
     >>> vanishing_summary(r)["vanishing_point_error_px"]
     5.0
     """
+    check_result(result)
     v = result.vanishing
     if v is None:
         return None
@@ -224,6 +235,7 @@ def vanishing_overlay(result: SimulationResult, display: np.ndarray) -> Any:
     """The output picture ``display`` (uint8 RGB) with the true and detected vanishing point
     and horizon (:func:`imageform.report.overlays.draw_vanishing_truth_overlay`); ``None``
     without rails."""
+    check_result(result)
     from imageform.report.overlays import draw_vanishing_truth_overlay
 
     v = result.vanishing

@@ -72,6 +72,8 @@ def all_examples() -> list[WorkedExample]:
 def lecture_topics() -> tuple[str, ...]:
     """The topics of the worked examples, in lecture order, each once.
 
+    Examples
+    --------
     >>> "pinhole" in lecture_topics()
     True
     """

@@ -108,6 +108,8 @@ def to_json_value(value: Any, where: str = "metrics") -> Any:
     numbers, paths strings, NaN and infinities ``None``; anything else is an error naming
     where it sits.
 
+    Examples
+    --------
     >>> to_json_value({"a": np.array([1.5, np.nan]), "b": (np.int64(2), Path("x"))})
     {'a': [1.5, None], 'b': [2, 'x']}
     """

@@ -98,6 +98,8 @@ def draw_vanishing_truth_overlay(
     on each side (farther ones, and points at infinity, are not drawn); the image's top-left
     pixel then sits at ``canvas.info["offset"]`` ``(ox, oy)`` (``(0, 0)`` without margin).
 
+    Examples
+    --------
     >>> im = draw_vanishing_truth_overlay(np.zeros((40, 60, 3)), [30.0, 20.0, 1.0], [0, 1, -20])
     >>> im.getpixel((30, 20)) == TRUE_COLOUR, im.info["offset"]
     (True, (0, 0))

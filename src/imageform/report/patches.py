@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from imageform.report._checks import check_result
 from imageform.simulate.result import PatchMeasurements, SimulationResult, Stage
 from imageform.simulate.truth import measure_colorchecker, patch_windows
 
@@ -21,6 +22,7 @@ def snr_stage(result: SimulationResult) -> Stage:
     """The stage the patch SNR is measured on: the last three-channel ``"linear"`` stage
     (the simulator's ``color_corrected``: linear sRGB before encoding), else the final
     stage."""
+    check_result(result)
     for s in reversed(result.stages):
         if s.kind == "linear" and s.image.ndim == 3 and s.image.shape[-1] == 3:
             return s
@@ -51,6 +53,7 @@ def measure_patches(result: SimulationResult) -> PatchMeasurements | None:
     ``snr_luminance_db = 20 log10(mean(Y) / std(Y))`` of the window's luminance
     (ISO 15739:2013 §6).
     """
+    check_result(result)
     cc = result.colorchecker
     if cc is None:
         return None

@@ -110,6 +110,8 @@ def cfa_masks(shape: tuple[int, int], pattern: str = "RGGB") -> np.ndarray:
     -------
     ndarray of bool, shape (H, W, 3)
 
+    Notes
+    -----
     Source: Bayer, US patent 3,971,065 (1976), fig. 6.
 
     Examples
@@ -160,6 +162,8 @@ def mosaic(rgb: ArrayLike, pattern: str = "RGGB") -> Array:
     UnknownOptionError
         If ``pattern`` is not a known Bayer pattern.
 
+    Notes
+    -----
     Source: Bayer, US patent 3,971,065 (1976).
 
     Examples

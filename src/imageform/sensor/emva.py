@@ -112,9 +112,13 @@ def simulate_photon_transfer(
     channel : int
         Which output channel to analyse.
 
+    Notes
+    -----
     Source: EMVA 1288 4.0, §6.1 (photon-transfer method, varying exposure time) and
     eqs. (29)–(30).
 
+    Examples
+    --------
     >>> from imageform.sensor.presets import cmos_preset
     >>> d = simulate_photon_transfer(cmos_preset(), irradiance=0.05, wavelength_nm=550,
     ...                              exposure_times=[1e-3], rng=0, shape=(8, 8))
@@ -217,6 +221,8 @@ def fit_photon_transfer(data: PhotonTransferData, *, fit_fraction: float = 0.7) 
     DegenerateConfigurationError
         Fewer than two usable points below saturation, or fewer than two exposure times.
 
+    Examples
+    --------
     >>> from imageform.sensor.presets import cmos_preset
     >>> s = cmos_preset(prnu=0.0)
     >>> d = simulate_photon_transfer(s, irradiance=0.05, wavelength_nm=550,

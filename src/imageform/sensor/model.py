@@ -68,6 +68,8 @@ def photons_per_pixel(
     ``irradiance`` in W/m², ``pixel_area`` in m², ``exposure_time`` in s. Source: EMVA 1288
     4.0, eq. (2).
 
+    Examples
+    --------
     >>> round(float(photons_per_pixel(1e-3, 550, pixel_area=25e-12, exposure_time=1e-3)), 2)
     69.22
     """
@@ -132,6 +134,8 @@ class SensorModel:
         Seed of the chip's fixed pattern (the same chip in every frame). An int on purpose,
         not an ``rng``: it is part of the chip's identity, drawn again identically each time.
 
+    Examples
+    --------
     >>> s = SensorModel(conversion_gain=50e-6, adc_range=1.0, bit_depth=12)
     >>> round(s.system_gain, 5)  # DN per electron
     0.20475
@@ -230,6 +234,8 @@ class SensorModel:
     def quantum_efficiency(self, wavelength_nm: float) -> np.ndarray:
         """QE of every channel at ``wavelength_nm`` (linear interpolation), shape ``(C,)``.
 
+        Examples
+        --------
         >>> s = SensorModel(qe_wavelengths=(500.0, 600.0), qe_curves=((0.4, 0.6),))
         >>> s.quantum_efficiency(550.0).tolist()
         [0.5]
@@ -392,8 +398,12 @@ class SensorModel:
         uint16 array (..., H, W, C)
             Raw digital numbers.
 
+        Notes
+        -----
         Source: EMVA 1288 4.0, §2, eqs. (1)–(9).
 
+        Examples
+        --------
         >>> s = SensorModel(read_noise=0, dark_current=0, dsnu=0, prnu=0, black_level=0)
         >>> s.capture(np.full((1, 2, 1), 0.0), exposure_time=0.01, rng=0).ravel().tolist()
         [0, 0]
@@ -440,6 +450,8 @@ class SensorModel:
 
         Values below the black level stay negative (noise is not clipped).
 
+        Examples
+        --------
         >>> SensorModel(black_level=64, bit_depth=12).normalize([64, 4095]).tolist()
         [0.0, 1.0]
         """
@@ -451,6 +463,8 @@ class SensorModel:
     def frame_readout_time(self, rows: int) -> float:
         """Time to read ``rows`` rows, ``rows × line_time`` (s).
 
+        Examples
+        --------
         >>> round(SensorModel(line_time=10e-6).frame_readout_time(1080), 6)
         0.0108
         """
@@ -462,6 +476,8 @@ class SensorModel:
 
         .. math:: DR = 20 \\log_{10}(Q_{FW} / \\sigma_{read})
 
+        Examples
+        --------
         >>> round(SensorModel(full_well=10000, read_noise=2.0).dynamic_range_db(), 2)
         73.98
         """

@@ -68,6 +68,8 @@ def fixed_pattern(
     (DSNU, PRNU definitions); column FPN of column-parallel CMOS read-out (A. El Gamal and
     H. Eltoukhy, "CMOS image sensors", IEEE Circuits & Devices 21(3), 2005).
 
+    Examples
+    --------
     >>> fp = fixed_pattern((2, 3, 1), prnu=0.0, dsnu=0.0, column_fpn=0.0, rng=0)
     >>> bool((fp.gain == 1).all()), bool((fp.offset == 0).all())
     (True, True)
@@ -98,6 +100,8 @@ def temporal_noise_dn(mean_electrons: float, *, system_gain: float, dark_noise_e
 
     Source: EMVA Standard 1288, Release 4.0 (2021), eq. (9).
 
+    Examples
+    --------
     >>> round(temporal_noise_dn(100.0, system_gain=0.5, dark_noise_e=2.0), 6)
     5.107184
     """
@@ -127,6 +131,8 @@ def emva_snr(
 
     Source: EMVA Standard 1288, Release 4.0 (2021), eq. (13).
 
+    Examples
+    --------
     >>> round(emva_snr(1000, quantum_efficiency=0.5, dark_noise_e=5, system_gain=1), 4)
     21.8201
     """

@@ -53,6 +53,8 @@ def ccd_preset(*, color: bool = False, **changes: Any) -> SensorModel:
 
     ``changes`` override fields (``dataclasses.replace``).
 
+    Examples
+    --------
     >>> s = ccd_preset()
     >>> s.architecture, s.shutter, s.read_noise
     ('ccd', 'global', 4.0)
@@ -85,6 +87,8 @@ def ccd_preset(*, color: bool = False, **changes: Any) -> SensorModel:
 def cmos_preset(*, color: bool = False, **changes: Any) -> SensorModel:
     """A CMOS active-pixel sensor: column-parallel ADCs, fast, low power, rolling shutter.
 
+    Examples
+    --------
     >>> s = cmos_preset()
     >>> s.architecture, s.shutter, round(s.system_gain, 4)
     ('cmos', 'rolling', 0.3276)
@@ -149,6 +153,8 @@ CCD_VS_CMOS: tuple[ComparisonRow, ...] = (
 def comparison_table(rows: int = 1000) -> list[dict[str, str]]:
     """The comparison table with the presets' numbers for a sensor of ``rows`` rows.
 
+    Examples
+    --------
     >>> t = comparison_table()
     >>> [r["aspect"] for r in t][:3]
     ['readout', 'speed', 'noise']

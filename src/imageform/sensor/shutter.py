@@ -41,6 +41,8 @@ def rolling_shutter_skew(velocity: float, line_time: float) -> float:
     Source: C.-K. Liang, L.-W. Chang, H. H. Chen, "Analysis and compensation of rolling
     shutter effect", IEEE TIP 17(8), 2008, §II.
 
+    Examples
+    --------
     >>> rolling_shutter_skew(1000.0, 20e-6)  # 1000 px/s, 20 µs per line
     0.02
     """
@@ -52,6 +54,8 @@ def rolling_shutter_skew(velocity: float, line_time: float) -> float:
 def row_start_times(rows: int, *, mode: str, line_time: float) -> np.ndarray:
     """Start of exposure of each row (s): all 0 (global) or ``r · t_line`` (rolling).
 
+    Examples
+    --------
     >>> row_start_times(3, mode="rolling", line_time=1e-3).tolist()
     [0.0, 0.001, 0.002]
     """
@@ -80,6 +84,8 @@ def rolling_shutter_points(
 
     ``points_uv`` ``(..., 2)`` in pixels at time ``t0``, ``velocity_uv`` ``(..., 2)`` px/s.
 
+    Examples
+    --------
     >>> rolling_shutter_points([[10.0, 100.0]], [1000.0, 0.0], line_time=1e-5).tolist()
     [[11.0, 100.0]]
     """
@@ -144,6 +150,8 @@ def shutter_capture(
     mode : {"global", "rolling"}
     samples : int
 
+    Examples
+    --------
     >>> bar = lambda t: (np.abs(np.arange(8) - (2 + 1000 * t)) < 0.5)[None].repeat(4, 0) * 1.0
     >>> img = shutter_capture(bar, exposure_time=1e-6, mode="rolling", line_time=1e-3,
     ...                       samples=1)

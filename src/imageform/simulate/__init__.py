@@ -7,6 +7,7 @@ composed by :func:`simulate`. The world is z up (:data:`WORLD_UP`).
 
 from imageform.simulate.colorfit import apply_color_correction, fit_color_correction
 from imageform.simulate.config import WORLD_UP, CameraConfig, SceneConfig
+from imageform.simulate.dng import simulated_color_matrix, write_simulated_dng
 from imageform.simulate.pipeline import simulate
 from imageform.simulate.render import RenderOutput, render_scene
 from imageform.simulate.result import (
@@ -42,4 +43,6 @@ __all__ = [
     "load_scene",
     "render_scene",
     "simulate",
+    "simulated_color_matrix",
+    "write_simulated_dng",
 ]

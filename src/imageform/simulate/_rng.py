@@ -52,6 +52,8 @@ def random_source(rng: RNGLike, seed: int | None, where: str) -> RandomSource:
 
     ``seed`` given: a DeprecationWarning naming ``rng``; both given: an error.
 
+    Examples
+    --------
     >>> random_source(3, None, "simulate").seed
     3
     """

@@ -19,6 +19,8 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
+from imageform._validate import as_int
+
 __all__ = [
     "BYTES_PER_PIXEL",
     "available_memory_bytes",
@@ -34,10 +36,14 @@ def estimate_memory_bytes(width: int, height: int) -> int:
     """Memory (bytes) that simulating and reporting a ``width`` x ``height`` image needs on
     top of the loaded libraries: :data:`BYTES_PER_PIXEL` per pixel.
 
+    Examples
+    --------
     >>> estimate_memory_bytes(1280, 720) / 1e9
     0.41472
     """
-    return int(width) * int(height) * BYTES_PER_PIXEL
+    w = as_int(width, "width", minimum=0)
+    h = as_int(height, "height", minimum=0)
+    return w * h * BYTES_PER_PIXEL
 
 
 def _meminfo_available(path: Path = Path("/proc/meminfo")) -> int | None:
@@ -78,6 +84,8 @@ def available_memory_bytes() -> int | None:
 def format_bytes(n: float) -> str:
     """``n`` bytes in the largest unit that keeps a number >= 1 (decimal units).
 
+    Examples
+    --------
     >>> format_bytes(414_720_000), format_bytes(2.5e12)
     ('415 MB', '2500 GB')
     """

@@ -16,6 +16,7 @@ from __future__ import annotations
 import numpy as np
 
 from imageform import _deprecate
+from imageform._validate import as_float, as_matrix
 from imageform.analysis.harmonize import ChartPatches, ColorCorrection
 from imageform.analysis.harmonize import fit_color_correction as _fit
 from imageform.errors import InvalidInputError
@@ -29,8 +30,8 @@ def _as_patches(values: np.ndarray, missing: np.ndarray) -> ChartPatches:
 
 
 def _fit_matrix(measured: np.ndarray, target: np.ndarray) -> np.ndarray:
-    C = np.asarray(measured, dtype=np.float64)
-    T = np.asarray(target, dtype=np.float64)
+    C = np.asarray(as_float(measured, "measured", finite=False), dtype=np.float64)
+    T = np.asarray(as_float(target, "target", finite=False), dtype=np.float64)
     if C.ndim != 2 or C.shape[1] != 3 or T.shape != C.shape:
         raise InvalidInputError(
             f"expected measured and target of shape (N, 3), got {C.shape} and {T.shape}"
@@ -73,9 +74,7 @@ def apply_color_correction(image: np.ndarray, M: np.ndarray) -> np.ndarray:
         "use the ColorCorrection returned by imageform.analysis.fit_color_correction"
         "(..., transfer='linear'): corr.apply(image)",
     )
-    Mm = np.asarray(M, dtype=np.float64)
-    if Mm.shape != (3, 3):
-        raise InvalidInputError(f"expected a (3, 3) matrix M, got {Mm.shape}")
+    Mm = np.asarray(as_matrix(M, "M", (3, 3), batch=False), dtype=np.float64)
     corr = ColorCorrection("linear", 1, Mm.T, transfer="linear")
     return np.asarray(corr.apply(image))
 

@@ -26,6 +26,7 @@ from typing import Any
 
 import numpy as np
 
+from imageform._validate import as_real, check_option
 from imageform.errors import InvalidInputError
 from imageform.geometry.camera import Camera
 from imageform.geometry.distortion import BrownConrady, DivisionModel, KannalaBrandt
@@ -115,9 +116,18 @@ class DistortionConfig:
     k5: float = 0.0
     k6: float = 0.0
 
+    def __post_init__(self) -> None:
+        """A known model and finite coefficients."""
+        model = check_option(self.model, DISTORTION_COEFFICIENTS, "distortion model")
+        object.__setattr__(self, "model", model)
+        for key in ("k1", "k2", "p1", "p2", "k3", "k4", "k5", "k6"):
+            object.__setattr__(self, key, as_real(getattr(self, key), key))
+
     def to_model(self) -> BrownConrady | DivisionModel | KannalaBrandt | None:
         """The :mod:`imageform.geometry.distortion` model, ``None`` when every coefficient is 0.
 
+        Examples
+        --------
         >>> DistortionConfig(k1=-0.1).to_model()
         BrownConrady(k1=-0.1, k2=0.0, p1=0.0, p2=0.0, k3=0.0, k4=0.0, k5=0.0, k6=0.0)
         >>> DistortionConfig().to_model() is None
@@ -138,6 +148,8 @@ class DistortionConfig:
     def from_model(cls, model: Any) -> DistortionConfig:
         """The section describing a distortion model (``None``: no distortion).
 
+        Examples
+        --------
         >>> DistortionConfig.from_model(KannalaBrandt(k1=0.1)).model
         'kannala_brandt'
         """
@@ -229,6 +241,8 @@ class CameraConfig:
 
         The inverse of :meth:`to_camera`:
 
+        Examples
+        --------
         >>> cam = Camera([[500.0, 0, 319.5], [0, 500.0, 239.5], [0, 0, 1]], t=[0, 0, 1],
         ...              image_size=(640, 480))
         >>> back = CameraConfig.from_camera(cam).to_camera((640, 480), 1e-6)

@@ -52,6 +52,8 @@ def scene_irradiance(illuminant: Spectrum, illuminance_lux: float, wl: np.ndarra
 
     .. math:: E(\\lambda) = S(\\lambda) E_v / (K_m \\textstyle\\sum S V \\Delta\\lambda)
 
+    Examples
+    --------
     >>> from imageform.spectral import illuminant
     >>> wl = np.arange(360.0, 831.0, 1.0)
     >>> E = scene_irradiance(illuminant("E"), 683.0, wl)  # 683 lx of equal energy
@@ -78,6 +80,8 @@ def electron_rates(
 
     See the module docstring for the equation.
 
+    Examples
+    --------
     >>> from imageform.sensor import cmos_preset
     >>> r = electron_rates(np.ones((2, 1)), np.array([300.0, 900.0]),
     ...                    Spectrum([300.0, 900.0], [1.0, 1.0]), 1000.0,
@@ -100,6 +104,8 @@ def electron_rates(
 def reflectance_spectrum(value: float | str) -> tuple[np.ndarray, np.ndarray]:
     """``(wavelengths, values)`` of a flat reflectance or a named ColorChecker patch.
 
+    Examples
+    --------
     >>> wl, r = reflectance_spectrum(0.5)
     >>> float(r.min()), float(r.max())
     (0.5, 0.5)
@@ -119,6 +125,8 @@ def texture_basis() -> tuple[np.ndarray, np.ndarray]:
     \\rho_\\lambda\\|`, ``C`` (24, 3) (Lawson & Hanson, *Solving Least Squares Problems*,
     1974, ch. 23).
 
+    Examples
+    --------
     >>> wl, B = texture_basis()
     >>> B.shape, bool(B.min() >= 0)
     ((36, 3), True)

@@ -5,12 +5,13 @@ from __future__ import annotations
 
 import math
 import time
+import warnings
 from collections.abc import Callable
 from typing import Any
 
 import numpy as np
 
-from imageform.errors import InvalidInputError
+from imageform.errors import ImageformWarning, InvalidInputError
 from imageform.simulate._rng import RNGLike, random_source
 from imageform.simulate.config import GroundConfig
 from imageform.simulate.render import render_scene
@@ -209,6 +210,15 @@ def simulate(
         ``white_balance_gains``, ``color_correction_matrix``, ``step_times_s`` and
         ``simulation_time_s`` (the run's wall time).
 
+    Warns
+    -----
+    ImageformWarning
+        A ColorChecker patch without noise (``sensor.noise = false``, or a flat patch):
+        its SNR is infinite, ``inf`` in ``snr_luminance_db_per_patch`` and ``null`` in
+        ``metrics.json``.
+
+    Examples
+    --------
     >>> from imageform.simulate import default_scene
     >>> res = simulate(default_scene().resized(160), rng=0)
     >>> res.stages[-1].kind, res.stages[-1].image.shape
@@ -268,6 +278,16 @@ def simulate(
         patches = measure_colorchecker(lin_out, cc.image, truth, snr_stage="color_corrected")
         patch_xy = _patch_chromaticities(truth, cc_before, cc_wb, cc.image)
         metrics |= _patch_metrics(patches)
+        flat = np.flatnonzero(np.isposinf(patches.snr_luminance_db))
+        if flat.size:
+            warnings.warn(
+                f"simulate: {flat.size} ColorChecker patch(es) have σ = 0 (no noise, or a window "
+                "of one pixel): their "
+                "SNR is infinite (null in metrics.json); set sensor.noise = true for a "
+                "measured SNR",
+                ImageformWarning,
+                stacklevel=2,
+            )
     run.tick("isp", "colorchecker")
     vanishing, errors = _vanishing(scene, out.image, source.int_seed())
     metrics |= errors

@@ -19,6 +19,7 @@ from typing import Any
 import numpy as np
 
 from imageform._backend import use_numba
+from imageform._validate import as_int, check_memory
 from imageform.errors import InvalidInputError
 from imageform.geometry.camera import Camera
 from imageform.simulate.config import (
@@ -31,6 +32,7 @@ from imageform.simulate.config import (
 )
 from imageform.simulate.materials import electron_rates, reflectance_spectrum, texture_basis
 from imageform.simulate.scene import Scene, SceneObject
+from imageform.simulate.schema import MAX_SUPERSAMPLING
 from imageform.simulate.textures import load_texture
 from imageform.spectral import COLORCHECKER_PATCHES
 
@@ -112,6 +114,8 @@ def pixel_rays(camera: Camera, u: np.ndarray, v: np.ndarray) -> np.ndarray:
 
     NaN where the distortion model cannot be inverted (outside its valid radius).
 
+    Examples
+    --------
     >>> cam = Camera([[100.0, 0, 50], [0, 100.0, 40], [0, 0, 1]], image_plane="real")
     >>> pixel_rays(cam, np.array([60.0]), np.array([40.0])).tolist()
     [[-0.1, -0.0]]
@@ -241,14 +245,29 @@ def render_scene(
     See the module docstring for the model. ``progress(fraction)`` is called after each
     band of rows.
 
+    Examples
+    --------
     >>> from imageform.simulate import default_scene
     >>> out = render_scene(default_scene().with_changes(render={"width": 64, "height": 36}))
     >>> out.rate.shape, bool(out.rate.min() >= 0)
     ((36, 64, 3), True)
     """
+    if not isinstance(scene, Scene):
+        raise TypeError(f"expected scene as a Scene (load_scene), got {type(scene).__name__}")
+    if progress is not None and not callable(progress):
+        raise TypeError(f"expected progress as a callable or None, got {type(progress).__name__}")
+    rows_per_chunk = as_int(rows_per_chunk, "rows_per_chunk", minimum=1)
     cfg = scene.config
     w, h = scene.image_size
     S = int(cfg.render.supersampling)
+    if not 1 <= S <= MAX_SUPERSAMPLING:
+        raise InvalidInputError(
+            f"expected scene render.supersampling in [1, {MAX_SUPERSAMPLING}], got {S}"
+        )
+    # rate, depth, falloff, index maps + one band of rays (about 16 float64 per ray)
+    check_memory(
+        8.0 * h * w * 6 + 8.0 * min(rows_per_chunk, h) * w * 16, "scene", f"a {w}x{h} render"
+    )
     vignette = cfg.lens.vignetting == "cos4"
     shader = _Shader(scene, float(cfg.lens.f_number))
     quads = _quads_camera(scene.objects, scene.camera)

@@ -12,6 +12,7 @@ import copy
 import dataclasses
 import tomllib
 import warnings
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -34,7 +35,7 @@ from imageform.simulate.config import (
     SceneConfig,
 )
 from imageform.simulate.textures import load_texture, resolve_path
-from imageform.simulate.validation import validate_scene_dict
+from imageform.simulate.validation import _Ctx, validate_scene_dict
 from imageform.spectral.spectrum import Spectrum
 
 __all__ = ["Scene", "SceneObject", "default_scene", "load_scene"]
@@ -107,6 +108,8 @@ class Scene:
     def with_changes(self, **sections: dict[str, Any] | list[dict[str, Any]]) -> Scene:
         """A copy with some keys of some sections replaced, re-validated.
 
+        Examples
+        --------
         >>> s = default_scene().with_changes(render={"width": 160, "height": 90})
         >>> s.image_size
         (160, 90)
@@ -130,6 +133,8 @@ class Scene:
         (``focal_length_mm``, the lens's focal length for defocus, defaults to the scene's).
         The scene's ``camera`` is then ``camera`` itself (the same K, R, t and distortion).
 
+        Examples
+        --------
         >>> from imageform.geometry import Camera
         >>> cam = Camera([[100.0, 0, 79.5], [0, 100.0, 59.5], [0, 0, 1]],
         ...              t=[0.0, 0.0, 0.3], image_size=(160, 120))
@@ -154,6 +159,8 @@ class Scene:
         """The scene seen from its extra view ``index`` (``[[views]]``): the same camera
         (intrinsics, distortion, sensor) at that view's look-at pose, without extra views.
 
+        Examples
+        --------
         >>> s = default_scene().with_changes(views=[{"eye_m": [0.0, -0.2, 0.05]}])
         >>> [round(float(v), 3) for v in s.view(0).camera.center]
         [0.0, -0.2, 0.05]
@@ -176,6 +183,8 @@ class Scene:
         ``width / current width``; ``height`` defaults to keeping the aspect ratio. The
         sensor (pixel area, noise) is unchanged.
 
+        Examples
+        --------
         >>> small = default_scene().resized(160)
         >>> small.image_size, round(float(small.camera.K[0, 0]), 3)
         ((160, 90), 71.429)
@@ -303,17 +312,35 @@ def _illuminant(il: IlluminantConfig, base: Path | None) -> Spectrum:
 
 def _build(data: dict[str, Any], text: str | None, origin: str, base: Path | None) -> Scene:
     cfg = SceneConfig.from_dict(validate_scene_dict(data, text, origin))
-    sensor = cfg.sensor.to_model()
-    camera = cfg.camera.to_camera((cfg.render.width, cfg.render.height), sensor.pixel_pitch)
+    ctx = _Ctx(text, origin)
+
+    def at(path: tuple[str, ...], make: Callable[[], Any]) -> Any:
+        """``make()``; an error it raises names the scene key and line (issue 16)."""
+        try:
+            return make()
+        except InvalidInputError as exc:
+            if str(exc).startswith("scene key"):
+                raise
+            raise type(exc)(f"scene key {ctx.where(path)}: {exc}") from None
+
+    sensor = at(("sensor",), cfg.sensor.to_model)
+    camera = at(
+        ("camera",),
+        lambda: cfg.camera.to_camera((cfg.render.width, cfg.render.height), sensor.pixel_pitch),
+    )
     if cfg.lens.focus_distance_m * 1e3 <= cfg.camera.focal_length_mm:
-        raise InvalidInputError("lens.focus_distance_m must exceed the focal length")
+        ctx.fail(
+            ("lens", "focus_distance_m"),
+            f"expected more than the focal length ({cfg.camera.focal_length_mm:g} mm), got "
+            f"{cfg.lens.focus_distance_m:g} m",
+        )
     return Scene(
         name=cfg.name,
         config=cfg,
-        objects=_objects(cfg, base),
+        objects=at(("objects",), lambda: _objects(cfg, base)),
         camera=camera,
         sensor=sensor,
-        illuminant=_illuminant(cfg.illuminant, base),
+        illuminant=at(("illuminant",), lambda: _illuminant(cfg.illuminant, base)),
         base_dir=base,
     )
 
@@ -332,6 +359,8 @@ def load_scene(source: str | Path | dict[str, Any]) -> Scene:
     UnknownOptionError
         An unknown key or choice, with the valid ones.
 
+    Examples
+    --------
     >>> s = load_scene('name = "tiny"\\n[render]\\nwidth = 160\\nheight = 90\\n')
     >>> s.name, s.image_size
     ('tiny', (160, 90))
@@ -344,7 +373,17 @@ def load_scene(source: str | Path | dict[str, Any]) -> Scene:
         path = Path(source)
         if not path.is_file():
             raise InvalidInputError(f"scene file not found: {str(path)!r}")
-        text = path.read_text(encoding="utf-8")
+        try:
+            text = path.read_text(encoding="utf-8")
+        except UnicodeDecodeError as exc:
+            raise InvalidInputError(
+                f"scene file {str(path)!r:.200} is not UTF-8 text (byte {exc.start}); "
+                "save it as UTF-8 TOML"
+            ) from None
+        except OSError as exc:
+            raise InvalidInputError(
+                f"cannot read scene file {str(path)!r:.200}: {exc.strerror}"
+            ) from None
         origin, base = str(path), path.resolve().parent
     elif isinstance(source, str):
         text, origin, base = source, "scene string", None
@@ -363,6 +402,8 @@ def default_scene() -> Scene:
     """The built-in scene: a ColorChecker and a checkerboard standing on a ground with rails,
     under tungsten light (CIE A), seen by an endoscope-like camera at 1280x720.
 
+    Examples
+    --------
     >>> default_scene().image_size
     (1280, 720)
     """

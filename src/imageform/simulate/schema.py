@@ -146,8 +146,12 @@ SCENE_SCHEMA: dict[str, Any] = {
             minimum=0.0,
             positive=True,
         ),
-        "fx_px": Field("float", None, "focal length in pixels (overrides focal_length_mm)"),
-        "fy_px": Field("float", None, "vertical focal length in pixels (default fx_px)"),
+        "fx_px": Field(
+            "float", None, "focal length in pixels (overrides focal_length_mm)", positive=True
+        ),
+        "fy_px": Field(
+            "float", None, "vertical focal length in pixels (default fx_px)", positive=True
+        ),
         "cx_px": Field("float", None, "principal point column (default (width - 1) / 2)"),
         "cy_px": Field("float", None, "principal point row (default (height - 1) / 2)"),
         "skew_px": Field("float", 0.0, "skew K[0, 1] (pixels; 0 for square pixels)"),
@@ -171,7 +175,7 @@ SCENE_SCHEMA: dict[str, Any] = {
         },
     },
     "lens": {
-        "f_number": Field("float", 8.0, "aperture f-number N = f / D", minimum=0.5),
+        "f_number": Field("float", 8.0, "aperture f-number N = f / D", minimum=0.5, maximum=1000.0),
         "focus_distance_m": Field(
             "float", 0.1, "distance in focus (m)", "length", minimum=0.0, positive=True
         ),

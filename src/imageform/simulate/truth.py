@@ -97,6 +97,8 @@ def patch_windows(
     centres lie within ``sample_radius_px`` of the centre along both axes, cut to the image
     (``None`` where nothing of the window is inside).
 
+    Examples
+    --------
     >>> t = ColorCheckerTruth(("a",), np.zeros((1, 3)), np.array([[10.0, 5.0]]), 2.0)
     >>> patch_windows(t, 20, 20)
     [(slice(3, 8, None), slice(8, 13, None))]
@@ -122,6 +124,8 @@ def patch_windows(
 def patch_means(image: np.ndarray, truth: ColorCheckerTruth) -> np.ndarray:
     """Mean ``(24, C)`` of each patch window (:func:`patch_windows`); NaN outside the image.
 
+    Examples
+    --------
     >>> t = ColorCheckerTruth(("a",), np.zeros((1, 3)), np.array([[1.0, 1.0]]), 1.0)
     >>> patch_means(np.arange(27.0).reshape(3, 3, 3), t).tolist()
     [[12.0, 13.0, 14.0]]
@@ -149,6 +153,8 @@ def patch_stats(image: np.ndarray, truth: ColorCheckerTruth) -> tuple[np.ndarray
 def xy_of_linear_srgb(rgb: np.ndarray) -> np.ndarray:
     """Chromaticity xy ``(..., 2)`` of linear-sRGB colours (CIE 015:2018 eq. 7.4).
 
+    Examples
+    --------
     >>> xy_of_linear_srgb(np.array([1.0, 1.0, 1.0])).round(4).tolist()
     [0.3127, 0.329]
     """
@@ -245,6 +251,8 @@ def light_cct(spd: Spectrum) -> tuple[float, float]:
     with ``illuminant=None``) and Robertson's method
     (:func:`imageform.color.xy_to_cct`; CIE 15:2004 eq. 3.3).
 
+    Examples
+    --------
     >>> from imageform.spectral import illuminant
     >>> cct, duv = light_cct(illuminant("A"))
     >>> round(cct), abs(duv) < 1e-3
@@ -296,6 +304,8 @@ def vanishing_errors(v: VanishingTruth) -> dict[str, float | None]:
     vanishing point (both finite; else ``None``); ``horizon_angle_error_deg``: the angle
     between the detected and the true horizon (``None`` without a detected horizon).
 
+    Examples
+    --------
     >>> vanishing_errors(VanishingTruth(np.array([3.0, 4.0, 1.0]), np.array([0.0, 1.0, -4.0]),
     ...                                 np.array([0.0, 0.0, 1.0]), np.array([0.0, 1.0, -2.0])))
     {'vanishing_point_error_px': 5.0, 'horizon_angle_error_deg': 0.0}

@@ -46,6 +46,8 @@ def find_line(text: str | None, path: tuple[Any, ...]) -> int | None:
     """1-based line of the key (or table) at ``path`` (e.g. ``("objects", 1, "squares")``) in
     TOML ``text``; None if not found. Array-of-tables entries count from 0.
 
+    Examples
+    --------
     >>> find_line("a = 1\\n[camera]\\nf = 2\\n", ("camera", "f"))
     3
     """
@@ -74,6 +76,24 @@ def find_line(text: str | None, path: tuple[Any, ...]) -> int | None:
 
 
 # ---- value checks ------------------------------------------------------------------------
+#: The largest length a scene may hold (m): a scene is a room, not an astronomical
+#: distance; beyond this the ray-quad intersections lose every significant digit.
+MAX_LENGTH_M = 1e6
+
+#: The most characters of a scene value (or key) an error message repeats.
+_ECHO = 60
+
+
+def _show_text(text: str) -> str:
+    """``text`` cut to :data:`_ECHO` characters (a scene file's content is never dumped)."""
+    return text if len(text) <= _ECHO else text[: _ECHO - 3] + "..."
+
+
+def _show(v: object) -> str:
+    """A scene value for an error message: its repr, cut to :data:`_ECHO` characters."""
+    return _show_text(repr(v))
+
+
 class _Ctx:
     def __init__(self, text: str | None, origin: str) -> None:
         self.text = text
@@ -81,7 +101,7 @@ class _Ctx:
 
     def where(self, path: tuple[Any, ...]) -> str:
         dotted = ".".join(f"[{p}]" if isinstance(p, int) else str(p) for p in path)
-        dotted = dotted.replace(".[", "[")
+        dotted = _show_text(dotted.replace(".[", "["))
         line = find_line(self.text, path)
         at = f" ({self.origin}, line {line})" if line else f" ({self.origin})"
         return f"{dotted}{at}"
@@ -94,7 +114,7 @@ class _Ctx:
 def _quantity(v: str, f: Field, key: str, path: tuple[Any, ...], ctx: _Ctx) -> float:
     m = re.fullmatch(r"\s*([-+0-9.eE]+)\s*([A-Za-zµ]+)\s*", v)
     if m is None or f.dimension is None:
-        ctx.fail(path, f"expected a number, got {v!r}")
+        ctx.fail(path, f"expected a number, got {_show(v)}")
         raise AssertionError  # unreachable (for type checkers)
     num, unit = float(m.group(1)), m.group(2)
     table = UNITS[f.dimension]
@@ -102,7 +122,7 @@ def _quantity(v: str, f: Field, key: str, path: tuple[Any, ...], ctx: _Ctx) -> f
         kinds = [d for d, t in UNITS.items() if unit in t]
         got = f" (a {kinds[0]})" if kinds else ""
         ctx.fail(
-            path, f"expected a {f.dimension} in one of {sorted(table)}, got unit {unit!r}{got}"
+            path, f"expected a {f.dimension} in one of {sorted(table)}, got unit {_show(unit)}{got}"
         )
     suffix = next((s for s in _SUFFIX_SCALE if key.endswith(s)), "")
     return num * table[unit] * _SUFFIX_SCALE.get(suffix, 1.0)
@@ -110,12 +130,13 @@ def _quantity(v: str, f: Field, key: str, path: tuple[Any, ...], ctx: _Ctx) -> f
 
 def _number(v: Any, f: Field, key: str, path: tuple[Any, ...], ctx: _Ctx) -> float:
     if isinstance(v, bool):
-        ctx.fail(path, f"expected a number, got {v!r}")
-    if isinstance(v, str):
-        return _quantity(v, f, key, path, ctx)
-    if not isinstance(v, int | float) or not math.isfinite(v):
-        ctx.fail(path, f"expected a finite number, got {v!r}")
-    return float(v)
+        ctx.fail(path, f"expected a number, got {_show(v)}")
+    x = _quantity(v, f, key, path, ctx) if isinstance(v, str) else v
+    if not isinstance(x, int | float) or not math.isfinite(x):
+        ctx.fail(path, f"expected a finite number, got {_show(v)}")
+    if f.dimension == "length" and abs(x) > MAX_LENGTH_M:
+        ctx.fail(path, f"expected a length within ±{MAX_LENGTH_M:g} m, got {x:g} m")
+    return float(x)
 
 
 def _bounds(x: float, f: Field, path: tuple[Any, ...], ctx: _Ctx) -> None:
@@ -133,21 +154,21 @@ def _check_value(v: Any, f: Field, key: str, path: tuple[Any, ...], ctx: _Ctx) -
     kind = f.kind
     if kind == "str":
         if not isinstance(v, str):
-            ctx.fail(path, f"expected a string, got {v!r}")
+            ctx.fail(path, f"expected a string, got {_show(v)}")
         if f.choices:
             key_ = v.strip().lower().replace("-", "_")
             valid = {c.lower(): c for c in f.choices}
             if key_ not in valid and v not in f.choices:
-                ctx.fail(path, f"unknown value {v!r}; valid: {', '.join(f.choices)}", True)
+                ctx.fail(path, f"unknown value {_show(v)}; valid: {', '.join(f.choices)}", True)
             return valid.get(key_, v)
         return v
     if kind == "bool":
         if not isinstance(v, bool):
-            ctx.fail(path, f"expected true or false, got {v!r}")
+            ctx.fail(path, f"expected true or false, got {_show(v)}")
         return v
     if kind == "int":
         if isinstance(v, bool) or not isinstance(v, int):
-            ctx.fail(path, f"expected an integer, got {v!r}")
+            ctx.fail(path, f"expected an integer, got {_show(v)}")
         _bounds(float(v), f, path, ctx)
         return int(v)
     if kind == "float_or_auto" and isinstance(v, str) and v.strip().lower() == "auto":
@@ -160,7 +181,7 @@ def _check_value(v: Any, f: Field, key: str, path: tuple[Any, ...], ctx: _Ctx) -
         if isinstance(v, str):
             if v not in COLORCHECKER_PATCHES:
                 near = difflib.get_close_matches(v, COLORCHECKER_PATCHES, 3)
-                ctx.fail(path, f"unknown ColorChecker patch {v!r}; close: {near}", True)
+                ctx.fail(path, f"unknown ColorChecker patch {_show(v)}; close: {near}", True)
             return v
         x = _number(v, f, key, path, ctx)
         if not 0.0 <= x <= 1.0:
@@ -169,18 +190,19 @@ def _check_value(v: Any, f: Field, key: str, path: tuple[Any, ...], ctx: _Ctx) -
     n = {"vec2": 2, "vec3": 3, "ivec2": 2, "mat3": 3}[kind]
     if not isinstance(v, list) or len(v) != n:
         ctx.fail(
-            path, f"expected a list of {n} {'rows' if kind == 'mat3' else 'numbers'}, got {v!r}"
+            path,
+            f"expected a list of {n} {'rows' if kind == 'mat3' else 'numbers'}, got {_show(v)}",
         )
     if kind == "mat3":
         rows = []
         for r in v:
             if not isinstance(r, list) or len(r) != 3:
-                ctx.fail(path, f"expected 3 rows of 3 numbers, got {v!r}")
+                ctx.fail(path, f"expected 3 rows of 3 numbers, got {_show(v)}")
             rows.append(tuple(_number(x, f, key, path, ctx) for x in r))
         return tuple(rows)
     if kind == "ivec2":
         if not all(isinstance(x, int) and not isinstance(x, bool) and x >= 2 for x in v):
-            ctx.fail(path, f"expected two integers >= 2, got {v!r}")
+            ctx.fail(path, f"expected two integers >= 2, got {_show(v)}")
         return tuple(int(x) for x in v)
     out = tuple(_number(x, f, key, path, ctx) for x in v)
     for x in out:
@@ -231,6 +253,8 @@ def validate_scene_dict(
     InvalidInputError
         A value of the wrong type, range or unit.
 
+    Examples
+    --------
     >>> cfg = validate_scene_dict({"render": {"width": 320, "height": 180}})
     >>> cfg["render"]["supersampling"], cfg["lens"]["f_number"]
     (2, 8.0)

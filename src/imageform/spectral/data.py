@@ -119,6 +119,8 @@ def read_table(key: str) -> DataTable:
     wavelength tables (the viridis colour map, the Machado et al. (2009) CVD matrices);
     :func:`load_table` gives a wavelength table as a :class:`Spectrum`.
 
+    Examples
+    --------
     >>> t = read_table("cvd_machado2009")
     >>> t.columns[:3], t.labels[0], t.values.shape
     (('deficiency', 'severity', 'm00'), 'protan', (33, 10))
@@ -134,6 +136,8 @@ def read_table(key: str) -> DataTable:
 def table_source(key: str) -> str:
     """The header (source and notes) of a shipped table.
 
+    Examples
+    --------
     >>> table_source("cmf_2").startswith("source: CIE 015:2018")
     True
     """
@@ -174,6 +178,8 @@ def cmfs(observer: int | str = 2) -> Spectrum:
 
     ``observer`` 2 (CIE 1931) or 10 (CIE 1964); source CIE 015:2018 Tables 4-5.
 
+    Examples
+    --------
     >>> round(float(cmfs(2).interpolate([555]).values[0, 1]), 6)
     1.0
     """
@@ -186,6 +192,8 @@ def cmfs(observer: int | str = 2) -> Spectrum:
 def luminous_efficiency(kind: str = "photopic") -> Spectrum:
     """CIE photopic V(λ) (1924, 360-830 nm) or scotopic V'(λ) (1951, 380-780 nm), 1 nm.
 
+    Examples
+    --------
     >>> luminous_efficiency("scotopic").peak_wavelength()
     507.0
     """
@@ -196,6 +204,8 @@ def luminous_efficiency(kind: str = "photopic") -> Spectrum:
 def cone_fundamentals() -> Spectrum:
     """Stockman & Sharpe (2000) 2° cone fundamentals L, M, S (energy units, peak 1), 1 nm.
 
+    Examples
+    --------
     >>> [round(float(p)) for p in cone_fundamentals().peak_wavelength()]
     [570, 543, 442]
     """
@@ -206,6 +216,8 @@ def illuminant_table(name: str) -> Spectrum:
     """A tabulated CIE illuminant, 5 nm: A, D50, D65 (100 at 560 nm); B, C (the old CIE
     daylight simulators, as tabulated: 102.8 and 105.3 at 560 nm); F2, F11 (relative).
 
+    Examples
+    --------
     >>> illuminant_table("C").name
     'CIE C'
     """

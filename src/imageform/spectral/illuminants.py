@@ -111,6 +111,8 @@ def blackbody_spectrum(
 
     The default grid is 300-830 nm at 1 nm.
 
+    Examples
+    --------
     >>> round(float(blackbody_spectrum(2856).interpolate([400]).values[0]), 3)
     14.717
     """
@@ -143,6 +145,8 @@ def daylight_spectrum(cct: float, *, round_m: bool = True) -> Spectrum:
     :math:`M_1, M_2` to three decimals as CIE 015:2018 §4.1.2 prescribes for the tabulated
     illuminants, which reproduces Table 1's D65 exactly.
 
+    Examples
+    --------
     >>> d65 = daylight_spectrum(6500 * 1.4388 / 1.4380)
     >>> round(float(d65.interpolate([560]).values[0]), 3)
     100.0
@@ -219,6 +223,8 @@ def illuminant(name: str) -> Spectrum:
     the 1931 scale, i.e. ``daylight_spectrum(7500 * 1.4388 / 1.4380)``), or ``"bb<T>"``
     (black body at T kelvin, e.g. ``"bb3200"``).
 
+    Examples
+    --------
     >>> illuminant("d65").name
     'CIE D65'
     """
@@ -258,6 +264,8 @@ def planckian_cct(xyz: npt.ArrayLike, *, observer: int = 2) -> PlanckianCCT:
     (:func:`imageform.color.cct.xy_to_cct`) and is its reference. Duv is signed positive above
     the locus.
 
+    Examples
+    --------
     >>> t, duv = planckian_cct([1.09850, 1.0, 0.35585])  # CIE illuminant A
     >>> round(t)
     2856

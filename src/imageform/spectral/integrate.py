@@ -69,6 +69,8 @@ def observer_functions(observer: int | str | Spectrum = 2) -> Spectrum:
     """The three sensitivity curves of an observer: CIE 1931 2° (``2``), CIE 1964 10° (``10``)
     or the Stockman & Sharpe (2000) 2° cone fundamentals (``"cones"``, alias ``"lms"``).
 
+    Examples
+    --------
     >>> observer_functions("cones").labels
     ('l_bar', 'm_bar', 's_bar')
     """
@@ -91,6 +93,8 @@ def resolve_illuminant(illuminant: str | Spectrum | None) -> Spectrum | None:
     :func:`~imageform.spectral.illuminant`, a single-curve Spectrum is returned as it is, and
     ``None`` (a light source measured on its own, no illuminant) stays ``None``.
 
+    Examples
+    --------
     >>> resolve_illuminant("D65").name
     'CIE D65'
     >>> resolve_illuminant(None) is None
@@ -234,6 +238,8 @@ def spectrum_to_xyz(
     ndarray, shape (3,) or (K, 3)
         XYZ with the perfect white (or the light) at Y = 1.
 
+    Notes
+    -----
     Source: CIE 015:2018 §7.1-7.2, eqs. 7.1-7.3; ASTM E308-22 §7.3.
 
     Examples
@@ -279,6 +285,8 @@ def spectrum_to_lms(
     -------
     ndarray, shape (3,) or (K, 3)
 
+    Examples
+    --------
     >>> from imageform.spectral import colorchecker_reflectances
     >>> [round(float(v), 3) for v in spectrum_to_lms(colorchecker_reflectances()["red"])]
     [0.141, 0.073, 0.046]
@@ -303,6 +311,8 @@ def spectrum_to_camera_rgb(
     Under an illuminant, normalised so the perfect white has G = 1 (not white balanced):
     :math:`c = \sum S R \bar c / \sum S \bar g`.
 
+    Examples
+    --------
     >>> from imageform.spectral import colorchecker_reflectances
     >>> rgb = spectrum_to_camera_rgb(colorchecker_reflectances()["white 9.5 (.05 D)"])
     >>> round(float(rgb[1]), 3)
@@ -324,6 +334,8 @@ def luminance(spectrum: Spectrum, *, scotopic: bool = False) -> float | np.ndarr
     :math:`K_m = 683` lm/W) or scotopic cd m⁻² (:math:`K'_m = 1700` lm/W); CIE 015:2018 §7.1.
     Summed on the V-function's 1 nm grid (sample interpolated linearly, zero outside).
 
+    Examples
+    --------
     >>> import numpy as np
     >>> flat = Spectrum(np.arange(360.0, 831.0), np.full(471, 0.01))
     >>> round(float(luminance(flat)), 2)

@@ -203,6 +203,8 @@ class Spectrum:
         A unique sampled maximum is refined by the parabola through it and its neighbours;
         a plateau of equal maxima (tables rounded to a few digits) gives the plateau's centre.
 
+        Examples
+        --------
         >>> round(Spectrum([500, 510, 520], [0.2, 0.9, 0.4]).peak_wavelength(), 2)
         510.83
         """
@@ -291,6 +293,8 @@ class Spectrum:
     ) -> Spectrum:
         """The spectrum on the uniform grid ``start, start + step, ..., stop`` (nm).
 
+        Examples
+        --------
         >>> Spectrum([400, 500], [0.0, 1.0]).resample(400, 500, 25).values.tolist()
         [0.0, 0.25, 0.5, 0.75, 1.0]
         """

@@ -111,6 +111,8 @@ def _norm(value: str) -> str:
 def normalize_choice(value: object, choices: Sequence[str] | str, what: str) -> str:
     """``value`` in its normalised spelling if it is one of ``choices``, else raise.
 
+    Examples
+    --------
     >>> normalize_choice("Gray-World", ("gray_world", "white_patch"), "--method")
     'gray_world'
     """
@@ -147,6 +149,10 @@ class Options:
 
     def check(self) -> None:
         """Cross-field checks (raise :class:`~imageform.errors.InvalidInputError`)."""
+
+    def check_output(self, path: Path) -> None:
+        """Refuse a main output these options cannot write (``imageform batch`` checks every
+        output suffix with it before any job starts)."""
 
     @classmethod
     def fields(cls) -> tuple[dataclasses.Field[Any], ...]:

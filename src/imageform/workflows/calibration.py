@@ -46,6 +46,8 @@ def parse_board(text: str) -> tuple[int, int]:
     Each count must be 2 to :data:`MAX_BOARD_CORNERS`: a row of one corner has no squares on
     both sides, and larger boards are not made.
 
+    Examples
+    --------
     >>> parse_board("9x6")
     (9, 6)
     """

@@ -11,6 +11,7 @@ from imageform.workflows._images import ImageIn, ImageOut, read, write
 from imageform.workflows._spec import Input, Options, Output, Result, Run, Workflow, option
 
 __all__ = [
+    "DISPLAYABLE_SPACES",
     "WORKFLOWS",
     "ConvertOptions",
     "CvdOptions",
@@ -39,6 +40,8 @@ _DISPLAYABLE = (
     "linear_prophoto",
 )
 
+#: Colour spaces whose values are RGB-like in [0, 1] (an integer image can hold them).
+DISPLAYABLE_SPACES = _DISPLAYABLE
 
 # ---------------------------------------------------------------- convert
 
@@ -73,6 +76,15 @@ class ConvertOptions(ImageIn, ImageOut):
         object.__setattr__(self, "src", space_name(self.src, "--from"))
         object.__setattr__(self, "dst", space_name(self.dst, "--to"))
 
+    def check_output(self, path: Path) -> None:
+        from imageform.io import image_format
+
+        if image_format(path) in ("png", "jpeg") and self.dst not in _DISPLAYABLE:
+            raise InvalidInputError(
+                f"{self.dst} values do not fit an integer image: write {path.stem}.tif or "
+                f"{path.stem}.npy (PNG and JPEG hold RGB-like spaces: {', '.join(_DISPLAYABLE)})"
+            )
+
     def params(self) -> dict[str, Any]:
         """The keyword parameters of :func:`imageform.color.convert`."""
         p: dict[str, Any] = {"alpha": "keep" if self.alpha == "keep" else "reject"}
@@ -93,15 +105,10 @@ def convert(run: Run, opts: ConvertOptions, *, out: Path, image: Path) -> Result
     import numpy as np
 
     from imageform.color import SPACES, convert, path
-    from imageform.io import image_format
 
     src, dst = opts.src, opts.dst
     edges = path(src, dst)
-    if image_format(out) in ("png", "jpeg") and dst not in _DISPLAYABLE:
-        raise InvalidInputError(
-            f"{dst} values do not fit an integer image: write {out.stem}.tif or "
-            f"{out.stem}.npy (PNG and JPEG hold RGB-like spaces: {', '.join(_DISPLAYABLE)})"
-        )
+    opts.check_output(out)
     img = read(image, opts)
     if src != "gray" and img.shape[-1] == 1:
         raise InvalidInputError(f"{image} is a grey image; convert it with --from gray")

@@ -7,11 +7,14 @@ from types import MappingProxyType
 
 from imageform.errors import UnknownOptionError
 from imageform.workflows import (
+    analysis,
     calibration,
     color,
     geometry,
     lecture,
     optics,
+    raw,
+    sensor,
     simulate,
     stereo,
     vanishing,
@@ -28,11 +31,14 @@ WORKFLOWS = MappingProxyType(
             *simulate.WORKFLOWS,
             *lecture.WORKFLOWS,
             *color.WORKFLOWS,
+            *raw.WORKFLOWS,
             *geometry.WORKFLOWS,
             *calibration.WORKFLOWS,
             *stereo.WORKFLOWS,
             *vanishing.WORKFLOWS,
             *optics.WORKFLOWS,
+            *sensor.WORKFLOWS,
+            *analysis.WORKFLOWS,
         )
     }
 )
@@ -41,6 +47,8 @@ WORKFLOWS = MappingProxyType(
 def get_workflow(name: str) -> Workflow:
     """The workflow called ``name`` (``-`` or ``_`` alike); unknown names list the valid ones.
 
+    Examples
+    --------
     >>> get_workflow("white_balance").name
     'white-balance'
     """

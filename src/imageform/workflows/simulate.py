@@ -34,11 +34,21 @@ class SimulateOptions(Options):
         input=True,
     )
     seed: int = option(0, help="Seed of the sensor noise (the same seed, the same pixels).")
+    raw: Path | None = option(
+        None,
+        help="Also write the raw mosaic as a DNG file with the simulated camera's colour "
+        "matrix and white balance (opens in LibRaw, darktable, RawTherapee); a path outside the "
+        "output folder.",
+        output=True,
+        metavar="FILE.dng",
+    )
 
     def check(self) -> None:
         super().check()
         if isinstance(self.seed, bool) or not isinstance(self.seed, int) or self.seed < 0:
             raise InvalidInputError(f"expected --seed as an integer >= 0, got {self.seed!r}")
+        if self.raw is not None and Path(self.raw).suffix.lower() != ".dng":
+            raise InvalidInputError(f"expected --raw as a .dng file, got {str(self.raw)!r}")
 
 
 def _check_folder(out: Path, force: bool) -> None:
@@ -88,6 +98,12 @@ def simulate(run: Run, opts: SimulateOptions, *, out: Path) -> Result:
             ),
         ),
     )
+    raw_dng = None
+    if opts.raw is not None:
+        from imageform.simulate import write_simulated_dng
+
+        write_simulated_dng(result, scene, run.file(opts.raw))
+        raw_dng = opts.raw
     wall = time.perf_counter() - t0
 
     def final(p: Path) -> Path:
@@ -105,6 +121,7 @@ def simulate(run: Run, opts: SimulateOptions, *, out: Path) -> Result:
         "stages": [final(p) for p in paths.stages],
         "raw_files": [final(p) for p in paths.raw_files],
         "views": [final(p) for p in views],
+        "raw_dng": raw_dng,
         "summary": s,
         "report_time_s": paths.seconds,
         "total_time_s": wall,
@@ -120,6 +137,7 @@ def simulate(run: Run, opts: SimulateOptions, *, out: Path) -> Result:
         f"metrics -> {summary['metrics']}",
         f"camera  -> {summary['camera']}",
         *([f"views   -> {out / 'views'} ({len(views)} images)"] if views else []),
+        *([f"raw DNG -> {raw_dng}"] if raw_dng is not None else []),
         f"mean ΔE00 {num(s.get('delta_e00_mean'), '.2f')} "
         f"(max {num(s.get('delta_e00_max'), '.2f')}); "
         f"vanishing-point error {num(s.get('vanishing_point_error_px'), '.2f', ' px')}; "

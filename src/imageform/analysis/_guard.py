@@ -1,0 +1,59 @@
+"""Boundary checks shared by the analysis tools (issue 16): real arrays and the
+validation of the result dataclasses a user can also build by hand."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from imageform._validate import as_float, as_int, as_real, describe, format_shape
+from imageform.errors import InvalidInputError
+
+__all__ = ["count", "real_array", "real_triple"]
+
+
+def real_array(
+    x: object, name: str, shape: tuple[int | None, ...] | None = None, *, finite: bool = True
+) -> np.ndarray:
+    """``x`` as a float64 NumPy array: complex, object, string and bool-only input refused;
+    ``shape`` (``None`` for any length on that axis) checked before the values."""
+    if x is None or isinstance(x, str | bytes):
+        raise InvalidInputError(f"expected {name} as a numeric array, got {describe(x)}")
+    arr = np.asarray(as_float(x, name, finite=False), dtype=np.float64)
+    if shape is not None and (
+        arr.ndim != len(shape)
+        or any(want is not None and got != want for got, want in zip(arr.shape, shape, strict=True))
+    ):
+        want_s = format_shape(shape)
+        raise InvalidInputError(
+            f"expected {name} of shape {want_s}, got {format_shape(tuple(arr.shape))}"
+        )
+    if finite and arr.size and not np.all(np.isfinite(arr)):
+        raise InvalidInputError(f"{name} contains NaN or inf")
+    return arr
+
+
+def real_triple(x: object, name: str, *, nonnegative: bool = False) -> tuple[float, float, float]:
+    """Three finite real numbers (a tuple, list or array of length 3)."""
+    if isinstance(x, str | bytes) or not hasattr(x, "__len__") or not hasattr(x, "__iter__"):
+        raise InvalidInputError(f"expected {name} as 3 numbers, got {describe(x)}")
+    items = list(x)
+    if len(items) != 3:
+        raise InvalidInputError(f"expected {name} as 3 numbers, got {len(items)}: {describe(x)}")
+    a, b, c = (as_real(v, f"{name}[{i}]", nonnegative=nonnegative) for i, v in enumerate(items))
+    return a, b, c
+
+
+def count(x: object, name: str) -> int:
+    """A count >= 0 (Python or NumPy integer)."""
+    return as_int(x, name, minimum=0)
+
+
+def unit_rows(m: np.ndarray, name: str) -> Any:
+    """Refuse a zero-length row (a stain vector of length 0 has no direction)."""
+    norms = np.linalg.norm(m, axis=-1)
+    if np.any(norms <= 1e-12):
+        i = int(np.argmin(norms))
+        raise InvalidInputError(f"expected {name} rows of non-zero length, row {i} is zero")
+    return norms

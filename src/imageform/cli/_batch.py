@@ -1,0 +1,231 @@
+"""``imageform batch COMMAND`` and ``imageform chunked COMMAND``: thin adapters generated
+from the workflow registry.
+
+Each subcommand takes the workflow's own options (the same flags, names and defaults as the
+single command) plus what scaling out needs: ``batch`` a glob of inputs, an output folder
+``-o/--out``, ``--scheduler``, ``--workers``, ``--suffix``; ``chunked`` one input, ``-o/--out``,
+``--chunk``, ``--tile``, ``--dtype``.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import click
+
+from imageform.cli._build import CommandExit, option_params
+from imageform.errors import ImageformError
+from imageform.workflows import Workflow
+
+__all__ = ["batch_group", "chunked_group"]
+
+_CHUNKED = ("convert", "white-balance")
+
+
+def _batch_workflows() -> dict[str, Workflow]:
+    from imageform.workflows.registry import WORKFLOWS
+
+    return {n: w for n, w in WORKFLOWS.items() if w.batch}
+
+
+def _extra_outputs(wf: Workflow) -> set[str]:
+    return {f.name for f in wf.options.fields() if f.metadata.get("output")}
+
+
+def _options(wf: Workflow, kw: dict[str, Any]) -> Any:
+    try:
+        return wf.make_options(**kw)
+    except ImageformError as exc:
+        raise click.UsageError(str(exc)) from None
+
+
+def _batch_command(wf: Workflow) -> click.Command:
+    params: list[click.Parameter] = [
+        click.Argument(["glob_pattern"], metavar="'GLOB'", required=True),
+        click.Option(
+            ["-o", "--out", "out"],
+            type=click.Path(path_type=Path, file_okay=False),
+            required=True,
+            help="Output folder (keeps the inputs' folders relative to the glob's fixed part).",
+        ),
+        # an extra output (--save-target, --overlay) is one file per run, not per input
+        *[p for p in option_params(wf) if p.name not in _extra_outputs(wf)],
+        click.Option(
+            ["--scheduler"], default=None, help="Address of a running dask scheduler (tcp://...)."
+        ),
+        click.Option(
+            ["--workers"], type=click.INT, default=None, help="Worker processes of a local cluster."
+        ),
+        click.Option(["--suffix"], default=None, help="Output suffix (.png, .tif, .npy)."),
+        click.Option(["--force"], is_flag=True, help="Redo outputs that are up to date."),
+        click.Option(["--json", "json_out"], is_flag=True, help="Print the summary as JSON."),
+    ]
+
+    def callback(**kw: Any) -> None:
+        from imageform._jsonio import dumps
+        from imageform.batch import BatchInterrupted, print_summary, run_batch
+
+        pattern, out = kw.pop("glob_pattern"), kw.pop("out")
+        scheduler, workers, suffix = kw.pop("scheduler"), kw.pop("workers"), kw.pop("suffix")
+        force, as_json = bool(kw.pop("force")), bool(kw.pop("json_out"))
+        opts = _options(wf, kw)
+        try:
+            report = run_batch(
+                wf.name,
+                pattern,
+                out,
+                opts,
+                scheduler=scheduler,
+                n_workers=workers,
+                force=force,
+                out_suffix=suffix,
+                progress=not as_json,
+            )
+        except BatchInterrupted as exc:
+            click.echo(f"imageform: {exc}", err=True)
+            raise CommandExit(130) from None
+        if as_json:
+            click.echo(dumps(report.to_dict()))
+        else:
+            from rich.console import Console
+
+            print_summary(report, Console(highlight=False))
+        if not report.ok:
+            raise CommandExit(1)
+
+    return click.Command(
+        wf.name,
+        params=params,
+        callback=callback,
+        help=f"{wf.summary}\n\nOver every file matching GLOB (quote it), on a dask cluster.",
+        short_help=wf.summary,
+        no_args_is_help=True,
+    )
+
+
+def _chunked_command(wf: Workflow) -> click.Command:
+    params: list[click.Parameter] = [
+        click.Argument(["image"], type=click.Path(path_type=Path), metavar="IMAGE"),
+        click.Option(
+            ["-o", "--out", "out"],
+            type=click.Path(path_type=Path),
+            required=True,
+            help="Output: a tiled .tif or a .zarr array.",
+        ),
+        *[p for p in option_params(wf) if p.name not in ("bits", "out_of_range", "clip")],
+        click.Option(
+            ["--chunk"],
+            type=click.INT,
+            default=1024,
+            show_default=True,
+            help="Block size in pixels (a multiple of --tile).",
+        ),
+        click.Option(
+            ["--tile"],
+            type=click.INT,
+            default=256,
+            show_default=True,
+            help="Tile size of a TIFF output.",
+        ),
+        click.Option(
+            ["--dtype"],
+            type=click.Choice(["uint8", "uint16", "float32"]),
+            default=None,
+            help="Output samples (default: the input's integer type; float32 for float input "
+            "or a space outside [0, 1]); integer output clips, with a note.",
+        ),
+        click.Option(["--force"], is_flag=True, help="Overwrite an existing output."),
+        click.Option(["--json", "json_out"], is_flag=True, help="Print the result as JSON."),
+    ]
+
+    def callback(**kw: Any) -> None:
+        from imageform._jsonio import dumps
+        from imageform.batch import process_chunked
+
+        image, out = kw.pop("image"), kw.pop("out")
+        chunk, tile, dtype = kw.pop("chunk"), kw.pop("tile"), kw.pop("dtype")
+        force, as_json = bool(kw.pop("force")), bool(kw.pop("json_out"))
+        opts = _options(wf, kw)
+        r = process_chunked(
+            image, out, wf.name, opts, chunk=chunk, tile=tile, dtype=dtype, force=force
+        )
+        info = {
+            "input": image,
+            "output": r.output,
+            "shape": list(r.shape),
+            "dtype": r.dtype,
+            "chunk": r.chunk,
+            "values_clipped": r.clipped,
+            "gains": r.gains,
+            "seconds": round(r.seconds, 3),
+        }
+        if as_json:
+            click.echo(dumps(info))
+        else:
+            h, w = r.shape[:2]
+            click.echo(f"wrote {r.output} ({w} x {h} {r.dtype}, {r.seconds:.1f} s)")
+        if r.clipped:
+            click.echo(
+                f"imageform: note: {r.clipped} values outside [0, 1] were clipped to fit "
+                f"{r.dtype}; --dtype float32 keeps them",
+                err=True,
+            )
+
+    return click.Command(
+        wf.name,
+        params=params,
+        callback=callback,
+        help=f"{wf.summary}\n\nOne image larger than memory (a TIFF or a .zarr array), block "
+        "by block, with bounded memory.",
+        short_help=wf.summary,
+        no_args_is_help=True,
+    )
+
+
+class _Lazy(click.Group):
+    """A group whose subcommands are built from the registry on first use."""
+
+    def __init__(self, name: str, make: Any, names: Any, **kw: Any) -> None:
+        super().__init__(name, **kw)
+        self._make, self._names = make, names
+
+    def list_commands(self, ctx: click.Context) -> list[str]:
+        return list(self._names())
+
+    def get_command(self, ctx: click.Context, cmd_name: str) -> click.Command | None:
+        from imageform.workflows.registry import WORKFLOWS
+
+        key = cmd_name.replace("_", "-")
+        if key not in self._names():
+            return None
+        return self._make(WORKFLOWS[key])
+
+
+def batch_group() -> click.Group:
+    """``imageform batch``: one subcommand per workflow that runs file by file."""
+    return _Lazy(
+        "batch",
+        _batch_command,
+        lambda: tuple(_batch_workflows()),
+        help="Run a command over many files on a dask cluster: imageform batch COMMAND "
+        "'GLOB' -o OUT_DIR [options of COMMAND]. Resumable (a manifest, "
+        ".imageform-batch.json, records the command, options and input behind each output: "
+        "a re-run with other options recomputes), atomic outputs, failures listed with their "
+        "reason (exit 1); Ctrl-C says what is done and exits 130.",
+        short_help="Run a command over many files on a dask cluster (resumable).",
+        no_args_is_help=True,
+    )
+
+
+def chunked_group() -> click.Group:
+    """``imageform chunked``: convert or white-balance one image larger than memory."""
+    return _Lazy(
+        "chunked",
+        _chunked_command,
+        lambda: _CHUNKED,
+        help="Process one image larger than memory block by block (bounded memory): "
+        "imageform chunked COMMAND IMAGE -o OUT [options of COMMAND].",
+        short_help="Process one image larger than memory block by block (bounded memory).",
+        no_args_is_help=True,
+    )

@@ -1,0 +1,593 @@
+"""Raw files in and out: DNG written with tifffile, any raw LibRaw reads (through rawpy, the
+optional ``imageform[raw]`` extra), and imageform's own development of a raw file, step by
+step (docs/raw.md).
+
+- :func:`write_dng`: a Bayer mosaic as a DNG 1.4 file (one uncompressed 16-bit CFA IFD,
+  PhotometricInterpretation 32803, with CFARepeatPatternDim/CFAPattern, BlackLevel,
+  WhiteLevel, ColorMatrix1, AsShotNeutral, CalibrationIlluminant1, UniqueCameraModel).
+  Adobe, *Digital Negative (DNG) Specification*, version 1.4.0.0 (2012), chapter 4.
+- :func:`read_raw`: the mosaic, black and white levels, CFA pattern, as-shot white balance
+  and colour matrices of a raw file (DNG, CR2, NEF, ARW, ...), as a :class:`RawImage`.
+- :func:`develop`: linearise, white balance, demosaic
+  (:func:`imageform.sensor.demosaic`), camera RGB to XYZ from the colour matrix, chromatic
+  adaptation to the output space's white, encoding; every stage kept in a
+  :class:`Development`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from imageform._validate import describe
+from imageform.errors import InvalidInputError
+
+__all__ = [
+    "CALIBRATION_ILLUMINANTS",
+    "Development",
+    "RawImage",
+    "develop",
+    "read_raw",
+    "write_dng",
+]
+
+#: EXIF LightSource codes of the DNG CalibrationIlluminant tags (EXIF 2.3, tag 0x9208) that
+#: name a CIE illuminant imageform knows, by name.
+CALIBRATION_ILLUMINANTS: dict[str, int] = {
+    "A": 17,
+    "B": 18,
+    "C": 19,
+    "D55": 20,
+    "D65": 21,
+    "D75": 22,
+    "D50": 23,
+}
+
+# TIFF/DNG tag codes (DNG specification 1.4.0.0, chapter 4; TIFF/EP for the CFA tags).
+_DNG_VERSION = 50706
+_DNG_BACKWARD_VERSION = 50707
+_UNIQUE_CAMERA_MODEL = 50708
+_CFA_REPEAT_PATTERN_DIM = 33421
+_CFA_PATTERN = 33422
+_CFA_PLANE_COLOR = 50710
+_CFA_LAYOUT = 50711
+_BLACK_LEVEL_REPEAT_DIM = 50713
+_BLACK_LEVEL = 50714
+_WHITE_LEVEL = 50717
+_COLOR_MATRIX_1 = 50721
+_COLOR_MATRIX_2 = 50722
+_AS_SHOT_NEUTRAL = 50728
+_CALIBRATION_ILLUMINANT_1 = 50778
+_CALIBRATION_ILLUMINANT_2 = 50779
+_PHOTOMETRIC_CFA = 32803
+# TIFF field types
+_BYTE, _ASCII, _SHORT, _LONG, _RATIONAL, _SRATIONAL = 1, 2, 3, 4, 5, 10
+#: Denominator of the rationals written (ColorMatrix1, AsShotNeutral): 1e-6 resolution.
+_DEN = 1_000_000
+
+
+def _rawpy() -> Any:
+    from imageform._optional import require
+
+    return require("rawpy", what="reading raw files (LibRaw)")
+
+
+def _rationals(values: np.ndarray, what: str, *, signed: bool) -> list[int]:
+    out: list[int] = []
+    lim = (2**31 - 1) if signed else (2**32 - 1)
+    for v in np.ravel(values):
+        num = round(float(v) * _DEN)
+        if abs(num) > lim or (not signed and num < 0):
+            raise InvalidInputError(f"expected {what} to fit a DNG rational, got {float(v)!r}")
+        out += [int(num), _DEN]
+    return out
+
+
+def _cfa_indices(pattern: str) -> tuple[int, int, int, int]:
+    return tuple("RGB".index(c) for c in pattern)  # type: ignore[return-value]
+
+
+def write_dng(
+    path: str | Path,
+    mosaic: Any,
+    *,
+    cfa_pattern: str = "RGGB",
+    black_level: float = 0.0,
+    white_level: float | None = None,
+    color_matrix: Any,
+    as_shot_neutral: Any = (1.0, 1.0, 1.0),
+    calibration_illuminant: str = "D65",
+    camera_model: str = "imageform simulated camera",
+) -> Path:
+    """Write a Bayer mosaic as a DNG file that raw developers (LibRaw, darktable,
+    RawTherapee, Adobe Camera Raw) open.
+
+    One IFD (NewSubfileType 0) holding the raw CFA image, uncompressed, 16 bits per sample,
+    PhotometricInterpretation 32803 (CFA), DNGVersion 1.4.0.0, DNGBackwardVersion 1.1.0.0,
+    and the colour tags of the DNG specification 1.4.0.0, chapter 4:
+
+    - CFARepeatPatternDim (2, 2) and CFAPattern (0 = red, 1 = green, 2 = blue);
+    - BlackLevel (one value for every photosite) and WhiteLevel;
+    - ColorMatrix1: XYZ to camera RGB under CalibrationIlluminant1 (SRATIONAL, stored to
+      1e-6), :math:`\\mathbf c = C\\,\\mathbf{XYZ}`;
+    - AsShotNeutral: the camera RGB of a neutral in the scene (white balance gains are its
+      reciprocals);
+    - UniqueCameraModel.
+
+    Parameters
+    ----------
+    path : str or Path
+        The file to write (``.dng``).
+    mosaic : array_like (H, W)
+        Integer digital numbers in [0, 65535], H and W even.
+    cfa_pattern : str
+        The 2x2 Bayer tile, read row by row (``"RGGB"``, ``"BGGR"``, ``"GRBG"``, ``"GBRG"``).
+    black_level, white_level : float
+        The code of no light and the largest code (default: the mosaic's dtype maximum for
+        uint16 data, else 65535).
+    color_matrix : array_like (3, 3)
+        XYZ (Y = 1 for the illuminant's white) to camera RGB, as DNG's ColorMatrix1.
+    as_shot_neutral : array_like (3,)
+        Camera RGB of a scene neutral (any scale; written as is, each in (0, 1e3)).
+    calibration_illuminant : str
+        The illuminant of ``color_matrix``: a name of :data:`CALIBRATION_ILLUMINANTS`.
+    camera_model : str
+        UniqueCameraModel.
+
+    Returns
+    -------
+    Path
+        The file written.
+    """
+    import tifffile
+
+    from imageform.sensor import cfa_pattern as _pattern
+
+    pattern = _pattern(cfa_pattern)
+    arr = np.asarray(mosaic)
+    if (
+        arr.ndim != 2
+        or arr.shape[0] < 2
+        or arr.shape[1] < 2
+        or arr.shape[0] % 2
+        or arr.shape[1] % 2
+    ):
+        raise InvalidInputError(
+            f"expected mosaic as an (H, W) array, H and W even, got {describe(arr)}"
+        )
+    if arr.dtype.kind not in "ui" and not (
+        arr.dtype.kind == "f" and np.all(np.isfinite(arr)) and np.all(arr == np.round(arr))
+    ):
+        raise InvalidInputError(f"expected mosaic of integer digital numbers, got {describe(arr)}")
+    if arr.size and (arr.min() < 0 or arr.max() > 65535):
+        raise InvalidInputError(f"expected mosaic values in [0, 65535], got {describe(arr)}")
+    data = arr.astype(np.uint16)
+    if white_level is None:
+        white_level = 65535.0
+    white = float(white_level)
+    black = float(black_level)
+    if not (0 <= black < white <= 65535) or black != round(black) or white != round(white):
+        raise InvalidInputError(
+            "expected integer black_level < white_level in [0, 65535], "
+            f"got {black_level!r} and {white_level!r}"
+        )
+    cm = np.asarray(color_matrix, dtype=np.float64)
+    if cm.shape != (3, 3) or not np.all(np.isfinite(cm)) or abs(np.linalg.det(cm)) < 1e-12:
+        raise InvalidInputError(
+            f"expected color_matrix as an invertible (3, 3) matrix, got {describe(cm)}"
+        )
+    neutral = np.asarray(as_shot_neutral, dtype=np.float64)
+    if neutral.shape != (3,) or not np.all(np.isfinite(neutral)) or np.any(neutral <= 0):
+        raise InvalidInputError(
+            f"expected as_shot_neutral as 3 positive numbers, got {describe(neutral)}"
+        )
+    ill = str(calibration_illuminant).upper()
+    if ill not in CALIBRATION_ILLUMINANTS:
+        raise InvalidInputError(
+            f"unknown calibration_illuminant {calibration_illuminant!r}; "
+            f"valid: {', '.join(CALIBRATION_ILLUMINANTS)}"
+        )
+    if not isinstance(camera_model, str) or not camera_model or not camera_model.isascii():
+        raise InvalidInputError(
+            f"expected camera_model as a non-empty ASCII string, got {describe(camera_model)}"
+        )
+    tags = [
+        (_DNG_VERSION, _BYTE, 4, (1, 4, 0, 0), True),
+        (_DNG_BACKWARD_VERSION, _BYTE, 4, (1, 1, 0, 0), True),
+        (_UNIQUE_CAMERA_MODEL, _ASCII, 0, camera_model, True),
+        (_CFA_REPEAT_PATTERN_DIM, _SHORT, 2, (2, 2), True),
+        (_CFA_PATTERN, _BYTE, 4, _cfa_indices(pattern), True),
+        (_CFA_PLANE_COLOR, _BYTE, 3, (0, 1, 2), True),
+        (_CFA_LAYOUT, _SHORT, 1, 1, True),
+        (_BLACK_LEVEL_REPEAT_DIM, _SHORT, 2, (1, 1), True),
+        (_BLACK_LEVEL, _LONG, 1, int(black), True),
+        (_WHITE_LEVEL, _LONG, 1, int(white), True),
+        (_COLOR_MATRIX_1, _SRATIONAL, 9, _rationals(cm, "color_matrix", signed=True), True),
+        (
+            _AS_SHOT_NEUTRAL,
+            _RATIONAL,
+            3,
+            _rationals(neutral, "as_shot_neutral", signed=False),
+            True,
+        ),
+        (_CALIBRATION_ILLUMINANT_1, _SHORT, 1, CALIBRATION_ILLUMINANTS[ill], True),
+    ]
+    out = Path(path)
+    tifffile.imwrite(
+        out,
+        data,
+        photometric=_PHOTOMETRIC_CFA,
+        subfiletype=0,
+        extratags=tags,
+        metadata=None,
+        software="imageform",
+    )
+    return out
+
+
+@dataclass(frozen=True)
+class RawImage:
+    """A raw file's sensor data and colour description (:func:`read_raw`).
+
+    Attributes
+    ----------
+    mosaic : ndarray (H, W) uint16
+        The visible Bayer mosaic in digital numbers.
+    black_level : ndarray (2, 2)
+        The black level of each photosite of the 2x2 tile (the mosaic's ``[0:2, 0:2]``).
+    white_level : float
+        The largest code (saturation).
+    cfa_pattern : str
+        The 2x2 tile read row by row (``"RGGB"``, ...).
+    white_balance : ndarray (3,) or None
+        The as-shot white balance gains (R, G, B) with green 1 (None if the file has none).
+    xyz_to_camera : ndarray (3, 3) or None
+        The camera's colour matrix, XYZ to camera RGB (DNG ColorMatrix, LibRaw's
+        ``rgb_xyz_matrix``), under ``calibration_illuminant``.
+    camera_to_srgb : ndarray (3, 3)
+        LibRaw's ``rgb_cam``: white-balanced camera RGB to linear sRGB.
+    calibration_illuminant : str or None
+        The illuminant of ``xyz_to_camera`` (``"D65"`` where the file does not say).
+    metadata : dict
+        What else is known: ``raw_type``, ``color_desc``, ``daylight_white_balance``,
+        ``camera_model`` (DNG UniqueCameraModel), ``path``.
+    """
+
+    mosaic: np.ndarray
+    black_level: np.ndarray
+    white_level: float
+    cfa_pattern: str
+    white_balance: np.ndarray | None
+    xyz_to_camera: np.ndarray | None
+    camera_to_srgb: np.ndarray
+    calibration_illuminant: str | None
+    metadata: dict[str, Any] = field(default_factory=dict)
+
+
+def _dng_tags(path: Path) -> dict[str, Any]:
+    """ColorMatrix1/2, CalibrationIlluminant1/2 and UniqueCameraModel of a DNG (tifffile)."""
+    import tifffile
+
+    try:
+        with tifffile.TiffFile(path) as tf:
+            found: dict[str, Any] = {}
+            for page in tf.pages:
+                tags = page.tags  # type: ignore[union-attr]
+                for code, name in (
+                    (_COLOR_MATRIX_1, "cm1"),
+                    (_COLOR_MATRIX_2, "cm2"),
+                    (_CALIBRATION_ILLUMINANT_1, "ill1"),
+                    (_CALIBRATION_ILLUMINANT_2, "ill2"),
+                    (_UNIQUE_CAMERA_MODEL, "model"),
+                ):
+                    if code in tags and name not in found:
+                        found[name] = tags[code].value
+                break
+    except Exception:  # not a TIFF-based raw: nothing more to read
+        return {}
+    return found
+
+
+def _matrix(value: Any) -> np.ndarray:
+    v = np.asarray(value, dtype=np.float64).ravel()
+    if v.size == 18:  # numerator, denominator pairs
+        v = v[0::2] / v[1::2]
+    return v[:9].reshape(3, 3)
+
+
+def read_raw(path: str | Path) -> RawImage:
+    """Read a raw file with LibRaw (rawpy): DNG, CR2, NEF, ARW, RAF (Bayer), ORF, RW2, ...
+
+    Needs the optional extra ``imageform[raw]`` (rawpy). Only Bayer sensors with a 2x2 RGB
+    tile are supported (not X-Trans, not four-colour sensors).
+
+    Parameters
+    ----------
+    path : str or Path
+        The raw file.
+
+    Returns
+    -------
+    RawImage
+        The visible mosaic, levels, CFA pattern, as-shot white balance and colour matrices.
+        For a DNG, ``xyz_to_camera`` is its ColorMatrix (the one of a D65 illuminant if it
+        has two, else ColorMatrix1); for other files LibRaw's ``rgb_xyz_matrix``.
+
+    Raises
+    ------
+    InvalidInputError
+        Missing file, a file LibRaw cannot read, or a non-Bayer sensor.
+    imageform.errors.ImageformError
+        rawpy is not installed (the message names ``pip install "imageform[raw]"``).
+    """
+    p = Path(path)
+    if not p.is_file():
+        raise InvalidInputError(f"raw file {p} does not exist")
+    rawpy = _rawpy()
+    try:
+        r = rawpy.imread(str(p))
+    except Exception as exc:  # LibRawFileUnsupportedError, LibRawIOError, ...
+        raise InvalidInputError(
+            f"{p} is not a raw file LibRaw can read ({type(exc).__name__})"
+        ) from None
+    with r:
+        desc = r.color_desc.decode("ascii", "replace")
+        pat = np.asarray(r.raw_pattern)
+        if r.num_colors != 3 or pat.shape != (2, 2) or any(c not in "RGB" for c in desc[:3]):
+            raise InvalidInputError(
+                f"{p}: only Bayer sensors with a 2x2 RGB tile are supported, got a "
+                f"{pat.shape[0]}x{pat.shape[1]} tile of {desc!r}"
+            )
+        pattern = "".join(desc[int(i)] for i in pat.ravel()).replace("G2", "G")
+        pattern = "".join("G" if c not in "RB" else c for c in pattern)
+        mosaic = np.array(r.raw_image_visible, dtype=np.uint16, copy=True)
+        per_channel = np.asarray(r.black_level_per_channel, dtype=np.float64)
+        black = per_channel[pat].astype(np.float64)
+        white = float(r.white_level)
+        wb4 = np.asarray(r.camera_whitebalance, dtype=np.float64)
+        gains = None
+        if wb4[1] > 0 and wb4[0] > 0 and wb4[2] > 0:
+            gains = np.array([wb4[0] / wb4[1], 1.0, wb4[2] / wb4[1]])
+        day = np.asarray(r.daylight_whitebalance, dtype=np.float64)
+        rgb_cam = np.array(r.color_matrix, dtype=np.float64)[:3, :3]
+        cam_xyz = np.array(r.rgb_xyz_matrix, dtype=np.float64)[:3, :3]
+        raw_type = str(r.raw_type).split(".")[-1].lower()
+    meta: dict[str, Any] = {
+        "path": str(p),
+        "raw_type": raw_type,
+        "color_desc": desc,
+        "daylight_white_balance": (day[:3] / day[1]).tolist() if day[1] > 0 else None,
+        "camera_model": None,
+    }
+    illum: str | None = None
+    xyz_to_camera: np.ndarray | None = cam_xyz if np.any(cam_xyz) else None
+    tags = _dng_tags(p)
+    if tags:
+        names = {v: k for k, v in CALIBRATION_ILLUMINANTS.items()}
+        if "model" in tags:
+            meta["camera_model"] = str(tags["model"]).strip("\x00")
+        pick = "1"
+        if "cm2" in tags and int(tags.get("ill2", 0)) == 21 and int(tags.get("ill1", 0)) != 21:
+            pick = "2"
+        if f"cm{pick}" in tags:
+            xyz_to_camera = _matrix(tags[f"cm{pick}"])
+            code = int(tags.get(f"ill{pick}", 0))
+            illum = names.get(code, "D65")
+            meta["calibration_illuminant_code"] = code
+    if xyz_to_camera is not None and illum is None:
+        illum = "D65"  # LibRaw's matrices are for D65
+    return RawImage(
+        mosaic=mosaic,
+        black_level=black,
+        white_level=white,
+        cfa_pattern=pattern,
+        white_balance=gains,
+        xyz_to_camera=xyz_to_camera,
+        camera_to_srgb=rgb_cam,
+        calibration_illuminant=illum,
+        metadata=meta,
+    )
+
+
+@dataclass(frozen=True)
+class Development:
+    """Every stage of :func:`develop`, in order.
+
+    Attributes
+    ----------
+    linear : ndarray (H, W)
+        The mosaic linearised: :math:`(DN - B) / (W - B)`.
+    white_balanced : ndarray (H, W)
+        ``linear`` times the gain of each photosite's colour, clipped to [0, 1].
+    camera_rgb : ndarray (H, W, 3)
+        Demosaiced, white-balanced camera RGB.
+    xyz : ndarray (H, W, 3)
+        CIE XYZ adapted to the output space's white (Y = 1 for white).
+    linear_rgb : ndarray (H, W, 3)
+        Linear RGB of the output space, clipped to [0, 1].
+    image : ndarray (H, W, 3)
+        The encoded output in [0, 1] (``linear_rgb`` itself for linear output).
+    gains : ndarray (3,)
+        The white balance gains applied (R, G, B; the smallest is 1).
+    camera_to_xyz : ndarray (3, 3)
+        White-balanced camera RGB to XYZ under the calibration illuminant.
+    adaptation : ndarray (3, 3)
+        Bradford, the calibration illuminant's white to the output space's white.
+    space, transfer, demosaic : str
+        The output space, its encoding and the demosaicing method.
+    """
+
+    linear: np.ndarray
+    white_balanced: np.ndarray
+    camera_rgb: np.ndarray
+    xyz: np.ndarray
+    linear_rgb: np.ndarray
+    image: np.ndarray
+    gains: np.ndarray
+    camera_to_xyz: np.ndarray
+    adaptation: np.ndarray
+    space: str
+    transfer: str
+    demosaic: str
+
+    def to_integer(self, bits: int = 16) -> np.ndarray:
+        """The output image as uint8 (``bits=8``) or uint16 (``bits=16``), rounded."""
+        if bits not in (8, 16):
+            raise InvalidInputError(f"expected bits 8 or 16, got {describe(bits)}")
+        top = 2**bits - 1
+        return np.asarray(np.round(self.image * top), dtype=np.uint8 if bits == 8 else np.uint16)
+
+
+def develop(
+    raw: RawImage | str | Path,
+    *,
+    demosaic: str = "bilinear",
+    white_balance: Any = "camera",
+    space: str = "srgb",
+    linear: bool = False,
+) -> Development:
+    """Develop a raw image with imageform's own pipeline, keeping every stage.
+
+    1. Linearise: :math:`x = (DN - B) / (W - B)` with B the black level of each photosite.
+    2. White balance: :math:`x \\cdot g_c` with the as-shot gains (or the ones given),
+       scaled so the smallest gain is 1, clipped to [0, 1] (LibRaw's default highlight
+       clipping).
+    3. Demosaic with :func:`imageform.sensor.demosaic` (``demosaic`` names the method).
+    4. Camera RGB to XYZ: :math:`M = C^{-1}\\,\\mathrm{diag}(C\\,\\mathbf w)`, with C the
+       colour matrix (XYZ to camera) and :math:`\\mathbf w` the XYZ of the calibration
+       illuminant's white (Y = 1), so that white-balanced white (1, 1, 1) maps to
+       :math:`\\mathbf w` (the normalisation of dcraw/LibRaw's ``cam_xyz_coeff``, which
+       scales the rows of :math:`C` by its camera response to white).
+    5. Bradford chromatic adaptation from :math:`\\mathbf w` to the output space's white
+       (identity for a D65 matrix and sRGB).
+    6. XYZ to the output space's linear RGB, clipped to [0, 1], encoded with the space's
+       transfer function (``linear=True``: not encoded).
+
+    Parameters
+    ----------
+    raw : RawImage, str or Path
+        From :func:`read_raw`, or a raw file's path.
+    demosaic : str
+        A method of :data:`imageform.sensor.DEMOSAIC_METHODS`.
+    white_balance : "camera", "daylight", "none" or array_like (3,)
+        The as-shot gains, LibRaw's daylight gains, none, or R, G, B gains.
+    space : str
+        An RGB space of :data:`imageform.color.RGB_SPACES` (``"srgb"``, ``"display_p3"``,
+        ``"prophoto"``, ...).
+    linear : bool
+        Leave the output linear (no transfer function).
+
+    Returns
+    -------
+    Development
+        Every stage; ``.image`` is the result, ``.to_integer(8 or 16)`` its integer form.
+    """
+    from imageform.color import (
+        RGB_SPACES,
+        chromatic_adaptation_matrix,
+        encode,
+        whitepoint_xy,
+        xy_to_xyz_white,
+        xyz_to_linear_rgb,
+    )
+    from imageform.sensor import DEMOSAIC_METHODS
+    from imageform.sensor import demosaic as _demosaic
+
+    if isinstance(raw, (str, Path)):
+        raw = read_raw(raw)
+    if not isinstance(raw, RawImage):
+        raise InvalidInputError(
+            f"expected raw as a RawImage (read_raw) or a path, got {describe(raw)}"
+        )
+    method = str(demosaic).lower().replace("-", "_")
+    if method not in DEMOSAIC_METHODS:
+        raise InvalidInputError(
+            f"unknown demosaic method {demosaic!r}; valid: {', '.join(DEMOSAIC_METHODS)}"
+        )
+    key = str(space).lower().replace("-", "_")
+    if key not in RGB_SPACES:
+        raise InvalidInputError(f"unknown space {space!r}; valid: {', '.join(RGB_SPACES)}")
+    out_space = RGB_SPACES[key]
+    # 1. linearise
+    h, w = raw.mosaic.shape
+    black = np.tile(np.asarray(raw.black_level, np.float64), (h // 2 + 1, w // 2 + 1))[:h, :w]
+    lin = (raw.mosaic.astype(np.float64) - black) / (raw.white_level - black)
+    # 2. white balance
+    gains = _gains(raw, white_balance)
+    idx = np.array(_cfa_indices(raw.cfa_pattern)).reshape(2, 2)
+    site = np.tile(idx, (h // 2 + 1, w // 2 + 1))[:h, :w]
+    balanced = np.clip(lin * gains[site], 0.0, 1.0)
+    # 3. demosaic
+    cam = np.asarray(_demosaic(balanced, raw.cfa_pattern, method, allow_odd=True), np.float64)
+    # 4. camera RGB -> XYZ under the calibration illuminant
+    ill = raw.calibration_illuminant or "D65"
+    white = np.asarray(xy_to_xyz_white(whitepoint_xy(ill)), np.float64)
+    if raw.xyz_to_camera is not None:
+        C = np.asarray(raw.xyz_to_camera, np.float64)
+        cam_to_xyz = np.linalg.inv(C) @ np.diag(C @ white)
+    else:  # LibRaw's camera -> sRGB only
+        from imageform.color import rgb_to_xyz_matrix
+
+        cam_to_xyz = np.asarray(rgb_to_xyz_matrix("srgb"), np.float64) @ raw.camera_to_srgb
+        white = np.asarray(xy_to_xyz_white(whitepoint_xy("D65")), np.float64)
+    xyz_cal = cam @ cam_to_xyz.T
+    # 5. adaptation to the output space's white
+    dst_white = np.asarray(xy_to_xyz_white(out_space.white_xy), np.float64)
+    src_xy = white[:2] / white.sum()
+    if np.allclose(src_xy, np.asarray(out_space.white_xy), atol=5e-4):  # the same white
+        cat = np.eye(3)
+    else:
+        cat = np.asarray(chromatic_adaptation_matrix(white, dst_white, "bradford"), np.float64)
+    xyz = xyz_cal @ cat.T
+    # 6. output space, clip, encode
+    rgb_lin = np.clip(np.asarray(xyz_to_linear_rgb(xyz, key), np.float64), 0.0, 1.0)
+    transfer = "linear" if linear else out_space.transfer
+    image = rgb_lin if linear else np.asarray(encode(rgb_lin, out_space.transfer), np.float64)
+    return Development(
+        linear=lin,
+        white_balanced=balanced,
+        camera_rgb=cam,
+        xyz=xyz,
+        linear_rgb=rgb_lin,
+        image=image,
+        gains=gains,
+        camera_to_xyz=cam_to_xyz,
+        adaptation=cat,
+        space=key,
+        transfer=transfer,
+        demosaic=method,
+    )
+
+
+def _gains(raw: RawImage, white_balance: Any) -> np.ndarray:
+    if isinstance(white_balance, str):
+        wb = white_balance.lower()
+        if wb == "camera":
+            if raw.white_balance is None:
+                raise InvalidInputError(
+                    "white_balance='camera': the file has no as-shot white balance; "
+                    "give 'daylight', 'none' or three gains"
+                )
+            g = np.asarray(raw.white_balance, np.float64)
+        elif wb == "daylight":
+            day = raw.metadata.get("daylight_white_balance")
+            if day is None:
+                raise InvalidInputError("white_balance='daylight': the file has no daylight gains")
+            g = np.asarray(day, np.float64)
+        elif wb == "none":
+            g = np.ones(3)
+        else:
+            raise InvalidInputError(
+                f"unknown white_balance {white_balance!r}; valid: camera, daylight, none, "
+                "or three gains"
+            )
+    else:
+        g = np.asarray(white_balance, np.float64)
+        if g.shape != (3,) or not np.all(np.isfinite(g)) or np.any(g <= 0):
+            raise InvalidInputError(
+                f"expected white_balance as 3 positive gains, got {describe(white_balance)}"
+            )
+    return g / g.min()

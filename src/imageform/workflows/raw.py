@@ -1,0 +1,88 @@
+"""Raw workflows: ``imageform develop`` (a raw file through imageform's own pipeline)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from imageform.workflows._images import ImageOut, write
+from imageform.workflows._spec import Input, Options, Output, Result, Run, Workflow, option
+
+__all__ = ["WORKFLOWS", "DevelopOptions"]
+
+
+@dataclass(frozen=True, kw_only=True)
+class DevelopOptions(ImageOut, Options):
+    """Options of ``imageform develop``."""
+
+    demosaic: str = option(
+        "bilinear",
+        help="Demosaicing method (bilinear matches LibRaw's LINEAR).",
+        choices="imageform.sensor.demosaic:DEMOSAIC_METHODS",
+    )
+    white_balance: str = option(
+        "camera",
+        help="White balance: the as-shot gains (camera), LibRaw's daylight gains, or none.",
+        choices=("camera", "daylight", "none"),
+    )
+    space: str = option(
+        "srgb",
+        help="Output RGB space (see imageform.color.RGB_SPACES).",
+        choices="imageform.color:RGB_SPACES",
+    )
+    linear: bool = option(False, help="Leave the output linear (no transfer function).")
+
+
+def develop(run: Run, opts: DevelopOptions, *, raw: Path, out: Path) -> Result:
+    """Read the raw file, develop it step by step, write the image."""
+    from imageform.io import develop as develop_raw
+    from imageform.io import read_raw
+
+    img = read_raw(raw)
+    dev = develop_raw(
+        img,
+        demosaic=opts.demosaic,
+        white_balance=opts.white_balance,
+        space=opts.space,
+        linear=opts.linear,
+    )
+    write(run, out, dev.image, opts, like=img.mosaic)
+    h, w = img.mosaic.shape
+    summary: dict[str, Any] = {
+        "raw": raw,
+        "out": out,
+        "size": [w, h],
+        "cfa_pattern": img.cfa_pattern,
+        "black_level": img.black_level.tolist(),
+        "white_level": img.white_level,
+        "gains": dev.gains.tolist(),
+        "camera_to_xyz": dev.camera_to_xyz.tolist(),
+        "calibration_illuminant": img.calibration_illuminant,
+        "demosaic": dev.demosaic,
+        "space": dev.space,
+        "transfer": dev.transfer,
+    }
+    gains = ", ".join(f"{g:.3f}" for g in dev.gains)
+    text = (
+        f"{raw.name}: {w}x{h} {img.cfa_pattern} mosaic, black {img.black_level.mean():g}, "
+        f"white {img.white_level:g}",
+        f"white balance {opts.white_balance} (gains {gains}), {dev.demosaic} demosaicing, "
+        f"{dev.space} ({dev.transfer}) -> {out}",
+    )
+    return Result(summary, text)
+
+
+WORKFLOWS = (
+    Workflow(
+        "develop",
+        "Develop a raw file (DNG, CR2, NEF, ARW, ...) with imageform's own pipeline.",
+        "imageform.workflows.raw:develop",
+        DevelopOptions,
+        (Input("raw", "Raw file LibRaw reads (needs imageform[raw]).", metavar="RAW"),),
+        Output("Output image (PNG 16-bit by default, JPEG, TIFF float32, .npy)."),
+        group="colour",
+        description="Linearise (black and white levels), white balance, demosaic, camera RGB "
+        "to XYZ from the file's colour matrix, adaptation to the output white, encoding.",
+    ),
+)

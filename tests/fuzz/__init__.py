@@ -1,0 +1,1 @@
+"""The boundary fuzz test: every public callable with malformed arguments (issue 16)."""

@@ -1,0 +1,93 @@
+"""The boundary contract of issue 16, checked by calling every public callable with
+malformed arguments (see :mod:`tests.fuzz.runner`).
+
+- :func:`test_every_public_callable_has_an_entry`: a new public name needs a valid call in
+  ``tests/fuzz/table.py`` (or a ``Skip`` with a reason).
+- :func:`test_fuzz_default`: every valid call, and a fixed-seed sample of the malformed
+  calls (:data:`BUDGET` calls in all: today every call but those of ``table.SLOW`` and
+  the KNOWN timeouts, about 10 s on one core); findings must be in ``tests/fuzz/known.py``.
+- :func:`test_fuzz_full` (slow): every malformed call; also fails on KNOWN entries that no
+  longer happen, so the table shrinks as fixes land (regenerate it with
+  ``PYTHONPATH=src python -m tests.fuzz --known tests/fuzz/known.py``).
+"""
+
+from __future__ import annotations
+
+import pytest
+
+from tests.fuzz.known import KNOWN
+from tests.fuzz.runner import (
+    KINDS,
+    C,
+    Skip,
+    all_tasks,
+    findings,
+    format_findings,
+    new_findings,
+    public_callables,
+    run,
+    select,
+)
+from tests.fuzz.table import SLOW as SLOW_CALLS
+from tests.fuzz.table import VALID
+
+#: Calls in the default run (all valid calls, then a sample of the malformed ones).
+BUDGET = 8000
+SEED = 16
+#: Seconds per call; a call past this is a finding ("timeout").
+TIMEOUT = 30.0
+#: Outcomes left out of the default run when KNOWN: each costs the whole timeout.
+_SLOW = ("timeout", "crash")
+
+
+def test_every_public_callable_has_an_entry() -> None:
+    funcs = public_callables()
+    missing = sorted(n for n in funcs if n not in VALID)
+    stale = sorted(n for n in VALID if n not in funcs)
+    assert not missing, (
+        "public callables without an entry in tests/fuzz/table.py (add a valid call; "
+        f"`python -m tests.fuzz.bootstrap` drafts one): {missing}"
+    )
+    assert not stale, f"entries in tests/fuzz/table.py for names no longer public: {stale}"
+    for name, entry in VALID.items():
+        assert isinstance(entry, C | Skip), name
+        if isinstance(entry, Skip):
+            assert entry.reason.strip(), f"{name}: a Skip needs a reason"
+
+
+def test_known_entries_are_well_formed() -> None:
+    funcs = public_callables()
+    for (name, param, kind), reason in KNOWN.items():
+        assert name in funcs, f"KNOWN entry for a name no longer public: {name}"
+        assert kind in KINDS or (kind == "valid" and not param), (name, kind)
+        assert reason.strip(), (name, param, kind)
+
+
+def _default_tasks() -> list:
+    slow = {k for k, reason in KNOWN.items() if reason.startswith(_SLOW)}
+    tasks = [
+        t for t in all_tasks() if (t.name, t.param, t.kind) not in slow and t.name not in SLOW_CALLS
+    ]
+    return select(tasks, BUDGET, SEED)
+
+
+def test_fuzz_default() -> None:
+    outcomes = run(_default_tasks(), workers=1, timeout=TIMEOUT)
+    new = new_findings(outcomes, KNOWN)
+    assert not new, (
+        f"{len(new)} call(s) broke the boundary contract (fix them, or list them in "
+        f"tests/fuzz/known.py with a reason):\n{format_findings(new)}"
+    )
+
+
+@pytest.mark.slow
+def test_fuzz_full() -> None:
+    outcomes = run(all_tasks(), workers=2, timeout=TIMEOUT)
+    new = new_findings(outcomes, KNOWN)
+    assert not new, f"{len(new)} new finding(s):\n{format_findings(new)}"
+    found = findings(outcomes)
+    fixed = sorted(k for k in KNOWN if k not in found)
+    assert not fixed, (
+        f"{len(fixed)} KNOWN finding(s) no longer happen: regenerate tests/fuzz/known.py "
+        f"(python -m tests.fuzz --known tests/fuzz/known.py): {fixed[:20]}"
+    )

@@ -1,0 +1,209 @@
+"""Valid argument values for the fuzz table, built lazily in the worker process.
+
+The table (:mod:`tests.fuzz.table`) refers to these by name with :class:`V`; a value is
+built the first time a worker needs it (some need imageform objects) and a fresh copy is
+handed to every call, so that a callable that writes into its input cannot poison the next.
+"""
+
+from __future__ import annotations
+
+import copy
+import os
+import tempfile
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+__all__ = ["FIXTURES", "V", "resolve"]
+
+
+@dataclass(frozen=True)
+class V:
+    """A reference to a named fixture value (``V("rgb")``)."""
+
+    name: str
+
+    def __repr__(self) -> str:
+        return f"V({self.name!r})"
+
+
+def _rng() -> np.random.Generator:
+    return np.random.default_rng(20261125)
+
+
+def _rgb() -> np.ndarray:
+    return _rng().uniform(0.05, 0.95, (6, 8, 3))
+
+
+def _camera() -> Any:
+    from imageform.geometry import Camera
+
+    return Camera(_K(), image_size=(8, 6))
+
+
+def _K() -> np.ndarray:
+    return np.array([[500.0, 0.0, 4.0], [0.0, 500.0, 3.0], [0.0, 0.0, 1.0]])
+
+
+def _spectrum() -> Any:
+    from imageform.spectral import Spectrum
+
+    wl = np.arange(380.0, 781.0, 10.0)
+    return Spectrum(wl, 0.2 + 0.6 * np.exp(-(((wl - 550.0) / 80.0) ** 2)), name="fuzz")
+
+
+def _spectrum3() -> Any:
+    from imageform.spectral import Spectrum
+
+    wl = np.arange(380.0, 781.0, 10.0)
+    cols = [np.exp(-(((wl - c) / 30.0) ** 2)) for c in (450.0, 540.0, 610.0)]
+    return Spectrum(wl, np.column_stack(cols), name="primaries")
+
+
+def _brown() -> Any:
+    from imageform.geometry import BrownConrady
+
+    return BrownConrady(k1=-0.1, k2=0.01)
+
+
+def _sensor() -> Any:
+    from imageform.sensor import SensorModel
+
+    return SensorModel()
+
+
+def _points3() -> np.ndarray:
+    g = _rng()
+    return np.column_stack([g.uniform(-1, 1, 6), g.uniform(-1, 1, 6), g.uniform(3, 6, 6)])
+
+
+def _segments() -> Any:
+    from imageform.geometry import LineSegments
+
+    ends = np.array([[0.0, 0.0, 10.0, 1.0], [0.0, 5.0, 10.0, 4.0], [2.0, 0.0, 3.0, 10.0]])
+    return LineSegments(ends, np.ones(3), -np.ones(3))
+
+
+def _scene() -> Any:
+    from imageform.simulate import default_scene
+
+    return default_scene().resized(64)
+
+
+def _result() -> Any:
+    from imageform.simulate import simulate
+
+    return simulate(_scene(), rng=0)
+
+
+def _tmpdir() -> Path:
+    base = os.environ.get("IMAGEFORM_FUZZ_TMP") or None
+    return Path(tempfile.mkdtemp(prefix="imageform-fuzz-", dir=base))
+
+
+def _chart() -> np.ndarray:
+    from imageform.analysis import synthetic_chart_image
+
+    return synthetic_chart_image(patch=6, gap=2)
+
+
+def _rgb_chart() -> np.ndarray:
+    from imageform.analysis.synthetic import COLORCHECKER_SRGB8
+
+    return np.asarray(COLORCHECKER_SRGB8, dtype=float) / 255.0
+
+
+def _correction() -> Any:
+    from imageform.analysis import fit_color_correction
+
+    chart = _rgb_chart()
+    return fit_color_correction(chart * 0.9 + 0.02, chart)
+
+
+def _stain() -> np.ndarray:
+    from imageform.analysis import synthetic_stain_image
+
+    return synthetic_stain_image((32, 32)).image
+
+
+def _png_file() -> Path:
+    from imageform.io import write_image
+
+    path = _tmpdir() / "in.png"
+    write_image(path, _rgb())
+    return path
+
+
+def _camera_file() -> Path:
+    from imageform.io import write_camera
+
+    path = _tmpdir() / "camera.toml"
+    write_camera(path, _camera())
+    return path
+
+
+FIXTURES: dict[str, Callable[[], Any]] = {
+    "rgb": _rgb,
+    "rgb_u8": lambda: (_rgb() * 255).astype(np.uint8),
+    "rgb_big": lambda: _rng().uniform(0.05, 0.95, (32, 40, 3)),
+    "gray": lambda: _rgb()[..., 1],
+    "rgb4": lambda: _rng().uniform(0.05, 0.95, (4, 3)),
+    "rgb1": lambda: np.array([0.2, 0.5, 0.7]),
+    "xyz": lambda: _rng().uniform(0.1, 0.8, (4, 3)),
+    "lab": lambda: np.array([[50.0, 10.0, -10.0], [60.0, -20.0, 15.0], [30.0, 5.0, 5.0]]),
+    "xy": lambda: np.array([[0.3127, 0.329], [0.40, 0.38]]),
+    "uv": lambda: np.array([[1.0, 2.0], [3.0, 4.0], [6.0, 1.0], [7.5, 5.0]]),
+    "K": _K,
+    "R": lambda: np.eye(3),
+    "t": lambda: np.array([0.0, 0.0, 0.5]),
+    "rvec": lambda: np.array([0.1, -0.2, 0.05]),
+    "H": lambda: np.array([[1.0, 0.1, 2.0], [0.0, 1.1, -1.0], [0.001, 0.0, 1.0]]),
+    "P": lambda: np.hstack([_K(), np.zeros((3, 1))]),
+    "points3": _points3,
+    "points2": lambda: _points3()[:, :2],
+    "depth": lambda: np.array([2.0, 3.0, 4.0, 5.0]),
+    "lines": lambda: np.array([[1.0, 0.0, -2.0], [0.0, 1.0, -3.0], [1.0, 1.0, -6.0]]),
+    "wavelengths": lambda: np.arange(400.0, 701.0, 10.0),
+    "spectrum": _spectrum,
+    "camera": _camera,
+    "sensor": _sensor,
+    "segments": _segments,
+    "spectrum3": _spectrum3,
+    "brown": _brown,
+    "scene": _scene,
+    "result": _result,
+    "tmpdir": _tmpdir,
+    "chart": _chart,
+    "rgb_chart": _rgb_chart,
+    "correction": _correction,
+    "stain": _stain,
+    "png_file": _png_file,
+    "camera_file": _camera_file,
+    "tmpfile_png": lambda: _tmpdir() / "out.png",
+    "tmpfile_json": lambda: _tmpdir() / "out.json",
+    "tmpfile_toml": lambda: _tmpdir() / "out.toml",
+}
+
+_CACHE: dict[str, Any] = {}
+_FRESH = {"tmpdir", "tmpfile_png", "tmpfile_json", "tmpfile_toml", "png_file", "camera_file"}
+
+
+def resolve(value: Any) -> Any:
+    """``value`` with every :class:`V` (also inside tuples, lists and dicts) replaced by a
+    fresh copy of its fixture."""
+    if isinstance(value, V):
+        if value.name in _FRESH:
+            return FIXTURES[value.name]()
+        if value.name not in _CACHE:
+            _CACHE[value.name] = FIXTURES[value.name]()
+        return copy.deepcopy(_CACHE[value.name])
+    if isinstance(value, tuple) and not hasattr(value, "_fields"):
+        return tuple(resolve(v) for v in value)
+    if isinstance(value, list):
+        return [resolve(v) for v in value]
+    if isinstance(value, dict):
+        return {k: resolve(v) for k, v in value.items()}
+    return value

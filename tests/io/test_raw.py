@@ -1,0 +1,285 @@
+"""Raw files in and out (docs/raw.md): the simulator's DNG read back by LibRaw bit for bit,
+read_raw's fields, and imageform's development against LibRaw's own (rawpy.postprocess)."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from imageform.errors import ImageformError, InvalidInputError
+from imageform.io import Development, RawImage, develop, read_raw, write_dng
+
+rawpy = pytest.importorskip("rawpy")
+
+ROOT = Path(__file__).resolve().parents[2]
+
+#: XYZ (D65) to camera RGB of a made-up camera (rows: R, G, B).
+CM = np.array([[1.20, -0.30, -0.10], [-0.40, 1.30, 0.10], [-0.05, 0.20, 0.60]])
+
+
+@pytest.fixture(scope="module")
+def simulated(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, object, object]:
+    """The default scene at 160 x 90 through the simulator, its raw stage as a DNG."""
+    from imageform.simulate import default_scene, simulate, write_simulated_dng
+
+    scene = default_scene().resized(160)
+    res = simulate(scene, rng=0)
+    path = write_simulated_dng(res, scene, tmp_path_factory.mktemp("dng") / "sim.dng")
+    return path, res, scene
+
+
+def _rgb_cam_libraw(cm: np.ndarray) -> np.ndarray:
+    """LibRaw's rgb_cam from a DNG ColorMatrix (dcraw's cam_xyz_coeff): rows of
+    cam_rgb = cm @ xyz_rgb normalised to sum 1, then inverted."""
+    xyz_rgb = np.array(  # dcraw's sRGB (D65) matrix
+        [
+            [0.412453, 0.357580, 0.180423],
+            [0.212671, 0.715160, 0.072169],
+            [0.019334, 0.119193, 0.950227],
+        ]
+    )
+    cam_rgb = cm @ xyz_rgb
+    cam_rgb /= cam_rgb.sum(axis=1, keepdims=True)
+    return np.linalg.inv(cam_rgb)
+
+
+@pytest.mark.parametrize("pattern", ["RGGB", "BGGR", "GRBG", "GBRG"])
+def test_libraw_reads_write_dng_bit_for_bit(tmp_path: Path, pattern: str) -> None:
+    rng = np.random.default_rng(1)
+    mosaic = rng.integers(0, 4096, size=(24, 36)).astype(np.uint16)
+    path = write_dng(
+        tmp_path / "a.dng",
+        mosaic,
+        cfa_pattern=pattern,
+        black_level=64,
+        white_level=4095,
+        color_matrix=CM,
+        as_shot_neutral=(0.5, 1.0, 0.8),
+    )
+    with rawpy.imread(str(path)) as r:
+        np.testing.assert_array_equal(r.raw_image, mosaic)
+        assert r.raw_image.dtype == np.uint16
+        assert list(r.black_level_per_channel) == [64, 64, 64, 64]
+        assert r.white_level == 4095
+        desc = r.color_desc.decode()
+        got = "".join(desc[i] for i in np.asarray(r.raw_pattern).ravel())
+        assert got == pattern  # color_desc "RGBG": the second green is also "G"
+        wb = np.asarray(r.camera_whitebalance)
+        np.testing.assert_allclose(wb[:3] / wb[1], [2.0, 1.0, 1.25], rtol=1e-6)
+        np.testing.assert_allclose(
+            np.asarray(r.color_matrix)[:3, :3], _rgb_cam_libraw(CM), atol=2e-4
+        )
+    raw = read_raw(path)
+    assert raw.cfa_pattern == pattern
+    np.testing.assert_array_equal(raw.mosaic, mosaic)
+    np.testing.assert_allclose(raw.xyz_to_camera, CM, atol=1e-6)
+
+
+def test_simulated_dng_read_back_bit_for_bit(simulated: tuple[Path, object, object]) -> None:
+    path, res, scene = simulated
+    raw = np.asarray(res.stage("raw").image)  # type: ignore[attr-defined]
+    sensor = scene.sensor  # type: ignore[attr-defined]
+    with rawpy.imread(str(path)) as r:
+        np.testing.assert_array_equal(r.raw_image, raw)
+        assert set(r.black_level_per_channel) == {int(sensor.black_level)}
+        assert r.white_level == sensor.max_dn
+        wb = np.asarray(r.camera_whitebalance)[:3]
+        gains = np.asarray(res.metrics["white_balance_gains"])  # type: ignore[attr-defined]
+        np.testing.assert_allclose(wb / wb[1], gains / gains[1], rtol=1e-4)
+        from imageform.simulate import simulated_color_matrix
+
+        cm, _ = simulated_color_matrix(res)  # type: ignore[arg-type]
+        np.testing.assert_allclose(
+            np.asarray(r.color_matrix)[:3, :3], _rgb_cam_libraw(cm), atol=5e-4
+        )
+
+
+def test_read_raw_fields(simulated: tuple[Path, object, object]) -> None:
+    path, res, scene = simulated
+    raw = read_raw(path)
+    assert isinstance(raw, RawImage)
+    assert raw.cfa_pattern == scene.config.sensor.cfa  # type: ignore[attr-defined]
+    assert raw.mosaic.dtype == np.uint16 and raw.mosaic.shape == (90, 160)
+    np.testing.assert_array_equal(raw.black_level, np.full((2, 2), 64.0))
+    assert raw.white_level == 4095.0
+    gains = np.asarray(res.metrics["white_balance_gains"])  # type: ignore[attr-defined]
+    np.testing.assert_allclose(raw.white_balance, gains / gains[1], rtol=1e-5)
+    from imageform.simulate import simulated_color_matrix
+
+    cm, _ = simulated_color_matrix(res)  # type: ignore[arg-type]
+    np.testing.assert_allclose(raw.xyz_to_camera, cm, atol=1e-6)
+    assert raw.calibration_illuminant == "D65"
+    assert raw.metadata["camera_model"] == "imageform simulated camera"
+    assert raw.camera_to_srgb.shape == (3, 3)
+
+
+def _delta_e00_vs_libraw(path: Path, *, linear: bool) -> float:
+    from imageform.color import decode, delta_e, linear_srgb_to_xyz, xyz_to_lab
+
+    dev = develop(path, demosaic="bilinear", white_balance="camera", linear=linear)
+    with rawpy.imread(str(path)) as r:
+        ref = r.postprocess(
+            use_camera_wb=True,
+            no_auto_bright=True,
+            output_bps=16,
+            gamma=(1, 1) if linear else (2.4, 12.92),
+            demosaic_algorithm=rawpy.DemosaicAlgorithm.LINEAR,
+            adjust_maximum_thr=0.0,
+            user_flip=0,
+        )
+    ours = dev.image
+    ref = ref / 65535.0
+    if not linear:
+        ours, ref = decode(ours, "srgb"), decode(ref, "srgb")
+    lab1 = xyz_to_lab(linear_srgb_to_xyz(ours))
+    lab2 = xyz_to_lab(linear_srgb_to_xyz(ref))
+    return float(np.mean(delta_e(lab1, lab2)))
+
+
+@pytest.mark.parametrize("linear", [True, False], ids=["linear", "srgb"])
+def test_develop_matches_libraw(simulated: tuple[Path, object, object], linear: bool) -> None:
+    """Same white balance, bilinear (LibRaw LINEAR), no auto-brightening: measured mean
+    CIEDE2000 0.02 (docs/raw.md); asserted < 1."""
+    path, _, _ = simulated
+    de = _delta_e00_vs_libraw(path, linear=linear)
+    assert de < 1.0, de
+
+
+def test_develop_stages(simulated: tuple[Path, object, object]) -> None:
+    path, _, _ = simulated
+    raw = read_raw(path)
+    dev = develop(raw, demosaic="menon")
+    assert isinstance(dev, Development)
+    h, w = raw.mosaic.shape
+    # 1. linearise
+    np.testing.assert_allclose(dev.linear, (raw.mosaic - 64.0) / (4095.0 - 64.0))
+    # 2. white balance: the gains, smallest 1, per photosite colour, clipped
+    assert dev.gains.min() == pytest.approx(1.0)
+    g = raw.white_balance / raw.white_balance.min()
+    np.testing.assert_allclose(dev.gains, g)
+    r0 = "RGB".index(raw.cfa_pattern[0])
+    np.testing.assert_allclose(
+        dev.white_balanced[0::2, 0::2], np.clip(dev.linear[0::2, 0::2] * g[r0], 0, 1)
+    )
+    # 3. demosaic keeps the measured samples
+    assert dev.camera_rgb.shape == (h, w, 3)
+    np.testing.assert_allclose(dev.camera_rgb[0::2, 0::2, r0], dev.white_balanced[0::2, 0::2])
+    # 4. white-balanced white maps to the illuminant's white (D65, Y = 1)
+    from imageform.color import linear_srgb_to_xyz, whitepoint_xy, xy_to_xyz_white
+
+    np.testing.assert_allclose(
+        dev.camera_to_xyz @ np.ones(3), xy_to_xyz_white(whitepoint_xy("D65")), atol=1e-12
+    )
+    np.testing.assert_allclose(dev.adaptation, np.eye(3))
+    np.testing.assert_allclose(dev.xyz, dev.camera_rgb @ dev.camera_to_xyz.T)
+    # 5-6. output
+    np.testing.assert_allclose(
+        linear_srgb_to_xyz(dev.linear_rgb)[dev.linear_rgb.max(-1) < 0.99].mean(0),
+        dev.xyz[dev.linear_rgb.max(-1) < 0.99].mean(0),
+        atol=0.02,
+    )
+    assert dev.image.min() >= 0 and dev.image.max() <= 1 and dev.transfer == "srgb"
+    assert dev.to_integer(8).dtype == np.uint8 and dev.to_integer(16).dtype == np.uint16
+
+
+def test_develop_adapts_to_a_d50_space(simulated: tuple[Path, object, object]) -> None:
+    """ProPhoto RGB has a D50 white: Bradford from D65, so white stays white."""
+    from imageform.color import chromatic_adaptation_matrix, whitepoint_xy, xy_to_xyz_white
+
+    path, _, _ = simulated
+    dev = develop(path, space="prophoto", linear=True)
+    d65 = xy_to_xyz_white(whitepoint_xy("D65"))
+    d50 = xy_to_xyz_white((0.3457, 0.3585))
+    np.testing.assert_allclose(dev.adaptation, chromatic_adaptation_matrix(d65, d50, "bradford"))
+    from imageform.color import xyz_to_linear_rgb
+
+    white = xyz_to_linear_rgb(dev.adaptation @ dev.camera_to_xyz @ np.ones(3), "prophoto")
+    np.testing.assert_allclose(white, np.ones(3), atol=2e-3)
+
+
+def test_not_a_raw_file(tmp_path: Path) -> None:
+    bad = tmp_path / "notes.dng"
+    bad.write_text("hello")
+    with pytest.raises(InvalidInputError, match="not a raw file") as e:
+        read_raw(bad)
+    assert "\n" not in str(e.value) and "notes.dng" in str(e.value)
+    with pytest.raises(InvalidInputError, match="does not exist"):
+        read_raw(tmp_path / "missing.dng")
+
+
+def test_missing_extra(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setitem(sys.modules, "rawpy", None)
+    f = tmp_path / "x.dng"
+    f.write_bytes(b"II*\x00")
+    with pytest.raises(ImageformError, match=r'pip install "imageform\[raw\]"') as e:
+        read_raw(f)
+    assert "\n" not in str(e.value)
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "match"),
+    [
+        ({"mosaic": np.zeros((3, 4), np.uint16)}, "H and W even"),
+        ({"mosaic": np.full((4, 4), -1.0)}, r"\[0, 65535\]"),
+        ({"color_matrix": np.zeros((3, 3))}, "invertible"),
+        ({"as_shot_neutral": (1, 0, 1)}, "positive"),
+        ({"calibration_illuminant": "F2"}, "calibration_illuminant"),
+        ({"cfa_pattern": "RGBG"}, "RGBG"),
+        ({"black_level": 5000}, "black_level"),
+    ],
+)
+def test_write_dng_bad_inputs(tmp_path: Path, kwargs: dict[str, object], match: str) -> None:
+    args: dict[str, object] = {
+        "mosaic": np.zeros((4, 4), np.uint16),
+        "color_matrix": CM,
+        "white_level": 4095,
+    } | kwargs
+    mosaic = args.pop("mosaic")
+    with pytest.raises(InvalidInputError, match=match) as e:
+        write_dng(tmp_path / "x.dng", mosaic, **args)  # type: ignore[arg-type]
+    assert "\n" not in str(e.value)
+
+
+def test_develop_bad_inputs(simulated: tuple[Path, object, object]) -> None:
+    path, _, _ = simulated
+    raw = read_raw(path)
+    with pytest.raises(InvalidInputError, match="demosaic"):
+        develop(raw, demosaic="magic")
+    with pytest.raises(InvalidInputError, match="space"):
+        develop(raw, space="cmyk")
+    with pytest.raises(InvalidInputError, match="white_balance"):
+        develop(raw, white_balance=(1, -1, 1))
+    with pytest.raises(InvalidInputError, match="RawImage"):
+        develop(np.zeros((4, 4)))  # type: ignore[arg-type]
+
+
+def test_cli_simulate_raw_then_develop(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """``imageform simulate --raw`` writes the DNG; ``imageform develop`` develops it."""
+    from imageform.cli import main
+    from imageform.io import read_image
+
+    pytest.importorskip("matplotlib")
+    text = (ROOT / "examples" / "scenes" / "default.toml").read_text()
+    text = text.replace("width = 1280", "width = 320").replace("height = 720", "height = 180")
+    text = text.replace("supersampling = 2", "supersampling = 1")
+    scene = tmp_path / "small.toml"
+    scene.write_text(text)
+    dng, png = tmp_path / "sim.dng", tmp_path / "dev.png"
+    args = ["simulate", "--scene", str(scene), "-o", str(tmp_path / "sim"), "--raw", str(dng)]
+    assert main(args) == 0
+    assert "raw DNG" in capsys.readouterr().out
+    with rawpy.imread(str(dng)) as r:
+        assert r.raw_image.shape == (180, 320)
+    assert main(["develop", str(dng), "-o", str(png)]) == 0
+    img = read_image(png)
+    assert img.shape == (180, 320, 3)
+    bad = tmp_path / "x.txt"
+    bad.write_text("no")
+    assert main(["develop", str(bad), "-o", str(tmp_path / "y.png")]) == 1
+    err = capsys.readouterr().err
+    assert "not a raw file" in err and err.count("\n") == 1
+    assert main(["simulate", "--raw", str(tmp_path / "x.tif"), "-o", str(tmp_path / "z")]) == 2
+    assert "expected --raw as a .dng file" in capsys.readouterr().err
