@@ -129,8 +129,7 @@ def main(argv: list[str] | None = None) -> int:
     text = (
         header("Simulation report: time, size and page load")
         + f"\nBuilt-in scene 1280x720, `imageform simulate` in a fresh process per run; "
-        f"medians of {args.repeat} runs after one unmeasured run.\n\n"
-        + table
+        f"medians of {args.repeat} runs after one unmeasured run.\n\n" + table
     )
     print(text)
     if args.out is not None:

@@ -341,9 +341,10 @@ def write_report(
 
     Writes ``report.html`` (one self-contained file: every figure a base64 ``data:`` URI,
     plots as PNG, stage pictures as JPEG at most 1280 px wide, each linking to its lossless
-    PNG in ``stages/`` by a relative link; inline CSS, no external URL, nothing to run), ``metrics.json`` (see
-    :mod:`imageform.report.metrics`) and ``stages/NN-name.png`` for every stage (displayed
-    with :func:`imageform.report.display.stage_display_image`), plus ``NN-name-dn.png``
+    PNG in ``stages/`` by a relative link; inline CSS, no external URL, nothing to run),
+    ``metrics.json`` (see :mod:`imageform.report.metrics`) and ``stages/NN-name.png`` for
+    every stage (displayed with :func:`imageform.report.display.stage_display_image`), plus
+    ``NN-name-dn.png``
     (16-bit) with the digital numbers of raw stages.
 
     Sections: the stages; colour (the patches on the chromaticity diagram at each stage of
