@@ -3,15 +3,18 @@ report.html is, and how long the page takes to load in headless Chromium.
 
 Run::
 
-    OPENBLAS_NUM_THREADS=1 python benchmarks/bench_report.py [--repeat 5] [--src SRC]
-        [--label NAME] [--out FILE]
+    OPENBLAS_NUM_THREADS=1 python benchmarks/bench_report.py [--repeat 5]
+        [--src LABEL=SRC ...] [--out FILE]
 
 Each run is a fresh ``python -m imageform simulate -o TMP --force --json`` process on the
 built-in scene (1280 x 720), as a user runs it: the report's time (``report_time_s``, what
 ``write_report`` measured, matplotlib's import included) against the simulation's
 (``summary.simulation_time_s``, the simulator's own wall time of the chain). One unmeasured
-run first (numba compiles and caches). ``--src`` puts another source tree first on
-``PYTHONPATH`` (e.g. an exported older commit, to measure "before" with the same script).
+run first per source tree (numba compiles and caches). ``--src LABEL=SRC`` (repeatable)
+measures the source tree SRC on ``PYTHONPATH`` (e.g. an older commit exported with
+``git archive``, to measure "before" with the same script); with several, their runs
+alternate (before, after, before, after ...) so that a changing load on a shared machine
+falls on each alike. Default: this tree's ``src``.
 
 Page load: each run's report.html opened in a new page of one headless Chromium
 (``/usr/bin/chromium`` through Playwright, ``executable_path``: no download), the wall time
@@ -82,40 +85,49 @@ def _load_times(paths: list[Path]) -> list[float]:
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--repeat", type=int, default=5)
-    ap.add_argument("--src", type=Path, default=ROOT / "src")
-    ap.add_argument("--label", default="this tree")
-    ap.add_argument("--out", type=Path, default=None, help="append the table to this file")
+    ap.add_argument("--src", action="append", default=[], metavar="LABEL=SRC")
+    ap.add_argument("--out", type=Path, default=None, help="write the text to this file")
     args = ap.parse_args(argv)
+    sources = [tuple(s.split("=", 1)) for s in args.src] or [("this tree", str(ROOT / "src"))]
 
-    runs = []
+    runs: dict[str, list[dict[str, Any]]] = {label: [] for label, _ in sources}
+    loads: dict[str, list[float]] = {}
     with tempfile.TemporaryDirectory() as tmp:
-        _simulate(Path(tmp) / "warmup", args.src)
-        htmls = []
+        for j, (_, src) in enumerate(sources):
+            _simulate(Path(tmp) / f"warmup{j}", Path(src))
+        htmls: dict[str, list[Path]] = {label: [] for label, _ in sources}
         for i in range(args.repeat):
-            out = Path(tmp) / f"run{i}"
-            runs.append(_simulate(out, args.src))
-            htmls.append(out / "report.html")
-            r = runs[-1]
-            print(
-                f"run {i}: simulation {r['sim']:.2f} s, report {r['report']:.2f} s, "
-                f"html {r['html_bytes'] / 1e6:.2f} MB",
-                file=sys.stderr,
-            )
-        loads = _load_times(htmls) if CHROMIUM.is_file() else []
+            for j, (label, src) in enumerate(sources):
+                out = Path(tmp) / f"src{j}-run{i}"
+                r = _simulate(out, Path(src))
+                runs[label].append(r)
+                htmls[label].append(out / "report.html")
+                print(
+                    f"{label} run {i}: simulation {r['sim']:.2f} s, report {r['report']:.2f} s, "
+                    f"html {r['html_bytes'] / 1e6:.2f} MB",
+                    file=sys.stderr,
+                )
+        if CHROMIUM.is_file():
+            loads = {label: _load_times(paths) for label, paths in htmls.items()}
 
-    def med(key: str) -> float:
-        return statistics.median(r[key] for r in runs)
+    rows = []
+    for label, rs in runs.items():
 
-    ratios = [r["report"] / r["sim"] for r in runs]
-    row = [
-        args.label,
-        f"{med('sim'):.2f}",
-        f"{med('report'):.2f}",
-        f"{statistics.median(ratios) * 100:.0f} %",
-        f"{med('html_bytes') / 1e6:.2f}",
-        f"{med('page_dir_bytes') / 1e6:.2f}",
-        f"{statistics.median(loads):.2f}" if loads else "n/a (no Chromium)",
-    ]
+        def med(key: str, rs: list[dict[str, Any]] = rs) -> float:
+            return statistics.median(r[key] for r in rs)
+
+        ratios = [r["report"] / r["sim"] for r in rs]
+        rows.append(
+            [
+                label,
+                f"{med('sim'):.2f}",
+                f"{med('report'):.2f}",
+                f"{statistics.median(ratios) * 100:.0f} %",
+                f"{med('html_bytes') / 1e6:.2f}",
+                f"{med('page_dir_bytes') / 1e6:.2f}",
+                f"{statistics.median(loads[label]):.2f}" if loads else "n/a (no Chromium)",
+            ]
+        )
     cols = [
         "code",
         "simulation s",
@@ -125,7 +137,7 @@ def main(argv: list[str] | None = None) -> int:
         "whole folder MB",
         "Chromium load s",
     ]
-    table = markdown_table(cols, [row])
+    table = markdown_table(cols, rows)
     text = (
         header("Simulation report: time, size and page load")
         + f"\nBuilt-in scene 1280x720, `imageform simulate` in a fresh process per run; "
@@ -133,8 +145,7 @@ def main(argv: list[str] | None = None) -> int:
     )
     print(text)
     if args.out is not None:
-        with args.out.open("a", encoding="utf-8") as f:
-            f.write(table)
+        args.out.write_text(text, encoding="utf-8")
     return 0
 
 
