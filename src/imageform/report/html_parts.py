@@ -60,10 +60,11 @@ def e(text: Any) -> str:
     return html.escape(str(text), quote=True)
 
 
-def img_tag(data: bytes, alt: str, *, photo: bool = False, mime: str = "image/png") -> str:
-    """An ``<img>`` whose source is the encoded image itself (``mime``: PNG or JPEG), base64
-    in a ``data:`` URI; a ``photo`` (a stage image) is shown as wide as the page."""
-    b64 = base64.b64encode(data).decode("ascii")
+def img_tag(png: bytes, alt: str, *, photo: bool = False, mime: str = "image/png") -> str:
+    """An ``<img>`` whose source is the encoded image itself, base64 in a ``data:`` URI:
+    ``png`` holds the bytes of a PNG, or of a JPEG with ``mime="image/jpeg"``; a ``photo``
+    (a stage image) is shown as wide as the page."""
+    b64 = base64.b64encode(png).decode("ascii")
     cls = ' class="photo"' if photo else ""
     return f'<img{cls} src="data:{mime};base64,{b64}" alt="{e(alt)}">'
 
@@ -106,7 +107,7 @@ def figure_png(fig: Any, dpi: int = 100) -> bytes:
 
 
 def figure(
-    data: bytes,
+    png: bytes,
     alt: str,
     caption_html: str,
     fig_id: str | None = None,
@@ -115,11 +116,12 @@ def figure(
     mime: str = "image/png",
     href: str | None = None,
 ) -> str:
-    """A ``<figure>`` with the embedded image and a caption (``caption_html`` is trusted:
-    build it from escaped parts); with ``href`` (a relative link, e.g. the lossless stage
-    file) the image links to it."""
+    """A ``<figure>`` with the embedded image (``png``: its bytes, a JPEG's with
+    ``mime="image/jpeg"``) and a caption (``caption_html`` is trusted: build it from escaped
+    parts); with ``href`` (a relative link, e.g. the lossless stage file) the image links
+    to it."""
     ident = f' id="{e(fig_id)}"' if fig_id else ""
-    img = img_tag(data, alt, photo=photo, mime=mime)
+    img = img_tag(png, alt, photo=photo, mime=mime)
     if href is not None:
         img = f'<a href="{e(href)}">{img}</a>'
     return f"<figure{ident}>{img}<figcaption>{caption_html}</figcaption></figure>"
