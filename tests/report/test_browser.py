@@ -112,3 +112,41 @@ def test_real_simulation_report_in_headless_chromium(
     others = [u for u in seen["requests"] if not u.startswith(("file:", "data:"))]
     assert others == [], f"the report asked for {others}"
     _not_blank(page.screenshot(full_page=True))
+
+
+def _load_seconds(page, path: Path, repeat: int = 3) -> float:  # type: ignore[no-untyped-def]
+    """Median wall time of opening ``path`` until its load event (HTML parsed, every image
+    decoded)."""
+    import statistics
+    import time
+
+    times = []
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        page.goto(path.resolve().as_uri(), wait_until="load")
+        times.append(time.perf_counter() - t0)
+    return statistics.median(times)
+
+
+def test_report_loads_in_under_a_second(
+    browser_page,  # type: ignore[no-untyped-def]
+    real_run: dict[str, Any],
+    result_factory,  # type: ignore[no-untyped-def]
+    tmp_path: Path,
+) -> None:
+    """issue 19: the page loads in headless Chromium in under 1 s: the real run's report,
+    and the report of a noisy full-size (1280 x 720) result, whose stage pictures are
+    JPEGs of the default scene's size (the 16 MB PNG page took 2.5 s)."""
+    import dataclasses
+
+    from tests.report.test_report_html import _noisy
+
+    r = result_factory(width=1280, height=720)
+    rng = np.random.default_rng(0)
+    big = write_report(
+        dataclasses.replace(r, stages=tuple(_noisy(s, rng) for s in r.stages)), tmp_path / "big"
+    )
+    assert big.html.stat().st_size <= 3_000_000
+    for path in (real_run["out"] / "report.html", big.html):
+        seconds = _load_seconds(browser_page, path)
+        assert seconds < 1.0, f"{path} took {seconds:.2f} s to load"

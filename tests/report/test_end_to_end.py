@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 from pathlib import Path
 from typing import Any
 
@@ -74,5 +75,10 @@ def test_metrics_json_matches_the_summary(real_run: dict[str, Any]) -> None:
 
 def test_report_embeds_every_stage(real_run: dict[str, Any]) -> None:
     html = (real_run["out"] / "report.html").read_text()
-    assert html.count('<img class="photo" src="data:image/png;base64,') >= len(STAGES)
+    assert html.count('<img class="photo" src="data:image/jpeg;base64,') >= len(STAGES)
+    # each picture links to its lossless PNG in stages/, relative to the swapped-in folder
+    links = re.findall(r'<a href="(stages/[^"]+)"><img', html)
+    assert len(links) == len(STAGES)
+    for h in links:
+        assert (real_run["out"] / h).is_file(), h
     assert "<script src=" not in html and '<link rel="stylesheet" href=' not in html

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import base64
 import dataclasses
+import io
 import json
 import re
 from pathlib import Path
@@ -22,6 +23,8 @@ pytest.importorskip("matplotlib")
 
 _IMG = re.compile(r"<img\b[^>]*>")
 _PNG_URI = re.compile(r'src="data:image/png;base64,([A-Za-z0-9+/=]+)"')
+_JPEG_URI = re.compile(r'src="data:image/jpeg;base64,([A-Za-z0-9+/=]+)"')
+_HREF = re.compile(r'href="([^"#][^"]*)"')
 
 
 @pytest.fixture(scope="module")
@@ -53,16 +56,40 @@ def test_html_is_self_contained(written: ReportPaths) -> None:
     assert not re.search(r"https?://", text)
     assert "<script" not in text and 'src="http' not in text and "url(" not in text
     imgs = _IMG.findall(text)
-    uris = _PNG_URI.findall(text)
-    # one data: URI per image: 5 stages + chromaticity, ΔE00, SNR, top view, VP overlay, PTC
-    assert len(imgs) == len(uris) == 11
-    assert text.count("data:image/png;base64,") == 11
-    for b64 in uris:
+    pngs, jpegs = _PNG_URI.findall(text), _JPEG_URI.findall(text)
+    # one data: URI per image: the plots (chromaticity, ΔE00, SNR, top view, PTC) as PNG,
+    # the pictures (5 stages, VP overlay) as JPEG
+    assert len(imgs) == len(pngs) + len(jpegs) == 11
+    assert len(pngs) == 5 and len(jpegs) == 6
+    for b64 in pngs:
         assert base64.b64decode(b64)[:8] == b"\x89PNG\r\n\x1a\n"
+    for b64 in jpegs:
+        assert base64.b64decode(b64)[:3] == b"\xff\xd8\xff"
     for section in ("stages", "colour", "geometry", "sensor", "numbers"):
         assert f'<section id="{section}">' in text
     assert "just noticeable" in text and "imperceptible" in text
     assert 'class="note"' not in text  # nothing left out
+
+
+def test_stage_pictures_link_to_lossless_files(written: ReportPaths) -> None:
+    """Each stage picture (a JPEG in the page) links to its lossless PNG in stages/ by a
+    relative link that resolves inside the report's folder (swapped in whole)."""
+    text = written.html.read_text(encoding="utf-8")
+    links = [h for h in _HREF.findall(text) if not h.startswith("data:")]
+    assert links, "no links"
+    for h in links:
+        assert h.startswith("stages/") and "//" not in h and ".." not in h, h
+        assert (written.html.parent / h).is_file(), h
+    for p in written.stages:
+        assert text.count(f'href="stages/{p.name}"') == 2  # the picture and the caption
+    # the page's picture is the stage file, compressed: same size, close in value
+    from PIL import Image
+
+    jpg = Image.open(io.BytesIO(base64.b64decode(_JPEG_URI.findall(text)[-2])))
+    ref = read_image(written.stages[-1])
+    got = np.asarray(jpg.convert("RGB"), dtype=np.float64)
+    assert got.shape == ref.shape
+    assert np.abs(got - ref).mean() < 4.0
 
 
 def test_stage_captions(written: ReportPaths, sim_result: SimulationResult) -> None:
@@ -184,7 +211,9 @@ def test_bare_result_leaves_sections_out_with_notes(
     text = paths.html.read_text(encoding="utf-8")
     assert text.count('class="note"') == 4  # chromaticity, ΔE/SNR, vanishing point, sensor
     assert "No ColorChecker" in text and "No rails" in text and "photon-transfer" in text
-    assert len(_IMG.findall(text)) == len(_PNG_URI.findall(text)) == 6  # 5 stages + top view
+    # 5 stages (JPEG) + top view (PNG)
+    assert len(_IMG.findall(text)) == len(_JPEG_URI.findall(text)) + 1 == 6
+    assert len(_PNG_URI.findall(text)) == 1
     data = json.loads(paths.metrics.read_text())
     assert data["colorchecker"] is None and data["vanishing"] is None
     assert data["photon_transfer"] is None and len(data["notes"]) == 4
@@ -258,5 +287,7 @@ def test_report_of_a_noisy_1280x720_result(result_factory, tmp_path: Path) -> No
     mb = paths.html.stat().st_size / 1e6
     print(f"report of a noisy 1280x720 result: {paths.seconds:.2f} s, report.html {mb:.1f} MB")
     assert paths.seconds < 30.0
+    # the page's pictures are JPEG: the page stays small (16 MB with PNG data: URIs)
+    assert mb <= 3.0
     assert read_image(paths.stages[0]).shape == (720, 1280, 3)
     assert read_image(paths.raw_files[0]).dtype == np.uint16

@@ -54,7 +54,9 @@ def planckian_locus(
 
 def _horseshoe_image(coords: str, n: int) -> tuple[np.ndarray, tuple[float, float, float, float]]:
     """RGBA image of the visible region, each point in its (brightest in-gamut) sRGB colour."""
-    from imageform.color.chromaticity import in_locus, uv_prime_to_xy
+    from matplotlib.path import Path as MplPath
+
+    from imageform.color.chromaticity import spectral_locus, uv_prime_to_xy
     from imageform.color.rgb_spaces import xyz_to_rgb_matrix
     from imageform.color.transfer import linear_to_srgb
 
@@ -63,7 +65,10 @@ def _horseshoe_image(coords: str, n: int) -> tuple[np.ndarray, tuple[float, floa
     ys = np.linspace(ext[2], ext[3], n)
     gx, gy = np.meshgrid(xs, ys)
     pts = np.stack([gx, gy], axis=-1)
-    inside = in_locus(pts, coords)
+    # matplotlib's point-in-polygon (compiled) instead of imageform.color.in_locus (numpy,
+    # points x edges): ~30x faster here, and a picture does not mind the boundary pixels
+    locus = spectral_locus(coords=coords).chromaticities
+    inside = MplPath(locus, closed=False).contains_points(pts.reshape(-1, 2)).reshape(n, n)
     xy = pts if coords == "xy" else np.asarray(uv_prime_to_xy(pts))
     y = np.where(xy[..., 1] > 1e-6, xy[..., 1], 1e-6)
     xyz = np.stack([xy[..., 0] / y, np.ones_like(y), (1 - xy[..., 0] - xy[..., 1]) / y], -1)

@@ -21,6 +21,7 @@ __all__ = [
     "json_block",
     "note",
     "page",
+    "page_jpeg",
     "section",
     "table",
 ]
@@ -59,12 +60,37 @@ def e(text: Any) -> str:
     return html.escape(str(text), quote=True)
 
 
-def img_tag(png: bytes, alt: str, *, photo: bool = False) -> str:
-    """An ``<img>`` whose source is the PNG itself, base64 in a ``data:`` URI; a ``photo``
+def img_tag(png: bytes, alt: str, *, photo: bool = False, mime: str = "image/png") -> str:
+    """An ``<img>`` whose source is the encoded image itself, base64 in a ``data:`` URI:
+    ``png`` holds the bytes of a PNG, or of a JPEG with ``mime="image/jpeg"``; a ``photo``
     (a stage image) is shown as wide as the page."""
     b64 = base64.b64encode(png).decode("ascii")
     cls = ' class="photo"' if photo else ""
-    return f'<img{cls} src="data:image/png;base64,{b64}" alt="{e(alt)}">'
+    return f'<img{cls} src="data:{mime};base64,{b64}" alt="{e(alt)}">'
+
+
+#: The widest picture the page embeds (px): the page's column is at most 1320 px wide.
+PAGE_IMAGE_MAX_WIDTH = 1280
+#: JPEG quality of the pictures embedded in the page (the lossless files are in stages/).
+PAGE_JPEG_QUALITY = 85
+
+
+def page_jpeg(
+    rgb: Any, *, max_width: int = PAGE_IMAGE_MAX_WIDTH, quality: int = PAGE_JPEG_QUALITY
+) -> bytes:
+    """An 8-bit RGB picture ``(H, W, 3)`` (or a PIL image) as JPEG bytes for the page,
+    scaled down (area average) to at most ``max_width`` pixels wide. For display only: the
+    lossless PNG of a stage is written to stages/ and linked from the page."""
+    from PIL import Image
+
+    im = rgb if isinstance(rgb, Image.Image) else Image.fromarray(rgb, "RGB")
+    im = im.convert("RGB")
+    if im.width > max_width:
+        h = max(1, round(im.height * max_width / im.width))
+        im = im.resize((max_width, h), Image.Resampling.BOX)
+    buf = io.BytesIO()
+    im.save(buf, format="JPEG", quality=quality)
+    return buf.getvalue()
 
 
 def figure_png(fig: Any, dpi: int = 100) -> bytes:
@@ -81,12 +107,23 @@ def figure_png(fig: Any, dpi: int = 100) -> bytes:
 
 
 def figure(
-    png: bytes, alt: str, caption_html: str, fig_id: str | None = None, *, photo: bool = False
+    png: bytes,
+    alt: str,
+    caption_html: str,
+    fig_id: str | None = None,
+    *,
+    photo: bool = False,
+    mime: str = "image/png",
+    href: str | None = None,
 ) -> str:
-    """A ``<figure>`` with the embedded image and a caption (``caption_html`` is trusted:
-    build it from escaped parts)."""
+    """A ``<figure>`` with the embedded image (``png``: its bytes, a JPEG's with
+    ``mime="image/jpeg"``) and a caption (``caption_html`` is trusted: build it from escaped
+    parts); with ``href`` (a relative link, e.g. the lossless stage file) the image links
+    to it."""
     ident = f' id="{e(fig_id)}"' if fig_id else ""
-    img = img_tag(png, alt, photo=photo)
+    img = img_tag(png, alt, photo=photo, mime=mime)
+    if href is not None:
+        img = f'<a href="{e(href)}">{img}</a>'
     return f"<figure{ident}>{img}<figcaption>{caption_html}</figcaption></figure>"
 
 
