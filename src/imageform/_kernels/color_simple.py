@@ -109,9 +109,7 @@ def summarize(stats: np.ndarray) -> tuple[bool, bool]:
     return bool(stats[:, 0].sum() > 0), bool(np.isfinite(stats).all())
 
 
-def srgb_to_hsv(
-    image: np.ndarray, out: np.ndarray | None = None
-) -> tuple[np.ndarray, np.ndarray]:
+def srgb_to_hsv(image: np.ndarray, out: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Encoded sRGB (..., 3) -> HSV (degrees, [0, 1], [0, 1]) and the input's stats.
 
     ``out``: C-contiguous, the result's shape and dtype, not overlapping ``image`` (checked

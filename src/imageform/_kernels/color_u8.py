@@ -141,9 +141,7 @@ def _flat_out(image: np.ndarray, out: np.ndarray | None) -> tuple[np.ndarray, np
     return src, out
 
 
-def srgb8_to_lab8(
-    image: np.ndarray, m: np.ndarray, out: np.ndarray | None = None
-) -> np.ndarray:
+def srgb8_to_lab8(image: np.ndarray, m: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
     """uint8 sRGB (..., 3) -> uint8 Lab (OpenCV's encoding); ``m`` = RGB->XYZ / white.
 
     ``out`` (C-contiguous uint8 of the image's shape, checked by the caller) is written in place.

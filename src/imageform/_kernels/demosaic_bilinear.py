@@ -105,7 +105,8 @@ def _make_pairs(own_first: bool, k: int):  # type: ignore[no-untyped-def]
     def own_first_loop(u, c, d, o, q1):  # type: ignore[no-untyped-def]
         for q in range(1, q1):
             j = 2 * q
-            cl, c0, c1, c2 = np.int32(c[j - 1]), np.int32(c[j]), np.int32(c[j + 1]), np.int32(c[j + 2])
+            cl, c0 = np.int32(c[j - 1]), np.int32(c[j])
+            c1, c2 = np.int32(c[j + 1]), np.int32(c[j + 2])
             ul, u0, u1 = np.int32(u[j - 1]), np.int32(u[j]), np.int32(u[j + 1])
             dl, d0, d1 = np.int32(d[j - 1]), np.int32(d[j]), np.int32(d[j + 1])
             o[j, 1] = (cl + c1 + u0 + d0 + 2) >> 2
@@ -118,7 +119,8 @@ def _make_pairs(own_first: bool, k: int):  # type: ignore[no-untyped-def]
     def green_first_loop(u, c, d, o, q1):  # type: ignore[no-untyped-def]
         for q in range(1, q1):
             j = 2 * q
-            cl, c0, c1, c2 = np.int32(c[j - 1]), np.int32(c[j]), np.int32(c[j + 1]), np.int32(c[j + 2])
+            cl, c0 = np.int32(c[j - 1]), np.int32(c[j])
+            c1, c2 = np.int32(c[j + 1]), np.int32(c[j + 2])
             u0, u1, u2 = np.int32(u[j]), np.int32(u[j + 1]), np.int32(u[j + 2])
             d0, d1, d2 = np.int32(d[j]), np.int32(d[j + 1]), np.int32(d[j + 2])
             o[j, 1] = c0
@@ -163,8 +165,17 @@ def bilinear_int_numba(raw: np.ndarray, ry: int, rx: int, out: np.ndarray) -> np
             _PAIRS_GREEN_B(u, c, d, o, q1)
         for j in (0, 1):
             if j < w:
-                _px_int(u, c, d, o, j - 1 if j > 0 else 1, j, j + 1 if j < w - 1 else w - 2,
-                        (j & 1) == par, k)
+                _px_int(
+                    u,
+                    c,
+                    d,
+                    o,
+                    j - 1 if j > 0 else 1,
+                    j,
+                    j + 1 if j < w - 1 else w - 2,
+                    (j & 1) == par,
+                    k,
+                )
         for j in range(max(2, 2 * q1), w):
             _px_int(u, c, d, o, j - 1, j, j + 1 if j < w - 1 else w - 2, (j & 1) == par, k)
     return out

@@ -51,9 +51,8 @@ import numpy as np
 from imageform import _deprecate
 from imageform._backend import device_of, namespace, use_numba
 from imageform._dask import chunkwise
-from imageform._validate import check_name, check_option
+from imageform._validate import check_name, check_option, describe
 from imageform.color._guard import as_float, as_image
-from imageform._validate import describe
 from imageform.errors import InvalidInputError, UnknownOptionError
 
 from . import cielab, cmyk, gray, hsv, ycbcr
