@@ -27,6 +27,10 @@ __all__ = ["DECODE_LUT", "srgb8_to_hsv8", "srgb8_to_lab8"]
 
 _F32 = np.float32
 _BLOCK = 65536
+#: Images of fewer pixels run the serial loop in the calling thread: waking numba's
+#: thread pool costs more than it gains there (measured on a loaded 2-core machine,
+#: benchmarks/results/8bit-2026-11-25.md).
+PARALLEL_MIN_PIXELS = 1 << 22
 _FM = {"nsz", "arcp", "contract", "afn", "reassoc"}
 _JIT = {"cache": True, "fastmath": _FM, "error_model": "numpy"}
 
@@ -147,12 +151,14 @@ def srgb8_to_lab8(image: np.ndarray, m: np.ndarray, out: np.ndarray | None = Non
     ``out`` (C-contiguous uint8 of the image's shape, checked by the caller) is written in place.
     """
     src, res = _flat_out(image, out)
-    _lab8(src, res.reshape(-1), xyz_tables(m), F_TABLE)
+    run = _lab8 if src.size // 3 >= PARALLEL_MIN_PIXELS else _lab8_serial
+    run(src, res.reshape(-1), xyz_tables(m), F_TABLE)
     return res
 
 
 def srgb8_to_hsv8(image: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
     """uint8 sRGB (..., 3) -> uint8 HSV (H/2 in [0, 180), 255 S, V), as ``COLOR_RGB2HSV``."""
     src, res = _flat_out(image, out)
-    _hsv8(src, res.reshape(-1))
+    run = _hsv8 if src.size // 3 >= PARALLEL_MIN_PIXELS else _hsv8_serial
+    run(src, res.reshape(-1))
     return res
