@@ -2,7 +2,8 @@
 the integer bilinear demosaicing kernel, against their twins, the float64 reference and
 OpenCV (benchmark peer). Stated bounds: Lab and HSV within one code of the float result
 rounded (``to_opencv``); CIEDE2000 of the decoded 8-bit Lab at most 1.0 and within 0.15 of
-the rounding floor of the lab8 encoding itself (0.88 over all 2^24 colours, benchmarks/results/8bit-2026-11-25.md);
+the rounding floor of the lab8 encoding itself (0.88 over all 2^24 colours,
+benchmarks/results/8bit-2026-11-25.md);
 the float32 result from uint8 input at most 0.5 (it is below 1e-3); the integer demosaicing
 within half a code of 255 x the float64 bilinear result and equal to OpenCV's interior.
 """
