@@ -169,7 +169,7 @@ def _accuracy(cv2: Any, img1: np.ndarray) -> list[list[object]]:
     ):
         mx = max(stats[key][0::2])
         mean = sum(stats[key][1::2]) / n
-        rows.append([f"sRGB->Lab: {what}", f"{mx:.3f}", f"{mean:.4f}"])
+        rows.append([f"sRGB->Lab: {what}", f"{mx:.3g}", f"{mean:.3g}"])
     rows.append(["sRGB->HSV: imageform, max code error vs float64 rounded", hue["if"], ""])
     rows.append(["sRGB->HSV: OpenCV, max code error vs float64 rounded", hue["cv"], ""])
     raw = _mosaic(img1)
@@ -179,7 +179,7 @@ def _accuracy(cv2: Any, img1: np.ndarray) -> list[list[object]]:
     same = float((cvd[1:-1, 1:-1] == ours[1:-1, 1:-1]).mean())
     rows.append(
         [
-            "demosaic uint8 (1 MP): max |ours - 255 float64| / max |ours - round(255 float64)|",
+            "demosaic uint8 (1 MP): max abs(ours - 255 ref) / max abs(ours - rint(255 ref))",
             f"{np.abs(ours - ref).max():.3f} / {np.abs(ours - np.rint(ref)).max():.0f}",
             "",
         ]
@@ -234,7 +234,11 @@ def main() -> None:
             rows,
         )
     )
-    out.append(f"\nRatios < 1: imageform faster. {args.rounds} rounds, median of 5 calls each.\n")
+    out.append(
+        f"\nRatios < 1: imageform faster. {args.rounds} rounds, median of 5 calls each; the "
+        "ratio column is the median of the per-round ratios (the ms columns are medians over "
+        "the rounds, so they need not divide to it on this loaded machine).\n"
+    )
     numba.set_num_threads(default_nb)
     cv2.setNumThreads(default_cv)
     acc = _accuracy(cv2, images["1 MP"])
