@@ -20,6 +20,8 @@ run over chunks by a ``prange`` wrapper (table reads: scalar code, no gathers).
 
 from __future__ import annotations
 
+from typing import Any
+
 import numba as nb
 import numpy as np
 
@@ -32,7 +34,7 @@ _BLOCK = 65536
 #: benchmarks/results/8bit-2026-11-25.md).
 PARALLEL_MIN_PIXELS = 1 << 22
 _FM = {"nsz", "arcp", "contract", "afn", "reassoc"}
-_JIT = {"cache": True, "fastmath": _FM, "error_model": "numpy"}
+_JIT: dict[str, Any] = {"cache": True, "fastmath": _FM, "error_model": "numpy"}
 
 
 def _decode_table() -> np.ndarray:

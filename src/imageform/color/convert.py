@@ -289,8 +289,8 @@ def convert(
     src: str,
     dst: str,
     *,
-    out: np.ndarray | None = None,
-    dtype: str | None = None,
+    out: Any = None,
+    dtype: Any = None,
     **params: Any,
 ) -> Any:
     """Convert ``image`` from colour space ``src`` to ``dst`` along the conversion graph.
