@@ -279,6 +279,13 @@ def _check_out(out: object, shape: tuple[int, ...], dtype: Any, image: object) -
     return out
 
 
+def _is_uint8(dtype: object) -> bool:
+    try:
+        return bool(np.dtype(dtype) == np.uint8)  # type: ignore[call-overload]
+    except TypeError:
+        return False
+
+
 def _float_dtype(arr: Any) -> Any:
     return np.float64 if getattr(arr, "dtype", None) == np.float64 else np.float32
 
@@ -349,7 +356,7 @@ def convert(
         ]
         p["white"] = rgb[0] if rgb else "D65"
 
-    if dtype is not None and dtype != "uint8" and dtype is not np.uint8:
+    if dtype is not None and not _is_uint8(dtype):
         raise InvalidInputError(f"expected dtype None or 'uint8', got {describe(dtype)}")
     enc8 = _DTYPE8.get(d) if dtype is not None else None
     if dtype is not None and enc8 is None:
