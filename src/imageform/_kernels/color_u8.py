@@ -64,6 +64,13 @@ def _f_table() -> np.ndarray:
 F_TABLE: np.ndarray = _f_table()
 
 
+#: The lab8 L channel at t = k / SCALE: round(2.55 (116 f(t) - 16)), saturated (uint8): one
+#: table read instead of the float arithmetic and rounding (twice as fast, measured).
+L_TABLE: np.ndarray = np.clip(
+    np.rint(2.55 * (116.0 * F_TABLE.astype(np.float64) - 16.0)), 0, 255
+).astype(np.uint8)
+
+
 def xyz_tables(m: np.ndarray) -> np.ndarray:
     """uint32 (3 * 3 * 256,): entry ``768 i + 256 j + v`` is ``round(m[i, j] decode(v) SCALE)``
     (negative entries, which no RGB->XYZ matrix has, clipped to 0), so that
@@ -80,7 +87,7 @@ def _sat8(x):  # type: ignore[no-untyped-def]
 
 
 @nb.njit(**_JIT)
-def _lab8_serial(src, dst, tx, tab):  # type: ignore[no-untyped-def]
+def _lab8_serial(src, dst, tx, tab, lt):  # type: ignore[no-untyped-def]
     # unsigned indices into flat tables: no negative-index wrap-around selects
     top = np.uint32(tab.shape[0] - 1)
     for i in range(src.shape[0] // 3):
@@ -90,22 +97,19 @@ def _lab8_serial(src, dst, tx, tab):  # type: ignore[no-untyped-def]
         x = min(tx[r] + tx[g] + tx[bl], top)
         y = min(tx[768 + r] + tx[768 + g] + tx[768 + bl], top)
         z = min(tx[1536 + r] + tx[1536 + g] + tx[1536 + bl], top)
-        fx = tab[x]
         fy = tab[y]
-        fz = tab[z]
-        # L* 255/100 = (116 fy - 16) 2.55; a* + 128; b* + 128
-        dst[3 * i] = _sat8(_F32(295.8) * fy - _F32(40.8))
-        dst[3 * i + 1] = _sat8(_F32(500) * (fx - fy) + _F32(128))
-        dst[3 * i + 2] = _sat8(_F32(200) * (fy - fz) + _F32(128))
+        dst[3 * i] = lt[y]  # L* 255/100 = (116 fy - 16) 2.55, rounded, from its own table
+        dst[3 * i + 1] = _sat8(_F32(500) * (tab[x] - fy) + _F32(128))  # a* + 128
+        dst[3 * i + 2] = _sat8(_F32(200) * (fy - tab[z]) + _F32(128))  # b* + 128
 
 
 @nb.njit(parallel=True, cache=True)
-def _lab8(src, dst, tx, tab):  # type: ignore[no-untyped-def]
+def _lab8(src, dst, tx, tab, lt):  # type: ignore[no-untyped-def]
     n = src.shape[0] // 3
     for c in nb.prange((n + _BLOCK - 1) // _BLOCK):
         lo = c * _BLOCK
         hi = min(n, lo + _BLOCK)
-        _lab8_serial(src[3 * lo : 3 * hi], dst[3 * lo : 3 * hi], tx, tab)
+        _lab8_serial(src[3 * lo : 3 * hi], dst[3 * lo : 3 * hi], tx, tab, lt)
 
 
 @nb.njit(**_JIT)
@@ -154,7 +158,7 @@ def srgb8_to_lab8(image: np.ndarray, m: np.ndarray, out: np.ndarray | None = Non
     """
     src, res = _flat_out(image, out)
     run = _lab8 if src.size // 3 >= PARALLEL_MIN_PIXELS else _lab8_serial
-    run(src, res.reshape(-1), xyz_tables(m), F_TABLE)
+    run(src, res.reshape(-1), xyz_tables(m), F_TABLE, L_TABLE)
     return res
 
 
