@@ -312,8 +312,13 @@ def _finv(u):  # type: ignore[no-untyped-def]
     return (u - _LOFF) / _LSLOPE
 
 
-def srgb_to_lab(image: np.ndarray, m: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
+def srgb_to_lab(
+    image: np.ndarray, m: np.ndarray, out: np.ndarray | None = None
+) -> tuple[np.ndarray, np.ndarray | None]:
     """Encoded sRGB (..., 3) -> CIELAB; ``m`` = diag(1/white) @ RGB->XYZ matrix (float64).
+
+    ``out``: a C-contiguous array of the result's shape and dtype, not overlapping ``image``
+    (checked by the caller), written in place.
 
     uint8 and float32 input give float32 (float32 arithmetic); float64 gives float64
     (exact formulas). Also returns the per-chunk input stats of the float32/uint8 kernel
@@ -323,10 +328,10 @@ def srgb_to_lab(image: np.ndarray, m: np.ndarray) -> tuple[np.ndarray, np.ndarra
 
     src = np.ascontiguousarray(image).reshape(-1)
     if image.dtype == np.float64:
-        dst = np.empty(src.shape, np.float64)
+        dst = np.empty(src.shape, np.float64) if out is None else out.reshape(-1)
         _srgb_to_lab_f64(src, dst, m)
         return dst.reshape(image.shape), None
-    dst = np.empty(src.shape, np.float32)
+    dst = np.empty(src.shape, np.float32) if out is None else out.reshape(-1)
     scale = np.float32(1.0 / 255.0) if image.dtype == np.uint8 else np.float32(1.0)
     m32 = m.astype(np.float32)
     stats = new_stats(src.size // 3)

@@ -109,23 +109,26 @@ def summarize(stats: np.ndarray) -> tuple[bool, bool]:
     return bool(stats[:, 0].sum() > 0), bool(np.isfinite(stats).all())
 
 
-def srgb_to_hsv(image: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Encoded sRGB (..., 3) -> HSV (degrees, [0, 1], [0, 1]) and the input's stats."""
+def srgb_to_hsv(image: np.ndarray, out: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Encoded sRGB (..., 3) -> HSV (degrees, [0, 1], [0, 1]) and the input's stats.
+
+    ``out``: C-contiguous, the result's shape and dtype, not overlapping ``image`` (checked
+    by the caller), written in place."""
     src = np.ascontiguousarray(image).reshape(-1)
     dt = _out_dtype(image)
-    dst: np.ndarray = np.empty(src.shape, dt)
+    dst: np.ndarray = np.empty(src.shape, dt) if out is None else out.reshape(-1)
     stats = new_stats(src.size // 3)
     _hsv(src, dst, dt(1.0 / 255.0) if image.dtype == np.uint8 else dt(1.0), stats)
     return dst.reshape(image.shape), stats
 
 
 def ycbcr_affine(
-    image: np.ndarray, m: np.ndarray, off: np.ndarray
+    image: np.ndarray, m: np.ndarray, off: np.ndarray, out: np.ndarray | None = None
 ) -> tuple[np.ndarray, np.ndarray]:
     """``out = image @ m.T + off`` per pixel (the Y'CbCr transforms are affine), and stats."""
     src = np.ascontiguousarray(image).reshape(-1)
     dt = _out_dtype(image)
-    dst: np.ndarray = np.empty(src.shape, dt)
+    dst: np.ndarray = np.empty(src.shape, dt) if out is None else out.reshape(-1)
     scale = dt(1.0 / 255.0) if image.dtype == np.uint8 else dt(1.0)
     stats = new_stats(src.size // 3)
     _affine(src, dst, m.astype(dt), off.astype(dt), scale, stats)

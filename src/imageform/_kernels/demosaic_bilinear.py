@@ -9,12 +9,14 @@ the convolution of the masked planes with ``[[0,1,0],[1,4,1],[0,1,0]]/4`` (green
 
 from __future__ import annotations
 
+import sys
+
 import numpy as np
 from numba import njit, prange
 
 from imageform._kernels.demosaic_common import crop, phase_masks, shift
 
-__all__ = ["RADIUS", "bilinear_numba", "bilinear_numpy"]
+__all__ = ["RADIUS", "bilinear_int_numba", "bilinear_int_numpy", "bilinear_numba", "bilinear_numpy"]
 
 RADIUS = 1
 
@@ -76,3 +78,211 @@ def bilinear_numpy(P: np.ndarray, oy: int, ox: int, h: int, w: int) -> np.ndarra
             s += diag * (shift(c, -1, -1) + shift(c, -1, 1) + shift(c, 1, -1) + shift(c, 1, 1))
         planes.append(s)
     return crop(np.stack(planes, axis=-1), oy, ox, h, w)
+
+
+# --- integer (uint8 / uint16 in and out) ----------------------------------------------------
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _px_int(u, c, d, o, jl, j, jr, is_rb, k):  # type: ignore[no-untyped-def]
+    cc = np.int32(c[j])
+    sh = np.int32(c[jl]) + np.int32(c[jr])
+    sv = np.int32(u[j]) + np.int32(d[j])
+    dg = np.int32(u[jl]) + np.int32(u[jr]) + np.int32(d[jl]) + np.int32(d[jr])
+    g = ((sh + sv + 2) >> 2) if is_rb else cc
+    own = cc if is_rb else ((sh + 1) >> 1)
+    oth = ((dg + 2) >> 2) if is_rb else ((sv + 1) >> 1)
+    o[j, 1] = g
+    o[j, k] = own
+    o[j, 2 - k] = oth
+
+
+_U = np.uint32
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _own_green(u, c, d, j):  # type: ignore[no-untyped-def]
+    """Pixel ``j`` a red (blue) site, ``j + 1`` green: (own, green, other) of both."""
+    cl, c0, c1, c2 = _U(c[j - 1]), _U(c[j]), _U(c[j + 1]), _U(c[j + 2])
+    ul, u1, dl, d1 = _U(u[j - 1]), _U(u[j + 1]), _U(d[j - 1]), _U(d[j + 1])
+    u0, d0 = _U(u[j]), _U(d[j])
+    g0 = (cl + c1 + u0 + d0 + _U(2)) >> _U(2)
+    x0 = (ul + u1 + dl + d1 + _U(2)) >> _U(2)
+    return c0, g0, x0, (c0 + c2 + _U(1)) >> _U(1), c1, (u1 + d1 + _U(1)) >> _U(1)
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _green_own(u, c, d, j):  # type: ignore[no-untyped-def]
+    """Pixel ``j`` green, ``j + 1`` a red (blue) site: (own, green, other) of both."""
+    cl, c0, c1, c2 = _U(c[j - 1]), _U(c[j]), _U(c[j + 1]), _U(c[j + 2])
+    u0, u1, u2, d0, d1, d2 = (
+        _U(u[j]),
+        _U(u[j + 1]),
+        _U(u[j + 2]),
+        _U(d[j]),
+        _U(d[j + 1]),
+        _U(d[j + 2]),
+    )
+    k0 = (cl + c1 + _U(1)) >> _U(1)
+    x0 = (u0 + d0 + _U(1)) >> _U(1)
+    g1 = (c0 + c2 + u1 + d1 + _U(2)) >> _U(2)
+    x1 = (u0 + u2 + d0 + d2 + _U(2)) >> _U(2)
+    return k0, c0, x0, c1, g1, x1
+
+
+def _make_rows(own_first: bool, red_row: bool, wide: bool):  # type: ignore[no-untyped-def]
+    """Interior loop of one row phase, writing packed 32-bit words of the output row ``o32``
+    (little-endian): uint8 (``wide`` False) 4 pixels = 12 bytes = 3 words per step, uint16
+    2 pixels = 3 words. ``own_first``: the row's red (blue) site at even columns;
+    ``red_row``: the own colour is red (channel 0). Constant channel order and no selects,
+    so LLVM vectorises the loop."""
+    pair = _own_green if own_first else _green_own
+
+    def rgb(own, g, oth):  # type: ignore[no-untyped-def]
+        return (own, g, oth) if red_row else (oth, g, own)
+
+    rgb_j = njit(inline="always")(rgb)
+
+    def loop8(u, c, d, o32, n):  # type: ignore[no-untyped-def]
+        for q in range(1, n):
+            j = 4 * q
+            a0, a1, a2, b0, b1, b2 = pair(u, c, d, j)
+            e0, e1, e2, f0, f1, f2 = pair(u, c, d, j + 2)
+            r0, g0, x0 = rgb_j(a0, a1, a2)
+            r1, g1, x1 = rgb_j(b0, b1, b2)
+            r2, g2, x2 = rgb_j(e0, e1, e2)
+            r3, g3, x3 = rgb_j(f0, f1, f2)
+            k = 3 * q  # o32: this row's words (an offset here would stop vectorisation)
+            o32[k] = r0 | (g0 << _U(8)) | (x0 << _U(16)) | (r1 << _U(24))
+            o32[k + 1] = g1 | (x1 << _U(8)) | (r2 << _U(16)) | (g2 << _U(24))
+            o32[k + 2] = x2 | (r3 << _U(8)) | (g3 << _U(16)) | (x3 << _U(24))
+
+    def loop16(u, c, d, o32, n):  # type: ignore[no-untyped-def]
+        for q in range(1, n):
+            j = 2 * q
+            a0, a1, a2, b0, b1, b2 = pair(u, c, d, j)
+            r0, g0, x0 = rgb_j(a0, a1, a2)
+            r1, g1, x1 = rgb_j(b0, b1, b2)
+            k = 3 * q  # o32: this row's words (an offset here would stop vectorisation)
+            o32[k] = r0 | (g0 << _U(16))
+            o32[k + 1] = x0 | (r1 << _U(16))
+            o32[k + 2] = g1 | (x1 << _U(16))
+
+    return njit(cache=True, error_model="numpy")(loop16 if wide else loop8)
+
+
+_OWN_R8 = _make_rows(True, True, False)
+_OWN_B8 = _make_rows(True, False, False)
+_GREEN_R8 = _make_rows(False, True, False)
+_GREEN_B8 = _make_rows(False, False, False)
+_OWN_R16 = _make_rows(True, True, True)
+_OWN_B16 = _make_rows(True, False, True)
+_GREEN_R16 = _make_rows(False, True, True)
+_GREEN_B16 = _make_rows(False, False, True)
+
+
+@njit(cache=True, parallel=True, error_model="numpy")
+def _int_rows(raw, ry, rx, out, o32, n):  # type: ignore[no-untyped-def]
+    # Unpadded mosaic (red at row % 2 == ry, column % 2 == rx); edges mirrored about the edge
+    # pixel (index -1 reads 1, as numpy.pad(mode="reflect") in the float path). ``o32``: the
+    # output as 32-bit words (empty and n = 0 when the rows are not whole words).
+    h, w = raw.shape
+    wide = raw.itemsize == 2
+    step = 2 if wide else 4  # pixels per 3 output words
+    row_words = (3 * w * raw.itemsize) // 4
+    for i in prange(h):
+        up = i - 1 if i > 0 else 1
+        dn = i + 1 if i < h - 1 else h - 2
+        u = raw[up]
+        c = raw[i]
+        d = raw[dn]
+        o = out[i]
+        red_row = (i & 1) == ry
+        k = 0 if red_row else 2
+        par = rx if red_row else 1 - rx  # column parity of this row's red (blue) sites
+        ow = o32[i * row_words : (i + 1) * row_words]
+        if n > 1:
+            if wide:
+                if par == 0 and red_row:
+                    _OWN_R16(u, c, d, ow, n)
+                elif par == 0:
+                    _OWN_B16(u, c, d, ow, n)
+                elif red_row:
+                    _GREEN_R16(u, c, d, ow, n)
+                else:
+                    _GREEN_B16(u, c, d, ow, n)
+            elif par == 0 and red_row:
+                _OWN_R8(u, c, d, ow, n)
+            elif par == 0:
+                _OWN_B8(u, c, d, ow, n)
+            elif red_row:
+                _GREEN_R8(u, c, d, ow, n)
+            else:
+                _GREEN_B8(u, c, d, ow, n)
+            lo, hi = step, step * n
+        else:
+            lo, hi = w, w
+        for j in range(lo):
+            jl = j - 1 if j > 0 else 1
+            jr = j + 1 if j < w - 1 else w - 2
+            _px_int(u, c, d, o, jl, j, jr, (j & 1) == par, k)
+        for j in range(max(hi, lo), w):
+            jl = j - 1 if j > 0 else 1
+            jr = j + 1 if j < w - 1 else w - 2
+            _px_int(u, c, d, o, jl, j, jr, (j & 1) == par, k)
+    return out
+
+
+_int_rows_serial = njit(cache=True, error_model="numpy")(_int_rows.py_func)
+#: Mosaics of fewer pixels run the rows in the calling thread (waking numba's pool costs
+#: more than it gains there on a loaded machine; benchmarks/results/8bit-2026-11-25.md).
+PARALLEL_MIN_PIXELS = 1 << 22
+
+
+def bilinear_int_numba(
+    raw: np.ndarray, ry: int, rx: int, out: np.ndarray, parallel: bool | None = None
+) -> np.ndarray:
+    """uint8/uint16 bilinear demosaicing of an unpadded C-contiguous ``(H, W)`` mosaic with red
+    at ``(ry, rx)`` into ``out`` (``(H, W, 3)``, same dtype, C-contiguous): integer means
+    rounded half up (twin: :func:`bilinear_int_numpy`). Rows whose bytes make whole 32-bit
+    words (W a multiple of 4 for uint8, of 2 for uint16; little-endian) run the packed,
+    vectorised loop; other widths the per-pixel one."""
+    h, w = raw.shape
+    step = 2 if raw.itemsize == 2 else 4
+    if w % step == 0 and sys.byteorder == "little":
+        o32, n = out.reshape(-1).view(np.uint32), w // step - 1
+    else:
+        o32, n = np.empty(0, np.uint32), 0
+    if parallel is None:
+        parallel = h * w >= PARALLEL_MIN_PIXELS
+    (_int_rows if parallel else _int_rows_serial)(raw, ry, rx, out, o32, n)
+    return out
+
+
+def bilinear_int_numpy(raw: np.ndarray, ry: int, rx: int) -> np.ndarray:
+    """Twin of :func:`bilinear_int_numba`: the exact (integer) bilinear means, rounded half up.
+
+    ``floor(mean + 1/2)`` of the nearest same-colour code values, i.e. ``(a + b + 1) >> 1`` and
+    ``(a + b + c + d + 2) >> 2``.
+    """
+    h, w = raw.shape
+    pr = np.pad(raw.astype(np.int64), 1, mode="reflect")
+    y = (np.arange(h) % 2 == ry)[:, None]
+    x = (np.arange(w) % 2 == rx)[None, :]
+    r_m, b_m = y & x, ~y & ~x
+    g_m = ~(r_m | b_m)
+
+    def at(dy: int, dx: int) -> np.ndarray:
+        return pr[1 + dy : 1 + dy + h, 1 + dx : 1 + dx + w]
+
+    c = at(0, 0)
+    sh = at(0, -1) + at(0, 1)
+    sv = at(-1, 0) + at(1, 0)
+    dg = at(-1, -1) + at(-1, 1) + at(1, -1) + at(1, 1)
+    cross, two_h, two_v, diag = (sh + sv + 2) >> 2, (sh + 1) >> 1, (sv + 1) >> 1, (dg + 2) >> 2
+    # green rows: red row greens see red left/right; blue row greens see red above/below
+    g_red_row = g_m & y
+    red = np.where(r_m, c, np.where(b_m, diag, np.where(g_red_row, two_h, two_v)))
+    blue = np.where(b_m, c, np.where(r_m, diag, np.where(g_red_row, two_v, two_h)))
+    green = np.where(g_m, c, cross)
+    return np.stack([red, green, blue], axis=-1).astype(raw.dtype)

@@ -24,8 +24,21 @@ _KERNEL_PAIRS = {
 }
 
 
-def dispatch(image: np.ndarray, s: str, d: str, p: dict[str, Any]) -> np.ndarray | None:
-    """Run the kernel for ``s -> d`` on a validated-shape NumPy array, or return None."""
+def dispatch(
+    image: np.ndarray,
+    s: str,
+    d: str,
+    p: dict[str, Any],
+    out: np.ndarray | None = None,
+    enc8: str | None = None,
+) -> np.ndarray | None:
+    """Run the kernel for ``s -> d`` on a validated-shape NumPy array, or return None.
+
+    ``out``: the checked result buffer (or None); ``enc8``: ``"lab8"`` / ``"hsv8"`` for
+    OpenCV's 8-bit output, which only uint8 sRGB input runs here.
+    """
+    if enc8 is not None:
+        return _dispatch8(image, s, d, p, out)
     if (s, d) not in _KERNEL_PAIRS or image.dtype not in (np.float32, np.float64, np.uint8):
         return None
     from imageform._kernels import color_lab, color_simple
@@ -46,13 +59,16 @@ def dispatch(image: np.ndarray, s: str, d: str, p: dict[str, Any]) -> np.ndarray
         m = rgb_to_xyz_matrix("srgb") / w[:, None]
         if image.dtype == np.float64:
             as_image(image, "srgb image")
-        out, stats = color_lab.srgb_to_lab(image, m)
+        res, stats = color_lab.srgb_to_lab(image, m, out)
     elif (s, d) == ("lab", "srgb"):
         check_finite(image, "lab image")
         w = resolve_white(p["white"], observer=p.get("observer", 2))
-        out = color_lab.lab_to_srgb(image, xyz_to_rgb_matrix("srgb") * w[None, :])
+        res = color_lab.lab_to_srgb(image, xyz_to_rgb_matrix("srgb") * w[None, :])
+        if out is not None:
+            out[...] = res
+            res = out
     elif (s, d) == ("srgb", "hsv"):
-        out, stats = color_simple.srgb_to_hsv(image)
+        res, stats = color_simple.srgb_to_hsv(image, out)
     else:
         _, kr, kb = ycbcr._coeffs(p.get("standard", "bt601"))
         yg, yo, cg, co = ycbcr._scale(p.get("signal_range", "full"), p.get("bits"))
@@ -67,10 +83,10 @@ def dispatch(image: np.ndarray, s: str, d: str, p: dict[str, Any]) -> np.ndarray
         gain = np.array([yg, cg, cg])
         off = np.array([yo, co, co])
         if d == "ycbcr":
-            out, stats = color_simple.ycbcr_affine(image, a * gain[:, None], off)
+            res, stats = color_simple.ycbcr_affine(image, a * gain[:, None], off, out)
         else:
             ainv = np.linalg.inv(a * gain[:, None])
-            out, stats = color_simple.ycbcr_affine(image, ainv, -ainv @ off)
+            res, stats = color_simple.ycbcr_affine(image, ainv, -ainv @ off, out)
     if stats is not None and image.dtype != np.uint8:
         # the boundary checks of as_image, from the statistics the kernel gathered
         outside, finite = color_simple.summarize(stats)
@@ -78,4 +94,24 @@ def dispatch(image: np.ndarray, s: str, d: str, p: dict[str, Any]) -> np.ndarray
             check_finite(image, f"{s} image")  # confirms (a non-finite sum may be overflow)
         if s == "srgb" and outside:
             as_image(image, "srgb image")  # raises for plainly 0-255 floats
-    return out
+    return res
+
+
+def _dispatch8(
+    image: np.ndarray, s: str, d: str, p: dict[str, Any], out: np.ndarray | None
+) -> np.ndarray | None:
+    """uint8 sRGB -> OpenCV-encoded uint8 Lab / HSV (:mod:`imageform._kernels.color_u8`)."""
+    if s != "srgb" or image.dtype != np.uint8 or image.size == 0:
+        return None
+    from imageform._kernels import color_u8
+
+    if d == "hsv":
+        return color_u8.srgb8_to_hsv8(image, out)
+    from imageform.color.rgb_spaces import rgb_to_xyz_matrix
+    from imageform.color.whitepoints import resolve_white
+
+    w = resolve_white(p["white"], observer=p.get("observer", 2))
+    m = rgb_to_xyz_matrix("srgb") / w[:, None]
+    if m.sum(axis=1).max() > 1.0 + 4.0 / color_u8.SCALE:
+        return None  # X / Xn above the f table (a white other than sRGB's): the float path
+    return color_u8.srgb8_to_lab8(image, m, out)

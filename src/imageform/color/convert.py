@@ -23,6 +23,17 @@ the path uses is an error):
 - ``alpha``: ``"reject"`` (default) or ``"keep"`` — an extra last channel is carried through
   unchanged, never mixed into the colour.
 
+Output (keyword-only, for every path):
+
+- ``dtype=None`` (the float result) or ``"uint8"``: for ``dst`` ``"lab"`` and ``"hsv"``, the
+  8-bit encodings of OpenCV (``"lab8"``: L* x 255/100, a* + 128, b* + 128; ``"hsv8"``: H/2 in
+  [0, 180), S x 255, V x 255; see :func:`imageform.color.to_opencv`). uint8 sRGB input
+  runs fused 8-bit kernels (table decode, 16-bit fixed-point XYZ; at most one code from
+  ``to_opencv(convert(image, src, dst), "lab8")``, the rounding of the float result).
+- ``out=``: a preallocated, writeable, C-contiguous NumPy array of the result's shape and
+  dtype, not overlapping ``image``; the fused kernels write straight into it, other paths
+  copy into it. ``convert`` returns ``out``.
+
 RGB spaces with different whites (ProPhoto's D50, the others' D65) are joined through XYZ
 *without* chromatic adaptation (an absolute-colorimetric conversion).
 """
@@ -40,7 +51,7 @@ import numpy as np
 from imageform import _deprecate
 from imageform._backend import device_of, namespace, use_numba
 from imageform._dask import chunkwise
-from imageform._validate import check_name, check_option
+from imageform._validate import check_name, check_option, describe
 from imageform.color._guard import as_float, as_image
 from imageform.errors import InvalidInputError, UnknownOptionError
 
@@ -250,8 +261,49 @@ def _validate(image: object, src: str) -> Any:
     return x
 
 
+_DTYPE8 = {"lab": "lab8", "hsv": "hsv8"}
+
+
+def _check_out(out: object, shape: tuple[int, ...], dtype: Any, image: object) -> np.ndarray:
+    """``out=`` as the result's buffer: one-line errors for every mismatch."""
+    if not isinstance(out, np.ndarray):
+        raise TypeError(f"expected out as a NumPy array, got {describe(out)}")
+    if out.dtype != dtype:
+        raise InvalidInputError(
+            f"expected out with dtype {np.dtype(dtype).name} (the result's), got {out.dtype.name}"
+        )
+    if tuple(out.shape) != tuple(shape):
+        raise InvalidInputError(
+            f"expected out of shape {tuple(shape)} (the result's), got {tuple(out.shape)}"
+        )
+    if not (out.flags.c_contiguous and out.flags.writeable):
+        raise InvalidInputError("expected out as a writeable C-contiguous array, got a view")
+    if isinstance(image, np.ndarray) and np.may_share_memory(out, image):
+        raise InvalidInputError("expected out not overlapping the image (no in-place convert)")
+    return out
+
+
+def _is_uint8(dtype: object) -> bool:
+    try:
+        return bool(np.dtype(dtype) == np.uint8)  # type: ignore[call-overload]
+    except TypeError:
+        return False
+
+
+def _float_dtype(arr: Any) -> Any:
+    return np.float64 if getattr(arr, "dtype", None) == np.float64 else np.float32
+
+
 @chunkwise(1)
-def convert(image: object, src: str, dst: str, **params: Any) -> Any:
+def convert(
+    image: object,
+    src: str,
+    dst: str,
+    *,
+    out: Any = None,
+    dtype: Any = None,
+    **params: Any,
+) -> Any:
     """Convert ``image`` from colour space ``src`` to ``dst`` along the conversion graph.
 
     Parameters
@@ -261,6 +313,12 @@ def convert(image: object, src: str, dst: str, **params: Any) -> Any:
         Encoded RGB-like spaces take floats in [0, 1] or uint8/uint16 code values.
     src, dst : str
         Keys of :data:`SPACES`; an unknown name raises and lists the valid ones.
+    out : numpy.ndarray, optional
+        Preallocated result (shape and dtype of the result, C-contiguous, writeable, not
+        overlapping ``image``); returned.
+    dtype : {None, "uint8"}
+        ``"uint8"``: OpenCV's 8-bit encoding of ``dst`` ``"lab"`` or ``"hsv"`` (module
+        docstring). Default: the float result.
     **params
         ``white``, ``observer``, ``standard``, ``signal_range``, ``bits``, ``method``,
         ``alpha`` (see the module docstring); only those the path uses are accepted.
@@ -268,7 +326,8 @@ def convert(image: object, src: str, dst: str, **params: Any) -> Any:
     Returns
     -------
     array, shape (..., C_dst)
-        Same namespace and float dtype as the input (float32 for integer input).
+        Same namespace and float dtype as the input (float32 for integer input); uint8
+        with ``dtype="uint8"``.
 
     Examples
     --------
@@ -276,6 +335,8 @@ def convert(image: object, src: str, dst: str, **params: Any) -> Any:
     [100.0, 0.0, 0.0]
     >>> convert([1.0, 0.0, 0.0], "srgb", "lab").round(2).tolist()
     [53.24, 80.09, 67.2]
+    >>> convert(np.array([[255, 0, 0]], np.uint8), "srgb", "lab", dtype="uint8").tolist()
+    [[136, 208, 195]]
     """
     if "range" in params:
         if "signal_range" in params:
@@ -301,6 +362,16 @@ def convert(image: object, src: str, dst: str, **params: Any) -> Any:
         ]
         p["white"] = rgb[0] if rgb else "D65"
 
+    if dtype is not None and not _is_uint8(dtype):
+        raise InvalidInputError(f"expected dtype None or 'uint8', got {describe(dtype)}")
+    enc8 = _DTYPE8.get(d) if dtype is not None else None
+    if dtype is not None and enc8 is None:
+        raise InvalidInputError(
+            f"dtype='uint8' encodes dst 'lab' or 'hsv' (OpenCV's 8-bit layouts), got dst {d!r}"
+        )
+    if enc8 is not None and alpha == "keep":
+        raise InvalidInputError("dtype='uint8' takes 3-channel images, not alpha='keep'")
+
     extra_chan = None
     n = SPACES[s][0]
     arr: Any = image if hasattr(image, "shape") else np.asarray(image)
@@ -313,23 +384,39 @@ def convert(image: object, src: str, dst: str, **params: Any) -> Any:
             "pass alpha='keep' to carry it through unchanged, or split it off"
         )
 
-    fast = _fast_path(image, s, d, p)
+    buf = None
+    if out is not None and extra_chan is None and isinstance(image, np.ndarray):
+        # the kernels' result: shape of the image, dtype known before computing
+        want = np.uint8 if enc8 is not None else _float_dtype(image)
+        buf = _check_out(out, (*shape[:-1], SPACES[d][0]), want, image)
+    fast = _fast_path(image, s, d, p, buf, enc8)
     if fast is not None:
-        out = fast
+        res = fast
     else:
         x = _validate(image, s)
         xp = namespace(x)
         for e in route:
             x = e.fn(xp, x, p)
-        out = x
+        res = x
+        if enc8 is not None:
+            from .opencv import to_opencv
+
+            res = to_opencv(res, enc8)
     if extra_chan is not None:
-        xp = namespace(out)
+        xp = namespace(res)
         a = as_image(extra_chan, "alpha", channels=None, range_check=False)
-        out = xp.concat([out, xp.astype(a, out.dtype)], axis=-1)
+        res = xp.concat([res, xp.astype(a, res.dtype)], axis=-1)
+    if out is None or (fast is not None and buf is not None):
+        return res if out is None else out  # the kernels wrote into out
+    if not isinstance(res, np.ndarray):
+        raise TypeError(f"out= takes NumPy results only, got {describe(res)}")
+    _check_out(out, res.shape, res.dtype, image)[...] = res
     return out
 
 
-def _fast_path(image: object, s: str, d: str, p: dict[str, Any]) -> Any:
+def _fast_path(
+    image: object, s: str, d: str, p: dict[str, Any], out: Any = None, enc8: str | None = None
+) -> Any:
     """Fused numba kernels for the hot NumPy paths; None when none applies."""
     if not isinstance(image, np.ndarray) or image.ndim < 1 or image.shape[-1] != 3:
         return None
@@ -337,4 +424,4 @@ def _fast_path(image: object, s: str, d: str, p: dict[str, Any]) -> Any:
         return None
     from imageform.color import _fast
 
-    return _fast.dispatch(image, s, d, p)
+    return _fast.dispatch(image, s, d, p, out=out, enc8=enc8)

@@ -97,6 +97,7 @@ def demosaic(
     *,
     clip: bool = False,
     allow_odd: bool = False,
+    keep_dtype: bool = False,
 ) -> Array:
     """Reconstruct a full RGB image from a Bayer colour-filter-array mosaic.
 
@@ -137,6 +138,15 @@ def demosaic(
         Hamilton-Adams and Menon overshoot slightly at sharp edges (no silent clipping).
     allow_odd : bool
         Accept odd heights/widths (see ``raw``).
+    keep_dtype : bool
+        8-bit in, 8-bit out: a uint8/uint16 NumPy mosaic gives uint8/uint16 RGB (``method``
+        ``"bilinear"`` only), computed in integers: each interpolated value is the exact
+        mean of its 2 or 4 neighbours rounded half up, ``(a + b + 1) >> 1``,
+        ``(a + b + c + d + 2) >> 2`` (as OpenCV's ``COLOR_Bayer*2RGB``, whose ``BayerBG``
+        is imageform's ``"RGGB"``), so it is within half a code of the float result times
+        255 (65535; plus the float32 rounding of the float path, < 0.01 code), and within
+        one code of it rounded (they differ only at ties). Float input keeps
+        its dtype anyway.
 
     Returns
     -------
@@ -181,6 +191,8 @@ def demosaic(
     method = check_option(method, DEMOSAIC_METHODS, "demosaicing method")
     clip = as_bool(clip, "clip")
     allow_odd = as_bool(allow_odd, "allow_odd")
+    if as_bool(keep_dtype, "keep_dtype") and getattr(raw, "dtype", None) in (np.uint8, np.uint16):
+        return _demosaic_int(raw, pattern, method, allow_odd)
     xp = namespace(raw)
     if is_dask_namespace(xp):
         return _demosaic_dask(raw, pattern, method, clip, allow_odd)
@@ -228,6 +240,44 @@ def demosaic(
         return res
     dev = device_of(arr)
     return xp.asarray(res) if dev is None else xp.asarray(res, device=dev)
+
+
+def _demosaic_int(raw: Any, pattern: str, method: str, allow_odd: bool) -> np.ndarray:
+    """uint8/uint16 in and out (``keep_dtype=True``): the integer bilinear kernel."""
+    if method != "bilinear":
+        raise InvalidInputError(
+            f"keep_dtype=True on a {raw.dtype} mosaic runs method='bilinear' only, got {method!r}"
+        )
+    if not isinstance(raw, np.ndarray):
+        raise InvalidInputError(
+            f"keep_dtype=True on integer mosaics takes NumPy arrays, got {type(raw).__name__}"
+        )
+    from imageform._kernels import demosaic_bilinear as m
+
+    shape = tuple(raw.shape)
+    if raw.ndim >= 3 and shape[-1] == 1:
+        raw, shape = raw[..., 0], shape[:-1]
+    if raw.ndim < 2 or min(shape[-2:]) < 2:
+        raise InvalidInputError(
+            f"expected a raw mosaic of shape (H, W) or (..., H, W, 1) of at least 2x2 pixels, "
+            f"got {format_shape(tuple(raw.shape))}"
+        )
+    h, w = shape[-2:]
+    if (h % 2 or w % 2) and not allow_odd:
+        raise InvalidInputError(
+            f"expected a raw mosaic of whole 2x2 Bayer cells (even height and width), got "
+            f"{format_shape(shape)}; pass allow_odd=True to demosaic a cut cell at the edge"
+        )
+    ry, rx = _red_offset(pattern)
+    flat = np.ascontiguousarray(raw).reshape((-1, h, w))
+    res = np.empty((flat.shape[0], h, w, 3), raw.dtype)
+    numba = use_numba(flat)
+    for k in range(flat.shape[0]):
+        if numba:
+            m.bilinear_int_numba(flat[k], ry, rx, res[k])
+        else:
+            res[k] = m.bilinear_int_numpy(flat[k], ry, rx)
+    return res.reshape((*shape[:-2], h, w, 3))
 
 
 def _demosaic_dask(raw: Any, pattern: str, method: str, clip: bool, allow_odd: bool) -> Any:
