@@ -9,6 +9,7 @@ main output is ``-o/--out``, ``--force`` overwrites, ``--json`` prints the resul
 
 from __future__ import annotations
 
+import contextlib
 import os
 import signal
 import sys
@@ -48,10 +49,28 @@ def main(argv: Sequence[str] | None = None) -> int:
     the final renames is delivered when they are done).
     """
     try:
-        return _main(argv)
+        code = _main(argv)
     except KeyboardInterrupt:
         print(_INTERRUPTED, file=sys.stderr)
-        return 130
+        code = 130
+    if argv is None and threading.current_thread() is threading.main_thread():
+        # run as a program, the process exits next: a signal arriving now (or one held back
+        # and delivered late) must not turn the exit code into death by that signal while
+        # the interpreter shuts down
+        try:
+            signal.signal(signal.SIGINT, signal.SIG_IGN)
+            signal.signal(signal.SIGTERM, signal.SIG_IGN)
+        except KeyboardInterrupt:
+            code = 130
+        if code == 130:
+            # interrupted: leave now, with exit code 130. The interpreter's shutdown would
+            # re-raise a KeyboardInterrupt noticed late (in a thread join, say) as death by
+            # SIGINT; everything this command wrote is already renamed or removed.
+            for stream in (sys.stdout, sys.stderr):
+                with contextlib.suppress(Exception):
+                    stream.flush()
+            os._exit(130)
+    return code
 
 
 def _main(argv: Sequence[str] | None) -> int:
