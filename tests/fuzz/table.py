@@ -24,9 +24,6 @@ VALID: dict[str, C | Skip] = {
         np.zeros(2, dtype=bool),
     ),
     "imageform.analysis.ColorCorrection": call("linear", 1, np.eye(3)),
-    "imageform.analysis.ColorCorrection.from_json": Skip(
-        "TODO: InvalidInputError: color_correction file /tmp/imageform-fuzz-lliejaya/out.png does not exist"
-    ),
     "imageform.analysis.CorrectionReport": call(
         np.array([3.0, 4.0]), np.array([1.0, 2.0]), np.array([True, True])
     ),
@@ -35,13 +32,7 @@ VALID: dict[str, C | Skip] = {
     "imageform.analysis.MacenkoStains": call(
         np.array([[0.65, 0.70, 0.29], [0.07, 0.99, 0.11]]), np.array([1.5, 1.2])
     ),
-    "imageform.analysis.MacenkoStains.from_json": Skip(
-        "TODO: InvalidInputError: macenko_stains file /tmp/imageform-fuzz-jgg2mruj/out.png does not exist"
-    ),
     "imageform.analysis.ReinhardStats": call((50.0, 5.0, -5.0), (10.0, 4.0, 4.0), 100),
-    "imageform.analysis.ReinhardStats.from_json": Skip(
-        "TODO: InvalidInputError: reinhard_stats file /tmp/imageform-fuzz-srt2zlit/out.png does not exist"
-    ),
     "imageform.analysis.StainMixture": Skip("a result NamedTuple (no validation of its own)"),
     "imageform.analysis.chart_patches": call(V("chart")),
     "imageform.analysis.correction_report": call(V("rgb_chart"), V("rgb_chart"), V("correction")),
@@ -66,8 +57,6 @@ VALID: dict[str, C | Skip] = {
     "imageform.analysis.synthetic_endoscopy_image": call(),
     "imageform.analysis.synthetic_shading_scene": call(),
     "imageform.analysis.synthetic_stain_image": call(),
-    "imageform.batch.BatchCommand": Skip("TODO: no guess for run, options, suffixes"),
-    "imageform.batch.BatchCommand.validate": Skip("no valid instance of BatchCommand"),
     "imageform.batch.BatchReport": Skip("TODO: no guess for command, results"),
     "imageform.batch.BatchReport.count": Skip("no valid instance of BatchReport"),
     "imageform.batch.BatchReport.to_dict": Skip("no valid instance of BatchReport"),
@@ -79,42 +68,15 @@ VALID: dict[str, C | Skip] = {
     "imageform.batch.chunked.open_lazy": Skip(
         "TODO: InvalidInputError: input /tmp/imageform-fuzz-1uibp30e/out.png does not exist"
     ),
-    "imageform.batch.get_command": Skip(
-        "TODO: UnknownOptionError: unknown batch command 'D65'; valid: 'convert', 'demosaic', 'harmonize', 'stain_normalize', 'white_ba"
-    ),
     "imageform.batch.plan_jobs": Skip("TODO: InvalidInputError: no files match 'RGGB'"),
     "imageform.batch.print_summary": Skip("TODO: no guess for report"),
     "imageform.batch.process_chunked": Skip("TODO: no guess for command"),
     "imageform.batch.run_batch": Skip("TODO: no guess for command"),
     "imageform.batch.run_job": Skip("TODO: no guess for command, in_path, out_path, options"),
-    "imageform.cli.analysis_cmds.register": Skip(
-        "registers typer commands on an app: tested through the command line"
-    ),
-    "imageform.cli.batch_cmd.register": Skip(
-        "registers typer commands on an app: tested through the command line"
-    ),
-    "imageform.cli.color_analysis_cmds.register": Skip(
-        "registers typer commands on an app: tested through the command line"
-    ),
-    "imageform.cli.color_analysis_cmds.white_balance_file": Skip(
-        "TODO: no guess for image_in, image_out"
-    ),
-    "imageform.cli.color_cmds.check_png_space": Skip("TODO: no guess for output"),
-    "imageform.cli.color_cmds.convert_file": Skip("TODO: no guess for input, output, params"),
-    "imageform.cli.color_cmds.register": Skip(
-        "registers typer commands on an app: tested through the command line"
-    ),
     "imageform.cli.main": Skip(
         "the command line (reads sys.argv, exits): fuzzed through files, not here"
     ),
     "imageform.cli.root": Skip("the typer app: tested through the command line"),
-    "imageform.cli.sensor_cmds.demosaic_file": Skip("TODO: no guess for out"),
-    "imageform.cli.sensor_cmds.register": Skip(
-        "registers typer commands on an app: tested through the command line"
-    ),
-    "imageform.cli.vision_cmds.register": Skip(
-        "registers typer commands on an app: tested through the command line"
-    ),
     "imageform.color.BrettelPlanes": Skip("TODO: no guess for H1, H2"),
     "imageform.color.GamutFigures": Skip(
         "TODO: no guess for area_xy, area_uv, coverage_xy, coverage_uv, area_ratio_xy, area_ratio_uv"
@@ -986,6 +948,253 @@ VALID.update(
         ),
         "imageform.workflows.vanishing.VanishingOptions.paths": method(
             VALID["imageform.workflows.vanishing.VanishingOptions"], kind="linear"
+        ),
+    }
+)
+
+# names added after the first table (two-view geometry, LSD, stereo, Zernike PSF, stain and CCT methods, workflows)
+VALID.update(
+    {
+        "imageform.workflows.analysis.FitCorrectionOptions": call(),
+        "imageform.workflows.analysis.HarmonizeOptions": call(correction=V("correction_json")),
+        "imageform.workflows.analysis.SegmentOptions": call(),
+        "imageform.workflows.analysis.StainNormalizeOptions": call(target=V("png_file")),
+        "imageform.workflows.sensor.DemosaicOptions": call(),
+        "imageform.workflows.sensor.MosaicOptions": call(),
+        "imageform.workflows.stereo.StereoCalibrateOptions": call(board="9x6"),
+        "imageform.workflows.analysis.FitCorrectionOptions.fields": call(),
+        "imageform.workflows.analysis.FitCorrectionOptions.types": call(),
+        "imageform.workflows.analysis.HarmonizeOptions.fields": call(),
+        "imageform.workflows.analysis.HarmonizeOptions.types": call(),
+        "imageform.workflows.analysis.SegmentOptions.fields": call(),
+        "imageform.workflows.analysis.SegmentOptions.types": call(),
+        "imageform.workflows.analysis.StainNormalizeOptions.fields": call(),
+        "imageform.workflows.analysis.StainNormalizeOptions.types": call(),
+        "imageform.workflows.sensor.DemosaicOptions.fields": call(),
+        "imageform.workflows.sensor.DemosaicOptions.types": call(),
+        "imageform.workflows.sensor.MosaicOptions.fields": call(),
+        "imageform.workflows.sensor.MosaicOptions.types": call(),
+        "imageform.workflows.stereo.StereoCalibrateOptions.fields": call(),
+        "imageform.workflows.stereo.StereoCalibrateOptions.types": call(),
+        "imageform.analysis.background_intensity": call(image=V("rgb")),
+        "imageform.analysis.synthetic_he_tile": call((32, 32)),
+        "imageform.analysis.vahadane_stains": call(image=V("stain"), iterations=20, max_pixels=500),
+        "imageform.batch.batch_options": call("white_balance", {}),
+        "imageform.batch.batch_workflow": call("white_balance"),
+        "imageform.color.cct_methods.cct_to_uv_ohno2013": call(cct=5000.0, duv=0.002),
+        "imageform.color.cct_methods.planckian_uv": call(cct=5000.0),
+        "imageform.color.cct_methods.uv_to_cct_ohno2013": call(
+            uv=np.array([[0.2105, 0.3226], [0.2, 0.31]])
+        ),
+        "imageform.color.cct_methods.xy_to_cct_hernandez1999": call(xy=V("xy")),
+        "imageform.color.cct_methods.xy_to_cct_mccamy1992": call(xy=V("xy")),
+        "imageform.geometry.EssentialResult": Skip(
+            "a result NamedTuple (no validation of its own)"
+        ),
+        "imageform.geometry.FundamentalResult": Skip(
+            "a result NamedTuple (no validation of its own)"
+        ),
+        "imageform.geometry.HomographyResult": Skip(
+            "a result NamedTuple (no validation of its own)"
+        ),
+        "imageform.geometry.RelativePose": Skip("a result NamedTuple (no validation of its own)"),
+        "imageform.geometry.StereoRectification": Skip(
+            "a result NamedTuple (no validation of its own)"
+        ),
+        "imageform.geometry.TwoViewPoints": Skip("a result NamedTuple (no validation of its own)"),
+        "imageform.geometry.StereoCalibrationResult": Skip(
+            "a result dataclass built by stereo_calibrate (its method is fuzzed on a fixture)"
+        ),
+        "imageform.geometry.StereoCalibrationResult.rectify": method(V("stereo_result"), alpha=0.0),
+        "imageform.geometry.essential_5point": call(V("pts1_5"), V("pts2_5")),
+        "imageform.geometry.find_essential_matrix": call(V("pts1"), V("pts2"), V("K")),
+        "imageform.geometry.find_fundamental_matrix": call(V("pts1"), V("pts2")),
+        "imageform.geometry.find_homography": call(
+            V("uv"), np.array([[3.1, 4.2], [5.3, 6.4], [8.6, 3.1], [10.25, 7.5], [4.0, 9.0]])[:4]
+        ),
+        "imageform.geometry.fundamental_7point": call(V("pts1_7"), V("pts2_7")),
+        "imageform.geometry.fundamental_8point": call(V("pts1"), V("pts2")),
+        "imageform.geometry.lsd.lsd_segments": call(V("gray")),
+        "imageform.geometry.recover_pose": call(V("E"), V("pts1"), V("pts2"), V("K")),
+        "imageform.geometry.rectification_map": call(V("K"), V("brown"), V("R"), V("P"), (8, 6)),
+        "imageform.geometry.solve_pnp_batch": call(V("points3"), V("points3_uv"), V("K")),
+        "imageform.geometry.stereo_calibrate": call(
+            V("stereo_objs"), V("stereo_left"), V("stereo_right"), (640, 480)
+        ),
+        "imageform.geometry.stereo_rectify": call(
+            V("K"), V("brown"), V("K"), V("brown"), (8, 6), V("R"), np.array([-0.1, 0.0, 0.0])
+        ),
+        "imageform.geometry.triangulate_two_view": call(V("P"), V("P2"), V("pts1"), V("pts2")),
+        "imageform.io.StereoCameraFile": Skip(
+            "a file record built by StereoCameraFile.from_calibration or read_stereo_camera (fuzzed there)"
+        ),
+        "imageform.io.StereoCameraFile.from_calibration": call(V("stereo_result")),
+        "imageform.io.read_stereo_camera": call(V("stereo_file")),
+        "imageform.io.write_stereo_camera": call(V("tmpfile_toml"), V("stereo_file_obj")),
+        "imageform.optics.TransferFunction": Skip("a result NamedTuple (no validation of its own)"),
+        "imageform.optics.diffraction_limited_mtf": call(
+            np.array([0.0, 50.0, 200.0]), wavelength=550e-9, f_number=4.0
+        ),
+        "imageform.optics.diffraction_psf": call(
+            wavelength=550e-9, f_number=4.0, pixel_pitch=2e-6, size=16, n_pupil=64
+        ),
+        "imageform.optics.field_psfs": call(
+            np.array([[0.0, 0.0, 0.0, 0.05], [0.0, 0.0, 0.0, 0.1]]),
+            wavelength=550e-9,
+            f_number=4.0,
+            pixel_pitch=2e-6,
+            size=16,
+            n_pupil=64,
+        ),
+        "imageform.optics.mtf": call(V("psf"), pixel_pitch=2e-6),
+        "imageform.optics.noll_to_nm": call(4),
+        "imageform.optics.otf": call(V("psf"), pixel_pitch=2e-6),
+        "imageform.optics.pixel_mtf": call(np.array([0.0, 50.0, 200.0]), pixel_pitch=2e-6),
+        "imageform.optics.polychromatic_psf": call(
+            wavelengths=np.array([450e-9, 550e-9, 650e-9]),
+            f_number=4.0,
+            pixel_pitch=2e-6,
+            size=16,
+            n_pupil=64,
+        ),
+        "imageform.optics.psf_from_pupil": call(np.ones((16, 16), dtype=complex), pad_to=32),
+        "imageform.optics.pupil_function": call(
+            np.array([0.0, 0.0, 0.0, 0.05]), wavelength=550e-9, n_samples=32
+        ),
+        "imageform.optics.zernike": call(4, np.array([0.0, 0.5, 1.0]), np.array([0.0, 1.0, 2.0])),
+        "imageform.optics.zernike_defocus": call(3e-5, f_number=4.0),
+        "imageform.optics.zernike_radial": call(2, 0, np.array([0.0, 0.5, 1.0])),
+        "imageform.optics.zernike_wavefront": call(
+            np.array([0.0, 0.0, 0.0, 0.1]), np.array([0.0, 0.5, 1.0]), np.array([0.0, 1.0, 2.0])
+        ),
+        "imageform.simulate.stages.diffraction_blur": call(
+            V("rgb"), f_number=4.0, pixel_pitch=2e-6
+        ),
+        "imageform.simulate.stages.diffraction_psf_kernel": call(
+            (450e-9, 550e-9, 650e-9), f_number=4.0, pixel_pitch=2e-6
+        ),
+        "imageform.analysis.ColorCorrection.from_json": call(V("correction_json")),
+        "imageform.analysis.MacenkoStains.from_json": call(V("macenko_json")),
+        "imageform.analysis.ReinhardStats.from_json": call(V("reinhard_json")),
+    }
+)
+
+# their methods
+VALID.update(
+    {
+        "imageform.workflows.analysis.FitCorrectionOptions.check": method(
+            VALID["imageform.workflows.analysis.FitCorrectionOptions"]
+        ),
+        "imageform.workflows.analysis.FitCorrectionOptions.check_output": method(
+            VALID["imageform.workflows.analysis.FitCorrectionOptions"], V("tmpfile_png")
+        ),
+        "imageform.workflows.analysis.FitCorrectionOptions.paths": method(
+            VALID["imageform.workflows.analysis.FitCorrectionOptions"], "output"
+        ),
+        "imageform.workflows.analysis.HarmonizeOptions.check": method(
+            VALID["imageform.workflows.analysis.HarmonizeOptions"]
+        ),
+        "imageform.workflows.analysis.HarmonizeOptions.check_output": method(
+            VALID["imageform.workflows.analysis.HarmonizeOptions"], V("tmpfile_png")
+        ),
+        "imageform.workflows.analysis.HarmonizeOptions.paths": method(
+            VALID["imageform.workflows.analysis.HarmonizeOptions"], "output"
+        ),
+        "imageform.workflows.analysis.SegmentOptions.check": method(
+            VALID["imageform.workflows.analysis.SegmentOptions"]
+        ),
+        "imageform.workflows.analysis.SegmentOptions.check_output": method(
+            VALID["imageform.workflows.analysis.SegmentOptions"], V("tmpfile_png")
+        ),
+        "imageform.workflows.analysis.SegmentOptions.paths": method(
+            VALID["imageform.workflows.analysis.SegmentOptions"], "output"
+        ),
+        "imageform.workflows.analysis.StainNormalizeOptions.check": method(
+            VALID["imageform.workflows.analysis.StainNormalizeOptions"]
+        ),
+        "imageform.workflows.analysis.StainNormalizeOptions.check_output": method(
+            VALID["imageform.workflows.analysis.StainNormalizeOptions"], V("tmpfile_png")
+        ),
+        "imageform.workflows.analysis.StainNormalizeOptions.paths": method(
+            VALID["imageform.workflows.analysis.StainNormalizeOptions"], "output"
+        ),
+        "imageform.workflows.sensor.DemosaicOptions.check": method(
+            VALID["imageform.workflows.sensor.DemosaicOptions"]
+        ),
+        "imageform.workflows.sensor.DemosaicOptions.check_output": method(
+            VALID["imageform.workflows.sensor.DemosaicOptions"], V("tmpfile_png")
+        ),
+        "imageform.workflows.sensor.DemosaicOptions.paths": method(
+            VALID["imageform.workflows.sensor.DemosaicOptions"], "output"
+        ),
+        "imageform.workflows.sensor.MosaicOptions.check": method(
+            VALID["imageform.workflows.sensor.MosaicOptions"]
+        ),
+        "imageform.workflows.sensor.MosaicOptions.check_output": method(
+            VALID["imageform.workflows.sensor.MosaicOptions"], V("tmpfile_png")
+        ),
+        "imageform.workflows.sensor.MosaicOptions.paths": method(
+            VALID["imageform.workflows.sensor.MosaicOptions"], "output"
+        ),
+        "imageform.workflows.stereo.StereoCalibrateOptions.check": method(
+            VALID["imageform.workflows.stereo.StereoCalibrateOptions"]
+        ),
+        "imageform.workflows.stereo.StereoCalibrateOptions.check_output": method(
+            VALID["imageform.workflows.stereo.StereoCalibrateOptions"], V("tmpfile_png")
+        ),
+        "imageform.workflows.stereo.StereoCalibrateOptions.paths": method(
+            VALID["imageform.workflows.stereo.StereoCalibrateOptions"], "output"
+        ),
+        "imageform.workflows.stereo.StereoCalibrateOptions.square_mm": method(
+            VALID["imageform.workflows.stereo.StereoCalibrateOptions"]
+        ),
+        "imageform.workflows.Options.check_output": method(
+            VALID["imageform.workflows.Options"], V("tmpfile_png")
+        ),
+        "imageform.workflows.calibration.CalibrateOptions.check_output": method(
+            VALID["imageform.workflows.calibration.CalibrateOptions"], V("tmpfile_png")
+        ),
+        "imageform.workflows.calibration.UndistortOptions.check_output": method(
+            VALID["imageform.workflows.calibration.UndistortOptions"], V("tmpfile_png")
+        ),
+        "imageform.workflows.color.ConvertOptions.check_output": method(
+            VALID["imageform.workflows.color.ConvertOptions"], V("tmpfile_png")
+        ),
+        "imageform.workflows.color.CvdOptions.check_output": method(
+            VALID["imageform.workflows.color.CvdOptions"], V("tmpfile_png")
+        ),
+        "imageform.workflows.color.DeltaEOptions.check_output": method(
+            VALID["imageform.workflows.color.DeltaEOptions"], V("tmpfile_png")
+        ),
+        "imageform.workflows.color.GamutOptions.check_output": method(
+            VALID["imageform.workflows.color.GamutOptions"], V("tmpfile_png")
+        ),
+        "imageform.workflows.color.PaletteCheckOptions.check_output": method(
+            VALID["imageform.workflows.color.PaletteCheckOptions"], V("tmpfile_png")
+        ),
+        "imageform.workflows.color.WhiteBalanceOptions.check_output": method(
+            VALID["imageform.workflows.color.WhiteBalanceOptions"], V("tmpfile_png")
+        ),
+        "imageform.workflows.geometry.PoseOptions.check_output": method(
+            VALID["imageform.workflows.geometry.PoseOptions"], V("tmpfile_png")
+        ),
+        "imageform.workflows.geometry.ProjectOptions.check_output": method(
+            VALID["imageform.workflows.geometry.ProjectOptions"], V("tmpfile_png")
+        ),
+        "imageform.workflows.geometry.TriangulateOptions.check_output": method(
+            VALID["imageform.workflows.geometry.TriangulateOptions"], V("tmpfile_png")
+        ),
+        "imageform.workflows.lecture.LectureOptions.check_output": method(
+            VALID["imageform.workflows.lecture.LectureOptions"], V("tmpfile_png")
+        ),
+        "imageform.workflows.optics.LensOptions.check_output": method(
+            VALID["imageform.workflows.optics.LensOptions"], V("tmpfile_png")
+        ),
+        "imageform.workflows.simulate.SimulateOptions.check_output": method(
+            VALID["imageform.workflows.simulate.SimulateOptions"], V("tmpfile_png")
+        ),
+        "imageform.workflows.vanishing.VanishingOptions.check_output": method(
+            VALID["imageform.workflows.vanishing.VanishingOptions"], V("tmpfile_png")
         ),
     }
 )
