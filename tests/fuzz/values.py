@@ -84,6 +84,7 @@ def _segments() -> Any:
     from imageform.geometry import LineSegments
 
     ends = np.array([[0.0, 0.0, 10.0, 1.0], [0.0, 5.0, 10.0, 4.0], [2.0, 0.0, 3.0, 10.0]])
+    ends = ends.reshape(3, 2, 2)
     return LineSegments(ends, np.ones(3), -np.ones(3))
 
 
@@ -134,6 +135,16 @@ def _png_file() -> Path:
 
     path = _tmpdir() / "in.png"
     write_image(path, _rgb())
+    return path
+
+
+def _tiff_file() -> Path:
+    import tifffile
+
+    path = _tmpdir() / "in.tif"
+    tifffile.imwrite(
+        path, (_rng().uniform(0.05, 0.95, (32, 32, 3)) * 255).astype(np.uint8), tile=(16, 16)
+    )
     return path
 
 
@@ -249,6 +260,41 @@ def _macenko() -> Any:
     return MacenkoStains(np.array([[0.65, 0.70, 0.29], [0.07, 0.99, 0.11]]), np.array([1.5, 1.2]))
 
 
+def _of(name: str, path: str) -> Callable[[], Any]:
+    """A fixture that is an attribute (dotted ``path``; ``[i]`` indexes) of another."""
+
+    def build() -> Any:
+        obj = resolve(V(name))
+        for part in path.split("."):
+            obj = obj[int(part[1:-1])] if part.startswith("[") else getattr(obj, part)
+        return obj
+
+    return build
+
+
+def _scene_object(kind: str) -> Callable[[], Any]:
+    def build() -> Any:
+        return next(o for o in resolve(V("scene")).objects if o.kind == kind)
+
+    return build
+
+
+def _render_output() -> Any:
+    from imageform.simulate.render import render_scene
+
+    return render_scene(resolve(V("scene")))
+
+
+def _calibration() -> Any:
+    return _stereo_result().left
+
+
+def _calibration_toml() -> Path:
+    path = _tmpdir() / "calibration.toml"
+    resolve(V("calibration")).to_toml(path)
+    return path
+
+
 FIXTURES: dict[str, Callable[[], Any]] = {
     "rgb": _rgb,
     "rgb_u8": lambda: (_rgb() * 255).astype(np.uint8),
@@ -308,6 +354,33 @@ FIXTURES: dict[str, Callable[[], Any]] = {
     "reinhard": _reinhard,
     "macenko": _macenko,
     "correction_json": _json_of("correction"),
+    "scene_config": _of("scene", "config"),
+    "tiff_file": _tiff_file,
+    "tmpfile_tif": lambda: _tmpdir() / "out.tif",
+    "png_glob": lambda: str(_png_file().parent / "*.png"),
+    "png_file_str": lambda: str(_png_file()),
+    "palette_check": lambda: __import__("imageform.color", fromlist=["x"]).check_palette(
+        "okabe_ito"
+    ),
+    "workflow": lambda: __import__("imageform.workflows", fromlist=["x"]).get_workflow(
+        "white_balance"
+    ),
+    "encoded": lambda: __import__("imageform.simulate.stages", fromlist=["x"]).Encoded(
+        image=_rgb(), transfer="srgb"
+    ),
+    "lens_config": _of("scene", "config.lens"),
+    "sensor_config": _of("scene", "config.sensor"),
+    "camera_config": _of("scene", "config.camera"),
+    "colorchecker_obj": _scene_object("colorchecker"),
+    "ground_obj": _scene_object("ground"),
+    "render_output": _render_output,
+    "photon_data": _of("result", "photon_transfer"),
+    "patch_measurements": _of("result", "patches"),
+    "cc_truth": _of("result", "colorchecker"),
+    "vanishing_truth": _of("result", "vanishing"),
+    "stage": _of("result", "stages.[0]"),
+    "calibration": _calibration,
+    "calibration_toml": _calibration_toml,
     "reinhard_json": _json_of("reinhard"),
     "macenko_json": _json_of("macenko"),
 }
@@ -321,6 +394,11 @@ _FRESH = {
     "png_file",
     "camera_file",
     "stereo_file",
+    "tiff_file",
+    "tmpfile_tif",
+    "png_glob",
+    "png_file_str",
+    "calibration_toml",
     "correction_json",
     "reinhard_json",
     "macenko_json",
