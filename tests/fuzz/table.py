@@ -57,13 +57,9 @@ VALID: dict[str, C | Skip] = {
     "imageform.analysis.synthetic_endoscopy_image": call(),
     "imageform.analysis.synthetic_shading_scene": call(),
     "imageform.analysis.synthetic_stain_image": call(),
-    "imageform.batch.BatchReport": Skip("a result record of run_batch (fuzzed through run_batch)"),
-    "imageform.batch.BatchReport.count": Skip(
-        "no valid instance of BatchReport (a result record of run_batch)"
-    ),
-    "imageform.batch.BatchReport.to_dict": Skip(
-        "no valid instance of BatchReport (a result record of run_batch)"
-    ),
+    "imageform.batch.BatchReport": call("white_balance", (V("job_result"),)),
+    "imageform.batch.BatchReport.count": method(V("batch_report"), "ok"),
+    "imageform.batch.BatchReport.to_dict": method(V("batch_report")),
     "imageform.batch.ChunkedResult": Skip(
         "a result record of process_chunked (fuzzed through process_chunked)"
     ),
@@ -71,9 +67,7 @@ VALID: dict[str, C | Skip] = {
     "imageform.batch.JobResult": call(V("png_file"), V("tmpfile_png"), "ok"),
     "imageform.batch.chunked.open_lazy": call(V("tiff_file")),
     "imageform.batch.plan_jobs": call(V("png_glob"), V("tmpdir")),
-    "imageform.batch.print_summary": Skip(
-        "prints a BatchReport of run_batch to a console (fuzzed through run_batch)"
-    ),
+    "imageform.batch.print_summary": call(V("batch_report")),
     "imageform.batch.process_chunked": call(
         V("tiff_file"), V("tmpfile_tif"), "white_balance", chunk=16, tile=16, num_workers=1
     ),
@@ -482,11 +476,9 @@ VALID: dict[str, C | Skip] = {
     "imageform.report.lecture.WorkedExample": Skip(
         "a record holding a callable, built by the lecture module (its values are checked by tests/report)"
     ),
-    "imageform.report.lecture.WorkedExample.agrees": Skip("no valid instance of WorkedExample"),
-    "imageform.report.lecture.WorkedExample.computed": Skip("no valid instance of WorkedExample"),
-    "imageform.report.lecture.WorkedExample.expected_values": Skip(
-        "no valid instance of WorkedExample"
-    ),
+    "imageform.report.lecture.WorkedExample.agrees": method(V("worked_example")),
+    "imageform.report.lecture.WorkedExample.computed": method(V("worked_example")),
+    "imageform.report.lecture.WorkedExample.expected_values": method(V("worked_example")),
     "imageform.report.lecture.all_examples": call(),
     "imageform.report.lecture.lecture_topics": call(),
     "imageform.report.metrics.to_json_value": call(value=1.0),

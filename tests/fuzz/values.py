@@ -148,6 +148,24 @@ def _tiff_file() -> Path:
     return path
 
 
+def _job_result() -> Any:
+    from imageform.batch import JobResult
+
+    return JobResult(Path("in.png"), Path("out.png"), "ok", metrics={"gains": [1.0, 1.0, 1.0]})
+
+
+def _batch_report() -> Any:
+    from imageform.batch import BatchReport
+
+    return BatchReport("white_balance", (_job_result(),))
+
+
+def _worked_example() -> Any:
+    from imageform.report.lecture import WorkedExample
+
+    return WorkedExample("optics", "f?", "1/f = 1/a + 1/b", lambda: 0.05, 0.05, unit="m")
+
+
 def _camera_file() -> Path:
     from imageform.io import write_camera
 
@@ -355,6 +373,9 @@ FIXTURES: dict[str, Callable[[], Any]] = {
     "macenko": _macenko,
     "correction_json": _json_of("correction"),
     "scene_config": _of("scene", "config"),
+    "job_result": _job_result,
+    "batch_report": _batch_report,
+    "worked_example": _worked_example,
     "tiff_file": _tiff_file,
     "tmpfile_tif": lambda: _tmpdir() / "out.tif",
     "png_glob": lambda: str(_png_file().parent / "*.png"),
