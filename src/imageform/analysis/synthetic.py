@@ -324,6 +324,7 @@ def synthetic_stain_image(
     s = s / np.linalg.norm(s, axis=1, keepdims=True)
     hgt, wid = _shape(shape)
     shape = (hgt, wid)
+    noise = as_real(noise, "noise", nonnegative=True)
     kind = gen.choice(4, size=(hgt, wid), p=[1 / 3, 1 / 3, 1 / 4, 1 - 1 / 3 - 1 / 3 - 1 / 4])
     c = gen.uniform(0.15, 1.0, (hgt, wid, 2)) * np.asarray(max_concentration)
     c[kind == 0, 1] = 0.0
@@ -415,7 +416,7 @@ def synthetic_shading_scene(
     bg = np.array([0.62, 0.66, 0.3])
     enc = np.where(truth[..., None], red, bg) + 0.02 * _smooth_noise(gen, shape, 3.0)[..., None]
     lin = srgb_decode(np, np.clip(enc, 0, 1))
-    if isinstance(shading, str | bytes) or len(shading) != 2:
+    if isinstance(shading, str | bytes) or not hasattr(shading, "__len__") or len(shading) != 2:
         raise InvalidInputError(f"expected shading as 2 numbers, got {shading!r:.60}")
     lo, hi = (as_real(v, "shading", nonnegative=True) for v in shading)
     ramp = np.linspace(lo, hi, wid)[None, :, None]
