@@ -785,6 +785,18 @@ SLOW: frozenset[str] = frozenset(
         "imageform.simulate.simulate",
         "imageform.simulate.render_scene",
         "imageform.report.figures_color.plot_patch_chromaticity",
+        # seconds per call (a bundle adjustment, RANSAC, LSD, a sparse NMF, a Dask graph or a
+        # whole workflow): fuzzed by the full run only
+        "imageform.geometry.stereo_calibrate",
+        "imageform.geometry.calibrate_camera",
+        "imageform.geometry.lsd.lsd_segments",
+        "imageform.geometry.find_essential_matrix",
+        "imageform.geometry.find_fundamental_matrix",
+        "imageform.geometry.find_homography",
+        "imageform.geometry.solve_pnp_ransac",
+        "imageform.analysis.vahadane_stains",
+        "imageform.batch.process_chunked",
+        "imageform.workflows.execute",
     }
 )
 

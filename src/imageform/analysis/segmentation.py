@@ -338,7 +338,7 @@ def mask_iou(a: object, b: object) -> float:
     ma, mb = _mask_in(a, "a"), _mask_in(b, "b")
     if tuple(ma.shape) != tuple(mb.shape):
         raise InvalidInputError(
-            f"expected masks of the same shape, got {format_shape(ma.shape)} and "
+            f"expected masks a and b of the same shape, got {format_shape(ma.shape)} and "
             f"{format_shape(mb.shape)}"
         )
     inter = (ma & mb).sum()
