@@ -356,7 +356,9 @@ VALID: dict[str, C | Skip] = {
     "imageform.geometry.remap_bilinear": call(image=V("rgb"), map_uv=np.zeros((6, 8, 2))),
     "imageform.geometry.rvec_to_matrix": call(rvec=V("rvec")),
     "imageform.geometry.solve_pnp": call(V("points3"), V("points3_uv"), V("K")),
-    "imageform.geometry.solve_pnp_ransac": call(V("points3"), V("points3_uv"), V("K")),
+    "imageform.geometry.solve_pnp_ransac": call(
+        V("points3"), V("points3_uv"), V("K"), max_hypotheses=50
+    ),
     "imageform.geometry.to_homogeneous": call(points=V("points3")),
     "imageform.geometry.triangulate_points": call(
         np.stack([V("P"), V("P2")]), np.stack([V("pts1"), V("pts2")])
