@@ -166,6 +166,12 @@ def _worked_example() -> Any:
     return WorkedExample("optics", "f?", "1/f = 1/a + 1/b", lambda: 0.05, 0.05, unit="m")
 
 
+def _palette_check() -> Any:
+    from imageform.color import palette, palette_check
+
+    return palette_check(palette("okabe_ito"))
+
+
 def _camera_file() -> Path:
     from imageform.io import write_camera
 
@@ -373,6 +379,9 @@ FIXTURES: dict[str, Callable[[], Any]] = {
     "macenko": _macenko,
     "correction_json": _json_of("correction"),
     "scene_config": _of("scene", "config"),
+    "P_stack": lambda: np.stack([_K() @ np.eye(3, 4), _P2()]),
+    "pts_stack": lambda: np.stack(_two_view()),
+    "png_dir": lambda: _png_file().parent,
     "job_result": _job_result,
     "batch_report": _batch_report,
     "worked_example": _worked_example,
@@ -380,9 +389,7 @@ FIXTURES: dict[str, Callable[[], Any]] = {
     "tmpfile_tif": lambda: _tmpdir() / "out.tif",
     "png_glob": lambda: str(_png_file().parent / "*.png"),
     "png_file_str": lambda: str(_png_file()),
-    "palette_check": lambda: __import__("imageform.color", fromlist=["x"]).check_palette(
-        "okabe_ito"
-    ),
+    "palette_check": _palette_check,
     "workflow": lambda: __import__("imageform.workflows", fromlist=["x"]).get_workflow(
         "white_balance"
     ),
@@ -415,6 +422,8 @@ _FRESH = {
     "png_file",
     "camera_file",
     "stereo_file",
+    "stereo_file_obj",
+    "png_dir",
     "tiff_file",
     "tmpfile_tif",
     "png_glob",
