@@ -168,3 +168,40 @@ def test_report_functions_name_result() -> None:
     for fn in (measure_patches, top_view_data):
         with pytest.raises(TypeError, match="result"):
             fn(None)  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize(
+    ("call", "name"),
+    [
+        (
+            lambda: __import__("imageform.analysis.segmentation", fromlist=["x"]).disc(
+                float("nan")
+            ),
+            "radius",
+        ),
+        (
+            lambda: __import__("imageform.analysis.segmentation", fromlist=["x"]).disc(10**9),
+            "radius",
+        ),
+        (lambda: segment_hsv(np.full((4, 4, 3), 0.5), open_radius=10**9), "open_radius"),
+        (lambda: synthetic_stain_image((8, 8), noise=-1.0), "noise"),
+        (lambda: synthetic_stain_image((8, 8), noise=None), "noise"),
+        (
+            lambda: ChartPatches(np.zeros((0, 3)), np.zeros((2, 3)), np.zeros(0, bool), None),
+            "means",
+        ),
+    ],
+)
+def test_fuzz_findings_fixed(call: object, name: str) -> None:
+    """Fuzz findings of issue 16: each names its parameter in one line."""
+    with pytest.raises(InvalidInputError, match=rf"\b{name}\b") as info:
+        call()  # type: ignore[operator]
+    assert "\n" not in str(info.value) and len(str(info.value)) <= 200
+
+
+@pytest.mark.parametrize("alpha", ["abc", None, 1 + 1j, [0.5]])
+def test_overlay_mask_alpha_named(alpha: object) -> None:
+    from imageform.analysis import overlay_mask
+
+    with pytest.raises(InvalidInputError, match="alpha"):
+        overlay_mask(np.full((2, 2, 3), 0.5), np.ones((2, 2), bool), alpha=alpha)  # type: ignore[arg-type]

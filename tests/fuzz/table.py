@@ -24,9 +24,6 @@ VALID: dict[str, C | Skip] = {
         np.zeros(2, dtype=bool),
     ),
     "imageform.analysis.ColorCorrection": call("linear", 1, np.eye(3)),
-    "imageform.analysis.ColorCorrection.from_json": Skip(
-        "TODO: InvalidInputError: color_correction file /tmp/imageform-fuzz-lliejaya/out.png does not exist"
-    ),
     "imageform.analysis.CorrectionReport": call(
         np.array([3.0, 4.0]), np.array([1.0, 2.0]), np.array([True, True])
     ),
@@ -35,13 +32,7 @@ VALID: dict[str, C | Skip] = {
     "imageform.analysis.MacenkoStains": call(
         np.array([[0.65, 0.70, 0.29], [0.07, 0.99, 0.11]]), np.array([1.5, 1.2])
     ),
-    "imageform.analysis.MacenkoStains.from_json": Skip(
-        "TODO: InvalidInputError: macenko_stains file /tmp/imageform-fuzz-jgg2mruj/out.png does not exist"
-    ),
     "imageform.analysis.ReinhardStats": call((50.0, 5.0, -5.0), (10.0, 4.0, 4.0), 100),
-    "imageform.analysis.ReinhardStats.from_json": Skip(
-        "TODO: InvalidInputError: reinhard_stats file /tmp/imageform-fuzz-srt2zlit/out.png does not exist"
-    ),
     "imageform.analysis.StainMixture": Skip("a result NamedTuple (no validation of its own)"),
     "imageform.analysis.chart_patches": call(V("chart")),
     "imageform.analysis.correction_report": call(V("rgb_chart"), V("rgb_chart"), V("correction")),
@@ -66,70 +57,37 @@ VALID: dict[str, C | Skip] = {
     "imageform.analysis.synthetic_endoscopy_image": call(),
     "imageform.analysis.synthetic_shading_scene": call(),
     "imageform.analysis.synthetic_stain_image": call(),
-    "imageform.batch.BatchCommand": Skip("TODO: no guess for run, options, suffixes"),
-    "imageform.batch.BatchCommand.validate": Skip("no valid instance of BatchCommand"),
-    "imageform.batch.BatchReport": Skip("TODO: no guess for command, results"),
-    "imageform.batch.BatchReport.count": Skip("no valid instance of BatchReport"),
-    "imageform.batch.BatchReport.to_dict": Skip("no valid instance of BatchReport"),
+    "imageform.batch.BatchReport": call("white_balance", (V("job_result"),)),
+    "imageform.batch.BatchReport.count": method(V("batch_report"), status="ok"),
+    "imageform.batch.BatchReport.to_dict": method(V("batch_report")),
     "imageform.batch.ChunkedResult": Skip(
-        "TODO: no guess for output, dtype, chunk, clipped, seconds"
+        "a result record of process_chunked (fuzzed through process_chunked)"
     ),
-    "imageform.batch.Job": Skip("TODO: no guess for input, output"),
-    "imageform.batch.JobResult": Skip("TODO: no guess for input, output, status"),
-    "imageform.batch.chunked.open_lazy": Skip(
-        "TODO: InvalidInputError: input /tmp/imageform-fuzz-1uibp30e/out.png does not exist"
+    "imageform.batch.Job": call(V("png_file"), V("tmpfile_png")),
+    "imageform.batch.JobResult": call(V("png_file"), V("tmpfile_png"), "ok"),
+    "imageform.batch.chunked.open_lazy": call(V("tiff_file")),
+    "imageform.batch.plan_jobs": call(V("png_glob"), V("tmpdir")),
+    "imageform.batch.print_summary": call(V("batch_report")),
+    "imageform.batch.process_chunked": call(
+        V("tiff_file"), V("tmpfile_tif"), "white_balance", chunk=16, tile=16, num_workers=1
     ),
-    "imageform.batch.get_command": Skip(
-        "TODO: UnknownOptionError: unknown batch command 'D65'; valid: 'convert', 'demosaic', 'harmonize', 'stain_normalize', 'white_ba"
+    "imageform.batch.run_batch": Skip(
+        "starts a scheduler and worker processes for a folder of files (slow; tested in tests/batch)"
     ),
-    "imageform.batch.plan_jobs": Skip("TODO: InvalidInputError: no files match 'RGGB'"),
-    "imageform.batch.print_summary": Skip("TODO: no guess for report"),
-    "imageform.batch.process_chunked": Skip("TODO: no guess for command"),
-    "imageform.batch.run_batch": Skip("TODO: no guess for command"),
-    "imageform.batch.run_job": Skip("TODO: no guess for command, in_path, out_path, options"),
-    "imageform.cli.analysis_cmds.register": Skip(
-        "registers typer commands on an app: tested through the command line"
-    ),
-    "imageform.cli.batch_cmd.register": Skip(
-        "registers typer commands on an app: tested through the command line"
-    ),
-    "imageform.cli.color_analysis_cmds.register": Skip(
-        "registers typer commands on an app: tested through the command line"
-    ),
-    "imageform.cli.color_analysis_cmds.white_balance_file": Skip(
-        "TODO: no guess for image_in, image_out"
-    ),
-    "imageform.cli.color_cmds.check_png_space": Skip("TODO: no guess for output"),
-    "imageform.cli.color_cmds.convert_file": Skip("TODO: no guess for input, output, params"),
-    "imageform.cli.color_cmds.register": Skip(
-        "registers typer commands on an app: tested through the command line"
-    ),
+    "imageform.batch.run_job": call("white_balance", V("png_file"), V("tmpfile_png")),
     "imageform.cli.main": Skip(
         "the command line (reads sys.argv, exits): fuzzed through files, not here"
     ),
     "imageform.cli.root": Skip("the typer app: tested through the command line"),
-    "imageform.cli.sensor_cmds.demosaic_file": Skip("TODO: no guess for out"),
-    "imageform.cli.sensor_cmds.register": Skip(
-        "registers typer commands on an app: tested through the command line"
+    "imageform.color.BrettelPlanes": Skip("a result NamedTuple (no validation of its own)"),
+    "imageform.color.GamutFigures": call("srgb", 0.11, 0.18, 0.35, 0.33, 0.5, 0.4),
+    "imageform.color.LinearLightComparison": Skip("a result NamedTuple (no validation of its own)"),
+    "imageform.color.PaletteCheck": Skip("a result dataclass built by check_palette"),
+    "imageform.color.PaletteCheck.as_dict": method(V("palette_check")),
+    "imageform.color.RGBSpace": call(
+        "test", ((0.64, 0.33), (0.30, 0.60), (0.15, 0.06)), (0.3127, 0.3290), "srgb", "test"
     ),
-    "imageform.cli.vision_cmds.register": Skip(
-        "registers typer commands on an app: tested through the command line"
-    ),
-    "imageform.color.BrettelPlanes": Skip("TODO: no guess for H1, H2"),
-    "imageform.color.GamutFigures": Skip(
-        "TODO: no guess for area_xy, area_uv, coverage_xy, coverage_uv, area_ratio_xy, area_ratio_uv"
-    ),
-    "imageform.color.GamutFigures.as_dict": Skip("no valid instance of GamutFigures"),
-    "imageform.color.LinearLightComparison": Skip(
-        "TODO: no guess for right, wrong, max_error, mean_error"
-    ),
-    "imageform.color.PaletteCheck": Skip(
-        "TODO: no guess for min_delta_e, closest_pair, threshold, simulated"
-    ),
-    "imageform.color.PaletteCheck.as_dict": Skip("no valid instance of PaletteCheck"),
-    "imageform.color.RGBSpace": Skip("TODO: no guess for primaries_xy, white_xy"),
-    "imageform.color.RGBSpace.matrix_to_xyz": Skip("no valid instance of RGBSpace"),
-    "imageform.color.SpectralLocus": Skip("TODO: no guess for chromaticities"),
+    "imageform.color.SpectralLocus": Skip("a result NamedTuple (no validation of its own)"),
     "imageform.color.SubsampledChroma": call(luma=V("gray"), chroma=np.full((3, 4, 2), 0.1)),
     "imageform.color.WhiteBalanceResult": call(image=V("rgb"), gains=np.array([1.0, 1.1, 0.9])),
     "imageform.color.adobe_rgb_to_linear": call(values=V("rgb4")),
@@ -137,9 +95,7 @@ VALID: dict[str, C | Skip] = {
     "imageform.color.bgr_to_srgb": call(image=V("rgb")),
     "imageform.color.brettel_planes": call(deficiency="protan"),
     "imageform.color.cct_to_xy": call(cct=5000.0),
-    "imageform.color.check_in_locus": Skip(
-        "TODO: InvalidInputError: expected chromaticities of shape (..., 2), got (6, 3)"
-    ),
+    "imageform.color.check_in_locus": call(V("xy")),
     "imageform.color.chroma_subsample": call(ycbcr=V("rgb")),
     "imageform.color.chroma_upsample": call(luma=V("gray"), chroma=np.full((3, 4, 2), 0.1)),
     "imageform.color.chromatic_adaptation": call(xyz=V("xyz"), src_white="D65", dst_white="A"),
@@ -149,7 +105,9 @@ VALID: dict[str, C | Skip] = {
     "imageform.color.cmyk_to_cmy": call(cmyk=np.full((4, 4), 0.25)),
     "imageform.color.cmyk_to_srgb": call(cmyk=np.full((4, 4), 0.25)),
     "imageform.color.convert": call(image=V("rgb"), src="srgb", dst="lab"),
-    "imageform.color.convert.Edge": Skip("TODO: no guess for fn, params, function"),
+    "imageform.color.convert.Edge": Skip(
+        "a graph edge of the colour-conversion registry (internal record)"
+    ),
     "imageform.color.cvd_matrix": call(deficiency="protan"),
     "imageform.color.decode": call(values=V("rgb4")),
     "imageform.color.delta_e": call(lab1=V("lab"), lab2=V("lab")),
@@ -161,16 +119,14 @@ VALID: dict[str, C | Skip] = {
     "imageform.color.downsample": call(image=V("rgb"), factor=2),
     "imageform.color.encode": call(values=V("rgb4")),
     "imageform.color.estimate_illuminant": call(image=V("rgb")),
-    "imageform.color.from_opencv": Skip("TODO: no guess for convention"),
+    "imageform.color.from_opencv": call(V("rgb_u8"), "bgr"),
     "imageform.color.gamma_to_linear": call(values=V("rgb4")),
     "imageform.color.gamut_area": call(),
     "imageform.color.gamut_coverage": call(),
     "imageform.color.gamut_figures": call(),
     "imageform.color.gamut_map": call(xyz=V("xyz")),
     "imageform.color.gamut_triangle": call(),
-    "imageform.color.gray_to_srgb": Skip(
-        "TODO: InvalidInputError: expected grey image with 1 channels on axis -1, got shape (6, 8)"
-    ),
+    "imageform.color.gray_to_srgb": call(np.full((6, 8, 1), 0.5)),
     "imageform.color.hsi_to_srgb": call(hsi=V("rgb4")),
     "imageform.color.hsl_to_srgb": call(hsl=V("rgb4")),
     "imageform.color.hsv_to_srgb": call(hsv=V("rgb4")),
@@ -199,9 +155,7 @@ VALID: dict[str, C | Skip] = {
     "imageform.color.mean_linear_light": call(image=V("rgb")),
     "imageform.color.metamer": call(spectrum=V("spectrum")),
     "imageform.color.metamerism_index": call(s1=V("spectrum"), s2=V("spectrum")),
-    "imageform.color.palette": Skip(
-        "TODO: UnknownOptionError: unknown palette 'D65'; valid: 'okabe_ito', 'red_green', 'viridis'"
-    ),
+    "imageform.color.palette": call("okabe_ito"),
     "imageform.color.palette_check": call(colors="#ff0000,#00ff00,#0000ff"),
     "imageform.color.parse_colors": call(colors="#ff0000,#00ff00,#0000ff"),
     "imageform.color.path": call(src="srgb", dst="lab"),
@@ -227,7 +181,7 @@ VALID: dict[str, C | Skip] = {
     "imageform.color.srgb_to_ycbcr": call(image=V("rgb")),
     "imageform.color.subsample_round_trip": call(image=V("rgb")),
     "imageform.color.subsampling_delta_e": call(image=V("rgb")),
-    "imageform.color.to_opencv": Skip("TODO: no guess for convention"),
+    "imageform.color.to_opencv": call(V("rgb"), "bgr"),
     "imageform.color.tristimulus": call(spectrum=V("spectrum")),
     "imageform.color.uv1960_to_xy": call(uv=V("uv")),
     "imageform.color.uv_prime_to_xy": call(uv=V("uv")),
@@ -240,9 +194,7 @@ VALID: dict[str, C | Skip] = {
     "imageform.color.xy_to_uv1960": call(xy=V("xy")),
     "imageform.color.xy_to_uv_prime": call(xy=V("xy")),
     "imageform.color.xy_to_xyz": call(xy=V("xy")),
-    "imageform.color.xy_to_xyz_white": Skip(
-        "TODO: TypeError: only 0-dimensional arrays can be converted to Python scalars"
-    ),
+    "imageform.color.xy_to_xyz_white": call((0.3127, 0.3290)),
     "imageform.color.xyy_to_xyz": call(xyy=V("xyz")),
     "imageform.color.xyz_to_lab": call(xyz=V("xyz")),
     "imageform.color.xyz_to_linear_rgb": call(xyz=V("xyz")),
@@ -256,29 +208,26 @@ VALID: dict[str, C | Skip] = {
     "imageform.color.ycbcr_to_srgb": call(ycbcr=V("rgb")),
     "imageform.geometry.BrownConrady": call(),
     "imageform.geometry.BrownConrady.from_opencv": call(dist_coeffs=np.zeros(5)),
-    "imageform.geometry.CalibrationResult": Skip("TODO: no guess for distortion, rvecs, tvecs"),
+    "imageform.geometry.CalibrationResult": Skip(
+        "a result dataclass built by calibrate_camera (its methods are fuzzed on a fixture)"
+    ),
     "imageform.geometry.CalibrationResult.from_fit": Skip(
-        "TODO: no guess for out, view, size, free, notes"
+        "an internal constructor from the refinement's RefineOutput (fuzzed through calibrate_camera)"
     ),
-    "imageform.geometry.CalibrationResult.from_toml": Skip(
-        "TODO: TypeError: expected str, bytes or os.PathLike object, not ndarray"
+    "imageform.geometry.CalibrationResult.from_toml": call(V("calibration_toml")),
+    "imageform.geometry.CalibrationResult.to_toml": method(
+        V("calibration"), path=V("tmpfile_toml")
     ),
-    "imageform.geometry.CalibrationResult.to_toml": Skip("no valid instance of CalibrationResult"),
     "imageform.geometry.Camera": call(K=V("K")),
     "imageform.geometry.Camera.from_projection_matrix": call(P=V("P")),
-    "imageform.geometry.Camera.in_image": Skip("no valid instance of Camera"),
-    "imageform.geometry.Camera.look_at": Skip(
-        "TODO: InvalidInputError: expected R of shape (3, 3), got (6, 8, 3, 3)"
+    "imageform.geometry.Camera.in_image": method(V("camera"), uv=V("uv")),
+    "imageform.geometry.Camera.look_at": call(
+        V("K"), np.array([0.0, 0.0, -5.0]), np.zeros(3), image_size=(8, 6)
     ),
-    "imageform.geometry.CheckerboardResult": Skip("TODO: no guess for found, corners"),
-    "imageform.geometry.CheckerboardResult.grid": Skip("no valid instance of CheckerboardResult"),
-    "imageform.geometry.ConeBeamGeometry": Skip(
-        "TODO: no guess for source_to_detector, source_to_object, detector_shape"
-    ),
-    "imageform.geometry.ConeBeamGeometry.penumbra": Skip("no valid instance of ConeBeamGeometry"),
-    "imageform.geometry.ConeBeamGeometry.project": Skip("no valid instance of ConeBeamGeometry"),
+    "imageform.geometry.CheckerboardResult": call(True, np.zeros((6, 2)), pattern_size=(3, 2)),
+    "imageform.geometry.ConeBeamGeometry": call(1.0, 0.5, 1e-4, (64, 48)),
     "imageform.geometry.DecomposedProjection": call(K=V("K"), R=V("R"), t=V("t")),
-    "imageform.geometry.Dehomogenized": Skip("TODO: no guess for valid"),
+    "imageform.geometry.Dehomogenized": Skip("a result NamedTuple (no validation of its own)"),
     "imageform.geometry.DivisionModel": call(),
     "imageform.geometry.ImagePlane": Skip("a typing.Literal alias, not a callable"),
     "imageform.geometry.Intrinsics": call(fx=500.0, fy=500.0, cx=4.0, cy=3.0),
@@ -291,61 +240,69 @@ VALID: dict[str, C | Skip] = {
         focal_length=0.05, sensor_size_mm=(6.4, 4.8), image_size=(8, 6)
     ),
     "imageform.geometry.KannalaBrandt": call(),
-    "imageform.geometry.LineSegments": Skip("TODO: no guess for endpoints, widths, log10_nfa"),
-    "imageform.geometry.PnPResult": Skip("TODO: no guess for tvec, rms, valid, inliers"),
+    "imageform.geometry.LineSegments": call(
+        np.array([[[0.0, 0.0], [10.0, 1.0]], [[0.0, 5.0], [10.0, 4.0]]]), np.ones(2), -np.ones(2)
+    ),
+    "imageform.geometry.PnPResult": Skip("a result NamedTuple (no validation of its own)"),
     "imageform.geometry.Pose": call(R=V("R"), t=V("t")),
-    "imageform.geometry.Projection": Skip("TODO: no guess for valid"),
-    "imageform.geometry.RefinedCorners": Skip("TODO: no guess for corners, status"),
-    "imageform.geometry.TriangulationResult": Skip("TODO: no guess for covariance, rms, valid"),
-    "imageform.geometry.Undistorted": Skip("TODO: no guess for valid"),
+    "imageform.geometry.Projection": Skip("a result NamedTuple (no validation of its own)"),
+    "imageform.geometry.RefinedCorners": Skip("a result NamedTuple (no validation of its own)"),
+    "imageform.geometry.TriangulationResult": Skip(
+        "a result NamedTuple (no validation of its own)"
+    ),
+    "imageform.geometry.Undistorted": Skip("a result NamedTuple (no validation of its own)"),
     "imageform.geometry.VanishingPointResult": Skip(
-        "TODO: no guess for vanishing_points, labels, vertical, horizon, perspective, scores"
+        "a result dataclass built by detect_vanishing_points"
     ),
     "imageform.geometry.apply_homography": call(H=V("H"), points=V("points2")),
     "imageform.geometry.are_collinear": call(points=V("points2")),
     "imageform.geometry.axis_rotation": call(axis="x", angle=0.3),
     "imageform.geometry.backproject": call(uv=V("uv"), K=V("K")),
-    "imageform.geometry.calibrate_camera": Skip(
-        "TODO: InvalidInputError: expected one object-point array per view of image points, got 6 object-point and 4 image-point arrays"
-    ),
+    "imageform.geometry.calibrate_camera": call(V("stereo_objs"), V("stereo_left"), (640, 480)),
     "imageform.geometry.calibration_refine.RefineOutput": Skip(
-        "TODO: no guess for globals_, rvecs, tvecs, residuals, std_globals, std_poses, n_iter, cond"
+        "an internal record of the calibration refinement (fuzzed through calibrate_camera)"
     ),
     "imageform.geometry.calibration_refine.project_views": Skip(
-        "TODO: no guess for g, rvecs, tvecs, obj, view"
+        "an internal step of calibrate_camera on its packed parameter vector (fuzzed through calibrate_camera)"
     ),
     "imageform.geometry.calibration_refine.refine": Skip(
-        "TODO: no guess for g0, rvecs0, tvecs0, obj, view, free, max_iter, tol"
+        "an internal step of calibrate_camera on its packed parameter vector (fuzzed through calibrate_camera)"
     ),
-    "imageform.geometry.calibration_zhang.dlt_init": Skip(
-        "TODO: InvalidInputError: expected at least 6 correspondences of shape (..., N, 3), got (3,)"
-    ),
-    "imageform.geometry.calibration_zhang.homographies": Skip(
-        "TODO: IndexError: too many indices for array: array is 1-dimensional, but 2 were indexed"
-    ),
+    "imageform.geometry.calibration_zhang.dlt_init": call([V("points3")], [V("points3_uv")]),
+    "imageform.geometry.calibration_zhang.homographies": call(V("stereo_objs"), V("stereo_left")),
     "imageform.geometry.calibration_zhang.poses_from_homographies": Skip(
-        "TODO: IndexError: too many indices for array: array is 2-dimensional, but 3 were indexed"
+        "an internal step of calibrate_camera (homographies of views; fuzzed through calibrate_camera)"
     ),
-    "imageform.geometry.calibration_zhang.zhang_intrinsics": Skip("TODO: no guess for skew"),
+    "imageform.geometry.calibration_zhang.zhang_intrinsics": Skip(
+        "an internal step of calibrate_camera (homographies of views; fuzzed through calibrate_camera)"
+    ),
     "imageform.geometry.camera_rotation": call(pitch=0.1),
     "imageform.geometry.checkerboard_candidates.Candidates": Skip(
-        "TODO: no guess for dirs, response, contrast"
+        "an internal record of the checkerboard detector (fuzzed through find_checkerboard)"
     ),
     "imageform.geometry.checkerboard_candidates.find_candidates": call(gray=V("gray"), sigma=1.0),
     "imageform.geometry.checkerboard_candidates.ring_test": Skip(
-        "TODO: no guess for smooth, min_contrast"
+        "an internal step of the checkerboard detector (fuzzed through find_checkerboard)"
     ),
-    "imageform.geometry.checkerboard_grid.cell_parity_ok": Skip("TODO: no guess for means"),
-    "imageform.geometry.checkerboard_grid.grow_rectangle": Skip("TODO: no guess for node_at"),
+    "imageform.geometry.checkerboard_grid.cell_parity_ok": Skip(
+        "an internal step of the checkerboard detector (fuzzed through find_checkerboard)"
+    ),
+    "imageform.geometry.checkerboard_grid.grow_rectangle": Skip(
+        "an internal step of the checkerboard detector (fuzzed through find_checkerboard)"
+    ),
     "imageform.geometry.checkerboard_grid.label_lattice": Skip(
-        "TODO: no guess for seed, cand, nbr"
+        "an internal step of the checkerboard detector (fuzzed through find_checkerboard)"
     ),
-    "imageform.geometry.checkerboard_grid.lattice_problem": Skip("TODO: no guess for grid"),
-    "imageform.geometry.checkerboard_grid.neighbors": Skip("TODO: no guess for cand, min_dist"),
+    "imageform.geometry.checkerboard_grid.lattice_problem": Skip(
+        "an internal step of the checkerboard detector (fuzzed through find_checkerboard)"
+    ),
+    "imageform.geometry.checkerboard_grid.neighbors": Skip(
+        "an internal step of the checkerboard detector (fuzzed through find_checkerboard)"
+    ),
     "imageform.geometry.checkerboard_points": call(pattern_size=(4, 3)),
     "imageform.geometry.checkerboard_subpix.as_gray": call(image=V("rgb_big")),
     "imageform.geometry.checkerboard_subpix.refine": Skip(
-        "TODO: no guess for pts, hx, hy, max_iter, eps"
+        "an internal numba step of refine_corners (fuzzed through refine_corners)"
     ),
     "imageform.geometry.cross_ratio": call(
         a=np.array([1.0, 2.0]),
@@ -355,19 +312,19 @@ VALID: dict[str, C | Skip] = {
     ),
     "imageform.geometry.decompose_projection_matrix": call(P=V("P")),
     "imageform.geometry.detect_line_segments": call(image=V("rgb")),
-    "imageform.geometry.detect_vanishing_points": Skip(
-        "TODO: InvalidInputError: give either an image or segments (with image_size)"
+    "imageform.geometry.detect_vanishing_points": call(
+        segments=V("segments"), image_size=(16, 12), iterations=50
     ),
-    "imageform.geometry.estimate_homography": Skip(
-        "TODO: InvalidInputError: expected a numeric array for src, got str"
+    "imageform.geometry.estimate_homography": call(
+        V("uv"), np.array([[3.1, 4.2], [5.3, 6.4], [8.6, 3.1], [10.25, 7.5]])
     ),
-    "imageform.geometry.estimate_projection_matrix": Skip(
-        "TODO: no guess for points_3d, points_2d"
-    ),
+    "imageform.geometry.estimate_projection_matrix": call(V("points3"), V("points3_uv")),
     "imageform.geometry.euler_to_matrix": call(angles=np.array([0.1, 0.2, 0.3]), order="xyz"),
     "imageform.geometry.find_checkerboard": call(image=V("rgb_big"), pattern_size=(4, 3)),
     "imageform.geometry.find_checkerboards": call(images=[V("rgb_big")], pattern_size=(4, 3)),
-    "imageform.geometry.focal_from_vanishing_points": Skip("TODO: no guess for principal_point"),
+    "imageform.geometry.focal_from_vanishing_points": call(
+        np.array([600.0, 3.0]), np.array([-400.0, 3.0]), np.array([4.0, 3.0])
+    ),
     "imageform.geometry.from_homogeneous": call(points=V("points3")),
     "imageform.geometry.from_homogeneous_masked": call(points=V("points3")),
     "imageform.geometry.horizon_line": call(K=V("K")),
@@ -375,11 +332,13 @@ VALID: dict[str, C | Skip] = {
         l1=np.array([1.0, 0.0, -2.0]), l2=np.array([0.0, 1.0, -3.0])
     ),
     "imageform.geometry.intrinsic_matrix": call(fx=500.0, fy=500.0, cx=4.0, cy=3.0),
-    "imageform.geometry.intrinsics_from_vanishing_points": Skip("TODO: no guess for v3"),
+    "imageform.geometry.intrinsics_from_vanishing_points": call(
+        np.array([600.0, -200.0]), np.array([-500.0, -200.0]), np.array([50.0, 1500.0])
+    ),
     "imageform.geometry.is_rotation": call(R=V("R")),
-    "imageform.geometry.line_through": Skip("TODO: no guess for p, q"),
-    "imageform.geometry.lines_from_segments": Skip(
-        "TODO: InvalidInputError: expected a numeric array for segments, got dtype object"
+    "imageform.geometry.line_through": call(np.array([0.0, 0.0]), np.array([1.0, 2.0])),
+    "imageform.geometry.lines_from_segments": call(
+        np.array([[[0.0, 0.0], [10.0, 1.0]], [[0.0, 5.0], [10.0, 4.0]]])
     ),
     "imageform.geometry.look_at": call(eye=(0.0, 0.0, -5.0), target=V("rgb")),
     "imageform.geometry.matrix_to_euler": call(R=V("R"), order="xyz"),
@@ -398,14 +357,12 @@ VALID: dict[str, C | Skip] = {
     "imageform.geometry.refine_corners": call(image=V("rgb_big"), corners=V("uv")),
     "imageform.geometry.remap_bilinear": call(image=V("rgb"), map_uv=np.zeros((6, 8, 2))),
     "imageform.geometry.rvec_to_matrix": call(rvec=V("rvec")),
-    "imageform.geometry.solve_pnp": Skip(
-        "TODO: InvalidInputError: expected object_points (..., N, 3) and image_points (..., N, 2) with the same leading shape, got (6, "
-    ),
-    "imageform.geometry.solve_pnp_ransac": Skip(
-        "TODO: InvalidInputError: expected object_points (..., N, 3) and image_points (..., N, 2) with the same leading shape, got (6, "
+    "imageform.geometry.solve_pnp": call(V("points3"), V("points3_uv"), V("K")),
+    "imageform.geometry.solve_pnp_ransac": call(
+        V("points3"), V("points3_uv"), V("K"), max_hypotheses=50
     ),
     "imageform.geometry.to_homogeneous": call(points=V("points3")),
-    "imageform.geometry.triangulate_points": Skip("TODO: no guess for projection_matrices"),
+    "imageform.geometry.triangulate_points": call(V("P_stack"), V("pts_stack")),
     "imageform.geometry.undistort_image": call(image=V("rgb"), K=V("K"), distortion=V("brown")),
     "imageform.geometry.undistortion_map": call(shape=(6, 8), K=V("K"), distortion=V("brown")),
     "imageform.geometry.unproject": call(uv=V("uv"), depth=V("depth"), K=V("K")),
@@ -414,9 +371,7 @@ VALID: dict[str, C | Skip] = {
     "imageform.geometry.weak_perspective_matrix": call(K=V("K"), depth=4.0),
     "imageform.geometry.weak_perspective_project": call(points=V("points3"), K=V("K")),
     "imageform.io.CameraFile": call(camera=V("camera")),
-    "imageform.io.CameraFile.from_calibration": Skip(
-        "TODO: AttributeError: 'SimulationResult' object has no attribute 'K'"
-    ),
+    "imageform.io.CameraFile.from_calibration": call(V("calibration")),
     "imageform.io.ImageInfo": Skip("a result NamedTuple (no validation of its own)"),
     "imageform.io.Provenance": call(),
     "imageform.io.WrittenImage": Skip("a result NamedTuple (no validation of its own)"),
@@ -430,13 +385,24 @@ VALID: dict[str, C | Skip] = {
     "imageform.io.write_camera": call(path=V("tmpfile_png"), camera=V("camera")),
     "imageform.io.write_image": call(path=V("tmpfile_png"), image=V("rgb")),
     "imageform.io.write_png": call(V("tmpfile_png"), V("rgb_u8")),
-    "imageform.optics.ChromaticFocalLengths": Skip("TODO: no guess for red, green, blue"),
-    "imageform.optics.DepthOfField": Skip("TODO: no guess for near, far, hyperfocal"),
-    "imageform.optics.ThinLensSolution": Skip("TODO: no guess for d_i, virtual"),
+    "imageform.optics.ChromaticFocalLengths": Skip(
+        "a result NamedTuple (no validation of its own)"
+    ),
+    "imageform.optics.DepthOfField": call(2.0, 1.5, 3.0, 30.0),
+    "imageform.optics.ThinLensSolution": call(0.05, 2.0, 0.0513, 0.0256, False),
     "imageform.optics.aperture_diameter": call(focal_length=0.05, f_number=2.8),
     "imageform.optics.apply_vignetting": call(image=V("rgb"), falloff=np.full((6, 8), 0.8)),
-    "imageform.optics.axial_chromatic_aberration": Skip("TODO: no guess for focal_lengths"),
-    "imageform.optics.axial_chromatic_blur_diameters": Skip("TODO: no guess for focal_lengths"),
+    "imageform.optics.axial_chromatic_aberration": call(
+        V("rgb"),
+        np.full((6, 8), 3.0),
+        focal_lengths=(0.0502, 0.05, 0.0499),
+        f_number=2.8,
+        focus=2.0,
+        pixel_pitch=2e-6,
+    ),
+    "imageform.optics.axial_chromatic_blur_diameters": call(
+        np.array([1.0, 2.0, 3.0]), focal_lengths=(0.0502, 0.05, 0.0499), f_number=2.8, focus=2.0
+    ),
     "imageform.optics.blur_by_radius": call(image=V("rgb"), radius_px=np.full((6, 8), 1.0)),
     "imageform.optics.chromatic_focal_lengths": call(focal_length=0.05, abbe_number=60.0),
     "imageform.optics.circle_of_confusion": call(
@@ -454,26 +420,22 @@ VALID: dict[str, C | Skip] = {
     "imageform.optics.f_number": call(focal_length=0.05, aperture_diameter=0.01),
     "imageform.optics.field_angle": call(shape=(6, 8), focal_length=0.05),
     "imageform.optics.hyperfocal_distance": call(focal_length=0.05, f_number=2.8, coc=3e-5),
-    "imageform.optics.lateral_chromatic_aberration": Skip(
-        "TODO: TypeError: 'float' object is not iterable"
-    ),
+    "imageform.optics.lateral_chromatic_aberration": call(V("rgb"), (1.001, 1.0, 0.999)),
     "imageform.optics.magnification": call(focal_length=0.05, d_o=2.0),
     "imageform.optics.mechanical_vignetting": call(
         shape=(6, 8), focal_length=0.05, pupil_radius=1.0, barrel_radius=1.2, barrel_distance=0.5
     ),
-    "imageform.optics.pupil_overlap_fraction": Skip(
-        "TODO: no guess for pupil_radius, stop_radius, offset"
-    ),
+    "imageform.optics.pupil_overlap_fraction": call(1.0, 1.2, np.array([0.0, 0.5, 1.0])),
     "imageform.optics.spherical_aberration": call(
         image=V("rgb"), focal_length=0.05, f_number=2.8, pixel_pitch=5e-6, sa_coefficient=0.1
     ),
     "imageform.optics.spherical_blur_radius": call(
         focal_length=0.05, f_number=2.8, sa_coefficient=0.1
     ),
-    "imageform.optics.thin_lens": Skip(
-        "TODO: InvalidInputError: expected exactly two of focal_length, d_o, d_i, got none"
+    "imageform.optics.thin_lens": call(focal_length=0.05, d_o=2.0),
+    "imageform.report.ReportPaths": Skip(
+        "a result record of write_report (fuzzed through write_report)"
     ),
-    "imageform.report.ReportPaths": Skip("TODO: no guess for html, metrics"),
     "imageform.report.chromaticity_plot.planckian_locus": call(
         temperatures=np.array([3000.0, 5000.0])
     ),
@@ -481,16 +443,22 @@ VALID: dict[str, C | Skip] = {
     "imageform.report.display.raw_to_uint16": call(image=V("rgb")),
     "imageform.report.display.stage_display_image": call(image=V("rgb"), kind="linear"),
     "imageform.report.figures_color.photon_transfer_summary": call(result=V("result")),
-    "imageform.report.figures_color.plot_delta_e": Skip("TODO: no guess for measurements"),
+    "imageform.report.figures_color.plot_delta_e": call(V("patch_measurements")),
     "imageform.report.figures_color.plot_patch_chromaticity": call(result=V("result")),
-    "imageform.report.figures_color.plot_patch_snr": Skip("TODO: no guess for measurements"),
-    "imageform.report.figures_color.plot_photon_transfer": Skip("TODO: no guess for summary"),
-    "imageform.report.figures_color.truth_xy": Skip("TODO: no guess for measurements"),
+    "imageform.report.figures_color.plot_patch_snr": call(V("patch_measurements")),
+    "imageform.report.figures_color.plot_photon_transfer": Skip(
+        "draws the photon-transfer summary dict built by the report (fuzzed through write_report)"
+    ),
+    "imageform.report.figures_color.truth_xy": call(V("patch_measurements")),
     "imageform.report.figures_geometry.image_corner_pixels": call(width=8, height=6),
-    "imageform.report.figures_geometry.plot_top_view": Skip("TODO: no guess for data"),
-    "imageform.report.figures_geometry.top_view_axes": Skip("TODO: no guess for world_up"),
+    "imageform.report.figures_geometry.plot_top_view": Skip(
+        "draws the dict of top_view_data(result) (fuzzed through top_view_data and write_report)"
+    ),
+    "imageform.report.figures_geometry.top_view_axes": call(V("R"), (0.0, 0.0, 1.0)),
     "imageform.report.figures_geometry.top_view_data": call(result=V("result")),
-    "imageform.report.figures_geometry.top_view_project": Skip("TODO: no guess for data"),
+    "imageform.report.figures_geometry.top_view_project": Skip(
+        "projects with the dict of top_view_data(result) (fuzzed through top_view_data)"
+    ),
     "imageform.report.figures_geometry.vanishing_overlay": call(
         result=V("result"), display=V("rgb")
     ),
@@ -498,7 +466,9 @@ VALID: dict[str, C | Skip] = {
     "imageform.report.html_parts.Markup": Skip("markupsafe.Markup re-exported: a str subclass"),
     "imageform.report.html_parts.e": call(text="hello"),
     "imageform.report.html_parts.figure": call(b"\x89PNG", "alt", "caption"),
-    "imageform.report.html_parts.figure_png": Skip("TODO: no guess for fig"),
+    "imageform.report.html_parts.figure_png": Skip(
+        "renders a matplotlib figure object to PNG bytes (no fuzzable value)"
+    ),
     "imageform.report.html_parts.img_tag": call(b"\x89PNG", "alt"),
     "imageform.report.html_parts.json_block": call({"a": 1}, "summary"),
     "imageform.report.html_parts.note": call(text="hello"),
@@ -506,48 +476,42 @@ VALID: dict[str, C | Skip] = {
     "imageform.report.html_parts.section": call("id", "title", "<p>x</p>"),
     "imageform.report.html_parts.table": call(["a", "b"], [[1, 2]]),
     "imageform.report.lecture.WorkedExample": Skip(
-        "TODO: no guess for topic, question, formula, compute, expected"
+        "a record holding a callable, built by the lecture module (its values are checked by tests/report)"
     ),
-    "imageform.report.lecture.WorkedExample.agrees": Skip("no valid instance of WorkedExample"),
-    "imageform.report.lecture.WorkedExample.computed": Skip("no valid instance of WorkedExample"),
-    "imageform.report.lecture.WorkedExample.expected_values": Skip(
-        "no valid instance of WorkedExample"
-    ),
+    "imageform.report.lecture.WorkedExample.agrees": method(V("worked_example")),
+    "imageform.report.lecture.WorkedExample.computed": method(V("worked_example")),
+    "imageform.report.lecture.WorkedExample.expected_values": method(V("worked_example")),
     "imageform.report.lecture.all_examples": call(),
     "imageform.report.lecture.lecture_topics": call(),
     "imageform.report.metrics.to_json_value": call(value=1.0),
     "imageform.report.overlays.draw_vanishing_overlay": Skip(
-        "TODO: AttributeError: 'SimulationResult' object has no attribute 'segments'"
+        "draws a VanishingPointResult (fuzzed through detect_vanishing_points and the vanishing workflow)"
     ),
     "imageform.report.overlays.draw_vanishing_truth_overlay": call(
         V("rgb_big"), np.array([20.0, 10.0])
     ),
     "imageform.report.patches.measure_patches": call(result=V("result")),
-    "imageform.report.patches.patch_windows": Skip("TODO: no guess for truth"),
+    "imageform.report.patches.patch_windows": call(V("cc_truth"), 36, 64),
     "imageform.report.patches.snr_stage": call(result=V("result")),
     "imageform.report.write_report": call(result=V("result"), out_dir=V("tmpdir")),
-    "imageform.sensor.ComparisonRow": Skip("TODO: no guess for aspect, ccd, cmos"),
-    "imageform.sensor.EmvaResult": Skip(
-        "TODO: no guess for read_noise, dark_current, saturation_dn, saturation_capacity, fit_points"
-    ),
-    "imageform.sensor.FixedPattern": Skip("TODO: no guess for gain, offset, column"),
+    "imageform.sensor.ComparisonRow": call("aspect", "ccd", "cmos"),
+    "imageform.sensor.EmvaResult": Skip("a result dataclass built by fit_photon_transfer"),
+    "imageform.sensor.FixedPattern": Skip("a result dataclass built by fixed_pattern"),
     "imageform.sensor.PhotonTransferData": Skip(
-        "TODO: no guess for exposure_times, mean_dn, var_dn, dark_mean_dn, dark_var_dn"
+        "a record built by measure_photon_transfer (fuzzed through fit_photon_transfer)"
     ),
     "imageform.sensor.SensorModel": call(),
-    "imageform.sensor.SensorModel.capture": Skip("no valid instance of SensorModel"),
-    "imageform.sensor.SensorModel.mean_electrons": Skip("no valid instance of SensorModel"),
-    "imageform.sensor.SensorModel.normalise": Skip("no valid instance of SensorModel"),
-    "imageform.sensor.SensorModel.normalize": Skip("no valid instance of SensorModel"),
     "imageform.sensor.ccd_preset": call(),
     "imageform.sensor.cfa_masks": call(shape=(6, 8)),
     "imageform.sensor.cfa_pattern": call(pattern="RGGB"),
     "imageform.sensor.cmos_preset": call(),
     "imageform.sensor.comparison_table": call(),
     "imageform.sensor.demosaic": call(raw=V("gray")),
-    "imageform.sensor.emva_snr": Skip("TODO: no guess for dark_noise_e"),
-    "imageform.sensor.fit_photon_transfer": Skip("TODO: no guess for data"),
-    "imageform.sensor.fixed_pattern": Skip("TODO: no guess for prnu, dsnu, column_fpn, rng"),
+    "imageform.sensor.emva_snr": call(
+        1000.0, quantum_efficiency=0.6, dark_noise_e=3.0, system_gain=0.5
+    ),
+    "imageform.sensor.fit_photon_transfer": call(V("photon_data")),
+    "imageform.sensor.fixed_pattern": call((6, 8, 3), prnu=0.01, dsnu=1.0, column_fpn=0.5, rng=0),
     "imageform.sensor.mosaic": call(rgb=V("rgb")),
     "imageform.sensor.photons_per_pixel": call(
         irradiance=1.0, wavelength_nm=550.0, pixel_area=1e-11, exposure_time=0.01
@@ -557,7 +521,9 @@ VALID: dict[str, C | Skip] = {
     ),
     "imageform.sensor.rolling_shutter_skew": call(velocity=10.0, line_time=1e-5),
     "imageform.sensor.row_start_times": call(rows=6, mode="rolling", line_time=1e-5),
-    "imageform.sensor.shutter_capture": Skip("TODO: no guess for render, mode"),
+    "imageform.sensor.shutter_capture": Skip(
+        "takes a render callable of time (no fuzzable value; tested in tests/sensor)"
+    ),
     "imageform.sensor.simulate_photon_transfer": call(
         sensor=V("sensor"),
         irradiance=1.0,
@@ -565,141 +531,168 @@ VALID: dict[str, C | Skip] = {
         exposure_times=np.array([0.001, 0.002, 0.004]),
         rng=0,
     ),
-    "imageform.sensor.temporal_noise_dn": Skip("TODO: no guess for mean_electrons, dark_noise_e"),
+    "imageform.sensor.temporal_noise_dn": call(1000.0, system_gain=0.5, dark_noise_e=3.0),
     "imageform.simulate.CameraConfig": Skip(
-        "TODO: no guess for image_plane, fx_px, fy_px, cx_px, cy_px, skew_px, eye_m, target_m, t_m, distortion"
+        "a scene-file section built by the scene parser (fuzzed through scene files)"
     ),
     "imageform.simulate.CameraConfig.from_camera": call(camera=V("camera")),
-    "imageform.simulate.CameraConfig.to_camera": Skip("no valid instance of CameraConfig"),
-    "imageform.simulate.ColorCheckerTruth": Skip(
-        "TODO: no guess for names, lab_d65, centres_uv, sample_radius_px"
+    "imageform.simulate.CameraConfig.to_camera": method(
+        V("camera_config"), image_size=(64, 36), sensor_pixel_pitch_m=2e-6
     ),
+    "imageform.simulate.ColorCheckerTruth": Skip("a result dataclass built by colorchecker_truth"),
     "imageform.simulate.PatchMeasurements": Skip(
-        "TODO: no guess for names, lab_truth, lab_measured, delta_e00, readings, snr_luminance_db, snr_stage, truth_srgb"
+        "a result dataclass built by measure_colorchecker"
     ),
-    "imageform.simulate.RenderOutput": Skip("TODO: no guess for rate, object_index"),
-    "imageform.simulate.Scene": Skip("TODO: no guess for config, objects"),
-    "imageform.simulate.Scene.resized": Skip("no valid instance of Scene"),
-    "imageform.simulate.Scene.view": Skip("no valid instance of Scene"),
-    "imageform.simulate.Scene.with_camera": Skip("no valid instance of Scene"),
-    "imageform.simulate.Scene.with_changes": Skip("no valid instance of Scene"),
-    "imageform.simulate.SceneConfig": Skip(
-        "TODO: no guess for description, render, lens, processing"
+    "imageform.simulate.RenderOutput": Skip("a result dataclass built by render_scene"),
+    "imageform.simulate.Scene": Skip(
+        "built by load_scene/default_scene (its methods are fuzzed on a fixture)"
     ),
+    "imageform.simulate.Scene.resized": method(V("scene"), width=32),
+    "imageform.simulate.Scene.view": Skip(
+        "the fixture scene (default_scene) has no [[views]]: fuzzed through scene files"
+    ),
+    "imageform.simulate.Scene.with_camera": method(V("scene"), camera=V("camera")),
+    "imageform.simulate.Scene.with_changes": method(V("scene"), lens={"f_number": 4.0}),
+    "imageform.simulate.SceneConfig": Skip("a scene file parsed (fuzzed through scene files)"),
     "imageform.simulate.SceneConfig.from_dict": Skip(
         "takes validate_scene_dict output; fuzzed through load_scene and validate_scene_dict"
     ),
-    "imageform.simulate.SceneConfig.to_dict": Skip("no valid instance of SceneConfig"),
-    "imageform.simulate.SceneObject": Skip("TODO: no guess for corners, config"),
+    "imageform.simulate.SceneConfig.to_dict": method(V("scene_config")),
+    "imageform.simulate.SceneObject": Skip(
+        "a scene object built by the scene parser (fuzzed through scene files)"
+    ),
     "imageform.simulate.SceneQuad": call(name="D65", corners=V("uv")),
     "imageform.simulate.SimulationResult": call(stages=(), camera=V("camera"), image_size=(8, 6)),
-    "imageform.simulate.SimulationResult.stage": Skip("no valid instance of SimulationResult"),
-    "imageform.simulate.Stage": Skip("TODO: no guess for description"),
-    "imageform.simulate.VanishingTruth": Skip("TODO: no guess for vanishing_point, horizon"),
+    "imageform.simulate.SimulationResult.stage": method(V("result"), name="raw"),
+    "imageform.simulate.Stage": call("raw", "Raw", "the raw image", V("gray"), "raw"),
+    "imageform.simulate.VanishingTruth": call(np.array([4.0, 3.0]), np.array([0.0, 1.0, -3.0])),
     "imageform.simulate.apply_color_correction": call(V("rgb"), np.eye(3)),
     "imageform.simulate.budget.available_memory_bytes": call(),
     "imageform.simulate.budget.estimate_memory_bytes": call(width=8, height=6),
     "imageform.simulate.budget.format_bytes": call(n=5),
     "imageform.simulate.config.CheckerboardConfig": Skip(
-        "TODO: no guess for type, squares, square_size_m, margin_squares, dark_reflectance, light_reflectance"
+        "a scene-file section built by the scene parser (fuzzed through scene files)"
     ),
     "imageform.simulate.config.ColorCheckerConfig": Skip(
-        "TODO: no guess for type, width_m, gap_fraction, frame_reflectance"
+        "a scene-file section built by the scene parser (fuzzed through scene files)"
     ),
     "imageform.simulate.config.DistortionConfig": call(),
-    "imageform.simulate.config.DistortionConfig.from_model": Skip("TODO: no guess for model"),
+    "imageform.simulate.config.DistortionConfig.from_model": call(V("brown")),
     "imageform.simulate.config.GroundConfig": Skip(
-        "TODO: no guess for type, size_m, reflectance, rail_count, rail_gauge_m, rail_width_m, rail_reflectance, sleeper_spacing_m, sleeper_width_m, sleeper_length_m, sleeper_reflectance"
+        "a scene-file section built by the scene parser (fuzzed through scene files)"
     ),
-    "imageform.simulate.config.IlluminantConfig": Skip(
-        "TODO: no guess for type, temperature_K, file, illuminance_lux"
+    "imageform.simulate.config.IlluminantConfig": call("blackbody", "light", 3000.0, None, 500.0),
+    "imageform.simulate.config.ImageConfig": Skip(
+        "a scene-file section built by the scene parser (fuzzed through scene files)"
     ),
-    "imageform.simulate.config.ImageConfig": Skip("TODO: no guess for type, width_m"),
-    "imageform.simulate.config.LensConfig": Skip(
-        "TODO: no guess for focus_distance_m, defocus, vignetting, lateral_ca"
+    "imageform.simulate.config.LensConfig": call(2.8, 2.0, False, "cos4", (0.0, 0.0, 0.0)),
+    "imageform.simulate.config.ObjectConfig": Skip(
+        "a scene-file section built by the scene parser (fuzzed through scene files)"
     ),
-    "imageform.simulate.config.ObjectConfig": Skip("TODO: no guess for type"),
-    "imageform.simulate.config.PlaneConfig": Skip("TODO: no guess for type, size_m, reflectance"),
-    "imageform.simulate.config.ProcessingConfig": Skip(
-        "TODO: no guess for demosaic, lens_shading_correction, white_balance, color_correction, output_space"
+    "imageform.simulate.config.PlaneConfig": Skip(
+        "a scene-file section built by the scene parser (fuzzed through scene files)"
     ),
-    "imageform.simulate.config.RenderConfig": Skip(
-        "TODO: no guess for supersampling, background_reflectance"
+    "imageform.simulate.config.ProcessingConfig": call(
+        "menon", True, "gray_world", "none", "srgb", "srgb"
     ),
+    "imageform.simulate.config.RenderConfig": call(32, 18, 1, 0.2),
     "imageform.simulate.config.SensorConfig": Skip(
-        "TODO: no guess for preset, spectral_sensitivity, peak_qe, auto_exposure_level, shutter, noise, fill_factor, full_well_e, read_noise_e, dark_current_e_per_s, dsnu_e, prnu, column_fpn_e, conversion_gain_uV_per_e, analog_gain, bit_depth, black_level_dn, fpn_seed"
+        "a scene-file section built by the scene parser (fuzzed through scene files)"
     ),
-    "imageform.simulate.config.SensorConfig.to_model": Skip("no valid instance of SensorConfig"),
-    "imageform.simulate.config.ViewConfig": Skip("TODO: no guess for eye_m, target_m"),
+    "imageform.simulate.config.SensorConfig.to_model": method(V("sensor_config")),
+    "imageform.simulate.config.ViewConfig": call(
+        (0.0, 0.0, -2.0), (0.0, 0.0, 0.0), (0.0, -1.0, 0.0)
+    ),
     "imageform.simulate.default_scene": call(),
     "imageform.simulate.fit_color_correction": call(V("rgb_chart"), V("rgb_chart")),
     "imageform.simulate.load_scene": call('name = "tiny"\n[render]\nwidth = 32\nheight = 18\n'),
     "imageform.simulate.materials.electron_rates": Skip(
-        "TODO: no guess for reflectances, wl_reflectance, illuminance_lux"
+        "an internal step of render_scene on its reflectance table (fuzzed through render_scene)"
     ),
     "imageform.simulate.materials.reflectance_spectrum": call(value=1.0),
-    "imageform.simulate.materials.scene_irradiance": Skip("TODO: no guess for illuminance_lux, wl"),
+    "imageform.simulate.materials.scene_irradiance": call(
+        V("spectrum"), 500.0, np.arange(400.0, 701.0, 10.0)
+    ),
     "imageform.simulate.materials.texture_basis": call(),
-    "imageform.simulate.render.load_texture": Skip("TODO: no guess for base"),
-    "imageform.simulate.render.pixel_rays": Skip("TODO: no guess for u, v"),
+    "imageform.simulate.render.load_texture": call(V("png_file_str"), None),
+    "imageform.simulate.render.pixel_rays": call(
+        V("camera"), np.array([0.0, 4.0]), np.array([0.0, 3.0])
+    ),
     "imageform.simulate.render.raycast_quads_numpy": Skip(
-        "TODO: no guess for origin, dual_a, dual_b"
+        "an internal step of render_scene on its quad table (fuzzed through render_scene)"
     ),
     "imageform.simulate.render_scene": call(scene=V("scene")),
-    "imageform.simulate.schema.Field": Skip("TODO: no guess for default, doc"),
+    "imageform.simulate.schema.Field": call("float", 1.0, "a value"),
     "imageform.simulate.simulate": call(scene=V("scene")),
     "imageform.simulate.stages.ColorCorrected": call(image=V("rgb"), matrix=np.eye(3)),
     "imageform.simulate.stages.Encoded": call(image=V("rgb"), transfer="srgb"),
     "imageform.simulate.stages.WhiteBalanced": call(
         image=V("rgb"), gains=np.array([1.0, 1.1, 0.9])
     ),
-    "imageform.simulate.stages.apply_lens": Skip("TODO: no guess for rendered, lens"),
+    "imageform.simulate.stages.apply_lens": call(
+        V("render_output"), V("camera"), V("lens_config"), 4.0
+    ),
     "imageform.simulate.stages.balance_white": call(image=V("rgb"), method="gray_world"),
-    "imageform.simulate.stages.capture_raw": Skip("TODO: no guess for mean_electrons, config, rng"),
+    "imageform.simulate.stages.capture_raw": Skip(
+        "an internal stage of simulate (takes a Generator; fuzzed through simulate)"
+    ),
     "imageform.simulate.stages.correct_color": call(image=V("rgb"), method="gray_world"),
     "imageform.simulate.stages.correct_lens_shading": call(
         image=V("rgb"), falloff=np.full((6, 8), 0.8)
     ),
-    "imageform.simulate.stages.decode_output": Skip("TODO: no guess for encoded"),
-    "imageform.simulate.stages.demosaic_raw": Skip("TODO: no guess for normalized"),
+    "imageform.simulate.stages.decode_output": call(V("encoded"), "srgb"),
+    "imageform.simulate.stages.demosaic_raw": call(np.full((8, 8), 0.3), "rggb", "bilinear"),
     "imageform.simulate.stages.encode_output": call(
         linear_srgb=V("rgb"), space="srgb", transfer="srgb"
     ),
-    "imageform.simulate.stages.exposure_time": Skip("TODO: no guess for rate, config"),
-    "imageform.simulate.stages.measure_photon_transfer": Skip("TODO: no guess for rng"),
+    "imageform.simulate.stages.exposure_time": call(
+        np.full((6, 8), 1000.0), V("sensor_config"), V("sensor")
+    ),
+    "imageform.simulate.stages.measure_photon_transfer": Skip(
+        "an internal stage of simulate (takes a Generator; fuzzed through simulate)"
+    ),
     "imageform.simulate.stages.normalize_raw": call(
         raw=V("gray"), sensor=V("sensor"), exposure_time_s=0.01
     ),
-    "imageform.simulate.textures.resolve_path": Skip("TODO: no guess for base"),
-    "imageform.simulate.truth.colorchecker_truth": Skip("TODO: no guess for obj"),
-    "imageform.simulate.truth.delta_e_patches": Skip("TODO: no guess for lab_truth"),
-    "imageform.simulate.truth.detect_vanishing": Skip("TODO: no guess for truth"),
-    "imageform.simulate.truth.light_cct": Skip("TODO: no guess for spd"),
-    "imageform.simulate.truth.measure_colorchecker": Skip(
-        "TODO: no guess for output_linear_srgb, snr_linear_srgb, truth, snr_stage"
+    "imageform.simulate.textures.resolve_path": call("in.png", V("png_dir")),
+    "imageform.simulate.truth.colorchecker_truth": call(V("colorchecker_obj"), V("camera")),
+    "imageform.simulate.truth.delta_e_patches": call(np.full((24, 3), 0.3), np.full((24, 3), 50.0)),
+    "imageform.simulate.truth.detect_vanishing": Skip(
+        "runs detect_vanishing_points on a rendered image (slow; fuzzed through detect_vanishing_points)"
     ),
-    "imageform.simulate.truth.patch_means": Skip("TODO: no guess for truth"),
-    "imageform.simulate.truth.patch_stats": Skip("TODO: no guess for truth"),
-    "imageform.simulate.truth.rails_truth": Skip("TODO: no guess for ground"),
-    "imageform.simulate.truth.vanishing_errors": Skip("TODO: no guess for v"),
+    "imageform.simulate.truth.light_cct": call(V("spectrum")),
+    "imageform.simulate.truth.measure_colorchecker": Skip(
+        "an internal stage of simulate on its rendered images (fuzzed through simulate)"
+    ),
+    "imageform.simulate.truth.patch_means": call(np.full((36, 64, 3), 0.3), V("cc_truth")),
+    "imageform.simulate.truth.patch_stats": call(np.full((36, 64, 3), 0.3), V("cc_truth")),
+    "imageform.simulate.truth.rails_truth": call(V("ground_obj"), V("camera")),
+    "imageform.simulate.truth.vanishing_errors": call(V("vanishing_truth")),
     "imageform.simulate.truth.xy_of_linear_srgb": call(rgb=V("rgb4")),
     "imageform.simulate.validation.find_line": call(text="hello", path=V("tmpfile_png")),
     "imageform.simulate.validation.validate_scene_dict": call(
         {"name": "tiny", "render": {"width": 32, "height": 18}}
     ),
-    "imageform.spectral.DataTable": Skip("TODO: no guess for comments, columns, labels"),
-    "imageform.spectral.IntegrationWeights": Skip("TODO: no guess for weights"),
-    "imageform.spectral.PlanckianCCT": Skip("TODO: no guess for duv"),
-    "imageform.spectral.Spectrum": Skip(
-        "TODO: InvalidInputError: expected values of shape (31,) or (31, K) to match 31 wavelengths, got (4, 3)"
+    "imageform.spectral.DataTable": Skip("a result NamedTuple (no validation of its own)"),
+    "imageform.spectral.IntegrationWeights": Skip("a result NamedTuple (no validation of its own)"),
+    "imageform.spectral.PlanckianCCT": Skip("a result NamedTuple (no validation of its own)"),
+    "imageform.spectral.Spectrum": call(
+        np.arange(400.0, 701.0, 100.0), np.array([0.1, 0.5, 0.7, 0.3]), name="s"
     ),
-    "imageform.spectral.Spectrum.allclose": Skip("no valid instance of Spectrum"),
-    "imageform.spectral.Spectrum.from_columns": Skip("TODO: no guess for columns"),
-    "imageform.spectral.Spectrum.interpolate": Skip("no valid instance of Spectrum"),
-    "imageform.spectral.Spectrum.normalize": Skip("no valid instance of Spectrum"),
-    "imageform.spectral.Spectrum.peak_wavelength": Skip("no valid instance of Spectrum"),
-    "imageform.spectral.Spectrum.resample": Skip("no valid instance of Spectrum"),
-    "imageform.spectral.Spectrum.trim": Skip("no valid instance of Spectrum"),
+    "imageform.spectral.Spectrum.allclose": method(V("spectrum"), other=V("spectrum")),
+    "imageform.spectral.Spectrum.from_columns": call(
+        np.arange(400.0, 701.0, 100.0),
+        [np.array([0.1, 0.5, 0.7, 0.3]), np.array([0.2, 0.2, 0.2, 0.2])],
+    ),
+    "imageform.spectral.Spectrum.interpolate": method(
+        V("spectrum"), wavelengths=np.arange(400.0, 701.0, 5.0)
+    ),
+    "imageform.spectral.Spectrum.normalize": method(V("spectrum")),
+    "imageform.spectral.Spectrum.peak_wavelength": method(V("spectrum")),
+    "imageform.spectral.Spectrum.resample": method(
+        V("spectrum"), start=400.0, stop=700.0, step=5.0
+    ),
+    "imageform.spectral.Spectrum.trim": method(V("spectrum"), start=400.0, stop=700.0),
     "imageform.spectral.blackbody_spectrum": call(temperature=5000.0),
     "imageform.spectral.camera_sensitivities": call(),
     "imageform.spectral.cmfs": call(),
@@ -707,57 +700,41 @@ VALID: dict[str, C | Skip] = {
     "imageform.spectral.colorchecker_reflectances": call(),
     "imageform.spectral.cone_fundamentals": call(),
     "imageform.spectral.daylight_spectrum": call(cct=5000.0),
-    "imageform.spectral.daylight_spectrum_from_xy": Skip(
-        "TODO: InvalidInputError: expected xy as two finite numbers, got array([[0.3127, 0.329 ],"
-    ),
+    "imageform.spectral.daylight_spectrum_from_xy": call(np.array([0.3127, 0.3290])),
     "imageform.spectral.illuminant": call(name="D65"),
     "imageform.spectral.illuminant_table": call(name="D65"),
-    "imageform.spectral.integration_weights": Skip("TODO: no guess for functions"),
+    "imageform.spectral.integration_weights": call(V("spectrum3"), illuminant=V("spectrum")),
     "imageform.spectral.led_spectrum": call(),
-    "imageform.spectral.load_table": Skip("TODO: no guess for key"),
+    "imageform.spectral.load_table": call("cmf_2"),
     "imageform.spectral.luminance": call(spectrum=V("spectrum")),
     "imageform.spectral.luminous_efficiency": call(),
     "imageform.spectral.observer_functions": call(),
     "imageform.spectral.planck": call(wavelength_nm=550.0, temperature=5000.0),
-    "imageform.spectral.planckian_cct": Skip(
-        "TODO: InvalidInputError: expected one XYZ of shape (3,) with X+Y+Z > 0, got array([[0.34851203, 0.12602746, 0.31664279],"
-    ),
-    "imageform.spectral.read_table": Skip("TODO: no guess for key"),
+    "imageform.spectral.planckian_cct": call(np.array([0.95047, 1.0, 1.08883])),
+    "imageform.spectral.read_table": call("cmf_2"),
     "imageform.spectral.resolve_illuminant": call(illuminant="D65"),
     "imageform.spectral.spectrum_to_camera_rgb": call(spectrum=V("spectrum")),
     "imageform.spectral.spectrum_to_lms": call(spectrum=V("spectrum")),
     "imageform.spectral.spectrum_to_xyz": call(spectrum=V("spectrum")),
-    "imageform.spectral.table_source": Skip("TODO: no guess for key"),
+    "imageform.spectral.table_source": call("cmf_2"),
     "imageform.workflows.Input": call(name="D65", help="help"),
     "imageform.workflows.Options": call(),
     "imageform.workflows.Options.fields": call(),
     "imageform.workflows.Options.types": call(),
     "imageform.workflows.Output": call(help="help"),
     "imageform.workflows.Result": call(summary="summary"),
-    "imageform.workflows.Run": Skip("TODO: no guess for outputs"),
-    "imageform.workflows.Run.file": Skip("no valid instance of Run"),
-    "imageform.workflows.Run.folder": Skip("no valid instance of Run"),
-    "imageform.workflows.Run.note": Skip("no valid instance of Run"),
-    "imageform.workflows.Workflow": Skip("TODO: no guess for summary, function, options"),
-    "imageform.workflows.Workflow.make_options": Skip("no valid instance of Workflow"),
+    "imageform.workflows.Run": call(V("tmpdir")),
+    "imageform.workflows.Workflow": Skip(
+        "a registry record built by the workflows modules (fuzzed through get_workflow/execute)"
+    ),
+    "imageform.workflows.Workflow.make_options": method(V("workflow")),
     "imageform.workflows.calibration.CalibrateOptions": call(board="9x6"),
-    "imageform.workflows.calibration.CalibrateOptions.check": Skip(
-        "no valid instance of CalibrateOptions"
-    ),
     "imageform.workflows.calibration.CalibrateOptions.fields": call(),
-    "imageform.workflows.calibration.CalibrateOptions.paths": Skip(
-        "no valid instance of CalibrateOptions"
-    ),
-    "imageform.workflows.calibration.CalibrateOptions.square_mm": Skip(
-        "no valid instance of CalibrateOptions"
-    ),
     "imageform.workflows.calibration.CalibrateOptions.types": call(),
     "imageform.workflows.calibration.UndistortOptions": call(camera=V("camera")),
     "imageform.workflows.calibration.UndistortOptions.fields": call(),
     "imageform.workflows.calibration.UndistortOptions.types": call(),
-    "imageform.workflows.calibration.parse_board": Skip(
-        "TODO: InvalidInputError: expected --board COLSxROWS of inner corners (e.g. 9x6), got 'hello'"
-    ),
+    "imageform.workflows.calibration.parse_board": call("9x6"),
     "imageform.workflows.choice_names": call(choices=("a", "b")),
     "imageform.workflows.color.ConvertOptions": call(),
     "imageform.workflows.color.ConvertOptions.fields": call(),
@@ -777,39 +754,30 @@ VALID: dict[str, C | Skip] = {
     "imageform.workflows.color.WhiteBalanceOptions": call(),
     "imageform.workflows.color.WhiteBalanceOptions.fields": call(),
     "imageform.workflows.color.WhiteBalanceOptions.types": call(),
-    "imageform.workflows.execute": Skip("TODO: no guess for workflow"),
-    "imageform.workflows.flag_of": Skip("TODO: no guess for f"),
+    "imageform.workflows.execute": call("white_balance", image=V("png_file"), out=V("tmpfile_png")),
+    "imageform.workflows.flag_of": Skip(
+        "takes a dataclasses.Field of an Options class (no fuzzable value)"
+    ),
     "imageform.workflows.geometry.PoseOptions": call(),
     "imageform.workflows.geometry.PoseOptions.fields": call(),
     "imageform.workflows.geometry.PoseOptions.types": call(),
-    "imageform.workflows.geometry.ProjectOptions": Skip(
-        "TODO: InvalidInputError: give the camera as --camera FILE or --fx [--fy --cx --cy]"
-    ),
-    "imageform.workflows.geometry.ProjectOptions.check": Skip(
-        "no valid instance of ProjectOptions"
-    ),
+    "imageform.workflows.geometry.ProjectOptions": call(fx=500.0),
     "imageform.workflows.geometry.ProjectOptions.fields": call(),
-    "imageform.workflows.geometry.ProjectOptions.paths": Skip(
-        "no valid instance of ProjectOptions"
-    ),
     "imageform.workflows.geometry.ProjectOptions.types": call(),
     "imageform.workflows.geometry.TriangulateOptions": call(),
     "imageform.workflows.geometry.TriangulateOptions.fields": call(),
     "imageform.workflows.geometry.TriangulateOptions.types": call(),
-    "imageform.workflows.get_workflow": Skip(
-        "TODO: UnknownOptionError: unknown command 'D65'; valid: simulate, lecture, convert, white-balance, delta-e, cvd, gamut, palett"
-    ),
+    "imageform.workflows.get_workflow": call("white_balance"),
     "imageform.workflows.lecture.LectureOptions": call(),
     "imageform.workflows.lecture.LectureOptions.fields": call(),
     "imageform.workflows.lecture.LectureOptions.types": call(),
-    "imageform.workflows.normalize_choice": Skip("TODO: no guess for choices, what"),
+    "imageform.workflows.normalize_choice": call("a", ("a", "b"), "thing"),
     "imageform.workflows.optics.LensOptions": call(focal="50mm", f_number=2.8, focus=2.0),
-    "imageform.workflows.optics.LensOptions.check": Skip("no valid instance of LensOptions"),
     "imageform.workflows.optics.LensOptions.fields": call(),
-    "imageform.workflows.optics.LensOptions.lengths": Skip("no valid instance of LensOptions"),
-    "imageform.workflows.optics.LensOptions.paths": Skip("no valid instance of LensOptions"),
     "imageform.workflows.optics.LensOptions.types": call(),
-    "imageform.workflows.run_file": Skip("TODO: no guess for input_path, output_path, options"),
+    "imageform.workflows.run_file": Skip(
+        "runs a workflow on files with an Options instance (fuzzed through execute)"
+    ),
     "imageform.workflows.simulate.SimulateOptions": call(),
     "imageform.workflows.simulate.SimulateOptions.fields": call(),
     "imageform.workflows.simulate.SimulateOptions.types": call(),
@@ -827,6 +795,18 @@ SLOW: frozenset[str] = frozenset(
         "imageform.simulate.simulate",
         "imageform.simulate.render_scene",
         "imageform.report.figures_color.plot_patch_chromaticity",
+        # seconds per call (a bundle adjustment, RANSAC, LSD, a sparse NMF, a Dask graph or a
+        # whole workflow): fuzzed by the full run only
+        "imageform.geometry.stereo_calibrate",
+        "imageform.geometry.calibrate_camera",
+        "imageform.geometry.lsd.lsd_segments",
+        "imageform.geometry.find_essential_matrix",
+        "imageform.geometry.find_fundamental_matrix",
+        "imageform.geometry.find_homography",
+        "imageform.geometry.solve_pnp_ransac",
+        "imageform.analysis.vahadane_stains",
+        "imageform.batch.process_chunked",
+        "imageform.workflows.execute",
     }
 )
 
@@ -986,6 +966,317 @@ VALID.update(
         ),
         "imageform.workflows.vanishing.VanishingOptions.paths": method(
             VALID["imageform.workflows.vanishing.VanishingOptions"], kind="linear"
+        ),
+    }
+)
+
+# names added after the first table (two-view geometry, LSD, stereo, Zernike PSF, stain and CCT methods, workflows)
+VALID.update(
+    {
+        "imageform.workflows.analysis.FitCorrectionOptions": call(),
+        "imageform.workflows.analysis.HarmonizeOptions": call(correction=V("correction_json")),
+        "imageform.workflows.analysis.SegmentOptions": call(),
+        "imageform.workflows.analysis.StainNormalizeOptions": call(target=V("png_file")),
+        "imageform.workflows.sensor.DemosaicOptions": call(),
+        "imageform.workflows.sensor.MosaicOptions": call(),
+        "imageform.workflows.stereo.StereoCalibrateOptions": call(board="9x6"),
+        "imageform.workflows.analysis.FitCorrectionOptions.fields": call(),
+        "imageform.workflows.analysis.FitCorrectionOptions.types": call(),
+        "imageform.workflows.analysis.HarmonizeOptions.fields": call(),
+        "imageform.workflows.analysis.HarmonizeOptions.types": call(),
+        "imageform.workflows.analysis.SegmentOptions.fields": call(),
+        "imageform.workflows.analysis.SegmentOptions.types": call(),
+        "imageform.workflows.analysis.StainNormalizeOptions.fields": call(),
+        "imageform.workflows.analysis.StainNormalizeOptions.types": call(),
+        "imageform.workflows.sensor.DemosaicOptions.fields": call(),
+        "imageform.workflows.sensor.DemosaicOptions.types": call(),
+        "imageform.workflows.sensor.MosaicOptions.fields": call(),
+        "imageform.workflows.sensor.MosaicOptions.types": call(),
+        "imageform.workflows.stereo.StereoCalibrateOptions.fields": call(),
+        "imageform.workflows.stereo.StereoCalibrateOptions.types": call(),
+        "imageform.analysis.background_intensity": call(image=V("rgb")),
+        "imageform.analysis.synthetic_he_tile": call((32, 32)),
+        "imageform.analysis.vahadane_stains": call(image=V("stain"), iterations=20, max_pixels=500),
+        "imageform.batch.batch_options": call("white_balance", {}),
+        "imageform.batch.batch_workflow": call("white_balance"),
+        "imageform.color.cct_methods.cct_to_uv_ohno2013": call(cct=5000.0, duv=0.002),
+        "imageform.color.cct_methods.planckian_uv": call(cct=5000.0),
+        "imageform.color.cct_methods.uv_to_cct_ohno2013": call(
+            uv=np.array([[0.2105, 0.3226], [0.2, 0.31]])
+        ),
+        "imageform.color.cct_methods.xy_to_cct_hernandez1999": call(xy=V("xy")),
+        "imageform.color.cct_methods.xy_to_cct_mccamy1992": call(xy=V("xy")),
+        "imageform.geometry.EssentialResult": Skip(
+            "a result NamedTuple (no validation of its own)"
+        ),
+        "imageform.geometry.FundamentalResult": Skip(
+            "a result NamedTuple (no validation of its own)"
+        ),
+        "imageform.geometry.HomographyResult": Skip(
+            "a result NamedTuple (no validation of its own)"
+        ),
+        "imageform.geometry.RelativePose": Skip("a result NamedTuple (no validation of its own)"),
+        "imageform.geometry.StereoRectification": Skip(
+            "a result NamedTuple (no validation of its own)"
+        ),
+        "imageform.geometry.TwoViewPoints": Skip("a result NamedTuple (no validation of its own)"),
+        "imageform.geometry.StereoCalibrationResult": Skip(
+            "a result dataclass built by stereo_calibrate (its method is fuzzed on a fixture)"
+        ),
+        "imageform.geometry.StereoCalibrationResult.rectify": method(V("stereo_result"), alpha=0.0),
+        "imageform.geometry.essential_5point": call(V("pts1_5"), V("pts2_5")),
+        "imageform.geometry.find_essential_matrix": call(V("pts1"), V("pts2"), V("K")),
+        "imageform.geometry.find_fundamental_matrix": call(V("pts1"), V("pts2")),
+        "imageform.geometry.find_homography": call(
+            V("uv"), np.array([[3.1, 4.2], [5.3, 6.4], [8.6, 3.1], [10.25, 7.5], [4.0, 9.0]])[:4]
+        ),
+        "imageform.geometry.fundamental_7point": call(V("pts1_7"), V("pts2_7")),
+        "imageform.geometry.fundamental_8point": call(V("pts1"), V("pts2")),
+        "imageform.geometry.lsd.lsd_segments": call(V("gray")),
+        "imageform.geometry.recover_pose": call(V("E"), V("pts1"), V("pts2"), V("K")),
+        "imageform.geometry.rectification_map": call(V("K"), V("brown"), V("R"), V("P"), (8, 6)),
+        "imageform.geometry.solve_pnp_batch": call(V("points3"), V("points3_uv"), V("K")),
+        "imageform.geometry.stereo_calibrate": call(
+            V("stereo_objs"), V("stereo_left"), V("stereo_right"), (640, 480)
+        ),
+        "imageform.geometry.stereo_rectify": call(
+            V("K"), V("brown"), V("K"), V("brown"), (8, 6), V("R"), np.array([-0.1, 0.0, 0.0])
+        ),
+        "imageform.geometry.triangulate_two_view": call(V("P"), V("P2"), V("pts1"), V("pts2")),
+        "imageform.io.StereoCameraFile": Skip(
+            "a file record built by StereoCameraFile.from_calibration or read_stereo_camera (fuzzed there)"
+        ),
+        "imageform.io.StereoCameraFile.from_calibration": call(V("stereo_result")),
+        "imageform.io.read_stereo_camera": call(V("stereo_file")),
+        "imageform.io.write_stereo_camera": call(V("tmpfile_toml"), V("stereo_file_obj")),
+        "imageform.optics.TransferFunction": Skip("a result NamedTuple (no validation of its own)"),
+        "imageform.optics.diffraction_limited_mtf": call(
+            np.array([0.0, 50.0, 200.0]), wavelength=550e-9, f_number=4.0
+        ),
+        "imageform.optics.diffraction_psf": call(
+            wavelength=550e-9, f_number=4.0, pixel_pitch=2e-6, size=16, n_pupil=64
+        ),
+        "imageform.optics.field_psfs": call(
+            np.array([[[0.0, 0.0, 0.0, 0.05], [0.0, 0.0, 0.0, 0.1]]]),
+            wavelength=550e-9,
+            f_number=4.0,
+            pixel_pitch=2e-6,
+            size=16,
+            n_pupil=64,
+        ),
+        "imageform.optics.mtf": call(V("psf"), pixel_pitch=2e-6),
+        "imageform.optics.noll_to_nm": call(4),
+        "imageform.optics.otf": call(V("psf"), pixel_pitch=2e-6),
+        "imageform.optics.pixel_mtf": call(np.array([0.0, 50.0, 200.0]), pixel_pitch=2e-6),
+        "imageform.optics.polychromatic_psf": call(
+            wavelengths=np.array([450e-9, 550e-9, 650e-9]),
+            f_number=4.0,
+            pixel_pitch=2e-6,
+            size=16,
+            n_pupil=64,
+        ),
+        "imageform.optics.psf_from_pupil": call(np.ones((16, 16), dtype=complex), pad_to=32),
+        "imageform.optics.pupil_function": call(
+            np.array([0.0, 0.0, 0.0, 0.05]), wavelength=550e-9, n_samples=32
+        ),
+        "imageform.optics.zernike": call(4, np.array([0.0, 0.5, 1.0]), np.array([0.0, 1.0, 2.0])),
+        "imageform.optics.zernike_defocus": call(3e-5, f_number=4.0),
+        "imageform.optics.zernike_radial": call(2, 0, np.array([0.0, 0.5, 1.0])),
+        "imageform.optics.zernike_wavefront": call(
+            np.array([0.0, 0.0, 0.0, 0.1]), np.array([0.0, 0.5, 1.0]), np.array([0.0, 1.0, 2.0])
+        ),
+        "imageform.simulate.stages.diffraction_blur": call(
+            V("rgb"), f_number=4.0, pixel_pitch=2e-6
+        ),
+        "imageform.simulate.stages.diffraction_psf_kernel": call(
+            (450e-9, 550e-9, 650e-9), f_number=4.0, pixel_pitch=2e-6
+        ),
+        "imageform.analysis.ColorCorrection.from_json": call(V("correction_json")),
+        "imageform.analysis.MacenkoStains.from_json": call(V("macenko_json")),
+        "imageform.analysis.ReinhardStats.from_json": call(V("reinhard_json")),
+    }
+)
+
+# their methods
+VALID.update(
+    {
+        "imageform.workflows.analysis.FitCorrectionOptions.check": method(
+            VALID["imageform.workflows.analysis.FitCorrectionOptions"]
+        ),
+        "imageform.workflows.analysis.FitCorrectionOptions.check_output": method(
+            VALID["imageform.workflows.analysis.FitCorrectionOptions"], V("tmpfile_png")
+        ),
+        "imageform.workflows.analysis.FitCorrectionOptions.paths": method(
+            VALID["imageform.workflows.analysis.FitCorrectionOptions"], "output"
+        ),
+        "imageform.workflows.analysis.HarmonizeOptions.check": method(
+            VALID["imageform.workflows.analysis.HarmonizeOptions"]
+        ),
+        "imageform.workflows.analysis.HarmonizeOptions.check_output": method(
+            VALID["imageform.workflows.analysis.HarmonizeOptions"], V("tmpfile_png")
+        ),
+        "imageform.workflows.analysis.HarmonizeOptions.paths": method(
+            VALID["imageform.workflows.analysis.HarmonizeOptions"], "output"
+        ),
+        "imageform.workflows.analysis.SegmentOptions.check": method(
+            VALID["imageform.workflows.analysis.SegmentOptions"]
+        ),
+        "imageform.workflows.analysis.SegmentOptions.check_output": method(
+            VALID["imageform.workflows.analysis.SegmentOptions"], V("tmpfile_png")
+        ),
+        "imageform.workflows.analysis.SegmentOptions.paths": method(
+            VALID["imageform.workflows.analysis.SegmentOptions"], "output"
+        ),
+        "imageform.workflows.analysis.StainNormalizeOptions.check": method(
+            VALID["imageform.workflows.analysis.StainNormalizeOptions"]
+        ),
+        "imageform.workflows.analysis.StainNormalizeOptions.check_output": method(
+            VALID["imageform.workflows.analysis.StainNormalizeOptions"], V("tmpfile_png")
+        ),
+        "imageform.workflows.analysis.StainNormalizeOptions.paths": method(
+            VALID["imageform.workflows.analysis.StainNormalizeOptions"], "output"
+        ),
+        "imageform.workflows.sensor.DemosaicOptions.check": method(
+            VALID["imageform.workflows.sensor.DemosaicOptions"]
+        ),
+        "imageform.workflows.sensor.DemosaicOptions.check_output": method(
+            VALID["imageform.workflows.sensor.DemosaicOptions"], V("tmpfile_png")
+        ),
+        "imageform.workflows.sensor.DemosaicOptions.paths": method(
+            VALID["imageform.workflows.sensor.DemosaicOptions"], "output"
+        ),
+        "imageform.workflows.sensor.MosaicOptions.check": method(
+            VALID["imageform.workflows.sensor.MosaicOptions"]
+        ),
+        "imageform.workflows.sensor.MosaicOptions.check_output": method(
+            VALID["imageform.workflows.sensor.MosaicOptions"], V("tmpfile_png")
+        ),
+        "imageform.workflows.sensor.MosaicOptions.paths": method(
+            VALID["imageform.workflows.sensor.MosaicOptions"], "output"
+        ),
+        "imageform.workflows.stereo.StereoCalibrateOptions.check": method(
+            VALID["imageform.workflows.stereo.StereoCalibrateOptions"]
+        ),
+        "imageform.workflows.stereo.StereoCalibrateOptions.check_output": method(
+            VALID["imageform.workflows.stereo.StereoCalibrateOptions"], V("tmpfile_png")
+        ),
+        "imageform.workflows.stereo.StereoCalibrateOptions.paths": method(
+            VALID["imageform.workflows.stereo.StereoCalibrateOptions"], "output"
+        ),
+        "imageform.workflows.stereo.StereoCalibrateOptions.square_mm": method(
+            VALID["imageform.workflows.stereo.StereoCalibrateOptions"]
+        ),
+        "imageform.workflows.Options.check_output": method(
+            VALID["imageform.workflows.Options"], V("tmpfile_png")
+        ),
+        "imageform.workflows.calibration.CalibrateOptions.check_output": method(
+            VALID["imageform.workflows.calibration.CalibrateOptions"], V("tmpfile_png")
+        ),
+        "imageform.workflows.calibration.UndistortOptions.check_output": method(
+            VALID["imageform.workflows.calibration.UndistortOptions"], V("tmpfile_png")
+        ),
+        "imageform.workflows.color.ConvertOptions.check_output": method(
+            VALID["imageform.workflows.color.ConvertOptions"], V("tmpfile_png")
+        ),
+        "imageform.workflows.color.CvdOptions.check_output": method(
+            VALID["imageform.workflows.color.CvdOptions"], V("tmpfile_png")
+        ),
+        "imageform.workflows.color.DeltaEOptions.check_output": method(
+            VALID["imageform.workflows.color.DeltaEOptions"], V("tmpfile_png")
+        ),
+        "imageform.workflows.color.GamutOptions.check_output": method(
+            VALID["imageform.workflows.color.GamutOptions"], V("tmpfile_png")
+        ),
+        "imageform.workflows.color.PaletteCheckOptions.check_output": method(
+            VALID["imageform.workflows.color.PaletteCheckOptions"], V("tmpfile_png")
+        ),
+        "imageform.workflows.color.WhiteBalanceOptions.check_output": method(
+            VALID["imageform.workflows.color.WhiteBalanceOptions"], V("tmpfile_png")
+        ),
+        "imageform.workflows.geometry.PoseOptions.check_output": method(
+            VALID["imageform.workflows.geometry.PoseOptions"], V("tmpfile_png")
+        ),
+        "imageform.workflows.geometry.ProjectOptions.check_output": method(
+            VALID["imageform.workflows.geometry.ProjectOptions"], V("tmpfile_png")
+        ),
+        "imageform.workflows.geometry.TriangulateOptions.check_output": method(
+            VALID["imageform.workflows.geometry.TriangulateOptions"], V("tmpfile_png")
+        ),
+        "imageform.workflows.lecture.LectureOptions.check_output": method(
+            VALID["imageform.workflows.lecture.LectureOptions"], V("tmpfile_png")
+        ),
+        "imageform.workflows.optics.LensOptions.check_output": method(
+            VALID["imageform.workflows.optics.LensOptions"], V("tmpfile_png")
+        ),
+        "imageform.workflows.simulate.SimulateOptions.check_output": method(
+            VALID["imageform.workflows.simulate.SimulateOptions"], V("tmpfile_png")
+        ),
+        "imageform.workflows.vanishing.VanishingOptions.check_output": method(
+            VALID["imageform.workflows.vanishing.VanishingOptions"], V("tmpfile_png")
+        ),
+    }
+)
+
+# methods of classes whose entry is above
+VALID.update(
+    {
+        "imageform.color.GamutFigures.as_dict": method(VALID["imageform.color.GamutFigures"]),
+        "imageform.color.RGBSpace.matrix_to_xyz": method(VALID["imageform.color.RGBSpace"]),
+        "imageform.geometry.CheckerboardResult.grid": method(
+            VALID["imageform.geometry.CheckerboardResult"]
+        ),
+        "imageform.geometry.ConeBeamGeometry.penumbra": method(
+            VALID["imageform.geometry.ConeBeamGeometry"], 1e-3
+        ),
+        "imageform.geometry.ConeBeamGeometry.project": method(
+            VALID["imageform.geometry.ConeBeamGeometry"],
+            np.array([[0.0, 0.0, 0.5], [0.01, 0.02, 0.6]]),
+        ),
+        "imageform.sensor.SensorModel.capture": method(
+            VALID["imageform.sensor.SensorModel"],
+            np.full((6, 8, 1), 100.0),
+            exposure_time=0.01,
+            rng=0,
+        ),
+        "imageform.sensor.SensorModel.mean_electrons": method(
+            VALID["imageform.sensor.SensorModel"], np.full((6, 8, 1), 100.0), exposure_time=0.01
+        ),
+        "imageform.sensor.SensorModel.normalise": method(
+            VALID["imageform.sensor.SensorModel"], np.full((6, 8), 300.0)
+        ),
+        "imageform.sensor.SensorModel.normalize": method(
+            VALID["imageform.sensor.SensorModel"], np.full((6, 8), 300.0)
+        ),
+        "imageform.workflows.Run.file": Skip(
+            "needs a Run inside execute (its outputs object): fuzzed through execute"
+        ),
+        "imageform.workflows.Run.folder": Skip(
+            "needs a Run inside execute (its outputs object): fuzzed through execute"
+        ),
+        "imageform.workflows.Run.note": method(VALID["imageform.workflows.Run"], text="a note"),
+        "imageform.workflows.calibration.CalibrateOptions.check": method(
+            VALID["imageform.workflows.calibration.CalibrateOptions"]
+        ),
+        "imageform.workflows.calibration.CalibrateOptions.paths": method(
+            VALID["imageform.workflows.calibration.CalibrateOptions"], "output"
+        ),
+        "imageform.workflows.calibration.CalibrateOptions.square_mm": method(
+            VALID["imageform.workflows.calibration.CalibrateOptions"]
+        ),
+        "imageform.workflows.geometry.ProjectOptions.check": method(
+            VALID["imageform.workflows.geometry.ProjectOptions"]
+        ),
+        "imageform.workflows.geometry.ProjectOptions.paths": method(
+            VALID["imageform.workflows.geometry.ProjectOptions"], "output"
+        ),
+        "imageform.workflows.optics.LensOptions.check": method(
+            VALID["imageform.workflows.optics.LensOptions"]
+        ),
+        "imageform.workflows.optics.LensOptions.lengths": method(
+            VALID["imageform.workflows.optics.LensOptions"]
+        ),
+        "imageform.workflows.optics.LensOptions.paths": method(
+            VALID["imageform.workflows.optics.LensOptions"], "output"
         ),
     }
 )

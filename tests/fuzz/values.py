@@ -10,6 +10,7 @@ from __future__ import annotations
 import copy
 import os
 import tempfile
+import warnings
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -84,6 +85,7 @@ def _segments() -> Any:
     from imageform.geometry import LineSegments
 
     ends = np.array([[0.0, 0.0, 10.0, 1.0], [0.0, 5.0, 10.0, 4.0], [2.0, 0.0, 3.0, 10.0]])
+    ends = ends.reshape(3, 2, 2)
     return LineSegments(ends, np.ones(3), -np.ones(3))
 
 
@@ -96,7 +98,9 @@ def _scene() -> Any:
 def _result() -> Any:
     from imageform.simulate import simulate
 
-    return simulate(_scene(), rng=0)
+    with warnings.catch_warnings():  # a noiseless 64-px scene: infinite patch SNR, expected
+        warnings.simplefilter("ignore")
+        return simulate(_scene(), rng=0)
 
 
 def _tmpdir() -> Path:
@@ -137,11 +141,186 @@ def _png_file() -> Path:
     return path
 
 
+def _tiff_file() -> Path:
+    import tifffile
+
+    path = _tmpdir() / "in.tif"
+    tifffile.imwrite(
+        path, (_rng().uniform(0.05, 0.95, (32, 32, 3)) * 255).astype(np.uint8), tile=(16, 16)
+    )
+    return path
+
+
+def _job_result() -> Any:
+    from imageform.batch import JobResult
+
+    return JobResult(Path("in.png"), Path("out.png"), "ok", metrics={"gains": [1.0, 1.0, 1.0]})
+
+
+def _batch_report() -> Any:
+    from imageform.batch import BatchReport
+
+    return BatchReport("white_balance", (_job_result(),))
+
+
+def _worked_example() -> Any:
+    from imageform.report.lecture import WorkedExample
+
+    return WorkedExample("optics", "f?", "1/f = 1/a + 1/b", lambda: 0.05, 0.05, unit="m")
+
+
+def _palette_check() -> Any:
+    from imageform.color import palette, palette_check
+
+    return palette_check(palette("okabe_ito"))
+
+
 def _camera_file() -> Path:
     from imageform.io import write_camera
 
     path = _tmpdir() / "camera.toml"
     write_camera(path, _camera())
+    return path
+
+
+def _two_view() -> tuple[np.ndarray, np.ndarray]:
+    """Pixel correspondences of 20 points seen by two cameras ``K`` (second at R, t)."""
+    from imageform.geometry.rotations import rvec_to_matrix
+
+    g = _rng()
+    X = np.column_stack([g.uniform(-1, 1, 20), g.uniform(-1, 1, 20), g.uniform(4, 8, 20)])
+    R = np.asarray(rvec_to_matrix([0.02, -0.1, 0.03]))
+    t = np.array([-1.0, 0.05, 0.02])
+    K = _K()
+    a = X @ K.T
+    b = (X @ R.T + t) @ K.T
+    return a[:, :2] / a[:, 2:], b[:, :2] / b[:, 2:]
+
+
+def _P2() -> np.ndarray:
+    """The second camera of :func:`_two_view`: ``K [R | t]``."""
+    from imageform.geometry.rotations import rvec_to_matrix
+
+    R = np.asarray(rvec_to_matrix([0.02, -0.1, 0.03]))
+    return _K() @ np.hstack([R, np.array([[-1.0], [0.05], [0.02]])])
+
+
+def _essential() -> np.ndarray:
+    from imageform.geometry import find_essential_matrix
+
+    p1, p2 = _two_view()
+    return np.asarray(find_essential_matrix(p1, p2, _K()).E)
+
+
+def _stereo_views() -> tuple[list[np.ndarray], list[np.ndarray], list[np.ndarray]]:
+    """(object points, left and right pixels) of 5 noiseless views of a 7x5 board."""
+    from imageform.geometry import BrownConrady, checkerboard_points, project_points_distorted
+    from imageform.geometry.rotations import rvec_to_matrix
+
+    obj = np.asarray(checkerboard_points((7, 5), 25.0))
+    K1 = np.array([[810.0, 0, 322], [0, 805, 238], [0, 0, 1]])
+    K2 = np.array([[790.0, 0, 315], [0, 792, 245], [0, 0, 1]])
+    d = BrownConrady(-0.1, 0.05)
+    R = np.asarray(rvec_to_matrix([0.02, -0.08, 0.01]))
+    T = np.array([-120.0, 2.0, 3.0])
+    objs, left, right = [], [], []
+    for rv in (
+        [0.2, 0.1, 0.0],
+        [-0.2, 0.15, 0.05],
+        [0.1, -0.25, -0.05],
+        [-0.15, -0.1, 0.1],
+        [0.25, 0.2, -0.1],
+    ):
+        Rk = np.asarray(rvec_to_matrix(rv))
+        t = np.array([-60.0, -40.0, 500.0])
+        left.append(np.asarray(project_points_distorted(obj, K1, Rk, t, d)[0]))
+        right.append(np.asarray(project_points_distorted(obj, K2, R @ Rk, R @ t + T, d)[0]))
+        objs.append(obj)
+    return objs, left, right
+
+
+def _stereo_result() -> Any:
+    from imageform.geometry import stereo_calibrate
+
+    objs, left, right = _stereo_views()
+    with warnings.catch_warnings():  # the small board covers a fifth of the frame: fine here
+        warnings.simplefilter("ignore")
+        return stereo_calibrate(objs, left, right, (640, 480))
+
+
+def _stereo_file_obj() -> Any:
+    from imageform.io import StereoCameraFile
+
+    return StereoCameraFile.from_calibration(_stereo_result())
+
+
+def _stereo_file() -> Path:
+    from imageform.io import write_stereo_camera
+
+    path = _tmpdir() / "stereo.toml"
+    write_stereo_camera(path, _stereo_file_obj())
+    return path
+
+
+def _psf() -> np.ndarray:
+    from imageform.optics import diffraction_psf
+
+    return diffraction_psf(wavelength=550e-9, f_number=4.0, pixel_pitch=2e-6, size=16, n_pupil=64)
+
+
+def _json_of(fixture: str) -> Callable[[], Path]:
+    def build() -> Path:
+        path = _tmpdir() / f"{fixture}.json"
+        FIXTURES[fixture]().to_json(path)
+        return path
+
+    return build
+
+
+def _reinhard() -> Any:
+    from imageform.analysis import ReinhardStats
+
+    return ReinhardStats((50.0, 5.0, -5.0), (10.0, 4.0, 4.0), 100)
+
+
+def _macenko() -> Any:
+    from imageform.analysis import MacenkoStains
+
+    return MacenkoStains(np.array([[0.65, 0.70, 0.29], [0.07, 0.99, 0.11]]), np.array([1.5, 1.2]))
+
+
+def _of(name: str, path: str) -> Callable[[], Any]:
+    """A fixture that is an attribute (dotted ``path``; ``[i]`` indexes) of another."""
+
+    def build() -> Any:
+        obj = resolve(V(name))
+        for part in path.split("."):
+            obj = obj[int(part[1:-1])] if part.startswith("[") else getattr(obj, part)
+        return obj
+
+    return build
+
+
+def _scene_object(kind: str) -> Callable[[], Any]:
+    def build() -> Any:
+        return next(o for o in resolve(V("scene")).objects if o.kind == kind)
+
+    return build
+
+
+def _render_output() -> Any:
+    from imageform.simulate.render import render_scene
+
+    return render_scene(resolve(V("scene")))
+
+
+def _calibration() -> Any:
+    return _stereo_result().left
+
+
+def _calibration_toml() -> Path:
+    path = _tmpdir() / "calibration.toml"
+    resolve(V("calibration")).to_toml(path)
     return path
 
 
@@ -185,10 +364,80 @@ FIXTURES: dict[str, Callable[[], Any]] = {
     "tmpfile_png": lambda: _tmpdir() / "out.png",
     "tmpfile_json": lambda: _tmpdir() / "out.json",
     "tmpfile_toml": lambda: _tmpdir() / "out.toml",
+    "pts1": lambda: _two_view()[0],
+    "pts2": lambda: _two_view()[1],
+    "pts1_5": lambda: (_two_view()[0][:5] - [4.0, 3.0]) / 500.0,
+    "pts2_5": lambda: (_two_view()[1][:5] - [4.0, 3.0]) / 500.0,
+    "pts1_7": lambda: _two_view()[0][:7],
+    "pts2_7": lambda: _two_view()[1][:7],
+    "points3_uv": lambda: _points3()[:, :2] / _points3()[:, 2:] * 500.0 + [4.0, 3.0],
+    "P2": _P2,
+    "E": _essential,
+    "stereo_objs": lambda: _stereo_views()[0],
+    "stereo_left": lambda: _stereo_views()[1],
+    "stereo_right": lambda: _stereo_views()[2],
+    "stereo_result": _stereo_result,
+    "stereo_file_obj": _stereo_file_obj,
+    "stereo_file": _stereo_file,
+    "psf": _psf,
+    "reinhard": _reinhard,
+    "macenko": _macenko,
+    "correction_json": _json_of("correction"),
+    "scene_config": _of("scene", "config"),
+    "P_stack": lambda: np.stack([_K() @ np.eye(3, 4), _P2()]),
+    "pts_stack": lambda: np.stack(_two_view()),
+    "png_dir": lambda: _png_file().parent,
+    "job_result": _job_result,
+    "batch_report": _batch_report,
+    "worked_example": _worked_example,
+    "tiff_file": _tiff_file,
+    "tmpfile_tif": lambda: _tmpdir() / "out.tif",
+    "png_glob": lambda: str(_png_file().parent / "*.png"),
+    "png_file_str": lambda: str(_png_file()),
+    "palette_check": _palette_check,
+    "workflow": lambda: __import__("imageform.workflows", fromlist=["x"]).get_workflow(
+        "white_balance"
+    ),
+    "encoded": lambda: __import__("imageform.simulate.stages", fromlist=["x"]).Encoded(
+        image=_rgb(), transfer="srgb"
+    ),
+    "lens_config": _of("scene", "config.lens"),
+    "sensor_config": _of("scene", "config.sensor"),
+    "camera_config": _of("scene", "config.camera"),
+    "colorchecker_obj": _scene_object("colorchecker"),
+    "ground_obj": _scene_object("ground"),
+    "render_output": _render_output,
+    "photon_data": _of("result", "photon_transfer"),
+    "patch_measurements": _of("result", "patches"),
+    "cc_truth": _of("result", "colorchecker"),
+    "vanishing_truth": _of("result", "vanishing"),
+    "stage": _of("result", "stages.[0]"),
+    "calibration": _calibration,
+    "calibration_toml": _calibration_toml,
+    "reinhard_json": _json_of("reinhard"),
+    "macenko_json": _json_of("macenko"),
 }
 
 _CACHE: dict[str, Any] = {}
-_FRESH = {"tmpdir", "tmpfile_png", "tmpfile_json", "tmpfile_toml", "png_file", "camera_file"}
+_FRESH = {
+    "tmpdir",
+    "tmpfile_png",
+    "tmpfile_json",
+    "tmpfile_toml",
+    "png_file",
+    "camera_file",
+    "stereo_file",
+    "stereo_file_obj",
+    "png_dir",
+    "tiff_file",
+    "tmpfile_tif",
+    "png_glob",
+    "png_file_str",
+    "calibration_toml",
+    "correction_json",
+    "reinhard_json",
+    "macenko_json",
+}
 
 
 def resolve(value: Any) -> Any:

@@ -227,7 +227,12 @@ class ChartPatches:
         """``means`` and ``std`` of shape (N, 3), the flags booleans of shape (N,)."""
         means = real_array(self.means, "means", (None, 3), finite=False)
         n = means.shape[0]
-        std = real_array(self.std, "std", (n, 3), finite=False)
+        std = real_array(self.std, "std", (None, 3), finite=False)
+        if std.shape[0] != n:
+            raise InvalidInputError(
+                f"expected means and std with the same number of patches, got {n} and "
+                f"{std.shape[0]}"
+            )
         object.__setattr__(self, "means", means)
         object.__setattr__(self, "std", std)
         for name in ("saturated", "missing"):

@@ -17,8 +17,9 @@ import numpy as np
 
 from imageform._backend import use_numba
 from imageform._colormath import rgb_to_hsv
-from imageform._validate import as_real, describe, format_shape
+from imageform._validate import as_int, as_real, check_memory, describe, format_shape
 from imageform.analysis._arrays import image_in, is_dask
+from imageform.analysis._guard import real_triple
 from imageform.errors import DegenerateConfigurationError, ImageformWarning, InvalidInputError
 
 __all__ = [
@@ -77,7 +78,13 @@ def disc(radius: int) -> np.ndarray:
     >>> disc(1).astype(int).tolist()
     [[0, 1, 0], [1, 1, 1], [0, 1, 0]]
     """
-    r = int(radius)
+    return _disc(as_int(radius, "radius", minimum=0), "radius")
+
+
+def _disc(r: int, name: str) -> np.ndarray:
+    """:func:`disc` of a checked radius; refuses (naming ``name``) one that cannot fit."""
+    # the int grids of np.mgrid (2 x 8 bytes) and the boolean result, per element
+    check_memory(float(2 * r + 1) ** 2 * 17, name, f"a disc of radius {r}")
     y, x = np.mgrid[-r : r + 1, -r : r + 1]
     return np.asarray(x * x + y * y <= r * r)
 
@@ -123,10 +130,10 @@ def _clean(mask: np.ndarray, open_radius: int, close_radius: int, min_area: int)
 
     out = mask
     if open_radius > 0:
-        d = disc(open_radius)
+        d = _disc(open_radius, "open_radius")
         out = ndimage.binary_dilation(ndimage.binary_erosion(out, d, border_value=1), d)
     if close_radius > 0:
-        d = disc(close_radius)
+        d = _disc(close_radius, "close_radius")
         out = ndimage.binary_erosion(ndimage.binary_dilation(out, d), d, border_value=1)
     if min_area > 1 and out.any():
         labels, n = ndimage.label(out, structure=np.ones((3, 3), dtype=bool))
@@ -238,6 +245,8 @@ def segment_hsv(
             raise InvalidInputError(f"expected {name} as an integer >= 0, got {val!r}")
         radii.append(int(val))
     ro, rc, area = radii
+    for name, r in (("open_radius", ro), ("close_radius", rc)):
+        check_memory(float(2 * r + 1) ** 2 * 17, name, f"a disc of radius {r}")
     if is_dask(rgb):
         raw = rgb.map_blocks(_threshold, hh, ss, vv, drop_axis=2, dtype=bool)
         depth = 2 * ro + 2 * rc + area
@@ -312,12 +321,12 @@ def overlay_mask(
         raise InvalidInputError(
             f"expected mask of shape {format_shape(rgb.shape[:-1])}, got {format_shape(m.shape)}"
         )
-    a = float(alpha)
+    a = as_real(alpha, "alpha")
     if not 0.0 <= a <= 1.0:
-        raise InvalidInputError(f"expected alpha in [0, 1], got {alpha!r}")
-    c = np.asarray(color, dtype=rgb.dtype)
-    if c.shape != (3,) or not np.all((c >= 0) & (c <= 1)):
-        raise InvalidInputError(f"expected color as 3 values in [0, 1], got {color!r}")
+        raise InvalidInputError(f"expected alpha in [0, 1], got {a:g}")
+    c = np.asarray(real_triple(color, "color"), dtype=rgb.dtype)
+    if not np.all((c >= 0) & (c <= 1)):
+        raise InvalidInputError(f"expected color as 3 values in [0, 1], got {describe(color)}")
     w = m[..., None].astype(rgb.dtype) * rgb.dtype.type(a)
     return rgb * (1 - w) + w * c
 
@@ -337,7 +346,7 @@ def mask_iou(a: object, b: object) -> float:
     ma, mb = _mask_in(a, "a"), _mask_in(b, "b")
     if tuple(ma.shape) != tuple(mb.shape):
         raise InvalidInputError(
-            f"expected masks of the same shape, got {format_shape(ma.shape)} and "
+            f"expected masks a and b of the same shape, got {format_shape(ma.shape)} and "
             f"{format_shape(mb.shape)}"
         )
     inter = (ma & mb).sum()

@@ -17,7 +17,8 @@ import numpy as np
 from imageform import _deprecate
 from imageform._colormath import hsv_to_rgb, srgb_decode, srgb_encode
 from imageform._random import RNGLike, as_rng
-from imageform._validate import as_float, as_int, as_real, as_size, check_memory
+from imageform._validate import as_float, as_int, as_real, as_reals, as_size, check_memory
+from imageform.analysis._guard import real_array
 from imageform.errors import InvalidInputError
 
 __all__ = [
@@ -250,13 +251,23 @@ def synthetic_he_tile(
     """
     from scipy import ndimage
 
+    hgt, wid = _shape(shape)
+    s = real_array(stains, "stains", (2, 3))
+    norms = np.linalg.norm(s, axis=1, keepdims=True)
+    if not np.all(norms > 0):
+        raise InvalidInputError("expected stains as two non-zero (3,) stain vectors")
+    mh, me = as_reals(max_concentration, "max_concentration", 2)
+    if mh < 0 or me < 0:
+        raise InvalidInputError(f"expected max_concentration >= 0, got ({mh:g}, {me:g})")
+    background = as_real(background, "background", minimum=0.0, maximum=1.0)
+    nuclei = as_real(nuclei, "nuclei", minimum=0.0, maximum=1.0)
+    i0 = as_real(i0, "i0", positive=True)
+    blur = as_real(blur, "blur", nonnegative=True, maximum=float(max(hgt, wid)))
+    noise = as_real(noise, "noise", nonnegative=True)
     gen = as_rng(rng)
-    s = np.asarray(stains, dtype=np.float64)
-    s = s / np.linalg.norm(s, axis=1, keepdims=True)
-    hgt, wid = shape
+    s = s / norms
     field = _smooth_noise(gen, (hgt, wid), max(hgt, wid) / 10.0)
     tissue = field > np.quantile(field, float(background))
-    mh, me = (float(v) for v in max_concentration)
     c = np.zeros((hgt, wid, 2))
     eos = 0.5 + 0.5 * _smooth_noise(gen, (hgt, wid), 4.0)  # 0..1
     c[..., 1] = me * (0.15 + 0.7 * eos) * tissue
@@ -334,6 +345,7 @@ def synthetic_stain_image(
     s = s / np.linalg.norm(s, axis=1, keepdims=True)
     hgt, wid = _shape(shape)
     shape = (hgt, wid)
+    noise = as_real(noise, "noise", nonnegative=True)
     kind = gen.choice(4, size=(hgt, wid), p=[1 / 3, 1 / 3, 1 / 4, 1 - 1 / 3 - 1 / 3 - 1 / 4])
     c = gen.uniform(0.15, 1.0, (hgt, wid, 2)) * np.asarray(max_concentration)
     c[kind == 0, 1] = 0.0
@@ -429,7 +441,7 @@ def synthetic_shading_scene(
     bg = np.array([0.62, 0.66, 0.3])
     enc = np.where(truth[..., None], red, bg) + 0.02 * _smooth_noise(gen, shape, 3.0)[..., None]
     lin = srgb_decode(np, np.clip(enc, 0, 1))
-    if isinstance(shading, str | bytes) or len(shading) != 2:
+    if isinstance(shading, str | bytes) or not hasattr(shading, "__len__") or len(shading) != 2:
         raise InvalidInputError(f"expected shading as 2 numbers, got {shading!r:.60}")
     lo, hi = (as_real(v, "shading", nonnegative=True) for v in shading)
     ramp = np.linspace(lo, hi, wid)[None, :, None]

@@ -22,6 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from imageform._validate import as_real, as_reals, describe
 from imageform.errors import InvalidInputError
 from imageform.geometry.camera import Camera
 from imageform.sensor.emva import PhotonTransferData
@@ -149,10 +150,25 @@ def diffraction_psf_kernel(
     """
     from imageform.optics import polychromatic_psf
 
+    wavelengths = as_reals(wavelengths, "wavelengths (m)", positive=True)
+    f_number = as_real(f_number, "f_number", positive=True)
+    pixel_pitch = as_real(pixel_pitch, "pixel_pitch (m)", positive=True)
     lam_n = max(wavelengths) * f_number
+    fine_ratio = pixel_pitch / (min(wavelengths) * f_number)
+    if not (fine_ratio < 1e4 and lam_n / pixel_pitch < 1e4):
+        raise InvalidInputError(
+            f"f_number {f_number:g} and pixel_pitch {pixel_pitch:g} m give a diffraction kernel "
+            f"of more than 16384 samples for wavelengths {min(wavelengths):g}.."
+            f"{max(wavelengths):g} m"
+        )
     k = max(3, 2 * math.ceil(2 * pixel_pitch / (2 * min(wavelengths) * f_number) + 0.5) + 1)
     half = max(1, math.ceil(10 * lam_n / pixel_pitch))  # ~98 % of the light
     n = 2 * half + 1
+    if n * k > 16384:
+        raise InvalidInputError(
+            f"f_number {f_number:g} and pixel_pitch {pixel_pitch:g} m give a diffraction kernel "
+            f"of {n * k} samples (at most 16384)"
+        )
     fine = polychromatic_psf(
         wavelengths=list(wavelengths),
         f_number=f_number,
@@ -173,6 +189,8 @@ def diffraction_blur(image: np.ndarray, *, f_number: float, pixel_pitch: float) 
     """
     from scipy.signal import fftconvolve
 
+    if not isinstance(image, np.ndarray) or image.ndim != 3 or image.shape[2] != 3:
+        raise InvalidInputError(f"expected image as an (H, W, 3) array, got {describe(image)}")
     out = np.empty_like(image)
     for ch, band in enumerate(reversed(DIFFRACTION_BANDS)):  # R, G, B
         kernel = diffraction_psf_kernel(band, f_number=f_number, pixel_pitch=pixel_pitch)
