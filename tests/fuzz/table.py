@@ -1280,3 +1280,67 @@ VALID.update(
         ),
     }
 )
+
+
+# Names added by the last merges (sharpness, raw files, the report's JPEG displays).
+def _edge() -> np.ndarray:
+    from imageform.analysis import render_slanted_edge
+
+    return np.asarray(render_slanted_edge((64, 48), angle=5.0, sigma=0.8))
+
+
+VALID.update(
+    {
+        "imageform.analysis.render_slanted_edge": call((64, 48), angle=5.0, sigma=0.8),
+        "imageform.analysis.slanted_edge_sfr": call(_edge()),
+        "imageform.analysis.render_sfr_chart": call((120, 160), grid=(1, 2), angle=5.0),
+        "imageform.analysis.find_slanted_edges": call(np.full((64, 64), 0.8)),
+        "imageform.analysis.mtf_crossing": call(
+            np.linspace(0.0, 1.0, 11), np.linspace(1.0, 0.0, 11), 0.5
+        ),
+        "imageform.analysis.SFRResult": Skip("a result dataclass built by slanted_edge_sfr"),
+        "imageform.analysis.SFRResult.channel": Skip("a method of a result dataclass"),
+        "imageform.analysis.SlantedEdgeROI": Skip("a result dataclass built by find_slanted_edges"),
+        "imageform.analysis.SlantedEdgeROI.crop": Skip("a method of a result dataclass"),
+        "imageform.io.Development": Skip("a result dataclass built by develop"),
+        "imageform.io.Development.to_integer": Skip("a method of a result dataclass"),
+        "imageform.io.RawImage": Skip("a result dataclass built by read_raw"),
+        "imageform.io.develop": Skip("needs a raw file and the raw extra (tests/io/test_raw.py)"),
+        "imageform.io.read_raw": Skip("needs a raw file and the raw extra (tests/io/test_raw.py)"),
+        "imageform.io.write_dng": Skip("writes a file; its checks: tests/io/test_raw.py"),
+        "imageform.report.html_parts.page_jpeg": call(np.full((6, 8, 3), 128, dtype=np.uint8)),
+        "imageform.simulate.simulated_color_matrix": Skip("takes a whole SimulationResult"),
+        "imageform.simulate.write_simulated_dng": Skip("takes a whole SimulationResult"),
+        "imageform.workflows.raw.DevelopOptions": call(),
+        "imageform.workflows.raw.DevelopOptions.fields": call(),
+        "imageform.workflows.raw.DevelopOptions.types": call(),
+        "imageform.workflows.sharpness.SfrOptions": call(),
+        "imageform.workflows.sharpness.SfrOptions.fields": call(),
+        "imageform.workflows.sharpness.SfrOptions.types": call(),
+    }
+)
+VALID.update(
+    {
+        "imageform.workflows.raw.DevelopOptions.check": method(
+            VALID["imageform.workflows.raw.DevelopOptions"]
+        ),
+        "imageform.workflows.raw.DevelopOptions.check_output": method(
+            VALID["imageform.workflows.raw.DevelopOptions"], V("tmpfile_png")
+        ),
+        "imageform.workflows.raw.DevelopOptions.paths": method(
+            VALID["imageform.workflows.raw.DevelopOptions"], "output"
+        ),
+        "imageform.workflows.sharpness.SfrOptions.check": method(
+            VALID["imageform.workflows.sharpness.SfrOptions"]
+        ),
+        "imageform.workflows.sharpness.SfrOptions.check_output": method(
+            VALID["imageform.workflows.sharpness.SfrOptions"], V("tmpfile_png")
+        ),
+        "imageform.workflows.sharpness.SfrOptions.paths": method(
+            VALID["imageform.workflows.sharpness.SfrOptions"], "output"
+        ),
+        "imageform.workflows.sharpness.SfrOptions.region": method(
+            VALID["imageform.workflows.sharpness.SfrOptions"]
+        ),
+    }
+)
