@@ -264,6 +264,30 @@ def _refine_pose_np(
     return R, t, rms
 
 
+def _pnp_result(
+    R: F64,
+    t: F64,
+    rms: F64,
+    Xf: F64,
+    batch: tuple[int, ...],
+    points_shape: tuple[int, ...],
+    out_dtype: npt.DTypeLike,
+) -> PnPResult:
+    """The flat batch's poses as a :class:`PnPResult` of shape ``batch``: valid where every
+    point is in front of the camera and the RMS is finite; every point an inlier."""
+    depth = np.einsum("bnj,bj->bn", Xf, R[:, 2, :]) + t[:, 2:3]
+    valid = np.all(depth > 0, axis=-1) & np.isfinite(rms)
+    rvec = np.asarray(matrix_to_rvec(R), dtype=np.float64)
+    return PnPResult(
+        rvec.reshape(*batch, 3).astype(out_dtype),
+        t.reshape(*batch, 3).astype(out_dtype),
+        R.reshape(*batch, 3, 3).astype(out_dtype),
+        rms.reshape(batch).astype(out_dtype),
+        valid.reshape(batch),
+        np.ones(points_shape, dtype=bool),
+    )
+
+
 def _validate(
     object_points: Any, image_points: Any, K: Any, distortion: Any
 ) -> tuple[F64, F64, F64, tuple[int, ...], Any]:
@@ -368,14 +392,4 @@ def solve_pnp(
     else:
         r, _ = _residuals(R, t, Xf, uv_ideal, Km)
         rms = np.sqrt(np.mean(np.sum(r * r, -1), -1))
-    depth = np.einsum("bnj,bj->bn", Xf, R[:, 2, :]) + t[:, 2:3]
-    valid = np.all(depth > 0, axis=-1) & np.isfinite(rms)
-    rvec = np.asarray(matrix_to_rvec(R), dtype=np.float64)
-    return PnPResult(
-        rvec.reshape(*batch, 3).astype(out_dtype),
-        t.reshape(*batch, 3).astype(out_dtype),
-        R.reshape(*batch, 3, 3).astype(out_dtype),
-        rms.reshape(batch).astype(out_dtype),
-        valid.reshape(batch),
-        np.ones(X.shape[:-1], dtype=bool),
-    )
+    return _pnp_result(R, t, rms, Xf, batch, X.shape[:-1], out_dtype)

@@ -16,8 +16,7 @@ from imageform._backend import to_numpy
 from imageform._validate import as_bool, as_int, as_matrix, as_points
 from imageform.errors import InvalidInputError
 from imageform.geometry.calibration_refine import rodrigues
-from imageform.geometry.pnp import PnPResult, linear_pose
-from imageform.geometry.rotations import matrix_to_rvec
+from imageform.geometry.pnp import PnPResult, _pnp_result, linear_pose
 
 __all__ = ["solve_pnp_batch"]
 
@@ -188,14 +187,4 @@ def solve_pnp_batch(
     else:
         r, _ = _residuals(R, t, Xf, uvf, Kf)
         rms = np.sqrt(np.mean(np.sum(r * r, -1), -1))
-    depth = np.einsum("bnj,bj->bn", Xf, R[:, 2, :]) + t[:, 2:3]
-    valid = np.all(depth > 0, axis=-1) & np.isfinite(rms)
-    rvec = np.asarray(matrix_to_rvec(R), dtype=np.float64)
-    return PnPResult(
-        rvec.reshape(*batch, 3).astype(out_dtype),
-        t.reshape(*batch, 3).astype(out_dtype),
-        R.reshape(*batch, 3, 3).astype(out_dtype),
-        rms.reshape(batch).astype(out_dtype),
-        valid.reshape(batch),
-        np.ones(X.shape[:-1], dtype=bool),
-    )
+    return _pnp_result(R, t, rms, Xf, batch, X.shape[:-1], out_dtype)
