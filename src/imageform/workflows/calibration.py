@@ -66,11 +66,42 @@ def parse_board(text: str) -> tuple[int, int]:
     return cols, rows
 
 
+class _BoardChecks:
+    """The checks of the options a checkerboard calibration shares (``calibrate`` and
+    ``stereo-calibrate``): the board, the square size, ``--fix`` names, ``--skew``,
+    ``--half-window``. Mixed in before the options' base class; adds no field."""
+
+    board: str
+    square: str
+    fix: tuple[str, ...]
+    skew: bool
+    half_window: int | None
+
+    def check(self) -> None:
+        super().check()  # type: ignore[misc]
+        parse_board(self.board)
+        self.square_mm()
+        fixed = tuple(normalize_choice(f, _PARAMETERS, "--fix") for f in self.fix)
+        object.__setattr__(self, "fix", fixed)
+        if self.skew and "skew" in fixed:
+            raise InvalidInputError("--skew estimates the skew; --fix skew holds it: not both")
+        if self.half_window is not None and not 1 <= self.half_window <= 50:
+            raise InvalidInputError(
+                f"expected --half-window 1 to 50 pixels, got {self.half_window}"
+            )
+
+    def square_mm(self) -> float:
+        """The square size in millimetres."""
+        from imageform._units import parse_length
+
+        return parse_length(self.square, "--square", default_unit="mm", unit="mm")
+
+
 # ---------------------------------------------------------------- calibrate
 
 
 @dataclass(frozen=True, kw_only=True)
-class CalibrateOptions(ImageIn):
+class CalibrateOptions(_BoardChecks, ImageIn):
     """Options of ``imageform calibrate``."""
 
     board: str = option(help="Inner corners COLSxROWS, e.g. 9x6 (not squares).", metavar="CxR")
@@ -98,25 +129,6 @@ class CalibrateOptions(ImageIn):
         metavar="NAME",
     )
     skew: bool = option(False, help="Estimate the skew (default: 0, as OpenCV).")
-
-    def check(self) -> None:
-        super().check()
-        parse_board(self.board)
-        self.square_mm()
-        fixed = tuple(normalize_choice(f, _PARAMETERS, "--fix") for f in self.fix)
-        object.__setattr__(self, "fix", fixed)
-        if self.skew and "skew" in fixed:
-            raise InvalidInputError("--skew estimates the skew; --fix skew holds it: not both")
-        if self.half_window is not None and not 1 <= self.half_window <= 50:
-            raise InvalidInputError(
-                f"expected --half-window 1 to 50 pixels, got {self.half_window}"
-            )
-
-    def square_mm(self) -> float:
-        """The square size in millimetres."""
-        from imageform._units import parse_length
-
-        return parse_length(self.square, "--square", default_unit="mm", unit="mm")
 
 
 def _plot(path: Path, res: Any, names: list[str]) -> None:

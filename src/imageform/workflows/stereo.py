@@ -16,18 +16,15 @@ from imageform.workflows._spec import (
     Result,
     Run,
     Workflow,
-    normalize_choice,
     option,
 )
-from imageform.workflows.calibration import MIN_VIEWS, parse_board
+from imageform.workflows.calibration import MIN_VIEWS, _BoardChecks, parse_board
 
 __all__ = ["WORKFLOWS", "StereoCalibrateOptions"]
 
-_PARAMETERS = ("fx", "fy", "cx", "cy", "skew", "k1", "k2", "p1", "p2", "k3")
-
 
 @dataclass(frozen=True, kw_only=True)
-class StereoCalibrateOptions(ImageIn):
+class StereoCalibrateOptions(_BoardChecks, ImageIn):
     """Options of ``imageform stereo-calibrate``."""
 
     board: str = option(help="Inner corners COLSxROWS, e.g. 9x6 (not squares).", metavar="CxR")
@@ -51,25 +48,6 @@ class StereoCalibrateOptions(ImageIn):
     half_window: int | None = option(
         None, help="Sub-pixel window half size (OpenCV's tutorial: 11); default adaptive."
     )
-
-    def check(self) -> None:
-        super().check()
-        parse_board(self.board)
-        self.square_mm()
-        fixed = tuple(normalize_choice(f, _PARAMETERS, "--fix") for f in self.fix)
-        object.__setattr__(self, "fix", fixed)
-        if self.skew and "skew" in fixed:
-            raise InvalidInputError("--skew estimates the skew; --fix skew holds it: not both")
-        if self.half_window is not None and not 1 <= self.half_window <= 50:
-            raise InvalidInputError(
-                f"expected --half-window 1 to 50 pixels, got {self.half_window}"
-            )
-
-    def square_mm(self) -> float:
-        """The square size in millimetres."""
-        from imageform._units import parse_length
-
-        return parse_length(self.square, "--square", default_unit="mm", unit="mm")
 
 
 def _expand(pattern: str, what: str) -> list[Path]:
