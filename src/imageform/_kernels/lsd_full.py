@@ -42,6 +42,37 @@ _JIT: dict[str, Any] = {"cache": True, "error_model": "numpy"}
 
 
 @njit(**_JIT)
+def _sampler_taps(n_out, size, scale, sigma, h):  # type: ignore[no-untyped-def]  # pragma: no cover
+    """One axis of :func:`gaussian_sampler`: for each of ``n_out`` output samples its
+    ``2 h + 1`` normalised Gaussian weights (centred on ``i / scale``) and their source
+    indices in ``[0, size)`` with the symmetric (mirror) boundary."""
+    n = 1 + 2 * h
+    k = np.empty((n_out, n))
+    src = np.empty((n_out, n), dtype=np.int64)
+    dbl = 2 * size
+    for o in range(n_out):
+        pos = o / scale
+        c = math.floor(pos + 0.5)
+        mean = h + pos - c
+        s = 0.0
+        for i in range(n):
+            v = (i - mean) / sigma
+            k[o, i] = math.exp(-0.5 * v * v)
+            s += k[o, i]
+        for i in range(n):
+            k[o, i] /= s
+            j = c - h + i
+            while j < 0:
+                j += dbl
+            while j >= dbl:
+                j -= dbl
+            if j >= size:
+                j = dbl - 1 - j
+            src[o, i] = j
+    return k, src
+
+
+@njit(**_JIT)
 def gaussian_sampler(img, scale, sigma_scale):  # type: ignore[no-untyped-def]  # pragma: no cover
     """Gaussian filter and sub-sample by ``scale`` (LSD's ``gaussian_sampler``).
 
@@ -56,28 +87,7 @@ def gaussian_sampler(img, scale, sigma_scale):  # type: ignore[no-untyped-def]  
     h = math.ceil(sigma * math.sqrt(2.0 * 3.0 * math.log(10.0)))
     n = 1 + 2 * h
     # x pass: per output column, its kernel and source columns
-    kx = np.empty((nx, n))
-    jx = np.empty((nx, n), dtype=np.int64)
-    dbl = 2 * xsize
-    for x in range(nx):
-        xx = x / scale
-        xc = math.floor(xx + 0.5)
-        mean = h + xx - xc
-        s = 0.0
-        for i in range(n):
-            v = (i - mean) / sigma
-            kx[x, i] = math.exp(-0.5 * v * v)
-            s += kx[x, i]
-        for i in range(n):
-            kx[x, i] /= s
-            j = xc - h + i
-            while j < 0:
-                j += dbl
-            while j >= dbl:
-                j -= dbl
-            if j >= xsize:
-                j = dbl - 1 - j
-            jx[x, i] = j
+    kx, jx = _sampler_taps(nx, xsize, scale, sigma, h)
     aux = np.empty((ysize, nx))
     for y in range(ysize):
         for x in range(nx):
@@ -86,28 +96,7 @@ def gaussian_sampler(img, scale, sigma_scale):  # type: ignore[no-untyped-def]  
                 acc += img[y, jx[x, i]] * kx[x, i]
             aux[y, x] = acc
     # y pass
-    ky = np.empty((ny, n))
-    jy = np.empty((ny, n), dtype=np.int64)
-    dbl = 2 * ysize
-    for y in range(ny):
-        yy = y / scale
-        yc = math.floor(yy + 0.5)
-        mean = h + yy - yc
-        s = 0.0
-        for i in range(n):
-            v = (i - mean) / sigma
-            ky[y, i] = math.exp(-0.5 * v * v)
-            s += ky[y, i]
-        for i in range(n):
-            ky[y, i] /= s
-            j = yc - h + i
-            while j < 0:
-                j += dbl
-            while j >= dbl:
-                j -= dbl
-            if j >= ysize:
-                j = dbl - 1 - j
-            jy[y, i] = j
+    ky, jy = _sampler_taps(ny, ysize, scale, sigma, h)
     out = np.zeros((ny, nx))
     for y in range(ny):
         for i in range(n):
