@@ -276,6 +276,30 @@ def refine_support(sq_err: F64, threshold: float, dof: int) -> float:
     return float(min(max(3.0 * sigma, threshold), REFINE_FACTOR * threshold))
 
 
+def refit_on_support(
+    model: F64,
+    sq_error: Callable[[F64], F64],
+    refit: Callable[[F64, NDArray[np.bool_]], F64],
+    threshold: float,
+    dof: int,
+    min_points: int,
+    rounds: int = 3,
+) -> F64:
+    """Least-squares refits of ``model`` on the correspondences within the support
+    :func:`refine_support` sets, until the support stops changing (or falls under
+    ``min_points``), at most ``rounds`` times; ``refit(model, selected)`` fits once."""
+    e0 = sq_error(model)
+    wide = refine_support(e0[e0 < threshold * threshold], threshold, dof)
+    sel = e0 < wide * wide
+    for _ in range(rounds):
+        model = refit(model, sel)
+        new = sq_error(model) < wide * wide
+        if new.sum() < min_points or np.array_equal(new, sel):
+            break
+        sel = new
+    return model
+
+
 def rotation(w: F64) -> F64:
     """``R = exp([w]ₓ)`` of one rotation vector (3,) (Rodrigues' formula, series near 0)."""
     th2 = float(w @ w)

@@ -244,15 +244,14 @@ def find_homography(
             f"no homography with at least 4 inliers within {thr:g} px after {drawn} samples"
         )
     if mode != "none" and inl.sum() > 4:
-        e0 = _sq_forward(H, s, d)
-        wide = _robust_core.refine_support(e0[e0 < thr * thr], thr, 2)
-        sel = e0 < wide * wide
-        for _ in range(3):
-            H = _refine(H, s[sel], d[sel], mode, n_iter)
-            new = _sq_forward(H, s, d) < wide * wide
-            if new.sum() < 4 or np.array_equal(new, sel):
-                break
-            sel = new
+        H = _robust_core.refit_on_support(
+            H,
+            lambda m: _sq_forward(m, s, d),
+            lambda m, sel: _refine(m, s[sel], d[sel], mode, n_iter),
+            thr,
+            2,
+            4,
+        )
     H = _normalise_scale(H)
     e = _sq_forward(H, s, d)
     inl = e < thr * thr

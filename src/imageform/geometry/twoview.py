@@ -332,15 +332,14 @@ def find_fundamental_matrix(
             f"no fundamental matrix with at least 8 inliers within {thr:g} px after {drawn} samples"
         )
     F = rank2(F)
-    e0 = sampson_sq(F, p1, p2)
-    wide = _robust_core.refine_support(e0[e0 < thr * thr], thr, 1)
-    sel = e0 < wide * wide
-    for _ in range(3):
-        F = _refine_f(F, p1[sel], p2[sel], n_iter)
-        new = sampson_sq(F, p1, p2) < wide * wide
-        if new.sum() < 8 or np.array_equal(new, sel):
-            break
-        sel = new
+    F = _robust_core.refit_on_support(
+        F,
+        lambda m: sampson_sq(m, p1, p2),
+        lambda m, sel: _refine_f(m, p1[sel], p2[sel], n_iter),
+        thr,
+        1,
+        8,
+    )
     F = _unit(F)
     e = sampson_sq(F, p1, p2)
     inl = e < thr * thr
@@ -501,15 +500,14 @@ def find_essential_matrix(
             f"no essential matrix with at least 5 inliers within {thr:g} px after {drawn} samples"
         )
     E = project_e(E)
-    e0 = sq(E)
-    wide = _robust_core.refine_support(e0[e0 < thr * thr], thr, 1)
-    sel = e0 < wide * wide
-    for _ in range(3):
-        E = _refine_e(E, q1[sel], q2[sel], Ka, Kb, p1[sel], p2[sel], n_iter)
-        new = sq(E) < wide * wide
-        if new.sum() < 5 or np.array_equal(new, sel):
-            break
-        sel = new
+    E = _robust_core.refit_on_support(
+        E,
+        sq,
+        lambda m, sel: _refine_e(m, q1[sel], q2[sel], Ka, Kb, p1[sel], p2[sel], n_iter),
+        thr,
+        1,
+        5,
+    )
     E = _unit(project_e(E))
     e = sq(E)
     inl = e < thr * thr
