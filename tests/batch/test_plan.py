@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from imageform.batch import batch_options, batch_workflow, plan_jobs, run_batch, run_job
-from imageform.batch.runner import temp_pattern
+from imageform.batch.runner import _remove_stale_temps, temp_pattern
 from imageform.errors import InvalidInputError, UnknownOptionError
 from imageform.io import read_image, write_image
 
@@ -56,6 +56,30 @@ def test_temp_files_are_hidden_from_the_glob(tmp_path: Path) -> None:
     stale.write_bytes(b"partial")
     assert stale.match(temp_pattern(tmp_path / "in" / "x.png"))
     assert [j.input.name for j in plan_jobs(f"{tmp_path}/in/**/*.png", tmp_path / "o")] == ["x.png"]
+
+
+def test_stale_temps_of_killed_workers_removed(tmp_path: Path) -> None:
+    """A worker killed mid-write leaves the job's temporary file, or, killed while the
+    workflow's own atomic writer was still writing, that writer's part file beside it (the
+    leftover CI once found); both go, the outputs and unrelated hidden files stay."""
+    (tmp_path / "in").mkdir()
+    write_image(tmp_path / "in" / "x.png", np.zeros((2, 2, 3), np.uint8))
+    (job,) = plan_jobs(f"{tmp_path}/in/*.png", tmp_path / "out")
+    folder = job.output.parent
+    folder.mkdir()
+    job.output.write_bytes(b"done")
+    leftovers = [
+        ".x.png.0123456789ab.tmp.png",
+        "..x.png.94c6d2ac0bb8.tmp.png.2512-7b4302b7.part.png",
+    ]
+    for name in [*leftovers, ".y.png.0123456789ab.tmp.png", ".keep"]:
+        (folder / name).write_bytes(b"partial")
+    assert _remove_stale_temps([job]) == 2
+    assert sorted(p.name for p in folder.iterdir()) == [
+        ".keep",
+        ".y.png.0123456789ab.tmp.png",
+        "x.png",
+    ]
 
 
 def test_run_job_atomic_and_failure(tmp_path: Path) -> None:

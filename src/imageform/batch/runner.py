@@ -30,6 +30,7 @@ import glob
 import json
 import os
 import re
+import shutil
 import time
 import uuid
 from collections.abc import Callable, Iterator, Mapping
@@ -267,13 +268,25 @@ def _temp_path(output: Path) -> Path:
     return output.with_name(f".{output.name}.{uuid.uuid4().hex[:12]}.tmp{output.suffix}")
 
 
+def _nested_part_pattern(output: Path) -> str:
+    """The glob of the files the workflow's own atomic writer makes beside a job's temporary
+    file (``..NAME.<random>.tmpSUFFIX.<pid>-<token>.partSUFFIX``): a worker killed while the
+    workflow was still writing leaves one of these, not the temporary file itself."""
+    return f".{temp_pattern(output)}.*.part*"
+
+
 def _remove_stale_temps(jobs: list[Job]) -> int:
     n = 0
     for job in jobs:
-        if job.output.parent.is_dir():
-            for stale in job.output.parent.glob(temp_pattern(job.output)):
-                stale.unlink(missing_ok=True)
-                n += 1
+        folder = job.output.parent
+        if folder.is_dir():
+            for pattern in (temp_pattern(job.output), _nested_part_pattern(job.output)):
+                for stale in folder.glob(pattern):
+                    if stale.is_dir() and not stale.is_symlink():
+                        shutil.rmtree(stale, ignore_errors=True)
+                    else:
+                        stale.unlink(missing_ok=True)
+                    n += 1
     return n
 
 
