@@ -11,6 +11,7 @@ from __future__ import annotations
 import functools
 import http.server
 import importlib
+import importlib.util
 import os
 import re
 import subprocess
@@ -18,6 +19,7 @@ import sys
 import threading
 from collections.abc import Iterator
 from pathlib import Path
+from typing import Any
 from urllib.parse import unquote, urlsplit
 
 import pytest
@@ -103,6 +105,39 @@ def test_the_cli_reference_lists_every_command(site: Path) -> None:
     absent = [name for name in WORKFLOWS if f"imageform {name}" not in html]
     assert absent == []
     assert "Exit codes" in html
+
+
+def _hooks() -> object:
+    spec = importlib.util.spec_from_file_location(
+        "mkdocs_hooks", ROOT / "tools" / "mkdocs_hooks.py"
+    )
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_every_benchmark_table_is_on_the_benchmarks_page() -> None:
+    """Every committed table (benchmarks/results/NAME-DATE.md) names its script, which exists;
+    the page shows the newest table of each (no MkDocs needed for this check)."""
+    hooks: Any = _hooks()
+    files = hooks.result_files(ROOT)
+    assert files, "no committed benchmark tables"
+    unmapped = sorted(set(files) - set(hooks.BENCH_SCRIPTS))
+    assert unmapped == [], (
+        f"add these results to BENCH_SCRIPTS in tools/mkdocs_hooks.py: {unmapped}"
+    )
+    for prefix in files:
+        assert (ROOT / hooks.BENCH_SCRIPTS[prefix]).is_file(), hooks.BENCH_SCRIPTS[prefix]
+    page = hooks.benchmark_results(ROOT)
+    for prefix, paths in files.items():
+        assert f"`benchmarks/results/{paths[0].name}`" in page, prefix
+    assert "2026-11-25 · x86_64" in page  # a table's own text is on the page
+
+
+def test_the_benchmarks_page_is_built(site: Path) -> None:
+    html = _page(site, "benchmarks")
+    assert "benchmark-results" not in html and "bench_remap.py" in html and "<table>" in html
 
 
 def _pages(site: Path) -> list[Path]:

@@ -34,5 +34,105 @@ def cli_reference() -> str:
 
 def on_page_markdown(markdown: str, page: Any, **kwargs: Any) -> str:
     if MARKER in markdown:
-        return markdown.replace(MARKER, cli_reference())
+        markdown = markdown.replace(MARKER, cli_reference())
+    if BENCH_MARKER in markdown:
+        from pathlib import Path
+
+        markdown = markdown.replace(BENCH_MARKER, benchmark_results(Path(__file__).parents[1]))
     return markdown
+
+
+# ------------------------------------------------------------------ benchmark tables
+
+BENCH_MARKER = "<!-- benchmark-results -->"
+
+#: Each committed results file's stem prefix (before the date) and the script that printed it.
+#: tests/test_docs_site.py checks that every file in benchmarks/results/ is listed here.
+BENCH_SCRIPTS: dict[str, str] = {
+    "8bit": "benchmarks/bench_8bit.py",
+    "calibration": "benchmarks/bench_calibration.py",
+    "checkerboard": "benchmarks/bench_checkerboard.py",
+    "chunked": "benchmarks/bench_chunked.py",
+    "chunked-strips": "benchmarks/bench_chunked.py",
+    "color": "benchmarks/bench_color.py",
+    "delta-e": "benchmarks/bench_delta_e.py",
+    "demosaic": "benchmarks/bench_demosaic.py",
+    "distortion": "benchmarks/bench_distortion.py",
+    "fuzz": "tests/fuzz/__main__.py",
+    "geometry": "benchmarks/bench_geometry.py",
+    "gpu-cpu": "benchmarks/bench_gpu.py",
+    "lsd": "benchmarks/bench_lsd.py",
+    "psf": "benchmarks/bench_psf.py",
+    "remap": "benchmarks/bench_remap.py",
+    "report": "benchmarks/bench_report.py",
+    "sfr": "benchmarks/bench_sfr.py",
+    "stain": "benchmarks/bench_stain.py",
+    "twoview": "benchmarks/bench_twoview.py",
+    "vision": "benchmarks/bench_vision.py",
+    "vp-lsd": "benchmarks/check_vp_lsd.py",
+}
+
+_DATED = r"^(?P<name>.+)-(?P<date>\d{4}-\d{2}-\d{2})$"
+
+
+def result_files(root: Any) -> dict[str, list[Any]]:
+    """``{prefix: [results file, ...]}``, newest first, from ``root/benchmarks/results``."""
+    import re
+    from pathlib import Path
+
+    found: dict[str, list[tuple[str, Path]]] = {}
+    for path in sorted(Path(root, "benchmarks", "results").glob("*.md")):
+        m = re.match(_DATED, path.stem)
+        if m is None:
+            raise ValueError(f"{path.name}: results files are named NAME-YYYY-MM-DD.md")
+        found.setdefault(m["name"], []).append((m["date"], path))
+    return {k: [p for _, p in sorted(v, reverse=True)] for k, v in sorted(found.items())}
+
+
+def _demote(text: str) -> str:
+    """The results file's Markdown with its headings two levels down and its title dropped."""
+    lines = text.splitlines()
+    if lines and lines[0].startswith("# "):
+        lines = lines[1:]
+    out, fence = [], False
+    for line in lines:
+        if line.lstrip().startswith("```"):
+            fence = not fence
+        if not fence and line.startswith("#"):
+            line = "#" + line
+        out.append(line)
+    return "\n".join(out).strip()
+
+
+def _script_command(script: str) -> str:
+    if script.startswith("tests/"):
+        return "PYTHONPATH=src:. python -m tests.fuzz --workers 2 --timeout 20 --report fuzz.md"
+    return f"OPENBLAS_NUM_THREADS=1 python {script}   # its defaults printed this table"
+
+
+def benchmark_results(root: Any) -> str:
+    """Markdown: for every benchmark, its script and purpose and its newest committed table."""
+    import ast
+    from pathlib import Path
+
+    parts = []
+    for prefix, files in result_files(root).items():
+        script = BENCH_SCRIPTS.get(prefix)
+        if script is None:
+            raise ValueError(f"benchmarks/results/{files[0].name}: add its script to BENCH_SCRIPTS")
+        source = Path(root, script).read_text(encoding="utf-8")
+        doc = ast.get_docstring(ast.parse(source)) or ""
+        purpose = " ".join(doc.split("\n\n")[0].split())
+        text = files[0].read_text(encoding="utf-8")
+        title = text.splitlines()[0].lstrip("# ").strip() if text.startswith("# ") else prefix
+        older = ", ".join(f"`{p.name}`" for p in files[1:])
+        parts.append(
+            f"## {title}\n\n{purpose}\n\nScript: `{script}`; table: "
+            f"`benchmarks/results/{files[0].name}`"
+            + (f" (earlier: {older})" if older else "")
+            + ".\n\n"
+            + ("" if "python" in text else f"```bash\n{_script_command(script)}\n```\n\n")
+            + _demote(text)
+            + "\n"
+        )
+    return "\n".join(parts)
