@@ -282,6 +282,16 @@ def chart_patches(
     ----------
     image : array_like, shape (H, W, 3)
         Encoded sRGB (floats, uint8, uint16) or Dask (the cells are reduced by Dask).
+    rows, cols : int
+        The grid of patches that fills the frame (4 × 6 for the ColorChecker Classic).
+    margin : float, keyword-only
+        Fraction of each cell left out on every side, in [0, 0.5).
+    max_std : float, keyword-only
+        Largest per-channel standard deviation (encoded, [0, 1] scale) of a flat patch.
+    saturation : float, keyword-only
+        The clipping level (encoded, [0, 1] scale).
+    max_saturated_fraction : float, keyword-only
+        Fraction of a patch's pixels at ``saturation`` above which it is saturated.
 
     Returns
     -------
@@ -404,6 +414,7 @@ def fit_color_correction(
         and patches where either side reaches ``saturation`` in any channel, are left out
         (the latter with a :class:`ChartWarning`).
     method : {"linear", "root_polynomial"}
+        A 3×3 matrix on linear RGB, or Finlayson's root-polynomial expansion of ``degree``.
     degree : int
         Root-polynomial degree (1, 2 or 3); ignored for ``"linear"``.
     transfer : {"srgb", "linear"}, keyword-only

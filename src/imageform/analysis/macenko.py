@@ -312,6 +312,7 @@ def stain_concentrations(
     Parameters
     ----------
     image : array_like, shape (..., 3)
+        RGB intensities (uint8, uint16 or floats on the scale of ``i0``).
     stain_matrix : array_like, shape (k, 3)
         One OD vector per stain (k = 2 or 3); with k = 3 this is Ruifrok's inversion.
     min_intensity, i0, base

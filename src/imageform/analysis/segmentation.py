@@ -299,6 +299,7 @@ def overlay_mask(
     image : array_like, shape (H, W, 3)
         Encoded sRGB (floats in [0, 1], uint8, uint16, or Dask).
     mask : array_like of bool, shape (H, W)
+        The pixels to tint.
     color : (float, float, float)
         Encoded sRGB in [0, 1].
     alpha : float

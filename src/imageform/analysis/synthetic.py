@@ -371,6 +371,14 @@ def synthetic_chart_image(
     srgb : array_like, shape (rows*cols, 3), optional
         Encoded sRGB patch values in [0, 1] (row by row); default the ColorChecker
         (:data:`COLORCHECKER_SRGB8` / 255).
+    rows, cols : int
+        The grid of patches.
+    patch : int
+        Side of each square patch in pixels.
+    gap : int
+        Width in pixels of the surround between patches and around the grid.
+    background : float
+        Encoded grey level of the surround, in [0, 1].
 
     Returns
     -------

@@ -301,6 +301,8 @@ def process_chunked(
         ``convert`` takes options ``from`` (default ``srgb``), ``to``, ``white``;
         ``white_balance`` takes ``method`` (gray_world, shades_of_gray, manual), ``p``,
         ``normalize``, ``illuminant``/``cct`` (manual).
+    options : dict, optional
+        The command's options named above (default: the command's defaults).
     chunk : int
         Block size in pixels (a multiple of ``tile`` and, for speed, of the input's tiles).
     dtype : {"uint8", "uint16", "float32"}, optional
@@ -309,6 +311,8 @@ def process_chunked(
         outside [0, 1]; how many is reported in ``clipped``.
     force : bool
         Replace an existing ``dst``.
+    tile : int, keyword-only
+        Tile side in pixels of a TIFF destination (``chunk`` must be a multiple of it).
     num_workers : int, optional
         Threads of dask's threaded scheduler (default: CPU count).
 

@@ -84,6 +84,8 @@ def chromatic_adaptation_matrix(
         Whites: an illuminant name (``"D65"``), an RGB space name, ``(x, y)`` or ``(X, Y, Z)``
         (see :func:`imageform.color.resolve_white`).
     method : {"bradford", "cat02", "cat16", "von_kries", "xyz_scaling"}
+        The chromatic adaptation transform's cone space: Bradford (default), CAT02, CAT16,
+        von Kries (Hunt-Pointer-Estévez) or plain XYZ scaling.
     degree : float
         Degree of adaptation ``D`` in [0, 1] (CIE 159:2004); 1 adapts completely.
     observer : {2, 10}
@@ -145,9 +147,12 @@ def chromatic_adaptation(
     src_white, dst_white : str or array_like
         See :func:`chromatic_adaptation_matrix`.
     method : {"bradford", "cat02", "cat16", "von_kries", "xyz_scaling"}
+        The chromatic adaptation transform's cone space: Bradford (default), CAT02, CAT16,
+        von Kries (Hunt-Pointer-Estévez) or plain XYZ scaling.
     degree : float
         Degree of adaptation in [0, 1].
     observer : {2, 10}
+        Observer of named illuminants.
 
     Returns
     -------

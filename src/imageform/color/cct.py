@@ -111,6 +111,7 @@ def xy_to_uv1960(xy: object) -> Any:
     Parameters
     ----------
     xy : array_like, shape (..., 2)
+        CIE 1931 chromaticity coordinates.
 
     Returns
     -------
@@ -140,6 +141,7 @@ def uv1960_to_xy(uv: object) -> Any:
     Parameters
     ----------
     uv : array_like, shape (..., 2)
+        CIE 1960 UCS chromaticity coordinates.
 
     Returns
     -------
@@ -244,6 +246,7 @@ def cct_to_xy(cct: object, duv: object = 0.0, *, method: str = "robertson1968") 
     duv : array_like, shape (...)
         Distance from the Planckian locus (broadcast against ``cct``).
     method : {"robertson1968", "daylight"}
+        The Planckian locus (Robertson's isotemperature lines) or the CIE daylight locus.
 
     Returns
     -------

@@ -92,6 +92,7 @@ def xy_to_cct_hernandez1999(xy: object) -> Any:
     Parameters
     ----------
     xy : array_like, shape (..., 2)
+        CIE 1931 chromaticity coordinates.
 
     Returns
     -------

@@ -225,6 +225,10 @@ def in_locus(points: object, coords: str = "xy", *, observer: int = 2) -> Any:
     ----------
     points : array_like, shape (..., 2)
         xy or u'v' chromaticities (any Array-API array; the result is of the same kind).
+    coords : {"xy", "uv"}
+        CIE 1931 ``xy`` or CIE 1976 UCS ``u'v'``.
+    observer : {2, 10}, keyword-only
+        The standard observer whose spectral locus bounds the region.
 
     Returns
     -------

@@ -254,6 +254,8 @@ def simulate_cvd(
     severity : float in [0, 1]
         1 = dichromacy, 0 = normal vision.
     method : {"machado2009", "brettel1997", "vienot1999"}
+        Machado et al.'s matrices (any severity), Brettel et al.'s two half-planes or
+        Viénot et al.'s single plane (see the module docstring).
     linear : bool
         Input and output are linear sRGB.
     clip : bool

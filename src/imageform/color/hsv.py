@@ -223,6 +223,7 @@ def hue_undefined_mask(values: object, *, atol: float = 0.0) -> Any:
     Parameters
     ----------
     values : array_like, shape (..., 3)
+        HSV values with S in [0, 1] (as :func:`rgb_to_hsv` returns them).
     atol : float
         Saturations at or below this count as achromatic (noise on grey pixels makes hue
         meaningless long before S is exactly 0).

@@ -89,8 +89,13 @@ def downsample(
     Parameters
     ----------
     image : array_like, shape (..., H, W, C)
+        The image; encoded as ``transfer`` says unless ``linear_light`` is False.
     factor : int
         Block size, >= 1.
+    linear_light : bool, keyword-only
+        Average in linear light (decode, average, encode); False averages the codes.
+    transfer : str, keyword-only
+        The image's transfer function (one of :data:`TRANSFER_FUNCTIONS`).
 
     Returns
     -------

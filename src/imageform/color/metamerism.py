@@ -140,10 +140,15 @@ def metamer(
     spectrum : Spectrum, values (N,)
         A reflectance (within [0, 1]) or a light (non-negative).
     observer : 2, 10 or "cones", keyword-only
+        Whose responses the metamer matches: the CIE 2° or 10° observer or the cone fundamentals.
     illuminant : str, Spectrum or None, keyword-only
         The light the match holds under (``None`` for lights).
+    kind : {"reflectance", "light"}, keyword-only
+        Keep the result in [0, 1] (a reflectance) or only non-negative (a light).
     strength : float in (0, 1]
         Fraction of the largest valid step.
+    max_frequency : int, keyword-only
+        Highest frequency of the cosine/sine basis the metameric black is built from.
 
     Returns
     -------
@@ -274,6 +279,8 @@ def match_with_primaries(
         A light (e.g. ``illuminant * reflectance``).
     primaries : Spectrum, values (M, 3)
         The three primary lights.
+    observer : 2, 10 or "cones", keyword-only
+        Whose responses are matched.
 
     Examples
     --------

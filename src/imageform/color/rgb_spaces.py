@@ -269,6 +269,7 @@ def linear_rgb_to_xyz(rgb: object, space: str | RGBSpace = "srgb") -> Any:
     rgb : array_like, shape (..., 3)
         Linear (decoded) RGB.
     space : str or RGBSpace
+        The RGB space (a name from :data:`RGB_SPACES` or an :class:`RGBSpace`).
 
     Returns
     -------

@@ -131,6 +131,7 @@ def chroma_subsample(
     ycbcr : array_like, shape (..., H, W, 3)
         Y', Cb, Cr (any scale; see :func:`imageform.color.srgb_to_ycbcr`).
     scheme : {"4:4:4", "4:2:2", "4:2:0"}
+        The J:a:b subsampling scheme.
     siting : {"left", "center", "top_left"}
         Chroma siting (module table); 4:2:2 uses only its horizontal part.
 
@@ -186,10 +187,13 @@ def chroma_upsample(
     Parameters
     ----------
     luma : array_like, shape (..., H, W)
+        The full-resolution Y' plane.
     chroma : array_like, shape (..., ceil(H/fv), ceil(W/fh), 2)
+        The subsampled Cb, Cr planes.
     scheme, siting :
         As given to :func:`chroma_subsample`.
     method : {"bilinear", "nearest"}
+        Interpolation of the chroma samples at their sited positions.
 
     Returns
     -------

@@ -177,6 +177,7 @@ def gamma_to_linear(values: object, gamma: float = 2.2) -> Any:
     Parameters
     ----------
     values : array_like, shape (...)
+        Encoded values in [0, 1].
     gamma : float
         Exponent, > 0.
 
@@ -382,6 +383,7 @@ def decode(values: object, transfer: str = "srgb", *, gamma: float = 2.2) -> Any
     Parameters
     ----------
     values : array_like, shape (...)
+        Encoded values in [0, 1].
     transfer : str
         One of :data:`TRANSFER_FUNCTIONS`.
     gamma : float

@@ -143,9 +143,12 @@ def rgb_to_ycbcr(
     image : array_like, shape (..., 3)
         Encoded R'G'B' in [0, 1] or uint8/uint16.
     standard : {"bt601", "bt709", "bt2020"}
+        Which luma coefficients (ITU-R BT.601, BT.709 or BT.2020).
     signal_range : {"full", "limited"}
         Full-range or limited ("studio", "narrow") code values; see the module docstring.
     bits : {None, 8, 10, 12}
+        Code values of this bit depth; None: analog values (``"full"``) or 8-bit codes
+        (``"limited"``).
 
     Returns
     -------

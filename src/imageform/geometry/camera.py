@@ -166,9 +166,11 @@ def project_points(
     points : array_like, shape (..., N, 3) or (..., 3)
         World points (camera frame when ``R`` and ``t`` are omitted).
     K : array_like, shape (..., 3, 3)
+        Intrinsic matrix (positive focal lengths; checked).
     R : array_like, shape (..., 3, 3), optional
         World-to-camera rotation (orthonormal, det +1; checked).
     t : array_like, shape (..., 3), optional
+        World-to-camera translation (camera frame = ``R X + t``).
     image_plane : {"virtual", "real"}
         ``"real"`` gives the inverted image of a camera obscura.
 

@@ -138,7 +138,9 @@ def from_homogeneous(
     Parameters
     ----------
     points : array_like, shape (..., n + 1)
+        Homogeneous coordinates, the last one the scale ``w``.
     at_infinity : {"raise", "nan"}
+        What a point at infinity (``w = 0``) gives: an error, or NaN coordinates.
 
     Returns
     -------
@@ -167,6 +169,7 @@ def from_homogeneous_masked(points: ArrayLike) -> Dehomogenized:
     Parameters
     ----------
     points : array_like, shape (..., n + 1)
+        Homogeneous coordinates, the last one the scale ``w``.
 
     Returns
     -------

@@ -102,7 +102,9 @@ def recover_pose(
     points1, points2 : array_like (N, 2)
         Corresponding pixels.
     K1 : array_like (3, 3)
-        Intrinsics of the first camera; ``K2`` those of the second (default ``K1``).
+        Intrinsics of the first camera.
+    K2 : array_like (3, 3), optional
+        Intrinsics of the second camera (default ``K1``).
     inliers : array_like of bool (N,), optional
         Only these correspondences vote (e.g. ``find_essential_matrix(...).inliers``).
     max_depth : float
@@ -250,6 +252,8 @@ def triangulate_two_view(
     points1, points2 : array_like (N, 2)
         Corresponding pixels.
     method : {"optimal", "linear", "midpoint"}
+        Hartley-Sturm optimal correction then linear, the linear (DLT) method alone, or the
+        midpoint of the closest points of the two rays.
     check_depth : bool
         Mark points at or behind either camera as not valid (their coordinates are kept).
 

@@ -214,6 +214,8 @@ def stereo_calibrate(
     image_size : (int, int)
         ``(width, height)`` of the left camera (and of the right, unless
         ``image_size_right`` is given).
+    image_size_right : (int, int), optional
+        ``(width, height)`` of the right camera when it differs from the left's.
     left, right : CalibrationResult, optional
         Single-camera calibrations to start from (default: computed here).
     fix_intrinsics : bool

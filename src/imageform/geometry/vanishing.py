@@ -55,9 +55,11 @@ def vanishing_point(K: ArrayLike, direction: ArrayLike, R: ArrayLike | None = No
     Parameters
     ----------
     K : array_like, shape (..., 3, 3)
+        Intrinsic matrix.
     direction : array_like, shape (..., 3)
         Scene direction (world frame when ``R`` is given, else camera frame); not zero.
     R : array_like, shape (..., 3, 3), optional
+        World-to-camera rotation; ``None``: ``direction`` is in the camera frame.
 
     Examples
     --------
@@ -117,6 +119,7 @@ def horizon_line(K: ArrayLike, R: ArrayLike | None = None, up: ArrayLike | str =
     Parameters
     ----------
     K : array_like, shape (..., 3, 3)
+        Intrinsic matrix.
     R : array_like, shape (..., 3, 3), optional
         World-to-camera rotation; ``None``: the world is the camera frame.
     up : str or array_like, shape (..., 3)
@@ -173,6 +176,9 @@ def perspective_type(
         Scene directions in the world frame (typically the three axes of a building or room).
     R : array_like, shape (3, 3), optional
         World-to-camera rotation.
+    tol : float, keyword-only
+        A direction with ``|d_z|`` (camera frame, unit length) at or below this is parallel to
+        the image plane (its vanishing point is at infinity).
 
     Returns
     -------

@@ -179,6 +179,8 @@ def detect_vanishing_points(
         The photograph (segments are detected with default settings).
     segments : LineSegments, optional
         Pre-detected segments instead of ``image`` (then ``image_size=(W, H)`` is needed).
+    image_size : (int, int), optional
+        ``(width, height)`` of the photograph the ``segments`` come from.
     angle_threshold : float
         A segment supports a vanishing point when the line from its midpoint to the point is
         within this angle of the segment (radians).

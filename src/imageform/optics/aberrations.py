@@ -187,7 +187,10 @@ def lateral_chromatic_aberration(
     Parameters
     ----------
     image : array (H, W, C)
-    magnification : sequence of C floats ``> 0`` (e.g. ``(1.002, 1.0, 0.998)`` for R, G, B)
+        The image, one magnification per channel.
+    magnification : sequence of C floats
+        Per-channel magnification about ``center``, ``> 0`` (e.g. ``(1.002, 1.0, 0.998)``
+        for R, G, B).
     center : (c_u, c_v), optional
         The optical center (column, row); default the image center.
     fill : float
@@ -353,11 +356,13 @@ def axial_chromatic_aberration(
     Parameters
     ----------
     image : array (H, W, C)
+        The all-in-focus image, one focal length per channel.
     depth : float or array (H, W)
         Scene depth per pixel (m).
     focal_lengths : C floats
         Per-channel focal lengths (m), e.g. from :func:`chromatic_focal_lengths`.
     f_number, focus, pixel_pitch : float
+        The f-number, the focus distance (m) and the sensor pixel pitch (m).
     reference : int
         The channel in focus at ``focus`` (default 1, green).
 

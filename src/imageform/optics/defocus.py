@@ -134,10 +134,13 @@ def blur_by_radius(image: Any, radius_px: Any, *, step: float = 0.5, max_layers:
     Parameters
     ----------
     image : array (H, W) or (H, W, C)
+        The all-in-focus image.
     radius_px : float or array (H, W) or (H, W, C)
         Disc radius per pixel (and per channel, if it has a channel axis), ``>= 0``.
     step : float
         Spacing of the radius ladder in pixels (more layers are not made than ``max_layers``).
+    max_layers : int, keyword-only
+        Largest number of blur radii in the ladder (the step widens to keep within it).
 
     Returns
     -------
@@ -235,6 +238,8 @@ def defocus_blur(
         Distance of the scene point seen at each pixel (m).
     focal_length, f_number, focus, pixel_pitch : float
         Focal length (m), f-number, focus distance (m), sensor pixel pitch (m).
+    step : float, keyword-only
+        Spacing of the blur radii in pixels (see :func:`blur_by_radius`).
 
     Notes
     -----

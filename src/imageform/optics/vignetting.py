@@ -47,6 +47,7 @@ def field_angle(
     Parameters
     ----------
     shape : (H, W)
+        Image size in pixels.
     focal_length : float, keyword-only
         Focal length in **pixels** (``fx``).
     center : (c_u, c_v), keyword-only, optional

@@ -102,10 +102,24 @@ def plot_chromaticity_diagram(
 
     Parameters
     ----------
-    spaces : names of RGB spaces (``imageform.color.RGB_SPACES``).
-    coords : ``"xy"`` or ``"uv"``.
-    points : array_like (n, 2), optional.
-    path : where to save a PNG/SVG/PDF (optional).
+    spaces : sequence of str
+        Names of RGB spaces (``imageform.color.RGB_SPACES``) whose gamuts are drawn.
+    coords : {"xy", "uv"}, keyword-only
+        CIE 1931 ``xy`` or CIE 1976 UCS ``u'v'``.
+    points : array_like (n, 2), optional
+        Chromaticities to mark, in ``coords``.
+    point_labels : sequence of str, optional
+        One label per point.
+    planckian : bool, keyword-only
+        Draw the Planckian locus with CCT ticks.
+    observer : {2, 10}, keyword-only
+        The standard observer of the spectral locus.
+    resolution : int, keyword-only
+        Samples per axis of the filled background.
+    ax : matplotlib Axes, optional
+        Draw into these axes (default: a new figure).
+    path : str or Path, optional
+        Where to save the figure (PNG, SVG or PDF, by the suffix).
 
     Examples
     --------

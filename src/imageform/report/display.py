@@ -58,6 +58,8 @@ def stage_display_image(
     image : ndarray, shape (H, W), (H, W, 1) or (H, W, 3)
         Finite values.
     kind : {"linear", "raw", "srgb"}
+        Linear light (scaled to a percentile and encoded), raw codes (scaled by
+        ``white_level``), or already encoded sRGB.
     white_level : float, optional
         Largest code of a raw stage (required for ``"raw"``).
     percentile : float

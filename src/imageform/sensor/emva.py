@@ -100,9 +100,11 @@ def simulate_photon_transfer(
     Parameters
     ----------
     sensor : SensorModel
+        The sensor measured.
     irradiance : float
         Uniform monochromatic irradiance on the sensor (W/m²).
     wavelength_nm : float
+        Wavelength of the light (nm), for the photon count and the quantum efficiency.
     exposure_times : array (n,)
         Seconds, ``>= 0``.
     rng : int, numpy.random.Generator or None

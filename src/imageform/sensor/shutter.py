@@ -148,7 +148,9 @@ def shutter_capture(
     exposure_time, line_time : float
         Seconds (``exposure_time > 0``).
     mode : {"global", "rolling"}
+        Every row exposed at once, or row ``i`` starting ``i * line_time`` later.
     samples : int
+        Instants per row of the midpoint rule over the exposure.
 
     Examples
     --------

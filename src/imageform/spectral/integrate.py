@@ -228,6 +228,8 @@ def spectrum_to_xyz(
     observer : 2, 10
         CIE 1931 2° or CIE 1964 10° standard observer.
     method : {"cie015", "astm_e308"}
+        CIE 015 summation on the observer's 1 nm grid, or ASTM E308 summation at the
+        sample's own interval (see the module docstring).
     interpolation : str
         How the sample is interpolated onto the integration grid (``Spectrum.interpolate``).
     absolute : bool
