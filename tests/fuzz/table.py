@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from imageform.geometry import CharucoBoard
 from tests.fuzz.runner import C, Skip, call, method
 from tests.fuzz.values import V
 
@@ -224,6 +225,12 @@ VALID: dict[str, C | Skip] = {
     "imageform.geometry.Camera.look_at": call(
         V("K"), np.array([0.0, 0.0, -5.0]), np.zeros(3), image_size=(8, 6)
     ),
+    "imageform.geometry.ArucoDictionary": call(
+        "tiny", 3, np.array([[[1, 0, 1], [0, 1, 0], [1, 1, 0]]], np.uint8), 0
+    ),
+    "imageform.geometry.ArucoMarkers": Skip("a result dataclass built by detect_aruco_markers"),
+    "imageform.geometry.CharucoBoard": call((5, 7), 30.0, 24.0, "4x4_50"),
+    "imageform.geometry.CharucoCorners": Skip("a result dataclass built by detect_charuco"),
     "imageform.geometry.CheckerboardResult": call(True, np.zeros((6, 2)), pattern_size=(3, 2)),
     "imageform.geometry.ConeBeamGeometry": call(1.0, 0.5, 1e-4, (64, 48)),
     "imageform.geometry.DecomposedProjection": call(K=V("K"), R=V("R"), t=V("t")),
@@ -254,6 +261,8 @@ VALID: dict[str, C | Skip] = {
     "imageform.geometry.VanishingPointResult": Skip(
         "a result dataclass built by detect_vanishing_points"
     ),
+    "imageform.geometry.aruco_dictionary": call("4x4_50"),
+    "imageform.geometry.aruco_marker_image": call(0, "4x4_50", size_px=24, border_bits=1),
     "imageform.geometry.apply_homography": call(H=V("H"), points=V("points2")),
     "imageform.geometry.are_collinear": call(points=V("points2")),
     "imageform.geometry.axis_rotation": call(axis="x", angle=0.3),
@@ -320,6 +329,10 @@ VALID: dict[str, C | Skip] = {
     ),
     "imageform.geometry.estimate_projection_matrix": call(V("points3"), V("points3_uv")),
     "imageform.geometry.euler_to_matrix": call(angles=np.array([0.1, 0.2, 0.3]), order="xyz"),
+    "imageform.geometry.detect_aruco_markers": call(V("rgb_big"), "4x4_50", min_side_px=8.0),
+    "imageform.geometry.detect_charuco": call(
+        V("rgb_big"), CharucoBoard((5, 7), 30.0, 24.0, "4x4_50"), min_markers=2
+    ),
     "imageform.geometry.find_checkerboard": call(image=V("rgb_big"), pattern_size=(4, 3)),
     "imageform.geometry.find_checkerboards": call(images=[V("rgb_big")], pattern_size=(4, 3)),
     "imageform.geometry.focal_from_vanishing_points": call(
@@ -1222,6 +1235,21 @@ VALID.update(
     {
         "imageform.color.GamutFigures.as_dict": method(VALID["imageform.color.GamutFigures"]),
         "imageform.color.RGBSpace.matrix_to_xyz": method(VALID["imageform.color.RGBSpace"]),
+        "imageform.geometry.CharucoBoard.corner_points": method(
+            VALID["imageform.geometry.CharucoBoard"]
+        ),
+        "imageform.geometry.CharucoBoard.image": method(
+            VALID["imageform.geometry.CharucoBoard"], square_px=20, margin_px=4
+        ),
+        "imageform.geometry.CharucoBoard.marker_points": method(
+            VALID["imageform.geometry.CharucoBoard"]
+        ),
+        "imageform.geometry.CharucoCorners.object_points": Skip(
+            "a method of a result dataclass built by detect_charuco (no arguments)"
+        ),
+        "imageform.geometry.CharucoBoard.marker_squares": method(
+            VALID["imageform.geometry.CharucoBoard"]
+        ),
         "imageform.geometry.CheckerboardResult.grid": method(
             VALID["imageform.geometry.CheckerboardResult"]
         ),

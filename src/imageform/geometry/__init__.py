@@ -6,6 +6,14 @@ top-left pixel centre at (0, 0); points are row vectors ``(..., N, 3)``; points 
 ``z_cam <= 0`` are NaN with ``valid = False``.
 """
 
+from imageform.geometry.aruco import (
+    ARUCO_DICTIONARIES,
+    ArucoDictionary,
+    ArucoMarkers,
+    aruco_dictionary,
+    aruco_marker_image,
+    detect_aruco_markers,
+)
 from imageform.geometry.calibration import (
     CalibrationResult,
     calibrate_camera,
@@ -22,6 +30,7 @@ from imageform.geometry.camera import (
     projection_matrix,
     unproject,
 )
+from imageform.geometry.charuco import CharucoBoard, CharucoCorners, detect_charuco
 from imageform.geometry.checkerboard import (
     CheckerboardNotFoundWarning,
     CheckerboardResult,
@@ -111,9 +120,14 @@ from imageform.geometry.vanishing import (
 from imageform.geometry.vp_detection import VanishingPointResult, detect_vanishing_points
 
 __all__ = [
+    "ARUCO_DICTIONARIES",
+    "ArucoDictionary",
+    "ArucoMarkers",
     "BrownConrady",
     "CalibrationResult",
     "Camera",
+    "CharucoBoard",
+    "CharucoCorners",
     "CheckerboardNotFoundWarning",
     "CheckerboardResult",
     "ConeBeamGeometry",
@@ -141,6 +155,8 @@ __all__ = [
     "VanishingPointResult",
     "apply_homography",
     "are_collinear",
+    "aruco_dictionary",
+    "aruco_marker_image",
     "axis_rotation",
     "backproject",
     "calibrate_camera",
@@ -148,6 +164,8 @@ __all__ = [
     "checkerboard_points",
     "cross_ratio",
     "decompose_projection_matrix",
+    "detect_aruco_markers",
+    "detect_charuco",
     "detect_line_segments",
     "detect_vanishing_points",
     "essential_5point",

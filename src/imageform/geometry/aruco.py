@@ -1,0 +1,599 @@
+"""ArUco square fiducial markers: the dictionaries, marker images, detection and decoding.
+
+An ArUco marker is a black square whose inner ``s x s`` cells carry a binary code (white =
+1), surrounded by a black border one cell wide (Garrido-Jurado et al., 2014). A dictionary
+is a set of codes chosen far apart in Hamming distance under the four rotations, so a
+marker's identity and orientation are read from its bits, and up to the dictionary's
+correction capacity of misread bits are corrected.
+
+Detection (the pipeline of Garrido-Jurado et al. and of OpenCV's ``ArucoDetector``, written
+here from the paper's description): local-mean adaptive thresholding at a few window sizes
+→ dark connected components (4-connectivity) → a quadrilateral per component (convex hull
+reduced to its four extreme vertices, accepted when the quad covers the hull) → sub-pixel
+sides (a line fitted to the component's boundary pixels along each side, corners where the
+lines meet) → the cells sampled through the quad's homography → Otsu's threshold on the
+cell means → border check → dictionary lookup over the four rotations (Hamming distance).
+
+The dictionaries are OpenCV's predefined ones (``DICT_4X4_1000`` ... ``DICT_7X7_1000`` and
+``DICT_ARUCO_ORIGINAL``; the ``_50``, ``_100`` and ``_250`` variants are their prefixes),
+shipped as bit tables in ``geometry/data/aruco_dictionaries.npz`` (source: OpenCV 5.0's
+``objdetect/aruco`` predefined dictionaries, Apache-2.0, read with
+``cv2.aruco.Dictionary.getBitsFromByteList``), so markers printed for OpenCV are read here.
+
+Conventions: pixel centres at integer ``(u, v)``, the top-left pixel's centre at (0, 0);
+a marker's corners in OpenCV's order: its top-left, top-right, bottom-right, bottom-left as
+printed (clockwise on screen for a marker seen from the front).
+
+References
+----------
+S. Garrido-Jurado, R. Muñoz-Salinas, F. J. Madrid-Cuevas, M. J. Marín-Jiménez, "Automatic
+generation and detection of highly reliable fiducial markers under occlusion", Pattern
+Recognition 47(6):2280-2292, 2014.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from functools import lru_cache
+from importlib import resources
+
+import numpy as np
+from numpy.typing import NDArray
+
+from imageform._validate import as_int, as_real, describe, format_shape
+from imageform.errors import InvalidInputError, UnknownOptionError
+
+__all__ = [
+    "ARUCO_DICTIONARIES",
+    "ArucoDictionary",
+    "ArucoMarkers",
+    "aruco_dictionary",
+    "aruco_marker_image",
+    "detect_aruco_markers",
+]
+
+#: Dictionary names: ``"4x4_50"`` ... ``"7x7_1000"`` (OpenCV's ``DICT_4X4_50`` ...) and
+#: ``"aruco_original"`` (``DICT_ARUCO_ORIGINAL``, 1024 markers of 5 x 5 bits).
+ARUCO_DICTIONARIES: tuple[str, ...] = (
+    *(f"{s}x{s}_{n}" for s in (4, 5, 6, 7) for n in (50, 100, 250, 1000)),
+    "aruco_original",
+)
+
+#: OpenCV's maxCorrectionBits of each predefined dictionary (bits a marker may differ from its
+#: code and still be read), as ``cv2.aruco.getPredefinedDictionary(...).maxCorrectionBits``.
+_CORRECTION_BITS = {
+    4: (1, 1, 1, 0),
+    5: (3, 3, 2, 2),
+    6: (6, 5, 5, 4),
+    7: (9, 8, 8, 6),
+}
+_COUNTS = (50, 100, 250, 1000)
+
+#: Largest image the detector takes (pixels), so a mistaken array cannot run for hours.
+_MAX_PIXELS = 100_000_000
+
+
+@dataclass(frozen=True)
+class ArucoDictionary:
+    """A marker dictionary: ``codes[i]`` is marker ``i``'s ``s x s`` bits (1 = white).
+
+    ``max_correction_bits``: how many bits may be misread and still be corrected to the
+    nearest code (OpenCV's value for its predefined dictionaries).
+    """
+
+    name: str
+    marker_size: int
+    codes: NDArray[np.uint8] = field(repr=False)
+    max_correction_bits: int
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.name, str):
+            raise InvalidInputError(f"expected name as a str, got {describe(self.name)}")
+        s = as_int(self.marker_size, "marker_size", minimum=2, maximum=16)
+        codes = self.codes
+        if not isinstance(codes, np.ndarray) or codes.ndim != 3 or codes.shape[1:] != (s, s):
+            raise InvalidInputError(
+                f"expected codes as an (n, {s}, {s}) array of 0/1, got {describe(codes)}"
+            )
+        if (
+            codes.shape[0] < 1
+            or codes.dtype.kind not in "uib"
+            or np.any((codes != 0) & (codes != 1))
+        ):
+            raise InvalidInputError(
+                f"expected codes of 0 and 1 (at least one), got {describe(codes)}"
+            )
+        corr = as_int(self.max_correction_bits, "max_correction_bits", minimum=0, maximum=s * s)
+        object.__setattr__(self, "marker_size", s)
+        object.__setattr__(self, "max_correction_bits", corr)
+        frozen = np.array(codes, dtype=np.uint8)
+        frozen.setflags(write=False)
+        object.__setattr__(self, "codes", frozen)
+
+    @property
+    def size(self) -> int:
+        """How many markers the dictionary holds."""
+        return int(self.codes.shape[0])
+
+
+@lru_cache(maxsize=1)
+def _tables() -> dict[str, NDArray[np.uint8]]:
+    ref = resources.files("imageform.geometry").joinpath("data", "aruco_dictionaries.npz")
+    with ref.open("rb") as fh, np.load(fh) as npz:
+        return {k: npz[k] for k in npz.files}
+
+
+def aruco_dictionary(name: str | ArucoDictionary = "6x6_250") -> ArucoDictionary:
+    """The predefined dictionary ``name`` (one of :data:`ARUCO_DICTIONARIES`).
+
+    Parameters
+    ----------
+    name : str or ArucoDictionary
+        ``"4x4_50"`` ... ``"7x7_1000"`` or ``"aruco_original"`` (case-insensitive; OpenCV's
+        spelling ``"DICT_6X6_250"`` is accepted too). A dictionary is returned as it is.
+
+    Returns
+    -------
+    ArucoDictionary
+
+    Raises
+    ------
+    UnknownOptionError
+        Not a predefined dictionary.
+
+    Examples
+    --------
+    >>> d = aruco_dictionary("4x4_50")
+    >>> d.size, d.marker_size, d.max_correction_bits
+    (50, 4, 1)
+    >>> d.codes[0].astype(int).tolist()
+    [[1, 0, 1, 1], [0, 1, 0, 1], [0, 0, 1, 1], [0, 0, 1, 0]]
+    """
+    if isinstance(name, ArucoDictionary):
+        return name
+    if not isinstance(name, str):
+        raise TypeError(f"expected dictionary as a name such as '6x6_250', got {describe(name)}")
+    key = name.strip().lower().removeprefix("dict_")
+    if key not in ARUCO_DICTIONARIES:
+        shown = name if len(name) <= 40 else name[:40] + "..."
+        raise UnknownOptionError(
+            f"unknown ArUco dictionary name {shown!r}; expected 4x4_50 ... 7x7_1000 "
+            "(sizes 4-7, counts 50/100/250/1000) or aruco_original"
+        )
+    tables = _tables()
+    if key == "aruco_original":
+        s, n, corr = 5, 1024, 1
+        packed = tables["aruco_original"]
+    else:
+        s, n = int(key[0]), int(key.split("_")[1])
+        corr = _CORRECTION_BITS[s][_COUNTS.index(n)]
+        packed = tables[f"{s}x{s}"][:n]
+    codes = np.unpackbits(packed, axis=1, count=s * s).reshape(n, s, s)
+    return ArucoDictionary(key, s, codes, corr)
+
+
+def aruco_marker_image(
+    marker_id: int,
+    dictionary: str | ArucoDictionary = "6x6_250",
+    *,
+    size_px: int = 200,
+    border_bits: int = 1,
+) -> NDArray[np.uint8]:
+    """The printable image of marker ``marker_id`` (uint8, 0 black, 255 white).
+
+    Equal to OpenCV's ``cv2.aruco.generateImageMarker(dictionary, id, size_px, borderBits)``
+    (tested): ``s + 2 border_bits`` cells per side, each cell a block of pixels (the
+    nearest cell of each pixel centre when ``size_px`` is not a multiple of the cells).
+
+    Parameters
+    ----------
+    marker_id : int
+        Index in the dictionary.
+    dictionary : str or ArucoDictionary
+        See :func:`aruco_dictionary`.
+    size_px : int, keyword-only
+        Side of the image in pixels (at least the number of cells).
+    border_bits : int, keyword-only
+        Width of the black border in cells (1 in OpenCV's detector).
+
+    Returns
+    -------
+    ndarray, shape (size_px, size_px), uint8
+
+    Examples
+    --------
+    >>> img = aruco_marker_image(0, "4x4_50", size_px=6)
+    >>> (img // 255).tolist()[1]
+    [0, 1, 0, 1, 1, 0]
+    """
+    d = aruco_dictionary(dictionary)
+    mid = as_int(marker_id, "marker_id", minimum=0, maximum=d.size - 1)
+    border = as_int(border_bits, "border_bits", minimum=1, maximum=16)
+    cells = d.marker_size + 2 * border
+    size = as_int(size_px, "size_px", minimum=cells, maximum=20000)
+    grid = np.zeros((cells, cells), dtype=np.uint8)
+    grid[border:-border, border:-border] = d.codes[mid] * 255
+    # OpenCV resizes the cell grid with INTER_NEAREST: source index floor(i * cells / size)
+    idx = (np.arange(size) * cells) // size
+    return grid[np.ix_(idx, idx)]
+
+
+@dataclass(frozen=True)
+class ArucoMarkers:
+    """Markers found in an image.
+
+    ``ids`` (n,) int64; ``corners`` (n, 4, 2) float64: each marker's top-left, top-right,
+    bottom-right and bottom-left corner (as printed) in pixels; ``hamming`` (n,) int64: the
+    bits corrected; ``dictionary``: the dictionary's name.
+    """
+
+    ids: NDArray[np.int64]
+    corners: NDArray[np.float64]
+    hamming: NDArray[np.int64]
+    dictionary: str
+
+    def __len__(self) -> int:
+        """How many markers were found."""
+        return int(self.ids.shape[0])
+
+    @property
+    def centers(self) -> NDArray[np.float64]:
+        """The markers' centres (n, 2): where the diagonals of the corners cross."""
+        if len(self) == 0:
+            return np.zeros((0, 2))
+        return np.stack([_diagonal_cross(c) for c in self.corners])
+
+
+def _diagonal_cross(q: NDArray[np.float64]) -> NDArray[np.float64]:
+    a = np.cross(np.append(q[0], 1.0), np.append(q[2], 1.0))
+    b = np.cross(np.append(q[1], 1.0), np.append(q[3], 1.0))
+    p = np.cross(a, b)
+    if abs(p[2]) < 1e-12:
+        return np.asarray(q.mean(axis=0))
+    return np.asarray(p[:2] / p[2])
+
+
+def _gray01(image: object) -> NDArray[np.float64]:
+    arr = np.asarray(image) if not isinstance(image, np.ndarray) else image
+    if arr.dtype.kind not in "uif" or arr.dtype.kind == "c":
+        raise InvalidInputError(f"expected image as a real array, got {describe(image)}")
+    if arr.ndim == 3 and arr.shape[2] in (3, 4):
+        arr = arr[..., :3]
+    elif arr.ndim == 3 and arr.shape[2] == 1:
+        arr = arr[..., 0]
+    if arr.ndim not in (2, 3) or min(arr.shape[:2]) < 8:
+        raise InvalidInputError(
+            "expected image of shape (H, W) or (H, W, 3) with H, W >= 8, got "
+            f"{format_shape(arr.shape)}"
+        )
+    if arr.shape[0] * arr.shape[1] > _MAX_PIXELS:
+        raise InvalidInputError(
+            f"image has {arr.shape[0] * arr.shape[1]} pixels, more than {_MAX_PIXELS}"
+        )
+    g = arr.astype(np.float64)
+    if not np.all(np.isfinite(g)):
+        raise InvalidInputError("image contains NaN or inf")
+    if g.ndim == 3:
+        g = g @ np.array([0.299, 0.587, 0.114])
+    if arr.dtype.kind == "u":
+        g /= float(np.iinfo(arr.dtype).max)
+    elif arr.dtype.kind == "i" or float(np.max(g)) > 1.0:
+        lo, hi = float(np.min(g)), float(np.max(g))
+        g = (g - lo) / (hi - lo) if hi > lo else np.zeros_like(g)
+    return g
+
+
+def _homography(src: NDArray[np.float64], dst: NDArray[np.float64]) -> NDArray[np.float64]:
+    """The 3x3 homography mapping 4 (or more) ``src`` points to ``dst`` (DLT, SVD)."""
+    rows = []
+    for (x, y), (u, v) in zip(src, dst, strict=True):
+        rows.append([x, y, 1, 0, 0, 0, -u * x, -u * y, -u])
+        rows.append([0, 0, 0, x, y, 1, -v * x, -v * y, -v])
+    _, _, vt = np.linalg.svd(np.asarray(rows))
+    h = vt[-1].reshape(3, 3)
+    return np.asarray(h / h[2, 2]) if abs(h[2, 2]) > 1e-15 else np.asarray(h)
+
+
+def _apply_h(h: NDArray[np.float64], pts: NDArray[np.float64]) -> NDArray[np.float64]:
+    p = np.column_stack([pts, np.ones(len(pts))]) @ h.T
+    return np.asarray(p[:, :2] / p[:, 2:3])
+
+
+def _bilinear(g: NDArray[np.float64], uv: NDArray[np.float64]) -> NDArray[np.float64]:
+    h, w = g.shape
+    u = np.clip(uv[:, 0], 0.0, w - 1.0)
+    v = np.clip(uv[:, 1], 0.0, h - 1.0)
+    u0 = np.minimum(np.floor(u).astype(np.int64), w - 2)
+    v0 = np.minimum(np.floor(v).astype(np.int64), h - 2)
+    fu, fv = u - u0, v - v0
+    return np.asarray(
+        (1 - fv) * ((1 - fu) * g[v0, u0] + fu * g[v0, u0 + 1])
+        + fv * ((1 - fu) * g[v0 + 1, u0] + fu * g[v0 + 1, u0 + 1])
+    )
+
+
+def _quad(pts: NDArray[np.float64], area: float) -> NDArray[np.float64] | None:
+    """Four extreme boundary points of a component, clockwise on screen; None unless the quad
+    through them has the component's area (a quadrilateral blob, not an L or a disc)."""
+    c = pts.mean(axis=0)
+    i0 = int(np.argmax(np.sum((pts - c) ** 2, axis=1)))
+    i2 = int(np.argmax(np.sum((pts - pts[i0]) ** 2, axis=1)))
+    d = pts[i2] - pts[i0]
+    side = d[0] * (pts[:, 1] - pts[i0, 1]) - d[1] * (pts[:, 0] - pts[i0, 0])
+    i1, i3 = int(np.argmax(side)), int(np.argmin(side))
+    if side[i1] <= 0 or side[i3] >= 0:
+        return None
+    quad = pts[[i0, i1, i2, i3]]
+    x, y = quad[:, 0], quad[:, 1]
+    xn, yn = x[[1, 2, 3, 0]], y[[1, 2, 3, 0]]
+    signed = 0.5 * float(np.sum(x * yn - y * xn))
+    perimeter = float(np.sum(np.hypot(xn - x, yn - y)))
+    # the quad runs through boundary pixel centres: about half a pixel inside the blob
+    expected = area - 0.5 * perimeter
+    if abs(abs(signed) - expected) > 0.12 * area:
+        return None
+    if signed < 0:  # clockwise on screen (v down) is a positive signed area in (u, v)
+        quad = quad[::-1]
+    return np.asarray(quad, dtype=np.float64)
+
+
+def _line_normal(centred: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Unit normal of the total-least-squares line through centred points (the eigenvector
+    of the 2x2 scatter matrix with the smaller eigenvalue, in closed form)."""
+    sxx = float(centred[:, 0] @ centred[:, 0])
+    syy = float(centred[:, 1] @ centred[:, 1])
+    sxy = float(centred[:, 0] @ centred[:, 1])
+    theta = 0.5 * math.atan2(2.0 * sxy, sxx - syy)  # direction of the line
+    return np.array([-math.sin(theta), math.cos(theta)])
+
+
+def _refine_sides(
+    quad: NDArray[np.float64], boundary: NDArray[np.float64]
+) -> NDArray[np.float64] | None:
+    """Corners where the four sides meet, each side a line fitted to the component's boundary
+    pixels along it and moved half a pixel outwards (the boundary pixels' centres lie half a
+    pixel inside the dark region's edge); None when a side has too few pixels."""
+    center = quad.mean(axis=0)
+    lines = []
+    for k in range(4):
+        a, b = quad[k], quad[(k + 1) % 4]
+        d = b - a
+        length = float(np.hypot(*d))
+        if length < 1e-9:
+            return None
+        t = ((boundary - a) @ d) / length**2
+        n = np.array([-d[1], d[0]]) / length
+        dist = np.abs((boundary - a) @ n)
+        sel = (t > 0.12) & (t < 0.88) & (dist < max(1.5, 0.06 * length))
+        p = boundary[sel]
+        if len(p) < 4:
+            return None
+        m = p.mean(axis=0)
+        normal = _line_normal(p - m)
+        if float(normal @ (m - center)) < 0:
+            normal = -normal  # pointing out of the quad
+        lines.append(np.array([normal[0], normal[1], -float(normal @ m) - 0.5]))
+    out = np.empty_like(quad)
+    for k in range(4):
+        a1, b1, c1 = lines[(k - 1) % 4]
+        a2, b2, c2 = lines[k]
+        det = a1 * b2 - a2 * b1
+        if abs(det) < 1e-12:
+            return None
+        out[k] = ((b1 * c2 - b2 * c1) / det, (c1 * a2 - c2 * a1) / det)
+    if np.max(np.hypot(*(out - quad).T)) > 3.0:
+        return None
+    return out
+
+
+def _fill_holes(mask: NDArray[np.bool_]) -> NDArray[np.bool_]:
+    """``mask`` with the background regions that do not touch its border filled."""
+    from scipy import ndimage
+
+    bg, n = ndimage.label(~mask)
+    if n == 0:
+        return mask
+    edge = np.unique(np.concatenate([bg[0], bg[-1], bg[:, 0], bg[:, -1]]))
+    inside = np.ones(n + 1, dtype=bool)
+    inside[edge] = False
+    inside[0] = False
+    return np.asarray(mask | inside[bg])
+
+
+def _otsu(values: NDArray[np.float64]) -> float:
+    """Otsu's threshold of a few values: the split maximising the between-class variance."""
+    v = np.sort(values)
+    n = len(v)
+    i = np.arange(1, n)
+    csum = np.cumsum(v)
+    m0 = csum[:-1] / i
+    m1 = (csum[-1] - csum[:-1]) / (n - i)
+    between = (i / n) * (1 - i / n) * (m0 - m1) ** 2
+    k = int(np.argmax(between))
+    return float(0.5 * (v[k] + v[k + 1]))
+
+
+def _read_bits(
+    g: NDArray[np.float64], quad: NDArray[np.float64], cells: int
+) -> tuple[NDArray[np.bool_], float] | None:
+    """The cell colours (True = white) of a quad seen as ``cells x cells``, and the contrast."""
+    unit = np.array([[0.0, 0.0], [cells, 0.0], [cells, cells], [0.0, cells]])
+    h = _homography(unit, quad)
+    sub = np.array([0.3, 0.5, 0.7])
+    su, sv = np.meshgrid(sub, sub)
+    offs = np.column_stack([su.ravel(), sv.ravel()])
+    ci, cj = np.meshgrid(np.arange(cells), np.arange(cells))
+    base = np.column_stack([ci.ravel(), cj.ravel()]).astype(np.float64)  # (x = col, y = row)
+    pts = (base[:, None, :] + offs[None]).reshape(-1, 2)
+    means = _bilinear(g, _apply_h(h, pts)).reshape(cells * cells, -1).mean(axis=1)
+    contrast = float(means.max() - means.min())
+    if contrast < 0.08:
+        return None
+    thr = _otsu(means)
+    return (means > thr).reshape(cells, cells), contrast
+
+
+def _match(
+    bits: NDArray[np.bool_], d: ArucoDictionary, rotated: NDArray[np.uint8], max_bits: int
+) -> tuple[int, int, int] | None:
+    """``(id, rotation, distance)`` of the nearest code, or None."""
+    flat = bits.reshape(-1).astype(np.uint8)
+    dist = np.count_nonzero(rotated != flat[None, None, :], axis=2)  # (n, 4)
+    best = int(np.argmin(dist))
+    mid, rot = divmod(best, 4)
+    dmin = int(dist[mid, rot])
+    if dmin > max_bits:
+        return None
+    return mid, rot, dmin
+
+
+@lru_cache(maxsize=16)
+def _rotated_codes(name: str) -> NDArray[np.uint8]:
+    d = aruco_dictionary(name)
+    return np.stack([np.stack([np.rot90(c, k).reshape(-1) for k in range(4)]) for c in d.codes])
+
+
+def detect_aruco_markers(
+    image: object,
+    dictionary: str | ArucoDictionary = "6x6_250",
+    *,
+    min_side_px: float = 12.0,
+    windows: tuple[int, ...] | None = None,
+    error_correction_rate: float = 0.6,
+    max_border_errors: float = 0.35,
+) -> ArucoMarkers:
+    """Find and decode the ArUco markers of ``dictionary`` in ``image``.
+
+    Parameters
+    ----------
+    image : array_like, shape (H, W) or (H, W, 3)
+        Grey or RGB (uint8, uint16, or floats: [0, 1] or any scale).
+    dictionary : str or ArucoDictionary
+        See :func:`aruco_dictionary`.
+    min_side_px : float, keyword-only
+        Smallest marker side, in pixels, looked for.
+    windows : tuple of int, optional, keyword-only
+        Side lengths (pixels, odd) of the adaptive threshold's local-mean windows; default
+        three sizes scaled with the image (about 1.5 %, 4 % and 10 % of its larger side).
+    error_correction_rate : float, keyword-only
+        Fraction in [0, 1] of the dictionary's ``max_correction_bits`` corrected (OpenCV's
+        ``errorCorrectionRate``, 0.6).
+    max_border_errors : float, keyword-only
+        Largest fraction of border cells that may read white (OpenCV's
+        ``maxErroneousBitsInBorderRate``, 0.35).
+
+    Returns
+    -------
+    ArucoMarkers
+        Sorted by id; a marker seen at several threshold windows is reported once.
+
+    Raises
+    ------
+    InvalidInputError
+        ``image`` is not a grey or RGB image of real numbers.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> canvas = np.full((240, 320), 255, np.uint8)
+    >>> canvas[60:180, 100:220] = aruco_marker_image(7, "4x4_50", size_px=120)
+    >>> m = detect_aruco_markers(canvas, "4x4_50")
+    >>> m.ids.tolist(), np.round(m.corners[0], 1).tolist()
+    ([7], [[99.5, 59.5], [219.5, 59.5], [219.5, 179.5], [99.5, 179.5]])
+    """
+    from scipy import ndimage
+
+    d = aruco_dictionary(dictionary)
+    g = _gray01(image)
+    min_side = as_real(min_side_px, "min_side_px", positive=True, maximum=1e5)
+    rate = as_real(error_correction_rate, "error_correction_rate", nonnegative=True, maximum=1.0)
+    border_rate = as_real(max_border_errors, "max_border_errors", nonnegative=True, maximum=1.0)
+    hgt, wid = g.shape
+    if windows is None:
+        big = max(hgt, wid)
+        wins = sorted({max(3, int(big * f) | 1) for f in (0.015, 0.04, 0.10)})
+    else:
+        if not isinstance(windows, tuple | list) or not windows:
+            raise InvalidInputError(f"expected windows as a tuple of ints, got {describe(windows)}")
+        wins = [as_int(w, "windows", minimum=3, maximum=4001) | 1 for w in windows]
+    max_bits = math.floor(d.max_correction_bits * rate)
+    rotated = (
+        _rotated_codes(d.name)
+        if isinstance(dictionary, str)
+        else np.stack([np.stack([np.rot90(c, k).reshape(-1) for k in range(4)]) for c in d.codes])
+    )
+    cells = d.marker_size + 2
+    border_mask = np.ones((cells, cells), dtype=bool)
+    border_mask[1:-1, 1:-1] = False
+    found: dict[int, tuple[float, NDArray[np.float64], int]] = {}
+    min_area = min_side * min_side * 0.5
+    max_area = 0.9 * hgt * wid
+    structure = np.array([[0, 1, 0], [1, 1, 1], [0, 1, 0]], dtype=bool)
+    boxes: list[tuple[float, float, float, float, int]] = []
+    for win in sorted(wins, reverse=True):
+        mean = ndimage.uniform_filter(g, size=win, mode="reflect")
+        dark = g < mean - 0.02
+        labels, n = ndimage.label(dark, structure=structure)
+        if n == 0:
+            continue
+        areas = np.bincount(labels.ravel(), minlength=n + 1)
+        slices = ndimage.find_objects(labels)
+        for k, sl in enumerate(slices, start=1):
+            if sl is None:
+                continue
+            hh, ww = sl[0].stop - sl[0].start, sl[1].stop - sl[1].start
+            if hh < min_side * 0.7 or ww < min_side * 0.7 or hh * ww > max_area:
+                continue
+            # holes filled: only the outer boundary counts (a small window leaves a ring)
+            if areas[k] < min_area:
+                continue
+            cy, cx = 0.5 * (sl[0].start + sl[0].stop), 0.5 * (sl[1].start + sl[1].stop)
+            if any(
+                b[0] <= cx <= b[2] and b[1] <= cy <= b[3] and 0.7 < (hh * ww) / b[4] < 1.4
+                for b in boxes
+            ):
+                continue  # decoded already, at a larger window
+            sub = _fill_holes(labels[sl] == k)
+            if int(np.count_nonzero(sub)) == int(areas[k]):
+                continue  # no holes: a solid blob, not a marker (its code has white cells)
+            # boundary pixels: in the component with a 4-neighbour outside it
+            pad = np.pad(sub, 1)
+            inner = pad[:-2, 1:-1] & pad[2:, 1:-1] & pad[1:-1, :-2] & pad[1:-1, 2:]
+            edge = sub & ~inner
+            vv, uu = np.nonzero(edge)
+            pts = np.column_stack([uu + sl[1].start, vv + sl[0].start]).astype(np.float64)
+            if len(pts) < 12:
+                continue
+            quad = _quad(pts, float(sub.sum()))
+            if quad is None:
+                continue
+            sides = np.hypot(*(np.roll(quad, -1, axis=0) - quad).T)
+            if sides.min() < min_side or sides.min() < 0.25 * sides.max():
+                continue
+            refined = _refine_sides(quad, pts)
+            if refined is None:
+                continue
+            quad = refined
+            read = _read_bits(g, quad, cells)
+            if read is None:
+                continue
+            bits, contrast = read
+            if np.count_nonzero(bits[border_mask]) > border_rate * border_mask.sum():
+                continue
+            hit = _match(bits[1:-1, 1:-1], d, rotated, max_bits)
+            if hit is None:
+                continue
+            mid, rot, dist = hit
+            # observed == np.rot90(code, rot) (counter-clockwise turns): the printed top-left
+            # corner is the observed corner (4 - rot) % 4
+            ordered = np.roll(quad, rot, axis=0)
+            score = contrast - dist
+            if mid not in found or score > found[mid][0]:
+                found[mid] = (score, ordered, dist)
+            lo, hi = quad.min(axis=0), quad.max(axis=0)
+            boxes.append((lo[0], lo[1], hi[0], hi[1], hh * ww))
+    ids = np.array(sorted(found), dtype=np.int64)
+    corners = np.array([found[i][1] for i in ids], dtype=np.float64).reshape(-1, 4, 2)
+    hamming = np.array([found[i][2] for i in ids], dtype=np.int64)
+    return ArucoMarkers(ids, corners, hamming, d.name)
