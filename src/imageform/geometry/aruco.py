@@ -531,15 +531,18 @@ def detect_aruco_markers(
     max_area = 0.9 * hgt * wid
     structure = np.array([[0, 1, 0], [1, 1, 1], [0, 1, 0]], dtype=bool)
     boxes: list[tuple[float, float, float, float, int]] = []
+    g32 = g.astype(np.float32)  # the local means only threshold: float32 is ample
     for win in sorted(wins, reverse=True):
-        mean = ndimage.uniform_filter(g, size=win, mode="reflect")
+        mean = ndimage.uniform_filter(g32, size=win, mode="reflect")
         dark = g < mean - 0.02
         labels, n = ndimage.label(dark, structure=structure)
         if n == 0:
             continue
         areas = np.bincount(labels.ravel(), minlength=n + 1)
         slices = ndimage.find_objects(labels)
-        for k, sl in enumerate(slices, start=1):
+        sized = np.nonzero(areas >= min_area)[0]
+        for k in sized[sized > 0].tolist():
+            sl = slices[k - 1]
             if sl is None:
                 continue
             hh, ww = sl[0].stop - sl[0].start, sl[1].stop - sl[1].start
