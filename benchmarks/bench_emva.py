@@ -30,8 +30,8 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from benchmarks._common import header, markdown_table  # noqa: E402
-from imageform.sensor import (  # noqa: E402
+from benchmarks._common import header, markdown_table
+from imageform.sensor import (
     EmvaFrames,
     SensorModel,
     ccd_preset,
@@ -166,7 +166,7 @@ def emva1288_results(
     from emva1288.process.results import Results1288
 
     if not hasattr(np, "asfarray"):
-        routines.np = _Numpy1Shim()  # type: ignore[attr-defined]
+        routines.np = _Numpy1Shim()
 
     def temporal(stack: np.ndarray) -> dict[str, Any]:
         d = routines.get_int_imgs(list(stack[:2]))
@@ -244,9 +244,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--seeds", type=int, default=3)
     args = ap.parse_args(argv)
     shape = (96, 96)
-    rows = []
-    worst: dict[str, float] = {k: 0.0 for k in _KEYS}
-    worst_truth = {k: 0.0 for k in ("K", "sigma_d", "eta", "dsnu", "prnu", "sat")}
+    rows: list[tuple[object, ...]] = []
+    worst: dict[str, float] = dict.fromkeys(_KEYS, 0.0)
+    worst_truth = dict.fromkeys(("K", "sigma_d", "eta", "dsnu", "prnu", "sat"), 0.0)
     for name, sensor in SENSORS.items():
         tr = truth(sensor, shape)
         for seed in range(args.seeds):
@@ -256,9 +256,7 @@ def main(argv: list[str] | None = None) -> int:
             own_index = ref["index_sat"]
             if own_index != ours["index_sat"]:  # its scan stopped on the read-noise floor
                 ref = emva1288_results(frames, si, index_u_ysat=int(ours["index_sat"]))
-            rows.append(
-                (name, seed, "saturation index", "", ours["index_sat"], own_index, "")
-            )
+            rows.append((name, seed, "saturation index", "", ours["index_sat"], own_index, ""))
             for k in _KEYS:
                 a, b = ours[k], ref[k]
                 rel = abs(a / b - 1) if b else abs(a - b)

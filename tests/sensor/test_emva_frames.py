@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 import pytest
@@ -47,7 +48,7 @@ KEYS = [(n, seed) for n in SENSORS for seed in (0, 1)]
 
 @pytest.mark.parametrize("key", KEYS, ids=[f"{n}-{s}" for n, s in KEYS])
 def test_parameters_within_3_percent_of_the_model(measured, key) -> None:  # type: ignore[no-untyped-def]
-    s, f, m = measured[key]
+    s, _f, m = measured[key]
     t = truth(s, SHAPE)
     assert m.system_gain == pytest.approx(t["K"], rel=0.03)
     assert m.dark_noise == pytest.approx(t["sigma_d"], rel=0.03)
@@ -101,7 +102,7 @@ def test_without_photon_counts(seed: int) -> None:
 
 
 def test_snr_curve_model_and_measurement_agree() -> None:
-    _s, f, m = _one()
+    _s, _f, m = _one()
     below = (m.signal_electrons > 100) & (np.arange(m.mean_dn.size) < np.argmax(m.var_dn) - 3)
     np.testing.assert_allclose(m.snr_measured[below], m.snr_model[below], rtol=0.03)
     i = int(np.flatnonzero(below)[-1])
@@ -147,9 +148,7 @@ def test_unequal_stacks_and_spatial_index() -> None:
 
 def test_float_frames_give_the_same_result() -> None:
     _s, f, m = _one()
-    m2 = measure_emva(
-        f.flats.astype(np.float32), f.darks.astype(np.float64), f.exposure_times
-    )
+    m2 = measure_emva(f.flats.astype(np.float32), f.darks.astype(np.float64), f.exposure_times)
     assert m2.system_gain == pytest.approx(m.system_gain, rel=1e-12)
     assert m2.dsnu == pytest.approx(m.dsnu, rel=1e-9)
 
@@ -206,7 +205,12 @@ def test_degenerate_series_are_refused() -> None:
 
 def test_simulator_checks_its_inputs() -> None:
     s = cmos_preset()
-    kw = {"irradiance": 0.02, "wavelength_nm": 550.0, "exposure_times": [0.0, 0.01], "rng": 0}
+    kw: dict[str, Any] = {
+        "irradiance": 0.02,
+        "wavelength_nm": 550.0,
+        "exposure_times": [0.0, 0.01],
+        "rng": 0,
+    }
     with pytest.raises(TypeError, match="SensorModel"):
         simulate_emva_frames("cmos", **kw)  # type: ignore[arg-type]
     with pytest.raises(ImageformError, match="frames"):

@@ -209,9 +209,7 @@ def simulate_emva_frames(
     times = as_real_array(exposure_times, "exposure_times (s)", ndim=(0, 1), nonnegative=True)
     times = times.ravel()
     if not 1 <= times.size <= _MAX_EXPOSURES:
-        raise InvalidInputError(
-            f"expected 1 to {_MAX_EXPOSURES} exposure_times, got {times.size}"
-        )
+        raise InvalidInputError(f"expected 1 to {_MAX_EXPOSURES} exposure_times, got {times.size}")
     n_frames = as_int(frames, "frames (per stack)", minimum=2, maximum=100_000)
     ch = as_int(channel, "channel")
     if not 0 <= ch < sensor.n_channels:
@@ -248,7 +246,9 @@ def simulate_emva_frames(
             )[..., ch]
     photons = np.array(
         [
-            float(photons_per_pixel(e, wavelength_nm, pixel_area=sensor.pixel_area, exposure_time=t))
+            float(
+                photons_per_pixel(e, wavelength_nm, pixel_area=sensor.pixel_area, exposure_time=t)
+            )
             for t in times
         ]
     )
