@@ -177,3 +177,19 @@ def test_not_a_folder(tmp_path: Path) -> None:
     with pytest.raises(InvalidInputError, match="expected FOLDER a folder"):
         execute("emva", out=tmp_path / "r.json", folder=str(tmp_path / "missing"))
     assert main(["emva", str(tmp_path / "missing"), "-o", str(tmp_path / "r.json")]) != 0
+
+
+@pytest.mark.parametrize(
+    ("values", "words"),
+    [
+        ({"fit_fraction": 1.5}, "--fit-fraction"),
+        ({"fit_fraction": float("nan")}, "--fit-fraction"),
+        ({"spatial_index": -1}, "--spatial-index"),
+        ({"channel": 1.5}, "--channel"),
+    ],
+)
+def test_options_are_checked(values: dict, words: str) -> None:  # type: ignore[type-arg]
+    from imageform.workflows.registry import get_workflow
+
+    with pytest.raises(InvalidInputError, match=words):
+        get_workflow("emva").make_options(**values)

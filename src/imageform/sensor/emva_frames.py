@@ -228,6 +228,7 @@ def simulate_emva_frames(
         lambda: e * sensor.pixel_area * t_max * lam / (PLANCK * SPEED_OF_LIGHT),
         irradiance=e,
         exposure_times=t_max,
+        wavelength_nm=wavelength_nm,
     )
     check_electrons(mp_max, "irradiance and exposure_times")
     gen = as_rng(check_rng(rng))

@@ -62,6 +62,17 @@ class EmvaOptions(Options):
     )
     channel: int = option(0, help="Channel of colour frames to measure (grey frames: 0).")
 
+    def check(self) -> None:
+        super().check()
+        from imageform._validate import as_int, as_real
+
+        ff = as_real(self.fit_fraction, "--fit-fraction", positive=True, maximum=1.0)
+        object.__setattr__(self, "fit_fraction", ff)
+        if self.spatial_index is not None:
+            si = as_int(self.spatial_index, "--spatial-index", minimum=0)
+            object.__setattr__(self, "spatial_index", si)
+        object.__setattr__(self, "channel", as_int(self.channel, "--channel", minimum=0))
+
 
 def _manifest(folder: Path) -> list[_Entry]:
     import tomllib
