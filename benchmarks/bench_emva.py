@@ -280,8 +280,9 @@ def main(argv: list[str] | None = None) -> int:
         f"Frames: `benchmarks/bench_emva.py` ({args.seeds} seeds per sensor, 53 exposures "
         "from 0 to 112 % of the clip, 8 flat + 8 dark frames of 96 x 96 px each, 550 nm). "
         "`truth`: the model (DSNU, PRNU: the drawn pattern of the region; saturation: the "
-        "clip, full well or ADC, which EMVA's saturation point, the peak of the "
-        "photon-transfer curve, lies below by the pixels' spread). `diff %`: imageform "
+        "model's photon-transfer peak, `expected_saturation`, a censored-normal computation "
+        "over the chip's pixels, 2-4 % below the clip, full well or ADC, because pixels of "
+        "different gain and shot noise clip at different exposures). `diff %`: imageform "
         "against emva1288.\n",
         "Worst difference against emva1288 over all rows (%): "
         + ", ".join(f"{k} {100 * v:.2f}" for k, v in worst.items())
