@@ -146,6 +146,18 @@ def test_unequal_stacks_and_spatial_index() -> None:
     assert m2.prnu != m.prnu
 
 
+def test_exposures_in_any_order() -> None:
+    _s, f, m = _one()
+    order = np.random.default_rng(0).permutation(len(f.exposure_times))
+    m2 = measure_emva(
+        f.flats[order], f.darks[order], f.exposure_times[order], photons=f.photons[order]
+    )
+    for name in ("system_gain", "dark_noise", "quantum_efficiency", "saturation_capacity", "prnu"):
+        assert getattr(m2, name) == pytest.approx(getattr(m, name), rel=1e-9), name
+    assert order[m2.spatial_index] == m.spatial_index
+    np.testing.assert_array_equal(m2.var_dn, m.var_dn[order])
+
+
 def test_float_frames_give_the_same_result() -> None:
     _s, f, m = _one()
     m2 = measure_emva(f.flats.astype(np.float32), f.darks.astype(np.float64), f.exposure_times)

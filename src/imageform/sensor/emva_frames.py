@@ -469,7 +469,8 @@ def measure_emva(
 
     i_sat = int(np.argmax(var_y))
     sat_sig = float(sig[i_sat])
-    use = (sig <= ff * sat_sig) & (np.arange(n) <= i_sat)
+    before = times <= times[i_sat]  # the exposures up to saturation, in any given order
+    use = (sig <= ff * sat_sig) & before
     signal = use & (sig > 0)
     if int(signal.sum()) < 2:
         raise DegenerateConfigurationError(
@@ -512,7 +513,7 @@ def measure_emva(
         snr_model = mu_e / np.sqrt(sigma_d**2 + q2 + np.maximum(mu_e, 0.0))
 
     if spatial_index is None:
-        si = int(np.argmin(np.abs(sig[: i_sat + 1] - 0.5 * sat_sig)))
+        si = int(np.argmin(np.where(before, np.abs(sig - 0.5 * sat_sig), np.inf)))
     else:
         si = si_given
     mu_50, s2_50 = _spatial(fl[si])
