@@ -367,7 +367,7 @@ def measure_emva(
       ``fit_fraction`` (70 %) of the saturation signal; responsivity ``R`` likewise of
       ``μ_y - μ_y.dark`` against ``μ_p``, and ``η = R / K``;
     - temporal dark noise: ``σ²_y.dark`` extrapolated to zero exposure (linear fit against
-      ``t``; the first value with two or fewer distinct times), floored at 0.24 DN², and
+      ``t``; with two distinct times, the value at the shorter), floored at 0.24 DN², and
       ``σ_d = sqrt(σ²_y.dark - 1/12) / K`` (quantisation noise removed);
     - SNR: measured ``(μ_y - μ_y.dark) / σ_y``; model
       ``μ_e / sqrt(σ_d² + σ_q²/K² + μ_e)`` (eq. 13); ``SNR_max = sqrt(μ_e.sat)``;
