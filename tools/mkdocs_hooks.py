@@ -59,6 +59,7 @@ BENCH_SCRIPTS: dict[str, str] = {
     "delta-e": "benchmarks/bench_delta_e.py",
     "demosaic": "benchmarks/bench_demosaic.py",
     "distortion": "benchmarks/bench_distortion.py",
+    "emva": "benchmarks/bench_emva.py",
     "fuzz": "tests/fuzz/__main__.py",
     "geometry": "benchmarks/bench_geometry.py",
     "gpu-cpu": "benchmarks/bench_gpu.py",

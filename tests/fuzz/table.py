@@ -508,6 +508,10 @@ VALID: dict[str, C | Skip] = {
     "imageform.report.patches.snr_stage": call(result=V("result")),
     "imageform.report.write_report": call(result=V("result"), out_dir=V("tmpdir")),
     "imageform.sensor.ComparisonRow": call("aspect", "ccd", "cmos"),
+    "imageform.sensor.EmvaFrames": Skip(
+        "a record built by simulate_emva_frames (fuzzed through measure_emva)"
+    ),
+    "imageform.sensor.EmvaMeasurement": Skip("a result dataclass built by measure_emva"),
     "imageform.sensor.EmvaResult": Skip("a result dataclass built by fit_photon_transfer"),
     "imageform.sensor.FixedPattern": Skip("a result dataclass built by fixed_pattern"),
     "imageform.sensor.PhotonTransferData": Skip(
@@ -525,6 +529,9 @@ VALID: dict[str, C | Skip] = {
     ),
     "imageform.sensor.fit_photon_transfer": call(V("photon_data")),
     "imageform.sensor.fixed_pattern": call((6, 8, 3), prnu=0.01, dsnu=1.0, column_fpn=0.5, rng=0),
+    "imageform.sensor.measure_emva": call(
+        V("emva_flats"), V("emva_darks"), V("emva_times"), photons=V("emva_photons")
+    ),
     "imageform.sensor.mosaic": call(rgb=V("rgb")),
     "imageform.sensor.photons_per_pixel": call(
         irradiance=1.0, wavelength_nm=550.0, pixel_area=1e-11, exposure_time=0.01
@@ -536,6 +543,14 @@ VALID: dict[str, C | Skip] = {
     "imageform.sensor.row_start_times": call(rows=6, mode="rolling", line_time=1e-5),
     "imageform.sensor.shutter_capture": Skip(
         "takes a render callable of time (no fuzzable value; tested in tests/sensor)"
+    ),
+    "imageform.sensor.simulate_emva_frames": call(
+        sensor=V("sensor"),
+        irradiance=1.0,
+        wavelength_nm=550.0,
+        exposure_times=np.array([0.0, 0.001]),
+        rng=0,
+        shape=(6, 8),
     ),
     "imageform.sensor.simulate_photon_transfer": call(
         sensor=V("sensor"),
@@ -992,6 +1007,7 @@ VALID.update(
         "imageform.workflows.analysis.StainNormalizeOptions": call(target=V("png_file")),
         "imageform.workflows.sensor.DemosaicOptions": call(),
         "imageform.workflows.sensor.MosaicOptions": call(),
+        "imageform.workflows.emva.EmvaOptions": call(fit_fraction=0.6, spatial_index=2),
         "imageform.workflows.stereo.StereoCalibrateOptions": call(board="9x6"),
         "imageform.workflows.analysis.FitCorrectionOptions.fields": call(),
         "imageform.workflows.analysis.FitCorrectionOptions.types": call(),
@@ -1005,6 +1021,8 @@ VALID.update(
         "imageform.workflows.sensor.DemosaicOptions.types": call(),
         "imageform.workflows.sensor.MosaicOptions.fields": call(),
         "imageform.workflows.sensor.MosaicOptions.types": call(),
+        "imageform.workflows.emva.EmvaOptions.fields": call(),
+        "imageform.workflows.emva.EmvaOptions.types": call(),
         "imageform.workflows.stereo.StereoCalibrateOptions.fields": call(),
         "imageform.workflows.stereo.StereoCalibrateOptions.types": call(),
         "imageform.analysis.background_intensity": call(image=V("rgb")),
@@ -1166,6 +1184,15 @@ VALID.update(
         ),
         "imageform.workflows.sensor.MosaicOptions.paths": method(
             VALID["imageform.workflows.sensor.MosaicOptions"], "output"
+        ),
+        "imageform.workflows.emva.EmvaOptions.check": method(
+            VALID["imageform.workflows.emva.EmvaOptions"]
+        ),
+        "imageform.workflows.emva.EmvaOptions.check_output": method(
+            VALID["imageform.workflows.emva.EmvaOptions"], V("tmpfile_png")
+        ),
+        "imageform.workflows.emva.EmvaOptions.paths": method(
+            VALID["imageform.workflows.emva.EmvaOptions"], "output"
         ),
         "imageform.workflows.stereo.StereoCalibrateOptions.check": method(
             VALID["imageform.workflows.stereo.StereoCalibrateOptions"]

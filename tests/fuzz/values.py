@@ -76,6 +76,19 @@ def _sensor() -> Any:
     return SensorModel()
 
 
+def _emva_frames() -> Any:
+    from imageform.sensor import SensorModel, simulate_emva_frames
+
+    return simulate_emva_frames(
+        SensorModel(full_well=2000.0),
+        irradiance=0.01,
+        wavelength_nm=550.0,
+        exposure_times=np.linspace(0.0, 0.014, 8),
+        rng=0,
+        shape=(6, 8),
+    )
+
+
 def _points3() -> np.ndarray:
     g = _rng()
     return np.column_stack([g.uniform(-1, 1, 6), g.uniform(-1, 1, 6), g.uniform(3, 6, 6)])
@@ -408,6 +421,11 @@ FIXTURES: dict[str, Callable[[], Any]] = {
     "ground_obj": _scene_object("ground"),
     "render_output": _render_output,
     "photon_data": _of("result", "photon_transfer"),
+    "emva_frames": _emva_frames,
+    "emva_flats": _of("emva_frames", "flats"),
+    "emva_darks": _of("emva_frames", "darks"),
+    "emva_times": _of("emva_frames", "exposure_times"),
+    "emva_photons": _of("emva_frames", "photons"),
     "patch_measurements": _of("result", "patches"),
     "cc_truth": _of("result", "colorchecker"),
     "vanishing_truth": _of("result", "vanishing"),

@@ -1,5 +1,5 @@
 """imageform.sensor — colour filter arrays and demosaicing, the sensor model, noise, shutter,
-CCD/CMOS presets, EMVA 1288 photon transfer."""
+CCD/CMOS presets, EMVA 1288 photon transfer and characterisation from frame stacks."""
 
 from __future__ import annotations
 
@@ -11,6 +11,12 @@ from imageform.sensor.emva import (
     PhotonTransferData,
     fit_photon_transfer,
     simulate_photon_transfer,
+)
+from imageform.sensor.emva_frames import (
+    EmvaFrames,
+    EmvaMeasurement,
+    measure_emva,
+    simulate_emva_frames,
 )
 from imageform.sensor.model import SensorModel, photons_per_pixel
 from imageform.sensor.noise import (
@@ -40,6 +46,8 @@ __all__ = [
     "DEMOSAIC_METHODS",
     "QUANTIZATION_NOISE_DN",
     "ComparisonRow",
+    "EmvaFrames",
+    "EmvaMeasurement",
     "EmvaResult",
     "FixedPattern",
     "PhotonTransferData",
@@ -53,12 +61,14 @@ __all__ = [
     "emva_snr",
     "fit_photon_transfer",
     "fixed_pattern",
+    "measure_emva",
     "mosaic",
     "photons_per_pixel",
     "rolling_shutter_points",
     "rolling_shutter_skew",
     "row_start_times",
     "shutter_capture",
+    "simulate_emva_frames",
     "simulate_photon_transfer",
     "temporal_noise_dn",
 ]

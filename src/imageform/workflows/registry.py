@@ -10,6 +10,7 @@ from imageform.workflows import (
     analysis,
     calibration,
     color,
+    emva,
     geometry,
     lecture,
     optics,
@@ -39,6 +40,7 @@ WORKFLOWS = MappingProxyType(
             *vanishing.WORKFLOWS,
             *optics.WORKFLOWS,
             *sensor.WORKFLOWS,
+            *emva.WORKFLOWS,
             *analysis.WORKFLOWS,
             *sharpness.WORKFLOWS,
         )
