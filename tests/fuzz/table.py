@@ -34,9 +34,15 @@ VALID: dict[str, C | Skip] = {
         np.array([[0.65, 0.70, 0.29], [0.07, 0.99, 0.11]]), np.array([1.5, 1.2])
     ),
     "imageform.analysis.ReinhardStats": call((50.0, 5.0, -5.0), (10.0, 4.0, 4.0), 100),
+    "imageform.analysis.SensitivityEstimate": Skip(
+        "a result dataclass built by estimate_camera_sensitivities"
+    ),
     "imageform.analysis.StainMixture": Skip("a result NamedTuple (no validation of its own)"),
     "imageform.analysis.chart_patches": call(V("chart")),
     "imageform.analysis.correction_report": call(V("rgb_chart"), V("rgb_chart"), V("correction")),
+    "imageform.analysis.estimate_camera_sensitivities": call(
+        np.linspace(0.1, 1.0, 72).reshape(24, 3), light="D65", smoothness=0.1
+    ),
     "imageform.analysis.fit_color_correction": call(V("rgb_chart"), V("rgb_chart")),
     "imageform.analysis.macenko_normalize": call(V("stain"), V("stain")),
     "imageform.analysis.macenko_stains": call(image=V("rgb_big")),

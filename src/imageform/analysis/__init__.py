@@ -9,6 +9,8 @@
 - Sharpness as imaging labs measure it: the ISO 12233 slanted-edge e-SFR
   (:func:`slanted_edge_sfr`: MTF per channel, MTF50, MTF10) and the edges of a slanted-edge
   chart found by themselves (:func:`find_slanted_edges`), in :mod:`imageform.analysis.sfr`.
+- A camera's spectral sensitivities from its raw responses to a chart
+  (:func:`estimate_camera_sensitivities`, in :mod:`imageform.analysis.sensitivity`).
 - Labelled synthetic images to test them (:mod:`imageform.analysis.synthetic`).
 
 Every tool accepts NumPy arrays (uint8/uint16/floats) and Dask arrays (lazy, chunk-wise,
@@ -44,6 +46,7 @@ from imageform.analysis.segmentation import (
     overlay_mask,
     segment_hsv,
 )
+from imageform.analysis.sensitivity import SensitivityEstimate, estimate_camera_sensitivities
 from imageform.analysis.sfr import (
     SFR_LUMINANCE_WEIGHTS,
     SFRResult,
@@ -77,11 +80,13 @@ __all__ = [
     "MacenkoStains",
     "ReinhardStats",
     "SFRResult",
+    "SensitivityEstimate",
     "SlantedEdgeROI",
     "StainMixture",
     "background_intensity",
     "chart_patches",
     "correction_report",
+    "estimate_camera_sensitivities",
     "find_slanted_edges",
     "fit_color_correction",
     "macenko_normalize",
