@@ -210,3 +210,12 @@ def test_depth_of_field_extreme_f_number_is_the_documented_limit() -> None:
     # test lists this as "nonfinite": the inf is the answer)
     d = depth_of_field(focal_length=0.05, f_number=1e308, focus=2.0, coc=3e-5)
     assert d.far == math.inf and d.near == 0.0
+
+
+def test_apply_vignetting_shape_before_values() -> None:
+    # the image's values (NaN here) are not read when its shape cannot match the falloff
+    from imageform.optics import apply_vignetting
+
+    with pytest.raises(InvalidInputError, match="falloff") as exc:
+        apply_vignetting(np.full((4, 4, 3), np.nan), np.ones((5, 5)))
+    _one_line(exc, "image")
