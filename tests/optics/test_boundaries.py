@@ -219,3 +219,23 @@ def test_apply_vignetting_shape_before_values() -> None:
     with pytest.raises(InvalidInputError, match="falloff") as exc:
         apply_vignetting(np.full((4, 4, 3), np.nan), np.ones((5, 5)))
     _one_line(exc, "image")
+
+
+def test_zero_d_tensor_broadcasts_to_a_zero_d_result() -> None:
+    # an array parameter given as a 0-d tensor gives a 0-d (or (C,)) result, as NumPy
+    # broadcasting does: the fuzz test's "wrong_result_shape" for these is expected
+    torch = pytest.importorskip("torch")
+    from imageform.optics import axial_chromatic_blur_diameters, pupil_overlap_fraction
+
+    one = torch.tensor(1.0)
+    for out in (
+        diffraction_limited_mtf(one, wavelength=5e-7, f_number=4.0),
+        pixel_mtf(one, pixel_pitch=2e-6),
+        zernike_radial(2, 0, one),
+        pupil_overlap_fraction(1.0, 1.0, one),
+    ):
+        assert np.shape(out) == () and np.isfinite(out)
+    b = axial_chromatic_blur_diameters(
+        torch.tensor(3.0), focal_lengths=(0.0501, 0.05, 0.0499), f_number=2.0, focus=2.0
+    )
+    assert b.shape == (3,) and np.isfinite(b).all()
