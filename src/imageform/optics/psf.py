@@ -140,7 +140,7 @@ def zernike_radial(n: int, m: int, rho: Any) -> np.ndarray:
     return _radial(n, m, as_real_array(rho, "rho"))
 
 
-def _radial(n: int, m: int, r: np.ndarray) -> np.ndarray:
+def _radial(n: int, m: int, r: np.ndarray, *, check: bool = True) -> np.ndarray:
     def total() -> np.ndarray:
         out = np.zeros_like(r)
         for s in range((n - m) // 2 + 1):
@@ -153,6 +153,8 @@ def _radial(n: int, m: int, r: np.ndarray) -> np.ndarray:
             out = out + c * r ** (n - 2 * s)
         return out
 
+    if not check:  # the caller checks the finished sum once (and ignores the warnings)
+        return total()
     # rho far beyond the rim (the polynomial is defined on the unit disc) overflows
     return finite_result(f"the radial polynomial R_{n}^{m}", total, rho=r)
 
@@ -189,9 +191,9 @@ def zernike(j: int, rho: Any, theta: Any) -> np.ndarray:
     return _zernike(j, r, t)
 
 
-def _zernike(j: int, r: np.ndarray, t: np.ndarray) -> np.ndarray:
+def _zernike(j: int, r: np.ndarray, t: np.ndarray, *, check: bool = True) -> np.ndarray:
     n, m = noll_to_nm(j)
-    radial = _radial(n, abs(m), r)
+    radial = _radial(n, abs(m), r, check=check)
     if m == 0:
         return math.sqrt(n + 1) * radial * np.ones_like(t)
     ang = np.cos(m * t) if m > 0 else np.sin(-m * t)
@@ -243,7 +245,7 @@ def zernike_wavefront(coefficients: Any, rho: Any, theta: Any) -> np.ndarray:
         out = np.zeros(shape)
         for j, c in sorted(coef.items()):
             if c != 0.0:
-                out = out + c * _zernike(j, r, t)
+                out = out + c * _zernike(j, r, t, check=False)
         return out
 
     try:
