@@ -229,7 +229,7 @@ VALID: dict[str, C | Skip] = {
     "imageform.geometry.Camera.from_projection_matrix": call(P=V("P")),
     "imageform.geometry.Camera.in_image": method(V("camera"), uv=V("uv")),
     "imageform.geometry.Camera.look_at": call(
-        V("K"), np.array([0.0, 0.0, -5.0]), np.zeros(3), image_size=(8, 6)
+        V("K"), np.array([0.0, 0.0, -5.0]), np.zeros(3), (0.0, -1.0, 0.0), (8, 6)
     ),
     "imageform.geometry.ArucoDictionary": call(
         "tiny", 3, np.array([[[1, 0, 1], [0, 1, 0], [1, 1, 0]]], np.uint8), 0
@@ -237,7 +237,7 @@ VALID: dict[str, C | Skip] = {
     "imageform.geometry.ArucoMarkers": Skip("a result dataclass built by detect_aruco_markers"),
     "imageform.geometry.CharucoBoard": call((5, 7), 30.0, 24.0, "4x4_50"),
     "imageform.geometry.CharucoCorners": Skip("a result dataclass built by detect_charuco"),
-    "imageform.geometry.CheckerboardResult": call(True, np.zeros((6, 2)), pattern_size=(3, 2)),
+    "imageform.geometry.CheckerboardResult": call(True, np.zeros((6, 2)), "", (3, 2)),
     "imageform.geometry.ConeBeamGeometry": call(1.0, 0.5, 1e-4, (64, 48)),
     "imageform.geometry.DecomposedProjection": call(K=V("K"), R=V("R"), t=V("t")),
     "imageform.geometry.Dehomogenized": Skip("a result NamedTuple (no validation of its own)"),

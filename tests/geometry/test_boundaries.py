@@ -372,11 +372,10 @@ def test_refinement_kernel_stops_on_nan_iteration() -> None:
         assert np.array_equal(out, corners) and status.tolist() == [2]
 
 
-@pytest.mark.skipif(os.environ.get("NUMBA_BOUNDSCHECK") == "1", reason="already bounds-checked")
-def test_kernel_tests_pass_with_numba_boundscheck(tmp_path: Path) -> None:
-    """The refinement kernel's tests once more in a fresh interpreter with
-    NUMBA_BOUNDSCHECK=1 (an out-of-bounds read raises IndexError there) and an empty numba
-    cache, so that the kernels are compiled with the checks."""
+def _run_bounds_checked(tmp_path: Path, files: list[str], select: str) -> None:
+    """``pytest files -k select`` in a fresh interpreter with NUMBA_BOUNDSCHECK=1 (an
+    out-of-bounds read raises IndexError there) and an empty numba cache, so that the
+    kernels are compiled with the checks."""
     pytest.importorskip("numba")
     env = {
         **os.environ,
@@ -387,26 +386,43 @@ def test_kernel_tests_pass_with_numba_boundscheck(tmp_path: Path) -> None:
         ),
     }
     done = subprocess.run(
-        [
-            sys.executable,
-            "-m",
-            "pytest",
-            "-q",
-            "-x",
-            "-n",
-            "0",
-            "-p",
-            "no:cacheprovider",
-            "tests/geometry/test_checkerboard_kernels.py",
-            "tests/geometry/test_boundaries.py",
-            "-k",
-            "refine_twin or refinement_kernel",
-        ],
+        [sys.executable, "-m", "pytest", "-q", "-x", "-n", "0", "-p", "no:cacheprovider"]
+        + files
+        + ["-k", select],
         cwd=REPO,
         env=env,
         capture_output=True,
         text=True,
-        timeout=300,
+        timeout=600,
         check=False,
     )
     assert done.returncode == 0, done.stdout[-3000:] + done.stderr[-2000:]
+    assert " passed" in done.stdout, done.stdout[-3000:]
+
+
+BOUNDSCHECKED = pytest.mark.skipif(
+    os.environ.get("NUMBA_BOUNDSCHECK") == "1", reason="already bounds-checked"
+)
+
+
+@BOUNDSCHECKED
+def test_kernel_tests_pass_with_numba_boundscheck(tmp_path: Path) -> None:
+    """The checkerboard refinement kernel's tests under NUMBA_BOUNDSCHECK=1 (issue 16)."""
+    _run_bounds_checked(
+        tmp_path,
+        ["tests/geometry/test_checkerboard_kernels.py", "tests/geometry/test_boundaries.py"],
+        "refine_twin or refinement_kernel",
+    )
+
+
+@pytest.mark.slow
+@BOUNDSCHECKED
+def test_remap_kernel_tests_pass_with_numba_boundscheck(tmp_path: Path) -> None:
+    """The remap and fused-undistort kernels' tests under NUMBA_BOUNDSCHECK=1 (issue 16):
+    every dtype and channel count, NaN and edge map entries, non-contiguous and batched
+    inputs. Slow (about 40 s of compilation with the checks): CI runs it with ``-m slow``."""
+    _run_bounds_checked(
+        tmp_path,
+        ["tests/geometry/test_remap_fast.py"],
+        "remap_kernel_matches_twin or undistort_equals or non_contiguous",
+    )

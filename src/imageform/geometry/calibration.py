@@ -82,10 +82,12 @@ def checkerboard_points(pattern_size: tuple[int, int], square_size: float = 1.0)
 MAX_VIEWS = 10_000
 
 
-def _views(object_points: Any, image_points: Any) -> tuple[list[F64], list[F64]]:
+def _views(
+    object_points: Any, image_points: Any, image_name: str = "image_points"
+) -> tuple[list[F64], list[F64]]:
     for value, name, dim in (
         (object_points, "object_points", 3),
-        (image_points, "image_points", 2),
+        (image_points, image_name, 2),
     ):
         if (
             isinstance(value, str | bytes)
@@ -106,17 +108,17 @@ def _views(object_points: Any, image_points: Any) -> tuple[list[F64], list[F64]]
     if len(objs) != len(imgs):
         raise InvalidInputError(
             f"expected one object-point array per view of image points (object_points and "
-            f"image_points of the same length), got {len(objs)} and {len(imgs)}"
+            f"{image_name} of the same length), got {len(objs)} and {len(imgs)}"
         )
     if not objs:
         raise InvalidInputError("expected object_points of at least one view, got none")
     out_o, out_i = [], []
     for k, (o, i) in enumerate(zip(objs, imgs, strict=True)):
         oa = np.asarray(to_numpy(as_points(o, f"object_points[{k}]", 3)), dtype=np.float64)
-        ia = np.asarray(to_numpy(as_points(i, f"image_points[{k}]", 2)), dtype=np.float64)
+        ia = np.asarray(to_numpy(as_points(i, f"{image_name}[{k}]", 2)), dtype=np.float64)
         if oa.ndim != 2 or ia.ndim != 2 or oa.shape[0] != ia.shape[0]:
             raise InvalidInputError(
-                f"view {k}: expected object_points (N, 3) and image_points (N, 2) with the same "
+                f"view {k}: expected object_points (N, 3) and {image_name} (N, 2) with the same "
                 f"N, got {oa.shape} and {ia.shape}"
             )
         if oa.shape[0] < 4:

@@ -11,6 +11,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from imageform._validate import describe
 from imageform.errors import InvalidInputError
 from imageform.geometry.calibration_refine import GLOBAL_NAMES, RefineOutput, rodrigues
 from imageform.geometry.camera import Camera
@@ -170,6 +171,8 @@ class CalibrationResult:
             DeprecationWarning,
             stacklevel=2,
         )
+        if not isinstance(source, str | Path):
+            raise TypeError(f"expected source as a path or TOML text (str), got {describe(source)}")
         if isinstance(source, Path) or "=" not in str(source):
             p = Path(source)
             if not p.is_file():

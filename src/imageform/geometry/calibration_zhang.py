@@ -10,6 +10,8 @@ All inputs are clean NumPy float64 arrays (validated by the public functions).
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 from numpy.typing import NDArray
 
@@ -24,8 +26,17 @@ __all__ = ["dlt_init", "homographies", "poses_from_homographies", "zhang_intrins
 F64 = NDArray[np.float64]
 
 
+def _checked(object_points: Any, image_points: Any) -> tuple[list[F64], list[F64]]:
+    """The views as :func:`~imageform.geometry.calibrate_camera` checks them (one pass over
+    the small point arrays)."""
+    from imageform.geometry.calibration import _views  # calibration imports this module
+
+    return _views(object_points, image_points)
+
+
 def homographies(object_points: list[F64], image_points: list[F64]) -> F64:
     """``H_k`` (V, 3, 3) with ``image ~ H_k (X, Y, 1)`` for every view (normalised DLT)."""
+    object_points, image_points = _checked(object_points, image_points)
     if len({o.shape[0] for o in object_points}) == 1:  # one batched call
         return np.asarray(
             estimate_homography(
@@ -139,6 +150,7 @@ def dlt_init(object_points: list[F64], image_points: list[F64]) -> tuple[F64, F6
     ``K_k [R_k | t_k]``; the initial K is the mean of the ``K_k`` and the poses are each
     view's own (the refinement then makes them consistent).
     """
+    object_points, image_points = _checked(object_points, image_points)
     Ks, rv, tv = [], [], []
     for o, i in zip(object_points, image_points, strict=True):
         P = np.asarray(estimate_projection_matrix(o, i), dtype=np.float64)

@@ -28,6 +28,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from imageform._backend import use_numba
+from imageform._validate import as_int, as_real, describe
+from imageform.errors import InvalidInputError
 
 __all__ = ["Candidates", "find_candidates", "ring_test"]
 
@@ -125,6 +127,12 @@ def find_candidates(
     max_candidates: int = 300,
 ) -> Candidates:
     """Saddle-response maxima of ``gray`` that pass the ring test."""
+    # O(1) checks (the image's values were checked by find_checkerboard; no extra pass)
+    if not isinstance(gray, np.ndarray) or gray.ndim != 2 or gray.dtype.kind not in "fiu":
+        raise InvalidInputError(f"expected gray as a 2-D real NumPy image, got {describe(gray)}")
+    sigma = as_real(sigma, "sigma", positive=True, maximum=1000.0)
+    relative_threshold = as_real(relative_threshold, "relative_threshold", minimum=0.0)
+    max_candidates = as_int(max_candidates, "max_candidates", minimum=1, maximum=10**7)
     from imageform._kernels.checkerboard import (
         gaussian_weights,
         local_maxima_numba,

@@ -217,7 +217,9 @@ def line_through(p: ArrayLike, q: ArrayLike) -> Array:
     line = linalg(xp).cross(hp, hq)
     norm = xp.sqrt(line[..., 0] ** 2 + line[..., 1] ** 2)
     if bool(xp.any(norm == 0)):
-        raise DegenerateConfigurationError("the two points coincide: no unique line through them")
+        raise DegenerateConfigurationError(
+            "the two points p and q coincide: no unique line through them"
+        )
     line = line / norm[..., None]
     # Fix the sign so the representation is unique: first non-zero of (a, b) positive.
     sign = xp.where(line[..., 0] != 0, xp.sign(line[..., 0]), xp.sign(line[..., 1]))
@@ -248,7 +250,7 @@ def intersect_lines(l1: ArrayLike, l2: ArrayLike) -> Array:
     b = as_points(l2, "l2", 3, xp=xp)
     a, b = xp.broadcast_arrays(a, b)
     x = linalg(xp).cross(a, b)
-    return _normalize_homogeneous_point(x, xp, what="the two lines are identical")
+    return _normalize_homogeneous_point(x, xp, what="the two lines l1 and l2 are identical")
 
 
 def _normalize_homogeneous_point(x: Array, xp: Any, *, what: str) -> Array:
@@ -320,7 +322,9 @@ def cross_ratio(a: ArrayLike, b: ArrayLike, c: ArrayLike, d: ArrayLike) -> Array
     pa, pb, pc, pd = xp.broadcast_arrays(pa, pb, pc, pd)
     stacked = xp.stack((pa, pb, pc, pd), axis=-2)
     if not bool(xp.all(are_collinear(stacked, tol=1e-6))):
-        raise DegenerateConfigurationError("cross_ratio needs four collinear points")
+        raise DegenerateConfigurationError(
+            "cross_ratio needs four collinear points a, b, c, d; they are not collinear"
+        )
     # Signed positions along the unit direction from a to d (a = d leaves it undefined).
     dvec = pd - pa
     dnorm = xp.sqrt(xp.sum(dvec * dvec, axis=-1, keepdims=True))

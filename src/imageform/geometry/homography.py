@@ -80,8 +80,8 @@ def estimate_homography(src: ArrayLike, dst: ArrayLike) -> Array:
     s = as_points(src, "src", 2, xp=xp)
     d = as_points(dst, "dst", 2, xp=xp, dtype=s.dtype)
     _check_pairs(s, d, 4)
-    _check_not_collinear(s, "source", xp)
-    _check_not_collinear(d, "destination", xp)
+    _check_not_collinear(s, "source (src)", xp)
+    _check_not_collinear(d, "destination (dst)", xp)
     sn, Ts = similarity_normalization(s, xp)
     dn, Td = similarity_normalization(d, xp)
     x, y = sn[..., 0], sn[..., 1]

@@ -34,7 +34,7 @@ import numpy as np
 
 from imageform._backend import to_numpy
 from imageform._typing import ArrayLike, FloatArray
-from imageform._validate import as_image, as_real, check_positive
+from imageform._validate import as_image, as_real, check_positive, describe
 from imageform.errors import InvalidInputError, UnknownOptionError
 from imageform.geometry._checks import MAX_MAGNITUDE, as_float, shape_text
 
@@ -193,7 +193,7 @@ def detect_line_segments(
 
     if method not in ("lsd", "simple"):
         raise UnknownOptionError(
-            f"unknown method {method!r} for detect_line_segments; valid: 'lsd', 'simple'"
+            f"unknown method {describe(method)} for detect_line_segments; valid: 'lsd', 'simple'"
         )
     if min_length is None:
         min_length = 0.0 if method == "lsd" else 10.0

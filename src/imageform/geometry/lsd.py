@@ -122,7 +122,8 @@ def lsd_segments(
     scale = as_real(scale, "scale")
     if not 0.0 < scale <= 1.0:
         raise InvalidInputError(f"expected scale in (0, 1], got {scale!r}")
-    check_positive(sigma_scale, "sigma_scale")
+    # the Gaussian's kernel is about 7 sigma wide: bounded like find_checkerboard's sigma
+    as_real(sigma_scale, "sigma_scale", positive=True, maximum=1000.0 * scale)
     check_positive(angle_tolerance, "angle_tolerance")
     if not angle_tolerance < math.pi / 2:
         raise InvalidInputError(
@@ -132,7 +133,7 @@ def lsd_segments(
     density_th = as_real(density_th, "density_th")
     if not 0.0 < density_th <= 1.0:
         raise InvalidInputError(f"expected density_th in (0, 1], got {density_th!r}")
-    n_bins = as_int(n_bins, "n_bins", minimum=1)
+    n_bins = as_int(n_bins, "n_bins", minimum=1, maximum=10**7)
     min_length = check_positive(min_length, "min_length", allow_zero=True)
     log10_eps = as_real(log10_eps, "log10_eps")
     img = _grey255(image)

@@ -20,12 +20,20 @@ import numpy.typing as npt
 from numpy.typing import NDArray
 
 from imageform._backend import to_numpy
-from imageform._validate import as_real, check_positive
+from imageform._validate import (
+    as_int,
+    as_real,
+    as_real_array,
+    check_memory,
+    check_positive,
+    describe,
+)
 from imageform.errors import (
     ConvergenceError,
     DegenerateConfigurationError,
     InvalidInputError,
 )
+from imageform.geometry._checks import check_bounded, size_pair
 from imageform.geometry.calibration import _views, calibrate_camera
 from imageform.geometry.calibration_refine import (
     GLOBAL_NAMES,
@@ -269,9 +277,11 @@ def stereo_calibrate(
     >>> np.round(res.T, 6).tolist() == [-120.0, 0.0, 0.0], round(res.rms, 9)
     (True, 0.0)
     """
-    objs, imgs_l = _views(object_points, image_points_left)
-    objs_r, imgs_r = _views(object_points, image_points_right)
+    objs, imgs_l = _views(object_points, image_points_left, "image_points_left")
+    objs_r, imgs_r = _views(object_points, image_points_right, "image_points_right")
     del objs_r
+    max_iter = as_int(max_iter, "max_iter", minimum=1, maximum=10**6)
+    tol = as_real(tol, "tol", minimum=0.0, maximum=1.0)
     size_l = _size(image_size, "image_size")
     size_r = size_l if image_size_right is None else _size(image_size_right, "image_size_right")
     V = len(objs)
@@ -429,8 +439,18 @@ def _size(value: Any, name: str) -> tuple[int, int]:
         or len(value) != 2
         or not all(isinstance(n, int | np.integer) and n > 0 for n in value)
     ):
-        raise InvalidInputError(f"expected {name} (width, height) > 0, got {value!r}")
-    return int(value[0]), int(value[1])
+        raise InvalidInputError(f"expected {name} (width, height) > 0, got {describe(value)}")
+    return size_pair(value, f"{name} (width, height)")
+
+
+def _model(value: Any, name: str, method: str) -> Any:
+    """A distortion model (anything with ``method`` on normalised coordinates) or None."""
+    if value is not None and not callable(getattr(value, method, None)):
+        raise InvalidInputError(
+            f"expected {name} as a distortion model (BrownConrady, DivisionModel, "
+            f"KannalaBrandt) or None, got {describe(value)}"
+        )
+    return value
 
 
 def _globals(cal: CalibrationResult) -> F64:
@@ -551,11 +571,11 @@ def _rectangles(
 
 
 def _matrix(value: Any, name: str, shape: tuple[int, ...]) -> F64:
-    a = np.asarray(to_numpy(value), dtype=np.float64)
+    # None, strings, complex and object arrays refused by name; the shape before the values
+    a = as_real_array(value, name, check=False)
     if a.shape != shape and not (shape == (3,) and a.size == 3):
         raise InvalidInputError(f"expected {name} of shape {shape}, got shape {a.shape}")
-    if not np.all(np.isfinite(a)):
-        raise InvalidInputError(f"expected finite values in {name}, got NaN or inf")
+    check_bounded(a, name, np)
     return a.reshape(shape)
 
 
@@ -628,6 +648,8 @@ def stereo_rectify(
     """
     K1m = _matrix(K1, "K1", (3, 3))
     K2m = _matrix(K2, "K2", (3, 3))
+    distortion1 = _model(distortion1, "distortion1", "undistort")
+    distortion2 = _model(distortion2, "distortion2", "undistort")
     Rm = _matrix(R, "R", (3, 3))
     Tv = _matrix(T, "T", (3,))
     size = _size(image_size, "image_size")
@@ -748,10 +770,13 @@ def rectification_map(
     """
     Km = _matrix(K, "K", (3, 3))
     Rr = _matrix(R_rect, "R_rect", (3, 3))
-    Pm = np.asarray(to_numpy(P), dtype=np.float64)
+    distortion = _model(distortion, "distortion", "distort")
+    Pm = as_real_array(P, "P", check=False)
     if Pm.shape not in ((3, 4), (3, 3)):
         raise InvalidInputError(f"expected P of shape (3, 4) or (3, 3), got shape {Pm.shape}")
+    check_bounded(Pm, "P", np)
     w, h = _size(image_size, "image_size")
+    check_memory(8.0 * w * h * 12, "image_size", f"a ({h}, {w}, 2) rectification map")
     check_positive(abs(float(np.linalg.det(Pm[:, :3]))), "det(P[:, :3])")
     A = Rr.T @ np.linalg.inv(Pm[:, :3])
     v, u = np.mgrid[0:h, 0:w].astype(np.float64)

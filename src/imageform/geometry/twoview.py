@@ -21,9 +21,10 @@ from numpy.typing import NDArray
 
 from imageform._backend import to_numpy
 from imageform._random import RNGLike, as_rng
-from imageform._validate import as_int, as_matrix, check_positive, describe
+from imageform._validate import as_int, as_matrix, as_real, describe
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
 from imageform.geometry import _robust_core
+from imageform.geometry._checks import MAX_MAGNITUDE
 from imageform.geometry._minimal import e5, f7, f8, rank2, sampson_sq
 from imageform.geometry._robust_core import (
     check_confidence,
@@ -241,7 +242,8 @@ def _robust_args(
     threshold: object, confidence: object, max_trials: object, max_iter: object
 ) -> tuple[float, float, int, int]:
     return (
-        check_positive(threshold, "threshold"),
+        # squared in Python floats: beyond 1e100 pixels it overflows (and means nothing)
+        as_real(threshold, "threshold", positive=True, maximum=MAX_MAGNITUDE),
         check_confidence(confidence),
         as_int(max_trials, "max_trials", minimum=1),
         as_int(max_iter, "max_iter", minimum=0),

@@ -15,7 +15,7 @@ from typing import Any
 
 from imageform._backend import device_of, linalg, namespace
 from imageform._typing import Array, ArrayLike
-from imageform._validate import as_real, check_rotation, format_shape
+from imageform._validate import as_real, check_rotation, describe, format_shape
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
 from imageform.geometry._checks import as_float, as_matrix, as_points
 from imageform.geometry.homogeneous import _normalize_homogeneous_point, line_through
@@ -100,7 +100,7 @@ def _up_vector(up: ArrayLike | str) -> ArrayLike:
         from imageform.errors import UnknownOptionError
 
         raise UnknownOptionError(
-            f"unknown up axis {up!r}; valid: {', '.join(UP_AXES)} (or a 3-vector)"
+            f"unknown up axis {describe(up)}; valid: {', '.join(UP_AXES)} (or a 3-vector)"
         )
     return UP_AXES[key]
 
@@ -297,13 +297,14 @@ def intrinsics_from_vanishing_points(v1: ArrayLike, v2: ArrayLike, v3: ArrayLike
     det = r1[0] * r2[1] - r1[1] * r2[0]
     norm2 = xp.sum(r1 * r1) + xp.sum(r2 * r2)
     if bool(xp.abs(det) <= 1e-12 * norm2):
-        raise DegenerateConfigurationError("the three vanishing points are collinear")
+        raise DegenerateConfigurationError("the three vanishing points v1, v2, v3 are collinear")
     s1, s2 = xp.sum(r1 * a), xp.sum(r2 * b)
     p = xp.stack([(s1 * r2[1] - r1[1] * s2) / det, (r1[0] * s2 - s1 * r2[0]) / det])
     f2 = xp.stack([-xp.sum((x - p) * (y - p)) for x, y in ((a, b), (b, c), (a, c))])
     if bool(xp.any(f2 <= 0)):
         raise DegenerateConfigurationError(
-            "the vanishing-point triangle is not acute: not three orthogonal directions"
+            "the triangle of vanishing points v1, v2, v3 is not acute: not three orthogonal "
+            "directions"
         )
     f = xp.sqrt(xp.mean(f2))
     zero, one = xp.zeros_like(f), xp.ones_like(f)
@@ -318,7 +319,12 @@ def lines_from_segments(segments: ArrayLike) -> Array:
     s = as_points(segments, "segments", 2, xp=xp)
     if s.ndim < 2 or s.shape[-2] != 2:
         raise InvalidInputError(f"expected segments of shape (..., 2, 2), got {tuple(s.shape)}")
-    return line_through(s[..., 0, :], s[..., 1, :])
+    try:
+        return line_through(s[..., 0, :], s[..., 1, :])
+    except DegenerateConfigurationError:
+        raise DegenerateConfigurationError(
+            "segments holds a segment of zero length (its two ends coincide): no line through it"
+        ) from None
 
 
 def vanishing_point_from_lines(lines: ArrayLike, weights: ArrayLike | None = None) -> Array:

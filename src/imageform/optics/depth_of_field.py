@@ -14,7 +14,7 @@ from typing import Any
 
 from imageform import _deprecate
 from imageform._backend import namespace
-from imageform._validate import as_float, check_positive, finite_result
+from imageform._validate import as_float, as_real, check_positive, finite_result
 from imageform.errors import InvalidInputError
 
 __all__ = [
@@ -90,6 +90,25 @@ class DepthOfField:
     near: float
     far: float
     hyperfocal: float
+
+    def __post_init__(self) -> None:
+        # issue 16: finite distances (> 0; near >= 0), near <= focus <= far; far is inf exactly when
+        # focused at or beyond the hyperfocal distance
+        for name in ("focus", "hyperfocal"):
+            object.__setattr__(self, name, as_real(getattr(self, name), name, positive=True))
+        object.__setattr__(self, "near", as_real(self.near, "near", nonnegative=True))
+        far = as_real(self.far, "far", positive=True, allow_inf=True)
+        object.__setattr__(self, "far", far)
+        if not self.near <= self.focus <= far:
+            raise InvalidInputError(
+                f"expected near <= focus <= far, got near {self.near:g}, focus {self.focus:g}, "
+                f"far {far:g} (m)"
+            )
+        if math.isinf(far) != (self.focus >= self.hyperfocal):
+            raise InvalidInputError(
+                f"expected far = inf exactly when focus >= hyperfocal, got far {far:g}, focus "
+                f"{self.focus:g}, hyperfocal {self.hyperfocal:g} (m)"
+            )
 
     @property
     def total(self) -> float:

@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from imageform import _deprecate
-from imageform._validate import as_real, check_positive, finite_result
+from imageform._validate import as_bool, as_real, check_positive, finite_result
 from imageform.errors import InvalidInputError
 
 __all__ = [
@@ -44,6 +44,17 @@ class ThinLensSolution:
     virtual: bool
 
     f = _deprecate.renamed_property("focal_length", "imageform.optics.ThinLensSolution.f")
+
+    def __post_init__(self) -> None:
+        # issue 16: a solution holds finite reals (complex, NaN, inf, None refused by name)
+        for name, kw in (
+            ("focal_length", {"positive": True}),
+            ("d_o", {"positive": True}),
+            ("d_i", {}),
+            ("magnification", {}),
+        ):
+            object.__setattr__(self, name, as_real(getattr(self, name), name, **kw))
+        object.__setattr__(self, "virtual", as_bool(self.virtual, "virtual"))
 
 
 def _number(value: object, name: str) -> float:

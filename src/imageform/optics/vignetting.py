@@ -184,13 +184,20 @@ def apply_vignetting(image: Any, falloff: Any) -> Any:
     >>> apply_vignetting(np.ones((1, 3)), cos4_falloff((1, 3), focal_length=1.0)).round(12).tolist()
     [[0.25, 1.0, 0.25]]
     """
-    img = np.asarray(to_numpy(as_image(image, "image", channels=None)))
     f = as_real_array(falloff, "falloff", check=False)
-    if img.ndim not in (2, 3) or f.shape != img.shape[:2]:
-        raise InvalidInputError(
-            f"expected image (H, W[, C]) and falloff (H, W), got {format_shape(img.shape)} "
-            f"and falloff {format_shape(f.shape)}"
-        )
+
+    def check_shapes(shape: tuple[int, ...]) -> None:
+        if len(shape) not in (2, 3) or tuple(shape[:2]) != f.shape:
+            raise InvalidInputError(
+                f"expected image (H, W[, C]) and falloff (H, W), got {format_shape(shape)} "
+                f"and falloff {format_shape(f.shape)}"
+            )
+
+    shape = getattr(image, "shape", None)
+    if isinstance(shape, tuple):  # an array: its shape before any of its values is read
+        check_shapes(shape)
+    img = np.asarray(to_numpy(as_image(image, "image", channels=None)))
+    check_shapes(img.shape)
     check_real_values(f, "falloff")
     f = f.astype(img.dtype, copy=False)
     return finite_result(
