@@ -475,12 +475,14 @@ def run_task(state: _State, task: Task) -> Outcome:
     sig = bound.signature
     args: list[Any] = []
     kwargs: dict[str, Any] = {}
+    skipped = False  # a parameter left to its default: later ones go by keyword
     for pname, p in sig.parameters.items():
         if pname == task.param:
             value = make()
         elif pname in arguments:
             value = arguments[pname]
         else:
+            skipped = skipped or p.kind is p.POSITIONAL_OR_KEYWORD
             continue
         if p.kind is p.VAR_POSITIONAL:
             args.extend(value)
@@ -489,6 +491,7 @@ def run_task(state: _State, task: Task) -> Outcome:
         elif (
             p.kind is p.KEYWORD_ONLY
             or (kwargs and p.kind is p.POSITIONAL_OR_KEYWORD)
+            or (skipped and p.kind is p.POSITIONAL_OR_KEYWORD)
             or (pname == task.param and pname not in bound.arguments)
         ):
             kwargs[pname] = value
