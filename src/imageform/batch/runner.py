@@ -101,6 +101,19 @@ class JobResult:
     metrics: dict[str, Any] = field(default_factory=dict)
     seconds: float = 0.0
 
+    def __post_init__(self) -> None:
+        from imageform._validate import as_path, as_real, check_option, describe
+
+        object.__setattr__(self, "input", as_path(self.input, "input"))
+        object.__setattr__(self, "output", as_path(self.output, "output"))
+        status = check_option(self.status, ("done", "skipped", "failed"), "status")
+        object.__setattr__(self, "status", status)
+        if self.error is not None and not isinstance(self.error, str):
+            raise InvalidInputError(f"expected error as text or None, got {describe(self.error)}")
+        if not isinstance(self.metrics, Mapping):
+            raise InvalidInputError(f"expected metrics as a mapping, got {describe(self.metrics)}")
+        object.__setattr__(self, "seconds", as_real(self.seconds, "seconds", nonnegative=True))
+
 
 @dataclass(frozen=True)
 class BatchReport:
@@ -155,8 +168,13 @@ def batch_workflow(command: str | Workflow) -> Workflow:
     >>> batch_workflow("white_balance").name
     'white-balance'
     """
+    from imageform._validate import describe
     from imageform.workflows import WORKFLOWS
 
+    if not isinstance(command, str | Workflow):
+        raise UnknownOptionError(
+            f"expected command as a workflow (command) name, got {describe(command)}"
+        )
     wf = command if isinstance(command, Workflow) else get_workflow(command)
     if not wf.batch:
         valid = ", ".join(n for n, w in WORKFLOWS.items() if w.batch)
@@ -185,11 +203,18 @@ def batch_options(command: str | Workflow, options: Options | Mapping[str, Any] 
             )
         _no_extra_outputs(wf, options)
         return options
+    if options is not None and not isinstance(options, Mapping):
+        from imageform._validate import describe
+
+        raise InvalidInputError(
+            f"expected options as {wf.options.__name__} or a mapping of option names to "
+            f"values, got {describe(options)}"
+        )
     by_flag = {_key(flag_of(f)): f.name for f in wf.options.fields()}
     by_flag.update({f.name: f.name for f in wf.options.fields()})
     values: dict[str, Any] = {}
     for k, v in dict(options or {}).items():
-        name = by_flag.get(_key(k))
+        name = by_flag.get(_key(k)) if isinstance(k, str) else None
         if name is None:
             valid = ", ".join(sorted(flag_of(f) for f in wf.options.fields()))
             raise UnknownOptionError(f"unknown option {k!r} of batch {wf.name}; valid: {valid}")
@@ -323,10 +348,19 @@ def plan_jobs(pattern: str, out_dir: str | Path, *, out_suffix: str | None = Non
     >>> [str(j.output.relative_to(root)) for j in plan_jobs(f"{root}/in/**/*.png", root / "out")]
     ['out/a/x.png']
     """
-    if out_suffix is not None and not out_suffix.startswith("."):
-        out_suffix = "." + out_suffix
+    from imageform._validate import as_path, describe
+
+    if not isinstance(pattern, str) or not pattern.strip() or "\0" in pattern:
+        raise InvalidInputError(f"expected pattern as a glob (text), got {describe(pattern)}")
+    out_root = Path(os.path.abspath(as_path(out_dir, "out_dir")))
+    if out_suffix is not None:
+        if not isinstance(out_suffix, str) or not out_suffix.strip(". ") or "/" in out_suffix:
+            raise InvalidInputError(
+                f"expected out_suffix as a file suffix such as '.tif', got {describe(out_suffix)}"
+            )
+        if not out_suffix.startswith("."):
+            out_suffix = "." + out_suffix
     base = Path(os.path.abspath(_glob_base(pattern)))
-    out_root = Path(os.path.abspath(out_dir))
     inputs = sorted(
         Path(os.path.abspath(p)) for p in glob.glob(pattern, recursive=True) if os.path.isfile(p)
     )
@@ -431,15 +465,18 @@ def run_job(
     ``hold_s`` waits between writing and renaming (a test hook: it widens the window in
     which a killed worker leaves a partial file behind).
     """
+    from imageform._validate import as_path, as_real
     from imageform.workflows import run_file
 
-    out = Path(out_path)
+    out = as_path(out_path, "out_path")
+    in_file = as_path(in_path, "in_path")
+    hold_s = as_real(hold_s, "hold_s", minimum=0.0, maximum=3600.0)
     tmp = _temp_path(out)
     t0 = time.perf_counter()
     try:
         opts = batch_options(command, options)
         out.parent.mkdir(parents=True, exist_ok=True)
-        result = run_file(batch_workflow(command).name, Path(in_path), tmp, opts)
+        result = run_file(batch_workflow(command).name, in_file, tmp, opts)
         if hold_s > 0:
             time.sleep(hold_s)
         _fsync(tmp)
@@ -719,6 +756,10 @@ def print_summary(report: BatchReport, console: Any = None) -> None:
     from rich.console import Console
     from rich.table import Table
 
+    if not isinstance(report, BatchReport):
+        from imageform._validate import describe
+
+        raise InvalidInputError(f"expected report as a BatchReport, got {describe(report)}")
     console = console or Console()
     console.print(
         f"batch {report.command}: {report.count('done')} done, "
