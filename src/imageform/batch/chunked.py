@@ -28,7 +28,7 @@ from typing import Any
 import numpy as np
 
 from imageform._validate import check_option
-from imageform.errors import InvalidInputError
+from imageform.errors import ImageformError, InvalidInputError
 from imageform.workflows.color import DISPLAYABLE_SPACES
 
 __all__ = ["CHUNKED_COMMANDS", "ChunkedResult", "open_lazy", "process_chunked"]
@@ -155,12 +155,19 @@ def open_lazy(path: str | Path, chunk: int = 1024) -> Any:
     zarr = require("zarr", what="imageform chunked")
     if not p.exists():
         raise InvalidInputError(f"input {p} does not exist")
-    if _kind(p) == "tiff":
-        z: Any = _tiff_lazy(p, chunk, da, zarr)
-        if not isinstance(z, (zarr.Array, zarr.Group)):
-            return z  # an uncompressed strip TIFF, already a dask array
-    else:
-        z = zarr.open(str(p), mode="r")
+    try:
+        if _kind(p) == "tiff":
+            z: Any = _tiff_lazy(p, chunk, da, zarr)
+            if not isinstance(z, (zarr.Array, zarr.Group)):
+                return z  # an uncompressed strip TIFF, already a dask array
+        else:
+            z = zarr.open(str(p), mode="r")
+    except (ImageformError, MemoryError):
+        raise
+    except Exception as exc:  # a damaged file: tifffile's, zarr's or numcodecs' own errors
+        text = str(exc).strip().splitlines()
+        reason = text[0][:120] if text else type(exc).__name__
+        raise InvalidInputError(f"cannot read {p}: {reason}") from exc
     if isinstance(z, zarr.Group):  # a pyramid: level 0 is the full resolution
         z = z["0"]
     if z.ndim != 3 or z.shape[-1] != 3:

@@ -10,9 +10,12 @@
   and modification time (and those of option files such as ``--target``). A re-run skips an
   output only when all of these are the same: a re-run with another ``--method`` recomputes.
   ``force=True`` redoes everything.
-- **Atomic**: each job writes ``.NAME.<random>.tmpSUFFIX`` in the output's folder, fsyncs it
-  and ``os.replace``-s it onto the final name; a worker killed mid-write leaves only a
-  temporary file, never taken as finished and removed at the start and end of a run.
+- **Atomic**: each job writes ``.NAME.<run>-<random>.tmpSUFFIX`` in the output's folder,
+  fsyncs it and ``os.replace``-s it onto the final name; a worker killed mid-write leaves only
+  a temporary file, never taken as finished and removed at the start and end of a run. A run
+  holds a lock file ``.imageform-batch.<run>.lock`` in the output folder while it goes on, so
+  that two runs into one folder keep each other's temporary files.
+- **Globs end**: ``**`` enters each real folder once, also through symbolic links that loop.
 - **Inputs never modified**: a plan in which an output is an input, or would match the input
   glob (a re-run would read outputs back as inputs), is refused, also when the output folder
   reaches the input tree through a symbolic link (real paths are compared).
@@ -289,8 +292,80 @@ def temp_pattern(output: Path) -> str:
     return f".{glob.escape(output.name)}.*.tmp{glob.escape(output.suffix)}"
 
 
-def _temp_path(output: Path) -> Path:
-    return output.with_name(f".{output.name}.{uuid.uuid4().hex[:12]}.tmp{output.suffix}")
+def _temp_path(output: Path, run_id: str | None = None) -> Path:
+    token = uuid.uuid4().hex[:12]
+    if run_id:
+        token = f"{run_id}-{token}"
+    return output.with_name(f".{output.name}.{token}.tmp{output.suffix}")
+
+
+_RUN_ID = re.compile("[0-9a-f]{12}")
+_LOCK = re.compile(r"\.imageform-batch\.([0-9a-f]{12})\.lock\Z")
+
+
+@contextlib.contextmanager
+def _run_lock(out_root: Path) -> Iterator[str]:
+    """A run's id, with a lock file ``.imageform-batch.<id>.lock`` in ``out_root`` held
+    (``flock``) for as long as the run goes on: another run into the same folder then knows
+    that the temporary files named with this id are being written, not left by a dead run.
+    Without ``fcntl`` (Windows) the id alone, every temporary file counting as stale."""
+    run_id = uuid.uuid4().hex[:12]
+    try:
+        import fcntl
+    except ImportError:  # pragma: no cover - not POSIX
+        yield run_id
+        return
+    out_root.mkdir(parents=True, exist_ok=True)
+    final = out_root / f".imageform-batch.{run_id}.lock"
+    part = out_root / f".imageform-batch.{run_id}.lock-part"
+    fd = os.open(part, os.O_CREAT | os.O_WRONLY, 0o644)
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX)
+        os.replace(part, final)  # visible only once held
+        yield run_id
+    finally:
+        final.unlink(missing_ok=True)
+        part.unlink(missing_ok=True)
+        os.close(fd)
+
+
+def _live_runs(out_root: Path, own: str | None) -> set[str]:
+    """The ids of the other runs going on into ``out_root`` (their lock is held); the lock
+    files of runs that died are removed."""
+    try:
+        import fcntl
+    except ImportError:  # pragma: no cover - not POSIX
+        return set()
+    live: set[str] = set()
+    try:
+        names = os.listdir(out_root)
+    except OSError:
+        return live
+    for name in names:
+        m = _LOCK.match(name)
+        if m is None or m.group(1) == own:
+            continue
+        path = out_root / name
+        try:
+            fd = os.open(path, os.O_RDONLY)
+        except OSError:
+            continue
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            live.add(m.group(1))  # held: that run goes on
+        else:
+            path.unlink(missing_ok=True)  # its run died
+        finally:
+            os.close(fd)
+    return live
+
+
+def _run_of(name: str, output: Path) -> str | None:
+    """The run id in the name of a temporary file of ``output`` (None for one without)."""
+    token = name.lstrip(".")[len(output.name) + 1 :].split(".", 1)[0]
+    run_id, sep, _ = token.partition("-")
+    return run_id if sep else None
 
 
 def _nested_part_pattern(output: Path) -> str:
@@ -300,19 +375,55 @@ def _nested_part_pattern(output: Path) -> str:
     return f".{temp_pattern(output)}.*.part*"
 
 
-def _remove_stale_temps(jobs: list[Job]) -> int:
+def _remove_stale_temps(
+    jobs: list[Job], out_root: Path | None = None, own: str | None = None
+) -> int:
+    """Remove the temporary files of ``jobs``' outputs that no run going on into
+    ``out_root`` is writing (those of run ``own``, this one, included: what it left is from
+    killed workers); returns how many."""
+    live = _live_runs(out_root, own) if out_root is not None else set()
     n = 0
     for job in jobs:
         folder = job.output.parent
         if folder.is_dir():
             for pattern in (temp_pattern(job.output), _nested_part_pattern(job.output)):
                 for stale in folder.glob(pattern):
+                    if _run_of(stale.name, job.output) in live:
+                        continue
                     if stale.is_dir() and not stale.is_symlink():
                         shutil.rmtree(stale, ignore_errors=True)
                     else:
                         stale.unlink(missing_ok=True)
                     n += 1
     return n
+
+
+def _find(pattern: str) -> list[str]:
+    """The paths matching ``pattern`` as ``glob.glob(pattern, recursive=True)`` finds them,
+    but ``**`` enters each real folder once: a symbolic link to an ancestor (a loop) is not
+    followed again, where glob would recurse until the path is too long (minutes)."""
+    if "**" not in pattern:
+        return glob.glob(pattern)
+    matcher = _glob_regex(pattern)
+    found: list[str] = []
+    seen: set[tuple[int, int]] = set()
+    for root, dirs, files in os.walk(str(_glob_base(pattern)), followlinks=True):
+        try:
+            st = os.stat(root)
+        except OSError:
+            dirs[:] = []
+            continue
+        if (st.st_dev, st.st_ino) in seen:
+            dirs[:] = []
+            continue
+        seen.add((st.st_dev, st.st_ino))
+        dirs[:] = sorted(d for d in dirs if not d.startswith("."))
+        found += [
+            p
+            for p in (os.path.join(root, f) for f in files if not f.startswith("."))
+            if matcher.match(os.path.abspath(p))
+        ]
+    return found
 
 
 def plan_jobs(pattern: str, out_dir: str | Path, *, out_suffix: str | None = None) -> list[Job]:
@@ -361,9 +472,7 @@ def plan_jobs(pattern: str, out_dir: str | Path, *, out_suffix: str | None = Non
         if not out_suffix.startswith("."):
             out_suffix = "." + out_suffix
     base = Path(os.path.abspath(_glob_base(pattern)))
-    inputs = sorted(
-        Path(os.path.abspath(p)) for p in glob.glob(pattern, recursive=True) if os.path.isfile(p)
-    )
+    inputs = sorted(Path(os.path.abspath(p)) for p in _find(pattern) if os.path.isfile(p))
     if not inputs:
         raise InvalidInputError(f"no files match {pattern!r}")
     matcher = _glob_regex(pattern)
@@ -456,6 +565,7 @@ def run_job(
     out_path: str,
     options: Options | Mapping[str, Any] | None = None,
     hold_s: float = 0.0,
+    run_id: str | None = None,
 ) -> dict[str, Any]:
     """Run ``command`` on one file and publish ``out_path`` atomically (runs on a worker).
 
@@ -463,15 +573,19 @@ def run_job(
     onto ``out_path`` (``os.replace``, atomic on POSIX), then the folder is fsync-ed. An
     exception removes the temporary file and comes back as ``{"ok": False, "error": ...}``.
     ``hold_s`` waits between writing and renaming (a test hook: it widens the window in
-    which a killed worker leaves a partial file behind).
+    which a killed worker leaves a partial file behind). ``run_id`` names the run in the
+    temporary file's name, so that another run into the same folder leaves it alone while
+    this run holds its lock.
     """
-    from imageform._validate import as_path, as_real
+    from imageform._validate import as_path, as_real, describe
     from imageform.workflows import run_file
 
     out = as_path(out_path, "out_path")
     in_file = as_path(in_path, "in_path")
     hold_s = as_real(hold_s, "hold_s", minimum=0.0, maximum=3600.0)
-    tmp = _temp_path(out)
+    if run_id is not None and not (isinstance(run_id, str) and _RUN_ID.fullmatch(run_id)):
+        raise InvalidInputError(f"expected run_id as 12 hex digits, got {describe(run_id)}")
+    tmp = _temp_path(out, run_id)
     t0 = time.perf_counter()
     try:
         opts = batch_options(command, options)
@@ -595,7 +709,6 @@ def run_batch(
     out_root = Path(os.path.abspath(out_dir))
     producer = _producer(wf, opts)
     manifest = _read_manifest(out_root)
-    _remove_stale_temps(jobs)
     results: dict[Job, JobResult] = {}
     todo = []
     for job in jobs:
@@ -605,30 +718,35 @@ def run_batch(
         else:
             manifest.pop(rel, None)
             todo.append(job)
-    if todo:
-        workers = n_workers or min(os.cpu_count() or 1, len(todo))
-        state = _Manifest(out_root, manifest, producer)
-        try:
-            with _client(scheduler, workers) as client:
-                _run_on(
-                    client,
-                    wf.name,
-                    todo,
-                    opts,
-                    hold_s,
-                    results,
-                    progress,
-                    on_result,
-                    state,
-                    worker_timeout_s,
-                )
-        except KeyboardInterrupt:
-            state.save()
-            done = sum(r.status != "failed" for r in results.values())
-            raise BatchInterrupted(done, len(jobs) - done) from None
-        finally:
-            state.save()
-            _remove_stale_temps(todo)  # left by workers killed mid-write
+    if not todo:
+        _remove_stale_temps(jobs, out_root)  # left by runs that died
+    else:
+        with _run_lock(out_root) as run_id:
+            _remove_stale_temps(jobs, out_root, run_id)  # of runs that died, not running ones
+            workers = n_workers or min(os.cpu_count() or 1, len(todo))
+            state = _Manifest(out_root, manifest, producer)
+            try:
+                with _client(scheduler, workers) as client:
+                    _run_on(
+                        client,
+                        wf.name,
+                        todo,
+                        opts,
+                        hold_s,
+                        results,
+                        progress,
+                        on_result,
+                        state,
+                        worker_timeout_s,
+                        run_id,
+                    )
+            except KeyboardInterrupt:
+                state.save()
+                done = sum(r.status != "failed" for r in results.values())
+                raise BatchInterrupted(done, len(jobs) - done) from None
+            finally:
+                state.save()
+                _remove_stale_temps(todo, out_root, run_id)  # left by workers killed mid-write
     return BatchReport(wf.name, tuple(results[j] for j in jobs))
 
 
@@ -666,12 +784,12 @@ def _run_on(
     on_result: Callable[[JobResult], None] | None,
     state: _Manifest,
     worker_timeout_s: float,
+    run_id: str,
 ) -> None:
     from distributed import wait
     from rich.console import Console
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TimeRemainingColumn
 
-    run_id = uuid.uuid4().hex[:8]
     by_key = {}
     futures = []
     for i, job in enumerate(todo):
@@ -682,6 +800,7 @@ def _run_on(
             str(job.output),
             opts,
             hold_s,
+            run_id,
             key=f"imageform-batch-{name}-{run_id}-{i}",
             pure=False,
         )

@@ -11,7 +11,6 @@ This module imports nothing heavy: ``imageform --help`` reads every declaration.
 from __future__ import annotations
 
 import dataclasses
-import functools
 import importlib
 import types
 import typing
@@ -178,9 +177,15 @@ def option_label(f: dataclasses.Field[Any]) -> str:
 _INT_MAX = 2**62
 
 
-@functools.cache
+_HINTS: dict[str, dict[str, Any]] = {}
+
+
 def _hints(cls: type) -> dict[str, Any]:
-    return typing.get_type_hints(cls)
+    """The evaluated field types of an options class (computed once per class)."""
+    key = f"{cls.__module__}.{cls.__qualname__}.{id(cls)}"
+    if key not in _HINTS:
+        _HINTS[key] = typing.get_type_hints(cls)
+    return _HINTS[key]
 
 
 def _unwrap_optional(tp: Any) -> tuple[Any, bool]:
