@@ -229,3 +229,30 @@ def test_batch_white_balance_keeps_16_bits(tmp_path: Path) -> None:
     with pytest.raises(ImageformError) as info:
         run_job("white-balance", str(src), str(out), None, 0.0, "../x")
     _one_line(info.value, "run_id")
+
+
+@pytest.mark.parametrize(
+    ("param", "bad"),
+    [
+        ("n_workers", 0),
+        ("n_workers", math.nan),
+        ("n_workers", 10**30),
+        ("worker_timeout_s", math.inf),
+        ("worker_timeout_s", 0.0),
+        ("hold_s", -1.0),
+        ("force", "yes"),
+        ("progress", None),
+        ("scheduler", 0),
+        ("on_result", 3),
+    ],
+)
+def test_run_batch_refuses_before_any_cluster_starts(
+    tmp_path: Path, param: str, bad: Any
+) -> None:
+    from imageform.batch import run_batch
+
+    write_image(tmp_path / "a.png", np.zeros((2, 2, 3), np.uint8))
+    with pytest.raises(ImageformError) as info:
+        run_batch("convert", f"{tmp_path}/*.png", tmp_path / "o", **{param: bad})
+    _one_line(info.value, param)
+    assert not (tmp_path / "o").exists()

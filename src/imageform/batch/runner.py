@@ -693,6 +693,19 @@ def run_batch(
     NoWorkersError
         No worker for ``worker_timeout_s`` seconds.
     """
+    from imageform._validate import as_bool, as_int, as_real, describe
+
+    if n_workers is not None:
+        n_workers = as_int(n_workers, "n_workers", minimum=1, maximum=4096)
+    worker_timeout_s = as_real(worker_timeout_s, "worker_timeout_s", positive=True)
+    hold_s = as_real(hold_s, "hold_s", minimum=0.0, maximum=3600.0)
+    force, progress = as_bool(force, "force"), as_bool(progress, "progress")
+    if scheduler is not None and not (isinstance(scheduler, str) and scheduler.strip()):
+        raise InvalidInputError(
+            f"expected scheduler as an address (tcp://host:port), got {describe(scheduler)}"
+        )
+    if on_result is not None and not callable(on_result):
+        raise InvalidInputError(f"expected on_result as a callable, got {describe(on_result)}")
     wf = batch_workflow(command)
     opts = batch_options(wf, options)
     jobs = plan_jobs(pattern, out_dir, out_suffix=out_suffix)
