@@ -109,7 +109,7 @@ def resolve(ref: str) -> Any:
 
 def choice_names(choices: Sequence[str] | str | Mapping[str, Any]) -> tuple[str, ...]:
     """The valid names of a ``choices`` declaration, in their normalised spelling."""
-    from imageform._validate import describe
+    describe = _describe
 
     names: Any = choices
     if isinstance(choices, str):
@@ -127,6 +127,16 @@ def choice_names(choices: Sequence[str] | str | Mapping[str, Any]) -> tuple[str,
     return tuple(_norm(n) for n in names)
 
 
+def _describe(value: object, width: int = 40) -> str:
+    """A value for a one-line message (as ``imageform._validate.describe``, which imports
+    NumPy: ``imageform --help`` must not)."""
+    shape = getattr(value, "shape", None)
+    if shape is not None and getattr(value, "ndim", None):
+        return f"{type(value).__name__} of shape {tuple(shape)}, {getattr(value, 'dtype', '')}"
+    text = repr(value)
+    return text if len(text) <= width else text[: width - 3] + "..."
+
+
 def _norm(value: str) -> str:
     return value.strip().lower().replace("-", "_").replace(" ", "_")
 
@@ -139,7 +149,7 @@ def normalize_choice(value: object, choices: Sequence[str] | str, what: str) -> 
     >>> normalize_choice("Gray-World", ("gray_world", "white_patch"), "--method")
     'gray_world'
     """
-    from imageform._validate import describe
+    describe = _describe
 
     if not isinstance(value, str):
         raise UnknownOptionError(f"expected a name as the {what} value, got {describe(value)}")

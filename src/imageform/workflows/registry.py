@@ -20,7 +20,7 @@ from imageform.workflows import (
     stereo,
     vanishing,
 )
-from imageform.workflows._spec import Workflow
+from imageform.workflows._spec import Workflow, _describe
 
 __all__ = ["WORKFLOWS", "get_workflow"]
 
@@ -54,8 +54,7 @@ def get_workflow(name: str) -> Workflow:
     >>> get_workflow("white_balance").name
     'white-balance'
     """
-    from imageform._validate import describe
-
+    describe = _describe
     if not isinstance(name, str):
         raise UnknownOptionError(
             f"expected the workflow (command) name as text, got {describe(name)}"
