@@ -256,3 +256,10 @@ def test_run_batch_refuses_before_any_cluster_starts(
         run_batch("convert", f"{tmp_path}/*.png", tmp_path / "o", **{param: bad})
     _one_line(info.value, param)
     assert not (tmp_path / "o").exists()
+
+
+def test_unknown_option_key_in_one_line() -> None:
+    for key in ("bogus", 1, "x" * 1000):
+        with pytest.raises(ImageformError) as info:
+            batch_options("convert", {key: 1})
+        _one_line(info.value, "unknown option")

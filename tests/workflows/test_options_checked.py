@@ -155,3 +155,10 @@ def test_options_base_has_no_unchecked_field_type() -> None:
             if typing.get_origin(tp) is tuple:
                 args = [a for a in typing.get_args(tp) if a is not Ellipsis]
             assert set(args) <= known, (wf.name, name, tp)
+
+
+@pytest.mark.parametrize("text", ["nan:5", "1e400:2", "x" * 1000, "1:2:3"])
+def test_hsv_ranges_are_finite_pairs(text: str) -> None:
+    with pytest.raises(InvalidInputError, match="--h") as info:
+        get_workflow("segment").make_options(h=text)
+    assert len(str(info.value)) <= 200

@@ -198,6 +198,8 @@ def batch_options(command: str | Workflow, options: Options | Mapping[str, Any] 
     >>> batch_options("convert", {"to": "lab"}).dst
     'lab'
     """
+    from imageform._validate import describe
+
     wf = batch_workflow(command)
     if isinstance(options, Options):
         if not isinstance(options, wf.options):
@@ -207,8 +209,6 @@ def batch_options(command: str | Workflow, options: Options | Mapping[str, Any] 
         _no_extra_outputs(wf, options)
         return options
     if options is not None and not isinstance(options, Mapping):
-        from imageform._validate import describe
-
         raise InvalidInputError(
             f"expected options as {wf.options.__name__} or a mapping of option names to "
             f"values, got {describe(options)}"
@@ -220,7 +220,11 @@ def batch_options(command: str | Workflow, options: Options | Mapping[str, Any] 
         name = by_flag.get(_key(k)) if isinstance(k, str) else None
         if name is None:
             valid = ", ".join(sorted(flag_of(f) for f in wf.options.fields()))
-            raise UnknownOptionError(f"unknown option {k!r} of batch {wf.name}; valid: {valid}")
+            if len(valid) > 90:
+                valid = valid[:90].rsplit(", ", 1)[0] + f", ... (imageform {wf.name} --help)"
+            raise UnknownOptionError(
+                f"unknown option {describe(k)} of batch {wf.name}; valid: {valid}"
+            )
         values[name] = v
     opts = wf.make_options(**values)
     _no_extra_outputs(wf, opts)

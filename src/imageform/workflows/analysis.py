@@ -42,11 +42,19 @@ def _rgb(path: Path, opts: Any) -> Any:
 def _range(text: str | None, flag: str) -> tuple[float, float] | None:
     if text is None:
         return None
+    import math
+
+    from imageform._validate import describe
+
     parts = str(text).split(":")
     try:
         lo, hi = (float(p) for p in parts)
     except ValueError:
-        raise InvalidInputError(f"expected {flag} as LOW:HIGH (e.g. 0:20), got {text!r}") from None
+        lo = hi = math.nan
+    if not (math.isfinite(lo) and math.isfinite(hi)):
+        raise InvalidInputError(
+            f"expected {flag} as LOW:HIGH of finite numbers (e.g. 0:20), got {describe(text)}"
+        )
     return lo, hi
 
 

@@ -48,7 +48,7 @@ class SimulateOptions(Options):
         if isinstance(self.seed, bool) or not isinstance(self.seed, int) or self.seed < 0:
             raise InvalidInputError(f"expected --seed as an integer >= 0, got {self.seed!r}")
         if self.raw is not None and Path(self.raw).suffix.lower() != ".dng":
-            raise InvalidInputError(f"expected --raw as a .dng file, got {str(self.raw)!r}")
+            raise InvalidInputError(f"expected --raw as a .dng file, got {str(self.raw)[-60:]!r}")
 
 
 def _check_folder(out: Path, force: bool) -> None:
