@@ -72,9 +72,13 @@ class SegmentOptions(ImageIn):
     opencv_ranges: bool = option(
         False, help="Read --h in 0-180 and --s/--v in 0-255 (OpenCV's units)."
     )
-    open_radius: int = option(2, help="Opening disc radius in pixels (0: none).")
-    close_radius: int = option(2, help="Closing disc radius in pixels (0: none).")
-    min_area: int = option(64, help="Remove components smaller than this (pixels).")
+    open_radius: int = option(
+        2, help="Opening disc radius in pixels (0: none).", minimum=0, maximum=1000
+    )
+    close_radius: int = option(
+        2, help="Closing disc radius in pixels (0: none).", minimum=0, maximum=1000
+    )
+    min_area: int = option(64, help="Remove components smaller than this (pixels).", minimum=0)
     overlay: Path | None = option(
         None, help="Also write the image with the mask blended over it (PNG).", output=True
     )
@@ -206,9 +210,9 @@ class FitCorrectionOptions(ImageIn):
         help="linear (3x3 in linear light) or root-polynomial.",
         choices=("linear", "root_polynomial"),
     )
-    degree: int = option(2, help="Root-polynomial degree (1 to 3).")
-    rows: int = option(4, help="Chart rows (the chart fills the frame).")
-    cols: int = option(6, help="Chart columns.")
+    degree: int = option(2, help="Root-polynomial degree (1 to 3).", minimum=1, maximum=3)
+    rows: int = option(4, help="Chart rows (the chart fills the frame).", minimum=1, maximum=1000)
+    cols: int = option(6, help="Chart columns.", minimum=1, maximum=1000)
 
 
 def _patches_csv(path: Path) -> tuple[Any, Any]:

@@ -33,7 +33,9 @@ class SimulateOptions(Options):
         "scene's).",
         input=True,
     )
-    seed: int = option(0, help="Seed of the sensor noise (the same seed, the same pixels).")
+    seed: int = option(
+        0, help="Seed of the sensor noise (the same seed, the same pixels).", minimum=0
+    )
     raw: Path | None = option(
         None,
         help="Also write the raw mosaic as a DNG file with the simulated camera's colour "
