@@ -243,3 +243,28 @@ def test_chunked_damaged_input_is_one_line_naming_it(
     err = capsys.readouterr().err
     assert err.strip().splitlines() == [err.strip()] and f"cannot read {src}" in err, err
     assert sorted(p.name for p in tmp_path.iterdir()) == [name]
+
+
+def test_command_glob_through_looping_links_ends(tmp_path: Path) -> None:
+    """``imageform calibrate 'views/**/*.png'`` with a link to an ancestor: a one-line
+    answer in seconds (glob.glob recursed until the path was too long)."""
+    import os
+    import subprocess
+    import sys
+
+    views = tmp_path / "views" / "a"
+    views.mkdir(parents=True)
+    (views / "up").symlink_to("..", target_is_directory=True)
+    (views / "self").symlink_to(".", target_is_directory=True)
+    env = {**os.environ, "PYTHONPATH": str(Path(__file__).parents[2] / "src")}
+    pattern = f"{tmp_path}/views/**/*.png"
+    proc = subprocess.run(
+        [sys.executable, "-m", "imageform", "calibrate", pattern, "--board", "9x6", "-o", "c.toml"],
+        capture_output=True,
+        text=True,
+        timeout=60,
+        env=env,
+        cwd=tmp_path,
+    )
+    assert proc.returncode == 1
+    assert proc.stderr.strip() == f"imageform: error: no files match {pattern!r}"

@@ -41,6 +41,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from imageform._files import glob_base, glob_paths, glob_regex
 from imageform.errors import ImageformError, InvalidInputError, UnknownOptionError
 from imageform.workflows import Options, Workflow, flag_of, get_workflow
 
@@ -258,39 +259,6 @@ def _producer(wf: Workflow, opts: Options) -> dict[str, Any]:
 # ---------------------------------------------------------------- planning
 
 
-def _glob_base(pattern: str) -> Path:
-    """The fixed folder prefix of ``pattern`` (the part before the first wildcard)."""
-    parts = Path(pattern).parts
-    fixed: list[str] = []
-    for part in parts[:-1]:
-        if _WILDCARDS.search(part):
-            break
-        fixed.append(part)
-    return Path(*fixed) if fixed else Path(".")
-
-
-def _glob_regex(pattern: str) -> re.Pattern[str]:
-    """A regex for absolute paths that ``glob.glob(pattern, recursive=True)`` would match."""
-    pat = os.path.abspath(pattern)
-    out, i = "", 0
-    while i < len(pat):
-        if pat.startswith("**/", i):
-            out, i = out + "(?:.*/)?", i + 3
-        elif pat.startswith("**", i):
-            out, i = out + ".*", i + 2
-        elif pat[i] == "*":
-            out, i = out + "[^/]*", i + 1
-        elif pat[i] == "?":
-            out, i = out + "[^/]", i + 1
-        elif pat[i] == "[" and "]" in pat[i + 1 :]:
-            j = pat.index("]", i + 1)
-            body = pat[i + 1 : j]
-            out, i = out + "[" + ("^" + body[1:] if body.startswith("!") else body) + "]", j + 1
-        else:
-            out, i = out + re.escape(pat[i]), i + 1
-    return re.compile(out + r"\Z")
-
-
 def temp_pattern(output: Path) -> str:
     """The glob of the temporary files that jobs writing ``output`` use."""
     return f".{glob.escape(output.name)}.*.tmp{glob.escape(output.suffix)}"
@@ -402,34 +370,6 @@ def _remove_stale_temps(
     return n
 
 
-def _find(pattern: str) -> list[str]:
-    """The paths matching ``pattern`` as ``glob.glob(pattern, recursive=True)`` finds them,
-    but ``**`` enters each real folder once: a symbolic link to an ancestor (a loop) is not
-    followed again, where glob would recurse until the path is too long (minutes)."""
-    if "**" not in pattern:
-        return glob.glob(pattern)
-    matcher = _glob_regex(pattern)
-    found: list[str] = []
-    seen: set[tuple[int, int]] = set()
-    for root, dirs, files in os.walk(str(_glob_base(pattern)), followlinks=True):
-        try:
-            st = os.stat(root)
-        except OSError:
-            dirs[:] = []
-            continue
-        if (st.st_dev, st.st_ino) in seen:
-            dirs[:] = []
-            continue
-        seen.add((st.st_dev, st.st_ino))
-        dirs[:] = sorted(d for d in dirs if not d.startswith("."))
-        found += [
-            p
-            for p in (os.path.join(root, f) for f in files if not f.startswith("."))
-            if matcher.match(os.path.abspath(p))
-        ]
-    return found
-
-
 def plan_jobs(pattern: str, out_dir: str | Path, *, out_suffix: str | None = None) -> list[Job]:
     """The jobs for the files matching ``pattern``, outputs under ``out_dir``.
 
@@ -475,14 +415,14 @@ def plan_jobs(pattern: str, out_dir: str | Path, *, out_suffix: str | None = Non
             )
         if not out_suffix.startswith("."):
             out_suffix = "." + out_suffix
-    base = Path(os.path.abspath(_glob_base(pattern)))
-    inputs = sorted(Path(os.path.abspath(p)) for p in _find(pattern) if os.path.isfile(p))
+    base = Path(os.path.abspath(glob_base(pattern)))
+    inputs = sorted(Path(os.path.abspath(p)) for p in glob_paths(pattern) if os.path.isfile(p))
     if not inputs:
         raise InvalidInputError(f"no files match {pattern!r}")
-    matcher = _glob_regex(pattern)
+    matcher = glob_regex(pattern)
     real_base = os.path.realpath(base)
     rest = os.path.relpath(os.path.abspath(pattern), base)
-    real_matcher = _glob_regex(os.path.join(real_base, rest))
+    real_matcher = glob_regex(os.path.join(real_base, rest))
     real_inputs = {os.path.realpath(p) for p in inputs}
     real_out_root = Path(os.path.realpath(out_root))
     jobs = []

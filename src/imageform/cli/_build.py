@@ -9,7 +9,6 @@ so ``imageform --help`` imports no numerical code.
 from __future__ import annotations
 
 import dataclasses
-import glob
 import os
 import sys
 import types
@@ -21,6 +20,7 @@ from typing import Any
 
 import click
 
+from imageform._files import glob_paths
 from imageform.errors import ImageformError, InvalidInputError
 from imageform.workflows import Result, Workflow, choice_names, flag_of
 
@@ -140,7 +140,7 @@ def expand_inputs(patterns: tuple[str, ...] | list[str]) -> list[Path]:
         if os.path.exists(p) or not any(c in p for c in "*?["):
             files.append(Path(p))
             continue
-        hits = sorted(glob.glob(p, recursive=True))
+        hits = sorted(glob_paths(p))  # ** enters each real folder once (looping links)
         if not hits:
             raise InvalidInputError(f"no files match {p!r}")
         files += [Path(h) for h in hits]
