@@ -246,9 +246,7 @@ def test_batch_white_balance_keeps_16_bits(tmp_path: Path) -> None:
         ("on_result", 3),
     ],
 )
-def test_run_batch_refuses_before_any_cluster_starts(
-    tmp_path: Path, param: str, bad: Any
-) -> None:
+def test_run_batch_refuses_before_any_cluster_starts(tmp_path: Path, param: str, bad: Any) -> None:
     from imageform.batch import run_batch
 
     write_image(tmp_path / "a.png", np.zeros((2, 2, 3), np.uint8))
