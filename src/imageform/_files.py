@@ -20,7 +20,9 @@ killed one (and only those: two live runs into one folder never delete each othe
 from __future__ import annotations
 
 import contextlib
+import glob
 import os
+import re
 import secrets
 import shutil
 import signal
@@ -299,3 +301,69 @@ def atomic_write(final: str | Path, write: Callable[[Path], object]) -> None:
     except BaseException:
         _remove(part)
         raise
+
+
+# --- h16wf ---
+
+_WILDCARDS = re.compile(r"[*?\[]")
+
+
+def glob_base(pattern: str) -> Path:
+    """The fixed folder prefix of ``pattern`` (the part before the first wildcard)."""
+    parts = Path(pattern).parts
+    fixed: list[str] = []
+    for part in parts[:-1]:
+        if _WILDCARDS.search(part):
+            break
+        fixed.append(part)
+    return Path(*fixed) if fixed else Path(".")
+
+
+def glob_regex(pattern: str) -> re.Pattern[str]:
+    """A regex for absolute paths that ``glob.glob(pattern, recursive=True)`` would match."""
+    pat = os.path.abspath(pattern)
+    out, i = "", 0
+    while i < len(pat):
+        if pat.startswith("**/", i):
+            out, i = out + "(?:.*/)?", i + 3
+        elif pat.startswith("**", i):
+            out, i = out + ".*", i + 2
+        elif pat[i] == "*":
+            out, i = out + "[^/]*", i + 1
+        elif pat[i] == "?":
+            out, i = out + "[^/]", i + 1
+        elif pat[i] == "[" and "]" in pat[i + 1 :]:
+            j = pat.index("]", i + 1)
+            body = pat[i + 1 : j]
+            out, i = out + "[" + ("^" + body[1:] if body.startswith("!") else body) + "]", j + 1
+        else:
+            out, i = out + re.escape(pat[i]), i + 1
+    return re.compile(out + r"\Z")
+
+
+def glob_paths(pattern: str) -> list[str]:
+    """The paths matching ``pattern`` as ``glob.glob(pattern, recursive=True)`` finds them,
+    but ``**`` enters each real folder once: a symbolic link to an ancestor (a loop) is not
+    followed again, where glob would recurse until the path is too long (minutes)."""
+    if "**" not in pattern:
+        return glob.glob(pattern)
+    matcher = glob_regex(pattern)
+    found: list[str] = []
+    seen: set[tuple[int, int]] = set()
+    for root, dirs, files in os.walk(str(glob_base(pattern)), followlinks=True):
+        try:
+            st = os.stat(root)
+        except OSError:
+            dirs[:] = []
+            continue
+        if (st.st_dev, st.st_ino) in seen:
+            dirs[:] = []
+            continue
+        seen.add((st.st_dev, st.st_ino))
+        dirs[:] = sorted(d for d in dirs if not d.startswith("."))
+        found += [
+            p
+            for p in (os.path.join(root, f) for f in files if not f.startswith("."))
+            if matcher.match(os.path.abspath(p))
+        ]
+    return found

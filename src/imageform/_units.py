@@ -31,6 +31,12 @@ LENGTH_UNITS = MappingProxyType(
 _NUMBER = re.compile(r"([-+]?(?:\d+\.?\d*|\.\d+)(?:e[-+]?\d+)?)([a-zµ]*)")
 
 
+def _shown(text: object, width: int = 40) -> str:
+    """``text`` for a one-line message: its repr, cut to ``width`` characters."""
+    shown = repr(str(text))
+    return shown if len(shown) <= width else shown[: width - 3] + "..."
+
+
 def parse_length(
     text: str | float,
     name: str,
@@ -80,19 +86,19 @@ def parse_length(
     t = str(text).strip().lower().replace(" ", "")
     if t in ("inf", "infinity", "+inf"):
         if not allow_inf:
-            raise InvalidInputError(f"expected {name} as a finite length, got {text!r}")
+            raise InvalidInputError(f"expected {name} as a finite length, got {_shown(text)}")
         return math.inf
     m = _NUMBER.fullmatch(t)
     if not m:
         raise InvalidInputError(
-            f"expected {name} as a number with a unit (e.g. 50mm, 2m, 0.03mm), got {str(text)!r}"
+            f"expected {name} as a number with a unit (e.g. 50mm, 2m, 0.03mm), got {_shown(text)}"
         )
     u = m.group(2) or default_unit
     if u not in LENGTH_UNITS:
         raise UnknownOptionError(f"unknown unit {u!r} for {name}; valid: {', '.join(LENGTH_UNITS)}")
     value = float(m.group(1)) * LENGTH_UNITS[u] / LENGTH_UNITS[unit]
     if not math.isfinite(value):
-        raise InvalidInputError(f"expected {name} as a finite length, got {str(text)!r}")
+        raise InvalidInputError(f"expected {name} as a finite length, got {_shown(text)}")
     if positive and value <= 0:
-        raise InvalidInputError(f"expected {name} > 0, got {str(text)!r}")
+        raise InvalidInputError(f"expected {name} > 0, got {_shown(text)}")
     return value

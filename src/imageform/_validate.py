@@ -828,3 +828,28 @@ def check_name(value: object, valid: Collection[str], what: str, name: str = "")
         raise UnknownOptionError(
             f"unknown {what} {describe(value, 30)}{where}; valid: {', '.join(shown)}{more}"
         ) from None
+
+
+# --- h16wf ---
+
+
+def as_path(value: object, name: str) -> Any:
+    """A file or folder name (``str`` or ``os.PathLike``, not empty, no NUL) as a
+    :class:`pathlib.Path`; anything else refused in one line naming ``name``.
+
+    Examples
+    --------
+    >>> as_path("out/a.png", "out_dir").name
+    'a.png'
+    >>> as_path(0, "out_dir")
+    Traceback (most recent call last):
+    ...
+    imageform.errors.InvalidInputError: expected out_dir as a file or folder name, got 0
+    """
+    from pathlib import Path
+
+    if isinstance(value, str | os.PathLike) and not isinstance(value, bytes):
+        text = os.fspath(value)
+        if isinstance(text, str) and text.strip() and "\0" not in text:
+            return Path(text)
+    raise InvalidInputError(f"expected {name} as a file or folder name, got {describe(value)}")

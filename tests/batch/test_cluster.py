@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import os
 import signal
+import time
 from pathlib import Path
 from typing import Any
 
@@ -378,3 +379,39 @@ def test_every_worker_gone_stops_with_a_message(
             worker_timeout_s=2,
         )
     assert not list((tmp_path / "o").rglob("*.png")) if (tmp_path / "o").exists() else True
+
+
+def test_two_runs_into_one_folder_keep_each_others_temporaries(
+    cluster: Any, tmp_path: Path
+) -> None:
+    """Run B starts while run A's jobs hold their temporary files (hold_s): B's cleanup of
+    temporaries left by dead runs leaves A's alone, and both runs finish every job."""
+    import threading
+
+    (tmp_path / "in").mkdir()
+    for i in range(2):
+        write_image(tmp_path / "in" / f"x{i}.png", np.full((4, 4, 3), 60 + i, np.uint8))
+    out = tmp_path / "out"
+    addr = cluster.scheduler_address
+    reports: dict[str, Any] = {}
+
+    def run_a() -> None:
+        reports["a"] = run_batch(
+            "convert", f"{tmp_path}/in/*.png", out, {"to": "rec2020"}, scheduler=addr, hold_s=4.0
+        )
+
+    thread = threading.Thread(target=run_a)
+    thread.start()
+    deadline = time.monotonic() + 60
+    while not list(out.glob(".x*.tmp.png")) and time.monotonic() < deadline:
+        time.sleep(0.05)
+    live = list(out.glob(".x*.tmp.png"))
+    assert live, "run A wrote no temporary file"
+    reports["b"] = run_batch(
+        "convert", f"{tmp_path}/in/*.png", out, {"to": "rec2020"}, scheduler=addr, force=True
+    )
+    thread.join(120)
+    assert reports["a"].ok and reports["a"].count("done") == 2, reports["a"].failed
+    assert reports["b"].ok and reports["b"].count("done") == 2, reports["b"].failed
+    assert not _leftover_temps(out)
+    assert sorted(p.name for p in out.iterdir()) == [MANIFEST, "x0.png", "x1.png"]

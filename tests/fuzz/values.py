@@ -167,7 +167,7 @@ def _tiff_file() -> Path:
 def _job_result() -> Any:
     from imageform.batch import JobResult
 
-    return JobResult(Path("in.png"), Path("out.png"), "ok", metrics={"gains": [1.0, 1.0, 1.0]})
+    return JobResult(Path("in.png"), Path("out.png"), "done", metrics={"gains": [1.0, 1.0, 1.0]})
 
 
 def _batch_report() -> Any:

@@ -28,7 +28,7 @@ from typing import Any
 import numpy as np
 
 from imageform._validate import check_option
-from imageform.errors import InvalidInputError
+from imageform.errors import ImageformError, InvalidInputError
 from imageform.workflows.color import DISPLAYABLE_SPACES
 
 __all__ = ["CHUNKED_COMMANDS", "ChunkedResult", "open_lazy", "process_chunked"]
@@ -127,6 +127,17 @@ def _tiff_lazy(p: Path, chunk: int, da: Any, zarr: Any) -> Any:
     return zarr.open(tifffile.imread(p, aszarr=True), mode="r")
 
 
+#: The largest block side: a block of 3 float64 channels stays under 2 GiB.
+_MAX_CHUNK = 16384
+
+
+def _chunk_size(chunk: object) -> int:
+    """The block side in pixels, 1 to 16384, refused by name otherwise."""
+    from imageform._validate import as_int
+
+    return as_int(chunk, "chunk", minimum=1, maximum=_MAX_CHUNK)
+
+
 def open_lazy(path: str | Path, chunk: int = 1024) -> Any:
     """Open a TIFF or a Zarr array as a dask array of ``chunk x chunk`` blocks.
 
@@ -136,18 +147,27 @@ def open_lazy(path: str | Path, chunk: int = 1024) -> Any:
     the file. Blocks have all channels (choose a multiple of the TIFF's tile size).
     """
     from imageform._optional import require
+    from imageform._validate import as_path
 
+    p = as_path(path, "path")
+    chunk = _chunk_size(chunk)
     da = require("dask.array", what="imageform chunked")
     zarr = require("zarr", what="imageform chunked")
-    p = Path(path)
     if not p.exists():
         raise InvalidInputError(f"input {p} does not exist")
-    if _kind(p) == "tiff":
-        z: Any = _tiff_lazy(p, chunk, da, zarr)
-        if not isinstance(z, (zarr.Array, zarr.Group)):
-            return z  # an uncompressed strip TIFF, already a dask array
-    else:
-        z = zarr.open(str(p), mode="r")
+    try:
+        if _kind(p) == "tiff":
+            z: Any = _tiff_lazy(p, chunk, da, zarr)
+            if not isinstance(z, (zarr.Array, zarr.Group)):
+                return z  # an uncompressed strip TIFF, already a dask array
+        else:
+            z = zarr.open(str(p), mode="r")
+    except (ImageformError, MemoryError):
+        raise
+    except Exception as exc:  # a damaged file: tifffile's, zarr's or numcodecs' own errors
+        text = str(exc).strip().splitlines()
+        reason = text[0][:120] if text else type(exc).__name__
+        raise InvalidInputError(f"cannot read {p}: {reason}") from exc
     if isinstance(z, zarr.Group):  # a pyramid: level 0 is the full resolution
         z = z["0"]
     if z.ndim != 3 or z.shape[-1] != 3:
@@ -332,14 +352,23 @@ def process_chunked(
     0.215861
     """
     from imageform._optional import require
+    from imageform._validate import as_bool, as_int, as_path
 
     t0 = time.perf_counter()
-    src_p, dst_p = Path(src), Path(dst)
+    src_p, dst_p = as_path(src, "src"), as_path(dst, "dst")
     cmd = check_option(command, CHUNKED_COMMANDS, "chunked command")
     opts = _options(cmd, options)
     out_kind = _kind(dst_p)
-    if chunk <= 0 or tile <= 0 or chunk % tile:
-        raise InvalidInputError(f"expected chunk a positive multiple of tile, got {chunk}, {tile}")
+    chunk = _chunk_size(chunk)
+    tile = as_int(tile, "tile", minimum=16, maximum=chunk)
+    if chunk % tile or tile % 16:
+        raise InvalidInputError(
+            f"expected chunk a multiple of tile, and tile a multiple of 16, got chunk {chunk}, "
+            f"tile {tile}"
+        )
+    force = as_bool(force, "force")
+    if num_workers is not None:
+        num_workers = as_int(num_workers, "num_workers", minimum=1, maximum=1024)
     if dst_p.resolve() == src_p.resolve():
         raise InvalidInputError(f"output {dst_p} is the input; choose another path")
     if dst_p.exists() and not force:

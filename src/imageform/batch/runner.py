@@ -10,9 +10,12 @@
   and modification time (and those of option files such as ``--target``). A re-run skips an
   output only when all of these are the same: a re-run with another ``--method`` recomputes.
   ``force=True`` redoes everything.
-- **Atomic**: each job writes ``.NAME.<random>.tmpSUFFIX`` in the output's folder, fsyncs it
-  and ``os.replace``-s it onto the final name; a worker killed mid-write leaves only a
-  temporary file, never taken as finished and removed at the start and end of a run.
+- **Atomic**: each job writes ``.NAME.<run>-<random>.tmpSUFFIX`` in the output's folder,
+  fsyncs it and ``os.replace``-s it onto the final name; a worker killed mid-write leaves only
+  a temporary file, never taken as finished and removed at the start and end of a run. A run
+  holds a lock file ``.imageform-batch.<run>.lock`` in the output folder while it goes on, so
+  that two runs into one folder keep each other's temporary files.
+- **Globs end**: ``**`` enters each real folder once, also through symbolic links that loop.
 - **Inputs never modified**: a plan in which an output is an input, or would match the input
   glob (a re-run would read outputs back as inputs), is refused, also when the output folder
   reaches the input tree through a symbolic link (real paths are compared).
@@ -38,6 +41,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from imageform._files import glob_base, glob_paths, glob_regex
 from imageform.errors import ImageformError, InvalidInputError, UnknownOptionError
 from imageform.workflows import Options, Workflow, flag_of, get_workflow
 
@@ -101,6 +105,19 @@ class JobResult:
     metrics: dict[str, Any] = field(default_factory=dict)
     seconds: float = 0.0
 
+    def __post_init__(self) -> None:
+        from imageform._validate import as_path, as_real, check_option, describe
+
+        object.__setattr__(self, "input", as_path(self.input, "input"))
+        object.__setattr__(self, "output", as_path(self.output, "output"))
+        status = check_option(self.status, ("done", "skipped", "failed"), "status")
+        object.__setattr__(self, "status", status)
+        if self.error is not None and not isinstance(self.error, str):
+            raise InvalidInputError(f"expected error as text or None, got {describe(self.error)}")
+        if not isinstance(self.metrics, Mapping):
+            raise InvalidInputError(f"expected metrics as a mapping, got {describe(self.metrics)}")
+        object.__setattr__(self, "seconds", as_real(self.seconds, "seconds", nonnegative=True))
+
 
 @dataclass(frozen=True)
 class BatchReport:
@@ -155,8 +172,13 @@ def batch_workflow(command: str | Workflow) -> Workflow:
     >>> batch_workflow("white_balance").name
     'white-balance'
     """
+    from imageform._validate import describe
     from imageform.workflows import WORKFLOWS
 
+    if not isinstance(command, str | Workflow):
+        raise UnknownOptionError(
+            f"expected command as a workflow (command) name, got {describe(command)}"
+        )
     wf = command if isinstance(command, Workflow) else get_workflow(command)
     if not wf.batch:
         valid = ", ".join(n for n, w in WORKFLOWS.items() if w.batch)
@@ -177,6 +199,8 @@ def batch_options(command: str | Workflow, options: Options | Mapping[str, Any] 
     >>> batch_options("convert", {"to": "lab"}).dst
     'lab'
     """
+    from imageform._validate import describe
+
     wf = batch_workflow(command)
     if isinstance(options, Options):
         if not isinstance(options, wf.options):
@@ -185,14 +209,23 @@ def batch_options(command: str | Workflow, options: Options | Mapping[str, Any] 
             )
         _no_extra_outputs(wf, options)
         return options
+    if options is not None and not isinstance(options, Mapping):
+        raise InvalidInputError(
+            f"expected options as {wf.options.__name__} or a mapping of option names to "
+            f"values, got {describe(options)}"
+        )
     by_flag = {_key(flag_of(f)): f.name for f in wf.options.fields()}
     by_flag.update({f.name: f.name for f in wf.options.fields()})
     values: dict[str, Any] = {}
     for k, v in dict(options or {}).items():
-        name = by_flag.get(_key(k))
+        name = by_flag.get(_key(k)) if isinstance(k, str) else None
         if name is None:
             valid = ", ".join(sorted(flag_of(f) for f in wf.options.fields()))
-            raise UnknownOptionError(f"unknown option {k!r} of batch {wf.name}; valid: {valid}")
+            if len(valid) > 90:
+                valid = valid[:90].rsplit(", ", 1)[0] + f", ... (imageform {wf.name} --help)"
+            raise UnknownOptionError(
+                f"unknown option {describe(k)} of batch {wf.name}; valid: {valid}"
+            )
         values[name] = v
     opts = wf.make_options(**values)
     _no_extra_outputs(wf, opts)
@@ -226,46 +259,85 @@ def _producer(wf: Workflow, opts: Options) -> dict[str, Any]:
 # ---------------------------------------------------------------- planning
 
 
-def _glob_base(pattern: str) -> Path:
-    """The fixed folder prefix of ``pattern`` (the part before the first wildcard)."""
-    parts = Path(pattern).parts
-    fixed: list[str] = []
-    for part in parts[:-1]:
-        if _WILDCARDS.search(part):
-            break
-        fixed.append(part)
-    return Path(*fixed) if fixed else Path(".")
-
-
-def _glob_regex(pattern: str) -> re.Pattern[str]:
-    """A regex for absolute paths that ``glob.glob(pattern, recursive=True)`` would match."""
-    pat = os.path.abspath(pattern)
-    out, i = "", 0
-    while i < len(pat):
-        if pat.startswith("**/", i):
-            out, i = out + "(?:.*/)?", i + 3
-        elif pat.startswith("**", i):
-            out, i = out + ".*", i + 2
-        elif pat[i] == "*":
-            out, i = out + "[^/]*", i + 1
-        elif pat[i] == "?":
-            out, i = out + "[^/]", i + 1
-        elif pat[i] == "[" and "]" in pat[i + 1 :]:
-            j = pat.index("]", i + 1)
-            body = pat[i + 1 : j]
-            out, i = out + "[" + ("^" + body[1:] if body.startswith("!") else body) + "]", j + 1
-        else:
-            out, i = out + re.escape(pat[i]), i + 1
-    return re.compile(out + r"\Z")
-
-
 def temp_pattern(output: Path) -> str:
     """The glob of the temporary files that jobs writing ``output`` use."""
     return f".{glob.escape(output.name)}.*.tmp{glob.escape(output.suffix)}"
 
 
-def _temp_path(output: Path) -> Path:
-    return output.with_name(f".{output.name}.{uuid.uuid4().hex[:12]}.tmp{output.suffix}")
+def _temp_path(output: Path, run_id: str | None = None) -> Path:
+    token = uuid.uuid4().hex[:12]
+    if run_id:
+        token = f"{run_id}-{token}"
+    return output.with_name(f".{output.name}.{token}.tmp{output.suffix}")
+
+
+_RUN_ID = re.compile("[0-9a-f]{12}")
+_LOCK = re.compile(r"\.imageform-batch\.([0-9a-f]{12})\.lock\Z")
+
+
+@contextlib.contextmanager
+def _run_lock(out_root: Path) -> Iterator[str]:
+    """A run's id, with a lock file ``.imageform-batch.<id>.lock`` in ``out_root`` held
+    (``flock``) for as long as the run goes on: another run into the same folder then knows
+    that the temporary files named with this id are being written, not left by a dead run.
+    Without ``fcntl`` (Windows) the id alone, every temporary file counting as stale."""
+    run_id = uuid.uuid4().hex[:12]
+    try:
+        import fcntl
+    except ImportError:  # pragma: no cover - not POSIX
+        yield run_id
+        return
+    out_root.mkdir(parents=True, exist_ok=True)
+    final = out_root / f".imageform-batch.{run_id}.lock"
+    part = out_root / f".imageform-batch.{run_id}.lock-part"
+    fd = os.open(part, os.O_CREAT | os.O_WRONLY, 0o644)
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX)
+        os.replace(part, final)  # visible only once held
+        yield run_id
+    finally:
+        final.unlink(missing_ok=True)
+        part.unlink(missing_ok=True)
+        os.close(fd)
+
+
+def _live_runs(out_root: Path, own: str | None) -> set[str]:
+    """The ids of the other runs going on into ``out_root`` (their lock is held); the lock
+    files of runs that died are removed."""
+    try:
+        import fcntl
+    except ImportError:  # pragma: no cover - not POSIX
+        return set()
+    live: set[str] = set()
+    try:
+        names = os.listdir(out_root)
+    except OSError:
+        return live
+    for name in names:
+        m = _LOCK.match(name)
+        if m is None or m.group(1) == own:
+            continue
+        path = out_root / name
+        try:
+            fd = os.open(path, os.O_RDONLY)
+        except OSError:
+            continue
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            live.add(m.group(1))  # held: that run goes on
+        else:
+            path.unlink(missing_ok=True)  # its run died
+        finally:
+            os.close(fd)
+    return live
+
+
+def _run_of(name: str, output: Path) -> str | None:
+    """The run id in the name of a temporary file of ``output`` (None for one without)."""
+    token = name.lstrip(".")[len(output.name) + 1 :].split(".", 1)[0]
+    run_id, sep, _ = token.partition("-")
+    return run_id if sep else None
 
 
 def _nested_part_pattern(output: Path) -> str:
@@ -275,13 +347,21 @@ def _nested_part_pattern(output: Path) -> str:
     return f".{temp_pattern(output)}.*.part*"
 
 
-def _remove_stale_temps(jobs: list[Job]) -> int:
+def _remove_stale_temps(
+    jobs: list[Job], out_root: Path | None = None, own: str | None = None
+) -> int:
+    """Remove the temporary files of ``jobs``' outputs that no run going on into
+    ``out_root`` is writing (those of run ``own``, this one, included: what it left is from
+    killed workers); returns how many."""
+    live = _live_runs(out_root, own) if out_root is not None else set()
     n = 0
     for job in jobs:
         folder = job.output.parent
         if folder.is_dir():
             for pattern in (temp_pattern(job.output), _nested_part_pattern(job.output)):
                 for stale in folder.glob(pattern):
+                    if _run_of(stale.name, job.output) in live:
+                        continue
                     if stale.is_dir() and not stale.is_symlink():
                         shutil.rmtree(stale, ignore_errors=True)
                     else:
@@ -323,19 +403,26 @@ def plan_jobs(pattern: str, out_dir: str | Path, *, out_suffix: str | None = Non
     >>> [str(j.output.relative_to(root)) for j in plan_jobs(f"{root}/in/**/*.png", root / "out")]
     ['out/a/x.png']
     """
-    if out_suffix is not None and not out_suffix.startswith("."):
-        out_suffix = "." + out_suffix
-    base = Path(os.path.abspath(_glob_base(pattern)))
-    out_root = Path(os.path.abspath(out_dir))
-    inputs = sorted(
-        Path(os.path.abspath(p)) for p in glob.glob(pattern, recursive=True) if os.path.isfile(p)
-    )
+    from imageform._validate import as_path, describe
+
+    if not isinstance(pattern, str) or not pattern.strip() or "\0" in pattern:
+        raise InvalidInputError(f"expected pattern as a glob (text), got {describe(pattern)}")
+    out_root = Path(os.path.abspath(as_path(out_dir, "out_dir")))
+    if out_suffix is not None:
+        if not isinstance(out_suffix, str) or not out_suffix.strip(". ") or "/" in out_suffix:
+            raise InvalidInputError(
+                f"expected out_suffix as a file suffix such as '.tif', got {describe(out_suffix)}"
+            )
+        if not out_suffix.startswith("."):
+            out_suffix = "." + out_suffix
+    base = Path(os.path.abspath(glob_base(pattern)))
+    inputs = sorted(Path(os.path.abspath(p)) for p in glob_paths(pattern) if os.path.isfile(p))
     if not inputs:
         raise InvalidInputError(f"no files match {pattern!r}")
-    matcher = _glob_regex(pattern)
+    matcher = glob_regex(pattern)
     real_base = os.path.realpath(base)
     rest = os.path.relpath(os.path.abspath(pattern), base)
-    real_matcher = _glob_regex(os.path.join(real_base, rest))
+    real_matcher = glob_regex(os.path.join(real_base, rest))
     real_inputs = {os.path.realpath(p) for p in inputs}
     real_out_root = Path(os.path.realpath(out_root))
     jobs = []
@@ -422,6 +509,7 @@ def run_job(
     out_path: str,
     options: Options | Mapping[str, Any] | None = None,
     hold_s: float = 0.0,
+    run_id: str | None = None,
 ) -> dict[str, Any]:
     """Run ``command`` on one file and publish ``out_path`` atomically (runs on a worker).
 
@@ -429,17 +517,24 @@ def run_job(
     onto ``out_path`` (``os.replace``, atomic on POSIX), then the folder is fsync-ed. An
     exception removes the temporary file and comes back as ``{"ok": False, "error": ...}``.
     ``hold_s`` waits between writing and renaming (a test hook: it widens the window in
-    which a killed worker leaves a partial file behind).
+    which a killed worker leaves a partial file behind). ``run_id`` names the run in the
+    temporary file's name, so that another run into the same folder leaves it alone while
+    this run holds its lock.
     """
+    from imageform._validate import as_path, as_real, describe
     from imageform.workflows import run_file
 
-    out = Path(out_path)
-    tmp = _temp_path(out)
+    out = as_path(out_path, "out_path")
+    in_file = as_path(in_path, "in_path")
+    hold_s = as_real(hold_s, "hold_s", minimum=0.0, maximum=3600.0)
+    if run_id is not None and not (isinstance(run_id, str) and _RUN_ID.fullmatch(run_id)):
+        raise InvalidInputError(f"expected run_id as 12 hex digits, got {describe(run_id)}")
+    tmp = _temp_path(out, run_id)
     t0 = time.perf_counter()
     try:
         opts = batch_options(command, options)
         out.parent.mkdir(parents=True, exist_ok=True)
-        result = run_file(batch_workflow(command).name, Path(in_path), tmp, opts)
+        result = run_file(batch_workflow(command).name, in_file, tmp, opts)
         if hold_s > 0:
             time.sleep(hold_s)
         _fsync(tmp)
@@ -542,6 +637,19 @@ def run_batch(
     NoWorkersError
         No worker for ``worker_timeout_s`` seconds.
     """
+    from imageform._validate import as_bool, as_int, as_real, describe
+
+    if n_workers is not None:
+        n_workers = as_int(n_workers, "n_workers", minimum=1, maximum=4096)
+    worker_timeout_s = as_real(worker_timeout_s, "worker_timeout_s", positive=True)
+    hold_s = as_real(hold_s, "hold_s", minimum=0.0, maximum=3600.0)
+    force, progress = as_bool(force, "force"), as_bool(progress, "progress")
+    if scheduler is not None and not (isinstance(scheduler, str) and scheduler.strip()):
+        raise InvalidInputError(
+            f"expected scheduler as an address (tcp://host:port), got {describe(scheduler)}"
+        )
+    if on_result is not None and not callable(on_result):
+        raise InvalidInputError(f"expected on_result as a callable, got {describe(on_result)}")
     wf = batch_workflow(command)
     opts = batch_options(wf, options)
     jobs = plan_jobs(pattern, out_dir, out_suffix=out_suffix)
@@ -558,7 +666,6 @@ def run_batch(
     out_root = Path(os.path.abspath(out_dir))
     producer = _producer(wf, opts)
     manifest = _read_manifest(out_root)
-    _remove_stale_temps(jobs)
     results: dict[Job, JobResult] = {}
     todo = []
     for job in jobs:
@@ -568,30 +675,35 @@ def run_batch(
         else:
             manifest.pop(rel, None)
             todo.append(job)
-    if todo:
-        workers = n_workers or min(os.cpu_count() or 1, len(todo))
-        state = _Manifest(out_root, manifest, producer)
-        try:
-            with _client(scheduler, workers) as client:
-                _run_on(
-                    client,
-                    wf.name,
-                    todo,
-                    opts,
-                    hold_s,
-                    results,
-                    progress,
-                    on_result,
-                    state,
-                    worker_timeout_s,
-                )
-        except KeyboardInterrupt:
-            state.save()
-            done = sum(r.status != "failed" for r in results.values())
-            raise BatchInterrupted(done, len(jobs) - done) from None
-        finally:
-            state.save()
-            _remove_stale_temps(todo)  # left by workers killed mid-write
+    if not todo:
+        _remove_stale_temps(jobs, out_root)  # left by runs that died
+    else:
+        with _run_lock(out_root) as run_id:
+            _remove_stale_temps(jobs, out_root, run_id)  # of runs that died, not running ones
+            workers = n_workers or min(os.cpu_count() or 1, len(todo))
+            state = _Manifest(out_root, manifest, producer)
+            try:
+                with _client(scheduler, workers) as client:
+                    _run_on(
+                        client,
+                        wf.name,
+                        todo,
+                        opts,
+                        hold_s,
+                        results,
+                        progress,
+                        on_result,
+                        state,
+                        worker_timeout_s,
+                        run_id,
+                    )
+            except KeyboardInterrupt:
+                state.save()
+                done = sum(r.status != "failed" for r in results.values())
+                raise BatchInterrupted(done, len(jobs) - done) from None
+            finally:
+                state.save()
+                _remove_stale_temps(todo, out_root, run_id)  # left by workers killed mid-write
     return BatchReport(wf.name, tuple(results[j] for j in jobs))
 
 
@@ -629,12 +741,12 @@ def _run_on(
     on_result: Callable[[JobResult], None] | None,
     state: _Manifest,
     worker_timeout_s: float,
+    run_id: str,
 ) -> None:
     from distributed import wait
     from rich.console import Console
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TimeRemainingColumn
 
-    run_id = uuid.uuid4().hex[:8]
     by_key = {}
     futures = []
     for i, job in enumerate(todo):
@@ -645,6 +757,7 @@ def _run_on(
             str(job.output),
             opts,
             hold_s,
+            run_id,
             key=f"imageform-batch-{name}-{run_id}-{i}",
             pure=False,
         )
@@ -719,6 +832,10 @@ def print_summary(report: BatchReport, console: Any = None) -> None:
     from rich.console import Console
     from rich.table import Table
 
+    if not isinstance(report, BatchReport):
+        from imageform._validate import describe
+
+        raise InvalidInputError(f"expected report as a BatchReport, got {describe(report)}")
     console = console or Console()
     console.print(
         f"batch {report.command}: {report.count('done')} done, "

@@ -14,7 +14,7 @@ from typing import Any
 
 import click
 
-from imageform.cli._build import CommandExit, option_params
+from imageform.cli._build import CommandExit, _naming_files, option_params
 from imageform.errors import ImageformError
 from imageform.workflows import Workflow
 
@@ -147,9 +147,10 @@ def _chunked_command(wf: Workflow) -> click.Command:
         chunk, tile, dtype = kw.pop("chunk"), kw.pop("tile"), kw.pop("dtype")
         force, as_json = bool(kw.pop("force")), bool(kw.pop("json_out"))
         opts = _options(wf, kw)
-        r = process_chunked(
-            image, out, wf.name, opts, chunk=chunk, tile=tile, dtype=dtype, force=force
-        )
+        with _naming_files({"image": image}):
+            r = process_chunked(
+                image, out, wf.name, opts, chunk=chunk, tile=tile, dtype=dtype, force=force
+            )
         info = {
             "input": image,
             "output": r.output,

@@ -9,7 +9,6 @@ so ``imageform --help`` imports no numerical code.
 from __future__ import annotations
 
 import dataclasses
-import glob
 import os
 import sys
 import types
@@ -21,6 +20,7 @@ from typing import Any
 
 import click
 
+from imageform._files import glob_paths
 from imageform.errors import ImageformError, InvalidInputError
 from imageform.workflows import Result, Workflow, choice_names, flag_of
 
@@ -140,7 +140,7 @@ def expand_inputs(patterns: tuple[str, ...] | list[str]) -> list[Path]:
         if os.path.exists(p) or not any(c in p for c in "*?["):
             files.append(Path(p))
             continue
-        hits = sorted(glob.glob(p, recursive=True))
+        hits = sorted(glob_paths(p))  # ** enters each real folder once (looping links)
         if not hits:
             raise InvalidInputError(f"no files match {p!r}")
         files += [Path(h) for h in hits]
@@ -200,6 +200,40 @@ def _terminal_width() -> int:
     return shutil.get_terminal_size((120, 24)).columns
 
 
+class UnexpectedError(ImageformError):
+    """An exception the library did not expect, in one line naming the input file(s); the
+    original is its ``__cause__`` (``--traceback`` shows both)."""
+
+
+@contextmanager
+def _naming_files(inputs: dict[str, Any]) -> Iterator[None]:
+    """Turn an unexpected exception (not an :class:`ImageformError`, an ``OSError`` naming
+    its file, an interrupt or a memory error) into one line naming the input file(s)."""
+    try:
+        yield
+    except (ImageformError, click.ClickException, CommandExit, MemoryError):
+        raise
+    except OSError as exc:
+        if exc.filename is not None:
+            raise
+        raise UnexpectedError(_unexpected(exc, inputs)) from exc
+    except Exception as exc:
+        raise UnexpectedError(_unexpected(exc, inputs)) from exc
+
+
+def _unexpected(exc: BaseException, inputs: dict[str, Any]) -> str:
+    files: list[str] = []
+    for value in inputs.values():
+        files += [str(v) for v in (value if isinstance(value, list | tuple) else [value])]
+    where = files[0] if len(files) == 1 else f"{files[0]} (and {len(files) - 1} more)"
+    text = str(exc).strip().splitlines()
+    reason = text[0][:120] if text else ""
+    head = f"{where}: " if files else ""
+    return (
+        f"{head}unexpected {type(exc).__name__}: {reason} (run again with --traceback to see where)"
+    ).replace(":  (", " (")
+
+
 def build_command(wf: Workflow) -> click.Command:
     """The click command of a workflow: its inputs, ``-o/--out``, options, ``--force``,
     ``--json``."""
@@ -251,7 +285,7 @@ def build_command(wf: Workflow) -> click.Command:
         from imageform.workflows import execute
 
         show = not as_json and sys.stderr.isatty()
-        with progress_bar(show) as progress:
+        with progress_bar(show) as progress, _naming_files(inputs):
             result = execute(wf, options=opts, out=out, force=force, progress=progress, **inputs)
         emit(result, as_json)
         if result.check_failed:

@@ -16,12 +16,14 @@ from imageform.workflows._spec import Options, Result, Run, Workflow, flag_of, r
 __all__ = ["execute", "run_file"]
 
 
-def _as_paths(value: Any) -> list[Path]:
-    if value is None:
+def _as_paths(value: Any, name: str, *, required: bool = False) -> list[Path]:
+    from imageform._validate import as_path
+
+    if value is None and not required:
         return []
     if isinstance(value, (list, tuple)):
-        return [Path(v) for v in value]
-    return [Path(value)]
+        return [as_path(v, f"{name}[{i}]") for i, v in enumerate(value)]
+    return [as_path(value, name)]
 
 
 def _note_of(w: warnings.WarningMessage) -> str:
@@ -66,9 +68,19 @@ def execute(
         An output that is an input, exists without ``force``, or whose folder is missing; a
         missing input; anything the workflow refuses.
     """
+    from imageform._validate import as_bool, as_path, describe
     from imageform.workflows.registry import get_workflow
 
+    if not isinstance(workflow, str | Workflow):
+        raise InvalidInputError(
+            f"expected workflow as a Workflow or a command name, got {describe(workflow)}"
+        )
     wf = get_workflow(workflow) if isinstance(workflow, str) else workflow
+    if out is not None:
+        out = as_path(out, "out (-o/--out)")
+    force = as_bool(force, "force")
+    if progress is not None and not callable(progress):
+        raise InvalidInputError(f"expected progress as a callable, got {describe(progress)}")
     opts = options if options is not None else wf.make_options()
     if not isinstance(opts, wf.options):
         raise InvalidInputError(
@@ -81,10 +93,10 @@ def execute(
             f"got {', '.join(sorted(inputs)) or 'none'}"
         )
     files = [i.name for i in wf.inputs if i.kind == "file"]
-    named = [("input", p) for n in files for p in _as_paths(inputs[n])]
+    named = [("input", p) for n in files for p in _as_paths(inputs[n], n, required=True)]
     for f in opts.fields():
         if f.metadata.get("input"):
-            named += [(flag_of(f), p) for p in _as_paths(getattr(opts, f.name))]
+            named += [(flag_of(f), p) for p in _as_paths(getattr(opts, f.name), flag_of(f))]
     for what, p in named:  # before any work starts
         if not p.exists():
             raise InvalidInputError(f"{what} file {p} does not exist")

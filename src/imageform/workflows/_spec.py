@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import dataclasses
 import importlib
+import types
 import typing
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -32,6 +33,7 @@ __all__ = [
     "flag_of",
     "normalize_choice",
     "option",
+    "option_label",
     "resolve",
 ]
 
@@ -50,6 +52,8 @@ def option(
     hidden: bool = False,
     output: bool = False,
     input: bool = False,
+    minimum: float | None = None,
+    maximum: float | None = None,
 ) -> Any:
     """A field of an options dataclass, with what the command line needs to know.
 
@@ -73,6 +77,9 @@ def option(
     output, input : bool
         The field is a path the workflow writes (checked and written all or nothing with the
         main output) or reads (never overwritten by an output).
+    minimum, maximum : float, optional
+        Bounds of a number (an ``int`` or ``float`` field), checked when the options are made;
+        an ``int`` field without ``maximum`` is at most ``2**62``.
     """
     meta = {
         "help": help,
@@ -83,6 +90,8 @@ def option(
         "hidden": hidden,
         "output": output,
         "input": input,
+        "minimum": minimum,
+        "maximum": maximum,
     }
     if isinstance(default, (list, dict, set)):
         raise TypeError("use a tuple for a sequence default")
@@ -100,8 +109,32 @@ def resolve(ref: str) -> Any:
 
 def choice_names(choices: Sequence[str] | str | Mapping[str, Any]) -> tuple[str, ...]:
     """The valid names of a ``choices`` declaration, in their normalised spelling."""
-    names = resolve(choices) if isinstance(choices, str) else choices
+    describe = _describe
+
+    names: Any = choices
+    if isinstance(choices, str):
+        try:
+            names = resolve(choices) if ":" in choices else None
+        except (ImportError, AttributeError):
+            names = None
+    if isinstance(names, str) or not isinstance(names, Sequence | Mapping | set | frozenset):
+        raise InvalidInputError(
+            'expected choices as names or "module:NAME" of a sequence of names, got '
+            f"{describe(choices)}"
+        )
+    if not all(isinstance(n, str) for n in names):
+        raise InvalidInputError(f"expected choices as names (str), got {describe(choices)}")
     return tuple(_norm(n) for n in names)
+
+
+def _describe(value: object, width: int = 40) -> str:
+    """A value for a one-line message (as ``imageform._validate.describe``, which imports
+    NumPy: ``imageform --help`` must not)."""
+    shape = getattr(value, "shape", None)
+    if shape is not None and getattr(value, "ndim", None):
+        return f"{type(value).__name__} of shape {tuple(shape)}, {getattr(value, 'dtype', '')}"
+    text = repr(value)
+    return text if len(text) <= width else text[: width - 3] + "..."
 
 
 def _norm(value: str) -> str:
@@ -116,19 +149,108 @@ def normalize_choice(value: object, choices: Sequence[str] | str, what: str) -> 
     >>> normalize_choice("Gray-World", ("gray_world", "white_patch"), "--method")
     'gray_world'
     """
+    describe = _describe
+
     if not isinstance(value, str):
-        raise UnknownOptionError(f"expected {what} as a name, got {type(value).__name__}")
+        raise UnknownOptionError(f"expected a name as the {what} value, got {describe(value)}")
     names = choice_names(choices)
     key = _norm(value)
     if key not in names:
-        shown = ", ".join(n.replace("_", "-") for n in names)
-        raise UnknownOptionError(f"unknown {what} {value!r}; valid: {shown}")
+        raise UnknownOptionError(f"unknown {what} {describe(value)}; valid: {_shown(names)}")
     return key
+
+
+def _shown(names: Sequence[str], width: int = 120) -> str:
+    """Names for a one-line message: as many as fit ``width`` characters, then how many more."""
+    out = ""
+    for i, n in enumerate(names):
+        part = (", " if out else "") + n.replace("_", "-")
+        if len(out) + len(part) > width:
+            return out + f", ... ({len(names) - i} more)"
+        out += part
+    return out
 
 
 def flag_of(f: dataclasses.Field[Any]) -> str:
     """The long command-line flag of an options field."""
     return f.metadata.get("flag") or "--" + f.name.replace("_", "-")
+
+
+def option_label(f: dataclasses.Field[Any]) -> str:
+    """How messages name an options field: its flag, and the field name too when the flag
+    spells another word (``--from (src)``), so that API and command-line users both see it."""
+    flag = flag_of(f)
+    return flag if flag[2:].replace("-", "_") == f.name else f"{flag} ({f.name})"
+
+
+#: The largest value of an ``int`` option without a declared ``maximum`` (fits int64).
+_INT_MAX = 2**62
+
+
+_HINTS: dict[str, dict[str, Any]] = {}
+
+
+def _hints(cls: type) -> dict[str, Any]:
+    """The evaluated field types of an options class (computed once per class)."""
+    key = f"{cls.__module__}.{cls.__qualname__}.{id(cls)}"
+    if key not in _HINTS:
+        _HINTS[key] = typing.get_type_hints(cls)
+    return _HINTS[key]
+
+
+def _unwrap_optional(tp: Any) -> tuple[Any, bool]:
+    """(type, optional) from ``X | None``."""
+    if typing.get_origin(tp) in (typing.Union, types.UnionType):
+        args = [a for a in typing.get_args(tp) if a is not type(None)]
+        if len(args) == 1:
+            return args[0], True
+    return tp, False
+
+
+def _checked(value: Any, hint: Any, f: dataclasses.Field[Any], label: str) -> Any:
+    """``value`` of the options field ``f`` checked against its declared type and bounds
+    (NumPy scalars and 0-d arrays accepted as numbers), as the plain Python value; one line
+    naming ``label`` otherwise."""
+    from imageform._validate import as_bool, as_int, as_path, as_real, describe
+
+    tp, optional = _unwrap_optional(hint)
+    if value is None:
+        if optional:
+            return None
+        raise InvalidInputError(f"expected {label} as {_kind(tp)}, got None")
+    lo, hi = f.metadata.get("minimum"), f.metadata.get("maximum")
+    if tp is bool:
+        return as_bool(value, label)
+    if tp is int:
+        return as_int(value, label, minimum=lo, maximum=_INT_MAX if hi is None else hi)
+    if tp is float:
+        return as_real(value, label, minimum=lo, maximum=hi)
+    if tp is str:
+        if isinstance(value, str):
+            return str(value)
+        raise InvalidInputError(f"expected {label} as text, got {describe(value)}")
+    if tp is Path:
+        return as_path(value, label)
+    if typing.get_origin(tp) is tuple:
+        args = typing.get_args(tp)
+        if not isinstance(value, tuple | list):
+            raise InvalidInputError(f"expected {label} as a sequence, got {describe(value)}")
+        if len(args) == 2 and args[1] is Ellipsis:
+            kinds = [args[0]] * len(value)
+        elif len(value) != len(args):
+            raise InvalidInputError(
+                f"expected {label} as {len(args)} values, got {len(value)}: {describe(value)}"
+            )
+        else:
+            kinds = list(args)
+        pairs = enumerate(zip(value, kinds, strict=True))
+        return tuple(_checked(v, k, f, f"{label}[{i}]") for i, (v, k) in pairs)
+    return value
+
+
+def _kind(tp: Any) -> str:
+    names = {bool: "True or False", int: "an integer", float: "a number", str: "text"}
+    return names.get(tp, "a file name" if tp is Path else "a value")
 
 
 @dataclass(frozen=True)
@@ -140,11 +262,14 @@ class Options:
     """
 
     def __post_init__(self) -> None:
+        hints = _hints(type(self))
         for f in dataclasses.fields(self):
+            label = option_label(f)
+            value = _checked(getattr(self, f.name), hints[f.name], f, label)
             choices = f.metadata.get("choices")
-            value = getattr(self, f.name)
             if choices is not None and value is not None:
-                object.__setattr__(self, f.name, normalize_choice(value, choices, flag_of(f)))
+                value = normalize_choice(value, choices, label)
+            object.__setattr__(self, f.name, value)
         self.check()
 
     def check(self) -> None:

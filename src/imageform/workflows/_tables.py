@@ -50,7 +50,7 @@ class Table:
                     v = float(cell) if cell else float("nan")
                 except ValueError:
                     raise InvalidInputError(
-                        f"{self.path}:{line}: expected a number, got {cell!r}"
+                        f"{self.path}:{line}: expected a number, got {cell[:40]!r}"
                     ) from None
                 if finite and not np.isfinite(v):
                     got = repr(cell) if cell else "an empty cell"

@@ -42,11 +42,19 @@ def _rgb(path: Path, opts: Any) -> Any:
 def _range(text: str | None, flag: str) -> tuple[float, float] | None:
     if text is None:
         return None
+    import math
+
+    from imageform._validate import describe
+
     parts = str(text).split(":")
     try:
         lo, hi = (float(p) for p in parts)
     except ValueError:
-        raise InvalidInputError(f"expected {flag} as LOW:HIGH (e.g. 0:20), got {text!r}") from None
+        lo = hi = math.nan
+    if not (math.isfinite(lo) and math.isfinite(hi)):
+        raise InvalidInputError(
+            f"expected {flag} as LOW:HIGH of finite numbers (e.g. 0:20), got {describe(text)}"
+        )
     return lo, hi
 
 
@@ -64,9 +72,13 @@ class SegmentOptions(ImageIn):
     opencv_ranges: bool = option(
         False, help="Read --h in 0-180 and --s/--v in 0-255 (OpenCV's units)."
     )
-    open_radius: int = option(2, help="Opening disc radius in pixels (0: none).")
-    close_radius: int = option(2, help="Closing disc radius in pixels (0: none).")
-    min_area: int = option(64, help="Remove components smaller than this (pixels).")
+    open_radius: int = option(
+        2, help="Opening disc radius in pixels (0: none).", minimum=0, maximum=1000
+    )
+    close_radius: int = option(
+        2, help="Closing disc radius in pixels (0: none).", minimum=0, maximum=1000
+    )
+    min_area: int = option(64, help="Remove components smaller than this (pixels).", minimum=0)
     overlay: Path | None = option(
         None, help="Also write the image with the mask blended over it (PNG).", output=True
     )
@@ -198,9 +210,9 @@ class FitCorrectionOptions(ImageIn):
         help="linear (3x3 in linear light) or root-polynomial.",
         choices=("linear", "root_polynomial"),
     )
-    degree: int = option(2, help="Root-polynomial degree (1 to 3).")
-    rows: int = option(4, help="Chart rows (the chart fills the frame).")
-    cols: int = option(6, help="Chart columns.")
+    degree: int = option(2, help="Root-polynomial degree (1 to 3).", minimum=1, maximum=3)
+    rows: int = option(4, help="Chart rows (the chart fills the frame).", minimum=1, maximum=1000)
+    cols: int = option(6, help="Chart columns.", minimum=1, maximum=1000)
 
 
 def _patches_csv(path: Path) -> tuple[Any, Any]:

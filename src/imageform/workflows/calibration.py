@@ -51,17 +51,21 @@ def parse_board(text: str) -> tuple[int, int]:
     >>> parse_board("9x6")
     (9, 6)
     """
-    m = re.fullmatch(r"\s*(\d+)\s*[xX×]\s*(\d+)\s*", str(text))
+    from imageform._validate import describe
+
+    pattern = r"\s*(\d{1,9})\s*[xX×]\s*(\d{1,9})\s*"
+    m = re.fullmatch(pattern, text) if isinstance(text, str) else None
     if not m:
         raise InvalidInputError(
-            f"expected --board COLSxROWS of inner corners (e.g. 9x6), got {text!r}"
+            f"expected the --board text as COLSxROWS of inner corners (e.g. 9x6), got "
+            f"{describe(text)}"
         )
     cols, rows = int(m.group(1)), int(m.group(2))
     for n in (cols, rows):
         if not 2 <= n <= MAX_BOARD_CORNERS:
             raise InvalidInputError(
-                f"expected --board COLSxROWS with 2 to {MAX_BOARD_CORNERS} inner corners each "
-                f"(a checkerboard of 3 x 3 squares has 2x2), got {text!r}"
+                f"expected the --board text as COLSxROWS with 2 to {MAX_BOARD_CORNERS} inner "
+                f"corners each (a checkerboard of 3 x 3 squares has 2x2), got {describe(text)}"
             )
     return cols, rows
 

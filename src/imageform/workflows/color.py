@@ -73,8 +73,8 @@ class ConvertOptions(ImageIn, ImageOut):
         super().check()
         from imageform.color import space_name
 
-        object.__setattr__(self, "src", space_name(self.src, "--from"))
-        object.__setattr__(self, "dst", space_name(self.dst, "--to"))
+        object.__setattr__(self, "src", space_name(self.src, "--from (src)"))
+        object.__setattr__(self, "dst", space_name(self.dst, "--to (dst)"))
 
     def check_output(self, path: Path) -> None:
         from imageform.io import image_format

@@ -27,7 +27,8 @@ class LectureOptions(Options):
             topics = lecture_topics()
             if not any(self.topic.strip().lower() in t.lower() for t in topics):
                 raise UnknownOptionError(
-                    f"no lecture topic matches --topic {self.topic!r}; valid: {', '.join(topics)}"
+                    f"no lecture topic matches --topic {self.topic[:40]!r}; "
+                    f"valid: {', '.join(topics)}"
                 )
 
 

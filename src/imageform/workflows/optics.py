@@ -19,10 +19,10 @@ STOPS = (1.4, 2.0, 2.8, 4.0, 5.6, 8.0, 11.0, 16.0, 22.0)
 class LensOptions(Options):
     """Options of ``imageform lens`` (lengths with a unit; see imageform._units)."""
 
-    focal: str = option(help="Focal length, e.g. 50mm (bare number: mm).", metavar="LENGTH")
+    focal: str | float = option(help="Focal length, e.g. 50mm (bare number: mm).", metavar="LENGTH")
     f_number: float = option(help="f-number N = f / D, e.g. 2.8.", metavar="N")
-    focus: str = option(help="Focus distance from the lens, e.g. 2m (bare number: m).")
-    coc: str = option("0.03mm", help="Circle of confusion diameter (bare number: mm).")
+    focus: str | float = option(help="Focus distance from the lens, e.g. 2m (bare number: m).")
+    coc: str | float = option("0.03mm", help="Circle of confusion diameter (bare number: mm).")
 
     def check(self) -> None:
         super().check()

@@ -21,7 +21,7 @@ from imageform.workflows import (
     stereo,
     vanishing,
 )
-from imageform.workflows._spec import Workflow
+from imageform.workflows._spec import Workflow, _describe
 
 __all__ = ["WORKFLOWS", "get_workflow"]
 
@@ -56,7 +56,25 @@ def get_workflow(name: str) -> Workflow:
     >>> get_workflow("white_balance").name
     'white-balance'
     """
-    key = str(name).strip().lower().replace("_", "-")
+    describe = _describe
+    if not isinstance(name, str):
+        raise UnknownOptionError(
+            f"expected the workflow (command) name as text, got {describe(name)}"
+        )
+    key = name.strip().lower().replace("_", "-")
     if key not in WORKFLOWS:
-        raise UnknownOptionError(f"unknown command {name!r}; valid: {', '.join(WORKFLOWS)}")
+        raise UnknownOptionError(
+            f"unknown workflow (command) name {describe(name)}; valid: {_shown(tuple(WORKFLOWS))}"
+        )
     return WORKFLOWS[key]
+
+
+def _shown(names: tuple[str, ...], width: int = 80) -> str:
+    """As many names as fit ``width`` characters, then how many more."""
+    out = ""
+    for i, n in enumerate(names):
+        part = (", " if out else "") + n
+        if len(out) + len(part) > width:
+            return out + f", ... ({len(names) - i} more: imageform --help)"
+        out += part
+    return out

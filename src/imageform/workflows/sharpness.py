@@ -14,7 +14,7 @@ from typing import Any
 
 from imageform.errors import InvalidInputError
 from imageform.workflows._images import ImageIn, read
-from imageform.workflows._spec import Input, Output, Result, Run, Workflow, option
+from imageform.workflows._spec import Input, Output, Result, Run, Workflow, _describe, option
 
 __all__ = ["WORKFLOWS", "SfrOptions"]
 
@@ -49,7 +49,7 @@ class SfrOptions(ImageIn):
             vals = ()
         if len(vals) != 4 or vals[2] < 1 or vals[3] < 1 or vals[0] < 0 or vals[1] < 0:
             raise InvalidInputError(
-                f"expected --roi as x,y,w,h (4 integers, w and h >= 1), got {self.roi!r}"
+                f"expected --roi as x,y,w,h (4 integers, w and h >= 1), got {_describe(self.roi)}"
             )
         return (vals[0], vals[1], vals[2], vals[3])
 

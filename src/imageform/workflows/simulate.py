@@ -33,7 +33,9 @@ class SimulateOptions(Options):
         "scene's).",
         input=True,
     )
-    seed: int = option(0, help="Seed of the sensor noise (the same seed, the same pixels).")
+    seed: int = option(
+        0, help="Seed of the sensor noise (the same seed, the same pixels).", minimum=0
+    )
     raw: Path | None = option(
         None,
         help="Also write the raw mosaic as a DNG file with the simulated camera's colour "
@@ -48,7 +50,7 @@ class SimulateOptions(Options):
         if isinstance(self.seed, bool) or not isinstance(self.seed, int) or self.seed < 0:
             raise InvalidInputError(f"expected --seed as an integer >= 0, got {self.seed!r}")
         if self.raw is not None and Path(self.raw).suffix.lower() != ".dng":
-            raise InvalidInputError(f"expected --raw as a .dng file, got {str(self.raw)!r}")
+            raise InvalidInputError(f"expected --raw as a .dng file, got {str(self.raw)[-60:]!r}")
 
 
 def _check_folder(out: Path, force: bool) -> None:

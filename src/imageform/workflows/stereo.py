@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import glob
 import os
 from dataclasses import dataclass
 from pathlib import Path
@@ -58,7 +57,9 @@ def _expand(pattern: str, what: str) -> list[Path]:
         if not path.is_file():
             raise InvalidInputError(f"{what} file {path} does not exist")
         return [path]
-    hits = sorted(glob.glob(p, recursive=True))
+    from imageform._files import glob_paths
+
+    hits = sorted(glob_paths(p))
     if not hits:
         raise InvalidInputError(f"no files match {what} pattern {p!r}")
     return [Path(h) for h in hits]

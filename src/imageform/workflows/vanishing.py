@@ -32,7 +32,7 @@ class VanishingOptions(ImageIn):
         metavar="FILE",
         input=True,
     )
-    seed: int = option(0, help="RANSAC seed (results are reproducible).")
+    seed: int = option(0, help="RANSAC seed (results are reproducible).", minimum=0)
 
 
 def _directions(K: Any, vps: Any) -> Any:
