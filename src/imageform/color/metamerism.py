@@ -18,8 +18,8 @@ from __future__ import annotations
 import numpy as np
 
 from imageform import _deprecate
-from imageform._validate import as_int, as_real, check_option
-from imageform.color._guard import as_bool
+from imageform._validate import as_int, as_real
+from imageform.color._guard import as_bool, check_option
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
 from imageform.spectral.integrate import (
     integration_weights,
@@ -239,6 +239,10 @@ def metamerism_index(
     correct = as_bool(correct, "correct")
     if str(observer) not in ("2", "10"):
         raise InvalidInputError(f"expected observer 2 or 10, got {observer!r}")
+    if test is None:
+        raise TypeError("expected test as an illuminant name or a Spectrum, got None")
+    test = resolve_illuminant(test, name="test")
+    reference = resolve_illuminant(reference, name="reference")
     x1t = spectrum_to_xyz(a, illuminant=test, observer=observer)
     x2t = spectrum_to_xyz(b, illuminant=test, observer=observer)
     if correct:

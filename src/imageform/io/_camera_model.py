@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from imageform._validate import as_bool, as_int
+from imageform._validate import as_bool, as_int, describe
 from imageform.errors import InvalidInputError, UnknownOptionError
 
 if TYPE_CHECKING:
@@ -184,8 +184,12 @@ class CameraFile:
         intrinsic parameter (0 for fixed ones) and the RMS, views used and fixed parameters.
         No pose: a calibration has one per view.
         """
-        from imageform.geometry import Camera
+        from imageform.geometry import CalibrationResult, Camera
 
+        if not isinstance(result, CalibrationResult):
+            raise TypeError(
+                f"expected result as a CalibrationResult (calibrate_camera), got {describe(result)}"
+            )
         width, height = result.image_size
         size = (int(width), int(height)) if min(result.image_size) > 0 else None
         camera = Camera(result.K, image_size=size, distortion=result.distortion)

@@ -27,6 +27,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from imageform._files import atomic_write
+from imageform._validate import describe
 from imageform.errors import InvalidInputError, UnknownOptionError
 from imageform.io._camera_model import (
     _TABLES,
@@ -127,6 +128,13 @@ class StereoCameraFile:
         command: str | None = None,
     ) -> StereoCameraFile:
         """The stereo file of a :func:`~imageform.geometry.stereo_calibrate` result."""
+        from imageform.geometry import StereoCalibrationResult
+
+        if not isinstance(result, StereoCalibrationResult):
+            raise TypeError(
+                "expected result as a StereoCalibrationResult (stereo_calibrate), "
+                f"got {describe(result)}"
+            )
         left = CameraFile.from_calibration(result.left, images=images_left)
         right = CameraFile.from_calibration(result.right, images=images_right)
         std = dict(right.std)

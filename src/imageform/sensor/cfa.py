@@ -34,7 +34,7 @@ import numpy as np
 
 from imageform._backend import device_of, namespace
 from imageform._typing import Array, ArrayLike
-from imageform._validate import as_image, as_shape, format_shape
+from imageform._validate import as_image, as_shape, describe, format_shape
 from imageform.errors import InvalidInputError, UnknownOptionError
 
 __all__ = ["CFA_PATTERNS", "cfa_masks", "cfa_pattern", "mosaic"]
@@ -69,11 +69,11 @@ def cfa_pattern(pattern: object) -> str:
     'RGGB'
     """
     if not isinstance(pattern, str):
-        raise UnknownOptionError(f"expected a CFA pattern name (str), got {type(pattern).__name__}")
+        raise UnknownOptionError(f"expected a CFA pattern name (str), got {describe(pattern)}")
     key = pattern.strip().upper()
     if key not in CFA_PATTERNS:
         names = ", ".join(repr(p) for p in CFA_PATTERNS)
-        raise UnknownOptionError(f"unknown CFA pattern {pattern!r}; valid: {names}")
+        raise UnknownOptionError(f"unknown CFA pattern {describe(pattern, 30)}; valid: {names}")
     return key
 
 
