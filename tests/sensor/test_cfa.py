@@ -155,3 +155,19 @@ def test_opencv_names_rggb_bayerbg() -> None:
     # measured samples come back unchanged from OpenCV's bilinear demosaicing
     m = cfa_masks((16, 16), "RGGB")
     np.testing.assert_array_equal(rgb[2:-2, 2:-2][m[2:-2, 2:-2]], img[2:-2, 2:-2][m[2:-2, 2:-2]])
+
+
+def test_huge_pattern_name_is_one_short_line() -> None:
+    """Issue 16: a 100,000-character name was echoed whole."""
+    from imageform.sensor import demosaic
+
+    rgb = np.full((4, 6, 3), 0.5)
+    for call in (
+        lambda p: cfa_pattern(p),
+        lambda p: cfa_masks((4, 6), p),
+        lambda p: mosaic(rgb, p),
+        lambda p: demosaic(rgb[..., :1], p),
+    ):
+        with pytest.raises(UnknownOptionError, match="CFA pattern") as exc:
+            call("x" * 100_000)
+        assert len(str(exc.value)) <= 200 and "\n" not in str(exc.value)
