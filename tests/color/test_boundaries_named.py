@@ -298,3 +298,18 @@ def test_invalid_input_still_a_value_error() -> None:
         white_balance(RGB, normalize="max")
     with pytest.raises(InvalidInputError):
         whitepoint_xy("D93")
+
+
+def test_dask_refusals_report_the_arrays_shape_not_the_probes() -> None:
+    """Issue 16 ("no chunk shape where the array's shape is meant"): a chunk-wise function
+    checks shapes on a one-pixel probe; its refusal used to report the probe's (1, 4)."""
+    da = pytest.importorskip("dask.array")
+    from imageform.color import delta_e, xyz_to_lab
+
+    x = da.from_array(np.full((100, 4), 0.5), chunks=(10, 4))
+    msg = _refused(lambda: xyz_to_lab(x), "XYZ")
+    assert "(100, 4)" in msg and "(1, 4)" not in msg
+    msg = _refused(lambda: delta_e(x, x), "lab1")
+    assert "(100, 4)" in msg
+    y = da.from_array(np.full((5, 100, 4), 0.5), chunks=(1, 10, 4))
+    assert "(5, 100, 4)" in _refused(lambda: in_locus(y), "points")
