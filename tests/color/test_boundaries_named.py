@@ -313,3 +313,21 @@ def test_dask_refusals_report_the_arrays_shape_not_the_probes() -> None:
     assert "(100, 4)" in msg
     y = da.from_array(np.full((5, 100, 4), 0.5), chunks=(1, 10, 4))
     assert "(5, 100, 4)" in _refused(lambda: in_locus(y), "points")
+
+
+@pytest.mark.parametrize("bad", [None, object(), True, 0, "srgb"])
+def test_gamut_figures_spaces_is_a_list(bad: object) -> None:
+    """A None-default or non-simple optional parameter the fuzz table does not reach:
+    "'NoneType' object is not iterable", and a bare "srgb" read letter by letter."""
+    _refused(lambda: gamut_figures(bad), "spaces")  # type: ignore[arg-type]
+
+
+def test_gamut_figures_names_the_bad_entry() -> None:
+    msg = _refused(lambda: gamut_figures(["srgb", "cmyk"]), "spaces[1]")
+    assert "unknown RGB space 'cmyk'" in msg
+
+
+@pytest.mark.parametrize("bad", [True, np.array([True, False, True]), object(), "nope"])
+def test_white_balance_illuminant_is_named(bad: object) -> None:
+    _refused(lambda: white_balance(RGB, "manual", illuminant=bad), "illuminant")
+    _refused(lambda: estimate_illuminant(RGB, "manual", illuminant=bad), "illuminant")

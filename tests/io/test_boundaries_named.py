@@ -48,3 +48,43 @@ def test_read_raw_pixel_limit_from_the_header(
             read_raw(path, max_pixels=bad)  # type: ignore[arg-type]
     with pytest.raises(TypeError, match="path"):
         read_raw(None)  # type: ignore[arg-type]
+
+
+def _camera_file() -> CameraFile:
+    from imageform.geometry import Camera
+
+    return CameraFile(Camera([[500.0, 0, 320], [0, 500, 240], [0, 0, 1]], image_size=(640, 480)))
+
+
+@pytest.mark.parametrize("bad", [object(), "abc", True, 0])
+def test_camera_file_std_and_provenance_are_typed(bad: object, tmp_path: Path) -> None:
+    """Optional fields with a None default (not reached by the fuzz table): a wrong type was
+    an AttributeError, a raw ValueError or "'int' object is not iterable"."""
+    from imageform.io import write_camera
+
+    cam = _camera_file().camera
+    with pytest.raises(TypeError, match="expected std as a mapping"):
+        CameraFile(cam, std=bad)  # type: ignore[arg-type]
+    with pytest.raises(TypeError, match="expected provenance as a Provenance"):
+        CameraFile(cam, provenance=bad)  # type: ignore[arg-type]
+    with pytest.raises(TypeError, match="expected std as a mapping"):
+        write_camera(tmp_path / "c.toml", cam, std=bad)  # type: ignore[arg-type]
+    with pytest.raises(TypeError, match="expected provenance as a Provenance"):
+        write_camera(tmp_path / "c.toml", cam, provenance=bad)  # type: ignore[arg-type]
+    with pytest.raises(InvalidInputError, match="has_pose"):
+        write_camera(tmp_path / "c.toml", cam, has_pose="yes")  # type: ignore[arg-type]
+    assert not (tmp_path / "c.toml").exists()
+
+
+@pytest.mark.parametrize("bad", [None, object(), True, 0, "a.png"])
+def test_from_calibration_images_are_a_list_of_paths(bad: object) -> None:
+    from tests.fuzz.values import V, resolve
+
+    stereo = resolve(V("stereo_result"))
+    cf = CameraFile.from_calibration(stereo.left, images=["a.png", Path("b.png")])
+    assert cf.provenance.images == ("a.png", "b.png")
+    with pytest.raises(TypeError, match="expected images as a list of image paths"):
+        CameraFile.from_calibration(stereo.left, images=bad)  # type: ignore[arg-type]
+    for side in ("images_left", "images_right"):
+        with pytest.raises(TypeError, match=f"expected {side} as a list of image paths"):
+            StereoCameraFile.from_calibration(stereo, **{side: bad})

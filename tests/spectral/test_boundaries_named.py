@@ -93,3 +93,10 @@ def test_resolve_illuminant_names_the_callers_parameter() -> None:
     _refused(lambda: resolve_illuminant(multi, name="reference"), "reference")
     assert resolve_illuminant("D65", name="test").name == "CIE D65"
     assert resolve_illuminant(None, name="test") is None
+
+
+@pytest.mark.parametrize("bad", [None, object(), True, 0, "ab"])
+def test_from_columns_labels_is_a_sequence_of_str(bad: object) -> None:
+    wl = np.linspace(400, 700, 7)
+    _refused(lambda: Spectrum.from_columns(wl, [wl, wl], labels=bad), "labels")
+    assert Spectrum.from_columns(wl, [wl, wl], labels=["a", "b"]).labels == ("a", "b")

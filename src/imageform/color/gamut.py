@@ -27,6 +27,7 @@ from imageform.color.chromaticity import (
     xy_to_uv_prime,
 )
 from imageform.color.rgb_spaces import RGB_SPACES, RGBSpace, rgb_space
+from imageform.errors import InvalidInputError
 
 __all__ = [
     "GAMUT_MAPPING_METHODS",
@@ -155,10 +156,17 @@ def gamut_figures(spaces: Sequence[str] = ("srgb", "display_p3", "rec2020")) -> 
     >>> [round(f.coverage_uv, 1) for f in gamut_figures(["srgb"])]
     [33.2]
     """
+    if isinstance(spaces, str) or not isinstance(spaces, Sequence):
+        raise TypeError(f"expected spaces as a list of RGB space names, got {describe(spaces)}")
+    resolved = []
+    for i, s in enumerate(spaces):
+        try:
+            resolved.append(rgb_space(s))
+        except (InvalidInputError, TypeError) as exc:  # say which entry of spaces
+            raise type(exc)(f"spaces[{i}]: {exc}"[:200]) from None
     out = []
     vxy, vuv = visible_area("xy"), visible_area("uv")
-    for s in spaces:
-        sp = rgb_space(s)
+    for sp in resolved:
         axy, auv = gamut_area(sp, "xy"), gamut_area(sp, "uv")
         out.append(
             GamutFigures(

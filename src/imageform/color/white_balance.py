@@ -192,7 +192,7 @@ def _manual(xp: Any, like: Any, illuminant: Any, cct: float | None, space: str) 
 
         xyz = xy_to_xyz_white([float(v) for v in cct_to_xy(float(cct))])
     else:
-        xyz = resolve_white(illuminant)
+        xyz = resolve_white(illuminant, name="illuminant")
     rgb = xyz_to_linear_rgb(xyz, space)
     e = xp.asarray([float(v) for v in rgb], dtype=like.dtype, device=device_of(like))
     return xp.broadcast_to(e, (*tuple(like.shape[:-3]), 3))
@@ -225,7 +225,7 @@ def _check_params(
         as_real(cct, "cct (K)", positive=True)
     if illuminant is not None:
         try:
-            resolve_white(illuminant)
+            resolve_white(illuminant, name="illuminant")
         except InvalidInputError as exc:
             raise type(exc)(f"illuminant: {exc}") from None
 

@@ -4,6 +4,7 @@ checks of values that reading and building share (internal to :mod:`imageform.io
 from __future__ import annotations
 
 import math
+import os
 from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 from datetime import datetime
@@ -159,6 +160,10 @@ class CameraFile:
                 f"expected camera to be an imageform.geometry.Camera, got "
                 f"{type(self.camera).__name__}"
             )
+        if not isinstance(self.std, Mapping):
+            raise TypeError(f"expected std as a mapping of name to value, got {describe(self.std)}")
+        if not isinstance(self.provenance, Provenance):
+            raise TypeError(f"expected provenance as a Provenance, got {describe(self.provenance)}")
         object.__setattr__(self, "std", MappingProxyType(check_std(dict(self.std), "std")))
         object.__setattr__(self, "has_pose", as_bool(self.has_pose, "has_pose"))
         object.__setattr__(
@@ -197,7 +202,7 @@ class CameraFile:
             command=command,
             rms_px=float(result.rms),
             views_used=len(result.rvecs),
-            images=tuple(str(i) for i in images),
+            images=image_names(images, "images"),
             fixed=tuple(result.fixed),
         )
         std = {k: float(v) for k, v in result.std.items() if math.isfinite(v)}
@@ -304,6 +309,15 @@ def _nonneg(r: Reader, value: Any, key: str) -> float:
     if v < 0:
         raise r.fail(key, f"expected a number >= 0, got {value:g}")
     return v
+
+
+def image_names(images: object, name: str) -> tuple[str, ...]:
+    """A list or tuple of image paths (str or path-like) as a tuple of str."""
+    if not isinstance(images, list | tuple) or not all(
+        isinstance(i, str | os.PathLike) for i in images
+    ):
+        raise TypeError(f"expected {name} as a list of image paths, got {describe(images)}")
+    return tuple(str(i) for i in images)
 
 
 def check_std(std: dict[str, Any], where: str, r: Reader | None = None) -> dict[str, Any]:

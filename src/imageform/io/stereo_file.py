@@ -35,6 +35,7 @@ from imageform.io._camera_model import (
     CameraFile,
     Provenance,
     Reader,
+    image_names,
 )
 from imageform.io.camera_file import _toml_string, _toml_value, camera_file_text
 
@@ -135,8 +136,12 @@ class StereoCameraFile:
                 "expected result as a StereoCalibrationResult (stereo_calibrate), "
                 f"got {describe(result)}"
             )
-        left = CameraFile.from_calibration(result.left, images=images_left)
-        right = CameraFile.from_calibration(result.right, images=images_right)
+        left = CameraFile.from_calibration(
+            result.left, images=image_names(images_left, "images_left")
+        )
+        right = CameraFile.from_calibration(
+            result.right, images=image_names(images_right, "images_right")
+        )
         std = dict(right.std)
         std["rvec"] = tuple(float(v) for v in result.std_rvec)
         std["t"] = tuple(float(v) for v in result.std_T)
