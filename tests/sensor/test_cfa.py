@@ -171,3 +171,10 @@ def test_huge_pattern_name_is_one_short_line() -> None:
         with pytest.raises(UnknownOptionError, match="CFA pattern") as exc:
             call("x" * 100_000)
         assert len(str(exc.value)) <= 200 and "\n" not in str(exc.value)
+
+
+def test_misshaped_rgb_is_refused_before_its_values_are_read() -> None:
+    """Issue 16: the channel count is checked from the shape, before the NaN/range pass."""
+    a = np.full((2000, 2000, 4), np.nan)
+    with pytest.raises(InvalidInputError, match="expected rgb with 3 channels"):
+        mosaic(a)
