@@ -88,3 +88,24 @@ def test_from_calibration_images_are_a_list_of_paths(bad: object) -> None:
     for side in ("images_left", "images_right"):
         with pytest.raises(TypeError, match=f"expected {side} as a list of image paths"):
             StereoCameraFile.from_calibration(stereo, **{side: bad})
+
+
+@pytest.mark.parametrize(
+    "text",
+    [
+        'x = "' + "a" * 100_000 + '"\n',  # a legacy file with an unknown key
+        'format = "imageform-camera"\nversion = 1\n[intrinsics]\n' + "k" * 5000 + " = 1\n",
+        'format = "imageform-camera"\nversion = 1\n[std]\n' + "k" * 5000 + " = 1\n",
+    ],
+)
+def test_unknown_camera_file_keys_are_one_short_line(tmp_path: Path, text: str) -> None:
+    """The unknown-key message listed every valid key (and echoed the key) past 200 chars."""
+    from imageform.errors import UnknownOptionError
+    from imageform.io import read_camera
+
+    p = tmp_path / "c.toml"
+    p.write_text(text)
+    with pytest.raises(UnknownOptionError, match="unknown key") as exc:
+        read_camera(p)
+    msg = str(exc.value)
+    assert "\n" not in msg and len(msg) <= 200 + len(str(p)), msg

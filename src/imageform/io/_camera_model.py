@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import math
 import os
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from datetime import datetime
 from pathlib import Path
@@ -294,9 +294,23 @@ class Reader:
         unknown = [k for k in table if k not in valid]
         if unknown:
             raise UnknownOptionError(
-                f"{self.where}: unknown key(s) {', '.join(where + k for k in unknown)}; "
-                f"valid{' in [' + where[:-1] + ']' if where else ''}: {', '.join(valid)}"
+                f"{self.where}: unknown key(s) {short_list([where + k for k in unknown], 40)}; "
+                f"valid{' in [' + where[:-1] + ']' if where else ''}: {short_list(valid, 90)}"
             )
+
+
+def short_list(names: Sequence[str], budget: int) -> str:
+    """``names`` joined by commas, cut to about ``budget`` characters (``... (3 more)``), each
+    name cut to 30: an error message stays one line however many or long the keys are."""
+    shown: list[str] = []
+    size = 0
+    for n in names:
+        text = n if len(n) <= 30 else n[:27] + "..."
+        size += len(text) + 2
+        if shown and size > budget:
+            return ", ".join(shown) + f", ... ({len(names) - len(shown)} more)"
+        shown.append(text)
+    return ", ".join(shown)
 
 
 def _show(value: Any) -> str:
@@ -327,7 +341,8 @@ def check_std(std: dict[str, Any], where: str, r: Reader | None = None) -> dict[
         key = f"{where}.{name}"
         if name not in _TABLES["std"]:
             raise UnknownOptionError(
-                f"{rr.where}: unknown key(s) {key}; valid in [std]: {', '.join(_TABLES['std'])}"
+                f"{rr.where}: unknown key(s) {short_list([key], 40)}; "
+                f"valid in [std]: {short_list(_TABLES['std'], 90)}"
             )
         if name in ("rvec", "t"):
             seq = list(value) if isinstance(value, (list, tuple, np.ndarray)) else value

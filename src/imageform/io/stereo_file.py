@@ -36,6 +36,7 @@ from imageform.io._camera_model import (
     Provenance,
     Reader,
     image_names,
+    short_list,
 )
 from imageform.io.camera_file import _toml_string, _toml_value, camera_file_text
 
@@ -272,7 +273,7 @@ def read_stereo_camera(path: str | Path) -> StereoCameraFile:
     unknown = [k for k in data if k not in ("format", "version", "provenance", *_SIDES)]
     if unknown:
         raise UnknownOptionError(
-            f"{p}: unknown key(s) {', '.join(unknown)}; valid: format, version, left, right, "
+            f"{p}: unknown key(s) {short_list(unknown, 40)}; valid: format, version, left, right, "
             "provenance"
         )
     cams = {}
