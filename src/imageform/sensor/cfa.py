@@ -174,14 +174,13 @@ def mosaic(rgb: ArrayLike, pattern: str = "RGGB") -> Array:
     [[0.9, 0.5], [0.5, 0.1]]
     """
     pattern = cfa_pattern(pattern)
-    shape = getattr(rgb, "shape", None)
-    last = shape[-1] if shape is not None and getattr(rgb, "ndim", 0) >= 1 else None
+    shape: tuple[Any, ...] = tuple(getattr(rgb, "shape", None) or ())
+    last = shape[-1] if shape and getattr(rgb, "ndim", 0) >= 1 else None
     if isinstance(last, int | np.integer) and last != 3:
         # refused before as_image reads the values (a misshaped 9 GB array took seconds)
         hint = "; an alpha channel? split it off (image[..., :3])" if last == 4 else ""
         raise InvalidInputError(
-            f"expected rgb with 3 channels on axis -1, got shape {format_shape(tuple(shape))}"
-            f"{hint}"
+            f"expected rgb with 3 channels on axis -1, got shape {format_shape(shape)}{hint}"
         )
     xp = namespace(rgb)
     img = as_image(rgb, "rgb", channels=3, xp=xp)
