@@ -21,6 +21,9 @@ from typing import Any, TypeVar
 import array_api_compat
 import numpy as np
 
+from imageform._validate import format_shape
+from imageform.errors import ImageformError
+
 __all__ = ["chunkwise", "is_dask_array"]
 
 F = TypeVar("F", bound=Callable[..., Any])
@@ -76,7 +79,10 @@ def _map_chunks(
     arrays = (first, *(a.rechunk(first.chunks) for a in arrays[1:]))
     # a one-pixel probe: checks shapes and options now, and gives the output's layout
     probes = [np.full((1,) * batch + tuple(a.shape[batch:]), _PROBE, dtype=a.dtype) for a in arrays]
-    out0 = fn(*probes, *rest, **kwargs)
+    try:
+        out0 = fn(*probes, *rest, **kwargs)
+    except (ImageformError, TypeError) as exc:  # name the input's shape, not the probe's
+        raise _with_shapes(exc, probes, arrays) from None
     if not isinstance(out0, np.ndarray) or out0.ndim < batch:
         raise TypeError(f"{fn.__name__}: chunk-wise Dask needs an array result per pixel")
     out_core = tuple(out0.shape[batch:])
@@ -101,3 +107,19 @@ def _map_chunks(
         token=name,
         **extra,
     )
+
+
+def _with_shapes(exc: Exception, probes: list[np.ndarray], arrays: tuple[Any, ...]) -> Exception:
+    """``exc`` with every probe shape in its message replaced by its array's shape (a
+    refusal on the one-pixel probe must not report ``(1, 4)`` for a (100, 4) input)."""
+    msg = str(exc)
+    for p, a in zip(probes, arrays, strict=True):
+        if p.shape != a.shape:
+            for fmt in (format_shape, str):
+                msg = msg.replace(fmt(p.shape), fmt(tuple(a.shape)))
+    if msg == str(exc):
+        return exc
+    try:
+        return type(exc)(msg)
+    except Exception:  # an exception class with another signature: keep it as it is
+        return exc

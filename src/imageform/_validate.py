@@ -815,19 +815,19 @@ def check_name(value: object, valid: Collection[str], what: str, name: str = "")
     try:
         return check_option(value, valid, what)
     except UnknownOptionError:
+        where = f" for {name}" if name else ""
+        head = f"unknown {what} {describe(value, 30)}{where}; valid: "
+        budget = min(110, 180 - len(head))  # the whole line stays under 200 characters
         names = sorted(valid)
         shown: list[str] = []
         size = 0
         for n in names:
             size += len(n) + 4
-            if size > 110:
+            if size > budget:
                 break
             shown.append(repr(n))
         more = f", ... ({len(names) - len(shown)} more)" if len(shown) < len(names) else ""
-        where = f" for {name}" if name else ""
-        raise UnknownOptionError(
-            f"unknown {what} {describe(value, 30)}{where}; valid: {', '.join(shown)}{more}"
-        ) from None
+        raise UnknownOptionError(f"{head}{', '.join(shown)}{more}") from None
 
 
 # --- h16wf ---

@@ -155,3 +155,26 @@ def test_opencv_names_rggb_bayerbg() -> None:
     # measured samples come back unchanged from OpenCV's bilinear demosaicing
     m = cfa_masks((16, 16), "RGGB")
     np.testing.assert_array_equal(rgb[2:-2, 2:-2][m[2:-2, 2:-2]], img[2:-2, 2:-2][m[2:-2, 2:-2]])
+
+
+def test_huge_pattern_name_is_one_short_line() -> None:
+    """Issue 16: a 100,000-character name was echoed whole."""
+    from imageform.sensor import demosaic
+
+    rgb = np.full((4, 6, 3), 0.5)
+    for call in (
+        lambda p: cfa_pattern(p),
+        lambda p: cfa_masks((4, 6), p),
+        lambda p: mosaic(rgb, p),
+        lambda p: demosaic(rgb[..., :1], p),
+    ):
+        with pytest.raises(UnknownOptionError, match="CFA pattern") as exc:
+            call("x" * 100_000)
+        assert len(str(exc.value)) <= 200 and "\n" not in str(exc.value)
+
+
+def test_misshaped_rgb_is_refused_before_its_values_are_read() -> None:
+    """Issue 16: the channel count is checked from the shape, before the NaN/range pass."""
+    a = np.full((2000, 2000, 4), np.nan)
+    with pytest.raises(InvalidInputError, match="expected rgb with 3 channels"):
+        mosaic(a)

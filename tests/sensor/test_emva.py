@@ -76,3 +76,19 @@ def test_fit_needs_two_exposures() -> None:
     )
     with pytest.raises(DegenerateConfigurationError, match="two different exposure times"):
         fit_photon_transfer(d)
+
+
+def test_photon_count_overflow_names_wavelength_nm() -> None:
+    """Issue 16: a wavelength of 1e308 nm overflowed the photon count, and the refusal named
+    only irradiance and exposure_times."""
+    import pytest
+
+    from imageform.errors import InvalidInputError
+    from imageform.sensor import SensorModel, simulate_photon_transfer
+
+    s = SensorModel(qe_wavelengths=(400.0, 1e308), qe_curves=((0.5, 0.5),))
+    with pytest.raises(InvalidInputError, match="wavelength_nm") as exc:
+        simulate_photon_transfer(
+            s, irradiance=1.0, wavelength_nm=1e308, exposure_times=[4e-3], rng=0, shape=(4, 4)
+        )
+    assert len(str(exc.value)) <= 200

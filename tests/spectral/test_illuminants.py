@@ -61,7 +61,7 @@ def test_named_illuminants() -> None:
     assert illuminant("D75").name.startswith("CIE daylight 75")
     assert illuminant("bb3200").name == "blackbody 3200 K"
     assert illuminant("LED-B1").values.max() > 0
-    with pytest.raises(InvalidInputError, match="unknown illuminant 'tungsten'; valid: A"):
+    with pytest.raises(InvalidInputError, match="unknown illuminant 'tungsten' for name; valid: A"):
         illuminant("tungsten")
     with pytest.raises(InvalidInputError, match="illuminant name"):
         illuminant(65)  # type: ignore[arg-type]

@@ -124,3 +124,17 @@ def check_nonempty(arr: Any, name: str) -> None:
         raise InvalidInputError(
             f"expected a non-empty {name}, got shape {_v.format_shape(tuple(arr.shape))}"
         )
+
+
+def check_result_array(x: object, name: str) -> None:
+    """Refuse a field of a result container built by a caller (not by imageform) that is not
+    a real, finite array: bool, complex, object and string values, NaN and inf. Lazy Dask
+    arrays are not computed here."""
+    if x is None:
+        raise TypeError(f"expected {name} as an array of numbers, got None")
+    _v.refuse_non_real(x, name)
+    if not (hasattr(x, "shape") and hasattr(x, "dtype")):
+        x = _v.as_real_ndarray(x, name, finite=False)
+    xp = namespace(x)
+    if not is_dask_namespace(xp):
+        _v.check_finite(x, name, xp)

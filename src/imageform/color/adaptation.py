@@ -19,8 +19,8 @@ import numpy as np
 
 from imageform._backend import device_of, namespace
 from imageform._dask import chunkwise
-from imageform._validate import as_real, check_option
-from imageform.color._guard import as_points
+from imageform._validate import as_real
+from imageform.color._guard import as_points, check_option
 from imageform.color.whitepoints import resolve_white
 from imageform.errors import InvalidInputError
 
@@ -112,8 +112,8 @@ def chromatic_adaptation_matrix(
     D = as_real(degree, "degree")
     if not 0.0 <= D <= 1.0:
         raise InvalidInputError(f"expected degree of adaptation D in [0, 1], got {degree!r}")
-    ws = resolve_white(src_white, observer=observer)
-    wd = resolve_white(dst_white, observer=observer)
+    ws = resolve_white(src_white, observer=observer, name="src_white")
+    wd = resolve_white(dst_white, observer=observer, name="dst_white")
     m = _CAT[key]
     rho_s = m @ ws
     rho_d = m @ wd

@@ -27,8 +27,8 @@ from imageform._colormath import daylight_x as _daylight_x
 from imageform._colormath import daylight_xy as _daylight_xy
 from imageform._colormath import uv1960_from_xy as _uv_from_xy
 from imageform._dask import chunkwise
-from imageform._validate import as_int, check_option
-from imageform.color._guard import as_float, as_points
+from imageform._validate import as_int
+from imageform.color._guard import as_float, as_points, check_option
 from imageform.color.cct_methods import (
     XY_TO_CCT_METHODS,
     uv_to_cct_ohno2013,

@@ -15,7 +15,8 @@ from typing import Any
 
 import numpy as np
 
-from imageform._validate import as_points, describe
+from imageform._validate import as_points, as_real, as_real_ndarray
+from imageform.color._guard import check_magnitude
 from imageform.errors import InvalidInputError
 
 __all__ = [
@@ -33,6 +34,10 @@ XY_TO_CCT_METHODS = ("mccamy1992", "hernandez1999", "ohno2013")
 
 #: CCT range (K) of the Planckian table of :func:`uv_to_cct_ohno2013`.
 OHNO2013_RANGE = (1000.0, 100000.0)
+#: Temperatures :func:`planckian_uv` computes (K): below 50 K every visible term of Planck's
+#: law underflows to 0 (0/0); above 1e15 K the point is its limit (0.180064, 0.263521) to 1e-10
+#: and beyond ~1e280 K the sums overflow.
+_PLANCK_RANGE = (50.0, 1e15)
 
 # Second radiation constant (m K), CIE 15:2004 (ITS-90 value used in colorimetry).
 _C2 = 1.4388e-2
@@ -152,9 +157,13 @@ def planckian_uv(cct: object) -> np.ndarray:
     >>> planckian_uv(6504).round(6).tolist()  # colour-science: [0.2004280, 0.3103334]
     [0.200428, 0.310333]
     """
-    t = np.asarray(cct, dtype=np.float64)
-    if not np.all(np.isfinite(t) & (t > 0)):
-        raise InvalidInputError(f"expected cct > 0 kelvin (finite), got {describe(cct)}")
+    t = as_real_ndarray(cct, "cct")
+    lo, hi = _PLANCK_RANGE
+    if t.size and not (float(t.min()) >= lo and float(t.max()) <= hi):
+        raise InvalidInputError(
+            f"expected cct in [{lo:g}, {hi:g}] kelvin, "
+            f"got {float(t.min()):.4g}..{float(t.max()):.4g}"
+        )
     wl, cmf = _cmf_1nm()
     lam = wl * 1e-9
     with np.errstate(over="ignore"):
@@ -235,9 +244,13 @@ def uv_to_cct_ohno2013(
     (6507.47, 0.0032233)
     """
     a = np.asarray(as_points(uv, "uv", 2), dtype=np.float64)
-    if not float(spacing) > 1.0:
-        raise InvalidInputError(f"expected spacing > 1, got {spacing!r}")
-    table = _ohno_table(*OHNO2013_RANGE, float(spacing))
+    check_magnitude(a, "uv")  # |uv| beyond 1e15 would overflow the squared distances
+    step = as_real(spacing, "spacing")
+    if not 1.0 < step <= 1.1:
+        raise InvalidInputError(f"expected spacing > 1 and <= 1.1, got {step:g}")
+    if step < 1.00001:  # the table would hold over 460,000 temperatures
+        raise InvalidInputError(f"expected spacing >= 1.00001, got {step!r}")
+    table = _ohno_table(*OHNO2013_RANGE, step)
     flat = a.reshape(-1, 2)
     cct = np.empty(flat.shape[0])
     duv = np.empty(flat.shape[0])
@@ -273,7 +286,7 @@ def uv_to_cct_ohno2013(
     if np.any(out):
         bad = flat[np.argmax(out)]
         raise InvalidInputError(
-            f"uv ({bad[0]:.5f}, {bad[1]:.5f}) outside the range of the ohno2013 method "
+            f"uv ({bad[0]:.5g}, {bad[1]:.5g}) outside the range of the ohno2013 method "
             f"({lo:g} K to {hi:g} K)"
         )
     shape = a.shape[:-1]
@@ -296,9 +309,16 @@ def cct_to_uv_ohno2013(cct: object, duv: object = 0.0) -> np.ndarray:
     >>> cct_to_uv_ohno2013(6507.4738046, 0.00322335).round(7).tolist()  # colour-science
     [0.1978, 0.3122]
     """
-    t = np.asarray(cct, dtype=np.float64)
-    d = np.asarray(duv, dtype=np.float64)
-    t, d = np.broadcast_arrays(t, d)
+    t = as_real_ndarray(cct, "cct")
+    d = as_real_ndarray(duv, "duv")
+    if d.size and float(np.abs(d).max()) > 1.0:
+        raise InvalidInputError(f"expected |duv| <= 1, got max {float(np.abs(d).max()):.4g}")
+    try:
+        t, d = np.broadcast_arrays(t, d)
+    except ValueError:
+        raise InvalidInputError(
+            f"expected cct and duv of broadcastable shapes, got {t.shape} and {d.shape}"
+        ) from None
     uv0 = planckian_uv(t)
     uv1 = planckian_uv(t + 0.01)
     du, dv = (uv0 - uv1)[..., 0], (uv0 - uv1)[..., 1]

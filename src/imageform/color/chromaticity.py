@@ -19,8 +19,8 @@ import numpy.typing as npt
 from imageform import _deprecate
 from imageform._backend import device_of, namespace, to_numpy
 from imageform._dask import chunkwise
-from imageform._validate import as_real, as_real_ndarray, check_option, describe
-from imageform.color._guard import as_bool, as_points
+from imageform._validate import as_real, as_real_ndarray, describe
+from imageform.color._guard import as_bool, as_points, check_option
 from imageform.errors import InvalidInputError
 
 __all__ = [
@@ -92,7 +92,7 @@ def uv_prime_to_xy(uv: object) -> Any:
     >>> [round(float(v), 4) for v in uv_prime_to_xy([0.19783, 0.46832])]
     [0.3127, 0.329]
     """
-    p = as_points(uv, "u'v'", 2)
+    p = as_points(uv, "uv", 2)
     xp = namespace(p)
     u, v = p[..., 0], p[..., 1]
     d = 6.0 * u - 16.0 * v + 12.0
@@ -154,7 +154,7 @@ def spectral_locus(
     >>> [round(float(v), 4) for v in xy[wl == 520][0]]
     [0.0743, 0.8338]
     """
-    c = check_option(coords, CHROMATICITY_COORDS, "chromaticity diagram")
+    c = check_option(coords, CHROMATICITY_COORDS, "chromaticity diagram", "coords")
     o = check_option(str(observer), ("2", "10"), "observer")
     rng = as_real_ndarray(wavelength_range, "wavelength_range")
     if rng.shape != (2,):
@@ -240,7 +240,7 @@ def in_locus(points: object, coords: str = "xy", *, observer: int = 2) -> Any:
     [True, False]
     """
     xp = namespace(points)
-    p = as_points(points, "chromaticities", 2, xp=xp)
+    p = as_points(points, "points", 2, xp=xp)
     return _points_in_polygon(
         p, spectral_locus(observer=observer, coords=coords).chromaticities, xp
     )
@@ -249,7 +249,7 @@ def in_locus(points: object, coords: str = "xy", *, observer: int = 2) -> Any:
 def check_in_locus(points: object, coords: str = "xy", *, observer: int = 2) -> Any:
     """``points`` as an array, raising :class:`InvalidInputError` if any lies outside the locus."""
     xp = namespace(points)
-    p = as_points(points, "chromaticities", 2, xp=xp)
+    p = as_points(points, "points", 2, xp=xp)
     ok = in_locus(p, coords, observer=observer)
     if not bool(xp.all(ok)):
         pn, okn = to_numpy(p), to_numpy(ok)

@@ -51,8 +51,8 @@ import numpy as np
 from imageform import _deprecate
 from imageform._backend import device_of, namespace, use_numba
 from imageform._dask import chunkwise
-from imageform._validate import check_name, check_option, describe
-from imageform.color._guard import as_float, as_image
+from imageform._validate import check_name, describe
+from imageform.color._guard import as_float, as_image, check_option
 from imageform.errors import InvalidInputError, UnknownOptionError
 
 from . import cielab, cmyk, gray, hsv, ycbcr
@@ -199,7 +199,7 @@ def _space(name: object, what: str) -> str:
     return check_name(name, SPACES, "colour space", what)
 
 
-def space_name(name: object, what: str = "colour space") -> str:
+def space_name(name: object, what: str = "name") -> str:
     """The canonical name of a colour space (``"Display-P3"`` -> ``"display_p3"``, ``"grey"``
     -> ``"gray"``); an unknown name raises, listing the valid ones, with ``what`` naming the
     argument (``--to``).

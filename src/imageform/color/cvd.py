@@ -34,8 +34,8 @@ import numpy as np
 
 from imageform._backend import device_of, namespace
 from imageform._dask import chunkwise
-from imageform._validate import as_real, check_option
-from imageform.color._guard import as_bool, as_image
+from imageform._validate import as_real
+from imageform.color._guard import as_bool, as_image, check_option
 from imageform.errors import InvalidInputError
 
 __all__ = [
@@ -81,7 +81,8 @@ def _deficiency(name: object) -> str:
         key = _ALIASES.get(key, key)
         if key in CVD_DEFICIENCIES:
             return key
-    return check_option(name, [*CVD_DEFICIENCIES, *_ALIASES], "colour-vision deficiency")
+    valid = [*CVD_DEFICIENCIES, *_ALIASES]
+    return check_option(name, valid, "colour-vision deficiency", "deficiency")
 
 
 def _method(name: object) -> str:
@@ -168,7 +169,6 @@ class BrettelPlanes(NamedTuple):
     n: np.ndarray
 
 
-@lru_cache(maxsize=8)
 def brettel_planes(deficiency: str) -> BrettelPlanes:
     """Brettel et al. (1997) in linear sRGB: ``(H1, H2, n)``, (3, 3), (3, 3), (3,).
 
@@ -181,7 +181,12 @@ def brettel_planes(deficiency: str) -> BrettelPlanes:
     >>> [round(float(v), 6) for v in h1 @ [1.0, 1.0, 1.0]]
     [1.0, 1.0, 1.0]
     """
-    d = _deficiency(deficiency)
+    h1, h2, n = _brettel_planes(_deficiency(deficiency))  # named before the cache hashes it
+    return BrettelPlanes(h1.copy(), h2.copy(), n.copy())
+
+
+@lru_cache(maxsize=8)
+def _brettel_planes(d: str) -> BrettelPlanes:
     t, t_inv = _rgb_lms()
     white = t @ np.ones(3)
     k = _MISSING[d]

@@ -17,8 +17,8 @@ import numpy as np
 
 from imageform._backend import namespace, use_numba
 from imageform._dask import chunkwise
-from imageform._validate import as_real, check_option, format_shape
-from imageform.color._guard import as_points, check_magnitude
+from imageform._validate import as_real, format_shape
+from imageform.color._guard import as_points, check_magnitude, check_option
 from imageform.errors import InvalidInputError
 
 __all__ = [

@@ -11,15 +11,15 @@ spaces whose primaries lie outside the locus (ProPhoto) and are equal otherwise.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from typing import Any
 
 import numpy as np
 
 from imageform._backend import device_of, namespace
 from imageform._dask import chunkwise
-from imageform._validate import as_int, as_real, check_option
-from imageform.color._guard import as_points
+from imageform._validate import as_int, as_real, describe
+from imageform.color._guard import as_points, check_option
 from imageform.color.chromaticity import (
     polygon_area,
     spectral_locus,
@@ -27,6 +27,7 @@ from imageform.color.chromaticity import (
     xy_to_uv_prime,
 )
 from imageform.color.rgb_spaces import RGB_SPACES, RGBSpace, rgb_space
+from imageform.errors import InvalidInputError
 
 __all__ = [
     "GAMUT_MAPPING_METHODS",
@@ -53,7 +54,7 @@ def gamut_triangle(space: str | RGBSpace = "srgb", coords: str = "xy") -> np.nda
     >>> gamut_triangle("srgb").tolist()
     [[0.64, 0.33], [0.3, 0.6], [0.15, 0.06]]
     """
-    c = check_option(coords, ("xy", "uv"), "chromaticity diagram")
+    c = check_option(coords, ("xy", "uv"), "chromaticity diagram", "coords")
     tri = np.array(rgb_space(space).primaries_xy, dtype=np.float64)
     return tri if c == "xy" else np.asarray(xy_to_uv_prime(tri))
 
@@ -135,6 +136,14 @@ class GamutFigures:
     area_ratio_xy: float
     area_ratio_uv: float
 
+    def __post_init__(self) -> None:
+        if not isinstance(self.space, str):
+            raise TypeError(f"expected space as a colour space name, got {describe(self.space)}")
+        for f in fields(self)[1:]:
+            object.__setattr__(
+                self, f.name, as_real(getattr(self, f.name), f.name, nonnegative=True)
+            )
+
     def as_dict(self) -> dict[str, Any]:
         return dict(self.__dict__)
 
@@ -147,10 +156,17 @@ def gamut_figures(spaces: Sequence[str] = ("srgb", "display_p3", "rec2020")) -> 
     >>> [round(f.coverage_uv, 1) for f in gamut_figures(["srgb"])]
     [33.2]
     """
+    if isinstance(spaces, str) or not isinstance(spaces, Sequence):
+        raise TypeError(f"expected spaces as a list of RGB space names, got {describe(spaces)}")
+    resolved = []
+    for i, s in enumerate(spaces):
+        try:
+            resolved.append(rgb_space(s))
+        except (InvalidInputError, TypeError) as exc:  # say which entry of spaces
+            raise type(exc)(f"spaces[{i}]: {exc}"[:200]) from None
     out = []
     vxy, vuv = visible_area("xy"), visible_area("uv")
-    for s in spaces:
-        sp = rgb_space(s)
+    for sp in resolved:
         axy, auv = gamut_area(sp, "xy"), gamut_area(sp, "uv")
         out.append(
             GamutFigures(
@@ -193,7 +209,7 @@ def in_gamut(
     sp = rgb_space(space)
     xp = namespace(values)
     if k == "xy":
-        p = as_points(values, "xy", 2, xp=xp)
+        p = as_points(values, "values (xy)", 2, xp=xp)
         tri = gamut_triangle(sp)
         # barycentric test (closed triangle, tolerance tol): lam = M^-1 (p - a)
         a, b, c = tri
@@ -202,7 +218,7 @@ def in_gamut(
         lam = d @ _const(minv.T, p, xp)
         l0 = 1.0 - lam[..., 0] - lam[..., 1]
         return (lam[..., 0] >= -tol) & (lam[..., 1] >= -tol) & (l0 >= -tol)
-    v = as_points(values, kind, 3, xp=xp)
+    v = as_points(values, f"values ({k})", 3, xp=xp)
     rgb = v if k == "linear_rgb" else v @ _const(np.linalg.inv(sp.matrix_to_xyz()).T, v, xp)
     return xp.all((rgb >= -tol) & (rgb <= 1.0 + tol), axis=-1)
 

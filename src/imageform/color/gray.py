@@ -19,8 +19,7 @@ from typing import Any
 
 from imageform._backend import namespace
 from imageform._dask import chunkwise
-from imageform._validate import check_option
-from imageform.color._guard import as_image
+from imageform.color._guard import as_image, check_option
 
 from .transfer import _srgb_decode, _srgb_encode
 
@@ -98,7 +97,7 @@ def gray_to_srgb(gray: object) -> Any:
     >>> gray_to_srgb([0.5]).tolist()
     [0.5, 0.5, 0.5]
     """
-    x = as_image(gray, "grey image", channels=1)
+    x = as_image(gray, "gray", channels=1)
     return _gray_to_srgb(namespace(x), x)
 
 

@@ -237,7 +237,7 @@ def hue_undefined_mask(values: object, *, atol: float = 0.0) -> Any:
     >>> hue_undefined_mask([[0.0, 0.0, 0.5], [30.0, 0.2, 0.5]]).tolist()
     [True, False]
     """
-    x = as_image(values, "HSV/HSL/HSI", range_check=False)
+    x = as_image(values, "values", range_check=False)
     atol = as_real(atol, "atol", nonnegative=True)
     return x[..., 1] <= atol
 

@@ -18,8 +18,8 @@ from __future__ import annotations
 import numpy as np
 
 from imageform import _deprecate
-from imageform._validate import as_int, as_real, check_option
-from imageform.color._guard import as_bool
+from imageform._validate import as_int, as_real
+from imageform.color._guard import as_bool, check_option
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
 from imageform.spectral.integrate import (
     integration_weights,
@@ -244,17 +244,20 @@ def metamerism_index(
     correct = as_bool(correct, "correct")
     if str(observer) not in ("2", "10"):
         raise InvalidInputError(f"expected observer 2 or 10, got {observer!r}")
-    x1t = spectrum_to_xyz(a, illuminant=test, observer=observer)
-    x2t = spectrum_to_xyz(b, illuminant=test, observer=observer)
+    if test is None:
+        raise TypeError("expected test as an illuminant name or a Spectrum, got None")
+    tst = resolve_illuminant(test, name="test")
+    ref = resolve_illuminant(reference, name="reference")
+    x1t = spectrum_to_xyz(a, illuminant=tst, observer=observer)
+    x2t = spectrum_to_xyz(b, illuminant=tst, observer=observer)
     if correct:
-        x1r = spectrum_to_xyz(a, illuminant=reference, observer=observer)
-        x2r = spectrum_to_xyz(b, illuminant=reference, observer=observer)
+        x1r = spectrum_to_xyz(a, illuminant=ref, observer=observer)
+        x2r = spectrum_to_xyz(b, illuminant=ref, observer=observer)
         if np.any(x2r == 0):
             raise DegenerateConfigurationError("s2 has a zero tristimulus value: cannot correct")
         x2t = x2t * x1r / x2r
-    ill = resolve_illuminant(test)
-    ones = Spectrum(ill.wavelengths, np.ones(len(ill))) if ill is not None else None
-    white = spectrum_to_xyz(ones, illuminant=test, observer=observer) if ones is not None else None
+    ones = Spectrum(tst.wavelengths, np.ones(len(tst))) if tst is not None else None
+    white = spectrum_to_xyz(ones, illuminant=tst, observer=observer) if ones is not None else None
     lab1 = xyz_to_lab(x1t, white, observer=observer)
     lab2 = xyz_to_lab(x2t, white, observer=observer)
     return float(delta_e_ciede2000(lab1, lab2))

@@ -16,8 +16,8 @@ from typing import Any
 
 import numpy as np
 
-from imageform._validate import as_int, as_real, check_option
-from imageform.color._guard import as_image
+from imageform._validate import as_int, as_real, describe
+from imageform.color._guard import as_image, check_option
 from imageform.errors import InvalidInputError
 
 __all__ = [
@@ -93,14 +93,16 @@ def parse_colors(colors: object) -> np.ndarray:
             if len(h) == 3:
                 h = "".join(ch * 2 for ch in h)
             if len(h) != 6 or any(ch not in "0123456789abcdefABCDEF" for ch in h):
-                raise InvalidInputError(f"expected a hex colour like '#E69F00', got {c!r}")
+                raise InvalidInputError(
+                    f"expected a hex colour like '#E69F00' in colors, got {describe(c, 30)}"
+                )
             out.append([int(h[i : i + 2], 16) / 255.0 for i in (0, 2, 4)])
         return np.array(out)
     arr = np.asarray(as_image(colors, "colors"), dtype=np.float64)
     if arr.ndim != 2:
-        raise InvalidInputError(f"expected colours of shape (n, 3), got {arr.shape}")
+        raise InvalidInputError(f"expected colors of shape (n, 3), got {arr.shape}")
     if np.any(arr < 0) or np.any(arr > 1):
-        raise InvalidInputError("expected encoded sRGB colours in [0, 1]")
+        raise InvalidInputError("expected colors as encoded sRGB in [0, 1]")
     return arr
 
 
@@ -113,7 +115,7 @@ def palette(name: str, n: int | None = None) -> np.ndarray:
     >>> palette("okabe_ito", 2).round(3).tolist()
     [[0.0, 0.0, 0.0], [0.902, 0.624, 0.0]]
     """
-    key = check_option(name, PALETTES, "palette")
+    key = check_option(name, PALETTES, "palette", "name")
     if n is not None:
         n = as_int(n, "n", minimum=1)
     if key == "viridis":

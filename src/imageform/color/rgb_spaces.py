@@ -26,8 +26,8 @@ import numpy as np
 
 from imageform._backend import device_of, namespace
 from imageform._dask import chunkwise
-from imageform._validate import as_real_ndarray, check_option, describe
-from imageform.color._guard import as_image
+from imageform._validate import as_real_ndarray, describe
+from imageform.color._guard import as_image, check_option
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
 
 __all__ = [

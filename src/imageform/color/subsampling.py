@@ -26,8 +26,8 @@ from types import MappingProxyType
 from typing import Any, NamedTuple
 
 from imageform._backend import namespace
-from imageform._validate import check_option
-from imageform.color._guard import as_bool, as_float, as_image
+from imageform._validate import describe
+from imageform.color._guard import as_bool, as_float, as_image, check_option, check_result_array
 from imageform.errors import InvalidInputError, UnknownOptionError
 
 __all__ = [
@@ -53,7 +53,9 @@ CHROMA_SITINGS: MappingProxyType[str, tuple[float, float]] = MappingProxyType(
 def _scheme(scheme: str) -> tuple[str, tuple[int, int]]:
     if not isinstance(scheme, str) or scheme.strip() not in CHROMA_SCHEMES:
         names = ", ".join(repr(s) for s in CHROMA_SCHEMES)
-        raise UnknownOptionError(f"unknown chroma subsampling scheme {scheme!r}; valid: {names}")
+        raise UnknownOptionError(
+            f"unknown chroma subsampling scheme {describe(scheme, 30)}; valid: {names}"
+        )
     return scheme.strip(), CHROMA_SCHEMES[scheme.strip()]
 
 
@@ -109,13 +111,26 @@ def _up2(xp: Any, c: Any, axis: int, offset: float, n: int, method: str) -> Any:
     return _interleave(xp, even, odd, axis, n)
 
 
-class SubsampledChroma(NamedTuple):
-    """The result of :func:`chroma_subsample`."""
-
+class _SubsampledChroma(NamedTuple):
     #: Full-resolution Y', shape (..., H, W).
     luma: Any
     #: Subsampled (Cb, Cr), shape (..., ceil(H/fv), ceil(W/fh), 2).
     chroma: Any
+
+
+class SubsampledChroma(_SubsampledChroma):
+    """The result of :func:`chroma_subsample`: ``(luma, chroma)``.
+
+    ``luma``: full-resolution Y', shape (..., H, W); ``chroma``: subsampled (Cb, Cr), shape
+    (..., ceil(H/fv), ceil(W/fh), 2). Built by hand, both must be real and finite.
+    """
+
+    __slots__ = ()
+
+    def __new__(cls, luma: Any, chroma: Any) -> SubsampledChroma:
+        check_result_array(luma, "luma")
+        check_result_array(chroma, "chroma")
+        return super().__new__(cls, luma, chroma)
 
 
 def chroma_subsample(
@@ -166,7 +181,7 @@ def chroma_subsample(
         chroma = _down2(xp, chroma, -2, oh)
     if fv == 2:
         chroma = _down2(xp, chroma, -3, ov)
-    return SubsampledChroma(luma, chroma)
+    return SubsampledChroma._make((luma, chroma))  # from checked input: no second pass
 
 
 def chroma_upsample(

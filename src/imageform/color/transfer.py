@@ -23,8 +23,8 @@ from imageform._colormath import pos_pow as _pos_pow
 from imageform._colormath import srgb_decode as _srgb_decode
 from imageform._colormath import srgb_encode as _srgb_encode
 from imageform._dask import chunkwise
-from imageform._validate import check_option, check_positive
-from imageform.color._guard import as_image
+from imageform._validate import check_positive
+from imageform.color._guard import as_image, check_option
 
 __all__ = [
     "ADOBE_RGB_GAMMA",

@@ -39,8 +39,14 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from imageform._backend import device_of, is_dask_namespace, namespace
-from imageform._validate import as_int, as_real, check_option, describe
-from imageform.color._guard import as_bool, as_image, check_nonempty
+from imageform._validate import as_int, as_real, describe
+from imageform.color._guard import (
+    as_bool,
+    as_image,
+    check_nonempty,
+    check_option,
+    check_result_array,
+)
 from imageform.color.rgb_spaces import xyz_to_linear_rgb
 from imageform.color.transfer import TRANSFER_FUNCTIONS, decode, encode
 from imageform.color.whitepoints import resolve_white, xy_to_xyz_white
@@ -68,12 +74,22 @@ _ALIASES = {
 }
 
 
-class WhiteBalanceResult(NamedTuple):
-    """``(image, gains)``: the balanced image (same encoding as the input) and the per-channel
-    gains applied in linear light, shape ``(..., 3)`` (one triple per image of a batch)."""
-
+class _WhiteBalanceResult(NamedTuple):
     image: Any
     gains: Any
+
+
+class WhiteBalanceResult(_WhiteBalanceResult):
+    """``(image, gains)``: the balanced image (same encoding as the input) and the per-channel
+    gains applied in linear light, shape ``(..., 3)`` (one triple per image of a batch).
+    Built by hand, both must be real and finite."""
+
+    __slots__ = ()
+
+    def __new__(cls, image: Any, gains: Any) -> WhiteBalanceResult:
+        check_result_array(image, "image")
+        check_result_array(gains, "gains")
+        return super().__new__(cls, image, gains)
 
 
 def _method(method: str, percentile: float | None) -> tuple[str, float]:
@@ -176,7 +192,7 @@ def _manual(xp: Any, like: Any, illuminant: Any, cct: float | None, space: str) 
 
         xyz = xy_to_xyz_white([float(v) for v in cct_to_xy(float(cct))])
     else:
-        xyz = resolve_white(illuminant)
+        xyz = resolve_white(illuminant, name="illuminant")
     rgb = xyz_to_linear_rgb(xyz, space)
     e = xp.asarray([float(v) for v in rgb], dtype=like.dtype, device=device_of(like))
     return xp.broadcast_to(e, (*tuple(like.shape[:-3]), 3))
@@ -209,7 +225,7 @@ def _check_params(
         as_real(cct, "cct (K)", positive=True)
     if illuminant is not None:
         try:
-            resolve_white(illuminant)
+            resolve_white(illuminant, name="illuminant")
         except InvalidInputError as exc:
             raise type(exc)(f"illuminant: {exc}") from None
 
@@ -388,7 +404,7 @@ def white_balance(
     ([1.25, 1.0, 0.8333], [0.5, 0.5, 0.5])
     """
     m, percentile = _method(method, percentile)
-    norm = check_option(normalize, ("mean", "green"), "gain normalisation")
+    norm = check_option(normalize, ("mean", "green"), "gain normalisation", "normalize")
     _check_params(m, percentile, p, sigma, illuminant, cct)
     xp, lin, tname = _linear(image, transfer, channel_axis)
     e = _estimate(xp, lin, m, percentile, p, sigma, illuminant, cct, space)
@@ -403,4 +419,4 @@ def white_balance(
         out = xp.clip(out, 0.0, 1.0)
     if tname != "linear":
         out = encode(out, tname)
-    return WhiteBalanceResult(out, gains)
+    return WhiteBalanceResult._make((out, gains))  # from checked input: no second pass

@@ -113,12 +113,13 @@ def whitepoint_xy(name: str, *, observer: int = 2) -> tuple[float, float]:
     """
     obs = _check_observer(observer)
     if not isinstance(name, str):
-        raise UnknownOptionError(f"expected a white point name (str), got {type(name).__name__}")
+        raise TypeError(f"expected name as a white point name (str), got {describe(name)}")
     table = WHITEPOINTS_XY[obs]
     key = _canonical(name)
     if key not in table:
         raise UnknownOptionError(
-            f"unknown white point {name!r}; valid: {', '.join(repr(k) for k in table)}"
+            f"unknown white point {describe(name, 30)} for name; "
+            f"valid: {', '.join(repr(k) for k in table)}"
         )
     return table[key]
 
@@ -178,14 +179,15 @@ def whitepoint_xyz(name: str, *, observer: int = 2) -> np.ndarray:
 
 
 @_deprecate.parameters(positional=("observer",))
-def resolve_white(white: Any, *, observer: int = 2) -> np.ndarray:
+def resolve_white(white: Any, *, observer: int = 2, name: str = "white") -> np.ndarray:
     """A ``white=`` argument as XYZ (float64, shape (3,), Y as given or 1).
 
     Accepted forms: an illuminant name (``"D65"``, see :data:`WHITEPOINTS_XY`); an RGB space
     name (``"srgb"``, ``"prophoto"`` ...: the white its standard writes, see
     :data:`imageform.color.rgb_spaces.RGB_SPACES`); a chromaticity ``(x, y)``; a tristimulus
     ``(X, Y, Z)`` with ``Y > 0`` (used as given). ``observer`` (keyword-only, 2 or 10) picks
-    the illuminant table for a name.
+    the illuminant table for a name. ``name`` (keyword-only) is the parameter the errors
+    name (a caller's ``src_white`` ...).
 
     Examples
     --------
@@ -204,15 +206,17 @@ def resolve_white(white: Any, *, observer: int = 2) -> np.ndarray:
             return xy_to_xyz_white(RGB_SPACES[key].white_xy)
         names = [*WHITEPOINTS_XY[2], *RGB_SPACES]
         raise UnknownOptionError(
-            f"unknown white {describe(white, 30)}; valid: a white point or RGB space name "
-            f"({', '.join(repr(n) for n in names[:6])}, ...), (x, y) or (X, Y, Z)"
+            f"unknown white {describe(white, 30)} for {name}; valid: a white point or RGB "
+            f"space name ({', '.join(repr(n) for n in names[:6])}, ...), (x, y) or (X, Y, Z)"
         )
-    refuse_non_real(white, "white")
+    if white is None:
+        raise TypeError(f"expected {name} as a white point name, (x, y) or (X, Y, Z), got None")
+    refuse_non_real(white, name)
     try:
         arr = np.asarray(white, dtype=np.float64)
     except (TypeError, ValueError) as exc:
         raise InvalidInputError(
-            f"expected white as a white point name, (x, y) or (X, Y, Z), got {describe(white)}"
+            f"expected {name} as a white point name, (x, y) or (X, Y, Z), got {describe(white)}"
         ) from exc
     if arr.shape == (2,):
         return xy_to_xyz_white(arr.tolist())
@@ -225,6 +229,6 @@ def resolve_white(white: Any, *, observer: int = 2) -> np.ndarray:
     ):
         return arr.copy()
     raise InvalidInputError(
-        f"expected white as a name, (x, y) or (X, Y, Z) with Y > 0, all in [0, 1e6], "
+        f"expected {name} as a name, (x, y) or (X, Y, Z) with Y > 0, all in [0, 1e6], "
         f"got {describe(white)}"
     )

@@ -35,8 +35,7 @@ import numpy as np
 from imageform import _deprecate
 from imageform._backend import namespace
 from imageform._dask import chunkwise
-from imageform._validate import check_option
-from imageform.color._guard import as_float, as_image
+from imageform.color._guard import as_float, as_image, check_option
 from imageform.errors import InvalidInputError
 
 __all__ = [
@@ -95,13 +94,13 @@ def _check_codes(values: object, signal_range: str, bits: int | None) -> None:
         return
     if bits is None and signal_range == "full":
         raise InvalidInputError(
-            f"integer Y'CbCr ({dt}) are code values: pass bits=8 or bits=10 (or floats)"
+            f"integer ycbcr ({dt}) are code values: pass bits=8 or bits=10 (or floats)"
         )
     n = 8 if bits is None else bits
     xp = namespace(values)
     if math.prod(values.shape) and int(xp.max(values)) > 2**n - 1:  # type: ignore[attr-defined]
         raise InvalidInputError(
-            f"Y'CbCr code values exceed the {n}-bit range (max {int(xp.max(values))} > {2**n - 1})"
+            f"ycbcr code values exceed the {n}-bit range (max {int(xp.max(values))} > {2**n - 1})"
         )
 
 
@@ -194,10 +193,10 @@ def ycbcr_to_rgb(
     _, kr, kb = _coeffs(standard)
     sc = _scale(signal_range, bits)
     _check_codes(ycbcr, signal_range, bits)
-    x = as_float(ycbcr, "Y'CbCr", integer="float32")
+    x = as_float(ycbcr, "ycbcr", integer="float32")
     if x.ndim < 1 or x.shape[-1] != 3:
         raise InvalidInputError(
-            f"expected Y'CbCr with 3 channels on axis -1, got shape {tuple(x.shape)}"
+            f"expected ycbcr (Y'CbCr) with 3 channels on axis -1, got shape {tuple(x.shape)}"
         )
     return _ycbcr_to_rgb(namespace(x), x, kr, kb, sc)
 

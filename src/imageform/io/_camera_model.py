@@ -4,7 +4,8 @@ checks of values that reading and building share (internal to :mod:`imageform.io
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+import os
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from datetime import datetime
 from pathlib import Path
@@ -13,7 +14,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from imageform._validate import as_bool, as_int
+from imageform._validate import as_bool, as_int, describe
 from imageform.errors import InvalidInputError, UnknownOptionError
 
 if TYPE_CHECKING:
@@ -159,6 +160,10 @@ class CameraFile:
                 f"expected camera to be an imageform.geometry.Camera, got "
                 f"{type(self.camera).__name__}"
             )
+        if not isinstance(self.std, Mapping):
+            raise TypeError(f"expected std as a mapping of name to value, got {describe(self.std)}")
+        if not isinstance(self.provenance, Provenance):
+            raise TypeError(f"expected provenance as a Provenance, got {describe(self.provenance)}")
         object.__setattr__(self, "std", MappingProxyType(check_std(dict(self.std), "std")))
         object.__setattr__(self, "has_pose", as_bool(self.has_pose, "has_pose"))
         object.__setattr__(
@@ -184,8 +189,12 @@ class CameraFile:
         intrinsic parameter (0 for fixed ones) and the RMS, views used and fixed parameters.
         No pose: a calibration has one per view.
         """
-        from imageform.geometry import Camera
+        from imageform.geometry import CalibrationResult, Camera
 
+        if not isinstance(result, CalibrationResult):
+            raise TypeError(
+                f"expected result as a CalibrationResult (calibrate_camera), got {describe(result)}"
+            )
         width, height = result.image_size
         size = (int(width), int(height)) if min(result.image_size) > 0 else None
         camera = Camera(result.K, image_size=size, distortion=result.distortion)
@@ -193,7 +202,7 @@ class CameraFile:
             command=command,
             rms_px=float(result.rms),
             views_used=len(result.rvecs),
-            images=tuple(str(i) for i in images),
+            images=image_names(images, "images"),
             fixed=tuple(result.fixed),
         )
         std = {k: float(v) for k, v in result.std.items() if math.isfinite(v)}
@@ -285,9 +294,23 @@ class Reader:
         unknown = [k for k in table if k not in valid]
         if unknown:
             raise UnknownOptionError(
-                f"{self.where}: unknown key(s) {', '.join(where + k for k in unknown)}; "
-                f"valid{' in [' + where[:-1] + ']' if where else ''}: {', '.join(valid)}"
+                f"{self.where}: unknown key(s) {short_list([where + k for k in unknown], 40)}; "
+                f"valid{' in [' + where[:-1] + ']' if where else ''}: {short_list(valid, 90)}"
             )
+
+
+def short_list(names: Sequence[str], budget: int) -> str:
+    """``names`` joined by commas, cut to about ``budget`` characters (``... (3 more)``), each
+    name cut to 30: an error message stays one line however many or long the keys are."""
+    shown: list[str] = []
+    size = 0
+    for n in names:
+        text = n if len(n) <= 30 else n[:27] + "..."
+        size += len(text) + 2
+        if shown and size > budget:
+            return ", ".join(shown) + f", ... ({len(names) - len(shown)} more)"
+        shown.append(text)
+    return ", ".join(shown)
 
 
 def _show(value: Any) -> str:
@@ -302,6 +325,15 @@ def _nonneg(r: Reader, value: Any, key: str) -> float:
     return v
 
 
+def image_names(images: object, name: str) -> tuple[str, ...]:
+    """A list or tuple of image paths (str or path-like) as a tuple of str."""
+    if not isinstance(images, list | tuple) or not all(
+        isinstance(i, str | os.PathLike) for i in images
+    ):
+        raise TypeError(f"expected {name} as a list of image paths, got {describe(images)}")
+    return tuple(str(i) for i in images)
+
+
 def check_std(std: dict[str, Any], where: str, r: Reader | None = None) -> dict[str, Any]:
     rr = r if r is not None else Reader("camera")
     out: dict[str, Any] = {}
@@ -309,7 +341,8 @@ def check_std(std: dict[str, Any], where: str, r: Reader | None = None) -> dict[
         key = f"{where}.{name}"
         if name not in _TABLES["std"]:
             raise UnknownOptionError(
-                f"{rr.where}: unknown key(s) {key}; valid in [std]: {', '.join(_TABLES['std'])}"
+                f"{rr.where}: unknown key(s) {short_list([key], 40)}; "
+                f"valid in [std]: {short_list(_TABLES['std'], 90)}"
             )
         if name in ("rvec", "t"):
             seq = list(value) if isinstance(value, (list, tuple, np.ndarray)) else value

@@ -26,6 +26,7 @@ from imageform.io._camera_model import (
     _show,
     check_std,
     distortion_name,
+    short_list,
 )
 
 __all__ = ["parse"]
@@ -85,7 +86,7 @@ def _read_legacy(data: dict[str, Any], r: Reader) -> CameraFile:
         rest = [k for k in data if k not in ("camera", "calibration")]
         if rest:
             raise UnknownOptionError(
-                f"{r.where}: unknown key(s) {', '.join(rest)} beside [camera]; valid: camera, "
+                f"{r.where}: unknown key(s) {short_list(rest, 40)} beside [camera]; valid: camera, "
                 "calibration (a version-1 camera file starts with format = "
                 f'"{CAMERA_FILE_FORMAT}" and version = {CAMERA_FILE_VERSION})'
             )
@@ -96,9 +97,9 @@ def _read_legacy(data: dict[str, Any], r: Reader) -> CameraFile:
     unknown = [k for k in cam if k not in _LEGACY_KEYS]
     if unknown:
         raise UnknownOptionError(
-            f"{r.where}: unknown key(s) {', '.join(prefix + k for k in unknown)}; valid: "
-            f"{', '.join(_LEGACY_KEYS)} (a version-1 camera file starts with format = "
-            f'"{CAMERA_FILE_FORMAT}" and version = {CAMERA_FILE_VERSION})'
+            f"{r.where}: unknown key(s) {short_list([prefix + k for k in unknown], 40)}; "
+            f"valid: {short_list(_LEGACY_KEYS, 40)} (or a version-1 file: "
+            f'format = "{CAMERA_FILE_FORMAT}", version = {CAMERA_FILE_VERSION})'
         )
     if not isinstance(cal, dict):
         raise r.fail("calibration", f"expected a table [calibration], got {_show(cal)}")

@@ -35,6 +35,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from imageform._files import atomic_write
+from imageform._validate import as_bool, describe
 from imageform.errors import InvalidInputError
 from imageform.io._camera_model import (
     _ALWAYS,
@@ -241,9 +242,13 @@ def write_camera(
 
     cf = camera if isinstance(camera, CameraFile) else CameraFile(camera)
     if has_pose is not None:
-        cf = replace(cf, has_pose=bool(has_pose))
+        cf = replace(cf, has_pose=as_bool(has_pose, "has_pose"))
     if std is not None:
+        if not isinstance(std, Mapping):
+            raise TypeError(f"expected std as a mapping of name to value, got {describe(std)}")
         cf = replace(cf, std=dict(std))
+    if provenance is not None and not isinstance(provenance, Provenance):
+        raise TypeError(f"expected provenance as a Provenance, got {describe(provenance)}")
     prov = provenance if provenance is not None else cf.provenance
     prov = replace(
         prov,

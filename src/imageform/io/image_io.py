@@ -38,7 +38,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from imageform._files import atomic_write
-from imageform._validate import check_memory, check_option, format_shape
+from imageform._validate import check_memory, check_option, describe, format_shape
 from imageform.errors import InvalidInputError
 
 __all__ = [
@@ -465,7 +465,7 @@ def _pixel_limit(value: object) -> int:
     if value is None:
         return max_pixels()
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or int(value) <= 0:
-        raise InvalidInputError(f"expected max_pixels as a positive integer, got {value!r}")
+        raise InvalidInputError(f"expected max_pixels as a positive integer, got {describe(value)}")
     return int(value)
 
 

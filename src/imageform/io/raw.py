@@ -16,6 +16,7 @@ step (docs/raw.md).
 
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -298,7 +299,7 @@ def _matrix(value: Any) -> np.ndarray:
     return v[:9].reshape(3, 3)
 
 
-def read_raw(path: str | Path) -> RawImage:
+def read_raw(path: str | Path, *, max_pixels: int | None = None) -> RawImage:
     """Read a raw file with LibRaw (rawpy): DNG, CR2, NEF, ARW, RAF (Bayer), ORF, RW2, ...
 
     Needs the optional extra ``imageform[raw]`` (rawpy). Only Bayer sensors with a 2x2 RGB
@@ -308,6 +309,9 @@ def read_raw(path: str | Path) -> RawImage:
     ----------
     path : str or Path
         The raw file.
+    max_pixels : int, optional
+        Refuse a file whose header declares more pixels than this (before anything is
+        decoded); default :func:`imageform.io.max_pixels` (``IMAGEFORM_MAX_PIXELS``, 100 Mpx).
 
     Returns
     -------
@@ -323,13 +327,26 @@ def read_raw(path: str | Path) -> RawImage:
     imageform.errors.ImageformError
         rawpy is not installed (the message names ``pip install "imageform[raw]"``).
     """
+    from imageform.io.image_io import ImageInfo, _check_pixels, _pixel_limit
+
+    limit = _pixel_limit(max_pixels)
+    if not isinstance(path, str | os.PathLike):
+        raise TypeError(f"expected path as a file path, got {describe(path)}")
     p = Path(path)
     if not p.is_file():
         raise InvalidInputError(f"raw file {p} does not exist")
     rawpy = _rawpy()
+    r = rawpy.RawPy()
     try:
-        r = rawpy.imread(str(p))
+        r.open_file(str(p))  # the header only: sizes are known before anything is decoded
+        size = r.sizes
+        _check_pixels(p, ImageInfo(int(size.raw_width), int(size.raw_height), 1, "", "raw"), limit)
+        r.unpack()
+    except InvalidInputError:
+        r.close()
+        raise
     except Exception as exc:  # LibRawFileUnsupportedError, LibRawIOError, ...
+        r.close()
         raise InvalidInputError(
             f"{p} is not a raw file LibRaw can read ({type(exc).__name__})"
         ) from None

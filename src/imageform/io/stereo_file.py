@@ -27,6 +27,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from imageform._files import atomic_write
+from imageform._validate import describe
 from imageform.errors import InvalidInputError, UnknownOptionError
 from imageform.io._camera_model import (
     _TABLES,
@@ -34,6 +35,8 @@ from imageform.io._camera_model import (
     CameraFile,
     Provenance,
     Reader,
+    image_names,
+    short_list,
 )
 from imageform.io.camera_file import _toml_string, _toml_value, camera_file_text
 
@@ -127,8 +130,19 @@ class StereoCameraFile:
         command: str | None = None,
     ) -> StereoCameraFile:
         """The stereo file of a :func:`~imageform.geometry.stereo_calibrate` result."""
-        left = CameraFile.from_calibration(result.left, images=images_left)
-        right = CameraFile.from_calibration(result.right, images=images_right)
+        from imageform.geometry import StereoCalibrationResult
+
+        if not isinstance(result, StereoCalibrationResult):
+            raise TypeError(
+                "expected result as a StereoCalibrationResult (stereo_calibrate), "
+                f"got {describe(result)}"
+            )
+        left = CameraFile.from_calibration(
+            result.left, images=image_names(images_left, "images_left")
+        )
+        right = CameraFile.from_calibration(
+            result.right, images=image_names(images_right, "images_right")
+        )
         std = dict(right.std)
         std["rvec"] = tuple(float(v) for v in result.std_rvec)
         std["t"] = tuple(float(v) for v in result.std_T)
@@ -259,7 +273,7 @@ def read_stereo_camera(path: str | Path) -> StereoCameraFile:
     unknown = [k for k in data if k not in ("format", "version", "provenance", *_SIDES)]
     if unknown:
         raise UnknownOptionError(
-            f"{p}: unknown key(s) {', '.join(unknown)}; valid: format, version, left, right, "
+            f"{p}: unknown key(s) {short_list(unknown, 40)}; valid: format, version, left, right, "
             "provenance"
         )
     cams = {}

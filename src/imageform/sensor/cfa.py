@@ -34,7 +34,7 @@ import numpy as np
 
 from imageform._backend import device_of, namespace
 from imageform._typing import Array, ArrayLike
-from imageform._validate import as_image, as_shape, format_shape
+from imageform._validate import as_image, as_shape, describe, format_shape
 from imageform.errors import InvalidInputError, UnknownOptionError
 
 __all__ = ["CFA_PATTERNS", "cfa_masks", "cfa_pattern", "mosaic"]
@@ -69,11 +69,11 @@ def cfa_pattern(pattern: object) -> str:
     'RGGB'
     """
     if not isinstance(pattern, str):
-        raise UnknownOptionError(f"expected a CFA pattern name (str), got {type(pattern).__name__}")
+        raise UnknownOptionError(f"expected a CFA pattern name (str), got {describe(pattern)}")
     key = pattern.strip().upper()
     if key not in CFA_PATTERNS:
         names = ", ".join(repr(p) for p in CFA_PATTERNS)
-        raise UnknownOptionError(f"unknown CFA pattern {pattern!r}; valid: {names}")
+        raise UnknownOptionError(f"unknown CFA pattern {describe(pattern, 30)}; valid: {names}")
     return key
 
 
@@ -174,6 +174,14 @@ def mosaic(rgb: ArrayLike, pattern: str = "RGGB") -> Array:
     [[0.9, 0.5], [0.5, 0.1]]
     """
     pattern = cfa_pattern(pattern)
+    shape: tuple[Any, ...] = tuple(getattr(rgb, "shape", None) or ())
+    last = shape[-1] if shape and getattr(rgb, "ndim", 0) >= 1 else None
+    if isinstance(last, int | np.integer) and last != 3:
+        # refused before as_image reads the values (a misshaped 9 GB array took seconds)
+        hint = "; an alpha channel? split it off (image[..., :3])" if last == 4 else ""
+        raise InvalidInputError(
+            f"expected rgb with 3 channels on axis -1, got shape {format_shape(shape)}{hint}"
+        )
     xp = namespace(rgb)
     img = as_image(rgb, "rgb", channels=3, xp=xp)
     if img.ndim < 3:

@@ -150,8 +150,9 @@ def simulate_photon_transfer(
         lambda: e * sensor.pixel_area * t_max * lam / (PLANCK * SPEED_OF_LIGHT),
         irradiance=e,
         exposure_times=t_max,
+        wavelength_nm=lam * 1e9,
     )
-    check_electrons(mp_max, "irradiance and exposure_times")
+    check_electrons(mp_max, "irradiance, exposure_times and wavelength_nm")
     gen = as_rng(check_rng(rng))
     flat = np.full((h, w), e)
     dark = np.zeros((h, w))

@@ -159,6 +159,8 @@ def load_table(key: str, name: str = "") -> Spectrum:
         if isinstance(key, str) and key in TABLES
         else check_name(key, TABLES, "spectral table", "key")
     )
+    if not isinstance(name, str):
+        raise TypeError(f"expected name as a display name (str), got {describe(name)}")
     return _load_table(k, name)
 
 
@@ -197,7 +199,7 @@ def luminous_efficiency(kind: str = "photopic") -> Spectrum:
     >>> luminous_efficiency("scotopic").peak_wavelength()
     507.0
     """
-    k = check_option(kind, ("photopic", "scotopic"), "luminous efficiency")
+    k = check_name(kind, ("photopic", "scotopic"), "luminous efficiency", "kind")
     return load_table("v_photopic" if k == "photopic" else "v_scotopic", f"V {k}")
 
 
@@ -226,7 +228,8 @@ def illuminant_table(name: str) -> Spectrum:
     key = name.strip().upper().replace("FL", "F")
     if key not in ILLUMINANT_TABLES:
         raise InvalidInputError(
-            f"unknown illuminant table {name!r}; valid: {', '.join(map(repr, ILLUMINANT_TABLES))}"
+            f"unknown illuminant table {describe(name, 30)} for name; "
+            f"valid: {', '.join(map(repr, ILLUMINANT_TABLES))}"
         )
     return load_table(key, f"CIE {key}")
 
@@ -238,7 +241,8 @@ def led_spectrum(name: str = "LED-B3") -> Spectrum:
     key = name.strip().upper().replace("_", "-")
     if key not in LED_SPECTRA:
         raise InvalidInputError(
-            f"unknown LED spectrum {name!r}; valid: {', '.join(map(repr, LED_SPECTRA))}"
+            f"unknown LED spectrum {describe(name, 30)} for name; "
+            f"valid: {', '.join(map(repr, LED_SPECTRA))}"
         )
     return load_table("led")[key]
 

@@ -228,9 +228,22 @@ def illuminant(name: str) -> Spectrum:
     >>> illuminant("d65").name
     'CIE D65'
     """
-    if not isinstance(name, str):
-        raise InvalidInputError(f"expected an illuminant name, got {type(name).__name__}")
-    key = name.strip().upper().replace("_", "-")
+    return _lookup_illuminant(name, "name")
+
+
+def _lookup_illuminant(value: object, name: str = "illuminant") -> Spectrum:
+    """:func:`illuminant` of ``value``, the errors naming the caller's parameter ``name``.
+
+    Examples
+    --------
+    >>> _lookup_illuminant("A", "test").name
+    'CIE A'
+    """
+    if not isinstance(value, str):
+        raise InvalidInputError(
+            f"expected {name} as an illuminant name (str), got {describe(value)}"
+        )
+    key = value.strip().upper().replace("_", "-")
     if key.replace("FL", "F") in ILLUMINANT_TABLES:
         return illuminant_table(key)
     if key == "E":
@@ -241,8 +254,10 @@ def illuminant(name: str) -> Spectrum:
         return blackbody_spectrum(float(key[2:]))
     if key.startswith("D") and key[1:].isdigit() and len(key) in (3, 4):
         return daylight_spectrum(float(key[1:]) * 100.0 * 1.4388 / 1.4380)
-    valid = [*ILLUMINANT_TABLES, "E", *LED_SPECTRA, "D<cct/100> (e.g. D75)", "bb<T> (e.g. bb3200)"]
-    raise InvalidInputError(f"unknown illuminant {name!r}; valid: {', '.join(valid)}")
+    valid = [*ILLUMINANT_TABLES, "E", f"{LED_SPECTRA[0]} ... {LED_SPECTRA[-1]}", "D<cct/100>"]
+    raise InvalidInputError(
+        f"unknown illuminant {describe(value, 30)} for {name}; valid: {', '.join(valid)}, bb<T>"
+    )
 
 
 class PlanckianCCT(NamedTuple):

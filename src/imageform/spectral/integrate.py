@@ -40,7 +40,7 @@ from imageform.spectral.data import (
     cone_fundamentals,
     luminous_efficiency,
 )
-from imageform.spectral.illuminants import illuminant as _illuminant
+from imageform.spectral.illuminants import _lookup_illuminant
 from imageform.spectral.spectrum import Spectrum
 
 __all__ = [
@@ -88,10 +88,13 @@ def observer_functions(observer: int | str | Spectrum = 2) -> Spectrum:
     return cone_fundamentals() if key == "cones" else cmfs(int(key))
 
 
-def resolve_illuminant(illuminant: str | Spectrum | None) -> Spectrum | None:
+def resolve_illuminant(
+    illuminant: str | Spectrum | None, *, name: str = "illuminant"
+) -> Spectrum | None:
     """An ``illuminant`` argument as a :class:`Spectrum`: a name is looked up with
     :func:`~imageform.spectral.illuminant`, a single-curve Spectrum is returned as it is, and
-    ``None`` (a light source measured on its own, no illuminant) stays ``None``.
+    ``None`` (a light source measured on its own, no illuminant) stays ``None``. ``name``
+    (keyword-only) is the parameter the errors name (a caller's ``test`` ...).
 
     Examples
     --------
@@ -102,13 +105,15 @@ def resolve_illuminant(illuminant: str | Spectrum | None) -> Spectrum | None:
     """
     if not (illuminant is None or isinstance(illuminant, Spectrum | str)):
         raise TypeError(
-            f"expected illuminant as a name, a Spectrum or None, got {describe(illuminant)}"
+            f"expected {name} as an illuminant name, a Spectrum or None, got {describe(illuminant)}"
         )
     if illuminant is None or isinstance(illuminant, Spectrum):
         if isinstance(illuminant, Spectrum) and illuminant.values.ndim != 1:
-            raise InvalidInputError(f"expected a single-curve illuminant, got {illuminant.shape}")
+            raise InvalidInputError(
+                f"expected {name} as a single-curve illuminant, got {illuminant.shape}"
+            )
         return illuminant
-    return _illuminant(illuminant)
+    return _lookup_illuminant(illuminant, name)
 
 
 def _as_spectrum(s: object, name: str) -> Spectrum:

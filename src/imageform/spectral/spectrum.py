@@ -438,7 +438,7 @@ class Spectrum:
             raise InvalidInputError(
                 f"expected columns of equal length, got lengths {[len(c) for c in cols]}"
             )
-        if isinstance(labels, str):
+        if isinstance(labels, str) or not isinstance(labels, Sequence):
             raise TypeError(f"expected labels as a sequence of str, got {describe(labels)}")
         return cls(
             as_real_ndarray(wavelengths, "wavelengths"), np.stack(cols, 1), name, tuple(labels)
