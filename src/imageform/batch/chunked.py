@@ -124,7 +124,14 @@ def _tiff_lazy(p: Path, chunk: int, da: Any, zarr: Any) -> Any:
             asarray=False,
             fancy=False,
         )
-    return zarr.open(tifffile.imread(p, aszarr=True), mode="r")
+    import weakref
+
+    store = tifffile.imread(p, aszarr=True)
+    arr = zarr.open(store, mode="r")
+    # the store holds the TIFF open: close it when the array goes, not at interpreter exit
+    # (an unclosed file is a ResourceWarning wherever the garbage collector happens to run)
+    weakref.finalize(arr, store.close)
+    return arr
 
 
 #: The largest block side: a block of 3 float64 channels stays under 2 GiB.
