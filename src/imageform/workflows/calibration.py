@@ -70,6 +70,37 @@ def parse_board(text: str) -> tuple[int, int]:
     return cols, rows
 
 
+#: ``--board`` prefix of a ChArUco board (its size in squares follows).
+CHARUCO_PREFIX = "charuco:"
+#: Fewest ChArUco corners a view must give to be used.
+MIN_CHARUCO_CORNERS = 6
+
+
+def parse_charuco(text: str) -> tuple[int, int] | None:
+    """``"charuco:7x5"`` -> ``(7, 5)`` squares per row x per column; None for a checkerboard.
+
+    Each count must be 3 to :data:`MAX_BOARD_CORNERS` squares (a board of 3 x 3 squares has
+    four inner corners).
+
+    Examples
+    --------
+    >>> parse_charuco("charuco:7x5"), parse_charuco("9x6")
+    ((7, 5), None)
+    """
+    from imageform._validate import describe
+
+    if not isinstance(text, str) or not text.strip().lower().startswith(CHARUCO_PREFIX):
+        return None
+    body = text.strip()[len(CHARUCO_PREFIX) :]
+    m = re.fullmatch(r"\s*(\d{1,9})\s*[xX×]\s*(\d{1,9})\s*", body)
+    if not m or not all(3 <= int(g) <= MAX_BOARD_CORNERS for g in m.groups()):
+        raise InvalidInputError(
+            f"expected the --board text charuco:COLSxROWS with 3 to {MAX_BOARD_CORNERS} "
+            f"squares each (e.g. charuco:7x5), got {describe(text)}"
+        )
+    return int(m.group(1)), int(m.group(2))
+
+
 class _BoardChecks:
     """The checks of the options a checkerboard calibration shares (``calibrate`` and
     ``stereo-calibrate``): the board, the square size, ``--fix`` names, ``--skew``,
@@ -83,7 +114,13 @@ class _BoardChecks:
 
     def check(self) -> None:
         super().check()  # type: ignore[misc]
-        parse_board(self.board)
+        if parse_charuco(self.board) is None:
+            parse_board(self.board)
+        elif not hasattr(self, "marker"):
+            raise InvalidInputError(
+                "a ChArUco --board is read by imageform calibrate; this command takes a "
+                "checkerboard --board COLSxROWS of inner corners"
+            )
         self.square_mm()
         fixed = tuple(normalize_choice(f, _PARAMETERS, "--fix") for f in self.fix)
         object.__setattr__(self, "fix", fixed)
@@ -108,7 +145,11 @@ class _BoardChecks:
 class CalibrateOptions(_BoardChecks, ImageIn):
     """Options of ``imageform calibrate``."""
 
-    board: str = option(help="Inner corners COLSxROWS, e.g. 9x6 (not squares).", metavar="CxR")
+    board: str = option(
+        help="Inner corners COLSxROWS, e.g. 9x6 (not squares); or a ChArUco board "
+        "charuco:COLSxROWS of squares (with --marker).",
+        metavar="CxR",
+    )
     square: str = option(
         "1",
         help="Side of a square with unit (25mm, 2.5cm, 1in; bare number: mm). Only poses and "
@@ -133,6 +174,41 @@ class CalibrateOptions(_BoardChecks, ImageIn):
         metavar="NAME",
     )
     skew: bool = option(False, help="Estimate the skew (default: 0, as OpenCV).")
+    marker: str | None = option(
+        None,
+        help="ChArUco: side of a marker with unit (22mm; bare number: mm), smaller than "
+        "--square; needed with --board charuco:COLSxROWS.",
+    )
+    dictionary: str = option(
+        "6x6_250",
+        help="ChArUco: the markers' ArUco dictionary (OpenCV's: 4x4_50 ... 7x7_1000, "
+        "aruco_original).",
+        choices="imageform.geometry.aruco:ARUCO_DICTIONARIES",
+    )
+
+    def check(self) -> None:
+        super().check()
+        charuco = parse_charuco(self.board)
+        if charuco is None:
+            if self.marker is not None:
+                raise InvalidInputError("--marker is for a ChArUco --board charuco:COLSxROWS")
+            return
+        if self.marker is None:
+            raise InvalidInputError(
+                "--board charuco:COLSxROWS needs --marker, the side of a marker (e.g. 22mm)"
+            )
+        if not self.marker_mm() < self.square_mm():
+            raise InvalidInputError(
+                f"expected --marker smaller than --square, got {self.marker} and {self.square}"
+            )
+
+    def marker_mm(self) -> float:
+        """The marker size in millimetres (ChArUco)."""
+        from imageform._units import parse_length
+
+        if self.marker is None:
+            raise InvalidInputError("--board charuco:COLSxROWS needs --marker (e.g. 22mm)")
+        return parse_length(self.marker, "--marker", default_unit="mm", unit="mm")
 
 
 def _plot(path: Path, res: Any, names: list[str]) -> None:
@@ -160,13 +236,12 @@ def _plot(path: Path, res: Any, names: list[str]) -> None:
 def calibrate(run: Run, opts: CalibrateOptions, *, out: Path, images: list[Path]) -> Result:
     """``imageform calibrate``: a camera file from checkerboard views (Zhang, then
     Levenberg-Marquardt on every reprojection error)."""
-    import numpy as np
-
-    from imageform.geometry import calibrate_camera, checkerboard_points
+    from imageform.geometry import checkerboard_points
     from imageform.geometry.checkerboard import find_checkerboard
-    from imageform.io import CameraFile, write_camera
-    from imageform.workflows._tables import write_table
 
+    charuco = parse_charuco(opts.board)
+    if charuco is not None:
+        return _calibrate_charuco(run, opts, out=out, images=images, squares=charuco)
     cols, rows = parse_board(opts.board)
     square = opts.square_mm()
     shape0: tuple[int, int] | None = None
@@ -216,14 +291,32 @@ def calibrate(run: Run, opts: CalibrateOptions, *, out: Path, images: list[Path]
         )
     assert shape0 is not None
     obj = checkerboard_points((cols, rows), square)
-    res = calibrate_camera(
-        [obj] * len(corners),
-        corners,
-        (shape0[1], shape0[0]),
-        skew=opts.skew,
-        fix=opts.fix,
-    )
     command = f"imageform calibrate --board {cols}x{rows} --square {opts.square}"
+    return _calibrate_views(
+        run, opts, out, len(images), names, [obj] * len(corners), corners, shape0, command
+    )
+
+
+def _calibrate_views(
+    run: Run,
+    opts: CalibrateOptions,
+    out: Path,
+    n_images: int,
+    names: list[str],
+    objs: list[Any],
+    corners: list[Any],
+    shape: tuple[int, int],
+    command: str,
+) -> Result:
+    """Calibrate from the views' board points and corners, write the camera file (and the
+    plot and corners table asked for), and say what was found."""
+    import numpy as np
+
+    from imageform.geometry import calibrate_camera
+    from imageform.io import CameraFile, write_camera
+    from imageform.workflows._tables import write_table
+
+    res = calibrate_camera(objs, corners, (shape[1], shape[0]), skew=opts.skew, fix=opts.fix)
     command += "".join(f" --fix {p}" for p in opts.fix) + (" --skew" if opts.skew else "")
     cf = CameraFile.from_calibration(res, images=names, command=command)
     write_camera(run.file(out), cf)
@@ -235,19 +328,19 @@ def calibrate(run: Run, opts: CalibrateOptions, *, out: Path, images: list[Path]
             ("image", "X", "Y", "Z", "u", "v"),
             (
                 (n, *X, *uv)
-                for n, c in zip(names, corners, strict=True)
-                for X, uv in zip(obj, c, strict=True)
+                for n, o, c in zip(names, objs, corners, strict=True)
+                for X, uv in zip(o, c, strict=True)
             ),
         )
     per_view = [
-        {"view": n, "rms_px": float(e), "max_px": float(np.max(p))}
-        for n, e, p in zip(names, res.per_view_rms, res.per_point_errors, strict=True)
+        {"view": n, "rms_px": float(e), "max_px": float(np.max(p)), "points": len(c)}
+        for n, e, p, c in zip(names, res.per_view_rms, res.per_point_errors, corners, strict=True)
     ]
     K, d = res.K, res.distortion
     summary = {
         "output": out,
         "views_used": len(names),
-        "views_total": len(images),
+        "views_total": n_images,
         "image_size": list(res.image_size),
         "rms_px": res.rms,
         "fx": K[0, 0],
@@ -274,6 +367,60 @@ def calibrate(run: Run, opts: CalibrateOptions, *, out: Path, images: list[Path]
     text.append(f"k1, k2, p1, p2, k3: {', '.join(f'{c:.6g}' for c in d.coeffs[:5])}")
     text.append(f"wrote {out}")
     return Result(summary, tuple(text))
+
+
+def _calibrate_charuco(
+    run: Run,
+    opts: CalibrateOptions,
+    *,
+    out: Path,
+    images: list[Path],
+    squares: tuple[int, int],
+) -> Result:
+    """``imageform calibrate --board charuco:COLSxROWS``: every view that gives at least
+    :data:`MIN_CHARUCO_CORNERS` identified corners is used, whole or in part."""
+    from imageform.geometry import CharucoBoard, detect_charuco
+
+    board = CharucoBoard(squares, opts.square_mm(), opts.marker_mm(), opts.dictionary)
+    cols, rows = squares
+    shape0: tuple[int, int] | None = None
+    objs, corners, names, missed = [], [], [], []
+    for i, f in enumerate(images):
+        if run.progress is not None:
+            run.progress("detecting", i / max(len(images), 1))
+        img = read(f, opts)
+        if shape0 is None:
+            shape0 = (int(img.shape[0]), int(img.shape[1]))
+        elif img.shape[:2] != shape0:
+            raise InvalidInputError(
+                f"expected all images of one size, got {images[0]} of {shape0[1]} x "
+                f"{shape0[0]} px and {f} of {img.shape[1]} x {img.shape[0]} px"
+            )
+        grey = img[..., 0] if img.shape[-1] == 1 else img
+        found = detect_charuco(grey, board)
+        if len(found) >= MIN_CHARUCO_CORNERS:
+            objs.append(found.object_points())
+            corners.append(found.corners)
+            names.append(f.name)
+        else:
+            why = f"{len(found.markers)} markers, {len(found)} corners"
+            run.note(f"warning: {f}: too little of the charuco:{cols}x{rows} board ({why})")
+            missed.append(f"{f.name}: {why}")
+    if run.progress is not None:
+        run.progress("calibrating", 1.0)
+    if len(corners) < MIN_VIEWS:
+        raise DegenerateConfigurationError(
+            f"found at least {MIN_CHARUCO_CORNERS} corners of the charuco:{cols}x{rows} board "
+            f"({opts.dictionary} markers) in {len(corners)} view(s) of {len(images)}; "
+            f"calibrate needs at least {MIN_VIEWS}"
+            + (f" ({missed[0]}{'; ...' if len(missed) > 1 else ''})" if missed else "")
+        )
+    assert shape0 is not None
+    command = (
+        f"imageform calibrate --board charuco:{cols}x{rows} --square {opts.square} "
+        f"--marker {opts.marker} --dictionary {opts.dictionary}"
+    )
+    return _calibrate_views(run, opts, out, len(images), names, objs, corners, shape0, command)
 
 
 # ---------------------------------------------------------------- undistort
