@@ -239,3 +239,120 @@ def test_memory_bounded_on_a_one_strip_tiff(tmp_path: Path) -> None:
     )
     before, after = (int(v) for v in proc.stdout.split())
     assert after - before < n * n * 3, (before, after)
+
+
+def _he_slide(tmp_path: Path, shape: tuple[int, int], seed: int) -> tuple[Path, np.ndarray]:
+    from imageform.analysis import synthetic_he_tile
+
+    img = np.round(synthetic_he_tile(shape, rng=seed).image * 255).astype(np.uint8)
+    path = tmp_path / f"slide{seed}.tif"
+    tifffile.imwrite(path, img, tile=(256, 256), photometric="rgb")
+    return path, img
+
+
+@pytest.mark.parametrize("method", ["macenko", "reinhard"])
+def test_stain_normalize_equals_in_memory(
+    tmp_path: Path, method: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A slide below the sample budget: its statistics come from every pixel, so the chunked
+    result equals `imageform stain-normalize` in memory (same target JSON), to one code;
+    through `imageform chunked stain-normalize` too."""
+    from imageform import analysis
+    from imageform.io import read_image
+
+    src, _img = _he_slide(tmp_path, (640, 768), 0)
+    _, ref = _he_slide(tmp_path, (256, 256), 1)
+    measure = analysis.macenko_stains if method == "macenko" else analysis.reinhard_stats
+    target = tmp_path / "target.json"
+    measure(ref).to_json(target)
+    r = process_chunked(
+        src,
+        tmp_path / "out.tif",
+        "stain_normalize",
+        {"target": target, "method": method},
+        chunk=256,
+    )
+    assert r.dtype == "uint8" and r.shape == (640, 768, 3)
+    out = tifffile.imread(r.output)
+    assert (
+        main(
+            [
+                "stain-normalize",
+                str(src),
+                "--target",
+                str(target),
+                "--method",
+                method,
+                "-o",
+                str(tmp_path / "mem.png"),
+            ]
+        )
+        == 0
+    )
+    mem = read_image(tmp_path / "mem.png")
+    mem8 = np.round(mem * 255).astype(int) if mem.dtype.kind == "f" else mem.astype(int)
+    assert np.abs(out.astype(int) - mem8).max() <= 1
+    capsys.readouterr()
+    argv = [
+        "chunked",
+        "stain-normalize",
+        str(src),
+        "-o",
+        str(tmp_path / "cli.zarr"),
+        "--target",
+        str(target),
+        "--method",
+        method,
+        "--chunk",
+        "256",
+        "--dtype",
+        "float32",
+    ]
+    assert main(argv) == 0, capsys.readouterr().err
+    z = np.asarray(zarr.open(str(tmp_path / "cli.zarr"), mode="r"))
+    assert np.abs(z * 255 - out).max() <= 0.51
+
+
+def test_stain_normalize_statistics_from_a_subsample(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Above the budget the slide's stains come from every s-th row and column: with the
+    budget cut to a quarter of the slide (s = 2), the stain vectors are within 1 degree of the
+    full image's and the output within 2 codes."""
+    import imageform.batch.chunked as ch
+    from imageform import analysis
+
+    src, img = _he_slide(tmp_path, (512, 512), 2)
+    _, ref = _he_slide(tmp_path, (256, 256), 3)
+    target = tmp_path / "t.json"
+    analysis.macenko_stains(ref).to_json(target)
+    monkeypatch.setattr(ch, "STAIN_SAMPLE_PIXELS", 512 * 512 // 4)
+    r = process_chunked(src, tmp_path / "o.tif", "stain_normalize", {"target": target}, chunk=256)
+    out = tifffile.imread(r.output).astype(int)
+    full = analysis.macenko_normalize(img, analysis.MacenkoStains.from_json(target))
+    assert np.abs(out - np.round(np.asarray(full) * 255)).max() <= 2
+    sub = analysis.macenko_stains(img[::2, ::2])
+    whole = analysis.macenko_stains(img)
+    for k in range(2):
+        assert analysis.stain_angle(sub.stain_matrix[k], whole.stain_matrix[k]) < 1.0
+
+
+def test_stain_normalize_refusals(tmp_path: Path) -> None:
+    src, _ = _he_slide(tmp_path, (256, 256), 0)
+    with pytest.raises(InvalidInputError, match="target"):
+        process_chunked(
+            src,
+            tmp_path / "o.tif",
+            "stain_normalize",
+            {"target": tmp_path / "missing.json"},
+            chunk=256,
+        )
+    with pytest.raises(InvalidInputError, match="save-target"):
+        process_chunked(
+            src,
+            tmp_path / "o.tif",
+            "stain_normalize",
+            {"target": src, "save_target": tmp_path / "s.json"},
+            chunk=256,
+        )
+    assert not (tmp_path / "o.tif").exists()

@@ -34,7 +34,10 @@ from imageform.workflows.color import DISPLAYABLE_SPACES
 __all__ = ["CHUNKED_COMMANDS", "ChunkedResult", "open_lazy", "process_chunked"]
 
 #: Commands :func:`process_chunked` runs.
-CHUNKED_COMMANDS = ("convert", "white_balance")
+CHUNKED_COMMANDS = ("convert", "white_balance", "stain_normalize")
+#: Most pixels of the regular subsample on which a slide's own stain statistics are measured
+#: (every s-th row and column; a whole-slide tool estimates on a thumbnail the same way).
+STAIN_SAMPLE_PIXELS = 4_000_000
 #: White-balance methods whose illuminant is a streaming reduction (or needs none).
 _WB_METHODS = ("gray_world", "shades_of_gray", "manual")
 _OUT_DTYPES = ("uint8", "uint16", "float32")
@@ -229,6 +232,39 @@ def _wb_gains(x: Any, options: dict[str, Any]) -> np.ndarray:
     return (ref / e).astype(np.float32)
 
 
+def _stain_block(block: np.ndarray, method: str, target: Any, source: Any) -> np.ndarray:
+    from imageform import analysis
+
+    if method == "macenko":
+        out = analysis.macenko_normalize(block, target, source=source)
+    else:
+        out = analysis.reinhard_normalize(block, target, source_stats=source)
+    return np.asarray(out, dtype=np.float32)
+
+
+def _stain_stats(x: Any, opts: dict[str, Any]) -> tuple[Any, Any, int]:
+    """The target's statistics (a JSON file or a reference image) and the slide's own, the
+    latter on a regular subsample of at most :data:`STAIN_SAMPLE_PIXELS` (every ``step``-th
+    row and column), read block by block."""
+    from imageform import analysis
+    from imageform.io import read_image
+
+    method = opts["method"]
+    kind = analysis.MacenkoStains if method == "macenko" else analysis.ReinhardStats
+    measure = analysis.macenko_stains if method == "macenko" else analysis.reinhard_stats
+    target = Path(opts["target"])
+    if not target.is_file():
+        raise InvalidInputError(f"--target {target} does not exist")
+    stats_t = kind.from_json(target) if target.suffix.lower() == ".json" else None
+    if stats_t is None:
+        ref = read_image(target)
+        stats_t = measure(ref[..., :3] if ref.ndim == 3 else ref)
+    h, w = int(x.shape[0]), int(x.shape[1])
+    step = max(1, int(np.ceil(np.sqrt(h * w / STAIN_SAMPLE_PIXELS))))
+    sample = np.asarray(x[::step, ::step].compute())
+    return stats_t, measure(sample), step
+
+
 def _quantize(block: np.ndarray, dtype: str) -> np.ndarray:
     if dtype == "float32":
         return block
@@ -251,6 +287,7 @@ def _remove_stale(path: Path) -> None:
 #: Options of each command that chunked processing honours (the others must keep their
 #: default).
 _HONOURED = {
+    "stain_normalize": {"target": "target", "method": "method"},
     "convert": {"src": "from", "dst": "to", "white": "white"},
     "white_balance": {
         "method": "method",
@@ -307,14 +344,19 @@ def process_chunked(
     force: bool = False,
     num_workers: int | None = None,
 ) -> ChunkedResult:
-    r"""Apply ``convert`` or ``white_balance`` to an image larger than memory, chunk-wise.
+    r"""Apply ``convert``, ``white_balance`` or ``stain_normalize`` to an image larger than
+    memory, chunk-wise.
 
     .. math:: \text{out}[b] = f(\text{in}[b];\ \theta),\qquad
         \theta = \text{gains } \bar e / e_c,\ e_c = \big(\operatorname{mean}_{\text{all}}
         \rho_c^p\big)^{1/p}
 
     Pointwise, so each block ``b`` gives the same numbers as the whole image in memory; the
-    white-balance illuminant ``e`` is a reduction over every block (a first pass).
+    white-balance illuminant ``e`` is a reduction over every block (a first pass). Stain
+    normalisation measures the slide's own statistics (Macenko's stain vectors and
+    concentration range, or Reinhard's CIELAB mean and standard deviation) on a regular
+    subsample of at most :data:`STAIN_SAMPLE_PIXELS` (the whole image when smaller), then
+    maps every block to the target's with those fixed statistics.
 
     Parameters
     ----------
@@ -324,10 +366,11 @@ def process_chunked(
     dst : path
         ``.tif``/``.tiff`` (tiled, ``tile`` pixels, BigTIFF when needed) or ``.zarr``; written
         under a temporary name in the same folder and renamed when complete.
-    command : {"convert", "white_balance"}
+    command : {"convert", "white_balance", "stain_normalize"}
         ``convert`` takes options ``from`` (default ``srgb``), ``to``, ``white``;
         ``white_balance`` takes ``method`` (gray_world, shades_of_gray, manual), ``p``,
-        ``normalize``, ``illuminant``/``cct`` (manual).
+        ``normalize``, ``illuminant``/``cct`` (manual); ``stain_normalize`` takes ``target``
+        (a reference image or its statistics as JSON) and ``method`` (macenko, reinhard).
     options : dict, optional
         The command's options named above (default: the command's defaults).
     chunk : int
@@ -393,6 +436,10 @@ def process_chunked(
             params = {k: opts[k] for k in ("white",) if opts.get(k) is not None}
             op: tuple[Any, ...] = (_convert_block, s, d, params)
             displayable = d in DISPLAYABLE_SPACES
+        elif cmd == "stain_normalize":
+            stats_t, stats_s, _step = _stain_stats(x, opts)
+            op = (_stain_block, opts["method"], stats_t, stats_s)
+            displayable = True
         else:
             gains = _wb_gains(x, opts)
             op = (_balance_block, gains)

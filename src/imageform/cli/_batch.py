@@ -20,7 +20,7 @@ from imageform.workflows import Workflow
 
 __all__ = ["batch_group", "chunked_group"]
 
-_CHUNKED = ("convert", "white-balance")
+_CHUNKED = ("convert", "white-balance", "stain-normalize")
 
 
 def _batch_workflows() -> dict[str, Workflow]:
@@ -220,7 +220,8 @@ def batch_group() -> click.Group:
 
 
 def chunked_group() -> click.Group:
-    """``imageform chunked``: convert or white-balance one image larger than memory."""
+    """``imageform chunked``: convert, white-balance or stain-normalise one image larger than
+    memory."""
     return _Lazy(
         "chunked",
         _chunked_command,
