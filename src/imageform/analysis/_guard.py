@@ -57,3 +57,24 @@ def unit_rows(m: np.ndarray, name: str) -> Any:
         i = int(np.argmin(norms))
         raise InvalidInputError(f"expected {name} rows of non-zero length, row {i} is zero")
     return norms
+
+
+def target_source(target: object, name: str, what: str) -> Any:
+    """A normalisation target that is not a statistics object: an existing JSON file (its
+    :class:`~pathlib.Path`) or an image validated under the parameter's own ``name``
+    (never reported as ``image``)."""
+    from pathlib import Path
+
+    from imageform.analysis._arrays import image_in
+
+    if target is None:
+        raise TypeError(f"expected {name} as an image, {what} or a JSON path, got None")
+    if isinstance(target, str | Path):
+        path = Path(target)
+        if not path.is_file():
+            raise InvalidInputError(
+                f"expected {name} as an image, {what} or an existing JSON file, got "
+                f"{describe(str(target))} (no such file)"
+            )
+        return path
+    return image_in(target, name)

@@ -27,6 +27,7 @@ import numpy as np
 from imageform._jsonio import dumps
 from imageform.errors import InvalidInputError
 from imageform.report import html_parts as hp
+from imageform.report._checks import check_path
 from imageform.report.metrics import (
     METRICS_VERSION,
     PLACED_METRICS,
@@ -367,6 +368,7 @@ def write_report(
 
     t0 = time.perf_counter()
     res = _check_result(result)
+    check_path(out_dir, "out_dir")
     out = Path(out_dir)
     folder = _prepare_out_dir(out, force)
     if matplotlib.get_backend().lower() != "agg":
