@@ -10,7 +10,7 @@ import numpy as np
 from imageform._validate import as_float, as_int, as_real, describe, format_shape
 from imageform.errors import InvalidInputError
 
-__all__ = ["count", "real_array", "real_triple"]
+__all__ = ["count", "dtype_kind", "real_array", "real_triple", "target_source", "unit_rows"]
 
 
 def real_array(
@@ -78,3 +78,15 @@ def target_source(target: object, name: str, what: str) -> Any:
             )
         return path
     return image_in(target, name)
+
+
+def dtype_kind(value: object) -> str:
+    """The NumPy dtype kind of ``value`` (``"O"`` when it does not convert)."""
+    dtype = getattr(value, "dtype", None)
+    if dtype is not None and not isinstance(dtype, np.dtype):  # a tensor: by its name
+        text = str(dtype).removeprefix("torch.")
+        return "b" if text == "bool" else "c" if text.startswith("complex") else "f"
+    try:
+        return np.asarray(value).dtype.kind
+    except (TypeError, ValueError):
+        return "O"

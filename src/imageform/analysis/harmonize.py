@@ -502,7 +502,12 @@ class CorrectionReport:
         where a patch is not valid), ``valid`` booleans (N,)."""
         before = real_array(self.delta_e_before, "delta_e_before", (None,), finite=False)
         n = before.shape[0]
-        after = real_array(self.delta_e_after, "delta_e_after", (n,), finite=False)
+        after = real_array(self.delta_e_after, "delta_e_after", (None,), finite=False)
+        if after.shape != (n,):
+            raise InvalidInputError(
+                f"expected delta_e_before and delta_e_after of one length, got {n} and "
+                f"{after.shape[0]}"
+            )
         flag = self.valid
         valid = np.asarray(flag) if not isinstance(flag, str | bytes) else None
         if valid is None or valid.dtype != np.bool_ or valid.shape != (n,):

@@ -347,6 +347,7 @@ def stain_concentrations(
         raise InvalidInputError(
             f"expected stain_matrix of shape (2, 3) or (3, 3), got {format_shape(s.shape)}"
         )
+    unit_rows(s, "stain_matrix")
     od = optical_density(image, min_intensity=min_intensity, i0=i0, base=base)
     pinv = np.linalg.pinv(s).astype(od.dtype)  # (3, k)
     return od @ pinv

@@ -67,7 +67,8 @@ class ReinhardStats:
         d = read_json(path, "reinhard_stats")
         if d.get("space") != REINHARD_SPACE:
             raise InvalidInputError(
-                f"expected statistics in {REINHARD_SPACE!r} in {path}, got {d.get('space')!r}"
+                f"expected statistics in {REINHARD_SPACE!r} in {path}, got "
+                f"{describe(d.get('space'))}"
             )
         try:
             mean = tuple(float(v) for v in d["mean"])

@@ -132,7 +132,9 @@ class SFRResult(NamedTuple):
     def channel(self, name: str) -> np.ndarray:
         """The SFR curve of channel ``name`` (``"Y"``, ``"R"``, ``"G"`` or ``"B"``)."""
         if name not in self.channels:
-            raise InvalidInputError(f"expected name as one of {self.channels}, got {name!r}")
+            raise InvalidInputError(
+                f"expected name as one of {self.channels}, got {describe(name)}"
+            )
         return self.sfr[:, self.channels.index(name)]
 
 

@@ -25,6 +25,7 @@ from typing import Any
 import numpy as np
 
 from imageform._jsonio import dumps
+from imageform._validate import describe
 from imageform.errors import InvalidInputError
 from imageform.report import html_parts as hp
 from imageform.report._checks import check_path
@@ -70,12 +71,13 @@ def _check_result(result: Any) -> SimulationResult:
     for i, s in enumerate(result.stages):
         if s.kind not in STAGE_KINDS:
             raise InvalidInputError(
-                f"stage {i} ({s.name!r}) has kind {s.kind!r}; valid: {', '.join(STAGE_KINDS)}"
+                f"stage {i} ({describe(s.name)}) has kind {describe(s.kind)}; valid: "
+                f"{', '.join(STAGE_KINDS)}"
             )
     if result.stages[-1].kind != "srgb":
         raise InvalidInputError(
             f"expected the last stage to be the encoded 'srgb' output, got kind "
-            f"{result.stages[-1].kind!r} ({result.stages[-1].name!r})"
+            f"{describe(result.stages[-1].kind)} ({describe(result.stages[-1].name)})"
         )
     w, h = result.image_size
     if tuple(np.shape(result.stages[-1].image)[:2]) != (h, w):
