@@ -450,3 +450,12 @@ def test_render_sfr_chart_grid_bounded() -> None:
         render_sfr_chart((120, 160), grid=(10**30, 2))
     _one_line(info)
     assert render_sfr_chart((16, 16), grid=(np.int64(4), 4), supersampling=1).shape == (16, 16)
+
+
+def test_vahadane_iterations_bounded() -> None:
+    """A huge iteration count could run for ever on a tile that does not converge."""
+    from imageform.analysis import vahadane_stains
+
+    with pytest.raises(InvalidInputError, match="iterations") as info:
+        vahadane_stains(synthetic_stain_image((16, 16), rng=0).image, iterations=10**30)
+    _one_line(info)

@@ -68,6 +68,9 @@ STAIN_METHODS = ("macenko", "vahadane")
 
 _LN10 = float(np.log(10.0))
 
+#: The most alternating rounds :func:`vahadane_stains` runs (it stops earlier on convergence).
+MAX_ITERATIONS = 100_000
+
 
 def _base(base: object) -> str:
     return check_option(str(base) if isinstance(base, int) else base, OD_BASES, "OD log base")
@@ -747,7 +750,7 @@ def vahadane_stains(
     lam = as_real(lam, "lam", minimum=0.0, maximum=10.0)
     min_pixels = as_int(min_pixels, "min_pixels", minimum=0)
     max_pixels = as_int(max_pixels, "max_pixels")
-    iterations = as_int(iterations, "iterations")
+    iterations = as_int(iterations, "iterations", maximum=MAX_ITERATIONS)
     if max_pixels < 2 or iterations < 1:
         raise InvalidInputError(
             f"expected max_pixels >= 2 and iterations >= 1, got {max_pixels} and {iterations}"
