@@ -459,3 +459,16 @@ def test_vahadane_iterations_bounded() -> None:
     with pytest.raises(InvalidInputError, match="iterations") as info:
         vahadane_stains(synthetic_stain_image((16, 16), rng=0).image, iterations=10**30)
     _one_line(info)
+
+
+@pytest.mark.parametrize("image", [None, "abc", 1j, np.zeros((5, 5)), np.zeros((8, 8), object)])
+def test_slanted_edge_roi_crop_refuses(image: object) -> None:
+    """A crop of a scalar raised IndexError; a crop beyond the image returned an empty or
+    cut array without a word."""
+    from imageform.analysis import SlantedEdgeROI
+
+    roi = SlantedEdgeROI(2, 3, 10, 12, 5.0, "vertical", "left", (7.0, 9.0))
+    with pytest.raises(InvalidInputError, match="image") as info:
+        roi.crop(image)
+    _one_line(info)
+    assert roi.crop(np.zeros((15, 12, 3))).shape == (12, 10, 3)

@@ -60,6 +60,7 @@ from imageform._validate import (
     check_option,
     check_real_values,
     describe,
+    format_shape,
 )
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
 
@@ -162,8 +163,20 @@ class SlantedEdgeROI(NamedTuple):
         return (self.x, self.y, self.width, self.height)
 
     def crop(self, image: Any) -> np.ndarray:
-        """The ROI's pixels of ``image`` (a view)."""
-        return np.asarray(image)[self.y : self.y + self.height, self.x : self.x + self.width]
+        """The ROI's pixels of ``image`` (a view); the ROI must lie inside ``image``."""
+        if image is None or isinstance(image, str | bytes):
+            raise InvalidInputError(f"expected image as an array, got {describe(image)}")
+        arr = np.asarray(image)
+        if arr.dtype.kind not in "buif" or arr.ndim not in (2, 3):
+            raise InvalidInputError(
+                f"expected image as an (H, W) or (H, W, C) array of numbers, got {describe(image)}"
+            )
+        if self.y + self.height > arr.shape[0] or self.x + self.width > arr.shape[1]:
+            raise InvalidInputError(
+                f"expected image of at least {self.x + self.width}x{self.y + self.height} "
+                f"pixels (width x height) for this ROI, got shape {format_shape(arr.shape)}"
+            )
+        return arr[self.y : self.y + self.height, self.x : self.x + self.width]
 
 
 # --- input ----------------------------------------------------------------------------------
