@@ -10,7 +10,7 @@ import numpy as np
 from imageform._validate import as_float, as_int, as_real, describe, format_shape
 from imageform.errors import InvalidInputError
 
-__all__ = ["count", "real_array", "real_triple"]
+__all__ = ["count", "dtype_kind", "real_array", "real_triple", "target_source", "unit_rows"]
 
 
 def real_array(
@@ -57,3 +57,36 @@ def unit_rows(m: np.ndarray, name: str) -> Any:
         i = int(np.argmin(norms))
         raise InvalidInputError(f"expected {name} rows of non-zero length, row {i} is zero")
     return norms
+
+
+def target_source(target: object, name: str, what: str) -> Any:
+    """A normalisation target that is not a statistics object: an existing JSON file (its
+    :class:`~pathlib.Path`) or an image validated under the parameter's own ``name``
+    (never reported as ``image``)."""
+    from pathlib import Path
+
+    from imageform.analysis._arrays import image_in
+
+    if target is None:
+        raise TypeError(f"expected {name} as an image, {what} or a JSON path, got None")
+    if isinstance(target, str | Path):
+        path = Path(target)
+        if not path.is_file():
+            raise InvalidInputError(
+                f"expected {name} as an image, {what} or an existing JSON file, got "
+                f"{describe(str(target))} (no such file)"
+            )
+        return path
+    return image_in(target, name)
+
+
+def dtype_kind(value: object) -> str:
+    """The NumPy dtype kind of ``value`` (``"O"`` when it does not convert)."""
+    dtype = getattr(value, "dtype", None)
+    if dtype is not None and not isinstance(dtype, np.dtype):  # a tensor: by its name
+        text = str(dtype).removeprefix("torch.")
+        return "b" if text == "bool" else "c" if text.startswith("complex") else "f"
+    try:
+        return np.asarray(value).dtype.kind
+    except (TypeError, ValueError):
+        return "O"

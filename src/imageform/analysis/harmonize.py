@@ -243,12 +243,15 @@ class ChartPatches:
                     f"expected {name} as booleans of shape ({n},), got {describe(flag)}"
                 )
             object.__setattr__(self, name, arr)
-        bad = ~np.all(np.isfinite(means), axis=1) & ~self.missing
-        if bad.any():
-            raise InvalidInputError(
-                f"means has NaN or inf in patch(es) {np.flatnonzero(bad).tolist()[:8]} "
-                "not marked missing"
-            )
+        for name, arr in (("means", means), ("std", std)):
+            bad = ~np.all(np.isfinite(arr), axis=1) & ~self.missing
+            if bad.any():
+                raise InvalidInputError(
+                    f"{name} has NaN or inf in patch(es) {np.flatnonzero(bad).tolist()[:8]} "
+                    "not marked missing"
+                )
+        if np.any(std < 0):
+            raise InvalidInputError(f"expected std >= 0, got min {float(np.nanmin(std)):g}")
 
     @property
     def valid(self) -> np.ndarray:
@@ -347,8 +350,9 @@ def chart_patches(
     bad = {"saturated": np.flatnonzero(saturated), "missing": np.flatnonzero(missing)}
     if not (~saturated & ~missing).any():
         raise InvalidInputError(
-            f"no usable chart patch: saturated {bad['saturated'].tolist()}, missing "
-            f"{bad['missing'].tolist()} (does the chart fill the frame as a {rows}x{cols} grid?)"
+            f"no usable chart patch in the {rows}x{cols} grid: {bad['saturated'].size} "
+            f"saturated (>= saturation={saturation:g}), {bad['missing'].size} missing (std > "
+            f"max_std={max_std:g} with margin={margin:g}); does the chart fill the frame?"
         )
     for what, idx in bad.items():
         if idx.size:
@@ -504,8 +508,38 @@ class CorrectionReport:
     delta_e_after: np.ndarray
     valid: np.ndarray
 
+    def __post_init__(self) -> None:
+        """Two ΔE00 vectors (N,) of finite values >= 0 on the valid patches (NaN allowed
+        where a patch is not valid), ``valid`` booleans (N,)."""
+        before = real_array(self.delta_e_before, "delta_e_before", (None,), finite=False)
+        n = before.shape[0]
+        after = real_array(self.delta_e_after, "delta_e_after", (None,), finite=False)
+        if after.shape != (n,):
+            raise InvalidInputError(
+                f"expected delta_e_before and delta_e_after of one length, got {n} and "
+                f"{after.shape[0]}"
+            )
+        flag = self.valid
+        valid = np.asarray(flag) if not isinstance(flag, str | bytes) else None
+        if valid is None or valid.dtype != np.bool_ or valid.shape != (n,):
+            raise InvalidInputError(
+                f"expected valid as booleans of shape ({n},), got {describe(flag)}"
+            )
+        for name, arr in (("delta_e_before", before), ("delta_e_after", after)):
+            used = arr[valid]
+            if not np.all(np.isfinite(used)) or np.any(used < 0):
+                raise InvalidInputError(
+                    f"expected {name} as finite values >= 0 on the valid patches"
+                )
+            object.__setattr__(self, name, arr)
+        object.__setattr__(self, "valid", valid)
+
     def summary(self) -> dict[str, float]:
         """Mean, median and maximum ΔE00 before and after, over the valid patches."""
+        if not self.valid.any():
+            raise DegenerateConfigurationError(
+                "CorrectionReport.summary: no valid patch (every patch is saturated or missing)"
+            )
         out: dict[str, float] = {}
         for key, v in (("before", self.delta_e_before), ("after", self.delta_e_after)):
             v = v[self.valid]

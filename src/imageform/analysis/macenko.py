@@ -33,7 +33,7 @@ from imageform._validate import (
     format_shape,
 )
 from imageform.analysis._arrays import exact_quantile, image_in, is_dask, read_json, write_json
-from imageform.analysis._guard import count, real_array, unit_rows
+from imageform.analysis._guard import count, real_array, target_source, unit_rows
 from imageform.analysis._sparse_nmf import sample_rows, sparse_nmf
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
 
@@ -68,16 +68,24 @@ STAIN_METHODS = ("macenko", "vahadane")
 
 _LN10 = float(np.log(10.0))
 
+#: The most alternating rounds :func:`vahadane_stains` runs (it stops earlier on convergence).
+MAX_ITERATIONS = 100_000
+
 
 def _base(base: object) -> str:
     return check_option(str(base) if isinstance(base, int) else base, OD_BASES, "OD log base")
 
 
-def _i0_value(i0: object, name: str = "i0") -> np.ndarray:
-    """A given incident light: a scalar or three values in (0, 1]."""
+def _i0_value(i0: object, name: str = "i0", *, complete: bool = False) -> np.ndarray:
+    """A given incident light: a scalar or three values in (0, 1] (``complete``: three)."""
+    v = np.full(1, np.nan)
     try:
-        v = np.asarray(i0, dtype=np.float64)
-    except (TypeError, ValueError):
+        raw = np.asarray(i0)
+        if raw.dtype.kind in "iuf":  # never bool, complex, object or strings
+            v = raw.astype(np.float64)
+    except (TypeError, ValueError, RuntimeError):
+        pass
+    if complete and v.shape != (3,):
         v = np.full(1, np.nan)
     if v.shape not in ((), (3,)) or not np.all((v > 0.0) & (v <= 1.0)):
         raise InvalidInputError(
@@ -126,9 +134,9 @@ def background_intensity(
     [0.9412, 0.9412, 0.9412]
     """
     rgb = image_in(image)
-    if not 0.0 <= float(percentile) <= 100.0:
-        raise InvalidInputError(f"expected percentile in [0, 100], got {describe(percentile)}")
-    if not 0.0 < float(min_background) <= 1.0:
+    percentile = as_real(percentile, "percentile", minimum=0.0, maximum=100.0)
+    min_background = as_real(min_background, "min_background")
+    if not 0.0 < min_background <= 1.0:
         raise InvalidInputError(
             f"expected min_background in (0, 1], got {describe(min_background)}"
         )
@@ -256,6 +264,11 @@ class MacenkoStains:
         object.__setattr__(self, "stain_matrix", s)
         object.__setattr__(self, "max_concentrations", m)
         object.__setattr__(self, "n_pixels", count(self.n_pixels, "n_pixels"))
+        object.__setattr__(self, "n_total", count(self.n_total, "n_total"))
+        i0 = _i0_value(self.i0, "i0", complete=True)
+        object.__setattr__(self, "i0", (float(i0[0]), float(i0[1]), float(i0[2])))
+        object.__setattr__(self, "base", _base(self.base))
+        object.__setattr__(self, "method", check_option(self.method, STAIN_METHODS, "method"))
 
     def to_json(self, path: str | Path) -> None:
         """Save as JSON (``kind: "macenko_stains"``)."""
@@ -338,6 +351,7 @@ def stain_concentrations(
         raise InvalidInputError(
             f"expected stain_matrix of shape (2, 3) or (3, 3), got {format_shape(s.shape)}"
         )
+    unit_rows(s, "stain_matrix")
     od = optical_density(image, min_intensity=min_intensity, i0=i0, base=base)
     pinv = np.linalg.pinv(s).astype(od.dtype)  # (3, k)
     return od @ pinv
@@ -367,9 +381,9 @@ def _count(keep: Any, beta: float, min_pixels: int, rule: str, what: str) -> int
     n = int(n)
     if n < min_pixels:
         raise DegenerateConfigurationError(
-            f"{what}: only {n} pixels have optical density >= beta={beta:g} "
-            f"({TRANSPARENT_RULES[rule]} drops the others) "
-            f"(need at least {min_pixels}); is there tissue in the image?"
+            f"{what}: only {n} pixels have optical density >= beta={beta:g} (transparent "
+            f"rule {rule!r}), fewer than min_pixels={describe(min_pixels, 24)}; is there "
+            "tissue in the image?"
         )
     return n
 
@@ -541,11 +555,10 @@ def macenko_stains(
 def _target(target: object, **kw: Any) -> MacenkoStains:
     if isinstance(target, MacenkoStains):
         return target
-    if target is None:
-        raise TypeError("expected target as an image, MacenkoStains or a JSON path, got None")
-    if isinstance(target, str | Path):
-        return MacenkoStains.from_json(target)
-    return macenko_stains(target, **kw)
+    src = target_source(target, "target", "MacenkoStains")
+    if isinstance(src, Path):
+        return MacenkoStains.from_json(src)
+    return macenko_stains(src, **kw)
 
 
 def _ln_units(st: MacenkoStains) -> np.ndarray:
@@ -644,7 +657,9 @@ def macenko_normalize(
         if np.any(np.asarray(mx) <= 0):
             raise DegenerateConfigurationError(
                 f"Macenko: {name} max concentrations "
-                f"{np.round(np.asarray(mx), 4).tolist()} are not positive"
+                f"{np.round(np.asarray(mx), 4).tolist()} are not positive (they are the "
+                f"max_percentile-th percentile, here {describe(max_percentile, 12)}, of each "
+                "stain's concentrations)"
             )
     scale = tgt_max / src_max
     sv = np.linalg.svd(np.asarray(src.stain_matrix, dtype=np.float64), compute_uv=False)
@@ -733,10 +748,10 @@ def vahadane_stains(
     [True, True]
     """
     _check_params(beta, 1.0, max_percentile)
-    if not 0.0 <= float(lam) <= 10.0:
-        raise InvalidInputError(f"expected lam in [0, 10], got {describe(lam)}")
+    lam = as_real(lam, "lam", minimum=0.0, maximum=10.0)
+    min_pixels = as_int(min_pixels, "min_pixels", minimum=0)
     max_pixels = as_int(max_pixels, "max_pixels")
-    iterations = as_int(iterations, "iterations")
+    iterations = as_int(iterations, "iterations", maximum=MAX_ITERATIONS)
     if max_pixels < 2 or iterations < 1:
         raise InvalidInputError(
             f"expected max_pixels >= 2 and iterations >= 1, got {max_pixels} and {iterations}"

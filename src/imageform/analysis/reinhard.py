@@ -14,9 +14,9 @@ from typing import Any
 
 import numpy as np
 
-from imageform._validate import describe, format_shape
+from imageform._validate import as_bool, describe, format_shape
 from imageform.analysis._arrays import image_in, is_dask, read_json, write_json
-from imageform.analysis._guard import count, real_triple
+from imageform.analysis._guard import count, real_triple, target_source
 from imageform.color.convert import convert
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
 
@@ -67,7 +67,8 @@ class ReinhardStats:
         d = read_json(path, "reinhard_stats")
         if d.get("space") != REINHARD_SPACE:
             raise InvalidInputError(
-                f"expected statistics in {REINHARD_SPACE!r} in {path}, got {d.get('space')!r}"
+                f"expected statistics in {REINHARD_SPACE!r} in {path}, got "
+                f"{describe(d.get('space'))}"
             )
         try:
             mean = tuple(float(v) for v in d["mean"])
@@ -165,9 +166,10 @@ def reinhard_stats(image: object, mask: object = None) -> ReinhardStats:
 def _target_stats(target: object) -> ReinhardStats:
     if isinstance(target, ReinhardStats):
         return target
-    if isinstance(target, str | Path):
-        return ReinhardStats.from_json(target)
-    return reinhard_stats(target)
+    src = target_source(target, "target", "ReinhardStats")
+    if isinstance(src, Path):
+        return ReinhardStats.from_json(src)
+    return reinhard_stats(src)
 
 
 def _transfer(
@@ -242,7 +244,7 @@ def reinhard_normalize(
             "a flat image cannot be rescaled"
         )
     gain = np.asarray(tgt.std) / sd_s
-    args = (np.asarray(src.mean), gain, np.asarray(tgt.mean), bool(clip))
+    args = (np.asarray(src.mean), gain, np.asarray(tgt.mean), as_bool(clip, "clip"))
     if is_dask(rgb):
         return rgb.map_blocks(_transfer, *args, dtype=rgb.dtype)
     return _transfer(rgb, *args)

@@ -19,7 +19,7 @@ from imageform._backend import use_numba
 from imageform._colormath import rgb_to_hsv
 from imageform._validate import as_int, as_real, check_memory, describe, format_shape
 from imageform.analysis._arrays import image_in, is_dask
-from imageform.analysis._guard import real_triple
+from imageform.analysis._guard import dtype_kind, real_triple
 from imageform.errors import DegenerateConfigurationError, ImageformWarning, InvalidInputError
 
 __all__ = [
@@ -96,6 +96,8 @@ def _pair(value: object, name: str, lo: float, hi: float, unit: str) -> tuple[fl
         n = -1
     if isinstance(value, str | bytes) or n != 2:
         raise InvalidInputError(f"expected {name} as a (low, high) pair, got {describe(value)}")
+    if dtype_kind(value) not in "iuf":  # no object, string, complex or bool arrays
+        raise InvalidInputError(f"expected {name} as two real numbers, got {describe(value)}")
     a, b = (as_real(v, name) for v in value)  # type: ignore[attr-defined]
     for v in (a, b):
         if not (math.isfinite(v) and lo <= v <= hi):
@@ -242,7 +244,7 @@ def segment_hsv(
         ("min_area", min_area),
     ):
         if isinstance(val, bool) or not isinstance(val, int | np.integer) or val < 0:
-            raise InvalidInputError(f"expected {name} as an integer >= 0, got {val!r}")
+            raise InvalidInputError(f"expected {name} as an integer >= 0, got {describe(val)}")
         radii.append(int(val))
     ro, rc, area = radii
     for name, r in (("open_radius", ro), ("close_radius", rc)):

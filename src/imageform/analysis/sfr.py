@@ -52,7 +52,16 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from imageform._validate import as_int, as_real, check_memory, check_option, describe
+from imageform._validate import (
+    as_int,
+    as_real,
+    as_real_array,
+    check_memory,
+    check_option,
+    check_real_values,
+    describe,
+    format_shape,
+)
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
 
 __all__ = [
@@ -124,7 +133,9 @@ class SFRResult(NamedTuple):
     def channel(self, name: str) -> np.ndarray:
         """The SFR curve of channel ``name`` (``"Y"``, ``"R"``, ``"G"`` or ``"B"``)."""
         if name not in self.channels:
-            raise InvalidInputError(f"expected name as one of {self.channels}, got {name!r}")
+            raise InvalidInputError(
+                f"expected name as one of {self.channels}, got {describe(name)}"
+            )
         return self.sfr[:, self.channels.index(name)]
 
 
@@ -152,8 +163,20 @@ class SlantedEdgeROI(NamedTuple):
         return (self.x, self.y, self.width, self.height)
 
     def crop(self, image: Any) -> np.ndarray:
-        """The ROI's pixels of ``image`` (a view)."""
-        return np.asarray(image)[self.y : self.y + self.height, self.x : self.x + self.width]
+        """The ROI's pixels of ``image`` (a view); the ROI must lie inside ``image``."""
+        if image is None or isinstance(image, str | bytes):
+            raise InvalidInputError(f"expected image as an array, got {describe(image)}")
+        arr = np.asarray(image)
+        if arr.dtype.kind not in "buif" or arr.ndim not in (2, 3):
+            raise InvalidInputError(
+                f"expected image as an (H, W) or (H, W, C) array of numbers, got {describe(image)}"
+            )
+        if self.y + self.height > arr.shape[0] or self.x + self.width > arr.shape[1]:
+            raise InvalidInputError(
+                f"expected image of at least {self.x + self.width}x{self.y + self.height} "
+                f"pixels (width x height) for this ROI, got shape {format_shape(arr.shape)}"
+            )
+        return arr[self.y : self.y + self.height, self.x : self.x + self.width]
 
 
 # --- input ----------------------------------------------------------------------------------
@@ -172,9 +195,9 @@ def _as_image(image: Any, name: str = "image") -> np.ndarray:
         )
     if arr.ndim == 3 and arr.shape[2] == 1:
         arr = arr[:, :, 0]
-    if arr.ndim not in (2, 3) or (arr.ndim == 3 and arr.shape[2] != 3):
+    if arr.ndim not in (2, 3) or (arr.ndim == 3 and arr.shape[2] != 3) or arr.size == 0:
         raise InvalidInputError(
-            f"expected {name} of shape (H, W) or (H, W, 3), got {describe(image)}"
+            f"expected {name} of shape (H, W) or (H, W, 3), non-empty, got {describe(image)}"
         )
     out = arr.astype(np.float64)
     if not np.isfinite(out).all():
@@ -201,6 +224,15 @@ def _crop(img: np.ndarray, roi: Any) -> np.ndarray:
             f"expected roi (x, y, width, height) inside the {W}x{H} image, got {tuple(vals)}"
         )
     return img[y : y + h, x : x + w]
+
+
+def _weights(weights: object) -> np.ndarray:
+    """The R, G, B luminance weights: 3 finite real numbers."""
+    w = as_real_array(weights, "weights", ndim=1, check=False)
+    if w.shape != (3,):
+        raise InvalidInputError(f"expected weights as 3 finite numbers, got {describe(weights)}")
+    check_real_values(w, "weights")
+    return w
 
 
 def _luminance(img: np.ndarray, weights: Any) -> np.ndarray:
@@ -242,7 +274,9 @@ def _fit_edge(a: np.ndarray, order: int) -> np.ndarray:
     rows = np.arange(a.shape[0], dtype=np.float64)
     c = _row_centroids(a, None)
     if not np.isfinite(c).all():
-        raise DegenerateConfigurationError("no edge found in the ROI: a row has no contrast")
+        raise DegenerateConfigurationError(
+            "no edge found in image (or its roi): a row has no contrast"
+        )
     p = np.polyfit(rows, c, order)
     n = a.shape[1] - 1
     win = np.stack([_hamming(n, float(np.polyval(p, r)) - 0.5) for r in rows])
@@ -267,8 +301,8 @@ def _project(a: np.ndarray, p: np.ndarray, q: int) -> np.ndarray:
     hi = int(idx[:, -1].min())
     if hi - lo < 4 * q:
         raise DegenerateConfigurationError(
-            f"the ROI is too narrow across the edge: {(hi - lo) / q:.1f} px seen by every row; "
-            "widen it or centre the edge"
+            f"the image (or its roi) is too narrow across the edge: {(hi - lo) / q:.1f} px seen "
+            "by every row; widen it or centre the edge"
         )
     keep = (idx >= lo) & (idx <= hi)
     b = idx[keep] - lo
@@ -277,8 +311,8 @@ def _project(a: np.ndarray, p: np.ndarray, q: int) -> np.ndarray:
     full = counts > 0
     if full.sum() < 0.75 * counts.size:
         raise DegenerateConfigurationError(
-            f"too few edge phases: {int((~full).sum())} of {counts.size} ESF bins are empty; "
-            "tilt the edge 2-10 deg or use more rows"
+            f"too few edge phases in image: {int((~full).sum())} of {counts.size} ESF bins "
+            "are empty; tilt the edge 2-10 deg or use more rows"
         )
     k = np.arange(counts.size, dtype=np.float64)
     esf = np.interp(k, k[full], sums[full] / counts[full])
@@ -295,7 +329,7 @@ def _lsf(esf: np.ndarray, derivative: str) -> np.ndarray:
         lsf = np.diff(esf)
     s = lsf.sum()
     if s == 0:
-        raise DegenerateConfigurationError("no edge found in the ROI: the ESF is flat")
+        raise DegenerateConfigurationError("no edge found in image (or its roi): the ESF is flat")
     lsf = lsf * np.sign(s)
     pos = np.clip(lsf, 0.0, None)
     mid = float((pos * np.arange(lsf.size)).sum() / pos.sum())
@@ -326,14 +360,16 @@ def mtf_crossing(frequency: Any, mtf: Any, level: float) -> float:
     >>> round(mtf_crossing([0.0, 0.1, 0.2], [1.0, 0.6, 0.4], 0.5), 6)
     0.15
     """
-    f = np.asarray(frequency, dtype=np.float64)
-    m = np.asarray(mtf, dtype=np.float64)
-    if f.ndim != 1 or m.shape != f.shape:
+    f = as_real_array(frequency, "frequency", ndim=1, check=False)
+    m = as_real_array(mtf, "mtf", ndim=1, check=False)
+    if m.shape != f.shape or not f.size:
         raise InvalidInputError(
-            "expected frequency and mtf as 1-d arrays of one length, got "
+            "expected frequency and mtf as non-empty 1-d arrays of one length, got "
             f"{describe(f)} and {describe(m)}"
         )
-    lv = as_real(level, "level")
+    check_real_values(f, "frequency")
+    check_real_values(m, "mtf")
+    lv = as_real(level, "level", minimum=0.0, maximum=1.0)
     below = np.nonzero(m <= lv)[0]
     below = below[below > 0]
     if below.size == 0:
@@ -409,9 +445,7 @@ def slanted_edge_sfr(
     q = as_int(oversampling, "oversampling", minimum=1, maximum=16)
     order = as_int(edge_order, "edge_order", minimum=1, maximum=5)
     deriv = check_option(derivative, _DERIVATIVES, "derivative")
-    w = np.asarray(weights, dtype=np.float64) if not isinstance(weights, str) else None
-    if w is None or w.shape != (3,) or not np.isfinite(w).all():
-        raise InvalidInputError(f"expected weights as 3 finite numbers, got {describe(weights)}")
+    w = _weights(weights)
 
     lum = _luminance(img, w)
     gy, gx = np.abs(np.diff(lum, axis=0)).mean(), np.abs(np.diff(lum, axis=1)).mean()
@@ -435,8 +469,8 @@ def slanted_edge_sfr(
     slope = float(np.polyval(np.polyder(p_lum), (h - 1) / 2.0))
     if abs(slope) * h < 1.0:
         raise DegenerateConfigurationError(
-            f"the edge is too close to {orientation}: it moves {abs(slope) * h:.2f} px over "
-            f"{h} rows (needs >= 1); tilt it 2-10 deg"
+            f"the edge in image is too close to {orientation}: it moves {abs(slope) * h:.2f} px "
+            f"over {h} rows (needs >= 1); tilt it 2-10 deg"
         )
     rows_used = h
     if order == 1:  # a whole number of phase cycles (sfrmat3)
@@ -584,8 +618,9 @@ def render_sfr_chart(
     w = as_int(shape[1], "shape[1]", minimum=8)
     if not isinstance(grid, Sequence) or len(grid) != 2:
         raise InvalidInputError(f"expected grid as (rows, columns), got {describe(grid)}")
-    gr = as_int(grid[0], "grid[0]", minimum=1)
-    gc = as_int(grid[1], "grid[1]", minimum=1)
+    # at most one square per 4 x 4 pixels: the loop below runs once per square
+    gr = as_int(grid[0], "grid[0]", minimum=1, maximum=max(1, h // 4))
+    gc = as_int(grid[1], "grid[1]", minimum=1, maximum=max(1, w // 4))
     th = math.radians(as_real(angle, "angle", minimum=-45.0, maximum=45.0))
     sg = as_real(sigma, "sigma", positive=True)
     lo, hi = as_real(low, "low"), as_real(high, "high")
@@ -680,12 +715,12 @@ def find_slanted_edges(
     from scipy import ndimage
 
     img = _as_image(image)
-    lo_a = as_real(min_angle, "min_angle", nonnegative=True)
+    lo_a = as_real(min_angle, "min_angle", nonnegative=True, maximum=40.0)
     hi_a = as_real(max_angle, "max_angle", minimum=lo_a, maximum=40.0)
     msz = as_int(min_size, "min_size", minimum=8)
     frac = as_real(roi_length, "roi_length", positive=True, maximum=0.9)
     rw = None if roi_width is None else as_int(roi_width, "roi_width", minimum=8)
-    g = _luminance(img, np.asarray(weights, dtype=np.float64))
+    g = _luminance(img, _weights(weights))
     H, W = g.shape
     p2, p98 = np.percentile(g, [2.0, 98.0])
     if p98 - p2 <= 0:

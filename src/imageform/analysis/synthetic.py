@@ -17,8 +17,16 @@ import numpy as np
 from imageform import _deprecate
 from imageform._colormath import hsv_to_rgb, srgb_decode, srgb_encode
 from imageform._random import RNGLike, as_rng
-from imageform._validate import as_float, as_int, as_real, as_reals, as_size, check_memory
-from imageform.analysis._guard import real_array
+from imageform._validate import (
+    as_float,
+    as_int,
+    as_real,
+    as_reals,
+    as_size,
+    check_memory,
+    format_shape,
+)
+from imageform.analysis._guard import real_array, unit_rows
 from imageform.errors import InvalidInputError
 
 __all__ = [
@@ -334,9 +342,12 @@ def synthetic_stain_image(
     [0.651, 0.701, 0.29]
     """
     gen = as_rng(rng)
-    s = np.asarray(as_float(stains, "stains"), dtype=np.float64)
-    if s.ndim != 2 or s.shape[1] != 3 or s.shape[0] not in (2, 3):
-        raise InvalidInputError(f"expected stains of shape (2, 3) or (3, 3), got {s.shape}")
+    s = real_array(stains, "stains", (None, 3))
+    if s.shape[0] not in (2, 3):
+        raise InvalidInputError(
+            f"expected stains of shape (2, 3) or (3, 3), got {format_shape(s.shape)}"
+        )
+    unit_rows(s, "stains")  # a zero-length stain vector has no direction (NaN image)
     mc = np.asarray(as_float(max_concentration, "max_concentration"), dtype=np.float64)
     if mc.shape != (s.shape[0],) or np.any(mc < 0):
         raise InvalidInputError(

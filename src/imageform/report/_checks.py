@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from imageform.simulate import SimulationResult
 
-__all__ = ["check_result"]
+__all__ = ["check_measurements", "check_path", "check_result"]
 
 
 def check_result(result: object, name: str = "result") -> None:
@@ -14,3 +14,22 @@ def check_result(result: object, name: str = "result") -> None:
             f"expected {name} as a SimulationResult (imageform.simulate.simulate), "
             f"got {type(result).__name__}"
         )
+
+
+def check_measurements(measurements: object, name: str = "measurements") -> None:
+    """Raise :class:`TypeError` naming ``name`` unless ``measurements`` is PatchMeasurements."""
+    from imageform.simulate.result import PatchMeasurements
+
+    if not isinstance(measurements, PatchMeasurements):
+        raise TypeError(
+            f"expected {name} as PatchMeasurements (imageform.report.measure_patches), "
+            f"got {type(measurements).__name__}"
+        )
+
+
+def check_path(path: object, name: str) -> None:
+    """Raise :class:`TypeError` naming ``name`` unless ``path`` is a str or os.PathLike."""
+    import os
+
+    if not isinstance(path, str | os.PathLike) or (isinstance(path, str) and not path):
+        raise TypeError(f"expected {name} as a non-empty path (str or Path), got {path!r:.40}")

@@ -6,16 +6,30 @@ matplotlib is imported inside :func:`plot_chromaticity_diagram` (the optional ``
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from imageform._validate import as_float, check_option
+from imageform._validate import (
+    as_bool,
+    as_int,
+    as_real_ndarray,
+    check_memory,
+    check_name,
+    describe,
+)
 from imageform.errors import InvalidInputError
 
 __all__ = ["CCT_TICKS", "planckian_locus", "plot_chromaticity_diagram"]
+
+#: The finest horseshoe grid :func:`plot_chromaticity_diagram` draws (``resolution``² points).
+MAX_RESOLUTION = 4000
+
+#: The coolest black body :func:`planckian_locus` takes (K): below it the CIE integral of
+#: Planck's law underflows (the chromaticity has long reached the red end of the locus).
+MIN_TEMPERATURE = 100.0
 
 #: Temperatures (K) marked on the Planckian locus.
 CCT_TICKS = (1500.0, 2000.0, 2856.0, 4000.0, 5000.0, 6500.0, 10000.0)
@@ -36,11 +50,14 @@ def planckian_locus(
     from imageform.spectral.illuminants import blackbody_spectrum
     from imageform.spectral.integrate import spectrum_to_xyz
 
-    c = check_option(coords, ("xy", "uv"), "chromaticity diagram")
+    c = check_name(coords, ("xy", "uv"), "chromaticity diagram", "coords")
     out = []
-    temps = np.asarray(as_float(temperatures, "temperatures"), dtype=np.float64).ravel()
-    if np.any(temps <= 0) or np.any(temps > 1e6):
-        raise InvalidInputError("expected temperatures in (0, 1e6] K")
+    temps = as_real_ndarray(temperatures, "temperatures", ndim=(0, 1)).ravel()
+    if temps.size and (temps.min() < MIN_TEMPERATURE or temps.max() > 1e6):
+        raise InvalidInputError(
+            f"expected temperatures in [{MIN_TEMPERATURE:g}, 1e6] K, got "
+            f"{temps.min():g}..{temps.max():g}"
+        )
     for t in temps:
         xyz = spectrum_to_xyz(
             blackbody_spectrum(float(t), np.arange(360.0, 831.0)),
@@ -129,26 +146,32 @@ def plot_chromaticity_diagram(
     >>> len(fig.axes)
     1
     """
-    try:
-        import matplotlib.pyplot as plt
-    except ImportError as exc:  # pragma: no cover - the plot extra is installed in tests
-        raise InvalidInputError("plotting needs matplotlib: pip install 'imageform[plot]'") from exc
     from imageform.color.chromaticity import spectral_locus
     from imageform.color.gamut import gamut_triangle
     from imageform.color.rgb_spaces import rgb_space
 
-    c = check_option(coords, ("xy", "uv"), "chromaticity diagram")
+    # every argument is checked before matplotlib is imported (seconds on a cold start)
+    c = check_name(coords, ("xy", "uv"), "chromaticity diagram", "coords")
+    n_grid = as_int(resolution, "resolution", minimum=2, maximum=MAX_RESOLUTION)
+    # the grid's points, xyz, rgb and the RGBA picture: about 16 float64 values per point
+    check_memory(16.0 * 8 * n_grid * n_grid, "resolution", f"a {n_grid}x{n_grid} diagram")
+    if isinstance(spaces, str | bytes) or not isinstance(spaces, Iterable):
+        raise TypeError(f"expected spaces as a sequence of RGB space names, got {describe(spaces)}")
     space_objs = [rgb_space(s) for s in spaces]
+    as_bool(planckian, "planckian")
     pts = None
     if points is not None:
-        pts = np.asarray(points, dtype=np.float64).reshape(-1, 2)
-        if not np.all(np.isfinite(pts)):
-            raise InvalidInputError("points contain NaN or inf")
+        pts = as_real_ndarray(points, "points", last=2)
+        pts = pts.reshape(-1, 2)
+    try:
+        import matplotlib.pyplot as plt
+    except ImportError as exc:  # pragma: no cover - the plot extra is installed in tests
+        raise InvalidInputError("plotting needs matplotlib: pip install 'imageform[plot]'") from exc
     if ax is None:
         fig, ax = plt.subplots(figsize=(6.5, 6.5))
     else:
         fig = ax.figure
-    img, ext = _horseshoe_image(c, int(resolution))
+    img, ext = _horseshoe_image(c, n_grid)
     ax.imshow(img, origin="lower", extent=ext, interpolation="bilinear")
     wl, locus = spectral_locus(observer=observer, coords=c)
     closed = np.vstack([locus, locus[:1]])

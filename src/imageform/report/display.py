@@ -9,13 +9,20 @@ from __future__ import annotations
 
 import numpy as np
 
-from imageform._validate import check_option
+from imageform._validate import as_real, check_name, describe, format_shape
 from imageform.errors import InvalidInputError
 
 __all__ = ["DISPLAY_PERCENTILE", "raw_to_uint16", "stage_display_image"]
 
 #: The percentile of a linear stage that is shown as white (display only).
 DISPLAY_PERCENTILE = 99.0
+
+
+def _host(image: object) -> object:
+    """A PyTorch tensor as a NumPy array (on the host); anything else as it is."""
+    if type(image).__module__.startswith("torch"):
+        return image.detach().cpu().numpy()  # type: ignore[attr-defined]
+    return image
 
 
 def _as_rgb(a: np.ndarray, name: str) -> np.ndarray:
@@ -78,24 +85,39 @@ def stage_display_image(
     """
     from imageform.color.transfer import linear_to_srgb
 
-    k = check_option(kind, ("linear", "raw", "srgb"), "stage kind")
-    a = np.asarray(image)
-    if a.size == 0:
-        raise InvalidInputError(f"expected a non-empty stage image, got shape {a.shape}")
+    k = check_name(kind, ("linear", "raw", "srgb"), "stage kind", "kind")
+    if image is None or isinstance(image, str | bytes):
+        raise InvalidInputError(f"expected image as a numeric array, got {describe(image)}")
+    a = np.asarray(_host(image))
     if a.dtype.kind not in "biuf":
-        raise InvalidInputError(f"expected a numeric stage image, got dtype {a.dtype}")
-    a = a.astype(np.float32)  # a picture: float32 is plenty
-    if not np.all(np.isfinite(a)):
-        raise InvalidInputError("stage image contains NaN or inf; cannot display it")
+        raise InvalidInputError(f"expected image as a numeric array, got {describe(image)}")
+    if a.ndim not in (2, 3) or (a.ndim == 3 and a.shape[-1] not in (1, 3)):
+        raise InvalidInputError(
+            f"expected image of shape (H, W), (H, W, 1) or (H, W, 3), got {format_shape(a.shape)}"
+        )
+    if a.size == 0:
+        raise InvalidInputError(f"expected a non-empty image, got shape {format_shape(a.shape)}")
+    wl = None
     if k == "raw":
         if a.ndim != 2:
-            raise InvalidInputError(f"expected a raw stage of shape (H, W), got {a.shape}")
-        if white_level is None or not np.isfinite(white_level) or white_level <= 0:
-            raise InvalidInputError(f"a raw stage needs white_level > 0, got {white_level!r}")
-        v = a / np.float32(white_level)
+            raise InvalidInputError(
+                f"expected image as a raw stage of shape (H, W), got {format_shape(a.shape)}"
+            )
+        if white_level is None:
+            raise InvalidInputError("a raw stage needs white_level > 0, got None")
+        wl = as_real(white_level, "white_level", positive=True)
     elif k == "linear":
+        percentile = as_real(percentile, "percentile")
         if not 0 < percentile <= 100:
-            raise InvalidInputError(f"expected percentile in (0, 100], got {percentile}")
+            raise InvalidInputError(f"expected percentile in (0, 100], got {percentile:g}")
+    a = a.astype(np.float32)  # a picture: float32 is plenty
+    if not np.all(np.isfinite(a)):
+        raise InvalidInputError(
+            "image contains NaN or inf (or values beyond float32); cannot display it"
+        )
+    if k == "raw":
+        v = a / np.float32(wl)
+    elif k == "linear":
         flat = a.ravel()
         if flat.size > 1_000_000:  # a regular subsample gives the same percentile to display
             flat = flat[:: flat.size // 500_000]

@@ -12,7 +12,7 @@ from typing import Any
 
 import numpy as np
 
-from imageform.report._checks import check_result
+from imageform.report._checks import check_measurements, check_result
 from imageform.report.patches import PatchMeasurements
 from imageform.simulate.result import SimulationResult
 
@@ -61,6 +61,7 @@ def truth_xy(measurements: PatchMeasurements) -> np.ndarray:
     from imageform.color.chromaticity import xyz_to_xy
     from imageform.color.cielab import lab_to_xyz
 
+    check_measurements(measurements)
     return np.asarray(xyz_to_xy(lab_to_xyz(measurements.lab_truth, white="srgb"), white="srgb"))
 
 
@@ -167,6 +168,7 @@ def plot_delta_e(measurements: PatchMeasurements | None) -> Any:
     the lecture's bands at 1, 3 and 10. ``None`` without measurements."""
     if measurements is None:
         return None
+    check_measurements(measurements)
     m = measurements
     plt = _pyplot()
     fig, ax = plt.subplots(figsize=(12, 4.2))
@@ -195,6 +197,7 @@ def plot_patch_snr(measurements: PatchMeasurements | None) -> Any:
     ``None`` without measurements."""
     if measurements is None:
         return None
+    check_measurements(measurements)
     m = measurements
     plt = _pyplot()
     fig, ax = plt.subplots(figsize=(12, 3.8))

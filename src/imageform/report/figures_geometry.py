@@ -20,7 +20,13 @@ from typing import Any
 
 import numpy as np
 
-from imageform._validate import as_int
+from imageform._validate import (
+    as_int,
+    as_real_array,
+    check_real_values,
+    describe,
+    format_shape,
+)
 from imageform.errors import InvalidInputError
 from imageform.report._checks import check_result
 from imageform.simulate.result import SimulationResult
@@ -62,11 +68,16 @@ def top_view_axes(R: Any, world_up: Any) -> tuple[np.ndarray, np.ndarray]:
     >>> [v.tolist() for v in top_view_axes(R, (0, 0, 1))]
     [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]
     """
-    Rm = np.asarray(R, dtype=np.float64)
-    up = np.asarray(world_up, dtype=np.float64)
-    n = float(np.linalg.norm(up))
-    if up.shape != (3,) or not np.isfinite(n) or n == 0:
-        raise InvalidInputError(f"expected world_up to be a non-zero 3-vector, got {world_up!r}")
+    Rm = as_real_array(R, "R", ndim=2, check=False)
+    if Rm.shape != (3, 3):
+        raise InvalidInputError(f"expected R of shape (3, 3), got {format_shape(Rm.shape)}")
+    check_real_values(Rm, "R")
+    up = as_real_array(world_up, "world_up", ndim=1, check=False)
+    n = float(np.linalg.norm(up)) if up.shape == (3,) else 0.0
+    if not np.isfinite(n) or n == 0:
+        raise InvalidInputError(
+            f"expected world_up to be a finite non-zero 3-vector, got {describe(world_up)}"
+        )
     up = up / n
     for d in (Rm[2], -Rm[1]):
         flat = d - (d @ up) * up
@@ -236,13 +247,14 @@ def vanishing_overlay(result: SimulationResult, display: np.ndarray) -> Any:
     and horizon (:func:`imageform.report.overlays.draw_vanishing_truth_overlay`); ``None``
     without rails."""
     check_result(result)
-    from imageform.report.overlays import draw_vanishing_truth_overlay
+    from imageform.report.overlays import _to_rgb8, draw_vanishing_truth_overlay
 
+    picture = _to_rgb8(display, "display")
     v = result.vanishing
     if v is None:
         return None
     return draw_vanishing_truth_overlay(
-        display,
+        picture,
         v.vanishing_point,
         v.horizon,
         detected_vanishing_point=v.detected_vanishing_point,

@@ -25,8 +25,10 @@ from typing import Any
 import numpy as np
 
 from imageform._jsonio import dumps
+from imageform._validate import describe
 from imageform.errors import InvalidInputError
 from imageform.report import html_parts as hp
+from imageform.report._checks import check_path
 from imageform.report.metrics import (
     METRICS_VERSION,
     PLACED_METRICS,
@@ -69,12 +71,13 @@ def _check_result(result: Any) -> SimulationResult:
     for i, s in enumerate(result.stages):
         if s.kind not in STAGE_KINDS:
             raise InvalidInputError(
-                f"stage {i} ({s.name!r}) has kind {s.kind!r}; valid: {', '.join(STAGE_KINDS)}"
+                f"stage {i} ({describe(s.name)}) has kind {describe(s.kind)}; valid: "
+                f"{', '.join(STAGE_KINDS)}"
             )
     if result.stages[-1].kind != "srgb":
         raise InvalidInputError(
             f"expected the last stage to be the encoded 'srgb' output, got kind "
-            f"{result.stages[-1].kind!r} ({result.stages[-1].name!r})"
+            f"{describe(result.stages[-1].kind)} ({describe(result.stages[-1].name)})"
         )
     w, h = result.image_size
     if tuple(np.shape(result.stages[-1].image)[:2]) != (h, w):
@@ -367,6 +370,7 @@ def write_report(
 
     t0 = time.perf_counter()
     res = _check_result(result)
+    check_path(out_dir, "out_dir")
     out = Path(out_dir)
     folder = _prepare_out_dir(out, force)
     if matplotlib.get_backend().lower() != "agg":

@@ -6,10 +6,14 @@ from __future__ import annotations
 import base64
 import html
 import io
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 from typing import Any
 
+import numpy as np
+
 from imageform._jsonio import dumps
+from imageform._validate import as_int, describe, format_shape
+from imageform.errors import InvalidInputError
 
 __all__ = [
     "CSS",
@@ -60,11 +64,27 @@ def e(text: Any) -> str:
     return html.escape(str(text), quote=True)
 
 
+def _image_bytes(png: object, name: str = "png") -> bytes:
+    """The encoded image's bytes (bytes, bytearray or memoryview), else a TypeError naming
+    ``name``."""
+    if not isinstance(png, bytes | bytearray | memoryview):
+        raise TypeError(f"expected {name} as the bytes of an encoded image, got {describe(png)}")
+    return bytes(png)
+
+
+def _strings(value: object, name: str) -> list[Any]:
+    """A list of the items of a sequence (not a str or bytes), else a TypeError naming
+    ``name``."""
+    if isinstance(value, str | bytes) or not isinstance(value, Iterable):
+        raise TypeError(f"expected {name} as a sequence, got {describe(value)}")
+    return list(value)
+
+
 def img_tag(png: bytes, alt: str, *, photo: bool = False, mime: str = "image/png") -> str:
     """An ``<img>`` whose source is the encoded image itself, base64 in a ``data:`` URI:
     ``png`` holds the bytes of a PNG, or of a JPEG with ``mime="image/jpeg"``; a ``photo``
     (a stage image) is shown as wide as the page."""
-    b64 = base64.b64encode(png).decode("ascii")
+    b64 = base64.b64encode(_image_bytes(png)).decode("ascii")
     cls = ' class="photo"' if photo else ""
     return f'<img{cls} src="data:{mime};base64,{b64}" alt="{e(alt)}">'
 
@@ -83,7 +103,9 @@ def page_jpeg(
     lossless PNG of a stage is written to stages/ and linked from the page."""
     from PIL import Image
 
-    im = rgb if isinstance(rgb, Image.Image) else Image.fromarray(rgb, "RGB")
+    max_width = as_int(max_width, "max_width", minimum=1)
+    quality = as_int(quality, "quality", minimum=1, maximum=95)
+    im = rgb if isinstance(rgb, Image.Image) else Image.fromarray(_rgb8(rgb), "RGB")
     im = im.convert("RGB")
     if im.width > max_width:
         h = max(1, round(im.height * max_width / im.width))
@@ -91,6 +113,18 @@ def page_jpeg(
     buf = io.BytesIO()
     im.save(buf, format="JPEG", quality=quality)
     return buf.getvalue()
+
+
+def _rgb8(rgb: object) -> np.ndarray:
+    """``rgb`` as a non-empty uint8 array of shape (H, W, 3), else an error naming it."""
+    arr = np.asarray(rgb) if isinstance(rgb, np.ndarray) else None
+    if arr is None or arr.dtype != np.uint8 or arr.ndim != 3 or arr.shape[-1] != 3:
+        raise InvalidInputError(
+            f"expected rgb as a uint8 array of shape (H, W, 3) or a PIL image, got {describe(rgb)}"
+        )
+    if arr.size == 0:
+        raise InvalidInputError(f"expected rgb non-empty, got shape {format_shape(arr.shape)}")
+    return np.ascontiguousarray(arr)
 
 
 def figure_png(fig: Any, dpi: int = 100) -> bytes:
@@ -145,9 +179,11 @@ def table(header: Sequence[str], rows: Sequence[Sequence[Any]], left: Sequence[i
         cls = ' class="l"' if j in left else ""
         return f"<{tag}{cls}>{v if isinstance(v, Markup) else e(v)}</{tag}>"
 
-    head = "".join(cell("th", j, h) for j, h in enumerate(header))
+    heads = _strings(header, "header")
+    body_rows = [_strings(r, f"rows[{i}]") for i, r in enumerate(_strings(rows, "rows"))]
+    head = "".join(cell("th", j, h) for j, h in enumerate(heads))
     body = "".join(
-        "<tr>" + "".join(cell("td", j, v) for j, v in enumerate(r)) + "</tr>" for r in rows
+        "<tr>" + "".join(cell("td", j, v) for j, v in enumerate(r)) + "</tr>" for r in body_rows
     )
     return f"<table><thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>"
 
@@ -160,13 +196,19 @@ class Markup(str):
 
 def json_block(value: Any, summary: str) -> str:
     """Collapsible pretty-printed JSON."""
-    text = dumps(value)
+    try:
+        text = dumps(value)
+    except (TypeError, ValueError) as exc:
+        raise TypeError(f"expected value as JSON-serialisable data: {exc}"[:200]) from None
     return f"<details><summary>{e(summary)}</summary><pre>{e(text)}</pre></details>"
 
 
 def page(title: str, subtitle_html: str, nav: Sequence[tuple[str, str]], body: str) -> str:
     """The whole document: no external resource, no script needed to view it."""
-    links = " ".join(f'<a href="#{e(i)}">{e(t)}</a>' for i, t in nav)
+    pairs = _strings(nav, "nav")
+    if not all(isinstance(p, tuple | list) and len(p) == 2 for p in pairs):
+        raise TypeError(f"expected nav as (anchor, title) pairs, got {describe(nav)}")
+    links = " ".join(f'<a href="#{e(i)}">{e(t)}</a>' for i, t in pairs)
     return (
         "<!DOCTYPE html>\n"
         '<html lang="en"><head><meta charset="utf-8">'

@@ -129,7 +129,9 @@ def to_json_value(value: Any, where: str = "metrics") -> Any:
         return {str(k): to_json_value(v, f"{where}.{k}") for k, v in value.items()}
     if isinstance(value, list | tuple):
         return [to_json_value(v, f"{where}[{i}]") for i, v in enumerate(value)]
+    if type(value).__module__.startswith("torch") and hasattr(value, "detach"):
+        return to_json_value(value.detach().cpu().numpy(), where)  # a tensor as its values
     raise InvalidInputError(
-        f"expected JSON-serialisable numbers, strings, lists or dicts at {where}, "
-        f"got {type(value).__name__}"
+        f"expected value as JSON-serialisable numbers, strings, lists or dicts, got "
+        f"{type(value).__name__} at {where}"[:200]
     )

@@ -2,11 +2,14 @@
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
 
 from imageform._typing import ArrayLike
+from imageform._validate import as_real, as_real_array, check_memory, describe, format_shape
+from imageform.errors import InvalidInputError
 
 __all__ = [
     "DETECTED_COLOUR",
@@ -23,19 +26,52 @@ TRUE_COLOUR = (0, 158, 115)
 DETECTED_COLOUR = (213, 94, 0)
 
 
-def _to_rgb8(image: ArrayLike) -> np.ndarray:
+#: The widest margin :func:`draw_vanishing_truth_overlay` adds, in image sizes per side.
+MAX_MARGIN = 2.0
+
+
+def _to_rgb8(image: ArrayLike, name: str = "image") -> np.ndarray:
+    """``image`` (H, W) or (H, W, 3), uint8 or floats in [0, 1], as uint8 RGB; anything else
+    refused naming ``name``."""
+    if image is None or isinstance(image, str | bytes):
+        raise InvalidInputError(f"expected {name} as an (H, W, 3) array, got {describe(image)}")
+    if type(image).__module__.startswith("torch"):
+        image = image.detach().cpu().numpy()  # type: ignore[union-attr]
     arr = np.asarray(image)
+    if arr.dtype.kind not in "uif":
+        raise InvalidInputError(f"expected {name} as numbers, got {describe(image)}")
+    if arr.ndim not in (2, 3) or (arr.ndim == 3 and arr.shape[-1] != 3) or arr.size == 0:
+        raise InvalidInputError(
+            f"expected {name} of shape (H, W) or (H, W, 3), non-empty, got "
+            f"{format_shape(arr.shape)}"
+        )
     if arr.dtype != np.uint8:
+        if not np.isfinite(arr).all():
+            raise InvalidInputError(f"{name} contains NaN or inf")
         arr = np.clip(np.asarray(arr, dtype=np.float64) * 255.0 + 0.5, 0, 255).astype(np.uint8)
     if arr.ndim == 2:
         arr = np.repeat(arr[..., None], 3, axis=-1)
     return arr
 
 
+def _homogeneous(p: object, name: str, sizes: tuple[int, ...]) -> np.ndarray | None:
+    """A point or line in homogeneous pixel coordinates as float64 (``None`` stays ``None``);
+    non-finite values are allowed (such a point or line is not drawn)."""
+    if p is None:
+        return None
+    v = as_real_array(p, name, finite=False, ndim=(1, 2)).ravel()
+    if v.size not in sizes:
+        want = " or ".join(str(n) for n in sizes)
+        raise InvalidInputError(f"expected {name} as {want} numbers, got {describe(p)}")
+    return v
+
+
 def _line_in_box(line: ArrayLike, w: float, h: float) -> list[tuple[float, float]] | None:
     """The two PIL points (pixel centre at +0.5) where the line ``a u + b v + c = 0`` crosses
     the canvas' left and right edges (top and bottom edges for a steep line)."""
     a, b, c = (float(x) for x in np.asarray(line, dtype=np.float64))
+    if not (math.isfinite(a) and math.isfinite(b) and math.isfinite(c)):
+        return None
     if abs(b) >= abs(a) and abs(b) > 1e-12:
         us = (-0.5, w - 0.5)
         return [(u + 0.5, -(a * u + c) / b + 0.5) for u in us]
@@ -108,12 +144,25 @@ def draw_vanishing_truth_overlay(
 
     arr = _to_rgb8(image)
     h, w = arr.shape[:2]
+    max_margin = as_real(max_margin, "max_margin", minimum=0.0, maximum=MAX_MARGIN)
+    vps = {
+        "vanishing_point": _homogeneous(vanishing_point, "vanishing_point", (2, 3)),
+        "detected_vanishing_point": _homogeneous(
+            detected_vanishing_point, "detected_vanishing_point", (2, 3)
+        ),
+    }
+    lines = {
+        "horizon": _homogeneous(horizon, "horizon", (3,)),
+        "detected_horizon": _homogeneous(detected_horizon, "detected_horizon", (3,)),
+    }
     k = max(1, round(max(w, h) / 640))  # marks grow with the image (1 up to 960 px wide)
     pts: list[tuple[np.ndarray, tuple[int, int, int]]] = []
-    for p, colour in ((vanishing_point, TRUE_COLOUR), (detected_vanishing_point, DETECTED_COLOUR)):
-        if p is None:
+    for v, colour in (
+        (vps["vanishing_point"], TRUE_COLOUR),
+        (vps["detected_vanishing_point"], DETECTED_COLOUR),
+    ):
+        if v is None:
             continue
-        v = np.asarray(p, dtype=np.float64).ravel()
         if v.size == 2:
             v = np.append(v, 1.0)
         if v[2] != 0 and np.all(np.isfinite(v)):
@@ -129,13 +178,17 @@ def draw_vanishing_truth_overlay(
     ox, oy = int(np.ceil(-lo[0])), int(np.ceil(-lo[1]))
     cw = w + ox + (int(np.ceil(hi[0] - (w - 1))) if hi is not None else 0)
     ch = h + oy + (int(np.ceil(hi[1] - (h - 1))) if hi is not None else 0)
+    check_memory(3.0 * cw * ch, "max_margin", f"a {cw}x{ch} overlay canvas")
     base = Image.fromarray(arr, "RGB")
     canvas = Image.new("RGB", (cw, ch), (128, 128, 128))
     canvas.paste(Image.blend(base, Image.new("RGB", base.size, (0, 0, 0)), 0.25), (ox, oy))
     draw = ImageDraw.Draw(canvas)
-    for line, colour in ((detected_horizon, DETECTED_COLOUR), (horizon, TRUE_COLOUR)):
+    for line, colour in (
+        (lines["detected_horizon"], DETECTED_COLOUR),
+        (lines["horizon"], TRUE_COLOUR),
+    ):
         if line is not None:
-            a, b, c = np.asarray(line, dtype=np.float64).ravel()[:3]
+            a, b, c = line
             _draw_line(draw, (a, b, c - a * ox - b * oy), cw, ch, colour, k)
     for uv, colour in reversed(pts):
         x, y = uv[0] + ox + 0.5, uv[1] + oy + 0.5
