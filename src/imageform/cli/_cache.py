@@ -44,8 +44,8 @@ rows = [",".join(repr(float(v)) for v in (*a, *b)) for a, b in zip(X, uv, strict
 (work / "pairs.csv").write_text("X,Y,Z,u,v\n" + "\n".join(rows) + "\n")
 img = (rng.uniform(0, 1, (64, 96, 3)) * 255).astype(np.uint8)
 write_image(work / "rgb8.png", img)
-write_image(work / "mosaic8.png", img[..., 1])
-write_image(work / "mosaic16.png", img[..., 1].astype(np.uint16) * 257)
+write_image(work / "mosaic8.png", np.ascontiguousarray(img[..., 1:2]))
+write_image(work / "mosaic16.png", np.ascontiguousarray(img[..., 1:2]).astype(np.uint16) * 257)
 """
 
 
@@ -81,7 +81,7 @@ def warm_cache(jobs: int | None = None) -> list[tuple[str, float, int]]:
             [sys.executable, "-c", _INPUTS, str(work)],
             env={**env, "IMAGEFORM_DISABLE_NUMBA": "1"},
             check=True,
-            capture_output=True,
+            stdout=subprocess.DEVNULL,
         )
         pending = _jobs(work)
         running: list[tuple[list[str], float, subprocess.Popen[bytes]]] = []
@@ -91,7 +91,6 @@ def warm_cache(jobs: int | None = None) -> list[tuple[str, float, int]]:
                 proc = subprocess.Popen(
                     [sys.executable, "-m", "imageform", *argv],
                     env=env,
-                    cwd=work,
                     stdout=subprocess.DEVNULL,
                     stderr=subprocess.DEVNULL,
                 )
