@@ -15,11 +15,14 @@ Each command runs as a fresh process (``python -m imageform ...``), as a user ru
 
 *cold*: ``NUMBA_CACHE_DIR`` points at a new empty folder, so numba finds no cache (a folder it
 names wins over the ``__pycache__`` beside the source, so stale in-tree files do not count);
-*warm*: the same command again with the same folder, now filled by the cold run. Each
-repetition takes a new folder: cold then warm, ``--repeat`` times; the table gives the medians
-and warm/cold ratio. ``--src DIR`` runs the imageform found in ``DIR`` (default: this checkout's
-``src``); ``--python EXE`` runs an installed imageform with that interpreter instead. Inputs
-are made once, before timing, with ``IMAGEFORM_DISABLE_NUMBA=1`` (no kernel is compiled).
+*warm*: the same command again with the same folder, now filled by the cold run. Each repetition
+takes a new folder: cold then warm, ``--repeat`` times; the table gives the medians and
+cold/warm ratio. ``--after-warm``: each repetition's new folder is first filled by ``imageform
+cache --warm`` (timed, once per repetition for all commands), then each command runs twice:
+*first* (the first run after installing and warming) and *warm*. ``--src DIR`` runs the
+imageform found in ``DIR`` (default: this checkout's ``src``); ``--python EXE`` runs an
+installed imageform with that interpreter instead. Inputs are made once, before timing, with
+``IMAGEFORM_DISABLE_NUMBA=1`` (no kernel is compiled).
 """
 
 from __future__ import annotations
@@ -88,6 +91,8 @@ def main() -> None:
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--commands", default="simulate,pose,demosaic")
     ap.add_argument("--write", type=Path, default=None)
+    ap.add_argument("--after-warm", action="store_true", help="imageform cache --warm first")
+    ap.add_argument("--jobs", type=int, default=2, help="processes for imageform cache --warm")
     a = ap.parse_args()
     python = a.python or sys.executable
     src = None if a.python else a.src.resolve()
@@ -113,27 +118,49 @@ def main() -> None:
             ],
         }
         rows = []
-        for name in a.commands.split(","):
-            cold, warm = [], []
-            for i in range(a.repeat):
-                cache = work / f"cache-{name}-{i}"
+        names = a.commands.split(",")
+        cold: dict[str, list[float]] = {n: [] for n in names}
+        warm: dict[str, list[float]] = {n: [] for n in names}
+        warming: list[float] = []
+        for i in range(a.repeat):
+            if a.after_warm:
+                cache = work / f"cache-{i}"
                 cache.mkdir()
+                warming.append(
+                    _run(python, ["cache", "--warm", "--jobs", str(a.jobs)], _env(src, cache), work)
+                )
+                print(f"#{i}: imageform cache --warm {warming[-1]:.2f} s", flush=True)
+            for name in names:
+                if not a.after_warm:
+                    cache = work / f"cache-{name}-{i}"
+                    cache.mkdir()
                 env = _env(src, cache)
-                cold.append(_run(python, commands[name], env, work))
-                warm.append(_run(python, commands[name], env, work))
-                print(f"{name} #{i}: cold {cold[-1]:.2f} s, warm {warm[-1]:.2f} s", flush=True)
-            c, w = statistics.median(cold), statistics.median(warm)
+                cold[name].append(_run(python, commands[name], env, work))
+                warm[name].append(_run(python, commands[name], env, work))
+                print(
+                    f"{name} #{i}: first {cold[name][-1]:.2f} s, warm {warm[name][-1]:.2f} s",
+                    flush=True,
+                )
+        for name in names:
+            c, w = statistics.median(cold[name]), statistics.median(warm[name])
             rows.append(
                 f"| `imageform {name}` | {c:.2f} | {w:.2f} | {c / w:.2f} "
-                f"| {min(cold):.2f}-{max(cold):.2f} | {min(warm):.2f}-{max(warm):.2f} |"
+                f"| {min(cold[name]):.2f}-{max(cold[name]):.2f} "
+                f"| {min(warm[name]):.2f}-{max(warm[name]):.2f} |"
             )
     load = os.getloadavg() if hasattr(os, "getloadavg") else (float("nan"),) * 3
     lines = [
         f"python {platform.python_version()}, {platform.machine()}, {os.cpu_count()} CPUs, "
         f"load average at the end {load[0]:.1f} / {load[1]:.1f} / {load[2]:.1f}; "
-        f"imageform from {a.python or src}; median of {a.repeat}",
+        f"imageform from {a.python or src}; median of {a.repeat}; "
+        + (
+            f"first run after `imageform cache --warm --jobs {a.jobs}` "
+            f"({statistics.median(warming):.1f} s, median)"
+            if a.after_warm
+            else "first run with an empty cache"
+        ),
         "",
-        "| command | cold (s) | warm (s) | cold / warm | cold range | warm range |",
+        "| command | first (s) | warm (s) | first / warm | first range | warm range |",
         "|---|---:|---:|---:|---:|---:|",
         *rows,
     ]
