@@ -142,7 +142,8 @@ def _make_rows(own_first: bool, red_row: bool, wide: bool):  # type: ignore[no-u
     def rgb(own, g, oth):  # type: ignore[no-untyped-def]
         return (own, g, oth) if red_row else (oth, g, own)
 
-    rgb_j = njit(inline="always")(rgb)
+    # a closure, inlined into the loops below (whose cache holds it): nothing to cache itself
+    rgb_j = njit(inline="always", cache=False)(rgb)
 
     def loop8(u, c, d, o32, n):  # type: ignore[no-untyped-def]
         for q in range(1, n):

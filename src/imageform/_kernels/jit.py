@@ -4,7 +4,8 @@ Every kernel module decorates with :func:`njit` from here instead of ``numba.nji
 options, plus ``cache=True``, so numba's compilation (seconds per kernel: 15-25 s for the
 first ``imageform pose`` or ``demosaic`` in a fresh process) is paid once per machine, not
 once per process. A kernel that cannot be cached (a closure, or one that takes another jitted
-function as an argument) says ``cache=False`` where it is defined; none does today.
+function as an argument) says ``cache=False`` where it is defined: only the ``rgb`` closure of
+``demosaic_bilinear._make_rows``, which is inlined into the cached loops that call it.
 
 Where the cache lives (:func:`cache_location`, ``docs/performance.md``):
 
