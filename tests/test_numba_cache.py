@@ -178,3 +178,39 @@ def test_numba_cache_dir_wins(tmp_path: Path) -> None:
     out = json.loads(done.stdout)
     assert out["cache_dir"] == str(tmp_path / "mine") and out["reason"] == "NUMBA_CACHE_DIR"
     assert out["files"] == 0
+
+
+def test_cache_clear_removes_only_imageforms_kernels(tmp_path: Path) -> None:
+    import hashlib
+
+    src = os.path.abspath(os.path.dirname(jit.__file__))
+    ours = tmp_path / "_".join([os.path.basename(src), hashlib.sha1(src.encode()).hexdigest()])
+    other = tmp_path / "elsewhere_0123"
+    for folder in (ours, other):
+        folder.mkdir()
+        (folder / "k.f-1.py311.nbi").write_bytes(b"x")
+        (folder / "k.f-1.py311.1.nbc").write_bytes(b"yy")
+    env = {k: v for k, v in os.environ.items() if not k.startswith(("NUMBA_", "_IMAGEFORM"))}
+    env.update(PYTHONPATH=str(SRC), NUMBA_CACHE_DIR=str(tmp_path))
+    argv = [sys.executable, "-m", "imageform", "cache", "--json"]
+    listed = json.loads(subprocess.run(argv, env=env, capture_output=True, check=True).stdout)
+    assert (listed["files"], listed["bytes"]) == (2, 3)
+    done = subprocess.run([*argv, "--clear"], env=env, capture_output=True, check=True)
+    cleared = json.loads(done.stdout)
+    assert (cleared["removed"], cleared["files"]) == (2, 0)
+    assert not list(ours.iterdir()) and len(list(other.iterdir())) == 2
+
+
+def test_warm_runs_each_command_and_reports_failures(
+    monkeypatch: pytest.MonkeyPatch, tmp_path: Path
+) -> None:
+    from imageform.cli import _cache
+
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path))
+    monkeypatch.setenv("PYTHONPATH", str(SRC))
+    monkeypatch.setattr(_cache, "_jobs", lambda work: [["--version"], ["no-such-command"]])
+    done = _cache.warm_cache(jobs=2)
+    assert sorted(name for name, _, _ in done) == ["--version", "no-such-command"]
+    errors = {name: why for name, _, why in done}
+    assert errors["--version"] == ""
+    assert "no-such-command" in errors["no-such-command"]

@@ -62,8 +62,9 @@ def _jobs(work: Path) -> list[list[str]]:
     return jobs
 
 
-def warm_cache(jobs: int | None = None) -> list[tuple[str, float, int]]:
-    """Compile the hot kernels into the cache; ``(command, seconds, exit code)`` per command.
+def warm_cache(jobs: int | None = None) -> list[tuple[str, float, str]]:
+    """Compile the hot kernels into the cache; ``(command, seconds, error)`` per command
+    (``error``: the last line the command wrote on stderr when it failed, else ``""``).
 
     Each command runs as ``python -m imageform ...`` in its own process, at most ``jobs`` at
     once (default: the CPU count); the processes share the cache folder of this one.
@@ -73,7 +74,7 @@ def warm_cache(jobs: int | None = None) -> list[tuple[str, float, int]]:
     configure_cache()  # children inherit NUMBA_CACHE_DIR when the package folder is read-only
     n = max(1, jobs or os.cpu_count() or 1)
     env = {**os.environ, "MPLBACKEND": "Agg"}
-    done: list[tuple[str, float, int]] = []
+    done: list[tuple[str, float, str]] = []
     with tempfile.TemporaryDirectory(prefix="imageform-warm-") as tmp:
         work = Path(tmp)
         subprocess.run(
@@ -83,24 +84,28 @@ def warm_cache(jobs: int | None = None) -> list[tuple[str, float, int]]:
             stdout=subprocess.DEVNULL,
         )
         pending = _jobs(work)
-        running: list[tuple[list[str], float, subprocess.Popen[bytes]]] = []
+        running: list[tuple[list[str], float, subprocess.Popen[bytes], Path]] = []
         while pending or running:
             while pending and len(running) < n:
                 argv = pending.pop(0)
-                proc = subprocess.Popen(
-                    [sys.executable, "-m", "imageform", *argv],
-                    env=env,
-                    stdout=subprocess.DEVNULL,
-                    stderr=subprocess.DEVNULL,
-                )
-                running.append((argv, time.perf_counter(), proc))
+                err = work / f"job{len(pending)}.err"
+                with err.open("wb") as stderr:
+                    proc = subprocess.Popen(
+                        [sys.executable, "-m", "imageform", *argv],
+                        env=env,
+                        stdout=subprocess.DEVNULL,
+                        stderr=stderr,
+                    )
+                running.append((argv, time.perf_counter(), proc, err))
             time.sleep(0.05)
             for item in list(running):
-                argv, t0, proc = item
+                argv, t0, proc, err = item
                 if proc.poll() is not None:
                     running.remove(item)
-                    name = " ".join(a for a in argv if not a.startswith(str(work)))
-                    done.append((name, time.perf_counter() - t0, proc.returncode))
+                    name = " ".join(a for a in argv if not a.startswith(str(work)) and a != "-o")
+                    lines = err.read_text(errors="replace").strip().splitlines()
+                    why = "" if proc.returncode == 0 else (lines or [f"exit {proc.returncode}"])[-1]
+                    done.append((name, time.perf_counter() - t0, why))
     return done
 
 
@@ -149,11 +154,13 @@ def cache_command(warm: bool, clear: bool, jobs: int | None, as_json: bool) -> N
     warmed = warm_cache(jobs) if warm else []
     files = _files()
     size = sum(f.stat().st_size for f in files)
-    failed = [name for name, _, code in warmed if code != 0]
+    failed = [f"imageform {name}: {why}" for name, _, why in warmed if why]
     if as_json:
         out = {"cache_dir": str(where), "reason": reason, "files": len(files), "bytes": size}
         out |= {"removed": removed} if clear else {}
-        out |= {"warmed": [{"command": n, "seconds": round(s, 2), "exit": c} for n, s, c in warmed]}
+        out |= {
+            "warmed": [{"command": n, "seconds": round(t, 2), "error": e} for n, t, e in warmed]
+        }
         click.echo(json.dumps(out))
     else:
         why = {
@@ -164,8 +171,8 @@ def cache_command(warm: bool, clear: bool, jobs: int | None, as_json: bool) -> N
         click.echo(f"cache: {where} ({why})")
         if clear:
             click.echo(f"removed {removed} files")
-        for name, secs, code in warmed:
-            click.echo(f"warmed: imageform {name}: {secs:.1f} s" + ("" if not code else " FAILED"))
+        for name, secs, why in warmed:
+            click.echo(f"warmed: imageform {name}: {secs:.1f} s" + (" FAILED" if why else ""))
         click.echo(f"{len(files)} files, {size / 1e6:.1f} MB")
     if failed:
-        raise SystemExit(1)
+        raise click.ClickException(f"cache --warm: {len(failed)} command(s) failed: {failed[0]}")
