@@ -56,7 +56,9 @@ def have_numba() -> bool:
     twins, not crash; importing it costs about 0.1 s, paid only by the first hot path.
     """
     try:
-        import numba  # noqa: F401
+        # numba through the kernels' policy module: it points numba's cache at the user's
+        # cache folder first when the package folder is read-only (imageform._kernels.jit)
+        import imageform._kernels.jit  # noqa: F401
     except Exception:  # pragma: no cover - exercised only on broken installs
         return False
     return True

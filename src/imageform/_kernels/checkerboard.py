@@ -35,8 +35,9 @@ peak, the same local maxima, samples 1e-12.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 from numpy.typing import NDArray
+
+from imageform._kernels.jit import njit
 
 __all__ = [
     "corner_window_weights",
@@ -59,7 +60,7 @@ def corner_window_weights(hx: int, hy: int) -> NDArray[np.float64]:
     return np.exp(-(y**2))[:, None] * np.exp(-(x**2))[None, :]
 
 
-@njit(cache=True, fastmath=False)
+@njit(fastmath=False)
 def refine_corners_numba(
     image: NDArray[np.floating],
     corners: NDArray[np.float64],
@@ -249,7 +250,7 @@ def gaussian_weights(sigma: float, truncate: float = 3.0) -> NDArray[np.float64]
     return w / w.sum()
 
 
-@njit(cache=True, fastmath=False)
+@njit(fastmath=False)
 def smooth_saddle_numba(
     gray: NDArray[np.floating], taps: NDArray[np.floating]
 ) -> tuple[NDArray[np.floating], NDArray[np.floating]]:  # pragma: no cover - numba-compiled
@@ -311,7 +312,7 @@ def smooth_saddle_numpy(
     return s, resp
 
 
-@njit(cache=True, fastmath=False)
+@njit(fastmath=False)
 def local_maxima_numba(
     resp: NDArray[np.floating], radius: int, threshold: float, border: int
 ) -> tuple[NDArray[np.int64], NDArray[np.int64]]:  # pragma: no cover - numba-compiled
@@ -357,7 +358,7 @@ def local_maxima_numpy(
     return ys.astype(np.int64), xs.astype(np.int64)
 
 
-@njit(cache=True, fastmath=False)
+@njit(fastmath=False)
 def sample_bilinear_numba(
     image: NDArray[np.floating], u: NDArray[np.float64], v: NDArray[np.float64]
 ) -> NDArray[np.float64]:  # pragma: no cover - numba-compiled

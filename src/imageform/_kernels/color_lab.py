@@ -28,6 +28,8 @@ from typing import Any
 import numba as nb
 import numpy as np
 
+from imageform._kernels.jit import njit
+
 __all__ = ["lab_to_srgb", "srgb_to_lab"]
 
 _BLOCK = 65536  # pixels per parallel chunk; each chunk runs a serial (vectorisable) loop
@@ -44,21 +46,21 @@ _LSLOPE = 1.0 / (3.0 * _DELTA**2)
 _LOFF = 4.0 / 29.0
 
 
-@nb.njit(cache=True, inline="always", error_model="numpy")
+@njit(inline="always", error_model="numpy")
 def _dec_exact(v):  # type: ignore[no-untyped-def]
     if v <= _ENC_T:
         return v / _SLOPE
     return ((v + _A) / (1.0 + _A)) ** _G
 
 
-@nb.njit(cache=True, inline="always", error_model="numpy")
+@njit(inline="always", error_model="numpy")
 def _enc_exact(x):  # type: ignore[no-untyped-def]
     if x <= _LIN_T:
         return x * _SLOPE
     return (1.0 + _A) * x ** (1.0 / _G) - _A
 
 
-@nb.njit(cache=True, inline="always", error_model="numpy")
+@njit(inline="always", error_model="numpy")
 def _f_exact(t):  # type: ignore[no-untyped-def]
     if t > _EPS:
         return np.cbrt(t)
@@ -76,7 +78,7 @@ _ENC_T32 = np.float32(_ENC_T)
 # fastmath without nnan/ninf: inputs are validated finite, but NaN semantics stay intact.
 # error_model="numpy": no ZeroDivisionError checks, so LLVM can vectorise the loops.
 _FM = {"nsz", "arcp", "contract", "afn", "reassoc"}
-_JIT: dict[str, Any] = {"cache": True, "fastmath": _FM, "error_model": "numpy"}
+_JIT: dict[str, Any] = {"fastmath": _FM, "error_model": "numpy"}
 
 # Seed for the float32 cube root: t^(1/3) = u^(4/3) with u = t^(1/4), and u^(1/3) ~ cubic
 # in u, least-squares on u in [0.15, 1.05] (t in [5e-4, 1.2]; max relative error 1.3 %);
@@ -84,7 +86,7 @@ _JIT: dict[str, Any] = {"cache": True, "fastmath": _FM, "error_model": "numpy"}
 _C3, _C2, _C1, _C0 = (_F32(0.3550869), _F32(-0.96483168), _F32(1.23719213), _F32(0.37323781))
 
 
-@nb.njit(inline="always", **_JIT)
+@njit(inline="always", **_JIT)
 def _cbrt32(t):  # type: ignore[no-untyped-def]
     """Cube root of t > 0 in float32 (valid for t in [5e-4, 1.2]; callers fix up the rest)."""
     u = np.sqrt(np.sqrt(t))
@@ -113,7 +115,7 @@ _DEC = tuple(
 _CBL = tuple(np.float32(c) for c in (-0.53410316, 1.52206240, -1.73456023, 1.68579010, 0.06292927))
 
 
-@nb.njit(inline="always", **_JIT)
+@njit(inline="always", **_JIT)
 def _dec32(v):  # type: ignore[no-untyped-def]
     """sRGB decode in float32 for v in [0, 1] (callers fix up values outside)."""
     w = (v + _F32(_A)) / _F32(1.0 + _A)
@@ -125,7 +127,7 @@ def _dec32(v):  # type: ignore[no-untyped-def]
     return lin if v > _ENC_T32 else v / _SLOPE32
 
 
-@nb.njit(inline="always", **_JIT)
+@njit(inline="always", **_JIT)
 def _cbrt32_lab(t):  # type: ignore[no-untyped-def]
     """Cube root for t in [eps, 1.2] (CIELAB): polynomial seed in sqrt(t) + one Halley step."""
     s = np.sqrt(t)
@@ -135,13 +137,13 @@ def _cbrt32_lab(t):  # type: ignore[no-untyped-def]
     return y * (y3 + _F32(2) * t) / (_F32(2) * y3 + t)
 
 
-@nb.njit(inline="always", **_JIT)
+@njit(inline="always", **_JIT)
 def _f32(t):  # type: ignore[no-untyped-def]
     c = _cbrt32_lab(t if t > _EPS32 else _EPS32)
     return c if t > _EPS32 else _LSLOPE32 * t + _LOFF32
 
 
-@nb.njit(**_JIT)
+@njit(**_JIT)
 def _lab_exact_pixel(r, g, b, m, dst, k):  # type: ignore[no-untyped-def]
     """Exact float64 Lab of one pixel from linear RGB (the fix-up for rare inputs)."""
     fx = _f_exact(m[0, 0] * r + m[0, 1] * g + m[0, 2] * b)
@@ -152,7 +154,7 @@ def _lab_exact_pixel(r, g, b, m, dst, k):  # type: ignore[no-untyped-def]
     dst[k + 2] = 200.0 * (fy - fz)
 
 
-@nb.njit(**_JIT)
+@njit(**_JIT)
 def _srgb_to_lab_f32_serial(src, dst, m, scale, stats, c):  # type: ignore[no-untyped-def]
     """float32 (scale 1) or uint8 (scale 1/255) sRGB -> Lab on a flat (N * 3,) slice."""
     n = src.shape[0] // 3
@@ -184,7 +186,7 @@ def _srgb_to_lab_f32_serial(src, dst, m, scale, stats, c):  # type: ignore[no-un
     stats[c, 1] = acc
 
 
-@nb.njit(**_JIT)
+@njit(**_JIT)
 def _srgb_to_lab_f32_fixup(src, dst, m, scale, idx):  # type: ignore[no-untyped-def]
     """Pixels ``idx`` (a value outside [0, 1]) take the exact float64 path. A separate
     function over the few listed pixels: a call inside the hot loop's function would stop
@@ -196,7 +198,7 @@ def _srgb_to_lab_f32_fixup(src, dst, m, scale, idx):  # type: ignore[no-untyped-
         )
 
 
-@nb.njit(**_JIT)
+@njit(**_JIT)
 def _srgb_to_lab_f64_serial(src, dst, m):  # type: ignore[no-untyped-def]
     """float64 sRGB -> Lab with the exact formulas."""
     for i in range(src.shape[0] // 3):
@@ -214,19 +216,19 @@ def _srgb_to_lab_f64_serial(src, dst, m):  # type: ignore[no-untyped-def]
 _ENC_MAX = np.float32(1.08)
 
 
-@nb.njit(inline="always", **_JIT)
+@njit(inline="always", **_JIT)
 def _enc32(x):  # type: ignore[no-untyped-def]
     # x^(1/2.4) = x^(5/12) = cbrt(x * x^(1/4))
     c = _F32(1.055) * _cbrt32(x * np.sqrt(np.sqrt(x if x > _LIN_T32 else _LIN_T32))) - _F32(_A)
     return c if x > _LIN_T32 else x * _SLOPE32
 
 
-@nb.njit(inline="always", **_JIT)
+@njit(inline="always", **_JIT)
 def _finv32(u):  # type: ignore[no-untyped-def]
     return u * u * u if u > _DELTA32 else (u - _LOFF32) / _LSLOPE32
 
 
-@nb.njit(**_JIT)
+@njit(**_JIT)
 def _lab_exact_rgb(l, a, b, mi, dst, k):  # type: ignore[no-untyped-def]
     fy = (l + 16.0) / 116.0
     x = _finv(fy + a / 500.0)
@@ -237,7 +239,7 @@ def _lab_exact_rgb(l, a, b, mi, dst, k):  # type: ignore[no-untyped-def]
     dst[k + 2] = _enc_exact(mi[2, 0] * x + mi[2, 1] * y + mi[2, 2] * z)
 
 
-@nb.njit(**_JIT)
+@njit(**_JIT)
 def _lab_to_srgb_f32_serial(src, dst, mi):  # type: ignore[no-untyped-def]
     n = src.shape[0] // 3
     m00, m01, m02 = mi[0, 0], mi[0, 1], mi[0, 2]
@@ -253,7 +255,7 @@ def _lab_to_srgb_f32_serial(src, dst, mi):  # type: ignore[no-untyped-def]
         dst[3 * i + 2] = _enc32(m20 * x + m21 * y + m22 * z)
 
 
-@nb.njit(**_JIT)
+@njit(**_JIT)
 def _lab_to_srgb_f32_fixup(src, dst, mi, idx):  # type: ignore[no-untyped-def]
     """Pixels ``idx``, beyond the float32 cube root's range (linear > 1.2, encoded > 1.08:
     far out of gamut), take the exact float64 path."""
@@ -263,13 +265,13 @@ def _lab_to_srgb_f32_fixup(src, dst, mi, idx):  # type: ignore[no-untyped-def]
         )
 
 
-@nb.njit(**_JIT)
+@njit(**_JIT)
 def _lab_to_srgb_f64_serial(src, dst, mi):  # type: ignore[no-untyped-def]
     for i in range(src.shape[0] // 3):
         _lab_exact_rgb(src[3 * i], src[3 * i + 1], src[3 * i + 2], mi, dst, 3 * i)
 
 
-@nb.njit(parallel=True, cache=True)
+@njit(parallel=True)
 def _srgb_to_lab_f32(src, dst, m, scale, stats):  # type: ignore[no-untyped-def]
     n = src.shape[0] // 3
     for c in nb.prange((n + _BLOCK - 1) // _BLOCK):
@@ -278,7 +280,7 @@ def _srgb_to_lab_f32(src, dst, m, scale, stats):  # type: ignore[no-untyped-def]
         _srgb_to_lab_f32_serial(src[3 * lo : 3 * hi], dst[3 * lo : 3 * hi], m, scale, stats, c)
 
 
-@nb.njit(parallel=True, cache=True)
+@njit(parallel=True)
 def _srgb_to_lab_f64(src, dst, m):  # type: ignore[no-untyped-def]
     n = src.shape[0] // 3
     for c in nb.prange((n + _BLOCK - 1) // _BLOCK):
@@ -287,7 +289,7 @@ def _srgb_to_lab_f64(src, dst, m):  # type: ignore[no-untyped-def]
         _srgb_to_lab_f64_serial(src[3 * lo : 3 * hi], dst[3 * lo : 3 * hi], m)
 
 
-@nb.njit(parallel=True, cache=True)
+@njit(parallel=True)
 def _lab_to_srgb_f32(src, dst, m):  # type: ignore[no-untyped-def]
     n = src.shape[0] // 3
     for c in nb.prange((n + _BLOCK - 1) // _BLOCK):
@@ -296,7 +298,7 @@ def _lab_to_srgb_f32(src, dst, m):  # type: ignore[no-untyped-def]
         _lab_to_srgb_f32_serial(src[3 * lo : 3 * hi], dst[3 * lo : 3 * hi], m)
 
 
-@nb.njit(parallel=True, cache=True)
+@njit(parallel=True)
 def _lab_to_srgb_f64(src, dst, m):  # type: ignore[no-untyped-def]
     n = src.shape[0] // 3
     for c in nb.prange((n + _BLOCK - 1) // _BLOCK):
@@ -305,7 +307,7 @@ def _lab_to_srgb_f64(src, dst, m):  # type: ignore[no-untyped-def]
         _lab_to_srgb_f64_serial(src[3 * lo : 3 * hi], dst[3 * lo : 3 * hi], m)
 
 
-@nb.njit(inline="always", **_JIT)
+@njit(inline="always", **_JIT)
 def _finv(u):  # type: ignore[no-untyped-def]
     if u > _DELTA:
         return u * u * u

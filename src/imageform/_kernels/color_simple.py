@@ -14,6 +14,8 @@ from __future__ import annotations
 import numba as nb
 import numpy as np
 
+from imageform._kernels.jit import njit
+
 __all__ = ["new_stats", "srgb_to_hsv", "summarize", "ycbcr_affine"]
 
 _F32 = np.float32
@@ -22,7 +24,7 @@ _BLOCK = 65536  # pixels per parallel chunk
 _FM = {"nsz", "arcp", "contract", "afn", "reassoc"}
 
 
-@nb.njit(cache=True, fastmath=_FM, error_model="numpy")
+@njit(fastmath=_FM, error_model="numpy")
 def _hsv_serial(src, dst, scale, stats, c):  # type: ignore[no-untyped-def]
     out = 0
     acc = _F32(0)
@@ -52,7 +54,7 @@ def _hsv_serial(src, dst, scale, stats, c):  # type: ignore[no-untyped-def]
     stats[c, 1] = acc
 
 
-@nb.njit(parallel=True, cache=True)
+@njit(parallel=True)
 def _hsv(src, dst, scale, stats):  # type: ignore[no-untyped-def]
     n = src.shape[0] // 3
     for c in nb.prange((n + _BLOCK - 1) // _BLOCK):
@@ -61,7 +63,7 @@ def _hsv(src, dst, scale, stats):  # type: ignore[no-untyped-def]
         _hsv_serial(src[3 * lo : 3 * hi], dst[3 * lo : 3 * hi], scale, stats, c)
 
 
-@nb.njit(cache=True, fastmath=_FM, error_model="numpy")
+@njit(fastmath=_FM, error_model="numpy")
 def _affine_serial(src, dst, m, off, scale, stats, c):  # type: ignore[no-untyped-def]
     m00, m01, m02 = m[0, 0], m[0, 1], m[0, 2]
     m10, m11, m12 = m[1, 0], m[1, 1], m[1, 2]
@@ -82,7 +84,7 @@ def _affine_serial(src, dst, m, off, scale, stats, c):  # type: ignore[no-untype
     stats[c, 1] = acc
 
 
-@nb.njit(parallel=True, cache=True)
+@njit(parallel=True)
 def _affine(src, dst, m, off, scale, stats):  # type: ignore[no-untyped-def]
     n = src.shape[0] // 3
     for c in nb.prange((n + _BLOCK - 1) // _BLOCK):

@@ -25,6 +25,8 @@ from typing import Any
 import numba as nb
 import numpy as np
 
+from imageform._kernels.jit import njit
+
 __all__ = ["DECODE_LUT", "srgb8_to_hsv8", "srgb8_to_lab8"]
 
 _F32 = np.float32
@@ -34,7 +36,7 @@ _BLOCK = 65536
 #: benchmarks/results/8bit-2026-11-25.md).
 PARALLEL_MIN_PIXELS = 1 << 22
 _FM = {"nsz", "arcp", "contract", "afn", "reassoc"}
-_JIT: dict[str, Any] = {"cache": True, "fastmath": _FM, "error_model": "numpy"}
+_JIT: dict[str, Any] = {"fastmath": _FM, "error_model": "numpy"}
 
 
 def _decode_table() -> np.ndarray:
@@ -79,14 +81,14 @@ def xyz_tables(m: np.ndarray) -> np.ndarray:
     return np.clip(np.rint(t), 0, None).astype(np.uint32).reshape(-1)
 
 
-@nb.njit(inline="always", **_JIT)
+@njit(inline="always", **_JIT)
 def _sat8(x):  # type: ignore[no-untyped-def]
     x = x if x > _F32(0) else _F32(0)
     x = x if x < _F32(255) else _F32(255)
     return np.uint8(np.int32(x + _F32(0.5)))
 
 
-@nb.njit(**_JIT)
+@njit(**_JIT)
 def _lab8_serial(src, dst, tx, tab, lt):  # type: ignore[no-untyped-def]
     # unsigned indices into flat tables: no negative-index wrap-around selects
     top = np.uint32(tab.shape[0] - 1)
@@ -103,7 +105,7 @@ def _lab8_serial(src, dst, tx, tab, lt):  # type: ignore[no-untyped-def]
         dst[3 * i + 2] = _sat8(_F32(200) * (fy - tab[z]) + _F32(128))  # b* + 128
 
 
-@nb.njit(parallel=True, cache=True)
+@njit(parallel=True)
 def _lab8(src, dst, tx, tab, lt):  # type: ignore[no-untyped-def]
     n = src.shape[0] // 3
     for c in nb.prange((n + _BLOCK - 1) // _BLOCK):
@@ -112,7 +114,7 @@ def _lab8(src, dst, tx, tab, lt):  # type: ignore[no-untyped-def]
         _lab8_serial(src[3 * lo : 3 * hi], dst[3 * lo : 3 * hi], tx, tab, lt)
 
 
-@nb.njit(**_JIT)
+@njit(**_JIT)
 def _hsv8_serial(src, dst):  # type: ignore[no-untyped-def]
     for i in range(src.shape[0] // 3):
         r = _F32(src[3 * i])
@@ -134,7 +136,7 @@ def _hsv8_serial(src, dst):  # type: ignore[no-untyped-def]
         dst[3 * i + 2] = np.uint8(np.int32(mx))
 
 
-@nb.njit(parallel=True, cache=True)
+@njit(parallel=True)
 def _hsv8(src, dst):  # type: ignore[no-untyped-def]
     n = src.shape[0] // 3
     for c in nb.prange((n + _BLOCK - 1) // _BLOCK):

@@ -34,7 +34,9 @@ import math
 from typing import Any
 
 import numpy as np
-from numba import njit, prange
+from numba import prange
+
+from imageform._kernels.jit import njit
 
 __all__ = ["ciede2000_numba", "ciede2000_twin"]
 
@@ -69,7 +71,7 @@ _ATAN_COEF = (
 _A0, _A1, _A2, _A3, _A4, _A5, _A6, _A7, _A8, _A9, _A10, _A11 = _ATAN_COEF
 
 
-@njit(cache=True, error_model="numpy", fastmath={"contract"})
+@njit(error_model="numpy", fastmath={"contract"})
 def _atan2_deg(y: float, x: float) -> float:  # pragma: no cover - numba
     """atan2(y, x) in degrees in [0, 360), branch-free polynomial."""
     ax = abs(x)
@@ -102,7 +104,7 @@ def _atan2_deg(y: float, x: float) -> float:  # pragma: no cover - numba
     return a * _DEG
 
 
-@njit(cache=True, error_model="numpy", fastmath={"contract"})
+@njit(error_model="numpy", fastmath={"contract"})
 def _exp_neg(y: float) -> float:  # pragma: no cover - numba
     """exp(y) for y in [-130, 0]: Taylor on y/256 (degree 14), then 8 squarings."""
     r = y * (1.0 / 256.0)
@@ -126,7 +128,7 @@ def _exp_neg(y: float) -> float:  # pragma: no cover - numba
     return p
 
 
-@njit(cache=True, error_model="numpy", fastmath={"contract"})
+@njit(error_model="numpy", fastmath={"contract"})
 def _sin_small(x: float) -> float:  # pragma: no cover - numba
     """sin(x) for x in [0, π/3]: Taylor series to x**17 (error < 3e-17)."""
     x2 = x * x
@@ -142,7 +144,7 @@ def _sin_small(x: float) -> float:  # pragma: no cover - numba
     return x * p
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(inline="always", error_model="numpy")
 def _de00(
     L1: float,
     a1: float,
@@ -226,7 +228,7 @@ def _de00(
 _BLOCK = 2048
 
 
-@njit(cache=True, error_model="numpy")
+@njit(error_model="numpy")
 def _ciede2000_block(
     lab1: np.ndarray,
     lab2: np.ndarray,
@@ -258,7 +260,7 @@ def _ciede2000_block(
         res[j] = _de00(L1[j], A1[j], B1[j], L2[j], A2[j], B2[j], ikL, ikC, ikH)
 
 
-@njit(cache=True, parallel=True, error_model="numpy")
+@njit(parallel=True, error_model="numpy")
 def _ciede2000_loop(
     lab1: np.ndarray, lab2: np.ndarray, out: np.ndarray, ikL: float, ikC: float, ikH: float
 ) -> None:  # pragma: no cover - numba

@@ -12,16 +12,17 @@ from __future__ import annotations
 import sys
 
 import numpy as np
-from numba import njit, prange
+from numba import prange
 
 from imageform._kernels.demosaic_common import crop, phase_masks, shift
+from imageform._kernels.jit import njit
 
 __all__ = ["RADIUS", "bilinear_int_numba", "bilinear_int_numpy", "bilinear_numba", "bilinear_numpy"]
 
 RADIUS = 1
 
 
-@njit(cache=True, parallel=True, fastmath=False)
+@njit(parallel=True, fastmath=False)
 def bilinear_numba(P: np.ndarray, oy: int, ox: int, h: int, w: int) -> np.ndarray:
     # Unit-stride row views indexed from 0 (vectorisable), the phase selects, then the three
     # results are interleaved into the output (as in demosaic_malvar).
@@ -83,7 +84,7 @@ def bilinear_numpy(P: np.ndarray, oy: int, ox: int, h: int, w: int) -> np.ndarra
 # --- integer (uint8 / uint16 in and out) ----------------------------------------------------
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(inline="always", error_model="numpy")
 def _px_int(u, c, d, o, jl, j, jr, is_rb, k):  # type: ignore[no-untyped-def]
     cc = np.int32(c[j])
     sh = np.int32(c[jl]) + np.int32(c[jr])
@@ -100,7 +101,7 @@ def _px_int(u, c, d, o, jl, j, jr, is_rb, k):  # type: ignore[no-untyped-def]
 _U = np.uint32
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(inline="always", error_model="numpy")
 def _own_green(u, c, d, j):  # type: ignore[no-untyped-def]
     """Pixel ``j`` a red (blue) site, ``j + 1`` green: (own, green, other) of both."""
     cl, c0, c1, c2 = _U(c[j - 1]), _U(c[j]), _U(c[j + 1]), _U(c[j + 2])
@@ -111,7 +112,7 @@ def _own_green(u, c, d, j):  # type: ignore[no-untyped-def]
     return c0, g0, x0, (c0 + c2 + _U(1)) >> _U(1), c1, (u1 + d1 + _U(1)) >> _U(1)
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(inline="always", error_model="numpy")
 def _green_own(u, c, d, j):  # type: ignore[no-untyped-def]
     """Pixel ``j`` green, ``j + 1`` a red (blue) site: (own, green, other) of both."""
     cl, c0, c1, c2 = _U(c[j - 1]), _U(c[j]), _U(c[j + 1]), _U(c[j + 2])
@@ -141,7 +142,8 @@ def _make_rows(own_first: bool, red_row: bool, wide: bool):  # type: ignore[no-u
     def rgb(own, g, oth):  # type: ignore[no-untyped-def]
         return (own, g, oth) if red_row else (oth, g, own)
 
-    rgb_j = njit(inline="always")(rgb)
+    # a closure, inlined into the loops below (whose cache holds it): nothing to cache itself
+    rgb_j = njit(inline="always", cache=False)(rgb)
 
     def loop8(u, c, d, o32, n):  # type: ignore[no-untyped-def]
         for q in range(1, n):
@@ -168,7 +170,7 @@ def _make_rows(own_first: bool, red_row: bool, wide: bool):  # type: ignore[no-u
             o32[k + 1] = x0 | (r1 << _U(16))
             o32[k + 2] = g1 | (x1 << _U(16))
 
-    return njit(cache=True, error_model="numpy")(loop16 if wide else loop8)
+    return njit(error_model="numpy")(loop16 if wide else loop8)
 
 
 _OWN_R8 = _make_rows(True, True, False)
@@ -181,7 +183,7 @@ _GREEN_R16 = _make_rows(False, True, True)
 _GREEN_B16 = _make_rows(False, False, True)
 
 
-@njit(cache=True, parallel=True, error_model="numpy")
+@njit(parallel=True, error_model="numpy")
 def _int_rows(raw, ry, rx, out, o32, n):  # type: ignore[no-untyped-def]
     # Unpadded mosaic (red at row % 2 == ry, column % 2 == rx); edges mirrored about the edge
     # pixel (index -1 reads 1, as numpy.pad(mode="reflect") in the float path). ``o32``: the
@@ -233,7 +235,7 @@ def _int_rows(raw, ry, rx, out, o32, n):  # type: ignore[no-untyped-def]
     return out
 
 
-_int_rows_serial = njit(cache=True, error_model="numpy")(_int_rows.py_func)
+_int_rows_serial = njit(error_model="numpy")(_int_rows.py_func)
 #: Mosaics of fewer pixels run the rows in the calling thread (waking numba's pool costs
 #: more than it gains there on a loaded machine; benchmarks/results/8bit-2026-11-25.md).
 PARALLEL_MIN_PIXELS = 1 << 22

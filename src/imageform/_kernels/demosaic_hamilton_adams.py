@@ -20,16 +20,17 @@ sensor color electronic camera", US patent 5,629,734 (1997). Radius: 3 pixels.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit, prange
+from numba import prange
 
 from imageform._kernels.demosaic_common import crop, phase_masks, shift
+from imageform._kernels.jit import njit
 
 __all__ = ["RADIUS", "hamilton_adams_numba", "hamilton_adams_numpy"]
 
 RADIUS = 3
 
 
-@njit(cache=True, parallel=True, fastmath=False)
+@njit(parallel=True, fastmath=False)
 def _green(P: np.ndarray, y0: int, y1: int, x0: int, x1: int) -> np.ndarray:
     G = np.empty_like(P)
     for y in prange(y0, y1):
@@ -58,7 +59,7 @@ def _green(P: np.ndarray, y0: int, y1: int, x0: int, x1: int) -> np.ndarray:
     return G
 
 
-@njit(cache=True, parallel=True, fastmath=False)
+@njit(parallel=True, fastmath=False)
 def _chroma(P: np.ndarray, G: np.ndarray, oy: int, ox: int, h: int, w: int) -> np.ndarray:
     out = np.empty((h, w, 3), dtype=P.dtype)
     for i in prange(h):

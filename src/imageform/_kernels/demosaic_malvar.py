@@ -17,16 +17,17 @@ of Bayer-patterned color images", ICASSP 2004, vol. 3, pp. 485-488. Radius: 2 pi
 from __future__ import annotations
 
 import numpy as np
-from numba import njit, prange
+from numba import prange
 
 from imageform._kernels.demosaic_common import crop, phase_masks, shift
+from imageform._kernels.jit import njit
 
 __all__ = ["RADIUS", "malvar_numba", "malvar_numpy"]
 
 RADIUS = 2
 
 
-@njit(cache=True, parallel=True, fastmath=False)
+@njit(parallel=True, fastmath=False)
 def malvar_numba(P: np.ndarray, oy: int, ox: int, h: int, w: int) -> np.ndarray:
     # Every filter is evaluated at every pixel of a row from unit-stride row views (loop
     # indices from 0, so no negative-index wraparound: LLVM can vectorise), the phase then

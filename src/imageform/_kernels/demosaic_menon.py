@@ -37,9 +37,10 @@ posteriori decision", IEEE Trans. Image Process. 16(1), 132-141 (2007). Radius: 
 from __future__ import annotations
 
 import numpy as np
-from numba import njit, prange
+from numba import prange
 
 from imageform._kernels.demosaic_common import crop, phase_masks, shift
+from imageform._kernels.jit import njit
 
 __all__ = ["RADIUS", "menon_numba", "menon_numpy", "menon_soft_numba", "menon_soft_numpy"]
 
@@ -142,7 +143,7 @@ def _refine_numpy(R, G, B, hor, r_m, g1, g2, b_m):  # type: ignore[no-untyped-de
     return R2, G, B2
 
 
-@njit(cache=True, fastmath=False)
+@njit(fastmath=False)
 def _menon_slab(
     P: np.ndarray, oy: int, ox: int, h: int, w: int, refine: bool, soft: bool, out: np.ndarray
 ) -> None:
@@ -340,7 +341,7 @@ def _menon_slab(
             o[j, 2] = bbuf[j]
 
 
-@njit(cache=True, parallel=True, fastmath=False)
+@njit(parallel=True, fastmath=False)
 def _menon(
     P: np.ndarray, oy: int, ox: int, h: int, w: int, refine: bool, soft: bool, block: int
 ) -> np.ndarray:

@@ -13,7 +13,9 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit, prange
+from numba import prange
+
+from imageform._kernels.jit import njit
 
 __all__ = [
     "bc_distort_point",
@@ -24,7 +26,7 @@ __all__ = [
 ]
 
 
-@njit(cache=True, inline="always")
+@njit(inline="always")
 def bc_distort_point(x: float, y: float, c: np.ndarray) -> tuple[float, float]:
     """Brown-Conrady forward model for one point (OpenCV's rational model)."""
     k1, k2, p1, p2, k3, k4, k5, k6 = c[0], c[1], c[2], c[3], c[4], c[5], c[6], c[7]
@@ -37,7 +39,7 @@ def bc_distort_point(x: float, y: float, c: np.ndarray) -> tuple[float, float]:
     return xd, yd
 
 
-@njit(cache=True, parallel=True)
+@njit(parallel=True)
 def brown_conrady_distort(
     xy: np.ndarray, c: np.ndarray, out: np.ndarray
 ) -> None:  # pragma: no cover
@@ -47,7 +49,7 @@ def brown_conrady_distort(
         out[i, 1] = yd
 
 
-@njit(cache=True, parallel=True)
+@njit(parallel=True)
 def brown_conrady_undistort(
     xyd: np.ndarray, c: np.ndarray, max_iter: int, tol: float, out: np.ndarray, ok: np.ndarray
 ) -> None:  # pragma: no cover
@@ -94,7 +96,7 @@ def brown_conrady_undistort(
             ok[i] = False
 
 
-@njit(cache=True, parallel=True)
+@njit(parallel=True)
 def kannala_brandt_distort(
     xy: np.ndarray, c: np.ndarray, out: np.ndarray
 ) -> None:  # pragma: no cover
@@ -111,7 +113,7 @@ def kannala_brandt_distort(
         out[i, 1] = y * s
 
 
-@njit(cache=True, parallel=True)
+@njit(parallel=True)
 def kannala_brandt_undistort(
     xyd: np.ndarray, c: np.ndarray, max_iter: int, tol: float, out: np.ndarray, ok: np.ndarray
 ) -> None:  # pragma: no cover

@@ -10,12 +10,13 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
+
+from imageform._kernels.jit import njit
 
 __all__ = ["grow_regions", "rect_alignment_counts", "region_rectangles"]
 
 
-@njit(cache=True)
+@njit
 def _angle_diff(a: float, b: float) -> float:  # pragma: no cover - numba
     d = a - b
     while d <= -math.pi:
@@ -25,7 +26,7 @@ def _angle_diff(a: float, b: float) -> float:  # pragma: no cover - numba
     return abs(d)
 
 
-@njit(cache=True)
+@njit
 def grow_regions(angle, order, tau, min_size):  # type: ignore[no-untyped-def]  # pragma: no cover
     """Label 8-connected regions of pixels whose level-line angle is within ``tau`` of the
     region's running mean angle, seeded in ``order`` (decreasing gradient). NaN angles are
@@ -82,7 +83,7 @@ def grow_regions(angle, order, tau, min_size):  # type: ignore[no-untyped-def]  
     return labels, n_regions
 
 
-@njit(cache=True)
+@njit
 def region_rectangles(labels, n_regions, mag):  # type: ignore[no-untyped-def]  # pragma: no cover
     """Per region: the magnitude-weighted centroid, principal direction and extents.
 
@@ -149,7 +150,7 @@ def region_rectangles(labels, n_regions, mag):  # type: ignore[no-untyped-def]  
     return rects
 
 
-@njit(cache=True)
+@njit
 def rect_alignment_counts(rects, angle, tau):  # type: ignore[no-untyped-def]  # pragma: no cover
     """For each rectangle: (n pixels whose centre lies inside, k of them aligned within tau).
 

@@ -23,7 +23,8 @@ import math
 from typing import Any
 
 import numpy as np
-from numba import njit
+
+from imageform._kernels.jit import njit
 
 __all__ = [
     "NOTDEF",
@@ -38,7 +39,7 @@ __all__ = [
 NOTDEF = -1024.0  # the level-line angle of pixels with a too small gradient
 _M_3_2_PI = 4.71238898038
 _M_2_PI = 6.28318530718
-_JIT: dict[str, Any] = {"cache": True, "error_model": "numpy"}
+_JIT: dict[str, Any] = {"error_model": "numpy"}
 
 
 @njit(**_JIT)

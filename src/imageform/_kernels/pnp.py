@@ -9,12 +9,14 @@ twin :func:`imageform.geometry.pnp.refine_pose`; a test checks agreement to 1e-9
 from __future__ import annotations
 
 import numpy as np
-from numba import njit, prange
+from numba import prange
+
+from imageform._kernels.jit import njit
 
 __all__ = ["refine_pose_batch"]
 
 
-@njit(cache=True)
+@njit
 def _cost(R, t, X, uv, K, w):  # type: ignore[no-untyped-def]  # pragma: no cover
     c = 0.0
     for i in range(X.shape[0]):
@@ -32,7 +34,7 @@ def _cost(R, t, X, uv, K, w):  # type: ignore[no-untyped-def]  # pragma: no cove
     return c
 
 
-@njit(cache=True)
+@njit
 def _rodrigues_left(d, R, out):  # type: ignore[no-untyped-def]  # pragma: no cover
     th2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2]
     if th2 < 1e-12:
@@ -45,7 +47,7 @@ def _rodrigues_left(d, R, out):  # type: ignore[no-untyped-def]  # pragma: no co
     out[:, :] = E @ R
 
 
-@njit(cache=True, parallel=True)
+@njit(parallel=True)
 def refine_pose_batch(R, t, X, uv, K, w, max_iter, tol, rms):  # type: ignore[no-untyped-def]  # pragma: no cover
     """Refine ``R (B, 3, 3)``, ``t (B, 3)`` in place; write the weighted RMS to ``rms (B,)``."""
     B, N = X.shape[0], X.shape[1]

@@ -12,12 +12,14 @@ they agree to 1e-12 px in float64.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit, prange
+from numba import prange
+
+from imageform._kernels.jit import njit
 
 __all__ = ["project_pinhole"]
 
 
-@njit(parallel=True, cache=True, fastmath=False, nogil=True)
+@njit(parallel=True, fastmath=False, nogil=True)
 def _project_kernel(pts, K, R, t, uv, valid):  # type: ignore[no-untyped-def]  # pragma: no cover
     n = pts.shape[0]
     fx = K[0, 0]

@@ -10,14 +10,15 @@ they are never projected as if in front. The plain twin is
 from __future__ import annotations
 
 import numpy as np
-from numba import njit, prange
+from numba import prange
 
 from imageform._kernels.distortion import bc_distort_point
+from imageform._kernels.jit import njit
 
 __all__ = ["project_brown_conrady", "project_brown_conrady_into"]
 
 
-@njit(cache=True, parallel=True)
+@njit(parallel=True)
 def project_brown_conrady_into(
     pts: np.ndarray,
     K: np.ndarray,

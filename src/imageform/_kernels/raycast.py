@@ -16,12 +16,14 @@ checks they agree (same index, a and b to 1e-12).
 from __future__ import annotations
 
 import numpy as np
-from numba import njit, prange
+from numba import prange
+
+from imageform._kernels.jit import njit
 
 __all__ = ["raycast_quads"]
 
 
-@njit(parallel=True, cache=True, fastmath=False, nogil=True)
+@njit(parallel=True, fastmath=False, nogil=True)
 def _raycast_kernel(xy, origin, normal, ga, gb, idx, a_out, b_out, depth):  # type: ignore[no-untyped-def]  # pragma: no cover
     n = xy.shape[0]
     nq = origin.shape[0]

@@ -24,18 +24,20 @@ map from :func:`~imageform.geometry.undistort.undistortion_map`; tests check agr
 from __future__ import annotations
 
 import numpy as np
-from numba import njit, prange
+from numba import prange
+
+from imageform._kernels.jit import njit
 
 __all__ = ["remap_bilinear", "undistort_brown_conrady"]
 
 #: Row blocks per image (the parallel work items); each allocates its row buffers once.
 _BLOCKS = 64
 
-# every kernel: cache=True, error_model="numpy" (no ZeroDivisionError checks), fastmath
+# every kernel: error_model="numpy" (no ZeroDivisionError checks), fastmath
 # {"contract"} (fused multiply-adds only; NaN/inf semantics kept)
 
 
-@njit(cache=True, inline="always", error_model="numpy", fastmath={"contract"})
+@njit(inline="always", error_model="numpy", fastmath={"contract"})
 def _locate(
     u: float,
     v: float,
@@ -62,7 +64,7 @@ def _locate(
     ok[j] = inside
 
 
-@njit(cache=True, inline="always", error_model="numpy", fastmath={"contract"})
+@njit(inline="always", error_model="numpy", fastmath={"contract"})
 def _gather_row(
     flat: np.ndarray,
     nc: int,
@@ -109,7 +111,7 @@ def _gather_row(
                 orow[o + c] = scale * (top + ay * (bot - top))
 
 
-@njit(cache=True, parallel=True, error_model="numpy", fastmath={"contract"})
+@njit(parallel=True, error_model="numpy", fastmath={"contract"})
 def remap_bilinear(
     img: np.ndarray, map_uv: np.ndarray, scale: float, fill: float, out: np.ndarray
 ) -> None:  # pragma: no cover
@@ -134,7 +136,7 @@ def remap_bilinear(
             _gather_row(flat, nc, idx, step, wts, ok, scale, fill, out[b, i].ravel())
 
 
-@njit(cache=True, parallel=True, error_model="numpy", fastmath={"contract"})
+@njit(parallel=True, error_model="numpy", fastmath={"contract"})
 def undistort_brown_conrady(
     img: np.ndarray,
     k_new: np.ndarray,

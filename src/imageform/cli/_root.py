@@ -29,8 +29,14 @@ _GROUPS = {
 
 def _extra_commands() -> dict[str, Callable[[], click.Command]]:
     """Commands that are not single workflows: batch and chunked (generated from the same
-    registry)."""
-    return {"batch": batch_group, "chunked": chunked_group}
+    registry), and cache (numba's compiled kernels)."""
+    return {"batch": batch_group, "chunked": chunked_group, "cache": _cache_command}
+
+
+def _cache_command() -> click.Command:
+    from imageform.cli._cache import cache_command
+
+    return cache_command
 
 
 class _Root(click.Group):

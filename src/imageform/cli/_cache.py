@@ -1,0 +1,178 @@
+"""``imageform cache``: where numba's compiled kernels live; warm or clear them.
+
+numba compiles imageform's kernels on first use (15-25 s for the first ``pose``, ``demosaic``
+or ``simulate``) and caches them on disk (``imageform._kernels.jit``: the policy and the
+location). ``imageform cache --warm`` pays that once, ahead of time: after installing, in a
+container image, or before a CI test run. It runs the commands people wait on (``simulate``
+with its built-in scene, ``pose --ransac`` with a Brown-Conrady camera, ``demosaic`` with
+each method, ``convert``) on small inputs it writes to a temporary folder, each in its own
+process (``--jobs`` at once), so that every kernel they use is compiled for the same types
+and layouts as a real run, and written to the cache.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import click
+
+__all__ = ["cache_command", "warm_cache"]
+
+_INPUTS = r"""
+import sys
+from pathlib import Path
+import numpy as np
+from imageform.geometry import BrownConrady, Camera
+from imageform.io import write_camera, write_image
+
+work = Path(sys.argv[1])
+K = np.array([[800.0, 0.0, 320.0], [0.0, 800.0, 240.0], [0.0, 0.0, 1.0]])
+dist = BrownConrady(-0.2, 0.05, 1e-3, -5e-4, 0.0)
+write_camera(work / "cam.toml", Camera(K, np.eye(3), np.zeros(3), (640, 480), distortion=dist),
+             has_pose=True)
+rng = np.random.default_rng(0)
+X = rng.uniform(-1, 1, (40, 3)) + [0, 0, 6]
+uv = np.asarray(Camera(K, np.eye(3), [0.1, 0.0, 0.2], distortion=dist).project(X).uv)
+uv[::10] += 30.0
+rows = [",".join(repr(float(v)) for v in (*a, *b)) for a, b in zip(X, uv, strict=True)]
+(work / "pairs.csv").write_text("X,Y,Z,u,v\n" + "\n".join(rows) + "\n")
+img = (rng.uniform(0, 1, (64, 96, 3)) * 255).astype(np.uint8)
+write_image(work / "rgb8.png", img)
+write_image(work / "mosaic8.png", np.ascontiguousarray(img[..., 1:2]))
+"""
+
+
+def _jobs(work: Path) -> list[list[str]]:
+    w = str(work)
+    jobs = [
+        ["simulate", "-o", f"{w}/sim"],
+        ["pose", f"{w}/cam.toml", f"{w}/pairs.csv", "--ransac"],
+        ["convert", f"{w}/rgb8.png", "--from", "srgb", "--to", "lab", "-o", f"{w}/lab.tif"],
+    ]
+    # 8-bit mosaics only: 16-bit ones run the same float32 kernels
+    for method in ("menon", "bilinear", "malvar", "hamilton-adams"):
+        out = f"{w}/rgb-{method}.png"
+        jobs.append(["demosaic", f"{w}/mosaic8.png", "--method", method, "-o", out])
+    return jobs
+
+
+def warm_cache(jobs: int | None = None) -> list[tuple[str, float, str]]:
+    """Compile the hot kernels into the cache; ``(command, seconds, error)`` per command
+    (``error``: the last line the command wrote on stderr when it failed, else ``""``).
+
+    Each command runs as ``python -m imageform ...`` in its own process, at most ``jobs`` at
+    once (default: the CPU count); the processes share the cache folder of this one.
+    """
+    from imageform._kernels.jit import configure_cache
+
+    configure_cache()  # children inherit NUMBA_CACHE_DIR when the package folder is read-only
+    n = max(1, jobs or os.cpu_count() or 1)
+    env = {**os.environ, "MPLBACKEND": "Agg"}
+    done: list[tuple[str, float, str]] = []
+    with tempfile.TemporaryDirectory(prefix="imageform-warm-") as tmp:
+        work = Path(tmp)
+        subprocess.run(
+            [sys.executable, "-c", _INPUTS, str(work)],
+            env={**env, "IMAGEFORM_DISABLE_NUMBA": "1"},
+            check=True,
+            stdout=subprocess.DEVNULL,
+        )
+        pending = _jobs(work)
+        running: list[tuple[list[str], float, subprocess.Popen[bytes], Path]] = []
+        while pending or running:
+            while pending and len(running) < n:
+                argv = pending.pop(0)
+                err = work / f"job{len(pending)}.err"
+                with err.open("wb") as stderr:
+                    proc = subprocess.Popen(
+                        [sys.executable, "-m", "imageform", *argv],
+                        env=env,
+                        stdout=subprocess.DEVNULL,
+                        stderr=stderr,
+                    )
+                running.append((argv, time.perf_counter(), proc, err))
+            time.sleep(0.05)
+            for item in list(running):
+                argv, t0, proc, err = item
+                if proc.poll() is not None:
+                    running.remove(item)
+                    name = " ".join(a for a in argv if not a.startswith(str(work)) and a != "-o")
+                    lines = err.read_text(errors="replace").strip().splitlines()
+                    why = "" if proc.returncode == 0 else (lines or [f"exit {proc.returncode}"])[-1]
+                    done.append((name, time.perf_counter() - t0, why))
+    return done
+
+
+def _files() -> list[Path]:
+    from imageform._kernels.jit import cache_location
+
+    where, reason = cache_location()
+    if reason == "in-tree":
+        roots = [where]
+    else:
+        # numba's sub-folder for one source folder: its name and the SHA-1 of its path
+        import hashlib
+
+        from imageform._kernels import jit
+
+        src = os.path.abspath(os.path.dirname(jit.__file__))
+        sub = "_".join([os.path.basename(src), hashlib.sha1(src.encode()).hexdigest()])
+        roots = [where / sub]
+    return [p for r in roots if r.is_dir() for p in r.iterdir() if p.suffix in (".nbi", ".nbc")]
+
+
+@click.command(
+    "cache",
+    short_help="Where numba's compiled kernels are cached; --warm compiles them, --clear "
+    "removes them.",
+)
+@click.option("--warm", is_flag=True, help="Compile the hot kernels now (once per machine).")
+@click.option("--clear", is_flag=True, help="Remove imageform's compiled kernels.")
+@click.option("--jobs", type=click.IntRange(1), default=None, help="Processes for --warm.")
+@click.option("--json", "as_json", is_flag=True, help="Print the result as JSON.")
+def cache_command(warm: bool, clear: bool, jobs: int | None, as_json: bool) -> None:
+    """Show where numba caches imageform's compiled kernels; warm or clear that cache.
+
+    The cache is NUMBA_CACHE_DIR when set; else __pycache__ beside the kernels when that is
+    writable; else the user's cache folder (~/.cache/imageform/numba on Linux).
+    """
+    from imageform._kernels.jit import cache_location, configure_cache
+
+    configure_cache()
+    where, reason = cache_location()
+    removed = 0
+    if clear:
+        for f in _files():
+            f.unlink(missing_ok=True)
+            removed += 1
+    warmed = warm_cache(jobs) if warm else []
+    files = _files()
+    size = sum(f.stat().st_size for f in files)
+    failed = [f"imageform {name}: {why}" for name, _, why in warmed if why]
+    if as_json:
+        out = {"cache_dir": str(where), "reason": reason, "files": len(files), "bytes": size}
+        out |= {"removed": removed} if clear else {}
+        out |= {
+            "warmed": [{"command": n, "seconds": round(t, 2), "error": e} for n, t, e in warmed]
+        }
+        click.echo(json.dumps(out))
+    else:
+        why = {
+            "NUMBA_CACHE_DIR": "NUMBA_CACHE_DIR is set",
+            "in-tree": "beside the kernels' source, writable",
+            "user": "the package folder is read-only: the user's cache folder",
+        }[reason]
+        click.echo(f"cache: {where} ({why})")
+        if clear:
+            click.echo(f"removed {removed} files")
+        for name, secs, why in warmed:
+            click.echo(f"warmed: imageform {name}: {secs:.1f} s" + (" FAILED" if why else ""))
+        click.echo(f"{len(files)} files, {size / 1e6:.1f} MB")
+    if failed:
+        raise click.ClickException(f"cache --warm: {len(failed)} command(s) failed: {failed[0]}")

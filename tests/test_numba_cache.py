@@ -1,0 +1,216 @@
+"""numba's cache of imageform's kernels: one decorator policy, and a deterministic location.
+
+``imageform._kernels.jit``: every kernel is cached; where the package folder cannot be written
+(a wheel installed read-only, system-wide) and ``NUMBA_CACHE_DIR`` is not set, the cache is
+the user's cache folder (``$XDG_CACHE_HOME/imageform/numba``), so the second process loads
+what the first compiled. Each check runs in fresh interpreters (subprocesses).
+"""
+
+from __future__ import annotations
+
+import importlib
+import json
+import os
+import pkgutil
+import shutil
+import stat
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+import pytest
+
+import imageform._kernels as kernels_pkg
+from imageform._kernels import jit
+
+SRC = Path(__file__).resolve().parents[1] / "src"
+
+
+def test_every_kernel_is_cached() -> None:
+    """The one policy: every numba dispatcher of imageform._kernels caches (cache=True)."""
+    from numba.core.caching import NullCache
+    from numba.core.registry import CPUDispatcher
+
+    found, uncached = 0, []
+    for info in pkgutil.iter_modules(kernels_pkg.__path__):
+        module = importlib.import_module(f"imageform._kernels.{info.name}")
+        for name, value in vars(module).items():
+            if isinstance(value, CPUDispatcher) and value.__module__ == module.__name__:
+                found += 1
+                if isinstance(value._cache, NullCache):  # type: ignore[attr-defined]
+                    uncached.append(f"{info.name}.{name}")
+    assert found > 90
+    assert uncached == []
+
+
+def test_kernels_use_the_policy_decorator() -> None:
+    """No kernel module calls numba.njit / numba.jit itself (one policy, in jit.py)."""
+    for path in Path(kernels_pkg.__path__[0]).glob("*.py"):
+        if path.name == "jit.py":
+            continue
+        text = path.read_text()
+        for bad in ("nb.njit", "numba.njit", "from numba import njit", "nb.jit(", "@jit"):
+            assert bad not in text, f"{path.name} uses {bad}: use imageform._kernels.jit.njit"
+
+
+def test_njit_defaults_and_overrides() -> None:
+    @jit.njit
+    def one(x):  # type: ignore[no-untyped-def]
+        return x + 1
+
+    @jit.njit(cache=False, error_model="numpy")
+    def two(x):  # type: ignore[no-untyped-def]
+        return x + 2
+
+    from numba.core.caching import NullCache
+
+    assert not isinstance(one._cache, NullCache) and one(1) == 2
+    assert isinstance(two._cache, NullCache) and two(1) == 3
+
+
+@pytest.mark.skipif(sys.platform in ("win32", "darwin"), reason="XDG layout: Linux and BSD")
+def test_user_cache_dir_follows_xdg(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
+    assert jit.user_cache_dir() == tmp_path / "imageform" / "numba"
+    monkeypatch.setenv("XDG_CACHE_HOME", "relative/ignored")  # the spec: absolute paths only
+    assert jit.user_cache_dir() == Path.home() / ".cache" / "imageform" / "numba"
+    monkeypatch.delenv("XDG_CACHE_HOME")
+    assert jit.user_cache_dir() == Path.home() / ".cache" / "imageform" / "numba"
+
+
+_PROBE = r"""
+import json, os, sys
+from imageform._kernels.jit import cache_location, njit
+import numba
+
+@njit
+def probe(x):
+    return x * 2.0 + 1.0
+
+value = probe(1.5)
+where, reason = cache_location()
+print(json.dumps({"value": value, "where": str(where), "reason": reason,
+                  "numba": numba.config.CACHE_DIR, "env": os.environ.get("NUMBA_CACHE_DIR"),
+                  "hits": sum(probe.stats.cache_hits.values()),
+                  "misses": sum(probe.stats.cache_misses.values())}))
+"""
+
+
+def _read_only_copy(tmp_path: Path) -> Path:
+    """A copy of imageform whose folders cannot be written (as an installed wheel, chmod
+    a-w); the probe script lives in it too, so that numba's in-tree cache is ruled out."""
+    site = tmp_path / "site"
+    shutil.copytree(
+        SRC / "imageform", site / "imageform", ignore=shutil.ignore_patterns("__pycache__")
+    )
+    (site / "probe_kernel.py").write_text(_PROBE)
+    for root, _dirs, files in os.walk(site):
+        for name in files:
+            p = Path(root) / name
+            p.chmod(p.stat().st_mode & ~(stat.S_IWUSR | stat.S_IWGRP | stat.S_IWOTH))
+        Path(root).chmod(0o555)
+    return site
+
+
+def _as_unprivileged() -> list[str]:
+    # root writes through chmod a-w: drop to nobody where we are root (CI containers)
+    if os.geteuid() != 0:
+        return []
+    setpriv = shutil.which("setpriv")
+    if setpriv is None:
+        pytest.skip("running as root without setpriv: cannot make a folder unwritable")
+    return [setpriv, "--reuid=65534", "--regid=65534", "--clear-groups"]
+
+
+@pytest.mark.skipif(not hasattr(os, "geteuid"), reason="POSIX permissions")
+def test_read_only_package_caches_in_the_user_cache() -> None:
+    prefix = _as_unprivileged()
+    # not pytest's tmp_path: its parents are private to the user running the tests
+    tmp_path = Path(tempfile.mkdtemp(prefix="imageform-ro-"))
+    tmp_path.chmod(0o755)
+    site = _read_only_copy(tmp_path)
+    home = tmp_path / "home"
+    home.mkdir()
+    home.chmod(0o777)
+    env = {k: v for k, v in os.environ.items() if not k.startswith(("NUMBA_", "_IMAGEFORM"))}
+    env.update(PYTHONPATH=str(site), HOME=str(home), XDG_CACHE_HOME=str(home / "cache"))
+    runs = []
+    try:
+        for _ in range(2):
+            done = subprocess.run(
+                [*prefix, sys.executable, str(site / "probe_kernel.py")],
+                env=env,
+                capture_output=True,
+                text=True,
+                check=False,
+                cwd=home,
+            )
+            assert done.returncode == 0, done.stderr[-2000:]
+            runs.append(json.loads(done.stdout))
+        expected = str(home / "cache" / "imageform" / "numba")
+        first, second = runs
+        assert first["value"] == second["value"] == 4.0
+        assert first["reason"] == "user" and first["where"] == expected
+        assert first["numba"] == first["env"] == expected
+        assert (first["misses"], first["hits"]) == (1, 0)
+        assert (second["misses"], second["hits"]) == (0, 1), "the second process compiled again"
+        cached = list(Path(expected).rglob("probe_kernel.probe-*.nbi"))
+        assert len(cached) == 1
+        assert not list(site.rglob("*.nbi")), "nothing is written beside the read-only source"
+    finally:
+        for root, _, _ in os.walk(site):
+            Path(root).chmod(0o755)
+        shutil.rmtree(tmp_path, ignore_errors=True)
+
+
+def test_numba_cache_dir_wins(tmp_path: Path) -> None:
+    env = {k: v for k, v in os.environ.items() if not k.startswith(("NUMBA_", "_IMAGEFORM"))}
+    env.update(PYTHONPATH=str(SRC), NUMBA_CACHE_DIR=str(tmp_path / "mine"), MPLBACKEND="Agg")
+    done = subprocess.run(
+        [sys.executable, "-m", "imageform", "cache", "--json"],
+        env=env,
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    assert done.returncode == 0, done.stderr
+    out = json.loads(done.stdout)
+    assert out["cache_dir"] == str(tmp_path / "mine") and out["reason"] == "NUMBA_CACHE_DIR"
+    assert out["files"] == 0
+
+
+def test_cache_clear_removes_only_imageforms_kernels(tmp_path: Path) -> None:
+    import hashlib
+
+    src = os.path.abspath(os.path.dirname(jit.__file__))
+    ours = tmp_path / "_".join([os.path.basename(src), hashlib.sha1(src.encode()).hexdigest()])
+    other = tmp_path / "elsewhere_0123"
+    for folder in (ours, other):
+        folder.mkdir()
+        (folder / "k.f-1.py311.nbi").write_bytes(b"x")
+        (folder / "k.f-1.py311.1.nbc").write_bytes(b"yy")
+    env = {k: v for k, v in os.environ.items() if not k.startswith(("NUMBA_", "_IMAGEFORM"))}
+    env.update(PYTHONPATH=str(SRC), NUMBA_CACHE_DIR=str(tmp_path))
+    argv = [sys.executable, "-m", "imageform", "cache", "--json"]
+    listed = json.loads(subprocess.run(argv, env=env, capture_output=True, check=True).stdout)
+    assert (listed["files"], listed["bytes"]) == (2, 3)
+    done = subprocess.run([*argv, "--clear"], env=env, capture_output=True, check=True)
+    cleared = json.loads(done.stdout)
+    assert (cleared["removed"], cleared["files"]) == (2, 0)
+    assert not list(ours.iterdir()) and len(list(other.iterdir())) == 2
+
+
+def test_warm_runs_each_command_and_reports_failures(
+    monkeypatch: pytest.MonkeyPatch, tmp_path: Path
+) -> None:
+    from imageform.cli import _cache
+
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path))
+    monkeypatch.setenv("PYTHONPATH", str(SRC))
+    monkeypatch.setattr(_cache, "_jobs", lambda work: [["--version"], ["no-such-command"]])
+    done = _cache.warm_cache(jobs=2)
+    assert sorted(name for name, _, _ in done) == ["--version", "no-such-command"]
+    errors = {name: why for name, _, why in done}
+    assert errors["--version"] == ""
+    assert "no-such-command" in errors["no-such-command"]
