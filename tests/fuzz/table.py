@@ -1321,6 +1321,9 @@ VALID.update(
         "imageform.workflows.calibration.CalibrateOptions.paths": method(
             VALID["imageform.workflows.calibration.CalibrateOptions"], "output"
         ),
+        "imageform.workflows.calibration.CalibrateOptions.marker_mm": method(
+            call(board="charuco:7x5", square="30mm", marker="22mm")
+        ),
         "imageform.workflows.calibration.CalibrateOptions.square_mm": method(
             VALID["imageform.workflows.calibration.CalibrateOptions"]
         ),

@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import warnings
 from collections.abc import Collection, Sequence
-from typing import Any
 
 import numpy as np
 import numpy.typing as npt
@@ -30,7 +29,6 @@ from imageform.errors import (
 )
 from imageform.geometry._checks import (
     as_matrix,
-    as_points,
     check_image_size,
     check_K,
     check_memory,
@@ -38,6 +36,7 @@ from imageform.geometry._checks import (
 )
 from imageform.geometry.calibration_refine import GLOBAL_NAMES, refine, rodrigues
 from imageform.geometry.calibration_result import CalibrationResult
+from imageform.geometry.calibration_views import _views
 from imageform.geometry.calibration_zhang import (
     dlt_init,
     homographies,
@@ -76,58 +75,6 @@ def checkerboard_points(pattern_size: tuple[int, int], square_size: float = 1.0)
     s = as_real(square_size, "square_size", positive=True, maximum=1e90)
     r, c = np.mgrid[0:rows, 0:cols]
     return np.stack([c.ravel() * s, r.ravel() * s, np.zeros(rows * cols)], axis=-1).astype(float)
-
-
-#: The most views one calibration takes (each adds six unknowns to the solve).
-MAX_VIEWS = 10_000
-
-
-def _views(
-    object_points: Any, image_points: Any, image_name: str = "image_points"
-) -> tuple[list[F64], list[F64]]:
-    for value, name, dim in (
-        (object_points, "object_points", 3),
-        (image_points, image_name, 2),
-    ):
-        if (
-            isinstance(value, str | bytes)
-            or not hasattr(value, "__len__")
-            or not hasattr(value, "__getitem__")
-            or getattr(value, "ndim", 1) == 0
-        ):
-            raise InvalidInputError(
-                f"expected {name} as a sequence of (N, {dim}) arrays, one per view, got "
-                + describe(value)
-            )
-    if len(object_points) > MAX_VIEWS:
-        raise InvalidInputError(
-            f"expected object_points for at most {MAX_VIEWS} views, got {len(object_points)}"
-        )
-    objs = [object_points[k] for k in range(len(object_points))]
-    imgs = [image_points[k] for k in range(len(image_points))]
-    if len(objs) != len(imgs):
-        raise InvalidInputError(
-            f"expected one object-point array per view of image points (object_points and "
-            f"{image_name} of the same length), got {len(objs)} and {len(imgs)}"
-        )
-    if not objs:
-        raise InvalidInputError("expected object_points of at least one view, got none")
-    out_o, out_i = [], []
-    for k, (o, i) in enumerate(zip(objs, imgs, strict=True)):
-        oa = np.asarray(to_numpy(as_points(o, f"object_points[{k}]", 3)), dtype=np.float64)
-        ia = np.asarray(to_numpy(as_points(i, f"{image_name}[{k}]", 2)), dtype=np.float64)
-        if oa.ndim != 2 or ia.ndim != 2 or oa.shape[0] != ia.shape[0]:
-            raise InvalidInputError(
-                f"view {k}: expected object_points (N, 3) and {image_name} (N, 2) with the same "
-                f"N, got {oa.shape} and {ia.shape}"
-            )
-        if oa.shape[0] < 4:
-            raise DegenerateConfigurationError(
-                f"view {k}: expected at least 4 points in object_points, got {oa.shape[0]}"
-            )
-        out_o.append(oa)
-        out_i.append(ia)
-    return out_o, out_i
 
 
 def _is_planar_z0(objs: list[F64]) -> bool:

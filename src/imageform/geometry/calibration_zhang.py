@@ -16,6 +16,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from imageform.errors import DegenerateConfigurationError
+from imageform.geometry.calibration_views import _views
 from imageform.geometry.camera import decompose_projection_matrix
 from imageform.geometry.dlt import estimate_projection_matrix
 from imageform.geometry.homography import estimate_homography
@@ -29,8 +30,6 @@ F64 = NDArray[np.float64]
 def _checked(object_points: Any, image_points: Any) -> tuple[list[F64], list[F64]]:
     """The views as :func:`~imageform.geometry.calibrate_camera` checks them (one pass over
     the small point arrays)."""
-    from imageform.geometry.calibration import _views  # calibration imports this module
-
     return _views(object_points, image_points)
 
 

@@ -34,7 +34,7 @@ from imageform.errors import (
     InvalidInputError,
 )
 from imageform.geometry._checks import check_bounded, size_pair
-from imageform.geometry.calibration import _views, calibrate_camera
+from imageform.geometry.calibration import calibrate_camera
 from imageform.geometry.calibration_refine import (
     GLOBAL_NAMES,
     _skew,
@@ -43,6 +43,7 @@ from imageform.geometry.calibration_refine import (
     rodrigues,
 )
 from imageform.geometry.calibration_result import CalibrationResult
+from imageform.geometry.calibration_views import _views
 from imageform.geometry.distortion import BrownConrady
 
 __all__ = [
