@@ -120,7 +120,9 @@ def test_zarr_input_and_cli(tmp_path: Path, capsys: pytest.CaptureFixture[str]) 
 
 def test_errors(tiled: tuple[Path, np.ndarray], tmp_path: Path) -> None:
     src, _ = tiled
-    with pytest.raises(UnknownOptionError, match="valid: 'convert', 'white_balance'"):
+    with pytest.raises(
+        UnknownOptionError, match="valid: 'convert', 'stain_normalize', 'white_balance'"
+    ):
         process_chunked(src, tmp_path / "o.zarr", "demosaic")
     with pytest.raises(UnknownOptionError, match="'gray_world', 'manual', 'shades_of_gray'"):
         process_chunked(src, tmp_path / "o.zarr", "white_balance", {"method": "white-patch"})

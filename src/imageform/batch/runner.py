@@ -559,7 +559,10 @@ def _client(scheduler: str | None, n_workers: int) -> Iterator[Any]:
     distributed = require("distributed", what="imageform batch")
     if scheduler:
         try:
-            client = distributed.Client(scheduler)  # timeout: distributed.comm.timeouts.connect
+            # not the default scheduler: the run submits to this client explicitly, and a
+            # default client leaks dask's global "scheduler" setting when clients close out
+            # of order (a later dask.compute then asks for a closed client)
+            client = distributed.Client(scheduler, set_as_default=False)
         except (OSError, TimeoutError) as exc:
             raise InvalidInputError(f"cannot reach the scheduler {scheduler}: {exc}") from None
         with client:
@@ -576,7 +579,7 @@ def _client(scheduler: str | None, n_workers: int) -> Iterator[Any]:
         silence_logs=logging.CRITICAL,
         preload=["imageform.batch._worker_setup"],
     )
-    with cluster, distributed.Client(cluster) as client:
+    with cluster, distributed.Client(cluster, set_as_default=False) as client:
         yield client
 
 

@@ -146,7 +146,7 @@ def chroma_subsample(
     ycbcr : array_like, shape (..., H, W, 3)
         Y', Cb, Cr (any scale; see :func:`imageform.color.srgb_to_ycbcr`).
     scheme : {"4:4:4", "4:2:2", "4:2:0"}
-        The J:a:b subsampling scheme.
+        The chroma subsampling scheme (``J:a:b`` notation).
     siting : {"left", "center", "top_left"}
         Chroma siting (module table); 4:2:2 uses only its horizontal part.
 
