@@ -178,6 +178,14 @@ def _fit_h(src: np.ndarray, dst: np.ndarray) -> np.ndarray:
 # ---------------------------------------------------------------- candidates
 
 
+def _gaussian_taps(sigma: float) -> np.ndarray:
+    """Normalised Gaussian taps, radius ``int(3 sigma + 0.5)`` (scipy's default truncation)."""
+    radius = int(3.0 * sigma + 0.5)
+    x = np.arange(-radius, radius + 1, dtype=np.float64)
+    w = np.exp(-0.5 * (x / sigma) ** 2)
+    return np.asarray(w / w.sum())
+
+
 def _work_image(rgb: np.ndarray, max_size: int) -> tuple[np.ndarray, int]:
     """Block mean by an integer factor so that the long side is at most ``max_size``."""
     hgt, wid = rgb.shape[:2]
@@ -193,29 +201,22 @@ def _candidates(work: np.ndarray) -> dict[str, np.ndarray]:
     """Square-ish flat regions of the work image: centroid, area, covariance."""
     from scipy import ndimage, spatial
 
-    sm = ndimage.gaussian_filter(work, sigma=(0.8, 0.8, 0.0), mode="nearest")
-    gx = ndimage.sobel(sm, axis=1, mode="nearest")
-    gy = ndimage.sobel(sm, axis=0, mode="nearest")
-    grad = np.sqrt(np.sum(gx * gx + gy * gy, axis=2)) / 8.0
+    from imageform._kernels.chart import flat_gradient_numba, region_moments_numba
+
+    taps = _gaussian_taps(0.8).astype(np.float32)
+    grad = flat_gradient_numba(np.ascontiguousarray(work, dtype=np.float32), taps)
     hgt, wid = grad.shape
-    yy, xx = np.mgrid[0:hgt, 0:wid]
-    xs, ys = xx.ravel().astype(np.float64), yy.ravel().astype(np.float64)
     max_area = hgt * wid / 12.0
     out: list[np.ndarray] = []
     for level in _LEVELS:
         lab, n = ndimage.label(grad < level)
         if n == 0:
             continue
-        flat = lab.ravel()
-        m0 = np.bincount(flat, minlength=n + 1)[1:].astype(np.float64)
+        mom = region_moments_numba(lab, n)
+        m0, mx, my, mxx, myy, mxy = mom.T
         keep = (m0 >= 16) & (m0 <= max_area)
         if not keep.any():
             continue
-        mx = np.bincount(flat, xs, n + 1)[1:]
-        my = np.bincount(flat, ys, n + 1)[1:]
-        mxx = np.bincount(flat, xs * xs, n + 1)[1:]
-        myy = np.bincount(flat, ys * ys, n + 1)[1:]
-        mxy = np.bincount(flat, xs * ys, n + 1)[1:]
         a = m0[keep]
         cx, cy = mx[keep] / a, my[keep] / a
         sxx = mxx[keep] / a - cx * cx + 1 / 12
