@@ -26,6 +26,7 @@ class ChartCase:
     centres: np.ndarray  # (24, 2) true patch centres
     pitch: float  # smallest distance between neighbouring true centres (pixels)
     occluded: np.ndarray  # (24,) bool: patch covered by clutter
+    patches: np.ndarray  # (24, 3) true encoded sRGB of the patches as lit (before blur, noise)
     params: dict[str, float]
 
 
@@ -95,4 +96,4 @@ def chart_case(
     quality = int(rng.integers(70, 96))
     params["jpeg_quality"] = quality
     params["occluded"] = float(occluded.sum())
-    return ChartCase(_jpeg(img, quality), photo.centres, pitch, occluded, params)
+    return ChartCase(_jpeg(img, quality), photo.centres, pitch, occluded, photo.patches, params)

@@ -47,7 +47,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from imageform._colormath import srgb_decode
+from imageform._colormath import srgb_decode, srgb_encode
 from imageform._validate import as_int, as_real, describe, format_shape
 from imageform.analysis._arrays import image_in, is_dask
 from imageform.analysis._guard import real_array
@@ -398,17 +398,20 @@ def _sample(work: np.ndarray, h: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 def _colour_fit(
     meas: np.ndarray, ref_lin: np.ndarray, usable: np.ndarray
 ) -> tuple[float, np.ndarray]:
-    """R² of the affine linear-light fit ref ~ [meas, 1] W, robust to a few outliers."""
+    """R² of the affine linear-light fit ref ~ [meas, 1] W, robust to a few outliers (judged
+    on the encoded residual, so that dark patches count as much as light ones)."""
     x = np.c_[srgb_decode(np, np.clip(meas, 0.0, 1.0)), np.ones(len(meas))]
+    ref_enc = srgb_encode(np, ref_lin)
     use = usable.copy()
     out = np.zeros(len(meas), dtype=bool)
     for _ in range(3):
         if use.sum() < 14:
             return -1.0, out
         w, *_ = np.linalg.lstsq(x[use], ref_lin[use], rcond=None)
-        err = np.linalg.norm(x @ w - ref_lin, axis=1)
+        fit = srgb_encode(np, np.clip(x @ w, 0.0, 1.0))
+        err = np.linalg.norm(fit - ref_enc, axis=1)
         med = float(np.median(err[use]))
-        bad = use & (err > max(4.0 * med, 0.04))
+        bad = use & (err > max(5.0 * med, 0.06))
         if not bad.any() or (out | bad).sum() > 5:
             break
         out |= bad
@@ -818,7 +821,6 @@ def synthetic_chart_photo(
     """
     from scipy import ndimage
 
-    from imageform._colormath import srgb_encode
     from imageform._random import as_rng
     from imageform._validate import as_float, as_size
     from imageform.analysis.synthetic import COLORCHECKER_SRGB8, _smooth_noise
