@@ -5,6 +5,8 @@ with a plain NumPy/SciPy twin.
   :math:`\\sqrt{\\sum_c (S_x * G * I_c)^2 + (S_y * G * I_c)^2} / 8` of an (H, W, 3) image:
   separable Gaussian ``taps``, then the 3 × 3 Sobel operator (divided by 8: a unit-slope
   ramp gives 1), edges replicated.
+- :func:`block_mean_numba` / :func:`block_mean_numpy`: the mean of ``f × f`` pixel blocks
+  (any input dtype, divided by ``scale``: 255 for uint8), the detector's working image.
 - :func:`region_moments_numba` / :func:`region_moments_numpy`: per label ``1..n`` of a label
   image, the pixel count and the sums of ``u, v, u², v², u v`` (``u`` the column).
 
@@ -19,6 +21,8 @@ from numba import njit
 from numpy.typing import NDArray
 
 __all__ = [
+    "block_mean_numba",
+    "block_mean_numpy",
     "flat_gradient_numba",
     "flat_gradient_numpy",
     "region_moments_numba",
@@ -123,3 +127,33 @@ def region_moments_numpy(labels: NDArray[np.integer], n: int) -> NDArray[np.floa
     xs, ys = xx.ravel().astype(np.float64), yy.ravel().astype(np.float64)
     cols = [np.ones_like(xs), xs, ys, xs * xs, ys * ys, xs * ys]
     return np.stack([np.bincount(flat, c, n + 1)[1:] for c in cols], axis=1)
+
+
+@njit(cache=True, fastmath=False)
+def block_mean_numba(
+    img: NDArray[np.generic], f: int, scale: float
+) -> NDArray[np.float32]:  # pragma: no cover - numba-compiled
+    """(H // f, W // f, C) means of f x f blocks of ``img`` divided by ``scale``."""
+    h, w, nc = img.shape
+    h2, w2 = h // f, w // f
+    out = np.zeros((h2, w2, nc), dtype=np.float32)
+    norm = 1.0 / (f * f * scale)
+    for y in range(h2 * f):
+        yo = y // f
+        for x in range(w2 * f):
+            xo = x // f
+            for c in range(nc):
+                out[yo, xo, c] += img[y, x, c]
+    for yo in range(h2):
+        for xo in range(w2):
+            for c in range(nc):
+                out[yo, xo, c] = np.float32(out[yo, xo, c] * norm)
+    return out
+
+
+def block_mean_numpy(img: NDArray[np.generic], f: int, scale: float) -> NDArray[np.float64]:
+    """Twin of :func:`block_mean_numba` by reshaping."""
+    h, w, nc = img.shape
+    h2, w2 = h // f, w // f
+    a = np.asarray(img[: h2 * f, : w2 * f], dtype=np.float64)
+    return a.reshape(h2, f, w2, f, nc).mean(axis=(1, 3)) / scale

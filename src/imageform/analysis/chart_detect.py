@@ -186,15 +186,36 @@ def _gaussian_taps(sigma: float) -> np.ndarray:
     return np.asarray(w / w.sum())
 
 
-def _work_image(rgb: np.ndarray, max_size: int) -> tuple[np.ndarray, int]:
-    """Block mean by an integer factor so that the long side is at most ``max_size``."""
+def _work_image(rgb: np.ndarray, max_size: int, scale: float) -> tuple[np.ndarray, int]:
+    """Block mean by an integer factor so that the long side is at most ``max_size``, as
+    float32 in [0, 1] (``scale``: 255 for uint8)."""
+    from imageform._kernels.chart import block_mean_numba
+
     hgt, wid = rgb.shape[:2]
     f = max(1, int(np.ceil(max(hgt, wid) / max_size)))
     if f == 1:
-        return rgb.astype(np.float32), 1
-    h2, w2 = hgt // f, wid // f
-    small = rgb[: h2 * f, : w2 * f].astype(np.float32)
-    return small.reshape(h2, f, w2, f, 3).mean(axis=(1, 3)), f
+        return np.asarray(rgb, dtype=np.float32) / np.float32(scale), 1
+    return block_mean_numba(np.ascontiguousarray(rgb), f, float(scale)), f
+
+
+def _rgb_in(image: object) -> tuple[np.ndarray, float]:
+    """The photograph as an (H, W, 3) array and its full scale: uint8 and uint16 arrays are
+    kept as they are (no float copy of a large photograph), the rest goes through the
+    usual checks (``image_in``: floats in [0, 1]); Dask is computed."""
+    if isinstance(image, np.ndarray) and image.dtype in (np.uint8, np.uint16):
+        if image.ndim != 3 or image.shape[-1] != 3:
+            raise InvalidInputError(
+                f"expected image of shape (H, W, 3), got {format_shape(tuple(image.shape))}"
+            )
+        return image, 255.0 if image.dtype == np.uint8 else 65535.0
+    rgb = image_in(image)
+    if is_dask(rgb):
+        rgb = np.asarray(rgb.compute())
+    if rgb.ndim != 3:
+        raise InvalidInputError(
+            f"expected image of shape (H, W, 3), got {format_shape(tuple(rgb.shape))}"
+        )
+    return rgb, 1.0
 
 
 def _candidates(work: np.ndarray) -> dict[str, np.ndarray]:
@@ -512,13 +533,7 @@ def detect_colorchecker(
     """
     from imageform.analysis.synthetic import COLORCHECKER_SRGB8
 
-    rgb = image_in(image)
-    if is_dask(rgb):
-        rgb = np.asarray(rgb.compute())
-    if rgb.ndim != 3:
-        raise InvalidInputError(
-            f"expected image of shape (H, W, 3), got {format_shape(tuple(rgb.shape))}"
-        )
+    rgb, full = _rgb_in(image)
     max_size = as_int(max_size, "max_size", minimum=64, maximum=100_000)
     min_score = as_real(min_score, "min_score", minimum=-1.0, maximum=1.0)
     sample = as_real(sample, "sample", positive=True, maximum=1.0)
@@ -534,7 +549,7 @@ def detect_colorchecker(
         raise ChartNotFoundError(
             f"image of {rgb.shape[0]}x{rgb.shape[1]} pixels is too small to hold a colour chart"
         )
-    work, f = _work_image(rgb, max_size)
+    work, f = _work_image(rgb, max_size, full)
     cand = _candidates(work)
     n_cand = len(cand["area"])
     if n_cand < 6:
@@ -658,13 +673,7 @@ def measure_chart_patches(
     """
     if not isinstance(chart, ChartDetection):
         raise TypeError(f"expected chart as a ChartDetection, got {describe(chart)}")
-    rgb = image_in(image)
-    if is_dask(rgb):
-        rgb = np.asarray(rgb.compute())
-    if rgb.ndim != 3:
-        raise InvalidInputError(
-            f"expected image of shape (H, W, 3), got {format_shape(tuple(rgb.shape))}"
-        )
+    rgb, full = _rgb_in(image)
     max_std = as_real(max_std, "max_std", nonnegative=True)
     saturation = as_real(saturation, "saturation", positive=True)
     max_saturated_fraction = as_real(
@@ -679,7 +688,7 @@ def measure_chart_patches(
         sv, su, mask = _quad_mask_bounds(chart.quads[k], hgt, wid)
         if not mask.any():
             continue
-        px = rgb[sv, su][mask].astype(np.float64)
+        px = rgb[sv, su][mask].astype(np.float64) / full
         means[k] = px.mean(axis=0)
         stds[k] = px.std(axis=0)
         sat[k] = (px >= saturation).any(axis=1).mean()

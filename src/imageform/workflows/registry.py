@@ -9,6 +9,7 @@ from imageform.errors import UnknownOptionError
 from imageform.workflows import (
     analysis,
     calibration,
+    chart,
     color,
     geometry,
     lecture,
@@ -40,6 +41,7 @@ WORKFLOWS = MappingProxyType(
             *optics.WORKFLOWS,
             *sensor.WORKFLOWS,
             *analysis.WORKFLOWS,
+            *chart.WORKFLOWS,
             *sharpness.WORKFLOWS,
         )
     }
