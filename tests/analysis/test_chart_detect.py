@@ -202,3 +202,34 @@ def test_against_colour_checker_detection(kodak: list[np.ndarray]) -> None:
     assert np.median(_de(ours.means, case.patches)) < 2.0
     if len(peer):  # the peer's swatches, same order, agree with ours
         assert np.median(_de(np.asarray(peer[0], float), ours.means)) < 3.0
+
+
+def test_cli_chart(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """``imageform chart``: JSON, overlay, CSV (read back by fit-correction), correction
+    (read by harmonize); a photograph without a chart exits 1 with one line."""
+    import json
+
+    from imageform.cli import main
+    from imageform.io import read_image, write_image
+
+    photo = synthetic_chart_photo(cast=(1.0, 0.85, 0.7), rng=3)
+    src = tmp_path / "photo.png"
+    write_image(src, np.round(photo.image * 255).astype(np.uint8))
+    out, ov, csv, corr = (tmp_path / n for n in ("c.json", "ov.png", "p.csv", "corr.json"))
+    argv = ["chart", str(src), "-o", str(out), "--overlay", str(ov), "--csv", str(csv)]
+    assert main([*argv, "--correction", str(corr), "--json"]) == 0
+    res = json.loads(capsys.readouterr().out)
+    assert res["mean_after"] < 1.5 < res["mean_before"]
+    data = json.loads(out.read_text())
+    assert data["kind"] == "colorchecker" and len(data["chart"]["centres"]) == 24
+    assert np.abs(np.asarray(data["chart"]["centres"]) - photo.centres).max() < 1.0
+    assert read_image(ov).shape == photo.image.shape
+    assert main(["fit-correction", str(csv), "-o", str(tmp_path / "c2.json")]) == 0
+    fixed = tmp_path / "fixed.png"
+    assert main(["harmonize", str(src), "-o", str(fixed), "--correction", str(corr)]) == 0
+    capsys.readouterr()
+    blank = tmp_path / "blank.png"
+    write_image(blank, np.full((64, 96, 3), 128, np.uint8))
+    assert main(["chart", str(blank), "-o", str(tmp_path / "x.json")]) == 1
+    err = capsys.readouterr().err.strip()
+    assert "chart" in err and len(err.splitlines()) == 1

@@ -302,7 +302,7 @@ def _hypotheses(cand: dict[str, np.ndarray]) -> tuple[np.ndarray, np.ndarray, np
     inv[:, 0, 1], inv[:, 1, 0] = -basis[:, 0, 1] / cross, -basis[:, 1, 0] / cross
     s = 12.0 * np.einsum("nij,njk,nlk->nil", inv, cov[i_idx], inv)
     s11, s22, s12 = s[:, 0, 0], s[:, 1, 1], s[:, 0, 1]
-    good = (s11 > 0.3) & (s11 < 0.95) & (s22 > 0.3) & (s22 < 0.95)
+    good = (s11 > 0.15) & (s11 < 0.95) & (s22 > 0.15) & (s22 < 0.95)
     good &= (s11 / s22 > 0.6) & (s11 / s22 < 1.65) & (np.abs(s12) < 0.25 * np.sqrt(s11 * s22))
     i_idx, basis, inv = i_idx[good], basis[good], inv[good]
     score = np.zeros(len(i_idx))
@@ -344,6 +344,29 @@ def _collect(
     return idx[first], keys[first], res[idx[first]]
 
 
+def _in_square_window(
+    idx: np.ndarray, keys: np.ndarray, size: int
+) -> tuple[np.ndarray, np.ndarray]:
+    """The members of the ``size × size`` window of lattice cells that holds the most (a chart
+    fits in one whatever its orientation): growth never strays onto clutter that happens to
+    continue the lattice far away."""
+    if not len(keys):
+        return idx, keys
+    lo, hi = keys.min(axis=0).astype(int), keys.max(axis=0).astype(int)
+    best, best_n = None, -1
+    for u0 in range(lo[0] - size + 1, hi[0] + 1):
+        in_u = (keys[:, 0] >= u0) & (keys[:, 0] < u0 + size)
+        if in_u.sum() <= best_n:
+            continue
+        for v0 in range(lo[1] - size + 1, hi[1] + 1):
+            m = in_u & (keys[:, 1] >= v0) & (keys[:, 1] < v0 + size)
+            n = int(m.sum())
+            if n > best_n:
+                best, best_n = m, n
+    assert best is not None
+    return idx[best], keys[best]
+
+
 def _grow(
     cand: dict[str, np.ndarray], origin: int, basis: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
@@ -357,6 +380,7 @@ def _grow(
     keys = np.zeros((0, 2))
     for tol in (0.22, 0.25, 0.28, 0.28):
         idx, keys, _ = _collect(cand, h, area_scale, tol)
+        idx, keys = _in_square_window(idx, keys, max(_ROWS, _COLS))
         if len(idx) < 4:
             return None
         span = keys.max(axis=0) - keys.min(axis=0)
@@ -425,18 +449,17 @@ def _colour_fit(
     ref_enc = srgb_encode(np, ref_lin)
     use = usable.copy()
     out = np.zeros(len(meas), dtype=bool)
-    for _ in range(3):
+    for _ in range(6):  # drop the worst patch, one at a time, while it stands out
         if use.sum() < 14:
             return -1.0, out
         w, *_ = np.linalg.lstsq(x[use], ref_lin[use], rcond=None)
         fit = srgb_encode(np, np.clip(x @ w, 0.0, 1.0))
-        err = np.linalg.norm(fit - ref_enc, axis=1)
-        med = float(np.median(err[use]))
-        bad = use & (err > max(5.0 * med, 0.06))
-        if not bad.any() or (out | bad).sum() > 5:
+        err = np.where(use, np.linalg.norm(fit - ref_enc, axis=1), -1.0)
+        worst = int(np.argmax(err))
+        if err[worst] <= max(5.0 * float(np.median(err[use])), 0.06):
             break
-        out |= bad
-        use &= ~bad
+        out[worst] = True
+        use[worst] = False
     w, *_ = np.linalg.lstsq(x[use], ref_lin[use], rcond=None)
     res = ref_lin[use] - x[use] @ w
     tot = ref_lin[use] - ref_lin[use].mean(axis=0)
@@ -472,7 +495,7 @@ def _best_window(
             a = _turn(quarter, u0, v0)
             hc = h @ a
             mean, spread = _sample(work, hc)
-            usable = (spread < 0.08) & (mean.max(axis=1) < 0.995)
+            usable = (spread < 0.08) & (mean.max(axis=1) < 0.98)
             r2, out = _colour_fit(mean, ref_lin, usable)
             if best is None or r2 > best[0]:
                 best = (r2, a, out)
@@ -595,6 +618,11 @@ def detect_colorchecker(
     inside = np.all((chart_xy > -0.5) & (chart_xy < [_COLS - 0.5, _ROWS - 0.5]), axis=1)
     chart_xy, pts = np.round(chart_xy[inside]), cand["c"][idx[inside]]
     hc = _fit_h(chart_xy, pts) if len(pts) >= 4 else h @ a
+    # the score and the outliers again, sampled through the refitted homography
+    mean, spread = _sample(work, hc)
+    r2_final, out_final = _colour_fit(mean, ref_lin, (spread < 0.08) & (mean.max(axis=1) < 0.98))
+    if r2_final >= r2 or r2_final >= min_score:
+        r2, out = r2_final, out_final
     found = np.zeros(_ROWS * _COLS, dtype=bool)
     found[(chart_xy[:, 1] * _COLS + chart_xy[:, 0]).astype(int)] = True
     scale = np.array([[f, 0.0, (f - 1) / 2.0], [0.0, f, (f - 1) / 2.0], [0.0, 0.0, 1.0]])
@@ -843,9 +871,9 @@ def synthetic_chart_photo(
             0.5 + 0.5 * _smooth_noise(gen, (hgt, wid), 30)[..., None]
         )
         for _ in range(40):
-            y, x = gen.integers(0, hgt), gen.integers(0, wid)
+            ry, rx = int(gen.integers(0, hgt)), int(gen.integers(0, wid))
             dy, dx = gen.integers(4, max(5, hgt // 6)), gen.integers(4, max(5, wid // 6))
-            base[y : y + dy, x : x + dx] = gen.uniform(0.05, 0.95, 3)
+            base[ry : ry + dy, rx : rx + dx] = gen.uniform(0.05, 0.95, 3)
         bg = np.clip(base, 0.0, 1.0)
     else:
         bg = np.asarray(image_in(background, "background"), dtype=np.float64)
@@ -888,7 +916,8 @@ def synthetic_chart_photo(
     card_lin = float(srgb_decode(np, np.array(gen.uniform(0.05, 0.12))))
     if u1 >= u0 and v1 >= v0:
         sub = (np.arange(3) - 1) / 3.0
-        vv, uu = np.mgrid[v0 : v1 + 1, u0 : u1 + 1].astype(np.float64)
+        grid = np.mgrid[v0 : v1 + 1, u0 : u1 + 1].astype(np.float64)
+        vv, uu = grid[0], grid[1]
         acc = np.zeros(uu.shape + (3,))
         cover = np.zeros(uu.shape)
         hinv = np.linalg.inv(h)

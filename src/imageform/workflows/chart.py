@@ -5,7 +5,8 @@ Writes a JSON file (``kind: "colorchecker"``): the chart's corners and homograph
 patch's centre, sampling quad, mean and flags, the correction (the fit ``fit-correction``
 does, measured -> reference) and CIEDE2000 per patch before and after. ``--correction``
 also writes the correction alone, the file ``imageform harmonize --correction`` reads;
-``--csv`` the table of the usable patches, whose ``a_*``/``b_*`` columns ``imageform fit-correction`` reads;
+``--csv`` the table of the usable patches, whose ``a_*``/``b_*`` columns
+``imageform fit-correction`` reads;
 ``--overlay`` the photograph with the detected lattice drawn over it.
 
 A separate command rather than a ``--detect`` option of ``fit-correction``: that command
