@@ -48,7 +48,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from imageform._colormath import srgb_decode, srgb_encode
-from imageform._validate import as_int, as_real, describe, format_shape
+from imageform._validate import as_int, as_real, check_memory, describe, format_shape
 from imageform.analysis._arrays import image_in, is_dask
 from imageform.analysis._guard import real_array
 from imageform.analysis.harmonize import ChartPatches, ChartWarning
@@ -727,8 +727,8 @@ def measure_chart_patches(
     )
     if not (~saturated & ~missing).any():
         raise InvalidInputError(
-            f"no usable chart patch: saturated {np.flatnonzero(saturated).tolist()}, missing "
-            f"{np.flatnonzero(missing).tolist()}"
+            f"no usable chart patch (max_std={max_std:g}, saturation={saturation:g}): saturated "
+            f"{np.flatnonzero(saturated).tolist()}, missing {np.flatnonzero(missing).tolist()}"
         )
     for what, idx in (
         ("saturated", np.flatnonzero(saturated)),
@@ -865,6 +865,7 @@ def synthetic_chart_photo(
     gen = as_rng(rng)
     if background is None:
         hgt, wid = as_size(shape, "shape")
+        check_memory(hgt * wid * 3 * 8 * 8.0, "shape", "the chart photograph")
         if hgt < 32 or wid < 32:
             raise InvalidInputError(f"expected shape of at least 32x32, got {hgt}x{wid}")
         base = 0.2 + 0.5 * gen.uniform(size=3) * (
@@ -882,6 +883,7 @@ def synthetic_chart_photo(
                 f"expected background of shape (H, W, 3), at least 32x32, got {describe(bg)}"
             )
         hgt, wid = bg.shape[:2]
+        check_memory(hgt * wid * 3 * 8 * 8.0, "background", "the chart photograph")
     width = (
         gen.uniform(0.15, 0.6)
         if width is None
@@ -899,7 +901,7 @@ def synthetic_chart_photo(
     if gains.shape != (3,) or np.any(gains <= 0):
         raise InvalidInputError(f"expected cast as 3 positive gains, got {describe(cast)}")
     shading = as_real(shading, "shading", minimum=0.0, maximum=0.9)
-    blur = as_real(blur, "blur", nonnegative=True)
+    blur = as_real(blur, "blur", nonnegative=True, maximum=100.0)
     noise = as_real(noise, "noise", nonnegative=True)
     h = _chart_homography(gen, hgt, wid, width, tilt, rotation)
     lin = srgb_decode(np, bg.copy())

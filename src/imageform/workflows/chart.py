@@ -56,6 +56,14 @@ class ChartOptions(ImageIn):
         output=True,
     )
 
+    def check(self) -> None:
+        from imageform._validate import as_int, as_real
+
+        super().check()
+        as_int(self.degree, "--degree", minimum=1, maximum=3)
+        as_int(self.max_size, "--max-size", minimum=64, maximum=100_000)
+        as_real(self.min_score, "--min-score", minimum=-1.0, maximum=1.0)
+
 
 def _draw(img: Any, polylines: list[Any], colour: tuple[float, float, float]) -> None:
     """Draw closed polylines (K, 2) of (u, v) points in place, 2 pixels wide."""
