@@ -463,7 +463,10 @@ def _colour_fit(
     w, *_ = np.linalg.lstsq(x[use], ref_lin[use], rcond=None)
     res = ref_lin[use] - x[use] @ w
     tot = ref_lin[use] - ref_lin[use].mean(axis=0)
-    r2 = 1.0 - float(np.sum(res * res)) / max(float(np.sum(tot * tot)), 1e-12)
+    ss_tot = float(np.sum(tot * tot))
+    if ss_tot < 1e-9:  # a reference without distinct colours identifies nothing
+        return -1.0, out
+    r2 = 1.0 - float(np.sum(res * res)) / ss_tot
     return r2, out
 
 

@@ -126,6 +126,7 @@ def chart(run: Run, opts: ChartOptions, *, out: Path, image: Path) -> Result:
 
     import numpy as np
 
+    from imageform._jsonio import dumps
     from imageform.analysis import (
         ChartPatches,
         ChartWarning,
@@ -134,7 +135,6 @@ def chart(run: Run, opts: ChartOptions, *, out: Path, image: Path) -> Result:
         fit_color_correction,
         measure_chart_patches,
     )
-    from imageform.analysis._arrays import write_json
     from imageform.analysis.synthetic import COLORCHECKER_SRGB8
     from imageform.io import write_image
 
@@ -176,7 +176,7 @@ def chart(run: Run, opts: ChartOptions, *, out: Path, image: Path) -> Result:
         "delta_e00_after": rep.delta_e_after.tolist(),
         **stats,
     }
-    write_json(run.file(out), _json_safe(payload))
+    run.file(out).write_text(dumps(payload) + "\n")
     if opts.correction is not None:
         corr.to_json(run.file(opts.correction))
     if opts.csv is not None:
@@ -219,19 +219,6 @@ def _scale(img: Any) -> float:
 
     dt = np.asarray(img).dtype
     return 255.0 if dt == np.uint8 else 65535.0 if dt == np.uint16 else 1.0
-
-
-def _json_safe(x: Any) -> Any:
-    """NaN (a missing patch's mean) as null: strict JSON."""
-    import math
-
-    if isinstance(x, dict):
-        return {k: _json_safe(v) for k, v in x.items()}
-    if isinstance(x, list | tuple):
-        return [_json_safe(v) for v in x]
-    if isinstance(x, float) and not math.isfinite(x):
-        return None
-    return x
 
 
 WORKFLOWS = (
