@@ -15,7 +15,7 @@ Measures, per method:
   over cases of the per-case median, and of the per-case maximum. The peer returns no
   centres, so a peer detection is **correct** when its per-case median ΔE00 is below 5;
 - **false charts**: charts returned on the 24 Kodak photographs themselves (no chart);
-- time per image (median), and imageform on a 3072 x 2048 photograph (a case upscaled 4x).
+- time per image (median), and imageform on a 6-megapixel photograph (case 0 upscaled 4x).
 
 colour-checker-detection (PyPI, colour-science) is the peer when importable; install it
 aside, e.g. ``pip install --no-deps --target /tmp/ccd-peer colour-checker-detection`` and
@@ -147,10 +147,10 @@ def main() -> None:
         false_ours += _ours(u8)[0] is not None
         if ccd is not None:
             false_peer += _peer_run(ccd, u8)[0] is not None
-    # a 3072 x 2048 photograph
+    # a 6-megapixel photograph
     from PIL import Image
 
-    big_case = chart_case(bgs, 0)  # a landscape frame: 3072 x 2048 once upscaled
+    big_case = chart_case(bgs, 0)  # 2048 x 3072 once upscaled
     hgt, wid = big_case.image.shape[:2]
     big = np.asarray(Image.fromarray(big_case.image).resize((4 * wid, 4 * hgt), Image.BICUBIC))
     times, mtimes = [], []
