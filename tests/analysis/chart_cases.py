@@ -57,16 +57,21 @@ def _pitch(centres: np.ndarray) -> float:
 
 
 def chart_case(
-    backgrounds: list[np.ndarray], seed: int, *, occlude: int | None = None
+    backgrounds: list[np.ndarray],
+    seed: int,
+    *,
+    occlude: int | None = None,
+    width: tuple[float, float] = (0.1, 0.6),
 ) -> ChartCase:
     """Case number ``seed``: a random background, chart pose, light, blur, noise, JPEG, and
-    ``occlude`` patches covered (default: 0 in 4 cases out of 5, else 1 to 3)."""
+    ``occlude`` patches covered (default: 0 in 4 cases out of 5, else 1 to 3); the chart's
+    lattice spans ``width`` (a range) of the frame width."""
     rng = np.random.default_rng([17, seed])
     bg = backgrounds[int(rng.integers(len(backgrounds)))]
     if rng.uniform() < 0.5:  # a horizontal flip of the background: more clutter variety
         bg = bg[:, ::-1]
     params = {
-        "width": float(rng.uniform(0.1, 0.6)),
+        "width": float(rng.uniform(*width)),
         "tilt": float(rng.uniform(0.0, 40.0)),
         "rotation": float(rng.uniform(-180.0, 180.0)),
         "shading": float(rng.uniform(0.0, 0.5)),

@@ -505,6 +505,58 @@ def _best_window(
     return best
 
 
+def _search(
+    work: np.ndarray, ref_lin: np.ndarray, min_score: float
+) -> tuple[float, np.ndarray, np.ndarray, np.ndarray] | str:
+    """The chart in the work image: (score, chart -> work homography, outliers, chart
+    coordinates of the segmented patches), or why none was found."""
+    cand = _candidates(work)
+    n_cand = len(cand["area"])
+    if n_cand < 6:
+        return f"{n_cand} flat square region(s) in the image, a ColorChecker shows 24"
+    origin, basis, score = _hypotheses(cand)
+    order = np.argsort(-score, kind="stable")
+    tried: set[int] = set()
+    best: tuple[float, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None = None
+    attempts = 0
+    for hyp in order:
+        if score[hyp] < 6 or attempts >= 8:
+            break
+        if int(origin[hyp]) in tried:
+            continue
+        grown = _grow(cand, int(origin[hyp]), basis[hyp])
+        attempts += 1
+        tried.add(int(origin[hyp]))
+        if grown is None:
+            continue
+        h, idx, keys = grown
+        tried.update(int(i) for i in idx)
+        win = _best_window(work, h, keys, ref_lin)
+        if win is None:
+            continue
+        r2, a, out = win
+        if best is None or r2 > best[0]:
+            best = (r2, h, a, idx, keys, out)
+        if r2 > 0.97:
+            break
+    if best is None:
+        return "no 4x6 lattice of flat patches"
+    if best[0] < min_score:
+        return f"best candidate's colour fit R2 = {best[0]:.2f} < min_score = {min_score:g}"
+    r2, h, a, idx, keys, out = best
+    # chart coordinates of the matched candidates, refit chart -> work directly
+    chart_xy = _apply_h(np.linalg.inv(a), keys)
+    inside = np.all((chart_xy > -0.5) & (chart_xy < [_COLS - 0.5, _ROWS - 0.5]), axis=1)
+    chart_xy, pts = np.round(chart_xy[inside]), cand["c"][idx[inside]]
+    hc = _fit_h(chart_xy, pts) if len(pts) >= 4 else h @ a
+    # the score and the outliers again, sampled through the refitted homography
+    mean, spread = _sample(work, hc)
+    r2_final, out_final = _colour_fit(mean, ref_lin, (spread < 0.08) & (mean.max(axis=1) < 0.98))
+    if r2_final >= r2 or r2_final >= min_score:
+        r2, out = r2_final, out_final
+    return r2, hc, out, chart_xy
+
+
 # ---------------------------------------------------------------- public API
 
 
@@ -576,59 +628,24 @@ def detect_colorchecker(
             f"image of {rgb.shape[0]}x{rgb.shape[1]} pixels is too small to hold a colour chart"
         )
     work, f = _work_image(rgb, max_size, full)
-    cand = _candidates(work)
-    n_cand = len(cand["area"])
-    if n_cand < 6:
-        raise ChartNotFoundError(
-            f"no colour chart found: {n_cand} flat square region(s) in the image, a "
-            "ColorChecker shows 24"
-        )
-    origin, basis, score = _hypotheses(cand)
-    order = np.argsort(-score, kind="stable")
-    tried: set[int] = set()
-    best: tuple[float, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None = None
-    attempts = 0
-    for hyp in order:
-        if score[hyp] < 6 or attempts >= 8:
-            break
-        if int(origin[hyp]) in tried:
-            continue
-        grown = _grow(cand, int(origin[hyp]), basis[hyp])
-        attempts += 1
-        tried.add(int(origin[hyp]))
-        if grown is None:
-            continue
-        h, idx, keys = grown
-        tried.update(int(i) for i in idx)
-        win = _best_window(work, h, keys, ref_lin)
-        if win is None:
-            continue
-        r2, a, out = win
-        if best is None or r2 > best[0]:
-            best = (r2, h, a, idx, keys, out)
-        if r2 > 0.97:
-            break
-    if best is None or best[0] < min_score:
-        got = (
-            "no 4x6 lattice of flat patches"
-            if best is None
-            else (f"best candidate's colour fit R2 = {best[0]:.2f} < min_score = {min_score:g}")
-        )
-        raise ChartNotFoundError(f"no ColorChecker found in the image: {got}")
-    r2, h, a, idx, keys, out = best
-    # chart coordinates of the matched candidates, refit chart -> work directly
-    chart_xy = _apply_h(np.linalg.inv(a), keys)
-    inside = np.all((chart_xy > -0.5) & (chart_xy < [_COLS - 0.5, _ROWS - 0.5]), axis=1)
-    chart_xy, pts = np.round(chart_xy[inside]), cand["c"][idx[inside]]
-    hc = _fit_h(chart_xy, pts) if len(pts) >= 4 else h @ a
-    # the score and the outliers again, sampled through the refitted homography
-    mean, spread = _sample(work, hc)
-    r2_final, out_final = _colour_fit(mean, ref_lin, (spread < 0.08) & (mean.max(axis=1) < 0.98))
-    if r2_final >= r2 or r2_final >= min_score:
-        r2, out = r2_final, out_final
+    # work pixel -> image pixel (pixel centres): block means of f x f pixels
+    scale = np.array([[f, 0.0, (f - 1) / 2.0], [0.0, f, (f - 1) / 2.0], [0.0, 0.0, 1.0]])
+    res = _search(work, ref_lin, min_score)
+    if not isinstance(res, tuple) and f == 1:
+        # not found at full resolution: small charts (patch pitch under about 12 pixels)
+        # separate better on a 2x bilinear upsample (o -> o / 2 - 0.25 in image pixels)
+        from scipy import ndimage
+
+        up = ndimage.zoom(work, (2, 2, 1), order=1, grid_mode=True, mode="nearest")
+        res_up = _search(up, ref_lin, min_score)
+        if isinstance(res_up, tuple):
+            res, work = res_up, up
+            scale = np.array([[0.5, 0.0, -0.25], [0.0, 0.5, -0.25], [0.0, 0.0, 1.0]])
+    if not isinstance(res, tuple):
+        raise ChartNotFoundError(f"no ColorChecker found in the image: {res}")
+    r2, hc, out, chart_xy = res
     found = np.zeros(_ROWS * _COLS, dtype=bool)
     found[(chart_xy[:, 1] * _COLS + chart_xy[:, 0]).astype(int)] = True
-    scale = np.array([[f, 0.0, (f - 1) / 2.0], [0.0, f, (f - 1) / 2.0], [0.0, 0.0, 1.0]])
     hf = scale @ hc
     hf = hf / hf[2, 2]
     unit = np.array([[-0.5, -0.5], [0.5, -0.5], [0.5, 0.5], [-0.5, 0.5]])
