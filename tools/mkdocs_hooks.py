@@ -51,6 +51,7 @@ BENCH_MARKER = "<!-- benchmark-results -->"
 BENCH_SCRIPTS: dict[str, str] = {
     "8bit": "benchmarks/bench_8bit.py",
     "calibration": "benchmarks/bench_calibration.py",
+    "chart-detect": "benchmarks/bench_chart_detect.py",
     "charuco": "benchmarks/bench_charuco.py",
     "checkerboard": "benchmarks/bench_checkerboard.py",
     "chunked": "benchmarks/bench_chunked.py",

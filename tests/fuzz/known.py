@@ -5421,4 +5421,14 @@ KNOWN: dict[tuple[str, str, str], str] = {
     ("imageform.workflows.vanishing.VanishingOptions", "seed", "complex"): "nonfinite",
     ("imageform.workflows.vanishing.VanishingOptions", "seed", "inf"): "nonfinite",
     ("imageform.workflows.vanishing.VanishingOptions", "seed", "nan"): "nonfinite",
+    (
+        "imageform.workflows.chart.ChartOptions",
+        "alpha",
+        "huge",
+    ): "long: UnknownOptionError: unknown --alpha 'xxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxx",
+    (
+        "imageform.workflows.chart.ChartOptions",
+        "method",
+        "huge",
+    ): "long: UnknownOptionError: unknown --method 'xxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxx",
 }

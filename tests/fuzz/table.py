@@ -1408,3 +1408,33 @@ VALID.update(
         ),
     }
 )
+
+# the ColorChecker detector (imageform.analysis.chart_detect) and imageform chart
+VALID.update(
+    {
+        "imageform.analysis.ChartDetection": Skip(
+            "a result dataclass built by detect_colorchecker"
+        ),
+        "imageform.analysis.ChartDetection.to_dict": method(V("chart_detection")),
+        "imageform.analysis.ChartPhoto": Skip("a result NamedTuple (no validation of its own)"),
+        "imageform.analysis.detect_colorchecker": call(V("chart_photo")),
+        "imageform.analysis.measure_chart_patches": call(V("chart_photo"), V("chart_detection")),
+        "imageform.analysis.synthetic_chart_photo": call(shape=(64, 96), width=0.5),
+        "imageform.workflows.chart.ChartOptions": call(),
+        "imageform.workflows.chart.ChartOptions.fields": call(),
+        "imageform.workflows.chart.ChartOptions.types": call(),
+    }
+)
+VALID.update(
+    {
+        "imageform.workflows.chart.ChartOptions.check": method(
+            VALID["imageform.workflows.chart.ChartOptions"]
+        ),
+        "imageform.workflows.chart.ChartOptions.check_output": method(
+            VALID["imageform.workflows.chart.ChartOptions"], V("tmpfile_png")
+        ),
+        "imageform.workflows.chart.ChartOptions.paths": method(
+            VALID["imageform.workflows.chart.ChartOptions"], "output"
+        ),
+    }
+)

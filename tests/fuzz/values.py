@@ -337,7 +337,21 @@ def _calibration_toml() -> Path:
     return path
 
 
+def _chart_photo() -> np.ndarray:
+    from imageform.analysis import synthetic_chart_photo
+
+    return synthetic_chart_photo(shape=(128, 192), width=0.6, tilt=0.0, rotation=10.0).image
+
+
+def _chart_detection() -> Any:
+    from imageform.analysis import detect_colorchecker
+
+    return detect_colorchecker(_chart_photo())
+
+
 FIXTURES: dict[str, Callable[[], Any]] = {
+    "chart_photo": _chart_photo,
+    "chart_detection": _chart_detection,
     "rgb": _rgb,
     "rgb_u8": lambda: (_rgb() * 255).astype(np.uint8),
     "rgb_big": lambda: _rng().uniform(0.05, 0.95, (32, 40, 3)),

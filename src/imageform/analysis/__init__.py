@@ -5,7 +5,8 @@
 - Stain normalisation for pathology: :func:`reinhard_normalize` (CIELAB statistics),
   :func:`macenko_normalize` (optical density, stain vectors by SVD).
 - Colour harmonisation between devices from a chart: :func:`fit_color_correction`,
-  :func:`chart_patches`, :func:`correction_report`.
+  :func:`chart_patches`, :func:`correction_report`; a ColorChecker found in an uncropped
+  photograph by :func:`detect_colorchecker` and measured by :func:`measure_chart_patches`.
 - Sharpness as imaging labs measure it: the ISO 12233 slanted-edge e-SFR
   (:func:`slanted_edge_sfr`: MTF per channel, MTF50, MTF10) and the edges of a slanted-edge
   chart found by themselves (:func:`find_slanted_edges`), in :mod:`imageform.analysis.sfr`.
@@ -17,6 +18,14 @@ Every tool accepts NumPy arrays (uint8/uint16/floats) and Dask arrays (lazy, chu
 with exact global statistics).
 """
 
+from imageform.analysis.chart_detect import (
+    ChartDetection,
+    ChartNotFoundError,
+    ChartPhoto,
+    detect_colorchecker,
+    measure_chart_patches,
+    synthetic_chart_photo,
+)
 from imageform.analysis.harmonize import (
     CORRECTION_METHODS,
     ChartPatches,
@@ -70,7 +79,10 @@ from imageform.analysis.synthetic import (
 __all__ = [
     "CORRECTION_METHODS",
     "SFR_LUMINANCE_WEIGHTS",
+    "ChartDetection",
+    "ChartNotFoundError",
     "ChartPatches",
+    "ChartPhoto",
     "ChartWarning",
     "ColorCorrection",
     "CorrectionReport",
@@ -86,12 +98,14 @@ __all__ = [
     "background_intensity",
     "chart_patches",
     "correction_report",
+    "detect_colorchecker",
     "estimate_camera_sensitivities",
     "find_slanted_edges",
     "fit_color_correction",
     "macenko_normalize",
     "macenko_stains",
     "mask_iou",
+    "measure_chart_patches",
     "mtf_crossing",
     "optical_density",
     "overlay_mask",
@@ -105,6 +119,7 @@ __all__ = [
     "stain_angle",
     "stain_concentrations",
     "synthetic_chart_image",
+    "synthetic_chart_photo",
     "synthetic_endoscopy_image",
     "synthetic_he_tile",
     "synthetic_shading_scene",

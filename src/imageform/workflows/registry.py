@@ -9,6 +9,7 @@ from imageform.errors import UnknownOptionError
 from imageform.workflows import (
     analysis,
     calibration,
+    chart,
     color,
     emva,
     geometry,
@@ -42,6 +43,7 @@ WORKFLOWS = MappingProxyType(
             *sensor.WORKFLOWS,
             *emva.WORKFLOWS,
             *analysis.WORKFLOWS,
+            *chart.WORKFLOWS,
             *sharpness.WORKFLOWS,
         )
     }

@@ -1,0 +1,993 @@
+"""Find a ColorChecker Classic (4 × 6 patches) in an uncropped photograph.
+
+:func:`detect_colorchecker` returns the chart's homography, its 24 patch centres and sampling
+quadrilaterals in image coordinates, a score and the chart's in-plane rotation;
+:func:`measure_chart_patches` averages the patches through it (a :class:`ChartPatches`, the
+input of :func:`~imageform.analysis.fit_color_correction`), the uncropped sibling of
+:func:`~imageform.analysis.chart_patches`.
+
+The method (written for imageform; the steps follow the usual chart detectors, e.g. the
+segmentation detector of colour-checker-detection and OpenCV's ``mcc`` module):
+
+1. **Flat regions.** The photograph is block-averaged to at most ``max_size`` pixels on its
+   long side; the colour gradient magnitude of the Gaussian-smoothed image is thresholded at
+   several levels, and the 4-connected regions below each threshold are candidate patches.
+2. **Square-ish candidates**, by moments: an affine image of a square (any rotation, tilt
+   or shear) of area :math:`A` and covariance :math:`\\Sigma` has
+   :math:`A / (12 \\sqrt{\\det \\Sigma}) = 1` (a uniform square of side *s* has variance
+   :math:`s^2/12` along each side); regions with this ratio in [0.85, 1.12] and an
+   elongation of at most 3 are kept, duplicates across thresholds removed.
+3. **Lattice hypotheses.** A candidate and two of its neighbours give a lattice origin and
+   basis :math:`B = [d_1\\ d_2]`; it is kept when the candidate's own shape agrees, i.e.
+   :math:`12\\, B^{-1} \\Sigma B^{-T} \\approx (s/p)^2 I` (the patch sides run along the
+   basis, side over pitch between 0.55 and 0.97), which rules out diagonal bases. Every
+   hypothesis counts the candidates on its lattice (RANSAC-style, all hypotheses at once).
+4. **Growth.** The best lattices are refitted as homographies (normalised DLT) from integer
+   lattice coordinates to the candidates' centroids, re-collecting candidates, three times.
+5. **Chart, orientation and validity by colour.** Every 4 × 6 window of the lattice in
+   either of its two chart orientations (the two quarter turns the window's shape allows;
+   never mirrored: the basis is right-handed like the image) is sampled, and the reference
+   colours are regressed on the measured ones with an affine map in linear light
+   (a 3 × 3 matrix and an offset per channel, robust to a few occluded patches). The score
+   is that fit's :math:`R^2`; the best window and orientation above ``min_score`` wins,
+   otherwise :class:`ChartNotFoundError`.
+
+Coordinates are imageform's pixel convention (docs/conventions.md): ``(u, v)`` = (column,
+row), integer values at pixel centres. Chart coordinates are ``(column, row)`` of the
+upright chart, in patch pitches, patch ``k`` (row by row, the order of
+:data:`~imageform.analysis.synthetic.COLORCHECKER_SRGB8`) centred at
+``(k % 6, k // 6)``: the upright chart has the brown "dark skin" patch top left and the
+grey row at the bottom.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, NamedTuple
+
+import numpy as np
+
+from imageform._colormath import srgb_decode, srgb_encode
+from imageform._validate import as_int, as_real, check_memory, describe, format_shape
+from imageform.analysis._arrays import image_in, is_dask
+from imageform.analysis._guard import real_array
+from imageform.analysis.harmonize import ChartPatches, ChartWarning
+from imageform.errors import InvalidInputError
+
+__all__ = [
+    "ChartDetection",
+    "ChartNotFoundError",
+    "ChartPhoto",
+    "detect_colorchecker",
+    "measure_chart_patches",
+    "synthetic_chart_photo",
+]
+
+_ROWS, _COLS = 4, 6
+#: Gradient thresholds (encoded sRGB per pixel) of the flat-region segmentation.
+_LEVELS = (0.012, 0.025, 0.05, 0.1)
+
+
+class ChartNotFoundError(InvalidInputError):
+    """No ColorChecker was found in the image (or none whose colours match the reference)."""
+
+
+@dataclass(frozen=True)
+class ChartDetection:
+    """A ColorChecker found in a photograph (:func:`detect_colorchecker`).
+
+    All positions are image pixels ``(u, v)`` (column, row; pixel centres at integers).
+    """
+
+    #: (3, 3) homography from chart ``(column, row)`` (patch pitches, patch k at
+    #: ``(k % 6, k // 6)``) to image ``(u, v)``.
+    homography: np.ndarray
+    #: (4, 2) outer corners of the patch lattice, ``(-0.5, -0.5)``, ``(5.5, -0.5)``,
+    #: ``(5.5, 3.5)``, ``(-0.5, 3.5)`` in chart coordinates: the upright chart's top left, top
+    #: right, bottom right and bottom left.
+    corners: np.ndarray
+    #: (24, 2) patch centres, row by row.
+    centres: np.ndarray
+    #: (24, 4, 2) sampling quadrilaterals (the inner part of each patch), corners in the
+    #: same order as ``corners``.
+    quads: np.ndarray
+    #: (24,) bool: the patch was segmented in the photograph (others are placed by the
+    #: homography: occluded, merged with the surround, or too blurred).
+    found: np.ndarray
+    #: (24,) bool: patches whose colour disagrees with the others' colour fit (left out of
+    #: the score; likely occluded or covered by a reflection).
+    outliers: np.ndarray
+    #: :math:`R^2` of the affine linear-light fit of the reference colours on the measured
+    #: ones (1 is perfect).
+    score: float
+    #: In-plane rotation of the chart in degrees, (-180, 180]: the image direction of the
+    #: chart's rows (left to right), clockwise from the image's +u axis as seen on screen.
+    rotation: float
+
+    def __post_init__(self) -> None:
+        """Arrays to float64/bool of the documented shapes."""
+        shapes = {"homography": (3, 3), "corners": (4, 2), "centres": (24, 2), "quads": (24, 4, 2)}
+        for name, shape in shapes.items():
+            object.__setattr__(self, name, real_array(getattr(self, name), name, shape))
+        for name in ("found", "outliers"):
+            arr = np.asarray(getattr(self, name))
+            if arr.dtype != np.bool_ or arr.shape != (24,):
+                raise InvalidInputError(
+                    f"expected {name} as booleans of shape (24,), got {describe(arr)}"
+                )
+            object.__setattr__(self, name, arr)
+        object.__setattr__(self, "score", as_real(self.score, "score"))
+        object.__setattr__(self, "rotation", as_real(self.rotation, "rotation"))
+
+    def to_dict(self) -> dict[str, Any]:
+        """The detection as JSON-ready lists."""
+        return {
+            "homography": self.homography.tolist(),
+            "corners": self.corners.tolist(),
+            "centres": self.centres.tolist(),
+            "quads": self.quads.tolist(),
+            "found": self.found.tolist(),
+            "outliers": self.outliers.tolist(),
+            "score": self.score,
+            "rotation_degrees": self.rotation,
+        }
+
+
+# ---------------------------------------------------------------- geometry helpers
+
+
+def _apply_h(h: np.ndarray, pts: np.ndarray) -> np.ndarray:
+    p = np.asarray(pts, dtype=np.float64)
+    q = p @ h[:, :2].T + h[:, 2]
+    return q[..., :2] / q[..., 2:3]
+
+
+def _normalizer(p: np.ndarray) -> np.ndarray:
+    c = p.mean(axis=0)
+    s = np.sqrt(2.0) / max(float(np.mean(np.linalg.norm(p - c, axis=1))), 1e-12)
+    return np.array([[s, 0.0, -s * c[0]], [0.0, s, -s * c[1]], [0.0, 0.0, 1.0]])
+
+
+def _fit_h(src: np.ndarray, dst: np.ndarray) -> np.ndarray:
+    """Homography src -> dst by the normalised DLT (Hartley & Zisserman, alg. 4.2); an affine
+    map when the points cannot determine more (fewer than 6 or nearly collinear rows)."""
+    ts, td = _normalizer(src), _normalizer(dst)
+    s = _apply_h(ts, src)
+    d = _apply_h(td, dst)
+    n = len(s)
+    if n < 6:
+        a = np.c_[s, np.ones(n)]
+        sol, *_ = np.linalg.lstsq(a, d, rcond=None)
+        hn = np.eye(3)
+        hn[:2, :] = sol.T
+    else:
+        zero = np.zeros((n, 3))
+        one = np.c_[s, np.ones(n)]
+        rows = np.concatenate(
+            [
+                np.c_[zero, -one, d[:, 1:2] * one],
+                np.c_[one, zero, -d[:, 0:1] * one],
+            ]
+        )
+        _, _, vt = np.linalg.svd(rows)
+        hn = vt[-1].reshape(3, 3)
+    h = np.linalg.solve(td, hn @ ts)
+    return np.asarray(h / h[2, 2])
+
+
+# ---------------------------------------------------------------- candidates
+
+
+def _gaussian_taps(sigma: float) -> np.ndarray:
+    """Normalised Gaussian taps, radius ``int(3 sigma + 0.5)`` (scipy's default truncation)."""
+    radius = int(3.0 * sigma + 0.5)
+    x = np.arange(-radius, radius + 1, dtype=np.float64)
+    w = np.exp(-0.5 * (x / sigma) ** 2)
+    return np.asarray(w / w.sum())
+
+
+def _work_image(rgb: np.ndarray, max_size: int, scale: float) -> tuple[np.ndarray, int]:
+    """Block mean by an integer factor so that the long side is at most ``max_size``, as
+    float32 in [0, 1] (``scale``: 255 for uint8)."""
+    from imageform._kernels.chart import block_mean_numba
+
+    hgt, wid = rgb.shape[:2]
+    f = max(1, int(np.ceil(max(hgt, wid) / max_size)))
+    if f == 1:
+        return np.asarray(rgb, dtype=np.float32) / np.float32(scale), 1
+    return block_mean_numba(np.ascontiguousarray(rgb), f, float(scale)), f
+
+
+def _rgb_in(image: object) -> tuple[np.ndarray, float]:
+    """The photograph as an (H, W, 3) array and its full scale: uint8 and uint16 arrays are
+    kept as they are (no float copy of a large photograph), the rest goes through the
+    usual checks (``image_in``: floats in [0, 1]); Dask is computed."""
+    if isinstance(image, np.ndarray) and image.dtype in (np.uint8, np.uint16):
+        if image.ndim != 3 or image.shape[-1] != 3:
+            raise InvalidInputError(
+                f"expected image of shape (H, W, 3), got {format_shape(tuple(image.shape))}"
+            )
+        return image, 255.0 if image.dtype == np.uint8 else 65535.0
+    rgb = image_in(image)
+    if is_dask(rgb):
+        rgb = np.asarray(rgb.compute())
+    if rgb.ndim != 3:
+        raise InvalidInputError(
+            f"expected image of shape (H, W, 3), got {format_shape(tuple(rgb.shape))}"
+        )
+    return rgb, 1.0
+
+
+def _candidates(work: np.ndarray) -> dict[str, np.ndarray]:
+    """Square-ish flat regions of the work image: centroid, area, covariance."""
+    from scipy import ndimage, spatial
+
+    from imageform._kernels.chart import flat_gradient_numba, region_moments_numba
+
+    taps = _gaussian_taps(0.8).astype(np.float32)
+    grad = flat_gradient_numba(np.ascontiguousarray(work, dtype=np.float32), taps)
+    hgt, wid = grad.shape
+    max_area = hgt * wid / 12.0
+    out: list[np.ndarray] = []
+    for level in _LEVELS:
+        lab, n = ndimage.label(grad < level)
+        if n == 0:
+            continue
+        mom = region_moments_numba(lab, n)
+        m0, mx, my, mxx, myy, mxy = mom.T
+        keep = (m0 >= 16) & (m0 <= max_area)
+        if not keep.any():
+            continue
+        a = m0[keep]
+        cx, cy = mx[keep] / a, my[keep] / a
+        sxx = mxx[keep] / a - cx * cx + 1 / 12
+        syy = myy[keep] / a - cy * cy + 1 / 12
+        sxy = mxy[keep] / a - cx * cy
+        det = np.maximum(sxx * syy - sxy * sxy, 1e-12)
+        fill = a / (12.0 * np.sqrt(det))
+        tr = sxx + syy
+        disc = np.sqrt(np.maximum(tr * tr / 4 - det, 0.0))
+        elong = np.sqrt((tr / 2 + disc) / np.maximum(tr / 2 - disc, 1e-12))
+        ok = (fill > 0.85) & (fill < 1.12) & (elong < 3.0)
+        out.append(np.c_[cx, cy, a, sxx, syy, sxy, fill][ok])
+    if not out:
+        return {"c": np.zeros((0, 2)), "area": np.zeros(0), "cov": np.zeros((0, 2, 2))}
+    cand = np.concatenate(out)
+    # Duplicates across levels: keep the largest region (closest to the whole patch).
+    order = np.argsort(-cand[:, 2])
+    cand = cand[order]
+    tree = spatial.cKDTree(cand[:, :2])
+    alive = np.ones(len(cand), dtype=bool)
+    for i in range(len(cand)):
+        if not alive[i]:
+            continue
+        near = tree.query_ball_point(cand[i, :2], 0.35 * np.sqrt(cand[i, 2]))
+        for j in near:
+            if j > i:
+                alive[j] = False
+    cand = cand[alive]
+    cov = np.stack([np.c_[cand[:, 3], cand[:, 5]], np.c_[cand[:, 5], cand[:, 4]]], axis=1)
+    return {"c": cand[:, :2].copy(), "area": cand[:, 2].copy(), "cov": cov}
+
+
+# ---------------------------------------------------------------- lattice hypotheses
+
+
+def _hypotheses(cand: dict[str, np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(origin index, basis (2, 2) columns d1 d2, score) of every plausible lattice."""
+    from scipy import spatial
+
+    c, area, cov = cand["c"], cand["area"], cand["cov"]
+    n = len(c)
+    k = min(9, n)
+    tree = spatial.cKDTree(c)
+    _, nb = tree.query(c, k=k)
+    nb = nb[:, 1:]
+    i_idx = np.repeat(np.arange(n), nb.shape[1] ** 2)
+    j_idx = np.repeat(nb, nb.shape[1], axis=1).ravel()
+    k_idx = np.tile(nb, (1, nb.shape[1])).ravel()
+    d1 = c[j_idx] - c[i_idx]
+    d2 = c[k_idx] - c[i_idx]
+    cross = d1[:, 0] * d2[:, 1] - d1[:, 1] * d2[:, 0]
+    ok = cross > 0.3 * np.linalg.norm(d1, axis=1) * np.linalg.norm(d2, axis=1)
+    ratio_a = area[j_idx] / area[i_idx]
+    ratio_b = area[k_idx] / area[i_idx]
+    ok &= (ratio_a > 0.5) & (ratio_a < 2.0) & (ratio_b > 0.5) & (ratio_b < 2.0)
+    i_idx, d1, d2, cross = i_idx[ok], d1[ok], d2[ok], cross[ok]
+    if not len(i_idx):
+        return np.zeros(0, int), np.zeros((0, 2, 2)), np.zeros(0)
+    basis = np.stack([d1, d2], axis=2)  # columns
+    inv = np.empty_like(basis)
+    inv[:, 0, 0], inv[:, 1, 1] = basis[:, 1, 1] / cross, basis[:, 0, 0] / cross
+    inv[:, 0, 1], inv[:, 1, 0] = -basis[:, 0, 1] / cross, -basis[:, 1, 0] / cross
+    s = 12.0 * np.einsum("nij,njk,nlk->nil", inv, cov[i_idx], inv)
+    s11, s22, s12 = s[:, 0, 0], s[:, 1, 1], s[:, 0, 1]
+    good = (s11 > 0.15) & (s11 < 0.95) & (s22 > 0.15) & (s22 < 0.95)
+    good &= (s11 / s22 > 0.6) & (s11 / s22 < 1.65) & (np.abs(s12) < 0.25 * np.sqrt(s11 * s22))
+    i_idx, basis, inv = i_idx[good], basis[good], inv[good]
+    score = np.zeros(len(i_idx))
+    for lo in range(0, len(i_idx), 1024):
+        sl = slice(lo, lo + 1024)
+        rel = c[None, :, :] - c[i_idx[sl]][:, None, :]
+        uv = np.einsum("hij,hnj->hni", inv[sl], rel)
+        ruv = np.round(uv)
+        res = np.abs(uv - ruv).max(axis=2)
+        ar = area[None, :] / area[i_idx[sl]][:, None]
+        inl = (res < 0.22) & (np.abs(ruv).max(axis=2) <= 5) & (ar > 0.4) & (ar < 2.5)
+        score[sl] = inl.sum(axis=1)
+    return i_idx, basis, score
+
+
+def _collect(
+    cand: dict[str, np.ndarray], h: np.ndarray, area_scale: float, tol: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Candidates on the lattice of ``h`` (lattice -> image): indices, integer coords,
+    residuals; one candidate per cell (the closest)."""
+    hinv = np.linalg.inv(h)
+    uv = _apply_h(hinv, cand["c"])
+    ruv = np.round(uv)
+    res = np.abs(uv - ruv).max(axis=1)
+    # local area of one lattice cell, from the Jacobian of h at the candidate
+    eps = 0.5
+    px = _apply_h(h, ruv + [eps, 0]) - _apply_h(h, ruv - [eps, 0])
+    py = _apply_h(h, ruv + [0, eps]) - _apply_h(h, ruv - [0, eps])
+    cell = np.abs(px[:, 0] * py[:, 1] - px[:, 1] * py[:, 0])
+    ar = cand["area"] / np.maximum(cell * area_scale, 1e-9)
+    ok = (res < tol) & (ar > 0.45) & (ar < 2.2) & (np.abs(ruv).max(axis=1) <= 12)
+    idx = np.flatnonzero(ok)
+    if not len(idx):
+        return idx, np.zeros((0, 2)), np.zeros(0)
+    keys = ruv[idx]
+    order = np.lexsort((res[idx], keys[:, 1], keys[:, 0]))
+    idx, keys = idx[order], keys[order]
+    first = np.r_[True, np.any(np.diff(keys, axis=0) != 0, axis=1)]
+    return idx[first], keys[first], res[idx[first]]
+
+
+def _in_square_window(
+    idx: np.ndarray, keys: np.ndarray, size: int
+) -> tuple[np.ndarray, np.ndarray]:
+    """The members of the ``size × size`` window of lattice cells that holds the most (a chart
+    fits in one whatever its orientation): growth never strays onto clutter that happens to
+    continue the lattice far away."""
+    if not len(keys):
+        return idx, keys
+    lo, hi = keys.min(axis=0).astype(int), keys.max(axis=0).astype(int)
+    best, best_n = None, -1
+    for u0 in range(lo[0] - size + 1, hi[0] + 1):
+        in_u = (keys[:, 0] >= u0) & (keys[:, 0] < u0 + size)
+        if in_u.sum() <= best_n:
+            continue
+        for v0 in range(lo[1] - size + 1, hi[1] + 1):
+            m = in_u & (keys[:, 1] >= v0) & (keys[:, 1] < v0 + size)
+            n = int(m.sum())
+            if n > best_n:
+                best, best_n = m, n
+    assert best is not None
+    return idx[best], keys[best]
+
+
+def _grow(
+    cand: dict[str, np.ndarray], origin: int, basis: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+    """Refit the lattice as a homography from its inliers, three rounds."""
+    h = np.eye(3)
+    h[:2, :2] = basis
+    h[:2, 2] = cand["c"][origin]
+    det = abs(float(np.linalg.det(basis)))
+    area_scale = float(cand["area"][origin]) / max(det, 1e-9)
+    idx = np.zeros(0, int)
+    keys = np.zeros((0, 2))
+    for tol in (0.22, 0.25, 0.28, 0.28):
+        idx, keys, _ = _collect(cand, h, area_scale, tol)
+        idx, keys = _in_square_window(idx, keys, max(_ROWS, _COLS))
+        if len(idx) < 4:
+            return None
+        span = keys.max(axis=0) - keys.min(axis=0)
+        if min(span) < 1:
+            return None
+        h = _fit_h(keys, cand["c"][idx])
+        if not np.all(np.isfinite(h)):
+            return None
+        dets = _cell_area(h, keys)
+        area_scale = float(np.median(cand["area"][idx] / np.maximum(dets, 1e-9)))
+    return h, idx, keys
+
+
+def _cell_area(h: np.ndarray, keys: np.ndarray) -> np.ndarray:
+    px = _apply_h(h, keys + [0.5, 0]) - _apply_h(h, keys - [0.5, 0])
+    py = _apply_h(h, keys + [0, 0.5]) - _apply_h(h, keys - [0, 0.5])
+    return np.abs(px[:, 0] * py[:, 1] - px[:, 1] * py[:, 0])
+
+
+# ---------------------------------------------------------------- colour check
+
+
+#: Chart (column, row) -> lattice (u, v) for the four quarter turns, as 3x3 affine maps
+#: applied after the window offset: rotation 0 and 180 need a 6-wide window, 90 and 270 a
+#: 4-wide one. All have determinant +1 (a chart is never mirrored).
+def _turn(quarter: int, u0: float, v0: float) -> np.ndarray:
+    m = {
+        0: [[1, 0, 0], [0, 1, 0]],
+        2: [[-1, 0, _COLS - 1], [0, -1, _ROWS - 1]],
+        1: [[0, -1, _ROWS - 1], [1, 0, 0]],
+        3: [[0, 1, 0], [-1, 0, _COLS - 1]],
+    }[quarter]
+    a = np.vstack([np.asarray(m, dtype=np.float64), [0.0, 0.0, 1.0]])
+    a[0, 2] += u0
+    a[1, 2] += v0
+    return a
+
+
+_GRID = np.stack(np.meshgrid(np.arange(_COLS), np.arange(_ROWS)), axis=-1).reshape(-1, 2)
+_OFFS = np.stack(np.meshgrid(np.linspace(-0.2, 0.2, 5), np.linspace(-0.2, 0.2, 5)), -1).reshape(
+    -1, 2
+)
+
+
+def _sample(work: np.ndarray, h: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Mean and spread of the work image over the inner part of every cell of chart->work h."""
+    from scipy import ndimage
+
+    pts = _apply_h(h, (_GRID[:, None, :] + _OFFS[None, :, :]).reshape(-1, 2))
+    vals = np.stack(
+        [
+            ndimage.map_coordinates(work[..., ch], [pts[:, 1], pts[:, 0]], order=1, mode="nearest")
+            for ch in range(3)
+        ],
+        axis=-1,
+    ).reshape(len(_GRID), len(_OFFS), 3)
+    return vals.mean(axis=1), vals.std(axis=1).max(axis=1)
+
+
+def _colour_fit(
+    meas: np.ndarray, ref_lin: np.ndarray, usable: np.ndarray
+) -> tuple[float, np.ndarray]:
+    """R² of the affine linear-light fit ref ~ [meas, 1] W, robust to a few outliers (judged
+    on the encoded residual, so that dark patches count as much as light ones)."""
+    x = np.c_[srgb_decode(np, np.clip(meas, 0.0, 1.0)), np.ones(len(meas))]
+    ref_enc = srgb_encode(np, ref_lin)
+    use = usable.copy()
+    out = np.zeros(len(meas), dtype=bool)
+    for _ in range(6):  # drop the worst patch, one at a time, while it stands out
+        if use.sum() < 14:
+            return -1.0, out
+        w, *_ = np.linalg.lstsq(x[use], ref_lin[use], rcond=None)
+        fit = srgb_encode(np, np.clip(x @ w, 0.0, 1.0))
+        err = np.where(use, np.linalg.norm(fit - ref_enc, axis=1), -1.0)
+        worst = int(np.argmax(err))
+        if err[worst] <= max(5.0 * float(np.median(err[use])), 0.06):
+            break
+        out[worst] = True
+        use[worst] = False
+    w, *_ = np.linalg.lstsq(x[use], ref_lin[use], rcond=None)
+    res = ref_lin[use] - x[use] @ w
+    tot = ref_lin[use] - ref_lin[use].mean(axis=0)
+    ss_tot = float(np.sum(tot * tot))
+    if ss_tot < 1e-9:  # a reference without distinct colours identifies nothing
+        return -1.0, out
+    r2 = 1.0 - float(np.sum(res * res)) / ss_tot
+    return r2, out
+
+
+def _best_window(
+    work: np.ndarray, h: np.ndarray, keys: np.ndarray, ref_lin: np.ndarray
+) -> tuple[float, np.ndarray, np.ndarray] | None:
+    """Best (score, chart->lattice map, outliers) over windows and quarter turns."""
+    umin, vmin = keys.min(axis=0).astype(int)
+    umax, vmax = keys.max(axis=0).astype(int)
+    best: tuple[float, np.ndarray, np.ndarray] | None = None
+    key_set = {(int(a), int(b)) for a, b in keys}
+    for quarter in range(4):
+        wu, wv = (_COLS, _ROWS) if quarter % 2 == 0 else (_ROWS, _COLS)
+        placements = [
+            (u0, v0)
+            for u0 in range(min(umin, umax - wu + 1), max(umin, umax - wu + 1) + 1)
+            for v0 in range(min(vmin, vmax - wv + 1), max(vmin, vmax - wv + 1) + 1)
+        ]
+        counts = [
+            sum((u0 <= a < u0 + wu) and (v0 <= b < v0 + wv) for a, b in key_set)
+            for u0, v0 in placements
+        ]
+        if not counts:
+            continue
+        top = max(counts)
+        for (u0, v0), cnt in zip(placements, counts, strict=True):
+            if cnt < max(top - 2, 6):
+                continue
+            a = _turn(quarter, u0, v0)
+            hc = h @ a
+            mean, spread = _sample(work, hc)
+            usable = (spread < 0.08) & (mean.max(axis=1) < 0.98)
+            r2, out = _colour_fit(mean, ref_lin, usable)
+            if best is None or r2 > best[0]:
+                best = (r2, a, out)
+    return best
+
+
+def _search(
+    work: np.ndarray, ref_lin: np.ndarray, min_score: float
+) -> tuple[float, np.ndarray, np.ndarray, np.ndarray] | str:
+    """The chart in the work image: (score, chart -> work homography, outliers, chart
+    coordinates of the segmented patches), or why none was found."""
+    cand = _candidates(work)
+    n_cand = len(cand["area"])
+    if n_cand < 6:
+        return f"{n_cand} flat square region(s) in the image, a ColorChecker shows 24"
+    origin, basis, score = _hypotheses(cand)
+    order = np.argsort(-score, kind="stable")
+    tried: set[int] = set()
+    best: tuple[float, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None = None
+    attempts = 0
+    for hyp in order:
+        if score[hyp] < 6 or attempts >= 8:
+            break
+        if int(origin[hyp]) in tried:
+            continue
+        grown = _grow(cand, int(origin[hyp]), basis[hyp])
+        attempts += 1
+        tried.add(int(origin[hyp]))
+        if grown is None:
+            continue
+        h, idx, keys = grown
+        tried.update(int(i) for i in idx)
+        win = _best_window(work, h, keys, ref_lin)
+        if win is None:
+            continue
+        r2, a, out = win
+        if best is None or r2 > best[0]:
+            best = (r2, h, a, idx, keys, out)
+        if r2 > 0.97:
+            break
+    if best is None:
+        return "no 4x6 lattice of flat patches"
+    if best[0] < min_score:
+        return f"best candidate's colour fit R2 = {best[0]:.2f} < min_score = {min_score:g}"
+    r2, h, a, idx, keys, out = best
+    # chart coordinates of the matched candidates, refit chart -> work directly
+    chart_xy = _apply_h(np.linalg.inv(a), keys)
+    inside = np.all((chart_xy > -0.5) & (chart_xy < [_COLS - 0.5, _ROWS - 0.5]), axis=1)
+    chart_xy, pts = np.round(chart_xy[inside]), cand["c"][idx[inside]]
+    hc = _fit_h(chart_xy, pts) if len(pts) >= 4 else h @ a
+    # the score and the outliers again, sampled through the refitted homography
+    mean, spread = _sample(work, hc)
+    r2_final, out_final = _colour_fit(mean, ref_lin, (spread < 0.08) & (mean.max(axis=1) < 0.98))
+    if r2_final >= r2 or r2_final >= min_score:
+        r2, out = r2_final, out_final
+    return r2, hc, out, chart_xy
+
+
+# ---------------------------------------------------------------- public API
+
+
+def detect_colorchecker(
+    image: object,
+    *,
+    reference: object = None,
+    max_size: int = 1024,
+    min_score: float = 0.8,
+    sample: float = 0.5,
+) -> ChartDetection:
+    """Find a ColorChecker Classic (4 × 6) anywhere in a photograph.
+
+    Any position, scale (down to about 10 pixels per patch at the working resolution), in-plane
+    rotation (upside down included: the patch colours fix it), perspective tilt to about
+    45 degrees, clutter, blur, noise, uneven light and another illuminant. The method is in
+    the module docstring (:mod:`imageform.analysis.chart_detect`).
+
+    Parameters
+    ----------
+    image : array_like, shape (H, W, 3)
+        Encoded sRGB (uint8, uint16 or floats in [0, 1]); a Dask array is computed.
+    reference : array_like, shape (24, 3), optional, keyword-only
+        Encoded sRGB of the chart's patches, row by row, to recognise it by; default the
+        ColorChecker (:data:`~imageform.analysis.synthetic.COLORCHECKER_SRGB8` / 255).
+    max_size : int, keyword-only
+        The long side of the working image (block-averaged by an integer factor): the
+        speed / smallest-chart trade-off.
+    min_score : float, keyword-only
+        The least :math:`R^2` of the affine colour fit that accepts a chart (0 to 1).
+    sample : float, keyword-only
+        Side of the sampling square in patch pitches (the patches are about 0.85 pitch
+        wide): the quads :func:`measure_chart_patches` averages.
+
+    Returns
+    -------
+    ChartDetection
+
+    Raises
+    ------
+    ChartNotFoundError
+        No 4 × 6 lattice of flat patches whose colours match the reference.
+
+    Examples
+    --------
+    >>> from imageform.analysis import synthetic_chart_photo
+    >>> photo = synthetic_chart_photo(rng=3)
+    >>> det = detect_colorchecker(photo.image)
+    >>> err = np.linalg.norm(det.centres - photo.centres, axis=1).max()
+    >>> bool(err < 1.0), bool(det.found.all())
+    (True, True)
+    """
+    from imageform.analysis.synthetic import COLORCHECKER_SRGB8
+
+    rgb, full = _rgb_in(image)
+    max_size = as_int(max_size, "max_size", minimum=64, maximum=100_000)
+    min_score = as_real(min_score, "min_score", minimum=-1.0, maximum=1.0)
+    sample = as_real(sample, "sample", positive=True, maximum=1.0)
+    ref = (
+        np.asarray(COLORCHECKER_SRGB8, dtype=np.float64) / 255.0
+        if reference is None
+        else real_array(reference, "reference", (24, 3))
+    )
+    if np.any(ref < 0) or np.any(ref > 1):
+        raise InvalidInputError(f"expected reference in [0, 1], got {describe(ref)}")
+    ref_lin = srgb_decode(np, ref)
+    if min(rgb.shape[:2]) < 16:
+        raise ChartNotFoundError(
+            f"image of {rgb.shape[0]}x{rgb.shape[1]} pixels is too small to hold a colour chart"
+        )
+    work, f = _work_image(rgb, max_size, full)
+    # work pixel -> image pixel (pixel centres): block means of f x f pixels
+    scale = np.array([[f, 0.0, (f - 1) / 2.0], [0.0, f, (f - 1) / 2.0], [0.0, 0.0, 1.0]])
+    res = _search(work, ref_lin, min_score)
+    if not isinstance(res, tuple) and f == 1:
+        # not found at full resolution: small charts (patch pitch under about 12 pixels)
+        # separate better on a 2x bilinear upsample (o -> o / 2 - 0.25 in image pixels)
+        from scipy import ndimage
+
+        up = ndimage.zoom(work, (2, 2, 1), order=1, grid_mode=True, mode="nearest")
+        res_up = _search(up, ref_lin, min_score)
+        if isinstance(res_up, tuple):
+            res, work = res_up, up
+            scale = np.array([[0.5, 0.0, -0.25], [0.0, 0.5, -0.25], [0.0, 0.0, 1.0]])
+    if not isinstance(res, tuple):
+        raise ChartNotFoundError(f"no ColorChecker found in the image: {res}")
+    r2, hc, out, chart_xy = res
+    found = np.zeros(_ROWS * _COLS, dtype=bool)
+    found[(chart_xy[:, 1] * _COLS + chart_xy[:, 0]).astype(int)] = True
+    hf = scale @ hc
+    hf = hf / hf[2, 2]
+    unit = np.array([[-0.5, -0.5], [0.5, -0.5], [0.5, 0.5], [-0.5, 0.5]])
+    corners = _apply_h(hf, unit * [_COLS, _ROWS] + [(_COLS - 1) / 2, (_ROWS - 1) / 2])
+    centres = _apply_h(hf, _GRID.astype(np.float64))
+    quads = _apply_h(hf, (_GRID[:, None, :] + sample * unit[None]).reshape(-1, 2)).reshape(-1, 4, 2)
+    row_dir = _apply_h(hf, np.array([[_COLS - 1, 1.5]])) - _apply_h(hf, np.array([[0.0, 1.5]]))
+    rot = float(np.degrees(np.arctan2(row_dir[0, 1], row_dir[0, 0])))
+    if rot <= -180.0:
+        rot += 360.0
+    return ChartDetection(hf, corners, centres, quads, found, out, float(r2), rot)
+
+
+def _quad_mask_bounds(quad: np.ndarray, hgt: int, wid: int) -> tuple[slice, slice, np.ndarray]:
+    """Pixels (centres) inside a convex quadrilateral: the bounding slices and the mask."""
+    u0 = max(int(np.ceil(quad[:, 0].min())), 0)
+    u1 = min(int(np.floor(quad[:, 0].max())), wid - 1)
+    v0 = max(int(np.ceil(quad[:, 1].min())), 0)
+    v1 = min(int(np.floor(quad[:, 1].max())), hgt - 1)
+    if u1 < u0 or v1 < v0:
+        return slice(0, 0), slice(0, 0), np.zeros((0, 0), dtype=bool)
+    vv, uu = np.mgrid[v0 : v1 + 1, u0 : u1 + 1]
+    inside = np.ones(uu.shape, dtype=bool)
+    area2 = 0.0
+    for k in range(4):
+        a, b = quad[k], quad[(k + 1) % 4]
+        area2 += a[0] * b[1] - a[1] * b[0]
+    sign = 1.0 if area2 >= 0 else -1.0
+    for k in range(4):
+        a, b = quad[k], quad[(k + 1) % 4]
+        cross = (b[0] - a[0]) * (vv - a[1]) - (b[1] - a[1]) * (uu - a[0])
+        inside &= sign * cross >= 0
+    return slice(v0, v1 + 1), slice(u0, u1 + 1), inside
+
+
+def measure_chart_patches(
+    image: object,
+    chart: ChartDetection,
+    *,
+    max_std: float = 0.04,
+    saturation: float = 1.0,
+    max_saturated_fraction: float = 0.01,
+) -> ChartPatches:
+    """Mean encoded sRGB of each patch of a chart found by :func:`detect_colorchecker`.
+
+    The pixels whose centres lie in each of ``chart.quads`` (the inner part of the patch) are
+    averaged in the full-resolution image. As :func:`~imageform.analysis.chart_patches`
+    does, a patch is **missing** when its sampled region is not flat (any channel's
+    standard deviation above ``max_std``), when it holds no pixel (outside the image), or
+    when the detection flagged it as a colour outlier (``chart.outliers``: occluded);
+    **saturated** when more than ``max_saturated_fraction`` of its pixels reach
+    ``saturation`` in some channel. Both raise a :class:`ChartWarning`;
+    :func:`~imageform.analysis.fit_color_correction` leaves them out.
+
+    Parameters
+    ----------
+    image : array_like, shape (H, W, 3)
+        The photograph the chart was detected in (encoded sRGB).
+    chart : ChartDetection
+        The chart found in ``image`` by :func:`detect_colorchecker`.
+    max_std : float, keyword-only
+        Largest per-channel standard deviation (encoded, [0, 1] scale) of a flat patch.
+    saturation : float, keyword-only
+        The clipping level (encoded, [0, 1] scale).
+    max_saturated_fraction : float, keyword-only
+        Fraction of a patch's pixels at ``saturation`` above which it is saturated.
+
+    Returns
+    -------
+    ChartPatches
+        Row by row in the reference chart's order (upright), whatever the photo's rotation.
+
+    Examples
+    --------
+    >>> from imageform.analysis import synthetic_chart_photo
+    >>> photo = synthetic_chart_photo(rng=3, cast=(1.0, 1.0, 1.0), noise=0.0)
+    >>> p = measure_chart_patches(photo.image, detect_colorchecker(photo.image))
+    >>> bool(p.valid.all()), bool(np.abs(p.means - photo.patches).max() < 0.01)
+    (True, True)
+    """
+    if not isinstance(chart, ChartDetection):
+        raise TypeError(f"expected chart as a ChartDetection, got {describe(chart)}")
+    rgb, full = _rgb_in(image)
+    max_std = as_real(max_std, "max_std", nonnegative=True)
+    saturation = as_real(saturation, "saturation", positive=True)
+    max_saturated_fraction = as_real(
+        max_saturated_fraction, "max_saturated_fraction", minimum=0.0, maximum=1.0
+    )
+    hgt, wid = rgb.shape[:2]
+    n = len(chart.quads)
+    means = np.full((n, 3), np.nan)
+    stds = np.full((n, 3), np.nan)
+    sat = np.zeros(n)
+    for k in range(n):
+        sv, su, mask = _quad_mask_bounds(chart.quads[k], hgt, wid)
+        if not mask.any():
+            continue
+        px = rgb[sv, su][mask].astype(np.float64) / full
+        means[k] = px.mean(axis=0)
+        stds[k] = px.std(axis=0)
+        sat[k] = (px >= saturation).any(axis=1).mean()
+    empty = ~np.isfinite(means).all(axis=1)
+    saturated = (sat > max_saturated_fraction) & ~empty
+    missing = (
+        empty | np.asarray(chart.outliers) | (np.nan_to_num(stds, nan=0.0) > max_std).any(axis=1)
+    )
+    if not (~saturated & ~missing).any():
+        raise InvalidInputError(
+            f"no usable chart patch (max_std={max_std:g}, saturation={saturation:g}): saturated "
+            f"{np.flatnonzero(saturated).tolist()}, missing {np.flatnonzero(missing).tolist()}"
+        )
+    for what, idx in (
+        ("saturated", np.flatnonzero(saturated)),
+        ("missing", np.flatnonzero(missing)),
+    ):
+        if idx.size:
+            import warnings
+
+            warnings.warn(
+                f"measure_chart_patches: {idx.size} {what} patch(es) {idx.tolist()} (0-based, "
+                "row by row) will be left out of a fit",
+                ChartWarning,
+                stacklevel=2,
+            )
+    return ChartPatches(means, np.nan_to_num(stds, nan=0.0), saturated, missing)
+
+
+# ---------------------------------------------------------------- synthetic chart photographs
+
+
+class ChartPhoto(NamedTuple):
+    """A synthetic photograph of a ColorChecker and its truth (:func:`synthetic_chart_photo`)."""
+
+    #: Encoded sRGB in [0, 1], shape (H, W, 3), float64.
+    image: np.ndarray
+    #: (3, 3) homography from chart ``(column, row)`` to image ``(u, v)`` (as
+    #: :attr:`ChartDetection.homography`).
+    homography: np.ndarray
+    #: (24, 2) true patch centres in the image, row by row.
+    centres: np.ndarray
+    #: (24, 3) encoded sRGB of each patch at its centre, as lit (cast and shading), before
+    #: blur and noise.
+    patches: np.ndarray
+
+
+#: Patch side and card margins of the rendered chart, in patch pitches (close to the
+#: ColorChecker Classic's proportions).
+_PATCH, _MARGIN_U, _MARGIN_V = 0.85, 0.3, 0.45
+
+
+def _chart_homography(
+    rng: np.random.Generator, hgt: int, wid: int, width: float, tilt: float, rotation: float
+) -> np.ndarray:
+    """Chart (column, row) -> image: the chart plane tilted by ``tilt`` degrees about a
+    random in-plane axis, rotated by ``rotation``, seen by a pinhole (focal = image width),
+    scaled so that its lattice is ``width`` of the image width, placed at random inside."""
+    t, phi, r = np.radians(tilt), rng.uniform(0, np.pi), np.radians(rotation)
+    axis = np.array([np.cos(phi), np.sin(phi), 0.0])
+    kx = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
+    r_tilt = np.eye(3) + np.sin(t) * kx + (1 - np.cos(t)) * kx @ kx
+    rz = np.array([[np.cos(r), -np.sin(r), 0], [np.sin(r), np.cos(r), 0], [0, 0, 1.0]])
+    rot = rz @ r_tilt
+    focal = float(wid)
+    # chart units: pitch 1, centred; distance so that the lattice spans `width` of the frame
+    dist = focal * (_COLS + 2 * _MARGIN_U) / (width * wid)
+    centre = np.array([(_COLS - 1) / 2, (_ROWS - 1) / 2])
+    m = np.c_[rot[:, 0], rot[:, 1], [0.0, 0.0, dist] - rot[:, :2] @ centre]
+    k = np.array([[focal, 0, 0], [0, focal, 0], [0, 0, 1.0]])
+    h = k @ m
+    card = np.array(
+        [
+            [-0.5 - _MARGIN_U, -0.5 - _MARGIN_V],
+            [_COLS - 0.5 + _MARGIN_U, -0.5 - _MARGIN_V],
+            [_COLS - 0.5 + _MARGIN_U, _ROWS - 0.5 + _MARGIN_V],
+            [-0.5 - _MARGIN_U, _ROWS - 0.5 + _MARGIN_V],
+        ]
+    )
+    pts = _apply_h(h, card)
+    lo, hi = pts.min(axis=0), pts.max(axis=0)
+    span = hi - lo
+    room = np.array([wid - 1.0, hgt - 1.0]) - span
+    shift = np.where(room > 0, rng.uniform(0, 1, 2) * np.maximum(room, 0), room / 2) - lo
+    h = np.array([[1, 0, shift[0]], [0, 1, shift[1]], [0, 0, 1.0]]) @ h
+    return h / h[2, 2]
+
+
+def synthetic_chart_photo(
+    background: object = None,
+    *,
+    shape: tuple[int, int] = (512, 768),
+    width: float | None = None,
+    tilt: float | None = None,
+    rotation: float | None = None,
+    cast: object = None,
+    shading: float = 0.3,
+    blur: float = 0.7,
+    noise: float = 0.01,
+    rng: Any = 0,
+) -> ChartPhoto:
+    """A ColorChecker photographed in a scene: the test input of :func:`detect_colorchecker`.
+
+    The 24 patches (:data:`~imageform.analysis.synthetic.COLORCHECKER_SRGB8`) on a dark card
+    are rendered through a random perspective homography (3 × 3 supersampling) over
+    ``background``, in linear light; the whole frame is then multiplied by the illuminant
+    ``cast`` (per channel) and a smooth ``shading`` field (vignetting and a light ramp),
+    blurred by a Gaussian of ``blur`` pixels, encoded to sRGB, and Gaussian ``noise`` is added.
+
+    Parameters
+    ----------
+    background : array_like, shape (H, W, 3), optional
+        Encoded sRGB scene (e.g. a real photograph); default random clutter of ``shape``.
+    shape : (int, int), keyword-only
+        (H, W) when no background is given.
+    width : float, keyword-only
+        The chart's width over the image width (default uniform in [0.15, 0.6]).
+    tilt : float, keyword-only
+        Out-of-plane tilt of the chart in degrees (default uniform in [0, 40]).
+    rotation : float, keyword-only
+        In-plane rotation in degrees (default uniform in [-180, 180)).
+    cast : array_like, shape (3,), keyword-only
+        Linear-light gains of the illuminant (default random, each in [0.6, 1.1]).
+    shading : float, keyword-only
+        Depth of the vignetting and light ramp (0: uniform light).
+    blur, noise : float, keyword-only
+        Gaussian blur sigma in pixels, and noise sigma in encoded units.
+    rng : int or numpy.random.Generator, keyword-only
+        The random source of the placement, the cast, the shading and the noise.
+
+    Returns
+    -------
+    ChartPhoto
+
+    Examples
+    --------
+    >>> p = synthetic_chart_photo(rng=1)
+    >>> p.image.shape, p.centres.shape
+    ((512, 768, 3), (24, 2))
+    """
+    from scipy import ndimage
+
+    from imageform._random import as_rng
+    from imageform._validate import as_float, as_size
+    from imageform.analysis.synthetic import COLORCHECKER_SRGB8, _smooth_noise
+
+    gen = as_rng(rng)
+    if background is None:
+        hgt, wid = as_size(shape, "shape")
+        check_memory(hgt * wid * 3 * 8 * 8.0, "shape", "the chart photograph")
+        if hgt < 32 or wid < 32:
+            raise InvalidInputError(f"expected shape of at least 32x32, got {hgt}x{wid}")
+        base = 0.2 + 0.5 * gen.uniform(size=3) * (
+            0.5 + 0.5 * _smooth_noise(gen, (hgt, wid), 30)[..., None]
+        )
+        for _ in range(40):
+            ry, rx = int(gen.integers(0, hgt)), int(gen.integers(0, wid))
+            dy, dx = gen.integers(4, max(5, hgt // 6)), gen.integers(4, max(5, wid // 6))
+            base[ry : ry + dy, rx : rx + dx] = gen.uniform(0.05, 0.95, 3)
+        bg = np.clip(base, 0.0, 1.0)
+    else:
+        bg = np.asarray(image_in(background, "background"), dtype=np.float64)
+        if bg.ndim != 3 or min(bg.shape[:2]) < 32:
+            raise InvalidInputError(
+                f"expected background of shape (H, W, 3), at least 32x32, got {describe(bg)}"
+            )
+        hgt, wid = bg.shape[:2]
+        check_memory(hgt * wid * 3 * 8 * 8.0, "background", "the chart photograph")
+    width = (
+        gen.uniform(0.15, 0.6)
+        if width is None
+        else as_real(width, "width", minimum=0.02, maximum=1.0)
+    )
+    tilt = (
+        gen.uniform(0.0, 40.0) if tilt is None else as_real(tilt, "tilt", minimum=0.0, maximum=80.0)
+    )
+    rotation = gen.uniform(-180.0, 180.0) if rotation is None else as_real(rotation, "rotation")
+    gains = (
+        gen.uniform(0.6, 1.1, 3)
+        if cast is None
+        else np.asarray(as_float(cast, "cast"), dtype=np.float64).reshape(-1)
+    )
+    if gains.shape != (3,) or np.any(gains <= 0):
+        raise InvalidInputError(f"expected cast as 3 positive gains, got {describe(cast)}")
+    shading = as_real(shading, "shading", minimum=0.0, maximum=0.9)
+    blur = as_real(blur, "blur", nonnegative=True, maximum=100.0)
+    noise = as_real(noise, "noise", nonnegative=True)
+    h = _chart_homography(gen, hgt, wid, width, tilt, rotation)
+    lin = srgb_decode(np, bg.copy())
+    # render the card: pixels of its bounding box, 3x3 supersampled, mapped back to the chart
+    card = np.array(
+        [[-0.5 - _MARGIN_U, -0.5 - _MARGIN_V], [_COLS - 0.5 + _MARGIN_U, _ROWS - 0.5 + _MARGIN_V]]
+    )
+    corners = _apply_h(
+        h, np.array([card[0], [card[1, 0], card[0, 1]], card[1], [card[0, 0], card[1, 1]]])
+    )
+    u0, v0 = np.maximum(np.floor(corners.min(axis=0)).astype(int), 0)
+    u1, v1 = np.minimum(np.ceil(corners.max(axis=0)).astype(int), [wid - 1, hgt - 1])
+    ref_lin = srgb_decode(np, np.asarray(COLORCHECKER_SRGB8, dtype=np.float64) / 255.0)
+    card_lin = float(srgb_decode(np, np.array(gen.uniform(0.05, 0.12))))
+    if u1 >= u0 and v1 >= v0:
+        sub = (np.arange(3) - 1) / 3.0
+        grid = np.mgrid[v0 : v1 + 1, u0 : u1 + 1].astype(np.float64)
+        vv, uu = grid[0], grid[1]
+        acc = np.zeros(uu.shape + (3,))
+        cover = np.zeros(uu.shape)
+        hinv = np.linalg.inv(h)
+        for dv in sub:
+            for du in sub:
+                xy = _apply_h(hinv, np.stack([uu + du, vv + dv], axis=-1))
+                x, y = xy[..., 0], xy[..., 1]
+                on_card = (
+                    (x >= card[0, 0]) & (x <= card[1, 0]) & (y >= card[0, 1]) & (y <= card[1, 1])
+                )
+                col, row = np.round(x), np.round(y)
+                in_patch = (
+                    on_card
+                    & (np.abs(x - col) <= _PATCH / 2)
+                    & (np.abs(y - row) <= _PATCH / 2)
+                    & (col >= 0)
+                    & (col < _COLS)
+                    & (row >= 0)
+                    & (row < _ROWS)
+                )
+                idx = (np.clip(row, 0, _ROWS - 1) * _COLS + np.clip(col, 0, _COLS - 1)).astype(int)
+                val = np.where(in_patch[..., None], ref_lin[idx], card_lin)
+                acc += np.where(on_card[..., None], val, 0.0)
+                cover += on_card
+        cover /= 9.0
+        box = lin[v0 : v1 + 1, u0 : u1 + 1]
+        lin[v0 : v1 + 1, u0 : u1 + 1] = box * (1 - cover[..., None]) + acc / 9.0
+    # light: illuminant gains, vignetting and a ramp in a random direction
+    yy, xx = np.mgrid[0:hgt, 0:wid].astype(np.float64)
+    rr = ((xx - wid / 2) ** 2 + (yy - hgt / 2) ** 2) / ((wid / 2) ** 2 + (hgt / 2) ** 2)
+    ang = gen.uniform(0, 2 * np.pi)
+    ramp = (xx / wid - 0.5) * np.cos(ang) + (yy / hgt - 0.5) * np.sin(ang)
+    light = (1.0 - shading * 0.6 * rr) * (1.0 + shading * ramp)
+    lin = lin * light[..., None] * gains
+    if blur > 0:
+        lin = ndimage.gaussian_filter(lin, sigma=(blur, blur, 0.0), mode="nearest")
+    img = srgb_encode(np, np.clip(lin, 0.0, 1.0))
+    if noise > 0:
+        img = img + gen.normal(0.0, noise, img.shape)
+    centres = _apply_h(h, _GRID.astype(np.float64))
+    ci = np.clip(np.round(centres).astype(int), 0, [wid - 1, hgt - 1])
+    patches = srgb_encode(np, np.clip(ref_lin * gains * light[ci[:, 1], ci[:, 0], None], 0.0, 1.0))
+    return ChartPhoto(np.clip(img, 0.0, 1.0), h, centres, patches)

@@ -1,0 +1,235 @@
+"""``imageform chart``: find a ColorChecker in an uncropped photograph, measure its patches
+and fit the colour correction to the chart's published sRGB values (docs/howto-color-chart.md).
+
+Writes a JSON file (``kind: "colorchecker"``): the chart's corners and homography, every
+patch's centre, sampling quad, mean and flags, the correction (the fit ``fit-correction``
+does, measured -> reference) and CIEDE2000 per patch before and after. ``--correction``
+also writes the correction alone, the file ``imageform harmonize --correction`` reads;
+``--csv`` the table of the usable patches, whose ``a_*``/``b_*`` columns
+``imageform fit-correction`` reads;
+``--overlay`` the photograph with the detected lattice drawn over it.
+
+A separate command rather than a ``--detect`` option of ``fit-correction``: that command
+pairs two charts (device A, device B) and takes a CSV, while a photograph of a ColorChecker
+is corrected against the chart's published values, and its detection has outputs of its
+own (corners, overlay) that ``fit-correction`` has no place for.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from imageform.errors import InvalidInputError
+from imageform.workflows._images import ImageIn, read
+from imageform.workflows._spec import Input, Output, Result, Run, Workflow, option
+
+__all__ = ["WORKFLOWS", "ChartOptions"]
+
+
+@dataclass(frozen=True, kw_only=True)
+class ChartOptions(ImageIn):
+    """Options of ``imageform chart``."""
+
+    method: str = option(
+        "linear",
+        help="Correction model: linear (3x3 in linear light) or root-polynomial.",
+        choices=("linear", "root_polynomial"),
+    )
+    degree: int = option(2, help="Root-polynomial degree (1 to 3).")
+    min_score: float = option(
+        0.8, help="Least R^2 of the colour fit that accepts a chart (0 to 1)."
+    )
+    max_size: int = option(1024, help="Long side of the working image of the detection (pixels).")
+    overlay: Path | None = option(
+        None, help="Also write the photograph with the detected chart drawn (PNG).", output=True
+    )
+    csv: Path | None = option(
+        None,
+        help="Also write the patch table (CSV; fit-correction reads its a_*/b_* columns).",
+        output=True,
+    )
+    correction: Path | None = option(
+        None,
+        help="Also write the correction alone (.json, read by harmonize --correction).",
+        output=True,
+    )
+
+    def check(self) -> None:
+        from imageform._validate import as_int, as_real
+
+        super().check()
+        as_int(self.degree, "--degree", minimum=1, maximum=3)
+        as_int(self.max_size, "--max-size", minimum=64, maximum=100_000)
+        as_real(self.min_score, "--min-score", minimum=-1.0, maximum=1.0)
+
+
+def _draw(img: Any, polylines: list[Any], colour: tuple[float, float, float]) -> None:
+    """Draw closed polylines (K, 2) of (u, v) points in place, 2 pixels wide."""
+    import numpy as np
+
+    hgt, wid = img.shape[:2]
+    for poly in polylines:
+        pts = np.asarray(poly, dtype=np.float64)
+        for a, b in zip(pts, np.roll(pts, -1, axis=0), strict=True):
+            n = int(np.ceil(np.abs(b - a).max())) * 2 + 2
+            t = np.linspace(0.0, 1.0, n)[:, None]
+            seg = a + t * (b - a)
+            for du in (0, 1):
+                for dv in (0, 1):
+                    u = np.round(seg[:, 0]).astype(int) + du
+                    v = np.round(seg[:, 1]).astype(int) + dv
+                    ok = (u >= 0) & (u < wid) & (v >= 0) & (v < hgt)
+                    img[v[ok], u[ok]] = colour
+
+
+def _overlay(rgb: Any, det: Any, valid: Any) -> Any:
+    import numpy as np
+
+    out = np.array(rgb, dtype=np.float64, copy=True)
+    _draw(out, [det.corners], (1.0, 0.9, 0.0))
+    _draw(out, [q for q, ok in zip(det.quads, valid, strict=True) if ok], (0.0, 1.0, 0.2))
+    _draw(out, [q for q, ok in zip(det.quads, valid, strict=True) if not ok], (1.0, 0.0, 0.0))
+    # the first patch (dark skin, top left of the upright chart) marked by a cross
+    c = det.centres[0]
+    r = 0.25 * float(np.linalg.norm(det.centres[1] - det.centres[0]))
+    _draw(
+        out,
+        [np.array([c - [r, 0], c + [r, 0]]), np.array([c - [0, r], c + [0, r]])],
+        (1.0, 1.0, 1.0),
+    )
+    return out
+
+
+def _write_csv(path: Path, det: Any, pat: Any, ref: Any) -> None:
+    """The usable patches (saturated and missing ones left out), one row each."""
+    import csv
+
+    import numpy as np
+
+    with path.open("w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(["patch", "u", "v", "a_r", "a_g", "a_b", "b_r", "b_g", "b_b", "valid"])
+        for k in np.flatnonzero(pat.valid):
+            w.writerow(
+                [k, f"{det.centres[k, 0]:.3f}", f"{det.centres[k, 1]:.3f}"]
+                + [f"{x:.6f}" for x in pat.means[k]]
+                + [f"{x:.6f}" for x in ref[k]]
+                + [int(pat.valid[k])]
+            )
+
+
+def chart(run: Run, opts: ChartOptions, *, out: Path, image: Path) -> Result:
+    """``imageform chart``: detect the ColorChecker, measure it, fit the correction."""
+    import warnings
+
+    import numpy as np
+
+    from imageform._jsonio import dumps
+    from imageform.analysis import (
+        ChartPatches,
+        ChartWarning,
+        correction_report,
+        detect_colorchecker,
+        fit_color_correction,
+        measure_chart_patches,
+    )
+    from imageform.analysis.synthetic import COLORCHECKER_SRGB8
+    from imageform.io import write_image
+
+    img = read(image, opts)
+    if img.ndim != 3 or img.shape[-1] != 3:
+        raise InvalidInputError(f"{image}: expected an RGB image, got shape {img.shape}")
+    det = detect_colorchecker(img, max_size=opts.max_size, min_score=opts.min_score)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", ChartWarning)
+        pat = measure_chart_patches(img, det)
+        ref = np.asarray(COLORCHECKER_SRGB8, dtype=np.float64) / 255.0
+        means = np.where(np.isfinite(pat.means), pat.means, 0.0)
+        filled = ChartPatches(means, pat.std, pat.saturated, pat.missing)
+        corr = fit_color_correction(filled, ref, opts.method, opts.degree)
+        rep = correction_report(filled, ref, corr)
+    for w in caught:
+        run.note(f"note: {w.message}")
+    stats = rep.summary()
+    payload = {
+        "kind": "colorchecker",
+        "image": str(image),
+        "image_size": [int(img.shape[1]), int(img.shape[0])],
+        "chart": det.to_dict(),
+        "patches": {
+            "means_srgb": pat.means.tolist(),
+            "std": pat.std.tolist(),
+            "saturated": pat.saturated.tolist(),
+            "missing": pat.missing.tolist(),
+            "reference_srgb": ref.tolist(),
+        },
+        "correction": {
+            "method": corr.method,
+            "degree": int(corr.degree),
+            "transfer": corr.transfer,
+            "matrix": corr.matrix.tolist(),
+            "n_patches": int(corr.n_patches),
+        },
+        "delta_e00_before": rep.delta_e_before.tolist(),
+        "delta_e00_after": rep.delta_e_after.tolist(),
+        **stats,
+    }
+    run.file(out).write_text(dumps(payload) + "\n")
+    if opts.correction is not None:
+        corr.to_json(run.file(opts.correction))
+    if opts.csv is not None:
+        _write_csv(run.file(opts.csv), det, pat, ref)
+    if opts.overlay is not None:
+        ov = _overlay(np.asarray(img, dtype=np.float64) / _scale(img), det, pat.valid)
+        write_image(run.file(opts.overlay), np.round(np.clip(ov, 0, 1) * 255).astype(np.uint8))
+    summary = {
+        "input": image,
+        "output": out,
+        "overlay": opts.overlay,
+        "csv": opts.csv,
+        "correction": opts.correction,
+        "score": det.score,
+        "rotation_degrees": det.rotation,
+        "corners": det.corners,
+        "patches_found": int(det.found.sum()),
+        "patches_valid": int(pat.valid.sum()),
+        "method": corr.method,
+        "degree": corr.degree,
+        "delta_e00_before": rep.delta_e_before,
+        "delta_e00_after": rep.delta_e_after,
+        **stats,
+    }
+    text = [
+        f"ColorChecker found: score R2 {det.score:.4f}, rotation {det.rotation:.1f} deg, "
+        f"{int(det.found.sum())} of 24 patches segmented, {int(pat.valid.sum())} usable",
+        "corners (u, v): " + ", ".join(f"({u:.1f}, {v:.1f})" for u, v in det.corners),
+        f"{corr.method} (degree {corr.degree}) correction to the chart's sRGB values, "
+        f"fitted on {corr.n_patches} patches",
+        f"ΔE00 mean {stats['mean_before']:.3f} -> {stats['mean_after']:.3f}, "
+        f"max {stats['max_before']:.3f} -> {stats['max_after']:.3f}",
+        f"wrote {out}",
+    ]
+    return Result(summary, tuple(text))
+
+
+def _scale(img: Any) -> float:
+    import numpy as np
+
+    dt = np.asarray(img).dtype
+    return 255.0 if dt == np.uint8 else 65535.0 if dt == np.uint16 else 1.0
+
+
+WORKFLOWS = (
+    Workflow(
+        "chart",
+        "Find a ColorChecker in a photograph, measure its patches, fit the colour correction.",
+        "imageform.workflows.chart:chart",
+        ChartOptions,
+        (Input("image", "Photograph with a ColorChecker Classic (24 patches) anywhere in it."),),
+        Output("Result to write (.json): corners, patches, correction, ΔE00 before/after."),
+        suffixes=(".json",),
+        group="analysis",
+    ),
+)
