@@ -17,8 +17,9 @@ tested in tests/analysis/test_chart_detect.py.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 from numpy.typing import NDArray
+
+from imageform._kernels.jit import njit
 
 __all__ = [
     "block_mean_numba",
@@ -30,7 +31,7 @@ __all__ = [
 ]
 
 
-@njit(cache=True, fastmath=False)
+@njit(fastmath=False)
 def flat_gradient_numba(
     img: NDArray[np.float32], taps: NDArray[np.float32]
 ) -> NDArray[np.float32]:  # pragma: no cover - numba-compiled
@@ -97,7 +98,7 @@ def flat_gradient_numpy(
     return np.sqrt(total) / 8.0
 
 
-@njit(cache=True, fastmath=False)
+@njit(fastmath=False)
 def region_moments_numba(
     labels: NDArray[np.integer], n: int
 ) -> NDArray[np.float64]:  # pragma: no cover - numba-compiled
@@ -129,7 +130,7 @@ def region_moments_numpy(labels: NDArray[np.integer], n: int) -> NDArray[np.floa
     return np.stack([np.bincount(flat, c, n + 1)[1:] for c in cols], axis=1)
 
 
-@njit(cache=True, fastmath=False)
+@njit(fastmath=False)
 def block_mean_numba(
     img: NDArray[np.generic], f: int, scale: float
 ) -> NDArray[np.float32]:  # pragma: no cover - numba-compiled

@@ -552,6 +552,26 @@ def run_job(
 
 @contextlib.contextmanager
 def _client(scheduler: str | None, n_workers: int) -> Iterator[Any]:
+    """The run's client (the default one while it runs: ``distributed.wait`` looks it up);
+    dask's global ``scheduler`` setting is put back as it was when the client closes (clients
+    closed out of order left it naming a closed client, and a later ``dask.compute`` in the
+    same process failed)."""
+    import dask
+
+    before = dask.config.get("scheduler", None)
+    try:
+        with _open_client(scheduler, n_workers) as client:
+            yield client
+    finally:
+        if dask.config.get("scheduler", None) != before:
+            if before is None:
+                dask.config.config.pop("scheduler", None)
+            else:
+                dask.config.set(scheduler=before)
+
+
+@contextlib.contextmanager
+def _open_client(scheduler: str | None, n_workers: int) -> Iterator[Any]:
     import logging
 
     from imageform._optional import require
@@ -559,10 +579,7 @@ def _client(scheduler: str | None, n_workers: int) -> Iterator[Any]:
     distributed = require("distributed", what="imageform batch")
     if scheduler:
         try:
-            # not the default scheduler: the run submits to this client explicitly, and a
-            # default client leaks dask's global "scheduler" setting when clients close out
-            # of order (a later dask.compute then asks for a closed client)
-            client = distributed.Client(scheduler, set_as_default=False)
+            client = distributed.Client(scheduler)  # timeout: distributed.comm.timeouts.connect
         except (OSError, TimeoutError) as exc:
             raise InvalidInputError(f"cannot reach the scheduler {scheduler}: {exc}") from None
         with client:
@@ -579,7 +596,7 @@ def _client(scheduler: str | None, n_workers: int) -> Iterator[Any]:
         silence_logs=logging.CRITICAL,
         preload=["imageform.batch._worker_setup"],
     )
-    with cluster, distributed.Client(cluster, set_as_default=False) as client:
+    with cluster, distributed.Client(cluster) as client:
         yield client
 
 
