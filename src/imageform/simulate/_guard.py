@@ -20,7 +20,6 @@ from imageform.simulate.validation import MAX_LENGTH_M
 __all__: list[str] = []
 
 
-
 def check_type(value: Any, cls: type | tuple[type, ...], name: str, what: str = "") -> Any:
     """``value`` when it is an instance of ``cls``; else a :class:`TypeError` naming ``name``.
 
@@ -52,7 +51,9 @@ def real_array(
     values refused by name before any conversion), with ``ndim`` dimensions and ``last``
     values on its last axis; NaN and inf refused unless ``finite=False``."""
     if value is None or isinstance(value, str | bytes | bool | np.bool_):
-        raise InvalidInputError(f"expected {name} as an array of real numbers, got {describe(value)}")
+        raise InvalidInputError(
+            f"expected {name} as an array of real numbers, got {describe(value)}"
+        )
     if hasattr(value, "detach") and hasattr(value, "cpu"):  # a torch tensor
         value = value.detach().cpu().numpy()
     arr = np.asarray(value) if not isinstance(value, np.ndarray) else value
@@ -76,7 +77,11 @@ def real_array(
 
 
 def _reals(value: Any, name: str, n: int) -> tuple[float, ...]:
-    if isinstance(value, str | bytes) or not hasattr(value, "__iter__") or getattr(value, "ndim", 1) != 1:
+    if (
+        isinstance(value, str | bytes)
+        or not hasattr(value, "__iter__")
+        or getattr(value, "ndim", 1) != 1
+    ):
         raise InvalidInputError(f"expected {name} as {n} numbers, got {describe(value)}")
     items = list(value)
     if len(items) != n:
@@ -139,10 +144,14 @@ def check_field(value: Any, spec: Any, name: str) -> Any:
         return as_real(value, name, minimum=0.0, maximum=1.0)
     if kind == "mat3":
         if isinstance(value, str | bytes) or not hasattr(value, "__iter__"):
-            raise InvalidInputError(f"expected {name} as 3 rows of 3 numbers, got {describe(value)}")
+            raise InvalidInputError(
+                f"expected {name} as 3 rows of 3 numbers, got {describe(value)}"
+            )
         rows = list(value)
         if len(rows) != 3:
-            raise InvalidInputError(f"expected {name} as 3 rows of 3 numbers, got {describe(value)}")
+            raise InvalidInputError(
+                f"expected {name} as 3 rows of 3 numbers, got {describe(value)}"
+            )
         return tuple(_reals(r, f"{name}[{i}]", 3) for i, r in enumerate(rows))
     n = {"vec2": 2, "vec3": 3, "ivec2": 2}.get(kind)
     if n is None:  # pragma: no cover - a schema kind this module does not know

@@ -209,7 +209,8 @@ class CameraConfig:
         check_section(self, SCENE_SCHEMA["camera"], "camera")
         if not isinstance(self.distortion, DistortionConfig):
             raise TypeError(
-                f"expected camera.distortion as a DistortionConfig, got {type(self.distortion).__name__}"
+                "expected camera.distortion as a DistortionConfig, got "
+                f"{type(self.distortion).__name__}"
             )
 
     def to_camera(self, image_size: tuple[int, int], sensor_pixel_pitch_m: float) -> Camera:
@@ -426,7 +427,9 @@ class ObjectConfig:
             raise TypeError(f"expected type as one of {', '.join(schema)}, got {self.type!r:.40}")
         check_section(self, schema[self.type], "objects")
         if self.centre_m is None:
-            raise TypeError("expected objects.centre_m as 3 numbers (the object's position), got None")
+            raise TypeError(
+                "expected objects.centre_m as 3 numbers (the object's position), got None"
+            )
 
 
 @dataclass(frozen=True)
@@ -507,7 +510,9 @@ class ViewConfig:
         """Each field checked against the schema's ``[[views]]`` keys; ``eye_m`` required."""
         check_section(self, SCENE_SCHEMA["views"], "views")
         if self.eye_m is None:
-            raise TypeError("expected views.eye_m as 3 numbers (the view's camera centre), got None")
+            raise TypeError(
+                "expected views.eye_m as 3 numbers (the view's camera centre), got None"
+            )
 
 
 @dataclass(frozen=True)

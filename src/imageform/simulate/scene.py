@@ -19,6 +19,7 @@ from typing import Any
 
 import numpy as np
 
+from imageform._validate import describe
 from imageform.errors import InvalidInputError
 from imageform.geometry.camera import Camera
 from imageform.sensor.model import SensorModel
@@ -371,8 +372,14 @@ def load_scene(source: str | Path | dict[str, Any]) -> Scene:
         isinstance(source, str) and "\n" not in source and "=" not in source
     ):
         path = Path(source)
-        if not path.is_file():
-            raise InvalidInputError(f"scene file not found: {str(path)!r}")
+        try:
+            found = path.is_file()
+        except OSError as exc:  # a name too long for the file system
+            raise InvalidInputError(
+                f"source: cannot use {describe(str(source), 60)} as a scene file: {exc.strerror}"
+            ) from None
+        if not found:
+            raise InvalidInputError(f"scene file not found (source): {describe(str(source), 120)}")
         try:
             text = path.read_text(encoding="utf-8")
         except UnicodeDecodeError as exc:
@@ -389,7 +396,7 @@ def load_scene(source: str | Path | dict[str, Any]) -> Scene:
         text, origin, base = source, "scene string", None
     else:
         raise InvalidInputError(
-            f"expected a TOML path, a TOML string or a dict, got {type(source).__name__}"
+            f"expected source as a TOML path, a TOML string or a dict, got {type(source).__name__}"
         )
     try:
         data = tomllib.loads(text)

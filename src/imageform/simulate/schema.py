@@ -50,6 +50,42 @@ class Field:
     maximum: float | None = None
     positive: bool = False
 
+    def __post_init__(self) -> None:
+        """A known ``kind``; a numeric ``default`` finite and real (issue 16)."""
+        from imageform._validate import as_real, describe
+        from imageform.errors import InvalidInputError
+
+        if self.kind not in _KINDS:
+            raise InvalidInputError(
+                f"expected kind as one of {', '.join(_KINDS)}, got {self.kind!r:.40}"
+            )
+        if not isinstance(self.doc, str):
+            raise TypeError(f"expected doc as a string, got {describe(self.doc)}")
+        d = self.default
+        if d is None or isinstance(d, str) or (self.kind == "bool" and isinstance(d, bool)):
+            return
+        if isinstance(d, tuple | list):
+            rows = d if self.kind == "mat3" else (d,)
+            for row in rows:
+                for x in row if isinstance(row, tuple | list) else (row,):
+                    as_real(x, "default")
+            return
+        as_real(d, "default")
+
+
+#: The kinds of :class:`Field`.
+_KINDS = (
+    "float",
+    "int",
+    "str",
+    "bool",
+    "vec2",
+    "vec3",
+    "ivec2",
+    "mat3",
+    "reflectance",
+    "float_or_auto",
+)
 
 # Conversion of a unit to the key's base unit (m, s, rad ... deg is kept for *_deg keys);
 # lengths are imageform's one table of length units (imageform._units).

@@ -51,6 +51,10 @@ def find_line(text: str | None, path: tuple[Any, ...]) -> int | None:
     >>> find_line("a = 1\\n[camera]\\nf = 2\\n", ("camera", "f"))
     3
     """
+    if text is not None and not isinstance(text, str):
+        raise TypeError(f"expected text as a TOML string or None, got {type(text).__name__}")
+    if not isinstance(path, tuple | list):
+        raise TypeError(f"expected path as a tuple of keys, got {type(path).__name__}")
     if not text:
         return None
     section: tuple[Any, ...] = ()
@@ -261,7 +265,7 @@ def validate_scene_dict(
     """
     ctx = _Ctx(text, origin)
     if not isinstance(data, dict):
-        raise InvalidInputError(f"expected a scene table (dict), got {type(data).__name__}")
+        raise InvalidInputError(f"expected data as a scene table (dict), got {type(data).__name__}")
     sections = {k: v for k, v in SCENE_SCHEMA.items() if k not in ("", "objects", "views")}
     top = {**SCENE_SCHEMA[""], **sections, "views": None, "objects": None}
     out: dict[str, Any] = {}
