@@ -8,11 +8,12 @@ The world frame is z-up (the ground is ``z = 0``); lengths are metres.
 
 from __future__ import annotations
 
+import contextlib
 import copy
 import dataclasses
 import tomllib
 import warnings
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -20,7 +21,7 @@ from typing import Any
 import numpy as np
 
 from imageform._validate import describe
-from imageform.errors import InvalidInputError
+from imageform.errors import DegenerateConfigurationError, InvalidInputError
 from imageform.geometry.camera import Camera
 from imageform.sensor.model import SensorModel
 from imageform.simulate.config import (
@@ -123,7 +124,8 @@ class Scene:
                 cfg[sec].update(changes)
             else:
                 cfg[sec] = changes
-        return _build(_plain(cfg), None, "scene", self.base_dir)
+        origin = _where(self).origin
+        return _build(_plain(cfg), None, origin, self.base_dir)
 
     def with_camera(self, camera: Camera, *, focal_length_mm: float | None = None) -> Scene:
         """The same scene seen through ``camera`` (an :class:`imageform.geometry.Camera`:
@@ -209,6 +211,26 @@ class Scene:
         if cam.skew_px:
             changes["skew_px"] = cam.skew_px * f
         return self.with_changes(render={"width": int(width), "height": h}, camera=changes)
+
+
+def _where(scene: Scene) -> _Ctx:
+    """Where ``scene`` came from: its file (or string) and text, to name a key's line."""
+    ctx = getattr(scene, "_where", None)
+    return ctx if isinstance(ctx, _Ctx) else _Ctx(None, "scene")
+
+
+@contextlib.contextmanager
+def _at_key(scene: Scene, path: tuple[Any, ...]) -> Iterator[None]:
+    """Run a step of the simulation of ``scene``; an error it raises about the scene's values
+    names the scene key ``path`` and its line in the scene file (issue 16: errors that arise
+    at render time point at the file like those found when it is read)."""
+    try:
+        yield
+    except (InvalidInputError, DegenerateConfigurationError) as exc:
+        msg = str(exc)
+        if msg.startswith("scene key"):
+            raise
+        raise type(exc)(f"scene key {_where(scene).where(path)}: {msg}") from None
 
 
 def _plain(cfg: Any) -> Any:
@@ -335,7 +357,7 @@ def _build(data: dict[str, Any], text: str | None, origin: str, base: Path | Non
             f"expected more than the focal length ({cfg.camera.focal_length_mm:g} mm), got "
             f"{cfg.lens.focus_distance_m:g} m",
         )
-    return Scene(
+    scene = Scene(
         name=cfg.name,
         config=cfg,
         objects=at(("objects",), lambda: _objects(cfg, base)),
@@ -344,6 +366,8 @@ def _build(data: dict[str, Any], text: str | None, origin: str, base: Path | Non
         illuminant=at(("illuminant",), lambda: _illuminant(cfg.illuminant, base)),
         base_dir=base,
     )
+    object.__setattr__(scene, "_where", ctx)  # not a field: for errors at render time
+    return scene
 
 
 def load_scene(source: str | Path | dict[str, Any]) -> Scene:

@@ -160,6 +160,13 @@ DIFFRACTION_BANDS = (
 )
 
 
+#: The most samples across the fine grid of :func:`diffraction_psf_kernel` (``n k``): a
+#: 2047-sample polychromatic PSF takes about 3 s per channel, 16383 would take minutes and
+#: gigabytes (issue 16: bounded before anything is computed). The kernel is then at least
+#: 680 pixels wide, larger than the images this blur is meant for.
+MAX_KERNEL_SAMPLES = 2048
+
+
 def diffraction_psf_kernel(
     wavelengths: tuple[float, ...], *, f_number: float, pixel_pitch: float
 ) -> np.ndarray:
@@ -182,16 +189,16 @@ def diffraction_psf_kernel(
     if not (fine_ratio < 1e4 and lam_n / pixel_pitch < 1e4):
         raise InvalidInputError(
             f"f_number {f_number:g} and pixel_pitch {pixel_pitch:g} m give a diffraction kernel "
-            f"of more than 16384 samples for wavelengths {min(wavelengths):g}.."
+            f"of more than {MAX_KERNEL_SAMPLES} samples for wavelengths {min(wavelengths):g}.."
             f"{max(wavelengths):g} m"
         )
     k = max(3, 2 * math.ceil(2 * pixel_pitch / (2 * min(wavelengths) * f_number) + 0.5) + 1)
     half = max(1, math.ceil(10 * lam_n / pixel_pitch))  # ~98 % of the light
     n = 2 * half + 1
-    if n * k > 16384:
+    if n * k > MAX_KERNEL_SAMPLES:
         raise InvalidInputError(
             f"f_number {f_number:g} and pixel_pitch {pixel_pitch:g} m give a diffraction kernel "
-            f"of {n * k} samples (at most 16384)"
+            f"of {n * k} samples (at most {MAX_KERNEL_SAMPLES}: a lower f_number)"
         )
     fine = polychromatic_psf(
         wavelengths=list(wavelengths),

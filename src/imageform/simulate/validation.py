@@ -107,8 +107,13 @@ class _Ctx:
         dotted = ".".join(f"[{p}]" if isinstance(p, int) else str(p) for p in path)
         dotted = _show_text(dotted.replace(".[", "["))
         line = find_line(self.text, path)
-        at = f" ({self.origin}, line {line})" if line else f" ({self.origin})"
-        return f"{dotted}{at}"
+        if line:
+            return f"{dotted} ({self.origin}, line {line})"
+        if self.text:  # a key the file leaves out: its default; point at its section
+            section = find_line(self.text, path[:1]) if len(path) > 1 else None
+            at = f", [{path[0]}] at line {section}" if section else ""
+            return f"{dotted} ({self.origin}{at}, default)"
+        return f"{dotted} ({self.origin})"
 
     def fail(self, path: tuple[Any, ...], msg: str, unknown: bool = False) -> None:
         cls = UnknownOptionError if unknown else InvalidInputError
@@ -353,7 +358,7 @@ def _check_memory(render: dict[str, Any], ctx: _Ctx) -> None:
     if have is not None and need > have:
         ctx.fail(
             ("render", "width"),
-            f"a {w}x{h} image needs about {format_bytes(need)} of memory to simulate "
-            f"({BYTES_PER_PIXEL} bytes per pixel), more than the {format_bytes(have)} this "
-            "machine has available; reduce render.width and render.height",
+            f"a {w}x{h} image needs about {format_bytes(need)} of memory ({BYTES_PER_PIXEL} "
+            f"bytes/pixel), more than the {format_bytes(have)} this machine has; reduce width "
+            "and height",
         )
