@@ -290,3 +290,23 @@ def test_delta_e_patches_missing_rows_only_whole() -> None:
     with pytest.raises(InvalidInputError) as info:
         truth.delta_e_patches(rgb, lab)
     _one_line(info.value, "linear_srgb")
+
+
+# ---- scene-file errors: one line, never the file's content
+
+
+@pytest.mark.parametrize(
+    ("extra", "names"),
+    [
+        ("[sensor]\nfoo = 1\n", ("sensor.foo", "line 6", "more")),
+        ('[[objects]]\ntype = "ground"\ncentre_m = [0, 0, 0]\nfoo = 1\n', ("objects[0].foo",)),
+        ('[illuminant]\nname = "' + "x" * 100_000 + '"\n', ("illuminant.name", "line 6")),
+        ("[camera]\nt_m = [0, 0, " + "9" * 5000 + "]\n", ("TOML",)),
+        ('[processing]\noutput_space = "' + "x" * 100_000 + '"\n', ("processing.output_space",)),
+    ],
+)
+def test_scene_errors_one_line_without_content(extra: str, names: tuple[str, ...]) -> None:
+    with pytest.raises(InvalidInputError) as info:
+        load_scene(BASE + extra)
+    _one_line(info.value, *names)
+    assert "x" * 80 not in str(info.value) and "9" * 80 not in str(info.value)

@@ -37,7 +37,7 @@ from imageform.simulate.config import (
     SceneConfig,
 )
 from imageform.simulate.textures import load_texture, resolve_path
-from imageform.simulate.validation import _Ctx, validate_scene_dict
+from imageform.simulate.validation import _Ctx, one_line, validate_scene_dict
 from imageform.spectral.spectrum import Spectrum
 
 __all__ = ["Scene", "SceneObject", "default_scene", "load_scene"]
@@ -230,7 +230,7 @@ def _at_key(scene: Scene, path: tuple[Any, ...]) -> Iterator[None]:
         msg = str(exc)
         if msg.startswith("scene key"):
             raise
-        raise type(exc)(f"scene key {_where(scene).where(path)}: {msg}") from None
+        raise type(exc)(one_line(f"scene key {_where(scene).where(path)}: {msg}")) from None
 
 
 def _plain(cfg: Any) -> Any:
@@ -344,7 +344,7 @@ def _build(data: dict[str, Any], text: str | None, origin: str, base: Path | Non
         except InvalidInputError as exc:
             if str(exc).startswith("scene key"):
                 raise
-            raise type(exc)(f"scene key {ctx.where(path)}: {exc}") from None
+            raise type(exc)(one_line(f"scene key {ctx.where(path)}: {exc}")) from None
 
     sensor = at(("sensor",), cfg.sensor.to_model)
     camera = at(
@@ -408,12 +408,12 @@ def load_scene(source: str | Path | dict[str, Any]) -> Scene:
             text = path.read_text(encoding="utf-8")
         except UnicodeDecodeError as exc:
             raise InvalidInputError(
-                f"scene file {str(path)!r:.200} is not UTF-8 text (byte {exc.start}); "
+                f"scene file {describe(str(path), 100)} is not UTF-8 text (byte {exc.start}); "
                 "save it as UTF-8 TOML"
             ) from None
         except OSError as exc:
             raise InvalidInputError(
-                f"cannot read scene file {str(path)!r:.200}: {exc.strerror}"
+                f"cannot read scene file {describe(str(path), 100)}: {exc.strerror}"
             ) from None
         origin, base = str(path), path.resolve().parent
     elif isinstance(source, str):
@@ -424,8 +424,8 @@ def load_scene(source: str | Path | dict[str, Any]) -> Scene:
         )
     try:
         data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise InvalidInputError(f"{origin}: TOML syntax error: {exc}") from exc
+    except (tomllib.TOMLDecodeError, ValueError) as exc:  # ValueError: a 5000-digit integer
+        raise InvalidInputError(one_line(f"{origin}: TOML syntax error: {exc}")) from None
     return _build(data, text, origin, base)
 
 
