@@ -310,3 +310,14 @@ def test_scene_errors_one_line_without_content(extra: str, names: tuple[str, ...
         load_scene(BASE + extra)
     _one_line(info.value, *names)
     assert "x" * 80 not in str(info.value) and "9" * 80 not in str(info.value)
+
+
+def test_rail_count_bounded() -> None:
+    # 10**18 rails: one pass over the ground's rays each, would render for ever
+    text = (
+        BASE
+        + '[[objects]]\ntype = "ground"\ncentre_m = [0, 0, 0]\nrail_count = 1000000000000000000\n'
+    )
+    with pytest.raises(InvalidInputError) as info:
+        load_scene(text)
+    _one_line(info.value, "objects[0].rail_count", "line 8")

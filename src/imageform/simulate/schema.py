@@ -105,6 +105,10 @@ OBJECT_TYPES: tuple[str, ...] = ("checkerboard", "colorchecker", "ground", "imag
 #: Largest ``render.supersampling``: 16 x 16 = 256 rays per pixel (the render time grows
 #: with S²; beyond this a box filter gains nothing visible).
 MAX_SUPERSAMPLING = 16
+#: Most rails on a ground (each is one pass over the ground's rays when rendering; 10**18
+#: rails would render for ever).
+MAX_RAILS = 64
+
 #: Most ``[[views]]`` of one scene (each is a whole extra simulation).
 MAX_VIEWS = 64
 #: ``illuminant.temperature_K`` of a blackbody or daylight light when the key is absent.
@@ -331,7 +335,7 @@ SCENE_SCHEMA: dict[str, Any] = {
             "normal": Field("vec3", (0.0, 0.0, 1.0), "ground normal (up)"),
             "size_m": Field("vec2", (0.2, 0.6), "extent across and along the rails (m)", "length"),
             "reflectance": Field("reflectance", 0.25, "the ground"),
-            "rail_count": Field("int", 2, "number of parallel rails", minimum=0),
+            "rail_count": Field("int", 2, "number of parallel rails", minimum=0, maximum=MAX_RAILS),
             "rail_gauge_m": Field(
                 "float", 0.0165, "distance between rails (m)", "length", minimum=0.0
             ),
