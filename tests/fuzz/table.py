@@ -599,7 +599,9 @@ VALID: dict[str, C | Skip] = {
     "imageform.simulate.SimulationResult": call(stages=(), camera=V("camera"), image_size=(8, 6)),
     "imageform.simulate.SimulationResult.stage": method(V("result"), name="raw"),
     "imageform.simulate.Stage": call("raw", "Raw", "the raw image", V("gray"), "raw"),
-    "imageform.simulate.VanishingTruth": call(np.array([4.0, 3.0]), np.array([0.0, 1.0, -3.0])),
+    "imageform.simulate.VanishingTruth": call(
+        np.array([4.0, 3.0, 1.0]), np.array([0.0, 1.0, -3.0])
+    ),
     "imageform.simulate.apply_color_correction": call(V("rgb"), np.eye(3)),
     "imageform.simulate.budget.available_memory_bytes": call(),
     "imageform.simulate.budget.estimate_memory_bytes": call(width=8, height=6),
@@ -619,7 +621,7 @@ VALID: dict[str, C | Skip] = {
     "imageform.simulate.config.ImageConfig": Skip(
         "a scene-file section built by the scene parser (fuzzed through scene files)"
     ),
-    "imageform.simulate.config.LensConfig": call(2.8, 2.0, False, "cos4", (0.0, 0.0, 0.0)),
+    "imageform.simulate.config.LensConfig": call(2.8, 2.0, False, "cos4", (1.0, 1.0, 1.0)),
     "imageform.simulate.config.ObjectConfig": Skip(
         "a scene-file section built by the scene parser (fuzzed through scene files)"
     ),
@@ -680,7 +682,7 @@ VALID: dict[str, C | Skip] = {
         linear_srgb=V("rgb"), space="srgb", transfer="srgb"
     ),
     "imageform.simulate.stages.exposure_time": call(
-        np.full((6, 8), 1000.0), V("sensor_config"), V("sensor")
+        np.full((6, 8, 3), 1000.0), V("sensor_config"), V("sensor")
     ),
     "imageform.simulate.stages.measure_photon_transfer": Skip(
         "an internal stage of simulate (takes a Generator; fuzzed through simulate)"
@@ -703,7 +705,9 @@ VALID: dict[str, C | Skip] = {
     "imageform.simulate.truth.rails_truth": call(V("ground_obj"), V("camera")),
     "imageform.simulate.truth.vanishing_errors": call(V("vanishing_truth")),
     "imageform.simulate.truth.xy_of_linear_srgb": call(rgb=V("rgb4")),
-    "imageform.simulate.validation.find_line": call(text="hello", path=V("tmpfile_png")),
+    "imageform.simulate.validation.find_line": call(
+        text="a = 1\n[camera]\nf = 2\n", path=("camera", "f")
+    ),
     "imageform.simulate.validation.validate_scene_dict": call(
         {"name": "tiny", "render": {"width": 32, "height": 18}}
     ),

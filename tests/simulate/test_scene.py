@@ -135,7 +135,7 @@ def test_missing_files_and_keys(tmp_path: Path) -> None:
         load_scene({"illuminant": {"type": "file"}})
     with pytest.raises(InvalidInputError, match="TOML syntax error"):
         load_scene("name = \n")
-    with pytest.raises(InvalidInputError, match="expected a TOML path"):
+    with pytest.raises(InvalidInputError, match="expected source as a TOML path"):
         load_scene(3)  # type: ignore[arg-type]
 
 

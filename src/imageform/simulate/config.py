@@ -32,7 +32,8 @@ from imageform.geometry.camera import Camera
 from imageform.geometry.distortion import BrownConrady, DivisionModel, KannalaBrandt
 from imageform.geometry.rotations import look_at
 from imageform.sensor.model import SensorModel
-from imageform.simulate.schema import DISTORTION_COEFFICIENTS
+from imageform.simulate._guard import check_section
+from imageform.simulate.schema import DISTORTION_COEFFICIENTS, SCENE_SCHEMA
 
 __all__ = [
     "WORLD_UP",
@@ -87,6 +88,10 @@ class RenderConfig:
     supersampling: int
     background_reflectance: Reflectance
 
+    def __post_init__(self) -> None:
+        """Each field checked against the schema's ``[render]`` keys (issue 16)."""
+        check_section(self, SCENE_SCHEMA["render"], "render")
+
 
 @dataclass(frozen=True)
 class IlluminantConfig:
@@ -99,6 +104,10 @@ class IlluminantConfig:
     temperature_K: float | None
     file: str | None
     illuminance_lux: float
+
+    def __post_init__(self) -> None:
+        """Each field checked against the schema's ``[illuminant]`` keys."""
+        check_section(self, SCENE_SCHEMA["illuminant"], "illuminant")
 
 
 @dataclass(frozen=True)
@@ -194,6 +203,16 @@ class CameraConfig:
     t_m: Vec3 | None
     distortion: DistortionConfig
 
+    def __post_init__(self) -> None:
+        """Each field checked against the schema's ``[camera]`` keys (a negative ``fx_px``
+        would render a mirrored camera); ``distortion`` a :class:`DistortionConfig`."""
+        check_section(self, SCENE_SCHEMA["camera"], "camera")
+        if not isinstance(self.distortion, DistortionConfig):
+            raise TypeError(
+                "expected camera.distortion as a DistortionConfig, got "
+                f"{type(self.distortion).__name__}"
+            )
+
     def to_camera(self, image_size: tuple[int, int], sensor_pixel_pitch_m: float) -> Camera:
         """The camera the renderer uses: K from the intrinsics, R and t from the pose.
 
@@ -264,7 +283,7 @@ class CameraConfig:
             )
         return cls(
             image_plane=str(camera.image_plane),
-            focal_length_mm=float(focal_length_mm),
+            focal_length_mm=as_real(focal_length_mm, "focal_length_mm", positive=True),
             pixel_pitch_um=None,
             fx_px=float(K[0, 0]),
             fy_px=float(K[1, 1]),
@@ -292,6 +311,10 @@ class LensConfig:
     vignetting: str
     lateral_ca: Vec3
     diffraction: bool = False
+
+    def __post_init__(self) -> None:
+        """Each field checked against the schema's ``[lens]`` keys."""
+        check_section(self, SCENE_SCHEMA["lens"], "lens")
 
 
 @dataclass(frozen=True)
@@ -321,6 +344,10 @@ class SensorConfig:
     bit_depth: int | None
     black_level_dn: float | None
     fpn_seed: int | None
+
+    def __post_init__(self) -> None:
+        """Each field checked against the schema's ``[sensor]`` keys."""
+        check_section(self, SCENE_SCHEMA["sensor"], "sensor")
 
     def to_model(self) -> SensorModel:
         """The :class:`~imageform.sensor.SensorModel`: the preset (colour) with the overrides
@@ -375,6 +402,10 @@ class ProcessingConfig:
     output_space: str
     transfer: str
 
+    def __post_init__(self) -> None:
+        """Each field checked against the schema's ``[processing]`` keys."""
+        check_section(self, SCENE_SCHEMA["processing"], "processing")
+
 
 @dataclass(frozen=True)
 class ObjectConfig:
@@ -387,6 +418,18 @@ class ObjectConfig:
     centre_m: Vec3
     normal: Vec3
     up: Vec3 | None
+
+    def __post_init__(self) -> None:
+        """Each field checked against the schema's keys of its ``type``; ``centre_m``
+        required."""
+        schema = SCENE_SCHEMA["objects"]
+        if not isinstance(self.type, str) or self.type not in schema:
+            raise TypeError(f"expected type as one of {', '.join(schema)}, got {self.type!r:.40}")
+        check_section(self, schema[self.type], "objects")
+        if self.centre_m is None:
+            raise TypeError(
+                "expected objects.centre_m as 3 numbers (the object's position), got None"
+            )
 
 
 @dataclass(frozen=True)
@@ -462,6 +505,14 @@ class ViewConfig:
     eye_m: Vec3
     target_m: Vec3
     up: Vec3
+
+    def __post_init__(self) -> None:
+        """Each field checked against the schema's ``[[views]]`` keys; ``eye_m`` required."""
+        check_section(self, SCENE_SCHEMA["views"], "views")
+        if self.eye_m is None:
+            raise TypeError(
+                "expected views.eye_m as 3 numbers (the view's camera centre), got None"
+            )
 
 
 @dataclass(frozen=True)

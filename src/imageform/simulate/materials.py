@@ -25,7 +25,10 @@ from __future__ import annotations
 import numpy as np
 from scipy.optimize import nnls
 
+from imageform._validate import as_real, describe
+from imageform.errors import InvalidInputError, UnknownOptionError
 from imageform.sensor.model import PLANCK, SPEED_OF_LIGHT, SensorModel
+from imageform.simulate._guard import check_type, real_array
 from imageform.spectral import (
     COLORCHECKER_PATCHES,
     colorchecker_reflectances,
@@ -60,6 +63,13 @@ def scene_irradiance(illuminant: Spectrum, illuminance_lux: float, wl: np.ndarra
     >>> round(float(E[0]) * float(luminous_efficiency().interpolate(wl).values.sum()), 3)
     1.0
     """
+    check_type(illuminant, Spectrum, "illuminant")
+    illuminance_lux = as_real(illuminance_lux, "illuminance_lux", nonnegative=True)
+    wl = real_array(wl, "wl", ndim=1, min_size=1)
+    if wl[0] <= 0 or (wl.size > 1 and not np.all(np.diff(wl) > 0)):
+        raise InvalidInputError(
+            f"expected wl as positive, strictly increasing wavelengths (nm), got {describe(wl)}"
+        )
     fine = np.arange(360.0, 831.0, 1.0)
     s_fine = illuminant.interpolate(fine).values
     v = luminous_efficiency("photopic").interpolate(fine).values
@@ -112,8 +122,14 @@ def reflectance_spectrum(value: float | str) -> tuple[np.ndarray, np.ndarray]:
     """
     cc = colorchecker_reflectances()
     if isinstance(value, str):
+        if value not in COLORCHECKER_PATCHES:
+            raise UnknownOptionError(
+                f"unknown ColorChecker patch {describe(value, 30)} for value (a reflectance "
+                "in [0, 1] or a patch name such as 'dark skin')"
+            )
         return cc.wavelengths, cc.values[:, COLORCHECKER_PATCHES.index(value)]
-    return cc.wavelengths, np.full(cc.wavelengths.shape, float(value))
+    rho = as_real(value, "value", minimum=0.0, maximum=1.0)
+    return cc.wavelengths, np.full(cc.wavelengths.shape, rho)
 
 
 def texture_basis() -> tuple[np.ndarray, np.ndarray]:

@@ -24,7 +24,7 @@ from imageform.simulate.result import (
     StageKind,
     VanishingTruth,
 )
-from imageform.simulate.scene import Scene, SceneObject
+from imageform.simulate.scene import Scene, SceneObject, _at_key
 from imageform.simulate.stages import (
     apply_lens,
     balance_white,
@@ -159,10 +159,12 @@ def _chart(scene: Scene) -> SceneObject | None:
     proc = scene.config.processing
     checkers = [o for o in scene.objects if o.kind == "colorchecker"]
     if not checkers and "colorchecker" in (proc.color_correction, proc.white_balance):
-        raise InvalidInputError(
-            "processing.color_correction / white_balance = 'colorchecker' needs a colorchecker "
-            "object in the scene; set them to 'none' / 'gray_world'"
-        )
+        key = "color_correction" if proc.color_correction == "colorchecker" else "white_balance"
+        with _at_key(scene, ("processing", key)):
+            raise InvalidInputError(
+                "'colorchecker' needs a colorchecker object in the scene; add one or set "
+                f"{'none' if key == 'color_correction' else 'gray_world'!r}"
+            )
     return checkers[0] if checkers else None
 
 
@@ -233,12 +235,16 @@ def simulate(
     run = _Run(progress)
 
     w8 = _WEIGHTS["render"]
-    r = render_scene(scene, progress=lambda f: run.report("render", f * w8))
+    with _at_key(scene, ("render",)):
+        r = render_scene(scene, progress=lambda f: run.report("render", f * w8))
     run.stage("rendered", r.rate, S=cfg.render.supersampling)
-    optical = apply_lens(r, scene.camera, cfg.lens, cfg.camera.focal_length_mm)
+    with _at_key(scene, ("lens",)):
+        optical = apply_lens(r, scene.camera, cfg.lens, cfg.camera.focal_length_mm)
     run.stage("optics", optical)
-    t_exp = exposure_time(optical, cfg.sensor, sensor)
-    raw = capture_raw(optical * t_exp, sensor, cfg.sensor, t_exp, source.for_step())
+    with _at_key(scene, ("sensor", "exposure_time_s")):
+        t_exp = exposure_time(optical, cfg.sensor, sensor)
+    with _at_key(scene, ("sensor",)):
+        raw = capture_raw(optical * t_exp, sensor, cfg.sensor, t_exp, source.for_step())
     run.stage(
         "raw",
         raw,
@@ -248,20 +254,24 @@ def simulate(
         bits=sensor.bit_depth,
         gain=sensor.system_gain,
     )
-    img = demosaic_raw(normalize_raw(raw, sensor, t_exp), cfg.sensor.cfa, proc.demosaic)
+    with _at_key(scene, ("processing", "demosaic")):
+        img = demosaic_raw(normalize_raw(raw, sensor, t_exp), cfg.sensor.cfa, proc.demosaic)
     run.stage("demosaiced", img, method=proc.demosaic)
     if proc.lens_shading_correction and cfg.lens.vignetting != "none":
         img = correct_lens_shading(img, r.falloff)
         run.stage("shading_corrected", img)
     truth = colorchecker_truth(chart, scene.camera) if chart is not None else None
     cc_before = patch_means(img, truth) if truth is not None else None
-    wb = balance_white(img, proc.white_balance, cc_before)
+    with _at_key(scene, ("processing", "white_balance")):
+        wb = balance_white(img, proc.white_balance, cc_before)
     gains = ", ".join(f"{g:.3g}" for g in np.ravel(wb.gains))
     run.stage("white_balanced", wb.image, method=proc.white_balance, gains=gains)
     cc_wb = patch_means(wb.image, truth) if truth is not None else None
-    cc = correct_color(wb.image, proc.color_correction, cc_wb)
+    with _at_key(scene, ("processing", "color_correction")):
+        cc = correct_color(wb.image, proc.color_correction, cc_wb)
     run.stage("color_corrected", cc.image)
-    out = encode_output(cc.image, proc.output_space, proc.transfer)
+    with _at_key(scene, ("processing", "output_space")):
+        out = encode_output(cc.image, proc.output_space, proc.transfer)
     run.stage("output", out.image, space=proc.output_space, tf=out.transfer)
 
     cct, duv = light_cct(scene.illuminant)

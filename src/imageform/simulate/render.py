@@ -22,6 +22,7 @@ from imageform._backend import use_numba
 from imageform._validate import as_int, check_memory
 from imageform.errors import InvalidInputError
 from imageform.geometry.camera import Camera
+from imageform.simulate._guard import check_type, real_array
 from imageform.simulate.config import (
     CheckerboardConfig,
     ColorCheckerConfig,
@@ -120,6 +121,16 @@ def pixel_rays(camera: Camera, u: np.ndarray, v: np.ndarray) -> np.ndarray:
     >>> pixel_rays(cam, np.array([60.0]), np.array([40.0])).tolist()
     [[-0.1, -0.0]]
     """
+    check_type(camera, Camera, "camera")
+    u = real_array(u, "u", ndim=1)
+    v = real_array(v, "v", ndim=1)
+    if u.shape != v.shape:
+        raise InvalidInputError(f"expected u and v of one shape, got {u.shape} and {v.shape}")
+    return _pixel_rays(camera, u, v)
+
+
+def _pixel_rays(camera: Camera, u: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """:func:`pixel_rays` without the checks (the renderer's own finite pixel grid)."""
     K = np.asarray(camera.K, dtype=np.float64)
     fx, s, cx, fy, cy = K[0, 0], K[0, 1], K[0, 2], K[1, 1], K[1, 2]
     y = (v - cy) / fy
@@ -284,7 +295,7 @@ def render_scene(
         acc_inv = np.zeros(uu.size)
         for oy in offsets:
             for ox in offsets:
-                xy = pixel_rays(scene.camera, uu + ox, vv + oy)
+                xy = _pixel_rays(scene.camera, uu + ox, vv + oy)
                 idx, a, b, depth = _raycast(xy, *quads)
                 val = shader.shade(idx, a, b)
                 if vignette:
@@ -294,7 +305,7 @@ def render_scene(
                 acc_inv += np.where(np.isfinite(depth), 1.0 / depth, 0.0)
         rate[r0:r1] = (acc / S**2).reshape(r1 - r0, w, 3)
         inv_depth[r0:r1] = (acc_inv / S**2).reshape(r1 - r0, w)
-        xy0 = pixel_rays(scene.camera, uu, vv)
+        xy0 = _pixel_rays(scene.camera, uu, vv)
         idx0 = _raycast(xy0, *quads)[0]
         obj[r0:r1] = idx0.reshape(r1 - r0, w)
         if vignette:

@@ -21,6 +21,8 @@ from typing import Any, Literal
 
 import numpy as np
 
+from imageform._validate import as_real, as_reals, as_size, describe
+from imageform.errors import InvalidInputError
 from imageform.geometry.camera import Camera
 from imageform.sensor.emva import PhotonTransferData
 from imageform.simulate.config import WORLD_UP
@@ -54,6 +56,20 @@ class Stage:
     kind: StageKind
     white_level: float | None = None
     seconds: float = 0.0
+
+    def __post_init__(self) -> None:
+        """Names are strings, ``seconds`` finite and ``>= 0``, ``white_level`` finite and
+        ``> 0`` (or None), ``image`` an array (an unknown ``kind`` is the report's to refuse,
+        naming the stage)."""
+        for key in ("name", "title", "description"):
+            if not isinstance(getattr(self, key), str):
+                raise TypeError(f"expected {key} as a string, got {describe(getattr(self, key))}")
+        if not hasattr(self.image, "shape") or not hasattr(self.image, "dtype"):
+            raise TypeError(f"expected image as an array, got {describe(self.image)}")
+        object.__setattr__(self, "seconds", as_real(self.seconds, "seconds", nonnegative=True))
+        if self.white_level is not None:
+            wl = as_real(self.white_level, "white_level", positive=True)
+            object.__setattr__(self, "white_level", wl)
 
 
 @dataclass(frozen=True)
@@ -145,6 +161,21 @@ class PatchMeasurements:
         return self.snr_luminance_db
 
 
+def _homogeneous(value: object, name: str) -> np.ndarray:
+    """A finite real homogeneous 3-vector (a point or a line) as float64."""
+    if value is None or isinstance(value, str | bytes | bool):
+        raise InvalidInputError(f"expected {name} as 3 numbers, got {describe(value)}")
+    arr = np.asarray(value)
+    if arr.dtype.kind not in "iuf":
+        raise InvalidInputError(f"expected {name} as 3 real numbers, got {describe(value)}")
+    if arr.shape != (3,):
+        raise InvalidInputError(f"expected {name} as a homogeneous 3-vector, got shape {arr.shape}")
+    arr = arr.astype(np.float64)
+    if not np.all(np.isfinite(arr)) or not np.any(arr):
+        raise InvalidInputError(f"expected {name} finite and non-zero, got {arr.tolist()}")
+    return arr
+
+
 @dataclass(frozen=True)
 class VanishingTruth:
     """The rails' true vanishing point (homogeneous ``(3,)``, pixels) and the true horizon
@@ -155,6 +186,15 @@ class VanishingTruth:
     horizon: np.ndarray
     detected_vanishing_point: np.ndarray | None = None
     detected_horizon: np.ndarray | None = None
+
+    def __post_init__(self) -> None:
+        """Each line or point a finite homogeneous 3-vector (``None`` for a detection that
+        found nothing)."""
+        for key in ("vanishing_point", "horizon", "detected_vanishing_point", "detected_horizon"):
+            value = getattr(self, key)
+            if value is None and key.startswith("detected"):
+                continue
+            object.__setattr__(self, key, _homogeneous(value, key))
 
 
 @dataclass(frozen=True)
@@ -198,6 +238,24 @@ class SimulationResult:
     config: dict[str, Any] = field(default_factory=dict)
     patches: PatchMeasurements | None = None
     world_up: tuple[float, float, float] = WORLD_UP
+
+    def __post_init__(self) -> None:
+        """``camera`` a Camera, ``image_size`` two positive integers, ``world_up`` a finite
+        non-zero 3-vector, ``stages`` Stage objects (issue 16)."""
+        if not isinstance(self.camera, Camera):
+            raise TypeError(
+                f"expected camera as an imageform.geometry.Camera, got {describe(self.camera)}"
+            )
+        w, h = as_size(self.image_size, "image_size (width, height)")
+        object.__setattr__(self, "image_size", (w, h))
+        up = as_reals(self.world_up, "world_up", 3)
+        if not any(up):
+            raise InvalidInputError("expected world_up as a non-zero direction, got (0, 0, 0)")
+        object.__setattr__(self, "world_up", up)
+        stages = tuple(self.stages) if isinstance(self.stages, tuple | list) else None
+        if stages is None or not all(isinstance(s, Stage) for s in stages):
+            raise TypeError(f"expected stages as a tuple of Stage, got {describe(self.stages)}")
+        object.__setattr__(self, "stages", stages)
 
     def stage(self, name: str) -> Stage:
         """The stage called ``name``; ``KeyError`` listing the names if there is none."""

@@ -8,18 +8,20 @@ The world frame is z-up (the ground is ``z = 0``); lengths are metres.
 
 from __future__ import annotations
 
+import contextlib
 import copy
 import dataclasses
 import tomllib
 import warnings
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from imageform.errors import InvalidInputError
+from imageform._validate import describe
+from imageform.errors import DegenerateConfigurationError, InvalidInputError
 from imageform.geometry.camera import Camera
 from imageform.sensor.model import SensorModel
 from imageform.simulate.config import (
@@ -35,7 +37,7 @@ from imageform.simulate.config import (
     SceneConfig,
 )
 from imageform.simulate.textures import load_texture, resolve_path
-from imageform.simulate.validation import _Ctx, validate_scene_dict
+from imageform.simulate.validation import _Ctx, one_line, validate_scene_dict
 from imageform.spectral.spectrum import Spectrum
 
 __all__ = ["Scene", "SceneObject", "default_scene", "load_scene"]
@@ -122,7 +124,8 @@ class Scene:
                 cfg[sec].update(changes)
             else:
                 cfg[sec] = changes
-        return _build(_plain(cfg), None, "scene", self.base_dir)
+        origin = _where(self).origin
+        return _build(_plain(cfg), None, origin, self.base_dir)
 
     def with_camera(self, camera: Camera, *, focal_length_mm: float | None = None) -> Scene:
         """The same scene seen through ``camera`` (an :class:`imageform.geometry.Camera`:
@@ -208,6 +211,26 @@ class Scene:
         if cam.skew_px:
             changes["skew_px"] = cam.skew_px * f
         return self.with_changes(render={"width": int(width), "height": h}, camera=changes)
+
+
+def _where(scene: Scene) -> _Ctx:
+    """Where ``scene`` came from: its file (or string) and text, to name a key's line."""
+    ctx = getattr(scene, "_where", None)
+    return ctx if isinstance(ctx, _Ctx) else _Ctx(None, "scene")
+
+
+@contextlib.contextmanager
+def _at_key(scene: Scene, path: tuple[Any, ...]) -> Iterator[None]:
+    """Run a step of the simulation of ``scene``; an error it raises about the scene's values
+    names the scene key ``path`` and its line in the scene file (issue 16: errors that arise
+    at render time point at the file like those found when it is read)."""
+    try:
+        yield
+    except (InvalidInputError, DegenerateConfigurationError) as exc:
+        msg = str(exc)
+        if msg.startswith("scene key"):
+            raise
+        raise type(exc)(one_line(f"scene key {_where(scene).where(path)}: {msg}")) from None
 
 
 def _plain(cfg: Any) -> Any:
@@ -321,7 +344,7 @@ def _build(data: dict[str, Any], text: str | None, origin: str, base: Path | Non
         except InvalidInputError as exc:
             if str(exc).startswith("scene key"):
                 raise
-            raise type(exc)(f"scene key {ctx.where(path)}: {exc}") from None
+            raise type(exc)(one_line(f"scene key {ctx.where(path)}: {exc}")) from None
 
     sensor = at(("sensor",), cfg.sensor.to_model)
     camera = at(
@@ -334,7 +357,7 @@ def _build(data: dict[str, Any], text: str | None, origin: str, base: Path | Non
             f"expected more than the focal length ({cfg.camera.focal_length_mm:g} mm), got "
             f"{cfg.lens.focus_distance_m:g} m",
         )
-    return Scene(
+    scene = Scene(
         name=cfg.name,
         config=cfg,
         objects=at(("objects",), lambda: _objects(cfg, base)),
@@ -343,6 +366,8 @@ def _build(data: dict[str, Any], text: str | None, origin: str, base: Path | Non
         illuminant=at(("illuminant",), lambda: _illuminant(cfg.illuminant, base)),
         base_dir=base,
     )
+    object.__setattr__(scene, "_where", ctx)  # not a field: for errors at render time
+    return scene
 
 
 def load_scene(source: str | Path | dict[str, Any]) -> Scene:
@@ -371,30 +396,36 @@ def load_scene(source: str | Path | dict[str, Any]) -> Scene:
         isinstance(source, str) and "\n" not in source and "=" not in source
     ):
         path = Path(source)
-        if not path.is_file():
-            raise InvalidInputError(f"scene file not found: {str(path)!r}")
+        try:
+            found = path.is_file()
+        except OSError as exc:  # a name too long for the file system
+            raise InvalidInputError(
+                f"source: cannot use {describe(str(source), 60)} as a scene file: {exc.strerror}"
+            ) from None
+        if not found:
+            raise InvalidInputError(f"scene file not found (source): {describe(str(source), 120)}")
         try:
             text = path.read_text(encoding="utf-8")
         except UnicodeDecodeError as exc:
             raise InvalidInputError(
-                f"scene file {str(path)!r:.200} is not UTF-8 text (byte {exc.start}); "
+                f"scene file {describe(str(path), 100)} is not UTF-8 text (byte {exc.start}); "
                 "save it as UTF-8 TOML"
             ) from None
         except OSError as exc:
             raise InvalidInputError(
-                f"cannot read scene file {str(path)!r:.200}: {exc.strerror}"
+                f"cannot read scene file {describe(str(path), 100)}: {exc.strerror}"
             ) from None
         origin, base = str(path), path.resolve().parent
     elif isinstance(source, str):
         text, origin, base = source, "scene string", None
     else:
         raise InvalidInputError(
-            f"expected a TOML path, a TOML string or a dict, got {type(source).__name__}"
+            f"expected source as a TOML path, a TOML string or a dict, got {type(source).__name__}"
         )
     try:
         data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise InvalidInputError(f"{origin}: TOML syntax error: {exc}") from exc
+    except (tomllib.TOMLDecodeError, ValueError) as exc:  # ValueError: a 5000-digit integer
+        raise InvalidInputError(one_line(f"{origin}: TOML syntax error: {exc}")) from None
     return _build(data, text, origin, base)
 
 

@@ -50,6 +50,42 @@ class Field:
     maximum: float | None = None
     positive: bool = False
 
+    def __post_init__(self) -> None:
+        """A known ``kind``; a numeric ``default`` finite and real (issue 16)."""
+        from imageform._validate import as_real, describe
+        from imageform.errors import InvalidInputError
+
+        if self.kind not in _KINDS:
+            raise InvalidInputError(
+                f"expected kind as one of {', '.join(_KINDS)}, got {self.kind!r:.40}"
+            )
+        if not isinstance(self.doc, str):
+            raise TypeError(f"expected doc as a string, got {describe(self.doc)}")
+        d = self.default
+        if d is None or isinstance(d, str) or (self.kind == "bool" and isinstance(d, bool)):
+            return
+        if isinstance(d, tuple | list):
+            rows = d if self.kind == "mat3" else (d,)
+            for row in rows:
+                for x in row if isinstance(row, tuple | list) else (row,):
+                    as_real(x, "default")
+            return
+        as_real(d, "default")
+
+
+#: The kinds of :class:`Field`.
+_KINDS = (
+    "float",
+    "int",
+    "str",
+    "bool",
+    "vec2",
+    "vec3",
+    "ivec2",
+    "mat3",
+    "reflectance",
+    "float_or_auto",
+)
 
 # Conversion of a unit to the key's base unit (m, s, rad ... deg is kept for *_deg keys);
 # lengths are imageform's one table of length units (imageform._units).
@@ -69,6 +105,10 @@ OBJECT_TYPES: tuple[str, ...] = ("checkerboard", "colorchecker", "ground", "imag
 #: Largest ``render.supersampling``: 16 x 16 = 256 rays per pixel (the render time grows
 #: with S²; beyond this a box filter gains nothing visible).
 MAX_SUPERSAMPLING = 16
+#: Most rails on a ground (each is one pass over the ground's rays when rendering; 10**18
+#: rails would render for ever).
+MAX_RAILS = 64
+
 #: Most ``[[views]]`` of one scene (each is a whole extra simulation).
 MAX_VIEWS = 64
 #: ``illuminant.temperature_K`` of a blackbody or daylight light when the key is absent.
@@ -295,7 +335,7 @@ SCENE_SCHEMA: dict[str, Any] = {
             "normal": Field("vec3", (0.0, 0.0, 1.0), "ground normal (up)"),
             "size_m": Field("vec2", (0.2, 0.6), "extent across and along the rails (m)", "length"),
             "reflectance": Field("reflectance", 0.25, "the ground"),
-            "rail_count": Field("int", 2, "number of parallel rails", minimum=0),
+            "rail_count": Field("int", 2, "number of parallel rails", minimum=0, maximum=MAX_RAILS),
             "rail_gauge_m": Field(
                 "float", 0.0165, "distance between rails (m)", "length", minimum=0.0
             ),

@@ -22,11 +22,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from imageform._validate import as_real, as_reals, describe
-from imageform.errors import InvalidInputError
+from imageform._validate import as_real, as_reals, check_name, describe
+from imageform.errors import InvalidInputError, UnknownOptionError
 from imageform.geometry.camera import Camera
 from imageform.sensor.emva import PhotonTransferData
 from imageform.sensor.model import SensorModel
+from imageform.simulate._guard import check_type, real_array
 from imageform.simulate.colorfit import _fit_matrix
 from imageform.simulate.config import LensConfig, SensorConfig
 from imageform.simulate.render import RenderOutput
@@ -61,6 +62,13 @@ class WhiteBalanced:
     image: np.ndarray
     gains: np.ndarray
 
+    def __post_init__(self) -> None:
+        """``gains``: three finite reals (issue 16)."""
+        gains = real_array(self.gains, "gains", ndim=1)
+        if gains.shape != (3,):
+            raise InvalidInputError(f"expected gains of shape (3,), got {gains.shape}")
+        object.__setattr__(self, "gains", gains)
+
 
 @dataclass(frozen=True)
 class ColorCorrected:
@@ -69,6 +77,13 @@ class ColorCorrected:
 
     image: np.ndarray
     matrix: np.ndarray
+
+    def __post_init__(self) -> None:
+        """``matrix``: a finite real (3, 3) (issue 16)."""
+        matrix = real_array(self.matrix, "matrix", ndim=2)
+        if matrix.shape != (3, 3):
+            raise InvalidInputError(f"expected matrix of shape (3, 3), got {matrix.shape}")
+        object.__setattr__(self, "matrix", matrix)
 
 
 @dataclass(frozen=True)
@@ -95,6 +110,15 @@ def apply_lens(
     """
     from imageform.optics import blur_by_radius, defocus_radius_px, lateral_chromatic_aberration
 
+    check_type(rendered, RenderOutput, "rendered")
+    check_type(camera, Camera, "camera")
+    check_type(lens, LensConfig, "lens")
+    focal_length_mm = as_real(focal_length_mm, "focal_length_mm", positive=True)
+    if lens.defocus and focal_length_mm * 1e-3 >= lens.focus_distance_m:
+        raise InvalidInputError(
+            f"expected focal_length_mm below the focus distance ({lens.focus_distance_m:g} m), "
+            f"got {focal_length_mm:g} mm"
+        )
     img = rendered.rate
     mags = tuple(lens.lateral_ca)
     if any(m != 1.0 for m in mags):
@@ -136,6 +160,13 @@ DIFFRACTION_BANDS = (
 )
 
 
+#: The most samples across the fine grid of :func:`diffraction_psf_kernel` (``n k``): a
+#: 2047-sample polychromatic PSF takes about 3 s per channel, 16383 would take minutes and
+#: gigabytes (issue 16: bounded before anything is computed). The kernel is then at least
+#: 680 pixels wide, larger than the images this blur is meant for.
+MAX_KERNEL_SAMPLES = 2048
+
+
 def diffraction_psf_kernel(
     wavelengths: tuple[float, ...], *, f_number: float, pixel_pitch: float
 ) -> np.ndarray:
@@ -158,16 +189,16 @@ def diffraction_psf_kernel(
     if not (fine_ratio < 1e4 and lam_n / pixel_pitch < 1e4):
         raise InvalidInputError(
             f"f_number {f_number:g} and pixel_pitch {pixel_pitch:g} m give a diffraction kernel "
-            f"of more than 16384 samples for wavelengths {min(wavelengths):g}.."
+            f"of more than {MAX_KERNEL_SAMPLES} samples for wavelengths {min(wavelengths):g}.."
             f"{max(wavelengths):g} m"
         )
     k = max(3, 2 * math.ceil(2 * pixel_pitch / (2 * min(wavelengths) * f_number) + 0.5) + 1)
     half = max(1, math.ceil(10 * lam_n / pixel_pitch))  # ~98 % of the light
     n = 2 * half + 1
-    if n * k > 16384:
+    if n * k > MAX_KERNEL_SAMPLES:
         raise InvalidInputError(
             f"f_number {f_number:g} and pixel_pitch {pixel_pitch:g} m give a diffraction kernel "
-            f"of {n * k} samples (at most 16384)"
+            f"of {n * k} samples (at most {MAX_KERNEL_SAMPLES}: a lower f_number)"
         )
     fine = polychromatic_psf(
         wavelengths=list(wavelengths),
@@ -213,11 +244,18 @@ def exposure_time(rate: np.ndarray, config: SensorConfig, sensor: SensorModel) -
     InvalidInputError
         ``"auto"`` on a black scene.
     """
+    check_type(config, SensorConfig, "config")
+    check_type(sensor, SensorModel, "sensor")
+    rate = real_array(rate, "rate", ndim=(2, 3), finite=False)
     if config.exposure_time_s != "auto":
         return float(config.exposure_time_s)
+    if rate.size == 0:
+        raise InvalidInputError(f"expected rate with at least one pixel, got shape {rate.shape}")
     bright = float(np.percentile(rate.max(axis=-1), 99.5))
+    if not math.isfinite(bright):
+        raise InvalidInputError(f"rate contains NaN or inf (99.5th percentile {bright:g})")
     if bright <= 0:
-        raise InvalidInputError("the scene is black: auto exposure has nothing to measure")
+        raise InvalidInputError("rate: the scene is black: auto exposure has nothing to measure")
     return float(config.auto_exposure_level) * sensor.full_well / bright
 
 
@@ -252,23 +290,53 @@ def normalize_raw(raw: np.ndarray, sensor: SensorModel, exposure_time_s: float) 
 
     .. math:: x = (DN - B - K\\, I_{dark}\\, t) / (DN_{max} - B)
     """
+    raw = real_array(raw, "raw", ndim=2, finite=False)  # float64 (the one conversion)
+    check_type(sensor, SensorModel, "sensor")
+    exposure_time_s = as_real(exposure_time_s, "exposure_time_s", nonnegative=True)
     dark_dn = sensor.system_gain * sensor.dark_current * exposure_time_s
-    return (raw.astype(np.float64) - sensor.black_level - dark_dn) / (
-        sensor.max_dn - sensor.black_level
-    )
+    return (raw - sensor.black_level - dark_dn) / (sensor.max_dn - sensor.black_level)
 
 
 def demosaic_raw(normalized: np.ndarray, cfa: str, method: str) -> np.ndarray:
     """Camera RGB ``(H, W, 3)`` float64 from the normalised mosaic
     (:func:`imageform.sensor.demosaic.demosaic`)."""
-    from imageform.sensor.demosaic import demosaic
+    from imageform.sensor.cfa import CFA_PATTERNS
+    from imageform.sensor.demosaic import DEMOSAIC_METHODS, demosaic
 
-    return np.asarray(demosaic(normalized, cfa, method, allow_odd=True), dtype=np.float64)
+    if not isinstance(cfa, str):
+        raise TypeError(f"expected cfa as a CFA pattern name, got {describe(cfa)}")
+    if cfa.strip().upper() not in CFA_PATTERNS:
+        raise UnknownOptionError(
+            f"unknown CFA pattern {describe(cfa, 30)} for cfa; valid: {', '.join(CFA_PATTERNS)}"
+        )
+    cfa = cfa.strip().upper()
+    method = check_name(method, DEMOSAIC_METHODS, "demosaicing method", "method")
+    arr = real_array(normalized, "normalized", ndim=2, finite=False)
+    if min(arr.shape) < 2:
+        raise InvalidInputError(
+            f"expected normalized as a mosaic of at least 2x2 pixels, got shape {arr.shape}"
+        )
+    lo, hi = float(arr.min()), float(arr.max())  # one pass; demosaic reads it whole anyway
+    if not (math.isfinite(lo) and math.isfinite(hi)):
+        raise InvalidInputError("normalized contains NaN or inf")
+    if lo < -1e3 or hi > 1e3:
+        raise InvalidInputError(
+            f"expected normalized as a raw image scaled to about [0, 1], got {lo:g}..{hi:g}"
+        )
+    return np.asarray(demosaic(arr, cfa, method, allow_odd=True), dtype=np.float64)
 
 
 def correct_lens_shading(image: np.ndarray, falloff: np.ndarray) -> np.ndarray:
     """Flat-field correction: ``image`` divided by the vignetting map ``falloff`` (H, W)."""
-    return np.asarray(image / falloff[..., None])
+    img = real_array(image, "image", ndim=3, finite=False)
+    fall = real_array(falloff, "falloff", ndim=2, finite=False)
+    if fall.shape != img.shape[:2]:
+        raise InvalidInputError(
+            f"expected falloff of the image's shape {img.shape[:2]}, got {fall.shape}"
+        )
+    if fall.size and not float(fall.min()) > 0:  # one pass over (H, W); NaN fails too
+        raise InvalidInputError(f"expected falloff > 0 everywhere, got min {float(fall.min()):g}")
+    return np.asarray(img / fall[..., None])
 
 
 def balance_white(
@@ -286,8 +354,10 @@ def balance_white(
     InvalidInputError
         ``"colorchecker"`` without ``chart_rgb``.
     """
-    from imageform.color import white_balance
+    from imageform.color import WHITE_BALANCE_METHODS, white_balance
 
+    if not isinstance(method, str):
+        raise TypeError(f"expected method as a white-balance method name, got {describe(method)}")
     if method == "none":
         return WhiteBalanced(image, np.ones(3))
     if method == "colorchecker":
@@ -295,9 +365,21 @@ def balance_white(
             raise InvalidInputError("white_balance = 'colorchecker' needs a colorchecker object")
         idx = [COLORCHECKER_PATCHES.index(name) for name in NEUTRAL_PATCHES]
         neutral = np.asarray(chart_rgb)[idx]
-        gains = np.nanmean(neutral[:, 1:2] / neutral, axis=0)
+        with np.errstate(all="ignore"):
+            gains = np.nanmean(neutral[:, 1:2] / neutral, axis=0)
+        if not np.all(np.isfinite(gains) & (gains > 0)):
+            raise InvalidInputError(
+                "chart_rgb: white_balance = 'colorchecker' found no measured neutral patch "
+                "(the chart's greys are outside the image or black)"
+            )
         return WhiteBalanced(image * gains, gains)
-    res = white_balance(image, method, transfer="linear", normalize="green")
+    try:
+        res = white_balance(image, method, transfer="linear", normalize="green")
+    except UnknownOptionError:
+        valid = ", ".join(("none", "colorchecker", *WHITE_BALANCE_METHODS))
+        raise UnknownOptionError(
+            f"unknown white-balance method {describe(method, 30)} for method; valid: {valid}"
+        ) from None
     return WhiteBalanced(np.asarray(res.image), np.asarray(res.gains))
 
 
@@ -330,6 +412,7 @@ def encode_output(linear_srgb: np.ndarray, space: str, transfer: str) -> Encoded
     an explicit step) and encoded with ``transfer`` (``"space"``: the space's own)."""
     from imageform.color import RGB_SPACES, encode, linear_srgb_to_xyz, xyz_to_linear_rgb
 
+    linear_srgb = real_array(linear_srgb, "linear_srgb", finite=False)
     lin = (
         linear_srgb
         if space == "srgb"
@@ -344,6 +427,7 @@ def decode_output(encoded: Encoded, space: str) -> np.ndarray:
     """The encoded output back to linear sRGB (to measure it against the truth)."""
     from imageform.color import decode, linear_rgb_to_xyz, xyz_to_linear_srgb
 
+    check_type(encoded, Encoded, "encoded")
     lin = np.asarray(decode(encoded.image, encoded.transfer))
     return lin if space == "srgb" else np.asarray(xyz_to_linear_srgb(linear_rgb_to_xyz(lin, space)))
 

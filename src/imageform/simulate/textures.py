@@ -11,6 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
+from imageform._validate import describe
 from imageform.errors import InvalidInputError
 
 __all__ = ["load_texture", "resolve_path"]
@@ -19,12 +20,21 @@ __all__ = ["load_texture", "resolve_path"]
 def resolve_path(path: str, base: Path | None) -> Path:
     """``path`` relative to the scene file's folder ``base`` (the working folder when
     ``None``); an error naming the file when it does not exist."""
+    if not isinstance(path, str | Path):
+        raise TypeError(f"expected path as a file name (str or Path), got {describe(path)}")
+    if base is not None and not isinstance(base, str | Path):
+        raise TypeError(f"expected base as a folder (str or Path) or None, got {describe(base)}")
     p = Path(path).expanduser()
     if not p.is_absolute() and base is not None:
-        p = base / p
-    if not p.is_file():
+        p = Path(base) / p
+    try:
+        found = p.is_file()
+    except OSError as exc:  # a name too long for the file system
+        raise InvalidInputError(f"path {describe(str(path), 60)}: {exc.strerror}") from None
+    if not found:
+        where = "the working folder: base is None" if base is None else "base, the scene's folder"
         raise InvalidInputError(
-            f"file not found: {str(p)!r} (paths are relative to the scene file)"
+            f"file not found: {describe(str(p), 100)} (path relative to {where})"
         )
     return p
 

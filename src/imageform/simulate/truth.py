@@ -30,6 +30,7 @@ from imageform.color import (
 from imageform.errors import InvalidInputError
 from imageform.geometry.camera import Camera
 from imageform.geometry.vanishing import horizon_line
+from imageform.simulate._guard import check_type, real_array
 from imageform.simulate._rng import RNGLike, random_source
 from imageform.simulate.config import ColorCheckerConfig
 from imageform.simulate.result import ColorCheckerTruth, PatchMeasurements, VanishingTruth
@@ -62,12 +63,18 @@ NEUTRAL_PATCHES: tuple[str, ...] = (
 )
 
 
+#: The largest colour value :func:`delta_e_patches` takes (beyond it CIELAB overflows).
+_MAX_COLOUR = 1e15
+
+
 def colorchecker_truth(obj: SceneObject, camera: Camera) -> ColorCheckerTruth:
     """Ground-truth Lab (D65) and image positions of the 24 patches of ``obj``.
 
     The sampling radius is a third of the smallest projected half-patch (so that windows stay
     inside the patches in perspective).
     """
+    check_type(obj, SceneObject, "obj")
+    check_type(camera, Camera, "camera")
     if not isinstance(obj.config, ColorCheckerConfig):
         raise InvalidInputError(f"expected a colorchecker object, got a {obj.kind}")
     xyz = spectrum_to_xyz(colorchecker_reflectances(), illuminant="D65")
@@ -135,9 +142,12 @@ def patch_means(image: np.ndarray, truth: ColorCheckerTruth) -> np.ndarray:
 
 def patch_stats(image: np.ndarray, truth: ColorCheckerTruth) -> tuple[np.ndarray, np.ndarray]:
     """Mean and standard deviation ``(24, C)`` of each patch window."""
-    img = np.asarray(image, dtype=np.float64)
+    check_type(truth, ColorCheckerTruth, "truth")
+    img = real_array(image, "image", ndim=(2, 3), finite=False)  # NaN: an unmeasured pixel
     if img.ndim == 2:
         img = img[..., None]
+    if img.size == 0:
+        raise InvalidInputError(f"expected image with at least one pixel, got shape {img.shape}")
     h, w, c = img.shape
     mean = np.full((len(truth.names), c), np.nan)
     std = np.full((len(truth.names), c), np.nan)
@@ -158,7 +168,7 @@ def xy_of_linear_srgb(rgb: np.ndarray) -> np.ndarray:
     >>> xy_of_linear_srgb(np.array([1.0, 1.0, 1.0])).round(4).tolist()
     [0.3127, 0.329]
     """
-    arr = np.asarray(rgb, dtype=np.float64)
+    arr = real_array(rgb, "rgb", last=3, finite=False)  # a NaN row: a patch not measured
     out = np.full((*arr.shape[:-1], 2), np.nan)
     ok = np.all(np.isfinite(arr), axis=-1)
     out[ok] = np.asarray(xyz_to_xy(linear_srgb_to_xyz(arr[ok])))
@@ -166,8 +176,29 @@ def xy_of_linear_srgb(rgb: np.ndarray) -> np.ndarray:
 
 
 def delta_e_patches(linear_srgb: np.ndarray, lab_truth: np.ndarray) -> np.ndarray:
-    """CIEDE2000 of linear-sRGB patch colours ``(24, 3)`` against ``lab_truth`` (D65)."""
-    return _lab_and_delta_e(linear_srgb, lab_truth)[1]
+    """CIEDE2000 of linear-sRGB patch colours ``(24, 3)`` against ``lab_truth`` (D65).
+
+    A row of NaN is a patch not measured (outside the image): its ΔE00 is NaN. A row only
+    partly NaN, or any inf, is refused.
+    """
+    rgb = real_array(linear_srgb, "linear_srgb", ndim=2, last=3, finite=False, min_size=3)
+    lab = real_array(lab_truth, "lab_truth", ndim=2, last=3)
+    if lab.shape != rgb.shape:
+        raise InvalidInputError(
+            f"expected lab_truth of linear_srgb's shape {rgb.shape}, got {lab.shape}"
+        )
+    nan = np.isnan(rgb)
+    if np.isinf(rgb).any() or (nan.any(axis=1) & ~nan.all(axis=1)).any():
+        raise InvalidInputError(
+            "linear_srgb contains inf or a row only partly NaN (a whole NaN row: not measured)"
+        )
+    for arr, name in ((rgb, "linear_srgb"), (lab, "lab_truth")):
+        big = float(np.nanmax(np.abs(arr))) if not np.isnan(arr).all() else 0.0
+        if big > _MAX_COLOUR:
+            raise InvalidInputError(
+                f"expected {name} within ±{_MAX_COLOUR:g} (a colour value), got {big:g}"
+            )
+    return _lab_and_delta_e(rgb, lab)[1]
 
 
 def _lab_and_delta_e(linear_srgb: np.ndarray, lab_truth: np.ndarray) -> tuple[Any, Any]:
@@ -258,6 +289,7 @@ def light_cct(spd: Spectrum) -> tuple[float, float]:
     >>> round(cct), abs(duv) < 1e-3
     (2856, True)
     """
+    check_type(spd, Spectrum, "spd")
     xy = np.asarray(xyz_to_xy(spectrum_to_xyz(spd, illuminant=None)))
     cct, duv = xy_to_cct(xy)
     return float(cct), float(duv)
@@ -283,6 +315,8 @@ def rails_truth(ground: SceneObject, camera: Camera) -> VanishingTruth:
     line (a distorted horizon is a curve): :func:`imageform.geometry.horizon_line` with the
     ground's normal as ``up`` (the world's up axis, z, for a level ground).
     """
+    check_type(ground, SceneObject, "ground")
+    check_type(camera, Camera, "camera")
     d = -ground.edge_down / np.linalg.norm(ground.edge_down)
     n = np.cross(ground.edge_right, ground.edge_down)
     n = -n / np.linalg.norm(n)  # right x down points into the ground; the normal is up
@@ -310,6 +344,7 @@ def vanishing_errors(v: VanishingTruth) -> dict[str, float | None]:
     ...                                 np.array([0.0, 0.0, 1.0]), np.array([0.0, 1.0, -2.0])))
     {'vanishing_point_error_px': 5.0, 'horizon_angle_error_deg': 0.0}
     """
+    check_type(v, VanishingTruth, "v")
     out: dict[str, float | None] = {
         "vanishing_point_error_px": None,
         "horizon_angle_error_deg": None,

@@ -51,6 +51,10 @@ def find_line(text: str | None, path: tuple[Any, ...]) -> int | None:
     >>> find_line("a = 1\\n[camera]\\nf = 2\\n", ("camera", "f"))
     3
     """
+    if text is not None and not isinstance(text, str):
+        raise TypeError(f"expected text as a TOML string or None, got {type(text).__name__}")
+    if not isinstance(path, tuple | list):
+        raise TypeError(f"expected path as a tuple of keys, got {type(path).__name__}")
     if not text:
         return None
     section: tuple[Any, ...] = ()
@@ -94,6 +98,24 @@ def _show(v: object) -> str:
     return _show_text(repr(v))
 
 
+def _names(keys: Any, width: int = 70) -> str:
+    """The valid keys, as many as fit ``width`` characters, then how many more (one line)."""
+    keys = list(keys)
+    shown: list[str] = []
+    for k in keys:
+        if len(", ".join([*shown, k])) > width:
+            return f"{', '.join(shown)}, ... ({len(keys) - len(shown)} more; docs/simulate.md)"
+        shown.append(k)
+    return ", ".join(shown)
+
+
+def one_line(text: str, limit: int = 200) -> str:
+    """``text``'s first line cut to ``limit`` characters (an error message never dumps a
+    scene value or a file's content)."""
+    first = text.strip().splitlines()[0] if text.strip() else ""
+    return first if len(first) <= limit else first[: limit - 3] + "..."
+
+
 class _Ctx:
     def __init__(self, text: str | None, origin: str) -> None:
         self.text = text
@@ -103,12 +125,17 @@ class _Ctx:
         dotted = ".".join(f"[{p}]" if isinstance(p, int) else str(p) for p in path)
         dotted = _show_text(dotted.replace(".[", "["))
         line = find_line(self.text, path)
-        at = f" ({self.origin}, line {line})" if line else f" ({self.origin})"
-        return f"{dotted}{at}"
+        if line:
+            return f"{dotted} ({self.origin}, line {line})"
+        if self.text:  # a key the file leaves out: its default; point at its section
+            section = find_line(self.text, path[:1]) if len(path) > 1 else None
+            at = f", [{path[0]}] at line {section}" if section else ""
+            return f"{dotted} ({self.origin}{at}, default)"
+        return f"{dotted} ({self.origin})"
 
     def fail(self, path: tuple[Any, ...], msg: str, unknown: bool = False) -> None:
         cls = UnknownOptionError if unknown else InvalidInputError
-        raise cls(f"scene key {self.where(path)}: {msg}")
+        raise cls(one_line(f"scene key {self.where(path)}: {msg}"))
 
 
 def _quantity(v: str, f: Field, key: str, path: tuple[Any, ...], ctx: _Ctx) -> float:
@@ -223,9 +250,7 @@ def _table(data: Any, schema: dict[str, Any], path: tuple[Any, ...], ctx: _Ctx) 
             same = [k for k in schema if re.sub(r"_(m|mm|um|s|deg|K|lux|px|e)$", "", k) == stem]
             if same and key not in same:
                 unit_hint = f" (wrong unit? this key is {same[0]!r})"
-            ctx.fail(
-                (*path, key), f"unknown key{unit_hint}{hint}; valid: {', '.join(schema)}", True
-            )
+            ctx.fail((*path, key), f"unknown key{unit_hint}{hint}; valid: {_names(schema)}", True)
         f = schema[key]
         if isinstance(f, dict):
             out[key] = _table(value, f, (*path, key), ctx)
@@ -261,7 +286,7 @@ def validate_scene_dict(
     """
     ctx = _Ctx(text, origin)
     if not isinstance(data, dict):
-        raise InvalidInputError(f"expected a scene table (dict), got {type(data).__name__}")
+        raise InvalidInputError(f"expected data as a scene table (dict), got {type(data).__name__}")
     sections = {k: v for k, v in SCENE_SCHEMA.items() if k not in ("", "objects", "views")}
     top = {**SCENE_SCHEMA[""], **sections, "views": None, "objects": None}
     out: dict[str, Any] = {}
@@ -269,7 +294,7 @@ def validate_scene_dict(
         if key not in top:
             near = difflib.get_close_matches(key, list(top), 1)
             hint = f"; did you mean {near[0]!r}?" if near else ""
-            ctx.fail((key,), f"unknown key{hint}; valid: {', '.join(top)}", True)
+            ctx.fail((key,), f"unknown key{hint}; valid: {_names(top)}", True)
     for key, f in SCENE_SCHEMA[""].items():
         out[key] = _check_value(data[key], f, key, (key,), ctx) if key in data else f.default
     for sec, schema in sections.items():
@@ -316,6 +341,8 @@ def _check_illuminant(ill: dict[str, Any], ctx: _Ctx) -> None:
     """``file`` needs a path; ``temperature_K`` belongs to blackbody and daylight lights only
     (a CIE illuminant's or a file's temperature is not a setting: the report computes the
     light's CCT from its spectrum)."""
+    if ill["type"] == "cie" and len(ill["name"]) > 40:  # no CIE name is that long
+        ctx.fail(("illuminant", "name"), f"unknown CIE illuminant {_show(ill['name'])}")
     if ill["type"] == "file" and ill["file"] is None:
         ctx.fail(("illuminant", "type"), "type 'file' needs the key 'file' (a CSV path)")
     if ill["type"] in ("blackbody", "daylight"):
@@ -349,7 +376,7 @@ def _check_memory(render: dict[str, Any], ctx: _Ctx) -> None:
     if have is not None and need > have:
         ctx.fail(
             ("render", "width"),
-            f"a {w}x{h} image needs about {format_bytes(need)} of memory to simulate "
-            f"({BYTES_PER_PIXEL} bytes per pixel), more than the {format_bytes(have)} this "
-            "machine has available; reduce render.width and render.height",
+            f"a {w}x{h} image needs about {format_bytes(need)} of memory ({BYTES_PER_PIXEL} "
+            f"bytes/pixel), more than the {format_bytes(have)} this machine has; reduce width "
+            "and height",
         )
