@@ -213,7 +213,7 @@ def main() -> int:
 
     # the simulator's lens stage: a step edge (the renderer's box-averaged pixels) through
     # imageform.simulate's diffraction_blur; its own MTF is the pixel box's times the DTFT
-    # of its pixel-integrated kernel (periodic: the Airy MTF beyond 1 cycle/pixel folds back)
+    # of its kernel, which is the optics' MTF band-limited to the pixel grid
     rows = []
     from imageform.analysis import mtf_crossing
     from imageform.simulate.stages import (
@@ -224,7 +224,7 @@ def main() -> int:
 
     ang = 5.0
     t = math.radians(ang)
-    step = render_slanted_edge((160, 96), angle=ang, sigma=0.0, supersampling=16)
+    step = render_slanted_edge((160, 128), angle=ang, sigma=0.0, supersampling=16)
     fgrid = np.linspace(0.0, 1.0, 1001)
     for n in (2.8, 4.0, 8.0):
         out = diffraction_blur(
@@ -253,11 +253,11 @@ def main() -> int:
         "## The simulator's diffraction stage\n\n"
         "A step edge at 5 deg integrated over the pixels (as the renderer's supersampled "
         "pixels) through `imageform.simulate.stages.diffraction_blur` (2 um pixels), measured "
-        "per channel. The stage's own MTF is the pixel box's times the DTFT of its "
-        "pixel-integrated kernel; the continuous model (band-averaged pupil MTF times the "
-        "pixel's once) is shown for comparison: the discrete kernel integrates over a pixel a "
-        "second time and folds the Airy MTF beyond 1 cycle/pixel back, so the stage departs "
-        "from the continuous model by up to several per cent.\n\n"
+        "per channel in a 96-column ROI. The stage's own MTF is the pixel box's times the DTFT "
+        "of its kernel, the band-averaged pupil MTF band-limited to the pixel grid; the "
+        "continuous model (pupil MTF times the pixel's once, as in a camera) is shown beside "
+        "it: the two now agree (until 2026-11 the kernel was integrated over the pixel, which "
+        "counted the pixel twice and folded the Airy MTF above 1 cycle/pixel back).\n\n"
         + markdown_table(
             ["f-number", "channel", "MTF50", "stage MTF (kernel DTFT x pixel)", "pupil x pixel"],
             rows,
@@ -276,8 +276,8 @@ def main() -> int:
             {
                 "name": "slanted edge",
                 "render": {
-                    "width": 192,
-                    "height": 144,
+                    "width": 288,
+                    "height": 240,
                     "supersampling": ss,
                     "background_reflectance": 0.8,
                 },
@@ -304,7 +304,7 @@ def main() -> int:
                         "centre_m": [0.0, 0.0, 0.0],
                         "normal": [0.0, -1.0, 0.0],
                         "up": [math.sin(a), 0.0, math.cos(a)],
-                        "size_m": [0.012, 0.012],
+                        "size_m": [0.024, 0.024],
                         "reflectance": 0.1,
                     }
                 ],
@@ -321,7 +321,7 @@ def main() -> int:
             out[nz] = np.sin(np.pi * x[nz]) / (ss * np.sin(np.pi * x[nz] / ss))
             return np.abs(out)
 
-        for roi in find_slanted_edges(img, roi_width=56, roi_length=0.7):
+        for roi in find_slanted_edges(img, roi_width=96, roi_length=0.7):
             r = slanted_edge_sfr(img, roi.roi)
             th = math.radians(r.angle)
             t = abs(th)
@@ -349,7 +349,8 @@ def main() -> int:
         "A dark plane (reflectance 0.1) turned 5 deg on a light background (0.8), ray-cast by "
         "`imageform.simulate.render.render_scene` (S x S supersampling) and blurred by "
         "`apply_lens` (diffraction at f/8, 2 um pixels; no defocus, vignetting or lateral "
-        "colour); edges found by `find_slanted_edges(img, roi_width=56, roi_length=0.7)`. The "
+        "colour); a 24 mm square, edges found by `find_slanted_edges(img, roi_width=96, "
+        "roi_length=0.7)` (wide enough for the Airy wings at f/8). The "
         "simulator's own MTF: the S-point box per axis, sin(pi x) / (S sin(pi x / S)), times "
         "the DTFT of the lens stage's kernel.\n\n"
         + markdown_table(

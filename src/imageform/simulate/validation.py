@@ -98,7 +98,7 @@ def _show(v: object) -> str:
     return _show_text(repr(v))
 
 
-def _names(keys: Any, width: int = 70) -> str:
+def _names(keys: Any, width: int = 76) -> str:
     """The valid keys, as many as fit ``width`` characters, then how many more (one line)."""
     keys = list(keys)
     shown: list[str] = []
@@ -250,6 +250,8 @@ def _table(data: Any, schema: dict[str, Any], path: tuple[Any, ...], ctx: _Ctx) 
             same = [k for k in schema if re.sub(r"_(m|mm|um|s|deg|K|lux|px|e)$", "", k) == stem]
             if same and key not in same:
                 unit_hint = f" (wrong unit? this key is {same[0]!r})"
+                if near and near[0] == same[0]:
+                    hint = ""  # said once: the message stays within one 200-character line
             ctx.fail((*path, key), f"unknown key{unit_hint}{hint}; valid: {_names(schema)}", True)
         f = schema[key]
         if isinstance(f, dict):
