@@ -824,6 +824,26 @@ VALID: dict[str, C | Skip] = {
     "imageform.workflows.vanishing.VanishingOptions.types": call(),
 }
 
+#: Non-finite results that are the documented answer, not garbage: ``(callable, parameter,
+#: kind) -> why``. The runner reports them as ok with the reason.
+DOCUMENTED_NONFINITE: dict[tuple[str, str, str], str] = {
+    ("imageform.analysis.mtf_crossing", "mtf", "huge"): (
+        "a curve that never falls to the level has no crossing: NaN (SFRResult.mtf10 relies on it)"
+    ),
+    ("imageform.optics.depth_of_field", "coc", "huge"): (
+        "focus beyond the hyperfocal distance: the far limit is infinite"
+    ),
+    ("imageform.optics.depth_of_field", "f_number", "huge"): (
+        "focus beyond the hyperfocal distance: the far limit is infinite"
+    ),
+    ("imageform.optics.lateral_chromatic_aberration", "fill", "nan"): (
+        "fill=NaN marks the pixels sampled from outside the image, as documented"
+    ),
+    ("imageform.sensor.measure_emva", "photons", "none"): (
+        "without photon counts the quantum efficiency and what derives from it are unknown: NaN"
+    ),
+}
+
 #: Calls of a second or more each (matplotlib figures, whole simulations, report folders):
 #: in the slow run only.
 SLOW: frozenset[str] = frozenset(

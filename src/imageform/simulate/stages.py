@@ -197,8 +197,9 @@ def diffraction_psf_kernel(
     lam_n = max(wavelengths) * f_number
     if not lam_n / pixel_pitch < MAX_KERNEL_SAMPLES:
         raise InvalidInputError(
-            f"f_number {f_number:g} and pixel_pitch {pixel_pitch:g} m give a diffraction kernel "
-            f"of more than {MAX_KERNEL_SAMPLES} samples (a lower f_number)"
+            f"f_number {f_number:g}, pixel_pitch {pixel_pitch:g} m and wavelengths up to "
+            f"{max(wavelengths):.3g} m give a diffraction kernel of more than "
+            f"{MAX_KERNEL_SAMPLES} samples (a lower f_number)"
         )
     half = max(1, math.ceil(10 * lam_n / pixel_pitch))  # ~98 % of the light
     n = 2 * half + 1

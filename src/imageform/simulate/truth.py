@@ -19,6 +19,7 @@ from typing import Any
 
 import numpy as np
 
+from imageform._validate import as_int, describe
 from imageform.color import (
     delta_e_ciede2000,
     linear_srgb_to_luminance,
@@ -110,6 +111,10 @@ def patch_windows(
     >>> patch_windows(t, 20, 20)
     [(slice(3, 8, None), slice(8, 13, None))]
     """
+    if not isinstance(truth, ColorCheckerTruth):
+        raise TypeError(f"expected truth as a ColorCheckerTruth, got {describe(truth)}")
+    height = as_int(height, "height", minimum=0, maximum=10**9)
+    width = as_int(width, "width", minimum=0, maximum=10**9)
     c = np.asarray(truth.centres_uv, dtype=np.float64)
     r = float(truth.sample_radius_px)
     if c.ndim != 2 or c.shape[1] != 2 or not np.isfinite(r) or r < 0:
