@@ -556,6 +556,9 @@ def _client(scheduler: str | None, n_workers: int) -> Iterator[Any]:
     dask's global ``scheduler`` setting is put back as it was when the client closes (clients
     closed out of order left it naming a closed client, and a later ``dask.compute`` in the
     same process failed)."""
+    from imageform._optional import require
+
+    require("distributed", what="imageform batch")  # one line naming the extra if missing
     import dask
 
     before = dask.config.get("scheduler", None)
