@@ -550,31 +550,23 @@ def run_job(
 # ---------------------------------------------------------------- the run (on the client)
 
 
+def _wait_some(pending: set[Any], timeout: float) -> tuple[set[Any], set[Any]]:
+    """``(finished, still pending)`` once a future is done or ``timeout`` s have passed
+    (``distributed.wait`` looks up the default client, which the run's client is not)."""
+    deadline = time.monotonic() + timeout
+    while True:
+        finished = {f for f in pending if f.done()}
+        if finished or time.monotonic() >= deadline:
+            return finished, pending - finished
+        time.sleep(0.02)
+
+
 @contextlib.contextmanager
 def _client(scheduler: str | None, n_workers: int) -> Iterator[Any]:
-    """The run's client (the default one while it runs: ``distributed.wait`` looks it up);
-    dask's global ``scheduler`` setting is put back as it was when the client closes (clients
-    closed out of order left it naming a closed client, and a later ``dask.compute`` in the
-    same process failed)."""
-    from imageform._optional import require
-
-    require("distributed", what="imageform batch")  # one line naming the extra if missing
-    import dask
-
-    before = dask.config.get("scheduler", None)
-    try:
-        with _open_client(scheduler, n_workers) as client:
-            yield client
-    finally:
-        if dask.config.get("scheduler", None) != before:
-            if before is None:
-                dask.config.config.pop("scheduler", None)
-            else:
-                dask.config.set(scheduler=before)
-
-
-@contextlib.contextmanager
-def _open_client(scheduler: str | None, n_workers: int) -> Iterator[Any]:
+    """The run's client. Never dask's default scheduler: the run submits to it explicitly,
+    and default clients closed out of order (two runs in one process, in threads) leave
+    dask's global ``scheduler`` setting naming a closed client, which breaks every later
+    ``dask.compute`` in the process."""
     import logging
 
     from imageform._optional import require
@@ -582,7 +574,8 @@ def _open_client(scheduler: str | None, n_workers: int) -> Iterator[Any]:
     distributed = require("distributed", what="imageform batch")
     if scheduler:
         try:
-            client = distributed.Client(scheduler)  # timeout: distributed.comm.timeouts.connect
+            # timeout: distributed.comm.timeouts.connect
+            client = distributed.Client(scheduler, set_as_default=False)
         except (OSError, TimeoutError) as exc:
             raise InvalidInputError(f"cannot reach the scheduler {scheduler}: {exc}") from None
         with client:
@@ -599,7 +592,7 @@ def _open_client(scheduler: str | None, n_workers: int) -> Iterator[Any]:
         silence_logs=logging.CRITICAL,
         preload=["imageform.batch._worker_setup"],
     )
-    with cluster, distributed.Client(cluster) as client:
+    with cluster, distributed.Client(cluster, set_as_default=False) as client:
         yield client
 
 
@@ -766,7 +759,6 @@ def _run_on(
     worker_timeout_s: float,
     run_id: str,
 ) -> None:
-    from distributed import wait
     from rich.console import Console
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TimeRemainingColumn
 
@@ -801,10 +793,7 @@ def _run_on(
         with bar:
             task = bar.add_task(f"batch {name}", total=len(futures))
             while pending:
-                try:
-                    finished, pending = wait(pending, timeout=1.0, return_when="FIRST_COMPLETED")
-                except TimeoutError:  # distributed raises rather than returning nothing
-                    finished = set()
+                finished, pending = _wait_some(pending, timeout=1.0)
                 if not finished:
                     if client.scheduler_info().get("workers"):
                         no_worker_since = None
