@@ -477,6 +477,22 @@ def as_image(
     """
     xp = namespace(image) if xp is None else xp
     arr = _raw(image, name, xp, device_of(image))
+    axis = -1
+    if channels is not None:  # the shape before any pass over the values
+        if arr.ndim < 1:
+            raise InvalidInputError(f"expected {name} with a channel axis, got a scalar")
+        axis = channel_axis % arr.ndim
+        n = arr.shape[axis]
+        if n != channels:
+            hint = (
+                "; an alpha channel? split it off (image[..., :3]) and handle it separately"
+                if channels == 3 and n == 4
+                else ""
+            )
+            raise InvalidInputError(
+                f"expected {name} with {channels} channels on axis {channel_axis}, "
+                f"got shape {format_shape(tuple(arr.shape))}{hint}"
+            )
     dt = arr.dtype
     if isinstance(image, list | tuple) and xp.isdtype(dt, "integral") and math.prod(arr.shape):
         lo, hi = _min_max(arr, xp)
@@ -503,23 +519,8 @@ def as_image(
                 arr = arr.map_blocks(_check_image_block, name, finite, range_check, dtype=arr.dtype)
         else:
             _check_values(arr, xp, name, finite=finite, range_check=range_check)
-    if channels is not None:
-        if arr.ndim < 1:
-            raise InvalidInputError(f"expected {name} with a channel axis, got a scalar")
-        axis = channel_axis % arr.ndim
-        n = arr.shape[axis]
-        if n != channels:
-            hint = (
-                "; an alpha channel? split it off (image[..., :3]) and handle it separately"
-                if channels == 3 and n == 4
-                else ""
-            )
-            raise InvalidInputError(
-                f"expected {name} with {channels} channels on axis {channel_axis}, "
-                f"got shape {format_shape(tuple(arr.shape))}{hint}"
-            )
-        if axis != arr.ndim - 1:
-            arr = xp.moveaxis(arr, axis, -1)
+    if channels is not None and axis != arr.ndim - 1:
+        arr = xp.moveaxis(arr, axis, -1)
     return arr
 
 

@@ -73,7 +73,14 @@ def _kernels(method: str, numba: bool) -> tuple[_Kernel, int]:
 
 
 def _as_raw(raw: ArrayLike, xp: Any) -> Any:
-    """The mosaic as a float array of shape (..., H, W); rejects colour images."""
+    """The mosaic as a float array of shape (..., H, W); rejects colour images (by shape,
+    before any pass over the values)."""
+    shape = tuple(getattr(raw, "shape", ()) or ())
+    if len(shape) >= 3 and shape[-1] != 1:
+        raise InvalidInputError(
+            f"expected raw as a single-channel raw mosaic (H, W) or (..., H, W, 1), got "
+            f"{format_shape(shape)} with {shape[-1]} channels; a batch needs raw[..., None]"
+        )
     arr = as_image(raw, "raw", channels=None, xp=xp)
     shape = tuple(arr.shape)
     if arr.ndim == 2:
