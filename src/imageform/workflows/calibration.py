@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import re
+from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -233,6 +234,26 @@ def _plot(path: Path, res: Any, names: list[str]) -> None:
     plt.close(fig)
 
 
+def _read_views(run: Run, opts: CalibrateOptions, images: list[Path]) -> Iterator[tuple[Path, Any]]:
+    """Each image as ``(path, grey or RGB array)``, with progress, all of one size (refused
+    in one line naming both files otherwise); progress "calibrating" once they are read."""
+    shape0: tuple[int, ...] | None = None
+    for i, f in enumerate(images):
+        if run.progress is not None:
+            run.progress("detecting", i / max(len(images), 1))
+        img = read(f, opts)
+        if shape0 is None:
+            shape0 = tuple(img.shape[:2])
+        elif img.shape[:2] != shape0:
+            raise InvalidInputError(
+                f"expected all images of one size, got {images[0]} of {shape0[1]} x "
+                f"{shape0[0]} px and {f} of {img.shape[1]} x {img.shape[0]} px"
+            )
+        yield f, img[..., 0] if img.shape[-1] == 1 else img
+    if run.progress is not None:
+        run.progress("calibrating", 1.0)
+
+
 def calibrate(run: Run, opts: CalibrateOptions, *, out: Path, images: list[Path]) -> Result:
     """``imageform calibrate``: a camera file from checkerboard views (Zhang, then
     Levenberg-Marquardt on every reprojection error)."""
@@ -247,12 +268,9 @@ def calibrate(run: Run, opts: CalibrateOptions, *, out: Path, images: list[Path]
     shape0: tuple[int, int] | None = None
     corners, names = [], []
     missed: list[str] = []
-    for i, f in enumerate(images):
-        if run.progress is not None:
-            run.progress("detecting", i / max(len(images), 1))
-        img = read(f, opts)
+    for f, grey in _read_views(run, opts, images):
         if shape0 is None:
-            shape0 = (int(img.shape[0]), int(img.shape[1]))
+            shape0 = (int(grey.shape[0]), int(grey.shape[1]))
             h, w = shape0
             if (cols + 1) * _MIN_SQUARE_PX > w or (rows + 1) * _MIN_SQUARE_PX > h:
                 raise InvalidInputError(
@@ -260,12 +278,6 @@ def calibrate(run: Run, opts: CalibrateOptions, *, out: Path, images: list[Path]
                     f"({f}): each of its {cols + 1} x {rows + 1} squares needs at least "
                     f"{_MIN_SQUARE_PX} px; check --board (inner corners, not squares)"
                 )
-        elif img.shape[:2] != shape0:
-            raise InvalidInputError(
-                f"expected all images of one size, got {images[0]} of {shape0[1]} x "
-                f"{shape0[0]} px and {f} of {img.shape[1]} x {img.shape[0]} px"
-            )
-        grey = img[..., 0] if img.shape[-1] == 1 else img
         det = find_checkerboard(grey, (cols, rows), half_window=opts.half_window)
         if det.found:
             assert det.corners is not None
@@ -274,8 +286,6 @@ def calibrate(run: Run, opts: CalibrateOptions, *, out: Path, images: list[Path]
         else:
             run.note(f"warning: {f}: no {cols}x{rows} board found ({det.reason})")
             missed.append(f"{f.name}: {det.reason}")
-    if run.progress is not None:
-        run.progress("calibrating", 1.0)
     if not corners:
         raise DegenerateConfigurationError(
             f"no {cols}x{rows} checkerboard found in any of the {len(images)} images "
@@ -385,18 +395,8 @@ def _calibrate_charuco(
     cols, rows = squares
     shape0: tuple[int, int] | None = None
     objs, corners, names, missed = [], [], [], []
-    for i, f in enumerate(images):
-        if run.progress is not None:
-            run.progress("detecting", i / max(len(images), 1))
-        img = read(f, opts)
-        if shape0 is None:
-            shape0 = (int(img.shape[0]), int(img.shape[1]))
-        elif img.shape[:2] != shape0:
-            raise InvalidInputError(
-                f"expected all images of one size, got {images[0]} of {shape0[1]} x "
-                f"{shape0[0]} px and {f} of {img.shape[1]} x {img.shape[0]} px"
-            )
-        grey = img[..., 0] if img.shape[-1] == 1 else img
+    for f, grey in _read_views(run, opts, images):
+        shape0 = (int(grey.shape[0]), int(grey.shape[1]))
         found = detect_charuco(grey, board)
         if len(found) >= MIN_CHARUCO_CORNERS:
             objs.append(found.object_points())
@@ -406,8 +406,6 @@ def _calibrate_charuco(
             why = f"{len(found.markers)} markers, {len(found)} corners"
             run.note(f"warning: {f}: too little of the charuco:{cols}x{rows} board ({why})")
             missed.append(f"{f.name}: {why}")
-    if run.progress is not None:
-        run.progress("calibrating", 1.0)
     if len(corners) < MIN_VIEWS:
         raise DegenerateConfigurationError(
             f"found at least {MIN_CHARUCO_CORNERS} corners of the charuco:{cols}x{rows} board "
