@@ -389,6 +389,6 @@ def sample_bilinear_numpy(
     from scipy import ndimage
 
     vals = ndimage.map_coordinates(
-        image.astype(np.float64), [v.ravel(), u.ravel()], order=1, mode="nearest"
+        np.asarray(image, dtype=np.float64), [v.ravel(), u.ravel()], order=1, mode="nearest"
     )
     return vals.reshape(u.shape)
