@@ -34,6 +34,7 @@ from imageform.analysis import (  # noqa: E402
     slanted_edge_sfr,
 )
 from imageform.optics import diffraction_limited_mtf  # noqa: E402
+from tests.analysis.test_sfr import _kernel_mtf, _slanted_square, _sub_box  # noqa: E402
 
 PITCH, LAMBDA = 2e-6, 550e-9
 
@@ -233,10 +234,7 @@ def main() -> int:
         r = slanted_edge_sfr(out[16:-16, 16:-16])
         for k, band in enumerate(reversed(DIFFRACTION_BANDS)):
             ker = diffraction_psf_kernel(band, f_number=n, pixel_pitch=PITCH)
-            c = ker.shape[0] // 2
-            i, j = np.mgrid[0 : ker.shape[0], 0 : ker.shape[0]] - c
-            arg = j.ravel()[None, :] * math.cos(t) - i.ravel()[None, :] * math.sin(t)
-            kmtf = np.abs(np.exp(-2j * np.pi * fgrid[:, None] * arg) @ ker.ravel())
+            kmtf = _kernel_mtf(ker, fgrid, ang)
             stage = mtf_crossing(fgrid, kmtf * _pixel(fgrid, ang), 0.5)
             poly = np.mean([_pupil(fgrid, n, lam) for lam in band], axis=0)
             cont = mtf_crossing(fgrid, poly * _pixel(fgrid, ang), 0.5)
@@ -265,73 +263,19 @@ def main() -> int:
     )
 
     # a slanted square ray-cast by the simulator's renderer and blurred by its lens stage
-    from imageform.simulate import load_scene
-    from imageform.simulate.render import render_scene
-    from imageform.simulate.stages import apply_lens
-
     rows = []
     for ss in (4, 8):
-        a = math.radians(5.0)
-        scene = load_scene(
-            {
-                "name": "slanted edge",
-                "render": {
-                    "width": 288,
-                    "height": 240,
-                    "supersampling": ss,
-                    "background_reflectance": 0.8,
-                },
-                "illuminant": {"type": "cie", "name": "D65", "illuminance_lux": 1000.0},
-                "camera": {
-                    "focal_length_mm": 10.0,
-                    "pixel_pitch_um": 2.0,
-                    "eye_m": [0.0, -1.0, 0.0],
-                    "target_m": [0.0, 0.0, 0.0],
-                    "up": [0.0, 0.0, 1.0],
-                },
-                "lens": {
-                    "f_number": 8.0,
-                    "focus_distance_m": 1.0,
-                    "defocus": False,
-                    "vignetting": "none",
-                    "lateral_ca": [1.0, 1.0, 1.0],
-                    "diffraction": True,
-                },
-                "objects": [
-                    {
-                        "type": "plane",
-                        "name": "dark square",
-                        "centre_m": [0.0, 0.0, 0.0],
-                        "normal": [0.0, -1.0, 0.0],
-                        "up": [math.sin(a), 0.0, math.cos(a)],
-                        "size_m": [0.024, 0.024],
-                        "reflectance": 0.1,
-                    }
-                ],
-            }
-        )
-        rendered = render_scene(scene)
-        img = apply_lens(
-            rendered, scene.camera, scene.config.lens, scene.config.camera.focal_length_mm
-        )
-
-        def box(x: np.ndarray, ss: int = ss) -> np.ndarray:
-            out = np.ones_like(x)
-            nz = np.abs(x) > 1e-12
-            out[nz] = np.sin(np.pi * x[nz]) / (ss * np.sin(np.pi * x[nz] / ss))
-            return np.abs(out)
-
+        img = _slanted_square(ss)
         for roi in find_slanted_edges(img, roi_width=96, roi_length=0.7):
             r = slanted_edge_sfr(img, roi.roi)
-            th = math.radians(r.angle)
-            t = abs(th)
+            t = math.radians(abs(r.angle))
             for k, band in enumerate(reversed(DIFFRACTION_BANDS)):
                 ker = diffraction_psf_kernel(band, f_number=8.0, pixel_pitch=PITCH)
-                c = ker.shape[0] // 2
-                i, j = np.mgrid[0 : ker.shape[0], 0 : ker.shape[0]] - c
-                arg = j.ravel()[None, :] * math.cos(th) - i.ravel()[None, :] * math.sin(th)
-                kmtf = np.abs(np.exp(-2j * np.pi * fgrid[:, None] * arg) @ ker.ravel())
-                own = kmtf * box(fgrid * math.cos(t)) * box(fgrid * math.sin(t))
+                own = (
+                    _kernel_mtf(ker, fgrid, r.angle)
+                    * _sub_box(fgrid * math.cos(t), ss)
+                    * _sub_box(fgrid * math.sin(t), ss)
+                )
                 ref = mtf_crossing(fgrid, own, 0.5)
                 rows.append(
                     [

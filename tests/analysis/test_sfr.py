@@ -322,20 +322,16 @@ def test_curved_edge_needs_the_polynomial_fit() -> None:
     assert quad.edge[0, 0] == pytest.approx(k, rel=0.05)
 
 
-def test_simulator_rendered_edge_within_3_percent_of_its_own_mtf() -> None:
-    """A dark square turned 5 deg on a light background, ray-cast by imageform.simulate's
-    renderer (S x S supersampling) and blurred by its lens stage (diffraction at f/8, 2 um
-    pixels; no defocus, vignetting or colour shift). The simulator's own MTF along the edge
-    normal is the S-point box of each axis, sin(pi x) / (S sin(pi x / S)) at x = f cos t and
-    f sin t, times the DTFT of the stage's kernel (the optics' MTF). A 24 mm square and
-    96-pixel ROIs, wide enough for the Airy wings at f/8 (a 56-pixel ROI cut them: +3.5 % in
-    red). Every edge the finder returns, every channel: MTF50 within 3 % (measured +0.2 to
-    +1.4 %)."""
+def _slanted_square(S: int, N: float = 8.0) -> np.ndarray:
+    """A dark square (24 mm, reflectance 0.1) turned 5 deg on a light background (0.8),
+    ray-cast by imageform.simulate's renderer (S x S supersampling) and blurred by its lens
+    stage (diffraction at f/``N``, 2 um pixels; no defocus, vignetting or colour shift);
+    benchmarks/bench_sfr.py renders the same."""
     from imageform.simulate import load_scene
     from imageform.simulate.render import render_scene
-    from imageform.simulate.stages import DIFFRACTION_BANDS, apply_lens, diffraction_psf_kernel
+    from imageform.simulate.stages import apply_lens
 
-    a, S, N = math.radians(5.0), 4, 8.0
+    a = math.radians(5.0)
     scene = load_scene(
         {
             "name": "slanted edge",
@@ -375,16 +371,35 @@ def test_simulator_rendered_edge_within_3_percent_of_its_own_mtf() -> None:
         }
     )
     rendered = render_scene(scene)
-    img = apply_lens(rendered, scene.camera, scene.config.lens, scene.config.camera.focal_length_mm)
+    return apply_lens(
+        rendered, scene.camera, scene.config.lens, scene.config.camera.focal_length_mm
+    )
+
+
+def _sub_box(x: np.ndarray, S: int) -> np.ndarray:
+    """|MTF| of the mean of S point samples across a pixel: sin(pi x) / (S sin(pi x / S))."""
+    out = np.ones_like(x)
+    nz = np.abs(x) > 1e-12
+    out[nz] = np.sin(np.pi * x[nz]) / (S * np.sin(np.pi * x[nz] / S))
+    return np.abs(out)
+
+
+def test_simulator_rendered_edge_within_3_percent_of_its_own_mtf() -> None:
+    """A dark square turned 5 deg on a light background, ray-cast by imageform.simulate's
+    renderer (S x S supersampling) and blurred by its lens stage (diffraction at f/8, 2 um
+    pixels; no defocus, vignetting or colour shift). The simulator's own MTF along the edge
+    normal is the S-point box of each axis, sin(pi x) / (S sin(pi x / S)) at x = f cos t and
+    f sin t, times the DTFT of the stage's kernel (the optics' MTF). A 24 mm square and
+    96-pixel ROIs, wide enough for the Airy wings at f/8 (a 56-pixel ROI cut them: +3.5 % in
+    red). Every edge the finder returns, every channel: MTF50 within 3 % (measured +0.2 to
+    +1.4 %)."""
+    from imageform.simulate.stages import DIFFRACTION_BANDS, diffraction_psf_kernel
+
+    S, N = 4, 8.0
+    img = _slanted_square(S, N)
     rois = find_slanted_edges(img, roi_width=96, roi_length=0.7)
     assert sorted(r.side for r in rois) == ["bottom", "left", "right", "top"]
     f = np.linspace(0.0, 1.0, 1001)
-
-    def box(x: np.ndarray) -> np.ndarray:
-        out = np.ones_like(x)
-        nz = np.abs(x) > 1e-12
-        out[nz] = np.sin(np.pi * x[nz]) / (S * np.sin(np.pi * x[nz] / S))
-        return np.abs(out)
 
     kernels = [
         diffraction_psf_kernel(band, f_number=N, pixel_pitch=PITCH)
@@ -395,5 +410,9 @@ def test_simulator_rendered_edge_within_3_percent_of_its_own_mtf() -> None:
         assert abs(r.angle) == pytest.approx(5.0, abs=0.1)
         t = math.radians(abs(r.angle))
         for k, kernel in enumerate(kernels):
-            own = _kernel_mtf(kernel, f, r.angle) * box(f * math.cos(t)) * box(f * math.sin(t))
+            own = (
+                _kernel_mtf(kernel, f, r.angle)
+                * _sub_box(f * math.cos(t), S)
+                * _sub_box(f * math.sin(t), S)
+            )
             assert r.mtf50[k] == pytest.approx(mtf_crossing(f, own, 0.5), rel=0.03)
