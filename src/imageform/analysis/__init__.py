@@ -6,7 +6,9 @@
   :func:`macenko_normalize` (optical density, stain vectors by SVD).
 - Colour harmonisation between devices from a chart: :func:`fit_color_correction`,
   :func:`chart_patches`, :func:`correction_report`; a ColorChecker found in an uncropped
-  photograph by :func:`detect_colorchecker` and measured by :func:`measure_chart_patches`.
+  photograph by :func:`detect_colorchecker` and measured by :func:`measure_chart_patches`;
+  :func:`sample_chart` takes either (cropped or photographed) and is how the fit,
+  :func:`correction_report` and :func:`chart_white_balance` accept chart photographs.
 - Sharpness as imaging labs measure it: the ISO 12233 slanted-edge e-SFR
   (:func:`slanted_edge_sfr`: MTF per channel, MTF50, MTF10) and the edges of a slanted-edge
   chart found by themselves (:func:`find_slanted_edges`), in :mod:`imageform.analysis.sfr`.
@@ -25,6 +27,13 @@ from imageform.analysis.chart_detect import (
     detect_colorchecker,
     measure_chart_patches,
     synthetic_chart_photo,
+)
+from imageform.analysis.chart_input import (
+    CHART_LAYOUTS,
+    COLORCHECKER_NEUTRALS,
+    ChartSample,
+    chart_white_balance,
+    sample_chart,
 )
 from imageform.analysis.harmonize import (
     CORRECTION_METHODS,
@@ -77,12 +86,15 @@ from imageform.analysis.synthetic import (
 )
 
 __all__ = [
+    "CHART_LAYOUTS",
+    "COLORCHECKER_NEUTRALS",
     "CORRECTION_METHODS",
     "SFR_LUMINANCE_WEIGHTS",
     "ChartDetection",
     "ChartNotFoundError",
     "ChartPatches",
     "ChartPhoto",
+    "ChartSample",
     "ChartWarning",
     "ColorCorrection",
     "CorrectionReport",
@@ -97,6 +109,7 @@ __all__ = [
     "StainMixture",
     "background_intensity",
     "chart_patches",
+    "chart_white_balance",
     "correction_report",
     "detect_colorchecker",
     "estimate_camera_sensitivities",
@@ -114,6 +127,7 @@ __all__ = [
     "render_sfr_chart",
     "render_slanted_edge",
     "root_polynomial_terms",
+    "sample_chart",
     "segment_hsv",
     "slanted_edge_sfr",
     "stain_angle",

@@ -365,8 +365,12 @@ def chart_patches(
     return ChartPatches(m, sd, saturated, missing)
 
 
-def _patches_in(x: object, name: str) -> tuple[np.ndarray, np.ndarray]:
-    """Patch values (N, 3) and the usable-row mask."""
+def _patches_in(x: object, name: str, layout: str = "auto") -> tuple[np.ndarray, np.ndarray]:
+    """Patch values (N, 3) and the usable-row mask; an image (H, W, 3) or a ChartSample is
+    sampled by :func:`~imageform.analysis.sample_chart` first."""
+    from imageform.analysis.chart_input import _as_chart_patches
+
+    x = _as_chart_patches(x, name, layout)
     if isinstance(x, ChartPatches):
         return np.asarray(x.means, dtype=np.float64), x.valid
     arr = np.asarray(as_float(x, name, finite=False), dtype=np.float64)
@@ -378,11 +382,12 @@ def _patches_in(x: object, name: str) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _paired_patches(
-    measured: object, reference: object
+    measured: object, reference: object, layout: str = "auto"
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Both charts' patch values and validity masks, checked to be the same patches."""
-    a, va = _patches_in(measured, "measured")
-    b, vb = _patches_in(reference, "reference")
+    layout = check_option(layout, ("auto", "cropped", "detect"), "chart layout (chart_layout)")
+    a, va = _patches_in(measured, "measured", layout)
+    b, vb = _patches_in(reference, "reference", layout)
     if a.shape != b.shape:
         raise InvalidInputError(
             f"expected measured and reference of the same shape, got {format_shape(a.shape)} "
@@ -399,6 +404,7 @@ def fit_color_correction(
     *,
     transfer: str = "srgb",
     saturation: float | None = 1.0,
+    chart_layout: str = "auto",
 ) -> ColorCorrection:
     """Least-squares colour correction from device A's chart (``measured``) to the reference.
 
@@ -412,11 +418,14 @@ def fit_color_correction(
 
     Parameters
     ----------
-    measured, reference : array_like, shape (N, 3), or ChartPatches
+    measured, reference : array_like, shape (N, 3), ChartPatches, or an image with a chart
         Patch values of the same N patches, encoded as ``transfer`` says. Patches flagged
         in a :class:`ChartPatches` (saturated, missing: mark non-finite rows as missing),
         and patches where either side reaches ``saturation`` in any channel, are left out
-        (the latter with a :class:`ChartWarning`).
+        (the latter with a :class:`ChartWarning`). An image, shape (H, W, 3), is a chart
+        cropped to fill the frame or a photograph with a ColorChecker anywhere in it: its
+        patches are sampled by :func:`~imageform.analysis.sample_chart` (``chart_layout``);
+        a :class:`~imageform.analysis.ChartSample` is taken as sampled.
     method : {"linear", "root_polynomial"}
         A 3×3 matrix on linear RGB, or Finlayson's root-polynomial expansion of ``degree``.
     degree : int
@@ -428,6 +437,10 @@ def fit_color_correction(
     saturation : float or None, keyword-only
         The clipping level; ``None`` leaves no patch out for saturation (linear data above
         1 is not clipped).
+    chart_layout : {"auto", "cropped", "detect"}, keyword-only
+        How a chart is found in an image given as ``measured`` or ``reference``
+        (:func:`~imageform.analysis.sample_chart`: ``"auto"`` takes a chart that fills the
+        frame when its grid validates, else detects a ColorChecker in the photograph).
 
     Returns
     -------
@@ -467,7 +480,7 @@ def fit_color_correction(
         )
     if saturation is not None:
         saturation = as_real(saturation, "saturation", positive=True)
-    a, va, b, vb = _paired_patches(measured, reference)
+    a, va, b, vb = _paired_patches(measured, reference, chart_layout)
     if saturation is None:
         sat = np.zeros(a.shape[0], dtype=bool)
     else:
@@ -550,13 +563,21 @@ class CorrectionReport:
 
 
 def correction_report(
-    measured: object, reference: object, correction: ColorCorrection
+    measured: object,
+    reference: object,
+    correction: ColorCorrection,
+    *,
+    chart_layout: str = "auto",
 ) -> CorrectionReport:
     """CIEDE2000 per patch, :math:`\\Delta E_{00}(\\mathrm{Lab}(b_i), \\mathrm{Lab}(a_i))`
     before and :math:`\\Delta E_{00}(\\mathrm{Lab}(b_i), \\mathrm{Lab}(f(a_i)))` after.
 
     Lab from encoded sRGB with its D65 white. Patches fitted on are scored too: report
     ΔE on patches left out of the fit (or another chart) to judge generalisation.
+    ``measured`` and ``reference`` take what :func:`fit_color_correction` takes, images with
+    a chart included (found as ``chart_layout`` says; pass the
+    :class:`~imageform.analysis.ChartSample` of :func:`~imageform.analysis.sample_chart` to
+    sample a photograph once for both calls).
 
     Source: CIE 142:2001 / Sharma, Wu & Dalal 2005 (CIEDE2000).
 
@@ -571,7 +592,7 @@ def correction_report(
         raise TypeError(
             f"expected correction as a ColorCorrection, got {type(correction).__name__}"
         )
-    a, va, b, vb = _paired_patches(measured, reference)
+    a, va, b, vb = _paired_patches(measured, reference, chart_layout)
     lab_b = np.asarray(convert(b, "srgb", "lab"))
     before = np.asarray(delta_e(lab_b, np.asarray(convert(a, "srgb", "lab"))))
     fixed = correction.apply(a[:, None, :])[:, 0, :]

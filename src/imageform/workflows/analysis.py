@@ -2,8 +2,11 @@
 ``fit-correction`` and ``harmonize`` (see docs/biomedical.md).
 
 ``fit-correction`` fits a colour correction between two devices from a chart (two chart
-images, or a CSV of patch values) and writes it as JSON; ``harmonize`` applies such a file to
-an image (and runs file by file in ``imageform batch``).
+images, one chart image against the ColorChecker's published values, or a CSV of patch
+values) and writes it as JSON; ``harmonize`` applies such a file to an image, or fits one
+from ``--chart`` itself (and runs file by file in ``imageform batch``). Chart images may be
+cropped to the chart or be photographs with a ColorChecker anywhere in them
+(``--chart-layout``, :mod:`imageform.workflows._charts`).
 """
 
 from __future__ import annotations
@@ -13,6 +16,7 @@ from pathlib import Path
 from typing import Any
 
 from imageform.errors import InvalidInputError
+from imageform.workflows import _charts
 from imageform.workflows._images import ImageIn, ImageOut, read, write
 from imageform.workflows._spec import Input, Output, Result, Run, Workflow, option
 
@@ -200,6 +204,8 @@ def stain_normalize(run: Run, opts: StainNormalizeOptions, *, out: Path, image: 
 
 # ---------------------------------------------------------------- colour correction
 
+_CORRECTION_METHODS = ("linear", "root_polynomial")
+
 
 @dataclass(frozen=True, kw_only=True)
 class FitCorrectionOptions(ImageIn):
@@ -208,60 +214,93 @@ class FitCorrectionOptions(ImageIn):
     method: str = option(
         "linear",
         help="linear (3x3 in linear light) or root-polynomial.",
-        choices=("linear", "root_polynomial"),
+        choices=_CORRECTION_METHODS,
     )
     degree: int = option(2, help="Root-polynomial degree (1 to 3).", minimum=1, maximum=3)
-    rows: int = option(4, help="Chart rows (the chart fills the frame).", minimum=1, maximum=1000)
-    cols: int = option(6, help="Chart columns.", minimum=1, maximum=1000)
+    rows: int = option(
+        4, help="Rows of the grid of a chart cropped to fill the frame.", minimum=1, maximum=1000
+    )
+    cols: int = option(6, help="Columns of that grid.", minimum=1, maximum=1000)
+    chart_layout: str = option(
+        "auto", help=_charts.CHART_LAYOUT_HELP, choices=_charts.CHART_LAYOUTS
+    )
+    overlay: Path | None = option(
+        None, help="Also write CHART_A with the sampled chart drawn over it (PNG).", output=True
+    )
+    overlay_b: Path | None = option(
+        None, help="Also write CHART_B with the sampled chart drawn over it (PNG).", output=True
+    )
 
 
-def _patches_csv(path: Path) -> tuple[Any, Any]:
-    import csv
-
+def _reference_patches(chart: Any, reference: Any, flag: str) -> Any:
+    """The reference's values for ``chart``: ``reference`` (a ChartInput), the ``b_*``
+    columns of a CSV chart, or the ColorChecker's published sRGB values."""
     import numpy as np
 
-    with path.open(newline="") as fh:
-        reader = csv.DictReader(fh)
-        missing = [c for c in _CSV_COLUMNS if c not in (reader.fieldnames or [])]
-        if missing:
-            raise InvalidInputError(
-                f"expected CSV columns {','.join(_CSV_COLUMNS)} in {path}; missing "
-                f"{','.join(missing)}"
-            )
-        try:
-            rows = [[float(r[c]) for c in _CSV_COLUMNS] for r in reader]
-        except (TypeError, ValueError) as exc:
-            raise InvalidInputError(f"non-numeric value in {path}: {exc}") from None
-    if not rows:
-        raise InvalidInputError(f"{path} holds no patch rows")
-    arr = np.asarray(rows, dtype=np.float64).reshape((-1, 6))
-    return arr[:, :3], arr[:, 3:]
+    from imageform.analysis.synthetic import COLORCHECKER_SRGB8
+
+    if reference is not None:
+        return reference.patches
+    if chart.reference is not None:
+        return chart.reference
+    n = len(chart.patches.means)
+    if n != 24:
+        raise InvalidInputError(
+            f"{flag} {chart.path} has {n} patches; without a reference chart it must be a "
+            "24-patch ColorChecker (its published values are the reference)"
+        )
+    return np.asarray(COLORCHECKER_SRGB8, dtype=np.float64) / 255.0
+
+
+def _fit(run: Run, chart: Any, ref: Any, method: str, degree: int) -> tuple[Any, Any]:
+    """The correction and its report; ChartWarnings become notes."""
+    import warnings
+
+    from imageform.analysis import ChartWarning, correction_report, fit_color_correction
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", ChartWarning)
+        corr = fit_color_correction(chart.patches, ref, method, degree)
+        rep = correction_report(chart.patches, ref, corr)
+    for w in caught:
+        run.note(f"note: {w.message}")
+    return corr, rep
 
 
 def fit_correction(run: Run, opts: FitCorrectionOptions, *, out: Path, charts: Any) -> Result:
     """``imageform fit-correction``: fit device A -> device B from a chart, write the JSON
-    that ``imageform harmonize --correction`` reads; ΔE00 per patch before and after."""
-    from imageform.analysis import chart_patches, correction_report, fit_color_correction
+    that ``imageform harmonize --correction`` reads; ΔE00 per patch before and after.
 
+    Charts are images (cropped to the chart, or photographs with a ColorChecker anywhere in
+    them: ``--chart-layout``), or one CSV; one image alone is fitted to the ColorChecker's
+    published sRGB values."""
     files = [Path(p) for p in charts]
-    pa: Any
-    pb: Any
-    if len(files) == 1 and files[0].suffix.lower() == ".csv":
-        pa, pb = _patches_csv(files[0])
-        n = len(pa)
-    elif len(files) == 2 and all(p.suffix.lower() != ".csv" for p in files):
-        pa = chart_patches(_rgb(files[0], opts), opts.rows, opts.cols)
-        pb = chart_patches(_rgb(files[1], opts), opts.rows, opts.cols)
-        n = len(pa.means)
-    else:
+    csvs = [p.suffix.lower() == ".csv" for p in files]
+    if not (len(files) == 1 or (len(files) == 2 and not any(csvs))):
         raise InvalidInputError(
-            "expected CHART_A CHART_B (two chart images, device A then the reference B) or "
-            f"one PATCHES.csv (columns {','.join(_CSV_COLUMNS)}), got "
+            "expected CHART_A CHART_B (two chart images, device A then the reference B), one "
+            f"chart image, or one PATCHES.csv (columns {','.join(_CSV_COLUMNS)}), got "
             f"{' '.join(str(p) for p in files) or 'nothing'}"
         )
-    corr = fit_color_correction(pa, pb, opts.method, opts.degree)
-    rep = correction_report(pa, pb, corr)
+    kw = {"layout": opts.chart_layout, "rows": opts.rows, "cols": opts.cols}
+    chart_a = _charts.read_chart(files[0], opts, flag="CHART_A", **kw)
+    chart_b = _charts.read_chart(files[1], opts, flag="CHART_B", **kw) if len(files) == 2 else None
+    if csvs[0] and chart_a.reference is None:
+        raise InvalidInputError(
+            f"expected CSV columns {','.join(_CSV_COLUMNS)} in {files[0]}; missing "
+            f"{','.join(_CSV_COLUMNS[3:])}"
+        )
+    if opts.overlay_b is not None and chart_b is None:
+        raise InvalidInputError("--overlay-b draws CHART_B: give two chart images")
+    pa = chart_a.patches
+    pb = _reference_patches(chart_a, chart_b, "CHART_A")
+    n = len(pa.means)
+    corr, rep = _fit(run, chart_a, pb, opts.method, opts.degree)
     corr.to_json(run.file(out))
+    if opts.overlay is not None:
+        _charts.write_overlay(run, opts.overlay, chart_a, "CHART_A")
+    if opts.overlay_b is not None and chart_b is not None:
+        _charts.write_overlay(run, opts.overlay_b, chart_b, "CHART_B")
     stats = rep.summary()
     summary = {
         "inputs": files,
@@ -270,13 +309,22 @@ def fit_correction(run: Run, opts: FitCorrectionOptions, *, out: Path, charts: A
         "degree": corr.degree,
         "patches": n,
         "patches_fitted": corr.n_patches,
+        "chart_a": _charts.summary(chart_a),
+        "chart_b": None if chart_b is None else _charts.summary(chart_b),
+        "reference": "CHART_B"
+        if chart_b is not None
+        else ("csv" if chart_a.reference is not None else "colorchecker"),
+        "overlay": opts.overlay,
+        "overlay_b": opts.overlay_b,
         "delta_e00_before": rep.delta_e_before,
         "delta_e00_after": rep.delta_e_after,
         "patch_valid": rep.valid,
         **stats,
         "matrix": corr.matrix,
     }
+    found = [f"{name} {c.path}: {c.layout}" for name, c in (("A", chart_a), ("B", chart_b)) if c]
     text = [
+        "charts: " + "; ".join(found),
         f"{corr.method} (degree {corr.degree}) fitted on {corr.n_patches} of {n} patches, "
         "in linear light",
         "patch  ΔE00 before  after",
@@ -296,36 +344,128 @@ def fit_correction(run: Run, opts: FitCorrectionOptions, *, out: Path, charts: A
 class HarmonizeOptions(ImageIn, ImageOut):
     """Options of ``imageform harmonize`` (and ``imageform batch harmonize``)."""
 
-    correction: Path = option(
-        help="Colour correction written by imageform fit-correction (.json).",
+    correction: Path | None = option(
+        None,
+        help="Colour correction written by imageform fit-correction or chart (.json).",
         input=True,
         metavar="FILE",
+    )
+    chart: Path | None = option(
+        None,
+        help="Instead of --correction: device A's chart (a photograph with a ColorChecker, a "
+        "cropped chart, or a CSV), fitted here to --reference.",
+        input=True,
+        metavar="FILE",
+    )
+    reference: Path | None = option(
+        None,
+        help="--chart's reference: device B's chart (image or CSV); default the CSV's b_* "
+        "columns, else the ColorChecker's published sRGB values.",
+        input=True,
+        metavar="FILE",
+    )
+    method: str = option(
+        "linear",
+        help="--chart: linear (3x3 in linear light) or root-polynomial.",
+        choices=_CORRECTION_METHODS,
+    )
+    degree: int = option(2, help="--chart: root-polynomial degree (1 to 3).", minimum=1, maximum=3)
+    chart_layout: str = option(
+        "auto", help=_charts.CHART_LAYOUT_HELP, choices=_charts.CHART_LAYOUTS
+    )
+    overlay: Path | None = option(
+        None,
+        help="--chart: also write the chart image with what was sampled drawn (PNG).",
+        output=True,
+    )
+    save_correction: Path | None = option(
+        None,
+        help="--chart: also write the fitted correction (.json, for --correction).",
+        output=True,
     )
 
     def check(self) -> None:
         super().check()
-        object.__setattr__(self, "correction", Path(self.correction))
+        if (self.correction is None) == (self.chart is None):
+            raise InvalidInputError(
+                "expected --correction FILE or --chart FILE (exactly one), got "
+                + ("both" if self.chart is not None else "neither")
+            )
+        for name in ("correction", "chart", "reference"):
+            v = getattr(self, name)
+            if v is not None:
+                object.__setattr__(self, name, Path(v))
+        if self.chart is None:
+            extra = [
+                flag
+                for flag, v in (
+                    ("--reference", self.reference),
+                    ("--overlay", self.overlay),
+                    ("--save-correction", self.save_correction),
+                )
+                if v is not None
+            ]
+            if extra:
+                raise InvalidInputError(f"{', '.join(extra)} go(es) with --chart, not --correction")
 
 
 def harmonize(run: Run, opts: HarmonizeOptions, *, out: Path, image: Path) -> Result:
-    """``imageform harmonize``: apply a fitted colour correction to an image of device A."""
+    """``imageform harmonize``: apply a colour correction to an image of device A: a fitted
+    one (``--correction``), or one fitted here from device A's chart (``--chart``: a
+    photograph with a ColorChecker in it, a cropped chart or a CSV)."""
     import numpy as np
 
     from imageform.analysis import ColorCorrection
 
-    corr = ColorCorrection.from_json(opts.correction)
     img = _rgb(image, opts)
+    summary: dict[str, Any] = {"input": image, "output": out}
+    if opts.chart is not None:
+        same = opts.chart.resolve() == Path(image).resolve()
+        chart = _charts.read_chart(
+            opts.chart, opts, flag="--chart", layout=opts.chart_layout, image=img if same else None
+        )
+        ref_in = (
+            None
+            if opts.reference is None
+            else _charts.read_chart(
+                opts.reference, opts, flag="--reference", layout=opts.chart_layout
+            )
+        )
+        ref = _reference_patches(chart, ref_in, "--chart")
+        corr, rep = _fit(run, chart, ref, opts.method, opts.degree)
+        stats = rep.summary()
+        summary.update(
+            chart=_charts.summary(chart),
+            reference=str(opts.reference)
+            if opts.reference is not None
+            else ("csv" if chart.reference is not None else "colorchecker"),
+            overlay=opts.overlay,
+            save_correction=opts.save_correction,
+            patches_fitted=corr.n_patches,
+            delta_e00_before=rep.delta_e_before,
+            delta_e00_after=rep.delta_e_after,
+            **stats,
+        )
+    else:
+        corr = ColorCorrection.from_json(opts.correction)  # type: ignore[arg-type]
+        summary["correction"] = opts.correction
     result = np.asarray(corr.apply(img))
     n_out = write(run, out, result, opts, like=img)
-    summary = {
-        "input": image,
-        "output": out,
-        "correction": opts.correction,
-        "method": corr.method,
-        "degree": corr.degree,
-        "values_clipped": n_out,
-    }
-    return Result(summary, (f"corrected {image} -> {out} ({corr.method})",))
+    if opts.chart is not None:
+        if opts.save_correction is not None:
+            corr.to_json(run.file(opts.save_correction))
+        if opts.overlay is not None:
+            _charts.write_overlay(run, opts.overlay, chart, "--chart")
+    summary.update(method=corr.method, degree=corr.degree, values_clipped=n_out)
+    text = [f"corrected {image} -> {out} ({corr.method})"]
+    if opts.chart is not None:
+        text.insert(
+            0,
+            f"chart {opts.chart} ({chart.layout}): {corr.method} fitted on {corr.n_patches} "
+            f"patches, ΔE00 mean {stats['mean_before']:.3f} -> {stats['mean_after']:.3f}, "
+            f"max {stats['max_before']:.3f} -> {stats['max_after']:.3f}",
+        )
+    return Result(summary, tuple(text))
 
 
 _IMG = Input("image", "Input image (PNG 8/16-bit, TIFF, JPEG or .npy).")
@@ -359,10 +499,11 @@ WORKFLOWS = (
         (
             Input(
                 "charts",
-                "CHART_A CHART_B: the chart imaged by device A and by the reference device B; "
-                "or one PATCHES.csv with columns a_r,a_g,a_b,b_r,b_g,b_b.",
+                "CHART_A [CHART_B]: the chart imaged by device A and by the reference device B "
+                "(cropped, or photographs with a ColorChecker anywhere; without CHART_B the "
+                "ColorChecker's published values), or one PATCHES.csv (a_r,a_g,a_b,b_r,b_g,b_b).",
                 many=True,
-                metavar="CHART_A CHART_B | PATCHES.csv",
+                metavar="CHART_A [CHART_B] | PATCHES.csv",
             ),
         ),
         Output("Correction to write (.json), read by imageform harmonize --correction."),
@@ -371,7 +512,7 @@ WORKFLOWS = (
     ),
     Workflow(
         "harmonize",
-        "Apply a colour correction (from fit-correction) to an image of device A.",
+        "Apply a colour correction (from fit-correction, or fitted from --chart) to an image.",
         "imageform.workflows.analysis:harmonize",
         HarmonizeOptions,
         (_IMG,),

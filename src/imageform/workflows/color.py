@@ -8,7 +8,16 @@ from typing import Any
 
 from imageform.errors import InvalidInputError
 from imageform.workflows._images import ImageIn, ImageOut, read, write
-from imageform.workflows._spec import Input, Options, Output, Result, Run, Workflow, option
+from imageform.workflows._spec import (
+    Input,
+    Options,
+    Output,
+    Result,
+    Run,
+    Workflow,
+    normalize_choice,
+    option,
+)
 
 __all__ = [
     "DISPLAYABLE_SPACES",
@@ -134,7 +143,15 @@ def convert(run: Run, opts: ConvertOptions, *, out: Path, image: Path) -> Result
 
 # ---------------------------------------------------------------- white balance
 
-_WB_METHODS = ("gray_world", "white_patch", "max_rgb", "shades_of_gray", "gray_edge", "manual")
+_WB_METHODS = (
+    "gray_world",
+    "white_patch",
+    "max_rgb",
+    "shades_of_gray",
+    "gray_edge",
+    "manual",
+    "chart",
+)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -152,6 +169,33 @@ class WhiteBalanceOptions(ImageIn, ImageOut):
     normalize: str = option(
         "mean", help="Keep the mean grey level or the green channel.", choices=("mean", "green")
     )
+    chart: Path | None = option(
+        None,
+        help="chart: the image holding the ColorChecker (a photograph or a cropped chart) or "
+        "its patch CSV; default the input image itself.",
+        input=True,
+        metavar="FILE",
+    )
+    chart_layout: str = option(
+        "auto",
+        help="chart: how the chart is found in an image: auto (a cropped chart when its grid "
+        "validates, else detected anywhere in the photograph), cropped, detect.",
+        choices=("auto", "cropped", "detect"),
+    )
+    overlay: Path | None = option(
+        None,
+        help="chart: also write the chart image with the sampled patches drawn (PNG).",
+        output=True,
+    )
+
+    def check(self) -> None:
+        super().check()
+        if self.chart is not None:
+            object.__setattr__(self, "chart", Path(self.chart))
+        if normalize_choice(self.method, _WB_METHODS, "--method") != "chart":
+            used = [f for f, v in (("--chart", self.chart), ("--overlay", self.overlay)) if v]
+            if used:
+                raise InvalidInputError(f"{', '.join(used)} go(es) with --method chart only")
 
     def params(self) -> dict[str, Any]:
         """Keywords of :func:`imageform.color.white_balance`."""
@@ -174,18 +218,38 @@ def white_balance(run: Run, opts: WhiteBalanceOptions, *, out: Path, image: Path
     img = read(image, opts)
     if img.shape[-1] != 3:
         raise InvalidInputError(f"{image}: expected an RGB image, got {img.shape[-1]} channel(s)")
-    balanced, gains = balance(img, opts.method, **opts.params())
+    chart = None
+    flag = "IMAGE" if opts.chart is None else "--chart"
+    if normalize_choice(opts.method, _WB_METHODS, "--method") == "chart":
+        from imageform.analysis import chart_white_balance
+        from imageform.workflows import _charts
+
+        src = Path(image) if opts.chart is None else opts.chart
+        same = src.resolve() == Path(image).resolve()
+        chart = _charts.read_chart(
+            src, opts, flag=flag, layout=opts.chart_layout, image=img if same else None
+        )
+        _charts.notes(run, chart, flag)
+        balanced, gains = chart_white_balance(img, chart.patches, normalize=opts.normalize)
+    else:
+        balanced, gains = balance(img, opts.method, **opts.params())
     n_out = write(run, out, np.asarray(balanced), opts, like=img)
+    if chart is not None and opts.overlay is not None:
+        _charts.write_overlay(run, opts.overlay, chart, flag)
     g = [float(v) for v in np.asarray(gains)]
-    summary = {
+    summary: dict[str, Any] = {
         "input": image,
         "output": out,
         "method": opts.method,
         "gains": g,
         "values_clipped": n_out,
     }
+    if chart is not None:
+        summary["chart"] = _charts.summary(chart)
+        summary["overlay"] = opts.overlay
     text = (
-        f"gains (R, G, B) in linear light: {g[0]:.4f} {g[1]:.4f} {g[2]:.4f}",
+        f"gains (R, G, B) in linear light: {g[0]:.4f} {g[1]:.4f} {g[2]:.4f}"
+        + ("" if chart is None else f" (from the grey patches, chart {chart.layout})"),
         f"wrote {out}",
     )
     return Result(summary, text)
