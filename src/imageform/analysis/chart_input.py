@@ -40,7 +40,7 @@ from imageform.analysis.chart_detect import (
     detect_colorchecker,
     measure_chart_patches,
 )
-from imageform.analysis.harmonize import ChartPatches, ChartWarning, chart_patches
+from imageform.analysis.chart_grid import ChartPatches, ChartWarning, chart_patches
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
 
 __all__ = [
@@ -96,8 +96,9 @@ class ChartSample:
 def _grid_geometry(
     hgt: int, wid: int, rows: int, cols: int, margin: float
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Outline, centres and sampling quads of :func:`chart_patches`' grid (pixel centres:
-    the cell ``[x0, x1)`` samples pixels ``ceil(x0 + d) .. floor(x1 - d) - 1``)."""
+    """Outline, centres and sampling quads of :func:`chart_patches`' grid: the cell
+    ``[x0, x1)`` averages pixels ``xa = ceil(x0 + d) .. xb - 1 = floor(x1 - d) - 1``, whose
+    squares span ``[xa - 0.5, xb - 0.5]`` (pixel centres at integers)."""
     outline = np.array([[-0.5, -0.5], [wid - 0.5, -0.5], [wid - 0.5, hgt - 0.5], [-0.5, hgt - 0.5]])
     centres, quads = [], []
     for i in range(rows):
@@ -109,7 +110,8 @@ def _grid_geometry(
             yb = max(int(np.floor(y1 - dy)), ya + 1)
             xa = int(np.ceil(x0 + dx))
             xb = max(int(np.floor(x1 - dx)), xa + 1)
-            quads.append([[xa, ya], [xb - 1, ya], [xb - 1, yb - 1], [xa, yb - 1]])
+            lo_u, hi_u, lo_v, hi_v = xa - 0.5, xb - 0.5, ya - 0.5, yb - 0.5
+            quads.append([[lo_u, lo_v], [hi_u, lo_v], [hi_u, hi_v], [lo_u, hi_v]])
             centres.append([(xa + xb - 1) / 2.0, (ya + yb - 1) / 2.0])
     return outline, np.asarray(centres, dtype=np.float64), np.asarray(quads, dtype=np.float64)
 

@@ -34,9 +34,11 @@ from imageform._validate import (
 )
 from imageform.analysis._arrays import image_in, is_dask, read_json, write_json
 from imageform.analysis._guard import count, real_array
+from imageform.analysis.chart_grid import ChartPatches, ChartWarning, chart_patches
+from imageform.analysis.chart_input import _as_chart_patches
 from imageform.color.convert import convert
 from imageform.color.delta_e import delta_e
-from imageform.errors import DegenerateConfigurationError, ImageformWarning, InvalidInputError
+from imageform.errors import DegenerateConfigurationError, InvalidInputError
 
 __all__ = [
     "CORRECTION_METHODS",
@@ -61,10 +63,6 @@ CORRECTION_METHODS: MappingProxyType[str, tuple[int, ...]] = MappingProxyType(
 
 #: Number of root-polynomial terms per degree (Finlayson et al. 2015).
 _N_TERMS = {1: 3, 2: 6, 3: 13}
-
-
-class ChartWarning(ImageformWarning):
-    """Chart patches were saturated or missing and are left out of the fit."""
 
 
 def root_polynomial_terms(rgb: Any, degree: int) -> Any:
@@ -213,163 +211,9 @@ class ColorCorrection:
         return cls(method, degree, matrix, int(d.get("n_patches", 0)), transfer)
 
 
-@dataclass(frozen=True)
-class ChartPatches:
-    """Patch statistics of a chart image (row by row): encoded sRGB ``means`` (N, 3), the
-    per-patch ``std`` (N, 3), and which patches are ``saturated`` or ``missing``."""
-
-    means: np.ndarray
-    std: np.ndarray
-    saturated: np.ndarray
-    missing: np.ndarray
-
-    def __post_init__(self) -> None:
-        """``means`` and ``std`` of shape (N, 3), the flags booleans of shape (N,)."""
-        means = real_array(self.means, "means", (None, 3), finite=False)
-        n = means.shape[0]
-        std = real_array(self.std, "std", (None, 3), finite=False)
-        if std.shape[0] != n:
-            raise InvalidInputError(
-                f"expected means and std with the same number of patches, got {n} and "
-                f"{std.shape[0]}"
-            )
-        object.__setattr__(self, "means", means)
-        object.__setattr__(self, "std", std)
-        for name in ("saturated", "missing"):
-            flag = getattr(self, name)
-            arr = np.asarray(flag) if not isinstance(flag, str | bytes) else None
-            if arr is None or arr.dtype != np.bool_ or arr.shape != (n,):
-                raise InvalidInputError(
-                    f"expected {name} as booleans of shape ({n},), got {describe(flag)}"
-                )
-            object.__setattr__(self, name, arr)
-        for name, arr in (("means", means), ("std", std)):
-            bad = ~np.all(np.isfinite(arr), axis=1) & ~self.missing
-            if bad.any():
-                raise InvalidInputError(
-                    f"{name} has NaN or inf in patch(es) {np.flatnonzero(bad).tolist()[:8]} "
-                    "not marked missing"
-                )
-        if np.any(std < 0):
-            raise InvalidInputError(f"expected std >= 0, got min {float(np.nanmin(std)):g}")
-
-    @property
-    def valid(self) -> np.ndarray:
-        """Patches usable for a fit: neither saturated nor missing."""
-        return np.asarray(~self.saturated & ~self.missing)
-
-
-def chart_patches(
-    image: object,
-    rows: int = 4,
-    cols: int = 6,
-    *,
-    margin: float = 0.25,
-    max_std: float = 0.04,
-    saturation: float = 1.0,
-    max_saturated_fraction: float = 0.01,
-) -> ChartPatches:
-    """Mean encoded sRGB of each patch of a chart that fills the frame.
-
-    Assumption: the image is cropped to the chart so that a ``rows × cols`` grid of equal
-    cells covers it (one patch per cell, the ColorChecker's 4 × 6 by default). The central
-    ``1 - 2 margin`` of each cell is averaged, away from patch edges and gaps.
-
-    A patch is **missing** when its sampled region is not flat (any channel's standard
-    deviation above ``max_std``: the grid misses the patch, an edge or the surround runs
-    through it), and **saturated** when more than ``max_saturated_fraction`` of its pixels
-    reach ``saturation`` in some channel (clipped by the sensor). Both raise a
-    :class:`ChartWarning` naming the patches; :func:`fit_color_correction` leaves them out.
-
-    Parameters
-    ----------
-    image : array_like, shape (H, W, 3)
-        Encoded sRGB (floats, uint8, uint16) or Dask (the cells are reduced by Dask).
-    rows, cols : int
-        The grid of patches that fills the frame (4 × 6 for the ColorChecker Classic).
-    margin : float, keyword-only
-        Fraction of each cell left out on every side, in [0, 0.5).
-    max_std : float, keyword-only
-        Largest per-channel standard deviation (encoded, [0, 1] scale) of a flat patch.
-    saturation : float, keyword-only
-        The clipping level (encoded, [0, 1] scale).
-    max_saturated_fraction : float, keyword-only
-        Fraction of a patch's pixels at ``saturation`` above which it is saturated.
-
-    Returns
-    -------
-    ChartPatches
-
-    Examples
-    --------
-    >>> from imageform.analysis.synthetic import synthetic_chart_image
-    >>> p = chart_patches(synthetic_chart_image())
-    >>> (p.means[0] * 255).round(3).tolist(), bool(p.valid.all())
-    ([115.0, 82.0, 68.0], True)
-    """
-    rgb = image_in(image)
-    if rgb.ndim != 3:
-        raise InvalidInputError(
-            f"expected image of shape (H, W, 3), got {format_shape(tuple(rgb.shape))}"
-        )
-    rows = as_int(rows, "rows", minimum=1)
-    cols = as_int(cols, "cols", minimum=1)
-    margin = as_real(margin, "margin")
-    max_std = as_real(max_std, "max_std", nonnegative=True)
-    saturation = as_real(saturation, "saturation", positive=True)
-    max_saturated_fraction = as_real(
-        max_saturated_fraction, "max_saturated_fraction", minimum=0.0, maximum=1.0
-    )
-    hgt, wid = int(rgb.shape[0]), int(rgb.shape[1])
-    if rows < 1 or cols < 1 or hgt < 2 * rows or wid < 2 * cols:
-        raise InvalidInputError(
-            f"expected rows, cols >= 1 with at least 2 pixels per cell, got {rows}x{cols} "
-            f"for an image of {hgt}x{wid}"
-        )
-    if not 0.0 <= margin < 0.5:
-        raise InvalidInputError(f"expected margin in [0, 0.5), got {margin!r}")
-    means, stds, sat = [], [], []
-    for i in range(rows):
-        for j in range(cols):
-            y0, y1 = hgt * i / rows, hgt * (i + 1) / rows
-            x0, x1 = wid * j / cols, wid * (j + 1) / cols
-            dy, dx = (y1 - y0) * margin, (x1 - x0) * margin
-            ya, yb = int(np.ceil(y0 + dy)), max(int(np.floor(y1 - dy)), int(np.ceil(y0 + dy)) + 1)
-            xa, xb = int(np.ceil(x0 + dx)), max(int(np.floor(x1 - dx)), int(np.ceil(x0 + dx)) + 1)
-            cell = rgb[ya:yb, xa:xb].reshape((-1, 3)).astype(np.float64)
-            means.append(cell.mean(axis=0))
-            stds.append(cell.std(axis=0))
-            sat.append((cell >= saturation).any(axis=1).mean())
-    if is_dask(rgb):
-        import dask
-
-        means, stds, sat = dask.compute(means, stds, sat)
-    m, sd = np.asarray(means), np.asarray(stds)
-    saturated = np.asarray(sat) > max_saturated_fraction
-    missing = np.asarray((sd > max_std).any(axis=1))
-    bad = {"saturated": np.flatnonzero(saturated), "missing": np.flatnonzero(missing)}
-    if not (~saturated & ~missing).any():
-        raise InvalidInputError(
-            f"no usable chart patch in the {rows}x{cols} grid: {bad['saturated'].size} "
-            f"saturated (>= saturation={saturation:g}), {bad['missing'].size} missing (std > "
-            f"max_std={max_std:g} with margin={margin:g}); does the chart fill the frame?"
-        )
-    for what, idx in bad.items():
-        if idx.size:
-            warnings.warn(
-                f"chart_patches: {idx.size} {what} patch(es) {idx.tolist()} (0-based, row by "
-                "row) will be left out of a fit",
-                ChartWarning,
-                stacklevel=2,
-            )
-    return ChartPatches(m, sd, saturated, missing)
-
-
 def _patches_in(x: object, name: str, layout: str = "auto") -> tuple[np.ndarray, np.ndarray]:
     """Patch values (N, 3) and the usable-row mask; an image (H, W, 3) or a ChartSample is
     sampled by :func:`~imageform.analysis.sample_chart` first."""
-    from imageform.analysis.chart_input import _as_chart_patches
-
     x = _as_chart_patches(x, name, layout)
     if isinstance(x, ChartPatches):
         return np.asarray(x.means, dtype=np.float64), x.valid

@@ -21,7 +21,15 @@ from typing import Any
 from imageform.errors import InvalidInputError
 from imageform.workflows._images import read
 
-__all__ = ["CHART_LAYOUTS", "CHART_LAYOUT_HELP", "ChartInput", "notes", "read_chart", "summary", "write_overlay"]
+__all__ = [
+    "CHART_LAYOUTS",
+    "CHART_LAYOUT_HELP",
+    "ChartInput",
+    "notes",
+    "read_chart",
+    "summary",
+    "write_overlay",
+]
 
 #: Values of ``--chart-layout`` (as :data:`imageform.analysis.CHART_LAYOUTS`).
 CHART_LAYOUTS = ("auto", "cropped", "detect")
