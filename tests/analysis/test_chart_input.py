@@ -337,8 +337,11 @@ def test_cli_bad_input_one_line_nothing_written(
         assert "CSV" in err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["scene.png"]
     # options that need --chart, or exactly one of --correction / --chart
-    assert main(["harmonize", str(img), "-o", str(tmp_path / "x.png")]) == 2
-    assert "exactly one" in capsys.readouterr().err
+    assert main(["harmonize", str(img), "-o", str(tmp_path / "x.png")]) == 1
+    assert "got neither" in capsys.readouterr().err
+    argv = ["harmonize", str(img), "-o", str(tmp_path / "x.png"), "--chart", str(img)]
+    assert main([*argv, "--correction", "c.json"]) == 2
+    assert "got both" in capsys.readouterr().err
     argv = ["harmonize", str(img), "-o", str(tmp_path / "x.png"), "--correction", "c.json"]
     assert main([*argv, "--overlay", str(tmp_path / "o.png")]) == 2
     assert "go(es) with --chart" in capsys.readouterr().err

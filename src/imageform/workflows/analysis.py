@@ -386,11 +386,8 @@ class HarmonizeOptions(ImageIn, ImageOut):
 
     def check(self) -> None:
         super().check()
-        if (self.correction is None) == (self.chart is None):
-            raise InvalidInputError(
-                "expected --correction FILE or --chart FILE (exactly one), got "
-                + ("both" if self.chart is not None else "neither")
-            )
+        if self.correction is not None and self.chart is not None:
+            raise InvalidInputError("expected --correction FILE or --chart FILE, got both")
         for name in ("correction", "chart", "reference"):
             v = getattr(self, name)
             if v is not None:
@@ -417,6 +414,11 @@ def harmonize(run: Run, opts: HarmonizeOptions, *, out: Path, image: Path) -> Re
 
     from imageform.analysis import ColorCorrection
 
+    if opts.correction is None and opts.chart is None:
+        raise InvalidInputError(
+            "expected --correction FILE (from imageform fit-correction) or --chart FILE (a "
+            "chart to fit one from), got neither"
+        )
     img = _rgb(image, opts)
     summary: dict[str, Any] = {"input": image, "output": out}
     if opts.chart is not None:
