@@ -41,6 +41,7 @@ from imageform.analysis.chart_detect import (
     measure_chart_patches,
 )
 from imageform.analysis.chart_grid import ChartPatches, ChartWarning, chart_patches
+from imageform.color.white_balance import WhiteBalanceResult
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
 
 __all__ = [
@@ -304,7 +305,7 @@ def chart_white_balance(
     chart_layout: str = "auto",
     normalize: str = "mean",
     clip: bool = False,
-) -> Any:
+) -> WhiteBalanceResult:
     r"""White-balance an image from the neutral patches of a ColorChecker.
 
     The illuminant's linear RGB is fitted on the chart's grey row (patches 18-23, those
@@ -357,8 +358,6 @@ def chart_white_balance(
     >>> (gains / gains[1]).round(2).tolist()
     [0.8, 1.0, 1.33]
     """
-    from imageform.color.white_balance import WhiteBalanceResult
-
     norm = check_option(normalize, ("mean", "green"), "gain normalisation (normalize)")
     clip = as_bool(clip, "clip")
     check_option(chart_layout, CHART_LAYOUTS, "chart layout (chart_layout)")
