@@ -140,7 +140,10 @@ def read_chart(
             warnings.filterwarnings("ignore", category=ChartWarning)
             sample = sample_chart(img, layout, rows=rows, cols=cols, name=f"{flag} {path}")
     except ChartNotFoundError as exc:
-        why = "" if layout == "cropped" else " (nor a chart that fills the frame)"
+        why = {
+            "auto": ", neither filling the frame nor anywhere in the photograph",
+            "detect": " anywhere in the photograph",
+        }.get(layout, "")
         hint = "" if layout == "cropped" else "pass --chart-layout cropped for a cropped chart, or "
         if (rows, cols) != (4, 6):
             raise InvalidInputError(f"{flag} {path}: {exc}") from None
