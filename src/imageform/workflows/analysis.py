@@ -282,7 +282,7 @@ def fit_correction(run: Run, opts: FitCorrectionOptions, *, out: Path, charts: A
             f"chart image, or one PATCHES.csv (columns {','.join(_CSV_COLUMNS)}), got "
             f"{' '.join(str(p) for p in files) or 'nothing'}"
         )
-    kw = {"layout": opts.chart_layout, "rows": opts.rows, "cols": opts.cols}
+    kw: dict[str, Any] = {"layout": opts.chart_layout, "rows": opts.rows, "cols": opts.cols}
     chart_a = _charts.read_chart(files[0], opts, flag="CHART_A", **kw)
     chart_b = _charts.read_chart(files[1], opts, flag="CHART_B", **kw) if len(files) == 2 else None
     if csvs[0] and chart_a.reference is None:
