@@ -1444,6 +1444,11 @@ VALID.update(
         "imageform.analysis.detect_colorchecker": call(V("chart_photo")),
         "imageform.analysis.measure_chart_patches": call(V("chart_photo"), V("chart_detection")),
         "imageform.analysis.synthetic_chart_photo": call(shape=(64, 96), width=0.5),
+        # chart images given directly to the fit and the white balance (sample_chart)
+        "imageform.analysis.ChartSample": Skip("a result dataclass built by sample_chart"),
+        "imageform.analysis.ChartSample.to_dict": Skip("a method of a result dataclass"),
+        "imageform.analysis.sample_chart": call(V("chart")),
+        "imageform.analysis.chart_white_balance": call(V("chart")),
         "imageform.workflows.chart.ChartOptions": call(),
         "imageform.workflows.chart.ChartOptions.fields": call(),
         "imageform.workflows.chart.ChartOptions.types": call(),

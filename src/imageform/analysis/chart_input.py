@@ -221,17 +221,20 @@ def sample_chart(
     if rgb.ndim != 3:
         raise InvalidInputError(f"expected {label} of shape (H, W, 3), got {describe(rgb)}")
     if how == "auto":
+        colorchecker = (rows, cols) == (4, 6)
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always", ChartWarning)
             try:
                 grid: ChartSample | None = _cropped(rgb, rows, cols, margin, max_std, saturation)
             except InvalidInputError:  # too small for the grid, or no flat cell at all
+                if not colorchecker:  # nothing else to try: the grid's own message
+                    raise
                 grid = None
         if grid is not None and _looks_cropped(grid.patches, rows, cols, min_score):
             for w in caught:
                 warnings.warn(w.message, w.category, stacklevel=2)
             return grid
-        if (rows, cols) != (4, 6):
+        if not colorchecker:
             raise ChartNotFoundError(
                 f"{label} is not a {rows}x{cols} chart that fills the frame (detection finds "
                 "the 4x6 ColorChecker only); crop it to the chart"
