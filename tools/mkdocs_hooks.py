@@ -52,6 +52,7 @@ BENCH_SCRIPTS: dict[str, str] = {
     "8bit": "benchmarks/bench_8bit.py",
     "calibration": "benchmarks/bench_calibration.py",
     "chart-detect": "benchmarks/bench_chart_detect.py",
+    "chart-input": "benchmarks/check_chart_input.py",
     "charuco": "benchmarks/bench_charuco.py",
     "checkerboard": "benchmarks/bench_checkerboard.py",
     "chunked": "benchmarks/bench_chunked.py",
