@@ -51,6 +51,7 @@ __all__ = [
     "aruco_dictionary",
     "aruco_marker_image",
     "detect_aruco_markers",
+    "identify_aruco_dictionary",
 ]
 
 #: Dictionary names: ``"4x4_50"`` ... ``"7x7_1000"`` (OpenCV's ``DICT_4X4_50`` ...) and
@@ -600,3 +601,57 @@ def detect_aruco_markers(
     corners = np.array([found[i][1] for i in ids], dtype=np.float64).reshape(-1, 4, 2)
     hamming = np.array([found[i][2] for i in ids], dtype=np.int64)
     return ArucoMarkers(ids, corners, hamming, d.name)
+
+
+def identify_aruco_dictionary(image: object, *, min_markers: int = 2) -> str | None:
+    """Name the predefined dictionary whose markers an image shows, or None.
+
+    OpenCV's predefined dictionaries of one marker size are prefixes of each other
+    (``4x4_50`` is the first 50 codes of ``4x4_1000``), so each family is searched once, with
+    its largest dictionary and no bit correction (an exact match only: a false code is then
+    unlikely); the family with the most markers wins, and the smallest dictionary of that
+    family holding the largest id found is returned (a larger one of the same family reads
+    the same markers with the same ids). Meant for error messages and for a user
+    holding a board of unknown origin; it costs one detection per family (five in all).
+
+    Parameters
+    ----------
+    image : array_like, shape (H, W) or (H, W, 3)
+        Grey or RGB image (as :func:`detect_aruco_markers`).
+    min_markers : int, keyword-only
+        Fewest markers (at least 1) for a family to be named.
+
+    Returns
+    -------
+    str or None
+        A name of :data:`ARUCO_DICTIONARIES`, or None when no family reaches ``min_markers``.
+
+    Raises
+    ------
+    InvalidInputError
+        ``image`` is not a grey or RGB image of real numbers, or ``min_markers`` is not a
+        positive integer.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> canvas = np.full((240, 480), 255, np.uint8)
+    >>> canvas[60:180, 40:160] = aruco_marker_image(7, "5x5_100", size_px=120)
+    >>> canvas[60:180, 280:400] = aruco_marker_image(63, "5x5_100", size_px=120)
+    >>> identify_aruco_dictionary(canvas)
+    '5x5_100'
+    """
+    need = as_int(min_markers, "min_markers", minimum=1, maximum=10000)
+    g = _gray01(image)
+    best: tuple[int, str, int] | None = None
+    for family in ("4x4_1000", "5x5_1000", "6x6_1000", "7x7_1000", "aruco_original"):
+        found = detect_aruco_markers(g, family, error_correction_rate=0.0)
+        if len(found) >= need and (best is None or len(found) > best[0]):
+            best = (len(found), family, int(found.ids.max()))
+    if best is None:
+        return None
+    _, family, top = best
+    if family == "aruco_original":
+        return family
+    size = family.split("_")[0]
+    return next(f"{size}_{n}" for n in _COUNTS if top < n)

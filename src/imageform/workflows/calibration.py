@@ -395,6 +395,7 @@ def _calibrate_charuco(
     cols, rows = squares
     shape0: tuple[int, int] | None = None
     objs, corners, names, missed = [], [], [], []
+    first_missed: object = None
     for f, grey in _read_views(run, opts, images):
         shape0 = (int(grey.shape[0]), int(grey.shape[1]))
         found = detect_charuco(grey, board)
@@ -406,12 +407,16 @@ def _calibrate_charuco(
             why = f"{len(found.markers)} markers, {len(found)} corners"
             run.note(f"warning: {f}: too little of the charuco:{cols}x{rows} board ({why})")
             missed.append(f"{f.name}: {why}")
+            if first_missed is None and len(found.markers) < 2:
+                first_missed = grey
     if len(corners) < MIN_VIEWS:
+        hint = _dictionary_hint(first_missed, opts.dictionary)
         raise DegenerateConfigurationError(
             f"found at least {MIN_CHARUCO_CORNERS} corners of the charuco:{cols}x{rows} board "
             f"({opts.dictionary} markers) in {len(corners)} view(s) of {len(images)}; "
             f"calibrate needs at least {MIN_VIEWS}"
             + (f" ({missed[0]}{'; ...' if len(missed) > 1 else ''})" if missed else "")
+            + hint
         )
     assert shape0 is not None
     command = (
@@ -419,6 +424,19 @@ def _calibrate_charuco(
         f"--marker {opts.marker} --dictionary {opts.dictionary}"
     )
     return _calibrate_views(run, opts, out, len(images), names, objs, corners, shape0, command)
+
+
+def _dictionary_hint(grey: object, dictionary: str) -> str:
+    """``"; its markers look like 4x4_50: try --dictionary 4x4_50"`` when a view that showed
+    (almost) no marker of ``dictionary`` shows those of another predefined dictionary."""
+    if grey is None:
+        return ""
+    from imageform.geometry import identify_aruco_dictionary
+
+    other = identify_aruco_dictionary(grey)
+    if other is None or other == dictionary:
+        return ""
+    return f"; the markers look like {other}: try --dictionary {other}"
 
 
 # ---------------------------------------------------------------- undistort
