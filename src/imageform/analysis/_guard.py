@@ -1,5 +1,6 @@
 """Boundary checks shared by the analysis tools (issue 16): real arrays and the
-validation of the result dataclasses a user can also build by hand."""
+validation of the result dataclasses a user can also build by hand.
+"""
 
 from __future__ import annotations
 
@@ -17,7 +18,8 @@ def real_array(
     x: object, name: str, shape: tuple[int | None, ...] | None = None, *, finite: bool = True
 ) -> np.ndarray:
     """``x`` as a float64 NumPy array: complex, object, string and bool-only input refused;
-    ``shape`` (``None`` for any length on that axis) checked before the values."""
+    ``shape`` (``None`` for any length on that axis) checked before the values.
+    """
     if x is None or isinstance(x, str | bytes):
         raise InvalidInputError(f"expected {name} as a numeric array, got {describe(x)}")
     arr = np.asarray(as_float(x, name, finite=False), dtype=np.float64)
@@ -62,7 +64,8 @@ def unit_rows(m: np.ndarray, name: str) -> Any:
 def target_source(target: object, name: str, what: str) -> Any:
     """A normalisation target that is not a statistics object: an existing JSON file (its
     :class:`~pathlib.Path`) or an image validated under the parameter's own ``name``
-    (never reported as ``image``)."""
+    (never reported as ``image``).
+    """
     from pathlib import Path
 
     from imageform.analysis._arrays import image_in

@@ -1,4 +1,4 @@
-"""Find a ColorChecker Classic (4 × 6 patches) in an uncropped photograph.
+r"""Find a ColorChecker Classic (4 × 6 patches) in an uncropped photograph.
 
 :func:`detect_colorchecker` returns the chart's homography, its 24 patch centres and sampling
 quadrilaterals in image coordinates, a score and the chart's in-plane rotation;
@@ -13,13 +13,13 @@ segmentation detector of colour-checker-detection and OpenCV's ``mcc`` module):
    long side; the colour gradient magnitude of the Gaussian-smoothed image is thresholded at
    several levels, and the 4-connected regions below each threshold are candidate patches.
 2. **Square-ish candidates**, by moments: an affine image of a square (any rotation, tilt
-   or shear) of area :math:`A` and covariance :math:`\\Sigma` has
-   :math:`A / (12 \\sqrt{\\det \\Sigma}) = 1` (a uniform square of side *s* has variance
+   or shear) of area :math:`A` and covariance :math:`\Sigma` has
+   :math:`A / (12 \sqrt{\det \Sigma}) = 1` (a uniform square of side *s* has variance
    :math:`s^2/12` along each side); regions with this ratio in [0.85, 1.12] and an
    elongation of at most 3 are kept, duplicates across thresholds removed.
 3. **Lattice hypotheses.** A candidate and two of its neighbours give a lattice origin and
-   basis :math:`B = [d_1\\ d_2]`; it is kept when the candidate's own shape agrees, i.e.
-   :math:`12\\, B^{-1} \\Sigma B^{-T} \\approx (s/p)^2 I` (the patch sides run along the
+   basis :math:`B = [d_1\ d_2]`; it is kept when the candidate's own shape agrees, i.e.
+   :math:`12\, B^{-1} \Sigma B^{-T} \approx (s/p)^2 I` (the patch sides run along the
    basis, side over pitch between 0.55 and 0.97), which rules out diagonal bases. Every
    hypothesis counts the candidates on its lattice (RANSAC-style, all hypotheses at once).
 4. **Growth.** The best lattices are refitted as homographies (normalised DLT) from integer
@@ -150,7 +150,8 @@ def _normalizer(p: np.ndarray) -> np.ndarray:
 
 def _fit_h(src: np.ndarray, dst: np.ndarray) -> np.ndarray:
     """Homography src -> dst by the normalised DLT (Hartley & Zisserman, alg. 4.2); an affine
-    map when the points cannot determine more (fewer than 6 or nearly collinear rows)."""
+    map when the points cannot determine more (fewer than 6 or nearly collinear rows).
+    """
     ts, td = _normalizer(src), _normalizer(dst)
     s = _apply_h(ts, src)
     d = _apply_h(td, dst)
@@ -188,7 +189,8 @@ def _gaussian_taps(sigma: float) -> np.ndarray:
 
 def _work_image(rgb: np.ndarray, max_size: int, scale: float) -> tuple[np.ndarray, int]:
     """Block mean by an integer factor so that the long side is at most ``max_size``, as
-    float32 in [0, 1] (``scale``: 255 for uint8)."""
+    float32 in [0, 1] (``scale``: 255 for uint8).
+    """
     from imageform._kernels.chart import block_mean_numba
 
     hgt, wid = rgb.shape[:2]
@@ -201,7 +203,8 @@ def _work_image(rgb: np.ndarray, max_size: int, scale: float) -> tuple[np.ndarra
 def _rgb_in(image: object) -> tuple[np.ndarray, float]:
     """The photograph as an (H, W, 3) array and its full scale: uint8 and uint16 arrays are
     kept as they are (no float copy of a large photograph), the rest goes through the
-    usual checks (``image_in``: floats in [0, 1]); Dask is computed."""
+    usual checks (``image_in``: floats in [0, 1]); Dask is computed.
+    """
     if isinstance(image, np.ndarray) and image.dtype in (np.uint8, np.uint16):
         if image.ndim != 3 or image.shape[-1] != 3:
             raise InvalidInputError(
@@ -322,7 +325,8 @@ def _collect(
     cand: dict[str, np.ndarray], h: np.ndarray, area_scale: float, tol: float
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Candidates on the lattice of ``h`` (lattice -> image): indices, integer coords,
-    residuals; one candidate per cell (the closest)."""
+    residuals; one candidate per cell (the closest).
+    """
     hinv = np.linalg.inv(h)
     uv = _apply_h(hinv, cand["c"])
     ruv = np.round(uv)
@@ -349,7 +353,8 @@ def _in_square_window(
 ) -> tuple[np.ndarray, np.ndarray]:
     """The members of the ``size × size`` window of lattice cells that holds the most (a chart
     fits in one whatever its orientation): growth never strays onto clutter that happens to
-    continue the lattice far away."""
+    continue the lattice far away.
+    """
     if not len(keys):
         return idx, keys
     lo, hi = keys.min(axis=0).astype(int), keys.max(axis=0).astype(int)
@@ -444,7 +449,8 @@ def _colour_fit(
     meas: np.ndarray, ref_lin: np.ndarray, usable: np.ndarray
 ) -> tuple[float, np.ndarray]:
     """R² of the affine linear-light fit ref ~ [meas, 1] W, robust to a few outliers (judged
-    on the encoded residual, so that dark patches count as much as light ones)."""
+    on the encoded residual, so that dark patches count as much as light ones).
+    """
     x = np.c_[srgb_decode(np, np.clip(meas, 0.0, 1.0)), np.ones(len(meas))]
     ref_enc = srgb_encode(np, ref_lin)
     use = usable.copy()
@@ -509,7 +515,8 @@ def _search(
     work: np.ndarray, ref_lin: np.ndarray, min_score: float
 ) -> tuple[float, np.ndarray, np.ndarray, np.ndarray] | str:
     """The chart in the work image: (score, chart -> work homography, outliers, chart
-    coordinates of the segmented patches), or why none was found."""
+    coordinates of the segmented patches), or why none was found.
+    """
     cand = _candidates(work)
     n_cand = len(cand["area"])
     if n_cand < 6:
@@ -801,7 +808,8 @@ def _chart_homography(
 ) -> np.ndarray:
     """Chart (column, row) -> image: the chart plane tilted by ``tilt`` degrees about a
     random in-plane axis, rotated by ``rotation``, seen by a pinhole (focal = image width),
-    scaled so that its lattice is ``width`` of the image width, placed at random inside."""
+    scaled so that its lattice is ``width`` of the image width, placed at random inside.
+    """
     t, phi, r = np.radians(tilt), rng.uniform(0, np.pi), np.radians(rotation)
     axis = np.array([np.cos(phi), np.sin(phi), 0.0])
     kx = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])

@@ -68,13 +68,13 @@ class ChartWarning(ImageformWarning):
 
 
 def root_polynomial_terms(rgb: Any, degree: int) -> Any:
-    """Root-polynomial expansion of linear RGB (Finlayson et al. 2015, eq. (9)-(10)).
+    r"""Root-polynomial expansion of linear RGB (Finlayson et al. 2015, eq. (9)-(10)).
 
-    degree 1: (R, G, B); degree 2 adds :math:`\\sqrt{RG}, \\sqrt{GB}, \\sqrt{RB}` (6 terms);
-    degree 3 adds :math:`\\sqrt[3]{RG^2}, \\sqrt[3]{GB^2}, \\sqrt[3]{RB^2}, \\sqrt[3]{GR^2},
-    \\sqrt[3]{BG^2}, \\sqrt[3]{BR^2}, \\sqrt[3]{RGB}` (13 terms). Every term is of degree
-    one in exposure: :math:`t(kx) = k\\,t(x)`. Roots are sign-preserving
-    (:math:`\\operatorname{sign}(p)|p|^{1/n}`) so small negative noise values stay finite.
+    degree 1: (R, G, B); degree 2 adds :math:`\sqrt{RG}, \sqrt{GB}, \sqrt{RB}` (6 terms);
+    degree 3 adds :math:`\sqrt[3]{RG^2}, \sqrt[3]{GB^2}, \sqrt[3]{RB^2}, \sqrt[3]{GR^2},
+    \sqrt[3]{BG^2}, \sqrt[3]{BR^2}, \sqrt[3]{RGB}` (13 terms). Every term is of degree
+    one in exposure: :math:`t(kx) = k\,t(x)`. Roots are sign-preserving
+    (:math:`\operatorname{sign}(p)|p|^{1/n}`) so small negative noise values stay finite.
 
     Examples
     --------
@@ -216,7 +216,8 @@ class ColorCorrection:
 @dataclass(frozen=True)
 class ChartPatches:
     """Patch statistics of a chart image (row by row): encoded sRGB ``means`` (N, 3), the
-    per-patch ``std`` (N, 3), and which patches are ``saturated`` or ``missing``."""
+    per-patch ``std`` (N, 3), and which patches are ``saturated`` or ``missing``.
+    """
 
     means: np.ndarray
     std: np.ndarray
@@ -400,14 +401,14 @@ def fit_color_correction(
     transfer: str = "srgb",
     saturation: float | None = 1.0,
 ) -> ColorCorrection:
-    """Least-squares colour correction from device A's chart (``measured``) to the reference.
+    r"""Least-squares colour correction from device A's chart (``measured``) to the reference.
 
-    .. math:: \\hat M = \\arg\\min_M \\sum_i \\lVert \\rho(a_i) M^T - b_i \\rVert^2
-        = \\big((\\rho(A)^T \\rho(A))^{-1} \\rho(A)^T B\\big)^T
+    .. math:: \hat M = \arg\min_M \sum_i \lVert \rho(a_i) M^T - b_i \rVert^2
+        = \big((\rho(A)^T \rho(A))^{-1} \rho(A)^T B\big)^T
 
     with :math:`a_i, b_i` the linear-light RGB of patch *i* (rows of A and B),
-    :math:`\\rho` the identity (``"linear"``, 3×3) or the root-polynomial expansion of
-    ``degree`` (:func:`root_polynomial_terms`). The fitted ``matrix`` is :math:`\\hat M`
+    :math:`\rho` the identity (``"linear"``, 3×3) or the root-polynomial expansion of
+    ``degree`` (:func:`root_polynomial_terms`). The fitted ``matrix`` is :math:`\hat M`
     for row vectors: the corrected colour is ``rho(a) @ matrix.T``.
 
     Parameters
@@ -510,7 +511,8 @@ class CorrectionReport:
 
     def __post_init__(self) -> None:
         """Two ΔE00 vectors (N,) of finite values >= 0 on the valid patches (NaN allowed
-        where a patch is not valid), ``valid`` booleans (N,)."""
+        where a patch is not valid), ``valid`` booleans (N,).
+        """
         before = real_array(self.delta_e_before, "delta_e_before", (None,), finite=False)
         n = before.shape[0]
         after = real_array(self.delta_e_after, "delta_e_after", (None,), finite=False)
@@ -552,8 +554,8 @@ class CorrectionReport:
 def correction_report(
     measured: object, reference: object, correction: ColorCorrection
 ) -> CorrectionReport:
-    """CIEDE2000 per patch, :math:`\\Delta E_{00}(\\mathrm{Lab}(b_i), \\mathrm{Lab}(a_i))`
-    before and :math:`\\Delta E_{00}(\\mathrm{Lab}(b_i), \\mathrm{Lab}(f(a_i)))` after.
+    r"""CIEDE2000 per patch, :math:`\Delta E_{00}(\mathrm{Lab}(b_i), \mathrm{Lab}(a_i))`
+    before and :math:`\Delta E_{00}(\mathrm{Lab}(b_i), \mathrm{Lab}(f(a_i)))` after.
 
     Lab from encoded sRGB with its D65 white. Patches fitted on are scored too: report
     ΔE on patches left out of the fit (or another chart) to judge generalisation.

@@ -247,7 +247,8 @@ def _luminance(img: np.ndarray, weights: Any) -> np.ndarray:
 
 def _hamming(n: int, mid: float) -> np.ndarray:
     """Hamming window over ``n`` samples centred on ``mid`` (``sfrmat3``'s ``ahamming``):
-    ``0.54 + 0.46 cos(pi (k - mid) / w)`` with ``w`` the larger distance to an end."""
+    ``0.54 + 0.46 cos(pi (k - mid) / w)`` with ``w`` the larger distance to an end.
+    """
     k = np.arange(n, dtype=np.float64)
     wid = max(mid, n - 1 - mid, 1.0)
     arg = np.clip((k - mid) / wid, -1.0, 1.0)
@@ -661,7 +662,8 @@ def _subpixel_side(
     g: np.ndarray, t: float, lines: np.ndarray, first: np.ndarray, step: int
 ) -> np.ndarray:
     """Threshold crossing along each line (row of ``g``) next to index ``first`` (the first
-    dark pixel seen walking in direction ``step``)."""
+    dark pixel seen walking in direction ``step``).
+    """
     out = np.empty(lines.size)
     n = g.shape[1]
     for i, (r, j) in enumerate(zip(lines, first, strict=True)):
