@@ -49,7 +49,8 @@ def real_array(
 ) -> np.ndarray:
     """``value`` as a float64 array of real numbers (None, bool, complex, object and string
     values refused by name before any conversion), with ``ndim`` dimensions and ``last``
-    values on its last axis; NaN and inf refused unless ``finite=False``."""
+    values on its last axis; NaN and inf refused unless ``finite=False``.
+    """
     if value is None or isinstance(value, str | bytes | bool | np.bool_):
         raise InvalidInputError(
             f"expected {name} as an array of real numbers, got {describe(value)}"
@@ -95,7 +96,8 @@ def check_field(value: Any, spec: Any, name: str) -> Any:
     """A dataclass field's value checked against its schema entry ``spec``
     (:class:`imageform.simulate.schema.Field`): kind, choices and bounds, in the units the
     typed config holds (already converted). ``None`` is accepted only for an optional key
-    (default ``None``)."""
+    (default ``None``).
+    """
     if value is None:
         if spec.default is None:
             return None
@@ -182,7 +184,8 @@ def _bounded(x: float, spec: Any, name: str) -> float:
 def check_section(obj: Any, schema: dict[str, Any], section: str) -> None:
     """Check (and normalise, on a frozen dataclass) every field of ``obj`` that ``schema``
     (a section of :data:`~imageform.simulate.schema.SCENE_SCHEMA`) describes; the error
-    names ``section.field``."""
+    names ``section.field``.
+    """
     import dataclasses
 
     from imageform.simulate.schema import Field

@@ -71,7 +71,8 @@ def _cgroup_available(root: Path = Path("/sys/fs/cgroup")) -> int | None:
 def available_memory_bytes() -> int | None:
     """Memory this process can still use (bytes): the smaller of the system's available
     memory (Linux ``MemAvailable``; elsewhere the physical memory) and what a cgroup v2 limit
-    leaves; ``None`` when neither can be read (then no scene is refused for its size)."""
+    leaves; ``None`` when neither can be read (then no scene is refused for its size).
+    """
     found = [v for v in (_meminfo_available(), _cgroup_available()) if v is not None]
     if not found:
         try:

@@ -81,7 +81,8 @@ def _build(cls: Any, data: dict[str, Any]) -> Any:
 @dataclass(frozen=True)
 class RenderConfig:
     """``[render]``: image size (pixels), ``supersampling`` S (S x S rays per pixel) and the
-    reflectance seen where no object is hit."""
+    reflectance seen where no object is hit.
+    """
 
     width: int
     height: int
@@ -97,7 +98,8 @@ class RenderConfig:
 class IlluminantConfig:
     """``[illuminant]``: how the light's spectrum is given (``type``: a CIE ``name``, a
     blackbody or daylight ``temperature_K``, or a CSV ``file``) and ``illuminance_lux`` on
-    every surface. ``temperature_K`` is ``None`` for a CIE or file light."""
+    every surface. ``temperature_K`` is ``None`` for a CIE or file light.
+    """
 
     type: str
     name: str
@@ -113,7 +115,8 @@ class IlluminantConfig:
 @dataclass(frozen=True)
 class DistortionConfig:
     """``[camera.distortion]``: the lens distortion ``model`` and its coefficients (those the
-    model lacks are 0; see :data:`~imageform.simulate.schema.DISTORTION_COEFFICIENTS`)."""
+    model lacks are 0; see :data:`~imageform.simulate.schema.DISTORTION_COEFFICIENTS`).
+    """
 
     model: str = "brown_conrady"
     k1: float = 0.0
@@ -205,7 +208,8 @@ class CameraConfig:
 
     def __post_init__(self) -> None:
         """Each field checked against the schema's ``[camera]`` keys (a negative ``fx_px``
-        would render a mirrored camera); ``distortion`` a :class:`DistortionConfig`."""
+        would render a mirrored camera); ``distortion`` a :class:`DistortionConfig`.
+        """
         check_section(self, SCENE_SCHEMA["camera"], "camera")
         if not isinstance(self.distortion, DistortionConfig):
             raise TypeError(
@@ -214,10 +218,10 @@ class CameraConfig:
             )
 
     def to_camera(self, image_size: tuple[int, int], sensor_pixel_pitch_m: float) -> Camera:
-        """The camera the renderer uses: K from the intrinsics, R and t from the pose.
+        r"""The camera the renderer uses: K from the intrinsics, R and t from the pose.
 
-        .. math:: f_x = f / p \\ (\\text{unless } f_x \\text{ is given}),\\quad f_y = f_x,\\quad
-            (c_x, c_y) = ((W - 1)/2, (H - 1)/2) \\text{ by default}
+        .. math:: f_x = f / p \ (\text{unless } f_x \text{ is given}),\quad f_y = f_x,\quad
+            (c_x, c_y) = ((W - 1)/2, (H - 1)/2) \text{ by default}
 
         with ``p`` the ``pixel_pitch_um`` or else ``sensor_pixel_pitch_m``.
 
@@ -303,7 +307,8 @@ class CameraConfig:
 class LensConfig:
     """``[lens]``: aperture ``f_number``, ``focus_distance_m``, whether to blur by defocus,
     the natural ``vignetting``, the per-channel magnification ``lateral_ca`` and whether to
-    blur by ``diffraction`` (off by default)."""
+    blur by ``diffraction`` (off by default).
+    """
 
     f_number: float
     focus_distance_m: float
@@ -321,7 +326,8 @@ class LensConfig:
 class SensorConfig:
     """``[sensor]``: a preset, its spectral sensitivity, the CFA, the exposure (seconds or
     ``"auto"``), noise on/off and overrides of the preset's parameters (``None``: the
-    preset's)."""
+    preset's).
+    """
 
     preset: str
     spectral_sensitivity: str
@@ -351,7 +357,8 @@ class SensorConfig:
 
     def to_model(self) -> SensorModel:
         """The :class:`~imageform.sensor.SensorModel`: the preset (colour) with the overrides
-        converted to SI units, and measured QE curves scaled to ``peak_qe``."""
+        converted to SI units, and measured QE curves scaled to ``peak_qe``.
+        """
         from imageform.sensor.presets import ccd_preset, cmos_preset
 
         base = (cmos_preset if self.preset == "cmos" else ccd_preset)(color=True)
@@ -393,7 +400,8 @@ class SensorConfig:
 @dataclass(frozen=True)
 class ProcessingConfig:
     """``[processing]``: the camera's processing after the sensor (demosaicing, lens-shading
-    correction, white balance, colour correction, output space and transfer function)."""
+    correction, white balance, colour correction, output space and transfer function).
+    """
 
     demosaic: str
     lens_shading_correction: bool
@@ -411,7 +419,8 @@ class ProcessingConfig:
 class ObjectConfig:
     """The pose every ``[[objects]]`` entry has: ``type``, ``name``, ``centre_m`` (world),
     the front face's ``normal`` and the world direction ``up`` of its top edge (``None``:
-    z, or y for a horizontal object)."""
+    z, or y for a horizontal object).
+    """
 
     type: str
     name: str
@@ -421,7 +430,8 @@ class ObjectConfig:
 
     def __post_init__(self) -> None:
         """Each field checked against the schema's keys of its ``type``; ``centre_m``
-        required."""
+        required.
+        """
         schema = SCENE_SCHEMA["objects"]
         if not isinstance(self.type, str) or self.type not in schema:
             raise TypeError(f"expected type as one of {', '.join(schema)}, got {self.type!r:.40}")
@@ -435,7 +445,8 @@ class ObjectConfig:
 @dataclass(frozen=True)
 class CheckerboardConfig(ObjectConfig):
     """A checkerboard: ``squares`` (columns, rows) of ``square_size_m``, a light border of
-    ``margin_squares``, the two reflectances (the top-left square dark)."""
+    ``margin_squares``, the two reflectances (the top-left square dark).
+    """
 
     squares: tuple[int, int]
     square_size_m: float
@@ -447,7 +458,8 @@ class CheckerboardConfig(ObjectConfig):
 @dataclass(frozen=True)
 class ColorCheckerConfig(ObjectConfig):
     """A ColorChecker Classic (6 x 4 patches, BabelColor average spectra), ``width_m`` wide
-    (2/3 as tall), patches separated by ``gap_fraction`` of a cell of the frame."""
+    (2/3 as tall), patches separated by ``gap_fraction`` of a cell of the frame.
+    """
 
     width_m: float
     gap_fraction: float
@@ -457,7 +469,8 @@ class ColorCheckerConfig(ObjectConfig):
 @dataclass(frozen=True)
 class GroundConfig(ObjectConfig):
     """A ground of ``size_m`` (across, along) with ``rail_count`` rails running towards its
-    top edge and sleepers between them."""
+    top edge and sleepers between them.
+    """
 
     size_m: Vec2
     reflectance: Reflectance
@@ -500,7 +513,8 @@ _OBJECT_CLASSES: dict[str, type[ObjectConfig]] = {
 class ViewConfig:
     """An extra view of the scene (``[[views]]``): the same camera, looking from ``eye_m``
     at ``target_m`` with ``up`` up (look-at pose). ``imageform simulate`` renders each one
-    through the whole chain beside the main view (e.g. the views of a calibration board)."""
+    through the whole chain beside the main view (e.g. the views of a calibration board).
+    """
 
     eye_m: Vec3
     target_m: Vec3
@@ -538,7 +552,8 @@ class SceneConfig:
     @classmethod
     def from_dict(cls, cfg: dict[str, Any]) -> SceneConfig:
         """The typed form of a validated description
-        (:func:`~imageform.simulate.validation.validate_scene_dict`'s output)."""
+        (:func:`~imageform.simulate.validation.validate_scene_dict`'s output).
+        """
         cam = dict(cfg["camera"])
         cam["distortion"] = _build(DistortionConfig, cam["distortion"])
         return cls(
@@ -563,7 +578,8 @@ class SceneConfig:
 
     def __getitem__(self, section: str) -> Any:
         """Deprecated dict access (``config["lens"]["f_number"]``): use the attributes
-        (``config.lens.f_number``)."""
+        (``config.lens.f_number``).
+        """
         warnings.warn(
             f"Scene.config[{section!r}] is deprecated: Scene.config is a typed SceneConfig; "
             f"use scene.config.{section} (or scene.config.to_dict())",

@@ -1,5 +1,6 @@
 """The camera pipeline: the stages of :mod:`.stages` composed, every stage kept
-(:func:`simulate`)."""
+(:func:`simulate`).
+"""
 
 from __future__ import annotations
 
@@ -338,7 +339,8 @@ def _vanishing(
     scene: Scene, output: np.ndarray, seed: int
 ) -> tuple[VanishingTruth | None, dict[str, Any]]:
     """The first railed ground's true and detected vanishing point and horizon, and the
-    errors (nothing without rails)."""
+    errors (nothing without rails).
+    """
     grounds = [
         o for o in scene.objects if isinstance(o.config, GroundConfig) and o.config.rail_count
     ]

@@ -47,7 +47,8 @@ class Stage:
     ``"radiance"``, ``"raw"``, ``"demosaiced"``), ``title`` and ``description`` (one sentence
     saying what the stage did, with the formula where there is one), ``image`` (a NumPy array,
     see the module docstring for ``kind``), ``white_level`` (raw stages only), and
-    ``seconds`` (the time the stage took)."""
+    ``seconds`` (the time the stage took).
+    """
 
     name: str
     title: str
@@ -60,7 +61,8 @@ class Stage:
     def __post_init__(self) -> None:
         """Names are strings, ``seconds`` finite and ``>= 0``, ``white_level`` finite and
         ``> 0`` (or None), ``image`` an array (an unknown ``kind`` is the report's to refuse,
-        naming the stage)."""
+        naming the stage).
+        """
         for key in ("name", "title", "description"):
             if not isinstance(getattr(self, key), str):
                 raise TypeError(f"expected {key} as a string, got {describe(getattr(self, key))}")
@@ -75,7 +77,8 @@ class Stage:
 @dataclass(frozen=True)
 class SceneQuad:
     """A planar object of the scene as the report's top view draws it: ``name`` and its four
-    world corners ``corners`` of shape ``(4, 3)`` (metres, world frame)."""
+    world corners ``corners`` of shape ``(4, 3)`` (metres, world frame).
+    """
 
     name: str
     corners: np.ndarray
@@ -85,7 +88,8 @@ class SceneQuad:
 class ColorCheckerTruth:
     """The 24 ColorChecker patches: ``names`` (24,), ``lab_d65`` (24, 3) the ground-truth CIELAB
     under D65 (2°), ``centres_uv`` (24, 2) the patch centres in the image (pixels) and
-    ``sample_radius_px`` the radius of the square window sampled around each centre."""
+    ``sample_radius_px`` the radius of the square window sampled around each centre.
+    """
 
     names: tuple[str, ...]
     lab_d65: np.ndarray
@@ -180,7 +184,8 @@ def _homogeneous(value: object, name: str) -> np.ndarray:
 class VanishingTruth:
     """The rails' true vanishing point (homogeneous ``(3,)``, pixels) and the true horizon
     line (homogeneous ``(3,)``, ``a u + b v + c = 0``); ``detected_*`` what the detector found
-    on the output image (``None`` when it found nothing)."""
+    on the output image (``None`` when it found nothing).
+    """
 
     vanishing_point: np.ndarray
     horizon: np.ndarray
@@ -189,7 +194,8 @@ class VanishingTruth:
 
     def __post_init__(self) -> None:
         """Each line or point a finite homogeneous 3-vector (``None`` for a detection that
-        found nothing)."""
+        found nothing).
+        """
         for key in ("vanishing_point", "horizon", "detected_vanishing_point", "detected_horizon"):
             value = getattr(self, key)
             if value is None and key.startswith("detected"):
@@ -241,7 +247,8 @@ class SimulationResult:
 
     def __post_init__(self) -> None:
         """``camera`` a Camera, ``image_size`` two positive integers, ``world_up`` a finite
-        non-zero 3-vector, ``stages`` Stage objects (issue 16)."""
+        non-zero 3-vector, ``stages`` Stage objects (issue 16).
+        """
         if not isinstance(self.camera, Camera):
             raise TypeError(
                 f"expected camera as an imageform.geometry.Camera, got {describe(self.camera)}"

@@ -49,7 +49,8 @@ _DEFAULT_TOML = Path(__file__).with_name("scenes") / "default.toml"
 class SceneObject:
     """A planar object: ``kind``, ``name``, its world ``corners`` ``(4, 3)`` (top-left,
     top-right, bottom-right, bottom-left as seen from the front) and its typed ``config``
-    (:class:`~imageform.simulate.config.ObjectConfig` of its kind)."""
+    (:class:`~imageform.simulate.config.ObjectConfig` of its kind).
+    """
 
     kind: str
     name: str
@@ -223,7 +224,8 @@ def _where(scene: Scene) -> _Ctx:
 def _at_key(scene: Scene, path: tuple[Any, ...]) -> Iterator[None]:
     """Run a step of the simulation of ``scene``; an error it raises about the scene's values
     names the scene key ``path`` and its line in the scene file (issue 16: errors that arise
-    at render time point at the file like those found when it is read)."""
+    at render time point at the file like those found when it is read).
+    """
     try:
         yield
     except (InvalidInputError, DegenerateConfigurationError) as exc:
@@ -371,7 +373,7 @@ def _build(data: dict[str, Any], text: str | None, origin: str, base: Path | Non
 
 
 def load_scene(source: str | Path | dict[str, Any]) -> Scene:
-    """Read and validate a scene: a TOML file path, a TOML string or a dict.
+    r"""Read and validate a scene: a TOML file path, a TOML string or a dict.
 
     Paths inside the scene (image textures, illuminant files) are relative to the file's
     folder (or the working folder for a string or dict).
@@ -386,7 +388,7 @@ def load_scene(source: str | Path | dict[str, Any]) -> Scene:
 
     Examples
     --------
-    >>> s = load_scene('name = "tiny"\\n[render]\\nwidth = 160\\nheight = 90\\n')
+    >>> s = load_scene('name = "tiny"\n[render]\nwidth = 160\nheight = 90\n')
     >>> s.name, s.image_size
     ('tiny', (160, 90))
     """

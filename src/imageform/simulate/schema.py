@@ -39,7 +39,8 @@ class Field:
     ``"vec2"``, ``"vec3"``, ``"ivec2"``, ``"mat3"``, ``"reflectance"`` (a number in [0, 1] or
     a ColorChecker patch name), ``"float_or_auto"``), the physical ``dimension`` of a unit
     suffix (``"length"``, ``"time"``, ``"angle"`` or None), the ``default`` (None: optional,
-    absent), the valid ``choices`` of a string, and a one-line ``doc``."""
+    absent), the valid ``choices`` of a string, and a one-line ``doc``.
+    """
 
     kind: str
     default: Any

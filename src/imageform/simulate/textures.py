@@ -19,7 +19,8 @@ __all__ = ["load_texture", "resolve_path"]
 
 def resolve_path(path: str, base: Path | None) -> Path:
     """``path`` relative to the scene file's folder ``base`` (the working folder when
-    ``None``); an error naming the file when it does not exist."""
+    ``None``); an error naming the file when it does not exist.
+    """
     if not isinstance(path, str | Path):
         raise TypeError(f"expected path as a file name (str or Path), got {describe(path)}")
     if base is not None and not isinstance(base, str | Path):

@@ -1,13 +1,13 @@
-"""Ground truth of a scene and measurements on the simulated images.
+r"""Ground truth of a scene and measurements on the simulated images.
 
 - ColorChecker: CIELAB under D65 from the reflectances (CIE 015:2018 eqs. 7.1-7.3 via
   :func:`imageform.spectral.spectrum_to_xyz`, then :func:`imageform.color.xyz_to_lab`), the
   patch centres projected through the camera, the patch means of an image and
   :func:`measure_colorchecker` (CIEDE2000 and luminance SNR per patch: the one measurement
   the simulator and the report both give).
-- Rails: the true vanishing point :math:`v \\sim K R d` of the rail direction d (distorted
+- Rails: the true vanishing point :math:`v \sim K R d` of the rail direction d (distorted
   like every image point when the camera has a distortion model) and the horizon, the
-  vanishing line :math:`l \\sim K^{-T} R n` of the ground plane of normal n (Hartley &
+  vanishing line :math:`l \sim K^{-T} R n` of the ground plane of normal n (Hartley &
   Zisserman, 2nd ed., §8.6.1-8.6.2), and :func:`vanishing_errors` against a detection.
 - The light: its correlated colour temperature from its spectrum (:func:`light_cct`).
 """

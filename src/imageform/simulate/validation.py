@@ -43,12 +43,12 @@ def _split_key(k: str) -> tuple[str, ...]:
 
 
 def find_line(text: str | None, path: tuple[Any, ...]) -> int | None:
-    """1-based line of the key (or table) at ``path`` (e.g. ``("objects", 1, "squares")``) in
+    r"""1-based line of the key (or table) at ``path`` (e.g. ``("objects", 1, "squares")``) in
     TOML ``text``; None if not found. Array-of-tables entries count from 0.
 
     Examples
     --------
-    >>> find_line("a = 1\\n[camera]\\nf = 2\\n", ("camera", "f"))
+    >>> find_line("a = 1\n[camera]\nf = 2\n", ("camera", "f"))
     3
     """
     if text is not None and not isinstance(text, str):
@@ -111,7 +111,8 @@ def _names(keys: Any, width: int = 76) -> str:
 
 def one_line(text: str, limit: int = 200) -> str:
     """``text``'s first line cut to ``limit`` characters (an error message never dumps a
-    scene value or a file's content)."""
+    scene value or a file's content).
+    """
     first = text.strip().splitlines()[0] if text.strip() else ""
     return first if len(first) <= limit else first[: limit - 3] + "..."
 
@@ -342,7 +343,8 @@ def validate_scene_dict(
 def _check_illuminant(ill: dict[str, Any], ctx: _Ctx) -> None:
     """``file`` needs a path; ``temperature_K`` belongs to blackbody and daylight lights only
     (a CIE illuminant's or a file's temperature is not a setting: the report computes the
-    light's CCT from its spectrum)."""
+    light's CCT from its spectrum).
+    """
     if ill["type"] == "cie" and len(ill["name"]) > 40:  # no CIE name is that long
         ctx.fail(("illuminant", "name"), f"unknown CIE illuminant {_show(ill['name'])}")
     if ill["type"] == "file" and ill["file"] is None:
