@@ -45,12 +45,12 @@ def stage_display_image(
     white_level: float | None = None,
     percentile: float = DISPLAY_PERCENTILE,
 ) -> np.ndarray:
-    """The 8-bit sRGB picture ``(H, W, 3)`` uint8 of one stage of the chain.
+    r"""The 8-bit sRGB picture ``(H, W, 3)`` uint8 of one stage of the chain.
 
     - ``"linear"`` (linear light, any scale): divide by the ``percentile``-th percentile
       ``p`` of all values, then sRGB-encode:
 
-      .. math:: V = \\mathrm{sRGB}\\big(\\min(\\max(L / p, 0), 1)\\big)
+      .. math:: V = \mathrm{sRGB}\big(\min(\max(L / p, 0), 1)\big)
 
       (an all-zero image stays black).
     - ``"raw"`` (digital numbers, ``(H, W)``): grey ``V = DN / white_level``.

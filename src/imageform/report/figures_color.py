@@ -67,7 +67,8 @@ def truth_xy(measurements: PatchMeasurements) -> np.ndarray:
 
 def _zoom_background(ax: Any) -> None:
     """The lines of the chromaticity diagram (spectral locus, sRGB gamut, Planckian locus with
-    CCT ticks) without the coloured fill, for the zoomed panel."""
+    CCT ticks) without the coloured fill, for the zoomed panel.
+    """
     from imageform.color.chromaticity import spectral_locus
     from imageform.color.gamut import gamut_triangle
     from imageform.report.chromaticity_plot import CCT_TICKS, planckian_locus
@@ -165,7 +166,8 @@ def _bar_colours(m: PatchMeasurements) -> np.ndarray:
 
 def plot_delta_e(measurements: PatchMeasurements | None) -> Any:
     """Bar chart of CIEDE2000 per patch (bars in the patch's true colour), with the mean and
-    the lecture's bands at 1, 3 and 10. ``None`` without measurements."""
+    the lecture's bands at 1, 3 and 10. ``None`` without measurements.
+    """
     if measurements is None:
         return None
     check_measurements(measurements)
@@ -194,7 +196,8 @@ def plot_delta_e(measurements: PatchMeasurements | None) -> Any:
 
 def plot_patch_snr(measurements: PatchMeasurements | None) -> Any:
     """Bar chart of ``snr_luminance_db`` of every patch (the SNR of the window's luminance).
-    ``None`` without measurements."""
+    ``None`` without measurements.
+    """
     if measurements is None:
         return None
     check_measurements(measurements)
@@ -224,7 +227,8 @@ def plot_patch_snr(measurements: PatchMeasurements | None) -> Any:
 def photon_transfer_summary(result: SimulationResult) -> dict[str, Any] | None:
     """The photon-transfer data as plain numbers plus the EMVA 1288 fit
     (:func:`imageform.sensor.fit_photon_transfer`); ``fit`` is ``None`` with a ``fit_error``
-    when the data cannot be fitted. ``None`` without data."""
+    when the data cannot be fitted. ``None`` without data.
+    """
     check_result(result)
     from imageform.errors import ImageformError
     from imageform.sensor.emva import fit_photon_transfer
@@ -262,7 +266,8 @@ def plot_photon_transfer(summary: dict[str, Any] | None) -> Any:
     """The photon-transfer curve: temporal variance against mean signal, both
     dark-corrected (EMVA 1288 4.0, §6.3, eq. 31), with the fitted line
     ``σ² = K μ`` up to saturation. ``summary`` from :func:`photon_transfer_summary`;
-    ``None`` without it."""
+    ``None`` without it.
+    """
     if summary is None:
         return None
     plt = _pyplot()

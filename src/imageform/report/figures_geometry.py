@@ -91,7 +91,8 @@ def top_view_axes(R: Any, world_up: Any) -> tuple[np.ndarray, np.ndarray]:
 def top_view_project(points: Any, data: dict[str, Any]) -> np.ndarray:
     """World points ``(N, 3)`` to top-view coordinates ``(N, 2)`` (metres): right of the
     camera, ahead of it (the camera centre at the origin). ``data`` from
-    :func:`top_view_data`."""
+    :func:`top_view_data`.
+    """
     X = np.asarray(points, dtype=np.float64).reshape(-1, 3) - data["camera_center_m"]
     return np.stack([X @ data["view_right"], X @ data["view_ahead"]], axis=-1)
 
@@ -136,7 +137,8 @@ def plot_top_view(data: dict[str, Any]) -> Any:
     """Figure: the scene from above (looking down ``world_up``), the camera looking up the
     page: the objects' outlines, the camera centre at the origin, the frustum rays through
     the image corners and the optical axis, all :func:`top_view_project`-ed. ``data`` from
-    :func:`top_view_data`."""
+    :func:`top_view_data`.
+    """
     from imageform.report.figures_color import _pyplot
 
     plt = _pyplot()
@@ -245,7 +247,8 @@ def vanishing_summary(result: SimulationResult) -> dict[str, Any] | None:
 def vanishing_overlay(result: SimulationResult, display: np.ndarray) -> Any:
     """The output picture ``display`` (uint8 RGB) with the true and detected vanishing point
     and horizon (:func:`imageform.report.overlays.draw_vanishing_truth_overlay`); ``None``
-    without rails."""
+    without rails.
+    """
     check_result(result)
     from imageform.report.overlays import _to_rgb8, draw_vanishing_truth_overlay
 

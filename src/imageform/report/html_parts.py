@@ -1,5 +1,6 @@
 """Building blocks of the self-contained simulation report: the page skeleton with inline CSS,
-figures as base64 ``data:`` URIs, tables and notes. Every text is HTML-escaped here."""
+figures as base64 ``data:`` URIs, tables and notes. Every text is HTML-escaped here.
+"""
 
 from __future__ import annotations
 
@@ -66,7 +67,8 @@ def e(text: Any) -> str:
 
 def _image_bytes(png: object, name: str = "png") -> bytes:
     """The encoded image's bytes (bytes, bytearray or memoryview), else a TypeError naming
-    ``name``."""
+    ``name``.
+    """
     if not isinstance(png, bytes | bytearray | memoryview):
         raise TypeError(f"expected {name} as the bytes of an encoded image, got {describe(png)}")
     return bytes(png)
@@ -74,7 +76,8 @@ def _image_bytes(png: object, name: str = "png") -> bytes:
 
 def _strings(value: object, name: str) -> list[Any]:
     """A list of the items of a sequence (not a str or bytes), else a TypeError naming
-    ``name``."""
+    ``name``.
+    """
     if isinstance(value, str | bytes) or not isinstance(value, Iterable):
         raise TypeError(f"expected {name} as a sequence, got {describe(value)}")
     return list(value)
@@ -83,7 +86,8 @@ def _strings(value: object, name: str) -> list[Any]:
 def img_tag(png: bytes, alt: str, *, photo: bool = False, mime: str = "image/png") -> str:
     """An ``<img>`` whose source is the encoded image itself, base64 in a ``data:`` URI:
     ``png`` holds the bytes of a PNG, or of a JPEG with ``mime="image/jpeg"``; a ``photo``
-    (a stage image) is shown as wide as the page."""
+    (a stage image) is shown as wide as the page.
+    """
     b64 = base64.b64encode(_image_bytes(png)).decode("ascii")
     cls = ' class="photo"' if photo else ""
     return f'<img{cls} src="data:{mime};base64,{b64}" alt="{e(alt)}">'
@@ -100,7 +104,8 @@ def page_jpeg(
 ) -> bytes:
     """An 8-bit RGB picture ``(H, W, 3)`` (or a PIL image) as JPEG bytes for the page,
     scaled down (area average) to at most ``max_width`` pixels wide. For display only: the
-    lossless PNG of a stage is written to stages/ and linked from the page."""
+    lossless PNG of a stage is written to stages/ and linked from the page.
+    """
     from PIL import Image
 
     max_width = as_int(max_width, "max_width", minimum=1)
@@ -153,7 +158,8 @@ def figure(
     """A ``<figure>`` with the embedded image (``png``: its bytes, a JPEG's with
     ``mime="image/jpeg"``) and a caption (``caption_html`` is trusted: build it from escaped
     parts); with ``href`` (a relative link, e.g. the lossless stage file) the image links
-    to it."""
+    to it.
+    """
     ident = f' id="{e(fig_id)}"' if fig_id else ""
     img = img_tag(png, alt, photo=photo, mime=mime)
     if href is not None:
@@ -173,7 +179,8 @@ def section(ident: str, title: str, body: str) -> str:
 
 def table(header: Sequence[str], rows: Sequence[Sequence[Any]], left: Sequence[int] = ()) -> str:
     """An HTML table; cells are escaped unless they are ``Markup`` (a str subclass marking
-    trusted HTML); columns listed in ``left`` are left-aligned."""
+    trusted HTML); columns listed in ``left`` are left-aligned.
+    """
 
     def cell(tag: str, j: int, v: Any) -> str:
         cls = ' class="l"' if j in left else ""

@@ -32,7 +32,8 @@ MAX_MARGIN = 2.0
 
 def _to_rgb8(image: ArrayLike, name: str = "image") -> np.ndarray:
     """``image`` (H, W) or (H, W, 3), uint8 or floats in [0, 1], as uint8 RGB; anything else
-    refused naming ``name``."""
+    refused naming ``name``.
+    """
     if image is None or isinstance(image, str | bytes):
         raise InvalidInputError(f"expected {name} as an (H, W, 3) array, got {describe(image)}")
     if type(image).__module__.startswith("torch"):
@@ -56,7 +57,8 @@ def _to_rgb8(image: ArrayLike, name: str = "image") -> np.ndarray:
 
 def _homogeneous(p: object, name: str, sizes: tuple[int, ...]) -> np.ndarray | None:
     """A point or line in homogeneous pixel coordinates as float64 (``None`` stays ``None``);
-    non-finite values are allowed (such a point or line is not drawn)."""
+    non-finite values are allowed (such a point or line is not drawn).
+    """
     if p is None:
         return None
     v = as_real_array(p, name, finite=False, ndim=(1, 2)).ravel()
@@ -68,7 +70,8 @@ def _homogeneous(p: object, name: str, sizes: tuple[int, ...]) -> np.ndarray | N
 
 def _line_in_box(line: ArrayLike, w: float, h: float) -> list[tuple[float, float]] | None:
     """The two PIL points (pixel centre at +0.5) where the line ``a u + b v + c = 0`` crosses
-    the canvas' left and right edges (top and bottom edges for a steep line)."""
+    the canvas' left and right edges (top and bottom edges for a steep line).
+    """
     a, b, c = (float(x) for x in np.asarray(line, dtype=np.float64))
     if not (math.isfinite(a) and math.isfinite(b) and math.isfinite(c)):
         return None
@@ -94,7 +97,8 @@ def _draw_line(
 def draw_vanishing_overlay(image: ArrayLike, result: Any) -> Any:
     """An RGB PIL image: segments coloured by vanishing point, VPs inside the view marked,
     the horizon in white over black. ``result`` is a
-    :class:`~imageform.geometry.VanishingPointResult`."""
+    :class:`~imageform.geometry.VanishingPointResult`.
+    """
     from PIL import Image, ImageDraw
 
     base = Image.fromarray(_to_rgb8(image), "RGB")

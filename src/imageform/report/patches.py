@@ -21,7 +21,8 @@ __all__ = ["PatchMeasurements", "measure_patches", "patch_windows", "snr_stage"]
 def snr_stage(result: SimulationResult) -> Stage:
     """The stage the patch SNR is measured on: the last three-channel ``"linear"`` stage
     (the simulator's ``color_corrected``: linear sRGB before encoding), else the final
-    stage."""
+    stage.
+    """
     check_result(result)
     for s in reversed(result.stages):
         if s.kind == "linear" and s.image.ndim == 3 and s.image.shape[-1] == 3:
