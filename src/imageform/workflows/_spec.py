@@ -129,7 +129,8 @@ def choice_names(choices: Sequence[str] | str | Mapping[str, Any]) -> tuple[str,
 
 def _describe(value: object, width: int = 40) -> str:
     """A value for a one-line message (as ``imageform._validate.describe``, which imports
-    NumPy: ``imageform --help`` must not)."""
+    NumPy: ``imageform --help`` must not).
+    """
     shape = getattr(value, "shape", None)
     if shape is not None and getattr(value, "ndim", None):
         return f"{type(value).__name__} of shape {tuple(shape)}, {getattr(value, 'dtype', '')}"
@@ -178,7 +179,8 @@ def flag_of(f: dataclasses.Field[Any]) -> str:
 
 def option_label(f: dataclasses.Field[Any]) -> str:
     """How messages name an options field: its flag, and the field name too when the flag
-    spells another word (``--from (src)``), so that API and command-line users both see it."""
+    spells another word (``--from (src)``), so that API and command-line users both see it.
+    """
     flag = flag_of(f)
     return flag if flag[2:].replace("-", "_") == f.name else f"{flag} ({f.name})"
 
@@ -210,7 +212,8 @@ def _unwrap_optional(tp: Any) -> tuple[Any, bool]:
 def _checked(value: Any, hint: Any, f: dataclasses.Field[Any], label: str) -> Any:
     """``value`` of the options field ``f`` checked against its declared type and bounds
     (NumPy scalars and 0-d arrays accepted as numbers), as the plain Python value; one line
-    naming ``label`` otherwise."""
+    naming ``label`` otherwise.
+    """
     from imageform._validate import as_bool, as_int, as_path, as_real, describe
 
     tp, optional = _unwrap_optional(hint)
@@ -277,7 +280,8 @@ class Options:
 
     def check_output(self, path: Path) -> None:
         """Refuse a main output these options cannot write (``imageform batch`` checks every
-        output suffix with it before any job starts)."""
+        output suffix with it before any job starts).
+        """
 
     @classmethod
     def fields(cls) -> tuple[dataclasses.Field[Any], ...]:
@@ -305,7 +309,8 @@ class Options:
 @dataclass(frozen=True)
 class Input:
     """A positional input of a command: a file (``many``: one or more, glob patterns
-    expanded), or a value (``kind="text"``)."""
+    expanded), or a value (``kind="text"``).
+    """
 
     name: str
     help: str
@@ -349,7 +354,8 @@ class Result:
 @dataclass
 class Run:
     """What a running workflow may use: its outputs (written all or nothing), notes for the
-    user, and a progress callback."""
+    user, and a progress callback.
+    """
 
     outputs: Any  # imageform._files.Outputs (imported lazily: it is cheap, but keep --help lean)
     notes: list[str] = field(default_factory=list)

@@ -122,7 +122,8 @@ def write_table(path: Path, header: Sequence[str], rows: Any) -> None:
 
 def camera_from(path: Path, *, need_pose: bool = False, what: str = "") -> Any:
     """The :class:`~imageform.io.CameraFile` at ``path``; ``need_pose`` refuses one without
-    a pose, naming the file and what needs it."""
+    a pose, naming the file and what needs it.
+    """
     from imageform.io import read_camera
 
     cf = read_camera(path)

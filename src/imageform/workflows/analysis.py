@@ -240,7 +240,8 @@ def _patches_csv(path: Path) -> tuple[Any, Any]:
 
 def fit_correction(run: Run, opts: FitCorrectionOptions, *, out: Path, charts: Any) -> Result:
     """``imageform fit-correction``: fit device A -> device B from a chart, write the JSON
-    that ``imageform harmonize --correction`` reads; ΔE00 per patch before and after."""
+    that ``imageform harmonize --correction`` reads; ΔE00 per patch before and after.
+    """
     from imageform.analysis import chart_patches, correction_report, fit_color_correction
 
     files = [Path(p) for p in charts]

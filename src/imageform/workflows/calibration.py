@@ -105,7 +105,8 @@ def parse_charuco(text: str) -> tuple[int, int] | None:
 class _BoardChecks:
     """The checks of the options a checkerboard calibration shares (``calibrate`` and
     ``stereo-calibrate``): the board, the square size, ``--fix`` names, ``--skew``,
-    ``--half-window``. Mixed in before the options' base class; adds no field."""
+    ``--half-window``. Mixed in before the options' base class; adds no field.
+    """
 
     board: str
     square: str
@@ -236,7 +237,8 @@ def _plot(path: Path, res: Any, names: list[str]) -> None:
 
 def _read_views(run: Run, opts: CalibrateOptions, images: list[Path]) -> Iterator[tuple[Path, Any]]:
     """Each image as ``(path, grey or RGB array)``, with progress, all of one size (refused
-    in one line naming both files otherwise); progress "calibrating" once they are read."""
+    in one line naming both files otherwise); progress "calibrating" once they are read.
+    """
     shape0: tuple[int, ...] | None = None
     for i, f in enumerate(images):
         if run.progress is not None:
@@ -256,7 +258,8 @@ def _read_views(run: Run, opts: CalibrateOptions, images: list[Path]) -> Iterato
 
 def calibrate(run: Run, opts: CalibrateOptions, *, out: Path, images: list[Path]) -> Result:
     """``imageform calibrate``: a camera file from checkerboard views (Zhang, then
-    Levenberg-Marquardt on every reprojection error)."""
+    Levenberg-Marquardt on every reprojection error).
+    """
     from imageform.geometry import checkerboard_points
     from imageform.geometry.checkerboard import find_checkerboard
 
@@ -319,7 +322,8 @@ def _calibrate_views(
     command: str,
 ) -> Result:
     """Calibrate from the views' board points and corners, write the camera file (and the
-    plot and corners table asked for), and say what was found."""
+    plot and corners table asked for), and say what was found.
+    """
     import numpy as np
 
     from imageform.geometry import calibrate_camera
@@ -388,7 +392,8 @@ def _calibrate_charuco(
     squares: tuple[int, int],
 ) -> Result:
     """``imageform calibrate --board charuco:COLSxROWS``: every view that gives at least
-    :data:`MIN_CHARUCO_CORNERS` identified corners is used, whole or in part."""
+    :data:`MIN_CHARUCO_CORNERS` identified corners is used, whole or in part.
+    """
     from imageform.geometry import CharucoBoard, detect_charuco
 
     board = CharucoBoard(squares, opts.square_mm(), opts.marker_mm(), opts.dictionary)
@@ -462,7 +467,8 @@ class UndistortOptions(ImageIn, ImageOut):
 
 def undistort(run: Run, opts: UndistortOptions, *, out: Path, image: Path) -> Result:
     """``imageform undistort``: remove lens distortion with the camera file's K and model
-    (inverse mapping, bilinear sampling; the output keeps K)."""
+    (inverse mapping, bilinear sampling; the output keeps K).
+    """
     import numpy as np
 
     from imageform.geometry.undistort import undistort_image

@@ -379,7 +379,8 @@ class PaletteCheckOptions(Options):
 
 def palette_check(run: Run, opts: PaletteCheckOptions, *, out: None, colors: str) -> Result:
     """``imageform palette-check``: smallest pairwise ΔE00, normal and for each deficiency;
-    the check fails (exit 3) when a condition is under the threshold."""
+    the check fails (exit 3) when a condition is under the threshold.
+    """
     from imageform.color.palettes import palette_check as check
 
     r = check(colors, threshold=opts.threshold, method=opts.method)

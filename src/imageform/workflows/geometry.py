@@ -283,7 +283,8 @@ class TriangulateOptions(Options):
 
 def _observations(table: Any, n_cams: int, views: str | None) -> Any:
     """(M, 2V) pixel columns: a wide table (u, v per camera), or a long one with an image
-    column and X, Y, Z naming each point."""
+    column and X, Y, Z naming each point.
+    """
     import numpy as np
 
     img = table.column("image")

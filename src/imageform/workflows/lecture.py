@@ -34,7 +34,8 @@ class LectureOptions(Options):
 
 def lecture(run: Run, opts: LectureOptions, *, out: None) -> Result:
     """Every worked example and numeric practice answer, the reader's value beside ours; the
-    check fails (exit 3) if one disagrees."""
+    check fails (exit 3) if one disagrees.
+    """
     from rich.table import Table
 
     from imageform.report.lecture import all_examples

@@ -1,5 +1,6 @@
 """The registry: every workflow by its command name (the command line and ``imageform
-batch`` are generated from it)."""
+batch`` are generated from it).
+"""
 
 from __future__ import annotations
 

@@ -1,6 +1,7 @@
 """``imageform simulate``: a scene through the whole image-formation chain, written as one
 output folder (report.html, metrics.json, the stage images and the ground-truth camera file)
-that replaces the previous one all at once."""
+that replaces the previous one all at once.
+"""
 
 from __future__ import annotations
 
@@ -65,7 +66,8 @@ def _check_folder(out: Path, force: bool) -> None:
 
 def simulate(run: Run, opts: SimulateOptions, *, out: Path) -> Result:
     """Render the scene, write the report, the metrics, the stage images and the truth
-    camera file into a temporary folder that replaces ``out`` when everything is written."""
+    camera file into a temporary folder that replaces ``out`` when everything is written.
+    """
     import importlib.util
 
     if importlib.util.find_spec("matplotlib") is None:  # the report's figures
@@ -151,7 +153,8 @@ def simulate(run: Run, opts: SimulateOptions, *, out: Path) -> Result:
 
 def _camera_for(cf: Any, scene: Any) -> Any:
     """The camera of a camera file, posed as the file says, or where the scene's camera is
-    when the file has no pose (a calibration gives intrinsics and distortion only)."""
+    when the file has no pose (a calibration gives intrinsics and distortion only).
+    """
     from imageform.geometry import Camera
 
     cam = cf.camera
@@ -167,7 +170,8 @@ def _camera_for(cf: Any, scene: Any) -> Any:
 
 def _render_views(run: Run, scene: Any, folder: Path, seed: int) -> list[Path]:
     """Each extra view of the scene (``[[views]]``) through the whole chain: its encoded
-    output as ``views/view-NN.png`` (the noise of view i seeded with ``seed + 1 + i``)."""
+    output as ``views/view-NN.png`` (the noise of view i seeded with ``seed + 1 + i``).
+    """
     from imageform.io import write_image
     from imageform.simulate import simulate as simulate_scene
 
