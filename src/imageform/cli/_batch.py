@@ -221,7 +221,8 @@ def batch_group() -> click.Group:
 
 def chunked_group() -> click.Group:
     """``imageform chunked``: convert, white-balance or stain-normalise one image larger than
-    memory."""
+    memory.
+    """
     return _Lazy(
         "chunked",
         _chunked_command,

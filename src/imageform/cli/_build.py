@@ -134,7 +134,8 @@ def option_params(wf: Workflow) -> list[click.Parameter]:
 
 def expand_inputs(patterns: tuple[str, ...] | list[str]) -> list[Path]:
     """Files named or matched by glob patterns (a name that exists is taken literally, so a
-    file called ``scan[1].png`` works); no match is an error naming the pattern."""
+    file called ``scan[1].png`` works); no match is an error naming the pattern.
+    """
     files: list[Path] = []
     for p in patterns:
         if os.path.exists(p) or not any(c in p for c in "*?["):
@@ -202,13 +203,15 @@ def _terminal_width() -> int:
 
 class UnexpectedError(ImageformError):
     """An exception the library did not expect, in one line naming the input file(s); the
-    original is its ``__cause__`` (``--traceback`` shows both)."""
+    original is its ``__cause__`` (``--traceback`` shows both).
+    """
 
 
 @contextmanager
 def _naming_files(inputs: dict[str, Any]) -> Iterator[None]:
     """Turn an unexpected exception (not an :class:`ImageformError`, an ``OSError`` naming
-    its file, an interrupt or a memory error) into one line naming the input file(s)."""
+    its file, an interrupt or a memory error) into one line naming the input file(s).
+    """
     try:
         yield
     except (ImageformError, click.ClickException, CommandExit, MemoryError):
@@ -236,7 +239,8 @@ def _unexpected(exc: BaseException, inputs: dict[str, Any]) -> str:
 
 def build_command(wf: Workflow) -> click.Command:
     """The click command of a workflow: its inputs, ``-o/--out``, options, ``--force``,
-    ``--json``."""
+    ``--json``.
+    """
     params: list[click.Parameter] = []
     for inp in wf.inputs:
         ptype = click.STRING if inp.kind == "text" or inp.many else click.Path(path_type=Path)

@@ -1,5 +1,6 @@
 """The root ``imageform`` group: every workflow of the registry, plus ``batch`` and
-``chunked``, built on first use and listed by section."""
+``chunked``, built on first use and listed by section.
+"""
 
 from __future__ import annotations
 
@@ -29,7 +30,8 @@ _GROUPS = {
 
 def _extra_commands() -> dict[str, Callable[[], click.Command]]:
     """Commands that are not single workflows: batch and chunked (generated from the same
-    registry), and cache (numba's compiled kernels)."""
+    registry), and cache (numba's compiled kernels).
+    """
     return {"batch": batch_group, "chunked": chunked_group, "cache": _cache_command}
 
 
