@@ -73,7 +73,8 @@ class _ContiguousRows:
     """The pixels of an uncompressed, contiguous (strip or single-strip) TIFF page, read
     block by block with ``pread`` (one read per row of the block): a block costs its own
     samples, never the whole strip (tifffile's Zarr store has one chunk per strip, and an
-    uncompressed TIFF is often one strip: the whole image)."""
+    uncompressed TIFF is often one strip: the whole image).
+    """
 
     def __init__(self, path: Path, offset: int, shape: tuple[int, ...], dtype: Any) -> None:
         self.path, self.offset = path, offset
@@ -245,7 +246,8 @@ def _stain_block(block: np.ndarray, method: str, target: Any, source: Any) -> np
 def _stain_stats(x: Any, opts: dict[str, Any]) -> tuple[Any, Any, int]:
     """The target's statistics (a JSON file or a reference image) and the slide's own, the
     latter on a regular subsample of at most :data:`STAIN_SAMPLE_PIXELS` (every ``step``-th
-    row and column), read block by block."""
+    row and column), read block by block.
+    """
     from imageform import analysis
     from imageform.io import read_image
 
@@ -301,7 +303,8 @@ _HONOURED = {
 
 def _options(cmd: str, options: Any) -> dict[str, Any]:
     """The options of ``cmd`` with the single command's defaults (its options dataclass, or
-    a mapping by field name or flag), as the names the block functions use."""
+    a mapping by field name or flag), as the names the block functions use.
+    """
     import dataclasses
 
     from imageform.batch.runner import batch_options
@@ -470,7 +473,8 @@ def process_chunked(
 
 def _finish(block: np.ndarray, op: tuple[Any, ...], dtype: str) -> tuple[np.ndarray, int]:
     """One block: the operation in float32, then the output samples and the out-of-range
-    count, so that no float block outlives its task."""
+    count, so that no float block outlives its task.
+    """
     f = op[0](block, *op[1:])
     n = int(np.count_nonzero((f < 0) | (f > 1))) if dtype != "float32" else 0
     return _quantize(f, dtype), n
@@ -478,7 +482,8 @@ def _finish(block: np.ndarray, op: tuple[Any, ...], dtype: str) -> tuple[np.ndar
 
 def _rows(x: Any, op: tuple[Any, ...], dtype: str) -> Any:
     """Yield (row0, output blocks of one block row, out-of-range count), row by row; the
-    blocks of a row run in parallel on dask's threaded scheduler."""
+    blocks of a row run in parallel on dask's threaded scheduler.
+    """
     import dask
 
     blocks = x.to_delayed()

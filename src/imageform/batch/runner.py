@@ -68,7 +68,8 @@ _MANIFEST_VERSION = 1
 
 class BatchInterrupted(KeyboardInterrupt):
     """Ctrl-C during a batch run: ``done`` outputs are finished (and recorded in the
-    manifest), ``remaining`` are not; running the same command again resumes."""
+    manifest), ``remaining`` are not; running the same command again resumes.
+    """
 
     def __init__(self, done: int, remaining: int) -> None:
         super().__init__(done, remaining)
@@ -249,7 +250,8 @@ def _stamp(path: Path) -> list[Any]:
 
 def _producer(wf: Workflow, opts: Options) -> dict[str, Any]:
     """What produces every output of a run, but the input file: command and options (with
-    the size and time of the files options name, such as ``--target``)."""
+    the size and time of the files options name, such as ``--target``).
+    """
     from imageform._jsonio import json_ready
 
     files = {str(p): _stamp(p) for p in opts.paths("input") if p.is_file()}
@@ -280,7 +282,8 @@ def _run_lock(out_root: Path) -> Iterator[str]:
     """A run's id, with a lock file ``.imageform-batch.<id>.lock`` in ``out_root`` held
     (``flock``) for as long as the run goes on: another run into the same folder then knows
     that the temporary files named with this id are being written, not left by a dead run.
-    Without ``fcntl`` (Windows) the id alone, every temporary file counting as stale."""
+    Without ``fcntl`` (Windows) the id alone, every temporary file counting as stale.
+    """
     run_id = uuid.uuid4().hex[:12]
     try:
         import fcntl
@@ -303,7 +306,8 @@ def _run_lock(out_root: Path) -> Iterator[str]:
 
 def _live_runs(out_root: Path, own: str | None) -> set[str]:
     """The ids of the other runs going on into ``out_root`` (their lock is held); the lock
-    files of runs that died are removed."""
+    files of runs that died are removed.
+    """
     try:
         import fcntl
     except ImportError:  # pragma: no cover - not POSIX
@@ -343,7 +347,8 @@ def _run_of(name: str, output: Path) -> str | None:
 def _nested_part_pattern(output: Path) -> str:
     """The glob of the files the workflow's own atomic writer makes beside a job's temporary
     file (``..NAME.<random>.tmpSUFFIX.<pid>-<token>.partSUFFIX``): a worker killed while the
-    workflow was still writing leaves one of these, not the temporary file itself."""
+    workflow was still writing leaves one of these, not the temporary file itself.
+    """
     return f".{temp_pattern(output)}.*.part*"
 
 
@@ -352,7 +357,8 @@ def _remove_stale_temps(
 ) -> int:
     """Remove the temporary files of ``jobs``' outputs that no run going on into
     ``out_root`` is writing (those of run ``own``, this one, included: what it left is from
-    killed workers); returns how many."""
+    killed workers); returns how many.
+    """
     live = _live_runs(out_root, own) if out_root is not None else set()
     n = 0
     for job in jobs:
@@ -552,7 +558,8 @@ def run_job(
 
 def _wait_some(pending: set[Any], timeout: float) -> tuple[set[Any], set[Any]]:
     """``(finished, still pending)`` once a future is done or ``timeout`` s have passed
-    (``distributed.wait`` looks up the default client, which the run's client is not)."""
+    (``distributed.wait`` looks up the default client, which the run's client is not).
+    """
     deadline = time.monotonic() + timeout
     while True:
         finished = {f for f in pending if f.done()}
@@ -566,7 +573,8 @@ def _client(scheduler: str | None, n_workers: int) -> Iterator[Any]:
     """The run's client. Never dask's default scheduler: the run submits to it explicitly,
     and default clients closed out of order (two runs in one process, in threads) leave
     dask's global ``scheduler`` setting naming a closed client, which breaks every later
-    ``dask.compute`` in the process."""
+    ``dask.compute`` in the process.
+    """
     import logging
 
     from imageform._optional import require
