@@ -120,7 +120,7 @@ class ChartDetection:
         object.__setattr__(self, "rotation", as_real(self.rotation, "rotation"))
 
     def to_dict(self) -> dict[str, Any]:
-        """The detection as JSON-ready lists."""
+        """Return the detection as JSON-ready lists."""
         return {
             "homography": self.homography.tolist(),
             "corners": self.corners.tolist(),
@@ -149,8 +149,10 @@ def _normalizer(p: np.ndarray) -> np.ndarray:
 
 
 def _fit_h(src: np.ndarray, dst: np.ndarray) -> np.ndarray:
-    """Homography src -> dst by the normalised DLT (Hartley & Zisserman, alg. 4.2); an affine
-    map when the points cannot determine more (fewer than 6 or nearly collinear rows).
+    """Fit the homography src -> dst by the normalised DLT (Hartley & Zisserman, alg. 4.2).
+
+    An affine map is returned when the points cannot determine more (fewer than 6 or nearly
+    collinear rows).
     """
     ts, td = _normalizer(src), _normalizer(dst)
     s = _apply_h(ts, src)
@@ -188,8 +190,9 @@ def _gaussian_taps(sigma: float) -> np.ndarray:
 
 
 def _work_image(rgb: np.ndarray, max_size: int, scale: float) -> tuple[np.ndarray, int]:
-    """Block mean by an integer factor so that the long side is at most ``max_size``, as
-    float32 in [0, 1] (``scale``: 255 for uint8).
+    """Block-mean the image by an integer factor so that its long side is at most ``max_size``.
+
+    The result is float32 in [0, 1] (``scale``: 255 for uint8).
     """
     from imageform._kernels.chart import block_mean_numba
 
@@ -201,9 +204,10 @@ def _work_image(rgb: np.ndarray, max_size: int, scale: float) -> tuple[np.ndarra
 
 
 def _rgb_in(image: object) -> tuple[np.ndarray, float]:
-    """The photograph as an (H, W, 3) array and its full scale: uint8 and uint16 arrays are
-    kept as they are (no float copy of a large photograph), the rest goes through the
-    usual checks (``image_in``: floats in [0, 1]); Dask is computed.
+    """Return the photograph as an (H, W, 3) array and its full scale.
+
+    uint8 and uint16 arrays are kept as they are (no float copy of a large photograph), the rest
+    goes through the usual checks (``image_in``: floats in [0, 1]); Dask is computed.
     """
     if isinstance(image, np.ndarray) and image.dtype in (np.uint8, np.uint16):
         if image.ndim != 3 or image.shape[-1] != 3:
@@ -324,8 +328,9 @@ def _hypotheses(cand: dict[str, np.ndarray]) -> tuple[np.ndarray, np.ndarray, np
 def _collect(
     cand: dict[str, np.ndarray], h: np.ndarray, area_scale: float, tol: float
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Candidates on the lattice of ``h`` (lattice -> image): indices, integer coords,
-    residuals; one candidate per cell (the closest).
+    """Collect the candidates on the lattice of ``h`` (lattice -> image), one per cell.
+
+    Returns indices, integer coords and residuals; one candidate per cell (the closest).
     """
     hinv = np.linalg.inv(h)
     uv = _apply_h(hinv, cand["c"])
@@ -351,8 +356,9 @@ def _collect(
 def _in_square_window(
     idx: np.ndarray, keys: np.ndarray, size: int
 ) -> tuple[np.ndarray, np.ndarray]:
-    """The members of the ``size × size`` window of lattice cells that holds the most (a chart
-    fits in one whatever its orientation): growth never strays onto clutter that happens to
+    """Return the members of the ``size × size`` window of lattice cells that holds the most.
+
+    A chart fits in one whatever its orientation: growth never strays onto clutter that happens to
     continue the lattice far away.
     """
     if not len(keys):
@@ -448,8 +454,10 @@ def _sample(work: np.ndarray, h: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 def _colour_fit(
     meas: np.ndarray, ref_lin: np.ndarray, usable: np.ndarray
 ) -> tuple[float, np.ndarray]:
-    """R² of the affine linear-light fit ref ~ [meas, 1] W, robust to a few outliers (judged
-    on the encoded residual, so that dark patches count as much as light ones).
+    """Return R² of the affine linear-light fit ref ~ [meas, 1] W, robust to a few outliers.
+
+    The outliers are judged on the encoded residual, so that dark patches count as much as light
+    ones.
     """
     x = np.c_[srgb_decode(np, np.clip(meas, 0.0, 1.0)), np.ones(len(meas))]
     ref_enc = srgb_encode(np, ref_lin)
@@ -514,8 +522,10 @@ def _best_window(
 def _search(
     work: np.ndarray, ref_lin: np.ndarray, min_score: float
 ) -> tuple[float, np.ndarray, np.ndarray, np.ndarray] | str:
-    """The chart in the work image: (score, chart -> work homography, outliers, chart
-    coordinates of the segmented patches), or why none was found.
+    """Search the work image for the chart.
+
+    Returns (score, chart -> work homography, outliers, chart coordinates of the segmented patches),
+    or why none was found.
     """
     cand = _candidates(work)
     n_cand = len(cand["area"])
@@ -806,9 +816,11 @@ _PATCH, _MARGIN_U, _MARGIN_V = 0.85, 0.3, 0.45
 def _chart_homography(
     rng: np.random.Generator, hgt: int, wid: int, width: float, tilt: float, rotation: float
 ) -> np.ndarray:
-    """Chart (column, row) -> image: the chart plane tilted by ``tilt`` degrees about a
-    random in-plane axis, rotated by ``rotation``, seen by a pinhole (focal = image width),
-    scaled so that its lattice is ``width`` of the image width, placed at random inside.
+    """Return a random chart (column, row) -> image homography.
+
+    The chart plane is tilted by ``tilt`` degrees about a random in-plane axis, rotated by
+    ``rotation``, seen by a pinhole (focal = image width), scaled so that its lattice is ``width``
+    of the image width, placed at random inside.
     """
     t, phi, r = np.radians(tilt), rng.uniform(0, np.pi), np.radians(rotation)
     axis = np.array([np.cos(phi), np.sin(phi), 0.0])
@@ -853,7 +865,7 @@ def synthetic_chart_photo(
     noise: float = 0.01,
     rng: Any = 0,
 ) -> ChartPhoto:
-    """A ColorChecker photographed in a scene: the test input of :func:`detect_colorchecker`.
+    """Render a ColorChecker photographed in a scene: the test input of :func:`detect_colorchecker`.
 
     The 24 patches (:data:`~imageform.analysis.synthetic.COLORCHECKER_SRGB8`) on a dark card
     are rendered through a random perspective homography (3 × 3 supersampling) over

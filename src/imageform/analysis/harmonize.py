@@ -124,8 +124,10 @@ def _apply_block(
 
 @dataclass(frozen=True)
 class ColorCorrection:
-    """A fitted correction: ``matrix`` (3, n_terms) maps the expanded linear RGB of device A
-    to linear RGB of the reference (row vectors: ``terms @ matrix.T``).
+    """A fitted colour correction from device A to the reference.
+
+    ``matrix`` (3, n_terms) maps the expanded linear RGB of device A to linear RGB of the reference
+    (row vectors: ``terms @ matrix.T``).
 
     ``transfer`` is the encoding of the values it was fitted on and applies to: ``"srgb"``
     (decoded to linear light, corrected, re-encoded) or ``"linear"`` (corrected as is).
@@ -138,7 +140,7 @@ class ColorCorrection:
     transfer: str = "srgb"
 
     def __post_init__(self) -> None:
-        """A known method and degree, a finite matrix of the matching shape."""
+        """Check for a known method and degree, and a finite matrix of the matching shape."""
         key = check_option(self.method, CORRECTION_METHODS, "correction method")
         deg = as_int(self.degree, "degree")
         if deg not in CORRECTION_METHODS[key]:
@@ -215,8 +217,10 @@ class ColorCorrection:
 
 @dataclass(frozen=True)
 class ChartPatches:
-    """Patch statistics of a chart image (row by row): encoded sRGB ``means`` (N, 3), the
-    per-patch ``std`` (N, 3), and which patches are ``saturated`` or ``missing``.
+    """Patch statistics of a chart image (row by row).
+
+    Encoded sRGB ``means`` (N, 3), the per-patch ``std`` (N, 3), and which patches are ``saturated``
+    or ``missing``.
     """
 
     means: np.ndarray
@@ -510,8 +514,10 @@ class CorrectionReport:
     valid: np.ndarray
 
     def __post_init__(self) -> None:
-        """Two ΔE00 vectors (N,) of finite values >= 0 on the valid patches (NaN allowed
-        where a patch is not valid), ``valid`` booleans (N,).
+        """Check two ΔE00 vectors (N,) and the ``valid`` booleans (N,).
+
+        The ΔE00 values are finite and >= 0 on the valid patches (NaN allowed where a patch is not
+        valid).
         """
         before = real_array(self.delta_e_before, "delta_e_before", (None,), finite=False)
         n = before.shape[0]
@@ -554,8 +560,10 @@ class CorrectionReport:
 def correction_report(
     measured: object, reference: object, correction: ColorCorrection
 ) -> CorrectionReport:
-    r"""CIEDE2000 per patch, :math:`\Delta E_{00}(\mathrm{Lab}(b_i), \mathrm{Lab}(a_i))`
-    before and :math:`\Delta E_{00}(\mathrm{Lab}(b_i), \mathrm{Lab}(f(a_i)))` after.
+    r"""Return the CIEDE2000 per patch before and after the correction.
+
+    Before: :math:`\Delta E_{00}(\mathrm{Lab}(b_i), \mathrm{Lab}(a_i))`; after:
+    :math:`\Delta E_{00}(\mathrm{Lab}(b_i), \mathrm{Lab}(f(a_i)))`.
 
     Lab from encoded sRGB with its D65 white. Patches fitted on are scored too: report
     ΔE on patches left out of the fit (or another chart) to judge generalisation.

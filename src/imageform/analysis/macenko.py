@@ -77,7 +77,7 @@ def _base(base: object) -> str:
 
 
 def _i0_value(i0: object, name: str = "i0", *, complete: bool = False) -> np.ndarray:
-    """A given incident light: a scalar or three values in (0, 1] (``complete``: three)."""
+    """Return a given incident light: a scalar or three values in (0, 1] (``complete``: three)."""
     v = np.full(1, np.nan)
     try:
         raw = np.asarray(i0)
@@ -242,11 +242,13 @@ def stain_angle(u: object, v: object) -> float:
 
 @dataclass(frozen=True)
 class MacenkoStains:
-    """Stain matrix (rows: first and second stain, unit OD vectors) and the 99th-percentile
-    concentration of each stain (``max_concentrations``), with the convention they were
-    measured in: the incident light ``i0`` (per channel), the OD log ``base`` (the
-    concentrations are in that base's units) and the estimator ``method``.
-    ``n_pixels`` of the ``n_total`` pixels passed the transparent-pixel threshold.
+    """Stain matrix and 99th-percentile stain concentrations, with the convention of measurement.
+
+    The stain matrix has rows for the first and second stain (unit OD vectors); the 99th-percentile
+    concentration of each stain is ``max_concentrations``. The convention they were measured in: the
+    incident light ``i0`` (per channel), the OD log ``base`` (the concentrations are in that base's
+    units) and the estimator ``method``. ``n_pixels`` of the ``n_total`` pixels passed the
+    transparent-pixel threshold.
     """
 
     stain_matrix: np.ndarray
@@ -289,8 +291,10 @@ class MacenkoStains:
 
     @classmethod
     def from_json(cls, path: str | Path) -> MacenkoStains:
-        """Load stains saved by :meth:`to_json`. Files without ``od_base`` were written
-        before the ln convention: they are read as base 10 with I₀ = 1.
+        """Load stains saved by :meth:`to_json`.
+
+        Files without ``od_base`` were written before the ln convention: they are read as base 10
+        with I₀ = 1.
         """
         d = read_json(path, "macenko_stains")
         try:

@@ -123,7 +123,7 @@ def _threshold(
 
 
 def _clean(mask: np.ndarray, open_radius: int, close_radius: int, min_area: int) -> np.ndarray:
-    """Opening, closing, then removal of 8-connected components below ``min_area``.
+    """Apply an opening, a closing, then remove 8-connected components below ``min_area``.
 
     Erosions treat the outside of the image as foreground (``border_value=1``), dilations
     as background, so tissue touching the frame is not eaten away from the border.

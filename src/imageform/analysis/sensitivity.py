@@ -76,7 +76,7 @@ def _second_difference(n: int) -> np.ndarray:
 
 
 def _gcv_weight(a: np.ndarray, d: np.ndarray, c: np.ndarray) -> float:
-    """The ridge weight (relative units) minimising generalised cross-validation."""
+    """Return the ridge weight (relative units) minimising generalised cross-validation."""
     ata, dtd = a.T @ a, d.T @ d
     unit = float(np.trace(ata) / np.trace(dtd))
     p = a.shape[0]
