@@ -1,5 +1,7 @@
-"""The simulated camera's raw mosaic as a DNG file (docs/raw.md): what a raw developer
-(LibRaw, darktable, RawTherapee) needs to develop it as the simulator's camera would.
+"""The simulated camera's raw mosaic as a DNG file (docs/raw.md).
+
+What a raw developer (LibRaw, darktable, RawTherapee) needs to develop it as the simulator's camera
+would.
 """
 
 from __future__ import annotations
@@ -16,7 +18,7 @@ __all__ = ["simulated_color_matrix", "write_simulated_dng"]
 
 
 def simulated_color_matrix(result: SimulationResult) -> tuple[np.ndarray, np.ndarray]:
-    r"""The simulated camera's DNG colour description: ``(color_matrix, as_shot_neutral)``.
+    r"""Return the simulated camera's DNG colour description: ``(color_matrix, as_shot_neutral)``.
 
     The simulator white-balances camera RGB with gains :math:`\mathbf g` and maps it to
     linear sRGB with the fitted matrix :math:`M` (``image @ M``), so camera RGB to CIE XYZ
@@ -39,8 +41,9 @@ def simulated_color_matrix(result: SimulationResult) -> tuple[np.ndarray, np.nda
 
 
 def write_simulated_dng(result: SimulationResult, scene: Scene, path: str | Path) -> Path:
-    """Write the ``raw`` stage of ``result`` (the simulation of ``scene``) as a DNG file
-    (:func:`imageform.io.write_dng`) with the sensor's black and white levels, its CFA
+    """Write the ``raw`` stage of ``result`` (the simulation of ``scene``) as a DNG file.
+
+    Written by :func:`imageform.io.write_dng` with the sensor's black and white levels, its CFA
     pattern and :func:`simulated_color_matrix`.
 
     An odd image size loses its last row or column (a DNG Bayer tile is 2x2).

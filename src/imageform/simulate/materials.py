@@ -133,8 +133,9 @@ def reflectance_spectrum(value: float | str) -> tuple[np.ndarray, np.ndarray]:
 
 
 def texture_basis() -> tuple[np.ndarray, np.ndarray]:
-    r"""Three non-negative reflectance spectra ``B`` ``(L, 3)`` with ``ρ(λ) ≈ B rgb`` for a
-    linear-sRGB colour: the textured surface's reflectance is recovered from its pixel.
+    r"""Return three non-negative reflectance spectra ``B`` ``(L, 3)`` with ``ρ(λ) ≈ B rgb``.
+
+    For a linear-sRGB colour: the textured surface's reflectance is recovered from its pixel.
 
     Fitted per wavelength by non-negative least squares to the 24 ColorChecker spectra and
     their linear sRGB under D65: :math:`\min_{b_\lambda \ge 0} \|C b_\lambda -

@@ -42,10 +42,12 @@ __all__ = ["RenderOutput", "load_texture", "pixel_rays", "raycast_quads_numpy", 
 
 @dataclass(frozen=True)
 class RenderOutput:
-    """What the renderer produced: ``rate`` ``(H, W, 3)`` mean photo-electrons per second
-    (vignetted), ``depth`` ``(H, W)`` camera-frame depth (m; ``inf`` where nothing was hit),
-    ``falloff`` ``(H, W)`` the cos⁴ vignetting at pixel centres (1 when disabled) and
-    ``object_index`` ``(H, W)`` the object at each pixel centre (-1: background).
+    """What the renderer produced: photo-electron rate, depth, falloff and object index.
+
+    ``rate`` ``(H, W, 3)`` mean photo-electrons per second (vignetted), ``depth`` ``(H, W)``
+    camera-frame depth (m; ``inf`` where nothing was hit), ``falloff`` ``(H, W)`` the cos⁴
+    vignetting at pixel centres (1 when disabled) and ``object_index`` ``(H, W)`` the object at each
+    pixel centre (-1: background).
     """
 
     rate: np.ndarray
