@@ -1,5 +1,6 @@
-"""Biomedical colour-analysis workflows: ``segment``, ``stain-normalize``,
-``fit-correction`` and ``harmonize`` (see docs/biomedical.md).
+"""Biomedical colour-analysis workflows.
+
+``segment``, ``stain-normalize``, ``fit-correction`` and ``harmonize`` (see docs/biomedical.md).
 
 ``fit-correction`` fits a colour correction between two devices from a chart (two chart
 images, or a CSV of patch values) and writes it as JSON; ``harmonize`` applies such a file to
@@ -84,6 +85,7 @@ class SegmentOptions(ImageIn):
     )
 
     def check(self) -> None:
+        """Check that ``--h``, ``--s`` and ``--v`` are valid ranges."""
         super().check()
         for flag, value in (("--h", self.h), ("--s", self.s), ("--v", self.v)):
             _range(value, flag)
@@ -153,6 +155,7 @@ class StainNormalizeOptions(ImageIn, ImageOut):
     )
 
     def check(self) -> None:
+        """Check the options and take ``target`` as a path."""
         super().check()
         object.__setattr__(self, "target", Path(self.target))
 
@@ -239,8 +242,10 @@ def _patches_csv(path: Path) -> tuple[Any, Any]:
 
 
 def fit_correction(run: Run, opts: FitCorrectionOptions, *, out: Path, charts: Any) -> Result:
-    """``imageform fit-correction``: fit device A -> device B from a chart, write the JSON
-    that ``imageform harmonize --correction`` reads; ΔE00 per patch before and after.
+    """``imageform fit-correction``: fit device A -> device B from a chart.
+
+    Writes the JSON that ``imageform harmonize --correction`` reads; ΔE00 per patch before and
+    after.
     """
     from imageform.analysis import chart_patches, correction_report, fit_color_correction
 
@@ -304,6 +309,7 @@ class HarmonizeOptions(ImageIn, ImageOut):
     )
 
     def check(self) -> None:
+        """Check the options and take ``correction`` as a path."""
         super().check()
         object.__setattr__(self, "correction", Path(self.correction))
 

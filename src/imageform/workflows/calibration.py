@@ -103,9 +103,10 @@ def parse_charuco(text: str) -> tuple[int, int] | None:
 
 
 class _BoardChecks:
-    """The checks of the options a checkerboard calibration shares (``calibrate`` and
-    ``stereo-calibrate``): the board, the square size, ``--fix`` names, ``--skew``,
-    ``--half-window``. Mixed in before the options' base class; adds no field.
+    """The option checks a checkerboard calibration shares (``calibrate``, ``stereo-calibrate``).
+
+    The board, the square size, ``--fix`` names, ``--skew``, ``--half-window``. Mixed in before the
+    options' base class; adds no field.
     """
 
     board: str
@@ -134,7 +135,7 @@ class _BoardChecks:
             )
 
     def square_mm(self) -> float:
-        """The square size in millimetres."""
+        """Return the square size in millimetres."""
         from imageform._units import parse_length
 
         return parse_length(self.square, "--square", default_unit="mm", unit="mm")
@@ -189,6 +190,7 @@ class CalibrateOptions(_BoardChecks, ImageIn):
     )
 
     def check(self) -> None:
+        """Check the board; a ChArUco board needs a ``--marker`` smaller than ``--square``."""
         super().check()
         charuco = parse_charuco(self.board)
         if charuco is None:
@@ -205,7 +207,7 @@ class CalibrateOptions(_BoardChecks, ImageIn):
             )
 
     def marker_mm(self) -> float:
-        """The marker size in millimetres (ChArUco)."""
+        """Return the marker size in millimetres (ChArUco)."""
         from imageform._units import parse_length
 
         if self.marker is None:
@@ -236,8 +238,10 @@ def _plot(path: Path, res: Any, names: list[str]) -> None:
 
 
 def _read_views(run: Run, opts: CalibrateOptions, images: list[Path]) -> Iterator[tuple[Path, Any]]:
-    """Each image as ``(path, grey or RGB array)``, with progress, all of one size (refused
-    in one line naming both files otherwise); progress "calibrating" once they are read.
+    """Read each image as ``(path, grey or RGB array)``, with progress, all of one size.
+
+    Images of different sizes are refused in one line naming both files; progress "calibrating" once
+    they are read.
     """
     shape0: tuple[int, ...] | None = None
     for i, f in enumerate(images):
@@ -257,8 +261,9 @@ def _read_views(run: Run, opts: CalibrateOptions, images: list[Path]) -> Iterato
 
 
 def calibrate(run: Run, opts: CalibrateOptions, *, out: Path, images: list[Path]) -> Result:
-    """``imageform calibrate``: a camera file from checkerboard views (Zhang, then
-    Levenberg-Marquardt on every reprojection error).
+    """``imageform calibrate``: a camera file from checkerboard views.
+
+    Zhang, then Levenberg-Marquardt on every reprojection error.
     """
     from imageform.geometry import checkerboard_points
     from imageform.geometry.checkerboard import find_checkerboard
@@ -321,8 +326,9 @@ def _calibrate_views(
     shape: tuple[int, int],
     command: str,
 ) -> Result:
-    """Calibrate from the views' board points and corners, write the camera file (and the
-    plot and corners table asked for), and say what was found.
+    """Calibrate from the views' board points and corners and write the camera file.
+
+    The plot and corners table asked for are written too, and the result says what was found.
     """
     import numpy as np
 
@@ -391,8 +397,10 @@ def _calibrate_charuco(
     images: list[Path],
     squares: tuple[int, int],
 ) -> Result:
-    """``imageform calibrate --board charuco:COLSxROWS``: every view that gives at least
-    :data:`MIN_CHARUCO_CORNERS` identified corners is used, whole or in part.
+    """``imageform calibrate --board charuco:COLSxROWS``: calibrate from ChArUco views.
+
+    Every view that gives at least :data:`MIN_CHARUCO_CORNERS` identified corners is used, whole or
+    in part.
     """
     from imageform.geometry import CharucoBoard, detect_charuco
 
@@ -466,8 +474,9 @@ class UndistortOptions(ImageIn, ImageOut):
 
 
 def undistort(run: Run, opts: UndistortOptions, *, out: Path, image: Path) -> Result:
-    """``imageform undistort``: remove lens distortion with the camera file's K and model
-    (inverse mapping, bilinear sampling; the output keeps K).
+    """``imageform undistort``: remove lens distortion with the camera file's K and model.
+
+    Inverse mapping, bilinear sampling; the output keeps K.
     """
     import numpy as np
 

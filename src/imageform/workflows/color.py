@@ -70,6 +70,7 @@ class ConvertOptions(ImageIn, ImageOut):
     )
 
     def check(self) -> None:
+        """Check the options and normalise the ``--from`` and ``--to`` space names."""
         super().check()
         from imageform.color import space_name
 
@@ -77,6 +78,7 @@ class ConvertOptions(ImageIn, ImageOut):
         object.__setattr__(self, "dst", space_name(self.dst, "--to (dst)"))
 
     def check_output(self, path: Path) -> None:
+        """Refuse a PNG or JPEG output for a space whose values do not fit an integer image."""
         from imageform.io import image_format
 
         if image_format(path) in ("png", "jpeg") and self.dst not in _DISPLAYABLE:
@@ -86,7 +88,7 @@ class ConvertOptions(ImageIn, ImageOut):
             )
 
     def params(self) -> dict[str, Any]:
-        """The keyword parameters of :func:`imageform.color.convert`."""
+        """Return the keyword parameters of :func:`imageform.color.convert`."""
         p: dict[str, Any] = {"alpha": "keep" if self.alpha == "keep" else "reject"}
         for key, val in (
             ("white", self.white),
@@ -322,7 +324,7 @@ class GamutOptions(Options):
     )
 
     def names(self) -> list[str]:
-        """The spaces, split."""
+        """Return the spaces, split."""
         names = [s.strip() for s in self.spaces.split(",") if s.strip()]
         if not names:
             raise InvalidInputError("expected --spaces as one or more RGB space names")
@@ -378,8 +380,9 @@ class PaletteCheckOptions(Options):
 
 
 def palette_check(run: Run, opts: PaletteCheckOptions, *, out: None, colors: str) -> Result:
-    """``imageform palette-check``: smallest pairwise ΔE00, normal and for each deficiency;
-    the check fails (exit 3) when a condition is under the threshold.
+    """``imageform palette-check``: smallest pairwise ΔE00, normal and for each deficiency.
+
+    The check fails (exit 3) when a condition is under the threshold.
     """
     from imageform.color.palettes import palette_check as check
 
