@@ -442,7 +442,7 @@ def _calibrate_charuco(
 def _dictionary_hint(grey: object, dictionary: str) -> str:
     """Return a hint naming the predefined dictionary a view's markers belong to, else ``""``.
 
-    The hint, ``"; its markers look like 4x4_50: try --dictionary 4x4_50"``, is given when a view
+    The hint, ``"; the markers look like 4x4_50: try --dictionary 4x4_50"``, is given when a view
     that showed (almost) no marker of ``dictionary`` shows those of another predefined dictionary.
     """
     if grey is None:
