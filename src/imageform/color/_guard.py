@@ -46,7 +46,8 @@ def _shape_of(x: object) -> tuple[int, ...] | None:
 
 def as_points(x: object, name: str, dim: int | Collection[int], **kw: Any) -> Any:
     """:func:`imageform._validate.as_points` that first refuses bool/complex/object/string
-    and a wrong last axis (before any value is read: a misshaped array is refused at once)."""
+    and a wrong last axis (before any value is read: a misshaped array is refused at once).
+    """
     _v.refuse_non_real(x, name)
     shape = _shape_of(x)
     dims = (dim,) if isinstance(dim, int) else tuple(dim)
@@ -65,7 +66,8 @@ def as_float(x: object, name: str, **kw: Any) -> Any:
 def as_image(image: object, name: str = "image", **kw: Any) -> Any:
     """:func:`imageform._validate.as_image` that first refuses bool/complex/object/string;
     values read without the 0-1 range check (XYZ, Lab, HSV ...) are bounded by
-    :data:`MAX_COLOR_MAGNITUDE`."""
+    :data:`MAX_COLOR_MAGNITUDE`.
+    """
     _v.refuse_non_real(image, name)
     channels = kw.get("channels", 3)
     axis = kw.get("channel_axis", -1)
@@ -95,13 +97,15 @@ def as_image(image: object, name: str = "image", **kw: Any) -> Any:
 
 def as_bool(value: object, name: str) -> bool:
     """A flag: Python or NumPy bool (:func:`imageform._validate.as_bool`); 0/1, strings and
-    arrays are refused."""
+    arrays are refused.
+    """
     return _v.as_bool(value, name)
 
 
 def check_option(value: object, valid: Collection[str], what: str, name: str = "") -> str:
     """:func:`imageform._validate.check_name`: an option naming its parameter, listing a short
-    line of valid names."""
+    line of valid names.
+    """
     return _v.check_name(value, valid, what, name)
 
 
@@ -129,7 +133,8 @@ def check_nonempty(arr: Any, name: str) -> None:
 def check_result_array(x: object, name: str) -> None:
     """Refuse a field of a result container built by a caller (not by imageform) that is not
     a real, finite array: bool, complex, object and string values, NaN and inf. Lazy Dask
-    arrays are not computed here."""
+    arrays are not computed here.
+    """
     if x is None:
         raise TypeError(f"expected {name} as an array of numbers, got None")
     _v.refuse_non_real(x, name)

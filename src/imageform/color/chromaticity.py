@@ -141,10 +141,10 @@ def spectral_locus(
     coords: str = "xy",
     wavelength_range: tuple[float, float] = LOCUS_RANGE,
 ) -> SpectralLocus:
-    """Wavelengths (N,) and chromaticities (N, 2) of the spectral locus at 1 nm.
+    r"""Wavelengths (N,) and chromaticities (N, 2) of the spectral locus at 1 nm.
 
     From the CIE colour-matching functions (CIE 015:2018 Tables 4-5):
-    :math:`x(\\lambda) = \\bar x/(\\bar x + \\bar y + \\bar z)`. Every parameter is
+    :math:`x(\lambda) = \bar x/(\bar x + \bar y + \bar z)`. Every parameter is
     keyword-only: ``observer`` (2 or 10), ``coords`` (``"xy"`` or ``"uv"``) and the
     ``wavelength_range`` (nm).
 

@@ -106,9 +106,9 @@ def _clip_polygon(subject: np.ndarray, clip: np.ndarray) -> np.ndarray:
 def gamut_coverage(
     space: str | RGBSpace = "srgb", coords: str = "xy", *, observer: int = 2
 ) -> float:
-    """Percentage of the visible region (spectral locus, 380-780 nm) the gamut covers.
+    r"""Percentage of the visible region (spectral locus, 380-780 nm) the gamut covers.
 
-    .. math:: \\mathrm{coverage} = 100\\,\\frac{A(T \\cap V)}{A(V)}
+    .. math:: \mathrm{coverage} = 100\,\frac{A(T \cap V)}{A(V)}
 
     with :math:`T` the triangle and :math:`V` the visible region (Sutherland-Hodgman clipping).
 
@@ -190,10 +190,10 @@ def in_gamut(
     kind: str = "xyz",
     tol: float = 1e-9,
 ) -> Any:
-    """True where colours lie inside an RGB space's gamut.
+    r"""True where colours lie inside an RGB space's gamut.
 
     ``kind="xyz"`` (shape (..., 3), white Y = 1): linear RGB of the space in
-    :math:`[-\\mathrm{tol}, 1 + \\mathrm{tol}]`; ``kind="linear_rgb"``: the same test on given
+    :math:`[-\mathrm{tol}, 1 + \mathrm{tol}]`; ``kind="linear_rgb"``: the same test on given
     linear RGB; ``kind="xy"`` (shape (..., 2)): chromaticity inside the primaries' triangle
     (any luminance).
 

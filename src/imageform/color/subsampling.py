@@ -257,7 +257,7 @@ def subsample_round_trip(
     standard: str = "bt601",
     clip: bool = False,
 ) -> Any:
-    """sRGB -> Y'CbCr -> subsample -> upsample -> sRGB, as a codec's colour path does.
+    """Round-trip sRGB -> Y'CbCr -> subsample -> upsample -> sRGB, as a codec's colour path does.
 
     Parameters
     ----------

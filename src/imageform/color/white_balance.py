@@ -82,7 +82,8 @@ class _WhiteBalanceResult(NamedTuple):
 class WhiteBalanceResult(_WhiteBalanceResult):
     """``(image, gains)``: the balanced image (same encoding as the input) and the per-channel
     gains applied in linear light, shape ``(..., 3)`` (one triple per image of a batch).
-    Built by hand, both must be real and finite."""
+    Built by hand, both must be real and finite.
+    """
 
     __slots__ = ()
 
@@ -121,7 +122,8 @@ def _percentile(xp: Any, lin: Any, q: float) -> Any:
 
 def _percentile_dask(lin: Any, q: float) -> Any:
     """Exact percentile of a Dask image: the sorted values at ``lo`` and ``lo + 1`` are the
-    ``(n - lo)``-th and ``(n - lo - 1)``-th largest, from one ``topk`` reduction."""
+    ``(n - lo)``-th and ``(n - lo - 1)``-th largest, from one ``topk`` reduction.
+    """
     import dask.array as da
 
     shape = tuple(lin.shape)
