@@ -106,7 +106,8 @@ class DataTable(NamedTuple):
     """A shipped CSV table as read: ``comments`` (its ``#`` header lines: source and notes),
     ``columns`` (the column names), ``values`` (the numeric columns, read-only float64;
     every column when the first is numeric, else all but the first) and ``labels`` (the
-    first column's entries as strings)."""
+    first column's entries as strings).
+    """
 
     comments: tuple[str, ...]
     columns: tuple[str, ...]

@@ -11,7 +11,7 @@ CIE 015 writes k = 100/..., Y = 100). A light source (``illuminant=None``) is in
 :math:`X = k\sum S \bar x \Delta\lambda` with Y = 1 for the source itself, or absolutely with
 :math:`k = K_m = 683` lm W⁻¹ (``absolute=True``).
 
-Methods:
+The two methods:
 
 - ``"cie015"`` (CIE 015:2018 §7.2): everything on the observer's 1 nm grid, within the range
   the illuminant covers; the sample is interpolated (method named) and extended beyond its
