@@ -178,7 +178,8 @@ def size_pair(value: object, name: str, *, minimum: int = 1) -> tuple[int, int]:
 def check_K(K: Any, xp: Any, name: str = "K", *, positive: bool = False) -> None:
     """Refuse a K that is not upper-triangular with a non-zero diagonal (singular), or,
     when ``positive``, whose focal lengths ``K[0, 0] / K[2, 2]``, ``K[1, 1] / K[2, 2]``
-    are not > 0. ``K`` has been through :func:`as_matrix` (finite)."""
+    are not > 0. ``K`` has been through :func:`as_matrix` (finite).
+    """
     if (
         bool(xp.any(K[..., 2, 0] != 0))
         or bool(xp.any(K[..., 2, 1] != 0))
@@ -207,13 +208,15 @@ def shape_text(x: Any) -> str:
 
 def check_image_size(size: object, name: str = "image_size") -> tuple[int, int]:
     """A ``(width, height)`` pair of positive integers (a 0-d array or a string refused
-    in one line, as every other malformed pair)."""
+    in one line, as every other malformed pair).
+    """
     return size_pair(size, f"{name} (width, height)")
 
 
 def check_rng(value: object, name: str = "rng") -> object:
     """Refuse an array for a seed before the shared :func:`imageform._random.as_rng` (whose
-    message would print it); return the value unchanged."""
+    message would print it); return the value unchanged.
+    """
     if getattr(value, "ndim", 0) and not isinstance(value, str | bytes):
         raise InvalidInputError(
             f"expected {name} an int seed, a numpy.random.Generator or None, got " + describe(value)

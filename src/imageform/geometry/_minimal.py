@@ -28,7 +28,8 @@ def epipolar_rows(p1: F64, p2: F64) -> F64:
 
 def null_space(A: F64) -> F64:
     """Orthonormal basis (B, n, n - m) of the null space of each full-rank ``A`` (B, m, n),
-    m < n, from the complete QR of ``Aᵀ`` (cheaper than the SVD, as exact)."""
+    m < n, from the complete QR of ``Aᵀ`` (cheaper than the SVD, as exact).
+    """
     m = A.shape[-2]
     return np.linalg.qr(np.swapaxes(A, -1, -2), mode="complete")[0][..., m:]
 
@@ -42,7 +43,8 @@ def rank2(F: F64) -> F64:
 
 def f8(p1: F64, p2: F64, w: F64 | None = None) -> F64:
     """Fundamental matrices (B, 3, 3) from (B, N >= 8, 2) pairs by the normalised 8-point
-    algorithm (Hartley 1997; H&Z Algorithm 11.1); optional per-point weights ``w``."""
+    algorithm (Hartley 1997; H&Z Algorithm 11.1); optional per-point weights ``w``.
+    """
     n1, T1 = hartley(p1)
     n2, T2 = hartley(p2)
     A = epipolar_rows(n1, n2)
@@ -94,9 +96,9 @@ def f7(p1: F64, p2: F64) -> tuple[F64, NDArray[np.intp]]:
 
 
 def sampson_sq(F: F64, p1: F64, p2: F64) -> F64:
-    """Squared Sampson distances (..., N) of pairs (N, 2) under ``F`` (..., 3, 3).
+    r"""Squared Sampson distances (..., N) of pairs (N, 2) under ``F`` (..., 3, 3).
 
-    .. math:: d^2 = \\frac{(x_2^T F x_1)^2}{(F x_1)_1^2 + (F x_1)_2^2 + (F^T x_2)_1^2
+    .. math:: d^2 = \frac{(x_2^T F x_1)^2}{(F x_1)_1^2 + (F x_1)_2^2 + (F^T x_2)_1^2
               + (F^T x_2)_2^2}
 
     (H&Z eq. 11.9), the first-order geometric error in the units of the points.

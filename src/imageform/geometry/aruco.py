@@ -315,7 +315,8 @@ def _bilinear(g: NDArray[np.float64], uv: NDArray[np.float64]) -> NDArray[np.flo
 
 def _quad(pts: NDArray[np.float64], area: float) -> NDArray[np.float64] | None:
     """Four extreme boundary points of a component, clockwise on screen; None unless the quad
-    through them has the component's area (a quadrilateral blob, not an L or a disc)."""
+    through them has the component's area (a quadrilateral blob, not an L or a disc).
+    """
     c = pts.mean(axis=0)
     i0 = int(np.argmax(np.sum((pts - c) ** 2, axis=1)))
     i2 = int(np.argmax(np.sum((pts - pts[i0]) ** 2, axis=1)))
@@ -340,7 +341,8 @@ def _quad(pts: NDArray[np.float64], area: float) -> NDArray[np.float64] | None:
 
 def _line_normal(centred: NDArray[np.float64]) -> NDArray[np.float64]:
     """Unit normal of the total-least-squares line through centred points (the eigenvector
-    of the 2x2 scatter matrix with the smaller eigenvalue, in closed form)."""
+    of the 2x2 scatter matrix with the smaller eigenvalue, in closed form).
+    """
     sxx = float(centred[:, 0] @ centred[:, 0])
     syy = float(centred[:, 1] @ centred[:, 1])
     sxy = float(centred[:, 0] @ centred[:, 1])
@@ -353,7 +355,8 @@ def _refine_sides(
 ) -> NDArray[np.float64] | None:
     """Corners where the four sides meet, each side a line fitted to the component's boundary
     pixels along it and moved half a pixel outwards (the boundary pixels' centres lie half a
-    pixel inside the dark region's edge); None when a side has too few pixels."""
+    pixel inside the dark region's edge); None when a side has too few pixels.
+    """
     center = quad.mean(axis=0)
     lines = []
     for k in range(4):

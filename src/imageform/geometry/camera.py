@@ -113,7 +113,8 @@ def _project_xp(
     """Array-API twin of the numba kernel; broadcasts K, R, t over leading dimensions.
 
     ``identity``: R and t were not given (camera-frame points), so the ``(N, 3) x (3, 3)``
-    product, a full pass over the points, is skipped."""
+    product, a full pass over the points, is skipped.
+    """
     if identity:
         Xc = X
     else:
@@ -152,11 +153,11 @@ def project_points(
     *,
     image_plane: ImagePlane = "virtual",
 ) -> Projection:
-    """Project world points to pixels, ``(u, v, 1)ᵀ ~ K (R X + t)``.
+    r"""Project world points to pixels, ``(u, v, 1)ᵀ ~ K (R X + t)``.
 
     .. math::
-        x = X_c / Z_c,\\; y = Y_c / Z_c, \\quad
-        u = f_x x + s\\, y + c_x, \\quad v = f_y y + c_y
+        x = X_c / Z_c,\; y = Y_c / Z_c, \quad
+        u = f_x x + s\, y + c_x, \quad v = f_y y + c_y
 
     with ``(X_c, Y_c, Z_c) = R X + t`` (Hartley & Zisserman eq. 6.11). The skew ``s`` is
     honoured (OpenCV's ``projectPoints`` ignores ``K[0, 1]``).

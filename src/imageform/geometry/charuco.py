@@ -122,7 +122,8 @@ class CharucoBoard:
 
     def marker_points(self) -> NDArray[np.float64]:
         """``(n_markers, 4, 3)``: each marker's corners on the board (top-left, top-right,
-        bottom-right, bottom-left as printed), by marker id."""
+        bottom-right, bottom-left as printed), by marker id.
+        """
         sq = self.marker_squares()
         s, m = self.square_length, self.marker_length
         x0 = sq[:, 1] * s + (s - m) / 2

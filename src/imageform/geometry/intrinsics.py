@@ -1,7 +1,7 @@
-"""Intrinsic parameters: the calibration matrix K, physical units and fields of view.
+r"""Intrinsic parameters: the calibration matrix K, physical units and fields of view.
 
 .. math::
-    K = \\begin{pmatrix} f_x & s & c_x \\\\ 0 & f_y & c_y \\\\ 0 & 0 & 1 \\end{pmatrix}
+    K = \begin{pmatrix} f_x & s & c_x \\ 0 & f_y & c_y \\ 0 & 0 & 1 \end{pmatrix}
 
 ``fx = f / pitch_x`` and ``fy = f / pitch_y`` are the focal length in pixels, ``(cx, cy)`` the
 principal point in pixels (centre of the top-left pixel at (0, 0)), ``s`` the skew
@@ -231,10 +231,10 @@ class Intrinsics:
 
     @property
     def fov_x(self) -> float:
-        """Horizontal field of view in radians across the full image width.
+        r"""Horizontal field of view in radians across the full image width.
 
         .. math::
-            \\mathrm{FOV}_x = \\arctan\\frac{c_x + 1/2}{f_x} + \\arctan\\frac{w - 1/2 - c_x}{f_x}
+            \mathrm{FOV}_x = \arctan\frac{c_x + 1/2}{f_x} + \arctan\frac{w - 1/2 - c_x}{f_x}
 
         (the outer edges of the border pixels; ``2 arctan(w / 2 f)`` for a centred principal
         point).

@@ -274,7 +274,8 @@ def _pnp_result(
     out_dtype: npt.DTypeLike,
 ) -> PnPResult:
     """The flat batch's poses as a :class:`PnPResult` of shape ``batch``: valid where every
-    point is in front of the camera and the RMS is finite; every point an inlier."""
+    point is in front of the camera and the RMS is finite; every point an inlier.
+    """
     depth = np.einsum("bnj,bj->bn", Xf, R[:, 2, :]) + t[:, 2:3]
     valid = np.all(depth > 0, axis=-1) & np.isfinite(rms)
     rvec = np.asarray(matrix_to_rvec(R), dtype=np.float64)
@@ -318,14 +319,14 @@ def solve_pnp(
     refine: bool = True,
     max_iter: int = 20,
 ) -> PnPResult:
-    """Pose ``(R, t)`` of a calibrated camera from N point correspondences, batched.
+    r"""Pose ``(R, t)`` of a calibrated camera from N point correspondences, batched.
 
     Linear estimate on the ideal normalised coordinates ``(x, y) = K⁻¹ u`` (undistorted),
     then Levenberg-Marquardt on the pixel reprojection error
 
-    .. math:: \\min_{R, t} \\sum_i \\left\\| \\mathbf{u}_i - \\pi\\left(K (R \\mathbf{X}_i
-              + \\mathbf{t})\\right) \\right\\|^2 \\quad \\text{s.t. } (R\\mathbf{X}_i
-              + \\mathbf{t})_z > 0
+    .. math:: \min_{R, t} \sum_i \left\| \mathbf{u}_i - \pi\left(K (R \mathbf{X}_i
+              + \mathbf{t})\right) \right\|^2 \quad \text{s.t. } (R\mathbf{X}_i
+              + \mathbf{t})_z > 0
 
     Parameters
     ----------

@@ -110,9 +110,9 @@ def weak_perspective_project(
     *,
     depth: float | None = None,
 ) -> Array:
-    """Weak-perspective projection with one reference depth ``Z₀`` for all points.
+    r"""Weak-perspective projection with one reference depth ``Z₀`` for all points.
 
-    .. math:: u = f_x X_c / Z_0 + s\\, Y_c / Z_0 + c_x, \\quad v = f_y Y_c / Z_0 + c_y
+    .. math:: u = f_x X_c / Z_0 + s\, Y_c / Z_0 + c_x, \quad v = f_y Y_c / Z_0 + c_y
 
     ``Z₀`` defaults to the mean camera-frame depth of the points (over the last point
     axis). ``Z₀ <= 0`` raises: the object is not in front of the camera.

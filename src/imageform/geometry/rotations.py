@@ -54,11 +54,11 @@ def _check_order(order: object) -> str:
 
 
 def axis_rotation(axis: str, angle: ArrayLike) -> Array:
-    """Rotation by ``angle`` (radians) about the coordinate axis ``"x"``, ``"y"`` or ``"z"``.
+    r"""Rotation by ``angle`` (radians) about the coordinate axis ``"x"``, ``"y"`` or ``"z"``.
 
     .. math::
-        R_x(\\theta) = \\begin{pmatrix}1&0&0\\\\0&\\cos\\theta&-\\sin\\theta\\\\
-        0&\\sin\\theta&\\cos\\theta\\end{pmatrix}
+        R_x(\theta) = \begin{pmatrix}1&0&0\\0&\cos\theta&-\sin\theta\\
+        0&\sin\theta&\cos\theta\end{pmatrix}
 
     and cyclically for y and z (right-handed, counter-clockwise looking down the axis).
 
@@ -206,10 +206,10 @@ def camera_rotation(pitch: float, yaw: float = 0.0, roll: float = 0.0) -> Array:
 
 
 def rvec_to_matrix(rvec: ArrayLike) -> Array:
-    """Rotation matrix from an axis-angle (Rodrigues) vector, as OpenCV's ``Rodrigues``.
+    r"""Rotation matrix from an axis-angle (Rodrigues) vector, as OpenCV's ``Rodrigues``.
 
-    .. math:: R = I + \\frac{\\sin\\theta}{\\theta} [r]_\\times
-              + \\frac{1 - \\cos\\theta}{\\theta^2} [r]_\\times^2, \\quad \\theta = \\|r\\|
+    .. math:: R = I + \frac{\sin\theta}{\theta} [r]_\times
+              + \frac{1 - \cos\theta}{\theta^2} [r]_\times^2, \quad \theta = \|r\|
 
     Small angles use the Taylor series of the coefficients (no division by zero).
 
@@ -271,15 +271,15 @@ def matrix_to_rvec(R: ArrayLike) -> Array:
 
 
 def quaternion_to_matrix(q: ArrayLike) -> Array:
-    """Rotation matrix from a quaternion ``(w, x, y, z)`` (scalar first, Hamilton product).
+    r"""Rotation matrix from a quaternion ``(w, x, y, z)`` (scalar first, Hamilton product).
 
     The quaternion is normalised first; a zero quaternion raises.
 
     .. math::
-        R = \\begin{pmatrix}
-        1-2(y^2+z^2) & 2(xy-wz) & 2(xz+wy)\\\\
-        2(xy+wz) & 1-2(x^2+z^2) & 2(yz-wx)\\\\
-        2(xz-wy) & 2(yz+wx) & 1-2(x^2+y^2)\\end{pmatrix}
+        R = \begin{pmatrix}
+        1-2(y^2+z^2) & 2(xy-wz) & 2(xz+wy)\\
+        2(xy+wz) & 1-2(x^2+z^2) & 2(yz-wx)\\
+        2(xz-wy) & 2(yz+wx) & 1-2(x^2+y^2)\end{pmatrix}
 
     Examples
     --------

@@ -52,7 +52,8 @@ F64 = NDArray[np.float64]
 class FundamentalResult(NamedTuple):
     """A robustly estimated fundamental matrix (``x2ᵀ F x1 = 0``, rank 2, ``‖F‖_F = 1``),
     the inlier mask ``(N,)`` (Sampson distance below the threshold), the Sampson RMS of the
-    inliers in pixels and the number of minimal samples drawn."""
+    inliers in pixels and the number of minimal samples drawn.
+    """
 
     F: F64
     inliers: NDArray[np.bool_]
@@ -63,7 +64,8 @@ class FundamentalResult(NamedTuple):
 class EssentialResult(NamedTuple):
     """A robustly estimated essential matrix (singular values ``(1, 1, 0)/√2``,
     ``‖E‖_F = 1``), the inlier mask ``(N,)``, the Sampson RMS of the inliers in pixels and
-    the number of minimal samples drawn."""
+    the number of minimal samples drawn.
+    """
 
     E: F64
     inliers: NDArray[np.bool_]
@@ -203,7 +205,8 @@ def essential_5point(points1: npt.ArrayLike, points2: npt.ArrayLike) -> F64:
 
 def _rot_basis(F: F64) -> tuple[F64, F64, float]:
     """``F = U diag(1, σ, 0) Vᵀ`` with U, V rotations (the orthonormal representation of
-    Bartoli & Sturm 2004)."""
+    Bartoli & Sturm 2004).
+    """
     U, s, Vt = np.linalg.svd(F)
     if np.linalg.det(U) < 0:
         U = -U
@@ -214,7 +217,8 @@ def _rot_basis(F: F64) -> tuple[F64, F64, float]:
 
 def _refine_f(F: F64, p1: F64, p2: F64, max_iter: int) -> F64:
     """LM on the Sampson distances over ``F = U diag(1, σ, 0) Vᵀ`` (7 parameters),
-    parametrised in Hartley-normalised coordinates, residuals in pixels."""
+    parametrised in Hartley-normalised coordinates, residuals in pixels.
+    """
     T1, T2 = hartley(p1)[1], hartley(p2)[1]
     Fn = np.linalg.inv(T2).T @ F @ np.linalg.inv(T1)
     U0, V0, s0 = _rot_basis(Fn)
