@@ -1,5 +1,6 @@
 """imageform.sensor — colour filter arrays and demosaicing, the sensor model, noise, shutter,
-CCD/CMOS presets, EMVA 1288 photon transfer and characterisation from frame stacks."""
+CCD/CMOS presets, EMVA 1288 photon transfer and characterisation from frame stacks.
+"""
 
 from __future__ import annotations
 

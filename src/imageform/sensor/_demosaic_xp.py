@@ -52,7 +52,8 @@ def pad_reflect(a: Any, top: int, bottom: int, left: int, right: int, xp: Any) -
 
 def demosaic_xp(raw: Any, ry: int, rx: int, method: str, xp: Any) -> Any:
     """RGB ``(..., H, W, 3)`` from a float mosaic ``(..., H, W)`` whose red site is at
-    ``(ry, rx)`` in the top-left cell; ``method`` in :data:`XP_METHODS`."""
+    ``(ry, rx)`` in the top-left cell; ``method`` in :data:`XP_METHODS`.
+    """
     h, w = int(raw.shape[-2]), int(raw.shape[-1])
     r = _RADIUS[method]
     pad = r + (r % 2)
@@ -96,7 +97,8 @@ def demosaic_xp(raw: Any, ry: int, rx: int, method: str, xp: Any) -> Any:
 
 def demosaic_dask(raw: Any, depth: int, block: Callable[[Any], Any], out_dtype: Any) -> Any:
     """Lazy demosaicing of a Dask mosaic ``(..., H, W)`` with ``block`` (the in-memory
-    function on a NumPy block ``(..., h, w)`` -> ``(..., h, w, 3)``); ``depth`` is even."""
+    function on a NumPy block ``(..., h, w)`` -> ``(..., h, w, 3)``); ``depth`` is even.
+    """
     import dask.array as da
     import numpy as np
 
@@ -129,7 +131,8 @@ def demosaic_dask(raw: Any, depth: int, block: Callable[[Any], Any], out_dtype: 
 
 def _even_chunks(n: int, size: int, depth: int) -> tuple[int, ...]:
     """Chunks of an axis of length ``n``: even sizes (at least ``depth`` and 2), a short
-    last chunk merged into the one before so that every chunk holds the overlap depth."""
+    last chunk merged into the one before so that every chunk holds the overlap depth.
+    """
     size = max(size, depth, 2)
     size += size % 2
     chunks = [size] * (n // size)

@@ -89,7 +89,7 @@ def _cell_channels(pattern: str) -> np.ndarray:
 
 
 def cfa_masks(shape: tuple[int, int], pattern: str = "RGGB") -> np.ndarray:
-    """Boolean sampling masks of a Bayer array, one per channel.
+    r"""Boolean sampling masks of a Bayer array, one per channel.
 
     ``masks[y, x, c]`` is true where the photosite at row ``y``, column ``x`` has a filter
     of colour ``c`` (0 red, 1 green, 2 blue). Exactly one channel is true per pixel; the
@@ -97,7 +97,7 @@ def cfa_masks(shape: tuple[int, int], pattern: str = "RGGB") -> np.ndarray:
 
     .. math::
 
-        m_c(y, x) = [\\,\\mathrm{cell}(y \\bmod 2,\\, x \\bmod 2) = c\\,]
+        m_c(y, x) = [\,\mathrm{cell}(y \bmod 2,\, x \bmod 2) = c\,]
 
     Parameters
     ----------
@@ -129,13 +129,13 @@ def cfa_masks(shape: tuple[int, int], pattern: str = "RGGB") -> np.ndarray:
 
 
 def mosaic(rgb: ArrayLike, pattern: str = "RGGB") -> Array:
-    """Sample an RGB image through a Bayer colour filter array (the forward model).
+    r"""Sample an RGB image through a Bayer colour filter array (the forward model).
 
     Each output pixel keeps the one channel its filter passes:
 
     .. math::
 
-        \\mathrm{raw}(y, x) = \\sum_{c \\in \\{R,G,B\\}} m_c(y, x)\\, I_c(y, x)
+        \mathrm{raw}(y, x) = \sum_{c \in \{R,G,B\}} m_c(y, x)\, I_c(y, x)
 
     with :math:`m_c` from :func:`cfa_masks`. Half the pixels keep green, a quarter red,
     a quarter blue: green is sampled twice as densely because the luminance that carries
