@@ -1,5 +1,6 @@
 """The camera file's model: its constants, :class:`CameraFile`, :class:`Provenance` and the
-checks of values that reading and building share (internal to :mod:`imageform.io`)."""
+checks of values that reading and building share (internal to :mod:`imageform.io`).
+"""
 
 from __future__ import annotations
 
@@ -210,7 +211,8 @@ class CameraFile:
 
     def with_pose(self, R: Any, t: Any, **provenance: Any) -> CameraFile:
         """The same camera with the pose ``X_cam = R X_world + t``; pose standard deviations
-        are dropped, provenance fields replaced by ``provenance``."""
+        are dropped, provenance fields replaced by ``provenance``.
+        """
         from imageform.geometry import Camera
 
         c = self.camera
@@ -301,7 +303,8 @@ class Reader:
 
 def short_list(names: Sequence[str], budget: int) -> str:
     """``names`` joined by commas, cut to about ``budget`` characters (``... (3 more)``), each
-    name cut to 30: an error message stays one line however many or long the keys are."""
+    name cut to 30: an error message stays one line however many or long the keys are.
+    """
     shown: list[str] = []
     size = 0
     for n in names:

@@ -1,5 +1,6 @@
 """Reading a camera file: every key checked, one-line errors naming the file and the key
-(the internals of :func:`imageform.io.read_camera`; the schema is in docs/camera-file.md)."""
+(the internals of :func:`imageform.io.read_camera`; the schema is in docs/camera-file.md).
+"""
 
 from __future__ import annotations
 
@@ -77,7 +78,8 @@ def _read_v1(data: dict[str, Any], r: Reader) -> CameraFile:
 
 def _read_legacy(data: dict[str, Any], r: Reader) -> CameraFile:
     """Files of imageform before the versioned format (keys at the top level or in
-    ``[camera]``; ``[calibration]`` with ``rms`` and ``views``)."""
+    ``[camera]``; ``[calibration]`` with ``rms`` and ``views``).
+    """
     cal = data.get("calibration", {})
     if "camera" in data:
         cam = data["camera"]

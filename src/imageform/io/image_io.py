@@ -77,7 +77,8 @@ _pillow_lock = threading.Lock()
 
 class ImageInfo(NamedTuple):
     """What a file's header says: ``width``, ``height``, ``channels``, sample ``dtype`` and
-    ``format`` (png, jpeg, tiff, npy)."""
+    ``format`` (png, jpeg, tiff, npy).
+    """
 
     width: int
     height: int
@@ -88,7 +89,8 @@ class ImageInfo(NamedTuple):
 
 class WrittenImage(NamedTuple):
     """What :func:`write_image` stored: ``bits`` per sample for integer formats (None for
-    float data), and how many values were ``out_of_range`` (outside [0, 1], clipped)."""
+    float data), and how many values were ``out_of_range`` (outside [0, 1], clipped).
+    """
 
     bits: int | None
     out_of_range: int

@@ -103,7 +103,7 @@ def write_dng(
     calibration_illuminant: str = "D65",
     camera_model: str = "imageform simulated camera",
 ) -> Path:
-    """Write a Bayer mosaic as a DNG file that raw developers (LibRaw, darktable,
+    r"""Write a Bayer mosaic as a DNG file that raw developers (LibRaw, darktable,
     RawTherapee, Adobe Camera Raw) open.
 
     One IFD (NewSubfileType 0) holding the raw CFA image, uncompressed, 16 bits per sample,
@@ -113,7 +113,7 @@ def write_dng(
     - CFARepeatPatternDim (2, 2) and CFAPattern (0 = red, 1 = green, 2 = blue);
     - BlackLevel (one value for every photosite) and WhiteLevel;
     - ColorMatrix1: XYZ to camera RGB under CalibrationIlluminant1 (SRATIONAL, stored to
-      1e-6), :math:`\\mathbf c = C\\,\\mathbf{XYZ}`;
+      1e-6), :math:`\mathbf c = C\,\mathbf{XYZ}`;
     - AsShotNeutral: the camera RGB of a neutral in the scene (white balance gains are its
       reciprocals);
     - UniqueCameraModel.
@@ -466,19 +466,19 @@ def develop(
     space: str = "srgb",
     linear: bool = False,
 ) -> Development:
-    """Develop a raw image with imageform's own pipeline, keeping every stage.
+    r"""Develop a raw image with imageform's own pipeline, keeping every stage.
 
     1. Linearise: :math:`x = (DN - B) / (W - B)` with B the black level of each photosite.
-    2. White balance: :math:`x \\cdot g_c` with the as-shot gains (or the ones given),
+    2. White balance: :math:`x \cdot g_c` with the as-shot gains (or the ones given),
        scaled so the smallest gain is 1, clipped to [0, 1] (LibRaw's default highlight
        clipping).
     3. Demosaic with :func:`imageform.sensor.demosaic` (``demosaic`` names the method).
-    4. Camera RGB to XYZ: :math:`M = C^{-1}\\,\\mathrm{diag}(C\\,\\mathbf w)`, with C the
-       colour matrix (XYZ to camera) and :math:`\\mathbf w` the XYZ of the calibration
+    4. Camera RGB to XYZ: :math:`M = C^{-1}\,\mathrm{diag}(C\,\mathbf w)`, with C the
+       colour matrix (XYZ to camera) and :math:`\mathbf w` the XYZ of the calibration
        illuminant's white (Y = 1), so that white-balanced white (1, 1, 1) maps to
-       :math:`\\mathbf w` (the normalisation of dcraw/LibRaw's ``cam_xyz_coeff``, which
+       :math:`\mathbf w` (the normalisation of dcraw/LibRaw's ``cam_xyz_coeff``, which
        scales the rows of :math:`C` by its camera response to white).
-    5. Bradford chromatic adaptation from :math:`\\mathbf w` to the output space's white
+    5. Bradford chromatic adaptation from :math:`\mathbf w` to the output space's white
        (identity for a D65 matrix and sRGB).
     6. XYZ to the output space's linear RGB, clipped to [0, 1], encoded with the space's
        transfer function (``linear=True``: not encoded).
