@@ -1,4 +1,4 @@
-"""numba kernels of the checkerboard detector, each with a plain NumPy/SciPy twin.
+r"""numba kernels of the checkerboard detector, each with a plain NumPy/SciPy twin.
 
 - :func:`smooth_saddle_numba` / :func:`smooth_saddle_numpy`: separable Gaussian smoothing
   (edges replicated, the taps of :func:`gaussian_weights`) and the saddle response
@@ -17,7 +17,7 @@ replicated), central-difference gradients ``g_p`` are weighted by
 
 .. math::
 
-    \\Big(\\sum_p w_p\\, g_p g_p^\\top\\Big)\\, q' = \\sum_p w_p\\, g_p g_p^\\top\\, p ,
+    \Big(\sum_p w_p\, g_p g_p^\top\Big)\, q' = \sum_p w_p\, g_p g_p^\top\, p ,
 
 i.e. the point ``q'`` to which every gradient in the window is orthogonal. It stops after
 ``max_iter`` iterations or when the step is ``<= eps``; a point that ends farther than the

@@ -76,7 +76,8 @@ L_TABLE: np.ndarray = np.clip(
 def xyz_tables(m: np.ndarray) -> np.ndarray:
     """uint32 (3 * 3 * 256,): entry ``768 i + 256 j + v`` is ``round(m[i, j] decode(v) SCALE)``
     (negative entries, which no RGB->XYZ matrix has, clipped to 0), so that
-    ``X_i = sum_j T[768 i + 256 j + v_j]`` is the fixed-point linear XYZ / white of a pixel."""
+    ``X_i = sum_j T[768 i + 256 j + v_j]`` is the fixed-point linear XYZ / white of a pixel.
+    """
     t = m[:, :, None] * DECODE_LUT.astype(np.float64)[None, None, :] * SCALE
     return np.clip(np.rint(t), 0, None).astype(np.uint32).reshape(-1)
 

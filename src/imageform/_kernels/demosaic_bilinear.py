@@ -136,7 +136,8 @@ def _make_rows(own_first: bool, red_row: bool, wide: bool):  # type: ignore[no-u
     (little-endian): uint8 (``wide`` False) 4 pixels = 12 bytes = 3 words per step, uint16
     2 pixels = 3 words. ``own_first``: the row's red (blue) site at even columns;
     ``red_row``: the own colour is red (channel 0). Constant channel order and no selects,
-    so LLVM vectorises the loop."""
+    so LLVM vectorises the loop.
+    """
     pair = _own_green if own_first else _green_own
 
     def rgb(own, g, oth):  # type: ignore[no-untyped-def]
@@ -248,7 +249,8 @@ def bilinear_int_numba(
     at ``(ry, rx)`` into ``out`` (``(H, W, 3)``, same dtype, C-contiguous): integer means
     rounded half up (twin: :func:`bilinear_int_numpy`). Rows whose bytes make whole 32-bit
     words (W a multiple of 4 for uint8, of 2 for uint16; little-endian) run the packed,
-    vectorised loop; other widths the per-pixel one."""
+    vectorised loop; other widths the per-pixel one.
+    """
     h, w = raw.shape
     step = 2 if raw.itemsize == 2 else 4
     if w % step == 0 and sys.byteorder == "little":

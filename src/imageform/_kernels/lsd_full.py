@@ -46,7 +46,8 @@ _JIT: dict[str, Any] = {"error_model": "numpy"}
 def _sampler_taps(n_out, size, scale, sigma, h):  # type: ignore[no-untyped-def]  # pragma: no cover
     """One axis of :func:`gaussian_sampler`: for each of ``n_out`` output samples its
     ``2 h + 1`` normalised Gaussian weights (centred on ``i / scale``) and their source
-    indices in ``[0, size)`` with the symmetric (mirror) boundary."""
+    indices in ``[0, size)`` with the symmetric (mirror) boundary.
+    """
     n = 1 + 2 * h
     k = np.empty((n_out, n))
     src = np.empty((n_out, n), dtype=np.int64)
@@ -255,7 +256,8 @@ def _inter_hi(x, x1, y1, x2, y2):  # type: ignore[no-untyped-def]  # pragma: no 
 @njit(**_JIT)
 def rect_nfa(rec, angles, log_nt):  # type: ignore[no-untyped-def]  # pragma: no cover
     """``-log10 NFA`` of a rectangle: the pixels whose centres lie inside it (LSD's rectangle
-    iterator, column by column) and how many are aligned with its direction within prec."""
+    iterator, column by column) and how many are aligned with its direction within prec.
+    """
     ny, nx = angles.shape
     x1, y1, x2, y2, width = rec[0], rec[1], rec[2], rec[3], rec[4]
     theta, dx, dy, prec, p = rec[7], rec[8], rec[9], rec[10], rec[11]
@@ -316,7 +318,8 @@ def rect_nfa(rec, angles, log_nt):  # type: ignore[no-untyped-def]  # pragma: no
 @njit(**_JIT)
 def region_grow(x, y, angles, reg_x, reg_y, used, prec):  # type: ignore[no-untyped-def]  # pragma: no cover
     """Grow a region of 8-connected pixels aligned within ``prec`` with the running mean
-    angle, from the seed (x, y); marks them used. Returns ``(size, reg_angle)``."""
+    angle, from the seed (x, y); marks them used. Returns ``(size, reg_angle)``.
+    """
     ny, nx = angles.shape
     reg_x[0] = x
     reg_y[0] = y
@@ -351,7 +354,8 @@ def region_grow(x, y, angles, reg_x, reg_y, used, prec):  # type: ignore[no-unty
 @njit(**_JIT)
 def _region2rect(reg_x, reg_y, size, modgrad, reg_angle, prec, p, rec):  # type: ignore[no-untyped-def]  # pragma: no cover
     """The rectangle of a region: gradient-weighted centre of mass, the principal axis of
-    inertia (oriented like the region's angle), and the extents along and across it."""
+    inertia (oriented like the region's angle), and the extents along and across it.
+    """
     x = 0.0
     y = 0.0
     s = 0.0
@@ -445,7 +449,8 @@ def _reduce_region_radius(reg_x, reg_y, size, modgrad, reg_angle, prec, p, rec, 
 @njit(**_JIT)
 def _refine(reg_x, reg_y, size, modgrad, reg_angle, prec, p, rec, used, angles, density_th):  # type: ignore[no-untyped-def]  # pragma: no cover
     """LSD's refinement: a region whose rectangle is less than ``density_th`` full is regrown
-    from its seed with a tolerance adapted to the angles near the seed, then shrunk."""
+    from its seed with a tolerance adapted to the angles near the seed, then shrunk.
+    """
     if _density(size, rec) >= density_th:
         return True, size
     xc = reg_x[0]
@@ -477,7 +482,8 @@ def _refine(reg_x, reg_y, size, modgrad, reg_angle, prec, p, rec, used, angles, 
 @njit(**_JIT)
 def _rect_improve(rec, angles, log_nt, log_eps):  # type: ignore[no-untyped-def]  # pragma: no cover
     """LSD's rectangle improvement: finer precisions, thinner, each side thinner, finer
-    again; the best -log10 NFA is kept (``rec`` is updated in place)."""
+    again; the best -log10 NFA is kept (``rec`` is updated in place).
+    """
     delta = 0.5
     delta_2 = delta / 2.0
     log_nfa = rect_nfa(rec, angles, log_nt)
