@@ -111,7 +111,8 @@ def _map_chunks(
 
 def _with_shapes(exc: Exception, probes: list[np.ndarray], arrays: tuple[Any, ...]) -> Exception:
     """``exc`` with every probe shape in its message replaced by its array's shape (a
-    refusal on the one-pixel probe must not report ``(1, 4)`` for a (100, 4) input)."""
+    refusal on the one-pixel probe must not report ``(1, 4)`` for a (100, 4) input).
+    """
     msg = str(exc)
     for p, a in zip(probes, arrays, strict=True):
         if p.shape != a.shape:

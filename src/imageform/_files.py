@@ -47,7 +47,8 @@ _PART = ".part"
 
 def same_file(a: Path, b: Path) -> bool:
     """True when ``a`` and ``b`` name one file: same device and inode when both exist (links
-    included), else the same resolved path."""
+    included), else the same resolved path.
+    """
     try:
         return os.path.samefile(a, b)
     except OSError:
@@ -112,7 +113,8 @@ def _pid_alive(pid: int) -> bool:
 
 def remove_stale_parts(final: Path) -> int:
     """Remove temporary siblings of ``final`` left by processes that no longer run; returns
-    how many were removed."""
+    how many were removed.
+    """
     final = Path(final)
     folder = final.parent if str(final.parent) else Path(".")
     if not folder.is_dir():
@@ -344,7 +346,8 @@ def glob_regex(pattern: str) -> re.Pattern[str]:
 def glob_paths(pattern: str) -> list[str]:
     """The paths matching ``pattern`` as ``glob.glob(pattern, recursive=True)`` finds them,
     but ``**`` enters each real folder once: a symbolic link to an ancestor (a loop) is not
-    followed again, where glob would recurse until the path is too long (minutes)."""
+    followed again, where glob would recurse until the path is too long (minutes).
+    """
     if "**" not in pattern:
         return glob.glob(pattern)
     matcher = glob_regex(pattern)

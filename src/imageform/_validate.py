@@ -91,7 +91,8 @@ def _min_max(x: Any, xp: Any) -> tuple[float, float]:
 def _check_values(x: Any, xp: Any, name: str, *, finite: bool, range_check: bool) -> None:
     """The value checks of :func:`check_finite` and :func:`as_image` on a float array:
     NaN/inf (``finite``) and 0-255 values stored as floats (``range_check``), from one
-    min/max reduction."""
+    min/max reduction.
+    """
     if not (finite or range_check) or math.prod(x.shape) == 0:
         return
     lo, mx = _min_max(x, xp)
@@ -265,7 +266,8 @@ def describe(value: object, width: int = 40) -> str:
 
 def _as_number(value: object, name: str) -> float:
     """A real number from a Python or NumPy scalar (or a 0-d real array or tensor); never a
-    bool, string, complex, None or a sequence."""
+    bool, string, complex, None or a sequence.
+    """
     item = value
     if getattr(value, "ndim", None) == 0 and hasattr(value, "item"):
         item = value.item()
@@ -391,7 +393,8 @@ def as_size(
 
 def memory_limit() -> int:
     """The most bytes one allocation may ask for: ``IMAGEFORM_MAX_MEMORY`` (bytes; suffixes
-    K, M, G accepted) if set, else half of this machine's physical memory."""
+    K, M, G accepted) if set, else half of this machine's physical memory.
+    """
     text = os.environ.get("IMAGEFORM_MAX_MEMORY", "").strip().upper()
     if text:
         scale = {"K": 2**10, "M": 2**20, "G": 2**30}.get(text[-1:], 1)
@@ -595,7 +598,8 @@ def check_real_values(
     positive: bool = False,
 ) -> None:
     """The value checks of :func:`as_real_array` on a float NumPy array (one min/max pass):
-    NaN always, inf unless ``finite=False``, and the sign."""
+    NaN always, inf unless ``finite=False``, and the sign.
+    """
     if not arr.size:
         return
     lo, hi = float(np.min(arr)), float(np.max(arr))
@@ -714,7 +718,8 @@ def _all_finite(out: Any) -> bool:
 
 def _dtype_kind(value: object) -> str:
     """NumPy's dtype kind of ``value`` (``"b"`` bool, ``"c"`` complex, ``"O"`` object, ``"U"``
-    string ...) without converting an array; ``""`` when it has none."""
+    string ...) without converting an array; ``""`` when it has none.
+    """
     dt = getattr(value, "dtype", None)
     if dt is None:
         if isinstance(value, bool | np.bool_):
@@ -810,7 +815,8 @@ def as_real_ndarray(
 def check_name(value: object, valid: Collection[str], what: str, name: str = "") -> str:
     """:func:`check_option` naming the parameter ``name`` (``"unknown spectral table 'x' for
     key"``) and listing at most ~110 characters of the valid names, so that the message stays
-    one line under 200 characters however many names are valid; a non-str is a TypeError."""
+    one line under 200 characters however many names are valid; a non-str is a TypeError.
+    """
     if not isinstance(value, str):
         raise TypeError(f"expected {name or what} as a {what} name (str), got {describe(value)}")
     try:
