@@ -1,5 +1,6 @@
-r"""numba kernels of the colour-chart detector (:mod:`imageform.analysis.chart_detect`), each
-with a plain NumPy/SciPy twin.
+r"""numba kernels of the colour-chart detector (:mod:`imageform.analysis.chart_detect`).
+
+Each kernel has a plain NumPy/SciPy twin.
 
 - :func:`flat_gradient_numba` / :func:`flat_gradient_numpy`: the colour gradient magnitude
   :math:`\sqrt{\sum_c (S_x * G * I_c)^2 + (S_y * G * I_c)^2} / 8` of an (H, W, 3) image:

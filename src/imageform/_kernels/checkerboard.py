@@ -54,7 +54,7 @@ __all__ = [
 
 
 def corner_window_weights(hx: int, hy: int) -> NDArray[np.float64]:
-    """The ``(2 hy + 1, 2 hx + 1)`` Gaussian window ``exp(-(x/hx)²) exp(-(y/hy)²)``."""
+    """Return the ``(2 hy + 1, 2 hx + 1)`` Gaussian window ``exp(-(x/hx)²) exp(-(y/hy)²)``."""
     y = np.arange(-hy, hy + 1, dtype=np.float64) / hy
     x = np.arange(-hx, hx + 1, dtype=np.float64) / hx
     return np.exp(-(y**2))[:, None] * np.exp(-(x**2))[None, :]

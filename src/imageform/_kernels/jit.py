@@ -42,7 +42,7 @@ _HERE = Path(__file__).resolve().parent
 
 
 def user_cache_dir() -> Path:
-    """The user's cache folder for imageform's compiled kernels (platform conventions)."""
+    """Return the user's cache folder for imageform's compiled kernels (platform conventions)."""
     if sys.platform == "win32":
         base = Path(os.environ.get("LOCALAPPDATA") or Path.home() / "AppData" / "Local")
     elif sys.platform == "darwin":

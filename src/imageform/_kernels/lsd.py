@@ -28,10 +28,11 @@ def _angle_diff(a: float, b: float) -> float:  # pragma: no cover - numba
 
 @njit
 def grow_regions(angle, order, tau, min_size):  # type: ignore[no-untyped-def]  # pragma: no cover
-    """Label 8-connected regions of pixels whose level-line angle is within ``tau`` of the
-    region's running mean angle, seeded in ``order`` (decreasing gradient). NaN angles are
-    NOTDEF. Regions smaller than ``min_size`` are discarded (label -1 stays on their pixels
-    as 'used').
+    """Label 8-connected regions of pixels aligned with the region's running mean angle.
+
+    A pixel joins when its level-line angle is within ``tau`` of that angle; regions are
+    seeded in ``order`` (decreasing gradient). NaN angles are NOTDEF. Regions smaller than
+    ``min_size`` are discarded (label -1 stays on their pixels as 'used').
     """
     H, W = angle.shape
     labels = np.full((H, W), -1, dtype=np.int32)

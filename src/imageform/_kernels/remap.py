@@ -76,7 +76,8 @@ def _gather_row(
     fill: float,
     orow: np.ndarray,
 ) -> None:
-    """Bilinear interpolation of one output row (``orow`` flat, ``wo * nc``), as lerps:
+    """Interpolate one output row bilinearly (``orow`` flat, ``wo * nc``), as lerps.
+
     ``(1-ay)((1-ax) I00 + ax I01) + ay((1-ax) I10 + ax I11)``.
     """
     for j in range(idx.shape[0]):
@@ -147,8 +148,9 @@ def undistort_brown_conrady(
     fill: float,
     out: np.ndarray,
 ) -> None:  # pragma: no cover
-    """Brown-Conrady (OpenCV's rational model, as ``bc_distort_point``) fused with sampling:
-    the coefficients hoisted, the row terms computed once per row, and the rational
+    """Distort with Brown-Conrady (OpenCV's rational model, as ``bc_distort_point``) and sample.
+
+    The coefficients are hoisted, the row terms computed once per row, and the rational
     denominator skipped when ``k4 = k5 = k6 = 0``.
     """
     nb, h, w, nc = img.shape
