@@ -1,5 +1,6 @@
-"""More correlated-colour-temperature methods: McCamy (1992), Hernández-Andrés (1999),
-Ohno (2013).
+"""More correlated-colour-temperature methods.
+
+McCamy (1992), Hernández-Andrés (1999), Ohno (2013).
 
 Selected through :func:`imageform.color.xy_to_cct` (``method="mccamy1992"``,
 ``"hernandez1999"``, ``"ohno2013"``) or called directly. McCamy's and Hernández-Andrés'
@@ -176,8 +177,9 @@ def planckian_uv(cct: object) -> np.ndarray:
 
 @functools.lru_cache(maxsize=4)
 def _ohno_table(start: float, end: float, spacing: float) -> np.ndarray:
-    """(T, u, v) rows: T from ``start`` to ``end`` in geometric steps of ``spacing``,
-    narrowed to 1 + (spacing - 1)/10 towards ``end`` (colour-science's cascade).
+    """Tabulate (T, u, v) rows with T from ``start`` to ``end`` in geometric steps of ``spacing``.
+
+    The steps are narrowed to 1 + (spacing - 1)/10 towards ``end`` (colour-science's cascade).
     """
     ti = [start, start + 1.0]
     nxt, step = start + 1.0, spacing

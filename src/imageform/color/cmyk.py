@@ -43,7 +43,7 @@ def _cmyk_to_cmy(xp: Any, cmyk: Any) -> Any:
 
 @chunkwise(1)
 def srgb_to_cmy(image: object) -> Any:
-    """Encoded RGB to CMY: :math:`(C, M, Y) = 1 - (R, G, B)`.
+    """Convert encoded RGB to CMY: :math:`(C, M, Y) = 1 - (R, G, B)`.
 
     Parameters
     ----------
@@ -112,7 +112,7 @@ def cmyk_to_cmy(cmyk: object) -> Any:
 
 @chunkwise(1)
 def srgb_to_cmyk(image: object) -> Any:
-    """Encoded RGB to CMYK (via CMY), shape (..., 4).
+    """Convert encoded RGB to CMYK (via CMY), shape (..., 4).
 
     Examples
     --------

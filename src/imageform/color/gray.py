@@ -55,7 +55,7 @@ def _gray_to_srgb(xp: Any, g: Any) -> Any:
 
 @chunkwise(1)
 def srgb_to_gray(image: object, method: str = "rec601") -> Any:
-    r"""Encoded sRGB to an encoded grey image, shape (..., 1).
+    r"""Convert encoded sRGB to an encoded grey image, shape (..., 1).
 
     .. math::
         \text{rec601:}\; Y' = 0.299 R' + 0.587 G' + 0.114 B' \qquad
@@ -90,7 +90,7 @@ def srgb_to_gray(image: object, method: str = "rec601") -> Any:
 
 @chunkwise(1)
 def gray_to_srgb(gray: object) -> Any:
-    """A grey image (..., 1) to sRGB (..., 3) by repeating the value (R = G = B).
+    """Convert a grey image (..., 1) to sRGB (..., 3) by repeating the value (R = G = B).
 
     Examples
     --------

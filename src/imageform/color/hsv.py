@@ -96,7 +96,7 @@ def _rgb_in(image: object) -> tuple[Any, Any]:
 
 @chunkwise(1)
 def srgb_to_hsv(image: object) -> Any:
-    r"""Encoded RGB to HSV (hexcone model).
+    r"""Convert encoded RGB to HSV (hexcone model).
 
     .. math::
         V = \max(R,G,B), \; S = (V - \min) / V, \;
@@ -129,8 +129,10 @@ def srgb_to_hsv(image: object) -> Any:
 
 @chunkwise(1)
 def hsv_to_srgb(hsv: object) -> Any:
-    r"""HSV to encoded RGB: :math:`f(n) = V - VS\max(0, \min(k, 4 - k, 1))`,
-    :math:`k = (n + H/60) \bmod 6` for n = 5, 3, 1.
+    r"""Convert HSV to encoded RGB.
+
+    :math:`f(n) = V - VS\max(0, \min(k, 4 - k, 1))`, :math:`k = (n + H/60) \bmod 6` for
+    n = 5, 3, 1.
 
     Hue may be any real number (taken modulo 360).
 
@@ -145,8 +147,9 @@ def hsv_to_srgb(hsv: object) -> Any:
 
 @chunkwise(1)
 def srgb_to_hsl(image: object) -> Any:
-    r"""Encoded RGB to HSL (double hexcone): L = (max + min)/2,
-    :math:`S = \Delta / (1 - |2L - 1|)`, H as in HSV.
+    r"""Convert encoded RGB to HSL (double hexcone).
+
+    L = (max + min)/2, :math:`S = \Delta / (1 - |2L - 1|)`, H as in HSV.
 
     Source: A. R. Smith (1978); Joblove & Greenberg, "Color spaces for computer graphics",
     SIGGRAPH 1978.
@@ -162,8 +165,10 @@ def srgb_to_hsl(image: object) -> Any:
 
 @chunkwise(1)
 def hsl_to_srgb(hsl: object) -> Any:
-    r"""HSL to encoded RGB: :math:`f(n) = L - a \max(-1, \min(k - 3, 9 - k, 1))`,
-    :math:`a = S \min(L, 1 - L)`, :math:`k = (n + H/30) \bmod 12` for n = 0, 8, 4.
+    r"""Convert HSL to encoded RGB.
+
+    :math:`f(n) = L - a \max(-1, \min(k - 3, 9 - k, 1))`, :math:`a = S \min(L, 1 - L)`,
+    :math:`k = (n + H/30) \bmod 12` for n = 0, 8, 4.
 
     Examples
     --------
@@ -176,7 +181,7 @@ def hsl_to_srgb(hsl: object) -> Any:
 
 @chunkwise(1)
 def srgb_to_hsi(image: object) -> Any:
-    r"""Encoded RGB to HSI (Gonzalez & Woods).
+    r"""Convert encoded RGB to HSI (Gonzalez & Woods).
 
     .. math::
         I = \frac{R+G+B}{3}, \quad S = 1 - \frac{\min(R,G,B)}{I}, \quad

@@ -58,6 +58,7 @@ class RGBSpace:
     source: str
 
     def __post_init__(self) -> None:
+        """Check every field: the names, primaries, white point and transfer function."""
         # validated here, so that a space built by hand cannot give NaN matrices later
         from imageform.color.transfer import TRANSFER_FUNCTIONS
 
@@ -88,7 +89,7 @@ class RGBSpace:
         object.__setattr__(self, "white_xy", (float(white[0]), float(white[1])))
 
     def matrix_to_xyz(self) -> np.ndarray:
-        """The derived RGB -> XYZ matrix (float64, (3, 3)); see :func:`rgb_to_xyz_matrix`."""
+        """Return the derived RGB -> XYZ matrix (float64, (3, 3)); see :func:`rgb_to_xyz_matrix`."""
         return _npm(self.primaries_xy, self.white_xy).copy()
 
 
@@ -169,9 +170,11 @@ def _space_key(name: str) -> str:
 
 
 def rgb_space(space: str | RGBSpace) -> RGBSpace:
-    """The :class:`RGBSpace` named ``space`` (a key of :data:`RGB_SPACES`, any case, with
-    ``-``, spaces or dots, or an alias such as ``"p3"``, ``"bt2020"``, ``"romm"``); an
-    :class:`RGBSpace` is returned as it is.
+    """Return the :class:`RGBSpace` named ``space``.
+
+    ``space`` is a key of :data:`RGB_SPACES`, any case, with ``-``, spaces or dots, or an
+    alias such as ``"p3"``, ``"bt2020"``, ``"romm"``; an :class:`RGBSpace` is returned as it
+    is.
 
     Examples
     --------
@@ -206,7 +209,7 @@ def _npm(primaries: tuple[tuple[float, float], ...], white: tuple[float, float])
 
 
 def rgb_to_xyz_matrix(space: str | RGBSpace = "srgb") -> np.ndarray:
-    r"""The 3x3 matrix from linear RGB of ``space`` to XYZ (Y = 1 at the space's white).
+    r"""Return the 3x3 matrix from linear RGB of ``space`` to XYZ (Y = 1 at the space's white).
 
     Derived from the primaries and white point (SMPTE RP 177-1993, clause 3.3):
 
@@ -241,7 +244,7 @@ def rgb_to_xyz_matrix(space: str | RGBSpace = "srgb") -> np.ndarray:
 
 
 def xyz_to_rgb_matrix(space: str | RGBSpace = "srgb") -> np.ndarray:
-    """The inverse of :func:`rgb_to_xyz_matrix` (XYZ to linear RGB), float64 (3, 3).
+    """Return the inverse of :func:`rgb_to_xyz_matrix` (XYZ to linear RGB), float64 (3, 3).
 
     Examples
     --------

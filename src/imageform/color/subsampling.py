@@ -128,6 +128,7 @@ class SubsampledChroma(_SubsampledChroma):
     __slots__ = ()
 
     def __new__(cls, luma: Any, chroma: Any) -> SubsampledChroma:
+        """Build the result, refusing a non-real or non-finite ``luma`` or ``chroma``."""
         check_result_array(luma, "luma")
         check_result_array(chroma, "chroma")
         return super().__new__(cls, luma, chroma)

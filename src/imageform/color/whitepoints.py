@@ -180,7 +180,7 @@ def whitepoint_xyz(name: str, *, observer: int = 2) -> np.ndarray:
 
 @_deprecate.parameters(positional=("observer",))
 def resolve_white(white: Any, *, observer: int = 2, name: str = "white") -> np.ndarray:
-    """A ``white=`` argument as XYZ (float64, shape (3,), Y as given or 1).
+    """Resolve a ``white=`` argument to XYZ (float64, shape (3,), Y as given or 1).
 
     Accepted forms: an illuminant name (``"D65"``, see :data:`WHITEPOINTS_XY`); an RGB space
     name (``"srgb"``, ``"prophoto"`` ...: the white its standard writes, see

@@ -135,7 +135,7 @@ def rgb_to_ycbcr(
     signal_range: str = "full",
     bits: int | None = None,
 ) -> Any:
-    """Encoded R'G'B' to Y'CbCr (analog or code values), see the module docstring.
+    """Convert encoded R'G'B' to Y'CbCr (analog or code values), see the module docstring.
 
     Parameters
     ----------
