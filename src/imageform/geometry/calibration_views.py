@@ -1,5 +1,6 @@
-"""The views of a calibration as :func:`~imageform.geometry.calibrate_camera` checks them:
-one ``(N, 3)`` object-point and one ``(N, 2)`` image-point array per view (shared by the
+"""The views of a calibration as :func:`~imageform.geometry.calibrate_camera` checks them.
+
+One ``(N, 3)`` object-point and one ``(N, 2)`` image-point array per view (shared by the
 closed-form initialisation, the refinement and stereo calibration).
 """
 

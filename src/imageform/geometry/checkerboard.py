@@ -112,6 +112,7 @@ class CheckerboardResult:
     sigma: float | None = None
 
     def __post_init__(self) -> None:
+        """Check every field (corners required when found) and convert the arrays to NumPy."""
         object.__setattr__(self, "found", as_bool(self.found, "found"))
         if not isinstance(self.reason, str):
             raise InvalidInputError(f"expected reason as a str, got {describe(self.reason)}")
@@ -140,7 +141,7 @@ class CheckerboardResult:
             object.__setattr__(self, "sigma", as_real(self.sigma, "sigma", positive=True))
 
     def grid(self) -> NDArray[np.float64]:
-        """The corners as ``(rows, cols, 2)``; raises when not found."""
+        """Return the corners as ``(rows, cols, 2)``; raises when not found."""
         if self.corners is None:
             raise InvalidInputError(f"no checkerboard was found: {self.reason}")
         cols, rows = self.pattern_size

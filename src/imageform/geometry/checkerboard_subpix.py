@@ -37,7 +37,7 @@ class RefinedCorners(NamedTuple):
 
 
 def as_gray(image: object) -> NDArray[np.floating]:
-    """A grey NumPy image (H, W): float32 for integer/float32 input, float64 for float64."""
+    """Make a grey NumPy image (H, W): float32 for integer/float32 input, float64 for float64."""
     arr = as_image(image, "image", channels=None, range_check=False)
     # float32 (integer and float32 input) or float64 (float64 input): docs/conventions.md
     arr = np.asarray(to_numpy(arr))

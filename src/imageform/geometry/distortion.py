@@ -141,6 +141,7 @@ class BrownConrady:
     k6: float = 0.0
 
     def __post_init__(self) -> None:
+        """Check that every coefficient is a real within ±1e6."""
         _check_coeffs(self)
 
     @property
@@ -232,10 +233,12 @@ class DivisionModel:
     k2: float = 0.0
 
     def __post_init__(self) -> None:
+        """Check that every coefficient is a real within ±1e6."""
         _check_coeffs(self)
 
     @property
     def coeffs(self) -> tuple[float, ...]:
+        """``(k1, k2)`` as floats."""
         return (float(self.k1), float(self.k2))
 
     def distort(self, xy: Any, max_iter: int = 30, tol: float | None = None) -> Any:
@@ -288,10 +291,12 @@ class KannalaBrandt:
     k4: float = 0.0
 
     def __post_init__(self) -> None:
+        """Check that every coefficient is a real within ±1e6."""
         _check_coeffs(self)
 
     @property
     def coeffs(self) -> tuple[float, ...]:
+        """``(k1, k2, k3, k4)`` as floats (the order of OpenCV fisheye coefficients)."""
         return tuple(float(v) for v in astuple(self))
 
     def distort(self, xy: Any) -> Any:

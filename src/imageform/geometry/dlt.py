@@ -19,7 +19,7 @@ __all__ = ["estimate_projection_matrix"]
 
 
 def estimate_projection_matrix(points_3d: ArrayLike, points_2d: ArrayLike) -> Array:
-    r"""The 3×4 camera matrix P with ``x ~ P X`` by the normalised DLT.
+    r"""Estimate the 3×4 camera matrix P with ``x ~ P X`` by the normalised DLT.
 
     .. math::
         \begin{pmatrix} \tilde X_i^T & 0^T & -u_i \tilde X_i^T \\

@@ -195,7 +195,7 @@ def _homog2(points: ArrayLike, name: str, xp: Any) -> Array:
 
 
 def line_through(p: ArrayLike, q: ArrayLike) -> Array:
-    """The line through two image points, ``l = p × q``, normalised so ``a² + b² = 1``.
+    """Return the line through two image points, ``l = p × q``, normalised so ``a² + b² = 1``.
 
     Points are ``(..., 2)`` Euclidean or ``(..., 3)`` homogeneous (a point at infinity gives
     the line through ``p`` in that direction). With the normalisation, ``l · (x, y, 1)`` is

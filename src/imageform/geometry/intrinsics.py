@@ -37,7 +37,7 @@ __all__ = ["Intrinsics", "intrinsic_matrix", "projected_size"]
 def intrinsic_matrix(
     fx: ArrayLike, fy: ArrayLike, cx: ArrayLike, cy: ArrayLike, skew: ArrayLike = 0.0
 ) -> Array:
-    """The 3×3 calibration matrix K (batched if the parameters are arrays).
+    """Build the 3×3 calibration matrix K (batched if the parameters are arrays).
 
     ``fx`` and ``fy`` must be > 0 (zero makes K singular, a negative value mirrors the
     image): InvalidInputError otherwise.
@@ -121,6 +121,7 @@ class Intrinsics:
     image_size: tuple[int, int] | None = None
 
     def __post_init__(self) -> None:
+        """Check the parameters (bounded reals, positive focal lengths) and the image size."""
         for name in ("fx", "fy", "cx", "cy", "skew"):
             v = as_real(getattr(self, name), name, minimum=-MAX_MAGNITUDE, maximum=MAX_MAGNITUDE)
             object.__setattr__(self, name, v)

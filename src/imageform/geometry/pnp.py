@@ -74,7 +74,7 @@ def _procrustes(M: F64) -> F64:
 
 
 def _null_vector(A: F64) -> F64:
-    """Unit ``x`` minimising ``‖A x‖`` for each ``A`` (B, m, n) (eigh of ``AᵀA``)."""
+    """Return the unit ``x`` minimising ``‖A x‖`` for each ``A`` (B, m, n) (eigh of ``AᵀA``)."""
     return np.linalg.eigh(np.swapaxes(A, -1, -2) @ A)[1][..., 0]
 
 
@@ -273,8 +273,10 @@ def _pnp_result(
     points_shape: tuple[int, ...],
     out_dtype: npt.DTypeLike,
 ) -> PnPResult:
-    """The flat batch's poses as a :class:`PnPResult` of shape ``batch``: valid where every
-    point is in front of the camera and the RMS is finite; every point an inlier.
+    """Pack the flat batch's poses as a :class:`PnPResult` of shape ``batch``.
+
+    Valid where every point is in front of the camera and the RMS is finite; every point an
+    inlier.
     """
     depth = np.einsum("bnj,bj->bn", Xf, R[:, 2, :]) + t[:, 2:3]
     valid = np.all(depth > 0, axis=-1) & np.isfinite(rms)

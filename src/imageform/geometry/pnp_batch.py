@@ -37,8 +37,10 @@ def _residuals(R: F64, t: F64, X: F64, uv: F64, K: F64) -> tuple[F64, F64]:
 def _refine(
     R: F64, t: F64, X: F64, uv: F64, K: F64, max_iter: int, tol: float = 1e-10
 ) -> tuple[F64, F64, F64]:
-    """Batched LM on ``Σ ‖π(K_b (R X + t)) - u‖²`` (``R ← exp([δω]ₓ) R``, ``t ← t + δt``);
-    steps that put a point at or behind the camera are rejected.
+    """Refine by batched LM on ``Σ ‖π(K_b (R X + t)) - u‖²``.
+
+    Updates are ``R ← exp([δω]ₓ) R``, ``t ← t + δt``; steps that put a point at or behind the
+    camera are rejected.
     """
     B = X.shape[0]
     r, cam = _residuals(R, t, X, uv, K)

@@ -88,7 +88,7 @@ def orthographic_project(
 def orthographic_matrix(
     scale: float | tuple[float, float] = 1.0, principal_point: tuple[float, float] = (0.0, 0.0)
 ) -> FloatArray:
-    """The 3×4 affine camera of :func:`orthographic_project` (last row ``(0, 0, 0, 1)``).
+    """Build the 3×4 affine camera of :func:`orthographic_project` (last row ``(0, 0, 0, 1)``).
 
     Examples
     --------
@@ -148,7 +148,7 @@ def weak_perspective_project(
 
 
 def weak_perspective_matrix(K: ArrayLike, depth: float) -> FloatArray:
-    """The 3×4 camera ``K [[1,0,0,0],[0,1,0,0],[0,0,0,Z₀]]`` (camera frame in, pixels out).
+    """Build the 3×4 camera ``K [[1,0,0,0],[0,1,0,0],[0,0,0,Z₀]]`` (camera frame in, pixels out).
 
     Examples
     --------
@@ -191,6 +191,7 @@ class ConeBeamGeometry:
     principal_point: tuple[float, float] | None = None
 
     def __post_init__(self) -> None:
+        """Check the distances (object between source and detector), pitch and detector."""
         sdd = as_real(self.source_to_detector, "source_to_detector", positive=True, maximum=1e50)
         sod = as_real(self.source_to_object, "source_to_object", positive=True, maximum=1e50)
         pitch = as_real(self.pixel_pitch, "pixel_pitch", positive=True, maximum=1e50)

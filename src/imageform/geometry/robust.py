@@ -94,8 +94,10 @@ def _sq_forward(H: F64, src: F64, dst: F64) -> F64:
 
 
 def _refine(H: F64, src: F64, dst: F64, mode: str, max_iter: int) -> F64:
-    """LM on the forward (``dst``) or symmetric transfer error, parameters ``H`` in
-    Hartley-normalised coordinates (gauge: the scale, left to the damping).
+    """Refine ``H`` by LM on the forward (``dst``) or symmetric transfer error.
+
+    The parameters ``H`` are in Hartley-normalised coordinates (gauge: the scale, left to the
+    damping).
     """
     sn, Ts = hartley(src)
     dn, Td = hartley(dst)

@@ -122,8 +122,9 @@ def euler_to_matrix(angles: ArrayLike, order: str) -> Array:
 
 
 def matrix_to_euler(R: ArrayLike, order: str) -> Array:
-    """Euler angles ``(..., 3)`` of a rotation in the named order (inverse of
-    :func:`euler_to_matrix`).
+    """Return the Euler angles ``(..., 3)`` of a rotation in the named order.
+
+    The inverse of :func:`euler_to_matrix`.
 
     Tait–Bryan orders (three different axes) give the middle angle in ``[-π/2, π/2]``;
     proper Euler orders (``"zxz"`` ...) give it in ``[0, π]``. At gimbal lock the first
@@ -305,7 +306,7 @@ def quaternion_to_matrix(q: ArrayLike) -> Array:
 
 
 def matrix_to_quaternion(R: ArrayLike) -> Array:
-    """Unit quaternion ``(w, x, y, z)`` with ``w >= 0`` of a rotation matrix.
+    """Return the unit quaternion ``(w, x, y, z)`` with ``w >= 0`` of a rotation matrix.
 
     Shepperd's (1978) method: the largest of ``4w², 4x², 4y², 4z²`` picks the branch,
     so no branch divides by a small number.

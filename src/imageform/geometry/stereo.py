@@ -445,7 +445,7 @@ def _size(value: Any, name: str) -> tuple[int, int]:
 
 
 def _model(value: Any, name: str, method: str) -> Any:
-    """A distortion model (anything with ``method`` on normalised coordinates) or None."""
+    """Check a distortion model (anything with ``method`` on normalised coordinates) or None."""
     if value is not None and not callable(getattr(value, method, None)):
         raise InvalidInputError(
             f"expected {name} as a distortion model (BrownConrady, DivisionModel, "
@@ -465,7 +465,7 @@ def _globals(cal: CalibrationResult) -> F64:
 
 
 def _poses(cal: CalibrationResult, objs: list[F64], imgs: list[F64]) -> tuple[F64, F64]:
-    """The per-view poses of ``cal``, or (when it holds other views) from PnP with its K."""
+    """Return the per-view poses of ``cal``, or (when it holds other views) from PnP with its K."""
     if cal.rvecs.shape[0] == len(objs):
         return np.asarray(cal.rvecs, dtype=float), np.asarray(cal.tvecs, dtype=float)
     from imageform.geometry.pnp import solve_pnp

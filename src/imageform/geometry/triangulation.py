@@ -24,10 +24,12 @@ F64 = NDArray[np.float64]
 
 
 class TriangulationResult(NamedTuple):
-    """Triangulated points ``(M, 3)``, their covariances ``(M, 3, 3)`` (world units²), the
-    reprojection RMS per point ``(M,)`` in pixels, and ``valid (M,)``: in front of every
-    camera that sees it and finite. A point whose rays are parallel (no baseline) has no
-    finite solution: NaN, covariance inf, ``valid`` False.
+    """Triangulated points ``(M, 3)``, their covariances, reprojection RMS and validity.
+
+    The covariances are ``(M, 3, 3)`` (world units²), the reprojection RMS per point ``(M,)``
+    in pixels, and ``valid (M,)``: in front of every camera that sees it and finite. A point
+    whose rays are parallel (no baseline) has no finite solution: NaN, covariance inf,
+    ``valid`` False.
     """
 
     points: F64

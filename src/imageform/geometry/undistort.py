@@ -40,9 +40,11 @@ _INT_SCALE = {np.dtype(np.uint8): 1.0 / 255.0, np.dtype(np.uint16): 1.0 / 65535.
 
 
 def _as_batch(image: Any) -> tuple[np.ndarray, tuple[int, ...], bool, float]:
-    """The image as a C-contiguous ``(B, H, W, C)`` batch, its full shape, whether it was
-    2-D, and the scale to floats: uint8/uint16 NumPy images are kept as they are (the kernels
-    sample them and scale by 1/255 or 1/65535, without a float copy of the image).
+    """Return the image as a C-contiguous ``(B, H, W, C)`` batch, its shape, 2-D flag and scale.
+
+    The full shape, whether it was 2-D, and the scale to floats: uint8/uint16 NumPy images
+    are kept as they are (the kernels sample them and scale by 1/255 or 1/65535, without a
+    float copy of the image).
     """
     if isinstance(image, np.ndarray) and (
         image.dtype in _INT_SCALE or image.dtype in (np.float32, np.float64)
@@ -96,7 +98,7 @@ def _remap_bilinear_numpy(
 
 
 def _fill(fill: object) -> float:
-    """The fill value: a finite real or NaN (to mark pixels with no source)."""
+    """Check the fill value: a finite real or NaN (to mark pixels with no source)."""
     try:
         if isinstance(fill, float | np.floating) and math.isnan(fill):
             return math.nan
@@ -106,8 +108,9 @@ def _fill(fill: object) -> float:
 
 
 def _same_kind(image: Any, map_uv: Any) -> None:
-    """Refuse a Dask map_uv with an eager image (a Dask image with an eager map is the lazy
-    path; the map is small).
+    """Refuse a Dask map_uv with an eager image.
+
+    A Dask image with an eager map is the lazy path; the map is small.
     """
     lazy_map = hasattr(map_uv, "shape") and is_dask_namespace(namespace(map_uv))
     lazy_image = hasattr(image, "shape") and is_dask_namespace(namespace(image))
@@ -185,7 +188,7 @@ def remap_bilinear(image: Any, map_uv: Any, *, fill: float = 0.0) -> Any:
 
 
 def _scaled(batch: np.ndarray, scale: float) -> np.ndarray:
-    """An integer batch as float32 in [0, 1] (the plain path; the kernels scale on the fly)."""
+    """Scale an integer batch to float32 in [0, 1] (plain path; the kernels scale on the fly)."""
     if batch.dtype in _INT_SCALE:
         return batch.astype(np.float32) * np.float32(scale)
     return batch
@@ -405,7 +408,7 @@ def _remap_dask_public(image: Any, map_uv: Any, fill: float) -> Any:
 
 
 def _out_chunks(img: Any, out_hw: tuple[int, int]) -> tuple[tuple[int, ...], tuple[int, ...]]:
-    """The input's row/column chunks when the output has its size, else the same chunk size."""
+    """Return the input's row/column chunks if the output has its size, else the same chunk size."""
     res = []
     for axis, n in ((-3, out_hw[0]), (-2, out_hw[1])):
         ch = img.chunks[axis]

@@ -85,8 +85,10 @@ def _angles_to(v: FloatArray, mids: FloatArray, dirs: FloatArray) -> FloatArray:
 
 
 def _normalise(v: FloatArray, scale: float) -> FloatArray:
-    """Finite points scaled to ``w = 1``; points at infinity (``|w|`` at rounding level of
-    ``|(x, y)| / scale``) as a unit direction ``(dx, dy, 0)`` with a canonical sign.
+    """Scale finite points to ``w = 1``; turn points at infinity into unit directions.
+
+    Points at infinity (``|w|`` at rounding level of ``|(x, y)| / scale``) become a unit
+    direction ``(dx, dy, 0)`` with a canonical sign.
     """
     v = np.asarray(v, dtype=np.float64)
     n = float(np.hypot(v[0], v[1]))
