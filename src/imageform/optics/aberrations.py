@@ -62,7 +62,7 @@ def _is_nan(value: object) -> bool:
 
 
 def _image(image: Any, ndim: tuple[int, ...], want: str) -> np.ndarray:
-    """The image as a NumPy float array of ``ndim`` dimensions, not empty."""
+    """Check the image: a NumPy float array of ``ndim`` dimensions, not empty."""
     arr = np.asarray(to_numpy(as_image(image, "image", channels=None)))
     if arr.ndim not in ndim or 0 in arr.shape:
         raise InvalidInputError(

@@ -40,17 +40,20 @@ _MAX_LAYERS = 4096
 
 
 def _kernel_bytes(radius: float) -> float:
-    """Bytes :func:`disc_kernel` allocates for ``radius``: the sub-pixel grid's booleans and
-    two float64 temporaries of ``(16 m)²`` with ``m = 2⌈R⌉ + 1``.
+    """Count the bytes :func:`disc_kernel` allocates for ``radius``.
+
+    The sub-pixel grid's booleans and two float64 temporaries of ``(16 m)²`` with
+    ``m = 2⌈R⌉ + 1``.
     """
     x = (2.0 * math.ceil(radius) + 1.0) * _SUPERSAMPLE
     return x * x * 17.0  # inf, not OverflowError, beyond the float range
 
 
 def _check_blur_radius(radius: float, shape: tuple[int, ...], names: str) -> None:
-    """Refuse a blur radius whose disc kernel or padded FFT convolution of an image of
-    ``shape`` (H, W, C) would not fit :func:`memory_limit`; ``names`` says which
-    arguments made the radius.
+    """Refuse a blur radius whose disc kernel or FFT convolution would not fit in memory.
+
+    The kernel, or the padded FFT convolution of an image of ``shape`` (H, W, C), must fit
+    :func:`memory_limit`; ``names`` says which arguments made the radius.
     """
     p = math.ceil(radius) if math.isfinite(radius) else math.inf
     h, w = shape[0], shape[1]
@@ -68,7 +71,7 @@ def _check_blur_radius(radius: float, shape: tuple[int, ...], names: str) -> Non
 
 
 def disc_kernel(radius: float) -> np.ndarray:
-    r"""A normalised uniform-disc PSF of ``radius`` pixels, anti-aliased by pixel coverage.
+    r"""Return a normalised uniform-disc PSF of ``radius`` pixels, anti-aliased by pixel coverage.
 
     .. math::
 

@@ -92,6 +92,7 @@ class DepthOfField:
     hyperfocal: float
 
     def __post_init__(self) -> None:
+        """Check the distances: finite (far may be inf), near <= focus <= far."""
         # issue 16: finite distances (> 0; near >= 0), near <= focus <= far; far is inf exactly when
         # focused at or beyond the hyperfocal distance
         for name in ("focus", "hyperfocal"):

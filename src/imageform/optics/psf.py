@@ -92,7 +92,7 @@ def _pupil_coords(rho: Any, theta: Any) -> tuple[np.ndarray, np.ndarray, tuple[i
 
 
 def noll_to_nm(j: int) -> tuple[int, int]:
-    """The radial order ``n`` and azimuthal frequency ``m`` of Noll's ``j``-th Zernike term.
+    """Return the radial order ``n`` and azimuthal frequency ``m`` of Noll's ``j``-th Zernike term.
 
     Noll (1976), *J. Opt. Soc. Am.* 66, 207, Table I: terms are ordered by ``n``, then by
     ``|m|``; within a pair of equal ``|m| > 0`` the even ``j`` takes ``cos(m theta)`` (here
@@ -118,7 +118,7 @@ def noll_to_nm(j: int) -> tuple[int, int]:
 
 
 def zernike_radial(n: int, m: int, rho: Any) -> np.ndarray:
-    r"""The Zernike radial polynomial :math:`R_n^{|m|}(\rho)` (unnormalised, ``R(1) = 1``).
+    r"""Evaluate the Zernike radial polynomial :math:`R_n^{|m|}(\rho)` (unnormalised, ``R(1) = 1``).
 
     .. math::
 
@@ -227,7 +227,7 @@ def _coefficients(coefficients: Any) -> dict[int, float]:
 
 
 def zernike_wavefront(coefficients: Any, rho: Any, theta: Any) -> np.ndarray:
-    r"""The wavefront :math:`W(\rho, \theta) = \sum_j c_j Z_j(\rho, \theta)`.
+    r"""Compute the wavefront :math:`W(\rho, \theta) = \sum_j c_j Z_j(\rho, \theta)`.
 
     ``coefficients`` is a mapping ``{j: c_j}`` (Noll ``j``) or a sequence whose index 0 is
     ``j = 1``; ``W`` is in the coefficients' unit (metres in this module; each ``c_j`` is that
@@ -257,7 +257,7 @@ def zernike_wavefront(coefficients: Any, rho: Any, theta: Any) -> np.ndarray:
 
 
 def zernike_defocus(coc: Any, *, f_number: float) -> Any:
-    r"""The Zernike defocus coefficient (Noll ``j = 4``, metres RMS) of a geometric blur circle.
+    r"""Return the Zernike defocus coefficient (Noll ``j = 4``, metres RMS) of a blur circle.
 
     A focusing error ``dz`` behind a lens of working f-number ``N`` adds the wavefront
     :math:`W_{020}\rho^2` with :math:`W_{020} = dz / (8 N^2)` (Goodman eq. 6-42 at the
@@ -287,11 +287,13 @@ def zernike_defocus(coc: Any, *, f_number: float) -> Any:
 
 
 def _disc_grid(diameter: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Amplitude, rho and theta of a disc ``diameter`` samples wide (any real > 0) centred on
-    a grid point of an even-sized square grid. Samples are in (1) or out (0) by their centre
-    (``rho <= 1``): the discrete autocorrelation of a point-sampled disc matches the analytic
-    MTF to ~2e-4 at 256 samples, where an area-weighted (grey) rim is ten times worse (its
-    ``sum a^2 < sum a`` biases the zero-frequency normalisation by ~2/(3D)).
+    """Return amplitude, rho and theta of a disc ``diameter`` samples wide on a square grid.
+
+    The diameter is any real > 0; the disc is centred on a grid point of an even-sized square
+    grid. Samples are in (1) or out (0) by their centre (``rho <= 1``): the discrete
+    autocorrelation of a point-sampled disc matches the analytic MTF to ~2e-4 at 256
+    samples, where an area-weighted (grey) rim is ten times worse (its ``sum a^2 < sum a``
+    biases the zero-frequency normalisation by ~2/(3D)).
     """
     size = 2 * (math.ceil(diameter / 2) + 1)
     c = np.arange(size, dtype=np.float64) - size // 2
@@ -307,7 +309,7 @@ def pupil_function(
     n_samples: float = 256,
     aperture: Any = None,
 ) -> np.ndarray:
-    r"""The complex pupil function :math:`P = A\,\exp(2\pi i\,W / \lambda)`.
+    r"""Return the complex pupil function :math:`P = A\,\exp(2\pi i\,W / \lambda)`.
 
     Goodman, *Introduction to Fourier Optics*, eq. 6-39 (the generalised pupil function):
     ``A`` is the aperture's amplitude transmission and ``W`` the wavefront aberration
@@ -378,7 +380,7 @@ def _as_aperture(aperture: Any) -> np.ndarray:
 
 
 def psf_from_pupil(pupil: Any, *, pad_to: int) -> np.ndarray:
-    r"""The intensity PSF of ``pupil`` zero-padded to ``pad_to`` samples: the Fraunhofer FFT.
+    r"""Compute the intensity PSF of ``pupil`` zero-padded to ``pad_to`` samples (Fraunhofer FFT).
 
     .. math::
 
@@ -415,7 +417,8 @@ _NAMES = "wavelength, f_number and pixel_pitch"
 def _check_sampling(
     lam: float, f_number: float, pitch: float, size: int | None, n_pupil: float, names: str
 ) -> None:
-    """Refuse, before any integer is formed, a sampling whose padded pupil would not fit:
+    """Refuse, before any integer is formed, a sampling whose padded pupil would not fit.
+
     ``Q = lambda N / pitch`` sets the FFT size (about ``Q n_pupil``, or ``k (size + 1)`` with
     ``k = 2 / Q`` when ``Q < 2``); its ``(M, D)`` complex rows must fit the memory limit.
     """
@@ -489,7 +492,7 @@ def diffraction_psf(
     n_pupil: int = 256,
     aperture: Any = None,
 ) -> np.ndarray:
-    r"""The diffraction PSF of an (aberrated) circular pupil, sampled at ``pixel_pitch``.
+    r"""Compute the diffraction PSF of an (aberrated) circular pupil, sampled at ``pixel_pitch``.
 
     The pupil function (:func:`pupil_function`) is Fourier transformed
     (:func:`psf_from_pupil`). An FFT of ``M`` samples over a pupil ``D`` samples wide gives
@@ -572,7 +575,7 @@ def polychromatic_psf(
     n_pupil: int = 256,
     aperture: Any = None,
 ) -> np.ndarray:
-    r"""A polychromatic PSF: the weighted sum of unit-sum monochromatic PSFs.
+    r"""Compute a polychromatic PSF: the weighted sum of unit-sum monochromatic PSFs.
 
     .. math::
 
@@ -676,7 +679,7 @@ def field_psfs(
 
 
 def otf(psf: Any, *, pixel_pitch: float) -> TransferFunction:
-    r"""The optical transfer function of a sampled PSF, frequencies in cycles/mm.
+    r"""Compute the optical transfer function of a sampled PSF, frequencies in cycles/mm.
 
     .. math::
 
@@ -710,7 +713,7 @@ def otf(psf: Any, *, pixel_pitch: float) -> TransferFunction:
 
 
 def mtf(psf: Any, *, pixel_pitch: float) -> TransferFunction:
-    r"""The modulation transfer function :math:`|\mathrm{OTF}|` (1 at zero frequency).
+    r"""Compute the modulation transfer function :math:`|\mathrm{OTF}|` (1 at zero frequency).
 
     Frequencies in cycles/mm, on the grid of :func:`otf`.
 
@@ -728,7 +731,7 @@ def mtf(psf: Any, *, pixel_pitch: float) -> TransferFunction:
 
 
 def diffraction_limited_mtf(frequency: Any, *, wavelength: float, f_number: float) -> np.ndarray:
-    r"""The MTF of an aberration-free circular pupil (incoherent light).
+    r"""Compute the MTF of an aberration-free circular pupil (incoherent light).
 
     .. math::
 
@@ -756,7 +759,7 @@ def diffraction_limited_mtf(frequency: Any, *, wavelength: float, f_number: floa
 
 
 def pixel_mtf(frequency: Any, *, pixel_pitch: float, fill_factor: float = 1.0) -> np.ndarray:
-    r"""The MTF of a square pixel aperture (uniform response over its active area).
+    r"""Compute the MTF of a square pixel aperture (uniform response over its active area).
 
     .. math::
 

@@ -46,6 +46,7 @@ class ThinLensSolution:
     f = _deprecate.renamed_property("focal_length", "imageform.optics.ThinLensSolution.f")
 
     def __post_init__(self) -> None:
+        """Check the fields: finite reals (complex, NaN, inf, None refused by name)."""
         # issue 16: a solution holds finite reals (complex, NaN, inf, None refused by name)
         for name, kw in (
             ("focal_length", {"positive": True}),
@@ -199,7 +200,7 @@ def magnification(*, focal_length: float, d_o: float, allow_virtual: bool = Fals
     renamed={"f": "focal_length"}, positional=("focal_length", "aperture_diameter")
 )
 def f_number(*, focal_length: float, aperture_diameter: float) -> float:
-    r"""The f-number ``N = f / D`` of a lens with entrance-pupil diameter ``D`` (metres).
+    r"""Return the f-number ``N = f / D`` of a lens with entrance-pupil diameter ``D`` (metres).
 
     ``focal_length`` and ``aperture_diameter`` in metres, keyword-only.
 
