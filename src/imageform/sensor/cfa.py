@@ -84,7 +84,7 @@ def _red_offset(pattern: str) -> tuple[int, int]:
 
 
 def _cell_channels(pattern: str) -> np.ndarray:
-    """The 2×2 cell as channel indices (0 R, 1 G, 2 B)."""
+    """Return the 2×2 cell as channel indices (0 R, 1 G, 2 B)."""
     return np.array([_CHANNEL[c] for c in pattern], dtype=np.intp).reshape(2, 2)
 
 
@@ -198,7 +198,7 @@ def mosaic(rgb: ArrayLike, pattern: str = "RGGB") -> Array:
 
 
 def _as_xp(mask: np.ndarray, xp: Any, like: Any) -> Any:
-    """A NumPy bool mask as a float array of ``like``'s namespace, dtype and device."""
+    """Convert a NumPy bool mask to a float array of ``like``'s namespace, dtype and device."""
     dev = device_of(like)
     m = mask.astype(np.float64)
     arr = xp.asarray(m) if dev is None else xp.asarray(m, device=dev)

@@ -73,8 +73,9 @@ def _kernels(method: str, numba: bool) -> tuple[_Kernel, int]:
 
 
 def _as_raw(raw: ArrayLike, xp: Any) -> Any:
-    """The mosaic as a float array of shape (..., H, W); rejects colour images (by shape,
-    before any pass over the values).
+    """Return the mosaic as a float array of shape (..., H, W).
+
+    Colour images are rejected (by shape, before any pass over the values).
     """
     shape = tuple(getattr(raw, "shape", ()) or ())
     if len(shape) >= 3 and shape[-1] != 1:

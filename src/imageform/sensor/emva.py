@@ -44,8 +44,10 @@ __all__ = [
 
 @dataclass(frozen=True)
 class PhotonTransferData:
-    """Per exposure time: mean photons per pixel, and mean and temporal variance (DN, DN²)
-    of the flat fields and of the dark frames. All arrays have shape ``(n,)``.
+    """Per exposure time: mean photons per pixel, mean and temporal variance of flats and darks.
+
+    Mean and temporal variance are in DN and DN², of the flat fields and of the dark frames.
+    All arrays have shape ``(n,)``.
     """
 
     exposure_times: np.ndarray
@@ -193,7 +195,7 @@ _PTC_FIELDS = ("exposure_times", "photons", "mean_dn", "var_dn", "dark_mean_dn",
 
 
 def _check_data(data: object) -> dict[str, np.ndarray]:
-    """The arrays of a :class:`PhotonTransferData`: 1-D, finite, all of one length."""
+    """Check the arrays of a :class:`PhotonTransferData`: 1-D, finite, all of one length."""
     if not isinstance(data, PhotonTransferData):
         raise TypeError(f"expected data as a PhotonTransferData, got {describe(data)}")
     arrays = {f: as_real_array(getattr(data, f), f"data.{f}", ndim=1) for f in _PTC_FIELDS}

@@ -164,6 +164,7 @@ class SensorModel:
     fpn_seed: int = 0
 
     def __post_init__(self) -> None:
+        """Check every parameter: options by name, gains and noise levels real and in range."""
         if not isinstance(self.name, str):
             raise InvalidInputError(f"expected name as a str, got {describe(self.name)}")
         check_option(self.architecture, ("cmos", "ccd"), "sensor architecture")
@@ -251,7 +252,7 @@ class SensorModel:
         )
 
     def fixed_pattern(self, height: int, width: int) -> FixedPattern:
-        """This chip's fixed-pattern maps for an ``(height, width)`` frame (from ``fpn_seed``)."""
+        """Return the fixed-pattern maps for a ``(height, width)`` frame (from ``fpn_seed``)."""
         col = self.column_fpn if self.architecture == "cmos" else 0.0
         h = as_int(height, "height", minimum=1)
         w = as_int(width, "width", minimum=1)
