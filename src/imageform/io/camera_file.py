@@ -147,7 +147,7 @@ def _toml_string(text: str) -> str:
 
 
 def camera_file_text(cf: CameraFile) -> str:
-    """The TOML text of a camera file (what :func:`write_camera` writes)."""
+    """Return the TOML text of a camera file (what :func:`write_camera` writes)."""
     from imageform.geometry import matrix_to_rvec
 
     cam = cf.camera

@@ -1,6 +1,8 @@
-"""Raw files in and out: DNG written with tifffile, any raw LibRaw reads (through rawpy, the
-optional ``imageform[raw]`` extra), and imageform's own development of a raw file, step by
-step (docs/raw.md).
+"""Raw files in and out: DNG writing, LibRaw reading and imageform's own development.
+
+DNG written with tifffile, any raw LibRaw reads (through rawpy, the optional
+``imageform[raw]`` extra), and imageform's own development of a raw file, step by step
+(docs/raw.md).
 
 - :func:`write_dng`: a Bayer mosaic as a DNG 1.4 file (one uncompressed 16-bit CFA IFD,
   PhotometricInterpretation 32803, with CFARepeatPatternDim/CFAPattern, BlackLevel,
@@ -103,8 +105,9 @@ def write_dng(
     calibration_illuminant: str = "D65",
     camera_model: str = "imageform simulated camera",
 ) -> Path:
-    r"""Write a Bayer mosaic as a DNG file that raw developers (LibRaw, darktable,
-    RawTherapee, Adobe Camera Raw) open.
+    r"""Write a Bayer mosaic as a DNG file that raw developers open.
+
+    Raw developers such as LibRaw, darktable, RawTherapee and Adobe Camera Raw.
 
     One IFD (NewSubfileType 0) holding the raw CFA image, uncompressed, 16 bits per sample,
     PhotometricInterpretation 32803 (CFA), DNGVersion 1.4.0.0, DNGBackwardVersion 1.1.0.0,
@@ -451,7 +454,7 @@ class Development:
     demosaic: str
 
     def to_integer(self, bits: int = 16) -> np.ndarray:
-        """The output image as uint8 (``bits=8``) or uint16 (``bits=16``), rounded."""
+        """Return the output image as uint8 (``bits=8``) or uint16 (``bits=16``), rounded."""
         if bits not in (8, 16):
             raise InvalidInputError(f"expected bits 8 or 16, got {describe(bits)}")
         top = 2**bits - 1
