@@ -257,7 +257,9 @@ def zernike_wavefront(coefficients: Any, rho: Any, theta: Any) -> np.ndarray:
 
 
 def zernike_defocus(coc: Any, *, f_number: float) -> Any:
-    r"""Return the Zernike defocus coefficient (Noll ``j = 4``, metres RMS) of a blur circle.
+    r"""Return the Zernike defocus coefficient (Noll ``j = 4``) of a geometric blur circle.
+
+    The coefficient is in metres RMS.
 
     A focusing error ``dz`` behind a lens of working f-number ``N`` adds the wavefront
     :math:`W_{020}\rho^2` with :math:`W_{020} = dz / (8 N^2)` (Goodman eq. 6-42 at the
