@@ -252,7 +252,7 @@ class SensorModel:
         )
 
     def fixed_pattern(self, height: int, width: int) -> FixedPattern:
-        """Return the fixed-pattern maps for a ``(height, width)`` frame (from ``fpn_seed``)."""
+        """Make the chip's fixed-pattern maps for a ``(height, width)`` frame from ``fpn_seed``."""
         col = self.column_fpn if self.architecture == "cmos" else 0.0
         h = as_int(height, "height", minimum=1)
         w = as_int(width, "width", minimum=1)
