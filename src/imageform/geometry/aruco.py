@@ -89,6 +89,7 @@ class ArucoDictionary:
     max_correction_bits: int
 
     def __post_init__(self) -> None:
+        """Check the name, the marker size and the codes' shape and bits."""
         if not isinstance(self.name, str):
             raise InvalidInputError(f"expected name as a str, got {describe(self.name)}")
         s = as_int(self.marker_size, "marker_size", minimum=2, maximum=16)
@@ -126,7 +127,7 @@ def _tables() -> dict[str, NDArray[np.uint8]]:
 
 
 def aruco_dictionary(name: str | ArucoDictionary = "6x6_250") -> ArucoDictionary:
-    """The predefined dictionary ``name`` (one of :data:`ARUCO_DICTIONARIES`).
+    """Return the predefined dictionary ``name`` (one of :data:`ARUCO_DICTIONARIES`).
 
     Parameters
     ----------
@@ -181,7 +182,7 @@ def aruco_marker_image(
     size_px: int = 200,
     border_bits: int = 1,
 ) -> NDArray[np.uint8]:
-    """The printable image of marker ``marker_id`` (uint8, 0 black, 255 white).
+    """Draw the printable image of marker ``marker_id`` (uint8, 0 black, 255 white).
 
     Equal to OpenCV's ``cv2.aruco.generateImageMarker(dictionary, id, size_px, borderBits)``
     (tested): ``s + 2 border_bits`` cells per side, each cell a block of pixels (the
@@ -286,7 +287,7 @@ def _gray01(image: object) -> NDArray[np.float64]:
 
 
 def _homography(src: NDArray[np.float64], dst: NDArray[np.float64]) -> NDArray[np.float64]:
-    """The 3x3 homography mapping 4 (or more) ``src`` points to ``dst`` (DLT, SVD)."""
+    """Estimate the 3x3 homography mapping 4 (or more) ``src`` points to ``dst`` (DLT, SVD)."""
     rows = []
     for (x, y), (u, v) in zip(src, dst, strict=True):
         rows.append([x, y, 1, 0, 0, 0, -u * x, -u * y, -u])
@@ -315,8 +316,11 @@ def _bilinear(g: NDArray[np.float64], uv: NDArray[np.float64]) -> NDArray[np.flo
 
 
 def _quad(pts: NDArray[np.float64], area: float) -> NDArray[np.float64] | None:
-    """Four extreme boundary points of a component, clockwise on screen; None unless the quad
-    through them has the component's area (a quadrilateral blob, not an L or a disc)."""
+    """Find four extreme boundary points of a component, clockwise on screen.
+
+    None unless the quad through them has the component's area (a quadrilateral blob, not an
+    L or a disc).
+    """
     c = pts.mean(axis=0)
     i0 = int(np.argmax(np.sum((pts - c) ** 2, axis=1)))
     i2 = int(np.argmax(np.sum((pts - pts[i0]) ** 2, axis=1)))
@@ -340,8 +344,11 @@ def _quad(pts: NDArray[np.float64], area: float) -> NDArray[np.float64] | None:
 
 
 def _line_normal(centred: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Unit normal of the total-least-squares line through centred points (the eigenvector
-    of the 2x2 scatter matrix with the smaller eigenvalue, in closed form)."""
+    """Return the unit normal of the total-least-squares line through centred points.
+
+    It is the eigenvector of the 2x2 scatter matrix with the smaller eigenvalue, in closed
+    form.
+    """
     sxx = float(centred[:, 0] @ centred[:, 0])
     syy = float(centred[:, 1] @ centred[:, 1])
     sxy = float(centred[:, 0] @ centred[:, 1])
@@ -352,9 +359,12 @@ def _line_normal(centred: NDArray[np.float64]) -> NDArray[np.float64]:
 def _refine_sides(
     quad: NDArray[np.float64], boundary: NDArray[np.float64]
 ) -> NDArray[np.float64] | None:
-    """Corners where the four sides meet, each side a line fitted to the component's boundary
-    pixels along it and moved half a pixel outwards (the boundary pixels' centres lie half a
-    pixel inside the dark region's edge); None when a side has too few pixels."""
+    """Find the corners where the four sides meet; None when a side has too few pixels.
+
+    Each side is a line fitted to the component's boundary pixels along it and moved half a
+    pixel outwards (the boundary pixels' centres lie half a pixel inside the dark region's
+    edge).
+    """
     center = quad.mean(axis=0)
     lines = []
     for k in range(4):
@@ -418,7 +428,7 @@ def _otsu(values: NDArray[np.float64]) -> float:
 def _read_bits(
     g: NDArray[np.float64], quad: NDArray[np.float64], cells: int
 ) -> tuple[NDArray[np.bool_], float] | None:
-    """The cell colours (True = white) of a quad seen as ``cells x cells``, and the contrast."""
+    """Read the cell colours (True = white) of a quad seen as ``cells x cells`` and the contrast."""
     unit = np.array([[0.0, 0.0], [cells, 0.0], [cells, cells], [0.0, cells]])
     h = _homography(unit, quad)
     sub = np.array([0.3, 0.5, 0.7])
