@@ -91,12 +91,12 @@ def namespace(*arrays: object) -> Any:
 
 
 def is_numpy_namespace(xp: Any) -> bool:
-    """True when ``xp`` is NumPy (through array-api-compat or directly)."""
+    """Tell whether ``xp`` is NumPy (through array-api-compat or directly)."""
     return bool(array_api_compat.is_numpy_namespace(xp))
 
 
 def is_dask_namespace(xp: Any) -> bool:
-    """True when ``xp`` is Dask's array namespace (through array-api-compat)."""
+    """Tell whether ``xp`` is Dask's array namespace (through array-api-compat)."""
     return bool(array_api_compat.is_dask_namespace(xp))
 
 
@@ -191,7 +191,7 @@ def device_of(x: object) -> Any:
 
 
 def float_dtype(x: Any, xp: Any, *, integer: str = IMAGE_INTEGER_DTYPE) -> Any:
-    """The floating dtype a computation on ``x`` runs in.
+    """Return the floating dtype a computation on ``x`` runs in.
 
     float32 and float64 are kept; float16/bfloat16 compute in float32; integers and bools
     compute in ``integer`` (``"float32"`` for images, ``"float64"`` for coordinates).
@@ -225,14 +225,14 @@ def asarray_like(x: object, xp: Any, dtype: Any = None, device: Any = None) -> A
 
 
 def scalar(x: Any) -> float:
-    """A 0-d array (any library, any device, with or without gradient) as a Python float."""
+    """Convert a 0-d array (any library, any device, with or without gradient) to a Python float."""
     if hasattr(x, "detach"):
         x = x.detach()
     return float(x)
 
 
 def to_numpy(x: object) -> np.ndarray:
-    """A NumPy view/copy of any array (moves GPU tensors to host, detaches gradients)."""
+    """Return a NumPy view/copy of any array (moves GPU tensors to host, detaches gradients)."""
     if array_api_compat.is_torch_array(x):
         return np.asarray(x.detach().cpu().numpy())
     return np.asarray(x)

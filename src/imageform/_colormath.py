@@ -54,20 +54,25 @@ def pos_pow(xp: Any, x: Any, p: float) -> Any:
     """``x ** p`` for the branch where x is above a breakpoint > 1e-30.
 
     Elements below are clipped to 1e-30 (their branch is unused): no NaN from a negative
-    base, and gradients stay finite, in one pass (a ``where`` on ``x > 0`` took three)."""
+    base, and gradients stay finite, in one pass (a ``where`` on ``x > 0`` took three).
+    """
     return xp.pow(xp.clip(x, min=1e-30), p)
 
 
 def srgb_decode(xp: Any, v: Any) -> Any:
-    r"""Encoded sRGB to linear light, :math:`L = V/12.92` below the breakpoint,
-    :math:`((V + 0.055)/1.055)^{2.4}` above (IEC 61966-2-1:1999 eq. 5-6); no clipping."""
+    r"""Decode sRGB to linear light (IEC 61966-2-1:1999 eq. 5-6); no clipping.
+
+    :math:`L = V/12.92` below the breakpoint, :math:`((V + 0.055)/1.055)^{2.4}` above.
+    """
     hi = pos_pow(xp, (v + SRGB_A) / (1.0 + SRGB_A), SRGB_GAMMA)
     return xp.where(v <= SRGB_ENC_THRESHOLD, v / SRGB_SLOPE, hi)
 
 
 def srgb_encode(xp: Any, lin: Any) -> Any:
-    r"""Linear light to encoded sRGB, :math:`V = 12.92 L` for :math:`L \le 0.0031308`,
-    :math:`1.055 L^{1/2.4} - 0.055` above (IEC 61966-2-1:1999 eq. 8-9); no clipping."""
+    r"""Encode linear light to sRGB (IEC 61966-2-1:1999 eq. 8-9); no clipping.
+
+    :math:`V = 12.92 L` for :math:`L \le 0.0031308`, :math:`1.055 L^{1/2.4} - 0.055` above.
+    """
     hi = (1.0 + SRGB_A) * pos_pow(xp, lin, 1.0 / SRGB_GAMMA) - SRGB_A
     return xp.where(lin <= SRGB_LIN_THRESHOLD, lin * SRGB_SLOPE, hi)
 
@@ -87,8 +92,10 @@ def hexcone_hue(xp: Any, r: Any, g: Any, b: Any, mx: Any, delta: Any) -> Any:
 
 
 def rgb_to_hsv(xp: Any, rgb: Any) -> Any:
-    """RGB ``(..., 3)`` to HSV (A. R. Smith, "Color gamut transform pairs", SIGGRAPH 1978):
-    V = max, S = (max - min)/max (0 where max = 0), H the hexcone hue in degrees."""
+    """Convert RGB ``(..., 3)`` to HSV (A. R. Smith, "Color gamut transform pairs", SIGGRAPH 1978).
+
+    V = max, S = (max - min)/max (0 where max = 0), H the hexcone hue in degrees.
+    """
     r, g, b = rgb[..., 0], rgb[..., 1], rgb[..., 2]
     mx = xp.maximum(xp.maximum(r, g), b)
     mn = xp.minimum(xp.minimum(r, g), b)
@@ -98,8 +105,11 @@ def rgb_to_hsv(xp: Any, rgb: Any) -> Any:
 
 
 def hsv_to_rgb(xp: Any, hsv: Any) -> Any:
-    """HSV ``(..., 3)`` to RGB: :math:`f(n) = V - VS\\max(0, \\min(k, 4 - k, 1))`,
-    :math:`k = (n + H/60) \\bmod 6` for n = 5, 3, 1 (hue taken modulo 360)."""
+    r"""Convert HSV ``(..., 3)`` to RGB (hue taken modulo 360).
+
+    :math:`f(n) = V - VS\max(0, \min(k, 4 - k, 1))`, :math:`k = (n + H/60) \bmod 6` for
+    n = 5, 3, 1.
+    """
     h, s, v = hsv[..., 0], hsv[..., 1], hsv[..., 2]
     # the "k" formulation: f(n) = V - V S max(0, min(k, 4 - k, 1)), k = (n + H/60) mod 6
     out = []
@@ -119,9 +129,12 @@ DAYLIGHT_HIGH = (-2.0064e9, 1.9018e6, 0.24748e3, 0.237040)  # 7000 K < T <= 2500
 
 
 def daylight_x(xp: Any, cct: Any) -> Any:
-    r""":math:`x_D = a_3 10^9/T^3 + a_2 10^6/T^2 + a_1 10^3/T + a_0` of the CIE daylight
-    locus (CIE 15:2004 eq. 3.3; coefficients :data:`DAYLIGHT_LOW` up to 7000 K,
-    :data:`DAYLIGHT_HIGH` above); ``cct`` in kelvin, not range-checked."""
+    r"""Return :math:`x_D` of the CIE daylight locus at ``cct`` (CIE 15:2004 eq. 3.3).
+
+    :math:`x_D = a_3 10^9/T^3 + a_2 10^6/T^2 + a_1 10^3/T + a_0`, coefficients
+    :data:`DAYLIGHT_LOW` up to 7000 K, :data:`DAYLIGHT_HIGH` above; ``cct`` in kelvin, not
+    range-checked.
+    """
     s = 1.0 / cct
     lo = DAYLIGHT_LOW
     hi = DAYLIGHT_HIGH
@@ -131,8 +144,10 @@ def daylight_x(xp: Any, cct: Any) -> Any:
 
 
 def daylight_xy(xp: Any, cct: Any) -> Any:
-    r"""Chromaticity ``(..., 2)`` of the CIE daylight locus at ``cct``:
-    :func:`daylight_x` and :math:`y_D = -3.000 x_D^2 + 2.870 x_D - 0.275`."""
+    r"""Return the chromaticity ``(..., 2)`` of the CIE daylight locus at ``cct``.
+
+    :func:`daylight_x` and :math:`y_D = -3.000 x_D^2 + 2.870 x_D - 0.275`.
+    """
     x = daylight_x(xp, cct)
     # CIE 15:2004 eq. (3.4)
     y = -3.000 * x * x + 2.870 * x - 0.275
@@ -140,8 +155,10 @@ def daylight_xy(xp: Any, cct: Any) -> Any:
 
 
 def uv1960_from_xy(xp: Any, xy: Any) -> tuple[Any, Any]:
-    r"""CIE 1960 UCS ``(u, v)`` of ``xy (..., 2)``:
-    :math:`u = 4x/(-2x + 12y + 3)`, :math:`v = 6y/(-2x + 12y + 3)` (CIE 15:2004 §8.1)."""
+    r"""Convert ``xy (..., 2)`` to CIE 1960 UCS ``(u, v)`` (CIE 15:2004 §8.1).
+
+    :math:`u = 4x/(-2x + 12y + 3)`, :math:`v = 6y/(-2x + 12y + 3)`.
+    """
     x, y = xy[..., 0], xy[..., 1]
     d = -2.0 * x + 12.0 * y + 3.0
     return 4.0 * x / d, 6.0 * y / d

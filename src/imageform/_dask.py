@@ -33,12 +33,12 @@ _PROBE = 0.3
 
 
 def is_dask_array(x: object) -> bool:
-    """True for a ``dask.array.Array``."""
+    """Tell whether ``x`` is a ``dask.array.Array``."""
     return bool(array_api_compat.is_dask_array(x))
 
 
 def chunkwise(core: int = 1) -> Callable[[F], F]:
-    """Decorator: run ``fn`` block by block when its leading positional arguments are Dask.
+    """Run ``fn`` block by block when its leading positional arguments are Dask (a decorator).
 
     ``core`` is the number of trailing axes of each array argument that one output element
     needs whole (they are rechunked into a single chunk). Non-Dask calls go straight to
@@ -110,8 +110,10 @@ def _map_chunks(
 
 
 def _with_shapes(exc: Exception, probes: list[np.ndarray], arrays: tuple[Any, ...]) -> Exception:
-    """``exc`` with every probe shape in its message replaced by its array's shape (a
-    refusal on the one-pixel probe must not report ``(1, 4)`` for a (100, 4) input)."""
+    """Return ``exc`` with every probe shape in its message replaced by its array's shape.
+
+    A refusal on the one-pixel probe must not report ``(1, 4)`` for a (100, 4) input.
+    """
     msg = str(exc)
     for p, a in zip(probes, arrays, strict=True):
         if p.shape != a.shape:

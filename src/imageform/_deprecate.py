@@ -66,7 +66,7 @@ def _public_name(fn: Callable[..., Any]) -> str:
 def parameters(
     *, renamed: Mapping[str, str] | None = None, positional: Sequence[str] = ()
 ) -> Callable[[F], F]:
-    """Decorator: accept the old parameter names and the old positional calls, with a warning.
+    """Accept the old parameter names and the old positional calls, with a warning (a decorator).
 
     Parameters
     ----------
@@ -139,7 +139,7 @@ def parameters(
 
 
 def renamed(new: F, old_name: str, *, instead: str | None = None) -> F:
-    """The old name of a function or method: calls ``new`` after a warning.
+    """Make the old name of a function or method: it calls ``new`` after a warning.
 
     ``old_name`` is the dotted public name (``"imageform.sensor.SensorModel.normalise"``);
     ``instead`` overrides the advice (default: use the new function's public name).
@@ -161,7 +161,7 @@ def renamed(new: F, old_name: str, *, instead: str | None = None) -> F:
 
 
 def renamed_property(new: str, old_name: str) -> property:
-    """A read-only property under the old name of the attribute ``new``, with a warning."""
+    """Make a read-only property under the old name of the attribute ``new``, with a warning."""
     advice = f"use .{new} instead"
 
     def getter(self: Any) -> Any:
@@ -174,7 +174,7 @@ def renamed_property(new: str, old_name: str) -> property:
 
 
 def module_getattr(module: str, renames: Mapping[str, tuple[str, Any]]) -> Callable[[str], Any]:
-    """A module ``__getattr__`` serving renamed constants: ``{old: (new name, value)}``."""
+    """Make a module ``__getattr__`` serving renamed constants: ``{old: (new name, value)}``."""
 
     def __getattr__(name: str) -> Any:
         if name in renames:

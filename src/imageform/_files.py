@@ -46,8 +46,10 @@ _PART = ".part"
 
 
 def same_file(a: Path, b: Path) -> bool:
-    """True when ``a`` and ``b`` name one file: same device and inode when both exist (links
-    included), else the same resolved path."""
+    """Tell whether ``a`` and ``b`` name one file.
+
+    Same device and inode when both exist (links included), else the same resolved path.
+    """
     try:
         return os.path.samefile(a, b)
     except OSError:
@@ -65,8 +67,9 @@ def _inside(path: Path, folder: Path) -> bool:
 def check_output(
     out: Path, *, inputs: Iterable[Path] = (), force: bool = False, folder: bool = False
 ) -> Path:
-    """Refuse an output that is an input, that exists without ``force``, or whose folder is
-    missing; returns ``out``.
+    """Refuse an output that is an input, that exists without ``force``, or whose folder is missing.
+
+    Returns ``out``.
 
     A dangling symbolic link counts as existing (it is replaced, never followed).
 
@@ -111,8 +114,10 @@ def _pid_alive(pid: int) -> bool:
 
 
 def remove_stale_parts(final: Path) -> int:
-    """Remove temporary siblings of ``final`` left by processes that no longer run; returns
-    how many were removed."""
+    """Remove temporary siblings of ``final`` left by processes that no longer run.
+
+    Returns how many were removed.
+    """
     final = Path(final)
     folder = final.parent if str(final.parent) else Path(".")
     if not folder.is_dir():
@@ -212,11 +217,11 @@ class Outputs:
         return part
 
     def file(self, final: str | Path) -> Path:
-        """The temporary path to write for the output file ``final``."""
+        """Return the temporary path to write for the output file ``final``."""
         return self._add(final, False)
 
     def folder(self, final: str | Path) -> Path:
-        """A new, empty temporary folder to fill for the output folder ``final``."""
+        """Make a new, empty temporary folder to fill for the output folder ``final``."""
         return self._add(final, True)
 
     @property
@@ -225,7 +230,7 @@ class Outputs:
         return tuple(f for _, f, _ in self._items)
 
     def part(self, final: str | Path) -> Path | None:
-        """The temporary path of an output added before (None if ``final`` was not added)."""
+        """Return the temporary path of an output added before (None if ``final`` was not added)."""
         for part, other, _ in self._items:
             if other == Path(final):
                 return part
@@ -278,8 +283,9 @@ class Outputs:
 
 
 def atomic_write(final: str | Path, write: Callable[[Path], object]) -> None:
-    """Call ``write(temporary_path)``, then rename the temporary onto ``final`` (overwriting
-    it); on any error the temporary is removed and ``final`` is untouched.
+    """Call ``write(temporary_path)``, then rename the temporary onto ``final`` (overwriting it).
+
+    On any error the temporary is removed and ``final`` is untouched.
 
     Examples
     --------
@@ -309,7 +315,7 @@ _WILDCARDS = re.compile(r"[*?\[]")
 
 
 def glob_base(pattern: str) -> Path:
-    """The fixed folder prefix of ``pattern`` (the part before the first wildcard)."""
+    """Return the fixed folder prefix of ``pattern`` (the part before the first wildcard)."""
     parts = Path(pattern).parts
     fixed: list[str] = []
     for part in parts[:-1]:
@@ -320,7 +326,7 @@ def glob_base(pattern: str) -> Path:
 
 
 def glob_regex(pattern: str) -> re.Pattern[str]:
-    """A regex for absolute paths that ``glob.glob(pattern, recursive=True)`` would match."""
+    """Build a regex for absolute paths that ``glob.glob(pattern, recursive=True)`` would match."""
     pat = os.path.abspath(pattern)
     out, i = "", 0
     while i < len(pat):
@@ -342,9 +348,11 @@ def glob_regex(pattern: str) -> re.Pattern[str]:
 
 
 def glob_paths(pattern: str) -> list[str]:
-    """The paths matching ``pattern`` as ``glob.glob(pattern, recursive=True)`` finds them,
-    but ``**`` enters each real folder once: a symbolic link to an ancestor (a loop) is not
-    followed again, where glob would recurse until the path is too long (minutes)."""
+    """Return the paths matching ``pattern`` as ``glob.glob(pattern, recursive=True)`` finds them.
+
+    But ``**`` enters each real folder once: a symbolic link to an ancestor (a loop) is not
+    followed again, where glob would recurse until the path is too long (minutes).
+    """
     if "**" not in pattern:
         return glob.glob(pattern)
     matcher = glob_regex(pattern)

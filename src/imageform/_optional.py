@@ -31,8 +31,9 @@ class MissingExtraError(ImageformError, ImportError):
 
 
 def require(module: str, *, what: str) -> ModuleType:
-    """Import ``module`` (``"dask.array"``), or raise :class:`MissingExtraError` naming the
-    extra to install and what needs it.
+    """Import ``module`` (``"dask.array"``), or raise :class:`MissingExtraError`.
+
+    The error names the extra to install and what needs it.
 
     Examples
     --------

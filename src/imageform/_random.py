@@ -28,7 +28,7 @@ RNGLike: TypeAlias = "int | np.integer | np.random.SeedSequence | np.random.Gene
 
 
 def as_rng(rng: object, name: str = "rng", *, mix: Sequence[int] = ()) -> np.random.Generator:
-    """A :class:`numpy.random.Generator` from ``rng`` (SPEC 7).
+    """Return a :class:`numpy.random.Generator` from ``rng`` (SPEC 7).
 
     ``mix`` adds integers to an integer seed's entropy (``SeedSequence([seed, *mix])``), for
     a draw that must depend on, e.g., the shape as well as the seed. A Generator is returned

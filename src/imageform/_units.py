@@ -46,7 +46,7 @@ def parse_length(
     positive: bool = True,
     allow_inf: bool = False,
 ) -> float:
-    """A length given as text, in ``unit`` (metres by default).
+    """Parse a length given as text, in ``unit`` (metres by default).
 
     Parameters
     ----------

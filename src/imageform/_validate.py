@@ -89,9 +89,11 @@ def _min_max(x: Any, xp: Any) -> tuple[float, float]:
 
 
 def _check_values(x: Any, xp: Any, name: str, *, finite: bool, range_check: bool) -> None:
-    """The value checks of :func:`check_finite` and :func:`as_image` on a float array:
+    """Run the value checks of :func:`check_finite` and :func:`as_image` on a float array.
+
     NaN/inf (``finite``) and 0-255 values stored as floats (``range_check``), from one
-    min/max reduction."""
+    min/max reduction.
+    """
     if not (finite or range_check) or math.prod(x.shape) == 0:
         return
     lo, mx = _min_max(x, xp)
@@ -170,7 +172,7 @@ def as_matrix(
     batch: bool = True,
     finite: bool = True,
 ) -> Any:
-    """A matrix (or batch of matrices when ``batch``) of trailing shape ``shape``."""
+    """Check a matrix (or batch of matrices when ``batch``) of trailing shape ``shape``."""
     arr = as_float(x, name, xp=xp, dtype=dtype, device=device, finite=finite)
     ok = arr.ndim >= 2 and tuple(arr.shape[-2:]) == shape
     if ok and not batch and arr.ndim != 2:
@@ -209,7 +211,7 @@ def check_rotation(R: Any, name: str = "R", *, xp: Any | None = None, atol: floa
 
 
 def det3(M: Any) -> Any:
-    """Determinant of (a batch of) 3×3 matrices by cofactor expansion.
+    """Compute the determinant of (a batch of) 3×3 matrices by cofactor expansion.
 
     Works in every Array-API namespace, including those without ``linalg.det`` (Dask).
     """
@@ -247,8 +249,10 @@ def check_option(value: object, valid: Collection[str], what: str) -> str:
 
 
 def describe(value: object, width: int = 40) -> str:
-    """A short description of a value for an error message: its repr cut to ``width``
-    characters (arrays as their type, shape and dtype, never their contents).
+    """Describe a value briefly for an error message.
+
+    Its repr cut to ``width`` characters (arrays as their type, shape and dtype, never their
+    contents).
 
     Examples
     --------
@@ -264,8 +268,10 @@ def describe(value: object, width: int = 40) -> str:
 
 
 def _as_number(value: object, name: str) -> float:
-    """A real number from a Python or NumPy scalar (or a 0-d real array or tensor); never a
-    bool, string, complex, None or a sequence."""
+    """Check a real number from a Python or NumPy scalar (or a 0-d real array or tensor).
+
+    Never a bool, string, complex, None or a sequence.
+    """
     item = value
     if getattr(value, "ndim", None) == 0 and hasattr(value, "item"):
         item = value.item()
@@ -290,7 +296,7 @@ def as_real(
     nonnegative: bool = False,
     allow_inf: bool = False,
 ) -> float:
-    """A finite real scalar (Python or NumPy number, 0-d array) as ``float``.
+    """Convert a finite real scalar (Python or NumPy number, 0-d array) to ``float``.
 
     Refuses bool, None, strings, complex numbers, NaN, inf (unless ``allow_inf``) and values
     outside the bounds, in one line naming ``name``.
@@ -321,7 +327,7 @@ def as_real(
 def as_int(
     value: object, name: str, *, minimum: int | None = None, maximum: int | None = None
 ) -> int:
-    """An integer (Python ``int`` or any NumPy integer; a 0-d integer array) as ``int``.
+    """Convert an integer (Python ``int`` or any NumPy integer; a 0-d integer array) to ``int``.
 
     Floats are refused even when whole (``2.0``), as are bool, None, strings and inf.
 
@@ -351,7 +357,7 @@ def as_int(
 
 
 def as_bool(value: object, name: str) -> bool:
-    """A bool (Python or NumPy); 0/1 and strings are refused.
+    """Check a bool (Python or NumPy); 0/1 and strings are refused.
 
     Examples
     --------
@@ -366,7 +372,7 @@ def as_bool(value: object, name: str) -> bool:
 def as_size(
     value: object, name: str, n: int = 2, *, minimum: int = 1, maximum: int | None = None
 ) -> tuple[int, ...]:
-    """A tuple of ``n`` integers (a shape or an image size), each ``>= minimum``.
+    """Check a tuple of ``n`` integers (a shape or an image size), each ``>= minimum``.
 
     Examples
     --------
@@ -390,8 +396,11 @@ def as_size(
 
 
 def memory_limit() -> int:
-    """The most bytes one allocation may ask for: ``IMAGEFORM_MAX_MEMORY`` (bytes; suffixes
-    K, M, G accepted) if set, else half of this machine's physical memory."""
+    """Return the most bytes one allocation may ask for.
+
+    ``IMAGEFORM_MAX_MEMORY`` (bytes; suffixes K, M, G accepted) if set, else half of this
+    machine's physical memory.
+    """
     text = os.environ.get("IMAGEFORM_MAX_MEMORY", "").strip().upper()
     if text:
         scale = {"K": 2**10, "M": 2**20, "G": 2**30}.get(text[-1:], 1)
@@ -427,7 +436,7 @@ def check_memory(n_bytes: float, name: str, what: str = "the result") -> None:
 
 
 def check_image_size(size: object, name: str = "image_size") -> tuple[int, int]:
-    """A ``(width, height)`` pair of positive integers, as a tuple of ``int``.
+    """Check a ``(width, height)`` pair of positive integers, returned as a tuple of ``int``.
 
     Examples
     --------
@@ -439,7 +448,7 @@ def check_image_size(size: object, name: str = "image_size") -> tuple[int, int]:
 
 
 def check_positive(value: object, name: str, *, allow_zero: bool = False) -> float:
-    """A finite scalar ``> 0`` (or ``>= 0`` with ``allow_zero``) as ``float``."""
+    """Check a finite scalar ``> 0`` (or ``>= 0`` with ``allow_zero``), returned as ``float``."""
     return as_real(value, name, positive=not allow_zero, nonnegative=allow_zero)
 
 
@@ -462,7 +471,7 @@ def as_image(
     range_check: bool = True,
     finite: bool = True,
 ) -> Any:
-    """An image as floats, channels last, following the colour conventions of docs/conventions.md.
+    """Check an image as floats, channels last, per the colour conventions of docs/conventions.md.
 
     - ``uint8`` / ``uint16`` are full-range encoded values: divided by 255 / 65535, float32.
     - Python integers (a list or tuple such as ``(200, 50, 50)``) are 8-bit codes 0-255, read
@@ -594,8 +603,10 @@ def check_real_values(
     nonnegative: bool = False,
     positive: bool = False,
 ) -> None:
-    """The value checks of :func:`as_real_array` on a float NumPy array (one min/max pass):
-    NaN always, inf unless ``finite=False``, and the sign."""
+    """Run the value checks of :func:`as_real_array` on a float NumPy array (one min/max pass).
+
+    NaN always, inf unless ``finite=False``, and the sign.
+    """
     if not arr.size:
         return
     lo, hi = float(np.min(arr)), float(np.max(arr))
@@ -618,7 +629,7 @@ def _to_numpy_host(x: object) -> Any:
 def as_reals(
     value: object, name: str, n: int | None = None, *, positive: bool = False
 ) -> tuple[float, ...]:
-    """A sequence of finite real numbers (``n`` of them if given) as a tuple of floats.
+    """Convert a sequence of finite real numbers (``n`` of them if given) to a tuple of floats.
 
     Examples
     --------
@@ -645,8 +656,10 @@ def as_reals(
 def as_shape(
     value: object, name: str, n: int = 2, *, itemsize: int = 8, copies: int = 1
 ) -> tuple[int, ...]:
-    """A shape of ``n`` positive integers whose arrays (``copies`` of ``itemsize``-byte
-    elements) fit :func:`memory_limit`; checked before anything is allocated.
+    """Check a shape of ``n`` positive integers whose arrays fit :func:`memory_limit`.
+
+    The arrays are ``copies`` of ``itemsize``-byte elements; checked before anything is
+    allocated.
 
     Examples
     --------
@@ -673,9 +686,11 @@ def _short(value: object) -> str:
 
 
 def finite_result(what: str, compute: Any, /, **inputs: object) -> Any:
-    """``compute()`` with floating-point warnings off; an overflow, a division by zero or
-    a non-finite result is refused in one line naming ``inputs`` (a formula evaluated
-    beyond the float range: refuse it rather than return inf or NaN).
+    """Call ``compute()`` with floating-point warnings off, refusing non-finite results.
+
+    An overflow, a division by zero or a non-finite result is refused in one line naming
+    ``inputs`` (a formula evaluated beyond the float range: refuse it rather than return inf
+    or NaN).
 
     Examples
     --------
@@ -713,8 +728,11 @@ def _all_finite(out: Any) -> bool:
 
 
 def _dtype_kind(value: object) -> str:
-    """NumPy's dtype kind of ``value`` (``"b"`` bool, ``"c"`` complex, ``"O"`` object, ``"U"``
-    string ...) without converting an array; ``""`` when it has none."""
+    """Return NumPy's dtype kind of ``value`` without converting an array.
+
+    ``"b"`` bool, ``"c"`` complex, ``"O"`` object, ``"U"`` string ...; ``""`` when it has
+    none.
+    """
     dt = getattr(value, "dtype", None)
     if dt is None:
         if isinstance(value, bool | np.bool_):
@@ -738,9 +756,11 @@ def _dtype_kind(value: object) -> str:
 
 
 def refuse_non_real(value: object, name: str) -> None:
-    """Refuse, before any conversion, values that are not real numbers: bool arrays and bools
-    (:class:`TypeError`: a mask is not a measurement), complex, object and string arrays
-    (:class:`InvalidInputError`). Never casts, so no ComplexWarning is ever issued.
+    """Refuse, before any conversion, values that are not real numbers.
+
+    Bool arrays and bools (:class:`TypeError`: a mask is not a measurement), complex, object
+    and string arrays (:class:`InvalidInputError`). Never casts, so no ComplexWarning is ever
+    issued.
 
     Examples
     --------
@@ -769,8 +789,9 @@ def as_real_ndarray(
     min_size: int = 0,
     finite: bool = True,
 ) -> np.ndarray:
-    """``value`` as a float64 NumPy array of real numbers (no bool, complex, object, string),
-    with ``ndim`` dimensions (one of them), a last axis of ``last`` and ``>= min_size``
+    """Convert ``value`` to a float64 NumPy array of reals (no bool, complex, object, string).
+
+    With ``ndim`` dimensions (one of them), a last axis of ``last`` and ``>= min_size``
     elements, finite unless ``finite=False``; every refusal is one line naming ``name``.
 
     Examples
@@ -808,9 +829,12 @@ def as_real_ndarray(
 
 
 def check_name(value: object, valid: Collection[str], what: str, name: str = "") -> str:
-    """:func:`check_option` naming the parameter ``name`` (``"unknown spectral table 'x' for
-    key"``) and listing at most ~110 characters of the valid names, so that the message stays
-    one line under 200 characters however many names are valid; a non-str is a TypeError."""
+    """Check an option like :func:`check_option`, naming the parameter ``name``.
+
+    The message reads like ``"unknown spectral table 'x' for key"`` and lists at most ~110
+    characters of the valid names, so that it stays one line under 200 characters however
+    many names are valid; a non-str is a TypeError.
+    """
     if not isinstance(value, str):
         raise TypeError(f"expected {name or what} as a {what} name (str), got {describe(value)}")
     try:
@@ -835,8 +859,10 @@ def check_name(value: object, valid: Collection[str], what: str, name: str = "")
 
 
 def as_path(value: object, name: str) -> Any:
-    """A file or folder name (``str`` or ``os.PathLike``, not empty, no NUL) as a
-    :class:`pathlib.Path`; anything else refused in one line naming ``name``.
+    """Convert a file or folder name (``str`` or ``os.PathLike``, not empty, no NUL) to a Path.
+
+    The result is a :class:`pathlib.Path`; anything else is refused in one line naming
+    ``name``.
 
     Examples
     --------

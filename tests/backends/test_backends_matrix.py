@@ -291,6 +291,7 @@ EXCLUDED: dict[str, str] = {
     "find_checkerboard": "image detector, NumPy-only by design",
     "find_checkerboards": "image detector, NumPy-only by design",
     "detect_aruco_markers": "image detector, NumPy-only by design",
+    "identify_aruco_dictionary": "image detector, NumPy-only by design",
     "brettel_planes": "the Brettel model's constant planes for a deficiency (NumPy)",
     "detect_charuco": "image detector, NumPy-only by design",
     "aruco_dictionary": "a lookup by name: returns NumPy tables",

@@ -293,3 +293,40 @@ def test_calibrate_charuco_refusals(tmp_path: Path, capsys: pytest.CaptureFixtur
     argv = ["stereo-calibrate", left, right, "--board", "charuco:7x5", "-o", out]
     assert main(argv) == 2
     assert "checkerboard --board" in capsys.readouterr().err
+
+
+def test_calibrate_charuco_wrong_dictionary_hint(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A 4x4_50 board calibrated with the default --dictionary 6x6_250 finds no marker; the
+    error names the dictionary the markers do belong to, and nothing is written."""
+    from PIL import Image
+
+    from imageform.geometry import CharucoBoard
+
+    art = CharucoBoard((7, 5), 20.0, 15.0, "4x4_50").image(60, margin_px=60)
+    Image.fromarray(art).save(tmp_path / "v.png")
+    out = tmp_path / "cam.toml"
+    argv = ["calibrate", str(tmp_path / "v.png"), "--board", "charuco:7x5", "-o", str(out)]
+    assert main([*argv, "--square", "20mm", "--marker", "15mm"]) == 1
+    err = capsys.readouterr().err
+    assert "try --dictionary 4x4_50" in err and len(err.strip().splitlines()) == 1, err
+    assert not out.exists()
+
+
+def test_identify_aruco_dictionary() -> None:
+    from imageform.geometry import CharucoBoard, aruco_marker_image, identify_aruco_dictionary
+
+    # a board uses ids 0, 1, ...: the smallest dictionary of its family reads it
+    for name in ("4x4_50", "5x5_250", "6x6_1000", "7x7_100", "aruco_original"):
+        art = CharucoBoard((5, 5), 20.0, 15.0, name).image(50, margin_px=50)
+        want = name if name == "aruco_original" else name.split("_")[0] + "_50"
+        assert identify_aruco_dictionary(art) == want, name
+    canvas = np.full((240, 480), 255, np.uint8)
+    canvas[60:180, 40:160] = aruco_marker_image(700, "6x6_1000", size_px=120)
+    canvas[60:180, 280:400] = aruco_marker_image(3, "6x6_1000", size_px=120)
+    assert identify_aruco_dictionary(canvas) == "6x6_1000"
+    assert identify_aruco_dictionary(canvas, min_markers=3) is None
+    assert identify_aruco_dictionary(np.full((200, 200), 255, np.uint8)) is None
+    with pytest.raises(InvalidInputError, match="min_markers"):
+        identify_aruco_dictionary(np.zeros((50, 50)), min_markers=0)

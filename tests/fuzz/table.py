@@ -336,6 +336,7 @@ VALID: dict[str, C | Skip] = {
     "imageform.geometry.estimate_projection_matrix": call(V("points3"), V("points3_uv")),
     "imageform.geometry.euler_to_matrix": call(angles=np.array([0.1, 0.2, 0.3]), order="xyz"),
     "imageform.geometry.detect_aruco_markers": call(V("rgb_big"), "4x4_50", min_side_px=8.0),
+    "imageform.geometry.identify_aruco_dictionary": call(V("rgb_big"), min_markers=2),
     "imageform.geometry.detect_charuco": call(
         V("rgb_big"), CharucoBoard((5, 7), 30.0, 24.0, "4x4_50"), min_markers=2
     ),

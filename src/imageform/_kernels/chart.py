@@ -1,8 +1,9 @@
-"""numba kernels of the colour-chart detector (:mod:`imageform.analysis.chart_detect`), each
-with a plain NumPy/SciPy twin.
+r"""numba kernels of the colour-chart detector (:mod:`imageform.analysis.chart_detect`).
+
+Each kernel has a plain NumPy/SciPy twin.
 
 - :func:`flat_gradient_numba` / :func:`flat_gradient_numpy`: the colour gradient magnitude
-  :math:`\\sqrt{\\sum_c (S_x * G * I_c)^2 + (S_y * G * I_c)^2} / 8` of an (H, W, 3) image:
+  :math:`\sqrt{\sum_c (S_x * G * I_c)^2 + (S_y * G * I_c)^2} / 8` of an (H, W, 3) image:
   separable Gaussian ``taps``, then the 3 × 3 Sobel operator (divided by 8: a unit-slope
   ramp gives 1), edges replicated.
 - :func:`block_mean_numba` / :func:`block_mean_numpy`: the mean of ``f × f`` pixel blocks

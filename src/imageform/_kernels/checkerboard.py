@@ -1,4 +1,4 @@
-"""numba kernels of the checkerboard detector, each with a plain NumPy/SciPy twin.
+r"""numba kernels of the checkerboard detector, each with a plain NumPy/SciPy twin.
 
 - :func:`smooth_saddle_numba` / :func:`smooth_saddle_numpy`: separable Gaussian smoothing
   (edges replicated, the taps of :func:`gaussian_weights`) and the saddle response
@@ -17,7 +17,7 @@ replicated), central-difference gradients ``g_p`` are weighted by
 
 .. math::
 
-    \\Big(\\sum_p w_p\\, g_p g_p^\\top\\Big)\\, q' = \\sum_p w_p\\, g_p g_p^\\top\\, p ,
+    \Big(\sum_p w_p\, g_p g_p^\top\Big)\, q' = \sum_p w_p\, g_p g_p^\top\, p ,
 
 i.e. the point ``q'`` to which every gradient in the window is orthogonal. It stops after
 ``max_iter`` iterations or when the step is ``<= eps``; a point that ends farther than the
@@ -54,7 +54,7 @@ __all__ = [
 
 
 def corner_window_weights(hx: int, hy: int) -> NDArray[np.float64]:
-    """The ``(2 hy + 1, 2 hx + 1)`` Gaussian window ``exp(-(x/hx)²) exp(-(y/hy)²)``."""
+    """Return the ``(2 hy + 1, 2 hx + 1)`` Gaussian window ``exp(-(x/hx)²) exp(-(y/hy)²)``."""
     y = np.arange(-hy, hy + 1, dtype=np.float64) / hy
     x = np.arange(-hx, hx + 1, dtype=np.float64) / hx
     return np.exp(-(y**2))[:, None] * np.exp(-(x**2))[None, :]

@@ -117,7 +117,7 @@ _CBL = tuple(np.float32(c) for c in (-0.53410316, 1.52206240, -1.73456023, 1.685
 
 @njit(inline="always", **_JIT)
 def _dec32(v):  # type: ignore[no-untyped-def]
-    """sRGB decode in float32 for v in [0, 1] (callers fix up values outside)."""
+    """Decode sRGB in float32 for v in [0, 1] (callers fix up values outside)."""
     w = (v + _F32(_A)) / _F32(1.0 + _A)
     w = w if w > _F32(0.09) else _F32(0.09)
     u = np.sqrt(w)
@@ -188,9 +188,11 @@ def _srgb_to_lab_f32_serial(src, dst, m, scale, stats, c):  # type: ignore[no-un
 
 @njit(**_JIT)
 def _srgb_to_lab_f32_fixup(src, dst, m, scale, idx):  # type: ignore[no-untyped-def]
-    """Pixels ``idx`` (a value outside [0, 1]) take the exact float64 path. A separate
-    function over the few listed pixels: a call inside the hot loop's function would stop
-    LLVM from vectorising it."""
+    """Send pixels ``idx`` (a value outside [0, 1]) through the exact float64 path.
+
+    A separate function over the few listed pixels: a call inside the hot loop's function
+    would stop LLVM from vectorising it.
+    """
     for i in idx:
         v0, v1, v2 = src[3 * i] * scale, src[3 * i + 1] * scale, src[3 * i + 2] * scale
         _lab_exact_pixel(
@@ -257,8 +259,10 @@ def _lab_to_srgb_f32_serial(src, dst, mi):  # type: ignore[no-untyped-def]
 
 @njit(**_JIT)
 def _lab_to_srgb_f32_fixup(src, dst, mi, idx):  # type: ignore[no-untyped-def]
-    """Pixels ``idx``, beyond the float32 cube root's range (linear > 1.2, encoded > 1.08:
-    far out of gamut), take the exact float64 path."""
+    """Send pixels ``idx`` beyond the float32 cube root's range to the exact float64 path.
+
+    The range ends at linear > 1.2, encoded > 1.08: far out of gamut.
+    """
     for i in idx:
         _lab_exact_rgb(
             float(src[3 * i]), float(src[3 * i + 1]), float(src[3 * i + 2]), mi, dst, 3 * i
@@ -317,7 +321,7 @@ def _finv(u):  # type: ignore[no-untyped-def]
 def srgb_to_lab(
     image: np.ndarray, m: np.ndarray, out: np.ndarray | None = None
 ) -> tuple[np.ndarray, np.ndarray | None]:
-    """Encoded sRGB (..., 3) -> CIELAB; ``m`` = diag(1/white) @ RGB->XYZ matrix (float64).
+    """Convert encoded sRGB (..., 3) -> CIELAB; ``m`` = diag(1/white) @ RGB->XYZ matrix (float64).
 
     ``out``: a C-contiguous array of the result's shape and dtype, not overlapping ``image``
     (checked by the caller), written in place.

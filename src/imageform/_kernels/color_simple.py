@@ -112,10 +112,11 @@ def summarize(stats: np.ndarray) -> tuple[bool, bool]:
 
 
 def srgb_to_hsv(image: np.ndarray, out: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """Encoded sRGB (..., 3) -> HSV (degrees, [0, 1], [0, 1]) and the input's stats.
+    """Convert encoded sRGB (..., 3) -> HSV (degrees, [0, 1], [0, 1]) and the input's stats.
 
     ``out``: C-contiguous, the result's shape and dtype, not overlapping ``image`` (checked
-    by the caller), written in place."""
+    by the caller), written in place.
+    """
     src = np.ascontiguousarray(image).reshape(-1)
     dt = _out_dtype(image)
     dst: np.ndarray = np.empty(src.shape, dt) if out is None else out.reshape(-1)

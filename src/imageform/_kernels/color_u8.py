@@ -54,7 +54,7 @@ SCALE = 1 << 16
 
 
 def _f_table() -> np.ndarray:
-    """The CIELAB function f(t) at t = k / SCALE, k = 0 .. SCALE + 7 (float32)."""
+    """Tabulate the CIELAB function f(t) at t = k / SCALE, k = 0 .. SCALE + 7 (float32)."""
     t = np.arange(SCALE + 8, dtype=np.float64) / SCALE
     d = 6.0 / 29.0
     return np.where(t > d**3, np.cbrt(t), t / (3 * d * d) + 4.0 / 29.0).astype(np.float32)
@@ -74,9 +74,12 @@ L_TABLE: np.ndarray = np.clip(
 
 
 def xyz_tables(m: np.ndarray) -> np.ndarray:
-    """uint32 (3 * 3 * 256,): entry ``768 i + 256 j + v`` is ``round(m[i, j] decode(v) SCALE)``
-    (negative entries, which no RGB->XYZ matrix has, clipped to 0), so that
-    ``X_i = sum_j T[768 i + 256 j + v_j]`` is the fixed-point linear XYZ / white of a pixel."""
+    """Build the uint32 (3 * 3 * 256,) fixed-point table of an RGB->XYZ matrix ``m``.
+
+    Entry ``768 i + 256 j + v`` is ``round(m[i, j] decode(v) SCALE)`` (negative entries,
+    which no RGB->XYZ matrix has, clipped to 0), so that ``X_i = sum_j T[768 i + 256 j + v_j]``
+    is the fixed-point linear XYZ / white of a pixel.
+    """
     t = m[:, :, None] * DECODE_LUT.astype(np.float64)[None, None, :] * SCALE
     return np.clip(np.rint(t), 0, None).astype(np.uint32).reshape(-1)
 

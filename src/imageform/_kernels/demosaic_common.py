@@ -34,5 +34,5 @@ def phase_masks(shape: tuple[int, int]) -> tuple[np.ndarray, np.ndarray, np.ndar
 
 
 def crop(full: Any, oy: int, ox: int, h: int, w: int) -> np.ndarray:
-    """The ``(h, w, ...)`` window of ``full`` at ``(oy, ox)``, as a contiguous array."""
+    """Return the ``(h, w, ...)`` window of ``full`` at ``(oy, ox)``, as a contiguous array."""
     return np.ascontiguousarray(full[oy : oy + h, ox : ox + w])

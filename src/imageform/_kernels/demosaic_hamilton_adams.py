@@ -1,14 +1,14 @@
-"""Hamilton-Adams (1997) edge-directed demosaicing: numba kernel and its NumPy twin.
+r"""Hamilton-Adams (1997) edge-directed demosaicing: numba kernel and its NumPy twin.
 
 Green at a red (blue) site is interpolated along the direction of the smaller gradient,
 the gradient combining the green first difference and the red (blue) second difference:
 
 .. math::
 
-    \\Delta_H = |G_{x-1} - G_{x+1}| + |2 C_x - C_{x-2} - C_{x+2}|, \\qquad
-    \\hat G_H = \\frac{G_{x-1} + G_{x+1}}{2} + \\frac{2 C_x - C_{x-2} - C_{x+2}}{4}
+    \Delta_H = |G_{x-1} - G_{x+1}| + |2 C_x - C_{x-2} - C_{x+2}|, \qquad
+    \hat G_H = \frac{G_{x-1} + G_{x+1}}{2} + \frac{2 C_x - C_{x-2} - C_{x+2}}{4}
 
-(and the same vertically; the mean of both when :math:`\\Delta_H = \\Delta_V`). Red and
+(and the same vertically; the mean of both when :math:`\Delta_H = \Delta_V`). Red and
 blue then follow the completed green: at green sites the colour difference is averaged
 from the two neighbours that hold the colour; at blue (red) sites the diagonal with the
 smaller gradient :math:`|C_{NW} - C_{SE}| + |2 G - G_{NW} - G_{SE}|` is used.

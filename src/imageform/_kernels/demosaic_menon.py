@@ -1,14 +1,14 @@
-"""Menon-Andriani-Calvagno (2007) DDFAPD demosaicing: numba kernel and its NumPy twin.
+r"""Menon-Andriani-Calvagno (2007) DDFAPD demosaicing: numba kernel and its NumPy twin.
 
 Directional filtering with a posteriori decision (DDFAPD):
 
 1. green is interpolated twice at red/blue sites, horizontally and vertically, with the
    filter ``h0 + h1 = [-1/4, 1/2, 1/2, 1/2, -1/4]`` (paper eq. 3, Adams' filter);
-2. the chrominances :math:`C_H = X - \\hat G_H`, :math:`C_V = X - \\hat G_V` (X the
+2. the chrominances :math:`C_H = X - \hat G_H`, :math:`C_V = X - \hat G_V` (X the
    measured red or blue) give gradients :math:`D_H(y, x) = |C_H(y, x) - C_H(y, x + 2)|`,
    :math:`D_V` likewise, summed over a 5×5 window with weights
    ``[[1,0,1,0,1]... 3 ...]`` (eq. 9); green is taken from the direction with the smaller
-   sum (:math:`\\delta_V \\ge \\delta_H` chooses horizontal);
+   sum (:math:`\delta_V \ge \delta_H` chooses horizontal);
 3. red and blue are filled with colour differences: at green sites the mean of the two
    neighbours' differences along the row or column that holds the colour, at blue (red)
    sites along the direction chosen in step 2;
@@ -21,7 +21,7 @@ weighted by the *other* direction's squared gradient sum,
 
 .. math::
 
-    \\hat G = \\frac{\\delta_V^2 \\hat G_H + \\delta_H^2 \\hat G_V}{\\delta_H^2 + \\delta_V^2}
+    \hat G = \frac{\delta_V^2 \hat G_H + \delta_H^2 \hat G_V}{\delta_H^2 + \delta_V^2}
 
 (the plain mean where both are 0); the direction used by steps 3-4 stays the hard decision.
 On Kodak this gains about 0.7 dB CPSNR over the hard decision (benchmarks/results).

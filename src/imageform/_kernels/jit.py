@@ -1,4 +1,4 @@
-"""The one numba policy of imageform's kernels: every kernel cached, and where the cache lives.
+r"""The one numba policy of imageform's kernels: every kernel cached, and where the cache lives.
 
 Every kernel module decorates with :func:`njit` from here instead of ``numba.njit``: the same
 options, plus ``cache=True``, so numba's compilation (seconds per kernel: 15-25 s for the
@@ -14,7 +14,7 @@ Where the cache lives (:func:`cache_location`, ``docs/performance.md``):
    writable (an editable checkout, a virtual environment the user owns);
 3. else (a wheel installed read-only, system-wide) the user's cache folder,
    ``$XDG_CACHE_HOME/imageform/numba`` or ``~/.cache/imageform/numba`` on Linux,
-   ``~/Library/Caches/imageform/numba`` on macOS, ``%LOCALAPPDATA%\\imageform\\numba`` on
+   ``~/Library/Caches/imageform/numba`` on macOS, ``%LOCALAPPDATA%\imageform\numba`` on
    Windows: :func:`configure_cache` exports it as ``NUMBA_CACHE_DIR`` before numba is imported
    (numba reads it then, and again whenever its environment changes), so child processes
    (``imageform batch`` workers) share it.
@@ -42,7 +42,7 @@ _HERE = Path(__file__).resolve().parent
 
 
 def user_cache_dir() -> Path:
-    """The user's cache folder for imageform's compiled kernels (platform conventions)."""
+    """Return the user's cache folder for imageform's compiled kernels (platform conventions)."""
     if sys.platform == "win32":
         base = Path(os.environ.get("LOCALAPPDATA") or Path.home() / "AppData" / "Local")
     elif sys.platform == "darwin":

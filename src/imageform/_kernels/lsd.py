@@ -28,10 +28,12 @@ def _angle_diff(a: float, b: float) -> float:  # pragma: no cover - numba
 
 @njit
 def grow_regions(angle, order, tau, min_size):  # type: ignore[no-untyped-def]  # pragma: no cover
-    """Label 8-connected regions of pixels whose level-line angle is within ``tau`` of the
-    region's running mean angle, seeded in ``order`` (decreasing gradient). NaN angles are
-    NOTDEF. Regions smaller than ``min_size`` are discarded (label -1 stays on their pixels
-    as 'used')."""
+    """Label 8-connected regions of pixels aligned with the region's running mean angle.
+
+    A pixel joins when its level-line angle is within ``tau`` of that angle; regions are
+    seeded in ``order`` (decreasing gradient). NaN angles are NOTDEF. Regions smaller than
+    ``min_size`` are discarded (label -1 stays on their pixels as 'used').
+    """
     H, W = angle.shape
     labels = np.full((H, W), -1, dtype=np.int32)
     used = np.zeros((H, W), dtype=np.bool_)
@@ -88,7 +90,8 @@ def region_rectangles(labels, n_regions, mag):  # type: ignore[no-untyped-def]  
     """Per region: the magnitude-weighted centroid, principal direction and extents.
 
     Returns ``rects`` (n, 7): cx, cy, theta (line direction), l_min, l_max, w_min, w_max,
-    coordinates of pixel centres (u = column, v = row)."""
+    coordinates of pixel centres (u = column, v = row).
+    """
     H, W = labels.shape
     sw = np.zeros(n_regions)
     sx = np.zeros(n_regions)
@@ -155,7 +158,8 @@ def rect_alignment_counts(rects, angle, tau):  # type: ignore[no-untyped-def]  #
     """For each rectangle: (n pixels whose centre lies inside, k of them aligned within tau).
 
     'Aligned' compares the pixel's level-line angle with the rectangle's direction modulo pi
-    (a line segment has no polarity at this stage; the region grew with one polarity)."""
+    (a line segment has no polarity at this stage; the region grew with one polarity).
+    """
     H, W = angle.shape
     n = rects.shape[0]
     out = np.zeros((n, 2), dtype=np.int64)

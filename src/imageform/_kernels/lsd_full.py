@@ -44,9 +44,12 @@ _JIT: dict[str, Any] = {"error_model": "numpy"}
 
 @njit(**_JIT)
 def _sampler_taps(n_out, size, scale, sigma, h):  # type: ignore[no-untyped-def]  # pragma: no cover
-    """One axis of :func:`gaussian_sampler`: for each of ``n_out`` output samples its
-    ``2 h + 1`` normalised Gaussian weights (centred on ``i / scale``) and their source
-    indices in ``[0, size)`` with the symmetric (mirror) boundary."""
+    """Compute one axis of :func:`gaussian_sampler`: weights and source indices per sample.
+
+    For each of ``n_out`` output samples its ``2 h + 1`` normalised Gaussian weights
+    (centred on ``i / scale``) and their source indices in ``[0, size)`` with the symmetric
+    (mirror) boundary.
+    """
     n = 1 + 2 * h
     k = np.empty((n_out, n))
     src = np.empty((n_out, n), dtype=np.int64)
@@ -254,8 +257,11 @@ def _inter_hi(x, x1, y1, x2, y2):  # type: ignore[no-untyped-def]  # pragma: no 
 
 @njit(**_JIT)
 def rect_nfa(rec, angles, log_nt):  # type: ignore[no-untyped-def]  # pragma: no cover
-    """``-log10 NFA`` of a rectangle: the pixels whose centres lie inside it (LSD's rectangle
-    iterator, column by column) and how many are aligned with its direction within prec."""
+    """Compute the ``-log10 NFA`` of a rectangle.
+
+    It counts the pixels whose centres lie inside it (LSD's rectangle iterator, column by
+    column) and how many are aligned with its direction within prec.
+    """
     ny, nx = angles.shape
     x1, y1, x2, y2, width = rec[0], rec[1], rec[2], rec[3], rec[4]
     theta, dx, dy, prec, p = rec[7], rec[8], rec[9], rec[10], rec[11]
@@ -315,8 +321,10 @@ def rect_nfa(rec, angles, log_nt):  # type: ignore[no-untyped-def]  # pragma: no
 
 @njit(**_JIT)
 def region_grow(x, y, angles, reg_x, reg_y, used, prec):  # type: ignore[no-untyped-def]  # pragma: no cover
-    """Grow a region of 8-connected pixels aligned within ``prec`` with the running mean
-    angle, from the seed (x, y); marks them used. Returns ``(size, reg_angle)``."""
+    """Grow a region of 8-connected pixels aligned within ``prec`` with the running mean angle.
+
+    It grows from the seed (x, y) and marks the pixels used. Returns ``(size, reg_angle)``.
+    """
     ny, nx = angles.shape
     reg_x[0] = x
     reg_y[0] = y
@@ -350,8 +358,11 @@ def region_grow(x, y, angles, reg_x, reg_y, used, prec):  # type: ignore[no-unty
 
 @njit(**_JIT)
 def _region2rect(reg_x, reg_y, size, modgrad, reg_angle, prec, p, rec):  # type: ignore[no-untyped-def]  # pragma: no cover
-    """The rectangle of a region: gradient-weighted centre of mass, the principal axis of
-    inertia (oriented like the region's angle), and the extents along and across it."""
+    """Compute the rectangle of a region.
+
+    Its gradient-weighted centre of mass, the principal axis of inertia (oriented like the
+    region's angle), and the extents along and across it.
+    """
     x = 0.0
     y = 0.0
     s = 0.0
@@ -444,8 +455,11 @@ def _reduce_region_radius(reg_x, reg_y, size, modgrad, reg_angle, prec, p, rec, 
 
 @njit(**_JIT)
 def _refine(reg_x, reg_y, size, modgrad, reg_angle, prec, p, rec, used, angles, density_th):  # type: ignore[no-untyped-def]  # pragma: no cover
-    """LSD's refinement: a region whose rectangle is less than ``density_th`` full is regrown
-    from its seed with a tolerance adapted to the angles near the seed, then shrunk."""
+    """Refine a region as LSD does.
+
+    A region whose rectangle is less than ``density_th`` full is regrown from its seed with a
+    tolerance adapted to the angles near the seed, then shrunk.
+    """
     if _density(size, rec) >= density_th:
         return True, size
     xc = reg_x[0]
@@ -476,8 +490,10 @@ def _refine(reg_x, reg_y, size, modgrad, reg_angle, prec, p, rec, used, angles, 
 
 @njit(**_JIT)
 def _rect_improve(rec, angles, log_nt, log_eps):  # type: ignore[no-untyped-def]  # pragma: no cover
-    """LSD's rectangle improvement: finer precisions, thinner, each side thinner, finer
-    again; the best -log10 NFA is kept (``rec`` is updated in place)."""
+    """Improve a rectangle as LSD does (``rec`` is updated in place).
+
+    Finer precisions, thinner, each side thinner, finer again; the best -log10 NFA is kept.
+    """
     delta = 0.5
     delta_2 = delta / 2.0
     log_nfa = rect_nfa(rec, angles, log_nt)
@@ -576,7 +592,7 @@ def _detect(angles, modgrad, list_x, list_y, prec, p, log_nt, log_eps, density_t
 
 @njit(**_JIT)
 def lsd(img, scale, sigma_scale, quant, ang_th, log_eps, density_th, n_bins, validate=True):  # type: ignore[no-untyped-def]  # pragma: no cover
-    """The LSD pipeline on a grey float64 image with values in [0, 255].
+    """Run the LSD pipeline on a grey float64 image with values in [0, 255].
 
     Returns ``(n, 7)``: ``x1, y1, x2, y2, width, p, -log10 NFA`` per segment, in the input
     image's pixel-centre coordinates (x column, y row). ``validate=False`` skips the

@@ -76,8 +76,10 @@ def _gather_row(
     fill: float,
     orow: np.ndarray,
 ) -> None:
-    """Bilinear interpolation of one output row (``orow`` flat, ``wo * nc``), as lerps:
-    ``(1-ay)((1-ax) I00 + ax I01) + ay((1-ax) I10 + ax I11)``."""
+    """Interpolate one output row bilinearly (``orow`` flat, ``wo * nc``), as lerps.
+
+    ``(1-ay)((1-ax) I00 + ax I01) + ay((1-ax) I10 + ax I11)``.
+    """
     for j in range(idx.shape[0]):
         o = j * nc
         if not ok[j]:
@@ -146,9 +148,11 @@ def undistort_brown_conrady(
     fill: float,
     out: np.ndarray,
 ) -> None:  # pragma: no cover
-    """Brown-Conrady (OpenCV's rational model, as ``bc_distort_point``) fused with sampling:
-    the coefficients hoisted, the row terms computed once per row, and the rational
-    denominator skipped when ``k4 = k5 = k6 = 0``."""
+    """Distort with Brown-Conrady (OpenCV's rational model, as ``bc_distort_point``) and sample.
+
+    The coefficients are hoisted, the row terms computed once per row, and the rational
+    denominator skipped when ``k4 = k5 = k6 = 0``.
+    """
     nb, h, w, nc = img.shape
     ho = out.shape[1]
     wo = out.shape[2]

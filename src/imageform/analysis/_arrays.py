@@ -31,14 +31,14 @@ _INTEGER_SCALE = {np.dtype(np.uint8): 255.0, np.dtype(np.uint16): 65535.0}
 
 
 def is_dask(x: object) -> bool:
-    """True for a Dask array (checked without importing Dask)."""
+    """Return True for a Dask array (checked without importing Dask)."""
     return type(x).__module__.startswith("dask.") and hasattr(x, "map_blocks")
 
 
 def image_in(
     image: object, name: str = "image", *, channels: int | None = 3, range_check: bool = True
 ) -> Any:
-    """An RGB image as floats in [0, 1]: NumPy through ``as_image``, Dask kept lazy.
+    """Return an RGB image as floats in [0, 1]: NumPy through ``as_image``, Dask kept lazy.
 
     ``range_check=False`` for linear-light values, which may exceed 1.
 
@@ -67,7 +67,7 @@ def image_in(
 
 
 def exact_quantile(values: Any, q: float, *, bins: int = 4096) -> float:
-    """The ``q``-th percentile (NumPy's default linear interpolation) of a 1-D Dask array.
+    """Return the ``q``-th percentile (NumPy's linear interpolation) of a 1-D Dask array.
 
     Exact, in two passes of reductions: a histogram locates the bins holding the two order
     statistics that the linear rule interpolates between, then only the values inside

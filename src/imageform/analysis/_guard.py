@@ -1,5 +1,7 @@
-"""Boundary checks shared by the analysis tools (issue 16): real arrays and the
-validation of the result dataclasses a user can also build by hand."""
+"""Boundary checks shared by the analysis tools (issue 16).
+
+Real arrays and the validation of the result dataclasses a user can also build by hand.
+"""
 
 from __future__ import annotations
 
@@ -16,8 +18,11 @@ __all__ = ["count", "dtype_kind", "real_array", "real_triple", "target_source", 
 def real_array(
     x: object, name: str, shape: tuple[int | None, ...] | None = None, *, finite: bool = True
 ) -> np.ndarray:
-    """``x`` as a float64 NumPy array: complex, object, string and bool-only input refused;
-    ``shape`` (``None`` for any length on that axis) checked before the values."""
+    """Return ``x`` as a float64 NumPy array, its ``shape`` checked before the values.
+
+    Complex, object, string and bool-only input is refused; ``shape`` may hold ``None`` for any
+    length on that axis.
+    """
     if x is None or isinstance(x, str | bytes):
         raise InvalidInputError(f"expected {name} as a numeric array, got {describe(x)}")
     arr = np.asarray(as_float(x, name, finite=False), dtype=np.float64)
@@ -46,7 +51,7 @@ def real_triple(x: object, name: str, *, nonnegative: bool = False) -> tuple[flo
 
 
 def count(x: object, name: str) -> int:
-    """A count >= 0 (Python or NumPy integer)."""
+    """Return a count >= 0 (Python or NumPy integer)."""
     return as_int(x, name, minimum=0)
 
 
@@ -60,9 +65,11 @@ def unit_rows(m: np.ndarray, name: str) -> Any:
 
 
 def target_source(target: object, name: str, what: str) -> Any:
-    """A normalisation target that is not a statistics object: an existing JSON file (its
-    :class:`~pathlib.Path`) or an image validated under the parameter's own ``name``
-    (never reported as ``image``)."""
+    """Return a normalisation target that is not a statistics object: a JSON path or an image.
+
+    An existing JSON file is returned as its :class:`~pathlib.Path`; an image is validated under the
+    parameter's own ``name`` (never reported as ``image``).
+    """
     from pathlib import Path
 
     from imageform.analysis._arrays import image_in
@@ -81,7 +88,7 @@ def target_source(target: object, name: str, what: str) -> Any:
 
 
 def dtype_kind(value: object) -> str:
-    """The NumPy dtype kind of ``value`` (``"O"`` when it does not convert)."""
+    """Return the NumPy dtype kind of ``value`` (``"O"`` when it does not convert)."""
     dtype = getattr(value, "dtype", None)
     if dtype is not None and not isinstance(dtype, np.dtype):  # a tensor: by its name
         text = str(dtype).removeprefix("torch.")

@@ -11,7 +11,7 @@ __all__ = ["sample_rows", "sparse_nmf"]
 
 
 def sample_rows(flat: np.ndarray, max_pixels: int) -> np.ndarray:
-    """A deterministic, evenly strided subsample of at most ``max_pixels`` rows."""
+    """Return a deterministic, evenly strided subsample of at most ``max_pixels`` rows."""
     if flat.shape[0] <= max_pixels:
         return flat
     idx = np.linspace(0, flat.shape[0] - 1, max_pixels).round().astype(np.int64)

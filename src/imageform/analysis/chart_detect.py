@@ -1,4 +1,4 @@
-"""Find a ColorChecker Classic (4 × 6 patches) in an uncropped photograph.
+r"""Find a ColorChecker Classic (4 × 6 patches) in an uncropped photograph.
 
 :func:`detect_colorchecker` returns the chart's homography, its 24 patch centres and sampling
 quadrilaterals in image coordinates, a score and the chart's in-plane rotation;
@@ -13,13 +13,13 @@ segmentation detector of colour-checker-detection and OpenCV's ``mcc`` module):
    long side; the colour gradient magnitude of the Gaussian-smoothed image is thresholded at
    several levels, and the 4-connected regions below each threshold are candidate patches.
 2. **Square-ish candidates**, by moments: an affine image of a square (any rotation, tilt
-   or shear) of area :math:`A` and covariance :math:`\\Sigma` has
-   :math:`A / (12 \\sqrt{\\det \\Sigma}) = 1` (a uniform square of side *s* has variance
+   or shear) of area :math:`A` and covariance :math:`\Sigma` has
+   :math:`A / (12 \sqrt{\det \Sigma}) = 1` (a uniform square of side *s* has variance
    :math:`s^2/12` along each side); regions with this ratio in [0.85, 1.12] and an
    elongation of at most 3 are kept, duplicates across thresholds removed.
 3. **Lattice hypotheses.** A candidate and two of its neighbours give a lattice origin and
-   basis :math:`B = [d_1\\ d_2]`; it is kept when the candidate's own shape agrees, i.e.
-   :math:`12\\, B^{-1} \\Sigma B^{-T} \\approx (s/p)^2 I` (the patch sides run along the
+   basis :math:`B = [d_1\ d_2]`; it is kept when the candidate's own shape agrees, i.e.
+   :math:`12\, B^{-1} \Sigma B^{-T} \approx (s/p)^2 I` (the patch sides run along the
    basis, side over pitch between 0.55 and 0.97), which rules out diagonal bases. Every
    hypothesis counts the candidates on its lattice (RANSAC-style, all hypotheses at once).
 4. **Growth.** The best lattices are refitted as homographies (normalised DLT) from integer
@@ -120,7 +120,7 @@ class ChartDetection:
         object.__setattr__(self, "rotation", as_real(self.rotation, "rotation"))
 
     def to_dict(self) -> dict[str, Any]:
-        """The detection as JSON-ready lists."""
+        """Return the detection as JSON-ready lists."""
         return {
             "homography": self.homography.tolist(),
             "corners": self.corners.tolist(),
@@ -149,8 +149,11 @@ def _normalizer(p: np.ndarray) -> np.ndarray:
 
 
 def _fit_h(src: np.ndarray, dst: np.ndarray) -> np.ndarray:
-    """Homography src -> dst by the normalised DLT (Hartley & Zisserman, alg. 4.2); an affine
-    map when the points cannot determine more (fewer than 6 or nearly collinear rows)."""
+    """Fit the homography src -> dst by the normalised DLT (Hartley & Zisserman, alg. 4.2).
+
+    An affine map is returned when the points cannot determine more (fewer than 6 or nearly
+    collinear rows).
+    """
     ts, td = _normalizer(src), _normalizer(dst)
     s = _apply_h(ts, src)
     d = _apply_h(td, dst)
@@ -187,8 +190,10 @@ def _gaussian_taps(sigma: float) -> np.ndarray:
 
 
 def _work_image(rgb: np.ndarray, max_size: int, scale: float) -> tuple[np.ndarray, int]:
-    """Block mean by an integer factor so that the long side is at most ``max_size``, as
-    float32 in [0, 1] (``scale``: 255 for uint8)."""
+    """Block-mean the image by an integer factor so that its long side is at most ``max_size``.
+
+    The result is float32 in [0, 1] (``scale``: 255 for uint8).
+    """
     from imageform._kernels.chart import block_mean_numba
 
     hgt, wid = rgb.shape[:2]
@@ -199,9 +204,11 @@ def _work_image(rgb: np.ndarray, max_size: int, scale: float) -> tuple[np.ndarra
 
 
 def _rgb_in(image: object) -> tuple[np.ndarray, float]:
-    """The photograph as an (H, W, 3) array and its full scale: uint8 and uint16 arrays are
-    kept as they are (no float copy of a large photograph), the rest goes through the
-    usual checks (``image_in``: floats in [0, 1]); Dask is computed."""
+    """Return the photograph as an (H, W, 3) array and its full scale.
+
+    uint8 and uint16 arrays are kept as they are (no float copy of a large photograph), the rest
+    goes through the usual checks (``image_in``: floats in [0, 1]); Dask is computed.
+    """
     if isinstance(image, np.ndarray) and image.dtype in (np.uint8, np.uint16):
         if image.ndim != 3 or image.shape[-1] != 3:
             raise InvalidInputError(
@@ -321,8 +328,10 @@ def _hypotheses(cand: dict[str, np.ndarray]) -> tuple[np.ndarray, np.ndarray, np
 def _collect(
     cand: dict[str, np.ndarray], h: np.ndarray, area_scale: float, tol: float
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Candidates on the lattice of ``h`` (lattice -> image): indices, integer coords,
-    residuals; one candidate per cell (the closest)."""
+    """Collect the candidates on the lattice of ``h`` (lattice -> image), one per cell.
+
+    Returns indices, integer coords and residuals; one candidate per cell (the closest).
+    """
     hinv = np.linalg.inv(h)
     uv = _apply_h(hinv, cand["c"])
     ruv = np.round(uv)
@@ -347,9 +356,11 @@ def _collect(
 def _in_square_window(
     idx: np.ndarray, keys: np.ndarray, size: int
 ) -> tuple[np.ndarray, np.ndarray]:
-    """The members of the ``size × size`` window of lattice cells that holds the most (a chart
-    fits in one whatever its orientation): growth never strays onto clutter that happens to
-    continue the lattice far away."""
+    """Return the members of the ``size × size`` window of lattice cells that holds the most.
+
+    A chart fits in one whatever its orientation: growth never strays onto clutter that happens to
+    continue the lattice far away.
+    """
     if not len(keys):
         return idx, keys
     lo, hi = keys.min(axis=0).astype(int), keys.max(axis=0).astype(int)
@@ -443,8 +454,11 @@ def _sample(work: np.ndarray, h: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 def _colour_fit(
     meas: np.ndarray, ref_lin: np.ndarray, usable: np.ndarray
 ) -> tuple[float, np.ndarray]:
-    """R² of the affine linear-light fit ref ~ [meas, 1] W, robust to a few outliers (judged
-    on the encoded residual, so that dark patches count as much as light ones)."""
+    """Return R² of the affine linear-light fit ref ~ [meas, 1] W, robust to a few outliers.
+
+    The outliers are judged on the encoded residual, so that dark patches count as much as light
+    ones.
+    """
     x = np.c_[srgb_decode(np, np.clip(meas, 0.0, 1.0)), np.ones(len(meas))]
     ref_enc = srgb_encode(np, ref_lin)
     use = usable.copy()
@@ -508,8 +522,11 @@ def _best_window(
 def _search(
     work: np.ndarray, ref_lin: np.ndarray, min_score: float
 ) -> tuple[float, np.ndarray, np.ndarray, np.ndarray] | str:
-    """The chart in the work image: (score, chart -> work homography, outliers, chart
-    coordinates of the segmented patches), or why none was found."""
+    """Search the work image for the chart.
+
+    Returns (score, chart -> work homography, outliers, chart coordinates of the segmented patches),
+    or why none was found.
+    """
     cand = _candidates(work)
     n_cand = len(cand["area"])
     if n_cand < 6:
@@ -799,9 +816,12 @@ _PATCH, _MARGIN_U, _MARGIN_V = 0.85, 0.3, 0.45
 def _chart_homography(
     rng: np.random.Generator, hgt: int, wid: int, width: float, tilt: float, rotation: float
 ) -> np.ndarray:
-    """Chart (column, row) -> image: the chart plane tilted by ``tilt`` degrees about a
-    random in-plane axis, rotated by ``rotation``, seen by a pinhole (focal = image width),
-    scaled so that its lattice is ``width`` of the image width, placed at random inside."""
+    """Return a random chart (column, row) -> image homography.
+
+    The chart plane is tilted by ``tilt`` degrees about a random in-plane axis, rotated by
+    ``rotation``, seen by a pinhole (focal = image width), scaled so that its lattice is ``width``
+    of the image width, placed at random inside.
+    """
     t, phi, r = np.radians(tilt), rng.uniform(0, np.pi), np.radians(rotation)
     axis = np.array([np.cos(phi), np.sin(phi), 0.0])
     kx = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
@@ -845,7 +865,7 @@ def synthetic_chart_photo(
     noise: float = 0.01,
     rng: Any = 0,
 ) -> ChartPhoto:
-    """A ColorChecker photographed in a scene: the test input of :func:`detect_colorchecker`.
+    """Render a ColorChecker photographed in a scene: the test input of :func:`detect_colorchecker`.
 
     The 24 patches (:data:`~imageform.analysis.synthetic.COLORCHECKER_SRGB8`) on a dark card
     are rendered through a random perspective homography (3 × 3 supersampling) over

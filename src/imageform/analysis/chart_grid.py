@@ -1,7 +1,9 @@
-"""Patch values of a colour chart cropped to fill the frame: :class:`ChartPatches` and
-:func:`chart_patches` (the grid sampler), and the :class:`ChartWarning` both chart samplers
-raise. Below :mod:`~imageform.analysis.harmonize` (which fits corrections to the patches),
-:mod:`~imageform.analysis.chart_detect` (which measures them in photographs) and
+"""Patch values of a colour chart cropped to fill the frame.
+
+:class:`ChartPatches` and :func:`chart_patches` (the grid sampler), and the
+:class:`ChartWarning` both chart samplers raise. Below :mod:`~imageform.analysis.harmonize`
+(which fits corrections to the patches), :mod:`~imageform.analysis.chart_detect` (which
+measures them in photographs) and
 :mod:`~imageform.analysis.chart_input` (which picks the sampler), so that the fit can take
 chart images without a module cycle; :mod:`imageform.analysis.harmonize` re-exports all three.
 """
@@ -27,8 +29,11 @@ class ChartWarning(ImageformWarning):
 
 @dataclass(frozen=True)
 class ChartPatches:
-    """Patch statistics of a chart image (row by row): encoded sRGB ``means`` (N, 3), the
-    per-patch ``std`` (N, 3), and which patches are ``saturated`` or ``missing``."""
+    """Patch statistics of a chart image (row by row).
+
+    Encoded sRGB ``means`` (N, 3), the per-patch ``std`` (N, 3), and which patches are ``saturated``
+    or ``missing``.
+    """
 
     means: np.ndarray
     std: np.ndarray

@@ -97,9 +97,11 @@ class ChartSample:
 def _grid_geometry(
     hgt: int, wid: int, rows: int, cols: int, margin: float
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Outline, centres and sampling quads of :func:`chart_patches`' grid: the cell
-    ``[x0, x1)`` averages pixels ``xa = ceil(x0 + d) .. xb - 1 = floor(x1 - d) - 1``, whose
-    squares span ``[xa - 0.5, xb - 0.5]`` (pixel centres at integers)."""
+    """Return the outline, centres and sampling quads of :func:`chart_patches`' grid.
+
+    The cell ``[x0, x1)`` averages pixels ``xa = ceil(x0 + d) .. xb - 1 = floor(x1 - d) - 1``,
+    whose squares span ``[xa - 0.5, xb - 0.5]`` (pixel centres at integers).
+    """
     outline = np.array([[-0.5, -0.5], [wid - 0.5, -0.5], [wid - 0.5, hgt - 0.5], [-0.5, hgt - 0.5]])
     centres, quads = [], []
     for i in range(rows):
@@ -128,8 +130,11 @@ def _cropped(
 
 
 def _looks_cropped(pat: ChartPatches, rows: int, cols: int, min_score: float) -> bool:
-    """The grid sampling validates: few non-flat cells and, for a ColorChecker, colours that
-    match the published ones (the detector's affine linear-light R²)."""
+    """Tell whether the grid sampling validates.
+
+    Few non-flat cells and, for a ColorChecker, colours that match the published ones (the
+    detector's affine linear-light R²).
+    """
     n = rows * cols
     if int(pat.missing.sum()) > max(1, n // 12):
         return False
@@ -156,7 +161,7 @@ def sample_chart(
     max_size: int = 1024,
     name: str = "image",
 ) -> ChartSample:
-    """The patches of the colour chart in ``image``, cropped or anywhere in a photograph.
+    """Sample the colour chart in ``image``, cropped or anywhere in a photograph.
 
     Parameters
     ----------
@@ -256,8 +261,11 @@ def sample_chart(
 
 
 def _as_chart_patches(chart: object, name: str, layout: str = "auto") -> Any:
-    """``chart`` as patch values: a :class:`ChartSample`'s patches, an image's (through
-    :func:`sample_chart`), or ``chart`` itself (a ChartPatches or an (N, 3) array)."""
+    """Return ``chart`` as patch values.
+
+    A :class:`ChartSample`'s patches, an image's (through :func:`sample_chart`), or ``chart``
+    itself (a ChartPatches or an (N, 3) array).
+    """
     if isinstance(chart, ChartSample):
         return chart.patches
     if isinstance(chart, ChartPatches):
@@ -270,8 +278,10 @@ def _as_chart_patches(chart: object, name: str, layout: str = "auto") -> Any:
 
 
 def _neutral_illuminant(pat: ChartPatches, neutrals: tuple[int, ...]) -> np.ndarray:
-    r"""The illuminant's linear RGB from the neutral patches:
-    :math:`e_c = \sum_i m_{ic} r_{ic} / \sum_i r_{ic}^2` (least squares of measured = e × ref)."""
+    r"""Estimate the illuminant's linear RGB from the neutral patches.
+
+    :math:`e_c = \sum_i m_{ic} r_{ic} / \sum_i r_{ic}^2` (least squares of measured = e × ref).
+    """
     from imageform.analysis.synthetic import COLORCHECKER_SRGB8
 
     if pat.means.shape[0] != 24:

@@ -66,13 +66,13 @@ _N_TERMS = {1: 3, 2: 6, 3: 13}
 
 
 def root_polynomial_terms(rgb: Any, degree: int) -> Any:
-    """Root-polynomial expansion of linear RGB (Finlayson et al. 2015, eq. (9)-(10)).
+    r"""Root-polynomial expansion of linear RGB (Finlayson et al. 2015, eq. (9)-(10)).
 
-    degree 1: (R, G, B); degree 2 adds :math:`\\sqrt{RG}, \\sqrt{GB}, \\sqrt{RB}` (6 terms);
-    degree 3 adds :math:`\\sqrt[3]{RG^2}, \\sqrt[3]{GB^2}, \\sqrt[3]{RB^2}, \\sqrt[3]{GR^2},
-    \\sqrt[3]{BG^2}, \\sqrt[3]{BR^2}, \\sqrt[3]{RGB}` (13 terms). Every term is of degree
-    one in exposure: :math:`t(kx) = k\\,t(x)`. Roots are sign-preserving
-    (:math:`\\operatorname{sign}(p)|p|^{1/n}`) so small negative noise values stay finite.
+    degree 1: (R, G, B); degree 2 adds :math:`\sqrt{RG}, \sqrt{GB}, \sqrt{RB}` (6 terms);
+    degree 3 adds :math:`\sqrt[3]{RG^2}, \sqrt[3]{GB^2}, \sqrt[3]{RB^2}, \sqrt[3]{GR^2},
+    \sqrt[3]{BG^2}, \sqrt[3]{BR^2}, \sqrt[3]{RGB}` (13 terms). Every term is of degree
+    one in exposure: :math:`t(kx) = k\,t(x)`. Roots are sign-preserving
+    (:math:`\operatorname{sign}(p)|p|^{1/n}`) so small negative noise values stay finite.
 
     Examples
     --------
@@ -122,8 +122,10 @@ def _apply_block(
 
 @dataclass(frozen=True)
 class ColorCorrection:
-    """A fitted correction: ``matrix`` (3, n_terms) maps the expanded linear RGB of device A
-    to linear RGB of the reference (row vectors: ``terms @ matrix.T``).
+    """A fitted colour correction from device A to the reference.
+
+    ``matrix`` (3, n_terms) maps the expanded linear RGB of device A to linear RGB of the reference
+    (row vectors: ``terms @ matrix.T``).
 
     ``transfer`` is the encoding of the values it was fitted on and applies to: ``"srgb"``
     (decoded to linear light, corrected, re-encoded) or ``"linear"`` (corrected as is).
@@ -136,7 +138,7 @@ class ColorCorrection:
     transfer: str = "srgb"
 
     def __post_init__(self) -> None:
-        """A known method and degree, a finite matrix of the matching shape."""
+        """Check for a known method and degree, and a finite matrix of the matching shape."""
         key = check_option(self.method, CORRECTION_METHODS, "correction method")
         deg = as_int(self.degree, "degree")
         if deg not in CORRECTION_METHODS[key]:
@@ -212,8 +214,11 @@ class ColorCorrection:
 
 
 def _patches_in(x: object, name: str, layout: str = "auto") -> tuple[np.ndarray, np.ndarray]:
-    """Patch values (N, 3) and the usable-row mask; an image (H, W, 3) or a ChartSample is
-    sampled by :func:`~imageform.analysis.sample_chart` first."""
+    """Return the patch values (N, 3) and the usable-row mask.
+
+    An image (H, W, 3) or a ChartSample is sampled by :func:`~imageform.analysis.sample_chart`
+    first.
+    """
     x = _as_chart_patches(x, name, layout)
     if isinstance(x, ChartPatches):
         return np.asarray(x.means, dtype=np.float64), x.valid
@@ -250,14 +255,14 @@ def fit_color_correction(
     saturation: float | None = 1.0,
     chart_layout: str = "auto",
 ) -> ColorCorrection:
-    """Least-squares colour correction from device A's chart (``measured``) to the reference.
+    r"""Least-squares colour correction from device A's chart (``measured``) to the reference.
 
-    .. math:: \\hat M = \\arg\\min_M \\sum_i \\lVert \\rho(a_i) M^T - b_i \\rVert^2
-        = \\big((\\rho(A)^T \\rho(A))^{-1} \\rho(A)^T B\\big)^T
+    .. math:: \hat M = \arg\min_M \sum_i \lVert \rho(a_i) M^T - b_i \rVert^2
+        = \big((\rho(A)^T \rho(A))^{-1} \rho(A)^T B\big)^T
 
     with :math:`a_i, b_i` the linear-light RGB of patch *i* (rows of A and B),
-    :math:`\\rho` the identity (``"linear"``, 3×3) or the root-polynomial expansion of
-    ``degree`` (:func:`root_polynomial_terms`). The fitted ``matrix`` is :math:`\\hat M`
+    :math:`\rho` the identity (``"linear"``, 3×3) or the root-polynomial expansion of
+    ``degree`` (:func:`root_polynomial_terms`). The fitted ``matrix`` is :math:`\hat M`
     for row vectors: the corrected colour is ``rho(a) @ matrix.T``.
 
     Parameters
@@ -366,8 +371,11 @@ class CorrectionReport:
     valid: np.ndarray
 
     def __post_init__(self) -> None:
-        """Two ΔE00 vectors (N,) of finite values >= 0 on the valid patches (NaN allowed
-        where a patch is not valid), ``valid`` booleans (N,)."""
+        """Check two ΔE00 vectors (N,) and the ``valid`` booleans (N,).
+
+        The ΔE00 values are finite and >= 0 on the valid patches (NaN allowed where a patch is not
+        valid).
+        """
         before = real_array(self.delta_e_before, "delta_e_before", (None,), finite=False)
         n = before.shape[0]
         after = real_array(self.delta_e_after, "delta_e_after", (None,), finite=False)
@@ -413,8 +421,10 @@ def correction_report(
     *,
     chart_layout: str = "auto",
 ) -> CorrectionReport:
-    """CIEDE2000 per patch, :math:`\\Delta E_{00}(\\mathrm{Lab}(b_i), \\mathrm{Lab}(a_i))`
-    before and :math:`\\Delta E_{00}(\\mathrm{Lab}(b_i), \\mathrm{Lab}(f(a_i)))` after.
+    r"""Return the CIEDE2000 per patch before and after the correction.
+
+    Before: :math:`\Delta E_{00}(\mathrm{Lab}(b_i), \mathrm{Lab}(a_i))`; after:
+    :math:`\Delta E_{00}(\mathrm{Lab}(b_i), \mathrm{Lab}(f(a_i)))`.
 
     Lab from encoded sRGB with its D65 white. Patches fitted on are scored too: report
     ΔE on patches left out of the fit (or another chart) to judge generalisation.

@@ -1,7 +1,7 @@
-"""Stain separation and normalisation in optical density (Macenko 2009, Vahadane 2016).
+r"""Stain separation and normalisation in optical density (Macenko 2009, Vahadane 2016).
 
 Bright-field microscopy obeys Beer-Lambert: the optical density of each RGB channel,
-:math:`OD = -\\ln(I / I_0)`, is linear in the stain concentrations, :math:`OD = C S` with
+:math:`OD = -\ln(I / I_0)`, is linear in the stain concentrations, :math:`OD = C S` with
 one row of ``S`` per stain. Macenko's method finds the two stain vectors as the extreme
 directions of the tissue's OD cloud in its principal plane; Vahadane's
 (:func:`vahadane_stains`) as a sparse non-negative factorisation. Both rescale
@@ -77,7 +77,7 @@ def _base(base: object) -> str:
 
 
 def _i0_value(i0: object, name: str = "i0", *, complete: bool = False) -> np.ndarray:
-    """A given incident light: a scalar or three values in (0, 1] (``complete``: three)."""
+    """Return a given incident light: a scalar or three values in (0, 1] (``complete``: three)."""
     v = np.full(1, np.nan)
     try:
         raw = np.asarray(i0)
@@ -167,7 +167,7 @@ def optical_density(
     i0: object = 1.0,
     base: str = "e",
 ) -> Any:
-    """Optical density per channel: :math:`OD = -\\ln(\\max(I, I_{min}) / I_0)`.
+    r"""Optical density per channel: :math:`OD = -\ln(\max(I, I_{min}) / I_0)`.
 
     ``I`` is the encoded value in [0, 1] read as transmitted intensity (as Macenko and
     Ruifrok do with 8-bit scans). A pixel of 0 has unbounded OD; it is read as
@@ -184,7 +184,7 @@ def optical_density(
         Incident light (encoded, in (0, 1]); ``"auto"``: :func:`background_intensity`.
     base : {"e", "10"}
         Logarithm base: natural (the reference code, torchstain; default) or decimal
-        (Ruifrok & Johnston; imageform before this version). :math:`OD_{10} = OD_e/\\ln 10`.
+        (Ruifrok & Johnston; imageform before this version). :math:`OD_{10} = OD_e/\ln 10`.
 
     Returns
     -------
@@ -221,7 +221,7 @@ def optical_density(
 
 
 def stain_angle(u: object, v: object) -> float:
-    """Angle in degrees between two stain (OD) vectors: :math:`\\arccos(\\hat u \\cdot \\hat v)`.
+    r"""Angle in degrees between two stain (OD) vectors: :math:`\arccos(\hat u \cdot \hat v)`.
 
     Examples
     --------
@@ -242,11 +242,14 @@ def stain_angle(u: object, v: object) -> float:
 
 @dataclass(frozen=True)
 class MacenkoStains:
-    """Stain matrix (rows: first and second stain, unit OD vectors) and the 99th-percentile
-    concentration of each stain (``max_concentrations``), with the convention they were
-    measured in: the incident light ``i0`` (per channel), the OD log ``base`` (the
-    concentrations are in that base's units) and the estimator ``method``.
-    ``n_pixels`` of the ``n_total`` pixels passed the transparent-pixel threshold."""
+    """Stain matrix and 99th-percentile stain concentrations, with the convention of measurement.
+
+    The stain matrix has rows for the first and second stain (unit OD vectors); the 99th-percentile
+    concentration of each stain is ``max_concentrations``. The convention they were measured in: the
+    incident light ``i0`` (per channel), the OD log ``base`` (the concentrations are in that base's
+    units) and the estimator ``method``. ``n_pixels`` of the ``n_total`` pixels passed the
+    transparent-pixel threshold.
+    """
 
     stain_matrix: np.ndarray
     max_concentrations: np.ndarray
@@ -288,8 +291,11 @@ class MacenkoStains:
 
     @classmethod
     def from_json(cls, path: str | Path) -> MacenkoStains:
-        """Load stains saved by :meth:`to_json`. Files without ``od_base`` were written
-        before the ln convention: they are read as base 10 with I₀ = 1."""
+        """Load stains saved by :meth:`to_json`.
+
+        Files without ``od_base`` were written before the ln convention: they are read as base 10
+        with I₀ = 1.
+        """
         d = read_json(path, "macenko_stains")
         try:
             s = as_matrix(d["stain_matrix"], "stain_matrix", (2, 3), batch=False)
@@ -320,7 +326,7 @@ def stain_concentrations(
     i0: object = 1.0,
     base: str = "e",
 ) -> Any:
-    """Colour deconvolution: least-squares concentrations :math:`C = OD\\, S^+`.
+    r"""Colour deconvolution: least-squares concentrations :math:`C = OD\, S^+`.
 
     Parameters
     ----------
@@ -459,16 +465,16 @@ def macenko_stains(
     base: str = "e",
     method: str = "macenko",
 ) -> MacenkoStains:
-    """Estimate the two stain vectors and their maximum concentrations (Macenko 2009).
+    r"""Estimate the two stain vectors and their maximum concentrations (Macenko 2009).
 
-    1. :math:`OD = -\\ln(I / I_0)`, :math:`I_0` from the background
+    1. :math:`OD = -\ln(I / I_0)`, :math:`I_0` from the background
        (:func:`background_intensity`) or given; keep pixels with OD ≥ β in every channel.
     2. Eigenvectors of the covariance of the kept OD: the plane of the two largest.
-    3. Angle of each projected pixel, :math:`\\varphi = \\operatorname{atan2}(t_2, t_1)`;
+    3. Angle of each projected pixel, :math:`\varphi = \operatorname{atan2}(t_2, t_1)`;
        the α-th and (100-α)-th percentiles of φ give the extreme stain vectors
-       :math:`v = V(\\cos\\varphi, \\sin\\varphi)^T`, the one with larger red OD first
+       :math:`v = V(\cos\varphi, \sin\varphi)^T`, the one with larger red OD first
        (hematoxylin).
-    4. Concentrations :math:`C = OD\\, S^+` (least squares, all pixels); their 99th
+    4. Concentrations :math:`C = OD\, S^+` (least squares, all pixels); their 99th
        percentile per stain is the robust maximum.
 
     The defaults are the reference code's (Macenko's MATLAB code, its Python port
@@ -497,7 +503,7 @@ def macenko_stains(
     transparent : {"any_channel", "norm"}
         Which pixels count as transparent: ``"any_channel"`` drops a pixel when any
         channel's OD is below β (Macenko's reference code); ``"norm"`` when
-        :math:`\\lVert OD \\rVert_2 < \\beta`. Stains that barely absorb in one channel
+        :math:`\lVert OD \rVert_2 < \beta`. Stains that barely absorb in one channel
         (Ruifrok's eosin, OD 0.07 in red) lose their pure pixels under ``"any_channel"``
         and the estimated vector moves towards the other stain; use ``"norm"`` there.
     i0 : "auto" or float or sequence of 3 floats
@@ -593,14 +599,14 @@ def macenko_normalize(
     base: str = "e",
     method: str = "macenko",
 ) -> Any:
-    """Re-render ``image`` with ``target``'s stain vectors and concentration range.
+    r"""Re-render ``image`` with ``target``'s stain vectors and concentration range.
 
-    .. math:: C = OD\\,S_s^+, \\quad C' = C \\,\\frac{C^{99}_t}{C^{99}_s}, \\quad
-        I' = I_{0,t}\\, e^{-C' S_t}
+    .. math:: C = OD\,S_s^+, \quad C' = C \,\frac{C^{99}_t}{C^{99}_s}, \quad
+        I' = I_{0,t}\, e^{-C' S_t}
 
     with OD taken with the source's :math:`I_0` and the output lit by the target's
     :math:`I_{0,t}` (its background). Stains measured in another base (a JSON file from
-    before the ln convention) are converted: :math:`C_e = C_{10} \\ln 10`.
+    before the ln convention) are converted: :math:`C_e = C_{10} \ln 10`.
 
     Parameters
     ----------
@@ -692,19 +698,19 @@ def vahadane_stains(
     max_pixels: int = 20_000,
     iterations: int = 200,
 ) -> MacenkoStains:
-    """Estimate two stain vectors by sparse non-negative factorisation (Vahadane 2016).
+    r"""Estimate two stain vectors by sparse non-negative factorisation (Vahadane 2016).
 
-    1. :math:`OD = -\\ln(I / I_0)` (:math:`I_0` as in
+    1. :math:`OD = -\ln(I / I_0)` (:math:`I_0` as in
        :func:`~imageform.analysis.macenko_stains`); tissue pixels are those with
-       :math:`\\lVert OD \\rVert_2 \\ge \\beta` (Vahadane's code thresholds luminance;
+       :math:`\lVert OD \rVert_2 \ge \beta` (Vahadane's code thresholds luminance;
        the OD norm is the same idea in OD units).
     2. Sparse NMF of the tissue OD (an even subsample of at most ``max_pixels``):
-       :math:`\\min \\tfrac{1}{2n}\\lVert OD - WH\\rVert_F^2 + \\tfrac{\\lambda}{n}
-       \\lVert W\\rVert_1` with :math:`W, H \\ge 0`, :math:`\\lVert h_k\\rVert_2 \\le 1`,
+       :math:`\min \tfrac{1}{2n}\lVert OD - WH\rVert_F^2 + \tfrac{\lambda}{n}
+       \lVert W\rVert_1` with :math:`W, H \ge 0`, :math:`\lVert h_k\rVert_2 \le 1`,
        started from Macenko's vectors.
        Solved by alternating proximal gradient steps in NumPy — FISTA on ``W`` with the
-       non-negative soft threshold :math:`\\max(z - \\lambda/L, 0)`, projected gradient
-       on ``H`` onto :math:`\\{H \\ge 0, \\lVert h_k \\rVert_2 \\le 1\\}` — until ``H``
+       non-negative soft threshold :math:`\max(z - \lambda/L, 0)`, projected gradient
+       on ``H`` onto :math:`\{H \ge 0, \lVert h_k \rVert_2 \le 1\}` — until ``H``
        moves by less than 1e-7; the reference implementation (Vahadane's MATLAB code,
        StainTools) uses SPAMS' online dictionary learning on the same objective.
     3. Rows of ``H`` normalised, hematoxylin (larger red OD) first; the concentrations

@@ -88,11 +88,11 @@ def _lab(rgb: Any) -> Any:
 
 
 def reinhard_stats(image: object, mask: object = None) -> ReinhardStats:
-    """Mean and standard deviation of L*, a*, b* over the image (or its ``mask``).
+    r"""Mean and standard deviation of L*, a*, b* over the image (or its ``mask``).
 
-    .. math:: \\mu_k = \\frac{1}{N}\\sum_{i \\in M} c_{ik}, \\quad
-        \\sigma_k = \\sqrt{\\frac{1}{N}\\sum_{i \\in M} (c_{ik} - \\mu_k)^2},
-        \\quad c = (L^*, a^*, b^*)
+    .. math:: \mu_k = \frac{1}{N}\sum_{i \in M} c_{ik}, \quad
+        \sigma_k = \sqrt{\frac{1}{N}\sum_{i \in M} (c_{ik} - \mu_k)^2},
+        \quad c = (L^*, a^*, b^*)
 
     Parameters
     ----------
@@ -189,10 +189,10 @@ def reinhard_normalize(
     source_stats: ReinhardStats | None = None,
     clip: bool = False,
 ) -> Any:
-    """Match the L*a*b* mean and standard deviation of ``image`` to ``target``'s.
+    r"""Match the L*a*b* mean and standard deviation of ``image`` to ``target``'s.
 
-    .. math:: c'_k = \\frac{\\sigma^t_k}{\\sigma^s_k}(c_k - \\mu^s_k) + \\mu^t_k,
-        \\quad c = (L^*, a^*, b^*) \\text{ (CIELAB, D65)}
+    .. math:: c'_k = \frac{\sigma^t_k}{\sigma^s_k}(c_k - \mu^s_k) + \mu^t_k,
+        \quad c = (L^*, a^*, b^*) \text{ (CIELAB, D65)}
 
     Parameters
     ----------

@@ -123,7 +123,7 @@ def _threshold(
 
 
 def _clean(mask: np.ndarray, open_radius: int, close_radius: int, min_area: int) -> np.ndarray:
-    """Opening, closing, then removal of 8-connected components below ``min_area``.
+    """Apply an opening, a closing, then remove 8-connected components below ``min_area``.
 
     Erosions treat the outside of the image as foreground (``border_value=1``), dilations
     as background, so tissue touching the frame is not eaten away from the border.
@@ -157,14 +157,14 @@ def segment_hsv(
     close_radius: int = 2,
     min_area: int = 64,
 ) -> HsvSegmentation:
-    """Tissue mask from hue, saturation and value thresholds, cleaned up morphologically.
+    r"""Tissue mask from hue, saturation and value thresholds, cleaned up morphologically.
 
     .. math::
-        M = [H \\in [h_0, h_1]] \\wedge [s_0 \\le S \\le s_1] \\wedge [v_0 \\le V \\le v_1],
-        \\qquad [h_0, h_1] = [h_0, 360) \\cup [0, h_1] \\text{ when } h_0 > h_1,
+        M = [H \in [h_0, h_1]] \wedge [s_0 \le S \le s_1] \wedge [v_0 \le V \le v_1],
+        \qquad [h_0, h_1] = [h_0, 360) \cup [0, h_1] \text{ when } h_0 > h_1,
 
-    then :math:`M \\leftarrow (M \\ominus D_o) \\oplus D_o` (opening with a disc of radius
-    ``open_radius``), :math:`M \\leftarrow (M \\oplus D_c) \\ominus D_c` (closing), and
+    then :math:`M \leftarrow (M \ominus D_o) \oplus D_o` (opening with a disc of radius
+    ``open_radius``), :math:`M \leftarrow (M \oplus D_c) \ominus D_c` (closing), and
     8-connected components of fewer than ``min_area`` pixels are removed.
 
     Parameters
@@ -294,7 +294,7 @@ def overlay_mask(
     color: tuple[float, float, float] = (0.0, 1.0, 0.0),
     alpha: float = 0.4,
 ) -> Any:
-    """Blend ``color`` over the masked pixels: :math:`I' = (1 - \\alpha M) I + \\alpha M c`.
+    r"""Blend ``color`` over the masked pixels: :math:`I' = (1 - \alpha M) I + \alpha M c`.
 
     Parameters
     ----------
@@ -335,7 +335,7 @@ def overlay_mask(
 
 
 def mask_iou(a: object, b: object) -> float:
-    """Intersection over union of two boolean masks: :math:`|A \\cap B| / |A \\cup B|`.
+    r"""Intersection over union of two boolean masks: :math:`|A \cap B| / |A \cup B|`.
 
     Two empty masks have no IoU: :class:`DegenerateConfigurationError`.
 

@@ -1,26 +1,26 @@
-"""A camera's spectral sensitivities, estimated from a photograph of a colour chart.
+r"""A camera's spectral sensitivities, estimated from a photograph of a colour chart.
 
 The raw (linear, black-subtracted) response of channel ``k`` to patch ``p`` under a light
 ``E`` is the sum over wavelength of reflectance times light times sensitivity:
 
-.. math:: c_{pk} = \\sum_j R_p(\\lambda_j)\\, E(\\lambda_j)\\, S_k(\\lambda_j)\\, \\Delta\\lambda
-    \\quad\\Longleftrightarrow\\quad c_k = A\\, s_k,\\ A = R\\, \\mathrm{diag}(E)\\, \\Delta\\lambda
+.. math:: c_{pk} = \sum_j R_p(\lambda_j)\, E(\lambda_j)\, S_k(\lambda_j)\, \Delta\lambda
+    \quad\Longleftrightarrow\quad c_k = A\, s_k,\ A = R\, \mathrm{diag}(E)\, \Delta\lambda
 
 With 24 smooth reflectances the matrix ``A`` has an effective rank near 8 for 31 unknowns,
 so the problem is ill-posed; real sensitivities are smooth and non-negative. Following
 Finlayson, Hordley & Hubel (1998), each channel is the non-negative minimiser of the data
 misfit plus a penalty on its second differences,
 
-.. math:: \\hat s_k = \\arg\\min_{s \\ge 0}\\ \\lVert A s - c_k\\rVert^2
-    + \\mu_k \\lVert D_2 s\\rVert^2,
+.. math:: \hat s_k = \arg\min_{s \ge 0}\ \lVert A s - c_k\rVert^2
+    + \mu_k \lVert D_2 s\rVert^2,
 
-with one weight :math:`\\mu` for all channels, in units of
-:math:`\\operatorname{tr}(A^TA)/\\operatorname{tr}(D_2^TD_2)` (0.1 by default: on simulated
+with one weight :math:`\mu` for all channels, in units of
+:math:`\operatorname{tr}(A^TA)/\operatorname{tr}(D_2^TD_2)` (0.1 by default: on simulated
 charts with 0-2 % noise it gave the smallest errors of the weights tried, 1e-5 to 1), or chosen
 per channel by generalised cross-validation (Golub, Heath & Wahba, 1979) on the unconstrained
 problem, which undersmooths noisy charts (measured in the tests):
-:math:`\\mathrm{GCV}(\\mu) = P \\lVert (I - H_\\mu) c\\rVert^2 / \\operatorname{tr}(I - H_\\mu)^2`,
-:math:`H_\\mu = A (A^T A + \\mu D_2^T D_2)^{-1} A^T`.
+:math:`\mathrm{GCV}(\mu) = P \lVert (I - H_\mu) c\rVert^2 / \operatorname{tr}(I - H_\mu)^2`,
+:math:`H_\mu = A (A^T A + \mu D_2^T D_2)^{-1} A^T`.
 
 The exposure is unknown, so the sensitivities are found up to one common factor: they are
 returned scaled to a largest value of 1 (the ratios between channels are kept: they carry
@@ -50,12 +50,12 @@ __all__ = ["SensitivityEstimate", "estimate_camera_sensitivities"]
 
 @dataclass(frozen=True)
 class SensitivityEstimate:
-    """Estimated spectral sensitivities.
+    r"""Estimated spectral sensitivities.
 
     ``sensitivities``: a :class:`~imageform.spectral.Spectrum` with values (N, 3) (R, G, B),
     largest value 1; ``scale``: the factor that multiplied them (the camera's response per
     unit of the returned sensitivities); ``smoothness`` (3,): the chosen weights
-    :math:`\\mu_k` (relative to :math:`\\operatorname{tr}(A^TA)/\\operatorname{tr}(D^TD)`);
+    :math:`\mu_k` (relative to :math:`\operatorname{tr}(A^TA)/\operatorname{tr}(D^TD)`);
     ``predicted`` (P, 3): the chart's responses the estimate gives (on the input's scale);
     ``relative_rms`` (3,): the misfit per channel, RMS over the patches relative to the
     channel's RMS response.
@@ -76,7 +76,7 @@ def _second_difference(n: int) -> np.ndarray:
 
 
 def _gcv_weight(a: np.ndarray, d: np.ndarray, c: np.ndarray) -> float:
-    """The ridge weight (relative units) minimising generalised cross-validation."""
+    """Return the ridge weight (relative units) minimising generalised cross-validation."""
     ata, dtd = a.T @ a, d.T @ d
     unit = float(np.trace(ata) / np.trace(dtd))
     p = a.shape[0]
@@ -107,7 +107,7 @@ def estimate_camera_sensitivities(
     smoothness: object = 0.1,
     nonnegative: bool = True,
 ) -> SensitivityEstimate:
-    """Estimate a camera's R, G, B spectral sensitivities from its raw responses to a chart.
+    r"""Estimate a camera's R, G, B spectral sensitivities from its raw responses to a chart.
 
     Parameters
     ----------
@@ -124,8 +124,8 @@ def estimate_camera_sensitivities(
     wavelengths : array_like, optional, keyword-only
         The wavelengths (nm) of the estimate; default 400 to 700 nm in 10 nm steps.
     smoothness : float, sequence of 3 floats or "gcv", keyword-only
-        The weights :math:`\\mu_k` in units of :math:`\\operatorname{tr}(A^TA) /
-        \\operatorname{tr}(D^TD)`, or ``"gcv"``: chosen per channel by generalised
+        The weights :math:`\mu_k` in units of :math:`\operatorname{tr}(A^TA) /
+        \operatorname{tr}(D^TD)`, or ``"gcv"``: chosen per channel by generalised
         cross-validation.
     nonnegative : bool, keyword-only
         Constrain the sensitivities to be >= 0 (non-negative least squares).

@@ -131,7 +131,7 @@ class SFRResult(NamedTuple):
     rows_used: int
 
     def channel(self, name: str) -> np.ndarray:
-        """The SFR curve of channel ``name`` (``"Y"``, ``"R"``, ``"G"`` or ``"B"``)."""
+        """Return the SFR curve of channel ``name`` (``"Y"``, ``"R"``, ``"G"`` or ``"B"``)."""
         if name not in self.channels:
             raise InvalidInputError(
                 f"expected name as one of {self.channels}, got {describe(name)}"
@@ -163,7 +163,7 @@ class SlantedEdgeROI(NamedTuple):
         return (self.x, self.y, self.width, self.height)
 
     def crop(self, image: Any) -> np.ndarray:
-        """The ROI's pixels of ``image`` (a view); the ROI must lie inside ``image``."""
+        """Return the ROI's pixels of ``image`` (a view); the ROI must lie inside ``image``."""
         if image is None or isinstance(image, str | bytes):
             raise InvalidInputError(f"expected image as an array, got {describe(image)}")
         arr = np.asarray(image)
@@ -183,7 +183,7 @@ class SlantedEdgeROI(NamedTuple):
 
 
 def _as_image(image: Any, name: str = "image") -> np.ndarray:
-    """A float64 image (H, W) or (H, W, 3) (a (H, W, 1) is squeezed); refuses the rest."""
+    """Return a float64 image (H, W) or (H, W, 3) (a (H, W, 1) is squeezed); refuse the rest."""
     if image is None or isinstance(image, str | bytes):
         raise InvalidInputError(
             f"expected {name} as a 2-d or (H, W, 3) array, got {describe(image)}"
@@ -227,7 +227,7 @@ def _crop(img: np.ndarray, roi: Any) -> np.ndarray:
 
 
 def _weights(weights: object) -> np.ndarray:
-    """The R, G, B luminance weights: 3 finite real numbers."""
+    """Return the R, G, B luminance weights: 3 finite real numbers."""
     w = as_real_array(weights, "weights", ndim=1, check=False)
     if w.shape != (3,):
         raise InvalidInputError(f"expected weights as 3 finite numbers, got {describe(weights)}")
@@ -246,8 +246,10 @@ def _luminance(img: np.ndarray, weights: Any) -> np.ndarray:
 
 
 def _hamming(n: int, mid: float) -> np.ndarray:
-    """Hamming window over ``n`` samples centred on ``mid`` (``sfrmat3``'s ``ahamming``):
-    ``0.54 + 0.46 cos(pi (k - mid) / w)`` with ``w`` the larger distance to an end."""
+    """Return a Hamming window over ``n`` samples centred on ``mid`` (``sfrmat3``'s ``ahamming``).
+
+    The window is ``0.54 + 0.46 cos(pi (k - mid) / w)`` with ``w`` the larger distance to an end.
+    """
     k = np.arange(n, dtype=np.float64)
     wid = max(mid, n - 1 - mid, 1.0)
     arg = np.clip((k - mid) / wid, -1.0, 1.0)
@@ -349,7 +351,7 @@ def _spectrum(lsf: np.ndarray, q: int, derivative: str, nfft: int) -> tuple[np.n
 
 
 def mtf_crossing(frequency: Any, mtf: Any, level: float) -> float:
-    r"""The lowest frequency where a falling MTF curve reaches ``level`` (linear interpolation).
+    r"""Return the lowest frequency where a falling MTF reaches ``level`` (linear interpolation).
 
     ``mtf_crossing(f, m, 0.5)`` is MTF50: the first ``i`` with ``m[i+1] <= level < m[i]``
     gives :math:`f_i + (f_{i+1} - f_i)(m_i - \text{level})/(m_i - m_{i+1})`; NaN if the curve
@@ -537,7 +539,7 @@ def render_slanted_edge(
     orientation: str = "vertical",
     supersampling: int = 16,
 ) -> np.ndarray:
-    r"""An ideal slanted edge of known ESF, integrated over each pixel's area.
+    r"""Render an ideal slanted edge of known ESF, integrated over each pixel's area.
 
     The edge passes through ``center`` (``(u, v)``, default the image centre) at ``angle``
     degrees from the vertical (``orientation="vertical"``: dark on the left, light on the
@@ -594,8 +596,9 @@ def render_sfr_chart(
     high: float = 0.8,
     supersampling: int = 8,
 ) -> np.ndarray:
-    r"""A slanted-edge chart: ``grid = (rows, columns)`` dark squares on a light background,
-    each turned ``angle`` degrees (clockwise as displayed), blurred by a Gaussian PSF of
+    r"""Render a slanted-edge chart: ``grid = (rows, columns)`` dark squares on a light background.
+
+    Each square is turned ``angle`` degrees (clockwise as displayed), blurred by a Gaussian PSF of
     ``sigma`` pixels and integrated over each pixel's area.
 
     The squares (side ``side`` pixels, default 45 % of a grid cell) are centred in the cells
@@ -660,8 +663,10 @@ def render_sfr_chart(
 def _subpixel_side(
     g: np.ndarray, t: float, lines: np.ndarray, first: np.ndarray, step: int
 ) -> np.ndarray:
-    """Threshold crossing along each line (row of ``g``) next to index ``first`` (the first
-    dark pixel seen walking in direction ``step``)."""
+    """Return the threshold crossing along each line (row of ``g``) next to index ``first``.
+
+    ``first`` is the first dark pixel seen walking in direction ``step``.
+    """
     out = np.empty(lines.size)
     n = g.shape[1]
     for i, (r, j) in enumerate(zip(lines, first, strict=True)):

@@ -122,7 +122,7 @@ class StainMixture(NamedTuple):
 
 
 def _seed_first(fn: Any) -> Any:
-    """The old calls (``synthetic_...(0, shape)``, ``seed=0``) warn and still work."""
+    """Make the old calls (``synthetic_...(0, shape)``, ``seed=0``) warn and still work."""
     name = f"imageform.analysis.{fn.__name__}"
 
     @functools.wraps(fn)
@@ -150,7 +150,7 @@ def _seed_first(fn: Any) -> Any:
 def synthetic_endoscopy_image(
     shape: tuple[int, int] = (256, 256), *, rng: RNGLike = 0
 ) -> LabeledImage:
-    """An endoscopy-like frame and its tissue mask.
+    """Render an endoscopy-like frame and its tissue mask.
 
     Reddish/pink mucosa (hue 350°..12°, S 0.35..0.7) with smooth texture, a dark lumen
     (V < 0.15), specular highlights (S < 0.1, V ≈ 1), a bluish instrument (hue ≈ 210°)
@@ -229,8 +229,9 @@ def synthetic_he_tile(
     noise: float = 1.5 / 255.0,
     rng: RNGLike = 0,
 ) -> StainMixture:
-    """A bright-field H&E tile by Beer-Lambert in ln units, :math:`I = I_0 e^{-C S}`,
-    closer to a scanned slide than :func:`synthetic_stain_image`.
+    """Render a bright-field H&E tile by Beer-Lambert in ln units, :math:`I = I_0 e^{-C S}`.
+
+    It is closer to a scanned slide than :func:`synthetic_stain_image`.
 
     Glass (``background``, a fraction of the tile, :math:`C = 0`) around smooth tissue
     regions; in the tissue eosin varies smoothly (stroma, cytoplasm) over a faint
@@ -319,7 +320,7 @@ def synthetic_stain_image(
     *,
     rng: RNGLike = 0,
 ) -> StainMixture:
-    """A two-stain mixture by Beer-Lambert: :math:`I = 10^{-C S}` (I₀ = 1).
+    """Render a two-stain mixture by Beer-Lambert: :math:`I = 10^{-C S}` (I₀ = 1).
 
     A third of the pixels holds the first stain only, a third the second only, a
     quarter both, the rest is faintly stained background (OD < 0.1).
@@ -375,7 +376,7 @@ def synthetic_chart_image(
     gap: int = 6,
     background: float = 0.05,
 ) -> np.ndarray:
-    """A chart image that fills the frame: ``rows × cols`` flat patches on a dark surround.
+    """Render a chart image that fills the frame: ``rows × cols`` flat patches on a dark surround.
 
     Parameters
     ----------

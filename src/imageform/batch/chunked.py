@@ -70,10 +70,12 @@ def _kind(path: Path) -> str:
 
 
 class _ContiguousRows:
-    """The pixels of an uncompressed, contiguous (strip or single-strip) TIFF page, read
-    block by block with ``pread`` (one read per row of the block): a block costs its own
-    samples, never the whole strip (tifffile's Zarr store has one chunk per strip, and an
-    uncompressed TIFF is often one strip: the whole image)."""
+    """The pixels of an uncompressed, contiguous (strip or single-strip) TIFF page, read by block.
+
+    Blocks are read with ``pread`` (one read per row of the block): a block costs its own samples,
+    never the whole strip (tifffile's Zarr store has one chunk per strip, and an uncompressed TIFF
+    is often one strip: the whole image).
+    """
 
     def __init__(self, path: Path, offset: int, shape: tuple[int, ...], dtype: Any) -> None:
         self.path, self.offset = path, offset
@@ -142,7 +144,7 @@ _MAX_CHUNK = 16384
 
 
 def _chunk_size(chunk: object) -> int:
-    """The block side in pixels, 1 to 16384, refused by name otherwise."""
+    """Return the block side in pixels, 1 to 16384, refused by name otherwise."""
     from imageform._validate import as_int
 
     return as_int(chunk, "chunk", minimum=1, maximum=_MAX_CHUNK)
@@ -243,9 +245,11 @@ def _stain_block(block: np.ndarray, method: str, target: Any, source: Any) -> np
 
 
 def _stain_stats(x: Any, opts: dict[str, Any]) -> tuple[Any, Any, int]:
-    """The target's statistics (a JSON file or a reference image) and the slide's own, the
-    latter on a regular subsample of at most :data:`STAIN_SAMPLE_PIXELS` (every ``step``-th
-    row and column), read block by block."""
+    """Return the target's statistics (a JSON file or a reference image) and the slide's own.
+
+    The slide's are taken on a regular subsample of at most :data:`STAIN_SAMPLE_PIXELS` (every
+    ``step``-th row and column), read block by block.
+    """
     from imageform import analysis
     from imageform.io import read_image
 
@@ -300,8 +304,10 @@ _HONOURED = {
 
 
 def _options(cmd: str, options: Any) -> dict[str, Any]:
-    """The options of ``cmd`` with the single command's defaults (its options dataclass, or
-    a mapping by field name or flag), as the names the block functions use."""
+    """Return the options of ``cmd``, as the names the block functions use.
+
+    The single command's defaults apply (its options dataclass, or a mapping by field name or flag).
+    """
     import dataclasses
 
     from imageform.batch.runner import batch_options
@@ -344,8 +350,9 @@ def process_chunked(
     force: bool = False,
     num_workers: int | None = None,
 ) -> ChunkedResult:
-    r"""Apply ``convert``, ``white_balance`` or ``stain_normalize`` to an image larger than
-    memory, chunk-wise.
+    r"""Apply ``convert``, ``white_balance`` or ``stain_normalize`` to an image larger than memory.
+
+    The image is processed chunk-wise.
 
     .. math:: \text{out}[b] = f(\text{in}[b];\ \theta),\qquad
         \theta = \text{gains } \bar e / e_c,\ e_c = \big(\operatorname{mean}_{\text{all}}
@@ -469,16 +476,20 @@ def process_chunked(
 
 
 def _finish(block: np.ndarray, op: tuple[Any, ...], dtype: str) -> tuple[np.ndarray, int]:
-    """One block: the operation in float32, then the output samples and the out-of-range
-    count, so that no float block outlives its task."""
+    """Process one block: the operation in float32, then the output samples and out-of-range count.
+
+    Both are computed in the task so that no float block outlives it.
+    """
     f = op[0](block, *op[1:])
     n = int(np.count_nonzero((f < 0) | (f > 1))) if dtype != "float32" else 0
     return _quantize(f, dtype), n
 
 
 def _rows(x: Any, op: tuple[Any, ...], dtype: str) -> Any:
-    """Yield (row0, output blocks of one block row, out-of-range count), row by row; the
-    blocks of a row run in parallel on dask's threaded scheduler."""
+    """Yield (row0, output blocks of one block row, out-of-range count), row by row.
+
+    The blocks of a row run in parallel on dask's threaded scheduler.
+    """
     import dask
 
     blocks = x.to_delayed()

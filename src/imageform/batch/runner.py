@@ -67,8 +67,10 @@ _MANIFEST_VERSION = 1
 
 
 class BatchInterrupted(KeyboardInterrupt):
-    """Ctrl-C during a batch run: ``done`` outputs are finished (and recorded in the
-    manifest), ``remaining`` are not; running the same command again resumes."""
+    """Ctrl-C during a batch run; running the same command again resumes.
+
+    ``done`` outputs are finished (and recorded in the manifest), ``remaining`` are not.
+    """
 
     def __init__(self, done: int, remaining: int) -> None:
         super().__init__(done, remaining)
@@ -76,6 +78,7 @@ class BatchInterrupted(KeyboardInterrupt):
         self.remaining = remaining
 
     def __str__(self) -> str:
+        """Say how many outputs are done and remaining, and how to resume."""
         return (
             f"interrupted: {self.done} done, {self.remaining} remaining; run the same command "
             "again to resume"
@@ -106,6 +109,7 @@ class JobResult:
     seconds: float = 0.0
 
     def __post_init__(self) -> None:
+        """Check the paths, ``status``, ``error``, ``metrics`` and ``seconds``."""
         from imageform._validate import as_path, as_real, check_option, describe
 
         object.__setattr__(self, "input", as_path(self.input, "input"))
@@ -141,7 +145,7 @@ class BatchReport:
         return not self.failed
 
     def to_dict(self) -> dict[str, Any]:
-        """A JSON-ready summary (what ``imageform batch --json`` prints)."""
+        """Return a JSON-ready summary (what ``imageform batch --json`` prints)."""
         return {
             "command": self.command,
             "done": self.count("done"),
@@ -165,7 +169,7 @@ class BatchReport:
 
 
 def batch_workflow(command: str | Workflow) -> Workflow:
-    """The workflow ``command`` if it runs file by file in ``imageform batch``.
+    """Return the workflow ``command`` if it runs file by file in ``imageform batch``.
 
     Examples
     --------
@@ -191,8 +195,10 @@ def _key(name: str) -> str:
 
 
 def batch_options(command: str | Workflow, options: Options | Mapping[str, Any] | None) -> Options:
-    """The options of ``command`` from its dataclass, or from a mapping whose keys are field
-    names or flags (``{"to": "lab"}``, ``{"--to": "lab"}`` and ``{"dst": "lab"}`` alike).
+    """Return the options of ``command`` from its dataclass, or from a mapping.
+
+    The mapping's keys are field names or flags (``{"to": "lab"}``, ``{"--to": "lab"}`` and
+    ``{"dst": "lab"}`` alike).
 
     Examples
     --------
@@ -233,7 +239,7 @@ def batch_options(command: str | Workflow, options: Options | Mapping[str, Any] 
 
 
 def _no_extra_outputs(wf: Workflow, opts: Options) -> None:
-    """An extra output (``--save-target``) is one file per run: every job would write it."""
+    """Refuse an extra output (``--save-target``): one file per run, every job would write it."""
     for f in wf.options.fields():
         if f.metadata.get("output") and getattr(opts, f.name) is not None:
             raise InvalidInputError(
@@ -248,8 +254,11 @@ def _stamp(path: Path) -> list[Any]:
 
 
 def _producer(wf: Workflow, opts: Options) -> dict[str, Any]:
-    """What produces every output of a run, but the input file: command and options (with
-    the size and time of the files options name, such as ``--target``)."""
+    """Return what produces every output of a run, but the input file.
+
+    That is the command and options (with the size and time of the files options name, such as
+    ``--target``).
+    """
     from imageform._jsonio import json_ready
 
     files = {str(p): _stamp(p) for p in opts.paths("input") if p.is_file()}
@@ -260,7 +269,7 @@ def _producer(wf: Workflow, opts: Options) -> dict[str, Any]:
 
 
 def temp_pattern(output: Path) -> str:
-    """The glob of the temporary files that jobs writing ``output`` use."""
+    """Return the glob of the temporary files that jobs writing ``output`` use."""
     return f".{glob.escape(output.name)}.*.tmp{glob.escape(output.suffix)}"
 
 
@@ -277,10 +286,12 @@ _LOCK = re.compile(r"\.imageform-batch\.([0-9a-f]{12})\.lock\Z")
 
 @contextlib.contextmanager
 def _run_lock(out_root: Path) -> Iterator[str]:
-    """A run's id, with a lock file ``.imageform-batch.<id>.lock`` in ``out_root`` held
-    (``flock``) for as long as the run goes on: another run into the same folder then knows
-    that the temporary files named with this id are being written, not left by a dead run.
-    Without ``fcntl`` (Windows) the id alone, every temporary file counting as stale."""
+    """Return a run's id, holding a lock file ``.imageform-batch.<id>.lock`` in ``out_root``.
+
+    The lock is held (``flock``) for as long as the run goes on: another run into the same folder
+    then knows that the temporary files named with this id are being written, not left by a dead
+    run. Without ``fcntl`` (Windows) the id alone, every temporary file counting as stale.
+    """
     run_id = uuid.uuid4().hex[:12]
     try:
         import fcntl
@@ -302,8 +313,10 @@ def _run_lock(out_root: Path) -> Iterator[str]:
 
 
 def _live_runs(out_root: Path, own: str | None) -> set[str]:
-    """The ids of the other runs going on into ``out_root`` (their lock is held); the lock
-    files of runs that died are removed."""
+    """Return the ids of the other runs going on into ``out_root`` (their lock is held).
+
+    The lock files of runs that died are removed.
+    """
     try:
         import fcntl
     except ImportError:  # pragma: no cover - not POSIX
@@ -334,25 +347,29 @@ def _live_runs(out_root: Path, own: str | None) -> set[str]:
 
 
 def _run_of(name: str, output: Path) -> str | None:
-    """The run id in the name of a temporary file of ``output`` (None for one without)."""
+    """Return the run id in the name of a temporary file of ``output`` (None for one without)."""
     token = name.lstrip(".")[len(output.name) + 1 :].split(".", 1)[0]
     run_id, sep, _ = token.partition("-")
     return run_id if sep else None
 
 
 def _nested_part_pattern(output: Path) -> str:
-    """The glob of the files the workflow's own atomic writer makes beside a job's temporary
-    file (``..NAME.<random>.tmpSUFFIX.<pid>-<token>.partSUFFIX``): a worker killed while the
-    workflow was still writing leaves one of these, not the temporary file itself."""
+    """Return the glob of the files the workflow's own atomic writer makes beside a job's temp file.
+
+    Those are ``..NAME.<random>.tmpSUFFIX.<pid>-<token>.partSUFFIX``: a worker killed while the
+    workflow was still writing leaves one of these, not the temporary file itself.
+    """
     return f".{temp_pattern(output)}.*.part*"
 
 
 def _remove_stale_temps(
     jobs: list[Job], out_root: Path | None = None, own: str | None = None
 ) -> int:
-    """Remove the temporary files of ``jobs``' outputs that no run going on into
-    ``out_root`` is writing (those of run ``own``, this one, included: what it left is from
-    killed workers); returns how many."""
+    """Remove the temporary files of ``jobs``' outputs that no live run is writing; return how many.
+
+    A file is stale when no run going on into ``out_root`` is writing it (those of run ``own``, this
+    one, included: what it left is from killed workers).
+    """
     live = _live_runs(out_root, own) if out_root is not None else set()
     n = 0
     for job in jobs:
@@ -371,7 +388,7 @@ def _remove_stale_temps(
 
 
 def plan_jobs(pattern: str, out_dir: str | Path, *, out_suffix: str | None = None) -> list[Job]:
-    """The jobs for the files matching ``pattern``, outputs under ``out_dir``.
+    """Return the jobs for the files matching ``pattern``, outputs under ``out_dir``.
 
     Parameters
     ----------
@@ -551,8 +568,10 @@ def run_job(
 
 
 def _wait_some(pending: set[Any], timeout: float) -> tuple[set[Any], set[Any]]:
-    """``(finished, still pending)`` once a future is done or ``timeout`` s have passed
-    (``distributed.wait`` looks up the default client, which the run's client is not)."""
+    """Return ``(finished, still pending)`` once a future is done or ``timeout`` s have passed.
+
+    ``distributed.wait`` is not used: it looks up the default client, which the run's client is not.
+    """
     deadline = time.monotonic() + timeout
     while True:
         finished = {f for f in pending if f.done()}
@@ -563,10 +582,12 @@ def _wait_some(pending: set[Any], timeout: float) -> tuple[set[Any], set[Any]]:
 
 @contextlib.contextmanager
 def _client(scheduler: str | None, n_workers: int) -> Iterator[Any]:
-    """The run's client. Never dask's default scheduler: the run submits to it explicitly,
-    and default clients closed out of order (two runs in one process, in threads) leave
-    dask's global ``scheduler`` setting naming a closed client, which breaks every later
-    ``dask.compute`` in the process."""
+    """Yield the run's client, never dask's default scheduler.
+
+    The run submits to it explicitly: default clients closed out of order (two runs in one process,
+    in threads) leave dask's global ``scheduler`` setting naming a closed client, which breaks every
+    later ``dask.compute`` in the process.
+    """
     import logging
 
     from imageform._optional import require
@@ -831,8 +852,9 @@ def _run_on(
 
 
 def print_summary(report: BatchReport, console: Any = None) -> None:
-    """Print the counts and the failures (input and reason): a rich table on a terminal,
-    one ``failed: INPUT: REASON`` line each otherwise.
+    """Print the counts and the failures (input and reason).
+
+    A rich table on a terminal, one ``failed: INPUT: REASON`` line each otherwise.
 
     Examples
     --------

@@ -1,5 +1,6 @@
-"""``imageform batch COMMAND`` and ``imageform chunked COMMAND``: thin adapters generated
-from the workflow registry.
+"""``imageform batch COMMAND`` and ``imageform chunked COMMAND``.
+
+Thin adapters generated from the workflow registry.
 
 Each subcommand takes the workflow's own options (the same flags, names and defaults as the
 single command) plus what scaling out needs: ``batch`` a glob of inputs, an output folder
@@ -220,8 +221,10 @@ def batch_group() -> click.Group:
 
 
 def chunked_group() -> click.Group:
-    """``imageform chunked``: convert, white-balance or stain-normalise one image larger than
-    memory."""
+    """Return the ``imageform chunked`` group: process one image larger than memory.
+
+    Its commands convert, white-balance or stain-normalise the image block by block.
+    """
     return _Lazy(
         "chunked",
         _chunked_command,

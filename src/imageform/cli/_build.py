@@ -79,7 +79,7 @@ def _choices_text(choices: Any) -> str:
 
 
 def option_params(wf: Workflow) -> list[click.Parameter]:
-    """The click options of a workflow's options dataclass (flags, types, defaults, help)."""
+    """Return the click options of a workflow's options dataclass (flags, types, defaults, help)."""
     params: list[click.Parameter] = []
     hints = wf.options.types()
     for f in wf.options.fields():
@@ -133,8 +133,10 @@ def option_params(wf: Workflow) -> list[click.Parameter]:
 
 
 def expand_inputs(patterns: tuple[str, ...] | list[str]) -> list[Path]:
-    """Files named or matched by glob patterns (a name that exists is taken literally, so a
-    file called ``scan[1].png`` works); no match is an error naming the pattern."""
+    """Return the files named or matched by glob patterns; no match is an error naming the pattern.
+
+    A name that exists is taken literally, so a file called ``scan[1].png`` works.
+    """
     files: list[Path] = []
     for p in patterns:
         if os.path.exists(p) or not any(c in p for c in "*?["):
@@ -149,7 +151,7 @@ def expand_inputs(patterns: tuple[str, ...] | list[str]) -> list[Path]:
 
 @contextmanager
 def progress_bar(enabled: bool) -> Iterator[Callable[[str, float], None] | None]:
-    """A progress bar on stderr driven by ``progress(stage, fraction)``; None when disabled."""
+    """Yield a progress bar on stderr driven by ``progress(stage, fraction)``; None if disabled."""
     if not enabled:
         yield None
         return
@@ -201,14 +203,19 @@ def _terminal_width() -> int:
 
 
 class UnexpectedError(ImageformError):
-    """An exception the library did not expect, in one line naming the input file(s); the
-    original is its ``__cause__`` (``--traceback`` shows both)."""
+    """An exception the library did not expect, in one line naming the input file(s).
+
+    The original is its ``__cause__`` (``--traceback`` shows both).
+    """
 
 
 @contextmanager
 def _naming_files(inputs: dict[str, Any]) -> Iterator[None]:
-    """Turn an unexpected exception (not an :class:`ImageformError`, an ``OSError`` naming
-    its file, an interrupt or a memory error) into one line naming the input file(s)."""
+    """Turn an unexpected exception into one line naming the input file(s).
+
+    Unexpected: not an :class:`ImageformError`, an ``OSError`` naming its file, an interrupt or a
+    memory error.
+    """
     try:
         yield
     except (ImageformError, click.ClickException, CommandExit, MemoryError):
@@ -235,8 +242,10 @@ def _unexpected(exc: BaseException, inputs: dict[str, Any]) -> str:
 
 
 def build_command(wf: Workflow) -> click.Command:
-    """The click command of a workflow: its inputs, ``-o/--out``, options, ``--force``,
-    ``--json``."""
+    """Return the click command of a workflow.
+
+    It has the workflow's inputs, ``-o/--out``, its options, ``--force`` and ``--json``.
+    """
     params: list[click.Parameter] = []
     for inp in wf.inputs:
         ptype = click.STRING if inp.kind == "text" or inp.many else click.Path(path_type=Path)

@@ -63,8 +63,9 @@ def _jobs(work: Path) -> list[list[str]]:
 
 
 def warm_cache(jobs: int | None = None) -> list[tuple[str, float, str]]:
-    """Compile the hot kernels into the cache; ``(command, seconds, error)`` per command
-    (``error``: the last line the command wrote on stderr when it failed, else ``""``).
+    """Compile the hot kernels into the cache; return ``(command, seconds, error)`` per command.
+
+    ``error`` is the last line the command wrote on stderr when it failed, else ``""``.
 
     Each command runs as ``python -m imageform ...`` in its own process, at most ``jobs`` at
     once (default: the CPU count); the processes share the cache folder of this one.

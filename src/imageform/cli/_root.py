@@ -1,5 +1,7 @@
-"""The root ``imageform`` group: every workflow of the registry, plus ``batch`` and
-``chunked``, built on first use and listed by section."""
+"""The root ``imageform`` group: every workflow of the registry, plus ``batch`` and ``chunked``.
+
+Built on first use and listed by section.
+"""
 
 from __future__ import annotations
 
@@ -28,8 +30,10 @@ _GROUPS = {
 
 
 def _extra_commands() -> dict[str, Callable[[], click.Command]]:
-    """Commands that are not single workflows: batch and chunked (generated from the same
-    registry), and cache (numba's compiled kernels)."""
+    """Return the commands that are not single workflows: batch, chunked and cache.
+
+    batch and chunked are generated from the same registry; cache handles numba's compiled kernels.
+    """
     return {"batch": batch_group, "chunked": chunked_group, "cache": _cache_command}
 
 

@@ -1,6 +1,8 @@
-"""imageform.color: colour spaces and the conversion graph, transfer functions, white points,
-colour difference, chromatic adaptation, white balance, CCT, chroma subsampling, colour vision
-(metamerism, colour-vision deficiency, palettes), chromaticity and gamut.
+"""imageform.color: colour spaces and the conversion graph, colour difference and more.
+
+Colour spaces and the conversion graph, transfer functions, white points, colour difference,
+chromatic adaptation, white balance, CCT, chroma subsampling, colour vision (metamerism,
+colour-vision deficiency, palettes), chromaticity and gamut.
 
 Conventions (docs/conventions.md): channels-last ``(..., 3)`` arrays; encoded RGB in
 [0, 1]; XYZ with Y = 1 at the reference white; L* in [0, 100]; hue in degrees [0, 360).

@@ -1,6 +1,8 @@
-"""imageform.color's boundary checks: the shared ones of :mod:`imageform._validate` with the
-refusals of issue 16 in front (bool, complex, object and string input never converted), plus a
-magnitude bound for formulas whose powers would overflow.
+"""imageform.color's boundary checks.
+
+The shared ones of :mod:`imageform._validate` with the refusals of issue 16 in front (bool,
+complex, object and string input never converted), plus a magnitude bound for formulas
+whose powers would overflow.
 
 The wrappers keep the shared functions' signatures, so a module switches by its import line.
 """
@@ -34,7 +36,7 @@ MAX_COLOR_MAGNITUDE = {"float64": 1e15, "float32": 1e5}
 
 
 def _shape_of(x: object) -> tuple[int, ...] | None:
-    """The shape of an array-like that has one (NumPy, torch, Dask ...), without converting."""
+    """Return the shape of an array-like that has one (NumPy, torch, Dask ...), unconverted."""
     shape = getattr(x, "shape", None)
     if shape is None or getattr(x, "ndim", None) is None:
         return None
@@ -45,8 +47,11 @@ def _shape_of(x: object) -> tuple[int, ...] | None:
 
 
 def as_points(x: object, name: str, dim: int | Collection[int], **kw: Any) -> Any:
-    """:func:`imageform._validate.as_points` that first refuses bool/complex/object/string
-    and a wrong last axis (before any value is read: a misshaped array is refused at once)."""
+    """Check points like :func:`imageform._validate.as_points`, refusing bad dtypes first.
+
+    It first refuses bool/complex/object/string and a wrong last axis (before any value is
+    read: a misshaped array is refused at once).
+    """
     _v.refuse_non_real(x, name)
     shape = _shape_of(x)
     dims = (dim,) if isinstance(dim, int) else tuple(dim)
@@ -63,9 +68,11 @@ def as_float(x: object, name: str, **kw: Any) -> Any:
 
 
 def as_image(image: object, name: str = "image", **kw: Any) -> Any:
-    """:func:`imageform._validate.as_image` that first refuses bool/complex/object/string;
-    values read without the 0-1 range check (XYZ, Lab, HSV ...) are bounded by
-    :data:`MAX_COLOR_MAGNITUDE`."""
+    """Check an image like :func:`imageform._validate.as_image`, refusing bad dtypes first.
+
+    It first refuses bool/complex/object/string; values read without the 0-1 range check
+    (XYZ, Lab, HSV ...) are bounded by :data:`MAX_COLOR_MAGNITUDE`.
+    """
     _v.refuse_non_real(image, name)
     channels = kw.get("channels", 3)
     axis = kw.get("channel_axis", -1)
@@ -94,14 +101,18 @@ def as_image(image: object, name: str = "image", **kw: Any) -> Any:
 
 
 def as_bool(value: object, name: str) -> bool:
-    """A flag: Python or NumPy bool (:func:`imageform._validate.as_bool`); 0/1, strings and
-    arrays are refused."""
+    """Check a flag: Python or NumPy bool (:func:`imageform._validate.as_bool`).
+
+    0/1, strings and arrays are refused.
+    """
     return _v.as_bool(value, name)
 
 
 def check_option(value: object, valid: Collection[str], what: str, name: str = "") -> str:
-    """:func:`imageform._validate.check_name`: an option naming its parameter, listing a short
-    line of valid names."""
+    """Check an option like :func:`imageform._validate.check_name`.
+
+    The error names its parameter and lists a short line of valid names.
+    """
     return _v.check_name(value, valid, what, name)
 
 
@@ -127,9 +138,11 @@ def check_nonempty(arr: Any, name: str) -> None:
 
 
 def check_result_array(x: object, name: str) -> None:
-    """Refuse a field of a result container built by a caller (not by imageform) that is not
-    a real, finite array: bool, complex, object and string values, NaN and inf. Lazy Dask
-    arrays are not computed here."""
+    """Refuse a field of a caller-built result container that is not a real, finite array.
+
+    The container is built by a caller (not by imageform); refused are bool, complex, object
+    and string values, NaN and inf. Lazy Dask arrays are not computed here.
+    """
     if x is None:
         raise TypeError(f"expected {name} as an array of numbers, got None")
     _v.refuse_non_real(x, name)

@@ -71,7 +71,7 @@ def chromatic_adaptation_matrix(
     degree: float = 1.0,
     observer: int = 2,
 ) -> np.ndarray:
-    r"""The 3x3 matrix that adapts XYZ from ``src_white`` to ``dst_white``.
+    r"""Return the 3x3 matrix that adapts XYZ from ``src_white`` to ``dst_white``.
 
     .. math:: M = M_{CAT}^{-1}\,\mathrm{diag}\!\left(D\frac{Y_s}{Y_d}\frac{\rho_d}{\rho_s}
         + 1 - D\right) M_{CAT},\qquad \rho = M_{CAT}\,XYZ_w

@@ -1,5 +1,6 @@
-"""More correlated-colour-temperature methods: McCamy (1992), Hernández-Andrés (1999),
-Ohno (2013).
+"""More correlated-colour-temperature methods.
+
+McCamy (1992), Hernández-Andrés (1999), Ohno (2013).
 
 Selected through :func:`imageform.color.xy_to_cct` (``method="mccamy1992"``,
 ``"hernandez1999"``, ``"ohno2013"``) or called directly. McCamy's and Hernández-Andrés'
@@ -48,9 +49,9 @@ def _xy(xy: object) -> np.ndarray:
 
 
 def xy_to_cct_mccamy1992(xy: object) -> Any:
-    """CCT by McCamy's cubic in the epicentre slope (1992).
+    r"""CCT by McCamy's cubic in the epicentre slope (1992).
 
-    .. math:: n = \\frac{x - 0.3320}{y - 0.1858},\\qquad
+    .. math:: n = \frac{x - 0.3320}{y - 0.1858},\qquad
         T = -449 n^3 + 3525 n^2 - 6823.3 n + 5520.33
 
     Accurate to about 2 K between 2856 K and 6504 K on the Planckian locus; rougher
@@ -83,15 +84,15 @@ def xy_to_cct_mccamy1992(xy: object) -> Any:
 
 
 def xy_to_cct_hernandez1999(xy: object) -> Any:
-    """CCT by Hernández-Andrés, Lee & Romero's exponential fit (1999).
+    r"""CCT by Hernández-Andrés, Lee & Romero's exponential fit (1999).
 
-    .. math:: n = \\frac{x - x_e}{y - y_e},\\qquad
+    .. math:: n = \frac{x - x_e}{y - y_e},\qquad
         T = A_0 + A_1 e^{-n/t_1} + A_2 e^{-n/t_2} + A_3 e^{-n/t_3}
 
     with :math:`x_e = 0.3366, y_e = 0.1735, A_0 = -949.86315, A_1 = 6253.80338,
     t_1 = 0.92159, A_2 = 28.70599, t_2 = 0.20039, A_3 = 0.00004, t_3 = 0.07125`
     (3000-50000 K) and, where that gives more than 50000 K, :math:`x_e = 0.3356,
-    y_e = 0.1691, A_0 = 36284.48953, A_1 = 0.00228, t_1 = 0.07861, A_2 = 5.4535\\cdot
+    y_e = 0.1691, A_0 = 36284.48953, A_1 = 0.00228, t_1 = 0.07861, A_2 = 5.4535\cdot
     10^{-36}, t_2 = 0.01543` (50000 K to 8e5 K).
 
     Parameters
@@ -142,13 +143,13 @@ def _cmf_1nm() -> tuple[np.ndarray, np.ndarray]:
 
 
 def planckian_uv(cct: object) -> np.ndarray:
-    """CIE 1960 ``(u, v)`` of a black body at ``cct`` kelvin (CIE 1931 2° observer).
+    r"""CIE 1960 ``(u, v)`` of a black body at ``cct`` kelvin (CIE 1931 2° observer).
 
-    .. math:: X_i = \\sum_\\lambda \\lambda^{-5} (e^{c_2/\\lambda T} - 1)^{-1}
-        \\bar x_i(\\lambda),\\quad u = \\frac{4X}{X + 15Y + 3Z},\\;
-        v = \\frac{6Y}{X + 15Y + 3Z}
+    .. math:: X_i = \sum_\lambda \lambda^{-5} (e^{c_2/\lambda T} - 1)^{-1}
+        \bar x_i(\lambda),\quad u = \frac{4X}{X + 15Y + 3Z},\;
+        v = \frac{6Y}{X + 15Y + 3Z}
 
-    summed over 360-780 nm at 1 nm, :math:`c_2 = 1.4388 \\cdot 10^{-2}` m K.
+    summed over 360-780 nm at 1 nm, :math:`c_2 = 1.4388 \cdot 10^{-2}` m K.
 
     Source: Planck's law and CIE 15:2004, sec. 3.1 and 8.1 (c₂, CIE 1960 UCS).
 
@@ -176,8 +177,10 @@ def planckian_uv(cct: object) -> np.ndarray:
 
 @functools.lru_cache(maxsize=4)
 def _ohno_table(start: float, end: float, spacing: float) -> np.ndarray:
-    """(T, u, v) rows: T from ``start`` to ``end`` in geometric steps of ``spacing``,
-    narrowed to 1 + (spacing - 1)/10 towards ``end`` (colour-science's cascade)."""
+    """Tabulate (T, u, v) rows with T from ``start`` to ``end`` in geometric steps of ``spacing``.
+
+    The steps are narrowed to 1 + (spacing - 1)/10 towards ``end`` (colour-science's cascade).
+    """
     ti = [start, start + 1.0]
     nxt, step = start + 1.0, spacing
     lo, hi = OHNO2013_RANGE
@@ -194,27 +197,27 @@ def _ohno_table(start: float, end: float, spacing: float) -> np.ndarray:
 def uv_to_cct_ohno2013(
     uv: object, *, spacing: float = 1.001, correction: bool = False
 ) -> tuple[Any, Any]:
-    """CCT and Duv from CIE 1960 ``(u, v)`` by Ohno's combined method (2013/2014).
+    r"""CCT and Duv from CIE 1960 ``(u, v)`` by Ohno's combined method (2013/2014).
 
     A table of Planckian ``(T_i, u_i, v_i)`` (1000 K to 100000 K, geometric steps of
     ``spacing``) gives the nearest entry ``i`` and its neighbours, at distances
     :math:`d_{i-1}, d_i, d_{i+1}` from ``(u, v)``.
 
     Triangular solution (:math:`|D_{uv}| < 0.002`), with :math:`l` the distance between
-    entries :math:`i \\pm 1`:
+    entries :math:`i \pm 1`:
 
-    .. math:: x = \\frac{d_{i-1}^2 - d_{i+1}^2 + l^2}{2l},\\quad
-        T = T_{i-1} + (T_{i+1} - T_{i-1})\\frac{x}{l},\\quad
-        D_{uv} = \\operatorname{sgn}(v - v_x)\\sqrt{d_{i-1}^2 - x^2}
+    .. math:: x = \frac{d_{i-1}^2 - d_{i+1}^2 + l^2}{2l},\quad
+        T = T_{i-1} + (T_{i+1} - T_{i-1})\frac{x}{l},\quad
+        D_{uv} = \operatorname{sgn}(v - v_x)\sqrt{d_{i-1}^2 - x^2}
 
     Parabolic solution (otherwise): the parabola :math:`d(T) = aT^2 + bT + c` through
-    the three distances gives :math:`T = -b/2a` and :math:`D_{uv} = \\operatorname{sgn}
+    the three distances gives :math:`T = -b/2a` and :math:`D_{uv} = \operatorname{sgn}
     (v - v_x)(aT^2 + bT + c)`.
 
     With the default table (0.1 % steps, narrowed towards 100000 K, as colour-science
     builds it) the interpolation error is at most 2.5e-6 relative (median 7e-7, measured
     on 2000-20000 K, Duv up to 0.02) and no correction is needed. Ohno's table has 1 %
-    steps; his correction :math:`T \\leftarrow 0.99991\\,T` (``correction=True``,
+    steps; his correction :math:`T \leftarrow 0.99991\,T` (``correction=True``,
     applied to both solutions) compensates its bias: with ``spacing=1.01`` the measured
     bias is +7e-5 to +8e-5 (median) and at most 1.2e-4, at most 5.8e-5 after the
     correction.
@@ -294,10 +297,10 @@ def uv_to_cct_ohno2013(
 
 
 def cct_to_uv_ohno2013(cct: object, duv: object = 0.0) -> np.ndarray:
-    """CIE 1960 ``(u, v)`` at ``cct`` kelvin, ``duv`` off the Planckian locus (Ohno 2014).
+    r"""CIE 1960 ``(u, v)`` at ``cct`` kelvin, ``duv`` off the Planckian locus (Ohno 2014).
 
-    .. math:: (u, v) = (u_0 - D_{uv} \\sin\\theta,\\; v_0 + D_{uv} \\cos\\theta),\\quad
-        \\theta = \\operatorname{atan2}(v_0 - v_1, u_0 - u_1)
+    .. math:: (u, v) = (u_0 - D_{uv} \sin\theta,\; v_0 + D_{uv} \cos\theta),\quad
+        \theta = \operatorname{atan2}(v_0 - v_1, u_0 - u_1)
 
     with :math:`(u_0, v_0)` the Planckian point at T and :math:`(u_1, v_1)` at
     T + 0.01 K.

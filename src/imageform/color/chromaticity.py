@@ -84,8 +84,9 @@ def xy_to_uv_prime(xy: object) -> Any:
 
 @chunkwise(1)
 def uv_prime_to_xy(uv: object) -> Any:
-    r"""Inverse of :func:`xy_to_uv_prime`: :math:`x = 9u'/(6u' - 16v' + 12)`,
-    :math:`y = 4v'/(6u' - 16v' + 12)` (CIE 015:2018 eq. 8.3).
+    r"""Invert :func:`xy_to_uv_prime` (CIE 015:2018 eq. 8.3).
+
+    :math:`x = 9u'/(6u' - 16v' + 12)`, :math:`y = 4v'/(6u' - 16v' + 12)`.
 
     Examples
     --------
@@ -141,10 +142,10 @@ def spectral_locus(
     coords: str = "xy",
     wavelength_range: tuple[float, float] = LOCUS_RANGE,
 ) -> SpectralLocus:
-    """Wavelengths (N,) and chromaticities (N, 2) of the spectral locus at 1 nm.
+    r"""Wavelengths (N,) and chromaticities (N, 2) of the spectral locus at 1 nm.
 
     From the CIE colour-matching functions (CIE 015:2018 Tables 4-5):
-    :math:`x(\\lambda) = \\bar x/(\\bar x + \\bar y + \\bar z)`. Every parameter is
+    :math:`x(\lambda) = \bar x/(\bar x + \bar y + \bar z)`. Every parameter is
     keyword-only: ``observer`` (2 or 10), ``coords`` (``"xy"`` or ``"uv"``) and the
     ``wavelength_range`` (nm).
 
@@ -168,7 +169,8 @@ def spectral_locus(
 
 
 def polygon_area(vertices: npt.ArrayLike) -> float:
-    r"""Area of a simple polygon by the shoelace formula,
+    r"""Compute the area of a simple polygon by the shoelace formula.
+
     :math:`A = \tfrac12 |\sum_i (x_i y_{i+1} - x_{i+1} y_i)|`.
 
     Examples
@@ -189,8 +191,9 @@ def polygon_area(vertices: npt.ArrayLike) -> float:
 
 @_deprecate.parameters(positional=("observer",))
 def visible_area(coords: str = "xy", *, observer: int = 2) -> float:
-    """Area of the region bounded by the spectral locus and the purple line (``observer``
-    keyword-only).
+    """Compute the area bounded by the spectral locus and the purple line.
+
+    ``observer`` is keyword-only.
 
     Examples
     --------
@@ -219,7 +222,7 @@ def _points_in_polygon(pts: Any, poly: np.ndarray, xp: Any) -> Any:
 
 @chunkwise(1)
 def in_locus(points: object, coords: str = "xy", *, observer: int = 2) -> Any:
-    """True where chromaticities lie inside the spectral locus (physically realisable).
+    """Test where chromaticities lie inside the spectral locus (physically realisable).
 
     Parameters
     ----------

@@ -1,4 +1,4 @@
-"""CIE XYZ to xyY, CIELAB (L*a*b*), CIELCh (L*C*h_ab) and CIELUV (L*u*v*), and back.
+r"""CIE XYZ to xyY, CIELAB (L*a*b*), CIELCh (L*C*h_ab) and CIELUV (L*u*v*), and back.
 
 XYZ is scaled so that the reference white has Y = 1 (docs/conventions.md); L* is in [0, 100]; hue
 angles are degrees in [0, 360). The reference white is the ``white=`` parameter: an
@@ -7,8 +7,8 @@ standard writes), an ``(x, y)`` pair or an ``(X, Y, Z)`` triple (see
 :func:`imageform.color.whitepoints.resolve_white`).
 
 Constants follow CIE 15:2004 clause 8.2 in their exact rational form:
-:math:`\\delta = 6/29`, so the cube-root threshold is :math:`\\delta^3 = 216/24389` and the
-linear segment is :math:`t / (3\\delta^2) + 4/29 = (841/108) t + 16/116`.
+:math:`\delta = 6/29`, so the cube-root threshold is :math:`\delta^3 = 216/24389` and the
+linear segment is :math:`t / (3\delta^2) + 4/29 = (841/108) t + 16/116`.
 """
 
 from __future__ import annotations
@@ -72,10 +72,10 @@ def _lab_to_xyz(xp: Any, lab: Any, w: Any) -> Any:
 
 @chunkwise(1)
 def xyz_to_lab(xyz: object, white: Any = "D65", *, observer: int = 2) -> Any:
-    """CIE XYZ to CIELAB.
+    r"""CIE XYZ to CIELAB.
 
     .. math::
-        L^* = 116 f(Y/Y_n) - 16, \\quad a^* = 500 [f(X/X_n) - f(Y/Y_n)], \\quad
+        L^* = 116 f(Y/Y_n) - 16, \quad a^* = 500 [f(X/X_n) - f(Y/Y_n)], \quad
         b^* = 200 [f(Y/Y_n) - f(Z/Z_n)]
 
     with :math:`f(t) = t^{1/3}` for :math:`t > (6/29)^3`, else :math:`(841/108) t + 4/29`.
@@ -112,11 +112,11 @@ def xyz_to_lab(xyz: object, white: Any = "D65", *, observer: int = 2) -> Any:
 
 @chunkwise(1)
 def lab_to_xyz(lab: object, white: Any = "D65", *, observer: int = 2) -> Any:
-    """CIELAB to CIE XYZ; inverse of :func:`xyz_to_lab`.
+    r"""CIELAB to CIE XYZ; inverse of :func:`xyz_to_lab`.
 
     .. math::
-        f_y = (L^* + 16)/116, \\; f_x = f_y + a^*/500, \\; f_z = f_y - b^*/200, \\;
-        X = X_n f^{-1}(f_x) \\ldots
+        f_y = (L^* + 16)/116, \; f_x = f_y + a^*/500, \; f_z = f_y - b^*/200, \;
+        X = X_n f^{-1}(f_x) \ldots
 
     with :math:`f^{-1}(u) = u^3` for :math:`u > 6/29`, else :math:`3 (6/29)^2 (u - 4/29)`.
 
@@ -153,9 +153,9 @@ def _lch_to_lab(xp: Any, lch: Any) -> Any:
 
 @chunkwise(1)
 def lab_to_lch(lab: object) -> Any:
-    """CIELAB to CIELCh_ab: chroma and hue angle in degrees [0, 360).
+    r"""CIELAB to CIELCh_ab: chroma and hue angle in degrees [0, 360).
 
-    .. math:: C^*_{ab} = \\sqrt{a^{*2} + b^{*2}}, \\quad h_{ab} = \\operatorname{atan2}(b^*, a^*)
+    .. math:: C^*_{ab} = \sqrt{a^{*2} + b^{*2}}, \quad h_{ab} = \operatorname{atan2}(b^*, a^*)
 
     For :math:`C^* = 0` the hue is undefined; it is returned as 0 (atan2(0, 0)).
 
@@ -172,7 +172,7 @@ def lab_to_lch(lab: object) -> Any:
 
 @chunkwise(1)
 def lch_to_lab(lch: object) -> Any:
-    """CIELCh_ab to CIELAB: :math:`a^* = C^* \\cos h`, :math:`b^* = C^* \\sin h`.
+    r"""CIELCh_ab to CIELAB: :math:`a^* = C^* \cos h`, :math:`b^* = C^* \sin h`.
 
     Examples
     --------
@@ -205,9 +205,9 @@ def _xyy_to_xyz(xp: Any, xyy: Any) -> Any:
 
 @chunkwise(1)
 def xyz_to_xyy(xyz: object, white: Any = "D65", *, observer: int = 2) -> Any:
-    """CIE XYZ to chromaticity and luminance xyY.
+    r"""CIE XYZ to chromaticity and luminance xyY.
 
-    .. math:: x = X / (X + Y + Z), \\quad y = Y / (X + Y + Z), \\quad Y = Y
+    .. math:: x = X / (X + Y + Z), \quad y = Y / (X + Y + Z), \quad Y = Y
 
     Black (X + Y + Z = 0) has no chromaticity; it gets the chromaticity of ``white``
     (documented convention, as in Lindbloom's formulae), so that black round-trips.
@@ -276,12 +276,12 @@ def _luv_to_xyz(xp: Any, luv: Any, w: Any) -> Any:
 
 @chunkwise(1)
 def xyz_to_luv(xyz: object, white: Any = "D65", *, observer: int = 2) -> Any:
-    """CIE XYZ to CIELUV.
+    r"""CIE XYZ to CIELUV.
 
     .. math::
-        L^* = 116 f(Y/Y_n) - 16, \\quad u^* = 13 L^* (u' - u'_n), \\quad
-        v^* = 13 L^* (v' - v'_n), \\quad
-        u' = \\frac{4X}{X + 15Y + 3Z}, \\; v' = \\frac{9Y}{X + 15Y + 3Z}
+        L^* = 116 f(Y/Y_n) - 16, \quad u^* = 13 L^* (u' - u'_n), \quad
+        v^* = 13 L^* (v' - v'_n), \quad
+        u' = \frac{4X}{X + 15Y + 3Z}, \; v' = \frac{9Y}{X + 15Y + 3Z}
 
     Black (X + 15Y + 3Z = 0) gives u* = v* = 0.
 
@@ -298,11 +298,11 @@ def xyz_to_luv(xyz: object, white: Any = "D65", *, observer: int = 2) -> Any:
 
 @chunkwise(1)
 def luv_to_xyz(luv: object, white: Any = "D65", *, observer: int = 2) -> Any:
-    """CIELUV to CIE XYZ; inverse of :func:`xyz_to_luv` (L* = 0 gives black).
+    r"""CIELUV to CIE XYZ; inverse of :func:`xyz_to_luv` (L* = 0 gives black).
 
     .. math::
-        u' = u^*/(13 L^*) + u'_n, \\; v' = v^*/(13 L^*) + v'_n, \\;
-        X = Y \\frac{9u'}{4v'}, \\; Z = Y \\frac{12 - 3u' - 20v'}{4v'}
+        u' = u^*/(13 L^*) + u'_n, \; v' = v^*/(13 L^*) + v'_n, \;
+        X = Y \frac{9u'}{4v'}, \; Z = Y \frac{12 - 3u' - 20v'}{4v'}
 
     Source: CIE 15:2004, clause 8.2.2 (inverted).
 

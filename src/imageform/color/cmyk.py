@@ -1,8 +1,8 @@
-"""CMY and CMYK: the subtractive complements of encoded RGB, as the lecture defines them.
+r"""CMY and CMYK: the subtractive complements of encoded RGB, as the lecture defines them.
 
 .. math::
-    (C, M, Y) = (1 - R, 1 - G, 1 - B); \\quad K = \\min(C, M, Y); \\quad
-    C' = \\frac{C - K}{1 - K}, \\; M' = \\frac{M - K}{1 - K}, \\; Y' = \\frac{Y - K}{1 - K}
+    (C, M, Y) = (1 - R, 1 - G, 1 - B); \quad K = \min(C, M, Y); \quad
+    C' = \frac{C - K}{1 - K}, \; M' = \frac{M - K}{1 - K}, \; Y' = \frac{Y - K}{1 - K}
 
 (pure black, K = 1, has C' = M' = Y' = 0). This is the device-independent textbook
 conversion ("K added as the lecture explains"); real presses use ICC profiles with
@@ -43,7 +43,7 @@ def _cmyk_to_cmy(xp: Any, cmyk: Any) -> Any:
 
 @chunkwise(1)
 def srgb_to_cmy(image: object) -> Any:
-    """Encoded RGB to CMY: :math:`(C, M, Y) = 1 - (R, G, B)`.
+    """Convert encoded RGB to CMY: :math:`(C, M, Y) = 1 - (R, G, B)`.
 
     Parameters
     ----------
@@ -82,9 +82,9 @@ def cmy_to_srgb(cmy: object) -> Any:
 
 @chunkwise(1)
 def cmy_to_cmyk(cmy: object) -> Any:
-    """CMY to CMYK with K = min(C, M, Y) and the remaining inks rescaled by 1/(1 - K).
+    r"""CMY to CMYK with K = min(C, M, Y) and the remaining inks rescaled by 1/(1 - K).
 
-    .. math:: K = \\min(C, M, Y), \\quad C' = (C - K)/(1 - K) \\ldots
+    .. math:: K = \min(C, M, Y), \quad C' = (C - K)/(1 - K) \ldots
 
     Returns shape (..., 4). Source: the lecture; Gonzalez & Woods, 4th ed., eq. (6-6)-(6-9).
 
@@ -112,7 +112,7 @@ def cmyk_to_cmy(cmyk: object) -> Any:
 
 @chunkwise(1)
 def srgb_to_cmyk(image: object) -> Any:
-    """Encoded RGB to CMYK (via CMY), shape (..., 4).
+    """Convert encoded RGB to CMYK (via CMY), shape (..., 4).
 
     Examples
     --------

@@ -200,9 +200,10 @@ def _space(name: object, what: str) -> str:
 
 
 def space_name(name: object, what: str = "name") -> str:
-    """The canonical name of a colour space (``"Display-P3"`` -> ``"display_p3"``, ``"grey"``
-    -> ``"gray"``); an unknown name raises, listing the valid ones, with ``what`` naming the
-    argument (``--to``).
+    """Return the canonical name of a colour space.
+
+    For example ``"Display-P3"`` -> ``"display_p3"``, ``"grey"`` -> ``"gray"``; an unknown
+    name raises, listing the valid ones, with ``what`` naming the argument (``--to``).
 
     Examples
     --------
@@ -213,7 +214,7 @@ def space_name(name: object, what: str = "name") -> str:
 
 
 def path(src: str, dst: str) -> list[Edge]:
-    """The edges :func:`convert` applies from ``src`` to ``dst`` (shortest path).
+    """Return the edges :func:`convert` applies from ``src`` to ``dst`` (shortest path).
 
     Examples
     --------

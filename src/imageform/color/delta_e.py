@@ -49,7 +49,7 @@ FACTOR_RANGE = (1e-3, 1e3)
 
 
 def check_positive(value: object, name: str) -> float:
-    """A parametric factor within :data:`FACTOR_RANGE`."""
+    """Check a parametric factor within :data:`FACTOR_RANGE`."""
     v = as_real(value, name, positive=True)
     lo, hi = FACTOR_RANGE
     if not lo <= v <= hi:
@@ -359,7 +359,7 @@ def delta_e(
 
 
 def describe_delta_e(value: float) -> str:
-    """The lecture's reading of a ΔE.
+    """Return the lecture's reading of a ΔE.
 
     The lecture: below 1 imperceptible, about 2 just noticeable, above 10 obviously different.
     The bands: ``ΔE < 1`` "imperceptible"; ``1 <= ΔE < 3`` "just noticeable" (around the JND

@@ -1,5 +1,7 @@
-r"""RGB gamuts: triangles in xy and u'v', area and coverage of the visible region, gamut tests
-and gamut mapping (clipping, or hue-preserving chroma reduction in CIELAB LCh).
+r"""RGB gamuts: triangles in xy and u'v', area and coverage, gamut tests and gamut mapping.
+
+Area and coverage are of the visible region; gamut mapping is clipping, or hue-preserving
+chroma reduction in CIELAB LCh.
 
 The gamut triangle of an RGB space has its primaries' chromaticities as vertices
 (:data:`imageform.color.RGB_SPACES`). *Area ratio* is the triangle's area over the area of
@@ -47,7 +49,7 @@ _KINDS = ("xyz", "xy", "linear_rgb")
 
 
 def gamut_triangle(space: str | RGBSpace = "srgb", coords: str = "xy") -> np.ndarray:
-    """The primaries' chromaticities, shape (3, 2), in ``"xy"`` or ``"uv"`` (u', v').
+    """Return the primaries' chromaticities, shape (3, 2), in ``"xy"`` or ``"uv"`` (u', v').
 
     Examples
     --------
@@ -106,9 +108,9 @@ def _clip_polygon(subject: np.ndarray, clip: np.ndarray) -> np.ndarray:
 def gamut_coverage(
     space: str | RGBSpace = "srgb", coords: str = "xy", *, observer: int = 2
 ) -> float:
-    """Percentage of the visible region (spectral locus, 380-780 nm) the gamut covers.
+    r"""Percentage of the visible region (spectral locus, 380-780 nm) the gamut covers.
 
-    .. math:: \\mathrm{coverage} = 100\\,\\frac{A(T \\cap V)}{A(V)}
+    .. math:: \mathrm{coverage} = 100\,\frac{A(T \cap V)}{A(V)}
 
     with :math:`T` the triangle and :math:`V` the visible region (Sutherland-Hodgman clipping).
 
@@ -137,6 +139,7 @@ class GamutFigures:
     area_ratio_uv: float
 
     def __post_init__(self) -> None:
+        """Check the space name and make every figure a non-negative real."""
         if not isinstance(self.space, str):
             raise TypeError(f"expected space as a colour space name, got {describe(self.space)}")
         for f in fields(self)[1:]:
@@ -145,6 +148,7 @@ class GamutFigures:
             )
 
     def as_dict(self) -> dict[str, Any]:
+        """Return the fields as a dict (for JSON output)."""
         return dict(self.__dict__)
 
 
@@ -190,10 +194,10 @@ def in_gamut(
     kind: str = "xyz",
     tol: float = 1e-9,
 ) -> Any:
-    """True where colours lie inside an RGB space's gamut.
+    r"""Test where colours lie inside an RGB space's gamut.
 
     ``kind="xyz"`` (shape (..., 3), white Y = 1): linear RGB of the space in
-    :math:`[-\\mathrm{tol}, 1 + \\mathrm{tol}]`; ``kind="linear_rgb"``: the same test on given
+    :math:`[-\mathrm{tol}, 1 + \mathrm{tol}]`; ``kind="linear_rgb"``: the same test on given
     linear RGB; ``kind="xy"`` (shape (..., 2)): chromaticity inside the primaries' triangle
     (any luminance).
 
@@ -224,7 +228,7 @@ def in_gamut(
 
 
 def _const(m: np.ndarray, like: Any, xp: Any) -> Any:
-    """A NumPy constant in ``like``'s namespace, dtype and device."""
+    """Make a NumPy constant in ``like``'s namespace, dtype and device."""
     return xp.asarray(np.asarray(m, dtype=np.float64), dtype=like.dtype, device=device_of(like))
 
 

@@ -55,11 +55,11 @@ def _gray_to_srgb(xp: Any, g: Any) -> Any:
 
 @chunkwise(1)
 def srgb_to_gray(image: object, method: str = "rec601") -> Any:
-    """Encoded sRGB to an encoded grey image, shape (..., 1).
+    r"""Convert encoded sRGB to an encoded grey image, shape (..., 1).
 
     .. math::
-        \\text{rec601:}\\; Y' = 0.299 R' + 0.587 G' + 0.114 B' \\qquad
-        \\text{rec709:}\\; Y' = \\mathrm{enc}(0.2126 R + 0.7152 G + 0.0722 B)
+        \text{rec601:}\; Y' = 0.299 R' + 0.587 G' + 0.114 B' \qquad
+        \text{rec709:}\; Y' = \mathrm{enc}(0.2126 R + 0.7152 G + 0.0722 B)
 
     Parameters
     ----------
@@ -90,7 +90,7 @@ def srgb_to_gray(image: object, method: str = "rec601") -> Any:
 
 @chunkwise(1)
 def gray_to_srgb(gray: object) -> Any:
-    """A grey image (..., 1) to sRGB (..., 3) by repeating the value (R = G = B).
+    """Convert a grey image (..., 1) to sRGB (..., 3) by repeating the value (R = G = B).
 
     Examples
     --------

@@ -96,12 +96,12 @@ def _rgb_in(image: object) -> tuple[Any, Any]:
 
 @chunkwise(1)
 def srgb_to_hsv(image: object) -> Any:
-    """Encoded RGB to HSV (hexcone model).
+    r"""Convert encoded RGB to HSV (hexcone model).
 
     .. math::
-        V = \\max(R,G,B), \\; S = (V - \\min) / V, \\;
-        H = 60° \\times \\begin{cases} (G-B)/\\Delta & V = R \\\\ (B-R)/\\Delta + 2 & V = G
-        \\\\ (R-G)/\\Delta + 4 & V = B \\end{cases} \\bmod 360
+        V = \max(R,G,B), \; S = (V - \min) / V, \;
+        H = 60° \times \begin{cases} (G-B)/\Delta & V = R \\ (B-R)/\Delta + 2 & V = G
+        \\ (R-G)/\Delta + 4 & V = B \end{cases} \bmod 360
 
     Parameters
     ----------
@@ -129,8 +129,10 @@ def srgb_to_hsv(image: object) -> Any:
 
 @chunkwise(1)
 def hsv_to_srgb(hsv: object) -> Any:
-    """HSV to encoded RGB: :math:`f(n) = V - VS\\max(0, \\min(k, 4 - k, 1))`,
-    :math:`k = (n + H/60) \\bmod 6` for n = 5, 3, 1.
+    r"""Convert HSV to encoded RGB.
+
+    :math:`f(n) = V - VS\max(0, \min(k, 4 - k, 1))`, :math:`k = (n + H/60) \bmod 6` for
+    n = 5, 3, 1.
 
     Hue may be any real number (taken modulo 360).
 
@@ -145,8 +147,9 @@ def hsv_to_srgb(hsv: object) -> Any:
 
 @chunkwise(1)
 def srgb_to_hsl(image: object) -> Any:
-    """Encoded RGB to HSL (double hexcone): L = (max + min)/2,
-    :math:`S = \\Delta / (1 - |2L - 1|)`, H as in HSV.
+    r"""Convert encoded RGB to HSL (double hexcone).
+
+    L = (max + min)/2, :math:`S = \Delta / (1 - |2L - 1|)`, H as in HSV.
 
     Source: A. R. Smith (1978); Joblove & Greenberg, "Color spaces for computer graphics",
     SIGGRAPH 1978.
@@ -162,8 +165,10 @@ def srgb_to_hsl(image: object) -> Any:
 
 @chunkwise(1)
 def hsl_to_srgb(hsl: object) -> Any:
-    """HSL to encoded RGB: :math:`f(n) = L - a \\max(-1, \\min(k - 3, 9 - k, 1))`,
-    :math:`a = S \\min(L, 1 - L)`, :math:`k = (n + H/30) \\bmod 12` for n = 0, 8, 4.
+    r"""Convert HSL to encoded RGB.
+
+    :math:`f(n) = L - a \max(-1, \min(k - 3, 9 - k, 1))`, :math:`a = S \min(L, 1 - L)`,
+    :math:`k = (n + H/30) \bmod 12` for n = 0, 8, 4.
 
     Examples
     --------
@@ -176,14 +181,14 @@ def hsl_to_srgb(hsl: object) -> Any:
 
 @chunkwise(1)
 def srgb_to_hsi(image: object) -> Any:
-    """Encoded RGB to HSI (Gonzalez & Woods).
+    r"""Convert encoded RGB to HSI (Gonzalez & Woods).
 
     .. math::
-        I = \\frac{R+G+B}{3}, \\quad S = 1 - \\frac{\\min(R,G,B)}{I}, \\quad
-        H = \\begin{cases}\\theta & B \\le G \\\\ 360° - \\theta & B > G\\end{cases}, \\;
-        \\theta = \\arccos \\frac{\\tfrac12[(R-G)+(R-B)]}{\\sqrt{(R-G)^2+(R-B)(G-B)}}
+        I = \frac{R+G+B}{3}, \quad S = 1 - \frac{\min(R,G,B)}{I}, \quad
+        H = \begin{cases}\theta & B \le G \\ 360° - \theta & B > G\end{cases}, \;
+        \theta = \arccos \frac{\tfrac12[(R-G)+(R-B)]}{\sqrt{(R-G)^2+(R-B)(G-B)}}
 
-    θ is computed as :math:`\\operatorname{atan2}(\\sqrt3 (G-B), 2R-G-B)`, the same angle.
+    θ is computed as :math:`\operatorname{atan2}(\sqrt3 (G-B), 2R-G-B)`, the same angle.
     H = 0 where S = 0; S = 0 for black.
 
     Source: R. C. Gonzalez & R. E. Woods, *Digital Image Processing*, 4th ed., eq. (6-16)-(6-19).
@@ -244,9 +249,9 @@ def hue_undefined_mask(values: object, *, atol: float = 0.0) -> Any:
 
 @chunkwise(0)
 def hue_difference(h1: object, h2: object) -> Any:
-    """Signed hue difference ``h2 - h1`` wrapped to [-180, 180) degrees.
+    r"""Signed hue difference ``h2 - h1`` wrapped to [-180, 180) degrees.
 
-    .. math:: \\Delta h = ((h_2 - h_1 + 180) \\bmod 360) - 180
+    .. math:: \Delta h = ((h_2 - h_1 + 180) \bmod 360) - 180
 
     Examples
     --------
@@ -267,9 +272,9 @@ def hue_difference(h1: object, h2: object) -> Any:
 
 @chunkwise(0)
 def hue_distance(h1: object, h2: object) -> Any:
-    """Unsigned angular distance between hues in degrees, in [0, 180].
+    r"""Unsigned angular distance between hues in degrees, in [0, 180].
 
-    .. math:: d = \\min(|h_1 - h_2| \\bmod 360,\\; 360 - |h_1 - h_2| \\bmod 360)
+    .. math:: d = \min(|h_1 - h_2| \bmod 360,\; 360 - |h_1 - h_2| \bmod 360)
 
     Examples
     --------

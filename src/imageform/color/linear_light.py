@@ -31,9 +31,9 @@ __all__ = ["LinearLightComparison", "downsample", "linear_light_error", "mean_li
 def mean_linear_light(
     image: object, axis: int | tuple[int, ...] | None = None, *, transfer: str = "srgb"
 ) -> Any:
-    """Mean of encoded values computed in linear light, returned encoded.
+    r"""Mean of encoded values computed in linear light, returned encoded.
 
-    .. math:: \\bar V = \\mathrm{enc}\\Big(\\frac1N \\sum_i \\mathrm{dec}(V_i)\\Big)
+    .. math:: \bar V = \mathrm{enc}\Big(\frac1N \sum_i \mathrm{dec}(V_i)\Big)
 
     Parameters
     ----------

@@ -90,8 +90,10 @@ def are_metamers(
     tol: float = 1e-6,
     spectral_tol: float = 1e-9,
 ) -> bool:
-    r"""True when two *different* spectra give the same responses for ``observer`` under
-    ``illuminant`` (keyword-only; ``illuminant=None``: the spectra are lights).
+    r"""Tell whether two *different* spectra give the same responses (metamers).
+
+    The responses are those of ``observer`` under ``illuminant`` (keyword-only;
+    ``illuminant=None``: the spectra are lights).
 
     Match: :math:`\max_c |t_{1c} - t_{2c}| / t_{\mathrm{white},Y} <` ``tol`` (relative to the
     white's Y, so the scale is that of XYZ with white Y = 1). Different: spectral RMS on the
@@ -125,7 +127,7 @@ def metamer(
     strength: float = 0.95,
     max_frequency: int = 8,
 ) -> Spectrum:
-    r"""A physically valid spectrum, different from ``spectrum``, with identical responses.
+    r"""Construct a physically valid spectrum, unlike ``spectrum``, with identical responses.
 
     Method: metameric blacks (module docstring). Candidate directions are cosines
     :math:`d = \cos(2\pi f (\lambda - \lambda_0)/(\lambda_1 - \lambda_0) + \varphi)` for
@@ -223,7 +225,9 @@ def metamerism_index(
     observer: int = 2,
     correct: bool = True,
 ) -> float:
-    r"""Special metamerism index (change in illuminant), CIEDE2000 under the test illuminant.
+    r"""Compute the special metamerism index (change in illuminant).
+
+    The index is CIEDE2000 under the test illuminant.
 
     CIE 015:2018 §9.2.2 / CIE 80 (1989): the colour difference of a pair under a test
     illuminant. If the pair does not match exactly under the reference, ``correct=True``

@@ -79,7 +79,7 @@ def _round_u8(xp: Any, x: Any) -> Any:
 
 @chunkwise(1)
 def to_opencv(values: object, convention: str) -> Any:
-    """imageform values (float, RGB order, degrees) in OpenCV's layout ``convention``.
+    """Convert imageform values (float, RGB order, degrees) to OpenCV's layout ``convention``.
 
     Parameters
     ----------

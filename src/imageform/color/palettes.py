@@ -75,9 +75,10 @@ def viridis(n: int = 256) -> np.ndarray:
 
 
 def parse_colors(colors: object) -> np.ndarray:
-    """Colours as encoded sRGB floats (n, 3): hex strings (``"#E69F00"``, ``"E69F00"``,
-    ``"#E90"``), one comma-separated string, or an array of shape (n, 3) (floats in [0, 1] or
-    uint8).
+    """Parse colours into encoded sRGB floats (n, 3).
+
+    Hex strings (``"#E69F00"``, ``"E69F00"``, ``"#E90"``), one comma-separated string, or an
+    array of shape (n, 3) (floats in [0, 1] or uint8).
 
     Examples
     --------
@@ -107,8 +108,10 @@ def parse_colors(colors: object) -> np.ndarray:
 
 
 def palette(name: str, n: int | None = None) -> np.ndarray:
-    """A named palette as encoded sRGB (n, 3): ``viridis`` (n evenly spaced, default 8),
-    ``okabe_ito`` (the first n of 8), ``red_green`` (ColorBrewer RdYlGn, 5).
+    """Return a named palette as encoded sRGB (n, 3).
+
+    ``viridis`` (n evenly spaced, default 8), ``okabe_ito`` (the first n of 8), ``red_green``
+    (ColorBrewer RdYlGn, 5).
 
     Examples
     --------
@@ -142,7 +145,7 @@ class PaletteCheck:
 
     @property
     def passes(self) -> dict[str, bool]:
-        """Per condition: is the smallest difference at least the threshold?"""
+        """Per condition: whether the smallest difference is at least the threshold."""
         return {k: v >= self.threshold for k, v in self.min_delta_e.items()}
 
     @property
@@ -151,6 +154,7 @@ class PaletteCheck:
         return all(self.passes.values())
 
     def as_dict(self) -> dict[str, Any]:
+        """Return the report as a JSON-ready dict (closest pairs as lists)."""
         return {
             "threshold": self.threshold,
             "min_delta_e": self.min_delta_e,

@@ -1,13 +1,13 @@
-"""RGB colour spaces defined by primaries, white point and transfer function.
+r"""RGB colour spaces defined by primaries, white point and transfer function.
 
 Matrices are derived, never typed: the normalised primary matrix of SMPTE RP 177-1993,
 
 .. math::
-    M = [\\mathbf{P}_R\\; \\mathbf{P}_G\\; \\mathbf{P}_B]\\,\\operatorname{diag}(\\mathbf{S}),
-    \\qquad \\mathbf{S} = [\\mathbf{P}_R\\; \\mathbf{P}_G\\; \\mathbf{P}_B]^{-1} \\mathbf{W},
+    M = [\mathbf{P}_R\; \mathbf{P}_G\; \mathbf{P}_B]\,\operatorname{diag}(\mathbf{S}),
+    \qquad \mathbf{S} = [\mathbf{P}_R\; \mathbf{P}_G\; \mathbf{P}_B]^{-1} \mathbf{W},
 
-where :math:`\\mathbf{P}_i = (x_i/y_i, 1, (1-x_i-y_i)/y_i)` are the primaries and
-:math:`\\mathbf{W}` the white (Y = 1). Each space keeps the white *its standard writes*;
+where :math:`\mathbf{P}_i = (x_i/y_i, 1, (1-x_i-y_i)/y_i)` are the primaries and
+:math:`\mathbf{W}` the white (Y = 1). Each space keeps the white *its standard writes*;
 for sRGB that is IEC 61966-2-1's D65 (0.3127, 0.3290) — the matrix then rounds to the
 4-digit matrix printed in the standard (clause 5.2) — not CIE 15:2004's (0.31271, 0.32902).
 
@@ -58,6 +58,7 @@ class RGBSpace:
     source: str
 
     def __post_init__(self) -> None:
+        """Check every field: the names, primaries, white point and transfer function."""
         # validated here, so that a space built by hand cannot give NaN matrices later
         from imageform.color.transfer import TRANSFER_FUNCTIONS
 
@@ -88,7 +89,7 @@ class RGBSpace:
         object.__setattr__(self, "white_xy", (float(white[0]), float(white[1])))
 
     def matrix_to_xyz(self) -> np.ndarray:
-        """The derived RGB -> XYZ matrix (float64, (3, 3)); see :func:`rgb_to_xyz_matrix`."""
+        """Return the derived RGB -> XYZ matrix (float64, (3, 3)); see :func:`rgb_to_xyz_matrix`."""
         return _npm(self.primaries_xy, self.white_xy).copy()
 
 
@@ -169,9 +170,11 @@ def _space_key(name: str) -> str:
 
 
 def rgb_space(space: str | RGBSpace) -> RGBSpace:
-    """The :class:`RGBSpace` named ``space`` (a key of :data:`RGB_SPACES`, any case, with
-    ``-``, spaces or dots, or an alias such as ``"p3"``, ``"bt2020"``, ``"romm"``); an
-    :class:`RGBSpace` is returned as it is.
+    """Return the :class:`RGBSpace` named ``space``.
+
+    ``space`` is a key of :data:`RGB_SPACES`, any case, with ``-``, spaces or dots, or an
+    alias such as ``"p3"``, ``"bt2020"``, ``"romm"``; an :class:`RGBSpace` is returned as it
+    is.
 
     Examples
     --------
@@ -206,13 +209,13 @@ def _npm(primaries: tuple[tuple[float, float], ...], white: tuple[float, float])
 
 
 def rgb_to_xyz_matrix(space: str | RGBSpace = "srgb") -> np.ndarray:
-    """The 3x3 matrix from linear RGB of ``space`` to XYZ (Y = 1 at the space's white).
+    r"""Return the 3x3 matrix from linear RGB of ``space`` to XYZ (Y = 1 at the space's white).
 
     Derived from the primaries and white point (SMPTE RP 177-1993, clause 3.3):
 
     .. math::
-        M = P \\operatorname{diag}(P^{-1} W), \\quad
-        P_{:,i} = (x_i / y_i,\\; 1,\\; (1 - x_i - y_i) / y_i)^T
+        M = P \operatorname{diag}(P^{-1} W), \quad
+        P_{:,i} = (x_i / y_i,\; 1,\; (1 - x_i - y_i) / y_i)^T
 
     Apply to channels-last images as ``rgb @ M.T``.
 
@@ -241,7 +244,7 @@ def rgb_to_xyz_matrix(space: str | RGBSpace = "srgb") -> np.ndarray:
 
 
 def xyz_to_rgb_matrix(space: str | RGBSpace = "srgb") -> np.ndarray:
-    """The inverse of :func:`rgb_to_xyz_matrix` (XYZ to linear RGB), float64 (3, 3).
+    """Return the inverse of :func:`rgb_to_xyz_matrix` (XYZ to linear RGB), float64 (3, 3).
 
     Examples
     --------
@@ -260,9 +263,9 @@ def _apply_matrix(x: Any, m: np.ndarray) -> Any:
 
 @chunkwise(1)
 def linear_rgb_to_xyz(rgb: object, space: str | RGBSpace = "srgb") -> Any:
-    """Linear RGB of ``space`` to CIE XYZ (relative to the space's white, Y = 1 there).
+    r"""Linear RGB of ``space`` to CIE XYZ (relative to the space's white, Y = 1 there).
 
-    .. math:: (X, Y, Z)^T = M\\,(R, G, B)^T
+    .. math:: (X, Y, Z)^T = M\,(R, G, B)^T
 
     Parameters
     ----------
@@ -303,13 +306,13 @@ def xyz_to_linear_rgb(xyz: object, space: str | RGBSpace = "srgb") -> Any:
 
 @chunkwise(1)
 def linear_srgb_to_xyz(rgb: object) -> Any:
-    """Linear sRGB to CIE XYZ with the derived IEC 61966-2-1 matrix (D65, Y = 1).
+    r"""Linear sRGB to CIE XYZ with the derived IEC 61966-2-1 matrix (D65, Y = 1).
 
     .. math::
-        \\begin{pmatrix}X\\\\Y\\\\Z\\end{pmatrix} \\approx
-        \\begin{pmatrix}0.4124 & 0.3576 & 0.1805\\\\ 0.2126 & 0.7152 & 0.0722\\\\
-        0.0193 & 0.1192 & 0.9505\\end{pmatrix}
-        \\begin{pmatrix}R\\\\G\\\\B\\end{pmatrix}
+        \begin{pmatrix}X\\Y\\Z\end{pmatrix} \approx
+        \begin{pmatrix}0.4124 & 0.3576 & 0.1805\\ 0.2126 & 0.7152 & 0.0722\\
+        0.0193 & 0.1192 & 0.9505\end{pmatrix}
+        \begin{pmatrix}R\\G\\B\end{pmatrix}
 
     Parameters
     ----------

@@ -128,6 +128,7 @@ class SubsampledChroma(_SubsampledChroma):
     __slots__ = ()
 
     def __new__(cls, luma: Any, chroma: Any) -> SubsampledChroma:
+        """Build the result, refusing a non-real or non-finite ``luma`` or ``chroma``."""
         check_result_array(luma, "luma")
         check_result_array(chroma, "chroma")
         return super().__new__(cls, luma, chroma)
@@ -257,7 +258,7 @@ def subsample_round_trip(
     standard: str = "bt601",
     clip: bool = False,
 ) -> Any:
-    """sRGB -> Y'CbCr -> subsample -> upsample -> sRGB, as a codec's colour path does.
+    """Round-trip sRGB -> Y'CbCr -> subsample -> upsample -> sRGB, as a codec's colour path does.
 
     Parameters
     ----------

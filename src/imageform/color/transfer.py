@@ -106,11 +106,11 @@ def _prep(values: object, name: str) -> tuple[Any, Any]:
 # ---------------------------------------------------------------- public functions
 @chunkwise(1)
 def srgb_to_linear(values: object) -> Any:
-    """Decode sRGB values to linear light (the IEC 61966-2-1 piecewise curve, exact).
+    r"""Decode sRGB values to linear light (the IEC 61966-2-1 piecewise curve, exact).
 
     .. math::
-        L = \\begin{cases} V / 12.92 & V \\le 0.04045 \\\\
-        \\left(\\frac{V + 0.055}{1.055}\\right)^{2.4} & V > 0.04045 \\end{cases}
+        L = \begin{cases} V / 12.92 & V \le 0.04045 \\
+        \left(\frac{V + 0.055}{1.055}\right)^{2.4} & V > 0.04045 \end{cases}
 
     The breakpoint used is ``12.92 * 0.0031308 = 0.040449936`` (derived from the forward
     function; the standard prints it rounded to 0.04045).
@@ -140,11 +140,11 @@ def srgb_to_linear(values: object) -> Any:
 
 @chunkwise(1)
 def linear_to_srgb(values: object) -> Any:
-    """Encode linear light as sRGB (IEC 61966-2-1, exact).
+    r"""Encode linear light as sRGB (IEC 61966-2-1, exact).
 
     .. math::
-        V = \\begin{cases} 12.92 L & L \\le 0.0031308 \\\\
-        1.055 L^{1/2.4} - 0.055 & L > 0.0031308 \\end{cases}
+        V = \begin{cases} 12.92 L & L \le 0.0031308 \\
+        1.055 L^{1/2.4} - 0.055 & L > 0.0031308 \end{cases}
 
     Parameters
     ----------
@@ -170,7 +170,7 @@ def linear_to_srgb(values: object) -> Any:
 
 @chunkwise(1)
 def gamma_to_linear(values: object, gamma: float = 2.2) -> Any:
-    """Decode a pure power law: :math:`L = \\operatorname{sign}(V) |V|^{\\gamma}`.
+    r"""Decode a pure power law: :math:`L = \operatorname{sign}(V) |V|^{\gamma}`.
 
     The lecture's display gamma is 2.2 (the default).
 
@@ -197,7 +197,7 @@ def gamma_to_linear(values: object, gamma: float = 2.2) -> Any:
 
 @chunkwise(1)
 def linear_to_gamma(values: object, gamma: float = 2.2) -> Any:
-    """Encode with a pure power law: :math:`V = \\operatorname{sign}(L) |L|^{1/\\gamma}`.
+    r"""Encode with a pure power law: :math:`V = \operatorname{sign}(L) |L|^{1/\gamma}`.
 
     Examples
     --------
@@ -239,11 +239,11 @@ def linear_to_adobe_rgb(values: object) -> Any:
 
 @chunkwise(1)
 def linear_to_rec709(values: object) -> Any:
-    """Rec. 709 OETF (camera encoding).
+    r"""Rec. 709 OETF (camera encoding).
 
     .. math::
-        V = \\begin{cases} 4.5 L & L < 0.018 \\\\ 1.099 L^{0.45} - 0.099 & L \\ge 0.018
-        \\end{cases}
+        V = \begin{cases} 4.5 L & L < 0.018 \\ 1.099 L^{0.45} - 0.099 & L \ge 0.018
+        \end{cases}
 
     Source: ITU-R BT.709-6 (2015), Part 1, item 1.2.
 

@@ -80,13 +80,16 @@ class _WhiteBalanceResult(NamedTuple):
 
 
 class WhiteBalanceResult(_WhiteBalanceResult):
-    """``(image, gains)``: the balanced image (same encoding as the input) and the per-channel
-    gains applied in linear light, shape ``(..., 3)`` (one triple per image of a batch).
-    Built by hand, both must be real and finite."""
+    """``(image, gains)``: the balanced image and the per-channel gains applied in linear light.
+
+    The image has the same encoding as the input; the gains have shape ``(..., 3)`` (one
+    triple per image of a batch). Built by hand, both must be real and finite.
+    """
 
     __slots__ = ()
 
     def __new__(cls, image: Any, gains: Any) -> WhiteBalanceResult:
+        """Build the result, refusing a non-real or non-finite ``image`` or ``gains``."""
         check_result_array(image, "image")
         check_result_array(gains, "gains")
         return super().__new__(cls, image, gains)
@@ -120,8 +123,11 @@ def _percentile(xp: Any, lin: Any, q: float) -> Any:
 
 
 def _percentile_dask(lin: Any, q: float) -> Any:
-    """Exact percentile of a Dask image: the sorted values at ``lo`` and ``lo + 1`` are the
-    ``(n - lo)``-th and ``(n - lo - 1)``-th largest, from one ``topk`` reduction."""
+    """Compute the exact percentile of a Dask image from one ``topk`` reduction.
+
+    The sorted values at ``lo`` and ``lo + 1`` are the ``(n - lo)``-th and
+    ``(n - lo - 1)``-th largest.
+    """
     import dask.array as da
 
     shape = tuple(lin.shape)
@@ -264,7 +270,7 @@ def estimate_illuminant(
     space: str = "srgb",
     channel_axis: int = -1,
 ) -> Any:
-    r"""The illuminant's colour in linear RGB estimated from an image (see the module notes).
+    r"""Estimate the illuminant's colour in linear RGB from an image (see the module notes).
 
     .. math:: e_c = \left(\mathrm{mean}_x\,|\partial^n \rho_{c,\sigma}(x)|^p\right)^{1/p}
 

@@ -125,9 +125,9 @@ def whitepoint_xy(name: str, *, observer: int = 2) -> tuple[float, float]:
 
 
 def xy_to_xyz_white(xy: Sequence[float]) -> np.ndarray:
-    """XYZ (float64, Y = 1) of a chromaticity.
+    r"""XYZ (float64, Y = 1) of a chromaticity.
 
-    .. math:: X = x / y, \\quad Y = 1, \\quad Z = (1 - x - y) / y
+    .. math:: X = x / y, \quad Y = 1, \quad Z = (1 - x - y) / y
 
     Examples
     --------
@@ -148,9 +148,9 @@ def xy_to_xyz_white(xy: Sequence[float]) -> np.ndarray:
 
 @_deprecate.parameters(positional=("observer",))
 def whitepoint_xyz(name: str, *, observer: int = 2) -> np.ndarray:
-    """Tristimulus values ``(X, Y, Z)`` of a CIE illuminant's white, scaled to Y = 1.
+    r"""Tristimulus values ``(X, Y, Z)`` of a CIE illuminant's white, scaled to Y = 1.
 
-    .. math:: X = x / y, \\quad Y = 1, \\quad Z = (1 - x - y) / y
+    .. math:: X = x / y, \quad Y = 1, \quad Z = (1 - x - y) / y
 
     Parameters
     ----------
@@ -180,7 +180,7 @@ def whitepoint_xyz(name: str, *, observer: int = 2) -> np.ndarray:
 
 @_deprecate.parameters(positional=("observer",))
 def resolve_white(white: Any, *, observer: int = 2, name: str = "white") -> np.ndarray:
-    """A ``white=`` argument as XYZ (float64, shape (3,), Y as given or 1).
+    """Resolve a ``white=`` argument to XYZ (float64, shape (3,), Y as given or 1).
 
     Accepted forms: an illuminant name (``"D65"``, see :data:`WHITEPOINTS_XY`); an RGB space
     name (``"srgb"``, ``"prophoto"`` ...: the white its standard writes, see

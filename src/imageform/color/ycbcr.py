@@ -1,12 +1,12 @@
-"""Y'CbCr (BT.601, BT.709, BT.2020): analog values and 8/10-bit code values.
+r"""Y'CbCr (BT.601, BT.709, BT.2020): analog values and 8/10-bit code values.
 
 The input is *encoded* R'G'B' in [0, 1] (the standards' E'R, E'G, E'B). The luma
 coefficients Kr, Kb are those each standard writes; Kg = 1 - Kr - Kb:
 
 .. math::
-    E'_Y = K_r R' + K_g G' + K_b B', \\quad
-    E'_{Cb} = \\frac{B' - E'_Y}{2 (1 - K_b)}, \\quad
-    E'_{Cr} = \\frac{R' - E'_Y}{2 (1 - K_r)}
+    E'_Y = K_r R' + K_g G' + K_b B', \quad
+    E'_{Cb} = \frac{B' - E'_Y}{2 (1 - K_b)}, \quad
+    E'_{Cr} = \frac{R' - E'_Y}{2 (1 - K_r)}
 
 ``signal_range`` chooses the output scale:
 
@@ -135,7 +135,7 @@ def rgb_to_ycbcr(
     signal_range: str = "full",
     bits: int | None = None,
 ) -> Any:
-    """Encoded R'G'B' to Y'CbCr (analog or code values), see the module docstring.
+    """Convert encoded R'G'B' to Y'CbCr (analog or code values), see the module docstring.
 
     Parameters
     ----------

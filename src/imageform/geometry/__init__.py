@@ -13,6 +13,7 @@ from imageform.geometry.aruco import (
     aruco_dictionary,
     aruco_marker_image,
     detect_aruco_markers,
+    identify_aruco_dictionary,
 )
 from imageform.geometry.calibration import (
     CalibrationResult,
@@ -183,6 +184,7 @@ __all__ = [
     "fundamental_7point",
     "fundamental_8point",
     "horizon_line",
+    "identify_aruco_dictionary",
     "intersect_lines",
     "intrinsic_matrix",
     "intrinsics_from_vanishing_points",

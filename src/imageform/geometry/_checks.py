@@ -87,7 +87,7 @@ def check_bounded(x: Any, name: str, xp: Any | None = None, limit: float = MAX_M
 
 
 def _host(x: object, kw: dict[str, Any]) -> object:
-    """A tensor asked for as NumPy (``xp=np``) is moved to the host first."""
+    """Move a tensor asked for as NumPy (``xp=np``) to the host first."""
     if kw.get("xp") is np and array_api_compat.is_torch_array(x):
         return to_numpy(x)
     return x
@@ -120,7 +120,7 @@ def as_matrix(
 
 
 def count(value: object, name: str, *, minimum: int = 1, maximum: int = 10**9) -> int:
-    """An integer count (Python or NumPy integer) within ``[minimum, maximum]``."""
+    """Check an integer count (Python or NumPy integer) within ``[minimum, maximum]``."""
     return as_int(value, name, minimum=minimum, maximum=maximum)
 
 
@@ -176,9 +176,11 @@ def size_pair(value: object, name: str, *, minimum: int = 1) -> tuple[int, int]:
 
 
 def check_K(K: Any, xp: Any, name: str = "K", *, positive: bool = False) -> None:
-    """Refuse a K that is not upper-triangular with a non-zero diagonal (singular), or,
-    when ``positive``, whose focal lengths ``K[0, 0] / K[2, 2]``, ``K[1, 1] / K[2, 2]``
-    are not > 0. ``K`` has been through :func:`as_matrix` (finite)."""
+    """Refuse a K that is not upper-triangular with a non-zero diagonal (singular).
+
+    When ``positive``, also refuse focal lengths ``K[0, 0] / K[2, 2]``, ``K[1, 1] / K[2, 2]``
+    that are not > 0. ``K`` has been through :func:`as_matrix` (finite).
+    """
     if (
         bool(xp.any(K[..., 2, 0] != 0))
         or bool(xp.any(K[..., 2, 1] != 0))
@@ -206,14 +208,18 @@ def shape_text(x: Any) -> str:
 
 
 def check_image_size(size: object, name: str = "image_size") -> tuple[int, int]:
-    """A ``(width, height)`` pair of positive integers (a 0-d array or a string refused
-    in one line, as every other malformed pair)."""
+    """Check a ``(width, height)`` pair of positive integers.
+
+    A 0-d array or a string is refused in one line, as every other malformed pair.
+    """
     return size_pair(size, f"{name} (width, height)")
 
 
 def check_rng(value: object, name: str = "rng") -> object:
-    """Refuse an array for a seed before the shared :func:`imageform._random.as_rng` (whose
-    message would print it); return the value unchanged."""
+    """Refuse an array for a seed before the shared :func:`imageform._random.as_rng`.
+
+    That function's message would print the array; the value is returned unchanged.
+    """
     if getattr(value, "ndim", 0) and not isinstance(value, str | bytes):
         raise InvalidInputError(
             f"expected {name} an int seed, a numpy.random.Generator or None, got " + describe(value)

@@ -127,7 +127,7 @@ def kb_undistort_xp(
 
 
 def division_undistort_xp(xyd: Any, c: tuple[float, ...], xp: Any) -> tuple[Any, Any]:
-    """Closed form ``x_u = x_d / (1 + k1 r_d² + k2 r_d⁴)``; invalid where the divisor ≤ 0."""
+    """Undistort in closed form ``x_u = x_d / (1 + k1 r_d² + k2 r_d⁴)``; invalid if divisor ≤ 0."""
     k1, k2 = c
     xd, yd = _split(xyd)
     r2 = xd * xd + yd * yd

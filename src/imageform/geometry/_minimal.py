@@ -27,8 +27,11 @@ def epipolar_rows(p1: F64, p2: F64) -> F64:
 
 
 def null_space(A: F64) -> F64:
-    """Orthonormal basis (B, n, n - m) of the null space of each full-rank ``A`` (B, m, n),
-    m < n, from the complete QR of ``Aᵀ`` (cheaper than the SVD, as exact)."""
+    """Return an orthonormal basis (B, n, n - m) of the null space of each full-rank ``A``.
+
+    ``A`` is (B, m, n), m < n; the basis comes from the complete QR of ``Aᵀ`` (cheaper than
+    the SVD, as exact).
+    """
     m = A.shape[-2]
     return np.linalg.qr(np.swapaxes(A, -1, -2), mode="complete")[0][..., m:]
 
@@ -41,8 +44,11 @@ def rank2(F: F64) -> F64:
 
 
 def f8(p1: F64, p2: F64, w: F64 | None = None) -> F64:
-    """Fundamental matrices (B, 3, 3) from (B, N >= 8, 2) pairs by the normalised 8-point
-    algorithm (Hartley 1997; H&Z Algorithm 11.1); optional per-point weights ``w``."""
+    """Estimate fundamental matrices (B, 3, 3) from (B, N >= 8, 2) pairs by the 8-point algorithm.
+
+    The normalised 8-point algorithm (Hartley 1997; H&Z Algorithm 11.1); optional per-point
+    weights ``w``.
+    """
     n1, T1 = hartley(p1)
     n2, T2 = hartley(p2)
     A = epipolar_rows(n1, n2)
@@ -94,9 +100,9 @@ def f7(p1: F64, p2: F64) -> tuple[F64, NDArray[np.intp]]:
 
 
 def sampson_sq(F: F64, p1: F64, p2: F64) -> F64:
-    """Squared Sampson distances (..., N) of pairs (N, 2) under ``F`` (..., 3, 3).
+    r"""Squared Sampson distances (..., N) of pairs (N, 2) under ``F`` (..., 3, 3).
 
-    .. math:: d^2 = \\frac{(x_2^T F x_1)^2}{(F x_1)_1^2 + (F x_1)_2^2 + (F^T x_2)_1^2
+    .. math:: d^2 = \frac{(x_2^T F x_1)^2}{(F x_1)_1^2 + (F x_1)_2^2 + (F^T x_2)_1^2
               + (F^T x_2)_2^2}
 
     (H&Z eq. 11.9), the first-order geometric error in the units of the points.
@@ -154,7 +160,7 @@ _XB = [_IDX[(b[0] + 1, b[1], b[2])] for b in _BASIS]
 
 
 def _constraints(L: F64) -> F64:
-    """The ten cubics (B, 10, 20) from the linear entries ``L`` (B, 3, 3, 4) of ``E``."""
+    """Build the ten cubics (B, 10, 20) from the linear entries ``L`` (B, 3, 3, 4) of ``E``."""
     B = L.shape[0]
     # E Eᵀ (B, 3, 3, 10): sum_k E_ik E_jk
     eet = np.einsum("bikp,bjkq->bijpq", L, L).reshape(B, 3, 3, 16) @ _T_LL

@@ -135,8 +135,11 @@ def _block_lead(grid: list[list[Any]]) -> Any:
 
 
 def _window(m: np.ndarray, h: int, w: int) -> tuple[tuple[int, int], tuple[int, int]]:
-    """Source rows/cols a block's map reads (bilinear: floor and floor + 1, one pixel of
-    slack each side); a one-pixel window when the block reads nothing (all fill)."""
+    """Return the source rows/cols a block's map reads.
+
+    Bilinear: floor and floor + 1, one pixel of slack each side; a one-pixel window when the
+    block reads nothing (all fill).
+    """
     u, v = m[..., 0], m[..., 1]
     ok = (u >= 0) & (u <= w - 1) & (v >= 0) & (v <= h - 1)
     if not np.any(ok):

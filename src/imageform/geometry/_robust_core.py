@@ -1,5 +1,7 @@
-"""The RANSAC engine, a small Levenberg-Marquardt solver and input checks shared by the
-robust two-view estimators (:mod:`imageform.geometry.robust`, :mod:`.twoview`).
+"""The RANSAC engine, a small Levenberg-Marquardt solver and input checks.
+
+They are shared by the robust two-view estimators (:mod:`imageform.geometry.robust`,
+:mod:`.twoview`).
 
 Internal to :mod:`imageform.geometry`.
 """
@@ -61,8 +63,10 @@ def check_pairs(a: object, b: object, name_a: str, name_b: str, n_min: int) -> t
 
 
 def result_dtype(*inputs: object) -> type[np.floating]:
-    """float32 when every input is a float32 array (conventions: float32 in, float32 out),
-    else float64; the computation is float64 either way."""
+    """Return float32 when every input is a float32 array, else float64.
+
+    Conventions: float32 in, float32 out; the computation is float64 either way.
+    """
     if all(getattr(x, "dtype", None) == np.float32 for x in inputs):
         return np.float32
     return np.float64
@@ -91,9 +95,9 @@ def hartley(p: F64) -> tuple[F64, F64]:
 
 
 def trials_needed(n_inliers: int, n: int, s: int, confidence: float) -> float:
-    """Samples for probability ``confidence`` of one outlier-free sample of size ``s``.
+    r"""Count the samples for probability ``confidence`` of one outlier-free sample of size ``s``.
 
-    .. math:: k = \\frac{\\log(1 - p)}{\\log(1 - \\varepsilon^s)}
+    .. math:: k = \frac{\log(1 - p)}{\log(1 - \varepsilon^s)}
 
     (Fischler & Bolles 1981; Hartley & Zisserman 2nd ed., Algorithm 4.5.)
     """
@@ -286,9 +290,12 @@ def refit_on_support(
     min_points: int,
     rounds: int = 3,
 ) -> F64:
-    """Least-squares refits of ``model`` on the correspondences within the support
-    :func:`refine_support` sets, until the support stops changing (or falls under
-    ``min_points``), at most ``rounds`` times; ``refit(model, selected)`` fits once."""
+    """Refit ``model`` by least squares on the correspondences within its support.
+
+    The support is what :func:`refine_support` sets; refits go on until the support stops
+    changing (or falls under ``min_points``), at most ``rounds`` times; ``refit(model,
+    selected)`` fits once.
+    """
     e0 = sq_error(model)
     wide = refine_support(e0[e0 < threshold * threshold], threshold, dof)
     sel = e0 < wide * wide

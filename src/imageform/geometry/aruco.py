@@ -51,6 +51,7 @@ __all__ = [
     "aruco_dictionary",
     "aruco_marker_image",
     "detect_aruco_markers",
+    "identify_aruco_dictionary",
 ]
 
 #: Dictionary names: ``"4x4_50"`` ... ``"7x7_1000"`` (OpenCV's ``DICT_4X4_50`` ...) and
@@ -88,6 +89,7 @@ class ArucoDictionary:
     max_correction_bits: int
 
     def __post_init__(self) -> None:
+        """Check the name, the marker size and the codes' shape and bits."""
         if not isinstance(self.name, str):
             raise InvalidInputError(f"expected name as a str, got {describe(self.name)}")
         s = as_int(self.marker_size, "marker_size", minimum=2, maximum=16)
@@ -125,7 +127,7 @@ def _tables() -> dict[str, NDArray[np.uint8]]:
 
 
 def aruco_dictionary(name: str | ArucoDictionary = "6x6_250") -> ArucoDictionary:
-    """The predefined dictionary ``name`` (one of :data:`ARUCO_DICTIONARIES`).
+    """Return the predefined dictionary ``name`` (one of :data:`ARUCO_DICTIONARIES`).
 
     Parameters
     ----------
@@ -180,7 +182,7 @@ def aruco_marker_image(
     size_px: int = 200,
     border_bits: int = 1,
 ) -> NDArray[np.uint8]:
-    """The printable image of marker ``marker_id`` (uint8, 0 black, 255 white).
+    """Draw the printable image of marker ``marker_id`` (uint8, 0 black, 255 white).
 
     Equal to OpenCV's ``cv2.aruco.generateImageMarker(dictionary, id, size_px, borderBits)``
     (tested): ``s + 2 border_bits`` cells per side, each cell a block of pixels (the
@@ -285,7 +287,7 @@ def _gray01(image: object) -> NDArray[np.float64]:
 
 
 def _homography(src: NDArray[np.float64], dst: NDArray[np.float64]) -> NDArray[np.float64]:
-    """The 3x3 homography mapping 4 (or more) ``src`` points to ``dst`` (DLT, SVD)."""
+    """Estimate the 3x3 homography mapping 4 (or more) ``src`` points to ``dst`` (DLT, SVD)."""
     rows = []
     for (x, y), (u, v) in zip(src, dst, strict=True):
         rows.append([x, y, 1, 0, 0, 0, -u * x, -u * y, -u])
@@ -314,8 +316,11 @@ def _bilinear(g: NDArray[np.float64], uv: NDArray[np.float64]) -> NDArray[np.flo
 
 
 def _quad(pts: NDArray[np.float64], area: float) -> NDArray[np.float64] | None:
-    """Four extreme boundary points of a component, clockwise on screen; None unless the quad
-    through them has the component's area (a quadrilateral blob, not an L or a disc)."""
+    """Find four extreme boundary points of a component, clockwise on screen.
+
+    None unless the quad through them has the component's area (a quadrilateral blob, not an
+    L or a disc).
+    """
     c = pts.mean(axis=0)
     i0 = int(np.argmax(np.sum((pts - c) ** 2, axis=1)))
     i2 = int(np.argmax(np.sum((pts - pts[i0]) ** 2, axis=1)))
@@ -339,8 +344,11 @@ def _quad(pts: NDArray[np.float64], area: float) -> NDArray[np.float64] | None:
 
 
 def _line_normal(centred: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Unit normal of the total-least-squares line through centred points (the eigenvector
-    of the 2x2 scatter matrix with the smaller eigenvalue, in closed form)."""
+    """Return the unit normal of the total-least-squares line through centred points.
+
+    It is the eigenvector of the 2x2 scatter matrix with the smaller eigenvalue, in closed
+    form.
+    """
     sxx = float(centred[:, 0] @ centred[:, 0])
     syy = float(centred[:, 1] @ centred[:, 1])
     sxy = float(centred[:, 0] @ centred[:, 1])
@@ -351,9 +359,12 @@ def _line_normal(centred: NDArray[np.float64]) -> NDArray[np.float64]:
 def _refine_sides(
     quad: NDArray[np.float64], boundary: NDArray[np.float64]
 ) -> NDArray[np.float64] | None:
-    """Corners where the four sides meet, each side a line fitted to the component's boundary
-    pixels along it and moved half a pixel outwards (the boundary pixels' centres lie half a
-    pixel inside the dark region's edge); None when a side has too few pixels."""
+    """Find the corners where the four sides meet; None when a side has too few pixels.
+
+    Each side is a line fitted to the component's boundary pixels along it and moved half a
+    pixel outwards (the boundary pixels' centres lie half a pixel inside the dark region's
+    edge).
+    """
     center = quad.mean(axis=0)
     lines = []
     for k in range(4):
@@ -417,7 +428,7 @@ def _otsu(values: NDArray[np.float64]) -> float:
 def _read_bits(
     g: NDArray[np.float64], quad: NDArray[np.float64], cells: int
 ) -> tuple[NDArray[np.bool_], float] | None:
-    """The cell colours (True = white) of a quad seen as ``cells x cells``, and the contrast."""
+    """Read the cell colours (True = white) of a quad seen as ``cells x cells`` and the contrast."""
     unit = np.array([[0.0, 0.0], [cells, 0.0], [cells, cells], [0.0, cells]])
     h = _homography(unit, quad)
     sub = np.array([0.3, 0.5, 0.7])
@@ -600,3 +611,57 @@ def detect_aruco_markers(
     corners = np.array([found[i][1] for i in ids], dtype=np.float64).reshape(-1, 4, 2)
     hamming = np.array([found[i][2] for i in ids], dtype=np.int64)
     return ArucoMarkers(ids, corners, hamming, d.name)
+
+
+def identify_aruco_dictionary(image: object, *, min_markers: int = 2) -> str | None:
+    """Name the predefined dictionary whose markers an image shows, or None.
+
+    OpenCV's predefined dictionaries of one marker size are prefixes of each other
+    (``4x4_50`` is the first 50 codes of ``4x4_1000``), so each family is searched once, with
+    its largest dictionary and no bit correction (an exact match only: a false code is then
+    unlikely); the family with the most markers wins, and the smallest dictionary of that
+    family holding the largest id found is returned (a larger one of the same family reads
+    the same markers with the same ids). Meant for error messages and for a user
+    holding a board of unknown origin; it costs one detection per family (five in all).
+
+    Parameters
+    ----------
+    image : array_like, shape (H, W) or (H, W, 3)
+        Grey or RGB image (as :func:`detect_aruco_markers`).
+    min_markers : int, keyword-only
+        Fewest markers (at least 1) for a family to be named.
+
+    Returns
+    -------
+    str or None
+        A name of :data:`ARUCO_DICTIONARIES`, or None when no family reaches ``min_markers``.
+
+    Raises
+    ------
+    InvalidInputError
+        ``image`` is not a grey or RGB image of real numbers, or ``min_markers`` is not a
+        positive integer.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> canvas = np.full((240, 480), 255, np.uint8)
+    >>> canvas[60:180, 40:160] = aruco_marker_image(7, "5x5_100", size_px=120)
+    >>> canvas[60:180, 280:400] = aruco_marker_image(63, "5x5_100", size_px=120)
+    >>> identify_aruco_dictionary(canvas)
+    '5x5_100'
+    """
+    need = as_int(min_markers, "min_markers", minimum=1, maximum=10000)
+    g = _gray01(image)
+    best: tuple[int, str, int] | None = None
+    for family in ("4x4_1000", "5x5_1000", "6x6_1000", "7x7_1000", "aruco_original"):
+        found = detect_aruco_markers(g, family, error_correction_rate=0.0)
+        if len(found) >= need and (best is None or len(found) > best[0]):
+            best = (len(found), family, int(found.ids.max()))
+    if best is None:
+        return None
+    _, family, top = best
+    if family == "aruco_original":
+        return family
+    size = family.split("_")[0]
+    return next(f"{size}_{n}" for n in _COUNTS if top < n)

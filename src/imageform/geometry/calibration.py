@@ -58,9 +58,9 @@ MIN_COVERAGE = 0.25
 
 
 def checkerboard_points(pattern_size: tuple[int, int], square_size: float = 1.0) -> F64:
-    """Board points ``(cols*rows, 3)`` in the detector's order: ``(c s, r s, 0)``, row by row.
+    r"""Board points ``(cols*rows, 3)`` in the detector's order: ``(c s, r s, 0)``, row by row.
 
-    .. math:: \\mathbf{X}_{r \\cdot \\text{cols} + c} = (c\\,s,\\ r\\,s,\\ 0)
+    .. math:: \mathbf{X}_{r \cdot \text{cols} + c} = (c\,s,\ r\,s,\ 0)
 
     The order of :func:`~imageform.geometry.checkerboard.find_checkerboard` and OpenCV's
     tutorial (``objp[:, :2] = np.mgrid[0:cols, 0:rows].T.reshape(-1, 2)``).
@@ -143,16 +143,16 @@ def calibrate_camera(
     max_iter: int = 100,
     tol: float = 1e-10,
 ) -> CalibrationResult:
-    """Calibrate a camera from views of a known target: closed form, then Levenberg-Marquardt.
+    r"""Calibrate a camera from views of a known target: closed form, then Levenberg-Marquardt.
 
     Minimises the reprojection error over ``K``, Brown-Conrady ``(k1, k2, p1, p2, k3)`` and
     the poses ``(R_k, t_k)`` of the V views:
 
     .. math::
 
-        \\min \\sum_{k=1}^{V} \\sum_{i=1}^{N_k}
-        \\left\\| \\mathbf{u}_{ki} - \\pi\\!\\left(K, d, R_k \\mathbf{X}_{ki} + \\mathbf{t}_k
-        \\right) \\right\\|^2
+        \min \sum_{k=1}^{V} \sum_{i=1}^{N_k}
+        \left\| \mathbf{u}_{ki} - \pi\!\left(K, d, R_k \mathbf{X}_{ki} + \mathbf{t}_k
+        \right) \right\|^2
 
     Initial values: for a planar target (all ``Z = 0``) Zhang's closed form from the
     homographies (Zhang 2000, "A flexible new technique for camera calibration", IEEE TPAMI

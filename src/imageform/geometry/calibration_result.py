@@ -122,7 +122,7 @@ class CalibrationResult:
         return Camera(self.K, image_size=size, distortion=self.distortion)
 
     def to_toml(self, path: str | Path | None = None) -> str:
-        """The camera as TOML in the format before the versioned camera file (deprecated).
+        """Write the camera as TOML in the format before the versioned camera file (deprecated).
 
         .. deprecated::
             Use ``imageform.io.write_camera(path, CameraFile.from_calibration(result))``:
@@ -156,7 +156,7 @@ class CalibrationResult:
 
     @classmethod
     def from_toml(cls, source: str | Path) -> CalibrationResult:
-        """The camera written by :meth:`to_toml` (a path, or the TOML text itself; deprecated).
+        """Read the camera written by :meth:`to_toml` (a path, or the TOML text itself; deprecated).
 
         .. deprecated::
             Use ``imageform.io.read_camera(path)``, which reads this format, the versioned

@@ -1,6 +1,8 @@
-"""The views of a calibration as :func:`~imageform.geometry.calibrate_camera` checks them:
-one ``(N, 3)`` object-point and one ``(N, 2)`` image-point array per view (shared by the
-closed-form initialisation, the refinement and stereo calibration)."""
+"""The views of a calibration as :func:`~imageform.geometry.calibrate_camera` checks them.
+
+One ``(N, 3)`` object-point and one ``(N, 2)`` image-point array per view (shared by the
+closed-form initialisation, the refinement and stereo calibration).
+"""
 
 from __future__ import annotations
 

@@ -28,8 +28,10 @@ F64 = NDArray[np.float64]
 
 
 def _checked(object_points: Any, image_points: Any) -> tuple[list[F64], list[F64]]:
-    """The views as :func:`~imageform.geometry.calibrate_camera` checks them (one pass over
-    the small point arrays)."""
+    """Check the views as :func:`~imageform.geometry.calibrate_camera` does.
+
+    One pass over the small point arrays.
+    """
     return _views(object_points, image_points)
 
 

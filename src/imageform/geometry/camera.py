@@ -59,7 +59,7 @@ class DecomposedProjection(NamedTuple):
 
 
 def _plane_K(K: Array, plane: str, xp: Any) -> Array:
-    """The calibration matrix of the chosen image plane.
+    """Return the calibration matrix of the chosen image plane.
 
     On the real plane (behind the pinhole) the image is inverted about the principal point:
     ``u' = cx - (fx x + s y)``, ``v' = cy - fy y``, i.e. fx, fy and s change sign.
@@ -113,7 +113,8 @@ def _project_xp(
     """Array-API twin of the numba kernel; broadcasts K, R, t over leading dimensions.
 
     ``identity``: R and t were not given (camera-frame points), so the ``(N, 3) x (3, 3)``
-    product, a full pass over the points, is skipped."""
+    product, a full pass over the points, is skipped.
+    """
     if identity:
         Xc = X
     else:
@@ -152,11 +153,11 @@ def project_points(
     *,
     image_plane: ImagePlane = "virtual",
 ) -> Projection:
-    """Project world points to pixels, ``(u, v, 1)ᵀ ~ K (R X + t)``.
+    r"""Project world points to pixels, ``(u, v, 1)ᵀ ~ K (R X + t)``.
 
     .. math::
-        x = X_c / Z_c,\\; y = Y_c / Z_c, \\quad
-        u = f_x x + s\\, y + c_x, \\quad v = f_y y + c_y
+        x = X_c / Z_c,\; y = Y_c / Z_c, \quad
+        u = f_x x + s\, y + c_x, \quad v = f_y y + c_y
 
     with ``(X_c, Y_c, Z_c) = R X + t`` (Hartley & Zisserman eq. 6.11). The skew ``s`` is
     honoured (OpenCV's ``projectPoints`` ignores ``K[0, 1]``).
@@ -215,7 +216,7 @@ def project_points(
 def projection_matrix(
     K: ArrayLike, R: ArrayLike | None = None, t: ArrayLike | None = None
 ) -> Array:
-    """The 3×4 camera matrix ``P = K [R | t]``.
+    """Build the 3×4 camera matrix ``P = K [R | t]``.
 
     P has 12 entries but is defined up to scale: 11 degrees of freedom (5 intrinsic: fx, fy,
     cx, cy, skew; 6 extrinsic: 3 rotation, 3 translation), Hartley & Zisserman §6.1.
@@ -315,7 +316,7 @@ def _Kinv_apply(uv: Array, K: Array, xp: Any) -> Array:
 def backproject(
     uv: ArrayLike, K: ArrayLike, R: ArrayLike | None = None, *, image_plane: ImagePlane = "virtual"
 ) -> Array:
-    """Unit ray directions through pixels, in the world frame (``Rᵀ K⁻¹ (u, v, 1)``).
+    """Return unit ray directions through pixels, in the world frame (``Rᵀ K⁻¹ (u, v, 1)``).
 
     The ray starts at the camera centre ``C = -Rᵀ t`` (not needed here: directions only).
 
@@ -417,6 +418,7 @@ class Camera:
     distortion: Any = None
 
     def __post_init__(self) -> None:
+        """Check K, R, t, the image size and plane and the distortion model."""
         K = self.K.K if isinstance(self.K, Intrinsics) else self.K
         if isinstance(self.K, Intrinsics) and self.image_size is None:
             object.__setattr__(self, "image_size", self.K.image_size)
@@ -468,7 +470,7 @@ class Camera:
         up: ArrayLike = (0.0, -1.0, 0.0),
         image_size: tuple[int, int] | None = None,
     ) -> Camera:
-        """A camera at ``eye`` looking at ``target`` (see :func:`~imageform.geometry.look_at`)."""
+        """Place a camera at ``eye`` looking at ``target`` (:func:`~imageform.geometry.look_at`)."""
         from imageform.geometry.rotations import look_at
 
         R, t = look_at(eye, target, up)
@@ -539,7 +541,7 @@ class Camera:
         return xp.where(ok[..., None], ideal, xp.full_like(ideal, float("nan")))
 
     def backproject(self, uv: ArrayLike) -> Array:
-        """Unit world-frame directions of the rays through pixels ``uv`` (from ``center``)."""
+        """Return unit world-frame directions of rays through pixels ``uv`` (from ``center``)."""
         if self.distortion is not None:
             return backproject(self.undistort_pixels(uv), _identity_like(self.K), self.R)
         return backproject(uv, self.K, self.R, image_plane=self.image_plane)

@@ -45,9 +45,10 @@ __all__ = ["CharucoBoard", "CharucoCorners", "detect_charuco"]
 
 @dataclass(frozen=True)
 class CharucoBoard:
-    """A ChArUco board: ``squares = (cols, rows)`` squares of side ``square_length``, markers
-    of side ``marker_length`` from ``dictionary`` (OpenCV's ``CharucoBoard((cols, rows),
-    square_length, marker_length, dictionary)``).
+    """A ChArUco board of ``squares = (cols, rows)`` squares with markers from ``dictionary``.
+
+    The squares have side ``square_length``, the markers side ``marker_length`` (OpenCV's
+    ``CharucoBoard((cols, rows), square_length, marker_length, dictionary)``).
 
     Lengths are in the unit the calibration should use (mm, m, ...).
 
@@ -72,6 +73,7 @@ class CharucoBoard:
     dictionary: str = "6x6_250"
 
     def __post_init__(self) -> None:
+        """Check the squares, lengths (markers smaller than squares) and the dictionary."""
         sq = self.squares
         if not isinstance(sq, tuple | list) or len(sq) != 2:
             raise InvalidInputError(f"expected squares as (cols, rows), got {describe(sq)}")
@@ -121,8 +123,10 @@ class CharucoBoard:
         return np.column_stack([(c + 1) * s, (r + 1) * s, np.zeros(r.shape)])
 
     def marker_points(self) -> NDArray[np.float64]:
-        """``(n_markers, 4, 3)``: each marker's corners on the board (top-left, top-right,
-        bottom-right, bottom-left as printed), by marker id."""
+        """``(n_markers, 4, 3)``: each marker's corners on the board, by marker id.
+
+        The corners are top-left, top-right, bottom-right, bottom-left as printed.
+        """
         sq = self.marker_squares()
         s, m = self.square_length, self.marker_length
         x0 = sq[:, 1] * s + (s - m) / 2
@@ -132,7 +136,7 @@ class CharucoBoard:
         return np.stack([x0[:, None] + dx, y0[:, None] + dy, np.zeros((len(sq), 4))], axis=-1)
 
     def image(self, square_px: int = 100, *, margin_px: int = 0) -> NDArray[np.uint8]:
-        """The printable board (uint8, 0 black, 255 white), ``square_px`` pixels per square.
+        """Draw the printable board (uint8, 0 black, 255 white), ``square_px`` pixels per square.
 
         Equal to OpenCV's ``CharucoBoard.generateImage`` at the same size when the marker's
         side in pixels, ``round(square_px * marker_length / square_length)``, is a multiple of

@@ -112,6 +112,7 @@ class CheckerboardResult:
     sigma: float | None = None
 
     def __post_init__(self) -> None:
+        """Check every field (corners required when found) and convert the arrays to NumPy."""
         object.__setattr__(self, "found", as_bool(self.found, "found"))
         if not isinstance(self.reason, str):
             raise InvalidInputError(f"expected reason as a str, got {describe(self.reason)}")
@@ -140,7 +141,7 @@ class CheckerboardResult:
             object.__setattr__(self, "sigma", as_real(self.sigma, "sigma", positive=True))
 
     def grid(self) -> NDArray[np.float64]:
-        """The corners as ``(rows, cols, 2)``; raises when not found."""
+        """Return the corners as ``(rows, cols, 2)``; raises when not found."""
         if self.corners is None:
             raise InvalidInputError(f"no checkerboard was found: {self.reason}")
         cols, rows = self.pattern_size
@@ -261,11 +262,11 @@ def find_checkerboard(
     max_iter: int = 30,
     eps: float = 1e-3,
 ) -> CheckerboardResult:
-    """Find the inner corners of a ``cols x rows`` checkerboard, sub-pixel refined.
+    r"""Find the inner corners of a ``cols x rows`` checkerboard, sub-pixel refined.
 
     Corners are saddle points of the smoothed intensity; candidates are local maxima of
 
-    .. math::  s = I_{uv}^2 - I_{uu} I_{vv}  \\quad (= -\\det \\nabla^2 I)
+    .. math::  s = I_{uv}^2 - I_{uu} I_{vv}  \quad (= -\det \nabla^2 I)
 
     that show four alternating dark/bright sectors on a ring; their edge directions link
     them into a lattice, which must be exactly ``cols x rows``, nearly straight and evenly
@@ -380,14 +381,14 @@ def find_checkerboards(
     names: Sequence[str] | None = None,
     **options: Any,
 ) -> list[CheckerboardResult]:
-    """:func:`find_checkerboard` on every view of a calibration set, with the set's checks.
+    r""":func:`find_checkerboard` on every view of a calibration set, with the set's checks.
 
     All views must have the same size ``(H, W)`` (one camera, one resolution); views without
     a complete board are reported in one :class:`CheckerboardNotFoundWarning` naming each
     view and its reason (their results have ``found=False``), never silently dropped.
 
-    .. math::  \text{result}_k = \\operatorname{find\\_checkerboard}(\text{image}_k), \\quad
-               k = 0 \\ldots N-1
+    .. math::  \text{result}_k = \operatorname{find\_checkerboard}(\text{image}_k), \quad
+               k = 0 \ldots N-1
 
     Parameters
     ----------

@@ -1,4 +1,4 @@
-"""Checkerboard corner candidates: saddle response, non-maximum suppression, ring test.
+r"""Checkerboard corner candidates: saddle response, non-maximum suppression, ring test.
 
 Private helpers of :mod:`imageform.geometry.checkerboard`; they take a clean float64
 grey image ``(H, W)``.
@@ -7,7 +7,7 @@ grey image ``(H, W)``.
    ``sigma`` and its Hessian ``H`` is taken by central differences. At an X-junction (the
    meeting point of four squares) the smoothed intensity is a saddle, so
 
-   .. math::  s(u, v) = -\\det H = I_{uv}^2 - I_{uu} I_{vv}
+   .. math::  s(u, v) = -\det H = I_{uv}^2 - I_{uu} I_{vv}
 
    is large and positive there, and near zero on edges and flat areas (the "saddle point"
    detector of Lucchese & Mitra 2002; Chen & Zhang 2005, eq. 3).

@@ -149,7 +149,7 @@ def label_lattice(
 def grow_rectangle(
     node_at: dict[tuple[int, int], int], xy: NDArray[np.float64], max_error: float = 0.35
 ) -> NDArray[np.int64]:
-    """The largest complete rectangle grown from the 3 x 3 block around ``(0, 0)``.
+    """Grow the largest complete rectangle from the 3 x 3 block around ``(0, 0)``.
 
     A new row (or column) is accepted when all its labels exist and every new point lies
     within ``max_error`` grid steps of its linear prediction ``2 p_k - p_{k-1}``. Returns

@@ -37,7 +37,7 @@ class RefinedCorners(NamedTuple):
 
 
 def as_gray(image: object) -> NDArray[np.floating]:
-    """A grey NumPy image (H, W): float32 for integer/float32 input, float64 for float64."""
+    """Make a grey NumPy image (H, W): float32 for integer/float32 input, float64 for float64."""
     arr = as_image(image, "image", channels=None, range_check=False)
     # float32 (integer and float32 input) or float64 (float64 input): docs/conventions.md
     arr = np.asarray(to_numpy(arr))
@@ -67,15 +67,15 @@ def refine_corners(
     max_iter: int = 30,
     eps: float = 1e-3,
 ) -> RefinedCorners:
-    """Sub-pixel corner positions by gradient orthogonality (OpenCV's ``cornerSubPix``).
+    r"""Sub-pixel corner positions by gradient orthogonality (OpenCV's ``cornerSubPix``).
 
     Each corner ``q`` is moved to the point to which the image gradients ``g_p`` in a
     window around it are orthogonal, iterating on a bilinearly resampled window:
 
     .. math::
 
-        q' = \\Big(\\sum_p w_p\\, g_p g_p^\\top\\Big)^{-1} \\sum_p w_p\\, g_p g_p^\\top\\, p,
-        \\qquad w_p = e^{-(x_p/h_x)^2} e^{-(y_p/h_y)^2}
+        q' = \Big(\sum_p w_p\, g_p g_p^\top\Big)^{-1} \sum_p w_p\, g_p g_p^\top\, p,
+        \qquad w_p = e^{-(x_p/h_x)^2} e^{-(y_p/h_y)^2}
 
     with central-difference gradients, window offsets ``x_p ∈ [-h_x, h_x]``; it stops after
     ``max_iter`` iterations or when a step is ``<= eps`` pixels. A corner that ends more than

@@ -111,15 +111,15 @@ def _numpy_kernel_in(xy: Any) -> tuple[np.ndarray, tuple[int, ...]]:
 
 @dataclass(frozen=True)
 class BrownConrady:
-    """Brown-Conrady radial-tangential distortion, OpenCV's order and rational extension.
+    r"""Brown-Conrady radial-tangential distortion, OpenCV's order and rational extension.
 
     .. math::
 
-        r^2 = x^2 + y^2, \\quad
-        \\rho = \\frac{1 + k_1 r^2 + k_2 r^4 + k_3 r^6}{1 + k_4 r^2 + k_5 r^4 + k_6 r^6}
+        r^2 = x^2 + y^2, \quad
+        \rho = \frac{1 + k_1 r^2 + k_2 r^4 + k_3 r^6}{1 + k_4 r^2 + k_5 r^4 + k_6 r^6}
 
-        x_d = x\\rho + 2 p_1 x y + p_2 (r^2 + 2x^2), \\quad
-        y_d = y\\rho + p_1 (r^2 + 2y^2) + 2 p_2 x y
+        x_d = x\rho + 2 p_1 x y + p_2 (r^2 + 2x^2), \quad
+        y_d = y\rho + p_1 (r^2 + 2y^2) + 2 p_2 x y
 
     Source: D. C. Brown, "Decentering distortion of lenses", Photogramm. Eng. 32 (1966);
     OpenCV ``calib3d`` documentation (``distCoeffs = (k1, k2, p1, p2, k3, k4, k5, k6)``).
@@ -141,6 +141,7 @@ class BrownConrady:
     k6: float = 0.0
 
     def __post_init__(self) -> None:
+        """Check that every coefficient is a real within ±1e6."""
         _check_coeffs(self)
 
     @property
@@ -208,12 +209,12 @@ class BrownConrady:
 
 @dataclass(frozen=True)
 class DivisionModel:
-    """Fitzgibbon's division model, with an optional second coefficient.
+    r"""Fitzgibbon's division model, with an optional second coefficient.
 
     .. math::
 
-        \\mathbf{x}_u = \\frac{\\mathbf{x}_d}{1 + k_1 r_d^2 + k_2 r_d^4}, \\quad
-        r_d = \\lVert \\mathbf{x}_d \\rVert
+        \mathbf{x}_u = \frac{\mathbf{x}_d}{1 + k_1 r_d^2 + k_2 r_d^4}, \quad
+        r_d = \lVert \mathbf{x}_d \rVert
 
     Undistortion is closed form; distortion solves ``r_d = r_u (1 + k1 r_d² + k2 r_d⁴)``
     for the root on the branch continuous with the centre (NaN where none exists, e.g.
@@ -232,10 +233,12 @@ class DivisionModel:
     k2: float = 0.0
 
     def __post_init__(self) -> None:
+        """Check that every coefficient is a real within ±1e6."""
         _check_coeffs(self)
 
     @property
     def coeffs(self) -> tuple[float, ...]:
+        """``(k1, k2)`` as floats."""
         return (float(self.k1), float(self.k2))
 
     def distort(self, xy: Any, max_iter: int = 30, tol: float | None = None) -> Any:
@@ -263,13 +266,13 @@ class DivisionModel:
 
 @dataclass(frozen=True)
 class KannalaBrandt:
-    """Kannala-Brandt fisheye model (OpenCV ``cv::fisheye``).
+    r"""Kannala-Brandt fisheye model (OpenCV ``cv::fisheye``).
 
     .. math::
 
-        r = \\lVert (x, y) \\rVert,\\ \\theta = \\arctan r,\\
-        \\theta_d = \\theta (1 + k_1\\theta^2 + k_2\\theta^4 + k_3\\theta^6 + k_4\\theta^8),\\
-        (x_d, y_d) = \\frac{\\theta_d}{r} (x, y)
+        r = \lVert (x, y) \rVert,\ \theta = \arctan r,\
+        \theta_d = \theta (1 + k_1\theta^2 + k_2\theta^4 + k_3\theta^6 + k_4\theta^8),\
+        (x_d, y_d) = \frac{\theta_d}{r} (x, y)
 
     Source: J. Kannala and S. S. Brandt, "A generic camera model and calibration method for
     conventional, wide-angle, and fish-eye lenses", IEEE TPAMI 28(8), 2006, eq. (6);
@@ -288,10 +291,12 @@ class KannalaBrandt:
     k4: float = 0.0
 
     def __post_init__(self) -> None:
+        """Check that every coefficient is a real within ±1e6."""
         _check_coeffs(self)
 
     @property
     def coeffs(self) -> tuple[float, ...]:
+        """``(k1, k2, k3, k4)`` as floats (the order of OpenCV fisheye coefficients)."""
         return tuple(float(v) for v in astuple(self))
 
     def distort(self, xy: Any) -> Any:
@@ -364,13 +369,13 @@ def _project_xp(points: Any, K: Any, R: Any, t: Any, distortion: Any, xp: Any) -
 def project_points_distorted(
     points: Any, K: Any, R: Any, t: Any, distortion: DistortionModel | None
 ) -> Projection:
-    """Project world points through ``[R | t]``, a distortion model and ``K`` to pixels.
+    r"""Project world points through ``[R | t]``, a distortion model and ``K`` to pixels.
 
     .. math::
 
-        \\mathbf{X}_c = R\\mathbf{X} + \\mathbf{t},\\quad
-        (x, y) = (X_c / Z_c,\\ Y_c / Z_c),\\quad
-        (x_d, y_d) = \\mathrm{distort}(x, y),\\quad
+        \mathbf{X}_c = R\mathbf{X} + \mathbf{t},\quad
+        (x, y) = (X_c / Z_c,\ Y_c / Z_c),\quad
+        (x_d, y_d) = \mathrm{distort}(x, y),\quad
         (u, v, 1)^T = K (x_d, y_d, 1)^T
 
     Parameters

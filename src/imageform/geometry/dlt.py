@@ -19,11 +19,11 @@ __all__ = ["estimate_projection_matrix"]
 
 
 def estimate_projection_matrix(points_3d: ArrayLike, points_2d: ArrayLike) -> Array:
-    """The 3×4 camera matrix P with ``x ~ P X`` by the normalised DLT.
+    r"""Estimate the 3×4 camera matrix P with ``x ~ P X`` by the normalised DLT.
 
     .. math::
-        \\begin{pmatrix} \\tilde X_i^T & 0^T & -u_i \\tilde X_i^T \\\\
-        0^T & \\tilde X_i^T & -v_i \\tilde X_i^T \\end{pmatrix} p = 0
+        \begin{pmatrix} \tilde X_i^T & 0^T & -u_i \tilde X_i^T \\
+        0^T & \tilde X_i^T & -v_i \tilde X_i^T \end{pmatrix} p = 0
 
     P is returned scaled so that its third row's first three entries have unit norm and
     ``det P[:, :3] > 0``: then ``(P X̃)₃`` is the depth of ``X`` in front of the camera.

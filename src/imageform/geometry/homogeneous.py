@@ -126,9 +126,9 @@ def from_homogeneous(
     *,
     at_infinity: Literal["raise", "nan"] = "raise",
 ) -> Array:
-    """Divide by the last coordinate: ``(..., n + 1)`` → ``(..., n)``.
+    r"""Divide by the last coordinate: ``(..., n + 1)`` → ``(..., n)``.
 
-    .. math:: (x_1, \\dots, x_n, w) \\mapsto (x_1 / w, \\dots, x_n / w)
+    .. math:: (x_1, \dots, x_n, w) \mapsto (x_1 / w, \dots, x_n / w)
 
     A point with ``w = 0`` lies at infinity and has no Euclidean coordinates. It is never
     divided by zero silently: ``at_infinity="raise"`` (default) raises
@@ -158,10 +158,10 @@ def from_homogeneous(
 
 
 def from_homogeneous_masked(points: ArrayLike) -> Dehomogenized:
-    """Divide by the last coordinate and say which points are finite.
+    r"""Divide by the last coordinate and say which points are finite.
 
-    .. math:: (x_1, \\dots, x_n, w) \\mapsto (x_1 / w, \\dots, x_n / w), \\quad
-        \\mathrm{valid} = (w \\ne 0)
+    .. math:: (x_1, \dots, x_n, w) \mapsto (x_1 / w, \dots, x_n / w), \quad
+        \mathrm{valid} = (w \ne 0)
 
     Points at infinity (``w = 0``) come back as NaN with ``valid`` False, never divided by
     zero.
@@ -195,7 +195,7 @@ def _homog2(points: ArrayLike, name: str, xp: Any) -> Array:
 
 
 def line_through(p: ArrayLike, q: ArrayLike) -> Array:
-    """The line through two image points, ``l = p × q``, normalised so ``a² + b² = 1``.
+    """Return the line through two image points, ``l = p × q``, normalised so ``a² + b² = 1``.
 
     Points are ``(..., 2)`` Euclidean or ``(..., 3)`` homogeneous (a point at infinity gives
     the line through ``p`` in that direction). With the normalisation, ``l · (x, y, 1)`` is
@@ -304,9 +304,9 @@ def are_collinear(points: ArrayLike, *, tol: float = 1e-9) -> Array:
 
 
 def cross_ratio(a: ArrayLike, b: ArrayLike, c: ArrayLike, d: ArrayLike) -> Array:
-    """Cross-ratio of four collinear points, invariant under any projective transformation.
+    r"""Cross-ratio of four collinear points, invariant under any projective transformation.
 
-    .. math:: \\mathrm{CR}(a, b; c, d) = \\frac{|ac| \\, |bd|}{|bc| \\, |ad|}
+    .. math:: \mathrm{CR}(a, b; c, d) = \frac{|ac| \, |bd|}{|bc| \, |ad|}
 
     with signed distances along the common line (Hartley & Zisserman §2.5, eq. 2.18 in the
     ``{x1, x2; x3, x4}`` form with ``|x_i x_j| = det[x_i, x_j]`` of 2-vectors). Points are

@@ -46,11 +46,11 @@ def _check_not_collinear(p: Array, name: str, xp: Any) -> None:
 
 
 def estimate_homography(src: ArrayLike, dst: ArrayLike) -> Array:
-    """Homography ``H`` with ``dst ~ H src`` by the normalised DLT.
+    r"""Homography ``H`` with ``dst ~ H src`` by the normalised DLT.
 
     .. math::
-        \\begin{pmatrix} 0^T & -\\tilde x_i^T & y'_i \\tilde x_i^T \\\\
-        \\tilde x_i^T & 0^T & -x'_i \\tilde x_i^T \\end{pmatrix} h = 0
+        \begin{pmatrix} 0^T & -\tilde x_i^T & y'_i \tilde x_i^T \\
+        \tilde x_i^T & 0^T & -x'_i \tilde x_i^T \end{pmatrix} h = 0
 
     stacked for all correspondences, solved by SVD after normalising both point sets
     (Hartley & Zisserman Algorithm 4.2), then de-normalised and scaled to ``H[2, 2] = 1``

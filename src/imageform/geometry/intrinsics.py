@@ -1,7 +1,7 @@
-"""Intrinsic parameters: the calibration matrix K, physical units and fields of view.
+r"""Intrinsic parameters: the calibration matrix K, physical units and fields of view.
 
 .. math::
-    K = \\begin{pmatrix} f_x & s & c_x \\\\ 0 & f_y & c_y \\\\ 0 & 0 & 1 \\end{pmatrix}
+    K = \begin{pmatrix} f_x & s & c_x \\ 0 & f_y & c_y \\ 0 & 0 & 1 \end{pmatrix}
 
 ``fx = f / pitch_x`` and ``fy = f / pitch_y`` are the focal length in pixels, ``(cx, cy)`` the
 principal point in pixels (centre of the top-left pixel at (0, 0)), ``s`` the skew
@@ -37,7 +37,7 @@ __all__ = ["Intrinsics", "intrinsic_matrix", "projected_size"]
 def intrinsic_matrix(
     fx: ArrayLike, fy: ArrayLike, cx: ArrayLike, cy: ArrayLike, skew: ArrayLike = 0.0
 ) -> Array:
-    """The 3×3 calibration matrix K (batched if the parameters are arrays).
+    """Build the 3×3 calibration matrix K (batched if the parameters are arrays).
 
     ``fx`` and ``fy`` must be > 0 (zero makes K singular, a negative value mirrors the
     image): InvalidInputError otherwise.
@@ -121,6 +121,7 @@ class Intrinsics:
     image_size: tuple[int, int] | None = None
 
     def __post_init__(self) -> None:
+        """Check the parameters (bounded reals, positive focal lengths) and the image size."""
         for name in ("fx", "fy", "cx", "cy", "skew"):
             v = as_real(getattr(self, name), name, minimum=-MAX_MAGNITUDE, maximum=MAX_MAGNITUDE)
             object.__setattr__(self, name, v)
@@ -231,10 +232,10 @@ class Intrinsics:
 
     @property
     def fov_x(self) -> float:
-        """Horizontal field of view in radians across the full image width.
+        r"""Horizontal field of view in radians across the full image width.
 
         .. math::
-            \\mathrm{FOV}_x = \\arctan\\frac{c_x + 1/2}{f_x} + \\arctan\\frac{w - 1/2 - c_x}{f_x}
+            \mathrm{FOV}_x = \arctan\frac{c_x + 1/2}{f_x} + \arctan\frac{w - 1/2 - c_x}{f_x}
 
         (the outer edges of the border pixels; ``2 arctan(w / 2 f)`` for a centred principal
         point).

@@ -44,7 +44,7 @@ _Q = 2.0 / 255.0  # LSD's gradient quantisation bound, 2 grey levels of 255
 
 
 def _host(v: object) -> object:
-    """A tensor as a NumPy array (segments live on the host); anything else as is."""
+    """Convert a tensor to a NumPy array (segments live on the host); return anything else as is."""
     return to_numpy(v) if array_api_compat.is_torch_array(v) else v
 
 
@@ -60,6 +60,7 @@ class LineSegments:
     log10_nfa: FloatArray
 
     def __post_init__(self) -> None:
+        """Check the arrays (one width and NFA per segment) and keep float64 NumPy copies."""
         e = np.asarray(
             to_numpy(as_float(_host(self.endpoints), "endpoints", xp=np, dtype=np.float64))
         )
@@ -90,19 +91,23 @@ class LineSegments:
             object.__setattr__(self, k, v)
 
     def __len__(self) -> int:
+        """Return the number of segments."""
         return int(self.endpoints.shape[0])
 
     @property
     def lengths(self) -> FloatArray:
+        """Segment lengths ``(N,)`` in pixels."""
         d = self.endpoints[:, 1] - self.endpoints[:, 0]
         return np.hypot(d[:, 0], d[:, 1])
 
     @property
     def midpoints(self) -> FloatArray:
+        """Segment midpoints ``(N, 2)``."""
         return 0.5 * (self.endpoints[:, 0] + self.endpoints[:, 1])
 
     @property
     def lines(self) -> FloatArray:
+        """Homogeneous lines ``(N, 3)`` through the segments, normalised so ``a² + b² = 1``."""
         from imageform.geometry.vanishing import lines_from_segments
 
         return np.asarray(lines_from_segments(self.endpoints))

@@ -74,7 +74,7 @@ def _procrustes(M: F64) -> F64:
 
 
 def _null_vector(A: F64) -> F64:
-    """Unit ``x`` minimising ``‖A x‖`` for each ``A`` (B, m, n) (eigh of ``AᵀA``)."""
+    """Return the unit ``x`` minimising ``‖A x‖`` for each ``A`` (B, m, n) (eigh of ``AᵀA``)."""
     return np.linalg.eigh(np.swapaxes(A, -1, -2) @ A)[1][..., 0]
 
 
@@ -273,8 +273,11 @@ def _pnp_result(
     points_shape: tuple[int, ...],
     out_dtype: npt.DTypeLike,
 ) -> PnPResult:
-    """The flat batch's poses as a :class:`PnPResult` of shape ``batch``: valid where every
-    point is in front of the camera and the RMS is finite; every point an inlier."""
+    """Pack the flat batch's poses as a :class:`PnPResult` of shape ``batch``.
+
+    Valid where every point is in front of the camera and the RMS is finite; every point an
+    inlier.
+    """
     depth = np.einsum("bnj,bj->bn", Xf, R[:, 2, :]) + t[:, 2:3]
     valid = np.all(depth > 0, axis=-1) & np.isfinite(rms)
     rvec = np.asarray(matrix_to_rvec(R), dtype=np.float64)
@@ -318,14 +321,14 @@ def solve_pnp(
     refine: bool = True,
     max_iter: int = 20,
 ) -> PnPResult:
-    """Pose ``(R, t)`` of a calibrated camera from N point correspondences, batched.
+    r"""Pose ``(R, t)`` of a calibrated camera from N point correspondences, batched.
 
     Linear estimate on the ideal normalised coordinates ``(x, y) = K⁻¹ u`` (undistorted),
     then Levenberg-Marquardt on the pixel reprojection error
 
-    .. math:: \\min_{R, t} \\sum_i \\left\\| \\mathbf{u}_i - \\pi\\left(K (R \\mathbf{X}_i
-              + \\mathbf{t})\\right) \\right\\|^2 \\quad \\text{s.t. } (R\\mathbf{X}_i
-              + \\mathbf{t})_z > 0
+    .. math:: \min_{R, t} \sum_i \left\| \mathbf{u}_i - \pi\left(K (R \mathbf{X}_i
+              + \mathbf{t})\right) \right\|^2 \quad \text{s.t. } (R\mathbf{X}_i
+              + \mathbf{t})_z > 0
 
     Parameters
     ----------

@@ -37,8 +37,11 @@ def _residuals(R: F64, t: F64, X: F64, uv: F64, K: F64) -> tuple[F64, F64]:
 def _refine(
     R: F64, t: F64, X: F64, uv: F64, K: F64, max_iter: int, tol: float = 1e-10
 ) -> tuple[F64, F64, F64]:
-    """Batched LM on ``Σ ‖π(K_b (R X + t)) - u‖²`` (``R ← exp([δω]ₓ) R``, ``t ← t + δt``);
-    steps that put a point at or behind the camera are rejected."""
+    """Refine by batched LM on ``Σ ‖π(K_b (R X + t)) - u‖²``.
+
+    Updates are ``R ← exp([δω]ₓ) R``, ``t ← t + δt``; steps that put a point at or behind the
+    camera are rejected.
+    """
     B = X.shape[0]
     r, cam = _residuals(R, t, X, uv, K)
     cost = np.sum(r * r, axis=(-2, -1))
@@ -91,15 +94,15 @@ def solve_pnp_batch(
     refine: bool = True,
     max_iter: int = 20,
 ) -> PnPResult:
-    """Poses ``(R, t)`` of a batch of PnP problems, each with its own intrinsics.
+    r"""Poses ``(R, t)`` of a batch of PnP problems, each with its own intrinsics.
 
     For each problem ``b``: the linear pose on the normalised coordinates ``K_b⁻¹ u``
     (DLT of ``[R | t]`` for non-planar points, the plane homography for planar ones, as
     :func:`~imageform.geometry.solve_pnp`), then Levenberg-Marquardt on
 
-    .. math:: \\min_{R_b, t_b} \\sum_i \\left\\| \\mathbf{u}_{bi} - \\pi\\left(K_b (R_b
-              \\mathbf{X}_{bi} + \\mathbf{t}_b)\\right) \\right\\|^2 \\quad
-              \\text{s.t. } (R_b\\mathbf{X}_{bi} + \\mathbf{t}_b)_z > 0,
+    .. math:: \min_{R_b, t_b} \sum_i \left\| \mathbf{u}_{bi} - \pi\left(K_b (R_b
+              \mathbf{X}_{bi} + \mathbf{t}_b)\right) \right\|^2 \quad
+              \text{s.t. } (R_b\mathbf{X}_{bi} + \mathbf{t}_b)_z > 0,
 
     all problems at once (NumPy, no Python loop over problems).
 

@@ -43,13 +43,13 @@ def solve_pnp_ransac(
     rng: RNGLike = 0,
     max_iter: int = 20,
 ) -> PnPResult:
-    """Pose of a calibrated camera from correspondences with outliers (RANSAC + LM).
+    r"""Pose of a calibrated camera from correspondences with outliers (RANSAC + LM).
 
     Minimal samples (6 points, 4 for a planar set) give linear poses, scored in batches of
     64 by the number of inliers ``‖u - û‖ < threshold`` (pixels, points in front of the
     camera only); the number of hypotheses adapts to the inlier ratio ``ε``:
 
-    .. math:: k = \\frac{\\log(1 - p)}{\\log(1 - \\varepsilon^s)}
+    .. math:: k = \frac{\log(1 - p)}{\log(1 - \varepsilon^s)}
 
     The best pose is refined (LM) on its inliers, and the inliers are re-selected with the
     refined pose (Fischler & Bolles 1981, "Random sample consensus", CACM 24(6); the

@@ -88,7 +88,7 @@ def orthographic_project(
 def orthographic_matrix(
     scale: float | tuple[float, float] = 1.0, principal_point: tuple[float, float] = (0.0, 0.0)
 ) -> FloatArray:
-    """The 3×4 affine camera of :func:`orthographic_project` (last row ``(0, 0, 0, 1)``).
+    """Build the 3×4 affine camera of :func:`orthographic_project` (last row ``(0, 0, 0, 1)``).
 
     Examples
     --------
@@ -110,9 +110,9 @@ def weak_perspective_project(
     *,
     depth: float | None = None,
 ) -> Array:
-    """Weak-perspective projection with one reference depth ``Z₀`` for all points.
+    r"""Weak-perspective projection with one reference depth ``Z₀`` for all points.
 
-    .. math:: u = f_x X_c / Z_0 + s\\, Y_c / Z_0 + c_x, \\quad v = f_y Y_c / Z_0 + c_y
+    .. math:: u = f_x X_c / Z_0 + s\, Y_c / Z_0 + c_x, \quad v = f_y Y_c / Z_0 + c_y
 
     ``Z₀`` defaults to the mean camera-frame depth of the points (over the last point
     axis). ``Z₀ <= 0`` raises: the object is not in front of the camera.
@@ -148,7 +148,7 @@ def weak_perspective_project(
 
 
 def weak_perspective_matrix(K: ArrayLike, depth: float) -> FloatArray:
-    """The 3×4 camera ``K [[1,0,0,0],[0,1,0,0],[0,0,0,Z₀]]`` (camera frame in, pixels out).
+    """Build the 3×4 camera ``K [[1,0,0,0],[0,1,0,0],[0,0,0,Z₀]]`` (camera frame in, pixels out).
 
     Examples
     --------
@@ -191,6 +191,7 @@ class ConeBeamGeometry:
     principal_point: tuple[float, float] | None = None
 
     def __post_init__(self) -> None:
+        """Check the distances (object between source and detector), pitch and detector."""
         sdd = as_real(self.source_to_detector, "source_to_detector", positive=True, maximum=1e50)
         sod = as_real(self.source_to_object, "source_to_object", positive=True, maximum=1e50)
         pitch = as_real(self.pixel_pitch, "pixel_pitch", positive=True, maximum=1e50)

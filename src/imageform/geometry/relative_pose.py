@@ -44,8 +44,10 @@ class RelativePose(NamedTuple):
 
 
 class TwoViewPoints(NamedTuple):
-    """Triangulated points ``(N, 3)`` and ``valid (N,)``: finite and in front of both
-    cameras (positive depth in each)."""
+    """Triangulated points ``(N, 3)`` and ``valid (N,)``.
+
+    Valid: finite and in front of both cameras (positive depth in each).
+    """
 
     points: F64
     valid: NDArray[np.bool_]
@@ -204,8 +206,11 @@ def _fundamental_from_p(P1: F64, P2: F64) -> F64:
 
 
 def _lindstrom(F: F64, p1: F64, p2: F64) -> tuple[F64, F64]:
-    """Optimal correction ``niter2`` (Lindstrom 2010, "Triangulation made easy", CVPR,
-    Listing 3) so that ``x̂2ᵀ F x̂1 = 0`` with minimal ``‖x̂1 - x1‖² + ‖x̂2 - x2‖²``."""
+    """Correct the points optimally by ``niter2`` so that ``x̂2ᵀ F x̂1 = 0``.
+
+    Lindstrom 2010, "Triangulation made easy", CVPR, Listing 3: minimal
+    ``‖x̂1 - x1‖² + ‖x̂2 - x2‖²``.
+    """
     x = np.c_[p2, np.ones(len(p2))]  # Lindstrom's x: x^T F x' = 0
     xp = np.c_[p1, np.ones(len(p1))]
     Et = F[:2, :2]

@@ -94,8 +94,11 @@ def _sq_forward(H: F64, src: F64, dst: F64) -> F64:
 
 
 def _refine(H: F64, src: F64, dst: F64, mode: str, max_iter: int) -> F64:
-    """LM on the forward (``dst``) or symmetric transfer error, parameters ``H`` in
-    Hartley-normalised coordinates (gauge: the scale, left to the damping)."""
+    """Refine ``H`` by LM on the forward (``dst``) or symmetric transfer error.
+
+    The parameters ``H`` are in Hartley-normalised coordinates (gauge: the scale, left to the
+    damping).
+    """
     sn, Ts = hartley(src)
     dn, Td = hartley(dst)
     Tdi = np.linalg.inv(Td)
@@ -143,13 +146,13 @@ def find_homography(
     max_iter: int = 50,
     rng: RNGLike = 0,
 ) -> HomographyResult:
-    """Homography ``dst ~ H src`` from correspondences with outliers (RANSAC + LM).
+    r"""Homography ``dst ~ H src`` from correspondences with outliers (RANSAC + LM).
 
     Minimal samples of 4 correspondences give hypotheses by the normalised DLT, scored by
     the truncated forward transfer error (MSAC)
 
-    .. math:: C(H) = \\sum_i \\min\\left(\\| \\mathbf{x}'_i - \\pi(H \\tilde{\\mathbf{x}}_i)
-              \\|^2, \\tau^2\\right),
+    .. math:: C(H) = \sum_i \min\left(\| \mathbf{x}'_i - \pi(H \tilde{\mathbf{x}}_i)
+              \|^2, \tau^2\right),
 
     the number of samples adapting to the inlier ratio (``k = log(1-p) / log(1-ε⁴)``); each
     new best hypothesis is re-fitted by least squares on its inliers (LO-RANSAC). The final

@@ -54,11 +54,11 @@ def _check_order(order: object) -> str:
 
 
 def axis_rotation(axis: str, angle: ArrayLike) -> Array:
-    """Rotation by ``angle`` (radians) about the coordinate axis ``"x"``, ``"y"`` or ``"z"``.
+    r"""Rotation by ``angle`` (radians) about the coordinate axis ``"x"``, ``"y"`` or ``"z"``.
 
     .. math::
-        R_x(\\theta) = \\begin{pmatrix}1&0&0\\\\0&\\cos\\theta&-\\sin\\theta\\\\
-        0&\\sin\\theta&\\cos\\theta\\end{pmatrix}
+        R_x(\theta) = \begin{pmatrix}1&0&0\\0&\cos\theta&-\sin\theta\\
+        0&\sin\theta&\cos\theta\end{pmatrix}
 
     and cyclically for y and z (right-handed, counter-clockwise looking down the axis).
 
@@ -122,8 +122,9 @@ def euler_to_matrix(angles: ArrayLike, order: str) -> Array:
 
 
 def matrix_to_euler(R: ArrayLike, order: str) -> Array:
-    """Euler angles ``(..., 3)`` of a rotation in the named order (inverse of
-    :func:`euler_to_matrix`).
+    """Return the Euler angles ``(..., 3)`` of a rotation in the named order.
+
+    The inverse of :func:`euler_to_matrix`.
 
     Tait–Bryan orders (three different axes) give the middle angle in ``[-π/2, π/2]``;
     proper Euler orders (``"zxz"`` ...) give it in ``[0, π]``. At gimbal lock the first
@@ -206,10 +207,10 @@ def camera_rotation(pitch: float, yaw: float = 0.0, roll: float = 0.0) -> Array:
 
 
 def rvec_to_matrix(rvec: ArrayLike) -> Array:
-    """Rotation matrix from an axis-angle (Rodrigues) vector, as OpenCV's ``Rodrigues``.
+    r"""Rotation matrix from an axis-angle (Rodrigues) vector, as OpenCV's ``Rodrigues``.
 
-    .. math:: R = I + \\frac{\\sin\\theta}{\\theta} [r]_\\times
-              + \\frac{1 - \\cos\\theta}{\\theta^2} [r]_\\times^2, \\quad \\theta = \\|r\\|
+    .. math:: R = I + \frac{\sin\theta}{\theta} [r]_\times
+              + \frac{1 - \cos\theta}{\theta^2} [r]_\times^2, \quad \theta = \|r\|
 
     Small angles use the Taylor series of the coefficients (no division by zero).
 
@@ -271,15 +272,15 @@ def matrix_to_rvec(R: ArrayLike) -> Array:
 
 
 def quaternion_to_matrix(q: ArrayLike) -> Array:
-    """Rotation matrix from a quaternion ``(w, x, y, z)`` (scalar first, Hamilton product).
+    r"""Rotation matrix from a quaternion ``(w, x, y, z)`` (scalar first, Hamilton product).
 
     The quaternion is normalised first; a zero quaternion raises.
 
     .. math::
-        R = \\begin{pmatrix}
-        1-2(y^2+z^2) & 2(xy-wz) & 2(xz+wy)\\\\
-        2(xy+wz) & 1-2(x^2+z^2) & 2(yz-wx)\\\\
-        2(xz-wy) & 2(yz+wx) & 1-2(x^2+y^2)\\end{pmatrix}
+        R = \begin{pmatrix}
+        1-2(y^2+z^2) & 2(xy-wz) & 2(xz+wy)\\
+        2(xy+wz) & 1-2(x^2+z^2) & 2(yz-wx)\\
+        2(xz-wy) & 2(yz+wx) & 1-2(x^2+y^2)\end{pmatrix}
 
     Examples
     --------
@@ -305,7 +306,7 @@ def quaternion_to_matrix(q: ArrayLike) -> Array:
 
 
 def matrix_to_quaternion(R: ArrayLike) -> Array:
-    """Unit quaternion ``(w, x, y, z)`` with ``w >= 0`` of a rotation matrix.
+    """Return the unit quaternion ``(w, x, y, z)`` with ``w >= 0`` of a rotation matrix.
 
     Shepperd's (1978) method: the largest of ``4w², 4x², 4y², 4z²`` picks the branch,
     so no branch divides by a small number.

@@ -192,7 +192,7 @@ def stereo_calibrate(
     max_iter: int = 100,
     tol: float = 1e-12,
 ) -> StereoCalibrationResult:
-    """Calibrate a stereo pair: both cameras and ``(R, T)`` by a joint Levenberg-Marquardt.
+    r"""Calibrate a stereo pair: both cameras and ``(R, T)`` by a joint Levenberg-Marquardt.
 
     Minimises the reprojection errors of both cameras over the intrinsics and distortion
     of both, the relative pose ``(R, T)`` and the target pose ``(R_k, t_k)`` of every view
@@ -200,11 +200,11 @@ def stereo_calibrate(
 
     .. math::
 
-        \\min \\sum_{k=1}^{V} \\sum_{i=1}^{N_k}
-        \\left\\| \\mathbf{u}^{l}_{ki} - \\pi(K_l, d_l, R_k \\mathbf{X}_{ki} + \\mathbf{t}_k)
-        \\right\\|^2 +
-        \\left\\| \\mathbf{u}^{r}_{ki} - \\pi\\!\\left(K_r, d_r,
-        R (R_k \\mathbf{X}_{ki} + \\mathbf{t}_k) + \\mathbf{T}\\right) \\right\\|^2
+        \min \sum_{k=1}^{V} \sum_{i=1}^{N_k}
+        \left\| \mathbf{u}^{l}_{ki} - \pi(K_l, d_l, R_k \mathbf{X}_{ki} + \mathbf{t}_k)
+        \right\|^2 +
+        \left\| \mathbf{u}^{r}_{ki} - \pi\!\left(K_r, d_r,
+        R (R_k \mathbf{X}_{ki} + \mathbf{t}_k) + \mathbf{T}\right) \right\|^2
 
     This is the formulation of Bouguet's Camera Calibration Toolbox for Matlab
     (``stereo_calib.m``) and of OpenCV's ``stereoCalibrate``. Initial values: each camera
@@ -445,7 +445,7 @@ def _size(value: Any, name: str) -> tuple[int, int]:
 
 
 def _model(value: Any, name: str, method: str) -> Any:
-    """A distortion model (anything with ``method`` on normalised coordinates) or None."""
+    """Check a distortion model (anything with ``method`` on normalised coordinates) or None."""
     if value is not None and not callable(getattr(value, method, None)):
         raise InvalidInputError(
             f"expected {name} as a distortion model (BrownConrady, DivisionModel, "
@@ -465,7 +465,7 @@ def _globals(cal: CalibrationResult) -> F64:
 
 
 def _poses(cal: CalibrationResult, objs: list[F64], imgs: list[F64]) -> tuple[F64, F64]:
-    """The per-view poses of ``cal``, or (when it holds other views) from PnP with its K."""
+    """Return the per-view poses of ``cal``, or (when it holds other views) from PnP with its K."""
     if cal.rvecs.shape[0] == len(objs):
         return np.asarray(cal.rvecs, dtype=float), np.asarray(cal.tvecs, dtype=float)
     from imageform.geometry.pnp import solve_pnp
@@ -593,7 +593,7 @@ def stereo_rectify(
     zero_disparity: bool = True,
     new_image_size: tuple[int, int] | None = None,
 ) -> StereoRectification:
-    """Bouguet's rectification of a calibrated stereo pair (as ``cv2.stereoRectify``).
+    r"""Bouguet's rectification of a calibrated stereo pair (as ``cv2.stereoRectify``).
 
     Each camera is rotated by half the relative rotation, ``r = rodrigues(-rvec(R)/2)``
     (so the left turns by ``rᵀ`` and the right by ``r``), then both by the rotation
@@ -602,9 +602,9 @@ def stereo_rectify(
 
     .. math::
 
-        R_1 = W r^\\mathsf{T}, \\quad R_2 = W r, \\quad
-        W = \\mathrm{rodrigues}\\!\\left(\\frac{t \\times u}{\\|t \\times u\\|}
-        \\arccos\\frac{|t_x|}{\\|t\\|}\\right),\\ u = (\\mathrm{sign}\\,t_x, 0, 0)
+        R_1 = W r^\mathsf{T}, \quad R_2 = W r, \quad
+        W = \mathrm{rodrigues}\!\left(\frac{t \times u}{\|t \times u\|}
+        \arccos\frac{|t_x|}{\|t\|}\right),\ u = (\mathrm{sign}\,t_x, 0, 0)
 
     which minimises the reprojection distortion while making epipolar lines horizontal
     (J.-Y. Bouguet, Camera Calibration Toolbox for Matlab, ``rectify_stereo_pair.m``;
@@ -739,14 +739,14 @@ def rectification_map(
     P: npt.ArrayLike,
     image_size: tuple[int, int],
 ) -> F64:
-    """Source pixel of every rectified pixel (as ``cv2.initUndistortRectifyMap``).
+    r"""Source pixel of every rectified pixel (as ``cv2.initUndistortRectifyMap``).
 
     For a rectified pixel ``(u, v)``:
 
     .. math::
 
-        (X, Y, W)^\\mathsf{T} = R_{rect}^\\mathsf{T}\\, P_{3 \\times 3}^{-1} (u, v, 1)^\\mathsf{T},
-        \\quad (u_s, v_s, 1)^\\mathsf{T} = K\\,(\\mathrm{distort}(X/W, Y/W), 1)^\\mathsf{T}
+        (X, Y, W)^\mathsf{T} = R_{rect}^\mathsf{T}\, P_{3 \times 3}^{-1} (u, v, 1)^\mathsf{T},
+        \quad (u_s, v_s, 1)^\mathsf{T} = K\,(\mathrm{distort}(X/W, Y/W), 1)^\mathsf{T}
 
     (OpenCV, ``initUndistortRectifyMap`` documentation). Apply it with
     :func:`~imageform.geometry.remap_bilinear`: ``remap_bilinear(image, map_uv)``.

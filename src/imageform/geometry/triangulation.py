@@ -24,10 +24,13 @@ F64 = NDArray[np.float64]
 
 
 class TriangulationResult(NamedTuple):
-    """Triangulated points ``(M, 3)``, their covariances ``(M, 3, 3)`` (world units²), the
-    reprojection RMS per point ``(M,)`` in pixels, and ``valid (M,)``: in front of every
-    camera that sees it and finite. A point whose rays are parallel (no baseline) has no
-    finite solution: NaN, covariance inf, ``valid`` False."""
+    """Triangulated points ``(M, 3)``, their covariances, reprojection RMS and validity.
+
+    The covariances are ``(M, 3, 3)`` (world units²), the reprojection RMS per point ``(M,)``
+    in pixels, and ``valid (M,)``: in front of every camera that sees it and finite. A point
+    whose rays are parallel (no baseline) has no finite solution: NaN, covariance inf,
+    ``valid`` False.
+    """
 
     points: F64
     covariance: F64
@@ -72,13 +75,13 @@ def triangulate_points(
     sigma: float = 1.0,
     max_iter: int = 20,
 ) -> TriangulationResult:
-    """3-D points from their pixels in V >= 2 calibrated views: DLT, then LM, with covariance.
+    r"""3-D points from their pixels in V >= 2 calibrated views: DLT, then LM, with covariance.
 
     .. math::
 
-        \\hat{\\mathbf{X}} = \\arg\\min_{\\mathbf{X}} \\sum_{v}
-        \\left\\| \\mathbf{u}_v - \\pi(P_v \\tilde{\\mathbf{X}}) \\right\\|^2, \\qquad
-        \\Sigma_{\\mathbf{X}} = \\sigma^2 (J^T J)^{-1}
+        \hat{\mathbf{X}} = \arg\min_{\mathbf{X}} \sum_{v}
+        \left\| \mathbf{u}_v - \pi(P_v \tilde{\mathbf{X}}) \right\|^2, \qquad
+        \Sigma_{\mathbf{X}} = \sigma^2 (J^T J)^{-1}
 
     Parameters
     ----------

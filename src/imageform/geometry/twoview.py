@@ -50,9 +50,12 @@ F64 = NDArray[np.float64]
 
 
 class FundamentalResult(NamedTuple):
-    """A robustly estimated fundamental matrix (``x2ᵀ F x1 = 0``, rank 2, ``‖F‖_F = 1``),
-    the inlier mask ``(N,)`` (Sampson distance below the threshold), the Sampson RMS of the
-    inliers in pixels and the number of minimal samples drawn."""
+    """A robustly estimated fundamental matrix, its inlier mask, Sampson RMS and sample count.
+
+    The matrix has ``x2ᵀ F x1 = 0``, rank 2, ``‖F‖_F = 1``; the inlier mask is ``(N,)``
+    (Sampson distance below the threshold), then the Sampson RMS of the inliers in pixels and
+    the number of minimal samples drawn.
+    """
 
     F: F64
     inliers: NDArray[np.bool_]
@@ -61,9 +64,12 @@ class FundamentalResult(NamedTuple):
 
 
 class EssentialResult(NamedTuple):
-    """A robustly estimated essential matrix (singular values ``(1, 1, 0)/√2``,
-    ``‖E‖_F = 1``), the inlier mask ``(N,)``, the Sampson RMS of the inliers in pixels and
-    the number of minimal samples drawn."""
+    """A robustly estimated essential matrix, its inlier mask, Sampson RMS and sample count.
+
+    The matrix has singular values ``(1, 1, 0)/√2``, ``‖E‖_F = 1``; the inlier mask is
+    ``(N,)``, then the Sampson RMS of the inliers in pixels and the number of minimal samples
+    drawn.
+    """
 
     E: F64
     inliers: NDArray[np.bool_]
@@ -72,7 +78,7 @@ class EssentialResult(NamedTuple):
 
 
 def _unit(F: F64) -> F64:
-    """Unit Frobenius norm, sign fixed so that the entry of largest magnitude is positive."""
+    """Scale to unit Frobenius norm, the sign fixed so that the largest-magnitude entry is > 0."""
     F = F / np.linalg.norm(F)
     return F if F.flat[np.argmax(np.abs(F))] > 0 else -F
 
@@ -112,7 +118,7 @@ def fundamental_8point(points1: npt.ArrayLike, points2: npt.ArrayLike) -> F64:
 
 
 def fundamental_7point(points1: npt.ArrayLike, points2: npt.ArrayLike) -> F64:
-    """The one to three fundamental matrices through exactly 7 correspondences.
+    """Return the one to three fundamental matrices through exactly 7 correspondences.
 
     The null space of the 7 x 9 system ``x2ᵀ F x1 = 0`` is the pencil
     ``F(α) = α F1 + (1 - α) F2``; the rank-2 condition ``det F(α) = 0`` is a cubic in
@@ -164,8 +170,9 @@ def _normalised(p: F64, K: F64) -> F64:
 
 
 def essential_5point(points1: npt.ArrayLike, points2: npt.ArrayLike) -> F64:
-    """The up to ten essential matrices through exactly 5 correspondences (normalised
-    coordinates ``K⁻¹ x``).
+    """Return the up to ten essential matrices through exactly 5 correspondences.
+
+    The correspondences are in normalised coordinates ``K⁻¹ x``.
 
     ``E`` lies in the 4-dimensional null space of the 5 x 9 system ``x2ᵀ E x1 = 0``;
     ``det E = 0`` and ``2 E Eᵀ E - tr(E Eᵀ) E = 0`` (Nister 2004, "An efficient solution to
@@ -202,8 +209,10 @@ def essential_5point(points1: npt.ArrayLike, points2: npt.ArrayLike) -> F64:
 
 
 def _rot_basis(F: F64) -> tuple[F64, F64, float]:
-    """``F = U diag(1, σ, 0) Vᵀ`` with U, V rotations (the orthonormal representation of
-    Bartoli & Sturm 2004)."""
+    """Decompose ``F = U diag(1, σ, 0) Vᵀ`` with U, V rotations.
+
+    The orthonormal representation of Bartoli & Sturm 2004.
+    """
     U, s, Vt = np.linalg.svd(F)
     if np.linalg.det(U) < 0:
         U = -U
@@ -213,8 +222,10 @@ def _rot_basis(F: F64) -> tuple[F64, F64, float]:
 
 
 def _refine_f(F: F64, p1: F64, p2: F64, max_iter: int) -> F64:
-    """LM on the Sampson distances over ``F = U diag(1, σ, 0) Vᵀ`` (7 parameters),
-    parametrised in Hartley-normalised coordinates, residuals in pixels."""
+    """Refine F by LM on the Sampson distances over ``F = U diag(1, σ, 0) Vᵀ`` (7 parameters).
+
+    Parametrised in Hartley-normalised coordinates, residuals in pixels.
+    """
     T1, T2 = hartley(p1)[1], hartley(p2)[1]
     Fn = np.linalg.inv(T2).T @ F @ np.linalg.inv(T1)
     U0, V0, s0 = _rot_basis(Fn)

@@ -40,9 +40,12 @@ _INT_SCALE = {np.dtype(np.uint8): 1.0 / 255.0, np.dtype(np.uint16): 1.0 / 65535.
 
 
 def _as_batch(image: Any) -> tuple[np.ndarray, tuple[int, ...], bool, float]:
-    """The image as a C-contiguous ``(B, H, W, C)`` batch, its full shape, whether it was
-    2-D, and the scale to floats: uint8/uint16 NumPy images are kept as they are (the kernels
-    sample them and scale by 1/255 or 1/65535, without a float copy of the image)."""
+    """Return the image as a C-contiguous ``(B, H, W, C)`` batch, its shape, 2-D flag and scale.
+
+    The full shape, whether it was 2-D, and the scale to floats: uint8/uint16 NumPy images
+    are kept as they are (the kernels sample them and scale by 1/255 or 1/65535, without a
+    float copy of the image).
+    """
     if isinstance(image, np.ndarray) and (
         image.dtype in _INT_SCALE or image.dtype in (np.float32, np.float64)
     ):
@@ -95,7 +98,7 @@ def _remap_bilinear_numpy(
 
 
 def _fill(fill: object) -> float:
-    """The fill value: a finite real or NaN (to mark pixels with no source)."""
+    """Check the fill value: a finite real or NaN (to mark pixels with no source)."""
     try:
         if isinstance(fill, float | np.floating) and math.isnan(fill):
             return math.nan
@@ -105,8 +108,10 @@ def _fill(fill: object) -> float:
 
 
 def _same_kind(image: Any, map_uv: Any) -> None:
-    """Refuse a Dask map_uv with an eager image (a Dask image with an eager map is the lazy
-    path; the map is small)."""
+    """Refuse a Dask map_uv with an eager image.
+
+    A Dask image with an eager map is the lazy path; the map is small.
+    """
     lazy_map = hasattr(map_uv, "shape") and is_dask_namespace(namespace(map_uv))
     lazy_image = hasattr(image, "shape") and is_dask_namespace(namespace(image))
     if lazy_map and not lazy_image:
@@ -117,12 +122,12 @@ def _same_kind(image: Any, map_uv: Any) -> None:
 
 
 def remap_bilinear(image: Any, map_uv: Any, *, fill: float = 0.0) -> Any:
-    """Sample ``image`` at the source positions ``map_uv`` by bilinear interpolation.
+    r"""Sample ``image`` at the source positions ``map_uv`` by bilinear interpolation.
 
     .. math::
 
-        I'(i, j) = \\sum_{a, b \\in \\{0, 1\\}} w_a(u) w_b(v)\\, I(\\lfloor v \\rfloor + b,
-        \\lfloor u \\rfloor + a), \\quad (u, v) = \\mathrm{map}(i, j)
+        I'(i, j) = \sum_{a, b \in \{0, 1\}} w_a(u) w_b(v)\, I(\lfloor v \rfloor + b,
+        \lfloor u \rfloor + a), \quad (u, v) = \mathrm{map}(i, j)
 
     Parameters
     ----------
@@ -183,7 +188,7 @@ def remap_bilinear(image: Any, map_uv: Any, *, fill: float = 0.0) -> Any:
 
 
 def _scaled(batch: np.ndarray, scale: float) -> np.ndarray:
-    """An integer batch as float32 in [0, 1] (the plain path; the kernels scale on the fly)."""
+    """Scale an integer batch to float32 in [0, 1] (plain path; the kernels scale on the fly)."""
     if batch.dtype in _INT_SCALE:
         return batch.astype(np.float32) * np.float32(scale)
     return batch
@@ -219,12 +224,12 @@ def undistortion_map(
     *,
     new_K: Any = None,
 ) -> Any:
-    """Source pixel ``(u, v)`` in the distorted image for every pixel of the ideal image.
+    r"""Source pixel ``(u, v)`` in the distorted image for every pixel of the ideal image.
 
     .. math::
 
-        (x, y, 1)^T = K_{new}^{-1} (u, v, 1)^T,\\quad
-        (u_s, v_s, 1)^T = K\\,(\\mathrm{distort}(x, y), 1)^T
+        (x, y, 1)^T = K_{new}^{-1} (u, v, 1)^T,\quad
+        (u_s, v_s, 1)^T = K\,(\mathrm{distort}(x, y), 1)^T
 
     ``shape`` is the output ``(H, W)``; ``new_K`` defaults to ``K``. Returns ``(H, W, 2)``
     float64 (of ``K``'s array kind and device); NaN where the model has no distorted point.
@@ -261,11 +266,11 @@ def undistort_image(
     out_shape: tuple[int, int] | None = None,
     fill: float = 0.0,
 ) -> Any:
-    """Remove lens distortion from an image by inverse mapping and bilinear sampling.
+    r"""Remove lens distortion from an image by inverse mapping and bilinear sampling.
 
     .. math::
 
-        I_u(u, v) = I_d\\big(K\\,\\mathrm{distort}(K_{new}^{-1}(u, v, 1)^T)\\big)
+        I_u(u, v) = I_d\big(K\,\mathrm{distort}(K_{new}^{-1}(u, v, 1)^T)\big)
 
     Parameters
     ----------
@@ -403,7 +408,7 @@ def _remap_dask_public(image: Any, map_uv: Any, fill: float) -> Any:
 
 
 def _out_chunks(img: Any, out_hw: tuple[int, int]) -> tuple[tuple[int, ...], tuple[int, ...]]:
-    """The input's row/column chunks when the output has its size, else the same chunk size."""
+    """Return the input's row/column chunks if the output has its size, else the same chunk size."""
     res = []
     for axis, n in ((-3, out_hw[0]), (-2, out_hw[1])):
         ch = img.chunks[axis]

@@ -106,7 +106,7 @@ def _up_vector(up: ArrayLike | str) -> ArrayLike:
 
 
 def horizon_line(K: ArrayLike, R: ArrayLike | None = None, up: ArrayLike | str = "-y") -> Array:
-    """The horizon: vanishing line ``l ~ K⁻ᵀ R n`` of planes perpendicular to ``up``.
+    """Return the horizon: vanishing line ``l ~ K⁻ᵀ R n`` of planes perpendicular to ``up``.
 
     Returned as ``(a, b, c)`` with ``a u + b v + c = 0``, normalised to ``a² + b² = 1``
     (then ``l · (u, v, 1)`` is a signed distance in pixels) and ``b >= 0`` (horizon of an

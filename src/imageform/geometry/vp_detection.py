@@ -74,7 +74,8 @@ class VanishingPointResult:
 def _angles_to(v: FloatArray, mids: FloatArray, dirs: FloatArray) -> FloatArray:
     """Angle between each segment's direction and the line from its midpoint to ``v``.
 
-    ``v`` is ``(H, 3)`` hypotheses; returns ``(H, N)`` radians in [0, π/2]."""
+    ``v`` is ``(H, 3)`` hypotheses; returns ``(H, N)`` radians in [0, π/2].
+    """
     d = v[:, None, :2] - mids[None, :, :] * v[:, None, 2:3]
     dn = np.hypot(d[..., 0], d[..., 1])
     with np.errstate(invalid="ignore", divide="ignore"):
@@ -84,8 +85,11 @@ def _angles_to(v: FloatArray, mids: FloatArray, dirs: FloatArray) -> FloatArray:
 
 
 def _normalise(v: FloatArray, scale: float) -> FloatArray:
-    """Finite points scaled to ``w = 1``; points at infinity (``|w|`` at rounding level of
-    ``|(x, y)| / scale``) as a unit direction ``(dx, dy, 0)`` with a canonical sign."""
+    """Scale finite points to ``w = 1``; turn points at infinity into unit directions.
+
+    Points at infinity (``|w|`` at rounding level of ``|(x, y)| / scale``) become a unit
+    direction ``(dx, dy, 0)`` with a canonical sign.
+    """
     v = np.asarray(v, dtype=np.float64)
     n = float(np.hypot(v[0], v[1]))
     if abs(v[2]) * scale > 1e-12 * max(n, 1e-300):

@@ -1,5 +1,8 @@
-"""The camera file's model: its constants, :class:`CameraFile`, :class:`Provenance` and the
-checks of values that reading and building share (internal to :mod:`imageform.io`)."""
+"""The camera file's model: constants, :class:`CameraFile`, :class:`Provenance`, shared checks.
+
+The checks are those of values that reading and building share (internal to
+:mod:`imageform.io`).
+"""
 
 from __future__ import annotations
 
@@ -183,7 +186,7 @@ class CameraFile:
         images: tuple[str, ...] | list[str] = (),
         command: str | None = None,
     ) -> CameraFile:
-        """The camera file of a :func:`~imageform.geometry.calibrate_camera` result.
+        """Build the camera file of a :func:`~imageform.geometry.calibrate_camera` result.
 
         K, the Brown-Conrady coefficients, the image size, the standard deviations of every
         intrinsic parameter (0 for fixed ones) and the RMS, views used and fixed parameters.
@@ -209,8 +212,10 @@ class CameraFile:
         return cls(camera, False, std, prov)
 
     def with_pose(self, R: Any, t: Any, **provenance: Any) -> CameraFile:
-        """The same camera with the pose ``X_cam = R X_world + t``; pose standard deviations
-        are dropped, provenance fields replaced by ``provenance``."""
+        """Return the same camera with the pose ``X_cam = R X_world + t``.
+
+        Pose standard deviations are dropped, provenance fields replaced by ``provenance``.
+        """
         from imageform.geometry import Camera
 
         c = self.camera
@@ -222,7 +227,7 @@ class CameraFile:
 
 
 def distortion_name(model: Any) -> str:
-    """The camera-file name of a distortion model object (``none`` for None).
+    """Return the camera-file name of a distortion model object (``none`` for None).
 
     Examples
     --------
@@ -300,8 +305,11 @@ class Reader:
 
 
 def short_list(names: Sequence[str], budget: int) -> str:
-    """``names`` joined by commas, cut to about ``budget`` characters (``... (3 more)``), each
-    name cut to 30: an error message stays one line however many or long the keys are."""
+    """Join ``names`` by commas, cut to about ``budget`` characters (``... (3 more)``).
+
+    Each name is cut to 30: an error message stays one line however many or long the keys
+    are.
+    """
     shown: list[str] = []
     size = 0
     for n in names:
@@ -326,7 +334,7 @@ def _nonneg(r: Reader, value: Any, key: str) -> float:
 
 
 def image_names(images: object, name: str) -> tuple[str, ...]:
-    """A list or tuple of image paths (str or path-like) as a tuple of str."""
+    """Convert a list or tuple of image paths (str or path-like) to a tuple of str."""
     if not isinstance(images, list | tuple) or not all(
         isinstance(i, str | os.PathLike) for i in images
     ):

@@ -1,5 +1,7 @@
-"""Reading a camera file: every key checked, one-line errors naming the file and the key
-(the internals of :func:`imageform.io.read_camera`; the schema is in docs/camera-file.md)."""
+"""Reading a camera file: every key checked, one-line errors naming the file and the key.
+
+The internals of :func:`imageform.io.read_camera`; the schema is in docs/camera-file.md.
+"""
 
 from __future__ import annotations
 
@@ -33,7 +35,7 @@ __all__ = ["parse"]
 
 
 def parse(data: dict[str, Any], where: str) -> CameraFile:
-    """The camera file of parsed TOML ``data`` (``where`` names it in messages)."""
+    """Build the camera file of parsed TOML ``data`` (``where`` names it in messages)."""
     r = Reader(where)
     versioned = "format" in data or "version" in data
     return _read_v1(data, r) if versioned else _read_legacy(data, r)
@@ -76,8 +78,10 @@ def _read_v1(data: dict[str, Any], r: Reader) -> CameraFile:
 
 
 def _read_legacy(data: dict[str, Any], r: Reader) -> CameraFile:
-    """Files of imageform before the versioned format (keys at the top level or in
-    ``[camera]``; ``[calibration]`` with ``rms`` and ``views``)."""
+    """Read files of imageform before the versioned format.
+
+    Keys at the top level or in ``[camera]``; ``[calibration]`` with ``rms`` and ``views``.
+    """
     cal = data.get("calibration", {})
     if "camera" in data:
         cam = data["camera"]

@@ -66,7 +66,7 @@ __all__ = [
 
 
 def read_camera(path: str | Path) -> CameraFile:
-    """Read a camera file (the versioned format, or a file from an earlier imageform).
+    r"""Read a camera file (the versioned format, or a file from an earlier imageform).
 
     Parameters
     ----------
@@ -92,7 +92,7 @@ def read_camera(path: str | Path) -> CameraFile:
     --------
     >>> import tempfile
     >>> p = Path(tempfile.mkdtemp()) / "cam.toml"
-    >>> _ = p.write_text("fx = 500\\nfy = 500\\ncx = 320\\ncy = 240\\nk1 = -0.1\\n")
+    >>> _ = p.write_text("fx = 500\nfy = 500\ncx = 320\ncy = 240\nk1 = -0.1\n")
     >>> cf = read_camera(p)
     >>> cf.camera.K[0].tolist(), cf.distortion_model, cf.has_pose, cf.version
     ([500.0, 0.0, 320.0], 'brown_conrady', False, 0)
@@ -147,7 +147,7 @@ def _toml_string(text: str) -> str:
 
 
 def camera_file_text(cf: CameraFile) -> str:
-    """The TOML text of a camera file (what :func:`write_camera` writes)."""
+    """Return the TOML text of a camera file (what :func:`write_camera` writes)."""
     from imageform.geometry import matrix_to_rvec
 
     cam = cf.camera

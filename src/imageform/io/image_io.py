@@ -76,8 +76,11 @@ _pillow_lock = threading.Lock()
 
 
 class ImageInfo(NamedTuple):
-    """What a file's header says: ``width``, ``height``, ``channels``, sample ``dtype`` and
-    ``format`` (png, jpeg, tiff, npy)."""
+    """What a file's header says: size, channels, sample type and format.
+
+    ``width``, ``height``, ``channels``, sample ``dtype`` and ``format`` (png, jpeg, tiff,
+    npy).
+    """
 
     width: int
     height: int
@@ -87,15 +90,18 @@ class ImageInfo(NamedTuple):
 
 
 class WrittenImage(NamedTuple):
-    """What :func:`write_image` stored: ``bits`` per sample for integer formats (None for
-    float data), and how many values were ``out_of_range`` (outside [0, 1], clipped)."""
+    """What :func:`write_image` stored: bits per sample and the count of clipped values.
+
+    ``bits`` per sample for integer formats (None for float data), and how many values were
+    ``out_of_range`` (outside [0, 1], clipped).
+    """
 
     bits: int | None
     out_of_range: int
 
 
 def max_pixels() -> int:
-    """The pixel limit for reading: ``IMAGEFORM_MAX_PIXELS`` if set, else 100 Mpx."""
+    """Return the pixel limit for reading: ``IMAGEFORM_MAX_PIXELS`` if set, else 100 Mpx."""
     text = os.environ.get("IMAGEFORM_MAX_PIXELS", "").strip()
     if not text:
         return DEFAULT_MAX_PIXELS
@@ -111,7 +117,7 @@ def max_pixels() -> int:
 
 
 def image_format(path: str | Path) -> str:
-    """The format of ``path`` from its suffix (png, jpeg, tiff, npy); others raise.
+    """Return the format of ``path`` from its suffix (png, jpeg, tiff, npy); others raise.
 
     Examples
     --------
@@ -273,7 +279,7 @@ def _orient(a: np.ndarray, orientation: int) -> np.ndarray:
 
 
 def _png_orientation(data: bytes) -> int:
-    """The EXIF orientation stored in a PNG's eXIf chunk (1 when there is none)."""
+    """Return the EXIF orientation stored in a PNG's eXIf chunk (1 when there is none)."""
     pos = len(_PNG_SIGNATURE)
     while pos + 8 <= len(data):
         length, kind = struct.unpack(">I4s", data[pos : pos + 8])

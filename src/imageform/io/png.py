@@ -1,5 +1,7 @@
-"""PNG of any bit depth through libpng (imagecodecs): the codec behind :mod:`imageform.io`
-for PNG, also usable on its own for integer arrays."""
+"""PNG of any bit depth through libpng (imagecodecs).
+
+The codec behind :mod:`imageform.io` for PNG, also usable on its own for integer arrays.
+"""
 
 from __future__ import annotations
 

@@ -1,6 +1,8 @@
-"""Raw files in and out: DNG written with tifffile, any raw LibRaw reads (through rawpy, the
-optional ``imageform[raw]`` extra), and imageform's own development of a raw file, step by
-step (docs/raw.md).
+"""Raw files in and out: DNG writing, LibRaw reading and imageform's own development.
+
+DNG written with tifffile, any raw LibRaw reads (through rawpy, the optional
+``imageform[raw]`` extra), and imageform's own development of a raw file, step by step
+(docs/raw.md).
 
 - :func:`write_dng`: a Bayer mosaic as a DNG 1.4 file (one uncompressed 16-bit CFA IFD,
   PhotometricInterpretation 32803, with CFARepeatPatternDim/CFAPattern, BlackLevel,
@@ -103,8 +105,9 @@ def write_dng(
     calibration_illuminant: str = "D65",
     camera_model: str = "imageform simulated camera",
 ) -> Path:
-    """Write a Bayer mosaic as a DNG file that raw developers (LibRaw, darktable,
-    RawTherapee, Adobe Camera Raw) open.
+    r"""Write a Bayer mosaic as a DNG file that raw developers open.
+
+    Raw developers such as LibRaw, darktable, RawTherapee and Adobe Camera Raw.
 
     One IFD (NewSubfileType 0) holding the raw CFA image, uncompressed, 16 bits per sample,
     PhotometricInterpretation 32803 (CFA), DNGVersion 1.4.0.0, DNGBackwardVersion 1.1.0.0,
@@ -113,7 +116,7 @@ def write_dng(
     - CFARepeatPatternDim (2, 2) and CFAPattern (0 = red, 1 = green, 2 = blue);
     - BlackLevel (one value for every photosite) and WhiteLevel;
     - ColorMatrix1: XYZ to camera RGB under CalibrationIlluminant1 (SRATIONAL, stored to
-      1e-6), :math:`\\mathbf c = C\\,\\mathbf{XYZ}`;
+      1e-6), :math:`\mathbf c = C\,\mathbf{XYZ}`;
     - AsShotNeutral: the camera RGB of a neutral in the scene (white balance gains are its
       reciprocals);
     - UniqueCameraModel.
@@ -451,7 +454,7 @@ class Development:
     demosaic: str
 
     def to_integer(self, bits: int = 16) -> np.ndarray:
-        """The output image as uint8 (``bits=8``) or uint16 (``bits=16``), rounded."""
+        """Return the output image as uint8 (``bits=8``) or uint16 (``bits=16``), rounded."""
         if bits not in (8, 16):
             raise InvalidInputError(f"expected bits 8 or 16, got {describe(bits)}")
         top = 2**bits - 1
@@ -466,19 +469,19 @@ def develop(
     space: str = "srgb",
     linear: bool = False,
 ) -> Development:
-    """Develop a raw image with imageform's own pipeline, keeping every stage.
+    r"""Develop a raw image with imageform's own pipeline, keeping every stage.
 
     1. Linearise: :math:`x = (DN - B) / (W - B)` with B the black level of each photosite.
-    2. White balance: :math:`x \\cdot g_c` with the as-shot gains (or the ones given),
+    2. White balance: :math:`x \cdot g_c` with the as-shot gains (or the ones given),
        scaled so the smallest gain is 1, clipped to [0, 1] (LibRaw's default highlight
        clipping).
     3. Demosaic with :func:`imageform.sensor.demosaic` (``demosaic`` names the method).
-    4. Camera RGB to XYZ: :math:`M = C^{-1}\\,\\mathrm{diag}(C\\,\\mathbf w)`, with C the
-       colour matrix (XYZ to camera) and :math:`\\mathbf w` the XYZ of the calibration
+    4. Camera RGB to XYZ: :math:`M = C^{-1}\,\mathrm{diag}(C\,\mathbf w)`, with C the
+       colour matrix (XYZ to camera) and :math:`\mathbf w` the XYZ of the calibration
        illuminant's white (Y = 1), so that white-balanced white (1, 1, 1) maps to
-       :math:`\\mathbf w` (the normalisation of dcraw/LibRaw's ``cam_xyz_coeff``, which
+       :math:`\mathbf w` (the normalisation of dcraw/LibRaw's ``cam_xyz_coeff``, which
        scales the rows of :math:`C` by its camera response to white).
-    5. Bradford chromatic adaptation from :math:`\\mathbf w` to the output space's white
+    5. Bradford chromatic adaptation from :math:`\mathbf w` to the output space's white
        (identity for a D65 matrix and sRGB).
     6. XYZ to the output space's linear RGB, clipped to [0, 1], encoded with the space's
        transfer function (``linear=True``: not encoded).

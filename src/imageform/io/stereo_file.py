@@ -83,6 +83,7 @@ class StereoCameraFile:
     path: Path | None = None
 
     def __post_init__(self) -> None:
+        """Check both sides: two camera files, the left without a pose, the right with one."""
         for side in _SIDES:
             if not isinstance(getattr(self, side), CameraFile):
                 raise InvalidInputError(
@@ -129,7 +130,7 @@ class StereoCameraFile:
         images_right: tuple[str, ...] | list[str] = (),
         command: str | None = None,
     ) -> StereoCameraFile:
-        """The stereo file of a :func:`~imageform.geometry.stereo_calibrate` result."""
+        """Build the stereo file of a :func:`~imageform.geometry.stereo_calibrate` result."""
         from imageform.geometry import StereoCalibrationResult
 
         if not isinstance(result, StereoCalibrationResult):
@@ -157,7 +158,7 @@ class StereoCameraFile:
 
 
 def _side_text(cf: CameraFile, side: str) -> list[str]:
-    """The tables of a camera file under ``[side.*]`` (no format, version, comments)."""
+    """Return the tables of a camera file under ``[side.*]`` (no format, version, comments)."""
     out: list[str] = []
     for line in camera_file_text(cf).splitlines():
         if line.startswith(("format =", "version =")) or (line.startswith("#") and not out):
@@ -170,7 +171,7 @@ def _side_text(cf: CameraFile, side: str) -> list[str]:
 
 
 def stereo_file_text(sf: StereoCameraFile) -> str:
-    """The TOML text of a stereo file (what :func:`write_stereo_camera` writes)."""
+    """Return the TOML text of a stereo file (what :func:`write_stereo_camera` writes)."""
     lines = [
         '# imageform stereo camera file (docs/camera-file.md, "Stereo rigs"): two camera',
         "# files; the rig frame is the left camera's: X_right = R X_left + T ([right.pose]).",

@@ -1,5 +1,6 @@
-"""imageform.optics — thin lens, depth of field, defocus, vignetting, aberrations and
-diffraction PSFs (SI units).
+"""imageform.optics — thin lens, depth of field, defocus, vignetting, aberrations, PSFs.
+
+Thin lens, depth of field, defocus, vignetting, aberrations and diffraction PSFs (SI units).
 
 The focal length is always the keyword-only ``focal_length``: in metres, except where a
 function works on pixels (the vignetting maps take it in pixels, as ``fx`` of K).

@@ -62,7 +62,7 @@ def _is_nan(value: object) -> bool:
 
 
 def _image(image: Any, ndim: tuple[int, ...], want: str) -> np.ndarray:
-    """The image as a NumPy float array of ``ndim`` dimensions, not empty."""
+    """Check the image: a NumPy float array of ``ndim`` dimensions, not empty."""
     arr = np.asarray(to_numpy(as_image(image, "image", channels=None)))
     if arr.ndim not in ndim or 0 in arr.shape:
         raise InvalidInputError(
@@ -73,7 +73,7 @@ def _image(image: Any, ndim: tuple[int, ...], want: str) -> np.ndarray:
 
 @_deprecate.parameters(positional=("focal_length", "f_number", "sa_coefficient"))
 def spherical_blur_radius(*, focal_length: float, f_number: float, sa_coefficient: float) -> float:
-    """Radius (m) of the circle of least confusion of a lens with spherical aberration.
+    r"""Radius (m) of the circle of least confusion of a lens with spherical aberration.
 
     ``focal_length`` in metres; every parameter is keyword-only.
 
@@ -84,7 +84,7 @@ def spherical_blur_radius(*, focal_length: float, f_number: float, sa_coefficien
 
     .. math::
 
-        r_{lc} = \\frac{S h^3}{4 f^2} = \\frac{S f}{32 N^3}
+        r_{lc} = \frac{S h^3}{4 f^2} = \frac{S f}{32 N^3}
 
     ``S`` (``sa_coefficient``, dimensionless, ``>= 0``) sets the lens's aberration; halving
     ``N`` makes the blur 8 × larger. Source: W. J. Smith, *Modern Optical Engineering*,
@@ -122,15 +122,15 @@ def spherical_aberration(
     field_coefficient: float = 0.0,
     center: tuple[float, float] | None = None,
 ) -> Any:
-    """Blur an image by spherical aberration at a given aperture, growing across the field.
+    r"""Blur an image by spherical aberration at a given aperture, growing across the field.
 
     ``focal_length`` and ``pixel_pitch`` in metres; ``center`` ``(c_u, c_v)`` in pixels
     (default the image center).
 
     .. math::
 
-        R_{px}(\\rho) = \\frac{r_{lc}}{p}\\,(1 + g \\rho^2),\\quad
-        \\rho = \\frac{\\lVert (u, v) - c \\rVert}{\\lVert \\text{corner} - c \\rVert}
+        R_{px}(\rho) = \frac{r_{lc}}{p}\,(1 + g \rho^2),\quad
+        \rho = \frac{\lVert (u, v) - c \rVert}{\lVert \text{corner} - c \rVert}
 
     with ``r_lc`` from :func:`spherical_blur_radius`, ``p`` the pixel pitch and ``g`` the
     ``field_coefficient``. The PSF is modelled as the uniform disc of least confusion.
@@ -174,12 +174,12 @@ def lateral_chromatic_aberration(
     center: tuple[float, float] | None = None,
     fill: float = 0.0,
 ) -> Any:
-    """Scale each channel about the optical centre by its own magnification (colour fringes).
+    r"""Scale each channel about the optical centre by its own magnification (colour fringes).
 
     .. math::
 
-        I'_c(\\mathbf{p}) = I_c\\!\\left(\\mathbf{c}
-            + \\frac{\\mathbf{p} - \\mathbf{c}}{m_c}\\right)
+        I'_c(\mathbf{p}) = I_c\!\left(\mathbf{c}
+            + \frac{\mathbf{p} - \mathbf{c}}{m_c}\right)
 
     A feature at distance ``r`` from the centre ``c`` appears in channel ``c`` at ``m_c r``.
     Typical lenses have ``|m_c - 1|`` of 1e-4 … 3e-3 relative to green.
@@ -242,7 +242,7 @@ class ChromaticFocalLengths(NamedTuple):
 
 @_deprecate.parameters(positional=("focal_length", "abbe_number"))
 def chromatic_focal_lengths(*, focal_length: float, abbe_number: float) -> ChromaticFocalLengths:
-    """Focal lengths for red, green, blue of a singlet of Abbe number ``V`` (d-line focus ``f``).
+    r"""Focal lengths for red, green, blue of a singlet of Abbe number ``V`` (d-line focus ``f``).
 
     ``focal_length`` (the d-line focal length, metres) and ``abbe_number`` are keyword-only.
 
@@ -252,8 +252,8 @@ def chromatic_focal_lengths(*, focal_length: float, abbe_number: float) -> Chrom
 
     .. math::
 
-        f_R = f\\left(1 + \\frac{1}{2V}\\right),\\ f_G = f,\\
-        f_B = f\\left(1 - \\frac{1}{2V}\\right)
+        f_R = f\left(1 + \frac{1}{2V}\right),\ f_G = f,\
+        f_B = f\left(1 - \frac{1}{2V}\right)
 
     Source: Hecht, *Optics*, 5th ed., §6.3.2 (longitudinal chromatic aberration, Abbe number).
 
@@ -282,7 +282,7 @@ def axial_chromatic_blur_diameters(
     focus: float,
     reference: int = 1,
 ) -> np.ndarray:
-    """Blur-disc diameter (m) per channel of points at ``depth``; shape ``(*depth.shape, C)``.
+    r"""Blur-disc diameter (m) per channel of points at ``depth``; shape ``(*depth.shape, C)``.
 
     The sensor sits where channel ``reference`` (green) focuses the plane at ``focus``:
     ``d_s = f_ref s / (s - f_ref)``. Channel ``c`` images a point at depth ``d`` at
@@ -291,7 +291,7 @@ def axial_chromatic_blur_diameters(
 
     .. math::
 
-        b_c(d) = A \\frac{|d_c - d_s|}{d_c}
+        b_c(d) = A \frac{|d_c - d_s|}{d_c}
 
     (with all ``f_c`` equal this is the circle of confusion). Source: thin-lens geometry,
     Hecht §5.2; Wikipedia "Circle of confusion".
@@ -347,11 +347,11 @@ def axial_chromatic_aberration(
     pixel_pitch: float,
     reference: int = 1,
 ) -> Any:
-    """Blur each channel by its own defocus disc (:func:`axial_chromatic_blur_diameters`).
+    r"""Blur each channel by its own defocus disc (:func:`axial_chromatic_blur_diameters`).
 
     .. math::
 
-        I'_c = \\mathrm{blur}\\!\\left(I_c, \\frac{b_c(d)}{2p}\\right)
+        I'_c = \mathrm{blur}\!\left(I_c, \frac{b_c(d)}{2p}\right)
 
     Parameters
     ----------

@@ -40,16 +40,21 @@ _MAX_LAYERS = 4096
 
 
 def _kernel_bytes(radius: float) -> float:
-    """Bytes :func:`disc_kernel` allocates for ``radius``: the sub-pixel grid's booleans and
-    two float64 temporaries of ``(16 m)²`` with ``m = 2⌈R⌉ + 1``."""
+    """Count the bytes :func:`disc_kernel` allocates for ``radius``.
+
+    The sub-pixel grid's booleans and two float64 temporaries of ``(16 m)²`` with
+    ``m = 2⌈R⌉ + 1``.
+    """
     x = (2.0 * math.ceil(radius) + 1.0) * _SUPERSAMPLE
     return x * x * 17.0  # inf, not OverflowError, beyond the float range
 
 
 def _check_blur_radius(radius: float, shape: tuple[int, ...], names: str) -> None:
-    """Refuse a blur radius whose disc kernel or padded FFT convolution of an image of
-    ``shape`` (H, W, C) would not fit :func:`memory_limit`; ``names`` says which
-    arguments made the radius."""
+    """Refuse a blur radius whose disc kernel or FFT convolution would not fit in memory.
+
+    The kernel, or the padded FFT convolution of an image of ``shape`` (H, W, C), must fit
+    :func:`memory_limit`; ``names`` says which arguments made the radius.
+    """
     p = math.ceil(radius) if math.isfinite(radius) else math.inf
     h, w = shape[0], shape[1]
     c = shape[2] if len(shape) > 2 else 1
@@ -66,12 +71,12 @@ def _check_blur_radius(radius: float, shape: tuple[int, ...], names: str) -> Non
 
 
 def disc_kernel(radius: float) -> np.ndarray:
-    """A normalised uniform-disc PSF of ``radius`` pixels, anti-aliased by pixel coverage.
+    r"""Return a normalised uniform-disc PSF of ``radius`` pixels, anti-aliased by pixel coverage.
 
     .. math::
 
-        h(i, j) = \\frac{|\\mathrm{pixel}_{ij} \\cap \\{r \\le R\\}|}
-                       {\\sum_{kl} |\\mathrm{pixel}_{kl} \\cap \\{r \\le R\\}|}
+        h(i, j) = \frac{|\mathrm{pixel}_{ij} \cap \{r \le R\}|}
+                       {\sum_{kl} |\mathrm{pixel}_{kl} \cap \{r \le R\}|}
 
     Coverage is integrated on a 16 × 16 sub-pixel grid; ``radius = 0`` gives the identity
     ``[[1.0]]``. Shape ``(2 ⌈R⌉ + 1, 2 ⌈R⌉ + 1)``; sums to 1.
@@ -124,12 +129,12 @@ def _convolve(img: np.ndarray, kernel: np.ndarray) -> np.ndarray:
 
 
 def blur_by_radius(image: Any, radius_px: Any, *, step: float = 0.5, max_layers: int = 48) -> Any:
-    """Blur each pixel with a disc PSF of its own radius (pixels), by layered interpolation.
+    r"""Blur each pixel with a disc PSF of its own radius (pixels), by layered interpolation.
 
     .. math::
 
-        I'(p) = (1 - w)\\,(I * h_{r_k})(p) + w\\,(I * h_{r_{k+1}})(p),\\quad
-        r_k \\le R(p) \\le r_{k+1},\\ w = \\frac{R(p) - r_k}{r_{k+1} - r_k}
+        I'(p) = (1 - w)\,(I * h_{r_k})(p) + w\,(I * h_{r_{k+1}})(p),\quad
+        r_k \le R(p) \le r_{k+1},\ w = \frac{R(p) - r_k}{r_{k+1} - r_k}
 
     Parameters
     ----------
@@ -191,13 +196,13 @@ def blur_by_radius(image: Any, radius_px: Any, *, step: float = 0.5, max_layers:
 def defocus_radius_px(
     depth: Any, *, focal_length: float, f_number: float, focus: float, pixel_pitch: float
 ) -> Any:
-    """Radius in pixels of the defocus disc of points at ``depth``: half the CoC over the pitch.
+    r"""Radius in pixels of the defocus disc of points at ``depth``: half the CoC over the pitch.
 
     ``depth``, ``focal_length``, ``focus`` and ``pixel_pitch`` in metres.
 
     .. math::
 
-        R_{px}(d) = \\frac{c(d)}{2 p}
+        R_{px}(d) = \frac{c(d)}{2 p}
 
     Examples
     --------
@@ -223,12 +228,12 @@ def defocus_blur(
     pixel_pitch: float,
     step: float = 0.5,
 ) -> Any:
-    """Depth-dependent defocus: each pixel blurred by the disc of its circle of confusion.
+    r"""Depth-dependent defocus: each pixel blurred by the disc of its circle of confusion.
 
     .. math::
 
-        I' = \\mathrm{blur}\\big(I, R_{px}(d)\\big),\\quad
-        R_{px}(d) = \\frac{1}{2p} \\frac{f}{N} \\frac{|d - s|}{d} \\frac{f}{s - f}
+        I' = \mathrm{blur}\big(I, R_{px}(d)\big),\quad
+        R_{px}(d) = \frac{1}{2p} \frac{f}{N} \frac{|d - s|}{d} \frac{f}{s - f}
 
     Parameters
     ----------

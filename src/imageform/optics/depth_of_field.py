@@ -43,11 +43,11 @@ def _focus(focus: float, f: float) -> float:
     renamed={"f": "focal_length"}, positional=("focal_length", "f_number", "coc")
 )
 def hyperfocal_distance(*, focal_length: float, f_number: float, coc: float) -> float:
-    """Hyperfocal distance: focused there, everything from ``H/2`` to infinity is sharp.
+    r"""Hyperfocal distance: focused there, everything from ``H/2`` to infinity is sharp.
 
     .. math::
 
-        H = \\frac{f^2}{N c} + f
+        H = \frac{f^2}{N c} + f
 
     Parameters
     ----------
@@ -92,6 +92,7 @@ class DepthOfField:
     hyperfocal: float
 
     def __post_init__(self) -> None:
+        """Check the distances: finite (far may be inf), near <= focus <= far."""
         # issue 16: finite distances (> 0; near >= 0), near <= focus <= far; far is inf exactly when
         # focused at or beyond the hyperfocal distance
         for name in ("focus", "hyperfocal"):
@@ -132,15 +133,15 @@ class DepthOfField:
 def depth_of_field(
     *, focal_length: float, f_number: float, focus: float, coc: float
 ) -> DepthOfField:
-    """Near and far limits of the depth of field of a thin lens.
+    r"""Near and far limits of the depth of field of a thin lens.
 
     ``focal_length``, ``focus`` (the distance ``s``) and ``coc`` in metres; every parameter is
     keyword-only.
 
     .. math::
 
-        D_n = \\frac{s (H - f)}{H + s - 2f}, \\qquad
-        D_f = \\frac{s (H - f)}{H - s}\\ (s < H), \\quad D_f = \\infty\\ (s \\ge H)
+        D_n = \frac{s (H - f)}{H + s - 2f}, \qquad
+        D_f = \frac{s (H - f)}{H - s}\ (s < H), \quad D_f = \infty\ (s \ge H)
 
     with ``s`` the focus distance and ``H`` the :func:`hyperfocal_distance`. At ``D_n`` and
     ``D_f`` the :func:`circle_of_confusion` equals ``coc`` exactly.
@@ -170,11 +171,11 @@ def depth_of_field(
 
 @_deprecate.parameters(renamed={"f": "focal_length"})
 def circle_of_confusion(depth: Any, *, focal_length: float, f_number: float, focus: float) -> Any:
-    """Blur-spot diameter on the sensor (m) of a point at ``depth`` when focused at ``focus``.
+    r"""Blur-spot diameter on the sensor (m) of a point at ``depth`` when focused at ``focus``.
 
     .. math::
 
-        c(d) = \\frac{f}{N} \\cdot \\frac{|d - s|}{d} \\cdot \\frac{f}{s - f}
+        c(d) = \frac{f}{N} \cdot \frac{|d - s|}{d} \cdot \frac{f}{s - f}
 
     Parameters
     ----------

@@ -92,7 +92,7 @@ def _pupil_coords(rho: Any, theta: Any) -> tuple[np.ndarray, np.ndarray, tuple[i
 
 
 def noll_to_nm(j: int) -> tuple[int, int]:
-    """The radial order ``n`` and azimuthal frequency ``m`` of Noll's ``j``-th Zernike term.
+    """Return the radial order ``n`` and azimuthal frequency ``m`` of Noll's ``j``-th Zernike term.
 
     Noll (1976), *J. Opt. Soc. Am.* 66, 207, Table I: terms are ordered by ``n``, then by
     ``|m|``; within a pair of equal ``|m| > 0`` the even ``j`` takes ``cos(m theta)`` (here
@@ -118,12 +118,12 @@ def noll_to_nm(j: int) -> tuple[int, int]:
 
 
 def zernike_radial(n: int, m: int, rho: Any) -> np.ndarray:
-    """The Zernike radial polynomial :math:`R_n^{|m|}(\\rho)` (unnormalised, ``R(1) = 1``).
+    r"""Evaluate the Zernike radial polynomial :math:`R_n^{|m|}(\rho)` (unnormalised, ``R(1) = 1``).
 
     .. math::
 
-        R_n^{m}(\\rho) = \\sum_{s=0}^{(n-m)/2}
-            \\frac{(-1)^s (n-s)!}{s!\\,(\\tfrac{n+m}{2}-s)!\\,(\\tfrac{n-m}{2}-s)!}\\,\\rho^{n-2s}
+        R_n^{m}(\rho) = \sum_{s=0}^{(n-m)/2}
+            \frac{(-1)^s (n-s)!}{s!\,(\tfrac{n+m}{2}-s)!\,(\tfrac{n-m}{2}-s)!}\,\rho^{n-2s}
 
     (Noll 1976, eq. 2; Born & Wolf, *Principles of Optics*, sec. 9.2.) ``n - |m|`` must be even
     and non-negative.
@@ -160,17 +160,17 @@ def _radial(n: int, m: int, r: np.ndarray, *, check: bool = True) -> np.ndarray:
 
 
 def zernike(j: int, rho: Any, theta: Any) -> np.ndarray:
-    """Noll's ``j``-th Zernike polynomial, unit RMS over the unit disc.
+    r"""Noll's ``j``-th Zernike polynomial, unit RMS over the unit disc.
 
     .. math::
 
-        Z_j = \\sqrt{n+1}\\,R_n^0(\\rho) \\ (m = 0),\\qquad
-        Z_j = \\sqrt{2(n+1)}\\,R_n^{|m|}(\\rho)\\,
-              \\begin{cases}\\cos m\\theta & j\\ \\text{even}\\\\
-                            \\sin |m|\\theta & j\\ \\text{odd}\\end{cases}
+        Z_j = \sqrt{n+1}\,R_n^0(\rho) \ (m = 0),\qquad
+        Z_j = \sqrt{2(n+1)}\,R_n^{|m|}(\rho)\,
+              \begin{cases}\cos m\theta & j\ \text{even}\\
+                            \sin |m|\theta & j\ \text{odd}\end{cases}
 
-    so that :math:`\\frac{1}{\\pi}\\int_0^1\\!\\int_0^{2\\pi} Z_j Z_{j'}\\,\\rho\\,d\\theta\\,d\\rho
-    = \\delta_{jj'}` (Noll 1976, eqs. 3-4). Named terms: 1 piston, 2-3 tilt, 4 defocus,
+    so that :math:`\frac{1}{\pi}\int_0^1\!\int_0^{2\pi} Z_j Z_{j'}\,\rho\,d\theta\,d\rho
+    = \delta_{jj'}` (Noll 1976, eqs. 3-4). Named terms: 1 piston, 2-3 tilt, 4 defocus,
     5-6 astigmatism, 7-8 coma, 9-10 trefoil, 11 primary spherical, 22 secondary spherical.
     Any ``j >= 1`` is computed from the general formula.
 
@@ -227,11 +227,11 @@ def _coefficients(coefficients: Any) -> dict[int, float]:
 
 
 def zernike_wavefront(coefficients: Any, rho: Any, theta: Any) -> np.ndarray:
-    """The wavefront :math:`W(\\rho, \\theta) = \\sum_j c_j Z_j(\\rho, \\theta)`.
+    r"""Compute the wavefront :math:`W(\rho, \theta) = \sum_j c_j Z_j(\rho, \theta)`.
 
     ``coefficients`` is a mapping ``{j: c_j}`` (Noll ``j``) or a sequence whose index 0 is
     ``j = 1``; ``W`` is in the coefficients' unit (metres in this module; each ``c_j`` is that
-    term's RMS over the pupil, so the total RMS is :math:`\\sqrt{\\sum_{j>1} c_j^2}`).
+    term's RMS over the pupil, so the total RMS is :math:`\sqrt{\sum_{j>1} c_j^2}`).
 
     Examples
     --------
@@ -257,17 +257,19 @@ def zernike_wavefront(coefficients: Any, rho: Any, theta: Any) -> np.ndarray:
 
 
 def zernike_defocus(coc: Any, *, f_number: float) -> Any:
-    """The Zernike defocus coefficient (Noll ``j = 4``, metres RMS) of a geometric blur circle.
+    r"""Return the Zernike defocus coefficient (Noll ``j = 4``) of a geometric blur circle.
+
+    The coefficient is in metres RMS.
 
     A focusing error ``dz`` behind a lens of working f-number ``N`` adds the wavefront
-    :math:`W_{020}\\rho^2` with :math:`W_{020} = dz / (8 N^2)` (Goodman eq. 6-42 at the
+    :math:`W_{020}\rho^2` with :math:`W_{020} = dz / (8 N^2)` (Goodman eq. 6-42 at the
     pupil's rim, paraxial); geometric optics images a point as a disc of diameter
     ``c = dz / N`` (the circle of confusion, :func:`imageform.optics.circle_of_confusion`).
-    Since :math:`\\rho^2 = (1 + Z_4/\\sqrt{3}) / 2`, the Noll coefficient is
+    Since :math:`\rho^2 = (1 + Z_4/\sqrt{3}) / 2`, the Noll coefficient is
 
     .. math::
 
-        c_4 = \\frac{W_{020}}{2\\sqrt{3}} = \\frac{c}{16\\sqrt{3}\\,N}
+        c_4 = \frac{W_{020}}{2\sqrt{3}} = \frac{c}{16\sqrt{3}\,N}
 
     (piston dropped). ``coc`` in metres (scalar or array, >= 0); the sign of the defocus is
     lost in ``c``, and the PSF of ``+c_4`` and ``-c_4`` are mirror images anyway.
@@ -287,11 +289,14 @@ def zernike_defocus(coc: Any, *, f_number: float) -> Any:
 
 
 def _disc_grid(diameter: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Amplitude, rho and theta of a disc ``diameter`` samples wide (any real > 0) centred on
-    a grid point of an even-sized square grid. Samples are in (1) or out (0) by their centre
-    (``rho <= 1``): the discrete autocorrelation of a point-sampled disc matches the analytic
-    MTF to ~2e-4 at 256 samples, where an area-weighted (grey) rim is ten times worse (its
-    ``sum a^2 < sum a`` biases the zero-frequency normalisation by ~2/(3D))."""
+    """Return amplitude, rho and theta of a disc ``diameter`` samples wide on a square grid.
+
+    The diameter is any real > 0; the disc is centred on a grid point of an even-sized square
+    grid. Samples are in (1) or out (0) by their centre (``rho <= 1``): the discrete
+    autocorrelation of a point-sampled disc matches the analytic MTF to ~2e-4 at 256
+    samples, where an area-weighted (grey) rim is ten times worse (its ``sum a^2 < sum a``
+    biases the zero-frequency normalisation by ~2/(3D)).
+    """
     size = 2 * (math.ceil(diameter / 2) + 1)
     c = np.arange(size, dtype=np.float64) - size // 2
     y, x = c[:, None], c[None, :]
@@ -306,7 +311,7 @@ def pupil_function(
     n_samples: float = 256,
     aperture: Any = None,
 ) -> np.ndarray:
-    """The complex pupil function :math:`P = A\\,\\exp(2\\pi i\\,W / \\lambda)`.
+    r"""Return the complex pupil function :math:`P = A\,\exp(2\pi i\,W / \lambda)`.
 
     Goodman, *Introduction to Fourier Optics*, eq. 6-39 (the generalised pupil function):
     ``A`` is the aperture's amplitude transmission and ``W`` the wavefront aberration
@@ -377,17 +382,17 @@ def _as_aperture(aperture: Any) -> np.ndarray:
 
 
 def psf_from_pupil(pupil: Any, *, pad_to: int) -> np.ndarray:
-    """The intensity PSF of ``pupil`` zero-padded to ``pad_to`` samples: the Fraunhofer FFT.
+    r"""Compute the intensity PSF of ``pupil`` zero-padded to ``pad_to`` samples (Fraunhofer FFT).
 
     .. math::
 
-        h[k, l] = \\frac{1}{M^2}\\Big|\\sum_{p, q} P[p, q]\\,
-                  e^{-2\\pi i (kp + lq)/M}\\Big|^2,\\qquad M = \\text{pad\\_to}
+        h[k, l] = \frac{1}{M^2}\Big|\sum_{p, q} P[p, q]\,
+                  e^{-2\pi i (kp + lq)/M}\Big|^2,\qquad M = \text{pad\_to}
 
     (Goodman, eq. 6-13: the coherent impulse response is the Fourier transform of the
-    pupil). By Parseval the sum of ``h`` equals :math:`\\sum |P|^2`, the transmitted energy,
+    pupil). By Parseval the sum of ``h`` equals :math:`\sum |P|^2`, the transmitted energy,
     so the PSF is *not* renormalised here. If the pupil is ``D`` samples wide, the image
-    sample spacing is :math:`\\lambda N D / M = \\lambda N / Q` with ``Q = M / D`` (``Q >= 2``
+    sample spacing is :math:`\lambda N D / M = \lambda N / Q` with ``Q = M / D`` (``Q >= 2``
     samples the PSF at or above Nyquist). The optical axis is at ``(M // 2, M // 2)``.
 
     Examples
@@ -414,9 +419,11 @@ _NAMES = "wavelength, f_number and pixel_pitch"
 def _check_sampling(
     lam: float, f_number: float, pitch: float, size: int | None, n_pupil: float, names: str
 ) -> None:
-    """Refuse, before any integer is formed, a sampling whose padded pupil would not fit:
+    """Refuse, before any integer is formed, a sampling whose padded pupil would not fit.
+
     ``Q = lambda N / pitch`` sets the FFT size (about ``Q n_pupil``, or ``k (size + 1)`` with
-    ``k = 2 / Q`` when ``Q < 2``); its ``(M, D)`` complex rows must fit the memory limit."""
+    ``k = 2 / Q`` when ``Q < 2``); its ``(M, D)`` complex rows must fit the memory limit.
+    """
     with np.errstate(all="ignore"):
         q = np.float64(lam) * f_number / pitch
         k = 1.0 if q >= 2 else 2.0 / q
@@ -487,24 +494,24 @@ def diffraction_psf(
     n_pupil: int = 256,
     aperture: Any = None,
 ) -> np.ndarray:
-    """The diffraction PSF of an (aberrated) circular pupil, sampled at ``pixel_pitch``.
+    r"""Compute the diffraction PSF of an (aberrated) circular pupil, sampled at ``pixel_pitch``.
 
     The pupil function (:func:`pupil_function`) is Fourier transformed
     (:func:`psf_from_pupil`). An FFT of ``M`` samples over a pupil ``D`` samples wide gives
-    image samples :math:`\\Delta = \\lambda N D / M`, so the padding ratio must be
+    image samples :math:`\Delta = \lambda N D / M`, so the padding ratio must be
 
     .. math::
 
-        Q = \\frac{M}{D} = \\frac{\\lambda N}{\\Delta}
+        Q = \frac{M}{D} = \frac{\lambda N}{\Delta}
 
-    (Goodman, sec. 4.2 and 6.2; :math:`\\lambda N` is the image-space scale of the pupil's
+    (Goodman, sec. 4.2 and 6.2; :math:`\lambda N` is the image-space scale of the pupil's
     Fourier transform, :math:`f / D = N`). **Approach: the pupil is sized to the FFT.** ``M``
     is the next fast FFT length at or above ``Q n_pupil`` (and the output size), and the
     circular aperture is drawn ``D = M / Q`` samples wide (``D >= n_pupil``, not necessarily
     whole), so the FFT grid spacing *equals* ``pixel_pitch`` exactly and no image-plane
     resampling is done (only the ``size`` output rows and columns are transformed: the
     pupil's rows first, then the kept columns). When ``Q < 2`` (pixels coarser than the
-    Nyquist spacing :math:`\\lambda N / 2`), the PSF is computed on a grid ``k = ceil(2/Q)``
+    Nyquist spacing :math:`\lambda N / 2`), the PSF is computed on a grid ``k = ceil(2/Q)``
     times finer and point-sampled every ``k``-th sample. A given ``aperture`` array keeps its
     own width ``D = M_a``; the PSF is then computed at the nearest FFT spacing and resampled
     to ``pixel_pitch`` with cubic splines (accurate to about 1e-3 of the peak when Q >= 2).
@@ -570,11 +577,11 @@ def polychromatic_psf(
     n_pupil: int = 256,
     aperture: Any = None,
 ) -> np.ndarray:
-    """A polychromatic PSF: the weighted sum of unit-sum monochromatic PSFs.
+    r"""Compute a polychromatic PSF: the weighted sum of unit-sum monochromatic PSFs.
 
     .. math::
 
-        h = \\frac{\\sum_i w_i\\, h_{\\lambda_i}}{\\sum_i w_i}
+        h = \frac{\sum_i w_i\, h_{\lambda_i}}{\sum_i w_i}
 
     (incoherent superposition; Goodman sec. 6.1.2). ``weights`` (default equal) are the
     relative detected energies per wavelength, e.g. the source spectrum times the channel's
@@ -674,15 +681,15 @@ def field_psfs(
 
 
 def otf(psf: Any, *, pixel_pitch: float) -> TransferFunction:
-    """The optical transfer function of a sampled PSF, frequencies in cycles/mm.
+    r"""Compute the optical transfer function of a sampled PSF, frequencies in cycles/mm.
 
     .. math::
 
-        \\mathrm{OTF}(f_x, f_y) = \\frac{\\sum_{k,l} h[k,l]\\, e^{-2\\pi i (f_x x_l + f_y y_k)}}
-                                       {\\sum_{k,l} h[k,l]}
+        \mathrm{OTF}(f_x, f_y) = \frac{\sum_{k,l} h[k,l]\, e^{-2\pi i (f_x x_l + f_y y_k)}}
+                                       {\sum_{k,l} h[k,l]}
 
     with pixel ``(n // 2, n // 2)`` as the origin (Goodman eq. 6-28), on the DFT grid
-    :math:`f = j / (n\\,\\Delta)`, shifted so that zero frequency is at ``(n // 2, n // 2)``.
+    :math:`f = j / (n\,\Delta)`, shifted so that zero frequency is at ``(n // 2, n // 2)``.
 
     Examples
     --------
@@ -708,7 +715,7 @@ def otf(psf: Any, *, pixel_pitch: float) -> TransferFunction:
 
 
 def mtf(psf: Any, *, pixel_pitch: float) -> TransferFunction:
-    """The modulation transfer function :math:`|\\mathrm{OTF}|` (1 at zero frequency).
+    r"""Compute the modulation transfer function :math:`|\mathrm{OTF}|` (1 at zero frequency).
 
     Frequencies in cycles/mm, on the grid of :func:`otf`.
 
@@ -726,14 +733,14 @@ def mtf(psf: Any, *, pixel_pitch: float) -> TransferFunction:
 
 
 def diffraction_limited_mtf(frequency: Any, *, wavelength: float, f_number: float) -> np.ndarray:
-    """The MTF of an aberration-free circular pupil (incoherent light).
+    r"""Compute the MTF of an aberration-free circular pupil (incoherent light).
 
     .. math::
 
-        \\mathrm{MTF}(\\nu) = \\frac{2}{\\pi}\\left(\\arccos x - x\\sqrt{1 - x^2}\\right),
-        \\quad x = \\frac{\\nu}{\\nu_c},\\ \\nu_c = \\frac{1}{\\lambda N}
+        \mathrm{MTF}(\nu) = \frac{2}{\pi}\left(\arccos x - x\sqrt{1 - x^2}\right),
+        \quad x = \frac{\nu}{\nu_c},\ \nu_c = \frac{1}{\lambda N}
 
-    and 0 for :math:`x \\ge 1` (Goodman eq. 6-31). ``frequency`` in cycles/mm (its absolute
+    and 0 for :math:`x \ge 1` (Goodman eq. 6-31). ``frequency`` in cycles/mm (its absolute
     value is used), ``wavelength`` in metres.
 
     Examples
@@ -754,12 +761,12 @@ def diffraction_limited_mtf(frequency: Any, *, wavelength: float, f_number: floa
 
 
 def pixel_mtf(frequency: Any, *, pixel_pitch: float, fill_factor: float = 1.0) -> np.ndarray:
-    """The MTF of a square pixel aperture (uniform response over its active area).
+    r"""Compute the MTF of a square pixel aperture (uniform response over its active area).
 
     .. math::
 
-        \\mathrm{MTF}_{pix}(\\nu) = |\\mathrm{sinc}(\\nu\\, a)|,\\qquad
-        a = p \\sqrt{F},\\ \\mathrm{sinc}(t) = \\frac{\\sin \\pi t}{\\pi t}
+        \mathrm{MTF}_{pix}(\nu) = |\mathrm{sinc}(\nu\, a)|,\qquad
+        a = p \sqrt{F},\ \mathrm{sinc}(t) = \frac{\sin \pi t}{\pi t}
 
     along one axis, for pixels of pitch ``p`` whose active area is a centred square holding
     the fraction ``F`` (the fill factor) of the pixel (Goodman sec. 6.3; Boreman, *Modulation

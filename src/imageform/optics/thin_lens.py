@@ -46,6 +46,7 @@ class ThinLensSolution:
     f = _deprecate.renamed_property("focal_length", "imageform.optics.ThinLensSolution.f")
 
     def __post_init__(self) -> None:
+        """Check the fields: finite reals (complex, NaN, inf, None refused by name)."""
         # issue 16: a solution holds finite reals (complex, NaN, inf, None refused by name)
         for name, kw in (
             ("focal_length", {"positive": True}),
@@ -80,11 +81,11 @@ def thin_lens(
     d_i: float | None = None,
     allow_virtual: bool = False,
 ) -> ThinLensSolution:
-    """Solve the Gaussian thin-lens equation for whichever of ``f``, ``d_o``, ``d_i`` is missing.
+    r"""Solve the Gaussian thin-lens equation for whichever of ``f``, ``d_o``, ``d_i`` is missing.
 
     .. math::
 
-        \\frac{1}{f} = \\frac{1}{d_o} + \\frac{1}{d_i}, \\qquad m = -\\frac{d_i}{d_o}
+        \frac{1}{f} = \frac{1}{d_o} + \frac{1}{d_i}, \qquad m = -\frac{d_i}{d_o}
 
     Parameters
     ----------
@@ -177,13 +178,13 @@ def thin_lens(
 
 @_deprecate.parameters(renamed={"f": "focal_length"}, positional=("focal_length", "d_o"))
 def magnification(*, focal_length: float, d_o: float, allow_virtual: bool = False) -> float:
-    """Lateral magnification of an object at ``d_o`` through a thin lens of focal length ``f``.
+    r"""Lateral magnification of an object at ``d_o`` through a thin lens of focal length ``f``.
 
     ``focal_length`` and ``d_o`` in metres, keyword-only.
 
     .. math::
 
-        m = -\\frac{d_i}{d_o} = \\frac{f}{f - d_o}
+        m = -\frac{d_i}{d_o} = \frac{f}{f - d_o}
 
     Negative values mean an inverted real image. Source: Hecht, *Optics*, 5th ed., eq. (5.24).
 
@@ -199,13 +200,13 @@ def magnification(*, focal_length: float, d_o: float, allow_virtual: bool = Fals
     renamed={"f": "focal_length"}, positional=("focal_length", "aperture_diameter")
 )
 def f_number(*, focal_length: float, aperture_diameter: float) -> float:
-    """The f-number ``N = f / D`` of a lens with entrance-pupil diameter ``D`` (metres).
+    r"""Return the f-number ``N = f / D`` of a lens with entrance-pupil diameter ``D`` (metres).
 
     ``focal_length`` and ``aperture_diameter`` in metres, keyword-only.
 
     .. math::
 
-        N = \\frac{f}{D}
+        N = \frac{f}{D}
 
     Source: Hecht, *Optics*, 5th ed., §5.3.3.
 

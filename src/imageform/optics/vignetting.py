@@ -70,13 +70,13 @@ def field_angle(
 def cos4_falloff(
     shape: tuple[int, int], *, focal_length: float, center: tuple[float, float] | None = None
 ) -> np.ndarray:
-    """Relative illumination of the natural vignetting law, ``cos⁴ θ``; shape ``(H, W)``.
+    r"""Relative illumination of the natural vignetting law, ``cos⁴ θ``; shape ``(H, W)``.
 
     ``focal_length`` (keyword-only) is in pixels, ``center`` as in :func:`field_angle`.
 
     .. math::
 
-        \\frac{E(\\theta)}{E(0)} = \\cos^4\\theta = \\left(\\frac{f^2}{f^2 + r^2}\\right)^2
+        \frac{E(\theta)}{E(0)} = \cos^4\theta = \left(\frac{f^2}{f^2 + r^2}\right)^2
 
     One cosine from the obliquity of the pupil seen from the pixel, one from the tilt of the
     sensor, two from the inverse-square distance to the pupil. Source: E. Hecht, *Optics*,
@@ -92,13 +92,13 @@ def cos4_falloff(
 
 
 def pupil_overlap_fraction(pupil_radius: float, stop_radius: float, offset: Any) -> Any:
-    """Fraction of a circular pupil (radius ``a``) inside a circle of radius ``b`` at ``offset``.
+    r"""Fraction of a circular pupil (radius ``a``) inside a circle of radius ``b`` at ``offset``.
 
     .. math::
 
-        \\frac{A(a, b, d)}{\\pi a^2},\\ A = a^2 \\cos^{-1}\\frac{d^2 + a^2 - b^2}{2da}
-        + b^2 \\cos^{-1}\\frac{d^2 + b^2 - a^2}{2db}
-        - \\tfrac12\\sqrt{(-d+a+b)(d+a-b)(d-a+b)(d+a+b)}
+        \frac{A(a, b, d)}{\pi a^2},\ A = a^2 \cos^{-1}\frac{d^2 + a^2 - b^2}{2da}
+        + b^2 \cos^{-1}\frac{d^2 + b^2 - a^2}{2db}
+        - \tfrac12\sqrt{(-d+a+b)(d+a-b)(d-a+b)(d+a+b)}
 
     (the area of intersection of two circles, Weisstein, MathWorld "Circle-Circle
     Intersection", eq. 14). 1 when the pupil lies inside, 0 when they do not overlap.
@@ -145,7 +145,7 @@ def mechanical_vignetting(
     barrel_distance: float,
     center: tuple[float, float] | None = None,
 ) -> np.ndarray:
-    """Relative illumination when a lens barrel clips the oblique beam; shape ``(H, W)``.
+    r"""Relative illumination when a lens barrel clips the oblique beam; shape ``(H, W)``.
 
     At field angle θ the beam that fills the aperture stop (radius ``a = pupil_radius``) is
     displaced by ``d = L tan θ`` where it passes the barrel's opening (radius
@@ -154,7 +154,7 @@ def mechanical_vignetting(
 
     .. math::
 
-        V(\\theta) = \\frac{A(a, b, L\\tan\\theta)}{\\pi a^2}
+        V(\theta) = \frac{A(a, b, L\tan\theta)}{\pi a^2}
 
     ``focal_length`` is in pixels and ``center`` as in :func:`field_angle`; the other lengths
     in one unit (e.g. metres). Source: S. F. Ray, *Applied Photographic Optics*, §23

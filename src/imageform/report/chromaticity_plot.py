@@ -38,8 +38,9 @@ CCT_TICKS = (1500.0, 2000.0, 2856.0, 4000.0, 5000.0, 6500.0, 10000.0)
 def planckian_locus(
     temperatures: Sequence[float] | np.ndarray, coords: str = "xy", *, observer: int = 2
 ) -> np.ndarray:
-    """Chromaticities (N, 2) of black bodies, integrated from Planck's law (CIE 015:2018 eq. 4.1)
-    with the CIE colour-matching functions.
+    """Return the chromaticities (N, 2) of black bodies, integrated from Planck's law.
+
+    Planck's law (CIE 015:2018 eq. 4.1) is integrated with the CIE colour-matching functions.
 
     Examples
     --------

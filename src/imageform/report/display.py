@@ -19,7 +19,7 @@ DISPLAY_PERCENTILE = 99.0
 
 
 def _host(image: object) -> object:
-    """A PyTorch tensor as a NumPy array (on the host); anything else as it is."""
+    """Return a PyTorch tensor as a NumPy array (on the host); anything else as it is."""
     if type(image).__module__.startswith("torch"):
         return image.detach().cpu().numpy()  # type: ignore[attr-defined]
     return image
@@ -45,12 +45,12 @@ def stage_display_image(
     white_level: float | None = None,
     percentile: float = DISPLAY_PERCENTILE,
 ) -> np.ndarray:
-    """The 8-bit sRGB picture ``(H, W, 3)`` uint8 of one stage of the chain.
+    r"""Return the 8-bit sRGB picture ``(H, W, 3)`` uint8 of one stage of the chain.
 
     - ``"linear"`` (linear light, any scale): divide by the ``percentile``-th percentile
       ``p`` of all values, then sRGB-encode:
 
-      .. math:: V = \\mathrm{sRGB}\\big(\\min(\\max(L / p, 0), 1)\\big)
+      .. math:: V = \mathrm{sRGB}\big(\min(\max(L / p, 0), 1)\big)
 
       (an all-zero image stays black).
     - ``"raw"`` (digital numbers, ``(H, W)``): grey ``V = DN / white_level``.
@@ -133,8 +133,9 @@ def stage_display_image(
 
 
 def raw_to_uint16(image: np.ndarray) -> np.ndarray | None:
-    """The raw digital numbers as uint16 when they are whole numbers in [0, 65535], else None
-    (the caller then keeps them as a float TIFF: nothing is rounded or clipped).
+    """Return the raw digital numbers as uint16 if they are whole numbers in [0, 65535], else None.
+
+    The caller then keeps them as a float TIFF: nothing is rounded or clipped.
 
     Examples
     --------

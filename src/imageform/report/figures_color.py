@@ -1,5 +1,7 @@
-"""The simulation report's colour and sensor figures (matplotlib, Agg): patch chromaticities
-through the white balance, ΔE00 and SNR per ColorChecker patch, the photon-transfer curve.
+"""The simulation report's colour and sensor figures (matplotlib, Agg).
+
+Patch chromaticities through the white balance, ΔE00 and SNR per ColorChecker patch, the
+photon-transfer curve.
 
 Each function returns a matplotlib Figure, or ``None`` when the result has nothing to draw
 (no ColorChecker, no photon-transfer data); the report then leaves the section out with a
@@ -66,8 +68,10 @@ def truth_xy(measurements: PatchMeasurements) -> np.ndarray:
 
 
 def _zoom_background(ax: Any) -> None:
-    """The lines of the chromaticity diagram (spectral locus, sRGB gamut, Planckian locus with
-    CCT ticks) without the coloured fill, for the zoomed panel."""
+    """Draw the lines of the chromaticity diagram without the coloured fill, for the zoomed panel.
+
+    The lines are the spectral locus, the sRGB gamut and the Planckian locus with CCT ticks.
+    """
     from imageform.color.chromaticity import spectral_locus
     from imageform.color.gamut import gamut_triangle
     from imageform.report.chromaticity_plot import CCT_TICKS, planckian_locus
@@ -96,11 +100,12 @@ def _zoom_background(ax: Any) -> None:
 def plot_patch_chromaticity(
     result: SimulationResult, measurements: PatchMeasurements | None = None
 ) -> Any:
-    """The CIE 1931 xy diagram with every patch at each stage of ``result.patch_xy`` (e.g.
-    before and after white balance, after colour correction), a thin line joining each
-    patch's positions in order, and the ground truth (from ``lab_d65``) when
-    ``measurements`` is given. Left: the whole diagram; right: zoomed on the patches.
-    ``None`` when ``patch_xy`` is empty.
+    """Plot every patch at each stage of ``result.patch_xy`` on the CIE 1931 xy diagram.
+
+    The stages are e.g. before and after white balance, after colour correction; a thin line joins
+    each patch's positions in order, and the ground truth (from ``lab_d65``) is drawn when
+    ``measurements`` is given. Left: the whole diagram; right: zoomed on the patches. ``None`` when
+    ``patch_xy`` is empty.
 
     Raises
     ------
@@ -164,8 +169,10 @@ def _bar_colours(m: PatchMeasurements) -> np.ndarray:
 
 
 def plot_delta_e(measurements: PatchMeasurements | None) -> Any:
-    """Bar chart of CIEDE2000 per patch (bars in the patch's true colour), with the mean and
-    the lecture's bands at 1, 3 and 10. ``None`` without measurements."""
+    """Plot a bar chart of CIEDE2000 per patch (bars in the patch's true colour).
+
+    With the mean and the lecture's bands at 1, 3 and 10. ``None`` without measurements.
+    """
     if measurements is None:
         return None
     check_measurements(measurements)
@@ -193,8 +200,10 @@ def plot_delta_e(measurements: PatchMeasurements | None) -> Any:
 
 
 def plot_patch_snr(measurements: PatchMeasurements | None) -> Any:
-    """Bar chart of ``snr_luminance_db`` of every patch (the SNR of the window's luminance).
-    ``None`` without measurements."""
+    """Plot a bar chart of ``snr_luminance_db`` of every patch (the SNR of the window's luminance).
+
+    ``None`` without measurements.
+    """
     if measurements is None:
         return None
     check_measurements(measurements)
@@ -222,9 +231,11 @@ def plot_patch_snr(measurements: PatchMeasurements | None) -> Any:
 
 
 def photon_transfer_summary(result: SimulationResult) -> dict[str, Any] | None:
-    """The photon-transfer data as plain numbers plus the EMVA 1288 fit
-    (:func:`imageform.sensor.fit_photon_transfer`); ``fit`` is ``None`` with a ``fit_error``
-    when the data cannot be fitted. ``None`` without data."""
+    """Return the photon-transfer data as plain numbers plus the EMVA 1288 fit.
+
+    The fit is :func:`imageform.sensor.fit_photon_transfer`'s; ``fit`` is ``None`` with a
+    ``fit_error`` when the data cannot be fitted. ``None`` without data.
+    """
     check_result(result)
     from imageform.errors import ImageformError
     from imageform.sensor.emva import fit_photon_transfer
@@ -259,10 +270,11 @@ def photon_transfer_summary(result: SimulationResult) -> dict[str, Any] | None:
 
 
 def plot_photon_transfer(summary: dict[str, Any] | None) -> Any:
-    """The photon-transfer curve: temporal variance against mean signal, both
-    dark-corrected (EMVA 1288 4.0, §6.3, eq. 31), with the fitted line
-    ``σ² = K μ`` up to saturation. ``summary`` from :func:`photon_transfer_summary`;
-    ``None`` without it."""
+    """Plot the photon-transfer curve: temporal variance against mean signal, both dark-corrected.
+
+    As in EMVA 1288 4.0, §6.3, eq. 31, with the fitted line ``σ² = K μ`` up to saturation.
+    ``summary`` from :func:`photon_transfer_summary`; ``None`` without it.
+    """
     if summary is None:
         return None
     plt = _pyplot()

@@ -1,5 +1,7 @@
-r"""The simulation report's geometry figures: the scene and the camera frustum seen from above,
-and the vanishing point and horizon drawn on the output image.
+r"""The simulation report's geometry figures.
+
+The scene and the camera frustum seen from above, and the vanishing point and horizon drawn on the
+output image.
 
 The top view looks down the world's up axis (``SimulationResult.world_up``; the simulator's
 world is z up) and is turned so that the camera looks up the page: a world point X is drawn
@@ -44,8 +46,9 @@ __all__ = [
 
 
 def image_corner_pixels(width: int, height: int) -> np.ndarray:
-    """The outer corners ``(4, 2)`` of the image (pixel edges, centre of the top-left pixel at
-    (0, 0)), clockwise from the top left.
+    """Return the outer corners ``(4, 2)`` of the image, clockwise from the top left.
+
+    Corners at the pixel edges, with the centre of the top-left pixel at (0, 0).
 
     Examples
     --------
@@ -58,9 +61,10 @@ def image_corner_pixels(width: int, height: int) -> np.ndarray:
 
 
 def top_view_axes(R: Any, world_up: Any) -> tuple[np.ndarray, np.ndarray]:
-    """The unit vectors ``(right, ahead)`` of the top view in world coordinates: ``ahead``
-    the camera's optical axis (or, looking straight down, its image-up direction) flattened
-    onto the ground plane perpendicular to ``world_up``; ``right = ahead x up``.
+    """Return the unit vectors ``(right, ahead)`` of the top view in world coordinates.
+
+    ``ahead`` is the camera's optical axis (or, looking straight down, its image-up direction)
+    flattened onto the ground plane perpendicular to ``world_up``; ``right = ahead x up``.
 
     Examples
     --------
@@ -89,15 +93,17 @@ def top_view_axes(R: Any, world_up: Any) -> tuple[np.ndarray, np.ndarray]:
 
 
 def top_view_project(points: Any, data: dict[str, Any]) -> np.ndarray:
-    """World points ``(N, 3)`` to top-view coordinates ``(N, 2)`` (metres): right of the
-    camera, ahead of it (the camera centre at the origin). ``data`` from
-    :func:`top_view_data`."""
+    """Project world points ``(N, 3)`` to top-view coordinates ``(N, 2)`` (metres).
+
+    The coordinates are right of the camera and ahead of it (the camera centre at the origin).
+    ``data`` from :func:`top_view_data`.
+    """
     X = np.asarray(points, dtype=np.float64).reshape(-1, 3) - data["camera_center_m"]
     return np.stack([X @ data["view_right"], X @ data["view_ahead"]], axis=-1)
 
 
 def top_view_data(result: SimulationResult) -> dict[str, Any]:
-    """What the top view draws, in world coordinates (metres).
+    """Return what the top view draws, in world coordinates (metres).
 
     ``camera_center_m`` :math:`C = -R^T t`; ``frustum_far_corners_m`` ``(4, 3)`` the points
     imaged at the image corners at camera depth ``frustum_depth_m`` (``Camera.unproject``),
@@ -133,10 +139,12 @@ def top_view_data(result: SimulationResult) -> dict[str, Any]:
 
 
 def plot_top_view(data: dict[str, Any]) -> Any:
-    """Figure: the scene from above (looking down ``world_up``), the camera looking up the
-    page: the objects' outlines, the camera centre at the origin, the frustum rays through
-    the image corners and the optical axis, all :func:`top_view_project`-ed. ``data`` from
-    :func:`top_view_data`."""
+    """Plot the scene from above (looking down ``world_up``), the camera looking up the page.
+
+    The figure shows the objects' outlines, the camera centre at the origin, the frustum rays
+    through the image corners and the optical axis, all :func:`top_view_project`-ed. ``data`` from
+    :func:`top_view_data`.
+    """
     from imageform.report.figures_color import _pyplot
 
     plt = _pyplot()
@@ -201,13 +209,14 @@ def _world_axes(ax: Any, data: dict[str, Any]) -> None:
 
 
 def vanishing_summary(result: SimulationResult) -> dict[str, Any] | None:
-    """True and detected vanishing point ``vanishing_point_px``,
-    ``detected_vanishing_point_px`` (homogeneous pixel coordinates ``(u, v, 1)``, or
-    ``(x, y, 0)`` at infinity) and horizon ``horizon_px``, ``detected_horizon_px`` (the line
-    ``a u + b v + c = 0`` in pixel coordinates), with
-    :func:`imageform.simulate.truth.vanishing_errors`: ``vanishing_point_error_px``
-    (distance of the finite points; ``None`` without a detection) and
-    ``horizon_angle_error_deg``. ``None`` without rails.
+    """Return the true and detected vanishing point and horizon, with their errors.
+
+    The vanishing points ``vanishing_point_px``, ``detected_vanishing_point_px`` (homogeneous pixel
+    coordinates ``(u, v, 1)``, or ``(x, y, 0)`` at infinity) and horizons ``horizon_px``,
+    ``detected_horizon_px`` (the line ``a u + b v + c = 0`` in pixel coordinates), with
+    :func:`imageform.simulate.truth.vanishing_errors`: ``vanishing_point_error_px`` (distance of the
+    finite points; ``None`` without a detection) and ``horizon_angle_error_deg``. ``None`` without
+    rails.
 
     Examples
     --------
@@ -243,9 +252,11 @@ def vanishing_summary(result: SimulationResult) -> dict[str, Any] | None:
 
 
 def vanishing_overlay(result: SimulationResult, display: np.ndarray) -> Any:
-    """The output picture ``display`` (uint8 RGB) with the true and detected vanishing point
-    and horizon (:func:`imageform.report.overlays.draw_vanishing_truth_overlay`); ``None``
-    without rails."""
+    """Return the output picture ``display`` (uint8 RGB) with the vanishing points and horizons.
+
+    The true and detected ones are drawn by
+    :func:`imageform.report.overlays.draw_vanishing_truth_overlay`; ``None`` without rails.
+    """
     check_result(result)
     from imageform.report.overlays import _to_rgb8, draw_vanishing_truth_overlay
 

@@ -1,5 +1,6 @@
-"""The simulation report: one self-contained ``report.html``, ``metrics.json`` and every stage
-as a PNG file.
+"""The simulation report: one self-contained ``report.html``, ``metrics.json`` and stage PNGs.
+
+Every stage is written as a PNG file.
 
 :func:`write_report` turns a :class:`~imageform.simulate.SimulationResult` into::
 
@@ -44,10 +45,12 @@ _OUR_STAGE_FILE = re.compile(r"^\d{2,}-[A-Za-z0-9_.-]+\.(png|tif)$")
 
 @dataclass(frozen=True)
 class ReportPaths:
-    """What :func:`write_report` wrote: ``html`` (report.html), ``metrics`` (metrics.json),
-    ``stages`` (one display PNG per stage, in order), ``raw_files`` (the raw stages' digital
-    numbers), ``summary`` (the headline numbers, as in metrics.json) and ``seconds`` (how
-    long writing took)."""
+    """What :func:`write_report` wrote.
+
+    ``html`` (report.html), ``metrics`` (metrics.json), ``stages`` (one display PNG per stage, in
+    order), ``raw_files`` (the raw stages' digital numbers), ``summary`` (the headline numbers, as
+    in metrics.json) and ``seconds`` (how long writing took).
+    """
 
     out_dir: Path
     html: Path
@@ -108,10 +111,12 @@ def _prepare_out_dir(out_dir: Path, force: bool) -> Path:
 
 
 def _fast_png(image: np.ndarray) -> bytes:
-    """Lossless PNG bytes of a uint8/uint16 array, encoded for speed (libpng through
-    imagecodecs: zlib level 1, run-length strategy, the Sub filter, as OpenCV's fast setting):
-    noisy camera images hardly compress further, and the default settings cost 3-40x the
-    time. The report folder is swapped in whole, so no atomic write is needed here."""
+    """Encode a uint8/uint16 array as lossless PNG bytes, for speed.
+
+    libpng through imagecodecs: zlib level 1, run-length strategy, the Sub filter, as OpenCV's fast
+    setting: noisy camera images hardly compress further, and the default settings cost 3-40x the
+    time. The report folder is swapped in whole, so no atomic write is needed here.
+    """
     import imagecodecs
 
     return bytes(imagecodecs.png_encode(image, level=1, strategy=3, filter=16))
@@ -120,9 +125,11 @@ def _fast_png(image: np.ndarray) -> bytes:
 def _write_stage(
     stage: Stage, index: int, folder: Path
 ) -> tuple[Path, Path | None, bytes, np.ndarray]:
-    """Write the stage's lossless display PNG (and raw digital numbers); return the paths,
-    the page's compressed picture of it (JPEG, see :func:`html_parts.page_jpeg`) and the
-    displayed 8-bit image. Safe to run in a thread (the encoders release the GIL)."""
+    """Write the stage's lossless display PNG (and raw digital numbers).
+
+    Return the paths, the page's compressed picture of it (JPEG, see :func:`html_parts.page_jpeg`)
+    and the displayed 8-bit image. Safe to run in a thread (the encoders release the GIL).
+    """
     from imageform.io.image_io import write_image
     from imageform.report.display import raw_to_uint16, stage_display_image
 

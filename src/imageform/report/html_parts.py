@@ -1,5 +1,8 @@
-"""Building blocks of the self-contained simulation report: the page skeleton with inline CSS,
-figures as base64 ``data:`` URIs, tables and notes. Every text is HTML-escaped here."""
+"""Building blocks of the self-contained simulation report.
+
+The page skeleton with inline CSS, figures as base64 ``data:`` URIs, tables and notes. Every text is
+HTML-escaped here.
+"""
 
 from __future__ import annotations
 
@@ -65,25 +68,31 @@ def e(text: Any) -> str:
 
 
 def _image_bytes(png: object, name: str = "png") -> bytes:
-    """The encoded image's bytes (bytes, bytearray or memoryview), else a TypeError naming
-    ``name``."""
+    """Return the encoded image's bytes (bytes, bytearray or memoryview).
+
+    Anything else is a TypeError naming ``name``.
+    """
     if not isinstance(png, bytes | bytearray | memoryview):
         raise TypeError(f"expected {name} as the bytes of an encoded image, got {describe(png)}")
     return bytes(png)
 
 
 def _strings(value: object, name: str) -> list[Any]:
-    """A list of the items of a sequence (not a str or bytes), else a TypeError naming
-    ``name``."""
+    """Return a list of the items of a sequence (not a str or bytes).
+
+    Anything else is a TypeError naming ``name``.
+    """
     if isinstance(value, str | bytes) or not isinstance(value, Iterable):
         raise TypeError(f"expected {name} as a sequence, got {describe(value)}")
     return list(value)
 
 
 def img_tag(png: bytes, alt: str, *, photo: bool = False, mime: str = "image/png") -> str:
-    """An ``<img>`` whose source is the encoded image itself, base64 in a ``data:`` URI:
-    ``png`` holds the bytes of a PNG, or of a JPEG with ``mime="image/jpeg"``; a ``photo``
-    (a stage image) is shown as wide as the page."""
+    """Return an ``<img>`` whose source is the encoded image itself, base64 in a ``data:`` URI.
+
+    ``png`` holds the bytes of a PNG, or of a JPEG with ``mime="image/jpeg"``; a ``photo`` (a stage
+    image) is shown as wide as the page.
+    """
     b64 = base64.b64encode(_image_bytes(png)).decode("ascii")
     cls = ' class="photo"' if photo else ""
     return f'<img{cls} src="data:{mime};base64,{b64}" alt="{e(alt)}">'
@@ -98,9 +107,11 @@ PAGE_JPEG_QUALITY = 85
 def page_jpeg(
     rgb: Any, *, max_width: int = PAGE_IMAGE_MAX_WIDTH, quality: int = PAGE_JPEG_QUALITY
 ) -> bytes:
-    """An 8-bit RGB picture ``(H, W, 3)`` (or a PIL image) as JPEG bytes for the page,
-    scaled down (area average) to at most ``max_width`` pixels wide. For display only: the
-    lossless PNG of a stage is written to stages/ and linked from the page."""
+    """Encode an 8-bit RGB picture ``(H, W, 3)`` (or a PIL image) as JPEG bytes for the page.
+
+    It is scaled down (area average) to at most ``max_width`` pixels wide. For display only: the
+    lossless PNG of a stage is written to stages/ and linked from the page.
+    """
     from PIL import Image
 
     max_width = as_int(max_width, "max_width", minimum=1)
@@ -128,7 +139,7 @@ def _rgb8(rgb: object) -> np.ndarray:
 
 
 def figure_png(fig: Any, dpi: int = 100) -> bytes:
-    """The matplotlib figure as PNG bytes; the figure is closed."""
+    """Return the matplotlib figure as PNG bytes; the figure is closed."""
     import matplotlib.pyplot as plt
 
     buf = io.BytesIO()
@@ -150,10 +161,12 @@ def figure(
     mime: str = "image/png",
     href: str | None = None,
 ) -> str:
-    """A ``<figure>`` with the embedded image (``png``: its bytes, a JPEG's with
-    ``mime="image/jpeg"``) and a caption (``caption_html`` is trusted: build it from escaped
-    parts); with ``href`` (a relative link, e.g. the lossless stage file) the image links
-    to it."""
+    """Return a ``<figure>`` with the embedded image and a caption.
+
+    ``png``: the image's bytes (a JPEG's with ``mime="image/jpeg"``); ``caption_html`` is trusted:
+    build it from escaped parts. With ``href`` (a relative link, e.g. the lossless stage file) the
+    image links to it.
+    """
     ident = f' id="{e(fig_id)}"' if fig_id else ""
     img = img_tag(png, alt, photo=photo, mime=mime)
     if href is not None:
@@ -162,18 +175,20 @@ def figure(
 
 
 def note(text: str) -> str:
-    """A highlighted note (escaped)."""
+    """Return a highlighted note (escaped)."""
     return f'<p class="note">{e(text)}</p>'
 
 
 def section(ident: str, title: str, body: str) -> str:
-    """A ``<section>`` with an anchor and a heading."""
+    """Return a ``<section>`` with an anchor and a heading."""
     return f'<section id="{e(ident)}"><h2>{e(title)}</h2>{body}</section>'
 
 
 def table(header: Sequence[str], rows: Sequence[Sequence[Any]], left: Sequence[int] = ()) -> str:
-    """An HTML table; cells are escaped unless they are ``Markup`` (a str subclass marking
-    trusted HTML); columns listed in ``left`` are left-aligned."""
+    """Return an HTML table; cells are escaped unless they are ``Markup``.
+
+    ``Markup`` is a str subclass marking trusted HTML; columns listed in ``left`` are left-aligned.
+    """
 
     def cell(tag: str, j: int, v: Any) -> str:
         cls = ' class="l"' if j in left else ""
@@ -204,7 +219,7 @@ def json_block(value: Any, summary: str) -> str:
 
 
 def page(title: str, subtitle_html: str, nav: Sequence[tuple[str, str]], body: str) -> str:
-    """The whole document: no external resource, no script needed to view it."""
+    """Return the whole document: no external resource, no script needed to view it."""
     pairs = _strings(nav, "nav")
     if not all(isinstance(p, tuple | list) and len(p) == 2 for p in pairs):
         raise TypeError(f"expected nav as (anchor, title) pairs, got {describe(nav)}")

@@ -34,17 +34,20 @@ class WorkedExample:
     tol: float = 1e-9
 
     def computed(self) -> tuple[float, ...]:
+        """Return our computed answer as a tuple of floats."""
         value = self.compute()
         if isinstance(value, int | float):
             return (float(value),)
         return tuple(float(v) for v in value)
 
     def expected_values(self) -> tuple[float, ...]:
+        """Return the lecture's answer as a tuple of floats."""
         if isinstance(self.expected, int | float):
             return (float(self.expected),)
         return tuple(float(v) for v in self.expected)
 
     def agrees(self) -> bool:
+        """Return True when our values match the lecture's in number, each within ``tol``."""
         got, want = self.computed(), self.expected_values()
         return len(got) == len(want) and all(
             math.isclose(g, w, rel_tol=0.0, abs_tol=self.tol)
@@ -70,7 +73,7 @@ def all_examples() -> list[WorkedExample]:
 
 
 def lecture_topics() -> tuple[str, ...]:
-    """The topics of the worked examples, in lecture order, each once.
+    """Return the topics of the worked examples, in lecture order, each once.
 
     Examples
     --------

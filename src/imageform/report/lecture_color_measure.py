@@ -1,5 +1,7 @@
-"""The lecture's colour-measurement examples: the ΔE*ab formula, the practice questions on
-HSV, chroma subsampling and the Bayer pattern, grey world.
+"""The lecture's colour-measurement examples.
+
+The ΔE*ab formula, the practice questions on HSV, chroma subsampling and the Bayer pattern, grey
+world.
 
 The lecture states the formulas (ΔE*ab as the Euclidean distance in CIELAB; grey-world
 gains that scale every channel mean to the mean grey) and the reading of a ΔE (below 1

@@ -104,9 +104,10 @@ SUMMARY_KEYS = (
 
 
 def to_json_value(value: Any, where: str = "metrics") -> Any:
-    """``value`` as plain JSON types: arrays and tuples become lists, NumPy scalars Python
-    numbers, paths strings, NaN and infinities ``None``; anything else is an error naming
-    where it sits.
+    """Return ``value`` as plain JSON types.
+
+    Arrays and tuples become lists, NumPy scalars Python numbers, paths strings, NaN and infinities
+    ``None``; anything else is an error naming where it sits.
 
     Examples
     --------

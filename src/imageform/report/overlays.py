@@ -31,8 +31,10 @@ MAX_MARGIN = 2.0
 
 
 def _to_rgb8(image: ArrayLike, name: str = "image") -> np.ndarray:
-    """``image`` (H, W) or (H, W, 3), uint8 or floats in [0, 1], as uint8 RGB; anything else
-    refused naming ``name``."""
+    """Return ``image`` (H, W) or (H, W, 3), uint8 or floats in [0, 1], as uint8 RGB.
+
+    Anything else is refused naming ``name``.
+    """
     if image is None or isinstance(image, str | bytes):
         raise InvalidInputError(f"expected {name} as an (H, W, 3) array, got {describe(image)}")
     if type(image).__module__.startswith("torch"):
@@ -55,8 +57,10 @@ def _to_rgb8(image: ArrayLike, name: str = "image") -> np.ndarray:
 
 
 def _homogeneous(p: object, name: str, sizes: tuple[int, ...]) -> np.ndarray | None:
-    """A point or line in homogeneous pixel coordinates as float64 (``None`` stays ``None``);
-    non-finite values are allowed (such a point or line is not drawn)."""
+    """Return a point or line in homogeneous pixel coordinates as float64 (``None`` stays ``None``).
+
+    Non-finite values are allowed (such a point or line is not drawn).
+    """
     if p is None:
         return None
     v = as_real_array(p, name, finite=False, ndim=(1, 2)).ravel()
@@ -67,8 +71,11 @@ def _homogeneous(p: object, name: str, sizes: tuple[int, ...]) -> np.ndarray | N
 
 
 def _line_in_box(line: ArrayLike, w: float, h: float) -> list[tuple[float, float]] | None:
-    """The two PIL points (pixel centre at +0.5) where the line ``a u + b v + c = 0`` crosses
-    the canvas' left and right edges (top and bottom edges for a steep line)."""
+    """Return the two PIL points where the line ``a u + b v + c = 0`` crosses the canvas' edges.
+
+    PIL points have the pixel centre at +0.5; the left and right edges are used (top and bottom
+    edges for a steep line).
+    """
     a, b, c = (float(x) for x in np.asarray(line, dtype=np.float64))
     if not (math.isfinite(a) and math.isfinite(b) and math.isfinite(c)):
         return None
@@ -84,7 +91,7 @@ def _line_in_box(line: ArrayLike, w: float, h: float) -> list[tuple[float, float
 def _draw_line(
     draw: Any, line: ArrayLike, w: float, h: float, colour: tuple[int, int, int], k: int = 1
 ) -> None:
-    """The line, ``2k`` px wide in ``colour`` over ``5k`` px of black."""
+    """Draw the line, ``2k`` px wide in ``colour`` over ``5k`` px of black."""
     pts = _line_in_box(line, w, h)
     if pts is not None:
         draw.line(pts, fill=(0, 0, 0), width=5 * k)
@@ -92,9 +99,11 @@ def _draw_line(
 
 
 def draw_vanishing_overlay(image: ArrayLike, result: Any) -> Any:
-    """An RGB PIL image: segments coloured by vanishing point, VPs inside the view marked,
-    the horizon in white over black. ``result`` is a
-    :class:`~imageform.geometry.VanishingPointResult`."""
+    """Draw the segments coloured by vanishing point and the horizon, as an RGB PIL image.
+
+    VPs inside the view are marked, the horizon is white over black. ``result`` is a
+    :class:`~imageform.geometry.VanishingPointResult`.
+    """
     from PIL import Image, ImageDraw
 
     base = Image.fromarray(_to_rgb8(image), "RGB")
@@ -125,8 +134,10 @@ def draw_vanishing_truth_overlay(
     detected_horizon: ArrayLike | None = None,
     max_margin: float = 0.5,
 ) -> Any:
-    """An RGB PIL image: the true vanishing point (bluish-green ring and cross) and horizon
-    (bluish-green over black), and the detected ones (vermillion), on ``image``.
+    """Draw the true and the detected vanishing point and horizon on ``image`` (RGB PIL image).
+
+    The true vanishing point is a bluish-green ring and cross, the true horizon bluish-green over
+    black, and the detected ones vermillion.
 
     Points and lines are homogeneous pixel coordinates (``(u, v, w)``; ``a u + b v + c = 0``),
     pixel centre of the top-left pixel at (0, 0). A vanishing point outside the image gets a

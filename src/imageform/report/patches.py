@@ -1,5 +1,7 @@
-"""ColorChecker patches of a simulation: CIEDE2000 against the ground truth, the lecture's
-reading of each difference, and the luminance signal-to-noise ratio of each patch.
+"""ColorChecker patches of a simulation.
+
+CIEDE2000 against the ground truth, the lecture's reading of each difference, and the luminance
+signal-to-noise ratio of each patch.
 
 One measurement, :func:`imageform.simulate.truth.measure_colorchecker`, gives these numbers
 to the simulator and to the report: a result from :func:`imageform.simulate.simulate`
@@ -19,9 +21,11 @@ __all__ = ["PatchMeasurements", "measure_patches", "patch_windows", "snr_stage"]
 
 
 def snr_stage(result: SimulationResult) -> Stage:
-    """The stage the patch SNR is measured on: the last three-channel ``"linear"`` stage
-    (the simulator's ``color_corrected``: linear sRGB before encoding), else the final
-    stage."""
+    """Return the stage the patch SNR is measured on.
+
+    The last three-channel ``"linear"`` stage (the simulator's ``color_corrected``: linear sRGB
+    before encoding), else the final stage.
+    """
     check_result(result)
     for s in reversed(result.stages):
         if s.kind == "linear" and s.image.ndim == 3 and s.image.shape[-1] == 3:
@@ -30,7 +34,7 @@ def snr_stage(result: SimulationResult) -> Stage:
 
 
 def _stage_linear(stage: Stage) -> np.ndarray:
-    """The stage as linear RGB ``(H, W, 3)`` (a grey stage repeated to three channels)."""
+    """Return the stage as linear RGB ``(H, W, 3)`` (a grey stage repeated to three channels)."""
     from imageform.color.transfer import srgb_to_linear
 
     a = np.asarray(stage.image, dtype=np.float64)
@@ -44,7 +48,7 @@ def _stage_linear(stage: Stage) -> np.ndarray:
 
 
 def measure_patches(result: SimulationResult) -> PatchMeasurements | None:
-    """The ColorChecker measurement of ``result`` (``None`` without a ColorChecker).
+    """Measure the ColorChecker of ``result`` (``None`` without a ColorChecker).
 
     ``result.patches`` when the simulator measured it; otherwise
     :func:`~imageform.simulate.truth.measure_colorchecker` on the final (``"srgb"``) stage,

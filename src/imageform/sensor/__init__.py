@@ -1,5 +1,8 @@
-"""imageform.sensor — colour filter arrays and demosaicing, the sensor model, noise, shutter,
-CCD/CMOS presets, EMVA 1288 photon transfer and characterisation from frame stacks."""
+"""imageform.sensor — CFAs and demosaicing, sensor model, noise, shutter, EMVA 1288.
+
+Colour filter arrays and demosaicing, the sensor model, noise, shutter, CCD/CMOS presets,
+EMVA 1288 photon transfer and characterisation from frame stacks.
+"""
 
 from __future__ import annotations
 

@@ -51,8 +51,10 @@ def pad_reflect(a: Any, top: int, bottom: int, left: int, right: int, xp: Any) -
 
 
 def demosaic_xp(raw: Any, ry: int, rx: int, method: str, xp: Any) -> Any:
-    """RGB ``(..., H, W, 3)`` from a float mosaic ``(..., H, W)`` whose red site is at
-    ``(ry, rx)`` in the top-left cell; ``method`` in :data:`XP_METHODS`."""
+    """Demosaic a float mosaic ``(..., H, W)`` into RGB ``(..., H, W, 3)``.
+
+    The red site is at ``(ry, rx)`` in the top-left cell; ``method`` in :data:`XP_METHODS`.
+    """
     h, w = int(raw.shape[-2]), int(raw.shape[-1])
     r = _RADIUS[method]
     pad = r + (r % 2)
@@ -95,8 +97,11 @@ def demosaic_xp(raw: Any, ry: int, rx: int, method: str, xp: Any) -> Any:
 
 
 def demosaic_dask(raw: Any, depth: int, block: Callable[[Any], Any], out_dtype: Any) -> Any:
-    """Lazy demosaicing of a Dask mosaic ``(..., H, W)`` with ``block`` (the in-memory
-    function on a NumPy block ``(..., h, w)`` -> ``(..., h, w, 3)``); ``depth`` is even."""
+    """Demosaic a Dask mosaic ``(..., H, W)`` lazily with ``block``.
+
+    ``block`` is the in-memory function on a NumPy block ``(..., h, w)`` ->
+    ``(..., h, w, 3)``; ``depth`` is even.
+    """
     import dask.array as da
     import numpy as np
 
@@ -128,8 +133,11 @@ def demosaic_dask(raw: Any, depth: int, block: Callable[[Any], Any], out_dtype: 
 
 
 def _even_chunks(n: int, size: int, depth: int) -> tuple[int, ...]:
-    """Chunks of an axis of length ``n``: even sizes (at least ``depth`` and 2), a short
-    last chunk merged into the one before so that every chunk holds the overlap depth."""
+    """Return the chunks of an axis of length ``n``: even sizes, at least ``depth`` and 2.
+
+    A short last chunk is merged into the one before so that every chunk holds the overlap
+    depth.
+    """
     size = max(size, depth, 2)
     size += size % 2
     chunks = [size] * (n // size)

@@ -18,8 +18,10 @@ MAX_MEAN_ELECTRONS = 1e15
 
 
 def check_rng(rng: object, name: str = "rng") -> object:
-    """``rng`` unchanged when :func:`imageform._random.as_rng` takes it, else a one-line
-    error that never prints an array."""
+    """Return ``rng`` unchanged when :func:`imageform._random.as_rng` takes it.
+
+    Otherwise raise a one-line error that never prints an array.
+    """
     if (
         rng is None
         or isinstance(rng, np.random.Generator | np.random.SeedSequence)

@@ -84,12 +84,12 @@ def _red_offset(pattern: str) -> tuple[int, int]:
 
 
 def _cell_channels(pattern: str) -> np.ndarray:
-    """The 2×2 cell as channel indices (0 R, 1 G, 2 B)."""
+    """Return the 2×2 cell as channel indices (0 R, 1 G, 2 B)."""
     return np.array([_CHANNEL[c] for c in pattern], dtype=np.intp).reshape(2, 2)
 
 
 def cfa_masks(shape: tuple[int, int], pattern: str = "RGGB") -> np.ndarray:
-    """Boolean sampling masks of a Bayer array, one per channel.
+    r"""Boolean sampling masks of a Bayer array, one per channel.
 
     ``masks[y, x, c]`` is true where the photosite at row ``y``, column ``x`` has a filter
     of colour ``c`` (0 red, 1 green, 2 blue). Exactly one channel is true per pixel; the
@@ -97,7 +97,7 @@ def cfa_masks(shape: tuple[int, int], pattern: str = "RGGB") -> np.ndarray:
 
     .. math::
 
-        m_c(y, x) = [\\,\\mathrm{cell}(y \\bmod 2,\\, x \\bmod 2) = c\\,]
+        m_c(y, x) = [\,\mathrm{cell}(y \bmod 2,\, x \bmod 2) = c\,]
 
     Parameters
     ----------
@@ -129,13 +129,13 @@ def cfa_masks(shape: tuple[int, int], pattern: str = "RGGB") -> np.ndarray:
 
 
 def mosaic(rgb: ArrayLike, pattern: str = "RGGB") -> Array:
-    """Sample an RGB image through a Bayer colour filter array (the forward model).
+    r"""Sample an RGB image through a Bayer colour filter array (the forward model).
 
     Each output pixel keeps the one channel its filter passes:
 
     .. math::
 
-        \\mathrm{raw}(y, x) = \\sum_{c \\in \\{R,G,B\\}} m_c(y, x)\\, I_c(y, x)
+        \mathrm{raw}(y, x) = \sum_{c \in \{R,G,B\}} m_c(y, x)\, I_c(y, x)
 
     with :math:`m_c` from :func:`cfa_masks`. Half the pixels keep green, a quarter red,
     a quarter blue: green is sampled twice as densely because the luminance that carries
@@ -198,7 +198,7 @@ def mosaic(rgb: ArrayLike, pattern: str = "RGGB") -> Array:
 
 
 def _as_xp(mask: np.ndarray, xp: Any, like: Any) -> Any:
-    """A NumPy bool mask as a float array of ``like``'s namespace, dtype and device."""
+    """Convert a NumPy bool mask to a float array of ``like``'s namespace, dtype and device."""
     dev = device_of(like)
     m = mask.astype(np.float64)
     arr = xp.asarray(m) if dev is None else xp.asarray(m, device=dev)

@@ -73,8 +73,10 @@ def _kernels(method: str, numba: bool) -> tuple[_Kernel, int]:
 
 
 def _as_raw(raw: ArrayLike, xp: Any) -> Any:
-    """The mosaic as a float array of shape (..., H, W); rejects colour images (by shape,
-    before any pass over the values)."""
+    """Return the mosaic as a float array of shape (..., H, W).
+
+    Colour images are rejected (by shape, before any pass over the values).
+    """
     shape = tuple(getattr(raw, "shape", ()) or ())
     if len(shape) >= 3 and shape[-1] != 1:
         raise InvalidInputError(
@@ -106,17 +108,17 @@ def demosaic(
     allow_odd: bool = False,
     keep_dtype: bool = False,
 ) -> Array:
-    """Reconstruct a full RGB image from a Bayer colour-filter-array mosaic.
+    r"""Reconstruct a full RGB image from a Bayer colour-filter-array mosaic.
 
     Every pixel of the mosaic measured one colour (:func:`imageform.sensor.mosaic`); the
     other two are interpolated. The methods, from fastest to best:
 
     - ``"bilinear"``: the mean of the nearest samples of each colour, i.e. the masked
       planes convolved with
-      :math:`K_G = \\tfrac14\\begin{bmatrix}0&1&0\\\\1&4&1\\\\0&1&0\\end{bmatrix}`,
-      :math:`K_{R,B} = \\tfrac14\\begin{bmatrix}1&2&1\\\\2&4&2\\\\1&2&1\\end{bmatrix}`.
+      :math:`K_G = \tfrac14\begin{bmatrix}0&1&0\\1&4&1\\0&1&0\end{bmatrix}`,
+      :math:`K_{R,B} = \tfrac14\begin{bmatrix}1&2&1\\2&4&2\\1&2&1\end{bmatrix}`.
     - ``"malvar"``: bilinear plus a Laplacian correction from the measured colour,
-      :math:`\\hat G = \\hat G_{bl} + \\alpha \\Delta_R` (Malvar, He, Cutler, ICASSP 2004,
+      :math:`\hat G = \hat G_{bl} + \alpha \Delta_R` (Malvar, He, Cutler, ICASSP 2004,
       eqs. 4-6; α = 1/2, β = 5/8, γ = 3/4).
     - ``"hamilton_adams"``: edge-directed green (interpolation along the smaller of
       :math:`|G_{x-1} - G_{x+1}| + |2 C_x - C_{x-2} - C_{x+2}|` and its vertical twin),
@@ -124,7 +126,7 @@ def demosaic(
     - ``"menon"``: directional filtering with a posteriori decision and the refinement step
       (Menon, Andriani, Calvagno, IEEE TIP 16(1), 2007, eqs. 3-9 and sec. IV).
     - ``"menon_soft"``: ``"menon"`` with a soft green decision, the horizontal and vertical
-      estimates blended with weights :math:`\\delta_V^2 : \\delta_H^2` (an imageform
+      estimates blended with weights :math:`\delta_V^2 : \delta_H^2` (an imageform
       variant; about 0.7 dB better than ``"menon"`` on Kodak at the same speed).
 
     Parameters

@@ -44,8 +44,11 @@ __all__ = [
 
 @dataclass(frozen=True)
 class PhotonTransferData:
-    """Per exposure time: mean photons per pixel, and mean and temporal variance (DN, DN²)
-    of the flat fields and of the dark frames. All arrays have shape ``(n,)``."""
+    """Per exposure time: mean photons per pixel, mean and temporal variance of flats and darks.
+
+    Mean and temporal variance are in DN and DN², of the flat fields and of the dark frames.
+    All arrays have shape ``(n,)``.
+    """
 
     exposure_times: np.ndarray
     photons: np.ndarray
@@ -90,12 +93,12 @@ def simulate_photon_transfer(
     shape: tuple[int, int] = (64, 64),
     channel: int = 0,
 ) -> PhotonTransferData:
-    """Record flat-field and dark pairs at each exposure time, EMVA 1288 style.
+    r"""Record flat-field and dark pairs at each exposure time, EMVA 1288 style.
 
     .. math::
 
-        \\mu_y = \\tfrac12(\\bar y_A + \\bar y_B),\\quad
-        \\sigma_y^2 = \\tfrac12 \\operatorname{var}(y_A - y_B)
+        \mu_y = \tfrac12(\bar y_A + \bar y_B),\quad
+        \sigma_y^2 = \tfrac12 \operatorname{var}(y_A - y_B)
 
     Parameters
     ----------
@@ -192,7 +195,7 @@ _PTC_FIELDS = ("exposure_times", "photons", "mean_dn", "var_dn", "dark_mean_dn",
 
 
 def _check_data(data: object) -> dict[str, np.ndarray]:
-    """The arrays of a :class:`PhotonTransferData`: 1-D, finite, all of one length."""
+    """Check the arrays of a :class:`PhotonTransferData`: 1-D, finite, all of one length."""
     if not isinstance(data, PhotonTransferData):
         raise TypeError(f"expected data as a PhotonTransferData, got {describe(data)}")
     arrays = {f: as_real_array(getattr(data, f), f"data.{f}", ndim=1) for f in _PTC_FIELDS}
@@ -204,14 +207,14 @@ def _check_data(data: object) -> dict[str, np.ndarray]:
 
 
 def fit_photon_transfer(data: PhotonTransferData, *, fit_fraction: float = 0.7) -> EmvaResult:
-    """Recover system gain, read noise, QE, dark current and saturation from a PTC.
+    r"""Recover system gain, read noise, QE, dark current and saturation from a PTC.
 
     .. math::
 
-        \\sigma_y^2 - \\sigma_{y,dark}^2 = K (\\mu_y - \\mu_{y,dark}),\\qquad
-        \\mu_y - \\mu_{y,dark} = K \\eta\\, \\mu_p
+        \sigma_y^2 - \sigma_{y,dark}^2 = K (\mu_y - \mu_{y,dark}),\qquad
+        \mu_y - \mu_{y,dark} = K \eta\, \mu_p
 
-        \\sigma_{y,dark}^2(t) = K^2 (\\sigma_{d0}^2 + \\mu_I t) + \\sigma_q^2
+        \sigma_{y,dark}^2(t) = K^2 (\sigma_{d0}^2 + \mu_I t) + \sigma_q^2
 
     Saturation is the exposure of largest temporal variance (EMVA 1288 4.0, §6.5); the gain
     and responsivity are fitted by least squares over the points from above zero up to

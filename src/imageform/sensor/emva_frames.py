@@ -302,12 +302,12 @@ def _stacks(value: object, name: str) -> list[np.ndarray]:
 
 
 def _pair(stack: np.ndarray) -> tuple[float, float]:
-    """Mean and temporal variance of the first two frames (EMVA 1288 4.0, pair method).
+    r"""Mean and temporal variance of the first two frames (EMVA 1288 4.0, pair method).
 
     .. math::
 
-        \\mu_y = \\tfrac12(\\mu_A + \\mu_B),\\quad
-        \\sigma_y^2 = \\tfrac12\\,\\overline{[(y_A - y_B) - (\\mu_A - \\mu_B)]^2}
+        \mu_y = \tfrac12(\mu_A + \mu_B),\quad
+        \sigma_y^2 = \tfrac12\,\overline{[(y_A - y_B) - (\mu_A - \mu_B)]^2}
     """
     a = stack[0].astype(np.float64)
     b = stack[1].astype(np.float64)
@@ -316,12 +316,12 @@ def _pair(stack: np.ndarray) -> tuple[float, float]:
 
 
 def _spatial(stack: np.ndarray) -> tuple[float, float]:
-    """Mean of the stack average and its spatial variance, temporal noise removed.
+    r"""Mean of the stack average and its spatial variance, temporal noise removed.
 
     .. math::
 
-        \\langle y\\rangle = \\frac1L\\sum_l y[l],\\quad
-        s^2_{y} = s^2_{y.measured} - \\sigma^2_{y.stack}/L
+        \langle y\rangle = \frac1L\sum_l y[l],\quad
+        s^2_{y} = s^2_{y.measured} - \sigma^2_{y.stack}/L
 
     with ``s²_y.measured`` the spatial variance (``ddof=1``) of ``⟨y⟩`` and
     ``σ²_y.stack`` the mean over pixels of the temporal variance (``ddof=1``) of the stack.
@@ -347,7 +347,7 @@ def measure_emva(
     fit_fraction: float = 0.7,
     spatial_index: int | None = None,
 ) -> EmvaMeasurement:
-    """EMVA 1288 (Release 4.0 Linear) characterisation from flat-field and dark stacks.
+    r"""EMVA 1288 (Release 4.0 Linear) characterisation from flat-field and dark stacks.
 
     For each exposure time ``t_i``, ``flats[i]`` and ``darks[i]`` are stacks of ``L >= 2``
     raw frames ``(L, H, W)`` (digital numbers of one channel, a uniformly lit region of
@@ -355,8 +355,8 @@ def measure_emva(
 
     .. math::
 
-        \\mu_y = \\tfrac12(\\mu_A + \\mu_B),\\qquad
-        \\sigma_y^2 = \\tfrac12\\,\\overline{[(y_A - y_B) - (\\mu_A - \\mu_B)]^2}
+        \mu_y = \tfrac12(\mu_A + \mu_B),\qquad
+        \sigma_y^2 = \tfrac12\,\overline{[(y_A - y_B) - (\mu_A - \mu_B)]^2}
 
     and the same for the darks (``μ_y.dark``, ``σ²_y.dark``). Then:
 

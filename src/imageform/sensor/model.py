@@ -59,11 +59,11 @@ def _positive_field(obj: object, name: str, *, allow_zero: bool = False) -> None
 def photons_per_pixel(
     irradiance: Any, wavelength_nm: float, *, pixel_area: float, exposure_time: float
 ) -> np.ndarray:
-    """Mean photons reaching a pixel: irradiance × area × time over the photon energy.
+    r"""Mean photons reaching a pixel: irradiance × area × time over the photon energy.
 
     .. math::
 
-        \\mu_p = \\frac{E A t \\lambda}{h c}
+        \mu_p = \frac{E A t \lambda}{h c}
 
     ``irradiance`` in W/m², ``pixel_area`` in m², ``exposure_time`` in s. Source: EMVA 1288
     4.0, eq. (2).
@@ -164,6 +164,7 @@ class SensorModel:
     fpn_seed: int = 0
 
     def __post_init__(self) -> None:
+        """Check every parameter: options by name, gains and noise levels real and in range."""
         if not isinstance(self.name, str):
             raise InvalidInputError(f"expected name as a str, got {describe(self.name)}")
         check_option(self.architecture, ("cmos", "ccd"), "sensor architecture")
@@ -220,9 +221,9 @@ class SensorModel:
 
     @property
     def system_gain(self) -> float:
-        """Overall system gain ``K`` (DN/e⁻), EMVA 1288's ``K``.
+        r"""Overall system gain ``K`` (DN/e⁻), EMVA 1288's ``K``.
 
-        .. math:: K = G_{conv}\\, G_{analog}\\, \\frac{2^b - 1}{V_{ADC}}
+        .. math:: K = G_{conv}\, G_{analog}\, \frac{2^b - 1}{V_{ADC}}
         """
         return self.conversion_gain * self.analog_gain * self.max_dn / self.adc_range
 
@@ -251,7 +252,7 @@ class SensorModel:
         )
 
     def fixed_pattern(self, height: int, width: int) -> FixedPattern:
-        """This chip's fixed-pattern maps for an ``(height, width)`` frame (from ``fpn_seed``)."""
+        """Make the chip's fixed-pattern maps for a ``(height, width)`` frame from ``fpn_seed``."""
         col = self.column_fpn if self.architecture == "cmos" else 0.0
         h = as_int(height, "height", minimum=1)
         w = as_int(width, "width", minimum=1)
@@ -274,7 +275,7 @@ class SensorModel:
         quantity: str = "electrons",
         wavelength_nm: float | None = None,
     ) -> np.ndarray:
-        """Mean photo-electrons per pixel and channel, ``(..., H, W, C)``, before any noise.
+        r"""Mean photo-electrons per pixel and channel, ``(..., H, W, C)``, before any noise.
 
         ``quantity`` says what ``signal`` holds:
 
@@ -286,7 +287,7 @@ class SensorModel:
           irradiance W m⁻² nm⁻¹ ``(..., H, W, L)`` on ``qe_wavelengths`` (integrated with
           the trapezoidal rule).
 
-        .. math:: \\mu_{e,c} = FF \\sum_\\lambda QE_c(\\lambda)\\, \\mu_p(\\lambda)
+        .. math:: \mu_{e,c} = FF \sum_\lambda QE_c(\lambda)\, \mu_p(\lambda)
         """
         t = check_positive(exposure_time, "exposure_time (s)", allow_zero=True)
         kind = check_option(quantity, _QUANTITIES, "signal quantity")
@@ -372,12 +373,12 @@ class SensorModel:
         quantity: str = "electrons",
         wavelength_nm: float | None = None,
     ) -> np.ndarray:
-        """Simulate one exposure: shot, dark and read noise, FPN, gain, black level, ADC.
+        r"""Simulate one exposure: shot, dark and read noise, FPN, gain, black level, ADC.
 
         .. math::
 
-            y = \\mathrm{clip}_{[0, 2^b - 1]}\\Big(\\mathrm{round}\\big(K\\,[\\min(
-            \\mathcal{P}(g \\mu_e) + \\mathcal{P}(I_d t),\\ Q_{FW}) + o + n_r] + y_0\\big)\\Big)
+            y = \mathrm{clip}_{[0, 2^b - 1]}\Big(\mathrm{round}\big(K\,[\min(
+            \mathcal{P}(g \mu_e) + \mathcal{P}(I_d t),\ Q_{FW}) + o + n_r] + y_0\big)\Big)
 
         Parameters
         ----------
@@ -444,9 +445,9 @@ class SensorModel:
         return dn.astype(np.uint16)
 
     def normalize(self, dn: Any) -> np.ndarray:
-        """Raw DN to floats: black level subtracted, white (``2^b - 1``) mapped to 1.
+        r"""Raw DN to floats: black level subtracted, white (``2^b - 1``) mapped to 1.
 
-        .. math:: \\frac{y - y_0}{(2^b - 1) - y_0}
+        .. math:: \frac{y - y_0}{(2^b - 1) - y_0}
 
         Values below the black level stay negative (noise is not clipped).
 
@@ -472,9 +473,9 @@ class SensorModel:
         return float(finite_result("the read-out time", lambda: n * self.line_time, rows=n))
 
     def dynamic_range_db(self) -> float:
-        """Dynamic range ``20 log10(Q_FW / σ_read)`` (dB); ``inf`` without read noise.
+        r"""Dynamic range ``20 log10(Q_FW / σ_read)`` (dB); ``inf`` without read noise.
 
-        .. math:: DR = 20 \\log_{10}(Q_{FW} / \\sigma_{read})
+        .. math:: DR = 20 \log_{10}(Q_{FW} / \sigma_{read})
 
         Examples
         --------

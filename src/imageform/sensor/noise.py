@@ -54,12 +54,12 @@ class FixedPattern:
 def fixed_pattern(
     shape: tuple[int, int, int], *, prnu: float, dsnu: float, column_fpn: float, rng: RNGLike
 ) -> FixedPattern:
-    """Draw the fixed-pattern maps of a chip: Gaussian PRNU, DSNU and column offsets.
+    r"""Draw the fixed-pattern maps of a chip: Gaussian PRNU, DSNU and column offsets.
 
     .. math::
 
-        g_{ijc} = 1 + \\sigma_{PRNU} z_{ijc},\\quad
-        o_{ijc} = \\sigma_{DSNU} z'_{ijc} + \\sigma_{col} z''_j,\\quad z \\sim N(0, 1)
+        g_{ijc} = 1 + \sigma_{PRNU} z_{ijc},\quad
+        o_{ijc} = \sigma_{DSNU} z'_{ijc} + \sigma_{col} z''_j,\quad z \sim N(0, 1)
 
     ``prnu`` is a fraction (0.01 = 1 %), ``dsnu`` and ``column_fpn`` are electrons rms.
     ``rng`` (SPEC 7): an int seeds the draw together with the shape, so the same seed and
@@ -91,12 +91,12 @@ def fixed_pattern(
 
 
 def temporal_noise_dn(mean_electrons: float, *, system_gain: float, dark_noise_e: float) -> float:
-    """Temporal noise of the digital signal (DN rms) by EMVA 1288's linear model.
+    r"""Temporal noise of the digital signal (DN rms) by EMVA 1288's linear model.
 
     .. math::
 
-        \\sigma_y^2 = K^2 (\\sigma_d^2 + \\mu_e) + \\sigma_q^2,\\quad
-        \\sigma_q^2 = 1/12\\ \\mathrm{DN}^2
+        \sigma_y^2 = K^2 (\sigma_d^2 + \mu_e) + \sigma_q^2,\quad
+        \sigma_q^2 = 1/12\ \mathrm{DN}^2
 
     Source: EMVA Standard 1288, Release 4.0 (2021), eq. (9).
 
@@ -122,12 +122,12 @@ def temporal_noise_dn(mean_electrons: float, *, system_gain: float, dark_noise_e
 def emva_snr(
     photons: float, *, quantum_efficiency: float, dark_noise_e: float, system_gain: float
 ) -> float:
-    """Signal-to-noise ratio of a linear camera at ``photons`` mean photons per pixel.
+    r"""Signal-to-noise ratio of a linear camera at ``photons`` mean photons per pixel.
 
     .. math::
 
-        \\mathrm{SNR}(\\mu_p) = \\frac{\\eta \\mu_p}
-        {\\sqrt{\\sigma_d^2 + \\sigma_q^2 / K^2 + \\eta \\mu_p}}
+        \mathrm{SNR}(\mu_p) = \frac{\eta \mu_p}
+        {\sqrt{\sigma_d^2 + \sigma_q^2 / K^2 + \eta \mu_p}}
 
     Source: EMVA Standard 1288, Release 4.0 (2021), eq. (13).
 

@@ -49,7 +49,7 @@ def _curves(color: bool, scale: float) -> tuple[tuple[float, ...], ...]:
 
 
 def ccd_preset(*, color: bool = False, **changes: Any) -> SensorModel:
-    """A scientific interline CCD: large pixels, low noise, uniform, global shutter, slow.
+    """Return a scientific interline CCD: large pixels, low noise, uniform, global shutter, slow.
 
     ``changes`` override fields (``dataclasses.replace``).
 
@@ -85,7 +85,7 @@ def ccd_preset(*, color: bool = False, **changes: Any) -> SensorModel:
 
 
 def cmos_preset(*, color: bool = False, **changes: Any) -> SensorModel:
-    """A CMOS active-pixel sensor: column-parallel ADCs, fast, low power, rolling shutter.
+    """Return a CMOS active-pixel sensor: column-parallel ADCs, fast, low power, rolling shutter.
 
     Examples
     --------
@@ -151,7 +151,7 @@ CCD_VS_CMOS: tuple[ComparisonRow, ...] = (
 
 
 def comparison_table(rows: int = 1000) -> list[dict[str, str]]:
-    """The comparison table with the presets' numbers for a sensor of ``rows`` rows.
+    """Return the comparison table with the presets' numbers for a sensor of ``rows`` rows.
 
     Examples
     --------

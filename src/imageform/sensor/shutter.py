@@ -34,9 +34,9 @@ __all__ = ["rolling_shutter_points", "rolling_shutter_skew", "row_start_times", 
 
 
 def rolling_shutter_skew(velocity: float, line_time: float) -> float:
-    """Horizontal shift per row (pixels/row) of an object moving at ``velocity`` px/s.
+    r"""Horizontal shift per row (pixels/row) of an object moving at ``velocity`` px/s.
 
-    .. math:: \\Delta x_{row} = v\\, t_{line}
+    .. math:: \Delta x_{row} = v\, t_{line}
 
     Source: C.-K. Liang, L.-W. Chang, H. H. Chen, "Analysis and compensation of rolling
     shutter effect", IEEE TIP 17(8), 2008, §II.
@@ -72,15 +72,15 @@ def row_start_times(rows: int, *, mode: str, line_time: float) -> np.ndarray:
 def rolling_shutter_points(
     points_uv: Any, velocity_uv: Any, *, line_time: float, t0: float = 0.0
 ) -> np.ndarray:
-    """Where a rolling shutter records points moving at constant velocity (instant exposure).
+    r"""Where a rolling shutter records points moving at constant velocity (instant exposure).
 
     A point at ``p(t) = p_0 + v (t - t_0)`` is recorded by the row ``r`` whose read-out time
     ``r · t_line`` it occupies: ``r = y_0 + v_y (r t_line - t_0)``, hence
 
     .. math::
 
-        r = \\frac{y_0 - v_y t_0}{1 - v_y t_{line}},\\qquad
-        u = x_0 + v_x (r\\, t_{line} - t_0)
+        r = \frac{y_0 - v_y t_0}{1 - v_y t_{line}},\qquad
+        u = x_0 + v_x (r\, t_{line} - t_0)
 
     ``points_uv`` ``(..., 2)`` in pixels at time ``t0``, ``velocity_uv`` ``(..., 2)`` px/s.
 
@@ -132,12 +132,12 @@ def shutter_capture(
     line_time: float,
     samples: int = 8,
 ) -> np.ndarray:
-    """Integrate a time-varying scene under a global or rolling shutter.
+    r"""Integrate a time-varying scene under a global or rolling shutter.
 
     .. math::
 
-        I(r, c) = \\frac{1}{t_{exp}} \\int_{t_r}^{t_r + t_{exp}} L(r, c, t)\\,dt,\\quad
-        t_r = 0 \\text{ (global)},\\ r\\,t_{line} \\text{ (rolling)}
+        I(r, c) = \frac{1}{t_{exp}} \int_{t_r}^{t_r + t_{exp}} L(r, c, t)\,dt,\quad
+        t_r = 0 \text{ (global)},\ r\,t_{line} \text{ (rolling)}
 
     The integral is the midpoint rule with ``samples`` instants per row.
 

@@ -1,6 +1,8 @@
-"""The simulator's boundary checks (issue 16): typed arguments of its stages, the fields of
-its dataclasses checked against the scene schema, and real arrays, each refused in one line
-that names the parameter (:func:`imageform._validate.describe` shows the value).
+"""The simulator's boundary checks (issue 16).
+
+Typed arguments of its stages, the fields of its dataclasses checked against the scene schema, and
+real arrays, each refused in one line that names the parameter (:func:`imageform._validate.describe`
+shows the value).
 
 O(1) per parameter (or one pass over a small array): never an extra pass over an image the
 stage did not already read.
@@ -47,9 +49,12 @@ def real_array(
     finite: bool = True,
     min_size: int = 0,
 ) -> np.ndarray:
-    """``value`` as a float64 array of real numbers (None, bool, complex, object and string
-    values refused by name before any conversion), with ``ndim`` dimensions and ``last``
-    values on its last axis; NaN and inf refused unless ``finite=False``."""
+    """Return ``value`` as a float64 array of real numbers, ``ndim`` dimensions, ``last`` values.
+
+    None, bool, complex, object and string values are refused by name before any conversion; the
+    array has ``ndim`` dimensions and ``last`` values on its last axis; NaN and inf are refused
+    unless ``finite=False``.
+    """
     if value is None or isinstance(value, str | bytes | bool | np.bool_):
         raise InvalidInputError(
             f"expected {name} as an array of real numbers, got {describe(value)}"
@@ -92,10 +97,12 @@ def _reals(value: Any, name: str, n: int) -> tuple[float, ...]:
 
 
 def check_field(value: Any, spec: Any, name: str) -> Any:
-    """A dataclass field's value checked against its schema entry ``spec``
-    (:class:`imageform.simulate.schema.Field`): kind, choices and bounds, in the units the
-    typed config holds (already converted). ``None`` is accepted only for an optional key
-    (default ``None``)."""
+    """Check a dataclass field's value against its schema entry ``spec``.
+
+    ``spec`` is a :class:`imageform.simulate.schema.Field`: kind, choices and bounds, in the units
+    the typed config holds (already converted). ``None`` is accepted only for an optional key
+    (default ``None``).
+    """
     if value is None:
         if spec.default is None:
             return None
@@ -180,9 +187,11 @@ def _bounded(x: float, spec: Any, name: str) -> float:
 
 
 def check_section(obj: Any, schema: dict[str, Any], section: str) -> None:
-    """Check (and normalise, on a frozen dataclass) every field of ``obj`` that ``schema``
-    (a section of :data:`~imageform.simulate.schema.SCENE_SCHEMA`) describes; the error
-    names ``section.field``."""
+    """Check (and normalise, on a frozen dataclass) each field of ``obj`` that ``schema`` describes.
+
+    ``schema`` is a section of :data:`~imageform.simulate.schema.SCENE_SCHEMA`; the error names
+    ``section.field``.
+    """
     import dataclasses
 
     from imageform.simulate.schema import Field

@@ -1,5 +1,7 @@
-"""Random numbers of the simulator (SPEC 7): ``rng`` is an int seed, a NumPy Generator or
-None, and ``seed=`` is kept one release as a deprecated alias.
+"""Random numbers of the simulator (SPEC 7).
+
+``rng`` is an int seed, a NumPy Generator or None, and ``seed=`` is kept one release as a deprecated
+alias.
 
 Internal to :mod:`imageform.simulate` (used by :func:`~imageform.simulate.simulate` and
 :func:`~imageform.simulate.truth.detect_vanishing`).
@@ -33,14 +35,14 @@ class RandomSource:
     generator: np.random.Generator | None
 
     def for_step(self) -> np.random.Generator:
-        """The generator of one random step."""
+        """Return the generator of one random step."""
         if self.seed is not None:
             return np.random.default_rng(self.seed)
         assert self.generator is not None
         return self.generator
 
     def int_seed(self) -> int:
-        """An int seed for a function that takes only one."""
+        """Return an int seed for a function that takes only one."""
         if self.seed is not None:
             return self.seed
         assert self.generator is not None

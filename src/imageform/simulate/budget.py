@@ -33,8 +33,9 @@ BYTES_PER_PIXEL = 450
 
 
 def estimate_memory_bytes(width: int, height: int) -> int:
-    """Memory (bytes) that simulating and reporting a ``width`` x ``height`` image needs on
-    top of the loaded libraries: :data:`BYTES_PER_PIXEL` per pixel.
+    """Estimate the memory (bytes) simulating and reporting a ``width`` x ``height`` image needs.
+
+    That is on top of the loaded libraries: :data:`BYTES_PER_PIXEL` per pixel.
 
     Examples
     --------
@@ -57,7 +58,7 @@ def _meminfo_available(path: Path = Path("/proc/meminfo")) -> int | None:
 
 
 def _cgroup_available(root: Path = Path("/sys/fs/cgroup")) -> int | None:
-    """What a cgroup v2 memory limit leaves (None without a limit)."""
+    """Return what a cgroup v2 memory limit leaves (None without a limit)."""
     try:
         limit = (root / "memory.max").read_text().strip()
         if limit == "max":
@@ -69,9 +70,12 @@ def _cgroup_available(root: Path = Path("/sys/fs/cgroup")) -> int | None:
 
 
 def available_memory_bytes() -> int | None:
-    """Memory this process can still use (bytes): the smaller of the system's available
-    memory (Linux ``MemAvailable``; elsewhere the physical memory) and what a cgroup v2 limit
-    leaves; ``None`` when neither can be read (then no scene is refused for its size)."""
+    """Return the memory this process can still use (bytes).
+
+    The smaller of the system's available memory (Linux ``MemAvailable``; elsewhere the physical
+    memory) and what a cgroup v2 limit leaves; ``None`` when neither can be read (then no scene is
+    refused for its size).
+    """
     found = [v for v in (_meminfo_available(), _cgroup_available()) if v is not None]
     if not found:
         try:

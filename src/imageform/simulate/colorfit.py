@@ -50,7 +50,7 @@ def _fit_matrix(measured: np.ndarray, target: np.ndarray) -> np.ndarray:
 
 
 def fit_color_correction(measured: np.ndarray, target: np.ndarray) -> np.ndarray:
-    """Deprecated: the 3×3 M with ``target ≈ measured @ M`` (NaN rows left out).
+    """Fit the 3×3 M with ``target ≈ measured @ M`` (NaN rows left out); deprecated.
 
     ``M`` is ``fit_color_correction(measured, target, transfer="linear",
     saturation=None).matrix.T`` (:func:`imageform.analysis.fit_color_correction`).
@@ -64,7 +64,7 @@ def fit_color_correction(measured: np.ndarray, target: np.ndarray) -> np.ndarray
 
 
 def apply_color_correction(image: np.ndarray, M: np.ndarray) -> np.ndarray:
-    """Deprecated: ``image @ M`` for a linear image ``(..., 3)``.
+    """Return ``image @ M`` for a linear image ``(..., 3)``; deprecated.
 
     Use :meth:`imageform.analysis.ColorCorrection.apply` (``transfer="linear"``), which
     computes ``image @ matrix.T`` with ``matrix = M.T``.

@@ -80,8 +80,10 @@ def _build(cls: Any, data: dict[str, Any]) -> Any:
 
 @dataclass(frozen=True)
 class RenderConfig:
-    """``[render]``: image size (pixels), ``supersampling`` S (S x S rays per pixel) and the
-    reflectance seen where no object is hit."""
+    """``[render]``: image size (pixels), supersampling and the background reflectance.
+
+    ``supersampling`` S (S x S rays per pixel) and the reflectance seen where no object is hit.
+    """
 
     width: int
     height: int
@@ -95,9 +97,11 @@ class RenderConfig:
 
 @dataclass(frozen=True)
 class IlluminantConfig:
-    """``[illuminant]``: how the light's spectrum is given (``type``: a CIE ``name``, a
-    blackbody or daylight ``temperature_K``, or a CSV ``file``) and ``illuminance_lux`` on
-    every surface. ``temperature_K`` is ``None`` for a CIE or file light."""
+    """``[illuminant]``: how the light's spectrum is given and ``illuminance_lux`` on every surface.
+
+    ``type``: a CIE ``name``, a blackbody or daylight ``temperature_K``, or a CSV ``file``.
+    ``temperature_K`` is ``None`` for a CIE or file light.
+    """
 
     type: str
     name: str
@@ -112,8 +116,10 @@ class IlluminantConfig:
 
 @dataclass(frozen=True)
 class DistortionConfig:
-    """``[camera.distortion]``: the lens distortion ``model`` and its coefficients (those the
-    model lacks are 0; see :data:`~imageform.simulate.schema.DISTORTION_COEFFICIENTS`)."""
+    """``[camera.distortion]``: the lens distortion ``model`` and its coefficients.
+
+    Those the model lacks are 0; see :data:`~imageform.simulate.schema.DISTORTION_COEFFICIENTS`.
+    """
 
     model: str = "brown_conrady"
     k1: float = 0.0
@@ -126,14 +132,14 @@ class DistortionConfig:
     k6: float = 0.0
 
     def __post_init__(self) -> None:
-        """A known model and finite coefficients."""
+        """Check for a known model and finite coefficients."""
         model = check_option(self.model, DISTORTION_COEFFICIENTS, "distortion model")
         object.__setattr__(self, "model", model)
         for key in ("k1", "k2", "p1", "p2", "k3", "k4", "k5", "k6"):
             object.__setattr__(self, key, as_real(getattr(self, key), key))
 
     def to_model(self) -> BrownConrady | DivisionModel | KannalaBrandt | None:
-        """The :mod:`imageform.geometry.distortion` model, ``None`` when every coefficient is 0.
+        """Return the :mod:`imageform.geometry.distortion` model (``None``: every coefficient 0).
 
         Examples
         --------
@@ -155,7 +161,7 @@ class DistortionConfig:
 
     @classmethod
     def from_model(cls, model: Any) -> DistortionConfig:
-        """The section describing a distortion model (``None``: no distortion).
+        """Return the section describing a distortion model (``None``: no distortion).
 
         Examples
         --------
@@ -180,9 +186,10 @@ class DistortionConfig:
 
 @dataclass(frozen=True)
 class CameraConfig:
-    """``[camera]``: intrinsics (``focal_length_mm`` with the pixel pitch, or ``fx_px`` ...
-    directly), pose (``eye_m``/``target_m``/``up`` for look-at, or ``R`` and ``t_m``),
-    ``image_plane`` and the lens ``distortion``.
+    """``[camera]``: intrinsics, pose, ``image_plane`` and the lens ``distortion``.
+
+    Intrinsics: ``focal_length_mm`` with the pixel pitch, or ``fx_px`` ... directly; pose:
+    ``eye_m``/``target_m``/``up`` for look-at, or ``R`` and ``t_m``.
 
     ``focal_length_mm`` is also the lens's focal length for defocus; with ``fx_px`` given it
     does not set the intrinsics.
@@ -204,8 +211,11 @@ class CameraConfig:
     distortion: DistortionConfig
 
     def __post_init__(self) -> None:
-        """Each field checked against the schema's ``[camera]`` keys (a negative ``fx_px``
-        would render a mirrored camera); ``distortion`` a :class:`DistortionConfig`."""
+        """Check each field against the schema's ``[camera]`` keys.
+
+        A negative ``fx_px`` would render a mirrored camera; ``distortion`` is a
+        :class:`DistortionConfig`.
+        """
         check_section(self, SCENE_SCHEMA["camera"], "camera")
         if not isinstance(self.distortion, DistortionConfig):
             raise TypeError(
@@ -214,10 +224,10 @@ class CameraConfig:
             )
 
     def to_camera(self, image_size: tuple[int, int], sensor_pixel_pitch_m: float) -> Camera:
-        """The camera the renderer uses: K from the intrinsics, R and t from the pose.
+        r"""Return the camera the renderer uses: K from the intrinsics, R and t from the pose.
 
-        .. math:: f_x = f / p \\ (\\text{unless } f_x \\text{ is given}),\\quad f_y = f_x,\\quad
-            (c_x, c_y) = ((W - 1)/2, (H - 1)/2) \\text{ by default}
+        .. math:: f_x = f / p \ (\text{unless } f_x \text{ is given}),\quad f_y = f_x,\quad
+            (c_x, c_y) = ((W - 1)/2, (H - 1)/2) \text{ by default}
 
         with ``p`` the ``pixel_pitch_um`` or else ``sensor_pixel_pitch_m``.
 
@@ -254,9 +264,11 @@ class CameraConfig:
 
     @classmethod
     def from_camera(cls, camera: Camera, *, focal_length_mm: float = 1.0) -> CameraConfig:
-        """The camera section that renders through ``camera`` (K, R, t, distortion, image
-        plane): the intrinsics as ``fx_px, fy_px, cx_px, cy_px, skew_px``, the pose as ``R``
-        and ``t_m``. ``focal_length_mm`` is the lens's focal length (defocus only).
+        """Return the camera section that renders through ``camera``.
+
+        ``camera`` has K, R, t, a distortion and an image plane: the section holds the intrinsics as
+        ``fx_px, fy_px, cx_px, cy_px, skew_px``, the pose as ``R`` and ``t_m``. ``focal_length_mm``
+        is the lens's focal length (defocus only).
 
         The inverse of :meth:`to_camera`:
 
@@ -301,9 +313,12 @@ class CameraConfig:
 
 @dataclass(frozen=True)
 class LensConfig:
-    """``[lens]``: aperture ``f_number``, ``focus_distance_m``, whether to blur by defocus,
-    the natural ``vignetting``, the per-channel magnification ``lateral_ca`` and whether to
-    blur by ``diffraction`` (off by default)."""
+    """``[lens]``: aperture, focus, defocus blur, vignetting, lateral CA and diffraction.
+
+    Aperture ``f_number``, ``focus_distance_m``, whether to blur by defocus, the natural
+    ``vignetting``, the per-channel magnification ``lateral_ca`` and whether to blur by
+    ``diffraction`` (off by default).
+    """
 
     f_number: float
     focus_distance_m: float
@@ -319,9 +334,11 @@ class LensConfig:
 
 @dataclass(frozen=True)
 class SensorConfig:
-    """``[sensor]``: a preset, its spectral sensitivity, the CFA, the exposure (seconds or
-    ``"auto"``), noise on/off and overrides of the preset's parameters (``None``: the
-    preset's)."""
+    """``[sensor]``: a preset, its spectral sensitivity, the CFA, the exposure, noise and overrides.
+
+    The exposure is in seconds or ``"auto"``; noise is on or off; overrides of the preset's
+    parameters (``None``: the preset's).
+    """
 
     preset: str
     spectral_sensitivity: str
@@ -350,8 +367,10 @@ class SensorConfig:
         check_section(self, SCENE_SCHEMA["sensor"], "sensor")
 
     def to_model(self) -> SensorModel:
-        """The :class:`~imageform.sensor.SensorModel`: the preset (colour) with the overrides
-        converted to SI units, and measured QE curves scaled to ``peak_qe``."""
+        """Return the :class:`~imageform.sensor.SensorModel`: the preset (colour), overridden.
+
+        The overrides are converted to SI units, and measured QE curves scaled to ``peak_qe``.
+        """
         from imageform.sensor.presets import ccd_preset, cmos_preset
 
         base = (cmos_preset if self.preset == "cmos" else ccd_preset)(color=True)
@@ -392,8 +411,11 @@ class SensorConfig:
 
 @dataclass(frozen=True)
 class ProcessingConfig:
-    """``[processing]``: the camera's processing after the sensor (demosaicing, lens-shading
-    correction, white balance, colour correction, output space and transfer function)."""
+    """``[processing]``: the camera's processing after the sensor.
+
+    Demosaicing, lens-shading correction, white balance, colour correction, output space and
+    transfer function.
+    """
 
     demosaic: str
     lens_shading_correction: bool
@@ -409,9 +431,11 @@ class ProcessingConfig:
 
 @dataclass(frozen=True)
 class ObjectConfig:
-    """The pose every ``[[objects]]`` entry has: ``type``, ``name``, ``centre_m`` (world),
-    the front face's ``normal`` and the world direction ``up`` of its top edge (``None``:
-    z, or y for a horizontal object)."""
+    """The pose every ``[[objects]]`` entry has: ``type``, ``name``, ``centre_m`` and orientation.
+
+    ``centre_m`` is in world coordinates, ``normal`` is the front face's normal and ``up`` the world
+    direction of its top edge (``None``: z, or y for a horizontal object).
+    """
 
     type: str
     name: str
@@ -420,8 +444,7 @@ class ObjectConfig:
     up: Vec3 | None
 
     def __post_init__(self) -> None:
-        """Each field checked against the schema's keys of its ``type``; ``centre_m``
-        required."""
+        """Check each field against the schema's keys of its ``type``; ``centre_m`` is required."""
         schema = SCENE_SCHEMA["objects"]
         if not isinstance(self.type, str) or self.type not in schema:
             raise TypeError(f"expected type as one of {', '.join(schema)}, got {self.type!r:.40}")
@@ -434,8 +457,10 @@ class ObjectConfig:
 
 @dataclass(frozen=True)
 class CheckerboardConfig(ObjectConfig):
-    """A checkerboard: ``squares`` (columns, rows) of ``square_size_m``, a light border of
-    ``margin_squares``, the two reflectances (the top-left square dark)."""
+    """A checkerboard: ``squares`` (columns, rows) of ``square_size_m``.
+
+    A light border of ``margin_squares``, the two reflectances (the top-left square dark).
+    """
 
     squares: tuple[int, int]
     square_size_m: float
@@ -446,8 +471,10 @@ class CheckerboardConfig(ObjectConfig):
 
 @dataclass(frozen=True)
 class ColorCheckerConfig(ObjectConfig):
-    """A ColorChecker Classic (6 x 4 patches, BabelColor average spectra), ``width_m`` wide
-    (2/3 as tall), patches separated by ``gap_fraction`` of a cell of the frame."""
+    """A ColorChecker Classic (6 x 4 patches, BabelColor average spectra), ``width_m`` wide.
+
+    It is 2/3 as tall, with the patches separated by ``gap_fraction`` of a cell of the frame.
+    """
 
     width_m: float
     gap_fraction: float
@@ -456,8 +483,10 @@ class ColorCheckerConfig(ObjectConfig):
 
 @dataclass(frozen=True)
 class GroundConfig(ObjectConfig):
-    """A ground of ``size_m`` (across, along) with ``rail_count`` rails running towards its
-    top edge and sleepers between them."""
+    """A ground of ``size_m`` (across, along) with rails and sleepers.
+
+    ``rail_count`` rails run towards its top edge, with sleepers between them.
+    """
 
     size_m: Vec2
     reflectance: Reflectance
@@ -498,9 +527,11 @@ _OBJECT_CLASSES: dict[str, type[ObjectConfig]] = {
 
 @dataclass(frozen=True)
 class ViewConfig:
-    """An extra view of the scene (``[[views]]``): the same camera, looking from ``eye_m``
-    at ``target_m`` with ``up`` up (look-at pose). ``imageform simulate`` renders each one
-    through the whole chain beside the main view (e.g. the views of a calibration board)."""
+    """An extra view of the scene (``[[views]]``): the same camera at another look-at pose.
+
+    It looks from ``eye_m`` at ``target_m`` with ``up`` up. ``imageform simulate`` renders each one
+    through the whole chain beside the main view (e.g. the views of a calibration board).
+    """
 
     eye_m: Vec3
     target_m: Vec3
@@ -517,8 +548,10 @@ class ViewConfig:
 
 @dataclass(frozen=True)
 class SceneConfig:
-    """A whole validated scene description, typed: ``name``, ``description``, one section
-    dataclass per table, the extra ``views`` and the ``objects`` in file order.
+    """A whole validated scene description, typed.
+
+    ``name``, ``description``, one section dataclass per table, the extra ``views`` and the
+    ``objects`` in file order.
 
     Built by :func:`imageform.simulate.load_scene`; :meth:`to_dict` gives the validated plain
     description (every default filled in) back.
@@ -537,8 +570,10 @@ class SceneConfig:
 
     @classmethod
     def from_dict(cls, cfg: dict[str, Any]) -> SceneConfig:
-        """The typed form of a validated description
-        (:func:`~imageform.simulate.validation.validate_scene_dict`'s output)."""
+        """Return the typed form of a validated description.
+
+        The description is :func:`~imageform.simulate.validation.validate_scene_dict`'s output.
+        """
         cam = dict(cfg["camera"])
         cam["distortion"] = _build(DistortionConfig, cam["distortion"])
         return cls(
@@ -555,15 +590,17 @@ class SceneConfig:
         )
 
     def to_dict(self) -> dict[str, Any]:
-        """The description as plain data (sections as dicts, objects as a list of dicts)."""
+        """Return the description as plain data (sections as dicts, objects as a list of dicts)."""
         out = dataclasses.asdict(self)
         out["objects"] = list(out["objects"])
         out["views"] = list(out["views"])
         return out
 
     def __getitem__(self, section: str) -> Any:
-        """Deprecated dict access (``config["lens"]["f_number"]``): use the attributes
-        (``config.lens.f_number``)."""
+        """Return a section by name: deprecated dict access (``config["lens"]["f_number"]``).
+
+        Use the attributes (``config.lens.f_number``).
+        """
         warnings.warn(
             f"Scene.config[{section!r}] is deprecated: Scene.config is a typed SceneConfig; "
             f"use scene.config.{section} (or scene.config.to_dict())",

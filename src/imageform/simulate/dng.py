@@ -1,5 +1,8 @@
-"""The simulated camera's raw mosaic as a DNG file (docs/raw.md): what a raw developer
-(LibRaw, darktable, RawTherapee) needs to develop it as the simulator's camera would."""
+"""The simulated camera's raw mosaic as a DNG file (docs/raw.md).
+
+What a raw developer (LibRaw, darktable, RawTherapee) needs to develop it as the simulator's camera
+would.
+"""
 
 from __future__ import annotations
 
@@ -15,13 +18,13 @@ __all__ = ["simulated_color_matrix", "write_simulated_dng"]
 
 
 def simulated_color_matrix(result: SimulationResult) -> tuple[np.ndarray, np.ndarray]:
-    """The simulated camera's DNG colour description: ``(color_matrix, as_shot_neutral)``.
+    r"""Return the simulated camera's DNG colour description: ``(color_matrix, as_shot_neutral)``.
 
-    The simulator white-balances camera RGB with gains :math:`\\mathbf g` and maps it to
+    The simulator white-balances camera RGB with gains :math:`\mathbf g` and maps it to
     linear sRGB with the fitted matrix :math:`M` (``image @ M``), so camera RGB to CIE XYZ
-    (D65) is :math:`A = S\\,M^T \\mathrm{diag}(\\mathbf g)` with :math:`S` the sRGB-to-XYZ
+    (D65) is :math:`A = S\,M^T \mathrm{diag}(\mathbf g)` with :math:`S` the sRGB-to-XYZ
     matrix (IEC 61966-2-1). DNG's ColorMatrix1 is its inverse :math:`C = A^{-1}` (XYZ to
-    camera, CalibrationIlluminant1 D65) and AsShotNeutral is :math:`1/\\mathbf g`, scaled
+    camera, CalibrationIlluminant1 D65) and AsShotNeutral is :math:`1/\mathbf g`, scaled
     to a largest component of 1.
     """
     from imageform.color import rgb_to_xyz_matrix
@@ -38,8 +41,9 @@ def simulated_color_matrix(result: SimulationResult) -> tuple[np.ndarray, np.nda
 
 
 def write_simulated_dng(result: SimulationResult, scene: Scene, path: str | Path) -> Path:
-    """Write the ``raw`` stage of ``result`` (the simulation of ``scene``) as a DNG file
-    (:func:`imageform.io.write_dng`) with the sensor's black and white levels, its CFA
+    """Write the ``raw`` stage of ``result`` (the simulation of ``scene``) as a DNG file.
+
+    Written by :func:`imageform.io.write_dng` with the sensor's black and white levels, its CFA
     pattern and :func:`simulated_color_matrix`.
 
     An odd image size loses its last row or column (a DNG Bayer tile is 2x2).

@@ -1,19 +1,19 @@
-"""From spectra to electrons: the camera equation per material, precomputed once.
+r"""From spectra to electrons: the camera equation per material, precomputed once.
 
 Every surface is Lambertian and receives the scene illuminance ``E_v`` (lux) from the
-illuminant's spectral power distribution :math:`S(\\lambda)`, scaled to
+illuminant's spectral power distribution :math:`S(\lambda)`, scaled to
 
-.. math:: E(\\lambda) = S(\\lambda)\\, \\frac{E_v}{K_m \\sum_\\lambda S V \\Delta\\lambda}
-    \\quad [\\mathrm{W\\,m^{-2}\\,nm^{-1}}],\\qquad K_m = 683\\ \\mathrm{lm/W}.
+.. math:: E(\lambda) = S(\lambda)\, \frac{E_v}{K_m \sum_\lambda S V \Delta\lambda}
+    \quad [\mathrm{W\,m^{-2}\,nm^{-1}}],\qquad K_m = 683\ \mathrm{lm/W}.
 
-Its radiance is :math:`L = \\rho E / \\pi`, and the image irradiance on the axis of a lens
-of f-number N is :math:`E_s = \\pi L / (4 N^2) = \\rho E / (4 N^2)` (the camera equation for
+Its radiance is :math:`L = \rho E / \pi`, and the image irradiance on the axis of a lens
+of f-number N is :math:`E_s = \pi L / (4 N^2) = \rho E / (4 N^2)` (the camera equation for
 a distant object; Smith, *Modern Optical Engineering*, 4th ed., §8.5; the off-axis
-:math:`\\cos^4\\theta` is applied per ray by the renderer). The mean photo-electrons per
+:math:`\cos^4\theta` is applied per ray by the renderer). The mean photo-electrons per
 second of channel c in a pixel of area A and fill factor FF are
 
-.. math:: \\dot e_c = FF\\, A \\sum_\\lambda \\frac{\\rho(\\lambda) E(\\lambda)}{4 N^2}\\,
-    QE_c(\\lambda)\\, \\frac{\\lambda}{h c}\\, \\Delta\\lambda
+.. math:: \dot e_c = FF\, A \sum_\lambda \frac{\rho(\lambda) E(\lambda)}{4 N^2}\,
+    QE_c(\lambda)\, \frac{\lambda}{h c}\, \Delta\lambda
 
 on a 1 nm grid over the sensor's QE range (trapezoidal weights). The QE curves,
 reflectances and the illuminant are linearly interpolated onto that grid (constant beyond
@@ -51,9 +51,9 @@ def _trapezoid(wl: np.ndarray) -> np.ndarray:
 
 
 def scene_irradiance(illuminant: Spectrum, illuminance_lux: float, wl: np.ndarray) -> np.ndarray:
-    """Spectral irradiance (W m⁻² nm⁻¹) on the grid ``wl`` giving ``illuminance_lux``.
+    r"""Spectral irradiance (W m⁻² nm⁻¹) on the grid ``wl`` giving ``illuminance_lux``.
 
-    .. math:: E(\\lambda) = S(\\lambda) E_v / (K_m \\textstyle\\sum S V \\Delta\\lambda)
+    .. math:: E(\lambda) = S(\lambda) E_v / (K_m \textstyle\sum S V \Delta\lambda)
 
     Examples
     --------
@@ -133,12 +133,13 @@ def reflectance_spectrum(value: float | str) -> tuple[np.ndarray, np.ndarray]:
 
 
 def texture_basis() -> tuple[np.ndarray, np.ndarray]:
-    """Three non-negative reflectance spectra ``B`` ``(L, 3)`` with ``ρ(λ) ≈ B rgb`` for a
-    linear-sRGB colour: the textured surface's reflectance is recovered from its pixel.
+    r"""Return three non-negative reflectance spectra ``B`` ``(L, 3)`` with ``ρ(λ) ≈ B rgb``.
+
+    For a linear-sRGB colour: the textured surface's reflectance is recovered from its pixel.
 
     Fitted per wavelength by non-negative least squares to the 24 ColorChecker spectra and
-    their linear sRGB under D65: :math:`\\min_{b_\\lambda \\ge 0} \\|C b_\\lambda -
-    \\rho_\\lambda\\|`, ``C`` (24, 3) (Lawson & Hanson, *Solving Least Squares Problems*,
+    their linear sRGB under D65: :math:`\min_{b_\lambda \ge 0} \|C b_\lambda -
+    \rho_\lambda\|`, ``C`` (24, 3) (Lawson & Hanson, *Solving Least Squares Problems*,
     1974, ch. 23).
 
     Examples

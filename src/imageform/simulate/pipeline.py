@@ -1,5 +1,7 @@
-"""The camera pipeline: the stages of :mod:`.stages` composed, every stage kept
-(:func:`simulate`)."""
+"""The camera pipeline: the stages of :mod:`.stages` composed, every stage kept.
+
+See :func:`simulate`.
+"""
 
 from __future__ import annotations
 
@@ -155,7 +157,7 @@ class _Run:
 
 
 def _chart(scene: Scene) -> SceneObject | None:
-    """The scene's first ColorChecker, checked against the options that need one."""
+    """Return the scene's first ColorChecker, checked against the options that need one."""
     proc = scene.config.processing
     checkers = [o for o in scene.objects if o.kind == "colorchecker"]
     if not checkers and "colorchecker" in (proc.color_correction, proc.white_balance):
@@ -337,8 +339,10 @@ def _patch_chromaticities(
 def _vanishing(
     scene: Scene, output: np.ndarray, seed: int
 ) -> tuple[VanishingTruth | None, dict[str, Any]]:
-    """The first railed ground's true and detected vanishing point and horizon, and the
-    errors (nothing without rails)."""
+    """Return the first railed ground's true and detected vanishing point and horizon, and errors.
+
+    Nothing without rails.
+    """
     grounds = [
         o for o in scene.objects if isinstance(o.config, GroundConfig) and o.config.rail_count
     ]
@@ -348,7 +352,7 @@ def _vanishing(
 
 
 def _patch_metrics(m: PatchMeasurements) -> dict[str, Any]:
-    """The ColorChecker's numbers of ``metrics`` (the same arrays as ``m``)."""
+    """Return the ColorChecker's numbers of ``metrics`` (the same arrays as ``m``)."""
     return {
         "delta_e00_per_patch": [float(x) for x in m.delta_e00],
         "delta_e00_mean": m.delta_e00_mean,

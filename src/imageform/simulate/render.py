@@ -1,12 +1,12 @@
-"""The renderer: per-pixel ray casting with supersampling, through the lens model.
+r"""The renderer: per-pixel ray casting with supersampling, through the lens model.
 
 For each of the ``S x S`` sub-pixel positions of every pixel the ray is found by undoing
-the camera model: :math:`(x, y) = \\mathrm{undistort}(K^{-1}(u, v, 1))` (for the camera
+the camera model: :math:`(x, y) = \mathrm{undistort}(K^{-1}(u, v, 1))` (for the camera
 obscura, the image plane is behind the pinhole and :math:`x = (c_x - u)/f_x`,
-:math:`y = (c_y - v)/f_y`: the image is inverted). The ray :math:`s\\,(x, y, 1)` is
+:math:`y = (c_y - v)/f_y`: the image is inverted). The ray :math:`s\,(x, y, 1)` is
 intersected with every planar object (nearest hit wins), the hit's texture coordinates
 give its material, the material's precomputed electron rate (:mod:`.materials`) is looked
-up and multiplied by the natural vignetting :math:`\\cos^4\\theta = (1 + x^2 + y^2)^{-2}`;
+up and multiplied by the natural vignetting :math:`\cos^4\theta = (1 + x^2 + y^2)^{-2}`;
 the samples of a pixel are averaged (a box filter over the pixel's area).
 """
 
@@ -42,10 +42,13 @@ __all__ = ["RenderOutput", "load_texture", "pixel_rays", "raycast_quads_numpy", 
 
 @dataclass(frozen=True)
 class RenderOutput:
-    """What the renderer produced: ``rate`` ``(H, W, 3)`` mean photo-electrons per second
-    (vignetted), ``depth`` ``(H, W)`` camera-frame depth (m; ``inf`` where nothing was hit),
-    ``falloff`` ``(H, W)`` the cos⁴ vignetting at pixel centres (1 when disabled) and
-    ``object_index`` ``(H, W)`` the object at each pixel centre (-1: background)."""
+    """What the renderer produced: photo-electron rate, depth, falloff and object index.
+
+    ``rate`` ``(H, W, 3)`` mean photo-electrons per second (vignetted), ``depth`` ``(H, W)``
+    camera-frame depth (m; ``inf`` where nothing was hit), ``falloff`` ``(H, W)`` the cos⁴
+    vignetting at pixel centres (1 when disabled) and ``object_index`` ``(H, W)`` the object at each
+    pixel centre (-1: background).
+    """
 
     rate: np.ndarray
     depth: np.ndarray

@@ -43,11 +43,13 @@ STAGE_KINDS: tuple[str, ...] = ("linear", "raw", "srgb")
 
 @dataclass(frozen=True)
 class Stage:
-    """One step of the chain, in order: ``name`` (a slug used for file names, e.g.
-    ``"radiance"``, ``"raw"``, ``"demosaiced"``), ``title`` and ``description`` (one sentence
-    saying what the stage did, with the formula where there is one), ``image`` (a NumPy array,
-    see the module docstring for ``kind``), ``white_level`` (raw stages only), and
-    ``seconds`` (the time the stage took)."""
+    """One step of the chain, in order.
+
+    ``name`` (a slug used for file names, e.g. ``"radiance"``, ``"raw"``, ``"demosaiced"``),
+    ``title`` and ``description`` (one sentence saying what the stage did, with the formula where
+    there is one), ``image`` (a NumPy array, see the module docstring for ``kind``), ``white_level``
+    (raw stages only), and ``seconds`` (the time the stage took).
+    """
 
     name: str
     title: str
@@ -58,9 +60,11 @@ class Stage:
     seconds: float = 0.0
 
     def __post_init__(self) -> None:
-        """Names are strings, ``seconds`` finite and ``>= 0``, ``white_level`` finite and
-        ``> 0`` (or None), ``image`` an array (an unknown ``kind`` is the report's to refuse,
-        naming the stage)."""
+        """Check the names are strings, ``seconds`` finite and ``>= 0``, ``image`` an array.
+
+        ``white_level`` is finite and ``> 0`` (or None); an unknown ``kind`` is the report's to
+        refuse, naming the stage.
+        """
         for key in ("name", "title", "description"):
             if not isinstance(getattr(self, key), str):
                 raise TypeError(f"expected {key} as a string, got {describe(getattr(self, key))}")
@@ -74,8 +78,10 @@ class Stage:
 
 @dataclass(frozen=True)
 class SceneQuad:
-    """A planar object of the scene as the report's top view draws it: ``name`` and its four
-    world corners ``corners`` of shape ``(4, 3)`` (metres, world frame)."""
+    """A planar object of the scene as the report's top view draws it.
+
+    ``name`` and its four world corners ``corners`` of shape ``(4, 3)`` (metres, world frame).
+    """
 
     name: str
     corners: np.ndarray
@@ -83,9 +89,12 @@ class SceneQuad:
 
 @dataclass(frozen=True)
 class ColorCheckerTruth:
-    """The 24 ColorChecker patches: ``names`` (24,), ``lab_d65`` (24, 3) the ground-truth CIELAB
-    under D65 (2°), ``centres_uv`` (24, 2) the patch centres in the image (pixels) and
-    ``sample_radius_px`` the radius of the square window sampled around each centre."""
+    """The 24 ColorChecker patches: names, ground-truth CIELAB, centres and sampling radius.
+
+    ``names`` (24,), ``lab_d65`` (24, 3) the ground-truth CIELAB under D65 (2°), ``centres_uv``
+    (24, 2) the patch centres in the image (pixels) and ``sample_radius_px`` the radius of the
+    square window sampled around each centre.
+    """
 
     names: tuple[str, ...]
     lab_d65: np.ndarray
@@ -95,7 +104,7 @@ class ColorCheckerTruth:
 
 @dataclass(frozen=True)
 class PatchMeasurements:
-    """The ColorChecker measured on a run's images, one row per patch (24):
+    """The ColorChecker measured on a run's images, one row per patch (24).
 
     - ``names``; ``lab_truth`` and ``lab_measured`` (CIELAB, D65 white) and ``delta_e00``
       (CIEDE2000 between them; NaN for a patch outside the image);
@@ -162,7 +171,7 @@ class PatchMeasurements:
 
 
 def _homogeneous(value: object, name: str) -> np.ndarray:
-    """A finite real homogeneous 3-vector (a point or a line) as float64."""
+    """Return a finite real homogeneous 3-vector (a point or a line) as float64."""
     if value is None or isinstance(value, str | bytes | bool):
         raise InvalidInputError(f"expected {name} as 3 numbers, got {describe(value)}")
     arr = np.asarray(value)
@@ -178,9 +187,12 @@ def _homogeneous(value: object, name: str) -> np.ndarray:
 
 @dataclass(frozen=True)
 class VanishingTruth:
-    """The rails' true vanishing point (homogeneous ``(3,)``, pixels) and the true horizon
-    line (homogeneous ``(3,)``, ``a u + b v + c = 0``); ``detected_*`` what the detector found
-    on the output image (``None`` when it found nothing)."""
+    """The rails' true vanishing point and horizon line, and what the detector found.
+
+    The vanishing point is homogeneous ``(3,)`` (pixels), the horizon line homogeneous ``(3,)``
+    (``a u + b v + c = 0``); ``detected_*`` what the detector found on the output image (``None``
+    when it found nothing).
+    """
 
     vanishing_point: np.ndarray
     horizon: np.ndarray
@@ -188,8 +200,10 @@ class VanishingTruth:
     detected_horizon: np.ndarray | None = None
 
     def __post_init__(self) -> None:
-        """Each line or point a finite homogeneous 3-vector (``None`` for a detection that
-        found nothing)."""
+        """Check each line or point is a finite homogeneous 3-vector.
+
+        ``None`` is allowed for a detection that found nothing.
+        """
         for key in ("vanishing_point", "horizon", "detected_vanishing_point", "detected_horizon"):
             value = getattr(self, key)
             if value is None and key.startswith("detected"):
@@ -240,8 +254,11 @@ class SimulationResult:
     world_up: tuple[float, float, float] = WORLD_UP
 
     def __post_init__(self) -> None:
-        """``camera`` a Camera, ``image_size`` two positive integers, ``world_up`` a finite
-        non-zero 3-vector, ``stages`` Stage objects (issue 16)."""
+        """Check the fields: ``camera``, ``image_size``, ``world_up`` and ``stages`` (issue 16).
+
+        ``camera`` a Camera, ``image_size`` two positive integers, ``world_up`` a finite non-zero
+        3-vector, ``stages`` Stage objects.
+        """
         if not isinstance(self.camera, Camera):
             raise TypeError(
                 f"expected camera as an imageform.geometry.Camera, got {describe(self.camera)}"
@@ -258,7 +275,7 @@ class SimulationResult:
         object.__setattr__(self, "stages", stages)
 
     def stage(self, name: str) -> Stage:
-        """The stage called ``name``; ``KeyError`` listing the names if there is none."""
+        """Return the stage called ``name``; ``KeyError`` listing the names if there is none."""
         for s in self.stages:
             if s.name == name:
                 return s

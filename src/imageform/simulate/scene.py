@@ -47,9 +47,11 @@ _DEFAULT_TOML = Path(__file__).with_name("scenes") / "default.toml"
 
 @dataclass(frozen=True)
 class SceneObject:
-    """A planar object: ``kind``, ``name``, its world ``corners`` ``(4, 3)`` (top-left,
-    top-right, bottom-right, bottom-left as seen from the front) and its typed ``config``
-    (:class:`~imageform.simulate.config.ObjectConfig` of its kind)."""
+    """A planar object: ``kind``, ``name``, its world ``corners`` ``(4, 3)`` and typed ``config``.
+
+    The corners are top-left, top-right, bottom-right, bottom-left as seen from the front; the
+    config is the :class:`~imageform.simulate.config.ObjectConfig` of its kind.
+    """
 
     kind: str
     name: str
@@ -108,7 +110,7 @@ class Scene:
         return int(r.width), int(r.height)
 
     def with_changes(self, **sections: dict[str, Any] | list[dict[str, Any]]) -> Scene:
-        """A copy with some keys of some sections replaced, re-validated.
+        """Return a copy with some keys of some sections replaced, re-validated.
 
         Examples
         --------
@@ -128,8 +130,9 @@ class Scene:
         return _build(_plain(cfg), None, origin, self.base_dir)
 
     def with_camera(self, camera: Camera, *, focal_length_mm: float | None = None) -> Scene:
-        """The same scene seen through ``camera`` (an :class:`imageform.geometry.Camera`:
-        K, R, t, distortion, image plane), re-validated.
+        """Return the same scene seen through ``camera``, re-validated.
+
+        ``camera`` is an :class:`imageform.geometry.Camera`: K, R, t, distortion, image plane.
 
         The image size is the camera's ``image_size``; the camera section becomes
         :meth:`~imageform.simulate.config.CameraConfig.from_camera` of ``camera``
@@ -159,8 +162,9 @@ class Scene:
         return self.with_changes(render={"width": int(w), "height": int(h)}, camera=cam)
 
     def view(self, index: int) -> Scene:
-        """The scene seen from its extra view ``index`` (``[[views]]``): the same camera
-        (intrinsics, distortion, sensor) at that view's look-at pose, without extra views.
+        """Return the scene seen from its extra view ``index`` (``[[views]]``), without extra views.
+
+        The same camera (intrinsics, distortion, sensor) at that view's look-at pose.
 
         Examples
         --------
@@ -180,7 +184,7 @@ class Scene:
         return self.with_changes(camera={**pose, "R": None, "t_m": None}, views=[])
 
     def resized(self, width: int, height: int | None = None) -> Scene:
-        """The same view at another image size: intrinsics scaled with the image.
+        """Return the same view at another image size: intrinsics scaled with the image.
 
         The camera's pixel pitch (or ``fx_px``, ``fy_px``, ``cx_px``, ``cy_px``) is scaled by
         ``width / current width``; ``height`` defaults to keeping the aspect ratio. The
@@ -221,9 +225,12 @@ def _where(scene: Scene) -> _Ctx:
 
 @contextlib.contextmanager
 def _at_key(scene: Scene, path: tuple[Any, ...]) -> Iterator[None]:
-    """Run a step of the simulation of ``scene``; an error it raises about the scene's values
-    names the scene key ``path`` and its line in the scene file (issue 16: errors that arise
-    at render time point at the file like those found when it is read)."""
+    """Run a step of the simulation of ``scene``, naming the scene key ``path`` in its errors.
+
+    An error it raises about the scene's values names the scene key ``path`` and its line in the
+    scene file (issue 16: errors that arise at render time point at the file like those found when
+    it is read).
+    """
     try:
         yield
     except (InvalidInputError, DegenerateConfigurationError) as exc:
@@ -234,7 +241,7 @@ def _at_key(scene: Scene, path: tuple[Any, ...]) -> Iterator[None]:
 
 
 def _plain(cfg: Any) -> Any:
-    """Validated config back to TOML-like data (tuples to lists, None dropped)."""
+    """Convert a validated config back to TOML-like data (tuples to lists, None dropped)."""
     if isinstance(cfg, dict):
         return {k: _plain(v) for k, v in cfg.items() if v is not None}
     if isinstance(cfg, tuple | list):
@@ -250,7 +257,7 @@ def _unit(v: np.ndarray, what: str) -> np.ndarray:
 
 
 def _object_frame(o: ObjectConfig) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Unit vectors (right, down, normal) of an object from its normal and up hint."""
+    """Return the unit vectors (right, down, normal) of an object from its normal and up hint."""
     n = _unit(np.asarray(o.normal, float), f"{o.name}: normal")
     if o.up is not None:
         up = _unit(np.asarray(o.up, float), f"{o.name}: up")
@@ -371,7 +378,7 @@ def _build(data: dict[str, Any], text: str | None, origin: str, base: Path | Non
 
 
 def load_scene(source: str | Path | dict[str, Any]) -> Scene:
-    """Read and validate a scene: a TOML file path, a TOML string or a dict.
+    r"""Read and validate a scene: a TOML file path, a TOML string or a dict.
 
     Paths inside the scene (image textures, illuminant files) are relative to the file's
     folder (or the working folder for a string or dict).
@@ -386,7 +393,7 @@ def load_scene(source: str | Path | dict[str, Any]) -> Scene:
 
     Examples
     --------
-    >>> s = load_scene('name = "tiny"\\n[render]\\nwidth = 160\\nheight = 90\\n')
+    >>> s = load_scene('name = "tiny"\n[render]\nwidth = 160\nheight = 90\n')
     >>> s.name, s.image_size
     ('tiny', (160, 90))
     """
@@ -430,8 +437,9 @@ def load_scene(source: str | Path | dict[str, Any]) -> Scene:
 
 
 def default_scene() -> Scene:
-    """The built-in scene: a ColorChecker and a checkerboard standing on a ground with rails,
-    under tungsten light (CIE A), seen by an endoscope-like camera at 1280x720.
+    """Return the built-in scene: a ColorChecker and a checkerboard on a ground with rails.
+
+    They stand under tungsten light (CIE A), seen by an endoscope-like camera at 1280x720.
 
     Examples
     --------

@@ -35,11 +35,14 @@ __all__ = [
 
 @dataclass(frozen=True)
 class Field:
-    """One key of the schema: ``kind`` (``"float"``, ``"int"``, ``"str"``, ``"bool"``,
-    ``"vec2"``, ``"vec3"``, ``"ivec2"``, ``"mat3"``, ``"reflectance"`` (a number in [0, 1] or
-    a ColorChecker patch name), ``"float_or_auto"``), the physical ``dimension`` of a unit
-    suffix (``"length"``, ``"time"``, ``"angle"`` or None), the ``default`` (None: optional,
-    absent), the valid ``choices`` of a string, and a one-line ``doc``."""
+    """One key of the schema: ``kind``, ``dimension``, ``default``, ``choices`` and ``doc``.
+
+    ``kind`` (``"float"``, ``"int"``, ``"str"``, ``"bool"``, ``"vec2"``, ``"vec3"``, ``"ivec2"``,
+    ``"mat3"``, ``"reflectance"`` (a number in [0, 1] or a ColorChecker patch name),
+    ``"float_or_auto"``), the physical ``dimension`` of a unit suffix (``"length"``, ``"time"``,
+    ``"angle"`` or None), the ``default`` (None: optional, absent), the valid ``choices`` of a
+    string, and a one-line ``doc``.
+    """
 
     kind: str
     default: Any
@@ -51,7 +54,7 @@ class Field:
     positive: bool = False
 
     def __post_init__(self) -> None:
-        """A known ``kind``; a numeric ``default`` finite and real (issue 16)."""
+        """Check for a known ``kind`` and a finite, real numeric ``default`` (issue 16)."""
         from imageform._validate import as_real, describe
         from imageform.errors import InvalidInputError
 

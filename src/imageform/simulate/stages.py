@@ -72,8 +72,10 @@ class WhiteBalanced:
 
 @dataclass(frozen=True)
 class ColorCorrected:
-    """:func:`correct_color`'s output: linear sRGB ``image`` and the ``matrix`` M (3, 3)
-    with ``image = camera RGB @ M``."""
+    """:func:`correct_color`'s output: linear sRGB ``image`` and the ``matrix`` M (3, 3).
+
+    ``image = camera RGB @ M``.
+    """
 
     image: np.ndarray
     matrix: np.ndarray
@@ -88,8 +90,10 @@ class ColorCorrected:
 
 @dataclass(frozen=True)
 class Encoded:
-    """:func:`encode_output`'s output: the encoded ``image`` in [0, 1] and the name of the
-    ``transfer`` function applied."""
+    """:func:`encode_output`'s output: the encoded ``image`` in [0, 1] and the ``transfer`` name.
+
+    ``transfer`` is the name of the transfer function applied.
+    """
 
     image: np.ndarray
     transfer: str
@@ -98,13 +102,13 @@ class Encoded:
 def apply_lens(
     rendered: RenderOutput, camera: Camera, lens: LensConfig, focal_length_mm: float
 ) -> np.ndarray:
-    """Lateral chromatic aberration, then depth-dependent defocus, on the rendered rate.
+    r"""Lateral chromatic aberration, then depth-dependent defocus, on the rendered rate.
 
     Each channel is scaled by its magnification about the principal point
     (:func:`imageform.optics.lateral_chromatic_aberration`); a channel shrunk by ``m < 1``
     keeps its unshifted value where it would sample outside the frame. Each pixel is then
     blurred by the disc of its circle of confusion
-    :math:`c = (f/N) |d - s| / d \\cdot f / (s - f)` at the pitch ``f / f_x``
+    :math:`c = (f/N) |d - s| / d \cdot f / (s - f)` at the pitch ``f / f_x``
     (:func:`imageform.optics.defocus_radius_px`, :func:`imageform.optics.blur_by_radius`);
     no blur when every radius is under 0.25 px.
     """
@@ -170,16 +174,18 @@ MAX_KERNEL_SAMPLES = 2048
 def diffraction_psf_kernel(
     wavelengths: tuple[float, ...], *, f_number: float, pixel_pitch: float
 ) -> np.ndarray:
-    """The diffraction PSF of a circular aperture over ``wavelengths``, band-limited to the
-    pixel grid: the kernel whose transfer function on the grid is the optics' own MTF.
+    r"""Return the diffraction PSF of a circular aperture over ``wavelengths``, band-limited.
+
+    Band-limited to the pixel grid: the kernel whose transfer function on the grid is the optics'
+    own MTF.
 
     The renderer's pixels are already area averages (the pixel aperture's MTF is in the
     image), so the lens stage must add only the optics: its kernel is the inverse DFT of the
     band-averaged MTF of the circular pupil (Goodman eq. 6-31) sampled on the ``n x n``
     frequencies of the pixel grid up to Nyquist,
 
-    .. math:: h[x] = \\frac{1}{n^2} \\sum_m \\overline{\\mathrm{MTF}}
-        \\big(\\lVert m\\rVert / (n p)\\big)\\, e^{2\\pi i\\, m \\cdot x / n},
+    .. math:: h[x] = \frac{1}{n^2} \sum_m \overline{\mathrm{MTF}}
+        \big(\lVert m\rVert / (n p)\big)\, e^{2\pi i\, m \cdot x / n},
 
     with ``p`` the pixel pitch and ``n`` odd, the kernel reaching ``10 lambda N`` of the
     longest wavelength from its centre (the Airy pattern's wings wrap around beyond that). The
@@ -219,9 +225,10 @@ def diffraction_psf_kernel(
 
 
 def diffraction_blur(image: np.ndarray, *, f_number: float, pixel_pitch: float) -> np.ndarray:
-    """Each channel of ``image (H, W, 3)`` (R, G, B) convolved with its band's
-    band-limited diffraction PSF (:func:`diffraction_psf_kernel`,
-    :data:`DIFFRACTION_BANDS`); borders reflected; light is kept >= 0.
+    """Convolve each channel of ``image (H, W, 3)`` (R, G, B) with its band's diffraction PSF.
+
+    The PSF is band-limited (:func:`diffraction_psf_kernel`, :data:`DIFFRACTION_BANDS`); borders
+    reflected; light is kept >= 0.
 
     An Airy disc well inside a pixel still moves a little light (its wings) to neighbours.
     """
@@ -242,9 +249,10 @@ def diffraction_blur(image: np.ndarray, *, f_number: float, pixel_pitch: float) 
 
 
 def exposure_time(rate: np.ndarray, config: SensorConfig, sensor: SensorModel) -> float:
-    """The exposure (s): ``config.exposure_time_s``, or for ``"auto"`` the time that brings
-    the 99.5th percentile of the brightest channel to ``auto_exposure_level`` of the full
-    well: :math:`t = a\\, FW / \\dot e_{99.5}`.
+    r"""Return the exposure (s): ``config.exposure_time_s``, or the automatic one for ``"auto"``.
+
+    For ``"auto"``, the time that brings the 99.5th percentile of the brightest channel to
+    ``auto_exposure_level`` of the full well: :math:`t = a\, FW / \dot e_{99.5}`.
 
     Raises
     ------
@@ -293,9 +301,9 @@ def capture_raw(
 
 
 def normalize_raw(raw: np.ndarray, sensor: SensorModel, exposure_time_s: float) -> np.ndarray:
-    """Raw DN to [0, 1]: black level and mean dark signal subtracted, divided by the range.
+    r"""Raw DN to [0, 1]: black level and mean dark signal subtracted, divided by the range.
 
-    .. math:: x = (DN - B - K\\, I_{dark}\\, t) / (DN_{max} - B)
+    .. math:: x = (DN - B - K\, I_{dark}\, t) / (DN_{max} - B)
     """
     raw = real_array(raw, "raw", ndim=2, finite=False)  # float64 (the one conversion)
     check_type(sensor, SensorModel, "sensor")
@@ -305,8 +313,10 @@ def normalize_raw(raw: np.ndarray, sensor: SensorModel, exposure_time_s: float) 
 
 
 def demosaic_raw(normalized: np.ndarray, cfa: str, method: str) -> np.ndarray:
-    """Camera RGB ``(H, W, 3)`` float64 from the normalised mosaic
-    (:func:`imageform.sensor.demosaic.demosaic`)."""
+    """Return camera RGB ``(H, W, 3)`` float64 from the normalised mosaic.
+
+    Demosaiced by :func:`imageform.sensor.demosaic.demosaic`.
+    """
     from imageform.sensor.cfa import CFA_PATTERNS
     from imageform.sensor.demosaic import DEMOSAIC_METHODS, demosaic
 
@@ -349,10 +359,10 @@ def correct_lens_shading(image: np.ndarray, falloff: np.ndarray) -> np.ndarray:
 def balance_white(
     image: np.ndarray, method: str, chart_rgb: np.ndarray | None = None
 ) -> WhiteBalanced:
-    """White balance in linear light, the green channel kept.
+    r"""White balance in linear light, the green channel kept.
 
     ``"none"``: gains 1. ``"colorchecker"``: the gains that make the mean of the chart's
-    :data:`~imageform.simulate.truth.NEUTRAL_PATCHES` grey, :math:`g_c = \\mathrm{mean}_p
+    :data:`~imageform.simulate.truth.NEUTRAL_PATCHES` grey, :math:`g_c = \mathrm{mean}_p
     (G_p / C_p)`, from ``chart_rgb`` (24, 3) (the patch means). Otherwise
     :func:`imageform.color.white_balance` with that method.
 
@@ -415,8 +425,11 @@ def correct_color(
 
 
 def encode_output(linear_srgb: np.ndarray, space: str, transfer: str) -> Encoded:
-    """Linear sRGB to the output ``space``'s primaries, clipped to [0, 1] (the display range:
-    an explicit step) and encoded with ``transfer`` (``"space"``: the space's own)."""
+    """Convert linear sRGB to the output ``space``, clip to [0, 1] and encode with ``transfer``.
+
+    The primaries are the output ``space``'s; the clipping to the display range is an explicit step;
+    ``transfer="space"`` applies the space's own.
+    """
     from imageform.color import RGB_SPACES, encode, linear_srgb_to_xyz, xyz_to_linear_rgb
 
     linear_srgb = real_array(linear_srgb, "linear_srgb", finite=False)
@@ -431,7 +444,7 @@ def encode_output(linear_srgb: np.ndarray, space: str, transfer: str) -> Encoded
 
 
 def decode_output(encoded: Encoded, space: str) -> np.ndarray:
-    """The encoded output back to linear sRGB (to measure it against the truth)."""
+    """Decode the encoded output back to linear sRGB (to measure it against the truth)."""
     from imageform.color import decode, linear_rgb_to_xyz, xyz_to_linear_srgb
 
     check_type(encoded, Encoded, "encoded")
@@ -440,9 +453,11 @@ def decode_output(encoded: Encoded, space: str) -> np.ndarray:
 
 
 def measure_photon_transfer(sensor: SensorModel, rng: np.random.Generator) -> PhotonTransferData:
-    """EMVA 1288 photon transfer of the green channel at 550 nm, dark to beyond saturation:
-    20 exposure times from 1e-3 to 1.3 times the saturation time, 48x48 flat-field pairs
-    at 0.05 W/m² (:func:`imageform.sensor.emva.simulate_photon_transfer`)."""
+    """Measure the EMVA 1288 photon transfer of the green channel at 550 nm.
+
+    Dark to beyond saturation: 20 exposure times from 1e-3 to 1.3 times the saturation time, 48x48
+    flat-field pairs at 0.05 W/m² (:func:`imageform.sensor.emva.simulate_photon_transfer`).
+    """
     from imageform.sensor.emva import simulate_photon_transfer
     from imageform.sensor.model import photons_per_pixel
 

@@ -18,8 +18,10 @@ __all__ = ["load_texture", "resolve_path"]
 
 
 def resolve_path(path: str, base: Path | None) -> Path:
-    """``path`` relative to the scene file's folder ``base`` (the working folder when
-    ``None``); an error naming the file when it does not exist."""
+    """Return ``path`` relative to the scene file's folder ``base``.
+
+    ``base=None`` stands for the working folder; an error names the file when it does not exist.
+    """
     if not isinstance(path, str | Path):
         raise TypeError(f"expected path as a file name (str or Path), got {describe(path)}")
     if base is not None and not isinstance(base, str | Path):
@@ -40,7 +42,7 @@ def resolve_path(path: str, base: Path | None) -> Path:
 
 
 def load_texture(path: str, base: Path | None) -> np.ndarray:
-    """An image texture as linear sRGB ``(H, W, 3)`` float64 (decoded from sRGB), read-only.
+    """Load an image texture as linear sRGB ``(H, W, 3)`` float64 (decoded from sRGB), read-only.
 
     Grey images are repeated to three channels; alpha is ignored (the texture is opaque).
     """

@@ -1,13 +1,13 @@
-"""Ground truth of a scene and measurements on the simulated images.
+r"""Ground truth of a scene and measurements on the simulated images.
 
 - ColorChecker: CIELAB under D65 from the reflectances (CIE 015:2018 eqs. 7.1-7.3 via
   :func:`imageform.spectral.spectrum_to_xyz`, then :func:`imageform.color.xyz_to_lab`), the
   patch centres projected through the camera, the patch means of an image and
   :func:`measure_colorchecker` (CIEDE2000 and luminance SNR per patch: the one measurement
   the simulator and the report both give).
-- Rails: the true vanishing point :math:`v \\sim K R d` of the rail direction d (distorted
+- Rails: the true vanishing point :math:`v \sim K R d` of the rail direction d (distorted
   like every image point when the camera has a distortion model) and the horizon, the
-  vanishing line :math:`l \\sim K^{-T} R n` of the ground plane of normal n (Hartley &
+  vanishing line :math:`l \sim K^{-T} R n` of the ground plane of normal n (Hartley &
   Zisserman, 2nd ed., §8.6.1-8.6.2), and :func:`vanishing_errors` against a detection.
 - The light: its correlated colour temperature from its spectrum (:func:`light_cct`).
 """
@@ -101,9 +101,10 @@ def colorchecker_truth(obj: SceneObject, camera: Camera) -> ColorCheckerTruth:
 def patch_windows(
     truth: ColorCheckerTruth, height: int, width: int
 ) -> list[tuple[slice, slice] | None]:
-    """The square window ``(rows, cols)`` sampled around each patch centre: pixels whose
-    centres lie within ``sample_radius_px`` of the centre along both axes, cut to the image
-    (``None`` where nothing of the window is inside).
+    """Return the square window ``(rows, cols)`` sampled around each patch centre.
+
+    Pixels whose centres lie within ``sample_radius_px`` of the centre along both axes, cut to the
+    image (``None`` where nothing of the window is inside).
 
     Examples
     --------
@@ -313,7 +314,7 @@ def _finite_vp(camera: Camera, d_world: np.ndarray) -> np.ndarray:
 
 
 def rails_truth(ground: SceneObject, camera: Camera) -> VanishingTruth:
-    """True vanishing point of the rails of ``ground`` and the horizon of its plane.
+    """Return the true vanishing point of the rails of ``ground`` and the horizon of its plane.
 
     The rails run along the object's ``-edge_down`` (towards its top edge). Under lens
     distortion the point is distorted like any image point; the horizon is the pinhole
@@ -339,9 +340,11 @@ def _line_angle(l1: np.ndarray, l2: np.ndarray) -> float:
 
 
 def vanishing_errors(v: VanishingTruth) -> dict[str, float | None]:
-    """``vanishing_point_error_px``: the distance (pixels) between the detected and the true
-    vanishing point (both finite; else ``None``); ``horizon_angle_error_deg``: the angle
-    between the detected and the true horizon (``None`` without a detected horizon).
+    """Return the vanishing point's error (pixels) and the horizon's angle error (degrees).
+
+    ``vanishing_point_error_px``: the distance (pixels) between the detected and the true vanishing
+    point (both finite; else ``None``); ``horizon_angle_error_deg``: the angle between the detected
+    and the true horizon (``None`` without a detected horizon).
 
     Examples
     --------

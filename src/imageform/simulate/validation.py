@@ -43,12 +43,14 @@ def _split_key(k: str) -> tuple[str, ...]:
 
 
 def find_line(text: str | None, path: tuple[Any, ...]) -> int | None:
-    """1-based line of the key (or table) at ``path`` (e.g. ``("objects", 1, "squares")``) in
-    TOML ``text``; None if not found. Array-of-tables entries count from 0.
+    r"""Return the 1-based line of the key (or table) at ``path`` in TOML ``text``.
+
+    ``path`` is e.g. ``("objects", 1, "squares")``; None if not found. Array-of-tables entries count
+    from 0.
 
     Examples
     --------
-    >>> find_line("a = 1\\n[camera]\\nf = 2\\n", ("camera", "f"))
+    >>> find_line("a = 1\n[camera]\nf = 2\n", ("camera", "f"))
     3
     """
     if text is not None and not isinstance(text, str):
@@ -94,12 +96,12 @@ def _show_text(text: str) -> str:
 
 
 def _show(v: object) -> str:
-    """A scene value for an error message: its repr, cut to :data:`_ECHO` characters."""
+    """Return a scene value for an error message: its repr, cut to :data:`_ECHO` characters."""
     return _show_text(repr(v))
 
 
 def _names(keys: Any, width: int = 76) -> str:
-    """The valid keys, as many as fit ``width`` characters, then how many more (one line)."""
+    """Return the valid keys, as many as fit ``width`` characters, then how many more (one line)."""
     keys = list(keys)
     shown: list[str] = []
     for k in keys:
@@ -110,8 +112,10 @@ def _names(keys: Any, width: int = 76) -> str:
 
 
 def one_line(text: str, limit: int = 200) -> str:
-    """``text``'s first line cut to ``limit`` characters (an error message never dumps a
-    scene value or a file's content)."""
+    """Return ``text``'s first line cut to ``limit`` characters.
+
+    An error message never dumps a scene value or a file's content.
+    """
     first = text.strip().splitlines()[0] if text.strip() else ""
     return first if len(first) <= limit else first[: limit - 3] + "..."
 
@@ -340,9 +344,11 @@ def validate_scene_dict(
 
 
 def _check_illuminant(ill: dict[str, Any], ctx: _Ctx) -> None:
-    """``file`` needs a path; ``temperature_K`` belongs to blackbody and daylight lights only
-    (a CIE illuminant's or a file's temperature is not a setting: the report computes the
-    light's CCT from its spectrum)."""
+    """Check that ``file`` has a path and ``temperature_K`` is for blackbody and daylight only.
+
+    A CIE illuminant's or a file's temperature is not a setting: the report computes the light's CCT
+    from its spectrum.
+    """
     if ill["type"] == "cie" and len(ill["name"]) > 40:  # no CIE name is that long
         ctx.fail(("illuminant", "name"), f"unknown CIE illuminant {_show(ill['name'])}")
     if ill["type"] == "file" and ill["file"] is None:
@@ -359,7 +365,7 @@ def _check_illuminant(ill: dict[str, Any], ctx: _Ctx) -> None:
 
 
 def _check_distortion(dist: dict[str, Any], ctx: _Ctx) -> None:
-    """A coefficient the chosen model does not have must be absent or 0."""
+    """Check that a coefficient the chosen model does not have is absent or 0."""
     model = dist["model"]
     has = DISTORTION_COEFFICIENTS[model]
     for key, value in dist.items():

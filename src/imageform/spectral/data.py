@@ -103,10 +103,12 @@ def _parse(key: str) -> tuple[tuple[str, ...], tuple[str, ...], np.ndarray, tupl
 
 
 class DataTable(NamedTuple):
-    """A shipped CSV table as read: ``comments`` (its ``#`` header lines: source and notes),
-    ``columns`` (the column names), ``values`` (the numeric columns, read-only float64;
-    every column when the first is numeric, else all but the first) and ``labels`` (the
-    first column's entries as strings)."""
+    """A shipped CSV table as read.
+
+    ``comments`` (its ``#`` header lines: source and notes), ``columns`` (the column names),
+    ``values`` (the numeric columns, read-only float64; every column when the first is
+    numeric, else all but the first) and ``labels`` (the first column's entries as strings).
+    """
 
     comments: tuple[str, ...]
     columns: tuple[str, ...]
@@ -115,9 +117,11 @@ class DataTable(NamedTuple):
 
 
 def read_table(key: str) -> DataTable:
-    """Any shipped table by its key in :data:`TABLES`, including those that are not
-    wavelength tables (the viridis colour map, the Machado et al. (2009) CVD matrices);
-    :func:`load_table` gives a wavelength table as a :class:`Spectrum`.
+    """Read any shipped table by its key in :data:`TABLES`.
+
+    This includes those that are not wavelength tables (the viridis colour map, the Machado
+    et al. (2009) CVD matrices); :func:`load_table` gives a wavelength table as a
+    :class:`Spectrum`.
 
     Examples
     --------
@@ -134,7 +138,7 @@ def read_table(key: str) -> DataTable:
 
 
 def table_source(key: str) -> str:
-    """The header (source and notes) of a shipped table.
+    """Return the header (source and notes) of a shipped table.
 
     Examples
     --------
@@ -150,7 +154,7 @@ def table_source(key: str) -> str:
 
 
 def load_table(key: str, name: str = "") -> Spectrum:
-    """A shipped wavelength table as a :class:`Spectrum` (one curve or K labelled curves).
+    """Load a shipped wavelength table as a :class:`Spectrum` (one curve or K labelled curves).
 
     Spectra are immutable (read-only arrays), so one cached object per table is shared.
     """
@@ -215,8 +219,10 @@ def cone_fundamentals() -> Spectrum:
 
 
 def illuminant_table(name: str) -> Spectrum:
-    """A tabulated CIE illuminant, 5 nm: A, D50, D65 (100 at 560 nm); B, C (the old CIE
-    daylight simulators, as tabulated: 102.8 and 105.3 at 560 nm); F2, F11 (relative).
+    """Return a tabulated CIE illuminant, 5 nm.
+
+    A, D50, D65 (100 at 560 nm); B, C (the old CIE daylight simulators, as tabulated: 102.8
+    and 105.3 at 560 nm); F2, F11 (relative).
 
     Examples
     --------
@@ -235,7 +241,7 @@ def illuminant_table(name: str) -> Spectrum:
 
 
 def led_spectrum(name: str = "LED-B3") -> Spectrum:
-    """A CIE 015:2018 Table 11 white-LED spectrum (LED-B1 ... LED-V2), 5 nm."""
+    """Return a CIE 015:2018 Table 11 white-LED spectrum (LED-B1 ... LED-V2), 5 nm."""
     if not isinstance(name, str):
         raise TypeError(f"expected name as an LED spectrum name (str), got {describe(name)}")
     key = name.strip().upper().replace("_", "-")
@@ -254,7 +260,7 @@ def camera_sensitivities(camera: str = "nikon_d5100") -> Spectrum:
 
 
 def colorchecker_reflectances() -> Spectrum:
-    """The 24 ColorChecker reflectances (BabelColor average, 380-730 nm, 10 nm), (36, 24)."""
+    """Return the 24 ColorChecker reflectances (BabelColor average, 380-730 nm, 10 nm), (36, 24)."""
     return load_table("colorchecker", "ColorChecker (BabelColor average)")
 
 
@@ -263,7 +269,7 @@ COLORCHECKER_PATCHES: tuple[str, ...] = tuple(_parse("colorchecker")[1][1:])
 
 
 def colorchecker_published_xyy(table: str = "babelcolor") -> np.ndarray:
-    """Published ColorChecker xyY under D50 (2°), shape (24, 3), Y in [0, 1].
+    """Return the published ColorChecker xyY under D50 (2°), shape (24, 3), Y in [0, 1].
 
     ``"babelcolor"``: BabelColor average (Pascale 2006), published as L*a*b* D50 and computed
     by BabelColor from the same average spectra shipped here; ``"xrite2014"``: X-Rite's values

@@ -107,7 +107,7 @@ def _planck(lam: np.ndarray, t: float) -> np.ndarray:
 def blackbody_spectrum(
     temperature: float, wavelengths: npt.ArrayLike | None = None, *, normalize_at: float = 560.0
 ) -> Spectrum:
-    """A black body as a :class:`Spectrum`, scaled to 100 at ``normalize_at`` nm.
+    """Return a black body as a :class:`Spectrum`, scaled to 100 at ``normalize_at`` nm.
 
     The default grid is 300-830 nm at 1 nm.
 
@@ -218,10 +218,12 @@ def _d_series(xd: float, yd: float, round_m: bool, name: str) -> Spectrum:
 
 
 def illuminant(name: str) -> Spectrum:
-    """An illuminant by name: a CIE table (A, B, C, D50, D65, F2, F11), ``"E"`` (equal energy),
-    a CIE LED (LED-B1 ... LED-V2), ``"D<cct>"`` (daylight series, e.g. ``"D75"`` is 7500 K on
-    the 1931 scale, i.e. ``daylight_spectrum(7500 * 1.4388 / 1.4380)``), or ``"bb<T>"``
-    (black body at T kelvin, e.g. ``"bb3200"``).
+    """Return an illuminant by name.
+
+    A CIE table (A, B, C, D50, D65, F2, F11), ``"E"`` (equal energy), a CIE LED (LED-B1 ...
+    LED-V2), ``"D<cct>"`` (daylight series, e.g. ``"D75"`` is 7500 K on the 1931 scale, i.e.
+    ``daylight_spectrum(7500 * 1.4388 / 1.4380)``), or ``"bb<T>"`` (black body at T kelvin,
+    e.g. ``"bb3200"``).
 
     Examples
     --------

@@ -11,7 +11,7 @@ CIE 015 writes k = 100/..., Y = 100). A light source (``illuminant=None``) is in
 :math:`X = k\sum S \bar x \Delta\lambda` with Y = 1 for the source itself, or absolutely with
 :math:`k = K_m = 683` lm W⁻¹ (``absolute=True``).
 
-Methods:
+The two methods:
 
 - ``"cie015"`` (CIE 015:2018 §7.2): everything on the observer's 1 nm grid, within the range
   the illuminant covers; the sample is interpolated (method named) and extended beyond its
@@ -66,8 +66,10 @@ OBSERVER_NAMES = ("2", "10", "cones")
 
 
 def observer_functions(observer: int | str | Spectrum = 2) -> Spectrum:
-    """The three sensitivity curves of an observer: CIE 1931 2° (``2``), CIE 1964 10° (``10``)
-    or the Stockman & Sharpe (2000) 2° cone fundamentals (``"cones"``, alias ``"lms"``).
+    """Return the three sensitivity curves of an observer.
+
+    CIE 1931 2° (``2``), CIE 1964 10° (``10``) or the Stockman & Sharpe (2000) 2° cone
+    fundamentals (``"cones"``, alias ``"lms"``).
 
     Examples
     --------
@@ -91,10 +93,12 @@ def observer_functions(observer: int | str | Spectrum = 2) -> Spectrum:
 def resolve_illuminant(
     illuminant: str | Spectrum | None, *, name: str = "illuminant"
 ) -> Spectrum | None:
-    """An ``illuminant`` argument as a :class:`Spectrum`: a name is looked up with
-    :func:`~imageform.spectral.illuminant`, a single-curve Spectrum is returned as it is, and
-    ``None`` (a light source measured on its own, no illuminant) stays ``None``. ``name``
-    (keyword-only) is the parameter the errors name (a caller's ``test`` ...).
+    """Resolve an ``illuminant`` argument to a :class:`Spectrum`.
+
+    A name is looked up with :func:`~imageform.spectral.illuminant`, a single-curve Spectrum
+    is returned as it is, and ``None`` (a light source measured on its own, no illuminant)
+    stays ``None``. ``name`` (keyword-only) is the parameter the errors name (a caller's
+    ``test`` ...).
 
     Examples
     --------
@@ -145,7 +149,7 @@ def integration_weights(
     method: str = "cie015",
     sample: Spectrum | None = None,
 ) -> IntegrationWeights:
-    r"""The grid and the weights :math:`W_{\lambda,c} = S(\lambda) f_c(\lambda)\Delta\lambda`.
+    r"""Return the grid and weights :math:`W_{\lambda,c} = S(\lambda) f_c(\lambda)\Delta\lambda`.
 
     Returns ``IntegrationWeights(wavelengths (M,), weights (M, 3))``:
     ``X_c = sum_l R(l) W_{l,c}``. ``illuminant`` (keyword-only; ``None`` for a light) is
@@ -334,7 +338,9 @@ def spectrum_to_camera_rgb(
 
 
 def luminance(spectrum: Spectrum, *, scotopic: bool = False) -> float | np.ndarray:
-    r"""Photopic luminance :math:`K_m \int S V \mathrm{d}\lambda` or scotopic
+    r"""Compute photopic or scotopic luminance.
+
+    Photopic: :math:`K_m \int S V \mathrm{d}\lambda`; scotopic:
     :math:`K'_m \int S V' \mathrm{d}\lambda`.
 
     With spectral radiance in W sr⁻¹ m⁻² nm⁻¹ the result is in cd m⁻² (photopic,

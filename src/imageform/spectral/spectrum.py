@@ -128,6 +128,7 @@ class Spectrum:
     labels: tuple[str, ...] = field(default=())
 
     def __post_init__(self) -> None:
+        """Validate and freeze the wavelengths, values and labels."""
         w = _as_wavelengths(self.wavelengths, 1)
         v = np.array(as_real_ndarray(self.values, "values", finite=False), copy=True)
         if v.ndim not in (1, 2) or v.shape[0] != w.shape[0]:
@@ -172,9 +173,11 @@ class Spectrum:
         return float(d[0]) if np.allclose(d, d[0], rtol=0, atol=1e-9) else None
 
     def __len__(self) -> int:
+        """Return the number of wavelengths."""
         return int(self.wavelengths.shape[0])
 
     def __repr__(self) -> str:
+        """Return a one-line summary: name, wavelength grid and values shape."""
         lo, hi = self.range
         step = self.interval
         grid = f"{lo:g}-{hi:g} nm" + (f" step {step:g}" if step else " (irregular)")
@@ -233,7 +236,7 @@ class Spectrum:
         method: str = "linear",
         extrapolate: str = "constant",
     ) -> Spectrum:
-        """The spectrum at new wavelengths, with the interpolation method named.
+        """Resample the spectrum at new wavelengths, with the interpolation method named.
 
         ``"linear"`` is piecewise linear; ``"cubic"`` a natural-free not-a-knot cubic spline
         (SciPy ``CubicSpline``); ``"pchip"`` shape-preserving (no overshoot: keeps a
@@ -291,7 +294,7 @@ class Spectrum:
         method: str = "linear",
         extrapolate: str = "constant",
     ) -> Spectrum:
-        """The spectrum on the uniform grid ``start, start + step, ..., stop`` (nm).
+        """Resample the spectrum on the uniform grid ``start, start + step, ..., stop`` (nm).
 
         Examples
         --------
@@ -318,7 +321,7 @@ class Spectrum:
         return self.interpolate(grid, method=method, extrapolate=extrapolate)
 
     def trim(self, start: float, stop: float) -> Spectrum:
-        """The samples with ``start <= wavelength <= stop`` (``-inf`` / ``inf`` for no bound)."""
+        """Keep samples with ``start <= wavelength <= stop`` (``-inf`` / ``inf`` for no bound)."""
         start = as_real(start, "start", allow_inf=True)
         stop = as_real(stop, "stop", allow_inf=True)
         keep = (self.wavelengths >= start) & (self.wavelengths <= stop)
@@ -384,31 +387,39 @@ class Spectrum:
         return Spectrum(self.wavelengths, out, self.name, self.labels)
 
     def __add__(self, other: Any) -> Spectrum:
+        """Add a spectrum on the same grid or a real scalar."""
         return self._binary(other, "add", np.add)
 
     def __radd__(self, other: Any) -> Spectrum:
+        """Add to a real scalar (``other + self``)."""
         return self._binary(other, "add", np.add)
 
     def __sub__(self, other: Any) -> Spectrum:
+        """Subtract a spectrum on the same grid or a real scalar."""
         return self._binary(other, "subtract", np.subtract)
 
     def __rsub__(self, other: Any) -> Spectrum:
+        """Subtract from a real scalar (``other - self``)."""
         return self._binary(other, "subtract", lambda a, b: b - a)
 
     def __mul__(self, other: Any) -> Spectrum:
+        """Multiply by a spectrum on the same grid or a real scalar."""
         return self._binary(other, "multiply", np.multiply)
 
     def __rmul__(self, other: Any) -> Spectrum:
+        """Multiply by a real scalar on the left (``other * self``)."""
         return self._binary(other, "multiply", np.multiply)
 
     def __truediv__(self, other: Any) -> Spectrum:
+        """Divide by a spectrum on the same grid or a real scalar."""
         return self._binary(other, "divide", np.divide)
 
     def __neg__(self) -> Spectrum:
+        """Negate the values, same grid, name and labels."""
         return Spectrum(self.wavelengths, -self.values, self.name, self.labels)
 
     def allclose(self, other: Spectrum, *, atol: float = 1e-12) -> bool:
-        """Same grid and values within ``atol``."""
+        """Tell whether ``other`` has the same grid and values within ``atol``."""
         if not isinstance(other, Spectrum):
             raise TypeError(f"expected other as a Spectrum, got {describe(other)}")
         atol = as_real(atol, "atol", nonnegative=True)

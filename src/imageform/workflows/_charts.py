@@ -120,8 +120,11 @@ def read_chart(
     cols: int = 6,
     image: Any = None,
 ) -> ChartInput:
-    """The chart argument ``flag`` (e.g. ``--chart``): a CSV of patch values or an image
-    (``image``: the array already read from ``path``), sampled as ``layout`` says."""
+    """Read the chart argument ``flag`` (e.g. ``--chart``).
+
+    A CSV of patch values or an image (``image``: the array already read from ``path``),
+    sampled as ``layout`` says.
+    """
     import warnings
 
     from imageform.analysis import ChartNotFoundError, ChartWarning, sample_chart
@@ -156,8 +159,10 @@ def read_chart(
 
 
 def _filled(pat: Any) -> Any:
-    """The patches with the means of empty (missing) patches set to 0, not NaN: the fit
-    leaves them out, and the report's colour conversions take finite values only."""
+    """Return the patches with the means of empty (missing) patches set to 0, not NaN.
+
+    The fit leaves them out, and the report's colour conversions take finite values only.
+    """
     import numpy as np
 
     from imageform.analysis import ChartPatches
@@ -178,8 +183,11 @@ def notes(run: Any, chart: ChartInput, flag: str) -> None:
 
 
 def write_overlay(run: Any, path: Path, chart: ChartInput, flag: str) -> None:
-    """The image with the sampled chart drawn: outline (yellow), sampled boxes (green used,
-    red left out), a white cross on patch 0 (dark skin, top left of the upright chart)."""
+    """Write the image with the sampled chart drawn.
+
+    Outline (yellow), sampled boxes (green used, red left out), a white cross on patch 0
+    (dark skin, top left of the upright chart).
+    """
     import numpy as np
 
     from imageform.io import write_image
@@ -204,7 +212,7 @@ def write_overlay(run: Any, path: Path, chart: ChartInput, flag: str) -> None:
 
 
 def summary(chart: ChartInput) -> dict[str, Any]:
-    """What a command's JSON says about a chart argument."""
+    """Return what a command's JSON says about a chart argument."""
     d: dict[str, Any] = {
         "path": chart.path,
         "layout": chart.layout,

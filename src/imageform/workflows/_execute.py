@@ -1,5 +1,7 @@
-"""Running a workflow: outputs checked first and written all or nothing, warnings turned
-into one-line notes."""
+"""Running a workflow: outputs checked first and written all or nothing.
+
+Warnings are turned into one-line notes.
+"""
 
 from __future__ import annotations
 

@@ -55,7 +55,7 @@ def option(
     minimum: float | None = None,
     maximum: float | None = None,
 ) -> Any:
-    """A field of an options dataclass, with what the command line needs to know.
+    """Declare a field of an options dataclass, with what the command line needs to know.
 
     Parameters
     ----------
@@ -99,7 +99,7 @@ def option(
 
 
 def resolve(ref: str) -> Any:
-    """The object named by ``"package.module:attribute"`` (imported on first use)."""
+    """Return the object named by ``"package.module:attribute"`` (imported on first use)."""
     module, _, attr = ref.partition(":")
     obj: Any = importlib.import_module(module)
     for part in attr.split("."):
@@ -108,7 +108,7 @@ def resolve(ref: str) -> Any:
 
 
 def choice_names(choices: Sequence[str] | str | Mapping[str, Any]) -> tuple[str, ...]:
-    """The valid names of a ``choices`` declaration, in their normalised spelling."""
+    """Return the valid names of a ``choices`` declaration, in their normalised spelling."""
     describe = _describe
 
     names: Any = choices
@@ -128,8 +128,10 @@ def choice_names(choices: Sequence[str] | str | Mapping[str, Any]) -> tuple[str,
 
 
 def _describe(value: object, width: int = 40) -> str:
-    """A value for a one-line message (as ``imageform._validate.describe``, which imports
-    NumPy: ``imageform --help`` must not)."""
+    """Describe a value for a one-line message, without importing NumPy.
+
+    As ``imageform._validate.describe``, which imports NumPy: ``imageform --help`` must not.
+    """
     shape = getattr(value, "shape", None)
     if shape is not None and getattr(value, "ndim", None):
         return f"{type(value).__name__} of shape {tuple(shape)}, {getattr(value, 'dtype', '')}"
@@ -172,13 +174,16 @@ def _shown(names: Sequence[str], width: int = 120) -> str:
 
 
 def flag_of(f: dataclasses.Field[Any]) -> str:
-    """The long command-line flag of an options field."""
+    """Return the long command-line flag of an options field."""
     return f.metadata.get("flag") or "--" + f.name.replace("_", "-")
 
 
 def option_label(f: dataclasses.Field[Any]) -> str:
-    """How messages name an options field: its flag, and the field name too when the flag
-    spells another word (``--from (src)``), so that API and command-line users both see it."""
+    """Return how messages name an options field: its flag, and the field name too if it differs.
+
+    The field name is added when the flag spells another word (``--from (src)``), so that API and
+    command-line users both see it.
+    """
     flag = flag_of(f)
     return flag if flag[2:].replace("-", "_") == f.name else f"{flag} ({f.name})"
 
@@ -191,7 +196,7 @@ _HINTS: dict[str, dict[str, Any]] = {}
 
 
 def _hints(cls: type) -> dict[str, Any]:
-    """The evaluated field types of an options class (computed once per class)."""
+    """Return the evaluated field types of an options class (computed once per class)."""
     key = f"{cls.__module__}.{cls.__qualname__}.{id(cls)}"
     if key not in _HINTS:
         _HINTS[key] = typing.get_type_hints(cls)
@@ -208,9 +213,11 @@ def _unwrap_optional(tp: Any) -> tuple[Any, bool]:
 
 
 def _checked(value: Any, hint: Any, f: dataclasses.Field[Any], label: str) -> Any:
-    """``value`` of the options field ``f`` checked against its declared type and bounds
-    (NumPy scalars and 0-d arrays accepted as numbers), as the plain Python value; one line
-    naming ``label`` otherwise."""
+    """Return ``value`` of the options field ``f`` checked against its declared type and bounds.
+
+    NumPy scalars and 0-d arrays are accepted as numbers; the result is the plain Python value;
+    otherwise an error in one line names ``label``.
+    """
     from imageform._validate import as_bool, as_int, as_path, as_real, describe
 
     tp, optional = _unwrap_optional(hint)
@@ -276,21 +283,23 @@ class Options:
         """Cross-field checks (raise :class:`~imageform.errors.InvalidInputError`)."""
 
     def check_output(self, path: Path) -> None:
-        """Refuse a main output these options cannot write (``imageform batch`` checks every
-        output suffix with it before any job starts)."""
+        """Refuse a main output these options cannot write.
+
+        ``imageform batch`` checks every output suffix with it before any job starts.
+        """
 
     @classmethod
     def fields(cls) -> tuple[dataclasses.Field[Any], ...]:
-        """The dataclass fields, in declaration order."""
+        """Return the dataclass fields, in declaration order."""
         return dataclasses.fields(cls)
 
     @classmethod
     def types(cls) -> dict[str, Any]:
-        """The evaluated type of each field."""
+        """Return the evaluated type of each field."""
         return typing.get_type_hints(cls)
 
     def paths(self, kind: str) -> tuple[Path, ...]:
-        """The paths in fields declared ``output=True`` (``kind="output"``) or ``input=True``."""
+        """Return the paths in fields declared ``output=True`` or ``input=True`` (by ``kind``)."""
         out: list[Path] = []
         for f in dataclasses.fields(self):
             if f.metadata.get(kind):
@@ -304,8 +313,10 @@ class Options:
 
 @dataclass(frozen=True)
 class Input:
-    """A positional input of a command: a file (``many``: one or more, glob patterns
-    expanded), or a value (``kind="text"``)."""
+    """A positional input of a command: one or more files, or a value.
+
+    A file (``many``: one or more, glob patterns expanded), or a value (``kind="text"``).
+    """
 
     name: str
     help: str
@@ -348,25 +359,27 @@ class Result:
 
 @dataclass
 class Run:
-    """What a running workflow may use: its outputs (written all or nothing), notes for the
-    user, and a progress callback."""
+    """What a running workflow may use: its outputs, notes for the user, and a progress callback.
+
+    The outputs are written all or nothing.
+    """
 
     outputs: Any  # imageform._files.Outputs (imported lazily: it is cheap, but keep --help lean)
     notes: list[str] = field(default_factory=list)
     progress: Callable[[str, float], None] | None = None
 
     def file(self, path: str | Path) -> Path:
-        """The temporary path to write for the output ``path`` (checked on first use)."""
+        """Return the temporary path to write for the output ``path`` (checked on first use)."""
         part = self.outputs.part(path)
         return Path(part) if part is not None else Path(self.outputs.file(path))
 
     def folder(self, path: str | Path) -> Path:
-        """A temporary folder to fill for the output folder ``path``."""
+        """Return a temporary folder to fill for the output folder ``path``."""
         part = self.outputs.part(path)
         return Path(part) if part is not None else Path(self.outputs.folder(path))
 
     def note(self, text: str) -> None:
-        """A one-line note for the user (stderr)."""
+        """Add a one-line note for the user (stderr)."""
         self.notes.append(text)
 
 
@@ -410,7 +423,7 @@ class Workflow:
     description: str = ""
 
     def make_options(self, **values: Any) -> Options:
-        """The options from keyword values (unknown names are refused, with the valid ones)."""
+        """Return the options from keyword values (unknown names refused, with the valid ones)."""
         known = {f.name for f in self.options.fields()}
         unknown = sorted(set(values) - known)
         if unknown:

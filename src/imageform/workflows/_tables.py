@@ -37,7 +37,7 @@ class Table:
     def numbers(
         self, columns: Sequence[int], *, finite: bool, rows: Sequence[int] | None = None
     ) -> Any:
-        """The given columns of the given rows as floats (NaN for empty cells), (N, C)."""
+        """Return the given columns of the given rows as floats (NaN for empty cells), (N, C)."""
         import numpy as np
 
         out = []
@@ -121,8 +121,10 @@ def write_table(path: Path, header: Sequence[str], rows: Any) -> None:
 
 
 def camera_from(path: Path, *, need_pose: bool = False, what: str = "") -> Any:
-    """The :class:`~imageform.io.CameraFile` at ``path``; ``need_pose`` refuses one without
-    a pose, naming the file and what needs it."""
+    """Read the :class:`~imageform.io.CameraFile` at ``path``.
+
+    ``need_pose`` refuses one without a pose, naming the file and what needs it.
+    """
     from imageform.io import read_camera
 
     cf = read_camera(path)

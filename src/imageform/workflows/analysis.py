@@ -1,5 +1,6 @@
-"""Biomedical colour-analysis workflows: ``segment``, ``stain-normalize``,
-``fit-correction`` and ``harmonize`` (see docs/biomedical.md).
+"""Biomedical colour-analysis workflows.
+
+``segment``, ``stain-normalize``, ``fit-correction`` and ``harmonize`` (see docs/biomedical.md).
 
 ``fit-correction`` fits a colour correction between two devices from a chart (two chart
 images, one chart image against the ColorChecker's published values, or a CSV of patch
@@ -88,6 +89,7 @@ class SegmentOptions(ImageIn):
     )
 
     def check(self) -> None:
+        """Check that ``--h``, ``--s`` and ``--v`` are valid ranges."""
         super().check()
         for flag, value in (("--h", self.h), ("--s", self.s), ("--v", self.v)):
             _range(value, flag)
@@ -157,6 +159,7 @@ class StainNormalizeOptions(ImageIn, ImageOut):
     )
 
     def check(self) -> None:
+        """Check the options and take ``target`` as a path."""
         super().check()
         object.__setattr__(self, "target", Path(self.target))
 
@@ -233,8 +236,11 @@ class FitCorrectionOptions(ImageIn):
 
 
 def _reference_patches(chart: Any, reference: Any, flag: str) -> Any:
-    """The reference's values for ``chart``: ``reference`` (a ChartInput), the ``b_*``
-    columns of a CSV chart, or the ColorChecker's published sRGB values."""
+    """Return the reference's values for ``chart``.
+
+    ``reference`` (a ChartInput), the ``b_*`` columns of a CSV chart, or the ColorChecker's
+    published sRGB values.
+    """
     import numpy as np
 
     from imageform.analysis.synthetic import COLORCHECKER_SRGB8
@@ -253,7 +259,7 @@ def _reference_patches(chart: Any, reference: Any, flag: str) -> Any:
 
 
 def _fit(run: Run, chart: Any, ref: Any, method: str, degree: int) -> tuple[Any, Any]:
-    """The correction and its report; ChartWarnings become notes."""
+    """Fit the correction and report it; ChartWarnings become notes."""
     import warnings
 
     from imageform.analysis import ChartWarning, correction_report, fit_color_correction
@@ -268,12 +274,13 @@ def _fit(run: Run, chart: Any, ref: Any, method: str, degree: int) -> tuple[Any,
 
 
 def fit_correction(run: Run, opts: FitCorrectionOptions, *, out: Path, charts: Any) -> Result:
-    """``imageform fit-correction``: fit device A -> device B from a chart, write the JSON
-    that ``imageform harmonize --correction`` reads; ΔE00 per patch before and after.
+    """``imageform fit-correction``: fit device A -> device B from a chart.
 
-    Charts are images (cropped to the chart, or photographs with a ColorChecker anywhere in
-    them: ``--chart-layout``), or one CSV; one image alone is fitted to the ColorChecker's
-    published sRGB values."""
+    Writes the JSON that ``imageform harmonize --correction`` reads; ΔE00 per patch before and
+    after. Charts are images (cropped to the chart, or photographs with a ColorChecker anywhere
+    in them: ``--chart-layout``), or one CSV; one image alone is fitted to the ColorChecker's
+    published sRGB values.
+    """
     files = [Path(p) for p in charts]
     csvs = [p.suffix.lower() == ".csv" for p in files]
     if not (len(files) == 1 or (len(files) == 2 and not any(csvs))):
@@ -385,6 +392,7 @@ class HarmonizeOptions(ImageIn, ImageOut):
     )
 
     def check(self) -> None:
+        """Check the options and take ``correction`` as a path."""
         super().check()
         if self.correction is not None and self.chart is not None:
             raise InvalidInputError("expected --correction FILE or --chart FILE, got both")
@@ -407,9 +415,11 @@ class HarmonizeOptions(ImageIn, ImageOut):
 
 
 def harmonize(run: Run, opts: HarmonizeOptions, *, out: Path, image: Path) -> Result:
-    """``imageform harmonize``: apply a colour correction to an image of device A: a fitted
-    one (``--correction``), or one fitted here from device A's chart (``--chart``: a
-    photograph with a ColorChecker in it, a cropped chart or a CSV)."""
+    """``imageform harmonize``: apply a colour correction to an image of device A.
+
+    A fitted one (``--correction``), or one fitted here from device A's chart (``--chart``: a
+    photograph with a ColorChecker in it, a cropped chart or a CSV).
+    """
     import numpy as np
 
     from imageform.analysis import ColorCorrection

@@ -103,9 +103,11 @@ def parse_charuco(text: str) -> tuple[int, int] | None:
 
 
 class _BoardChecks:
-    """The checks of the options a checkerboard calibration shares (``calibrate`` and
-    ``stereo-calibrate``): the board, the square size, ``--fix`` names, ``--skew``,
-    ``--half-window``. Mixed in before the options' base class; adds no field."""
+    """The option checks a checkerboard calibration shares (``calibrate``, ``stereo-calibrate``).
+
+    The board, the square size, ``--fix`` names, ``--skew``, ``--half-window``. Mixed in before the
+    options' base class; adds no field.
+    """
 
     board: str
     square: str
@@ -133,7 +135,7 @@ class _BoardChecks:
             )
 
     def square_mm(self) -> float:
-        """The square size in millimetres."""
+        """Return the square size in millimetres."""
         from imageform._units import parse_length
 
         return parse_length(self.square, "--square", default_unit="mm", unit="mm")
@@ -188,6 +190,7 @@ class CalibrateOptions(_BoardChecks, ImageIn):
     )
 
     def check(self) -> None:
+        """Check the board; a ChArUco board needs a ``--marker`` smaller than ``--square``."""
         super().check()
         charuco = parse_charuco(self.board)
         if charuco is None:
@@ -204,7 +207,7 @@ class CalibrateOptions(_BoardChecks, ImageIn):
             )
 
     def marker_mm(self) -> float:
-        """The marker size in millimetres (ChArUco)."""
+        """Return the marker size in millimetres (ChArUco)."""
         from imageform._units import parse_length
 
         if self.marker is None:
@@ -235,8 +238,11 @@ def _plot(path: Path, res: Any, names: list[str]) -> None:
 
 
 def _read_views(run: Run, opts: CalibrateOptions, images: list[Path]) -> Iterator[tuple[Path, Any]]:
-    """Each image as ``(path, grey or RGB array)``, with progress, all of one size (refused
-    in one line naming both files otherwise); progress "calibrating" once they are read."""
+    """Read each image as ``(path, grey or RGB array)``, with progress, all of one size.
+
+    Images of different sizes are refused in one line naming both files; progress "calibrating" once
+    they are read.
+    """
     shape0: tuple[int, ...] | None = None
     for i, f in enumerate(images):
         if run.progress is not None:
@@ -255,8 +261,10 @@ def _read_views(run: Run, opts: CalibrateOptions, images: list[Path]) -> Iterato
 
 
 def calibrate(run: Run, opts: CalibrateOptions, *, out: Path, images: list[Path]) -> Result:
-    """``imageform calibrate``: a camera file from checkerboard views (Zhang, then
-    Levenberg-Marquardt on every reprojection error)."""
+    """``imageform calibrate``: a camera file from checkerboard views.
+
+    Zhang, then Levenberg-Marquardt on every reprojection error.
+    """
     from imageform.geometry import checkerboard_points
     from imageform.geometry.checkerboard import find_checkerboard
 
@@ -318,8 +326,10 @@ def _calibrate_views(
     shape: tuple[int, int],
     command: str,
 ) -> Result:
-    """Calibrate from the views' board points and corners, write the camera file (and the
-    plot and corners table asked for), and say what was found."""
+    """Calibrate from the views' board points and corners and write the camera file.
+
+    The plot and corners table asked for are written too, and the result says what was found.
+    """
     import numpy as np
 
     from imageform.geometry import calibrate_camera
@@ -387,14 +397,18 @@ def _calibrate_charuco(
     images: list[Path],
     squares: tuple[int, int],
 ) -> Result:
-    """``imageform calibrate --board charuco:COLSxROWS``: every view that gives at least
-    :data:`MIN_CHARUCO_CORNERS` identified corners is used, whole or in part."""
+    """``imageform calibrate --board charuco:COLSxROWS``: calibrate from ChArUco views.
+
+    Every view that gives at least :data:`MIN_CHARUCO_CORNERS` identified corners is used, whole or
+    in part.
+    """
     from imageform.geometry import CharucoBoard, detect_charuco
 
     board = CharucoBoard(squares, opts.square_mm(), opts.marker_mm(), opts.dictionary)
     cols, rows = squares
     shape0: tuple[int, int] | None = None
     objs, corners, names, missed = [], [], [], []
+    first_missed: object = None
     for f, grey in _read_views(run, opts, images):
         shape0 = (int(grey.shape[0]), int(grey.shape[1]))
         found = detect_charuco(grey, board)
@@ -406,12 +420,16 @@ def _calibrate_charuco(
             why = f"{len(found.markers)} markers, {len(found)} corners"
             run.note(f"warning: {f}: too little of the charuco:{cols}x{rows} board ({why})")
             missed.append(f"{f.name}: {why}")
+            if first_missed is None and len(found.markers) < 2:
+                first_missed = grey
     if len(corners) < MIN_VIEWS:
+        hint = _dictionary_hint(first_missed, opts.dictionary)
         raise DegenerateConfigurationError(
             f"found at least {MIN_CHARUCO_CORNERS} corners of the charuco:{cols}x{rows} board "
             f"({opts.dictionary} markers) in {len(corners)} view(s) of {len(images)}; "
             f"calibrate needs at least {MIN_VIEWS}"
             + (f" ({missed[0]}{'; ...' if len(missed) > 1 else ''})" if missed else "")
+            + hint
         )
     assert shape0 is not None
     command = (
@@ -419,6 +437,22 @@ def _calibrate_charuco(
         f"--marker {opts.marker} --dictionary {opts.dictionary}"
     )
     return _calibrate_views(run, opts, out, len(images), names, objs, corners, shape0, command)
+
+
+def _dictionary_hint(grey: object, dictionary: str) -> str:
+    """Return a hint naming the predefined dictionary a view's markers belong to, else ``""``.
+
+    The hint, ``"; the markers look like 4x4_50: try --dictionary 4x4_50"``, is given when a view
+    that showed (almost) no marker of ``dictionary`` shows those of another predefined dictionary.
+    """
+    if grey is None:
+        return ""
+    from imageform.geometry import identify_aruco_dictionary
+
+    other = identify_aruco_dictionary(grey)
+    if other is None or other == dictionary:
+        return ""
+    return f"; the markers look like {other}: try --dictionary {other}"
 
 
 # ---------------------------------------------------------------- undistort
@@ -443,8 +477,10 @@ class UndistortOptions(ImageIn, ImageOut):
 
 
 def undistort(run: Run, opts: UndistortOptions, *, out: Path, image: Path) -> Result:
-    """``imageform undistort``: remove lens distortion with the camera file's K and model
-    (inverse mapping, bilinear sampling; the output keeps K)."""
+    """``imageform undistort``: remove lens distortion with the camera file's K and model.
+
+    Inverse mapping, bilinear sampling; the output keeps K.
+    """
     import numpy as np
 
     from imageform.geometry.undistort import undistort_image

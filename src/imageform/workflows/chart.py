@@ -1,5 +1,7 @@
-"""``imageform chart``: find a ColorChecker in an uncropped photograph, measure its patches
-and fit the colour correction to the chart's published sRGB values (docs/howto-color-chart.md).
+"""``imageform chart``: find a ColorChecker in an uncropped photograph and fit a correction.
+
+It measures the patches and fits the colour correction to the chart's published sRGB values
+(docs/howto-color-chart.md).
 
 Writes a JSON file (``kind: "colorchecker"``): the chart's corners and homography, every
 patch's centre, sampling quad, mean and flags, the correction (the fit ``fit-correction``
@@ -57,6 +59,7 @@ class ChartOptions(ImageIn):
     )
 
     def check(self) -> None:
+        """Check ``--degree`` (1 to 3), ``--max-size`` and ``--min-score`` (-1 to 1)."""
         from imageform._validate import as_int, as_real
 
         super().check()
@@ -103,7 +106,7 @@ def _overlay(rgb: Any, det: Any, valid: Any) -> Any:
 
 
 def _write_csv(path: Path, det: Any, pat: Any, ref: Any) -> None:
-    """The usable patches (saturated and missing ones left out), one row each."""
+    """Write the usable patches (saturated and missing ones left out), one row each."""
     import csv
 
     import numpy as np

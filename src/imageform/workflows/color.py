@@ -79,6 +79,7 @@ class ConvertOptions(ImageIn, ImageOut):
     )
 
     def check(self) -> None:
+        """Check the options and normalise the ``--from`` and ``--to`` space names."""
         super().check()
         from imageform.color import space_name
 
@@ -86,6 +87,7 @@ class ConvertOptions(ImageIn, ImageOut):
         object.__setattr__(self, "dst", space_name(self.dst, "--to (dst)"))
 
     def check_output(self, path: Path) -> None:
+        """Refuse a PNG or JPEG output for a space whose values do not fit an integer image."""
         from imageform.io import image_format
 
         if image_format(path) in ("png", "jpeg") and self.dst not in _DISPLAYABLE:
@@ -95,7 +97,7 @@ class ConvertOptions(ImageIn, ImageOut):
             )
 
     def params(self) -> dict[str, Any]:
-        """The keyword parameters of :func:`imageform.color.convert`."""
+        """Return the keyword parameters of :func:`imageform.color.convert`."""
         p: dict[str, Any] = {"alpha": "keep" if self.alpha == "keep" else "reject"}
         for key, val in (
             ("white", self.white),
@@ -189,6 +191,7 @@ class WhiteBalanceOptions(ImageIn, ImageOut):
     )
 
     def check(self) -> None:
+        """Check that --chart and --overlay come with --method chart only."""
         super().check()
         if self.chart is not None:
             object.__setattr__(self, "chart", Path(self.chart))
@@ -386,7 +389,7 @@ class GamutOptions(Options):
     )
 
     def names(self) -> list[str]:
-        """The spaces, split."""
+        """Return the spaces, split."""
         names = [s.strip() for s in self.spaces.split(",") if s.strip()]
         if not names:
             raise InvalidInputError("expected --spaces as one or more RGB space names")
@@ -442,8 +445,10 @@ class PaletteCheckOptions(Options):
 
 
 def palette_check(run: Run, opts: PaletteCheckOptions, *, out: None, colors: str) -> Result:
-    """``imageform palette-check``: smallest pairwise ΔE00, normal and for each deficiency;
-    the check fails (exit 3) when a condition is under the threshold."""
+    """``imageform palette-check``: smallest pairwise ΔE00, normal and for each deficiency.
+
+    The check fails (exit 3) when a condition is under the threshold.
+    """
     from imageform.color.palettes import palette_check as check
 
     r = check(colors, threshold=opts.threshold, method=opts.method)

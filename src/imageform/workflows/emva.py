@@ -63,6 +63,7 @@ class EmvaOptions(Options):
     channel: int = option(0, help="Channel of colour frames to measure (grey frames: 0).")
 
     def check(self) -> None:
+        """Check ``--fit-fraction`` in (0, 1], ``--spatial-index`` and ``--channel`` >= 0."""
         super().check()
         from imageform._validate import as_int, as_real
 

@@ -51,6 +51,7 @@ class ProjectOptions(Options):
     skew: float | None = option(None, help="Skew (default 0).")
 
     def check(self) -> None:
+        """Check that the camera is given as ``--camera FILE`` or as ``--fx ...``, not both."""
         super().check()
         pinhole = [f for f in ("fx", "fy", "cx", "cy", "skew") if getattr(self, f) is not None]
         if self.camera is not None and pinhole:
@@ -162,6 +163,7 @@ class PoseOptions(Options):
     )
 
     def check(self) -> None:
+        """Check that ``--threshold`` is a finite number of pixels > 0."""
         super().check()
         if not (math.isfinite(self.threshold) and self.threshold > 0):
             raise InvalidInputError(f"expected --threshold > 0 pixels, got {self.threshold}")
@@ -276,14 +278,17 @@ class TriangulateOptions(Options):
     )
 
     def check(self) -> None:
+        """Check that ``--sigma`` is a finite number of pixels > 0."""
         super().check()
         if not (math.isfinite(self.sigma) and self.sigma > 0):
             raise InvalidInputError(f"expected --sigma > 0 pixels, got {self.sigma}")
 
 
 def _observations(table: Any, n_cams: int, views: str | None) -> Any:
-    """(M, 2V) pixel columns: a wide table (u, v per camera), or a long one with an image
-    column and X, Y, Z naming each point."""
+    """Return the (M, 2V) pixel columns of a wide or a long table.
+
+    A wide table has u, v per camera; a long one an image column and X, Y, Z naming each point.
+    """
     import numpy as np
 
     img = table.column("image")

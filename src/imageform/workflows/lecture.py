@@ -20,6 +20,7 @@ class LectureOptions(Options):
     )
 
     def check(self) -> None:
+        """Check that ``--topic``, when given, matches a lecture topic."""
         super().check()
         if self.topic is not None:
             from imageform.report.lecture import lecture_topics
@@ -33,8 +34,10 @@ class LectureOptions(Options):
 
 
 def lecture(run: Run, opts: LectureOptions, *, out: None) -> Result:
-    """Every worked example and numeric practice answer, the reader's value beside ours; the
-    check fails (exit 3) if one disagrees."""
+    """Tabulate every worked example and numeric practice answer, the reader's value beside ours.
+
+    The check fails (exit 3) if one disagrees.
+    """
     from rich.table import Table
 
     from imageform.report.lecture import all_examples

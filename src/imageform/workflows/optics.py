@@ -25,6 +25,7 @@ class LensOptions(Options):
     coc: str | float = option("0.03mm", help="Circle of confusion diameter (bare number: mm).")
 
     def check(self) -> None:
+        """Check the lengths and that ``--f-number`` is finite and > 0."""
         super().check()
         self.lengths()
         if not (math.isfinite(self.f_number) and self.f_number > 0):

@@ -1,5 +1,7 @@
-"""The registry: every workflow by its command name (the command line and ``imageform
-batch`` are generated from it)."""
+"""The registry: every workflow by its command name.
+
+The command line and ``imageform batch`` are generated from it.
+"""
 
 from __future__ import annotations
 
@@ -51,7 +53,7 @@ WORKFLOWS = MappingProxyType(
 
 
 def get_workflow(name: str) -> Workflow:
-    """The workflow called ``name`` (``-`` or ``_`` alike); unknown names list the valid ones.
+    """Return the workflow ``name`` (``-`` or ``_`` alike); unknown names list the valid ones.
 
     Examples
     --------

@@ -39,7 +39,7 @@ class SfrOptions(ImageIn):
     max_angle: float = option(10.0, help="Largest edge angle (deg) kept by the edge finder.")
 
     def region(self) -> tuple[int, int, int, int] | None:
-        """The ``--roi`` as four integers, or None."""
+        """Return the ``--roi`` as four integers, or None."""
         if self.roi is None:
             return None
         parts = str(self.roi).replace(" ", "").split(",")
@@ -54,6 +54,7 @@ class SfrOptions(ImageIn):
         return (vals[0], vals[1], vals[2], vals[3])
 
     def check(self) -> None:
+        """Check the options and the ``--roi``."""
         super().check()
         self.region()
 

@@ -1,6 +1,8 @@
-"""``imageform simulate``: a scene through the whole image-formation chain, written as one
-output folder (report.html, metrics.json, the stage images and the ground-truth camera file)
-that replaces the previous one all at once."""
+"""``imageform simulate``: a scene through the whole image-formation chain, in one folder.
+
+The output folder (report.html, metrics.json, the stage images and the ground-truth camera file)
+replaces the previous one all at once.
+"""
 
 from __future__ import annotations
 
@@ -46,6 +48,7 @@ class SimulateOptions(Options):
     )
 
     def check(self) -> None:
+        """Check ``--seed`` (an integer >= 0) and that ``--raw`` names a .dng file."""
         super().check()
         if isinstance(self.seed, bool) or not isinstance(self.seed, int) or self.seed < 0:
             raise InvalidInputError(f"expected --seed as an integer >= 0, got {self.seed!r}")
@@ -64,8 +67,10 @@ def _check_folder(out: Path, force: bool) -> None:
 
 
 def simulate(run: Run, opts: SimulateOptions, *, out: Path) -> Result:
-    """Render the scene, write the report, the metrics, the stage images and the truth
-    camera file into a temporary folder that replaces ``out`` when everything is written."""
+    """Render the scene, write the report, the metrics, the stage images and the truth camera file.
+
+    They are written into a temporary folder that replaces ``out`` when everything is written.
+    """
     import importlib.util
 
     if importlib.util.find_spec("matplotlib") is None:  # the report's figures
@@ -150,8 +155,11 @@ def simulate(run: Run, opts: SimulateOptions, *, out: Path) -> Result:
 
 
 def _camera_for(cf: Any, scene: Any) -> Any:
-    """The camera of a camera file, posed as the file says, or where the scene's camera is
-    when the file has no pose (a calibration gives intrinsics and distortion only)."""
+    """Return the camera of a camera file, posed as the file says or where the scene's camera is.
+
+    The scene's pose is used when the file has no pose (a calibration gives intrinsics and
+    distortion only).
+    """
     from imageform.geometry import Camera
 
     cam = cf.camera
@@ -166,8 +174,11 @@ def _camera_for(cf: Any, scene: Any) -> Any:
 
 
 def _render_views(run: Run, scene: Any, folder: Path, seed: int) -> list[Path]:
-    """Each extra view of the scene (``[[views]]``) through the whole chain: its encoded
-    output as ``views/view-NN.png`` (the noise of view i seeded with ``seed + 1 + i``)."""
+    """Render each extra view of the scene (``[[views]]``) through the whole chain.
+
+    Its encoded output is written as ``views/view-NN.png`` (the noise of view i seeded with
+    ``seed + 1 + i``).
+    """
     from imageform.io import write_image
     from imageform.simulate import simulate as simulate_scene
 

@@ -50,7 +50,7 @@ class StereoCalibrateOptions(_BoardChecks, ImageIn):
 
 
 def _expand(pattern: str, what: str) -> list[Path]:
-    """The files a name or a glob pattern names, sorted; none is an error."""
+    """Return the files a name or a glob pattern names, sorted; none is an error."""
     p = str(pattern)
     if os.path.exists(p) or not any(c in p for c in "*?["):
         path = Path(p)

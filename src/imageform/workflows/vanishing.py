@@ -43,8 +43,10 @@ def _directions(K: Any, vps: Any) -> Any:
 
 
 def _with_known_K(res: Any, K: Any) -> tuple[Any, dict[str, Any]]:
-    """The result with the vertical and the horizon from a known K, and the angles between
-    the vanishing directions (90 degrees for a Manhattan scene)."""
+    """Return the result with the vertical and the horizon from a known K, and the angles.
+
+    The angles are those between the vanishing directions (90 degrees for a Manhattan scene).
+    """
     import numpy as np
 
     from imageform.geometry import horizon_line
@@ -69,8 +71,10 @@ def _with_known_K(res: Any, K: Any) -> tuple[Any, dict[str, Any]]:
 
 
 def _world_axes(res: Any, K: Any, R: Any) -> list[dict[str, Any]]:
-    """For each vanishing point, the world axis whose direction it is closest to (the
-    vanishing point of world axis i is ``K R e_i``)."""
+    """Return, for each vanishing point, the world axis whose direction it is closest to.
+
+    The vanishing point of world axis i is ``K R e_i``.
+    """
     import numpy as np
 
     if not len(res.vanishing_points):
