@@ -8,6 +8,7 @@ composed by :func:`simulate`. The world is z up (:data:`WORLD_UP`).
 from imageform.simulate.colorfit import apply_color_correction, fit_color_correction
 from imageform.simulate.config import WORLD_UP, CameraConfig, SceneConfig
 from imageform.simulate.dng import simulated_color_matrix, write_simulated_dng
+from imageform.simulate.measured import apply_camera_file, gaussian_sigma_for_mtf50
 from imageform.simulate.pipeline import simulate
 from imageform.simulate.render import RenderOutput, render_scene
 from imageform.simulate.result import (
@@ -37,9 +38,11 @@ __all__ = [
     "SimulationResult",
     "Stage",
     "VanishingTruth",
+    "apply_camera_file",
     "apply_color_correction",
     "default_scene",
     "fit_color_correction",
+    "gaussian_sigma_for_mtf50",
     "load_scene",
     "render_scene",
     "simulate",
