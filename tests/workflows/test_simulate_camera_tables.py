@@ -28,8 +28,9 @@ def test_simulate_camera_with_tables(tmp_path: Path) -> None:
     out = tmp_path / "sim"
     assert main(["simulate", "--camera", str(path), "-o", str(out), "--json"]) == 0
     metrics = json.loads((out / "metrics.json").read_text())
-    flat = json.dumps(metrics)
-    assert "1.9" in flat  # the file's white-balance gains were used
+    assert metrics["white_balance_gains"] == [1.9, 1.0, 1.6]  # the file's, not gray world
+    assert metrics["config"]["processing"]["white_balance"] == "none"
+    assert metrics["config"]["lens"]["defocus"] is False  # [optics] replaces the lens blur
     used = read_camera(out / "camera.toml")
     given = read_camera(path)
     assert used.sensor == given.sensor and used.optics == given.optics
