@@ -36,3 +36,25 @@ def test_simulate_camera_with_tables(tmp_path: Path) -> None:
     assert used.sensor == given.sensor and used.optics == given.optics
     assert used.color == given.color
     assert used.camera.image_size == (320, 180)
+
+
+@pytest.mark.filterwarnings("ignore::UserWarning")
+def test_simulate_lab_folder(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    cam = Camera([[300.0, 0, 159.5], [0, 300.0, 119.5], [0, 0, 1]], image_size=(320, 240))
+    path = write_camera(tmp_path / "cam.toml", cam, sensor={"read_noise_e": 3.0})
+    lab = tmp_path / "lab"
+    args = ["simulate", "--camera", str(path), "--lab", str(lab), "-o", str(tmp_path / "sim")]
+    assert main(args) == 0
+    assert "lab set ->" in capsys.readouterr().out
+    for sub in ("lab.toml", "emva.toml", "camera.toml", "checkerboard", "edge", "flats"):
+        assert (lab / sub).exists(), sub
+    assert read_camera(lab / "camera.toml").sensor == read_camera(path).sensor
+    # --lab without --camera, and a folder of someone's files, are refused
+    assert main(["simulate", "--lab", str(tmp_path / "x"), "-o", str(tmp_path / "s2")]) == 2
+    assert "give --camera FILE" in capsys.readouterr().err
+    mine = tmp_path / "mine"
+    mine.mkdir()
+    (mine / "photo.png").write_bytes(b"")
+    args = ["simulate", "--camera", str(path), "--lab", str(mine), "-o", str(tmp_path / "s3")]
+    assert main([*args, "--force"]) == 1
+    assert (mine / "photo.png").exists()

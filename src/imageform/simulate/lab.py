@@ -180,8 +180,8 @@ def render_lab_set(
         The camera (a camera file path is read with :func:`imageform.io.read_camera`); it
         needs an image size.
     folder : str or Path
-        Where to write; must not exist unless ``force`` (then only a previous lab set is
-        replaced).
+        Where to write; must not exist (or be empty) unless ``force`` (then only a previous
+        lab set is replaced).
     seed : int
         Seed of the sensor noise.
     views : int
@@ -244,6 +244,8 @@ def render_lab_set(
     )
     angle = as_real(edge_angle_deg, "edge_angle_deg", minimum=2.0, maximum=10.0)
     out = Path(folder)
+    if out.is_dir() and not any(out.iterdir()):
+        out.rmdir()  # an empty folder (a command's temporary output) is filled as a new one
     if out.exists():
         if not force:
             raise InvalidInputError(f"folder {out} exists; choose a new one or pass force=True")

@@ -34,6 +34,14 @@ class SimulateOptions(Options):
         "CCM and sensitivities when present; the file's values override the scene's.",
         input=True,
     )
+    lab: Path | None = option(
+        None,
+        help="Also render what a lab photographs of the --camera file into this folder: "
+        "checkerboard/, colorchecker/, edge/, flats/ and darks/ with emva.toml, lab.toml and "
+        "the camera file (imageform.simulate.render_lab_set; docs/simulate.md).",
+        output=True,
+        metavar="FOLDER",
+    )
     seed: int = option(
         0, help="Seed of the sensor noise (the same seed, the same pixels).", minimum=0
     )
@@ -50,6 +58,8 @@ class SimulateOptions(Options):
         super().check()
         if isinstance(self.seed, bool) or not isinstance(self.seed, int) or self.seed < 0:
             raise InvalidInputError(f"expected --seed as an integer >= 0, got {self.seed!r}")
+        if self.lab is not None and self.camera is None:
+            raise InvalidInputError("--lab renders a camera file's lab set: give --camera FILE")
         if self.raw is not None and Path(self.raw).suffix.lower() != ".dng":
             raise InvalidInputError(f"expected --raw as a .dng file, got {str(self.raw)[-60:]!r}")
 
@@ -113,6 +123,20 @@ def simulate(run: Run, opts: SimulateOptions, *, out: Path) -> Result:
 
         write_simulated_dng(result, scene, run.file(opts.raw))
         raw_dng = opts.raw
+    lab_folder = None
+    if opts.lab is not None and opts.camera is not None:
+        from imageform.simulate import render_lab_set
+
+        lab_out = Path(opts.lab)
+        if lab_out.is_dir() and any(lab_out.iterdir()) and not (lab_out / "lab.toml").is_file():
+            raise InvalidInputError(
+                f"--lab folder {lab_out} exists and is not a lab set (no lab.toml); choose a "
+                "new folder"
+            )
+        if run.progress is not None:
+            run.progress("lab set", 1.0)
+        render_lab_set(read_camera(opts.camera), run.folder(lab_out), seed=opts.seed)
+        lab_folder = opts.lab
     wall = time.perf_counter() - t0
 
     def final(p: Path) -> Path:
@@ -131,6 +155,7 @@ def simulate(run: Run, opts: SimulateOptions, *, out: Path) -> Result:
         "raw_files": [final(p) for p in paths.raw_files],
         "views": [final(p) for p in views],
         "raw_dng": raw_dng,
+        "lab": lab_folder,
         "summary": s,
         "report_time_s": paths.seconds,
         "total_time_s": wall,
@@ -147,6 +172,7 @@ def simulate(run: Run, opts: SimulateOptions, *, out: Path) -> Result:
         f"camera  -> {summary['camera']}",
         *([f"views   -> {out / 'views'} ({len(views)} images)"] if views else []),
         *([f"raw DNG -> {raw_dng}"] if raw_dng is not None else []),
+        *([f"lab set -> {lab_folder}"] if lab_folder is not None else []),
         f"mean ΔE00 {num(s.get('delta_e00_mean'), '.2f')} "
         f"(max {num(s.get('delta_e00_max'), '.2f')}); "
         f"vanishing-point error {num(s.get('vanishing_point_error_px'), '.2f', ' px')}; "
