@@ -93,10 +93,13 @@ def test_calibrate_gives_back_the_intrinsics(lab: LabSet, tmp_path: Path) -> Non
     out = tmp_path / "cam.toml"
     pattern = str(lab.folder / "checkerboard" / "*.png")
     assert main(["calibrate", pattern, "--board", "9x6", "--square", "20mm", "-o", str(out)]) == 0
-    K = np.asarray(read_camera(out).camera.K)
+    est = read_camera(out).camera
+    K = np.asarray(est.K)
     # measured -0.07 %, -0.04 %, -0.04 %, -0.05 % (seed 0)
-    for est, true in ((K[0, 0], FX), (K[1, 1], FY), (K[0, 2], CX), (K[1, 2], CY)):
-        assert abs(est / true - 1) < 0.002, (est, true)
+    for value, true in ((K[0, 0], FX), (K[1, 1], FY), (K[0, 2], CX), (K[1, 2], CY)):
+        assert abs(value / true - 1) < 0.002, (value, true)
+    assert est.distortion is not None
+    assert est.distortion.k1 == pytest.approx(-0.18, rel=0.02)  # measured -0.35 %
 
 
 def test_edge_mtf50_is_the_files(lab: LabSet) -> None:
