@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import math
 import os
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 from datetime import datetime
 from pathlib import Path
@@ -19,9 +19,11 @@ import numpy as np
 
 from imageform._validate import as_bool, as_int, describe
 from imageform.errors import InvalidInputError, UnknownOptionError
+from imageform.io._camera_toml import Reader, short_list
 
 if TYPE_CHECKING:
     from imageform.geometry import CalibrationResult, Camera
+    from imageform.io._camera_tables import CameraColor, CameraOptics, CameraSensor
 
 __all__ = [
     "CAMERA_FILE_FORMAT",
@@ -74,7 +76,9 @@ _TABLES: dict[str, tuple[str, ...]] = {
         "fixed",
     ),
 }
-_TOP = ("format", "version", *_TABLES)
+#: The optional measured-camera tables (imageform.io._camera_tables), each one dataclass.
+_MEASURED = ("sensor", "optics", "color")
+_TOP = ("format", "version", *_TABLES, *_MEASURED)
 _LEGACY_KEYS = ("fx", "fy", "cx", "cy", "skew", "width", "height", "image_plane", "model") + (
     "k1",
     "k2",
@@ -146,6 +150,14 @@ class CameraFile:
         The file's format version (0 for a file from before the versioned format).
     path : Path or None
         The file it was read from.
+    sensor : CameraSensor or None
+        ``[sensor]``: the EMVA 1288 noise model (None when the file has no such table).
+    optics : CameraOptics or None
+        ``[optics]``: the lens's blur model.
+    color : CameraColor or None
+        ``[color]``: white balance, colour-correction matrix, spectral sensitivities.
+
+    A mapping of a table's keys is accepted for ``sensor``, ``optics`` and ``color``.
     """
 
     camera: Camera
@@ -154,6 +166,9 @@ class CameraFile:
     provenance: Provenance = field(default_factory=Provenance)
     version: int = CAMERA_FILE_VERSION
     path: Path | None = None
+    sensor: CameraSensor | None = None
+    optics: CameraOptics | None = None
+    color: CameraColor | None = None
 
     def __post_init__(self) -> None:
         from imageform.geometry import Camera
@@ -172,6 +187,10 @@ class CameraFile:
         object.__setattr__(
             self, "version", as_int(self.version, "version", minimum=0, maximum=CAMERA_FILE_VERSION)
         )
+        from imageform.io._camera_tables import as_table
+
+        for name in _MEASURED:
+            object.__setattr__(self, name, as_table(getattr(self, name), name))
 
     @property
     def distortion_model(self) -> str:
@@ -244,86 +263,6 @@ def distortion_name(model: Any) -> str:
     raise InvalidInputError(
         f"expected a BrownConrady, KannalaBrandt or DivisionModel distortion, got {name}"
     )
-
-
-class Reader:
-    """Checks values of one file; every message names the file and the key."""
-
-    def __init__(self, where: str) -> None:
-        self.where = where
-
-    def fail(self, key: str, problem: str) -> InvalidInputError:
-        return InvalidInputError(f"{self.where}: {key}: {problem}")
-
-    def number(self, value: Any, key: str) -> float:
-        if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
-            raise self.fail(key, f"expected a number, got {_show(value)}")
-        v = float(value)
-        if not math.isfinite(v):
-            raise self.fail(key, f"expected a finite number, got {value}")
-        return v
-
-    def positive(self, value: Any, key: str, what: str = "") -> float:
-        v = self.number(value, key)
-        if v <= 0:
-            raise self.fail(key, f"expected {what or 'a number'} > 0, got {value:g}")
-        return v
-
-    def count(self, value: Any, key: str, *, minimum: int = 0) -> int:
-        if isinstance(value, bool) or not isinstance(value, int) or value < minimum:
-            raise self.fail(key, f"expected an integer >= {minimum}, got {_show(value)}")
-        return int(value)
-
-    def text(self, value: Any, key: str) -> str:
-        if not isinstance(value, str):
-            raise self.fail(key, f"expected a string, got {_show(value)}")
-        return value
-
-    def vector(self, value: Any, key: str, n: int = 3) -> tuple[float, ...]:
-        if not isinstance(value, list) or len(value) != n:
-            raise self.fail(key, f"expected a list of {n} numbers, got {_show(value)}")
-        return tuple(self.number(v, f"{key}[{i}]") for i, v in enumerate(value))
-
-    def matrix(self, value: Any, key: str) -> np.ndarray:
-        if not isinstance(value, list) or len(value) != 3:
-            raise self.fail(key, f"expected 3 rows of 3 numbers, got {_show(value)}")
-        return np.array([self.vector(row, f"{key}[{i}]") for i, row in enumerate(value)])
-
-    def table(self, data: Mapping[str, Any], name: str) -> dict[str, Any]:
-        value = data.get(name, {})
-        if not isinstance(value, dict):
-            raise self.fail(name, f"expected a table [{name}], got {_show(value)}")
-        return value
-
-    def known(self, table: Mapping[str, Any], valid: tuple[str, ...], where: str) -> None:
-        unknown = [k for k in table if k not in valid]
-        if unknown:
-            raise UnknownOptionError(
-                f"{self.where}: unknown key(s) {short_list([where + k for k in unknown], 40)}; "
-                f"valid{' in [' + where[:-1] + ']' if where else ''}: {short_list(valid, 90)}"
-            )
-
-
-def short_list(names: Sequence[str], budget: int) -> str:
-    """Join ``names`` by commas, cut to about ``budget`` characters (``... (3 more)``).
-
-    Each name is cut to 30: an error message stays one line however many or long the keys
-    are.
-    """
-    shown: list[str] = []
-    size = 0
-    for n in names:
-        text = n if len(n) <= 30 else n[:27] + "..."
-        size += len(text) + 2
-        if shown and size > budget:
-            return ", ".join(shown) + f", ... ({len(names) - len(shown)} more)"
-        shown.append(text)
-    return ", ".join(shown)
-
-
-def _show(value: Any) -> str:
-    text = repr(value)
-    return text if len(text) <= 60 else text[:57] + "..."
 
 
 def _nonneg(r: Reader, value: Any, key: str) -> float:

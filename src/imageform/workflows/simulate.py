@@ -30,10 +30,19 @@ class SimulateOptions(Options):
     )
     camera: Path | None = option(
         None,
-        help="Render through this camera file (from imageform calibrate, or a simulation's "
-        "camera.toml): its intrinsics and distortion, and its pose if it has one (else the "
-        "scene's).",
+        help="Render through this camera file (from imageform calibrate or characterize, or a "
+        "simulation's camera.toml): its intrinsics and distortion, its pose if it has one (else "
+        "the scene's), and its [sensor] noise model, [optics] blur and [color] white balance, "
+        "CCM and sensitivities when present; the file's values override the scene's.",
         input=True,
+    )
+    lab: Path | None = option(
+        None,
+        help="Also render what a lab photographs of the --camera file into this folder: "
+        "checkerboard/, colorchecker/, edge/, flats/ and darks/ with emva.toml, lab.toml and "
+        "the camera file (imageform.simulate.render_lab_set; docs/simulate.md).",
+        output=True,
+        metavar="FOLDER",
     )
     seed: int = option(
         0, help="Seed of the sensor noise (the same seed, the same pixels).", minimum=0
@@ -52,6 +61,8 @@ class SimulateOptions(Options):
         super().check()
         if isinstance(self.seed, bool) or not isinstance(self.seed, int) or self.seed < 0:
             raise InvalidInputError(f"expected --seed as an integer >= 0, got {self.seed!r}")
+        if self.lab is not None and self.camera is None:
+            raise InvalidInputError("--lab renders a camera file's lab set: give --camera FILE")
         if self.raw is not None and Path(self.raw).suffix.lower() != ".dng":
             raise InvalidInputError(f"expected --raw as a .dng file, got {str(self.raw)[-60:]!r}")
 
@@ -88,17 +99,23 @@ def simulate(run: Run, opts: SimulateOptions, *, out: Path) -> Result:
     t0 = time.perf_counter()
     scene = load_scene(opts.scene) if opts.scene is not None else default_scene()
     if opts.camera is not None:
-        scene = scene.with_camera(_camera_for(read_camera(opts.camera), scene))
+        from imageform.simulate import apply_camera_file
+
+        scene = apply_camera_file(scene, read_camera(opts.camera))
     result = simulate_scene(scene, progress=run.progress, rng=opts.seed)
     if run.progress is not None:
         run.progress("writing the report", 1.0)
     paths = write_report(result, folder, force=True)
     views = _render_views(run, scene, folder, opts.seed)
+    measured = getattr(scene, "measured", None)  # the camera file's tables, if any
     camera_file = write_camera(
         folder / "camera.toml",
         CameraFile(
             result.camera,
             has_pose=True,
+            sensor=None if measured is None else measured.sensor,
+            optics=None if measured is None else measured.optics,
+            color=None if measured is None else measured.color,
             provenance=Provenance(
                 command="imageform simulate",
                 based_on=str(opts.scene) if opts.scene is not None else "built-in scene",
@@ -111,6 +128,20 @@ def simulate(run: Run, opts: SimulateOptions, *, out: Path) -> Result:
 
         write_simulated_dng(result, scene, run.file(opts.raw))
         raw_dng = opts.raw
+    lab_folder = None
+    if opts.lab is not None and opts.camera is not None:
+        from imageform.simulate import render_lab_set
+
+        lab_out = Path(opts.lab)
+        if lab_out.is_dir() and any(lab_out.iterdir()) and not (lab_out / "lab.toml").is_file():
+            raise InvalidInputError(
+                f"--lab folder {lab_out} exists and is not a lab set (no lab.toml); choose a "
+                "new folder"
+            )
+        if run.progress is not None:
+            run.progress("lab set", 1.0)
+        render_lab_set(read_camera(opts.camera), run.folder(lab_out), seed=opts.seed)
+        lab_folder = opts.lab
     wall = time.perf_counter() - t0
 
     def final(p: Path) -> Path:
@@ -129,6 +160,7 @@ def simulate(run: Run, opts: SimulateOptions, *, out: Path) -> Result:
         "raw_files": [final(p) for p in paths.raw_files],
         "views": [final(p) for p in views],
         "raw_dng": raw_dng,
+        "lab": lab_folder,
         "summary": s,
         "report_time_s": paths.seconds,
         "total_time_s": wall,
@@ -145,6 +177,7 @@ def simulate(run: Run, opts: SimulateOptions, *, out: Path) -> Result:
         f"camera  -> {summary['camera']}",
         *([f"views   -> {out / 'views'} ({len(views)} images)"] if views else []),
         *([f"raw DNG -> {raw_dng}"] if raw_dng is not None else []),
+        *([f"lab set -> {lab_folder}"] if lab_folder is not None else []),
         f"mean ΔE00 {num(s.get('delta_e00_mean'), '.2f')} "
         f"(max {num(s.get('delta_e00_max'), '.2f')}); "
         f"vanishing-point error {num(s.get('vanishing_point_error_px'), '.2f', ' px')}; "
@@ -152,25 +185,6 @@ def simulate(run: Run, opts: SimulateOptions, *, out: Path) -> Result:
         f"report {paths.seconds:.1f} s, total {wall:.1f} s",
     )
     return Result(summary, text)
-
-
-def _camera_for(cf: Any, scene: Any) -> Any:
-    """Return the camera of a camera file, posed as the file says or where the scene's camera is.
-
-    The scene's pose is used when the file has no pose (a calibration gives intrinsics and
-    distortion only).
-    """
-    from imageform.geometry import Camera
-
-    cam = cf.camera
-    if cam.image_size is None:
-        raise InvalidInputError(
-            f"{cf.path}: the camera file has no image size ([image] width, height) to render"
-        )
-    if cf.has_pose:
-        return cam
-    here = scene.camera
-    return Camera(cam.K, here.R, here.t, cam.image_size, cam.image_plane, distortion=cam.distortion)
 
 
 def _render_views(run: Run, scene: Any, folder: Path, seed: int) -> list[Path]:
