@@ -1,0 +1,258 @@
+"""``imageform characterize FOLDER -o OUT`` (issue 18): the loop closes.
+
+A lab set photographed by a known camera X (tests/workflows/characterize_lab.py: the
+simulator's renderer, a Gaussian lens, its CMOS sensor and X's processing) is characterised
+through the command line; the camera file and metrics give X back: fx, fy, cx, cy within
+0.2 %, k1 within 2 %, MTF50 within 3 % of X's own (the Gaussian times the pixel box), gain
+and read noise within 3 %, and the ColorChecker rendered through the twin (its estimated
+sensitivities, white balance and matrix) within a mean CIEDE2000 of 1 of X's rendering.
+Then the report in headless Chromium, and refusals: an empty folder, an unreadable image,
+flats without darks, each one line, nothing written.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import json
+import math
+import tomllib
+from dataclasses import replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+from imageform.cli import main
+from imageform.errors import ImageformError, InvalidInputError
+from imageform.workflows import execute
+from tests.workflows.characterize_lab import CX, CY, FX, FY, K1, SIZE, make_lab_set
+
+pytest.importorskip("matplotlib")
+pytest.importorskip("rawpy")
+
+
+@pytest.fixture(scope="module")
+def lab(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
+    """The lab set of camera X, characterised once through the command line (--json)."""
+    root = tmp_path_factory.mktemp("lab")
+    truth = make_lab_set(root / "set")
+    out = root / "twin"
+    buf = io.StringIO()
+    with contextlib.redirect_stdout(buf):
+        rc = main(["characterize", str(root / "set"), "-o", str(out), "--json"])
+    assert rc == 0
+    return {"root": root, "truth": truth, "out": out, "printed": json.loads(buf.getvalue())}
+
+
+def test_geometry_comes_back(lab: dict[str, Any]) -> None:
+    """fx, fy, cx, cy within 0.2 % and k1 within 2 % (measured: -0.05, -0.03, +0.02, +0.09 %,
+    k1 -0.6 %), in the camera file and in the printed summary alike."""
+    cam = tomllib.loads((lab["out"] / "camera.toml").read_text())
+    intr = cam["intrinsics"]
+    for key, true in (("fx", FX), ("fy", FY), ("cx", CX), ("cy", CY)):
+        assert intr[key] == pytest.approx(true, rel=0.002), key
+    assert cam["distortion"]["k1"] == pytest.approx(K1, rel=0.02)
+    assert (cam["image"]["width"], cam["image"]["height"]) == SIZE
+    g = lab["printed"]["geometry"]
+    assert g["fx"] == pytest.approx(intr["fx"]) and g["views_used"] == 10
+    assert g["rms_px"] < 0.3
+
+
+def test_mtf_comes_back(lab: dict[str, Any]) -> None:
+    """MTF50 of the raw edge within 3 % of X's own (Gaussian sigma 0.9 px times the 4-point
+    pixel box along the edge normal; measured -0.3 %), and the fitted sigma within 3 %."""
+    truth = lab["truth"]
+    s = lab["printed"]["sharpness"]
+    assert s["raw"] and s["edges"] == 4
+    angle = float(np.median(s["angles_deg"]))
+    assert s["mtf50_cy_per_px"]["raw"] == pytest.approx(truth.mtf50(angle), rel=0.03)
+    assert s["gaussian_sigma_px"] == pytest.approx(truth.sigma_px, rel=0.03)
+    cam = tomllib.loads((lab["out"] / "camera.toml").read_text())
+    metrics = json.loads((lab["out"] / "metrics.json").read_text())
+    optics = cam.get("optics", metrics["camera_tables"]["optics"])
+    assert optics["model"] == "gaussian"
+    assert optics["gaussian_sigma_px"] == pytest.approx(s["gaussian_sigma_px"])
+
+
+def test_noise_comes_back(lab: dict[str, Any]) -> None:
+    """EMVA 1288 gain and read noise within 3 % of the sensor's (measured -0.8 %, +0.8 %),
+    and the quantum efficiency from lab.toml's photon rate within 5 %."""
+    truth = lab["truth"]
+    n = lab["printed"]["noise"]
+    assert n["system_gain_dn_per_e"] == pytest.approx(truth.gain, rel=0.03)
+    assert n["read_noise_e"] == pytest.approx(truth.read_noise, rel=0.03)
+    qe = float(truth.sensor.quantum_efficiency(550.0)[1]) * truth.sensor.fill_factor
+    assert n["quantum_efficiency"] == pytest.approx(qe, rel=0.05)
+    assert n["system_gain_std"] < 0.01 * truth.gain
+    metrics = json.loads((lab["out"] / "metrics.json").read_text())
+    sensor = metrics["camera_tables"]["sensor"]
+    assert sensor["system_gain_dn_per_e"] == pytest.approx(n["system_gain_dn_per_e"])
+    assert sensor["black_level_dn"] == pytest.approx(truth.sensor.black_level, abs=1.0)
+
+
+def _twin_sensor(sensor: Any, table: dict[str, Any]) -> Any:
+    """X's sensor with the estimated sensitivities (scaled to X's green peak QE)."""
+    s = table["sensitivity"]
+    curves = np.array([s["r"], s["g"], s["b"]])
+    peak = max(max(c) for c in sensor.qe_curves)
+    return replace(
+        sensor,
+        qe_wavelengths=tuple(s["wavelengths_nm"]),
+        qe_curves=tuple(tuple(float(x) for x in c * peak) for c in curves),
+    )
+
+
+def test_twin_renders_the_chart_as_the_camera_does(lab: dict[str, Any]) -> None:
+    """The ColorChecker simulated through X and through its twin (the estimated
+    sensitivities, the measured white balance and colour matrix): mean CIEDE2000 between
+    the two renderings < 1 (measured 0.2). Without the measured colour model (the twin's
+    sensitivities, identity processing) the renderings differ far more."""
+    from imageform.color import delta_e_ciede2000, linear_srgb_to_xyz, xyz_to_lab
+    from tests.workflows.characterize_lab import render_chart
+
+    truth = lab["truth"]
+    metrics = json.loads((lab["out"] / "metrics.json").read_text())
+    color = metrics["camera_tables"]["color"]
+    assert color["ccm_to"] == "camera_output"
+    twin = _twin_sensor(truth.sensor, color)
+    orig, *_ = render_chart(truth.sensor, truth.wb, truth.ccm)
+    mine, *_ = render_chart(twin, np.array(color["white_balance"]), np.array(color["ccm"]))
+
+    def lab_(x: np.ndarray) -> np.ndarray:
+        return np.asarray(xyz_to_lab(linear_srgb_to_xyz(x), white="D65"))
+
+    de = np.asarray(delta_e_ciede2000(lab_(orig), lab_(mine)))
+    assert float(de.mean()) < 1.0, de
+    bare, *_ = render_chart(twin, np.ones(3), np.eye(3))
+    assert float(np.mean(delta_e_ciede2000(lab_(orig), lab_(bare)))) > 5.0
+    # the estimate against X's own curves: the same peaks within 20 nm
+    s = color["sensitivity"]
+    wl = np.array(s["wavelengths_nm"])
+    est_peaks = [wl[int(np.argmax(s[c]))] for c in "rgb"]
+    xw = np.array(truth.sensor.qe_wavelengths)
+    true_peaks = [xw[int(np.argmax(c))] for c in truth.sensor.qe_curves]
+    assert np.allclose(est_peaks, true_peaks, atol=20.0), (est_peaks, true_peaks)
+
+
+def test_outputs_and_report(lab: dict[str, Any]) -> None:
+    out = lab["out"]
+    assert sorted(p.name for p in out.iterdir()) == ["camera.toml", "metrics.json", "report.html"]
+    html = (out / "report.html").read_text()
+    for anchor in ("geometry", "sharpness", "noise", "colour", "camera-file"):
+        assert f'id="{anchor}"' in html
+    assert html.count("<img") == 6  # reprojection, MTF, PTC+SNR, chart, sensitivities... (5+)
+    assert "http://" not in html and "https://" not in html
+    metrics = json.loads((out / "metrics.json").read_text())
+    assert metrics["format"] == "imageform-characterization"
+    assert set(metrics["summary"]["measured"]) == {"geometry", "sharpness", "noise", "color"}
+    assert metrics["summary"]["missing"] == {}
+
+
+def test_python_api_and_rerun_needs_force(lab: dict[str, Any]) -> None:
+    from imageform.workflows import CameraCharacterization, characterize_camera
+
+    res = characterize_camera(lab["root"] / "set")
+    assert isinstance(res, CameraCharacterization)
+    assert res.measured == ("geometry", "sharpness", "noise", "color")
+    assert res.tables["optics"]["model"] == "gaussian"
+    with pytest.raises(InvalidInputError, match="exists"):
+        execute("characterize", folder=str(lab["root"] / "set"), out=lab["out"])
+    before = (lab["out"] / "camera.toml").read_text()
+    execute("characterize", folder=str(lab["root"] / "set"), out=lab["out"], force=True)
+    assert (lab["out"] / "camera.toml").read_text().split("[provenance]")[0] == before.split(
+        "[provenance]"
+    )[0]
+
+
+def test_partial_lab_set_reports_what_is_missing(lab: dict[str, Any], tmp_path: Path) -> None:
+    """Only the edge and the flats/darks: those are measured, the rest is reported as not
+    measured (in the summary and the report), and the camera file still written."""
+    import shutil
+
+    src = lab["root"] / "set"
+    part = tmp_path / "part"
+    part.mkdir()
+    for name in ("edge", "flats", "darks"):
+        shutil.copytree(src / name, part / name)
+    out = tmp_path / "out"
+    r = execute("characterize", folder=str(part), out=out)
+    assert r.summary["measured"] == ["sharpness", "noise"]
+    assert set(r.summary["missing"]) == {"geometry", "color"}
+    html = (out / "report.html").read_text()
+    assert "Not measured: no checkerboard/ (or charuco/) folder" in html
+    assert (out / "camera.toml").is_file()
+
+
+def _one_line_refusal(folder: Path, out: Path, match: str) -> None:
+    with pytest.raises(ImageformError, match=match) as info:
+        execute("characterize", folder=str(folder), out=out)
+    msg = str(info.value)
+    assert "\n" not in msg and len(msg) <= 220, msg
+    assert not out.exists()
+
+
+def test_refusals(tmp_path: Path, lab: dict[str, Any]) -> None:
+    import shutil
+
+    out = tmp_path / "out"
+    empty = tmp_path / "empty"
+    empty.mkdir()
+    _one_line_refusal(empty, out, "holds none of checkerboard/")
+    _one_line_refusal(tmp_path / "nope", out, "expected FOLDER a folder")
+    flats_only = tmp_path / "flats_only"
+    shutil.copytree(lab["root"] / "set" / "flats", flats_only / "flats")
+    _one_line_refusal(flats_only, out, "nothing to measure.*no darks/")
+    bad = tmp_path / "bad"
+    (bad / "edge").mkdir(parents=True)
+    (bad / "edge" / "edge.png").write_bytes(b"not a png")
+    _one_line_refusal(bad, out, "edge.png")
+    manifest = tmp_path / "manifest"
+    shutil.copytree(lab["root"] / "set" / "edge", manifest / "edge")
+    (manifest / "lab.toml").write_text("[camera]\nbogus = 1\n")
+    _one_line_refusal(manifest, out, "unknown key.*bogus")
+    noboard = tmp_path / "noboard"
+    shutil.copytree(lab["root"] / "set" / "checkerboard", noboard / "checkerboard")
+    _one_line_refusal(noboard, out, "board = ")
+    inside = lab["root"] / "set"
+    with pytest.raises(InvalidInputError, match="inside FOLDER"):
+        execute("characterize", folder=str(inside), out=inside / "twin")
+
+
+# ---------------------------------------------------------------- the report in a browser
+
+
+def test_report_in_headless_chromium(lab: dict[str, Any]) -> None:
+    """Every image loads, no console error, nothing asked beyond the file and data: URIs,
+    and the screenshot is not blank (as the simulate report's check)."""
+    from tests.report.test_browser import CHROMIUM, _not_blank, _open, _require
+
+    if not CHROMIUM.is_file():
+        _require(f"Chromium ({CHROMIUM})")
+    try:
+        from playwright.sync_api import sync_playwright
+    except ImportError:
+        _require("Playwright for Python (the test extra)")
+    with sync_playwright() as p:
+        browser = p.chromium.launch(
+            executable_path=str(CHROMIUM),
+            args=["--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage"],
+        )
+        try:
+            page = browser.new_page(viewport={"width": 1280, "height": 900})
+            seen = _open(page, lab["out"] / "report.html")
+            images = page.evaluate(
+                "Array.from(document.images).map(i => [i.alt, i.complete, i.naturalWidth])"
+            )
+            assert len(images) >= 5
+            broken = [alt for alt, complete, width in images if not (complete and width > 0)]
+            assert broken == [], f"images that did not load: {broken}"
+            assert seen["console_errors"] == [] and seen["page_errors"] == []
+            others = [u for u in seen["requests"] if not u.startswith(("file:", "data:"))]
+            assert others == [], f"the report asked for {others}"
+            _not_blank(page.screenshot(full_page=True))
+            assert page.title() == "imageform camera characterisation"
+        finally:
+            browser.close()
+    assert math.isfinite(lab["printed"]["color"]["delta_e00_mean"])
