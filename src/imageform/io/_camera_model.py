@@ -19,6 +19,7 @@ from imageform.errors import InvalidInputError, UnknownOptionError
 
 if TYPE_CHECKING:
     from imageform.geometry import CalibrationResult, Camera
+    from imageform.io._camera_tables import CameraColor, CameraOptics, CameraSensor
 
 __all__ = [
     "CAMERA_FILE_FORMAT",
@@ -71,7 +72,9 @@ _TABLES: dict[str, tuple[str, ...]] = {
         "fixed",
     ),
 }
-_TOP = ("format", "version", *_TABLES)
+#: The optional measured-camera tables (imageform.io._camera_tables), each one dataclass.
+_MEASURED = ("sensor", "optics", "color")
+_TOP = ("format", "version", *_TABLES, *_MEASURED)
 _LEGACY_KEYS = ("fx", "fy", "cx", "cy", "skew", "width", "height", "image_plane", "model") + (
     "k1",
     "k2",
@@ -143,6 +146,14 @@ class CameraFile:
         The file's format version (0 for a file from before the versioned format).
     path : Path or None
         The file it was read from.
+    sensor : CameraSensor or None
+        ``[sensor]``: the EMVA 1288 noise model (None when the file has no such table).
+    optics : CameraOptics or None
+        ``[optics]``: the lens's blur model.
+    color : CameraColor or None
+        ``[color]``: white balance, colour-correction matrix, spectral sensitivities.
+
+    A mapping of a table's keys is accepted for ``sensor``, ``optics`` and ``color``.
     """
 
     camera: Camera
@@ -151,6 +162,9 @@ class CameraFile:
     provenance: Provenance = field(default_factory=Provenance)
     version: int = CAMERA_FILE_VERSION
     path: Path | None = None
+    sensor: CameraSensor | None = None
+    optics: CameraOptics | None = None
+    color: CameraColor | None = None
 
     def __post_init__(self) -> None:
         from imageform.geometry import Camera
@@ -169,6 +183,10 @@ class CameraFile:
         object.__setattr__(
             self, "version", as_int(self.version, "version", minimum=0, maximum=CAMERA_FILE_VERSION)
         )
+        from imageform.io._camera_tables import as_table
+
+        for name in _MEASURED:
+            object.__setattr__(self, name, as_table(getattr(self, name), name))
 
     @property
     def distortion_model(self) -> str:

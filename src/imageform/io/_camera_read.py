@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 from datetime import UTC, date, datetime
 from typing import Any, Literal
 
@@ -72,7 +73,14 @@ def _read_v1(data: dict[str, Any], r: Reader) -> CameraFile:
     if pose and "R" not in pose and "rvec" not in pose:
         raise r.fail("pose", "expected the rotation as R (3 x 3) or rvec (radians)")
     prov = _provenance(tables["provenance"], r)
-    return _build(intr, image, dist, pose, tables["std"], prov, version, r, "")
+    cf = _build(intr, image, dist, pose, tables["std"], prov, version, r, "")
+    from imageform.io._camera_tables import CameraColor, CameraOptics, CameraSensor
+
+    measured: dict[str, Any] = {}
+    for name, cls in (("sensor", CameraSensor), ("optics", CameraOptics), ("color", CameraColor)):
+        if name in data:
+            measured[name] = cls.from_table(r.table(data, name), r)
+    return replace(cf, **measured) if measured else cf
 
 
 def _read_legacy(data: dict[str, Any], r: Reader) -> CameraFile:

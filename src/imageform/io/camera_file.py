@@ -13,6 +13,9 @@ reading rules are in docs/camera-file.md. In short::
     [pose]         R (3 x 3 rows) or rvec (radians), t  (world to camera: X_cam = R X_world + t)
     [std]          standard deviations, same names as above
     [provenance]   imageform_version, date (UTC), command, rms_px, views_used, images, ...
+    [sensor]       the EMVA 1288 noise model (optional; CameraSensor)
+    [optics]       the lens's blur: diffraction, zernike, gaussian or mtf50 (optional)
+    [color]        white balance, CCM, illuminant, spectral sensitivities (optional)
 
 Files written by earlier imageform versions (keys ``fx fy cx cy skew width height k1 k2 p1 p2
 k3 ... rvec/R t`` at the top level or in ``[camera]``, plus the ``[calibration]`` table of
@@ -47,6 +50,14 @@ from imageform.io._camera_model import (
     Provenance,
     distortion_name,
 )
+from imageform.io._camera_tables import (
+    CCM_TARGETS,
+    OPTICS_MODELS,
+    CameraColor,
+    CameraOptics,
+    CameraSensitivity,
+    CameraSensor,
+)
 
 if TYPE_CHECKING:
     from imageform.geometry import Camera
@@ -54,8 +65,14 @@ if TYPE_CHECKING:
 __all__ = [
     "CAMERA_FILE_FORMAT",
     "CAMERA_FILE_VERSION",
+    "CCM_TARGETS",
     "DISTORTION_MODELS",
+    "OPTICS_MODELS",
+    "CameraColor",
     "CameraFile",
+    "CameraOptics",
+    "CameraSensitivity",
+    "CameraSensor",
     "Provenance",
     "distortion_name",
     "read_camera",
@@ -188,6 +205,10 @@ def camera_file_text(cf: CameraFile) -> str:
     if cf.std:
         lines += ["", "[std]"]
         lines += [f"{name} = {_toml_value(v)}" for name, v in cf.std.items()]
+    from imageform.io._camera_tables import table_lines
+
+    for table in (cf.sensor, cf.optics, cf.color):
+        lines += table_lines(table)
     prov = cf.provenance
     lines += ["", "[provenance]"]
     for name in _TABLES["provenance"]:
@@ -208,6 +229,9 @@ def write_camera(
     has_pose: bool | None = None,
     std: Mapping[str, Any] | None = None,
     provenance: Provenance | None = None,
+    sensor: CameraSensor | Mapping[str, Any] | None = None,
+    optics: CameraOptics | Mapping[str, Any] | None = None,
+    color: CameraColor | Mapping[str, Any] | None = None,
 ) -> Path:
     """Write a camera file atomically (a temporary sibling renamed at the end).
 
@@ -220,6 +244,9 @@ def write_camera(
         written only with ``has_pose=True``.
     has_pose, std, provenance : optional
         Replace those fields of ``camera``.
+    sensor, optics, color : CameraSensor, CameraOptics, CameraColor or mapping, optional
+        The measured-camera tables ``[sensor]``, ``[optics]``, ``[color]`` (a mapping of a
+        table's keys is checked as the dataclass); given, they replace those of ``camera``.
 
     Returns
     -------
@@ -247,6 +274,15 @@ def write_camera(
         if not isinstance(std, Mapping):
             raise TypeError(f"expected std as a mapping of name to value, got {describe(std)}")
         cf = replace(cf, std=dict(std))
+    from imageform.io._camera_tables import as_table
+
+    measured = {
+        name: as_table(value, name)
+        for name, value in (("sensor", sensor), ("optics", optics), ("color", color))
+        if value is not None
+    }
+    if measured:
+        cf = replace(cf, **measured)
     if provenance is not None and not isinstance(provenance, Provenance):
         raise TypeError(f"expected provenance as a Provenance, got {describe(provenance)}")
     prov = provenance if provenance is not None else cf.provenance

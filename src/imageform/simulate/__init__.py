@@ -8,6 +8,12 @@ composed by :func:`simulate`. The world is z up (:data:`WORLD_UP`).
 from imageform.simulate.colorfit import apply_color_correction, fit_color_correction
 from imageform.simulate.config import WORLD_UP, CameraConfig, SceneConfig
 from imageform.simulate.dng import simulated_color_matrix, write_simulated_dng
+from imageform.simulate.lab import LAB_FORMAT, LabSet, render_lab_set
+from imageform.simulate.measured import (
+    MeasuredCamera,
+    apply_camera_file,
+    gaussian_sigma_for_mtf50,
+)
 from imageform.simulate.pipeline import simulate
 from imageform.simulate.render import RenderOutput, render_scene
 from imageform.simulate.result import (
@@ -23,11 +29,14 @@ from imageform.simulate.scene import Scene, SceneObject, default_scene, load_sce
 from imageform.simulate.schema import SCENE_SCHEMA
 
 __all__ = [
+    "LAB_FORMAT",
     "SCENE_SCHEMA",
     "STAGE_KINDS",
     "WORLD_UP",
     "CameraConfig",
     "ColorCheckerTruth",
+    "LabSet",
+    "MeasuredCamera",
     "PatchMeasurements",
     "RenderOutput",
     "Scene",
@@ -37,10 +46,13 @@ __all__ = [
     "SimulationResult",
     "Stage",
     "VanishingTruth",
+    "apply_camera_file",
     "apply_color_correction",
     "default_scene",
     "fit_color_correction",
+    "gaussian_sigma_for_mtf50",
     "load_scene",
+    "render_lab_set",
     "render_scene",
     "simulate",
     "simulated_color_matrix",

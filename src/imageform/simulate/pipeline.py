@@ -26,6 +26,8 @@ from imageform.simulate.result import (
 )
 from imageform.simulate.scene import Scene, SceneObject, _at_key
 from imageform.simulate.stages import (
+    ColorCorrected,
+    WhiteBalanced,
     apply_lens,
     balance_white,
     capture_raw,
@@ -240,6 +242,17 @@ def simulate(
     run.stage("rendered", r.rate, S=cfg.render.supersampling)
     with _at_key(scene, ("lens",)):
         optical = apply_lens(r, scene.camera, cfg.lens, cfg.camera.focal_length_mm)
+    measured = scene.measured
+    if measured is not None and measured.optics is not None:
+        from imageform.simulate.measured import measured_optics_blur
+
+        with _at_key(scene, ("lens",)):
+            optical = measured_optics_blur(
+                optical,
+                measured.optics,
+                pixel_pitch=sensor.pixel_pitch,
+                supersampling=cfg.render.supersampling,
+            )
     run.stage("optics", optical)
     with _at_key(scene, ("sensor", "exposure_time_s")):
         t_exp = exposure_time(optical, cfg.sensor, sensor)
@@ -262,13 +275,27 @@ def simulate(
         run.stage("shading_corrected", img)
     truth = colorchecker_truth(chart, scene.camera) if chart is not None else None
     cc_before = patch_means(img, truth) if truth is not None else None
-    with _at_key(scene, ("processing", "white_balance")):
-        wb = balance_white(img, proc.white_balance, cc_before)
+    color = measured.color if measured is not None else None
+    wb_method = proc.white_balance
+    if color is not None and color.white_balance is not None:
+        fixed = np.asarray(color.white_balance, dtype=np.float64)
+        wb, wb_method = WhiteBalanced(img * fixed, fixed), "camera file"
+    else:
+        with _at_key(scene, ("processing", "white_balance")):
+            wb = balance_white(img, proc.white_balance, cc_before)
     gains = ", ".join(f"{g:.3g}" for g in np.ravel(wb.gains))
-    run.stage("white_balanced", wb.image, method=proc.white_balance, gains=gains)
+    run.stage("white_balanced", wb.image, method=wb_method, gains=gains)
     cc_wb = patch_means(wb.image, truth) if truth is not None else None
-    with _at_key(scene, ("processing", "color_correction")):
-        cc = correct_color(wb.image, proc.color_correction, cc_wb)
+    matrix = None
+    if color is not None:
+        from imageform.simulate.measured import measured_color_matrix
+
+        matrix = measured_color_matrix(color)
+    if matrix is not None:
+        cc = ColorCorrected(wb.image @ matrix, matrix)
+    else:
+        with _at_key(scene, ("processing", "color_correction")):
+            cc = correct_color(wb.image, proc.color_correction, cc_wb)
     run.stage("color_corrected", cc.image)
     with _at_key(scene, ("processing", "output_space")):
         out = encode_output(cc.image, proc.output_space, proc.transfer)

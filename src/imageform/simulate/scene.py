@@ -100,6 +100,9 @@ class Scene:
     sensor: SensorModel
     illuminant: Spectrum
     base_dir: Path | None = None
+    #: The measured camera's tables (a camera file's [sensor], [optics], [color]) the scene
+    #: renders through (:func:`imageform.simulate.apply_camera_file`); None: the scene's own.
+    measured: Any = field(default=None, compare=False)
 
     @property
     def image_size(self) -> tuple[int, int]:
@@ -125,7 +128,22 @@ class Scene:
             else:
                 cfg[sec] = changes
         origin = _where(self).origin
-        return _build(_plain(cfg), None, origin, self.base_dir)
+        return _build(_plain(cfg), None, origin, self.base_dir, self.measured)
+
+    def with_measured(self, measured: Any) -> Scene:
+        """The same scene rendered through a measured camera's tables (a
+        :class:`imageform.simulate.measured.MeasuredCamera`, or None for the scene's own
+        sensor and processing): the sensor model is rebuilt with them. Kept by
+        :meth:`with_changes`, :meth:`view` and :meth:`resized`; see
+        :func:`imageform.simulate.apply_camera_file`."""
+        from imageform.simulate.measured import MeasuredCamera
+
+        if measured is not None and not isinstance(measured, MeasuredCamera):
+            raise TypeError(
+                f"expected measured as a MeasuredCamera or None, got {describe(measured)}"
+            )
+        cfg = _plain(self.config.to_dict())
+        return _build(cfg, None, _where(self).origin, self.base_dir, measured)
 
     def with_camera(self, camera: Camera, *, focal_length_mm: float | None = None) -> Scene:
         """The same scene seen through ``camera`` (an :class:`imageform.geometry.Camera`:
@@ -333,7 +351,9 @@ def _illuminant(il: IlluminantConfig, base: Path | None) -> Spectrum:
     return Spectrum(arr[:, 0], arr[:, 1], name=Path(path).name)
 
 
-def _build(data: dict[str, Any], text: str | None, origin: str, base: Path | None) -> Scene:
+def _build(
+    data: dict[str, Any], text: str | None, origin: str, base: Path | None, measured: Any = None
+) -> Scene:
     cfg = SceneConfig.from_dict(validate_scene_dict(data, text, origin))
     ctx = _Ctx(text, origin)
 
@@ -347,6 +367,10 @@ def _build(data: dict[str, Any], text: str | None, origin: str, base: Path | Non
             raise type(exc)(one_line(f"scene key {ctx.where(path)}: {exc}")) from None
 
     sensor = at(("sensor",), cfg.sensor.to_model)
+    if measured is not None:
+        from imageform.simulate.measured import measured_sensor
+
+        sensor = measured_sensor(sensor, measured)
     camera = at(
         ("camera",),
         lambda: cfg.camera.to_camera((cfg.render.width, cfg.render.height), sensor.pixel_pitch),
@@ -365,6 +389,7 @@ def _build(data: dict[str, Any], text: str | None, origin: str, base: Path | Non
         sensor=sensor,
         illuminant=at(("illuminant",), lambda: _illuminant(cfg.illuminant, base)),
         base_dir=base,
+        measured=measured,
     )
     object.__setattr__(scene, "_where", ctx)  # not a field: for errors at render time
     return scene

@@ -28,9 +28,10 @@ class SimulateOptions(Options):
     )
     camera: Path | None = option(
         None,
-        help="Render through this camera file (from imageform calibrate, or a simulation's "
-        "camera.toml): its intrinsics and distortion, and its pose if it has one (else the "
-        "scene's).",
+        help="Render through this camera file (from imageform calibrate or characterize, or a "
+        "simulation's camera.toml): its intrinsics and distortion, its pose if it has one (else "
+        "the scene's), and its [sensor] noise model, [optics] blur and [color] white balance, "
+        "CCM and sensitivities when present; the file's values override the scene's.",
         input=True,
     )
     seed: int = option(
@@ -83,7 +84,9 @@ def simulate(run: Run, opts: SimulateOptions, *, out: Path) -> Result:
     t0 = time.perf_counter()
     scene = load_scene(opts.scene) if opts.scene is not None else default_scene()
     if opts.camera is not None:
-        scene = scene.with_camera(_camera_for(read_camera(opts.camera), scene))
+        from imageform.simulate import apply_camera_file
+
+        scene = apply_camera_file(scene, read_camera(opts.camera))
     result = simulate_scene(scene, progress=run.progress, rng=opts.seed)
     if run.progress is not None:
         run.progress("writing the report", 1.0)
@@ -94,6 +97,9 @@ def simulate(run: Run, opts: SimulateOptions, *, out: Path) -> Result:
         CameraFile(
             result.camera,
             has_pose=True,
+            sensor=None if scene.measured is None else scene.measured.sensor,
+            optics=None if scene.measured is None else scene.measured.optics,
+            color=None if scene.measured is None else scene.measured.color,
             provenance=Provenance(
                 command="imageform simulate",
                 based_on=str(opts.scene) if opts.scene is not None else "built-in scene",
@@ -147,22 +153,6 @@ def simulate(run: Run, opts: SimulateOptions, *, out: Path) -> Result:
         f"report {paths.seconds:.1f} s, total {wall:.1f} s",
     )
     return Result(summary, text)
-
-
-def _camera_for(cf: Any, scene: Any) -> Any:
-    """The camera of a camera file, posed as the file says, or where the scene's camera is
-    when the file has no pose (a calibration gives intrinsics and distortion only)."""
-    from imageform.geometry import Camera
-
-    cam = cf.camera
-    if cam.image_size is None:
-        raise InvalidInputError(
-            f"{cf.path}: the camera file has no image size ([image] width, height) to render"
-        )
-    if cf.has_pose:
-        return cam
-    here = scene.camera
-    return Camera(cam.K, here.R, here.t, cam.image_size, cam.image_plane, distortion=cam.distortion)
 
 
 def _render_views(run: Run, scene: Any, folder: Path, seed: int) -> list[Path]:
