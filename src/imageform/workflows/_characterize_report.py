@@ -3,7 +3,6 @@ style: :mod:`imageform.report.html_parts`, figures embedded as data: URIs) and m
 
 from __future__ import annotations
 
-import inspect
 import math
 from pathlib import Path
 from typing import Any
@@ -369,26 +368,30 @@ def _camera_section(text: str) -> str:
 # ---------------------------------------------------------------- writing
 
 
-def _write_camera(res: Any, path: Path) -> tuple[Path, list[str]]:
-    """camera.toml with every measured table the camera file takes."""
+def _write_camera(res: Any, path: Path) -> Path | None:
+    """camera.toml with the geometry and every measured table; None (nothing written)
+    when no photograph gives the image size (flats and darks only)."""
     from imageform.io import write_camera
 
-    cf = res.camera_file()
-    params = inspect.signature(write_camera).parameters
-    extra = {k: v for k, v in res.tables.items() if k in params}
-    left = [k for k in res.tables if k not in params]
-    write_camera(path, cf, **extra)
-    return path, left
+    if res.image_size is None:
+        return None
+    write_camera(path, res.camera_file(), **res.tables)
+    return path
 
 
-def write_outputs(res: Any, folder: Path) -> dict[str, Path]:
+def write_outputs(res: Any, folder: Path) -> dict[str, Path | None]:
     """Write camera.toml, report.html and metrics.json of ``res`` into ``folder``."""
-    camera, left = _write_camera(res, folder / "camera.toml")
+    camera = _write_camera(res, folder / "camera.toml")
     notes = list(res.notes)
-    if left:
+    if camera is None:
         notes.append(
-            f"this imageform's camera file has no [{'], ['.join(left)}] table: those values "
-            "are in metrics.json"
+            "no photograph gives the image size: no camera.toml was written (the measured "
+            "values are in metrics.json)"
+        )
+    if res.geometry is None and camera is not None:
+        notes.append(
+            "no checkerboard: camera.toml has nominal intrinsics (f = the longer image side, "
+            "principal point at the centre), not measured ones"
         )
     summary = res.summary()
     metrics = {
@@ -404,7 +407,8 @@ def write_outputs(res: Any, folder: Path) -> dict[str, Path]:
     mpath = folder / "metrics.json"
     mpath.write_text(dumps(metrics) + "\n", encoding="utf-8")
     sections = [_overview(res, summary), _geometry(res), _sharpness(res), _noise(res), _colour(res)]
-    sections.append(_camera_section(camera.read_text(encoding="utf-8")))
+    if camera is not None:
+        sections.append(_camera_section(camera.read_text(encoding="utf-8")))
     if notes:
         sections.append(hp.section("notes", "Notes", "".join(hp.note(n) for n in notes)))
     nav = [

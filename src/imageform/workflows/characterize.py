@@ -107,11 +107,50 @@ _MANIFEST_KEYS: dict[str, tuple[str, ...]] = {
         "pixel_pitch_um",
         "f_number",
     ),
-    "checkerboard": ("board", "square", "marker", "dictionary"),
-    "colorchecker": ("illuminant", "transfer"),
-    "edge": ("transfer", "min_angle", "max_angle"),
-    "flats": ("photons_per_s", "fit_fraction"),
+    "checkerboard": (
+        "board",
+        "inner_corners",
+        "square",
+        "square_mm",
+        "marker",
+        "dictionary",
+        "folder",
+        "images",
+        "encoding",
+    ),
+    "colorchecker": (
+        "illuminant",
+        "transfer",
+        "encoding",
+        "image",
+        "corners_px",
+        "patch_centres_px",
+    ),
+    "edge": (
+        "transfer",
+        "encoding",
+        "min_angle",
+        "max_angle",
+        "image",
+        "angle_deg",
+        "white_balance",
+    ),
+    "flats": ("photons_per_s", "fit_fraction", "wavelength_nm"),
+    "emva": (
+        "manifest",
+        "flats",
+        "darks",
+        "wavelength_nm",
+        "channel",
+        "exposures",
+        "frames",
+        "frame_shape",
+        "fit_fraction",
+    ),
+    "truth": (),  # any key: the true values of a simulated camera (shown in the report)
 }
+#: Top-level keys of lab.toml (render_lab_set writes them).
+_MANIFEST_TOP = ("format", "version", "camera", "seed")
 _FRAME_NAME = re.compile(r"^(?:(?:flat|dark)s?_)?([0-9][0-9.eE+-]*)_([0-9]+)$")
 _NEUTRALS = (18, 19, 20, 21, 22)  # white 9.5 ... neutral 3.5 (black 2 left out: noisy)
 
@@ -153,6 +192,8 @@ class SharpnessMeasurement:
     angles_deg: tuple[float, ...]
     edges: int
     raw: bool
+    cfa: str | None = None
+    image_size: tuple[int, int] | None = None
 
     @property
     def mtf50_main(self) -> float:
@@ -204,6 +245,8 @@ class ColorMeasurement:
     reference_rgb: Any
     detection: Any
     photo: Any = field(default=None, repr=False)
+    half_size: bool = False
+    cfa: str | None = None
 
 
 @dataclass(frozen=True)
@@ -238,6 +281,15 @@ class CameraCharacterization:
     notes: tuple[str, ...]
     manifest: dict[str, Any]
     tables: dict[str, dict[str, Any]]
+
+    @property
+    def raw_cfa(self) -> str | None:
+        """The CFA pattern of a raw photograph measured (None: none was raw)."""
+        for part in (self.color, self.sharpness):
+            cfa = getattr(part, "cfa", None) if part is not None else None
+            if cfa:
+                return str(cfa)
+        return None
 
     @property
     def measured(self) -> tuple[str, ...]:
@@ -376,13 +428,20 @@ def _manifest(folder: Path) -> dict[str, Any]:
     except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:
         msg = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
         raise InvalidInputError(f"{path}: cannot read the lab description ({msg})"[:200]) from None
+    fmt = doc.get("format", "imageform-lab")
+    if fmt != "imageform-lab":
+        raise InvalidInputError(f'{path}: expected format = "imageform-lab", got {fmt!r}'[:200])
     for section, body in doc.items():
+        if section in _MANIFEST_TOP and not isinstance(body, dict):
+            continue
         if section not in _MANIFEST_KEYS:
             raise InvalidInputError(
                 f"{path}: unknown table [{section}]; valid: {', '.join(_MANIFEST_KEYS)}"
             )
         if not isinstance(body, dict):
             raise InvalidInputError(f"{path}: expected [{section}] as a table")
+        if section == "truth":
+            continue
         unknown = sorted(set(body) - set(_MANIFEST_KEYS[section]))
         if unknown:
             raise InvalidInputError(
@@ -393,8 +452,11 @@ def _manifest(folder: Path) -> dict[str, Any]:
 
 
 def _get(doc: Mapping[str, Any], section: str, key: str, kind: type, default: Any) -> Any:
-    """``doc[section][key]`` checked to be ``kind`` (int accepted for float), or default."""
-    value = doc.get(section, {}).get(key, default)
+    """``doc[section][key]`` (or its alias: ``encoding`` for ``transfer``) checked to be
+    ``kind`` (int accepted for float), or default."""
+    body = doc.get(section, {})
+    alias = {"transfer": "encoding"}.get(key)
+    value = body.get(key, body.get(alias, default) if alias else default)
     if value is None or value is default:
         return value
     ok = (
@@ -440,6 +502,7 @@ class _Image:
     linear: Any = None
     mosaic: Any = None
     cfa: str | None = None
+    camera: Any = None  # linear camera RGB (H, W, 3): demosaiced raw, not white-balanced
 
 
 def _camera_cfa(doc: Mapping[str, Any]) -> str | None:
@@ -564,6 +627,18 @@ def _measure_geometry(
     if not files:
         raise InvalidInputError(f"{folder} holds no image")
     board = _get(doc, "checkerboard", "board", str, None)
+    corners_given = doc.get("checkerboard", {}).get("inner_corners")
+    if board is None and corners_given is not None:
+        if not (
+            isinstance(corners_given, list)
+            and len(corners_given) == 2
+            and all(isinstance(c, int) and not isinstance(c, bool) for c in corners_given)
+        ):
+            raise InvalidInputError(
+                f"{LAB_MANIFEST}: expected [checkerboard] inner_corners as [cols, rows], got "
+                f"{corners_given!r}"[:200]
+            )
+        board = f"{corners_given[0]}x{corners_given[1]}"
     if board is None:
         raise InvalidInputError(
             f'{folder}: the board\'s size is unknown; give [checkerboard] board = "9x6" '
@@ -571,8 +646,16 @@ def _measure_geometry(
         )
     from imageform._units import parse_length
 
-    square = parse_length(
-        str(_get(doc, "checkerboard", "square", str, "1")), "square", default_unit="mm", unit="mm"
+    square_mm = _get(doc, "checkerboard", "square_mm", float, None)
+    square = (
+        square_mm
+        if square_mm is not None
+        else parse_length(
+            str(_get(doc, "checkerboard", "square", str, "1")),
+            "square",
+            default_unit="mm",
+            unit="mm",
+        )
     )
     charuco = parse_charuco(board)
     shape: tuple[int, int] | None = None
@@ -743,6 +826,8 @@ def _measure_sharpness(
         angles_deg=angles,
         edges=len(results),
         raw=im.mosaic is not None,
+        cfa=im.cfa,
+        image_size=(int(arr.shape[1]), int(arr.shape[0])),
     )
 
 
@@ -796,33 +881,54 @@ def _plane(frame: Any, cfa: str | None) -> tuple[Any, str]:
     return frame[dy::2, dx::2], f"G at ({dy}, {dx}) of {cfa}"
 
 
-def _measure_noise(
-    flats_dir: Path, darks_dir: Path, doc: Mapping[str, Any], max_pixels: int | None
-) -> NoiseMeasurement:
-    import numpy as np
+def _entries(
+    root: Path, flats_dir: Path, darks_dir: Path, doc: Mapping[str, Any]
+) -> list[tuple[float, float | None, list[Path], list[Path]]]:
+    """Each exposure: (time, photons or None, flat files, dark files), from an EMVA
+    manifest (``emva.toml`` in FOLDER, or ``[emva] manifest``) or else the file names."""
+    from imageform.workflows.emva import MANIFEST
+    from imageform.workflows.emva import _manifest as emva_manifest
 
-    from imageform.sensor import measure_emva
-
+    name = _get(doc, "emva", "manifest", str, MANIFEST)
+    if (root / name).is_file():
+        if name != MANIFEST:
+            raise InvalidInputError(
+                f"{LAB_MANIFEST}: [emva] manifest must be {MANIFEST} in FOLDER, got {name!r}"
+            )
+        return sorted(emva_manifest(root), key=lambda e: e[0])
     flats = _frames(flats_dir, "flat")
     darks = _frames(darks_dir, "dark")
-    times = sorted(flats)
-    lonely = [t for t in times if t not in darks]
+    lonely = [t for t in sorted(flats) if t not in darks]
     if lonely:
         raise InvalidInputError(
             f"{darks_dir}: no dark frames for the flats' exposure time {lonely[0]:g} s (each "
             "time needs both)"
         )
+    return [(t, None, flats[t], darks[t]) for t in sorted(flats)]
+
+
+def _measure_noise(
+    root: Path, flats_dir: Path, darks_dir: Path, doc: Mapping[str, Any], max_pixels: int | None
+) -> NoiseMeasurement:
+    import numpy as np
+
+    from imageform.sensor import measure_emva
+
+    entries = _entries(root, flats_dir, darks_dir, doc)
+    times = [e[0] for e in entries]
     stacks: dict[str, list[Any]] = {"flat": [], "dark": []}
     plane = "all"
     shape: tuple[int, ...] | None = None
-    for t in times:
-        for kind, paths in (("flat", flats[t]), ("dark", darks[t])):
+    for t, _, fl, dk in entries:
+        for kind, paths in (("flat", fl), ("dark", dk)):
             if len(paths) < 2:
                 raise InvalidInputError(
                     f"expected at least 2 {kind} frames at {t:g} s, got {len(paths)}"
                 )
             planes = []
             for p in paths:
+                if not p.is_file():
+                    raise InvalidInputError(f"{kind} frame {p} does not exist")
                 fr, cfa = _frame(p, doc, max_pixels)
                 a, plane = _plane(fr, cfa)
                 if shape is None:
@@ -836,9 +942,14 @@ def _measure_noise(
             stacks[kind].append(np.stack(planes))
     photons = None
     pps = _get(doc, "flats", "photons_per_s", float, None)
-    if pps is not None:
+    if all(e[1] is not None for e in entries):
+        photons = np.array([float(e[1]) for e in entries])  # type: ignore[arg-type]
+    elif pps is not None:
         photons = np.asarray(times) * pps
-    ff = float(_get(doc, "flats", "fit_fraction", float, 0.7))
+    ff = float(
+        _get(doc, "flats", "fit_fraction", float, None)
+        or _get(doc, "emva", "fit_fraction", float, 0.7)
+    )
     m = measure_emva(
         stacks["flat"], stacks["dark"], np.asarray(times), photons=photons, fit_fraction=ff
     )
@@ -915,9 +1026,8 @@ def _chart_patches(im: _Image, max_size: int) -> tuple[Any, Any, Any]:
     from imageform.analysis import detect_colorchecker, measure_chart_patches
     from imageform.color import linear_to_srgb
 
-    if im.mosaic is not None:
-        assert im.cfa is not None
-        lin = _superpixel(im.mosaic, im.cfa)
+    if im.mosaic is not None or im.camera is not None:
+        lin = _superpixel(im.mosaic, str(im.cfa)) if im.mosaic is not None else im.camera
         # only to find the chart: grey-world balanced, exposed to a mean of 0.2, encoded
         means = np.maximum(lin.reshape(-1, 3).mean(axis=0), 1e-9)
         shown = np.clip(lin * (0.2 / means), 0.0, 1.0)
@@ -946,8 +1056,13 @@ def _measure_color(
         raise InvalidInputError(f"{LAB_MANIFEST}: expected [colorchecker] transfer srgb or linear")
     light = str(_get(doc, "colorchecker", "illuminant", str, "D65"))
     images = [_read_photo(p, doc, transfer, max_pixels, black) for p in files]
-    raw = next((i for i in images if i.mosaic is not None), None)
-    dev = next((i for i in images if i.mosaic is None), None)
+    if transfer == "linear":  # a linear RGB photograph of the chart is camera RGB
+        images = [
+            i if i.mosaic is not None else _Image(i.name, camera=np.asarray(i.linear))
+            for i in images
+        ]
+    raw = next((i for i in images if i.mosaic is not None or i.camera is not None), None)
+    dev = next((i for i in images if i.encoded is not None), None)
     ref = _reference_linear_srgb()
     cam = out = None
     det = photo = None
@@ -1019,6 +1134,8 @@ def _measure_color(
         reference_rgb=ref,
         detection=det,
         photo=photo,
+        half_size=raw is not None and raw.mosaic is not None,
+        cfa=raw.cfa if raw is not None else None,
     )
 
 
@@ -1089,8 +1206,9 @@ def _tables(res: CameraCharacterization) -> dict[str, dict[str, Any]]:
         ):
             if math.isfinite(v):
                 s[key] = v
-        if math.isfinite(m.quantum_efficiency):
-            s["quantum_efficiency"] = float(m.quantum_efficiency)
+        qe = _peak_qe(res)
+        if qe is not None:
+            s["quantum_efficiency"] = qe
         bits = _get(doc, "camera", "bit_depth", int, None)
         if bits is None and math.isfinite(m.saturation_dn) and m.saturation_dn > 1:
             bits = math.ceil(math.log2(float(np.max(m.mean_dn)) + 1))
@@ -1100,7 +1218,7 @@ def _tables(res: CameraCharacterization) -> dict[str, dict[str, Any]]:
             v2 = _get(doc, "camera", key, float, None)
             if v2 is not None:
                 s[key] = v2
-        cfa = _get(doc, "camera", "cfa", str, None)
+        cfa = _camera_cfa(doc) or res.raw_cfa
         if cfa is not None:
             s["cfa"] = cfa
         tables["sensor"] = s
@@ -1109,7 +1227,7 @@ def _tables(res: CameraCharacterization) -> dict[str, dict[str, Any]]:
         o: dict[str, Any] = {
             "model": "gaussian",
             "gaussian_sigma_px": sh.gaussian_sigma_px,
-            "mtf50_cy_per_px": sh.mtf50_main,
+            "mtf50_cy_per_px": list(sh.mtf50) if len(sh.mtf50) == 3 else sh.mtf50[0],
         }
         fn = _get(doc, "camera", "f_number", float, None)
         if fn is not None:
@@ -1118,8 +1236,9 @@ def _tables(res: CameraCharacterization) -> dict[str, dict[str, Any]]:
     c = res.color
     if c is not None:
         col: dict[str, Any] = {
-            "ccm": [[float(x) for x in row] for row in np.asarray(c.ccm)],
-            "ccm_to": c.ccm_to,
+            # the camera file's convention: linear sRGB = ccm @ (white-balanced camera RGB)
+            "ccm": [[float(x) for x in row] for row in np.asarray(c.ccm).T],
+            "ccm_to": "linear_srgb",
             "white_balance": list(c.white_balance),
             "illuminant": c.illuminant,
         }
@@ -1133,6 +1252,29 @@ def _tables(res: CameraCharacterization) -> dict[str, dict[str, Any]]:
             }
         tables["color"] = col
     return tables
+
+
+def _peak_qe(res: CameraCharacterization) -> float | None:
+    """The peak quantum efficiency: the EMVA QE at the flats' wavelength (``[emva]`` or
+    ``[flats] wavelength_nm``, default 550 nm), divided by the estimated green sensitivity
+    there (relative QE, largest 1) when the chart gave one; None without photon counts."""
+    import numpy as np
+
+    n = res.noise
+    if n is None or not math.isfinite(n.emva.quantum_efficiency):
+        return None
+    qe = float(n.emva.quantum_efficiency)
+    doc = res.manifest
+    lam = _get(doc, "emva", "wavelength_nm", float, None) or _get(
+        doc, "flats", "wavelength_nm", float, 550.0
+    )
+    c = res.color
+    if c is not None and c.sensitivities is not None:
+        wl, rel = relative_qe(c.sensitivities)
+        g = float(np.interp(float(lam), wl, rel[:, 1]))
+        if g > 0.05:
+            qe = qe / g
+    return float(min(max(qe, 1e-6), 1.0))
 
 
 def characterize_camera(
@@ -1201,7 +1343,7 @@ def characterize_camera(
     noise = None
     report("noise")
     if flats is not None and darks is not None:
-        noise = _measure_noise(flats, darks, doc, max_pixels)
+        noise = _measure_noise(root, flats, darks, doc, max_pixels)
     else:
         missing["noise"] = (
             "no darks/ folder"
@@ -1221,6 +1363,7 @@ def characterize_camera(
     report("sharpness")
     if dirs["sharpness"] is not None:
         sharp = _measure_sharpness(dirs["sharpness"], doc, max_pixels, black)
+        size = size or sharp.image_size
     else:
         missing["sharpness"] = "no edge/ (or sfr/) folder"
     report("color")
@@ -1228,7 +1371,8 @@ def characterize_camera(
         color = _measure_color(dirs["color"], doc, max_pixels, black)
         if size is None and color.photo is not None:
             h, w = color.photo.shape[:2]
-            size = (int(w), int(h)) if color.raw is None else (int(w) * 2, int(h) * 2)
+            half = color.raw is not None and color.developed is None and color.half_size
+            size = (int(w) * 2, int(h) * 2) if half else (int(w), int(h))
     else:
         missing["color"] = "no colorchecker/ (or chart/) folder"
     if noise is None and geometry is None and sharp is None and color is None:
@@ -1303,7 +1447,7 @@ def characterize(run: Run, opts: CharacterizeOptions, *, out: Path, folder: str)
     summary = {
         "folder": src,
         "out": out,
-        "camera": out / written["camera"].name,
+        "camera": out / written["camera"].name if written["camera"] is not None else None,
         "report": out / written["report"].name,
         "metrics": out / written["metrics"].name,
         **s,
@@ -1338,7 +1482,10 @@ def characterize(run: Run, opts: CharacterizeOptions, *, out: Path, folder: str)
             "sensitivities "
             + ("estimated" if co["sensitivities_estimated"] else "not estimated (no raw)")
         )
-    text += [f"camera  -> {summary['camera']}", f"report  -> {summary['report']}"]
+    text += [
+        f"camera  -> {summary['camera'] or 'not written (no image size: flats and darks only)'}",
+        f"report  -> {summary['report']}",
+    ]
     return Result(summary, tuple(text))
 
 
