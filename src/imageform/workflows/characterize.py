@@ -123,6 +123,7 @@ _MANIFEST_KEYS: dict[str, tuple[str, ...]] = {
         "transfer",
         "encoding",
         "image",
+        "developed",
         "corners_px",
         "patch_centres_px",
     ),
@@ -455,6 +456,8 @@ def _get(doc: Mapping[str, Any], section: str, key: str, kind: type, default: An
     """``doc[section][key]`` (or its alias: ``encoding`` for ``transfer``) checked to be
     ``kind`` (int accepted for float), or default."""
     body = doc.get(section, {})
+    if not isinstance(body, dict):  # lab.toml's top-level camera = "camera.toml"
+        body = {}
     alias = {"transfer": "encoding"}.get(key)
     value = body.get(key, body.get(alias, default) if alias else default)
     if value is None or value is default:
@@ -1055,12 +1058,23 @@ def _measure_color(
     if transfer not in ("srgb", "linear"):
         raise InvalidInputError(f"{LAB_MANIFEST}: expected [colorchecker] transfer srgb or linear")
     light = str(_get(doc, "colorchecker", "illuminant", str, "D65"))
-    images = [_read_photo(p, doc, transfer, max_pixels, black) for p in files]
-    if transfer == "linear":  # a linear RGB photograph of the chart is camera RGB
-        images = [
-            i if i.mosaic is not None else _Image(i.name, camera=np.asarray(i.linear))
-            for i in images
-        ]
+    developed = _get(doc, "colorchecker", "developed", str, None)
+    dev_name = Path(developed).name if developed is not None else None
+    if developed is not None and not (folder / dev_name).is_file():  # type: ignore[operator]
+        raise InvalidInputError(
+            f"{LAB_MANIFEST}: [colorchecker] developed = {developed!r}: no such file in {folder}"[
+                :200
+            ]
+        )
+    images = []
+    for p in files:
+        if p.name == dev_name:  # the camera's own developed output (sRGB-encoded)
+            images.append(_read_photo(p, doc, "srgb", max_pixels, black))
+            continue
+        im = _read_photo(p, doc, transfer, max_pixels, black)
+        if transfer == "linear" and im.mosaic is None:  # linear RGB of the chart: camera RGB
+            im = _Image(im.name, camera=np.asarray(im.linear))
+        images.append(im)
     raw = next((i for i in images if i.mosaic is not None or i.camera is not None), None)
     dev = next((i for i in images if i.encoded is not None), None)
     ref = _reference_linear_srgb()
