@@ -100,7 +100,7 @@ def _sharpness(res: Any) -> str:
     plt = _plt()
     fig, ax = plt.subplots(figsize=(7.5, 4.2))
     f = np.asarray(s.frequency)
-    colours = {"R": "tab:red", "G": "tab:green", "B": "tab:blue", "raw": "k"}
+    colours = {"R": "tab:red", "G": "tab:green", "B": "tab:blue", "raw": "k", "Y": "k"}
     for k, c in enumerate(s.channels):
         ax.plot(f, np.asarray(s.sfr)[:, k], color=colours.get(c, "k"), label=f"measured {c}")
     angle = float(np.median(s.angles_deg))
@@ -119,7 +119,7 @@ def _sharpness(res: Any) -> str:
     what = (
         "the raw mosaic, its photosites balanced on the neutral edge (one channel)"
         if s.raw
-        else "the developed photograph, decoded to linear light, per channel"
+        else "the photograph, decoded to linear light, per channel"
     )
     body = [
         f"<p>ISO 12233 slanted-edge e-SFR of {hp.e(s.image)}: {s.edges} edges found "

@@ -506,6 +506,7 @@ class _Image:
     mosaic: Any = None
     cfa: str | None = None
     camera: Any = None  # linear camera RGB (H, W, 3): demosaiced raw, not white-balanced
+    grey: bool = False  # a one-channel photograph (its three channels are one)
 
 
 def _camera_cfa(doc: Mapping[str, Any]) -> str | None:
@@ -568,7 +569,7 @@ def _read_photo(
         from imageform.color import srgb_to_linear
 
         lin = np.asarray(srgb_to_linear(enc))
-    return _Image(path.name, encoded=enc, linear=lin)
+    return _Image(path.name, encoded=enc, linear=lin, grey=img.shape[-1] == 1)
 
 
 def _superpixel(mosaic: Any, cfa: str) -> Any:
@@ -784,6 +785,9 @@ def _measure_sharpness(
         assert im.cfa is not None
         arr = _balanced_mosaic(im.mosaic, im.cfa)
         channels: tuple[str, ...] = ("raw",)
+    elif im.grey:
+        arr = np.asarray(im.linear)[..., 0]
+        channels = ("Y",)
     else:
         arr = np.asarray(im.linear)
         channels = ("R", "G", "B")
@@ -805,7 +809,7 @@ def _measure_sharpness(
             _fit_sigma(freq, r.sfr[:, c], abs(r.angle))
             for r in results
             for c in range(n_ch)
-            if channels[c] in ("G", "raw")
+            if channels[c] in ("G", "raw", "Y")
         ]
     )
 
@@ -1462,8 +1466,8 @@ def characterize(run: Run, opts: CharacterizeOptions, *, out: Path, folder: str)
         "folder": src,
         "out": out,
         "camera": out / written["camera"].name if written["camera"] is not None else None,
-        "report": out / written["report"].name,
-        "metrics": out / written["metrics"].name,
+        "report": out / "report.html",
+        "metrics": out / "metrics.json",
         **s,
     }
     text = [f"characterised {src}: measured {', '.join(res.measured) or 'nothing'}"]
