@@ -217,9 +217,17 @@ def _chart_figure(c: Any) -> bytes | None:
         return None
     plt = _plt()
     img = np.clip(np.asarray(c.photo), 0, 1)
+    # the chart and a margin of a fifth of its size around it
+    corners = np.asarray(c.detection.corners, dtype=float)
+    lo, hi = corners.min(axis=0), corners.max(axis=0)
+    pad = 0.2 * (hi - lo)
+    u0, v0 = (int(max(0, x)) for x in np.floor(lo - pad))
+    u1 = int(min(img.shape[1], np.ceil(hi[0] + pad[0])))
+    v1 = int(min(img.shape[0], np.ceil(hi[1] + pad[1])))
+    img = img[v0:v1, u0:u1]
     h, w = img.shape[:2]
     fig, ax = plt.subplots(figsize=(8, 8 * h / max(w, 1)))
-    ax.imshow(img)
+    ax.imshow(img, extent=(u0 - 0.5, u1 - 0.5, v1 - 0.5, v0 - 0.5))
     for k, (u, v) in enumerate(np.asarray(c.detection.centres)):
         de = float(np.asarray(c.delta_e00)[k])
         if math.isfinite(de):
