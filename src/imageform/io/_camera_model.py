@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import math
 import os
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 from datetime import datetime
 from pathlib import Path
@@ -16,6 +16,7 @@ import numpy as np
 
 from imageform._validate import as_bool, as_int, describe
 from imageform.errors import InvalidInputError, UnknownOptionError
+from imageform.io._camera_toml import Reader, short_list
 
 if TYPE_CHECKING:
     from imageform.geometry import CalibrationResult, Camera
@@ -257,83 +258,6 @@ def distortion_name(model: Any) -> str:
     raise InvalidInputError(
         f"expected a BrownConrady, KannalaBrandt or DivisionModel distortion, got {name}"
     )
-
-
-class Reader:
-    """Checks values of one file; every message names the file and the key."""
-
-    def __init__(self, where: str) -> None:
-        self.where = where
-
-    def fail(self, key: str, problem: str) -> InvalidInputError:
-        return InvalidInputError(f"{self.where}: {key}: {problem}")
-
-    def number(self, value: Any, key: str) -> float:
-        if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
-            raise self.fail(key, f"expected a number, got {_show(value)}")
-        v = float(value)
-        if not math.isfinite(v):
-            raise self.fail(key, f"expected a finite number, got {value}")
-        return v
-
-    def positive(self, value: Any, key: str, what: str = "") -> float:
-        v = self.number(value, key)
-        if v <= 0:
-            raise self.fail(key, f"expected {what or 'a number'} > 0, got {value:g}")
-        return v
-
-    def count(self, value: Any, key: str, *, minimum: int = 0) -> int:
-        if isinstance(value, bool) or not isinstance(value, int) or value < minimum:
-            raise self.fail(key, f"expected an integer >= {minimum}, got {_show(value)}")
-        return int(value)
-
-    def text(self, value: Any, key: str) -> str:
-        if not isinstance(value, str):
-            raise self.fail(key, f"expected a string, got {_show(value)}")
-        return value
-
-    def vector(self, value: Any, key: str, n: int = 3) -> tuple[float, ...]:
-        if not isinstance(value, list) or len(value) != n:
-            raise self.fail(key, f"expected a list of {n} numbers, got {_show(value)}")
-        return tuple(self.number(v, f"{key}[{i}]") for i, v in enumerate(value))
-
-    def matrix(self, value: Any, key: str) -> np.ndarray:
-        if not isinstance(value, list) or len(value) != 3:
-            raise self.fail(key, f"expected 3 rows of 3 numbers, got {_show(value)}")
-        return np.array([self.vector(row, f"{key}[{i}]") for i, row in enumerate(value)])
-
-    def table(self, data: Mapping[str, Any], name: str) -> dict[str, Any]:
-        value = data.get(name, {})
-        if not isinstance(value, dict):
-            raise self.fail(name, f"expected a table [{name}], got {_show(value)}")
-        return value
-
-    def known(self, table: Mapping[str, Any], valid: tuple[str, ...], where: str) -> None:
-        unknown = [k for k in table if k not in valid]
-        if unknown:
-            raise UnknownOptionError(
-                f"{self.where}: unknown key(s) {short_list([where + k for k in unknown], 40)}; "
-                f"valid{' in [' + where[:-1] + ']' if where else ''}: {short_list(valid, 90)}"
-            )
-
-
-def short_list(names: Sequence[str], budget: int) -> str:
-    """``names`` joined by commas, cut to about ``budget`` characters (``... (3 more)``), each
-    name cut to 30: an error message stays one line however many or long the keys are."""
-    shown: list[str] = []
-    size = 0
-    for n in names:
-        text = n if len(n) <= 30 else n[:27] + "..."
-        size += len(text) + 2
-        if shown and size > budget:
-            return ", ".join(shown) + f", ... ({len(names) - len(shown)} more)"
-        shown.append(text)
-    return ", ".join(shown)
-
-
-def _show(value: Any) -> str:
-    text = repr(value)
-    return text if len(text) <= 60 else text[:57] + "..."
 
 
 def _nonneg(r: Reader, value: Any, key: str) -> float:

@@ -24,11 +24,10 @@ from imageform.io._camera_model import (
     Provenance,
     Reader,
     _nonneg,
-    _show,
     check_std,
     distortion_name,
-    short_list,
 )
+from imageform.io._camera_toml import _show, short_list
 
 __all__ = ["parse"]
 

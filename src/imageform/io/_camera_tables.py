@@ -19,7 +19,7 @@ import numpy as np
 
 from imageform._validate import describe
 from imageform.errors import UnknownOptionError
-from imageform.io._camera_model import Reader, _show
+from imageform.io._camera_toml import Reader, _show, toml_value
 
 __all__ = [
     "CCM_TARGETS",
@@ -452,9 +452,7 @@ def as_table(value: Any, name: str) -> Any:
 
 
 def _value(value: Any) -> str:
-    from imageform.io.camera_file import _toml_value
-
-    return _toml_value(value)
+    return toml_value(value)
 
 
 def table_lines(table: Any) -> list[str]:

@@ -27,7 +27,6 @@ The module imports :mod:`imageform.geometry` only when a camera is built, so imp
 
 from __future__ import annotations
 
-import math
 import tomllib
 from collections.abc import Mapping
 from dataclasses import replace
@@ -58,6 +57,8 @@ from imageform.io._camera_tables import (
     CameraSensitivity,
     CameraSensor,
 )
+from imageform.io._camera_toml import toml_string as _toml_string
+from imageform.io._camera_toml import toml_value as _toml_value
 
 if TYPE_CHECKING:
     from imageform.geometry import Camera
@@ -131,36 +132,6 @@ def read_camera(path: str | Path) -> CameraFile:
 
 
 # ---------------------------------------------------------------- writing
-
-
-def _toml_value(value: Any) -> str:
-    if isinstance(value, str):
-        return _toml_string(value)
-    if isinstance(value, bool):
-        return "true" if value else "false"
-    if isinstance(value, (int, np.integer)):
-        return str(int(value))
-    if isinstance(value, datetime):
-        return value.astimezone(UTC).strftime("%Y-%m-%dT%H:%M:%SZ")
-    if isinstance(value, (list, tuple, np.ndarray)):
-        return "[" + ", ".join(_toml_value(v) for v in value) + "]"
-    v = float(value)
-    if not math.isfinite(v):
-        raise InvalidInputError(f"cannot write a non-finite number ({v}) to a camera file")
-    return repr(v)
-
-
-def _toml_string(text: str) -> str:
-    out = ['"']
-    for ch in text:
-        if ch in '"\\':
-            out.append("\\" + ch)
-        elif ord(ch) < 0x20 or ord(ch) == 0x7F:
-            out.append(f"\\u{ord(ch):04x}")
-        else:
-            out.append(ch)
-    out.append('"')
-    return "".join(out)
 
 
 def camera_file_text(cf: CameraFile) -> str:

@@ -9,11 +9,8 @@ from imageform.simulate.colorfit import apply_color_correction, fit_color_correc
 from imageform.simulate.config import WORLD_UP, CameraConfig, SceneConfig
 from imageform.simulate.dng import simulated_color_matrix, write_simulated_dng
 from imageform.simulate.lab import LAB_FORMAT, LabSet, render_lab_set
-from imageform.simulate.measured import (
-    MeasuredCamera,
-    apply_camera_file,
-    gaussian_sigma_for_mtf50,
-)
+from imageform.simulate.measured import apply_camera_file
+from imageform.simulate.measured_sensor import MeasuredCamera
 from imageform.simulate.pipeline import simulate
 from imageform.simulate.render import RenderOutput, render_scene
 from imageform.simulate.result import (
@@ -27,6 +24,7 @@ from imageform.simulate.result import (
 )
 from imageform.simulate.scene import Scene, SceneObject, default_scene, load_scene
 from imageform.simulate.schema import SCENE_SCHEMA
+from imageform.simulate.stages import gaussian_sigma_for_mtf50
 
 __all__ = [
     "LAB_FORMAT",

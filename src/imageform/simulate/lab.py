@@ -65,7 +65,7 @@ class LabSet:
 
 
 def _base_scene(size: tuple[int, int], supersampling: int, objects: list[dict[str, Any]]) -> Any:
-    from imageform.simulate import load_scene
+    from imageform.simulate.scene import load_scene
 
     return load_scene(
         {

@@ -38,6 +38,8 @@ from imageform.simulate.stages import (
     encode_output,
     exposure_time,
     measure_photon_transfer,
+    measured_color_matrix,
+    measured_optics_blur,
     normalize_raw,
 )
 from imageform.simulate.truth import (
@@ -244,8 +246,6 @@ def simulate(
         optical = apply_lens(r, scene.camera, cfg.lens, cfg.camera.focal_length_mm)
     measured = scene.measured
     if measured is not None and measured.optics is not None:
-        from imageform.simulate.measured import measured_optics_blur
-
         with _at_key(scene, ("lens",)):
             optical = measured_optics_blur(
                 optical,
@@ -288,8 +288,6 @@ def simulate(
     cc_wb = patch_means(wb.image, truth) if truth is not None else None
     matrix = None
     if color is not None:
-        from imageform.simulate.measured import measured_color_matrix
-
         matrix = measured_color_matrix(color)
     if matrix is not None:
         cc = ColorCorrected(wb.image @ matrix, matrix)

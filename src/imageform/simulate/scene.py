@@ -136,7 +136,7 @@ class Scene:
         sensor and processing): the sensor model is rebuilt with them. Kept by
         :meth:`with_changes`, :meth:`view` and :meth:`resized`; see
         :func:`imageform.simulate.apply_camera_file`."""
-        from imageform.simulate.measured import MeasuredCamera
+        from imageform.simulate.measured_sensor import MeasuredCamera
 
         if measured is not None and not isinstance(measured, MeasuredCamera):
             raise TypeError(
@@ -368,7 +368,7 @@ def _build(
 
     sensor = at(("sensor",), cfg.sensor.to_model)
     if measured is not None:
-        from imageform.simulate.measured import measured_sensor
+        from imageform.simulate.measured_sensor import measured_sensor
 
         sensor = measured_sensor(sensor, measured)
     camera = at(
