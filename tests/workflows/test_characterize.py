@@ -381,3 +381,33 @@ def test_closed_loop_through_render_lab_set(tmp_path: Path) -> None:
     assert a is not None and b is not None
     de = np.asarray(delta_e_ciede2000(a.lab_measured, b.lab_measured))
     assert float(np.mean(de)) < 1.0, de
+
+
+def test_raw_frames_and_grey_mosaics(lab: dict[str, Any], tmp_path: Path) -> None:
+    """The other raw forms: flats and darks as DNG files (the first green photosite of each
+    2x2 tile measured), and the edge as a grey 16-bit PNG mosaic described by lab.toml's
+    [camera] cfa and levels; the same numbers come back."""
+    from imageform.io import read_image, read_raw, write_dng, write_image
+
+    src = lab["root"] / "set"
+    folder = tmp_path / "raw"
+    for kind in ("flats", "darks"):
+        (folder / kind).mkdir(parents=True)
+        for p in sorted((src / kind).glob("*.png")):
+            frame = read_image(p)[..., 0]
+            write_dng(folder / kind / (p.stem + ".dng"), frame, color_matrix=np.eye(3))
+    (folder / "edge").mkdir()
+    edge = read_raw(src / "edge" / "edge.dng")
+    write_image(folder / "edge" / "edge.png", edge.mosaic[..., None])
+    (folder / "lab.toml").write_text(
+        '[camera]\ncfa = "RGGB"\nblack_level_dn = 64.0\nwhite_level_dn = 4095.0\n'
+    )
+    r = execute("characterize", folder=str(folder), out=tmp_path / "out")
+    n = r.summary["noise"]
+    assert n["plane"].startswith("G at (0, 1)") and n["frame_shape"] == [64, 64]
+    assert n["system_gain_dn_per_e"] == pytest.approx(lab["truth"].gain, rel=0.05)
+    assert n["read_noise_e"] == pytest.approx(lab["truth"].read_noise, rel=0.05)
+    s = r.summary["sharpness"]
+    assert s["raw"] and s["mtf50_cy_per_px"]["raw"] == pytest.approx(
+        lab["printed"]["sharpness"]["mtf50_cy_per_px"]["raw"], rel=1e-6
+    )
