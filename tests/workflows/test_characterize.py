@@ -323,8 +323,9 @@ def test_closed_loop_through_render_lab_set(tmp_path: Path) -> None:
     camera file renders the ColorChecker as X does. render_lab_set photographs the chart as
     camera RGB; the lab adds the camera's own developed photograph of it (the same
     rendering's output stage) so that X's processing can be measured. Measured: fx -0.03 %,
-    fy +0.00 %, cx -0.02 %, cy +0.07 %, k1 -0.15 %; MTF50 +1.7 % (G); gain +1.0 %, read
-    noise -0.5 %; twin vs X mean CIEDE2000 0.73 (96 s on 2 shared cores)."""
+    fy -0.01 %, cx -0.04 %, cy +0.07 %, k1 -0.14 %; MTF50 +1.5 %, +1.5 %, +0.7 % (R, G, B);
+    gain +1.0 %, read noise -0.5 %; twin vs X mean CIEDE2000 0.75 (50-90 s on 2 shared
+    cores)."""
     import dataclasses
 
     from imageform.analysis import mtf_crossing
