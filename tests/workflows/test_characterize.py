@@ -357,6 +357,7 @@ def test_closed_loop_through_render_lab_set(tmp_path: Path) -> None:
     with contextlib.redirect_stdout(buf):
         assert main(["characterize", str(lab.folder), "-o", str(twin_dir), "--json"]) == 0
     twin = read_camera(twin_dir / "camera.toml")
+    assert 'id="truth"' in (twin_dir / "report.html").read_text()  # lab.toml's [truth] shown
     K = twin.camera.K
     for got, true in ((K[0, 0], FX), (K[1, 1], FY), (K[0, 2], CX), (K[1, 2], CY)):
         assert got == pytest.approx(true, rel=0.002)

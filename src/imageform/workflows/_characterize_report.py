@@ -414,7 +414,11 @@ def write_outputs(res: Any, folder: Path) -> dict[str, Path | None]:
     }
     mpath = folder / "metrics.json"
     mpath.write_text(dumps(metrics) + "\n", encoding="utf-8")
-    sections = [_overview(res, summary), _geometry(res), _sharpness(res), _noise(res), _colour(res)]
+    sections = [_overview(res, summary)]
+    truth = _truth(res, summary)
+    if truth:
+        sections.append(truth)
+    sections += [_geometry(res), _sharpness(res), _noise(res), _colour(res)]
     if camera is not None:
         sections.append(_camera_section(camera.read_text(encoding="utf-8")))
     if notes:
@@ -453,6 +457,34 @@ def _overview(res: Any, summary: dict[str, Any]) -> str:
         "overview",
         "Overview",
         hp.table(["part", "status", "headline"], rows, left=(0, 1, 2)),
+    )
+
+
+def _truth(res: Any, summary: dict[str, Any]) -> str:
+    """Measured against lab.toml's ``[truth]`` (a simulated lab set knows its camera)."""
+    truth = res.manifest.get("truth")
+    if not isinstance(truth, dict) or not truth:
+        return ""
+    g = summary.get("geometry", {})
+    sensor = res.tables.get("sensor", {})
+    measured = {**{k: g.get(k) for k in ("fx", "fy", "cx", "cy", "k1", "k2")}, **sensor}
+    rows = []
+    for key, true in truth.items():
+        got = measured.get(key)
+        if isinstance(true, bool) or not isinstance(true, int | float) or got is None:
+            continue
+        if not isinstance(got, int | float) or not math.isfinite(float(got)):
+            continue
+        err = f"{(float(got) / float(true) - 1) * 100:+.2f} %" if true else "—"
+        rows.append([key, f"{float(true):.6g}", f"{float(got):.6g}", err])
+    if not rows:
+        return ""
+    return hp.section(
+        "truth",
+        "Against the truth",
+        "<p>lab.toml gives the true values of the camera that made these photographs (a "
+        "simulated lab set): each one beside what was measured.</p>"
+        + hp.table(["quantity", "true", "measured", "error"], rows, left=(0,)),
     )
 
 

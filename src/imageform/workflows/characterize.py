@@ -535,7 +535,7 @@ def _read_photo(
 
         r = read_raw(path, max_pixels=max_pixels)
         mosaic = np.asarray(r.mosaic, dtype=np.float64)
-        blk = np.tile(np.asarray(r.black_level, dtype=np.float64), (1, 1))
+        blk = np.asarray(r.black_level, dtype=np.float64).reshape(2, 2)  # the 2x2 tile's
         h, w = mosaic.shape
         blk_full = np.tile(blk, (h // 2 + 1, w // 2 + 1))[:h, :w]
         span = float(r.white_level) - float(np.mean(blk))
