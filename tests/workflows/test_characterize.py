@@ -364,6 +364,14 @@ def test_closed_loop_through_render_lab_set(tmp_path: Path) -> None:
     assert twin.camera.distortion.k1 == pytest.approx(K1, rel=0.02)
     assert twin.sensor.system_gain_dn_per_e == pytest.approx(0.4, rel=0.03)
     assert twin.sensor.read_noise_e == pytest.approx(4.0, rel=0.03)
+    # the estimated sensitivities against X's (the shipped Nikon D5100 table): the same peaks
+    from imageform.spectral import camera_sensitivities
+
+    assert twin.color is not None and twin.color.sensitivity is not None
+    wl, est = twin.color.sensitivity.to_array()
+    nikon = camera_sensitivities("nikon_d5100")
+    true_peaks = np.asarray(nikon.wavelengths)[np.argmax(np.asarray(nikon.values), axis=0)]
+    assert np.allclose(wl[np.argmax(est, axis=0)], true_peaks, atol=20.0)
     # X's MTF along the edge normal: the Gaussian times the renderer's 2-point pixel box
     # (the lab develops the edge with Malvar's demosaicing after balancing the CFA)
     summary = json.loads(buf.getvalue())
