@@ -13,7 +13,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from imageform.geometry import CharucoBoard
+from imageform.geometry import Camera, CharucoBoard
+from imageform.io import CameraColor, CameraFile, CameraOptics
 from tests.fuzz.runner import C, Skip, call, method
 from tests.fuzz.values import V
 
@@ -389,8 +390,33 @@ VALID: dict[str, C | Skip] = {
     "imageform.geometry.vanishing_point_from_lines": call(lines=V("lines")),
     "imageform.geometry.weak_perspective_matrix": call(K=V("K"), depth=4.0),
     "imageform.geometry.weak_perspective_project": call(points=V("points3"), K=V("K")),
+    "imageform.io.CameraColor": call(white_balance=(2.0, 1.0, 1.5), illuminant="D65"),
+    "imageform.io.CameraColor.from_table": call({"ccm": [[1.0, 0, 0], [0, 1.0, 0], [0, 0, 1.0]]}),
+    "imageform.io.CameraColor.to_dict": method(call(white_balance=(2.0, 1.0, 1.5))),
     "imageform.io.CameraFile": call(camera=V("camera")),
     "imageform.io.CameraFile.from_calibration": call(V("calibration")),
+    "imageform.io.CameraOptics": call(model="mtf50", mtf50_cy_per_px=0.3),
+    "imageform.io.CameraOptics.from_table": call({"model": "diffraction", "f_number": 4.0}),
+    "imageform.io.CameraOptics.mtf50_rgb": method(call(model="mtf50", mtf50_cy_per_px=0.3)),
+    "imageform.io.CameraOptics.to_dict": method(call(model="gaussian", gaussian_sigma_px=1.0)),
+    "imageform.io.CameraSensitivity": call(
+        wavelengths_nm=(450.0, 550.0, 650.0),
+        r=(0.0, 0.2, 1.0),
+        g=(0.2, 1.0, 0.2),
+        b=(1.0, 0.2, 0.0),
+    ),
+    "imageform.io.CameraSensitivity.from_table": call(
+        {"wavelengths_nm": [450, 650], "r": [0, 1], "g": [1, 1], "b": [1, 0]}
+    ),
+    "imageform.io.CameraSensitivity.to_array": method(
+        call(wavelengths_nm=(450.0, 650.0), r=(0.0, 1.0), g=(1.0, 1.0), b=(1.0, 0.0))
+    ),
+    "imageform.io.CameraSensitivity.to_dict": method(
+        call(wavelengths_nm=(450.0, 650.0), r=(0.0, 1.0), g=(1.0, 1.0), b=(1.0, 0.0))
+    ),
+    "imageform.io.CameraSensor": call(read_noise_e=2.0, system_gain_dn_per_e=0.5),
+    "imageform.io.CameraSensor.from_table": call({"read_noise_e": 2.0, "cfa": "RGGB"}),
+    "imageform.io.CameraSensor.to_dict": method(call(read_noise_e=2.0)),
     "imageform.io.ImageInfo": Skip("a result NamedTuple (no validation of its own)"),
     "imageform.io.Provenance": call(),
     "imageform.io.WrittenImage": Skip("a result NamedTuple (no validation of its own)"),
@@ -587,6 +613,7 @@ VALID: dict[str, C | Skip] = {
     ),
     "imageform.simulate.Scene.with_camera": method(V("scene"), camera=V("camera")),
     "imageform.simulate.Scene.with_changes": method(V("scene"), lens={"f_number": 4.0}),
+    "imageform.simulate.Scene.with_measured": method(V("scene"), measured=None),
     "imageform.simulate.SceneConfig": Skip("a scene file parsed (fuzzed through scene files)"),
     "imageform.simulate.SceneConfig.from_dict": Skip(
         "takes validate_scene_dict output; fuzzed through load_scene and validate_scene_dict"
@@ -660,6 +687,31 @@ VALID: dict[str, C | Skip] = {
     "imageform.simulate.render_scene": call(scene=V("scene")),
     "imageform.simulate.schema.Field": call("float", 1.0, "a value"),
     "imageform.simulate.simulate": call(scene=V("scene")),
+    "imageform.simulate.LabSet": Skip("a result record of render_lab_set"),
+    "imageform.simulate.MeasuredCamera": call(),
+    "imageform.simulate.apply_camera_file": call(
+        V("scene"),
+        CameraFile(
+            Camera([[60.0, 0, 31.5], [0, 60.0, 23.5], [0, 0, 1]], image_size=(64, 48)),
+            sensor={"read_noise_e": 4.0},
+            optics={"model": "gaussian", "gaussian_sigma_px": 1.0},
+        ),
+    ),
+    "imageform.simulate.gaussian_sigma_for_mtf50": call(0.25, supersampling=2),
+    "imageform.simulate.measured_sensor.measured_sensor": call(V("sensor"), None),
+    "imageform.simulate.render_lab_set": Skip(
+        "renders eleven scenes and writes a folder of PNGs (tens of seconds); its checks are "
+        "in tests/workflows/test_lab_set.py"
+    ),
+    "imageform.simulate.stages.measured_color_matrix": call(
+        CameraColor(ccm=((1.2, -0.1, -0.1), (-0.1, 1.2, -0.1), (0.0, -0.2, 1.2)))
+    ),
+    "imageform.simulate.stages.measured_optics_blur": call(
+        V("rgb"),
+        CameraOptics(model="gaussian", gaussian_sigma_px=1.0),
+        pixel_pitch=2e-6,
+        supersampling=2,
+    ),
     "imageform.simulate.stages.ColorCorrected": call(image=V("rgb"), matrix=np.eye(3)),
     "imageform.simulate.stages.Encoded": call(image=V("rgb"), transfer="srgb"),
     "imageform.simulate.stages.WhiteBalanced": call(

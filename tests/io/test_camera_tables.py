@@ -167,3 +167,18 @@ def test_python_errors_name_the_table_key() -> None:
         CameraOptics(model="gaussian")
     with pytest.raises(UnknownOptionError, match=r"valid in \[color\]"):
         write_camera("unused.toml", _camera(), color={"wb": [1, 1, 1]})
+
+
+def test_stereo_file_keeps_the_tables(tmp_path: Path) -> None:
+    import numpy as np
+
+    from imageform.io import StereoCameraFile, read_stereo_camera, write_stereo_camera
+
+    left = CameraFile(_camera(), sensor=SENSOR, color=COLOR)
+    right = CameraFile(_camera(), optics=OPTICS).with_pose(np.eye(3), [-0.1, 0.0, 0.0])
+    right = CameraFile(right.camera, True, optics=OPTICS)
+    p = write_stereo_camera(tmp_path / "rig.toml", StereoCameraFile(left, right))
+    assert "[left.color.sensitivity]" in p.read_text()
+    back = read_stereo_camera(p)
+    assert back.left.sensor == SENSOR and back.left.color == left.color
+    assert back.right.optics == right.optics and back.right.sensor is None

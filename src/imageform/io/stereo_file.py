@@ -162,7 +162,7 @@ def _side_text(cf: CameraFile, side: str) -> list[str]:
     for line in camera_file_text(cf).splitlines():
         if line.startswith(("format =", "version =")) or (line.startswith("#") and not out):
             continue
-        m = re.fullmatch(r"\[(\w+)\]", line)
+        m = re.fullmatch(r"\[([\w.]+)\]", line)
         out.append(f"[{side}.{m.group(1)}]" if m else line)
     while out and not out[0]:
         out.pop(0)

@@ -390,7 +390,8 @@ def render_lab_set(
         out / "camera.toml",
         posed,
         provenance=Provenance(
-            command="imageform.simulate.render_lab_set", based_on=str(cf.path or "")
+            command="imageform.simulate.render_lab_set",
+            based_on=None if cf.path is None else str(cf.path),
         ),
     )
     fp = sensor.fixed_pattern(*shape)

@@ -58,8 +58,12 @@ def measured_sensor(sensor: SensorModel, measured: MeasuredCamera | None) -> Sen
         ``bit_depth`` above 16 (the simulator's ADC), or values the sensor model refuses
         (a black level above the ADC's range).
     """
+    if not isinstance(sensor, SensorModel):
+        raise TypeError(f"expected sensor as a SensorModel, got {describe(sensor)}")
     if measured is None:
         return sensor
+    if not isinstance(measured, MeasuredCamera):
+        raise TypeError(f"expected measured as a MeasuredCamera or None, got {describe(measured)}")
     s, color = measured.sensor, measured.color
     changes: dict[str, Any] = {}
     if s is not None:

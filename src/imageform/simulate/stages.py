@@ -473,9 +473,10 @@ def measure_photon_transfer(sensor: SensorModel, rng: np.random.Generator) -> Ph
 
 def _sub_box(f: float, n: int) -> float:
     """|MTF| of the mean of ``n`` point samples across a pixel at ``f`` cycles/pixel."""
-    if f == 0:
+    den = n * math.sin(math.pi * f / n)
+    if abs(den) < 1e-12:  # f = 0, or a multiple of n (the samples alias to DC)
         return 1.0
-    return abs(math.sin(math.pi * f) / (n * math.sin(math.pi * f / n)))
+    return abs(math.sin(math.pi * f) / den)
 
 
 def gaussian_sigma_for_mtf50(mtf50: float, *, supersampling: int = 0) -> float:
@@ -496,7 +497,7 @@ def gaussian_sigma_for_mtf50(mtf50: float, *, supersampling: int = 0) -> float:
     >>> round(gaussian_sigma_for_mtf50(0.25, supersampling=4), 4)
     0.6942
     """
-    f = as_real(mtf50, "mtf50 (cycles/pixel)", positive=True)
+    f = as_real(mtf50, "mtf50 (cycles/pixel)", positive=True, maximum=10.0)
     n = as_int(supersampling, "supersampling", minimum=0)
     box = _sub_box(f, n) if n else 1.0
     if box <= 0.5:
@@ -545,9 +546,12 @@ def measured_optics_blur(
     ``mtf50``: the Gaussian of :func:`gaussian_sigma_for_mtf50` for each channel's MTF50 (the
     pixel aperture of ``supersampling`` accounted for).
     """
-    img = np.asarray(image, dtype=np.float64)
-    if img.ndim != 3 or img.shape[2] != 3:
+    check_type(optics, CameraOptics, "optics", "an imageform.io.CameraOptics")
+    img = real_array(image, "image", ndim=3)
+    if img.shape[2] != 3:
         raise InvalidInputError(f"expected image as an (H, W, 3) array, got {describe(image)}")
+    pixel_pitch = as_real(pixel_pitch, "pixel_pitch (m)", positive=True)
+    supersampling = as_int(supersampling, "supersampling", minimum=0)
     model = optics.model
     if model == "diffraction":
         assert optics.f_number is not None
@@ -591,6 +595,7 @@ def measured_color_matrix(color: CameraColor) -> np.ndarray | None:
     """The simulator's colour-correction matrix ``M`` (``linear sRGB = camera RGB @ M``) of
     the file's ``ccm`` (``out = ccm @ rgb``): ``ccm.T``, or for ``ccm_to = "xyz"``
     :math:`(M_{XYZ \\to sRGB}\\, \\mathrm{ccm})^T`; None without a ``ccm``."""
+    check_type(color, CameraColor, "color", "an imageform.io.CameraColor")
     if color.ccm is None:
         return None
     ccm = np.asarray(color.ccm, dtype=np.float64)

@@ -92,14 +92,15 @@ def simulate(run: Run, opts: SimulateOptions, *, out: Path) -> Result:
         run.progress("writing the report", 1.0)
     paths = write_report(result, folder, force=True)
     views = _render_views(run, scene, folder, opts.seed)
+    measured = getattr(scene, "measured", None)  # the camera file's tables, if any
     camera_file = write_camera(
         folder / "camera.toml",
         CameraFile(
             result.camera,
             has_pose=True,
-            sensor=None if scene.measured is None else scene.measured.sensor,
-            optics=None if scene.measured is None else scene.measured.optics,
-            color=None if scene.measured is None else scene.measured.color,
+            sensor=None if measured is None else measured.sensor,
+            optics=None if measured is None else measured.optics,
+            color=None if measured is None else measured.color,
             provenance=Provenance(
                 command="imageform simulate",
                 based_on=str(opts.scene) if opts.scene is not None else "built-in scene",

@@ -1,0 +1,38 @@
+"""``imageform simulate --camera FILE`` with a camera file's [sensor], [optics] and [color]
+(issue 18): the file overrides the scene, and the output camera.toml keeps the tables."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from imageform.cli import main
+from imageform.geometry import Camera
+from imageform.io import read_camera, write_camera
+
+pytest.importorskip("matplotlib")
+
+
+@pytest.mark.filterwarnings("ignore::UserWarning")
+def test_simulate_camera_with_tables(tmp_path: Path) -> None:
+    cam = Camera([[200.0, 0, 159.5], [0, 200.0, 89.5], [0, 0, 1]], image_size=(320, 180))
+    path = write_camera(
+        tmp_path / "cam.toml",
+        cam,
+        sensor={"system_gain_dn_per_e": 0.5, "read_noise_e": 4.0, "bit_depth": 14},
+        optics={"model": "mtf50", "mtf50_cy_per_px": [0.3, 0.28, 0.25]},
+        color={"white_balance": [1.9, 1.0, 1.6], "illuminant": "D65"},
+    )
+    out = tmp_path / "sim"
+    assert main(["simulate", "--camera", str(path), "-o", str(out), "--json"]) == 0
+    metrics = json.loads((out / "metrics.json").read_text())
+    assert metrics["white_balance_gains"] == [1.9, 1.0, 1.6]  # the file's, not gray world
+    assert metrics["config"]["processing"]["white_balance"] == "none"
+    assert metrics["config"]["lens"]["defocus"] is False  # [optics] replaces the lens blur
+    used = read_camera(out / "camera.toml")
+    given = read_camera(path)
+    assert used.sensor == given.sensor and used.optics == given.optics
+    assert used.color == given.color
+    assert used.camera.image_size == (320, 180)
