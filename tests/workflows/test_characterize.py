@@ -421,3 +421,37 @@ def test_raw_frames_and_grey_mosaics(lab: dict[str, Any], tmp_path: Path) -> Non
     assert s["raw"] and s["mtf50_cy_per_px"]["raw"] == pytest.approx(
         lab["printed"]["sharpness"]["mtf50_cy_per_px"]["raw"], rel=1e-6
     )
+
+
+def test_charuco_views(tmp_path: Path) -> None:
+    """A charuco/ folder and lab.toml's board = "charuco:9x7" (marker, dictionary): the
+    ChArUco corners calibrate the camera (tests/geometry's twelve views, some cut by the
+    border, as PNG files: fx, fy, cx, cy within 0.3 %, k1 within 5 %)."""
+    pytest.importorskip("cv2")
+    from imageform.geometry import CharucoBoard
+    from imageform.io import write_image
+    from tests.geometry.test_charuco import _render_view
+
+    board = CharucoBoard((9, 7), 20.0, 15.0, "6x6_250")
+    px = 64
+    art = board.image(px, margin_px=px)
+    K = np.array([[700.0, 0, 322.0], [0, 705.0, 238.0], [0, 0, 1]])
+    dist = np.array([-0.12, 0.05, 0.0, 0.0, 0.0])
+    rng = np.random.default_rng(5)
+    (tmp_path / "lab" / "charuco").mkdir(parents=True)
+    for k in range(12):
+        rvec = np.array([rng.uniform(-0.6, 0.6), rng.uniform(-0.6, 0.6), rng.uniform(-0.3, 0.3)])
+        shift = (110.0 if k % 2 else -110.0) if k % 3 == 2 else 0.0  # cut by the border
+        tvec = np.array([-90.0 + shift + rng.uniform(-40, 40), -70.0 + rng.uniform(-30, 30), 330.0])
+        img = _render_view(board, art, px, K, dist, rvec, tvec, (640, 480))
+        write_image(tmp_path / "lab" / "charuco" / f"view-{k}.png", img)
+    (tmp_path / "lab" / "lab.toml").write_text(
+        '[checkerboard]\nboard = "charuco:9x7"\nsquare = "20mm"\nmarker = "15mm"\n'
+        'dictionary = "6x6_250"\n'
+    )
+    r = execute("characterize", folder=str(tmp_path / "lab"), out=tmp_path / "out")
+    g = r.summary["geometry"]
+    assert g["views_used"] == 12 and g["board"] == "charuco:9x7"
+    for key, want in (("fx", 700.0), ("fy", 705.0), ("cx", 322.0), ("cy", 238.0)):
+        assert g[key] == pytest.approx(want, rel=3e-3), key
+    assert g["k1"] == pytest.approx(-0.12, rel=0.05)
