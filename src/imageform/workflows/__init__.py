@@ -23,16 +23,19 @@ from imageform.workflows._spec import (
     flag_of,
     normalize_choice,
 )
+from imageform.workflows.characterize import CameraCharacterization, characterize_camera
 from imageform.workflows.registry import WORKFLOWS, get_workflow
 
 __all__ = [
     "WORKFLOWS",
+    "CameraCharacterization",
     "Input",
     "Options",
     "Output",
     "Result",
     "Run",
     "Workflow",
+    "characterize_camera",
     "choice_names",
     "execute",
     "flag_of",

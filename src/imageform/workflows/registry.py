@@ -11,6 +11,7 @@ from imageform.errors import UnknownOptionError
 from imageform.workflows import (
     analysis,
     calibration,
+    characterize,
     chart,
     color,
     emva,
@@ -34,6 +35,7 @@ WORKFLOWS = MappingProxyType(
         w.name: w
         for w in (
             *simulate.WORKFLOWS,
+            *characterize.WORKFLOWS,
             *lecture.WORKFLOWS,
             *color.WORKFLOWS,
             *raw.WORKFLOWS,
