@@ -161,6 +161,9 @@ def test_sensor_qe_and_sensitivities() -> None:
     )
     s = apply_camera_file(_flat_scene(), cf).sensor
     assert float(np.max(s.qe_curves)) == pytest.approx(0.8)
+    # the file's QE is the effective one (EMVA 1288): no fill factor on top of it
+    assert s.fill_factor == 1.0
+    assert float(np.max(s.quantum_efficiency(550.0))) * s.fill_factor <= 0.8 + 1e-12
     assert s.pixel_pitch == pytest.approx(2.5e-6)
     from imageform.spectral import camera_sensitivities
 

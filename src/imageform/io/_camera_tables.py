@@ -141,7 +141,8 @@ class CameraSensor(_Table):
     black_level_dn : float >= 0
         Offset of a dark pixel (DN).
     quantum_efficiency : float in (0, 1]
-        Peak quantum efficiency.
+        Peak effective quantum efficiency, as EMVA 1288 measures it (the fill factor and
+        microlenses included); the simulator renders it with a fill factor of 1.
     pixel_pitch_um : float > 0
         Pixel pitch (micrometres).
     cfa : str

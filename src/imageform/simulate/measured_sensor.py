@@ -112,7 +112,10 @@ def measured_sensor(sensor: SensorModel, measured: MeasuredCamera | None) -> Sen
         curves = curves / curves.max() * peak
         qe_changed = True
     if s is not None and s.quantum_efficiency is not None:
+        # the file's QE is EMVA 1288's effective one (fill factor included, as measured):
+        # the model's fill factor must not scale it a second time
         curves = curves / curves.max() * s.quantum_efficiency
+        changes["fill_factor"] = 1.0
         qe_changed = True
     if qe_changed:
         changes["qe_wavelengths"] = tuple(float(x) for x in wl)
