@@ -95,7 +95,8 @@ class _Table:
     @classmethod
     def from_table(cls, table: Mapping[str, Any], r: Reader | None = None) -> Any:
         """The dataclass of a TOML table (a mapping of key to value); unknown keys refused,
-        listing the valid ones; errors name ``r``'s file, the table and the key."""
+        listing the valid ones; errors name ``r``'s file, the table and the key.
+        """
         rr = _reader(r, cls.__name__)
         if not isinstance(table, Mapping):
             raise rr.fail(cls.TABLE, f"expected a table [{cls.TABLE}], got {_show(table)}")
@@ -297,7 +298,8 @@ class CameraOptics(_Table):
 @dataclass(frozen=True)
 class CameraSensitivity(_Table):
     """``[color.sensitivity]``: estimated spectral sensitivities, R, G, B on
-    ``wavelengths_nm`` (strictly increasing, > 0; values >= 0, relative)."""
+    ``wavelengths_nm`` (strictly increasing, > 0; values >= 0, relative).
+    """
 
     TABLE: ClassVar[str] = "color.sensitivity"
 

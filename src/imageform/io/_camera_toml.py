@@ -1,6 +1,7 @@
 """The camera file's reading and writing primitives: :class:`Reader` (checks values, one-line
 errors naming the file and the key), :func:`short_list` and the TOML value writer (internal
-to :mod:`imageform.io`; the lowest of the camera-file modules)."""
+to :mod:`imageform.io`; the lowest of the camera-file modules).
+"""
 
 from __future__ import annotations
 
@@ -76,7 +77,8 @@ class Reader:
 
 def short_list(names: Sequence[str], budget: int) -> str:
     """``names`` joined by commas, cut to about ``budget`` characters (``... (3 more)``), each
-    name cut to 30: an error message stays one line however many or long the keys are."""
+    name cut to 30: an error message stays one line however many or long the keys are.
+    """
     shown: list[str] = []
     size = 0
     for n in names:

@@ -52,7 +52,8 @@ class LabSet:
     """What :func:`render_lab_set` wrote: the ``folder``, its ``manifest`` (``lab.toml``),
     the true ``camera`` file, the ``checkerboard`` images, the ``colorchecker`` and ``edge``
     images, the EMVA ``emva_manifest`` (``emva.toml``, flats/ and darks/) and the
-    ``seconds`` it took."""
+    ``seconds`` it took.
+    """
 
     folder: Path
     manifest: Path
@@ -106,7 +107,8 @@ def _balanced_edge(result: Any, scene: Any, path: Path) -> np.ndarray:
     and dark signal removed, white-balanced on the light ground (each CFA colour's 75th
     percentile made equal to green's) before Malvar demosaicing, so that the demosaicing of
     a neutral edge keeps its resolution (demosaicing unbalanced colours costs up to 17 % of
-    a channel's MTF50). Returns the gains (R, G, B)."""
+    a channel's MTF50). Returns the gains (R, G, B).
+    """
     from imageform.sensor.cfa import cfa_masks
     from imageform.simulate.stages import demosaic_raw, normalize_raw
 

@@ -1,7 +1,8 @@
 """A measured camera's tables in the simulator's sensor model (internal to
 :mod:`imageform.simulate`; :func:`imageform.simulate.apply_camera_file` is the entry point):
 :class:`MeasuredCamera` holds a camera file's ``[sensor]``, ``[optics]`` and ``[color]``,
-:func:`measured_sensor` puts them into a :class:`~imageform.sensor.SensorModel`."""
+:func:`measured_sensor` puts them into a :class:`~imageform.sensor.SensorModel`.
+"""
 
 from __future__ import annotations
 

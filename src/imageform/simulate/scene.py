@@ -137,7 +137,8 @@ class Scene:
         :class:`imageform.simulate.measured.MeasuredCamera`, or None for the scene's own
         sensor and processing): the sensor model is rebuilt with them. Kept by
         :meth:`with_changes`, :meth:`view` and :meth:`resized`; see
-        :func:`imageform.simulate.apply_camera_file`."""
+        :func:`imageform.simulate.apply_camera_file`.
+        """
         from imageform.simulate.measured_sensor import MeasuredCamera
 
         if measured is not None and not isinstance(measured, MeasuredCamera):

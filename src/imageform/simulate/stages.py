@@ -525,7 +525,8 @@ def _gaussian_blur(channel: np.ndarray, sigma: float) -> np.ndarray:
     pixel grid is the continuous one, :math:`e^{-2\\pi^2\\sigma^2 f^2}` up to Nyquist (a
     sampled Gaussian kernel of sigma < 1 px has a much higher MTF: 0.77 instead of 0.62 at
     0.35 cycles/pixel for sigma = 0.45): multiplied in the DFT of each axis, the borders
-    reflected over 6 sigma (at least 8 pixels)."""
+    reflected over 6 sigma (at least 8 pixels).
+    """
     pad = max(8, math.ceil(6 * sigma))
     a = np.pad(channel, pad, mode="reflect" if min(channel.shape) > pad else "symmetric")
     for axis in (0, 1):
@@ -609,7 +610,8 @@ def measured_optics_blur(
 def measured_color_matrix(color: CameraColor) -> np.ndarray | None:
     """The simulator's colour-correction matrix ``M`` (``linear sRGB = camera RGB @ M``) of
     the file's ``ccm`` (``out = ccm @ rgb``): ``ccm.T``, or for ``ccm_to = "xyz"``
-    :math:`(M_{XYZ \\to sRGB}\\, \\mathrm{ccm})^T`; None without a ``ccm``."""
+    :math:`(M_{XYZ \\to sRGB}\\, \\mathrm{ccm})^T`; None without a ``ccm``.
+    """
     check_type(color, CameraColor, "color", "an imageform.io.CameraColor")
     if color.ccm is None:
         return None

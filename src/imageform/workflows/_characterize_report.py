@@ -1,5 +1,6 @@
 """The outputs of ``imageform characterize``: camera.toml, report.html (the simulate report's
-style: :mod:`imageform.report.html_parts`, figures embedded as data: URIs) and metrics.json."""
+style: :mod:`imageform.report.html_parts`, figures embedded as data: URIs) and metrics.json.
+"""
 
 from __future__ import annotations
 
@@ -378,7 +379,8 @@ def _camera_section(text: str) -> str:
 
 def _write_camera(res: Any, path: Path) -> Path | None:
     """camera.toml with the geometry and every measured table; None (nothing written)
-    when no photograph gives the image size (flats and darks only)."""
+    when no photograph gives the image size (flats and darks only).
+    """
     from imageform.io import write_camera
 
     if res.image_size is None:

@@ -165,7 +165,8 @@ Progress = Callable[[str, float], None]
 class GeometryMeasurement:
     """The checkerboard calibration: ``calibration`` (a
     :class:`~imageform.geometry.CalibrationResult`), the ``views`` used, the ``board``
-    description and the views where no board was found (``missed``)."""
+    description and the views where no board was found (``missed``).
+    """
 
     calibration: Any
     views: tuple[str, ...]
@@ -179,7 +180,8 @@ class SharpnessMeasurement:
     edges, ``*_std`` their spread), the fitted Gaussian PSF ``gaussian_sigma_px`` (the
     optics' blur, the pixel aperture divided out) and the curves (``frequency``, ``sfr``
     (n, channels), the median over the edges) of the image ``image``; ``raw`` when it was
-    measured on a raw mosaic (the CFA balanced on the neutral edge: one channel ``"raw"``)."""
+    measured on a raw mosaic (the CFA balanced on the neutral edge: one channel ``"raw"``).
+    """
 
     image: str
     channels: tuple[str, ...]
@@ -207,7 +209,8 @@ class NoiseMeasurement:
     """EMVA 1288 from the flats and darks: ``emva`` (an
     :class:`~imageform.sensor.EmvaMeasurement`), the standard errors of the gain and the read
     noise, the black level (mean dark at the shortest exposure, DN), the frame ``shape``, the
-    ``plane`` measured (``"all"`` or a CFA photosite) and how many exposures."""
+    ``plane`` measured (``"all"`` or a CFA photosite) and how many exposures.
+    """
 
     emva: Any
     system_gain_std: float
@@ -229,7 +232,8 @@ class ColorMeasurement:
     rendering against the reference (``delta_e00``) and of the fitted model against its
     target (``fit_delta_e00``), the estimated ``sensitivities`` (a
     :class:`~imageform.spectral.Spectrum`, or None without a raw photograph) and their misfit
-    (``sensitivity_rms``), and ``detection`` (the chart found)."""
+    (``sensitivity_rms``), and ``detection`` (the chart found).
+    """
 
     raw: str | None
     developed: str | None
@@ -301,7 +305,8 @@ class CameraCharacterization:
 
     def camera_file(self) -> Any:
         """The :class:`~imageform.io.CameraFile` of the geometry (a camera with the default
-        intrinsics of the image size when no checkerboard was measured)."""
+        intrinsics of the image size when no checkerboard was measured).
+        """
         from imageform.io import CameraFile, Provenance
 
         cmd = f"imageform characterize {self.folder}"
@@ -454,7 +459,8 @@ def _manifest(folder: Path) -> dict[str, Any]:
 
 def _get(doc: Mapping[str, Any], section: str, key: str, kind: type, default: Any) -> Any:
     """``doc[section][key]`` (or its alias: ``encoding`` for ``transfer``) checked to be
-    ``kind`` (int accepted for float), or default."""
+    ``kind`` (int accepted for float), or default.
+    """
     body = doc.get(section, {})
     if not isinstance(body, dict):  # lab.toml's top-level camera = "camera.toml"
         body = {}
@@ -498,7 +504,8 @@ def _subfolder(root: Path, names: tuple[str, ...]) -> Path | None:
 class _Image:
     """One photograph: ``rgb`` linear floats (H, W, 3) or None, ``mosaic`` (raw DN floats,
     black subtracted, scaled to 1 at white) with its ``cfa``, ``encoded`` (H, W, 3) floats in
-    [0, 1] as stored (developed images), and its name."""
+    [0, 1] as stored (developed images), and its name.
+    """
 
     name: str
     encoded: Any = None
@@ -525,7 +532,8 @@ def _read_photo(
     path: Path, doc: Mapping[str, Any], transfer: str, max_pixels: int | None, black: float | None
 ) -> _Image:
     """Read a photograph: a raw file, a grey raw mosaic (with [camera] cfa), or a developed
-    image (decoded with ``transfer``)."""
+    image (decoded with ``transfer``).
+    """
     import numpy as np
 
     from imageform.io import read_image
@@ -727,7 +735,8 @@ def _pixel_box(f: Any, angle_deg: float) -> Any:
 
 def _fit_sigma(freq: Any, sfr: Any, angle: float) -> float:
     """The Gaussian PSF sigma (pixels) whose MTF times the pixel aperture's best fits the
-    measured SFR up to Nyquist (least squares on the curve where it is above 0.1)."""
+    measured SFR up to Nyquist (least squares on the curve where it is above 0.1).
+    """
     import numpy as np
     from scipy.optimize import minimize_scalar
 
@@ -747,7 +756,8 @@ def _fit_sigma(freq: Any, sfr: Any, angle: float) -> float:
 def _balanced_mosaic(mosaic: Any, cfa: str) -> Any:
     """A raw mosaic of a neutral target as one full-resolution grey image: each photosite
     of the 2x2 tile mapped affinely onto the greens' levels (dark and light parts, from the
-    5th and 95th percentiles), so that the CFA's pattern vanishes on a grey edge."""
+    5th and 95th percentiles), so that the CFA's pattern vanishes on a grey edge.
+    """
     import numpy as np
 
     out = np.array(mosaic, dtype=np.float64)
@@ -892,7 +902,8 @@ def _entries(
     root: Path, flats_dir: Path, darks_dir: Path, doc: Mapping[str, Any]
 ) -> list[tuple[float, float | None, list[Path], list[Path]]]:
     """Each exposure: (time, photons or None, flat files, dark files), from an EMVA
-    manifest (``emva.toml`` in FOLDER, or ``[emva] manifest``) or else the file names."""
+    manifest (``emva.toml`` in FOLDER, or ``[emva] manifest``) or else the file names.
+    """
     from imageform.workflows.emva import MANIFEST
     from imageform.workflows.emva import _manifest as emva_manifest
 
@@ -1025,7 +1036,8 @@ def _fit_ccm(src: Any, dst: Any, ok: Any) -> Any:
 
 def _chart_patches(im: _Image, max_size: int) -> tuple[Any, Any, Any]:
     """(detection, linear patch means (24, 3), the picture detected in (encoded)) of a
-    photograph; a raw one is measured on its half-size superpixels, black subtracted."""
+    photograph; a raw one is measured on its half-size superpixels, black subtracted.
+    """
     import warnings
 
     import numpy as np
@@ -1275,7 +1287,8 @@ def _tables(res: CameraCharacterization) -> dict[str, dict[str, Any]]:
 def _peak_qe(res: CameraCharacterization) -> float | None:
     """The peak quantum efficiency: the EMVA QE at the flats' wavelength (``[emva]`` or
     ``[flats] wavelength_nm``, default 550 nm), divided by the estimated green sensitivity
-    there (relative QE, largest 1) when the chart gave one; None without photon counts."""
+    there (relative QE, largest 1) when the chart gave one; None without photon counts.
+    """
     import numpy as np
 
     n = res.noise
@@ -1442,7 +1455,8 @@ def _check_folder(out: Path, force: bool) -> None:
 
 def characterize(run: Run, opts: CharacterizeOptions, *, out: Path, folder: str) -> Result:
     """``imageform characterize``: measure, then write camera.toml, report.html and
-    metrics.json into a temporary folder that replaces ``out`` when all is written."""
+    metrics.json into a temporary folder that replaces ``out`` when all is written.
+    """
     import importlib.util
 
     from imageform.workflows._characterize_report import write_outputs
