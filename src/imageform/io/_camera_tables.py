@@ -1,5 +1,7 @@
-"""The camera file's measured-camera tables: ``[sensor]`` (the EMVA 1288 noise model),
-``[optics]`` (the lens's blur) and ``[color]`` (the colour model), each optional.
+"""The camera file's measured-camera tables: ``[sensor]``, ``[optics]`` and ``[color]``.
+
+``[sensor]`` is the EMVA 1288 noise model, ``[optics]`` the lens's blur and ``[color]`` the
+colour model; each table is optional.
 
 Each table is a small frozen dataclass (:class:`CameraSensor`, :class:`CameraOptics`,
 :class:`CameraColor`) whose fields are the table's keys, with the units in their names;
@@ -94,8 +96,11 @@ class _Table:
 
     @classmethod
     def from_table(cls, table: Mapping[str, Any], r: Reader | None = None) -> Any:
-        """The dataclass of a TOML table (a mapping of key to value); unknown keys refused,
-        listing the valid ones; errors name ``r``'s file, the table and the key."""
+        """Build the dataclass of a TOML table (a mapping of key to value).
+
+        Unknown keys are refused, listing the valid ones; errors name ``r``'s file, the table
+        and the key.
+        """
         rr = _reader(r, cls.__name__)
         if not isinstance(table, Mapping):
             raise rr.fail(cls.TABLE, f"expected a table [{cls.TABLE}], got {_show(table)}")
@@ -108,7 +113,7 @@ class _Table:
         return obj
 
     def to_dict(self) -> dict[str, Any]:
-        """The keys that are set (not None), lists for sequences: the TOML table."""
+        """Return the keys that are set (not None), lists for sequences: the TOML table."""
         out: dict[str, Any] = {}
         for f in fields(self):  # type: ignore[arg-type]
             v = getattr(self, f.name)
@@ -297,8 +302,10 @@ class CameraOptics(_Table):
 
 @dataclass(frozen=True)
 class CameraSensitivity(_Table):
-    """``[color.sensitivity]``: estimated spectral sensitivities, R, G, B on
-    ``wavelengths_nm`` (strictly increasing, > 0; values >= 0, relative)."""
+    """``[color.sensitivity]``: estimated spectral sensitivities, R, G, B.
+
+    The curves are on ``wavelengths_nm`` (strictly increasing, > 0; values >= 0, relative).
+    """
 
     TABLE: ClassVar[str] = "color.sensitivity"
 
@@ -457,7 +464,10 @@ def _value(value: Any) -> str:
 
 
 def table_lines(table: Any) -> list[str]:
-    """The TOML lines of one table (a blank line, the header, the keys; sub-tables after)."""
+    """Return the TOML lines of one table.
+
+    A blank line, the header, the keys; sub-tables after.
+    """
     if table is None:
         return []
     data = table.to_dict()

@@ -1,6 +1,8 @@
-"""The camera file's reading and writing primitives: :class:`Reader` (checks values, one-line
-errors naming the file and the key), :func:`short_list` and the TOML value writer (internal
-to :mod:`imageform.io`; the lowest of the camera-file modules)."""
+"""The camera file's reading and writing primitives (internal to :mod:`imageform.io`).
+
+:class:`Reader` (checks values, one-line errors naming the file and the key),
+:func:`short_list` and the TOML value writer; the lowest of the camera-file modules.
+"""
 
 from __future__ import annotations
 
@@ -75,8 +77,10 @@ class Reader:
 
 
 def short_list(names: Sequence[str], budget: int) -> str:
-    """``names`` joined by commas, cut to about ``budget`` characters (``... (3 more)``), each
-    name cut to 30: an error message stays one line however many or long the keys are."""
+    """``names`` joined by commas, cut to about ``budget`` characters (``... (3 more)``).
+
+    Each name is cut to 30: an error message stays one line however many or long the keys are.
+    """
     shown: list[str] = []
     size = 0
     for n in names:

@@ -1,5 +1,6 @@
-"""What an imaging lab photographs to characterise a camera, rendered through a camera file
-(:func:`render_lab_set`): checkerboard views, a ColorChecker, a slanted edge and EMVA 1288
+"""What an imaging lab photographs to characterise a camera, rendered through a camera file.
+
+:func:`render_lab_set` writes checkerboard views, a ColorChecker, a slanted edge and EMVA 1288
 flat and dark stacks, with a manifest ``lab.toml`` and the true camera file. The input of
 ``imageform characterize`` (docs/simulate.md, "A lab's photographs of a camera"), and the
 closed loop's test bed: characterising these photographs should give the camera file back.
@@ -49,10 +50,12 @@ MAX_VIEWS = len(_VIEWS)
 
 @dataclass(frozen=True)
 class LabSet:
-    """What :func:`render_lab_set` wrote: the ``folder``, its ``manifest`` (``lab.toml``),
-    the true ``camera`` file, the ``checkerboard`` images, the ``colorchecker`` and ``edge``
-    images, the EMVA ``emva_manifest`` (``emva.toml``, flats/ and darks/) and the
-    ``seconds`` it took."""
+    """What :func:`render_lab_set` wrote.
+
+    The ``folder``, its ``manifest`` (``lab.toml``), the true ``camera`` file, the
+    ``checkerboard`` images, the ``colorchecker`` and ``edge`` images, the EMVA
+    ``emva_manifest`` (``emva.toml``, flats/ and darks/) and the ``seconds`` it took.
+    """
 
     folder: Path
     manifest: Path
@@ -102,11 +105,13 @@ def _stage(result: Any, name: str) -> np.ndarray:
 
 
 def _balanced_edge(result: Any, scene: Any, path: Path) -> np.ndarray:
-    """Write the edge photograph as a lab develops it for an e-SFR: the raw mosaic, black
-    and dark signal removed, white-balanced on the light ground (each CFA colour's 75th
-    percentile made equal to green's) before Malvar demosaicing, so that the demosaicing of
-    a neutral edge keeps its resolution (demosaicing unbalanced colours costs up to 17 % of
-    a channel's MTF50). Returns the gains (R, G, B)."""
+    """Write the edge photograph as a lab develops it for an e-SFR; return the gains (R, G, B).
+
+    The raw mosaic, black and dark signal removed, is white-balanced on the light ground (each
+    CFA colour's 75th percentile made equal to green's) before Malvar demosaicing, so that the
+    demosaicing of a neutral edge keeps its resolution (demosaicing unbalanced colours costs up
+    to 17 % of a channel's MTF50).
+    """
     from imageform.sensor.cfa import cfa_masks
     from imageform.simulate.stages import demosaic_raw, normalize_raw
 
@@ -121,7 +126,10 @@ def _balanced_edge(result: Any, scene: Any, path: Path) -> np.ndarray:
 
 
 def _toml(value: Any) -> str:
-    """A TOML value: a string, an integer, a finite float (exact repr) or a list of them."""
+    """Return the TOML text of ``value``.
+
+    A string, an integer, a finite float (exact repr) or a list of them.
+    """
     import json
 
     if isinstance(value, str):

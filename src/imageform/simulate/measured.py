@@ -1,6 +1,8 @@
-"""A measured camera in the simulator: a camera file's ``[sensor]``, ``[optics]`` and
-``[color]`` tables (docs/camera-file.md) turned into the simulator's sensor model, lens blur
-and processing (:func:`apply_camera_file`; docs/simulate.md, "A measured camera").
+"""A measured camera in the simulator (:func:`apply_camera_file`).
+
+A camera file's ``[sensor]``, ``[optics]`` and ``[color]`` tables (docs/camera-file.md) are
+turned into the simulator's sensor model, lens blur and processing (docs/simulate.md, "A
+measured camera").
 
 The camera file overrides the scene: each key present replaces the scene's value; a key or
 table absent leaves the scene's as it is (a file without these tables renders exactly as

@@ -1,7 +1,9 @@
-"""A measured camera's tables in the simulator's sensor model (internal to
-:mod:`imageform.simulate`; :func:`imageform.simulate.apply_camera_file` is the entry point):
-:class:`MeasuredCamera` holds a camera file's ``[sensor]``, ``[optics]`` and ``[color]``,
-:func:`measured_sensor` puts them into a :class:`~imageform.sensor.SensorModel`."""
+"""A measured camera's tables in the simulator's sensor model.
+
+Internal to :mod:`imageform.simulate` (:func:`imageform.simulate.apply_camera_file` is the
+entry point): :class:`MeasuredCamera` holds a camera file's ``[sensor]``, ``[optics]`` and
+``[color]``, :func:`measured_sensor` puts them into a :class:`~imageform.sensor.SensorModel`.
+"""
 
 from __future__ import annotations
 
@@ -42,11 +44,12 @@ class MeasuredCamera:
 
 
 def measured_sensor(sensor: SensorModel, measured: MeasuredCamera | None) -> SensorModel:
-    """The scene's sensor model with the camera file's ``[sensor]`` values (and the
-    ``[color]`` spectral sensitivities) in place of its own.
+    r"""Return the scene's sensor model with the camera file's values in place of its own.
+
+    The values are the ``[sensor]`` table's (and the ``[color]`` spectral sensitivities).
 
     The EMVA 1288 system gain ``K`` is set through the analog gain, the preset's conversion
-    gain and ADC range kept: :math:`G_{analog} = K\\, V_{ADC} / (G_{conv} (2^b - 1))`. The
+    gain and ADC range kept: :math:`G_{analog} = K\, V_{ADC} / (G_{conv} (2^b - 1))`. The
     file's ``dsnu_e`` is the whole dark non-uniformity, so the preset's column offsets are
     removed. ``quantum_efficiency`` scales the QE curves to that peak; sensitivities given in
     ``[color]`` replace the curves' shape. ``exposure_time_s`` is not applied (the scene's

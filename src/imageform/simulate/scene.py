@@ -133,11 +133,13 @@ class Scene:
         return _build(_plain(cfg), None, origin, self.base_dir, self.measured)
 
     def with_measured(self, measured: Any) -> Scene:
-        """The same scene rendered through a measured camera's tables (a
-        :class:`imageform.simulate.measured.MeasuredCamera`, or None for the scene's own
-        sensor and processing): the sensor model is rebuilt with them. Kept by
+        """Return the same scene rendered through a measured camera's tables.
+
+        ``measured`` is a :class:`imageform.simulate.measured.MeasuredCamera`, or None for the
+        scene's own sensor and processing: the sensor model is rebuilt with them. Kept by
         :meth:`with_changes`, :meth:`view` and :meth:`resized`; see
-        :func:`imageform.simulate.apply_camera_file`."""
+        :func:`imageform.simulate.apply_camera_file`.
+        """
         from imageform.simulate.measured_sensor import MeasuredCamera
 
         if measured is not None and not isinstance(measured, MeasuredCamera):

@@ -495,15 +495,15 @@ def _sub_box(f: float, n: int) -> float:
 
 
 def gaussian_sigma_for_mtf50(mtf50: float, *, supersampling: int = 0) -> float:
-    """The Gaussian PSF's sigma (pixels) that gives a system MTF50 of ``mtf50`` (cycles per
-    pixel).
+    r"""Return the Gaussian PSF's sigma (pixels) that gives a system MTF50 of ``mtf50``.
 
-    A Gaussian of sigma :math:`\\sigma` has :math:`\\mathrm{MTF}(f) = e^{-2\\pi^2\\sigma^2
-    f^2}`, so on its own :math:`\\sigma = \\sqrt{\\ln 2 / (2\\pi^2)} / f_{50}`. A slanted-edge
-    measurement also sees the pixel aperture: with ``supersampling`` S > 0 (the renderer's S
-    point samples across each pixel, MTF :math:`|\\sin(\\pi f) / (S \\sin(\\pi f / S))|`) sigma
-    is solved from :math:`e^{-2\\pi^2\\sigma^2 f_{50}^2}\\, \\mathrm{box}_S(f_{50}) = 1/2`; 0 when
-    the pixel alone is already that blurred.
+    ``mtf50`` is in cycles per pixel. A Gaussian of sigma :math:`\sigma` has
+    :math:`\mathrm{MTF}(f) = e^{-2\pi^2\sigma^2 f^2}`, so on its own
+    :math:`\sigma = \sqrt{\ln 2 / (2\pi^2)} / f_{50}`. A slanted-edge measurement also sees the
+    pixel aperture: with ``supersampling`` S > 0 (the renderer's S point samples across each
+    pixel, MTF :math:`|\sin(\pi f) / (S \sin(\pi f / S))|`) sigma is solved from
+    :math:`e^{-2\pi^2\sigma^2 f_{50}^2}\, \mathrm{box}_S(f_{50}) = 1/2`; 0 when the pixel alone
+    is already that blurred.
 
     Examples
     --------
@@ -521,11 +521,13 @@ def gaussian_sigma_for_mtf50(mtf50: float, *, supersampling: int = 0) -> float:
 
 
 def _gaussian_blur(channel: np.ndarray, sigma: float) -> np.ndarray:
-    """``channel`` blurred by a Gaussian of ``sigma`` pixels whose transfer function on the
-    pixel grid is the continuous one, :math:`e^{-2\\pi^2\\sigma^2 f^2}` up to Nyquist (a
-    sampled Gaussian kernel of sigma < 1 px has a much higher MTF: 0.77 instead of 0.62 at
-    0.35 cycles/pixel for sigma = 0.45): multiplied in the DFT of each axis, the borders
-    reflected over 6 sigma (at least 8 pixels)."""
+    r"""``channel`` blurred by a Gaussian of ``sigma`` pixels with its continuous MTF.
+
+    The transfer function on the pixel grid is the continuous one,
+    :math:`e^{-2\pi^2\sigma^2 f^2}` up to Nyquist (a sampled Gaussian kernel of sigma < 1 px
+    has a much higher MTF: 0.77 instead of 0.62 at 0.35 cycles/pixel for sigma = 0.45):
+    multiplied in the DFT of each axis, the borders reflected over 6 sigma (at least 8 pixels).
+    """
     pad = max(8, math.ceil(6 * sigma))
     a = np.pad(channel, pad, mode="reflect" if min(channel.shape) > pad else "symmetric")
     for axis in (0, 1):
@@ -550,8 +552,10 @@ _ZERNIKE_BANDS = (
 def measured_optics_blur(
     image: np.ndarray, optics: CameraOptics, *, pixel_pitch: float, supersampling: int
 ) -> np.ndarray:
-    """``image (H, W, 3)`` (R, G, B, already integrated over each pixel by the renderer)
-    blurred by the camera file's lens model, borders reflected, light kept >= 0.
+    """``image (H, W, 3)`` blurred by the camera file's lens model.
+
+    The image is R, G, B, already integrated over each pixel by the renderer; borders are
+    reflected, light kept >= 0.
 
     ``diffraction``: :func:`imageform.simulate.stages.diffraction_blur` at ``f_number``.
     ``zernike``: per channel the polychromatic PSF of the aberrated pupil
@@ -607,9 +611,12 @@ def measured_optics_blur(
 
 
 def measured_color_matrix(color: CameraColor) -> np.ndarray | None:
-    """The simulator's colour-correction matrix ``M`` (``linear sRGB = camera RGB @ M``) of
-    the file's ``ccm`` (``out = ccm @ rgb``): ``ccm.T``, or for ``ccm_to = "xyz"``
-    :math:`(M_{XYZ \\to sRGB}\\, \\mathrm{ccm})^T`; None without a ``ccm``."""
+    r"""Return the simulator's colour-correction matrix ``M`` of the file's ``ccm``.
+
+    ``linear sRGB = camera RGB @ M``, while the file's ``ccm`` is ``out = ccm @ rgb``: ``M`` is
+    ``ccm.T``, or for ``ccm_to = "xyz"`` :math:`(M_{XYZ \to sRGB}\, \mathrm{ccm})^T`; None
+    without a ``ccm``.
+    """
     check_type(color, CameraColor, "color", "an imageform.io.CameraColor")
     if color.ccm is None:
         return None

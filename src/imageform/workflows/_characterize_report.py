@@ -1,5 +1,8 @@
-"""The outputs of ``imageform characterize``: camera.toml, report.html (the simulate report's
-style: :mod:`imageform.report.html_parts`, figures embedded as data: URIs) and metrics.json."""
+"""The outputs of ``imageform characterize``: camera.toml, report.html and metrics.json.
+
+report.html has the simulate report's style (:mod:`imageform.report.html_parts`), figures
+embedded as data: URIs.
+"""
 
 from __future__ import annotations
 
@@ -377,8 +380,11 @@ def _camera_section(text: str) -> str:
 
 
 def _write_camera(res: Any, path: Path) -> Path | None:
-    """camera.toml with the geometry and every measured table; None (nothing written)
-    when no photograph gives the image size (flats and darks only)."""
+    """Write camera.toml with the geometry and every measured table.
+
+    Returns its path, or None (nothing written) when no photograph gives the image size (flats
+    and darks only).
+    """
     from imageform.io import write_camera
 
     if res.image_size is None:

@@ -1,5 +1,7 @@
-"""``imageform characterize``: measure a camera as imaging labs do, from one folder of
-photographs of standard targets, and write one camera file plus a characterisation report.
+"""``imageform characterize``: measure a camera as imaging labs do.
+
+From one folder of photographs of standard targets, write one camera file plus a
+characterisation report.
 
 The folder (every part optional; what is missing is reported as not measured, an error only
 when nothing can be measured)::
@@ -163,9 +165,11 @@ Progress = Callable[[str, float], None]
 
 @dataclass(frozen=True)
 class GeometryMeasurement:
-    """The checkerboard calibration: ``calibration`` (a
-    :class:`~imageform.geometry.CalibrationResult`), the ``views`` used, the ``board``
-    description and the views where no board was found (``missed``)."""
+    """The checkerboard calibration.
+
+    ``calibration`` (a :class:`~imageform.geometry.CalibrationResult`), the ``views`` used, the
+    ``board`` description and the views where no board was found (``missed``).
+    """
 
     calibration: Any
     views: tuple[str, ...]
@@ -175,11 +179,14 @@ class GeometryMeasurement:
 
 @dataclass(frozen=True)
 class SharpnessMeasurement:
-    """The slanted-edge e-SFR: per channel MTF50 and MTF10 (cycles/pixel, median over the
-    edges, ``*_std`` their spread), the fitted Gaussian PSF ``gaussian_sigma_px`` (the
-    optics' blur, the pixel aperture divided out) and the curves (``frequency``, ``sfr``
-    (n, channels), the median over the edges) of the image ``image``; ``raw`` when it was
-    measured on a raw mosaic (the CFA balanced on the neutral edge: one channel ``"raw"``)."""
+    """The slanted-edge e-SFR of the image ``image``.
+
+    Per channel MTF50 and MTF10 (cycles/pixel, median over the edges, ``*_std`` their spread),
+    the fitted Gaussian PSF ``gaussian_sigma_px`` (the optics' blur, the pixel aperture divided
+    out) and the curves (``frequency``, ``sfr`` (n, channels), the median over the edges);
+    ``raw`` when it was measured on a raw mosaic (the CFA balanced on the neutral edge: one
+    channel ``"raw"``).
+    """
 
     image: str
     channels: tuple[str, ...]
@@ -204,10 +211,12 @@ class SharpnessMeasurement:
 
 @dataclass(frozen=True)
 class NoiseMeasurement:
-    """EMVA 1288 from the flats and darks: ``emva`` (an
-    :class:`~imageform.sensor.EmvaMeasurement`), the standard errors of the gain and the read
-    noise, the black level (mean dark at the shortest exposure, DN), the frame ``shape``, the
-    ``plane`` measured (``"all"`` or a CFA photosite) and how many exposures."""
+    """EMVA 1288 from the flats and darks.
+
+    ``emva`` (an :class:`~imageform.sensor.EmvaMeasurement`), the standard errors of the gain
+    and the read noise, the black level (mean dark at the shortest exposure, DN), the frame
+    ``shape``, the ``plane`` measured (``"all"`` or a CFA photosite) and how many exposures.
+    """
 
     emva: Any
     system_gain_std: float
@@ -220,16 +229,18 @@ class NoiseMeasurement:
 
 @dataclass(frozen=True)
 class ColorMeasurement:
-    """The ColorChecker: where it came from (``raw``, ``developed`` file names), the patch
-    means (``camera_rgb``: linear raw, black subtracted, scaled to the white level;
-    ``output_rgb``: the developed photograph, linear), the ``white_balance`` gains (green 1)
-    and ``ccm`` (3, 3) with linear output = (camera RGB x gains) @ ccm, what it maps to
-    (``ccm_to``: ``"camera_output"`` when fitted to the camera's own developed photograph,
-    else ``"srgb"``, the chart's D65 reference), per-patch CIEDE2000 of the camera's
-    rendering against the reference (``delta_e00``) and of the fitted model against its
-    target (``fit_delta_e00``), the estimated ``sensitivities`` (a
-    :class:`~imageform.spectral.Spectrum`, or None without a raw photograph) and their misfit
-    (``sensitivity_rms``), and ``detection`` (the chart found)."""
+    """The ColorChecker: patch means, white balance, CCM, colour errors and sensitivities.
+
+    Where it came from (``raw``, ``developed`` file names), the patch means (``camera_rgb``:
+    linear raw, black subtracted, scaled to the white level; ``output_rgb``: the developed
+    photograph, linear), the ``white_balance`` gains (green 1) and ``ccm`` (3, 3) with linear
+    output = (camera RGB x gains) @ ccm, what it maps to (``ccm_to``: ``"camera_output"`` when
+    fitted to the camera's own developed photograph, else ``"srgb"``, the chart's D65
+    reference), per-patch CIEDE2000 of the camera's rendering against the reference
+    (``delta_e00``) and of the fitted model against its target (``fit_delta_e00``), the
+    estimated ``sensitivities`` (a :class:`~imageform.spectral.Spectrum`, or None without a raw
+    photograph) and their misfit (``sensitivity_rms``), and ``detection`` (the chart found).
+    """
 
     raw: str | None
     developed: str | None
@@ -300,8 +311,11 @@ class CameraCharacterization:
         )
 
     def camera_file(self) -> Any:
-        """The :class:`~imageform.io.CameraFile` of the geometry (a camera with the default
-        intrinsics of the image size when no checkerboard was measured)."""
+        """Return the :class:`~imageform.io.CameraFile` of the geometry.
+
+        A camera with the default intrinsics of the image size when no checkerboard was
+        measured.
+        """
         from imageform.io import CameraFile, Provenance
 
         cmd = f"imageform characterize {self.folder}"
@@ -323,7 +337,7 @@ class CameraCharacterization:
         return CameraFile(cam, provenance=Provenance(command=cmd))
 
     def summary(self) -> dict[str, Any]:
-        """The headline numbers (plain data), as ``metrics.json``'s ``summary``."""
+        """Return the headline numbers (plain data), as ``metrics.json``'s ``summary``."""
         out: dict[str, Any] = {"measured": list(self.measured), "missing": dict(self.missing)}
         g = self.geometry
         if g is not None:
@@ -453,8 +467,10 @@ def _manifest(folder: Path) -> dict[str, Any]:
 
 
 def _get(doc: Mapping[str, Any], section: str, key: str, kind: type, default: Any) -> Any:
-    """``doc[section][key]`` (or its alias: ``encoding`` for ``transfer``) checked to be
-    ``kind`` (int accepted for float), or default."""
+    """``doc[section][key]`` (or its alias: ``encoding`` for ``transfer``), or default.
+
+    The value is checked to be ``kind`` (int accepted for float).
+    """
     body = doc.get(section, {})
     if not isinstance(body, dict):  # lab.toml's top-level camera = "camera.toml"
         body = {}
@@ -496,9 +512,12 @@ def _subfolder(root: Path, names: tuple[str, ...]) -> Path | None:
 
 @dataclass(frozen=True)
 class _Image:
-    """One photograph: ``rgb`` linear floats (H, W, 3) or None, ``mosaic`` (raw DN floats,
-    black subtracted, scaled to 1 at white) with its ``cfa``, ``encoded`` (H, W, 3) floats in
-    [0, 1] as stored (developed images), and its name."""
+    """One photograph: its linear RGB, raw mosaic and encoded pixels, and its name.
+
+    ``rgb`` linear floats (H, W, 3) or None, ``mosaic`` (raw DN floats, black subtracted,
+    scaled to 1 at white) with its ``cfa``, ``encoded`` (H, W, 3) floats in [0, 1] as stored
+    (developed images), and its name.
+    """
 
     name: str
     encoded: Any = None
@@ -524,8 +543,10 @@ def _camera_cfa(doc: Mapping[str, Any]) -> str | None:
 def _read_photo(
     path: Path, doc: Mapping[str, Any], transfer: str, max_pixels: int | None, black: float | None
 ) -> _Image:
-    """Read a photograph: a raw file, a grey raw mosaic (with [camera] cfa), or a developed
-    image (decoded with ``transfer``)."""
+    """Read a photograph: a raw file, a grey raw mosaic or a developed image.
+
+    A grey raw mosaic is read with [camera] cfa, a developed image decoded with ``transfer``.
+    """
     import numpy as np
 
     from imageform.io import read_image
@@ -573,7 +594,7 @@ def _read_photo(
 
 
 def _superpixel(mosaic: Any, cfa: str) -> Any:
-    """The 2x2 tiles of a mosaic as half-size camera RGB (the two greens averaged)."""
+    """Return the 2x2 tiles of a mosaic as half-size camera RGB (the two greens averaged)."""
     import numpy as np
 
     h, w = (mosaic.shape[0] // 2) * 2, (mosaic.shape[1] // 2) * 2
@@ -726,8 +747,11 @@ def _pixel_box(f: Any, angle_deg: float) -> Any:
 
 
 def _fit_sigma(freq: Any, sfr: Any, angle: float) -> float:
-    """The Gaussian PSF sigma (pixels) whose MTF times the pixel aperture's best fits the
-    measured SFR up to Nyquist (least squares on the curve where it is above 0.1)."""
+    """Fit the Gaussian PSF sigma (pixels) to a measured SFR, the pixel aperture's MTF included.
+
+    The sigma whose MTF times the pixel aperture's best fits the measured SFR up to Nyquist
+    (least squares on the curve where it is above 0.1).
+    """
     import numpy as np
     from scipy.optimize import minimize_scalar
 
@@ -745,9 +769,12 @@ def _fit_sigma(freq: Any, sfr: Any, angle: float) -> float:
 
 
 def _balanced_mosaic(mosaic: Any, cfa: str) -> Any:
-    """A raw mosaic of a neutral target as one full-resolution grey image: each photosite
-    of the 2x2 tile mapped affinely onto the greens' levels (dark and light parts, from the
-    5th and 95th percentiles), so that the CFA's pattern vanishes on a grey edge."""
+    """Return a raw mosaic of a neutral target as one full-resolution grey image.
+
+    Each photosite of the 2x2 tile is mapped affinely onto the greens' levels (dark and light
+    parts, from the 5th and 95th percentiles), so that the CFA's pattern vanishes on a grey
+    edge.
+    """
     import numpy as np
 
     out = np.array(mosaic, dtype=np.float64)
@@ -861,7 +888,7 @@ def _frames(folder: Path, kind: str) -> dict[float, list[Path]]:
 
 
 def _frame(path: Path, doc: Mapping[str, Any], max_pixels: int | None) -> tuple[Any, str | None]:
-    """A frame's digital numbers (2-D floats) and its CFA (None: grey)."""
+    """Read a frame's digital numbers (2-D floats) and its CFA (None: grey)."""
     import numpy as np
 
     from imageform.io import read_image
@@ -891,8 +918,11 @@ def _plane(frame: Any, cfa: str | None) -> tuple[Any, str]:
 def _entries(
     root: Path, flats_dir: Path, darks_dir: Path, doc: Mapping[str, Any]
 ) -> list[tuple[float, float | None, list[Path], list[Path]]]:
-    """Each exposure: (time, photons or None, flat files, dark files), from an EMVA
-    manifest (``emva.toml`` in FOLDER, or ``[emva] manifest``) or else the file names."""
+    """Each exposure: (time, photons or None, flat files, dark files).
+
+    From an EMVA manifest (``emva.toml`` in FOLDER, or ``[emva] manifest``) or else the file
+    names.
+    """
     from imageform.workflows.emva import MANIFEST
     from imageform.workflows.emva import _manifest as emva_manifest
 
@@ -988,7 +1018,7 @@ def _measure_noise(
 
 
 def _reference_linear_srgb() -> Any:
-    """The ColorChecker's linear sRGB under D65 (from its reflectances), (24, 3)."""
+    """Return the ColorChecker's linear sRGB under D65 (from its reflectances), (24, 3)."""
     import numpy as np
 
     from imageform.color import xyz_to_linear_srgb
@@ -1024,8 +1054,11 @@ def _fit_ccm(src: Any, dst: Any, ok: Any) -> Any:
 
 
 def _chart_patches(im: _Image, max_size: int) -> tuple[Any, Any, Any]:
-    """(detection, linear patch means (24, 3), the picture detected in (encoded)) of a
-    photograph; a raw one is measured on its half-size superpixels, black subtracted."""
+    """Find and measure a photograph's ColorChecker.
+
+    Returns (detection, linear patch means (24, 3), the picture detected in (encoded)); a raw
+    photograph is measured on its half-size superpixels, black subtracted.
+    """
     import warnings
 
     import numpy as np
@@ -1158,12 +1191,14 @@ def _measure_color(
 
 
 def relative_qe(sensitivities: Any) -> tuple[Any, Any]:
-    """The relative quantum efficiencies (photon counting, largest 1) of estimated spectral
-    sensitivities (energy units: response per unit of spectral power).
+    r"""Return the relative quantum efficiencies of estimated spectral sensitivities.
 
-    A photosite counts photons, :math:`N(\\lambda) = E(\\lambda)\\,\\lambda / (h c)`, so the
-    response per unit power is :math:`S(\\lambda) \\propto \\mathrm{QE}(\\lambda)\\,\\lambda`
-    and :math:`\\mathrm{QE}(\\lambda) \\propto S(\\lambda) / \\lambda`.
+    The efficiencies are for photon counting, largest 1; the sensitivities are in energy units
+    (response per unit of spectral power).
+
+    A photosite counts photons, :math:`N(\lambda) = E(\lambda)\,\lambda / (h c)`, so the
+    response per unit power is :math:`S(\lambda) \propto \mathrm{QE}(\lambda)\,\lambda`
+    and :math:`\mathrm{QE}(\lambda) \propto S(\lambda) / \lambda`.
 
     Examples
     --------
@@ -1181,7 +1216,7 @@ def relative_qe(sensitivities: Any) -> tuple[Any, Any]:
 
 
 def _patch_subset(ok: Any) -> Any:
-    """The ColorChecker reflectances of the patches ``ok``."""
+    """Return the ColorChecker reflectances of the patches ``ok``."""
     import numpy as np
 
     from imageform.spectral import Spectrum, colorchecker_reflectances
@@ -1191,7 +1226,7 @@ def _patch_subset(ok: Any) -> Any:
 
 
 def _exposure_match(rendered: Any, ref: Any) -> float:
-    """The factor that brings the neutral patches' luminance onto the reference's."""
+    """Return the factor that brings the neutral patches' luminance onto the reference's."""
     import numpy as np
 
     y = np.array([0.2126, 0.7152, 0.0722])
@@ -1273,9 +1308,12 @@ def _tables(res: CameraCharacterization) -> dict[str, dict[str, Any]]:
 
 
 def _peak_qe(res: CameraCharacterization) -> float | None:
-    """The peak quantum efficiency: the EMVA QE at the flats' wavelength (``[emva]`` or
-    ``[flats] wavelength_nm``, default 550 nm), divided by the estimated green sensitivity
-    there (relative QE, largest 1) when the chart gave one; None without photon counts."""
+    """Return the peak quantum efficiency, or None without photon counts.
+
+    The EMVA QE at the flats' wavelength (``[emva]`` or ``[flats] wavelength_nm``, default
+    550 nm), divided by the estimated green sensitivity there (relative QE, largest 1) when
+    the chart gave one.
+    """
     import numpy as np
 
     n = res.noise
@@ -1301,8 +1339,10 @@ def characterize_camera(
     progress: Progress | None = None,
     max_pixels: int | None = None,
 ) -> CameraCharacterization:
-    """Characterise a camera from a folder of lab photographs (the module docstring gives
-    the layout): geometry, sharpness, noise and colour, each where its subfolder exists.
+    """Characterise a camera from a folder of lab photographs.
+
+    Geometry, sharpness, noise and colour are measured, each where its subfolder exists (the
+    module docstring gives the layout).
 
     Parameters
     ----------
@@ -1441,8 +1481,10 @@ def _check_folder(out: Path, force: bool) -> None:
 
 
 def characterize(run: Run, opts: CharacterizeOptions, *, out: Path, folder: str) -> Result:
-    """``imageform characterize``: measure, then write camera.toml, report.html and
-    metrics.json into a temporary folder that replaces ``out`` when all is written."""
+    """``imageform characterize``: measure, then write camera.toml, report.html, metrics.json.
+
+    They go into a temporary folder that replaces ``out`` when all is written.
+    """
     import importlib.util
 
     from imageform.workflows._characterize_report import write_outputs
