@@ -51,8 +51,9 @@ def measured_sensor(sensor: SensorModel, measured: MeasuredCamera | None) -> Sen
     The EMVA 1288 system gain ``K`` is set through the analog gain, the preset's conversion
     gain and ADC range kept: :math:`G_{analog} = K\, V_{ADC} / (G_{conv} (2^b - 1))`. The
     file's ``dsnu_e`` is the whole dark non-uniformity, so the preset's column offsets are
-    removed. ``quantum_efficiency`` scales the QE curves to that peak; sensitivities given in
-    ``[color]`` replace the curves' shape. ``exposure_time_s`` is not applied (the scene's
+    removed. ``quantum_efficiency`` (the effective QE EMVA 1288 measures, fill factor
+    included) scales the QE curves to that peak and sets the fill factor to 1; sensitivities
+    given in ``[color]`` replace the curves' shape. ``exposure_time_s`` is not applied (the scene's
     exposure is a shooting setting).
 
     Raises
