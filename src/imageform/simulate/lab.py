@@ -167,7 +167,10 @@ def render_lab_set(
                             ``square_mm`` in lab.toml) at ``views`` poses, the camera's
                             developed output (sRGB-encoded)
         colorchecker/       colorchecker.png: a frontal ColorChecker under D65, linear
-                            camera RGB (demosaiced, no white balance, no colour correction)
+                            camera RGB (demosaiced, no white balance, no colour correction);
+                            developed.png: the same exposure as the camera develops it
+                            (its white balance, colour matrix and sRGB encoding), from which
+                            ``imageform characterize`` measures the camera's processing
         edge/               edge.png: a dark square (reflectance 0.1) on a light ground (0.8)
                             turned ``edge_angle_deg``, linear camera RGB white-balanced on
                             the ground before demosaicing (the gains in lab.toml)
@@ -311,6 +314,7 @@ def render_lab_set(
     (out / "colorchecker").mkdir()
     cc_path = out / "colorchecker" / "colorchecker.png"
     write_image(cc_path, _linear16(_stage(res, "demosaiced")))
+    write_image(out / "colorchecker" / "developed.png", _linear16(_stage(res, "output")))
     centres = res.colorchecker.centres_uv if res.colorchecker is not None else np.zeros((24, 2))
     quad = res.quads[0].corners if res.quads else np.zeros((4, 3))
     chart_quad = np.asarray(cc_scene.camera.project(quad).uv, dtype=np.float64)
@@ -447,6 +451,7 @@ def render_lab_set(
         f"image = {_toml(cc_path.relative_to(out).as_posix())}",
         'illuminant = "D65"',
         'encoding = "linear"          # demosaiced camera RGB / (white - black), no white balance',
+        'developed = "colorchecker/developed.png"  # the same exposure, the camera\'s output',
         f"corners_px = {_toml([list(map(float, c)) for c in chart_quad])}",
         f"patch_centres_px = {_toml([list(map(float, c)) for c in centres])}",
         "",
