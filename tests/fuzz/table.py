@@ -1520,3 +1520,52 @@ VALID.update(
         ),
     }
 )
+
+# imageform characterize (issue 18): the measurement dataclasses are results; the folder
+# boundary (empty, missing, unreadable, half a part) is tested in tests/workflows/test_characterize.py
+VALID.update(
+    {
+        "imageform.workflows.CameraCharacterization": Skip(
+            "a result dataclass built by characterize_camera"
+        ),
+        "imageform.workflows.CameraCharacterization.camera_file": Skip(
+            "a method of a result dataclass"
+        ),
+        "imageform.workflows.CameraCharacterization.summary": Skip(
+            "a method of a result dataclass"
+        ),
+        "imageform.workflows.characterize.ColorMeasurement": Skip(
+            "a result dataclass built by characterize_camera"
+        ),
+        "imageform.workflows.characterize.GeometryMeasurement": Skip(
+            "a result dataclass built by characterize_camera"
+        ),
+        "imageform.workflows.characterize.NoiseMeasurement": Skip(
+            "a result dataclass built by characterize_camera"
+        ),
+        "imageform.workflows.characterize.SharpnessMeasurement": Skip(
+            "a result dataclass built by characterize_camera"
+        ),
+        "imageform.workflows.characterize_camera": Skip(
+            "needs a lab folder (render_lab_set, seconds); its refusals (no folder, an empty "
+            "one, unreadable images, half a part) are tested in tests/workflows/test_characterize.py"
+        ),
+        "imageform.workflows.characterize.relative_qe": call(V("spectrum")),
+        "imageform.workflows.characterize.CharacterizeOptions": call(),
+        "imageform.workflows.characterize.CharacterizeOptions.fields": call(),
+        "imageform.workflows.characterize.CharacterizeOptions.types": call(),
+    }
+)
+VALID.update(
+    {
+        "imageform.workflows.characterize.CharacterizeOptions.check": method(
+            VALID["imageform.workflows.characterize.CharacterizeOptions"]
+        ),
+        "imageform.workflows.characterize.CharacterizeOptions.check_output": method(
+            VALID["imageform.workflows.characterize.CharacterizeOptions"], V("tmpdir")
+        ),
+        "imageform.workflows.characterize.CharacterizeOptions.paths": method(
+            VALID["imageform.workflows.characterize.CharacterizeOptions"], "output"
+        ),
+    }
+)

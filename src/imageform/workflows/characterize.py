@@ -71,6 +71,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from imageform._validate import describe
 from imageform.errors import InvalidInputError
 from imageform.workflows._spec import Input, Options, Output, Result, Run, Workflow, option
 
@@ -1210,9 +1211,16 @@ def relative_qe(sensitivities: Any) -> tuple[Any, Any]:
     """
     import numpy as np
 
+    from imageform.spectral import Spectrum
+
+    if not isinstance(sensitivities, Spectrum):
+        raise TypeError(f"expected sensitivities as a Spectrum, got {describe(sensitivities)}")
     wl = np.asarray(sensitivities.wavelengths, dtype=np.float64)
-    qe = np.asarray(sensitivities.values, dtype=np.float64) / wl[:, None]
-    return wl, qe / qe.max()
+    qe = np.asarray(sensitivities.values, dtype=np.float64).reshape(len(wl), -1) / wl[:, None]
+    peak = float(qe.max()) if qe.size else 0.0
+    if not peak > 0.0:
+        raise InvalidInputError("sensitivities: expected a positive value somewhere, got none")
+    return wl, qe / peak
 
 
 def _patch_subset(ok: Any) -> Any:
