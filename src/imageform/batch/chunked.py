@@ -191,7 +191,11 @@ def _tiff_meta(p: Path) -> _TiffMeta:
         series = tf.series[0]
         page = series.keyframe
         levels: list[tuple[int, int]] = []
-        for k, level in enumerate(series.levels):
+        found: list[Any] = list(series.levels)
+        if isinstance(page, tifffile.TiffPage) and page.subifds:
+            # every SubIFD, not only those tifffile accepts as levels (it drops the others)
+            found = [series, *tifffile.TiffPages(page)]
+        for k, level in enumerate(found):
             shape = tuple(int(v) for v in level.shape)
             if len(shape) != 3 or shape[-1] != 3 or level.dtype != series.dtype:
                 raise InvalidInputError(
