@@ -4,7 +4,8 @@ TIFF against the in-memory rate per megapixel, with the peak memory and the leve
 A synthetic N x N H&E slide is written as scanners and OME-TIFF write them: 256-px JPEG tiles
 (YCbCr 4:2:0, quality 90), reduced levels (halvings down to 1024 px or less) as SubIFDs,
 0.25 um/px. Its content is a 2048 x 2048 super-tile (four synthetic H&E tiles,
-:func:`imageform.analysis.synthetic_he_tile`, and a strip of glass) repeated with flips,
+:func:`imageform.analysis.synthetic_he_tile`, a strip of glass, Gaussian grain of 3 codes
+for a scan's noise and texture) repeated with flips,
 the reduced levels the same super-tile box-reduced, so every level shows the same tissue.
 
 For each operation, two fresh processes in turn:
@@ -71,7 +72,8 @@ def super_tile(seed: int = 0) -> np.ndarray:
         [np.concatenate(quads[:2], axis=1), np.concatenate(quads[2:], axis=1)], axis=0
     )
     s[:, 1900:] = np.array([236, 234, 238], np.uint8)  # glass between tissue sections
-    return s
+    grain = np.random.default_rng(seed).normal(0.0, 3.0, s.shape)  # a scan's noise, texture
+    return np.clip(np.round(s + grain), 0, 255).astype(np.uint8)
 
 
 def write_slide(path: Path, n: int) -> tuple[float, list[int]]:

@@ -819,6 +819,9 @@ def _write_tiff(
         "tile": (tile, tile),
         "photometric": "rgb",
         "maxworkers": spec.workers,
+        # tifffile encodes buffersize // tile-bytes tiles at a time (512 MiB by default:
+        # several bands of a wide slide held at once); a few tiles per thread suffice
+        "buffersize": 8 * spec.workers * tile * tile * channels * np.dtype(dtype).itemsize,
         "metadata": None,
     }
     if spec.compression != "none":
