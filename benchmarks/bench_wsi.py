@@ -4,14 +4,15 @@ TIFF against the in-memory rate per megapixel, with the peak memory and the leve
 A synthetic N x N H&E slide is written as scanners and OME-TIFF write them: 256-px JPEG tiles
 (YCbCr 4:2:0, quality 90), reduced levels (halvings down to 1024 px or less) as SubIFDs,
 0.25 um/px. Its content is a 2048 x 2048 super-tile (four synthetic H&E tiles,
-:func:`imageform.analysis.synthetic_he_tile`, a strip of glass, Gaussian grain of 3 codes
+:func:`imageform.analysis.synthetic_he_tile`, a strip of glass, Gaussian grain of 5 codes
 for a scan's noise and texture) repeated with flips,
 the reduced levels the same super-tile box-reduced, so every level shows the same tissue.
 
 For each operation, two fresh processes in turn:
 
 - **in memory**: a 4096 x 4096 crop of level 0 read into memory, then the operation alone
-  timed (median of 3, after a warm-up on a small crop), the float result quantised to uint8
+  timed (median of 3, after a warm-up on a small crop; run before and after the chunked
+  run and the two rates averaged, as the machine's load drifts), the float result quantised to uint8
   like the chunked output: ``convert`` sRGB -> Display P3; ``stain_normalize`` Macenko or
   Reinhard applied with the slide's statistics given (the apply step only: a user's one
   call, which also measures the 16 Mpx, is slower, and printed too);
@@ -19,6 +20,9 @@ For each operation, two fresh processes in turn:
   decoding, statistics (a reduced level), the operation, the reduced levels (box means),
   JPEG encoding, all levels written; after a warm-up on a small pyramid, with its peak RSS
   (``ru_maxrss``, confirmed by a psutil sampler every 50 ms) and the RSS before.
+
+Both report wall-clock rates (the target: chunked at least 50 % of in memory) and CPU
+seconds per megapixel (user + system of the process: what the load does not change).
 
 Run: ``OPENBLAS_NUM_THREADS=1 python benchmarks/bench_wsi.py --size 40000
 --out benchmarks/results/wsi-2026-11-25.md`` (writes the slide to --dir, deleted at the end;
@@ -72,7 +76,7 @@ def super_tile(seed: int = 0) -> np.ndarray:
         [np.concatenate(quads[:2], axis=1), np.concatenate(quads[2:], axis=1)], axis=0
     )
     s[:, 1900:] = np.array([236, 234, 238], np.uint8)  # glass between tissue sections
-    grain = np.random.default_rng(seed).normal(0.0, 3.0, s.shape)  # a scan's noise, texture
+    grain = np.random.default_rng(seed).normal(0.0, 5.0, s.shape)  # a scan's noise, texture
     return np.clip(np.round(s + grain), 0, 255).astype(np.uint8)
 
 
@@ -152,13 +156,18 @@ _MEMORY = _OPS + textwrap.dedent(
         f = made[0](a, stats)
         return np.round(np.clip(np.asarray(f), 0, 1) * 255).astype(np.uint8)
     run(img[:256, :256])
-    times = []
+    import resource
+    times, cpu = [], []
     for _ in range(3):
+        u0 = resource.getrusage(resource.RUSAGE_SELF)
         t0 = time.perf_counter(); run(img); times.append(time.perf_counter() - t0)
+        u1 = resource.getrusage(resource.RUSAGE_SELF)
+        cpu.append(u1.ru_utime + u1.ru_stime - u0.ru_utime - u0.ru_stime)
     full = None
     if len(made) > 2:
         t0 = time.perf_counter(); made[2](img); full = time.perf_counter() - t0
-    print(json.dumps({"seconds": sorted(times)[1], "full": full, "mpx": crop * crop / 1e6}))
+    print(json.dumps({"seconds": sorted(times)[1], "cpu": sorted(cpu)[1], "full": full,
+                      "mpx": crop * crop / 1e6}))
     """
 )
 
@@ -192,12 +201,15 @@ _CHUNKED = textwrap.dedent(
     rss_before = proc.memory_info().rss
     t = threading.Thread(target=sample, daemon=True)
     t.start()
+    u0 = resource.getrusage(resource.RUSAGE_SELF)
     r = process_chunked(src, out, cmd, opts, chunk=chunk, force=True)
+    u1 = resource.getrusage(resource.RUSAGE_SELF)
     stop.set()
     t.join()
     after = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
     print(json.dumps({"rss_before": rss_before, "after": after, "sampled": peak[0],
                       "seconds": r.seconds, "levels": [list(v) for v in r.levels],
+                      "cpu": u1.ru_utime + u1.ru_stime - u0.ru_utime - u0.ru_stime,
                       "compression": r.compression, "stats_from": r.stats_from,
                       "bytes": os.path.getsize(out)}))
     """
@@ -264,13 +276,16 @@ def main() -> None:
         for op in args.ops:
             target = tg.get(op.split(":")[-1], tg["macenko"])
             load0 = os.getloadavg()[0]
-            mem = _child(_MEMORY, src, op, target, args.crop)
-            out = scratch / "out.tif"
+            mem = _child(_MEMORY, src, op, target, args.crop)  # before and after the
+            out = scratch / "out.tif"  # chunked run, averaged: the load drifts
             ch = _child(_CHUNKED, src, out, op, target, args.chunk)
+            mem2 = _child(_MEMORY, src, op, target, args.crop)
             load1 = os.getloadavg()[0]
             out.unlink()
-            mem_rate = mem["mpx"] / mem["seconds"]
+            mem_rate = mem["mpx"] * (1 / mem["seconds"] + 1 / mem2["seconds"]) / 2
+            mem_cpu = (mem["cpu"] + mem2["cpu"]) / 2 / mem["mpx"]  # CPU s per Mpx
             ch_rate = n * n / 1e6 / ch["seconds"]
+            ch_cpu = ch["cpu"] / (n * n / 1e6)
             peak = max(ch["after"], ch["sampled"])
             name = "convert sRGB -> Display P3" if op == "convert" else f"stain-normalize {op[6:]}"
             rows.append(
@@ -279,6 +294,7 @@ def main() -> None:
                     f"{mem_rate:.2f}",
                     f"{ch_rate:.2f}",
                     f"**{ch_rate / mem_rate:.2f}**",
+                    f"{mem_cpu:.2f} / {ch_cpu:.2f}",
                     f"{ch['seconds']:.0f}",
                     f"{ch['rss_before'] / MIB:.0f}",
                     f"**{peak / MIB:.0f}**",
@@ -304,6 +320,7 @@ def main() -> None:
         f"in memory Mpx/s ({args.crop}^2)",
         f"chunked Mpx/s ({n}^2)",
         "ratio",
+        "CPU s per Mpx, in memory / chunked",
         "chunked s",
         "RSS before MiB",
         "peak RSS MiB",

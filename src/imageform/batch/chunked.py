@@ -409,13 +409,6 @@ def _stain_stats(
     return stats_t, measure(sample), where
 
 
-def _quantize(block: np.ndarray, dtype: str) -> np.ndarray:
-    if dtype == "float32":
-        return block
-    top = 255.0 if dtype == "uint8" else 65535.0
-    return np.round(np.clip(block, 0.0, 1.0) * top).astype(dtype)
-
-
 def _temp(path: Path) -> Path:
     return path.with_name(f".{path.name}.{uuid.uuid4().hex[:12]}.tmp{path.suffix}")
 
@@ -679,7 +672,7 @@ def process_chunked(
 def _reduce(a: np.ndarray, f: int) -> np.ndarray:
     """The ``f x f`` box mean of ``a`` (H, W, C), ceil(H/f) x ceil(W/f): a partial box at the
     bottom or right edge averages the pixels it has; integers rounded half up. Summed as
-    ``f^2`` strided slices (a reshape-and-sum is ~30 times slower)."""
+    ``f`` row slices, then ``f`` column slices (a reshape-and-sum is ~20 times slower)."""
     h, w, c = a.shape
     hh, ww = -(-h // f), -(-w // f)
     partial = (hh * f, ww * f) != (h, w)
@@ -689,10 +682,13 @@ def _reduce(a: np.ndarray, f: int) -> np.ndarray:
         acc: Any = np.float32 if a.dtype.itemsize <= 4 else np.float64
     else:
         acc = np.uint16 if f * f * int(np.iinfo(a.dtype).max) < 2**16 else np.uint32
-    s = np.zeros((hh, ww, c), dtype=acc)
-    for i in range(f):
-        for j in range(f):
-            s += a[i::f, j::f]
+    rows = a[0::f].astype(acc)  # rows first: contiguous row slices, then column pairs
+    for i in range(1, f):
+        rows += a[i::f]
+    pairs = rows.reshape(hh, ww, f, c)
+    s = pairs[:, :, 0].copy()
+    for j in range(1, f):
+        s += pairs[:, :, j]
     if partial:
         n = np.minimum(f, h - f * np.arange(hh))[:, None] * np.minimum(f, w - f * np.arange(ww))
         n = n[:, :, None].astype(acc)
@@ -710,8 +706,14 @@ def _finish(
     count and (``factor``) the block's box mean for the next pyramid level, so that no float
     block outlives its task."""
     f = op[0](block, *op[1:])
-    n = int(np.count_nonzero((f < 0) | (f > 1))) if dtype != "float32" else 0
-    q = _quantize(f, dtype)
+    if dtype == "float32":
+        return f, 0, _reduce(f, factor) if factor else None
+    if np.shares_memory(f, block) or not f.flags.writeable:
+        f = f.copy()
+    n = int(np.count_nonzero(f < 0)) + int(np.count_nonzero(f > 1))
+    np.clip(f, 0.0, 1.0, out=f)  # in place: the block's own float result, no temporaries
+    f *= 255.0 if dtype == "uint8" else 65535.0
+    q = np.rint(f, out=f).astype(dtype)
     return q, n, _reduce(q, factor) if factor else None
 
 
