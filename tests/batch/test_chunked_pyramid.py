@@ -223,7 +223,9 @@ def _he_pyramid(tmp_path: Path) -> tuple[Path, Path]:
     return src, target
 
 
-def test_stain_statistics_from_a_reduced_level(tmp_path: Path) -> None:
+def test_stain_statistics_from_a_reduced_level(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     """stats_from="level" (auto on a pyramid) measures the slide on its largest level of at
     most STAIN_SAMPLE_PIXELS, read whole: the output within 3 codes of the statistics from
     every pixel of level 0 (subsample, below the budget), mean difference under 1 code."""
@@ -242,6 +244,10 @@ def test_stain_statistics_from_a_reduced_level(tmp_path: Path) -> None:
     finally:
         mp.undo()
     assert lvl.stats_from == "pyramid level 1 (512 x 512)"
+    argv = ["chunked", "stain-normalize", str(src), "-o", str(tmp_path / "cli.tif")]
+    argv += ["--target", str(target), "--stats-from", "level", "--chunk", "512", "--json"]
+    assert main(argv) == 0
+    assert json.loads(capsys.readouterr().out)["stats_from"] == "pyramid level 1 (512 x 512)"
     a, b = _levels(full.output)[0].astype(int), _levels(lvl.output)[0].astype(int)
     assert np.abs(a - b).max() <= 3 and np.abs(a - b).mean() < 1.0  # measured: 2, 0.52
 

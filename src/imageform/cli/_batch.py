@@ -153,7 +153,7 @@ def _chunked_command(wf: Workflow) -> click.Command:
         click.Option(["--force"], is_flag=True, help="Overwrite an existing output."),
         click.Option(["--json", "json_out"], is_flag=True, help="Print the result as JSON."),
     ]
-    if wf.name == "stain_normalize":
+    if wf.name.replace("-", "_") == "stain_normalize":
         params.insert(
             -2,
             click.Option(
