@@ -18,9 +18,10 @@ first, reduced levels as SubIFDs or further pages of the series) gives a pyramid
 level 0 processed block by block, then each reduced level the box mean (``f x f``, ``f``
 the input's factor between levels, usually 2 or 4) of the *processed* level above, computed
 in the same block tasks and spooled to a raw scratch file beside the output, so no level is
-ever held whole. Tiles, compression (JPEG at quality :data:`JPEG_QUALITY` for JPEG inputs),
-resolution and description follow the input's. benchmarks/bench_wsi.py measures a
-40000 x 40000 slide.
+ever held whole: the bound above gains one band of the level being read back (at most
+``c W C b_out / f``) and the reduced band of each block row (a quarter of that). Tiles,
+compression (JPEG at quality :data:`JPEG_QUALITY` for JPEG inputs), resolution and
+description follow the input's. benchmarks/bench_wsi.py measures a 40000 x 40000 slide.
 """
 
 from __future__ import annotations
