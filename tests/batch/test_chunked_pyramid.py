@@ -336,3 +336,27 @@ def test_memory_bounded_on_a_pyramid(tmp_path: Path) -> None:
     before, after, levels = (int(v) for v in proc.stdout.split())
     assert levels == 3
     assert after - before < n * n * 3, (before, after)
+
+
+def test_ome_tiff_pyramid_keeps_its_pixel_size(tmp_path: Path) -> None:
+    """An OME-TIFF pyramid (0.25 um/px in its OME-XML) gives an OME-TIFF pyramid with the
+    same PhysicalSizeX/Y, and resolution tags of 40000 px/cm at level 0, 20000 at level 1;
+    an Aperio header's MPP is read the same way."""
+    from imageform.batch.chunked import _microns
+
+    img = _image(512, 512)
+    src = tmp_path / "in.ome.tif"
+    kw = {"tile": (TILE, TILE), "photometric": "rgb"}
+    with tifffile.TiffWriter(src, ome=True) as tw:
+        meta = {"axes": "YXS", "PhysicalSizeX": 0.25, "PhysicalSizeY": 0.25}
+        tw.write(img, subifds=1, metadata=meta, **kw)
+        tw.write(_box2(img).astype(np.uint8), subfiletype=1, **kw)
+    r = process_chunked(src, tmp_path / "out.ome.tif", "convert", {"to": "display_p3"}, chunk=256)
+    assert r.levels == ((512, 512), (256, 256))
+    with tifffile.TiffFile(r.output) as tf:
+        assert tf.is_ome
+        assert 'PhysicalSizeX="0.25"' in tf.pages[0].description
+        levels = tf.series[0].levels
+        assert [lv.keyframe.tags["XResolution"].value for lv in levels] == [(40000, 1), (20000, 1)]
+    header = "Aperio Image Library v10.0.51\r\n46920x33014 (256x256) JPEG/RGB Q=30|MPP = 0.4990"
+    assert _microns(header) == (0.499, 0.499)

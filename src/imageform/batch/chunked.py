@@ -173,6 +173,24 @@ class _TiffMeta:
     resolution: tuple[float, float] | None
     resolutionunit: int | None
     description: str | None
+    ome: bool = False
+    microns: tuple[float, float] | None = None
+
+
+def _microns(desc: str) -> tuple[float, float] | None:
+    """The pixel size in micrometres (x, y) an OME-XML (``PhysicalSizeX/Y``, in um) or an
+    Aperio SVS description (``MPP = ...``) states, or None."""
+    import re
+
+    if "Aperio" in desc[:200]:
+        m = re.search(r"\bMPP\s*=\s*([0-9.eE+-]+)", desc)
+        return (float(m.group(1)),) * 2 if m else None
+    xs = re.search(r'PhysicalSizeX="([0-9.eE+-]+)"', desc)
+    ys = re.search(r'PhysicalSizeY="([0-9.eE+-]+)"', desc)
+    units = re.findall(r'PhysicalSize[XY]Unit="([^"]*)"', desc)
+    if not xs or any(u not in ("µm", "um", "\u00b5m") for u in units):
+        return None
+    return float(xs.group(1)), float(ys.group(1)) if ys else float(xs.group(1))
 
 
 def _factor(big: tuple[int, int], small: tuple[int, int]) -> int:
@@ -219,9 +237,18 @@ def _tiff_meta(p: Path) -> _TiffMeta:
             res = (xr[0] / xr[1], yr[0] / yr[1]) if xr[1] and yr[1] else None
         unit = int(tags["ResolutionUnit"].value) if "ResolutionUnit" in tags else None
         desc = page.description or None
-        if desc is not None and (page.is_shaped or desc.lstrip().startswith("{")):
-            desc = None  # tifffile's own shape metadata, written afresh
-        return _TiffMeta(tuple(levels), tile, int(page.compression), res, unit, desc)
+        microns = _microns(desc) if desc else None
+        if desc is not None and (
+            page.is_shaped or tf.is_ome or tf.is_svs or desc.lstrip()[:1] in ("{", "<")
+        ):
+            # tifffile's shape, an OME-XML or an Aperio header describe the input's file
+            # layout: the output is written afresh (OME-XML with the pixel size for OME)
+            desc = None
+        if microns is not None and (res is None or unit in (None, 1) or res == (1.0, 1.0)):
+            res, unit = (1e4 / microns[0], 1e4 / microns[1]), 3  # pixels per centimetre
+        return _TiffMeta(
+            tuple(levels), tile, int(page.compression), res, unit, desc, tf.is_ome, microns
+        )
 
 
 #: tifffile's compression tag values a TIFF output can repeat, by name.
@@ -865,8 +892,17 @@ def _write_tiff(
         sy, sx = levels[0][0] / levels[k][0], levels[0][1] / levels[k][1]
         return {"resolution": (meta.resolution[0] / sx, meta.resolution[1] / sy)}
 
+    ome = meta is not None and meta.ome
+    first_kw = dict(kw)
+    if ome:  # an OME-TIFF in, an OME-TIFF out, with its pixel size
+        assert meta is not None
+        first_kw["metadata"] = {"axes": "YXS"}
+        if meta.microns is not None:
+            first_kw["metadata"].update(
+                PhysicalSizeX=meta.microns[0], PhysicalSizeY=meta.microns[1]
+            )
     try:
-        with tifffile.TiffWriter(tmp, bigtiff=nbytes > 2**32 - 2**26) as tw:
+        with tifffile.TiffWriter(tmp, bigtiff=nbytes > 2**32 - 2**26, ome=ome) as tw:
             h, w = levels[0]
             first = spool(1)
             tw.write(
@@ -875,7 +911,7 @@ def _write_tiff(
                 subifds=len(levels) - 1 or None,
                 description=meta.description if meta is not None else None,
                 **resolution(0),
-                **kw,
+                **first_kw,
             )
             src = first
             for k in range(1, len(levels)):
