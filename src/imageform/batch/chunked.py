@@ -609,6 +609,7 @@ def process_chunked(
     stats_from = check_option(stats_from, STATS_SOURCES, "stats_from")
     if tile is not None:
         tile = as_int(tile, "tile", minimum=16, maximum=chunk)
+        _check_tile(chunk, tile)
     force = as_bool(force, "force")
     if num_workers is not None:
         num_workers = as_int(num_workers, "num_workers", minimum=1, maximum=1024)
@@ -634,11 +635,7 @@ def process_chunked(
     if tile is None:
         tile = meta.tile if meta is not None and meta.tile and chunk % meta.tile == 0 else 256
         tile = min(tile, chunk)
-    if chunk % tile or tile % 16:
-        raise InvalidInputError(
-            f"expected chunk a multiple of tile, and tile a multiple of 16, got chunk {chunk}, "
-            f"tile {tile}"
-        )
+    _check_tile(chunk, tile)
     shape0 = (int(x.shape[0]), int(x.shape[1]))
     levels = _pyramid_levels(pyramid, meta, shape0, tile) if out_kind == "tiff" else (shape0,)
     for k in range(1, len(levels)):
@@ -695,6 +692,14 @@ def process_chunked(
         comp,
         where,
     )
+
+
+def _check_tile(chunk: int, tile: int) -> None:
+    if chunk % tile or tile % 16:
+        raise InvalidInputError(
+            f"expected chunk a multiple of tile, and tile a multiple of 16, got chunk {chunk}, "
+            f"tile {tile}"
+        )
 
 
 def _reduce(a: np.ndarray, f: int) -> np.ndarray:
