@@ -307,8 +307,10 @@ _CHILD = textwrap.dedent(
 
 def test_memory_bounded_on_a_pyramid(tmp_path: Path) -> None:
     """A 4096 x 4096, 3-level zlib pyramid (48 MiB as uint8 at level 0; 12 MiB at level 1)
-    processed in a fresh process: the peak RSS grows by less than the level-0 image; the
-    reduced levels are spooled to disk, never held whole."""
+    processed in a fresh process: the peak RSS grows by less than levels 0 and 1 written
+    (measured: 41 MiB, after a warm-up on one 512-px block; a band of 512 rows is 6 MiB);
+    the reduced levels are spooled to disk, never held whole, and the in-memory path would
+    hold level 0 plus its float copies (192 MiB each)."""
     n = 4096
     src = tmp_path / "big.tif"
 
@@ -335,7 +337,7 @@ def test_memory_bounded_on_a_pyramid(tmp_path: Path) -> None:
     )
     before, after, levels = (int(v) for v in proc.stdout.split())
     assert levels == 3
-    assert after - before < n * n * 3, (before, after)
+    assert after - before < n * n * 3 * 5 // 4, (before, after)
 
 
 def test_ome_tiff_pyramid_keeps_its_pixel_size(tmp_path: Path) -> None:
