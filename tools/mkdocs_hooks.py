@@ -75,6 +75,7 @@ BENCH_SCRIPTS: dict[str, str] = {
     "twoview": "benchmarks/bench_twoview.py",
     "vision": "benchmarks/bench_vision.py",
     "vp-lsd": "benchmarks/check_vp_lsd.py",
+    "wsi": "benchmarks/bench_wsi.py",
 }
 
 _DATED = r"^(?P<name>.+)-(?P<date>\d{4}-\d{2}-\d{2})$"

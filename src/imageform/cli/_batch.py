@@ -125,9 +125,24 @@ def _chunked_command(wf: Workflow) -> click.Command:
         click.Option(
             ["--tile"],
             type=click.INT,
-            default=256,
+            default=None,
+            help="Tile size of a TIFF output (default: the input's tiles, else 256).",
+        ),
+        click.Option(
+            ["--pyramid"],
+            type=click.Choice(["auto", "none", "build"]),
+            default="auto",
             show_default=True,
-            help="Tile size of a TIFF output.",
+            help="TIFF output levels: auto writes a pyramidal input's levels back (each the "
+            "box mean of the processed level above), none level 0 only, build also halves a "
+            "flat input.",
+        ),
+        click.Option(
+            ["--compression"],
+            type=click.Choice(["none", "zlib", "lzw", "zstd", "jpeg"]),
+            default=None,
+            help="TIFF output compression (default: the input's when writable; JPEG for "
+            "uint8 only).",
         ),
         click.Option(
             ["--dtype"],
@@ -139,6 +154,19 @@ def _chunked_command(wf: Workflow) -> click.Command:
         click.Option(["--force"], is_flag=True, help="Overwrite an existing output."),
         click.Option(["--json", "json_out"], is_flag=True, help="Print the result as JSON."),
     ]
+    if wf.name.replace("-", "_") == "stain_normalize":
+        params.insert(
+            -2,
+            click.Option(
+                ["--stats-from", "stats_from"],
+                type=click.Choice(["auto", "level", "subsample"]),
+                default="auto",
+                show_default=True,
+                help="Where the slide's own stain statistics are measured: a reduced pyramid "
+                "level of at most 4 Mpx (level; auto when the input is a pyramid) or every "
+                "s-th pixel of level 0 (subsample).",
+            ),
+        )
 
     def callback(**kw: Any) -> None:
         from imageform._jsonio import dumps
@@ -147,10 +175,19 @@ def _chunked_command(wf: Workflow) -> click.Command:
         image, out = kw.pop("image"), kw.pop("out")
         chunk, tile, dtype = kw.pop("chunk"), kw.pop("tile"), kw.pop("dtype")
         force, as_json = bool(kw.pop("force")), bool(kw.pop("json_out"))
+        extra = {k: kw.pop(k) for k in ("pyramid", "compression", "stats_from") if k in kw}
         opts = _options(wf, kw)
         with _naming_files({"image": image}):
             r = process_chunked(
-                image, out, wf.name, opts, chunk=chunk, tile=tile, dtype=dtype, force=force
+                image,
+                out,
+                wf.name,
+                opts,
+                chunk=chunk,
+                tile=tile,
+                dtype=dtype,
+                force=force,
+                **extra,
             )
         info = {
             "input": image,
@@ -160,13 +197,17 @@ def _chunked_command(wf: Workflow) -> click.Command:
             "chunk": r.chunk,
             "values_clipped": r.clipped,
             "gains": r.gains,
+            "levels": [list(v) for v in r.levels],
+            "compression": r.compression,
+            "stats_from": r.stats_from,
             "seconds": round(r.seconds, 3),
         }
         if as_json:
             click.echo(dumps(info))
         else:
             h, w = r.shape[:2]
-            click.echo(f"wrote {r.output} ({w} x {h} {r.dtype}, {r.seconds:.1f} s)")
+            pyr = f", {len(r.levels)} levels" if len(r.levels) > 1 else ""
+            click.echo(f"wrote {r.output} ({w} x {h} {r.dtype}{pyr}, {r.seconds:.1f} s)")
         if r.clipped:
             click.echo(
                 f"imageform: note: {r.clipped} values outside [0, 1] were clipped to fit "
