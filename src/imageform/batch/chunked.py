@@ -165,9 +165,12 @@ def _tiff_lazy(p: Path, chunk: int, da: Any, zarr: Any) -> Any:
 
 @dataclass(frozen=True)
 class _TiffMeta:
-    """What a TIFF output copies from a TIFF input: the level sizes (level 0 first), the
-    tile side (None: strips or non-square tiles), compression (tifffile's tag value),
-    resolution (pixels per unit, x and y), its unit and level 0's description."""
+    """What a TIFF output copies from a TIFF input.
+
+    The level sizes (level 0 first), the tile side (None: strips or non-square tiles),
+    compression (tifffile's tag value), resolution (pixels per unit, x and y), its unit and
+    level 0's description.
+    """
 
     levels: tuple[tuple[int, int], ...]
     tile: int | None
@@ -180,8 +183,11 @@ class _TiffMeta:
 
 
 def _microns(desc: str) -> tuple[float, float] | None:
-    """The pixel size in micrometres (x, y) an OME-XML (``PhysicalSizeX/Y``, in um) or an
-    Aperio SVS description (``MPP = ...``) states, or None."""
+    """Return the pixel size in micrometres (x, y) a TIFF description states, or None.
+
+    The description is an OME-XML (``PhysicalSizeX/Y``, in um) or an Aperio SVS one
+    (``MPP = ...``).
+    """
     import re
 
     if "Aperio" in desc[:200]:
@@ -196,16 +202,21 @@ def _microns(desc: str) -> tuple[float, float] | None:
 
 
 def _factor(big: tuple[int, int], small: tuple[int, int]) -> int:
-    """The whole reduction factor from ``big`` to ``small`` (each side floor or ceil of
-    ``big / f``), or 0 when there is none."""
+    """Return the whole reduction factor from ``big`` to ``small``, or 0 when there is none.
+
+    Each side of ``small`` is the floor or ceil of ``big / f``.
+    """
     f = max(1, round(big[0] / max(small[0], 1)))
     ok = all(s in (b // f, -(-b // f)) for b, s in zip(big, small, strict=True))
     return f if f >= 2 and ok else 0
 
 
 def _tiff_meta(p: Path) -> _TiffMeta:
-    """The levels and tags of a TIFF's first series, the pyramid checked: every level RGB
-    like level 0, each a whole factor (2, 4, ...) smaller than the one above."""
+    """Read the levels and tags of a TIFF's first series, the pyramid checked.
+
+    Every level is RGB like level 0, each a whole factor (2, 4, ...) smaller than the one
+    above.
+    """
     import tifffile
 
     with tifffile.TiffFile(p) as tf:
@@ -258,8 +269,11 @@ _COMPRESSION_NAMES = {1: "none", 5: "lzw", 7: "jpeg", 8: "zlib", 32946: "zlib", 
 
 
 def _out_compression(given: str | None, meta: _TiffMeta | None, dtype: str) -> str:
-    """The TIFF output's compression: ``given``, or the input's when tifffile writes it
-    (JPEG for uint8 only; another JPEG-like codec, JPEG 2000 say, becomes zlib)."""
+    """Return the TIFF output's compression: ``given``, or the input's.
+
+    The input's when tifffile writes it (JPEG for uint8 only; another JPEG-like codec, JPEG
+    2000 say, becomes zlib).
+    """
     if given is not None:
         name = check_option(given, _COMPRESSIONS, "compression")
         if name == "jpeg" and dtype != "uint8":
@@ -274,9 +288,11 @@ def _out_compression(given: str | None, meta: _TiffMeta | None, dtype: str) -> s
 def _pyramid_levels(
     mode: str, meta: _TiffMeta | None, shape: tuple[int, int], tile: int
 ) -> tuple[tuple[int, int], ...]:
-    """The levels to write: the input's (``auto``, ``build``), level 0 only (``none``, or
-    ``auto`` on a flat input), or halvings until the short side fits a tile (``build`` on a
-    flat input)."""
+    """Return the levels to write.
+
+    The input's (``auto``, ``build``), level 0 only (``none``, or ``auto`` on a flat input),
+    or halvings until the short side fits a tile (``build`` on a flat input).
+    """
     if mode == "none":
         return (shape,)
     if meta is not None and len(meta.levels) > 1:
@@ -397,12 +413,14 @@ def _stain_block(block: np.ndarray, method: str, target: Any, source: Any) -> np
 def _stain_stats(
     x: Any, opts: dict[str, Any], src: Path, meta: _TiffMeta | None, stats_from: str
 ) -> tuple[Any, Any, str]:
-    """The target's statistics (a JSON file or a reference image) and the slide's own, with
-    where they were measured: a reduced pyramid level (``level``; ``auto`` when the input
-    has one: the largest level of at most :data:`STAIN_SAMPLE_PIXELS`, read whole, as
-    whole-slide tools estimate on a thumbnail) or a regular subsample of level 0 of at most
-    that many pixels (every ``step``-th row and column, read block by block: every tile of
-    level 0 is decoded once)."""
+    """Return the target's statistics and the slide's own, with where they were measured.
+
+    The target's come from a JSON file or a reference image; the slide's are measured on a
+    reduced pyramid level (``level``; ``auto`` when the input has one: the largest level of
+    at most :data:`STAIN_SAMPLE_PIXELS`, read whole, as whole-slide tools estimate on a
+    thumbnail) or a regular subsample of level 0 of at most that many pixels (every
+    ``step``-th row and column, read block by block: every tile of level 0 is decoded once).
+    """
     from imageform import analysis
     from imageform.io import read_image
 
@@ -516,8 +534,10 @@ def process_chunked(
     compression: str | None = None,
     stats_from: str = "auto",
 ) -> ChunkedResult:
-    r"""Apply ``convert``, ``white_balance`` or ``stain_normalize`` to an image larger than
-    memory, chunk-wise; a pyramidal TIFF (a whole-slide image) gives a pyramidal TIFF.
+    r"""Apply ``convert``, ``white_balance`` or ``stain_normalize`` chunk-wise.
+
+    The image may be larger than memory; a pyramidal TIFF (a whole-slide image) gives a
+    pyramidal TIFF.
 
     .. math:: \text{out}[b] = f(\text{in}[b];\ \theta),\qquad
         \theta = \text{gains } \bar e / e_c,\ e_c = \big(\operatorname{mean}_{\text{all}}
@@ -707,9 +727,12 @@ def _check_tile(chunk: int, tile: int) -> None:
 
 
 def _reduce(a: np.ndarray, f: int) -> np.ndarray:
-    """The ``f x f`` box mean of ``a`` (H, W, C), ceil(H/f) x ceil(W/f): a partial box at the
-    bottom or right edge averages the pixels it has; integers rounded half up. Summed as
-    ``f`` row slices, then ``f`` column slices (a reshape-and-sum is ~20 times slower)."""
+    """Return the ``f x f`` box mean of ``a`` (H, W, C), ceil(H/f) x ceil(W/f).
+
+    A partial box at the bottom or right edge averages the pixels it has; integers rounded
+    half up. Summed as ``f`` row slices, then ``f`` column slices (a reshape-and-sum is ~20
+    times slower).
+    """
     h, w, c = a.shape
     hh, ww = -(-h // f), -(-w // f)
     partial = (hh * f, ww * f) != (h, w)
@@ -739,9 +762,11 @@ def _reduce(a: np.ndarray, f: int) -> np.ndarray:
 def _finish(
     block: np.ndarray, op: tuple[Any, ...], dtype: str, factor: int = 0
 ) -> tuple[np.ndarray, int, np.ndarray | None]:
-    """One block: the operation in float32, then the output samples, the out-of-range
-    count and (``factor``) the block's box mean for the next pyramid level, so that no float
-    block outlives its task."""
+    """Process one block: the operation in float32, then the output samples.
+
+    Return the output samples, the out-of-range count and (``factor``) the block's box mean
+    for the next pyramid level, so that no float block outlives its task.
+    """
     f = op[0](block, *op[1:])
     if dtype == "float32":
         return f, 0, _reduce(f, factor) if factor else None
@@ -755,8 +780,11 @@ def _finish(
 
 
 def _rows(x: Any, op: tuple[Any, ...], dtype: str, factor: int = 0) -> Any:
-    """Yield (row0, output blocks of one block row, out-of-range count, reduced band or
-    None), row by row; the blocks of a row run in parallel on dask's threaded scheduler."""
+    """Yield the processed blocks row by row.
+
+    Each item is (row0, output blocks of one block row, out-of-range count, reduced band or
+    None); the blocks of a row run in parallel on dask's threaded scheduler.
+    """
     import dask
 
     blocks = x.to_delayed()
@@ -789,8 +817,10 @@ def _write_zarr(tmp: Path, x: Any, op: tuple[Any, ...], dtype: str, chunk: int) 
 
 @dataclass(frozen=True)
 class _TiffSpec:
-    """How a TIFF output is written: its levels, tile side, compression, encoding threads
-    and the input's tags to copy."""
+    """How a TIFF output is written.
+
+    Its levels, tile side, compression, encoding threads and the input's tags to copy.
+    """
 
     levels: tuple[tuple[int, int], ...]
     tile: int
@@ -800,8 +830,10 @@ class _TiffSpec:
 
 
 class _Spool:
-    """A pyramid level spooled to a raw file (row-major, C-order samples) band by band, then
-    read back band by band: the level is never held whole."""
+    """A pyramid level spooled to a raw file band by band, then read back band by band.
+
+    The file holds row-major, C-order samples; the level is never held whole.
+    """
 
     def __init__(self, path: Path, shape: tuple[int, int], channels: int, dtype: Any) -> None:
         self.path, self.shape, self.channels = path, shape, channels
@@ -834,7 +866,7 @@ class _Spool:
 
 
 def _band_tiles(band: list[np.ndarray], tile: int) -> Any:
-    """The tiles of one band of blocks, row-major as TIFF stores them."""
+    """Yield the tiles of one band of blocks, row-major as TIFF stores them."""
     for tr in range(0, band[0].shape[0], tile):
         for q in band:
             for tc in range(0, q.shape[1], tile):
@@ -844,9 +876,12 @@ def _band_tiles(band: list[np.ndarray], tile: int) -> Any:
 def _write_tiff(
     tmp: Path, x: Any, op: tuple[Any, ...], dtype: str, chunk: int, spec: _TiffSpec
 ) -> int:
-    """Level 0 from the blocks, then each reduced level from the spooled box means of the
-    level above, into one (BigTIFF when needed) tiled TIFF: reduced levels as SubIFDs of
-    level 0 (as tifffile and OME-TIFF write pyramids)."""
+    """Write level 0 from the blocks, then each reduced level, into one tiled TIFF.
+
+    Each reduced level comes from the spooled box means of the level above; the file is
+    BigTIFF when needed, with reduced levels as SubIFDs of level 0 (as tifffile and OME-TIFF
+    write pyramids).
+    """
     import tifffile
 
     levels, tile = spec.levels, spec.tile
