@@ -49,7 +49,7 @@ def test_remap_kernel_matches_twin_all_dtypes(dtype: type, c: int) -> None:
     for mdt in (np.float64, np.float32):
         mm = m.astype(mdt)
         out = np.empty((2, 25, 35, c), np.float64)
-        kernel(img, mm, scale, 0.5, out)
+        kernel(img, mm, scale, 0.5, out, np.empty(0), np.empty(0, np.int64), 0.0)
         twin = _remap_bilinear_numpy(img.astype(np.float64) * scale, mm[..., 0], mm[..., 1], 0.5)
         np.testing.assert_allclose(out, twin, atol=1e-12)
         assert out[0, 0, 0, 0] == 0.5
