@@ -49,7 +49,14 @@ from numba import prange
 
 from imageform._kernels.jit import njit
 
-__all__ = ["remap_bilinear", "undistort_brown_conrady"]
+__all__ = [
+    "PARALLEL_MIN_SAMPLES",
+    "pick",
+    "remap_bilinear",
+    "remap_bilinear_serial",
+    "undistort_brown_conrady",
+    "undistort_brown_conrady_serial",
+]
 
 #: Row blocks per image (the parallel work items); each allocates its buffers once.
 _BLOCKS = 64
@@ -386,3 +393,24 @@ def undistort_brown_conrady(
         i0, i1 = blk * ho // nblk, (blk + 1) * ho // nblk
         bufs = (kidx, ax, ay, ok)
         _undistort_rows(flat, i0, i1, wo, h, w, nc, p, rational, scale, fill, rounded, hi, of, bufs)
+
+
+# the same loops in the calling thread (prange runs as range): for small images, where waking
+# numba's pool costs more than it gains on a loaded machine (as demosaic_bilinear's)
+remap_bilinear_serial = njit(error_model="numpy", fastmath={"contract"})(remap_bilinear.py_func)
+undistort_brown_conrady_serial = njit(error_model="numpy", fastmath={"contract"})(
+    undistort_brown_conrady.py_func
+)
+
+#: Outputs of fewer samples (pixels x channels x images) run serially: on the shared 2-core
+#: machine (load 9-10), every 1 MP grey remap took 16.0 ms with 2 numba threads against
+#: 6.7-8.9 ms with one (and OpenCV 6.7 ms with 2), in a first run of bench_remap.py.
+PARALLEL_MIN_SAMPLES = 1 << 22
+
+
+def pick(kernel: str, n_samples: int) -> object:
+    """The parallel or the serial kernel ``kernel`` for an output of ``n_samples`` samples."""
+    serial = n_samples < PARALLEL_MIN_SAMPLES
+    if kernel == "remap":
+        return remap_bilinear_serial if serial else remap_bilinear
+    return undistort_brown_conrady_serial if serial else undistort_brown_conrady

@@ -85,8 +85,7 @@ def _keep_dtype(keep_dtype: object, image: Any, fill: float) -> tuple[bool, floa
                 f" got {fill!r}"
             )
         return True, fill
-    kind = getattr(dtype, "kind", None) or getattr(np.asarray(image).dtype, "kind", "f")
-    if not isinstance(image, np.ndarray) and kind in "ui":
+    if not isinstance(image, np.ndarray) and "int" in str(dtype):  # torch.uint8, a Dask uint8
         raise InvalidInputError(
             f"keep_dtype=True on integer images takes NumPy arrays, got {type(image).__name__}"
         )
@@ -224,10 +223,11 @@ def remap_bilinear(image: Any, map_uv: Any, *, fill: float = 0.0, keep_dtype: bo
     fill_v = float(fill)
     hw = (int(m.shape[0]), int(m.shape[1]))
     if use_numba(batch):
-        from imageform._kernels.remap import remap_bilinear as kernel
+        from imageform._kernels.remap import pick
 
         out_dtype, last = _kernel_args(batch, keep)
         out = np.empty((batch.shape[0], *hw, batch.shape[-1]), dtype=out_dtype)
+        kernel: Any = pick("remap", out.size)
         kernel(batch, np.ascontiguousarray(m), scale, fill_v, out, *last)
     elif keep:
         out = _rounded(
@@ -416,13 +416,14 @@ def undistort_image(
         batch, full_shape, gray, scale = _as_batch(image)
         if use_numba(batch):
             # fused kernel: source position and sampling in one pass (no (H, W, 2) map)
-            from imageform._kernels.remap import undistort_brown_conrady
+            from imageform._kernels.remap import pick
 
             Km, Kn = _intrinsics(K, new_K)
             out_dtype, last = _kernel_args(batch, keep)
             out = np.empty((batch.shape[0], *out_hw, batch.shape[-1]), dtype=out_dtype)
             coeffs = np.asarray(distortion.coeffs, dtype=np.float64)
-            undistort_brown_conrady(batch, Kn, Km, coeffs, scale, float(fill), out, *last)
+            kernel: Any = pick("undistort", out.size)
+            kernel(batch, Kn, Km, coeffs, scale, float(fill), out, *last)
             out = out.reshape(*full_shape[:-3], *out_hw, full_shape[-1])
             return out[..., 0] if gray else out
     m = undistortion_map(out_hw, K, distortion, new_K=new_K)
