@@ -10,22 +10,28 @@ same pixels to 1e-3. Both libraries run on the same inputs in the same run:
   ``cv2.undistort(img, K, D)``;
 - ``remap_bilinear(img, map32)`` against ``cv2.remap(img, map32, None, INTER_LINEAR)`` with
   the same ``(H, W, 2)`` float32 map (``undistortion_map(...).astype(np.float32)``);
-- numba's and OpenCV's thread counts set equal: 1 thread, then the default (all cores);
-  medians of ``--reps`` runs after one warm-up call (numba compiled before timing).
+- kernel against kernel, the same dtypes in and out: uint8 rows run imageform with
+  ``keep_dtype=True`` (uint8 out, rounded, as OpenCV); ``u8->f32`` rows (1 MP) time
+  imageform's default float32 output of a uint8 image against the same OpenCV call;
+- numba's and OpenCV's thread counts set equal: 1 thread, then 2 (the machine's cores).
 
-Outputs differ in type where OpenCV keeps 8 bits: imageform returns float32 in [0, 1] for a
-uint8 image (docs/conventions.md), OpenCV uint8. Accuracy (1 MP, each dtype and channel
-count): the largest |difference| between imageform and OpenCV with float maps on the float
-image (``initUndistortRectifyMap(..., CV_32FC1)`` + ``remap``, which OpenCV 5 interpolates
-without quantising) and a float64 reference (the NumPy twin on float64 image and map), both
-in [0, 1] units; for uint8, also the difference to OpenCV's 8-bit output in codes
-(OpenCV rounds to the nearest code; cv2.undistort also quantises positions to 1/32 px).
+Timing: warm numba; ``--rounds`` rounds, in each the median of 5 calls of imageform then of
+OpenCV (interleaved, so both see the same load of this shared machine); the table gives the
+medians over the rounds and the speed OpenCV ms / imageform ms as the median of the
+per-round ratios (and its range). The load average is printed at the start and the end.
+
+Accuracy (1 MP, each dtype and channel count): the largest |difference| between imageform
+and OpenCV with float maps (``initUndistortRectifyMap(..., CV_32FC1)`` + ``remap``, which
+OpenCV 5 interpolates without quantising) and a float64 reference (the NumPy twin on float64
+image and map), in [0, 1] units for float outputs and in codes for uint8 outputs (OpenCV
+rounds to the nearest code; cv2.undistort also quantises positions to 1/32 px).
 
 Run from the repository root::
 
-    OPENBLAS_NUM_THREADS=1 PYTHONPATH=src python benchmarks/bench_remap.py [--reps 5]
+    OPENBLAS_NUM_THREADS=1 PYTHONPATH=src python benchmarks/bench_remap.py [--rounds 7]
 
-Prints a Markdown table and writes it to ``benchmarks/results/remap-<date>.md``.
+Prints a Markdown table and writes it to ``benchmarks/results/remap-<date>.md`` (or
+``--write PATH``).
 """
 
 from __future__ import annotations
@@ -34,8 +40,11 @@ import argparse
 import datetime as _dt
 import os
 import platform
+import statistics
 import sys
+import time
 from pathlib import Path
+from typing import Any
 
 import cv2
 import numba
@@ -51,7 +60,7 @@ from imageform.geometry.undistort import (
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))  # run as a script or as a module
-from benchmarks._common import markdown_table, median_time  # noqa: E402
+from benchmarks._common import markdown_table  # noqa: E402
 
 # the OpenCV tutorial's left*.jpg calibration (shared/data/README.md), scaled to each size
 D = np.array([-0.26509039, -0.0467422, 0.00183302, -0.00031469, 0.25231221])
@@ -82,104 +91,155 @@ def _accuracy(img: np.ndarray, K: np.ndarray, model: BrownConrady) -> dict[str, 
     f32 = img.astype(np.float32) / 255 if img.dtype == np.uint8 else img
     m64 = undistortion_map((h, w), K, model)
     m32 = m64.astype(np.float32)
-    ours_u = np.asarray(undistort_image(img, K, model))
-    ours_r = np.asarray(remap_bilinear(img, m32))
     mx, my = cv2.initUndistortRectifyMap(K, D, None, K, (w, h), cv2.CV_32FC1)
-    cv_u = cv2.remap(f32, mx, my, cv2.INTER_LINEAR)
-    cv_r = cv2.remap(f32, m32, None, cv2.INTER_LINEAR)
     f64 = f32.astype(np.float64).reshape(1, h, w, -1)
-    ref_u = _remap_bilinear_numpy(f64, m64[..., 0], m64[..., 1], 0.0).reshape(ours_u.shape)
-    ref_r = _remap_bilinear_numpy(f64, m32[..., 0], m32[..., 1], 0.0).reshape(ours_r.shape)
-    res = {
-        "undistort": f"cv2 float maps {np.abs(ours_u - cv_u).max():.1e}; "
-        f"f64 ref {np.abs(ours_u - ref_u).max():.1e}",
-        "remap": f"cv2 {np.abs(ours_r - cv_r).max():.1e}; "
-        f"f64 ref {np.abs(ours_r - ref_r).max():.1e}",
-    }
+    ref_u = _remap_bilinear_numpy(f64, m64[..., 0], m64[..., 1], 0.0).reshape(img.shape)
+    ref_r = _remap_bilinear_numpy(f64, m32[..., 0], m32[..., 1], 0.0).reshape(img.shape)
+    inner = np.s_[2:-2, 2:-2]  # OpenCV blends its constant border into the edge half pixel
+
+    def mx_(a: np.ndarray, b: np.ndarray) -> float:
+        return float(np.abs(a.astype(np.float64) - b)[inner].max())
+
+    res: dict[str, str] = {}
     if img.dtype == np.uint8:
-        u8 = cv2.undistort(img, K, D).astype(np.float64)
-        r8 = cv2.remap(img, m32, None, cv2.INTER_LINEAR).astype(np.float64)
-        res["undistort"] += f"; cv2.undistort uint8 {np.abs(ours_u * 255 - u8).max():.2f} codes"
-        res["remap"] += f"; cv2 uint8 {np.abs(ours_r * 255 - r8).max():.2f} codes"
+        ours_u = np.asarray(undistort_image(img, K, model, keep_dtype=True))
+        ours_r = np.asarray(remap_bilinear(img, m32, keep_dtype=True))
+        cv_u = cv2.remap(img, mx, my, cv2.INTER_LINEAR)
+        cv_r = cv2.remap(img, m32, None, cv2.INTER_LINEAR)
+        res["undistort"] = (
+            f"codes: cv2 float maps {mx_(ours_u, cv_u):.0f}; "
+            f"f64 ref {mx_(ours_u, ref_u * 255):.2f}; "
+            f"cv2.undistort {mx_(ours_u, cv2.undistort(img, K, D)):.0f}"
+        )
+        res["remap"] = f"codes: cv2 {mx_(ours_r, cv_r):.0f}; f64 ref {mx_(ours_r, ref_r * 255):.2f}"
+        fu = np.asarray(undistort_image(img, K, model))
+        fr = np.asarray(remap_bilinear(img, m32))
+        res["undistort f32"] = f"f64 ref {mx_(fu, ref_u):.1e}"
+        res["remap f32"] = f"f64 ref {mx_(fr, ref_r):.1e}"
     else:
-        fx = cv2.undistort(img, K, D)
-        res["undistort"] += f"; cv2.undistort (1/32 px) {np.abs(ours_u - fx).max():.1e}"
+        ours_u = np.asarray(undistort_image(img, K, model))
+        ours_r = np.asarray(remap_bilinear(img, m32))
+        cv_u = cv2.remap(f32, mx, my, cv2.INTER_LINEAR)
+        cv_r = cv2.remap(f32, m32, None, cv2.INTER_LINEAR)
+        res["undistort"] = (
+            f"cv2 float maps {mx_(ours_u, cv_u):.1e}; f64 ref {mx_(ours_u, ref_u):.1e}; "
+            f"cv2.undistort (1/32 px) {mx_(ours_u, cv2.undistort(img, K, D)):.1e}"
+        )
+        res["remap"] = f"cv2 {mx_(ours_r, cv_r):.1e}; f64 ref {mx_(ours_r, ref_r):.1e}"
     return res
+
+
+def _median5(fn: Any) -> float:
+    ts = []
+    for _ in range(5):
+        t0 = time.perf_counter()
+        fn()
+        ts.append(time.perf_counter() - t0)
+    return statistics.median(ts)
+
+
+def _pair(ours: Any, cv: Any, rounds: int) -> tuple[float, float, float, float, float]:
+    """Medians over ``rounds`` interleaved rounds: imageform ms, OpenCV ms, and the speed
+    (OpenCV / imageform) as the median of the per-round ratios, with its range."""
+    ours()
+    cv()
+    a, b, r = [], [], []
+    for _ in range(rounds):
+        ta, tb = _median5(ours), _median5(cv)
+        a.append(ta)
+        b.append(tb)
+        r.append(tb / ta)
+    return statistics.median(a), statistics.median(b), statistics.median(r), min(r), max(r)
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--reps", type=int, default=5)
+    ap.add_argument("--rounds", type=int, default=7)
     ap.add_argument("--sizes", default="1 MP,12 MP")
+    ap.add_argument("--threads", default="1,2")
+    ap.add_argument("--write", type=Path, help="the results file (default: remap-<date>.md)")
     args = ap.parse_args()
     model = BrownConrady.from_opencv(D)
     default_threads = numba.get_num_threads()
-    thread_counts = sorted({1, default_threads})
+    default_cv = cv2.getNumThreads()
+    thread_counts = [int(t) for t in args.threads.split(",")]
+    load0 = os.getloadavg()[0]
     rows: list[list[object]] = []
-    for size in args.sizes.split(","):
-        h, w = SIZES[size.strip()]
+    for size in (s.strip() for s in args.sizes.split(",")):
+        h, w = SIZES[size]
         K = _k(h, w)
         imgs = _images(h, w)
         m32 = undistortion_map((h, w), K, model).astype(np.float32)
         for (dt, c), img in imgs.items():
-            acc = _accuracy(img, K, model) if size.strip() == "1 MP" else {}
+            acc = _accuracy(img, K, model) if size == "1 MP" else {}
+            variants = [(f"{dt}->{dt}", dt == "uint8", "")]
+            if dt == "uint8" and size == "1 MP":
+                variants.append(("u8->f32 (default)", False, " f32"))
             for nt in thread_counts:
                 numba.set_num_threads(nt)
                 cv2.setNumThreads(nt)
-                t = {
-                    "undistort": (
-                        median_time(lambda i=img, k=K: undistort_image(i, k, model), args.reps),
-                        median_time(lambda i=img, k=K: cv2.undistort(i, k, D), args.reps),
-                    ),
-                    "remap": (
-                        median_time(lambda i=img, m=m32: remap_bilinear(i, m), args.reps),
-                        median_time(
-                            lambda i=img, m=m32: cv2.remap(i, m, None, cv2.INTER_LINEAR), args.reps
+                for label, keep, key in variants:
+                    cases = {
+                        "undistort": (
+                            lambda i=img, k=K, kd=keep: undistort_image(i, k, model, keep_dtype=kd),
+                            lambda i=img, k=K: cv2.undistort(i, k, D),
                         ),
-                    ),
-                }
-                for op, (t_if, t_cv) in t.items():
-                    rows.append(
-                        [
-                            f"{size.strip()} {dt} {c}ch",
-                            "undistort_image / cv2.undistort"
-                            if op == "undistort"
-                            else "remap_bilinear / cv2.remap",
-                            nt,
-                            f"{t_if * 1e3:.1f}",
-                            f"{t_cv * 1e3:.1f}",
-                            f"{t_cv / t_if:.2f}x",
-                            acc.get(op, "-"),
-                        ]
-                    )
-                print(rows[-2], rows[-1], flush=True)
+                        "remap": (
+                            lambda i=img, m=m32, kd=keep: remap_bilinear(i, m, keep_dtype=kd),
+                            lambda i=img, m=m32: cv2.remap(i, m, None, cv2.INTER_LINEAR),
+                        ),
+                    }
+                    for op, (ours, cv) in cases.items():
+                        t_if, t_cv, r, rmin, rmax = _pair(ours, cv, args.rounds)
+                        rows.append(
+                            [
+                                f"{size} {c}ch",
+                                label,
+                                "undistort_image / cv2.undistort"
+                                if op == "undistort"
+                                else "remap_bilinear / cv2.remap",
+                                nt,
+                                f"{t_if * 1e3:.2f}",
+                                f"{t_cv * 1e3:.2f}",
+                                f"**{r:.2f}x** ({rmin:.2f}-{rmax:.2f})",
+                                acc.get(op + key, "-"),
+                            ]
+                        )
+                        print(rows[-1], flush=True)
     numba.set_num_threads(default_threads)
-    cv2.setNumThreads(default_threads)
+    cv2.setNumThreads(default_cv)
     cols = [
         "image",
+        "dtype in->out",
         "imageform / OpenCV",
         "threads",
         "imageform ms",
         "OpenCV ms",
-        "speed (OpenCV ms / ours)",
-        "max |diff| (1 MP; [0, 1] units)",
+        "speed OpenCV/imageform (range)",
+        "max |diff| (1 MP; [0, 1] units or codes)",
     ]
-    load = os.getloadavg()
+    load1 = os.getloadavg()[0]
+    today = _dt.date.today().isoformat()
     text = (
-        f"# Remap benchmark ({_dt.date.today().isoformat()})\n\n"
-        f"Machine: {platform.machine()}, {os.cpu_count()} cores (shared, load average "
-        f"{load[0]:.1f} at the end), Python {platform.python_version()}, NumPy {np.__version__}, "
-        f"numba {numba.__version__}, OpenCV {cv2.__version__}; numba and OpenCV threads set "
-        f"equal. Median of {args.reps} runs after one warm-up call, both libraries in the same "
-        "run on the same input. imageform returns float32 for uint8 input, OpenCV uint8.\n\n"
+        f"# Remap benchmark ({today})\n\n"
+        f"Machine: {platform.machine()}, {os.cpu_count()} cores (shared with other engineers: "
+        f"load average {load0:.1f} at the start, {load1:.1f} at the end), Python "
+        f"{platform.python_version()}, NumPy {np.__version__}, numba {numba.__version__}, "
+        f"OpenCV {cv2.__version__}; OPENBLAS_NUM_THREADS="
+        f"{os.environ.get('OPENBLAS_NUM_THREADS', 'unset')}; numba and OpenCV threads set "
+        f"equal. {args.rounds} rounds, in each the median of 5 calls of imageform then of "
+        "OpenCV; the ms columns are the medians over the rounds, the speed the median of the "
+        "per-round ratios (> 1: imageform faster). Same dtypes in and out: uint8 rows run "
+        "imageform with `keep_dtype=True`; `u8->f32 (default)` rows time imageform's float32 "
+        "output of a uint8 image against OpenCV's uint8 one.\n\n"
         + markdown_table(cols, rows)
         + "\nCommand: `OPENBLAS_NUM_THREADS=1 PYTHONPATH=src python benchmarks/bench_remap.py"
-        + (f" --reps {args.reps}`\n" if args.reps != 5 else "`\n")
+        + (f" --rounds {args.rounds}`\n" if args.rounds != 7 else "`\n")
     )
     print(text)
-    out = ROOT / "benchmarks" / "results" / f"remap-{_dt.date.today().isoformat()}.md"
+    out = args.write or ROOT / "benchmarks" / "results" / f"remap-{today}.md"
     out.write_text(text)
-    print(f"written to {out.relative_to(ROOT)}")
+    print(f"written to {out}")
 
 
 if __name__ == "__main__":

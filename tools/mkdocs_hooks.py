@@ -78,7 +78,9 @@ BENCH_SCRIPTS: dict[str, str] = {
     "wsi": "benchmarks/bench_wsi.py",
 }
 
-_DATED = r"^(?P<name>.+)-(?P<date>\d{4}-\d{2}-\d{2})$"
+#: ``NAME-YYYY-MM-DD.md``, or with a letter after the date for a later table of the same day
+#: (``remap-2026-11-25b.md`` is newer than ``remap-2026-11-25.md``).
+_DATED = r"^(?P<name>.+)-(?P<date>\d{4}-\d{2}-\d{2}[a-z]?)$"
 
 
 def result_files(root: Any) -> dict[str, list[Any]]:
@@ -90,7 +92,7 @@ def result_files(root: Any) -> dict[str, list[Any]]:
     for path in sorted(Path(root, "benchmarks", "results").glob("*.md")):
         m = re.match(_DATED, path.stem)
         if m is None:
-            raise ValueError(f"{path.name}: results files are named NAME-YYYY-MM-DD.md")
+            raise ValueError(f"{path.name}: results files are named NAME-YYYY-MM-DD[a-z].md")
         found.setdefault(m["name"], []).append((m["date"], path))
     return {k: [p for _, p in sorted(v, reverse=True)] for k, v in sorted(found.items())}
 

@@ -45,7 +45,7 @@ def test_remap_kernel_matches_twin() -> None:
     m = rng.uniform(-2, 42, (25, 35, 2))
     m[0, 0] = np.nan
     out = np.empty((2, 25, 35, 3))
-    kernel(img, m, 1.0, 0.5, out)
+    kernel(img, m, 1.0, 0.5, out, np.empty(0), np.empty(0, np.int32), 0.0)
     twin = _remap_bilinear_numpy(img, m[..., 0], m[..., 1], 0.5)
     np.testing.assert_allclose(out, twin, atol=1e-12)
     assert out[0, 0, 0, 0] == 0.5

@@ -27,7 +27,7 @@ from imageform._backend import (
     to_numpy,
     use_numba,
 )
-from imageform._validate import as_image, as_real, check_memory, format_shape
+from imageform._validate import as_bool, as_image, as_real, check_memory, format_shape
 from imageform.errors import InvalidInputError
 from imageform.geometry._checks import MAX_MAGNITUDE, as_float, as_matrix, size_pair
 from imageform.geometry._remap_xp import map_grid, remap_dask, remap_xp
@@ -68,9 +68,50 @@ def _as_batch(image: Any) -> tuple[np.ndarray, tuple[int, ...], bool, float]:
     return np.ascontiguousarray(arr.reshape(-1, h, w, c)), (*lead, h, w, c), gray, scale
 
 
-def _out_dtype(batch: np.ndarray) -> Any:
-    """float32 for uint8/uint16 images (as :func:`imageform._validate.as_image`), else theirs."""
-    return np.float32 if batch.dtype in _INT_SCALE else batch.dtype
+def _out_dtype(batch: np.ndarray, keep: bool = False) -> Any:
+    """Return the output dtype of ``batch``.
+
+    float32 for uint8/uint16 images (as :func:`imageform._validate.as_image`) unless ``keep``
+    (``keep_dtype=True``: their own dtype), else theirs.
+    """
+    return np.float32 if batch.dtype in _INT_SCALE and not keep else batch.dtype
+
+
+def _keep_dtype(keep_dtype: object, image: Any, fill: float) -> tuple[bool, float]:
+    """Tell whether the kernels write the image's integer dtype, and check ``fill``.
+
+    The integer dtype is kept with ``keep_dtype=True`` on a uint8/uint16 NumPy image; ``fill``
+    is then checked in its codes.
+    """
+    if not as_bool(keep_dtype, "keep_dtype"):
+        return False, fill
+    dtype = getattr(image, "dtype", None)
+    if isinstance(image, np.ndarray) and dtype in _INT_SCALE:
+        hi = float(np.iinfo(dtype).max)
+        if math.isnan(fill) or not 0.0 <= fill <= hi:
+            raise InvalidInputError(
+                f"expected fill in [0, {hi:.0f}] (codes of the {dtype} output, keep_dtype=True),"
+                f" got {fill!r}"
+            )
+        return True, fill
+    if not isinstance(image, np.ndarray) and "int" in str(dtype):  # torch.uint8, a Dask uint8
+        raise InvalidInputError(
+            f"keep_dtype=True on integer images takes NumPy arrays, got {type(image).__name__}"
+        )
+    return False, fill  # float images keep their dtype anyway
+
+
+def _kernel_args(batch: np.ndarray, keep: bool) -> tuple[Any, tuple[np.ndarray, np.ndarray, float]]:
+    """Return the kernels' output dtype for ``batch`` and their last arguments.
+
+    The arguments: the arithmetic's and the sample index's dtype carriers and the largest code
+    (0 for float outputs); see :mod:`imageform._kernels.remap`.
+    """
+    out_dtype = np.dtype(_out_dtype(batch, keep))
+    acc = np.empty(0, np.float64 if out_dtype == np.float64 else np.float32)
+    kcar = np.empty(0, np.int32 if math.prod(batch.shape[1:]) < 2**31 - 1 else np.int64)
+    hi = float(np.iinfo(out_dtype).max) if out_dtype.kind == "u" else 0.0
+    return out_dtype, (acc, kcar, hi)
 
 
 def _remap_bilinear_numpy(
@@ -121,7 +162,7 @@ def _same_kind(image: Any, map_uv: Any) -> None:
         )
 
 
-def remap_bilinear(image: Any, map_uv: Any, *, fill: float = 0.0) -> Any:
+def remap_bilinear(image: Any, map_uv: Any, *, fill: float = 0.0, keep_dtype: bool = False) -> Any:
     r"""Sample ``image`` at the source positions ``map_uv`` by bilinear interpolation.
 
     .. math::
@@ -138,12 +179,29 @@ def remap_bilinear(image: Any, map_uv: Any, *, fill: float = 0.0) -> Any:
         Source ``(u, v)`` = (column, row) for every output pixel; pixel centres at integers.
     fill : float
         Value for positions outside ``[0, W-1] × [0, H-1]`` or NaN (a constant border, as
-        OpenCV's ``BORDER_CONSTANT``; nothing is clamped).
+        OpenCV's ``BORDER_CONSTANT``; nothing is clamped), in the output's units.
+    keep_dtype : bool
+        8-bit in, 8-bit out (NumPy uint8/uint16 images): the result in the image's dtype,
+        the interpolated code value rounded to the nearest integer (ties to even), as
+        ``cv2.remap`` returns it; ``fill`` is then a code in ``[0, 255]`` (``[0, 65535]``).
+        At most half a code from the float result times 255 (65535). Off by default: uint8
+        and uint16 images give float32 in [0, 1]. Float images keep their dtype either way.
 
     Returns
     -------
-    array (H', W') or (..., H', W', C), the image's float dtype and array kind (PyTorch in,
-    PyTorch out on the same device, differentiable; Dask in, a lazy Dask array out).
+    array (H', W') or (..., H', W', C), the image's float dtype (float32 for uint8/uint16
+    unless ``keep_dtype``) and array kind (PyTorch in, PyTorch out on the same device,
+    differentiable; Dask in, a lazy Dask array out).
+
+    Notes
+    -----
+    NumPy images run a numba kernel: positions in the map's precision, the interpolation
+    in float32 (float64 for float64 images), so a uint8, uint16 or float32 result is within
+    1e-7 (relative) of the float64 reference. With ``keep_dtype`` on uint8 it equals OpenCV
+    5's ``cv2.remap(image, map_uv, None, cv2.INTER_LINEAR)`` bit for bit wherever the four
+    neighbours are inside the image (OpenCV's ``BORDER_CONSTANT`` also blends the border
+    colour into the half pixel around the image; this function fills only outside
+    ``[0, W-1] × [0, H-1]``).
 
     Examples
     --------
@@ -152,6 +210,7 @@ def remap_bilinear(image: Any, map_uv: Any, *, fill: float = 0.0) -> Any:
     [[1.5]]
     """
     fill = _fill(fill)
+    keep, fill = _keep_dtype(keep_dtype, image, fill)
     _same_kind(image, map_uv)
     if hasattr(image, "shape") and math.prod(tuple(image.shape)) == 0:
         raise InvalidInputError(
@@ -177,14 +236,27 @@ def remap_bilinear(image: Any, map_uv: Any, *, fill: float = 0.0) -> Any:
     fill_v = float(fill)
     hw = (int(m.shape[0]), int(m.shape[1]))
     if use_numba(batch):
-        from imageform._kernels.remap import remap_bilinear as kernel
+        from imageform._kernels.remap import pick
 
-        out = np.empty((batch.shape[0], *hw, batch.shape[-1]), dtype=_out_dtype(batch))
-        kernel(batch, np.ascontiguousarray(m), scale, fill_v, out)
+        out_dtype, last = _kernel_args(batch, keep)
+        out = np.empty((batch.shape[0], *hw, batch.shape[-1]), dtype=out_dtype)
+        kernel: Any = pick("remap", out.size)
+        kernel(batch, np.ascontiguousarray(m), scale, fill_v, out, *last)
+    elif keep:
+        out = _rounded(
+            _remap_bilinear_numpy(batch.astype(np.float64), m[..., 0], m[..., 1], fill_v),
+            batch.dtype,
+        )
     else:
         out = _remap_bilinear_numpy(_scaled(batch, scale), m[..., 0], m[..., 1], fill_v)
     out = out.reshape(*full_shape[:-3], *hw, full_shape[-1])
     return out[..., 0] if gray else out
+
+
+def _rounded(values: np.ndarray, dtype: Any) -> np.ndarray:
+    """Code values rounded to the nearest integer (ties to even) in ``dtype``'s range."""
+    info = np.iinfo(dtype)
+    return np.clip(np.rint(values), info.min, info.max).astype(dtype)
 
 
 def _scaled(batch: np.ndarray, scale: float) -> np.ndarray:
@@ -265,6 +337,7 @@ def undistort_image(
     new_K: Any = None,
     out_shape: tuple[int, int] | None = None,
     fill: float = 0.0,
+    keep_dtype: bool = False,
 ) -> Any:
     r"""Remove lens distortion from an image by inverse mapping and bilinear sampling.
 
@@ -285,12 +358,17 @@ def undistort_image(
     out_shape : (H, W), optional
         Output size (default: the input's).
     fill : float
-        Value where the source position falls outside the image.
+        Value where the source position falls outside the image (in the output's units).
+    keep_dtype : bool
+        uint8/uint16 NumPy images: the result in their dtype, rounded to the nearest code
+        (``fill`` a code then), as ``cv2.undistort`` returns it; see
+        :func:`remap_bilinear`.
 
     Returns
     -------
     array
-        The undistorted image, float (float32 for integer input), of the input's array
+        The undistorted image, float (float32 for integer input unless ``keep_dtype``), of
+        the input's array
         kind and device. A Dask image gives a lazy Dask array with the input's row and
         column chunks (for the default ``out_shape``): each output block is remapped from
         the source window it reads, and equals the in-memory result.
@@ -299,6 +377,9 @@ def undistort_image(
     -----
     Equivalent to OpenCV's ``cv2.undistort`` (``initUndistortRectifyMap`` + ``remap`` with
     ``INTER_LINEAR``) up to OpenCV's 1/32-pixel quantisation of the sampling positions.
+    Brown-Conrady on NumPy images runs one fused numba kernel (the source position of every
+    output pixel computed in float64 where it is sampled, no map array); other models
+    build the map (:func:`undistortion_map`) and remap it.
 
     Examples
     --------
@@ -321,6 +402,7 @@ def undistort_image(
             f"expected a non-empty image, got shape {format_shape(batch_shape)}"
         )
     fill = _fill(fill)
+    keep, fill = _keep_dtype(keep_dtype, image, fill)
     out_hw = (
         (int(hw[0]), int(hw[1])) if out_shape is None else size_pair(out_shape, "out_shape (H, W)")
     )
@@ -347,16 +429,18 @@ def undistort_image(
         batch, full_shape, gray, scale = _as_batch(image)
         if use_numba(batch):
             # fused kernel: source position and sampling in one pass (no (H, W, 2) map)
-            from imageform._kernels.remap import undistort_brown_conrady
+            from imageform._kernels.remap import pick
 
             Km, Kn = _intrinsics(K, new_K)
-            out = np.empty((batch.shape[0], *out_hw, batch.shape[-1]), dtype=_out_dtype(batch))
+            out_dtype, last = _kernel_args(batch, keep)
+            out = np.empty((batch.shape[0], *out_hw, batch.shape[-1]), dtype=out_dtype)
             coeffs = np.asarray(distortion.coeffs, dtype=np.float64)
-            undistort_brown_conrady(batch, Kn, Km, coeffs, scale, float(fill), out)
+            kernel: Any = pick("undistort", out.size)
+            kernel(batch, Kn, Km, coeffs, scale, float(fill), out, *last)
             out = out.reshape(*full_shape[:-3], *out_hw, full_shape[-1])
             return out[..., 0] if gray else out
     m = undistortion_map(out_hw, K, distortion, new_K=new_K)
-    return remap_bilinear(image, m, fill=fill)
+    return remap_bilinear(image, m, fill=fill, keep_dtype=keep)
 
 
 def _remap_generic(image: Any, map_uv: Any, fill: float, xp: Any) -> Any:
