@@ -60,7 +60,12 @@ from imageform.geometry.checkerboard_grid import (
     lattice_problem,
     neighbors,
 )
-from imageform.geometry.checkerboard_subpix import MAX_HALF_WINDOW, as_gray, refine_corners
+from imageform.geometry.checkerboard_subpix import (
+    MAX_HALF_WINDOW,
+    as_gray,
+    gray_span,
+    refine_corners,
+)
 from imageform.geometry.checkerboard_subpix import refine as refine_clean
 
 __all__ = [
@@ -324,7 +329,7 @@ def find_checkerboard(
            [59.5, 39.5],
            [39.5, 59.5]])
     """
-    gray = as_gray(image)
+    gray, span = gray_span(image)
     cols, rows = _check_pattern(pattern_size)
     if sigma is not None:
         # a Gaussian wider than 1000 px blurs any board away (and its kernel is 8 sigma)
@@ -334,7 +339,7 @@ def find_checkerboard(
     max_iter = as_int(max_iter, "max_iter", minimum=1, maximum=10**6)
     eps = as_real(eps, "eps", nonnegative=True)
     size = (cols, rows)
-    if float(gray.max() - gray.min()) == 0.0:
+    if span == 0.0:
         return CheckerboardResult(False, None, "the image is constant (no contrast)", size)
     sigmas: tuple[float, ...] = DEFAULT_SIGMAS if sigma is None else (float(sigma),)
     reason, best = "no checkerboard found", -1

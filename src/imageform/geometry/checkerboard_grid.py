@@ -29,6 +29,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from imageform import _deprecate
+from imageform._backend import use_numba
 from imageform.geometry.checkerboard_candidates import Candidates
 
 __all__ = ["cell_parity_ok", "grow_rectangle", "label_lattice", "lattice_problem", "neighbors"]
@@ -43,45 +44,12 @@ def neighbors(cand: Candidates, min_dist: float, k_nearest: int = 16) -> NDArray
     Only the ``k_nearest`` nearest candidates of each are considered (a grid neighbour is
     among the 8 nearest on a board); links are kept only when mutual.
     """
-    xy, dirs = cand.xy, cand.dirs
-    n = xy.shape[0]
-    out = np.full((n, 2, 2), -1, dtype=np.int64)
-    if n < 2:
-        return out
-    from scipy.spatial import cKDTree  # imported on use, not with imageform.geometry
+    from imageform._kernels.checkerboard import neighbors_numba, neighbors_numpy
 
-    kq = min(n, k_nearest + 1)
-    dist, idx = cKDTree(xy).query(xy, k=kq)
-    dist, idx = dist[:, 1:], idx[:, 1:]  # drop self
-    dx = xy[idx, 0] - xy[:, None, 0]
-    dy = xy[idx, 1] - xy[:, None, 1]
-    safe = np.where(dist > 0, dist, np.inf)
-    ux, uy = dx / safe, dy / safe
-    cos_tol = np.cos(ANGLE_TOL)
-    # the candidate b must have an edge along the joining vector (shared edge)
-    db = dirs[idx]  # (N, K, 2, 2)
-    shared = (
-        np.maximum(
-            np.abs(ux * db[..., 0, 0] + uy * db[..., 0, 1]),
-            np.abs(ux * db[..., 1, 0] + uy * db[..., 1, 1]),
-        )
-        > cos_tol
-    )
-    usable = shared & (dist > min_dist)
-    rows = np.arange(n)
-    for k in range(2):
-        along = ux * dirs[:, None, k, 0] + uy * dirs[:, None, k, 1]
-        for s, sign in enumerate((1.0, -1.0)):
-            d = np.where(usable & (sign * along > cos_tol), dist, np.inf)
-            best = np.argmin(d, axis=1)
-            found = np.isfinite(d[rows, best])
-            out[found, k, s] = idx[rows, best][found]
-    # keep mutual links only: b must list a among its own neighbours
-    flat = out.reshape(n, 4)
-    b = np.where(flat >= 0, flat, 0)
-    mutual = np.any(flat[b] == np.arange(n)[:, None, None], axis=2)
-    flat[~mutual] = -1
-    return out
+    xy = np.ascontiguousarray(cand.xy, dtype=np.float64)
+    dirs = np.ascontiguousarray(cand.dirs, dtype=np.float64)
+    kernel = neighbors_numba if use_numba(xy) else neighbors_numpy
+    return kernel(xy, dirs, float(min_dist), int(k_nearest), float(np.cos(ANGLE_TOL)))  # type: ignore[no-any-return]
 
 
 neighbours = _deprecate.renamed(

@@ -16,7 +16,7 @@ from imageform._validate import as_image, as_int, as_real, format_shape
 from imageform.errors import InvalidInputError
 from imageform.geometry._checks import as_points, check_bounded, size_pair
 
-__all__ = ["RefinedCorners", "as_gray", "refine", "refine_corners"]
+__all__ = ["RefinedCorners", "as_gray", "gray_span", "refine", "refine_corners"]
 
 # ITU-R BT.601 luma weights (the grey conversion OpenCV's cvtColor uses)
 _LUMA = np.array([0.299, 0.587, 0.114])
@@ -57,6 +57,33 @@ def as_gray(image: object) -> NDArray[np.floating]:
             f"expected an image of at least 16 x 16 pixels, got {format_shape(arr.shape)}"
         )
     return arr
+
+
+_SCALE = {np.dtype(np.uint8): 255.0, np.dtype(np.uint16): 65535.0}
+
+
+def gray_span(image: object) -> tuple[NDArray[np.floating], float]:
+    """:func:`as_gray` and the span ``max - min`` of the grey values (0 for a constant image).
+
+    A NumPy ``uint8``/``uint16`` grey image (the common case: a camera frame) takes a short
+    path with the same result: one float32 array (``image / 255`` written once, where
+    :func:`as_gray` converts then divides) and the span from the integers, which need no
+    finiteness check.
+    """
+    if (
+        isinstance(image, np.ndarray)
+        and image.dtype in _SCALE
+        and (image.ndim == 2 or (image.ndim == 3 and image.shape[-1] == 1))
+        and min(image.shape[:2]) >= 16
+    ):
+        raw = image[..., 0] if image.ndim == 3 else image
+        scale = _SCALE[image.dtype]
+        gray = np.empty(raw.shape, dtype=np.float32)
+        # bit for bit image.astype(float32) / scale (float32 division either way)
+        np.divide(raw, np.float32(scale), out=gray, dtype=np.float32)
+        return gray, float(int(raw.max()) - int(raw.min())) / scale
+    gray = as_gray(image)
+    return gray, float(gray.max() - gray.min())
 
 
 def refine_corners(
