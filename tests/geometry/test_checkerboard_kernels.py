@@ -66,8 +66,8 @@ def test_saddle_maxima_twin(image: np.ndarray, sigma: float, dtype: type) -> Non
     g = image.astype(dtype)
     taps = gaussian_weights(sigma).astype(dtype)
     radius, border = max(2, round(1.5 * sigma)), taps.size // 2 + 1
-    s1, p1, y1, x1, v1 = saddle_maxima_numba(g, taps, radius, border, 0.02)
-    s2, p2, y2, x2, v2 = saddle_maxima_numpy(g, taps, radius, border, 0.02)
+    s1, p1, y1, x1, v1 = saddle_maxima_numba(g, taps, radius, border, 0.02, 1.0)
+    s2, p2, y2, x2, v2 = saddle_maxima_numpy(g, taps, radius, border, 0.02, 1.0)
     assert s1.dtype == s2.dtype == dtype
     assert np.abs(s1 - s2).max() < 1e-6
     assert p1 == pytest.approx(p2, rel=1e-4)
@@ -84,7 +84,7 @@ def test_saddle_maxima_relative_zero_keeps_every_positive_maximum(image: np.ndar
     g = image.astype(np.float32)
     taps = gaussian_weights(2.0).astype(np.float32)
     _, resp = smooth_saddle_numpy(g, taps)
-    _, peak, ys, _, vals = saddle_maxima_numba(g, taps, 3, 7, 0.0)
+    _, peak, ys, _, vals = saddle_maxima_numba(g, taps, 3, 7, 0.0, 1.0)
     assert peak == pytest.approx(float(resp.max()), rel=1e-4)
     assert np.all(vals[:, 1, 1] > 0)
     assert ys.size == local_maxima_numpy(resp, 3, 0.0, 7)[0].size
@@ -99,8 +99,8 @@ def test_saddle_maxima_peak_in_the_frame(image: np.ndarray) -> None:
     taps = gaussian_weights(1.0)
     _, resp = smooth_saddle_numpy(g, taps)
     for rel in (0.02, 1.0, 5.0):
-        _, p1, y1, x1, v1 = saddle_maxima_numba(g, taps, 2, 9, rel)
-        _, p2, y2, x2, _ = saddle_maxima_numpy(g, taps, 2, 9, rel)
+        _, p1, y1, x1, v1 = saddle_maxima_numba(g, taps, 2, 9, rel, 1.0)
+        _, p2, y2, x2, _ = saddle_maxima_numpy(g, taps, 2, 9, rel, 1.0)
         assert p1 == pytest.approx(p2, rel=1e-9) and p2 == resp.max()
         assert resp[:9, :9].max() == resp.max() > 10 * resp[9:-9, 9:-9].max()
         keep = v1[:, 1, 1] > rel * p1
@@ -110,10 +110,31 @@ def test_saddle_maxima_peak_in_the_frame(image: np.ndarray) -> None:
 
 def test_saddle_maxima_flat_image() -> None:
     s, peak, ys, _, vals = saddle_maxima_numba(
-        np.full((40, 50), 0.5, np.float32), gaussian_weights(2.0).astype(np.float32), 3, 7, 0.02
+        np.full((40, 50), 0.5, np.float32),
+        gaussian_weights(2.0).astype(np.float32),
+        3,
+        7,
+        0.02,
+        1.0,
     )
     assert peak == 0.0 and ys.size == 0 and vals.shape == (0, 3, 3)
     assert np.all(s == s[0, 0])
+
+
+@pytest.mark.parametrize("dtype", [np.uint8, np.uint16])
+def test_saddle_maxima_reads_integer_codes(image: np.ndarray, dtype: type) -> None:
+    """uint8/uint16 codes with their scale: the numbers of the float32 image, bit for bit."""
+    scale = float(np.iinfo(dtype).max)
+    codes = np.clip(np.round(image * 0.8 * scale + 0.1 * scale), 0, scale).astype(dtype)
+    taps = gaussian_weights(2.0).astype(np.float32)
+    a = saddle_maxima_numba(codes, taps, 3, 7, 0.02, scale)
+    b = saddle_maxima_numba(codes.astype(np.float32) / scale, taps, 3, 7, 0.02, 1.0)
+    assert a[0].dtype == np.float32
+    assert np.array_equal(a[0], b[0]) and a[1] == b[1]
+    for x, y in zip(a[2:], b[2:], strict=True):
+        assert np.array_equal(x, y)
+    c = saddle_maxima_numpy(codes, taps, 3, 7, 0.02, scale)
+    assert np.abs(c[0] - a[0]).max() < 1e-6
 
 
 def test_local_maxima_numpy(image: np.ndarray) -> None:

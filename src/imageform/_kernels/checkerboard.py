@@ -266,11 +266,12 @@ def gaussian_weights(sigma: float, truncate: float = 3.0) -> NDArray[np.float64]
 
 @njit(fastmath=False)
 def saddle_maxima_numba(
-    gray: NDArray[np.floating],
+    gray: NDArray[np.number],
     taps: NDArray[np.floating],
     radius: int,
     border: int,
     relative: float,
+    scale: float,
 ) -> tuple[
     NDArray[np.floating],
     float,
@@ -280,16 +281,18 @@ def saddle_maxima_numba(
 ]:  # pragma: no cover - numba-compiled
     """Smoothing, saddle response and its local maxima in one pass over the image.
 
-    The smoothed image is the separable Gaussian of :func:`smooth_saddle_numpy` (edges
-    replicated) and the response ``I_uv² - I_uu I_vv`` its central second differences (0 on
-    the outer pixel ring); both computed in the dtype of ``gray`` with the same operations,
-    in the same order, as the twin, so they are the same numbers. The response is never
-    stored whole: it is computed row by row into a ring of ``2 radius + 1`` rows, and the
-    maxima of the ``(2 radius + 1)²`` windows (the rule of :func:`local_maxima_numpy`,
-    pixels at least ``border`` from the edge) are taken from the ring as soon as their
-    window is complete; the horizontal pass lives in a ring of ``len(taps)`` rows. Only
-    the smoothed image is allocated whole (each full-size temporary costs its page faults,
-    which at 640 x 480 cost more than the arithmetic).
+    The image read is ``gray / scale`` in the dtype of ``taps`` (``gray`` as given: uint8
+    codes with ``scale`` 255 give, bit for bit, the values of ``gray.astype(float32) / 255``
+    without that array). The smoothed image is the separable Gaussian of
+    :func:`smooth_saddle_numpy` (edges replicated) and the response ``I_uv² - I_uu I_vv``
+    its central second differences (0 on the outer pixel ring), in the dtype of ``taps``,
+    with the operations of the twin in its order. The response is never stored whole: it
+    is computed row by row into a ring of ``2 radius + 1`` rows, and the maxima of the
+    ``(2 radius + 1)²`` windows (the rule of :func:`local_maxima_numpy`, pixels at least
+    ``border`` from the edge) are taken from the ring as soon as their window is complete;
+    the horizontal pass lives in a ring of ``len(taps)`` rows. Only the smoothed image is
+    allocated whole (each full-size temporary costs its page faults, which at 640 x 480
+    cost more than the arithmetic).
 
     Returns ``(smooth, peak, ys, xs, values)``: ``peak`` the largest response (0 when none
     is positive) and, in row-major order, every maximum above ``relative`` times the peak
@@ -300,7 +303,7 @@ def saddle_maxima_numba(
     h, w = gray.shape
     r = taps.shape[0] // 2
     n = 2 * r + 1
-    dt = gray.dtype
+    dt = taps.dtype
     smooth = np.empty((h, w), dtype=dt)
     hring = np.empty((n, w), dtype=dt)  # horizontal pass, row y at y % n
     row = np.empty(w + 2 * r, dtype=dt)
@@ -323,10 +326,14 @@ def saddle_maxima_numba(
             last = min(y + r, h - 1)
             while next_h <= last:
                 for x in range(w):
-                    row[x + r] = gray[next_h, x]
+                    row[x + r] = gray[next_h, x]  # converted to the working dtype
+                for x in range(w):
+                    # one division, correctly rounded in the working dtype whatever the
+                    # type of scale (a float32 quotient computed in float64 rounds the same)
+                    row[x + r] = row[x + r] / scale
                 for x in range(r):
-                    row[x] = gray[next_h, 0]
-                    row[w + r + x] = gray[next_h, w - 1]
+                    row[x] = row[r]
+                    row[w + r + x] = row[w + r - 1]
                 out = hring[next_h % n]
                 w0 = taps[0]
                 for x in range(w):
@@ -440,11 +447,12 @@ def saddle_maxima_numba(
 
 
 def saddle_maxima_numpy(
-    gray: NDArray[np.floating],
+    gray: NDArray[np.number],
     taps: NDArray[np.floating],
     radius: int,
     border: int,
     relative: float,
+    scale: float,
 ) -> tuple[
     NDArray[np.floating],
     float,
@@ -453,7 +461,7 @@ def saddle_maxima_numpy(
     NDArray[np.floating],
 ]:
     """Plain twin of :func:`saddle_maxima_numba`: all maxima above ``relative`` times the peak."""
-    smooth, resp = smooth_saddle_numpy(gray, taps)
+    smooth, resp = smooth_saddle_numpy(gray.astype(taps.dtype) / taps.dtype.type(scale), taps)
     peak = max(float(resp.max()), 0.0)
     ys, xs = local_maxima_numpy(resp, radius, relative * peak, border)
     iy = ys[:, None, None] + np.arange(-1, 2)[None, :, None]

@@ -63,7 +63,8 @@ from imageform.geometry.checkerboard_grid import (
 from imageform.geometry.checkerboard_subpix import (
     MAX_HALF_WINDOW,
     as_gray,
-    gray_span,
+    gray_codes,
+    gray_from_codes,
     refine_corners,
 )
 from imageform.geometry.checkerboard_subpix import refine as refine_clean
@@ -187,15 +188,37 @@ def _orient(
     return np.ascontiguousarray(grid)
 
 
+class _Gray:
+    """The grey image as the detector reads it (``codes / scale``, see ``gray_codes``) and,
+    made on first use only, as floats: the candidates are found on the codes, so that the
+    smoothed image and a float copy of the input are never held together (a full-size
+    temporary costs its page faults, which at 640 x 480 cost as much as the arithmetic)."""
+
+    __slots__ = ("_float", "codes", "scale")
+
+    def __init__(self, codes: NDArray[np.number], scale: float) -> None:
+        self.codes = codes
+        self.scale = scale
+        self._float: NDArray[np.floating] | None = None
+
+    @property
+    def float(self) -> NDArray[np.floating]:
+        if self._float is None:
+            self._float = gray_from_codes(self.codes, self.scale)
+        return self._float
+
+
 def _detect(
-    gray: NDArray[np.floating], cols: int, rows: int, sigma: float
+    image: _Gray, cols: int, rows: int, sigma: float
 ) -> tuple[NDArray[np.float64] | None, str, int]:
     """One scale: the ordered grid or (None, reason, size of the best partial grid).
 
     When several complete boards pass the checks (a board on a monitor behind the target),
     the one covering the largest image area is returned.
     """
-    cand = find_candidates(gray, sigma, max_candidates=max(300, 4 * cols * rows))
+    cand = find_candidates(
+        image.codes, sigma, max_candidates=max(300, 4 * cols * rows), scale=image.scale
+    )
     n = cand.xy.shape[0]
     if n < cols * rows:
         return None, f"{n} corner candidates, fewer than the {cols * rows} inner corners", n
@@ -230,10 +253,10 @@ def _detect(
                     )
             continue
         problem = lattice_problem(grid)
-        if problem is None and not cell_parity_ok(cell_means(gray, grid)):
+        if problem is None and not cell_parity_ok(cell_means(image.float, grid)):
             problem = "the cells of the grid do not alternate dark and bright"
         if problem is None:
-            side = board_continues(gray, grid)
+            side = board_continues(image.float, grid)
             if side is not None:
                 problem = (
                     f"the checkerboard continues {side} of the {cols} x {rows} grid (a "
@@ -245,7 +268,7 @@ def _detect(
             continue
         boards.append(grid)
     if boards:
-        return _orient(max(boards, key=_area), gray, cols, rows), "", cols * rows
+        return _orient(max(boards, key=_area), image.float, cols, rows), "", cols * rows
     return None, best_reason, best_size
 
 
@@ -329,7 +352,7 @@ def find_checkerboard(
            [59.5, 39.5],
            [39.5, 59.5]])
     """
-    gray, span = gray_span(image)
+    codes, scale, span = gray_codes(image)
     cols, rows = _check_pattern(pattern_size)
     if sigma is not None:
         # a Gaussian wider than 1000 px blurs any board away (and its kernel is 8 sigma)
@@ -343,10 +366,11 @@ def find_checkerboard(
         return CheckerboardResult(False, None, "the image is constant (no contrast)", size)
     sigmas: tuple[float, ...] = DEFAULT_SIGMAS if sigma is None else (float(sigma),)
     reason, best = "no checkerboard found", -1
+    gray = _Gray(codes, scale)
     for s in sigmas:
         grid, why, n = _detect(gray, cols, rows, s)
         if grid is not None:
-            return _finish(gray, grid, size, s, refine, half_window, max_iter, eps)
+            return _finish(gray.float, grid, size, s, refine, half_window, max_iter, eps)
         if n > best:
             reason, best = why, n
     return CheckerboardResult(False, None, reason, size)

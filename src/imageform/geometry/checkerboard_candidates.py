@@ -91,14 +91,20 @@ def find_candidates(
     *,
     relative_threshold: float = 0.02,
     max_candidates: int = 300,
+    scale: float = 1.0,
 ) -> Candidates:
-    """Saddle-response maxima of ``gray`` that pass the ring test."""
+    """Saddle-response maxima of ``gray / scale`` that pass the ring test.
+
+    ``scale`` lets integer codes be read as they are (``uint8`` with ``scale=255`` gives the
+    candidates of ``gray.astype(float32) / 255`` without making that array).
+    """
     # O(1) checks (the image's values were checked by find_checkerboard; no extra pass)
     if not isinstance(gray, np.ndarray) or gray.ndim != 2 or gray.dtype.kind not in "fiu":
         raise InvalidInputError(f"expected gray as a 2-D real NumPy image, got {describe(gray)}")
     sigma = as_real(sigma, "sigma", positive=True, maximum=1000.0)
     relative_threshold = as_real(relative_threshold, "relative_threshold", minimum=0.0)
     max_candidates = as_int(max_candidates, "max_candidates", minimum=1, maximum=10**7)
+    scale = as_real(scale, "scale", positive=True)
     from imageform._kernels.checkerboard import (
         gaussian_weights,
         refine_corners_numba,
@@ -109,13 +115,12 @@ def find_candidates(
 
     taps = gaussian_weights(sigma).astype(np.float32)
     fast = use_numba(gray)
-    # float32 is ample for a detector (the refinement runs on the image as given); no copy
-    # when the image is float32 already (as_gray makes integer images float32)
-    g32 = np.ascontiguousarray(gray, dtype=np.float32)
+    # float32 is ample for a detector (the refinement runs on the image as given): the
+    # kernel reads gray as it is and works in float32 (no converted copy of the image)
     nms = max(2, round(1.5 * sigma))
     border = taps.size // 2 + 1
     smooth, peak, ys, xs, around = (saddle_maxima_numba if fast else saddle_maxima_numpy)(
-        g32, taps, nms, border, relative_threshold
+        np.ascontiguousarray(gray), taps, nms, border, relative_threshold, np.float32(scale)
     )
     empty = Candidates(np.zeros((0, 2)), np.zeros((0, 2, 2)), np.zeros(0), np.zeros(0))
     if not peak > 0.0:
