@@ -643,7 +643,8 @@ def neighbors_numba(
     if n < 2:
         return out
     kq = min(n, k_nearest + 1) - 1  # others considered
-    dist = np.empty(n)
+    d2 = np.empty(n)
+    near = np.empty(kq)  # the kq smallest squared distances so far, ascending
     best = np.empty(4, dtype=np.int64)
     best_d = np.empty(4)
     for a in range(n):
@@ -652,16 +653,32 @@ def neighbors_numba(
         for b in range(n):
             dx = xy[b, 0] - xa
             dy = xy[b, 1] - ya
-            dist[b] = np.sqrt(dx * dx + dy * dy)
-        dist[a] = np.inf
+            d2[b] = dx * dx + dy * dy
+        d2[a] = np.inf
+        # the kq-th smallest squared distance (insertion into a short sorted list: most
+        # points are farther than the current kq-th and cost one comparison)
+        near[:] = np.inf
+        for b in range(n):
+            v = d2[b]
+            if v < near[kq - 1]:
+                i = kq - 1
+                while i > 0 and near[i - 1] > v:
+                    near[i] = near[i - 1]
+                    i -= 1
+                near[i] = v
+        limit = near[kq - 1]
         best[:] = -1
         best_d[:] = np.inf
         for b in range(n):
-            d = dist[b]
+            if not d2[b] <= limit:  # not among the kq nearest (ties at the limit are)
+                continue
+            dx = xy[b, 0] - xa
+            dy = xy[b, 1] - ya
+            d = np.sqrt(d2[b])
             if not d > min_dist:
                 continue
-            ux = (xy[b, 0] - xa) / d
-            uy = (xy[b, 1] - ya) / d
+            ux = dx / d
+            uy = dy / d
             e0 = abs(ux * dirs[b, 0, 0] + uy * dirs[b, 0, 1])
             e1 = abs(ux * dirs[b, 1, 0] + uy * dirs[b, 1, 1])
             if not max(e0, e1) > cos_tol:
@@ -672,17 +689,8 @@ def neighbors_numba(
                     if (along if s == 0 else -along) > cos_tol and d < best_d[2 * k + s]:
                         best_d[2 * k + s] = d
                         best[2 * k + s] = b
-        # the nearest usable point in each direction counts only when it is among the
-        # kq nearest: fewer than kq others closer (every other usable one is farther)
         for i in range(4):
-            if best[i] < 0:
-                continue
-            closer = 0
-            for b in range(n):
-                if dist[b] < best_d[i]:
-                    closer += 1
-            if closer < kq:
-                out[a, i // 2, i % 2] = best[i]
+            out[a, i // 2, i % 2] = best[i]
     # keep mutual links only: b must list a among its own neighbours
     keep = np.zeros((n, 2, 2), dtype=np.bool_)
     for a in range(n):

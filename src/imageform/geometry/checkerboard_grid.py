@@ -234,7 +234,11 @@ def cell_parity_ok(means: NDArray[np.float64]) -> bool:
     return bool(np.all(diffs > 0) or np.all(diffs < 0))
 
 
-def board_continues(gray: NDArray[np.floating], grid: NDArray[np.float64]) -> str | None:
+def board_continues(
+    gray: NDArray[np.floating],
+    grid: NDArray[np.float64],
+    own: NDArray[np.float64] | None = None,
+) -> str | None:
     """Which side of ``grid`` (R, C, 2) the checkerboard visibly continues past, or None.
 
     A complete ``cols x rows`` grid can still be the wrong one: a sub-grid of a larger
@@ -245,11 +249,13 @@ def board_continues(gray: NDArray[np.floating], grid: NDArray[np.float64]) -> st
     if instead three or more neighbouring cells there (inside the image) alternate with the
     board's own parity by at least a sixth of its contrast, the board goes on.
     A board cut within a quarter cell of row ``k + 1`` cannot be told from a smaller one.
+    ``own``: the grid's :func:`cell_means`, when the caller has them.
     """
     from scipy import ndimage
 
     h, w = gray.shape
-    own = cell_means(gray, grid)
+    if own is None:
+        own = cell_means(gray, grid)
     flip = 1 - 2 * (np.add.outer(np.arange(own.shape[0]), np.arange(own.shape[1])) % 2)
     sense = 1.0 if float(np.mean(own * flip)) > 0 else -1.0  # +1: flip=+1 cells bright
     mid = float(np.mean(own))
