@@ -205,3 +205,24 @@ def test_sample_bilinear_twin(image: np.ndarray) -> None:
     b = sample_bilinear_numpy(image, u, v)
     assert a.shape == (50, 8)
     assert np.abs(a - b).max() < 1e-12
+
+
+def test_lattice_rectangle_twin(views: dict[str, np.ndarray]) -> None:
+    """The one-kernel lattice walk and rectangle growth give the rectangles of
+    label_lattice + grow_rectangle from every seed of three real views (boards, clutter)."""
+    from imageform._kernels.checkerboard import lattice_rectangle_numba
+    from imageform.geometry.checkerboard_candidates import find_candidates
+    from imageform.geometry.checkerboard_grid import grow_rectangle, label_lattice, neighbors
+
+    compared = found = 0
+    for name in ("left01.jpg", "left04.jpg", "left12.jpg"):
+        cand = find_candidates(views[name], 2.0, scale=255.0)
+        nbr = neighbors(cand, 4.0)
+        for seed in range(cand.xy.shape[0]):
+            for hops in (15, 3):
+                a = lattice_rectangle_numba(seed, cand.dirs, nbr, cand.xy, hops, 0.35)
+                b = grow_rectangle(label_lattice(seed, cand, nbr, max_hops=hops), cand.xy)
+                assert a.shape == b.shape and np.array_equal(a, b), (name, seed, hops)
+                compared += 1
+                found += a.size == 54
+    assert compared > 300 and found > 20

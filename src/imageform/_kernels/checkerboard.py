@@ -9,6 +9,8 @@
   directions of each candidate.
 - :func:`neighbors_numba` / :func:`neighbors_numpy`: each candidate's grid neighbours along
   its edge directions.
+- :func:`lattice_rectangle_numba` (twin: ``checkerboard_grid.label_lattice`` then
+  ``grow_rectangle``): the lattice labels from a seed and the largest complete rectangle.
 - :func:`sample_bilinear_numba` / :func:`sample_bilinear_numpy`: bilinear samples, edges
   replicated.
 - :func:`refine_corners_numba` / :func:`refine_corners_numpy`: sub-pixel corner refinement
@@ -34,7 +36,7 @@ few milliseconds and threads cost more than they give on a shared machine; paral
 belongs across views. Agreement with the twins is tested (tests/geometry/
 test_checkerboard_kernels.py): refinement 1e-9 px, smoothing 1e-6, the same local maxima
 (response 1e-4 of its peak), the same ring-test verdicts (directions 1e-9), the same
-neighbours, samples 1e-12.
+neighbours and rectangles, samples 1e-12.
 """
 
 from __future__ import annotations
@@ -47,6 +49,7 @@ from imageform._kernels.jit import njit
 __all__ = [
     "corner_window_weights",
     "gaussian_weights",
+    "lattice_rectangle_numba",
     "local_maxima_numpy",
     "neighbors_numba",
     "neighbors_numpy",
@@ -800,4 +803,158 @@ def neighbors_numpy(
     b = np.where(flat >= 0, flat, 0)
     mutual = np.any(flat[b] == np.arange(n)[:, None, None], axis=2)
     flat[~mutual] = -1
+    return out
+
+
+@njit(fastmath=False)
+def lattice_rectangle_numba(
+    seed: int,
+    dirs: NDArray[np.float64],
+    nbr: NDArray[np.int64],
+    xy: NDArray[np.float64],
+    max_hops: int,
+    max_error: float,
+) -> NDArray[np.int64]:  # pragma: no cover - numba-compiled
+    """``checkerboard_grid.label_lattice`` then ``grow_rectangle``, in one kernel.
+
+    The breadth-first lattice labels of the component of ``seed`` (the same walk, in the
+    same order, with the same oriented bases and conflict rule), then the largest complete
+    rectangle grown from the 3 x 3 block around ``(0, 0)``, one full row or column at a
+    time, each new point within ``max_error`` grid steps of its linear prediction. Returns
+    the node indices ``(n_i, n_j)``; ``(0, 0)`` when the 3 x 3 block is incomplete.
+    """
+    n = xy.shape[0]
+    m = max_hops + 2  # labels reach |i| + |j| <= max_hops; the growth looks one further
+    size = 2 * m + 1
+    node_at = np.full((size, size), -1, dtype=np.int64)  # [i + m, j + m]
+    ci = np.zeros(n, dtype=np.int64)
+    cj = np.zeros(n, dtype=np.int64)
+    seen = np.zeros(n, dtype=np.bool_)
+    basis = np.empty((n, 4))
+    queue = np.empty(n, dtype=np.int64)
+    seen[seed] = True
+    node_at[m, m] = seed
+    basis[seed, 0] = dirs[seed, 0, 0]
+    basis[seed, 1] = dirs[seed, 0, 1]
+    basis[seed, 2] = dirs[seed, 1, 0]
+    basis[seed, 3] = dirs[seed, 1, 1]
+    queue[0] = seed
+    head = 0
+    tail = 1
+    while head < tail:
+        a = queue[head]
+        head += 1
+        eix = basis[a, 0]
+        eiy = basis[a, 1]
+        ejx = basis[a, 2]
+        ejy = basis[a, 3]
+        ia = ci[a]
+        ja = cj[a]
+        if abs(ia) + abs(ja) >= max_hops:
+            continue
+        for k in range(2):
+            vx = dirs[a, k, 0]
+            vy = dirs[a, k, 1]
+            for s in range(2):
+                b = nbr[a, k, s]
+                if b < 0 or seen[b]:
+                    continue
+                sign = 1.0 if s == 0 else -1.0
+                di = sign * (vx * eix + vy * eiy)
+                dj = sign * (vx * ejx + vy * ejy)
+                if abs(di) >= abs(dj):
+                    ni = ia + (1 if di > 0 else -1)
+                    nj = ja
+                else:
+                    ni = ia
+                    nj = ja + (1 if dj > 0 else -1)
+                if node_at[ni + m, nj + m] >= 0:
+                    continue
+                p0x = dirs[b, 0, 0]
+                p0y = dirs[b, 0, 1]
+                p1x = dirs[b, 1, 0]
+                p1y = dirs[b, 1, 1]
+                c0 = p0x * eix + p0y * eiy
+                c1 = p1x * eix + p1y * eiy
+                if abs(c0) >= abs(c1):
+                    bix, biy, bjx, bjy, cc = p0x, p0y, p1x, p1y, c0
+                else:
+                    bix, biy, bjx, bjy, cc = p1x, p1y, p0x, p0y, c1
+                si = 1.0 if cc >= 0 else -1.0
+                sj = 1.0 if bjx * ejx + bjy * ejy >= 0 else -1.0
+                seen[b] = True
+                ci[b] = ni
+                cj[b] = nj
+                node_at[ni + m, nj + m] = b
+                basis[b, 0] = si * bix
+                basis[b, 1] = si * biy
+                basis[b, 2] = sj * bjx
+                basis[b, 3] = sj * bjy
+                queue[tail] = b
+                tail += 1
+    for i in range(-1, 2):
+        for j in range(-1, 2):
+            if node_at[i + m, j + m] < 0:
+                return np.zeros((0, 0), dtype=np.int64)
+    limit2 = max_error * max_error
+    i0, i1, j0, j1 = -1, 1, -1, 1
+    grew = True
+    while grew:
+        grew = False
+        # a new row i1 + 1 (predicted from rows i1, i1 - 1), then i0 - 1, over j0 .. j1
+        for side in range(2):
+            inew = i1 + 1 if side == 0 else i0 - 1
+            step = -1 if side == 0 else 1
+            fits = abs(inew) < m
+            j = j0
+            while fits and j <= j1:
+                bn = node_at[inew + m, j + m]
+                if bn < 0:
+                    fits = False
+                    break
+                bl = node_at[inew + step + m, j + m]
+                bp = node_at[inew + 2 * step + m, j + m]
+                step2 = (xy[bl, 0] - xy[bp, 0]) ** 2 + (xy[bl, 1] - xy[bp, 1]) ** 2
+                err2 = (xy[bn, 0] - 2.0 * xy[bl, 0] + xy[bp, 0]) ** 2 + (
+                    xy[bn, 1] - 2.0 * xy[bl, 1] + xy[bp, 1]
+                ) ** 2
+                if not err2 < limit2 * step2:
+                    fits = False
+                j += 1
+            if fits:
+                if side == 0:
+                    i1 += 1
+                else:
+                    i0 -= 1
+                grew = True
+        # then a new column j1 + 1, then j0 - 1, over the (grown) rows i0 .. i1
+        for side in range(2):
+            jnew = j1 + 1 if side == 0 else j0 - 1
+            step = -1 if side == 0 else 1
+            fits = abs(jnew) < m
+            i = i0
+            while fits and i <= i1:
+                bn = node_at[i + m, jnew + m]
+                if bn < 0:
+                    fits = False
+                    break
+                bl = node_at[i + m, jnew + step + m]
+                bp = node_at[i + m, jnew + 2 * step + m]
+                step2 = (xy[bl, 0] - xy[bp, 0]) ** 2 + (xy[bl, 1] - xy[bp, 1]) ** 2
+                err2 = (xy[bn, 0] - 2.0 * xy[bl, 0] + xy[bp, 0]) ** 2 + (
+                    xy[bn, 1] - 2.0 * xy[bl, 1] + xy[bp, 1]
+                ) ** 2
+                if not err2 < limit2 * step2:
+                    fits = False
+                i += 1
+            if fits:
+                if side == 0:
+                    j1 += 1
+                else:
+                    j0 -= 1
+                grew = True
+    out = np.empty((i1 - i0 + 1, j1 - j0 + 1), dtype=np.int64)
+    for i in range(i0, i1 + 1):
+        for j in range(j0, j1 + 1):
+            out[i - i0, j - j0] = node_at[i + m, j + m]
     return out

@@ -55,9 +55,8 @@ from imageform.geometry.checkerboard_grid import (
     board_continues,
     cell_means,
     cell_parity_ok,
-    grow_rectangle,
-    label_lattice,
     lattice_problem,
+    lattice_rectangle,
     neighbors,
 )
 from imageform.geometry.checkerboard_subpix import (
@@ -230,8 +229,7 @@ def _detect(
     for seed in range(min(n, MAX_SEEDS)):
         if tried[seed] or np.any(nbr[seed] < 0):
             continue
-        node_at = label_lattice(seed, cand, nbr, max_hops=cols + rows)
-        rect = grow_rectangle(node_at, cand.xy)
+        rect = lattice_rectangle(seed, cand, nbr, max_hops=cols + rows)
         if rect.size == 0:
             continue
         tried[rect.ravel()] = True

@@ -32,7 +32,14 @@ from imageform import _deprecate
 from imageform._backend import use_numba
 from imageform.geometry.checkerboard_candidates import Candidates
 
-__all__ = ["cell_parity_ok", "grow_rectangle", "label_lattice", "lattice_problem", "neighbors"]
+__all__ = [
+    "cell_parity_ok",
+    "grow_rectangle",
+    "label_lattice",
+    "lattice_problem",
+    "lattice_rectangle",
+    "neighbors",
+]
 
 #: Largest angle (radians) between an edge direction and the vector to a neighbour.
 ANGLE_TOL = 0.3
@@ -159,6 +166,27 @@ def grow_rectangle(
     return np.array(
         [[node_at[(i, j)] for j in range(j0, j1 + 1)] for i in range(i0, i1 + 1)], dtype=np.int64
     )
+
+
+def lattice_rectangle(
+    seed: int, cand: Candidates, nbr: NDArray[np.int64], max_hops: int = 10**6
+) -> NDArray[np.int64]:
+    """:func:`grow_rectangle` of :func:`label_lattice` from ``seed``: node indices
+    ``(n_i, n_j)``, empty when the 3 x 3 block around the seed is incomplete (one numba
+    kernel, ``lattice_rectangle_numba``, where numba runs; the two functions otherwise)."""
+    xy = np.ascontiguousarray(cand.xy, dtype=np.float64)
+    if use_numba(xy) and max_hops <= 100_000:
+        from imageform._kernels.checkerboard import lattice_rectangle_numba
+
+        return lattice_rectangle_numba(  # type: ignore[no-any-return]
+            int(seed),
+            np.ascontiguousarray(cand.dirs, dtype=np.float64),
+            np.ascontiguousarray(nbr, dtype=np.int64),
+            xy,
+            int(max_hops),
+            0.35,
+        )
+    return grow_rectangle(label_lattice(seed, cand, nbr, max_hops=max_hops), xy)
 
 
 def lattice_problem(grid: NDArray[np.float64], max_bend: float = 0.3) -> str | None:
