@@ -226,3 +226,33 @@ def test_lattice_rectangle_twin(views: dict[str, np.ndarray]) -> None:
                 compared += 1
                 found += a.size == 54
     assert compared > 300 and found > 20
+
+
+def test_lattice_problem_twin() -> None:
+    """The kernel's verdicts and messages are the NumPy twin's, on good and broken grids."""
+    from imageform.geometry.checkerboard_grid import lattice_problem, lattice_problem_numpy
+
+    rng = np.random.default_rng(2)
+    i, j = np.mgrid[0:6, 0:9]
+    base = np.stack([j * 20.0 + 30, i * 18.0 + 40], -1)
+    kinds = set()
+    for trial in range(400):
+        g = base + rng.normal(0, [0.5, 2.0, 4.0, 8.0][trial % 4], base.shape)
+        if trial % 7 == 0:
+            g = g[:, ::-1]  # the other orientation
+        if trial % 11 == 0:
+            g[2, 3] = g[2, 4]  # a duplicated point: a zero step
+        if trial % 13 == 0:
+            g[1, 1] = np.nan
+        if trial % 17 == 0:
+            g = g[:2]  # too few rows for second differences
+        a, b = lattice_problem(g), lattice_problem_numpy(g)
+        assert a == b, trial
+        kinds.add(None if a is None else a.split(" (")[0])
+    # two straight rows that cross: no second differences across rows, cells flip
+    row = np.stack([np.arange(9) * 20.0, np.zeros(9)], -1)
+    crossing = np.stack([row, row + np.stack([np.zeros(9), 18.0 * (np.arange(9) - 4.5)], -1)])
+    a = lattice_problem(crossing)
+    assert a == lattice_problem_numpy(crossing) and a is not None and "convex" in a
+    kinds.add(a)
+    assert len(kinds) >= 3

@@ -9,6 +9,8 @@
   directions of each candidate.
 - :func:`neighbors_numba` / :func:`neighbors_numpy`: each candidate's grid neighbours along
   its edge directions.
+- :func:`lattice_problem_numba` (twin: ``checkerboard_grid.lattice_problem``): the
+  lattice checks of a grid.
 - :func:`lattice_rectangle_numba` (twin: ``checkerboard_grid.label_lattice`` then
   ``grow_rectangle``): the lattice labels from a seed and the largest complete rectangle.
 - :func:`sample_bilinear_numba` / :func:`sample_bilinear_numpy`: bilinear samples, edges
@@ -49,6 +51,7 @@ from imageform._kernels.jit import njit
 __all__ = [
     "corner_window_weights",
     "gaussian_weights",
+    "lattice_problem_numba",
     "lattice_rectangle_numba",
     "local_maxima_numpy",
     "neighbors_numba",
@@ -958,3 +961,103 @@ def lattice_rectangle_numba(
         for j in range(j0, j1 + 1):
             out[i - i0, j - j0] = node_at[i + m, j + m]
     return out
+
+
+@njit(fastmath=False)
+def lattice_problem_numba(
+    grid: NDArray[np.float64], max_bend: float
+) -> tuple[int, float, float]:  # pragma: no cover - numba-compiled
+    """The checks of ``checkerboard_grid.lattice_problem`` on ``grid`` (R, C, 2), in its order.
+
+    Returns ``(code, a, b)``: 0 a consistent lattice; 1 (rows) or 3 (columns) a second
+    difference not below ``max_bend`` times the spacing, ``a`` the largest ratio; 2 (rows)
+    or 4 (columns) consecutive steps whose ratio leaves (0.5, 2), ``a``-``b`` the ratio's
+    range; 5 cells not convex with one orientation. NaN propagates into ``a``, ``b``.
+    """
+    nr, nc = grid.shape[0], grid.shape[1]
+    for axis in range(2):
+        # axis 0: along each row (over columns); axis 1: along each column (over rows)
+        n_along = nc if axis == 0 else nr
+        n_lines = nr if axis == 0 else nc
+        if n_along < 3:
+            continue
+        ok = True
+        worst = -np.inf
+        nan = False
+        for line in range(n_lines):
+            for k in range(n_along - 2):
+                if axis == 0:
+                    ax_, ay_ = grid[line, k, 0], grid[line, k, 1]
+                    bx, by = grid[line, k + 1, 0], grid[line, k + 1, 1]
+                    cx, cy = grid[line, k + 2, 0], grid[line, k + 2, 1]
+                else:
+                    ax_, ay_ = grid[k, line, 0], grid[k, line, 1]
+                    bx, by = grid[k + 1, line, 0], grid[k + 1, line, 1]
+                    cx, cy = grid[k + 2, line, 0], grid[k + 2, line, 1]
+                sx = cx - 2.0 * bx + ax_
+                sy = cy - 2.0 * by + ay_
+                second = np.sqrt(sx * sx + sy * sy)
+                dx = cx - ax_
+                dy = cy - ay_
+                spacing = 0.5 * np.sqrt(dx * dx + dy * dy)
+                ratio = second / spacing
+                if not ratio < max_bend:
+                    ok = False
+                if np.isnan(ratio):
+                    nan = True
+                elif ratio > worst:
+                    worst = ratio
+        if not ok:
+            return 1 + 2 * axis, np.nan if nan else worst, 0.0
+        lo = np.inf
+        hi = -np.inf
+        nan = False
+        for line in range(n_lines):
+            prev = 0.0
+            for k in range(n_along - 1):
+                if axis == 0:
+                    dx = grid[line, k + 1, 0] - grid[line, k, 0]
+                    dy = grid[line, k + 1, 1] - grid[line, k, 1]
+                else:
+                    dx = grid[k + 1, line, 0] - grid[k, line, 0]
+                    dy = grid[k + 1, line, 1] - grid[k, line, 1]
+                step = np.sqrt(dx * dx + dy * dy)
+                if k > 0:
+                    jump = step / prev
+                    if not (jump > 0.5 and jump < 2.0):
+                        ok = False
+                    if np.isnan(jump):
+                        nan = True
+                    else:
+                        lo = min(lo, jump)
+                        hi = max(hi, jump)
+                prev = step
+        if not ok:
+            if nan:
+                return 2 + 2 * axis, np.nan, np.nan
+            return 2 + 2 * axis, lo, hi
+    positive = True
+    negative = True
+    for i in range(nr - 1):
+        for j in range(nc - 1):
+            p00x, p00y = grid[i, j, 0], grid[i, j, 1]
+            p01x, p01y = grid[i, j + 1, 0], grid[i, j + 1, 1]
+            p10x, p10y = grid[i + 1, j, 0], grid[i + 1, j, 1]
+            p11x, p11y = grid[i + 1, j + 1, 0], grid[i + 1, j + 1, 1]
+            for t in range(4):
+                if t == 0:
+                    ax_, ay_, bx, by = p01x - p00x, p01y - p00y, p11x - p01x, p11y - p01y
+                elif t == 1:
+                    ax_, ay_, bx, by = p11x - p01x, p11y - p01y, p10x - p11x, p10y - p11y
+                elif t == 2:
+                    ax_, ay_, bx, by = p10x - p11x, p10y - p11y, p00x - p10x, p00y - p10y
+                else:
+                    ax_, ay_, bx, by = p00x - p10x, p00y - p10y, p01x - p00x, p01y - p00y
+                turn = ax_ * by - ay_ * bx
+                if not turn > 0:
+                    positive = False
+                if not turn < 0:
+                    negative = False
+    if not (positive or negative):
+        return 5, 0.0, 0.0
+    return 0, 0.0, 0.0

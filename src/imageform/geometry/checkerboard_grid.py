@@ -37,6 +37,7 @@ __all__ = [
     "grow_rectangle",
     "label_lattice",
     "lattice_problem",
+    "lattice_problem_numpy",
     "lattice_rectangle",
     "neighbors",
 ]
@@ -193,8 +194,27 @@ def lattice_problem(grid: NDArray[np.float64], max_bend: float = 0.3) -> str | N
     """Why ``grid`` (R, C, 2) is not a consistent lattice, or None when it is.
 
     Second differences along rows and columns must stay below ``max_bend`` times the local
-    spacing; all cells must be convex with one orientation.
+    spacing; all cells must be convex with one orientation. (One numba kernel,
+    ``lattice_problem_numba``, where numba runs; :func:`lattice_problem_numpy` otherwise.)
     """
+    g = np.ascontiguousarray(grid, dtype=np.float64)
+    if not use_numba(g) or g.ndim != 3 or g.shape[-1] != 2:
+        return lattice_problem_numpy(grid, max_bend)
+    from imageform._kernels.checkerboard import lattice_problem_numba
+
+    code, a, b = lattice_problem_numba(g, float(max_bend))
+    if code == 0:
+        return None
+    name = "row" if code <= 2 else "column"
+    if code in (1, 3):
+        return f"a {name} of the grid bends or jumps (second difference {a:.2f} x spacing)"
+    if code in (2, 4):
+        return f"spacing along a {name} changes abruptly (ratio {a:.2f}-{b:.2f})"
+    return "the grid's cells are not convex quadrilaterals of one orientation"
+
+
+def lattice_problem_numpy(grid: NDArray[np.float64], max_bend: float = 0.3) -> str | None:
+    """Plain NumPy twin of :func:`lattice_problem`."""
     for axis, name in ((1, "row"), (0, "column")):
         g = np.moveaxis(grid, axis, 0)
         if g.shape[0] < 3:
