@@ -122,13 +122,22 @@ def refine_corners_numba(
             ay = cy - fy
             x0 = int(fx) - hx - 1
             y0 = int(fy) - hy - 1
-            for j in range(ww + 3):
-                xcol[j] = min(max(x0 + j, 0), width - 1)
-            for i in range(wh + 3):
-                img_row = image[min(max(y0 + i, 0), height - 1)]
-                hr = hrow[i]
-                for j in range(ww + 2):
-                    hr[j] = (1.0 - ax) * img_row[xcol[j]] + ax * img_row[xcol[j + 1]]
+            bx = 1.0 - ax
+            if x0 >= 0 and x0 + ww + 2 <= width - 1:
+                # inside the image: contiguous reads, no clamping (the same numbers)
+                for i in range(wh + 3):
+                    img_row = image[min(max(y0 + i, 0), height - 1), x0 : x0 + ww + 3]
+                    hr = hrow[i]
+                    for j in range(ww + 2):
+                        hr[j] = bx * img_row[j] + ax * img_row[j + 1]
+            else:
+                for j in range(ww + 3):
+                    xcol[j] = min(max(x0 + j, 0), width - 1)
+                for i in range(wh + 3):
+                    img_row = image[min(max(y0 + i, 0), height - 1)]
+                    hr = hrow[i]
+                    for j in range(ww + 2):
+                        hr[j] = bx * img_row[xcol[j]] + ax * img_row[xcol[j + 1]]
             for i in range(wh + 2):
                 for j in range(ww + 2):
                     patch[i, j] = (1.0 - ay) * hrow[i, j] + ay * hrow[i + 1, j]
