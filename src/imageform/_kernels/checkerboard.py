@@ -580,19 +580,43 @@ def ring_test_numba(
     vals = np.empty(ns)
     ks = np.empty(4, dtype=np.int64)
     theta = np.empty(4)
+    # the ring's extent: a point whose ring lies inside the image, away from its last row
+    # and column, is sampled without the clamps (which change nothing there)
+    reach = 0.0
+    for s in range(ns):
+        reach = max(reach, abs(offsets[s, 0]), abs(offsets[s, 1]))
     for p in range(n):
-        for s in range(ns):
-            x = min(max(xy[p, 0] + offsets[s, 0], 0.0), w - 1.0)
-            y = min(max(xy[p, 1] + offsets[s, 1], 0.0), h - 1.0)
-            x0 = min(int(np.floor(x)), w - 2) if w > 1 else 0
-            y0 = min(int(np.floor(y)), h - 2) if h > 1 else 0
-            ax = x - x0
-            ay = y - y0
-            x1 = min(x0 + 1, w - 1)
-            y1 = min(y0 + 1, h - 1)
-            vals[s] = (1.0 - ay) * ((1.0 - ax) * smooth[y0, x0] + ax * smooth[y0, x1]) + ay * (
-                (1.0 - ax) * smooth[y1, x0] + ax * smooth[y1, x1]
-            )
+        px = xy[p, 0]
+        py = xy[p, 1]
+        if (
+            px - reach >= 1.0
+            and px + reach <= w - 3.0
+            and py - reach >= 1.0
+            and py + reach <= h - 3.0
+        ):
+            for s in range(ns):
+                x = px + offsets[s, 0]
+                y = py + offsets[s, 1]
+                x0 = int(np.floor(x))
+                y0 = int(np.floor(y))
+                ax = x - x0
+                ay = y - y0
+                vals[s] = (1.0 - ay) * (
+                    (1.0 - ax) * smooth[y0, x0] + ax * smooth[y0, x0 + 1]
+                ) + ay * ((1.0 - ax) * smooth[y0 + 1, x0] + ax * smooth[y0 + 1, x0 + 1])
+        else:
+            for s in range(ns):
+                x = min(max(px + offsets[s, 0], 0.0), w - 1.0)
+                y = min(max(py + offsets[s, 1], 0.0), h - 1.0)
+                x0 = min(int(np.floor(x)), w - 2) if w > 1 else 0
+                y0 = min(int(np.floor(y)), h - 2) if h > 1 else 0
+                ax = x - x0
+                ay = y - y0
+                x1 = min(x0 + 1, w - 1)
+                y1 = min(y0 + 1, h - 1)
+                vals[s] = (1.0 - ay) * ((1.0 - ax) * smooth[y0, x0] + ax * smooth[y0, x1]) + ay * (
+                    (1.0 - ax) * smooth[y1, x0] + ax * smooth[y1, x1]
+                )
         lo = vals[0]
         hi = vals[0]
         for s in range(1, ns):
