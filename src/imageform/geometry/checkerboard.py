@@ -163,17 +163,28 @@ def _check_pattern(pattern_size: object) -> tuple[int, int]:
 
 
 def _orient(
-    grid: NDArray[np.float64], gray: NDArray[np.floating], cols: int, rows: int
+    grid: NDArray[np.float64],
+    gray: NDArray[np.floating],
+    cols: int,
+    rows: int,
+    means: NDArray[np.float64] | None = None,
 ) -> NDArray[np.float64]:
-    """Apply the module's order convention to a ``(rows, cols, 2)`` or ``(cols, rows, 2)`` grid."""
+    """Apply the module's order convention to a ``(rows, cols, 2)`` or ``(cols, rows, 2)`` grid.
+
+    ``means``: the grid's :func:`cell_means` when the caller has them (they follow the
+    grid's transposition and mirroring; only their sign pattern is used).
+    """
     if grid.shape[:2] != (rows, cols):
         grid = grid.transpose(1, 0, 2)
+        means = None if means is None else means.T
     x = grid[0, 1] - grid[0, 0]
     y = grid[1, 0] - grid[0, 0]
     if x[0] * y[1] - x[1] * y[0] < 0:
         grid = grid[:, ::-1]
+        means = None if means is None else means[:, ::-1]
     if (cols + rows) % 2 == 1:
-        means = cell_means(gray, grid)
+        if means is None:
+            means = cell_means(gray, grid)
         flip = 1 - 2 * (np.add.outer(np.arange(rows - 1), np.arange(cols - 1)) % 2)
         # > 0 when the parity-0 cells (the first cell among them) are the bright ones
         if float(np.mean(means * flip)) > 0:
@@ -225,7 +236,7 @@ def _detect(
     tried = np.zeros(n, dtype=bool)
     best_reason, best_size = "no grid of corners found", 0
     want = sorted((cols, rows))
-    boards: list[NDArray[np.float64]] = []
+    boards: list[tuple[NDArray[np.float64], NDArray[np.float64]]] = []
     for seed in range(min(n, MAX_SEEDS)):
         if tried[seed] or np.any(nbr[seed] < 0):
             continue
@@ -265,9 +276,10 @@ def _detect(
             if rect.size >= best_size:
                 best_size, best_reason = rect.size, f"grid rejected: {problem}"
             continue
-        boards.append(grid)
+        boards.append((grid, means))  # type: ignore[arg-type]  # means is set here
     if boards:
-        return _orient(max(boards, key=_area), image.float, cols, rows), "", cols * rows
+        grid, means = max(boards, key=lambda b: _area(b[0]))
+        return _orient(grid, image.float, cols, rows, means), "", cols * rows
     return None, best_reason, best_size
 
 
