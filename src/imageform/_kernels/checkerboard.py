@@ -286,7 +286,7 @@ def saddle_maxima_numba(
     radius: int,
     border: int,
     relative: float,
-    scale: float,
+    scale: float | np.floating,
 ) -> tuple[
     NDArray[np.floating],
     float,
@@ -472,7 +472,7 @@ def saddle_maxima_numpy(
     radius: int,
     border: int,
     relative: float,
-    scale: float,
+    scale: float | np.floating,
 ) -> tuple[
     NDArray[np.floating],
     float,

@@ -66,7 +66,7 @@ def ring_test(
     if use_numba(smooth):
         from imageform._kernels.checkerboard import ring_test_numba
 
-        return ring_test_numba(  # type: ignore[no-any-return]
+        return ring_test_numba(
             smooth, np.ascontiguousarray(xy, dtype=np.float64), _ring_offsets(radius),
             float(min_contrast),
         )  # fmt: skip
@@ -86,7 +86,7 @@ def _peak_offset(minus: NDArray, centre: NDArray, plus: NDArray) -> NDArray[np.f
 
 
 def find_candidates(
-    gray: NDArray[np.floating],
+    gray: NDArray[np.number],
     sigma: float,
     *,
     relative_threshold: float = 0.02,

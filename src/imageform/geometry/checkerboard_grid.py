@@ -57,7 +57,7 @@ def neighbors(cand: Candidates, min_dist: float, k_nearest: int = 16) -> NDArray
     xy = np.ascontiguousarray(cand.xy, dtype=np.float64)
     dirs = np.ascontiguousarray(cand.dirs, dtype=np.float64)
     kernel = neighbors_numba if use_numba(xy) else neighbors_numpy
-    return kernel(xy, dirs, float(min_dist), int(k_nearest), float(np.cos(ANGLE_TOL)))  # type: ignore[no-any-return]
+    return kernel(xy, dirs, float(min_dist), int(k_nearest), float(np.cos(ANGLE_TOL)))
 
 
 neighbours = _deprecate.renamed(
@@ -179,7 +179,7 @@ def lattice_rectangle(
     if use_numba(xy) and max_hops <= 100_000:
         from imageform._kernels.checkerboard import lattice_rectangle_numba
 
-        return lattice_rectangle_numba(  # type: ignore[no-any-return]
+        return lattice_rectangle_numba(
             int(seed),
             np.ascontiguousarray(cand.dirs, dtype=np.float64),
             np.ascontiguousarray(nbr, dtype=np.int64),
