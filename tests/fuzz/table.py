@@ -312,11 +312,23 @@ VALID: dict[str, C | Skip] = {
     "imageform.geometry.checkerboard_grid.lattice_problem": Skip(
         "an internal step of the checkerboard detector (fuzzed through find_checkerboard)"
     ),
+    "imageform.geometry.checkerboard_grid.lattice_problem_numpy": Skip(
+        "the NumPy twin of an internal step of the checkerboard detector (fuzzed through "
+        "find_checkerboard with IMAGEFORM_DISABLE_NUMBA)"
+    ),
+    "imageform.geometry.checkerboard_grid.lattice_rectangle": Skip(
+        "an internal step of the checkerboard detector (fuzzed through find_checkerboard)"
+    ),
     "imageform.geometry.checkerboard_grid.neighbors": Skip(
         "an internal step of the checkerboard detector (fuzzed through find_checkerboard)"
     ),
     "imageform.geometry.checkerboard_points": call(pattern_size=(4, 3)),
     "imageform.geometry.checkerboard_subpix.as_gray": call(image=V("rgb_big")),
+    "imageform.geometry.checkerboard_subpix.gray_codes": call(image=V("rgb_big")),
+    "imageform.geometry.checkerboard_subpix.gray_from_codes": Skip(
+        "an internal step of the checkerboard detector on gray_codes' output (fuzzed through "
+        "find_checkerboard)"
+    ),
     "imageform.geometry.checkerboard_subpix.refine": Skip(
         "an internal numba step of refine_corners (fuzzed through refine_corners)"
     ),

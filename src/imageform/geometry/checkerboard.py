@@ -55,12 +55,17 @@ from imageform.geometry.checkerboard_grid import (
     board_continues,
     cell_means,
     cell_parity_ok,
-    grow_rectangle,
-    label_lattice,
     lattice_problem,
+    lattice_rectangle,
     neighbors,
 )
-from imageform.geometry.checkerboard_subpix import MAX_HALF_WINDOW, as_gray, refine_corners
+from imageform.geometry.checkerboard_subpix import (
+    MAX_HALF_WINDOW,
+    as_gray,
+    gray_codes,
+    gray_from_codes,
+    refine_corners,
+)
 from imageform.geometry.checkerboard_subpix import refine as refine_clean
 
 __all__ = [
@@ -159,17 +164,28 @@ def _check_pattern(pattern_size: object) -> tuple[int, int]:
 
 
 def _orient(
-    grid: NDArray[np.float64], gray: NDArray[np.floating], cols: int, rows: int
+    grid: NDArray[np.float64],
+    gray: NDArray[np.floating],
+    cols: int,
+    rows: int,
+    means: NDArray[np.float64] | None = None,
 ) -> NDArray[np.float64]:
-    """Apply the module's order convention to a ``(rows, cols, 2)`` or ``(cols, rows, 2)`` grid."""
+    """Apply the module's order convention to a ``(rows, cols, 2)`` or ``(cols, rows, 2)`` grid.
+
+    ``means``: the grid's :func:`cell_means` when the caller has them (they follow the
+    grid's transposition and mirroring; only their sign pattern is used).
+    """
     if grid.shape[:2] != (rows, cols):
         grid = grid.transpose(1, 0, 2)
+        means = None if means is None else means.T
     x = grid[0, 1] - grid[0, 0]
     y = grid[1, 0] - grid[0, 0]
     if x[0] * y[1] - x[1] * y[0] < 0:
         grid = grid[:, ::-1]
+        means = None if means is None else means[:, ::-1]
     if (cols + rows) % 2 == 1:
-        means = cell_means(gray, grid)
+        if means is None:
+            means = cell_means(gray, grid)
         flip = 1 - 2 * (np.add.outer(np.arange(rows - 1), np.arange(cols - 1)) % 2)
         # > 0 when the parity-0 cells (the first cell among them) are the bright ones
         if float(np.mean(means * flip)) > 0:
@@ -183,15 +199,39 @@ def _orient(
     return np.ascontiguousarray(grid)
 
 
+class _Gray:
+    """Hold the grey image as the detector reads it, and as floats made on first use only.
+
+    The image is ``codes / scale`` (see ``gray_codes``); the candidates are found on the codes, so
+    that the smoothed image and a float copy of the input are never held together (a full-size
+    temporary costs its page faults, which at 640 x 480 cost as much as the arithmetic).
+    """
+
+    __slots__ = ("_float", "codes", "scale")
+
+    def __init__(self, codes: NDArray[np.number], scale: float) -> None:
+        self.codes = codes
+        self.scale = scale
+        self._float: NDArray[np.floating] | None = None
+
+    @property
+    def float(self) -> NDArray[np.floating]:
+        if self._float is None:
+            self._float = gray_from_codes(self.codes, self.scale)
+        return self._float
+
+
 def _detect(
-    gray: NDArray[np.floating], cols: int, rows: int, sigma: float
+    image: _Gray, cols: int, rows: int, sigma: float
 ) -> tuple[NDArray[np.float64] | None, str, int]:
     """One scale: the ordered grid or (None, reason, size of the best partial grid).
 
     When several complete boards pass the checks (a board on a monitor behind the target),
     the one covering the largest image area is returned.
     """
-    cand = find_candidates(gray, sigma, max_candidates=max(300, 4 * cols * rows))
+    cand = find_candidates(
+        image.codes, sigma, max_candidates=max(300, 4 * cols * rows), scale=image.scale
+    )
     n = cand.xy.shape[0]
     if n < cols * rows:
         return None, f"{n} corner candidates, fewer than the {cols * rows} inner corners", n
@@ -199,12 +239,11 @@ def _detect(
     tried = np.zeros(n, dtype=bool)
     best_reason, best_size = "no grid of corners found", 0
     want = sorted((cols, rows))
-    boards: list[NDArray[np.float64]] = []
+    boards: list[tuple[NDArray[np.float64], NDArray[np.float64]]] = []
     for seed in range(min(n, MAX_SEEDS)):
         if tried[seed] or np.any(nbr[seed] < 0):
             continue
-        node_at = label_lattice(seed, cand, nbr, max_hops=cols + rows)
-        rect = grow_rectangle(node_at, cand.xy)
+        rect = lattice_rectangle(seed, cand, nbr, max_hops=cols + rows)
         if rect.size == 0:
             continue
         tried[rect.ravel()] = True
@@ -226,10 +265,11 @@ def _detect(
                     )
             continue
         problem = lattice_problem(grid)
-        if problem is None and not cell_parity_ok(cell_means(gray, grid)):
+        means = None if problem is not None else cell_means(image.float, grid)
+        if means is not None and not cell_parity_ok(means):
             problem = "the cells of the grid do not alternate dark and bright"
         if problem is None:
-            side = board_continues(gray, grid)
+            side = board_continues(image.float, grid, means)
             if side is not None:
                 problem = (
                     f"the checkerboard continues {side} of the {cols} x {rows} grid (a "
@@ -239,9 +279,10 @@ def _detect(
             if rect.size >= best_size:
                 best_size, best_reason = rect.size, f"grid rejected: {problem}"
             continue
-        boards.append(grid)
+        boards.append((grid, means))  # type: ignore[arg-type]  # means is set here
     if boards:
-        return _orient(max(boards, key=_area), gray, cols, rows), "", cols * rows
+        grid, means = max(boards, key=lambda b: _area(b[0]))
+        return _orient(grid, image.float, cols, rows, means), "", cols * rows
     return None, best_reason, best_size
 
 
@@ -325,7 +366,7 @@ def find_checkerboard(
            [59.5, 39.5],
            [39.5, 59.5]])
     """
-    gray = as_gray(image)
+    codes, scale, span = gray_codes(image)
     cols, rows = _check_pattern(pattern_size)
     if sigma is not None:
         # a Gaussian wider than 1000 px blurs any board away (and its kernel is 8 sigma)
@@ -335,14 +376,15 @@ def find_checkerboard(
     max_iter = as_int(max_iter, "max_iter", minimum=1, maximum=10**6)
     eps = as_real(eps, "eps", nonnegative=True)
     size = (cols, rows)
-    if float(gray.max() - gray.min()) == 0.0:
+    if span == 0.0:
         return CheckerboardResult(False, None, "the image is constant (no contrast)", size)
     sigmas: tuple[float, ...] = DEFAULT_SIGMAS if sigma is None else (float(sigma),)
     reason, best = "no checkerboard found", -1
+    gray = _Gray(codes, scale)
     for s in sigmas:
         grid, why, n = _detect(gray, cols, rows, s)
         if grid is not None:
-            return _finish(gray, grid, size, s, refine, half_window, max_iter, eps)
+            return _finish(gray.float, grid, size, s, refine, half_window, max_iter, eps)
         if n > best:
             reason, best = why, n
     return CheckerboardResult(False, None, reason, size)
@@ -371,7 +413,32 @@ def _finish(
     problem = lattice_problem(refined.reshape(grid.shape))
     if problem is not None:
         return CheckerboardResult(False, None, f"refined grid rejected: {problem}", size)
-    return CheckerboardResult(True, refined, "", size, status, sigma)
+    return _found(refined, size, status, sigma)
+
+
+def _found(
+    corners: NDArray[np.float64],
+    size: tuple[int, int],
+    status: NDArray[np.int64],
+    sigma: float,
+) -> CheckerboardResult:
+    """Build a found result from the detector's own checked values.
+
+    The checks of ``__post_init__`` are skipped (meant for callers' values: here they would cost a
+    tenth of a millisecond per view for nothing). Equal to ``CheckerboardResult(True, corners, "",
+    size, status, sigma)``.
+    """
+    res = object.__new__(CheckerboardResult)
+    for name, value in (
+        ("found", True),
+        ("corners", corners),
+        ("reason", ""),
+        ("pattern_size", size),
+        ("status", status),
+        ("sigma", float(sigma)),
+    ):
+        object.__setattr__(res, name, value)
+    return res
 
 
 def find_checkerboards(

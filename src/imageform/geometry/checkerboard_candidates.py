@@ -56,14 +56,6 @@ def _ring_offsets(radius: float) -> NDArray[np.float64]:
     return np.stack([radius * np.cos(ang), radius * np.sin(ang)], axis=1)
 
 
-def _bilinear(img: NDArray[np.floating], x: NDArray[np.float64], y: NDArray[np.float64]) -> NDArray:
-    # the kernels module imports numba: loaded on first use, not with imageform.geometry
-    from imageform._kernels.checkerboard import sample_bilinear_numba, sample_bilinear_numpy
-
-    fn = sample_bilinear_numba if use_numba(img) else sample_bilinear_numpy
-    return fn(img, np.ascontiguousarray(x), np.ascontiguousarray(y))
-
-
 def ring_test(
     smooth: NDArray[np.floating],
     xy: NDArray[np.float64],
@@ -71,42 +63,16 @@ def ring_test(
     min_contrast: float,
 ) -> tuple[NDArray[np.bool_], NDArray[np.float64], NDArray[np.float64]]:
     """Four-sector test on a ring; returns (ok, edge directions (N, 2, 2), contrast)."""
-    n = xy.shape[0]
-    off = _ring_offsets(radius)
-    vals = _bilinear(
-        smooth, xy[:, None, 0] + off[None, :, 0], xy[:, None, 1] + off[None, :, 1]
-    )  # (N, S)
-    lo = vals.min(axis=1)
-    hi = vals.max(axis=1)
-    contrast = hi - lo
-    mid = 0.5 * (lo + hi)
-    bright = vals > mid[:, None]
-    change = bright != np.roll(bright, -1, axis=1)  # crossing between sample k and k+1
-    ok = (change.sum(axis=1) == 4) & (contrast >= min_contrast)
-    dirs = np.zeros((n, 2, 2))
-    idx = np.flatnonzero(ok)
-    if idx.size:
-        # crossing angles, linearly interpolated between the two samples
-        k = np.nonzero(change[idx])[1].reshape(-1, 4)  # (M, 4) sorted sample indices
-        rows = np.arange(idx.size)[:, None]
-        v0 = vals[idx][rows, k] - mid[idx][:, None]
-        v1 = vals[idx][rows, (k + 1) % RING_SAMPLES] - mid[idx][:, None]
-        frac = v0 / (v0 - v1)
-        theta = 2.0 * np.pi * (k + frac) / RING_SAMPLES
-        # every sector must span at least two samples: rejects noise flips
-        span = np.diff(np.concatenate([k, k[:, :1] + RING_SAMPLES], axis=1), axis=1)
-        wide = np.all(span >= 2, axis=1)
-        u = np.stack([np.cos(theta), np.sin(theta)], axis=2)  # (M, 4, 2)
-        d1 = u[:, 0] - u[:, 2]
-        d2 = u[:, 1] - u[:, 3]
-        d1 /= np.linalg.norm(d1, axis=1, keepdims=True)
-        d2 /= np.linalg.norm(d2, axis=1, keepdims=True)
-        dirs[idx, 0] = d1
-        dirs[idx, 1] = d2
-        # the two edges must not be (nearly) parallel
-        sin_between = np.abs(d1[:, 0] * d2[:, 1] - d1[:, 1] * d2[:, 0])
-        ok[idx] = wide & (sin_between > 0.3)
-    return ok, dirs, contrast
+    if use_numba(smooth):
+        from imageform._kernels.checkerboard import ring_test_numba
+
+        return ring_test_numba(
+            smooth, np.ascontiguousarray(xy, dtype=np.float64), _ring_offsets(radius),
+            float(min_contrast),
+        )  # fmt: skip
+    from imageform._kernels.checkerboard import ring_test_numpy
+
+    return ring_test_numpy(smooth, xy, _ring_offsets(radius), float(min_contrast))
 
 
 def _peak_offset(minus: NDArray, centre: NDArray, plus: NDArray) -> NDArray[np.float64]:
@@ -120,50 +86,54 @@ def _peak_offset(minus: NDArray, centre: NDArray, plus: NDArray) -> NDArray[np.f
 
 
 def find_candidates(
-    gray: NDArray[np.floating],
+    gray: NDArray[np.number],
     sigma: float,
     *,
     relative_threshold: float = 0.02,
     max_candidates: int = 300,
+    scale: float = 1.0,
 ) -> Candidates:
-    """Saddle-response maxima of ``gray`` that pass the ring test."""
+    """Saddle-response maxima of ``gray / scale`` that pass the ring test.
+
+    ``scale`` lets integer codes be read as they are (``uint8`` with ``scale=255`` gives the
+    candidates of ``gray.astype(float32) / 255`` without making that array).
+    """
     # O(1) checks (the image's values were checked by find_checkerboard; no extra pass)
     if not isinstance(gray, np.ndarray) or gray.ndim != 2 or gray.dtype.kind not in "fiu":
         raise InvalidInputError(f"expected gray as a 2-D real NumPy image, got {describe(gray)}")
     sigma = as_real(sigma, "sigma", positive=True, maximum=1000.0)
     relative_threshold = as_real(relative_threshold, "relative_threshold", minimum=0.0)
     max_candidates = as_int(max_candidates, "max_candidates", minimum=1, maximum=10**7)
+    scale = as_real(scale, "scale", positive=True)
     from imageform._kernels.checkerboard import (
         gaussian_weights,
-        local_maxima_numba,
-        local_maxima_numpy,
         refine_corners_numba,
         refine_corners_numpy,
-        smooth_saddle_numba,
-        smooth_saddle_numpy,
+        saddle_maxima_numba,
+        saddle_maxima_numpy,
     )
 
     taps = gaussian_weights(sigma).astype(np.float32)
     fast = use_numba(gray)
-    # float32 is ample for a detector (the refinement runs on the float64 image)
-    g32 = gray.astype(np.float32)
-    smooth, resp = (smooth_saddle_numba if fast else smooth_saddle_numpy)(g32, taps)
-    empty = Candidates(np.zeros((0, 2)), np.zeros((0, 2, 2)), np.zeros(0), np.zeros(0))
-    peak = float(resp.max())
-    if not peak > 0.0:
-        return empty
+    # float32 is ample for a detector (the refinement runs on the image as given): the
+    # kernel reads gray as it is and works in float32 (no converted copy of the image)
     nms = max(2, round(1.5 * sigma))
     border = taps.size // 2 + 1
-    ys, xs = (local_maxima_numba if fast else local_maxima_numpy)(
-        resp, nms, relative_threshold * peak, border
+    smooth, peak, ys, xs, around = (saddle_maxima_numba if fast else saddle_maxima_numpy)(
+        np.ascontiguousarray(gray), taps, nms, border, relative_threshold, np.float32(scale)
     )
+    empty = Candidates(np.zeros((0, 2)), np.zeros((0, 2, 2)), np.zeros(0), np.zeros(0))
+    if not peak > 0.0:
+        return empty
+    keep = around[:, 1, 1] > relative_threshold * peak
+    ys, xs, around = ys[keep], xs[keep], around[keep]
     if ys.size == 0:
         return empty
-    r = resp[ys, xs]
+    r = around[:, 1, 1]
     order = np.argsort(-r, kind="stable")[:max_candidates]
-    ys, xs, r = ys[order], xs[order], r[order]
-    dx = _peak_offset(resp[ys, xs - 1], r, resp[ys, xs + 1])
-    dy = _peak_offset(resp[ys - 1, xs], r, resp[ys + 1, xs])
+    ys, xs, r, around = ys[order], xs[order], r[order], around[order]
+    dx = _peak_offset(around[:, 1, 0], r, around[:, 1, 2])
+    dy = _peak_offset(around[:, 0, 1], r, around[:, 2, 1])
     xy = np.stack([xs + dx, ys + dy], axis=1).astype(np.float64)
     # contrast scale of the image from a subsample (robust to a few hot pixels)
     lo, hi = np.percentile(smooth[::8, ::8], [1.0, 99.0])

@@ -29,9 +29,18 @@ import numpy as np
 from numpy.typing import NDArray
 
 from imageform import _deprecate
+from imageform._backend import use_numba
 from imageform.geometry.checkerboard_candidates import Candidates
 
-__all__ = ["cell_parity_ok", "grow_rectangle", "label_lattice", "lattice_problem", "neighbors"]
+__all__ = [
+    "cell_parity_ok",
+    "grow_rectangle",
+    "label_lattice",
+    "lattice_problem",
+    "lattice_problem_numpy",
+    "lattice_rectangle",
+    "neighbors",
+]
 
 #: Largest angle (radians) between an edge direction and the vector to a neighbour.
 ANGLE_TOL = 0.3
@@ -43,45 +52,12 @@ def neighbors(cand: Candidates, min_dist: float, k_nearest: int = 16) -> NDArray
     Only the ``k_nearest`` nearest candidates of each are considered (a grid neighbour is
     among the 8 nearest on a board); links are kept only when mutual.
     """
-    xy, dirs = cand.xy, cand.dirs
-    n = xy.shape[0]
-    out = np.full((n, 2, 2), -1, dtype=np.int64)
-    if n < 2:
-        return out
-    from scipy.spatial import cKDTree  # imported on use, not with imageform.geometry
+    from imageform._kernels.checkerboard import neighbors_numba, neighbors_numpy
 
-    kq = min(n, k_nearest + 1)
-    dist, idx = cKDTree(xy).query(xy, k=kq)
-    dist, idx = dist[:, 1:], idx[:, 1:]  # drop self
-    dx = xy[idx, 0] - xy[:, None, 0]
-    dy = xy[idx, 1] - xy[:, None, 1]
-    safe = np.where(dist > 0, dist, np.inf)
-    ux, uy = dx / safe, dy / safe
-    cos_tol = np.cos(ANGLE_TOL)
-    # the candidate b must have an edge along the joining vector (shared edge)
-    db = dirs[idx]  # (N, K, 2, 2)
-    shared = (
-        np.maximum(
-            np.abs(ux * db[..., 0, 0] + uy * db[..., 0, 1]),
-            np.abs(ux * db[..., 1, 0] + uy * db[..., 1, 1]),
-        )
-        > cos_tol
-    )
-    usable = shared & (dist > min_dist)
-    rows = np.arange(n)
-    for k in range(2):
-        along = ux * dirs[:, None, k, 0] + uy * dirs[:, None, k, 1]
-        for s, sign in enumerate((1.0, -1.0)):
-            d = np.where(usable & (sign * along > cos_tol), dist, np.inf)
-            best = np.argmin(d, axis=1)
-            found = np.isfinite(d[rows, best])
-            out[found, k, s] = idx[rows, best][found]
-    # keep mutual links only: b must list a among its own neighbours
-    flat = out.reshape(n, 4)
-    b = np.where(flat >= 0, flat, 0)
-    mutual = np.any(flat[b] == np.arange(n)[:, None, None], axis=2)
-    flat[~mutual] = -1
-    return out
+    xy = np.ascontiguousarray(cand.xy, dtype=np.float64)
+    dirs = np.ascontiguousarray(cand.dirs, dtype=np.float64)
+    kernel = neighbors_numba if use_numba(xy) else neighbors_numpy
+    return kernel(xy, dirs, float(min_dist), int(k_nearest), float(np.cos(ANGLE_TOL)))
 
 
 neighbours = _deprecate.renamed(
@@ -193,12 +169,54 @@ def grow_rectangle(
     )
 
 
+def lattice_rectangle(
+    seed: int, cand: Candidates, nbr: NDArray[np.int64], max_hops: int = 10**6
+) -> NDArray[np.int64]:
+    """Run :func:`grow_rectangle` of :func:`label_lattice` from ``seed``.
+
+    Returns node indices ``(n_i, n_j)``, empty when the 3 x 3 block around the seed is incomplete
+    (one numba kernel, ``lattice_rectangle_numba``, where numba runs; the two functions otherwise).
+    """
+    xy = np.ascontiguousarray(cand.xy, dtype=np.float64)
+    if use_numba(xy) and max_hops <= 100_000:
+        from imageform._kernels.checkerboard import lattice_rectangle_numba
+
+        return lattice_rectangle_numba(
+            int(seed),
+            np.ascontiguousarray(cand.dirs, dtype=np.float64),
+            np.ascontiguousarray(nbr, dtype=np.int64),
+            xy,
+            int(max_hops),
+            0.35,
+        )
+    return grow_rectangle(label_lattice(seed, cand, nbr, max_hops=max_hops), xy)
+
+
 def lattice_problem(grid: NDArray[np.float64], max_bend: float = 0.3) -> str | None:
     """Why ``grid`` (R, C, 2) is not a consistent lattice, or None when it is.
 
     Second differences along rows and columns must stay below ``max_bend`` times the local
-    spacing; all cells must be convex with one orientation.
+    spacing; all cells must be convex with one orientation. (One numba kernel,
+    ``lattice_problem_numba``, where numba runs; :func:`lattice_problem_numpy` otherwise.)
     """
+    g = np.ascontiguousarray(grid, dtype=np.float64)
+    if not use_numba(g) or g.ndim != 3 or g.shape[-1] != 2:
+        return lattice_problem_numpy(grid, max_bend)
+    from imageform._kernels.checkerboard import lattice_problem_numba
+
+    code, a, b = lattice_problem_numba(g, float(max_bend))
+    if code == 0:
+        return None
+    name = "row" if code <= 2 else "column"
+    if code in (1, 3):
+        return f"a {name} of the grid bends or jumps (second difference {a:.2f} x spacing)"
+    if code in (2, 4):
+        return f"spacing along a {name} changes abruptly (ratio {a:.2f}-{b:.2f})"
+    return "the grid's cells are not convex quadrilaterals of one orientation"
+
+
+def lattice_problem_numpy(grid: NDArray[np.float64], max_bend: float = 0.3) -> str | None:
+    """Plain NumPy twin of :func:`lattice_problem`."""
     for axis, name in ((1, "row"), (0, "column")):
         g = np.moveaxis(grid, axis, 0)
         if g.shape[0] < 3:
@@ -266,7 +284,11 @@ def cell_parity_ok(means: NDArray[np.float64]) -> bool:
     return bool(np.all(diffs > 0) or np.all(diffs < 0))
 
 
-def board_continues(gray: NDArray[np.floating], grid: NDArray[np.float64]) -> str | None:
+def board_continues(
+    gray: NDArray[np.floating],
+    grid: NDArray[np.float64],
+    own: NDArray[np.float64] | None = None,
+) -> str | None:
     """Which side of ``grid`` (R, C, 2) the checkerboard visibly continues past, or None.
 
     A complete ``cols x rows`` grid can still be the wrong one: a sub-grid of a larger
@@ -277,11 +299,13 @@ def board_continues(gray: NDArray[np.floating], grid: NDArray[np.float64]) -> st
     if instead three or more neighbouring cells there (inside the image) alternate with the
     board's own parity by at least a sixth of its contrast, the board goes on.
     A board cut within a quarter cell of row ``k + 1`` cannot be told from a smaller one.
+    ``own``: the grid's :func:`cell_means`, when the caller has them.
     """
     from scipy import ndimage
 
     h, w = gray.shape
-    own = cell_means(gray, grid)
+    if own is None:
+        own = cell_means(gray, grid)
     flip = 1 - 2 * (np.add.outer(np.arange(own.shape[0]), np.arange(own.shape[1])) % 2)
     sense = 1.0 if float(np.mean(own * flip)) > 0 else -1.0  # +1: flip=+1 cells bright
     mid = float(np.mean(own))

@@ -16,7 +16,7 @@ from imageform._validate import as_image, as_int, as_real, format_shape
 from imageform.errors import InvalidInputError
 from imageform.geometry._checks import as_points, check_bounded, size_pair
 
-__all__ = ["RefinedCorners", "as_gray", "refine", "refine_corners"]
+__all__ = ["RefinedCorners", "as_gray", "gray_codes", "gray_from_codes", "refine", "refine_corners"]
 
 # ITU-R BT.601 luma weights (the grey conversion OpenCV's cvtColor uses)
 _LUMA = np.array([0.299, 0.587, 0.114])
@@ -57,6 +57,44 @@ def as_gray(image: object) -> NDArray[np.floating]:
             f"expected an image of at least 16 x 16 pixels, got {format_shape(arr.shape)}"
         )
     return arr
+
+
+_SCALE = {np.dtype(np.uint8): 255.0, np.dtype(np.uint16): 65535.0}
+
+
+def gray_codes(image: object) -> tuple[NDArray[np.number], float, float]:
+    """Return the grey image as stored, its scale and its span: ``(codes, scale, max - min)``.
+
+    ``codes / scale`` is :func:`as_gray` (see :func:`gray_from_codes`) and the span is 0
+    for a constant image. A NumPy ``uint8``/``uint16`` grey image (a camera frame) is
+    returned as it is, with scale 255 or 65535 and its span from the integers (which need
+    no finiteness check), so that no float copy of it is made unless needed; any other
+    image goes through :func:`as_gray` (scale 1).
+    """
+    if (
+        isinstance(image, np.ndarray)
+        and image.dtype in _SCALE
+        and (image.ndim == 2 or (image.ndim == 3 and image.shape[-1] == 1))
+        and min(image.shape[:2]) >= 16
+    ):
+        raw = image[..., 0] if image.ndim == 3 else image
+        scale = _SCALE[image.dtype]
+        return raw, scale, float(int(raw.max()) - int(raw.min())) / scale
+    gray = as_gray(image)
+    return gray, 1.0, float(gray.max() - gray.min())
+
+
+def gray_from_codes(codes: NDArray[np.number], scale: float) -> NDArray[np.floating]:
+    """Return :func:`as_gray`'s image from :func:`gray_codes`' ``(codes, scale)``.
+
+    The codes as they are for scale 1, else ``codes.astype(float32) / scale`` (bit for bit, in one
+    pass).
+    """
+    if scale == 1.0:
+        return codes  # type: ignore[return-value]
+    gray = np.empty(codes.shape, dtype=np.float32)
+    np.divide(codes, np.float32(scale), out=gray, dtype=np.float32)
+    return gray
 
 
 def refine_corners(
