@@ -3,11 +3,11 @@
 numba compiles imageform's kernels on first use (15-25 s for the first ``pose``, ``demosaic``
 or ``simulate``) and caches them on disk (``imageform._kernels.jit``: the policy and the
 location). ``imageform cache --warm`` pays that once, ahead of time: after installing, in a
-container image, or before a CI test run. It runs the commands people wait on (``simulate``
-with its built-in scene, ``pose --ransac`` with a Brown-Conrady camera, ``demosaic`` with
-each method, ``convert``) on small inputs it writes to a temporary folder, each in its own
-process (``--jobs`` at once), so that every kernel they use is compiled for the same types
-and layouts as a real run, and written to the cache.
+container image, or before a CI test run. It runs the commands people wait on (``simulate`` with its
+built-in scene, ``pose --ransac`` with a Brown-Conrady camera, ``demosaic`` with each method,
+``convert``, ``calibrate`` on three checkerboard views, ``undistort``) on small inputs it writes to
+a temporary folder, each in its own process (``--jobs`` at once), so that every kernel they use is
+compiled for the same types and layouts as a real run, and written to the cache.
 """
 
 from __future__ import annotations
@@ -45,6 +45,21 @@ rows = [",".join(repr(float(v)) for v in (*a, *b)) for a, b in zip(X, uv, strict
 img = (rng.uniform(0, 1, (64, 96, 3)) * 255).astype(np.uint8)
 write_image(work / "rgb8.png", img)
 write_image(work / "mosaic8.png", np.ascontiguousarray(img[..., 1:2]))
+# three views of a 9 x 6 checkerboard (30 mm squares) for calibrate's detector and refinement
+vv, uu = np.mgrid[0:480, 0:640].astype(np.float64)
+for k, (ax, ay) in enumerate(((0.3, 0.0), (0.0, 0.35), (-0.25, 0.2))):
+    Rx = np.array([[1, 0, 0], [0, np.cos(ax), -np.sin(ax)], [0, np.sin(ax), np.cos(ax)]])
+    Ry = np.array([[np.cos(ay), 0, np.sin(ay)], [0, 1, 0], [-np.sin(ay), 0, np.cos(ay)]])
+    R = Rx @ Ry
+    H = K @ np.column_stack([R[:, 0], R[:, 1], [-180.0, -135.0, 900.0]])
+    q = np.linalg.solve(H, np.stack([uu.ravel(), vv.ravel(), np.ones(uu.size)]))
+    x, y = (q[0] / q[2] + 30.0) / 30.0, (q[1] / q[2] + 30.0) / 30.0  # squares from -1
+    inside = (x >= 0) & (x < 12) & (y >= 0) & (y < 9)
+    dark = (np.floor(x) + np.floor(y)) % 2 == 0
+    board = np.where(inside & ~((x >= 1) & (x < 11) & (y >= 1) & (y < 8) & dark), 230, 25)
+    board = np.where(inside, board, 128).reshape(480, 640).astype(np.uint8)
+    write_image(work / f"board{k}.png", board[..., None])
+write_image(work / "board_rgb.png", np.repeat(board[..., None], 3, axis=2))
 """
 
 
@@ -54,6 +69,8 @@ def _jobs(work: Path) -> list[list[str]]:
         ["simulate", "-o", f"{w}/sim"],
         ["pose", f"{w}/cam.toml", f"{w}/pairs.csv", "--ransac"],
         ["convert", f"{w}/rgb8.png", "--from", "srgb", "--to", "lab", "-o", f"{w}/lab.tif"],
+        ["calibrate", f"{w}/board*.png", "--board", "9x6", "--square", "30mm", "-o", f"{w}/c.toml"],
+        ["undistort", f"{w}/board_rgb.png", "--camera", f"{w}/cam.toml", "-o", f"{w}/u.png"],
     ]
     # 8-bit mosaics only: 16-bit ones run the same float32 kernels
     for method in ("menon", "bilinear", "malvar", "hamilton-adams"):
