@@ -71,7 +71,6 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from imageform._validate import describe
 from imageform.errors import InvalidInputError
 from imageform.workflows._spec import Input, Options, Output, Result, Run, Workflow, option
 
@@ -1211,6 +1210,7 @@ def relative_qe(sensitivities: Any) -> tuple[Any, Any]:
     """
     import numpy as np
 
+    from imageform._validate import describe
     from imageform.spectral import Spectrum
 
     if not isinstance(sensitivities, Spectrum):
