@@ -99,11 +99,12 @@ def _px_int(u, c, d, o, jl, j, jr, is_rb, k):  # type: ignore[no-untyped-def]
 
 
 _U = np.uint32
+_H = np.uint16  # uint8 sums: 4 x 255 + 2 fits
 
 
 @njit(inline="always", error_model="numpy")
 def _own_green(u, c, d, j):  # type: ignore[no-untyped-def]
-    """Pixel ``j`` a red (blue) site, ``j + 1`` green: (own, green, other) of both."""
+    """Pixel ``j`` a red (blue) site, ``j + 1`` green: (own, green, other) of both (uint32)."""
     cl, c0, c1, c2 = _U(c[j - 1]), _U(c[j]), _U(c[j + 1]), _U(c[j + 2])
     ul, u1, dl, d1 = _U(u[j - 1]), _U(u[j + 1]), _U(d[j - 1]), _U(d[j + 1])
     u0, d0 = _U(u[j]), _U(d[j])
@@ -114,7 +115,7 @@ def _own_green(u, c, d, j):  # type: ignore[no-untyped-def]
 
 @njit(inline="always", error_model="numpy")
 def _green_own(u, c, d, j):  # type: ignore[no-untyped-def]
-    """Pixel ``j`` green, ``j + 1`` a red (blue) site: (own, green, other) of both."""
+    """Pixel ``j`` green, ``j + 1`` a red (blue) site: (own, green, other) of both (uint32)."""
     cl, c0, c1, c2 = _U(c[j - 1]), _U(c[j]), _U(c[j + 1]), _U(c[j + 2])
     u0, u1, u2, d0, d1, d2 = (
         _U(u[j]),
@@ -131,15 +132,49 @@ def _green_own(u, c, d, j):  # type: ignore[no-untyped-def]
     return k0, c0, x0, c1, g1, x1
 
 
-def _make_rows(own_first: bool, red_row: bool, wide: bool):  # type: ignore[no-untyped-def]
-    """Run the interior loop of one row phase, writing packed 32-bit words of the output row.
+@njit(inline="always", error_model="numpy")
+def _own_green8(u, c, d, j):  # type: ignore[no-untyped-def]
+    """:func:`_own_green` of uint8 samples, in 16-bit lanes (twice as many per vector)."""
+    cl, c0, c1, c2 = _H(c[j - 1]), _H(c[j]), _H(c[j + 1]), _H(c[j + 2])
+    ul, u1, dl, d1 = _H(u[j - 1]), _H(u[j + 1]), _H(d[j - 1]), _H(d[j + 1])
+    u0, d0 = _H(u[j]), _H(d[j])
+    g0 = (cl + c1 + u0 + d0 + _H(2)) >> _H(2)
+    x0 = (ul + u1 + dl + d1 + _H(2)) >> _H(2)
+    return c0, g0, x0, (c0 + c2 + _H(1)) >> _H(1), c1, (u1 + d1 + _H(1)) >> _H(1)
 
-    The output row is ``o32`` (little-endian): uint8 (``wide`` False) 4 pixels = 12 bytes =
-    3 words per step, uint16 2 pixels = 3 words. ``own_first``: the row's red (blue) site at
-    even columns; ``red_row``: the own colour is red (channel 0). Constant channel order and
-    no selects, so LLVM vectorises the loop.
+
+@njit(inline="always", error_model="numpy")
+def _green_own8(u, c, d, j):  # type: ignore[no-untyped-def]
+    """:func:`_green_own` of uint8 samples, in 16-bit lanes."""
+    cl, c0, c1, c2 = _H(c[j - 1]), _H(c[j]), _H(c[j + 1]), _H(c[j + 2])
+    u0, u1, u2, d0, d1, d2 = (
+        _H(u[j]),
+        _H(u[j + 1]),
+        _H(u[j + 2]),
+        _H(d[j]),
+        _H(d[j + 1]),
+        _H(d[j + 2]),
+    )
+    k0 = (cl + c1 + _H(1)) >> _H(1)
+    x0 = (u0 + d0 + _H(1)) >> _H(1)
+    g1 = (c0 + c2 + u1 + d1 + _H(2)) >> _H(2)
+    x1 = (u0 + u2 + d0 + d2 + _H(2)) >> _H(2)
+    return k0, c0, x0, c1, g1, x1
+
+
+def _make_rows(own_first: bool, red_row: bool, wide: bool):  # type: ignore[no-untyped-def]
+    """Run the interior loop of one row phase: 2 pixels (6 output samples) per step.
+
+    uint8 (``wide`` False): 16-bit arithmetic, six byte stores into the flat output row
+    ``o8``. uint16: packed 32-bit words of the output row ``o32`` (little-endian), 2 pixels
+    = 3 words per step. ``own_first``: the row's red (blue) site at even columns;
+    ``red_row``: the own colour is red (channel 0). Constant channel order and no selects, so
+    LLVM vectorises the loop.
     """
-    pair = _own_green if own_first else _green_own
+    if wide:
+        pair = _own_green if own_first else _green_own
+    else:
+        pair = _own_green8 if own_first else _green_own8
 
     def rgb(own, g, oth):  # type: ignore[no-untyped-def]
         return (own, g, oth) if red_row else (oth, g, own)
@@ -147,19 +182,18 @@ def _make_rows(own_first: bool, red_row: bool, wide: bool):  # type: ignore[no-u
     # a closure, inlined into the loops below (whose cache holds it): nothing to cache itself
     rgb_j = njit(inline="always", cache=False)(rgb)
 
-    def loop8(u, c, d, o32, n):  # type: ignore[no-untyped-def]
+    def loop8(u, c, d, o8, n):  # type: ignore[no-untyped-def]
         for q in range(1, n):
-            j = 4 * q
-            a0, a1, a2, b0, b1, b2 = pair(u, c, d, j)
-            e0, e1, e2, f0, f1, f2 = pair(u, c, d, j + 2)
+            a0, a1, a2, b0, b1, b2 = pair(u, c, d, 2 * q)
             r0, g0, x0 = rgb_j(a0, a1, a2)
             r1, g1, x1 = rgb_j(b0, b1, b2)
-            r2, g2, x2 = rgb_j(e0, e1, e2)
-            r3, g3, x3 = rgb_j(f0, f1, f2)
-            k = 3 * q  # o32: this row's words (an offset here would stop vectorisation)
-            o32[k] = r0 | (g0 << _U(8)) | (x0 << _U(16)) | (r1 << _U(24))
-            o32[k + 1] = g1 | (x1 << _U(8)) | (r2 << _U(16)) | (g2 << _U(24))
-            o32[k + 2] = x2 | (r3 << _U(8)) | (g3 << _U(16)) | (x3 << _U(24))
+            k = 6 * q  # o8: this row's bytes (an offset here would stop vectorisation)
+            o8[k] = r0
+            o8[k + 1] = g0
+            o8[k + 2] = x0
+            o8[k + 3] = r1
+            o8[k + 4] = g1
+            o8[k + 5] = x1
 
     def loop16(u, c, d, o32, n):  # type: ignore[no-untyped-def]
         for q in range(1, n):
@@ -186,14 +220,14 @@ _GREEN_B16 = _make_rows(False, False, True)
 
 
 @njit(parallel=True, error_model="numpy")
-def _int_rows(raw, ry, rx, out, o32, n):  # type: ignore[no-untyped-def]
+def _int_rows(raw, ry, rx, out, o8, o32, n):  # type: ignore[no-untyped-def]
     # Unpadded mosaic (red at row % 2 == ry, column % 2 == rx); edges mirrored about the edge
-    # pixel (index -1 reads 1, as numpy.pad(mode="reflect") in the float path). ``o32``: the
-    # output as 32-bit words (empty and n = 0 when the rows are not whole words).
+    # pixel (index -1 reads 1, as numpy.pad(mode="reflect") in the float path). ``o8``
+    # (uint8) / ``o32`` (uint16: the output as 32-bit words): the flat output, the other one
+    # empty; n = 0 when the vectorised loop does not apply.
     h, w = raw.shape
     wide = raw.itemsize == 2
-    step = 2 if wide else 4  # pixels per 3 output words
-    row_words = (3 * w * raw.itemsize) // 4
+    row_len = (3 * w * raw.itemsize) // 4 if wide else 3 * w
     for i in prange(h):
         up = i - 1 if i > 0 else 1
         dn = i + 1 if i < h - 1 else h - 2
@@ -204,9 +238,9 @@ def _int_rows(raw, ry, rx, out, o32, n):  # type: ignore[no-untyped-def]
         red_row = (i & 1) == ry
         k = 0 if red_row else 2
         par = rx if red_row else 1 - rx  # column parity of this row's red (blue) sites
-        ow = o32[i * row_words : (i + 1) * row_words]
         if n > 1:
             if wide:
+                ow = o32[i * row_len : (i + 1) * row_len]
                 if par == 0 and red_row:
                     _OWN_R16(u, c, d, ow, n)
                 elif par == 0:
@@ -215,15 +249,17 @@ def _int_rows(raw, ry, rx, out, o32, n):  # type: ignore[no-untyped-def]
                     _GREEN_R16(u, c, d, ow, n)
                 else:
                     _GREEN_B16(u, c, d, ow, n)
-            elif par == 0 and red_row:
-                _OWN_R8(u, c, d, ow, n)
-            elif par == 0:
-                _OWN_B8(u, c, d, ow, n)
-            elif red_row:
-                _GREEN_R8(u, c, d, ow, n)
             else:
-                _GREEN_B8(u, c, d, ow, n)
-            lo, hi = step, step * n
+                ob = o8[i * row_len : (i + 1) * row_len]
+                if par == 0 and red_row:
+                    _OWN_R8(u, c, d, ob, n)
+                elif par == 0:
+                    _OWN_B8(u, c, d, ob, n)
+                elif red_row:
+                    _GREEN_R8(u, c, d, ob, n)
+                else:
+                    _GREEN_B8(u, c, d, ob, n)
+            lo, hi = 2, 2 * n
         else:
             lo, hi = w, w
         for j in range(lo):
@@ -249,19 +285,20 @@ def bilinear_int_numba(
     """Demosaic a uint8/uint16 unpadded C-contiguous ``(H, W)`` mosaic bilinearly into ``out``.
 
     Red is at ``(ry, rx)``; ``out`` is ``(H, W, 3)``, same dtype, C-contiguous; integer
-    means rounded half up (twin: :func:`bilinear_int_numpy`). Rows whose bytes make whole
-    32-bit words (W a multiple of 4 for uint8, of 2 for uint16; little-endian) run the
-    packed, vectorised loop; other widths the per-pixel one.
+    means rounded half up (twin: :func:`bilinear_int_numpy`). The interior runs a
+    vectorised loop of 2 pixels per step: uint8 any width (16-bit arithmetic, byte stores),
+    uint16 where the rows' bytes make whole 32-bit words (W even; little-endian: packed
+    words); other rows, and the edge pixels, the per-pixel loop.
     """
     h, w = raw.shape
-    step = 2 if raw.itemsize == 2 else 4
-    if w % step == 0 and sys.byteorder == "little":
-        o32, n = out.reshape(-1).view(np.uint32), w // step - 1
-    else:
-        o32, n = np.empty(0, np.uint32), 0
+    o8, o32, n = np.empty(0, np.uint8), np.empty(0, np.uint32), 0
+    if raw.itemsize == 1:
+        o8, n = out.reshape(-1), w // 2 - 1
+    elif w % 2 == 0 and sys.byteorder == "little":
+        o32, n = out.reshape(-1).view(np.uint32), w // 2 - 1
     if parallel is None:
         parallel = h * w >= PARALLEL_MIN_PIXELS
-    (_int_rows if parallel else _int_rows_serial)(raw, ry, rx, out, o32, n)
+    (_int_rows if parallel else _int_rows_serial)(raw, ry, rx, out, o8, o32, n)
     return out
 
 
