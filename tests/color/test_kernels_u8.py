@@ -212,6 +212,26 @@ def test_int_bilinear_kernel_twin(pattern: str, dtype: type, shape: tuple[int, i
     assert np.abs(got.astype(np.float64) - np.rint(ref)).max() <= 1
 
 
+def test_int_bilinear_avg2_exact() -> None:
+    # the uint8 loop's 2-mean written with bit operations: (a | b) - ((a ^ b) >> 1)
+    a = np.arange(256, dtype=np.int64)[:, None]
+    b = np.arange(256, dtype=np.int64)[None, :]
+    np.testing.assert_array_equal((a | b) - ((a ^ b) >> 1), (a + b + 1) >> 1)
+
+
+@pytest.mark.parametrize("parallel", [False, True])
+@pytest.mark.parametrize("shape", [(9, 131), (8, 130), (5, 7)])
+def test_int_bilinear_uint8_extremes_any_width(parallel: bool, shape: tuple[int, int]) -> None:
+    # values at 0/1/254/255 (carries and rounding at the limits), odd and even widths
+    rng = np.random.default_rng(7)
+    raw = rng.choice(np.array([0, 1, 254, 255], np.uint8), shape)
+    for ry in (0, 1):
+        for rx in (0, 1):
+            out = np.empty((*shape, 3), np.uint8)
+            got = demosaic_bilinear.bilinear_int_numba(raw, ry, rx, out, parallel=parallel)
+            np.testing.assert_array_equal(got, demosaic_bilinear.bilinear_int_numpy(raw, ry, rx))
+
+
 def test_int_bilinear_flat_and_batch() -> None:
     raw = np.full((3, 8, 10, 1), 77, np.uint8)
     got = demosaic(raw, "GRBG", "bilinear", keep_dtype=True)
