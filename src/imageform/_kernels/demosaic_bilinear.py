@@ -278,7 +278,8 @@ def _int_rows(raw, ry, rx, out, o8, o32, n):  # type: ignore[no-untyped-def]
 
 _int_rows_serial = njit(error_model="numpy")(_int_rows.py_func)
 #: Mosaics of fewer pixels run the rows in the calling thread (waking numba's pool costs
-#: more than it gains there on a loaded machine; benchmarks/results/8bit-2026-11-25.md).
+#: more than it gains there on a loaded machine; benchmarks/results/8bit-2026-11-25.md and
+#: 8bit-2026-11-25b.md).
 PARALLEL_MIN_PIXELS = 1 << 22
 
 
