@@ -212,6 +212,34 @@ def test_int_bilinear_kernel_twin(pattern: str, dtype: type, shape: tuple[int, i
     assert np.abs(got.astype(np.float64) - np.rint(ref)).max() <= 1
 
 
+def test_int_bilinear_avg2_exact() -> None:
+    # the loops' 2-mean written with bit operations: (a | b) - ((a ^ b) >> 1); all uint8
+    # pairs, and uint16 against the extremes
+    a = np.arange(256, dtype=np.int64)[:, None]
+    b = np.arange(256, dtype=np.int64)[None, :]
+    np.testing.assert_array_equal((a | b) - ((a ^ b) >> 1), (a + b + 1) >> 1)
+    a = np.arange(1 << 16, dtype=np.int64)[:, None]
+    b = np.array([0, 1, 2, 255, 256, 32767, 32768, 65534, 65535], np.int64)[None, :]
+    np.testing.assert_array_equal((a | b) - ((a ^ b) >> 1), (a + b + 1) >> 1)
+
+
+@pytest.mark.parametrize("dtype", [np.uint8, np.uint16])
+@pytest.mark.parametrize("parallel", [False, True])
+@pytest.mark.parametrize("shape", [(9, 131), (8, 130), (5, 7)])
+def test_int_bilinear_extremes_any_width(
+    dtype: type, parallel: bool, shape: tuple[int, int]
+) -> None:
+    # codes 0, 1, max - 1, max (carries and rounding at the limits), odd and even widths
+    top = np.iinfo(dtype).max
+    rng = np.random.default_rng(7)
+    raw = rng.choice(np.array([0, 1, top - 1, top], dtype), shape)
+    for ry in (0, 1):
+        for rx in (0, 1):
+            out = np.empty((*shape, 3), dtype)
+            got = demosaic_bilinear.bilinear_int_numba(raw, ry, rx, out, parallel=parallel)
+            np.testing.assert_array_equal(got, demosaic_bilinear.bilinear_int_numpy(raw, ry, rx))
+
+
 def test_int_bilinear_flat_and_batch() -> None:
     raw = np.full((3, 8, 10, 1), 77, np.uint8)
     got = demosaic(raw, "GRBG", "bilinear", keep_dtype=True)

@@ -9,8 +9,6 @@ the convolution of the masked planes with ``[[0,1,0],[1,4,1],[0,1,0]]/4`` (green
 
 from __future__ import annotations
 
-import sys
-
 import numpy as np
 from numba import prange
 
@@ -99,80 +97,97 @@ def _px_int(u, c, d, o, jl, j, jr, is_rb, k):  # type: ignore[no-untyped-def]
 
 
 _U = np.uint32
+_H = np.uint16  # uint8 sums: 4 x 255 + 2 fits
+
+
+@njit(inline="always", error_model="numpy")
+def _avg2(a, b):  # type: ignore[no-untyped-def]
+    """Return ``(a + b + 1) >> 1`` of two unsigned samples as ``(a | b) - ((a ^ b) >> 1)``.
+
+    (``a + b = 2 (a & b) + (a ^ b)`` and ``a | b = (a & b) + (a ^ b)``.) Written so, not as
+    the sum: numba widens the sum to 64 bits and, where a sum feeds both a 2-mean and a
+    4-mean, LLVM then keeps 64-bit lanes (about 2x slower); bit operations stay narrow.
+    """
+    return (a | b) - ((a ^ b) >> 1)
 
 
 @njit(inline="always", error_model="numpy")
 def _own_green(u, c, d, j):  # type: ignore[no-untyped-def]
-    """Pixel ``j`` a red (blue) site, ``j + 1`` green: (own, green, other) of both."""
+    """Pixel ``j`` a red (blue) site, ``j + 1`` green: (own, green, other) of both (uint32)."""
     cl, c0, c1, c2 = _U(c[j - 1]), _U(c[j]), _U(c[j + 1]), _U(c[j + 2])
-    ul, u1, dl, d1 = _U(u[j - 1]), _U(u[j + 1]), _U(d[j - 1]), _U(d[j + 1])
-    u0, d0 = _U(u[j]), _U(d[j])
+    ul, u0, u1 = _U(u[j - 1]), _U(u[j]), _U(u[j + 1])
+    dl, d0, d1 = _U(d[j - 1]), _U(d[j]), _U(d[j + 1])
     g0 = (cl + c1 + u0 + d0 + _U(2)) >> _U(2)
     x0 = (ul + u1 + dl + d1 + _U(2)) >> _U(2)
-    return c0, g0, x0, (c0 + c2 + _U(1)) >> _U(1), c1, (u1 + d1 + _U(1)) >> _U(1)
+    return c0, g0, x0, _avg2(c0, c2), c1, _avg2(u1, d1)
 
 
 @njit(inline="always", error_model="numpy")
 def _green_own(u, c, d, j):  # type: ignore[no-untyped-def]
-    """Pixel ``j`` green, ``j + 1`` a red (blue) site: (own, green, other) of both."""
+    """Pixel ``j`` green, ``j + 1`` a red (blue) site: (own, green, other) of both (uint32)."""
     cl, c0, c1, c2 = _U(c[j - 1]), _U(c[j]), _U(c[j + 1]), _U(c[j + 2])
-    u0, u1, u2, d0, d1, d2 = (
-        _U(u[j]),
-        _U(u[j + 1]),
-        _U(u[j + 2]),
-        _U(d[j]),
-        _U(d[j + 1]),
-        _U(d[j + 2]),
-    )
-    k0 = (cl + c1 + _U(1)) >> _U(1)
-    x0 = (u0 + d0 + _U(1)) >> _U(1)
+    u0, u1, u2 = _U(u[j]), _U(u[j + 1]), _U(u[j + 2])
+    d0, d1, d2 = _U(d[j]), _U(d[j + 1]), _U(d[j + 2])
     g1 = (c0 + c2 + u1 + d1 + _U(2)) >> _U(2)
     x1 = (u0 + u2 + d0 + d2 + _U(2)) >> _U(2)
-    return k0, c0, x0, c1, g1, x1
+    return _avg2(cl, c1), c0, _avg2(u0, d0), c1, g1, x1
+
+
+@njit(inline="always", error_model="numpy")
+def _own_green8(u, c, d, j):  # type: ignore[no-untyped-def]
+    """:func:`_own_green` of uint8 samples: 4-means in 16-bit lanes, 2-means :func:`_avg2`."""
+    cl, c0, c1, c2 = _H(c[j - 1]), _H(c[j]), _H(c[j + 1]), _H(c[j + 2])
+    ul, u0, u1 = _H(u[j - 1]), _H(u[j]), _H(u[j + 1])
+    dl, d0, d1 = _H(d[j - 1]), _H(d[j]), _H(d[j + 1])
+    g0 = (cl + c1 + u0 + d0 + _H(2)) >> _H(2)
+    x0 = (ul + u1 + dl + d1 + _H(2)) >> _H(2)
+    return c0, g0, x0, _avg2(c0, c2), c1, _avg2(u1, d1)
+
+
+@njit(inline="always", error_model="numpy")
+def _green_own8(u, c, d, j):  # type: ignore[no-untyped-def]
+    """:func:`_green_own` of uint8 samples (as :func:`_own_green8`)."""
+    cl, c0, c1, c2 = _H(c[j - 1]), _H(c[j]), _H(c[j + 1]), _H(c[j + 2])
+    u0, u1, u2 = _H(u[j]), _H(u[j + 1]), _H(u[j + 2])
+    d0, d1, d2 = _H(d[j]), _H(d[j + 1]), _H(d[j + 2])
+    g1 = (c0 + c2 + u1 + d1 + _H(2)) >> _H(2)
+    x1 = (u0 + u2 + d0 + d2 + _H(2)) >> _H(2)
+    return _avg2(cl, c1), c0, _avg2(u0, d0), c1, g1, x1
 
 
 def _make_rows(own_first: bool, red_row: bool, wide: bool):  # type: ignore[no-untyped-def]
-    """Run the interior loop of one row phase, writing packed 32-bit words of the output row.
+    """Run the interior loop of one row phase: 2 pixels (6 output samples) per step.
 
-    The output row is ``o32`` (little-endian): uint8 (``wide`` False) 4 pixels = 12 bytes =
-    3 words per step, uint16 2 pixels = 3 words. ``own_first``: the row's red (blue) site at
-    even columns; ``red_row``: the own colour is red (channel 0). Constant channel order and
-    no selects, so LLVM vectorises the loop.
+    Six stores into the flat output row ``ov`` (the mosaic's dtype). uint8 (``wide``
+    False): 4-means in 16-bit lanes; uint16: in 32-bit lanes. ``own_first``: the row's red
+    (blue) site at even columns; ``red_row``: the own colour is red (channel 0). Constant
+    channel order and no selects, so LLVM vectorises the loop.
     """
-    pair = _own_green if own_first else _green_own
+    if wide:
+        pair = _own_green if own_first else _green_own
+    else:
+        pair = _own_green8 if own_first else _green_own8
 
     def rgb(own, g, oth):  # type: ignore[no-untyped-def]
         return (own, g, oth) if red_row else (oth, g, own)
 
-    # a closure, inlined into the loops below (whose cache holds it): nothing to cache itself
+    # a closure, inlined into the loop below (whose cache holds it): nothing to cache itself
     rgb_j = njit(inline="always", cache=False)(rgb)
 
-    def loop8(u, c, d, o32, n):  # type: ignore[no-untyped-def]
+    def loop(u, c, d, ov, n):  # type: ignore[no-untyped-def]
         for q in range(1, n):
-            j = 4 * q
-            a0, a1, a2, b0, b1, b2 = pair(u, c, d, j)
-            e0, e1, e2, f0, f1, f2 = pair(u, c, d, j + 2)
+            a0, a1, a2, b0, b1, b2 = pair(u, c, d, 2 * q)
             r0, g0, x0 = rgb_j(a0, a1, a2)
             r1, g1, x1 = rgb_j(b0, b1, b2)
-            r2, g2, x2 = rgb_j(e0, e1, e2)
-            r3, g3, x3 = rgb_j(f0, f1, f2)
-            k = 3 * q  # o32: this row's words (an offset here would stop vectorisation)
-            o32[k] = r0 | (g0 << _U(8)) | (x0 << _U(16)) | (r1 << _U(24))
-            o32[k + 1] = g1 | (x1 << _U(8)) | (r2 << _U(16)) | (g2 << _U(24))
-            o32[k + 2] = x2 | (r3 << _U(8)) | (g3 << _U(16)) | (x3 << _U(24))
+            k = 6 * q  # ov: this row's samples (an offset here would stop vectorisation)
+            ov[k] = r0
+            ov[k + 1] = g0
+            ov[k + 2] = x0
+            ov[k + 3] = r1
+            ov[k + 4] = g1
+            ov[k + 5] = x1
 
-    def loop16(u, c, d, o32, n):  # type: ignore[no-untyped-def]
-        for q in range(1, n):
-            j = 2 * q
-            a0, a1, a2, b0, b1, b2 = pair(u, c, d, j)
-            r0, g0, x0 = rgb_j(a0, a1, a2)
-            r1, g1, x1 = rgb_j(b0, b1, b2)
-            k = 3 * q  # o32: this row's words (an offset here would stop vectorisation)
-            o32[k] = r0 | (g0 << _U(16))
-            o32[k + 1] = x0 | (r1 << _U(16))
-            o32[k + 2] = g1 | (x1 << _U(16))
-
-    return njit(error_model="numpy")(loop16 if wide else loop8)
+    return njit(error_model="numpy")(loop)
 
 
 _OWN_R8 = _make_rows(True, True, False)
@@ -186,14 +201,12 @@ _GREEN_B16 = _make_rows(False, False, True)
 
 
 @njit(parallel=True, error_model="numpy")
-def _int_rows(raw, ry, rx, out, o32, n):  # type: ignore[no-untyped-def]
+def _int_rows(raw, ry, rx, out, ov, n):  # type: ignore[no-untyped-def]
     # Unpadded mosaic (red at row % 2 == ry, column % 2 == rx); edges mirrored about the edge
-    # pixel (index -1 reads 1, as numpy.pad(mode="reflect") in the float path). ``o32``: the
-    # output as 32-bit words (empty and n = 0 when the rows are not whole words).
+    # pixel (index -1 reads 1, as numpy.pad(mode="reflect") in the float path). ``ov``: the
+    # flat output; n = w // 2 - 1 (n < 2: the per-pixel loop only).
     h, w = raw.shape
     wide = raw.itemsize == 2
-    step = 2 if wide else 4  # pixels per 3 output words
-    row_words = (3 * w * raw.itemsize) // 4
     for i in prange(h):
         up = i - 1 if i > 0 else 1
         dn = i + 1 if i < h - 1 else h - 2
@@ -204,26 +217,26 @@ def _int_rows(raw, ry, rx, out, o32, n):  # type: ignore[no-untyped-def]
         red_row = (i & 1) == ry
         k = 0 if red_row else 2
         par = rx if red_row else 1 - rx  # column parity of this row's red (blue) sites
-        ow = o32[i * row_words : (i + 1) * row_words]
         if n > 1:
+            orow = ov[i * 3 * w : (i + 1) * 3 * w]
             if wide:
                 if par == 0 and red_row:
-                    _OWN_R16(u, c, d, ow, n)
+                    _OWN_R16(u, c, d, orow, n)
                 elif par == 0:
-                    _OWN_B16(u, c, d, ow, n)
+                    _OWN_B16(u, c, d, orow, n)
                 elif red_row:
-                    _GREEN_R16(u, c, d, ow, n)
+                    _GREEN_R16(u, c, d, orow, n)
                 else:
-                    _GREEN_B16(u, c, d, ow, n)
+                    _GREEN_B16(u, c, d, orow, n)
             elif par == 0 and red_row:
-                _OWN_R8(u, c, d, ow, n)
+                _OWN_R8(u, c, d, orow, n)
             elif par == 0:
-                _OWN_B8(u, c, d, ow, n)
+                _OWN_B8(u, c, d, orow, n)
             elif red_row:
-                _GREEN_R8(u, c, d, ow, n)
+                _GREEN_R8(u, c, d, orow, n)
             else:
-                _GREEN_B8(u, c, d, ow, n)
-            lo, hi = step, step * n
+                _GREEN_B8(u, c, d, orow, n)
+            lo, hi = 2, 2 * n
         else:
             lo, hi = w, w
         for j in range(lo):
@@ -239,7 +252,8 @@ def _int_rows(raw, ry, rx, out, o32, n):  # type: ignore[no-untyped-def]
 
 _int_rows_serial = njit(error_model="numpy")(_int_rows.py_func)
 #: Mosaics of fewer pixels run the rows in the calling thread (waking numba's pool costs
-#: more than it gains there on a loaded machine; benchmarks/results/8bit-2026-11-25.md).
+#: more than it gains there on a loaded machine; benchmarks/results/8bit-2026-11-25.md and
+#: 8bit-2026-11-25b.md).
 PARALLEL_MIN_PIXELS = 1 << 22
 
 
@@ -249,19 +263,14 @@ def bilinear_int_numba(
     """Demosaic a uint8/uint16 unpadded C-contiguous ``(H, W)`` mosaic bilinearly into ``out``.
 
     Red is at ``(ry, rx)``; ``out`` is ``(H, W, 3)``, same dtype, C-contiguous; integer
-    means rounded half up (twin: :func:`bilinear_int_numpy`). Rows whose bytes make whole
-    32-bit words (W a multiple of 4 for uint8, of 2 for uint16; little-endian) run the
-    packed, vectorised loop; other widths the per-pixel one.
+    means rounded half up (twin: :func:`bilinear_int_numpy`). The interior runs a
+    vectorised loop of 2 pixels per step (any width; narrow lanes, one store per sample);
+    the edge pixels the per-pixel loop.
     """
     h, w = raw.shape
-    step = 2 if raw.itemsize == 2 else 4
-    if w % step == 0 and sys.byteorder == "little":
-        o32, n = out.reshape(-1).view(np.uint32), w // step - 1
-    else:
-        o32, n = np.empty(0, np.uint32), 0
     if parallel is None:
         parallel = h * w >= PARALLEL_MIN_PIXELS
-    (_int_rows if parallel else _int_rows_serial)(raw, ry, rx, out, o32, n)
+    (_int_rows if parallel else _int_rows_serial)(raw, ry, rx, out, out.reshape(-1), w // 2 - 1)
     return out
 
 
