@@ -141,6 +141,32 @@ def _sample(
 
 
 @njit(inline="always", error_model="numpy", fastmath={"contract"})
+def _sample_loop(
+    flat: np.ndarray,
+    n: int,
+    nc: int,
+    udx: np.uint64,
+    udy: np.uint64,
+    kidx: np.ndarray,
+    ax: np.ndarray,
+    ay: np.ndarray,
+    ok: np.ndarray,
+    sc: float,
+    fl: float,
+    rounded: bool,
+    ob: np.ndarray,
+) -> None:
+    """The loop over the block's pixels, ``nc`` and ``rounded`` constants where inlined."""
+    O = ob.dtype.type
+    for t in range(n):
+        k = np.uint64(kidx[t])
+        a, b, inside = ax[t], ay[t], ok[t]
+        for c in range(nc):
+            v = _sample(flat, k + np.uint64(c), udx, udy, a, b, inside, sc, fl, rounded)
+            ob[nc * t + c] = O(v)
+
+
+@njit(error_model="numpy", fastmath={"contract"})
 def _sample_block(
     flat: np.ndarray,
     n: int,
@@ -159,39 +185,31 @@ def _sample_block(
 ) -> None:
     """Write the block's ``n`` pixels into the flat output block ``ob``.
 
-    One loop per channel count 1, 3, 4 (unrolled over the channels), one generic.
+    A function of its own (not inlined: its loops get the registers to themselves), with one
+    loop per channel count 1, 3, 4 (unrolled over the channels) and rounding, one generic.
     """
     T = ax.dtype.type
-    O = ob.dtype.type
     sc = T(scale)
     fl = T(fill)
     udx = np.uint64(dx)  # unsigned indices: no negative-index wrap-around code
     udy = np.uint64(dy)
-    if nc == 1:
-        for t in range(n):
-            k = np.uint64(kidx[t])
-            ob[t] = O(_sample(flat, k, udx, udy, ax[t], ay[t], ok[t], sc, fl, rounded))
+    if rounded:
+        if nc == 1:
+            _sample_loop(flat, n, 1, udx, udy, kidx, ax, ay, ok, sc, fl, True, ob)
+        elif nc == 3:
+            _sample_loop(flat, n, 3, udx, udy, kidx, ax, ay, ok, sc, fl, True, ob)
+        elif nc == 4:
+            _sample_loop(flat, n, 4, udx, udy, kidx, ax, ay, ok, sc, fl, True, ob)
+        else:
+            _sample_loop(flat, n, nc, udx, udy, kidx, ax, ay, ok, sc, fl, True, ob)
+    elif nc == 1:
+        _sample_loop(flat, n, 1, udx, udy, kidx, ax, ay, ok, sc, fl, False, ob)
     elif nc == 3:
-        for t in range(n):
-            k = np.uint64(kidx[t])
-            a, b, inside = ax[t], ay[t], ok[t]
-            for c in range(3):
-                v = _sample(flat, k + np.uint64(c), udx, udy, a, b, inside, sc, fl, rounded)
-                ob[3 * t + c] = O(v)
+        _sample_loop(flat, n, 3, udx, udy, kidx, ax, ay, ok, sc, fl, False, ob)
     elif nc == 4:
-        for t in range(n):
-            k = np.uint64(kidx[t])
-            a, b, inside = ax[t], ay[t], ok[t]
-            for c in range(4):
-                v = _sample(flat, k + np.uint64(c), udx, udy, a, b, inside, sc, fl, rounded)
-                ob[4 * t + c] = O(v)
+        _sample_loop(flat, n, 4, udx, udy, kidx, ax, ay, ok, sc, fl, False, ob)
     else:
-        for t in range(n):
-            k = np.uint64(kidx[t])
-            a, b, inside = ax[t], ay[t], ok[t]
-            for c in range(nc):
-                v = _sample(flat, k + np.uint64(c), udx, udy, a, b, inside, sc, fl, rounded)
-                ob[nc * t + c] = O(v)
+        _sample_loop(flat, n, nc, udx, udy, kidx, ax, ay, ok, sc, fl, False, ob)
 
 
 @njit(error_model="numpy", fastmath={"contract"})
@@ -246,10 +264,7 @@ def _remap_rows(
                     ok,
                 )
             ob = of[base * nc : (base + n) * nc]
-            if rounded:  # a constant in each copy of the inlined loops (no per-sample select)
-                _sample_block(flat, n, nc, dx, dy, kidx, ax, ay, ok, scale, fill, True, hi, ob)
-            else:
-                _sample_block(flat, n, nc, dx, dy, kidx, ax, ay, ok, scale, fill, False, hi, ob)
+            _sample_block(flat, n, nc, dx, dy, kidx, ax, ay, ok, scale, fill, rounded, hi, ob)
 
 
 @njit(parallel=True, error_model="numpy", fastmath={"contract"})
@@ -357,10 +372,7 @@ def _undistort_rows(
                     )
             base = i * wo + j0
             ob = of[base * nc : (base + n) * nc]
-            if rounded:  # a constant in each copy of the inlined loops (no per-sample select)
-                _sample_block(flat, n, nc, dx, dy, kidx, ax, ay, ok, scale, fill, True, hi, ob)
-            else:
-                _sample_block(flat, n, nc, dx, dy, kidx, ax, ay, ok, scale, fill, False, hi, ob)
+            _sample_block(flat, n, nc, dx, dy, kidx, ax, ay, ok, scale, fill, rounded, hi, ob)
 
 
 @njit(parallel=True, error_model="numpy", fastmath={"contract"})
