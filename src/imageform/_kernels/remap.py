@@ -31,8 +31,8 @@ Both run in parallel over blocks of output rows and process each row in blocks o
    equals ``cv2.remap``'s bit for bit), then ``fill`` where outside, the scale or the
    rounding as selects; uint8 samples become floats through a 256-entry table (a load, not
    a conversion). This loop is a function of its own (not inlined into the locate loops,
-   whose registers it would share: 3-channel uint8 1.3 times faster). Indices are unsigned (no negative-index wrap-around code) and the
-   channel loop is unrolled.
+   whose registers it would share: 3-channel uint8 1.3 times faster). Indices are unsigned
+   (no negative-index wrap-around code) and the channel loop is unrolled.
 
 Every array is indexed through flat 1-D views: numba computes a C array's multi-dimensional
 index from its runtime shape, which LLVM then versions on (falling back to scalar code);
@@ -45,6 +45,8 @@ map from :func:`~imageform.geometry.undistort.undistortion_map`; tests check agr
 """
 
 from __future__ import annotations
+
+from typing import Any
 
 import numpy as np
 from numba import prange, types
@@ -114,10 +116,12 @@ def _value(flat: np.ndarray, k: np.uint64, lut: np.ndarray) -> float:  # pragma:
 
 
 @overload(_value)
-def _value_impl(flat: types.Array, k: types.Integer, lut: types.Array) -> object:
-    """uint8: ``lut[flat[k]]`` from the 256-entry table of the codes as floats (a load in
-    place of an integer-to-float conversion, two micro-ops on the ports the lerps use: 3
-    channels sampled 1.3 times faster); other dtypes: converted (``lut`` gives the float type).
+def _value_impl(flat: Any, k: Any, lut: Any) -> object:
+    """Return ``_value``'s implementation for ``flat``'s dtype.
+
+    uint8: ``lut[flat[k]]`` from the 256-entry table of the codes as floats (a load in place
+    of an integer-to-float conversion, two micro-ops on the ports the lerps use: 3 channels
+    sampled 1.3 times faster); other dtypes: converted (``lut`` gives the float type).
 
     Not ``inline="always"``: numba's IR inlining made the 1-channel loop twice as slow (2.9
     -> 6.5 ms per 1 MP remap); LLVM inlines the call anyway.
@@ -125,12 +129,12 @@ def _value_impl(flat: types.Array, k: types.Integer, lut: types.Array) -> object
     # the implementations' signatures must equal this one's, annotations included
     if flat.dtype == types.uint8:
 
-        def table(flat: types.Array, k: types.Integer, lut: types.Array) -> object:
+        def table(flat: Any, k: Any, lut: Any) -> object:
             return lut[flat[k]]
 
         return table
 
-    def convert(flat: types.Array, k: types.Integer, lut: types.Array) -> object:
+    def convert(flat: Any, k: Any, lut: Any) -> object:
         return lut.dtype.type(flat[k])
 
     return convert
@@ -189,7 +193,7 @@ def _sample_loop(
     ob: np.ndarray,
     lut: np.ndarray,
 ) -> None:
-    """The loop over the block's pixels, ``nc`` and ``rounded`` constants where inlined."""
+    """Loop over the block's pixels (``nc`` and ``rounded`` constants where inlined)."""
     O = ob.dtype.type
     for t in range(n):
         k = np.uint64(kidx[t])
