@@ -29,8 +29,10 @@ Both run in parallel over blocks of output rows and process each row in blocks o
    on x86): the lerps ``top = I00 + ax (I01 - I00)``, ``bot = I10 + ax (I11 - I10)``,
    ``top + ay (bot - top)`` with fused multiply-adds (OpenCV 5's formula: the uint8 result
    equals ``cv2.remap``'s bit for bit), then ``fill`` where outside, the scale or the
-   rounding as selects. Indices are unsigned (no negative-index wrap-around code) and the
-   channel loop is unrolled.
+   rounding as selects; uint8 samples become floats through a 256-entry table (a load, not
+   a conversion). This loop is a function of its own (not inlined into the locate loops,
+   whose registers it would share: 3-channel uint8 1.3 times faster). Indices are unsigned
+   (no negative-index wrap-around code) and the channel loop is unrolled.
 
 Every array is indexed through flat 1-D views: numba computes a C array's multi-dimensional
 index from its runtime shape, which LLVM then versions on (falling back to scalar code);
@@ -44,8 +46,11 @@ map from :func:`~imageform.geometry.undistort.undistortion_map`; tests check agr
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
-from numba import prange
+from numba import prange, types
+from numba.extending import overload
 
 from imageform._kernels.jit import njit
 
@@ -105,6 +110,36 @@ def _locate(
     ok[t] = inside
 
 
+def _value(flat: np.ndarray, k: np.uint64, lut: np.ndarray) -> float:  # pragma: no cover
+    """Sample ``flat[k]`` as a float of ``lut``'s dtype (jitted code: :func:`_value_impl`)."""
+    return lut.dtype.type(flat[k])
+
+
+@overload(_value)
+def _value_impl(flat: Any, k: Any, lut: Any) -> object:
+    """Return ``_value``'s implementation for ``flat``'s dtype.
+
+    uint8: ``lut[flat[k]]`` from the 256-entry table of the codes as floats (a load in place
+    of an integer-to-float conversion, two micro-ops on the ports the lerps use: 3 channels
+    sampled 1.3 times faster); other dtypes: converted (``lut`` gives the float type).
+
+    Not ``inline="always"``: numba's IR inlining made the 1-channel loop twice as slow (2.9
+    -> 6.5 ms per 1 MP remap); LLVM inlines the call anyway.
+    """
+    # the implementations' signatures must equal this one's, annotations included
+    if flat.dtype == types.uint8:
+
+        def table(flat: Any, k: Any, lut: Any) -> object:
+            return lut[flat[k]]
+
+        return table
+
+    def convert(flat: Any, k: Any, lut: Any) -> object:
+        return lut.dtype.type(flat[k])
+
+    return convert
+
+
 @njit(inline="always", error_model="numpy", fastmath={"contract"})
 def _sample(
     flat: np.ndarray,
@@ -117,6 +152,7 @@ def _sample(
     sc: float,
     fl: float,
     rounded: bool,
+    lut: np.ndarray,
 ) -> float:
     """Return one output sample (module docstring, 2).
 
@@ -124,10 +160,10 @@ def _sample(
     rounding, as selects.
     """
     T = type(a)
-    i00 = T(flat[k])  # floats: uint8/uint16 differences must not wrap
-    i10 = T(flat[k + udy])
-    top = i00 + a * (T(flat[k + udx]) - i00)
-    bot = i10 + a * (T(flat[k + udx + udy]) - i10)
+    i00 = _value(flat, k, lut)  # floats: uint8/uint16 differences must not wrap
+    i10 = _value(flat, k + udy, lut)
+    top = i00 + a * (_value(flat, k + udx, lut) - i00)
+    bot = i10 + a * (_value(flat, k + udx + udy, lut) - i10)
     r = top + b * (bot - top)
     if rounded:
         # to the nearest integer, ties to even (as np.rint, without its call): adding and
@@ -141,6 +177,33 @@ def _sample(
 
 
 @njit(inline="always", error_model="numpy", fastmath={"contract"})
+def _sample_loop(
+    flat: np.ndarray,
+    n: int,
+    nc: int,
+    udx: np.uint64,
+    udy: np.uint64,
+    kidx: np.ndarray,
+    ax: np.ndarray,
+    ay: np.ndarray,
+    ok: np.ndarray,
+    sc: float,
+    fl: float,
+    rounded: bool,
+    ob: np.ndarray,
+    lut: np.ndarray,
+) -> None:
+    """Loop over the block's pixels (``nc`` and ``rounded`` constants where inlined)."""
+    O = ob.dtype.type
+    for t in range(n):
+        k = np.uint64(kidx[t])
+        a, b, inside = ax[t], ay[t], ok[t]
+        for c in range(nc):
+            v = _sample(flat, k + np.uint64(c), udx, udy, a, b, inside, sc, fl, rounded, lut)
+            ob[nc * t + c] = O(v)
+
+
+@njit(error_model="numpy", fastmath={"contract"})
 def _sample_block(
     flat: np.ndarray,
     n: int,
@@ -156,42 +219,35 @@ def _sample_block(
     rounded: bool,
     hi: float,
     ob: np.ndarray,
+    lut: np.ndarray,
 ) -> None:
     """Write the block's ``n`` pixels into the flat output block ``ob``.
 
-    One loop per channel count 1, 3, 4 (unrolled over the channels), one generic.
+    A function of its own (not inlined: its loops get the registers to themselves), with one
+    loop per channel count 1, 3, 4 (unrolled over the channels) and rounding, one generic.
     """
     T = ax.dtype.type
-    O = ob.dtype.type
     sc = T(scale)
     fl = T(fill)
     udx = np.uint64(dx)  # unsigned indices: no negative-index wrap-around code
     udy = np.uint64(dy)
-    if nc == 1:
-        for t in range(n):
-            k = np.uint64(kidx[t])
-            ob[t] = O(_sample(flat, k, udx, udy, ax[t], ay[t], ok[t], sc, fl, rounded))
+    if rounded:
+        if nc == 1:
+            _sample_loop(flat, n, 1, udx, udy, kidx, ax, ay, ok, sc, fl, True, ob, lut)
+        elif nc == 3:
+            _sample_loop(flat, n, 3, udx, udy, kidx, ax, ay, ok, sc, fl, True, ob, lut)
+        elif nc == 4:
+            _sample_loop(flat, n, 4, udx, udy, kidx, ax, ay, ok, sc, fl, True, ob, lut)
+        else:
+            _sample_loop(flat, n, nc, udx, udy, kidx, ax, ay, ok, sc, fl, True, ob, lut)
+    elif nc == 1:
+        _sample_loop(flat, n, 1, udx, udy, kidx, ax, ay, ok, sc, fl, False, ob, lut)
     elif nc == 3:
-        for t in range(n):
-            k = np.uint64(kidx[t])
-            a, b, inside = ax[t], ay[t], ok[t]
-            for c in range(3):
-                v = _sample(flat, k + np.uint64(c), udx, udy, a, b, inside, sc, fl, rounded)
-                ob[3 * t + c] = O(v)
+        _sample_loop(flat, n, 3, udx, udy, kidx, ax, ay, ok, sc, fl, False, ob, lut)
     elif nc == 4:
-        for t in range(n):
-            k = np.uint64(kidx[t])
-            a, b, inside = ax[t], ay[t], ok[t]
-            for c in range(4):
-                v = _sample(flat, k + np.uint64(c), udx, udy, a, b, inside, sc, fl, rounded)
-                ob[4 * t + c] = O(v)
+        _sample_loop(flat, n, 4, udx, udy, kidx, ax, ay, ok, sc, fl, False, ob, lut)
     else:
-        for t in range(n):
-            k = np.uint64(kidx[t])
-            a, b, inside = ax[t], ay[t], ok[t]
-            for c in range(nc):
-                v = _sample(flat, k + np.uint64(c), udx, udy, a, b, inside, sc, fl, rounded)
-                ob[nc * t + c] = O(v)
+        _sample_loop(flat, n, nc, udx, udy, kidx, ax, ay, ok, sc, fl, False, ob, lut)
 
 
 @njit(error_model="numpy", fastmath={"contract"})
@@ -213,6 +269,7 @@ def _remap_rows(
 ) -> None:
     """Output rows ``i0:i1`` of one image from the flat map ``mf`` (``nc`` may be a constant)."""
     kidx, ax, ay, ok = bufs
+    lut = np.arange(256).astype(ax.dtype)  # the uint8 codes as floats (see _value_impl)
     M = mf.dtype.type
     K = kidx.dtype.type
     zero = M(0)
@@ -246,10 +303,7 @@ def _remap_rows(
                     ok,
                 )
             ob = of[base * nc : (base + n) * nc]
-            if rounded:  # a constant in each copy of the inlined loops (no per-sample select)
-                _sample_block(flat, n, nc, dx, dy, kidx, ax, ay, ok, scale, fill, True, hi, ob)
-            else:
-                _sample_block(flat, n, nc, dx, dy, kidx, ax, ay, ok, scale, fill, False, hi, ob)
+            _sample_block(flat, n, nc, dx, dy, kidx, ax, ay, ok, scale, fill, rounded, hi, ob, lut)
 
 
 @njit(parallel=True, error_model="numpy", fastmath={"contract"})
@@ -313,6 +367,7 @@ def _undistort_rows(
     see :func:`undistort_brown_conrady`).
     """
     kidx, ax, ay, ok = bufs
+    lut = np.arange(256).astype(ax.dtype)  # the uint8 codes as floats (see _value_impl)
     fxn, sn, cxn, fyn, cyn = p[0], p[1], p[2], p[3], p[4]
     fx, s, cx, fy, cy = p[5], p[6], p[7], p[8], p[9]
     k1, k2, p1, p2, k3, k4, k5, k6 = p[10], p[11], p[12], p[13], p[14], p[15], p[16], p[17]
@@ -357,10 +412,7 @@ def _undistort_rows(
                     )
             base = i * wo + j0
             ob = of[base * nc : (base + n) * nc]
-            if rounded:  # a constant in each copy of the inlined loops (no per-sample select)
-                _sample_block(flat, n, nc, dx, dy, kidx, ax, ay, ok, scale, fill, True, hi, ob)
-            else:
-                _sample_block(flat, n, nc, dx, dy, kidx, ax, ay, ok, scale, fill, False, hi, ob)
+            _sample_block(flat, n, nc, dx, dy, kidx, ax, ay, ok, scale, fill, rounded, hi, ob, lut)
 
 
 @njit(parallel=True, error_model="numpy", fastmath={"contract"})
