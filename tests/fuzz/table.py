@@ -1214,6 +1214,9 @@ VALID.update(
         "imageform.simulate.stages.diffraction_blur": call(
             V("rgb"), f_number=4.0, pixel_pitch=2e-6
         ),
+        "imageform.simulate.stages.wave_defocus_blur": call(
+            np.full((8, 8, 3), 0.5), 1.0, f_number=4.0, pixel_pitch=3e-6
+        ),
         "imageform.simulate.stages.diffraction_psf_kernel": call(
             (450e-9, 550e-9, 650e-9), f_number=4.0, pixel_pitch=2e-6
         ),

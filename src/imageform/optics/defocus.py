@@ -13,6 +13,7 @@ are reflected (``mode="reflect"`` in :mod:`scipy.signal`'s sense, by padding).
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -25,6 +26,7 @@ from imageform._validate import (
     as_real_array,
     check_positive,
     check_real_values,
+    describe,
     finite_result,
     format_shape,
     memory_limit,
@@ -128,7 +130,14 @@ def _convolve(img: np.ndarray, kernel: np.ndarray) -> np.ndarray:
     return out.astype(img.dtype, copy=False)
 
 
-def blur_by_radius(image: Any, radius_px: Any, *, step: float = 0.5, max_layers: int = 48) -> Any:
+def blur_by_radius(
+    image: Any,
+    radius_px: Any,
+    *,
+    step: float = 0.5,
+    max_layers: int = 48,
+    kernel: Callable[[float], np.ndarray] | None = None,
+) -> Any:
     r"""Blur each pixel with a disc PSF of its own radius (pixels), by layered interpolation.
 
     .. math::
@@ -146,6 +155,10 @@ def blur_by_radius(image: Any, radius_px: Any, *, step: float = 0.5, max_layers:
         Spacing of the radius ladder in pixels (more layers are not made than ``max_layers``).
     max_layers : int, keyword-only
         Largest number of blur radii in the ladder (the step widens to keep within it).
+    kernel : callable, optional, keyword-only
+        ``kernel(radius) -> (k, k)`` PSF of unit sum, odd ``k``, used in place of
+        :func:`disc_kernel` (e.g. the wave-optics PSF of the same defocus:
+        :func:`imageform.simulate.stages.wave_defocus_blur`).
 
     Returns
     -------
@@ -179,9 +192,12 @@ def blur_by_radius(image: Any, radius_px: Any, *, step: float = 0.5, max_layers:
     ladder = np.linspace(lo, hi, n) if hi > lo else np.array([lo, lo])
     rb = np.broadcast_to(r, img.shape)
     out = np.zeros_like(img)
-    prev = _convolve(img, disc_kernel(ladder[0]))
+    if kernel is not None and not callable(kernel):
+        raise TypeError(f"expected kernel as a callable radius -> PSF, got {describe(kernel)}")
+    make = disc_kernel if kernel is None else kernel
+    prev = _convolve(img, make(float(ladder[0])))
     for k in range(1, len(ladder)):
-        cur = _convolve(img, disc_kernel(ladder[k])) if ladder[k] != ladder[k - 1] else prev
+        cur = _convolve(img, make(float(ladder[k]))) if ladder[k] != ladder[k - 1] else prev
         span = ladder[k] - ladder[k - 1]
         below = ladder[k - 1]
         sel = (rb >= below) & ((rb <= ladder[k]) if k == len(ladder) - 1 else (rb < ladder[k]))

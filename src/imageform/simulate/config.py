@@ -316,8 +316,10 @@ class LensConfig:
     """``[lens]``: aperture, focus, defocus blur, vignetting, lateral CA and diffraction.
 
     Aperture ``f_number``, ``focus_distance_m``, whether to blur by defocus, the natural
-    ``vignetting``, the per-channel magnification ``lateral_ca`` and whether to blur by
-    ``diffraction`` (off by default).
+    ``vignetting``, the per-channel magnification ``lateral_ca``, whether to blur by
+    ``diffraction`` (off by default) and the defocus ``psf``: ``"geometric"`` (the disc of
+    the circle of confusion) or ``"wave"`` (the pupil's PSF with that defocus as its Zernike
+    term, diffraction included).
     """
 
     f_number: float
@@ -326,6 +328,7 @@ class LensConfig:
     vignetting: str
     lateral_ca: Vec3
     diffraction: bool = False
+    psf: str = "geometric"
 
     def __post_init__(self) -> None:
         """Each field checked against the schema's ``[lens]`` keys."""

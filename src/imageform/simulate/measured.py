@@ -76,7 +76,7 @@ def apply_camera_file(scene: Scene, camera_file: CameraFile) -> Scene:
     if camera_file.sensor is not None and camera_file.sensor.cfa is not None:
         changes["sensor"] = {"cfa": camera_file.sensor.cfa}
     if camera_file.optics is not None:
-        lens: dict[str, Any] = {"defocus": False, "diffraction": False}
+        lens: dict[str, Any] = {"defocus": False, "diffraction": False, "psf": "geometric"}
         if camera_file.optics.f_number is not None:
             lens["f_number"] = camera_file.optics.f_number
         changes["lens"] = lens

@@ -234,6 +234,13 @@ SCENE_SCHEMA: dict[str, Any] = {
         "diffraction": Field(
             "bool", False, "convolve each channel with the aperture's diffraction PSF (Airy)"
         ),
+        "psf": Field(
+            "str",
+            "geometric",
+            "defocus PSF: the geometric disc, or the wave-optics PSF of the pupil with the "
+            "same defocus as a Zernike term (diffraction included)",
+            choices=("geometric", "wave"),
+        ),
     },
     "sensor": {
         "preset": Field("str", "cmos", "starting parameters", choices=("cmos", "ccd")),

@@ -22,7 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from imageform._validate import as_int, as_real, as_reals, check_name, describe
+from imageform._validate import as_int, as_real, as_real_array, as_reals, check_name, describe
 from imageform.errors import InvalidInputError, UnknownOptionError
 from imageform.geometry.camera import Camera
 from imageform.io import CameraColor, CameraOptics
@@ -56,6 +56,7 @@ __all__ = [
     "measured_color_matrix",
     "measured_optics_blur",
     "normalize_raw",
+    "wave_defocus_blur",
 ]
 
 
@@ -137,6 +138,22 @@ def apply_lens(
         # a channel shrunk by m < 1 samples outside the frame at the border: keep the
         # unshifted value there (the lens would have imaged light from beyond the frame)
         img = np.where(np.isnan(shifted), img, shifted)
+    if lens.psf == "wave":
+        f = focal_length_mm * 1e-3
+        pitch = f / float(np.asarray(camera.K)[0, 0])
+        rad = (
+            defocus_radius_px(
+                rendered.depth,
+                focal_length=f,
+                f_number=lens.f_number,
+                focus=lens.focus_distance_m,
+                pixel_pitch=pitch,
+            )
+            if lens.defocus
+            else np.zeros(img.shape[:2])
+        )
+        # the pupil's PSF holds both the defocus and the diffraction: no separate stage
+        return np.maximum(wave_defocus_blur(img, rad, f_number=lens.f_number, pixel_pitch=pitch), 0)
     if lens.defocus:
         f = focal_length_mm * 1e-3
         # the pitch at which the lens's image is sampled: f / fx (the camera's pixels)
@@ -250,6 +267,77 @@ def diffraction_blur(image: np.ndarray, *, f_number: float, pixel_pitch: float) 
             padded = np.pad(image[..., ch], p, mode="symmetric")
         out[..., ch] = fftconvolve(padded, kernel, mode="valid")
     return np.maximum(out, 0.0)
+
+
+def wave_defocus_blur(
+    image: np.ndarray, radius_px: float | np.ndarray, *, f_number: float, pixel_pitch: float
+) -> np.ndarray:
+    r"""Blur each channel by the wave-optics PSF of each pixel's defocus.
+
+    The geometric disc of radius :math:`R` pixels (the circle of confusion
+    :math:`c = 2 R p`) becomes the Zernike defocus term of the pupil,
+    :math:`c_4 = c / (16 \sqrt{3}\, N)` metres RMS (:func:`imageform.optics.zernike_defocus`),
+    and the PSF is that pupil's Fraunhofer pattern over the channel's band (three wavelengths
+    of :data:`DIFFRACTION_BANDS`, equal weights; :func:`imageform.optics.polychromatic_psf`),
+    so diffraction is included: at :math:`R = 0` it is the Airy pattern, and for a defocus
+    of many waves it tends to the geometric disc. Each pixel blends the PSFs of the two
+    nearest radii of a ladder (:func:`imageform.optics.blur_by_radius`, 12 radii at most).
+
+    Parameters
+    ----------
+    image : ndarray, shape (H, W, 3)
+        R, G, B light on the sensor.
+    radius_px : float or ndarray, shape (H, W)
+        Geometric defocus radius per pixel (pixels, >= 0).
+    f_number : float
+        Working f-number ``N``.
+    pixel_pitch : float
+        Pixel pitch (m).
+
+    Returns
+    -------
+    ndarray, shape (H, W, 3)
+
+    Raises
+    ------
+    InvalidInputError
+        ``image`` not (H, W, 3), or a defocus too large for the PSF's sampling.
+    """
+    from imageform.optics import blur_by_radius, polychromatic_psf, zernike_defocus
+
+    if not isinstance(image, np.ndarray) or image.ndim != 3 or image.shape[2] != 3:
+        raise InvalidInputError(f"expected image as an (H, W, 3) array, got {describe(image)}")
+    fn = as_real(f_number, "f_number", positive=True, maximum=1000.0)
+    pitch = as_real(pixel_pitch, "pixel_pitch", positive=True, maximum=1e-3)
+    r = as_real_array(radius_px, "radius_px", nonnegative=True)
+    if r.ndim != 0 and r.shape != image.shape[:2]:
+        raise InvalidInputError(
+            f"expected radius_px as a number or an {image.shape[:2]} array, got {describe(r)}"
+        )
+    reach = float(r.max()) + 6.0 * DIFFRACTION_BANDS[-1][-1] * fn / pitch
+    if reach > 1024:
+        raise InvalidInputError(
+            f"radius_px, f_number and pixel_pitch give a PSF {2 * reach:.3g} pixels wide; "
+            "expected at most 2048"
+        )
+    rad = np.broadcast_to(r, image.shape[:2])
+    out = np.empty_like(image)
+    for ch, band in enumerate(reversed(DIFFRACTION_BANDS)):  # R, G, B
+        lams = band[::2]
+
+        def kernel(r: float, lams: tuple[float, ...] = lams) -> np.ndarray:
+            c4 = zernike_defocus(2.0 * r * pitch, f_number=fn)
+            half = math.ceil(r + 6.0 * max(lams) * fn / pitch)  # the disc and the Airy rings
+            return polychromatic_psf(
+                [0.0, 0.0, 0.0, c4],
+                wavelengths=lams,
+                f_number=fn,
+                pixel_pitch=pitch,
+                size=2 * max(half, 2) + 1,
+            )
+
+        out[..., ch] = blur_by_radius(image[..., ch], rad, step=0.5, max_layers=12, kernel=kernel)
+    return out
 
 
 def exposure_time(rate: np.ndarray, config: SensorConfig, sensor: SensorModel) -> float:
