@@ -182,3 +182,12 @@ def test_stereo_file_keeps_the_tables(tmp_path: Path) -> None:
     back = read_stereo_camera(p)
     assert back.left.sensor == SENSOR and back.left.color == left.color
     assert back.right.optics == right.optics and back.right.sensor is None
+
+
+def test_zernike_zones_round_trip(tmp_path: Path) -> None:
+    zones = [[[0.0, 0.0, 0.0, 0.1], [0.0, 0.0, 0.0, 0.1, 0.0, 0.0, 0.0, 0.5]]] * 2
+    optics = CameraOptics(model="zernike", f_number=2.8, wavelength_nm=550.0, zernike_zones=zones)
+    write_camera(tmp_path / "z.toml", _camera(), optics=optics)
+    back = read_camera(tmp_path / "z.toml").optics
+    assert back == optics and back.zernike is None
+    assert len(back.zernike_zones) == 2 and len(back.zernike_zones[0][1]) == 8

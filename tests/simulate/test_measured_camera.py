@@ -232,3 +232,45 @@ def test_refusals() -> None:
         apply_camera_file(_flat_scene(), CameraFile(CAM, sensor={"bit_depth": 20}))
     with pytest.raises(TypeError, match="measured as a MeasuredCamera"):
         _flat_scene().with_measured({"sensor": None})
+
+
+def test_zernike_zones_field_dependent_blur() -> None:
+    """[optics] zernike_zones: a uniform grid blurs as the one-pupil model; a grid whose
+    right column has coma blurs the right side more than the left, and the zone weights
+    sum to 1 at every pixel."""
+    from imageform.simulate.stages import _zone_weights, measured_optics_blur
+
+    for n, z in ((64, 1), (64, 3), (101, 4)):
+        w = _zone_weights(n, z)
+        np.testing.assert_allclose(w.sum(axis=0), 1.0, atol=1e-12)
+        assert (w >= 0).all()
+    rng = np.random.default_rng(1)
+    img = rng.random((48, 64, 3))
+    base = [0.0, 0.0, 0.0, 0.1]
+    one = CameraOptics(model="zernike", f_number=4.0, wavelength_nm=550.0, zernike=base)
+    grid = CameraOptics(
+        model="zernike", f_number=4.0, wavelength_nm=550.0, zernike_zones=[[base, base]] * 2
+    )
+    a = measured_optics_blur(img, one, pixel_pitch=2e-6, supersampling=1)
+    b = measured_optics_blur(img, grid, pixel_pitch=2e-6, supersampling=1)
+    np.testing.assert_allclose(a, b, atol=1e-12)
+    coma = [0.0, 0.0, 0.0, 0.1, 0.0, 0.0, 0.0, 0.8]  # Noll 8: coma, 0.8 waves
+    field = CameraOptics(
+        model="zernike", f_number=4.0, wavelength_nm=550.0, zernike_zones=[[base, coma]] * 2
+    )
+    c = measured_optics_blur(img, field, pixel_pitch=2e-6, supersampling=1)
+    left = np.abs(c[:, :16] - a[:, :16]).max()
+    right = np.abs(c[:, -16:] - a[:, -16:]).max()
+    assert left < 1e-9 < 0.01 < right  # the left quarter is all zone 0's: unchanged
+
+
+def test_zernike_zones_checked() -> None:
+    from imageform.errors import ImageformError
+
+    z = {"model": "zernike", "f_number": 4.0, "wavelength_nm": 550.0}
+    with pytest.raises(ImageformError, match="zernike_zones"):
+        CameraOptics(**z, zernike_zones=[[[0.0], [0.1]], [[0.0]]])  # ragged rows
+    with pytest.raises(ImageformError, match="zernike_zones"):
+        CameraOptics(**z, zernike_zones=[[]])
+    with pytest.raises(ImageformError, match="zernike"):
+        CameraOptics(**z)  # neither zernike nor zernike_zones

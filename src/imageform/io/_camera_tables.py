@@ -83,6 +83,25 @@ def _numbers(r: Reader, value: Any, key: str, *, minimum: int = 1) -> tuple[floa
     return tuple(r.number(v, f"{key}[{i}]") for i, v in enumerate(value))
 
 
+def _zones(r: Reader, value: Any, k: str) -> tuple[tuple[tuple[float, ...], ...], ...]:
+    """Check ``zernike_zones``: rows x cols (at most 16 each, equal rows) of Noll lists."""
+    key = k + "zernike_zones"
+    rows = _list(value)
+    if not isinstance(rows, list) or not 1 <= len(rows) <= 16:
+        raise r.fail(key, f"expected 1 to 16 rows of zones, got {_show(rows)}")
+    out = []
+    for i, row in enumerate(rows):
+        if not isinstance(row, list) or not 1 <= len(row) <= 16:
+            raise r.fail(f"{key}[{i}]", f"expected 1 to 16 zones, got {_show(row)}")
+        if len(row) != len(rows[0]):
+            raise r.fail(f"{key}[{i}]", f"expected {len(rows[0])} zones as row 0, got {len(row)}")
+        zones = tuple(_numbers(r, z, f"{key}[{i}][{j}]") for j, z in enumerate(row))
+        if max(len(z) for z in zones) > 66:
+            raise r.fail(f"{key}[{i}]", "expected at most 66 Noll terms per zone")
+        out.append(zones)
+    return tuple(out)
+
+
 class _Table:
     """The shared part of the three tables: the table's name, checks, and conversions."""
 
@@ -224,6 +243,11 @@ class CameraOptics(_Table):
     zernike : tuple of float
         Noll-indexed Zernike coefficients in waves (RMS-normalised), the first for j = 1
         (piston), ...; required by ``zernike``.
+    zernike_zones : rows x cols x J nested lists of float
+        Field-dependent aberrations: the Noll coefficients (waves, as ``zernike``) of each zone
+        of a ``rows x cols`` grid over the image, row by row from the top (at most 16 x 16
+        zones of 66 terms); the ``zernike`` model then uses them in place of ``zernike`` (one
+        of the two is required).
     wavelength_nm : float > 0
         The wavelength the ``zernike`` coefficients (waves) refer to; required by
         ``zernike``.
@@ -245,6 +269,7 @@ class CameraOptics(_Table):
     f_number: float | None = None
     focal_length_mm: float | None = None
     zernike: tuple[float, ...] | None = None
+    zernike_zones: tuple[tuple[tuple[float, ...], ...], ...] | None = None
     wavelength_nm: float | None = None
     gaussian_sigma_px: float | None = None
     mtf50_cy_per_px: float | tuple[float, float, float] | None = None
@@ -272,6 +297,8 @@ class CameraOptics(_Table):
             if len(z) > 66:
                 raise r.fail(k + "zernike", f"expected at most 66 Noll terms, got {len(z)}")
             object.__setattr__(self, "zernike", z)
+        if self.zernike_zones is not None:
+            object.__setattr__(self, "zernike_zones", _zones(r, self.zernike_zones, k))
         if self.mtf50_cy_per_px is not None:
             v = _list(self.mtf50_cy_per_px)
             key = k + "mtf50_cy_per_px"
@@ -282,9 +309,13 @@ class CameraOptics(_Table):
             else:
                 m = r.positive(v, key)
             object.__setattr__(self, "mtf50_cy_per_px", m)
+        if model == "zernike" and self.zernike is None and self.zernike_zones is not None:
+            needs_z: tuple[str, ...] = ("f_number", "zernike_zones", "wavelength_nm")
+        else:
+            needs_z = ("f_number", "zernike", "wavelength_nm")
         needs = {
             "diffraction": ("f_number",),
-            "zernike": ("f_number", "zernike", "wavelength_nm"),
+            "zernike": needs_z,
             "gaussian": ("gaussian_sigma_px",),
             "mtf50": ("mtf50_cy_per_px",),
         }[model]

@@ -640,7 +640,7 @@ _ZERNIKE_BANDS = (
 def measured_optics_blur(
     image: np.ndarray, optics: CameraOptics, *, pixel_pitch: float, supersampling: int
 ) -> np.ndarray:
-    """``image (H, W, 3)`` blurred by the camera file's lens model.
+    r"""``image (H, W, 3)`` blurred by the camera file's lens model.
 
     The image is R, G, B, already integrated over each pixel by the renderer; borders are
     reflected, light kept >= 0.
@@ -648,7 +648,11 @@ def measured_optics_blur(
     ``diffraction``: :func:`imageform.simulate.stages.diffraction_blur` at ``f_number``.
     ``zernike``: per channel the polychromatic PSF of the aberrated pupil
     (:func:`imageform.optics.polychromatic_psf`, coefficients in waves at ``wavelength_nm``
-    turned into metres of optical path), point-sampled at ``pixel_pitch``.
+    turned into metres of optical path), point-sampled at ``pixel_pitch``; with
+    ``zernike_zones``, field-dependent: the image blurred by each zone's pupil (tiled
+    convolution, an isoplanatic patch per zone) and the results blended with bilinear
+    weights between the zone centres, :math:`I' = \sum_z w_z(p)\,(I * h_z)(p)`,
+    :math:`\sum_z w_z = 1`.
     ``gaussian``: a Gaussian of ``gaussian_sigma_px`` (its continuous MTF on the pixel grid).
     ``mtf50``: the Gaussian of :func:`gaussian_sigma_for_mtf50` for each channel's MTF50 (the
     pixel aperture of ``supersampling`` accounted for).
@@ -674,28 +678,80 @@ def measured_optics_blur(
         for c in range(3):
             out[..., c] = _gaussian_blur(img[..., c], sigmas[c]) if sigmas[c] > 0 else img[..., c]
         return np.maximum(out, 0.0)
-    # zernike
+    # zernike: one pupil, or one per zone of the field blended bilinearly
+    assert optics.wavelength_nm is not None and optics.f_number is not None
+    if optics.zernike_zones is None:
+        assert optics.zernike is not None
+        return np.maximum(
+            _zernike_blur(img, optics.zernike, optics.wavelength_nm, optics.f_number, pixel_pitch),
+            0.0,
+        )
+    zones = optics.zernike_zones
+    rows, cols = len(zones), len(zones[0])
+    wy = _zone_weights(img.shape[0], rows)
+    wx = _zone_weights(img.shape[1], cols)
+    out[:] = 0.0
+    for i in range(rows):
+        for k in range(cols):
+            if not (wy[i].any() and wx[k].any()):
+                continue
+            blurred = _zernike_blur(
+                img, zones[i][k], optics.wavelength_nm, optics.f_number, pixel_pitch
+            )
+            out += (wy[i][:, None] * wx[k][None, :])[..., None] * blurred
+    return np.maximum(out, 0.0)
+
+
+def _zone_weights(n: int, zones: int) -> np.ndarray:
+    """Return ``(zones, n)`` bilinear weights of the zone centres along one image axis.
+
+    Zone ``i`` is centred at ``(i + 1/2) n / zones``; between two centres the weights fall
+    linearly, beyond the first and last centre the nearest zone has all the weight: they sum
+    to 1 at every pixel (a partition of unity, so a uniform field gives the one-pupil blur).
+    """
+    x = np.arange(n) + 0.5
+    centres = (np.arange(zones) + 0.5) * n / zones
+    w = np.zeros((zones, n))
+    if zones == 1:
+        w[0] = 1.0
+        return w
+    pos = np.clip(np.interp(x, centres, np.arange(zones)), 0, zones - 1)
+    lo = np.floor(pos).astype(int)
+    hi = np.minimum(lo + 1, zones - 1)
+    frac = pos - lo
+    np.add.at(w, (lo, np.arange(n)), 1.0 - frac)
+    np.add.at(w, (hi, np.arange(n)), frac)
+    return w
+
+
+def _zernike_blur(
+    img: np.ndarray,
+    zernike: tuple[float, ...],
+    wavelength_nm: float,
+    f_number: float,
+    pixel_pitch: float,
+) -> np.ndarray:
+    """Convolve each channel with the polychromatic PSF of the pupil with these aberrations."""
     from scipy.signal import fftconvolve
 
     from imageform.optics import polychromatic_psf
 
-    assert optics.zernike is not None and optics.wavelength_nm is not None
-    assert optics.f_number is not None
-    coeffs = {j + 1: w * optics.wavelength_nm * 1e-9 for j, w in enumerate(optics.zernike)}
-    rms_waves = math.sqrt(sum(w * w for w in optics.zernike[3:]))
-    reach = 10 * 700e-9 * optics.f_number * (1 + 4 * rms_waves) / pixel_pitch
+    coeffs = {j + 1: w * wavelength_nm * 1e-9 for j, w in enumerate(zernike)}
+    rms_waves = math.sqrt(sum(w * w for w in zernike[3:]))
+    reach = 10 * 700e-9 * f_number * (1 + 4 * rms_waves) / pixel_pitch
     half = min(64, max(2, math.ceil(reach)))
     size = 2 * half + 1
+    out = np.empty_like(img)
     for c, band in enumerate(_ZERNIKE_BANDS):
         kernel = polychromatic_psf(
-            coeffs, wavelengths=band, f_number=optics.f_number, pixel_pitch=pixel_pitch, size=size
+            coeffs, wavelengths=band, f_number=f_number, pixel_pitch=pixel_pitch, size=size
         )
         if min(img.shape[:2]) > half:
             padded = np.pad(img[..., c], half, mode="reflect")
         else:
             padded = np.pad(img[..., c], half, mode="symmetric")
         out[..., c] = fftconvolve(padded, kernel, mode="valid")
-    return np.maximum(out, 0.0)
+    return out
 
 
 def measured_color_matrix(color: CameraColor) -> np.ndarray | None:
