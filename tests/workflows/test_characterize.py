@@ -27,6 +27,7 @@ import pytest
 from imageform.cli import main
 from imageform.errors import ImageformError, InvalidInputError
 from imageform.workflows import execute
+from tests.report.test_browser import browser_page  # noqa: F401 (the shared browser fixture)
 from tests.workflows.characterize_lab import CX, CY, FX, FY, K1, SIZE, make_lab_set
 
 pytest.importorskip("matplotlib")
@@ -234,38 +235,24 @@ def test_refusals(tmp_path: Path, lab: dict[str, Any]) -> None:
 # ---------------------------------------------------------------- the report in a browser
 
 
-def test_report_in_headless_chromium(lab: dict[str, Any]) -> None:
+def test_report_in_headless_chromium(lab: dict[str, Any], request: pytest.FixtureRequest) -> None:
     """Every image loads, no console error, nothing asked beyond the file and data: URIs,
     and the screenshot is not blank (as the simulate report's check)."""
-    from tests.report.test_browser import CHROMIUM, _not_blank, _open, _require
+    from tests.report.test_browser import _not_blank, _open
 
-    if not CHROMIUM.is_file():
-        _require(f"Chromium ({CHROMIUM})")
-    try:
-        from playwright.sync_api import sync_playwright
-    except ImportError:
-        _require("Playwright for Python (the test extra)")
-    with sync_playwright() as p:
-        browser = p.chromium.launch(
-            executable_path=str(CHROMIUM),
-            args=["--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage"],
-        )
-        try:
-            page = browser.new_page(viewport={"width": 1280, "height": 900})
-            seen = _open(page, lab["out"] / "report.html")
-            images = page.evaluate(
-                "Array.from(document.images).map(i => [i.alt, i.complete, i.naturalWidth])"
-            )
-            assert len(images) >= 5
-            broken = [alt for alt, complete, width in images if not (complete and width > 0)]
-            assert broken == [], f"images that did not load: {broken}"
-            assert seen["console_errors"] == [] and seen["page_errors"] == []
-            others = [u for u in seen["requests"] if not u.startswith(("file:", "data:"))]
-            assert others == [], f"the report asked for {others}"
-            _not_blank(page.screenshot(full_page=True))
-            assert page.title() == "imageform camera characterisation"
-        finally:
-            browser.close()
+    page = request.getfixturevalue("browser_page")  # the simulate report's fixture
+    seen = _open(page, lab["out"] / "report.html")
+    images = page.evaluate(
+        "Array.from(document.images).map(i => [i.alt, i.complete, i.naturalWidth])"
+    )
+    assert len(images) >= 5
+    broken = [alt for alt, complete, width in images if not (complete and width > 0)]
+    assert broken == [], f"images that did not load: {broken}"
+    assert seen["console_errors"] == [] and seen["page_errors"] == []
+    others = [u for u in seen["requests"] if not u.startswith(("file:", "data:"))]
+    assert others == [], f"the report asked for {others}"
+    _not_blank(page.screenshot(full_page=True))
+    assert page.title() == "imageform camera characterisation"
     assert math.isfinite(lab["printed"]["color"]["delta_e00_mean"])
 
 
