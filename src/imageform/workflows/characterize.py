@@ -500,6 +500,22 @@ def _files(folder: Path, *, raw: bool = True) -> list[Path]:
     )
 
 
+def _images(folder: Path) -> list[Path]:
+    """Return the images (raw ones included) of a part's folder; refuse an empty one."""
+    files = _files(folder)
+    if not files:
+        raise InvalidInputError(f"{folder} holds no image")
+    return files
+
+
+def _transfer(doc: Mapping[str, Any], table: str) -> str:
+    """Return lab.toml's ``[table] transfer`` (``srgb`` by default, or ``linear``)."""
+    transfer = str(_get(doc, table, "transfer", str, "srgb"))
+    if transfer not in ("srgb", "linear"):
+        raise InvalidInputError(f"{LAB_MANIFEST}: expected [{table}] transfer srgb or linear")
+    return transfer
+
+
 def _subfolder(root: Path, names: tuple[str, ...]) -> Path | None:
     for n in names:
         if (root / n).is_dir():
@@ -648,9 +664,7 @@ def _measure_geometry(
         parse_charuco,
     )
 
-    files = _files(folder)
-    if not files:
-        raise InvalidInputError(f"{folder} holds no image")
+    files = _images(folder)
     board = _get(doc, "checkerboard", "board", str, None)
     corners_given = doc.get("checkerboard", {}).get("inner_corners")
     if board is None and corners_given is not None:
@@ -798,12 +812,8 @@ def _measure_sharpness(
 
     from imageform.analysis import find_slanted_edges, slanted_edge_sfr
 
-    files = _files(folder)
-    if not files:
-        raise InvalidInputError(f"{folder} holds no image")
-    transfer = str(_get(doc, "edge", "transfer", str, "srgb"))
-    if transfer not in ("srgb", "linear"):
-        raise InvalidInputError(f"{LAB_MANIFEST}: expected [edge] transfer srgb or linear")
+    files = _images(folder)
+    transfer = _transfer(doc, "edge")
     lo = float(_get(doc, "edge", "min_angle", float, 2.0))
     hi = float(_get(doc, "edge", "max_angle", float, 10.0))
     path = files[0]
@@ -1088,12 +1098,8 @@ def _measure_color(
 
     from imageform.analysis import estimate_camera_sensitivities
 
-    files = _files(folder)
-    if not files:
-        raise InvalidInputError(f"{folder} holds no image")
-    transfer = str(_get(doc, "colorchecker", "transfer", str, "srgb"))
-    if transfer not in ("srgb", "linear"):
-        raise InvalidInputError(f"{LAB_MANIFEST}: expected [colorchecker] transfer srgb or linear")
+    files = _images(folder)
+    transfer = _transfer(doc, "colorchecker")
     light = str(_get(doc, "colorchecker", "illuminant", str, "D65"))
     developed = _get(doc, "colorchecker", "developed", str, None)
     dev_name = Path(developed).name if developed is not None else None
