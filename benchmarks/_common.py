@@ -10,7 +10,7 @@ from collections.abc import Callable, Sequence
 from datetime import date
 from typing import Any
 
-__all__ = ["header", "markdown_table", "median_time"]
+__all__ = ["header", "markdown_table", "median_time", "paired_rounds"]
 
 
 def median_time(fn: Callable[[], Any], repeat: int = 5, warmup: int = 1) -> float:
@@ -23,6 +23,26 @@ def median_time(fn: Callable[[], Any], repeat: int = 5, warmup: int = 1) -> floa
         fn()
         times.append(time.perf_counter() - t0)
     return statistics.median(times)
+
+
+def paired_rounds(
+    ours: Callable[[], Any], theirs: Callable[[], Any], rounds: int, *, speed: bool = False
+) -> tuple[float, float, float, float, float]:
+    """Time two callables in ``rounds`` interleaved rounds (median of 5 calls each per round).
+
+    Both are called once first (warm-up). Returns the medians over the rounds of our and
+    their seconds, then the median, minimum and maximum of the per-round ratio: ours / theirs
+    (a time ratio), or theirs / ours with ``speed`` (a speed ratio, > 1: ours faster).
+    """
+    ours()
+    theirs()
+    a, b, r = [], [], []
+    for _ in range(rounds):
+        ta, tb = median_time(ours, warmup=0), median_time(theirs, warmup=0)
+        a.append(ta)
+        b.append(tb)
+        r.append(tb / ta if speed else ta / tb)
+    return statistics.median(a), statistics.median(b), statistics.median(r), min(r), max(r)
 
 
 def header(title: str) -> str:

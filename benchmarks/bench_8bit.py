@@ -33,9 +33,7 @@ from __future__ import annotations
 
 import argparse
 import os
-import statistics
 import sys
-import time
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -44,30 +42,9 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-from benchmarks._common import header, markdown_table
+from benchmarks._common import header, markdown_table, paired_rounds
 
 DATA = Path(__file__).resolve().parent.parent.parent / "shared" / "data" / "kodak"
-
-
-def _median5(fn: Callable[[], Any]) -> float:
-    ts = []
-    for _ in range(5):
-        t0 = time.perf_counter()
-        fn()
-        ts.append(time.perf_counter() - t0)
-    return statistics.median(ts)
-
-
-def _pair(ours: Callable[[], Any], cv: Callable[[], Any], rounds: int) -> tuple[float, ...]:
-    ours()
-    cv()
-    a, b, r = [], [], []
-    for _ in range(rounds):
-        ta, tb = _median5(ours), _median5(cv)
-        a.append(ta)
-        b.append(tb)
-        r.append(ta / tb)
-    return statistics.median(a), statistics.median(b), statistics.median(r), min(r), max(r)
 
 
 def _images(cv2: Any) -> dict[str, np.ndarray]:
@@ -208,7 +185,7 @@ def main() -> None:
         cv2.setNumThreads(cv_t)
         for size, img in images.items():
             for name, ours, cv in _cases(cv2, img):
-                a, b, r, rmin, rmax = _pair(ours, cv, args.rounds)
+                a, b, r, rmin, rmax = paired_rounds(ours, cv, args.rounds)
                 rows.append(
                     [
                         name,

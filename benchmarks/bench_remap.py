@@ -40,11 +40,8 @@ import argparse
 import datetime as _dt
 import os
 import platform
-import statistics
 import sys
-import time
 from pathlib import Path
-from typing import Any
 
 import cv2
 import numba
@@ -60,7 +57,7 @@ from imageform.geometry.undistort import (
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))  # run as a script or as a module
-from benchmarks._common import markdown_table  # noqa: E402
+from benchmarks._common import markdown_table, paired_rounds  # noqa: E402
 
 # the OpenCV tutorial's left*.jpg calibration (shared/data/README.md), scaled to each size
 D = np.array([-0.26509039, -0.0467422, 0.00183302, -0.00031469, 0.25231221])
@@ -129,29 +126,6 @@ def _accuracy(img: np.ndarray, K: np.ndarray, model: BrownConrady) -> dict[str, 
     return res
 
 
-def _median5(fn: Any) -> float:
-    ts = []
-    for _ in range(5):
-        t0 = time.perf_counter()
-        fn()
-        ts.append(time.perf_counter() - t0)
-    return statistics.median(ts)
-
-
-def _pair(ours: Any, cv: Any, rounds: int) -> tuple[float, float, float, float, float]:
-    """Medians over ``rounds`` interleaved rounds: imageform ms, OpenCV ms, and the speed
-    (OpenCV / imageform) as the median of the per-round ratios, with its range."""
-    ours()
-    cv()
-    a, b, r = [], [], []
-    for _ in range(rounds):
-        ta, tb = _median5(ours), _median5(cv)
-        a.append(ta)
-        b.append(tb)
-        r.append(tb / ta)
-    return statistics.median(a), statistics.median(b), statistics.median(r), min(r), max(r)
-
-
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--rounds", type=int, default=7)
@@ -190,7 +164,7 @@ def main() -> None:
                         ),
                     }
                     for op, (ours, cv) in cases.items():
-                        t_if, t_cv, r, rmin, rmax = _pair(ours, cv, args.rounds)
+                        t_if, t_cv, r, rmin, rmax = paired_rounds(ours, cv, args.rounds, speed=True)
                         rows.append(
                             [
                                 f"{size} {c}ch",
