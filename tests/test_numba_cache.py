@@ -19,6 +19,7 @@ import sys
 import tempfile
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 import imageform._kernels as kernels_pkg
@@ -42,6 +43,104 @@ def test_every_kernel_is_cached() -> None:
                     uncached.append(f"{info.name}.{name}")
     assert found > 90
     assert uncached == []
+
+
+def test_no_two_kernels_share_cache_files() -> None:
+    """Each dispatcher has cache files of its own.
+
+    numba names them after the function's qualified name and first line and keys their
+    entries on signature, bytecode and closed-over values, not on ``parallel``: a serial
+    twin made with ``njit(...)(kernel.py_func)`` shared the parallel kernel's entries, and
+    whichever compiled first was loaded for both (the parallel remap ran on one thread).
+    """
+    from numba.core.registry import CPUDispatcher
+
+    owner: dict[str, str] = {}
+    clashes = []
+    for info in pkgutil.iter_modules(kernels_pkg.__path__):
+        module = importlib.import_module(f"imageform._kernels.{info.name}")
+        for name, value in vars(module).items():
+            if not isinstance(value, CPUDispatcher) or value.__module__ != module.__name__:
+                continue
+            cache = value._cache  # type: ignore[attr-defined]
+            if not hasattr(cache, "_cache_file") or value.py_func.__closure__:
+                continue  # closures: the entries' keys hold the closed-over values
+            index = cache._cache_file._index_name
+            if index in owner and owner[index] != f"{info.name}.{name}":
+                clashes.append((owner[index], f"{info.name}.{name}", index))
+            owner.setdefault(index, f"{info.name}.{name}")
+    assert len(owner) > 90
+    assert clashes == []
+
+
+def test_serial_twin_is_its_own_kernel() -> None:
+    from numba import prange
+
+    @jit.njit(parallel=True, cache=False)
+    def total(a):  # type: ignore[no-untyped-def]
+        s = 0.0
+        for i in prange(a.size):
+            s += a[i]
+        return s
+
+    twin = jit.serial_twin(total, cache=False)
+    assert twin.py_func is not total.py_func
+    assert twin.py_func.__qualname__.endswith("total_serial")
+    assert not twin.targetoptions.get("parallel") and total.targetoptions.get("parallel")
+    assert twin(np.arange(10.0)) == total(np.arange(10.0)) == 45.0
+
+
+def test_serial_first_cache_keeps_the_parallel_kernel_parallel(tmp_path: Path) -> None:
+    """Fill a fresh cache with the serial remap first; the parallel one, loaded from that
+    cache in a new process, still runs its rows on numba's threads (its code calls the
+    parallel scheduler)."""
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path), "PYTHONPATH": str(SRC)}
+    env.pop("NUMBA_BOUNDSCHECK", None)
+    setup = (
+        "import numpy as np\n"
+        "from imageform._kernels import remap as R\n"
+        "img = np.zeros((1, 8, 8, 1), np.uint8); m = np.zeros((8, 8, 2), np.float32)\n"
+        "out = np.empty_like(img); a = np.empty(0, np.float32); k = np.empty(0, np.int32)\n"
+    )
+    first = setup + "R.remap_bilinear_serial(img, m, 1.0, 0.0, out, a, k, 255.0)\n"
+    subprocess.run([sys.executable, "-c", first], env=env, check=True, timeout=600)
+    second = setup + (
+        "R.remap_bilinear(img, m, 1.0, 0.0, out, a, k, 255.0)\n"
+        "(cres,) = R.remap_bilinear.overloads.values()\n"
+        "print(sum(R.remap_bilinear.stats.cache_hits.values()),"
+        " 'do_scheduling' in cres.library.get_llvm_str())\n"
+    )
+    done = subprocess.run(
+        [sys.executable, "-c", second],
+        env=env,
+        check=True,
+        timeout=600,
+        capture_output=True,
+        text=True,
+    )
+    assert done.stdout.split() == ["0", "True"], done.stdout + done.stderr[-2000:]
+
+
+def test_boundscheck_compiles_are_not_cached(tmp_path: Path) -> None:
+    """numba's cache key has no bounds-check flag: under NUMBA_BOUNDSCHECK=1 nothing is saved
+    (checked code in the shared cache would slow every later run)."""
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path), "PYTHONPATH": str(SRC)}
+    env["NUMBA_BOUNDSCHECK"] = "1"
+    code = (
+        "from imageform._kernels import jit\n"
+        "from numba.core.caching import NullCache\n"
+        "f = jit.njit(lambda x: x + 1)\n"
+        "print(isinstance(f._cache, NullCache), f(1))\n"
+    )
+    done = subprocess.run(
+        [sys.executable, "-c", code],
+        env=env,
+        check=True,
+        timeout=300,
+        capture_output=True,
+        text=True,
+    )
+    assert done.stdout.split() == ["True", "2"], done.stdout + done.stderr[-2000:]
 
 
 def test_kernels_use_the_policy_decorator() -> None:

@@ -4,6 +4,9 @@ are, the fused Brown-Conrady kernel against the map path, and equality with Open
 
 from __future__ import annotations
 
+import os
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -265,3 +268,123 @@ def test_keep_dtype_float_images_and_bad_values() -> None:
         remap_bilinear(img8, m, keep_dtype=1)  # type: ignore[arg-type]
     with pytest.raises(InvalidInputError, match=r"fill in \[0, 65535\]"):
         undistort_image(img8.astype(np.uint16), K, None, keep_dtype=True, fill=-1)
+
+
+# --- the one-channel path: one vectorised loop, pairs of samples per load ------------------
+
+
+def _edge_map(h: int, w: int) -> np.ndarray:
+    """Positions on and around every pixel, the last row and column, and just outside."""
+    us = np.r_[-0.5, -1e-6, 0.0, np.linspace(0, w - 1, 4 * w), w - 1 - 1e-6, w - 1, w - 1 + 1e-5]
+    vs = np.r_[-1e-6, 0.0, np.linspace(0, h - 1, 3 * h), h - 1 - 1e-6, h - 1, h]
+    m = np.stack(np.meshgrid(us, vs), -1)
+    m[0, 0] = np.nan
+    return m
+
+
+@pytest.mark.parametrize("shape", [(2, 2), (2, 3), (3, 2), (2, 9), (9, 2), (5, 7), (4, 64)])
+@pytest.mark.parametrize("dtype", [np.uint8, np.uint16, np.float32, np.float64])
+def test_grey_path_matches_twin_at_the_edges(shape: tuple[int, int], dtype: type) -> None:
+    from imageform._kernels.remap import remap_bilinear as kernel
+    from imageform._kernels.remap import remap_bilinear_serial as serial
+
+    h, w = shape
+    rng = np.random.default_rng(h * 100 + w)
+    top = np.iinfo(dtype).max if np.dtype(dtype).kind == "u" else 1.0
+    img = (rng.random((3, h, w, 1)) * top).astype(dtype)
+    img[:, -1, -1] = top  # the last sample of each image: a wrong neighbour shows
+    scale = 1.0 / top
+    twin = None
+    for mdt in (np.float64, np.float32):
+        m = _edge_map(h, w).astype(mdt)
+        twin = _remap_bilinear_numpy(img.astype(np.float64) * scale, m[..., 0], m[..., 1], 0.25)
+        for run in (kernel, serial):
+            out = np.empty((3, *m.shape[:2], 1), np.float64)
+            run(img, m, scale, 0.25, out, np.empty(0), np.empty(0, np.int64), 0.0)
+            np.testing.assert_allclose(out, twin, atol=1e-12, rtol=0)
+            if np.dtype(dtype).kind == "u":  # rounded to codes, fill in codes
+                codes = np.empty((3, *m.shape[:2], 1), dtype)
+                acc = np.empty(0, np.float64)
+                run(img, m, 1.0, 7.0, codes, acc, np.empty(0, np.int64), float(top))
+                ref = _remap_bilinear_numpy(img.astype(np.float64), m[..., 0], m[..., 1], 7.0)
+                assert np.abs(codes - ref).max() <= 0.5 + 1e-9  # rounding only (near-ties)
+                assert (codes[:, 0, 0] == 7).all()
+    assert twin is not None
+
+
+def test_grey_path_equals_the_general_loops() -> None:
+    """The fused one-channel loop gives the general loops' results bit for bit (float32
+    arithmetic, uint8 in and out): the general loops run it as a two-channel image's first
+    channel."""
+    rng = np.random.default_rng(5)
+    img = rng.integers(0, 256, (123, 157), np.uint8)
+    m = np.stack(np.meshgrid(np.linspace(-3, 160, 211), np.linspace(-2, 126, 97)), -1)
+    m = (m + rng.normal(0, 0.7, m.shape)).astype(np.float32)
+    grey = remap_bilinear(img, m, keep_dtype=True, fill=11)
+    two = remap_bilinear(np.stack([img, img[::-1]], -1), m, keep_dtype=True, fill=11)
+    np.testing.assert_array_equal(grey, two[..., 0])
+    grey_f = remap_bilinear(img, m, fill=0.5)
+    two_f = remap_bilinear(np.stack([img, img], -1), m, fill=0.5)
+    np.testing.assert_array_equal(grey_f, two_f[..., 0])
+
+
+GUARD_SCRIPT = r"""
+import ctypes, mmap, sys
+import numpy as np
+from imageform._kernels.remap import remap_bilinear, remap_bilinear_serial
+
+page = mmap.PAGESIZE
+libc = ctypes.CDLL(None)
+libc.mprotect.argtypes = [ctypes.c_void_p, ctypes.c_size_t, ctypes.c_int]
+
+
+def guarded(n, dtype, at_end):
+    # n samples of dtype that touch a page no one may read (before or after them)
+    size = n * np.dtype(dtype).itemsize
+    pages = (size + page - 1) // page
+    buf = mmap.mmap(-1, (pages + 2) * page)
+    base = ctypes.addressof(ctypes.c_char.from_buffer(buf))
+    assert libc.mprotect(base, page, 0) == 0
+    assert libc.mprotect(base + (pages + 1) * page, page, 0) == 0
+    start = (pages + 1) * page - size if at_end else page
+    return np.frombuffer(buf, dtype, n, start), buf
+
+
+for dtype in (np.uint8, np.uint16, np.float32, np.float64):
+    for h, w in ((2, 2), (3, 5), (7, 3), (64, 63)):
+        for at_end in (True, False):
+            flat, keep = guarded(h * w, dtype, at_end)
+            img = flat.reshape(1, h, w, 1)
+            us = np.r_[0.0, np.linspace(0, w - 1, 5 * w), w - 1.0]
+            vs = np.r_[0.0, np.linspace(0, h - 1, 5 * h), h - 1.0]
+            m = np.ascontiguousarray(np.stack(np.meshgrid(us, vs), -1).astype(np.float32))
+            out = np.empty((1, *m.shape[:2], 1), np.float32)
+            for run in (remap_bilinear, remap_bilinear_serial):
+                run(img, m, 1.0, 0.0, out, np.empty(0, np.float32), np.empty(0, np.int32), 0.0)
+print("inside")
+"""
+
+
+def test_grey_path_reads_only_the_image(tmp_path: Path) -> None:
+    """Every load of the one-channel path stays inside the image: images placed against a
+    page that may not be read (before and after them) are remapped on all their pixels, the
+    last row and column included, without a fault."""
+    import mmap
+    import subprocess
+    import sys
+
+    if sys.platform != "linux" or mmap.PAGESIZE > 65536:
+        pytest.skip("mprotect guard pages: Linux")
+    src = Path(__file__).resolve().parents[2] / "src"
+    done = subprocess.run(
+        [sys.executable, "-c", GUARD_SCRIPT],
+        env={**os.environ, "PYTHONPATH": str(src)},
+        capture_output=True,
+        text=True,
+        timeout=600,
+        check=False,
+    )
+    assert done.returncode == 0 and done.stdout.strip() == "inside", (
+        done.returncode,
+        done.stderr[-2000:],
+    )

@@ -30,11 +30,11 @@ from imageform._kernels.jit import njit
 __all__ = ["DECODE_LUT", "srgb8_to_hsv8", "srgb8_to_lab8"]
 
 _F32 = np.float32
-_BLOCK = 65536
-#: Images of fewer pixels run the serial loop in the calling thread: waking numba's
-#: thread pool costs more than it gains there (measured on a loaded 2-core machine,
-#: benchmarks/results/8bit-2026-11-25.md).
-PARALLEL_MIN_PIXELS = 1 << 22
+#: Pixels per parallel work item.
+_BLOCK = 16384
+#: Images of fewer pixels (under 4 work items) run the serial loop in the calling thread:
+#: waking numba's thread pool costs more than it gains there.
+PARALLEL_MIN_PIXELS = 1 << 16
 _FM = {"nsz", "arcp", "contract", "afn", "reassoc"}
 _JIT: dict[str, Any] = {"fastmath": _FM, "error_model": "numpy"}
 

@@ -13,7 +13,7 @@ import numpy as np
 from numba import prange
 
 from imageform._kernels.demosaic_common import crop, phase_masks, shift
-from imageform._kernels.jit import njit
+from imageform._kernels.jit import njit, serial_twin
 
 __all__ = ["RADIUS", "bilinear_int_numba", "bilinear_int_numpy", "bilinear_numba", "bilinear_numpy"]
 
@@ -250,11 +250,12 @@ def _int_rows(raw, ry, rx, out, ov, n):  # type: ignore[no-untyped-def]
     return out
 
 
-_int_rows_serial = njit(error_model="numpy")(_int_rows.py_func)
+_int_rows_serial = serial_twin(_int_rows, error_model="numpy")
 #: Mosaics of fewer pixels run the rows in the calling thread (waking numba's pool costs
-#: more than it gains there on a loaded machine; benchmarks/results/8bit-2026-11-25.md and
-#: 8bit-2026-11-25b.md).
-PARALLEL_MIN_PIXELS = 1 << 22
+#: more than it gains there). On the idle 2-core machine two threads gain 1.3x at 96 x 96
+#: and 1.6-2.3x from 128 x 128 up; the earlier 1 << 22 was measured while the serial twin
+#: shared the parallel kernel's cache entries (:func:`imageform._kernels.jit.serial_twin`).
+PARALLEL_MIN_PIXELS = 1 << 14
 
 
 def bilinear_int_numba(

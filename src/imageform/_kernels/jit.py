@@ -31,11 +31,12 @@ from __future__ import annotations
 import os
 import sys
 import tempfile
+import types
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any, Literal
 
-__all__ = ["cache_location", "configure_cache", "njit", "user_cache_dir"]
+__all__ = ["cache_location", "configure_cache", "njit", "serial_twin", "user_cache_dir"]
 
 #: Where :func:`configure_cache` put the cache (see :func:`cache_location`).
 _HERE = Path(__file__).resolve().parent
@@ -110,6 +111,45 @@ def njit(fn: Callable[..., Any] | None = None, /, **options: Any) -> Any:
     as ``numba.njit``; every other option is numba's.
     """
     options.setdefault("cache", True)
+    if getattr(numba.config, "BOUNDSCHECK", None):
+        # numba's cache key has no bounds-check flag: checked code saved into the shared cache
+        # would be loaded by every later run (a remap 30 times slower), so none is saved
+        options["cache"] = False
     if fn is None:
         return numba.njit(**options)
     return numba.njit(fn, **options)
+
+
+def serial_twin(kernel: Any, /, **options: Any) -> Any:
+    """Compile a ``parallel=True`` kernel's loops again, serially (``prange`` runs as ``range``).
+
+    For small inputs, where waking numba's thread pool costs more than it gains. The twin is
+    a copy of the kernel's Python function under the name ``<name>_serial``: numba names a
+    kernel's cache files after the function's qualified name and first line and keys their
+    entries on the signature and the bytecode, not on ``parallel``, so
+    ``njit(**options)(kernel.py_func)`` would share the kernel's cache entries, and whichever
+    of the two compiled first was loaded for both (the parallel remap then ran on one thread
+    on every machine whose cache the serial twin had filled first).
+
+    Parameters
+    ----------
+    kernel : numba dispatcher
+        The parallel kernel.
+    **options
+        Options of the twin, as :func:`njit`'s (``parallel`` is not passed on).
+
+    Returns
+    -------
+    numba dispatcher
+        The serial twin, cached under its own name.
+    """
+    fn = kernel.py_func
+    twin = types.FunctionType(
+        fn.__code__, fn.__globals__, fn.__name__ + "_serial", fn.__defaults__, fn.__closure__
+    )
+    twin.__qualname__ = fn.__qualname__ + "_serial"
+    twin.__module__ = fn.__module__
+    twin.__doc__ = fn.__doc__
+    twin.__kwdefaults__ = fn.__kwdefaults__
+    options.pop("parallel", None)
+    return njit(twin, **options)

@@ -39,6 +39,15 @@ index from its runtime shape, which LLVM then versions on (falling back to scala
 1-D indices keep the locate loop vectorised (4 to 8 times faster on a 1 MP map). The
 sampling loop has one version for each of 1, 3 and 4 channels (unrolled), one generic.
 
+One-channel images take a third way (``_remap_rows_grey``): locate and sample fused in one
+loop that LLVM vectorises with gathers. Two things make that possible: the results go to a
+buffer on the stack (an intrinsic, ``_stack_block``), which LLVM knows aliases no input, so
+the gathers may run ahead of the stores; and a uint8 pair ``I00, I01`` comes from one
+unaligned 32-bit load (``_word``; the lower pair's word is read two bytes early and
+shifted, so that no load leaves the image). A second loop rounds or converts the block into
+the output. The arithmetic is the general loops' (equal results bit for bit); a 1 MP uint8
+remap takes 1.5 ms instead of 2.7 ms on one thread of the development machine.
+
 The plain twin of both is :func:`imageform.geometry.undistort._remap_bilinear_numpy` on the
 map from :func:`~imageform.geometry.undistort.undistortion_map`; tests check agreement to
 1e-12 (float64).
@@ -46,13 +55,16 @@ map from :func:`~imageform.geometry.undistort.undistortion_map`; tests check agr
 
 from __future__ import annotations
 
+import sys
 from typing import Any
 
 import numpy as np
+from llvmlite import ir
 from numba import prange, types
-from numba.extending import overload
+from numba.core import cgutils
+from numba.extending import intrinsic, overload
 
-from imageform._kernels.jit import njit
+from imageform._kernels.jit import njit, serial_twin
 
 __all__ = [
     "PARALLEL_MIN_SAMPLES",
@@ -306,6 +318,197 @@ def _remap_rows(
             _sample_block(flat, n, nc, dx, dy, kidx, ax, ay, ok, scale, fill, rounded, hi, ob, lut)
 
 
+# --- one channel: a single vectorised loop --------------------------------------------------
+
+#: The one-channel path reads two neighbouring uint8 samples with one unaligned 32-bit load
+#: (little-endian byte order assumed; elsewhere the general loops run).
+_LITTLE = sys.byteorder == "little"
+
+
+def _stack_block_typing(typingctx: Any, like: Any) -> object:  # pragma: no cover - jitted
+    """Return a C array of :data:`_BLK` elements of ``like``'s dtype on the caller's stack.
+
+    LLVM knows that a stack buffer aliases none of the arrays passed in, so a loop that
+    gathers from the image and stores into it vectorises (a store into a heap array may alias
+    the gathered image: LLVM cannot check that at run time and keeps the loop scalar).
+    """
+    dtype = like.dtype
+    arrty = types.Array(dtype, 1, "C")
+
+    def codegen(context: Any, builder: Any, sig: Any, args: Any) -> Any:
+        lty = context.get_data_type(dtype)
+        ptr = cgutils.alloca_once(builder, lty, size=_BLK)
+        ary = context.make_array(arrty)(context, builder)
+        itemsize = context.get_constant(types.intp, context.get_abi_sizeof(lty))
+        context.populate_array(
+            ary,
+            data=ptr,
+            shape=[context.get_constant(types.intp, _BLK)],
+            strides=[itemsize],
+            itemsize=itemsize,
+            meminfo=None,
+        )
+        return ary._getvalue()
+
+    return arrty(like), codegen
+
+
+#: ``_stack_block(like)`` in jitted code (see :func:`_stack_block_typing`).
+_stack_block: Any = intrinsic(_stack_block_typing)
+
+
+def _word_typing(typingctx: Any, flat: Any, k: Any) -> object:  # pragma: no cover - jitted
+    """Return the 32-bit word that starts at element ``k`` of the 1-D array ``flat`` (unaligned).
+
+    The caller keeps the four bytes inside ``flat``.
+    """
+
+    def codegen(context: Any, builder: Any, sig: Any, args: Any) -> Any:
+        ary = context.make_array(sig.args[0])(context, builder, args[0])
+        ptr = builder.gep(ary.data, [args[1]], inbounds=True)
+        return builder.load(builder.bitcast(ptr, ir.IntType(32).as_pointer()), align=1)
+
+    return types.uint32(flat, k), codegen
+
+
+#: ``_word(flat, k)`` in jitted code (see :func:`_word_typing`).
+_word: Any = intrinsic(_word_typing)
+
+
+def _pair(flat: np.ndarray, k: Any, zero: float, lower: bool) -> tuple[float, float]:
+    """``flat[k], flat[k + 1]`` as floats of ``zero``'s type (jitted code: :func:`_pair_impl`)."""
+    T = type(zero)
+    return T(flat[k]), T(flat[k + 1])  # pragma: no cover
+
+
+@overload(_pair)
+def _pair_impl(flat: Any, k: Any, zero: Any, lower: Any) -> object:
+    """Return ``_pair``'s implementation for ``flat``'s dtype.
+
+    uint8: one unaligned 32-bit load (a gather when vectorised) holds both samples. The upper
+    pair's word is read at ``k`` (it ends at ``k + 3 <= (h - 2) w + w + 1 < h w``); the lower
+    pair's (``lower``, a constant) two bytes earlier and shifted, so that it ends at ``k + 1``
+    (``k - 2 >= w - 2 >= 0``): no load leaves the image, and no per-pixel test is needed.
+    uint16: one 32-bit load, always inside (``k + 1`` is). Floats: two loads.
+    """
+    if flat.dtype == types.uint8:
+
+        def bytes2(flat: Any, k: Any, zero: Any, lower: Any) -> object:
+            T = type(zero)
+            # lower: the word ending at k + 1 (see above), its upper half
+            word = _word(flat, k - 2) >> np.uint32(16) if lower else _word(flat, k)
+            return T(word & np.uint32(255)), T((word >> np.uint32(8)) & np.uint32(255))
+
+        return bytes2
+    if flat.dtype == types.uint16:
+
+        def halves(flat: Any, k: Any, zero: Any, lower: Any) -> object:
+            T = type(zero)
+            word = _word(flat, k)
+            return T(word & np.uint32(65535)), T(word >> np.uint32(16))
+
+        return halves
+
+    def floats(flat: Any, k: Any, zero: Any, lower: Any) -> object:
+        T = type(zero)
+        return T(flat[k]), T(flat[k + 1])
+
+    return floats
+
+
+@njit(inline="always", error_model="numpy", fastmath={"contract"})
+def _grey_block(
+    flat: np.ndarray,
+    mb: np.ndarray,
+    n: int,
+    h: int,
+    w: int,
+    sc: float,
+    fl: float,
+    rounded: bool,
+    res: np.ndarray,
+) -> None:
+    """One block of a one-channel remap into the stack buffer ``res`` (``rounded`` a constant).
+
+    Locate (as :func:`_locate`) and sample (as :func:`_sample`) fused in one loop; LLVM
+    vectorises it with gathers. ``res`` gets the float result (scaled unless ``rounded``) or
+    ``fill``.
+    """
+    M = mb.dtype.type
+    T = res.dtype.type
+    zero = M(0)
+    wm1 = M(w - 1)
+    hm1 = M(h - 1)
+    xmax = np.int32(w - 2)
+    ymax = np.int32(h - 2)
+    tz = T(0)
+    for t in range(n):
+        u = mb[2 * t]
+        v = mb[2 * t + 1]
+        inside = (u >= zero) & (u <= wm1) & (v >= zero) & (v <= hm1)
+        uc = u if inside else zero
+        vc = v if inside else zero
+        x0 = np.int32(uc)  # uc >= 0: truncation is floor
+        y0 = np.int32(vc)
+        x0 = x0 if x0 < xmax else xmax
+        y0 = y0 if y0 < ymax else ymax
+        a = T(uc - M(x0))
+        b = T(vc - M(y0))
+        k = np.int64(y0) * w + x0
+        i00, i01 = _pair(flat, k, tz, False)
+        i10, i11 = _pair(flat, k + w, tz, True)
+        top = i00 + a * (i01 - i00)
+        bot = i10 + a * (i11 - i10)
+        r = top + b * (bot - top)
+        if rounded:
+            res[t] = r if inside else fl
+        else:
+            res[t] = sc * r if inside else fl
+
+
+@njit(error_model="numpy", fastmath={"contract"})
+def _remap_rows_grey(
+    flat: np.ndarray,
+    mf: np.ndarray,
+    i0: int,
+    i1: int,
+    wo: int,
+    h: int,
+    w: int,
+    scale: float,
+    fill: float,
+    rounded: bool,
+    of: np.ndarray,
+    acc: np.ndarray,
+) -> None:
+    """Output rows ``i0:i1`` of a one-channel image (``h, w >= 2``).
+
+    The same arithmetic as :func:`_remap_rows` (equal results bit for bit), in one loop that
+    vectorises: the source pairs are gathered, the results go to a stack buffer, and a second
+    loop converts them into the output (rounded when ``rounded``).
+    """
+    res: np.ndarray = _stack_block(acc)
+    T = acc.dtype.type
+    O = of.dtype.type
+    sc = T(scale)
+    fl = T(fill)
+    magic = T(12582912.0) if T(16777217.0) == T(16777216.0) else T(6755399441055744.0)
+    for i in range(i0, i1):
+        for j0 in range(0, wo, _BLK):
+            n = min(_BLK, wo - j0)
+            base = i * wo + j0
+            mb = mf[2 * base : 2 * (base + n)]
+            ob = of[base : base + n]
+            if rounded:
+                _grey_block(flat, mb, n, h, w, sc, fl, True, res)
+                for t in range(n):
+                    ob[t] = O(np.int32((res[t] + magic) - magic))  # ties to even, as _sample
+            else:
+                _grey_block(flat, mb, n, h, w, sc, fl, False, res)
+                for t in range(n):
+                    ob[t] = O(res[t])
+
+
 @njit(parallel=True, error_model="numpy", fastmath={"contract"})
 def remap_bilinear(
     img: np.ndarray,
@@ -329,18 +532,22 @@ def remap_bilinear(
     nblk = min(ho, _BLOCKS)
     mf = map_uv.ravel()
     rounded = hi > 0.0
+    grey = _LITTLE and nc == 1 and h >= 2 and w >= 2
     for t in prange(nb * nblk):
         b = t // nblk
         blk = t - b * nblk
-        kidx = np.empty(_BLK, kcar.dtype)
-        ax = np.empty(_BLK, acc.dtype)
-        ay = np.empty(_BLK, acc.dtype)
-        ok = np.empty(_BLK, np.bool_)
         flat = img[b].ravel()
         of = out[b].ravel()
         i0, i1 = blk * ho // nblk, (blk + 1) * ho // nblk
-        bufs = (kidx, ax, ay, ok)
-        _remap_rows(flat, mf, i0, i1, wo, h, w, nc, scale, fill, rounded, hi, of, bufs)
+        if grey:
+            _remap_rows_grey(flat, mf, i0, i1, wo, h, w, scale, fill, rounded, of, acc)
+        else:
+            kidx = np.empty(_BLK, kcar.dtype)
+            ax = np.empty(_BLK, acc.dtype)
+            ay = np.empty(_BLK, acc.dtype)
+            ok = np.empty(_BLK, np.bool_)
+            bufs = (kidx, ax, ay, ok)
+            _remap_rows(flat, mf, i0, i1, wo, h, w, nc, scale, fill, rounded, hi, of, bufs)
 
 
 @njit(error_model="numpy", fastmath={"contract"})
@@ -461,15 +668,17 @@ def undistort_brown_conrady(
 
 # the same loops in the calling thread (prange runs as range): for small images, where waking
 # numba's pool costs more than it gains on a loaded machine (as demosaic_bilinear's)
-remap_bilinear_serial = njit(error_model="numpy", fastmath={"contract"})(remap_bilinear.py_func)
-undistort_brown_conrady_serial = njit(error_model="numpy", fastmath={"contract"})(
-    undistort_brown_conrady.py_func
+remap_bilinear_serial = serial_twin(remap_bilinear, error_model="numpy", fastmath={"contract"})
+undistort_brown_conrady_serial = serial_twin(
+    undistort_brown_conrady, error_model="numpy", fastmath={"contract"}
 )
 
-#: Outputs of fewer samples (pixels x channels x images) run serially: on the shared 2-core
-#: machine (load 9-10), every 1 MP grey remap took 16.0 ms with 2 numba threads against
-#: 6.7-8.9 ms with one (and OpenCV 6.7 ms with 2), in a first run of bench_remap.py.
-PARALLEL_MIN_SAMPLES = 1 << 22
+#: Outputs of fewer samples (pixels x channels x images) run serially. On the idle 2-core
+#: machine two threads already halve a 96 x 96 grey remap (0.03 ms); the threshold only
+#: keeps the pool's wake-up off the smallest calls. (An earlier 1 << 22, set when both
+#: kernels shared numba's cache entries and the "parallel" one was often the serial code,
+#: ran every 1 MP image on one thread: see :func:`imageform._kernels.jit.serial_twin`.)
+PARALLEL_MIN_SAMPLES = 1 << 14
 
 
 def pick(kernel: str, n_samples: int) -> object:
