@@ -127,7 +127,7 @@ class _ContiguousRows:
         return out[(slice(None, None, rstep), slice(None, None, cstep), *key[2:])]
 
 
-def _tiff_lazy(p: Path, chunk: int, da: Any, zarr: Any) -> Any:
+def _tiff_lazy(p: Path, chunk: int, da: Any, zarr: Any, opened: list[Any] | None) -> Any:
     import tifffile
 
     with tifffile.TiffFile(p) as tf:
@@ -157,8 +157,11 @@ def _tiff_lazy(p: Path, chunk: int, da: Any, zarr: Any) -> Any:
 
     store = tifffile.imread(p, aszarr=True)
     arr = zarr.open(store, mode="r")
-    # the store holds the TIFF open: close it when the array goes, not at interpreter exit
-    # (an unclosed file is a ResourceWarning wherever the garbage collector happens to run)
+    # the store holds the TIFF open: a caller that knows when it is done closes it (``opened``);
+    # else it is closed when the array goes, not at interpreter exit (an unclosed file is a
+    # ResourceWarning wherever the garbage collector happens to run)
+    if opened is not None:
+        opened.append(store)
     weakref.finalize(arr, store.close)
     return arr
 
@@ -324,6 +327,11 @@ def open_lazy(path: str | Path, chunk: int = 1024) -> Any:
     decoded whole); an uncompressed strip TIFF (one strip or many) row band by row band from
     the file. Blocks have all channels (choose a multiple of the TIFF's tile size).
     """
+    return _open_lazy(path, chunk, None)
+
+
+def _open_lazy(path: str | Path, chunk: int, opened: list[Any] | None) -> Any:
+    """:func:`open_lazy`; the TIFF stores it opens are appended to ``opened`` (if given)."""
     from imageform._optional import require
     from imageform._validate import as_path
 
@@ -335,7 +343,7 @@ def open_lazy(path: str | Path, chunk: int = 1024) -> Any:
         raise InvalidInputError(f"input {p} does not exist")
     try:
         if _kind(p) == "tiff":
-            z: Any = _tiff_lazy(p, chunk, da, zarr)
+            z: Any = _tiff_lazy(p, chunk, da, zarr, opened)
             if not isinstance(z, (zarr.Array, zarr.Group)):
                 return z  # an uncompressed strip TIFF, already a dask array
         else:
@@ -647,75 +655,83 @@ def process_chunked(
         raise InvalidInputError(f"--pyramid build needs a .tif output, got {dst_p}")
     dask = require("dask", what="imageform chunked")
     _remove_stale(dst_p)  # left by a run killed mid-write (SIGKILL cannot be caught)
-    x = open_lazy(src_p, chunk)
-    meta = None
-    if _kind(src_p) == "tiff":
-        try:
-            meta = _tiff_meta(src_p)
-        except ImageformError:
-            raise
-        except Exception as exc:  # pragma: no cover - open_lazy read it already
-            raise InvalidInputError(f"cannot read {src_p}: {str(exc)[:120]}") from exc
-    if tile is None:
-        tile = meta.tile if meta is not None and meta.tile and chunk % meta.tile == 0 else 256
-        tile = min(tile, chunk)
-    _check_tile(chunk, tile)
-    shape0 = (int(x.shape[0]), int(x.shape[1]))
-    levels = _pyramid_levels(pyramid, meta, shape0, tile) if out_kind == "tiff" else (shape0,)
-    for k in range(1, len(levels)):
-        f = _factor(levels[k - 1], levels[k])
-        if chunk % f:
-            raise InvalidInputError(
-                f"expected chunk a multiple of the pyramid factor {f} (level {k}), got {chunk}"
-            )
-    in_int = x.dtype in (np.uint8, np.uint16)
-    gains: np.ndarray | None = None
-    where: str | None = None
-    workers = num_workers or os.cpu_count() or 1
-    with dask.config.set(scheduler="threads", num_workers=workers):
-        if cmd == "convert":
-            s, d = opts["from"], opts["to"]
-            params = {k: opts[k] for k in ("white",) if opts.get(k) is not None}
-            op: tuple[Any, ...] = (_convert_block, s, d, params)
-            displayable = d in DISPLAYABLE_SPACES
-        elif cmd == "stain_normalize":
-            stats_t, stats_s, where = _stain_stats(x, opts, src_p, meta, stats_from)
-            op = (_stain_block, opts["method"], stats_t, stats_s)
-            displayable = True
-        else:
-            gains = _wb_gains(x, opts)
-            op = (_balance_block, gains)
-            displayable = True
-        out_dtype = dtype or (str(x.dtype) if in_int and displayable else "float32")
-        check_option(out_dtype, _OUT_DTYPES, "output dtype")
-        if out_dtype != "float32" and not displayable:
-            raise InvalidInputError(f"{opts.get('to')} values are not in [0, 1]: use float32")
-        comp = _out_compression(compression, meta, out_dtype) if out_kind == "tiff" else None
-        tmp = _temp(dst_p)
-        try:
-            if out_kind == "zarr":
-                clipped = _write_zarr(tmp, x, op, out_dtype, chunk)
+    opened: list[Any] = []  # the TIFF stores this run opens: closed when it ends
+    try:
+        x = _open_lazy(src_p, chunk, opened)
+        meta = None
+        if _kind(src_p) == "tiff":
+            try:
+                meta = _tiff_meta(src_p)
+            except ImageformError:
+                raise
+            except Exception as exc:  # pragma: no cover - open_lazy read it already
+                raise InvalidInputError(f"cannot read {src_p}: {str(exc)[:120]}") from exc
+        if tile is None:
+            tile = meta.tile if meta is not None and meta.tile and chunk % meta.tile == 0 else 256
+            tile = min(tile, chunk)
+        _check_tile(chunk, tile)
+        shape0 = (int(x.shape[0]), int(x.shape[1]))
+        levels = _pyramid_levels(pyramid, meta, shape0, tile) if out_kind == "tiff" else (shape0,)
+        for k in range(1, len(levels)):
+            f = _factor(levels[k - 1], levels[k])
+            if chunk % f:
+                raise InvalidInputError(
+                    f"expected chunk a multiple of the pyramid factor {f} (level {k}), got {chunk}"
+                )
+        in_int = x.dtype in (np.uint8, np.uint16)
+        gains: np.ndarray | None = None
+        where: str | None = None
+        workers = num_workers or os.cpu_count() or 1
+        with dask.config.set(scheduler="threads", num_workers=workers):
+            if cmd == "convert":
+                s, d = opts["from"], opts["to"]
+                params = {k: opts[k] for k in ("white",) if opts.get(k) is not None}
+                op: tuple[Any, ...] = (_convert_block, s, d, params)
+                displayable = d in DISPLAYABLE_SPACES
+            elif cmd == "stain_normalize":
+                stats_t, stats_s, where = _stain_stats(x, opts, src_p, meta, stats_from)
+                op = (_stain_block, opts["method"], stats_t, stats_s)
+                displayable = True
             else:
-                spec = _TiffSpec(levels, tile, str(comp), workers, meta)
-                clipped = _write_tiff(tmp, x, op, out_dtype, chunk, spec)
-            if dst_p.exists():
-                shutil.rmtree(dst_p) if dst_p.is_dir() else dst_p.unlink()
-            os.replace(tmp, dst_p)
-        except BaseException:
-            shutil.rmtree(tmp, ignore_errors=True) if tmp.is_dir() else tmp.unlink(missing_ok=True)
-            raise
-    return ChunkedResult(
-        dst_p,
-        tuple(int(v) for v in x.shape),
-        out_dtype,
-        chunk,
-        clipped if out_dtype != "float32" else 0,
-        None if gains is None else tuple(float(g) for g in gains),
-        time.perf_counter() - t0,
-        levels,
-        comp,
-        where,
-    )
+                gains = _wb_gains(x, opts)
+                op = (_balance_block, gains)
+                displayable = True
+            out_dtype = dtype or (str(x.dtype) if in_int and displayable else "float32")
+            check_option(out_dtype, _OUT_DTYPES, "output dtype")
+            if out_dtype != "float32" and not displayable:
+                raise InvalidInputError(f"{opts.get('to')} values are not in [0, 1]: use float32")
+            comp = _out_compression(compression, meta, out_dtype) if out_kind == "tiff" else None
+            tmp = _temp(dst_p)
+            try:
+                if out_kind == "zarr":
+                    clipped = _write_zarr(tmp, x, op, out_dtype, chunk)
+                else:
+                    spec = _TiffSpec(levels, tile, str(comp), workers, meta)
+                    clipped = _write_tiff(tmp, x, op, out_dtype, chunk, spec)
+                if dst_p.exists():
+                    shutil.rmtree(dst_p) if dst_p.is_dir() else dst_p.unlink()
+                os.replace(tmp, dst_p)
+            except BaseException:
+                if tmp.is_dir():
+                    shutil.rmtree(tmp, ignore_errors=True)
+                else:
+                    tmp.unlink(missing_ok=True)
+                raise
+        return ChunkedResult(
+            dst_p,
+            tuple(int(v) for v in x.shape),
+            out_dtype,
+            chunk,
+            clipped if out_dtype != "float32" else 0,
+            None if gains is None else tuple(float(g) for g in gains),
+            time.perf_counter() - t0,
+            levels,
+            comp,
+            where,
+        )
+    finally:
+        for store in opened:
+            store.close()
 
 
 def _check_tile(chunk: int, tile: int) -> None:
