@@ -154,3 +154,94 @@ def test_bad_inputs() -> None:
         detect_line_segments(np.zeros((10, 10)), angle_tolerance=2.0)
     with pytest.raises(InvalidInputError, match="0-255"):
         detect_line_segments(np.full((10, 10), 200.0))
+
+
+def test_principal_point_options_and_refusals() -> None:
+    R = camera_rotation(0.25, 0.5, 0.03)
+    img = render_manhattan(K, R, np.zeros(3), seed=3)
+    seg = detect_line_segments(img)
+    size = (img.shape[1], img.shape[0])
+    given = detect_vanishing_points(segments=seg, image_size=size, principal_point=(383.5, 255.5))
+    centre = detect_vanishing_points(segments=seg, image_size=size)
+    ortho = detect_vanishing_points(segments=seg, image_size=size, principal_point="orthocentre")
+    assert given.K is not None and centre.K is not None and ortho.K is not None
+    np.testing.assert_allclose(given.K, centre.K)  # the render's principal point is the centre
+    assert ortho.K[0, 0] == pytest.approx(700.0, rel=0.03)
+    assert abs(ortho.K[0, 2] - 383.5) > 0  # the orthocentre moves it
+    with pytest.raises(InvalidInputError, match="principal_point"):
+        detect_vanishing_points(segments=seg, image_size=size, principal_point="middle")
+    with pytest.raises(InvalidInputError, match="principal_point"):
+        detect_vanishing_points(segments=seg, image_size=size, principal_point=(1.0, np.nan))
+    with pytest.raises(InvalidInputError, match="principal_point"):
+        detect_vanishing_points(segments=seg, image_size=size, principal_point=(1, 2, 3))
+    with pytest.raises(InvalidInputError, match="orthogonality_tolerance"):
+        detect_vanishing_points(segments=seg, image_size=size, orthogonality_tolerance=0.0)
+
+
+def test_non_orthogonal_third_point_is_not_a_manhattan_set() -> None:
+    """Three finite points whose directions cannot all be orthogonal for any focal length
+    with the principal point at the centre: no triplet K (the orthocentre would give one)."""
+    from imageform.geometry.vp_detection import _manhattan_K
+
+    pp = np.array([383.5, 255.5])
+    Kt = np.array([[700.0, 0, pp[0]], [0, 700.0, pp[1]], [0, 0, 1]])
+    R = camera_rotation(0.25, 0.5, 0.03)
+    vps = [vanishing_point(Kt, d, R) for d in np.eye(3)]
+    vps = [v / v[2] for v in vps]
+    diag = math.hypot(768, 512)
+    K3 = _manhattan_K(vps, [1.0, 1.0, 1.0], pp, diag, 20 * diag, math.radians(3.5))
+    assert K3 is not None and K3[0, 0] == pytest.approx(700.0, rel=1e-6)
+    bad = vps[:2] + [np.array([vps[2][0] + 300.0, vps[2][1], 1.0])]
+    assert _manhattan_K(bad, [1.0, 1.0, 1.0], pp, diag, 20 * diag, math.radians(3.5)) is None
+    # a pair: f from f^2 = -(v1 - p).(v2 - p) exactly
+    K2 = _manhattan_K(vps[:2], [1.0, 1.0], pp, diag, 20 * diag, math.radians(3.5))
+    a, b = vps[0][:2] - pp, vps[1][:2] - pp
+    assert K2 is not None and K2[0, 0] == pytest.approx(math.sqrt(-a @ b), rel=1e-6)
+
+
+def test_two_horizontal_points_give_the_horizon() -> None:
+    """A level camera looking at a floor grid: both points horizontal; the vertical is their
+    cross product and the horizon is level through them (vertical index None)."""
+    R = camera_rotation(0.3, 0.5, 0.0)
+    seg_pts = []
+    for d in (np.array([1.0, 0, 0]), np.array([0, 0, 1.0])):
+        v = vanishing_point(K, d, R)
+        v = v[:2] / v[2]
+        for t in np.linspace(-300, 300, 12):
+            p0 = np.array([383.5 + t, 400.0 + 0.1 * t])
+            p1 = p0 + 0.3 * (v - p0)
+            seg_pts.append([p0, p1])
+    from imageform.geometry import LineSegments
+
+    n = len(seg_pts)
+    seg = LineSegments(np.array(seg_pts), np.ones(n), np.full(n, -10.0))
+    res = detect_vanishing_points(segments=seg, image_size=(768, 512))
+    assert res.K is not None and len(res.vanishing_points) == 2
+    assert res.vertical is None
+    truth = horizon_line(K, R)
+    for u in (0.0, 383.5, 767.0):
+        assert _row_at(res.horizon, u) == pytest.approx(_row_at(truth, u), abs=1.0)
+
+
+def test_focal_length_on_real_checkerboard_photographs(shared_data: Path) -> None:
+    """Real photographs with a known camera (OpenCV's left*.jpg, f = 536.07 px after
+    undistortion): focal length within 8 % with the principal point at the centre and
+    within 3 % with the calibrated one, on four views (all 13: benchmarks/check_vp_real.py,
+    median 6.5 % and 3.6 %)."""
+    from PIL import Image
+
+    from imageform.geometry import undistort_image
+    from imageform.geometry.distortion import BrownConrady
+
+    Kc = np.array([[536.07345314, 0, 342.37046827], [0, 536.01636274, 235.53687064], [0, 0, 1]])
+    D = np.array([-0.26509039, -0.0467422, 0.00183302, -0.00031469, 0.25231221])
+    for name in ("left01.jpg", "left03.jpg", "left04.jpg", "left14.jpg"):
+        img = np.asarray(Image.open(shared_data / "opencv-left" / name).convert("L"))
+        und = undistort_image(img, Kc, BrownConrady.from_opencv(D), keep_dtype=True)
+        seg = detect_line_segments(und)
+        size = (und.shape[1], und.shape[0])
+        centre = detect_vanishing_points(segments=seg, image_size=size)
+        calib = detect_vanishing_points(segments=seg, image_size=size, principal_point=Kc[:2, 2])
+        assert centre.K is not None and calib.K is not None
+        assert abs(centre.K[0, 0] / 536.07 - 1) < 0.08, (name, centre.K[0, 0])
+        assert abs(calib.K[0, 0] / 536.07 - 1) < 0.03, (name, calib.K[0, 0])
