@@ -276,6 +276,7 @@ EXCLUDED: dict[str, str] = {
     "solve_pnp": "estimation, NumPy-only by design",
     "solve_pnp_ransac": "estimation, NumPy-only by design",
     "triangulate_points": "estimation, NumPy-only by design",
+    "srgb8_to_lab": "8-bit tables, NumPy uint8 only by design (convert takes other arrays)",
     "find_homography": "robust estimation (RANSAC + LM), NumPy-only by design",
     "find_fundamental_matrix": "robust estimation (RANSAC + LM), NumPy-only by design",
     "find_essential_matrix": "robust estimation (RANSAC + LM), NumPy-only by design",

@@ -269,3 +269,59 @@ def test_int_bilinear_rejects() -> None:
         demosaic(np.zeros((1, 8), np.uint8), "RGGB", "bilinear", keep_dtype=True)
     f = demosaic(np.zeros((8, 8), np.float32), "RGGB", "bilinear", keep_dtype=True)
     assert f.dtype == np.float32
+
+
+# --- srgb8_to_lab: float Lab of 8-bit sRGB from the tables ----------------------------------
+
+
+def test_srgb8_to_lab_all_colours_within_0p09() -> None:
+    from imageform.color import srgb8_to_lab
+    from imageform.color.convert import _lab_tables, _srgb8_to_lab_numpy
+
+    ours = srgb8_to_lab(CUBE)
+    assert ours.dtype == np.float32 and ours.shape == CUBE.shape
+    ref = convert(CUBE.astype(np.float64) / 255.0, "srgb", "lab")
+    de = delta_e_ciede2000(ours.astype(np.float64), ref)
+    assert float(de.max()) <= 0.09 and float(de.mean()) <= 0.004  # measured 0.087, 0.0035
+    m = _lab_tables("srgb", 2)
+    assert m is not None
+    np.testing.assert_allclose(_srgb8_to_lab_numpy(CUBE, m), ours, atol=2e-4, rtol=0)
+
+
+def test_srgb8_to_lab_published_values_out_and_fallbacks(monkeypatch: pytest.MonkeyPatch) -> None:
+    from imageform.color import srgb8_to_lab
+
+    x = np.zeros((70, 70, 3), np.uint8)
+    x[0, 0] = (255, 0, 0)  # L* a* b* = 53.24, 80.09, 67.20 (IEC 61966-2-1, D65, CIE 15)
+    x[0, 1] = (255, 255, 255)
+    lab = srgb8_to_lab(x)
+    np.testing.assert_allclose(lab[0, 0], [53.24, 80.09, 67.20], atol=0.02)
+    np.testing.assert_allclose(lab[0, 1], [100.0, 0.0, 0.0], atol=0.01)
+    np.testing.assert_allclose(lab[0, 2], [0.0, 0.0, 0.0], atol=1e-6)
+    out = np.empty(x.shape, np.float32)
+    assert srgb8_to_lab(x, out=out) is out
+    np.testing.assert_array_equal(out, lab)
+    # a warmer white (D50): t leaves the table, convert runs (exact)
+    d50 = srgb8_to_lab(x, white="D50")
+    np.testing.assert_allclose(d50, convert(x, "srgb", "lab", white="D50"), atol=1e-6)
+    monkeypatch.setenv("IMAGEFORM_DISABLE_NUMBA", "1")
+    np.testing.assert_allclose(srgb8_to_lab(x), lab, atol=2e-4)
+
+
+def test_srgb8_to_lab_refusals() -> None:
+    from imageform.color import srgb8_to_lab
+
+    x = np.zeros((4, 4, 3), np.uint8)
+    with pytest.raises(InvalidInputError, match="uint8"):
+        srgb8_to_lab(x.astype(np.float32))
+    with pytest.raises(InvalidInputError, match="uint8"):
+        srgb8_to_lab([[1, 2, 3]])
+    with pytest.raises(InvalidInputError, match=r"\(\.\.\., 3\)"):
+        srgb8_to_lab(np.zeros((4, 4), np.uint8))
+    with pytest.raises(InvalidInputError, match="dtype float32"):
+        srgb8_to_lab(x, out=np.empty((4, 4, 3), np.float64))
+    with pytest.raises(InvalidInputError, match="shape"):
+        srgb8_to_lab(x, out=np.empty((4, 3, 3), np.float32))
+    before = x.copy()
+    srgb8_to_lab(x)
+    np.testing.assert_array_equal(x, before)

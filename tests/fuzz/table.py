@@ -113,6 +113,7 @@ VALID: dict[str, C | Skip] = {
     "imageform.color.cmyk_to_cmy": call(cmyk=np.full((4, 4), 0.25)),
     "imageform.color.cmyk_to_srgb": call(cmyk=np.full((4, 4), 0.25)),
     "imageform.color.convert": call(image=V("rgb"), src="srgb", dst="lab"),
+    "imageform.color.srgb8_to_lab": call(V("rgb_u8")),
     "imageform.color.convert.Edge": Skip(
         "a graph edge of the colour-conversion registry (internal record)"
     ),

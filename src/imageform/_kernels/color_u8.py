@@ -25,9 +25,9 @@ from typing import Any
 import numba as nb
 import numpy as np
 
-from imageform._kernels.jit import njit
+from imageform._kernels.jit import njit, parallel_pays
 
-__all__ = ["DECODE_LUT", "srgb8_to_hsv8", "srgb8_to_lab8"]
+__all__ = ["DECODE_LUT", "srgb8_to_hsv8", "srgb8_to_lab8", "srgb8_to_lab_f32"]
 
 _F32 = np.float32
 #: Pixels per parallel work item.
@@ -73,14 +73,19 @@ L_TABLE: np.ndarray = np.clip(
 ).astype(np.uint8)
 
 
-def xyz_tables(m: np.ndarray) -> np.ndarray:
+#: Extra fixed-point bits of the float Lab path's tables (:func:`srgb8_to_lab_f32`): each
+#: entry rounded to 2**-24, the sum once to the f table's 2**-16 grid.
+FINE_BITS = 8
+
+
+def xyz_tables(m: np.ndarray, extra_bits: int = 0) -> np.ndarray:
     """Build the uint32 (3 * 3 * 256,) fixed-point table of an RGB->XYZ matrix ``m``.
 
     Entry ``768 i + 256 j + v`` is ``round(m[i, j] decode(v) SCALE)`` (negative entries,
     which no RGB->XYZ matrix has, clipped to 0), so that ``X_i = sum_j T[768 i + 256 j + v_j]``
     is the fixed-point linear XYZ / white of a pixel.
     """
-    t = m[:, :, None] * DECODE_LUT.astype(np.float64)[None, None, :] * SCALE
+    t = m[:, :, None] * DECODE_LUT.astype(np.float64)[None, None, :] * (SCALE << extra_bits)
     return np.clip(np.rint(t), 0, None).astype(np.uint32).reshape(-1)
 
 
@@ -115,6 +120,34 @@ def _lab8(src, dst, tx, tab, lt):  # type: ignore[no-untyped-def]
         lo = c * _BLOCK
         hi = min(n, lo + _BLOCK)
         _lab8_serial(src[3 * lo : 3 * hi], dst[3 * lo : 3 * hi], tx, tab, lt)
+
+
+@njit(**_JIT)
+def _labf_serial(src, dst, tx, tab):  # type: ignore[no-untyped-def]
+    # as _lab8_serial with FINE_BITS more bits per table entry (one rounding, at the sum), and
+    # the float result kept (no rounding to lab8 codes)
+    top = np.uint32(tab.shape[0] - 1)
+    half = np.uint32(1 << (FINE_BITS - 1))
+    sh = np.uint32(FINE_BITS)
+    for i in range(src.shape[0] // 3):
+        r = np.uint32(src[3 * i])
+        g = np.uint32(src[3 * i + 1]) + np.uint32(256)
+        bl = np.uint32(src[3 * i + 2]) + np.uint32(512)
+        fx = tab[min((tx[r] + tx[g] + tx[bl] + half) >> sh, top)]
+        fy = tab[min((tx[768 + r] + tx[768 + g] + tx[768 + bl] + half) >> sh, top)]
+        fz = tab[min((tx[1536 + r] + tx[1536 + g] + tx[1536 + bl] + half) >> sh, top)]
+        dst[3 * i] = _F32(116) * fy - _F32(16)
+        dst[3 * i + 1] = _F32(500) * (fx - fy)
+        dst[3 * i + 2] = _F32(200) * (fy - fz)
+
+
+@njit(parallel=True)
+def _labf(src, dst, tx, tab):  # type: ignore[no-untyped-def]
+    n = src.shape[0] // 3
+    for c in nb.prange((n + _BLOCK - 1) // _BLOCK):
+        lo = c * _BLOCK
+        hi = min(n, lo + _BLOCK)
+        _labf_serial(src[3 * lo : 3 * hi], dst[3 * lo : 3 * hi], tx, tab)
 
 
 @njit(**_JIT)
@@ -162,14 +195,25 @@ def srgb8_to_lab8(image: np.ndarray, m: np.ndarray, out: np.ndarray | None = Non
     ``out`` (C-contiguous uint8 of the image's shape, checked by the caller) is written in place.
     """
     src, res = _flat_out(image, out)
-    run = _lab8 if src.size // 3 >= PARALLEL_MIN_PIXELS else _lab8_serial
+    run = _lab8 if parallel_pays(src.size // 3, PARALLEL_MIN_PIXELS) else _lab8_serial
     run(src, res.reshape(-1), xyz_tables(m), F_TABLE, L_TABLE)
     return res
+
+
+def srgb8_to_lab_f32(image: np.ndarray, m: np.ndarray, out: np.ndarray) -> np.ndarray:
+    """uint8 sRGB (..., 3) -> float32 Lab from the tables of :func:`srgb8_to_lab8`, unrounded.
+
+    ``out``: C-contiguous float32 of the image's shape (checked by the caller).
+    """
+    src = np.ascontiguousarray(image).reshape(-1)
+    run = _labf if parallel_pays(src.size // 3, PARALLEL_MIN_PIXELS) else _labf_serial
+    run(src, out.reshape(-1), xyz_tables(m, FINE_BITS), F_TABLE)
+    return out
 
 
 def srgb8_to_hsv8(image: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
     """uint8 sRGB (..., 3) -> uint8 HSV (H/2 in [0, 180), 255 S, V), as ``COLOR_RGB2HSV``."""
     src, res = _flat_out(image, out)
-    run = _hsv8 if src.size // 3 >= PARALLEL_MIN_PIXELS else _hsv8_serial
+    run = _hsv8 if parallel_pays(src.size // 3, PARALLEL_MIN_PIXELS) else _hsv8_serial
     run(src, res.reshape(-1))
     return res

@@ -13,7 +13,7 @@ import numpy as np
 from numba import prange
 
 from imageform._kernels.demosaic_common import crop, phase_masks, shift
-from imageform._kernels.jit import njit, serial_twin
+from imageform._kernels.jit import njit, parallel_pays, serial_twin
 
 __all__ = ["RADIUS", "bilinear_int_numba", "bilinear_int_numpy", "bilinear_numba", "bilinear_numpy"]
 
@@ -270,7 +270,7 @@ def bilinear_int_numba(
     """
     h, w = raw.shape
     if parallel is None:
-        parallel = h * w >= PARALLEL_MIN_PIXELS
+        parallel = parallel_pays(h * w, PARALLEL_MIN_PIXELS)
     (_int_rows if parallel else _int_rows_serial)(raw, ry, rx, out, out.reshape(-1), w // 2 - 1)
     return out
 

@@ -36,7 +36,14 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any, Literal
 
-__all__ = ["cache_location", "configure_cache", "njit", "serial_twin", "user_cache_dir"]
+__all__ = [
+    "cache_location",
+    "configure_cache",
+    "njit",
+    "parallel_pays",
+    "serial_twin",
+    "user_cache_dir",
+]
 
 #: Where :func:`configure_cache` put the cache (see :func:`cache_location`).
 _HERE = Path(__file__).resolve().parent
@@ -153,3 +160,13 @@ def serial_twin(kernel: Any, /, **options: Any) -> Any:
     twin.__kwdefaults__ = fn.__kwdefaults__
     options.pop("parallel", None)
     return njit(twin, **options)
+
+
+def parallel_pays(n: int, threshold: int) -> bool:
+    """Whether to run the parallel kernel for ``n`` items rather than its serial twin.
+
+    True when ``n`` reaches ``threshold`` and numba's pool has more than one thread: with one
+    thread the parallel kernel only adds the pool's scheduling (a 1 MP uint8 HSV conversion:
+    1.005 ms against 0.954 ms serially).
+    """
+    return n >= threshold and numba.get_num_threads() > 1

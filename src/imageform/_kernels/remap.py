@@ -64,7 +64,7 @@ from numba import prange, types
 from numba.core import cgutils
 from numba.extending import intrinsic, overload
 
-from imageform._kernels.jit import njit, serial_twin
+from imageform._kernels.jit import njit, parallel_pays, serial_twin
 
 __all__ = [
     "PARALLEL_MIN_SAMPLES",
@@ -683,7 +683,7 @@ PARALLEL_MIN_SAMPLES = 1 << 14
 
 def pick(kernel: str, n_samples: int) -> object:
     """Return the parallel or the serial kernel ``kernel`` for ``n_samples`` output samples."""
-    serial = n_samples < PARALLEL_MIN_SAMPLES
+    serial = not parallel_pays(n_samples, PARALLEL_MIN_SAMPLES)
     if kernel == "remap":
         return remap_bilinear_serial if serial else remap_bilinear
     return undistort_brown_conrady_serial if serial else undistort_brown_conrady

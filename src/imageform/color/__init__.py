@@ -59,6 +59,7 @@ from imageform.color.convert import (
     convert,
     path,
     space_name,
+    srgb8_to_lab,
 )
 from imageform.color.cvd import (
     CVD_DEFICIENCIES,
@@ -306,6 +307,7 @@ __all__ = [
     "simulate_cvd",
     "space_name",
     "spectral_locus",
+    "srgb8_to_lab",
     "srgb_to_bgr",
     "srgb_to_cmy",
     "srgb_to_cmyk",

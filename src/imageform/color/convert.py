@@ -61,7 +61,7 @@ from .rgb_spaces import RGB_SPACES, _apply_matrix, rgb_to_xyz_matrix, xyz_to_rgb
 from .transfer import _decode_clean, _encode_clean
 from .whitepoints import resolve_white
 
-__all__ = ["EDGES", "SPACES", "Edge", "convert", "path", "space_name"]
+__all__ = ["EDGES", "SPACES", "Edge", "convert", "path", "space_name", "srgb8_to_lab"]
 
 Fn = Callable[[Any, Any, dict[str, Any]], Any]
 
@@ -426,3 +426,117 @@ def _fast_path(
     from imageform.color import _fast
 
     return _fast.dispatch(image, s, d, p, out=out, enc8=enc8)
+
+
+def _lab_tables(white: Any, observer: Any) -> np.ndarray | None:
+    """``RGB->XYZ / white`` of sRGB for ``white``; None when t may leave the f table."""
+    from imageform._kernels import color_u8
+
+    w = resolve_white(white, observer=observer)
+    m = rgb_to_xyz_matrix("srgb") / w[:, None]
+    if m.sum(axis=1).max() > 1.0 + 4.0 / color_u8.SCALE:
+        return None  # X / Xn above the table (a white other than sRGB's): the float path
+    return m
+
+
+def _srgb8_to_lab_numpy(image: np.ndarray, m: np.ndarray) -> np.ndarray:
+    """NumPy twin of the table kernel (:func:`imageform._kernels.color_u8.srgb8_to_lab_f32`)."""
+    from imageform._kernels import color_u8 as c8
+
+    tx = c8.xyz_tables(m, c8.FINE_BITS).reshape(3, 3, 256).astype(np.int64)
+    v = image.astype(np.intp)
+    half, top = 1 << (c8.FINE_BITS - 1), c8.F_TABLE.shape[0] - 1
+    f = [
+        c8.F_TABLE[
+            np.minimum(
+                (tx[i, 0][v[..., 0]] + tx[i, 1][v[..., 1]] + tx[i, 2][v[..., 2]] + half)
+                >> c8.FINE_BITS,
+                top,
+            )
+        ]
+        for i in range(3)
+    ]
+    out = np.empty(image.shape, np.float32)
+    out[..., 0] = np.float32(116) * f[1] - np.float32(16)
+    out[..., 1] = np.float32(500) * (f[0] - f[1])
+    out[..., 2] = np.float32(200) * (f[1] - f[2])
+    return out
+
+
+def srgb8_to_lab(
+    image: object, *, white: Any = None, observer: Any = 2, out: Any = None
+) -> np.ndarray:
+    r"""Return CIELAB (float32) of an 8-bit sRGB image, from tables (fast, unrounded).
+
+    The fast route for 8-bit images. Each code value's linear light times the RGB->XYZ
+    matrix over the white is tabulated in fixed point (2\ :sup:`-24`); per pixel the three
+    sums index a table of the CIELAB function :math:`f(t)` sampled every 2\ :sup:`-16`
+    (:math:`f(t) = t^{1/3}` above :math:`(6/29)^3`, else :math:`t / (3 (6/29)^2) + 4/29`;
+    CIE 15:2018, eq. 8.3), and
+
+    .. math:: L^* = 116 f(Y/Y_n) - 16,\quad a^* = 500 (f(X/X_n) - f(Y/Y_n)),\quad
+              b^* = 200 (f(Y/Y_n) - f(Z/Z_n)).
+
+    Over all 2\ :sup:`24` colours the result is within 0.087 CIEDE2000 of the float64
+    formulas (mean 0.0035; tested), against 0.959 for OpenCV's 8-bit encoding
+    (``convert(..., dtype="uint8")``, rounded to codes) and 3.31 for OpenCV's own 8-bit
+    ``cvtColor``; :func:`convert` on a uint8 image is exact to 2e-4 and about 4 times
+    slower. Speed: ``benchmarks/bench_8bit.py``.
+
+    Parameters
+    ----------
+    image : numpy.ndarray of uint8, shape (..., 3)
+        sRGB code values (IEC 61966-2-1).
+    white : str or array_like, optional
+        Reference white of Lab; default sRGB's own (D65 as IEC 61966-2-1 gives it), as
+        :func:`convert`'s. A white under which a colour's X / Xn can exceed 1 (another
+        D65 tabulation, a warmer white such as D50) runs :func:`convert` instead.
+    observer : {2, 10}
+        Standard observer of a named white.
+    out : numpy.ndarray of float32, optional
+        Preallocated result of the image's shape (C-contiguous, writeable, not overlapping
+        the image); returned.
+
+    Returns
+    -------
+    numpy.ndarray of float32, shape (..., 3)
+        L* in [0, 100], a*, b*.
+
+    Raises
+    ------
+    InvalidInputError
+        If ``image`` is not a uint8 array of shape (..., 3), or ``out`` does not fit.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from imageform.color import srgb8_to_lab
+    >>> srgb8_to_lab(np.array([[255, 0, 0], [255, 255, 255]], np.uint8)).round(1) + 0.0
+    array([[ 53.2,  80.1,  67.2],
+           [100. ,   0. ,   0. ]], dtype=float32)
+    """
+    if not isinstance(image, np.ndarray) or image.dtype != np.uint8:
+        raise InvalidInputError(
+            "expected a NumPy uint8 sRGB image (use convert for other arrays), got "
+            + describe(image)
+        )
+    if image.ndim < 1 or image.shape[-1] != 3:
+        raise InvalidInputError(f"expected an image of shape (..., 3), got {image.shape}")
+    if out is not None:
+        _check_out(out, image.shape, np.float32, image)
+    white = "srgb" if white is None else white
+    m = _lab_tables(white, observer)
+    if m is None:
+        res = np.asarray(convert(image, "srgb", "lab", white=white, observer=observer))
+        res = res.astype(np.float32, copy=False)
+    elif use_numba(image, min_size=1):
+        from imageform._kernels import color_u8
+
+        buf = out if out is not None else np.empty(image.shape, np.float32)
+        return color_u8.srgb8_to_lab_f32(image, m, buf)  # writes into buf
+    else:
+        res = _srgb8_to_lab_numpy(image, m)
+    if out is None:
+        return res
+    out[...] = res
+    return out
