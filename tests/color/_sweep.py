@@ -211,6 +211,7 @@ def targets() -> list[Target]:
         dst_white="D50",
     )
     add("convert", C.convert, image=RGB, src="srgb", dst="lab")
+    add("srgb8_to_lab", C.srgb8_to_lab, image=np.array([[10, 128, 200], [0, 0, 0]], np.uint8))
     add("cvd_matrix", C.cvd_matrix, deficiency="deutan")
     add("machado_matrix", C.machado_matrix, deficiency="deutan")
     for n in ("delta_e", "delta_e_cie76", "delta_e_cie94", "delta_e_ciede2000", "delta_e_cmc"):
