@@ -230,7 +230,7 @@ def _principal_point(value: str | ArrayLike) -> tuple[str, FloatArray | None]:
         if value == "orthocentre":
             return "orthocentre", None
         raise InvalidInputError(
-            f"unknown principal_point {value!r}; valid: 'centre', 'orthocentre' or (u, v)"
+            f"unknown principal_point {describe(value)}; valid: 'centre', 'orthocentre' or (u, v)"
         )
     try:
         pp = np.asarray(value, dtype=np.float64)
