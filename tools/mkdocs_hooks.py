@@ -75,6 +75,7 @@ BENCH_SCRIPTS: dict[str, str] = {
     "twoview": "benchmarks/bench_twoview.py",
     "vision": "benchmarks/bench_vision.py",
     "vp-lsd": "benchmarks/check_vp_lsd.py",
+    "vp-manhattan": "benchmarks/check_vp_manhattan.py",
     "vp-real": "benchmarks/check_vp_real.py",
     "wsi": "benchmarks/bench_wsi.py",
 }

@@ -245,3 +245,43 @@ def test_focal_length_on_real_checkerboard_photographs(shared_data: Path) -> Non
         assert centre.K is not None and calib.K is not None
         assert abs(centre.K[0, 0] / 536.07 - 1) < 0.08, (name, centre.K[0, 0])
         assert abs(calib.K[0, 0] / 536.07 - 1) < 0.03, (name, calib.K[0, 0])
+
+
+def test_horizon_through_the_horizontal_points_when_the_principal_point_is_off() -> None:
+    """The horizon does not move with K's assumed principal point: a camera whose principal
+    point is (-12, +12) px from the centre (York Urban's is about that) gives the horizon
+    within 1.5 px; from K alone (the centre assumed) it would be about 12 px off."""
+    Ko = np.array([[700.0, 0.0, 371.5], [0.0, 700.0, 267.5], [0.0, 0.0, 1.0]])
+    R = camera_rotation(0.25, 0.5, 0.03)
+    img = render_manhattan(Ko, R, np.zeros(3), seed=3)
+    res = detect_vanishing_points(img)
+    assert res.horizon is not None and res.K is not None
+    truth = horizon_line(Ko, R)
+    for u in (0.0, 383.5, 767.0):
+        assert _row_at(res.horizon, u) == pytest.approx(_row_at(truth, u), abs=1.5)
+    from_k = horizon_line(res.K, None, np.linalg.solve(res.K, res.vanishing_points[res.vertical]))
+    assert abs(_row_at(from_k, 383.5) - _row_at(truth, 383.5)) > 5  # what anchoring fixed
+
+
+def test_level_camera_before_a_wall_gives_the_horizon_without_K() -> None:
+    """Verticals (parallel in the image: their point at infinity) and one horizontal
+    direction: no focal length can be had, the horizon can (perpendicular to the verticals,
+    through the horizontal point)."""
+    R = camera_rotation(0.0, 0.5, 0.0)
+    segs = []
+    rng = np.random.default_rng(0)
+    for d in (np.array([1.0, 0, 0]), np.array([0, 1.0, 0])):
+        for _ in range(25):
+            p0 = R.T @ np.array([rng.uniform(-4, 4), rng.uniform(-3, 3), rng.uniform(6, 14)])
+            X = np.stack([p0, p0 + 2.0 * d])
+            q = (K @ (R @ X.T)).T
+            segs.append(q[:, :2] / q[:, 2:])
+    from imageform.geometry import LineSegments
+
+    n = len(segs)
+    seg = LineSegments(np.array(segs), np.ones(n), np.full(n, -10.0))
+    res = detect_vanishing_points(segments=seg, image_size=(768, 512))
+    assert res.K is None and res.horizon is not None
+    truth = horizon_line(K, R)
+    for u in (0.0, 383.5, 767.0):
+        assert _row_at(res.horizon, u) == pytest.approx(_row_at(truth, u), abs=1.0)

@@ -222,6 +222,61 @@ def _manhattan_K(
     return np.array([[f, 0.0, pp[0]], [0.0, f, pp[1]], [0.0, 0.0, 1.0]])
 
 
+def _level_horizon(
+    vps: FloatArray, vertical: int, centre: FloatArray, far: float
+) -> FloatArray | None:
+    """Return the horizon without K, when the vertical point is at infinity (a level camera).
+
+    The horizon is the polar of the vertical point under the image of the absolute conic;
+    for a vertical point at infinity in image direction ``d`` it is perpendicular to ``d``
+    whatever the focal length (square pixels, zero skew). Through a finite horizontal point
+    that fixes it: the wall seen by a level camera, with verticals and one horizontal
+    direction only. None otherwise.
+    """
+    v = vps[vertical]
+    if v[2] != 0 and np.hypot(*(v[:2] / v[2] - centre)) < far:
+        return None  # a finite vertical point: the horizon needs the focal length
+    d = v[:2] - centre * v[2]
+    nd = math.hypot(d[0], d[1])
+    finite = [
+        p
+        for i, p in enumerate(vps)
+        if i != vertical and p[2] != 0 and np.hypot(*(p[:2] / p[2] - centre)) < far
+    ]
+    if nd == 0 or len(finite) != 1:
+        return None
+    a, b = d / nd
+    if b < 0:
+        a, b = -a, -b
+    u, w = finite[0][0] / finite[0][2], finite[0][1] / finite[0][2]
+    return np.array([a, b, -(a * u + b * w)])
+
+
+def _anchor_horizon(line: FloatArray, horizontal: list[FloatArray]) -> FloatArray:
+    """Put the horizon through the horizontal vanishing points themselves.
+
+    ``line`` is the horizon from K (``K⁻ᵀ up``), which moves with any error of K's principal
+    point (a principal point assumed at the centre but 12 px below it moves the horizon 12
+    px). The horizontal points lie on the horizon whatever K is: through two of them the
+    horizon is their join; through one (finite) it keeps ``line``'s direction. A join more
+    than 10 degrees from ``line`` (points that do not belong together) is not used.
+    """
+    if len(horizontal) >= 2:
+        join = np.cross(horizontal[0], horizontal[1])
+        n = math.hypot(join[0], join[1])
+        if n > 0:
+            join = join / n
+            if join[:2] @ line[:2] < 0:
+                join = -join
+            if join[:2] @ line[:2] > math.cos(math.radians(10.0)):
+                return np.asarray(join, dtype=np.float64)
+    finite = [v for v in horizontal if v[2] != 0]
+    if len(finite) == 1:
+        u, v = finite[0][0] / finite[0][2], finite[0][1] / finite[0][2]
+        return np.array([line[0], line[1], -(line[0] * u + line[1] * v)])
+    return line
+
+
 def _principal_point(value: str | ArrayLike) -> tuple[str, FloatArray | None]:
     """``("centre" | "orthocentre" | "given", position or None)`` from the argument."""
     if isinstance(value, str):
@@ -402,7 +457,9 @@ def detect_vanishing_points(
         k = int(np.argmax(np.abs(cand[:, 1])))
         vertical = k if k < len(vps) else None  # None: both points are horizontal
         up = cand[k] * (-1.0 if cand[k, 1] > 0 else 1.0)  # image up is -y
-        horizon = np.asarray(horizon_line(K, None, up))
+        horizon = _anchor_horizon(
+            np.asarray(horizon_line(K, None, up)), [vps[i] for i in range(len(vps)) if i != k]
+        )
     elif len(vps) >= 2:
         # without K: the vertical point is the one most in line with the image's columns
         tilt = []
@@ -410,6 +467,7 @@ def detect_vanishing_points(
             d = v[:2] - centre * v[2]
             tilt.append(abs(d[1]) / max(np.hypot(*d), 1e-300))
         vertical = int(np.argmax(tilt))
+        horizon = _level_horizon(vps, vertical, centre, far)
     finite = sum(1 for v in vps if v[2] != 0 and np.hypot(*(v[:2] - centre)) < far)
     return VanishingPointResult(
         vanishing_points=vps,
