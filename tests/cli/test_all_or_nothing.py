@@ -126,26 +126,32 @@ def _start(args: list[str], cwd: Path) -> subprocess.Popen[str]:
 def test_interrupting_simulate_mid_run_keeps_the_old_folder(
     tmp_path: Path, first_run: Path, sig: signal.Signals, delay: float
 ) -> None:
-    scene = _scene(tmp_path)
-    shutil.copytree(first_run / "out", tmp_path / "out")
-    old = {
-        p.relative_to(tmp_path): p.read_bytes()
-        for p in (tmp_path / "out").rglob("*")
-        if p.is_file()
-    }
-    run = _start(
-        ["simulate", "--scene", str(scene), "-o", "out", "--force", "--seed", "5"], tmp_path
-    )
-    t0 = time.monotonic()
-    while not any(".part" in p.name for p in tmp_path.iterdir()):  # the new folder is started
-        if run.poll() is not None or time.monotonic() - t0 > 120:
-            pytest.fail(f"no temporary folder appeared (exit {run.returncode})")
-        time.sleep(0.01)
-    time.sleep(delay)
-    run.send_signal(sig)
-    _, err = run.communicate(timeout=120)
-    if run.returncode == 0:  # finished before the signal landed: nothing to check
-        pytest.skip("the run finished before the signal")
+    # a run that finishes before the signal lands (a fast machine) is tried again with half
+    # the delay, down to 0 (the signal as soon as the new folder appears): never skipped
+    for attempt, wait in enumerate((delay, delay / 2, delay / 4, 0.0)):
+        work = tmp_path / f"try{attempt}"
+        work.mkdir()
+        scene = _scene(work)
+        shutil.copytree(first_run / "out", work / "out")
+        old = {
+            p.relative_to(work): p.read_bytes() for p in (work / "out").rglob("*") if p.is_file()
+        }
+        run = _start(
+            ["simulate", "--scene", str(scene), "-o", "out", "--force", "--seed", "5"], work
+        )
+        t0 = time.monotonic()
+        while not any(".part" in p.name for p in work.iterdir()):  # the new folder is started
+            if run.poll() is not None or time.monotonic() - t0 > 120:
+                pytest.fail(f"no temporary folder appeared (exit {run.returncode})")
+            time.sleep(0.01)
+        time.sleep(wait)
+        run.send_signal(sig)
+        _, err = run.communicate(timeout=120)
+        if run.returncode != 0:
+            break
+    else:
+        pytest.fail("every run finished before the signal, even sent at once")
+    tmp_path = work
     assert run.returncode == 130, err
     assert err.strip().splitlines()[-1] == "imageform: interrupted; nothing new was written"
     assert "Traceback" not in err
