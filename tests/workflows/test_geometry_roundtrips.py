@@ -250,3 +250,11 @@ def test_vanishing_honours_distortion_and_pose(tmp_path: Path) -> None:
     assert read_image(tmp_path / "ov.png").shape == (512, 768, 3)
     q = _cli("vanishing", str(img), "--camera", str(pinhole))
     assert horizon_error(q) > 20.0
+    # the camera file's principal point for the estimated K: the focal length alone is fitted
+    c = _cli("vanishing", str(img), "--camera", str(full), "--principal-point", "camera")
+    assert c["principal_point_error_px"] == pytest.approx(0.0, abs=1e-9)
+    assert abs(c["focal_error_px"]) < 5
+    err = io.StringIO()
+    with contextlib.redirect_stderr(err):
+        assert main(["vanishing", str(img), "--principal-point", "camera"]) == 1
+    assert "--principal-point camera needs --camera" in err.getvalue()

@@ -1,10 +1,11 @@
 """``imageform vanishing``: vanishing points, K and the horizon of a photograph.
 
 Without a camera file, K is estimated from the orthogonal triplet of vanishing points
-(Caprile & Torre 1990). With ``--camera`` the file's camera is the truth: the image is
-undistorted with its model first (lines are straight only without distortion), the vertical
-direction and the horizon come from its K, and the K estimated from the vanishing points is
-reported with its error against the file's.
+(principal point at the image centre by default, ``--principal-point``). With ``--camera``
+the file's camera is the truth: the image is undistorted with its model first (lines are
+straight only without distortion), the vertical direction and the horizon come from its K,
+and the K estimated from the vanishing points is reported with its error against the file's
+(``--principal-point camera``: with the file's principal point, the focal length alone).
 """
 
 from __future__ import annotations
@@ -33,6 +34,13 @@ class VanishingOptions(ImageIn):
         input=True,
     )
     seed: int = option(0, help="RANSAC seed (results are reproducible).", minimum=0)
+    principal_point: str = option(
+        "centre",
+        choices=("centre", "orthocentre", "camera"),
+        help="Where the estimated K's principal point is: the image centre, the orthocentre "
+        "of three finite vanishing points, or the camera file's (needs --camera; the focal "
+        "length is then estimated alone).",
+    )
 
 
 def _directions(K: Any, vps: Any) -> Any:
@@ -125,7 +133,13 @@ def vanishing(run: Run, opts: VanishingOptions, *, out: Path | None, image: Path
                 f"note: {image} was undistorted with the {cf.distortion_model} model of "
                 f"{opts.camera} before finding lines"
             )
-    res = detect_vanishing_points(arr, rng=opts.seed)
+    if opts.principal_point == "camera":
+        if cf is None:
+            raise InvalidInputError("--principal-point camera needs --camera FILE")
+        pp: Any = np.asarray(cf.camera.K, dtype=np.float64)[:2, 2]
+    else:
+        pp = opts.principal_point
+    res = detect_vanishing_points(arr, rng=opts.seed, principal_point=pp)
     K_est = res.K
     summary: dict[str, Any] = {
         "image": image,
