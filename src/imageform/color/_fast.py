@@ -107,11 +107,9 @@ def _dispatch8(
 
     if d == "hsv":
         return color_u8.srgb8_to_hsv8(image, out)
-    from imageform.color.rgb_spaces import rgb_to_xyz_matrix
-    from imageform.color.whitepoints import resolve_white
+    from imageform.color.convert import _lab_tables
 
-    w = resolve_white(p["white"], observer=p.get("observer", 2))
-    m = rgb_to_xyz_matrix("srgb") / w[:, None]
-    if m.sum(axis=1).max() > 1.0 + 4.0 / color_u8.SCALE:
+    m = _lab_tables(p["white"], p.get("observer", 2))
+    if m is None:
         return None  # X / Xn above the f table (a white other than sRGB's): the float path
     return color_u8.srgb8_to_lab8(image, m, out)
