@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["dispatch"]
+__all__ = ["dispatch", "lab_tables"]
 
 _KERNEL_PAIRS = {
     ("srgb", "lab"),
@@ -97,6 +97,23 @@ def dispatch(
     return res
 
 
+def lab_tables(white: Any, observer: Any) -> np.ndarray | None:
+    """Return ``RGB->XYZ / white`` of sRGB for the 8-bit Lab tables; None when t may leave them.
+
+    (The f table of :mod:`imageform._kernels.color_u8` ends just above t = 1: a white under
+    which sRGB's white has X / Xn above 1 + 4 / SCALE takes the float path.)
+    """
+    from imageform._kernels import color_u8
+    from imageform.color.rgb_spaces import rgb_to_xyz_matrix
+    from imageform.color.whitepoints import resolve_white
+
+    w = resolve_white(white, observer=observer)
+    m = rgb_to_xyz_matrix("srgb") / w[:, None]
+    if m.sum(axis=1).max() > 1.0 + 4.0 / color_u8.SCALE:
+        return None
+    return m
+
+
 def _dispatch8(
     image: np.ndarray, s: str, d: str, p: dict[str, Any], out: np.ndarray | None
 ) -> np.ndarray | None:
@@ -107,9 +124,7 @@ def _dispatch8(
 
     if d == "hsv":
         return color_u8.srgb8_to_hsv8(image, out)
-    from imageform.color.convert import _lab_tables
-
-    m = _lab_tables(p["white"], p.get("observer", 2))
+    m = lab_tables(p["white"], p.get("observer", 2))
     if m is None:
         return None  # X / Xn above the f table (a white other than sRGB's): the float path
     return color_u8.srgb8_to_lab8(image, m, out)

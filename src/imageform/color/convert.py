@@ -428,17 +428,6 @@ def _fast_path(
     return _fast.dispatch(image, s, d, p, out=out, enc8=enc8)
 
 
-def _lab_tables(white: Any, observer: Any) -> np.ndarray | None:
-    """``RGB->XYZ / white`` of sRGB for ``white``; None when t may leave the f table."""
-    from imageform._kernels import color_u8
-
-    w = resolve_white(white, observer=observer)
-    m = rgb_to_xyz_matrix("srgb") / w[:, None]
-    if m.sum(axis=1).max() > 1.0 + 4.0 / color_u8.SCALE:
-        return None  # X / Xn above the table (a white other than sRGB's): the float path
-    return m
-
-
 def _srgb8_to_lab_numpy(image: np.ndarray, m: np.ndarray) -> np.ndarray:
     """NumPy twin of the table kernel (:func:`imageform._kernels.color_u8.srgb8_to_lab_f32`)."""
     from imageform._kernels import color_u8 as c8
@@ -524,8 +513,10 @@ def srgb8_to_lab(
         raise InvalidInputError(f"expected an image of shape (..., 3), got {image.shape}")
     if out is not None:
         _check_out(out, image.shape, np.float32, image)
+    from imageform.color._fast import lab_tables
+
     white = "srgb" if white is None else white
-    m = _lab_tables(white, observer)
+    m = lab_tables(white, observer)
     if m is None:
         res = np.asarray(convert(image, "srgb", "lab", white=white, observer=observer))
         res = res.astype(np.float32, copy=False)
