@@ -155,6 +155,11 @@ def _ransac_candidates(
     return out
 
 
+def _is_finite(v: FloatArray, ref: FloatArray, far: float) -> bool:
+    """Whether the homogeneous point ``v`` is finite: ``w != 0`` and within ``far`` of ``ref``."""
+    return bool(v[2] != 0 and np.hypot(*(v[:2] / v[2] - ref)) < far)
+
+
 def _directions(vps: list[FloatArray], pp: FloatArray, f: FloatArray) -> FloatArray:
     """Return the unit directions ``K⁻¹ v`` of the points for each focal length in ``f``.
 
@@ -186,7 +191,7 @@ def _manhattan_K(
     points are finite, when the minimum lies at the search's ends, or when a pair stays more
     than ``tol`` (radians) from orthogonal.
     """
-    finite = [v for v in vps if v[2] != 0 and np.hypot(*(v[:2] - pp)) < far]
+    finite = [v for v in vps if _is_finite(v, pp, far)]
     if len(finite) < 2:
         return None
     pairs = list(itertools.combinations(range(len(vps)), 2))
@@ -234,15 +239,11 @@ def _level_horizon(
     direction only. None otherwise.
     """
     v = vps[vertical]
-    if v[2] != 0 and np.hypot(*(v[:2] / v[2] - centre)) < far:
+    if _is_finite(v, centre, far):
         return None  # a finite vertical point: the horizon needs the focal length
     d = v[:2] - centre * v[2]
     nd = math.hypot(d[0], d[1])
-    finite = [
-        p
-        for i, p in enumerate(vps)
-        if i != vertical and p[2] != 0 and np.hypot(*(p[:2] / p[2] - centre)) < far
-    ]
+    finite = [p for i, p in enumerate(vps) if i != vertical and _is_finite(p, centre, far)]
     if nd == 0 or len(finite) != 1:
         return None
     a, b = d / nd
@@ -303,7 +304,7 @@ def _principal_point(value: str | ArrayLike) -> tuple[str, FloatArray | None]:
 def _triplet_K(
     vps: list[FloatArray], centre: FloatArray, diag: float, far: float
 ) -> FloatArray | None:
-    finite = [v for v in vps if v[2] != 0 and np.hypot(*(v[:2] - centre)) < far]
+    finite = [v for v in vps if _is_finite(v, centre, far)]
     try:
         if len(finite) == 3:
             K = intrinsics_from_vanishing_points(*finite)
@@ -468,7 +469,7 @@ def detect_vanishing_points(
             tilt.append(abs(d[1]) / max(np.hypot(*d), 1e-300))
         vertical = int(np.argmax(tilt))
         horizon = _level_horizon(vps, vertical, centre, far)
-    finite = sum(1 for v in vps if v[2] != 0 and np.hypot(*(v[:2] - centre)) < far)
+    finite = sum(1 for v in vps if _is_finite(v, centre, far))
     return VanishingPointResult(
         vanishing_points=vps,
         labels=labels,
