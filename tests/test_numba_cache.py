@@ -18,6 +18,7 @@ import subprocess
 import sys
 import tempfile
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -28,21 +29,26 @@ from imageform._kernels import jit
 SRC = Path(__file__).resolve().parents[1] / "src"
 
 
-def test_every_kernel_is_cached() -> None:
-    """The one policy: every numba dispatcher of imageform._kernels caches (cache=True)."""
-    from numba.core.caching import NullCache
+def _kernels() -> list[tuple[str, Any]]:
+    """``("module.name", dispatcher)`` for every numba dispatcher defined in imageform._kernels."""
     from numba.core.registry import CPUDispatcher
 
-    found, uncached = 0, []
+    out = []
     for info in pkgutil.iter_modules(kernels_pkg.__path__):
         module = importlib.import_module(f"imageform._kernels.{info.name}")
         for name, value in vars(module).items():
             if isinstance(value, CPUDispatcher) and value.__module__ == module.__name__:
-                found += 1
-                if isinstance(value._cache, NullCache):  # type: ignore[attr-defined]
-                    uncached.append(f"{info.name}.{name}")
-    assert found > 90
-    assert uncached == []
+                out.append((f"{info.name}.{name}", value))
+    return out
+
+
+def test_every_kernel_is_cached() -> None:
+    """The one policy: every numba dispatcher of imageform._kernels caches (cache=True)."""
+    from numba.core.caching import NullCache
+
+    kernels = _kernels()
+    assert len(kernels) > 90
+    assert [n for n, k in kernels if isinstance(k._cache, NullCache)] == []
 
 
 def test_no_two_kernels_share_cache_files() -> None:
@@ -53,24 +59,27 @@ def test_no_two_kernels_share_cache_files() -> None:
     twin made with ``njit(...)(kernel.py_func)`` shared the parallel kernel's entries, and
     whichever compiled first was loaded for both (the parallel remap ran on one thread).
     """
-    from numba.core.registry import CPUDispatcher
-
     owner: dict[str, str] = {}
     clashes = []
-    for info in pkgutil.iter_modules(kernels_pkg.__path__):
-        module = importlib.import_module(f"imageform._kernels.{info.name}")
-        for name, value in vars(module).items():
-            if not isinstance(value, CPUDispatcher) or value.__module__ != module.__name__:
-                continue
-            cache = value._cache  # type: ignore[attr-defined]
-            if not hasattr(cache, "_cache_file") or value.py_func.__closure__:
-                continue  # closures: the entries' keys hold the closed-over values
-            index = cache._cache_file._index_name
-            if index in owner and owner[index] != f"{info.name}.{name}":
-                clashes.append((owner[index], f"{info.name}.{name}", index))
-            owner.setdefault(index, f"{info.name}.{name}")
+    for label, kernel in _kernels():
+        cache = kernel._cache
+        if not hasattr(cache, "_cache_file") or kernel.py_func.__closure__:
+            continue  # closures: the entries' keys hold the closed-over values
+        index = cache._cache_file._index_name
+        if index in owner and owner[index] != label:
+            clashes.append((owner[index], label, index))
+        owner.setdefault(index, label)
     assert len(owner) > 90
     assert clashes == []
+
+
+def _python(code: str, env: dict[str, str]) -> str:
+    """Run ``code`` in a fresh interpreter with ``env``; its stdout (a failure shows stderr)."""
+    done = subprocess.run(
+        [sys.executable, "-c", code], env=env, timeout=600, capture_output=True, text=True
+    )
+    assert done.returncode == 0, done.stdout + done.stderr[-2000:]
+    return done.stdout
 
 
 def test_serial_twin_is_its_own_kernel() -> None:
@@ -102,23 +111,14 @@ def test_serial_first_cache_keeps_the_parallel_kernel_parallel(tmp_path: Path) -
         "img = np.zeros((1, 8, 8, 1), np.uint8); m = np.zeros((8, 8, 2), np.float32)\n"
         "out = np.empty_like(img); a = np.empty(0, np.float32); k = np.empty(0, np.int32)\n"
     )
-    first = setup + "R.remap_bilinear_serial(img, m, 1.0, 0.0, out, a, k, 255.0)\n"
-    subprocess.run([sys.executable, "-c", first], env=env, check=True, timeout=600)
+    _python(setup + "R.remap_bilinear_serial(img, m, 1.0, 0.0, out, a, k, 255.0)\n", env)
     second = setup + (
         "R.remap_bilinear(img, m, 1.0, 0.0, out, a, k, 255.0)\n"
         "(cres,) = R.remap_bilinear.overloads.values()\n"
         "print(sum(R.remap_bilinear.stats.cache_hits.values()),"
         " 'do_scheduling' in cres.library.get_llvm_str())\n"
     )
-    done = subprocess.run(
-        [sys.executable, "-c", second],
-        env=env,
-        check=True,
-        timeout=600,
-        capture_output=True,
-        text=True,
-    )
-    assert done.stdout.split() == ["0", "True"], done.stdout + done.stderr[-2000:]
+    assert _python(second, env).split() == ["0", "True"]
 
 
 def test_boundscheck_compiles_are_not_cached(tmp_path: Path) -> None:
@@ -132,15 +132,7 @@ def test_boundscheck_compiles_are_not_cached(tmp_path: Path) -> None:
         "f = jit.njit(lambda x: x + 1)\n"
         "print(isinstance(f._cache, NullCache), f(1))\n"
     )
-    done = subprocess.run(
-        [sys.executable, "-c", code],
-        env=env,
-        check=True,
-        timeout=300,
-        capture_output=True,
-        text=True,
-    )
-    assert done.stdout.split() == ["True", "2"], done.stdout + done.stderr[-2000:]
+    assert _python(code, env).split() == ["True", "2"]
 
 
 def test_kernels_use_the_policy_decorator() -> None:
