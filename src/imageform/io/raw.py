@@ -18,6 +18,7 @@ DNG written with tifffile, any raw LibRaw reads (through rawpy, the optional
 
 from __future__ import annotations
 
+import importlib.util
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -305,8 +306,11 @@ def _matrix(value: Any) -> np.ndarray:
 def read_raw(path: str | Path, *, max_pixels: int | None = None) -> RawImage:
     """Read a raw file with LibRaw (rawpy): DNG, CR2, NEF, ARW, RAF (Bayer), ORF, RW2, ...
 
-    Needs the optional extra ``imageform[raw]`` (rawpy). Only Bayer sensors with a 2x2 RGB
-    tile are supported (not X-Trans, not four-colour sensors).
+    Needs the optional extra ``imageform[raw]`` (rawpy), except for a DNG as
+    :func:`write_dng` and ``imageform simulate --raw`` write it (one uncompressed CFA image),
+    which is read with tifffile when rawpy is not installed, to the same values (LibRaw's
+    ``rgb_cam`` formula included). Only Bayer sensors with a 2x2 RGB tile are supported (not
+    X-Trans, not four-colour sensors).
 
     Parameters
     ----------
@@ -338,6 +342,12 @@ def read_raw(path: str | Path, *, max_pixels: int | None = None) -> RawImage:
     p = Path(path)
     if not p.is_file():
         raise InvalidInputError(f"raw file {p} does not exist")
+    if importlib.util.find_spec("rawpy") is None:
+        # without LibRaw, a DNG as imageform writes it (one uncompressed CFA image) is read
+        # with tifffile; any other raw file needs the extra (the message says so)
+        own = _read_plain_dng(p, limit)
+        if own is not None:
+            return own
     rawpy = _rawpy()
     r = rawpy.RawPy()
     try:
@@ -408,6 +418,117 @@ def read_raw(path: str | Path, *, max_pixels: int | None = None) -> RawImage:
         xyz_to_camera=xyz_to_camera,
         camera_to_srgb=rgb_cam,
         calibration_illuminant=illum,
+        metadata=meta,
+    )
+
+
+#: sRGB (D65) to XYZ as LibRaw writes it (``LibRaw_constants::xyz_rgb``): its ``rgb_cam`` for
+#: a DNG is computed from the file's colour matrix with these values (dcraw's
+#: ``cam_xyz_coeff``), so :func:`_read_plain_dng` uses them too.
+_LIBRAW_XYZ_RGB = np.array(
+    [
+        [0.4124564, 0.3575761, 0.1804375],
+        [0.2126729, 0.7151522, 0.0721750],
+        [0.0193339, 0.1191920, 0.9503041],
+    ]
+)
+
+
+def _libraw_rgb_cam(xyz_to_camera: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    r"""Return LibRaw's ``rgb_cam`` and daylight multipliers of a colour matrix.
+
+    dcraw's ``cam_xyz_coeff``, as LibRaw computes it for a DNG:
+
+    :math:`P = C\,S` (camera RGB of each sRGB primary), each row scaled to sum 1 (the
+    reciprocal of its sum is that channel's daylight multiplier), ``rgb_cam`` = :math:`P^{-1}`.
+    """
+    cam_rgb = xyz_to_camera @ _LIBRAW_XYZ_RGB
+    sums = cam_rgb.sum(axis=1)
+    rgb_cam = np.linalg.inv(cam_rgb / sums[:, None])
+    daylight = (1.0 / sums) / (1.0 / sums[1])
+    return rgb_cam, daylight
+
+
+def _read_plain_dng(p: Path, limit: int) -> RawImage | None:
+    """Read a DNG as :func:`write_dng` writes it, with tifffile (no LibRaw needed).
+
+    One uncompressed 16-bit CFA image with a 2x2 RGB ``CFAPattern``, one black level or one
+    per photosite, ``ColorMatrix1`` and, optionally, ``AsShotNeutral``; the same
+    :class:`RawImage` as LibRaw gives (its ``rgb_cam`` by its own formula,
+    :func:`_libraw_rgb_cam`). None for anything else (compressed, cropped, linear, other
+    CFAs, other raw formats): those need LibRaw.
+    """
+    import tifffile
+
+    from imageform.io.image_io import ImageInfo, _check_pixels
+
+    try:
+        with tifffile.TiffFile(p) as tf:
+            page = tf.pages[0]
+            tags = {t.code: t.value for t in page.tags}  # type: ignore[union-attr]
+            plain = (
+                _DNG_VERSION in tags
+                and tags.get(262) == _PHOTOMETRIC_CFA
+                and tags.get(259) == 1
+                and tags.get(277, 1) == 1
+                and tags.get(258) == 16
+                and tuple(tags.get(_CFA_REPEAT_PATTERN_DIM, ())) == (2, 2)
+                and _COLOR_MATRIX_1 in tags
+                and not ({50719, 50720, 50829} & tags.keys())  # DefaultCrop*, ActiveArea
+            )
+            if not plain:
+                return None
+            info = ImageInfo(int(tags[256]), int(tags[257]), 1, "", "raw")
+            _check_pixels(p, info, limit)
+            mosaic = np.ascontiguousarray(page.asarray(), dtype=np.uint16)
+    except InvalidInputError:
+        raise
+    except Exception:  # not a TIFF, or one tifffile cannot read: LibRaw's business
+        return None
+    cfa = bytes(tags[_CFA_PATTERN])
+    if len(cfa) != 4 or sorted(cfa) != [0, 1, 1, 2]:
+        return None
+    pattern = "".join("RGB"[i] for i in cfa)
+    levels = np.asarray(tags.get(_BLACK_LEVEL, 0), dtype=np.float64).ravel()
+    if levels.size == 8:  # rationals
+        levels = levels[0::2] / levels[1::2]
+    dim = tuple(tags.get(_BLACK_LEVEL_REPEAT_DIM, (1, 1)))
+    if dim == (1, 1) and levels.size == 1:
+        black = np.full((2, 2), float(levels[0]))
+    elif dim == (2, 2) and levels.size == 4:
+        black = levels.reshape(2, 2)
+    else:
+        return None
+    white = float(np.ravel(tags.get(_WHITE_LEVEL, 65535))[0])
+    cam_xyz = _matrix(tags[_COLOR_MATRIX_1])
+    rgb_cam, daylight = _libraw_rgb_cam(cam_xyz)
+    gains = None
+    if _AS_SHOT_NEUTRAL in tags:
+        neutral = np.asarray(tags[_AS_SHOT_NEUTRAL], dtype=np.float64).ravel()
+        neutral = neutral[0::2] / neutral[1::2] if neutral.size == 6 else neutral
+        if neutral.size == 3 and np.all(neutral > 0):
+            gains = (1.0 / neutral) / (1.0 / neutral[1])
+    names = {v: k for k, v in CALIBRATION_ILLUMINANTS.items()}
+    code = int(tags.get(_CALIBRATION_ILLUMINANT_1, 0))
+    model = tags.get(_UNIQUE_CAMERA_MODEL)
+    meta: dict[str, Any] = {
+        "path": str(p),
+        "raw_type": "flat",
+        "color_desc": "RGBG",
+        "daylight_white_balance": daylight.tolist(),
+        "camera_model": str(model).strip("\x00") if model is not None else None,
+        "calibration_illuminant_code": code,
+        "reader": "tifffile",
+    }
+    return RawImage(
+        mosaic=mosaic,
+        black_level=black,
+        white_level=white,
+        cfa_pattern=pattern,
+        white_balance=gains,
+        xyz_to_camera=cam_xyz,
+        camera_to_srgb=rgb_cam,
+        calibration_illuminant=names.get(code, "D65"),
         metadata=meta,
     )
 
