@@ -123,3 +123,21 @@ def test_compressed_or_cropped_dng_needs_libraw(
     monkeypatch.setitem(sys.modules, "rawpy", None)
     with pytest.raises(ImageformError, match=r"imageform\[raw\]"):
         read_raw(cropped)
+
+
+def test_own_dng_orientation_without_rawpy(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    import tifffile
+
+    path = write_dng(tmp_path / "x.dng", _mosaic(), white_level=4095, color_matrix=CM)
+    with tifffile.TiffFile(path) as tf:
+        tags = [(t.code, t.dtype, t.count, t.value, True) for t in tf.pages[0].tags]
+        data = tf.pages[0].asarray()
+    turned = tmp_path / "turned.dng"
+    extra = [t for t in tags if t[0] >= 33421] + [(274, 3, 1, 8, True)]  # EXIF 8: 90° anticlockwise
+    tifffile.imwrite(turned, data, photometric=32803, extratags=extra)
+    monkeypatch.setitem(sys.modules, "rawpy", None)
+    raw = read_raw(turned)
+    assert raw.orientation == 5  # LibRaw's flip code for it
+    dev = develop(raw)
+    assert dev.image.shape == (16, 12, 3)
+    np.testing.assert_array_equal(dev.image, np.rot90(develop(raw, orient=False).image))

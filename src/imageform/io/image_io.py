@@ -565,6 +565,8 @@ def write_image(
     if bits is not None and (isinstance(bits, bool) or bits not in (8, 16)):
         raise InvalidInputError(f"expected bits 8 or 16, got {bits!r}")
     a = np.asarray(image)
+    if a.ndim and not a.flags.c_contiguous:  # a turned or cropped view: codecs need C order
+        a = np.ascontiguousarray(a)
     if a.ndim == 3 and a.shape[-1] == 1 and fmt != "npy":
         a = a[..., 0]
     if a.ndim not in (2, 3) or (a.ndim == 3 and not 1 <= a.shape[-1] <= 4) or a.size == 0:

@@ -239,14 +239,17 @@ class RawImage:
 
     Attributes
     ----------
-    mosaic : ndarray (H, W) uint16
-        The visible Bayer mosaic in digital numbers.
-    black_level : ndarray (2, 2)
-        The black level of each photosite of the 2x2 tile (the mosaic's ``[0:2, 0:2]``).
+    mosaic : ndarray (H, W) or (H, W, 3) uint16
+        The visible Bayer mosaic in digital numbers, in the sensor's orientation; for a
+        linear raw (a DNG with PhotometricInterpretation LinearRaw, as phones and
+        converters write them: already demosaiced) the three channels of every pixel.
+    black_level : ndarray (2, 2) or (3,)
+        The black level of each photosite of the 2x2 tile (the mosaic's ``[0:2, 0:2]``);
+        of each channel for a linear raw.
     white_level : float
         The largest code (saturation).
-    cfa_pattern : str
-        The 2x2 tile read row by row (``"RGGB"``, ...).
+    cfa_pattern : str or None
+        The 2x2 tile read row by row (``"RGGB"``, ...); None for a linear raw.
     white_balance : ndarray (3,) or None
         The as-shot white balance gains (R, G, B) with green 1 (None if the file has none).
     xyz_to_camera : ndarray (3, 3) or None
@@ -259,17 +262,23 @@ class RawImage:
     metadata : dict
         What else is known: ``raw_type``, ``color_desc``, ``daylight_white_balance``,
         ``camera_model`` (DNG UniqueCameraModel), ``path``.
+    orientation : int
+        How the image is turned for display, as LibRaw's ``sizes.flip`` (from the EXIF/TIFF
+        Orientation tag): 0 none, 3 half a turn, 5 a quarter turn anticlockwise, 6 a
+        quarter turn clockwise; bit 4 transposes, then bit 2 flips rows and bit 1 columns.
+        :func:`develop` applies it as LibRaw's ``postprocess`` does.
     """
 
     mosaic: np.ndarray
     black_level: np.ndarray
     white_level: float
-    cfa_pattern: str
+    cfa_pattern: str | None
     white_balance: np.ndarray | None
     xyz_to_camera: np.ndarray | None
     camera_to_srgb: np.ndarray
     calibration_illuminant: str | None
     metadata: dict[str, Any] = field(default_factory=dict)
+    orientation: int = 0
 
 
 def _dng_tags(path: Path) -> dict[str, Any]:
@@ -365,17 +374,30 @@ def read_raw(path: str | Path, *, max_pixels: int | None = None) -> RawImage:
         ) from None
     with r:
         desc = r.color_desc.decode("ascii", "replace")
-        pat = np.asarray(r.raw_pattern)
-        if r.num_colors != 3 or pat.shape != (2, 2) or any(c not in "RGB" for c in desc[:3]):
-            raise InvalidInputError(
-                f"{p}: only Bayer sensors with a 2x2 RGB tile are supported, got a "
-                f"{pat.shape[0]}x{pat.shape[1]} tile of {desc!r}"
-            )
-        pattern = "".join(desc[int(i)] for i in pat.ravel()).replace("G2", "G")
-        pattern = "".join("G" if c not in "RB" else c for c in pattern)
-        mosaic = np.array(r.raw_image_visible, dtype=np.uint16, copy=True)
         per_channel = np.asarray(r.black_level_per_channel, dtype=np.float64)
-        black = per_channel[pat].astype(np.float64)
+        pattern: str | None
+        if r.raw_pattern is None:  # a linear raw (LinearRaw DNG): every pixel has its colours
+            visible = np.asarray(r.raw_image_visible)
+            if visible.ndim != 3 or r.num_colors != 3 or any(c not in "RGB" for c in desc[:3]):
+                raise InvalidInputError(
+                    f"{p}: a linear raw of {r.num_colors} colours ({desc!r}) is not "
+                    "supported: only RGB"
+                )
+            mosaic = np.array(visible[..., :3], dtype=np.uint16, copy=True)
+            pattern = None
+            black = per_channel[:3].copy()
+        else:
+            pat = np.asarray(r.raw_pattern)
+            if r.num_colors != 3 or pat.shape != (2, 2) or any(c not in "RGB" for c in desc[:3]):
+                raise InvalidInputError(
+                    f"{p}: {_cfa_name(pat, desc, r.num_colors)} is not supported: only 2x2 "
+                    "RGB Bayer tiles (LibRaw's own postprocess develops it)"
+                )
+            pattern = "".join(desc[int(i)] for i in pat.ravel()).replace("G2", "G")
+            pattern = "".join("G" if c not in "RB" else c for c in pattern)
+            mosaic = np.array(r.raw_image_visible, dtype=np.uint16, copy=True)
+            black = per_channel[pat].astype(np.float64)
+        flip = int(r.sizes.flip)
         white = float(r.white_level)
         wb4 = np.asarray(r.camera_whitebalance, dtype=np.float64)
         gains = None
@@ -419,7 +441,42 @@ def read_raw(path: str | Path, *, max_pixels: int | None = None) -> RawImage:
         camera_to_srgb=rgb_cam,
         calibration_illuminant=illum,
         metadata=meta,
+        orientation=flip if flip in _FLIPS else 0,
     )
+
+
+#: LibRaw's flip codes (``sizes.flip``) of the eight TIFF/EXIF orientations, by EXIF code.
+_EXIF_TO_FLIP = {1: 0, 2: 1, 3: 3, 4: 2, 5: 4, 6: 6, 7: 7, 8: 5}
+_FLIPS = frozenset(_EXIF_TO_FLIP.values())
+
+
+def _cfa_name(pattern: np.ndarray, desc: str, colours: int) -> str:
+    """Name a colour filter array in a refusal: its size, its kind and its first row."""
+    rows, cols = pattern.shape if pattern.ndim == 2 else (0, 0)
+    kind = "X-Trans " if (rows, cols) == (6, 6) else ""
+    letters = (
+        "".join(desc[int(i)] if int(i) < len(desc) else "?" for i in pattern[0]) if rows else ""
+    )
+    if colours != 3:
+        kind = f"{colours}-colour ({desc}) "
+    return f"a {rows}x{cols} {kind}CFA (first row {letters})"
+
+
+def _orient(image: np.ndarray, flip: int) -> np.ndarray:
+    """Turn ``image`` (H, W, ...) for display as LibRaw does for ``sizes.flip``: a view.
+
+    LibRaw's output pixel (r, c) is the input's ``flip_index(r, c)``: rows and columns
+    swapped when bit 4 is set, then rows reversed for bit 2 and columns for bit 1
+    (dcraw's ``flip_index``).
+    """
+    a = image
+    if flip & 1:
+        a = a[:, ::-1]
+    if flip & 2:
+        a = a[::-1]
+    if flip & 4:
+        a = a.swapaxes(0, 1)
+    return a
 
 
 #: sRGB (D65) to XYZ as LibRaw writes it (``LibRaw_constants::xyz_rgb``): its ``rgb_cam`` for
@@ -530,26 +587,32 @@ def _read_plain_dng(p: Path, limit: int) -> RawImage | None:
         camera_to_srgb=rgb_cam,
         calibration_illuminant=names.get(code, "D65"),
         metadata=meta,
+        orientation=_EXIF_TO_FLIP.get(int(tags.get(274, 1)), 0),
     )
 
 
-@dataclass(frozen=True)
 class Development:
     """Every stage of :func:`develop`, in order.
 
+    The result (``image``) and the demosaiced camera RGB are computed by :func:`develop`
+    (float32); the other stages are computed from them when first read, so that a 24 Mpx
+    development holds two images, not six. Every three-channel stage is turned for display
+    (:attr:`RawImage.orientation`, as LibRaw does); the mosaic stages stay in the sensor's
+    orientation, where the CFA is defined.
+
     Attributes
     ----------
-    linear : ndarray (H, W)
+    linear : ndarray (H, W) or (H, W, 3)
         The mosaic linearised: :math:`(DN - B) / (W - B)`.
-    white_balanced : ndarray (H, W)
+    white_balanced : ndarray (H, W) or (H, W, 3)
         ``linear`` times the gain of each photosite's colour, clipped to [0, 1].
-    camera_rgb : ndarray (H, W, 3)
+    camera_rgb : ndarray (H', W', 3)
         Demosaiced, white-balanced camera RGB.
-    xyz : ndarray (H, W, 3)
+    xyz : ndarray (H', W', 3)
         CIE XYZ adapted to the output space's white (Y = 1 for white).
-    linear_rgb : ndarray (H, W, 3)
+    linear_rgb : ndarray (H', W', 3)
         Linear RGB of the output space, clipped to [0, 1].
-    image : ndarray (H, W, 3)
+    image : ndarray (H', W', 3) float32
         The encoded output in [0, 1] (``linear_rgb`` itself for linear output).
     gains : ndarray (3,)
         The white balance gains applied (R, G, B; the smallest is 1).
@@ -558,28 +621,124 @@ class Development:
     adaptation : ndarray (3, 3)
         Bradford, the calibration illuminant's white to the output space's white.
     space, transfer, demosaic : str
-        The output space, its encoding and the demosaicing method.
+        The output space, its encoding and the demosaicing method (``"none"`` for a linear
+        raw).
+    orientation : int
+        The flip applied (:attr:`RawImage.orientation`; 0 when ``orient=False``).
+    notes : tuple of str
+        What the development had to assume (no colour matrix in the file, say).
     """
 
-    linear: np.ndarray
-    white_balanced: np.ndarray
-    camera_rgb: np.ndarray
-    xyz: np.ndarray
-    linear_rgb: np.ndarray
-    image: np.ndarray
-    gains: np.ndarray
-    camera_to_xyz: np.ndarray
-    adaptation: np.ndarray
-    space: str
-    transfer: str
-    demosaic: str
+    def __init__(
+        self,
+        *,
+        raw: RawImage,
+        gains: np.ndarray,
+        camera_rgb: np.ndarray,
+        image: np.ndarray,
+        camera_to_xyz: np.ndarray,
+        adaptation: np.ndarray,
+        space: str,
+        transfer: str,
+        demosaic: str,
+        orientation: int,
+        notes: tuple[str, ...],
+    ) -> None:
+        self._raw = raw
+        self._camera_rgb = camera_rgb  # the sensor's orientation
+        self._image = image
+        self.gains = gains
+        self.camera_to_xyz = camera_to_xyz
+        self.adaptation = adaptation
+        self.space = space
+        self.transfer = transfer
+        self.demosaic = demosaic
+        self.orientation = orientation
+        self.notes = notes
+
+    def __repr__(self) -> str:
+        """Size, method, space and gains (not the arrays)."""
+        h, w = self.image.shape[:2]
+        return (
+            f"Development({w}x{h}, {self.demosaic} demosaicing, {self.space} "
+            f"({self.transfer}), gains {np.round(self.gains, 4).tolist()})"
+        )
+
+    @property
+    def linear(self) -> np.ndarray:
+        """The mosaic linearised, :math:`(DN - B) / (W - B)` (float32, sensor orientation)."""
+        raw = self._raw
+        black = _black_plane(raw).astype(np.float32)
+        out = raw.mosaic.astype(np.float32)
+        out -= black
+        out /= np.float32(raw.white_level) - black
+        return out
+
+    @property
+    def white_balanced(self) -> np.ndarray:
+        """``linear`` times each photosite's gain, clipped to [0, 1] (sensor orientation)."""
+        raw = self._raw
+        out = self.linear
+        if raw.cfa_pattern is None:
+            out *= self.gains.astype(np.float32)
+        else:
+            idx = np.array(_cfa_indices(raw.cfa_pattern)).reshape(2, 2)
+            for i in (0, 1):
+                for j in (0, 1):
+                    out[i::2, j::2] *= np.float32(self.gains[idx[i, j]])
+        return np.clip(out, 0.0, 1.0, out=out)
+
+    @property
+    def camera_rgb(self) -> np.ndarray:
+        """Demosaiced, white-balanced camera RGB (float32, turned for display)."""
+        return _orient(self._camera_rgb, self.orientation)
+
+    @property
+    def xyz(self) -> np.ndarray:
+        """CIE XYZ adapted to the output space's white (float32, turned for display)."""
+        m = (self.adaptation @ self.camera_to_xyz).astype(np.float32)
+        return self.camera_rgb @ m.T
+
+    @property
+    def linear_rgb(self) -> np.ndarray:
+        """The output space's linear RGB, clipped to [0, 1] (float32, turned for display)."""
+        from imageform.color import rgb_to_xyz_matrix
+
+        to_rgb = np.linalg.inv(np.asarray(rgb_to_xyz_matrix(self.space), np.float64))
+        m = (to_rgb @ self.adaptation @ self.camera_to_xyz).astype(np.float32)
+        out = self.camera_rgb @ m.T
+        return np.clip(out, 0.0, 1.0, out=out)
+
+    @property
+    def image(self) -> np.ndarray:
+        """The encoded output in [0, 1] (float32, turned for display)."""
+        return _orient(self._image, self.orientation)
 
     def to_integer(self, bits: int = 16) -> np.ndarray:
         """Return the output image as uint8 (``bits=8``) or uint16 (``bits=16``), rounded."""
         if bits not in (8, 16):
             raise InvalidInputError(f"expected bits 8 or 16, got {describe(bits)}")
-        top = 2**bits - 1
-        return np.asarray(np.round(self.image * top), dtype=np.uint8 if bits == 8 else np.uint16)
+        scaled = self.image * np.float32(2**bits - 1)
+        np.rint(scaled, out=scaled)
+        return scaled.astype(np.uint8 if bits == 8 else np.uint16)
+
+
+def _black_plane(raw: RawImage) -> np.ndarray:
+    """Return the black level of every photosite (or channel), broadcast to the mosaic."""
+    black = np.asarray(raw.black_level, np.float64)
+    if raw.mosaic.ndim == 3:
+        return black.reshape(1, 1, -1)
+    h, w = raw.mosaic.shape
+    return np.tile(black, (h // 2 + 1, w // 2 + 1))[:h, :w]
+
+
+def _transfer_table(transfer: str) -> np.ndarray:
+    """Return the transfer function sampled uniformly in sqrt(x) (the render kernel's table)."""
+    from imageform._kernels.raw_develop import LUT_SIZE
+    from imageform.color import encode
+
+    u = np.linspace(0.0, 1.0, LUT_SIZE + 1)
+    return np.asarray(encode(u * u, transfer), np.float64).astype(np.float32)
 
 
 def develop(
@@ -589,6 +748,7 @@ def develop(
     white_balance: Any = "camera",
     space: str = "srgb",
     linear: bool = False,
+    orient: bool = True,
 ) -> Development:
     r"""Develop a raw image with imageform's own pipeline, keeping every stage.
 
@@ -596,16 +756,23 @@ def develop(
     2. White balance: :math:`x \cdot g_c` with the as-shot gains (or the ones given),
        scaled so the smallest gain is 1, clipped to [0, 1] (LibRaw's default highlight
        clipping).
-    3. Demosaic with :func:`imageform.sensor.demosaic` (``demosaic`` names the method).
+    3. Demosaic with :func:`imageform.sensor.demosaic` (``demosaic`` names the method); a
+       linear raw has every colour already and is not demosaiced.
     4. Camera RGB to XYZ: :math:`M = C^{-1}\,\mathrm{diag}(C\,\mathbf w)`, with C the
        colour matrix (XYZ to camera) and :math:`\mathbf w` the XYZ of the calibration
        illuminant's white (Y = 1), so that white-balanced white (1, 1, 1) maps to
        :math:`\mathbf w` (the normalisation of dcraw/LibRaw's ``cam_xyz_coeff``, which
-       scales the rows of :math:`C` by its camera response to white).
+       scales the rows of :math:`C` by its camera response to white). A file with no colour
+       matrix at all (LibRaw knows none for the camera either) is developed as if camera RGB
+       were linear sRGB, with a note (:attr:`Development.notes`).
     5. Bradford chromatic adaptation from :math:`\mathbf w` to the output space's white
        (identity for a D65 matrix and sRGB).
     6. XYZ to the output space's linear RGB, clipped to [0, 1], encoded with the space's
        transfer function (``linear=True``: not encoded).
+    7. Turned for display as the file's orientation says (LibRaw's ``user_flip``).
+
+    Steps 1-2 are one pass over the mosaic and steps 4-6 one pass over the demosaiced image,
+    in float32 (:mod:`imageform._kernels.raw_develop`).
 
     Parameters
     ----------
@@ -620,19 +787,28 @@ def develop(
         ``"prophoto"``, ...).
     linear : bool
         Leave the output linear (no transfer function).
+    orient : bool
+        Turn the result as the file's orientation tag says (as LibRaw does by default);
+        False keeps the sensor's orientation.
 
     Returns
     -------
     Development
         Every stage; ``.image`` is the result, ``.to_integer(8 or 16)`` its integer form.
+
+    Raises
+    ------
+    InvalidInputError
+        An unknown method, space or white balance; a raw file with no photosite above its
+        black level (nothing to develop).
     """
+    from imageform._kernels.raw_develop import balance_mosaic, render_rgb
     from imageform.color import (
         RGB_SPACES,
         chromatic_adaptation_matrix,
-        encode,
+        rgb_to_xyz_matrix,
         whitepoint_xy,
         xy_to_xyz_white,
-        xyz_to_linear_rgb,
     )
     from imageform.sensor import DEMOSAIC_METHODS
     from imageform.sensor import demosaic as _demosaic
@@ -652,29 +828,51 @@ def develop(
     if key not in RGB_SPACES:
         raise InvalidInputError(f"unknown space {space!r}; valid: {', '.join(RGB_SPACES)}")
     out_space = RGB_SPACES[key]
-    # 1. linearise
-    h, w = raw.mosaic.shape
-    black = np.tile(np.asarray(raw.black_level, np.float64), (h // 2 + 1, w // 2 + 1))[:h, :w]
-    lin = (raw.mosaic.astype(np.float64) - black) / (raw.white_level - black)
-    # 2. white balance
     gains = _gains(raw, white_balance)
-    idx = np.array(_cfa_indices(raw.cfa_pattern)).reshape(2, 2)
-    site = np.tile(idx, (h // 2 + 1, w // 2 + 1))[:h, :w]
-    balanced = np.clip(lin * gains[site], 0.0, 1.0)
-    # 3. demosaic
-    cam = np.asarray(_demosaic(balanced, raw.cfa_pattern, method, allow_odd=True), np.float64)
+    where = raw.metadata.get("path") or "the raw image"
+    black = np.asarray(raw.black_level, np.float64)
+    if raw.mosaic.size == 0 or float(raw.mosaic.max()) <= float(black.min()):
+        raise InvalidInputError(
+            f"{where}: no photosite is above the black level ({black.min():g}): nothing to develop"
+        )
+    span = raw.white_level - black
+    if np.any(span <= 0):
+        raise InvalidInputError(
+            f"{where}: white level {raw.white_level:g} is not above the black level"
+        )
+    notes: list[str] = []
+    # 1-3. linearise and white-balance in one pass, then demosaic
+    if raw.cfa_pattern is None:  # a linear raw: every pixel has its colours
+        cam = raw.mosaic.astype(np.float32)
+        cam -= black.astype(np.float32)
+        cam *= (gains / span).astype(np.float32)
+        np.clip(cam, 0.0, 1.0, out=cam)
+        method = "none"
+    else:
+        idx = np.array(_cfa_indices(raw.cfa_pattern)).reshape(2, 2)
+        scale = (gains[idx] / span).astype(np.float32)
+        balanced = np.empty(raw.mosaic.shape, np.float32)
+        balance_mosaic(raw.mosaic, black.astype(np.float32), scale, balanced)
+        cam = np.asarray(_demosaic(balanced, raw.cfa_pattern, method, allow_odd=True))
+        del balanced
+        cam = np.ascontiguousarray(cam, dtype=np.float32)
     # 4. camera RGB -> XYZ under the calibration illuminant
     ill = raw.calibration_illuminant or "D65"
     white = np.asarray(xy_to_xyz_white(whitepoint_xy(ill)), np.float64)
+    srgb_to_xyz = np.asarray(rgb_to_xyz_matrix("srgb"), np.float64)
     if raw.xyz_to_camera is not None:
         C = np.asarray(raw.xyz_to_camera, np.float64)
         cam_to_xyz = np.linalg.inv(C) @ np.diag(C @ white)
-    else:  # LibRaw's camera -> sRGB only
-        from imageform.color import rgb_to_xyz_matrix
-
-        cam_to_xyz = np.asarray(rgb_to_xyz_matrix("srgb"), np.float64) @ raw.camera_to_srgb
+    elif np.any(np.asarray(raw.camera_to_srgb)):  # LibRaw's camera -> sRGB only
+        cam_to_xyz = srgb_to_xyz @ np.asarray(raw.camera_to_srgb, np.float64)
         white = np.asarray(xy_to_xyz_white(whitepoint_xy("D65")), np.float64)
-    xyz_cal = cam @ cam_to_xyz.T
+    else:  # no colour matrix, and LibRaw knows none for this camera
+        cam_to_xyz = srgb_to_xyz
+        white = np.asarray(xy_to_xyz_white(whitepoint_xy("D65")), np.float64)
+        notes.append(
+            "note: the file has no colour matrix and LibRaw knows none for this camera: "
+            "camera RGB developed as if it were linear sRGB"
+        )
     # 5. adaptation to the output space's white
     dst_white = np.asarray(xy_to_xyz_white(out_space.white_xy), np.float64)
     src_xy = white[:2] / white.sum()
@@ -682,24 +880,25 @@ def develop(
         cat = np.eye(3)
     else:
         cat = np.asarray(chromatic_adaptation_matrix(white, dst_white, "bradford"), np.float64)
-    xyz = xyz_cal @ cat.T
-    # 6. output space, clip, encode
-    rgb_lin = np.clip(np.asarray(xyz_to_linear_rgb(xyz, key), np.float64), 0.0, 1.0)
+    # 6. output space, clip, encode: one pass
+    to_rgb = np.linalg.inv(np.asarray(rgb_to_xyz_matrix(key), np.float64))
+    m = (to_rgb @ cat @ cam_to_xyz).astype(np.float32)
     transfer = "linear" if linear else out_space.transfer
-    image = rgb_lin if linear else np.asarray(encode(rgb_lin, out_space.transfer), np.float64)
+    table = _transfer_table(out_space.transfer) if not linear else np.zeros(2, np.float32)
+    image = np.empty(cam.shape, np.float32)
+    render_rgb(cam, m, table, not linear, image)
     return Development(
-        linear=lin,
-        white_balanced=balanced,
-        camera_rgb=cam,
-        xyz=xyz,
-        linear_rgb=rgb_lin,
-        image=image,
+        raw=raw,
         gains=gains,
+        camera_rgb=cam,
+        image=image,
         camera_to_xyz=cam_to_xyz,
         adaptation=cat,
         space=key,
         transfer=transfer,
         demosaic=method,
+        orientation=raw.orientation if orient else 0,
+        notes=tuple(notes),
     )
 
 

@@ -36,6 +36,8 @@ class DevelopOptions(ImageOut, Options):
 
 def develop(run: Run, opts: DevelopOptions, *, raw: Path, out: Path) -> Result:
     """Read the raw file, develop it step by step, write the image."""
+    import numpy as np
+
     from imageform.io import develop as develop_raw
     from imageform.io import read_raw
 
@@ -47,14 +49,20 @@ def develop(run: Run, opts: DevelopOptions, *, raw: Path, out: Path) -> Result:
         space=opts.space,
         linear=opts.linear,
     )
-    write(run, out, dev.image, opts, like=img.mosaic)
-    h, w = img.mosaic.shape
+    for note in dev.notes:
+        run.note(note)
+    # a developed raw is 16 bits a channel in PNG (docs/raw.md) unless --bits says otherwise
+    write(run, out, dev.image, opts, like=np.zeros(1, np.uint16))
+    h, w = img.mosaic.shape[:2]
+    oh, ow = dev.image.shape[:2]
+    kind = f"{img.cfa_pattern} mosaic" if img.cfa_pattern else "linear (demosaiced) raw"
     summary: dict[str, Any] = {
         "raw": raw,
         "out": out,
         "size": [w, h],
+        "output_size": [ow, oh],
         "cfa_pattern": img.cfa_pattern,
-        "black_level": img.black_level.tolist(),
+        "black_level": np.asarray(img.black_level).tolist(),
         "white_level": img.white_level,
         "gains": dev.gains.tolist(),
         "camera_to_xyz": dev.camera_to_xyz.tolist(),
@@ -62,11 +70,16 @@ def develop(run: Run, opts: DevelopOptions, *, raw: Path, out: Path) -> Result:
         "demosaic": dev.demosaic,
         "space": dev.space,
         "transfer": dev.transfer,
+        "orientation": {"flip": img.orientation, "applied": dev.orientation == img.orientation},
+        "notes": list(dev.notes),
     }
     gains = ", ".join(f"{g:.3f}" for g in dev.gains)
+    turned = (
+        f", turned for display (flip {img.orientation}) to {ow}x{oh}" if img.orientation else ""
+    )
     text = (
-        f"{raw.name}: {w}x{h} {img.cfa_pattern} mosaic, black {img.black_level.mean():g}, "
-        f"white {img.white_level:g}",
+        f"{raw.name}: {w}x{h} {kind}, black {np.mean(img.black_level):g}, "
+        f"white {img.white_level:g}{turned}",
         f"white balance {opts.white_balance} (gains {gains}), {dev.demosaic} demosaicing, "
         f"{dev.space} ({dev.transfer}) -> {out}",
     )
@@ -79,7 +92,13 @@ WORKFLOWS = (
         "Develop a raw file (DNG, CR2, NEF, ARW, ...) with imageform's own pipeline.",
         "imageform.workflows.raw:develop",
         DevelopOptions,
-        (Input("raw", "Raw file LibRaw reads (needs imageform[raw]).", metavar="RAW"),),
+        (
+            Input(
+                "raw",
+                "Raw file LibRaw reads (needs imageform[raw]; the DNG imageform writes does not).",
+                metavar="RAW",
+            ),
+        ),
         Output("Output image (PNG 16-bit by default, JPEG, TIFF float32, .npy)."),
         group="colour",
         description="Linearise (black and white levels), white balance, demosaic, camera RGB "
