@@ -19,7 +19,7 @@ import numpy as np
 
 from imageform._kernels.jit import njit
 
-__all__ = ["LUT_SIZE", "balance_mosaic", "render_rgb"]
+__all__ = ["LUT_SIZE", "balance_mosaic", "quantize", "render_rgb"]
 
 #: Intervals of the transfer table (in sqrt(x)).
 LUT_SIZE = 65536
@@ -62,3 +62,15 @@ def render_rgb(cam, m, lut, encode, out):  # type: ignore[no-untyped-def]
                     f = u - np.float32(k)
                     v = lut[k] + f * (lut[k + 1] - lut[k])
                 out[i, j, c] = v
+
+
+@njit(error_model="numpy")
+def quantize(src, top, out):  # type: ignore[no-untyped-def]
+    """``out = round(src * top)`` for ``src`` in [0, 1] (flat arrays; ``out`` an integer type).
+
+    Rounds half up (``src * top + 0.5`` truncated, exact for non-negative values), which
+    differs from ``numpy.rint`` (half to even) only on exact halves.
+    """
+    half = np.float32(0.5)
+    for i in range(src.shape[0]):
+        out[i] = src[i] * top + half

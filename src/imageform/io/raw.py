@@ -715,12 +715,17 @@ class Development:
         return _orient(self._image, self.orientation)
 
     def to_integer(self, bits: int = 16) -> np.ndarray:
-        """Return the output image as uint8 (``bits=8``) or uint16 (``bits=16``), rounded."""
+        """Return the output image as uint8 (``bits=8``) or uint16 (``bits=16``), rounded.
+
+        One pass, rounding half up (the values are in [0, 1]), turned for display.
+        """
         if bits not in (8, 16):
             raise InvalidInputError(f"expected bits 8 or 16, got {describe(bits)}")
-        scaled = self.image * np.float32(2**bits - 1)
-        np.rint(scaled, out=scaled)
-        return scaled.astype(np.uint8 if bits == 8 else np.uint16)
+        from imageform._kernels.raw_develop import quantize
+
+        out = np.empty(self._image.shape, np.uint8 if bits == 8 else np.uint16)
+        quantize(self._image.reshape(-1), np.float32(2**bits - 1), out.reshape(-1))
+        return np.ascontiguousarray(_orient(out, self.orientation))
 
 
 def _black_plane(raw: RawImage) -> np.ndarray:
