@@ -23,6 +23,7 @@ EXTRAS = {
     "matplotlib": "plot",
     "torch": "torch",
     "rawpy": "raw",
+    "av": "video",
 }
 
 

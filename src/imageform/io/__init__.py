@@ -3,7 +3,8 @@
 Images (PNG 8/16-bit, JPEG, TIFF, ``.npy``) with one rule for shape, alpha, orientation and
 memory bounds (:func:`read_image`, :func:`write_image`); raw files (:func:`write_dng`,
 :func:`read_raw`, :func:`develop`, docs/raw.md); the one camera file, versioned TOML
-(:func:`read_camera`, :func:`write_camera`, docs/camera-file.md).
+(:func:`read_camera`, :func:`write_camera`, docs/camera-file.md); video files, image
+sequences and capture devices (:func:`open_video`, :class:`VideoWriter`, PyAV).
 """
 
 from imageform.io.camera_file import (
@@ -48,6 +49,14 @@ from imageform.io.stereo_file import (
     read_stereo_camera,
     write_stereo_camera,
 )
+from imageform.io.video import (
+    VIDEO_SUFFIXES,
+    Frame,
+    VideoInfo,
+    VideoReader,
+    VideoWriter,
+    open_video,
+)
 
 __all__ = [
     "CALIBRATION_ILLUMINANTS",
@@ -60,21 +69,27 @@ __all__ = [
     "OPTICS_MODELS",
     "STEREO_FILE_FORMAT",
     "STEREO_FILE_VERSION",
+    "VIDEO_SUFFIXES",
     "CameraColor",
     "CameraFile",
     "CameraOptics",
     "CameraSensitivity",
     "CameraSensor",
     "Development",
+    "Frame",
     "ImageInfo",
     "Provenance",
     "RawImage",
     "StereoCameraFile",
+    "VideoInfo",
+    "VideoReader",
+    "VideoWriter",
     "WrittenImage",
     "develop",
     "image_format",
     "image_info",
     "max_pixels",
+    "open_video",
     "read_camera",
     "read_image",
     "read_png",

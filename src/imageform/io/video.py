@@ -1,0 +1,474 @@
+"""Video in and out: files, image sequences and capture devices behind one reader.
+
+Decoding and encoding go through PyAV (FFmpeg's libraries, the optional extra ``video``):
+
+- a **video file** (MP4, MKV, AVI, MOV, ... whatever FFmpeg demuxes and decodes);
+- an **image sequence**: a folder of images (PNG, JPEG, TIFF, ``.npy``; natural order, so
+  ``frame2.png`` comes before ``frame10.png``) or a glob pattern (``"frames/*.png"``), read
+  with :func:`imageform.io.read_image` (no PyAV needed), at a frame rate the caller gives;
+- a **capture device**: ``/dev/video0`` (Linux, FFmpeg's ``v4l2`` input), read live until the
+  caller stops.
+
+Each frame comes as a :class:`Frame`: its index, its time in seconds (the stream's
+presentation time, or ``index / fps`` for a sequence) and the image, ``(H, W, 3)`` uint8
+RGB, one new array per frame (FFmpeg's RGB conversion writes it; nothing else is copied).
+:class:`VideoWriter` encodes RGB frames to a file (H.264 in MP4/MKV/MOV, MJPEG in AVI by
+default). Bad input is one :class:`~imageform.errors.InvalidInputError` line: not a video, a
+truncated or corrupt file (after the frames that decoded), no video stream, zero frames, a
+device that does not exist.
+"""
+
+from __future__ import annotations
+
+import glob as _glob
+import math
+import os
+import re
+from collections.abc import Iterator
+from dataclasses import dataclass
+from fractions import Fraction
+from pathlib import Path
+from types import TracebackType
+from typing import Any
+
+import numpy as np
+
+from imageform._validate import describe
+from imageform.errors import InvalidInputError
+
+__all__ = [
+    "VIDEO_SUFFIXES",
+    "Frame",
+    "VideoInfo",
+    "VideoReader",
+    "VideoWriter",
+    "open_video",
+]
+
+#: File suffixes read as video files (any other existing file is offered to FFmpeg too).
+VIDEO_SUFFIXES = (".mp4", ".m4v", ".mkv", ".avi", ".mov", ".webm", ".mpg", ".mpeg", ".ts")
+
+#: Image suffixes of an image sequence.
+_IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".tif", ".tiff", ".npy")
+
+#: Encoder by container, first available wins.
+_CODECS = {
+    ".mp4": ("libx264", "h264", "mpeg4"),
+    ".m4v": ("libx264", "h264", "mpeg4"),
+    ".mov": ("libx264", "h264", "mpeg4"),
+    ".mkv": ("libx264", "h264", "ffv1", "mpeg4"),
+    ".avi": ("mjpeg", "mpeg4"),
+}
+
+
+def _av() -> Any:
+    from imageform._optional import require
+
+    return require("av", what="reading and writing video")
+
+
+@dataclass(frozen=True)
+class Frame:
+    """One frame of a video.
+
+    Attributes
+    ----------
+    index : int
+        0 for the first frame read.
+    time_s : float
+        Its time in seconds from the start of the stream (``index / fps`` for an image
+        sequence; the capture time for a device).
+    image : ndarray (H, W, 3) uint8
+        RGB.
+    """
+
+    index: int
+    time_s: float
+    image: np.ndarray
+
+
+@dataclass(frozen=True)
+class VideoInfo:
+    """What a video source is.
+
+    Attributes
+    ----------
+    width, height : int
+        Frame size in pixels.
+    fps : float
+        Frames per second (the stream's average rate; given for an image sequence).
+    frames : int or None
+        The number of frames when the container says (a sequence always; a device never).
+    kind : {"file", "sequence", "device"}
+        The kind of source.
+    codec : str
+        The decoder's name (``"image"`` for a sequence).
+    """
+
+    width: int
+    height: int
+    fps: float
+    frames: int | None
+    kind: str
+    codec: str
+
+
+def _natural_key(path: Path) -> list[Any]:
+    return [int(t) if t.isdigit() else t.lower() for t in re.split(r"(\d+)", path.name)]
+
+
+def _sequence_files(source: str) -> list[Path] | None:
+    """Return the images of a folder or glob pattern in natural order (None: not one)."""
+    p = Path(source)
+    if p.is_dir():
+        files = [f for f in p.iterdir() if f.suffix.lower() in _IMAGE_SUFFIXES and f.is_file()]
+        if not files:
+            raise InvalidInputError(f"folder {p} holds no images (PNG, JPEG, TIFF, .npy)")
+        return sorted(files, key=_natural_key)
+    if _glob.has_magic(source):
+        files = [Path(f) for f in _glob.glob(source) if Path(f).is_file()]
+        files = [f for f in files if f.suffix.lower() in _IMAGE_SUFFIXES]
+        if not files:
+            raise InvalidInputError(f"no image matches {describe(source)}")
+        return sorted(files, key=_natural_key)
+    return None
+
+
+def _is_device(source: str) -> bool:
+    return source.startswith(("/dev/video", "v4l2:"))
+
+
+def _rgb8(image: np.ndarray, where: str) -> np.ndarray:
+    """Return an image of a sequence as (H, W, 3) uint8 RGB (grey repeated, 16 bits scaled)."""
+    a = np.asarray(image)
+    if a.ndim == 2:
+        a = a[..., None]
+    if a.ndim != 3 or a.shape[-1] not in (1, 3):
+        raise InvalidInputError(f"{where}: expected a grey or RGB image, got {describe(a)}")
+    if a.dtype == np.uint16:
+        a = ((a.astype(np.uint32) * 255 + 32767) // 65535).astype(np.uint8)
+    elif a.dtype.kind == "f":
+        a = np.round(np.clip(a, 0.0, 1.0) * 255).astype(np.uint8)
+    elif a.dtype != np.uint8:
+        raise InvalidInputError(f"{where}: unsupported sample type {a.dtype}")
+    if a.shape[-1] == 1:
+        a = np.repeat(a, 3, axis=-1)
+    return a
+
+
+class VideoReader:
+    """Frames of a video file, an image sequence or a capture device, one at a time.
+
+    Use :func:`open_video`. A context manager and an iterator of :class:`Frame`; iterate
+    once. ``info`` says what the source is.
+
+    Parameters
+    ----------
+    source : str or Path
+        A video file, a folder of images, a glob pattern of images, or a capture device
+        (``/dev/video0``).
+    fps : float, optional
+        The frame rate of an image sequence (default 30); for a device, the rate to ask for.
+        Ignored for a file, whose stream says.
+    max_pixels : int, optional
+        Refuse frames with more pixels (default :func:`imageform.io.max_pixels`).
+    """
+
+    def __init__(
+        self, source: str | Path, *, fps: float | None = None, max_pixels: int | None = None
+    ) -> None:
+        from imageform.io.image_io import _pixel_limit, image_info
+
+        if not isinstance(source, str | os.PathLike):
+            raise TypeError(f"expected source as a path, got {describe(source)}")
+        if fps is not None and not (isinstance(fps, int | float) and 0 < fps < 1e4):
+            raise InvalidInputError(f"expected fps in (0, 10000), got {describe(fps)}")
+        self._limit = _pixel_limit(max_pixels)
+        self._source = str(source)
+        self._container: Any = None
+        self._files = _sequence_files(self._source)
+        self._iterated = False
+        if self._files is not None:
+            first = image_info(self._files[0])
+            self._check_size(first.width, first.height)
+            self.info = VideoInfo(
+                first.width, first.height, float(fps or 30.0), len(self._files), "sequence",
+                "image",
+            )  # fmt: skip
+            return
+        av = _av()
+        device = _is_device(self._source)
+        path = self._source.removeprefix("v4l2:")
+        if not device:
+            p = Path(path)
+            if not p.exists():
+                raise InvalidInputError(f"video {p} does not exist")
+            if not p.is_file():
+                raise InvalidInputError(f"video {p} is not a regular file")
+        elif not os.path.exists(path):
+            raise InvalidInputError(f"capture device {path} does not exist")
+        options = {"framerate": str(fps)} if device and fps else {}
+        try:
+            self._container = av.open(path, format="v4l2" if device else None, options=options)
+        except Exception as exc:  # av.error.InvalidDataError, PermissionError, ...
+            if isinstance(exc, EOFError) and not device:
+                raise InvalidInputError(
+                    f"{path} has no video frames (the file ends before the first)"
+                ) from None
+            what = "capture device" if device else "video"
+            raise InvalidInputError(
+                f"{path} is not a {what} FFmpeg can read ({type(exc).__name__})"
+            ) from None
+        streams = self._container.streams.video
+        if not streams:
+            self._container.close()
+            raise InvalidInputError(f"{path} has no video stream")
+        self._stream = streams[0]
+        self._stream.thread_type = "AUTO"
+        ctx = self._stream.codec_context
+        rate = self._stream.average_rate or self._stream.guessed_rate or (fps or 30)
+        frames = int(self._stream.frames) or None
+        self._check_size(int(ctx.width), int(ctx.height))
+        self.info = VideoInfo(
+            int(ctx.width),
+            int(ctx.height),
+            float(rate),
+            None if device else frames,
+            "device" if device else "file",
+            str(ctx.name),
+        )
+
+    def _check_size(self, width: int, height: int) -> None:
+        if width <= 0 or height <= 0:
+            raise InvalidInputError(f"{self._source}: frames of {width}x{height} pixels")
+        if width * height > self._limit:
+            raise InvalidInputError(
+                f"{self._source}: frames of {width}x{height} pixels are above the limit of "
+                f"{self._limit} pixels (IMAGEFORM_MAX_PIXELS)"
+            )
+
+    def __enter__(self) -> VideoReader:
+        """Return the reader."""
+        return self
+
+    def __exit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc: BaseException | None,
+        tb: TracebackType | None,
+    ) -> None:
+        """Close the source."""
+        self.close()
+
+    def close(self) -> None:
+        """Close the source (a no-op when closed)."""
+        if self._container is not None:
+            self._container.close()
+            self._container = None
+
+    def __iter__(self) -> Iterator[Frame]:
+        """Yield the frames in order (once)."""
+        if self._iterated:
+            raise InvalidInputError(f"{self._source}: a VideoReader is iterated once")
+        self._iterated = True
+        if self._files is not None:
+            yield from self._sequence()
+        else:
+            yield from self._decode()
+
+    def _sequence(self) -> Iterator[Frame]:
+        from imageform.io.image_io import read_image
+
+        assert self._files is not None
+        shape = (self.info.height, self.info.width)
+        for i, f in enumerate(self._files):
+            img = _rgb8(read_image(f, alpha="drop", max_pixels=self._limit), str(f))
+            if img.shape[:2] != shape:
+                raise InvalidInputError(
+                    f"{f}: {img.shape[1]}x{img.shape[0]} pixels where the sequence's first "
+                    f"image has {shape[1]}x{shape[0]}"
+                )
+            yield Frame(i, i / self.info.fps, img)
+
+    def _decode(self) -> Iterator[Frame]:
+        av = _av()
+        index = 0
+        base = self._stream.time_base
+        start = self._stream.start_time or 0
+        try:
+            for packet in self._container.demux(self._stream):
+                for frame in packet.decode():
+                    if frame.pts is not None and base is not None:
+                        t = float((frame.pts - start) * base)
+                    else:
+                        t = index / self.info.fps
+                    yield Frame(index, t, frame.to_ndarray(format="rgb24"))
+                    index += 1
+        except av.error.FFmpegError as exc:
+            if index == 0:
+                raise InvalidInputError(
+                    f"{self._source}: no frame could be decoded ({type(exc).__name__})"
+                ) from None
+            raise InvalidInputError(
+                f"{self._source} is truncated or corrupt after frame {index - 1} "
+                f"({type(exc).__name__})"
+            ) from None
+        finally:
+            self.close()
+        if index == 0:
+            raise InvalidInputError(f"{self._source} has no video frames")
+
+
+def open_video(
+    source: str | Path, *, fps: float | None = None, max_pixels: int | None = None
+) -> VideoReader:
+    """Open a video file, an image sequence (a folder or a glob) or a capture device.
+
+    Parameters
+    ----------
+    source : str or Path
+        ``clip.mp4``, ``frames/`` (a folder of images), ``"frames/*.png"``, ``/dev/video0``.
+    fps : float, optional
+        The frame rate of an image sequence (default 30) or the one to ask a device for.
+    max_pixels : int, optional
+        Refuse frames with more pixels (default :func:`imageform.io.max_pixels`).
+
+    Returns
+    -------
+    VideoReader
+        Iterate it for :class:`Frame` objects; ``.info`` is a :class:`VideoInfo`.
+
+    Raises
+    ------
+    InvalidInputError
+        A missing file, folder or device; not a video; no video stream; an empty folder.
+    imageform.errors.ImageformError
+        PyAV is not installed for a file or a device (``pip install "imageform[video]"``).
+
+    Examples
+    --------
+    >>> import numpy as np, tempfile, pathlib
+    >>> from imageform.io import write_image
+    >>> folder = pathlib.Path(tempfile.mkdtemp())
+    >>> for i in range(3):
+    ...     _ = write_image(folder / f"f{i}.png", np.full((4, 6, 3), 40 * i, np.uint8))
+    >>> with open_video(folder, fps=10) as video:
+    ...     print(video.info.frames, [(f.index, f.time_s, f.image.shape) for f in video])
+    3 [(0, 0.0, (4, 6, 3)), (1, 0.1, (4, 6, 3)), (2, 0.2, (4, 6, 3))]
+    """
+    return VideoReader(source, fps=fps, max_pixels=max_pixels)
+
+
+class VideoWriter:
+    """Encode RGB frames to a video file (PyAV).
+
+    A context manager: frames go in with :meth:`write`; :meth:`close` flushes the encoder.
+
+    Parameters
+    ----------
+    path : str or Path
+        The file; its suffix picks the container (``.mp4``, ``.mkv``, ``.mov``, ``.avi``).
+    fps : float
+        Frames per second.
+    codec : str, optional
+        An FFmpeg encoder; default H.264 (``libx264``) for MP4/MKV/MOV, MJPEG for AVI, with
+        MPEG-4 part 2 where those are missing.
+    quality : int
+        For H.264, the constant rate factor (0 lossless to 51; default 18, visually
+        lossless); ignored by other encoders.
+    """
+
+    def __init__(
+        self, path: str | Path, fps: float, *, codec: str | None = None, quality: int = 18
+    ) -> None:
+        av = _av()
+        p = Path(path)
+        suffix = p.suffix.lower()
+        if suffix not in _CODECS:
+            raise InvalidInputError(
+                f"expected a video file name ending in {', '.join(_CODECS)}, got {p.name!r}"
+            )
+        if not (isinstance(fps, int | float) and math.isfinite(fps) and 0 < fps < 1e4):
+            raise InvalidInputError(f"expected fps in (0, 10000), got {describe(fps)}")
+        if isinstance(quality, bool) or not isinstance(quality, int) or not 0 <= quality <= 51:
+            raise InvalidInputError(f"expected quality an integer in [0, 51], got {quality!r}")
+        names = (codec,) if codec else _CODECS[suffix]
+        chosen = next((c for c in names if c in av.codecs_available), None)
+        if chosen is None:
+            raise InvalidInputError(f"no encoder among {', '.join(names)} in this FFmpeg")
+        self.path = p
+        self._fps = Fraction(fps).limit_denominator(1001)
+        self._codec = chosen
+        self._quality = quality
+        self._container = av.open(str(p), mode="w")
+        self._stream: Any = None
+        self.frames = 0
+
+    def _open_stream(self, width: int, height: int) -> None:
+        stream = self._container.add_stream(self._codec, rate=self._fps)
+        stream.width, stream.height = width, height
+        if self._codec == "mjpeg":
+            stream.pix_fmt = "yuvj420p"
+            ctx = stream.codec_context  # fixed quantiser 2 of 31: near-lossless JPEG frames
+            ctx.qscale = True
+            ctx.global_quality = 2 * 118  # FF_QP2LAMBDA
+            ctx.qmin = ctx.qmax = 2
+        elif self._codec == "ffv1":
+            stream.pix_fmt = "yuv444p"
+        else:
+            stream.pix_fmt = "yuv420p"
+        if self._codec == "libx264":
+            stream.options = {"crf": str(self._quality), "preset": "veryfast"}
+        self._stream = stream
+
+    def write(self, image: Any) -> None:
+        """Encode one frame: ``(H, W, 3)`` uint8 RGB (every frame the size of the first).
+
+        H.264 and MJPEG with 4:2:0 chroma need an even width and height: an odd one is
+        refused.
+        """
+        av = _av()
+        a = np.asarray(image)
+        if a.ndim != 3 or a.shape[-1] != 3 or a.dtype != np.uint8:
+            raise InvalidInputError(f"expected a frame as (H, W, 3) uint8 RGB, got {describe(a)}")
+        h, w = a.shape[:2]
+        if self._stream is None:
+            if self._codec != "ffv1" and (h % 2 or w % 2):
+                raise InvalidInputError(
+                    f"expected an even frame size for {self._codec}, got {w}x{h}"
+                )
+            self._open_stream(w, h)
+        elif (h, w) != (self._stream.height, self._stream.width):
+            raise InvalidInputError(
+                f"expected frames of {self._stream.width}x{self._stream.height} like the "
+                f"first, got {w}x{h}"
+            )
+        frame = av.VideoFrame.from_ndarray(np.ascontiguousarray(a), format="rgb24")
+        for packet in self._stream.encode(frame):
+            self._container.mux(packet)
+        self.frames += 1
+
+    def close(self) -> None:
+        """Flush the encoder and close the file (a no-op when closed)."""
+        if self._container is None:
+            return
+        try:
+            if self._stream is not None:
+                for packet in self._stream.encode(None):
+                    self._container.mux(packet)
+        finally:
+            self._container.close()
+            self._container = None
+
+    def __enter__(self) -> VideoWriter:
+        """Return the writer."""
+        return self
+
+    def __exit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc: BaseException | None,
+        tb: TracebackType | None,
+    ) -> None:
+        """Close the file (flushing the encoder)."""
+        self.close()
