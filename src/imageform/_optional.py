@@ -24,6 +24,7 @@ EXTRAS = {
     "torch": "torch",
     "rawpy": "raw",
     "av": "video",
+    "trimesh": "video",
 }
 
 

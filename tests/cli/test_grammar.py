@@ -24,6 +24,7 @@ ROOT = Path(__file__).resolve().parents[2]
 #: A valid value for each required option (a new required option needs one here).
 EXAMPLES = {
     "board": "9x6",
+    "square": "30mm",
     "deficiency": "deutan",
     "camera": "cam.toml",
     "focal": "50mm",

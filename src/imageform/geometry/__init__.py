@@ -98,6 +98,7 @@ from imageform.geometry.stereo import (
     stereo_calibrate,
     stereo_rectify,
 )
+from imageform.geometry.tracking import BoardPose, BoardTracker
 from imageform.geometry.triangulation import TriangulationResult, triangulate_points
 from imageform.geometry.twoview import (
     EssentialResult,
@@ -124,6 +125,8 @@ __all__ = [
     "ARUCO_DICTIONARIES",
     "ArucoDictionary",
     "ArucoMarkers",
+    "BoardPose",
+    "BoardTracker",
     "BrownConrady",
     "CalibrationResult",
     "Camera",

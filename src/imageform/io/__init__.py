@@ -33,6 +33,7 @@ from imageform.io.image_io import (
     read_image,
     write_image,
 )
+from imageform.io.plan import PLAN_MESH_SUFFIXES, Plan, read_plan
 from imageform.io.png import read_png, write_png
 from imageform.io.raw import (
     CALIBRATION_ILLUMINANTS,
@@ -67,6 +68,7 @@ __all__ = [
     "DISTORTION_MODELS",
     "IMAGE_FORMATS",
     "OPTICS_MODELS",
+    "PLAN_MESH_SUFFIXES",
     "STEREO_FILE_FORMAT",
     "STEREO_FILE_VERSION",
     "VIDEO_SUFFIXES",
@@ -78,6 +80,7 @@ __all__ = [
     "Development",
     "Frame",
     "ImageInfo",
+    "Plan",
     "Provenance",
     "RawImage",
     "StereoCameraFile",
@@ -92,6 +95,7 @@ __all__ = [
     "open_video",
     "read_camera",
     "read_image",
+    "read_plan",
     "read_png",
     "read_raw",
     "read_stereo_camera",

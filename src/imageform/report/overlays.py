@@ -14,6 +14,7 @@ from imageform.errors import InvalidInputError
 __all__ = [
     "DETECTED_COLOUR",
     "TRUE_COLOUR",
+    "draw_pose_overlay",
     "draw_vanishing_overlay",
     "draw_vanishing_truth_overlay",
 ]
@@ -211,3 +212,126 @@ def draw_vanishing_truth_overlay(
             draw.line([(x, y - c0), (x, y + c0)], fill=colour, width=2 * k)
     canvas.info["offset"] = (ox, oy)
     return canvas
+
+
+#: Colours of the board axes (x, y, z: vermillion, bluish green, blue) and of the plan
+#: (yellow) and the detected corners (sky blue), Okabe-Ito.
+_AXES = ((213, 94, 0), (0, 158, 115), (0, 114, 178))
+_PLAN = (240, 228, 66)
+_CORNER = (86, 180, 233)
+
+
+def _segments_uv(
+    a: np.ndarray, b: np.ndarray, K: Any, R: Any, t: Any, distortion: Any, pieces: int = 8
+) -> list[list[tuple[float, float]]]:
+    """Return the polylines (PIL points) of 3-D segments ``a[i] -> b[i]`` seen by the camera.
+
+    Each segment is cut into ``pieces`` so that lens distortion bends it as the lens does; a
+    piece with an end at or behind the camera (or projected to NaN) is not drawn.
+    """
+    from imageform.geometry.distortion import project_points_distorted
+
+    if a.shape[0] == 0:
+        return []
+    s = np.linspace(0.0, 1.0, pieces + 1)
+    pts = a[:, None, :] + (b - a)[:, None, :] * s[None, :, None]  # (n, pieces+1, 3)
+    flat = pts.reshape(-1, 3)
+    if distortion is not None:
+        uv, ok = project_points_distorted(flat, K, R, t, distortion)
+    else:
+        from imageform.geometry import project_points
+
+        uv, ok = project_points(flat, K, R, t)
+    uv = np.asarray(uv, np.float64).reshape(a.shape[0], pieces + 1, 2) + 0.5
+    ok = np.asarray(ok, bool).reshape(a.shape[0], pieces + 1) & np.all(np.isfinite(uv), -1)
+    lines: list[list[tuple[float, float]]] = []
+    for seg, good in zip(uv, ok, strict=True):
+        run: list[tuple[float, float]] = []
+        for p, g in zip(seg, good, strict=True):
+            if g and abs(p[0]) < 1e6 and abs(p[1]) < 1e6:
+                run.append((float(p[0]), float(p[1])))
+            else:
+                if len(run) > 1:
+                    lines.append(run)
+                run = []
+        if len(run) > 1:
+            lines.append(run)
+    return lines
+
+
+def draw_pose_overlay(
+    image: ArrayLike,
+    pose: Any,
+    K: ArrayLike,
+    distortion: Any = None,
+    *,
+    plan: Any = None,
+    axis_length: float | None = None,
+    label: str | None = None,
+) -> np.ndarray:
+    """Draw a tracked board's axes, its corners and a plan on a frame; return uint8 RGB.
+
+    Everything is projected through the full camera model (``K`` and ``distortion``, the
+    pose's ``R``, ``tvec``); segments are cut into pieces so that distortion bends them, and
+    a piece at or behind the camera is never drawn. A frame whose pose was not found gets
+    only the label.
+
+    Parameters
+    ----------
+    image : array_like (H, W, 3) or (H, W)
+        The frame (uint8, or floats in [0, 1]).
+    pose : BoardPose
+        From :meth:`imageform.geometry.BoardTracker.update`.
+    K : array_like (3, 3)
+        The camera's intrinsics.
+    distortion : distortion model, optional
+        The camera's lens distortion.
+    plan : Plan, optional
+        Points, polylines and edges in the board's frame (:func:`imageform.io.read_plan`).
+    axis_length : float, optional
+        Length of the drawn axes in the board's unit (default: 3 squares' worth, the span of
+        the corners over 3).
+    label : str, optional
+        Text drawn at the top left (the frame number, the reprojection error ...).
+
+    Returns
+    -------
+    ndarray (H, W, 3) uint8
+    """
+    from PIL import Image, ImageDraw
+
+    canvas = Image.fromarray(_to_rgb8(image), "RGB")
+    draw = ImageDraw.Draw(canvas)
+    if pose.found:
+        k = np.asarray(K, np.float64)
+        R, t = np.asarray(pose.R, np.float64), np.asarray(pose.tvec, np.float64)
+        if plan is not None:
+            pts = np.asarray(plan.points, np.float64)
+            a_idx = [np.asarray(plan.edges[:, 0], np.int64)]
+            b_idx = [np.asarray(plan.edges[:, 1], np.int64)]
+            for line in plan.polylines:
+                a_idx.append(line[:-1])
+                b_idx.append(line[1:])
+            ia, ib = np.concatenate(a_idx), np.concatenate(b_idx)
+            for run in _segments_uv(pts[ia], pts[ib], k, R, t, distortion):
+                draw.line(run, fill=_PLAN, width=3)
+            if plan.singles.size:
+                single = pts[plan.singles]
+                for run in _segments_uv(single, single, k, R, t, distortion, pieces=1):
+                    x, y = run[0]
+                    draw.ellipse([x - 5, y - 5, x + 5, y + 5], outline=_PLAN, width=3)
+        for u, v in np.asarray(pose.image_points, np.float64) + 0.5:
+            draw.ellipse([u - 3, v - 3, u + 3, v + 3], outline=_CORNER, width=2)
+        if axis_length is None:
+            span = np.ptp(np.asarray(pose.object_points, np.float64), axis=0)
+            axis_length = float(max(span.max(), 1e-9)) / 3
+        origin = np.zeros((1, 3))
+        for i, colour in enumerate(_AXES):  # x, y on the board, z = x cross y (into it)
+            tip = np.zeros((1, 3))
+            tip[0, i] = axis_length
+            for line in _segments_uv(origin, tip, k, R, t, distortion):
+                draw.line(line, fill=colour, width=4)
+    if label:
+        draw.rectangle([0, 0, 8 + 7 * len(label), 20], fill=(0, 0, 0))
+        draw.text((4, 4), label, fill=(255, 255, 255))
+    return np.asarray(canvas)

@@ -23,6 +23,7 @@ from imageform.workflows import (
     sharpness,
     simulate,
     stereo,
+    track,
     vanishing,
 )
 from imageform.workflows._spec import Workflow, _describe
@@ -42,6 +43,7 @@ WORKFLOWS = MappingProxyType(
             *geometry.WORKFLOWS,
             *calibration.WORKFLOWS,
             *stereo.WORKFLOWS,
+            *track.WORKFLOWS,
             *vanishing.WORKFLOWS,
             *optics.WORKFLOWS,
             *sensor.WORKFLOWS,

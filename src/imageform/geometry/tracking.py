@@ -1,0 +1,270 @@
+r"""Track a calibration board's pose frame by frame: detection, PnP, prediction, smoothing.
+
+The course's surgical-navigation loop: with the camera calibrated (K and its distortion),
+each frame's board corners give the pose :math:`[R\,|\,\mathbf t]` of the board in the
+camera frame (:math:`\mathbf X_c = R\,\mathbf X_b + \mathbf t`) by PnP, which places a plan
+drawn in board coordinates on the live image.
+
+:class:`BoardTracker` keeps what one frame teaches the next:
+
+- **prediction**: the board is searched first in the previous frame's board box, grown by a
+  margin (half the box's size and at least 32 pixels each way); only when it is not found
+  there is the whole frame searched. A box is a fraction of the frame, so detection costs a
+  fraction too;
+- **one orientation**: a checkerboard looks the same turned half a turn; its corners are
+  ordered as the previous frame's were (the order nearer to them), so the pose never jumps;
+- **smoothing** (off by default): an exponential filter of the pose,
+  :math:`\mathbf t_k = \alpha\,\mathbf t + (1-\alpha)\,\mathbf t_{k-1}` and the rotation
+  interpolated on the unit quaternions (normalised linear interpolation) with the same
+  :math:`\alpha`; it trades lag for jitter.
+
+Frames where the board is not found, or its pose cannot be solved, are reported as not
+found (NaN pose), never invented from earlier frames.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from imageform._validate import as_int, as_real, describe
+from imageform.errors import InvalidInputError
+from imageform.geometry.charuco import CharucoBoard
+
+__all__ = ["BoardPose", "BoardTracker"]
+
+
+@dataclass(frozen=True)
+class BoardPose:
+    """The board's pose in one frame (:meth:`BoardTracker.update`).
+
+    Attributes
+    ----------
+    found : bool
+        The board was found and its pose solved.
+    rvec, tvec : ndarray (3,)
+        Rodrigues vector and translation, board to camera (:math:`X_c = R X_b + t`, t in the
+        board's unit); NaN when not found.
+    R : ndarray (3, 3)
+        The rotation (NaN when not found).
+    rms_px : float
+        Reprojection RMS of the corners used, in pixels (NaN when not found).
+    image_points : ndarray (m, 2)
+        The corners found (distorted pixels, as detected).
+    object_points : ndarray (m, 3)
+        The same corners on the board.
+    searched : {"box", "frame", "none"}
+        Where the board was found: the predicted box, the whole frame, or nowhere.
+    """
+
+    found: bool
+    rvec: NDArray[np.float64]
+    tvec: NDArray[np.float64]
+    R: NDArray[np.float64]
+    rms_px: float
+    image_points: NDArray[np.float64]
+    object_points: NDArray[np.float64]
+    searched: str
+
+    @property
+    def corners(self) -> int:
+        """How many corners were used."""
+        return int(self.image_points.shape[0])
+
+
+def _missing(searched: str = "none", uv: NDArray[np.float64] | None = None) -> BoardPose:
+    nan3 = np.full(3, np.nan)
+    empty = np.zeros((0, 2)) if uv is None else uv
+    return BoardPose(
+        False, nan3, nan3.copy(), np.full((3, 3), np.nan), np.nan, empty,
+        np.zeros((empty.shape[0], 3)), searched,
+    )  # fmt: skip
+
+
+def _quat(R: NDArray[np.float64]) -> NDArray[np.float64]:
+    from imageform.geometry.rotations import matrix_to_quaternion
+
+    return np.asarray(matrix_to_quaternion(R), np.float64)
+
+
+class BoardTracker:
+    r"""Follow a ChArUco board or a checkerboard through video frames.
+
+    Parameters
+    ----------
+    board : CharucoBoard or (int, int)
+        A ChArUco board (its lengths are the pose's unit), or a checkerboard's inner corners
+        ``(cols, rows)``.
+    K : array_like (3, 3)
+        The camera's intrinsics.
+    distortion : distortion model, optional
+        The camera's lens distortion (:class:`BrownConrady`, ...): corners are undistorted
+        before PnP.
+    square : float
+        A checkerboard's square side, the pose's unit (ignored for a ChArUco board, which
+        has its own).
+    min_corners : int
+        Fewest corners accepted for a pose (4 at least: a planar target).
+    smooth : float
+        The smoothing weight :math:`\alpha` of the newest pose, in (0, 1]; 1 (the default)
+        turns smoothing off.
+    predict : bool
+        Search the previous frame's box first.
+
+    Examples
+    --------
+    >>> board = CharucoBoard((5, 7), 30.0, 24.0, "4x4_50")
+    >>> K = np.array([[600.0, 0, 200], [0, 600, 250], [0, 0, 1]])
+    >>> tracker = BoardTracker(board, K)
+    >>> pose = tracker.update(board.image(60, margin_px=30))
+    >>> pose.found, pose.corners
+    (True, 24)
+    """
+
+    def __init__(
+        self,
+        board: CharucoBoard | tuple[int, int],
+        K: object,
+        distortion: object = None,
+        *,
+        square: float = 1.0,
+        min_corners: int = 6,
+        smooth: float = 1.0,
+        predict: bool = True,
+    ) -> None:
+        from imageform.geometry.calibration import checkerboard_points
+        from imageform.geometry.distortion import _check_model
+
+        if isinstance(board, CharucoBoard):
+            self._charuco: CharucoBoard | None = board
+            self._pattern: tuple[int, int] | None = None
+            self._points = board.corner_points()
+        elif isinstance(board, tuple | list) and len(board) == 2:
+            cols = as_int(board[0], "board (cols)", minimum=2, maximum=1000)
+            rows = as_int(board[1], "board (rows)", minimum=2, maximum=1000)
+            self._charuco, self._pattern = None, (cols, rows)
+            s = as_real(square, "square", positive=True, maximum=1e12)
+            self._points = checkerboard_points((cols, rows), s)
+        else:
+            raise InvalidInputError(
+                f"expected board as a CharucoBoard or (cols, rows) inner corners, got "
+                f"{describe(board)}"
+            )
+        k = np.asarray(K, dtype=np.float64)
+        if k.shape != (3, 3) or not np.all(np.isfinite(k)) or k[2, 2] == 0:
+            raise InvalidInputError(f"expected K as a finite (3, 3) matrix, got {describe(K)}")
+        self.K = k
+        if distortion is not None:
+            _check_model(distortion)
+        self.distortion = distortion
+        self.min_corners = as_int(min_corners, "min_corners", minimum=4, maximum=100000)
+        a = as_real(smooth, "smooth", positive=True, maximum=1.0)
+        self.smooth = a
+        self.predict = bool(predict)
+        self._box: tuple[int, int, int, int] | None = None
+        self._last_uv: NDArray[np.float64] | None = None
+        self._last: BoardPose | None = None
+
+    def reset(self) -> None:
+        """Forget the previous frames (a cut in the video)."""
+        self._box = self._last_uv = self._last = None
+
+    # -- detection ------------------------------------------------------------------------
+
+    def _detect(self, image: np.ndarray) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
+        """Return the corners (m, 2) in ``image`` and their indices into the board's points."""
+        if self._charuco is not None:
+            from imageform.geometry.charuco import detect_charuco
+
+            found = detect_charuco(image, self._charuco)
+            return np.asarray(found.corners, np.float64), np.asarray(found.ids, np.int64)
+        from imageform.geometry.checkerboard import find_checkerboard
+
+        assert self._pattern is not None
+        res = find_checkerboard(image, self._pattern)
+        if not res.found or res.corners is None:
+            return np.zeros((0, 2)), np.zeros(0, np.int64)
+        uv = np.asarray(res.corners, np.float64)
+        return uv, np.arange(uv.shape[0], dtype=np.int64)
+
+    def _in(
+        self, image: np.ndarray, box: tuple[int, int, int, int]
+    ) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
+        x0, y0, x1, y1 = box
+        uv, ids = self._detect(image[y0:y1, x0:x1])
+        return uv + np.array([x0, y0], np.float64), ids
+
+    def _order_like_last(self, uv: NDArray[np.float64]) -> NDArray[np.float64]:
+        """Order a checkerboard's corners as the last frame's (they may be half a turn off)."""
+        if self._last_uv is None or self._last_uv.shape != uv.shape:
+            return uv
+        turned = uv[::-1]
+        d0 = np.mean(np.sum((uv - self._last_uv) ** 2, axis=1))
+        d1 = np.mean(np.sum((turned - self._last_uv) ** 2, axis=1))
+        return turned if d1 < d0 else uv
+
+    # -- one frame ------------------------------------------------------------------------
+
+    def update(self, image: object) -> BoardPose:
+        """Find the board in ``image`` (a frame, (H, W) or (H, W, 3)) and solve its pose."""
+        from imageform.geometry.pnp import solve_pnp
+        from imageform.geometry.rotations import matrix_to_rvec
+
+        a = np.asarray(image)
+        if a.ndim not in (2, 3) or a.shape[0] < 8 or a.shape[1] < 8:
+            raise InvalidInputError(f"expected a frame as an (H, W[, 3]) image, got {describe(a)}")
+        h, w = a.shape[:2]
+        uv = np.zeros((0, 2))
+        ids = np.zeros(0, np.int64)
+        searched = "none"
+        if self.predict and self._box is not None:
+            uv, ids = self._in(a, self._box)
+            searched = "box"
+        if uv.shape[0] < self.min_corners:
+            uv, ids = self._detect(a)
+            searched = "frame"
+        if uv.shape[0] < self.min_corners:
+            self._box = None
+            self._last = None
+            return _missing("none", uv)
+        if self._pattern is not None:
+            uv = self._order_like_last(uv)
+        X = self._points[ids]
+        try:
+            res = solve_pnp(X, uv, self.K, self.distortion)
+        except InvalidInputError:
+            self._box = None
+            return _missing("none", uv)
+        if not bool(res.valid) or not np.isfinite(res.rms):
+            self._box = None
+            return _missing("none", uv)
+        R = np.asarray(res.R, np.float64)
+        t = np.asarray(res.tvec, np.float64)
+        if self.smooth < 1.0 and self._last is not None and self._last.found:
+            R, t = self._blend(R, t, self._last)
+        rvec = np.asarray(matrix_to_rvec(R), np.float64)
+        pose = BoardPose(True, rvec, t, R, float(res.rms), uv, X, searched)
+        # the next frame's box: this one's corners, grown by half their extent (>= 32 px)
+        lo, hi = uv.min(axis=0), uv.max(axis=0)
+        grow = np.maximum((hi - lo) * 0.5, 32.0)
+        x0, y0 = np.floor(lo - grow).astype(int)
+        x1, y1 = np.ceil(hi + grow).astype(int)
+        self._box = (max(x0, 0), max(y0, 0), min(x1, w), min(y1, h))
+        self._last_uv = uv
+        self._last = pose
+        return pose
+
+    def _blend(
+        self, R: NDArray[np.float64], t: NDArray[np.float64], last: BoardPose
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        from imageform.geometry.rotations import quaternion_to_matrix
+
+        a = self.smooth
+        q0, q1 = _quat(last.R), _quat(R)
+        if np.dot(q0, q1) < 0:  # the same rotation, the nearer sign
+            q1 = -q1
+        q = (1 - a) * q0 + a * q1
+        q /= np.linalg.norm(q)
+        return np.asarray(quaternion_to_matrix(q), np.float64), (1 - a) * last.tvec + a * t

@@ -1,0 +1,325 @@
+"""``imageform track``: a board's pose in every frame of a video, and the plan drawn on it.
+
+The course's surgical-navigation loop: the endoscope is calibrated (its camera file), a
+board (ChArUco or checkerboard) is fixed to the patient's frame, and each frame's pose of the
+board places a plan drawn in board coordinates on the live image. The maths lives in
+:class:`imageform.geometry.BoardTracker` (detection, PnP, prediction, smoothing) and
+:func:`imageform.report.overlays.draw_pose_overlay`; this module reads the video, writes
+``poses.csv`` and the overlay video, and reports speed and jitter.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+import re
+import sys
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from imageform.errors import InvalidInputError
+from imageform.workflows._spec import Input, Options, Output, Result, Run, Workflow, option
+
+__all__ = ["POSE_COLUMNS", "WORKFLOWS", "TrackOptions", "parse_track_board"]
+
+#: Columns of ``poses.csv``.
+POSE_COLUMNS = ("frame", "time_s", "found", "corners", "rx", "ry", "rz", "tx", "ty", "tz", "rms_px")
+
+_BOARD = re.compile(r"^(charuco|checkerboard):(\d+)x(\d+)$|^(\d+)x(\d+)$")
+
+
+def parse_track_board(text: str) -> tuple[str, tuple[int, int]]:
+    """Parse ``--board``: ``charuco:COLSxROWS`` (squares) or ``checkerboard:COLSxROWS``.
+
+    A checkerboard is given by its inner corners (OpenCV's pattern size, as ``imageform
+    calibrate``); a bare ``COLSxROWS`` is a checkerboard.
+
+    Examples
+    --------
+    >>> parse_track_board("charuco:7x5"), parse_track_board("checkerboard:9x6")
+    (('charuco', (7, 5)), ('checkerboard', (9, 6)))
+    """
+    m = _BOARD.match(str(text).strip().lower())
+    if not m:
+        raise InvalidInputError(
+            "expected --board as charuco:COLSxROWS (squares) or checkerboard:COLSxROWS (inner "
+            f"corners), got {str(text)[:40]!r}"
+        )
+    if m.group(1):
+        kind, cols, rows = m.group(1), int(m.group(2)), int(m.group(3))
+    else:
+        kind, cols, rows = "checkerboard", int(m.group(4)), int(m.group(5))
+    low = 3 if kind == "charuco" else 2
+    if not (low <= cols <= 1000 and low <= rows <= 1000):
+        what = "squares" if kind == "charuco" else "inner corners"
+        raise InvalidInputError(f"expected {low} to 1000 {what} a side in --board, got {text!r}")
+    return kind, (cols, rows)
+
+
+def _length_unit(text: str) -> str:
+    """Return the unit a length is written in (``"30mm"`` -> ``"mm"``; a bare number: mm)."""
+    m = re.match(r"^\s*[-+]?(?:\d+\.?\d*|\.\d+)(?:e[-+]?\d+)?\s*([a-zµ]*)\s*$", text.lower())
+    return (m.group(1) if m and m.group(1) else "mm") if m else "mm"
+
+
+@dataclass(frozen=True, kw_only=True)
+class TrackOptions(Options):
+    """Options of ``imageform track``."""
+
+    camera: Path = option(
+        help="Camera file of the video's camera (K and distortion: imageform calibrate).",
+        metavar="FILE",
+        input=True,
+    )
+    board: str = option(
+        help="charuco:COLSxROWS (squares, with --marker) or checkerboard:COLSxROWS (inner "
+        "corners).",
+        metavar="KIND:CxR",
+    )
+    square: str = option(
+        help="Side of a square with unit (30mm, 3cm; bare number: mm): the unit of the poses.",
+    )
+    marker: str | None = option(
+        None, help="ChArUco: side of a marker with unit (22mm), smaller than --square."
+    )
+    dictionary: str = option(
+        "6x6_250",
+        help="ChArUco: the markers' ArUco dictionary (4x4_50 ... 7x7_1000, aruco_original).",
+        choices="imageform.geometry.aruco:ARUCO_DICTIONARIES",
+    )
+    overlay: Path | None = option(
+        None,
+        help="Also write the video with the board axes, corners and plan drawn (.mp4, .mkv, "
+        ".avi), at the input's frame rate.",
+        output=True,
+    )
+    plan: Path | None = option(
+        None,
+        help="A plan in the board's frame and unit: CSV x,y,z[,path] or a mesh (.ply, .obj, "
+        ".stl), drawn on --overlay.",
+        input=True,
+    )
+    smooth: float | None = option(
+        None,
+        help="Smooth the poses: weight of the newest pose in (0, 1) (exponential filter; "
+        "less jitter, more lag). Off by default.",
+        metavar="ALPHA",
+    )
+    fps: float | None = option(
+        None, help="Frame rate of an image sequence (default 30), or to ask a device for."
+    )
+    max_frames: int | None = option(
+        None, help="Stop after this many frames (a device runs until Ctrl-C otherwise)."
+    )
+    no_predict: bool = option(
+        False, help="Search every frame whole (default: the previous frame's box first)."
+    )
+
+    def check(self) -> None:
+        """Check the board, the lengths and the smoothing weight."""
+        from imageform._units import parse_length
+
+        super().check()
+        kind, _ = parse_track_board(self.board)
+        parse_length(self.square, "--square", default_unit="mm", unit="mm")
+        if kind == "charuco":
+            if self.marker is None:
+                raise InvalidInputError("--board charuco:COLSxROWS needs --marker (e.g. 22mm)")
+            m = parse_length(self.marker, "--marker", default_unit="mm", unit="mm")
+            s = parse_length(self.square, "--square", default_unit="mm", unit="mm")
+            if not m < s:
+                raise InvalidInputError(
+                    f"expected --marker smaller than --square, got {self.marker}"
+                )
+        elif self.marker is not None:
+            raise InvalidInputError("--marker is for a ChArUco --board charuco:COLSxROWS")
+        if self.smooth is not None and not 0 < self.smooth < 1:
+            raise InvalidInputError(f"expected --smooth in (0, 1), got {self.smooth:g}")
+        if self.max_frames is not None and self.max_frames < 1:
+            raise InvalidInputError(f"expected --max-frames >= 1, got {self.max_frames}")
+
+
+def _fmt(x: float) -> str:
+    return "nan" if not math.isfinite(x) else f"{x:.6g}"
+
+
+def _median(values: list[float]) -> float | None:
+    import numpy as np
+
+    return float(np.median(values)) if values else None
+
+
+def track(run: Run, opts: TrackOptions, *, out: Path, video: str) -> Result:
+    """Track the board through the video; write poses.csv (and the overlay)."""
+    import numpy as np
+
+    from imageform._units import parse_length
+    from imageform.geometry import BoardTracker, CharucoBoard
+    from imageform.io import VideoWriter, open_video, read_camera, read_plan
+    from imageform.report.overlays import draw_pose_overlay
+
+    cf = read_camera(opts.camera)
+    cam = cf.camera
+    unit = _length_unit(opts.square)
+    square = parse_length(opts.square, "--square", default_unit="mm", unit=unit)
+    kind, size = parse_track_board(opts.board)
+    if kind == "charuco":
+        assert opts.marker is not None
+        marker = parse_length(opts.marker, "--marker", default_unit="mm", unit=unit)
+        board: Any = CharucoBoard(size, square, marker, opts.dictionary)
+    else:
+        board = size
+    plan = read_plan(opts.plan) if opts.plan is not None else None
+    tracker = BoardTracker(
+        board,
+        cam.K,
+        cam.distortion,
+        square=square,
+        smooth=opts.smooth if opts.smooth is not None else 1.0,
+        predict=not opts.no_predict,
+    )
+    reader = open_video(video, fps=opts.fps)
+    info = reader.info
+    if cam.image_size is not None and tuple(cam.image_size) != (info.width, info.height):
+        reader.close()
+        raise InvalidInputError(
+            f"camera file {opts.camera} is for {cam.image_size[0]} x {cam.image_size[1]} px "
+            f"images, {video} has {info.width} x {info.height} px frames"
+        )
+    live = info.kind == "device"
+    writer = VideoWriter(run.file(opts.overlay), fps=info.fps) if opts.overlay else None
+    rows: list[list[str]] = []
+    rms: list[float] = []
+    steps: list[float] = []
+    angles: list[float] = []
+    latency: list[float] = []
+    last: Any = None
+    found = 0
+    interrupted = False
+    t0 = time.perf_counter()
+    try:
+        with reader:
+            for frame in reader:
+                got = time.perf_counter()
+                pose = tracker.update(frame.image)
+                latency.append(time.perf_counter() - got)
+                rows.append(
+                    [
+                        str(frame.index),
+                        f"{frame.time_s:.6f}",
+                        str(int(pose.found)),
+                        str(pose.corners),
+                        *(_fmt(float(v)) for v in pose.rvec),
+                        *(_fmt(float(v)) for v in pose.tvec),
+                        _fmt(pose.rms_px),
+                    ]
+                )
+                if pose.found:
+                    found += 1
+                    rms.append(pose.rms_px)
+                    if last is not None and last.found:
+                        steps.append(float(np.linalg.norm(pose.tvec - last.tvec)))
+                        dR = pose.R @ last.R.T
+                        c = float(np.clip((np.trace(dR) - 1) / 2, -1.0, 1.0))
+                        angles.append(math.degrees(math.acos(c)))
+                last = pose
+                if writer is not None:
+                    label = f"frame {frame.index}" + (
+                        f"  {pose.corners} corners  rms {pose.rms_px:.2f} px"
+                        if pose.found
+                        else "  board not found"
+                    )
+                    writer.write(
+                        draw_pose_overlay(
+                            frame.image, pose, cam.K, cam.distortion, plan=plan, label=label
+                        )
+                    )
+                if live and frame.index % 30 == 29:
+                    dt = time.perf_counter() - t0
+                    print(
+                        f"imageform track: frame {frame.index + 1}, "
+                        f"{(frame.index + 1) / dt:.1f} fps, latency "
+                        f"{1000 * latency[-1]:.0f} ms",
+                        file=sys.stderr,
+                        flush=True,
+                    )
+                if opts.max_frames is not None and len(rows) >= opts.max_frames:
+                    break
+    except KeyboardInterrupt:
+        if not live:
+            raise
+        interrupted = True  # a live capture stops on Ctrl-C: the outputs are completed
+    finally:
+        if writer is not None:
+            writer.close()
+    elapsed = time.perf_counter() - t0
+    if not rows:
+        raise InvalidInputError(f"{video}: no frame was read")
+    with open(run.file(out), "w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(POSE_COLUMNS)
+        w.writerows(rows)
+    n = len(rows)
+    if interrupted:
+        run.note(f"note: stopped by Ctrl-C after {n} frames; {out} is complete")
+    if found == 0:
+        run.note(f"note: the board was found in none of the {n} frames (check --board)")
+    summary: dict[str, Any] = {
+        "video": video,
+        "out": out,
+        "overlay": opts.overlay,
+        "frames": n,
+        "found": found,
+        "found_fraction": found / n,
+        "unit": unit,
+        "fps": n / elapsed if elapsed > 0 else None,
+        "latency_ms_median": 1000 * (_median(latency) or 0.0),
+        "rms_px_median": _median(rms),
+        "jitter_translation_median": _median(steps),
+        "jitter_rotation_deg_median": _median(angles),
+        "source": {"kind": info.kind, "width": info.width, "height": info.height, "fps": info.fps},
+        "interrupted": interrupted,
+    }
+    text = (
+        f"{video}: {n} frames ({info.width}x{info.height}, {info.fps:g} fps), board found in "
+        f"{found} ({100 * found / n:.0f} %)",
+        f"{summary['fps']:.1f} frames per second, median latency "
+        f"{summary['latency_ms_median']:.1f} ms, median reprojection RMS "
+        + (f"{summary['rms_px_median']:.3f} px" if rms else "-")
+        + (
+            f", frame-to-frame change median {summary['jitter_translation_median']:.3g} {unit} "
+            f"/ {summary['jitter_rotation_deg_median']:.3g} deg"
+            if steps
+            else ""
+        ),
+        f"poses -> {out}" + (f", overlay -> {opts.overlay}" if opts.overlay else ""),
+    )
+    return Result(summary, text)
+
+
+WORKFLOWS = (
+    Workflow(
+        "track",
+        "Track a board's pose in every frame of a video (or a camera) and overlay a plan.",
+        "imageform.workflows.track:track",
+        TrackOptions,
+        (
+            Input(
+                "video",
+                "A video file, a folder or glob of images, or a capture device (/dev/video0); "
+                "files and devices need imageform[video].",
+                metavar="VIDEO",
+                kind="text",
+            ),
+        ),
+        Output("Poses to write: CSV of frame,time_s,found,corners,rx,ry,rz,tx,ty,tz,rms_px."),
+        suffixes=(".csv",),
+        group="geometry",
+        description="Per frame: detect the board (the previous frame's box first), undistort "
+        "the corners with the camera file's model, solve PnP with refinement (X_cam = R X_board "
+        "+ t, r a Rodrigues vector, t in the unit of --square); frames without the board are "
+        "NaN rows. A capture device runs until Ctrl-C (or --max-frames) and prints its speed.",
+    ),
+)

@@ -1,0 +1,120 @@
+"""Videos with known poses for the tracking tests and benchmark (issue 27).
+
+A board (ChArUco as OpenCV draws it, or a checkerboard) pasted on a real photograph (a
+Kodak image when the reference data is there, else scikit-image's coffee), the whole plane
+seen by a pinhole camera from a smooth path of poses: each frame is the plane's texture
+warped by the homography :math:`H = K [r_1\\ r_2\\ t] A` (A maps texture pixels to board
+millimetres), with a little sensor noise. The truth is the pose of every frame.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+KODAK = ROOT.parent / "shared" / "data" / "kodak" / "kodim08.png"
+
+
+def background() -> np.ndarray:
+    """A real photograph, uint8 RGB."""
+    if KODAK.is_file():
+        from imageform.io import read_image
+
+        return np.asarray(read_image(KODAK))
+    from skimage import data
+
+    return np.asarray(data.coffee())
+
+
+def board_texture(
+    kind: str = "charuco", squares: tuple[int, int] = (7, 5), px: int = 40, margin: int = 240
+) -> tuple[np.ndarray, float]:
+    """The plane's texture (uint8 RGB) and the board's top-left in texture pixels.
+
+    A ChArUco board of ``squares`` (5x5_100 markers, 30 mm squares, 22 mm markers) drawn by
+    OpenCV, or a checkerboard of ``squares`` squares, pasted on the photograph.
+    """
+    import cv2
+
+    cols, rows = squares
+    if kind == "charuco":
+        d = cv2.aruco.getPredefinedDictionary(cv2.aruco.DICT_5X5_100)
+        board = cv2.aruco.CharucoBoard((cols, rows), 30.0, 22.0, d)
+        img = board.generateImage((cols * px, rows * px))
+    else:
+        r, c = np.mgrid[0:rows, 0:cols]
+        img = np.kron(((r + c) % 2 == 0) * 255, np.ones((px, px))).astype(np.uint8)
+    bg = background()
+    h, w = rows * px + 2 * margin, cols * px + 2 * margin
+    tex = cv2.resize(bg, (w, h), interpolation=cv2.INTER_AREA)
+    quiet = 12  # a white border around the board, as printed
+    tex[
+        margin - quiet : margin + rows * px + quiet, margin - quiet : margin + cols * px + quiet
+    ] = 255
+    tex[margin : margin + rows * px, margin : margin + cols * px] = img[..., None]
+    return tex, float(margin)
+
+
+def poses(n: int, distance: float = 420.0) -> list[tuple[np.ndarray, np.ndarray]]:
+    """A smooth path: the camera circles and tilts around the board's centre (R, t in mm)."""
+    from imageform.geometry import look_at
+
+    out = []
+    centre = np.array([105.0, 75.0, 0.0])
+    for i in range(n):
+        a = 2 * np.pi * i / max(n, 1)
+        eye = centre + np.array([90 * np.cos(a), 60 * np.sin(a), -distance])
+        pose = look_at(eye, centre + np.array([10 * np.sin(a), 0, 0]), up=(0.0, -1.0, 0.0))
+        out.append((np.asarray(pose.R, np.float64), np.asarray(pose.t, np.float64)))
+    return out
+
+
+def render(
+    tex: np.ndarray,
+    origin_px: float,
+    K: np.ndarray,
+    pose: tuple[np.ndarray, np.ndarray],
+    size: tuple[int, int],
+    *,
+    px_per_square: int = 40,
+    noise: float = 2.0,
+    rng: np.random.Generator | None = None,
+) -> np.ndarray:
+    """One frame: the texture warped by the pose's homography, with Gaussian noise."""
+    import cv2
+
+    R, t = pose
+    s = 30.0 / px_per_square  # mm per texture pixel
+    # texture pixel centre j is at (j + 0.5 - origin) s on the board (pixel edges on its edges)
+    off = (0.5 - origin_px) * s
+    A = np.array([[s, 0, off], [0, s, off], [0, 0, 1.0]])
+    H = K @ np.column_stack([R[:, 0], R[:, 1], t]) @ A
+    # pixel centres at integers on both sides: OpenCV's warp maps centres to centres
+    frame = cv2.warpPerspective(tex, H, size, flags=cv2.INTER_LINEAR, borderValue=(40, 40, 40))
+    if noise:
+        rng = rng or np.random.default_rng(0)
+        frame = np.clip(frame + rng.normal(0, noise, frame.shape), 0, 255).astype(np.uint8)
+    return frame
+
+
+def write_video(
+    path: Path, K: np.ndarray, n: int, size: tuple[int, int], kind: str = "charuco", fps: float = 30
+) -> list[tuple[np.ndarray, np.ndarray]]:
+    """Render ``n`` frames to ``path`` (a video file, or a folder of PNGs); return the poses."""
+    from imageform.io import VideoWriter, write_image
+
+    tex, origin = board_texture(kind)
+    truth = poses(n)
+    rng = np.random.default_rng(1)
+    frames = (render(tex, origin, K, p, size, rng=rng) for p in truth)
+    if path.suffix:
+        with VideoWriter(path, fps=fps, quality=12) as video:
+            for f in frames:
+                video.write(f)
+    else:
+        path.mkdir(parents=True, exist_ok=True)
+        for i, f in enumerate(frames):
+            write_image(path / f"frame{i:04d}.png", f)
+    return truth
