@@ -108,19 +108,40 @@ def test_frames_without_the_board_are_nan(tmp_path: Path) -> None:
     assert rows[1]["tx"] == "nan" and rows[1]["corners"] == "0"
 
 
-def test_tracker_prediction_searches_the_box_first() -> None:
+def test_tracker_follows_corners_then_detects_again() -> None:
+    tex, origin = video_scenes.board_texture()
+    board = CharucoBoard((7, 5), 30.0, 22.0, "5x5_100")
+    tracker = BoardTracker(board, K, redetect=3)
+    truth = video_scenes.poses(24)[:5]
+    where, err = [], []
+    for R, t in truth:
+        pose = tracker.update(video_scenes.render(tex, origin, K, (R, t), SIZE))
+        where.append(pose.searched)
+        assert pose.found
+        err.append(np.linalg.norm(pose.tvec - t) / np.linalg.norm(t))
+    # tracked corners between detections (in the last box) every third frame
+    assert where == ["frame", "tracked", "tracked", "box", "tracked"]
+    assert max(err) < 0.005, err
+    tracker.reset()
+    pose = tracker.update(video_scenes.render(tex, origin, K, truth[0], SIZE))
+    assert pose.searched == "frame"
+
+
+def test_tracked_corners_never_cover_an_occluder() -> None:
+    """A hand over half the board: tracking must not report the corners under it."""
     tex, origin = video_scenes.board_texture()
     board = CharucoBoard((7, 5), 30.0, 22.0, "5x5_100")
     tracker = BoardTracker(board, K)
-    poses = video_scenes.poses(3)
-    where = []
-    for p in poses:
-        pose = tracker.update(video_scenes.render(tex, origin, K, p, SIZE))
-        where.append(pose.searched)
-        assert pose.found
-    assert where == ["frame", "box", "box"]
-    tracker.reset()
-    assert tracker.update(video_scenes.render(tex, origin, K, poses[0], SIZE)).searched == "frame"
+    a, b = video_scenes.poses(48)[:2]
+    first = tracker.update(video_scenes.render(tex, origin, K, a, SIZE))
+    assert first.found and first.corners == 24
+    frame = video_scenes.render(tex, origin, K, b, SIZE)
+    cut = int(np.median(first.image_points[:, 0]))
+    frame[:, cut:] = (180, 120, 110)  # skin-coloured, flat
+    pose = tracker.update(frame)
+    if pose.found:
+        assert np.all(pose.image_points[:, 0] < cut - 2), pose.image_points
+        assert pose.corners < 24
 
 
 def test_smoothing_blends_poses() -> None:

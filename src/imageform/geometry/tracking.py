@@ -11,6 +11,15 @@ drawn in board coordinates on the live image.
   margin (half the box's size and at least 32 pixels each way); only when it is not found
   there is the whole frame searched. A box is a fraction of the frame, so detection costs a
   fraction too;
+- **corner tracking**: when the last frame's pose is known, its corners are moved by their
+  last motion (constant velocity) and refined in the new frame with the sub-pixel saddle
+  refinement (:func:`~imageform.geometry.refine_corners`, a window of a third of a square,
+  then the detector's own window from there)
+  instead of detecting the board again; the frame is accepted only when at least 80 % of
+  the corners refine, none moves more than half a square from its prediction, and the PnP
+  fit of all of them leaves every corner within 1.5 pixels (RMS within 0.75). Anything
+  else, and every ``redetect``-th frame (to pick up corners that came into view), falls
+  back to detection. A refinement costs a few milliseconds where a detection costs tens;
 - **one orientation**: a checkerboard looks the same turned half a turn; its corners are
   ordered as the previous frame's were (the order nearer to them), so the pose never jumps;
 - **smoothing** (off by default): an exponential filter of the pose,
@@ -55,8 +64,9 @@ class BoardPose:
         The corners found (distorted pixels, as detected).
     object_points : ndarray (m, 3)
         The same corners on the board.
-    searched : {"box", "frame", "none"}
-        Where the board was found: the predicted box, the whole frame, or nowhere.
+    searched : {"tracked", "box", "frame", "none"}
+        How the board was found: its corners tracked from the last frame, detected in the
+        predicted box, in the whole frame, or not at all.
     """
 
     found: bool
@@ -111,7 +121,10 @@ class BoardTracker:
         The smoothing weight :math:`\alpha` of the newest pose, in (0, 1]; 1 (the default)
         turns smoothing off.
     predict : bool
-        Search the previous frame's box first.
+        Track the last frame's corners, then search its box, before the whole frame.
+    redetect : int
+        Detect the board (instead of tracking its corners) at least every ``redetect``
+        frames, so that corners coming into view are picked up.
 
     Examples
     --------
@@ -133,6 +146,7 @@ class BoardTracker:
         min_corners: int = 6,
         smooth: float = 1.0,
         predict: bool = True,
+        redetect: int = 10,
     ) -> None:
         from imageform.geometry.calibration import checkerboard_points
         from imageform.geometry.distortion import _check_model
@@ -163,13 +177,19 @@ class BoardTracker:
         a = as_real(smooth, "smooth", positive=True, maximum=1.0)
         self.smooth = a
         self.predict = bool(predict)
+        self.redetect = as_int(redetect, "redetect", minimum=1, maximum=1_000_000)
         self._box: tuple[int, int, int, int] | None = None
         self._last_uv: NDArray[np.float64] | None = None
         self._last: BoardPose | None = None
+        self._last_ids: NDArray[np.int64] | None = None
+        self._prev_uv: dict[int, NDArray[np.float64]] = {}
+        self._since_detection = 0
 
     def reset(self) -> None:
         """Forget the previous frames (a cut in the video)."""
-        self._box = self._last_uv = self._last = None
+        self._box = self._last_uv = self._last = self._last_ids = None
+        self._prev_uv = {}
+        self._since_detection = 0
 
     # -- detection ------------------------------------------------------------------------
 
@@ -205,6 +225,88 @@ class BoardTracker:
         d1 = np.mean(np.sum((turned - self._last_uv) ** 2, axis=1))
         return turned if d1 < d0 else uv
 
+    def _scale_px(self, pose: BoardPose) -> float:
+        """Return a square's side in pixels near the board's corners (from the last pose)."""
+        from imageform.geometry.camera import project_points
+        from imageform.geometry.distortion import project_points_distorted
+
+        X = pose.object_points
+        step = float(np.linalg.norm(self._points[1] - self._points[0])) or 1.0
+        both = np.concatenate([X, X + np.array([step, 0.0, 0.0])])
+        if self.distortion is not None:
+            uv, _ = project_points_distorted(both, self.K, pose.R, pose.tvec, self.distortion)
+        else:
+            uv, _ = project_points(both, self.K, pose.R, pose.tvec)
+        uv = np.asarray(uv, np.float64)
+        d = np.linalg.norm(uv[X.shape[0] :] - uv[: X.shape[0]], axis=1)
+        d = d[np.isfinite(d)]
+        return float(np.median(d)) if d.size else 0.0
+
+    def _track(self, image: np.ndarray) -> tuple[NDArray[np.float64], NDArray[np.int64]] | None:
+        """Refine the last frame's corners, moved by their last motion, in ``image``.
+
+        None when the corners do not follow (too few refine, one jumps, or they do not fit
+        one pose): the caller detects the board instead.
+        """
+        from imageform.geometry.checkerboard_subpix import refine_corners
+
+        last, ids = self._last, self._last_ids
+        if last is None or ids is None or self._last_uv is None:
+            return None
+        uv = self._last_uv
+        velocity = np.array(
+            [uv[k] - self._prev_uv[int(i)] if int(i) in self._prev_uv else (0.0, 0.0)
+             for k, i in enumerate(ids)]
+        )  # fmt: skip
+        pred = uv + velocity
+        square = self._scale_px(last)
+        if not square > 8:  # too small to refine reliably (a detection decides)
+            return None
+        hw = int(np.clip(round(square / 3), 2, 15))
+        h, w = image.shape[:2]
+        lo = np.floor(pred.min(axis=0) - 2 * hw - 2).astype(int)
+        hi = np.ceil(pred.max(axis=0) + 2 * hw + 3).astype(int)
+        x0, y0 = max(lo[0], 0), max(lo[1], 0)
+        x1, y1 = min(hi[0], w), min(hi[1], h)
+        if x1 - x0 < 8 or y1 - y0 < 8:
+            return None
+        inside = np.all((pred >= [x0 + hw, y0 + hw]) & (pred <= [x1 - 1 - hw, y1 - 1 - hw]), 1)
+        if not np.any(inside):
+            return None
+        offset = np.array([x0, y0], np.float64)
+        crop = image[y0:y1, x0:x1]
+        res = refine_corners(crop, pred[inside] - offset, half_window=hw)
+        # then, from there, the detector's own window: clear of the markers' corners for a
+        # ChArUco board (whose bits would pull a wide window off the saddle)
+        fine = int(0.3 * square)
+        if self._charuco is not None:
+            b = self._charuco
+            gap = (b.square_length - b.marker_length) / 2 * np.sqrt(2) / b.square_length
+            fine = min(fine, int(0.6 * gap * square))
+        res2 = refine_corners(
+            crop, np.asarray(res.corners), half_window=max(2, fine), max_iter=40, eps=1e-4
+        )
+        got = np.asarray(res2.corners, np.float64) + offset
+        ok = np.isin(np.asarray(res.status), (0, 1)) & np.isin(np.asarray(res2.status), (0, 1))
+        ok &= np.linalg.norm(got - pred[inside], axis=1) < 0.5 * square
+        keep = np.flatnonzero(inside)[ok]
+        if keep.size < max(self.min_corners, int(np.ceil(0.8 * ids.size))):
+            return None
+        return got[ok], ids[keep]
+
+    def _fits(self, uv: NDArray[np.float64], X: NDArray[np.float64], res: object) -> bool:
+        """Whether every corner lies within 1.5 px of the pose's reprojection."""
+        from imageform.geometry.camera import project_points
+        from imageform.geometry.distortion import project_points_distorted
+
+        R, t = np.asarray(res.R), np.asarray(res.tvec)  # type: ignore[attr-defined]
+        if self.distortion is not None:
+            proj, _ = project_points_distorted(X, self.K, R, t, self.distortion)
+        else:
+            proj, _ = project_points(X, self.K, R, t)
+        err = np.linalg.norm(np.asarray(proj, np.float64) - uv, axis=1)
+        return bool(np.all(np.isfinite(err)) and err.max() < 1.5 and float(res.rms) < 0.75)  # type: ignore[attr-defined]
+
     # -- one frame ------------------------------------------------------------------------
 
     def update(self, image: object) -> BoardPose:
@@ -219,27 +321,52 @@ class BoardTracker:
         uv = np.zeros((0, 2))
         ids = np.zeros(0, np.int64)
         searched = "none"
-        if self.predict and self._box is not None:
-            uv, ids = self._in(a, self._box)
-            searched = "box"
-        if uv.shape[0] < self.min_corners:
-            uv, ids = self._detect(a)
-            searched = "frame"
-        if uv.shape[0] < self.min_corners:
-            self._box = None
-            self._last = None
-            return _missing("none", uv)
-        if self._pattern is not None:
-            uv = self._order_like_last(uv)
-        X = self._points[ids]
-        try:
-            res = solve_pnp(X, uv, self.K, self.distortion)
-        except InvalidInputError:
-            self._box = None
-            return _missing("none", uv)
-        if not bool(res.valid) or not np.isfinite(res.rms):
-            self._box = None
-            return _missing("none", uv)
+        res = None
+        if (
+            self.predict
+            and self._last is not None
+            and self._last.found
+            and self._since_detection + 1 < self.redetect
+        ):
+            tracked = self._track(a)
+            if tracked is not None:
+                uv, ids = tracked
+                X = self._points[ids]
+                try:
+                    res = solve_pnp(X, uv, self.K, self.distortion)
+                except InvalidInputError:
+                    res = None
+                if res is not None and bool(res.valid) and self._fits(uv, X, res):
+                    searched = "tracked"
+                else:
+                    res = None
+        if res is None:
+            if self.predict and self._box is not None:
+                uv, ids = self._in(a, self._box)
+                searched = "box"
+            if uv.shape[0] < self.min_corners:
+                uv, ids = self._detect(a)
+                searched = "frame"
+            if uv.shape[0] < self.min_corners:
+                self._box = None
+                self._last = None
+                return _missing("none", uv)
+            if self._pattern is not None:
+                uv = self._order_like_last(uv)
+            X = self._points[ids]
+            try:
+                res = solve_pnp(X, uv, self.K, self.distortion)
+            except InvalidInputError:
+                self._box = None
+                self._last = None
+                return _missing("none", uv)
+            if not bool(res.valid) or not np.isfinite(res.rms):
+                self._box = None
+                self._last = None
+                return _missing("none", uv)
+            self._since_detection = 0
+        else:
+            self._since_detection += 1
         R = np.asarray(res.R, np.float64)
         t = np.asarray(res.tvec, np.float64)
         if self.smooth < 1.0 and self._last is not None and self._last.found:
@@ -252,7 +379,12 @@ class BoardTracker:
         x0, y0 = np.floor(lo - grow).astype(int)
         x1, y1 = np.ceil(hi + grow).astype(int)
         self._box = (max(x0, 0), max(y0, 0), min(x1, w), min(y1, h))
+        if self._last_ids is not None and self._last_uv is not None:
+            self._prev_uv = {int(i): p for i, p in zip(self._last_ids, self._last_uv, strict=True)}
+        else:
+            self._prev_uv = {}
         self._last_uv = uv
+        self._last_ids = ids
         self._last = pose
         return pose
 
