@@ -25,9 +25,17 @@ from imageform.simulate.result import (
 from imageform.simulate.scene import Scene, SceneObject, default_scene, load_scene
 from imageform.simulate.schema import SCENE_SCHEMA
 from imageform.simulate.stages import gaussian_sigma_for_mtf50
+from imageform.simulate.trajectory import (
+    MAX_TRAJECTORY_FRAMES,
+    Trajectory,
+    board_poses,
+    read_trajectory,
+    render_frames,
+)
 
 __all__ = [
     "LAB_FORMAT",
+    "MAX_TRAJECTORY_FRAMES",
     "SCENE_SCHEMA",
     "STAGE_KINDS",
     "WORLD_UP",
@@ -43,13 +51,17 @@ __all__ = [
     "SceneQuad",
     "SimulationResult",
     "Stage",
+    "Trajectory",
     "VanishingTruth",
     "apply_camera_file",
     "apply_color_correction",
+    "board_poses",
     "default_scene",
     "fit_color_correction",
     "gaussian_sigma_for_mtf50",
     "load_scene",
+    "read_trajectory",
+    "render_frames",
     "render_lab_set",
     "render_scene",
     "simulate",

@@ -56,6 +56,22 @@ class SimulateOptions(Options):
         metavar="FILE.dng",
     )
 
+    trajectory: Path | None = option(
+        None,
+        help="Also render the scene along this camera path (CSV: time_s and rx,ry,rz,tx,ty,tz "
+        "world to camera in metres, or eye_x..z,target_x..z) into --video, with the true poses "
+        "beside it.",
+        input=True,
+        metavar="PATH.csv",
+    )
+    video: Path | None = option(
+        None,
+        help="The video of --trajectory (.mp4, .mkv, .avi); the truth goes to VIDEO.poses.csv "
+        "(the checkerboard's pose, as imageform track writes it).",
+        output=True,
+        metavar="FILE",
+    )
+
     def check(self) -> None:
         """Check ``--seed`` (an integer >= 0) and that ``--raw`` names a .dng file."""
         super().check()
@@ -65,6 +81,14 @@ class SimulateOptions(Options):
             raise InvalidInputError("--lab renders a camera file's lab set: give --camera FILE")
         if self.raw is not None and Path(self.raw).suffix.lower() != ".dng":
             raise InvalidInputError(f"expected --raw as a .dng file, got {str(self.raw)[-60:]!r}")
+        if (self.trajectory is None) != (self.video is None):
+            raise InvalidInputError("--trajectory and --video go together")
+        if self.video is not None and Path(self.video).suffix.lower() not in (
+            ".mp4", ".mkv", ".avi", ".mov",
+        ):  # fmt: skip
+            raise InvalidInputError(
+                f"expected --video as .mp4, .mkv, .avi or .mov, got {str(self.video)[-60:]!r}"
+            )
 
 
 def _check_folder(out: Path, force: bool) -> None:
@@ -102,6 +126,11 @@ def simulate(run: Run, opts: SimulateOptions, *, out: Path) -> Result:
         from imageform.simulate import apply_camera_file
 
         scene = apply_camera_file(scene, read_camera(opts.camera))
+    traj = None
+    if opts.trajectory is not None:  # read first: a bad path fails before any rendering
+        from imageform.simulate import read_trajectory
+
+        traj = read_trajectory(opts.trajectory, up=scene.config.camera.up)
     result = simulate_scene(scene, progress=run.progress, rng=opts.seed)
     if run.progress is not None:
         run.progress("writing the report", 1.0)
@@ -142,6 +171,7 @@ def simulate(run: Run, opts: SimulateOptions, *, out: Path) -> Result:
             run.progress("lab set", 1.0)
         render_lab_set(read_camera(opts.camera), run.folder(lab_out), seed=opts.seed)
         lab_folder = opts.lab
+    video = _render_trajectory(run, scene, opts, traj) if traj is not None else None
     wall = time.perf_counter() - t0
 
     def final(p: Path) -> Path:
@@ -161,6 +191,7 @@ def simulate(run: Run, opts: SimulateOptions, *, out: Path) -> Result:
         "views": [final(p) for p in views],
         "raw_dng": raw_dng,
         "lab": lab_folder,
+        "video": video,
         "summary": s,
         "report_time_s": paths.seconds,
         "total_time_s": wall,
@@ -178,6 +209,11 @@ def simulate(run: Run, opts: SimulateOptions, *, out: Path) -> Result:
         *([f"views   -> {out / 'views'} ({len(views)} images)"] if views else []),
         *([f"raw DNG -> {raw_dng}"] if raw_dng is not None else []),
         *([f"lab set -> {lab_folder}"] if lab_folder is not None else []),
+        *(
+            [f"video   -> {opts.video} ({video['frames']} frames), truth -> {video['truth']}"]
+            if video is not None
+            else []
+        ),
         f"mean ΔE00 {num(s.get('delta_e00_mean'), '.2f')} "
         f"(max {num(s.get('delta_e00_max'), '.2f')}); "
         f"vanishing-point error {num(s.get('vanishing_point_error_px'), '.2f', ' px')}; "
@@ -185,6 +221,44 @@ def simulate(run: Run, opts: SimulateOptions, *, out: Path) -> Result:
         f"report {paths.seconds:.1f} s, total {wall:.1f} s",
     )
     return Result(summary, text)
+
+
+def _truth_path(video: Path) -> Path:
+    return video.with_name(video.name + ".poses.csv")
+
+
+def _render_trajectory(run: Run, scene: Any, opts: SimulateOptions, traj: Any) -> dict[str, Any]:
+    """Render the scene along ``--trajectory`` into ``--video``; write the truth beside it."""
+    import csv
+
+    import numpy as np
+
+    from imageform.geometry import matrix_to_rvec
+    from imageform.io import VideoWriter
+    from imageform.simulate import board_poses, render_frames
+
+    assert opts.video is not None
+    truth_path = _truth_path(Path(opts.video))
+    board = board_poses(scene, traj)
+    with VideoWriter(run.file(opts.video), fps=traj.fps, quality=12) as writer:
+        for frame in render_frames(scene, traj, rng=opts.seed, progress=run.progress):
+            writer.write(frame)
+    if board is not None:
+        what, poses = board
+        cols, rows = (int(x) for x in what.split(":")[1].split("x"))
+        corners, unit = cols * rows, "mm"
+    else:
+        poses = list(zip(traj.R, traj.t, strict=True))
+        what, corners, unit = "camera (world to camera)", 0, "m"
+    with open(run.file(truth_path), "w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(("frame", "time_s", "found", "corners", "rx", "ry", "rz", "tx", "ty", "tz",
+                    "rms_px"))  # fmt: skip
+        for i, (time_s, (R, t)) in enumerate(zip(traj.times, poses, strict=True)):
+            r = np.asarray(matrix_to_rvec(R), np.float64)
+            w.writerow([i, f"{time_s:.6f}", 1, corners, *(f"{v:.9g}" for v in (*r, *t)), 0])
+    return {"frames": len(traj), "fps": traj.fps, "truth": truth_path, "pose_of": what,
+            "unit": unit}  # fmt: skip
 
 
 def _render_views(run: Run, scene: Any, folder: Path, seed: int) -> list[Path]:
