@@ -206,3 +206,43 @@ def test_bad_inputs(
     assert main(["track", str(video), "--camera", str(other), *board]) == 1
     assert "320 x 180" in capsys.readouterr().err
     assert not (tmp_path / "p.csv").exists()
+
+
+def test_live_capture_stops_on_ctrl_c_with_outputs_complete(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A capture device runs until Ctrl-C; then poses.csv is complete (exit 0, one note)."""
+    import imageform.io
+    from imageform.io import Frame, VideoInfo
+
+    tex, origin = video_scenes.board_texture()
+    frames = [video_scenes.render(tex, origin, K, p, SIZE) for p in video_scenes.poses(48)[:40]]
+
+    class Device:
+        info = VideoInfo(SIZE[0], SIZE[1], 30.0, None, "device", "rawvideo")
+
+        def __enter__(self) -> Device:
+            return self
+
+        def __exit__(self, *exc: object) -> None:
+            pass
+
+        def close(self) -> None:
+            pass
+
+        def __iter__(self):  # type: ignore[no-untyped-def]
+            for i, f in enumerate(frames):
+                if i == 35:
+                    raise KeyboardInterrupt  # the user's Ctrl-C while capturing
+                yield Frame(i, i / 30, f)
+
+    monkeypatch.setattr(imageform.io, "open_video", lambda *a, **k: Device())
+    camera = write_camera(tmp_path / "camera.toml", Camera(K, image_size=SIZE))
+    out = tmp_path / "poses.csv"
+    args = ["track", "/dev/video0", "--camera", str(camera), "--board", "charuco:7x5"]
+    args += ["--square", "30mm", "--marker", "22mm", "--dictionary", "5x5_100", "-o", str(out)]
+    assert main(args) == 0
+    captured = capsys.readouterr()
+    assert "stopped by Ctrl-C after 35 frames" in captured.err
+    assert "fps, latency" in captured.err  # the live speed, printed as it runs
+    assert len(_read(out)) == 35
