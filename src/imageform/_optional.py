@@ -25,6 +25,7 @@ EXTRAS = {
     "rawpy": "raw",
     "av": "video",
     "trimesh": "video",
+    "cv2": "reconstruct",
 }
 
 

@@ -190,8 +190,14 @@ def triangulate_points(
             A = np.swapaxes(J, 1, 2) @ J
             g = (np.swapaxes(J, 1, 2) @ r.reshape(M, -1, 1))[..., 0]
             D = np.einsum("mii->mi", A) * lam[:, None]
+            Areg = A + D[..., None] * np.eye(3)
+            # a point whose rays are (nearly) parallel or that is not active has a singular
+            # system: it must not stop the batch (numpy's solve raises for any one of them)
+            Areg[~active] = np.eye(3)
+            tr = np.einsum("mii->m", Areg)
+            Areg += (1e-14 * np.abs(tr) + 1e-300)[:, None, None] * np.eye(3)
             with np.errstate(all="ignore"):
-                step = -np.linalg.solve(A + D[..., None] * np.eye(3), g[..., None])[..., 0]
+                step = -np.linalg.solve(Areg, g[..., None])[..., 0]
             Xn = X + np.where(active[:, None], step, 0.0)
             cn, rn, dn = cost_of(Xn)
             front = np.all((dn > 0) | ~seen, axis=1)

@@ -1,0 +1,70 @@
+"""Structure from motion (issue 28): matching, bundle adjustment, a walk through a room."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from imageform.errors import InvalidInputError
+from imageform.geometry import bundle_adjust, match_features, reconstruct_sequence
+from imageform.geometry.rotations import rvec_to_matrix
+from tests import sfm_scenes
+
+pytest.importorskip("cv2")
+
+
+def test_match_features_ratio_and_mutual() -> None:
+    rng = np.random.default_rng(0)
+    a = rng.random((50, 8), dtype=np.float32)
+    b = np.concatenate([a[:30] + 0.001, rng.random((20, 8), dtype=np.float32)])
+    m = match_features(a, b)
+    true = m[m[:, 0] < 30]
+    assert np.array_equal(true[:, 0], true[:, 1]) and len(true) == 30
+    # an ambiguous descriptor (two equally near candidates) fails the ratio test
+    one = np.array([[0.0, 0.0], [5.0, 5.0]], np.float32)
+    two = np.array([[1.0, 0.0], [-1.0, 0.0], [9.0, 9.0]], np.float32)
+    assert [0, 0] not in match_features(one, two).tolist()
+    assert [0, 1] not in match_features(one, two).tolist()
+    with pytest.raises(InvalidInputError, match="descriptors"):
+        match_features(a, b[:, :4])
+
+
+def test_bundle_adjust_recovers_perturbed_poses() -> None:
+    rng = np.random.default_rng(1)
+    K = np.array([[500.0, 0, 320], [0, 500, 240], [0, 0, 1]])
+    n, m = 4, 60
+    R = np.stack([np.asarray(rvec_to_matrix([0, 0.05 * i, 0])) for i in range(n)])
+    t = np.array([[-0.2 * i, 0, 0] for i in range(n)], float)
+    X = rng.uniform([-1, -1, 4], [1, 1, 6], (m, 3))
+    ci, pi = np.repeat(np.arange(n), m), np.tile(np.arange(m), n)
+    Xc = np.einsum("mij,mj->mi", R[ci], X[pi]) + t[ci]
+    uv = (Xc @ K.T)[:, :2] / Xc[:, 2:] + rng.normal(0, 0.3, (n * m, 2))
+    R0 = R.copy()
+    R0[1:] = np.stack([np.asarray(rvec_to_matrix([0.01, 0.05 * i + 0.01, 0])) for i in range(1, n)])
+    Rb, tb, Xb = bundle_adjust(K, R0, t + rng.normal(0, 0.01, t.shape) * [0, 1, 1], X, ci, pi, uv)
+    Xc = np.einsum("mij,mj->mi", Rb[ci], Xb[pi]) + tb[ci]
+    rms = np.sqrt(np.mean(np.sum(((Xc @ K.T)[:, :2] / Xc[:, 2:] - uv) ** 2, 1)))
+    assert rms < 0.35
+    np.testing.assert_allclose(Rb[0], R[0])  # the gauge: the first camera fixed
+
+
+def test_walk_through_a_room_of_photographs() -> None:
+    K = np.array([[300.0, 0, 199.5], [0, 300.0, 149.5], [0, 0, 1]])
+    frames, truth = sfm_scenes.sequence(K, 8, (400, 300))
+    rec = reconstruct_sequence(frames, K, max_features=2000)
+    assert rec.registered.all(), rec.notes
+    C_est = np.array([-R.T @ t for R, t in zip(rec.R, rec.t, strict=True)])
+    C_true = np.array([-R.T @ t for R, t in truth])
+    assert sfm_scenes.align_rms(C_est, C_true) < 0.01  # 1 % of the path (the bar is 0.1 %)
+    assert rec.points.shape[0] > 500
+    assert np.nanmedian(rec.rms_px) < 1.0
+
+
+def test_bad_sequences() -> None:
+    K = np.eye(3)
+    with pytest.raises(InvalidInputError, match="at least 2 frames"):
+        reconstruct_sequence([np.zeros((20, 20, 3), np.uint8)], K)
+    with pytest.raises(InvalidInputError, match="one size"):
+        reconstruct_sequence([np.zeros((20, 20, 3), np.uint8), np.zeros((20, 30, 3), np.uint8)], K)
+    with pytest.raises(InvalidInputError, match="no texture"):
+        reconstruct_sequence([np.full((60, 80, 3), 90, np.uint8)] * 3, K)

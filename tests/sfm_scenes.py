@@ -1,0 +1,128 @@
+"""A room whose walls are real photographs, walked through by a camera (issue 28's bar).
+
+The room is a box 4 m wide (x), 6 m deep (y) and 2.5 m high (z up); its four walls, floor
+and ceiling carry photographs (scikit-image's, and Kodak's when the reference data is
+there), each tiled so that a wall has texture everywhere. A pinhole camera walks down the
+room looking ahead and a little to the side; each frame is ray-cast exactly (every pixel's
+ray hits the nearest plane, sampled bilinearly), with a little noise. The truth is every
+frame's pose.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+KODAK = ROOT.parent / "shared" / "data" / "kodak"
+
+W, D, H = 4.0, 6.0, 2.5
+
+
+def _photos() -> list[np.ndarray]:
+    from skimage import data
+
+    photos = [data.astronaut(), data.coffee(), data.chelsea(), data.rocket()]
+    if KODAK.is_dir():
+        from imageform.io import read_image
+
+        photos = [
+            np.asarray(read_image(KODAK / f"kodim{i:02d}.png")) for i in (1, 8, 13, 21, 23, 5)
+        ]
+    return [np.asarray(p[..., :3], np.uint8) for p in photos]
+
+
+#: planes: (point, normal, u axis, v axis, size u, size v)
+_PLANES = [
+    ((0, D, 0), (0, -1, 0), (1, 0, 0), (0, 0, 1), W, H),  # far wall
+    ((0, 0, 0), (0, 1, 0), (1, 0, 0), (0, 0, 1), W, H),  # near wall
+    ((0, 0, 0), (1, 0, 0), (0, 1, 0), (0, 0, 1), D, H),  # left wall (x = 0)
+    ((W, 0, 0), (-1, 0, 0), (0, 1, 0), (0, 0, 1), D, H),  # right wall
+    ((0, 0, 0), (0, 0, 1), (1, 0, 0), (0, 1, 0), W, D),  # floor
+    ((0, 0, H), (0, 0, -1), (1, 0, 0), (0, 1, 0), W, D),  # ceiling
+]
+
+
+def poses(n: int) -> list[tuple[np.ndarray, np.ndarray]]:
+    """A walk down the room: 3 m forward, swaying, looking ahead and to the side."""
+    from imageform.geometry import look_at
+
+    out = []
+    for i in range(n):
+        s = i / max(n - 1, 1)
+        eye = np.array(
+            [2.0 + 0.4 * np.sin(2 * np.pi * s), 1.0 + 3.0 * s, 1.4 + 0.1 * np.cos(3 * s)]
+        )
+        target = eye + np.array([0.8 * np.sin(1.5 * np.pi * s), 2.0, -0.2])
+        pose = look_at(eye, target, up=(0.0, 0.0, 1.0))
+        out.append((np.asarray(pose.R, np.float64), np.asarray(pose.t, np.float64)))
+    return out
+
+
+def render(
+    K: np.ndarray,
+    pose: tuple[np.ndarray, np.ndarray],
+    size: tuple[int, int],
+    *,
+    noise: float = 1.5,
+    rng: np.random.Generator | None = None,
+) -> np.ndarray:
+    """One frame of the room, uint8 RGB."""
+    import cv2
+
+    photos = _photos()
+    R, t = pose
+    w, h = size
+    C = -R.T @ t
+    u, v = np.meshgrid(np.arange(w, dtype=np.float64), np.arange(h, dtype=np.float64))
+    rays = np.stack([u, v, np.ones_like(u)], -1) @ np.linalg.inv(K).T @ R  # world directions
+    best = np.full((h, w), np.inf)
+    out = np.zeros((h, w, 3), np.float64)
+    for k, (p0, nrm, ax_u, ax_v, su, sv) in enumerate(_PLANES):
+        p0, nrm, ax_u, ax_v = (np.asarray(x, np.float64) for x in (p0, nrm, ax_u, ax_v))
+        denom = rays @ nrm
+        with np.errstate(divide="ignore", invalid="ignore"):
+            dist = ((p0 - C) @ nrm) / denom
+        hit = C + dist[..., None] * rays
+        a, b = (hit - p0) @ ax_u, (hit - p0) @ ax_v
+        ok = (dist > 0) & (dist < best) & (a >= 0) & (a <= su) & (b >= 0) & (b <= sv)
+        if not ok.any():
+            continue
+        photo = photos[k % len(photos)].astype(np.float32)
+        ph, pw = photo.shape[:2]
+        scale = pw / 1.6  # one photo per 1.6 m, tiled (mirrored) across the plane
+        x = np.mod(a * scale, 2 * pw)
+        y = np.mod((sv - b) * scale, 2 * ph)
+        x = np.where(x >= pw, 2 * pw - 1 - x, x).astype(np.float32)
+        y = np.where(y >= ph, 2 * ph - 1 - y, y).astype(np.float32)
+        sample = cv2.remap(
+            photo, x, y, interpolation=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REFLECT
+        )
+        out[ok] = sample[ok]
+        best[ok] = dist[ok]
+    if noise:
+        rng = rng or np.random.default_rng(0)
+        out = out + rng.normal(0, noise, out.shape)
+    return np.clip(np.round(out), 0, 255).astype(np.uint8)
+
+
+def sequence(K: np.ndarray, n: int, size: tuple[int, int]) -> tuple[list[np.ndarray], list]:
+    """``n`` frames of the walk and their true poses."""
+    truth = poses(n)
+    rng = np.random.default_rng(5)
+    return [render(K, p, size, rng=rng) for p in truth], truth
+
+
+def align_rms(est_centres: np.ndarray, true_centres: np.ndarray) -> float:
+    """RMS distance after the best similarity (Umeyama 1991), as a share of the path length."""
+    mu_e, mu_t = est_centres.mean(0), true_centres.mean(0)
+    e, t = est_centres - mu_e, true_centres - mu_t
+    U, S, Vt = np.linalg.svd(t.T @ e / len(e))
+    d = np.sign(np.linalg.det(U @ Vt))
+    Dm = np.diag([1.0, 1.0, d])
+    R = U @ Dm @ Vt
+    s = np.trace(np.diag(S) @ Dm) / (e**2).sum(1).mean()
+    fitted = s * e @ R.T + mu_t
+    path = np.sum(np.linalg.norm(np.diff(true_centres, axis=0), axis=1))
+    return float(np.sqrt(np.mean(np.sum((fitted - true_centres) ** 2, 1))) / path)
