@@ -28,6 +28,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import resource
 import statistics
 import subprocess
 import sys
@@ -49,13 +50,16 @@ def _simulate(out: Path, src: Path) -> dict[str, Any]:
     env = dict(os.environ, PYTHONPATH=str(src))
     cmd = [sys.executable, "-m", "imageform", "simulate", "-o", str(out), "--force", "--json"]
     t0 = time.perf_counter()
+    ru0 = resource.getrusage(resource.RUSAGE_CHILDREN)
     proc = subprocess.run(cmd, env=env, capture_output=True, text=True, check=True)
+    ru1 = resource.getrusage(resource.RUSAGE_CHILDREN)
     wall = time.perf_counter() - t0
     data: dict[str, Any] = json.loads(proc.stdout)
     return {
         "sim": float(data["summary"]["simulation_time_s"]),
         "report": float(data["report_time_s"]),
         "process": wall,
+        "process_cpu": (ru1.ru_utime + ru1.ru_stime) - (ru0.ru_utime + ru0.ru_stime),
         "html_bytes": (out / "report.html").stat().st_size,
         "page_dir_bytes": sum(p.stat().st_size for p in out.rglob("*") if p.is_file()),
     }
@@ -92,6 +96,7 @@ def main(argv: list[str] | None = None) -> int:
 
     runs: dict[str, list[dict[str, Any]]] = {label: [] for label, _ in sources}
     loads: dict[str, list[float]] = {}
+    load0 = os.getloadavg()
     with tempfile.TemporaryDirectory() as tmp:
         for j, (_, src) in enumerate(sources):
             _simulate(Path(tmp) / f"warmup{j}", Path(src))
@@ -122,7 +127,9 @@ def main(argv: list[str] | None = None) -> int:
                 label,
                 f"{med('sim'):.2f}",
                 f"{med('report'):.2f}",
-                f"{statistics.median(ratios) * 100:.0f} %",
+                f"{statistics.median(ratios) * 100:.0f} % ({min(ratios) * 100:.0f}-"
+                f"{max(ratios) * 100:.0f} %)",
+                f"{med('process_cpu'):.2f}",
                 f"{med('html_bytes') / 1e6:.2f}",
                 f"{med('page_dir_bytes') / 1e6:.2f}",
                 f"{statistics.median(loads[label]):.2f}" if loads else "n/a (no Chromium)",
@@ -132,7 +139,8 @@ def main(argv: list[str] | None = None) -> int:
         "code",
         "simulation s",
         "report s",
-        "report / simulation",
+        "report / simulation (min-max)",
+        "process CPU s",
         "report.html MB",
         "whole folder MB",
         "Chromium load s",
@@ -141,7 +149,9 @@ def main(argv: list[str] | None = None) -> int:
     text = (
         header("Simulation report: time, size and page load")
         + f"\nBuilt-in scene 1280x720, `imageform simulate` in a fresh process per run; "
-        f"medians of {args.repeat} runs after one unmeasured run.\n\n" + table
+        f"medians of {args.repeat} runs after one unmeasured run.\n"
+        f"Load average (1, 5, 15 min) at start {' '.join(f'{v:.2f}' for v in load0)}, at end "
+        f"{' '.join(f'{v:.2f}' for v in os.getloadavg())}.\n\n" + table
     )
     print(text)
     if args.out is not None:
