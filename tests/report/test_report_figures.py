@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Iterator
+from typing import Any
 
 import numpy as np
 import pytest
@@ -46,7 +48,7 @@ from .conftest import GAIN, SNR_DELTA, SNR_MU, TRUE_VP  # noqa: E402
 
 
 @pytest.fixture(autouse=True)
-def _close_figures() -> None:
+def _close_figures() -> Iterator[None]:
     yield
     plt.close("all")
 
@@ -264,11 +266,13 @@ def test_vanishing_summary_and_overlay(
     im = vanishing_overlay(sim_result, shown)
     assert im.getpixel((int(TRUE_VP[0]), int(TRUE_VP[1]))) == TRUE_COLOUR
     assert vanishing_summary(bare_result) is None and vanishing_overlay(bare_result, shown) is None
+    assert sim_result.vanishing is not None
     no_det = dataclasses.replace(
         sim_result,
         vanishing=dataclasses.replace(sim_result.vanishing, detected_vanishing_point=None),
     )
-    assert vanishing_summary(no_det)["vanishing_point_error_px"] is None
+    summary = vanishing_summary(no_det)
+    assert summary is not None and summary["vanishing_point_error_px"] is None
 
 
 def test_photon_transfer_fit_and_plot(
@@ -338,7 +342,7 @@ def test_chromaticity_background_and_planckian_locus_are_cached(
     calls = []
     real = integrate.spectrum_to_xyz
 
-    def counting(*args: object, **kwargs: object) -> object:
+    def counting(*args: Any, **kwargs: Any) -> Any:
         calls.append(1)
         return real(*args, **kwargs)
 
