@@ -3,7 +3,7 @@ report.html is, and how long the page takes to load in headless Chromium.
 
 Run::
 
-    OPENBLAS_NUM_THREADS=1 python benchmarks/bench_report.py [--repeat 5]
+    OPENBLAS_NUM_THREADS=1 python benchmarks/bench_report.py [--repeat 5] [--cpu]
         [--src LABEL=SRC ...] [--out FILE]
 
 Each run is a fresh ``python -m imageform simulate -o TMP --force --json`` process on the
@@ -19,6 +19,11 @@ falls on each alike. Default: this tree's ``src``.
 Page load: each run's report.html opened in a new page of one headless Chromium
 (``/usr/bin/chromium`` through Playwright, ``executable_path``: no download), the wall time
 of ``page.goto(file://..., wait_until="load")`` (the HTML parsed and every image decoded).
+
+``--cpu``: each run also renders the scene and writes the report in one more fresh process
+(``imageform.simulate.simulate`` and ``write_report``, as the command calls them) and times
+the CPU of each (every thread, ``time.process_time``): on a machine shared with other jobs
+the wall times stretch with the load, the CPU times much less.
 
 Columns are medians over the runs.
 """
@@ -65,6 +70,37 @@ def _simulate(out: Path, src: Path) -> dict[str, Any]:
     }
 
 
+_CPU_SPLIT = """
+import json, time
+from imageform.simulate import default_scene, simulate
+from imageform.report.html import write_report
+scene = default_scene()
+t0 = time.process_time()
+result = simulate(scene, rng=0)
+t1 = time.process_time()
+write_report(result, {out!r}, force=True)
+t2 = time.process_time()
+print(json.dumps({{"sim_cpu": t1 - t0, "report_cpu": t2 - t1}}))
+"""
+
+
+def _cpu_split(out: Path, src: Path) -> dict[str, float]:
+    """CPU seconds (every thread) of the simulation and of the report in one fresh process.
+
+    The built-in scene as ``imageform simulate`` renders it (seed 0), then the report written
+    once, as the command does (imports of imageform and numba outside, matplotlib's inside
+    the report's time, as in ``report_time_s``): less sensitive than wall times to other jobs
+    on the machine.
+    """
+    env = dict(os.environ, PYTHONPATH=str(src))
+    code = _CPU_SPLIT.format(out=str(out))
+    proc = subprocess.run(
+        [sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True
+    )
+    data: dict[str, float] = json.loads(proc.stdout.strip().splitlines()[-1])
+    return data
+
+
 def _load_times(paths: list[Path]) -> list[float]:
     from playwright.sync_api import sync_playwright
 
@@ -91,6 +127,11 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--repeat", type=int, default=5)
     ap.add_argument("--src", action="append", default=[], metavar="LABEL=SRC")
     ap.add_argument("--out", type=Path, default=None, help="write the text to this file")
+    ap.add_argument(
+        "--cpu",
+        action="store_true",
+        help="also time the simulation's and the report's CPU in a fresh process per run",
+    )
     args = ap.parse_args(argv)
     sources = [tuple(s.split("=", 1)) for s in args.src] or [("this tree", str(ROOT / "src"))]
 
@@ -105,6 +146,8 @@ def main(argv: list[str] | None = None) -> int:
             for j, (label, src) in enumerate(sources):
                 out = Path(tmp) / f"src{j}-run{i}"
                 r = _simulate(out, Path(src))
+                if args.cpu:
+                    r |= _cpu_split(Path(tmp) / f"cpu{j}-run{i}", Path(src))
                 runs[label].append(r)
                 htmls[label].append(out / "report.html")
                 print(
@@ -122,6 +165,7 @@ def main(argv: list[str] | None = None) -> int:
             return statistics.median(r[key] for r in rs)
 
         ratios = [r["report"] / r["sim"] for r in rs]
+        cpu_ratios = [r["report_cpu"] / r["sim_cpu"] for r in rs] if args.cpu else []
         rows.append(
             [
                 label,
@@ -130,6 +174,15 @@ def main(argv: list[str] | None = None) -> int:
                 f"{statistics.median(ratios) * 100:.0f} % ({min(ratios) * 100:.0f}-"
                 f"{max(ratios) * 100:.0f} %)",
                 f"{med('process_cpu'):.2f}",
+                *(
+                    [
+                        f"{med('sim_cpu'):.2f}",
+                        f"{med('report_cpu'):.2f}",
+                        f"{statistics.median(cpu_ratios) * 100:.0f} %",
+                    ]
+                    if args.cpu
+                    else []
+                ),
                 f"{med('html_bytes') / 1e6:.2f}",
                 f"{med('page_dir_bytes') / 1e6:.2f}",
                 f"{statistics.median(loads[label]):.2f}" if loads else "n/a (no Chromium)",
@@ -141,6 +194,7 @@ def main(argv: list[str] | None = None) -> int:
         "report s",
         "report / simulation (min-max)",
         "process CPU s",
+        *(["simulation CPU s", "report CPU s", "report / simulation CPU"] if args.cpu else []),
         "report.html MB",
         "whole folder MB",
         "Chromium load s",
