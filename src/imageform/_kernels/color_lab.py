@@ -383,7 +383,7 @@ def srgb_to_lab(
     scale = np.float32(1.0 / 255.0) if image.dtype == np.uint8 else np.float32(1.0)
     m32 = m.astype(np.float32)
     stats = new_stats(src.size // 3)
-    if parallel_pays(src.size // 3, 2 * _BLOCK):
+    if parallel_pays(src.size // 3, _BLOCK + 1):  # more than one chunk, more than one thread
         _srgb_to_lab_f32(src, dst, m32, scale, stats)
     else:  # one chunk, or one thread: the pool's scheduling would only add its cost
         _srgb_to_lab_f32_serial(src, dst, m32, scale, stats, 0)
