@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Iterator
+from typing import Any
 
 import numpy as np
 import pytest
@@ -46,7 +48,7 @@ from .conftest import GAIN, SNR_DELTA, SNR_MU, TRUE_VP  # noqa: E402
 
 
 @pytest.fixture(autouse=True)
-def _close_figures() -> None:
+def _close_figures() -> Iterator[None]:
     yield
     plt.close("all")
 
@@ -264,11 +266,13 @@ def test_vanishing_summary_and_overlay(
     im = vanishing_overlay(sim_result, shown)
     assert im.getpixel((int(TRUE_VP[0]), int(TRUE_VP[1]))) == TRUE_COLOUR
     assert vanishing_summary(bare_result) is None and vanishing_overlay(bare_result, shown) is None
+    assert sim_result.vanishing is not None
     no_det = dataclasses.replace(
         sim_result,
         vanishing=dataclasses.replace(sim_result.vanishing, detected_vanishing_point=None),
     )
-    assert vanishing_summary(no_det)["vanishing_point_error_px"] is None
+    summary = vanishing_summary(no_det)
+    assert summary is not None and summary["vanishing_point_error_px"] is None
 
 
 def test_photon_transfer_fit_and_plot(
@@ -290,3 +294,66 @@ def test_photon_transfer_unfittable_keeps_the_points(sim_result: SimulationResul
     s = photon_transfer_summary(dataclasses.replace(sim_result, photon_transfer=one))
     assert s is not None and s["fit"] is None and "two different exposure times" in s["fit_error"]
     assert plot_photon_transfer(s) is not None
+
+
+# --- what the report's figures cost (issue 25: the report at most 20 % of the simulation) ---
+
+
+def test_report_figures_skip_layout_passes(
+    sim_result: SimulationResult, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """No figure of the report runs tight_layout or moves its title at draw time.
+
+    Both measure every text of the figure again (a fifth of the figures' drawing time);
+    the margins are fixed and the titles sit at the top of their axes.
+    """
+    from matplotlib.figure import Figure
+
+    from imageform.report import html_parts as hp
+
+    def refuse(*args: object, **kwargs: object) -> None:
+        raise AssertionError("tight_layout ran")
+
+    monkeypatch.setattr(Figure, "tight_layout", refuse)
+    m = measure_patches(sim_result)
+    figs = [
+        plot_patch_chromaticity(sim_result, m),
+        plot_delta_e(m),
+        plot_patch_snr(m),
+        plot_top_view(top_view_data(sim_result)),
+        plot_photon_transfer(photon_transfer_summary(sim_result)),
+    ]
+    for fig in figs:
+        assert fig is not None
+        assert all(not ax._autotitlepos for ax in fig.axes)  # titles placed once
+        assert hp.figure_png(fig)[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_chromaticity_background_and_planckian_locus_are_cached(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """The horseshoe picture and the black bodies' chromaticities are computed once."""
+    import imageform.spectral.integrate as integrate
+    from imageform.report import chromaticity_plot as cp
+
+    img, _ = cp._horseshoe_image("xy", 48)
+    again, _ = cp._horseshoe_image("xy", 48)
+    assert again is img and not img.flags.writeable
+    calls = []
+    real = integrate.spectrum_to_xyz
+
+    def counting(*args: Any, **kwargs: Any) -> Any:
+        calls.append(1)
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(integrate, "spectrum_to_xyz", counting)
+    temps = [1234.5, 4321.0, 9876.5]  # temperatures no other test asks for
+    first = cp.planckian_locus(temps)
+    n = len(calls)
+    assert n <= len(temps)
+    np.testing.assert_array_equal(cp.planckian_locus(temps), first)
+    np.testing.assert_array_equal(cp.planckian_locus(temps, "uv")[0].shape, (2,))
+    assert len(calls) == n  # no integral again
+    # the standard observers only; another value is checked (and refused) as before
+    with pytest.raises(Exception, match="observer"):
+        cp.planckian_locus(temps, observer=5)

@@ -16,9 +16,15 @@ Accuracy design of the fast path (float32 / uint8 input, float32 arithmetic):
   seed in :math:`t^{1/4}` and two Halley steps (relative error ~1e-7, float32 rounding).
 - Lab -> sRGB results above 1 (out of gamut) are recomputed in float64.
 
-The hot loops have no calls and no data-dependent branches (selects only) and use
-``error_model="numpy"`` so that LLVM vectorises them. float64 input runs the exact
+The hot loops have no calls, no data-dependent branches (selects only) and no reductions,
+and use ``error_model="numpy"`` so that LLVM vectorises them. float64 input runs the exact
 formulas in float64.
+
+The boundary checks of float32 / uint8 input (NaN/inf, values outside [0, 1]) are gathered
+in the conversion's own pass over memory: each sub-block of :data:`_SUB` pixels is
+converted, then counted and summed while it is still in the L1 cache. Gathered inside the
+conversion loop itself (as before issue 25), the reduction made LLVM interleave the loop
+twice and spill registers, and an int64 count held it to four lanes: 2.2x slower.
 """
 
 from __future__ import annotations
@@ -28,11 +34,12 @@ from typing import Any
 import numba as nb
 import numpy as np
 
-from imageform._kernels.jit import njit
+from imageform._kernels.jit import njit, parallel_pays
 
 __all__ = ["lab_to_srgb", "srgb_to_lab"]
 
 _BLOCK = 65536  # pixels per parallel chunk; each chunk runs a serial (vectorisable) loop
+_SUB = 2048  # pixels per sub-block of a chunk: 24 kB of float32 input, checked while in L1
 
 # the same constants as imageform.color.transfer / cielab (IEC 61966-2-1, CIE 15:2004)
 _A = 0.055
@@ -155,24 +162,24 @@ def _lab_exact_pixel(r, g, b, m, dst, k):  # type: ignore[no-untyped-def]
 
 
 @njit(**_JIT)
-def _srgb_to_lab_f32_serial(src, dst, m, scale, stats, c):  # type: ignore[no-untyped-def]
-    """float32 (scale 1) or uint8 (scale 1/255) sRGB -> Lab on a flat (N * 3,) slice."""
+def _srgb_to_lab_f32_rows(src, dst, m, scale):  # type: ignore[no-untyped-def]
+    """float32 (scale 1) or uint8 (scale 1/255) sRGB -> Lab on a flat (N * 3,) slice.
+
+    The hot loop: no calls, no data-dependent branches and no reduction. A reduction (the
+    input statistics, once gathered here) makes LLVM interleave the vectorised body twice,
+    which spills registers and reads stride-3 pixels four at a time: 2.2x slower on
+    AVX-512 (benchmarks/results/color-2026-11-28.md).
+    """
     n = src.shape[0] // 3
     # matrix entries in locals: loads from ``m`` inside the loop could alias ``dst`` and
     # would block vectorisation
     m00, m01, m02 = m[0, 0], m[0, 1], m[0, 2]
     m10, m11, m12 = m[1, 0], m[1, 1], m[1, 2]
     m20, m21, m22 = m[2, 0], m[2, 1], m[2, 2]
-    out = 0
-    acc = _F32(0)
-    for i in range(n):  # hot loop: no calls, no data-dependent branches (vectorised)
+    for i in range(n):
         v0 = src[3 * i] * scale
         v1 = src[3 * i + 1] * scale
         v2 = src[3 * i + 2] * scale
-        # input statistics as a by-product (the boundary checks, and the fix-up decision):
-        # plain add reductions, which vectorise (min/max reductions would not)
-        out += (v0 < 0) + (v0 > 1) + (v1 < 0) + (v1 > 1) + (v2 < 0) + (v2 > 1)
-        acc += v0 + v1 + v2
         r = _dec32(v0)
         g = _dec32(v1)
         bl = _dec32(v2)
@@ -182,6 +189,41 @@ def _srgb_to_lab_f32_serial(src, dst, m, scale, stats, c):  # type: ignore[no-un
         dst[3 * i] = _F32(116) * fy - _F32(16)
         dst[3 * i + 1] = _F32(500) * (fx - fy)
         dst[3 * i + 2] = _F32(200) * (fy - fz)
+
+
+@njit(**_JIT)
+def _input_stats(src, scale):  # type: ignore[no-untyped-def]
+    """Return (count of values outside [0, 1], sum of values) of a flat slice, in float32.
+
+    The boundary checks' statistics: NaN/inf make the sum non-finite. A float32 count (a
+    select and an add) keeps the loop in 8 or 16 float lanes; exact to 2**24 values.
+    """
+    out = _F32(0)
+    acc = _F32(0)
+    for k in range(src.shape[0]):
+        v = src[k] * scale
+        out += _F32(1) if (v < _F32(0)) | (v > _F32(1)) else _F32(0)
+        acc += v
+    return out, acc
+
+
+@njit(**_JIT)
+def _srgb_to_lab_f32_serial(src, dst, m, scale, stats, c):  # type: ignore[no-untyped-def]
+    """Convert a flat (N * 3,) slice and gather its input statistics into ``stats[c]``.
+
+    One pass over memory: each sub-block of :data:`_SUB` pixels is converted, then its
+    values (still in the L1 cache) are counted and summed (:func:`_input_stats`).
+    """
+    n = src.shape[0] // 3
+    out = 0.0
+    acc = 0.0
+    for lo in range(0, n, _SUB):
+        hi = min(n, lo + _SUB)
+        s = src[3 * lo : 3 * hi]
+        _srgb_to_lab_f32_rows(s, dst[3 * lo : 3 * hi], m, scale)
+        o, a = _input_stats(s, scale)
+        out += o
+        acc += a
     stats[c, 0] = out
     stats[c, 1] = acc
 
@@ -341,7 +383,10 @@ def srgb_to_lab(
     scale = np.float32(1.0 / 255.0) if image.dtype == np.uint8 else np.float32(1.0)
     m32 = m.astype(np.float32)
     stats = new_stats(src.size // 3)
-    _srgb_to_lab_f32(src, dst, m32, scale, stats)
+    if parallel_pays(src.size // 3, _BLOCK + 1):  # more than one chunk, more than one thread
+        _srgb_to_lab_f32(src, dst, m32, scale, stats)
+    else:  # one chunk, or one thread: the pool's scheduling would only add its cost
+        _srgb_to_lab_f32_serial(src, dst, m32, scale, stats, 0)
     outside, finite = summarize(stats)
     if finite and outside:
         px = src.reshape(-1, 3).astype(np.float32) * scale

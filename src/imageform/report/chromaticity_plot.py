@@ -6,6 +6,7 @@ matplotlib is imported inside :func:`plot_chromaticity_diagram` (the optional ``
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Iterable, Sequence
 from pathlib import Path
 from typing import Any
@@ -48,30 +49,41 @@ def planckian_locus(
     [0.4475, 0.4074]
     """
     from imageform.color.chromaticity import xy_to_uv_prime
-    from imageform.spectral.illuminants import blackbody_spectrum
-    from imageform.spectral.integrate import spectrum_to_xyz
 
     c = check_name(coords, ("xy", "uv"), "chromaticity diagram", "coords")
-    out = []
     temps = as_real_ndarray(temperatures, "temperatures", ndim=(0, 1)).ravel()
     if temps.size and (temps.min() < MIN_TEMPERATURE or temps.max() > 1e6):
         raise InvalidInputError(
             f"expected temperatures in [{MIN_TEMPERATURE:g}, 1e6] K, got "
             f"{temps.min():g}..{temps.max():g}"
         )
-    for t in temps:
-        xyz = spectrum_to_xyz(
-            blackbody_spectrum(float(t), np.arange(360.0, 831.0)),
-            illuminant=None,
-            observer=observer,
-        )
-        out.append(xyz[:2] / xyz.sum())
-    xy = np.array(out)
+    # the standard observers' values are cached; anything else is checked where it was
+    known = type(observer) is int and observer in (2, 10)
+    planck = _planck_xy if known else _planck_xy.__wrapped__
+    xy = np.array([planck(float(t), observer) for t in temps]).reshape(-1, 2)
     return xy if c == "xy" else np.asarray(xy_to_uv_prime(xy))
 
 
+@functools.lru_cache(maxsize=1024)
+def _planck_xy(temperature: float, observer: Any) -> tuple[float, float]:
+    """Return the xy of one black body (cached: every report draws the same temperatures)."""
+    from imageform.spectral.illuminants import blackbody_spectrum
+    from imageform.spectral.integrate import spectrum_to_xyz
+
+    xyz = spectrum_to_xyz(
+        blackbody_spectrum(temperature, np.arange(360.0, 831.0)),
+        illuminant=None,
+        observer=observer,
+    )
+    return float(xyz[0] / xyz.sum()), float(xyz[1] / xyz.sum())
+
+
+@functools.lru_cache(maxsize=4)
 def _horseshoe_image(coords: str, n: int) -> tuple[np.ndarray, tuple[float, float, float, float]]:
-    """RGBA image of the visible region, each point in its (brightest in-gamut) sRGB colour."""
+    """RGBA image of the visible region, each point in its (brightest in-gamut) sRGB colour.
+
+    Computed once per process for each (coords, n) and returned read-only.
+    """
     from matplotlib.path import Path as MplPath
 
     from imageform.color.chromaticity import spectral_locus, uv_prime_to_xy
@@ -96,7 +108,9 @@ def _horseshoe_image(coords: str, n: int) -> tuple[np.ndarray, tuple[float, floa
     rgb = rgb - np.minimum(rgb.min(axis=-1, keepdims=True), 0.0)
     rgb = rgb / np.max(rgb, axis=-1, keepdims=True)
     img = np.concatenate([np.asarray(linear_to_srgb(rgb)), inside[..., None] * 1.0], axis=-1)
-    return np.clip(img, 0.0, 1.0), ext
+    img = np.clip(img, 0.0, 1.0)
+    img.flags.writeable = False
+    return img, ext
 
 
 def plot_chromaticity_diagram(

@@ -83,7 +83,7 @@ def stage_display_image(
     >>> stage_display_image(np.array([[0, 2048, 4095]]), "raw", white_level=4095)[0, :, 0]
     array([  0, 128, 255], dtype=uint8)
     """
-    from imageform.color.transfer import linear_to_srgb
+    from imageform._colormath import srgb_encode
 
     k = check_name(kind, ("linear", "raw", "srgb"), "stage kind", "kind")
     if image is None or isinstance(image, str | bytes):
@@ -125,11 +125,16 @@ def stage_display_image(
         if p <= 0:
             p = float(a.max())
         v = a / np.float32(p) if p > 0 else np.zeros_like(a)
-        v = np.asarray(linear_to_srgb(np.clip(v, 0.0, 1.0)))
+        np.clip(v, 0.0, 1.0, out=v)
+        # linear_to_srgb's formula without its checks (the values are finite, in [0, 1])
+        v = np.asarray(srgb_encode(np, v))
     else:
         v = a
+    # every array here is this function's own (a is a float32 copy): scaled in place
     rgb = _as_rgb(np.asarray(v), f"a {k} stage")
-    return np.asarray(np.round(np.clip(rgb, 0.0, 1.0) * 255.0), dtype=np.uint8)
+    np.clip(rgb, 0.0, 1.0, out=rgb)
+    rgb *= 255.0
+    return np.round(rgb, out=rgb).astype(np.uint8)
 
 
 def raw_to_uint16(image: np.ndarray) -> np.ndarray | None:
