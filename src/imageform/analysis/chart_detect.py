@@ -496,6 +496,22 @@ def _drop_one_fits(
     return idx, np.sqrt((d * d).sum(axis=-1))
 
 
+def _held_out(
+    x: np.ndarray, ref_lin: np.ndarray, lab_ref: np.ndarray, use: np.ndarray
+) -> np.ndarray:
+    """ΔE*ab of each used patch's leave-one-out prediction (hat-matrix identity, no refit).
+
+    Values for patches not in ``use`` are meaningless.
+    """
+    xu = x[use]
+    g = np.linalg.pinv(xu.T @ xu)
+    w = g @ (xu.T @ ref_lin[use])
+    lev = np.einsum("ij,jk,ik->i", x, g, x)
+    held = ref_lin - (ref_lin - x @ w) / np.maximum(1.0 - lev, 1e-9)[:, None]
+    d = _lab_from_linear(held) - lab_ref
+    return np.asarray(np.sqrt((d * d).sum(axis=1)))
+
+
 def _bound(others: np.ndarray) -> float:
     return max(_OUTLIER_FACTOR * float(np.median(others)), _OUTLIER_DELTA_E)
 
@@ -521,6 +537,9 @@ def _colour_fit(
     for _ in range(6):
         if use.sum() < 14:
             return -1.0, out
+        loo = _held_out(x, ref_lin, lab_ref, use)[use]
+        if loo.max() <= _bound(loo):  # no patch stands out: the usual case, one cheap pass
+            break
         idx, d = _drop_one_fits(x, ref_lin, lab_ref, use)
         own = d[np.arange(len(idx)), idx]
         others = np.where(use[None], d, np.nan)
