@@ -29,6 +29,9 @@ VALID: dict[str, C | Skip] = {
     "imageform.analysis.CorrectionReport": call(
         np.array([3.0, 4.0]), np.array([1.0, 2.0]), np.array([True, True])
     ),
+    "imageform.analysis.BackgroundEstimate": Skip(
+        "a result dataclass built by estimate_background"
+    ),
     "imageform.analysis.HsvSegmentation": Skip("a result dataclass built by segment_hsv"),
     "imageform.analysis.LabeledImage": call(image=V("rgb"), mask=np.ones((6, 8), dtype=bool)),
     "imageform.analysis.MacenkoStains": call(
@@ -1122,6 +1125,7 @@ VALID.update(
         "imageform.workflows.stereo.StereoCalibrateOptions.fields": call(),
         "imageform.workflows.stereo.StereoCalibrateOptions.types": call(),
         "imageform.analysis.background_intensity": call(image=V("rgb")),
+        "imageform.analysis.estimate_background": call(image=V("rgb")),
         "imageform.analysis.synthetic_he_tile": call((32, 32)),
         "imageform.analysis.vahadane_stains": call(image=V("stain"), iterations=20, max_pixels=500),
         "imageform.batch.batch_options": call("white_balance", {}),

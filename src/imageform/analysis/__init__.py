@@ -47,8 +47,10 @@ from imageform.analysis.harmonize import (
     root_polynomial_terms,
 )
 from imageform.analysis.macenko import (
+    BackgroundEstimate,
     MacenkoStains,
     background_intensity,
+    estimate_background,
     macenko_normalize,
     macenko_stains,
     optical_density,
@@ -90,6 +92,7 @@ __all__ = [
     "COLORCHECKER_NEUTRALS",
     "CORRECTION_METHODS",
     "SFR_LUMINANCE_WEIGHTS",
+    "BackgroundEstimate",
     "ChartDetection",
     "ChartNotFoundError",
     "ChartPatches",
@@ -112,6 +115,7 @@ __all__ = [
     "chart_white_balance",
     "correction_report",
     "detect_colorchecker",
+    "estimate_background",
     "estimate_camera_sensitivities",
     "find_slanted_edges",
     "fit_color_correction",

@@ -28,9 +28,12 @@ segmentation detector of colour-checker-detection and OpenCV's ``mcc`` module):
    either of its two chart orientations (the two quarter turns the window's shape allows;
    never mirrored: the basis is right-handed like the image) is sampled, and the reference
    colours are regressed on the measured ones with an affine map in linear light
-   (a 3 × 3 matrix and an offset per channel, robust to a few occluded patches). The score
-   is that fit's :math:`R^2`; the best window and orientation above ``min_score`` wins,
-   otherwise :class:`ChartNotFoundError`.
+   (a 3 × 3 matrix and an offset per channel). A patch is an outlier (an occluder, a
+   reflection) when the fit of the *other* patches predicts its colour more than
+   max(4 × median, 10) ΔE*ab from its reference (leave-one-out, in CIELAB: dark patches
+   count, and a channel clipped at the gamut's edge, the cyan's red, barely does). The score
+   is that fit's :math:`R^2` without the outliers; the best window and orientation above
+   ``min_score`` wins, otherwise :class:`ChartNotFoundError`.
 
 Coordinates are imageform's pixel convention (docs/conventions.md): ``(u, v)`` = (column,
 row), integer values at pixel centres. Chart coordinates are ``(column, row)`` of the
@@ -94,8 +97,8 @@ class ChartDetection:
     #: (24,) bool: the patch was segmented in the photograph (others are placed by the
     #: homography: occluded, merged with the surround, or too blurred).
     found: np.ndarray
-    #: (24,) bool: patches whose colour disagrees with the others' colour fit (left out of
-    #: the score; likely occluded or covered by a reflection).
+    #: (24,) bool: patches whose colour disagrees with the fit of the other patches
+    #: (leave-one-out; left out of the score; likely occluded or covered by a reflection).
     outliers: np.ndarray
     #: :math:`R^2` of the affine linear-light fit of the reference colours on the measured
     #: ones (1 is perfect).
@@ -451,29 +454,110 @@ def _sample(work: np.ndarray, h: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return vals.mean(axis=1), vals.std(axis=1).max(axis=1)
 
 
+#: A patch is a colour outlier when the colour the fit of the other patches predicts for it
+#: is more than ``max(_OUTLIER_FACTOR * median, _OUTLIER_DELTA_E)`` CIELAB ΔE*ab (CIE 1976)
+#: from its reference, the median taken over the other patches' residuals of that fit.
+_OUTLIER_FACTOR, _OUTLIER_DELTA_E = 4.0, 10.0
+
+
+def _lab_from_linear(lin: np.ndarray) -> np.ndarray:
+    """CIELAB (D65, the sRGB white) of linear sRGB rows (..., 3), clipped to [0, 1] first."""
+    from imageform.color.rgb_spaces import rgb_to_xyz_matrix
+
+    m = rgb_to_xyz_matrix("srgb")
+    xyz = np.clip(lin, 0.0, 1.0) @ m.T / m.sum(axis=1)
+    f = np.where(xyz > (6 / 29) ** 3, np.cbrt(xyz), xyz / (3 * (6 / 29) ** 2) + 4 / 29)
+    return np.stack(
+        [116 * f[..., 1] - 16, 500 * (f[..., 0] - f[..., 1]), 200 * (f[..., 1] - f[..., 2])],
+        axis=-1,
+    )
+
+
+def _drop_one_fits(
+    x: np.ndarray, ref_lin: np.ndarray, lab_ref: np.ndarray, use: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """ΔE*ab of every patch under the fit of ``use`` without each used patch in turn.
+
+    Returns the used patches' indices (m,) and ΔE (m, n): row i is the fit without patch
+    ``idx[i]`` (Sherman-Morrison downdates of one least-squares fit, no refit), column j
+    the distance of patch j's prediction from its reference.
+    """
+    idx = np.flatnonzero(use)
+    xu = x[idx]
+    g = np.linalg.pinv(xu.T @ xu)
+    b = xu.T @ ref_lin[idx]
+    gx = xu @ g  # (m, 4): g x_k
+    lev = np.einsum("ij,ij->i", gx, xu)
+    gk = g[None] + np.einsum("ki,kj->kij", gx, gx) / np.maximum(1.0 - lev, 1e-9)[:, None, None]
+    bk = b[None] - np.einsum("ki,kj->kij", xu, ref_lin[idx])
+    wk = np.einsum("kij,kjc->kic", gk, bk)  # (m, 4, 3)
+    pred = np.einsum("nj,kjc->knc", x, wk)  # (m, n, 3)
+    d = _lab_from_linear(pred) - lab_ref[None]
+    return idx, np.sqrt((d * d).sum(axis=-1))
+
+
+def _held_out(
+    x: np.ndarray, ref_lin: np.ndarray, lab_ref: np.ndarray, use: np.ndarray
+) -> np.ndarray:
+    """ΔE*ab of each used patch's leave-one-out prediction (hat-matrix identity, no refit).
+
+    Values for patches not in ``use`` are meaningless.
+    """
+    xu = x[use]
+    g = np.linalg.pinv(xu.T @ xu)
+    w = g @ (xu.T @ ref_lin[use])
+    lev = np.einsum("ij,jk,ik->i", x, g, x)
+    held = ref_lin - (ref_lin - x @ w) / np.maximum(1.0 - lev, 1e-9)[:, None]
+    d = _lab_from_linear(held) - lab_ref
+    return np.asarray(np.sqrt((d * d).sum(axis=1)))
+
+
+def _bound(others: np.ndarray) -> float:
+    return max(_OUTLIER_FACTOR * float(np.median(others)), _OUTLIER_DELTA_E)
+
+
 def _colour_fit(
     meas: np.ndarray, ref_lin: np.ndarray, usable: np.ndarray
 ) -> tuple[float, np.ndarray]:
-    """Return R² of the affine linear-light fit ref ~ [meas, 1] W, robust to a few outliers.
+    """Return R² of the affine linear-light fit ref ~ [meas, 1] W and the colour outliers.
 
-    The outliers are judged on the encoded residual, so that dark patches count as much as light
-    ones.
+    Outliers (an occluder, a reflection) are judged against a robust fit, leaving each
+    patch out in turn: the patch whose removal best fits the others (mean CIELAB distance)
+    is the suspect, and it is an outlier when the colour that fit predicts for it is more
+    than ``max(4 × median, 10)`` ΔE*ab from its reference (median of the others'). It is
+    dropped and the search repeated, at most six times; a dropped patch that the final fit
+    predicts within the bound is taken back. In CIELAB dark patches count as much as light
+    ones, and a channel clipped at the edge of the gamut (the ColorChecker's cyan has no
+    red in sRGB) moves the colour little: no patch is rejected for its gamut.
     """
     x = np.c_[srgb_decode(np, np.clip(meas, 0.0, 1.0)), np.ones(len(meas))]
-    ref_enc = srgb_encode(np, ref_lin)
+    lab_ref = _lab_from_linear(ref_lin)
     use = usable.copy()
     out = np.zeros(len(meas), dtype=bool)
-    for _ in range(6):  # drop the worst patch, one at a time, while it stands out
+    for _ in range(6):
         if use.sum() < 14:
             return -1.0, out
-        w, *_ = np.linalg.lstsq(x[use], ref_lin[use], rcond=None)
-        fit = srgb_encode(np, np.clip(x @ w, 0.0, 1.0))
-        err = np.where(use, np.linalg.norm(fit - ref_enc, axis=1), -1.0)
-        worst = int(np.argmax(err))
-        if err[worst] <= max(5.0 * float(np.median(err[use])), 0.06):
+        loo = _held_out(x, ref_lin, lab_ref, use)[use]
+        if loo.max() <= _bound(loo):  # no patch stands out: the usual case, one cheap pass
             break
-        out[worst] = True
-        use[worst] = False
+        idx, d = _drop_one_fits(x, ref_lin, lab_ref, use)
+        own = d[np.arange(len(idx)), idx]
+        others = np.where(use[None], d, np.nan)
+        others[np.arange(len(idx)), idx] = np.nan
+        i = int(np.argmin(np.nanmean(others, axis=1)))
+        if own[i] <= _bound(others[i][np.isfinite(others[i])]):
+            break
+        out[idx[i]] = True
+        use[idx[i]] = False
+    if out.any() and use.sum() >= 14:
+        w, *_ = np.linalg.lstsq(x[use], ref_lin[use], rcond=None)
+        d = _lab_from_linear(x @ w) - lab_ref
+        err = np.sqrt((d * d).sum(axis=1))
+        back = out & (err <= _bound(err[use]))
+        use |= back
+        out &= ~back
+    if use.sum() < 14:
+        return -1.0, out
     w, *_ = np.linalg.lstsq(x[use], ref_lin[use], rcond=None)
     res = ref_lin[use] - x[use] @ w
     tot = ref_lin[use] - ref_lin[use].mean(axis=0)

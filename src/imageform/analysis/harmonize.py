@@ -254,6 +254,7 @@ def fit_color_correction(
     transfer: str = "srgb",
     saturation: float | None = 1.0,
     chart_layout: str = "auto",
+    never_worse: bool = True,
 ) -> ColorCorrection:
     r"""Least-squares colour correction from device A's chart (``measured``) to the reference.
 
@@ -290,6 +291,14 @@ def fit_color_correction(
         How a chart is found in an image given as ``measured`` or ``reference``
         (:func:`~imageform.analysis.sample_chart`: ``"auto"`` takes a chart that fills the
         frame when its grid validates, else detects a ColorChecker in the photograph).
+    never_worse : bool, keyword-only
+        With ``transfer="srgb"``: a fit whose mean CIEDE2000 to the reference over the
+        patches it was fitted on is larger than the uncorrected patches' is replaced by the
+        first of the lower-order fits (root-polynomial of a lower degree, then the 3×3
+        matrix) that is no worse, else by the identity (no correction), with a
+        :class:`ChartWarning` saying so. Least squares in linear light is not least ΔE: a
+        chart that is nearly right already, or one bad patch the fit bends to, can come out
+        worse than it went in.
 
     Returns
     -------
@@ -355,7 +364,51 @@ def fit_color_correction(
             "span too few independent colours (rank-deficient design)"
         )
     sol, *_ = np.linalg.lstsq(terms, _linear_light(b[use], tf), rcond=None)
-    return ColorCorrection(key, deg, sol.T.copy(), int(use.sum()), tf)
+    fit = ColorCorrection(key, deg, sol.T.copy(), int(use.sum()), tf)
+    if not as_bool(never_worse, "never_worse") or tf != "srgb":
+        return fit
+    return _no_worse(fit, a[use], b[use])
+
+
+def _mean_delta_e(corr: ColorCorrection | None, a: np.ndarray, lab_b: np.ndarray) -> float:
+    """Mean CIEDE2000 of ``a`` corrected (``None``: as it is) to the reference's Lab."""
+    x = a if corr is None else corr.apply(a[:, None, :])[:, 0, :]  # as correction_report
+    return float(np.mean(delta_e(lab_b, np.asarray(convert(x, "srgb", "lab")))))
+
+
+def _no_worse(fit: ColorCorrection, a: np.ndarray, b: np.ndarray) -> ColorCorrection:
+    """``fit``, or the first lower-order fit (or the identity) no worse than no correction."""
+    lab_b = np.asarray(convert(b, "srgb", "lab"))
+    before = _mean_delta_e(None, a, lab_b)
+    after = _mean_delta_e(fit, a, lab_b)
+    if after <= before:
+        return fit
+    n = len(a)
+    lower = [("root_polynomial", d) for d in range(fit.degree - 1, 1, -1)]
+    if fit.method == "root_polynomial":
+        lower.append(("linear", 1))
+    chosen = ColorCorrection("linear", 1, np.eye(3), n, fit.transfer)
+    name, value = "no correction (the identity)", before
+    for method, degree in lower:
+        terms = root_polynomial_terms(_linear_light(a, "srgb"), degree)
+        if terms.shape[0] < terms.shape[1] or np.linalg.matrix_rank(terms) < terms.shape[1]:
+            continue
+        sol, *_ = np.linalg.lstsq(terms, _linear_light(b, "srgb"), rcond=None)
+        cand = ColorCorrection(method, degree, sol.T.copy(), n, fit.transfer)
+        value = _mean_delta_e(cand, a, lab_b)
+        if value <= before:
+            chosen, name = cand, f"the {method} fit (degree {degree})"
+            break
+    else:
+        value = before
+    warnings.warn(
+        f"fit_color_correction: the {fit.method} fit (degree {fit.degree}) makes the chart "
+        f"worse (mean CIEDE2000 {before:.2f} -> {after:.2f} on {n} patches); using {name} "
+        f"instead (mean {value:.2f})",
+        ChartWarning,
+        stacklevel=3,
+    )
+    return chosen
 
 
 @dataclass(frozen=True)

@@ -38,13 +38,16 @@ from imageform.analysis._sparse_nmf import sample_rows, sparse_nmf
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
 
 __all__ = [
+    "I0_SOURCES",
     "MIN_INTENSITY",
     "OD_BASES",
     "REFERENCE_I0",
     "STAIN_METHODS",
     "TRANSPARENT_RULES",
+    "BackgroundEstimate",
     "MacenkoStains",
     "background_intensity",
+    "estimate_background",
     "macenko_normalize",
     "macenko_stains",
     "optical_density",
@@ -95,30 +98,82 @@ def _i0_value(i0: object, name: str = "i0", *, complete: bool = False) -> np.nda
     return np.broadcast_to(v, (3,)).copy()
 
 
-def background_intensity(
-    image: object, *, percentile: float = 99.0, min_background: float = 0.8
-) -> np.ndarray:
-    """Incident light :math:`I_0` per channel, estimated from the slide's background.
+#: Where the incident light of :attr:`MacenkoStains.i0` came from: measured on the slide's
+#: glass, the reference code's default (:data:`REFERENCE_I0`, no glass found) or given.
+I0_SOURCES = ("glass", "default", "given")
 
-    No pixel of a bright-field slide transmits more than the incident light, and the
-    background (glass) is the brightest part of a tile: :math:`I_0` is the
-    ``percentile``-th percentile of each channel (a robust maximum). When it is darker
-    than ``min_background`` in any channel the tile has no background (all tissue) and
-    :data:`REFERENCE_I0` (240/255, Macenko's reference code) is returned for every channel.
+
+@dataclass(frozen=True)
+class BackgroundEstimate:
+    """The incident light :math:`I_0` and whether it was measured on glass.
+
+    ``i0`` (3,) is the estimate, or :data:`REFERENCE_I0` for every channel when no glass was
+    found (``found`` False; ``reason`` says why, in one line, and is empty otherwise).
+    ``glass_fraction`` is the share of the pixels within ``max_tint`` of the candidate in
+    every channel (the bright mode; 0 when the candidate was rejected before counting).
+    """
+
+    i0: np.ndarray
+    found: bool
+    glass_fraction: float
+    reason: str = ""
+
+
+def _glass_share(flat: Any, i0: np.ndarray, tol: float) -> float:
+    """Share of pixels within ``tol`` (ln units) of ``i0`` in every channel."""
+    lo, hi = i0 * np.exp(-tol), i0 * np.exp(tol)
+    near = ((flat >= lo) & (flat <= hi)).all(axis=1)
+    share = near.astype(np.float64).mean()
+    if is_dask(share):
+        import dask
+
+        share = dask.compute(share)[0]
+    return float(share)
+
+
+def estimate_background(
+    image: object,
+    *,
+    percentile: float = 99.0,
+    min_background: float = 0.8,
+    max_tint: float = 0.04,
+    min_glass: float = 0.01,
+) -> BackgroundEstimate:
+    r"""Incident light :math:`I_0` per channel from the slide's glass, or the default.
+
+    No pixel of a bright-field slide transmits more than the incident light, and the glass
+    is the brightest part of a tile: the candidate is the ``percentile``-th percentile of
+    each channel (a robust maximum). It is glass only when
+
+    1. it is bright: at least ``min_background`` in every channel;
+    2. it is neutral, as a white-balanced scanner renders glass:
+       :math:`\ln(\max_c I_c / \min_c I_c) \le` ``max_tint`` (pale tissue is tinted:
+       eosin absorbs green, hematoxylin red and green);
+    3. pixels form a bright mode there: at least ``min_glass`` of them lie within
+       ``max_tint`` of it in every channel (the per-channel percentiles of two tissues, one
+       pink and one blue, can make a neutral candidate that no pixel is near).
+
+    Otherwise the tile has no glass and :math:`I_0` is :data:`REFERENCE_I0` (240/255,
+    Macenko's reference code and torchstain) for every channel, with ``found`` False and the
+    failed check in ``reason``.
 
     Parameters
     ----------
     image : array_like, shape (..., 3)
         Encoded RGB (uint8/uint16/floats in [0, 1]) or Dask (exact two-pass quantiles).
     percentile : float
-        Percentile of each channel taken as :math:`I_0` (99: at least 1 % background).
+        Percentile of each channel taken as :math:`I_0` (99: at least 1 % glass).
     min_background : float
-        The darkest background accepted, in (0, 1].
+        The darkest glass accepted, in (0, 1].
+    max_tint : float
+        The largest spread of the glass between channels, and of glass pixels around
+        :math:`I_0`, in ln units (0.04: about 10 codes of 255 at 240), in [0, 1].
+    min_glass : float
+        The smallest share of pixels in the bright mode, in [0, 1].
 
     Returns
     -------
-    ndarray, shape (3,)
-        :math:`I_0` as encoded intensity in (0, 1].
+    BackgroundEstimate
 
     Notes
     -----
@@ -128,10 +183,15 @@ def background_intensity(
     Examples
     --------
     >>> img = np.full((10, 10, 3), 0.3); img[:2] = (0.95, 0.94, 0.96)
-    >>> background_intensity(img).round(2).tolist()
-    [0.95, 0.94, 0.96]
-    >>> background_intensity(np.full((4, 4, 3), 0.3)).round(4).tolist()  # no background
-    [0.9412, 0.9412, 0.9412]
+    >>> est = estimate_background(img)
+    >>> est.found, est.i0.round(2).tolist(), est.glass_fraction
+    (True, [0.95, 0.94, 0.96], 0.2)
+    >>> pale = np.full((10, 10, 3), (0.94, 0.83, 0.93))  # pale eosin, no glass
+    >>> est = estimate_background(pale)
+    >>> est.found, est.i0.round(4).tolist()
+    (False, [0.9412, 0.9412, 0.9412])
+    >>> print(est.reason)
+    no glass: the brightest pixels (0.94, 0.83, 0.93) are tinted (0.12 > max_tint 0.04 in ln units)
     """
     rgb = image_in(image)
     percentile = as_real(percentile, "percentile", minimum=0.0, maximum=100.0)
@@ -140,6 +200,8 @@ def background_intensity(
         raise InvalidInputError(
             f"expected min_background in (0, 1], got {describe(min_background)}"
         )
+    max_tint = as_real(max_tint, "max_tint", minimum=0.0, maximum=1.0)
+    min_glass = as_real(min_glass, "min_glass", minimum=0.0, maximum=1.0)
     flat = rgb.reshape((-1, 3))
     if is_dask(flat):
         i0 = np.array(
@@ -147,17 +209,83 @@ def background_intensity(
         )
     else:
         i0 = np.percentile(np.asarray(flat, dtype=np.float64), percentile, axis=0)
+    default = np.full(3, REFERENCE_I0)
+    seen = "(" + ", ".join(f"{v:.2f}" for v in i0) + ")"
     if not np.all(i0 >= float(min_background)):
-        return np.full(3, REFERENCE_I0)
-    return np.minimum(i0, 1.0)
+        why = f"the brightest pixels {seen} are darker than min_background {min_background:g}"
+        return BackgroundEstimate(default, False, 0.0, f"no glass: {why}")
+    tint = float(np.log(i0.max() / i0.min()))
+    if tint > max_tint:
+        why = (
+            f"the brightest pixels {seen} are tinted ({tint:.2f} > max_tint {max_tint:g} "
+            "in ln units)"
+        )
+        return BackgroundEstimate(default, False, 0.0, f"no glass: {why}")
+    share = _glass_share(flat, i0, float(max_tint))
+    if share < min_glass:
+        why = (
+            f"{share:.2%} of the pixels are near {seen} (within max_tint {max_tint:g}), "
+            f"fewer than min_glass {min_glass:g}"
+        )
+        return BackgroundEstimate(default, False, share, f"no glass: {why}")
+    return BackgroundEstimate(np.minimum(i0, 1.0), True, share)
+
+
+def background_intensity(
+    image: object,
+    *,
+    percentile: float = 99.0,
+    min_background: float = 0.8,
+    max_tint: float = 0.04,
+    min_glass: float = 0.01,
+) -> np.ndarray:
+    """Incident light :math:`I_0` per channel: :func:`estimate_background`'s ``i0``.
+
+    The ``percentile``-th percentile of each channel when it is glass (bright, neutral and
+    the centre of a bright mode, see :func:`estimate_background`), else :data:`REFERENCE_I0`
+    (240/255, Macenko's reference code) for every channel.
+
+    Parameters
+    ----------
+    image : array_like, shape (..., 3)
+        Encoded RGB (uint8/uint16/floats in [0, 1]) or Dask (exact two-pass quantiles).
+    percentile, min_background, max_tint, min_glass
+        As in :func:`estimate_background`.
+
+    Returns
+    -------
+    ndarray, shape (3,)
+        :math:`I_0` as encoded intensity in (0, 1].
+
+    Examples
+    --------
+    >>> img = np.full((10, 10, 3), 0.3); img[:2] = (0.95, 0.94, 0.96)
+    >>> background_intensity(img).round(2).tolist()
+    [0.95, 0.94, 0.96]
+    >>> background_intensity(np.full((4, 4, 3), 0.3)).round(4).tolist()  # no background
+    [0.9412, 0.9412, 0.9412]
+    """
+    return estimate_background(
+        image,
+        percentile=percentile,
+        min_background=min_background,
+        max_tint=max_tint,
+        min_glass=min_glass,
+    ).i0
 
 
 def _resolve_i0(image: object, i0: object) -> np.ndarray:
+    return _resolve_i0_source(image, i0)[0]
+
+
+def _resolve_i0_source(image: object, i0: object) -> tuple[np.ndarray, str]:
+    """I0 and where it came from (:data:`I0_SOURCES`)."""
     if isinstance(i0, str):
         if i0.strip().lower() != "auto":
             _i0_value(i0)  # raises with the message
-        return background_intensity(image)
-    return _i0_value(i0)
+        est = estimate_background(image)
+        return est.i0, "glass" if est.found else "default"
+    return _i0_value(i0), "given"
 
 
 def optical_density(
@@ -248,7 +376,9 @@ class MacenkoStains:
     concentration of each stain is ``max_concentrations``. The convention they were measured in: the
     incident light ``i0`` (per channel), the OD log ``base`` (the concentrations are in that base's
     units) and the estimator ``method``. ``n_pixels`` of the ``n_total`` pixels passed the
-    transparent-pixel threshold.
+    transparent-pixel threshold. ``i0_source`` says where ``i0`` came from (:data:`I0_SOURCES`):
+    ``"glass"`` (measured on the slide), ``"default"`` (no glass found: 240/255, the reference
+    code's) or ``"given"``.
     """
 
     stain_matrix: np.ndarray
@@ -258,6 +388,7 @@ class MacenkoStains:
     base: str = "e"
     method: str = "macenko"
     n_total: int = 0
+    i0_source: str = "given"
 
     def __post_init__(self) -> None:
         """Two finite stain vectors of non-zero length, two finite concentrations."""
@@ -272,6 +403,7 @@ class MacenkoStains:
         object.__setattr__(self, "i0", (float(i0[0]), float(i0[1]), float(i0[2])))
         object.__setattr__(self, "base", _base(self.base))
         object.__setattr__(self, "method", check_option(self.method, STAIN_METHODS, "method"))
+        object.__setattr__(self, "i0_source", check_option(self.i0_source, I0_SOURCES, "i0_source"))
 
     def to_json(self, path: str | Path) -> None:
         """Save as JSON (``kind: "macenko_stains"``)."""
@@ -286,6 +418,7 @@ class MacenkoStains:
                 "od_base": str(self.base),
                 "method": str(self.method),
                 "n_total": int(self.n_total),
+                "i0_source": str(self.i0_source),
             },
         )
 
@@ -305,12 +438,14 @@ class MacenkoStains:
             i0 = _i0_value(d.get("i0", 1.0), "i0")
             method = check_option(str(d.get("method", "macenko")), STAIN_METHODS, "method")
             n_total = int(d.get("n_total", 0))
+            i0_source = check_option(str(d.get("i0_source", "given")), I0_SOURCES, "i0_source")
         except (KeyError, TypeError, ValueError) as exc:
             raise InvalidInputError(f"malformed Macenko stains in {path}: {exc}") from exc
         if m.shape != (2,):
             raise InvalidInputError(f"expected 2 max_concentrations in {path}, got {m.shape}")
         i0t = (float(i0[0]), float(i0[1]), float(i0[2]))
-        return cls(np.asarray(s, dtype=np.float64), m, n, i0t, base, method, n_total)
+        s64 = np.asarray(s, dtype=np.float64)
+        return cls(s64, m, n, i0t, base, method, n_total, i0_source)
 
     @property
     def fraction(self) -> float:
@@ -549,13 +684,13 @@ def macenko_stains(
     rule = check_option(transparent, TRANSPARENT_RULES, "transparent-pixel rule")
     key = _base(base)
     rgb = image_in(image)
-    i0v = _resolve_i0(rgb, i0)
+    i0v, i0_from = _resolve_i0_source(rgb, i0)
     od = optical_density(rgb, min_intensity=min_intensity, i0=i0v, base=key)
     stains, n = _fit(od, float(beta), float(alpha), max(min_pixels, 2), rule)
     maxc = _max_conc(od, stains, float(max_percentile))
     n_total = int(np.prod(rgb.shape[:-1]))
     i0t = (float(i0v[0]), float(i0v[1]), float(i0v[2]))
-    return MacenkoStains(stains, maxc, n, i0t, key, "macenko", n_total)
+    return MacenkoStains(stains, maxc, n, i0t, key, "macenko", n_total, i0_from)
 
 
 def _target(target: object, **kw: Any) -> MacenkoStains:
@@ -764,7 +899,7 @@ def vahadane_stains(
         )
     key = _base(base)
     rgb = image_in(image)
-    i0v = _resolve_i0(rgb, i0)
+    i0v, i0_from = _resolve_i0_source(rgb, i0)
     od = optical_density(rgb, min_intensity=min_intensity, i0=i0v, base=key)
     flat: Any = od.reshape((-1, 3)).astype(np.float64)
     keep = _keep_mask(flat, float(beta), "norm")
@@ -784,4 +919,5 @@ def vahadane_stains(
         h = h[::-1]
     maxc = _max_conc(od, h, float(max_percentile))
     i0t = (float(i0v[0]), float(i0v[1]), float(i0v[2]))
-    return MacenkoStains(h.copy(), maxc, n, i0t, key, "vahadane", int(np.prod(rgb.shape[:-1])))
+    n_total = int(np.prod(rgb.shape[:-1]))
+    return MacenkoStains(h.copy(), maxc, n, i0t, key, "vahadane", n_total, i0_from)

@@ -42,6 +42,8 @@ _THIRD = 1.0 / 3.0
 # CIE 15:2004, Table T.3, columns x, y for the 2° (CIE 1931) and 10° (CIE 1964) observers.
 _XY_2 = {
     "A": (0.44757, 0.40745),
+    "B": (0.34842, 0.35161),
+    "C": (0.31006, 0.31616),
     "D50": (0.34567, 0.35850),
     "D55": (0.33242, 0.34743),
     "D65": (0.31271, 0.32902),
@@ -53,6 +55,8 @@ _XY_2 = {
 }
 _XY_10 = {
     "A": (0.45117, 0.40594),
+    "B": (0.34980, 0.35270),
+    "C": (0.31039, 0.31905),
     "D50": (0.34773, 0.35952),
     "D55": (0.33411, 0.34877),
     "D65": (0.31382, 0.33100),
@@ -91,7 +95,8 @@ def whitepoint_xy(name: str, *, observer: int = 2) -> tuple[float, float]:
     Parameters
     ----------
     name : str
-        One of A, D50, D55, D65, D75, E, F2, F7, F11 (case-insensitive; ``FL2`` also accepted).
+        One of A, B, C, D50, D55, D65, D75, E, F2, F7, F11 (case-insensitive; ``FL2`` also
+        accepted).
     observer : {2, 10}, keyword-only
         CIE 1931 2° or CIE 1964 10° standard observer.
 

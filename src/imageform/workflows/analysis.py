@@ -184,8 +184,11 @@ def stain_normalize(run: Run, opts: StainNormalizeOptions, *, out: Path, image: 
 
     img = _rgb(image, opts)
     stats = _stain_target(opts)
-    fn = analysis.macenko_normalize if opts.method == "macenko" else analysis.reinhard_normalize
-    result = fn(img, stats)
+    source = analysis.macenko_stains(img) if opts.method == "macenko" else None
+    if source is not None:
+        result = analysis.macenko_normalize(img, stats, source=source)
+    else:
+        result = analysis.reinhard_normalize(img, stats)
     n_out = write(run, out, np.asarray(result), opts, like=img)
     if opts.save_target is not None:
         stats.to_json(run.file(opts.save_target))
@@ -196,13 +199,22 @@ def stain_normalize(run: Run, opts: StainNormalizeOptions, *, out: Path, image: 
         "target": opts.target,
         "values_clipped": n_out,
     }
-    if opts.method == "macenko":
+    if source is not None:
         summary["target_stain_matrix"] = np.asarray(stats.stain_matrix).tolist()
         summary["target_max_concentrations"] = np.asarray(stats.max_concentrations).tolist()
+        summary["target_i0"], summary["target_i0_source"] = list(stats.i0), stats.i0_source
+        summary["source_i0"], summary["source_i0_source"] = list(source.i0), source.i0_source
     else:
         summary["target_lab_mean"] = list(stats.mean)
         summary["target_lab_std"] = list(stats.std)
-    return Result(summary, (f"{opts.method}: wrote {out}",))
+    text = [f"{opts.method}: wrote {out}"]
+    for name, st in (("image", source), ("target", stats)) if source is not None else ():
+        if st.i0_source == "default":
+            text.append(
+                f"no glass found on the {name}: incident light I0 = 240/255 (the reference "
+                "code's default)"
+            )
+    return Result(summary, tuple(text))
 
 
 # ---------------------------------------------------------------- colour correction

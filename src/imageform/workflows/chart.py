@@ -155,6 +155,10 @@ def chart(run: Run, opts: ChartOptions, *, out: Path, image: Path) -> Result:
         rep = correction_report(filled, ref, corr)
     for w in caught:
         run.note(f"note: {w.message}")
+    fallback = next(
+        (str(w.message) for w in caught if str(w.message).startswith("fit_color_correction: the")),
+        None,
+    )
     stats = rep.summary()
     payload = {
         "kind": "colorchecker",
@@ -174,6 +178,8 @@ def chart(run: Run, opts: ChartOptions, *, out: Path, image: Path) -> Result:
             "transfer": corr.transfer,
             "matrix": corr.matrix.tolist(),
             "n_patches": int(corr.n_patches),
+            "requested": {"method": opts.method, "degree": int(opts.degree)},
+            "fallback": fallback,
         },
         "delta_e00_before": rep.delta_e_before.tolist(),
         "delta_e00_after": rep.delta_e_after.tolist(),
