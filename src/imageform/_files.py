@@ -9,6 +9,10 @@ its final name only when everything succeeded:
 - the rename replaces a symbolic link at the final name instead of writing through it, and an
   input reached through another path, a symbolic or a hard link is recognised by its device
   and inode, never overwritten;
+- an existing final name that is not a regular file (a FIFO, a device, a socket, or a symbolic
+  link to one; a folder where a file is written; a folder output holding one) is refused,
+  whatever ``force`` says: checked when the output is added and again just before the rename,
+  in :func:`publish`, the one place a temporary becomes an output;
 - several outputs of one command are renamed together at the end, with SIGINT and SIGTERM
   held back for the few microseconds the renames take;
 - a folder output (``imageform simulate``'s) is built beside the old one and swapped in whole.
@@ -26,6 +30,7 @@ import re
 import secrets
 import shutil
 import signal
+import stat
 import threading
 from collections.abc import Callable, Iterable, Iterator
 from pathlib import Path
@@ -37,6 +42,8 @@ __all__ = [
     "Outputs",
     "atomic_write",
     "check_output",
+    "publish",
+    "refuse_special",
     "remove_stale_parts",
     "same_file",
     "signals_deferred",
@@ -64,6 +71,92 @@ def _inside(path: Path, folder: Path) -> bool:
     return True
 
 
+def _what(mode: int) -> str:
+    """Name the kind of a file that is not a regular file nor a folder."""
+    if stat.S_ISFIFO(mode):
+        return "a FIFO (named pipe)"
+    if stat.S_ISCHR(mode):
+        return "a character device"
+    if stat.S_ISBLK(mode):
+        return "a block device"
+    if stat.S_ISSOCK(mode):
+        return "a socket"
+    return "a special file"
+
+
+def _special_inside(folder: Path) -> tuple[Path, int] | None:
+    """Return the first entry under ``folder`` that an output folder must not hold, with its mode.
+
+    Not a regular file, a folder or a symbolic link (links are not followed); None if none.
+    """
+    stack = [folder]
+    while stack:
+        try:
+            entries = list(os.scandir(stack.pop()))
+        except OSError:
+            continue
+        for entry in entries:
+            try:
+                mode = entry.stat(follow_symlinks=False).st_mode
+            except OSError:
+                continue
+            if stat.S_ISDIR(mode):
+                stack.append(Path(entry.path))
+            elif not (stat.S_ISREG(mode) or stat.S_ISLNK(mode)):
+                return Path(entry.path), mode
+    return None
+
+
+def refuse_special(out: str | Path, *, folder: bool = False) -> None:
+    """Refuse an existing ``out`` that an output must never replace, whatever the flags.
+
+    Replaceable: nothing there, a regular file, a symbolic link to a regular file or a dangling
+    one (the link is replaced, never followed); for a folder output (``folder``), a folder (or a
+    link to one) holding only regular files, folders and links, and not a mount point.
+    Everything else (a FIFO, a device, a socket, a link to one; a folder where a file is
+    written) is refused.
+
+    Raises
+    ------
+    InvalidInputError
+        In one line naming ``out`` and what it is.
+    """
+    out = Path(out)
+    try:
+        mode = os.lstat(out).st_mode
+    except OSError:
+        return  # nothing there (or a parent that is not a folder: reported by check_output)
+    link = stat.S_ISLNK(mode)
+    if link:
+        try:
+            mode = os.stat(out).st_mode
+        except OSError:
+            return  # a dangling link: replaced, never followed
+    via = "a symbolic link to " if link else ""
+    if stat.S_ISREG(mode):
+        if folder:
+            raise InvalidInputError(f"output {out} exists and is not a folder")
+        return
+    if stat.S_ISDIR(mode):
+        if not folder:
+            what = f"{via}a folder" if link else "a folder"
+            raise InvalidInputError(f"output {out} is {what}; give a file name")
+        if not link:
+            if os.path.ismount(out):
+                raise InvalidInputError(f"output folder {out} is a mount point; refused")
+            found = _special_inside(out)
+            if found is not None:
+                raise InvalidInputError(
+                    f"output folder {out} holds {found[0]}, {_what(found[1])}; it is never "
+                    "replaced (choose another folder)"
+                )
+        return
+    what = via + _what(mode)
+    raise InvalidInputError(
+        f"output {out} is {what}, not a regular file; it is never replaced (choose another path)"
+    )
+
+
 def check_output(
     out: Path, *, inputs: Iterable[Path] = (), force: bool = False, folder: bool = False
 ) -> Path:
@@ -85,16 +178,38 @@ def check_output(
             what = "contains the input" if folder and not same_file(p, out) else "is also an input"
             raise InvalidInputError(f"output {out} {what} {p}; choose another path")
     if os.path.lexists(out):
-        if out.is_dir() and not out.is_symlink() and not folder:
-            raise InvalidInputError(f"output {out} is a folder; give a file name")
-        if folder and not out.is_dir():
-            raise InvalidInputError(f"output {out} exists and is not a folder")
+        refuse_special(out, folder=folder)
         if not force:
             raise InvalidInputError(f"output {out} exists; pass --force to overwrite it")
     parent = out.parent if str(out.parent) else Path(".")
     if not parent.is_dir():
         raise InvalidInputError(f"output folder {parent} does not exist")
     return out
+
+
+def publish(part: Path, final: Path, *, folder: bool = False, token: str | None = None) -> None:
+    """Rename the finished temporary ``part`` onto ``final``: the one place an output appears.
+
+    ``final`` is checked again (:func:`refuse_special`) just before the rename: whatever came
+    to be there while the output was written, a FIFO or a device is never replaced. A folder
+    output is swapped in whole (the old folder moved aside, then removed). Call it with SIGINT
+    and SIGTERM held back (:func:`signals_deferred`) when several outputs are published together.
+
+    Raises
+    ------
+    InvalidInputError
+        ``final`` became something an output must not replace (``part`` is left for the caller
+        to remove).
+    """
+    refuse_special(final, folder=folder)
+    if folder and os.path.lexists(final):
+        tag = token or secrets.token_hex(4)
+        old = final.with_name(f".{final.name}.{os.getpid()}-{tag}.old{_PART}")
+        os.replace(final, old)
+        os.replace(part, final)
+        _remove(old)
+    else:
+        os.replace(part, final)
 
 
 def _part_name(final: Path, token: str) -> Path:
@@ -241,18 +356,13 @@ class Outputs:
         for part, final, _ in self._items:
             if not os.path.lexists(part):
                 raise ImageformError(f"output {final} was not written")
-        for part, _, folder in self._items:
+        for part, final, folder in self._items:
             if not folder:
                 _fsync(part)
+            refuse_special(final, folder=folder)  # before any is renamed: all or nothing
         with signals_deferred():
             for part, final, folder in self._items:
-                if folder and os.path.lexists(final):
-                    old = final.with_name(f".{final.name}.{os.getpid()}-{self._token}.old{_PART}")
-                    os.replace(final, old)
-                    os.replace(part, final)
-                    _remove(old)
-                else:
-                    os.replace(part, final)
+                publish(part, final, folder=folder, token=self._token)
         self._done = True
 
     def discard(self) -> None:
@@ -296,6 +406,7 @@ def atomic_write(final: str | Path, write: Callable[[Path], object]) -> None:
     'hello'
     """
     final = Path(final)
+    refuse_special(final)
     part = _part_name(final, secrets.token_hex(4))
     try:
         write(part)
@@ -303,7 +414,7 @@ def atomic_write(final: str | Path, write: Callable[[Path], object]) -> None:
             raise ImageformError(f"output {final} was not written")
         _fsync(part)
         with signals_deferred():
-            os.replace(part, final)
+            publish(part, final)
     except BaseException:
         _remove(part)
         raise
