@@ -24,6 +24,7 @@ killed one (and only those: two live runs into one folder never delete each othe
 from __future__ import annotations
 
 import contextlib
+import errno
 import glob
 import os
 import re
@@ -39,6 +40,7 @@ from types import TracebackType
 from imageform.errors import ImageformError, InvalidInputError
 
 __all__ = [
+    "OutputWriteError",
     "Outputs",
     "atomic_write",
     "check_output",
@@ -50,6 +52,33 @@ __all__ = [
 ]
 
 _PART = ".part"
+_PART_NAME = re.compile(r"^\.(.+)\.\d+-[0-9a-z]+(?:\.old)?\.part")
+
+#: Why writing failed, for the errors that say nothing about the data.
+_WRITE_REASONS = {
+    errno.ENOSPC: "no space left on device",
+    errno.EDQUOT: "disk quota exceeded",
+    errno.EROFS: "read-only file system",
+    errno.EFBIG: "file too large for the file system",
+}
+
+
+class OutputWriteError(ImageformError, OSError):
+    """An output could not be written (a full disk, no permission): one line naming it.
+
+    The user's name of the output, never a temporary name; ``errno`` and ``filename`` are set,
+    and the original ``OSError`` is the ``__cause__``.
+    """
+
+    def __str__(self) -> str:
+        return str(self.args[0]) if self.args else ""
+
+
+def _unpart(name: str) -> str:
+    """Return the final name of a temporary name (``.out.png.1-ab.part.png`` -> ``out.png``)."""
+    while (m := _PART_NAME.match(name)) is not None:
+        name = m.group(1)
+    return name
 
 
 def same_file(a: Path, b: Path) -> bool:
@@ -350,6 +379,49 @@ class Outputs:
             if other == Path(final):
                 return part
         return None
+
+    def final_of(self, path: str | Path) -> Path | None:
+        """Return the user's name of ``path`` if it is (or is inside) a temporary of an output.
+
+        A writer's own temporary beside it (``write_image``'s) counts too; None otherwise.
+        """
+        p = Path(os.path.abspath(path))
+        for part, final, folder in self._items:
+            a = Path(os.path.abspath(part))
+            if p == a or (p.parent == a.parent and p.name.startswith(f".{a.name}.")):
+                return final
+            if folder and a in p.parents:
+                rel = p.relative_to(a).parts
+                return final.joinpath(*(_unpart(n) for n in rel))
+        return None
+
+    def explain(self, exc: OSError) -> OutputWriteError | None:
+        """Return ``exc`` as one line naming the output it failed to write (None: not an output).
+
+        An error naming a temporary names the user's output instead; a full disk, a quota or a
+        read-only file system without a file name is about the outputs, never the inputs.
+        """
+        final = None
+        for name in (exc.filename, exc.filename2):
+            if isinstance(name, str | os.PathLike) and final is None:
+                final = self.final_of(os.fspath(name))
+        code = exc.errno
+        if final is None:
+            if exc.filename is not None or code not in _WRITE_REASONS or not self._items:
+                return None
+            finals = self.finals
+            where = f"{finals[0]}" + (f" (or one of {len(finals) - 1} more)" if finals[1:] else "")
+        else:
+            where = str(final)
+        reason = _WRITE_REASONS.get(code) if code is not None else None
+        if reason is None:
+            lines = str(exc).strip().splitlines()
+            text = exc.strerror or (lines[0] if lines else "")
+            reason = (text[:1].lower() + text[1:]) if text else type(exc).__name__
+        err = OutputWriteError(f"{reason} writing {where}")
+        err.errno = code
+        err.filename = str(final) if final is not None else None
+        return err
 
     def commit(self) -> None:
         """Rename every temporary onto its final name (all of them, or none on an error)."""

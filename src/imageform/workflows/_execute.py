@@ -67,8 +67,11 @@ def execute(
     Raises
     ------
     InvalidInputError
-        An output that is an input, exists without ``force``, or whose folder is missing; a
-        missing input; anything the workflow refuses.
+        An output that is an input, exists without ``force``, is not a regular file, or whose
+        folder is missing; a missing input; anything the workflow refuses.
+    OSError
+        Writing an output failed: an ``imageform._files.OutputWriteError`` naming the output
+        (never a temporary name) when the error is about an output or the disk.
     """
     from imageform._validate import as_bool, as_path, describe
     from imageform.workflows.registry import get_workflow
@@ -109,19 +112,28 @@ def execute(
         if wf.output.default is None and wf.output.required:
             raise InvalidInputError(f"{wf.name} needs an output: -o/--out")
         out = wf.output.default
-    with Outputs(inputs=in_paths, force=force) as outputs:
-        run = Run(outputs, progress=progress)
-        if out is not None:  # checked before any work starts
-            (run.folder if wf.output is not None and wf.output.folder else run.file)(out)
-        for extra in opts.paths("output"):
-            run.file(extra)
-        with warnings.catch_warnings(record=True) as caught:
-            warnings.simplefilter("ignore", DeprecationWarning)
-            warnings.simplefilter("ignore", PendingDeprecationWarning)
-            warnings.simplefilter("always", UserWarning)
-            warnings.simplefilter("always", RuntimeWarning)
-            function = resolve(wf.function)
-            result: Result = function(run, opts, out=None if out is None else Path(out), **inputs)
+    outputs = Outputs(inputs=in_paths, force=force)
+    try:
+        with outputs:
+            run = Run(outputs, progress=progress)
+            if out is not None:  # checked before any work starts
+                (run.folder if wf.output is not None and wf.output.folder else run.file)(out)
+            for extra in opts.paths("output"):
+                run.file(extra)
+            with warnings.catch_warnings(record=True) as caught:
+                warnings.simplefilter("ignore", DeprecationWarning)
+                warnings.simplefilter("ignore", PendingDeprecationWarning)
+                warnings.simplefilter("always", UserWarning)
+                warnings.simplefilter("always", RuntimeWarning)
+                function = resolve(wf.function)
+                result: Result = function(
+                    run, opts, out=None if out is None else Path(out), **inputs
+                )
+    except OSError as exc:  # a full disk, no permission: name the user's output
+        explained = outputs.explain(exc)
+        if explained is None:
+            raise
+        raise explained from exc
     notes = tuple(run.notes) + tuple(dict.fromkeys(_note_of(w) for w in caught))
     return replace(result, notes=result.notes + notes)
 

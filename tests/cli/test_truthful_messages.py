@@ -1,0 +1,148 @@
+"""One-line messages that tell the truth: what failed, about which file (the user's name, never a
+temporary one), and the cause, not an error of the error handler."""
+
+from __future__ import annotations
+
+import errno
+import os
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import imageform.io
+from imageform.cli import main
+from imageform.io import write_image
+
+
+def _line(capsys: pytest.CaptureFixture[str]) -> str:
+    err = capsys.readouterr().err
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("imageform: error: "), err
+    assert "Traceback" not in err
+    return lines[0]
+
+
+@pytest.fixture
+def rgb(tmp_path: Path) -> Path:
+    src = tmp_path / "in.png"
+    write_image(src, np.full((4, 4, 3), 100, np.uint8))
+    return src
+
+
+def _no_leftovers(folder: Path) -> None:
+    assert [p.name for p in folder.iterdir() if ".part" in p.name] == []
+
+
+# ---------------------------------------------------------------- simulate's unexpected errors
+
+
+def test_simulate_unexpected_error_shows_its_own_type(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """simulate has no input file: the handler read files[0] of an empty list (IndexError)."""
+    import imageform.simulate
+
+    def broken(*args: object, **kwargs: object) -> None:
+        raise ZeroDivisionError("float division by zero")
+
+    monkeypatch.setattr(imageform.simulate, "simulate", broken)
+    out = tmp_path / "sim"
+    assert main(["simulate", "-o", str(out)]) == 1
+    line = _line(capsys)
+    assert line == (
+        "imageform: error: unexpected ZeroDivisionError: float division by zero "
+        "(run again with --traceback to see where)"
+    )
+    assert not out.exists()
+    _no_leftovers(tmp_path)
+
+
+def test_simulate_too_deep_scene_says_so_naming_it(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    scene = tmp_path / "deep.toml"
+    scene.write_text("x = " + "[" * 100_000 + "]" * 100_000 + "\n")
+    assert main(["simulate", "--scene", str(scene), "-o", str(tmp_path / "sim")]) == 1
+    line = _line(capsys)
+    assert str(scene) in line and "nested too deeply" in line and "IndexError" not in line
+
+
+def test_simulate_full_disk_names_the_output_folder(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    import imageform.report.html
+
+    def full(*args: object, **kwargs: object) -> None:
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.setattr(imageform.report.html, "write_report", full)
+    out = tmp_path / "sim"
+    assert main(["simulate", "-o", str(out)]) == 1
+    assert _line(capsys) == f"imageform: error: no space left on device writing {out}"
+    assert not out.exists()
+    _no_leftovers(tmp_path)
+
+
+# ---------------------------------------------------------------- a full disk, an unwritable output
+
+
+def _failing_write(exc_of: object) -> object:
+    def write(path: object, *args: object, **kwargs: object) -> None:
+        Path(str(path)).write_bytes(b"half")
+        raise exc_of(str(path))  # type: ignore[operator]
+
+    return write
+
+
+@pytest.mark.parametrize("named", [False, True])
+def test_full_disk_blames_the_output_not_the_input(
+    rgb: Path,
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+    monkeypatch: pytest.MonkeyPatch,
+    named: bool,
+) -> None:
+    """ENOSPC without a file name (numpy, PIL) or naming the temporary file."""
+
+    def enospc(path: str) -> OSError:
+        if named:
+            return OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), path)
+        return OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+
+    monkeypatch.setattr(imageform.io, "write_image", _failing_write(enospc))
+    out = tmp_path / "out.png"
+    assert main(["white-balance", str(rgb), "-o", str(out)]) == 1
+    assert _line(capsys) == f"imageform: error: no space left on device writing {out}"
+    assert not out.exists()
+    _no_leftovers(tmp_path)
+
+
+def test_unwritable_output_shows_the_users_name(
+    rgb: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    def denied(path: str) -> OSError:
+        return PermissionError(errno.EACCES, os.strerror(errno.EACCES), path)
+
+    monkeypatch.setattr(imageform.io, "write_image", _failing_write(denied))
+    out = tmp_path / "out.png"
+    assert main(["white-balance", str(rgb), "-o", str(out)]) == 1
+    line = _line(capsys)
+    assert line == f"imageform: error: permission denied writing {out}", line
+    _no_leftovers(tmp_path)
+
+
+def test_unwritable_file_inside_an_output_folder_shows_its_final_name(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    import imageform.report.html
+
+    def denied(result: object, folder: Path, **kwargs: object) -> None:
+        target = Path(folder) / "stages" / ".01.png.77-ab12cd34.part.png"
+        raise PermissionError(errno.EACCES, os.strerror(errno.EACCES), str(target))
+
+    monkeypatch.setattr(imageform.report.html, "write_report", denied)
+    out = tmp_path / "sim"
+    assert main(["simulate", "-o", str(out)]) == 1
+    line = _line(capsys)
+    assert line == f"imageform: error: permission denied writing {out / 'stages' / '01.png'}"
