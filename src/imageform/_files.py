@@ -44,6 +44,7 @@ __all__ = [
     "Outputs",
     "atomic_write",
     "check_output",
+    "not_a_regular_file",
     "publish",
     "refuse_special",
     "remove_stale_parts",
@@ -136,6 +137,41 @@ def _special_inside(folder: Path) -> tuple[Path, int] | None:
     return None
 
 
+def not_a_regular_file(path: str | Path) -> str | None:
+    """Say what an existing ``path`` is when it is not a regular file (links followed).
+
+    ``"is a folder"``, ``"is a FIFO (named pipe), not a regular file"`` ...; None for a regular
+    file or nothing at all (a missing file is the caller's message).
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> not_a_regular_file(tempfile.mkdtemp())
+    'is a folder'
+    """
+    try:
+        mode = os.stat(path).st_mode
+    except (OSError, ValueError):
+        return None
+    if stat.S_ISREG(mode):
+        return None
+    if stat.S_ISDIR(mode):
+        return "is a folder"
+    return f"is {_what(mode)}, not a regular file"
+
+
+def _folder_problem(parent: Path) -> str:
+    """Say why ``parent`` cannot hold an output: missing, or it (or a folder above) is a file."""
+    for above in (parent, *parent.parents):
+        if os.path.lexists(above):
+            if above.is_dir():
+                break
+            if above == parent:
+                return f"output folder {parent} is not a folder"
+            return f"output folder {parent} does not exist ({above} is not a folder)"
+    return f"output folder {parent} does not exist"
+
+
 def refuse_special(out: str | Path, *, folder: bool = False) -> None:
     """Refuse an existing ``out`` that an output must never replace, whatever the flags.
 
@@ -212,7 +248,7 @@ def check_output(
             raise InvalidInputError(f"output {out} exists; pass --force to overwrite it")
     parent = out.parent if str(out.parent) else Path(".")
     if not parent.is_dir():
-        raise InvalidInputError(f"output folder {parent} does not exist")
+        raise InvalidInputError(_folder_problem(parent))
     return out
 
 

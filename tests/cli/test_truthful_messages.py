@@ -146,3 +146,53 @@ def test_unwritable_file_inside_an_output_folder_shows_its_final_name(
     assert main(["simulate", "-o", str(out)]) == 1
     line = _line(capsys)
     assert line == f"imageform: error: permission denied writing {out / 'stages' / '01.png'}"
+
+
+# ---------------------------------------------------------------- what a path is
+
+
+def test_output_whose_parent_is_a_file_says_so(
+    rgb: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    good = tmp_path / "good.png"
+    good.write_bytes(b"mine")
+    assert main(["white-balance", str(rgb), "-o", str(good / "out.png")]) == 1
+    assert _line(capsys) == f"imageform: error: output folder {good} is not a folder"
+    deeper = good / "x" / "out.png"
+    assert main(["white-balance", str(rgb), "-o", str(deeper)]) == 1
+    assert _line(capsys) == (
+        f"imageform: error: output folder {deeper.parent} does not exist ({good} is not a folder)"
+    )
+    missing = tmp_path / "nope" / "x" / "out.png"
+    assert main(["white-balance", str(rgb), "-o", str(missing)]) == 1
+    assert _line(capsys) == f"imageform: error: output folder {missing.parent} does not exist"
+    assert good.read_bytes() == b"mine"
+
+
+@pytest.mark.parametrize(
+    ("kind", "said"),
+    [("fifo", "is a FIFO (named pipe), not a regular file"), ("folder", "is a folder")],
+)
+def test_fifo_or_folder_as_input_says_what_it_is(
+    rgb: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str], kind: str, said: str
+) -> None:
+    """Never "file not found" (and a FIFO is never opened: reading it would block)."""
+    odd = tmp_path / "odd.png"
+    if kind == "fifo":
+        os.mkfifo(odd)
+    else:
+        odd.mkdir()
+    out = tmp_path / "out.png"
+    assert main(["white-balance", str(odd), "-o", str(out)]) == 1
+    assert said in _line(capsys)
+    assert main(["undistort", str(rgb), "--camera", str(odd), "-o", str(out)]) == 1
+    line = _line(capsys)
+    assert f"--camera {odd} {said}" in line
+    assert main(["simulate", "--scene", str(odd), "-o", str(tmp_path / "sim")]) == 1
+    assert f"--scene {odd} {said}" in _line(capsys)
+    scene = tmp_path / "scene.toml"
+    scene.write_text(f'[[objects]]\ntype = "image"\ncentre_m = [0, 0, 0]\npath = "{odd.name}"\n')
+    assert main(["simulate", "--scene", str(scene), "-o", str(tmp_path / "sim")]) == 1
+    line = _line(capsys)  # the long line is cut after "FIFO (named pipe),"
+    assert said.split(",")[0] in line and "not found" not in line
+    assert not out.exists()

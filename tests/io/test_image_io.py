@@ -201,7 +201,7 @@ def test_errors(tmp_path: Path) -> None:
     with pytest.raises(InvalidInputError, match="does not exist"):
         read_image(tmp_path / "missing.png")
     (tmp_path / "dir.png").mkdir()
-    with pytest.raises(InvalidInputError, match="is not a file"):
+    with pytest.raises(InvalidInputError, match="is a folder"):
         read_image(tmp_path / "dir.png")
     (tmp_path / "fake.png").write_bytes(b"not a png")
     with pytest.raises(InvalidInputError, match="not a PNG"):

@@ -37,7 +37,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from imageform._files import atomic_write
+from imageform._files import atomic_write, not_a_regular_file
 from imageform._validate import check_memory, check_option, describe, format_shape
 from imageform.errors import InvalidInputError
 
@@ -245,7 +245,7 @@ def _existing(path: str | Path) -> Path:
     if not p.exists():
         raise InvalidInputError(f"input file {p} does not exist")
     if not p.is_file():
-        raise InvalidInputError(f"input {p} is not a file")
+        raise InvalidInputError(f"input {p} {not_a_regular_file(p) or 'is not a regular file'}")
     return p
 
 

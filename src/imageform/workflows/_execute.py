@@ -11,7 +11,7 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
-from imageform._files import Outputs
+from imageform._files import Outputs, not_a_regular_file
 from imageform.errors import InvalidInputError
 from imageform.workflows._spec import Options, Result, Run, Workflow, flag_of, resolve
 
@@ -102,11 +102,13 @@ def execute(
     for f in opts.fields():
         if f.metadata.get("input"):
             named += [(flag_of(f), p) for p in _as_paths(getattr(opts, f.name), flag_of(f))]
-    for what, p in named:  # before any work starts
+    for what, p in named:  # before any work starts (a FIFO is never opened: it would block)
+        kind = not_a_regular_file(p)
+        if kind is not None:
+            expected = "; expected a file" if kind == "is a folder" else ""
+            raise InvalidInputError(f"{what} {p} {kind}{expected}")
         if not p.exists():
             raise InvalidInputError(f"{what} file {p} does not exist")
-        if p.is_dir():
-            raise InvalidInputError(f"{what} {p} is a folder; expected a file")
     in_paths = [p for _, p in named]
     if wf.output is not None and out is None:
         if wf.output.default is None and wf.output.required:
