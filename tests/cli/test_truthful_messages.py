@@ -196,3 +196,30 @@ def test_fifo_or_folder_as_input_says_what_it_is(
     line = _line(capsys)  # the long line is cut after "FIFO (named pipe),"
     assert said.split(",")[0] in line and "not found" not in line
     assert not out.exists()
+
+
+# ---------------------------------------------------------------- sizes
+
+
+@pytest.mark.parametrize(
+    ("size", "limit", "said"),
+    [
+        ((4, 4), 10, "4 x 4 = 16 px, above the limit of 10 px"),
+        ((300, 400), 100_000, "400 x 300 = 0.120 Mpx, above the limit of 0.100 Mpx"),
+        ((1000, 1000), 999_999, "1000 x 1000 = 1000000 px, above the limit of 999999 px"),
+    ],
+)
+def test_pixel_limit_message_shows_small_sizes(
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+    size: tuple[int, int],
+    limit: int,
+    said: str,
+) -> None:
+    """Never "0.0 Mpx, above the limit of 0.0 Mpx"."""
+    src = tmp_path / "in.png"
+    write_image(src, np.zeros((*size, 3), np.uint8))
+    out = tmp_path / "out.png"
+    assert main(["white-balance", str(src), "-o", str(out), "--max-pixels", str(limit)]) == 1
+    line = _line(capsys)
+    assert said in line, line
