@@ -223,3 +223,44 @@ def test_pixel_limit_message_shows_small_sizes(
     assert main(["white-balance", str(src), "-o", str(out), "--max-pixels", str(limit)]) == 1
     line = _line(capsys)
     assert said in line, line
+
+
+# ---------------------------------------------------------------- calibration commands
+
+
+def test_stereo_calibrate_refuses_one_folder_for_both_cameras(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    views = tmp_path / "views"
+    views.mkdir()
+    for k in range(3):
+        write_image(views / f"v{k}.png", np.full((8, 8, 3), 100, np.uint8))
+    other = tmp_path / "other"
+    other.mkdir()
+    out = tmp_path / "rig.toml"
+    base = ["stereo-calibrate", "--board", "9x6", "-o", str(out)]
+    assert main([*base, str(views), str(views)]) == 1
+    assert f"left and right are both {views}" in _line(capsys)
+    glob = str(views / "*.png")
+    assert main([*base, glob, glob]) == 1
+    assert "left and right are both" in _line(capsys)
+    assert main([*base, str(views / "v[01].png"), glob]) == 1
+    assert "left and right both name the image" in _line(capsys)
+    assert main([*base, str(views), str(other)]) == 1
+    line = _line(capsys)
+    assert f"left {views} is a folder; give its images as a quoted glob pattern" in line
+    assert not out.exists()
+
+
+def test_calibrate_advises_its_own_max_iter_option(
+    shared_data: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The library says "raise max_iter": the command has --max-iter and says so."""
+    pattern = str(shared_data / "opencv-left" / "left0[1-4].jpg")
+    out = tmp_path / "cam.toml"
+    args = ["calibrate", pattern, "--board", "9x6", "-o", str(out)]
+    assert main([*args, "--max-iter", "2"]) == 1
+    line = _line(capsys)
+    assert "did not converge in 2 iterations" in line and "raise --max-iter (now 2)" in line
+    assert not out.exists()
+    assert main([*args, "--max-iter", "500"]) == 0

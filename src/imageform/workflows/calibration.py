@@ -4,11 +4,12 @@ from __future__ import annotations
 
 import re
 from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from imageform.errors import DegenerateConfigurationError, InvalidInputError
+from imageform.errors import ConvergenceError, DegenerateConfigurationError, InvalidInputError
 from imageform.workflows._images import ImageIn, ImageOut, read, write
 from imageform.workflows._spec import (
     IMAGE_SUFFIXES,
@@ -141,6 +142,16 @@ class _BoardChecks:
         return parse_length(self.square, "--square", default_unit="mm", unit="mm")
 
 
+@contextmanager
+def _converging(max_iter: int) -> Iterator[None]:
+    """Say ``--max-iter`` (the command's option) where the library advises its ``max_iter``."""
+    try:
+        yield
+    except ConvergenceError as exc:
+        text = str(exc).replace("raise max_iter", f"raise --max-iter (now {max_iter})")
+        raise ConvergenceError(text) from exc
+
+
 # ---------------------------------------------------------------- calibrate
 
 
@@ -177,6 +188,13 @@ class CalibrateOptions(_BoardChecks, ImageIn):
         metavar="NAME",
     )
     skew: bool = option(False, help="Estimate the skew (default: 0, as OpenCV).")
+    max_iter: int = option(
+        100,
+        help="Most iterations of the Levenberg-Marquardt refinement (raise it when it does not "
+        "converge).",
+        minimum=1,
+        maximum=1_000_000,
+    )
     marker: str | None = option(
         None,
         help="ChArUco: side of a marker with unit (22mm; bare number: mm), smaller than "
@@ -336,7 +354,15 @@ def _calibrate_views(
     from imageform.io import CameraFile, write_camera
     from imageform.workflows._tables import write_table
 
-    res = calibrate_camera(objs, corners, (shape[1], shape[0]), skew=opts.skew, fix=opts.fix)
+    with _converging(opts.max_iter):
+        res = calibrate_camera(
+            objs,
+            corners,
+            (shape[1], shape[0]),
+            skew=opts.skew,
+            fix=opts.fix,
+            max_iter=opts.max_iter,
+        )
     command += "".join(f" --fix {p}" for p in opts.fix) + (" --skew" if opts.skew else "")
     cf = CameraFile.from_calibration(res, images=names, command=command)
     write_camera(run.file(out), cf)

@@ -17,7 +17,7 @@ from imageform.workflows._spec import (
     Workflow,
     option,
 )
-from imageform.workflows.calibration import MIN_VIEWS, _BoardChecks, parse_board
+from imageform.workflows.calibration import MIN_VIEWS, _BoardChecks, _converging, parse_board
 
 __all__ = ["WORKFLOWS", "StereoCalibrateOptions"]
 
@@ -47,22 +47,56 @@ class StereoCalibrateOptions(_BoardChecks, ImageIn):
     half_window: int | None = option(
         None, help="Sub-pixel window half size (OpenCV's tutorial: 11); default adaptive."
     )
+    max_iter: int = option(
+        100,
+        help="Most iterations of the joint Levenberg-Marquardt refinement (raise it when it does "
+        "not converge).",
+        minimum=1,
+        maximum=1_000_000,
+    )
 
 
 def _expand(pattern: str, what: str) -> list[Path]:
     """Return the files a name or a glob pattern names, sorted; none is an error."""
+    from imageform._files import glob_paths, not_a_regular_file
+
     p = str(pattern)
     if os.path.exists(p) or not any(c in p for c in "*?["):
         path = Path(p)
+        kind = not_a_regular_file(path)
+        if kind == "is a folder":
+            raise InvalidInputError(
+                f"{what} {path} is a folder; give its images as a quoted glob pattern "
+                f"('{path / '*.png'}')"
+            )
+        if kind is not None:
+            raise InvalidInputError(f"{what} {path} {kind}")
         if not path.is_file():
             raise InvalidInputError(f"{what} file {path} does not exist")
         return [path]
-    from imageform._files import glob_paths
-
     hits = sorted(glob_paths(p))
     if not hits:
         raise InvalidInputError(f"no files match {what} pattern {p!r}")
     return [Path(h) for h in hits]
+
+
+def _check_distinct(left: str, right: str, lefts: list[Path], rights: list[Path]) -> None:
+    """Refuse left and right images that are the same files: a camera paired with itself."""
+    from imageform._files import same_file
+
+    if str(left) == str(right) or (
+        os.path.exists(left) and os.path.exists(right) and same_file(Path(left), Path(right))
+    ):
+        raise InvalidInputError(
+            f"left and right are both {left}; give each camera's own images (a quoted glob "
+            "pattern each: 'left/*.png' 'right/*.png')"
+        )
+    for a in lefts:
+        for b in rights:
+            if same_file(a, b):
+                raise InvalidInputError(
+                    f"left and right both name the image {a}; give each camera's own images"
+                )
 
 
 def _detect(
@@ -99,7 +133,10 @@ def stereo_calibrate_cmd(
     from imageform.geometry import checkerboard_points, stereo_calibrate
     from imageform.io import StereoCameraFile, write_stereo_camera
 
+    if str(left) == str(right):
+        _check_distinct(left, right, [], [])
     lefts, rights = _expand(left, "left"), _expand(right, "right")
+    _check_distinct(left, right, lefts, rights)
     if len(lefts) != len(rights):
         raise InvalidInputError(
             f"expected as many right images as left ones (paired in sorted order), got "
@@ -126,16 +163,18 @@ def stereo_calibrate_cmd(
     if run.progress is not None:
         run.progress("calibrating", 1.0)
     obj = checkerboard_points(board, opts.square_mm())
-    rig = stereo_calibrate(
-        [obj] * len(pairs),
-        [p[2] for p in pairs],
-        [p[3] for p in pairs],
-        size_l,
-        image_size_right=size_r,
-        fix_intrinsics=opts.fix_intrinsics,
-        fix=opts.fix,
-        skew=opts.skew,
-    )
+    with _converging(opts.max_iter):
+        rig = stereo_calibrate(
+            [obj] * len(pairs),
+            [p[2] for p in pairs],
+            [p[3] for p in pairs],
+            size_l,
+            image_size_right=size_r,
+            fix_intrinsics=opts.fix_intrinsics,
+            fix=opts.fix,
+            skew=opts.skew,
+            max_iter=opts.max_iter,
+        )
     command = f"imageform stereo-calibrate --board {board[0]}x{board[1]} --square {opts.square}"
     command += "".join(f" --fix {p}" for p in opts.fix) + (" --skew" if opts.skew else "")
     command += " --fix-intrinsics" if opts.fix_intrinsics else ""
