@@ -264,3 +264,40 @@ def test_calibrate_advises_its_own_max_iter_option(
     assert "did not converge in 2 iterations" in line and "raise --max-iter (now 2)" in line
     assert not out.exists()
     assert main([*args, "--max-iter", "500"]) == 0
+
+
+# ---------------------------------------------------------------- tables
+
+
+@pytest.mark.parametrize(
+    ("csv", "said"),
+    [
+        ("X,Y\n1,2\n3,4\n", "needs the columns X, Y, Z"),
+        ("X,Y,depth\n1,2,3\n", "its header has x, y, depth, no Z"),
+        ("a,b\n1,2\n", "needs the columns X, Y, Z"),
+    ],
+)
+def test_project_refuses_a_table_without_x_y_z(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], csv: str, said: str
+) -> None:
+    """A header X,Y was read as X, Y and an empty Z: exit 0 with NaN pixels."""
+    pts = tmp_path / "pts.csv"
+    pts.write_text(csv)
+    out = tmp_path / "uv.csv"
+    assert main(["project", str(pts), "--fx", "500", "-o", str(out)]) == 1
+    line = _line(capsys)
+    assert said in line and str(pts) in line, line
+    assert not out.exists()
+
+
+def test_project_reads_named_or_unnamed_columns(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Still read: a header naming X, Y, Z in any order, one naming none of 3 columns, none."""
+    for i, csv in enumerate(["z,X,Y\n2,0.1,0.2\n", "a,b,c\n0.1,0.2,2\n", "0.1,0.2,2\n"]):
+        pts = tmp_path / f"p{i}.csv"
+        pts.write_text(csv)
+        out = tmp_path / f"uv{i}.csv"
+        assert main(["project", str(pts), "--fx", "500", "-o", str(out)]) == 0
+        assert out.read_text().splitlines()[1] == "25.0,50.0,1"
+    capsys.readouterr()
