@@ -301,3 +301,37 @@ def test_project_reads_named_or_unnamed_columns(
         assert main(["project", str(pts), "--fx", "500", "-o", str(out)]) == 0
         assert out.read_text().splitlines()[1] == "25.0,50.0,1"
     capsys.readouterr()
+
+
+# ---------------------------------------------------------------- chart
+
+
+def test_chart_counts_add_up(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """A noisy photo: the library counted a saturated, not flat patch twice ("1 saturated",
+    "20 missing" for 20 patches left out of 24 segmented); each patch is left out once, for
+    one reason, and the counts add up."""
+    import json
+    import re
+
+    from imageform.analysis import synthetic_chart_photo
+
+    photo = synthetic_chart_photo(cast=(1.0, 0.85, 0.7), rng=3, noise=0.04)
+    src = tmp_path / "noisy.png"
+    write_image(src, np.round(np.clip(photo.image, 0, 1) * 255).astype(np.uint8))
+    out = tmp_path / "c.json"
+    assert main(["chart", str(src), "-o", str(out)]) == 0
+    cap = capsys.readouterr()
+    m = re.search(r"(\d+) of 24 patches segmented, (\d+) usable, (\d+) left out", cap.out)
+    assert m is not None, cap.out
+    _, usable, left = (int(g) for g in m.groups())
+    assert usable + left == 24 and left > 0
+    notes = cap.err.strip().splitlines()
+    assert len(notes) == 1 and "missing" not in cap.err, cap.err
+    assert notes[0].startswith(f"imageform: note: {left} of 24 patches left out of the fit: ")
+    counts = [int(n) for n in re.findall(r"(\d+) [a-z][^\[]*\[", notes[0].split(": ", 3)[3])]
+    assert sum(counts) == left
+    assert main(["chart", str(src), "-o", str(out), "--force", "--json"]) == 0
+    summary = json.loads(capsys.readouterr().out)
+    why = summary["patches_left_out"]
+    every = [i for idx in why.values() for i in idx]
+    assert len(every) == len(set(every)) == left == 24 - summary["patches_valid"]
