@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+import imageform.errors
 import imageform.io
 from imageform.cli import main
 from imageform.io import write_image
@@ -335,3 +336,53 @@ def test_chart_counts_add_up(tmp_path: Path, capsys: pytest.CaptureFixture[str])
     why = summary["patches_left_out"]
     every = [i for idx in why.values() for i in idx]
     assert len(every) == len(set(every)) == left == 24 - summary["patches_valid"]
+
+
+# ---------------------------------------------------------------- --board: corners or squares
+
+
+def test_board_counts_corners_or_squares_and_says_which(
+    shared_data: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A checkerboard counts inner corners, a ChArUco board squares: both spellings are
+    accepted (9x6corners, 10x7squares), and the output says how --board was read."""
+    import json
+
+    pattern = str(shared_data / "opencv-left" / "left0[1-4].jpg")
+    base = ["calibrate", pattern, "-o", str(tmp_path / "cam.toml"), "--force"]
+    assert main([*base, "--board", "10x7squares", "--json"]) == 0
+    board = json.loads(capsys.readouterr().out)["board"]
+    assert board == {
+        "type": "checkerboard",
+        "inner_corners": [9, 6],
+        "squares": [10, 7],
+        "read_as": "squares",
+    }
+    assert main([*base, "--board", "9x6"]) == 0
+    first = capsys.readouterr().out.splitlines()[0]
+    assert first == (
+        "board: checkerboard, 9x6 inner corners = 10x7 squares "
+        "('9x6' counts inner corners, the default for a checkerboard)"
+    )
+    # squares counted but given bare: the hint gives the spelling that counts squares
+    assert main([*base, "--board", "10x7"]) == 1
+    err = capsys.readouterr().err
+    assert "'10x7' counts inner corners; a board of 10x7 squares is --board 10x7squares" in err
+
+
+def test_board_spellings() -> None:
+    from imageform.workflows.calibration import board_reading, parse_board, parse_charuco
+
+    assert parse_board("9x6") == parse_board("9x6 corners") == parse_board("10X7 Squares")
+    assert parse_charuco("charuco:7x5") == parse_charuco("charuco:6x4corners") == (7, 5)
+    assert parse_charuco("charuco:7x5squares") == (7, 5)
+    r = board_reading("charuco:6x4corners")
+    assert (r["type"], r["squares"], r["inner_corners"], r["read_as"]) == (
+        "charuco",
+        [7, 5],
+        [6, 4],
+        "inner corners",
+    )
+    assert "the default for ChArUco" in board_reading("charuco:7x5")["line"]
+    with pytest.raises(imageform.errors.InvalidInputError, match="2 to"):
+        parse_board("2x7squares")  # one inner corner per row

@@ -17,7 +17,14 @@ from imageform.workflows._spec import (
     Workflow,
     option,
 )
-from imageform.workflows.calibration import MIN_VIEWS, _BoardChecks, _converging, parse_board
+from imageform.workflows.calibration import (
+    MIN_VIEWS,
+    _BoardChecks,
+    _converging,
+    board_hint,
+    board_reading,
+    parse_board,
+)
 
 __all__ = ["WORKFLOWS", "StereoCalibrateOptions"]
 
@@ -26,7 +33,11 @@ __all__ = ["WORKFLOWS", "StereoCalibrateOptions"]
 class StereoCalibrateOptions(_BoardChecks, ImageIn):
     """Options of ``imageform stereo-calibrate``."""
 
-    board: str = option(help="Inner corners COLSxROWS, e.g. 9x6 (not squares).", metavar="CxR")
+    board: str = option(
+        help="Checkerboard COLSxROWS of inner corners (9x6), or say which with 9x6corners or "
+        "10x7squares. The output says how it was read.",
+        metavar="CxR",
+    )
     square: str = option(
         "1",
         help="Side of a square with unit (25mm, 2.5cm, 1in; bare number: mm): the unit of T "
@@ -157,8 +168,8 @@ def stereo_calibrate_cmd(
     if len(pairs) < MIN_VIEWS:
         raise DegenerateConfigurationError(
             f"found the {board[0]}x{board[1]} board in both images of {len(pairs)} of the "
-            f"{len(lefts)} pairs; stereo-calibrate needs at least {MIN_VIEWS} (check --board: "
-            "inner corners, not squares)"
+            f"{len(lefts)} pairs; stereo-calibrate needs at least {MIN_VIEWS} "
+            f"({board_hint(opts.board)})"
         )
     if run.progress is not None:
         run.progress("calibrating", 1.0)
@@ -196,8 +207,10 @@ def stereo_calibrate_cmd(
         }
         for p, e in zip(pairs, rig.per_view_rms, strict=True)
     ]
+    reading = board_reading(opts.board)
     summary = {
         "output": out,
+        "board": {k: v for k, v in reading.items() if k != "line"},
         "pairs_used": len(pairs),
         "pairs_total": len(lefts),
         "rms_px": rig.rms,
@@ -212,7 +225,7 @@ def stereo_calibrate_cmd(
         "right": {"K": rig.right.K.tolist(), "distortion": list(rig.right.distortion.coeffs[:5])},
         "per_pair": per_pair,
     }
-    text = [f"{'left':<20} {'right':<20} {'RMS l px':>8} {'RMS r px':>8}"]
+    text = [reading["line"], f"{'left':<20} {'right':<20} {'RMS l px':>8} {'RMS r px':>8}"]
     text += [
         f"{r['left']:<20} {r['right']:<20} {r['rms_left_px']:8.4f} {r['rms_right_px']:8.4f}"
         for r in per_pair
