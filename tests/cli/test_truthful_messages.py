@@ -386,3 +386,40 @@ def test_board_spellings() -> None:
     assert "the default for ChArUco" in board_reading("charuco:7x5")["line"]
     with pytest.raises(imageform.errors.InvalidInputError, match="2 to"):
         parse_board("2x7squares")  # one inner corner per row
+
+
+# ---------------------------------------------------------------- lens units
+
+
+def test_lens_help_shows_the_units(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["lens", "--help"]) == 0
+    out = " ".join(capsys.readouterr().out.split())
+    for flag in ("--focal", "--focus", "--coc"):
+        assert f"{flag} LENGTH" in out
+    assert "a bare number is in mm" in out and "a bare number is in m)" in out
+    assert "keys ending _m" in out
+
+
+def test_lens_units_explicit_or_bare(capsys: pytest.CaptureFixture[str]) -> None:
+    """50mm, 5cm and 0.05m are one focal length; 2m, 2000mm, '2 m' and a bare 2 one focus;
+    a bare number that looks given in the other unit is read as documented, with a note."""
+    import json
+
+    def summary(*args: str) -> dict[str, float]:
+        assert main(["lens", "--f-number", "2.8", *args, "--json"]) == 0
+        return json.loads(capsys.readouterr().out)
+
+    ref = summary("--focal", "50", "--focus", "2")
+    for focal, focus in (("50mm", "2m"), ("5cm", "2000mm"), ("0.05m", "2 m"), ("50 mm", "0.002km")):
+        if focus.endswith("km"):
+            assert main(["lens", "--f-number", "2.8", "--focal", focal, "--focus", focus]) == 2
+            assert "unknown unit 'km'" in capsys.readouterr().err
+            continue
+        got = summary("--focal", focal, "--focus", focus)
+        assert got["focal_length_m"] == pytest.approx(0.05)
+        assert got["focus_m"] == pytest.approx(2.0) and got["near_m"] == pytest.approx(
+            ref["near_m"]
+        )
+    assert main(["lens", "--f-number", "2.8", "--focal", "50", "--focus", "2000"]) == 0
+    err = capsys.readouterr().err
+    assert "--focus 2000 is read as 2000 m" in err and "write 2000mm" in err
