@@ -47,6 +47,7 @@ __all__ = [
     "not_a_regular_file",
     "publish",
     "refuse_special",
+    "refuse_special_inside",
     "remove_stale_parts",
     "same_file",
     "signals_deferred",
@@ -172,6 +173,24 @@ def _folder_problem(parent: Path) -> str:
     return f"output folder {parent} does not exist"
 
 
+def refuse_special_inside(folder: str | Path) -> None:
+    """Refuse a folder that outputs are written into (or that replaces) holding a special file.
+
+    A FIFO, a device or a socket anywhere under ``folder`` (links are not followed).
+
+    Raises
+    ------
+    InvalidInputError
+        In one line naming the file and what it is.
+    """
+    found = _special_inside(Path(folder))
+    if found is not None:
+        raise InvalidInputError(
+            f"output folder {folder} holds {found[0]}, {_what(found[1])}; outputs never "
+            "replace one (choose another folder)"
+        )
+
+
 def refuse_special(out: str | Path, *, folder: bool = False) -> None:
     """Refuse an existing ``out`` that an output must never replace, whatever the flags.
 
@@ -209,12 +228,7 @@ def refuse_special(out: str | Path, *, folder: bool = False) -> None:
         if not link:
             if os.path.ismount(out):
                 raise InvalidInputError(f"output folder {out} is a mount point; refused")
-            found = _special_inside(out)
-            if found is not None:
-                raise InvalidInputError(
-                    f"output folder {out} holds {found[0]}, {_what(found[1])}; it is never "
-                    "replaced (choose another folder)"
-                )
+            refuse_special_inside(out)
         return
     what = via + _what(mode)
     raise InvalidInputError(

@@ -166,3 +166,33 @@ def test_atomic_write_refuses_a_special_file(tmp_path: Path) -> None:
         write_image(dev, np.zeros((2, 2, 3)))
     assert stat.S_ISCHR(os.lstat(dev).st_mode)
     assert [p.name for p in tmp_path.iterdir()] == ["null.png"]
+
+
+def test_chunked_and_batch_never_replace_a_fifo(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """chunked unlinked an existing output with --force (a FIFO, a folder named out.tif);
+    batch renames each job's output over the old one."""
+    src = tmp_path / "in.tif"
+    write_image(src, np.full((16, 16, 3), 0.5, np.float32))
+    fifo = _fifo(tmp_path / "out.tif")
+    args = ["chunked", "convert", str(src), "--to", "linear-srgb", "--force", "-o"]
+    assert main([*args, str(fifo)]) == 1
+    assert "is a FIFO" in _one_error_line(capsys.readouterr().err)
+    assert stat.S_ISFIFO(os.lstat(fifo).st_mode)
+    folder = tmp_path / "dir.tif"
+    folder.mkdir()
+    (folder / "mine.txt").write_text("mine")
+    assert main([*args, str(folder)]) == 1
+    assert "is a folder" in _one_error_line(capsys.readouterr().err)
+    assert (folder / "mine.txt").read_text() == "mine"
+    inputs, out = tmp_path / "inputs", tmp_path / "out"
+    inputs.mkdir()
+    out.mkdir()
+    write_image(inputs / "a.png", np.full((8, 8, 3), 100, np.uint8))
+    _fifo(out / "a.png")  # where the job writes its output
+    code = main(["batch", "white-balance", str(inputs / "*.png"), "-o", str(out), "--force"])
+    assert code == 1
+    line = _one_error_line(capsys.readouterr().err)
+    assert "FIFO" in line and str(out / "a.png") in line
+    assert stat.S_ISFIFO(os.lstat(out / "a.png").st_mode)
