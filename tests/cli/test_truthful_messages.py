@@ -194,8 +194,8 @@ def test_fifo_or_folder_as_input_says_what_it_is(
     scene = tmp_path / "scene.toml"
     scene.write_text(f'[[objects]]\ntype = "image"\ncentre_m = [0, 0, 0]\npath = "{odd.name}"\n')
     assert main(["simulate", "--scene", str(scene), "-o", str(tmp_path / "sim")]) == 1
-    line = _line(capsys)  # the long line is cut after "FIFO (named pipe),"
-    assert said.split(",")[0] in line and "not found" not in line
+    line = _line(capsys)
+    assert f"'{odd.name}' {said}" in line and "not found" not in line
     assert not out.exists()
 
 

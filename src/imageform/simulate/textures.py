@@ -37,7 +37,7 @@ def resolve_path(path: str, base: Path | None) -> Path:
     if not found:
         kind = not_a_regular_file(p)
         if kind is not None:
-            raise InvalidInputError(f"{describe(str(p), 100)} {kind}")
+            raise InvalidInputError(f"{describe(str(path), 60)} {kind}")  # as the scene says
         where = "the working folder: base is None" if base is None else "base, the scene's folder"
         raise InvalidInputError(
             f"file not found: {describe(str(p), 100)} (path relative to {where})"
