@@ -227,7 +227,10 @@ def refuse_special(out: str | Path, *, folder: bool = False) -> None:
             raise InvalidInputError(f"output {out} is {what}; give a file name")
         if not link:
             if os.path.ismount(out):
-                raise InvalidInputError(f"output folder {out} is a mount point; refused")
+                raise InvalidInputError(
+                    f"output folder {out} is a mount point; it is never replaced (choose a "
+                    "folder inside it)"
+                )
             refuse_special_inside(out)
         return
     what = via + _what(mode)
@@ -459,8 +462,8 @@ class Outputs:
         if final is None:
             if exc.filename is not None or code not in _WRITE_REASONS or not self._items:
                 return None
-            finals = self.finals
-            where = f"{finals[0]}" + (f" (or one of {len(finals) - 1} more)" if finals[1:] else "")
+            finals = [str(f) for f in self.finals]
+            where = ", ".join(finals[:3]) + (f" (and {len(finals) - 3} more)" if finals[3:] else "")
         else:
             where = str(final)
         reason = _WRITE_REASONS.get(code) if code is not None else None

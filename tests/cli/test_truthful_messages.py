@@ -423,3 +423,17 @@ def test_lens_units_explicit_or_bare(capsys: pytest.CaptureFixture[str]) -> None
     assert main(["lens", "--f-number", "2.8", "--focal", "50", "--focus", "2000"]) == 0
     err = capsys.readouterr().err
     assert "--focus 2000 is read as 2000 m" in err and "write 2000mm" in err
+
+
+def test_outputs_explain_names_every_output_for_an_anonymous_full_disk(tmp_path: Path) -> None:
+    import imageform._files as files
+
+    outs = files.Outputs()
+    outs.file(tmp_path / "a.png")
+    outs.folder(tmp_path / "sim")
+    err = outs.explain(OSError(errno.ENOSPC, "No space left on device"))
+    assert err is not None and isinstance(err, OSError) and err.errno == errno.ENOSPC
+    assert str(err) == f"no space left on device writing {tmp_path / 'a.png'}, {tmp_path / 'sim'}"
+    # an error about something else (a decoder's OSError without a file) is not an output's
+    assert outs.explain(OSError("broken data stream")) is None
+    outs.discard()
