@@ -9,6 +9,10 @@ its final name only when everything succeeded:
 - the rename replaces a symbolic link at the final name instead of writing through it, and an
   input reached through another path, a symbolic or a hard link is recognised by its device
   and inode, never overwritten;
+- an existing final name that is not a regular file (a FIFO, a device, a socket, or a symbolic
+  link to one; a folder where a file is written; a folder output holding one) is refused,
+  whatever ``force`` says: checked when the output is added and again just before the rename,
+  in :func:`publish`, the one place a temporary becomes an output;
 - several outputs of one command are renamed together at the end, with SIGINT and SIGTERM
   held back for the few microseconds the renames take;
 - a folder output (``imageform simulate``'s) is built beside the old one and swapped in whole.
@@ -20,12 +24,14 @@ killed one (and only those: two live runs into one folder never delete each othe
 from __future__ import annotations
 
 import contextlib
+import errno
 import glob
 import os
 import re
 import secrets
 import shutil
 import signal
+import stat
 import threading
 from collections.abc import Callable, Iterable, Iterator
 from pathlib import Path
@@ -34,15 +40,47 @@ from types import TracebackType
 from imageform.errors import ImageformError, InvalidInputError
 
 __all__ = [
+    "OutputWriteError",
     "Outputs",
     "atomic_write",
     "check_output",
+    "not_a_regular_file",
+    "publish",
+    "refuse_special",
+    "refuse_special_inside",
     "remove_stale_parts",
     "same_file",
     "signals_deferred",
 ]
 
 _PART = ".part"
+_PART_NAME = re.compile(r"^\.(.+)\.\d+-[0-9a-z]+(?:\.old)?\.part")
+
+#: Why writing failed, for the errors that say nothing about the data.
+_WRITE_REASONS = {
+    errno.ENOSPC: "no space left on device",
+    errno.EDQUOT: "disk quota exceeded",
+    errno.EROFS: "read-only file system",
+    errno.EFBIG: "file too large for the file system",
+}
+
+
+class OutputWriteError(ImageformError, OSError):
+    """An output could not be written (a full disk, no permission): one line naming it.
+
+    The user's name of the output, never a temporary name; ``errno`` and ``filename`` are set,
+    and the original ``OSError`` is the ``__cause__``.
+    """
+
+    def __str__(self) -> str:
+        return str(self.args[0]) if self.args else ""
+
+
+def _unpart(name: str) -> str:
+    """Return the final name of a temporary name (``.out.png.1-ab.part.png`` -> ``out.png``)."""
+    while (m := _PART_NAME.match(name)) is not None:
+        name = m.group(1)
+    return name
 
 
 def same_file(a: Path, b: Path) -> bool:
@@ -62,6 +100,143 @@ def _inside(path: Path, folder: Path) -> bool:
     except ValueError:
         return False
     return True
+
+
+def _what(mode: int) -> str:
+    """Name the kind of a file that is not a regular file nor a folder."""
+    if stat.S_ISFIFO(mode):
+        return "a FIFO (named pipe)"
+    if stat.S_ISCHR(mode):
+        return "a character device"
+    if stat.S_ISBLK(mode):
+        return "a block device"
+    if stat.S_ISSOCK(mode):
+        return "a socket"
+    return "a special file"
+
+
+def _special_inside(folder: Path) -> tuple[Path, int] | None:
+    """Return the first entry under ``folder`` that an output folder must not hold, with its mode.
+
+    Not a regular file, a folder or a symbolic link (links are not followed); None if none.
+    """
+    stack = [folder]
+    while stack:
+        try:
+            entries = list(os.scandir(stack.pop()))
+        except OSError:
+            continue
+        for entry in entries:
+            try:
+                mode = entry.stat(follow_symlinks=False).st_mode
+            except OSError:
+                continue
+            if stat.S_ISDIR(mode):
+                stack.append(Path(entry.path))
+            elif not (stat.S_ISREG(mode) or stat.S_ISLNK(mode)):
+                return Path(entry.path), mode
+    return None
+
+
+def not_a_regular_file(path: str | Path) -> str | None:
+    """Say what an existing ``path`` is when it is not a regular file (links followed).
+
+    ``"is a folder"``, ``"is a FIFO (named pipe), not a regular file"`` ...; None for a regular
+    file or nothing at all (a missing file is the caller's message).
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> not_a_regular_file(tempfile.mkdtemp())
+    'is a folder'
+    """
+    try:
+        mode = os.stat(path).st_mode
+    except (OSError, ValueError):
+        return None
+    if stat.S_ISREG(mode):
+        return None
+    if stat.S_ISDIR(mode):
+        return "is a folder"
+    return f"is {_what(mode)}, not a regular file"
+
+
+def _folder_problem(parent: Path) -> str:
+    """Say why ``parent`` cannot hold an output: missing, or it (or a folder above) is a file."""
+    for above in (parent, *parent.parents):
+        if os.path.lexists(above):
+            if above.is_dir():
+                break
+            if above == parent:
+                return f"output folder {parent} is not a folder"
+            return f"output folder {parent} does not exist ({above} is not a folder)"
+    return f"output folder {parent} does not exist"
+
+
+def refuse_special_inside(folder: str | Path) -> None:
+    """Refuse a folder that outputs are written into (or that replaces) holding a special file.
+
+    A FIFO, a device or a socket anywhere under ``folder`` (links are not followed).
+
+    Raises
+    ------
+    InvalidInputError
+        In one line naming the file and what it is.
+    """
+    found = _special_inside(Path(folder))
+    if found is not None:
+        raise InvalidInputError(
+            f"output folder {folder} holds {found[0]}, {_what(found[1])}; outputs never "
+            "replace one (choose another folder)"
+        )
+
+
+def refuse_special(out: str | Path, *, folder: bool = False) -> None:
+    """Refuse an existing ``out`` that an output must never replace, whatever the flags.
+
+    Replaceable: nothing there, a regular file, a symbolic link to a regular file or a dangling
+    one (the link is replaced, never followed); for a folder output (``folder``), a folder (or a
+    link to one) holding only regular files, folders and links, and not a mount point.
+    Everything else (a FIFO, a device, a socket, a link to one; a folder where a file is
+    written) is refused.
+
+    Raises
+    ------
+    InvalidInputError
+        In one line naming ``out`` and what it is.
+    """
+    out = Path(out)
+    try:
+        mode = os.lstat(out).st_mode
+    except OSError:
+        return  # nothing there (or a parent that is not a folder: reported by check_output)
+    link = stat.S_ISLNK(mode)
+    if link:
+        try:
+            mode = os.stat(out).st_mode
+        except OSError:
+            return  # a dangling link: replaced, never followed
+    via = "a symbolic link to " if link else ""
+    if stat.S_ISREG(mode):
+        if folder:
+            raise InvalidInputError(f"output {out} exists and is not a folder")
+        return
+    if stat.S_ISDIR(mode):
+        if not folder:
+            what = f"{via}a folder" if link else "a folder"
+            raise InvalidInputError(f"output {out} is {what}; give a file name")
+        if not link:
+            if os.path.ismount(out):
+                raise InvalidInputError(
+                    f"output folder {out} is a mount point; it is never replaced (choose a "
+                    "folder inside it)"
+                )
+            refuse_special_inside(out)
+        return
+    what = via + _what(mode)
+    raise InvalidInputError(
+        f"output {out} is {what}, not a regular file; it is never replaced (choose another path)"
+    )
 
 
 def check_output(
@@ -85,16 +260,38 @@ def check_output(
             what = "contains the input" if folder and not same_file(p, out) else "is also an input"
             raise InvalidInputError(f"output {out} {what} {p}; choose another path")
     if os.path.lexists(out):
-        if out.is_dir() and not out.is_symlink() and not folder:
-            raise InvalidInputError(f"output {out} is a folder; give a file name")
-        if folder and not out.is_dir():
-            raise InvalidInputError(f"output {out} exists and is not a folder")
+        refuse_special(out, folder=folder)
         if not force:
             raise InvalidInputError(f"output {out} exists; pass --force to overwrite it")
     parent = out.parent if str(out.parent) else Path(".")
     if not parent.is_dir():
-        raise InvalidInputError(f"output folder {parent} does not exist")
+        raise InvalidInputError(_folder_problem(parent))
     return out
+
+
+def publish(part: Path, final: Path, *, folder: bool = False, token: str | None = None) -> None:
+    """Rename the finished temporary ``part`` onto ``final``: the one place an output appears.
+
+    ``final`` is checked again (:func:`refuse_special`) just before the rename: whatever came
+    to be there while the output was written, a FIFO or a device is never replaced. A folder
+    output is swapped in whole (the old folder moved aside, then removed). Call it with SIGINT
+    and SIGTERM held back (:func:`signals_deferred`) when several outputs are published together.
+
+    Raises
+    ------
+    InvalidInputError
+        ``final`` became something an output must not replace (``part`` is left for the caller
+        to remove).
+    """
+    refuse_special(final, folder=folder)
+    if folder and os.path.lexists(final):
+        tag = token or secrets.token_hex(4)
+        old = final.with_name(f".{final.name}.{os.getpid()}-{tag}.old{_PART}")
+        os.replace(final, old)
+        os.replace(part, final)
+        _remove(old)
+    else:
+        os.replace(part, final)
 
 
 def _part_name(final: Path, token: str) -> Path:
@@ -236,23 +433,61 @@ class Outputs:
                 return part
         return None
 
+    def final_of(self, path: str | Path) -> Path | None:
+        """Return the user's name of ``path`` if it is (or is inside) a temporary of an output.
+
+        A writer's own temporary beside it (``write_image``'s) counts too; None otherwise.
+        """
+        p = Path(os.path.abspath(path))
+        for part, final, folder in self._items:
+            a = Path(os.path.abspath(part))
+            if p == a or (p.parent == a.parent and p.name.startswith(f".{a.name}.")):
+                return final
+            if folder and a in p.parents:
+                rel = p.relative_to(a).parts
+                return final.joinpath(*(_unpart(n) for n in rel))
+        return None
+
+    def explain(self, exc: OSError) -> OutputWriteError | None:
+        """Return ``exc`` as one line naming the output it failed to write (None: not an output).
+
+        An error naming a temporary names the user's output instead; a full disk, a quota or a
+        read-only file system without a file name is about the outputs, never the inputs.
+        """
+        final = None
+        for name in (exc.filename, exc.filename2):
+            if isinstance(name, str | os.PathLike) and final is None:
+                final = self.final_of(os.fspath(name))
+        code = exc.errno
+        if final is None:
+            if exc.filename is not None or code not in _WRITE_REASONS or not self._items:
+                return None
+            finals = [str(f) for f in self.finals]
+            where = ", ".join(finals[:3]) + (f" (and {len(finals) - 3} more)" if finals[3:] else "")
+        else:
+            where = str(final)
+        reason = _WRITE_REASONS.get(code) if code is not None else None
+        if reason is None:
+            lines = str(exc).strip().splitlines()
+            text = exc.strerror or (lines[0] if lines else "")
+            reason = (text[:1].lower() + text[1:]) if text else type(exc).__name__
+        err = OutputWriteError(f"{reason} writing {where}")
+        err.errno = code
+        err.filename = str(final) if final is not None else None
+        return err
+
     def commit(self) -> None:
         """Rename every temporary onto its final name (all of them, or none on an error)."""
         for part, final, _ in self._items:
             if not os.path.lexists(part):
                 raise ImageformError(f"output {final} was not written")
-        for part, _, folder in self._items:
+        for part, final, folder in self._items:
             if not folder:
                 _fsync(part)
+            refuse_special(final, folder=folder)  # before any is renamed: all or nothing
         with signals_deferred():
             for part, final, folder in self._items:
-                if folder and os.path.lexists(final):
-                    old = final.with_name(f".{final.name}.{os.getpid()}-{self._token}.old{_PART}")
-                    os.replace(final, old)
-                    os.replace(part, final)
-                    _remove(old)
-                else:
-                    os.replace(part, final)
+                publish(part, final, folder=folder, token=self._token)
         self._done = True
 
     def discard(self) -> None:
@@ -296,6 +531,7 @@ def atomic_write(final: str | Path, write: Callable[[Path], object]) -> None:
     'hello'
     """
     final = Path(final)
+    refuse_special(final)
     part = _part_name(final, secrets.token_hex(4))
     try:
         write(part)
@@ -303,7 +539,7 @@ def atomic_write(final: str | Path, write: Callable[[Path], object]) -> None:
             raise ImageformError(f"output {final} was not written")
         _fsync(part)
         with signals_deferred():
-            os.replace(part, final)
+            publish(part, final)
     except BaseException:
         _remove(part)
         raise

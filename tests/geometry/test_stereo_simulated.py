@@ -154,6 +154,27 @@ def test_stereo_calibrate_command(rendered: tuple, tmp_path: Path) -> None:
     assert main([*bad, "--board", "9x6", "-o", str(tmp_path / "c.toml")]) == 1
 
 
+def test_stereo_calibrate_max_iter_option(
+    rendered: tuple, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The refinement's advice "raise max_iter" names an option the command has."""
+    from imageform.cli import main
+    from imageform.io import write_image
+
+    images = rendered[4]
+    for k in range(len(images) // 2):
+        for side, img in (("left", images[2 * k]), ("right", images[2 * k + 1])):
+            (tmp_path / side).mkdir(exist_ok=True)
+            write_image(tmp_path / side / f"{side}-{k:02d}.png", img)
+    out = tmp_path / "rig.toml"
+    args = ["stereo-calibrate", str(tmp_path / "left" / "*.png"), str(tmp_path / "right" / "*.png")]
+    args += ["--board", "9x6", "--square", "20mm", "-o", str(out)]
+    assert main([*args, "--max-iter", "1"]) == 1
+    err = capsys.readouterr().err
+    assert "did not converge in 1 iterations" in err and "raise --max-iter (now 1)" in err, err
+    assert not out.exists()
+
+
 def _to_rectified(uv: np.ndarray, K: np.ndarray, d: BrownConrady, Rr: np.ndarray, P: np.ndarray):
     x = (uv - K[:2, 2]) / np.diag(K)[:2]
     xy = np.asarray(d.undistort(x).xy)

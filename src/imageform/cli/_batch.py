@@ -15,6 +15,7 @@ from typing import Any
 
 import click
 
+from imageform._files import refuse_special, refuse_special_inside
 from imageform.cli._build import CommandExit, _naming_files, option_params
 from imageform.errors import ImageformError
 from imageform.workflows import Workflow
@@ -71,6 +72,8 @@ def _batch_command(wf: Workflow) -> click.Command:
         scheduler, workers, suffix = kw.pop("scheduler"), kw.pop("workers"), kw.pop("suffix")
         force, as_json = bool(kw.pop("force")), bool(kw.pop("json_out"))
         opts = _options(wf, kw)
+        if Path(out).is_dir():  # no job replaces a FIFO or a device (the runner renames over)
+            refuse_special_inside(out)
         try:
             report = run_batch(
                 wf.name,
@@ -177,6 +180,8 @@ def _chunked_command(wf: Workflow) -> click.Command:
         force, as_json = bool(kw.pop("force")), bool(kw.pop("json_out"))
         extra = {k: kw.pop(k) for k in ("pyramid", "compression", "stats_from") if k in kw}
         opts = _options(wf, kw)
+        # a FIFO, a device or a folder named like the output is never replaced
+        refuse_special(out, folder=Path(out).suffix.lower() == ".zarr")
         with _naming_files({"image": image}):
             r = process_chunked(
                 image,

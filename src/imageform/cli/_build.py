@@ -229,16 +229,35 @@ def _naming_files(inputs: dict[str, Any]) -> Iterator[None]:
 
 
 def _unexpected(exc: BaseException, inputs: dict[str, Any]) -> str:
+    """One line for an exception nobody expected: its type and first line, naming the input(s).
+
+    A command without input files (``simulate``) names none; a ``RecursionError`` (a file
+    nested too deeply for Python to read) says so.
+    """
     files: list[str] = []
     for value in inputs.values():
+        if value is None:
+            continue
         files += [str(v) for v in (value if isinstance(value, list | tuple) else [value])]
-    where = files[0] if len(files) == 1 else f"{files[0]} (and {len(files) - 1} more)"
+    if not files:
+        where = ""
+    elif len(files) == 1:
+        where = files[0]
+    else:
+        where = f"{files[0]} (and {len(files) - 1} more)"
+    if isinstance(exc, RecursionError):
+        reason = "nested too deeply to process (RecursionError)"
+        return f"{where}: {reason}" if where else reason
     text = str(exc).strip().splitlines()
     reason = text[0][:120] if text else ""
-    head = f"{where}: " if files else ""
+    head = f"{where}: " if where else ""
     return (
         f"{head}unexpected {type(exc).__name__}: {reason} (run again with --traceback to see where)"
     ).replace(":  (", " (")
+
+
+def _input_fields(wf: Workflow) -> list[Any]:
+    return [f for f in wf.options.fields() if f.metadata.get("input")]
 
 
 def build_command(wf: Workflow) -> click.Command:
@@ -294,7 +313,9 @@ def build_command(wf: Workflow) -> click.Command:
         from imageform.workflows import execute
 
         show = not as_json and sys.stderr.isatty()
-        with progress_bar(show) as progress, _naming_files(inputs):
+        named = dict(inputs)  # the files an unexpected error names: inputs, then option inputs
+        named.update({f.name: getattr(opts, f.name) for f in _input_fields(wf)})
+        with progress_bar(show) as progress, _naming_files(named):
             result = execute(wf, options=opts, out=out, force=force, progress=progress, **inputs)
         emit(result, as_json)
         if result.check_failed:

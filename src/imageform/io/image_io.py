@@ -27,6 +27,7 @@ tifffile.
 
 from __future__ import annotations
 
+import math
 import os
 import struct
 import threading
@@ -37,7 +38,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from imageform._files import atomic_write
+from imageform._files import atomic_write, not_a_regular_file
 from imageform._validate import check_memory, check_option, describe, format_shape
 from imageform.errors import InvalidInputError
 
@@ -245,16 +246,28 @@ def _existing(path: str | Path) -> Path:
     if not p.exists():
         raise InvalidInputError(f"input file {p} does not exist")
     if not p.is_file():
-        raise InvalidInputError(f"input {p} is not a file")
+        raise InvalidInputError(f"input {p} {not_a_regular_file(p) or 'is not a regular file'}")
     return p
+
+
+def _pixels(n: int) -> str:
+    """Format a pixel count: ``"768 px"`` below 0.1 Mpx, else 3 digits (``"0.123 Mpx"``)."""
+    if n < 100_000:
+        return f"{n} px"
+    mpx = float(f"{n / 1e6:.3g}")  # 3 significant digits, then as many decimals as they need
+    decimals = max(0, 2 - math.floor(math.log10(mpx)))
+    return f"{mpx:.{decimals}f} Mpx"
 
 
 def _check_pixels(path: Path, info: ImageInfo, limit: int) -> None:
     n = info.width * info.height
     if n > limit:
+        size, cap = _pixels(n), _pixels(limit)
+        if size == cap:  # 3 digits do not tell them apart
+            size, cap = f"{n} px", f"{limit} px"
         raise InvalidInputError(
-            f"{path} is {info.width} x {info.height} = {n / 1e6:.1f} Mpx, above the limit of "
-            f"{limit / 1e6:.1f} Mpx (raise it with --max-pixels or IMAGEFORM_MAX_PIXELS, or "
+            f"{path} is {info.width} x {info.height} = {size}, above the limit of "
+            f"{cap} (raise it with --max-pixels or IMAGEFORM_MAX_PIXELS, or "
             "process it block by block with imageform chunked)"
         )
 

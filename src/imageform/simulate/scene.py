@@ -20,6 +20,7 @@ from typing import Any
 
 import numpy as np
 
+from imageform._files import not_a_regular_file
 from imageform._validate import describe
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
 from imageform.geometry.camera import Camera
@@ -437,6 +438,9 @@ def load_scene(source: str | Path | dict[str, Any]) -> Scene:
                 f"source: cannot use {describe(str(source), 60)} as a scene file: {exc.strerror}"
             ) from None
         if not found:
+            kind = not_a_regular_file(path)
+            if kind is not None:
+                raise InvalidInputError(f"scene file (source) {describe(str(source), 120)} {kind}")
             raise InvalidInputError(f"scene file not found (source): {describe(str(source), 120)}")
         try:
             text = path.read_text(encoding="utf-8")

@@ -11,6 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
+from imageform._files import not_a_regular_file
 from imageform._validate import describe
 from imageform.errors import InvalidInputError
 
@@ -34,6 +35,9 @@ def resolve_path(path: str, base: Path | None) -> Path:
     except OSError as exc:  # a name too long for the file system
         raise InvalidInputError(f"path {describe(str(path), 60)}: {exc.strerror}") from None
     if not found:
+        kind = not_a_regular_file(p)
+        if kind is not None:
+            raise InvalidInputError(f"{describe(str(path), 60)} {kind}")  # as the scene says
         where = "the working folder: base is None" if base is None else "base, the scene's folder"
         raise InvalidInputError(
             f"file not found: {describe(str(p), 100)} (path relative to {where})"

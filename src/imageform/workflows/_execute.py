@@ -11,7 +11,7 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
-from imageform._files import Outputs
+from imageform._files import Outputs, not_a_regular_file
 from imageform.errors import InvalidInputError
 from imageform.workflows._spec import Options, Result, Run, Workflow, flag_of, resolve
 
@@ -67,8 +67,11 @@ def execute(
     Raises
     ------
     InvalidInputError
-        An output that is an input, exists without ``force``, or whose folder is missing; a
-        missing input; anything the workflow refuses.
+        An output that is an input, exists without ``force``, is not a regular file, or whose
+        folder is missing; a missing input; anything the workflow refuses.
+    OSError
+        Writing an output failed: an ``imageform._files.OutputWriteError`` naming the output
+        (never a temporary name) when the error is about an output or the disk.
     """
     from imageform._validate import as_bool, as_path, describe
     from imageform.workflows.registry import get_workflow
@@ -99,29 +102,40 @@ def execute(
     for f in opts.fields():
         if f.metadata.get("input"):
             named += [(flag_of(f), p) for p in _as_paths(getattr(opts, f.name), flag_of(f))]
-    for what, p in named:  # before any work starts
+    for what, p in named:  # before any work starts (a FIFO is never opened: it would block)
+        kind = not_a_regular_file(p)
+        if kind is not None:
+            expected = "; expected a file" if kind == "is a folder" else ""
+            raise InvalidInputError(f"{what} {p} {kind}{expected}")
         if not p.exists():
             raise InvalidInputError(f"{what} file {p} does not exist")
-        if p.is_dir():
-            raise InvalidInputError(f"{what} {p} is a folder; expected a file")
     in_paths = [p for _, p in named]
     if wf.output is not None and out is None:
         if wf.output.default is None and wf.output.required:
             raise InvalidInputError(f"{wf.name} needs an output: -o/--out")
         out = wf.output.default
-    with Outputs(inputs=in_paths, force=force) as outputs:
-        run = Run(outputs, progress=progress)
-        if out is not None:  # checked before any work starts
-            (run.folder if wf.output is not None and wf.output.folder else run.file)(out)
-        for extra in opts.paths("output"):
-            run.file(extra)
-        with warnings.catch_warnings(record=True) as caught:
-            warnings.simplefilter("ignore", DeprecationWarning)
-            warnings.simplefilter("ignore", PendingDeprecationWarning)
-            warnings.simplefilter("always", UserWarning)
-            warnings.simplefilter("always", RuntimeWarning)
-            function = resolve(wf.function)
-            result: Result = function(run, opts, out=None if out is None else Path(out), **inputs)
+    outputs = Outputs(inputs=in_paths, force=force)
+    try:
+        with outputs:
+            run = Run(outputs, progress=progress)
+            if out is not None:  # checked before any work starts
+                (run.folder if wf.output is not None and wf.output.folder else run.file)(out)
+            for extra in opts.paths("output"):
+                run.file(extra)
+            with warnings.catch_warnings(record=True) as caught:
+                warnings.simplefilter("ignore", DeprecationWarning)
+                warnings.simplefilter("ignore", PendingDeprecationWarning)
+                warnings.simplefilter("always", UserWarning)
+                warnings.simplefilter("always", RuntimeWarning)
+                function = resolve(wf.function)
+                result: Result = function(
+                    run, opts, out=None if out is None else Path(out), **inputs
+                )
+    except OSError as exc:  # a full disk, no permission: name the user's output
+        explained = outputs.explain(exc)
+        if explained is None:
+            raise
+        raise explained from exc
     notes = tuple(run.notes) + tuple(dict.fromkeys(_note_of(w) for w in caught))
     return replace(result, notes=result.notes + notes)
 

@@ -34,6 +34,36 @@ class Table:
         key = name.lower()
         return self.header.index(key) if key in self.header else None
 
+    def named(self, names: Sequence[str]) -> list[int] | None:
+        """Return the indices of the columns ``names``, or None to take them by position.
+
+        By position: no header, or a header that names none of them with as many columns.
+
+        Raises
+        ------
+        InvalidInputError
+            A header that names some of ``names`` but not all, or none of them with another
+            number of columns: one line saying which columns are needed.
+        """
+        cols = [self.column(n) for n in names]
+        if self.header is None:
+            return None
+        if None not in cols:
+            return [c for c in cols if c is not None]
+        needed = ", ".join(n.upper() if len(n) == 1 else n for n in names)
+        shown = ", ".join(h[:20] for h in self.header[:8]) + (
+            ", ..." if len(self.header) > 8 else ""
+        )
+        if all(c is None for c in cols) and len(self.header) == len(names):
+            return None
+        missing = ", ".join(
+            (n.upper() if len(n) == 1 else n) for n, c in zip(names, cols, strict=True) if c is None
+        )
+        raise InvalidInputError(
+            f"{self.path}: needs the columns {needed} (a header naming them, or {len(names)} "
+            f"numbers per row without a header); its header has {shown}, no {missing}"
+        )
+
     def numbers(
         self, columns: Sequence[int], *, finite: bool, rows: Sequence[int] | None = None
     ) -> Any:

@@ -4,11 +4,12 @@ from __future__ import annotations
 
 import re
 from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from imageform.errors import DegenerateConfigurationError, InvalidInputError
+from imageform.errors import ConvergenceError, DegenerateConfigurationError, InvalidInputError
 from imageform.workflows._images import ImageIn, ImageOut, read, write
 from imageform.workflows._spec import (
     IMAGE_SUFFIXES,
@@ -27,6 +28,8 @@ __all__ = [
     "WORKFLOWS",
     "CalibrateOptions",
     "UndistortOptions",
+    "board_hint",
+    "board_reading",
     "parse_board",
 ]
 
@@ -41,27 +44,46 @@ _MIN_SQUARE_PX = 4
 _PARAMETERS = ("fx", "fy", "cx", "cy", "skew", "k1", "k2", "p1", "p2", "k3")
 
 
+_BOARD = re.compile(
+    r"\s*(\d{1,9})\s*[xX×]\s*(\d{1,9})\s*(corners|inner[ _-]?corners|inner|squares)?\s*",
+    re.IGNORECASE,
+)
+
+
+def _board_counts(text: str, what: str) -> tuple[int, int, str | None]:
+    """``(cols, rows, unit)`` of ``COLSxROWS[corners|squares]``; unit None when not given."""
+    from imageform._validate import describe
+
+    m = _BOARD.fullmatch(text) if isinstance(text, str) else None
+    if not m:
+        raise InvalidInputError(
+            f"expected the --board text as {what} (e.g. 9x6, 9x6corners or 10x7squares), got "
+            f"{describe(text)}"
+        )
+    unit = m.group(3)
+    if unit is not None:
+        unit = "squares" if unit.lower() == "squares" else "corners"
+    return int(m.group(1)), int(m.group(2)), unit
+
+
 def parse_board(text: str) -> tuple[int, int]:
     """``"9x6"`` -> ``(9, 6)``: inner corners per row x per column (OpenCV's patternSize).
 
-    Each count must be 2 to :data:`MAX_BOARD_CORNERS`: a row of one corner has no squares on
-    both sides, and larger boards are not made.
+    A bare count is of inner corners; ``"9x6corners"`` says so, ``"10x7squares"`` counts the
+    squares instead (one more each way: the same board). Each count of inner corners must be 2
+    to :data:`MAX_BOARD_CORNERS`: a row of one corner has no squares on both sides, and larger
+    boards are not made.
 
     Examples
     --------
-    >>> parse_board("9x6")
-    (9, 6)
+    >>> parse_board("9x6"), parse_board("9x6 corners"), parse_board("10x7squares")
+    ((9, 6), (9, 6), (9, 6))
     """
     from imageform._validate import describe
 
-    pattern = r"\s*(\d{1,9})\s*[xX×]\s*(\d{1,9})\s*"
-    m = re.fullmatch(pattern, text) if isinstance(text, str) else None
-    if not m:
-        raise InvalidInputError(
-            f"expected the --board text as COLSxROWS of inner corners (e.g. 9x6), got "
-            f"{describe(text)}"
-        )
-    cols, rows = int(m.group(1)), int(m.group(2))
+    cols, rows, unit = _board_counts(text, "COLSxROWS of inner corners")
+    if unit == "squares":
+        cols, rows = cols - 1, rows - 1
     for n in (cols, rows):
         if not 2 <= n <= MAX_BOARD_CORNERS:
             raise InvalidInputError(
@@ -80,26 +102,98 @@ MIN_CHARUCO_CORNERS = 6
 def parse_charuco(text: str) -> tuple[int, int] | None:
     """``"charuco:7x5"`` -> ``(7, 5)`` squares per row x per column; None for a checkerboard.
 
-    Each count must be 3 to :data:`MAX_BOARD_CORNERS` squares (a board of 3 x 3 squares has
-    four inner corners).
+    A bare count is of squares (as OpenCV's CharucoBoard); ``"charuco:6x4corners"`` counts the
+    inner corners instead (one fewer each way: the same board). Each count must be 3 to
+    :data:`MAX_BOARD_CORNERS` squares (a board of 3 x 3 squares has four inner corners).
 
     Examples
     --------
-    >>> parse_charuco("charuco:7x5"), parse_charuco("9x6")
-    ((7, 5), None)
+    >>> parse_charuco("charuco:7x5"), parse_charuco("charuco:6x4corners"), parse_charuco("9x6")
+    ((7, 5), (7, 5), None)
     """
     from imageform._validate import describe
 
     if not isinstance(text, str) or not text.strip().lower().startswith(CHARUCO_PREFIX):
         return None
     body = text.strip()[len(CHARUCO_PREFIX) :]
-    m = re.fullmatch(r"\s*(\d{1,9})\s*[xX×]\s*(\d{1,9})\s*", body)
-    if not m or not all(3 <= int(g) <= MAX_BOARD_CORNERS for g in m.groups()):
+    m = _BOARD.fullmatch(body)
+    cols = rows = 0
+    if m:
+        cols, rows, unit = _board_counts(body, "charuco:COLSxROWS of squares")
+        if unit == "corners":
+            cols, rows = cols + 1, rows + 1
+    if not m or not all(3 <= n <= MAX_BOARD_CORNERS for n in (cols, rows)):
         raise InvalidInputError(
             f"expected the --board text charuco:COLSxROWS with 3 to {MAX_BOARD_CORNERS} "
             f"squares each (e.g. charuco:7x5), got {describe(text)}"
         )
-    return int(m.group(1)), int(m.group(2))
+    return cols, rows
+
+
+def board_hint(text: str) -> str:
+    """Return the hint for a board not found: what ``text`` counts, and the other spelling.
+
+    Examples
+    --------
+    >>> board_hint("9x6")
+    "check --board: '9x6' counts inner corners; a board of 9x6 squares is --board 9x6squares"
+    """
+    r = board_reading(text)
+    if r["type"] == "charuco" or r["read_as"] == "squares":
+        return f"check --board: {r['line'][len('board: ') :]}"
+    c = "x".join(str(n) for n in r["inner_corners"])
+    given = text.strip()
+    if given.lower().endswith("corners"):
+        return f"check --board: {given!r} counts inner corners"
+    return (
+        f"check --board: {given!r} counts inner corners; a board of {c} squares is "
+        f"--board {c}squares"
+    )
+
+
+def board_reading(text: str) -> dict[str, Any]:
+    """Say how a ``--board`` text was read: the board's type, its corners and squares.
+
+    ``read_as`` is ``"inner corners"`` or ``"squares"``: what the two numbers given count (a
+    bare checkerboard count is of inner corners, a bare ChArUco count of squares); ``line``
+    says it in one line for a person.
+
+    Examples
+    --------
+    >>> board_reading("10x7squares")["line"]
+    "board: checkerboard, 9x6 inner corners = 10x7 squares ('10x7squares' counts squares)"
+    >>> board_reading("9x6")["read_as"], board_reading("9x6")["squares"]
+    ('inner corners', [10, 7])
+    >>> board_reading("charuco:7x5")["read_as"], board_reading("charuco:7x5")["inner_corners"]
+    ('squares', [6, 4])
+    """
+    charuco = parse_charuco(text)
+    kind = "charuco" if charuco is not None else "checkerboard"
+    body = text.strip()[len(CHARUCO_PREFIX) :] if charuco is not None else text
+    unit = _board_counts(body, "COLSxROWS")[2]
+    if charuco is not None:
+        squares = charuco
+        corners = (squares[0] - 1, squares[1] - 1)
+    else:
+        corners = parse_board(text)
+        squares = (corners[0] + 1, corners[1] + 1)
+    read_as = {"squares": "squares", "corners": "inner corners"}.get(unit or "", "")
+    default = not read_as
+    if default:
+        read_as = "squares" if charuco is not None else "inner corners"
+    name = "ChArUco" if charuco is not None else "checkerboard"
+    c, q = f"{corners[0]}x{corners[1]}", f"{squares[0]}x{squares[1]}"
+    sizes = f"{q} squares = {c} inner corners" if charuco else f"{c} inner corners = {q} squares"
+    given = body.strip()
+    article = "" if charuco is not None else "a "
+    how = f"{given!r} counts {read_as}" + (f", the default for {article}{name}" if default else "")
+    return {
+        "type": kind,
+        "inner_corners": list(corners),
+        "squares": list(squares),
+        "read_as": read_as,
+        "line": f"board: {name}, {sizes} ({how})",
+    }
 
 
 class _BoardChecks:
@@ -141,6 +235,16 @@ class _BoardChecks:
         return parse_length(self.square, "--square", default_unit="mm", unit="mm")
 
 
+@contextmanager
+def _converging(max_iter: int) -> Iterator[None]:
+    """Say ``--max-iter`` (the command's option) where the library advises its ``max_iter``."""
+    try:
+        yield
+    except ConvergenceError as exc:
+        text = str(exc).replace("raise max_iter", f"raise --max-iter (now {max_iter})")
+        raise ConvergenceError(text) from exc
+
+
 # ---------------------------------------------------------------- calibrate
 
 
@@ -149,8 +253,9 @@ class CalibrateOptions(_BoardChecks, ImageIn):
     """Options of ``imageform calibrate``."""
 
     board: str = option(
-        help="Inner corners COLSxROWS, e.g. 9x6 (not squares); or a ChArUco board "
-        "charuco:COLSxROWS of squares (with --marker).",
+        help="Checkerboard COLSxROWS of inner corners (9x6), or say which with 9x6corners or "
+        "10x7squares; a ChArUco board charuco:COLSxROWS of squares (charuco:7x5, or "
+        "charuco:6x4corners; with --marker). The output says how it was read.",
         metavar="CxR",
     )
     square: str = option(
@@ -177,6 +282,13 @@ class CalibrateOptions(_BoardChecks, ImageIn):
         metavar="NAME",
     )
     skew: bool = option(False, help="Estimate the skew (default: 0, as OpenCV).")
+    max_iter: int = option(
+        100,
+        help="Most iterations of the Levenberg-Marquardt refinement (raise it when it does not "
+        "converge).",
+        minimum=1,
+        maximum=1_000_000,
+    )
     marker: str | None = option(
         None,
         help="ChArUco: side of a marker with unit (22mm; bare number: mm), smaller than "
@@ -284,7 +396,7 @@ def calibrate(run: Run, opts: CalibrateOptions, *, out: Path, images: list[Path]
                 raise InvalidInputError(
                     f"a {cols}x{rows} board cannot be seen in {w} x {h} px images "
                     f"({f}): each of its {cols + 1} x {rows + 1} squares needs at least "
-                    f"{_MIN_SQUARE_PX} px; check --board (inner corners, not squares)"
+                    f"{_MIN_SQUARE_PX} px; {board_hint(opts.board)}"
                 )
         det = find_checkerboard(grey, (cols, rows), half_window=opts.half_window)
         if det.found:
@@ -297,8 +409,7 @@ def calibrate(run: Run, opts: CalibrateOptions, *, out: Path, images: list[Path]
     if not corners:
         raise DegenerateConfigurationError(
             f"no {cols}x{rows} checkerboard found in any of the {len(images)} images "
-            f"({missed[0]}{'; ...' if len(missed) > 1 else ''}; check --board: inner corners, "
-            "not squares)"
+            f"({missed[0]}{'; ...' if len(missed) > 1 else ''}; {board_hint(opts.board)})"
         )
     if len(corners) < MIN_VIEWS:
         raise DegenerateConfigurationError(
@@ -336,7 +447,15 @@ def _calibrate_views(
     from imageform.io import CameraFile, write_camera
     from imageform.workflows._tables import write_table
 
-    res = calibrate_camera(objs, corners, (shape[1], shape[0]), skew=opts.skew, fix=opts.fix)
+    with _converging(opts.max_iter):
+        res = calibrate_camera(
+            objs,
+            corners,
+            (shape[1], shape[0]),
+            skew=opts.skew,
+            fix=opts.fix,
+            max_iter=opts.max_iter,
+        )
     command += "".join(f" --fix {p}" for p in opts.fix) + (" --skew" if opts.skew else "")
     cf = CameraFile.from_calibration(res, images=names, command=command)
     write_camera(run.file(out), cf)
@@ -357,6 +476,7 @@ def _calibrate_views(
         for n, e, p, c in zip(names, res.per_view_rms, res.per_point_errors, corners, strict=True)
     ]
     K, d = res.K, res.distortion
+    board = board_reading(opts.board)
     summary = {
         "output": out,
         "views_used": len(names),
@@ -372,13 +492,14 @@ def _calibrate_views(
             "model": "brown_conrady",
             **dict(zip(("k1", "k2", "p1", "p2", "k3"), d.coeffs[:5], strict=True)),
         },
+        "board": {k: v for k, v in board.items() if k != "line"},
         "std": res.std,
         "fixed": list(res.fixed),
         "per_view": per_view,
         "plot": opts.plot,
         "corners": opts.corners,
     }
-    text = [f"{'view':<24} {'RMS px':>8} {'max px':>8}"]
+    text = [board["line"], f"{'view':<24} {'RMS px':>8} {'max px':>8}"]
     text += [f"{r['view']:<24} {r['rms_px']:8.4f} {r['max_px']:8.4f}" for r in per_view]
     text.append(
         f"RMS {res.rms:.4f} px over {len(names)} views; fx {K[0, 0]:.3f} ± {res.std['fx']:.3f}, "

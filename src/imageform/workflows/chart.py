@@ -147,14 +147,20 @@ def chart(run: Run, opts: ChartOptions, *, out: Path, image: Path) -> Result:
     det = detect_colorchecker(img, max_size=opts.max_size, min_score=opts.min_score)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", ChartWarning)
-        pat = measure_chart_patches(img, det)
+        pat = measure_chart_patches(img, det, max_std=_MAX_STD)
         ref = np.asarray(COLORCHECKER_SRGB8, dtype=np.float64) / 255.0
         means = np.where(np.isfinite(pat.means), pat.means, 0.0)
         filled = ChartPatches(means, pat.std, pat.saturated, pat.missing)
         corr = fit_color_correction(filled, ref, opts.method, opts.degree)
         rep = correction_report(filled, ref, corr)
-    for w in caught:
-        run.note(f"note: {w.message}")
+    left_out = _left_out(det, pat)
+    for w in caught:  # measure_chart_patches' own counts overlap: one note below instead
+        if not str(w.message).startswith("measure_chart_patches:"):
+            run.note(f"note: {w.message}")
+    n_out = sum(len(v) for v in left_out.values())
+    if n_out:
+        why = ", ".join(f"{len(idx)} {_REASONS[k]} {idx}" for k, idx in left_out.items() if idx)
+        run.note(f"note: {n_out} of {len(pat.valid)} patches left out of the fit: {why} (0-based)")
     fallback = next(
         (str(w.message) for w in caught if str(w.message).startswith("fit_color_correction: the")),
         None,
@@ -204,6 +210,7 @@ def chart(run: Run, opts: ChartOptions, *, out: Path, image: Path) -> Result:
         "corners": det.corners,
         "patches_found": int(det.found.sum()),
         "patches_valid": int(pat.valid.sum()),
+        "patches_left_out": left_out,
         "method": corr.method,
         "degree": corr.degree,
         "delta_e00_before": rep.delta_e_before,
@@ -212,7 +219,8 @@ def chart(run: Run, opts: ChartOptions, *, out: Path, image: Path) -> Result:
     }
     text = [
         f"ColorChecker found: score R2 {det.score:.4f}, rotation {det.rotation:.1f} deg, "
-        f"{int(det.found.sum())} of 24 patches segmented, {int(pat.valid.sum())} usable",
+        f"{int(det.found.sum())} of 24 patches segmented, {int(pat.valid.sum())} usable"
+        + (f", {n_out} left out" if n_out else ""),
         "corners (u, v): " + ", ".join(f"({u:.1f}, {v:.1f})" for u, v in det.corners),
         f"{corr.method} (degree {corr.degree}) correction to the chart's sRGB values, "
         f"fitted on {corr.n_patches} patches",
@@ -221,6 +229,34 @@ def chart(run: Run, opts: ChartOptions, *, out: Path, image: Path) -> Result:
         f"wrote {out}",
     ]
     return Result(summary, tuple(text))
+
+
+#: Largest per-channel standard deviation of a flat patch (encoded, [0, 1] scale).
+_MAX_STD = 0.04
+#: Why a patch is left out of the fit, in the order a patch is counted (each once).
+_REASONS = {
+    "outside_image": "outside the image",
+    "colour_outlier": "colour outlier(s) (occluded?)",
+    "saturated": "saturated",
+    "not_flat": f"not flat (a channel's std above {_MAX_STD:g})",
+}
+
+
+def _left_out(det: Any, pat: Any) -> dict[str, list[int]]:
+    """Return the patches left out of the fit by reason, each patch under one reason only.
+
+    ``measure_chart_patches`` counts a saturated patch that is also not flat twice (as
+    saturated and as missing): here the first reason of :data:`_REASONS` that applies.
+    """
+    import numpy as np
+
+    empty = ~np.isfinite(np.asarray(pat.means)).all(axis=1)
+    outlier = np.asarray(det.outliers, dtype=bool) & ~empty
+    saturated = np.asarray(pat.saturated, dtype=bool) & ~empty & ~outlier
+    not_flat = np.asarray(pat.missing, dtype=bool) & ~empty & ~outlier & ~saturated
+    masks = {"outside_image": empty, "colour_outlier": outlier}
+    masks |= {"saturated": saturated, "not_flat": not_flat}
+    return {k: np.flatnonzero(m).tolist() for k, m in masks.items()}
 
 
 def _scale(img: Any) -> float:

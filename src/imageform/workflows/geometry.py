@@ -140,10 +140,8 @@ def project(run: Run, opts: ProjectOptions, *, out: Path, points: Path) -> Resul
 
 
 def _xyz(table: Any) -> Any:
-    cols = [table.column(c) for c in ("x", "y", "z")]
-    if table.header is not None and None not in cols:
-        return table.numbers(cols, finite=False)
-    return table.numbers((0, 1, 2), finite=False)
+    cols = table.named(("x", "y", "z"))
+    return table.numbers((0, 1, 2) if cols is None else cols, finite=False)
 
 
 # ---------------------------------------------------------------- pose
@@ -172,7 +170,6 @@ class PoseOptions(Options):
 def _correspondences(table: Any, view: str | None) -> tuple[Any, list[int]]:
     """X, Y, Z, u, v of the chosen rows (by header names if present, else by position)."""
     names = ("x", "y", "z", "u", "v")
-    cols = [table.column(c) for c in names]
     img = table.column("image")
     rows = list(range(len(table.rows)))
     if img is not None:
@@ -190,8 +187,9 @@ def _correspondences(table: Any, view: str | None) -> tuple[Any, list[int]]:
             )
     elif view is not None:
         raise InvalidInputError(f"--view needs a table with an image column; {table.path} has none")
-    if table.header is not None and None not in cols:
-        return table.numbers(cols, finite=True, rows=rows), rows
+    named = table.named(names)
+    if named is not None:
+        return table.numbers(named, finite=True, rows=rows), rows
     if len(table.rows[0]) != 5:
         raise InvalidInputError(
             f"{table.path}: expected 5 columns (X, Y, Z, u, v) or a header naming them, "

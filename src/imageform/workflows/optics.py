@@ -19,10 +19,21 @@ STOPS = (1.4, 2.0, 2.8, 4.0, 5.6, 8.0, 11.0, 16.0, 22.0)
 class LensOptions(Options):
     """Options of ``imageform lens`` (lengths with a unit; see imageform._units)."""
 
-    focal: str | float = option(help="Focal length, e.g. 50mm (bare number: mm).", metavar="LENGTH")
+    focal: str | float = option(
+        help="Focal length with a unit: 50mm, 5cm, 0.05m (a bare number is in mm).",
+        metavar="LENGTH",
+    )
     f_number: float = option(help="f-number N = f / D, e.g. 2.8.", metavar="N")
-    focus: str | float = option(help="Focus distance from the lens, e.g. 2m (bare number: m).")
-    coc: str | float = option("0.03mm", help="Circle of confusion diameter (bare number: mm).")
+    focus: str | float = option(
+        help="Focus distance from the lens with a unit: 2m, 0.5 m, 500mm, 6ft (a bare number is "
+        "in m).",
+        metavar="LENGTH",
+    )
+    coc: str | float = option(
+        "0.03mm",
+        help="Circle of confusion diameter with a unit: 0.03mm, 30um (a bare number is in mm).",
+        metavar="LENGTH",
+    )
 
     def check(self) -> None:
         """Check the lengths and that ``--f-number`` is finite and > 0."""
@@ -42,6 +53,31 @@ class LensOptions(Options):
         )
 
 
+def _bare_notes(opts: LensOptions) -> list[str]:
+    """Return notes for bare numbers that look given in the other unit (--focus 2000)."""
+    notes = []
+    focal, focus = _bare(opts.focal), _bare(opts.focus)
+    if focus is not None and focus >= 100:
+        notes.append(
+            f"note: --focus {focus:g} is read as {focus:g} m (a bare --focus is in metres); "
+            f"write {focus:g}mm for millimetres"
+        )
+    if focal is not None and focal < 1:
+        notes.append(
+            f"note: --focal {focal:g} is read as {focal:g} mm (a bare --focal is in "
+            f"millimetres); write {focal:g}m for metres"
+        )
+    return notes
+
+
+def _bare(value: str | float) -> float | None:
+    """Return the number of a length given without a unit, else None."""
+    try:
+        return float(str(value).strip())
+    except ValueError:
+        return None
+
+
 def _fmt(x: float) -> str:
     return "inf" if math.isinf(x) else f"{x:.3f} m"
 
@@ -53,6 +89,8 @@ def lens(run: Run, opts: LensOptions, *, out: None) -> Result:
     from imageform.optics import aperture_diameter, depth_of_field, thin_lens
 
     f, s, c = opts.lengths()
+    for note in _bare_notes(opts):
+        run.note(note)
     n = float(opts.f_number)
     if s == f:
         raise InvalidInputError(
@@ -128,7 +166,8 @@ WORKFLOWS = (
         None,
         suffixes=(),
         group="optics",
-        description="Lengths take a unit (50mm, 2m, 0.03mm, 1in); --json writes an infinite "
-        "far limit as null.",
+        description="Lengths take a unit (50mm, 2m, 0.5 m, 0.03mm, 1in; m, cm, mm, um, nm, in, "
+        "ft); a bare number keeps its old meaning: mm for --focal and --coc, m for --focus. "
+        "--json gives every length in metres (keys ending _m) and an infinite far limit as null.",
     ),
 )

@@ -17,7 +17,14 @@ from imageform.workflows._spec import (
     Workflow,
     option,
 )
-from imageform.workflows.calibration import MIN_VIEWS, _BoardChecks, parse_board
+from imageform.workflows.calibration import (
+    MIN_VIEWS,
+    _BoardChecks,
+    _converging,
+    board_hint,
+    board_reading,
+    parse_board,
+)
 
 __all__ = ["WORKFLOWS", "StereoCalibrateOptions"]
 
@@ -26,7 +33,11 @@ __all__ = ["WORKFLOWS", "StereoCalibrateOptions"]
 class StereoCalibrateOptions(_BoardChecks, ImageIn):
     """Options of ``imageform stereo-calibrate``."""
 
-    board: str = option(help="Inner corners COLSxROWS, e.g. 9x6 (not squares).", metavar="CxR")
+    board: str = option(
+        help="Checkerboard COLSxROWS of inner corners (9x6), or say which with 9x6corners or "
+        "10x7squares. The output says how it was read.",
+        metavar="CxR",
+    )
     square: str = option(
         "1",
         help="Side of a square with unit (25mm, 2.5cm, 1in; bare number: mm): the unit of T "
@@ -47,22 +58,56 @@ class StereoCalibrateOptions(_BoardChecks, ImageIn):
     half_window: int | None = option(
         None, help="Sub-pixel window half size (OpenCV's tutorial: 11); default adaptive."
     )
+    max_iter: int = option(
+        100,
+        help="Most iterations of the joint Levenberg-Marquardt refinement (raise it when it does "
+        "not converge).",
+        minimum=1,
+        maximum=1_000_000,
+    )
 
 
 def _expand(pattern: str, what: str) -> list[Path]:
     """Return the files a name or a glob pattern names, sorted; none is an error."""
+    from imageform._files import glob_paths, not_a_regular_file
+
     p = str(pattern)
     if os.path.exists(p) or not any(c in p for c in "*?["):
         path = Path(p)
+        kind = not_a_regular_file(path)
+        if kind == "is a folder":
+            raise InvalidInputError(
+                f"{what} {path} is a folder; give its images as a quoted glob pattern "
+                f"('{path / '*.png'}')"
+            )
+        if kind is not None:
+            raise InvalidInputError(f"{what} {path} {kind}")
         if not path.is_file():
             raise InvalidInputError(f"{what} file {path} does not exist")
         return [path]
-    from imageform._files import glob_paths
-
     hits = sorted(glob_paths(p))
     if not hits:
         raise InvalidInputError(f"no files match {what} pattern {p!r}")
     return [Path(h) for h in hits]
+
+
+def _check_distinct(left: str, right: str, lefts: list[Path], rights: list[Path]) -> None:
+    """Refuse left and right images that are the same files: a camera paired with itself."""
+    from imageform._files import same_file
+
+    if str(left) == str(right) or (
+        os.path.exists(left) and os.path.exists(right) and same_file(Path(left), Path(right))
+    ):
+        raise InvalidInputError(
+            f"left and right are both {left}; give each camera's own images (a quoted glob "
+            "pattern each: 'left/*.png' 'right/*.png')"
+        )
+    for a in lefts:
+        for b in rights:
+            if same_file(a, b):
+                raise InvalidInputError(
+                    f"left and right both name the image {a}; give each camera's own images"
+                )
 
 
 def _detect(
@@ -99,7 +144,10 @@ def stereo_calibrate_cmd(
     from imageform.geometry import checkerboard_points, stereo_calibrate
     from imageform.io import StereoCameraFile, write_stereo_camera
 
+    if str(left) == str(right):
+        _check_distinct(left, right, [], [])
     lefts, rights = _expand(left, "left"), _expand(right, "right")
+    _check_distinct(left, right, lefts, rights)
     if len(lefts) != len(rights):
         raise InvalidInputError(
             f"expected as many right images as left ones (paired in sorted order), got "
@@ -120,22 +168,24 @@ def stereo_calibrate_cmd(
     if len(pairs) < MIN_VIEWS:
         raise DegenerateConfigurationError(
             f"found the {board[0]}x{board[1]} board in both images of {len(pairs)} of the "
-            f"{len(lefts)} pairs; stereo-calibrate needs at least {MIN_VIEWS} (check --board: "
-            "inner corners, not squares)"
+            f"{len(lefts)} pairs; stereo-calibrate needs at least {MIN_VIEWS} "
+            f"({board_hint(opts.board)})"
         )
     if run.progress is not None:
         run.progress("calibrating", 1.0)
     obj = checkerboard_points(board, opts.square_mm())
-    rig = stereo_calibrate(
-        [obj] * len(pairs),
-        [p[2] for p in pairs],
-        [p[3] for p in pairs],
-        size_l,
-        image_size_right=size_r,
-        fix_intrinsics=opts.fix_intrinsics,
-        fix=opts.fix,
-        skew=opts.skew,
-    )
+    with _converging(opts.max_iter):
+        rig = stereo_calibrate(
+            [obj] * len(pairs),
+            [p[2] for p in pairs],
+            [p[3] for p in pairs],
+            size_l,
+            image_size_right=size_r,
+            fix_intrinsics=opts.fix_intrinsics,
+            fix=opts.fix,
+            skew=opts.skew,
+            max_iter=opts.max_iter,
+        )
     command = f"imageform stereo-calibrate --board {board[0]}x{board[1]} --square {opts.square}"
     command += "".join(f" --fix {p}" for p in opts.fix) + (" --skew" if opts.skew else "")
     command += " --fix-intrinsics" if opts.fix_intrinsics else ""
@@ -157,8 +207,10 @@ def stereo_calibrate_cmd(
         }
         for p, e in zip(pairs, rig.per_view_rms, strict=True)
     ]
+    reading = board_reading(opts.board)
     summary = {
         "output": out,
+        "board": {k: v for k, v in reading.items() if k != "line"},
         "pairs_used": len(pairs),
         "pairs_total": len(lefts),
         "rms_px": rig.rms,
@@ -173,7 +225,7 @@ def stereo_calibrate_cmd(
         "right": {"K": rig.right.K.tolist(), "distortion": list(rig.right.distortion.coeffs[:5])},
         "per_pair": per_pair,
     }
-    text = [f"{'left':<20} {'right':<20} {'RMS l px':>8} {'RMS r px':>8}"]
+    text = [reading["line"], f"{'left':<20} {'right':<20} {'RMS l px':>8} {'RMS r px':>8}"]
     text += [
         f"{r['left']:<20} {r['right']:<20} {r['rms_left_px']:8.4f} {r['rms_right_px']:8.4f}"
         for r in per_pair
