@@ -346,20 +346,25 @@ def _live_runs(out_root: Path, own: str | None) -> set[str]:
     return live
 
 
-def _run_of(name: str, output: Path) -> str | None:
-    """Return the run id in the name of a temporary file of ``output`` (None for one without)."""
-    token = name.lstrip(".")[len(output.name) + 1 :].split(".", 1)[0]
-    run_id, sep, _ = token.partition("-")
-    return run_id if sep else None
+def _temps_of(output: Path) -> Iterator[tuple[Path, str | None]]:
+    """Yield each temporary file of ``output`` in its folder, with the run id in its name.
 
-
-def _nested_part_pattern(output: Path) -> str:
-    """Return the glob of the files the workflow's own atomic writer makes beside a job's temp file.
-
-    Those are ``..NAME.<random>.tmpSUFFIX.<pid>-<token>.partSUFFIX``: a worker killed while the
-    workflow was still writing leaves one of these, not the temporary file itself.
+    That is ``.NAME.<run>-<token>.tmpSUFFIX`` (``.NAME.<token>.tmpSUFFIX`` without a run id, None),
+    and the names older versions nested inside it (``..NAME.<run>-<token>.tmpSUFFIX.<pid>-...``,
+    one leading dot per level) when a worker was killed while the workflow wrote.
     """
-    return f".{temp_pattern(output)}.*.part*"
+    match = re.compile(
+        rf"\.+{re.escape(output.name)}\.(?:([0-9a-f]{{12}})-)?[0-9a-f]{{12}}\.tmp"
+        rf"(?:{re.escape(output.suffix)})?(?:\..*)?"
+    ).fullmatch
+    try:
+        names = os.listdir(output.parent)
+    except OSError:
+        return
+    for name in names:
+        m = match(name)
+        if m is not None:
+            yield output.parent / name, m.group(1)
 
 
 def _remove_stale_temps(
@@ -373,17 +378,15 @@ def _remove_stale_temps(
     live = _live_runs(out_root, own) if out_root is not None else set()
     n = 0
     for job in jobs:
-        folder = job.output.parent
-        if folder.is_dir():
-            for pattern in (temp_pattern(job.output), _nested_part_pattern(job.output)):
-                for stale in folder.glob(pattern):
-                    if _run_of(stale.name, job.output) in live:
-                        continue
-                    if stale.is_dir() and not stale.is_symlink():
-                        shutil.rmtree(stale, ignore_errors=True)
-                    else:
-                        stale.unlink(missing_ok=True)
-                    n += 1
+        for stale, run_id in _temps_of(job.output):
+            if run_id in live:
+                continue
+            with contextlib.suppress(OSError):
+                if stale.is_dir() and not stale.is_symlink():
+                    shutil.rmtree(stale, ignore_errors=True)
+                else:
+                    stale.unlink(missing_ok=True)
+                n += 1
     return n
 
 
