@@ -41,6 +41,22 @@ def _options(wf: Workflow, kw: dict[str, Any]) -> Any:
         raise click.UsageError(str(exc)) from None
 
 
+def _quiet_dask() -> None:
+    """Silence dask's own warnings in this process.
+
+    Such as ``Couldn't gather 1 keys, rescheduling`` after a worker is killed: jobs report
+    their errors, the run its summary.
+    """
+    import contextlib
+    import logging
+
+    with contextlib.suppress(ImportError):  # without it, run_batch says what to install
+        import distributed  # noqa: F401  (its loggers are configured on import)
+    for name in list(logging.root.manager.loggerDict):
+        if name == "distributed" or name.startswith("distributed."):
+            logging.getLogger(name).setLevel(logging.ERROR)
+
+
 def _batch_command(wf: Workflow) -> click.Command:
     params: list[click.Parameter] = [
         click.Argument(["glob_pattern"], metavar="'GLOB'", required=True),
@@ -71,6 +87,7 @@ def _batch_command(wf: Workflow) -> click.Command:
         scheduler, workers, suffix = kw.pop("scheduler"), kw.pop("workers"), kw.pop("suffix")
         force, as_json = bool(kw.pop("force")), bool(kw.pop("json_out"))
         opts = _options(wf, kw)
+        _quiet_dask()
         try:
             report = run_batch(
                 wf.name,
