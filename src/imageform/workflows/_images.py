@@ -116,7 +116,7 @@ def band_rows(shape: tuple[int, ...], band_bytes: int = BAND_BYTES) -> int:
 
 def write_mapped(
     run: Run, path: Path, image: Any, fn: Any, opts: Any, *, like: Any = None
-) -> tuple[int, Any, Any, Any]:
+) -> tuple[int, Any, Any, Any, tuple[int, ...]]:
     """Write ``fn(image)`` to ``path``, computed a band of rows at a time.
 
     ``fn`` works pixel by pixel: a colour conversion, a CVD simulation, white-balance gains. The
@@ -125,8 +125,8 @@ def write_mapped(
     16-bit integers for PNG/JPEG and ``--bits``, float32 for a float TIFF), so that a 100 Mpx
     image goes through in a fraction of the memory budget (``IMAGEFORM_MAX_MEMORY``).
 
-    Returns the clip count (values outside [0, 1] in an integer output), the computed dtype and
-    the per-channel minimum and maximum of the computed values.
+    Returns the clip count (values outside [0, 1] in an integer output), the computed dtype, the
+    per-channel minimum and maximum of the computed values, and the result's shape.
     """
     import numpy as np
 
@@ -177,6 +177,7 @@ def write_mapped(
             f"{float(np.max(hi)):.4g}) cannot be stored in the {bits}-bit {path.name}; keep "
             "them in a float .tif or .npy, or clip them (--out-of-range clip)"
         )
+    shape = tuple(dest.shape)
     if dest.ndim == 3 and dest.shape[-1] == 1 and fmt != "npy":
         dest = dest[..., 0]
     write_image(run.file(path), dest, bits=bits, out_of_range=policy)
@@ -186,4 +187,4 @@ def write_mapped(
             f"{bits}-bit {path.name}; write .tif or .npy to keep them "
             "(--out-of-range error refuses instead)"
         )
-    return n_out, dtype, lo, hi
+    return n_out, dtype, lo, hi, shape

@@ -122,7 +122,7 @@ def convert(run: Run, opts: ConvertOptions, *, out: Path, image: Path) -> Result
     if src != "gray" and img.shape[-1] == 1:
         raise InvalidInputError(f"{image} is a grey image; convert it with --from gray")
     params = opts.params()
-    n_out, dtype, lo, hi = write_mapped(
+    n_out, dtype, lo, hi, shape = write_mapped(
         run, out, img, lambda band: convert(band, src, dst, **params), opts, like=img
     )
     summary = {
@@ -131,7 +131,7 @@ def convert(run: Run, opts: ConvertOptions, *, out: Path, image: Path) -> Result
         "from": src,
         "to": dst,
         "path": [e.function for e in edges],
-        "shape": [*img.shape[:2], SPACES[dst][1]] if img.ndim == 3 else list(img.shape),
+        "shape": list(shape),
         "dtype": str(dtype),
         "channels": SPACES[dst][1],
         "min": lo,
