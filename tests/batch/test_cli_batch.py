@@ -33,7 +33,7 @@ def _imageform(*args: str) -> list[str]:
     return [sys.executable, "-m", "imageform", *args]
 
 
-def _wait_for(predicate, timeout: float = 120.0) -> bool:  # type: ignore[no-untyped-def]
+def _wait_for(predicate, timeout: float = 600.0) -> bool:  # type: ignore[no-untyped-def]
     t0 = time.monotonic()
     while time.monotonic() - t0 < timeout:
         if predicate():
@@ -71,7 +71,7 @@ def test_ctrl_c_prints_one_line_and_the_rerun_resumes(tmp_path: Path) -> None:
     try:
         assert _wait_for(lambda: out.is_dir() and len(list(out.glob("*.png"))) >= 3)
         os.killpg(proc.pid, signal.SIGINT)
-        stdout, stderr = proc.communicate(timeout=120)
+        stdout, stderr = proc.communicate(timeout=600)
     finally:
         if proc.poll() is None:
             os.killpg(proc.pid, signal.SIGKILL)
@@ -128,7 +128,7 @@ def test_chunked_killed_leaves_no_temporary_file(tmp_path: Path) -> None:
         try:
             assert _wait_for(lambda: bool(temps()) and temps()[0].stat().st_size > 2**20)
             proc.send_signal(sig)
-            _, stderr = proc.communicate(timeout=60)
+            _, stderr = proc.communicate(timeout=600)
         finally:
             if proc.poll() is None:
                 proc.kill()
@@ -358,7 +358,7 @@ def test_ctrl_c_while_the_workers_start_is_one_line(tmp_path: Path, delay: float
         time.sleep(delay)  # not a race: any moment of the start must give the same line
         family = {p.pid for p in psutil.Process(proc.pid).children(recursive=True)}
         os.killpg(proc.pid, signal.SIGINT)
-        stdout, stderr = proc.communicate(timeout=120)
+        stdout, stderr = proc.communicate(timeout=600)
     finally:
         if proc.poll() is None:
             os.killpg(proc.pid, signal.SIGKILL)
