@@ -55,8 +55,10 @@ from imageform.errors import DegenerateConfigurationError, InvalidInputError
 __all__ = [
     "WHITE_BALANCE_METHODS",
     "WhiteBalanceResult",
+    "apply_white_balance_gains",
     "estimate_illuminant",
     "white_balance",
+    "white_balance_gains",
 ]
 
 #: Methods of :func:`white_balance` and :func:`estimate_illuminant`.
@@ -448,7 +450,7 @@ def _apply(xp: Any, lin: Any, gains: Any, tname: str, clip: bool) -> Any:
     return out
 
 
-def _white_balance_gains(
+def white_balance_gains(
     image: object,
     method: str = "gray_world",
     *,
@@ -463,7 +465,7 @@ def _white_balance_gains(
 ) -> Any:
     """Return the gains :func:`white_balance` finds for ``image`` (not applied).
 
-    With :func:`_apply_white_balance_gains`, the same as :func:`white_balance`, a band of rows at a
+    With :func:`apply_white_balance_gains`, the same as :func:`white_balance`, a band of rows at a
     time (the ``imageform white-balance`` command: bounded memory). Internal.
     """
     m, percentile = _method(method, percentile)
@@ -485,7 +487,7 @@ def _white_balance_gains(
     return _gains(xp, lin, m, norm, percentile, p, sigma, illuminant, cct, space)
 
 
-def _apply_white_balance_gains(image: object, gains: Any, *, transfer: str = "srgb") -> Any:
-    """Apply ``gains`` (from :func:`_white_balance_gains`) as :func:`white_balance` does."""
+def apply_white_balance_gains(image: object, gains: Any, *, transfer: str = "srgb") -> Any:
+    """Apply ``gains`` (from :func:`white_balance_gains`) as :func:`white_balance` does."""
     xp, lin, tname = _linear(image, transfer, -1)
     return _apply(xp, lin, gains, tname, False)

@@ -131,7 +131,6 @@ def write_mapped(
     import numpy as np
 
     from imageform.io import image_format, write_image
-    from imageform.io.image_io import _quantise
 
     fmt = image_format(path)
     bits = getattr(opts, "bits", None)
@@ -165,10 +164,19 @@ def write_mapped(
         b_lo, b_hi = flat.min(axis=0), flat.max(axis=0)
         lo = b_lo if lo is None else np.minimum(lo, b_lo)
         hi = b_hi if hi is None else np.maximum(hi, b_hi)
-        if integer:
-            q, n = _quantise(band, depth, "clip", path)  # NaN/inf refused as write() does
-            n_out += n
-            dest[r0 : r0 + rows] = q
+        if integer and band.dtype.kind == "f":  # as write_image quantises (NaN/inf refused)
+            if not np.all(np.isfinite(band)):
+                raise InvalidInputError(f"the image to write to {path} contains NaN or inf")
+            n_out += int(np.count_nonzero((band < 0) | (band > 1)))
+            top = 2**depth - 1
+            dest[r0 : r0 + rows] = np.round(np.clip(band, 0.0, 1.0) * top).astype(dest.dtype)
+        elif integer:  # integer samples: rescaled by write_image's rule
+            top, src_top = 2**depth - 1, np.iinfo(band.dtype).max
+            dest[r0 : r0 + rows] = (
+                band
+                if src_top == top
+                else np.round(band.astype(np.float64) * (top / src_top)).astype(dest.dtype)
+            )
         else:
             dest[r0 : r0 + rows] = band
     if n_out and policy == "error":

@@ -234,13 +234,13 @@ def white_balance(run: Run, opts: WhiteBalanceOptions, *, out: Path, image: Path
         n_out = write(run, out, np.asarray(balanced), opts, like=img)
     else:  # the gains from the whole image, applied a band of rows at a time
         from imageform.color.white_balance import (
-            _apply_white_balance_gains,
-            _white_balance_gains,
+            apply_white_balance_gains,
+            white_balance_gains,
         )
 
-        gains = np.asarray(_white_balance_gains(img, opts.method, **opts.params()))
+        gains = np.asarray(white_balance_gains(img, opts.method, **opts.params()))
         n_out = write_mapped(
-            run, out, img, lambda band: _apply_white_balance_gains(band, gains), opts, like=img
+            run, out, img, lambda band: apply_white_balance_gains(band, gains), opts, like=img
         )[0]
     if chart is not None and opts.overlay is not None:
         _charts.write_overlay(run, opts.overlay, chart, flag)
