@@ -100,6 +100,27 @@ def test_memory_bound(monkeypatch: pytest.MonkeyPatch) -> None:
         check_memory(math.nan, "shape")
 
 
+@pytest.mark.parametrize(
+    ("text", "n"),
+    [("4GiB", 4 * 2**30), ("4G", 4 * 2**30), ("4 GB", 4 * 2**30), ("512MiB", 2**29),
+     ("1.5g", 3 * 2**29), ("123456", 123456), ("1e9", 10**9), ("2T", 2 * 2**40)],
+)  # fmt: skip
+def test_memory_budget_units(monkeypatch: pytest.MonkeyPatch, text: str, n: int) -> None:
+    """Issue 25: the budget reads as written in the docs (``IMAGEFORM_MAX_MEMORY=4GiB``)."""
+    monkeypatch.setenv("IMAGEFORM_MAX_MEMORY", text)
+    assert memory_limit() == n
+
+
+def test_memory_budget_default_and_refusals(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.delenv("IMAGEFORM_MAX_MEMORY", raising=False)
+    assert memory_limit() == 4 * 2**30  # documented: 4 GiB, whatever the machine
+    for bad in ("lots", "-1G", "0", "4XB", "nan", "1e400"):
+        monkeypatch.setenv("IMAGEFORM_MAX_MEMORY", bad)
+        with pytest.raises(InvalidInputError, match="IMAGEFORM_MAX_MEMORY") as err:
+            memory_limit()
+        assert "\n" not in str(err.value)
+
+
 def test_describe_never_prints_an_array() -> None:
     text = describe(np.zeros((1000, 1000)))
     assert text == "ndarray of shape (1000, 1000), float64"

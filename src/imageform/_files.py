@@ -82,6 +82,17 @@ def _unpart(name: str) -> str:
         name = m.group(1)
     return name
 
+#: A temporary name already (this module's ``.NAME.<pid>-<token>.part[SUFFIX]``, or an
+#: ``imageform batch`` job's ``.NAME.<run>-<token>.tmp[SUFFIX]``): written in place, so that
+#: temporary names never nest (its owner renames it, or removes it).
+_TEMPORARY = re.compile(
+    r"\..+\.(?:\d+-[0-9a-f]{8}\.part|[0-9a-f]{12}-[0-9a-f]{12}\.tmp)(?:\.[^.]*)?"
+)
+
+
+def _is_temporary(path: Path) -> bool:
+    return _TEMPORARY.fullmatch(path.name) is not None
+
 
 def same_file(a: Path, b: Path) -> bool:
     """Tell whether ``a`` and ``b`` name one file.
@@ -406,6 +417,9 @@ class Outputs:
             if other == final or same_file(other, final):
                 raise InvalidInputError(f"output {final} is given twice")
         check_output(final, inputs=self.inputs, force=self.force, folder=folder)
+        if not folder and _is_temporary(final):  # a temporary file already: written in place
+            self._items.append((final, final, False))
+            return final
         remove_stale_parts(final)
         part = _part_name(final, self._token)
         if folder:
@@ -532,6 +546,11 @@ def atomic_write(final: str | Path, write: Callable[[Path], object]) -> None:
     """
     final = Path(final)
     refuse_special(final)
+    if _is_temporary(final):  # a temporary file already (its owner renames it): in place
+        write(final)
+        if not os.path.lexists(final):
+            raise ImageformError(f"output {final} was not written")
+        return
     part = _part_name(final, secrets.token_hex(4))
     try:
         write(part)

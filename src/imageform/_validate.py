@@ -10,6 +10,7 @@ from __future__ import annotations
 import math
 import numbers
 import os
+import re
 from collections.abc import Collection, Sequence
 from typing import Any
 
@@ -395,26 +396,42 @@ def as_size(
     )
 
 
-def memory_limit() -> int:
-    """Return the most bytes one allocation may ask for.
+#: The memory budget without ``IMAGEFORM_MAX_MEMORY``: 4 GiB (a 100 Mpx image goes through any
+#: single-image command in it; larger inputs are refused in one line, or processed block by
+#: block with ``imageform chunked``).
+DEFAULT_MAX_MEMORY = 4 * 2**30
 
-    ``IMAGEFORM_MAX_MEMORY`` (bytes; suffixes K, M, G accepted) if set, else half of this
-    machine's physical memory.
+_UNITS = {"": 1, "K": 2**10, "M": 2**20, "G": 2**30, "T": 2**40}
+_MEMORY = re.compile(r"\s*([0-9.eE+]+)\s*([KMGT]?)(?:I?B)?\s*", re.IGNORECASE)
+
+
+def memory_limit() -> int:
+    """Return the memory budget: the most bytes a command or one call may ask for.
+
+    ``IMAGEFORM_MAX_MEMORY`` if set: bytes, or with a unit (``4GiB``, ``4G``, ``512MiB``,
+    ``512M``; K, M, G and T count powers of 1024), else :data:`DEFAULT_MAX_MEMORY` (4 GiB).
+
+    Examples
+    --------
+    >>> import os
+    >>> os.environ["IMAGEFORM_MAX_MEMORY"] = "1.5GiB"
+    >>> memory_limit() == 1.5 * 2**30
+    True
+    >>> del os.environ["IMAGEFORM_MAX_MEMORY"]
     """
-    text = os.environ.get("IMAGEFORM_MAX_MEMORY", "").strip().upper()
-    if text:
-        scale = {"K": 2**10, "M": 2**20, "G": 2**30}.get(text[-1:], 1)
-        try:
-            return int(float(text.rstrip("KMG")) * scale)
-        except ValueError:
-            raise InvalidInputError(
-                f"expected IMAGEFORM_MAX_MEMORY as bytes (e.g. 8G), got {text!r}"
-            ) from None
+    text = os.environ.get("IMAGEFORM_MAX_MEMORY", "").strip()
+    if not text:
+        return DEFAULT_MAX_MEMORY
+    m = _MEMORY.fullmatch(text)
     try:
-        total = os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
-    except (ValueError, OSError, AttributeError):  # pragma: no cover - non-POSIX
-        total = 16 * 2**30
-    return int(total // 2)
+        value = float(m.group(1)) * _UNITS[m.group(2).upper()] if m else float("nan")
+    except ValueError:
+        value = float("nan")
+    if not (value >= 1 and math.isfinite(value)):
+        raise InvalidInputError(
+            f"expected IMAGEFORM_MAX_MEMORY as bytes or with a unit (e.g. 4GiB), got {text[:40]!r}"
+        )
+    return int(value)
 
 
 def check_memory(n_bytes: float, name: str, what: str = "the result") -> None:

@@ -358,3 +358,41 @@ def test_stain_normalize_refusals(tmp_path: Path) -> None:
             chunk=256,
         )
     assert not (tmp_path / "o.tif").exists()
+
+
+@pytest.mark.parametrize(
+    ("layout", "decodes"),
+    [("one-tile", 1), ("big-tiles", 4), ("strips", 1024 // 64)],
+)
+def test_each_tile_or_strip_is_decoded_once(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, layout: str, decodes: int
+) -> None:
+    """Issue 25: a whole-image tile (or strip) was decoded again for every block inside it (a
+    16384^2 single-tile TIFF took > 420 s). Each TIFF tile or strip is decoded once, while
+    the blocks inside it are processed; the output is the in-memory one."""
+    img = _image(1024, 1024)
+    src = tmp_path / f"{layout}.tif"
+    kw: dict[str, object] = {
+        "one-tile": {"tile": (1024, 1024)},
+        "big-tiles": {"tile": (512, 512)},
+        "strips": {"rowsperstrip": 64},
+    }[layout]  # type: ignore[assignment]
+    tifffile.imwrite(src, img, photometric="rgb", compression="zlib", **kw)
+    calls = []
+    real = tifffile.TiffPage.decode.func  # a cached_property: the function that makes it
+
+    def counting(self):  # type: ignore[no-untyped-def]
+        fn = real(self)
+
+        def decode(*a, **k):  # type: ignore[no-untyped-def]
+            calls.append(1)
+            return fn(*a, **k)
+
+        return decode
+
+    monkeypatch.setattr(tifffile.TiffPage, "decode", property(lambda self: counting(self)))
+    r = process_chunked(src, tmp_path / "out.zarr", "convert", {"to": "display_p3"}, chunk=128)
+    assert len(calls) == decodes
+    ref = np.asarray(convert(img, "srgb", "display_p3"))
+    got = _read(r.output)
+    np.testing.assert_allclose(got / np.iinfo(got.dtype).max, np.clip(ref, 0, 1), atol=0.51 / 255)

@@ -4,6 +4,7 @@ processes: Ctrl-C (one line, exit 130, no traceback, the rerun resumes), a kill 
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import re
@@ -12,6 +13,7 @@ import subprocess
 import sys
 import time
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -31,7 +33,7 @@ def _imageform(*args: str) -> list[str]:
     return [sys.executable, "-m", "imageform", *args]
 
 
-def _wait_for(predicate, timeout: float = 120.0) -> bool:  # type: ignore[no-untyped-def]
+def _wait_for(predicate, timeout: float = 600.0) -> bool:  # type: ignore[no-untyped-def]
     t0 = time.monotonic()
     while time.monotonic() - t0 < timeout:
         if predicate():
@@ -69,7 +71,7 @@ def test_ctrl_c_prints_one_line_and_the_rerun_resumes(tmp_path: Path) -> None:
     try:
         assert _wait_for(lambda: out.is_dir() and len(list(out.glob("*.png"))) >= 3)
         os.killpg(proc.pid, signal.SIGINT)
-        stdout, stderr = proc.communicate(timeout=120)
+        stdout, stderr = proc.communicate(timeout=600)
     finally:
         if proc.poll() is None:
             os.killpg(proc.pid, signal.SIGKILL)
@@ -126,7 +128,7 @@ def test_chunked_killed_leaves_no_temporary_file(tmp_path: Path) -> None:
         try:
             assert _wait_for(lambda: bool(temps()) and temps()[0].stat().st_size > 2**20)
             proc.send_signal(sig)
-            _, stderr = proc.communicate(timeout=60)
+            _, stderr = proc.communicate(timeout=600)
         finally:
             if proc.poll() is None:
                 proc.kill()
@@ -240,3 +242,127 @@ def test_bad_input_is_one_line(tmp_path: Path, capsys: pytest.CaptureFixture[str
         if code == 1:
             assert len(err.strip().splitlines()) == 1 and "Traceback" not in err, err
     assert not (tmp_path / "out").exists()
+
+
+def _workers_of(pid: int) -> list[Any]:
+    """The dask worker processes below ``pid`` (spawned by multiprocessing)."""
+    import psutil
+
+    found = []
+    try:
+        children = psutil.Process(pid).children(recursive=True)
+    except psutil.Error:
+        return []
+    for c in children:
+        with contextlib.suppress(psutil.Error):
+            if "spawn_main" in " ".join(c.cmdline()):
+                found.append(c)
+    return found
+
+
+def _storm(root: Path, seed: int, storm_s: float, n: int = 16) -> tuple[int, str, str, Path]:
+    """Run a batch while its worker processes are SIGKILLed over and over (from the first
+    output on, for ``storm_s`` seconds, every 0.02-0.1 s: the nannies' restarts fail too, and
+    they give up); return the exit, stdout, stderr and
+    the output folder. A run still going 240 s after the storm is a hang (pytest.fail)."""
+    import psutil
+
+    rng = np.random.default_rng(seed)
+    (root / "in").mkdir(parents=True)
+    for i in range(n):
+        write_image(root / "in" / f"x{i:02d}.png", rng.integers(1, 256, (200, 200, 3), np.uint8))
+    out = root / "out"
+    argv = _imageform(
+        "batch", "convert", f"{root}/in/*.png", "-o", str(out), "--to", "rec2020",
+        "--workers", "2", "--suffix", ".tif", "--json",
+    )  # fmt: skip
+    proc = subprocess.Popen(
+        argv, env=_env(), stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+        start_new_session=True,
+    )  # fmt: skip
+    pick = np.random.default_rng(seed + 1000)
+    try:
+        assert _wait_for(lambda: proc.poll() is not None or any(out.glob("*.tif")), 300)
+        t0 = time.monotonic()
+        while time.monotonic() - t0 < storm_s and proc.poll() is None:
+            workers = _workers_of(proc.pid)
+            if workers:
+                with contextlib.suppress(psutil.Error):
+                    workers[int(pick.integers(len(workers)))].kill()
+            time.sleep(float(pick.uniform(0.02, 0.1)))
+        try:
+            stdout, stderr = proc.communicate(timeout=240)
+        except subprocess.TimeoutExpired:
+            pytest.fail(f"the run hung after a storm of killed workers (seed {seed})")
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.communicate()
+    return proc.returncode, stdout, stderr, out
+
+
+def _check_storm(rc: int, stdout: str, stderr: str, out: Path, n: int = 16) -> None:
+    assert rc in (0, 1), stderr
+    assert stderr == "", stderr  # nothing from the workers, the client or multiprocessing
+    summary = json.loads(stdout)
+    assert summary["done"] + summary["failed"] == n
+    # a job whose worker was killed four times is failed (dask's KilledWorker): rerun it
+    for job in summary["jobs"]:
+        assert job["status"] == "done" or "KilledWorker" in (job["error"] or ""), job
+    assert not [p.name for p in out.iterdir() if p.name.startswith(".") and ".tmp" in p.name]
+    assert not [p.name for p in out.iterdir() if p.name.endswith(".lock")]
+
+
+def test_storm_of_killed_workers_finishes(tmp_path: Path) -> None:
+    """Worker processes killed over and over for 10 s: the run ends (never hangs), with every
+    output done or failed for the kills, no temporary file and nothing on stderr; the rerun
+    finishes the rest."""
+    rc, stdout, stderr, out = _storm(tmp_path, 0, storm_s=10.0)
+    _check_storm(rc, stdout, stderr, out)
+    rerun = subprocess.run(
+        [*_imageform("batch", "convert", f"{tmp_path}/in/*.png", "-o", str(out)),
+         "--to", "rec2020", "--workers", "2", "--suffix", ".tif", "--json"],
+        env=_env(), capture_output=True, text=True, timeout=300,
+    )  # fmt: skip
+    assert rerun.returncode == 0, rerun.stderr
+    assert len(list(out.glob("*.tif"))) == 16
+
+
+@pytest.mark.slow
+def test_twenty_storms_never_hang(tmp_path: Path) -> None:
+    """Issue 25: a storm of killed workers hung 2 runs of 4. Twenty storms of 30 s each."""
+    for seed in range(20):
+        _check_storm(*_storm(tmp_path / f"r{seed}", seed, storm_s=30.0))
+
+
+@pytest.mark.parametrize("delay", [0.0, 0.5, 1.5])
+def test_ctrl_c_while_the_workers_start_is_one_line(tmp_path: Path, delay: float) -> None:
+    """Ctrl-C (SIGINT to the whole process group) ``delay`` s after the first worker process
+    exists (they import, start, connect): one line, exit 130, no worker traceback, no
+    leaked-semaphore warning, no process left."""
+    import psutil
+
+    (tmp_path / "in").mkdir()
+    for i in range(4):
+        write_image(tmp_path / "in" / f"x{i}.png", np.full((8, 8, 3), 40 + i, np.uint8))
+    proc = subprocess.Popen(
+        _imageform("batch", "convert", f"{tmp_path}/in/*.png", "-o", str(tmp_path / "out"),
+                   "--to", "rec2020", "--workers", "2"),
+        env=_env(), stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+        start_new_session=True,
+    )  # fmt: skip
+    family: set[int] = set()
+    try:
+        assert _wait_for(lambda: proc.poll() is not None or bool(_workers_of(proc.pid)), 300)
+        assert proc.poll() is None, proc.communicate()
+        time.sleep(delay)  # not a race: any moment of the start must give the same line
+        family = {p.pid for p in psutil.Process(proc.pid).children(recursive=True)}
+        os.killpg(proc.pid, signal.SIGINT)
+        stdout, stderr = proc.communicate(timeout=600)
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+    assert proc.returncode == 130, stderr
+    (line,) = stderr.strip().splitlines()
+    assert line.startswith("imageform: interrupted: ") and stdout == ""
+    assert _wait_for(lambda: not [p for p in family if psutil.pid_exists(p)], 30), "left running"

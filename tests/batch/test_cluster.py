@@ -402,7 +402,7 @@ def test_two_runs_into_one_folder_keep_each_others_temporaries(
 
     thread = threading.Thread(target=run_a)
     thread.start()
-    deadline = time.monotonic() + 60
+    deadline = time.monotonic() + 600
     while not list(out.glob(".x*.tmp.png")) and time.monotonic() < deadline:
         time.sleep(0.05)
     live = list(out.glob(".x*.tmp.png"))

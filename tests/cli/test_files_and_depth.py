@@ -81,7 +81,7 @@ def test_unexpected_error_names_the_file_and_traceback_flag(
     def broken(*args: object, **kwargs: object) -> None:
         raise ZeroDivisionError("float division by zero\nsecond line")
 
-    monkeypatch.setattr(wb, "white_balance", broken)
+    monkeypatch.setattr(wb, "white_balance_gains", broken)  # what the command calls
     src = tmp_path / "in.png"
     write_image(src, np.full((4, 4, 3), 100, np.uint8))
     out = tmp_path / "out.png"

@@ -200,6 +200,10 @@ VALID: dict[str, C | Skip] = {
     "imageform.color.viridis": call(),
     "imageform.color.visible_area": call(),
     "imageform.color.white_balance": call(image=V("rgb")),
+    "imageform.color.white_balance.white_balance_gains": call(image=V("rgb")),
+    "imageform.color.white_balance.apply_white_balance_gains": call(
+        image=V("rgb"), gains=(1.1, 1.0, 0.9)
+    ),
     "imageform.color.whitepoint_xy": call(name="D65"),
     "imageform.color.whitepoint_xyz": call(name="D65"),
     "imageform.color.xy_to_cct": call(xy=V("xy")),

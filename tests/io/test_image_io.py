@@ -222,3 +222,28 @@ def test_write_is_atomic(tmp_path: Path) -> None:
     with pytest.raises(InvalidInputError):
         write_image(p, np.full((2, 2, 3), 2.0))
     assert p.read_bytes() == before and os.listdir(tmp_path) == ["a.png"]
+
+
+def test_quantising_by_bands_is_the_whole_image_rule(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Issue 25: a large image is quantised a band of rows at a time (bounded temporaries):
+    the same samples, the same clip count, and the same refusal as in one piece."""
+    import imageform.io.image_io as image_io
+
+    monkeypatch.setattr(image_io, "_QUANTISE_BAND", 5 * 7 * 3)  # bands of 5 rows
+    rng = np.random.default_rng(4)
+    a = rng.uniform(-0.1, 1.1, (23, 7, 3))
+    n = int(np.count_nonzero((a < 0) | (a > 1)))
+    for bits, dtype in ((8, np.uint8), (16, np.uint16)):
+        written = write_image(tmp_path / f"a{bits}.png", a, bits=bits, out_of_range="clip")
+        assert written.out_of_range == n
+        expect = np.round(np.clip(a, 0, 1) * (2**bits - 1)).astype(dtype)
+        np.testing.assert_array_equal(read_image(tmp_path / f"a{bits}.png"), expect)
+    with pytest.raises(InvalidInputError, match=rf"^{n} values outside \[0, 1\] \(min -0\.0"):
+        write_image(tmp_path / "e.png", a, out_of_range="error")
+    assert not (tmp_path / "e.png").exists()
+    nan = a.copy()
+    nan[20, 3, 1] = np.nan
+    with pytest.raises(InvalidInputError, match="contains NaN or inf"):
+        write_image(tmp_path / "n.png", nan, out_of_range="clip")

@@ -224,3 +224,25 @@ def test_unit_strings_convert_lengths(value: float, unit: tuple[str, float]) -> 
     name, to_mm = unit
     cfg = validate_scene_dict({"camera": {"focal_length_mm": f"{value!r} {name}"}})
     assert cfg["camera"]["focal_length_mm"] == pytest.approx(value * to_mm, rel=1e-12)
+
+
+def test_the_memory_estimate_counts_textures(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Issue 25: a 10000^2 texture made simulate peak at 9.7 GB although the 1280x720 render
+    fit the budget. The textures count (from their headers, before any is decoded)."""
+    from imageform.io import write_image
+
+    write_image(tmp_path / "tex.png", np.zeros((1000, 1000, 3), np.uint8))
+    scene = {
+        "render": {"width": 64, "height": 48},
+        "objects": [{"type": "image", "centre_m": [0, 0, 0], "path": str(tmp_path / "tex.png")}],
+    }
+    monkeypatch.setenv("IMAGEFORM_MAX_MEMORY", "64MiB")  # the render alone: 1.4 MB
+    with pytest.raises(InvalidInputError) as err:
+        load_scene(scene)
+    msg = str(err.value)
+    assert "objects[0] (image0): its 1000x1000 texture and the 64x48 render need about" in msg
+    assert msg.endswith("(IMAGEFORM_MAX_MEMORY)") and "\n" not in msg
+    monkeypatch.setenv("IMAGEFORM_MAX_MEMORY", "256MiB")
+    assert load_scene(scene).objects[0].name == "image0"

@@ -127,6 +127,74 @@ class _ContiguousRows:
         return out[(slice(None, None, rstep), slice(None, None, cstep), *key[2:])]
 
 
+class _DecodedOnce:
+    """Blocks of a Zarr array whose chunks (TIFF tiles or strips) are larger than the blocks.
+
+    Zarr decodes a whole chunk for every block read from it: a 16384^2 single-tile TIFF was
+    decoded 256 times at ``--chunk 1024``. Here each decoded chunk is kept while the blocks inside
+    it are read, and decoded once (a lock per chunk: the blocks of a row run in parallel). The
+    cache holds the chunks of one block row and the next row of chunks (LRU), so that memory
+    stays bounded by a band of the image, and a chunk is decoded once when blocks go row by row.
+    """
+
+    def __init__(self, z: Any, chunk: int) -> None:
+        import threading
+        from collections import OrderedDict
+
+        self.z, self.shape, self.dtype, self.ndim = z, tuple(z.shape), np.dtype(z.dtype), z.ndim
+        self.cell = (int(z.chunks[0]), int(z.chunks[1]))
+        across = -(-self.shape[1] // self.cell[1])
+        self.capacity = (-(-chunk // self.cell[0]) + 1) * across
+        self.decodes = 0
+        self._cells: OrderedDict[tuple[int, int], np.ndarray] = OrderedDict()
+        self._lock = threading.Lock()
+        self._locks: dict[tuple[int, int], Any] = {}
+
+    def _decoded(self, i: int, j: int) -> np.ndarray:
+        import threading
+
+        key = (i, j)
+        with self._lock:
+            if key in self._cells:
+                self._cells.move_to_end(key)
+                return self._cells[key]
+            lock = self._locks.setdefault(key, threading.Lock())
+        with lock:
+            with self._lock:
+                if key in self._cells:
+                    return self._cells[key]
+            ch, cw = self.cell
+            a = np.asarray(self.z[i * ch : (i + 1) * ch, j * cw : (j + 1) * cw])
+            with self._lock:
+                self.decodes += 1
+                self._cells[key] = a
+                while len(self._cells) > self.capacity:
+                    self._cells.popitem(last=False)
+                self._locks.pop(key, None)
+            return a
+
+    def __getitem__(self, key: Any) -> np.ndarray:
+        if not isinstance(key, tuple):
+            key = (key,)
+        key = key + (slice(None),) * (self.ndim - len(key))
+        if not all(isinstance(k, slice) for k in key[:2]):
+            raise TypeError("expected slices of rows and columns")
+        r0, r1, rstep = key[0].indices(self.shape[0])
+        c0, c1, cstep = key[1].indices(self.shape[1])
+        r1, c1 = max(r1, r0), max(c1, c0)
+        out = np.empty((r1 - r0, c1 - c0, *self.shape[2:]), dtype=self.dtype)
+        ch, cw = self.cell
+        for i in range(r0 // ch, -(-r1 // ch)):
+            for j in range(c0 // cw, -(-c1 // cw)):
+                cell = self._decoded(i, j)
+                a0, a1 = max(r0, i * ch), min(r1, (i + 1) * ch)
+                b0, b1 = max(c0, j * cw), min(c1, (j + 1) * cw)
+                out[a0 - r0 : a1 - r0, b0 - c0 : b1 - c0] = cell[
+                    a0 - i * ch : a1 - i * ch, b0 - j * cw : b1 - j * cw
+                ]
+        return out[(slice(None, None, rstep), slice(None, None, cstep), *key[2:])]
+
+
 def _tiff_lazy(p: Path, chunk: int, da: Any, zarr: Any, opened: list[Any] | None) -> Any:
     import tifffile
 
@@ -358,6 +426,15 @@ def _open_lazy(path: str | Path, chunk: int, opened: list[Any] | None) -> Any:
         z = z["0"]
     if z.ndim != 3 or z.shape[-1] != 3:
         raise InvalidInputError(f"{p}: expected an RGB image (H, W, 3), got shape {z.shape}")
+    if z.chunks[0] > chunk or z.chunks[1] > chunk:  # tiles or strips larger than a block
+        st = p.stat()
+        return da.from_array(
+            _DecodedOnce(z, chunk),
+            chunks=(chunk, chunk, z.shape[-1]),
+            name=f"imageform-decoded-once-{p}-{st.st_size}-{st.st_mtime_ns}-{chunk}",
+            asarray=False,
+            fancy=False,
+        )
     return da.from_zarr(z, chunks=(chunk, chunk, z.shape[-1]))
 
 

@@ -22,7 +22,11 @@
 - **Failures** are collected with their reason (``ExceptionType: message``); the other jobs
   still run. A job on a worker that dies is re-run elsewhere by the scheduler; when no worker
   is left for ``worker_timeout_s`` the run stops with a message (never hangs).
-- **Ctrl-C** cancels the jobs, keeps the manifest of the finished ones and raises
+  The local cluster (no ``scheduler``) runs in a process of its own session
+  (:mod:`imageform.batch._local`): nannies whose workers are killed as they start are replaced,
+  and the run always ends it, with every worker.
+- **Ctrl-C** (the first; a terminal's reaches the run alone, not the local workers) cancels the
+  jobs, closes the cluster, keeps the manifest of the finished ones and raises
   :class:`BatchInterrupted` (done, remaining): the same command resumes.
 """
 
@@ -34,6 +38,7 @@ import json
 import os
 import re
 import shutil
+import threading
 import time
 import uuid
 from collections.abc import Callable, Iterator, Mapping
@@ -346,20 +351,25 @@ def _live_runs(out_root: Path, own: str | None) -> set[str]:
     return live
 
 
-def _run_of(name: str, output: Path) -> str | None:
-    """Return the run id in the name of a temporary file of ``output`` (None for one without)."""
-    token = name.lstrip(".")[len(output.name) + 1 :].split(".", 1)[0]
-    run_id, sep, _ = token.partition("-")
-    return run_id if sep else None
+def _temps_of(output: Path) -> Iterator[tuple[Path, str | None]]:
+    """Yield each temporary file of ``output`` in its folder, with the run id in its name.
 
-
-def _nested_part_pattern(output: Path) -> str:
-    """Return the glob of the files the workflow's own atomic writer makes beside a job's temp file.
-
-    Those are ``..NAME.<random>.tmpSUFFIX.<pid>-<token>.partSUFFIX``: a worker killed while the
-    workflow was still writing leaves one of these, not the temporary file itself.
+    That is ``.NAME.<run>-<token>.tmpSUFFIX`` (``.NAME.<token>.tmpSUFFIX`` without a run id, None),
+    and the names older versions nested inside it (``..NAME.<run>-<token>.tmpSUFFIX.<pid>-...``,
+    one leading dot per level) when a worker was killed while the workflow wrote.
     """
-    return f".{temp_pattern(output)}.*.part*"
+    match = re.compile(
+        rf"\.+{re.escape(output.name)}\.(?:([0-9a-f]{{12}})-)?[0-9a-f]{{12}}\.tmp"
+        rf"(?:{re.escape(output.suffix)})?(?:\..*)?"
+    ).fullmatch
+    try:
+        names = os.listdir(output.parent)
+    except OSError:
+        return
+    for name in names:
+        m = match(name)
+        if m is not None:
+            yield output.parent / name, m.group(1)
 
 
 def _remove_stale_temps(
@@ -373,17 +383,15 @@ def _remove_stale_temps(
     live = _live_runs(out_root, own) if out_root is not None else set()
     n = 0
     for job in jobs:
-        folder = job.output.parent
-        if folder.is_dir():
-            for pattern in (temp_pattern(job.output), _nested_part_pattern(job.output)):
-                for stale in folder.glob(pattern):
-                    if _run_of(stale.name, job.output) in live:
-                        continue
-                    if stale.is_dir() and not stale.is_symlink():
-                        shutil.rmtree(stale, ignore_errors=True)
-                    else:
-                        stale.unlink(missing_ok=True)
-                    n += 1
+        for stale, run_id in _temps_of(job.output):
+            if run_id in live:
+                continue
+            with contextlib.suppress(OSError):
+                if stale.is_dir() and not stale.is_symlink():
+                    shutil.rmtree(stale, ignore_errors=True)
+                else:
+                    stale.unlink(missing_ok=True)
+                n += 1
     return n
 
 
@@ -567,33 +575,73 @@ def run_job(
 # ---------------------------------------------------------------- the run (on the client)
 
 
-def _wait_some(pending: set[Any], timeout: float) -> tuple[set[Any], set[Any]]:
+def _wait_some(
+    pending: set[Any], timeout: float, interrupted: threading.Event | None = None
+) -> tuple[set[Any], set[Any]]:
     """Return ``(finished, still pending)`` once a future is done or ``timeout`` s have passed.
+
+    Also as soon as ``interrupted`` is set.
 
     ``distributed.wait`` is not used: it looks up the default client, which the run's client is not.
     """
     deadline = time.monotonic() + timeout
     while True:
         finished = {f for f in pending if f.done()}
-        if finished or time.monotonic() >= deadline:
+        if finished or time.monotonic() >= deadline or (interrupted and interrupted.is_set()):
             return finished, pending - finished
         time.sleep(0.02)
 
 
 @contextlib.contextmanager
-def _client(scheduler: str | None, n_workers: int) -> Iterator[Any]:
+def _interrupt_flag() -> Iterator[threading.Event]:
+    """Turn the first Ctrl-C (SIGINT) into a flag the run checks between jobs.
+
+    The run then stops in order: it cancels its jobs and closes the cluster before
+    :class:`BatchInterrupted` is raised. A second Ctrl-C interrupts at once. Outside the main
+    thread (no signal handler can be set there) the flag is never set, and Ctrl-C raises
+    ``KeyboardInterrupt`` where it lands.
+    """
+    import signal
+
+    flag = threading.Event()
+    if threading.current_thread() is not threading.main_thread():
+        yield flag
+        return
+
+    def handler(signum: int, frame: Any) -> None:
+        if flag.is_set():
+            raise KeyboardInterrupt
+        flag.set()
+
+    old = signal.signal(signal.SIGINT, handler)
+    try:
+        yield flag
+    finally:
+        signal.signal(signal.SIGINT, old)
+
+
+@contextlib.contextmanager
+def _client(
+    scheduler: str | None, n_workers: int, interrupted: threading.Event | None = None
+) -> Iterator[Any]:
     """Yield the run's client, never dask's default scheduler.
 
     The run submits to it explicitly: default clients closed out of order (two runs in one process,
     in threads) leave dask's global ``scheduler`` setting naming a closed client, which breaks every
-    later ``dask.compute`` in the process.
+    later ``dask.compute`` in the process. Without ``scheduler``, a local cluster of ``n_workers``
+    runs in a process of its own session (:mod:`imageform.batch._local`: a terminal's Ctrl-C does
+    not reach its workers, killed workers are started again, and it always ends with the run).
     """
-    import logging
-
     from imageform._optional import require
 
     distributed = require("distributed", what="imageform batch")
-    if scheduler:
+    local = None
+    if not scheduler:
+        from imageform.batch import _local
+
+        local = _local.start(n_workers, stop=None if interrupted is None else interrupted.is_set)
+        scheduler = local.address
+    try:
         try:
             # timeout: distributed.comm.timeouts.connect
             client = distributed.Client(scheduler, set_as_default=False)
@@ -601,20 +649,9 @@ def _client(scheduler: str | None, n_workers: int) -> Iterator[Any]:
             raise InvalidInputError(f"cannot reach the scheduler {scheduler}: {exc}") from None
         with client:
             yield client
-        return
-    cluster = distributed.LocalCluster(
-        n_workers=n_workers,
-        threads_per_worker=1,
-        processes=True,
-        host="127.0.0.1",
-        # ":0", not None: with None the scheduler's HTTP server still binds :8787, and two
-        # clusters (two runs, pytest-xdist) collide on it
-        dashboard_address=":0",
-        silence_logs=logging.CRITICAL,
-        preload=["imageform.batch._worker_setup"],
-    )
-    with cluster, distributed.Client(cluster, set_as_default=False) as client:
-        yield client
+    finally:
+        if local is not None:
+            local.close()
 
 
 def run_batch(
@@ -720,9 +757,13 @@ def run_batch(
             workers = n_workers or min(os.cpu_count() or 1, len(todo))
             state = _Manifest(out_root, manifest, producer)
             try:
-                with _client(scheduler, workers) as client:
+                with (
+                    _interrupt_flag() as interrupted,
+                    _client(scheduler, workers, interrupted) as client,
+                ):
                     _run_on(
                         client,
+                        interrupted,
                         wf.name,
                         todo,
                         opts,
@@ -769,6 +810,7 @@ class _Manifest:
 
 def _run_on(
     client: Any,
+    interrupted: threading.Event,
     name: str,
     todo: list[Job],
     opts: Options,
@@ -814,8 +856,10 @@ def _run_on(
         with bar:
             task = bar.add_task(f"batch {name}", total=len(futures))
             while pending:
-                finished, pending = _wait_some(pending, timeout=1.0)
+                finished, pending = _wait_some(pending, 1.0, interrupted)
                 if not finished:
+                    if interrupted.is_set():
+                        raise KeyboardInterrupt
                     if client.scheduler_info().get("workers"):
                         no_worker_since = None
                     elif no_worker_since is None:
@@ -831,7 +875,12 @@ def _run_on(
                 for fut in finished:
                     job = by_key[fut.key]
                     try:
-                        out = fut.result()
+                        # a bounded wait: the worker that holds a finished job's (small) result
+                        # may be killed before it is fetched; the job then runs again
+                        out = fut.result(timeout=10)
+                    except TimeoutError:
+                        pending.add(fut)
+                        continue
                     except Exception as exc:  # the task itself died (e.g. KilledWorker)
                         out = {"ok": False, "error": f"{type(exc).__name__}: {exc}"}
                     if out["ok"]:
@@ -845,6 +894,8 @@ def _run_on(
                     bar.advance(task)
                     if on_result is not None:
                         on_result(res)
+                if interrupted.is_set() and pending:
+                    raise KeyboardInterrupt
     finally:
         if pending:
             with contextlib.suppress(Exception):

@@ -42,6 +42,22 @@ def _options(wf: Workflow, kw: dict[str, Any]) -> Any:
         raise click.UsageError(str(exc)) from None
 
 
+def _quiet_dask() -> None:
+    """Silence dask's own warnings in this process.
+
+    Such as ``Couldn't gather 1 keys, rescheduling`` after a worker is killed: jobs report
+    their errors, the run its summary.
+    """
+    import contextlib
+    import logging
+
+    with contextlib.suppress(ImportError):  # without it, run_batch says what to install
+        import distributed  # noqa: F401  (its loggers are configured on import)
+    for name in list(logging.root.manager.loggerDict):
+        if name == "distributed" or name.startswith("distributed."):
+            logging.getLogger(name).setLevel(logging.ERROR)
+
+
 def _batch_command(wf: Workflow) -> click.Command:
     params: list[click.Parameter] = [
         click.Argument(["glob_pattern"], metavar="'GLOB'", required=True),
@@ -74,6 +90,7 @@ def _batch_command(wf: Workflow) -> click.Command:
         opts = _options(wf, kw)
         if Path(out).is_dir():  # no job replaces a FIFO or a device (the runner renames over)
             refuse_special_inside(out)
+        _quiet_dask()
         try:
             report = run_batch(
                 wf.name,

@@ -55,8 +55,10 @@ from imageform.errors import DegenerateConfigurationError, InvalidInputError
 __all__ = [
     "WHITE_BALANCE_METHODS",
     "WhiteBalanceResult",
+    "apply_white_balance_gains",
     "estimate_illuminant",
     "white_balance",
+    "white_balance_gains",
 ]
 
 #: Methods of :func:`white_balance` and :func:`estimate_illuminant`.
@@ -413,16 +415,79 @@ def white_balance(
     norm = check_option(normalize, ("mean", "green"), "gain normalisation", "normalize")
     _check_params(m, percentile, p, sigma, illuminant, cct)
     xp, lin, tname = _linear(image, transfer, channel_axis)
+    gains = _gains(xp, lin, m, norm, percentile, p, sigma, illuminant, cct, space)
+    out = _apply(xp, lin, gains, tname, as_bool(clip, "clip"))
+    return WhiteBalanceResult._make((out, gains))  # from checked input: no second pass
+
+
+def _gains(
+    xp: Any,
+    lin: Any,
+    m: str,
+    norm: str,
+    percentile: Any,
+    p: float,
+    sigma: float,
+    illuminant: Any,
+    cct: float | None,
+    space: str,
+) -> Any:
     e = _estimate(xp, lin, m, percentile, p, sigma, illuminant, cct, space)
     if is_dask_namespace(xp):
         e = e.map_blocks(_check_estimate, dtype=e.dtype)  # lazily: raises at compute
     elif not bool(xp.all(e > 0)):
         _check_estimate(np.asarray(e))
     ref = xp.mean(e, axis=-1, keepdims=True) if norm == "mean" else e[..., 1:2]
-    gains = ref / e
+    return ref / e
+
+
+def _apply(xp: Any, lin: Any, gains: Any, tname: str, clip: bool) -> Any:
     out = lin * gains[..., None, None, :]
-    if as_bool(clip, "clip"):
+    if clip:
         out = xp.clip(out, 0.0, 1.0)
     if tname != "linear":
         out = encode(out, tname)
-    return WhiteBalanceResult._make((out, gains))  # from checked input: no second pass
+    return out
+
+
+def white_balance_gains(
+    image: object,
+    method: str = "gray_world",
+    *,
+    transfer: str = "srgb",
+    normalize: str = "mean",
+    percentile: float | None = None,
+    p: float = 6.0,
+    sigma: float = 1.0,
+    illuminant: Any = None,
+    cct: float | None = None,
+    space: str = "srgb",
+) -> Any:
+    """Return the gains :func:`white_balance` finds for ``image`` (not applied).
+
+    With :func:`apply_white_balance_gains`, the same as :func:`white_balance`, a band of rows at a
+    time (the ``imageform white-balance`` command: bounded memory). Internal.
+    """
+    m, percentile = _method(method, percentile)
+    norm = check_option(normalize, ("mean", "green"), "gain normalisation", "normalize")
+    _check_params(m, percentile, p, sigma, illuminant, cct)
+    a = image if isinstance(image, np.ndarray) else None
+    if a is None or a.ndim != 3 or a.shape[0] < 2:
+        xp, lin, _ = _linear(image, transfer, -1)
+        return _gains(xp, lin, m, norm, percentile, p, sigma, illuminant, cct, space)
+    # the linear image made a band of rows at a time (the same values: decoding is pixel by
+    # pixel), so that decoding's float64 temporaries never span the whole image
+    rows = max(1, 2**20 // max(a.shape[1], 1))
+    lin = None
+    for r0 in range(0, a.shape[0], rows):
+        xp, band, _ = _linear(a[r0 : r0 + rows], transfer, -1)
+        if lin is None:
+            lin = np.empty(a.shape, dtype=band.dtype)
+        lin[r0 : r0 + rows] = band
+    return _gains(xp, lin, m, norm, percentile, p, sigma, illuminant, cct, space)
+
+
+def apply_white_balance_gains(image: object, gains: Any, *, transfer: str = "srgb") -> Any:
+    """Apply ``gains`` (from :func:`white_balance_gains`) as :func:`white_balance` does."""
+    xp, lin, tname = _linear(image, transfer, -1)
+    return _apply(xp, lin, gains, tname, False)

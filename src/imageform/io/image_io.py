@@ -491,7 +491,42 @@ def _pixel_limit(value: object) -> int:
 # ---------------------------------------------------------------- writing
 
 
+#: Samples quantised at a time (a band of rows): the float temporaries of quantising a 100 Mpx
+#: image stay a few times this, not a few times the image.
+_QUANTISE_BAND = 2**23
+
+
 def _quantise(a: np.ndarray, bits: int, out_of_range: str, path: Path) -> tuple[np.ndarray, int]:
+    """Return ``a`` as ``bits``-bit integers and how many values were outside [0, 1] (clipped).
+
+    A large image is quantised a band of rows at a time (same values, bounded temporaries).
+    """
+    top = 2**bits - 1
+    if a.dtype in (np.uint8, np.uint16) and np.iinfo(a.dtype).max == top:
+        return a, 0
+    per_row = a[:1].size
+    if a.ndim < 2 or a.size <= _QUANTISE_BAND or per_row == 0:
+        return _quantise_all(a, bits, out_of_range, path)
+    rows = max(1, _QUANTISE_BAND // per_row)
+    out = np.empty(a.shape, dtype=np.uint8 if bits == 8 else np.uint16)
+    outside = 0
+    for r0 in range(0, a.shape[0], rows):
+        q, n = _quantise_all(a[r0 : r0 + rows], bits, "clip", path)
+        out[r0 : r0 + rows] = q
+        outside += n
+    if outside and out_of_range == "error":
+        lo, hi = float(a.min()), float(a.max())
+        raise InvalidInputError(
+            f"{outside} values outside [0, 1] (min {lo:.4g}, max {hi:.4g}) cannot be stored in "
+            f"the {bits}-bit {path.name}; keep them in a float .tif or .npy, or clip them "
+            "(--out-of-range clip)"
+        )
+    return out, outside
+
+
+def _quantise_all(
+    a: np.ndarray, bits: int, out_of_range: str, path: Path
+) -> tuple[np.ndarray, int]:
     dtype = np.uint8 if bits == 8 else np.uint16
     top = 2**bits - 1
     if a.dtype in (np.uint8, np.uint16):

@@ -306,7 +306,45 @@ def _object_size(o: ObjectConfig, base: Path | None) -> tuple[float, float]:
     return float(o.size_m[0]), float(o.size_m[1])
 
 
+#: Bytes a texture pixel costs while a scene is loaded and rendered (the decoded samples, the
+#: float64 encoded and linear copies and their temporaries): issue 25 measured 9.7 GB for a
+#: 10000^2 texture.
+TEXTURE_BYTES_PER_PIXEL = 100
+
+
+def _check_texture_memory(cfg: SceneConfig, base: Path | None) -> None:
+    """Refuse, before any texture is read, a scene whose render and textures exceed the budget.
+
+    The render's own estimate (:func:`~imageform.simulate.budget.estimate_memory_bytes`) plus
+    :data:`TEXTURE_BYTES_PER_PIXEL` per texture pixel (from the files' headers), against the
+    memory budget (``IMAGEFORM_MAX_MEMORY``).
+    """
+    from imageform._validate import memory_limit
+    from imageform.io import image_info
+    from imageform.simulate.budget import estimate_memory_bytes, format_bytes
+
+    textures = []
+    for i, o in enumerate(cfg.objects):
+        if isinstance(o, ImageConfig):
+            info = image_info(resolve_path(o.path, base))
+            textures.append((i, o, info.width, info.height))
+    if not textures:
+        return
+    w, h = cfg.render.width, cfg.render.height
+    need = estimate_memory_bytes(w, h)
+    need += sum(tw * th * TEXTURE_BYTES_PER_PIXEL for _, _, tw, th in textures)
+    budget = memory_limit()
+    if need > budget:
+        i, o, tw, th = max(textures, key=lambda t: t[2] * t[3])
+        raise InvalidInputError(
+            f"objects[{i}] ({o.name}): its {tw}x{th} texture and the {w}x{h} render need about "
+            f"{format_bytes(need)}, more than the memory budget of {format_bytes(budget)} "
+            "(IMAGEFORM_MAX_MEMORY)"
+        )
+
+
 def _objects(cfg: SceneConfig, base: Path | None) -> tuple[SceneObject, ...]:
+    _check_texture_memory(cfg, base)
     out = []
     for o in cfg.objects:
         right, down, _ = _object_frame(o)

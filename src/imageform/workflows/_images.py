@@ -15,7 +15,7 @@ from typing import Any
 from imageform.errors import InvalidInputError
 from imageform.workflows._spec import Options, Run, option
 
-__all__ = ["ImageIn", "ImageOut", "read", "write"]
+__all__ = ["ImageIn", "ImageOut", "read", "write", "write_mapped"]
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -101,3 +101,98 @@ def write(run: Run, path: Path, image: Any, opts: Any, *, like: Any = None) -> i
             "(--out-of-range error refuses instead)"
         )
     return written.out_of_range
+
+
+#: Bytes of float64 values one band of rows holds in :func:`write_mapped` (its temporaries are a
+#: few times that): the band's height follows the image's width and channels.
+BAND_BYTES = 8 * 2**20
+
+
+def band_rows(shape: tuple[int, ...], band_bytes: int = BAND_BYTES) -> int:
+    """Rows of an image of ``shape`` (H, W[, C]) in one band of ``band_bytes`` float64 values."""
+    per_row = 8 * int(shape[1]) * (int(shape[2]) if len(shape) > 2 else 1)
+    return max(1, band_bytes // max(per_row, 1))
+
+
+def write_mapped(
+    run: Run, path: Path, image: Any, fn: Any, opts: Any, *, like: Any = None
+) -> tuple[int, Any, Any, Any, tuple[int, ...]]:
+    """Write ``fn(image)`` to ``path``, computed a band of rows at a time.
+
+    ``fn`` works pixel by pixel: a colour conversion, a CVD simulation, white-balance gains. The
+    same file as ``write(run, path, fn(image), opts, like=like)``, but the whole result never
+    exists as floats: each band is computed and stored straight as the output's samples (8 or
+    16-bit integers for PNG/JPEG and ``--bits``, float32 for a float TIFF), so that a 100 Mpx
+    image goes through in a fraction of the memory budget (``IMAGEFORM_MAX_MEMORY``).
+
+    Returns the clip count (values outside [0, 1] in an integer output), the computed dtype, the
+    per-channel minimum and maximum of the computed values, and the result's shape.
+    """
+    import numpy as np
+
+    from imageform.io import image_format, write_image
+
+    fmt = image_format(path)
+    bits = getattr(opts, "bits", None)
+    policy = getattr(opts, "out_of_range", "clip")
+    a = np.asarray(image)
+    if fmt in ("png", "jpeg") and bits is None:
+        bits = 16 if like is not None and np.asarray(like).dtype == np.uint16 else 8
+        if fmt == "jpeg":
+            bits = 8
+    integer = fmt != "npy" and bits is not None
+    depth = int(bits or 8)
+    h = a.shape[0]
+    rows = band_rows(a.shape)
+    dest: Any = None
+    dtype: Any = None
+    lo: Any = None
+    hi: Any = None
+    n_out = 0
+    for r0 in range(0, h, rows):
+        band = np.asarray(fn(a[r0 : r0 + rows]))
+        if dest is None:
+            dtype = band.dtype
+            if integer:
+                store: Any = np.uint8 if depth == 8 else np.uint16
+            elif fmt == "tiff" and band.dtype.kind == "f":
+                store = np.float32
+            else:
+                store = band.dtype
+            dest = np.empty((h, *band.shape[1:]), dtype=store)
+        flat = band.reshape(-1, band.shape[-1] if band.ndim == 3 else 1)
+        b_lo, b_hi = flat.min(axis=0), flat.max(axis=0)
+        lo = b_lo if lo is None else np.minimum(lo, b_lo)
+        hi = b_hi if hi is None else np.maximum(hi, b_hi)
+        if integer and band.dtype.kind == "f":  # as write_image quantises (NaN/inf refused)
+            if not np.all(np.isfinite(band)):
+                raise InvalidInputError(f"the image to write to {path} contains NaN or inf")
+            n_out += int(np.count_nonzero((band < 0) | (band > 1)))
+            top = 2**depth - 1
+            dest[r0 : r0 + rows] = np.round(np.clip(band, 0.0, 1.0) * top).astype(dest.dtype)
+        elif integer:  # integer samples: rescaled by write_image's rule
+            top, src_top = 2**depth - 1, np.iinfo(band.dtype).max
+            dest[r0 : r0 + rows] = (
+                band
+                if src_top == top
+                else np.round(band.astype(np.float64) * (top / src_top)).astype(dest.dtype)
+            )
+        else:
+            dest[r0 : r0 + rows] = band
+    if n_out and policy == "error":
+        raise InvalidInputError(
+            f"{n_out} values outside [0, 1] (min {float(np.min(lo)):.4g}, max "
+            f"{float(np.max(hi)):.4g}) cannot be stored in the {bits}-bit {path.name}; keep "
+            "them in a float .tif or .npy, or clip them (--out-of-range clip)"
+        )
+    shape = tuple(dest.shape)
+    if dest.ndim == 3 and dest.shape[-1] == 1 and fmt != "npy":
+        dest = dest[..., 0]
+    write_image(run.file(path), dest, bits=bits, out_of_range=policy)
+    if n_out:
+        run.note(
+            f"note: {n_out} values outside [0, 1] were clipped to fit the "
+            f"{bits}-bit {path.name}; write .tif or .npy to keep them "
+            "(--out-of-range error refuses instead)"
+        )
+    return n_out, dtype, lo, hi, shape

@@ -7,7 +7,7 @@ from pathlib import Path
 from typing import Any
 
 from imageform.errors import InvalidInputError
-from imageform.workflows._images import ImageIn, ImageOut, read, write
+from imageform.workflows._images import ImageIn, ImageOut, read, write, write_mapped
 from imageform.workflows._spec import (
     Input,
     Options,
@@ -113,8 +113,6 @@ class ConvertOptions(ImageIn, ImageOut):
 
 def convert(run: Run, opts: ConvertOptions, *, out: Path, image: Path) -> Result:
     """``imageform convert``: one image file from one colour space to another."""
-    import numpy as np
-
     from imageform.color import SPACES, convert, path
 
     src, dst = opts.src, opts.dst
@@ -123,20 +121,21 @@ def convert(run: Run, opts: ConvertOptions, *, out: Path, image: Path) -> Result
     img = read(image, opts)
     if src != "gray" and img.shape[-1] == 1:
         raise InvalidInputError(f"{image} is a grey image; convert it with --from gray")
-    result = np.asarray(convert(img, src, dst, **opts.params()))
-    n_out = write(run, out, result, opts, like=img)
-    flat = result.reshape(-1, result.shape[-1])
+    params = opts.params()
+    n_out, dtype, lo, hi, shape = write_mapped(
+        run, out, img, lambda band: convert(band, src, dst, **params), opts, like=img
+    )
     summary = {
         "input": image,
         "output": out,
         "from": src,
         "to": dst,
         "path": [e.function for e in edges],
-        "shape": list(result.shape),
-        "dtype": str(result.dtype),
+        "shape": list(shape),
+        "dtype": str(dtype),
         "channels": SPACES[dst][1],
-        "min": flat.min(axis=0),
-        "max": flat.max(axis=0),
+        "min": lo,
+        "max": hi,
         "values_clipped": n_out,
     }
     how = " -> ".join(summary["path"]) or "copy"
@@ -216,8 +215,6 @@ def white_balance(run: Run, opts: WhiteBalanceOptions, *, out: Path, image: Path
     """``imageform white-balance``: estimate the illuminant and divide it out in linear light."""
     import numpy as np
 
-    from imageform.color.white_balance import white_balance as balance
-
     img = read(image, opts)
     if img.shape[-1] != 3:
         raise InvalidInputError(f"{image}: expected an RGB image, got {img.shape[-1]} channel(s)")
@@ -234,9 +231,17 @@ def white_balance(run: Run, opts: WhiteBalanceOptions, *, out: Path, image: Path
         )
         _charts.notes(run, chart, flag)
         balanced, gains = chart_white_balance(img, chart.patches, normalize=opts.normalize)
-    else:
-        balanced, gains = balance(img, opts.method, **opts.params())
-    n_out = write(run, out, np.asarray(balanced), opts, like=img)
+        n_out = write(run, out, np.asarray(balanced), opts, like=img)
+    else:  # the gains from the whole image, applied a band of rows at a time
+        from imageform.color.white_balance import (
+            apply_white_balance_gains,
+            white_balance_gains,
+        )
+
+        gains = np.asarray(white_balance_gains(img, opts.method, **opts.params()))
+        n_out = write_mapped(
+            run, out, img, lambda band: apply_white_balance_gains(band, gains), opts, like=img
+        )[0]
     if chart is not None and opts.overlay is not None:
         _charts.write_overlay(run, opts.overlay, chart, flag)
     g = [float(v) for v in np.asarray(gains)]
@@ -353,15 +358,19 @@ class CvdOptions(ImageIn, ImageOut):
 
 def cvd(run: Run, opts: CvdOptions, *, out: Path, image: Path) -> Result:
     """``imageform cvd``: what a colour-vision deficient observer sees (in linear RGB)."""
-    import numpy as np
-
     from imageform.color.cvd import simulate_cvd
 
     arr = read(image, opts)
     if arr.shape[-1] != 3:
         raise InvalidInputError(f"{image}: expected an RGB image, got {arr.shape[-1]} channel(s)")
-    sim = np.asarray(simulate_cvd(arr, opts.deficiency, opts.severity, opts.method))
-    n_out = write(run, out, sim, opts, like=arr)
+    n_out = write_mapped(
+        run,
+        out,
+        arr,
+        lambda band: simulate_cvd(band, opts.deficiency, opts.severity, opts.method),
+        opts,
+        like=arr,
+    )[0]
     summary = {
         "input": image,
         "output": out,
