@@ -170,37 +170,17 @@ def test_user_cache_dir_follows_xdg(monkeypatch: pytest.MonkeyPatch, tmp_path: P
     assert jit.user_cache_dir() == Path.home() / ".cache" / "imageform" / "numba"
 
 
-_PROBE = r"""
-import json, os, sys
-from imageform._kernels.jit import cache_location, njit
-import numba
-
-@njit
-def probe(x):
-    return x * 2.0 + 1.0
-
-value = probe(1.5)
-where, reason = cache_location()
-print(json.dumps({"value": value, "where": str(where), "reason": reason,
-                  "numba": numba.config.CACHE_DIR, "env": os.environ.get("NUMBA_CACHE_DIR"),
-                  "hits": sum(probe.stats.cache_hits.values()),
-                  "misses": sum(probe.stats.cache_misses.values())}))
-"""
-
-
 def _read_only_copy(tmp_path: Path) -> Path:
     """A copy of imageform whose folders cannot be written (as an installed wheel, chmod
-    a-w); the probe script lives in it too, so that numba's in-tree cache is ruled out."""
+    a-w)."""
     site = tmp_path / "site"
     shutil.copytree(
         SRC / "imageform", site / "imageform", ignore=shutil.ignore_patterns("__pycache__")
     )
-    (site / "probe_kernel.py").write_text(_PROBE)
     # where numba's in-tree cache would go, a plain file: no one, root included, can make
     # the folder there (root writes through chmod a-w, and a checkout or a virtual
     # environment under a private folder cannot be read by another user)
-    for folder in (site, site / "imageform" / "_kernels"):
-        (folder / "__pycache__").write_text("not a folder\n")
+    (site / "imageform" / "_kernels" / "__pycache__").write_text("not a folder\n")
     for root, _dirs, files in os.walk(site):
         for name in files:
             p = Path(root) / name
@@ -219,28 +199,13 @@ def test_read_only_package_caches_in_the_user_cache() -> None:
     home.chmod(0o777)
     env = {k: v for k, v in os.environ.items() if not k.startswith(("NUMBA_", "_IMAGEFORM"))}
     env.update(PYTHONPATH=str(site), HOME=str(home), XDG_CACHE_HOME=str(home / "cache"))
-    runs = []
     try:
-        for _ in range(2):
-            done = subprocess.run(
-                [sys.executable, str(site / "probe_kernel.py")],
-                env=env,
-                capture_output=True,
-                text=True,
-                check=False,
-                cwd=home,
-            )
-            assert done.returncode == 0, done.stderr[-2000:]
-            runs.append(json.loads(done.stdout))
-        expected = str(home / "cache" / "imageform" / "numba")
-        first, second = runs
-        assert first["value"] == second["value"] == 4.0
-        assert first["reason"] == "user" and first["where"] == expected
-        assert first["numba"] == first["env"] == expected
+        first, second = (json.loads(_python(_SHARED_PROBE, env)) for _ in range(2))
+        expected = home / "cache" / "imageform" / "numba"
+        assert Path(first["where"]).parent == expected
         assert (first["misses"], first["hits"]) == (1, 0)
         assert (second["misses"], second["hits"]) == (0, 1), "the second process compiled again"
-        cached = list(Path(expected).rglob("probe_kernel.probe-*.nbi"))
-        assert len(cached) == 1
+        assert len(list(expected.rglob("color_simple._hsv_serial-*.nbi"))) == 1
         assert not list(site.rglob("*.nbi")), "nothing is written beside the read-only source"
         assert (site / "imageform" / "_kernels" / "__pycache__").is_file()
     finally:
@@ -249,41 +214,39 @@ def test_read_only_package_caches_in_the_user_cache() -> None:
         shutil.rmtree(tmp_path, ignore_errors=True)
 
 
+def _cache_json(env: dict[str, str], *args: str) -> dict[str, Any]:
+    argv = [sys.executable, "-m", "imageform", "cache", "--json", *args]
+    done = subprocess.run(argv, env=env, capture_output=True, text=True, check=False)
+    assert done.returncode == 0, done.stderr
+    out: dict[str, Any] = json.loads(done.stdout)
+    return out
+
+
 def test_numba_cache_dir_wins(tmp_path: Path) -> None:
     env = {k: v for k, v in os.environ.items() if not k.startswith(("NUMBA_", "_IMAGEFORM"))}
     env.update(PYTHONPATH=str(SRC), NUMBA_CACHE_DIR=str(tmp_path / "mine"), MPLBACKEND="Agg")
-    done = subprocess.run(
-        [sys.executable, "-m", "imageform", "cache", "--json"],
-        env=env,
-        capture_output=True,
-        text=True,
-        check=False,
-    )
-    assert done.returncode == 0, done.stderr
-    out = json.loads(done.stdout)
-    assert out["cache_dir"] == str(tmp_path / "mine") and out["reason"] == "NUMBA_CACHE_DIR"
-    assert out["files"] == 0
+    out = _cache_json(env)
+    assert Path(out["cache_dir"]).parent == tmp_path / "mine"
+    assert out["reason"] == "NUMBA_CACHE_DIR" and out["files"] == 0
 
 
 def test_cache_clear_removes_only_imageforms_kernels(tmp_path: Path) -> None:
-    import hashlib
-
-    src = os.path.abspath(os.path.dirname(jit.__file__))
-    ours = tmp_path / "_".join([os.path.basename(src), hashlib.sha1(src.encode()).hexdigest()])
-    other = tmp_path / "elsewhere_0123"
-    for folder in (ours, other):
-        folder.mkdir()
-        (folder / "k.f-1.py311.nbi").write_bytes(b"x")
-        (folder / "k.f-1.py311.1.nbc").write_bytes(b"yy")
+    """--clear empties this version's folder and removes imageform's stale ones (another
+    version, edited kernels); other numba caches under the same root stay."""
     env = {k: v for k, v in os.environ.items() if not k.startswith(("NUMBA_", "_IMAGEFORM"))}
     env.update(PYTHONPATH=str(SRC), NUMBA_CACHE_DIR=str(tmp_path))
-    argv = [sys.executable, "-m", "imageform", "cache", "--json"]
-    listed = json.loads(subprocess.run(argv, env=env, capture_output=True, check=True).stdout)
+    ours = Path(_cache_json(env)["cache_dir"])
+    stale = tmp_path / "imageform-0.0.1-0123456789abcdef0123"
+    other = tmp_path / "elsewhere_0123"
+    for folder in (ours, stale, other):
+        folder.mkdir(exist_ok=True)
+        (folder / "k.f-1.py311.nbi").write_bytes(b"x")
+        (folder / "k.f-1.py311.1.nbc").write_bytes(b"yy")
+    listed = _cache_json(env)
     assert (listed["files"], listed["bytes"]) == (2, 3)
-    done = subprocess.run([*argv, "--clear"], env=env, capture_output=True, check=True)
-    cleared = json.loads(done.stdout)
-    assert (cleared["removed"], cleared["files"]) == (2, 0)
-    assert not list(ours.iterdir()) and len(list(other.iterdir())) == 2
+    cleared = _cache_json(env, "--clear")
+    assert (cleared["removed"], cleared["files"]) == (4, 0)
+    assert not list(ours.iterdir()) and not stale.exists() and len(list(other.iterdir())) == 2
 
 
 def test_warm_runs_each_command_and_reports_failures(
@@ -299,3 +262,87 @@ def test_warm_runs_each_command_and_reports_failures(
     errors = {name: why for name, _, why in done}
     assert errors["--version"] == ""
     assert "no-such-command" in errors["no-such-command"]
+
+
+# ---- one cache per machine (issue 25): the same kernels, wherever they are, share it ----
+
+_SHARED_PROBE = r"""
+import json, sys
+import numpy as np
+from imageform._kernels import color_simple as k
+from imageform._kernels.jit import cache_location
+src = np.zeros(6, np.float32); dst = np.empty_like(src); stats = np.zeros((1, 2))
+k._hsv_serial(src, dst, np.float32(1.0), stats, 0)
+st = k._hsv_serial.stats
+print(json.dumps({"hits": sum(st.cache_hits.values()), "misses": sum(st.cache_misses.values()),
+                  "where": str(cache_location()[0]), "file": k.__file__}))
+"""
+
+
+def _copy_package(dest: Path) -> Path:
+    """A copy of imageform at ``dest``: new paths, new file times (shutil.copy, not copy2)."""
+    shutil.copytree(
+        SRC / "imageform",
+        dest / "imageform",
+        ignore=shutil.ignore_patterns("__pycache__"),
+        copy_function=shutil.copy,
+    )
+    return dest
+
+
+def _probe(site: Path, cache: Path) -> dict[str, Any]:
+    env = {k: v for k, v in os.environ.items() if not k.startswith(("NUMBA_", "_IMAGEFORM"))}
+    env.update(PYTHONPATH=str(site), NUMBA_CACHE_DIR=str(cache))
+    out: dict[str, Any] = json.loads(_python(_SHARED_PROBE, env))
+    assert out["file"].startswith(str(site))
+    return out
+
+
+def test_two_copies_of_the_package_share_one_cache(tmp_path: Path) -> None:
+    """A second clone (or reinstall) of the same code at another path loads what the first
+    compiled: numba's own cache sub-folder is named after the source folder's path, so it
+    compiled everything again."""
+    a = _copy_package(tmp_path / "clone-a")
+    b = _copy_package(tmp_path / "clone-b")
+    cache = tmp_path / "cache"
+    first, second = _probe(a, cache), _probe(b, cache)
+    assert (first["misses"], first["hits"]) == (1, 0)
+    assert (second["misses"], second["hits"]) == (0, 1), "the second clone compiled again"
+    assert first["where"] == second["where"]
+    assert Path(first["where"]).parent == cache
+    assert Path(first["where"]).name.startswith("imageform-")
+
+
+def test_new_file_times_same_content_still_hit(tmp_path: Path) -> None:
+    site = _copy_package(tmp_path / "site")
+    cache = tmp_path / "cache"
+    assert _probe(site, cache)["misses"] == 1
+    for path in (site / "imageform" / "_kernels").glob("*.py"):
+        os.utime(path, (1.0e9, 1.0e9))  # a checkout, an unpacked wheel: other times
+    again = _probe(site, cache)
+    assert (again["misses"], again["hits"]) == (0, 1)
+
+
+def test_an_edited_kernel_file_is_never_loaded_stale(tmp_path: Path) -> None:
+    """Editing any kernel file (here another one than the probe's: a kernel inlines the jitted
+    functions it calls from other files) gives a new cache folder: nothing stale is loaded."""
+    site = _copy_package(tmp_path / "site")
+    cache = tmp_path / "cache"
+    first = _probe(site, cache)
+    other = site / "imageform" / "_kernels" / "distortion.py"
+    other.write_text(other.read_text() + "\n# edited\n")
+    again = _probe(site, cache)
+    assert (again["misses"], again["hits"]) == (1, 0)
+    assert again["where"] != first["where"]
+
+
+def test_without_numba_cache_dir_the_users_cache_folder(tmp_path: Path) -> None:
+    """No NUMBA_CACHE_DIR: the kernels are cached in the user's cache folder, per machine,
+    not in ``__pycache__`` beside the source (which is per clone)."""
+    site = _copy_package(tmp_path / "site")
+    env = {k: v for k, v in os.environ.items() if not k.startswith(("NUMBA_", "_IMAGEFORM"))}
+    env.update(PYTHONPATH=str(site), XDG_CACHE_HOME=str(tmp_path / "xdg"))
+    out = json.loads(_python(_SHARED_PROBE, env))
+    assert Path(out["where"]).parent == tmp_path / "xdg" / "imageform" / "numba"
+    assert list(Path(out["where"]).glob("color_simple._hsv_serial-*.nbi"))
+    assert not list(site.rglob("*.nbi")), "nothing is written beside the source"
