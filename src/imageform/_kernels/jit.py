@@ -38,8 +38,10 @@ import hashlib
 import os
 import sys
 import tempfile
+import threading
 import types
 from collections.abc import Callable
+from concurrent.futures import Future, ThreadPoolExecutor
 from pathlib import Path
 from typing import Any, Literal
 
@@ -53,6 +55,7 @@ __all__ = [
     "configure_cache",
     "njit",
     "parallel_pays",
+    "run_tasks",
     "serial_twin",
     "user_cache_dir",
 ]
@@ -245,3 +248,57 @@ def parallel_pays(n: int, threshold: int) -> bool:
     1.005 ms against 0.954 ms serially).
     """
     return n >= threshold and numba.get_num_threads() > 1
+
+
+_POOL: ThreadPoolExecutor | None = None
+_POOL_SIZE = 0
+_POOL_LOCK = threading.Lock()
+
+
+def _reset_pool() -> None:  # in a forked child: the parent's threads do not exist there
+    global _POOL, _POOL_SIZE
+    _POOL, _POOL_SIZE = None, 0
+
+
+if hasattr(os, "register_at_fork"):
+    os.register_at_fork(after_in_child=_reset_pool)
+
+
+def _pool(workers: int) -> ThreadPoolExecutor:
+    global _POOL, _POOL_SIZE
+    with _POOL_LOCK:
+        if _POOL is None or workers > _POOL_SIZE:
+            if _POOL is not None:
+                _POOL.shutdown(wait=False)
+            _POOL = ThreadPoolExecutor(workers, thread_name_prefix="imageform-kernel")
+            _POOL_SIZE = workers
+        return _POOL
+
+
+def run_tasks(kernel: Any, n_tasks: int, *args: Any, threads: int | None = None) -> None:
+    """Run ``kernel(t0, t1, *args)`` over the tasks ``0 .. n_tasks - 1`` on numba's threads.
+
+    The tasks are cut into one contiguous run per thread (as ``prange``'s static schedule);
+    the calling thread runs the first. ``kernel`` is a serial kernel compiled with
+    ``nogil=True`` that loops ``for t in range(t0, t1)``: compiling it costs seconds less than
+    the same loop as a ``parallel=True`` ``prange`` (numba's parallel lowering and its gufunc,
+    about 3 s of CPU for the Menon demosaic on a first run), and one compiled kernel serves
+    the small inputs run serially too (no serial twin to compile). ``threads``: default
+    ``numba.get_num_threads()`` (``NUMBA_NUM_THREADS``, ``numba.set_num_threads``); 1 runs
+    every task in the calling thread.
+    """
+    k = min(n_tasks, threads if threads is not None else numba.get_num_threads())
+    if k <= 1:
+        if n_tasks > 0:
+            kernel(0, n_tasks, *args)
+        return
+    cut = [n_tasks * i // k for i in range(k + 1)]
+    pool = _pool(k - 1)
+    futures: list[Future[Any]] = [
+        pool.submit(kernel, cut[i], cut[i + 1], *args) for i in range(1, k)
+    ]
+    try:
+        kernel(cut[0], cut[1], *args)
+    finally:
+        for f in futures:
+            f.result()
