@@ -99,26 +99,44 @@ def test_serial_twin_is_its_own_kernel() -> None:
     assert twin(np.arange(10.0)) == total(np.arange(10.0)) == 45.0
 
 
-def test_serial_first_cache_keeps_the_parallel_kernel_parallel(tmp_path: Path) -> None:
-    """Fill a fresh cache with the serial remap first; the parallel one, loaded from that
-    cache in a new process, still runs its rows on numba's threads (its code calls the
-    parallel scheduler)."""
-    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path), "PYTHONPATH": str(SRC)}
-    env.pop("NUMBA_BOUNDSCHECK", None)
-    setup = (
-        "import numpy as np\n"
-        "from imageform._kernels import remap as R\n"
-        "img = np.zeros((1, 8, 8, 1), np.uint8); m = np.zeros((8, 8, 2), np.float32)\n"
-        "out = np.empty_like(img); a = np.empty(0, np.float32); k = np.empty(0, np.int32)\n"
-    )
-    _python(setup + "R.remap_bilinear_serial(img, m, 1.0, 0.0, out, a, k, 255.0)\n", env)
-    second = setup + (
-        "R.remap_bilinear(img, m, 1.0, 0.0, out, a, k, 255.0)\n"
-        "(cres,) = R.remap_bilinear.overloads.values()\n"
-        "print(sum(R.remap_bilinear.stats.cache_hits.values()),"
-        " 'do_scheduling' in cres.library.get_llvm_str())\n"
-    )
-    assert _python(second, env).split() == ["0", "True"]
+def test_run_tasks_cuts_the_tasks_over_the_threads() -> None:
+    """jit.run_tasks: every task once, one contiguous run per thread (the caller's first);
+    threads=1 runs them all in the calling thread."""
+    import threading
+
+    seen: list[tuple[int, int, int]] = []
+
+    def kernel(t0: int, t1: int, tag: str) -> None:
+        assert tag == "x"
+        seen.append((t0, t1, threading.get_ident()))
+
+    jit.run_tasks(kernel, 10, "x", threads=3)
+    assert sorted((a, b) for a, b, _ in seen) == [(0, 3), (3, 6), (6, 10)]
+    assert next(i for a, _, i in seen if a == 0) == threading.get_ident()
+    assert len({i for _, _, i in seen}) >= 2  # the caller and the pool (a worker may run two)
+    seen.clear()
+    jit.run_tasks(kernel, 10, "x", threads=1)
+    assert seen == [(0, 10, threading.get_ident())]
+    seen.clear()
+    jit.run_tasks(kernel, 0, "x", threads=4)
+    assert seen == []
+
+
+def test_small_and_large_remaps_share_one_compiled_kernel() -> None:
+    """The remap in the calling thread (small images) and on numba's threads is one kernel:
+    one compilation, where a serial twin and a parallel=True kernel were two."""
+    from imageform._kernels import remap as R
+
+    img = np.arange(64, dtype=np.uint8).reshape(1, 8, 8, 1)
+    m = np.stack(np.meshgrid(np.arange(8.0), np.arange(8.0)), axis=-1).astype(np.float32)
+    outs = []
+    for run in (R.remap_bilinear_serial, R.remap_bilinear):
+        out = np.zeros_like(img)
+        run(img, m, 1.0, 0.0, out, np.empty(0, np.float32), np.empty(0, np.int32), 255.0)
+        outs.append(out)
+    np.testing.assert_array_equal(outs[0], img)
+    np.testing.assert_array_equal(outs[1], img)
+    assert len(R._remap_tasks.signatures) == 1
 
 
 def test_boundscheck_compiles_are_not_cached(tmp_path: Path) -> None:
@@ -346,3 +364,32 @@ def test_without_numba_cache_dir_the_users_cache_folder(tmp_path: Path) -> None:
     assert Path(out["where"]).parent == tmp_path / "xdg" / "imageform" / "numba"
     assert list(Path(out["where"]).glob("color_simple._hsv_serial-*.nbi"))
     assert not list(site.rglob("*.nbi")), "nothing is written beside the source"
+
+
+def test_checkerboard_candidates_compile_one_kernel_per_8bit_or_other() -> None:
+    """uint16, float16, float32, float64 and read-only images share one compiled saddle
+    kernel (float32), and 8-bit images another: each specialisation costs seconds of
+    compilation on a first run (the float16 image of issue 25: 25-40 s)."""
+    from imageform._kernels.checkerboard import saddle_maxima_numba
+    from imageform.geometry.checkerboard_candidates import find_candidates
+
+    rng = np.random.default_rng(0)
+    base = rng.uniform(0, 1, (40, 48))
+    ro = base.astype(np.float32)
+    ro.flags.writeable = False
+    ro8 = (base * 255).astype(np.uint8)
+    ro8.flags.writeable = False
+    images = [
+        (base * 65535).astype(np.uint16),
+        base.astype(np.float16),
+        base.astype(np.float32),
+        base,
+        ro,
+        (base * 255).astype(np.uint8),
+        ro8,
+    ]
+    results = [find_candidates(im, 1.5) for im in images]
+    kinds = {(str(sig[0].dtype), sig[0].mutable) for sig in saddle_maxima_numba.signatures}
+    assert kinds <= {("float32", True), ("uint8", True)}, kinds
+    # the conversion gives the same bits as the kernel's own (float32 then / scale)
+    np.testing.assert_array_equal(results[2].xy, results[4].xy)

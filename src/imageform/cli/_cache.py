@@ -45,11 +45,6 @@ rows = [",".join(repr(float(v)) for v in (*a, *b)) for a, b in zip(X, uv, strict
 img = (rng.uniform(0, 1, (64, 96, 3)) * 255).astype(np.uint8)
 write_image(work / "rgb8.png", img)
 write_image(work / "mosaic8.png", np.ascontiguousarray(img[..., 1:2]))
-# undistortion has a serial twin for small images (imageform._kernels.jit.serial_twin): the
-# 96 x 64 image compiles it, board_rgb.png the parallel kernel
-Ks = np.array([[120.0, 0.0, 47.5], [0.0, 120.0, 31.5], [0.0, 0.0, 1.0]])
-write_camera(work / "cam_small.toml", Camera(Ks, np.eye(3), np.zeros(3), (96, 64), distortion=dist),
-             has_pose=True)
 # three views of a 9 x 6 checkerboard (30 mm squares) for calibrate's detector and refinement
 vv, uu = np.mgrid[0:480, 0:640].astype(np.float64)
 for k, (ax, ay) in enumerate(((0.3, 0.0), (0.0, 0.35), (-0.25, 0.2))):
@@ -76,7 +71,6 @@ def _jobs(work: Path) -> list[list[str]]:
         ["convert", f"{w}/rgb8.png", "--from", "srgb", "--to", "lab", "-o", f"{w}/lab.tif"],
         ["calibrate", f"{w}/board*.png", "--board", "9x6", "--square", "30mm", "-o", f"{w}/c.toml"],
         ["undistort", f"{w}/board_rgb.png", "--camera", f"{w}/cam.toml", "-o", f"{w}/u.png"],
-        ["undistort", f"{w}/mosaic8.png", "--camera", f"{w}/cam_small.toml", "-o", f"{w}/us.png"],
     ]
     # 8-bit mosaics only: 16-bit ones run the same float32 kernels
     for method in ("menon", "bilinear", "malvar", "hamilton-adams"):
