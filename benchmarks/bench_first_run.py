@@ -1,35 +1,37 @@
-"""First run against warm run: what numba's compilation costs a user, per command.
+"""First run against warm run: what numba's compilation costs a user, for every command.
 
 Run from the repository root::
 
     OPENBLAS_NUM_THREADS=1 python benchmarks/bench_first_run.py [--src DIR | --python EXE]
-        [--repeat 3] [--write PATH]
+        [--repeat 3] [--commands all|simulate,pose,...] [--warm-cache] [--profile]
+        [--write PATH]
 
-Each command runs as a fresh process (``python -m imageform ...``), as a user runs it:
+Each command of README's list runs as a fresh process (``python -m imageform ...``), as a
+user runs it, on small inputs made once before timing (the built-in scene's outputs, a lab
+set from ``imageform simulate --lab``, a DNG from ``--raw``, Kodak ``kodim01``, OpenCV's
+``left*.jpg`` checkerboards, synthetic correspondences and stereo views); their numba cache
+is a folder of their own, so that they fill nothing the timed runs use.
 
-- ``simulate``: ``imageform simulate -o OUT --force`` (the built-in scene);
-- ``pose``: ``imageform pose cam.toml pairs.csv --ransac`` (a Brown-Conrady camera and 200
-  synthetic 3-D/2-D correspondences with 10 % outliers);
-- ``demosaic``: ``imageform demosaic mosaic.png -o rgb.png`` (Menon, the default; the mosaic is
-  ``imageform mosaic`` of Kodak ``kodim01``, 768 x 512).
-
-*cold*: ``NUMBA_CACHE_DIR`` points at a new empty folder, so numba finds no cache (a folder it
-names wins over the ``__pycache__`` beside the source, so stale in-tree files do not count);
-*warm*: the same command again with the same folder, now filled by the cold run. Each repetition
-takes a new folder: cold then warm, ``--repeat`` times; the table gives the medians and
-cold/warm ratio. ``--after-warm``: each repetition's new folder is first filled by ``imageform
-cache --warm`` (timed, once per repetition for all commands), then each command runs twice:
-*first* (the first run after installing and warming) and *warm*. ``--src DIR`` runs the
-imageform found in ``DIR`` (default: this checkout's ``src``); ``--python EXE`` runs an
-installed imageform with that interpreter instead. Inputs are made once, before timing, with
-``IMAGEFORM_DISABLE_NUMBA=1`` (no kernel is compiled).
+*first*: ``NUMBA_CACHE_DIR`` points at a new empty folder (a new machine: nothing compiled);
+*warm*: the same command again with the same folder, now filled by the first run. Each
+repetition takes a new folder per command. ``--warm-cache``: also time ``imageform cache
+--warm`` into a new empty folder, then the same command again from a copy of the package at
+another path (a second clone or a reinstall of the same version on the same machine: it
+should find everything compiled). ``--profile``: each first run also records the seconds
+numba spends compiling each kernel (numba's ``numba:compile`` events; nested compilations
+are counted inside their caller) and prints the largest per command. The table gives
+medians, the range, and the load average at the start and at the end (the machine is shared;
+the ranges say how much that costs).
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import platform
+import resource
+import shutil
 import statistics
 import subprocess
 import sys
@@ -38,7 +40,10 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-KODAK = ROOT.parent / "shared" / "data" / "kodak" / "kodim01.png"
+DATA = ROOT.parent / "shared" / "data"
+KODAK = DATA / "kodak" / "kodim01.png"
+KODAK2 = DATA / "kodak" / "kodim02.png"
+BOARDS = DATA / "opencv-left"
 
 _INPUTS = r"""
 import sys
@@ -46,7 +51,7 @@ from pathlib import Path
 import numpy as np
 from imageform.geometry import BrownConrady, Camera
 from imageform.geometry.calibration_refine import rodrigues
-from imageform.io import write_camera
+from imageform.io import write_camera, write_image
 
 work = Path(sys.argv[1])
 K = np.array([[800.0, 0.0, 320.0], [0.0, 800.0, 240.0], [0.0, 0.0, 1.0]])
@@ -56,120 +61,399 @@ write_camera(work / "cam.toml", Camera(K, np.eye(3), np.zeros(3), (640, 480), di
 rng = np.random.default_rng(0)
 X = rng.uniform(-1, 1, (200, 3)) + [0, 0, 6]
 R = rodrigues(np.array([[0.05, -0.15, 0.02]]))[0]
-uv = np.asarray(Camera(K, R, [-0.5, 0.1, 0.2], distortion=dist).project(X).uv)
+t = np.array([-0.5, 0.1, 0.2])
+cam2 = Camera(K, R, t, (640, 480), distortion=dist)
+write_camera(work / "cam2.toml", cam2, has_pose=True)
+uv1 = np.asarray(Camera(K, np.eye(3), np.zeros(3), distortion=dist).project(X).uv)
+uv = np.asarray(cam2.project(X).uv)
+rows = [",".join(repr(float(v)) for v in (*a, *b)) for a, b in zip(uv1, uv, strict=True)]
+(work / "obs.csv").write_text("\n".join(rows) + "\n")
+(work / "points.csv").write_text(
+    "X,Y,Z\n" + "\n".join(",".join(repr(float(v)) for v in p) for p in X) + "\n")
 uv[::10] += rng.uniform(-40, 40, uv[::10].shape)
 rows = [",".join(repr(float(v)) for v in (*a, *b)) for a, b in zip(X, uv, strict=True)]
 (work / "pairs.csv").write_text("X,Y,Z,u,v\n" + "\n".join(rows) + "\n")
+# a stereo pair (60 mm baseline) seeing a 9 x 6 checkerboard (30 mm squares) in four poses
+vv, uu = np.mgrid[0:480, 0:640].astype(np.float64)
+for side, shift in (("left", 0.0), ("right", -60.0)):
+    (work / side).mkdir()
+    for k, (ax, ay) in enumerate(((0.3, 0.0), (0.0, 0.35), (-0.25, 0.2), (0.15, -0.3))):
+        Rx = np.array([[1, 0, 0], [0, np.cos(ax), -np.sin(ax)], [0, np.sin(ax), np.cos(ax)]])
+        Ry = np.array([[np.cos(ay), 0, np.sin(ay)], [0, 1, 0], [-np.sin(ay), 0, np.cos(ay)]])
+        Rb = Rx @ Ry
+        H = K @ np.column_stack([Rb[:, 0], Rb[:, 1], [-150.0 + shift, -105.0, 900.0]])
+        q = np.linalg.solve(H, np.stack([uu.ravel(), vv.ravel(), np.ones(uu.size)]))
+        x, y = (q[0] / q[2] + 30.0) / 30.0, (q[1] / q[2] + 30.0) / 30.0
+        inside = (x >= 0) & (x < 12) & (y >= 0) & (y < 9)
+        dark = (np.floor(x) + np.floor(y)) % 2 == 0
+        board = np.where(inside & ~((x >= 1) & (x < 11) & (y >= 1) & (y < 8) & dark), 230, 25)
+        board = np.where(inside, board, 128).reshape(480, 640).astype(np.uint8)
+        write_image(work / side / f"view{k}.png", board[..., None])
+(work / "many").mkdir()
+img = (rng.uniform(0, 1, (48, 64, 3)) * 255).astype(np.uint8)
+for k in range(3):
+    write_image(work / "many" / f"im{k}.png", img)
+write_image(work / "tiles.tif", np.repeat(img, 4, axis=0).astype(np.float32) / 255.0)
 """
 
 
 def _env(src: Path | None, cache: Path | None) -> dict[str, str]:
-    env = {k: v for k, v in os.environ.items() if not k.startswith("NUMBA_")}
+    env = {k: v for k, v in os.environ.items() if not k.startswith(("NUMBA_", "_IMAGEFORM"))}
     env.update(OPENBLAS_NUM_THREADS="1", MPLBACKEND="Agg")
     if src is not None:
         env["PYTHONPATH"] = str(src)
     if cache is not None:
         env["NUMBA_CACHE_DIR"] = str(cache)
+        env["XDG_CACHE_HOME"] = str(cache.parent / (cache.name + "-xdg"))
     return env
 
 
-def _run(python: str, args: list[str], env: dict[str, str], cwd: Path) -> float:
-    t0 = time.perf_counter()
-    done = subprocess.run(
-        [python, "-m", "imageform", *args], env=env, cwd=cwd, capture_output=True, text=True
-    )
-    dt = time.perf_counter() - t0
-    if done.returncode != 0:
+# the profiler: numba's compile events, timed; the command then runs as `python -m imageform`
+_PROFILE = r"""
+import atexit, json, os, runpy, sys, time
+from numba.core import event as ev
+
+records, stack = [], []
+
+class _Timer(ev.Listener):
+    def on_start(self, event):
+        stack.append(time.perf_counter())
+
+    def on_end(self, event):
+        t0 = stack.pop()
+        fn = event.data["dispatcher"].py_func
+        records.append({"kernel": fn.__module__.rsplit(".", 1)[-1] + "." + fn.__qualname__,
+                        "args": str(event.data["args"])[:160], "s": time.perf_counter() - t0,
+                        "depth": len(stack)})
+
+ev.register("numba:compile", _Timer())
+atexit.register(lambda: Path_out.write_text(json.dumps(records)))
+from pathlib import Path
+Path_out = Path(os.environ["IF_PROFILE_OUT"])
+sys.argv = ["imageform", *sys.argv[1:]]
+runpy.run_module("imageform", run_name="__main__", alter_sys=True)
+"""
+
+
+def _cpu() -> float:
+    r = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return r.ru_utime + r.ru_stime
+
+
+def _run(
+    python: str, args: list[str], env: dict[str, str], cwd: Path, profile: Path | None = None
+) -> tuple[float, float]:
+    """Run one command; its wall-clock and CPU seconds (user + system, all its threads)."""
+    if profile is not None:
+        argv = [python, "-c", _PROFILE, *args]
+        env = {**env, "IF_PROFILE_OUT": str(profile)}
+    else:
+        argv = [python, "-m", "imageform", *args]
+    c0, t0 = _cpu(), time.perf_counter()
+    done = subprocess.run(argv, env=env, cwd=cwd, capture_output=True, text=True)
+    dt, dc = time.perf_counter() - t0, _cpu() - c0
+    if done.returncode not in (0, 3):  # 3: palette-check's "a check failed"
         raise SystemExit(f"imageform {' '.join(args)} failed:\n{done.stderr[-2000:]}")
-    return dt
+    return dt, dc
+
+
+def _commands(w: Path) -> dict[str, list[str]]:
+    """README's command list, each on small inputs (``w``: the folder of inputs)."""
+    lab = w / "lab"
+    stage = w / "sim0" / "stages" / "07-output.png"
+    o = str(w / "out")
+    return {
+        "simulate": ["simulate", "-o", f"{o}/sim", "--force"],
+        "characterize": ["characterize", str(lab), "-o", f"{o}/twin", "--force"],
+        "lecture": ["lecture"],
+        "project": [
+            "project",
+            str(w / "points.csv"),
+            "--camera",
+            str(w / "cam.toml"),
+            "-o",
+            f"{o}/uv.csv",
+            "--force",
+        ],
+        "pose": ["pose", str(w / "cam.toml"), str(w / "pairs.csv"), "--ransac"],
+        "triangulate": [
+            "triangulate",
+            str(w / "obs.csv"),
+            str(w / "cam.toml"),
+            str(w / "cam2.toml"),
+            "-o",
+            f"{o}/X.csv",
+            "--force",
+        ],
+        "calibrate": [
+            "calibrate",
+            *sorted(str(p) for p in BOARDS.glob("left0[1-6].jpg")),
+            "--board",
+            "9x6",
+            "--square",
+            "25mm",
+            "-o",
+            f"{o}/c.toml",
+            "--force",
+        ],
+        "undistort": [
+            "undistort",
+            str(BOARDS / "left01.jpg"),
+            "--camera",
+            str(w / "cam.toml"),
+            "-o",
+            f"{o}/u.png",
+            "--force",
+        ],
+        "stereo-calibrate": [
+            "stereo-calibrate",
+            str(w / "left" / "*.png"),
+            str(w / "right" / "*.png"),
+            "--board",
+            "9x6",
+            "--square",
+            "30mm",
+            "-o",
+            f"{o}/st.toml",
+            "--force",
+        ],
+        "vanishing": ["vanishing", str(stage), "--json"],
+        "lens": ["lens", "--focal", "50mm", "--f-number", "2.8", "--focus", "2m"],
+        "sfr": ["sfr", str(lab / "edge" / "edge.png"), "--transfer", "linear"],
+        "convert": [
+            "convert",
+            str(KODAK),
+            "--from",
+            "srgb",
+            "--to",
+            "lab",
+            "-o",
+            f"{o}/lab.tif",
+            "--force",
+        ],
+        "white-balance": ["white-balance", str(KODAK), "-o", f"{o}/wb.png", "--force"],
+        "delta-e": ["delta-e", str(KODAK), str(KODAK2), "--json"],
+        "cvd": ["cvd", str(KODAK), "--type", "deutan", "-o", f"{o}/cvd.png", "--force"],
+        "gamut": ["gamut", "--spaces", "srgb,display-p3,rec2020", "--json"],
+        "palette-check": ["palette-check", "#E69F00,#56B4E9,#009E73"],
+        "develop": ["develop", str(w / "raw.dng"), "-o", f"{o}/dev.png", "--force"],
+        "mosaic": ["mosaic", str(KODAK), "-o", f"{o}/mos.png", "--force"],
+        "demosaic": ["demosaic", str(w / "mosaic.png"), "-o", f"{o}/rgb.png", "--force"],
+        "emva": ["emva", str(lab), "-o", f"{o}/emva.json", "--force"],
+        "segment": ["segment", str(KODAK), "-o", f"{o}/mask.png", "--force"],
+        "stain-normalize": [
+            "stain-normalize",
+            str(KODAK),
+            "--target",
+            str(KODAK2),
+            "-o",
+            f"{o}/stain.png",
+            "--force",
+        ],
+        "fit-correction": [
+            "fit-correction",
+            str(lab / "colorchecker" / "developed.png"),
+            "-o",
+            f"{o}/corr.json",
+            "--force",
+        ],
+        "harmonize": [
+            "harmonize",
+            str(KODAK),
+            "--correction",
+            str(w / "corr.json"),
+            "-o",
+            f"{o}/harm.png",
+            "--force",
+        ],
+        "chart": [
+            "chart",
+            str(lab / "colorchecker" / "developed.png"),
+            "-o",
+            f"{o}/chart.json",
+            "--force",
+        ],
+        "batch": [
+            "batch",
+            "convert",
+            str(w / "many" / "*.png"),
+            "-o",
+            f"{o}/batch",
+            "--to",
+            "lab",
+            "--suffix",
+            ".tif",
+            "--workers",
+            "1",
+            "--force",
+        ],
+        "chunked": [
+            "chunked",
+            "convert",
+            str(w / "tiles.tif"),
+            "-o",
+            f"{o}/ch.tif",
+            "--from",
+            "srgb",
+            "--to",
+            "lab",
+            "--force",
+        ],
+        "cache": ["cache"],
+    }
+
+
+def _inputs(python: str, src: Path | None, w: Path) -> None:
+    """Make every input once, with a numba cache of their own (not the timed runs')."""
+    env = _env(src, w / "inputs-cache")
+    (w / "out").mkdir()
+
+    def im(*args: str) -> None:
+        done = subprocess.run(
+            [python, "-m", "imageform", *args], env=env, cwd=w, capture_output=True, text=True
+        )
+        if done.returncode != 0:
+            raise SystemExit(f"input: imageform {' '.join(args)} failed:\n{done.stderr[-2000:]}")
+
+    subprocess.run([python, "-c", _INPUTS, str(w)], env=env, check=True)
+    im("mosaic", str(KODAK), "-o", str(w / "mosaic.png"))
+    im("simulate", "-o", str(w / "sim0"))
+    im(
+        "simulate",
+        "-o",
+        str(w / "sim1"),
+        "--camera",
+        str(w / "sim0" / "camera.toml"),
+        "--lab",
+        str(w / "lab"),
+        "--raw",
+        str(w / "raw.dng"),
+    )
+    im(
+        "fit-correction",
+        str(w / "lab" / "colorchecker" / "developed.png"),
+        "-o",
+        str(w / "corr.json"),
+    )
+
+
+def _load() -> str:
+    if not hasattr(os, "getloadavg"):
+        return "n/a"
+    return " / ".join(f"{v:.1f}" for v in os.getloadavg())
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap = argparse.ArgumentParser(description=(__doc__ or "").split("\n")[0])
     ap.add_argument("--src", type=Path, default=ROOT / "src")
     ap.add_argument("--python", default=None, help="an interpreter with imageform installed")
     ap.add_argument("--repeat", type=int, default=3)
-    ap.add_argument("--commands", default="simulate,pose,demosaic")
-    ap.add_argument("--write", type=Path, default=None)
-    ap.add_argument("--after-warm", action="store_true", help="imageform cache --warm first")
+    ap.add_argument("--commands", default="all", help="comma-separated, or all")
+    ap.add_argument("--warm-cache", action="store_true", help="time imageform cache --warm")
     ap.add_argument("--jobs", type=int, default=2, help="processes for imageform cache --warm")
+    ap.add_argument("--profile", action="store_true", help="seconds compiling, per kernel")
+    ap.add_argument("--inputs", type=Path, default=None, help="reuse (or make) inputs here")
+    ap.add_argument("--write", type=Path, default=None, help="append the table to this file")
     a = ap.parse_args()
     python = a.python or sys.executable
     src = None if a.python else a.src.resolve()
+    load0 = _load()
     with tempfile.TemporaryDirectory(prefix="if-first-run-") as tmp:
         work = Path(tmp)
-        setup = {**_env(src, None), "IMAGEFORM_DISABLE_NUMBA": "1"}
-        subprocess.run([python, "-c", _INPUTS, str(work)], env=setup, check=True)
-        subprocess.run(
-            [python, "-m", "imageform", "mosaic", str(KODAK), "-o", str(work / "mosaic.png")],
-            env=setup,
-            check=True,
-            capture_output=True,
-        )
-        commands = {
-            "simulate": ["simulate", "-o", str(work / "sim"), "--force"],
-            "pose": ["pose", str(work / "cam.toml"), str(work / "pairs.csv"), "--ransac"],
-            "demosaic": [
-                "demosaic",
-                str(work / "mosaic.png"),
-                "-o",
-                str(work / "rgb.png"),
-                "--force",
-            ],
-        }
-        rows = []
-        names = a.commands.split(",")
-        cold: dict[str, list[float]] = {n: [] for n in names}
-        warm: dict[str, list[float]] = {n: [] for n in names}
-        warming: list[float] = []
+        w = a.inputs.resolve() if a.inputs else work / "inputs"
+        if not (w / "corr.json").exists():
+            w.mkdir(parents=True, exist_ok=True)
+            t0 = time.perf_counter()
+            _inputs(python, src, w)
+            print(f"inputs made in {time.perf_counter() - t0:.1f} s", flush=True)
+        commands = _commands(w)
+        names = list(commands) if a.commands == "all" else a.commands.split(",")
+        # (wall, CPU) seconds per run
+        first: dict[str, list[tuple[float, float]]] = {n: [] for n in names}
+        warm: dict[str, list[tuple[float, float]]] = {n: [] for n in names}
+        compiled: dict[str, list[dict[str, object]]] = {}
+        warming: list[tuple[float, float]] = []
+        clone: list[tuple[float, float]] = []
         for i in range(a.repeat):
-            if a.after_warm:
-                cache = work / f"cache-{i}"
-                cache.mkdir()
-                warming.append(
-                    _run(python, ["cache", "--warm", "--jobs", str(a.jobs)], _env(src, cache), work)
-                )
-                print(f"#{i}: imageform cache --warm {warming[-1]:.2f} s", flush=True)
             for name in names:
-                if not a.after_warm:
-                    cache = work / f"cache-{name}-{i}"
-                    cache.mkdir()
+                cache = work / f"cache-{name}-{i}"
+                cache.mkdir()
                 env = _env(src, cache)
-                cold[name].append(_run(python, commands[name], env, work))
+                prof = work / f"prof-{name}.json" if a.profile and i == 0 else None
+                first[name].append(_run(python, commands[name], env, work, prof))
                 warm[name].append(_run(python, commands[name], env, work))
+                shutil.rmtree(cache, ignore_errors=True)
+                (f, fc), (m, mc) = first[name][-1], warm[name][-1]
                 print(
-                    f"{name} #{i}: first {cold[name][-1]:.2f} s, warm {warm[name][-1]:.2f} s",
+                    f"{name} #{i}: first {f:.2f} s ({fc:.2f} CPU), warm {m:.2f} s ({mc:.2f} CPU)"
+                    f" (load {_load()})",
                     flush=True,
                 )
-        for name in names:
-            c, w = statistics.median(cold[name]), statistics.median(warm[name])
-            rows.append(
-                f"| `imageform {name}` | {c:.2f} | {w:.2f} | {c / w:.2f} "
-                f"| {min(cold[name]):.2f}-{max(cold[name]):.2f} "
-                f"| {min(warm[name]):.2f}-{max(warm[name]):.2f} |"
-            )
-    load = os.getloadavg() if hasattr(os, "getloadavg") else (float("nan"),) * 3
+                if prof is not None:
+                    compiled[name] = json.loads(prof.read_text())
+            if a.warm_cache and src is not None:
+                cache = work / f"cache-warm-{i}"
+                cache.mkdir()
+                env = _env(src, cache)
+                argv = ["cache", "--warm", "--jobs", str(a.jobs)]
+                warming.append(_run(python, argv, env, work))
+                # a second clone of the same version, elsewhere: the same cache serves it
+                other = work / f"clone-{i}" / "src"
+                shutil.copytree(src, other, ignore=shutil.ignore_patterns("__pycache__"))
+                clone.append(_run(python, ["cache", "--warm"], _env(other, cache), work))
+                shutil.rmtree(cache, ignore_errors=True)
+                print(
+                    f"#{i}: cache --warm {warming[-1][0]:.2f} s ({warming[-1][1]:.2f} CPU), "
+                    f"again from a second clone {clone[-1][0]:.2f} s (load {_load()})",
+                    flush=True,
+                )
+
+    def med(runs: list[tuple[float, float]], k: int) -> float:
+        return statistics.median(r[k] for r in runs)
+
+    def span(runs: list[tuple[float, float]]) -> str:
+        return f"{min(r[0] for r in runs):.2f}-{max(r[0] for r in runs):.2f}"
+
+    rows = []
+    for name in names:
+        f, m = med(first[name], 0), med(warm[name], 0)
+        rows.append(
+            f"| `{name}` | {f:.2f} | {m:.2f} | {f / m:.2f} | {span(first[name])} "
+            f"| {span(warm[name])} | {med(first[name], 1):.2f} | {med(warm[name], 1):.2f} |"
+        )
     lines = [
         f"python {platform.python_version()}, {platform.machine()}, {os.cpu_count()} CPUs, "
-        f"load average at the end {load[0]:.1f} / {load[1]:.1f} / {load[2]:.1f}; "
-        f"imageform from {a.python or src}; median of {a.repeat}; "
-        + (
-            f"first run after `imageform cache --warm --jobs {a.jobs}` "
-            f"({statistics.median(warming):.1f} s, median)"
-            if a.after_warm
-            else "first run with an empty cache"
-        ),
+        f"load average at the start {load0}, at the end {_load()}; imageform from "
+        f"{a.python or src}; median of {a.repeat}; first = empty `NUMBA_CACHE_DIR`; "
+        "CPU = user + system seconds of the process and its threads",
         "",
-        "| command | first (s) | warm (s) | first / warm | first range | warm range |",
-        "|---|---:|---:|---:|---:|---:|",
+        "| command | first (s) | warm (s) | first / warm | first range | warm range "
+        "| first CPU (s) | warm CPU (s) |",
+        "|---|---:|---:|---:|---:|---:|---:|---:|",
         *rows,
     ]
+    if warming:
+        lines += [
+            "",
+            f"`imageform cache --warm --jobs {a.jobs}` into an empty cache: "
+            f"{med(warming, 0):.1f} s (median; {span(warming)}; {med(warming, 1):.1f} s CPU);"
+            f" the same again from a second copy of the package at another path, same cache: "
+            f"{med(clone, 0):.1f} s",
+        ]
+    if compiled:
+        lines += ["", "Seconds compiling (first run), the largest kernels per command:", ""]
+        for name, recs in compiled.items():
+            top = [r for r in recs if r["depth"] == 0]
+            total = sum(float(str(r["s"])) for r in top)
+            big = sorted(top, key=lambda r: -float(str(r["s"])))[:4]
+            what = ", ".join(f"{r['kernel']} {float(str(r['s'])):.1f}" for r in big)
+            lines.append(f"- `{name}`: {total:.1f} s in {len(recs)} compilations; {what}")
     text = "\n".join(lines)
     print(text)
     if a.write:
         a.write.parent.mkdir(parents=True, exist_ok=True)
-        with a.write.open("a") as f:
-            f.write(text + "\n")
+        with a.write.open("a") as fh:
+            fh.write(text + "\n")
 
 
 if __name__ == "__main__":

@@ -99,26 +99,44 @@ def test_serial_twin_is_its_own_kernel() -> None:
     assert twin(np.arange(10.0)) == total(np.arange(10.0)) == 45.0
 
 
-def test_serial_first_cache_keeps_the_parallel_kernel_parallel(tmp_path: Path) -> None:
-    """Fill a fresh cache with the serial remap first; the parallel one, loaded from that
-    cache in a new process, still runs its rows on numba's threads (its code calls the
-    parallel scheduler)."""
-    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path), "PYTHONPATH": str(SRC)}
-    env.pop("NUMBA_BOUNDSCHECK", None)
-    setup = (
-        "import numpy as np\n"
-        "from imageform._kernels import remap as R\n"
-        "img = np.zeros((1, 8, 8, 1), np.uint8); m = np.zeros((8, 8, 2), np.float32)\n"
-        "out = np.empty_like(img); a = np.empty(0, np.float32); k = np.empty(0, np.int32)\n"
-    )
-    _python(setup + "R.remap_bilinear_serial(img, m, 1.0, 0.0, out, a, k, 255.0)\n", env)
-    second = setup + (
-        "R.remap_bilinear(img, m, 1.0, 0.0, out, a, k, 255.0)\n"
-        "(cres,) = R.remap_bilinear.overloads.values()\n"
-        "print(sum(R.remap_bilinear.stats.cache_hits.values()),"
-        " 'do_scheduling' in cres.library.get_llvm_str())\n"
-    )
-    assert _python(second, env).split() == ["0", "True"]
+def test_run_tasks_cuts_the_tasks_over_the_threads() -> None:
+    """jit.run_tasks: every task once, one contiguous run per thread (the caller's first);
+    threads=1 runs them all in the calling thread."""
+    import threading
+
+    seen: list[tuple[int, int, int]] = []
+
+    def kernel(t0: int, t1: int, tag: str) -> None:
+        assert tag == "x"
+        seen.append((t0, t1, threading.get_ident()))
+
+    jit.run_tasks(kernel, 10, "x", threads=3)
+    assert sorted((a, b) for a, b, _ in seen) == [(0, 3), (3, 6), (6, 10)]
+    assert next(i for a, _, i in seen if a == 0) == threading.get_ident()
+    assert len({i for _, _, i in seen}) >= 2  # the caller and the pool (a worker may run two)
+    seen.clear()
+    jit.run_tasks(kernel, 10, "x", threads=1)
+    assert seen == [(0, 10, threading.get_ident())]
+    seen.clear()
+    jit.run_tasks(kernel, 0, "x", threads=4)
+    assert seen == []
+
+
+def test_small_and_large_remaps_share_one_compiled_kernel() -> None:
+    """The remap in the calling thread (small images) and on numba's threads is one kernel:
+    one compilation, where a serial twin and a parallel=True kernel were two."""
+    from imageform._kernels import remap as R
+
+    img = np.arange(64, dtype=np.uint8).reshape(1, 8, 8, 1)
+    m = np.stack(np.meshgrid(np.arange(8.0), np.arange(8.0)), axis=-1).astype(np.float32)
+    outs = []
+    for run in (R.remap_bilinear_serial, R.remap_bilinear):
+        out = np.zeros_like(img)
+        run(img, m, 1.0, 0.0, out, np.empty(0, np.float32), np.empty(0, np.int32), 255.0)
+        outs.append(out)
+    np.testing.assert_array_equal(outs[0], img)
+    np.testing.assert_array_equal(outs[1], img)
+    assert len(R._remap_tasks.signatures) == 1
 
 
 def test_boundscheck_compiles_are_not_cached(tmp_path: Path) -> None:
@@ -170,37 +188,17 @@ def test_user_cache_dir_follows_xdg(monkeypatch: pytest.MonkeyPatch, tmp_path: P
     assert jit.user_cache_dir() == Path.home() / ".cache" / "imageform" / "numba"
 
 
-_PROBE = r"""
-import json, os, sys
-from imageform._kernels.jit import cache_location, njit
-import numba
-
-@njit
-def probe(x):
-    return x * 2.0 + 1.0
-
-value = probe(1.5)
-where, reason = cache_location()
-print(json.dumps({"value": value, "where": str(where), "reason": reason,
-                  "numba": numba.config.CACHE_DIR, "env": os.environ.get("NUMBA_CACHE_DIR"),
-                  "hits": sum(probe.stats.cache_hits.values()),
-                  "misses": sum(probe.stats.cache_misses.values())}))
-"""
-
-
 def _read_only_copy(tmp_path: Path) -> Path:
     """A copy of imageform whose folders cannot be written (as an installed wheel, chmod
-    a-w); the probe script lives in it too, so that numba's in-tree cache is ruled out."""
+    a-w)."""
     site = tmp_path / "site"
     shutil.copytree(
         SRC / "imageform", site / "imageform", ignore=shutil.ignore_patterns("__pycache__")
     )
-    (site / "probe_kernel.py").write_text(_PROBE)
     # where numba's in-tree cache would go, a plain file: no one, root included, can make
     # the folder there (root writes through chmod a-w, and a checkout or a virtual
     # environment under a private folder cannot be read by another user)
-    for folder in (site, site / "imageform" / "_kernels"):
-        (folder / "__pycache__").write_text("not a folder\n")
+    (site / "imageform" / "_kernels" / "__pycache__").write_text("not a folder\n")
     for root, _dirs, files in os.walk(site):
         for name in files:
             p = Path(root) / name
@@ -219,28 +217,13 @@ def test_read_only_package_caches_in_the_user_cache() -> None:
     home.chmod(0o777)
     env = {k: v for k, v in os.environ.items() if not k.startswith(("NUMBA_", "_IMAGEFORM"))}
     env.update(PYTHONPATH=str(site), HOME=str(home), XDG_CACHE_HOME=str(home / "cache"))
-    runs = []
     try:
-        for _ in range(2):
-            done = subprocess.run(
-                [sys.executable, str(site / "probe_kernel.py")],
-                env=env,
-                capture_output=True,
-                text=True,
-                check=False,
-                cwd=home,
-            )
-            assert done.returncode == 0, done.stderr[-2000:]
-            runs.append(json.loads(done.stdout))
-        expected = str(home / "cache" / "imageform" / "numba")
-        first, second = runs
-        assert first["value"] == second["value"] == 4.0
-        assert first["reason"] == "user" and first["where"] == expected
-        assert first["numba"] == first["env"] == expected
+        first, second = (json.loads(_python(_SHARED_PROBE, env)) for _ in range(2))
+        expected = home / "cache" / "imageform" / "numba"
+        assert Path(first["where"]).parent == expected
         assert (first["misses"], first["hits"]) == (1, 0)
         assert (second["misses"], second["hits"]) == (0, 1), "the second process compiled again"
-        cached = list(Path(expected).rglob("probe_kernel.probe-*.nbi"))
-        assert len(cached) == 1
+        assert len(list(expected.rglob("color_simple._hsv_serial-*.nbi"))) == 1
         assert not list(site.rglob("*.nbi")), "nothing is written beside the read-only source"
         assert (site / "imageform" / "_kernels" / "__pycache__").is_file()
     finally:
@@ -249,41 +232,39 @@ def test_read_only_package_caches_in_the_user_cache() -> None:
         shutil.rmtree(tmp_path, ignore_errors=True)
 
 
+def _cache_json(env: dict[str, str], *args: str) -> dict[str, Any]:
+    argv = [sys.executable, "-m", "imageform", "cache", "--json", *args]
+    done = subprocess.run(argv, env=env, capture_output=True, text=True, check=False)
+    assert done.returncode == 0, done.stderr
+    out: dict[str, Any] = json.loads(done.stdout)
+    return out
+
+
 def test_numba_cache_dir_wins(tmp_path: Path) -> None:
     env = {k: v for k, v in os.environ.items() if not k.startswith(("NUMBA_", "_IMAGEFORM"))}
     env.update(PYTHONPATH=str(SRC), NUMBA_CACHE_DIR=str(tmp_path / "mine"), MPLBACKEND="Agg")
-    done = subprocess.run(
-        [sys.executable, "-m", "imageform", "cache", "--json"],
-        env=env,
-        capture_output=True,
-        text=True,
-        check=False,
-    )
-    assert done.returncode == 0, done.stderr
-    out = json.loads(done.stdout)
-    assert out["cache_dir"] == str(tmp_path / "mine") and out["reason"] == "NUMBA_CACHE_DIR"
-    assert out["files"] == 0
+    out = _cache_json(env)
+    assert Path(out["cache_dir"]).parent == tmp_path / "mine"
+    assert out["reason"] == "NUMBA_CACHE_DIR" and out["files"] == 0
 
 
 def test_cache_clear_removes_only_imageforms_kernels(tmp_path: Path) -> None:
-    import hashlib
-
-    src = os.path.abspath(os.path.dirname(jit.__file__))
-    ours = tmp_path / "_".join([os.path.basename(src), hashlib.sha1(src.encode()).hexdigest()])
-    other = tmp_path / "elsewhere_0123"
-    for folder in (ours, other):
-        folder.mkdir()
-        (folder / "k.f-1.py311.nbi").write_bytes(b"x")
-        (folder / "k.f-1.py311.1.nbc").write_bytes(b"yy")
+    """--clear empties this version's folder and removes imageform's stale ones (another
+    version, edited kernels); other numba caches under the same root stay."""
     env = {k: v for k, v in os.environ.items() if not k.startswith(("NUMBA_", "_IMAGEFORM"))}
     env.update(PYTHONPATH=str(SRC), NUMBA_CACHE_DIR=str(tmp_path))
-    argv = [sys.executable, "-m", "imageform", "cache", "--json"]
-    listed = json.loads(subprocess.run(argv, env=env, capture_output=True, check=True).stdout)
+    ours = Path(_cache_json(env)["cache_dir"])
+    stale = tmp_path / "imageform-0.0.1-0123456789abcdef0123"
+    other = tmp_path / "elsewhere_0123"
+    for folder in (ours, stale, other):
+        folder.mkdir(exist_ok=True)
+        (folder / "k.f-1.py311.nbi").write_bytes(b"x")
+        (folder / "k.f-1.py311.1.nbc").write_bytes(b"yy")
+    listed = _cache_json(env)
     assert (listed["files"], listed["bytes"]) == (2, 3)
-    done = subprocess.run([*argv, "--clear"], env=env, capture_output=True, check=True)
-    cleared = json.loads(done.stdout)
-    assert (cleared["removed"], cleared["files"]) == (2, 0)
-    assert not list(ours.iterdir()) and len(list(other.iterdir())) == 2
+    cleared = _cache_json(env, "--clear")
+    assert (cleared["removed"], cleared["files"]) == (4, 0)
+    assert not list(ours.iterdir()) and not stale.exists() and len(list(other.iterdir())) == 2
 
 
 def test_warm_runs_each_command_and_reports_failures(
@@ -299,3 +280,116 @@ def test_warm_runs_each_command_and_reports_failures(
     errors = {name: why for name, _, why in done}
     assert errors["--version"] == ""
     assert "no-such-command" in errors["no-such-command"]
+
+
+# ---- one cache per machine (issue 25): the same kernels, wherever they are, share it ----
+
+_SHARED_PROBE = r"""
+import json, sys
+import numpy as np
+from imageform._kernels import color_simple as k
+from imageform._kernels.jit import cache_location
+src = np.zeros(6, np.float32); dst = np.empty_like(src); stats = np.zeros((1, 2))
+k._hsv_serial(src, dst, np.float32(1.0), stats, 0)
+st = k._hsv_serial.stats
+print(json.dumps({"hits": sum(st.cache_hits.values()), "misses": sum(st.cache_misses.values()),
+                  "where": str(cache_location()[0]), "file": k.__file__}))
+"""
+
+
+def _copy_package(dest: Path) -> Path:
+    """A copy of imageform at ``dest``: new paths, new file times (shutil.copy, not copy2)."""
+    shutil.copytree(
+        SRC / "imageform",
+        dest / "imageform",
+        ignore=shutil.ignore_patterns("__pycache__"),
+        copy_function=shutil.copy,
+    )
+    return dest
+
+
+def _probe(site: Path, cache: Path) -> dict[str, Any]:
+    env = {k: v for k, v in os.environ.items() if not k.startswith(("NUMBA_", "_IMAGEFORM"))}
+    env.update(PYTHONPATH=str(site), NUMBA_CACHE_DIR=str(cache))
+    out: dict[str, Any] = json.loads(_python(_SHARED_PROBE, env))
+    assert out["file"].startswith(str(site))
+    return out
+
+
+def test_two_copies_of_the_package_share_one_cache(tmp_path: Path) -> None:
+    """A second clone (or reinstall) of the same code at another path loads what the first
+    compiled: numba's own cache sub-folder is named after the source folder's path, so it
+    compiled everything again."""
+    a = _copy_package(tmp_path / "clone-a")
+    b = _copy_package(tmp_path / "clone-b")
+    cache = tmp_path / "cache"
+    first, second = _probe(a, cache), _probe(b, cache)
+    assert (first["misses"], first["hits"]) == (1, 0)
+    assert (second["misses"], second["hits"]) == (0, 1), "the second clone compiled again"
+    assert first["where"] == second["where"]
+    assert Path(first["where"]).parent == cache
+    assert Path(first["where"]).name.startswith("imageform-")
+
+
+def test_new_file_times_same_content_still_hit(tmp_path: Path) -> None:
+    site = _copy_package(tmp_path / "site")
+    cache = tmp_path / "cache"
+    assert _probe(site, cache)["misses"] == 1
+    for path in (site / "imageform" / "_kernels").glob("*.py"):
+        os.utime(path, (1.0e9, 1.0e9))  # a checkout, an unpacked wheel: other times
+    again = _probe(site, cache)
+    assert (again["misses"], again["hits"]) == (0, 1)
+
+
+def test_an_edited_kernel_file_is_never_loaded_stale(tmp_path: Path) -> None:
+    """Editing any kernel file (here another one than the probe's: a kernel inlines the jitted
+    functions it calls from other files) gives a new cache folder: nothing stale is loaded."""
+    site = _copy_package(tmp_path / "site")
+    cache = tmp_path / "cache"
+    first = _probe(site, cache)
+    other = site / "imageform" / "_kernels" / "distortion.py"
+    other.write_text(other.read_text() + "\n# edited\n")
+    again = _probe(site, cache)
+    assert (again["misses"], again["hits"]) == (1, 0)
+    assert again["where"] != first["where"]
+
+
+def test_without_numba_cache_dir_the_users_cache_folder(tmp_path: Path) -> None:
+    """No NUMBA_CACHE_DIR: the kernels are cached in the user's cache folder, per machine,
+    not in ``__pycache__`` beside the source (which is per clone)."""
+    site = _copy_package(tmp_path / "site")
+    env = {k: v for k, v in os.environ.items() if not k.startswith(("NUMBA_", "_IMAGEFORM"))}
+    env.update(PYTHONPATH=str(site), XDG_CACHE_HOME=str(tmp_path / "xdg"))
+    out = json.loads(_python(_SHARED_PROBE, env))
+    assert Path(out["where"]).parent == tmp_path / "xdg" / "imageform" / "numba"
+    assert list(Path(out["where"]).glob("color_simple._hsv_serial-*.nbi"))
+    assert not list(site.rglob("*.nbi")), "nothing is written beside the source"
+
+
+def test_checkerboard_candidates_compile_one_kernel_per_8bit_or_other() -> None:
+    """uint16, float16, float32, float64 and read-only images share one compiled saddle
+    kernel (float32), and 8-bit images another: each specialisation costs seconds of
+    compilation on a first run (the float16 image of issue 25: 25-40 s)."""
+    from imageform._kernels.checkerboard import saddle_maxima_numba
+    from imageform.geometry.checkerboard_candidates import find_candidates
+
+    rng = np.random.default_rng(0)
+    base = rng.uniform(0, 1, (40, 48))
+    ro = base.astype(np.float32)
+    ro.flags.writeable = False
+    ro8 = (base * 255).astype(np.uint8)
+    ro8.flags.writeable = False
+    images = [
+        (base * 65535).astype(np.uint16),
+        base.astype(np.float16),
+        base.astype(np.float32),
+        base,
+        ro,
+        (base * 255).astype(np.uint8),
+        ro8,
+    ]
+    results = [find_candidates(im, 1.5) for im in images]
+    kinds = {(str(sig[0].dtype), sig[0].mutable) for sig in saddle_maxima_numba.signatures}
+    assert kinds <= {("float32", True), ("uint8", True)}, kinds
+    # the conversion gives the same bits as the kernel's own (float32 then / scale)
+    np.testing.assert_array_equal(results[2].xy, results[4].xy)

@@ -452,9 +452,14 @@ def saddle_maxima_numba(
                     ys2 = np.empty(2 * count, dtype=np.int64)
                     xs2 = np.empty(2 * count, dtype=np.int64)
                     vals2 = np.empty((2 * count, 3, 3), dtype=dt)
-                    ys2[:count] = ys
-                    xs2[:count] = xs
-                    vals2[:count] = vals
+                    # element loops, not slice copies: numba 0.68 compiles an f-string
+                    # shape message for each array-to-slice copy (seconds on a first run)
+                    for i in range(count):
+                        ys2[i] = ys[i]
+                        xs2[i] = xs[i]
+                        for j in range(3):
+                            for jj in range(3):
+                                vals2[i, j, jj] = vals[i, j, jj]
                     ys, xs, vals = ys2, xs2, vals2
                 ys[count] = yc
                 xs[count] = x

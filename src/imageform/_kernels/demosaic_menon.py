@@ -37,10 +37,9 @@ posteriori decision", IEEE Trans. Image Process. 16(1), 132-141 (2007). Radius: 
 from __future__ import annotations
 
 import numpy as np
-from numba import prange
 
 from imageform._kernels.demosaic_common import crop, phase_masks, shift
-from imageform._kernels.jit import njit
+from imageform._kernels.jit import njit, run_tasks
 
 __all__ = ["RADIUS", "menon_numba", "menon_numpy", "menon_soft_numba", "menon_soft_numpy"]
 
@@ -341,21 +340,38 @@ def _menon_slab(
             o[j, 2] = bbuf[j]
 
 
-@njit(parallel=True, fastmath=False)
-def _menon(
-    P: np.ndarray, oy: int, ox: int, h: int, w: int, refine: bool, soft: bool, block: int
-) -> np.ndarray:
-    # One parallel region over slabs of ``block`` output rows (each slab recomputes its
-    # 11-row halo): fewer barriers and cache-sized working sets than one region per pass.
-    out = np.empty((h, w, 3), dtype=P.dtype)
-    nb = (h + block - 1) // block
-    for b in prange(nb):
+@njit(nogil=True, fastmath=False)
+def _menon_tasks(
+    b0: int,
+    b1: int,
+    P: np.ndarray,
+    oy: int,
+    ox: int,
+    h: int,
+    w: int,
+    refine: bool,
+    soft: bool,
+    block: int,
+    out: np.ndarray,
+) -> None:
+    # slabs b0 .. b1 - 1 of ``block`` output rows (each slab recomputes its 11-row halo):
+    # fewer barriers and cache-sized working sets than one parallel region per pass
+    for b in range(b0, b1):
         y0 = b * block
         y1 = min(h, y0 + block)
         s = y0 + oy - RADIUS - 1
         s -= s % 2
         e = y1 + oy + RADIUS + 1
         _menon_slab(P[s:e], y0 + oy - s, ox, y1 - y0, w, refine, soft, out[y0:y1])
+
+
+def _menon(
+    P: np.ndarray, oy: int, ox: int, h: int, w: int, refine: bool, soft: bool, block: int
+) -> np.ndarray:
+    # the slabs on numba's threads (run_tasks: no parallel=True kernel to compile)
+    out = np.empty((h, w, 3), dtype=P.dtype)
+    nb = (h + block - 1) // block
+    run_tasks(_menon_tasks, nb, P, oy, ox, h, w, refine, soft, block, out)
     return out
 
 

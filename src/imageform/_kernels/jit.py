@@ -1,51 +1,66 @@
-r"""The one numba policy of imageform's kernels: every kernel cached, and where the cache lives.
+r"""The one numba policy of imageform's kernels: every kernel cached, once per machine.
 
 Every kernel module decorates with :func:`njit` from here instead of ``numba.njit``: the same
-options, plus ``cache=True``, so numba's compilation (seconds per kernel: 15-25 s for the
-first ``imageform pose`` or ``demosaic`` in a fresh process) is paid once per machine, not
-once per process. A kernel that cannot be cached (a closure, or one that takes another jitted
-function as an argument) says ``cache=False`` where it is defined: only the ``rgb`` closure of
+options, plus ``cache=True``, so numba's compilation is paid once per machine, not once per
+process. A kernel that cannot be cached (a closure, or one that takes another jitted function
+as an argument) says ``cache=False`` where it is defined: only the ``rgb`` closure of
 ``demosaic_bilinear._make_rows``, which is inlined into the cached loops that call it.
 
-Where the cache lives (:func:`cache_location`, ``docs/performance.md``):
+Where the cache lives (:func:`cache_location`, ``docs/performance.md``): one folder per
+machine, not per clone. numba's own cache sits in ``__pycache__`` beside the source, or under
+``NUMBA_CACHE_DIR`` in a sub-folder named after the source folder's path, so a second clone,
+a reinstall elsewhere or a new virtual environment compiled everything again. imageform's
+kernels use a cache locator of their own (:class:`PackageCacheLocator`, put first in numba's
+list of locators; it serves only the files of this folder) that puts them in
 
-1. ``NUMBA_CACHE_DIR`` when the user set it (numba's own variable: it wins);
-2. else ``__pycache__`` beside the kernels' source, numba's default, when that folder is
-   writable (an editable checkout, a virtual environment the user owns);
-3. else (a wheel installed read-only, system-wide) the user's cache folder,
-   ``$XDG_CACHE_HOME/imageform/numba`` or ``~/.cache/imageform/numba`` on Linux,
-   ``~/Library/Caches/imageform/numba`` on macOS, ``%LOCALAPPDATA%\imageform\numba`` on
-   Windows: :func:`configure_cache` exports it as ``NUMBA_CACHE_DIR`` before numba is imported
-   (numba reads it then, and again whenever its environment changes), so child processes
-   (``imageform batch`` workers) share it.
+1. ``NUMBA_CACHE_DIR/imageform-<version>-<digest>`` when ``NUMBA_CACHE_DIR`` is set (numba's
+   own variable: it wins), else
+2. the user's cache folder, ``$XDG_CACHE_HOME/imageform/numba/imageform-<version>-<digest>``
+   or ``~/.cache/...`` on Linux, ``~/Library/Caches/imageform/numba/...`` on macOS,
+   ``%LOCALAPPDATA%\imageform\numba\...`` on Windows;
+
+where ``<digest>`` is a hash of the content of every kernel source file of this folder, with
+imageform's, numba's and Python's versions. Every copy of the same kernels on the machine finds
+the same folder, whatever its path or its files' times; a kernel edited anywhere in the folder
+(a kernel that calls a jitted function of another file keeps that function's code inlined)
+gives a new folder, so nothing stale is ever loaded. numba's own key (the signature, the
+target CPU, the bytecode) still decides which entry of a kernel's index is loaded. When that
+folder cannot be written, numba's own locators take over (``__pycache__`` beside the source).
 
 Importing this module imports numba; ``import imageform`` does not (``_backend.have_numba``
-and the kernel modules import it on first use). numba's cache is keyed on the content of each
-kernel's own file: a kernel that calls a jitted function of another file
-(``project_distort`` calls ``distortion.bc_distort_point``) keeps its cached code when only
-the other file changes; ``imageform cache --clear`` after editing kernels by hand.
+and the kernel modules import it on first use).
 """
 
 from __future__ import annotations
 
+import functools
+import hashlib
 import os
 import sys
 import tempfile
+import threading
 import types
 from collections.abc import Callable
+from concurrent.futures import Future, ThreadPoolExecutor
 from pathlib import Path
 from typing import Any, Literal
 
+import numba
+from numba.core import caching
+
 __all__ = [
+    "PackageCacheLocator",
     "cache_location",
+    "cache_root",
     "configure_cache",
     "njit",
     "parallel_pays",
+    "run_tasks",
     "serial_twin",
     "user_cache_dir",
 ]
 
-#: Where :func:`configure_cache` put the cache (see :func:`cache_location`).
+#: The folder of imageform's kernels: the files :class:`PackageCacheLocator` serves.
 _HERE = Path(__file__).resolve().parent
 
 
@@ -61,9 +76,45 @@ def user_cache_dir() -> Path:
     return base / "imageform" / "numba"
 
 
+@functools.lru_cache(maxsize=1)
+def kernels_digest() -> str:
+    """Hash of every kernel source file's content, with imageform's, numba's, Python's versions.
+
+    Neither the files' paths nor their times: two clones or installs of the same code on one
+    machine give the same digest.
+    """
+    imageform = sys.modules.get("imageform")
+    h = hashlib.sha256()
+    for part in (
+        getattr(imageform, "__version__", "?"),
+        numba.__version__,
+        sys.implementation.cache_tag or "",
+        sys.version,
+    ):
+        h.update(part.encode() + b"\0")
+    for path in sorted(_HERE.glob("*.py")):
+        h.update(path.name.encode() + b"\0" + path.read_bytes() + b"\0")
+    return h.hexdigest()[:20]
+
+
+def cache_root() -> tuple[Path, Literal["NUMBA_CACHE_DIR", "user"]]:
+    """Return the folder of imageform's cache folders and why: ``NUMBA_CACHE_DIR`` or user's."""
+    env = os.environ.get("NUMBA_CACHE_DIR", "")
+    if env:
+        return Path(env), "NUMBA_CACHE_DIR"
+    return user_cache_dir(), "user"
+
+
+def _folder() -> Path:
+    imageform = sys.modules.get("imageform")
+    version = getattr(imageform, "__version__", "0")
+    return cache_root()[0] / f"imageform-{version}-{kernels_digest()}"
+
+
+@functools.lru_cache(maxsize=8)
 def _writable(folder: Path) -> bool:
     # as numba checks it: create the folder and a file in it (os.access says yes to root on a
-    # read-only file system, and no to nothing it cannot know about)
+    # read-only file system, and no to nothing it cannot know about); once per process
     try:
         folder.mkdir(parents=True, exist_ok=True)
         tempfile.TemporaryFile(dir=folder).close()
@@ -72,43 +123,70 @@ def _writable(folder: Path) -> bool:
     return True
 
 
-def cache_location() -> tuple[Path, Literal["NUMBA_CACHE_DIR", "in-tree", "user"]]:
+class PackageCacheLocator(caching._CacheLocator):
+    """numba cache locator for imageform's kernels: one folder per machine and kernel code.
+
+    The folder is :func:`cache_location`'s; the source stamp of every kernel is
+    :func:`kernels_digest` (already in the folder's name), not the path or the time of its
+    file. Serves the files of ``imageform/_kernels`` only: for every other file, and when the
+    folder cannot be written, :meth:`from_function` returns ``None`` and numba's own locators
+    take over.
+    """
+
+    def __init__(self, py_func: Any, py_file: str) -> None:
+        self._py_file = py_file
+        self._lineno = py_func.__code__.co_firstlineno
+        self._cache_path = str(_folder())
+
+    def ensure_cache_path(self) -> None:
+        if not _writable(Path(self._cache_path)):
+            raise OSError(f"cannot write {self._cache_path}")
+
+    def get_cache_path(self) -> str:
+        return self._cache_path
+
+    def get_source_stamp(self) -> str:
+        return kernels_digest()
+
+    def get_disambiguator(self) -> str:
+        return str(self._lineno)
+
+    @classmethod
+    def from_function(cls, py_func: Any, py_file: str) -> PackageCacheLocator | None:
+        if os.path.dirname(os.path.realpath(py_file)) != str(_HERE):
+            return None
+        self = cls(py_func, py_file)
+        try:
+            self.ensure_cache_path()
+        except OSError:
+            return None
+        return self
+
+
+def cache_location() -> tuple[Path, Literal["NUMBA_CACHE_DIR", "user", "in-tree"]]:
     """Where numba caches imageform's kernels in this process, and why.
 
-    ``("NUMBA_CACHE_DIR", path)`` when the variable is set (by the user, or by
-    :func:`configure_cache` because the package folder is read-only: then ``path`` is
-    :func:`user_cache_dir` and the reason ``"user"``); else ``"in-tree"``: the
-    ``__pycache__`` folder beside the kernels' source.
+    ``(folder, "NUMBA_CACHE_DIR")`` when the variable is set, ``(folder, "user")`` in the
+    user's cache folder otherwise (see the module's documentation); ``(__pycache__ beside the
+    kernels, "in-tree")`` when that folder cannot be written (numba's own default then).
     """
-    env = os.environ.get("NUMBA_CACHE_DIR", "")
-    if env:
-        reason: Literal["NUMBA_CACHE_DIR", "user"] = (
-            "user" if os.environ.get("_IMAGEFORM_NUMBA_CACHE_DIR") == env else "NUMBA_CACHE_DIR"
-        )
-        return Path(env), reason
+    folder = _folder()
+    if _writable(folder):
+        return folder, cache_root()[1]
     return _HERE / "__pycache__", "in-tree"
 
 
 def configure_cache() -> None:
-    """Point numba's cache at the user's cache folder when the package folder is read-only.
+    """Put :class:`PackageCacheLocator` first in numba's list of cache locators (idempotent).
 
-    Call before numba is imported; a no-op when ``NUMBA_CACHE_DIR`` is set or the kernels'
-    ``__pycache__`` is writable. When numba is already imported (by the caller's own code),
-    its configuration is updated too.
+    Done when this module is imported, before any kernel is defined.
     """
-    if os.environ.get("NUMBA_CACHE_DIR") or _writable(_HERE / "__pycache__"):
-        return
-    folder = str(user_cache_dir())
-    os.environ["NUMBA_CACHE_DIR"] = folder
-    os.environ["_IMAGEFORM_NUMBA_CACHE_DIR"] = folder  # marks it as ours (cache_location)
-    config = sys.modules.get("numba.core.config")
-    if config is not None:
-        config.CACHE_DIR = folder  # type: ignore[attr-defined]
+    impl = vars(caching).get("CacheImpl") or vars(caching)["_CacheImpl"]  # older numba: _CacheImpl
+    if PackageCacheLocator not in impl._locator_classes:
+        impl._locator_classes.insert(0, PackageCacheLocator)
 
 
 configure_cache()
-
-import numba  # noqa: E402  (after configure_cache: numba reads NUMBA_CACHE_DIR on import)
 
 
 def njit(fn: Callable[..., Any] | None = None, /, **options: Any) -> Any:
@@ -170,3 +248,57 @@ def parallel_pays(n: int, threshold: int) -> bool:
     1.005 ms against 0.954 ms serially).
     """
     return n >= threshold and numba.get_num_threads() > 1
+
+
+_POOL: ThreadPoolExecutor | None = None
+_POOL_SIZE = 0
+_POOL_LOCK = threading.Lock()
+
+
+def _reset_pool() -> None:  # in a forked child: the parent's threads do not exist there
+    global _POOL, _POOL_SIZE
+    _POOL, _POOL_SIZE = None, 0
+
+
+if hasattr(os, "register_at_fork"):
+    os.register_at_fork(after_in_child=_reset_pool)
+
+
+def _pool(workers: int) -> ThreadPoolExecutor:
+    global _POOL, _POOL_SIZE
+    with _POOL_LOCK:
+        if _POOL is None or workers > _POOL_SIZE:
+            if _POOL is not None:
+                _POOL.shutdown(wait=False)
+            _POOL = ThreadPoolExecutor(workers, thread_name_prefix="imageform-kernel")
+            _POOL_SIZE = workers
+        return _POOL
+
+
+def run_tasks(kernel: Any, n_tasks: int, *args: Any, threads: int | None = None) -> None:
+    """Run ``kernel(t0, t1, *args)`` over the tasks ``0 .. n_tasks - 1`` on numba's threads.
+
+    The tasks are cut into one contiguous run per thread (as ``prange``'s static schedule);
+    the calling thread runs the first. ``kernel`` is a serial kernel compiled with
+    ``nogil=True`` that loops ``for t in range(t0, t1)``: compiling it costs seconds less than
+    the same loop as a ``parallel=True`` ``prange`` (numba's parallel lowering and its gufunc,
+    about 3 s of CPU for the Menon demosaic on a first run), and one compiled kernel serves
+    the small inputs run serially too (no serial twin to compile). ``threads``: default
+    ``numba.get_num_threads()`` (``NUMBA_NUM_THREADS``, ``numba.set_num_threads``); 1 runs
+    every task in the calling thread.
+    """
+    k = min(n_tasks, threads if threads is not None else numba.get_num_threads())
+    if k <= 1:
+        if n_tasks > 0:
+            kernel(0, n_tasks, *args)
+        return
+    cut = [n_tasks * i // k for i in range(k + 1)]
+    pool = _pool(k - 1)
+    futures: list[Future[Any]] = [
+        pool.submit(kernel, cut[i], cut[i + 1], *args) for i in range(1, k)
+    ]
+    try:
+        kernel(cut[0], cut[1], *args)
+    finally:
+        for f in futures:
+            f.result()

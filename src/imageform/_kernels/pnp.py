@@ -35,16 +35,63 @@ def _cost(R, t, X, uv, K, w):  # type: ignore[no-untyped-def]  # pragma: no cove
 
 
 @njit
-def _rodrigues_left(d, R, out):  # type: ignore[no-untyped-def]  # pragma: no cover
-    th2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2]
+def _rodrigues_left(d0, d1, d2, R, out):  # type: ignore[no-untyped-def]  # pragma: no cover
+    """Write ``exp([d]x) R`` into ``out``, in scalars.
+
+    No temporaries, no matrix products: array expressions and slice copies cost seconds of
+    compilation on a first run.
+    """
+    th2 = d0 * d0 + d1 * d1 + d2 * d2
     if th2 < 1e-12:
         a, b = 1.0 - th2 / 6.0, 0.5 - th2 / 24.0
     else:
         th = np.sqrt(th2)
         a, b = np.sin(th) / th, (1.0 - np.cos(th)) / th2
-    S = np.array([[0.0, -d[2], d[1]], [d[2], 0.0, -d[0]], [-d[1], d[0], 0.0]])
-    E = np.eye(3) + a * S + b * (S @ S)
-    out[:, :] = E @ R
+    # E = I + a S + b S @ S, S = [d]x; S @ S = d d^T - |d|^2 I
+    e00 = 1.0 + b * (d0 * d0 - th2)
+    e11 = 1.0 + b * (d1 * d1 - th2)
+    e22 = 1.0 + b * (d2 * d2 - th2)
+    e01, e10 = -a * d2 + b * d0 * d1, a * d2 + b * d0 * d1
+    e02, e20 = a * d1 + b * d0 * d2, -a * d1 + b * d0 * d2
+    e12, e21 = -a * d0 + b * d1 * d2, a * d0 + b * d1 * d2
+    for j in range(3):
+        r0, r1, r2 = R[0, j], R[1, j], R[2, j]
+        out[0, j] = e00 * r0 + e01 * r1 + e02 * r2
+        out[1, j] = e10 * r0 + e11 * r1 + e12 * r2
+        out[2, j] = e20 * r0 + e21 * r1 + e22 * r2
+
+
+@njit
+def _solve(M, g, x):  # type: ignore[no-untyped-def]  # pragma: no cover
+    """Solve ``M x = g`` into ``x`` (``M`` overwritten).
+
+    Gaussian elimination with partial pivoting, as LAPACK's ``gesv`` (``np.linalg.solve``),
+    without its compile cost.
+    """
+    n = g.shape[0]
+    for i in range(n):
+        x[i] = g[i]
+    for c in range(n):
+        p = c
+        for r in range(c + 1, n):
+            if abs(M[r, c]) > abs(M[p, c]):
+                p = r
+        if p != c:
+            for k in range(n):
+                M[c, k], M[p, k] = M[p, k], M[c, k]
+            x[c], x[p] = x[p], x[c]
+        piv = M[c, c]
+        for r in range(c + 1, n):
+            f = M[r, c] / piv
+            if f != 0.0:
+                for k in range(c + 1, n):
+                    M[r, k] -= f * M[c, k]
+                x[r] -= f * x[c]
+    for c in range(n - 1, -1, -1):
+        acc = x[c]
+        for k in range(c + 1, n):
+            acc -= M[c, k] * x[k]
+        x[c] = acc / M[c, c]
 
 
 @njit(parallel=True)
@@ -63,6 +110,7 @@ def refine_pose_batch(R, t, X, uv, K, w, max_iter, tol, rms):  # type: ignore[no
         g = np.empty(6)
         Ju = np.empty(6)
         Jv = np.empty(6)
+        step = np.empty(6)
         for _it in range(max_iter):
             A[:, :] = 0.0
             g[:] = 0.0
@@ -99,15 +147,17 @@ def refine_pose_batch(R, t, X, uv, K, w, max_iter, tol, rms):  # type: ignore[no
             M = A.copy()
             for j in range(6):
                 M[j, j] += lam * (A[j, j] if A[j, j] != 0.0 else 1.0)
-            step = -np.linalg.solve(M, g)
-            _rodrigues_left(step[:3], Rb, Rn)
+            _solve(M, g, step)  # the step is minus the solution
+            _rodrigues_left(-step[0], -step[1], -step[2], Rb, Rn)
             for j in range(3):
-                tn[j] = tb[j] + step[3 + j]
+                tn[j] = tb[j] - step[3 + j]
             costn = _cost(Rn, tn, X[b], uv[b], K, w[b])
             if np.isfinite(costn) and costn <= cost:
                 gain = cost - costn
-                Rb[:, :] = Rn
-                tb[:] = tn
+                for j in range(3):
+                    tb[j] = tn[j]
+                    for k in range(3):
+                        Rb[j, k] = Rn[j, k]
                 done = gain <= tol * cost
                 cost = costn
                 lam = lam / 10.0
@@ -117,8 +167,10 @@ def refine_pose_batch(R, t, X, uv, K, w, max_iter, tol, rms):  # type: ignore[no
                 lam = lam * 10.0
                 if lam >= 1e12:
                     break
-        R[b] = Rb
-        t[b] = tb
+        for j in range(3):
+            t[b, j] = tb[j]
+            for k in range(3):
+                R[b, j, k] = Rb[j, k]
         wsum = 0.0
         for i in range(N):
             wsum += w[b, i]

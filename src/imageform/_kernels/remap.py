@@ -60,11 +60,11 @@ from typing import Any
 
 import numpy as np
 from llvmlite import ir
-from numba import prange, types
+from numba import types
 from numba.core import cgutils
 from numba.extending import intrinsic, overload
 
-from imageform._kernels.jit import njit, parallel_pays, serial_twin
+from imageform._kernels.jit import njit, parallel_pays, run_tasks
 
 __all__ = [
     "PARALLEL_MIN_SAMPLES",
@@ -509,7 +509,43 @@ def _remap_rows_grey(
                     ob[t] = O(res[t])
 
 
-@njit(parallel=True, error_model="numpy", fastmath={"contract"})
+@njit(nogil=True, error_model="numpy", fastmath={"contract"})
+def _remap_tasks(
+    t0: int,
+    t1: int,
+    img: np.ndarray,
+    map_uv: np.ndarray,
+    scale: float,
+    fill: float,
+    out: np.ndarray,
+    acc: np.ndarray,
+    kcar: np.ndarray,
+    hi: float,
+    nblk: int,
+) -> None:  # pragma: no cover
+    # tasks t0 .. t1 - 1 of remap_bilinear: image t // nblk, row block t % nblk
+    _, h, w, nc = img.shape
+    ho, wo = map_uv.shape[0], map_uv.shape[1]
+    mf = map_uv.ravel()
+    rounded = hi > 0.0
+    grey = _LITTLE and nc == 1 and h >= 2 and w >= 2
+    kidx = np.empty(_BLK, kcar.dtype)
+    ax = np.empty(_BLK, acc.dtype)
+    ay = np.empty(_BLK, acc.dtype)
+    ok = np.empty(_BLK, np.bool_)
+    bufs = (kidx, ax, ay, ok)
+    for t in range(t0, t1):
+        b = t // nblk
+        blk = t - b * nblk
+        flat = img[b].ravel()
+        of = out[b].ravel()
+        i0, i1 = blk * ho // nblk, (blk + 1) * ho // nblk
+        if grey:
+            _remap_rows_grey(flat, mf, i0, i1, wo, h, w, scale, fill, rounded, of, acc)
+        else:
+            _remap_rows(flat, mf, i0, i1, wo, h, w, nc, scale, fill, rounded, hi, of, bufs)
+
+
 def remap_bilinear(
     img: np.ndarray,
     map_uv: np.ndarray,
@@ -519,35 +555,34 @@ def remap_bilinear(
     acc: np.ndarray,
     kcar: np.ndarray,
     hi: float,
-) -> None:  # pragma: no cover
+    threads: int | None = None,
+) -> None:
     """``img`` (B, H, W, C), ``out`` (B, H', W', C) and ``map_uv`` (H', W', 2), C-contiguous.
 
     ``out`` float32/float64, or the image's integer dtype when ``hi`` (its largest code) is
     positive: rounded, ``fill`` in codes. ``acc``: an empty array of the arithmetic's dtype
     (float64 for a float64 ``out``, else float32); ``kcar``: one of the sample indices'
-    dtype (int32 when the image has fewer than 2**31 samples, else int64).
+    dtype (int32 when the image has fewer than 2**31 samples, else int64). The row blocks
+    run on numba's threads (:func:`imageform._kernels.jit.run_tasks`; ``threads=1``: in the
+    calling thread).
     """
-    nb, h, w, nc = img.shape
-    ho, wo = map_uv.shape[0], map_uv.shape[1]
-    nblk = min(ho, _BLOCKS)
-    mf = map_uv.ravel()
-    rounded = hi > 0.0
-    grey = _LITTLE and nc == 1 and h >= 2 and w >= 2
-    for t in prange(nb * nblk):
-        b = t // nblk
-        blk = t - b * nblk
-        flat = img[b].ravel()
-        of = out[b].ravel()
-        i0, i1 = blk * ho // nblk, (blk + 1) * ho // nblk
-        if grey:
-            _remap_rows_grey(flat, mf, i0, i1, wo, h, w, scale, fill, rounded, of, acc)
-        else:
-            kidx = np.empty(_BLK, kcar.dtype)
-            ax = np.empty(_BLK, acc.dtype)
-            ay = np.empty(_BLK, acc.dtype)
-            ok = np.empty(_BLK, np.bool_)
-            bufs = (kidx, ax, ay, ok)
-            _remap_rows(flat, mf, i0, i1, wo, h, w, nc, scale, fill, rounded, hi, of, bufs)
+    nblk = min(map_uv.shape[0], _BLOCKS)
+    args = (img, map_uv, scale, fill, out, acc, kcar, hi, nblk)
+    run_tasks(_remap_tasks, img.shape[0] * nblk, *args, threads=threads)
+
+
+def remap_bilinear_serial(
+    img: np.ndarray,
+    map_uv: np.ndarray,
+    scale: float,
+    fill: float,
+    out: np.ndarray,
+    acc: np.ndarray,
+    kcar: np.ndarray,
+    hi: float,
+) -> None:
+    """:func:`remap_bilinear` in the calling thread (small images: no pool to wake)."""
+    remap_bilinear(img, map_uv, scale, fill, out, acc, kcar, hi, threads=1)
 
 
 @njit(error_model="numpy", fastmath={"contract"})
@@ -622,7 +657,40 @@ def _undistort_rows(
             _sample_block(flat, n, nc, dx, dy, kidx, ax, ay, ok, scale, fill, rounded, hi, ob, lut)
 
 
-@njit(parallel=True, error_model="numpy", fastmath={"contract"})
+@njit(nogil=True, error_model="numpy", fastmath={"contract"})
+def _undistort_tasks(
+    t0: int,
+    t1: int,
+    img: np.ndarray,
+    p: np.ndarray,
+    rational: bool,
+    scale: float,
+    fill: float,
+    out: np.ndarray,
+    acc: np.ndarray,
+    kcar: np.ndarray,
+    hi: float,
+    nblk: int,
+) -> None:  # pragma: no cover
+    # tasks t0 .. t1 - 1 of undistort_brown_conrady: image t // nblk, row block t % nblk
+    _, h, w, nc = img.shape
+    ho = out.shape[1]
+    wo = out.shape[2]
+    rounded = hi > 0.0
+    kidx = np.empty(_BLK, kcar.dtype)
+    ax = np.empty(_BLK, acc.dtype)
+    ay = np.empty(_BLK, acc.dtype)
+    ok = np.empty(_BLK, np.bool_)
+    bufs = (kidx, ax, ay, ok)
+    for t in range(t0, t1):
+        b = t // nblk
+        blk = t - b * nblk
+        flat = img[b].ravel()
+        of = out[b].ravel()
+        i0, i1 = blk * ho // nblk, (blk + 1) * ho // nblk
+        _undistort_rows(flat, i0, i1, wo, h, w, nc, p, rational, scale, fill, rounded, hi, of, bufs)
+
+
 def undistort_brown_conrady(
     img: np.ndarray,
     k_new: np.ndarray,
@@ -634,50 +702,43 @@ def undistort_brown_conrady(
     acc: np.ndarray,
     kcar: np.ndarray,
     hi: float,
-) -> None:  # pragma: no cover
+    threads: int | None = None,
+) -> None:
     """Undistort: Brown-Conrady (OpenCV's rational model) fused with the sampling.
 
     As ``bc_distort_point``; the coefficients hoisted, the row terms computed once per row,
     the positions in float64, and the rational denominator skipped when ``k4 = k5 = k6 = 0``.
-    ``out`` as for :func:`remap_bilinear`.
+    ``out`` as for :func:`remap_bilinear`; the row blocks on numba's threads.
     """
-    nb, h, w, nc = img.shape
-    ho = out.shape[1]
-    wo = out.shape[2]
     p = np.empty(18, np.float64)
-    p[0], p[1], p[2], p[3], p[4] = k_new[0, 0], k_new[0, 1], k_new[0, 2], k_new[1, 1], k_new[1, 2]
-    p[5], p[6], p[7], p[8], p[9] = k_src[0, 0], k_src[0, 1], k_src[0, 2], k_src[1, 1], k_src[1, 2]
-    for q in range(8):
-        p[10 + q] = coeffs[q]
-    rational = coeffs[5] != 0.0 or coeffs[6] != 0.0 or coeffs[7] != 0.0
-    rounded = hi > 0.0
-    nblk = min(ho, _BLOCKS)
-    for t in prange(nb * nblk):
-        b = t // nblk
-        blk = t - b * nblk
-        kidx = np.empty(_BLK, kcar.dtype)
-        ax = np.empty(_BLK, acc.dtype)
-        ay = np.empty(_BLK, acc.dtype)
-        ok = np.empty(_BLK, np.bool_)
-        flat = img[b].ravel()
-        of = out[b].ravel()
-        i0, i1 = blk * ho // nblk, (blk + 1) * ho // nblk
-        bufs = (kidx, ax, ay, ok)
-        _undistort_rows(flat, i0, i1, wo, h, w, nc, p, rational, scale, fill, rounded, hi, of, bufs)
+    p[0:5] = k_new[0, 0], k_new[0, 1], k_new[0, 2], k_new[1, 1], k_new[1, 2]
+    p[5:10] = k_src[0, 0], k_src[0, 1], k_src[0, 2], k_src[1, 1], k_src[1, 2]
+    p[10:18] = np.asarray(coeffs, np.float64)[:8]
+    rational = bool(coeffs[5] != 0.0 or coeffs[6] != 0.0 or coeffs[7] != 0.0)
+    nblk = min(out.shape[1], _BLOCKS)
+    args = (img, p, rational, scale, fill, out, acc, kcar, hi, nblk)
+    run_tasks(_undistort_tasks, img.shape[0] * nblk, *args, threads=threads)
 
 
-# the same loops in the calling thread (prange runs as range): for small images, where waking
-# numba's pool costs more than it gains on a loaded machine (as demosaic_bilinear's)
-remap_bilinear_serial = serial_twin(remap_bilinear, error_model="numpy", fastmath={"contract"})
-undistort_brown_conrady_serial = serial_twin(
-    undistort_brown_conrady, error_model="numpy", fastmath={"contract"}
-)
+def undistort_brown_conrady_serial(
+    img: np.ndarray,
+    k_new: np.ndarray,
+    k_src: np.ndarray,
+    coeffs: np.ndarray,
+    scale: float,
+    fill: float,
+    out: np.ndarray,
+    acc: np.ndarray,
+    kcar: np.ndarray,
+    hi: float,
+) -> None:
+    """:func:`undistort_brown_conrady` in the calling thread."""
+    undistort_brown_conrady(img, k_new, k_src, coeffs, scale, fill, out, acc, kcar, hi, threads=1)
 
-#: Outputs of fewer samples (pixels x channels x images) run serially. On the idle 2-core
-#: machine two threads already halve a 96 x 96 grey remap (0.03 ms); the threshold only
-#: keeps the pool's wake-up off the smallest calls. (An earlier 1 << 22, set when both
-#: kernels shared numba's cache entries and the "parallel" one was often the serial code,
-#: ran every 1 MP image on one thread: see :func:`imageform._kernels.jit.serial_twin`.)
+
+#: Outputs of fewer samples (pixels x channels x images) run in the calling thread. On the
+#: idle 2-core machine two threads already halve a 96 x 96 grey remap (0.03 ms); the threshold
+#: only keeps the pool's wake-up off the smallest calls. One compiled kernel serves both.
 PARALLEL_MIN_SAMPLES = 1 << 14
 
 

@@ -45,11 +45,6 @@ rows = [",".join(repr(float(v)) for v in (*a, *b)) for a, b in zip(X, uv, strict
 img = (rng.uniform(0, 1, (64, 96, 3)) * 255).astype(np.uint8)
 write_image(work / "rgb8.png", img)
 write_image(work / "mosaic8.png", np.ascontiguousarray(img[..., 1:2]))
-# undistortion has a serial twin for small images (imageform._kernels.jit.serial_twin): the
-# 96 x 64 image compiles it, board_rgb.png the parallel kernel
-Ks = np.array([[120.0, 0.0, 47.5], [0.0, 120.0, 31.5], [0.0, 0.0, 1.0]])
-write_camera(work / "cam_small.toml", Camera(Ks, np.eye(3), np.zeros(3), (96, 64), distortion=dist),
-             has_pose=True)
 # three views of a 9 x 6 checkerboard (30 mm squares) for calibrate's detector and refinement
 vv, uu = np.mgrid[0:480, 0:640].astype(np.float64)
 for k, (ax, ay) in enumerate(((0.3, 0.0), (0.0, 0.35), (-0.25, 0.2))):
@@ -76,7 +71,6 @@ def _jobs(work: Path) -> list[list[str]]:
         ["convert", f"{w}/rgb8.png", "--from", "srgb", "--to", "lab", "-o", f"{w}/lab.tif"],
         ["calibrate", f"{w}/board*.png", "--board", "9x6", "--square", "30mm", "-o", f"{w}/c.toml"],
         ["undistort", f"{w}/board_rgb.png", "--camera", f"{w}/cam.toml", "-o", f"{w}/u.png"],
-        ["undistort", f"{w}/mosaic8.png", "--camera", f"{w}/cam_small.toml", "-o", f"{w}/us.png"],
     ]
     # 8-bit mosaics only: 16-bit ones run the same float32 kernels
     for method in ("menon", "bilinear", "malvar", "hamilton-adams"):
@@ -93,9 +87,6 @@ def warm_cache(jobs: int | None = None) -> list[tuple[str, float, str]]:
     Each command runs as ``python -m imageform ...`` in its own process, at most ``jobs`` at
     once (default: the CPU count); the processes share the cache folder of this one.
     """
-    from imageform._kernels.jit import configure_cache
-
-    configure_cache()  # children inherit NUMBA_CACHE_DIR when the package folder is read-only
     n = max(1, jobs or os.cpu_count() or 1)
     env = {**os.environ, "MPLBACKEND": "Agg"}
     done: list[tuple[str, float, str]] = []
@@ -134,21 +125,24 @@ def warm_cache(jobs: int | None = None) -> list[tuple[str, float, str]]:
 
 
 def _files() -> list[Path]:
+    """List the compiled kernels in this process's cache folder (``cache_location``)."""
     from imageform._kernels.jit import cache_location
 
-    where, reason = cache_location()
-    if reason == "in-tree":
-        roots = [where]
-    else:
-        # numba's sub-folder for one source folder: its name and the SHA-1 of its path
-        import hashlib
+    where, _ = cache_location()
+    if not where.is_dir():
+        return []
+    return [p for p in where.iterdir() if p.suffix in (".nbi", ".nbc")]
 
-        from imageform._kernels import jit
 
-        src = os.path.abspath(os.path.dirname(jit.__file__))
-        sub = "_".join([os.path.basename(src), hashlib.sha1(src.encode()).hexdigest()])
-        roots = [where / sub]
-    return [p for r in roots if r.is_dir() for p in r.iterdir() if p.suffix in (".nbi", ".nbc")]
+def _stale() -> list[Path]:
+    """List imageform's other cache folders here: other versions, or edited kernels."""
+    from imageform._kernels.jit import cache_location, cache_root
+
+    where, _ = cache_location()
+    root = cache_root()[0]
+    if not root.is_dir():
+        return []
+    return [p for p in root.glob("imageform-*") if p.is_dir() and p != where]
 
 
 @click.command(
@@ -163,18 +157,24 @@ def _files() -> list[Path]:
 def cache_command(warm: bool, clear: bool, jobs: int | None, as_json: bool) -> None:
     """Show where numba caches imageform's compiled kernels; warm or clear that cache.
 
-    The cache is NUMBA_CACHE_DIR when set; else __pycache__ beside the kernels when that is
-    writable; else the user's cache folder (~/.cache/imageform/numba on Linux).
+    One cache per machine, whatever the clone or install: NUMBA_CACHE_DIR when set, else the
+    user's cache folder (~/.cache/imageform/numba on Linux), in a folder named after
+    imageform's version and a hash of the kernels' code. --clear also removes the folders of
+    other versions and of edited kernels.
     """
-    from imageform._kernels.jit import cache_location, configure_cache
+    import shutil
 
-    configure_cache()
+    from imageform._kernels.jit import cache_location
+
     where, reason = cache_location()
     removed = 0
     if clear:
         for f in _files():
             f.unlink(missing_ok=True)
             removed += 1
+        for folder in _stale():
+            removed += sum(1 for p in folder.iterdir() if p.suffix in (".nbi", ".nbc"))
+            shutil.rmtree(folder, ignore_errors=True)
     warmed = warm_cache(jobs) if warm else []
     files = _files()
     size = sum(f.stat().st_size for f in files)
@@ -189,8 +189,8 @@ def cache_command(warm: bool, clear: bool, jobs: int | None, as_json: bool) -> N
     else:
         why = {
             "NUMBA_CACHE_DIR": "NUMBA_CACHE_DIR is set",
-            "in-tree": "beside the kernels' source, writable",
-            "user": "the package folder is read-only: the user's cache folder",
+            "in-tree": "the user's cache folder cannot be written: numba's, beside the source",
+            "user": "the user's cache folder, one per machine",
         }[reason]
         click.echo(f"cache: {where} ({why})")
         if clear:

@@ -119,6 +119,11 @@ def find_candidates(
     # kernel reads gray as it is and works in float32 (no converted copy of the image)
     nms = max(2, round(1.5 * sigma))
     border = taps.size // 2 + 1
+    if fast:
+        # one compiled kernel per 8-bit or other image, not one per dtype and read-only flag
+        # (each costs seconds of compilation on a first run): every value is converted to
+        # float32 where the kernel reads it, so converting the image first gives the same bits
+        gray = np.require(gray, np.uint8 if gray.dtype == np.uint8 else np.float32, ("C", "W"))
     smooth, peak, ys, xs, around = (saddle_maxima_numba if fast else saddle_maxima_numpy)(
         np.ascontiguousarray(gray), taps, nms, border, relative_threshold, np.float32(scale)
     )
