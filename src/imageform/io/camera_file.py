@@ -36,7 +36,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from imageform._files import atomic_write
+from imageform._files import atomic_write, check_writable
 from imageform._validate import as_bool, describe
 from imageform.errors import InvalidInputError
 from imageform.io._camera_model import (
@@ -238,6 +238,7 @@ def write_camera(
     """
     from imageform import __version__
 
+    final = check_writable(path, "path")
     cf = camera if isinstance(camera, CameraFile) else CameraFile(camera)
     if has_pose is not None:
         cf = replace(cf, has_pose=as_bool(has_pose, "has_pose"))
@@ -263,6 +264,5 @@ def write_camera(
         date=prov.date or datetime.now(UTC).replace(microsecond=0),
     )
     text = camera_file_text(replace(cf, provenance=prov))
-    final = Path(path)
     atomic_write(final, lambda tmp: tmp.write_text(text, encoding="utf-8"))
     return final

@@ -37,7 +37,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from imageform._files import atomic_write
+from imageform._files import atomic_write, check_writable
 from imageform._validate import check_memory, check_option, describe, format_shape
 from imageform.errors import InvalidInputError
 
@@ -559,7 +559,7 @@ def write_image(
             stacklevel=2,
         )
         out_of_range = "clip" if clip else "error"
-    p = Path(path)
+    p = check_writable(path, "path")
     fmt = image_format(p)
     out_of_range = check_option(out_of_range, _OUT_OF_RANGE, "out-of-range policy")
     if bits is not None and (isinstance(bits, bool) or bits not in (8, 16)):
