@@ -40,6 +40,7 @@ __all__ = [
     "check_finite",
     "check_image_size",
     "check_memory",
+    "check_nonempty",
     "check_option",
     "check_positive",
     "check_rotation",
@@ -286,6 +287,11 @@ def _as_number(value: object, name: str) -> float:
     )
 
 
+#: The smallest positive normal float64: a positive value below it (subnormal) passes ``> 0``
+#: but its reciprocal is inf, and its square 0.
+_SMALLEST_NORMAL = float(np.finfo(np.float64).tiny)
+
+
 def as_real(
     value: object,
     name: str,
@@ -299,7 +305,8 @@ def as_real(
     """Convert a finite real scalar (Python or NumPy number, 0-d array) to ``float``.
 
     Refuses bool, None, strings, complex numbers, NaN, inf (unless ``allow_inf``) and values
-    outside the bounds, in one line naming ``name``.
+    outside the bounds, in one line naming ``name``. With ``positive``, a subnormal value
+    (below 2.2e-308, whose reciprocal overflows) is refused too.
 
     Examples
     --------
@@ -315,6 +322,11 @@ def as_real(
         raise InvalidInputError(f"expected {name} as a finite number, got {v:g}")
     if positive and v <= 0:
         raise InvalidInputError(f"expected {name} > 0, got {v:g}")
+    if positive and v < _SMALLEST_NORMAL:  # passes > 0, but 1 / v overflows
+        raise InvalidInputError(
+            f"expected {name} > 0 and at least {_SMALLEST_NORMAL:.3g} (its reciprocal "
+            f"must be finite), got {v:g}"
+        )
     if nonnegative and v < 0:
         raise InvalidInputError(f"expected {name} >= 0, got {v:g}")
     if minimum is not None and v < minimum:
@@ -417,6 +429,12 @@ def memory_limit() -> int:
     return int(total // 2)
 
 
+def _gib(n_bytes: float) -> str:
+    """``12.3`` below a million GiB, ``1.2e+294`` above: a number of bytes, short."""
+    g = n_bytes / 2**30
+    return f"{g:.1f}" if g < 1e6 else f"{g:.3g}"
+
+
 def check_memory(n_bytes: float, name: str, what: str = "the result") -> None:
     """Refuse, before allocating, what would need more than :func:`memory_limit` bytes.
 
@@ -430,7 +448,7 @@ def check_memory(n_bytes: float, name: str, what: str = "the result") -> None:
     limit = memory_limit()
     if not n_bytes <= limit:  # NaN too
         raise InvalidInputError(
-            f"{name}: {what} would need {n_bytes / 2**30:.1f} GiB, more than the "
+            f"{name}: {what} would need {_gib(n_bytes)} GiB, more than the "
             f"{limit / 2**30:.1f} GiB allowed (IMAGEFORM_MAX_MEMORY)"
         )
 
@@ -445,6 +463,25 @@ def check_image_size(size: object, name: str = "image_size") -> tuple[int, int]:
     """
     w, h = as_size(size, f"{name} (width, height)")
     return w, h
+
+
+def check_nonempty(image: Any, name: str = "image") -> Any:
+    """Refuse an image (any array) without a single pixel, saying "empty image"; return it.
+
+    Examples
+    --------
+    >>> check_nonempty(np.empty((0, 4, 3)), "image")
+    Traceback (most recent call last):
+    ...
+    imageform.errors.InvalidInputError: expected image with at least one pixel, got an empty image of shape (0, 4, 3)
+    """  # noqa: E501
+    shape = tuple(getattr(image, "shape", ()))
+    if any(d == 0 for d in shape):
+        raise InvalidInputError(
+            f"expected {name} with at least one pixel, got an empty image of shape "
+            f"{format_shape(shape)}"
+        )
+    return image
 
 
 def check_positive(value: object, name: str, *, allow_zero: bool = False) -> float:

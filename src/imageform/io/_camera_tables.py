@@ -44,6 +44,8 @@ _CFA = ("RGGB", "BGGR", "GRBG", "GBRG")
 
 
 def _reader(r: Reader | None, owner: str) -> Reader:
+    if r is not None and not isinstance(r, Reader):
+        raise TypeError(f"expected r as the camera file's Reader (or None), got {describe(r)}")
     return r if r is not None else Reader(owner)
 
 
@@ -51,6 +53,17 @@ def _nonneg(r: Reader, value: Any, key: str) -> float:
     v = r.number(value, key)
     if v < 0:
         raise r.fail(key, f"expected a number >= 0, got {v:g}")
+    return v
+
+
+#: The Nyquist frequency of the pixel grid (cycles/pixel): the largest MTF50 a file may give.
+_NYQUIST_CY_PER_PX = 0.5
+
+
+def _mtf50(r: Reader, value: Any, key: str) -> float:
+    v = r.positive(value, key)
+    if v > _NYQUIST_CY_PER_PX:
+        raise r.fail(key, f"expected an MTF50 in (0, 0.5] cycles/pixel (Nyquist), got {v:.4g}")
     return v
 
 
@@ -253,7 +266,7 @@ class CameraOptics(_Table):
         ``zernike``.
     gaussian_sigma_px : float >= 0
         The Gaussian PSF's standard deviation (pixels); required by ``gaussian``.
-    mtf50_cy_per_px : float or tuple of 3 floats, each > 0
+    mtf50_cy_per_px : float or tuple of 3 floats, each in (0, 0.5]
         Measured MTF50 (cycles per pixel), one for all channels or one per R, G, B;
         required by ``mtf50``.
 
@@ -305,9 +318,9 @@ class CameraOptics(_Table):
             if isinstance(v, list):
                 if len(v) != 3:
                     raise r.fail(key, f"expected a number or 3 numbers (R, G, B), got {_show(v)}")
-                m: Any = tuple(r.positive(x, f"{key}[{i}]") for i, x in enumerate(v))
+                m: Any = tuple(_mtf50(r, x, f"{key}[{i}]") for i, x in enumerate(v))
             else:
-                m = r.positive(v, key)
+                m = _mtf50(r, v, key)
             object.__setattr__(self, "mtf50_cy_per_px", m)
         if model == "zernike" and self.zernike is None and self.zernike_zones is not None:
             needs_z: tuple[str, ...] = ("f_number", "zernike_zones", "wavelength_nm")

@@ -171,7 +171,11 @@ def plot_chromaticity_diagram(
     if ax is None:
         fig, ax = plt.subplots(figsize=(6.5, 6.5))
     else:
-        fig = ax.figure
+        from matplotlib.axes import Axes
+
+        if not isinstance(ax, Axes):
+            raise TypeError(f"expected ax as matplotlib Axes (or None), got {describe(ax)}")
+        fig = ax.figure  # type: ignore[assignment]
     img, ext = _horseshoe_image(c, n_grid)
     ax.imshow(img, origin="lower", extent=ext, interpolation="bilinear")
     wl, locus = spectral_locus(observer=observer, coords=c)

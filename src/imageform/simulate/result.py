@@ -22,7 +22,7 @@ from typing import Any, Literal
 import numpy as np
 
 from imageform._validate import as_real, as_reals, as_size, describe
-from imageform.errors import InvalidInputError
+from imageform.errors import InvalidInputError, UnknownOptionError
 from imageform.geometry.camera import Camera
 from imageform.sensor.emva import PhotonTransferData
 from imageform.simulate.config import WORLD_UP
@@ -275,8 +275,17 @@ class SimulationResult:
         object.__setattr__(self, "stages", stages)
 
     def stage(self, name: str) -> Stage:
-        """Return the stage called ``name``; ``KeyError`` listing the names if there is none."""
+        """Return the stage called ``name``.
+
+        Raises
+        ------
+        UnknownOptionError
+            No stage is called ``name`` (the message lists the stages, in order).
+        """
         for s in self.stages:
             if s.name == name:
                 return s
-        raise KeyError(f"no stage {name!r}; stages: {[s.name for s in self.stages]}")
+        if not isinstance(name, str):
+            raise TypeError(f"expected name as a stage name (str), got {describe(name)}")
+        names = ", ".join(repr(s.name) for s in self.stages)
+        raise UnknownOptionError(f"unknown stage {describe(name, 30)} for name; valid: {names}")

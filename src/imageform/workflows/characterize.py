@@ -1388,12 +1388,16 @@ def characterize_camera(
     ...
     imageform.errors.InvalidInputError: ... holds none of checkerboard/, colorchecker/, ...
     """
-    from imageform._validate import as_path
+    from imageform._validate import as_path, describe
 
     root = as_path(folder, "folder")
-    if not root.is_dir():
+    try:
+        is_dir = root.is_dir()
+    except OSError:  # a name too long for the file system, ...
+        is_dir = False
+    if not is_dir:
         raise InvalidInputError(
-            f"expected FOLDER a folder of lab photographs, got {str(root)!r}"[:200]
+            f"expected FOLDER a folder of lab photographs, got {describe(str(root), 60)}"
         )
     doc = _manifest(root)
     dirs = {part: _subfolder(root, names) for part, names in PARTS.items() if part != "noise"}

@@ -1,0 +1,234 @@
+"""The public API's boundary findings of issue 25's fuzz run, one test each.
+
+Each call below raised a raw Python error (IndexError, KeyError, AttributeError,
+ZeroDivisionError, OverflowError ...) or returned garbage before the fix; now each is the
+library's own error, in one line naming the parameter the user gave.
+"""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import pytest
+
+from imageform.errors import InvalidInputError, UnknownOptionError
+from tests.fuzz.values import V, resolve
+
+
+def _one_line(exc: BaseException, name: str) -> str:
+    msg = str(exc)
+    assert "\n" not in msg and len(msg) <= 200, msg
+    assert name in msg, msg
+    return msg
+
+
+@pytest.mark.parametrize(
+    "cls", ["CameraColor", "CameraOptics", "CameraSensor", "CameraSensitivity"]
+)
+def test_from_table_refuses_a_non_reader(cls: str) -> None:
+    import imageform.io as io
+
+    with pytest.raises(TypeError) as info:
+        getattr(io, cls).from_table({}, object())
+    _one_line(info.value, "r")
+    assert "Reader" in str(info.value)
+
+
+def _stain_calls() -> dict:
+    from imageform.analysis import (
+        background_intensity,
+        macenko_normalize,
+        macenko_stains,
+        vahadane_stains,
+    )
+
+    ok = resolve(V("stain"))
+    e = np.empty((0, 0, 3))
+    return {
+        "macenko_stains": (lambda: macenko_stains(e), "image"),
+        "macenko_normalize": (lambda: macenko_normalize(e, ok), "image"),
+        "macenko_normalize(target)": (lambda: macenko_normalize(ok, e), "target"),
+        "vahadane_stains": (lambda: vahadane_stains(e), "image"),
+        "background_intensity": (lambda: background_intensity(e), "image"),
+        "background_intensity(0 rows)": (
+            lambda: background_intensity(np.empty((0, 4, 3))),
+            "image",
+        ),
+    }
+
+
+@pytest.mark.parametrize(
+    "which",
+    [
+        "macenko_stains",
+        "macenko_normalize",
+        "macenko_normalize(target)",
+        "vahadane_stains",
+        "background_intensity",
+        "background_intensity(0 rows)",
+    ],
+)
+def test_stain_functions_refuse_an_empty_image(which: str) -> None:
+    call, name = _stain_calls()[which]
+    with pytest.raises(InvalidInputError, match="empty image") as info:
+        call()
+    _one_line(info.value, name)
+
+
+def test_simulation_result_stage_lists_the_valid_names() -> None:
+    res = resolve(V("result"))
+    with pytest.raises(UnknownOptionError, match=r"unknown stage 'nope'.*'raw'") as info:
+        res.stage("nope")
+    _one_line(info.value, "name")
+    assert res.stage("raw").name == "raw"
+
+
+def test_print_summary_refuses_a_console_without_print() -> None:
+    from imageform.batch import print_summary
+
+    with pytest.raises(TypeError, match="console") as info:
+        print_summary(resolve(V("batch_report")), console=object())
+    _one_line(info.value, "console")
+
+
+def test_plot_chromaticity_diagram_refuses_an_ax_that_is_not_axes() -> None:
+    pytest.importorskip("matplotlib")
+    from imageform.report.chromaticity_plot import plot_chromaticity_diagram
+
+    with pytest.raises(TypeError, match="ax") as info:
+        plot_chromaticity_diagram(ax=object())
+    _one_line(info.value, "ax")
+
+
+@pytest.mark.parametrize("size", [(), (64,), "ab", (0, 36), (64.5, 36)])
+def test_to_camera_refuses_a_bad_image_size(size: object) -> None:
+    cfg = resolve(V("camera_config"))
+    with pytest.raises(InvalidInputError) as info:
+        cfg.to_camera(size, 2e-6)
+    _one_line(info.value, "image_size")
+
+
+@pytest.mark.parametrize("pitch", [2e-6 + 1j, 5e-324, 0.0, -1e-6, float("nan"), "2e-6"])
+def test_to_camera_refuses_a_bad_sensor_pixel_pitch(pitch: object) -> None:
+    cfg = resolve(V("camera_config"))
+    with pytest.raises(InvalidInputError) as info:
+        cfg.to_camera((64, 36), pitch)  # type: ignore[arg-type]
+    _one_line(info.value, "sensor_pixel_pitch_m")
+
+
+@pytest.mark.parametrize("width", [0, -3, float("inf"), float("nan"), 2.5, 10**30])
+def test_scene_resized_refuses_a_bad_width(width: object) -> None:
+    scene = resolve(V("scene"))
+    with pytest.raises(InvalidInputError) as info:
+        scene.resized(width)  # type: ignore[arg-type]
+    _one_line(info.value, "width")
+
+
+def test_scene_resized_refuses_a_bad_height() -> None:
+    scene = resolve(V("scene"))
+    with pytest.raises(InvalidInputError) as info:
+        scene.resized(32, 0)
+    _one_line(info.value, "height")
+
+
+def test_a_subnormal_positive_number_is_refused() -> None:
+    """5e-324 passes ``> 0`` but its reciprocal overflows: as_real(positive=True) refuses it."""
+    from imageform._validate import as_real
+    from imageform.optics import mtf
+
+    with pytest.raises(InvalidInputError, match="pixel_pitch"):
+        as_real(5e-324, "pixel_pitch", positive=True)
+    assert as_real(1e-300, "x", positive=True) == 1e-300
+    with pytest.raises(InvalidInputError, match="pixel_pitch"):
+        mtf(resolve(V("psf")), pixel_pitch=5e-324)
+
+
+def test_check_memory_message_stays_short_for_a_huge_request() -> None:
+    from imageform._validate import check_memory
+
+    with pytest.raises(InvalidInputError) as info:
+        check_memory(1e300, "pixel_pitch", "the padded pupil")
+    _one_line(info.value, "pixel_pitch")
+
+
+def test_checkerboard_candidates_take_float16() -> None:
+    from imageform.geometry.checkerboard_candidates import find_candidates
+
+    gray = resolve(V("gray"))
+    a = find_candidates(gray.astype(np.float16), sigma=1.0)
+    b = find_candidates(gray.astype(np.float16).astype(np.float32), sigma=1.0)
+    np.testing.assert_array_equal(a.xy, b.xy)
+
+
+def test_characterize_camera_does_not_echo_a_huge_folder_name() -> None:
+    from imageform.workflows import characterize_camera
+
+    with pytest.raises(InvalidInputError) as info:
+        characterize_camera("x" * 100_000)
+    _one_line(info.value, "folder")
+
+
+# --- silent garbage ---------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("method", ["capture", "mean_electrons"])
+@pytest.mark.parametrize("wavelength", [550 + 1j, "550", 0.0, float("nan")])
+def test_sensor_refuses_a_bad_wavelength_even_when_unused(method: str, wavelength: object) -> None:
+    from imageform.sensor import SensorModel
+
+    s = SensorModel()
+    kwargs = {"rng": 0} if method == "capture" else {}
+    with pytest.raises(InvalidInputError) as info:
+        getattr(s, method)(
+            np.full((6, 8, 1), 100.0), exposure_time=0.01, wavelength_nm=wavelength, **kwargs
+        )
+    _one_line(info.value, "wavelength_nm")
+
+
+@pytest.mark.parametrize("white_level", [1 + 1j, "1", 0.0])
+def test_stage_display_image_refuses_a_bad_white_level_for_any_kind(white_level: object) -> None:
+    from imageform.report.display import stage_display_image
+
+    with pytest.raises(InvalidInputError) as info:
+        stage_display_image(resolve(V("rgb")), "linear", white_level=white_level)  # type: ignore[arg-type]
+    _one_line(info.value, "white_level")
+
+
+@pytest.mark.parametrize(
+    "E",
+    [
+        np.zeros((3, 3)),  # rank 0
+        np.diag([1.0, 0.0, 0.0]),  # rank 1
+        np.eye(3),  # rank 3
+    ],
+)
+def test_recover_pose_refuses_an_E_that_is_not_rank_2(E: np.ndarray) -> None:
+    from imageform.errors import DegenerateConfigurationError
+    from imageform.geometry import recover_pose
+
+    with pytest.raises((InvalidInputError, DegenerateConfigurationError)) as info:
+        recover_pose(E, resolve(V("pts1")), resolve(V("pts2")), resolve(V("K")))
+    _one_line(info.value, "E")
+    assert "rank" in str(info.value)
+
+
+def test_recover_pose_still_takes_a_valid_E() -> None:
+    from imageform.geometry import recover_pose
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        pose = recover_pose(
+            resolve(V("E")), resolve(V("pts1")), resolve(V("pts2")), resolve(V("K"))
+        )
+    assert np.allclose(pose.R @ pose.R.T, np.eye(3))
+
+
+@pytest.mark.parametrize("value", [1e308, 0.51, [0.3, 0.3, 0.7]])
+def test_camera_optics_refuses_an_mtf50_beyond_nyquist(value: object) -> None:
+    from imageform.io import CameraOptics
+
+    with pytest.raises(InvalidInputError, match="Nyquist") as info:
+        CameraOptics(model="mtf50", mtf50_cy_per_px=value)  # type: ignore[arg-type]
+    _one_line(info.value, "mtf50_cy_per_px")
+    assert CameraOptics(model="mtf50", mtf50_cy_per_px=0.5).mtf50_cy_per_px == 0.5
