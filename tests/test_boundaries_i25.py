@@ -232,3 +232,94 @@ def test_camera_optics_refuses_an_mtf50_beyond_nyquist(value: object) -> None:
         CameraOptics(model="mtf50", mtf50_cy_per_px=value)  # type: ignore[arg-type]
     _one_line(info.value, "mtf50_cy_per_px")
     assert CameraOptics(model="mtf50", mtf50_cy_per_px=0.5).mtf50_cy_per_px == 0.5
+
+
+# --- found by the fuzz harness on parameters left to a None/non-simple default -----------
+
+
+def _default_param_calls() -> dict:
+    import imageform.io as io
+    from imageform.analysis import chart_white_balance, render_slanted_edge
+    from imageform.color import rgb_to_ycbcr
+    from imageform.geometry import stereo_calibrate
+    from imageform.io import write_image
+    from imageform.report.html_parts import table
+    from imageform.simulate import SimulationResult, simulate
+    from imageform.simulate.schema import Field
+    from imageform.workflows import Input, Output, Run
+
+    res = resolve(V("result"))
+    objs, left, right = (resolve(V(n)) for n in ("stereo_objs", "stereo_left", "stereo_right"))
+    return {
+        "chart_white_balance(chart='abc')": (
+            lambda: chart_white_balance(resolve(V("chart")), chart="abc"),
+            "chart",
+        ),
+        "render_slanted_edge(center=0)": (
+            lambda: render_slanted_edge((16, 16), center=0),
+            "center",
+        ),
+        "render_slanted_edge(esf=1.0)": (lambda: render_slanted_edge((16, 16), esf=1.0), "esf"),
+        "rgb_to_ycbcr(bits='x' * 100000)": (
+            lambda: rgb_to_ycbcr(resolve(V("rgb")), bits="x" * 100_000),
+            "bits",
+        ),
+        "write_image(bits='x' * 100000)": (
+            lambda: write_image(resolve(V("tmpfile_png")), resolve(V("rgb")), bits="x" * 100_000),
+            "bits",
+        ),
+        "stereo_calibrate(fix=0)": (
+            lambda: stereo_calibrate(objs, left, right, (640, 480), fix=0),
+            "fix",
+        ),
+        "table(left=None)": (lambda: table(["a"], [["b"]], left=None), "left"),
+        "simulate(progress=0)": (lambda: simulate(resolve(V("scene")), progress=0), "progress"),
+        "Provenance(rms_px=nan)": (lambda: io.Provenance(rms_px=float("nan")), "rms_px"),
+        "Provenance(command=nan)": (lambda: io.Provenance(command=float("nan")), "command"),
+        "Provenance(views_used=1.5)": (lambda: io.Provenance(views_used=1.5), "views_used"),
+        "CameraFile(path=nan)": (
+            lambda: io.CameraFile(resolve(V("camera")), path=float("nan")),
+            "path",
+        ),
+        "SimulationResult(patches=nan)": (
+            lambda: SimulationResult(
+                res.camera, res.image_size, res.world_up, res.stages, patches=float("nan")
+            ),
+            "patches",
+        ),
+        "Field(minimum=nan)": (lambda: Field("float", None, "x", minimum=float("nan")), "minimum"),
+        "Field(dimension=1j)": (lambda: Field("float", None, "x", dimension=1j), "dimension"),
+        "Input(metavar=nan)": (lambda: Input("x", "help", metavar=float("nan")), "metavar"),
+        "Output(default=nan)": (lambda: Output("help", default=float("nan")), "default"),
+        "Run(progress=nan)": (lambda: Run(None, progress=float("nan")), "progress"),
+    }
+
+
+@pytest.mark.parametrize(
+    "which",
+    [
+        "chart_white_balance(chart='abc')",
+        "render_slanted_edge(center=0)",
+        "render_slanted_edge(esf=1.0)",
+        "rgb_to_ycbcr(bits='x' * 100000)",
+        "write_image(bits='x' * 100000)",
+        "stereo_calibrate(fix=0)",
+        "table(left=None)",
+        "simulate(progress=0)",
+        "Provenance(rms_px=nan)",
+        "Provenance(command=nan)",
+        "Provenance(views_used=1.5)",
+        "CameraFile(path=nan)",
+        "SimulationResult(patches=nan)",
+        "Field(minimum=nan)",
+        "Field(dimension=1j)",
+        "Input(metavar=nan)",
+        "Output(default=nan)",
+        "Run(progress=nan)",
+    ],
+)
+def test_a_parameter_left_to_its_default_is_checked_when_given(which: str) -> None:
+    call, name = _default_param_calls()[which]
+    with pytest.raises((InvalidInputError, TypeError)) as info:
+        call()
+    _one_line(info.value, name)

@@ -563,7 +563,7 @@ def write_image(
     fmt = image_format(p)
     out_of_range = check_option(out_of_range, _OUT_OF_RANGE, "out-of-range policy")
     if bits is not None and (isinstance(bits, bool) or bits not in (8, 16)):
-        raise InvalidInputError(f"expected bits 8 or 16, got {bits!r}")
+        raise InvalidInputError(f"expected bits 8 or 16, got {describe(bits)}")
     a = np.asarray(image)
     if a.ndim == 3 and a.shape[-1] == 1 and fmt != "npy":
         a = a[..., 0]

@@ -152,6 +152,10 @@ def plot_chromaticity_diagram(
     from imageform.color.rgb_spaces import rgb_space
 
     # every argument is checked before matplotlib is imported (seconds on a cold start)
+    if path is not None:
+        from imageform._files import check_writable
+
+        check_writable(path, "path")
     c = check_name(coords, ("xy", "uv"), "chromaticity diagram", "coords")
     n_grid = as_int(resolution, "resolution", minimum=2, maximum=MAX_RESOLUTION)
     # the grid's points, xyz, rgb and the RGBA picture: about 16 float64 values per point

@@ -257,8 +257,20 @@ class SimulationResult:
         """Check the fields: ``camera``, ``image_size``, ``world_up`` and ``stages`` (issue 16).
 
         ``camera`` a Camera, ``image_size`` two positive integers, ``world_up`` a finite non-zero
-        3-vector, ``stages`` Stage objects.
+        3-vector, ``stages`` Stage objects; ``colorchecker``, ``vanishing``,
+        ``photon_transfer`` and ``patches`` None or their record type.
         """
+        for name, kind in (
+            ("colorchecker", ColorCheckerTruth),
+            ("vanishing", VanishingTruth),
+            ("photon_transfer", PhotonTransferData),
+            ("patches", PatchMeasurements),
+        ):
+            value = getattr(self, name)
+            if value is not None and not isinstance(value, kind):
+                raise TypeError(
+                    f"expected {name} as a {kind.__name__} (or None), got {describe(value)}"
+                )
         if not isinstance(self.camera, Camera):
             raise TypeError(
                 f"expected camera as an imageform.geometry.Camera, got {describe(self.camera)}"

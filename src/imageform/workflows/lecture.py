@@ -28,7 +28,7 @@ class LectureOptions(Options):
             topics = lecture_topics()
             if not any(self.topic.strip().lower() in t.lower() for t in topics):
                 raise UnknownOptionError(
-                    f"no lecture topic matches --topic {self.topic[:40]!r}; "
+                    f"no lecture topic matches --topic {self.topic[:40]!r}"[:80] + "; "
                     f"valid: {', '.join(topics)}"
                 )
 
