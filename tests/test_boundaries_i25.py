@@ -323,3 +323,25 @@ def test_a_parameter_left_to_its_default_is_checked_when_given(which: str) -> No
     with pytest.raises((InvalidInputError, TypeError)) as info:
         call()
     _one_line(info.value, name)
+
+
+def test_messages_name_the_argument_not_an_internal_name() -> None:
+    """0-255 codes in an int64 array: the message names ``normalized``/``measured``, not
+    "raw" or "srgb image" (the internal names of the functions they are handed to)."""
+    from imageform.analysis import correction_report, fit_color_correction
+    from imageform.simulate.stages import demosaic_raw
+
+    codes = (np.random.default_rng(0).uniform(0, 0.3, (6, 8)) * 255).round().astype(np.int64)
+    with pytest.raises(InvalidInputError) as info:
+        demosaic_raw(codes, "RGGB", "bilinear")
+    msg = _one_line(info.value, "normalized")
+    assert "raw looks like" not in msg
+    chart = resolve(V("rgb_chart"))
+    corr = fit_color_correction(chart, chart)
+    for name in ("measured", "reference"):
+        args = {"measured": chart, "reference": chart}
+        args[name] = (chart * 255).round().astype(np.int64)
+        with pytest.raises(InvalidInputError) as info:
+            correction_report(args["measured"], args["reference"], corr)
+        msg = _one_line(info.value, name)
+        assert "srgb image" not in msg

@@ -48,6 +48,7 @@ __all__ = [
     "det3",
     "format_shape",
     "memory_limit",
+    "shorten_names",
 ]
 
 
@@ -266,6 +267,28 @@ def describe(value: object, width: int = 40) -> str:
         return f"{type(value).__name__} of shape {format_shape(tuple(shape))}, {dtype}"
     text = repr(value)
     return text if len(text) <= width else text[: width - 3] + "..."
+
+
+def shorten_names(names: Collection[str], width: int = 110) -> str:
+    """Join ``names`` with commas, cut to about ``width`` characters with a count of the rest.
+
+    For the "valid: ..." part of a one-line message, however many names are valid.
+
+    Examples
+    --------
+    >>> shorten_names([f"topic {i}" for i in range(40)], width=30)
+    'topic 0, topic 1, topic 2, ... (37 more)'
+    """
+    items = [str(n) for n in names]
+    shown: list[str] = []
+    size = 0
+    for n in items:
+        size += len(n) + 2
+        if size > width:
+            break
+        shown.append(n)
+    more = f", ... ({len(items) - len(shown)} more)" if len(shown) < len(items) else ""
+    return ", ".join(shown) + more
 
 
 def _as_number(value: object, name: str) -> float:

@@ -416,9 +416,16 @@ def _walk_finite(x: Any, depth: int = 0) -> bool:
 
 
 def _names_param(msg: str, param: str) -> bool:
+    """True when ``msg`` names ``param`` as a word (``R`` in "expected R as ...", not the r
+    of "error"; ``-`` or a space may stand for ``_``), case-insensitively."""
+    import re
+
     low = msg.lower()
     p = param.lower()
-    return p in low or p.replace("_", "-") in low or p.replace("_", " ") in low
+    for variant in {p, p.replace("_", "-"), p.replace("_", " ")}:
+        if re.search(rf"(?<![a-z0-9_]){re.escape(variant)}(?![a-z0-9_])", low):
+            return True
+    return False
 
 
 def _classify_exception(exc: BaseException, param: str) -> tuple[str, str]:

@@ -128,3 +128,14 @@ def test_a_partial_run_keeps_the_known_entries_it_did_not_run() -> None:
         ("m.f", "x", "nan"): "raw:ValueError: kept, not run",
         ("m.g", "x", "inf"): "raw:OverflowError: OverflowError: boom",
     }
+
+
+def test_a_short_parameter_name_is_found_only_as_a_word() -> None:
+    """Issue 25: ``R`` is named by "expected R of shape ...", not by the r of "error"."""
+    from tests.fuzz.runner import _names_param
+
+    assert _names_param("expected R of shape (3, 3), got (2, 2)", "R")
+    assert not _names_param("expected a rotation matrix, got an error", "R")
+    assert _names_param("expected max-iter >= 1", "max_iter")
+    assert _names_param("image_size (width, height)[0]: expected ...", "image_size")
+    assert not _names_param("expected xyz of shape (..., 3)", "xy")

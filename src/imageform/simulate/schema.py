@@ -70,7 +70,7 @@ class Field:
             )
         for bound in ("minimum", "maximum"):
             if getattr(self, bound) is not None:
-                as_real(getattr(self, bound), bound, allow_inf=True)
+                as_real(getattr(self, bound), bound)
         d = self.default
         if d is None or isinstance(d, str) or (self.kind == "bool" and isinstance(d, bool)):
             return
