@@ -345,3 +345,24 @@ def test_messages_name_the_argument_not_an_internal_name() -> None:
             correction_report(args["measured"], args["reference"], corr)
         msg = _one_line(info.value, name)
         assert "srgb image" not in msg
+
+
+@pytest.mark.parametrize("q", [None, "abc", [1.0, 0.0, 0.0, 0.0, 0.0], [float("nan"), 0, 0, 1]])
+def test_quaternion_to_matrix_names_q(q: object) -> None:
+    """Found by the fuzz harness once a name counts only as a word: "quaternion" is not q."""
+    from imageform.geometry import quaternion_to_matrix
+    from tests.fuzz.runner import _names_param
+
+    with pytest.raises(InvalidInputError) as info:
+        quaternion_to_matrix(q)  # type: ignore[arg-type]
+    assert _names_param(_one_line(info.value, "q"), "q")
+
+
+@pytest.mark.parametrize("n", [None, "1", [1, 2], float("nan"), -1.0])
+def test_format_bytes_names_n(n: object) -> None:
+    from imageform.simulate.budget import format_bytes
+    from tests.fuzz.runner import _names_param
+
+    with pytest.raises(InvalidInputError) as info:
+        format_bytes(n)  # type: ignore[arg-type]
+    assert _names_param(_one_line(info.value, "n"), "n")
