@@ -366,3 +366,51 @@ def test_format_bytes_names_n(n: object) -> None:
     with pytest.raises(InvalidInputError) as info:
         format_bytes(n)  # type: ignore[arg-type]
     assert _names_param(_one_line(info.value, "n"), "n")
+
+
+def _word_named_calls() -> dict:
+    import imageform.io as io
+    from imageform.analysis import MacenkoStains
+    from imageform.io.camera_file import distortion_name
+    from imageform.simulate.config import DistortionConfig
+
+    return {
+        "read_camera(None)": (lambda: io.read_camera(None), "path"),
+        "read_stereo_camera(0)": (lambda: io.read_stereo_camera(0), "path"),
+        "image_format(None)": (lambda: io.image_format(None), "path"),
+        "read_png(0)": (lambda: io.read_png(0), "path"),
+        "write_png(None)": (lambda: io.write_png(None, np.zeros((2, 2), np.uint8)), "path"),
+        "MacenkoStains.from_json(None)": (lambda: MacenkoStains.from_json(None), "path"),
+        "distortion_name(1)": (lambda: distortion_name(1), "model"),
+        "DistortionConfig.from_model('x')": (lambda: DistortionConfig.from_model("x"), "model"),
+    }
+
+
+@pytest.mark.parametrize(
+    "which",
+    [
+        "read_camera(None)",
+        "read_stereo_camera(0)",
+        "image_format(None)",
+        "read_png(0)",
+        "write_png(None)",
+        "MacenkoStains.from_json(None)",
+        "distortion_name(1)",
+        "DistortionConfig.from_model('x')",
+    ],
+)
+def test_the_parameter_is_named_as_a_word(which: str) -> None:
+    """'PathLike' or 'DivisionModel' in a message do not name ``path`` or ``model``."""
+    from tests.fuzz.runner import _names_param
+
+    call, name = _word_named_calls()[which]
+    with pytest.raises((InvalidInputError, TypeError)) as info:
+        call()
+    assert _names_param(_one_line(info.value, name), name), str(info.value)
+
+
+def test_shorten_never_echoes_a_huge_or_multiline_text() -> None:
+    from imageform._validate import shorten
+
+    assert len(shorten("x" * 100_000)) == 80
+    assert "\n" not in shorten(str(np.arange(1000.0).reshape(100, 10)))

@@ -48,6 +48,7 @@ __all__ = [
     "det3",
     "format_shape",
     "memory_limit",
+    "shorten",
     "shorten_names",
 ]
 
@@ -267,6 +268,23 @@ def describe(value: object, width: int = 40) -> str:
         return f"{type(value).__name__} of shape {format_shape(tuple(shape))}, {dtype}"
     text = repr(value)
     return text if len(text) <= width else text[: width - 3] + "..."
+
+
+def shorten(text: object, width: int = 80) -> str:
+    """Return ``str(text)`` cut to ``width`` characters (``...`` in the middle), on one line.
+
+    For a file name or other text a message quotes: a 100 kB argument is never echoed.
+
+    Examples
+    --------
+    >>> shorten("x" * 100_000, 20)
+    'xxxxxxxx...xxxxxxxxx'
+    """
+    s = " ".join(str(text).split()) if "\n" in str(text) else str(text)
+    if len(s) <= width:
+        return s
+    head = (width - 3) // 2
+    return s[:head] + "..." + s[len(s) - (width - 3 - head) :]
 
 
 def shorten_names(names: Collection[str], width: int = 110) -> str:

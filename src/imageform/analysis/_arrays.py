@@ -17,7 +17,7 @@ import numpy as np
 
 from imageform._backend import to_numpy
 from imageform._files import atomic_write, check_writable
-from imageform._validate import as_image, check_nonempty, format_shape
+from imageform._validate import as_image, as_path, check_nonempty, format_shape
 from imageform.errors import InvalidInputError
 
 __all__ = [
@@ -123,7 +123,7 @@ def write_json(path: str | Path, payload: dict[str, Any]) -> None:
 
 def read_json(path: str | Path, kind: str) -> dict[str, Any]:
     """Read a JSON file written by ``write_json`` and check its ``kind`` field."""
-    p = Path(path)
+    p = as_path(path, "path")
     if not p.is_file():
         raise InvalidInputError(f"{kind} file {p} does not exist")
     try:

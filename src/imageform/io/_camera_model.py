@@ -286,7 +286,7 @@ def distortion_name(model: Any) -> str:
         if cls == name:
             return key
     raise InvalidInputError(
-        f"expected a BrownConrady, KannalaBrandt or DivisionModel distortion, got {name}"
+        f"expected model as a BrownConrady, KannalaBrandt or DivisionModel distortion, got {name}"
     )
 
 

@@ -37,7 +37,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from imageform._files import atomic_write, check_writable
-from imageform._validate import as_bool, describe
+from imageform._validate import as_bool, as_path, describe
 from imageform.errors import InvalidInputError
 from imageform.io._camera_model import (
     _ALWAYS,
@@ -115,7 +115,7 @@ def read_camera(path: str | Path) -> CameraFile:
     >>> cf.camera.K[0].tolist(), cf.distortion_model, cf.has_pose, cf.version
     ([500.0, 0.0, 320.0], 'brown_conrady', False, 0)
     """
-    p = Path(path)
+    p = as_path(path, "path")
     if not p.is_file():
         raise InvalidInputError(f"camera file {p} does not exist")
     try:

@@ -38,7 +38,14 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from imageform._files import atomic_write, check_writable
-from imageform._validate import check_memory, check_option, describe, format_shape
+from imageform._validate import (
+    as_path,
+    check_memory,
+    check_option,
+    describe,
+    format_shape,
+    shorten,
+)
 from imageform.errors import InvalidInputError
 
 __all__ = [
@@ -124,10 +131,14 @@ def image_format(path: str | Path) -> str:
     >>> image_format("a.JPG")
     'jpeg'
     """
-    suffix = Path(path).suffix.lower()
+    p = as_path(path, "path")
+    suffix = p.suffix.lower()
     if suffix not in IMAGE_FORMATS:
         valid = ", ".join(IMAGE_FORMATS)
-        raise InvalidInputError(f"unknown image file type {suffix!r} of {path}; valid: {valid}")
+        shown = shorten(p)
+        raise InvalidInputError(
+            f"unknown image file type {suffix[:20]!r} of {shown}; valid: {valid}"
+        )
     return IMAGE_FORMATS[suffix]
 
 

@@ -27,7 +27,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from imageform._files import atomic_write, check_writable
-from imageform._validate import describe
+from imageform._validate import as_path, describe
 from imageform.errors import InvalidInputError, UnknownOptionError
 from imageform.io._camera_model import (
     _TABLES,
@@ -248,7 +248,7 @@ def read_stereo_camera(path: str | Path) -> StereoCameraFile:
     """
     from imageform.io._camera_read import _provenance, parse
 
-    p = Path(path)
+    p = as_path(path, "path")
     if not p.is_file():
         raise InvalidInputError(f"stereo camera file {p} does not exist")
     try:

@@ -178,7 +178,7 @@ class DistortionConfig:
         name = names.get(type(model))
         if name is None:
             raise InvalidInputError(
-                "expected the camera's distortion to be BrownConrady, DivisionModel, "
+                "expected model (the camera's distortion) as BrownConrady, DivisionModel, "
                 f"KannalaBrandt or None, got {type(model).__name__}"
             )
         return cls(name, **{k: float(getattr(model, k)) for k in DISTORTION_COEFFICIENTS[name]})

@@ -30,7 +30,7 @@ class LectureOptions(Options):
             if not any(self.topic.strip().lower() in t.lower() for t in topics):
                 raise UnknownOptionError(
                     f"no lecture topic matches --topic {self.topic[:40]!r}; "
-                    f"valid: {shorten_names(topics)}"
+                    f"valid: {shorten_names(topics, 90)}"
                 )
 
 
