@@ -44,6 +44,7 @@ __all__ = [
     "Outputs",
     "atomic_write",
     "check_output",
+    "check_writable",
     "not_a_regular_file",
     "publish",
     "refuse_special",
@@ -81,6 +82,7 @@ def _unpart(name: str) -> str:
     while (m := _PART_NAME.match(name)) is not None:
         name = m.group(1)
     return name
+
 
 #: A temporary name already (this module's ``.NAME.<pid>-<token>.part[SUFFIX]``, or an
 #: ``imageform batch`` job's ``.NAME.<run>-<token>.tmp[SUFFIX]``): written in place, so that
@@ -630,3 +632,56 @@ def glob_paths(pattern: str) -> list[str]:
             if matcher.match(os.path.abspath(p))
         ]
     return found
+
+
+# --- i25 (library writers) ---
+
+
+def _shown(path: Path, width: int = 80) -> str:
+    text = str(path)
+    return text if len(text) <= width else "..." + text[-(width - 3) :]
+
+
+def check_writable(path: object, name: str = "path") -> Path:
+    """Refuse, before writing, an output file that cannot be written (the library writers' check).
+
+    Returns ``path`` as a :class:`~pathlib.Path`. Refused in one line naming ``name`` (long
+    paths shortened): not a ``str`` or path; a folder; an existing file that is not a regular
+    file (a device such as ``/dev/null``, a FIFO, a socket: the temporary would be renamed
+    over it); a missing parent folder, or a parent that is not a folder. A symbolic link is
+    accepted: :func:`atomic_write` replaces it, never follows it.
+
+    Examples
+    --------
+    >>> check_writable("/dev/null", "path")
+    Traceback (most recent call last):
+    ...
+    imageform.errors.InvalidInputError: path: /dev/null is not a regular file (a device, FIFO or socket); give a file name
+    """  # noqa: E501
+    import stat
+
+    if isinstance(path, bytes) or not isinstance(path, str | os.PathLike):
+        kind = type(path).__name__
+        raise InvalidInputError(f"expected {name} as a file name (str or Path), got {kind}")
+    out = Path(os.fspath(path))
+    if not str(path).strip() or "\0" in str(path):
+        raise InvalidInputError(f"expected {name} as a file name, got {_shown(out)!r}")
+    try:
+        st = os.lstat(out)
+    except (FileNotFoundError, NotADirectoryError):  # the parent check below says which
+        st = None
+    except OSError as exc:  # too long, a parent that is a file, no permission ...
+        reason = exc.strerror or type(exc).__name__
+        raise InvalidInputError(f"{name}: cannot write {_shown(out)} ({reason})") from None
+    if st is not None and stat.S_ISDIR(st.st_mode):
+        raise InvalidInputError(f"{name}: {_shown(out)} is a folder; give a file name")
+    if st is not None and not (stat.S_ISREG(st.st_mode) or stat.S_ISLNK(st.st_mode)):
+        raise InvalidInputError(
+            f"{name}: {_shown(out)} is not a regular file (a device, FIFO or socket); "
+            "give a file name"
+        )
+    parent = out.parent if str(out.parent) else Path(".")
+    if not parent.is_dir():
+        what = "is not a folder" if os.path.lexists(parent) else "does not exist"
+        raise InvalidInputError(f"{name}: the folder {_shown(parent)} {what}")
+    return out

@@ -41,6 +41,7 @@ __all__ = [
     "check_finite",
     "check_image_size",
     "check_memory",
+    "check_nonempty",
     "check_option",
     "check_positive",
     "check_rotation",
@@ -48,6 +49,8 @@ __all__ = [
     "det3",
     "format_shape",
     "memory_limit",
+    "shorten",
+    "shorten_names",
 ]
 
 
@@ -268,6 +271,45 @@ def describe(value: object, width: int = 40) -> str:
     return text if len(text) <= width else text[: width - 3] + "..."
 
 
+def shorten(text: object, width: int = 80) -> str:
+    """Return ``str(text)`` cut to ``width`` characters (``...`` in the middle), on one line.
+
+    For a file name or other text a message quotes: a 100 kB argument is never echoed.
+
+    Examples
+    --------
+    >>> shorten("x" * 100_000, 20)
+    'xxxxxxxx...xxxxxxxxx'
+    """
+    s = " ".join(str(text).split()) if "\n" in str(text) else str(text)
+    if len(s) <= width:
+        return s
+    head = (width - 3) // 2
+    return s[:head] + "..." + s[len(s) - (width - 3 - head) :]
+
+
+def shorten_names(names: Collection[str], width: int = 110) -> str:
+    """Join ``names`` with commas, cut to about ``width`` characters with a count of the rest.
+
+    For the "valid: ..." part of a one-line message, however many names are valid.
+
+    Examples
+    --------
+    >>> shorten_names([f"topic {i}" for i in range(40)], width=30)
+    'topic 0, topic 1, topic 2, ... (37 more)'
+    """
+    items = [str(n) for n in names]
+    shown: list[str] = []
+    size = 0
+    for n in items:
+        size += len(n) + 2
+        if size > width:
+            break
+        shown.append(n)
+    more = f", ... ({len(items) - len(shown)} more)" if len(shown) < len(items) else ""
+    return ", ".join(shown) + more
+
+
 def _as_number(value: object, name: str) -> float:
     """Check a real number from a Python or NumPy scalar (or a 0-d real array or tensor).
 
@@ -287,6 +329,11 @@ def _as_number(value: object, name: str) -> float:
     )
 
 
+#: The smallest positive normal float64: a positive value below it (subnormal) passes ``> 0``
+#: but its reciprocal is inf, and its square 0.
+_SMALLEST_NORMAL = float(np.finfo(np.float64).tiny)
+
+
 def as_real(
     value: object,
     name: str,
@@ -300,7 +347,8 @@ def as_real(
     """Convert a finite real scalar (Python or NumPy number, 0-d array) to ``float``.
 
     Refuses bool, None, strings, complex numbers, NaN, inf (unless ``allow_inf``) and values
-    outside the bounds, in one line naming ``name``.
+    outside the bounds, in one line naming ``name``. With ``positive``, a subnormal value
+    (below 2.2e-308, whose reciprocal overflows) is refused too.
 
     Examples
     --------
@@ -316,6 +364,11 @@ def as_real(
         raise InvalidInputError(f"expected {name} as a finite number, got {v:g}")
     if positive and v <= 0:
         raise InvalidInputError(f"expected {name} > 0, got {v:g}")
+    if positive and v < _SMALLEST_NORMAL:  # passes > 0, but 1 / v overflows
+        raise InvalidInputError(
+            f"expected {name} > 0 and at least {_SMALLEST_NORMAL:.3g} (its reciprocal "
+            f"must be finite), got {v:g}"
+        )
     if nonnegative and v < 0:
         raise InvalidInputError(f"expected {name} >= 0, got {v:g}")
     if minimum is not None and v < minimum:
@@ -434,6 +487,12 @@ def memory_limit() -> int:
     return int(value)
 
 
+def _gib(n_bytes: float) -> str:
+    """``12.3`` below a million GiB, ``1.2e+294`` above: a number of bytes, short."""
+    g = n_bytes / 2**30
+    return f"{g:.1f}" if g < 1e6 else f"{g:.3g}"
+
+
 def check_memory(n_bytes: float, name: str, what: str = "the result") -> None:
     """Refuse, before allocating, what would need more than :func:`memory_limit` bytes.
 
@@ -447,7 +506,7 @@ def check_memory(n_bytes: float, name: str, what: str = "the result") -> None:
     limit = memory_limit()
     if not n_bytes <= limit:  # NaN too
         raise InvalidInputError(
-            f"{name}: {what} would need {n_bytes / 2**30:.1f} GiB, more than the "
+            f"{name}: {what} would need {_gib(n_bytes)} GiB, more than the "
             f"{limit / 2**30:.1f} GiB allowed (IMAGEFORM_MAX_MEMORY)"
         )
 
@@ -462,6 +521,25 @@ def check_image_size(size: object, name: str = "image_size") -> tuple[int, int]:
     """
     w, h = as_size(size, f"{name} (width, height)")
     return w, h
+
+
+def check_nonempty(image: Any, name: str = "image") -> Any:
+    """Refuse an image (any array) without a single pixel, saying "empty image"; return it.
+
+    Examples
+    --------
+    >>> check_nonempty(np.empty((0, 4, 3)), "image")
+    Traceback (most recent call last):
+    ...
+    imageform.errors.InvalidInputError: expected image with at least one pixel, got an empty image of shape (0, 4, 3)
+    """  # noqa: E501
+    shape = tuple(getattr(image, "shape", ()))
+    if any(d == 0 for d in shape):
+        raise InvalidInputError(
+            f"expected {name} with at least one pixel, got an empty image of shape "
+            f"{format_shape(shape)}"
+        )
+    return image
 
 
 def check_positive(value: object, name: str, *, allow_zero: bool = False) -> float:

@@ -3,11 +3,17 @@
 ::
 
     PYTHONPATH=src python -m tests.fuzz [--budget N] [--seed S] [--workers W]
-        [--timeout T] [--only PREFIX ...] [--report F.md] [--known OUT.py]
+        [--timeout T] [--only PREFIX ...] [--defaults all|simple|other]
+        [--report F.md] [--known OUT.py]
 
-Without ``--budget`` every task runs (the slow test's run). ``--known OUT.py`` writes a
-KNOWN table of this run's findings (reasons kept from ``tests/fuzz/known.py`` where the
-entry is already known): copy it over ``tests/fuzz/known.py`` after a full run.
+Without ``--budget`` every task runs (the slow test's run). ``--defaults other`` runs only
+the parameters left to a default that is not a plain number or string (None, tuples of
+names ...; see :func:`tests.fuzz.runner.parameters`).
+
+``--known OUT.py`` writes a KNOWN table: this run's findings (reasons kept from
+``tests/fuzz/known.py`` where the entry is already known) and every entry of
+``tests/fuzz/known.py`` whose call this run did not make, so that a partial run
+(``--only``, ``--budget``, ``--defaults``) never drops the findings of the calls it left out.
 """
 
 from __future__ import annotations
@@ -69,12 +75,18 @@ def summary(outcomes: list[Outcome], *, seconds: float, command: str) -> str:
     return "\n".join(lines) + "\n"
 
 
-def known_source(outcomes: list[Outcome]) -> str:
-    """The text of a ``known.py`` listing this run's findings."""
-    from tests.fuzz.known import KNOWN
+def known_source(
+    outcomes: list[Outcome], known: dict[tuple[str, str, str], str] | None = None
+) -> str:
+    """The text of a ``known.py``: this run's findings, and the entries of ``known``
+    (default: ``tests/fuzz/known.py``'s) for the calls this run did not make."""
     from tests.fuzz.runner import HARNESS_OUTCOMES
 
+    if known is None:
+        from tests.fuzz.known import KNOWN as known
     found = {k: o for k, o in findings(outcomes).items() if o.result not in HARNESS_OUTCOMES}
+    ran = {(o.name, o.param, o.kind) for o in outcomes}
+    kept = {k: reason for k, reason in known.items() if k not in ran}
     out = [
         "# ruff: noqa: E501",
         '"""Known findings of the fuzz test, not fixed yet (issue 16).',
@@ -87,10 +99,11 @@ def known_source(outcomes: list[Outcome]) -> str:
         "",
         "KNOWN: dict[tuple[str, str, str], str] = {",
     ]
-    for key, o in sorted(found.items()):
-        reason = KNOWN.get(key) or f"{o.result}: {o.detail}".strip().rstrip(":")
-        reason = reason.replace("\n", " ")[:160]
-        out.append(f"    {key!r}: {reason!r},")
+    reasons = dict(kept)
+    for key, o in found.items():
+        reasons[key] = known.get(key) or f"{o.result}: {o.detail}".strip().rstrip(":")
+    for key, reason in sorted(reasons.items()):
+        out.append(f"    {key!r}: {reason.replace(chr(10), ' ')[:160]!r},")
     out.append("}")
     return "\n".join(out) + "\n"
 
@@ -102,10 +115,11 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--workers", type=int, default=1)
     ap.add_argument("--timeout", type=float, default=20.0)
     ap.add_argument("--only", nargs="*", default=[])
+    ap.add_argument("--defaults", choices=("all", "simple", "other"), default="all")
     ap.add_argument("--report", type=Path)
     ap.add_argument("--known", type=Path)
     ns = ap.parse_args(argv)
-    tasks = all_tasks()
+    tasks = all_tasks(defaults=ns.defaults)
     if ns.only:
         tasks = [t for t in tasks if any(t.name.startswith(p) for p in ns.only)]
     tasks = select(tasks, ns.budget, ns.seed)

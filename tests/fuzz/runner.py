@@ -2,9 +2,11 @@
 
 Every callable of every public ``__all__`` (and the public methods of the classes there) has
 one entry in :data:`tests.fuzz.table.VALID`: a valid call, or a :class:`Skip` with a reason.
-From a valid call, each parameter it passes (and each optional parameter with a simple
-default) is replaced in turn by a malformed value of each :data:`KINDS` that fits the valid
-value's type, and the call is made in a worker process with a time and a memory limit.
+From a valid call, each parameter it passes and each optional parameter it leaves to its
+default (None, a number, a string, a tuple, any default) is replaced in turn by a malformed
+value of each :data:`KINDS` that fits the valid value's type (for a ``None`` default, whose
+type is unknown: every kind but ``none``), and the call is made in a worker process with a
+time and a memory limit.
 
 A call passes when it
 
@@ -262,6 +264,24 @@ def _str_mutations(s: str) -> dict[str, Callable[[], Any]]:
     }
 
 
+def _none_mutations() -> dict[str, Callable[[], Any]]:
+    """Malformed values for a parameter whose default is None (its type is unknown): one of
+    each kind but ``none`` (None is the valid value)."""
+    return {
+        "empty": list,
+        "wrong_shape": lambda: [[1.0, 2.0, 3.0, 4.0, 5.0]],
+        "nan": lambda: math.nan,
+        "inf": lambda: math.inf,
+        "complex": lambda: 1.0 + 1.0j,
+        "object": lambda: object(),
+        "string": lambda: "abc",
+        "bool": lambda: True,
+        "huge": lambda: "x" * 100_000,
+        "negative": lambda: -1,
+        "zero": lambda: 0,
+    }
+
+
 def _other_mutations(o: Any) -> dict[str, Callable[[], Any]]:
     return {
         "none": lambda: None,
@@ -274,6 +294,8 @@ def _other_mutations(o: Any) -> dict[str, Callable[[], Any]]:
 
 def mutations(value: Any) -> dict[str, Callable[[], Any]]:
     """Malformed values derived from a valid ``value``, by kind."""
+    if value is None:
+        return _none_mutations()
     if isinstance(value, bool | np.bool_):
         return {
             "none": lambda: None,
@@ -336,9 +358,15 @@ def _simple_default(v: Any) -> bool:
     )
 
 
-def parameters(func: Any, entry: C) -> dict[str, Any]:
+def parameters(func: Any, entry: C, *, defaults: str = "all") -> dict[str, Any]:
     """``{parameter: valid value}``: the parameters the valid call passes and the optional
-    ones with a simple default (a number, string, bool or tuple of numbers)."""
+    ones it leaves to their default.
+
+    ``defaults``: ``"all"`` every default; ``"simple"`` only a simple one (a number, string,
+    bool or tuple of numbers: the parameters fuzzed before issue 25); ``"other"`` only the
+    parameters with another default (None, a tuple of names, a dataclass factory ...), and
+    no parameter the call passes.
+    """
     try:
         sig = inspect.signature(func)
         bound = sig.bind(*entry.args, **entry.kwargs)
@@ -349,8 +377,14 @@ def parameters(func: Any, entry: C) -> dict[str, Any]:
         if p.kind in (p.VAR_POSITIONAL, p.VAR_KEYWORD) or name in entry.fixed:
             continue
         if name in bound.arguments:
-            out[name] = bound.arguments[name]
+            if defaults != "other":
+                out[name] = bound.arguments[name]
+        elif p.default is p.empty:
+            continue
         elif _simple_default(p.default):
+            if defaults != "other":
+                out[name] = p.default
+        elif defaults != "simple":
             out[name] = p.default
     return out
 
@@ -382,9 +416,16 @@ def _walk_finite(x: Any, depth: int = 0) -> bool:
 
 
 def _names_param(msg: str, param: str) -> bool:
+    """True when ``msg`` names ``param`` as a word (``R`` in "expected R as ...", not the r
+    of "error"; ``-`` or a space may stand for ``_``), case-insensitively."""
+    import re
+
     low = msg.lower()
     p = param.lower()
-    return p in low or p.replace("_", "-") in low or p.replace("_", " ") in low
+    for variant in {p, p.replace("_", "-"), p.replace("_", " ")}:
+        if re.search(rf"(?<![a-z0-9_]){re.escape(variant)}(?![a-z0-9_])", low):
+            return True
+    return False
 
 
 def _classify_exception(exc: BaseException, param: str) -> tuple[str, str]:
@@ -531,15 +572,16 @@ def run_task(state: _State, task: Task) -> Outcome:
     return Outcome(name, task.param, task.kind, "ok")
 
 
-def tasks_for(name: str, func: Any, entry: C) -> list[Task]:
+def tasks_for(name: str, func: Any, entry: C, *, defaults: str = "all") -> list[Task]:
+    """The valid call and its malformed variants (``defaults``: see :func:`parameters`)."""
     out = [Task(name, "", "valid")]
     if entry.self_ is not None:
         try:
-            params = parameters(func, entry)
+            params = parameters(func, entry, defaults=defaults)
         except Exception:
             params = {}
     else:
-        params = parameters(func, entry)
+        params = parameters(func, entry, defaults=defaults)
     for pname, value in params.items():
         try:
             muts = mutations(resolve(value))
@@ -558,7 +600,8 @@ def _kinds() -> tuple[str, ...]:
     return KINDS
 
 
-def all_tasks() -> list[Task]:
+def all_tasks(*, defaults: str = "all") -> list[Task]:
+    """Every task of every callable with a valid call (``defaults``: see :func:`parameters`)."""
     from tests.fuzz.table import VALID
 
     funcs = public_callables()
@@ -566,7 +609,7 @@ def all_tasks() -> list[Task]:
     for name, func in funcs.items():
         entry = VALID.get(name)
         if isinstance(entry, C):
-            out.extend(tasks_for(name, func, entry))
+            out.extend(tasks_for(name, func, entry, defaults=defaults))
     return out
 
 

@@ -91,3 +91,51 @@ def test_fuzz_full() -> None:
         f"{len(fixed)} KNOWN finding(s) no longer happen: regenerate tests/fuzz/known.py "
         f"(python -m tests.fuzz --known tests/fuzz/known.py): {fixed[:20]}"
     )
+
+
+def test_parameters_left_to_any_default_are_fuzzed() -> None:
+    """Issue 25: a parameter whose default is None or not a plain value is mutated too."""
+    from tests.fuzz.runner import mutations, parameters
+
+    def f(x: float, *, a: float = 1.0, b: object = None, c: tuple = ("u", "v")) -> None:
+        """A toy callable."""
+
+    entry = C((2.0,))
+    assert parameters(f, entry) == {"x": 2.0, "a": 1.0, "b": None, "c": ("u", "v")}
+    assert parameters(f, entry, defaults="simple") == {"x": 2.0, "a": 1.0}
+    assert parameters(f, entry, defaults="other") == {"b": None, "c": ("u", "v")}
+    kinds = mutations(None)
+    assert "none" not in kinds and {"complex", "huge", "object", "nan"} <= set(kinds)
+
+
+def test_a_partial_run_keeps_the_known_entries_it_did_not_run() -> None:
+    """``--known`` after ``--only``/``--budget``: entries of calls not made stay listed;
+    those made and now clean go; new findings come in."""
+    from tests.fuzz.__main__ import known_source
+    from tests.fuzz.runner import Outcome
+
+    known = {
+        ("m.f", "x", "nan"): "raw:ValueError: kept, not run",
+        ("m.g", "x", "nan"): "raw:ValueError: fixed since",
+    }
+    outcomes = [
+        Outcome("m.g", "x", "nan", "clean"),
+        Outcome("m.g", "x", "inf", "raw:OverflowError", "OverflowError: boom"),
+    ]
+    ns: dict = {}
+    exec(known_source(outcomes, known), ns)
+    assert ns["KNOWN"] == {
+        ("m.f", "x", "nan"): "raw:ValueError: kept, not run",
+        ("m.g", "x", "inf"): "raw:OverflowError: OverflowError: boom",
+    }
+
+
+def test_a_short_parameter_name_is_found_only_as_a_word() -> None:
+    """Issue 25: ``R`` is named by "expected R of shape ...", not by the r of "error"."""
+    from tests.fuzz.runner import _names_param
+
+    assert _names_param("expected R of shape (3, 3), got (2, 2)", "R")
+    assert not _names_param("expected a rotation matrix, got an error", "R")
+    assert _names_param("expected max-iter >= 1", "max_iter")
+    assert _names_param("image_size (width, height)[0]: expected ...", "image_size")
+    assert not _names_param("expected xyz of shape (..., 3)", "xy")

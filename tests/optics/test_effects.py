@@ -124,7 +124,7 @@ def test_lateral_ca_magnifies_channels_about_centre() -> None:
         centroid = float((row * u).sum() / row.sum())
         # bilinear resampling biases a centroid by up to ~0.01 px; the CA shift here is 0.6 px
         assert centroid - 50 == pytest.approx(30 * m, abs=0.015)
-    with pytest.raises(InvalidInputError, match="3 magnifications"):
+    with pytest.raises(InvalidInputError, match="magnification as 3 values"):
         lateral_chromatic_aberration(img, (1.0, 1.0))
 
 

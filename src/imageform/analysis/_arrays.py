@@ -16,7 +16,8 @@ from typing import Any
 import numpy as np
 
 from imageform._backend import to_numpy
-from imageform._validate import as_image, format_shape
+from imageform._files import atomic_write, check_writable
+from imageform._validate import as_image, as_path, check_nonempty, format_shape
 from imageform.errors import InvalidInputError
 
 __all__ = [
@@ -36,16 +37,25 @@ def is_dask(x: object) -> bool:
 
 
 def image_in(
-    image: object, name: str = "image", *, channels: int | None = 3, range_check: bool = True
+    image: object,
+    name: str = "image",
+    *,
+    channels: int | None = 3,
+    range_check: bool = True,
+    nonempty: bool = False,
 ) -> Any:
     """Return an RGB image as floats in [0, 1]: NumPy through ``as_image``, Dask kept lazy.
 
-    ``range_check=False`` for linear-light values, which may exceed 1.
+    ``range_check=False`` for linear-light values, which may exceed 1; ``nonempty=True``
+    refuses an image without a pixel ("empty image", naming ``name``).
 
     Dask input: uint8/uint16 are divided by 255/65535 lazily (float32), float32/float64
     are kept; the 0-255-floats range check of ``as_image`` needs a pass over the data and
     is skipped to stay lazy (documented in the tools that accept Dask).
     """
+    if nonempty:
+        checked = image_in(image, name, channels=channels, range_check=range_check)
+        return check_nonempty(checked, name)
     if is_dask(image):
         arr: Any = image
         if channels is not None and (arr.ndim < 1 or arr.shape[-1] != channels):
@@ -101,13 +111,19 @@ def exact_quantile(values: Any, q: float, *, bins: int = 4096) -> float:
 
 
 def write_json(path: str | Path, payload: dict[str, Any]) -> None:
-    """Write ``payload`` as indented JSON (arrays as nested lists)."""
-    Path(path).write_text(json.dumps(payload, indent=2) + "\n")
+    """Write ``payload`` as indented JSON (arrays as nested lists), atomically.
+
+    An output that cannot be written (a folder, a device, a missing folder) is refused in
+    one line naming ``path``, before anything is written.
+    """
+    final = check_writable(path, "path")
+    text = json.dumps(payload, indent=2) + "\n"
+    atomic_write(final, lambda tmp: tmp.write_text(text, encoding="utf-8"))
 
 
 def read_json(path: str | Path, kind: str) -> dict[str, Any]:
     """Read a JSON file written by ``write_json`` and check its ``kind`` field."""
-    p = Path(path)
+    p = as_path(path, "path")
     if not p.is_file():
         raise InvalidInputError(f"{kind} file {p} does not exist")
     try:

@@ -31,7 +31,14 @@ from typing import Any
 import numpy as np
 
 from imageform._colormath import srgb_decode, srgb_encode
-from imageform._validate import as_bool, as_int, as_real, check_option, describe
+from imageform._validate import (
+    as_bool,
+    as_int,
+    as_real,
+    as_real_ndarray,
+    check_option,
+    describe,
+)
 from imageform.analysis._arrays import image_in, is_dask
 from imageform.analysis.chart_detect import (
     ChartDetection,
@@ -380,7 +387,7 @@ def chart_white_balance(
     src = rgb if chart is None else chart
     pat = _as_chart_patches(src, "image" if chart is None else "chart", chart_layout)
     if not isinstance(pat, ChartPatches):
-        arr = np.asarray(pat, dtype=np.float64)
+        arr = as_real_ndarray(pat, "image" if chart is None else "chart", finite=False)
         if arr.shape != (24, 3) or not np.all(np.isfinite(arr)):
             raise InvalidInputError(
                 f"expected chart as an image, ChartPatches or (24, 3) finite patch means, got "

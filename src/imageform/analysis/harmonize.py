@@ -26,6 +26,7 @@ from imageform._colormath import srgb_decode, srgb_encode
 from imageform._validate import (
     as_bool,
     as_float,
+    as_image,
     as_int,
     as_real,
     check_option,
@@ -500,6 +501,9 @@ def correction_report(
             f"expected correction as a ColorCorrection, got {type(correction).__name__}"
         )
     a, va, b, vb = _paired_patches(measured, reference, chart_layout)
+    # encoded sRGB in [0, 1]: 0-255 codes are refused naming the argument, not "srgb image"
+    as_image(np.where(va[:, None], a, 0.0), "measured", finite=False)
+    as_image(np.where(vb[:, None], b, 0.0), "reference", finite=False)
     lab_b = np.asarray(convert(b, "srgb", "lab"))
     before = np.asarray(delta_e(lab_b, np.asarray(convert(a, "srgb", "lab"))))
     fixed = correction.apply(a[:, None, :])[:, 0, :]

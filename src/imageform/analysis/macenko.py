@@ -193,7 +193,7 @@ def estimate_background(
     >>> print(est.reason)
     no glass: the brightest pixels (0.94, 0.83, 0.93) are tinted (0.12 > max_tint 0.04 in ln units)
     """
-    rgb = image_in(image)
+    rgb = image_in(image, nonempty=True)
     percentile = as_real(percentile, "percentile", minimum=0.0, maximum=100.0)
     min_background = as_real(min_background, "min_background")
     if not 0.0 < min_background <= 1.0:
@@ -683,7 +683,7 @@ def macenko_stains(
     min_pixels = as_int(min_pixels, "min_pixels", minimum=0)
     rule = check_option(transparent, TRANSPARENT_RULES, "transparent-pixel rule")
     key = _base(base)
-    rgb = image_in(image)
+    rgb = image_in(image, nonempty=True)
     i0v, i0_from = _resolve_i0_source(rgb, i0)
     od = optical_density(rgb, min_intensity=min_intensity, i0=i0v, base=key)
     stains, n = _fit(od, float(beta), float(alpha), max(min_pixels, 2), rule)
@@ -699,7 +699,7 @@ def _target(target: object, **kw: Any) -> MacenkoStains:
     src = target_source(target, "target", "MacenkoStains")
     if isinstance(src, Path):
         return MacenkoStains.from_json(src)
-    return macenko_stains(src, **kw)
+    return macenko_stains(image_in(src, "target", nonempty=True), **kw)
 
 
 def _ln_units(st: MacenkoStains) -> np.ndarray:
@@ -790,7 +790,7 @@ def macenko_normalize(
     if source is not None and not isinstance(source, MacenkoStains):
         raise TypeError(f"expected source as MacenkoStains or None, got {type(source).__name__}")
     tgt = _target(target, **kw)
-    rgb = image_in(image)
+    rgb = image_in(image, nonempty=True)
     src = macenko_stains(rgb, **kw) if source is None else source
     od = optical_density(rgb, min_intensity=min_intensity, i0=np.asarray(src.i0), base="e")
     src_max, tgt_max = _ln_units(src), _ln_units(tgt)
@@ -898,7 +898,7 @@ def vahadane_stains(
             f"expected max_pixels >= 2 and iterations >= 1, got {max_pixels} and {iterations}"
         )
     key = _base(base)
-    rgb = image_in(image)
+    rgb = image_in(image, nonempty=True)
     i0v, i0_from = _resolve_i0_source(rgb, i0)
     od = optical_density(rgb, min_intensity=min_intensity, i0=i0v, base=key)
     flat: Any = od.reshape((-1, 3)).astype(np.float64)

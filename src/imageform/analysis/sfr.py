@@ -571,10 +571,16 @@ def render_slanted_edge(
     if center is None:
         cu, cv = (w - 1) / 2.0, (h - 1) / 2.0
     else:
+        if isinstance(center, str | bytes) or not hasattr(center, "__iter__"):
+            raise InvalidInputError(f"expected center as (u, v), got {describe(center)}")
         c = [as_real(v, "center") for v in center]
         if len(c) != 2:
             raise InvalidInputError(f"expected center as (u, v), got {describe(center)}")
         cu, cv = (c[0], c[1]) if ori == "vertical" else (c[1], c[0])
+    if esf is not None and not callable(esf):
+        raise TypeError(
+            f"expected esf as a function of the distance (or None), got {describe(esf)}"
+        )
     f = esf if esf is not None else _gauss_esf(sg)
     off = (np.arange(s) + 0.5) / s - 0.5
     u = (np.arange(w)[:, None] + off[None, :]).ravel()

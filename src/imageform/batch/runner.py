@@ -921,6 +921,12 @@ def print_summary(report: BatchReport, console: Any = None) -> None:
         from imageform._validate import describe
 
         raise InvalidInputError(f"expected report as a BatchReport, got {describe(report)}")
+    if console is not None and not (
+        callable(getattr(console, "print", None)) and hasattr(console, "is_terminal")
+    ):
+        from imageform._validate import describe
+
+        raise TypeError(f"expected console as a rich Console (or None), got {describe(console)}")
     console = console or Console()
     console.print(
         f"batch {report.command}: {report.count('done')} done, "

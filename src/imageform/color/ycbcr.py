@@ -35,6 +35,7 @@ import numpy as np
 from imageform import _deprecate
 from imageform._backend import namespace
 from imageform._dask import chunkwise
+from imageform._validate import describe
 from imageform.color._guard import as_float, as_image, check_option
 from imageform.errors import InvalidInputError
 
@@ -76,7 +77,7 @@ def _scale(signal_range: str, bits: int | None) -> tuple[float, float, float, fl
         or not isinstance(bits, int | np.integer)
         or bits not in (8, 10, 12)
     ):
-        raise InvalidInputError(f"expected bits 8, 10 or 12 (or None), got {bits!r}")
+        raise InvalidInputError(f"expected bits 8, 10 or 12 (or None), got {describe(bits)}")
     if rng == "full":
         if bits is None:
             return 1.0, 0.0, 1.0, 0.0

@@ -11,6 +11,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from imageform._files import atomic_write, check_writable
 from imageform._validate import describe
 from imageform.errors import InvalidInputError
 from imageform.geometry.calibration_refine import GLOBAL_NAMES, RefineOutput, rodrigues
@@ -151,7 +152,8 @@ class CalibrationResult:
         lines += ["", "[calibration]", f"rms = {self.rms!r}", f"views = {len(self.rvecs)}"]
         text = "\n".join(lines) + "\n"
         if path is not None:
-            Path(path).write_text(text)
+            final = check_writable(path, "path")
+            atomic_write(final, lambda tmp: tmp.write_text(text, encoding="utf-8"))
         return text
 
     @classmethod

@@ -114,6 +114,8 @@ def find_candidates(
     )
 
     taps = gaussian_weights(sigma).astype(np.float32)
+    if gray.dtype == np.float16:  # numba has no float16: the kernel works in float32 anyway
+        gray = gray.astype(np.float32)
     fast = use_numba(gray)
     # float32 is ample for a detector (the refinement runs on the image as given): the
     # kernel reads gray as it is and works in float32 (no converted copy of the image)

@@ -77,6 +77,23 @@ def _dehom(Xh: F64) -> F64:
         return Xh[:, :3] / Xh[:, 3:]
 
 
+#: An essential matrix has singular values (s, s, 0): its second must be above this fraction
+#: of the first (rank 2, not 1 or 0), its third below it (not rank 3).
+_RANK_TOL = (1e-6, 0.1)
+
+
+def _check_rank_2(E: NDArray[np.float64]) -> None:
+    """Refuse an ``E`` that is not of rank 2 within :data:`_RANK_TOL` (all-zero, rank 1, 3)."""
+    s = np.linalg.svd(E, compute_uv=False)
+    low, high = _RANK_TOL
+    if not (s[0] > 0 and s[1] > low * s[0] and s[2] < high * s[0]):
+        shown = ", ".join(f"{v:.3g}" for v in s)
+        raise InvalidInputError(
+            f"expected E of rank 2 (an essential matrix, singular values (s, s, 0)), got "
+            f"singular values {shown}"
+        )
+
+
 def recover_pose(
     E: npt.ArrayLike,
     points1: npt.ArrayLike,
@@ -120,7 +137,8 @@ def recover_pose(
     Raises
     ------
     InvalidInputError
-        Bad shapes, NaN, a mask of the wrong length.
+        Bad shapes, NaN, a mask of the wrong length; an ``E`` not of rank 2 (all zero, rank
+        1, or a third singular value above a tenth of the first).
     DegenerateConfigurationError
         No correspondence is in front of both cameras for any candidate.
 
@@ -151,6 +169,7 @@ def recover_pose(
             raise InvalidInputError(
                 f"expected inliers a bool array of shape ({n},), got {mask.dtype} {mask.shape}"
             )
+    _check_rank_2(Em)  # after every shape check
     q1, q2 = _normalised(p1, Ka), _normalised(p2, Kb)
     U, _, Vt = np.linalg.svd(Em)
     if np.linalg.det(U) < 0:

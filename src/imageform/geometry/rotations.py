@@ -291,10 +291,10 @@ def quaternion_to_matrix(q: ArrayLike) -> Array:
            [ 0.,  0.,  1.]])
     """
     xp = namespace(q)
-    qq = as_points(q, "quaternion", 4, xp=xp)
+    qq = as_points(q, "q (quaternion)", 4, xp=xp)
     n = xp.sqrt(xp.sum(qq * qq, axis=-1, keepdims=True))
     if bool(xp.any(n == 0)):
-        raise InvalidInputError("a zero quaternion does not represent a rotation")
+        raise InvalidInputError("q: a zero quaternion does not represent a rotation")
     qq = qq / n
     w, x, y, z = qq[..., 0], qq[..., 1], qq[..., 2], qq[..., 3]
     rows = (

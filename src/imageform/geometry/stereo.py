@@ -290,6 +290,10 @@ def stereo_calibrate(
         raise DegenerateConfigurationError(
             f"expected at least 2 views of the target seen by both cameras, got {V}"
         )
+    if not isinstance(fix, str) and not (
+        isinstance(fix, Collection) and all(isinstance(n, str) for n in fix)
+    ):
+        raise TypeError(f"expected fix as parameter names (str), got {describe(fix)}")
     fix_t = (fix,) if isinstance(fix, str) else tuple(fix)
     if left is None:
         cal_l = calibrate_camera(objs, imgs_l, size_l, skew=skew, fix=fix_t)

@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from imageform._validate import as_bool, as_int, describe
+from imageform._validate import as_bool, as_int, as_real, describe
 from imageform.errors import InvalidInputError, UnknownOptionError
 from imageform.io._camera_toml import Reader, short_list
 
@@ -129,6 +129,25 @@ class Provenance:
     images: tuple[str, ...] = ()
     fixed: tuple[str, ...] = ()
 
+    def __post_init__(self) -> None:
+        for name in ("imageform_version", "command", "based_on"):
+            value = getattr(self, name)
+            if value is not None and not isinstance(value, str):
+                raise TypeError(f"expected {name} as a str (or None), got {describe(value)}")
+        if self.date is not None and not isinstance(self.date, datetime):
+            raise TypeError(f"expected date as a datetime (or None), got {describe(self.date)}")
+        if self.rms_px is not None:
+            object.__setattr__(self, "rms_px", as_real(self.rms_px, "rms_px", nonnegative=True))
+        for name in ("views_used", "points_used"):
+            value = getattr(self, name)
+            if value is not None:
+                object.__setattr__(self, name, as_int(value, name, minimum=0))
+        for name in ("images", "fixed"):
+            value = getattr(self, name)
+            if not isinstance(value, tuple | list) or not all(isinstance(v, str) for v in value):
+                raise TypeError(f"expected {name} as a tuple of str, got {describe(value)}")
+            object.__setattr__(self, name, tuple(value))
+
 
 @dataclass(frozen=True)
 class CameraFile:
@@ -182,6 +201,12 @@ class CameraFile:
             raise TypeError(f"expected std as a mapping of name to value, got {describe(self.std)}")
         if not isinstance(self.provenance, Provenance):
             raise TypeError(f"expected provenance as a Provenance, got {describe(self.provenance)}")
+        if self.path is not None:
+            if isinstance(self.path, bytes) or not isinstance(self.path, str | os.PathLike):
+                raise TypeError(
+                    f"expected path as a file name (or None), got {describe(self.path)}"
+                )
+            object.__setattr__(self, "path", Path(self.path))
         object.__setattr__(self, "std", MappingProxyType(check_std(dict(self.std), "std")))
         object.__setattr__(self, "has_pose", as_bool(self.has_pose, "has_pose"))
         object.__setattr__(
@@ -261,7 +286,7 @@ def distortion_name(model: Any) -> str:
         if cls == name:
             return key
     raise InvalidInputError(
-        f"expected a BrownConrady, KannalaBrandt or DivisionModel distortion, got {name}"
+        f"expected model as a BrownConrady, KannalaBrandt or DivisionModel distortion, got {name}"
     )
 
 

@@ -44,6 +44,8 @@ _CFA = ("RGGB", "BGGR", "GRBG", "GBRG")
 
 
 def _reader(r: Reader | None, owner: str) -> Reader:
+    if r is not None and not isinstance(r, Reader):
+        raise TypeError(f"expected r as the camera file's Reader (or None), got {describe(r)}")
     return r if r is not None else Reader(owner)
 
 
@@ -51,6 +53,25 @@ def _nonneg(r: Reader, value: Any, key: str) -> float:
     v = r.number(value, key)
     if v < 0:
         raise r.fail(key, f"expected a number >= 0, got {v:g}")
+    return v
+
+
+#: The Nyquist frequency of the pixel grid (cycles/pixel): the largest MTF50 a file may give.
+#: An MTF50 lies below the sampling frequency: a pixel's own aperture (a square of 100 % fill
+#: factor, MTF sinc(f)) halves the contrast at 0.60 cycles/pixel, beyond Nyquist (0.5), so a
+#: sharp sensor without an anti-aliasing filter can measure MTF50 above 0.5; its MTF is 0 at
+#: 1 cycle/pixel.
+_SAMPLING_CY_PER_PX = 1.0
+
+
+def _mtf50(r: Reader, value: Any, key: str) -> float:
+    v = r.positive(value, key)
+    if not v < _SAMPLING_CY_PER_PX:
+        raise r.fail(
+            key,
+            f"expected an MTF50 in (0, 1) cycles/pixel (below the sampling frequency), got "
+            f"{v:.4g}",
+        )
     return v
 
 
@@ -253,7 +274,7 @@ class CameraOptics(_Table):
         ``zernike``.
     gaussian_sigma_px : float >= 0
         The Gaussian PSF's standard deviation (pixels); required by ``gaussian``.
-    mtf50_cy_per_px : float or tuple of 3 floats, each > 0
+    mtf50_cy_per_px : float or tuple of 3 floats, each in (0, 1)
         Measured MTF50 (cycles per pixel), one for all channels or one per R, G, B;
         required by ``mtf50``.
 
@@ -305,9 +326,9 @@ class CameraOptics(_Table):
             if isinstance(v, list):
                 if len(v) != 3:
                     raise r.fail(key, f"expected a number or 3 numbers (R, G, B), got {_show(v)}")
-                m: Any = tuple(r.positive(x, f"{key}[{i}]") for i, x in enumerate(v))
+                m: Any = tuple(_mtf50(r, x, f"{key}[{i}]") for i, x in enumerate(v))
             else:
-                m = r.positive(v, key)
+                m = _mtf50(r, v, key)
             object.__setattr__(self, "mtf50_cy_per_px", m)
         if model == "zernike" and self.zernike is None and self.zernike_zones is not None:
             needs_z: tuple[str, ...] = ("f_number", "zernike_zones", "wavelength_nm")

@@ -36,8 +36,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from imageform._files import atomic_write
-from imageform._validate import as_bool, describe
+from imageform._files import atomic_write, check_writable
+from imageform._validate import as_bool, as_path, describe
 from imageform.errors import InvalidInputError
 from imageform.io._camera_model import (
     _ALWAYS,
@@ -115,7 +115,7 @@ def read_camera(path: str | Path) -> CameraFile:
     >>> cf.camera.K[0].tolist(), cf.distortion_model, cf.has_pose, cf.version
     ([500.0, 0.0, 320.0], 'brown_conrady', False, 0)
     """
-    p = Path(path)
+    p = as_path(path, "path")
     if not p.is_file():
         raise InvalidInputError(f"camera file {p} does not exist")
     try:
@@ -238,6 +238,7 @@ def write_camera(
     """
     from imageform import __version__
 
+    final = check_writable(path, "path")
     cf = camera if isinstance(camera, CameraFile) else CameraFile(camera)
     if has_pose is not None:
         cf = replace(cf, has_pose=as_bool(has_pose, "has_pose"))
@@ -263,6 +264,5 @@ def write_camera(
         date=prov.date or datetime.now(UTC).replace(microsecond=0),
     )
     text = camera_file_text(replace(cf, provenance=prov))
-    final = Path(path)
     atomic_write(final, lambda tmp: tmp.write_text(text, encoding="utf-8"))
     return final

@@ -38,8 +38,15 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from imageform._files import atomic_write, not_a_regular_file
-from imageform._validate import check_memory, check_option, describe, format_shape
+from imageform._files import atomic_write, check_writable, not_a_regular_file
+from imageform._validate import (
+    as_path,
+    check_memory,
+    check_option,
+    describe,
+    format_shape,
+    shorten,
+)
 from imageform.errors import InvalidInputError
 
 __all__ = [
@@ -125,10 +132,14 @@ def image_format(path: str | Path) -> str:
     >>> image_format("a.JPG")
     'jpeg'
     """
-    suffix = Path(path).suffix.lower()
+    p = as_path(path, "path")
+    suffix = p.suffix.lower()
     if suffix not in IMAGE_FORMATS:
         valid = ", ".join(IMAGE_FORMATS)
-        raise InvalidInputError(f"unknown image file type {suffix!r} of {path}; valid: {valid}")
+        shown = shorten(p)
+        raise InvalidInputError(
+            f"unknown image file type {suffix[:20]!r} of {shown}; valid: {valid}"
+        )
     return IMAGE_FORMATS[suffix]
 
 
@@ -607,11 +618,11 @@ def write_image(
             stacklevel=2,
         )
         out_of_range = "clip" if clip else "error"
-    p = Path(path)
+    p = check_writable(path, "path")
     fmt = image_format(p)
     out_of_range = check_option(out_of_range, _OUT_OF_RANGE, "out-of-range policy")
     if bits is not None and (isinstance(bits, bool) or bits not in (8, 16)):
-        raise InvalidInputError(f"expected bits 8 or 16, got {bits!r}")
+        raise InvalidInputError(f"expected bits 8 or 16, got {describe(bits)}")
     a = np.asarray(image)
     if a.ndim and not a.flags.c_contiguous:  # a turned or cropped view: codecs need C order
         a = np.ascontiguousarray(a)

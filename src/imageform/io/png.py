@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
+from imageform._validate import as_path, shorten
 from imageform.errors import InvalidInputError
 
 __all__ = ["read_png", "write_png"]
@@ -22,8 +23,8 @@ def read_png(path: str | Path) -> np.ndarray:
     """
     from imageform.io.image_io import read_image
 
-    if Path(path).suffix.lower() != ".png":
-        raise InvalidInputError(f"expected a .png file, got {path}")
+    if as_path(path, "path").suffix.lower() != ".png":
+        raise InvalidInputError(f"expected path as a .png file, got {shorten(path)}")
     return read_image(path, alpha="keep")
 
 
@@ -43,6 +44,6 @@ def write_png(path: str | Path, image: np.ndarray) -> None:
     a = np.asarray(image)
     if a.dtype not in (np.uint8, np.uint16):
         raise InvalidInputError(f"expected image as uint8 or uint16 for PNG, got {a.dtype}")
-    if Path(path).suffix.lower() != ".png":
-        raise InvalidInputError(f"expected a .png file name, got {path}")
+    if as_path(path, "path").suffix.lower() != ".png":
+        raise InvalidInputError(f"expected path as a .png file name, got {shorten(path)}")
     write_image(path, a)

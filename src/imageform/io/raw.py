@@ -19,6 +19,7 @@ DNG written with tifffile, any raw LibRaw reads (through rawpy, the optional
 from __future__ import annotations
 
 import importlib.util
+import math
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -26,6 +27,7 @@ from typing import Any
 
 import numpy as np
 
+from imageform._files import atomic_write, check_writable
 from imageform._validate import describe
 from imageform.errors import InvalidInputError
 
@@ -83,7 +85,10 @@ def _rationals(values: np.ndarray, what: str, *, signed: bool) -> list[int]:
     out: list[int] = []
     lim = (2**31 - 1) if signed else (2**32 - 1)
     for v in np.ravel(values):
-        num = round(float(v) * _DEN)
+        scaled = float(v) * _DEN
+        if not math.isfinite(scaled) or abs(scaled) > lim + 1:  # round() of inf overflows
+            raise InvalidInputError(f"expected {what} to fit a DNG rational, got {float(v)!r}")
+        num = round(scaled)
         if abs(num) > lim or (not signed and num < 0):
             raise InvalidInputError(f"expected {what} to fit a DNG rational, got {float(v)!r}")
         out += [int(num), _DEN]
@@ -151,6 +156,7 @@ def write_dng(
 
     from imageform.sensor import cfa_pattern as _pattern
 
+    out = check_writable(path, "path")
     pattern = _pattern(cfa_pattern)
     arr = np.asarray(mosaic)
     if (
@@ -220,15 +226,17 @@ def write_dng(
         ),
         (_CALIBRATION_ILLUMINANT_1, _SHORT, 1, CALIBRATION_ILLUMINANTS[ill], True),
     ]
-    out = Path(path)
-    tifffile.imwrite(
+    atomic_write(
         out,
-        data,
-        photometric=_PHOTOMETRIC_CFA,
-        subfiletype=0,
-        extratags=tags,
-        metadata=None,
-        software="imageform",
+        lambda tmp: tifffile.imwrite(
+            tmp,
+            data,
+            photometric=_PHOTOMETRIC_CFA,
+            subfiletype=0,
+            extratags=tags,
+            metadata=None,
+            software="imageform",
+        ),
     )
     return out
 

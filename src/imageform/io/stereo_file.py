@@ -26,8 +26,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from imageform._files import atomic_write
-from imageform._validate import describe
+from imageform._files import atomic_write, check_writable
+from imageform._validate import as_path, describe
 from imageform.errors import InvalidInputError, UnknownOptionError
 from imageform.io._camera_model import (
     _TABLES,
@@ -208,6 +208,7 @@ def write_stereo_camera(path: str | Path, stereo: StereoCameraFile) -> Path:
     """
     from imageform import __version__
 
+    final = check_writable(path, "path")
     if not isinstance(stereo, StereoCameraFile):
         raise InvalidInputError(
             f"expected stereo to be a StereoCameraFile, got {type(stereo).__name__}"
@@ -218,7 +219,6 @@ def write_stereo_camera(path: str | Path, stereo: StereoCameraFile) -> Path:
         date=stereo.provenance.date or datetime.now(UTC).replace(microsecond=0),
     )
     text = stereo_file_text(replace(stereo, provenance=prov))
-    final = Path(path)
     atomic_write(final, lambda tmp: tmp.write_text(text, encoding="utf-8"))
     return final
 
@@ -248,7 +248,7 @@ def read_stereo_camera(path: str | Path) -> StereoCameraFile:
     """
     from imageform.io._camera_read import _provenance, parse
 
-    p = Path(path)
+    p = as_path(path, "path")
     if not p.is_file():
         raise InvalidInputError(f"stereo camera file {p} does not exist")
     try:

@@ -212,7 +212,7 @@ def lateral_chromatic_aberration(
     mags = as_reals(magnification, "magnification", positive=True)
     if len(mags) != arr.shape[-1]:
         raise InvalidInputError(
-            f"expected {arr.shape[-1]} magnifications (one per channel), got {len(mags)}"
+            f"expected magnification as {arr.shape[-1]} values (one per channel), got {len(mags)}"
         )
     # NaN is allowed: it marks the samples from outside the image (the simulator keeps the
     # unshifted value there)

@@ -166,6 +166,10 @@ def plot_chromaticity_diagram(
     from imageform.color.rgb_spaces import rgb_space
 
     # every argument is checked before matplotlib is imported (seconds on a cold start)
+    if path is not None:
+        from imageform._files import check_writable
+
+        check_writable(path, "path")
     c = check_name(coords, ("xy", "uv"), "chromaticity diagram", "coords")
     n_grid = as_int(resolution, "resolution", minimum=2, maximum=MAX_RESOLUTION)
     # the grid's points, xyz, rgb and the RGBA picture: about 16 float64 values per point
@@ -185,7 +189,11 @@ def plot_chromaticity_diagram(
     if ax is None:
         fig, ax = plt.subplots(figsize=(6.5, 6.5))
     else:
-        fig = ax.figure
+        from matplotlib.axes import Axes
+
+        if not isinstance(ax, Axes):
+            raise TypeError(f"expected ax as matplotlib Axes (or None), got {describe(ax)}")
+        fig = ax.figure  # type: ignore[assignment]
     img, ext = _horseshoe_image(c, n_grid)
     ax.imshow(img, origin="lower", extent=ext, interpolation="bilinear")
     wl, locus = spectral_locus(observer=observer, coords=c)

@@ -97,15 +97,15 @@ def stage_display_image(
         )
     if a.size == 0:
         raise InvalidInputError(f"expected a non-empty image, got shape {format_shape(a.shape)}")
-    wl = None
+    # checked whatever the kind (unused but for "raw"): a complex value is never cut
+    wl = None if white_level is None else as_real(white_level, "white_level", positive=True)
     if k == "raw":
         if a.ndim != 2:
             raise InvalidInputError(
                 f"expected image as a raw stage of shape (H, W), got {format_shape(a.shape)}"
             )
-        if white_level is None:
+        if wl is None:
             raise InvalidInputError("a raw stage needs white_level > 0, got None")
-        wl = as_real(white_level, "white_level", positive=True)
     elif k == "linear":
         percentile = as_real(percentile, "percentile")
         if not 0 < percentile <= 100:

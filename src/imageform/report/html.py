@@ -68,7 +68,9 @@ def _slug(name: str) -> str:
 
 def _check_result(result: Any) -> SimulationResult:
     if not isinstance(result, SimulationResult):
-        raise InvalidInputError(f"expected a SimulationResult, got {type(result).__name__}")
+        raise InvalidInputError(
+            f"expected result as a SimulationResult, got {type(result).__name__}"
+        )
     if not result.stages:
         raise InvalidInputError("expected at least one stage in the SimulationResult, got none")
     for i, s in enumerate(result.stages):

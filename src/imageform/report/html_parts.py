@@ -194,6 +194,11 @@ def table(header: Sequence[str], rows: Sequence[Sequence[Any]], left: Sequence[i
         cls = ' class="l"' if j in left else ""
         return f"<{tag}{cls}>{v if isinstance(v, Markup) else e(v)}</{tag}>"
 
+    if isinstance(left, str | bytes) or not (
+        isinstance(left, Sequence | set | frozenset)
+        and all(isinstance(j, int) and not isinstance(j, bool) for j in left)
+    ):
+        raise TypeError(f"expected left as column numbers (int), got {describe(left)}")
     heads = _strings(header, "header")
     body_rows = [_strings(r, f"rows[{i}]") for i, r in enumerate(_strings(rows, "rows"))]
     head = "".join(cell("th", j, h) for j, h in enumerate(heads))

@@ -291,6 +291,8 @@ class SensorModel:
         """
         t = check_positive(exposure_time, "exposure_time (s)", allow_zero=True)
         kind = check_option(quantity, _QUANTITIES, "signal quantity")
+        if wavelength_nm is not None:  # checked even where unused: never cut to a real part
+            wavelength_nm = check_positive(wavelength_nm, "wavelength_nm")
         arr = as_real_array(signal, "signal", check=False)
         if kind == "electrons":
             if arr.ndim < 3 or arr.shape[-1] != self.n_channels:

@@ -19,7 +19,7 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-from imageform._validate import as_int
+from imageform._validate import as_int, as_real
 
 __all__ = [
     "BYTES_PER_PIXEL",
@@ -93,6 +93,7 @@ def format_bytes(n: float) -> str:
     >>> format_bytes(414_720_000), format_bytes(2.5e12)
     ('415 MB', '2500 GB')
     """
+    n = as_real(n, "n", nonnegative=True)
     for unit, scale in (("GB", 1e9), ("MB", 1e6), ("kB", 1e3)):
         if n >= scale:
             return f"{n / scale:.3g} {unit}" if n / scale < 1000 else f"{n / scale:.0f} {unit}"

@@ -26,7 +26,7 @@ from typing import Any
 
 import numpy as np
 
-from imageform._validate import as_real, check_option
+from imageform._validate import as_real, check_image_size, check_option, finite_result
 from imageform.errors import InvalidInputError
 from imageform.geometry.camera import Camera
 from imageform.geometry.distortion import BrownConrady, DivisionModel, KannalaBrandt
@@ -178,7 +178,7 @@ class DistortionConfig:
         name = names.get(type(model))
         if name is None:
             raise InvalidInputError(
-                "expected the camera's distortion to be BrownConrady, DivisionModel, "
+                "expected model (the camera's distortion) as BrownConrady, DivisionModel, "
                 f"KannalaBrandt or None, got {type(model).__name__}"
             )
         return cls(name, **{k: float(getattr(model, k)) for k in DISTORTION_COEFFICIENTS[name]})
@@ -236,16 +236,20 @@ class CameraConfig:
         InvalidInputError
             A camera obscura (``image_plane = 'real'``) with lens distortion.
         """
-        w, h = int(image_size[0]), int(image_size[1])
+        w, h = check_image_size(image_size, "image_size")
+        # a pitch in metres: a complex, subnormal or absurd one is refused even when fx_px
+        # makes it unused (it would otherwise be cut to its real part, or overflow f / p)
+        p_m = as_real(sensor_pixel_pitch_m, "sensor_pixel_pitch_m", positive=True, maximum=1.0)
         if self.fx_px is not None:
             fx = float(self.fx_px)
         else:
-            pitch = (
-                self.pixel_pitch_um * 1e-6
-                if self.pixel_pitch_um is not None
-                else sensor_pixel_pitch_m
+            pitch = self.pixel_pitch_um * 1e-6 if self.pixel_pitch_um is not None else p_m
+            fx = finite_result(
+                "fx (focal length / pixel pitch)",
+                lambda: self.focal_length_mm * 1e-3 / pitch,
+                focal_length_mm=self.focal_length_mm,
+                sensor_pixel_pitch_m=pitch,
             )
-            fx = self.focal_length_mm * 1e-3 / pitch
         fy = float(self.fy_px) if self.fy_px is not None else fx
         cx = float(self.cx_px) if self.cx_px is not None else (w - 1) / 2
         cy = float(self.cy_px) if self.cy_px is not None else (h - 1) / 2

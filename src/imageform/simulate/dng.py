@@ -10,6 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
+from imageform._files import check_writable
 from imageform.errors import InvalidInputError
 from imageform.simulate.result import SimulationResult
 from imageform.simulate.scene import Scene
@@ -50,6 +51,7 @@ def write_simulated_dng(result: SimulationResult, scene: Scene, path: str | Path
     """
     from imageform.io import write_dng
 
+    check_writable(path, "path")
     if not isinstance(scene, Scene):
         raise InvalidInputError(f"expected a Scene (load_scene), got {type(scene).__name__}")
     cm, neutral = simulated_color_matrix(result)

@@ -234,6 +234,11 @@ def simulate(
     """
     if not isinstance(scene, Scene):
         raise InvalidInputError(f"expected a Scene (load_scene), got {type(scene).__name__}")
+    if progress is not None and not callable(progress):
+        raise TypeError(
+            f"expected progress as a callable progress(step, fraction) or None, got "
+            f"{type(progress).__name__}"
+        )
     source = random_source(rng, seed, "simulate")
     t_start = time.perf_counter()
     cfg, sensor, proc = scene.config, scene.sensor, scene.config.processing

@@ -22,7 +22,7 @@ from typing import Any, Literal
 import numpy as np
 
 from imageform._validate import as_real, as_reals, as_size, describe
-from imageform.errors import InvalidInputError
+from imageform.errors import InvalidInputError, UnknownOptionError
 from imageform.geometry.camera import Camera
 from imageform.sensor.emva import PhotonTransferData
 from imageform.simulate.config import WORLD_UP
@@ -257,8 +257,20 @@ class SimulationResult:
         """Check the fields: ``camera``, ``image_size``, ``world_up`` and ``stages`` (issue 16).
 
         ``camera`` a Camera, ``image_size`` two positive integers, ``world_up`` a finite non-zero
-        3-vector, ``stages`` Stage objects.
+        3-vector, ``stages`` Stage objects; ``colorchecker``, ``vanishing``,
+        ``photon_transfer`` and ``patches`` None or their record type.
         """
+        for name, kind in (
+            ("colorchecker", ColorCheckerTruth),
+            ("vanishing", VanishingTruth),
+            ("photon_transfer", PhotonTransferData),
+            ("patches", PatchMeasurements),
+        ):
+            value = getattr(self, name)
+            if value is not None and not isinstance(value, kind):
+                raise TypeError(
+                    f"expected {name} as a {kind.__name__} (or None), got {describe(value)}"
+                )
         if not isinstance(self.camera, Camera):
             raise TypeError(
                 f"expected camera as an imageform.geometry.Camera, got {describe(self.camera)}"
@@ -275,8 +287,17 @@ class SimulationResult:
         object.__setattr__(self, "stages", stages)
 
     def stage(self, name: str) -> Stage:
-        """Return the stage called ``name``; ``KeyError`` listing the names if there is none."""
+        """Return the stage called ``name``.
+
+        Raises
+        ------
+        UnknownOptionError
+            No stage is called ``name`` (the message lists the stages, in order).
+        """
         for s in self.stages:
             if s.name == name:
                 return s
-        raise KeyError(f"no stage {name!r}; stages: {[s.name for s in self.stages]}")
+        if not isinstance(name, str):
+            raise TypeError(f"expected name as a stage name (str), got {describe(name)}")
+        names = ", ".join(repr(s.name) for s in self.stages)
+        raise UnknownOptionError(f"unknown stage {describe(name, 30)} for name; valid: {names}")

@@ -21,7 +21,7 @@ from typing import Any
 import numpy as np
 
 from imageform._files import not_a_regular_file
-from imageform._validate import describe
+from imageform._validate import as_int, describe
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
 from imageform.geometry.camera import Camera
 from imageform.sensor.model import SensorModel
@@ -217,9 +217,11 @@ class Scene:
         >>> small.image_size, round(float(small.camera.K[0, 0]), 3)
         ((160, 90), 71.429)
         """
+        width = as_int(width, "width", minimum=1)
+        height = None if height is None else as_int(height, "height", minimum=1)
         w0, h0 = self.image_size
-        f = int(width) / w0
-        h = int(height) if height is not None else max(2, round(h0 * f))
+        f = width / w0
+        h = height if height is not None else max(2, round(h0 * f))
         cam = self.config.camera
         changes: dict[str, Any] = {}
         if cam.fx_px is not None:

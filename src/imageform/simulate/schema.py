@@ -64,6 +64,13 @@ class Field:
             )
         if not isinstance(self.doc, str):
             raise TypeError(f"expected doc as a string, got {describe(self.doc)}")
+        if self.dimension is not None and not isinstance(self.dimension, str):
+            raise TypeError(
+                f"expected dimension as a str (or None), got {describe(self.dimension)}"
+            )
+        for bound in ("minimum", "maximum"):
+            if getattr(self, bound) is not None:
+                as_real(getattr(self, bound), bound)
         d = self.default
         if d is None or isinstance(d, str) or (self.kind == "bool" and isinstance(d, bool)):
             return

@@ -420,6 +420,12 @@ def demosaic_raw(normalized: np.ndarray, cfa: str, method: str) -> np.ndarray:
         )
     cfa = cfa.strip().upper()
     method = check_name(method, DEMOSAIC_METHODS, "demosaicing method", "method")
+    kind = getattr(getattr(normalized, "dtype", None), "kind", "")
+    if kind in ("i", "u"):  # digital numbers: the caller divides by the white level first
+        raise InvalidInputError(
+            f"expected normalized as floats (the raw mosaic divided by its white level), got "
+            f"{describe(normalized)}"
+        )
     arr = real_array(normalized, "normalized", ndim=2, finite=False)
     if min(arr.shape) < 2:
         raise InvalidInputError(
@@ -428,7 +434,7 @@ def demosaic_raw(normalized: np.ndarray, cfa: str, method: str) -> np.ndarray:
     lo, hi = float(arr.min()), float(arr.max())  # one pass; demosaic reads it whole anyway
     if not (math.isfinite(lo) and math.isfinite(hi)):
         raise InvalidInputError("normalized contains NaN or inf")
-    if lo < -1e3 or hi > 1e3:
+    if lo < -1e3 or hi > 1e3 or (hi > 1.5 and bool(np.all(arr == np.round(arr)))):
         raise InvalidInputError(
             f"expected normalized as a raw image scaled to about [0, 1], got {lo:g}..{hi:g}"
         )

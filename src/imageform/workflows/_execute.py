@@ -89,7 +89,7 @@ def execute(
     opts = options if options is not None else wf.make_options()
     if not isinstance(opts, wf.options):
         raise InvalidInputError(
-            f"expected {wf.options.__name__} for {wf.name}, got {type(opts).__name__}"
+            f"expected options as {wf.options.__name__} for {wf.name}, got {type(opts).__name__}"
         )
     names = {i.name for i in wf.inputs}
     if set(inputs) != names:

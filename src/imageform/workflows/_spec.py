@@ -324,6 +324,12 @@ class Input:
     metavar: str | None = None
     kind: str = "file"
 
+    def __post_init__(self) -> None:
+        if self.metavar is not None and not isinstance(self.metavar, str):
+            raise TypeError(
+                f"expected metavar as a str (or None), got {type(self.metavar).__name__}"
+            )
+
 
 @dataclass(frozen=True)
 class Output:
@@ -333,6 +339,12 @@ class Output:
     required: bool = True
     default: str | None = None
     folder: bool = False
+
+    def __post_init__(self) -> None:
+        if self.default is not None and not isinstance(self.default, str):
+            raise TypeError(
+                f"expected default as a str (or None), got {type(self.default).__name__}"
+            )
 
 
 @dataclass(frozen=True)
@@ -367,6 +379,13 @@ class Run:
     outputs: Any  # imageform._files.Outputs (imported lazily: it is cheap, but keep --help lean)
     notes: list[str] = field(default_factory=list)
     progress: Callable[[str, float], None] | None = None
+
+    def __post_init__(self) -> None:
+        if self.progress is not None and not callable(self.progress):
+            raise TypeError(
+                f"expected progress as a callable progress(step, fraction) or None, got "
+                f"{type(self.progress).__name__}"
+            )
 
     def file(self, path: str | Path) -> Path:
         """Return the temporary path to write for the output ``path`` (checked on first use)."""

@@ -66,7 +66,7 @@ from __future__ import annotations
 
 import math
 import re
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -805,6 +805,27 @@ def _balanced_mosaic(mosaic: Any, cfa: str) -> Any:
     return out
 
 
+def _common_sfr_grid(results: Sequence[Any], n_ch: int) -> tuple[Any, Any]:
+    """Put the edges' SFR curves on one grid: ``(frequency (n,), curves (edges, n, C))``.
+
+    Each edge's grid follows its ROI's length (ROIs of a small image are cut to different
+    lengths), so the curves are interpolated (linearly) onto the coarsest grid, up to the
+    lowest top frequency of all.
+    """
+    import numpy as np
+
+    coarse = min(results, key=lambda r: r.frequency.size)
+    top = min(float(r.frequency[-1]) for r in results)
+    freq = coarse.frequency[coarse.frequency <= top]
+    curves = np.stack(
+        [
+            np.column_stack([np.interp(freq, r.frequency, r.sfr[:, c]) for c in range(n_ch)])
+            for r in results
+        ]
+    )
+    return freq, curves
+
+
 def _measure_sharpness(
     folder: Path, doc: Mapping[str, Any], max_pixels: int | None, black: float | None
 ) -> SharpnessMeasurement:
@@ -836,14 +857,13 @@ def _measure_sharpness(
         )
     results = [slanted_edge_sfr(arr, r.roi) for r in rois]
     n_ch = len(channels)
-    freq = results[0].frequency
-    curves = np.stack([r.sfr[:, :n_ch] for r in results])  # (edges, n, channels)
+    freq, curves = _common_sfr_grid(results, n_ch)  # curves: (edges, n, channels)
     mtf50 = np.array([r.mtf50[:n_ch] for r in results])
     mtf10 = np.array([r.mtf10[:n_ch] for r in results])
     angles = tuple(float(abs(r.angle)) for r in results)
     sig = np.array(
         [
-            _fit_sigma(freq, r.sfr[:, c], abs(r.angle))
+            _fit_sigma(r.frequency, r.sfr[:, c], abs(r.angle))  # its own grid
             for r in results
             for c in range(n_ch)
             if channels[c] in ("G", "raw", "Y")
@@ -1388,12 +1408,16 @@ def characterize_camera(
     ...
     imageform.errors.InvalidInputError: ... holds none of checkerboard/, colorchecker/, ...
     """
-    from imageform._validate import as_path
+    from imageform._validate import as_path, describe
 
     root = as_path(folder, "folder")
-    if not root.is_dir():
+    try:
+        is_dir = root.is_dir()
+    except OSError:  # a name too long for the file system, ...
+        is_dir = False
+    if not is_dir:
         raise InvalidInputError(
-            f"expected FOLDER a folder of lab photographs, got {str(root)!r}"[:200]
+            f"expected FOLDER a folder of lab photographs, got {describe(str(root), 60)}"
         )
     doc = _manifest(root)
     dirs = {part: _subfolder(root, names) for part, names in PARTS.items() if part != "noise"}

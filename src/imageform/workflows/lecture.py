@@ -23,13 +23,14 @@ class LectureOptions(Options):
         """Check that ``--topic``, when given, matches a lecture topic."""
         super().check()
         if self.topic is not None:
+            from imageform._validate import shorten_names
             from imageform.report.lecture import lecture_topics
 
             topics = lecture_topics()
             if not any(self.topic.strip().lower() in t.lower() for t in topics):
                 raise UnknownOptionError(
                     f"no lecture topic matches --topic {self.topic[:40]!r}; "
-                    f"valid: {', '.join(topics)}"
+                    f"valid: {shorten_names(topics, 90)}"
                 )
 
 
