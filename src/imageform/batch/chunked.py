@@ -37,6 +37,7 @@ from typing import Any
 
 import numpy as np
 
+from imageform._files import publish
 from imageform._validate import check_option
 from imageform.errors import ImageformError, InvalidInputError
 from imageform.workflows.color import DISPLAYABLE_SPACES
@@ -785,9 +786,9 @@ def process_chunked(
                 else:
                     spec = _TiffSpec(levels, tile, str(comp), workers, meta)
                     clipped = _write_tiff(tmp, x, op, out_dtype, chunk, spec)
-                if dst_p.exists():
-                    shutil.rmtree(dst_p) if dst_p.is_dir() else dst_p.unlink()
-                os.replace(tmp, dst_p)
+                # the one place an output appears: a FIFO or a device at dst is never replaced,
+                # a Zarr folder is swapped in whole (imageform._files.publish)
+                publish(tmp, dst_p, folder=out_kind == "zarr")
             except BaseException:
                 if tmp.is_dir():
                     shutil.rmtree(tmp, ignore_errors=True)

@@ -46,7 +46,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from imageform._files import glob_base, glob_paths, glob_regex
+from imageform._files import glob_base, glob_paths, glob_regex, publish
 from imageform.errors import ImageformError, InvalidInputError, UnknownOptionError
 from imageform.workflows import Options, Workflow, flag_of, get_workflow
 
@@ -563,7 +563,7 @@ def run_job(
         if hold_s > 0:
             time.sleep(hold_s)
         _fsync(tmp)
-        os.replace(tmp, out)
+        publish(tmp, out)  # never onto a FIFO or a device (imageform._files)
         _fsync(out.parent, directory=True)
     except Exception as exc:
         tmp.unlink(missing_ok=True)
