@@ -322,3 +322,15 @@ def test_sea_horizon_in_real_photographs(shared_data: Path, i: int, band: tuple[
     lo = int(guess) - 15
     step = lo + int(np.argmax(np.abs(np.diff(profile[lo : lo + 30])))) + 0.5
     assert guess == pytest.approx(step, abs=1.5)
+
+
+def test_no_sea_horizon_on_a_facade(shared_data: Path) -> None:
+    """kodim01, a facade seen square on: verticals and horizontals both parallel in the
+    image, long horizontal runs of window sills; none of them is a horizon (no point gives
+    one, and the image is no open water: its verticals add up to half its horizontals)."""
+    from imageform.io import read_image
+
+    path = shared_data / "kodak" / "kodim01.png"
+    if not path.is_file():
+        pytest.skip("../shared/data/kodak is not available")
+    assert detect_vanishing_points(np.asarray(read_image(path))).horizon is None

@@ -265,6 +265,9 @@ _SEA_TOL, _SEA_TOL_DIAG = 1.5, 0.002
 _SEA_SPAN = 0.6
 #: ... and whose segments cover at least this share of the width, and half the best run's.
 _SEA_COVER = 0.2
+#: Only where the near-vertical segments (within ``_SEA_TILT`` of the columns) add up to at
+#: most this share of the near-horizontal ones' length: open water shows no verticals.
+_SEA_VERTICAL = 0.25
 #: Segments within this share of the height from the frame's top or bottom are left out.
 _SEA_EDGE = 0.01
 
@@ -285,8 +288,17 @@ def _visible_horizon(
     ``_SEA_SPAN`` of the image width and whose segments cover ``_SEA_COVER`` of it and
     half of what the best-covered run covers (wave crests nearer the camera can span the
     width too, lower down; chance alignments of clutter cover little of it). The runs are
-    grown from the ten longest segments.
+    grown from the ten longest segments. Only where the near-vertical segments add up to at
+    most ``_SEA_VERTICAL`` of the near-horizontal ones: a facade seen square on (verticals
+    and horizontals both parallel in the image) has long horizontal runs too, and its
+    horizon is not one of them.
     """
+    every = seg.endpoints[:, 1] - seg.endpoints[:, 0]
+    size = np.hypot(every[:, 0], every[:, 1])
+    steep = np.abs(every[:, 0]) <= np.tan(_SEA_TILT) * np.abs(every[:, 1])
+    level = np.abs(every[:, 1]) <= np.tan(_SEA_TILT) * np.abs(every[:, 0])
+    if size[steep].sum() > _SEA_VERTICAL * size[level].sum():
+        return None  # a built scene (a facade seen square on): its lines are not a horizon
     ends = seg.endpoints[members]
     d = ends[:, 1] - ends[:, 0]
     length = np.hypot(d[:, 0], d[:, 1])
