@@ -18,7 +18,7 @@ from imageform.geometry import (
     horizon_line,
     vanishing_point,
 )
-from tests.geometry.scene_render import render_manhattan
+from tests.geometry.scene_render import render_manhattan, render_seaside
 
 K = np.array([[700.0, 0.0, 383.5], [0.0, 700.0, 255.5], [0.0, 0.0, 1.0]])
 
@@ -285,3 +285,52 @@ def test_level_camera_before_a_wall_gives_the_horizon_without_K() -> None:
     truth = horizon_line(K, R)
     for u in (0.0, 383.5, 767.0):
         assert _row_at(res.horizon, u) == pytest.approx(_row_at(truth, u), abs=1.0)
+
+
+@pytest.mark.parametrize(
+    ("pitch", "roll", "seed"), [(-3.0, 2.0, 0), (-1.0, -1.5, 1), (-5.0, 0.5, 2)]
+)
+def test_sea_horizon_of_a_level_camera(pitch: float, roll: float, seed: int) -> None:
+    """Issue 26: open sea under a sky, no verticals: one horizontal direction (the horizon,
+    the wave crests), its point at infinity, so no vanishing point gives the horizon (none
+    was returned). The horizon is in the picture: found within 0.5 px of the truth at both
+    edges, not on a wave crest below it."""
+    img, truth = render_seaside(pitch_deg=pitch, roll_deg=roll, seed=seed)
+    res = detect_vanishing_points(img)
+    assert res.horizon is not None and res.K is None and res.vertical is None
+    for u in (0.0, 767.0):
+        assert _row_at(res.horizon, u) == pytest.approx(_row_at(truth, u), abs=0.5)
+
+
+@pytest.mark.parametrize(("i", "band"), [(16, (620, 760)), (21, (700, 760))])
+def test_sea_horizon_in_real_photographs(shared_data: Path, i: int, band: tuple[int, int]) -> None:
+    """Issue 26: Kodak photographs with a sea horizon and no Manhattan triplet (kodim16: an
+    island on open water; kodim21: a lighthouse, the sea horizon on the right) returned no
+    horizon. Now it passes within 1.5 px of where the sky meets the sea in a band of
+    columns showing open sea (the largest step of the band's mean column profile)."""
+    from imageform.io import read_image
+
+    path = shared_data / "kodak" / f"kodim{i:02d}.png"
+    if not path.is_file():
+        pytest.skip("../shared/data/kodak is not available")
+    img = np.asarray(read_image(path))
+    res = detect_vanishing_points(img)
+    assert res.horizon is not None
+    grey = img @ np.array([0.299, 0.587, 0.114])
+    profile = grey[:, band[0] : band[1]].mean(axis=1)
+    guess = _row_at(res.horizon, float(np.mean(band)))
+    lo = int(guess) - 15
+    step = lo + int(np.argmax(np.abs(np.diff(profile[lo : lo + 30])))) + 0.5
+    assert guess == pytest.approx(step, abs=1.5)
+
+
+def test_no_sea_horizon_on_a_facade(shared_data: Path) -> None:
+    """kodim01, a facade seen square on: verticals and horizontals both parallel in the
+    image, long horizontal runs of window sills; none of them is a horizon (no point gives
+    one, and the image is no open water: its verticals add up to half its horizontals)."""
+    from imageform.io import read_image
+
+    path = shared_data / "kodak" / "kodim01.png"
+    if not path.is_file():
+        pytest.skip("../shared/data/kodak is not available")
+    assert detect_vanishing_points(np.asarray(read_image(path))).horizon is None

@@ -202,6 +202,38 @@ def test_fundamental_no_worse_than_opencv() -> None:
     assert np.median(ours) <= np.median(theirs)
 
 
+def _fundamental_errors(seeds: range) -> np.ndarray:
+    """RMS Sampson distance (px) of the true points under the F found on the noisy scenes
+    of benchmarks/bench_twoview.py (200 points, 30 % outliers, σ = 1 px, τ = 1 px)."""
+    from benchmarks.bench_twoview import scene as bench_scene
+
+    out = []
+    for s in seeds:
+        sc = bench_scene(2000 + s, 200, 0.3, 1.0, planar=False)
+        F = find_fundamental_matrix(sc["n1"], sc["n2"], threshold=1.0, rng=s).F
+        out.append(np.sqrt(np.mean(sampson_sq(F, sc["u1"], sc["u2"]))))
+    return np.asarray(out)
+
+
+def test_fundamental_worst_case_near_the_best_over_seeds() -> None:
+    """Issue 26: on noisy scenes (σ = τ) a minimal sample of inliers scores worse than a
+    model already optimised into a wrong basin and was never optimised: seed 29 ended at
+    1.15 px where the median is 0.29 px. LO-RANSAC's Sampson-weighted refits on 3τ then 2τ,
+    and the runner-up hypotheses optimised before sampling stops, bring the worst of 100
+    scenes under 1 px."""
+    err = _fundamental_errors(range(100))
+    assert np.median(err) < 0.35
+    assert err.max() < 1.0, (int(np.argmax(err)), float(err.max()))
+
+
+@pytest.mark.slow
+def test_fundamental_worst_case_near_the_best_over_1000_seeds() -> None:
+    """The same over 1000 scenes (before: 7 of the first 300 above 1 px, up to 1.84 px)."""
+    err = _fundamental_errors(range(1000))
+    assert np.median(err) < 0.35
+    assert err.max() < 1.0, (int(np.argmax(err)), float(err.max()))
+
+
 def test_fundamental_bad_inputs() -> None:
     p = np.random.default_rng(0).uniform(0, 100, (10, 2))
     with pytest.raises(InvalidInputError, match="at least 8"):

@@ -132,6 +132,7 @@ def ransac(
     max_trials: int,
     rng: np.random.Generator,
     local_opt: Callable[[F64, NDArray[np.bool_]], F64] | None = None,
+    pool: int = 0,
 ) -> tuple[F64 | None, NDArray[np.bool_], int]:
     """MSAC with adaptive trial count and LO-RANSAC local optimisation.
 
@@ -139,8 +140,16 @@ def ransac(
     ``sq_errors(models)`` their squared residuals ``(M, n)``. Each model is scored by the
     truncated quadratic ``Σ min(e², τ²)`` (MSAC, Torr & Zisserman 2000); every new best model
     is handed to ``local_opt(model, inliers)`` (LO-RANSAC, Chum, Matas & Kittler 2003), whose
-    result replaces it when it scores better. Returns ``(best model or None, inliers,
-    trials)``.
+    result replaces it when it scores better. The number of samples adapts to the inlier
+    ratio of the best (locally optimised) model so far.
+
+    With ``pool > 0`` the ``pool`` best-scoring raw hypotheses that were not locally
+    optimised are kept too, and before sampling stops (the adaptive count or
+    ``max_trials`` reached) each is locally optimised: with noisy data a minimal sample of
+    inliers can score worse than a model already optimised into a wrong basin, and never
+    be optimised itself. When that improves the best model, the adaptive count is
+    recomputed from its inlier ratio and sampling goes on if it asks for more. Returns
+    ``(best model or None, inliers, trials)``.
     """
     thr2 = threshold * threshold
     best_model: F64 | None = None
@@ -148,33 +157,57 @@ def ransac(
     best_inl = np.zeros(n, dtype=bool)
     needed = float(max_trials)
     drawn = 0
+    runners: list[tuple[float, F64]] = []
 
     def score(models: F64) -> tuple[F64, NDArray[np.bool_]]:
         e = sq_errors(models)
         e = np.where(np.isfinite(e), e, thr2)
         return np.minimum(e, thr2).sum(axis=-1), e < thr2
 
-    while drawn < min(needed, max_trials):
-        b = int(min(BATCH, max(1, max_trials - drawn)))
-        idx = _samples(rng, b, n, s)
-        drawn += b
+    def optimise(model: F64, inl: NDArray[np.bool_], sc: float) -> None:
+        nonlocal best_model, best_score, best_inl
+        if sc < best_score:
+            best_model, best_score, best_inl = model, sc, inl
+        if local_opt is None or inl.sum() <= s:
+            return
         with np.errstate(all="ignore"):
-            models = solve(idx)
-        if models.shape[0] == 0:
-            continue
-        sc, inl = score(models)
-        k = int(np.argmin(sc))
-        if sc[k] >= best_score:
-            continue
-        best_model, best_score, best_inl = models[k], float(sc[k]), inl[k]
-        if local_opt is not None and best_inl.sum() > s:
+            lo = local_opt(model, inl)
+        if lo is not None and np.all(np.isfinite(lo)):
+            sc2, inl2 = score(lo[None])
+            if sc2[0] < best_score:
+                best_model, best_score, best_inl = lo, float(sc2[0]), inl2[0]
+
+    while True:
+        while drawn < min(needed, max_trials):
+            b = int(min(BATCH, max(1, max_trials - drawn)))
+            idx = _samples(rng, b, n, s)
+            drawn += b
             with np.errstate(all="ignore"):
-                lo = local_opt(best_model, best_inl)
-            if lo is not None and np.all(np.isfinite(lo)):
-                sc2, inl2 = score(lo[None])
-                if sc2[0] < best_score:
-                    best_model, best_score, best_inl = lo, float(sc2[0]), inl2[0]
+                models = solve(idx)
+            if models.shape[0] == 0:
+                continue
+            sc, inl = score(models)
+            order = np.argsort(sc, kind="stable")
+            k = int(order[0])
+            if pool > 0:
+                rest = order[1 : pool + 1] if sc[k] < best_score else order[:pool]
+                runners.extend((float(sc[j]), models[j]) for j in rest)
+                runners.sort(key=lambda r: r[0])
+                del runners[pool:]
+            if sc[k] >= best_score:
+                continue
+            optimise(models[k], inl[k], float(sc[k]))
+            needed = trials_needed(int(best_inl.sum()), n, s, confidence)
+        if not runners:
+            break
+        before = best_score
+        for sc_r, model in runners:
+            e = sq_errors(model[None])[0]
+            optimise(model, np.isfinite(e) & (e < thr2), sc_r)
+        runners = []
         needed = trials_needed(int(best_inl.sum()), n, s, confidence)
+        if best_score >= before or drawn >= min(needed, max_trials):
+            break
     return best_model, best_inl, drawn
 
 

@@ -288,11 +288,13 @@ def _gray01(image: object) -> NDArray[np.float64]:
 
 def _homography(src: NDArray[np.float64], dst: NDArray[np.float64]) -> NDArray[np.float64]:
     """Estimate the 3x3 homography mapping 4 (or more) ``src`` points to ``dst`` (DLT, SVD)."""
-    rows = []
-    for (x, y), (u, v) in zip(src, dst, strict=True):
-        rows.append([x, y, 1, 0, 0, 0, -u * x, -u * y, -u])
-        rows.append([0, 0, 0, x, y, 1, -v * x, -v * y, -v])
-    _, _, vt = np.linalg.svd(np.asarray(rows))
+    x, y = np.asarray(src, dtype=np.float64).T
+    u, v = np.asarray(dst, dtype=np.float64).T
+    one, zero = np.ones_like(x), np.zeros_like(x)
+    rows = np.empty((2 * len(x), 9))
+    rows[0::2] = np.column_stack([x, y, one, zero, zero, zero, -u * x, -u * y, -u])
+    rows[1::2] = np.column_stack([zero, zero, zero, x, y, one, -v * x, -v * y, -v])
+    _, _, vt = np.linalg.svd(rows)
     h = vt[-1].reshape(3, 3)
     return np.asarray(h / h[2, 2]) if abs(h[2, 2]) > 1e-15 else np.asarray(h)
 

@@ -33,6 +33,7 @@ from imageform.errors import InvalidInputError
 from imageform.geometry.aruco import (
     ArucoMarkers,
     _apply_h,
+    _bilinear,
     _gray01,
     _homography,
     aruco_dictionary,
@@ -41,6 +42,25 @@ from imageform.geometry.aruco import (
 )
 
 __all__ = ["CharucoBoard", "CharucoCorners", "detect_charuco"]
+
+#: Seen-whole check of a corner's four squares (:func:`_seen_whole`): samples per side of the
+#: grid in each black square's interior and in each white square, and along each white margin.
+_GRID_BLACK, _GRID_WHITE, _N_STRIP = 6, 12, 7
+#: A black square's samples may not rise above its median by more than this share of the
+#: board's contrast; a white margin's may not fall below the black level plus this share.
+_BLACK_SPREAD, _WHITE_FLOOR = 0.3, 0.3
+#: Smallest contrast of the white margins next to the corner, as a share of the contrast the
+#: white squares' means give (1 when sharp): below it blur has merged the margins with the
+#: markers' borders and the saddle is not resolved.
+_MIN_RESOLVED = 0.6
+#: Largest relative difference between the contrasts the two white squares give.
+_WHITE_AGREE = 0.35
+#: Below this resolved share (see ``_MIN_RESOLVED``) a corner is refined again through a
+#: window a pixel larger, and refused when the two points are farther apart than
+#: ``_MAX_WINDOW_SHIFT`` pixels.
+_SHARP, _MAX_WINDOW_SHIFT = 0.9, 0.25
+#: Smallest contrast (image in [0, 1]) between the black squares and the white margins.
+_MIN_CONTRAST = 0.04
 
 
 @dataclass(frozen=True)
@@ -268,7 +288,7 @@ def detect_charuco(
     mpts = board.marker_points()[:, :, :2]
     at_square = {(int(squares[i, 0]), int(squares[i, 1])): k for k, i in enumerate(ids_m)}
     s = board.square_length
-    cand_ids, cand_xy, cand_hw, cand_scale = [], [], [], []
+    cand_ids, cand_xy, cand_hw, cand_scale, cand_hom = [], [], [], [], []
     h_img, w_img = g.shape
     for cid in range((cols - 1) * (rows - 1)):
         r, c = divmod(cid, cols - 1)
@@ -304,19 +324,34 @@ def detect_charuco(
         cand_xy.append(p)
         cand_hw.append(hw)
         cand_scale.append(scale)
+        cand_hom.append(hom)
     if not cand_ids:
         return empty
     xy = np.asarray(cand_xy)
     hws = np.asarray(cand_hw)
-    out_ids, out_xy = [], []
+    out_k, out_xy = [], []
     for hw in np.unique(hws):
         sel = np.nonzero(hws == hw)[0]
         ref = refine_corners(g, xy[sel], half_window=int(hw), max_iter=40, eps=1e-4)
         for j, k in enumerate(sel):
             moved = float(np.hypot(*(ref.corners[j] - xy[k])))
             if ref.status[j] in (0, 1) and moved <= shift * cand_scale[k] and moved < hw:
-                out_ids.append(cand_ids[k])
+                out_k.append(k)
                 out_xy.append(ref.corners[j])
+    if not out_k:
+        return empty
+    ks = np.asarray(out_k)
+    found = np.asarray(out_xy)
+    whole, resolved = _seen_whole(g, board, np.asarray(cand_ids)[ks], np.stack(cand_hom)[ks], found)
+    # a blurred saddle must give the same point through a window a pixel larger: where the
+    # blur lets the markers' borders into the window the point depends on the window
+    blurred = np.nonzero(whole & (resolved < _SHARP))[0]
+    for hw in np.unique(hws[ks[blurred]]):
+        sel = blurred[hws[ks[blurred]] == hw]
+        alt = refine_corners(g, found[sel], half_window=int(hw) + 1, max_iter=40, eps=1e-4)
+        whole[sel] &= np.hypot(*(alt.corners - found[sel]).T) <= _MAX_WINDOW_SHIFT
+    out_ids = [cand_ids[k] for k in ks[whole]]
+    out_xy = list(found[whole])
     if not out_ids:
         return empty
     order = np.argsort(out_ids)
@@ -326,3 +361,165 @@ def detect_charuco(
         markers,
         board,
     )
+
+
+def _printed(board: CharucoBoard, xy: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Sample the printed board at board points ``xy`` (..., 2), square units: 1 white, 0 black."""
+    cols, rows = board.squares
+    d = aruco_dictionary(board.dictionary)
+    n = d.marker_size + 2
+    col = np.clip(np.floor(xy[..., 0]).astype(np.int64), 0, cols - 1)
+    row = np.clip(np.floor(xy[..., 1]).astype(np.int64), 0, rows - 1)
+    white = (row + col) % 2 == 1
+    out = white.astype(np.float64)
+    at = np.zeros((rows, cols), dtype=np.int64)
+    sq = board.marker_squares()
+    at[sq[:, 0], sq[:, 1]] = np.arange(len(sq))
+    mid = at[row, col]
+    frac = board.marker_length / board.square_length
+    off = (1.0 - frac) / 2.0
+    cu = np.floor((xy[..., 0] - col - off) / frac * n).astype(np.int64)
+    cv = np.floor((xy[..., 1] - row - off) / frac * n).astype(np.int64)
+    inside = white & (cu >= 0) & (cu < n) & (cv >= 0) & (cv < n)
+    bits = (cu >= 1) & (cu <= n - 2) & (cv >= 1) & (cv <= n - 2)
+    code = d.codes[
+        np.clip(mid, 0, d.size - 1), np.clip(cv - 1, 0, n - 3), np.clip(cu - 1, 0, n - 3)
+    ]
+    out[inside] = np.where(bits[inside], code[inside], 0).astype(np.float64)
+    return out
+
+
+def _masked_median(v: NDArray[np.float64], ok: NDArray[np.bool_]) -> NDArray[np.float64]:
+    """Median of each row of ``v`` (m, P) over its ``ok`` entries (0 for a row without any)."""
+    srt = np.sort(np.where(ok, v, np.inf), axis=1)
+    n = ok.sum(1)
+    lo = np.take_along_axis(srt, np.maximum((n - 1) // 2, 0)[:, None], 1)[:, 0]
+    hi = np.take_along_axis(srt, np.maximum(n // 2, 0)[:, None], 1)[:, 0]
+    return np.where(n > 0, 0.5 * (lo + hi), 0.0)
+
+
+def _seen_whole(
+    g: NDArray[np.float64],
+    board: CharucoBoard,
+    ids: NDArray[np.int64],
+    homs: NDArray[np.float64],
+    xy: NDArray[np.float64],
+) -> tuple[NDArray[np.bool_], NDArray[np.float64]]:
+    """Which refined corners have their four squares seen whole, with a resolved saddle.
+
+    Each corner's squares are sampled through its local homography (board squares to
+    pixels, moved to the refined corner): a grid inside each black square (away from its
+    edges), a dense grid over each white square, and the white margin along each of the
+    four edges that meet at the corner. The dense grids' mean against the printed white
+    share of the same points (the markers' bits are known) gives the contrast ``C`` between
+    black and white whatever the blur, since blur keeps a square's mean. The corner is kept
+    when the black samples are uniform (none above their median by ``_BLACK_SPREAD C``),
+    no white-margin sample falls below the black level plus ``_WHITE_FLOOR C``, the two white
+    squares give the same ``C`` (within ``_WHITE_AGREE``), and the margins next to the
+    corner keep ``_MIN_RESOLVED`` of ``C`` (a blur that merges them with the markers' black
+    borders leaves no saddle to refine). An occluder over part of the squares breaks one of
+    these; samples outside the image are left out (a corner by the image border is judged
+    on what is in the image).
+    """
+    m = len(ids)
+    cols = board.squares[0]
+    r, c = np.divmod(ids, cols - 1)
+    corner = np.column_stack([c + 1.0, r + 1.0])  # board, square units
+    frac = board.marker_length / board.square_length
+    margin = (1.0 - frac) / 2.0
+    # quadrant directions; the top-left square (r, c) is black when r + c is even
+    quads = np.array([[-1.0, -1.0], [1.0, 1.0], [1.0, -1.0], [-1.0, 1.0]])
+    tb = (np.arange(_GRID_BLACK) + 0.5) / _GRID_BLACK * 0.6 + 0.2
+    tw = (np.arange(_GRID_WHITE) + 0.5) / _GRID_WHITE
+    ts = (np.arange(_N_STRIP) + 0.5) / _N_STRIP
+    gb = np.stack(np.meshgrid(tb, tb), -1).reshape(-1, 2)
+    gw = np.stack(np.meshgrid(tw, tw), -1).reshape(-1, 2)
+    # white margin along the two corner edges of a white square (u along x, v along y)
+    strip = np.concatenate(
+        [
+            np.column_stack([ts, np.full_like(ts, margin / 2)]),
+            np.column_stack([np.full_like(ts, margin / 2), ts]),
+        ]
+    )
+    near = ts < 0.5  # the half of each margin nearer the corner
+
+    # per corner: the black and the white quadrants' directions (m, 2, 2)
+    first = ((r + c) % 2 == 0)[:, None, None]
+    qb = np.where(first, quads[None, :2], quads[None, 2:])
+    qw = np.where(first, quads[None, 2:], quads[None, :2])
+
+    def points(dirs: NDArray[np.float64], grid: NDArray[np.float64]) -> NDArray[np.float64]:
+        """Board points (m, 2 P, 2): ``grid`` (P, 2) in the two quadrants ``dirs``."""
+        pts = corner[:, None, None, :] + dirs[:, :, None, :] * grid[None, None]
+        return pts.reshape(m, -1, 2)
+
+    pb, pw, ps = points(qb, gb), points(qw, gw), points(qw, strip)
+    pf = points(qb, gw)  # the black squares whole, for the block's mean
+    # homographies moved so that the corner lands on the refined pixel
+    pc = np.einsum("mij,mj->mi", homs, np.column_stack([corner, np.ones(m)]))
+    shift = np.zeros_like(homs)
+    shift[:, 0, 0] = shift[:, 1, 1] = shift[:, 2, 2] = 1.0
+    shift[:, :2, 2] = xy - pc[:, :2] / pc[:, 2:]
+    hs = shift @ homs
+    h_img, w_img = g.shape
+
+    def sample(pts: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
+        q = np.concatenate([pts, np.ones((*pts.shape[:2], 1))], -1) @ np.swapaxes(hs, 1, 2)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            uv = q[..., :2] / q[..., 2:3]
+        ok = (
+            np.isfinite(uv).all(-1)
+            & (uv[..., 0] >= 0)
+            & (uv[..., 0] <= w_img - 1)
+            & (uv[..., 1] >= 0)
+            & (uv[..., 1] <= h_img - 1)
+        )
+        vals = _bilinear(g, np.where(ok[..., None], uv, 0.0).reshape(-1, 2)).reshape(ok.shape)
+        return vals, ok
+
+    vb, okb = sample(pb)
+    vw, okw = sample(pw)
+    vs, oks = sample(ps)
+    nb = okb.sum(1)
+    black = _masked_median(vb, okb)
+    # each white square's contrast: (mean - black) / printed white share, same points
+    okw2 = okw.reshape(m, 2, -1)
+    n_in = okw2.sum(-1)
+    printed_w = _printed(board, pw)
+    share = np.where(okw2, printed_w.reshape(m, 2, -1), 0.0).sum(-1) / np.maximum(n_in, 1)
+    mean_w = np.where(okw2, vw.reshape(m, 2, -1), 0.0).sum(-1) / np.maximum(n_in, 1)
+    usable = (n_in >= gw.shape[0] // 4) & (share > 0.05)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        con = np.where(usable, (mean_w - black[:, None]) / share, np.nan)
+    n_use = usable.sum(1)
+    # the contrast from the whole 2 x 2 block: light that blur carries out of the white
+    # squares' margins into the black squares stays in the block, and what crosses the
+    # block's outline is on average as much in as out, so the block's mean against its
+    # printed mean gives the contrast whatever the blur
+    vf, okf = sample(pf)
+    n_blk = okw.sum(1) + okf.sum(1)
+    printed_blk = np.where(okw, printed_w, 0.0).sum(1) / np.maximum(n_blk, 1)
+    mean_blk = (np.where(okw, vw, 0.0).sum(1) + np.where(okf, vf, 0.0).sum(1)) / np.maximum(
+        n_blk, 1
+    )
+    with np.errstate(divide="ignore", invalid="ignore"):
+        cval = np.where((n_use > 0) & (printed_blk > 0.02), (mean_blk - black) / printed_blk, 0.0)
+    agree = (n_use < 2) | (np.abs(con[:, 0] - con[:, 1]) <= _WHITE_AGREE * cval)
+    b_max = np.where(okb, vb, -np.inf).max(1)
+    s_min = np.where(oks, vs, np.inf).min(1)
+    near_all = np.tile(near, 4)[None] & oks  # two margins per white square, two squares
+    near_v = _masked_median(vs, near_all)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        resolved = np.where(cval > 0, (near_v - black) / cval, 0.0)
+        keep = np.asarray(
+            (nb >= 4)
+            & (oks.sum(1) >= 4)
+            & (n_use > 0)
+            & (cval >= _MIN_CONTRAST)
+            & agree
+            & (b_max <= black + _BLACK_SPREAD * cval)
+            & (s_min >= black + _WHITE_FLOOR * cval)
+            & (near_all.any(1))
+            & (near_v - black >= _MIN_RESOLVED * cval)
+        )
+    return keep, resolved

@@ -48,6 +48,11 @@ __all__ = [
 
 F64 = NDArray[np.float64]
 
+#: Runner-up hypotheses locally optimised before RANSAC may stop (see ``_robust_core.ransac``),
+#: and the supports (multiples of the threshold) of the local optimisation's refits.
+_LO_POOL = 8
+_LO_STEPS = (3.0, 2.0, 2.0, 2.0)
+
 
 class FundamentalResult(NamedTuple):
     """A robustly estimated fundamental matrix, its inlier mask, Sampson RMS and sample count.
@@ -249,6 +254,15 @@ def _refine_f(F: F64, p1: F64, p2: F64, max_iter: int) -> F64:
     return Fr / np.linalg.norm(Fr) if np.all(np.isfinite(Fr)) else F
 
 
+def _sampson_parts(F: F64, p1: F64, p2: F64) -> tuple[F64, F64]:
+    """Epipolar residuals ``x2ᵀ F x1`` (N,) and the Sampson denominators (N,)."""
+    Fx1 = p1 @ F[:, :2].T + F[:, 2]
+    Ftx2 = p2 @ F[:2, :] + F[2, :]
+    num = np.sum(p2 * Fx1[:, :2], -1) + Fx1[:, 2]
+    den = Fx1[:, 0] ** 2 + Fx1[:, 1] ** 2 + Ftx2[:, 0] ** 2 + Ftx2[:, 1] ** 2
+    return num, den
+
+
 def _robust_args(
     threshold: object, confidence: object, max_trials: object, max_iter: object
 ) -> tuple[float, float, int, int]:
@@ -332,14 +346,19 @@ def find_fundamental_matrix(
         return sampson_sq(models, p1, p2)
 
     def local_opt(F: F64, inl: NDArray[np.bool_]) -> F64:
-        for m in (2.0, 1.5, 1.0):
-            sel = sampson_sq(F, p1, p2) < (m * thr) ** 2
+        # Sampson-weighted 8-point fits (iteratively reweighted least squares) on the
+        # correspondences within 3τ, then 2τ: with noise near τ, the inliers within τ of a
+        # minimal-sample model are too few and too biased to pull it to the right basin
+        for m in _LO_STEPS:
+            num, den = _sampson_parts(F, p1, p2)
+            sel = num * num < (m * thr) ** 2 * den
             if sel.sum() < 8:
                 break
-            F = f8(p1[sel][None], p2[sel][None])[0]
+            w = 1.0 / np.sqrt(den[sel])
+            F = f8(p1[sel][None], p2[sel][None], (w / w.mean())[None])[0]
         return F
 
-    F, inl, drawn = ransac(n, 7, solve, sq, thr, p, trials, gen, local_opt)
+    F, inl, drawn = ransac(n, 7, solve, sq, thr, p, trials, gen, local_opt, pool=_LO_POOL)
     if F is None or inl.sum() < 8:
         raise DegenerateConfigurationError(
             f"no fundamental matrix with at least 8 inliers within {thr:g} px after {drawn} samples"

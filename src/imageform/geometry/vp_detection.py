@@ -63,9 +63,13 @@ class VanishingPointResult:
     vertical : int or None
         Index of the vertical vanishing point (the direction closest to the image's y axis);
         None when the two points found are both horizontal (the horizon then comes from
-        their cross product, the vertical direction).
+        their cross product, the vertical direction), or when the horizon is the visible one
+        of open water and no point lies near the image's columns.
     horizon : (3,) or None
-        The horizon ``(a, b, c)``, ``a u + b v + c = 0``, ``a² + b² = 1``.
+        The horizon ``(a, b, c)``, ``a u + b v + c = 0``, ``a² + b² = 1``: from K and the
+        vertical point, from a level camera's vertical and horizontal points, or, when no
+        vanishing point gives it, the visible horizon of open water (the highest long
+        near-horizontal line across the frame).
     perspective : int
         How many of the vanishing points are finite (1, 2 or 3 point perspective), with
         "finite" meaning within ``infinity_factor`` image diagonals of the image centre.
@@ -251,6 +255,88 @@ def _level_horizon(
         a, b = -a, -b
     u, w = finite[0][0] / finite[0][2], finite[0][1] / finite[0][2]
     return np.array([a, b, -(a * u + b * w)])
+
+
+#: The visible horizon of a level camera (:func:`_visible_horizon`): its segments within this
+#: angle of the image rows, within this distance of one line (pixels, at least; or this share
+#: of the diagonal), spanning at least this share of the image width.
+_SEA_TILT = math.radians(15.0)
+_SEA_TOL, _SEA_TOL_DIAG = 1.5, 0.002
+_SEA_SPAN = 0.6
+#: ... and whose segments cover at least this share of the width, and half the best run's.
+_SEA_COVER = 0.2
+#: Only where the near-vertical segments (within ``_SEA_TILT`` of the columns) add up to at
+#: most this share of the near-horizontal ones' length: open water shows no verticals.
+_SEA_VERTICAL = 0.25
+#: Segments within this share of the height from the frame's top or bottom are left out.
+_SEA_EDGE = 0.01
+
+
+def _visible_horizon(
+    seg: LineSegments, members: np.ndarray, width: int, height: int
+) -> FloatArray | None:
+    """Return the horizon seen as a line in the image (a sea or lake horizon), or None.
+
+    A level camera over open water sees one horizontal direction (the horizon, the wave
+    crests, parallel in the image: their point at infinity) and no vertical one, so no
+    vanishing point gives the horizon; but the horizon is in the picture: the farthest
+    water meets the sky along the image line ``v = c_y - f tan(pitch)`` (rolled with the
+    camera), which is the vanishing line of the water plane itself, and all of the water is
+    below it. So it is the highest collinear run of the near-horizontal ``members`` segments
+    (within ``_SEA_TILT`` of the rows, all endpoints within ``_SEA_TOL`` px of one line,
+    refitted by total least squares on the endpoints weighted by length) that spans
+    ``_SEA_SPAN`` of the image width and whose segments cover ``_SEA_COVER`` of it and
+    half of what the best-covered run covers (wave crests nearer the camera can span the
+    width too, lower down; chance alignments of clutter cover little of it). The runs are
+    grown from the ten longest segments. Only where the near-vertical segments add up to at
+    most ``_SEA_VERTICAL`` of the near-horizontal ones: a facade seen square on (verticals
+    and horizontals both parallel in the image) has long horizontal runs too, and its
+    horizon is not one of them.
+    """
+    every = seg.endpoints[:, 1] - seg.endpoints[:, 0]
+    size = np.hypot(every[:, 0], every[:, 1])
+    steep = np.abs(every[:, 0]) <= np.tan(_SEA_TILT) * np.abs(every[:, 1])
+    level = np.abs(every[:, 1]) <= np.tan(_SEA_TILT) * np.abs(every[:, 0])
+    if size[steep].sum() > _SEA_VERTICAL * size[level].sum():
+        return None  # a built scene (a facade seen square on): its lines are not a horizon
+    ends = seg.endpoints[members]
+    d = ends[:, 1] - ends[:, 0]
+    length = np.hypot(d[:, 0], d[:, 1])
+    flat = np.abs(d[:, 1]) <= np.tan(_SEA_TILT) * np.abs(d[:, 0])
+    # the frame's own top and bottom edges (a scanned or letterboxed frame) are no horizon
+    edge = max(3.0, _SEA_EDGE * height)
+    flat &= ~np.all(ends[..., 1] < edge, axis=1) & ~np.all(ends[..., 1] > height - 1 - edge, axis=1)
+    ends, d, length = ends[flat], d[flat], length[flat]
+    if len(ends) == 0:
+        return None
+    tol = max(_SEA_TOL, _SEA_TOL_DIAG * math.hypot(width, height))
+    runs: list[tuple[float, float, FloatArray]] = []  # (row at the centre, coverage, line)
+    for i in np.argsort(-length)[:10]:
+        line = np.asarray(seg.lines[members][flat][i], dtype=np.float64)
+        for _ in range(2):
+            n = line[:2] / math.hypot(line[0], line[1])
+            off = line[2] / math.hypot(line[0], line[1])
+            dist = np.abs(ends @ n + off)  # (k, 2)
+            group = np.all(dist <= tol, axis=1)
+            pts = ends[group].reshape(-1, 2)
+            wts = np.repeat(length[group], 2)
+            mean = (wts[:, None] * pts).sum(0) / wts.sum()
+            cov = ((pts - mean) * wts[:, None]).T @ (pts - mean)
+            normal = np.linalg.eigh(cov)[1][:, 0]
+            line = np.array([normal[0], normal[1], -(normal @ mean)])
+        along = pts @ np.array([-line[1], line[0]])
+        if along.max() - along.min() >= _SEA_SPAN * width and abs(line[1]) > 0:
+            row = -(line[0] * (width - 1) / 2 + line[2]) / line[1]
+            runs.append((float(row), float(length[group].sum()), line))
+    if not runs:
+        return None
+    need = max(_SEA_COVER * width, 0.5 * max(r[1] for r in runs))
+    covered = [r for r in runs if r[1] >= need]
+    if not covered:
+        return None
+    top = min(covered, key=lambda r: r[0])[2]
+    sign = -1.0 if top[1] < 0 else 1.0
+    return np.asarray(sign * top / math.hypot(top[0], top[1]), dtype=np.float64)
 
 
 def _anchor_horizon(line: FloatArray, horizontal: list[FloatArray]) -> FloatArray:
@@ -448,6 +534,7 @@ def detect_vanishing_points(
         labels[cands[i][1] & (labels < 0)] = j
     vertical: int | None = None
     horizon: FloatArray | None = None
+    tilt: list[float] = []
     if K is not None and len(vps):
         dirs = np.linalg.solve(K, vps.T).T
         dirs /= np.linalg.norm(dirs, axis=1, keepdims=True)
@@ -463,12 +550,18 @@ def detect_vanishing_points(
         )
     elif len(vps) >= 2:
         # without K: the vertical point is the one most in line with the image's columns
-        tilt = []
         for v in vps:
             d = v[:2] - centre * v[2]
             tilt.append(abs(d[1]) / max(np.hypot(*d), 1e-300))
         vertical = int(np.argmax(tilt))
         horizon = _level_horizon(vps, vertical, centre, far)
+    if horizon is None and len(vps):
+        # no vanishing point gives the horizon: a level camera over open water sees it
+        sea = _visible_horizon(segments, labels >= 0, w, h)
+        if sea is not None:
+            horizon = sea
+            if vertical is not None and tilt[vertical] < math.cos(_SEA_TILT):
+                vertical = None  # the point taken for vertical is not near the columns
     finite = sum(1 for v in vps if _is_finite(v, centre, far))
     return VanishingPointResult(
         vanishing_points=vps,
