@@ -121,6 +121,7 @@ def dark_components(
     prev_hi = 0
     dark = np.empty(wid + 1, dtype=np.bool_)
     dark[wid] = False  # a sentinel ending the last run
+    trans = np.empty(wid + 2, dtype=np.int64)
     for i in range(hgt):
         top = integral[i + lo]
         bottom = integral[i + hi]
@@ -128,25 +129,26 @@ def dark_components(
         for j in range(wid):  # branch-free: the compiler vectorises it
             box = bottom[j + hi] - top[j + hi] - bottom[j + lo] + top[j + lo]
             dark[j] = gi[j] < box * inv - offset
+        # the row's runs from its dark/light transitions (a branch-free compaction)
+        n_trans = 0
+        was = False
+        for j in range(wid + 1):
+            now = dark[j]
+            trans[n_trans] = j
+            n_trans += now != was
+            was = now
         row_lo = nr
         q = prev_lo
-        j = 0
-        while j < wid:
-            if not dark[j]:
-                j += 1
-                continue
-            start = j
-            j += 1
-            while dark[j]:
-                j += 1
-            end = j - 1
+        for t in range(0, n_trans, 2):
+            start = trans[t]
+            end = trans[t + 1] - 1
             lab = 0
             # runs of the row above that overlap [start, end]
             while q < prev_hi and runs[q, 2] < start:
                 q += 1
-            t = q
-            while t < prev_hi and runs[t, 1] <= end:
-                b = _find(parent, run_lab[t])
+            above = q
+            while above < prev_hi and runs[above, 1] <= end:
+                b = _find(parent, run_lab[above])
                 if lab == 0:
                     lab = b
                 elif b < lab:
@@ -154,7 +156,7 @@ def dark_components(
                     lab = b
                 elif lab < b:
                     parent[b] = lab
-                t += 1
+                above += 1
             if lab == 0:
                 n_prov += 1
                 parent[n_prov] = n_prov
@@ -469,9 +471,11 @@ def component_quads(
                 if max(sa, sb) <= min(fa, fb) and node_a != node_b:
                     x = node_a
                     while gp[x] != x:
+                        gp[x] = gp[gp[x]]  # path halving
                         x = gp[x]
                     y = node_b
                     while gp[y] != y:
+                        gp[y] = gp[gp[y]]
                         y = gp[y]
                     if x < y:
                         gp[x] = y  # the larger wins: the outside (nr) stays a root
@@ -489,8 +493,8 @@ def component_quads(
             for q in range(p0, p1 - 1):
                 x = q
                 while gp[x] != x:
+                    gp[x] = gp[gp[x]]
                     x = gp[x]
-                gp[q] = x
                 if x == nr:
                     out_gap[q] = True
                     outside += rs[q + 1] - re[q] - 1
@@ -510,6 +514,8 @@ def component_quads(
             if 0 < i < hh - 1:
                 nu = _outside_segments(i - 1, rs, re, row_ptr, out_gap, c0, c1, seg_u)
                 nd = _outside_segments(i + 1, rs, re, row_ptr, out_gap, c0, c1, seg_d)
+            su = 0
+            sd = 0
             q = p0
             while q < p1:
                 a = rs[q]
@@ -529,13 +535,13 @@ def component_quads(
                 pts[n, 1] = r0 + i
                 n += 1
                 cur = a
-                tu = 0
-                td = 0
+                while su < nu and seg_u[su, 1] < a:
+                    su += 1  # segments ending before this span end before the next ones
+                while sd < nd and seg_d[sd, 1] < a:
+                    sd += 1
+                tu = su
+                td = sd
                 while True:
-                    while tu < nu and seg_u[tu, 1] < a:
-                        tu += 1
-                    while td < nd and seg_d[td, 1] < a:
-                        td += 1
                     have_u = tu < nu and seg_u[tu, 0] <= b
                     have_d = td < nd and seg_d[td, 0] <= b
                     if not (have_u or have_d):

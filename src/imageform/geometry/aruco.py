@@ -34,6 +34,7 @@ Recognition 47(6):2280-2292, 2014.
 from __future__ import annotations
 
 import math
+import weakref
 from dataclasses import dataclass, field
 from functools import lru_cache
 from importlib import resources
@@ -256,7 +257,21 @@ def _diagonal_cross(q: NDArray[np.float64]) -> NDArray[np.float64]:
     return np.asarray(p[:2] / p[2])
 
 
+#: The grey images :func:`_gray01` made (new arrays, never the caller's), so that passing one
+#: on (``detect_charuco`` to ``detect_aruco_markers``) is not converted and checked again.
+_MADE: weakref.WeakValueDictionary[int, NDArray[np.float64]] = weakref.WeakValueDictionary()
+
+
 def _gray01(image: object) -> NDArray[np.float64]:
+    if isinstance(image, np.ndarray) and _MADE.get(id(image)) is image:
+        return image
+    g = _gray01_checked(image)
+    if g is not image:
+        _MADE[id(g)] = g
+    return g
+
+
+def _gray01_checked(image: object) -> NDArray[np.float64]:
     arr = np.asarray(image) if not isinstance(image, np.ndarray) else image
     if arr.dtype.kind not in "uif" or arr.dtype.kind == "c":
         raise InvalidInputError(f"expected image as a real array, got {describe(image)}")
@@ -298,7 +313,8 @@ def _homography(src: NDArray[np.float64], dst: NDArray[np.float64]) -> NDArray[n
     rows = np.empty((2 * len(x), 9))
     rows[0::2] = np.column_stack([x, y, one, zero, zero, zero, -u * x, -u * y, -u])
     rows[1::2] = np.column_stack([zero, zero, zero, x, y, one, -v * x, -v * y, -v])
-    _, _, vt = np.linalg.svd(rows)
+    # the thin SVD has the same V when there are at least 9 rows (5 points or more)
+    _, _, vt = np.linalg.svd(rows, full_matrices=len(rows) < 9)
     h = vt[-1].reshape(3, 3)
     return np.asarray(h / h[2, 2]) if abs(h[2, 2]) > 1e-15 else np.asarray(h)
 
