@@ -74,13 +74,37 @@ def box_integral(g: NDArray[np.float64], pad: int) -> NDArray[np.float64]:  # pr
     cols = np.empty(wid + 2 * pad, dtype=np.int64)
     for k in range(wid + 2 * pad):
         cols[k] = _reflect(k - pad, wid)
-    out = np.zeros((hgt + 2 * pad + 1, wid + 2 * pad + 1))
-    for i in range(hgt + 2 * pad):
-        src = _reflect(i - pad, hgt)
-        s = 0.0
-        for j in range(wid + 2 * pad):
-            s += g[src, cols[j]]
-            out[i + 1, j + 1] = out[i, j + 1] + s
+    rows = hgt + 2 * pad
+    width = wid + 2 * pad
+    out = np.zeros((rows + 1, width + 1))
+    # each row's running sums first (four rows at a time: four independent chains of
+    # additions keep the processor busy), then the sums down the columns
+    for i0 in range(0, rows, 4):
+        n = min(4, rows - i0)
+        r0 = g[_reflect(i0 - pad, hgt)]
+        r1 = g[_reflect(min(i0 + 1, rows - 1) - pad, hgt)]
+        r2 = g[_reflect(min(i0 + 2, rows - 1) - pad, hgt)]
+        r3 = g[_reflect(min(i0 + 3, rows - 1) - pad, hgt)]
+        o0 = out[i0 + 1]
+        o1 = out[min(i0 + 2, rows)]
+        o2 = out[min(i0 + 3, rows)]
+        o3 = out[min(i0 + 4, rows)]
+        s0 = s1 = s2 = s3 = 0.0
+        for j in range(width):
+            c = cols[j]
+            s0 += r0[c]
+            s1 += r1[c]
+            s2 += r2[c]
+            s3 += r3[c]
+            o0[j + 1] = s0
+            o1[j + 1] = s1 if n > 1 else o1[j + 1]
+            o2[j + 1] = s2 if n > 2 else o2[j + 1]
+            o3[j + 1] = s3 if n > 3 else o3[j + 1]
+    for i in range(1, rows + 1):
+        above = out[i - 1]
+        here = out[i]
+        for j in range(1, width + 1):
+            here[j] += above[j]
     return out
 
 
@@ -414,6 +438,27 @@ def component_quads(
     quads = np.zeros((m, 4, 2))
     status = np.zeros(m, dtype=np.int64)
     quad = np.empty((4, 2))
+    # work buffers sized once for the largest candidate (no allocation per candidate)
+    max_nr = 1
+    max_hh = 1
+    max_ww = 1
+    max_box = 1
+    for c in range(m):
+        k = cand[c]
+        hh = stats[k, 2] - stats[k, 1] + 1
+        ww = stats[k, 4] - stats[k, 3] + 1
+        max_nr = max(max_nr, comp_ptr[k + 1] - comp_ptr[k])
+        max_hh = max(max_hh, hh)
+        max_ww = max(max_ww, ww)
+        max_box = max(max_box, hh * ww)
+    rs_buf = np.empty(max_nr, dtype=np.int64)
+    re_buf = np.empty(max_nr, dtype=np.int64)
+    row_ptr = np.empty(max_hh + 1, dtype=np.int64)
+    gp = np.empty(max_nr + 1, dtype=np.int64)
+    out_gap = np.empty(max_nr, dtype=np.bool_)
+    pts = np.empty((max_box, 2))  # the boundary pixels (at most the filled box)
+    seg_u = np.empty((max_ww + 2, 2), dtype=np.int64)
+    seg_d = np.empty((max_ww + 2, 2), dtype=np.int64)
     for c in range(m):
         k = cand[c]
         r0, r1, c0, c1 = stats[k, 1], stats[k, 2], stats[k, 3], stats[k, 4]
@@ -421,9 +466,8 @@ def component_quads(
         # the component's runs, row by row (in raster order, every row of its box has one)
         p0, p1 = comp_ptr[k], comp_ptr[k + 1]
         nr = p1 - p0
-        rs = np.empty(nr, dtype=np.int64)
-        re = np.empty(nr, dtype=np.int64)
-        row_ptr = np.empty(hh + 1, dtype=np.int64)
+        rs = rs_buf[:nr]
+        re = re_buf[:nr]
         for t in range(nr):
             rr = runs[comp_runs[p0 + t]]
             rs[t] = rr[1]
@@ -438,7 +482,8 @@ def component_quads(
             status[c] = 1  # one run a row: no hole, a solid blob
             continue
         # gaps (the gap after run q, when q is not its row's last) joined across rows
-        gp = np.arange(nr + 1)  # union-find; node nr is the outside
+        for t in range(nr + 1):  # union-find of the gaps; node nr is the outside
+            gp[t] = t
         for i in range(hh):
             for q in range(row_ptr[i], row_ptr[i + 1] - 1):
                 if i == 0 or i == hh - 1:
@@ -485,7 +530,7 @@ def component_quads(
                     ta += 1
                 else:
                     tb += 1
-        out_gap = np.zeros(nr, dtype=np.bool_)
+        out_gap[:nr] = False
         outside = 0
         for i in range(hh):
             p0, p1 = row_ptr[i], row_ptr[i + 1]
@@ -503,10 +548,7 @@ def component_quads(
             status[c] = 1  # no holes: a solid blob, not a marker (its code has white cells)
             continue
         # outer boundary: filled pixels with a 4-neighbour outside (or beyond the box)
-        pts = np.empty((filled, 2))
         n = 0
-        seg_u = np.empty((ww + 2, 2), dtype=np.int64)
-        seg_d = np.empty((ww + 2, 2), dtype=np.int64)
         for i in range(hh):
             p0, p1 = row_ptr[i], row_ptr[i + 1]
             nu = 0
