@@ -308,11 +308,12 @@ def _gray01_checked(image: object) -> NDArray[np.float64]:
 def _homography(src: NDArray[np.float64], dst: NDArray[np.float64]) -> NDArray[np.float64]:
     """Estimate the 3x3 homography mapping 4 (or more) ``src`` points to ``dst`` (DLT, SVD)."""
     x, y = src[:, 0], src[:, 1]
-    u, v = dst[:, 0], dst[:, 1]
+    u, v = -dst[:, 0], -dst[:, 1]
     one, zero = np.ones_like(x), np.zeros_like(x)
-    rows = np.empty((2 * len(x), 9))
-    rows[0::2] = np.column_stack([x, y, one, zero, zero, zero, -u * x, -u * y, -u])
-    rows[1::2] = np.column_stack([zero, zero, zero, x, y, one, -v * x, -v * y, -v])
+    # the two rows of each point side by side, then split: (x y 1 0 0 0 -ux -uy -u) and
+    # (0 0 0 x y 1 -vx -vy -v), point by point
+    cols = (x, y, one, zero, zero, zero, u * x, u * y, u, zero, zero, zero, x, y, one)
+    rows = np.array((*cols, v * x, v * y, v)).T.reshape(-1, 9)
     # the thin SVD has the same V when there are at least 9 rows (5 points or more)
     _, _, vt = np.linalg.svd(rows, full_matrices=len(rows) < 9)
     h = vt[-1].reshape(3, 3)
@@ -320,8 +321,12 @@ def _homography(src: NDArray[np.float64], dst: NDArray[np.float64]) -> NDArray[n
 
 
 def _apply_h(h: NDArray[np.float64], pts: NDArray[np.float64]) -> NDArray[np.float64]:
-    p = np.column_stack([pts, np.ones(len(pts))]) @ h.T
-    return np.asarray(p[:, :2] / p[:, 2:3])
+    x, y = pts[:, 0], pts[:, 1]
+    w = h[2, 0] * x + h[2, 1] * y + h[2, 2]
+    out = np.empty((len(pts), 2))
+    out[:, 0] = (h[0, 0] * x + h[0, 1] * y + h[0, 2]) / w
+    out[:, 1] = (h[1, 0] * x + h[1, 1] * y + h[1, 2]) / w
+    return out
 
 
 def _bilinear(g: NDArray[np.float64], uv: NDArray[np.float64]) -> NDArray[np.float64]:
