@@ -630,28 +630,34 @@ def _search_numba(
         decoded = _decode(
             cell_means(g, quads[good], cells), d, cells, rotated, max_bits, border_rate
         )
+        st = stats.tolist()
+        new_boxes: list[tuple[float, float, float, float, float]] = []
         for j, hit in zip(good.tolist(), decoded, strict=True):
             if hit is None:
                 continue
-            k = int(cand[j])
-            s_cx = 0.5 * (stats[k, 3] + stats[k, 4] + 1)
-            s_cy = 0.5 * (stats[k, 1] + stats[k, 2] + 1)
-            s_size = float(hh[k] * ww[k])
-            if (
-                len(boxes)
-                and _inside(boxes, np.array([s_cx]), np.array([s_cy]), np.array([s_size]))[0]
+            _, top, bottom, left, right = st[int(cand[j])]
+            s_cx, s_cy = 0.5 * (left + right + 1), 0.5 * (top + bottom + 1)
+            s_size = float((bottom - top + 1) * (right - left + 1))
+            if any(
+                b[0] <= s_cx <= b[2] and b[1] <= s_cy <= b[3] and 0.7 < s_size / b[4] < 1.4
+                for b in new_boxes
             ):
                 continue  # decoded already, at this window (an earlier component)
             mid, rot, dist, contrast = hit
             quad = quads[j]
             # observed == np.rot90(code, rot) (counter-clockwise turns): the printed top-left
             # corner is the observed corner (4 - rot) % 4
-            ordered = np.roll(quad, rot, axis=0)
+            ordered = quad[[(0 - rot) % 4, (1 - rot) % 4, (2 - rot) % 4, (3 - rot) % 4]]
             score = contrast - dist
             if mid not in found or score > found[mid][0]:
                 found[mid] = (score, ordered, dist)
-            lo, hi = quad.min(axis=0), quad.max(axis=0)
-            boxes = np.vstack([boxes, [lo[0], lo[1], hi[0], hi[1], s_size]])
+            (x0, x1), (y0, y1) = (
+                (float(quad[:, 0].min()), float(quad[:, 0].max())),
+                (float(quad[:, 1].min()), float(quad[:, 1].max())),
+            )
+            new_boxes.append((x0, y0, x1, y1, s_size))
+        if new_boxes:
+            boxes = np.vstack([boxes, np.array(new_boxes)])
     return found
 
 
