@@ -75,3 +75,20 @@ def test_numba_disabled_gives_the_same_corners(monkeypatch: pytest.MonkeyPatch) 
     slow = detect_charuco(img, board)
     np.testing.assert_array_equal(fast.ids, slow.ids)
     np.testing.assert_allclose(fast.corners, slow.corners, atol=1e-9)
+
+
+def test_dark_components_asks_for_room_when_the_runs_overflow() -> None:
+    """More runs than ``cap``: every output empty (the caller retries with the worst case);
+    a fine noise image overflows the first guess and still gives the twin's (no) markers."""
+    from imageform._kernels.aruco import box_integral, dark_components
+
+    g = np.random.default_rng(3).random((120, 160))
+    integral = box_integral(g, 7)
+    runs, _, _, stats = dark_components(g, integral, 7, 15, 0.02, 50)
+    assert len(runs) == 0 and stats.shape == (0, 5)
+    runs, comp_runs, comp_ptr, stats = dark_components(g, integral, 7, 15, 0.02, 120 * 80 + 2)
+    assert stats[1:, 0].sum() == (runs[:, 2] - runs[:, 1] + 1).sum()
+    assert comp_ptr[-1] == len(runs) == len(comp_runs)
+    noise = np.random.default_rng(4).random((400, 400))  # ~0.25 runs a pixel: overflows
+    fast, slow = _both(noise)
+    _same(fast, slow)

@@ -110,13 +110,20 @@ def box_integral(g: NDArray[np.float64], pad: int) -> NDArray[np.float64]:  # pr
 
 @njit(nogil=True)
 def dark_components(
-    g: NDArray[np.float64], integral: NDArray[np.float64], pad: int, win: int, offset: float
+    g: NDArray[np.float64],
+    integral: NDArray[np.float64],
+    pad: int,
+    win: int,
+    offset: float,
+    cap: int,
 ) -> tuple[
     NDArray[np.int64], NDArray[np.int64], NDArray[np.int64], NDArray[np.int64]
 ]:  # pragma: no cover - compiled
     """Threshold ``g`` against its ``win x win`` local mean and label the dark components.
 
-    ``integral`` is :func:`box_integral` of ``g`` with ``pad >= win // 2``. The dark pixels
+    ``integral`` is :func:`box_integral` of ``g`` with ``pad >= win // 2``; ``cap`` the most
+    runs expected (``H * ((W + 1) // 2)`` at worst): with more, every output is empty (``stats``
+    with no rows) and the caller asks again with a larger ``cap``. The dark pixels
     are labelled run by run: a row's run joins the labels of the runs above it that it
     touches (4-connectivity, union-find). Components are numbered ``1 .. n`` in raster
     order of their first pixel, as ``scipy.ndimage.label`` numbers them.
@@ -132,13 +139,12 @@ def dark_components(
     lo = pad - r
     hi = pad + r + 1
     inv = 1.0 / (win * win)
-    # at most (W + 1) // 2 runs a row, one new label a run: sized once (growing inside the
-    # loop would make numba count references on every access); filled as they are made
-    cap = hgt * ((wid + 1) // 2) + 2
+    # one new label a run at most: sized once (growing inside the loop would make numba
+    # count references on every access); filled as they are made
     runs = np.empty((cap, 3), dtype=np.int64)
     run_lab = np.empty(cap, dtype=np.int64)
-    parent = np.empty(cap, dtype=np.int64)
-    pstats = np.empty((cap, 5), dtype=np.int64)
+    parent = np.empty(cap + 2, dtype=np.int64)
+    pstats = np.empty((cap + 2, 5), dtype=np.int64)
     n_prov = 0
     nr = 0
     prev_lo = 0  # the previous row's runs: prev_lo .. prev_hi - 1
@@ -161,6 +167,9 @@ def dark_components(
             trans[n_trans] = j
             n_trans += now != was
             was = now
+        if nr + n_trans // 2 > cap:
+            empty = np.zeros(0, dtype=np.int64)
+            return np.zeros((0, 3), dtype=np.int64), empty, empty, np.zeros((0, 5), np.int64)
         row_lo = nr
         q = prev_lo
         for t in range(0, n_trans, 2):

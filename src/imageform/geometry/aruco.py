@@ -604,8 +604,14 @@ def _search_numba(
     boxes = np.zeros((0, 5))
     pad = max(wins) // 2
     integral = box_integral(g, pad)  # every window's local means from one table
+    cap = hgt * wid // 8 + 4096  # runs expected at most; the worst case, H (W + 1) / 2, if not
     for win in wins:
-        runs, comp_runs, comp_ptr, stats = dark_components(g, integral, pad, int(win), 0.02)
+        runs, comp_runs, comp_ptr, stats = dark_components(g, integral, pad, int(win), 0.02, cap)
+        if len(stats) == 0:
+            cap = hgt * ((wid + 1) // 2) + 2
+            runs, comp_runs, comp_ptr, stats = dark_components(
+                g, integral, pad, int(win), 0.02, cap
+            )
         if len(stats) < 2:
             continue
         area = stats[:, 0]
