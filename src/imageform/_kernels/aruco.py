@@ -76,7 +76,9 @@ def box_integral(g: NDArray[np.float64], pad: int) -> NDArray[np.float64]:  # pr
         cols[k] = _reflect(k - pad, wid)
     rows = hgt + 2 * pad
     width = wid + 2 * pad
-    out = np.zeros((rows + 1, width + 1))
+    out = np.empty((rows + 1, width + 1))  # every entry written below
+    out[0, :] = 0.0
+    out[:, 0] = 0.0
     # each row's running sums first (four rows at a time: four independent chains of
     # additions keep the processor busy), then the sums down the columns
     for i0 in range(0, rows, 4):

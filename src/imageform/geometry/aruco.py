@@ -636,12 +636,12 @@ def _search_numba(
         decoded = _decode(
             cell_means(g, quads[good], cells), d, cells, rotated, max_bits, border_rate
         )
-        st = stats.tolist()
+        st = stats[cand].tolist()
         new_boxes: list[tuple[float, float, float, float, float]] = []
         for j, hit in zip(good.tolist(), decoded, strict=True):
             if hit is None:
                 continue
-            _, top, bottom, left, right = st[int(cand[j])]
+            _, top, bottom, left, right = st[j]
             s_cx, s_cy = 0.5 * (left + right + 1), 0.5 * (top + bottom + 1)
             s_size = float((bottom - top + 1) * (right - left + 1))
             if any(
