@@ -84,9 +84,13 @@ def test_dark_components_asks_for_room_when_the_runs_overflow() -> None:
 
     g = np.random.default_rng(3).random((120, 160))
     integral = box_integral(g, 7)
-    runs, _, _, stats = dark_components(g, integral, 7, 15, 0.02, 50)
+    runs, _, _, stats = dark_components(g, integral, 7, 15, 0.02, 50, 50)
     assert len(runs) == 0 and stats.shape == (0, 5)
-    runs, comp_runs, comp_ptr, stats = dark_components(g, integral, 7, 15, 0.02, 120 * 80 + 2)
+    runs, _, _, stats = dark_components(g, integral, 7, 15, 0.02, 120 * 80, 20)  # labels
+    assert len(runs) == 0 and stats.shape == (0, 5)
+    runs, comp_runs, comp_ptr, stats = dark_components(
+        g, integral, 7, 15, 0.02, 120 * 80 + 2, 120 * 80 + 2
+    )
     assert stats[1:, 0].sum() == (runs[:, 2] - runs[:, 1] + 1).sum()
     assert comp_ptr[-1] == len(runs) == len(comp_runs)
     noise = np.random.default_rng(4).random((400, 400))  # ~0.25 runs a pixel: overflows

@@ -38,7 +38,7 @@ from imageform._kernels.jit import njit
 __all__ = ["cell_means", "component_quads", "dark_components"]
 
 
-@njit(nogil=True)
+@njit(nogil=True, error_model="numpy")
 def _reflect(k: int, n: int) -> int:  # pragma: no cover - compiled
     # SciPy's "reflect" (d c b a | a b c d | d c b a), any distance out
     period = 2 * n
@@ -50,7 +50,7 @@ def _reflect(k: int, n: int) -> int:  # pragma: no cover - compiled
     return k
 
 
-@njit(nogil=True)
+@njit(nogil=True, error_model="numpy")
 def _find(parent: NDArray[np.int64], x: int) -> int:  # pragma: no cover - compiled
     root = x
     while parent[root] != root:
@@ -62,7 +62,7 @@ def _find(parent: NDArray[np.int64], x: int) -> int:  # pragma: no cover - compi
     return root
 
 
-@njit(nogil=True)
+@njit(nogil=True, error_model="numpy")
 def box_integral(g: NDArray[np.float64], pad: int) -> NDArray[np.float64]:  # pragma: no cover
     """Return the integral image of ``g`` padded by ``pad`` pixels, edges reflected.
 
@@ -110,7 +110,7 @@ def box_integral(g: NDArray[np.float64], pad: int) -> NDArray[np.float64]:  # pr
     return out
 
 
-@njit(nogil=True)
+@njit(nogil=True, error_model="numpy")
 def dark_components(
     g: NDArray[np.float64],
     integral: NDArray[np.float64],
@@ -118,14 +118,16 @@ def dark_components(
     win: int,
     offset: float,
     cap: int,
+    cap_labels: int,
 ) -> tuple[
     NDArray[np.int64], NDArray[np.int64], NDArray[np.int64], NDArray[np.int64]
 ]:  # pragma: no cover - compiled
     """Threshold ``g`` against its ``win x win`` local mean and label the dark components.
 
-    ``integral`` is :func:`box_integral` of ``g`` with ``pad >= win // 2``; ``cap`` the most
-    runs expected (``H * ((W + 1) // 2)`` at worst): with more, every output is empty (``stats``
-    with no rows) and the caller asks again with a larger ``cap``. The dark pixels
+    ``integral`` is :func:`box_integral` of ``g`` with ``pad >= win // 2``; ``cap`` and
+    ``cap_labels`` the most runs and provisional labels expected (``H * ((W + 1) // 2)`` at
+    worst): with more, every output is empty (``stats`` with no rows) and the caller asks
+    again with more room. The dark pixels
     are labelled run by run: a row's run joins the labels of the runs above it that it
     touches (4-connectivity, union-find). Components are numbered ``1 .. n`` in raster
     order of their first pixel, as ``scipy.ndimage.label`` numbers them.
@@ -145,8 +147,8 @@ def dark_components(
     # count references on every access); filled as they are made
     runs = np.empty((cap, 3), dtype=np.int64)
     run_lab = np.empty(cap, dtype=np.int64)
-    parent = np.empty(cap + 2, dtype=np.int64)
-    pstats = np.empty((cap + 2, 5), dtype=np.int64)
+    parent = np.empty(cap_labels + 2, dtype=np.int64)
+    pstats = np.empty((cap_labels + 2, 5), dtype=np.int64)
     n_prov = 0
     nr = 0
     prev_lo = 0  # the previous row's runs: prev_lo .. prev_hi - 1
@@ -169,7 +171,7 @@ def dark_components(
             trans[n_trans] = j
             n_trans += now != was
             was = now
-        if nr + n_trans // 2 > cap:
+        if nr + n_trans // 2 > cap or n_prov + n_trans // 2 > cap_labels:
             empty = np.zeros(0, dtype=np.int64)
             return np.zeros((0, 3), dtype=np.int64), empty, empty, np.zeros((0, 5), np.int64)
         row_lo = nr
@@ -249,7 +251,7 @@ def dark_components(
     return runs[:nr].copy(), comp_runs, comp_ptr, stats
 
 
-@njit(nogil=True)
+@njit(nogil=True, error_model="numpy")
 def _quad(
     pts: NDArray[np.float64], area: float, quad: NDArray[np.float64]
 ) -> bool:  # pragma: no cover - compiled
@@ -321,7 +323,7 @@ def _quad(
     return True
 
 
-@njit(nogil=True)
+@njit(nogil=True, error_model="numpy")
 def _refine_sides(
     quad: NDArray[np.float64], pts: NDArray[np.float64], out: NDArray[np.float64]
 ) -> bool:  # pragma: no cover - compiled
@@ -390,7 +392,7 @@ def _refine_sides(
     return worst <= 3.0
 
 
-@njit(nogil=True)
+@njit(nogil=True, error_model="numpy")
 def _outside_segments(
     i: int,
     rs: NDArray[np.int64],
@@ -424,7 +426,7 @@ def _outside_segments(
     return n
 
 
-@njit(nogil=True)
+@njit(nogil=True, error_model="numpy")
 def component_quads(
     runs: NDArray[np.int64],
     comp_runs: NDArray[np.int64],
@@ -635,7 +637,7 @@ def component_quads(
     return quads, status
 
 
-@njit(nogil=True)
+@njit(nogil=True, error_model="numpy")
 def cell_means(
     g: NDArray[np.float64], quads: NDArray[np.float64], cells: int
 ) -> NDArray[np.float64]:  # pragma: no cover - compiled

@@ -604,14 +604,19 @@ def _search_numba(
     boxes = np.zeros((0, 5))
     pad = max(wins) // 2
     integral = box_integral(g, pad)  # every window's local means from one table
-    cap = hgt * wid // 8 + 4096  # runs expected at most; the worst case, H (W + 1) / 2, if not
+    # room for the runs (a photograph has about one run in 20 pixels, a row at most (W + 1) / 2)
+    # and the labels (about one in 10 runs starts one): four times more when a window needs it
+    worst = hgt * ((wid + 1) // 2) + 2
+    cap = min(worst, hgt * wid // 16 + 4096)
     for win in wins:
-        runs, comp_runs, comp_ptr, stats = dark_components(g, integral, pad, int(win), 0.02, cap)
-        if len(stats) == 0:
-            cap = hgt * ((wid + 1) // 2) + 2
+        while True:
+            cap_labels = cap if cap == worst else cap // 4 + 1024
             runs, comp_runs, comp_ptr, stats = dark_components(
-                g, integral, pad, int(win), 0.02, cap
+                g, integral, pad, int(win), 0.02, cap, cap_labels
             )
+            if len(stats) or cap == worst:
+                break
+            cap = min(worst, 4 * cap)
         if len(stats) < 2:
             continue
         area = stats[:, 0]
