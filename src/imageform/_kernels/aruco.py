@@ -20,10 +20,12 @@ Work per window is proportional to the image (the threshold) plus the runs and b
 pixels of the candidates, not their bounding boxes: a large textured blob of a photograph
 costs its runs, not the area it spans. All are serial (a call is a few milliseconds on a
 720p frame; parallelism belongs across frames), compiled for one signature each (float64
-image), cached. The Python pipeline around them is
-:func:`imageform.geometry.detect_aruco_markers`, whose NumPy/SciPy twin (the component by
-component implementation they replace, run under ``IMAGEFORM_DISABLE_NUMBA``) gives the same
-markers to 1e-9 px (``tests/geometry/test_aruco_kernels.py``).
+image), cached, with NumPy's division semantics (``error_model="numpy"``: a division by
+zero gives inf or NaN, as the NumPy steps they replace did, never an exception). The
+Python pipeline around them is :func:`imageform.geometry.detect_aruco_markers`, whose
+NumPy/SciPy twin (the component by component implementation they replace, run under
+``IMAGEFORM_DISABLE_NUMBA``) gives the same markers to 1e-9 px
+(``tests/geometry/test_aruco_kernels.py``).
 """
 
 from __future__ import annotations
