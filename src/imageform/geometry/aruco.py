@@ -605,12 +605,13 @@ def _search_numba(
     pad = max(wins) // 2
     integral = box_integral(g, pad)  # every window's local means from one table
     # room for the runs (a photograph has about one run in 20 pixels, a row at most (W + 1) / 2)
-    # and the labels (about one in 10 runs starts one): four times more when a window needs it
+    # and the labels (half the runs: photographs start one in 3 to 10): four times more when a
+    # window needs it
     worst = hgt * ((wid + 1) // 2) + 2
     cap = min(worst, hgt * wid // 16 + 4096)
     for win in wins:
         while True:
-            cap_labels = cap if cap == worst else cap // 4 + 1024
+            cap_labels = cap if cap == worst else cap // 2 + 1024
             runs, comp_runs, comp_ptr, stats = dark_components(
                 g, integral, pad, int(win), 0.02, cap, cap_labels
             )
