@@ -481,6 +481,9 @@ def component_quads(
         # the component's runs, row by row (in raster order, every row of its box has one)
         p0, p1 = comp_ptr[k], comp_ptr[k + 1]
         nr = p1 - p0
+        if nr == hh:
+            status[c] = 1  # one run a row: no hole, a solid blob
+            continue
         rs = rs_buf[:nr]
         re = re_buf[:nr]
         for t in range(nr):
@@ -493,9 +496,6 @@ def component_quads(
             while t < nr and runs[comp_runs[p0 + t], 0] == r0 + i:
                 t += 1
         row_ptr[hh] = nr
-        if nr == hh:
-            status[c] = 1  # one run a row: no hole, a solid blob
-            continue
         # gaps (the gap after run q, when q is not its row's last) joined across rows
         for t in range(nr + 1):  # union-find of the gaps; node nr is the outside
             gp[t] = t
