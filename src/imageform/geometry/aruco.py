@@ -34,6 +34,7 @@ Recognition 47(6):2280-2292, 2014.
 from __future__ import annotations
 
 import math
+import weakref
 from dataclasses import dataclass, field
 from functools import lru_cache
 from importlib import resources
@@ -256,7 +257,21 @@ def _diagonal_cross(q: NDArray[np.float64]) -> NDArray[np.float64]:
     return np.asarray(p[:2] / p[2])
 
 
+#: The grey images :func:`_gray01` made (new arrays, never the caller's), so that passing one
+#: on (``detect_charuco`` to ``detect_aruco_markers``) is not converted and checked again.
+_MADE: weakref.WeakValueDictionary[int, NDArray[np.float64]] = weakref.WeakValueDictionary()
+
+
 def _gray01(image: object) -> NDArray[np.float64]:
+    if isinstance(image, np.ndarray) and _MADE.get(id(image)) is image:
+        return image
+    g = _gray01_checked(image)
+    if g is not image:
+        _MADE[id(g)] = g
+    return g
+
+
+def _gray01_checked(image: object) -> NDArray[np.float64]:
     arr = np.asarray(image) if not isinstance(image, np.ndarray) else image
     if arr.dtype.kind not in "uif" or arr.dtype.kind == "c":
         raise InvalidInputError(f"expected image as a real array, got {describe(image)}")
@@ -273,35 +288,46 @@ def _gray01(image: object) -> NDArray[np.float64]:
         raise InvalidInputError(
             f"image has {arr.shape[0] * arr.shape[1]} pixels, more than {_MAX_PIXELS}"
         )
-    g = arr.astype(np.float64)
-    if not np.all(np.isfinite(g)):
+    if arr.dtype.kind == "u" and arr.ndim == 2:
+        # integers need no finiteness check; one pass to [0, 1]
+        return np.asarray(np.true_divide(arr, float(np.iinfo(arr.dtype).max), dtype=np.float64))
+    g = np.asarray(arr, dtype=np.float64)
+    lo, hi = float(np.min(g)), float(np.max(g))  # NaN or inf anywhere shows in one of them
+    if not (math.isfinite(lo) and math.isfinite(hi)):
         raise InvalidInputError("image contains NaN or inf")
     if g.ndim == 3:
         g = g @ np.array([0.299, 0.587, 0.114])
-    if arr.dtype.kind == "u":
-        g /= float(np.iinfo(arr.dtype).max)
-    elif arr.dtype.kind == "i" or float(np.max(g)) > 1.0:
         lo, hi = float(np.min(g)), float(np.max(g))
+    if arr.dtype.kind == "u":
+        g = g / float(np.iinfo(arr.dtype).max)
+    elif arr.dtype.kind == "i" or hi > 1.0:
         g = (g - lo) / (hi - lo) if hi > lo else np.zeros_like(g)
     return g
 
 
 def _homography(src: NDArray[np.float64], dst: NDArray[np.float64]) -> NDArray[np.float64]:
     """Estimate the 3x3 homography mapping 4 (or more) ``src`` points to ``dst`` (DLT, SVD)."""
-    x, y = np.asarray(src, dtype=np.float64).T
-    u, v = np.asarray(dst, dtype=np.float64).T
+    src, dst = np.asarray(src, dtype=np.float64), np.asarray(dst, dtype=np.float64)
+    x, y = src[:, 0], src[:, 1]
+    u, v = -dst[:, 0], -dst[:, 1]
     one, zero = np.ones_like(x), np.zeros_like(x)
-    rows = np.empty((2 * len(x), 9))
-    rows[0::2] = np.column_stack([x, y, one, zero, zero, zero, -u * x, -u * y, -u])
-    rows[1::2] = np.column_stack([zero, zero, zero, x, y, one, -v * x, -v * y, -v])
-    _, _, vt = np.linalg.svd(rows)
+    # the two rows of each point side by side, then split: (x y 1 0 0 0 -ux -uy -u) and
+    # (0 0 0 x y 1 -vx -vy -v), point by point
+    cols = (x, y, one, zero, zero, zero, u * x, u * y, u, zero, zero, zero, x, y, one)
+    rows = np.array((*cols, v * x, v * y, v)).T.reshape(-1, 9)
+    # the thin SVD has the same V when there are at least 9 rows (5 points or more)
+    _, _, vt = np.linalg.svd(rows, full_matrices=len(rows) < 9)
     h = vt[-1].reshape(3, 3)
     return np.asarray(h / h[2, 2]) if abs(h[2, 2]) > 1e-15 else np.asarray(h)
 
 
 def _apply_h(h: NDArray[np.float64], pts: NDArray[np.float64]) -> NDArray[np.float64]:
-    p = np.column_stack([pts, np.ones(len(pts))]) @ h.T
-    return np.asarray(p[:, :2] / p[:, 2:3])
+    x, y = pts[:, 0], pts[:, 1]
+    w = h[2, 0] * x + h[2, 1] * y + h[2, 2]
+    out = np.empty((len(pts), 2))
+    out[:, 0] = (h[0, 0] * x + h[0, 1] * y + h[0, 2]) / w
+    out[:, 1] = (h[1, 0] * x + h[1, 1] * y + h[1, 2]) / w
+    return out
 
 
 def _bilinear(g: NDArray[np.float64], uv: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -515,8 +541,6 @@ def detect_aruco_markers(
     >>> m.ids.tolist(), np.round(m.corners[0], 1).tolist()
     ([7], [[99.5, 59.5], [219.5, 59.5], [219.5, 179.5], [99.5, 179.5]])
     """
-    from scipy import ndimage
-
     d = aruco_dictionary(dictionary)
     g = _gray01(image)
     min_side = as_real(min_side_px, "min_side_px", positive=True, maximum=1e5)
@@ -536,16 +560,215 @@ def detect_aruco_markers(
         if isinstance(dictionary, str)
         else np.stack([np.stack([np.rot90(c, k).reshape(-1) for k in range(4)]) for c in d.codes])
     )
+    from imageform._backend import use_numba
+
+    search = _search_numba if use_numba(g) else _search_numpy
+    found = search(g, sorted(wins, reverse=True), d, rotated, min_side, max_bits, border_rate)
+    ids = np.array(sorted(found), dtype=np.int64)
+    corners = np.array([found[i][1] for i in ids], dtype=np.float64).reshape(-1, 4, 2)
+    hamming = np.array([found[i][2] for i in ids], dtype=np.int64)
+    return ArucoMarkers(ids, corners, hamming, d.name)
+
+
+#: What a search returns: for each marker id, (score, corners (4, 2) in printed order, bits
+#: corrected); the best score (contrast minus bits corrected) of its sightings.
+_Found = dict[int, tuple[float, NDArray[np.float64], int]]
+
+
+def _search_numba(
+    g: NDArray[np.float64],
+    wins: list[int],
+    d: ArucoDictionary,
+    rotated: NDArray[np.uint8],
+    min_side: float,
+    max_bits: int,
+    border_rate: float,
+) -> _Found:
+    """Find the markers of ``g`` at each threshold window (largest first): numba kernels.
+
+    The same steps and verdicts as :func:`_search_numpy` (tested): the per-pixel and
+    per-component work in ``imageform._kernels.aruco``, the decoding batched over the
+    candidates of a window.
+    """
+    from imageform._kernels.aruco import (
+        box_integral,
+        cell_means,
+        component_quads,
+        dark_components,
+    )
+
+    hgt, wid = g.shape
+    cells = d.marker_size + 2
+    found: _Found = {}
+    min_area = min_side * min_side * 0.5
+    max_area = 0.9 * hgt * wid
+    boxes = np.zeros((0, 5))
+    pad = max(wins) // 2
+    integral = box_integral(g, pad)  # every window's local means from one table
+    # room for the runs (a photograph has about one run in 20 pixels, a row at most (W + 1) / 2)
+    # and the labels (half the runs: photographs start one in 3 to 10): four times more when a
+    # window needs it
+    worst = hgt * ((wid + 1) // 2) + 2
+    cap = min(worst, hgt * wid // 16 + 4096)
+    for win in wins:
+        while True:
+            cap_labels = cap if cap == worst else cap // 2 + 1024
+            runs, comp_runs, comp_ptr, stats = dark_components(
+                g, integral, pad, int(win), 0.02, cap, cap_labels
+            )
+            if len(stats) or cap == worst:
+                break
+            cap = min(worst, 4 * cap)
+        if len(stats) < 2:
+            continue
+        area = stats[:, 0]
+        hh = stats[:, 2] - stats[:, 1] + 1
+        ww = stats[:, 4] - stats[:, 3] + 1
+        ok = (area >= min_area) & (hh >= min_side * 0.7) & (ww >= min_side * 0.7)
+        ok &= hh * ww <= max_area
+        ok[0] = False
+        cand = np.nonzero(ok)[0]
+        if len(cand) == 0:
+            continue
+        cy = 0.5 * (stats[cand, 1] + stats[cand, 2] + 1)
+        cx = 0.5 * (stats[cand, 3] + stats[cand, 4] + 1)
+        size = (hh * ww)[cand].astype(np.float64)
+        cand = cand[~_inside(boxes, cx, cy, size)]  # decoded already, at a larger window
+        if len(cand) == 0:
+            continue
+        quads, status = component_quads(runs, comp_runs, comp_ptr, cand, stats, float(min_side))
+        good = np.nonzero(status == 0)[0]
+        if len(good) == 0:
+            continue
+        decoded = _decode(
+            cell_means(g, quads[good], cells), d, cells, rotated, max_bits, border_rate
+        )
+        st = stats[cand].tolist()
+        new_boxes: list[tuple[float, float, float, float, float]] = []
+        for j, hit in zip(good.tolist(), decoded, strict=True):
+            if hit is None:
+                continue
+            _, top, bottom, left, right = st[j]
+            s_cx, s_cy = 0.5 * (left + right + 1), 0.5 * (top + bottom + 1)
+            s_size = float((bottom - top + 1) * (right - left + 1))
+            if any(
+                b[0] <= s_cx <= b[2] and b[1] <= s_cy <= b[3] and 0.7 < s_size / b[4] < 1.4
+                for b in new_boxes
+            ):
+                continue  # decoded already, at this window (an earlier component)
+            mid, rot, dist, contrast = hit
+            quad = quads[j]
+            # observed == np.rot90(code, rot) (counter-clockwise turns): the printed top-left
+            # corner is the observed corner (4 - rot) % 4
+            ordered = quad[[(0 - rot) % 4, (1 - rot) % 4, (2 - rot) % 4, (3 - rot) % 4]]
+            score = contrast - dist
+            if mid not in found or score > found[mid][0]:
+                found[mid] = (score, ordered, dist)
+            (x0, x1), (y0, y1) = (
+                (float(quad[:, 0].min()), float(quad[:, 0].max())),
+                (float(quad[:, 1].min()), float(quad[:, 1].max())),
+            )
+            new_boxes.append((x0, y0, x1, y1, s_size))
+        if new_boxes:
+            boxes = np.vstack([boxes, np.array(new_boxes)])
+    return found
+
+
+def _inside(
+    boxes: NDArray[np.float64],
+    cx: NDArray[np.float64],
+    cy: NDArray[np.float64],
+    size: NDArray[np.float64],
+) -> NDArray[np.bool_]:
+    """Whether each centre lies in a decoded marker's box of a similar size (0.7-1.4x)."""
+    if len(boxes) == 0:
+        return np.zeros(len(cx), dtype=bool)
+    b = boxes[None, :, :]
+    ratio = size[:, None] / b[..., 4]
+    return np.asarray(
+        np.any(
+            (b[..., 0] <= cx[:, None])
+            & (cx[:, None] <= b[..., 2])
+            & (b[..., 1] <= cy[:, None])
+            & (cy[:, None] <= b[..., 3])
+            & (ratio > 0.7)
+            & (ratio < 1.4),
+            axis=1,
+        )
+    )
+
+
+def _decode(
+    means: NDArray[np.float64],
+    d: ArucoDictionary,
+    cells: int,
+    rotated: NDArray[np.uint8],
+    max_bits: int,
+    border_rate: float,
+) -> list[tuple[int, int, int, float] | None]:
+    """Read the cells of several quads at once: ``(id, rotation, distance, contrast)`` or None.
+
+    Each quad's cell means are split by Otsu's threshold (white above), its border cells
+    checked (at most ``border_rate`` of them white) and its inner bits matched to the nearest
+    code under the four rotations (at most ``max_bits`` apart), as :func:`_read_bits` and
+    :func:`_match` for one quad.
+    """
+    m, n = means.shape
+    contrast = means.max(axis=1) - means.min(axis=1)
+    v = np.sort(means, axis=1)
+    i = np.arange(1, n)
+    csum = np.cumsum(v, axis=1)
+    m0 = csum[:, :-1] / i
+    m1 = (csum[:, -1:] - csum[:, :-1]) / (n - i)
+    between = (i / n) * (1 - i / n) * (m0 - m1) ** 2
+    k = np.argmax(between, axis=1)
+    rows = np.arange(m)
+    thr = 0.5 * (v[rows, k] + v[rows, k + 1])
+    bits = (means > thr[:, None]).reshape(m, cells, cells)
+    border = np.ones((cells, cells), dtype=bool)
+    border[1:-1, 1:-1] = False
+    bad = np.count_nonzero(bits[:, border], axis=1) > border_rate * border.sum()
+    inner = bits[:, 1:-1, 1:-1].reshape(m, -1).astype(np.uint8)
+    dist = np.count_nonzero(rotated[None] != inner[:, None, None, :], axis=3)  # (m, n, 4)
+    flat = dist.reshape(m, -1)
+    best = np.argmin(flat, axis=1)
+    dmin = flat[rows, best]
+    out: list[tuple[int, int, int, float] | None] = []
+    for j in range(m):
+        if contrast[j] < 0.08 or bad[j] or dmin[j] > max_bits:
+            out.append(None)
+            continue
+        mid, rot = divmod(int(best[j]), 4)
+        out.append((mid, rot, int(dmin[j]), float(contrast[j])))
+    return out
+
+
+def _search_numpy(
+    g: NDArray[np.float64],
+    wins: list[int],
+    d: ArucoDictionary,
+    rotated: NDArray[np.uint8],
+    min_side: float,
+    max_bits: int,
+    border_rate: float,
+) -> _Found:
+    """Find the markers as :func:`_search_numba`, with NumPy and SciPy, one component at a time.
+
+    The twin run when numba is disabled (``IMAGEFORM_DISABLE_NUMBA``).
+    """
+    from scipy import ndimage
+
+    hgt, wid = g.shape
     cells = d.marker_size + 2
     border_mask = np.ones((cells, cells), dtype=bool)
     border_mask[1:-1, 1:-1] = False
-    found: dict[int, tuple[float, NDArray[np.float64], int]] = {}
+    found: _Found = {}
     min_area = min_side * min_side * 0.5
     max_area = 0.9 * hgt * wid
     structure = np.array([[0, 1, 0], [1, 1, 1], [0, 1, 0]], dtype=bool)
     boxes: list[tuple[float, float, float, float, int]] = []
     g32 = g.astype(np.float32)  # the local means only threshold: float32 is ample
-    for win in sorted(wins, reverse=True):
+    for win in wins:
         mean = ndimage.uniform_filter(g32, size=win, mode="reflect")
         dark = g < mean - 0.02
         labels, n = ndimage.label(dark, structure=structure)
@@ -609,10 +832,7 @@ def detect_aruco_markers(
                 found[mid] = (score, ordered, dist)
             lo, hi = quad.min(axis=0), quad.max(axis=0)
             boxes.append((lo[0], lo[1], hi[0], hi[1], hh * ww))
-    ids = np.array(sorted(found), dtype=np.int64)
-    corners = np.array([found[i][1] for i in ids], dtype=np.float64).reshape(-1, 4, 2)
-    hamming = np.array([found[i][2] for i in ids], dtype=np.int64)
-    return ArucoMarkers(ids, corners, hamming, d.name)
+    return found
 
 
 def identify_aruco_dictionary(image: object, *, min_markers: int = 2) -> str | None:

@@ -267,7 +267,7 @@ def detect_charuco(
     >>> len(found), found.corners[0].round(1).tolist()
     (24, [89.5, 89.5])
     """
-    from imageform.geometry.checkerboard_subpix import refine_corners
+    from imageform.geometry.checkerboard_subpix import RefinedCorners, refine
 
     if not isinstance(board, CharucoBoard):
         raise InvalidInputError(f"expected board as a CharucoBoard, got {describe(board)}")
@@ -332,7 +332,8 @@ def detect_charuco(
     out_k, out_xy = [], []
     for hw in np.unique(hws):
         sel = np.nonzero(hws == hw)[0]
-        ref = refine_corners(g, xy[sel], half_window=int(hw), max_iter=40, eps=1e-4)
+        # refine_corners without re-checking g (grey, finite, in [0, 1] already)
+        ref = RefinedCorners(*refine(g, np.ascontiguousarray(xy[sel]), int(hw), int(hw), 40, 1e-4))
         for j, k in enumerate(sel):
             moved = float(np.hypot(*(ref.corners[j] - xy[k])))
             if ref.status[j] in (0, 1) and moved <= shift * cand_scale[k] and moved < hw:

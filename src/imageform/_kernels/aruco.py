@@ -1,0 +1,694 @@
+r"""numba kernels of the ArUco marker detector (``imageform.geometry.aruco``).
+
+- :func:`box_integral`: the integral image of the grey image, padded with its edges
+  reflected (SciPy's ``uniform_filter(mode="reflect")``), from which every threshold
+  window's local means are read with four look-ups a pixel.
+- :func:`dark_components`: the local-mean adaptive threshold (a pixel is dark when it is
+  below its ``win x win`` mean by more than ``offset``) and the dark pixels' connected
+  components (4-connectivity), labelled run by run with union-find and numbered in raster
+  order of their first pixel as ``scipy.ndimage.label`` numbers them; no label image is
+  written, each component keeps its list of runs, its area and its bounding box.
+- :func:`component_quads`: for each candidate component, its holes (the background of its
+  box not 4-connected to the box's edge, found from the runs' gaps), its outer boundary
+  pixels, the quadrilateral through four extreme boundary points (accepted when it has the
+  filled component's area) and the sides fitted to the boundary pixels (total least
+  squares), corners where they meet.
+- :func:`cell_means`: the mean grey of each marker cell, sampled bilinearly at ``3 x 3``
+  points through the homography of the unit square onto the quad.
+
+Work per window is proportional to the image (the threshold) plus the runs and boundary
+pixels of the candidates, not their bounding boxes: a large textured blob of a photograph
+costs its runs, not the area it spans. All are serial (a call is a few milliseconds on a
+720p frame; parallelism belongs across frames), compiled for one signature each (float64
+image), cached, with NumPy's division semantics (``error_model="numpy"``: a division by
+zero gives inf or NaN, as the NumPy steps they replace did, never an exception). The
+Python pipeline around them is :func:`imageform.geometry.detect_aruco_markers`, whose
+NumPy/SciPy twin (the component by component implementation they replace, run under
+``IMAGEFORM_DISABLE_NUMBA``) gives the same markers to 1e-9 px
+(``tests/geometry/test_aruco_kernels.py``).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numpy.typing import NDArray
+
+from imageform._kernels.jit import njit
+
+__all__ = ["cell_means", "component_quads", "dark_components"]
+
+
+@njit(nogil=True, error_model="numpy")
+def _reflect(k: int, n: int) -> int:  # pragma: no cover - compiled
+    # SciPy's "reflect" (d c b a | a b c d | d c b a), any distance out
+    period = 2 * n
+    k = k % period
+    if k < 0:
+        k += period
+    if k >= n:
+        k = period - 1 - k
+    return k
+
+
+@njit(nogil=True, error_model="numpy")
+def _find(parent: NDArray[np.int64], x: int) -> int:  # pragma: no cover - compiled
+    root = x
+    while parent[root] != root:
+        root = parent[root]
+    while parent[x] != root:
+        nxt = parent[x]
+        parent[x] = root
+        x = nxt
+    return root
+
+
+@njit(nogil=True, error_model="numpy")
+def box_integral(g: NDArray[np.float64], pad: int) -> NDArray[np.float64]:  # pragma: no cover
+    """Return the integral image of ``g`` padded by ``pad`` pixels, edges reflected.
+
+    ``out[i, j]`` is the sum of the padded image's rows ``< i`` and columns ``< j``, so any
+    window of the padded image sums with four look-ups; shape ``(H + 2 pad + 1,
+    W + 2 pad + 1)``.
+    """
+    hgt, wid = g.shape
+    cols = np.empty(wid + 2 * pad, dtype=np.int64)
+    for k in range(wid + 2 * pad):
+        cols[k] = _reflect(k - pad, wid)
+    rows = hgt + 2 * pad
+    width = wid + 2 * pad
+    out = np.empty((rows + 1, width + 1))  # every entry written below
+    out[0, :] = 0.0
+    out[:, 0] = 0.0
+    # each row's running sums first (four rows at a time: four independent chains of
+    # additions keep the processor busy), then the sums down the columns
+    for i0 in range(0, rows, 4):
+        n = min(4, rows - i0)
+        r0 = g[_reflect(i0 - pad, hgt)]
+        r1 = g[_reflect(min(i0 + 1, rows - 1) - pad, hgt)]
+        r2 = g[_reflect(min(i0 + 2, rows - 1) - pad, hgt)]
+        r3 = g[_reflect(min(i0 + 3, rows - 1) - pad, hgt)]
+        o0 = out[i0 + 1]
+        o1 = out[min(i0 + 2, rows)]
+        o2 = out[min(i0 + 3, rows)]
+        o3 = out[min(i0 + 4, rows)]
+        s0 = s1 = s2 = s3 = 0.0
+        for j in range(width):
+            c = cols[j]
+            s0 += r0[c]
+            s1 += r1[c]
+            s2 += r2[c]
+            s3 += r3[c]
+            o0[j + 1] = s0
+            o1[j + 1] = s1 if n > 1 else o1[j + 1]
+            o2[j + 1] = s2 if n > 2 else o2[j + 1]
+            o3[j + 1] = s3 if n > 3 else o3[j + 1]
+    for i in range(1, rows + 1):
+        above = out[i - 1]
+        here = out[i]
+        for j in range(1, width + 1):
+            here[j] += above[j]
+    return out
+
+
+@njit(nogil=True, error_model="numpy")
+def dark_components(
+    g: NDArray[np.float64],
+    integral: NDArray[np.float64],
+    pad: int,
+    win: int,
+    offset: float,
+    cap: int,
+    cap_labels: int,
+) -> tuple[
+    NDArray[np.int64], NDArray[np.int64], NDArray[np.int64], NDArray[np.int64]
+]:  # pragma: no cover - compiled
+    """Threshold ``g`` against its ``win x win`` local mean and label the dark components.
+
+    ``integral`` is :func:`box_integral` of ``g`` with ``pad >= win // 2``; ``cap`` and
+    ``cap_labels`` the most runs and provisional labels expected (``H * ((W + 1) // 2)`` at
+    worst): with more, every output is empty (``stats`` with no rows) and the caller asks
+    again with more room. The dark pixels
+    are labelled run by run: a row's run joins the labels of the runs above it that it
+    touches (4-connectivity, union-find). Components are numbered ``1 .. n`` in raster
+    order of their first pixel, as ``scipy.ndimage.label`` numbers them.
+
+    Returns ``runs`` (r, 3): row, first and last column of every dark run, in raster order;
+    ``comp_runs`` (r,) and ``comp_ptr`` (n + 2,): the runs of component ``k`` are
+    ``runs[comp_runs[comp_ptr[k]:comp_ptr[k + 1]]]``, in raster order; ``stats`` (n + 1, 5):
+    area, first row, last row, first column, last column (inclusive) of each component
+    (row 0 unused).
+    """
+    hgt, wid = g.shape
+    r = win // 2
+    lo = pad - r
+    hi = pad + r + 1
+    inv = 1.0 / (win * win)
+    # one new label a run at most: sized once (growing inside the loop would make numba
+    # count references on every access); filled as they are made
+    runs = np.empty((cap, 3), dtype=np.int64)
+    run_lab = np.empty(cap, dtype=np.int64)
+    parent = np.empty(cap_labels + 2, dtype=np.int64)
+    pstats = np.empty((cap_labels + 2, 5), dtype=np.int64)
+    n_prov = 0
+    nr = 0
+    prev_lo = 0  # the previous row's runs: prev_lo .. prev_hi - 1
+    prev_hi = 0
+    dark = np.empty(wid + 1, dtype=np.bool_)
+    dark[wid] = False  # a sentinel ending the last run
+    trans = np.empty(wid + 2, dtype=np.int64)
+    for i in range(hgt):
+        top = integral[i + lo]
+        bottom = integral[i + hi]
+        gi = g[i]
+        for j in range(wid):  # branch-free: the compiler vectorises it
+            box = bottom[j + hi] - top[j + hi] - bottom[j + lo] + top[j + lo]
+            dark[j] = gi[j] < box * inv - offset
+        # the row's runs from its dark/light transitions (a branch-free compaction)
+        n_trans = 0
+        was = False
+        for j in range(wid + 1):
+            now = dark[j]
+            trans[n_trans] = j
+            n_trans += now != was
+            was = now
+        if nr + n_trans // 2 > cap or n_prov + n_trans // 2 > cap_labels:
+            empty = np.zeros(0, dtype=np.int64)
+            return np.zeros((0, 3), dtype=np.int64), empty, empty, np.zeros((0, 5), np.int64)
+        row_lo = nr
+        q = prev_lo
+        for t in range(0, n_trans, 2):
+            start = trans[t]
+            end = trans[t + 1] - 1
+            lab = 0
+            # runs of the row above that overlap [start, end]
+            while q < prev_hi and runs[q, 2] < start:
+                q += 1
+            above = q
+            while above < prev_hi and runs[above, 1] <= end:
+                b = _find(parent, run_lab[above])
+                if lab == 0:
+                    lab = b
+                elif b < lab:
+                    parent[lab] = b
+                    lab = b
+                elif lab < b:
+                    parent[b] = lab
+                above += 1
+            if lab == 0:
+                n_prov += 1
+                parent[n_prov] = n_prov
+                lab = n_prov
+                pstats[lab, 0] = 0
+                pstats[lab, 1] = i
+                pstats[lab, 3] = start
+                pstats[lab, 4] = end
+            runs[nr, 0] = i
+            runs[nr, 1] = start
+            runs[nr, 2] = end
+            run_lab[nr] = lab
+            nr += 1
+            pstats[lab, 0] += end - start + 1
+            pstats[lab, 2] = i
+            if start < pstats[lab, 3]:
+                pstats[lab, 3] = start
+            if end > pstats[lab, 4]:
+                pstats[lab, 4] = end
+        prev_lo = row_lo
+        prev_hi = nr
+    # components in raster order of first pixel: each set's root is its smallest
+    # provisional label (unions keep the smaller), made at the set's first run
+    final = np.zeros(n_prov + 1, dtype=np.int64)
+    n = 0
+    for p in range(1, n_prov + 1):
+        root = _find(parent, p)
+        if root == p:
+            n += 1
+            final[p] = n
+        else:
+            final[p] = final[root]  # root < p: set already
+    stats = np.zeros((n + 1, 5), dtype=np.int64)
+    stats[:, 1] = hgt
+    stats[:, 3] = wid
+    for p in range(1, n_prov + 1):
+        f = final[p]
+        stats[f, 0] += pstats[p, 0]
+        stats[f, 1] = min(stats[f, 1], pstats[p, 1])
+        stats[f, 2] = max(stats[f, 2], pstats[p, 2])
+        stats[f, 3] = min(stats[f, 3], pstats[p, 3])
+        stats[f, 4] = max(stats[f, 4], pstats[p, 4])
+    # the runs grouped by component (a stable counting sort)
+    comp_ptr = np.zeros(n + 2, dtype=np.int64)
+    for t in range(nr):
+        comp_ptr[final[run_lab[t]] + 1] += 1
+    for k in range(1, n + 2):
+        comp_ptr[k] += comp_ptr[k - 1]
+    fill = comp_ptr[:-1].copy()
+    comp_runs = np.empty(nr, dtype=np.int64)
+    for t in range(nr):
+        f = final[run_lab[t]]
+        comp_runs[fill[f]] = t
+        fill[f] += 1
+    return runs[:nr].copy(), comp_runs, comp_ptr, stats
+
+
+@njit(nogil=True, error_model="numpy")
+def _quad(
+    pts: NDArray[np.float64], area: float, quad: NDArray[np.float64]
+) -> bool:  # pragma: no cover - compiled
+    """Put four extreme boundary points into ``quad``, clockwise on screen.
+
+    False when the quad through them does not have the component's area (an L, a disc).
+    """
+    n = pts.shape[0]
+    cx = 0.0
+    cy = 0.0
+    for k in range(n):
+        cx += pts[k, 0]
+        cy += pts[k, 1]
+    cx /= n
+    cy /= n
+    i0 = 0
+    best = -1.0
+    for k in range(n):
+        d = (pts[k, 0] - cx) ** 2 + (pts[k, 1] - cy) ** 2
+        if d > best:
+            best = d
+            i0 = k
+    i2 = 0
+    best = -1.0
+    for k in range(n):
+        d = (pts[k, 0] - pts[i0, 0]) ** 2 + (pts[k, 1] - pts[i0, 1]) ** 2
+        if d > best:
+            best = d
+            i2 = k
+    dx = pts[i2, 0] - pts[i0, 0]
+    dy = pts[i2, 1] - pts[i0, 1]
+    i1 = 0
+    i3 = 0
+    hi = -math.inf
+    lo = math.inf
+    for k in range(n):
+        side = dx * (pts[k, 1] - pts[i0, 1]) - dy * (pts[k, 0] - pts[i0, 0])
+        if side > hi:
+            hi = side
+            i1 = k
+        if side < lo:
+            lo = side
+            i3 = k
+    if hi <= 0 or lo >= 0:
+        return False
+    idx = (i0, i1, i2, i3)
+    for k in range(4):
+        quad[k, 0] = pts[idx[k], 0]
+        quad[k, 1] = pts[idx[k], 1]
+    signed = 0.0
+    perimeter = 0.0
+    for k in range(4):
+        x, y = quad[k, 0], quad[k, 1]
+        xn, yn = quad[(k + 1) % 4, 0], quad[(k + 1) % 4, 1]
+        signed += x * yn - y * xn
+        perimeter += math.hypot(xn - x, yn - y)
+    signed *= 0.5
+    # the quad runs through boundary pixel centres: about half a pixel inside the blob
+    expected = area - 0.5 * perimeter
+    if abs(abs(signed) - expected) > 0.12 * area:
+        return False
+    if signed < 0:  # clockwise on screen (v down) is a positive signed area in (u, v)
+        for c in range(2):
+            a0, a1 = quad[0, c], quad[1, c]
+            quad[0, c] = quad[3, c]
+            quad[1, c] = quad[2, c]
+            quad[2, c] = a1
+            quad[3, c] = a0
+    return True
+
+
+@njit(nogil=True, error_model="numpy")
+def _refine_sides(
+    quad: NDArray[np.float64], pts: NDArray[np.float64], out: NDArray[np.float64]
+) -> bool:  # pragma: no cover - compiled
+    """Put the corners where the four fitted sides meet into ``out``.
+
+    False when a side has too few pixels, two sides are parallel or a corner moves more
+    than 3 px.
+
+    Each side is the total-least-squares line through the boundary pixels along it, moved
+    half a pixel outwards (boundary pixel centres lie half a pixel inside the dark edge).
+    """
+    n = pts.shape[0]
+    ccx = 0.25 * (quad[0, 0] + quad[1, 0] + quad[2, 0] + quad[3, 0])
+    ccy = 0.25 * (quad[0, 1] + quad[1, 1] + quad[2, 1] + quad[3, 1])
+    lines = np.empty((4, 3))
+    for k in range(4):
+        ax, ay = quad[k, 0], quad[k, 1]
+        dx = quad[(k + 1) % 4, 0] - ax
+        dy = quad[(k + 1) % 4, 1] - ay
+        length = math.hypot(dx, dy)
+        if length < 1e-9:
+            return False
+        nx, ny = -dy / length, dx / length
+        tol = max(1.5, 0.06 * length)
+        cnt = 0
+        sx = 0.0
+        sy = 0.0
+        for q in range(n):
+            px, py = pts[q, 0] - ax, pts[q, 1] - ay
+            t = (px * dx + py * dy) / length**2
+            if t > 0.12 and t < 0.88 and abs(px * nx + py * ny) < tol:
+                cnt += 1
+                sx += pts[q, 0]
+                sy += pts[q, 1]
+        if cnt < 4:
+            return False
+        mx, my = sx / cnt, sy / cnt
+        sxx = 0.0
+        syy = 0.0
+        sxy = 0.0
+        for q in range(n):
+            px, py = pts[q, 0] - ax, pts[q, 1] - ay
+            t = (px * dx + py * dy) / length**2
+            if t > 0.12 and t < 0.88 and abs(px * nx + py * ny) < tol:
+                ux, uy = pts[q, 0] - mx, pts[q, 1] - my
+                sxx += ux * ux
+                syy += uy * uy
+                sxy += ux * uy
+        theta = 0.5 * math.atan2(2.0 * sxy, sxx - syy)  # direction of the line
+        lx, ly = -math.sin(theta), math.cos(theta)
+        if lx * (mx - ccx) + ly * (my - ccy) < 0:
+            lx, ly = -lx, -ly  # pointing out of the quad
+        lines[k, 0] = lx
+        lines[k, 1] = ly
+        lines[k, 2] = -(lx * mx + ly * my) - 0.5
+    worst = 0.0
+    for k in range(4):
+        a1, b1, c1 = lines[(k + 3) % 4, 0], lines[(k + 3) % 4, 1], lines[(k + 3) % 4, 2]
+        a2, b2, c2 = lines[k, 0], lines[k, 1], lines[k, 2]
+        det = a1 * b2 - a2 * b1
+        if abs(det) < 1e-12:
+            return False
+        out[k, 0] = (b1 * c2 - b2 * c1) / det
+        out[k, 1] = (c1 * a2 - c2 * a1) / det
+        worst = max(worst, math.hypot(out[k, 0] - quad[k, 0], out[k, 1] - quad[k, 1]))
+    return worst <= 3.0
+
+
+@njit(nogil=True, error_model="numpy")
+def _outside_segments(
+    i: int,
+    rs: NDArray[np.int64],
+    re: NDArray[np.int64],
+    row_ptr: NDArray[np.int64],
+    out_gap: NDArray[np.bool_],
+    c0: int,
+    c1: int,
+    seg: NDArray[np.int64],
+) -> int:  # pragma: no cover - compiled
+    """Write row ``i``'s outside background segments (start, end) into ``seg``; their count.
+
+    Left of the first run, right of the last, and the gaps between runs reached from the
+    box's edge; in column order.
+    """
+    n = 0
+    p0, p1 = row_ptr[i], row_ptr[i + 1]
+    if rs[p0] > c0:
+        seg[n, 0] = c0
+        seg[n, 1] = rs[p0] - 1
+        n += 1
+    for q in range(p0, p1 - 1):
+        if out_gap[q]:
+            seg[n, 0] = re[q] + 1
+            seg[n, 1] = rs[q + 1] - 1
+            n += 1
+    if re[p1 - 1] < c1:
+        seg[n, 0] = re[p1 - 1] + 1
+        seg[n, 1] = c1
+        n += 1
+    return n
+
+
+@njit(nogil=True, error_model="numpy")
+def component_quads(
+    runs: NDArray[np.int64],
+    comp_runs: NDArray[np.int64],
+    comp_ptr: NDArray[np.int64],
+    cand: NDArray[np.int64],
+    stats: NDArray[np.int64],
+    min_side: float,
+) -> tuple[NDArray[np.float64], NDArray[np.int64]]:  # pragma: no cover - compiled
+    """Find the refined quadrilateral of each candidate component ``cand[m]`` (see the module).
+
+    ``runs``, ``comp_runs``, ``comp_ptr`` and ``stats`` are :func:`dark_components`'. The
+    holes are found run by run: the component's runs in each row, the background gaps between
+    them joined (union-find) to the gaps they touch in the rows above and below, a gap
+    outside when joined to the box's edge (the first and last rows, the parts left and
+    right of each row's runs); the outer boundary pixels, in raster order, are the filled
+    pixels with a 4-neighbour outside. Returns ``quads`` (m, 4, 2) (clockwise on screen,
+    sub-pixel corners) and ``status`` (m,): 0 a quad, 1 no holes (a solid blob), 2 too few
+    boundary pixels, 3 not a quadrilateral, 4 sides too short or too unequal, 5 the sides
+    did not fit.
+    """
+    m = cand.shape[0]
+    quads = np.zeros((m, 4, 2))
+    status = np.zeros(m, dtype=np.int64)
+    quad = np.empty((4, 2))
+    # work buffers sized once for the largest candidate (no allocation per candidate)
+    max_nr = 1
+    max_hh = 1
+    max_ww = 1
+    max_box = 1
+    for c in range(m):
+        k = cand[c]
+        hh = stats[k, 2] - stats[k, 1] + 1
+        ww = stats[k, 4] - stats[k, 3] + 1
+        max_nr = max(max_nr, comp_ptr[k + 1] - comp_ptr[k])
+        max_hh = max(max_hh, hh)
+        max_ww = max(max_ww, ww)
+        max_box = max(max_box, hh * ww)
+    rs_buf = np.empty(max_nr, dtype=np.int64)
+    re_buf = np.empty(max_nr, dtype=np.int64)
+    row_ptr = np.empty(max_hh + 1, dtype=np.int64)
+    gp = np.empty(max_nr + 1, dtype=np.int64)
+    out_gap = np.empty(max_nr, dtype=np.bool_)
+    pts = np.empty((max_box, 2))  # the boundary pixels (at most the filled box)
+    seg_u = np.empty((max_ww + 2, 2), dtype=np.int64)
+    seg_d = np.empty((max_ww + 2, 2), dtype=np.int64)
+    for c in range(m):
+        k = cand[c]
+        r0, r1, c0, c1 = stats[k, 1], stats[k, 2], stats[k, 3], stats[k, 4]
+        hh, ww = r1 - r0 + 1, c1 - c0 + 1
+        # the component's runs, row by row (in raster order, every row of its box has one)
+        p0, p1 = comp_ptr[k], comp_ptr[k + 1]
+        nr = p1 - p0
+        if nr == hh:
+            status[c] = 1  # one run a row: no hole, a solid blob
+            continue
+        rs = rs_buf[:nr]
+        re = re_buf[:nr]
+        for t in range(nr):
+            rr = runs[comp_runs[p0 + t]]
+            rs[t] = rr[1]
+            re[t] = rr[2]
+        t = 0
+        for i in range(hh):
+            row_ptr[i] = t
+            while t < nr and runs[comp_runs[p0 + t], 0] == r0 + i:
+                t += 1
+        row_ptr[hh] = nr
+        # gaps (the gap after run q, when q is not its row's last) joined across rows
+        for t in range(nr + 1):  # union-find of the gaps; node nr is the outside
+            gp[t] = t
+        for i in range(hh):
+            for q in range(row_ptr[i], row_ptr[i + 1] - 1):
+                if i == 0 or i == hh - 1:
+                    gp[q] = nr
+        for i in range(hh - 1):
+            # merge-walk the background segments of rows i and i + 1
+            pa, ea = row_ptr[i], row_ptr[i + 1]
+            pb, eb = row_ptr[i + 1], row_ptr[i + 2]
+            ta, tb = 0, 0  # segment t: 0 left part, 1 .. runs-1 gaps, runs right part
+            na, nb = ea - pa, eb - pb
+            while ta <= na and tb <= nb:
+                if ta == 0:
+                    sa, fa, node_a = c0, rs[pa] - 1, nr
+                elif ta == na:
+                    sa, fa, node_a = re[ea - 1] + 1, c1, nr
+                else:
+                    sa, fa, node_a = re[pa + ta - 1] + 1, rs[pa + ta] - 1, pa + ta - 1
+                if tb == 0:
+                    sb, fb, node_b = c0, rs[pb] - 1, nr
+                elif tb == nb:
+                    sb, fb, node_b = re[eb - 1] + 1, c1, nr
+                else:
+                    sb, fb, node_b = re[pb + tb - 1] + 1, rs[pb + tb] - 1, pb + tb - 1
+                if sa > fa:
+                    ta += 1
+                    continue
+                if sb > fb:
+                    tb += 1
+                    continue
+                if max(sa, sb) <= min(fa, fb) and node_a != node_b:
+                    x = node_a
+                    while gp[x] != x:
+                        gp[x] = gp[gp[x]]  # path halving
+                        x = gp[x]
+                    y = node_b
+                    while gp[y] != y:
+                        gp[y] = gp[gp[y]]
+                        y = gp[y]
+                    if x < y:
+                        gp[x] = y  # the larger wins: the outside (nr) stays a root
+                    elif y < x:
+                        gp[y] = x
+                if fa < fb:
+                    ta += 1
+                else:
+                    tb += 1
+        out_gap[:nr] = False
+        outside = 0
+        for i in range(hh):
+            p0, p1 = row_ptr[i], row_ptr[i + 1]
+            outside += rs[p0] - c0 + c1 - re[p1 - 1]
+            for q in range(p0, p1 - 1):
+                x = q
+                while gp[x] != x:
+                    gp[x] = gp[gp[x]]
+                    x = gp[x]
+                if x == nr:
+                    out_gap[q] = True
+                    outside += rs[q + 1] - re[q] - 1
+        filled = hh * ww - outside
+        if filled == stats[k, 0]:
+            status[c] = 1  # no holes: a solid blob, not a marker (its code has white cells)
+            continue
+        # outer boundary: filled pixels with a 4-neighbour outside (or beyond the box)
+        n = 0
+        for i in range(hh):
+            p0, p1 = row_ptr[i], row_ptr[i + 1]
+            nu = 0
+            nd = 0
+            if 0 < i < hh - 1:
+                nu = _outside_segments(i - 1, rs, re, row_ptr, out_gap, c0, c1, seg_u)
+                nd = _outside_segments(i + 1, rs, re, row_ptr, out_gap, c0, c1, seg_d)
+            su = 0
+            sd = 0
+            q = p0
+            while q < p1:
+                a = rs[q]
+                while q < p1 - 1 and not out_gap[q]:
+                    q += 1
+                b = re[q]
+                q += 1
+                if i == 0 or i == hh - 1:
+                    for x in range(a, b + 1):
+                        pts[n, 0] = x
+                        pts[n, 1] = r0 + i
+                        n += 1
+                    continue
+                # a, b and the span's parts under an outside segment above or below, merged
+                # in column order (each list is sorted and disjoint)
+                pts[n, 0] = a
+                pts[n, 1] = r0 + i
+                n += 1
+                cur = a
+                while su < nu and seg_u[su, 1] < a:
+                    su += 1  # segments ending before this span end before the next ones
+                while sd < nd and seg_d[sd, 1] < a:
+                    sd += 1
+                tu = su
+                td = sd
+                while True:
+                    have_u = tu < nu and seg_u[tu, 0] <= b
+                    have_d = td < nd and seg_d[td, 0] <= b
+                    if not (have_u or have_d):
+                        break
+                    if have_u and (not have_d or seg_u[tu, 0] <= seg_d[td, 0]):
+                        lo_, hi_ = seg_u[tu, 0], seg_u[tu, 1]
+                        tu += 1
+                    else:
+                        lo_, hi_ = seg_d[td, 0], seg_d[td, 1]
+                        td += 1
+                    for x in range(max(lo_, cur + 1), min(hi_, b) + 1):
+                        pts[n, 0] = x
+                        pts[n, 1] = r0 + i
+                        n += 1
+                    cur = max(cur, min(hi_, b))
+                if cur < b:
+                    pts[n, 0] = b
+                    pts[n, 1] = r0 + i
+                    n += 1
+        if n < 12:
+            status[c] = 2
+            continue
+        bnd = pts[:n]
+        if not _quad(bnd, float(filled), quad):
+            status[c] = 3
+            continue
+        lo = math.inf
+        hi = 0.0
+        for q in range(4):
+            s = math.hypot(quad[(q + 1) % 4, 0] - quad[q, 0], quad[(q + 1) % 4, 1] - quad[q, 1])
+            lo = min(lo, s)
+            hi = max(hi, s)
+        if lo < min_side or lo < 0.25 * hi:
+            status[c] = 4
+            continue
+        if not _refine_sides(quad, bnd, quads[c]):
+            status[c] = 5
+    return quads, status
+
+
+@njit(nogil=True, error_model="numpy")
+def cell_means(
+    g: NDArray[np.float64], quads: NDArray[np.float64], cells: int
+) -> NDArray[np.float64]:  # pragma: no cover - compiled
+    """Average each of the ``cells x cells`` cells of each quad: (m, cells²), row by row.
+
+    Each cell is sampled bilinearly (edges clamped) at the 3 x 3 points ``0.3, 0.5, 0.7`` of
+    its side, mapped through the homography of the square ``[0, cells]²`` onto the quad
+    (its corners in the quad's order: top-left, top-right, bottom-right, bottom-left).
+    """
+    hgt, wid = g.shape
+    m = quads.shape[0]
+    out = np.zeros((m, cells * cells))
+    sub = (0.3, 0.5, 0.7)
+    for c in range(m):
+        x0, y0 = quads[c, 0, 0], quads[c, 0, 1]
+        x1, y1 = quads[c, 1, 0], quads[c, 1, 1]
+        x2, y2 = quads[c, 2, 0], quads[c, 2, 1]
+        x3, y3 = quads[c, 3, 0], quads[c, 3, 1]
+        # the unit square onto the quad (Heckbert's closed form)
+        sx = x0 - x1 + x2 - x3
+        sy = y0 - y1 + y2 - y3
+        dx1, dx2 = x1 - x2, x3 - x2
+        dy1, dy2 = y1 - y2, y3 - y2
+        den = dx1 * dy2 - dx2 * dy1
+        if den == 0.0:
+            continue
+        hg = (sx * dy2 - dx2 * sy) / den
+        hh = (dx1 * sy - sx * dy1) / den
+        a = x1 - x0 + hg * x1
+        b = x3 - x0 + hh * x3
+        d = y1 - y0 + hg * y1
+        e = y3 - y0 + hh * y3
+        for ci in range(cells):
+            for cj in range(cells):
+                acc = 0.0
+                for si in range(3):
+                    for sj in range(3):
+                        s = (cj + sub[sj]) / cells
+                        t = (ci + sub[si]) / cells
+                        w = hg * s + hh * t + 1.0
+                        u = (a * s + b * t + x0) / w
+                        v = (d * s + e * t + y0) / w
+                        u = min(max(u, 0.0), wid - 1.0)
+                        v = min(max(v, 0.0), hgt - 1.0)
+                        u0 = min(math.floor(u), wid - 2)
+                        v0 = min(math.floor(v), hgt - 2)
+                        fu, fv = u - u0, v - v0
+                        acc += (1 - fv) * ((1 - fu) * g[v0, u0] + fu * g[v0, u0 + 1]) + fv * (
+                            (1 - fu) * g[v0 + 1, u0] + fu * g[v0 + 1, u0 + 1]
+                        )
+                out[c, ci * cells + cj] = acc / 9.0
+    return out

@@ -1,0 +1,98 @@
+"""The numba ArUco pipeline against its NumPy/SciPy twin (the component-by-component
+implementation it replaced): the same markers, ids and corners, on photographs with a
+ChArUco board at many poses, scales, blurs and noise levels, and on frames without one."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from imageform.geometry import CharucoBoard, aruco_dictionary, detect_charuco
+from imageform.geometry.aruco import _rotated_codes, _search_numba, _search_numpy
+from tests.geometry.test_charuco import _composite, _kodak
+
+
+def _both(g: np.ndarray, name: str = "5x5_100") -> tuple[dict, dict]:
+    d = aruco_dictionary(name)
+    big = max(g.shape)
+    wins = sorted({max(3, int(big * f) | 1) for f in (0.015, 0.04, 0.10)}, reverse=True)
+    args = (d, _rotated_codes(d.name), 12.0, int(d.max_correction_bits * 0.6), 0.35)
+    return _search_numba(g, wins, *args), _search_numpy(g, wins, *args)
+
+
+def _same(fast: dict, slow: dict) -> None:
+    assert sorted(fast) == sorted(slow)
+    for mid in fast:
+        np.testing.assert_allclose(fast[mid][1], slow[mid][1], atol=1e-9)
+        assert fast[mid][2] == slow[mid][2]
+        assert fast[mid][0] == pytest.approx(slow[mid][0], abs=1e-9)
+
+
+def test_kernels_find_the_twins_markers_in_composites() -> None:
+    board = CharucoBoard((7, 5), 30.0, 22.0, "5x5_100")
+    rng = np.random.default_rng(5)
+    total = 0
+    for k in range(8):
+        img, _ = _composite(
+            rng,
+            board,
+            _kodak(k * 3 + 2),
+            square_px=int(rng.integers(20, 60)),
+            blur=float(rng.choice([0.0, 0.7, 1.5])),
+            noise=float(rng.choice([0.0, 0.01, 0.03])),
+            cut=k % 4 == 3,
+        )
+        fast, slow = _both(img / 255.0)
+        _same(fast, slow)
+        total += len(fast)
+    assert total >= 8 * 8  # the comparison saw markers
+
+
+def test_kernels_find_the_twins_markers_in_a_video_frame() -> None:
+    from tests import video_scenes as vs
+
+    tex, origin = vs.board_texture()
+    K = np.array([[1000.0, 0, 639.5], [0, 1000.0, 359.5], [0, 0, 1]])
+    for pose in vs.poses(8)[::3]:
+        frame = vs.render(tex, origin, K, pose, (1280, 720))
+        g = frame @ np.array([0.299, 0.587, 0.114]) / 255.0
+        fast, slow = _both(g)
+        _same(fast, slow)
+        assert len(fast) == 17
+
+
+def test_kernels_and_twin_agree_without_a_board() -> None:
+    for i in (3, 8):
+        fast, slow = _both(_kodak(i), "6x6_250")
+        _same(fast, slow)
+
+
+def test_numba_disabled_gives_the_same_corners(monkeypatch: pytest.MonkeyPatch) -> None:
+    board = CharucoBoard((5, 7), 30.0, 24.0, "4x4_50")
+    img = board.image(60, margin_px=30)
+    fast = detect_charuco(img, board)
+    monkeypatch.setenv("IMAGEFORM_DISABLE_NUMBA", "1")
+    slow = detect_charuco(img, board)
+    np.testing.assert_array_equal(fast.ids, slow.ids)
+    np.testing.assert_allclose(fast.corners, slow.corners, atol=1e-9)
+
+
+def test_dark_components_asks_for_room_when_the_runs_overflow() -> None:
+    """More runs than ``cap``: every output empty (the caller retries with the worst case);
+    a fine noise image overflows the first guess and still gives the twin's (no) markers."""
+    from imageform._kernels.aruco import box_integral, dark_components
+
+    g = np.random.default_rng(3).random((120, 160))
+    integral = box_integral(g, 7)
+    runs, _, _, stats = dark_components(g, integral, 7, 15, 0.02, 50, 50)
+    assert len(runs) == 0 and stats.shape == (0, 5)
+    runs, _, _, stats = dark_components(g, integral, 7, 15, 0.02, 120 * 80, 20)  # labels
+    assert len(runs) == 0 and stats.shape == (0, 5)
+    runs, comp_runs, comp_ptr, stats = dark_components(
+        g, integral, 7, 15, 0.02, 120 * 80 + 2, 120 * 80 + 2
+    )
+    assert stats[1:, 0].sum() == (runs[:, 2] - runs[:, 1] + 1).sum()
+    assert comp_ptr[-1] == len(runs) == len(comp_runs)
+    noise = np.random.default_rng(4).random((400, 400))  # ~0.25 runs a pixel: overflows
+    fast, slow = _both(noise)
+    _same(fast, slow)
