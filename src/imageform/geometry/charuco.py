@@ -349,7 +349,9 @@ def detect_charuco(
     blurred = np.nonzero(whole & (resolved < _SHARP))[0]
     for hw in np.unique(hws[ks[blurred]]):
         sel = blurred[hws[ks[blurred]] == hw]
-        alt = refine_corners(g, found[sel], half_window=int(hw) + 1, max_iter=40, eps=1e-4)
+        alt = RefinedCorners(
+            *refine(g, np.ascontiguousarray(found[sel]), int(hw) + 1, int(hw) + 1, 40, 1e-4)
+        )
         whole[sel] &= np.hypot(*(alt.corners - found[sel]).T) <= _MAX_WINDOW_SHIFT
     out_ids = [cand_ids[k] for k in ks[whole]]
     out_xy = list(found[whole])

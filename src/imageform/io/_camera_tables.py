@@ -69,8 +69,7 @@ def _mtf50(r: Reader, value: Any, key: str) -> float:
     if not v < _SAMPLING_CY_PER_PX:
         raise r.fail(
             key,
-            f"expected an MTF50 in (0, 1) cycles/pixel (below the sampling frequency), got "
-            f"{v:.4g}",
+            f"expected an MTF50 in (0, 1) cycles/pixel (below the sampling frequency), got {v:.4g}",
         )
     return v
 
