@@ -656,7 +656,7 @@ def check_writable(path: object, name: str = "path") -> Path:
     >>> check_writable("/dev/null", "path")
     Traceback (most recent call last):
     ...
-    imageform.errors.InvalidInputError: path: /dev/null is not a regular file (a device, FIFO or socket); give a file name
+    imageform.errors.InvalidInputError: path: /dev/null is a character device, not a regular file; give a file name
     """  # noqa: E501
     import stat
 
@@ -677,8 +677,7 @@ def check_writable(path: object, name: str = "path") -> Path:
         raise InvalidInputError(f"{name}: {_shown(out)} is a folder; give a file name")
     if st is not None and not (stat.S_ISREG(st.st_mode) or stat.S_ISLNK(st.st_mode)):
         raise InvalidInputError(
-            f"{name}: {_shown(out)} is not a regular file (a device, FIFO or socket); "
-            "give a file name"
+            f"{name}: {_shown(out)} is {_what(st.st_mode)}, not a regular file; give a file name"
         )
     parent = out.parent if str(out.parent) else Path(".")
     if not parent.is_dir():

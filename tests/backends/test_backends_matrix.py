@@ -298,6 +298,10 @@ EXCLUDED: dict[str, str] = {
     "aruco_dictionary": "a lookup by name: returns NumPy tables",
     "aruco_marker_image": "prints a uint8 marker image (NumPy)",
     "refine_corners": "checkerboard corner refinement, NumPy-only by design",
+    "detect_features": "image detector (OpenCV's SIFT), NumPy-only by design",
+    "match_features": "descriptor matching on host, NumPy-only by design",
+    "bundle_adjust": "estimation (scipy's sparse least squares), NumPy-only by design",
+    "reconstruct_sequence": "structure from motion over image files, NumPy-only by design",
     "detect_line_segments": "LSD detector, NumPy-only by design",
     "detect_vanishing_points": "VP detector, NumPy-only by design",
     # no array input: built from names/parameters; they return NumPy constants

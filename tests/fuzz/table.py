@@ -1595,3 +1595,72 @@ VALID.update(
         ),
     }
 )
+
+# --- issue 27 (video, tracking), 28 (structure from motion) ---------------------------------
+_K_TRACK = np.array([[600.0, 0.0, 200.0], [0.0, 600.0, 250.0], [0.0, 0.0, 1.0]])
+_BOARD_TRACK = CharucoBoard((5, 7), 30.0, 24.0, "4x4_50")
+VALID.update(
+    {
+        "imageform.geometry.BoardPose": Skip("a result dataclass built by BoardTracker.update"),
+        "imageform.geometry.BoardTracker": call(_BOARD_TRACK, _K_TRACK),
+        "imageform.geometry.Features": Skip("a result dataclass built by detect_features"),
+        "imageform.geometry.Reconstruction": Skip(
+            "a result dataclass built by reconstruct_sequence"
+        ),
+        "imageform.geometry.bundle_adjust": Skip(
+            "refines a whole reconstruction's poses and points (tests/geometry/test_sfm.py)"
+        ),
+        "imageform.geometry.detect_features": Skip(
+            "needs the reconstruct extra (OpenCV's SIFT); tests/geometry/test_sfm.py"
+        ),
+        "imageform.geometry.match_features": call(
+            np.linspace(0.0, 1.0, 40, dtype=np.float32).reshape(5, 8),
+            np.linspace(0.0, 1.0, 40, dtype=np.float32).reshape(5, 8),
+        ),
+        "imageform.geometry.reconstruct_sequence": Skip(
+            "structure from motion over many frames, minutes a call (tests/geometry/test_sfm.py)"
+        ),
+        "imageform.io.Frame": Skip("a record yielded by VideoReader"),
+        "imageform.io.VideoInfo": Skip("a record built by VideoReader"),
+        "imageform.io.Plan": Skip("a record built by read_plan"),
+        "imageform.io.VideoReader": Skip("reads a video or a device (tests/io/test_video.py)"),
+        "imageform.io.VideoReader.close": Skip("a method of a reader of files"),
+        "imageform.io.VideoWriter": Skip("writes a video file (tests/io/test_video.py)"),
+        "imageform.io.VideoWriter.close": Skip("a method of a writer of files"),
+        "imageform.io.VideoWriter.write": Skip("a method of a writer of files"),
+        "imageform.io.open_video": Skip("reads a video or a device (tests/io/test_video.py)"),
+        "imageform.io.read_plan": Skip("reads a plan file (its doctest, tests/workflows)"),
+        "imageform.report.overlays.draw_pose_overlay": Skip(
+            "draws a BoardTracker result on a frame (tests/workflows/test_track.py)"
+        ),
+        "imageform.simulate.Trajectory": Skip("a record built by read_trajectory"),
+        "imageform.simulate.board_poses": Skip("takes a whole Scene and a Trajectory"),
+        "imageform.simulate.read_trajectory": Skip(
+            "reads a trajectory file (tests/cli/test_trajectory_track.py)"
+        ),
+        "imageform.simulate.render_frames": Skip("a whole simulation per frame"),
+        "imageform.workflows.track.parse_track_board": call("charuco:7x5"),
+        "imageform.workflows.track.TrackOptions": call(
+            camera="cam.toml", board="9x6", square="30mm"
+        ),
+        "imageform.workflows.track.TrackOptions.fields": call(),
+        "imageform.workflows.track.TrackOptions.types": call(),
+    }
+)
+VALID.update(
+    {
+        "imageform.geometry.BoardTracker.reset": method(VALID["imageform.geometry.BoardTracker"]),
+        "imageform.geometry.BoardTracker.update": method(
+            VALID["imageform.geometry.BoardTracker"], _BOARD_TRACK.image(20, margin_px=10)
+        ),
+        "imageform.workflows.track.TrackOptions.check": method(
+            VALID["imageform.workflows.track.TrackOptions"]
+        ),
+        "imageform.workflows.track.TrackOptions.check_output": method(
+            VALID["imageform.workflows.track.TrackOptions"], V("tmpfile_png")
+        ),
+        "imageform.workflows.track.TrackOptions.paths": method(
+            VALID["imageform.workflows.track.TrackOptions"], "output"
+        ),
+    }
+)

@@ -25,7 +25,7 @@ def test_match_features_ratio_and_mutual() -> None:
     two = np.array([[1.0, 0.0], [-1.0, 0.0], [9.0, 9.0]], np.float32)
     assert [0, 0] not in match_features(one, two).tolist()
     assert [0, 1] not in match_features(one, two).tolist()
-    with pytest.raises(InvalidInputError, match="descriptors"):
+    with pytest.raises(InvalidInputError, match="descriptor length"):
         match_features(a, b[:, :4])
 
 

@@ -39,7 +39,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from imageform._backend import device_of, is_dask_namespace, namespace
-from imageform._validate import as_int, as_real, describe
+from imageform._validate import as_int, as_real, as_real_array, describe
 from imageform.color._guard import (
     as_bool,
     as_image,
@@ -488,6 +488,14 @@ def white_balance_gains(
 
 
 def apply_white_balance_gains(image: object, gains: Any, *, transfer: str = "srgb") -> Any:
-    """Apply ``gains`` (from :func:`white_balance_gains`) as :func:`white_balance` does."""
+    """Apply ``gains`` (from :func:`white_balance_gains`) as :func:`white_balance` does.
+
+    ``gains`` is ``(..., 3)`` positive finite numbers (one triple per image of a batch).
+    """
     xp, lin, tname = _linear(image, transfer, -1)
-    return _apply(xp, lin, gains, tname, False)
+    g = as_real_array(gains, "gains", positive=True)
+    if g.ndim < 1 or g.shape[-1] != 3:
+        raise InvalidInputError(
+            f"expected gains as 3 positive numbers (R, G, B), got {describe(gains)}"
+        )
+    return _apply(xp, lin, xp.asarray(g, dtype=lin.dtype, device=device_of(lin)), tname, False)

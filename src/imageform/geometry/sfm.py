@@ -38,7 +38,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from imageform._validate import as_int, as_real, describe
+from imageform._validate import as_int, as_real, as_real_array, describe
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
 
 __all__ = [
@@ -133,11 +133,11 @@ def match_features(
         Index pairs into ``a`` and ``b``.
     """
     r = as_real(ratio, "ratio", positive=True, maximum=1.0)
-    a = np.asarray(a, np.float32)
-    b = np.asarray(b, np.float32)
-    if a.ndim != 2 or b.ndim != 2 or a.shape[1] != b.shape[1]:
+    a = as_real_array(a, "a", ndim=2).astype(np.float32)
+    b = as_real_array(b, "b", ndim=2).astype(np.float32)
+    if a.shape[1] != b.shape[1]:
         raise InvalidInputError(
-            f"expected descriptors (N, D) and (M, D), got {describe(a)} and {describe(b)}"
+            f"expected b with the descriptor length of a ({a.shape[1]}), got {b.shape[1]}"
         )
     if a.shape[0] < 2 or b.shape[0] < 2:
         return np.zeros((0, 2), np.int64)
@@ -434,12 +434,10 @@ def reconstruct_sequence(
     DegenerateConfigurationError
         No pair of frames with enough matches and parallax to start from.
     """
-    from imageform.geometry import (
-        find_essential_matrix,
-        recover_pose,
-        solve_pnp_ransac,
-        triangulate_points,
-    )
+    from imageform.geometry.pnp_ransac import solve_pnp_ransac
+    from imageform.geometry.relative_pose import recover_pose
+    from imageform.geometry.triangulation import triangulate_points
+    from imageform.geometry.twoview import find_essential_matrix
 
     if len(images) < 2:
         raise InvalidInputError(f"expected at least 2 frames, got {len(images)}")

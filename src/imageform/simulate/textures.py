@@ -27,6 +27,8 @@ def resolve_path(path: str, base: Path | None) -> Path:
         raise TypeError(f"expected path as a file name (str or Path), got {describe(path)}")
     if base is not None and not isinstance(base, str | Path):
         raise TypeError(f"expected base as a folder (str or Path) or None, got {describe(base)}")
+    if not str(path).strip():
+        raise InvalidInputError("expected path as a file name, got an empty name")
     p = Path(path).expanduser()
     if not p.is_absolute() and base is not None:
         p = Path(base) / p

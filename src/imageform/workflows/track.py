@@ -41,11 +41,13 @@ def parse_track_board(text: str) -> tuple[str, tuple[int, int]]:
     >>> parse_track_board("charuco:7x5"), parse_track_board("checkerboard:9x6")
     (('charuco', (7, 5)), ('checkerboard', (9, 6)))
     """
-    m = _BOARD.match(str(text).strip().lower())
+    if not isinstance(text, str):
+        raise InvalidInputError(f"expected text (--board) as a str, got {type(text).__name__}")
+    m = _BOARD.match(text.strip().lower())
     if not m:
         raise InvalidInputError(
-            "expected --board as charuco:COLSxROWS (squares) or checkerboard:COLSxROWS (inner "
-            f"corners), got {str(text)[:40]!r}"
+            "expected --board (text) as charuco:COLSxROWS (squares) or checkerboard:COLSxROWS "
+            f"(inner corners), got {text[:40]!r}"
         )
     if m.group(1):
         kind, cols, rows = m.group(1), int(m.group(2)), int(m.group(3))
