@@ -100,7 +100,7 @@ def test_writer_refuses_a_device(writer: str) -> None:
     if not os.path.exists("/dev/null"):
         pytest.skip("no /dev/null on this system")
     write, _ = WRITERS[writer]
-    with pytest.raises(InvalidInputError, match="path: /dev/null is a character device, not a regular"):
+    with pytest.raises(InvalidInputError, match="path: /dev/null is a character device, not"):
         write(Path("/dev/null"))
     assert not Path("/dev/null").is_file()
 
