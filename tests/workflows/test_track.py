@@ -246,3 +246,23 @@ def test_live_capture_stops_on_ctrl_c_with_outputs_complete(
     assert "stopped by Ctrl-C after 35 frames" in captured.err
     assert "fps, latency" in captured.err  # the live speed, printed as it runs
     assert len(_read(out)) == 35
+
+
+def test_plan_mesh_is_read_with_trimesh(tmp_path: Path) -> None:
+    """A triangle mesh plan (an organ's surface) is read as its unique edges."""
+    trimesh = pytest.importorskip("trimesh")
+    from imageform.io import read_plan
+
+    box = trimesh.creation.box(extents=(30.0, 20.0, 10.0))
+    path = tmp_path / "organ.ply"
+    box.export(path)
+    plan = read_plan(path)
+    assert plan.points.shape == (8, 3)
+    assert plan.edges.shape == (18, 2)  # 12 triangles of a box: 12 edges and 6 diagonals
+    bad = tmp_path / "broken.ply"
+    bad.write_text("ply\nformat ascii 1.0\nnonsense\n")
+    from imageform.errors import InvalidInputError
+
+    with pytest.raises(InvalidInputError, match="plan") as info:
+        read_plan(bad)
+    assert "\n" not in str(info.value)
