@@ -34,6 +34,7 @@ found (NaN pose), never invented from earlier frames.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -225,18 +226,18 @@ class BoardTracker:
         d1 = np.mean(np.sum((turned - self._last_uv) ** 2, axis=1))
         return turned if d1 < d0 else uv
 
+    def _project(self, X: NDArray[np.float64], R: object, t: object) -> tuple[Any, Any]:
+        """Project board points through the full camera model (``Camera.project``)."""
+        from imageform.geometry.camera import Camera
+
+        return tuple(Camera(self.K, R, t, distortion=self.distortion).project(X))
+
     def _scale_px(self, pose: BoardPose) -> float:
         """Return a square's side in pixels near the board's corners (from the last pose)."""
-        from imageform.geometry.camera import project_points
-        from imageform.geometry.distortion import project_points_distorted
-
         X = pose.object_points
         step = float(np.linalg.norm(self._points[1] - self._points[0])) or 1.0
         both = np.concatenate([X, X + np.array([step, 0.0, 0.0])])
-        if self.distortion is not None:
-            uv, _ = project_points_distorted(both, self.K, pose.R, pose.tvec, self.distortion)
-        else:
-            uv, _ = project_points(both, self.K, pose.R, pose.tvec)
+        uv, _ = self._project(both, pose.R, pose.tvec)
         uv = np.asarray(uv, np.float64)
         d = np.linalg.norm(uv[X.shape[0] :] - uv[: X.shape[0]], axis=1)
         d = d[np.isfinite(d)]
@@ -296,14 +297,8 @@ class BoardTracker:
 
     def _fits(self, uv: NDArray[np.float64], X: NDArray[np.float64], res: object) -> bool:
         """Whether every corner lies within 1.5 px of the pose's reprojection."""
-        from imageform.geometry.camera import project_points
-        from imageform.geometry.distortion import project_points_distorted
-
         R, t = np.asarray(res.R), np.asarray(res.tvec)  # type: ignore[attr-defined]
-        if self.distortion is not None:
-            proj, _ = project_points_distorted(X, self.K, R, t, self.distortion)
-        else:
-            proj, _ = project_points(X, self.K, R, t)
+        proj, _ = self._project(X, R, t)
         err = np.linalg.norm(np.asarray(proj, np.float64) - uv, axis=1)
         return bool(np.all(np.isfinite(err)) and err.max() < 1.5 and float(res.rms) < 0.75)  # type: ignore[attr-defined]
 
