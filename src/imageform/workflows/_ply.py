@@ -110,9 +110,7 @@ def read_points_ply(path: str | Path) -> dict[str, np.ndarray]:
             table = np.loadtxt(fh, ndmin=2, max_rows=count) if count else np.zeros((0, len(props)))
             if table.shape != (count, len(props)):
                 raise InvalidInputError(f"{p}: expected {count} vertices, got {table.shape[0]}")
-            return {
-                name: table[:, j].astype(kind) for j, (name, kind) in enumerate(props)
-            }
+            return {name: table[:, j].astype(kind) for j, (name, kind) in enumerate(props)}
         dtype = np.dtype([(name, _FORMATS[fmt] + kind) for name, kind in props])
         data = fh.read(dtype.itemsize * count)
         if len(data) != dtype.itemsize * count:

@@ -32,14 +32,14 @@ def _plt() -> Any:
 
 
 def _limits(values: np.ndarray) -> tuple[float, float]:
-    """The 1st to 99th percentile with a margin (a few far points do not shrink the rest)."""
+    """Return the 1st to 99th percentile with a margin (a few far points do not shrink the rest)."""
     lo, hi = np.percentile(values, [1, 99]) if values.size else (0.0, 1.0)
     pad = 0.08 * max(hi - lo, 1e-9)
     return float(lo - pad), float(hi + pad)
 
 
 def _views(rec: Any) -> bytes:
-    """The points and cameras from above (x, z) and from the side (z, -y), first camera's frame."""
+    """Draw the points and cameras from above (x, z) and from the side (z, -y)."""
     plt = _plt()
     reg = np.flatnonzero(rec.registered)
     centres = np.array([-rec.R[i].T @ rec.t[i] for i in reg]).reshape(-1, 3)
@@ -176,7 +176,5 @@ def write_report(
         ("frames", "Frames"),
     ]
     sub = f"<p>{hp.e(title_source)}: {nreg} of {n} frames, {rec.points.shape[0]} points</p>"
-    path.write_text(
-        hp.page("imageform reconstruction", sub, nav, body), encoding="utf-8"
-    )
+    path.write_text(hp.page("imageform reconstruction", sub, nav, body), encoding="utf-8")
     return path

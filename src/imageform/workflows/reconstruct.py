@@ -88,7 +88,7 @@ def _fmt(x: float) -> str:
 def _read_frames(
     source: str, opts: ReconstructOptions, size: tuple[int, int] | None
 ) -> tuple[list[Any], list[str], Any]:
-    """The frames (every ``--every``-th, at most ``--max-frames``), their names, the info."""
+    """Read the frames (every ``--every``-th, at most ``--max-frames``), their names, the info."""
     from imageform.io import open_video
 
     reader = open_video(source)
