@@ -106,12 +106,13 @@ def read_points_ply(path: str | Path) -> dict[str, np.ndarray]:
                 props.append((words[2], _TYPES[words[1]]))
         if fmt is None or count is None or other_before:
             raise InvalidInputError(f"{p}: expected a PLY file whose first element is vertex")
-        if _FORMATS[fmt] is None:
+        order = _FORMATS[fmt]
+        if order is None:
             table = np.loadtxt(fh, ndmin=2, max_rows=count) if count else np.zeros((0, len(props)))
             if table.shape != (count, len(props)):
                 raise InvalidInputError(f"{p}: expected {count} vertices, got {table.shape[0]}")
             return {name: table[:, j].astype(kind) for j, (name, kind) in enumerate(props)}
-        dtype = np.dtype([(name, _FORMATS[fmt] + kind) for name, kind in props])
+        dtype = np.dtype([(name, order + kind) for name, kind in props])
         data = fh.read(dtype.itemsize * count)
         if len(data) != dtype.itemsize * count:
             raise InvalidInputError(f"{p} is truncated: {count} vertices announced")

@@ -66,7 +66,7 @@ def _views(rec: Any) -> bytes:
             color="#c0392b", angles="xy", scale_units="xy", scale=1 / arrow, width=0.003,
         )  # fmt: skip
         if centres.shape[0]:
-            ax.annotate("first", (centres[0, i], sj * centres[0, j]), fontsize=8)
+            ax.annotate(f"frame {reg[0]}", (centres[0, i], sj * centres[0, j]), fontsize=8)
         ax.set_xlim(*xl)
         ax.set_ylim(*yl)
         ax.set_aspect("equal", adjustable="box")
@@ -127,15 +127,17 @@ def write_report(
         "<p>Structure from motion: SIFT keypoints matched between neighbouring frames, each "
         "pair verified by its essential matrix, an initial pair with parallax, the other "
         "frames registered by PnP, the points triangulated, then bundle adjustment of every "
-        "pose and point. The world is the first camera's frame; the scale is arbitrary (the "
+        "pose and point. The world is the camera frame of the initial pair's first frame (its "
+        "pose is r = t = 0 in cameras.csv); the scale is arbitrary (the "
         "initial pair's baseline is 1).</p>" + hp.table(["", "value"], head, left=(0,))
     )
     views = hp.figure(
         _views(rec),
         "cameras and points from above and from the side",
         "The points in their colour and the registered cameras (red: centres in frame order, "
-        "arrows along the optical axes), from above and from the side (the first camera's "
-        "frame: x right, y down, z forward). Axes clipped to the 1st-99th percentile.",
+        "arrows along the optical axes), from above and from the side (the world frame, that "
+        "of the initial pair's first camera: x right, y down, z forward). Axes clipped to the "
+        "1st-99th percentile.",
     )
     hists = hp.figure(
         _histograms(rec),

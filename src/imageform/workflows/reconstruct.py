@@ -196,7 +196,8 @@ def reconstruct(run: Run, opts: ReconstructOptions, *, out: Path, frames: str) -
         rec.points,
         rec.colors,
         rec.track_length,
-        comment=f"imageform reconstruct {Path(frames).name}: world = the first camera's frame",
+        comment=f"imageform reconstruct {Path(frames).name}: the world is the frame of the "
+        "initial pair's first camera",
     )
     seconds["write"] = time.perf_counter() - t2
     metrics = {
@@ -264,9 +265,9 @@ WORKFLOWS = (
         description="SIFT keypoints matched between neighbouring frames (--window), each pair "
         "verified by its essential matrix (RANSAC), the pair with the most parallax first, "
         "the other frames registered by PnP, the points triangulated, then bundle adjustment "
-        "of every pose and point (needs imageform[reconstruct]). The world is the first "
-        "camera's frame, the initial pair's baseline 1. cameras.csv: frame,name,registered,"
-        "rx,ry,rz,tx,ty,tz,rms_px (world to camera); points.ply: x,y,z, colour, track_length. "
-        "docs/reconstruction.md.",
+        "of every pose and point (needs imageform[reconstruct]). The world is the camera "
+        "frame of the initial pair's first frame, the initial pair's baseline 1. cameras.csv: "
+        "frame,name,registered,rx,ry,rz,tx,ty,tz,rms_px (world to camera); points.ply: x,y,z, "
+        "colour, track_length. docs/reconstruction.md.",
     ),
 )
