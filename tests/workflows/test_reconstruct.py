@@ -276,3 +276,23 @@ def test_bad_input_is_one_line_and_writes_nothing(
         assert main(["reconstruct", str(few), *cam, "-o", str(out), *extra]) == 1
         assert capsys.readouterr().err.count("\n") == 1
     assert (out / "mine.txt").read_text() == "keep" and len(list(out.iterdir())) == 1
+
+
+def test_a_video_and_a_glob(stand_in: tuple[Path, Path], tmp_path: Path) -> None:
+    """A video's frames are named frame_NNNNNN by their index in the video; a glob's by file."""
+    pytest.importorskip("av")
+    from imageform.io import VideoWriter
+
+    frames, camera = stand_in
+    video = tmp_path / "clip.mkv"
+    with VideoWriter(video, fps=10, codec="ffv1") as writer:
+        for i in range(6):
+            writer.write(np.full((48, 64, 3), 40 * i, np.uint8))
+    cam = ["--camera", str(camera)]
+    out = tmp_path / "v"
+    assert main(["reconstruct", str(video), *cam, "-o", str(out), "--every", "2"]) == 0
+    names = [r["name"] for r in _read(out / "cameras.csv")]
+    assert names == ["frame_000000", "frame_000002", "frame_000004"]
+    out = tmp_path / "g"
+    assert main(["reconstruct", str(frames / "f[12].png"), *cam, "-o", str(out)]) == 0
+    assert [r["name"] for r in _read(out / "cameras.csv")] == ["f1.png", "f2.png"]
