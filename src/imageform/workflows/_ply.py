@@ -64,7 +64,7 @@ def write_points_ply(
     lines += ["property int track_length", "end_header"]
     out = Path(path)
     with out.open("wb") as fh:
-        fh.write(("\n".join(lines) + "\n").encode("ascii"))
+        fh.write(("\n".join(lines) + "\n").encode("ascii", "replace"))
         fh.write(rec.tobytes())
     return out
 

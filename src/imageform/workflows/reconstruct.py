@@ -152,12 +152,12 @@ def reconstruct(run: Run, opts: ReconstructOptions, *, out: Path, frames: str) -
 
     _check_folder(out, run.outputs.force)
     cam = read_camera(opts.camera).camera
-    size = tuple(cam.image_size) if cam.image_size is not None else None
+    size = None if cam.image_size is None else (int(cam.image_size[0]), int(cam.image_size[1]))
     seconds: dict[str, float] = {}
     t0 = time.perf_counter()
     if run.progress is not None:
         run.progress("reading the frames", 0.0)
-    images, names, info = _read_frames(frames, opts, size)  # type: ignore[arg-type]
+    images, names, info = _read_frames(frames, opts, size)
     if len(images) < 2:
         raise InvalidInputError(
             f"{frames}: {len(images)} frame"
