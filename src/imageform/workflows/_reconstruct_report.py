@@ -31,9 +31,14 @@ def _plt() -> Any:
     return plt
 
 
-def _limits(values: np.ndarray) -> tuple[float, float]:
-    """Return the 1st to 99th percentile with a margin (a few far points do not shrink the rest)."""
-    lo, hi = np.percentile(values, [1, 99]) if values.size else (0.0, 1.0)
+def _limits(points: np.ndarray, cameras: np.ndarray) -> tuple[float, float]:
+    """Return the points' 1st to 99th percentile and every camera, with a margin.
+
+    A few far points do not shrink the rest; no camera is left outside.
+    """
+    lo, hi = np.percentile(points, [1, 99]) if points.size else (np.inf, -np.inf)
+    if cameras.size:
+        lo, hi = min(lo, float(cameras.min())), max(hi, float(cameras.max()))
     pad = 0.08 * max(hi - lo, 1e-9)
     return float(lo - pad), float(hi + pad)
 
@@ -55,8 +60,8 @@ def _views(rec: Any) -> bytes:
         ((0, 2, 1.0, "from above (x right, z forward)"), (2, 1, -1.0, "from the side (z, up)")),
         strict=True,
     ):
-        both = np.concatenate([P, centres])
-        xl, yl = _limits(both[:, i]), _limits(sj * both[:, j])
+        xl = _limits(P[:, i], centres[:, i])
+        yl = _limits(sj * P[:, j], sj * centres[:, j])
         span = max(xl[1] - xl[0], yl[1] - yl[0])
         ax.scatter(P[:, i], sj * P[:, j], s=dot, c=C / 255.0, linewidths=0, rasterized=True)
         ax.plot(centres[:, i], sj * centres[:, j], "-o", color="#c0392b", ms=3, lw=1)
@@ -136,8 +141,8 @@ def write_report(
         "cameras and points from above and from the side",
         "The points in their colour and the registered cameras (red: centres in frame order, "
         "arrows along the optical axes), from above and from the side (the world frame, that "
-        "of the initial pair's first camera: x right, y down, z forward). Axes clipped to the "
-        "1st-99th percentile.",
+        "of the initial pair's first camera: x right, y down, z forward). The axes show the "
+        "points' 1st to 99th percentile and every camera.",
     )
     hists = hp.figure(
         _histograms(rec),
