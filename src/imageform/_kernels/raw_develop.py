@@ -63,7 +63,7 @@ def _mirror(i, n):  # type: ignore[no-untyped-def]
     return i
 
 
-@njit(inline="always", error_model="numpy")
+@njit(error_model="numpy")
 def _balance_row(mosaic, black, scale, i, buf):  # type: ignore[no-untyped-def]
     """``buf[1 + j] = clip((DN[i, j] - B) * k, 0, 1)``; ``buf[0]``, ``buf[w + 1]`` mirrored."""
     w = mosaic.shape[1]
@@ -107,10 +107,11 @@ def develop_rows(r0, r1, mosaic, black, scale, ry, rx, m, lut, encode, mode, out
     m00, m01, m02 = m[0, 0], m[0, 1], m[0, 2]
     m10, m11, m12 = m[1, 0], m[1, 1], m[1, 2]
     m20, m21, m22 = m[2, 0], m[2, 1], m[2, 2]
-    _balance_row(mosaic, black, scale, _mirror(r0 - 1, h), bal[(r0 + 2) % 3])
-    _balance_row(mosaic, black, scale, r0, bal[r0 % 3])
-    for i in range(r0, r1):
-        _balance_row(mosaic, black, scale, _mirror(i + 1, h), bal[(i + 1) % 3])
+    for k in range(r0 - 1, r1 + 1):  # white-balance row k, then develop row k - 1
+        _balance_row(mosaic, black, scale, _mirror(k, h), bal[(k + 3) % 3])
+        i = k - 1
+        if i < r0:
+            continue
         u = bal[(i + 2) % 3]
         c = bal[i % 3]
         d = bal[(i + 1) % 3]
