@@ -8,10 +8,10 @@ r"""Numba kernels of raw development (:func:`imageform.io.develop`), float32.
   (camera RGB to the output space's linear RGB, adaptation included), clipping to [0, 1]
   and the transfer function from a table (below); written as float32, as uint16 rounded half
   up, or, before the matrix, as the demosaiced camera RGB. The working set is three
-  white-balanced rows and one demosaiced row (a few hundred kilobytes at 6000 columns: in
-  the core's cache); no full-size temporary is made.
+  white-balanced rows, one demosaiced row, one output row (about 220 kB at 6000 columns) and
+  the 256 kB table: in the core's L2 cache; no full-size temporary is made.
 - :func:`render_rgb`: demosaiced camera RGB to the encoded output in one pass (a linear raw,
-  which has no mosaic).
+  which has no mosaic, and the other demosaicing methods).
 - :func:`quantize`: a float image in [0, 1] to integers, rounded half up.
 
 The transfer table is sampled uniformly in :math:`\sqrt{x}` (65,537 entries, linear
@@ -19,8 +19,8 @@ interpolation: within 1e-6 of the exact curve for sRGB, and for pure power laws,
 at 0 is infinite, within 2e-6; ``tests/io/test_raw_fast.py``).
 
 :func:`develop_rows` is a serial kernel of one explicit signature, run on numba's threads by
-:func:`imageform._kernels.jit.run_tasks` (contiguous row ranges; each range recomputes the two
-white-balanced rows above it), so it compiles once, as a serial loop (no ``parallel=True``
+:func:`imageform._kernels.jit.run_tasks` (contiguous row ranges; each range white-balances the
+rows just above and below it again), so it compiles once, as a serial loop (no ``parallel=True``
 lowering).
 """
 
