@@ -239,13 +239,13 @@ class VideoReader:
         )
 
     def _check_size(self, width: int, height: int) -> None:
+        from imageform.io.image_io import ImageInfo, _check_pixels
+
         if width <= 0 or height <= 0:
             raise InvalidInputError(f"{self._source}: frames of {width}x{height} pixels")
-        if width * height > self._limit:
-            raise InvalidInputError(
-                f"{self._source}: frames of {width}x{height} pixels are above the limit of "
-                f"{self._limit} pixels (IMAGEFORM_MAX_PIXELS)"
-            )
+        info = ImageInfo(width, height, 3, "uint8", "video")
+        remedy = "raise it with max_pixels= or IMAGEFORM_MAX_PIXELS"
+        _check_pixels(f"{self._source}: a frame", info, self._limit, remedy)
 
     def __enter__(self) -> VideoReader:
         """Return the reader."""
