@@ -170,6 +170,8 @@ def test_writer_bad_input(tmp_path: Path) -> None:
         VideoWriter(tmp_path / "x.gif", fps=25)
     with pytest.raises(InvalidInputError, match="fps"):
         VideoWriter(tmp_path / "x.mp4", fps=float("nan"))
+    with pytest.raises(InvalidInputError, match="preset one of ultrafast, superfast"):
+        VideoWriter(tmp_path / "x.mp4", fps=25, preset="warp")
     with VideoWriter(tmp_path / "x.mp4", fps=25) as video:
         with pytest.raises(InvalidInputError, match="even frame size"):
             video.write(np.zeros((5, 6, 3), np.uint8))
@@ -178,6 +180,18 @@ def test_writer_bad_input(tmp_path: Path) -> None:
         video.write(np.zeros((4, 6, 3), np.uint8))
         with pytest.raises(InvalidInputError, match="like the first"):
             video.write(np.zeros((6, 6, 3), np.uint8))
+
+
+def test_preset_ultrafast(tmp_path: Path) -> None:
+    """x264's fastest preset (track's overlay): every frame, the same quality."""
+    frames = _frames()
+    with VideoWriter(tmp_path / "fast.mp4", fps=25, preset="ultrafast") as video:
+        for f in frames:
+            video.write(f)
+    with open_video(tmp_path / "fast.mp4") as reader:
+        got = list(reader)
+    assert len(got) == len(frames)
+    assert min(_psnr(g.image, f) for g, f in zip(got, frames, strict=True)) > 30
 
 
 def test_iterated_once(tmp_path: Path) -> None:

@@ -185,7 +185,9 @@ def track(run: Run, opts: TrackOptions, *, out: Path, video: str) -> Result:
             f"images, {video} has {info.width} x {info.height} px frames"
         )
     live = info.kind == "device"
-    writer = VideoWriter(run.file(opts.overlay), fps=info.fps) if opts.overlay else None
+    writer = None
+    if opts.overlay:  # x264's fastest preset: encoding keeps up with tracking (bench_track.py)
+        writer = VideoWriter(run.file(opts.overlay), fps=info.fps, preset="ultrafast")
     rows: list[list[str]] = []
     rms: list[float] = []
     steps: list[float] = []
