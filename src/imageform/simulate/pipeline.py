@@ -13,6 +13,7 @@ from typing import Any
 
 import numpy as np
 
+from imageform._validate import describe
 from imageform.errors import ImageformWarning, InvalidInputError
 from imageform.simulate._rng import RNGLike, random_source
 from imageform.simulate.config import GroundConfig
@@ -180,6 +181,7 @@ def simulate(
     progress: Progress | None = None,
     rng: RNGLike = None,
     seed: int | None = None,
+    measure: bool = True,
 ) -> SimulationResult:
     """Run a scene through the whole chain and keep every stage.
 
@@ -205,6 +207,11 @@ def simulate(
         from in turn; None: fresh entropy (a different run each time).
     seed : int, optional
         Deprecated alias of ``rng`` (an int); removed in the next release.
+    measure : bool
+        Measure the result (the ColorChecker patches, the vanishing points and the horizon,
+        the sensor's photon transfer). False renders the stages only: the frames of a video
+        along a trajectory, where the measurements would cost about as much as the
+        rendering; ``patches``, ``vanishing`` and ``photon_transfer`` are then None.
 
     Returns
     -------
@@ -234,6 +241,8 @@ def simulate(
     """
     if not isinstance(scene, Scene):
         raise InvalidInputError(f"expected a Scene (load_scene), got {type(scene).__name__}")
+    if not isinstance(measure, bool):
+        raise InvalidInputError(f"expected measure as True or False, got {describe(measure)}")
     if progress is not None and not callable(progress):
         raise TypeError(
             f"expected progress as a callable progress(step, fraction) or None, got "
@@ -315,7 +324,8 @@ def simulate(
         "color_correction_matrix": cc.matrix.tolist(),
     }
     patches, patch_xy = None, {}
-    if truth is not None and cc_before is not None and cc_wb is not None:
+    vanishing, ptc = None, None
+    if measure and truth is not None and cc_before is not None and cc_wb is not None:
         lin_out = decode_output(out, proc.output_space)
         patches = measure_colorchecker(lin_out, cc.image, truth, snr_stage="color_corrected")
         patch_xy = _patch_chromaticities(truth, cc_before, cc_wb, cc.image)
@@ -331,11 +341,12 @@ def simulate(
                 stacklevel=2,
             )
     run.tick("isp", "colorchecker")
-    vanishing, errors = _vanishing(scene, out.image, source.int_seed())
-    metrics |= errors
-    run.tick("vanishing", "vanishing_points")
-    ptc = measure_photon_transfer(sensor, source.for_step())
-    run.tick("photon_transfer", "photon_transfer")
+    if measure:
+        vanishing, errors = _vanishing(scene, out.image, source.int_seed())
+        metrics |= errors
+        run.tick("vanishing", "vanishing_points")
+        ptc = measure_photon_transfer(sensor, source.for_step())
+        run.tick("photon_transfer", "photon_transfer")
     metrics["step_times_s"] = {k: float(v) for k, v in run.seconds.items()}
     metrics["simulation_time_s"] = float(time.perf_counter() - t_start)
     run.report("done", 1.0)
