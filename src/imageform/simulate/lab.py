@@ -456,6 +456,8 @@ def render_lab_set(
     if sigma is not None:  # the raw mosaic's MTF: the Gaussian lens times the pixel
         truth["gaussian_sigma_px"] = sigma
         truth["mtf50_cy_per_px"] = _raw_mtf50(sigma, angle, ss)
+    elif cf.optics is not None and cf.optics.mtf50_rgb() is not None:
+        truth["mtf50_cy_per_px"] = [float(m) for m in cf.optics.mtf50_rgb() or ()]
     truth["white_balance"] = cc_gains  # what the camera's processing applied to the chart
     truth["ccm"] = [[float(x) for x in row] for row in cc_matrix.T]  # linear sRGB = ccm @ rgb
     if cf.camera.distortion is not None:

@@ -332,7 +332,9 @@ def simulate(
     else:
         with _at_key(scene, ("processing", "color_correction")):
             cc = correct_color(wb.image, proc.color_correction, cc_wb)
-        wb, cc, folded = _white_kept(wb, cc, img)
+        folded = False
+        if wb_method != "camera file":  # a camera file's fixed gains stay as they are
+            wb, cc, folded = _white_kept(wb, cc, img)
         if folded:
             wb_method = f"{wb_method}, refined by the chart's matrix (which keeps white)"
             cc_wb = patch_means(wb.image, truth) if truth is not None else None
