@@ -43,6 +43,7 @@ the first green photosite of each 2x2 tile is measured.
     [colorchecker]
     illuminant = "D65"        # the light on the chart (CIE name): for the sensitivities
     transfer = "srgb"         # encoding of developed photographs: srgb or linear
+    processing = "fixed"      # or "automatic" (auto white balance): no fixed gains or ccm
 
     [edge]
     transfer = "srgb"         # encoding of developed edge photographs
