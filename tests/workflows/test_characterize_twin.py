@@ -37,7 +37,8 @@ def small(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
         image_size=(160, 120),
         distortion=BrownConrady(k1=-0.12, k2=0.01),
     )
-    cf = CameraFile(cam, optics={"model": "gaussian", "gaussian_sigma_px": 1.1})
+    optics: Any = {"model": "gaussian", "gaussian_sigma_px": 1.1}
+    cf = CameraFile(cam, optics=optics)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         lab = render_lab_set(cf, root / "lab", seed=0)
@@ -109,7 +110,8 @@ def test_the_twin_keeps_pitch_cfa_and_focal_length(small: dict[str, Any]) -> Non
     from imageform.simulate import apply_camera_file, default_scene
 
     res = small["res"]
-    twin = read_camera(write_camera(small["root"] / "twin.toml", res.camera_file(), **res.tables))
+    tables: Any = res.tables
+    twin: Any = read_camera(write_camera(small["root"] / "twin.toml", res.camera_file(), **tables))
     assert twin.sensor.pixel_pitch_um == 3.45 and twin.sensor.cfa == "RGGB"
     assert twin.optics.f_number == 4.0
     scene = apply_camera_file(default_scene(), twin)

@@ -61,6 +61,8 @@ def test_the_loop_closes_on_a_small_built_in_camera(tmp_path: Path) -> None:
     from imageform.workflows.simulate import _camera_tables
 
     scene = default_scene().resized(320)
+    sensor: Any
+    color: Any
     sensor, color = _camera_tables(scene, None)
     xfile = CameraFile(scene.camera, sensor=sensor, color=color)
     with warnings.catch_warnings():
@@ -69,7 +71,7 @@ def test_the_loop_closes_on_a_small_built_in_camera(tmp_path: Path) -> None:
         lab = render_lab_set(xfile, tmp_path / "lab", emva_exposures=8)
         res = characterize_camera(lab.folder)
         twin_file = read_camera(
-            write_camera(tmp_path / "twin.toml", res.camera_file(), **res.tables)
+            write_camera(tmp_path / "twin.toml", res.camera_file(), **dict(res.tables))  # type: ignore[arg-type]
         )
         twin = simulate(apply_camera_file(scene, twin_file), rng=0)
     assert twin_file.color is not None and twin_file.color.ccm is None  # automatic

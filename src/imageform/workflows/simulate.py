@@ -101,7 +101,7 @@ def _check_folder(out: Path, force: bool) -> None:
         )
 
 
-def _camera_tables(scene: Any, measured: Any) -> tuple[dict[str, Any], Any]:
+def _camera_tables(scene: Any, measured: Any) -> tuple[Any, Any]:
     """Return the truth camera file's ``[sensor]`` and ``[color]``: the scene's own camera.
 
     ``[sensor]`` holds the sensor model's EMVA values (the effective peak QE, fill factor
