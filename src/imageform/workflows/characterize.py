@@ -1315,11 +1315,10 @@ def _tables(res: CameraCharacterization) -> dict[str, dict[str, Any]]:
         tables["sensor"] = s
     sh = res.sharpness
     if sh is not None:
-        o: dict[str, Any] = {
-            "model": "gaussian",
-            "gaussian_sigma_px": sh.gaussian_sigma_px,
-            "mtf50_cy_per_px": list(sh.mtf50) if len(sh.mtf50) == 3 else sh.mtf50[0],
-        }
+        o: dict[str, Any] = {"model": "gaussian", "gaussian_sigma_px": sh.gaussian_sigma_px}
+        if all(math.isfinite(m) for m in sh.mtf50):  # a camera sharper than the e-SFR's
+            # range (MTF above 0.5 to its end: a pixel without lens blur) has no MTF50
+            o["mtf50_cy_per_px"] = list(sh.mtf50) if len(sh.mtf50) == 3 else sh.mtf50[0]
         fn = _get(doc, "camera", "f_number", float, None)
         if fn is not None:
             o["f_number"] = fn
