@@ -80,11 +80,14 @@ class Frame:
         sequence; the capture time for a device).
     image : ndarray (H, W, 3) uint8
         RGB.
+    path : Path or None
+        The image file of an image sequence's frame (None for a video file or a device).
     """
 
     index: int
     time_s: float
     image: np.ndarray
+    path: Path | None = None
 
 
 @dataclass(frozen=True)
@@ -288,7 +291,7 @@ class VideoReader:
                     f"{f}: {img.shape[1]}x{img.shape[0]} pixels where the sequence's first "
                     f"image has {shape[1]}x{shape[0]}"
                 )
-            yield Frame(i, i / self.info.fps, img)
+            yield Frame(i, i / self.info.fps, img, f)
 
     def _decode(self) -> Iterator[Frame]:
         av = _av()
