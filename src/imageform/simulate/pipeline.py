@@ -175,6 +175,39 @@ def _chart(scene: Scene) -> SceneObject | None:
     return checkers[0] if checkers else None
 
 
+def _white_kept(
+    wb: WhiteBalanced, cc: ColorCorrected, img: np.ndarray
+) -> tuple[WhiteBalanced, ColorCorrected, bool]:
+    r"""Fold the fitted matrix's white shift into the white balance (the same output).
+
+    A matrix :math:`M` fitted freely on the chart also corrects what the white balance
+    left (grey world is biased by the scene's colours), so it does not keep white:
+    :math:`\mathbf 1^T M \not\propto \mathbf 1^T`. With :math:`\mathbf u = \mathbf 1^T
+    M^{-1}` (the balanced camera RGB that :math:`M` renders white), the gains
+    :math:`\mathbf g' = \mathbf g / \mathbf u` and the matrix :math:`M' =
+    \mathrm{diag}(\mathbf u)\, M` give the same output, :math:`(\mathbf c \odot \mathbf
+    g') M' = (\mathbf c \odot \mathbf g) M`, and :math:`\mathbf 1^T M' = \mathbf 1^T`:
+    the white balance alone decides what is grey, as in a camera, and a raw developer given
+    the DNG's AsShotNeutral (:math:`1/\mathbf g'`) and ColorMatrix renders what the
+    simulator does. The green gain stays 1 (the overall scale goes into :math:`M'`).
+    Nothing changes when :math:`M` is the identity or :math:`\mathbf u` is not positive.
+    """
+    M = np.asarray(cc.matrix, dtype=np.float64)
+    if np.allclose(M, np.eye(3)):
+        return wb, cc, False
+    try:
+        u = np.ones(3) @ np.linalg.inv(M)
+    except np.linalg.LinAlgError:
+        return wb, cc, False
+    if not (np.all(np.isfinite(u)) and np.all(u > 0)):
+        return wb, cc, False
+    u = u / u[1]  # green's gain kept
+    gains = np.ravel(np.asarray(wb.gains, dtype=np.float64)) / u
+    M2 = np.diag(u) @ M
+    balanced = img * gains
+    return WhiteBalanced(balanced, gains), ColorCorrected(np.asarray(cc.image), M2), True
+
+
 def simulate(
     scene: Scene,
     *,
@@ -299,8 +332,6 @@ def simulate(
     else:
         with _at_key(scene, ("processing", "white_balance")):
             wb = balance_white(img, proc.white_balance, cc_before)
-    gains = ", ".join(f"{g:.3g}" for g in np.ravel(wb.gains))
-    run.stage("white_balanced", wb.image, method=wb_method, gains=gains)
     cc_wb = patch_means(wb.image, truth) if truth is not None else None
     matrix = None
     if color is not None:
@@ -310,6 +341,14 @@ def simulate(
     else:
         with _at_key(scene, ("processing", "color_correction")):
             cc = correct_color(wb.image, proc.color_correction, cc_wb)
+        folded = False
+        if wb_method != "camera file":  # a camera file's fixed gains stay as they are
+            wb, cc, folded = _white_kept(wb, cc, img)
+        if folded:
+            wb_method = f"{wb_method}, refined by the chart's matrix (which keeps white)"
+            cc_wb = patch_means(wb.image, truth) if truth is not None else None
+    gains = ", ".join(f"{g:.3g}" for g in np.ravel(wb.gains))
+    run.stage("white_balanced", wb.image, method=wb_method, gains=gains)
     run.stage("color_corrected", cc.image)
     with _at_key(scene, ("processing", "output_space")):
         out = encode_output(cc.image, proc.output_space, proc.transfer)
