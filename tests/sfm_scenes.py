@@ -123,7 +123,7 @@ def degrade(
     """A frame as a camera delivers it: Gaussian blur (``blur`` pixels), noise, then JPEG."""
     import cv2
 
-    out = image.astype(np.float32)
+    out: np.ndarray = image.astype(np.float32)
     if blur > 0:
         out = cv2.GaussianBlur(out, (0, 0), blur, borderType=cv2.BORDER_REFLECT)
     if noise > 0:
@@ -132,7 +132,9 @@ def degrade(
     if jpeg is not None:
         ok, buf = cv2.imencode(".jpg", out[..., ::-1], [cv2.IMWRITE_JPEG_QUALITY, int(jpeg)])
         assert ok
-        out = np.ascontiguousarray(cv2.imdecode(buf, cv2.IMREAD_COLOR)[..., ::-1])
+        decoded = cv2.imdecode(buf, cv2.IMREAD_COLOR)
+        assert decoded is not None
+        out = np.ascontiguousarray(decoded[..., ::-1])
     return out
 
 

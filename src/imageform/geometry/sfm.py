@@ -9,21 +9,31 @@ pipeline, each step a public function:
 2. :func:`match_features`: nearest neighbours by descriptor distance with Lowe's ratio test
    (the nearest clearly nearer than the second) and a mutual check (each the other's
    nearest);
-3. geometric verification of each pair (sequential neighbours in a video) by the essential
-   matrix (:func:`~imageform.geometry.find_essential_matrix`, 5-point LO-RANSAC) on the
-   undistorted keypoints;
-4. tracks: the verified matches joined across frames (union-find), one 3-D point each;
-5. the initial pair: the early pair with the most inliers among those with enough parallax
+3. geometric verification of each pair by the essential matrix
+   (:func:`~imageform.geometry.find_essential_matrix`, 5-point LO-RANSAC) on the
+   undistorted keypoints; the pairs are the sequential neighbours of a video and, for loop
+   closures, the frames farther away whose visual words vote alike (a small vocabulary,
+   k-means of the descriptors, tf-idf histograms compared by cosine; Sivic & Zisserman
+   2003);
+4. tracks: the verified matches joined across frames (connected components; one keypoint
+   a frame, a component that joins two keypoints of one frame rebuilt greedily);
+5. the initial pair: the pair with the most inliers among those with enough parallax
    (median triangulation angle of 2 degrees or more), its relative pose
    (:func:`~imageform.geometry.recover_pose`) and its triangulated points;
 6. incremental registration: each next frame's pose from its 2-D/3-D correspondences
-   (:func:`~imageform.geometry.solve_pnp_ransac`), then every track seen by two registered
-   frames triangulated (:func:`~imageform.geometry.triangulate_points`) when its rays meet
-   at 1.5 degrees or more and it reprojects within 4 pixels in front of every camera;
-7. bundle adjustment (:func:`bundle_adjust`): every pose (the first fixed) and every point
-   refined together by minimising the reprojection error, scipy's ``least_squares`` with a
-   sparse Jacobian and a Huber loss; observations beyond 4 pixels are then dropped and the
-   adjustment run again.
+   (:func:`~imageform.geometry.solve_pnp_ransac`; the ones it rejects are no views of
+   those points), then every track of that frame seen by two registered frames
+   triangulated (linear, then Gauss-Newton) when its rays meet at 1.5 degrees or more
+   and it reprojects within 4 pixels in front of every camera;
+7. bundle adjustment (:func:`bundle_adjust`: Levenberg-Marquardt on the reprojection
+   error, the points eliminated by the Schur complement) over everything each time the
+   registered frames grew by 40 %, observations beyond 4 pixels dropped, the tracks
+   completed (a point's projection lands on a keypoint with a like descriptor: a new
+   view; on another point's view: the two tracks merged when the points are one) and
+   re-triangulated;
+8. at the end: a robust adjustment (Huber), outliers dropped, completion, merging and
+   re-triangulation, then adjustments without the observations beyond 2 pixels, the last
+   one plain least squares.
 
 The reconstruction is up to a similarity (a rotation, a translation and a scale): the first
 camera is the world frame and the initial pair's baseline has length 1.
@@ -144,18 +154,24 @@ def match_features(
         )
     if a.shape[0] < 2 or b.shape[0] < 2:
         return np.zeros((0, 2), np.int64)
-    # squared distances |a|^2 + |b|^2 - 2 a.b, in one matrix product
-    d2 = (a * a).sum(1)[:, None] + (b * b).sum(1)[None, :] - 2.0 * (a @ b.T)
-    np.maximum(d2, 0.0, out=d2)
+    # squared distances |a|^2 + |b|^2 - 2 a.b by a matrix product; a row's |a|^2 is added
+    # to its two nearest only, and the mutual check is the product the other way round
+    # (a row-wise search: faster than a column-wise one)
+    na, nb = (a * a).sum(1), (b * b).sum(1)
+    d2 = a @ b.T
+    d2 *= -2.0
+    d2 += nb[None, :]
     rows = np.arange(a.shape[0])
-    back = np.argmin(d2, axis=0) if mutual else None
     best = np.argmin(d2, axis=1)
-    d1 = d2[rows, best].copy()
+    d1 = np.maximum(d2[rows, best] + na, 0.0)
     d2[rows, best] = np.inf  # the second nearest is the nearest of the rest
-    d2nd = d2.min(axis=1)
+    d2nd = np.maximum(d2.min(axis=1) + na, 0.0)
     keep = d1 < (r * r) * d2nd
-    if back is not None:
-        keep &= back[best] == rows
+    if mutual:
+        back = b @ a.T
+        back *= -2.0
+        back += na[None, :]
+        keep &= np.argmin(back, axis=1)[best] == rows
     idx = np.flatnonzero(keep)
     return np.column_stack([idx, best[idx]]).astype(np.int64)
 
@@ -268,7 +284,6 @@ def _schur_lm(
     damping (the diagonal scaled by ``1 + lambda``). Cameras with ``fixed`` set stay.
     """
     from scipy.linalg import cho_factor, cho_solve
-    from scipy.sparse import csr_matrix
 
     from imageform.geometry.rotations import rvec_to_matrix
 
@@ -281,11 +296,53 @@ def _schur_lm(
     has = cs >= 0
     csh, pih = cs[has], pi[has]
     fx, fy, sk = K[0, 0], K[1, 1], K[0, 1]
-    # the sparsity of W (one 6 x 3 block an observation of a free camera)
-    rows = np.broadcast_to((6 * csh)[:, None, None] + np.arange(6)[None, :, None], (csh.size, 6, 3))
-    cols = np.broadcast_to((3 * pih)[:, None, None] + np.arange(3)[None, None, :], (csh.size, 6, 3))
-    rows, cols = rows.ravel(), cols.ravel()
     eye3, eye6 = np.eye(3), np.eye(6)
+    # W V^-1 W^T by a sparse product, W's rows (6 a free camera) and W^T's rows (3 a point)
+    # laid out once: the observations sorted by camera then point, and by point then camera
+    Mh = csh.size
+    ab = np.arange(18)
+    a_, b_ = ab // 3, ab % 3
+
+    def layout(
+        major: NDArray[np.int64], minor_cols: NDArray[np.int64], nmaj: int, width: int, k: int
+    ) -> tuple[NDArray[np.int64], NDArray[np.int64], NDArray[np.int64], NDArray[np.int64]]:
+        """CSR of per-observation blocks: the rows ``width * major + r``, ``k`` columns each."""
+        perm = np.lexsort((minor_cols, major))
+        cnt = np.bincount(major, minlength=nmaj)
+        st = np.concatenate([[0], np.cumsum(cnt)])
+        maj = major[perm]
+        rank = np.arange(Mh) - st[maj]
+        # element (a, b) of block o; its row is the a-th (width 6) or b-th (width 3)
+        r_in = a_ if width == 6 else b_
+        c_in = b_ if width == 6 else a_
+        dest = (18 * st[maj])[:, None] + r_in * k * cnt[maj][:, None] + k * rank[:, None] + c_in
+        cols = (k * minor_cols[perm])[:, None] + c_in
+        indices = np.empty(18 * Mh, np.int64)
+        indices[dest.ravel()] = cols.ravel()
+        rows = np.arange(width * nmaj)
+        indptr = np.concatenate(
+            [18 * st[rows // width] + (rows % width) * k * cnt[rows // width], [18 * Mh]]
+        )
+        return perm, dest.ravel(), indices, indptr
+
+    w_perm, w_dest, w_ind, w_ptr = layout(csh, pih, nf, 6, 3)
+    t_perm, t_dest, t_ind, t_ptr = layout(pih, csh, m, 3, 6)
+
+    def reduced(Y: F64, Wo: F64) -> F64:
+        """Return :math:`W V^{-1} W^T` (6 nf, 6 nf) from the per-view blocks ``Y``, ``W``."""
+        from scipy.sparse import csr_matrix
+
+        dy = np.empty(18 * Mh)
+        dy[w_dest] = Y[w_perm].ravel()
+        dw = np.empty(18 * Mh)
+        dw[t_dest] = Wo[t_perm].ravel()
+        Ys = csr_matrix((dy, w_ind, w_ptr), shape=(6 * nf, 3 * m))
+        Wt = csr_matrix((dw, t_ind, t_ptr), shape=(3 * m, 6 * nf))
+        return np.asarray((Ys @ Wt).toarray())
+
+    def gram(A: F64, B: F64) -> F64:
+        """Return the blocks :math:`A_m^T B_m` of two (M, 2, k) stacks."""
+        return np.matmul(A.transpose(0, 2, 1), B)
 
     def evaluate(R: F64, t: F64, X: F64) -> tuple[F64, F64, float, F64]:
         proj, z = _project_obs(K, R[ci], t[ci], X[pi])
@@ -301,6 +358,7 @@ def _schur_lm(
     R, t, X = R.copy(), t.copy(), X.copy()
     res, _, cost, w = evaluate(R, t, X)
     lam = 1e-3
+    gain = 0.0
     for _ in range(max_iter):
         RX = np.einsum("mij,mj->mi", R[ci], X[pi])
         Xc = RX + t[ci]
@@ -314,32 +372,32 @@ def _schur_lm(
         Jx = Jp @ R[ci]  # d/dX
         Jc = np.concatenate([-Jp @ _skew_batch(RX), Jp], axis=2)[has]  # d/d(omega, t)
         wJx = Jx * w[:, None, None]
-        V = _sum_blocks(pi, np.einsum("mki,mkj->mij", wJx, Jx), m)
-        gp = _sum_blocks(pi, -np.einsum("mki,mk->mi", wJx, res), m)
+        V = _sum_blocks(pi, gram(wJx, Jx), m)
+        gp = _sum_blocks(pi, -(wJx[:, 0] * res[:, :1] + wJx[:, 1] * res[:, 1:]), m)
         wJc = Jc * w[has, None, None]
-        U = _sum_blocks(csh, np.einsum("mki,mkj->mij", wJc, Jc), nf)
-        gc = _sum_blocks(csh, -np.einsum("mki,mk->mi", wJc, res[has]), nf)
-        Wo = np.einsum("mki,mkj->mij", wJc, Jx[has])  # (Mh, 6, 3)
-        Ws = csr_matrix((Wo.ravel(), (rows, cols)), shape=(6 * nf, 3 * m))
+        U = _sum_blocks(csh, gram(wJc, Jc), nf)
+        rh = res[has]
+        gc = _sum_blocks(csh, -(wJc[:, 0] * rh[:, :1] + wJc[:, 1] * rh[:, 1:]), nf)
+        Wo = gram(wJc, Jx[has])  # (Mh, 6, 3)
         dV = np.diagonal(V, axis1=1, axis2=2)
         dU = np.diagonal(U, axis1=1, axis2=2)
         improved = False
         while lam < 1e10:
             Vinv = np.linalg.inv(V + (lam * dV + 1e-12)[:, :, None] * eye3)
-            Y = Wo @ Vinv[pih]
-            Ys = csr_matrix((Y.ravel(), (rows, cols)), shape=(6 * nf, 3 * m))
-            S = -(Ys @ Ws.T).toarray()
+            Y = Wo @ Vinv[pih]  # (Mh, 6, 3)
+            S = -reduced(Y, Wo)
             S4 = S.reshape(nf, 6, nf, 6)
             ar = np.arange(nf)
             S4[ar, :, ar, :] += U + (lam * dU + 1e-12)[:, :, None] * eye6
-            b = gc.ravel() - Ys @ gp.ravel()
+            b = gc - _sum_blocks(csh, np.einsum("mij,mj->mi", Y, gp[pih]), nf)
             try:
-                dc = cho_solve(cho_factor(S, check_finite=False), b, check_finite=False)
+                dc = cho_solve(cho_factor(S, check_finite=False), b.ravel(), check_finite=False)
             except np.linalg.LinAlgError:
                 lam *= 10.0
                 continue
             dc6 = dc.reshape(nf, 6)
-            dp = np.einsum("mij,mj->mi", Vinv, gp - (Ws.T @ dc).reshape(m, 3))
+            wtdc = _sum_blocks(pih, np.einsum("mji,mj->mi", Wo, dc6[csh]), m)
+            dp = np.einsum("mij,mj->mi", Vinv, gp - wtdc)
             R1, t1 = R.copy(), t.copy()
             if nf:
                 R1[free] = np.asarray(rvec_to_matrix(dc6[:, :3]), np.float64) @ R[free]
@@ -685,6 +743,9 @@ def reconstruct_sequence(
         inl = np.asarray(er.inliers, bool)
         if inl.sum() < 30:
             return
+        if j - i > win:  # a loop closure: never the initial pair, its parallax unused
+            pair_info[(i, j)] = (int(inl.sum()), 0.0, m[inl])
+            return
         # parallax of the pair: the median angle between the rays of its inliers
         rp = recover_pose(er.E, p1, p2, k, inliers=inl)
         C2 = -np.asarray(rp.R).T @ np.asarray(rp.t).ravel()
@@ -722,9 +783,9 @@ def reconstruct_sequence(
     kp_track = [node_track[offset[f] : offset[f + 1]].copy() for f in range(n)]
     desc = [f.descriptors for f in feats]
     # the initial pair: most inliers among pairs with 2 degrees of parallax or more
-    cands = [(v[0], key) for key, v in pair_info.items() if v[1] >= 2.0 and key[1] - key[0] <= win]
+    cands = [(v[0], key) for key, v in pair_info.items() if v[1] >= 2.0]
     if not cands:
-        cands = [(v[0], key) for key, v in pair_info.items()]
+        cands = [(v[0], key) for key, v in pair_info.items() if key[1] - key[0] <= win]
         notes.append("no pair with 2 degrees of parallax: started from the best matched one")
     _, (i0, j0) = max(cands)
     _, _, m0 = pair_info[(i0, j0)]
@@ -832,10 +893,12 @@ def reconstruct_sequence(
             ref_desc[s] = desc[f][o_kp[ref[s]]]
         new_f, new_k, new_t = [], [], []
         merges: list[tuple[int, int]] = []
-        seen = np.zeros((n, n_tracks), bool)
-        seen[o_frame, o_track] = True
+        by_frame = np.argsort(o_frame, kind="stable")
+        fstart = np.searchsorted(o_frame[by_frame], np.arange(n + 1))
         for f in np.flatnonzero(registered).tolist():
-            cand = np.flatnonzero(hp & ~seen[f] & (ref >= 0))
+            seen = np.zeros(n_tracks, bool)
+            seen[o_track[by_frame[fstart[f] : fstart[f + 1]]]] = True
+            cand = np.flatnonzero(hp & ~seen & (ref >= 0))
             if cand.size == 0:
                 continue
             proj, z = _project_obs(
@@ -879,21 +942,24 @@ def reconstruct_sequence(
             o_uv = np.concatenate([o_uv, all_uv[offset[nf_] + nk_]])
             o_ok = np.concatenate([o_ok, np.ones(nf_.size, bool)])
             added = int(nf_.size)
-        # merges: the second track's views join the first, if the two points are one
+        # merges: the second track's views join the first, if the two points are one (a
+        # track merged once waits for the next completion to merge again)
         gone = np.zeros(n_tracks, bool)
-        for a, b in merges:
-            if gone[a] or gone[b] or a == b:
+        touched = np.zeros(n_tracks, bool)
+        by_track = np.argsort(o_track, kind="stable")
+        start = np.searchsorted(o_track[by_track], np.arange(n_tracks + 1))
+        hp = has_point()
+        for ta, tb in merges:
+            if touched[ta] or touched[tb] or ta == tb or not hp[tb]:
                 continue
-            va = np.flatnonzero(o_track == a)
-            vb = np.flatnonzero(o_track == b)
+            va = by_track[start[ta] : start[ta + 1]]
+            vb = by_track[start[tb] : start[tb + 1]]
             if np.intersect1d(o_frame[va], o_frame[vb]).size:
                 continue
             both = np.concatenate([va, vb])
             both = both[o_ok[both] & registered[o_frame[both]]]
-            if not has_point()[b]:
-                continue
             fine = True
-            for X in (P[a], P[b]):
+            for X in (P[ta], P[tb]):
                 proj, z = _project_obs(
                     k, Rs[o_frame[both]], ts[o_frame[both]], np.broadcast_to(X, (both.size, 3))
                 )
@@ -901,11 +967,11 @@ def reconstruct_sequence(
                 fine &= bool(np.all((z > 0) & (err < radius)))
             if not fine:
                 continue
-            o_track[vb] = a
+            o_track[vb] = ta
             for fb, kb in zip(o_frame[vb].tolist(), o_kp[vb].tolist(), strict=True):
-                kp_track[fb][kb] = a
-            P[b] = np.nan
-            gone[b] = True
+                kp_track[fb][kb] = ta
+            P[tb] = np.nan
+            gone[tb] = touched[ta] = touched[tb] = True
         return added + int(gone.sum())
 
     triangulate(o_track[o_frame == i0])
