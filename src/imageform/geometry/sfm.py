@@ -60,10 +60,6 @@ __all__ = [
 ]
 
 F64 = NDArray[np.float64]
-_DEBUG: Any = None
-_LOOP = 2
-_NOBA = False
-_COMPLETE = True
 
 
 @dataclass(frozen=True)
@@ -611,7 +607,7 @@ def _build_tracks(
     bad = np.zeros(size.size, bool)
     bad[uk[cnt > 1] // (frame_of.max() + 1)] = True
     label = label.astype(np.int64)
-    if bad.any() and not _NOBA:
+    if bad.any():
         parent: dict[int, int] = {}
         frames: dict[int, set[int]] = {}
 
@@ -640,8 +636,6 @@ def _build_tracks(
                 next_label += 1
             label[x] = roots[r]
     keep = np.bincount(label)[label] >= 2
-    if _NOBA:
-        keep &= ~bad[label]
     label = np.where(keep, label, -1)
     _, track = np.unique(label[keep], return_inverse=True)
     out = -np.ones(total, np.int64)
@@ -757,7 +751,7 @@ def reconstruct_sequence(
     for i in range(n):
         for j in range(i + 1, min(n, i + 1 + win)):
             verify(i, j)
-    for i, j in _similar_pairs([f.descriptors for f in feats], win, _LOOP, rng):
+    for i, j in _similar_pairs([f.descriptors for f in feats], win, 2, rng):
         verify(i, j)
     if not pair_info:
         raise DegenerateConfigurationError(
@@ -854,8 +848,6 @@ def reconstruct_sequence(
         )
         Rs[registered], ts[registered] = Rn[registered], tn[registered]
         P[pts] = Xn
-        if _DEBUG is not None:
-            _DEBUG("adjust", Rs, ts, registered, P, o_ok)
 
     def filter_obs(limit: float, min_angle: float = 0.0) -> None:
         """Drop observations beyond ``limit`` pixels; points left with one view go."""
@@ -1002,24 +994,21 @@ def reconstruct_sequence(
         # the correspondences PnP rejected are not this frame's views of those points
         rejected = np.zeros(tr.size, bool)
         rejected[kps[~np.asarray(res.inliers, bool)]] = True
-        o_ok[(o_frame == fi) & rejected[o_kp * (o_frame == fi)]] = False
-        if _DEBUG is not None:
-            _DEBUG(f"pnp {fi} {kps.size} {int(np.sum(res.inliers))}", Rs, ts, registered, P, o_ok)
+        mine = np.flatnonzero(o_frame == fi)
+        o_ok[mine[rejected[o_kp[mine]]]] = False
         triangulate(tr[tr >= 0])
         nreg = int(registered.sum())
         if nreg >= 1.4 * last_ba:
             adjust(2.0, 10)
             filter_obs(max_err)
-            if _COMPLETE:
-                complete(2.0)
+            complete(2.0)
             triangulate(np.arange(n_tracks))
             last_ba = nreg
     # the final adjustment: robust, outliers out, the tracks completed, merged and
     # re-triangulated, robust again, then plain least squares on what is left
     adjust(2.0, 30)
     filter_obs(max_err)
-    if _COMPLETE:
-        complete(2.0)
+    complete(2.0)
     triangulate(np.arange(n_tracks))
     adjust(1.0, 30)
     filter_obs(2.0)
