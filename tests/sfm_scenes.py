@@ -6,10 +6,14 @@ there), each tiled so that a wall has texture everywhere. A pinhole camera walks
 room looking ahead and a little to the side; each frame is ray-cast exactly (every pixel's
 ray hits the nearest plane, sampled bilinearly), with a little noise. The truth is every
 frame's pose.
+
+The issue's bar adds what a real video has: a little defocus blur (Gaussian), sensor noise
+and JPEG compression (:func:`sequence`'s ``blur``, ``noise`` and ``jpeg``).
 """
 
 from __future__ import annotations
 
+from functools import cache
 from pathlib import Path
 
 import numpy as np
@@ -20,6 +24,7 @@ KODAK = ROOT.parent / "shared" / "data" / "kodak"
 W, D, H = 4.0, 6.0, 2.5
 
 
+@cache
 def _photos() -> list[np.ndarray]:
     from skimage import data
 
@@ -107,11 +112,53 @@ def render(
     return np.clip(np.round(out), 0, 255).astype(np.uint8)
 
 
-def sequence(K: np.ndarray, n: int, size: tuple[int, int]) -> tuple[list[np.ndarray], list]:
-    """``n`` frames of the walk and their true poses."""
+def degrade(
+    image: np.ndarray,
+    *,
+    blur: float = 0.0,
+    noise: float = 0.0,
+    jpeg: int | None = None,
+    rng: np.random.Generator | None = None,
+) -> np.ndarray:
+    """A frame as a camera delivers it: Gaussian blur (``blur`` pixels), noise, then JPEG."""
+    import cv2
+
+    out: np.ndarray = image.astype(np.float32)
+    if blur > 0:
+        out = cv2.GaussianBlur(out, (0, 0), blur, borderType=cv2.BORDER_REFLECT)
+    if noise > 0:
+        out = out + (rng or np.random.default_rng(0)).normal(0, noise, out.shape)
+    out = np.clip(np.round(out), 0, 255).astype(np.uint8)
+    if jpeg is not None:
+        ok, buf = cv2.imencode(".jpg", out[..., ::-1], [cv2.IMWRITE_JPEG_QUALITY, int(jpeg)])
+        assert ok
+        decoded = cv2.imdecode(buf, cv2.IMREAD_COLOR)
+        assert decoded is not None
+        out = np.ascontiguousarray(decoded[..., ::-1])
+    return out
+
+
+def sequence(
+    K: np.ndarray,
+    n: int,
+    size: tuple[int, int],
+    *,
+    noise: float = 1.5,
+    blur: float = 0.0,
+    jpeg: int | None = None,
+) -> tuple[list[np.ndarray], list]:
+    """``n`` frames of the walk and their true poses.
+
+    Without ``blur`` or ``jpeg`` the noise is added by :func:`render` (the frames of the
+    first tests); with them each frame is rendered clean, blurred, given its noise and
+    JPEG-compressed at quality ``jpeg``.
+    """
     truth = poses(n)
     rng = np.random.default_rng(5)
-    return [render(K, p, size, rng=rng) for p in truth], truth
+    if not blur and jpeg is None:
+        return [render(K, p, size, noise=noise, rng=rng) for p in truth], truth
+    frames = [render(K, p, size, noise=0.0) for p in truth]
+    return [degrade(f, blur=blur, noise=noise, jpeg=jpeg, rng=rng) for f in frames], truth
 
 
 def align_rms(est_centres: np.ndarray, true_centres: np.ndarray) -> float:

@@ -70,6 +70,7 @@ BENCH_SCRIPTS: dict[str, str] = {
     "lsd": "benchmarks/bench_lsd.py",
     "psf": "benchmarks/bench_psf.py",
     "raw": "benchmarks/bench_raw.py",
+    "reconstruct": "benchmarks/bench_reconstruct.py",
     "remap": "benchmarks/bench_remap.py",
     "report": "benchmarks/bench_report.py",
     "sfr": "benchmarks/bench_sfr.py",

@@ -68,3 +68,18 @@ def test_bad_sequences() -> None:
         reconstruct_sequence([np.zeros((20, 20, 3), np.uint8), np.zeros((20, 30, 3), np.uint8)], K)
     with pytest.raises(InvalidInputError, match="no texture"):
         reconstruct_sequence([np.full((60, 80, 3), 90, np.uint8)] * 3, K)
+
+
+@pytest.mark.slow
+def test_issue_28_bar_forty_frames_with_blur_noise_and_jpeg() -> None:
+    # the issue's bar (benchmarks/bench_reconstruct.py's scene): every frame registered,
+    # the path within 0.1 % of its length after a similarity alignment
+    K = np.array([[450.0, 0, 319.5], [0, 450.0, 239.5], [0, 0, 1]])
+    frames, truth = sfm_scenes.sequence(K, 40, (640, 480), noise=2.0, blur=0.7, jpeg=90)
+    rec = reconstruct_sequence(frames, K)
+    assert rec.registered.mean() >= 0.95, rec.notes
+    reg = rec.registered
+    C_est = np.array([-R.T @ t for R, t in zip(rec.R[reg], rec.t[reg], strict=True)])
+    C_true = np.array([-R.T @ t for R, t in truth])[reg]
+    assert sfm_scenes.align_rms(C_est, C_true) <= 0.001
+    assert np.nanmedian(rec.rms_px) < 1.0

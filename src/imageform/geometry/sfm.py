@@ -9,21 +9,31 @@ pipeline, each step a public function:
 2. :func:`match_features`: nearest neighbours by descriptor distance with Lowe's ratio test
    (the nearest clearly nearer than the second) and a mutual check (each the other's
    nearest);
-3. geometric verification of each pair (sequential neighbours in a video) by the essential
-   matrix (:func:`~imageform.geometry.find_essential_matrix`, 5-point LO-RANSAC) on the
-   undistorted keypoints;
-4. tracks: the verified matches joined across frames (union-find), one 3-D point each;
-5. the initial pair: the early pair with the most inliers among those with enough parallax
+3. geometric verification of each pair by the essential matrix
+   (:func:`~imageform.geometry.find_essential_matrix`, 5-point LO-RANSAC) on the
+   undistorted keypoints; the pairs are the sequential neighbours of a video and, for loop
+   closures, the frames farther away whose visual words vote alike (a small vocabulary,
+   k-means of the descriptors, tf-idf histograms compared by cosine; Sivic & Zisserman
+   2003);
+4. tracks: the verified matches joined across frames (connected components; one keypoint
+   a frame, a component that joins two keypoints of one frame rebuilt greedily);
+5. the initial pair: the pair with the most inliers among those with enough parallax
    (median triangulation angle of 2 degrees or more), its relative pose
    (:func:`~imageform.geometry.recover_pose`) and its triangulated points;
 6. incremental registration: each next frame's pose from its 2-D/3-D correspondences
-   (:func:`~imageform.geometry.solve_pnp_ransac`), then every track seen by two registered
-   frames triangulated (:func:`~imageform.geometry.triangulate_points`) when its rays meet
-   at 1.5 degrees or more and it reprojects within 4 pixels in front of every camera;
-7. bundle adjustment (:func:`bundle_adjust`): every pose (the first fixed) and every point
-   refined together by minimising the reprojection error, scipy's ``least_squares`` with a
-   sparse Jacobian and a Huber loss; observations beyond 4 pixels are then dropped and the
-   adjustment run again.
+   (:func:`~imageform.geometry.solve_pnp_ransac`; the ones it rejects are no views of
+   those points), then every track of that frame seen by two registered frames
+   triangulated (linear, then Gauss-Newton) when its rays meet at 1.5 degrees or more
+   and it reprojects within 4 pixels in front of every camera;
+7. bundle adjustment (:func:`bundle_adjust`: Levenberg-Marquardt on the reprojection
+   error, the points eliminated by the Schur complement) over everything each time the
+   registered frames grew by 40 %, observations beyond 4 pixels dropped, the tracks
+   completed (a point's projection lands on a keypoint with a like descriptor: a new
+   view; on another point's view: the two tracks merged when the points are one) and
+   re-triangulated;
+8. at the end: a robust adjustment (Huber), outliers dropped, completion, merging and
+   re-triangulation, then adjustments without the observations beyond 2 pixels, the last
+   one plain least squares.
 
 The reconstruction is up to a similarity (a rotation, a translation and a scale): the first
 camera is the world frame and the initial pair's baseline has length 1.
@@ -31,7 +41,6 @@ camera is the world frame and the initial pair's baseline has length 1.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -141,18 +150,24 @@ def match_features(
         )
     if a.shape[0] < 2 or b.shape[0] < 2:
         return np.zeros((0, 2), np.int64)
-    # squared distances |a|^2 + |b|^2 - 2 a.b, in one matrix product
-    d2 = (a * a).sum(1)[:, None] + (b * b).sum(1)[None, :] - 2.0 * (a @ b.T)
-    np.maximum(d2, 0.0, out=d2)
+    # squared distances |a|^2 + |b|^2 - 2 a.b by a matrix product; a row's |a|^2 is added
+    # to its two nearest only, and the mutual check is the product the other way round
+    # (a row-wise search: faster than a column-wise one)
+    na, nb = (a * a).sum(1), (b * b).sum(1)
+    d2 = a @ b.T
+    d2 *= -2.0
+    d2 += nb[None, :]
     rows = np.arange(a.shape[0])
-    back = np.argmin(d2, axis=0) if mutual else None
     best = np.argmin(d2, axis=1)
-    d1 = d2[rows, best].copy()
+    d1 = np.maximum(d2[rows, best] + na, 0.0)
     d2[rows, best] = np.inf  # the second nearest is the nearest of the rest
-    d2nd = d2.min(axis=1)
+    d2nd = np.maximum(d2.min(axis=1) + na, 0.0)
     keep = d1 < (r * r) * d2nd
-    if back is not None:
-        keep &= back[best] == rows
+    if mutual:
+        back = b @ a.T
+        back *= -2.0
+        back += na[None, :]
+        keep &= np.argmin(back, axis=1)[best] == rows
     idx = np.flatnonzero(keep)
     return np.column_stack([idx, best[idx]]).astype(np.int64)
 
@@ -193,31 +208,6 @@ class Reconstruction:
     residuals_px: F64 = field(default_factory=lambda: np.zeros(0))
 
 
-class _Tracks:
-    """Union-find over (frame, keypoint) observations."""
-
-    def __init__(self, sizes: list[int]) -> None:
-        self.offset = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
-        self.parent = np.arange(int(self.offset[-1]), dtype=np.int64)
-
-    def find(self, x: int) -> int:
-        p = self.parent
-        root = x
-        while p[root] != root:
-            root = int(p[root])
-        while p[x] != root:
-            p[x], x = root, int(p[x])
-        return root
-
-    def union(self, a: int, b: int) -> None:
-        ra, rb = self.find(a), self.find(b)
-        if ra != rb:
-            self.parent[max(ra, rb)] = min(ra, rb)
-
-    def node(self, frame: int, k: int) -> int:
-        return int(self.offset[frame]) + k
-
-
 def _angle_deg(C1: F64, C2: F64, X: F64) -> F64:
     a, b = X - C1, X - C2
     c = np.sum(a * b, axis=1) / (np.linalg.norm(a, axis=1) * np.linalg.norm(b, axis=1) + 1e-300)
@@ -233,11 +223,197 @@ def _skew_batch(v: F64) -> F64:
     return S
 
 
-def _project(K: F64, R: F64, t: F64, X: F64) -> tuple[F64, F64]:
-    Xc = X @ R.T + t
+def _project_obs(K: F64, R: F64, t: F64, X: F64) -> tuple[F64, F64]:
+    r"""Pixels and depths of points ``X`` (M, 3) seen by cameras ``R`` (M, 3, 3), ``t`` (M, 3).
+
+    The module's one projection, :math:`u = \pi(K (R X + t))` with :math:`\pi` the division
+    by the third coordinate (NaN where the depth is 0).
+    """
+    Xc = np.einsum("mij,mj->mi", R, X) + t
     z = Xc[:, 2]
-    uv = (Xc @ K.T)[:, :2] / np.where(np.abs(z) > 1e-12, z, np.nan)[:, None]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        uv = (Xc @ K[:2].T) / np.where(z != 0, z, np.nan)[:, None]
     return uv, z
+
+
+def _sum_blocks(idx: NDArray[np.int64], blocks: F64, n: int) -> F64:
+    """Sum of the ``blocks`` (M, ...) that share an index, as (n, ...)."""
+    shape = blocks.shape[1:]
+    size = int(np.prod(shape))
+    flat = (idx[:, None] * size + np.arange(size)).ravel()
+    out = np.bincount(flat, weights=blocks.reshape(-1), minlength=n * size)
+    return out.reshape((n, *shape))
+
+
+def _huber(r2: F64, delta: float) -> tuple[float, F64]:
+    """Huber's cost of residual norms ``sqrt(r2)`` and its IRLS weights (0: least squares)."""
+    if delta <= 0:
+        return float(0.5 * r2.sum()), np.ones_like(r2)
+    r = np.sqrt(r2)
+    inside = r <= delta
+    cost = float(np.sum(np.where(inside, 0.5 * r2, delta * (r - 0.5 * delta))))
+    return cost, np.where(inside, 1.0, delta / np.maximum(r, 1e-300))
+
+
+def _schur_lm(
+    K: F64,
+    R: F64,
+    t: F64,
+    X: F64,
+    ci: NDArray[np.int64],
+    pi: NDArray[np.int64],
+    uv: F64,
+    fixed: NDArray[np.bool_],
+    delta: float,
+    max_iter: int,
+    ftol: float = 1e-10,
+) -> tuple[F64, F64, F64]:
+    r"""Levenberg-Marquardt on the reprojection error, the points eliminated (Schur complement).
+
+    Each camera moves by a rotation :math:`\exp([\omega]_\times) R` and a translation
+    :math:`t + \delta t`, each point by :math:`X + \delta X`. The damped normal equations
+
+    .. math:: \begin{pmatrix} U & W \\ W^T & V \end{pmatrix}
+              \begin{pmatrix} \delta c \\ \delta p \end{pmatrix} =
+              \begin{pmatrix} g_c \\ g_p \end{pmatrix}
+
+    (``V`` block diagonal, one 3 x 3 block a point) are solved by the reduced camera system
+    :math:`(U - W V^{-1} W^T)\, \delta c = g_c - W V^{-1} g_p`, dense and small, then
+    :math:`\delta p = V^{-1} (g_p - W^T \delta c)` (Triggs et al. 2000, "Bundle adjustment:
+    a modern synthesis", sec. 6.1). Huber's loss by iterative reweighting; Marquardt's
+    damping (the diagonal scaled by ``1 + lambda``). Cameras with ``fixed`` set stay.
+    """
+    from scipy.linalg import cho_factor, cho_solve
+
+    from imageform.geometry.rotations import rvec_to_matrix
+
+    n, m, M = R.shape[0], X.shape[0], ci.size
+    slot = -np.ones(n, np.int64)
+    free = np.flatnonzero(~np.asarray(fixed, bool))
+    slot[free] = np.arange(free.size)
+    nf = free.size
+    cs = slot[ci]
+    has = cs >= 0
+    csh, pih = cs[has], pi[has]
+    fx, fy, sk = K[0, 0], K[1, 1], K[0, 1]
+    eye3, eye6 = np.eye(3), np.eye(6)
+    # W V^-1 W^T by a sparse product, W's rows (6 a free camera) and W^T's rows (3 a point)
+    # laid out once: the observations sorted by camera then point, and by point then camera
+    Mh = csh.size
+    ab = np.arange(18)
+    a_, b_ = ab // 3, ab % 3
+
+    def layout(
+        major: NDArray[np.int64], minor_cols: NDArray[np.int64], nmaj: int, width: int, k: int
+    ) -> tuple[NDArray[np.int64], NDArray[np.int64], NDArray[np.int64], NDArray[np.int64]]:
+        """CSR of per-observation blocks: the rows ``width * major + r``, ``k`` columns each."""
+        perm = np.lexsort((minor_cols, major))
+        cnt = np.bincount(major, minlength=nmaj)
+        st = np.concatenate([[0], np.cumsum(cnt)])
+        maj = major[perm]
+        rank = np.arange(Mh) - st[maj]
+        # element (a, b) of block o; its row is the a-th (width 6) or b-th (width 3)
+        r_in = a_ if width == 6 else b_
+        c_in = b_ if width == 6 else a_
+        dest = (18 * st[maj])[:, None] + r_in * k * cnt[maj][:, None] + k * rank[:, None] + c_in
+        cols = (k * minor_cols[perm])[:, None] + c_in
+        indices = np.empty(18 * Mh, np.int64)
+        indices[dest.ravel()] = cols.ravel()
+        rows = np.arange(width * nmaj)
+        indptr = np.concatenate(
+            [18 * st[rows // width] + (rows % width) * k * cnt[rows // width], [18 * Mh]]
+        )
+        return perm, dest.ravel(), indices, indptr
+
+    w_perm, w_dest, w_ind, w_ptr = layout(csh, pih, nf, 6, 3)
+    t_perm, t_dest, t_ind, t_ptr = layout(pih, csh, m, 3, 6)
+
+    def reduced(Y: F64, Wo: F64) -> F64:
+        """Return :math:`W V^{-1} W^T` (6 nf, 6 nf) from the per-view blocks ``Y``, ``W``."""
+        from scipy.sparse import csr_matrix
+
+        dy = np.empty(18 * Mh)
+        dy[w_dest] = Y[w_perm].ravel()
+        dw = np.empty(18 * Mh)
+        dw[t_dest] = Wo[t_perm].ravel()
+        Ys = csr_matrix((dy, w_ind, w_ptr), shape=(6 * nf, 3 * m))
+        Wt = csr_matrix((dw, t_ind, t_ptr), shape=(3 * m, 6 * nf))
+        return np.asarray((Ys @ Wt).toarray())
+
+    def gram(A: F64, B: F64) -> F64:
+        """Return the blocks :math:`A_m^T B_m` of two (M, 2, k) stacks."""
+        return np.matmul(A.transpose(0, 2, 1), B)
+
+    def evaluate(R: F64, t: F64, X: F64) -> tuple[F64, F64, float, F64]:
+        proj, z = _project_obs(K, R[ci], t[ci], X[pi])
+        r = proj - uv
+        r2 = np.sum(r * r, axis=1)
+        bad = ~((z > 0) & np.isfinite(r2))
+        r = np.where(bad[:, None], 0.0, r)
+        r2 = np.where(bad, 0.0, r2)
+        cost, w = _huber(r2, delta)
+        w[bad] = 0.0
+        return r, r2, cost + 1e6 * float(bad.sum()), w
+
+    R, t, X = R.copy(), t.copy(), X.copy()
+    res, _, cost, w = evaluate(R, t, X)
+    lam = 1e-3
+    gain = 0.0
+    for _ in range(max_iter):
+        RX = np.einsum("mij,mj->mi", R[ci], X[pi])
+        Xc = RX + t[ci]
+        z = np.where(np.abs(Xc[:, 2]) > 1e-9, Xc[:, 2], 1e-9)
+        Jp = np.zeros((M, 2, 3))  # d(u, v) / d Xc
+        Jp[:, 0, 0] = fx / z
+        Jp[:, 0, 1] = sk / z
+        Jp[:, 0, 2] = -(fx * Xc[:, 0] + sk * Xc[:, 1]) / z**2
+        Jp[:, 1, 1] = fy / z
+        Jp[:, 1, 2] = -fy * Xc[:, 1] / z**2
+        Jx = Jp @ R[ci]  # d/dX
+        Jc = np.concatenate([-Jp @ _skew_batch(RX), Jp], axis=2)[has]  # d/d(omega, t)
+        wJx = Jx * w[:, None, None]
+        V = _sum_blocks(pi, gram(wJx, Jx), m)
+        gp = _sum_blocks(pi, -(wJx[:, 0] * res[:, :1] + wJx[:, 1] * res[:, 1:]), m)
+        wJc = Jc * w[has, None, None]
+        U = _sum_blocks(csh, gram(wJc, Jc), nf)
+        rh = res[has]
+        gc = _sum_blocks(csh, -(wJc[:, 0] * rh[:, :1] + wJc[:, 1] * rh[:, 1:]), nf)
+        Wo = gram(wJc, Jx[has])  # (Mh, 6, 3)
+        dV = np.diagonal(V, axis1=1, axis2=2)
+        dU = np.diagonal(U, axis1=1, axis2=2)
+        improved = False
+        while lam < 1e10:
+            Vinv = np.linalg.inv(V + (lam * dV + 1e-12)[:, :, None] * eye3)
+            Y = Wo @ Vinv[pih]  # (Mh, 6, 3)
+            S = -reduced(Y, Wo)
+            S4 = S.reshape(nf, 6, nf, 6)
+            ar = np.arange(nf)
+            S4[ar, :, ar, :] += U + (lam * dU + 1e-12)[:, :, None] * eye6
+            b = gc - _sum_blocks(csh, np.einsum("mij,mj->mi", Y, gp[pih]), nf)
+            try:
+                dc = cho_solve(cho_factor(S, check_finite=False), b.ravel(), check_finite=False)
+            except np.linalg.LinAlgError:
+                lam *= 10.0
+                continue
+            dc6 = dc.reshape(nf, 6)
+            wtdc = _sum_blocks(pih, np.einsum("mji,mj->mi", Wo, dc6[csh]), m)
+            dp = np.einsum("mij,mj->mi", Vinv, gp - wtdc)
+            R1, t1 = R.copy(), t.copy()
+            if nf:
+                R1[free] = np.asarray(rvec_to_matrix(dc6[:, :3]), np.float64) @ R[free]
+                t1[free] = t[free] + dc6[:, 3:]
+            X1 = X + dp
+            res1, _, cost1, w1 = evaluate(R1, t1, X1)
+            if cost1 < cost:
+                gain = (cost - cost1) / max(cost, 1e-300)
+                R, t, X, res, cost, w = R1, t1, X1, res1, cost1, w1
+                lam = max(lam / 5.0, 1e-9)
+                improved = True
+                break
+            lam *= 8.0
+        if not improved or gain < ftol:
+            break
+    return R, t, X
 
 
 def bundle_adjust(
@@ -256,14 +432,15 @@ def bundle_adjust(
     r"""Refine poses and points together by minimising the reprojection error.
 
     .. math:: \min_{R_i, t_i, X_j} \sum_{(i, j)} \rho\left(\left\| u_{ij} -
-              \pi\left(K (R_i X_j + t_i)\right) \right\|^2\right)
+              \pi\left(K (R_i X_j + t_i)\right) \right\|\right)
 
-    with :math:`\rho` the Huber loss at ``loss_px`` pixels (Triggs et al. 2000, "Bundle
-    adjustment: a modern synthesis"). The poses are Rodrigues vectors and translations; the
-    camera ``fixed`` stays where it is, and so does the scale, which the first pose does not
-    fix: the other cameras' distance to it is kept by the points. Solved by scipy's
-    trust-region reflective method with the Jacobian's sparsity pattern (each residual
-    depends on one camera and one point).
+    with :math:`\rho` Huber's loss at ``loss_px`` pixels (Triggs et al. 2000, "Bundle
+    adjustment: a modern synthesis"). Levenberg-Marquardt with the points eliminated: each
+    step solves the small dense reduced camera system (the Schur complement of the points'
+    3 x 3 blocks), then the points one by one (Triggs et al. sec. 6.1); the rotations are
+    updated multiplicatively, :math:`R \leftarrow \exp([\omega]_\times) R`. The camera
+    ``fixed`` stays where it is, and so does the scale, which the first pose does not fix:
+    the damping keeps the other cameras' distance to it where the points put it.
 
     Parameters
     ----------
@@ -280,119 +457,194 @@ def bundle_adjust(
     loss_px : float
         Huber's threshold, pixels; 0 for plain least squares (once outliers are gone).
     max_nfev : int
-        Most function evaluations.
+        Most Levenberg-Marquardt iterations.
 
     Returns
     -------
     R, t, points
         Refined.
     """
-    from scipy.optimize import least_squares
+    R = as_real_array(R, "R", ndim=3).astype(np.float64)
+    t = as_real_array(t, "t", ndim=2).astype(np.float64)
+    points = as_real_array(points, "points", ndim=2).astype(np.float64)
+    ci = np.asarray(cam_idx, np.int64)
+    pi = np.asarray(pt_idx, np.int64)
+    n = R.shape[0]
+    f = as_int(fixed, "fixed", minimum=0, maximum=max(n - 1, 0))
+    keep = np.zeros(n, bool)
+    keep[f] = True
+    return _schur_lm(
+        np.asarray(K, np.float64),
+        R,
+        t,
+        points,
+        ci,
+        pi,
+        np.asarray(uv, np.float64),
+        keep,
+        float(loss_px),
+        as_int(max_nfev, "max_nfev", minimum=1, maximum=100_000),
+    )
 
-    from imageform.geometry.rotations import matrix_to_rvec, rvec_to_matrix
 
-    n, m = R.shape[0], points.shape[0]
-    free = np.array([i for i in range(n) if i != fixed], np.int64)
-    slot = -np.ones(n, np.int64)
-    slot[free] = np.arange(free.size)
-    r0 = np.array([np.asarray(matrix_to_rvec(R[i]), np.float64) for i in free]).reshape(-1, 3)
-    x0 = np.concatenate([np.hstack([r0, t[free]]).ravel(), points.ravel()])
-    Rf, tf = R[fixed], t[fixed]
-    fx, fy, cx, cy, sk = K[0, 0], K[1, 1], K[0, 2], K[1, 2], K[0, 1]
+def _triangulate_tracks(
+    K: F64, R: F64, t: F64, frame: NDArray[np.int64], col: NDArray[np.int64], uv: F64, m: int
+) -> F64:
+    r"""Points ``m`` from observations (frame, which point, pixel): DLT, then Gauss-Newton.
 
-    def unpack(x: F64) -> tuple[F64, F64, F64, F64]:
-        cams = x[: 6 * free.size].reshape(-1, 6)
-        X = x[6 * free.size :].reshape(m, 3)
-        Rs = np.empty((n, 3, 3))
-        ts = np.empty((n, 3))
-        Rs[fixed], ts[fixed] = Rf, tf
-        if free.size:
-            Rs[free] = np.asarray(rvec_to_matrix(cams[:, :3]), np.float64)
-            ts[free] = cams[:, 3:]
-        return cams, X, Rs, ts
-
-    def residuals(x: F64) -> F64:
-        _, X, Rs, ts = unpack(x)
-        Xc = np.einsum("mij,mj->mi", Rs[cam_idx], X[pt_idx]) + ts[cam_idx]
+    Each observation gives two rows :math:`x P^3 - P^1`, :math:`y P^3 - P^2` of the linear
+    system of its point (normalised coordinates :math:`K^{-1} u`, each row of unit norm);
+    the point is the eigenvector of :math:`A^T A`'s smallest eigenvalue (Hartley &
+    Zisserman 2004, sec. 12.2), then three Gauss-Newton steps on the reprojection error.
+    """
+    Ki = np.linalg.inv(K)
+    xn = uv @ Ki[:2, :2].T + Ki[:2, 2]
+    Pm = np.concatenate([R[frame], t[frame][:, :, None]], axis=2)  # (M, 3, 4)
+    rows = np.stack(
+        [xn[:, :1] * Pm[:, 2] - Pm[:, 0], xn[:, 1:2] * Pm[:, 2] - Pm[:, 1]], axis=1
+    )  # (M, 2, 4)
+    rows /= np.maximum(np.linalg.norm(rows, axis=2, keepdims=True), 1e-300)
+    A = _sum_blocks(col, np.einsum("mki,mkj->mij", rows, rows), m)
+    A += 1e-300 * np.eye(4)
+    _, vec = np.linalg.eigh(A)
+    Xh = vec[:, :, 0]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        X = Xh[:, :3] / Xh[:, 3:4]
+    X[~np.isfinite(X).all(axis=1)] = np.nan
+    fx, fy, sk = K[0, 0], K[1, 1], K[0, 1]
+    for _ in range(3):
+        Rm = R[frame]
+        Xc = np.einsum("mij,mj->mi", Rm, X[col]) + t[frame]
         z = np.where(np.abs(Xc[:, 2]) > 1e-9, Xc[:, 2], 1e-9)
-        u = fx * Xc[:, 0] / z + sk * Xc[:, 1] / z + cx
-        v = fy * Xc[:, 1] / z + cy
-        return np.column_stack([u - uv[:, 0], v - uv[:, 1]]).ravel()
-
-    M = cam_idx.shape[0]
-    obs = np.arange(M)
-    has = slot[cam_idx] >= 0
-    # the Jacobian's pattern: rows 2k, 2k+1; the camera's 6 columns (if free), the point's 3
-    cam_cols = 6 * np.maximum(slot[cam_idx], 0)[:, None] + np.arange(6)
-    pt_cols = 6 * free.size + 3 * pt_idx[:, None] + np.arange(3)
-
-    def jacobian(x: F64) -> Any:
-        r"""Return the Jacobian: :math:`\partial(R v)/\partial r = -R [v]_\times J_r`.
-
-        The derivative of a rotation by its Rodrigues vector (Gallego & Yezzi 2015).
-        """
-        from scipy.sparse import csr_matrix
-
-        cams, X, Rs, ts = unpack(x)
-        Rm = Rs[cam_idx]
-        Xw = X[pt_idx]
-        Xc = np.einsum("mij,mj->mi", Rm, Xw) + ts[cam_idx]
-        z = np.where(np.abs(Xc[:, 2]) > 1e-9, Xc[:, 2], 1e-9)
-        # d(u, v) / d Xc
-        Jp = np.zeros((M, 2, 3))
+        r = (
+            np.column_stack(
+                [fx * Xc[:, 0] / z + sk * Xc[:, 1] / z + K[0, 2], fy * Xc[:, 1] / z + K[1, 2]]
+            )
+            - uv
+        )
+        Jp = np.zeros((col.size, 2, 3))
         Jp[:, 0, 0] = fx / z
         Jp[:, 0, 1] = sk / z
         Jp[:, 0, 2] = -(fx * Xc[:, 0] + sk * Xc[:, 1]) / z**2
         Jp[:, 1, 1] = fy / z
         Jp[:, 1, 2] = -fy * Xc[:, 1] / z**2
-        J_pt = Jp @ Rm  # d/dX
-        if free.size:
-            r = np.zeros((n, 3))
-            r[free] = cams[:, :3]
-            rv = r[cam_idx]
-            th2 = np.sum(rv * rv, axis=1)
-            skew_r = _skew_batch(rv)
-            Jr = np.where(
-                (th2 > 1e-16)[:, None, None],
-                (rv[:, :, None] * rv[:, None, :] + (np.swapaxes(Rm, 1, 2) - np.eye(3)) @ skew_r)
-                / np.maximum(th2, 1e-300)[:, None, None],
-                np.eye(3),
-            )
-            dR = -Rm @ _skew_batch(Xw) @ Jr  # d(R X)/dr
-            J_cam = np.concatenate([Jp @ dR, Jp], axis=2)  # (M, 2, 6): r then t
-            rows_c = np.repeat(2 * obs[has], 6).reshape(-1, 6)
-            data = [J_cam[has, 0].ravel(), J_cam[has, 1].ravel()]
-            rr = [rows_c.ravel(), (rows_c + 1).ravel()]
-            cc = [cam_cols[has].ravel(), cam_cols[has].ravel()]
-        else:
-            data, rr, cc = [], [], []
-        rows_p = np.repeat(2 * obs, 3).reshape(-1, 3)
-        data += [J_pt[:, 0].ravel(), J_pt[:, 1].ravel()]
-        rr += [rows_p.ravel(), (rows_p + 1).ravel()]
-        cc += [pt_cols.ravel(), pt_cols.ravel()]
-        return csr_matrix(
-            (np.concatenate(data), (np.concatenate(rr), np.concatenate(cc))),
-            shape=(2 * M, x0.size),
-        )
+        J = Jp @ Rm
+        H = _sum_blocks(col, np.einsum("mki,mkj->mij", J, J), m) + 1e-12 * np.eye(3)
+        g = _sum_blocks(col, np.einsum("mki,mk->mi", J, r), m)
+        ok = np.isfinite(H).all(axis=(1, 2)) & np.isfinite(g).all(axis=1)
+        step = np.zeros((m, 3))
+        try:
+            step[ok] = np.linalg.solve(H[ok], -g[ok][:, :, None])[:, :, 0]
+        except np.linalg.LinAlgError:
+            break
+        X = X + step
+    return X
 
-    sol = least_squares(
-        residuals,
-        x0,
-        jac=jacobian,
-        loss="huber" if loss_px > 0 else "linear",
-        f_scale=float(loss_px) if loss_px > 0 else 1.0,
-        x_scale=1.0,  # "jac" stopped on xtol far from the minimum (a 4-camera test: 1.45 px)
-        max_nfev=max_nfev,
-        method="trf",
-        tr_solver="lsmr",
-    )
-    x = sol.x
-    cams = x[: 6 * free.size].reshape(-1, 6)
-    Rn, tn = R.copy(), t.copy()
-    if free.size:
-        Rn[free] = np.asarray(rvec_to_matrix(cams[:, :3]), np.float64)
-        tn[free] = cams[:, 3:]
-    return Rn, tn, x[6 * free.size :].reshape(m, 3)
+
+def _similar_pairs(
+    descriptors: list[NDArray[np.float32]], window: int, per_frame: int, seed: int
+) -> list[tuple[int, int]]:
+    r"""Loop-closure candidates: frame pairs beyond ``window`` whose visual words vote alike.
+
+    A small vocabulary (k-means of a sample of the descriptors, 256 words) makes each frame
+    a histogram of words weighted by tf-idf, normalised; the similarity of two frames is
+    the cosine of their histograms (Sivic & Zisserman 2003, "Video Google", ICCV). Each
+    frame proposes its ``per_frame`` most similar frames farther than ``window`` away.
+    """
+    n = len(descriptors)
+    if per_frame <= 0 or n <= window + 1:
+        return []
+    gen = np.random.default_rng(seed)
+    pool = np.concatenate([d for d in descriptors if d.shape[0]]).astype(np.float32)
+    sample = pool[gen.choice(pool.shape[0], min(pool.shape[0], 10_000), replace=False)]
+    words = min(256, max(8, sample.shape[0] // 20))
+    # Lloyd's k-means, the distances by one matrix product an iteration
+    c = sample[gen.choice(sample.shape[0], words, replace=False)].copy()
+    for _ in range(8):
+        label = np.argmin((c * c).sum(1)[None, :] - 2.0 * (sample @ c.T), axis=1)
+        cnt = np.bincount(label, minlength=words)
+        sums = np.zeros_like(c)
+        np.add.at(sums, label, sample)
+        moved = cnt > 0
+        c[moved] = sums[moved] / cnt[moved, None]
+    cc = (c * c).sum(1)
+    hist = np.zeros((n, words))
+    for f, d in enumerate(descriptors):
+        if d.shape[0]:
+            label = np.argmin(cc[None, :] - 2.0 * (d @ c.T), axis=1)
+            hist[f] = np.bincount(label, minlength=words)
+    idf = np.log(n / np.maximum((hist > 0).sum(0), 1))
+    h = hist / np.maximum(hist.sum(1, keepdims=True), 1) * idf
+    h /= np.maximum(np.linalg.norm(h, axis=1, keepdims=True), 1e-300)
+    sim = h @ h.T
+    out: set[tuple[int, int]] = set()
+    for i in range(n):
+        far = np.abs(np.arange(n) - i) > window
+        cand = np.flatnonzero(far)
+        for j in cand[np.argsort(-sim[i, cand])[:per_frame]]:
+            out.add((min(i, int(j)), max(i, int(j))))
+    return sorted(out)
+
+
+def _build_tracks(
+    offset: NDArray[np.int64], edges: NDArray[np.int64]
+) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
+    """Join matched keypoints (global ids) into tracks with one keypoint a frame at most.
+
+    Connected components of the match graph; a component with two keypoints of one frame
+    (two points joined by a wrong match) is rebuilt greedily, a union refused when the two
+    parts share a frame. Returns each node's track (-1: none) and the number of tracks.
+    """
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    total = int(offset[-1])
+    if edges.shape[0] == 0:
+        return -np.ones(total, np.int64), np.zeros(0, np.int64)
+    g = coo_matrix((np.ones(edges.shape[0]), (edges[:, 0], edges[:, 1])), shape=(total, total))
+    _, label = connected_components(g, directed=False)
+    frame_of = np.searchsorted(offset, np.arange(total), side="right") - 1
+    size = np.bincount(label)
+    # components with a frame twice
+    key = label.astype(np.int64) * (frame_of.max() + 1) + frame_of
+    uk, cnt = np.unique(key, return_counts=True)
+    bad = np.zeros(size.size, bool)
+    bad[uk[cnt > 1] // (frame_of.max() + 1)] = True
+    label = label.astype(np.int64)
+    if bad.any():
+        parent: dict[int, int] = {}
+        frames: dict[int, set[int]] = {}
+
+        def find(x: int) -> int:
+            while parent[x] != x:
+                parent[x] = parent[parent[x]]
+                x = parent[x]
+            return x
+
+        next_label = int(size.size)
+        for a, b in edges[bad[label[edges[:, 0]]]].tolist():
+            for x in (a, b):
+                if x not in parent:
+                    parent[x] = x
+                    frames[x] = {int(frame_of[x])}
+            ra, rb = find(a), find(b)
+            if ra == rb or frames[ra] & frames[rb]:
+                continue
+            parent[rb] = ra
+            frames[ra] |= frames.pop(rb)
+        roots: dict[int, int] = {}
+        for x in parent:
+            r = find(x)
+            if r not in roots:
+                roots[r] = next_label
+                next_label += 1
+            label[x] = roots[r]
+    keep = np.bincount(label)[label] >= 2
+    label = np.where(keep, label, -1)
+    _, track = np.unique(label[keep], return_inverse=True)
+    out = -np.ones(total, np.int64)
+    out[keep] = track
+    return out, np.bincount(track)
 
 
 def reconstruct_sequence(
@@ -417,7 +669,8 @@ def reconstruct_sequence(
     distortion : distortion model, optional
         Its lens distortion: keypoints are undistorted before any geometry.
     window : int
-        Each frame is matched with the next ``window`` frames.
+        Each frame is matched with the next ``window`` frames (and with the frames farther
+        away that its visual words make look alike, each verified geometrically).
     max_features : int
         SIFT keypoints per frame.
     ratio : float
@@ -440,7 +693,6 @@ def reconstruct_sequence(
     """
     from imageform.geometry.pnp_ransac import solve_pnp_ransac
     from imageform.geometry.relative_pose import recover_pose
-    from imageform.geometry.triangulation import triangulate_points
     from imageform.geometry.twoview import find_essential_matrix
 
     if len(images) < 2:
@@ -469,57 +721,69 @@ def reconstruct_sequence(
         raise InvalidInputError(
             f"no texture: at most {max(textured)} keypoints a frame (50 needed to match)"
         )
-    tracks = _Tracks(textured)
-    pair_info: dict[tuple[int, int], tuple[int, float, F64]] = {}
+    offset = np.concatenate([[0], np.cumsum(textured)]).astype(np.int64)
+    pair_info: dict[tuple[int, int], tuple[int, float, NDArray[np.int64]]] = {}
+
+    def verify(i: int, j: int) -> None:
+        """Match frames i and j, keep the essential matrix's inliers and the parallax."""
+        m = match_features(feats[i].descriptors, feats[j].descriptors, ratio=ratio)
+        if m.shape[0] < 30:
+            return
+        p1, p2 = ideal[i][m[:, 0]], ideal[j][m[:, 1]]
+        good = np.all(np.isfinite(p1), 1) & np.all(np.isfinite(p2), 1)
+        m, p1, p2 = m[good], p1[good], p2[good]
+        if m.shape[0] < 30:
+            return
+        try:
+            er = find_essential_matrix(p1, p2, k, threshold=threshold_px, rng=rng)
+        except (DegenerateConfigurationError, InvalidInputError):
+            return
+        inl = np.asarray(er.inliers, bool)
+        if inl.sum() < 30:
+            return
+        if j - i > win:  # a loop closure: never the initial pair, its parallax unused
+            pair_info[(i, j)] = (int(inl.sum()), 0.0, m[inl])
+            return
+        # parallax of the pair: the median angle between the rays of its inliers
+        rp = recover_pose(er.E, p1, p2, k, inliers=inl)
+        C2 = -np.asarray(rp.R).T @ np.asarray(rp.t).ravel()
+        X = np.asarray(rp.points, np.float64)
+        fin = np.all(np.isfinite(X), axis=1)
+        ang = float(np.median(_angle_deg(np.zeros(3), C2, X[fin]))) if fin.any() else 0.0
+        pair_info[(i, j)] = (int(inl.sum()), ang, m[inl])
+
     for i in range(n):
         for j in range(i + 1, min(n, i + 1 + win)):
-            m = match_features(feats[i].descriptors, feats[j].descriptors, ratio=ratio)
-            if m.shape[0] < 30:
-                continue
-            p1, p2 = ideal[i][m[:, 0]], ideal[j][m[:, 1]]
-            good = np.all(np.isfinite(p1), 1) & np.all(np.isfinite(p2), 1)
-            m, p1, p2 = m[good], p1[good], p2[good]
-            if m.shape[0] < 30:
-                continue
-            try:
-                er = find_essential_matrix(p1, p2, k, threshold=threshold_px, rng=rng)
-            except (DegenerateConfigurationError, InvalidInputError):
-                continue
-            inl = np.asarray(er.inliers, bool)
-            if inl.sum() < 30:
-                continue
-            for a, b in m[inl]:
-                tracks.union(tracks.node(i, int(a)), tracks.node(j, int(b)))
-            # parallax of the pair: the median angle between the rays of its inliers
-            rp = recover_pose(er.E, p1, p2, k, inliers=inl)
-            C2 = -np.asarray(rp.R).T @ np.asarray(rp.t).ravel()
-            X = np.asarray(rp.points, np.float64)
-            fin = np.all(np.isfinite(X), axis=1)
-            ang = float(np.median(_angle_deg(np.zeros(3), C2, X[fin]))) if fin.any() else 0.0
-            pair_info[(i, j)] = (int(inl.sum()), ang, m[inl])
+            verify(i, j)
+    for i, j in _similar_pairs([f.descriptors for f in feats], win, 2, rng):
+        verify(i, j)
     if not pair_info:
         raise DegenerateConfigurationError(
             "no pair of frames has 30 verified matches: too little overlap or texture"
         )
-    # the tracks: every observation's root, and the observations of each multi-view track
-    total = int(tracks.offset[-1])
-    roots = np.array([tracks.find(x) for x in range(total)], np.int64)
-    frame_of = np.searchsorted(tracks.offset, np.arange(total), side="right") - 1
-    order = np.argsort(roots, kind="stable")
-    bounds = np.flatnonzero(np.diff(roots[order])) + 1
-    # a track with two keypoints in one frame joined two different points: dropped
-    groups = [
-        g for g in np.split(order, bounds) if g.size >= 2 and np.unique(frame_of[g]).size == g.size
-    ]
-    track_obs = [
-        (frame_of[g].astype(np.int64), (g - tracks.offset[frame_of[g]]).astype(np.int64))
-        for g in groups
-    ]
-    n_tracks = len(track_obs)
+    edges = np.concatenate(
+        [
+            np.column_stack([offset[i] + m[:, 0], offset[j] + m[:, 1]])
+            for (i, j), (_, _, m) in pair_info.items()
+        ]
+    )
+    node_track, track_size = _build_tracks(offset, edges)
+    n_tracks = track_size.size
+    # the observations (frame, keypoint, track, undistorted pixel, usable), in no order:
+    # completion and merging append to them and move them between tracks
+    nodes = np.flatnonzero(node_track >= 0)
+    o_frame = (np.searchsorted(offset, nodes, side="right") - 1).astype(np.int64)
+    o_kp = (nodes - offset[o_frame]).astype(np.int64)
+    o_track = node_track[nodes].astype(np.int64)
+    all_uv = np.concatenate(ideal)
+    o_uv = all_uv[nodes]
+    o_ok = np.all(np.isfinite(o_uv), axis=1)
+    kp_track = [node_track[offset[f] : offset[f + 1]].copy() for f in range(n)]
+    desc = [f.descriptors for f in feats]
     # the initial pair: most inliers among pairs with 2 degrees of parallax or more
     cands = [(v[0], key) for key, v in pair_info.items() if v[1] >= 2.0]
     if not cands:
-        cands = [(v[0], key) for key, v in pair_info.items()]
+        cands = [(v[0], key) for key, v in pair_info.items() if key[1] - key[0] <= win]
         notes.append("no pair with 2 degrees of parallax: started from the best matched one")
     _, (i0, j0) = max(cands)
     _, _, m0 = pair_info[(i0, j0)]
@@ -532,79 +796,197 @@ def reconstruct_sequence(
     Rs[j0], ts[j0] = np.asarray(rp.R, np.float64), np.asarray(rp.t, np.float64).ravel()
     registered = np.zeros(n, bool)
     registered[[i0, j0]] = True
-    point_of = -np.ones(n_tracks, np.int64)  # track -> point index
-    pts: list[F64] = []
-    # per frame: keypoint -> track (or -1)
-    kp_track = [-np.ones(textured[f], np.int64) for f in range(n)]
-    for tid, (fr, kp) in enumerate(track_obs):
-        for f, q in zip(fr, kp, strict=True):
-            kp_track[int(f)][int(q)] = tid
+    P = np.full((n_tracks, 3), np.nan)  # each track's point (NaN: none yet)
+    h, w = np.asarray(images[0]).shape[:2]
+    max_err = 4.0
 
-    def triangulate_new() -> None:
-        """Triangulate every track seen by two registered frames and not yet a point."""
-        todo = [
-            tid
-            for tid in range(n_tracks)
-            if point_of[tid] < 0 and int(np.sum(registered[track_obs[tid][0]])) >= 2
-        ]
-        if not todo:
+    def has_point() -> NDArray[np.bool_]:
+        return np.all(np.isfinite(P), axis=1)
+
+    def triangulate(tids: NDArray[np.int64]) -> None:
+        """Triangulate the tracks ``tids`` (no point yet) from their registered views."""
+        tids = np.unique(tids)
+        tids = tids[~has_point()[tids]]
+        if tids.size == 0:
             return
-        reg = np.flatnonzero(registered)
-        slot = -np.ones(n, np.int64)
-        slot[reg] = np.arange(reg.size)
-        uv = np.full((reg.size, len(todo), 2), np.nan)
-        for c, tid in enumerate(todo):
-            fr, kp = track_obs[tid]
-            for f, q in zip(fr, kp, strict=True):
-                if registered[f]:
-                    uv[slot[f], c] = ideal[int(f)][int(q)]
-        P = np.stack([k @ np.hstack([Rs[g], ts[g][:, None]]) for g in reg])
-        tri = triangulate_points(P, uv)
-        X = np.asarray(tri.points, np.float64)
-        valid = np.asarray(tri.valid, bool) & np.all(np.isfinite(X), axis=1)
-        centres = np.stack([-Rs[g].T @ ts[g] for g in reg])
-        for c, tid in enumerate(todo):
-            if not valid[c]:
-                continue
-            seen = np.flatnonzero(np.all(np.isfinite(uv[:, c]), axis=1))
-            Cs = centres[seen]
-            x = X[c]
-            rays = x - Cs
-            rays /= np.linalg.norm(rays, axis=1, keepdims=True)
-            cosines = rays @ rays.T
-            if math.degrees(math.acos(float(np.clip(cosines.min(), -1, 1)))) < 1.5:
-                continue
-            ok = True
-            for s in seen:
-                proj, z = _project(k, Rs[reg[s]], ts[reg[s]], x[None])
-                if z[0] <= 0 or np.linalg.norm(proj[0] - uv[s, c]) > 4.0:
-                    ok = False
-                    break
-            if ok:
-                point_of[tid] = len(pts)
-                pts.append(x)
+        want = np.zeros(n_tracks, bool)
+        want[tids] = True
+        sel = np.flatnonzero(want[o_track] & registered[o_frame] & o_ok)
+        col = np.searchsorted(tids, o_track[sel])
+        cnt = np.bincount(col, minlength=tids.size)
+        fr = o_frame[sel]
+        X = _triangulate_tracks(k, Rs, ts, fr, col, o_uv[sel], tids.size)
+        X[cnt < 2] = np.nan
+        fin = np.all(np.isfinite(X), axis=1)
+        X[~fin] = 0.0
+        # checks: in front of every view, within max_err pixels, rays 1.5 degrees apart
+        proj, z = _project_obs(k, Rs[fr], ts[fr], X[col])
+        err = np.linalg.norm(proj - o_uv[sel], axis=1)
+        fine = (z > 0) & (err < max_err)
+        bad = np.bincount(col, weights=~fine, minlength=tids.size) > 0
+        C = -np.einsum("mji,mj->mi", Rs[fr], ts[fr])
+        ray = X[col] - C
+        ray /= np.maximum(np.linalg.norm(ray, axis=1, keepdims=True), 1e-300)
+        # the largest angle of a view's ray with the track's mean ray, twice: about the
+        # largest angle between two rays
+        mean = _sum_blocks(col, ray, tids.size)
+        mean /= np.maximum(np.linalg.norm(mean, axis=1, keepdims=True), 1e-300)
+        cosm = np.clip(np.sum(ray * mean[col], axis=1), -1.0, 1.0)
+        spread = np.zeros(tids.size)
+        np.maximum.at(spread, col, np.degrees(np.arccos(cosm)))
+        good = fin & ~bad & (2.0 * spread >= 1.5)
+        P[tids[good]] = X[good]
 
-    triangulate_new()
+    def adjust(delta: float, iters: int) -> None:
+        """Bundle adjustment over every registered frame and point."""
+        ids = np.flatnonzero(o_ok & registered[o_frame] & has_point()[o_track])
+        if ids.size == 0:
+            return
+        fixed = ~registered
+        fixed[i0] = True
+        R0 = np.where(registered[:, None, None], Rs, np.eye(3))
+        t0 = np.where(registered[:, None], ts, 0.0)
+        pts, pslot = np.unique(o_track[ids], return_inverse=True)
+        Rn, tn, Xn = _schur_lm(
+            k, R0, t0, P[pts], o_frame[ids], pslot, o_uv[ids], fixed, delta, iters
+        )
+        Rs[registered], ts[registered] = Rn[registered], tn[registered]
+        P[pts] = Xn
+
+    def filter_obs(limit: float, min_angle: float = 0.0) -> None:
+        """Drop observations beyond ``limit`` pixels; points left with one view go."""
+        ids = np.flatnonzero(registered[o_frame] & has_point()[o_track] & o_ok)
+        fr = o_frame[ids]
+        proj, z = _project_obs(k, Rs[fr], ts[fr], P[o_track[ids]])
+        err = np.linalg.norm(proj - o_uv[ids], axis=1)
+        o_ok[ids[~((z > 0) & (err < limit))]] = False
+        use = registered[o_frame] & o_ok
+        views = np.bincount(o_track[use], minlength=n_tracks)
+        P[views < 2] = np.nan
+
+    def complete(radius: float) -> int:
+        """Add the views a track's matching missed; merge tracks that are one point.
+
+        Every point is projected into each registered frame that has no view of it; the
+        keypoint nearest the projection (within ``radius`` pixels, its descriptor near the
+        track's) becomes a view of it, or, when it is another point's view and the two
+        points are one (each reprojects within ``radius`` in all of the other's views, no
+        frame in common), the two tracks are merged. Returns how many views were added.
+        """
+        nonlocal o_frame, o_kp, o_track, o_uv, o_ok
+        from scipy.spatial import cKDTree
+
+        hp = has_point()
+        ok_obs = o_ok & registered[o_frame]
+        # each track's reference descriptor: its first usable view's
+        ref = -np.ones(n_tracks, np.int64)
+        ids = np.flatnonzero(ok_obs & hp[o_track])
+        ref[o_track[ids[::-1]]] = ids[::-1]
+        ref_desc = np.zeros((n_tracks, 128), np.float32)
+        rt = np.flatnonzero(ref >= 0)
+        for f in np.unique(o_frame[ref[rt]]).tolist():
+            s = rt[o_frame[ref[rt]] == f]
+            ref_desc[s] = desc[f][o_kp[ref[s]]]
+        new_f, new_k, new_t = [], [], []
+        merges: list[tuple[int, int]] = []
+        by_frame = np.argsort(o_frame, kind="stable")
+        fstart = np.searchsorted(o_frame[by_frame], np.arange(n + 1))
+        for f in np.flatnonzero(registered).tolist():
+            seen = np.zeros(n_tracks, bool)
+            seen[o_track[by_frame[fstart[f] : fstart[f + 1]]]] = True
+            cand = np.flatnonzero(hp & ~seen & (ref >= 0))
+            if cand.size == 0:
+                continue
+            proj, z = _project_obs(
+                k,
+                np.broadcast_to(Rs[f], (cand.size, 3, 3)),
+                np.broadcast_to(ts[f], (cand.size, 3)),
+                P[cand],
+            )
+            inside = (z > 0) & np.all((proj > -0.5) & (proj < [w - 0.5, h - 0.5]), axis=1)
+            cand, proj = cand[inside], proj[inside]
+            fin = np.all(np.isfinite(ideal[f]), axis=1)
+            kp_ids = np.flatnonzero(fin)
+            if cand.size == 0 or kp_ids.size == 0:
+                continue
+            dist, q = cKDTree(ideal[f][kp_ids]).query(proj, distance_upper_bound=radius)
+            near = np.isfinite(dist)
+            cand, q = cand[near], kp_ids[q[near]]
+            dd = np.linalg.norm(desc[f][q] - ref_desc[cand], axis=1)
+            alike = dd < 250.0
+            cand, q, dd = cand[alike], q[alike], dd[alike]
+            # one track a keypoint: the nearest descriptor
+            order_ = np.lexsort((dd, q))
+            first = np.ones(order_.size, bool)
+            first[1:] = q[order_][1:] != q[order_][:-1]
+            cand, q = cand[order_][first], q[order_][first]
+            owner = kp_track[f][q]
+            free = owner < 0
+            new_f.append(np.full(int(free.sum()), f, np.int64))
+            new_k.append(q[free])
+            new_t.append(cand[free])
+            kp_track[f][q[free]] = cand[free]
+            other = ~free & (owner != cand)
+            merges += list(zip(cand[other].tolist(), owner[other].tolist(), strict=True))
+        added = 0
+        if new_f:
+            nf_ = np.concatenate(new_f)
+            nk_ = np.concatenate(new_k)
+            o_frame = np.concatenate([o_frame, nf_])
+            o_kp = np.concatenate([o_kp, nk_])
+            o_track = np.concatenate([o_track, np.concatenate(new_t)])
+            o_uv = np.concatenate([o_uv, all_uv[offset[nf_] + nk_]])
+            o_ok = np.concatenate([o_ok, np.ones(nf_.size, bool)])
+            added = int(nf_.size)
+        # merges: the second track's views join the first, if the two points are one (a
+        # track merged once waits for the next completion to merge again)
+        gone = np.zeros(n_tracks, bool)
+        touched = np.zeros(n_tracks, bool)
+        by_track = np.argsort(o_track, kind="stable")
+        start = np.searchsorted(o_track[by_track], np.arange(n_tracks + 1))
+        hp = has_point()
+        for ta, tb in merges:
+            if touched[ta] or touched[tb] or ta == tb or not hp[tb]:
+                continue
+            va = by_track[start[ta] : start[ta + 1]]
+            vb = by_track[start[tb] : start[tb + 1]]
+            if np.intersect1d(o_frame[va], o_frame[vb]).size:
+                continue
+            both = np.concatenate([va, vb])
+            both = both[o_ok[both] & registered[o_frame[both]]]
+            fine = True
+            for X in (P[ta], P[tb]):
+                proj, z = _project_obs(
+                    k, Rs[o_frame[both]], ts[o_frame[both]], np.broadcast_to(X, (both.size, 3))
+                )
+                err = np.linalg.norm(proj - o_uv[both], axis=1)
+                fine &= bool(np.all((z > 0) & (err < radius)))
+            if not fine:
+                continue
+            o_track[vb] = ta
+            for fb, kb in zip(o_frame[vb].tolist(), o_kp[vb].tolist(), strict=True):
+                kp_track[fb][kb] = ta
+            P[tb] = np.nan
+            gone[tb] = touched[ta] = touched[tb] = True
+        return added + int(gone.sum())
+
+    triangulate(o_track[o_frame == i0])
+    adjust(2.0, 10)
+    last_ba = 2
     # register the others: the frame that sees the most points first
     pending = [fi for fi in range(n) if not registered[fi]]
     while pending:
-        counts = []
-        for fi in pending:
-            tr = kp_track[fi]
-            has = (tr >= 0) & np.isin(np.arange(tr.size), np.flatnonzero(tr >= 0))
-            pid = np.where(has, point_of[np.maximum(tr, 0)], -1)
-            counts.append(int(np.sum(pid >= 0)))
+        hp = has_point()
+        counts = [int(np.sum(hp[kp_track[fi][kp_track[fi] >= 0]])) for fi in pending]
         fi = pending.pop(int(np.argmax(counts)))
         tr = kp_track[fi]
-        pid = np.where(tr >= 0, point_of[np.maximum(tr, 0)], -1)
-        kps = np.flatnonzero((pid >= 0) & np.all(np.isfinite(ideal[fi]), axis=1))
+        kps = np.flatnonzero(tr >= 0)
+        kps = kps[hp[tr[kps]] & np.all(np.isfinite(ideal[fi][kps]), axis=1)]
         if kps.size < 12:
             notes.append(f"frame {fi}: {kps.size} 2-D/3-D correspondences (12 needed)")
             continue
-        X = np.array([pts[p] for p in pid[kps]])
-        uv = ideal[fi][kps]
         try:
-            res = solve_pnp_ransac(X, uv, k, threshold=3.0, rng=rng)
+            res = solve_pnp_ransac(P[tr[kps]], ideal[fi][kps], k, threshold=3.0, rng=rng)
         except (DegenerateConfigurationError, InvalidInputError):
             notes.append(f"frame {fi}: PnP failed")
             continue
@@ -613,49 +995,56 @@ def reconstruct_sequence(
             continue
         Rs[fi], ts[fi] = np.asarray(res.R, np.float64), np.asarray(res.tvec, np.float64)
         registered[fi] = True
-        triangulate_new()
-    # bundle adjustment over everything, twice (the second without the outliers)
-    P = np.array(pts, np.float64).reshape(-1, 3)
-    reg = np.flatnonzero(registered)
-    cam_slot = -np.ones(n, np.int64)
-    cam_slot[reg] = np.arange(reg.size)
-    obs_c, obs_p, obs_uv = [], [], []
-    for tid in np.flatnonzero(point_of >= 0).tolist():
-        fr, kp = track_obs[tid]
-        for gi, q in zip(fr.tolist(), kp.tolist(), strict=True):
-            if registered[gi] and np.all(np.isfinite(ideal[int(gi)][int(q)])):
-                obs_c.append(cam_slot[gi])
-                obs_p.append(point_of[tid])
-                obs_uv.append(ideal[int(gi)][int(q)])
-    ci, pi, uvo = np.array(obs_c, np.int64), np.array(obs_p, np.int64), np.array(obs_uv)
-    Rr, t_reg = Rs[reg], ts[reg]
-    fixed = int(cam_slot[i0])
-    if P.shape[0]:
-        for loss in (2.0, 0.0):  # robust first, then plain least squares without outliers
-            Rr, t_reg, P = bundle_adjust(k, Rr, t_reg, P, ci, pi, uvo, fixed=fixed, loss_px=loss)
-            Xc = np.einsum("mij,mj->mi", Rr[ci], P[pi]) + t_reg[ci]
-            proj = (Xc @ k.T)[:, :2] / Xc[:, 2:3]
-            err = np.where(Xc[:, 2] > 0, np.linalg.norm(proj - uvo, axis=1), np.inf)
-            keep = np.isfinite(err) & (err < 4.0)
-            ci, pi, uvo = ci[keep], pi[keep], uvo[keep]
-    Rs[reg], ts[reg] = Rr, t_reg
-    rms = np.full(n, np.nan)
-    for slot_i, gi in enumerate(reg.tolist()):
-        sel = ci == slot_i
-        if sel.any():
-            proj, _ = _project(k, Rr[slot_i], t_reg[slot_i], P[pi[sel]])
-            rms[gi] = float(np.sqrt(np.mean(np.sum((proj - uvo[sel]) ** 2, axis=1))))
-    length = np.bincount(pi, minlength=P.shape[0]).astype(np.int64)
-    colors = np.zeros((P.shape[0], 3), np.uint8)
-    for tid in np.flatnonzero(point_of >= 0).tolist():
-        fr, kp = track_obs[tid]
-        g0, q = int(fr[0]), int(kp[0])
-        im = np.asarray(images[g0])
-        x, y = np.round(feats[g0].xy[q]).astype(int)
-        v = im[min(max(y, 0), im.shape[0] - 1), min(max(x, 0), im.shape[1] - 1)]
-        colors[point_of[tid]] = v[:3] if np.ndim(v) else v
-    residuals = np.zeros(0)
-    if ci.size:  # every kept observation's reprojection error, after the final adjustment
-        Xc = np.einsum("mij,mj->mi", Rr[ci], P[pi]) + t_reg[ci]
-        residuals = np.linalg.norm((Xc @ k.T)[:, :2] / Xc[:, 2:3] - uvo, axis=1)
-    return Reconstruction(Rs, ts, registered, P, colors, length, rms, notes, residuals)
+        # the correspondences PnP rejected are not this frame's views of those points
+        rejected = np.zeros(tr.size, bool)
+        rejected[kps[~np.asarray(res.inliers, bool)]] = True
+        mine = np.flatnonzero(o_frame == fi)
+        o_ok[mine[rejected[o_kp[mine]]]] = False
+        triangulate(tr[tr >= 0])
+        nreg = int(registered.sum())
+        if nreg >= 1.4 * last_ba:
+            adjust(2.0, 10)
+            filter_obs(max_err)
+            complete(2.0)
+            triangulate(np.arange(n_tracks))
+            last_ba = nreg
+    # the final adjustment: robust, outliers out, the tracks completed, merged and
+    # re-triangulated, robust again, then plain least squares on what is left
+    adjust(2.0, 30)
+    filter_obs(max_err)
+    complete(2.0)
+    triangulate(np.arange(n_tracks))
+    adjust(1.0, 30)
+    filter_obs(2.0)
+    adjust(0.0, 50)
+    filter_obs(2.0)
+    # the output: the tracks with a point, renumbered
+    hp = has_point()
+    pid = -np.ones(n_tracks, np.int64)
+    pid[hp] = np.arange(int(hp.sum()))
+    ids = np.flatnonzero(registered[o_frame] & o_ok & hp[o_track])
+    Pout = P[hp]
+    length = np.bincount(pid[o_track[ids]], minlength=Pout.shape[0]).astype(np.int64)
+    fr = o_frame[ids]
+    proj, _ = _project_obs(k, Rs[fr], ts[fr], P[o_track[ids]])
+    e2 = np.sum((proj - o_uv[ids]) ** 2, axis=1)
+    residuals = np.sqrt(e2)  # every kept observation's reprojection error, after the final BA
+    cnt = np.bincount(fr, minlength=n)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        rms = np.sqrt(np.bincount(fr, weights=e2, minlength=n) / cnt)
+    rms[~registered | (cnt == 0)] = np.nan
+    Rs[~registered], ts[~registered] = np.nan, np.nan
+    # colours from each point's first view
+    first = -np.ones(n_tracks, np.int64)
+    first[o_track[ids[::-1]]] = ids[::-1]
+    first = first[hp]
+    colors = np.zeros((Pout.shape[0], 3), np.uint8)
+    for f in np.unique(o_frame[first]).tolist():
+        sel = o_frame[first] == f
+        im = np.asarray(images[f])
+        xy = np.round(feats[f].xy[o_kp[first[sel]]]).astype(np.int64)
+        x = np.clip(xy[:, 0], 0, im.shape[1] - 1)
+        y = np.clip(xy[:, 1], 0, im.shape[0] - 1)
+        v = im[y, x]
+        colors[sel] = v[:, :3] if v.ndim == 2 else v[:, None]
+    return Reconstruction(Rs, ts, registered, Pout, colors, length, rms, notes, residuals)
