@@ -24,6 +24,12 @@ _IMG = np.random.default_rng(0).uniform(0, 1, (9, 11, 3))
 _SENSOR = sensor.SensorModel(read_noise=1, dark_current=0, black_level=0)
 
 
+def _workflows_analysis() -> Any:
+    from imageform.workflows import analysis as wf
+
+    return wf
+
+
 def _segments() -> geometry.LineSegments:
     """Segments towards two vanishing points, (600, 240) and (-200, 260), plus noise lines."""
     rng = np.random.default_rng(5)
@@ -409,6 +415,37 @@ CASES: list[tuple[str, Callable[[], Any], Callable[[], Any], str]] = [
         lambda: sensor.fixed_pattern((3, 4, 1), prnu=0.01, dsnu=1, column_fpn=1, rng=7).offset,
         "use rng=",
     ),
+    # method registries (issue 30): one read-only registry per concept
+    (
+        "color.CCT_METHODS",
+        lambda: dict(color.CCT_METHODS),
+        lambda: dict(color.CCT_TO_XY_METHODS),
+        "use imageform.color.CCT_TO_XY_METHODS",
+    ),
+    (
+        "color.cct.CCT_METHODS",
+        lambda: dict(color.cct.CCT_METHODS),
+        lambda: dict(color.cct.CCT_TO_XY_METHODS),
+        "CCT_TO_XY_METHODS",
+    ),
+    (
+        "color.cct_methods.XY_TO_CCT_METHODS",
+        lambda: dict(color.cct_methods.XY_TO_CCT_METHODS),
+        lambda: dict(color.XY_TO_CCT_METHODS),
+        "use imageform.color.XY_TO_CCT_METHODS",
+    ),
+    (
+        "analysis.macenko.STAIN_METHODS",
+        lambda: dict(analysis.macenko.STAIN_METHODS),
+        lambda: dict(analysis.STAIN_VECTOR_METHODS),
+        "STAIN_VECTOR_METHODS",
+    ),
+    (
+        "workflows.analysis.STAIN_METHODS",
+        lambda: dict(_workflows_analysis().STAIN_METHODS),
+        lambda: dict(analysis.STAIN_NORMALIZATION_METHODS),
+        "use imageform.analysis.STAIN_NORMALIZATION_METHODS",
+    ),
     # analysis and the simulator's colour correction
     (
         "synthetic_endoscopy_image seed first",
@@ -452,6 +489,8 @@ CASES: list[tuple[str, Callable[[], Any], Callable[[], Any], str]] = [
 
 
 def _same(a: Any, b: Any) -> bool:
+    if isinstance(a, dict) and isinstance(b, dict):
+        return a.keys() == b.keys() and all(a[k] is b[k] for k in a)
     if isinstance(a, tuple) and isinstance(b, tuple):
         return len(a) == len(b) and all(_same(x, y) for x, y in zip(a, b, strict=True))
     if hasattr(a, "__dataclass_fields__"):

@@ -144,6 +144,9 @@ def convert(run: Run, opts: ConvertOptions, *, out: Path, image: Path) -> Result
 
 # ---------------------------------------------------------------- white balance
 
+#: ``--method``: :data:`imageform.color.WHITE_BALANCE_METHODS` (the one registry) with the
+#: ``max_rgb`` alias, and ``chart``. Spelled out so that ``--help`` imports no NumPy;
+#: tests/test_registries.py checks it against the registry.
 _WB_METHODS = (
     "gray_world",
     "white_patch",
