@@ -24,6 +24,37 @@ _IMG = np.random.default_rng(0).uniform(0, 1, (9, 11, 3))
 _SENSOR = sensor.SensorModel(read_noise=1, dark_current=0, black_level=0)
 
 
+def _board() -> np.ndarray:
+    """A 5 x 4-square checkerboard (4 x 3 inner corners), 20 px squares, slightly blurred."""
+    from scipy.ndimage import gaussian_filter
+
+    v, u = np.mgrid[0:120, 0:140]
+    sq = ((u - 20) // 20 + (v - 20) // 20) % 2
+    inside = (u >= 20) & (u < 120) & (v >= 20) & (v < 100)
+    return np.asarray(gaussian_filter(np.where(inside, sq, 1).astype(float), 1.0))
+
+
+def _corner() -> np.ndarray:
+    from scipy.ndimage import gaussian_filter
+
+    v, u = np.mgrid[0:40, 0:40] * 1.0
+    a, b = np.clip(u - 20.3 + 0.5, 0, 1), np.clip(v - 19.6 + 0.5, 0, 1)
+    return np.asarray(gaussian_filter(a * b + (1 - a) * (1 - b), 1.5))
+
+
+_BOARD, _CORNER = _board(), _corner()
+
+
+def _written(name: str, **kw: Any) -> Any:
+    import tempfile
+    from pathlib import Path
+
+    from imageform.io import write_image
+
+    with tempfile.TemporaryDirectory() as d:
+        return write_image(Path(d) / name, np.full((2, 2, 3), 0.5), **kw)
+
+
 def _workflows_analysis() -> Any:
     from imageform.workflows import analysis as wf
 
@@ -142,7 +173,7 @@ CASES: list[tuple[str, Callable[[], Any], Callable[[], Any], str]] = [
     (
         "rgb_to_ycbcr range=",
         lambda: color.rgb_to_ycbcr(_IMG, "bt709", range="limited", bits=10),
-        lambda: color.rgb_to_ycbcr(_IMG, "bt709", signal_range="limited", bits=10),
+        lambda: color.rgb_to_ycbcr(_IMG, "bt709", signal_range="limited", bit_depth=10),
         "signal_range=",
     ),
     (
@@ -166,7 +197,7 @@ CASES: list[tuple[str, Callable[[], Any], Callable[[], Any], str]] = [
     (
         "convert range=",
         lambda: color.convert(_IMG, "srgb", "ycbcr", range="limited", bits=8),
-        lambda: color.convert(_IMG, "srgb", "ycbcr", signal_range="limited", bits=8),
+        lambda: color.convert(_IMG, "srgb", "ycbcr", signal_range="limited", bit_depth=8),
         "signal_range=",
     ),
     # geometry
@@ -414,6 +445,77 @@ CASES: list[tuple[str, Callable[[], Any], Callable[[], Any], str]] = [
         lambda: sensor.fixed_pattern((3, 4, 1), prnu=0.01, dsnu=1, column_fpn=1, seed=7).offset,
         lambda: sensor.fixed_pattern((3, 4, 1), prnu=0.01, dsnu=1, column_fpn=1, rng=7).offset,
         "use rng=",
+    ),
+    # one spelling per concept (issue 30): tol, max_trials, bit_depth, center
+    (
+        "refine_corners eps=",
+        lambda: geometry.refine_corners(_CORNER, [[19.0, 21.0]], half_window=5, eps=1e-2).corners,
+        lambda: geometry.refine_corners(_CORNER, [[19.0, 21.0]], half_window=5, tol=1e-2).corners,
+        "use tol=",
+    ),
+    (
+        "find_checkerboard eps=",
+        lambda: geometry.find_checkerboard(_BOARD, (4, 3), eps=1e-2).corners,
+        lambda: geometry.find_checkerboard(_BOARD, (4, 3), tol=1e-2).corners,
+        "use tol=",
+    ),
+    (
+        "solve_pnp_ransac max_hypotheses=",
+        lambda: geometry.solve_pnp_ransac(*_pnp_data(), max_hypotheses=300).tvec,
+        lambda: geometry.solve_pnp_ransac(*_pnp_data(), max_trials=300).tvec,
+        "use max_trials=",
+    ),
+    (
+        "detect_vanishing_points iterations=",
+        lambda: (
+            geometry.detect_vanishing_points(
+                segments=_segments(), image_size=(400, 400), iterations=200
+            ).vanishing_points
+        ),
+        lambda: (
+            geometry.detect_vanishing_points(
+                segments=_segments(), image_size=(400, 400), max_trials=200
+            ).vanishing_points
+        ),
+        "use max_trials=",
+    ),
+    (
+        "detect_vanishing_points principal_point='centre'",
+        lambda: (
+            geometry.detect_vanishing_points(
+                segments=_segments(), image_size=(400, 400), principal_point="centre"
+            ).vanishing_points
+        ),
+        lambda: (
+            geometry.detect_vanishing_points(
+                segments=_segments(), image_size=(400, 400), principal_point="center"
+            ).vanishing_points
+        ),
+        "principal_point='center'",
+    ),
+    (
+        "rgb_to_ycbcr bits=",
+        lambda: color.rgb_to_ycbcr(_IMG, "bt709", signal_range="limited", bits=10),
+        lambda: color.rgb_to_ycbcr(_IMG, "bt709", signal_range="limited", bit_depth=10),
+        "use bit_depth=",
+    ),
+    (
+        "ycbcr_to_srgb bits=",
+        lambda: color.ycbcr_to_srgb([235.0, 128.0, 128.0], signal_range="limited", bits=8),
+        lambda: color.ycbcr_to_srgb([235.0, 128.0, 128.0], signal_range="limited", bit_depth=8),
+        "use bit_depth=",
+    ),
+    (
+        "convert bits=",
+        lambda: color.convert(_IMG, "srgb", "ycbcr", bits=8),
+        lambda: color.convert(_IMG, "srgb", "ycbcr", bit_depth=8),
+        "use bit_depth=",
+    ),
+    (
+        "write_image bits= and WrittenImage.bits",
+        lambda: _written("old.png", bits=16).bits,
+        lambda: _written("new.png", bit_depth=16).bit_depth,
+        "bit_depth",
     ),
     # method registries (issue 30): one read-only registry per concept
     (

@@ -349,7 +349,7 @@ VALID: dict[str, C | Skip] = {
     "imageform.geometry.decompose_projection_matrix": call(P=V("P")),
     "imageform.geometry.detect_line_segments": call(image=V("rgb")),
     "imageform.geometry.detect_vanishing_points": call(
-        segments=V("segments"), image_size=(16, 12), iterations=50
+        segments=V("segments"), image_size=(16, 12), max_trials=50
     ),
     "imageform.geometry.estimate_homography": call(
         V("uv"), np.array([[3.1, 4.2], [5.3, 6.4], [8.6, 3.1], [10.25, 7.5]])
@@ -400,7 +400,7 @@ VALID: dict[str, C | Skip] = {
     "imageform.geometry.rvec_to_matrix": call(rvec=V("rvec")),
     "imageform.geometry.solve_pnp": call(V("points3"), V("points3_uv"), V("K")),
     "imageform.geometry.solve_pnp_ransac": call(
-        V("points3"), V("points3_uv"), V("K"), max_hypotheses=50
+        V("points3"), V("points3_uv"), V("K"), max_trials=50
     ),
     "imageform.geometry.to_homogeneous": call(points=V("points3")),
     "imageform.geometry.triangulate_points": call(V("P_stack"), V("pts_stack")),

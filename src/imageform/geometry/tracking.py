@@ -285,7 +285,7 @@ class BoardTracker:
             gap = (b.square_length - b.marker_length) / 2 * np.sqrt(2) / b.square_length
             fine = min(fine, int(0.6 * gap * square))
         res2 = refine_corners(
-            crop, np.asarray(res.corners), half_window=max(2, fine), max_iter=40, eps=1e-4
+            crop, np.asarray(res.corners), half_window=max(2, fine), max_iter=40, tol=1e-4
         )
         got = np.asarray(res2.corners, np.float64) + offset
         ok = np.isin(np.asarray(res.status), (0, 1)) & np.isin(np.asarray(res2.status), (0, 1))
