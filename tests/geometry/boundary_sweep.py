@@ -268,7 +268,7 @@ def _cases() -> list[Case]:
                 "image_size": (64, 48),
                 "angle_threshold": 0.035,
                 "n_candidates": 6,
-                "iterations": 50,
+                "max_trials": 50,
                 "infinity_factor": 20.0,
                 "rng": 0,
             },
