@@ -103,7 +103,7 @@ class ConvertOptions(ImageIn, ImageOut):
             ("white", self.white),
             ("standard", self.standard),
             ("signal_range", self.ycc_range),
-            ("bits", self.code_bits),
+            ("bit_depth", self.code_bits),
             ("method", self.gray_method),
         ):
             if val is not None:
