@@ -219,27 +219,27 @@ CASES: list[tuple[str, Callable[[], Any], Callable[[], Any], str]] = [
         "Intrinsics.from_physical positional",
         lambda: geometry.Intrinsics.from_physical(50.0, 5.0, image_size=(6000, 4000)),
         lambda: geometry.Intrinsics.from_physical(
-            focal_length=50.0, pixel_pitch_um=5.0, image_size=(6000, 4000)
+            focal_length_mm=50.0, pixel_pitch_um=5.0, image_size=(6000, 4000)
         ),
-        "focal_length=, pixel_pitch_um=",
+        "focal_length_mm=, pixel_pitch_um=",
     ),
     (
-        "Intrinsics.from_physical focal_length_mm=",
-        lambda: geometry.Intrinsics.from_physical(
-            focal_length_mm=8.0, pixel_pitch_um=3.45, image_size=(1280, 720)
-        ),
+        "Intrinsics.from_physical focal_length= (mm: focal_length_mm, issue 30)",
         lambda: geometry.Intrinsics.from_physical(
             focal_length=8.0, pixel_pitch_um=3.45, image_size=(1280, 720)
         ),
-        "use focal_length=",
+        lambda: geometry.Intrinsics.from_physical(
+            focal_length_mm=8.0, pixel_pitch_um=3.45, image_size=(1280, 720)
+        ),
+        "use focal_length_mm=",
     ),
     (
         "Intrinsics.from_sensor positional",
         lambda: geometry.Intrinsics.from_sensor(50.0, (36.0, 24.0), (6000, 4000)),
         lambda: geometry.Intrinsics.from_sensor(
-            focal_length=50.0, sensor_size_mm=(36.0, 24.0), image_size=(6000, 4000)
+            focal_length_mm=50.0, sensor_size_mm=(36.0, 24.0), image_size=(6000, 4000)
         ),
-        "focal_length=, sensor_size_mm=, image_size=",
+        "focal_length_mm=, sensor_size_mm=, image_size=",
     ),
     (
         "solve_pnp_ransac seed=",
@@ -341,14 +341,14 @@ CASES: list[tuple[str, Callable[[], Any], Callable[[], Any], str]] = [
     (
         "field_angle positional focal length and centre",
         lambda: optics.field_angle((5, 7), 3.0, (1.0, 2.0)),
-        lambda: optics.field_angle((5, 7), focal_length=3.0, center=(1.0, 2.0)),
-        "focal_length=, center=",
+        lambda: optics.field_angle((5, 7), focal_length_px=3.0, center=(1.0, 2.0)),
+        "focal_length_px=, center=",
     ),
     (
-        "cos4_falloff focal_length_px=, centre=",
-        lambda: optics.cos4_falloff((5, 7), focal_length_px=3.0, centre=(1.0, 2.0)),
-        lambda: optics.cos4_falloff((5, 7), focal_length=3.0, center=(1.0, 2.0)),
-        "use focal_length=",
+        "cos4_falloff focal_length= (pixels: focal_length_px, issue 30), centre=",
+        lambda: optics.cos4_falloff((5, 7), focal_length=3.0, centre=(1.0, 2.0)),
+        lambda: optics.cos4_falloff((5, 7), focal_length_px=3.0, center=(1.0, 2.0)),
+        "use focal_length_px=",
     ),
     (
         "mechanical_vignetting positional focal length, centre=",
@@ -357,7 +357,7 @@ CASES: list[tuple[str, Callable[[], Any], Callable[[], Any], str]] = [
         ),
         lambda: optics.mechanical_vignetting(
             (5, 7),
-            focal_length=3.0,
+            focal_length_px=3.0,
             pupil_radius=1,
             barrel_radius=1,
             barrel_distance=1,
@@ -516,6 +516,35 @@ CASES: list[tuple[str, Callable[[], Any], Callable[[], Any], str]] = [
         lambda: _written("old.png", bits=16).bits,
         lambda: _written("new.png", bit_depth=16).bit_depth,
         "bit_depth",
+    ),
+    # one name, one unit (issue 30)
+    (
+        "render_slanted_edge angle= (degrees: angle_deg)",
+        lambda: analysis.render_slanted_edge((8, 10), angle=4.0, sigma=0.5),
+        lambda: analysis.render_slanted_edge((8, 10), angle_deg=4.0, sigma=0.5),
+        "use angle_deg=",
+    ),
+    (
+        "render_sfr_chart angle= (degrees: angle_deg)",
+        lambda: analysis.render_sfr_chart((60, 80), grid=(1, 1), angle=4.0),
+        lambda: analysis.render_sfr_chart((60, 80), grid=(1, 1), angle_deg=4.0),
+        "use angle_deg=",
+    ),
+    (
+        "Intrinsics.from_sensor focal_length= (mm: focal_length_mm)",
+        lambda: geometry.Intrinsics.from_sensor(
+            focal_length=8.0, sensor_size_mm=(6.4, 4.8), image_size=(640, 480)
+        ),
+        lambda: geometry.Intrinsics.from_sensor(
+            focal_length_mm=8.0, sensor_size_mm=(6.4, 4.8), image_size=(640, 480)
+        ),
+        "use focal_length_mm=",
+    ),
+    (
+        "field_angle focal_length= (pixels: focal_length_px)",
+        lambda: optics.field_angle((5, 7), focal_length=3.0),
+        lambda: optics.field_angle((5, 7), focal_length_px=3.0),
+        "use focal_length_px=",
     ),
     # method registries (issue 30): one read-only registry per concept
     (

@@ -651,7 +651,7 @@ def _cases() -> list[Case]:
             "Intrinsics.from_physical",
             _g("Intrinsics.from_physical"),
             lambda f: {
-                "focal_length": 0.05,
+                "focal_length_mm": 0.05,
                 "pixel_pitch_um": 3.45,
                 "image_size": (640, 480),
                 "principal_point": None,
@@ -661,7 +661,7 @@ def _cases() -> list[Case]:
             "Intrinsics.from_sensor",
             _g("Intrinsics.from_sensor"),
             lambda f: {
-                "focal_length": 0.05,
+                "focal_length_mm": 0.05,
                 "sensor_size_mm": (6.4, 4.8),
                 "image_size": (640, 480),
             },

@@ -98,7 +98,12 @@ class ImageInfo(NamedTuple):
     format: str
 
 
-class WrittenImage(NamedTuple):
+class _WrittenImage(NamedTuple):
+    bit_depth: int | None
+    out_of_range: int
+
+
+class WrittenImage(_WrittenImage):
     """What :func:`write_image` stored: bits per sample and the count of clipped values.
 
     ``bit_depth``: bits per sample for integer formats (None for float data); how many
@@ -106,8 +111,7 @@ class WrittenImage(NamedTuple):
     name of ``bit_depth``.
     """
 
-    bit_depth: int | None
-    out_of_range: int
+    __slots__ = ()
 
     bits = _deprecate.renamed_property("bit_depth", "imageform.io.WrittenImage.bits")
 
