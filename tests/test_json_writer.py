@@ -1,4 +1,4 @@
-"""One JSON writer (STYLE.md 17, issue 30): every JSON file goes through
+"""One JSON writer (issue 30): every JSON file goes through
 :func:`imageform._jsonio.write_json` (atomic, NaN as ``null``), every JSON text through
 :func:`imageform._jsonio.dumps`.
 """

@@ -1,4 +1,4 @@
-"""Method names: one read-only registry per concept, and every name in it works (STYLE.md 15).
+"""Method names: one read-only registry per concept, and every name in it works (issue 30).
 
 Every public ``*_METHODS`` constant of every public module is a read-only collection (a
 ``MappingProxyType`` mapping a name to the function that implements it, or a tuple of names
@@ -145,7 +145,7 @@ def test_every_name_works(registry: str, method: str) -> None:
 
 
 def test_unknown_name_lists_the_registry_keys() -> None:
-    """The error message lists the same keys as the registry (STYLE.md 15)."""
+    """The error message lists the same keys as the registry."""
     with pytest.raises(ValueError, match="valid: ") as info:
         color.xy_to_cct(_XY_D65, method="nope")
     for key in color.XY_TO_CCT_METHODS:
