@@ -167,7 +167,12 @@ class BoardTracker:
                 f"expected board as a CharucoBoard or (cols, rows) inner corners, got "
                 f"{describe(board)}"
             )
-        k = np.asarray(K, dtype=np.float64)
+        try:
+            k = np.asarray(K, dtype=np.float64)
+        except (TypeError, ValueError):
+            raise InvalidInputError(
+                f"expected K as a finite (3, 3) matrix, got {describe(K)}"
+            ) from None
         if k.shape != (3, 3) or not np.all(np.isfinite(k)) or k[2, 2] == 0:
             raise InvalidInputError(f"expected K as a finite (3, 3) matrix, got {describe(K)}")
         self.K = k
