@@ -13,12 +13,18 @@ process); peak memory is each side's peak resident set size (VmHWM) in a fresh p
 development (imports included). Accuracy: mean and 99th percentile CIEDE2000 between the two
 outputs, 2-pixel border excluded.
 
+Each thread setting runs in a process of its own (both libraries read it when loaded):
+``1`` sets ``NUMBA_NUM_THREADS=1`` (imageform) and ``OMP_NUM_THREADS=1`` (LibRaw's OpenMP
+loops); ``default`` leaves both unset (every core).
+
     OPENBLAS_NUM_THREADS=1 python benchmarks/bench_raw.py [--sizes 6,24] [--rounds 3]
+        [--threads 1,default]
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import statistics
 import subprocess
@@ -26,6 +32,7 @@ import sys
 import tempfile
 import time
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -120,48 +127,94 @@ def timed(code: str, path: Path, n: int) -> float:
     return statistics.median(times)
 
 
+def thread_env(threads: str) -> dict[str, str]:
+    env = {k: v for k, v in os.environ.items() if k not in ("NUMBA_NUM_THREADS", "OMP_NUM_THREADS")}
+    if threads != "default":
+        env["NUMBA_NUM_THREADS"] = env["OMP_NUM_THREADS"] = threads
+    env["PYTHONPATH"] = str(ROOT / "src")
+    return env
+
+
+def child(folder: Path, sizes: list[int], rounds: int) -> None:
+    """Time both sides on the DNGs of ``folder`` in this process's thread setting (JSON out)."""
+    rows: list[dict[str, Any]] = []
+    for mpx in sizes:
+        path = folder / f"kodim23-{mpx}mpx.dng"
+        ours, theirs = run_once(OURS, path), run_once(THEIRS, path)  # warm-up
+        de, de99 = mean_de00(ours, theirs)
+        a, b, r = [], [], []
+        for _ in range(rounds):
+            ta, tb = timed(OURS, path, 3), timed(THEIRS, path, 3)
+            a.append(ta)
+            b.append(tb)
+            r.append(tb / ta)
+        mem_ours, mem_theirs = peak_rss_mib(OURS, path), peak_rss_mib(THEIRS, path)
+        rows.append(
+            {"mpx": mpx, "a": a, "b": b, "r": r, "mem": [mem_ours, mem_theirs], "de": [de, de99]}
+        )
+    print(json.dumps(rows))
+
+
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--sizes", default="6,24")
     ap.add_argument("--rounds", type=int, default=3)
+    ap.add_argument("--threads", default="1,default")
+    ap.add_argument("--child", default=None, help=argparse.SUPPRESS)
     args = ap.parse_args()
+    sizes = [int(s) for s in args.sizes.split(",")]
+    if args.child:
+        child(Path(args.child), sizes, args.rounds)
+        return
     import rawpy
 
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
-        for mpx in (int(s) for s in args.sizes.split(",")):
-            path = make_dng(Path(tmp), mpx)
-            ours, theirs = run_once(OURS, path), run_once(THEIRS, path)  # warm-up
-            de, de99 = mean_de00(ours, theirs)
-            a, b, r = [], [], []
-            for _ in range(args.rounds):
-                ta, tb = timed(OURS, path, 3), timed(THEIRS, path, 3)
-                a.append(ta)
-                b.append(tb)
-                r.append(tb / ta)
-            mem_ours, mem_theirs = peak_rss_mib(OURS, path), peak_rss_mib(THEIRS, path)
+        for mpx in sizes:
+            make_dng(Path(tmp), mpx)
+        found: dict[str, list[dict[str, Any]]] = {}
+        for threads in args.threads.split(","):
+            out = subprocess.run(
+                [sys.executable, __file__, "--child", tmp, "--sizes", args.sizes]
+                + ["--rounds", str(args.rounds)],
+                capture_output=True,
+                text=True,
+                check=True,
+                env=thread_env(threads),
+            ).stdout
+            found[threads] = json.loads(out.strip().splitlines()[-1])
+    for i, mpx in enumerate(sizes):
+        for threads, res in found.items():
+            row = res[i]
+            a, b, r = row["a"], row["b"], row["r"]
+            mem, de = row["mem"], row["de"]
+            n = os.cpu_count() if threads == "default" else int(threads)
             h, w = SIZES[mpx]
             rows.append(
                 (
                     f"{w} x {h} ({mpx} Mpx)",
+                    f"{threads} ({n})" if threads == "default" else threads,
                     f"{statistics.median(a):.2f}",
                     f"{statistics.median(b):.2f}",
                     f"{statistics.median(r):.2f} ({min(r):.2f}-{max(r):.2f})",
-                    f"{mem_ours:.0f}",
-                    f"{mem_theirs:.0f}",
-                    f"{de:.3f} / {de99:.3f}",
+                    f"{mem[0]:.0f}",
+                    f"{mem[1]:.0f}",
+                    f"{de[0]:.3f} / {de[1]:.3f}",
                 )
             )
     load = ", ".join(f"{x:.1f}" for x in os.getloadavg())
     print(header("Raw development: imageform against LibRaw (rawpy)"))
     print(
-        f"rawpy {rawpy.__version__} (LibRaw {rawpy.libraw_version}); load average {load}; "
-        f"{args.rounds} interleaved rounds, median of 3 calls per side per round\n"
+        f"rawpy {rawpy.__version__} (LibRaw {rawpy.libraw_version}, OpenMP "
+        f"{rawpy.flags.get('OPENMP') if rawpy.flags else None}); load average {load} "
+        f"(after the run); {args.rounds} interleaved rounds, median of 3 calls per side per "
+        "round; threads 1: NUMBA_NUM_THREADS=1 and OMP_NUM_THREADS=1\n"
     )
     print(
         markdown_table(
             (
                 "DNG",
+                "threads",
                 "imageform (s)",
                 "LibRaw (s)",
                 "speed ratio (LibRaw / imageform)",
@@ -172,7 +225,9 @@ def main() -> None:
             rows,
         )
     )
-    print("Command: `OPENBLAS_NUM_THREADS=1 python benchmarks/bench_raw.py`")
+    print(
+        f"Command: `OPENBLAS_NUM_THREADS=1 python benchmarks/bench_raw.py --rounds {args.rounds}`"
+    )
 
 
 if __name__ == "__main__":

@@ -12,7 +12,7 @@ from types import MappingProxyType
 
 from imageform.errors import InvalidInputError, UnknownOptionError
 
-__all__ = ["LENGTH_UNITS", "parse_length"]
+__all__ = ["LENGTH_UNITS", "length_unit", "parse_length"]
 
 #: Metres per unit.
 LENGTH_UNITS = MappingProxyType(
@@ -35,6 +35,20 @@ def _shown(text: object, width: int = 40) -> str:
     """``text`` for a one-line message: its repr, cut to ``width`` characters."""
     shown = repr(str(text))
     return shown if len(shown) <= width else shown[: width - 3] + "..."
+
+
+def length_unit(text: str | float, default_unit: str = "m") -> str:
+    """Return the unit a length is written in (``"30mm"`` -> ``"mm"``; a bare number: the default).
+
+    The same reading as :func:`parse_length`, which checks the unit and the value.
+
+    Examples
+    --------
+    >>> length_unit("30mm"), length_unit("2.5 cm"), length_unit("25", default_unit="mm")
+    ('mm', 'cm', 'mm')
+    """
+    m = _NUMBER.fullmatch(str(text).strip().lower().replace(" ", ""))
+    return (m.group(2) if m else "") or default_unit
 
 
 def parse_length(

@@ -1649,6 +1649,9 @@ VALID.update(
         ),
         "imageform.workflows.track.TrackOptions.fields": call(),
         "imageform.workflows.track.TrackOptions.types": call(),
+        "imageform.workflows.reconstruct.ReconstructOptions": call(camera="cam.toml"),
+        "imageform.workflows.reconstruct.ReconstructOptions.fields": call(),
+        "imageform.workflows.reconstruct.ReconstructOptions.types": call(),
     }
 )
 VALID.update(
@@ -1665,6 +1668,15 @@ VALID.update(
         ),
         "imageform.workflows.track.TrackOptions.paths": method(
             VALID["imageform.workflows.track.TrackOptions"], "output"
+        ),
+        "imageform.workflows.reconstruct.ReconstructOptions.check": method(
+            VALID["imageform.workflows.reconstruct.ReconstructOptions"]
+        ),
+        "imageform.workflows.reconstruct.ReconstructOptions.check_output": method(
+            VALID["imageform.workflows.reconstruct.ReconstructOptions"], V("tmpfile_png")
+        ),
+        "imageform.workflows.reconstruct.ReconstructOptions.paths": method(
+            VALID["imageform.workflows.reconstruct.ReconstructOptions"], "output"
         ),
     }
 )

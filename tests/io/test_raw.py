@@ -280,6 +280,17 @@ def test_cli_simulate_raw_then_develop(tmp_path: Path, capsys: pytest.CaptureFix
     assert main(["develop", str(dng), "-o", str(png)]) == 0
     img = read_image(png)
     assert img.shape == (180, 320, 3)
+    # the 16-bit PNG is the developer's own rounding of its float image (the fused pass)
+    cv2 = pytest.importorskip("cv2")
+    from imageform.io import develop, read_raw
+
+    dev = develop(read_raw(dng))
+    written = cv2.imread(str(png), cv2.IMREAD_UNCHANGED)[..., ::-1]
+    assert written.dtype == np.uint16
+    expect = np.floor(np.clip(dev.image, 0, 1) * 65535 + 0.5).astype(np.uint16)
+    np.testing.assert_array_equal(written, expect)
+    assert main(["develop", str(dng), "-o", str(tmp_path / "dev.tif")]) == 0
+    np.testing.assert_allclose(read_image(tmp_path / "dev.tif"), dev.image, atol=1e-7)
     bad = tmp_path / "x.txt"
     bad.write_text("no")
     assert main(["develop", str(bad), "-o", str(tmp_path / "y.png")]) == 1

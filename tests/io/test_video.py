@@ -83,6 +83,21 @@ def test_sequence_of_mixed_sizes(tmp_path: Path) -> None:
     assert "\n" not in str(e.value)
 
 
+def test_frames_above_the_pixel_limit(tmp_path: Path) -> None:
+    """The same one line as an image above the limit (image_io's check), for both sources."""
+    write_image(tmp_path / "a.png", np.zeros((30, 40, 3), np.uint8))
+    with pytest.raises(InvalidInputError) as e:
+        open_video(tmp_path, max_pixels=1000)
+    _one_line(e, "a frame is 40 x 30 = 1200 px, above the limit of 1000 px", "IMAGEFORM_MAX")
+    path = tmp_path / "clip.mp4"
+    with VideoWriter(path, fps=25) as video:
+        for f in _frames(2):
+            video.write(f)
+    with pytest.raises(InvalidInputError) as e:
+        open_video(path, max_pixels=6000)
+    _one_line(e, "a frame is 96 x 64 = 6144 px, above the limit of 6000 px")
+
+
 def _one_line(exc: pytest.ExceptionInfo[BaseException], *words: str) -> None:
     msg = str(exc.value)
     assert "\n" not in msg, msg
@@ -155,6 +170,8 @@ def test_writer_bad_input(tmp_path: Path) -> None:
         VideoWriter(tmp_path / "x.gif", fps=25)
     with pytest.raises(InvalidInputError, match="fps"):
         VideoWriter(tmp_path / "x.mp4", fps=float("nan"))
+    with pytest.raises(InvalidInputError, match="preset one of ultrafast, superfast"):
+        VideoWriter(tmp_path / "x.mp4", fps=25, preset="warp")
     with VideoWriter(tmp_path / "x.mp4", fps=25) as video:
         with pytest.raises(InvalidInputError, match="even frame size"):
             video.write(np.zeros((5, 6, 3), np.uint8))
@@ -163,6 +180,18 @@ def test_writer_bad_input(tmp_path: Path) -> None:
         video.write(np.zeros((4, 6, 3), np.uint8))
         with pytest.raises(InvalidInputError, match="like the first"):
             video.write(np.zeros((6, 6, 3), np.uint8))
+
+
+def test_preset_ultrafast(tmp_path: Path) -> None:
+    """x264's fastest preset (track's overlay): every frame, the same quality."""
+    frames = _frames()
+    with VideoWriter(tmp_path / "fast.mp4", fps=25, preset="ultrafast") as video:
+        for f in frames:
+            video.write(f)
+    with open_video(tmp_path / "fast.mp4") as reader:
+        got = list(reader)
+    assert len(got) == len(frames)
+    assert min(_psnr(g.image, f) for g, f in zip(got, frames, strict=True)) > 30
 
 
 def test_iterated_once(tmp_path: Path) -> None:

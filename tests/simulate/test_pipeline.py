@@ -197,6 +197,22 @@ def test_seed_is_a_deprecated_alias_of_rng() -> None:
         simulate(scene, rng=-1)
 
 
+def test_measure_false_renders_the_same_stages_without_measuring() -> None:
+    """The frames of a trajectory skip the measurements; the pixels are the same."""
+    scene = default_scene().resized(96, 54)
+    full = simulate(scene, rng=3)
+    quick = simulate(scene, rng=3, measure=False)
+    for a, b in zip(full.stages, quick.stages, strict=True):
+        assert a.name == b.name
+        np.testing.assert_array_equal(a.image, b.image)
+    assert full.patches is not None and full.photon_transfer is not None
+    assert quick.patches is None and quick.photon_transfer is None and quick.vanishing is None
+    assert "delta_e00_mean" not in quick.metrics
+    assert "photon_transfer" not in quick.metrics["step_times_s"]
+    with pytest.raises(InvalidInputError, match="expected measure as True or False"):
+        simulate(scene, measure="no")  # type: ignore[arg-type]
+
+
 def test_colorchecker_options_need_a_chart() -> None:
     scene = load_scene({"objects": [{"type": "plane", "centre_m": [0, 0, 0]}]})
     with pytest.raises(InvalidInputError, match="needs a colorchecker object"):

@@ -26,6 +26,7 @@ _REQUIRED = {  # valid values of the options without a default
     "calibrate": {"board": "9x6"},
     "stereo-calibrate": {"board": "9x6"},
     "track": {"camera": "camera.toml", "board": "9x6", "square": "30mm"},
+    "reconstruct": {"camera": "camera.toml"},
 }
 
 

@@ -208,44 +208,155 @@ def test_bad_inputs(
     assert not (tmp_path / "p.csv").exists()
 
 
-def test_live_capture_stops_on_ctrl_c_with_outputs_complete(
-    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
-) -> None:
-    """A capture device runs until Ctrl-C; then poses.csv is complete (exit 0, one note)."""
-    import imageform.io
-    from imageform.io import Frame, VideoInfo
+class _Device:
+    """A capture device without hardware: ``frames`` one by one, then the user's Ctrl-C.
 
+    Stands in for ``open_video("/dev/video0")`` (there is no camera on a test machine): the
+    same ``info`` (kind ``"device"``, no frame count), context manager and iterator;
+    ``interrupt_at`` raises ``KeyboardInterrupt`` where a user presses Ctrl-C while frames
+    are captured (None: the frames end, as a device that stops sending).
+    """
+
+    def __init__(self, frames: list[np.ndarray], interrupt_at: int | None) -> None:
+        from imageform.io import VideoInfo
+
+        self.frames, self.interrupt_at, self.closed = frames, interrupt_at, False
+        h, w = frames[0].shape[:2]
+        self.info = VideoInfo(w, h, 30.0, None, "device", "rawvideo")
+
+    def __enter__(self) -> _Device:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    def close(self) -> None:
+        self.closed = True
+
+    def __iter__(self):  # type: ignore[no-untyped-def]
+        from imageform.io import Frame
+
+        for i, f in enumerate(self.frames):
+            if i == self.interrupt_at:
+                raise KeyboardInterrupt  # the user's Ctrl-C while capturing
+            yield Frame(i, i / 30, f)
+
+
+@pytest.fixture(scope="module")
+def live_frames() -> list[np.ndarray]:
     tex, origin = video_scenes.board_texture()
-    frames = [video_scenes.render(tex, origin, K, p, SIZE) for p in video_scenes.poses(48)[:40]]
+    return [video_scenes.render(tex, origin, K, p, SIZE) for p in video_scenes.poses(48)[:40]]
 
-    class Device:
-        info = VideoInfo(SIZE[0], SIZE[1], 30.0, None, "device", "rawvideo")
 
-        def __enter__(self) -> Device:
-            return self
+def _live(
+    monkeypatch: pytest.MonkeyPatch, tmp_path: Path, device: _Device, *extra: str
+) -> tuple[list[str], Path]:
+    import imageform.io
 
-        def __exit__(self, *exc: object) -> None:
-            pass
+    opened: list[str] = []
 
-        def close(self) -> None:
-            pass
+    def fake_open(source: str, **kwargs: object) -> _Device:
+        opened.append(source)
+        return device
 
-        def __iter__(self):  # type: ignore[no-untyped-def]
-            for i, f in enumerate(frames):
-                if i == 35:
-                    raise KeyboardInterrupt  # the user's Ctrl-C while capturing
-                yield Frame(i, i / 30, f)
-
-    monkeypatch.setattr(imageform.io, "open_video", lambda *a, **k: Device())
+    monkeypatch.setattr(imageform.io, "open_video", fake_open)
     camera = write_camera(tmp_path / "camera.toml", Camera(K, image_size=SIZE))
     out = tmp_path / "poses.csv"
     args = ["track", "/dev/video0", "--camera", str(camera), "--board", "charuco:7x5"]
     args += ["--square", "30mm", "--marker", "22mm", "--dictionary", "5x5_100", "-o", str(out)]
+    return [*args, *extra], out
+
+
+def test_live_capture_stops_on_ctrl_c_with_outputs_complete(
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+    live_frames: list[np.ndarray],
+) -> None:
+    """A capture device runs until Ctrl-C; then poses.csv is complete (exit 0, one note)."""
+    device = _Device(live_frames, interrupt_at=35)
+    args, out = _live(monkeypatch, tmp_path, device)
     assert main(args) == 0
     captured = capsys.readouterr()
     assert "stopped by Ctrl-C after 35 frames" in captured.err
     assert "fps, latency" in captured.err  # the live speed, printed as it runs
     assert len(_read(out)) == 35
+    assert device.closed
+
+
+def test_live_capture_with_overlay_plan_and_json(
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+    live_frames: list[np.ndarray],
+) -> None:
+    """Ctrl-C with every output asked for: the overlay holds every frame tracked, playable;
+    the speed line comes every 30 frames; the JSON says what happened."""
+    import re
+
+    from imageform.io import open_video
+
+    plan = tmp_path / "plan.csv"
+    plan.write_text("x,y,z,path\n60,60,0,cut\n150,60,0,cut\n105,75,-40,\n")
+    overlay = tmp_path / "overlay.mp4"
+    device = _Device(live_frames, interrupt_at=35)
+    extra = ("--overlay", str(overlay), "--plan", str(plan), "--json")
+    args, out = _live(monkeypatch, tmp_path, device, *extra)
+    assert main(args) == 0
+    captured = capsys.readouterr()
+    doc = json.loads(captured.out)
+    assert doc["interrupted"] is True and doc["frames"] == 35 and doc["found"] == 35
+    assert doc["source"] == {"kind": "device", "width": 640, "height": 360, "fps": 30.0}
+    assert doc["fps"] > 0 and doc["latency_ms_median"] > 0
+    speed = re.findall(r"frame (\d+), ([\d.]+) fps, latency (\d+) ms", captured.err)
+    assert [int(f) for f, _, _ in speed] == [30]  # once a second at 30 fps: frame 30 only
+    assert "stopped by Ctrl-C after 35 frames" in captured.err
+    rows = _read(out)
+    assert [r["frame"] for r in rows] == [str(i) for i in range(35)]
+    with open_video(overlay) as v:
+        drawn = list(v)
+    assert len(drawn) == 35 and v.info.fps == pytest.approx(30)
+    # the plan and the axes are drawn: the overlay differs from the captured frame
+    assert np.abs(drawn[20].image.astype(int) - live_frames[20]).max() > 100
+
+
+def test_live_capture_max_frames_and_a_device_that_stops(
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+    live_frames: list[np.ndarray],
+) -> None:
+    """--max-frames ends a live run without Ctrl-C; a device that stops sending ends it too."""
+    device = _Device(live_frames[:12], interrupt_at=None)
+    args, out = _live(monkeypatch, tmp_path, device, "--max-frames", "5", "--json")
+    assert main(args) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["frames"] == 5 and doc["interrupted"] is False and device.closed
+    assert len(_read(out)) == 5
+    device = _Device(live_frames[:12], interrupt_at=None)
+    args, out = _live(monkeypatch, tmp_path, device, "--json", "--force")
+    assert main(args) == 0
+    assert json.loads(capsys.readouterr().out)["frames"] == 12
+
+
+def test_ctrl_c_on_a_file_writes_nothing(
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+    live_frames: list[np.ndarray],
+) -> None:
+    """A file is not a live capture: Ctrl-C ends the run with 130 and nothing half-written."""
+    from imageform.io import VideoInfo
+
+    device = _Device(live_frames[:10], interrupt_at=6)
+    device.info = VideoInfo(640, 360, 30.0, 10, "file", "h264")
+    overlay = tmp_path / "overlay.mp4"
+    args, out = _live(monkeypatch, tmp_path, device, "--overlay", str(overlay))
+    args[1] = "clip.mp4"
+    assert main(args) == 130
+    assert "interrupted; nothing new was written" in capsys.readouterr().err
+    assert not out.exists() and not overlay.exists()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["camera.toml"]
 
 
 def test_plan_mesh_is_read_with_trimesh(tmp_path: Path) -> None:

@@ -58,18 +58,24 @@ print(
 print(f"Gaussian PSF sigma {twin.sharpness.gaussian_sigma_px:.3f} px (0.8)")
 
 # %%
-# The lab's photographs: one checkerboard view, the slanted edge and the chart.
+# The lab's photographs: one checkerboard view, the slanted edge (a raw DNG mosaic: its
+# sharpness is measured without demosaicing) and the chart as the camera develops it.
 
-from imageform.io import read_image
+from imageform.io import read_image, read_raw
 
+edge = read_raw(lab.edge)
 fig, axes = plt.subplots(1, 3, figsize=(10, 3))
-for ax, path, title in zip(
+for ax, image, title in zip(
     axes,
-    (lab.checkerboard[0], lab.edge, lab.folder / "colorchecker" / "developed.png"),
-    ("checkerboard view", "slanted edge", "ColorChecker (developed)"),
+    (
+        read_image(lab.checkerboard[0]) / 65535.0,  # 16-bit PNGs
+        edge.mosaic / edge.white_level,
+        read_image(lab.folder / "colorchecker" / "developed.png") / 65535.0,
+    ),
+    ("checkerboard view", "slanted edge (raw mosaic)", "ColorChecker (developed)"),
     strict=True,
 ):
-    ax.imshow(read_image(path) / 65535.0, cmap="gray")  # 16-bit PNGs
+    ax.imshow(image, cmap="gray")
     ax.set_title(title)
     ax.axis("off")
 fig.tight_layout()

@@ -177,6 +177,9 @@ class Reconstruction:
         Each frame's reprojection RMS (NaN when not registered).
     notes : list of str
         What failed and why (frames that could not be registered, ...).
+    residuals_px : ndarray (M,)
+        The reprojection error of every observation the final bundle adjustment kept
+        (pixels; the distance between the observed keypoint and its point's projection).
     """
 
     R: F64
@@ -187,6 +190,7 @@ class Reconstruction:
     track_length: NDArray[np.int64]
     rms_px: F64
     notes: list[str] = field(default_factory=list)
+    residuals_px: F64 = field(default_factory=lambda: np.zeros(0))
 
 
 class _Tracks:
@@ -650,4 +654,8 @@ def reconstruct_sequence(
         x, y = np.round(feats[g0].xy[q]).astype(int)
         v = im[min(max(y, 0), im.shape[0] - 1), min(max(x, 0), im.shape[1] - 1)]
         colors[point_of[tid]] = v[:3] if np.ndim(v) else v
-    return Reconstruction(Rs, ts, registered, P, colors, length, rms, notes)
+    residuals = np.zeros(0)
+    if ci.size:  # every kept observation's reprojection error, after the final adjustment
+        Xc = np.einsum("mij,mj->mi", Rr[ci], P[pi]) + t_reg[ci]
+        residuals = np.linalg.norm((Xc @ k.T)[:, :2] / Xc[:, 2:3] - uvo, axis=1)
+    return Reconstruction(Rs, ts, registered, P, colors, length, rms, notes, residuals)

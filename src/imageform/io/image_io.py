@@ -278,16 +278,24 @@ def _pixels(n: int) -> str:
     return f"{mpx:.{decimals}f} Mpx"
 
 
-def _check_pixels(path: Path, info: ImageInfo, limit: int) -> None:
+#: What :func:`_check_pixels` suggests for an image above the pixel limit.
+_RAISE_LIMIT = (
+    "raise it with --max-pixels or IMAGEFORM_MAX_PIXELS, or process it block by block with "
+    "imageform chunked"
+)
+
+
+def _check_pixels(
+    path: Path | str, info: ImageInfo, limit: int, remedy: str = _RAISE_LIMIT
+) -> None:
+    """Refuse an image (or a video's frames) of more than ``limit`` pixels, in one line."""
     n = info.width * info.height
     if n > limit:
         size, cap = _pixels(n), _pixels(limit)
         if size == cap:  # 3 digits do not tell them apart
             size, cap = f"{n} px", f"{limit} px"
         raise InvalidInputError(
-            f"{path} is {info.width} x {info.height} = {size}, above the limit of "
-            f"{cap} (raise it with --max-pixels or IMAGEFORM_MAX_PIXELS, or "
-            "process it block by block with imageform chunked)"
+            f"{path} is {info.width} x {info.height} = {size}, above the limit of {cap} ({remedy})"
         )
 
 

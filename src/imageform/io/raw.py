@@ -602,9 +602,13 @@ def _read_plain_dng(p: Path, limit: int) -> RawImage | None:
 class Development:
     """Every stage of :func:`develop`, in order.
 
-    The result (``image``) and the demosaiced camera RGB are computed by :func:`develop`
-    (float32); the other stages are computed from them when first read, so that a 24 Mpx
-    development holds two images, not six. Every three-channel stage is turned for display
+    Every stage is computed when first read (:func:`develop` checks the inputs and builds
+    the matrices): for a Bayer mosaic developed bilinearly, ``image`` and ``camera_rgb`` come
+    from the raw digital numbers in one fused pass over strips of rows
+    (:func:`imageform._kernels.raw_develop.develop_rows`), and :meth:`to_integer` writes the
+    integers from that same pass when ``image`` has not been read, so a 24 Mpx development
+    makes no full-size float temporary. ``image`` is kept once read; the other stages are
+    computed again at each reading. Every three-channel stage is turned for display
     (:attr:`RawImage.orientation`, as LibRaw does); the mosaic stages stay in the sensor's
     orientation, where the CFA is defined.
 
@@ -642,8 +646,9 @@ class Development:
         *,
         raw: RawImage,
         gains: np.ndarray,
-        camera_rgb: np.ndarray,
-        image: np.ndarray,
+        camera_rgb: np.ndarray | None,
+        render: np.ndarray,
+        table: np.ndarray | None,
         camera_to_xyz: np.ndarray,
         adaptation: np.ndarray,
         space: str,
@@ -653,8 +658,12 @@ class Development:
         notes: tuple[str, ...],
     ) -> None:
         self._raw = raw
-        self._camera_rgb = camera_rgb  # the sensor's orientation
-        self._image = image
+        # the sensor's orientation: given for a linear raw and the other demosaicing methods;
+        # None for the fused bilinear pass (computed from the mosaic when read)
+        self._camera_rgb = camera_rgb
+        self._render = render  # float32 (3, 3): camera RGB to the output's linear RGB
+        self._table = table  # the transfer table; None for linear output
+        self._image: np.ndarray | None = None
         self.gains = gains
         self.camera_to_xyz = camera_to_xyz
         self.adaptation = adaptation
@@ -663,6 +672,62 @@ class Development:
         self.demosaic = demosaic
         self.orientation = orientation
         self.notes = notes
+
+    def _fused(self, mode: int) -> np.ndarray:
+        """Run the fused pass over the mosaic (``mode``: camera RGB, float or uint16 output)."""
+        from imageform._kernels.jit import run_tasks
+        from imageform._kernels.raw_develop import MODE_UINT16, develop_rows
+
+        raw = self._raw
+        h, w = raw.mosaic.shape
+        idx = np.array(_cfa_indices(str(raw.cfa_pattern))).reshape(2, 2)
+        black = np.asarray(raw.black_level, np.float64)
+        scale = (self.gains[idx] / (raw.white_level - black)).astype(np.float32)
+        red = str(raw.cfa_pattern).index("R")
+        shape = (h, w, 3)
+        out_f = np.empty(shape if mode != MODE_UINT16 else (0, 0, 3), np.float32)
+        out_u = np.empty(shape if mode == MODE_UINT16 else (0, 0, 3), np.uint16)
+        table = self._table if self._table is not None else np.zeros(2, np.float32)
+        run_tasks(
+            develop_rows,
+            h,
+            np.ascontiguousarray(raw.mosaic, dtype=np.uint16),
+            np.ascontiguousarray(black, dtype=np.float32),
+            scale,
+            red // 2,
+            red % 2,
+            self._render,
+            table,
+            self._table is not None,
+            mode,
+            out_f,
+            out_u,
+            threads=None if h * w >= _THREADS_MIN_PIXELS else 1,
+        )
+        return out_u if mode == MODE_UINT16 else out_f
+
+    def _sensor_camera_rgb(self) -> np.ndarray:
+        if self._camera_rgb is not None:
+            return self._camera_rgb
+        from imageform._kernels.raw_develop import MODE_CAMERA
+
+        return self._fused(MODE_CAMERA)
+
+    def _sensor_image(self) -> np.ndarray:
+        if self._image is None:
+            if self._camera_rgb is None:
+                from imageform._kernels.raw_develop import MODE_FLOAT
+
+                self._image = self._fused(MODE_FLOAT)
+            else:
+                from imageform._kernels.raw_develop import render_rgb
+
+                cam = self._camera_rgb
+                table = self._table if self._table is not None else np.zeros(2, np.float32)
+                image = np.empty(cam.shape, np.float32)
+                render_rgb(cam, self._render, table, self._table is not None, image)
+                self._image = image
+        return self._image
 
     def __repr__(self) -> str:
         """Size, method, space and gains (not the arrays)."""
@@ -699,7 +764,7 @@ class Development:
     @property
     def camera_rgb(self) -> np.ndarray:
         """Demosaiced, white-balanced camera RGB (float32, turned for display)."""
-        return _orient(self._camera_rgb, self.orientation)
+        return _orient(self._sensor_camera_rgb(), self.orientation)
 
     @property
     def xyz(self) -> np.ndarray:
@@ -719,21 +784,33 @@ class Development:
 
     @property
     def image(self) -> np.ndarray:
-        """The encoded output in [0, 1] (float32, turned for display)."""
-        return _orient(self._image, self.orientation)
+        """The encoded output in [0, 1] (float32, turned for display; kept once read)."""
+        return _orient(self._sensor_image(), self.orientation)
 
     def to_integer(self, bits: int = 16) -> np.ndarray:
         """Return the output image as uint8 (``bits=8``) or uint16 (``bits=16``), rounded.
 
-        One pass, rounding half up (the values are in [0, 1]), turned for display.
+        Rounded half up (the values are in [0, 1]), turned for display. 16 bits of a Bayer
+        mosaic developed bilinearly whose ``image`` has not been read: written by the fused
+        pass itself (no float image is made), to the same values.
         """
         if bits not in (8, 16):
             raise InvalidInputError(f"expected bits 8 or 16, got {describe(bits)}")
-        from imageform._kernels.raw_develop import quantize
+        if bits == 16 and self._image is None and self._camera_rgb is None:
+            from imageform._kernels.raw_develop import MODE_UINT16
 
-        out = np.empty(self._image.shape, np.uint8 if bits == 8 else np.uint16)
-        quantize(self._image.reshape(-1), np.float32(2**bits - 1), out.reshape(-1))
+            out = self._fused(MODE_UINT16)
+        else:
+            from imageform._kernels.raw_develop import quantize
+
+            image = self._sensor_image()
+            out = np.empty(image.shape, np.uint8 if bits == 8 else np.uint16)
+            quantize(image.reshape(-1), np.float32(2**bits - 1), out.reshape(-1))
         return np.ascontiguousarray(_orient(out, self.orientation))
+
+
+#: Mosaics of fewer pixels are developed in the calling thread (waking the pool costs more).
+_THREADS_MIN_PIXELS = 1 << 16
 
 
 def _black_plane(raw: RawImage) -> np.ndarray:
@@ -784,8 +861,10 @@ def develop(
        transfer function (``linear=True``: not encoded).
     7. Turned for display as the file's orientation says (LibRaw's ``user_flip``).
 
-    Steps 1-2 are one pass over the mosaic and steps 4-6 one pass over the demosaiced image,
-    in float32 (:mod:`imageform._kernels.raw_develop`).
+    For a Bayer mosaic developed bilinearly, steps 1-6 are one pass over strips of rows, in
+    float32, on numba's threads (:mod:`imageform._kernels.raw_develop`), run when the result
+    is first read (:attr:`Development.image`, :meth:`Development.to_integer`); other methods
+    demosaic the white-balanced mosaic first, then steps 4-6 are one pass.
 
     Parameters
     ----------
@@ -815,7 +894,6 @@ def develop(
         An unknown method, space or white balance; a raw file with no photosite above its
         black level (nothing to develop).
     """
-    from imageform._kernels.raw_develop import balance_mosaic, render_rgb
     from imageform.color import (
         RGB_SPACES,
         chromatic_adaptation_matrix,
@@ -854,18 +932,30 @@ def develop(
             f"{where}: white level {raw.white_level:g} is not above the black level"
         )
     notes: list[str] = []
-    # 1-3. linearise and white-balance in one pass, then demosaic
+    h, w = raw.mosaic.shape[:2]
+    if h < 2 or w < 2:
+        raise InvalidInputError(
+            f"{where}: expected a raw image of at least 2x2 pixels, got {h}x{w}"
+        )
+    # 1-3. linearise and white-balance, demosaic: the fused pass for a bilinear Bayer mosaic
+    cam: np.ndarray | None = None
     if raw.cfa_pattern is None:  # a linear raw: every pixel has its colours
         cam = raw.mosaic.astype(np.float32)
         cam -= black.astype(np.float32)
         cam *= (gains / span).astype(np.float32)
         np.clip(cam, 0.0, 1.0, out=cam)
         method = "none"
-    else:
+    elif method != "bilinear":
         idx = np.array(_cfa_indices(raw.cfa_pattern)).reshape(2, 2)
         scale = (gains[idx] / span).astype(np.float32)
-        balanced = np.empty(raw.mosaic.shape, np.float32)
-        balance_mosaic(raw.mosaic, black.astype(np.float32), scale, balanced)
+        black32 = black.astype(np.float32)
+        balanced = raw.mosaic.astype(np.float32)
+        for i in (0, 1):
+            for j in (0, 1):
+                site = balanced[i::2, j::2]
+                site -= black32[i, j]
+                site *= scale[i, j]
+        np.clip(balanced, 0.0, 1.0, out=balanced)
         cam = np.asarray(_demosaic(balanced, raw.cfa_pattern, method, allow_odd=True))
         del balanced
         cam = np.ascontiguousarray(cam, dtype=np.float32)
@@ -897,14 +987,12 @@ def develop(
     to_rgb = np.linalg.inv(np.asarray(rgb_to_xyz_matrix(key), np.float64))
     m = (to_rgb @ cat @ cam_to_xyz).astype(np.float32)
     transfer = "linear" if linear else out_space.transfer
-    table = _transfer_table(out_space.transfer) if not linear else np.zeros(2, np.float32)
-    image = np.empty(cam.shape, np.float32)
-    render_rgb(cam, m, table, not linear, image)
     return Development(
         raw=raw,
         gains=gains,
         camera_rgb=cam,
-        image=image,
+        render=m,
+        table=None if linear else _transfer_table(out_space.transfer),
         camera_to_xyz=cam_to_xyz,
         adaptation=cat,
         space=key,

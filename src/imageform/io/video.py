@@ -48,6 +48,12 @@ __all__ = [
 #: File suffixes read as video files (any other existing file is offered to FFmpeg too).
 VIDEO_SUFFIXES = (".mp4", ".m4v", ".mkv", ".avi", ".mov", ".webm", ".mpg", ".mpeg", ".ts")
 
+#: x264's speed presets, fastest first (:class:`VideoWriter`'s ``preset``).
+_X264_PRESETS = (
+    "ultrafast", "superfast", "veryfast", "faster", "fast", "medium", "slow", "slower",
+    "veryslow",
+)  # fmt: skip
+
 #: Image suffixes of an image sequence.
 _IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".tif", ".tiff", ".npy")
 
@@ -80,11 +86,14 @@ class Frame:
         sequence; the capture time for a device).
     image : ndarray (H, W, 3) uint8
         RGB.
+    path : Path or None
+        The image file of an image sequence's frame (None for a video file or a device).
     """
 
     index: int
     time_s: float
     image: np.ndarray
+    path: Path | None = None
 
 
 @dataclass(frozen=True)
@@ -239,13 +248,13 @@ class VideoReader:
         )
 
     def _check_size(self, width: int, height: int) -> None:
+        from imageform.io.image_io import ImageInfo, _check_pixels
+
         if width <= 0 or height <= 0:
             raise InvalidInputError(f"{self._source}: frames of {width}x{height} pixels")
-        if width * height > self._limit:
-            raise InvalidInputError(
-                f"{self._source}: frames of {width}x{height} pixels are above the limit of "
-                f"{self._limit} pixels (IMAGEFORM_MAX_PIXELS)"
-            )
+        info = ImageInfo(width, height, 3, "uint8", "video")
+        remedy = "raise it with max_pixels= or IMAGEFORM_MAX_PIXELS"
+        _check_pixels(f"{self._source}: a frame", info, self._limit, remedy)
 
     def __enter__(self) -> VideoReader:
         """Return the reader."""
@@ -288,7 +297,7 @@ class VideoReader:
                     f"{f}: {img.shape[1]}x{img.shape[0]} pixels where the sequence's first "
                     f"image has {shape[1]}x{shape[0]}"
                 )
-            yield Frame(i, i / self.info.fps, img)
+            yield Frame(i, i / self.info.fps, img, f)
 
     def _decode(self) -> Iterator[Frame]:
         av = _av()
@@ -376,10 +385,20 @@ class VideoWriter:
     quality : int
         For H.264, the constant rate factor (0 lossless to 51; default 18, visually
         lossless); ignored by other encoders.
+    preset : str
+        For H.264, x264's speed preset, from ``"ultrafast"`` (about three times faster than
+        the default ``"veryfast"``, a bigger file at the same quality: for video written
+        while it is captured or tracked) to ``"veryslow"``; ignored by other encoders.
     """
 
     def __init__(
-        self, path: str | Path, fps: float, *, codec: str | None = None, quality: int = 18
+        self,
+        path: str | Path,
+        fps: float,
+        *,
+        codec: str | None = None,
+        quality: int = 18,
+        preset: str = "veryfast",
     ) -> None:
         av = _av()
         p = Path(path)
@@ -392,6 +411,10 @@ class VideoWriter:
             raise InvalidInputError(f"expected fps in (0, 10000), got {describe(fps)}")
         if isinstance(quality, bool) or not isinstance(quality, int) or not 0 <= quality <= 51:
             raise InvalidInputError(f"expected quality an integer in [0, 51], got {quality!r}")
+        if preset not in _X264_PRESETS:
+            raise InvalidInputError(
+                f"expected preset one of {', '.join(_X264_PRESETS)}, got {describe(preset)}"
+            )
         names = (codec,) if codec else _CODECS[suffix]
         chosen = next((c for c in names if c in av.codecs_available), None)
         if chosen is None:
@@ -400,6 +423,7 @@ class VideoWriter:
         self._fps = Fraction(fps).limit_denominator(1001)
         self._codec = chosen
         self._quality = quality
+        self._preset = preset
         self._container = av.open(str(p), mode="w")
         self._stream: Any = None
         self.frames = 0
@@ -418,7 +442,7 @@ class VideoWriter:
         else:
             stream.pix_fmt = "yuv420p"
         if self._codec == "libx264":
-            stream.options = {"crf": str(self._quality), "preset": "veryfast"}
+            stream.options = {"crf": str(self._quality), "preset": self._preset}
         self._stream = stream
 
     def write(self, image: Any) -> None:

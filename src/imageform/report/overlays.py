@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 import math
 from typing import Any
 
@@ -221,42 +222,109 @@ _PLAN = (240, 228, 66)
 _CORNER = (86, 180, 233)
 
 
+#: Drawn coordinates farther than this from the image are dropped (PIL's integer range).
+_FAR_PX = 1e6
+
+
 def _segments_uv(
-    a: np.ndarray, b: np.ndarray, K: Any, R: Any, t: Any, distortion: Any, pieces: int = 8
-) -> list[list[tuple[float, float]]]:
-    """Return the polylines (PIL points) of 3-D segments ``a[i] -> b[i]`` seen by the camera.
+    groups: list[tuple[np.ndarray, np.ndarray, int]], camera: Any
+) -> list[list[list[tuple[float, float]]]]:
+    """Return, per group ``(a, b, pieces)``, the polylines (PIL points) of segments ``a -> b``.
 
-    Each segment is cut into ``pieces`` so that lens distortion bends it as the lens does; a
-    piece with an end at or behind the camera (or projected to NaN) is not drawn.
+    ``a`` and ``b`` are ``(n, 3)`` points; each segment is cut into ``pieces`` so that lens
+    distortion bends it as the lens does. All groups are projected in one call of
+    :meth:`~imageform.geometry.Camera.project` (the full camera model); a piece with an end
+    at or behind the camera (or projected to NaN) is not drawn.
     """
-    from imageform.geometry.distortion import project_points_distorted
+    chunks = []
+    for a, b, pieces in groups:
+        s = np.linspace(0.0, 1.0, pieces + 1)
+        chunks.append((a[:, None, :] + (b - a)[:, None, :] * s[None, :, None]).reshape(-1, 3))
+    flat = np.concatenate(chunks) if chunks else np.zeros((0, 3))
+    if flat.shape[0] == 0:
+        return [[] for _ in groups]
+    uv_all, ok_all = camera.project(flat)
+    uv_all = np.asarray(uv_all, np.float64) + 0.5
+    ok_all = np.asarray(ok_all, bool) & np.all(
+        np.isfinite(uv_all) & (np.abs(uv_all) < _FAR_PX), axis=-1
+    )
+    out: list[list[list[tuple[float, float]]]] = []
+    start = 0
+    for a, _, pieces in groups:
+        n = a.shape[0] * (pieces + 1)
+        uv = uv_all[start : start + n].reshape(a.shape[0], pieces + 1, 2)
+        ok = ok_all[start : start + n].reshape(a.shape[0], pieces + 1)
+        start += n
+        lines: list[list[tuple[float, float]]] = []
+        for seg, good, whole in zip(uv.tolist(), ok, ok.all(axis=1), strict=True):
+            if whole:  # the usual case: the whole segment in front of the camera
+                lines.append([(p[0], p[1]) for p in seg])
+                continue
+            run: list[tuple[float, float]] = []
+            for p, g in zip(seg, good, strict=True):
+                if g:
+                    run.append((p[0], p[1]))
+                else:
+                    if len(run) > 1:
+                        lines.append(run)
+                    run = []
+            if len(run) > 1:
+                lines.append(run)
+        out.append(lines)
+    return out
 
-    if a.shape[0] == 0:
-        return []
-    s = np.linspace(0.0, 1.0, pieces + 1)
-    pts = a[:, None, :] + (b - a)[:, None, :] * s[None, :, None]  # (n, pieces+1, 3)
-    flat = pts.reshape(-1, 3)
-    if distortion is not None:
-        uv, ok = project_points_distorted(flat, K, R, t, distortion)
-    else:
-        from imageform.geometry import project_points
 
-        uv, ok = project_points(flat, K, R, t)
-    uv = np.asarray(uv, np.float64).reshape(a.shape[0], pieces + 1, 2) + 0.5
-    ok = np.asarray(ok, bool).reshape(a.shape[0], pieces + 1) & np.all(np.isfinite(uv), -1)
-    lines: list[list[tuple[float, float]]] = []
-    for seg, good in zip(uv, ok, strict=True):
-        run: list[tuple[float, float]] = []
-        for p, g in zip(seg, good, strict=True):
-            if g and abs(p[0]) < 1e6 and abs(p[1]) < 1e6:
-                run.append((float(p[0]), float(p[1])))
-            else:
-                if len(run) > 1:
-                    lines.append(run)
-                run = []
-        if len(run) > 1:
-            lines.append(run)
-    return lines
+@functools.lru_cache(maxsize=1)
+def _label_font() -> Any:
+    """PIL's default font, loaded once (loading it costs more than drawing a label)."""
+    from PIL import ImageFont
+
+    return ImageFont.load_default()
+
+
+def _draw_in_place(
+    out: np.ndarray, shapes: list[tuple[str, Any, tuple[int, int, int], int]]
+) -> None:
+    """Draw ``shapes`` on ``out`` (uint8 RGB, changed in place) through a PIL crop.
+
+    Only the box around the shapes goes through PIL (a frame's conversions cost more than
+    the drawing); shifting the coordinates by whole pixels leaves the rasterisation as it
+    would be on the whole frame. Shapes: ``("line", points, colour, width)``, ``("ellipse",
+    box, ...)``, ``("rectangle", box, ...)`` (filled) and ``("text", (x, y, text), ...)``.
+    """
+    from PIL import Image, ImageDraw
+
+    if not shapes:
+        return
+    h, w = out.shape[:2]
+    lo, hi = np.array([np.inf, np.inf]), np.array([-np.inf, -np.inf])
+    for kind, geom, _, width in shapes:
+        if kind == "text":  # a bound, not measured: PIL's default font is under 10 x 14 px
+            x, y, text = geom
+            xy = np.array([[x, y], [x + 10 * len(text), y + 14]], np.float64)
+        else:
+            xy = np.asarray(geom, np.float64).reshape(-1, 2)
+        lo = np.minimum(lo, xy.min(axis=0) - width - 2)
+        hi = np.maximum(hi, xy.max(axis=0) + width + 2)
+    x0, y0 = max(0, math.floor(lo[0])), max(0, math.floor(lo[1]))
+    x1, y1 = min(w, math.ceil(hi[0]) + 1), min(h, math.ceil(hi[1]) + 1)
+    if x1 <= x0 or y1 <= y0:
+        return  # everything falls outside the frame
+    crop = Image.fromarray(out[y0:y1, x0:x1], "RGB")
+    draw = ImageDraw.Draw(crop)
+    for kind, geom, colour, width in shapes:
+        if kind == "line":
+            draw.line([(u - x0, v - y0) for u, v in geom], fill=colour, width=width)
+        elif kind == "ellipse":
+            u0, v0, u1, v1 = geom
+            draw.ellipse([u0 - x0, v0 - y0, u1 - x0, v1 - y0], outline=colour, width=width)
+        elif kind == "rectangle":
+            u0, v0, u1, v1 = geom
+            draw.rectangle([u0 - x0, v0 - y0, u1 - x0, v1 - y0], fill=colour)
+        else:
+            x, y, text = geom
+            draw.text((x - x0, y - y0), text, fill=colour, font=_label_font())
+    out[y0:y1, x0:x1] = np.asarray(crop)
 
 
 def draw_pose_overlay(
@@ -269,12 +337,14 @@ def draw_pose_overlay(
     axis_length: float | None = None,
     label: str | None = None,
 ) -> np.ndarray:
-    """Draw a tracked board's axes, its corners and a plan on a frame; return uint8 RGB.
+    r"""Draw a tracked board's axes, its corners and a plan on a frame; return uint8 RGB.
 
-    Everything is projected through the full camera model (``K`` and ``distortion``, the
-    pose's ``R``, ``tvec``); segments are cut into pieces so that distortion bends them, and
-    a piece at or behind the camera is never drawn. A frame whose pose was not found gets
-    only the label.
+    Everything is projected through the full camera model, :math:`x = K\, d(\pi(R X + t))`
+    with :math:`\pi` the division by depth and ``d`` the lens distortion
+    (:meth:`imageform.geometry.Camera.project`; Hartley & Zisserman eq. 6.11, Brown 1966 for
+    ``d``); segments are cut into pieces so that distortion bends them, and a piece at or
+    behind the camera is never drawn. A frame whose pose was not found gets only the label.
+    ``image`` is not changed.
 
     Parameters
     ----------
@@ -297,14 +367,23 @@ def draw_pose_overlay(
     Returns
     -------
     ndarray (H, W, 3) uint8
+        A new array: the frame with the drawing.
     """
-    from PIL import Image, ImageDraw
+    from imageform.geometry.camera import Camera
 
-    canvas = Image.fromarray(_to_rgb8(image), "RGB")
-    draw = ImageDraw.Draw(canvas)
+    arr = _to_rgb8(image)
+    out = arr.copy() if np.may_share_memory(arr, np.asarray(image)) else arr  # never draw on it
+    shapes: list[tuple[str, Any, tuple[int, int, int], int]] = []
     if pose.found:
-        k = np.asarray(K, np.float64)
         R, t = np.asarray(pose.R, np.float64), np.asarray(pose.tvec, np.float64)
+        camera = Camera(np.asarray(K, np.float64), R, t, distortion=distortion)
+        if axis_length is None:
+            span = np.ptp(np.asarray(pose.object_points, np.float64), axis=0)
+            axis_length = float(max(span.max(), 1e-9)) / 3
+        origin, tips = np.zeros((1, 3)), np.eye(3) * axis_length
+        # x, y on the board, z = x cross y (into it): one group each
+        groups = [(origin, tips[i : i + 1], 8) for i in range(3)]
+        single = np.zeros((0, 3))
         if plan is not None:
             pts = np.asarray(plan.points, np.float64)
             a_idx = [np.asarray(plan.edges[:, 0], np.int64)]
@@ -313,25 +392,20 @@ def draw_pose_overlay(
                 a_idx.append(line[:-1])
                 b_idx.append(line[1:])
             ia, ib = np.concatenate(a_idx), np.concatenate(b_idx)
-            for run in _segments_uv(pts[ia], pts[ib], k, R, t, distortion):
-                draw.line(run, fill=_PLAN, width=3)
-            if plan.singles.size:
-                single = pts[plan.singles]
-                for run in _segments_uv(single, single, k, R, t, distortion, pieces=1):
-                    x, y = run[0]
-                    draw.ellipse([x - 5, y - 5, x + 5, y + 5], outline=_PLAN, width=3)
-        for u, v in np.asarray(pose.image_points, np.float64) + 0.5:
-            draw.ellipse([u - 3, v - 3, u + 3, v + 3], outline=_CORNER, width=2)
-        if axis_length is None:
-            span = np.ptp(np.asarray(pose.object_points, np.float64), axis=0)
-            axis_length = float(max(span.max(), 1e-9)) / 3
-        origin = np.zeros((1, 3))
-        for i, colour in enumerate(_AXES):  # x, y on the board, z = x cross y (into it)
-            tip = np.zeros((1, 3))
-            tip[0, i] = axis_length
-            for line in _segments_uv(origin, tip, k, R, t, distortion):
-                draw.line(line, fill=colour, width=4)
-    if label:
-        draw.rectangle([0, 0, 8 + 7 * len(label), 20], fill=(0, 0, 0))
-        draw.text((4, 4), label, fill=(255, 255, 255))
-    return np.asarray(canvas)
+            single = pts[plan.singles]
+            groups += [(pts[ia], pts[ib], 8), (single, single, 1)]
+        runs = _segments_uv(groups, camera)
+        if plan is not None:
+            shapes += [("line", run, _PLAN, 3) for run in runs[3]]
+            for run in runs[4]:
+                x, y = run[0]
+                shapes.append(("ellipse", (x - 5, y - 5, x + 5, y + 5), _PLAN, 3))
+        for u, v in (np.asarray(pose.image_points, np.float64) + 0.5).tolist():
+            shapes.append(("ellipse", (u - 3, v - 3, u + 3, v + 3), _CORNER, 2))
+        for lines, colour in zip(runs[:3], _AXES, strict=True):
+            shapes += [("line", ln, colour, 4) for ln in lines]
+    _draw_in_place(out, shapes)
+    if label:  # a box of its own: the board's drawing rarely reaches the top left corner
+        box = ("rectangle", (0, 0, 8 + 7 * len(label), 20), (0, 0, 0), 0)
+        _draw_in_place(out, [box, ("text", (4, 4, label), (255, 255, 255), 0)])
+    return out

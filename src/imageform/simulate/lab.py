@@ -104,25 +104,40 @@ def _stage(result: Any, name: str) -> np.ndarray:
     raise InvalidInputError(f"the simulation has no stage {name!r}")  # pragma: no cover
 
 
-def _balanced_edge(result: Any, scene: Any, path: Path) -> np.ndarray:
-    """Write the edge photograph as a lab develops it for an e-SFR; return the gains (R, G, B).
+def _lens_sigma(cf: CameraFile) -> float | None:
+    """Return the Gaussian sigma (px) of the lens: 0 without ``[optics]``, None if not Gaussian."""
+    if cf.optics is None:
+        return 0.0
+    if cf.optics.model == "gaussian" and cf.optics.gaussian_sigma_px is not None:
+        return float(cf.optics.gaussian_sigma_px)
+    return None
 
-    The raw mosaic, black and dark signal removed, is white-balanced on the light ground (each
-    CFA colour's 75th percentile made equal to green's) before Malvar demosaicing, so that the
-    demosaicing of a neutral edge keeps its resolution (demosaicing unbalanced colours costs up
-    to 17 % of a channel's MTF50).
+
+def _raw_mtf50(sigma: float, angle_deg: float, supersampling: int) -> float:
+    r"""Return the true MTF50 (cy/px) of the raw mosaic across a slanted edge.
+
+    The Gaussian lens times the renderer's pixel aperture, ``S`` rays per pixel along each
+    axis averaged (the discrete box :math:`\sin(\pi x) / (S \sin(\pi x / S))`), taken along
+    the edge normal at ``angle_deg``: the system MTF an e-SFR of the raw mosaic measures.
     """
-    from imageform.sensor.cfa import cfa_masks
-    from imageform.simulate.stages import demosaic_raw, normalize_raw
+    from imageform.analysis import mtf_crossing
 
-    raw = next(s.image for s in result.stages if s.name == "raw")
-    x = normalize_raw(raw, scene.sensor, float(result.metrics["exposure_time_s"]))
-    masks = cfa_masks(x.shape, scene.config.sensor.cfa)
-    light = np.array([np.percentile(x[masks[..., c] > 0], 75) for c in range(3)])
-    gains = light[1] / np.maximum(light, 1e-12)
-    rgb = demosaic_raw(x * (masks * gains).sum(axis=-1), scene.config.sensor.cfa, "malvar")
-    write_image(path, _linear16(rgb))
-    return np.asarray(gains)
+    f = np.linspace(0.0, 1.0, 20001)
+    t = math.radians(angle_deg)
+
+    def box(x: np.ndarray) -> np.ndarray:
+        out = np.ones_like(x)
+        nz = np.abs(x) > 1e-12
+        out[nz] = np.sin(np.pi * x[nz]) / (supersampling * np.sin(np.pi * x[nz] / supersampling))
+        return np.abs(out)
+
+    mtf = np.exp(-2.0 * np.pi**2 * sigma**2 * f**2) * box(f * math.cos(t)) * box(f * math.sin(t))
+    return float(mtf_crossing(f, mtf, 0.5))
+
+
+#: The simulator's automatic processing (the built-in scene's): what a camera file without a
+#: fixed white balance or matrix develops with.
+_AUTOMATIC = {"white_balance": "gray_world", "color_correction": "colorchecker"}
 
 
 def _toml(value: Any) -> str:
@@ -159,21 +174,24 @@ def render_lab_set(
 ) -> LabSet:
     """Render what a lab photographs of ``camera`` into ``folder``.
 
-    Layout (every image 16-bit PNG)::
+    Layout (images 16-bit PNG, raw mosaics DNG)::
 
         lab.toml            the manifest: what is where, how it was encoded, the truth
         camera.toml         the camera file rendered through (the truth)
         checkerboard/       view-01.png ... : the board (``board`` inner corners, square
                             ``square_mm`` in lab.toml) at ``views`` poses, the camera's
                             developed output (sRGB-encoded)
-        colorchecker/       colorchecker.png: a frontal ColorChecker under D65, linear
-                            camera RGB (demosaiced, no white balance, no colour correction);
+        colorchecker/       chart.dng: a frontal ColorChecker under D65, the raw mosaic
+                            (:func:`imageform.simulate.write_simulated_dng`);
                             developed.png: the same exposure as the camera develops it
-                            (its white balance, colour matrix and sRGB encoding), from which
-                            ``imageform characterize`` measures the camera's processing
-        edge/               edge.png: a dark square (reflectance 0.1) on a light ground (0.8)
-                            turned ``edge_angle_deg``, linear camera RGB white-balanced on
-                            the ground before demosaicing (the gains in lab.toml)
+                            (its white balance, colour matrix and sRGB encoding; with no
+                            fixed ``white_balance`` or ``ccm`` in ``[color]``, the
+                            simulator's automatic processing: grey world and a matrix fitted
+                            on the chart), from which ``imageform characterize`` measures
+                            the camera's processing (``processing`` in lab.toml says which)
+        edge/               edge.dng: a dark square (reflectance 0.1) on a light ground (0.8)
+                            turned ``edge_angle_deg``, the raw mosaic (its sharpness is
+                            measured without demosaicing)
         emva.toml           the EMVA 1288 manifest ``imageform emva FOLDER`` reads
         flats/, darks/      e00-0.png ... : raw frames (DN) of the green channel at 550 nm
                             (:func:`imageform.sensor.simulate_emva_frames`), one stack of
@@ -224,6 +242,7 @@ def render_lab_set(
 
     from imageform.sensor import simulate_emva_frames
     from imageform.sensor.model import photons_per_pixel
+    from imageform.simulate.dng import write_simulated_dng
     from imageform.simulate.measured import apply_camera_file
     from imageform.simulate.pipeline import simulate
 
@@ -304,17 +323,19 @@ def render_lab_set(
     chart_w = 0.12
     dist = fx * chart_w / (0.7 * w)
     chart = {"type": "colorchecker", "centre_m": [0.0, 0.0, 0.0], "width_m": chart_w}
-    cc_scene = apply_camera_file(
-        _base_scene((w, h), ss, [chart]).with_changes(
-            camera={"eye_m": [0.01 * dist, -dist, 0.01 * dist], "target_m": [0.0, 0.0, 0.0]}
-        ),
-        posed,
+    automatic = cf.color is None or (cf.color.white_balance is None and cf.color.ccm is None)
+    cc_base = _base_scene((w, h), ss, [chart]).with_changes(
+        camera={"eye_m": [0.01 * dist, -dist, 0.01 * dist], "target_m": [0.0, 0.0, 0.0]}
     )
+    if automatic:  # the camera balances what it sees (the simulator's automatic processing)
+        cc_base = cc_base.with_changes(processing=_AUTOMATIC)
+    cc_scene = apply_camera_file(cc_base, posed)
     res = simulate(cc_scene, rng=seed + 100)
     (out / "colorchecker").mkdir()
-    cc_path = out / "colorchecker" / "colorchecker.png"
-    write_image(cc_path, _linear16(_stage(res, "demosaiced")))
+    cc_path = write_simulated_dng(res, cc_scene, out / "colorchecker" / "chart.dng")
     write_image(out / "colorchecker" / "developed.png", _linear16(_stage(res, "output")))
+    cc_gains = [float(g) for g in res.metrics["white_balance_gains"]]
+    cc_matrix = np.asarray(res.metrics["color_correction_matrix"], dtype=np.float64)
     centres = res.colorchecker.centres_uv if res.colorchecker is not None else np.zeros((24, 2))
     quad = res.quads[0].corners if res.quads else np.zeros((4, 3))
     chart_quad = np.asarray(cc_scene.camera.project(quad).uv, dtype=np.float64)
@@ -350,8 +371,7 @@ def render_lab_set(
     )
     res = simulate(edge_scene, rng=seed + 200)
     (out / "edge").mkdir()
-    edge_path = out / "edge" / "edge.png"
-    edge_gains = _balanced_edge(res, edge_scene, edge_path)
+    edge_path = write_simulated_dng(res, edge_scene, out / "edge" / "edge.dng")
     sensor = edge_scene.sensor
 
     # --- EMVA 1288 stacks, green channel at 550 nm, dark to 105 % of the clip
@@ -425,9 +445,21 @@ def render_lab_set(
         "bit_depth": int(sensor.bit_depth),
         "black_level_dn": float(sensor.black_level),
         "quantum_efficiency_green_550nm": eta,
+        "quantum_efficiency": float(
+            min(np.max(np.asarray(sensor.qe_curves)) * sensor.fill_factor, 1.0)
+        ),
         "pixel_pitch_um": float(sensor.pixel_pitch * 1e6),
         "cfa": str(edge_scene.config.sensor.cfa),
+        "f_number": float(edge_scene.config.lens.f_number),
     }
+    sigma = _lens_sigma(cf)
+    if sigma is not None:  # the raw mosaic's MTF: the Gaussian lens times the pixel
+        truth["gaussian_sigma_px"] = sigma
+        truth["mtf50_cy_per_px"] = _raw_mtf50(sigma, angle, ss)
+    elif cf.optics is not None and cf.optics.mtf50_rgb() is not None:
+        truth["mtf50_cy_per_px"] = [float(m) for m in cf.optics.mtf50_rgb() or ()]
+    truth["white_balance"] = cc_gains  # what the camera's processing applied to the chart
+    truth["ccm"] = [[float(x) for x in row] for row in cc_matrix.T]  # linear sRGB = ccm @ rgb
     if cf.camera.distortion is not None:
         for name in ("k1", "k2"):
             if hasattr(cf.camera.distortion, name):
@@ -437,8 +469,13 @@ def render_lab_set(
         "# characterise a camera, rendered through camera.toml (the truth).",
         f"format = {_toml(LAB_FORMAT)}",
         "version = 1",
-        'camera = "camera.toml"',
+        'camera_file = "camera.toml"  # the truth',
         f"seed = {seed}",
+        "",
+        "[camera]  # what the lab knows of the camera (its data sheet and settings)",
+        f"cfa = {_toml(truth['cfa'])}",
+        f"pixel_pitch_um = {_toml(truth['pixel_pitch_um'])}",
+        f"f_number = {_toml(truth['f_number'])}",
         "",
         "[checkerboard]",
         'folder = "checkerboard"',
@@ -448,18 +485,17 @@ def render_lab_set(
         'encoding = "srgb"  # the developed output (imageform calibrate reads it)',
         "",
         "[colorchecker]",
-        f"image = {_toml(cc_path.relative_to(out).as_posix())}",
+        f"image = {_toml(cc_path.relative_to(out).as_posix())}  # the raw mosaic",
         'illuminant = "D65"',
-        'encoding = "linear"          # demosaiced camera RGB / (white - black), no white balance',
         'developed = "colorchecker/developed.png"  # the same exposure, the camera\'s output',
+        f"processing = {_toml('automatic' if automatic else 'fixed')}"
+        "  # automatic: the camera white-balances and corrects each scene itself",
         f"corners_px = {_toml([list(map(float, c)) for c in chart_quad])}",
         f"patch_centres_px = {_toml([list(map(float, c)) for c in centres])}",
         "",
         "[edge]",
         f"image = {_toml(edge_path.relative_to(out).as_posix())}",
-        f"angle_deg = {_toml(angle)}",
-        'encoding = "linear"  # raw minus black, white-balanced on the ground, Malvar demosaic',
-        f"white_balance = {_toml([float(g) for g in edge_gains])}",
+        f"angle_deg = {_toml(angle)}  # the raw mosaic: sharpness without demosaicing",
         "",
         "[emva]",
         'manifest = "emva.toml"',
@@ -474,8 +510,6 @@ def render_lab_set(
         "[truth]  # the simulated camera's values (units as in the camera file)",
         *(f"{k} = {_toml(v)}" for k, v in truth.items()),
     ]
-    if cf.optics is not None and cf.optics.mtf50_rgb() is not None:
-        manifest.append(f"mtf50_cy_per_px = {_toml(list(cf.optics.mtf50_rgb() or ()))}")
     man_path = out / _MARKER
     man_path.write_text("\n".join(manifest) + "\n", encoding="utf-8")
     return LabSet(

@@ -13,6 +13,7 @@ from typing import Any
 
 import numpy as np
 
+from imageform._validate import describe
 from imageform.errors import ImageformWarning, InvalidInputError
 from imageform.simulate._rng import RNGLike, random_source
 from imageform.simulate.config import GroundConfig
@@ -174,12 +175,46 @@ def _chart(scene: Scene) -> SceneObject | None:
     return checkers[0] if checkers else None
 
 
+def _white_kept(
+    wb: WhiteBalanced, cc: ColorCorrected, img: np.ndarray
+) -> tuple[WhiteBalanced, ColorCorrected, bool]:
+    r"""Fold the fitted matrix's white shift into the white balance (the same output).
+
+    A matrix :math:`M` fitted freely on the chart also corrects what the white balance
+    left (grey world is biased by the scene's colours), so it does not keep white:
+    :math:`\mathbf 1^T M \not\propto \mathbf 1^T`. With :math:`\mathbf u = \mathbf 1^T
+    M^{-1}` (the balanced camera RGB that :math:`M` renders white), the gains
+    :math:`\mathbf g' = \mathbf g / \mathbf u` and the matrix :math:`M' =
+    \mathrm{diag}(\mathbf u)\, M` give the same output, :math:`(\mathbf c \odot \mathbf
+    g') M' = (\mathbf c \odot \mathbf g) M`, and :math:`\mathbf 1^T M' = \mathbf 1^T`:
+    the white balance alone decides what is grey, as in a camera, and a raw developer given
+    the DNG's AsShotNeutral (:math:`1/\mathbf g'`) and ColorMatrix renders what the
+    simulator does. The green gain stays 1 (the overall scale goes into :math:`M'`).
+    Nothing changes when :math:`M` is the identity or :math:`\mathbf u` is not positive.
+    """
+    M = np.asarray(cc.matrix, dtype=np.float64)
+    if np.allclose(M, np.eye(3)):
+        return wb, cc, False
+    try:
+        u = np.ones(3) @ np.linalg.inv(M)
+    except np.linalg.LinAlgError:
+        return wb, cc, False
+    if not (np.all(np.isfinite(u)) and np.all(u > 0)):
+        return wb, cc, False
+    u = u / u[1]  # green's gain kept
+    gains = np.ravel(np.asarray(wb.gains, dtype=np.float64)) / u
+    M2 = np.diag(u) @ M
+    balanced = img * gains
+    return WhiteBalanced(balanced, gains), ColorCorrected(np.asarray(cc.image), M2), True
+
+
 def simulate(
     scene: Scene,
     *,
     progress: Progress | None = None,
     rng: RNGLike = None,
     seed: int | None = None,
+    measure: bool = True,
 ) -> SimulationResult:
     """Run a scene through the whole chain and keep every stage.
 
@@ -205,6 +240,11 @@ def simulate(
         from in turn; None: fresh entropy (a different run each time).
     seed : int, optional
         Deprecated alias of ``rng`` (an int); removed in the next release.
+    measure : bool
+        Measure the result (the ColorChecker patches, the vanishing points and the horizon,
+        the sensor's photon transfer). False renders the stages only: the frames of a video
+        along a trajectory, where the measurements would cost about as much as the
+        rendering; ``patches``, ``vanishing`` and ``photon_transfer`` are then None.
 
     Returns
     -------
@@ -234,6 +274,8 @@ def simulate(
     """
     if not isinstance(scene, Scene):
         raise InvalidInputError(f"expected a Scene (load_scene), got {type(scene).__name__}")
+    if not isinstance(measure, bool):
+        raise InvalidInputError(f"expected measure as True or False, got {describe(measure)}")
     if progress is not None and not callable(progress):
         raise TypeError(
             f"expected progress as a callable progress(step, fraction) or None, got "
@@ -290,8 +332,6 @@ def simulate(
     else:
         with _at_key(scene, ("processing", "white_balance")):
             wb = balance_white(img, proc.white_balance, cc_before)
-    gains = ", ".join(f"{g:.3g}" for g in np.ravel(wb.gains))
-    run.stage("white_balanced", wb.image, method=wb_method, gains=gains)
     cc_wb = patch_means(wb.image, truth) if truth is not None else None
     matrix = None
     if color is not None:
@@ -301,6 +341,14 @@ def simulate(
     else:
         with _at_key(scene, ("processing", "color_correction")):
             cc = correct_color(wb.image, proc.color_correction, cc_wb)
+        folded = False
+        if wb_method != "camera file":  # a camera file's fixed gains stay as they are
+            wb, cc, folded = _white_kept(wb, cc, img)
+        if folded:
+            wb_method = f"{wb_method}, refined by the chart's matrix (which keeps white)"
+            cc_wb = patch_means(wb.image, truth) if truth is not None else None
+    gains = ", ".join(f"{g:.3g}" for g in np.ravel(wb.gains))
+    run.stage("white_balanced", wb.image, method=wb_method, gains=gains)
     run.stage("color_corrected", cc.image)
     with _at_key(scene, ("processing", "output_space")):
         out = encode_output(cc.image, proc.output_space, proc.transfer)
@@ -315,7 +363,8 @@ def simulate(
         "color_correction_matrix": cc.matrix.tolist(),
     }
     patches, patch_xy = None, {}
-    if truth is not None and cc_before is not None and cc_wb is not None:
+    vanishing, ptc = None, None
+    if measure and truth is not None and cc_before is not None and cc_wb is not None:
         lin_out = decode_output(out, proc.output_space)
         patches = measure_colorchecker(lin_out, cc.image, truth, snr_stage="color_corrected")
         patch_xy = _patch_chromaticities(truth, cc_before, cc_wb, cc.image)
@@ -331,11 +380,12 @@ def simulate(
                 stacklevel=2,
             )
     run.tick("isp", "colorchecker")
-    vanishing, errors = _vanishing(scene, out.image, source.int_seed())
-    metrics |= errors
-    run.tick("vanishing", "vanishing_points")
-    ptc = measure_photon_transfer(sensor, source.for_step())
-    run.tick("photon_transfer", "photon_transfer")
+    if measure:
+        vanishing, errors = _vanishing(scene, out.image, source.int_seed())
+        metrics |= errors
+        run.tick("vanishing", "vanishing_points")
+        ptc = measure_photon_transfer(sensor, source.for_step())
+        run.tick("photon_transfer", "photon_transfer")
     metrics["step_times_s"] = {k: float(v) for k, v in run.seconds.items()}
     metrics["simulation_time_s"] = float(time.perf_counter() - t_start)
     run.report("done", 1.0)

@@ -197,6 +197,6 @@ def render_frames(
         if progress is not None:
             progress(f"frame {i + 1} of {n}", (i + 0.5) / n)
         cam = {"R": R.tolist(), "t_m": t.tolist()}
-        res = simulate(scene.with_changes(camera=cam, views=[]), rng=rng + i)
+        res = simulate(scene.with_changes(camera=cam, views=[]), rng=rng + i, measure=False)
         img = np.asarray(res.stages[-1].image, np.float64)
         yield np.round(np.clip(img, 0.0, 1.0) * 255).astype(np.uint8)

@@ -467,22 +467,48 @@ def _overview(res: Any, summary: dict[str, Any]) -> str:
 
 
 def _truth(res: Any, summary: dict[str, Any]) -> str:
-    """Measured against lab.toml's ``[truth]`` (a simulated lab set knows its camera)."""
+    """Measured against lab.toml's ``[truth]`` (a simulated lab set knows its camera).
+
+    Every numeric true value gets a row (lists element by element: ``white_balance[0]``,
+    ``ccm[1][2]``) with what was measured: the geometry, the camera file's ``[sensor]`` and
+    ``[optics]``, and the chart's white balance and matrix (also when the twin's processing
+    is automatic and they are not in the camera file).
+    """
     truth = res.manifest.get("truth")
     if not isinstance(truth, dict) or not truth:
         return ""
     g = summary.get("geometry", {})
-    sensor = res.tables.get("sensor", {})
-    measured = {**{k: g.get(k) for k in ("fx", "fy", "cx", "cy", "k1", "k2")}, **sensor}
+    measured: dict[str, Any] = {
+        **{k: g.get(k) for k in ("fx", "fy", "cx", "cy", "k1", "k2")},
+        **res.tables.get("sensor", {}),
+        **res.tables.get("optics", {}),
+    }
+    for key, same in (("dsnu_e_of_the_frames", "dsnu_e"), ("prnu_of_the_frames", "prnu")):
+        measured[key] = measured.get(same)
+    if res.noise is not None:  # EMVA's QE at the flats' wavelength (fill factor included)
+        measured["quantum_efficiency_green_550nm"] = float(res.noise.emva.quantum_efficiency)
+    if res.color is not None:
+        measured["white_balance"] = [float(x) for x in res.color.white_balance]
+        measured["ccm"] = np.asarray(res.color.ccm, dtype=float).T.tolist()
+
+    def flat(name: str, value: Any) -> list[tuple[str, Any]]:
+        if isinstance(value, list | tuple):
+            return [p for i, v in enumerate(value) for p in flat(f"{name}[{i}]", v)]
+        return [(name, value)]
+
     rows = []
     for key, true in truth.items():
-        got = measured.get(key)
-        if isinstance(true, bool) or not isinstance(true, int | float) or got is None:
-            continue
-        if not isinstance(got, int | float) or not math.isfinite(float(got)):
-            continue
-        err = f"{(float(got) / float(true) - 1) * 100:+.2f} %" if true else "—"
-        rows.append([key, f"{float(true):.6g}", f"{float(got):.6g}", err])
+        got_all = dict(flat(key, measured.get(key)))
+        for name, t in flat(key, true):
+            got = got_all.get(name, measured.get(key))
+            if isinstance(t, bool) or not isinstance(t, int | float) or got is None:
+                continue
+            if isinstance(got, bool) or not isinstance(got, int | float):
+                continue
+            if not math.isfinite(float(got)):
+                continue
+            err = f"{(float(got) / float(t) - 1) * 100:+.2f} %" if t else f"{float(got):+.3g}"
+            rows.append([name, f"{float(t):.6g}", f"{float(got):.6g}", err])
     if not rows:
         return ""
     return hp.section(

@@ -43,6 +43,7 @@ the first green photosite of each 2x2 tile is measured.
     [colorchecker]
     illuminant = "D65"        # the light on the chart (CIE name): for the sensitivities
     transfer = "srgb"         # encoding of developed photographs: srgb or linear
+    processing = "fixed"      # or "automatic" (auto white balance): no fixed gains or ccm
 
     [edge]
     transfer = "srgb"         # encoding of developed edge photographs
@@ -126,6 +127,7 @@ _MANIFEST_KEYS: dict[str, tuple[str, ...]] = {
         "encoding",
         "image",
         "developed",
+        "processing",
         "corners_px",
         "patch_centres_px",
     ),
@@ -153,7 +155,7 @@ _MANIFEST_KEYS: dict[str, tuple[str, ...]] = {
     "truth": (),  # any key: the true values of a simulated camera (shown in the report)
 }
 #: Top-level keys of lab.toml (render_lab_set writes them).
-_MANIFEST_TOP = ("format", "version", "camera", "seed")
+_MANIFEST_TOP = ("format", "version", "camera", "camera_file", "seed")
 _FRAME_NAME = re.compile(r"^(?:(?:flat|dark)s?_)?([0-9][0-9.eE+-]*)_([0-9]+)$")
 _NEUTRALS = (18, 19, 20, 21, 22)  # white 9.5 ... neutral 3.5 (black 2 left out: noisy)
 
@@ -934,6 +936,8 @@ def _frame(path: Path, doc: Mapping[str, Any], max_pixels: int | None) -> tuple[
             f"{path.name}: expected a grey frame of raw digital numbers, got {img.shape[-1]} "
             "channels"
         )
+    if _get(doc, "emva", "channel", str, None) is not None:
+        return np.asarray(img[..., 0], dtype=np.float64), None  # one channel's plane already
     return np.asarray(img[..., 0], dtype=np.float64), _camera_cfa(doc)
 
 
@@ -1311,24 +1315,25 @@ def _tables(res: CameraCharacterization) -> dict[str, dict[str, Any]]:
         tables["sensor"] = s
     sh = res.sharpness
     if sh is not None:
-        o: dict[str, Any] = {
-            "model": "gaussian",
-            "gaussian_sigma_px": sh.gaussian_sigma_px,
-            "mtf50_cy_per_px": list(sh.mtf50) if len(sh.mtf50) == 3 else sh.mtf50[0],
-        }
+        o: dict[str, Any] = {"model": "gaussian", "gaussian_sigma_px": sh.gaussian_sigma_px}
+        if all(math.isfinite(m) for m in sh.mtf50):  # a camera sharper than the e-SFR's
+            # range (MTF above 0.5 to its end: a pixel without lens blur) has no MTF50
+            o["mtf50_cy_per_px"] = list(sh.mtf50) if len(sh.mtf50) == 3 else sh.mtf50[0]
         fn = _get(doc, "camera", "f_number", float, None)
         if fn is not None:
             o["f_number"] = fn
         tables["optics"] = o
     c = res.color
     if c is not None:
-        col: dict[str, Any] = {
-            # the camera file's convention: linear sRGB = ccm @ (white-balanced camera RGB)
-            "ccm": [[float(x) for x in row] for row in np.asarray(c.ccm).T],
-            "ccm_to": "linear_srgb",
-            "white_balance": list(c.white_balance),
-            "illuminant": c.illuminant,
-        }
+        col: dict[str, Any] = {}
+        if _processing(doc) == "fixed":
+            col = {
+                # the camera file's convention: linear sRGB = ccm @ (white-balanced camera RGB)
+                "ccm": [[float(x) for x in row] for row in np.asarray(c.ccm).T],
+                "ccm_to": "linear_srgb",
+                "white_balance": list(c.white_balance),
+                "illuminant": c.illuminant,
+            }
         if c.sensitivities is not None:
             wl, qe = relative_qe(c.sensitivities)
             col["sensitivity"] = {
@@ -1337,8 +1342,26 @@ def _tables(res: CameraCharacterization) -> dict[str, dict[str, Any]]:
                 "g": [float(x) for x in qe[:, 1]],
                 "b": [float(x) for x in qe[:, 2]],
             }
-        tables["color"] = col
+        if col:
+            tables["color"] = col
     return tables
+
+
+def _processing(doc: Mapping[str, Any]) -> str:
+    """Return lab.toml's ``[colorchecker] processing``: ``fixed`` (default) or ``automatic``.
+
+    ``automatic``: the camera white-balances and colour-corrects each scene itself (auto
+    white balance), so the twin's ``[color]`` gets no fixed ``white_balance`` or ``ccm``
+    (the simulated scene's own processing balances it); the measured ones are reported.
+    """
+    value = str(_get(doc, "colorchecker", "processing", str, "fixed"))
+    if value not in ("fixed", "automatic"):
+        raise InvalidInputError(
+            f"{LAB_MANIFEST}: expected [colorchecker] processing fixed or automatic, got {value!r}"[
+                :200
+            ]
+        )
+    return value
 
 
 def _peak_qe(res: CameraCharacterization) -> float | None:

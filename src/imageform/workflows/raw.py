@@ -39,7 +39,7 @@ def develop(run: Run, opts: DevelopOptions, *, raw: Path, out: Path) -> Result:
     import numpy as np
 
     from imageform.io import develop as develop_raw
-    from imageform.io import read_raw
+    from imageform.io import image_format, read_raw
 
     img = read_raw(raw)
     dev = develop_raw(
@@ -51,10 +51,17 @@ def develop(run: Run, opts: DevelopOptions, *, raw: Path, out: Path) -> Result:
     )
     for note in dev.notes:
         run.note(note)
-    # a developed raw is 16 bits a channel in PNG (docs/raw.md) unless --bits says otherwise
-    write(run, out, dev.image, opts, like=np.zeros(1, np.uint16))
+    # a developed raw is 16 bits a channel in PNG (docs/raw.md) unless --bits says otherwise;
+    # 16-bit samples come straight from the developer (a bilinear Bayer development writes them
+    # in its one fused pass, no float image made), the same values as rounding the float image
+    fmt = image_format(out)
+    if (fmt == "png" and opts.bits in (None, 16)) or (fmt == "tiff" and opts.bits == 16):
+        image = dev.to_integer(16)
+    else:
+        image = dev.image
+    write(run, out, image, opts, like=np.zeros(1, np.uint16))
     h, w = img.mosaic.shape[:2]
-    oh, ow = dev.image.shape[:2]
+    oh, ow = image.shape[:2]
     kind = f"{img.cfa_pattern} mosaic" if img.cfa_pattern else "linear (demosaiced) raw"
     summary: dict[str, Any] = {
         "raw": raw,

@@ -101,6 +101,49 @@ def _check_folder(out: Path, force: bool) -> None:
         )
 
 
+def _camera_tables(scene: Any, measured: Any) -> tuple[Any, Any]:
+    """Return the truth camera file's ``[sensor]`` and ``[color]``: the scene's own camera.
+
+    ``[sensor]`` holds the sensor model's EMVA values (the effective peak QE, fill factor
+    included; DSNU with the column offsets), its pixel pitch and CFA; ``[color]`` the shape
+    of its QE curves (a shipped table by name), so that ``--camera`` and ``--lab`` render
+    this camera, not the simulator's defaults (issue 26). No ``white_balance`` or ``ccm``:
+    the scene's processing is automatic (``[processing]``). A camera file's own tables
+    (``--camera``) win.
+    """
+    import numpy as np
+
+    sen = scene.sensor
+    curves = np.asarray(sen.qe_curves, dtype=np.float64)
+    table: dict[str, Any] = {
+        "system_gain_dn_per_e": float(sen.system_gain),
+        "read_noise_e": float(sen.read_noise),
+        "dark_current_e_per_s": float(sen.dark_current),
+        "dsnu_e": float(np.hypot(sen.dsnu, sen.column_fpn if sen.architecture == "cmos" else 0)),
+        "prnu": float(sen.prnu),
+        "full_well_e": float(sen.full_well),
+        "bit_depth": int(sen.bit_depth),
+        "black_level_dn": float(sen.black_level),
+        "quantum_efficiency": float(min(curves.max() * sen.fill_factor, 1.0)),
+        "pixel_pitch_um": float(sen.pixel_pitch * 1e6),
+        "cfa": str(scene.config.sensor.cfa),
+    }
+    if measured is not None and measured.sensor is not None:
+        table |= measured.sensor.to_dict()
+    if measured is not None and measured.color is not None:
+        return table, measured.color
+    if scene.config.sensor.spectral_sensitivity != "preset":
+        return table, {"spectral_sensitivity": scene.config.sensor.spectral_sensitivity}
+    rel = curves / curves.max()
+    color = {
+        "sensitivity": {
+            "wavelengths_nm": [float(w) for w in sen.qe_wavelengths],
+            **{c: [float(x) for x in rel[k]] for k, c in enumerate("rgb")},
+        }
+    }
+    return table, color
+
+
 def simulate(run: Run, opts: SimulateOptions, *, out: Path) -> Result:
     """Render the scene, write the report, the metrics, the stage images and the truth camera file.
 
@@ -137,14 +180,15 @@ def simulate(run: Run, opts: SimulateOptions, *, out: Path) -> Result:
     paths = write_report(result, folder, force=True)
     views = _render_views(run, scene, folder, opts.seed)
     measured = getattr(scene, "measured", None)  # the camera file's tables, if any
+    sensor_table, color_table = _camera_tables(scene, measured)
     camera_file = write_camera(
         folder / "camera.toml",
         CameraFile(
             result.camera,
             has_pose=True,
-            sensor=None if measured is None else measured.sensor,
+            sensor=sensor_table,
             optics=None if measured is None else measured.optics,
-            color=None if measured is None else measured.color,
+            color=color_table,
             provenance=Provenance(
                 command="imageform simulate",
                 based_on=str(opts.scene) if opts.scene is not None else "built-in scene",

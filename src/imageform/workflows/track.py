@@ -60,12 +60,6 @@ def parse_track_board(text: str) -> tuple[str, tuple[int, int]]:
     return kind, (cols, rows)
 
 
-def _length_unit(text: str) -> str:
-    """Return the unit a length is written in (``"30mm"`` -> ``"mm"``; a bare number: mm)."""
-    m = re.match(r"^\s*[-+]?(?:\d+\.?\d*|\.\d+)(?:e[-+]?\d+)?\s*([a-zµ]*)\s*$", text.lower())
-    return (m.group(1) if m and m.group(1) else "mm") if m else "mm"
-
-
 @dataclass(frozen=True, kw_only=True)
 class TrackOptions(Options):
     """Options of ``imageform track``."""
@@ -157,14 +151,14 @@ def track(run: Run, opts: TrackOptions, *, out: Path, video: str) -> Result:
     """Track the board through the video; write poses.csv (and the overlay)."""
     import numpy as np
 
-    from imageform._units import parse_length
+    from imageform._units import length_unit, parse_length
     from imageform.geometry import BoardTracker, CharucoBoard
     from imageform.io import VideoWriter, open_video, read_camera, read_plan
     from imageform.report.overlays import draw_pose_overlay
 
     cf = read_camera(opts.camera)
     cam = cf.camera
-    unit = _length_unit(opts.square)
+    unit = length_unit(opts.square, default_unit="mm")
     square = parse_length(opts.square, "--square", default_unit="mm", unit=unit)
     kind, size = parse_track_board(opts.board)
     if kind == "charuco":
@@ -191,7 +185,9 @@ def track(run: Run, opts: TrackOptions, *, out: Path, video: str) -> Result:
             f"images, {video} has {info.width} x {info.height} px frames"
         )
     live = info.kind == "device"
-    writer = VideoWriter(run.file(opts.overlay), fps=info.fps) if opts.overlay else None
+    writer = None
+    if opts.overlay:  # x264's fastest preset: encoding keeps up with tracking (bench_track.py)
+        writer = VideoWriter(run.file(opts.overlay), fps=info.fps, preset="ultrafast")
     rows: list[list[str]] = []
     rms: list[float] = []
     steps: list[float] = []

@@ -1,0 +1,273 @@
+"""``imageform reconstruct``: camera poses and a coloured point cloud from a video.
+
+The course's structure-from-motion application: with the intrinsics known (a camera file),
+the frames of a video (a file, a folder or a glob of images) give the camera's motion and the
+scene's shape up to a similarity. The maths lives in
+:func:`imageform.geometry.reconstruct_sequence`; this module reads the frames, writes
+``cameras.csv``, ``points.ply``, ``report.html`` and ``metrics.json`` into the output folder
+(all or nothing), and reports the time and the errors.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+import time
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Any
+
+from imageform.errors import InvalidInputError
+from imageform.workflows._spec import Input, Options, Output, Result, Run, Workflow, option
+
+__all__ = ["CAMERA_COLUMNS", "WORKFLOWS", "ReconstructOptions"]
+
+#: Columns of ``cameras.csv`` (world to camera: X_cam = R(r) X + t; NaN when not registered).
+CAMERA_COLUMNS = ("frame", "name", "registered", "rx", "ry", "rz", "tx", "ty", "tz", "rms_px")
+
+#: The files that mark a folder as imageform reconstruct's output (only such a folder is
+#: replaced with --force: never a folder of the user's files).
+_MARKERS = ("cameras.csv", "points.ply", "metrics.json", "report.html")
+
+#: The ``format`` of metrics.json.
+METRICS_FORMAT = "imageform-reconstruction"
+
+
+@dataclass(frozen=True, kw_only=True)
+class ReconstructOptions(Options):
+    """Options of ``imageform reconstruct``."""
+
+    camera: Path = option(
+        help="Camera file of the frames' camera (K and distortion: imageform calibrate).",
+        metavar="FILE",
+        input=True,
+    )
+    max_features: int = option(
+        4000, help="SIFT keypoints per frame (the strongest).", minimum=8, maximum=1_000_000
+    )
+    window: int = option(
+        3, help="Match each frame with the next this many frames.", minimum=1, maximum=100
+    )
+    ratio: float = option(
+        0.8,
+        help="Lowe's ratio: a match is kept when its nearest descriptor is nearer than this "
+        "times the second nearest, in (0, 1].",
+        maximum=1.0,
+    )
+    every: int = option(
+        1,
+        help="Take every Nth frame (neighbouring frames of a video barely move).",
+        metavar="N",
+        minimum=1,
+    )
+    max_frames: int | None = option(
+        None, help="Use at most this many frames (after --every).", minimum=2
+    )
+
+    def check(self) -> None:
+        """Check that ``--ratio`` is in (0, 1]."""
+        super().check()
+        if not 0 < self.ratio <= 1:
+            raise InvalidInputError(f"expected --ratio in (0, 1], got {self.ratio:g}")
+
+
+def _check_folder(out: Path, force: bool) -> None:
+    """With --force, replace only a folder that imageform reconstruct wrote."""
+    marked = any((out / m).exists() for m in _MARKERS)
+    if out.is_dir() and force and not marked and any(out.iterdir()):
+        raise InvalidInputError(
+            f"output folder {out} exists and is not an imageform reconstruct output; "
+            "choose a new folder (--force replaces only a previous reconstruction)"
+        )
+
+
+def _fmt(x: float) -> str:
+    return "nan" if not math.isfinite(x) else f"{x:.9g}"
+
+
+def _read_frames(
+    source: str, opts: ReconstructOptions, size: tuple[int, int] | None
+) -> tuple[list[Any], list[str], Any]:
+    """Read the frames (every ``--every``-th, at most ``--max-frames``), their names, the info."""
+    from imageform.io import open_video
+
+    reader = open_video(source)
+    info = reader.info
+    if size is not None and tuple(size) != (info.width, info.height):
+        reader.close()
+        raise InvalidInputError(
+            f"camera file {opts.camera} is for {size[0]} x {size[1]} px images, {source} has "
+            f"{info.width} x {info.height} px frames"
+        )
+    images: list[Any] = []
+    names: list[str] = []
+    with reader:
+        for frame in reader:
+            if frame.index % opts.every:
+                continue
+            images.append(frame.image)
+            names.append(frame.path.name if frame.path is not None else f"frame_{frame.index:06d}")
+            if opts.max_frames is not None and len(images) >= opts.max_frames:
+                break
+    return images, names, info
+
+
+def _metrics(rec: Any, names: list[str], seconds: dict[str, float]) -> dict[str, Any]:
+    import numpy as np
+
+    n, nreg = len(names), int(np.sum(rec.registered))
+    r = np.asarray(rec.residuals_px, np.float64)
+    tl = np.asarray(rec.track_length)
+    return {
+        "frames": n,
+        "registered": nreg,
+        "registered_share": nreg / n,
+        "points": int(rec.points.shape[0]),
+        "observations": int(r.size),
+        "track_length_mean": float(tl.mean()) if tl.size else None,
+        "reprojection_px_median": float(np.median(r)) if r.size else None,
+        "reprojection_px_rms": float(np.sqrt(np.mean(r**2))) if r.size else None,
+        "unregistered": [names[i] for i in np.flatnonzero(~rec.registered).tolist()],
+        "notes": list(rec.notes),
+        "seconds": {k: round(v, 3) for k, v in seconds.items()},
+    }
+
+
+def reconstruct(run: Run, opts: ReconstructOptions, *, out: Path, frames: str) -> Result:
+    """Reconstruct the cameras and points of the frames; write the four files into ``out``."""
+    import importlib.util
+
+    import numpy as np
+
+    if importlib.util.find_spec("matplotlib") is None:  # the report's figures
+        raise InvalidInputError(
+            "imageform reconstruct draws its report with matplotlib, which is not installed: "
+            'pip install "imageform[plot]"'
+        )
+    from imageform._jsonio import write_json
+    from imageform.geometry import matrix_to_rvec, reconstruct_sequence
+    from imageform.io import read_camera
+    from imageform.workflows._ply import write_points_ply
+    from imageform.workflows._reconstruct_report import write_report
+
+    _check_folder(out, run.outputs.force)
+    cam = read_camera(opts.camera).camera
+    size = None if cam.image_size is None else (int(cam.image_size[0]), int(cam.image_size[1]))
+    seconds: dict[str, float] = {}
+    t0 = time.perf_counter()
+    if run.progress is not None:
+        run.progress("reading the frames", 0.0)
+    images, names, info = _read_frames(frames, opts, size)
+    if len(images) < 2:
+        raise InvalidInputError(
+            f"{frames}: {len(images)} frame"
+            + (f" (one in {opts.every})" if opts.every > 1 else "")
+            + "; reconstruct needs at least 2"
+        )
+    seconds["read"] = time.perf_counter() - t0
+    if run.progress is not None:
+        run.progress("reconstructing", 0.1)
+    t1 = time.perf_counter()
+    rec = reconstruct_sequence(
+        images,
+        cam.K,
+        cam.distortion,
+        window=opts.window,
+        max_features=opts.max_features,
+        ratio=opts.ratio,
+    )
+    seconds["reconstruct"] = time.perf_counter() - t1
+    del images
+    folder = run.folder(out)
+    t2 = time.perf_counter()
+    with open(folder / "cameras.csv", "w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(CAMERA_COLUMNS)
+        for i, name in enumerate(names):
+            ok = bool(rec.registered[i])
+            r = np.asarray(matrix_to_rvec(rec.R[i]), np.float64) if ok else np.full(3, np.nan)
+            t = rec.t[i] if ok else np.full(3, np.nan)
+            w.writerow(
+                [str(i), name, str(int(ok)), *(_fmt(float(v)) for v in (*r, *t)),
+                 _fmt(float(rec.rms_px[i]))]
+            )  # fmt: skip
+    write_points_ply(
+        folder / "points.ply",
+        rec.points,
+        rec.colors,
+        rec.track_length,
+        comment=f"imageform reconstruct {Path(frames).name}: the world is the frame of the "
+        "initial pair's first camera",
+    )
+    seconds["write"] = time.perf_counter() - t2
+    metrics = {
+        "format": METRICS_FORMAT,
+        "version": 1,
+        "source": {"frames": frames, "width": info.width, "height": info.height},
+        "camera": str(opts.camera),
+        **_metrics(rec, names, seconds),
+        "options": {k: (str(v) if isinstance(v, Path) else v) for k, v in asdict(opts).items()},
+    }
+    if run.progress is not None:
+        run.progress("writing the report", 0.95)
+    t3 = time.perf_counter()
+    write_report(folder / "report.html", rec, names, metrics, title_source=frames)
+    seconds["report"] = time.perf_counter() - t3
+    metrics["seconds"] = {k: round(v, 3) for k, v in seconds.items()}
+    write_json(folder / "metrics.json", metrics)
+    for note in rec.notes:
+        run.note(f"note: {note}")
+    n, nreg = metrics["frames"], metrics["registered"]
+    summary: dict[str, Any] = {
+        "frames_source": frames,
+        "out": out,
+        "cameras": out / "cameras.csv",
+        "points_file": out / "points.ply",
+        "report": out / "report.html",
+        "metrics": out / "metrics.json",
+        **{k: v for k, v in metrics.items() if k not in ("format", "version", "options")},
+    }
+    med, rms = metrics["reprojection_px_median"], metrics["reprojection_px_rms"]
+    total = sum(seconds.values())
+    text = (
+        f"{frames}: {n} frames ({info.width}x{info.height}), {nreg} registered "
+        f"({100 * nreg / n:.0f} %), {metrics['points']} points, mean track length "
+        f"{metrics['track_length_mean'] or 0:.2f}",
+        "reprojection error "
+        + (f"median {med:.3f} px, RMS {rms:.3f} px" if med is not None else "-")
+        + f"; {total:.1f} s ("
+        + ", ".join(f"{k} {v:.1f} s" for k, v in seconds.items())
+        + ")",
+        f"cameras.csv, points.ply, report.html, metrics.json -> {out}",
+    )
+    return Result(summary, text)
+
+
+WORKFLOWS = (
+    Workflow(
+        "reconstruct",
+        "Camera poses and a coloured 3-D point cloud from a video (structure from motion).",
+        "imageform.workflows.reconstruct:reconstruct",
+        ReconstructOptions,
+        (
+            Input(
+                "frames",
+                "A video file (needs imageform[video]), a folder or a glob of images, in order.",
+                metavar="FRAMES",
+                kind="text",
+            ),
+        ),
+        Output(
+            "Output folder: cameras.csv, points.ply, report.html, metrics.json (replaced whole).",
+            folder=True,
+        ),
+        group="geometry",
+        description="SIFT keypoints matched between neighbouring frames (--window), each pair "
+        "verified by its essential matrix (RANSAC), the pair with the most parallax first, "
+        "the other frames registered by PnP, the points triangulated, then bundle adjustment "
+        "of every pose and point (needs imageform[reconstruct]). The world is the camera "
+        "frame of the initial pair's first frame, the initial pair's baseline 1. cameras.csv: "
+        "frame,name,registered,rx,ry,rz,tx,ty,tz,rms_px (world to camera); points.ply: x,y,z, "
+        "colour, track_length. docs/reconstruction.md.",
+    ),
+)

@@ -1,0 +1,293 @@
+"""imageform reconstruct (issue 28): a walk through a room against the truth, the four files,
+bad input in one line with nothing written, Ctrl-C."""
+
+from __future__ import annotations
+
+import csv
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import imageform.geometry
+from imageform.cli import main
+from imageform.geometry import Camera, Reconstruction, rvec_to_matrix
+from imageform.io import write_camera, write_image
+from imageform.workflows._ply import read_points_ply, write_points_ply
+from tests import sfm_scenes
+
+pytest.importorskip("cv2")
+pytest.importorskip("matplotlib")
+
+SIZE = (320, 240)
+K = np.array([[240.0, 0, 159.5], [0, 240.0, 119.5], [0, 0, 1]])
+
+
+def _leftovers(folder: Path) -> list[str]:
+    return sorted(p.name for p in folder.iterdir() if ".part" in p.name)
+
+
+def _read(path: Path) -> list[dict[str, str]]:
+    with path.open() as fh:
+        return list(csv.DictReader(fh))
+
+
+@pytest.fixture(scope="module")
+def room(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path, list]:
+    """8 frames of the first half of the room's walk (320 x 240 PNGs) and the camera file."""
+    folder = tmp_path_factory.mktemp("room")
+    truth = sfm_scenes.poses(16)[:8]
+    rng = np.random.default_rng(5)
+    (folder / "frames").mkdir()
+    for i, pose in enumerate(truth):
+        write_image(folder / "frames" / f"view{i}.png", sfm_scenes.render(K, pose, SIZE, rng=rng))
+    camera = write_camera(folder / "camera.toml", Camera(K, image_size=SIZE))
+    return folder / "frames", camera, truth
+
+
+@pytest.fixture(scope="module")
+def run(
+    room: tuple[Path, Path, list], tmp_path_factory: pytest.TempPathFactory
+) -> tuple[Path, dict, list]:
+    frames, camera, truth = room
+    out = tmp_path_factory.mktemp("rec") / "out"
+    args = ["reconstruct", str(frames), "--camera", str(camera), "-o", str(out)]
+    import contextlib
+    import io
+
+    buf = io.StringIO()
+    with contextlib.redirect_stdout(buf):
+        code = main([*args, "--max-features", "1000", "--json"])
+    assert code == 0
+    return out, json.loads(buf.getvalue()), truth
+
+
+def test_cameras_against_the_truth(run: tuple[Path, dict, list]) -> None:
+    out, doc, truth = run
+    assert sorted(p.name for p in out.iterdir()) == [
+        "cameras.csv", "metrics.json", "points.ply", "report.html",
+    ]  # fmt: skip
+    rows = _read(out / "cameras.csv")
+    assert list(rows[0]) == [
+        "frame", "name", "registered", "rx", "ry", "rz", "tx", "ty", "tz", "rms_px",
+    ]  # fmt: skip
+    # natural order: view2.png before view10.png; names are the files'
+    assert [r["name"] for r in rows] == [f"view{i}.png" for i in range(8)]
+    assert all(r["registered"] == "1" for r in rows), doc["notes"]
+    C_est = []
+    for r in rows:
+        R = np.asarray(rvec_to_matrix([float(r[k]) for k in ("rx", "ry", "rz")]))
+        t = np.array([float(r[k]) for k in ("tx", "ty", "tz")])
+        C_est.append(-R.T @ t)
+    C_true = np.array([-R.T @ t for R, t in truth])
+    assert sfm_scenes.align_rms(np.array(C_est), C_true) < 0.01  # 1 % of the path
+    assert np.median([float(r["rms_px"]) for r in rows]) < 1.0
+    assert doc["registered"] == 8 and doc["registered_share"] == 1.0 and doc["frames"] == 8
+
+
+def test_points_metrics_and_report(run: tuple[Path, dict, list]) -> None:
+    out, doc, _ = run
+    ply = read_points_ply(out / "points.ply")
+    assert list(ply) == ["x", "y", "z", "red", "green", "blue", "track_length"]
+    n = ply["x"].size
+    assert n > 300 and ply["red"].dtype == np.uint8
+    assert ply["track_length"].min() >= 2
+    metrics = json.loads((out / "metrics.json").read_text())
+    assert metrics["format"] == "imageform-reconstruction"
+    assert metrics["points"] == n == doc["points"]
+    assert metrics["track_length_mean"] == pytest.approx(ply["track_length"].mean())
+    assert 0 < metrics["reprojection_px_median"] <= metrics["reprojection_px_rms"] < 1.0
+    assert metrics["observations"] == int(ply["track_length"].sum())
+    assert set(metrics["seconds"]) == {"read", "reconstruct", "write", "report"}
+    assert metrics["options"]["max_features"] == 1000 and metrics["unregistered"] == []
+    html = (out / "report.html").read_text()
+    for part in ("Cameras and points", "Reprojection errors", "What failed", "view7.png"):
+        assert part in html
+    assert html.count("data:image/png;base64,") == 2
+    trimesh = pytest.importorskip("trimesh")
+    cloud = trimesh.load(out / "points.ply")
+    np.testing.assert_allclose(cloud.vertices[:, 0], ply["x"], rtol=1e-6)
+    np.testing.assert_array_equal(
+        cloud.colors[:, :3], np.column_stack([ply[c] for c in ("red", "green", "blue")])
+    )
+
+
+def test_ply_round_trip_ascii_and_binary(tmp_path: Path) -> None:
+    rng = np.random.default_rng(0)
+    P = rng.normal(size=(5, 3))
+    C = rng.integers(0, 256, (5, 3), dtype=np.uint8)
+    n = np.arange(2, 7)
+    back = read_points_ply(write_points_ply(tmp_path / "p.ply", P, C, n, comment="a\nb é"))
+    np.testing.assert_allclose(np.column_stack([back[a] for a in "xyz"]), P, rtol=1e-6)
+    np.testing.assert_array_equal(back["track_length"], n)
+    text = "ply\nformat ascii 1.0\nelement vertex 2\nproperty double x\nproperty double y\n"
+    text += "property double z\nproperty uchar red\nend_header\n1 2 3 255\n4 5 6 0\n"
+    (tmp_path / "a.ply").write_text(text)
+    a = read_points_ply(tmp_path / "a.ply")
+    assert a["z"].tolist() == [3.0, 6.0] and a["red"].tolist() == [255, 0]
+    empty = np.zeros((0, 3))
+    e = read_points_ply(
+        write_points_ply(tmp_path / "e.ply", empty, empty.astype(np.uint8), np.zeros(0, int))
+    )
+    assert e["x"].size == 0
+
+
+# ------------------------------------------------------------------ fast runs, a stand-in
+
+
+def _blank_frames(folder: Path, n: int, size: tuple[int, int] = (64, 48)) -> Path:
+    folder.mkdir()
+    for i in range(n):
+        write_image(folder / f"f{i}.png", np.full((size[1], size[0], 3), 90, np.uint8))
+    return folder
+
+
+def _fake(images: list, K: object, distortion: object = None, **kw: object) -> Reconstruction:
+    """A reconstruction of ``len(images)`` frames, the last not registered."""
+    n = len(images)
+    R = np.stack([np.eye(3)] * n)
+    t = np.array([[0.1 * i, 0, 0] for i in range(n)], float)
+    reg = np.ones(n, bool)
+    reg[-1] = False
+    R[-1], t[-1] = np.nan, np.nan
+    P = np.random.default_rng(0).normal(size=(40, 3)) + [0, 0, 5]
+    C = np.full((40, 3), 200, np.uint8)
+    rms = np.where(reg, 0.3, np.nan)
+    notes = [f"frame {n - 1}: PnP found 3 inliers (12 needed)"]
+    return Reconstruction(R, t, reg, P, C, np.full(40, 2), rms, notes, np.full(80, 0.3))
+
+
+@pytest.fixture
+def stand_in(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> tuple[Path, Path]:
+    monkeypatch.setattr(imageform.geometry, "reconstruct_sequence", _fake)
+    frames = _blank_frames(tmp_path / "frames", 4)
+    camera = write_camera(tmp_path / "cam.toml", Camera(K, image_size=(64, 48)))
+    return frames, camera
+
+
+def test_unregistered_frames_are_nan_rows_and_reported(
+    stand_in: tuple[Path, Path], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    frames, camera = stand_in
+    out = tmp_path / "out"
+    assert main(["reconstruct", str(frames), "--camera", str(camera), "-o", str(out)]) == 0
+    rows = _read(out / "cameras.csv")
+    assert rows[-1]["registered"] == "0" and rows[-1]["tx"] == "nan" == rows[-1]["rms_px"]
+    assert rows[1]["tx"] == "0.1"
+    metrics = json.loads((out / "metrics.json").read_text())
+    assert metrics["registered"] == 3 and metrics["unregistered"] == ["f3.png"]
+    html = (out / "report.html").read_text()
+    assert "PnP found 3 inliers" in html and "not registered: 3 (f3.png)" in html
+    assert "PnP found 3 inliers" in capsys.readouterr().err
+    # --force replaces a previous reconstruction; --every and --max-frames pick the frames
+    args = ["reconstruct", str(frames), "--camera", str(camera), "-o", str(out)]
+    assert main([*args, "--force", "--every", "2", "--max-frames", "2"]) == 0
+    assert [r["name"] for r in _read(out / "cameras.csv")] == ["f0.png", "f2.png"]
+
+
+def test_ctrl_c_leaves_the_previous_output(
+    stand_in: tuple[Path, Path], tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+) -> None:  # fmt: skip
+    import imageform.workflows._reconstruct_report as report
+
+    frames, camera = stand_in
+    out = tmp_path / "out"
+    args = ["reconstruct", str(frames), "--camera", str(camera), "-o", str(out)]
+    assert main(args) == 0
+    before = {p.name: p.read_bytes() for p in out.iterdir()}
+
+    def interrupted(*a: object, **k: object) -> None:
+        raise KeyboardInterrupt  # after cameras.csv and points.ply, before the report
+
+    monkeypatch.setattr(report, "write_report", interrupted)
+    capsys.readouterr()
+    assert main([*args, "--force", "--max-frames", "2"]) == 130
+    assert capsys.readouterr().err.strip() == "imageform: interrupted; nothing new was written"
+    assert {p.name: p.read_bytes() for p in out.iterdir()} == before
+    assert _leftovers(tmp_path) == []
+    assert (
+        main(["reconstruct", str(frames), "--camera", str(camera), "-o", str(tmp_path / "new")])
+        == 130
+    )
+    assert not (tmp_path / "new").exists() and _leftovers(tmp_path) == []
+
+
+# ------------------------------------------------------------------ bad input
+
+
+def _one_line_error(args: list[str], out: Path, capsys: pytest.CaptureFixture[str]) -> str:
+    capsys.readouterr()
+    code = main([*args, "-o", str(out)])
+    err = capsys.readouterr().err
+    assert code == 1, err
+    assert err.count("\n") == 1, err
+    assert not out.exists() and _leftovers(out.parent) == []
+    return err
+
+
+def test_bad_input_is_one_line_and_writes_nothing(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    camera = write_camera(tmp_path / "cam.toml", Camera(K, image_size=(64, 48)))
+    cam = ["--camera", str(camera)]
+    out = tmp_path / "out"
+    one = _blank_frames(tmp_path / "one", 1)
+    assert "1 frame; reconstruct needs at least 2" in _one_line_error(
+        ["reconstruct", str(one), *cam], out, capsys
+    )
+    few = _blank_frames(tmp_path / "few", 3)
+    assert "1 frame (one in 3)" in _one_line_error(
+        ["reconstruct", str(few), *cam, "--every", "3"], out, capsys
+    )
+    assert "no texture" in _one_line_error(["reconstruct", str(few), *cam], out, capsys)
+    mixed = _blank_frames(tmp_path / "mixed", 2)
+    write_image(mixed / "f2.png", np.zeros((40, 64, 3), np.uint8))
+    assert "64x40 pixels where" in _one_line_error(["reconstruct", str(mixed), *cam], out, capsys)
+    # two unrelated textures: keypoints in both, no verified matches
+    rng = np.random.default_rng(1)
+    import cv2
+
+    unrelated = tmp_path / "unrelated"
+    unrelated.mkdir()
+    for i in range(2):
+        noise = cv2.GaussianBlur(rng.random((120, 160, 3)).astype(np.float32), (0, 0), 1.5)
+        write_image(unrelated / f"f{i}.png", np.clip(noise * 3 - 1, 0, 1))
+    big = write_camera(tmp_path / "big.toml", Camera(K, image_size=(160, 120)))
+    err = _one_line_error(["reconstruct", str(unrelated), "--camera", str(big)], out, capsys)
+    assert "no pair of frames has 30 verified matches" in err
+    # the camera file: missing, or for another image size
+    missing = ["--camera", str(tmp_path / "nope.toml")]
+    assert "nope.toml" in _one_line_error(["reconstruct", str(few), *missing], out, capsys)
+    other = write_camera(tmp_path / "other.toml", Camera(K, image_size=(320, 240)))
+    err = _one_line_error(["reconstruct", str(few), "--camera", str(other)], out, capsys)
+    assert "is for 320 x 240 px images" in err and "64 x 48 px frames" in err
+    # an existing output: refused without --force; --force never replaces a user's folder
+    out.mkdir()
+    (out / "mine.txt").write_text("keep")
+    for extra in ([], ["--force"]):
+        capsys.readouterr()
+        assert main(["reconstruct", str(few), *cam, "-o", str(out), *extra]) == 1
+        assert capsys.readouterr().err.count("\n") == 1
+    assert (out / "mine.txt").read_text() == "keep" and len(list(out.iterdir())) == 1
+
+
+def test_a_video_and_a_glob(stand_in: tuple[Path, Path], tmp_path: Path) -> None:
+    """A video's frames are named frame_NNNNNN by their index in the video; a glob's by file."""
+    pytest.importorskip("av")
+    from imageform.io import VideoWriter
+
+    frames, camera = stand_in
+    video = tmp_path / "clip.mkv"
+    with VideoWriter(video, fps=10, codec="ffv1") as writer:
+        for i in range(6):
+            writer.write(np.full((48, 64, 3), 40 * i, np.uint8))
+    cam = ["--camera", str(camera)]
+    out = tmp_path / "v"
+    assert main(["reconstruct", str(video), *cam, "-o", str(out), "--every", "2"]) == 0
+    names = [r["name"] for r in _read(out / "cameras.csv")]
+    assert names == ["frame_000000", "frame_000002", "frame_000004"]
+    out = tmp_path / "g"
+    assert main(["reconstruct", str(frames / "f[12].png"), *cam, "-o", str(out)]) == 0
+    assert [r["name"] for r in _read(out / "cameras.csv")] == ["f1.png", "f2.png"]
