@@ -123,7 +123,7 @@ def main() -> int:
     rows = []
     for sigma in (0.5, 0.8, 1.2):
         for angle in (2.0, 3.0, 5.0, 7.0, 10.0):
-            img = render_slanted_edge((80, 80), angle=angle, sigma=sigma)
+            img = render_slanted_edge((80, 80), angle_deg=angle, sigma=sigma)
             rows.append(_row(f"Gaussian sigma {sigma} px", img, _gauss(sigma, angle), angle))
     parts.append("## Gaussian edges (80 x 80 ROI)\n\n" + markdown_table(COLS, rows))
 
@@ -131,7 +131,7 @@ def main() -> int:
     for n in (4.0, 8.0):
         esf = _diff_esf(n)
         for angle in (2.0, 5.0, 10.0):
-            img = render_slanted_edge((100, 100), angle=angle, esf=esf)
+            img = render_slanted_edge((100, 100), angle_deg=angle, esf=esf)
 
             def truth(f, n=n, angle=angle):  # type: ignore[no-untyped-def]
                 return _pupil(f, n) * _pixel(np.asarray(f), angle)
@@ -149,7 +149,7 @@ def main() -> int:
         for snr in (25.0, 50.0, 100.0):
             for sigma in (0.5, 0.8):
                 for angle in (2.0, 5.0, 10.0):
-                    img = render_slanted_edge(shape, angle=angle, sigma=sigma)
+                    img = render_slanted_edge(shape, angle_deg=angle, sigma=sigma)
                     a50 = _cross(_gauss(sigma, angle), 0.5)
                     e = np.array(
                         [
@@ -187,7 +187,9 @@ def main() -> int:
 
     rows = []
     for angle in (2.0, 5.0, 8.0, -5.0):
-        chart = render_sfr_chart((240, 320), grid=(2, 3), angle=angle, sigma=0.8, supersampling=4)
+        chart = render_sfr_chart(
+            (240, 320), grid=(2, 3), angle_deg=angle, sigma=0.8, supersampling=4
+        )
         t0 = time.perf_counter()
         rois = find_slanted_edges(chart, min_angle=1.5)
         ms = 1e3 * (time.perf_counter() - t0)
@@ -225,7 +227,7 @@ def main() -> int:
 
     ang = 5.0
     t = math.radians(ang)
-    step = render_slanted_edge((160, 128), angle=ang, sigma=0.0, supersampling=16)
+    step = render_slanted_edge((160, 128), angle_deg=ang, sigma=0.0, supersampling=16)
     fgrid = np.linspace(0.0, 1.0, 1001)
     for n in (2.8, 4.0, 8.0):
         out = diffraction_blur(
@@ -302,9 +304,9 @@ def main() -> int:
         )
     )
 
-    grey = render_slanted_edge((128, 64), angle=5.0, sigma=0.8)
+    grey = render_slanted_edge((128, 64), angle_deg=5.0, sigma=0.8)
     rgb = np.repeat(grey[:, :, None], 3, axis=2)
-    chart = render_sfr_chart((480, 640), grid=(3, 4), angle=5.0, sigma=0.8, supersampling=2)
+    chart = render_sfr_chart((480, 640), grid=(3, 4), angle_deg=5.0, sigma=0.8, supersampling=2)
     rows = [
         [
             "slanted_edge_sfr, 128 x 64 grey",

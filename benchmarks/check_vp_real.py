@@ -36,7 +36,7 @@ DATA = ROOT / ".." / "shared" / "data" / "opencv-left"
 F_TRUE = 536.07345314
 K = np.array([[F_TRUE, 0.0, 342.37046827], [0.0, 536.01636274, 235.53687064], [0.0, 0.0, 1.0]])
 D = np.array([-0.26509039, -0.0467422, 0.00183302, -0.00031469, 0.25231221])
-MODES = {"centre": "centre", "orthocentre": "orthocentre", "calibrated": K[:2, 2]}
+MODES = {"centre": "center", "orthocentre": "orthocenter", "calibrated": K[:2, 2]}
 
 
 def measure() -> tuple[list[tuple[object, ...]], dict[str, list[float]]]:

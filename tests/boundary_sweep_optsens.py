@@ -225,12 +225,12 @@ def cases() -> list[Case]:
         Case(
             "field_angle",
             optics.field_angle,
-            {"shape": (4, 6), "focal_length": 5.0, "center": (2.0, 1.5)},
+            {"shape": (4, 6), "focal_length_px": 5.0, "center": (2.0, 1.5)},
         ),
         Case(
             "cos4_falloff",
             optics.cos4_falloff,
-            {"shape": (4, 6), "focal_length": 5.0, "center": (2.0, 1.5)},
+            {"shape": (4, 6), "focal_length_px": 5.0, "center": (2.0, 1.5)},
         ),
         Case(
             "pupil_overlap_fraction",
@@ -242,7 +242,7 @@ def cases() -> list[Case]:
             optics.mechanical_vignetting,
             {
                 "shape": (4, 6),
-                "focal_length": 5.0,
+                "focal_length_px": 5.0,
                 "pupil_radius": 1.0,
                 "barrel_radius": 1.2,
                 "barrel_distance": 2.0,

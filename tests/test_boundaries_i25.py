@@ -262,13 +262,15 @@ def _default_param_calls() -> dict:
             "center",
         ),
         "render_slanted_edge(esf=1.0)": (lambda: render_slanted_edge((16, 16), esf=1.0), "esf"),
-        "rgb_to_ycbcr(bits='x' * 100000)": (
-            lambda: rgb_to_ycbcr(resolve(V("rgb")), bits="x" * 100_000),
-            "bits",
+        "rgb_to_ycbcr(bit_depth='x' * 100000)": (
+            lambda: rgb_to_ycbcr(resolve(V("rgb")), bit_depth="x" * 100_000),
+            "bit_depth",
         ),
-        "write_image(bits='x' * 100000)": (
-            lambda: write_image(resolve(V("tmpfile_png")), resolve(V("rgb")), bits="x" * 100_000),
-            "bits",
+        "write_image(bit_depth='x' * 100000)": (
+            lambda: write_image(
+                resolve(V("tmpfile_png")), resolve(V("rgb")), bit_depth="x" * 100_000
+            ),
+            "bit_depth",
         ),
         "stereo_calibrate(fix=0)": (
             lambda: stereo_calibrate(objs, left, right, (640, 480), fix=0),
@@ -303,8 +305,8 @@ def _default_param_calls() -> dict:
         "chart_white_balance(chart='abc')",
         "render_slanted_edge(center=0)",
         "render_slanted_edge(esf=1.0)",
-        "rgb_to_ycbcr(bits='x' * 100000)",
-        "write_image(bits='x' * 100000)",
+        "rgb_to_ycbcr(bit_depth='x' * 100000)",
+        "write_image(bit_depth='x' * 100000)",
         "stereo_calibrate(fix=0)",
         "table(left=None)",
         "simulate(progress=0)",

@@ -82,7 +82,7 @@ COMPLEX_CALLS = {
     "rolling_shutter_points.velocity": lambda v: rolling_shutter_points(
         [[1.0, 1.0]], np.array([v, 0.0]), line_time=1e-5
     ),
-    "cos4_falloff.center": lambda v: cos4_falloff((4, 4), focal_length=2.0, center=(v, 1.0)),
+    "cos4_falloff.center": lambda v: cos4_falloff((4, 4), focal_length_px=2.0, center=(v, 1.0)),
     "pupil_overlap_fraction": lambda v: pupil_overlap_fraction(1.0, 1.0, np.array([v])),
     "apply_vignetting": lambda v: apply_vignetting(np.ones((2, 2)), np.full((2, 2), v)),
     "lateral_chromatic_aberration": lambda v: lateral_chromatic_aberration(
@@ -92,7 +92,7 @@ COMPLEX_CALLS = {
         np.array([v]), focal_lengths=(0.05, 0.05), f_number=2, focus=2
     ),
     "mechanical_vignetting": lambda v: mechanical_vignetting(
-        (3, 3), focal_length=1.0, pupil_radius=v, barrel_radius=1, barrel_distance=1
+        (3, 3), focal_length_px=1.0, pupil_radius=v, barrel_radius=1, barrel_distance=1
     ),
 }
 
@@ -157,11 +157,11 @@ def test_empty_images_refused() -> None:
 @pytest.mark.parametrize(
     "call",
     [
-        lambda: cos4_falloff((5,), focal_length=1.0),
-        lambda: field_angle((5,), focal_length=1.0),
-        lambda: field_angle((4, 4), focal_length=1.0, center=(1.0,)),
+        lambda: cos4_falloff((5,), focal_length_px=1.0),
+        lambda: field_angle((5,), focal_length_px=1.0),
+        lambda: field_angle((4, 4), focal_length_px=1.0, center=(1.0,)),
         lambda: mechanical_vignetting(
-            (5,), focal_length=1.0, pupil_radius=1, barrel_radius=1, barrel_distance=1
+            (5,), focal_length_px=1.0, pupil_radius=1, barrel_radius=1, barrel_distance=1
         ),
         lambda: spherical_aberration(
             np.ones((4, 4)),
@@ -307,8 +307,8 @@ def test_kernels_get_no_odd_values() -> None:
     [
         lambda: disc_kernel(1e10),
         lambda: blur_by_radius(np.ones((4, 4)), 1e9),
-        lambda: field_angle((10**6, 10**6), focal_length=1.0),
-        lambda: cos4_falloff((10**12, 4), focal_length=1.0),
+        lambda: field_angle((10**6, 10**6), focal_length_px=1.0),
+        lambda: cos4_falloff((10**12, 4), focal_length_px=1.0),
         lambda: cfa_masks((10**6, 10**6)),
         lambda: fixed_pattern((10**5, 10**5, 3), prnu=0, dsnu=0, column_fpn=0, rng=0),
         lambda: row_start_times(10**12, mode="rolling", line_time=1e-5),

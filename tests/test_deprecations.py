@@ -24,6 +24,43 @@ _IMG = np.random.default_rng(0).uniform(0, 1, (9, 11, 3))
 _SENSOR = sensor.SensorModel(read_noise=1, dark_current=0, black_level=0)
 
 
+def _board() -> np.ndarray:
+    """A 5 x 4-square checkerboard (4 x 3 inner corners), 20 px squares, slightly blurred."""
+    from scipy.ndimage import gaussian_filter
+
+    v, u = np.mgrid[0:120, 0:140]
+    sq = ((u - 20) // 20 + (v - 20) // 20) % 2
+    inside = (u >= 20) & (u < 120) & (v >= 20) & (v < 100)
+    return np.asarray(gaussian_filter(np.where(inside, sq, 1).astype(float), 1.0))
+
+
+def _corner() -> np.ndarray:
+    from scipy.ndimage import gaussian_filter
+
+    v, u = np.mgrid[0:40, 0:40] * 1.0
+    a, b = np.clip(u - 20.3 + 0.5, 0, 1), np.clip(v - 19.6 + 0.5, 0, 1)
+    return np.asarray(gaussian_filter(a * b + (1 - a) * (1 - b), 1.5))
+
+
+_BOARD, _CORNER = _board(), _corner()
+
+
+def _written(name: str, **kw: Any) -> Any:
+    import tempfile
+    from pathlib import Path
+
+    from imageform.io import write_image
+
+    with tempfile.TemporaryDirectory() as d:
+        return write_image(Path(d) / name, np.full((2, 2, 3), 0.5), **kw)
+
+
+def _workflows_analysis() -> Any:
+    from imageform.workflows import analysis as wf
+
+    return wf
+
+
 def _segments() -> geometry.LineSegments:
     """Segments towards two vanishing points, (600, 240) and (-200, 260), plus noise lines."""
     rng = np.random.default_rng(5)
@@ -136,7 +173,7 @@ CASES: list[tuple[str, Callable[[], Any], Callable[[], Any], str]] = [
     (
         "rgb_to_ycbcr range=",
         lambda: color.rgb_to_ycbcr(_IMG, "bt709", range="limited", bits=10),
-        lambda: color.rgb_to_ycbcr(_IMG, "bt709", signal_range="limited", bits=10),
+        lambda: color.rgb_to_ycbcr(_IMG, "bt709", signal_range="limited", bit_depth=10),
         "signal_range=",
     ),
     (
@@ -160,7 +197,7 @@ CASES: list[tuple[str, Callable[[], Any], Callable[[], Any], str]] = [
     (
         "convert range=",
         lambda: color.convert(_IMG, "srgb", "ycbcr", range="limited", bits=8),
-        lambda: color.convert(_IMG, "srgb", "ycbcr", signal_range="limited", bits=8),
+        lambda: color.convert(_IMG, "srgb", "ycbcr", signal_range="limited", bit_depth=8),
         "signal_range=",
     ),
     # geometry
@@ -182,27 +219,27 @@ CASES: list[tuple[str, Callable[[], Any], Callable[[], Any], str]] = [
         "Intrinsics.from_physical positional",
         lambda: geometry.Intrinsics.from_physical(50.0, 5.0, image_size=(6000, 4000)),
         lambda: geometry.Intrinsics.from_physical(
-            focal_length=50.0, pixel_pitch_um=5.0, image_size=(6000, 4000)
+            focal_length_mm=50.0, pixel_pitch_um=5.0, image_size=(6000, 4000)
         ),
-        "focal_length=, pixel_pitch_um=",
+        "focal_length_mm=, pixel_pitch_um=",
     ),
     (
-        "Intrinsics.from_physical focal_length_mm=",
-        lambda: geometry.Intrinsics.from_physical(
-            focal_length_mm=8.0, pixel_pitch_um=3.45, image_size=(1280, 720)
-        ),
+        "Intrinsics.from_physical focal_length= (mm: focal_length_mm, issue 30)",
         lambda: geometry.Intrinsics.from_physical(
             focal_length=8.0, pixel_pitch_um=3.45, image_size=(1280, 720)
         ),
-        "use focal_length=",
+        lambda: geometry.Intrinsics.from_physical(
+            focal_length_mm=8.0, pixel_pitch_um=3.45, image_size=(1280, 720)
+        ),
+        "use focal_length_mm=",
     ),
     (
         "Intrinsics.from_sensor positional",
         lambda: geometry.Intrinsics.from_sensor(50.0, (36.0, 24.0), (6000, 4000)),
         lambda: geometry.Intrinsics.from_sensor(
-            focal_length=50.0, sensor_size_mm=(36.0, 24.0), image_size=(6000, 4000)
+            focal_length_mm=50.0, sensor_size_mm=(36.0, 24.0), image_size=(6000, 4000)
         ),
-        "focal_length=, sensor_size_mm=, image_size=",
+        "focal_length_mm=, sensor_size_mm=, image_size=",
     ),
     (
         "solve_pnp_ransac seed=",
@@ -304,14 +341,14 @@ CASES: list[tuple[str, Callable[[], Any], Callable[[], Any], str]] = [
     (
         "field_angle positional focal length and centre",
         lambda: optics.field_angle((5, 7), 3.0, (1.0, 2.0)),
-        lambda: optics.field_angle((5, 7), focal_length=3.0, center=(1.0, 2.0)),
-        "focal_length=, center=",
+        lambda: optics.field_angle((5, 7), focal_length_px=3.0, center=(1.0, 2.0)),
+        "focal_length_px=, center=",
     ),
     (
-        "cos4_falloff focal_length_px=, centre=",
-        lambda: optics.cos4_falloff((5, 7), focal_length_px=3.0, centre=(1.0, 2.0)),
-        lambda: optics.cos4_falloff((5, 7), focal_length=3.0, center=(1.0, 2.0)),
-        "use focal_length=",
+        "cos4_falloff focal_length= (pixels: focal_length_px, issue 30), centre=",
+        lambda: optics.cos4_falloff((5, 7), focal_length=3.0, centre=(1.0, 2.0)),
+        lambda: optics.cos4_falloff((5, 7), focal_length_px=3.0, center=(1.0, 2.0)),
+        "use focal_length_px=",
     ),
     (
         "mechanical_vignetting positional focal length, centre=",
@@ -320,7 +357,7 @@ CASES: list[tuple[str, Callable[[], Any], Callable[[], Any], str]] = [
         ),
         lambda: optics.mechanical_vignetting(
             (5, 7),
-            focal_length=3.0,
+            focal_length_px=3.0,
             pupil_radius=1,
             barrel_radius=1,
             barrel_distance=1,
@@ -409,6 +446,137 @@ CASES: list[tuple[str, Callable[[], Any], Callable[[], Any], str]] = [
         lambda: sensor.fixed_pattern((3, 4, 1), prnu=0.01, dsnu=1, column_fpn=1, rng=7).offset,
         "use rng=",
     ),
+    # one spelling per concept (issue 30): tol, max_trials, bit_depth, center
+    (
+        "refine_corners eps=",
+        lambda: geometry.refine_corners(_CORNER, [[19.0, 21.0]], half_window=5, eps=1e-2).corners,
+        lambda: geometry.refine_corners(_CORNER, [[19.0, 21.0]], half_window=5, tol=1e-2).corners,
+        "use tol=",
+    ),
+    (
+        "find_checkerboard eps=",
+        lambda: geometry.find_checkerboard(_BOARD, (4, 3), eps=1e-2).corners,
+        lambda: geometry.find_checkerboard(_BOARD, (4, 3), tol=1e-2).corners,
+        "use tol=",
+    ),
+    (
+        "solve_pnp_ransac max_hypotheses=",
+        lambda: geometry.solve_pnp_ransac(*_pnp_data(), max_hypotheses=300).tvec,
+        lambda: geometry.solve_pnp_ransac(*_pnp_data(), max_trials=300).tvec,
+        "use max_trials=",
+    ),
+    (
+        "detect_vanishing_points iterations=",
+        lambda: (
+            geometry.detect_vanishing_points(
+                segments=_segments(), image_size=(400, 400), iterations=200
+            ).vanishing_points
+        ),
+        lambda: (
+            geometry.detect_vanishing_points(
+                segments=_segments(), image_size=(400, 400), max_trials=200
+            ).vanishing_points
+        ),
+        "use max_trials=",
+    ),
+    (
+        "detect_vanishing_points principal_point='centre'",
+        lambda: (
+            geometry.detect_vanishing_points(
+                segments=_segments(), image_size=(400, 400), principal_point="centre"
+            ).vanishing_points
+        ),
+        lambda: (
+            geometry.detect_vanishing_points(
+                segments=_segments(), image_size=(400, 400), principal_point="center"
+            ).vanishing_points
+        ),
+        "principal_point='center'",
+    ),
+    (
+        "rgb_to_ycbcr bits=",
+        lambda: color.rgb_to_ycbcr(_IMG, "bt709", signal_range="limited", bits=10),
+        lambda: color.rgb_to_ycbcr(_IMG, "bt709", signal_range="limited", bit_depth=10),
+        "use bit_depth=",
+    ),
+    (
+        "ycbcr_to_srgb bits=",
+        lambda: color.ycbcr_to_srgb([235.0, 128.0, 128.0], signal_range="limited", bits=8),
+        lambda: color.ycbcr_to_srgb([235.0, 128.0, 128.0], signal_range="limited", bit_depth=8),
+        "use bit_depth=",
+    ),
+    (
+        "convert bits=",
+        lambda: color.convert(_IMG, "srgb", "ycbcr", bits=8),
+        lambda: color.convert(_IMG, "srgb", "ycbcr", bit_depth=8),
+        "use bit_depth=",
+    ),
+    (
+        "write_image bits= and WrittenImage.bits",
+        lambda: _written("old.png", bits=16).bits,
+        lambda: _written("new.png", bit_depth=16).bit_depth,
+        "bit_depth",
+    ),
+    # one name, one unit (issue 30)
+    (
+        "render_slanted_edge angle= (degrees: angle_deg)",
+        lambda: analysis.render_slanted_edge((8, 10), angle=4.0, sigma=0.5),
+        lambda: analysis.render_slanted_edge((8, 10), angle_deg=4.0, sigma=0.5),
+        "use angle_deg=",
+    ),
+    (
+        "render_sfr_chart angle= (degrees: angle_deg)",
+        lambda: analysis.render_sfr_chart((60, 80), grid=(1, 1), angle=4.0),
+        lambda: analysis.render_sfr_chart((60, 80), grid=(1, 1), angle_deg=4.0),
+        "use angle_deg=",
+    ),
+    (
+        "Intrinsics.from_sensor focal_length= (mm: focal_length_mm)",
+        lambda: geometry.Intrinsics.from_sensor(
+            focal_length=8.0, sensor_size_mm=(6.4, 4.8), image_size=(640, 480)
+        ),
+        lambda: geometry.Intrinsics.from_sensor(
+            focal_length_mm=8.0, sensor_size_mm=(6.4, 4.8), image_size=(640, 480)
+        ),
+        "use focal_length_mm=",
+    ),
+    (
+        "field_angle focal_length= (pixels: focal_length_px)",
+        lambda: optics.field_angle((5, 7), focal_length=3.0),
+        lambda: optics.field_angle((5, 7), focal_length_px=3.0),
+        "use focal_length_px=",
+    ),
+    # method registries (issue 30): one read-only registry per concept
+    (
+        "color.CCT_METHODS",
+        lambda: dict(color.CCT_METHODS),
+        lambda: dict(color.CCT_TO_XY_METHODS),
+        "use imageform.color.CCT_TO_XY_METHODS",
+    ),
+    (
+        "color.cct.CCT_METHODS",
+        lambda: dict(color.cct.CCT_METHODS),
+        lambda: dict(color.cct.CCT_TO_XY_METHODS),
+        "CCT_TO_XY_METHODS",
+    ),
+    (
+        "color.cct_methods.XY_TO_CCT_METHODS",
+        lambda: dict(color.cct_methods.XY_TO_CCT_METHODS),
+        lambda: dict(color.XY_TO_CCT_METHODS),
+        "use imageform.color.XY_TO_CCT_METHODS",
+    ),
+    (
+        "analysis.macenko.STAIN_METHODS",
+        lambda: dict(analysis.macenko.STAIN_METHODS),
+        lambda: dict(analysis.STAIN_VECTOR_METHODS),
+        "STAIN_VECTOR_METHODS",
+    ),
+    (
+        "workflows.analysis.STAIN_METHODS",
+        lambda: dict(_workflows_analysis().STAIN_METHODS),
+        lambda: dict(analysis.STAIN_NORMALIZATION_METHODS),
+        "use imageform.analysis.STAIN_NORMALIZATION_METHODS",
+    ),
     # analysis and the simulator's colour correction
     (
         "synthetic_endoscopy_image seed first",
@@ -452,6 +620,8 @@ CASES: list[tuple[str, Callable[[], Any], Callable[[], Any], str]] = [
 
 
 def _same(a: Any, b: Any) -> bool:
+    if isinstance(a, dict) and isinstance(b, dict):
+        return a.keys() == b.keys() and all(a[k] is b[k] for k in a)
     if isinstance(a, tuple) and isinstance(b, tuple):
         return len(a) == len(b) and all(_same(x, y) for x, y in zip(a, b, strict=True))
     if hasattr(a, "__dataclass_fields__"):

@@ -1,11 +1,10 @@
 """The layering contract, checked on the source with ``ast`` (no import is executed).
 
-Layers, lowest first; a module imports only from its own layer or lower ones:
-
-    0 core: imageform.errors and every private top-level module imageform._* (_validate,
-      _backend, _dask, _colormath, _kernels ...), the documented internal modules
-    1 spectral   2 color   3 geometry, optics, sensor   4 io, analysis   5 simulate
-    6 report   7 workflows   8 cli, batch
+The layers, lowest first, are declared once: the table of docs/design.md between its
+``<!-- layers -->`` markers, which the documentation renders and :func:`declared_layers`
+reads here (0 core: imageform.errors and every private top-level module imageform._*, the
+documented internal modules; then spectral, color, ...). A module imports only from its own
+layer or lower ones.
 
 Rules, for every import in a module (top-level and function-local, ``import`` and
 ``from ... import``, relative imports, ``importlib.import_module("...")`` with a literal
@@ -28,6 +27,7 @@ point) are exempt. Type-checking-only imports count like any other.
 from __future__ import annotations
 
 import ast
+import re
 from collections import defaultdict
 from collections.abc import Iterator
 from dataclasses import dataclass
@@ -36,22 +36,39 @@ from pathlib import Path
 SRC = Path(__file__).resolve().parents[1] / "src"
 PACKAGE = SRC / "imageform"
 
-#: Layer of each package; "core" is imageform.errors and the private imageform._* modules.
-LAYERS = {
-    "core": 0,
-    "spectral": 1,
-    "color": 2,
-    "geometry": 3,
-    "optics": 3,
-    "sensor": 3,
-    "io": 4,
-    "analysis": 4,
-    "simulate": 5,
-    "report": 6,
-    "workflows": 7,
-    "cli": 8,
-    "batch": 8,
-}
+DESIGN = SRC.parent / "docs" / "design.md"
+
+
+def declared_layers(text: str) -> tuple[dict[str, int], list[str]]:
+    """``({package: layer}, core modules listed)`` from the layers table of docs/design.md.
+
+    The table sits between ``<!-- layers -->`` and ``<!-- /layers -->``; each row is
+    ``| N [name] | `pkg`, `pkg` | what lives there |``. The core row (``0 core``) lists
+    ``errors`` and the private top-level modules; every one of them is layer ``core``.
+    """
+    m = re.search(r"<!-- layers -->\n(.*?)<!-- /layers -->", text, re.S)
+    if m is None:
+        raise AssertionError("docs/design.md has no <!-- layers --> ... <!-- /layers --> table")
+    layers: dict[str, int] = {}
+    core: list[str] = []
+    for row in m.group(1).splitlines():
+        cells = [c.strip() for c in row.strip().strip("|").split("|")]
+        if len(cells) < 3 or not re.match(r"\d+\b", cells[0]):
+            continue  # the header and the |---| line
+        level = int(cells[0].split()[0])
+        names = re.findall(r"`([A-Za-z_]\w*)`", cells[1])
+        if level == 0:
+            core = names
+            layers["core"] = 0
+        else:
+            for name in names:
+                layers[name] = level
+    return layers, core
+
+
+#: Layer of each package, as docs/design.md declares it; "core" is imageform.errors and the
+#: private imageform._* modules.
+LAYERS, CORE_LISTED = declared_layers(DESIGN.read_text(encoding="utf-8"))
 
 #: The namespace and the entry point: they may import anything.
 EXEMPT = {"imageform", "imageform.__main__"}
@@ -317,6 +334,30 @@ def test_every_package_has_a_layer() -> None:
         p.name for p in PACKAGE.iterdir() if (p / "__init__.py").is_file() and p.name[0] != "_"
     }
     assert on_disk <= set(LAYERS), f"packages without a layer: {sorted(on_disk - set(LAYERS))}"
+    assert set(LAYERS) - {"core"} <= on_disk, "docs/design.md lists packages that do not exist"
+
+
+def test_the_declaration_is_the_documented_table() -> None:
+    """The layers come from docs/design.md, the page the documentation site renders
+    (mkdocs.yml nav), and its core row names every core module that exists."""
+    assert re.search(r"^\s*- .*: design\.md$", (SRC.parent / "mkdocs.yml").read_text(), re.M)
+    assert LAYERS["core"] == 0 and LAYERS["workflows"] > LAYERS["report"] > LAYERS["simulate"]
+    core_on_disk = {"errors"} | {
+        p.stem for p in PACKAGE.iterdir() if p.name.startswith("_") and p.name[1] != "_"
+    }
+    assert core_on_disk == set(CORE_LISTED), (
+        "docs/design.md's core row and the private top-level modules differ: "
+        f"missing {sorted(core_on_disk - set(CORE_LISTED))}, "
+        f"gone {sorted(set(CORE_LISTED) - core_on_disk)}"
+    )
+
+
+def test_the_table_parser() -> None:
+    text = (
+        "x\n<!-- layers -->\n| layer | packages | what |\n|---|---|---|\n"
+        "| 0 core | `errors`, `_a` | c |\n| 1 | `p`, `q` | d |\n<!-- /layers -->\n"
+    )
+    assert declared_layers(text) == ({"core": 0, "p": 1, "q": 1}, ["errors", "_a"])
 
 
 # -- the checker itself: it must see each kind of break ------------------------------------

@@ -27,6 +27,7 @@ from typing import Any, TypeVar, cast
 
 __all__ = [
     "REMOVED_IN",
+    "Lazy",
     "module_getattr",
     "parameters",
     "renamed",
@@ -173,14 +174,32 @@ def renamed_property(new: str, old_name: str) -> property:
     return prop
 
 
+class Lazy:
+    """A constant of :func:`module_getattr` read on access: ``Lazy("pkg.module", "NAME")``."""
+
+    def __init__(self, module: str, name: str) -> None:
+        self.module, self.name = module, name
+
+    def load(self) -> Any:
+        """Import the module and return the constant."""
+        import importlib
+
+        return getattr(importlib.import_module(self.module), self.name)
+
+
 def module_getattr(module: str, renames: Mapping[str, tuple[str, Any]]) -> Callable[[str], Any]:
-    """Make a module ``__getattr__`` serving renamed constants: ``{old: (new name, value)}``."""
+    """Make a module ``__getattr__`` serving renamed constants: ``{old: (new name, value)}``.
+
+    A new name with a dot is a full dotted name (the constant moved to another module); a
+    :class:`Lazy` value is loaded on access (a constant of a module that this one cannot
+    import at load time without a cycle).
+    """
 
     def __getattr__(name: str) -> Any:
         if name in renames:
             new, value = renames[name]
-            warn(f"{module}.{name}", f"use {module}.{new} instead")
-            return value
+            warn(f"{module}.{name}", f"use {new if '.' in new else f'{module}.{new}'} instead")
+            return value.load() if isinstance(value, Lazy) else value
         raise AttributeError(f"module {module!r} has no attribute {name!r}")
 
     __getattr__.__deprecated_names__ = {old: new for old, (new, _) in renames.items()}  # type: ignore[attr-defined]

@@ -1,5 +1,10 @@
 """The one JSON writer (internal core module, shared by every package).
 
+Every JSON file imageform writes goes through :func:`write_json` (atomic: a temporary
+renamed at the end, or in place inside an all-or-nothing :func:`imageform._files.publish`
+set; NaN-safe), every JSON text through :func:`dumps` (``tests/test_json_writer.py``
+checks that nothing else in ``src`` calls ``json.dump``/``json.dumps``).
+
 JSON has no NaN or infinity. imageform writes them as ``null`` (a missing value) by walking
 the object, never by rewriting the text, so a string such as ``"NaNa.png"`` stays intact.
 NumPy arrays and scalars become lists and numbers, paths become strings, tuples lists,
@@ -12,10 +17,10 @@ import dataclasses
 import json
 import math
 from collections.abc import Mapping
-from pathlib import PurePath
+from pathlib import Path, PurePath
 from typing import Any
 
-__all__ = ["dumps", "json_ready"]
+__all__ = ["dumps", "json_ready", "write_json"]
 
 
 def json_ready(obj: Any) -> Any:
@@ -59,3 +64,27 @@ def dumps(obj: Any, *, indent: int | None = 2) -> str:
     '{"x": null, "name": "NaNa.png"}'
     """
     return json.dumps(json_ready(obj), indent=indent, ensure_ascii=False, allow_nan=False)
+
+
+def write_json(path: str | Path, obj: Any, *, indent: int | None = 2) -> Path:
+    r"""Write ``obj`` as JSON (:func:`dumps`, one final newline) to ``path``, atomically.
+
+    The text is built first (an object that cannot be written raises before any file is
+    touched), then written to a temporary sibling that replaces ``path`` (or in place
+    when ``path`` is a temporary of an all-or-nothing set, :func:`imageform._files.publish`).
+    An output that cannot be written (a folder, a device, a missing folder) is refused in
+    one line naming ``path``. Returns the path written.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> p = write_json(Path(tempfile.mkdtemp()) / "m.json", {"x": float("nan")}, indent=None)
+    >>> p.read_text()
+    '{"x": null}\n'
+    """
+    from imageform._files import atomic_write, check_writable
+
+    text = dumps(obj, indent=indent) + "\n"
+    final = check_writable(path, "path")
+    atomic_write(final, lambda tmp: tmp.write_text(text, encoding="utf-8"))
+    return final

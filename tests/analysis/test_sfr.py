@@ -82,7 +82,7 @@ def diffraction_esf(f_number: float):  # type: ignore[no-untyped-def]
 @pytest.mark.parametrize("sigma", [0.5, 0.8, 1.2])
 @pytest.mark.parametrize("angle", ANGLES)
 def test_gaussian_edge_mtf50_mtf10_and_curve(sigma: float, angle: float) -> None:
-    img = render_slanted_edge((80, 80), angle=angle, sigma=sigma)
+    img = render_slanted_edge((80, 80), angle_deg=angle, sigma=sigma)
     r = slanted_edge_sfr(img)
     assert isinstance(r, SFRResult)
     assert r.channels == ("Y",) and r.orientation == "vertical"
@@ -99,7 +99,7 @@ def test_gaussian_edge_mtf50_mtf10_and_curve(sigma: float, angle: float) -> None
 @pytest.mark.parametrize("f_number", [4.0, 8.0])
 @pytest.mark.parametrize("angle", [2.0, 5.0, 10.0])
 def test_diffraction_limited_edge(f_number: float, angle: float) -> None:
-    img = render_slanted_edge((100, 100), angle=angle, esf=diffraction_esf(f_number))
+    img = render_slanted_edge((100, 100), angle_deg=angle, esf=diffraction_esf(f_number))
     r = slanted_edge_sfr(img)
     truth = lambda f: diffraction_truth(f, f_number, angle)  # noqa: E731
     assert r.mtf50[0] == pytest.approx(crossing(truth, 0.5), rel=0.02)
@@ -114,7 +114,7 @@ def test_noise_snr50(sigma: float, angle: float) -> None:
     """SNR 50 (edge contrast / noise standard deviation) in a 200 x 64 ROI (200 rows along
     the edge): every one of 10 noisy copies within 5 %, their mean within 2 %. (In a
     128 x 64 ROI the sharpest edge, sigma 0.5 px, strays up to 6 %.)"""
-    img = render_slanted_edge((200, 64), angle=angle, sigma=sigma, low=0.2, high=0.8)
+    img = render_slanted_edge((200, 64), angle_deg=angle, sigma=sigma, low=0.2, high=0.8)
     f50 = crossing(lambda f: gauss_truth(f, sigma, angle), 0.5)
     rng = np.random.default_rng(12233)
     got = np.array(
@@ -125,7 +125,7 @@ def test_noise_snr50(sigma: float, angle: float) -> None:
 
 
 def test_two_point_derivative_and_polynomial_edge() -> None:
-    img = render_slanted_edge((80, 80), angle=4.0, sigma=0.7)
+    img = render_slanted_edge((80, 80), angle_deg=4.0, sigma=0.7)
     f50 = crossing(lambda f: gauss_truth(f, 0.7, 4.0), 0.5)
     two = slanted_edge_sfr(img, derivative="two-point")
     assert two.mtf50[0] == pytest.approx(f50, rel=0.02)
@@ -137,7 +137,7 @@ def test_two_point_derivative_and_polynomial_edge() -> None:
 def test_uncorrected_derivative_is_lower() -> None:
     """Without the finite-difference correction the SFR would sit below the truth by the
     FIR's sinc(2 f / 4): the corrected curve is the one on the truth at Nyquist."""
-    img = render_slanted_edge((80, 80), angle=5.0, sigma=0.5)
+    img = render_slanted_edge((80, 80), angle_deg=5.0, sigma=0.5)
     r = slanted_edge_sfr(img)
     k = int(np.argmin(np.abs(r.frequency - 0.5)))
     t = gauss_truth(r.frequency[k], 0.5, 5.0)
@@ -146,8 +146,8 @@ def test_uncorrected_derivative_is_lower() -> None:
 
 
 def test_horizontal_edge_and_roi() -> None:
-    vert = render_slanted_edge((80, 80), angle=6.0, sigma=0.8)
-    hor = render_slanted_edge((80, 80), angle=6.0, sigma=0.8, orientation="horizontal")
+    vert = render_slanted_edge((80, 80), angle_deg=6.0, sigma=0.8)
+    hor = render_slanted_edge((80, 80), angle_deg=6.0, sigma=0.8, orientation="horizontal")
     np.testing.assert_allclose(hor, vert.T, atol=1e-12)
     rv, rh = slanted_edge_sfr(vert), slanted_edge_sfr(hor)
     assert rh.orientation == "horizontal"
@@ -160,7 +160,7 @@ def test_horizontal_edge_and_roi() -> None:
 
 def test_rgb_channels_and_luminance() -> None:
     sig = (1.0, 0.7, 0.5)
-    img = np.stack([render_slanted_edge((80, 80), angle=5.0, sigma=s) for s in sig], axis=2)
+    img = np.stack([render_slanted_edge((80, 80), angle_deg=5.0, sigma=s) for s in sig], axis=2)
     r = slanted_edge_sfr(img)
     assert r.channels == ("R", "G", "B", "Y")
     assert r.sfr.shape[1] == 4 and r.mtf50.shape == (4,)
@@ -176,7 +176,7 @@ def test_rgb_channels_and_luminance() -> None:
 
 
 def test_integer_images() -> None:
-    img = render_slanted_edge((80, 80), angle=5.0, sigma=0.8)
+    img = render_slanted_edge((80, 80), angle_deg=5.0, sigma=0.8)
     f50 = crossing(lambda f: gauss_truth(f, 0.8, 5.0), 0.5)
     r16 = slanted_edge_sfr(np.round(img * 65535).astype(np.uint16))
     assert r16.mtf50[0] == pytest.approx(f50, rel=0.02)
@@ -193,9 +193,9 @@ def test_mtf_crossing() -> None:
 
 
 def test_refusals() -> None:
-    edge = render_slanted_edge((40, 40), angle=5.0, sigma=0.8)
+    edge = render_slanted_edge((40, 40), angle_deg=5.0, sigma=0.8)
     with pytest.raises(DegenerateConfigurationError, match="too close to vertical"):
-        slanted_edge_sfr(render_slanted_edge((40, 40), angle=0.0, sigma=0.8))
+        slanted_edge_sfr(render_slanted_edge((40, 40), angle_deg=0.0, sigma=0.8))
     with pytest.raises(DegenerateConfigurationError, match="no edge"):
         slanted_edge_sfr(np.full((40, 40), 0.5))
     with pytest.raises(UnknownOptionError, match="derivative"):
@@ -220,7 +220,7 @@ def test_refusals() -> None:
 
 
 def test_find_edges_in_a_chart_and_measure_them() -> None:
-    img = render_sfr_chart((240, 320), grid=(2, 3), angle=5.0, sigma=0.8, supersampling=4)
+    img = render_sfr_chart((240, 320), grid=(2, 3), angle_deg=5.0, sigma=0.8, supersampling=4)
     rois = find_slanted_edges(img)
     assert len(rois) == 24  # 6 squares x 4 sides
     assert sorted(r.side for r in rois).count("left") == 6
@@ -235,12 +235,12 @@ def test_find_edges_in_a_chart_and_measure_them() -> None:
 
 
 def test_find_edges_filters_by_angle_and_noise() -> None:
-    upright = render_sfr_chart((120, 160), grid=(1, 1), angle=0.0, supersampling=2)
+    upright = render_sfr_chart((120, 160), grid=(1, 1), angle_deg=0.0, supersampling=2)
     assert find_slanted_edges(upright) == []
-    steep = render_sfr_chart((160, 160), grid=(1, 1), angle=15.0, supersampling=2)
+    steep = render_sfr_chart((160, 160), grid=(1, 1), angle_deg=15.0, supersampling=2)
     assert find_slanted_edges(steep) == []
     assert len(find_slanted_edges(steep, max_angle=20.0)) == 4
-    img = render_sfr_chart((160, 200), grid=(1, 1), angle=-7.0, supersampling=2)
+    img = render_sfr_chart((160, 200), grid=(1, 1), angle_deg=-7.0, supersampling=2)
     noisy = img + np.random.default_rng(3).normal(0, 0.012, img.shape)
     rois = find_slanted_edges(noisy)
     assert len(rois) == 4
@@ -280,7 +280,7 @@ def test_simulator_diffraction_stage(f_number: float) -> None:
     )
 
     angle = 5.0
-    step = render_slanted_edge((160, 128), angle=angle, sigma=0.0, supersampling=16)
+    step = render_slanted_edge((160, 128), angle_deg=angle, sigma=0.0, supersampling=16)
     out = diffraction_blur(
         np.repeat(step[:, :, None], 3, axis=2), f_number=f_number, pixel_pitch=PITCH
     )

@@ -165,7 +165,7 @@ def test_harmonize_on_the_cluster(cluster: Any, tmp_path: Path) -> None:
     truth = {}
     for i in range(6):
         img_a = rng.uniform(0.1, 0.9, (24, 32, 3))
-        write_image(src / f"b{i}.png", device_b(img_a), bits=16)
+        write_image(src / f"b{i}.png", device_b(img_a), bit_depth=16)
         truth[f"b{i}.png"] = img_a
     out = tmp_path / "out"
     report = run_batch(

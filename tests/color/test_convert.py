@@ -151,7 +151,9 @@ def test_parameters_checked() -> None:
         convert([0.5, 0.5, 0.5], "srgb", "lab", standard="bt709")
     with pytest.raises(UnknownOptionError, match="grey method"):
         convert([0.5, 0.5, 0.5], "srgb", "gray", method="mean")
-    got = convert([1.0, 0, 0], "srgb", "ycbcr", standard="bt709", signal_range="limited", bits=10)
+    got = convert(
+        [1.0, 0, 0], "srgb", "ycbcr", standard="bt709", signal_range="limited", bit_depth=10
+    )
     np.testing.assert_allclose(got, [250.24, 409.34, 960], atol=0.01)
 
 

@@ -100,7 +100,7 @@ def test_hsv_and_ycbcr(dtype: type, monkeypatch: pytest.MonkeyPatch) -> None:
     dh = np.abs(hsv[..., 0] - ref[..., 0])
     assert np.minimum(dh, 360 - dh).max() < 2e-3
     np.testing.assert_allclose(hsv[..., 1:], ref[..., 1:], atol=2e-6)
-    for p in ({}, {"standard": "bt709", "signal_range": "limited", "bits": 10}):
+    for p in ({}, {"standard": "bt709", "signal_range": "limited", "bit_depth": 10}):
         ycc = convert(x, "srgb", "ycbcr", **p)
         np.testing.assert_allclose(
             ycc, twin(xf, "srgb", "ycbcr", monkeypatch, **p), rtol=1e-5, atol=1e-5

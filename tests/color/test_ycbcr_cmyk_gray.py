@@ -40,7 +40,7 @@ def test_gold_bt601_colour_bars_8bit() -> None:
         [41, 240, 110],
         [16, 128, 128],
     ]
-    got = np.round(rgb_to_ycbcr(BARS, "bt601", signal_range="limited", bits=8))
+    got = np.round(rgb_to_ycbcr(BARS, "bt601", signal_range="limited", bit_depth=8))
     np.testing.assert_array_equal(got, ref)
 
 
@@ -56,7 +56,7 @@ def test_gold_bt709_colour_bars_8bit() -> None:
         [32, 240, 118],
         [16, 128, 128],
     ]
-    got = np.round(rgb_to_ycbcr(BARS, "bt709", signal_range="limited", bits=8))
+    got = np.round(rgb_to_ycbcr(BARS, "bt709", signal_range="limited", bit_depth=8))
     np.testing.assert_array_equal(got, ref)
 
 
@@ -64,12 +64,12 @@ def test_gold_10bit_and_full_range() -> None:
     # Gold: BT.709/BT.2020 10-bit limited: white 940, black 64, chroma zero 512; full range
     # (H.273): white 1023 (10-bit), 255 (8-bit), chroma zero 2^(n-1).
     np.testing.assert_allclose(
-        rgb_to_ycbcr([1.0, 1, 1], "bt2020", signal_range="limited", bits=10), [940, 512, 512]
+        rgb_to_ycbcr([1.0, 1, 1], "bt2020", signal_range="limited", bit_depth=10), [940, 512, 512]
     )
     np.testing.assert_allclose(
-        rgb_to_ycbcr([0.0, 0, 0], "bt709", signal_range="limited", bits=10), [64, 512, 512]
+        rgb_to_ycbcr([0.0, 0, 0], "bt709", signal_range="limited", bit_depth=10), [64, 512, 512]
     )
-    np.testing.assert_allclose(rgb_to_ycbcr([1.0, 1, 1], bits=10), [1023, 512, 512])
+    np.testing.assert_allclose(rgb_to_ycbcr([1.0, 1, 1], bit_depth=10), [1023, 512, 512])
     np.testing.assert_allclose(
         rgb_to_ycbcr([1.0, 0, 0], "bt601"), [0.299, -0.168736, 0.5], atol=1e-6
     )
@@ -92,8 +92,10 @@ def test_cross_check_opencv_ycrcb() -> None:
 )
 def test_round_trip(std: str, rng: str, bits: int | None) -> None:
     x = np.random.default_rng(6).uniform(0, 1, (100, 3))
-    ycc = rgb_to_ycbcr(x, std, signal_range=rng, bits=bits)
-    np.testing.assert_allclose(ycbcr_to_rgb(ycc, std, signal_range=rng, bits=bits), x, atol=1e-12)
+    ycc = rgb_to_ycbcr(x, std, signal_range=rng, bit_depth=bits)
+    np.testing.assert_allclose(
+        ycbcr_to_rgb(ycc, std, signal_range=rng, bit_depth=bits), x, atol=1e-12
+    )
 
 
 def test_ycbcr_errors() -> None:
@@ -101,8 +103,8 @@ def test_ycbcr_errors() -> None:
         rgb_to_ycbcr([0.5, 0.5, 0.5], "bt.999")
     with pytest.raises(UnknownOptionError, match="valid: 'full', 'limited'"):
         rgb_to_ycbcr([0.5, 0.5, 0.5], signal_range="studio")
-    with pytest.raises(InvalidInputError, match="bits"):
-        rgb_to_ycbcr([0.5, 0.5, 0.5], bits=9)
+    with pytest.raises(InvalidInputError, match="bit_depth"):
+        rgb_to_ycbcr([0.5, 0.5, 0.5], bit_depth=9)
 
 
 def test_ycbcr_integer_codes_read_as_numbers() -> None:
@@ -111,7 +113,7 @@ def test_ycbcr_integer_codes_read_as_numbers() -> None:
         ycbcr_to_rgb(codes, "bt709", signal_range="limited"), [1, 1, 1], atol=1e-6
     )
     with pytest.raises(InvalidInputError, match="exceed"):
-        ycbcr_to_rgb(np.array([1023, 512, 512], dtype=np.uint16), bits=8)
+        ycbcr_to_rgb(np.array([1023, 512, 512], dtype=np.uint16), bit_depth=8)
 
 
 def test_cmy_cmyk_lecture() -> None:
@@ -178,4 +180,6 @@ def test_cross_check_colour_science_ycbcr(
     ref = ref * (2**bits - 1)
     if not legal:
         ref[:, 1:] += 2 ** (bits - 1)
-    np.testing.assert_allclose(rgb_to_ycbcr(x, std, signal_range=rng, bits=bits), ref, atol=1e-9)
+    np.testing.assert_allclose(
+        rgb_to_ycbcr(x, std, signal_range=rng, bit_depth=bits), ref, atol=1e-9
+    )

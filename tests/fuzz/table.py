@@ -256,10 +256,10 @@ VALID: dict[str, C | Skip] = {
     "imageform.geometry.Intrinsics.from_fov": call(fov_x=1.0, image_size=(8, 6)),
     "imageform.geometry.Intrinsics.from_matrix": call(K=V("K")),
     "imageform.geometry.Intrinsics.from_physical": call(
-        focal_length=0.05, pixel_pitch_um=3.0, image_size=(8, 6)
+        focal_length_mm=0.05, pixel_pitch_um=3.0, image_size=(8, 6)
     ),
     "imageform.geometry.Intrinsics.from_sensor": call(
-        focal_length=0.05, sensor_size_mm=(6.4, 4.8), image_size=(8, 6)
+        focal_length_mm=0.05, sensor_size_mm=(6.4, 4.8), image_size=(8, 6)
     ),
     "imageform.geometry.KannalaBrandt": call(),
     "imageform.geometry.LineSegments": call(
@@ -349,7 +349,7 @@ VALID: dict[str, C | Skip] = {
     "imageform.geometry.decompose_projection_matrix": call(P=V("P")),
     "imageform.geometry.detect_line_segments": call(image=V("rgb")),
     "imageform.geometry.detect_vanishing_points": call(
-        segments=V("segments"), image_size=(16, 12), iterations=50
+        segments=V("segments"), image_size=(16, 12), max_trials=50
     ),
     "imageform.geometry.estimate_homography": call(
         V("uv"), np.array([[3.1, 4.2], [5.3, 6.4], [8.6, 3.1], [10.25, 7.5]])
@@ -400,7 +400,7 @@ VALID: dict[str, C | Skip] = {
     "imageform.geometry.rvec_to_matrix": call(rvec=V("rvec")),
     "imageform.geometry.solve_pnp": call(V("points3"), V("points3_uv"), V("K")),
     "imageform.geometry.solve_pnp_ransac": call(
-        V("points3"), V("points3_uv"), V("K"), max_hypotheses=50
+        V("points3"), V("points3_uv"), V("K"), max_trials=50
     ),
     "imageform.geometry.to_homogeneous": call(points=V("points3")),
     "imageform.geometry.triangulate_points": call(V("P_stack"), V("pts_stack")),
@@ -474,7 +474,7 @@ VALID: dict[str, C | Skip] = {
     "imageform.optics.circle_of_confusion": call(
         depth=V("depth"), focal_length=0.05, f_number=2.8, focus=2.0
     ),
-    "imageform.optics.cos4_falloff": call(shape=(6, 8), focal_length=0.05),
+    "imageform.optics.cos4_falloff": call(shape=(6, 8), focal_length_px=0.05),
     "imageform.optics.defocus_blur": call(
         image=V("rgb"), depth=4.0, focal_length=0.05, f_number=2.8, focus=2.0, pixel_pitch=5e-6
     ),
@@ -484,12 +484,16 @@ VALID: dict[str, C | Skip] = {
     "imageform.optics.depth_of_field": call(focal_length=0.05, f_number=2.8, focus=2.0, coc=3e-5),
     "imageform.optics.disc_kernel": call(radius=2),
     "imageform.optics.f_number": call(focal_length=0.05, aperture_diameter=0.01),
-    "imageform.optics.field_angle": call(shape=(6, 8), focal_length=0.05),
+    "imageform.optics.field_angle": call(shape=(6, 8), focal_length_px=0.05),
     "imageform.optics.hyperfocal_distance": call(focal_length=0.05, f_number=2.8, coc=3e-5),
     "imageform.optics.lateral_chromatic_aberration": call(V("rgb"), (1.001, 1.0, 0.999)),
     "imageform.optics.magnification": call(focal_length=0.05, d_o=2.0),
     "imageform.optics.mechanical_vignetting": call(
-        shape=(6, 8), focal_length=0.05, pupil_radius=1.0, barrel_radius=1.2, barrel_distance=0.5
+        shape=(6, 8),
+        focal_length_px=0.05,
+        pupil_radius=1.0,
+        barrel_radius=1.2,
+        barrel_distance=0.5,
     ),
     "imageform.optics.pupil_overlap_fraction": call(1.0, 1.2, np.array([0.0, 0.5, 1.0])),
     "imageform.optics.spherical_aberration": call(
@@ -1453,7 +1457,7 @@ VALID.update(
 def _edge() -> np.ndarray:
     from imageform.analysis import render_slanted_edge
 
-    return np.asarray(render_slanted_edge((64, 48), angle=5.0, sigma=0.8))
+    return np.asarray(render_slanted_edge((64, 48), angle_deg=5.0, sigma=0.8))
 
 
 VALID.update(

@@ -191,14 +191,16 @@ def test_negative_focal_refused_by_camera_and_intrinsics() -> None:
 def test_intrinsics_from_sensor_refuses_bad_sizes() -> None:
     for sensor in ((6.4, 4.8, 1.0), (6.4,), (0, 0), "6.4x4.8", np.float64(6.4)):
         with pytest.raises(InvalidInputError) as exc:
-            Intrinsics.from_sensor(focal_length=8.0, sensor_size_mm=sensor, image_size=(640, 480))
+            Intrinsics.from_sensor(
+                focal_length_mm=8.0, sensor_size_mm=sensor, image_size=(640, 480)
+            )
         _one_line(exc, "sensor_size_mm")
     for size in ((0, 0), (640,), (640, 480, 3), (640.0, 480)):
         with pytest.raises(InvalidInputError) as exc:
-            Intrinsics.from_sensor(focal_length=8.0, sensor_size_mm=(6.4, 4.8), image_size=size)
+            Intrinsics.from_sensor(focal_length_mm=8.0, sensor_size_mm=(6.4, 4.8), image_size=size)
         _one_line(exc, "image_size")
     ok = Intrinsics.from_sensor(
-        focal_length=8.0, sensor_size_mm=(6.4, 4.8), image_size=(np.int64(640), 480)
+        focal_length_mm=8.0, sensor_size_mm=(6.4, 4.8), image_size=(np.int64(640), 480)
     )
     assert ok.fx == pytest.approx(800.0)
 

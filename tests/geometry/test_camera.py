@@ -49,7 +49,9 @@ def test_lecture_building_image_size() -> None:
     h_mm = projected_size(30.0, 100.0, focal_length=50.0)
     assert h_mm == pytest.approx(15.0)
     assert h_mm * 1000.0 / 5.0 == pytest.approx(3000.0)
-    intr = Intrinsics.from_physical(focal_length=50.0, pixel_pitch_um=5.0, image_size=(6000, 4000))
+    intr = Intrinsics.from_physical(
+        focal_length_mm=50.0, pixel_pitch_um=5.0, image_size=(6000, 4000)
+    )
     # the same through the camera: a 30 m tall object at 100 m spans 3000 px
     top, bottom = Camera(intr).project([[0.0, -15.0, 100.0], [0.0, 15.0, 100.0]]).uv
     assert bottom[1] - top[1] == pytest.approx(3000.0)
@@ -355,12 +357,14 @@ def test_negative_focal_lengths_are_refused(sign: tuple[float, float]) -> None:
 
 
 def test_intrinsics_physical_and_fov() -> None:
-    intr = Intrinsics.from_physical(focal_length=50.0, pixel_pitch_um=5.0, image_size=(6000, 4000))
+    intr = Intrinsics.from_physical(
+        focal_length_mm=50.0, pixel_pitch_um=5.0, image_size=(6000, 4000)
+    )
     assert intr.fx == pytest.approx(10_000.0)
     # 30 mm sensor width at 50 mm: 2 atan(15 / 50) = 33.398°
     assert math.degrees(intr.fov_x) == pytest.approx(2 * math.degrees(math.atan(15 / 50)))
     sens = Intrinsics.from_sensor(
-        focal_length=50.0, sensor_size_mm=(30.0, 20.0), image_size=(6000, 4000)
+        focal_length_mm=50.0, sensor_size_mm=(30.0, 20.0), image_size=(6000, 4000)
     )
     assert sens.fx == pytest.approx(intr.fx) and sens.fy == pytest.approx(intr.fy)
     fov = Intrinsics.from_fov(math.radians(90), (1000, 800))
@@ -377,7 +381,7 @@ def test_intrinsics_bad() -> None:
     with pytest.raises(InvalidInputError, match="non-zero"):
         Intrinsics(0.0, 1.0, 0.0, 0.0)
     with pytest.raises(InvalidInputError, match="pixel_pitch_um > 0"):
-        Intrinsics.from_physical(focal_length=50.0, pixel_pitch_um=-5.0, image_size=(10, 10))
+        Intrinsics.from_physical(focal_length_mm=50.0, pixel_pitch_um=-5.0, image_size=(10, 10))
     with pytest.raises(InvalidInputError, match="image_size"):
         _ = Intrinsics(1.0, 1.0, 0.0, 0.0).fov_x
     with pytest.raises(InvalidInputError, match="0 < fov_x < pi"):

@@ -304,7 +304,7 @@ def test_bad_pattern_size(pattern: object) -> None:
         ({"sigma": float("nan")}, "sigma"),
         ({"half_window": 0}, "half_window"),
         ({"max_iter": 0}, "max_iter"),
-        ({"eps": -1.0}, "eps"),
+        ({"tol": -1.0}, "tol"),
     ],
 )
 def test_bad_options(kwargs: dict, match: str) -> None:

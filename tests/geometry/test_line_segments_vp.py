@@ -163,7 +163,7 @@ def test_principal_point_options_and_refusals() -> None:
     size = (img.shape[1], img.shape[0])
     given = detect_vanishing_points(segments=seg, image_size=size, principal_point=(383.5, 255.5))
     centre = detect_vanishing_points(segments=seg, image_size=size)
-    ortho = detect_vanishing_points(segments=seg, image_size=size, principal_point="orthocentre")
+    ortho = detect_vanishing_points(segments=seg, image_size=size, principal_point="orthocenter")
     assert given.K is not None and centre.K is not None and ortho.K is not None
     np.testing.assert_allclose(given.K, centre.K)  # the render's principal point is the centre
     assert ortho.K[0, 0] == pytest.approx(700.0, rel=0.03)

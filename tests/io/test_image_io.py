@@ -112,7 +112,7 @@ def test_exif_orientation_applied(tmp_path: Path) -> None:
 
 
 def test_float_quantisation_and_no_silent_clipping(tmp_path: Path) -> None:
-    assert write_image(tmp_path / "q.png", np.array([[[0.0, 0.5, 1.0]]]), bits=8) == (8, 0)
+    assert write_image(tmp_path / "q.png", np.array([[[0.0, 0.5, 1.0]]]), bit_depth=8) == (8, 0)
     assert read_image(tmp_path / "q.png").tolist() == [[[0, 128, 255]]]
     with pytest.raises(InvalidInputError, match=r"1 values outside \[0, 1\].*--out-of-range"):
         write_image(tmp_path / "r.png", np.array([[[0.0, 1.2, 1.0]]]))
@@ -123,14 +123,14 @@ def test_float_quantisation_and_no_silent_clipping(tmp_path: Path) -> None:
         write_image(tmp_path / "r2.png", np.array([[[1.5, 0, 0]]]), clip=True)
     with pytest.raises(InvalidInputError, match="NaN"):
         write_image(tmp_path / "s.png", np.array([[[0.0, np.nan, 1.0]]]))
-    with pytest.raises(InvalidInputError, match="bits 8 or 16"):
-        write_image(tmp_path / "s.png", np.zeros((2, 2, 3)), bits=12)
+    with pytest.raises(InvalidInputError, match="bit_depth 8 or 16"):
+        write_image(tmp_path / "s.png", np.zeros((2, 2, 3)), bit_depth=12)
     with pytest.raises(InvalidInputError, match="JPEG holds 8 bits"):
         write_image(tmp_path / "s.jpg", np.zeros((2, 2, 3), np.uint16))
     with pytest.raises(InvalidInputError, match="JPEG has no alpha"):
         write_image(tmp_path / "s.jpg", np.zeros((2, 2, 4)))
     # 16-bit data written as 8 bits is rescaled, not cut
-    write_image(tmp_path / "d.png", np.array([[65535, 32896, 0]], np.uint16), bits=8)
+    write_image(tmp_path / "d.png", np.array([[65535, 32896, 0]], np.uint16), bit_depth=8)
     assert read_image(tmp_path / "d.png")[..., 0].tolist() == [[255, 128, 0]]
 
 
@@ -140,7 +140,9 @@ def test_tiff_and_npy_exact(tmp_path: Path) -> None:
     np.testing.assert_array_equal(read_image(tmp_path / "a.tif"), a)
     write_image(tmp_path / "a.npy", a.astype(np.float64))
     np.testing.assert_array_equal(read_image(tmp_path / "a.npy"), a.astype(np.float64))
-    write_image(tmp_path / "b.tif", np.clip(a / 100 + 0.5, 0, 1), bits=16)  # integer on request
+    write_image(
+        tmp_path / "b.tif", np.clip(a / 100 + 0.5, 0, 1), bit_depth=16
+    )  # integer on request
     assert read_image(tmp_path / "b.tif").dtype == np.uint16
 
 
@@ -236,7 +238,7 @@ def test_quantising_by_bands_is_the_whole_image_rule(
     a = rng.uniform(-0.1, 1.1, (23, 7, 3))
     n = int(np.count_nonzero((a < 0) | (a > 1)))
     for bits, dtype in ((8, np.uint8), (16, np.uint16)):
-        written = write_image(tmp_path / f"a{bits}.png", a, bits=bits, out_of_range="clip")
+        written = write_image(tmp_path / f"a{bits}.png", a, bit_depth=bits, out_of_range="clip")
         assert written.out_of_range == n
         expect = np.round(np.clip(a, 0, 1) * (2**bits - 1)).astype(dtype)
         np.testing.assert_array_equal(read_image(tmp_path / f"a{bits}.png"), expect)

@@ -159,12 +159,12 @@ def test_axial_ca_defocus_differs_by_channel() -> None:
 # -- vignetting -------------------------------------------------------------------------------
 def test_cos4_at_known_field_angle() -> None:
     # a pixel 100 px off-centre with f = 100 px is at 45°: cos⁴ 45° = 0.25 (Hecht §5.7.4)
-    fall = cos4_falloff((1, 201), focal_length=100.0)
+    fall = cos4_falloff((1, 201), focal_length_px=100.0)
     assert fall[0, 100] == 1.0
     assert fall[0, 200] == pytest.approx(0.25, abs=1e-12)
     # 30°: tan 30° · f off-centre → cos⁴ 30° = 9/16
     f = 100.0
-    fall2 = cos4_falloff((1, 1), focal_length=f, center=(-f * math.tan(math.pi / 6), 0.0))
+    fall2 = cos4_falloff((1, 1), focal_length_px=f, center=(-f * math.tan(math.pi / 6), 0.0))
     assert fall2[0, 0] == pytest.approx(9 / 16, abs=1e-12)
 
 
@@ -176,11 +176,11 @@ def test_mechanical_vignetting_overlap() -> None:
         (2 * math.pi / 3 - math.sqrt(3) / 2) / math.pi
     )
     v = mechanical_vignetting(
-        (1, 201), focal_length=100.0, pupil_radius=1.0, barrel_radius=1.2, barrel_distance=1.0
+        (1, 201), focal_length_px=100.0, pupil_radius=1.0, barrel_radius=1.2, barrel_distance=1.0
     )
     assert v[0, 100] == 1.0 and np.all(np.diff(v[0, 100:]) <= 0)
     img = np.ones((1, 201, 3))
-    out = apply_vignetting(img, v * cos4_falloff((1, 201), focal_length=100.0))
+    out = apply_vignetting(img, v * cos4_falloff((1, 201), focal_length_px=100.0))
     assert out[0, 200, 0] < out[0, 150, 0] < out[0, 100, 0] == 1.0
 
 
@@ -205,7 +205,7 @@ def test_effects_dtype_policy(dtype: type, want: type) -> None:
             focus=2.0,
             pixel_pitch=20e-6,
         ),
-        apply_vignetting(img, cos4_falloff((24, 32), focal_length=30.0)),
+        apply_vignetting(img, cos4_falloff((24, 32), focal_length_px=30.0)),
     ]
     for out in outs:
         assert out.dtype == want and out.shape == img.shape

@@ -72,7 +72,7 @@ def test_mtf50_sigma_formula() -> None:
 def test_mtf50_model_gives_the_file_mtf50_on_an_edge(mtf50: float) -> None:
     # an edge integrated over 4 x 4 samples per pixel (the renderer's pixels) blurred by the
     # mtf50 model: the slanted-edge MTF50 is the file's within 3 %
-    step = render_slanted_edge((160, 128), angle=5.0, sigma=0.0, supersampling=4)
+    step = render_slanted_edge((160, 128), angle_deg=5.0, sigma=0.0, supersampling=4)
     rgb = np.repeat(np.asarray(step, float)[..., None], 3, axis=2)
     optics = CameraOptics(model="mtf50", mtf50_cy_per_px=mtf50)
     out = measured_optics_blur(rgb, optics, pixel_pitch=2e-6, supersampling=4)
@@ -81,7 +81,7 @@ def test_mtf50_model_gives_the_file_mtf50_on_an_edge(mtf50: float) -> None:
 
 
 def test_gaussian_zernike_and_diffraction_blur() -> None:
-    step = render_slanted_edge((128, 128), angle=5.0, sigma=0.0, supersampling=4)
+    step = render_slanted_edge((128, 128), angle_deg=5.0, sigma=0.0, supersampling=4)
     rgb = np.repeat(np.asarray(step, float)[..., None], 3, axis=2)
     sharp = slanted_edge_sfr(rgb[..., 1]).mtf50[0]
     g = measured_optics_blur(

@@ -14,7 +14,7 @@ from imageform.workflows import execute, get_workflow
 
 
 def test_sfr_chart_npy_to_csv(tmp_path: Path) -> None:
-    chart = render_sfr_chart((160, 200), grid=(1, 1), angle=5.0, sigma=0.8, supersampling=4)
+    chart = render_sfr_chart((160, 200), grid=(1, 1), angle_deg=5.0, sigma=0.8, supersampling=4)
     src = tmp_path / "chart.npy"
     np.save(src, chart.astype(np.float32))
     out = tmp_path / "sfr.csv"
@@ -34,7 +34,7 @@ def test_sfr_roi_srgb_png(tmp_path: Path) -> None:
     from imageform.color import linear_to_srgb
     from imageform.io import write_image
 
-    lin = render_slanted_edge((96, 64), angle=4.0, sigma=0.8)
+    lin = render_slanted_edge((96, 64), angle_deg=4.0, sigma=0.8)
     big = np.full((120, 100), 0.2)
     big[10:106, 20:84] = lin
     src = tmp_path / "edge.png"

@@ -20,6 +20,7 @@ Every tool accepts NumPy arrays (uint8/uint16/floats) and Dask arrays (lazy, chu
 with exact global statistics).
 """
 
+from imageform.analysis._stain_methods import STAIN_NORMALIZATION_METHODS
 from imageform.analysis.chart_detect import (
     ChartDetection,
     ChartNotFoundError,
@@ -47,6 +48,7 @@ from imageform.analysis.harmonize import (
     root_polynomial_terms,
 )
 from imageform.analysis.macenko import (
+    STAIN_VECTOR_METHODS,
     BackgroundEstimate,
     MacenkoStains,
     background_intensity,
@@ -92,6 +94,8 @@ __all__ = [
     "COLORCHECKER_NEUTRALS",
     "CORRECTION_METHODS",
     "SFR_LUMINANCE_WEIGHTS",
+    "STAIN_NORMALIZATION_METHODS",
+    "STAIN_VECTOR_METHODS",
     "BackgroundEstimate",
     "ChartDetection",
     "ChartNotFoundError",

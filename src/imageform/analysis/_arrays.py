@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 
 from imageform._backend import to_numpy
-from imageform._files import atomic_write, check_writable
+from imageform._jsonio import write_json as _write_json
 from imageform._validate import as_image, as_path, check_nonempty, format_shape
 from imageform.errors import InvalidInputError
 
@@ -111,14 +111,13 @@ def exact_quantile(values: Any, q: float, *, bins: int = 4096) -> float:
 
 
 def write_json(path: str | Path, payload: dict[str, Any]) -> None:
-    """Write ``payload`` as indented JSON (arrays as nested lists), atomically.
+    """Write ``payload`` as indented JSON (arrays as nested lists), atomically, NaN as null.
 
-    An output that cannot be written (a folder, a device, a missing folder) is refused in
-    one line naming ``path``, before anything is written.
+    The one JSON writer, :func:`imageform._jsonio.write_json`. An output that cannot be
+    written (a folder, a device, a missing folder) is refused in one line naming ``path``,
+    before anything is written.
     """
-    final = check_writable(path, "path")
-    text = json.dumps(payload, indent=2) + "\n"
-    atomic_write(final, lambda tmp: tmp.write_text(text, encoding="utf-8"))
+    _write_json(path, payload, indent=2)
 
 
 def read_json(path: str | Path, kind: str) -> dict[str, Any]:

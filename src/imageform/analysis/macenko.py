@@ -23,6 +23,7 @@ from typing import Any
 
 import numpy as np
 
+from imageform import _deprecate
 from imageform._validate import (
     as_float,
     as_int,
@@ -42,7 +43,7 @@ __all__ = [
     "MIN_INTENSITY",
     "OD_BASES",
     "REFERENCE_I0",
-    "STAIN_METHODS",
+    "STAIN_VECTOR_METHODS",
     "TRANSPARENT_RULES",
     "BackgroundEstimate",
     "MacenkoStains",
@@ -66,8 +67,6 @@ REFERENCE_I0 = 240.0 / 255.0
 #: Logarithm bases of the optical density: ``"e"`` (reference code, default) or ``"10"``.
 OD_BASES = ("e", "10")
 
-#: Stain-vector estimators: ``"macenko"`` (2009) and ``"vahadane"`` (2016).
-STAIN_METHODS = ("macenko", "vahadane")
 
 _LN10 = float(np.log(10.0))
 
@@ -402,7 +401,9 @@ class MacenkoStains:
         i0 = _i0_value(self.i0, "i0", complete=True)
         object.__setattr__(self, "i0", (float(i0[0]), float(i0[1]), float(i0[2])))
         object.__setattr__(self, "base", _base(self.base))
-        object.__setattr__(self, "method", check_option(self.method, STAIN_METHODS, "method"))
+        object.__setattr__(
+            self, "method", check_option(self.method, STAIN_VECTOR_METHODS, "method")
+        )
         object.__setattr__(self, "i0_source", check_option(self.i0_source, I0_SOURCES, "i0_source"))
 
     def to_json(self, path: str | Path) -> None:
@@ -436,7 +437,7 @@ class MacenkoStains:
             n = int(d.get("n_pixels", 0))
             base = _base(str(d.get("od_base", "10")))
             i0 = _i0_value(d.get("i0", 1.0), "i0")
-            method = check_option(str(d.get("method", "macenko")), STAIN_METHODS, "method")
+            method = check_option(str(d.get("method", "macenko")), STAIN_VECTOR_METHODS, "method")
             n_total = int(d.get("n_total", 0))
             i0_source = check_option(str(d.get("i0_source", "given")), I0_SOURCES, "i0_source")
         except (KeyError, TypeError, ValueError) as exc:
@@ -668,9 +669,9 @@ def macenko_stains(
     >>> [round(stain_angle(est.stain_matrix[i], S[i]), 1) for i in range(2)]
     [0.4, 0.3]
     """
-    m = check_option(method, STAIN_METHODS, "stain method")
-    if m == "vahadane":
-        return vahadane_stains(
+    m = check_option(method, STAIN_VECTOR_METHODS, "stain method")
+    if m != "macenko":
+        return STAIN_VECTOR_METHODS[m](
             image,
             beta=beta,
             max_percentile=max_percentile,
@@ -921,3 +922,16 @@ def vahadane_stains(
     i0t = (float(i0v[0]), float(i0v[1]), float(i0v[2]))
     n_total = int(np.prod(rgb.shape[:-1]))
     return MacenkoStains(h.copy(), maxc, n, i0t, key, "vahadane", n_total, i0_from)
+
+
+#: Stain-vector estimators, each name mapped to its function (read-only): ``"macenko"``
+#: (Macenko et al. 2009, :func:`macenko_stains`) and ``"vahadane"`` (Vahadane et al. 2016,
+#: :func:`vahadane_stains`); both return :class:`MacenkoStains`. Not the stain
+#: *normalisation* methods (:data:`imageform.analysis.STAIN_NORMALIZATION_METHODS`).
+STAIN_VECTOR_METHODS: MappingProxyType[str, Any] = MappingProxyType(
+    {"macenko": macenko_stains, "vahadane": vahadane_stains}
+)
+
+__getattr__ = _deprecate.module_getattr(
+    "imageform.analysis.macenko", {"STAIN_METHODS": ("STAIN_VECTOR_METHODS", STAIN_VECTOR_METHODS)}
+)

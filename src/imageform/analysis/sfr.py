@@ -52,6 +52,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+from imageform import _deprecate
 from imageform._validate import (
     as_int,
     as_real,
@@ -438,7 +439,7 @@ def slanted_edge_sfr(
 
     Examples
     --------
-    >>> edge = render_slanted_edge((64, 64), angle=5.0, sigma=0.8)
+    >>> edge = render_slanted_edge((64, 64), angle_deg=5.0, sigma=0.8)
     >>> r = slanted_edge_sfr(edge)
     >>> r.channels, round(float(r.mtf50[0]), 3), round(r.angle, 2)
     (('Y',), 0.219, 5.0)
@@ -527,10 +528,11 @@ def _gauss_esf(sigma: float) -> Callable[[np.ndarray], np.ndarray]:
     return lambda d: np.asarray(ndtr(d / sigma))
 
 
+@_deprecate.parameters(renamed={"angle": "angle_deg"})
 def render_slanted_edge(
     shape: Sequence[int],
     *,
-    angle: float = 5.0,
+    angle_deg: float = 5.0,
     sigma: float = 0.0,
     esf: Callable[[np.ndarray], np.ndarray] | None = None,
     low: float = 0.2,
@@ -541,26 +543,27 @@ def render_slanted_edge(
 ) -> np.ndarray:
     r"""Render an ideal slanted edge of known ESF, integrated over each pixel's area.
 
-    The edge passes through ``center`` (``(u, v)``, default the image centre) at ``angle``
-    degrees from the vertical (``orientation="vertical"``: dark on the left, light on the
-    right) or the horizontal (dark above). A point at signed distance ``d`` (pixels, along the
-    normal, towards the light side) has the value ``low + (high - low) ESF(d)``: with
-    ``esf=None``, :math:`\mathrm{ESF}(d) = \Phi(d/\sigma)` (a Gaussian PSF of standard
-    deviation ``sigma`` pixels, MTF :math:`e^{-2\pi^2\sigma^2 f^2}`; a step when ``sigma`` is
-    0). Each pixel averages ``supersampling``\ :sup:`2` points, so the image's MTF along the
-    normal is the ESF's times the pixel aperture's,
+    The edge passes through ``center`` (``(u, v)``, default the image centre) at ``angle_deg``
+    degrees (``angle`` is its deprecated name) from the vertical (``orientation="vertical"``:
+    dark on the left, light on the right) or the horizontal (dark above). A point at signed
+    distance ``d`` (pixels, along the normal, towards the light side) has the value
+    ``low + (high - low) ESF(d)``: with ``esf=None``, :math:`\mathrm{ESF}(d) = \Phi(d/\sigma)`
+    (a Gaussian PSF of standard deviation ``sigma`` pixels, MTF
+    :math:`e^{-2\pi^2\sigma^2 f^2}`; a step when ``sigma`` is 0). Each pixel averages
+    ``supersampling``\ :sup:`2` points, so the image's MTF along the normal is the ESF's times
+    the pixel aperture's,
     :math:`\mathrm{sinc}(f\cos\theta)\,\mathrm{sinc}(f\sin\theta)`.
 
     Examples
     --------
-    >>> render_slanted_edge((4, 6), angle=0.0).round(2)[0].tolist()
+    >>> render_slanted_edge((4, 6), angle_deg=0.0).round(2)[0].tolist()
     [0.2, 0.2, 0.2, 0.8, 0.8, 0.8]
     """
     if not isinstance(shape, Sequence) or len(shape) != 2:
         raise InvalidInputError(f"expected shape as (height, width), got {describe(shape)}")
     h = as_int(shape[0], "shape[0]", minimum=1)
     w = as_int(shape[1], "shape[1]", minimum=1)
-    th = math.radians(as_real(angle, "angle", minimum=-45.0, maximum=45.0))
+    th = math.radians(as_real(angle_deg, "angle_deg", minimum=-45.0, maximum=45.0))
     sg = as_real(sigma, "sigma", nonnegative=True)
     lo, hi = as_real(low, "low"), as_real(high, "high")
     ori = check_option(orientation, ("vertical", "horizontal"), "orientation")
@@ -591,12 +594,13 @@ def render_slanted_edge(
     return out.T.copy() if ori == "horizontal" else out
 
 
+@_deprecate.parameters(renamed={"angle": "angle_deg"})
 def render_sfr_chart(
     shape: Sequence[int] = (240, 320),
     *,
     grid: Sequence[int] = (2, 3),
     side: float | None = None,
-    angle: float = 5.0,
+    angle_deg: float = 5.0,
     sigma: float = 0.8,
     low: float = 0.2,
     high: float = 0.8,
@@ -604,8 +608,9 @@ def render_sfr_chart(
 ) -> np.ndarray:
     r"""Render a slanted-edge chart: ``grid = (rows, columns)`` dark squares on a light background.
 
-    Each square is turned ``angle`` degrees (clockwise as displayed), blurred by a Gaussian PSF of
-    ``sigma`` pixels and integrated over each pixel's area.
+    Each square is turned ``angle_deg`` degrees (clockwise as displayed; ``angle`` is its
+    deprecated name), blurred by a Gaussian PSF of ``sigma`` pixels and integrated over each
+    pixel's area.
 
     The squares (side ``side`` pixels, default 45 % of a grid cell) are centred in the cells
     of a regular grid over the image. A square's blurred indicator is exact: in the square's
@@ -630,7 +635,7 @@ def render_sfr_chart(
     # at most one square per 4 x 4 pixels: the loop below runs once per square
     gr = as_int(grid[0], "grid[0]", minimum=1, maximum=max(1, h // 4))
     gc = as_int(grid[1], "grid[1]", minimum=1, maximum=max(1, w // 4))
-    th = math.radians(as_real(angle, "angle", minimum=-45.0, maximum=45.0))
+    th = math.radians(as_real(angle_deg, "angle_deg", minimum=-45.0, maximum=45.0))
     sg = as_real(sigma, "sigma", positive=True)
     lo, hi = as_real(low, "low"), as_real(high, "high")
     s = as_int(supersampling, "supersampling", minimum=1, maximum=32)

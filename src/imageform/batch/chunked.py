@@ -49,7 +49,9 @@ CHUNKED_COMMANDS = ("convert", "white_balance", "stain_normalize")
 #: Most pixels of the regular subsample on which a slide's own stain statistics are measured
 #: (every s-th row and column; a whole-slide tool estimates on a thumbnail the same way).
 STAIN_SAMPLE_PIXELS = 4_000_000
-#: White-balance methods whose illuminant is a streaming reduction (or needs none).
+#: The white-balance methods (of :data:`imageform.color.WHITE_BALANCE_METHODS`, the one
+#: list, which the test of the registries checks) whose illuminant is a streaming reduction
+#: (or needs none).
 _WB_METHODS = ("gray_world", "shades_of_gray", "manual")
 _OUT_DTYPES = ("uint8", "uint16", "float32")
 #: ``pyramid`` choices: the input's levels when it has them, none, or built by halving.

@@ -495,11 +495,10 @@ def _read_manifest(out_root: Path) -> dict[str, Any]:
 
 
 def _write_manifest(out_root: Path, outputs: dict[str, Any]) -> None:
-    from imageform._files import atomic_write
+    from imageform._jsonio import write_json
 
     out_root.mkdir(parents=True, exist_ok=True)
-    text = json.dumps({"version": _MANIFEST_VERSION, "outputs": outputs}, indent=1)
-    atomic_write(out_root / MANIFEST, lambda p: p.write_text(text, encoding="utf-8"))
+    write_json(out_root / MANIFEST, {"version": _MANIFEST_VERSION, "outputs": outputs}, indent=1)
 
 
 def _entry(job: Job, producer: dict[str, Any]) -> dict[str, Any] | None:

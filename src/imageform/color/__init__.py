@@ -8,14 +8,16 @@ Conventions (docs/conventions.md): channels-last ``(..., 3)`` arrays; encoded RG
 [0, 1]; XYZ with Y = 1 at the reference white; L* in [0, 100]; hue in degrees [0, 360).
 """
 
+from imageform import _deprecate
 from imageform.color.adaptation import (
     CAT_MATRICES,
     chromatic_adaptation,
     chromatic_adaptation_matrix,
 )
 from imageform.color.cct import (
-    CCT_METHODS,
+    CCT_TO_XY_METHODS,
     ROBERTSON_1968,
+    XY_TO_CCT_METHODS,
     cct_to_xy,
     uv1960_to_xy,
     xy_to_cct,
@@ -176,6 +178,7 @@ from imageform.color.transfer import (
     srgb_to_linear,
 )
 from imageform.color.white_balance import (
+    WHITE_BALANCE_ALIASES,
     WHITE_BALANCE_METHODS,
     WhiteBalanceResult,
     estimate_illuminant,
@@ -200,7 +203,7 @@ from imageform.color.ycbcr import (
 __all__ = [
     "ADOBE_RGB_GAMMA",
     "CAT_MATRICES",
-    "CCT_METHODS",
+    "CCT_TO_XY_METHODS",
     "CHROMATICITY_COORDS",
     "CHROMA_SCHEMES",
     "CHROMA_SITINGS",
@@ -220,7 +223,9 @@ __all__ = [
     "SPACES",
     "TRANSFER_FUNCTIONS",
     "WHITEPOINTS_XY",
+    "WHITE_BALANCE_ALIASES",
     "WHITE_BALANCE_METHODS",
+    "XY_TO_CCT_METHODS",
     "YCBCR_STANDARDS",
     "BrettelPlanes",
     "GamutFigures",
@@ -345,3 +350,7 @@ __all__ = [
     "ycbcr_to_rgb",
     "ycbcr_to_srgb",
 ]
+
+__getattr__ = _deprecate.module_getattr(
+    "imageform.color", {"CCT_METHODS": ("CCT_TO_XY_METHODS", CCT_TO_XY_METHODS)}
+)

@@ -71,7 +71,7 @@ def dispatch(
         res, stats = color_simple.srgb_to_hsv(image, out)
     else:
         _, kr, kb = ycbcr._coeffs(p.get("standard", "bt601"))
-        yg, yo, cg, co = ycbcr._scale(p.get("signal_range", "full"), p.get("bits"))
+        yg, yo, cg, co = ycbcr._scale(p.get("signal_range", "full"), p.get("bit_depth"))
         kg = 1.0 - kr - kb
         a = np.array(
             [

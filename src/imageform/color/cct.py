@@ -15,10 +15,13 @@ ANSI C78.377. McCamy (1992), Hernández-Andrés (1999) and Ohno (2013) are in
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
+from types import MappingProxyType
 from typing import Any
 
 import numpy as np
 
+from imageform import _deprecate
 from imageform._backend import device_of, is_dask_namespace, namespace, to_numpy
 from imageform._colormath import DAYLIGHT_HIGH as _DAYLIGHT_HIGH
 from imageform._colormath import DAYLIGHT_LOW as _DAYLIGHT_LOW
@@ -30,7 +33,6 @@ from imageform._dask import chunkwise
 from imageform._validate import as_int
 from imageform.color._guard import as_float, as_points, check_option
 from imageform.color.cct_methods import (
-    XY_TO_CCT_METHODS,
     uv_to_cct_ohno2013,
     xy_to_cct_hernandez1999,
     xy_to_cct_mccamy1992,
@@ -38,16 +40,15 @@ from imageform.color.cct_methods import (
 from imageform.errors import InvalidInputError
 
 __all__ = [
-    "CCT_METHODS",
+    "CCT_TO_XY_METHODS",
     "ROBERTSON_1968",
+    "XY_TO_CCT_METHODS",
     "cct_to_xy",
     "uv1960_to_xy",
     "xy_to_cct",
     "xy_to_uv1960",
 ]
 
-#: Methods of :func:`xy_to_cct` and :func:`cct_to_xy`.
-CCT_METHODS = ("robertson1968", "daylight")
 # How far (in x) beyond an end of the daylight locus xy_to_cct(method="daylight") still takes
 # a chromaticity, as that end: rounding (one ulp is 5.6e-17 at x = 0.38), not a colour.
 DAYLIGHT_X_TOLERANCE = 1e-9
@@ -264,7 +265,7 @@ def cct_to_xy(cct: object, duv: object = 0.0, *, method: str = "robertson1968") 
     >>> [round(float(c), 4) for c in cct_to_xy(6500 * 1.4388 / 1.4380, method="daylight")]
     [0.3127, 0.3291]
     """
-    m = check_option(method, CCT_METHODS, "CCT method")
+    m = check_option(method, CCT_TO_XY_METHODS, "CCT method")
     xp = namespace(cct, duv)
     T = as_float(cct, "cct", xp=xp)
     D = as_float(duv, "duv", xp=xp, dtype=T.dtype)
@@ -277,13 +278,27 @@ def cct_to_xy(cct: object, duv: object = 0.0, *, method: str = "robertson1968") 
             f"expected cct and duv of broadcastable shapes, got {tuple(T.shape)} and "
             f"{tuple(D.shape)}"
         ) from None
-    if m == "daylight":
-        if bool(xp.any(D != 0)):
-            raise InvalidInputError("the daylight method takes no duv (the locus is a curve)")
-        _check_cct_range(xp, T, *_DAYLIGHT_RANGE, "daylight")
-        return _daylight_xy(xp, T)
+    return CCT_TO_XY_METHODS[m](xp, T, D)
+
+
+def _cct_to_xy_daylight(xp: Any, T: Any, D: Any) -> Any:
+    if bool(xp.any(D != 0)):
+        raise InvalidInputError("the daylight method takes no duv (the locus is a curve)")
+    _check_cct_range(xp, T, *_DAYLIGHT_RANGE, "daylight")
+    return _daylight_xy(xp, T)
+
+
+def _cct_to_xy_robertson(xp: Any, T: Any, D: Any) -> Any:
     _check_cct_range(xp, T, _ROBERTSON_MIN_CCT, math.inf, "robertson1968")
     return _robertson_forward(xp, T, D)
+
+
+#: The methods of :func:`cct_to_xy`, each name mapped to its implementation
+#: ``f(xp, cct, duv) -> xy`` (read-only): the Planckian locus (Robertson 1968) and the CIE
+#: daylight locus.
+CCT_TO_XY_METHODS: MappingProxyType[str, Callable[[Any, Any, Any], Any]] = MappingProxyType(
+    {"robertson1968": _cct_to_xy_robertson, "daylight": _cct_to_xy_daylight}
+)
 
 
 def xy_to_cct(xy: object, *, method: str = "robertson1968", iterations: int = 20) -> Any:
@@ -331,18 +346,36 @@ def xy_to_cct(xy: object, *, method: str = "robertson1968", iterations: int = 20
     >>> round(float(xy_to_cct([0.31271, 0.32902])[0]))
     6503
     """
-    m = check_option(method, (*CCT_METHODS, *XY_TO_CCT_METHODS), "CCT method")
+    m = check_option(method, XY_TO_CCT_METHODS, "CCT method")
     n_iter = as_int(iterations, "iterations", minimum=1, maximum=1000)
     xp = namespace(xy)
     a = as_points(xy, "xy", 2, xp=xp)
-    if m == "ohno2013":  # CCT and Duv from the Planckian locus of the 1931 CMFs
-        return uv_to_cct_ohno2013(xy_to_uv1960(np.asarray(to_numpy(a), dtype=np.float64)))
-    cct, duv = _robertson_inverse(xp, a)
-    if m in XY_TO_CCT_METHODS:  # closed-form CCT (NumPy), Robertson's Duv
-        fit = xy_to_cct_mccamy1992 if m == "mccamy1992" else xy_to_cct_hernandez1999
+    return XY_TO_CCT_METHODS[m](xp, a, n_iter)
+
+
+def _xy_to_cct_robertson(xp: Any, a: Any, n_iter: int) -> tuple[Any, Any]:
+    return _robertson_inverse(xp, a)
+
+
+def _xy_to_cct_ohno(xp: Any, a: Any, n_iter: int) -> tuple[Any, Any]:
+    # CCT and Duv from the Planckian locus of the 1931 CMFs (NumPy)
+    cct, duv = uv_to_cct_ohno2013(xy_to_uv1960(np.asarray(to_numpy(a), dtype=np.float64)))
+    return cct, duv
+
+
+def _closed_form(fit: Callable[[Any], Any]) -> Callable[[Any, Any, int], tuple[Any, Any]]:
+    """Make a closed-form CCT fit (NumPy) a method, with Robertson's Duv."""
+
+    def method(xp: Any, a: Any, n_iter: int) -> tuple[Any, Any]:
+        _, duv = _robertson_inverse(xp, a)
         return fit(np.asarray(to_numpy(a), dtype=np.float64)), duv
-    if m == "robertson1968":
-        return cct, duv
+
+    method.__name__ = method.__qualname__ = f"_closed_form_{fit.__name__}"
+    return method
+
+
+def _xy_to_cct_daylight(xp: Any, a: Any, n_iter: int) -> tuple[Any, Any]:
+    cct, duv = _robertson_inverse(xp, a)
     x = a[..., 0]
     lo_x = float(_daylight_x(np, np.asarray(_DAYLIGHT_RANGE[1])))
     hi_x = float(_daylight_x(np, np.asarray(_DAYLIGHT_RANGE[0])))
@@ -365,3 +398,23 @@ def xy_to_cct(xy: object, *, method: str = "robertson1968", iterations: int = 20
         s = s - (_daylight_x(xp, T) - x) / dx_ds
         T = 1.0 / s
     return T, duv
+
+
+#: The methods of :func:`xy_to_cct`, each name mapped to its implementation
+#: ``f(xp, xy, iterations) -> (cct, duv)`` (read-only): Robertson (1968), the inverse of the
+#: CIE daylight locus, and the three of :mod:`imageform.color.cct_methods`.
+XY_TO_CCT_METHODS: MappingProxyType[str, Callable[[Any, Any, int], tuple[Any, Any]]] = (
+    MappingProxyType(
+        {
+            "robertson1968": _xy_to_cct_robertson,
+            "daylight": _xy_to_cct_daylight,
+            "mccamy1992": _closed_form(xy_to_cct_mccamy1992),
+            "hernandez1999": _closed_form(xy_to_cct_hernandez1999),
+            "ohno2013": _xy_to_cct_ohno,
+        }
+    )
+)
+
+__getattr__ = _deprecate.module_getattr(
+    "imageform.color.cct", {"CCT_METHODS": ("CCT_TO_XY_METHODS", CCT_TO_XY_METHODS)}
+)

@@ -16,13 +16,13 @@ from typing import Any
 
 import numpy as np
 
+from imageform import _deprecate
 from imageform._validate import as_points, as_real, as_real_ndarray
 from imageform.color._guard import check_magnitude
 from imageform.errors import InvalidInputError
 
 __all__ = [
     "OHNO2013_RANGE",
-    "XY_TO_CCT_METHODS",
     "cct_to_uv_ohno2013",
     "planckian_uv",
     "uv_to_cct_ohno2013",
@@ -30,8 +30,17 @@ __all__ = [
     "xy_to_cct_mccamy1992",
 ]
 
-#: The methods this module adds to :func:`imageform.color.xy_to_cct`.
-XY_TO_CCT_METHODS = ("mccamy1992", "hernandez1999", "ohno2013")
+# Its methods are in :data:`imageform.color.XY_TO_CCT_METHODS`, the one registry of
+# :func:`imageform.color.xy_to_cct`; this module's tuple of three names is deprecated.
+__getattr__ = _deprecate.module_getattr(
+    "imageform.color.cct_methods",
+    {
+        "XY_TO_CCT_METHODS": (
+            "imageform.color.XY_TO_CCT_METHODS (all five methods)",
+            _deprecate.Lazy("imageform.color.cct", "XY_TO_CCT_METHODS"),
+        )
+    },
+)
 
 #: CCT range (K) of the Planckian table of :func:`uv_to_cct_ohno2013`.
 OHNO2013_RANGE = (1000.0, 100000.0)

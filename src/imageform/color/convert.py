@@ -17,7 +17,7 @@ the path uses is an error):
 - ``white`` (lab, lch, luv, xyy): reference white, default the white of the RGB space on
   the path (so RGB white maps to L* = 100, a* = b* = 0), else CIE D65.
 - ``observer`` (2 or 10) for a named ``white``.
-- ``standard``, ``signal_range``, ``bits`` (ycbcr): see :mod:`imageform.color.ycbcr`
+- ``standard``, ``signal_range``, ``bit_depth`` (ycbcr): see :mod:`imageform.color.ycbcr`
   (``range`` is the deprecated name of ``signal_range``).
 - ``method`` (gray): ``"rec601"`` luma or ``"rec709"`` luminance.
 - ``alpha``: ``"reject"`` (default) or ``"keep"`` — an extra last channel is carried through
@@ -129,10 +129,10 @@ def _rgb_edges(key: str) -> list[Edge]:
 
 def _ycc(p: dict[str, Any]) -> tuple[float, float, tuple[float, ...]]:
     _, kr, kb = ycbcr._coeffs(p.get("standard", "bt601"))
-    return kr, kb, ycbcr._scale(p.get("signal_range", "full"), p.get("bits"))
+    return kr, kb, ycbcr._scale(p.get("signal_range", "full"), p.get("bit_depth"))
 
 
-_YP = ("standard", "signal_range", "bits")
+_YP = ("standard", "signal_range", "bit_depth")
 _WP = ("white", "observer")
 
 #: Every conversion step of the graph (a tuple: the graph is fixed).
@@ -321,7 +321,7 @@ def convert(
         ``"uint8"``: OpenCV's 8-bit encoding of ``dst`` ``"lab"`` or ``"hsv"`` (module
         docstring). Default: the float result.
     **params
-        ``white``, ``observer``, ``standard``, ``signal_range``, ``bits``, ``method``,
+        ``white``, ``observer``, ``standard``, ``signal_range``, ``bit_depth``, ``method``,
         ``alpha`` (see the module docstring); only those the path uses are accepted.
 
     Returns
@@ -344,6 +344,11 @@ def convert(
             raise TypeError("convert() got both range= (deprecated) and signal_range=")
         _deprecate.warn("imageform.color.convert(range=...)", "use signal_range= instead")
         params["signal_range"] = params.pop("range")
+    if "bits" in params:
+        if "bit_depth" in params:
+            raise TypeError("convert() got both bits= (deprecated) and bit_depth=")
+        _deprecate.warn("imageform.color.convert(bits=...)", "use bit_depth= instead")
+        params["bit_depth"] = params.pop("bits")
     s, d = _space(src, "src"), _space(dst, "dst")
     route = path(s, d)
     allowed = {p for e in route for p in e.params} | set(_GLOBAL_PARAMS)

@@ -11,6 +11,8 @@ noticeable, above 10 obviously different colours.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
+from types import MappingProxyType
 from typing import Any
 
 import numpy as np
@@ -31,8 +33,6 @@ __all__ = [
     "describe_delta_e",
 ]
 
-#: Names accepted by :func:`delta_e`'s ``method``.
-DELTA_E_METHODS = ("cie76", "cie94", "ciede2000", "cmc")
 
 # CIE 116-1995, Table 1: the parametric factors of the two reference applications.
 _CIE94_APPLICATIONS = {
@@ -349,13 +349,13 @@ def delta_e(
     for value, name in ((kC, "kC"), (kH, "kH"), (l, "l"), (c, "c")):
         check_positive(value, name)
     check_option(application, _CIE94_APPLICATIONS, "CIE94 application")
-    if m == "cie76":
-        return delta_e_cie76(lab1, lab2)
-    if m == "cie94":
-        return delta_e_cie94(lab1, lab2, application=application, kL=kL, kC=kC, kH=kH)
-    if m == "cmc":
-        return delta_e_cmc(lab1, lab2, l=l, c=c)
-    return delta_e_ciede2000(lab1, lab2, kL=1.0 if kL is None else kL, kC=kC, kH=kH)
+    kw: dict[str, dict[str, Any]] = {
+        "cie76": {},
+        "cie94": {"application": application, "kL": kL, "kC": kC, "kH": kH},
+        "cmc": {"l": l, "c": c},
+        "ciede2000": {"kL": 1.0 if kL is None else kL, "kC": kC, "kH": kH},
+    }
+    return DELTA_E_METHODS[m](lab1, lab2, **kw[m])
 
 
 def describe_delta_e(value: float) -> str:
@@ -378,3 +378,14 @@ def describe_delta_e(value: float) -> str:
     if v <= 10.0:
         return "perceptible"
     return "obviously different"
+
+
+#: The methods of :func:`delta_e`, each name mapped to its function (read-only).
+DELTA_E_METHODS: MappingProxyType[str, Callable[..., Any]] = MappingProxyType(
+    {
+        "cie76": delta_e_cie76,
+        "cie94": delta_e_cie94,
+        "ciede2000": delta_e_ciede2000,
+        "cmc": delta_e_cmc,
+    }
+)

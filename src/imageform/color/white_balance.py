@@ -34,6 +34,8 @@ the image is decoded, scaled and re-encoded chunk-wise, and nothing is computed 
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
+from types import MappingProxyType
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -53,6 +55,7 @@ from imageform.color.whitepoints import resolve_white, xy_to_xyz_white
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
 
 __all__ = [
+    "WHITE_BALANCE_ALIASES",
     "WHITE_BALANCE_METHODS",
     "WhiteBalanceResult",
     "apply_white_balance_gains",
@@ -61,19 +64,22 @@ __all__ = [
     "white_balance_gains",
 ]
 
-#: Methods of :func:`white_balance` and :func:`estimate_illuminant`.
-WHITE_BALANCE_METHODS = ("gray_world", "white_patch", "shades_of_gray", "gray_edge", "manual")
 #: Largest Minkowski norm ``p``: beyond it ``x**p`` underflows to 0 for most pixels < 1 and
 #: the estimate is the maximum anyway (``p = inf`` is the ``max_rgb`` method).
 MAX_MINKOWSKI_P = 1e4
 #: Largest ``sigma`` (pixels) of the grey-edge derivative filter (bounds the kernel size).
 MAX_SIGMA = 1000.0
-_ALIASES = {
-    "grey_world": "gray_world",
-    "max_rgb": "white_patch",
-    "shades_of_grey": "shades_of_gray",
-    "grey_edge": "gray_edge",
-}
+#: Other spellings of :data:`WHITE_BALANCE_METHODS` (British, and ``max_rgb``: a white
+#: patch at the 100th percentile), each mapped to its method (read-only).
+WHITE_BALANCE_ALIASES: MappingProxyType[str, str] = MappingProxyType(
+    {
+        "grey_world": "gray_world",
+        "max_rgb": "white_patch",
+        "shades_of_grey": "shades_of_gray",
+        "grey_edge": "gray_edge",
+    }
+)
+_ALIASES = WHITE_BALANCE_ALIASES
 
 
 class _WhiteBalanceResult(NamedTuple):
@@ -335,17 +341,55 @@ def _estimate(
     cct: float | None,
     space: str,
 ) -> Any:
-    if m == "gray_world":
-        return _pixel_mean(xp, lin)
-    if m == "white_patch":
-        return _percentile(xp, lin, float(percentile))
-    if m == "shades_of_gray":
-        return _minkowski(xp, lin, float(p))
-    if m == "gray_edge":
-        if lin.shape[-3] < 3 or lin.shape[-2] < 3:
-            raise InvalidInputError("gray_edge needs an image of at least 3 x 3 pixels")
-        return _gray_edge(xp, lin, float(p), float(sigma))
+    return WHITE_BALANCE_METHODS[m](
+        xp,
+        lin,
+        percentile=percentile,
+        p=p,
+        sigma=sigma,
+        illuminant=illuminant,
+        cct=cct,
+        space=space,
+    )
+
+
+def _est_gray_world(xp: Any, lin: Any, **_: Any) -> Any:
+    return _pixel_mean(xp, lin)
+
+
+def _est_white_patch(xp: Any, lin: Any, *, percentile: float, **_: Any) -> Any:
+    return _percentile(xp, lin, float(percentile))
+
+
+def _est_shades_of_gray(xp: Any, lin: Any, *, p: float, **_: Any) -> Any:
+    return _minkowski(xp, lin, float(p))
+
+
+def _est_gray_edge(xp: Any, lin: Any, *, p: float, sigma: float, **_: Any) -> Any:
+    if lin.shape[-3] < 3 or lin.shape[-2] < 3:
+        raise InvalidInputError("gray_edge needs an image of at least 3 x 3 pixels")
+    return _gray_edge(xp, lin, float(p), float(sigma))
+
+
+def _est_manual(
+    xp: Any, lin: Any, *, illuminant: Any, cct: float | None, space: str, **_: Any
+) -> Any:
     return _manual(xp, lin, illuminant, cct, space)
+
+
+#: The methods of :func:`white_balance` and :func:`estimate_illuminant`, each name mapped to
+#: its illuminant estimator ``f(xp, linear_image, *, percentile, p, sigma, illuminant, cct,
+#: space) -> (..., 3)`` (read-only). ``"grey_world"``, ``"max_rgb"``, ``"shades_of_grey"``
+#: and ``"grey_edge"`` are accepted as aliases (:data:`WHITE_BALANCE_ALIASES`).
+WHITE_BALANCE_METHODS: MappingProxyType[str, Callable[..., Any]] = MappingProxyType(
+    {
+        "gray_world": _est_gray_world,
+        "white_patch": _est_white_patch,
+        "shades_of_gray": _est_shades_of_gray,
+        "gray_edge": _est_gray_edge,
+        "manual": _est_manual,
+    }
+)
 
 
 def white_balance(

@@ -10,12 +10,12 @@ coefficients Kr, Kb are those each standard writes; Kg = 1 - Kr - Kb:
 
 ``signal_range`` chooses the output scale:
 
-- ``"full"`` with ``bits=None`` (default): the analog values, E'Y in [0, 1], E'Cb and E'Cr in
+- ``"full"`` with ``bit_depth=None`` (default): the analog values, E'Y in [0, 1], E'Cb and E'Cr in
   [-0.5, 0.5].
-- ``"full"`` with ``bits=n``: full-range code values, :math:`D_Y = (2^n - 1) E'_Y`,
+- ``"full"`` with ``bit_depth=n``: full-range code values, :math:`D_Y = (2^n - 1) E'_Y`,
   :math:`D_C = (2^n - 1) E'_C + 2^{n-1}` (ITU-T H.273, eq. for VideoFullRangeFlag = 1;
   JPEG/JFIF uses n = 8 with BT.601 weights).
-- ``"limited"`` (``bits`` 8 unless given): studio range,
+- ``"limited"`` (``bit_depth`` 8 unless given): studio range,
   :math:`D_Y = (219 E'_Y + 16) 2^{n-8}`, :math:`D_C = (224 E'_C + 128) 2^{n-8}`
   (BT.601-7 item 2.5.3, BT.709-6 item 4.6, BT.2020-2 Table 5).
 
@@ -77,7 +77,7 @@ def _scale(signal_range: str, bits: int | None) -> tuple[float, float, float, fl
         or not isinstance(bits, int | np.integer)
         or bits not in (8, 10, 12)
     ):
-        raise InvalidInputError(f"expected bits 8, 10 or 12 (or None), got {describe(bits)}")
+        raise InvalidInputError(f"expected bit_depth 8, 10 or 12 (or None), got {describe(bits)}")
     if rng == "full":
         if bits is None:
             return 1.0, 0.0, 1.0, 0.0
@@ -95,7 +95,7 @@ def _check_codes(values: object, signal_range: str, bits: int | None) -> None:
         return
     if bits is None and signal_range == "full":
         raise InvalidInputError(
-            f"integer ycbcr ({dt}) are code values: pass bits=8 or bits=10 (or floats)"
+            f"integer ycbcr ({dt}) are code values: pass bit_depth=8 or bit_depth=10 (or floats)"
         )
     n = 8 if bits is None else bits
     xp = namespace(values)
@@ -127,14 +127,14 @@ def _ycbcr_to_rgb(xp: Any, ycc: Any, kr: float, kb: float, sc: tuple[float, ...]
     return xp.stack([r, g, b], axis=-1)
 
 
-@_deprecate.parameters(renamed={"range": "signal_range"})
+@_deprecate.parameters(renamed={"range": "signal_range", "bits": "bit_depth"})
 @chunkwise(1)
 def rgb_to_ycbcr(
     image: object,
     standard: str = "bt601",
     *,
     signal_range: str = "full",
-    bits: int | None = None,
+    bit_depth: int | None = None,
 ) -> Any:
     """Convert encoded R'G'B' to Y'CbCr (analog or code values), see the module docstring.
 
@@ -146,9 +146,9 @@ def rgb_to_ycbcr(
         Which luma coefficients (ITU-R BT.601, BT.709 or BT.2020).
     signal_range : {"full", "limited"}
         Full-range or limited ("studio", "narrow") code values; see the module docstring.
-    bits : {None, 8, 10, 12}
-        Code values of this bit depth; None: analog values (``"full"``) or 8-bit codes
-        (``"limited"``).
+    bit_depth : {None, 8, 10, 12}
+        Code values of this bit depth (bits per sample; ``bits`` is its deprecated name);
+        None: analog values (``"full"``) or 8-bit codes (``"limited"``).
 
     Returns
     -------
@@ -162,23 +162,24 @@ def rgb_to_ycbcr(
 
     Examples
     --------
-    >>> rgb_to_ycbcr([1.0, 0.0, 0.0], "bt709", signal_range="limited", bits=8).round(2).tolist()
+    >>> ycc = rgb_to_ycbcr([1.0, 0.0, 0.0], "bt709", signal_range="limited", bit_depth=8)
+    >>> ycc.round(2).tolist()
     [62.56, 102.34, 240.0]
     """
     _, kr, kb = _coeffs(standard)
-    sc = _scale(signal_range, bits)
+    sc = _scale(signal_range, bit_depth)
     x = as_image(image, "R'G'B' image")
     return _rgb_to_ycbcr(namespace(x), x, kr, kb, sc)
 
 
-@_deprecate.parameters(renamed={"range": "signal_range"})
+@_deprecate.parameters(renamed={"range": "signal_range", "bits": "bit_depth"})
 @chunkwise(1)
 def ycbcr_to_rgb(
     ycbcr: object,
     standard: str = "bt601",
     *,
     signal_range: str = "full",
-    bits: int | None = None,
+    bit_depth: int | None = None,
 ) -> Any:
     """Y'CbCr (analog or code values) to encoded R'G'B'; inverse of :func:`rgb_to_ycbcr`.
 
@@ -192,8 +193,8 @@ def ycbcr_to_rgb(
     [1.0, 1.0, 1.0]
     """
     _, kr, kb = _coeffs(standard)
-    sc = _scale(signal_range, bits)
-    _check_codes(ycbcr, signal_range, bits)
+    sc = _scale(signal_range, bit_depth)
+    _check_codes(ycbcr, signal_range, bit_depth)
     x = as_float(ycbcr, "ycbcr", integer="float32")
     if x.ndim < 1 or x.shape[-1] != 3:
         raise InvalidInputError(
@@ -202,14 +203,14 @@ def ycbcr_to_rgb(
     return _ycbcr_to_rgb(namespace(x), x, kr, kb, sc)
 
 
-@_deprecate.parameters(renamed={"range": "signal_range"})
+@_deprecate.parameters(renamed={"range": "signal_range", "bits": "bit_depth"})
 @chunkwise(1)
 def srgb_to_ycbcr(
     image: object,
     standard: str = "bt601",
     *,
     signal_range: str = "full",
-    bits: int | None = None,
+    bit_depth: int | None = None,
 ) -> Any:
     """sRGB-encoded values to Y'CbCr: :func:`rgb_to_ycbcr` applied to the sRGB values.
 
@@ -218,20 +219,20 @@ def srgb_to_ycbcr(
 
     Examples
     --------
-    >>> srgb_to_ycbcr([1.0, 1.0, 1.0], bits=8).round(6).tolist()
+    >>> srgb_to_ycbcr([1.0, 1.0, 1.0], bit_depth=8).round(6).tolist()
     [255.0, 128.0, 128.0]
     """
-    return rgb_to_ycbcr(image, standard, signal_range=signal_range, bits=bits)
+    return rgb_to_ycbcr(image, standard, signal_range=signal_range, bit_depth=bit_depth)
 
 
-@_deprecate.parameters(renamed={"range": "signal_range"})
+@_deprecate.parameters(renamed={"range": "signal_range", "bits": "bit_depth"})
 @chunkwise(1)
 def ycbcr_to_srgb(
     ycbcr: object,
     standard: str = "bt601",
     *,
     signal_range: str = "full",
-    bits: int | None = None,
+    bit_depth: int | None = None,
 ) -> Any:
     """Y'CbCr to sRGB-encoded values; inverse of :func:`srgb_to_ycbcr`.
 
@@ -240,4 +241,4 @@ def ycbcr_to_srgb(
     >>> ycbcr_to_srgb([0.5, 0.0, 0.0]).round(6).tolist()
     [0.5, 0.5, 0.5]
     """
-    return ycbcr_to_rgb(ycbcr, standard, signal_range=signal_range, bits=bits)
+    return ycbcr_to_rgb(ycbcr, standard, signal_range=signal_range, bit_depth=bit_depth)

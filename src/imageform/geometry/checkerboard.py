@@ -46,6 +46,7 @@ import numpy as np
 import numpy.typing as npt
 from numpy.typing import NDArray
 
+from imageform import _deprecate
 from imageform._backend import to_numpy
 from imageform._validate import as_bool, as_int, as_real, describe, format_shape
 from imageform.errors import ImageformWarning, InvalidInputError
@@ -293,6 +294,7 @@ def _area(grid: NDArray[np.float64]) -> float:
     return 0.5 * abs(float(x @ np.roll(y, -1) - y @ np.roll(x, -1)))
 
 
+@_deprecate.parameters(renamed={"eps": "tol"})
 def find_checkerboard(
     image: npt.ArrayLike,
     pattern_size: tuple[int, int],
@@ -301,7 +303,7 @@ def find_checkerboard(
     sigma: float | None = None,
     half_window: int | None = None,
     max_iter: int = 30,
-    eps: float = 1e-3,
+    tol: float = 1e-3,
 ) -> CheckerboardResult:
     r"""Find the inner corners of a ``cols x rows`` checkerboard, sub-pixel refined.
 
@@ -332,8 +334,10 @@ def find_checkerboard(
         Half size of the refinement window (OpenCV's ``winSize``); by default
         ``min(11, max(2, floor(0.4 * shortest grid step)))`` so that the window never
         reaches the neighbouring corners.
-    max_iter, eps : int, float
-        Refinement stopping rule (OpenCV's ``TermCriteria(EPS + COUNT, 30, 0.001)``).
+    max_iter, tol : int, float
+        Refinement stopping rule: at most ``max_iter`` iterations, or a step of at most
+        ``tol`` pixels (OpenCV's ``TermCriteria(EPS + COUNT, 30, 0.001)``; ``eps`` is the
+        deprecated name of ``tol``).
 
     Returns
     -------
@@ -374,7 +378,7 @@ def find_checkerboard(
     if half_window is not None:
         half_window = as_int(half_window, "half_window", minimum=1, maximum=MAX_HALF_WINDOW)
     max_iter = as_int(max_iter, "max_iter", minimum=1, maximum=10**6)
-    eps = as_real(eps, "eps", nonnegative=True)
+    tol = as_real(tol, "tol", nonnegative=True)
     size = (cols, rows)
     if span == 0.0:
         return CheckerboardResult(False, None, "the image is constant (no contrast)", size)
@@ -384,7 +388,7 @@ def find_checkerboard(
     for s in sigmas:
         grid, why, n = _detect(gray, cols, rows, s)
         if grid is not None:
-            return _finish(gray.float, grid, size, s, refine, half_window, max_iter, eps)
+            return _finish(gray.float, grid, size, s, refine, half_window, max_iter, tol)
         if n > best:
             reason, best = why, n
     return CheckerboardResult(False, None, reason, size)
@@ -398,7 +402,7 @@ def _finish(
     refine: bool,
     half_window: int | None,
     max_iter: int,
-    eps: float,
+    tol: float,
 ) -> CheckerboardResult:
     pts = grid.reshape(-1, 2)
     if not refine:
@@ -409,7 +413,7 @@ def _finish(
             float(np.linalg.norm(np.diff(grid, axis=1), axis=-1).min()),
         )
         half_window = min(11, max(2, math.floor(0.4 * step)))
-    refined, status = refine_clean(gray, pts, half_window, half_window, max_iter, eps)
+    refined, status = refine_clean(gray, pts, half_window, half_window, max_iter, tol)
     problem = lattice_problem(refined.reshape(grid.shape))
     if problem is not None:
         return CheckerboardResult(False, None, f"refined grid rejected: {problem}", size)

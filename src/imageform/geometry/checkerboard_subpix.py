@@ -11,6 +11,7 @@ import numpy as np
 import numpy.typing as npt
 from numpy.typing import NDArray
 
+from imageform import _deprecate
 from imageform._backend import to_numpy, use_numba
 from imageform._validate import as_image, as_int, as_real, format_shape
 from imageform.errors import InvalidInputError
@@ -97,13 +98,14 @@ def gray_from_codes(codes: NDArray[np.number], scale: float) -> NDArray[np.float
     return gray
 
 
+@_deprecate.parameters(renamed={"eps": "tol"})
 def refine_corners(
     image: npt.ArrayLike,
     corners: npt.ArrayLike,
     *,
     half_window: int | tuple[int, int] = 11,
     max_iter: int = 30,
-    eps: float = 1e-3,
+    tol: float = 1e-3,
 ) -> RefinedCorners:
     r"""Sub-pixel corner positions by gradient orthogonality (OpenCV's ``cornerSubPix``).
 
@@ -116,7 +118,7 @@ def refine_corners(
         \qquad w_p = e^{-(x_p/h_x)^2} e^{-(y_p/h_y)^2}
 
     with central-difference gradients, window offsets ``x_p ∈ [-h_x, h_x]``; it stops after
-    ``max_iter`` iterations or when a step is ``<= eps`` pixels. A corner that ends more than
+    ``max_iter`` iterations or when a step is ``<= tol`` pixels. A corner that ends more than
     the half window away from its start keeps its start (status 4), as in OpenCV.
 
     Parameters
@@ -128,8 +130,11 @@ def refine_corners(
     half_window : int or (int, int)
         ``h`` or ``(h_x, h_y)``: the window is ``(2 h_y + 1) x (2 h_x + 1)`` pixels; OpenCV's
         ``winSize``. Must be smaller than half the square size of the board.
-    max_iter, eps : int, float
-        OpenCV's ``TermCriteria(EPS + COUNT, max_iter, eps)``.
+    max_iter : int
+        Most iterations per corner.
+    tol : float
+        Stop when a step is at most ``tol`` pixels (``eps`` is its deprecated name); with
+        ``max_iter``, OpenCV's ``TermCriteria(EPS + COUNT, max_iter, tol)``.
 
     Returns
     -------
@@ -173,22 +178,26 @@ def refine_corners(
         if max(hx, hy) > MAX_HALF_WINDOW:
             raise InvalidInputError(f"expected half_window <= {MAX_HALF_WINDOW}, got {(hx, hy)}")
     max_iter = as_int(max_iter, "max_iter", minimum=1, maximum=10**6)
-    eps = as_real(eps, "eps", nonnegative=True)
-    return RefinedCorners(*refine(gray, pts, int(hx), int(hy), max_iter, float(eps)))
+    tol = as_real(tol, "tol", nonnegative=True)
+    return RefinedCorners(*refine(gray, pts, int(hx), int(hy), max_iter, float(tol)))
 
 
+@_deprecate.parameters(renamed={"eps": "tol"})
 def refine(
     gray: NDArray[np.floating],
     pts: NDArray[np.float64],
     hx: int,
     hy: int,
     max_iter: int,
-    eps: float,
+    tol: float,
 ) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
-    """:func:`refine_corners` on clean input (kernel or twin by :func:`use_numba`)."""
+    """:func:`refine_corners` on clean input (kernel or twin by :func:`use_numba`).
+
+    ``tol`` (pixels; ``eps`` is its deprecated name) and ``max_iter`` are the stopping rule.
+    """
     if pts.shape[0] == 0:
         return pts.copy(), np.zeros(0, dtype=np.int64)
     from imageform._kernels.checkerboard import refine_corners_numba, refine_corners_numpy
 
     kernel = refine_corners_numba if use_numba(gray) else refine_corners_numpy
-    return kernel(np.ascontiguousarray(gray), np.ascontiguousarray(pts), hx, hy, max_iter, eps)
+    return kernel(np.ascontiguousarray(gray), np.ascontiguousarray(pts), hx, hy, max_iter, tol)

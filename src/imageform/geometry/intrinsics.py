@@ -105,7 +105,7 @@ class Intrinsics:
     Examples
     --------
     >>> cam = Intrinsics.from_physical(
-    ...     focal_length=50.0, pixel_pitch_um=5.0, image_size=(6000, 4000)
+    ...     focal_length_mm=50.0, pixel_pitch_um=5.0, image_size=(6000, 4000)
     ... )
     >>> cam.fx, cam.cx, cam.cy
     (10000.0, 2999.5, 1999.5)
@@ -150,27 +150,29 @@ class Intrinsics:
 
     @classmethod
     @_deprecate.parameters(
-        renamed={"focal_length_mm": "focal_length"},
-        positional=("focal_length", "pixel_pitch_um", "image_size", "principal_point"),
+        renamed={"focal_length": "focal_length_mm"},
+        positional=("focal_length_mm", "pixel_pitch_um", "image_size", "principal_point"),
     )
     def from_physical(
         cls,
         *,
-        focal_length: float,
+        focal_length_mm: float,
         pixel_pitch_um: float | tuple[float, float],
         image_size: tuple[int, int],
         principal_point: tuple[float, float] | None = None,
     ) -> Intrinsics:
         """From a lens focal length (mm) and a sensor pixel pitch (µm): ``fx = f / pitch``.
 
-        ``focal_length`` is in **millimetres**, ``pixel_pitch_um`` in micrometres (one value,
-        or ``(x, y)``); every parameter is keyword-only.
+        ``focal_length_mm`` is in **millimetres** (``focal_length`` is its deprecated name:
+        a bare ``focal_length`` is in metres in imageform, docs/conventions.md),
+        ``pixel_pitch_um`` in micrometres (one value, or ``(x, y)``); every parameter is
+        keyword-only.
 
         The principal point defaults to the image centre ``((w - 1) / 2, (h - 1) / 2)``
         (pixel-centre convention). The lecture: f = 50 mm at 5 µm pitch is 10 000 px, so
         a 15 mm image is 3000 px.
         """
-        f = check_positive(focal_length, "focal_length (mm)")
+        f = check_positive(focal_length_mm, "focal_length_mm")
         px, py = real_pair(pixel_pitch_um, "pixel_pitch_um", positive=True, scalar_ok=True)
         w, h = check_image_size(image_size)
         cx, cy = (
@@ -181,31 +183,32 @@ class Intrinsics:
         fx, fy = f * 1000.0 / px, f * 1000.0 / py
         if max(fx, fy) > MAX_MAGNITUDE:
             raise InvalidInputError(
-                f"expected focal_length / pixel_pitch_um <= {MAX_MAGNITUDE:g} pixels, got "
-                f"{max(fx, fy):g} (focal_length {f:g} mm, pixel_pitch_um ({px:g}, {py:g}))"
+                f"expected focal_length_mm / pixel_pitch_um <= {MAX_MAGNITUDE:g} pixels, got "
+                f"{max(fx, fy):g} (focal_length_mm {f:g}, pixel_pitch_um ({px:g}, {py:g}))"
             )
         return cls(fx, fy, cx, cy, 0.0, (w, h))
 
     @classmethod
     @_deprecate.parameters(
-        renamed={"focal_length_mm": "focal_length"},
-        positional=("focal_length", "sensor_size_mm", "image_size"),
+        renamed={"focal_length": "focal_length_mm"},
+        positional=("focal_length_mm", "sensor_size_mm", "image_size"),
     )
     def from_sensor(
         cls,
         *,
-        focal_length: float,
+        focal_length_mm: float,
         sensor_size_mm: tuple[float, float],
         image_size: tuple[int, int],
     ) -> Intrinsics:
         """From a focal length (mm) and the sensor's active area (width, height) in mm.
 
-        Every parameter is keyword-only.
+        ``focal_length_mm`` in millimetres (``focal_length`` is its deprecated name); every
+        parameter is keyword-only.
         """
         sw, sh = real_pair(sensor_size_mm, "sensor_size_mm (width, height)", positive=True)
         w, h = check_image_size(image_size)
         return cls.from_physical(
-            focal_length=focal_length,
+            focal_length_mm=focal_length_mm,
             pixel_pitch_um=(sw / w * 1000.0, sh / h * 1000.0),
             image_size=(w, h),
         )

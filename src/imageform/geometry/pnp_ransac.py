@@ -30,7 +30,7 @@ __all__ = ["solve_pnp_ransac"]
 BATCH = 64
 
 
-@_deprecate.parameters(renamed={"seed": "rng"})
+@_deprecate.parameters(renamed={"seed": "rng", "max_hypotheses": "max_trials"})
 def solve_pnp_ransac(
     object_points: npt.ArrayLike,
     image_points: npt.ArrayLike,
@@ -39,7 +39,7 @@ def solve_pnp_ransac(
     *,
     threshold: float = 2.0,
     confidence: float = 0.999,
-    max_hypotheses: int = 2000,
+    max_trials: int = 2000,
     rng: RNGLike = 0,
     max_iter: int = 20,
 ) -> PnPResult:
@@ -65,8 +65,8 @@ def solve_pnp_ransac(
         Inlier threshold in pixels.
     confidence : float
         Probability ``p`` of drawing at least one outlier-free sample, in (0, 1).
-    max_hypotheses : int
-        Upper bound on the number of samples.
+    max_trials : int
+        Upper bound on the number of samples (``max_hypotheses`` is its deprecated name).
     rng : int, numpy.random.Generator or None
         The sampler's random source (SPEC 7): an int seeds a new Generator (reproducible
         by default, ``rng=0``), a Generator is used as is, None draws fresh entropy.
@@ -96,7 +96,7 @@ def solve_pnp_ransac(
             f"expected one problem of shape (N, 3), (N, 2), got object_points {X.shape}; "
             "call solve_pnp_ransac per problem"
         )
-    max_hypotheses = as_int(max_hypotheses, "max_hypotheses", minimum=1, maximum=10**8)
+    max_trials = as_int(max_trials, "max_trials", minimum=1, maximum=10**8)
     max_iter = as_int(max_iter, "max_iter", minimum=1, maximum=10**6)
     thr = check_positive(threshold, "threshold")
     p = check_positive(confidence, "confidence")
@@ -115,8 +115,8 @@ def solve_pnp_ransac(
     )
     gen = as_rng(check_rng(rng))
     best_count, best_R, best_t = -1, np.eye(3), np.zeros(3)
-    needed, drawn = float(max_hypotheses), 0
-    while drawn < min(needed, max_hypotheses):
+    needed, drawn = float(max_trials), 0
+    while drawn < min(needed, max_trials):
         idx = np.argsort(gen.random((BATCH, N)), axis=1)[:, :s]
         with np.errstate(all="ignore"):
             R, t = linear_pose(X[idx], xy[idx])

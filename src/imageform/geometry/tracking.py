@@ -167,7 +167,12 @@ class BoardTracker:
                 f"expected board as a CharucoBoard or (cols, rows) inner corners, got "
                 f"{describe(board)}"
             )
-        k = np.asarray(K, dtype=np.float64)
+        try:
+            k = np.asarray(K, dtype=np.float64)
+        except (TypeError, ValueError):
+            raise InvalidInputError(
+                f"expected K as a finite (3, 3) matrix, got {describe(K)}"
+            ) from None
         if k.shape != (3, 3) or not np.all(np.isfinite(k)) or k[2, 2] == 0:
             raise InvalidInputError(f"expected K as a finite (3, 3) matrix, got {describe(K)}")
         self.K = k
@@ -285,7 +290,7 @@ class BoardTracker:
             gap = (b.square_length - b.marker_length) / 2 * np.sqrt(2) / b.square_length
             fine = min(fine, int(0.6 * gap * square))
         res2 = refine_corners(
-            crop, np.asarray(res.corners), half_window=max(2, fine), max_iter=40, eps=1e-4
+            crop, np.asarray(res.corners), half_window=max(2, fine), max_iter=40, tol=1e-4
         )
         got = np.asarray(res2.corners, np.float64) + offset
         ok = np.isin(np.asarray(res.status), (0, 1)) & np.isin(np.asarray(res2.status), (0, 1))

@@ -8,12 +8,12 @@ most consistent with three orthogonal scene directions (a "Manhattan world", Cou
 Yuille 1999) → K → the vertical direction (the one closest to the image's y axis) and the
 horizon ``l ~ K⁻ᵀ d_vertical``.
 
-K, by default (``principal_point="centre"``): the principal point at the image centre (or
+K, by default (``principal_point="center"``): the principal point at the image centre (or
 where the caller puts it) and the focal length that makes the set's directions
 ``K⁻¹ vᵢ`` most nearly orthogonal (least squares over the pairs; for two finite points
 ``f² = -(v₁ - p)·(v₂ - p)``, Caprile & Torre 1990); a set whose directions stay more than
 ``orthogonality_tolerance`` from orthogonal is not a Manhattan set and is passed over. With
-``principal_point="orthocentre"``, three finite points give the principal point as their
+``principal_point="orthocenter"``, three finite points give the principal point as their
 triangle's orthocentre (Caprile & Torre), the textbook construction, which on real photographs
 moves far with a weakly supported third point: on OpenCV's 13 checkerboard photographs
 (undistorted, known f = 536 px; ``benchmarks/check_vp_real.py``) the median focal-length
@@ -365,20 +365,27 @@ def _anchor_horizon(line: FloatArray, horizontal: list[FloatArray]) -> FloatArra
 
 
 def _principal_point(value: str | ArrayLike) -> tuple[str, FloatArray | None]:
-    """``("centre" | "orthocentre" | "given", position or None)`` from the argument."""
+    """``("center" | "orthocenter" | "given", position or None)`` from the argument.
+
+    ``"centre"`` and ``"orthocentre"`` are deprecated spellings (a DeprecationWarning).
+    """
     if isinstance(value, str):
-        if value in ("centre", "center"):
-            return "centre", None
-        if value == "orthocentre":
-            return "orthocentre", None
+        if value in ("centre", "orthocentre"):
+            new = value.replace("centre", "center")
+            _deprecate.warn(
+                f"principal_point={value!r}", f"use principal_point={new!r}", stacklevel=5
+            )
+            value = new
+        if value in ("center", "orthocenter"):
+            return value, None
         raise InvalidInputError(
-            f"unknown principal_point {describe(value)}; valid: 'centre', 'orthocentre' or (u, v)"
+            f"unknown principal_point {describe(value)}; valid: 'center', 'orthocenter' or (u, v)"
         )
     try:
         pp = np.asarray(value, dtype=np.float64)
     except (TypeError, ValueError):
         raise InvalidInputError(
-            "expected principal_point 'centre', 'orthocentre' or (u, v), got " + describe(value)
+            "expected principal_point 'center', 'orthocenter' or (u, v), got " + describe(value)
         ) from None
     if pp.shape != (2,) or not np.all(np.isfinite(pp)):
         raise InvalidInputError(
@@ -407,7 +414,7 @@ def _triplet_K(
     return K
 
 
-@_deprecate.parameters(renamed={"seed": "rng"})
+@_deprecate.parameters(renamed={"seed": "rng", "iterations": "max_trials"})
 def detect_vanishing_points(
     image: ArrayLike | None = None,
     *,
@@ -415,10 +422,10 @@ def detect_vanishing_points(
     image_size: tuple[int, int] | None = None,
     angle_threshold: float = math.radians(2.0),
     n_candidates: int = 6,
-    iterations: int = 600,
+    max_trials: int = 600,
     infinity_factor: float = 20.0,
     rng: RNGLike = 0,
-    principal_point: str | ArrayLike = "centre",
+    principal_point: str | ArrayLike = "center",
     orthogonality_tolerance: float = math.radians(3.5),
 ) -> VanishingPointResult:
     """Find the vanishing points of a photograph, its orthogonal triplet, K and the horizon.
@@ -436,14 +443,14 @@ def detect_vanishing_points(
         within this angle of the segment (radians).
     n_candidates : int
         How many vanishing points sequential RANSAC extracts before the triplet search.
-    iterations : int
-        RANSAC hypotheses per candidate.
+    max_trials : int
+        RANSAC hypotheses per candidate (``iterations`` is its deprecated name).
     infinity_factor : float
         A point farther than this many image diagonals from the centre counts as at infinity.
     rng : int, numpy.random.Generator or None
         RANSAC's random source (SPEC 7): an int seeds a new Generator (reproducible by
         default, ``rng=0``), a Generator is used as is, None draws fresh entropy.
-    principal_point : {"centre", "orthocentre"} or (u, v)
+    principal_point : {"center", "orthocenter"} or (u, v)
         Where K's principal point is: the image centre (default), the given pixel position
         (a calibrated camera's), or the orthocentre of three finite vanishing points
         (Caprile & Torre 1990; unstable on real photographs, see the module docstring). With
@@ -492,7 +499,7 @@ def detect_vanishing_points(
     image_size = check_image_size(image_size)
     angle_threshold = check_positive(angle_threshold, "angle_threshold")
     n_candidates = as_int(n_candidates, "n_candidates", minimum=1, maximum=1000)
-    iterations = as_int(iterations, "iterations", minimum=1, maximum=10**7)
+    max_trials = as_int(max_trials, "max_trials", minimum=1, maximum=10**7)
     infinity_factor = as_real(infinity_factor, "infinity_factor", positive=True, maximum=1e50)
     tol = as_real(orthogonality_tolerance, "orthogonality_tolerance", positive=True, maximum=1.5)
     pp_mode, pp_given = _principal_point(principal_point)
@@ -506,14 +513,14 @@ def detect_vanishing_points(
     diag = math.hypot(w, h)
     far = infinity_factor * diag
     cands = _ransac_candidates(
-        segments, as_rng(check_rng(rng)), n_candidates, angle_threshold, iterations
+        segments, as_rng(check_rng(rng)), n_candidates, angle_threshold, max_trials
     )
     cands = [(_normalise(v, far), inl, sc) for v, inl, sc in cands]
     best: tuple[float, tuple[int, ...], FloatArray | None] = (-1.0, (), None)
     for r in (3, 2):
         for combo in itertools.combinations(range(len(cands)), r):
             trial = [cands[i][0] for i in combo]
-            if pp_mode == "orthocentre":
+            if pp_mode == "orthocenter":
                 K = _triplet_K(trial, centre, diag, far) if r == 3 else None
             else:
                 K = _manhattan_K(trial, [cands[i][2] for i in combo], pp, diag, far, tol)

@@ -38,6 +38,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+from imageform import _deprecate
 from imageform._files import atomic_write, check_writable, not_a_regular_file
 from imageform._validate import (
     as_path,
@@ -97,15 +98,22 @@ class ImageInfo(NamedTuple):
     format: str
 
 
-class WrittenImage(NamedTuple):
+class _WrittenImage(NamedTuple):
+    bit_depth: int | None
+    out_of_range: int
+
+
+class WrittenImage(_WrittenImage):
     """What :func:`write_image` stored: bits per sample and the count of clipped values.
 
-    ``bits`` per sample for integer formats (None for float data), and how many values were
-    ``out_of_range`` (outside [0, 1], clipped).
+    ``bit_depth``: bits per sample for integer formats (None for float data); how many
+    values were ``out_of_range`` (outside [0, 1], clipped). ``.bits`` is the deprecated
+    name of ``bit_depth``.
     """
 
-    bits: int | None
-    out_of_range: int
+    __slots__ = ()
+
+    bits = _deprecate.renamed_property("bit_depth", "imageform.io.WrittenImage.bits")
 
 
 def max_pixels() -> int:
@@ -571,11 +579,12 @@ def _quantise_all(
     return q, outside
 
 
+@_deprecate.parameters(renamed={"bits": "bit_depth"})
 def write_image(
     path: str | Path,
     image: Any,
     *,
-    bits: int | None = None,
+    bit_depth: int | None = None,
     out_of_range: str = "error",
     quality: int = 95,
     clip: bool | None = None,
@@ -588,8 +597,9 @@ def write_image(
         ``.png``, ``.jpg``/``.jpeg``, ``.tif``/``.tiff`` or ``.npy``.
     image : array_like (H, W) or (H, W, C), C in 1..4
         Floats in [0, 1] (encoded values), uint8 or uint16.
-    bits : {8, 16}, optional
-        Bits per sample for PNG (JPEG: 8 only) and for integer TIFF. Default: the integer
+    bit_depth : {8, 16}, optional
+        Bits per sample for PNG (JPEG: 8 only) and for integer TIFF (``bits`` is its
+        deprecated name). Default: the integer
         input's depth, 8 for floats in PNG/JPEG; TIFF and ``.npy`` store floats as floats.
     out_of_range : {"error", "clip"}
         Float values outside [0, 1] when quantising: an error, or clip them (the count is
@@ -602,7 +612,7 @@ def write_image(
     Returns
     -------
     WrittenImage
-        ``(bits, out_of_range)``.
+        ``(bit_depth, out_of_range)``.
 
     Raises
     ------
@@ -614,8 +624,8 @@ def write_image(
     --------
     >>> import tempfile, os
     >>> p = os.path.join(tempfile.mkdtemp(), "a.png")
-    >>> write_image(p, np.array([[[0.0, 0.5, 1.0]]]), bits=16)
-    WrittenImage(bits=16, out_of_range=0)
+    >>> write_image(p, np.array([[[0.0, 0.5, 1.0]]]), bit_depth=16)
+    WrittenImage(bit_depth=16, out_of_range=0)
     >>> read_image(p).tolist()
     [[[0, 32768, 65535]]]
     """
@@ -629,8 +639,9 @@ def write_image(
     p = check_writable(path, "path")
     fmt = image_format(p)
     out_of_range = check_option(out_of_range, _OUT_OF_RANGE, "out-of-range policy")
+    bits = bit_depth
     if bits is not None and (isinstance(bits, bool) or bits not in (8, 16)):
-        raise InvalidInputError(f"expected bits 8 or 16, got {describe(bits)}")
+        raise InvalidInputError(f"expected bit_depth 8 or 16, got {describe(bits)}")
     a = np.asarray(image)
     if a.ndim and not a.flags.c_contiguous:  # a turned or cropped view: codecs need C order
         a = np.ascontiguousarray(a)

@@ -2,7 +2,7 @@
 
 Field angle of pixel ``(u, v)``: ``tan θ = r / f_px`` with ``r`` its distance from the optical
 center ``(c_u, c_v)`` in pixels and ``f_px`` the focal length in pixels: here the keyword-only
-``focal_length`` is in **pixels** (the focal length divided by the pixel pitch, ``fx`` of K).
+``focal_length_px`` is in **pixels** (the focal length divided by the pixel pitch, ``fx`` of K).
 """
 
 from __future__ import annotations
@@ -35,12 +35,14 @@ __all__ = [
 ]
 
 
-_RENAMED = {"focal_length_px": "focal_length", "centre": "center"}
+# A focal length in pixels carries its unit in its name (docs/conventions.md: a bare
+# focal_length is in metres); "focal_length" here was the 1.0 pass's name, now deprecated.
+_RENAMED = {"focal_length": "focal_length_px", "centre": "center"}
 
 
-@_deprecate.parameters(renamed=_RENAMED, positional=("focal_length", "center"))
+@_deprecate.parameters(renamed=_RENAMED, positional=("focal_length_px", "center"))
 def field_angle(
-    shape: tuple[int, int], *, focal_length: float, center: tuple[float, float] | None = None
+    shape: tuple[int, int], *, focal_length_px: float, center: tuple[float, float] | None = None
 ) -> np.ndarray:
     """Field angle θ (radians) of every pixel: ``θ = atan(r / f_px)``; shape ``(H, W)``.
 
@@ -48,31 +50,31 @@ def field_angle(
     ----------
     shape : (H, W)
         Image size in pixels.
-    focal_length : float, keyword-only
-        Focal length in **pixels** (``fx``).
+    focal_length_px : float, keyword-only
+        Focal length in **pixels** (``fx``; ``focal_length`` is its deprecated name).
     center : (c_u, c_v), keyword-only, optional
         The optical center (column, row); default the image center ``((W-1)/2, (H-1)/2)``.
 
     Examples
     --------
-    >>> round(float(field_angle((1, 3), focal_length=1.0)[0, 0]), 6)  # one pixel off, f = 1 px
+    >>> round(float(field_angle((1, 3), focal_length_px=1.0)[0, 0]), 6)  # 1 px off, f = 1 px
     0.785398
     """
     h, w = as_shape(shape, "shape (H, W)", 2, itemsize=8, copies=6)
-    f = check_positive(focal_length, "focal_length (px)")
+    f = check_positive(focal_length_px, "focal_length_px")
     cu, cv = ((w - 1) / 2, (h - 1) / 2) if center is None else as_reals(center, "center", 2)
     v, u = np.mgrid[0:h, 0:w].astype(np.float64)
     with np.errstate(over="ignore"):  # a far centre: r = inf gives θ = π/2
         return np.arctan(np.hypot(u - cu, v - cv) / f)
 
 
-@_deprecate.parameters(renamed=_RENAMED, positional=("focal_length", "center"))
+@_deprecate.parameters(renamed=_RENAMED, positional=("focal_length_px", "center"))
 def cos4_falloff(
-    shape: tuple[int, int], *, focal_length: float, center: tuple[float, float] | None = None
+    shape: tuple[int, int], *, focal_length_px: float, center: tuple[float, float] | None = None
 ) -> np.ndarray:
     r"""Relative illumination of the natural vignetting law, ``cos⁴ θ``; shape ``(H, W)``.
 
-    ``focal_length`` (keyword-only) is in pixels, ``center`` as in :func:`field_angle`.
+    ``focal_length_px`` (keyword-only) is in pixels, ``center`` as in :func:`field_angle`.
 
     .. math::
 
@@ -84,11 +86,11 @@ def cos4_falloff(
 
     Examples
     --------
-    >>> f = cos4_falloff((1, 3), focal_length=1.0)  # the outer pixels are at 45°
+    >>> f = cos4_falloff((1, 3), focal_length_px=1.0)  # the outer pixels are at 45°
     >>> round(float(f[0, 0]), 6), float(f[0, 1])
     (0.25, 1.0)
     """
-    return np.cos(field_angle(shape, focal_length=focal_length, center=center)) ** 4
+    return np.cos(field_angle(shape, focal_length_px=focal_length_px, center=center)) ** 4
 
 
 def pupil_overlap_fraction(pupil_radius: float, stop_radius: float, offset: Any) -> Any:
@@ -135,11 +137,11 @@ def _overlap(a: float, b: float, d: np.ndarray) -> np.ndarray:
     return frac
 
 
-@_deprecate.parameters(renamed=_RENAMED, positional=("focal_length",))
+@_deprecate.parameters(renamed=_RENAMED, positional=("focal_length_px",))
 def mechanical_vignetting(
     shape: tuple[int, int],
     *,
-    focal_length: float,
+    focal_length_px: float,
     pupil_radius: float,
     barrel_radius: float,
     barrel_distance: float,
@@ -156,13 +158,13 @@ def mechanical_vignetting(
 
         V(\theta) = \frac{A(a, b, L\tan\theta)}{\pi a^2}
 
-    ``focal_length`` is in pixels and ``center`` as in :func:`field_angle`; the other lengths
+    ``focal_length_px`` is in pixels and ``center`` as in :func:`field_angle`; the other lengths
     in one unit (e.g. metres). Source: S. F. Ray, *Applied Photographic Optics*, §23
     ("mechanical vignetting"); geometry of the oblique beam.
 
     Examples
     --------
-    >>> v = mechanical_vignetting((1, 3), focal_length=1.0, pupil_radius=1, barrel_radius=1,
+    >>> v = mechanical_vignetting((1, 3), focal_length_px=1.0, pupil_radius=1, barrel_radius=1,
     ...                           barrel_distance=1)
     >>> round(float(v[0, 0]), 6), float(v[0, 1])
     (0.391002, 1.0)
@@ -170,7 +172,7 @@ def mechanical_vignetting(
     L = check_positive(barrel_distance, "barrel_distance", allow_zero=True)
     a = check_positive(pupil_radius, "pupil_radius")
     b = check_positive(barrel_radius, "barrel_radius")
-    theta = field_angle(shape, focal_length=focal_length, center=center)
+    theta = field_angle(shape, focal_length_px=focal_length_px, center=center)
     names = {"pupil_radius": a, "barrel_radius": b, "barrel_distance": L}
     d = finite_result("the beam offset L tan θ", lambda: L * np.tan(theta), **names)
     return np.asarray(finite_result("the vignetting", lambda: _overlap(a, b, d), **names))
@@ -181,7 +183,8 @@ def apply_vignetting(image: Any, falloff: Any) -> Any:
 
     Examples
     --------
-    >>> apply_vignetting(np.ones((1, 3)), cos4_falloff((1, 3), focal_length=1.0)).round(12).tolist()
+    >>> fall = cos4_falloff((1, 3), focal_length_px=1.0)
+    >>> apply_vignetting(np.ones((1, 3)), fall).round(12).tolist()
     [[0.25, 1.0, 0.25]]
     """
     f = as_real_array(falloff, "falloff", check=False)

@@ -25,7 +25,7 @@ from typing import Any
 
 import numpy as np
 
-from imageform._jsonio import dumps
+from imageform._jsonio import write_json
 from imageform._validate import describe
 from imageform.errors import InvalidInputError
 from imageform.report import html_parts as hp
@@ -421,7 +421,7 @@ def write_report(
         ),
     }
     metrics_path = out / "metrics.json"
-    metrics_path.write_text(dumps(metrics), encoding="utf-8")
+    write_json(metrics_path, metrics)
     sections.append(_numbers_section(metrics))
     w, h = res.image_size
     t_sim = summary["simulation_time_s"]

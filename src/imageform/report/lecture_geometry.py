@@ -20,7 +20,7 @@ __all__ = ["EXAMPLES"]
 
 def _building_pixels() -> float:
     cam = Camera(
-        Intrinsics.from_physical(focal_length=50.0, pixel_pitch_um=5.0, image_size=(6000, 4000))
+        Intrinsics.from_physical(focal_length_mm=50.0, pixel_pitch_um=5.0, image_size=(6000, 4000))
     )
     top, bottom = cam.project([[0.0, -15.0, 100.0], [0.0, 15.0, 100.0]]).uv
     return float(bottom[1] - top[1])

@@ -12,7 +12,7 @@ from typing import Any
 
 import numpy as np
 
-from imageform._jsonio import dumps
+from imageform._jsonio import write_json
 from imageform.report import html_parts as hp
 
 __all__ = ["METRICS_FORMAT", "write_outputs"]
@@ -419,7 +419,7 @@ def write_outputs(res: Any, folder: Path) -> dict[str, Path | None]:
         "notes": notes,
     }
     mpath = folder / "metrics.json"
-    mpath.write_text(dumps(metrics) + "\n", encoding="utf-8")
+    write_json(mpath, metrics)
     sections = [_overview(res, summary)]
     truth = _truth(res, summary)
     if truth:

@@ -93,11 +93,11 @@ def write(run: Run, path: Path, image: Any, opts: Any, *, like: Any = None) -> i
             bits = 8
     if fmt == "tiff" and bits is None and a.dtype.kind == "f":
         a = a.astype(np.float32, copy=False)
-    written = write_image(run.file(path), a, bits=bits, out_of_range=policy)
+    written = write_image(run.file(path), a, bit_depth=bits, out_of_range=policy)
     if written.out_of_range:
         run.note(
             f"note: {written.out_of_range} values outside [0, 1] were clipped to fit the "
-            f"{written.bits}-bit {path.name}; write .tif or .npy to keep them "
+            f"{written.bit_depth}-bit {path.name}; write .tif or .npy to keep them "
             "(--out-of-range error refuses instead)"
         )
     return written.out_of_range
@@ -188,7 +188,7 @@ def write_mapped(
     shape = tuple(dest.shape)
     if dest.ndim == 3 and dest.shape[-1] == 1 and fmt != "npy":
         dest = dest[..., 0]
-    write_image(run.file(path), dest, bits=bits, out_of_range=policy)
+    write_image(run.file(path), dest, bit_depth=bits, out_of_range=policy)
     if n_out:
         run.note(
             f"note: {n_out} values outside [0, 1] were clipped to fit the "

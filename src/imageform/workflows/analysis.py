@@ -16,6 +16,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from imageform import _deprecate
 from imageform.errors import InvalidInputError
 from imageform.workflows import _charts
 from imageform.workflows._images import ImageIn, ImageOut, read, write
@@ -30,8 +31,19 @@ __all__ = [
 ]
 
 _CSV_COLUMNS = ("a_r", "a_g", "a_b", "b_r", "b_g", "b_b")
-#: Stain-normalisation methods; the first is the default everywhere.
-STAIN_METHODS = ("macenko", "reinhard")
+# Stain-normalisation methods: imageform.analysis.STAIN_NORMALIZATION_METHODS (the one
+# registry), spelled out so that --help imports no NumPy; tests/test_registries.py checks
+# that they are the same. This module's public STAIN_METHODS is deprecated.
+_STAIN_METHODS = ("macenko", "reinhard")
+__getattr__ = _deprecate.module_getattr(
+    "imageform.workflows.analysis",
+    {
+        "STAIN_METHODS": (
+            "imageform.analysis.STAIN_NORMALIZATION_METHODS",
+            _deprecate.Lazy("imageform.analysis", "STAIN_NORMALIZATION_METHODS"),
+        )
+    },
+)
 
 
 def _rgb(path: Path, opts: Any) -> Any:
@@ -152,7 +164,7 @@ class StainNormalizeOptions(ImageIn, ImageOut):
     method: str = option(
         "macenko",
         help="Macenko (optical-density stain vectors) or Reinhard (CIELAB statistics).",
-        choices=STAIN_METHODS,
+        choices=_STAIN_METHODS,
     )
     save_target: Path | None = option(
         None, help="Also save the target's statistics as JSON (reused with --target).", output=True
@@ -219,6 +231,8 @@ def stain_normalize(run: Run, opts: StainNormalizeOptions, *, out: Path, image: 
 
 # ---------------------------------------------------------------- colour correction
 
+# imageform.analysis.CORRECTION_METHODS (the one list), spelled out so that --help imports
+# no NumPy; tests/test_registries.py checks that they are the same.
 _CORRECTION_METHODS = ("linear", "root_polynomial")
 
 

@@ -129,7 +129,7 @@ def chart(run: Run, opts: ChartOptions, *, out: Path, image: Path) -> Result:
 
     import numpy as np
 
-    from imageform._jsonio import dumps
+    from imageform._jsonio import write_json
     from imageform.analysis import (
         ChartPatches,
         ChartWarning,
@@ -191,7 +191,7 @@ def chart(run: Run, opts: ChartOptions, *, out: Path, image: Path) -> Result:
         "delta_e00_after": rep.delta_e_after.tolist(),
         **stats,
     }
-    run.file(out).write_text(dumps(payload) + "\n")
+    write_json(run.file(out), payload)
     if opts.correction is not None:
         corr.to_json(run.file(opts.correction))
     if opts.csv is not None:

@@ -103,7 +103,7 @@ class ConvertOptions(ImageIn, ImageOut):
             ("white", self.white),
             ("standard", self.standard),
             ("signal_range", self.ycc_range),
-            ("bits", self.code_bits),
+            ("bit_depth", self.code_bits),
             ("method", self.gray_method),
         ):
             if val is not None:
@@ -144,6 +144,9 @@ def convert(run: Run, opts: ConvertOptions, *, out: Path, image: Path) -> Result
 
 # ---------------------------------------------------------------- white balance
 
+#: ``--method``: :data:`imageform.color.WHITE_BALANCE_METHODS` (the one registry) with the
+#: ``max_rgb`` alias, and ``chart``. Spelled out so that ``--help`` imports no NumPy;
+#: tests/test_registries.py checks it against the registry.
 _WB_METHODS = (
     "gray_world",
     "white_patch",

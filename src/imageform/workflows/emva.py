@@ -164,7 +164,7 @@ def emva(run: Run, opts: EmvaOptions, *, out: Path, folder: str) -> Result:
     """``imageform emva``: EMVA 1288 parameters of a camera from flat and dark frame stacks."""
     import numpy as np
 
-    from imageform._jsonio import dumps
+    from imageform._jsonio import write_json
     from imageform.sensor import measure_emva
 
     root = Path(folder)
@@ -204,7 +204,7 @@ def emva(run: Run, opts: EmvaOptions, *, out: Path, folder: str) -> Result:
         "frame_shape": list(flats[0].shape[1:]),
         "results": m,
     }
-    run.file(out).write_text(dumps(doc) + "\n", encoding="utf-8")
+    write_json(run.file(out), doc)
     scalars = {
         k: getattr(m, k)
         for k in (

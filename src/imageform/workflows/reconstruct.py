@@ -144,7 +144,7 @@ def reconstruct(run: Run, opts: ReconstructOptions, *, out: Path, frames: str) -
             "imageform reconstruct draws its report with matplotlib, which is not installed: "
             'pip install "imageform[plot]"'
         )
-    from imageform._jsonio import dumps
+    from imageform._jsonio import write_json
     from imageform.geometry import matrix_to_rvec, reconstruct_sequence
     from imageform.io import read_camera
     from imageform.workflows._ply import write_points_ply
@@ -214,7 +214,7 @@ def reconstruct(run: Run, opts: ReconstructOptions, *, out: Path, frames: str) -
     write_report(folder / "report.html", rec, names, metrics, title_source=frames)
     seconds["report"] = time.perf_counter() - t3
     metrics["seconds"] = {k: round(v, 3) for k, v in seconds.items()}
-    (folder / "metrics.json").write_text(dumps(metrics) + "\n", encoding="utf-8")
+    write_json(folder / "metrics.json", metrics)
     for note in rec.notes:
         run.note(f"note: {note}")
     n, nreg = metrics["frames"], metrics["registered"]

@@ -21,6 +21,8 @@ __all__ = ["WORKFLOWS", "DemosaicOptions", "MosaicOptions"]
 #: The Bayer patterns (imageform.sensor.CFA_PATTERNS, in the normalised spelling).
 _PATTERNS = ("rggb", "bggr", "grbg", "gbrg")
 #: imageform.sensor.DEMOSAIC_METHODS (kept literal: ``--help`` imports no numerical code).
+# imageform.sensor.DEMOSAIC_METHODS (the one list), spelled out so that --help imports no
+# NumPy; tests/test_registries.py checks that they are the same.
 _DEMOSAIC_METHODS = ("bilinear", "malvar", "hamilton_adams", "menon", "menon_soft")
 
 

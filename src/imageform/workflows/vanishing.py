@@ -35,8 +35,9 @@ class VanishingOptions(ImageIn):
     )
     seed: int = option(0, help="RANSAC seed (results are reproducible).", minimum=0)
     principal_point: str = option(
-        "centre",
-        choices=("centre", "orthocentre", "camera"),
+        "center",
+        # "centre" and "orthocentre": the spellings before issue 30, still accepted
+        choices=("center", "orthocenter", "camera", "centre", "orthocentre"),
         help="Where the estimated K's principal point is: the image centre, the orthocentre "
         "of three finite vanishing points, or the camera file's (needs --camera; the focal "
         "length is then estimated alone).",
@@ -138,7 +139,9 @@ def vanishing(run: Run, opts: VanishingOptions, *, out: Path | None, image: Path
             raise InvalidInputError("--principal-point camera needs --camera FILE")
         pp: Any = np.asarray(cf.camera.K, dtype=np.float64)[:2, 2]
     else:
-        pp = opts.principal_point
+        pp = {"centre": "center", "orthocentre": "orthocenter"}.get(
+            opts.principal_point, opts.principal_point
+        )
     res = detect_vanishing_points(arr, rng=opts.seed, principal_point=pp)
     K_est = res.K
     summary: dict[str, Any] = {

@@ -1,0 +1,126 @@
+"""One spelling per concept in the public signatures (issue 30), so that off-spellings cannot
+come back.
+
+The library's spellings: ``rng`` (a seed, a Generator or None; SPEC 7) for random numbers,
+``tol`` for a stopping tolerance, ``max_trials`` for a RANSAC budget, ``bit_depth`` for bits
+per sample, and American ``center`` in names and option values (prose stays British). Every
+parameter, dataclass field and method parameter of every public name is scanned; the
+allow-list below names each exception with its reason. Renamed parameters keep a
+deprecation shim (:mod:`imageform._deprecate`), which hides the old name from the signature.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import inspect
+import re
+
+import pytest
+
+from tests.regen_api_snapshot import public_modules
+
+#: Off-spelling -> the library's spelling.
+OFF_SPELLINGS: dict[str, str] = {
+    r"seed": "rng",
+    r"eps|epsilon": "tol",
+    r"max_hypotheses|n_hypotheses|num_trials|n_trials|max_ransac_iter": "max_trials",
+    r"bits|nbits|n_bits|bitdepth": "bit_depth",
+    r".*centre.*": "center",
+}
+_OFF = re.compile(f"^(?:{'|'.join(OFF_SPELLINGS)})$")
+
+#: ``module.qualname: parameter`` -> why it keeps its spelling today.
+ALLOWED: dict[str, str] = {
+    # another helper owns these files in this round (issue 30 leaves them to them)
+    "imageform.simulate.lab.render_lab_set: seed": "simulate lab set (camera-twin work)",
+    "imageform.io.raw.Development.to_integer: bits": "io/raw.py (raw-development work)",
+    # already deprecated aliases, kept in the signature by random_source()
+    "imageform.simulate.pipeline.simulate: seed": "deprecated alias of rng (random_source)",
+    "imageform.simulate.truth.detect_vanishing: seed": "deprecated alias of rng (random_source)",
+    # not a random seed: the lattice node a breadth-first walk starts from
+    "imageform.geometry.checkerboard_grid.label_lattice: seed": "a seed node, not randomness",
+    "imageform.geometry.checkerboard_grid.lattice_rectangle: seed": "a seed node, not randomness",
+    # command-line options: the field is the flag (--seed, --bits); renaming the flags is a
+    # CLI change of its own (README, batch option files), left for later
+    "imageform.workflows.simulate.SimulateOptions: seed": "CLI flag --seed",
+    "imageform.workflows.vanishing.VanishingOptions: seed": "CLI flag --seed",
+    "imageform.workflows.analysis.HarmonizeOptions: bits": "CLI flag --bits",
+    "imageform.workflows.analysis.StainNormalizeOptions: bits": "CLI flag --bits",
+    "imageform.workflows.calibration.UndistortOptions: bits": "CLI flag --bits",
+    "imageform.workflows.color.ConvertOptions: bits": "CLI flag --bits",
+    "imageform.workflows.color.CvdOptions: bits": "CLI flag --bits",
+    "imageform.workflows.color.WhiteBalanceOptions: bits": "CLI flag --bits",
+    "imageform.workflows.raw.DevelopOptions: bits": "CLI flag --bits",
+    "imageform.workflows.sensor.DemosaicOptions: bits": "CLI flag --bits",
+    "imageform.workflows.sensor.MosaicOptions: bits": "CLI flag --bits",
+    # scene-file keys (TOML): renaming them changes every scene file; left for later
+    "imageform.simulate.config.CheckerboardConfig: centre_m": "scene-file key",
+    "imageform.simulate.config.ColorCheckerConfig: centre_m": "scene-file key",
+    "imageform.simulate.config.GroundConfig: centre_m": "scene-file key",
+    "imageform.simulate.config.ImageConfig: centre_m": "scene-file key",
+    "imageform.simulate.config.ObjectConfig: centre_m": "scene-file key",
+    "imageform.simulate.config.PlaneConfig: centre_m": "scene-file key",
+    "imageform.simulate.result.ColorCheckerTruth: centres_uv": "read by simulate/lab.py",
+    # result fields written to JSON under the same key; left for later
+    "imageform.analysis.chart_detect.ChartDetection: centres": "result field and JSON key",
+    "imageform.analysis.chart_detect.ChartPhoto: centres": "result field",
+    "imageform.analysis.chart_input.ChartSample: centres": "result field and JSON key",
+}
+
+
+def _names(obj: object) -> list[str]:
+    try:
+        return list(inspect.signature(obj).parameters)  # type: ignore[arg-type]
+    except (TypeError, ValueError):
+        return []
+
+
+def _spelled() -> dict[str, set[str]]:
+    """``module.qualname -> parameter and field names`` of every public callable."""
+    out: dict[str, set[str]] = {}
+    for mod in public_modules():
+        for name in mod.__all__:
+            obj = getattr(mod, name)
+            if not callable(obj):
+                continue
+            qual = (
+                f"{getattr(obj, '__module__', mod.__name__)}.{getattr(obj, '__qualname__', name)}"
+            )
+            out.setdefault(qual, set()).update(_names(obj))
+            if dataclasses.is_dataclass(obj):
+                out[qual].update(f.name for f in dataclasses.fields(obj))
+            if inspect.isclass(obj):
+                out[qual].update(getattr(obj, "_fields", ()))  # NamedTuple fields
+                for attr, value in vars(obj).items():
+                    fn = value.__func__ if isinstance(value, classmethod | staticmethod) else value
+                    if not attr.startswith("_") and inspect.isfunction(fn):
+                        out.setdefault(f"{qual}.{attr}", set()).update(_names(fn))
+    return out
+
+
+def _offenders() -> set[str]:
+    return {f"{qual}: {p}" for qual, params in _spelled().items() for p in params if _OFF.match(p)}
+
+
+def test_no_off_spelling_in_public_signatures() -> None:
+    new = sorted(_offenders() - set(ALLOWED))
+    assert not new, (
+        "off-spelling(s) in public signatures (use "
+        + ", ".join(f"{v} for {k}" for k, v in OFF_SPELLINGS.items())
+        + f"): {new}"
+    )
+
+
+def test_allow_list_has_no_stale_entries() -> None:
+    """An exception that is gone (renamed, removed) leaves the allow-list too."""
+    assert not sorted(set(ALLOWED) - _offenders())
+
+
+@pytest.mark.parametrize("name", ["seed", "eps", "max_hypotheses", "bits", "centre", "centres_uv"])
+def test_the_pattern_catches(name: str) -> None:
+    assert _OFF.match(name)
+
+
+@pytest.mark.parametrize("name", ["rng", "tol", "max_trials", "bit_depth", "center", "centers"])
+def test_the_pattern_passes(name: str) -> None:
+    assert not _OFF.match(name)
