@@ -15,7 +15,7 @@ from typing import Any
 
 import numpy as np
 
-from imageform._backend import namespace, use_numba
+from imageform._backend import common_device, namespace, use_numba
 from imageform._dask import chunkwise
 from imageform._validate import as_real, format_shape
 from imageform.color._guard import as_points, check_magnitude, check_option
@@ -59,8 +59,9 @@ def check_positive(value: object, name: str) -> float:
 
 def _prepare(lab1: object, lab2: object) -> tuple[Any, Any, Any]:
     xp = namespace(lab1, lab2)
-    a = as_points(lab1, "lab1", 3, xp=xp)
-    b = as_points(lab2, "lab2", 3, xp=xp, device=None)
+    dev = common_device(lab1, lab2)
+    a = as_points(lab1, "lab1", 3, xp=xp, device=dev)
+    b = as_points(lab2, "lab2", 3, xp=xp, device=dev)
     check_magnitude(a, "lab1", xp)
     check_magnitude(b, "lab2", xp)
     dtype = xp.result_type(a.dtype, b.dtype)

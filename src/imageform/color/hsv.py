@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from imageform._backend import namespace
+from imageform._backend import device_of, namespace
 from imageform._colormath import hexcone_hue as _hue
 from imageform._colormath import hsv_to_rgb as _hsv_to_srgb
 from imageform._colormath import rgb_to_hsv as _srgb_to_hsv
@@ -260,7 +260,7 @@ def hue_difference(h1: object, h2: object) -> Any:
     """
     a = as_float(h1, "h1", integer="float64")
     xp = namespace(a)
-    b = as_float(h2, "h2", xp=xp, dtype=a.dtype)
+    b = as_float(h2, "h2", xp=xp, dtype=a.dtype, device=device_of(a))
     try:
         np.broadcast_shapes(tuple(a.shape), tuple(b.shape))
     except ValueError:

@@ -1,6 +1,8 @@
 """Array-API implementations of the distortion models (the plain twins of the kernels).
 
 Private: inputs are validated floating arrays of shape ``(..., 2)`` in namespace ``xp``;
+the Newton inverses stop early on host arrays and run ``max_iter`` steps on a device (no
+read-back: a fixed iteration count);
 coefficients are Python floats. Every function avoids in-place updates so that PyTorch
 gradients flow through the forward models.
 """
@@ -9,6 +11,8 @@ from __future__ import annotations
 
 import math
 from typing import Any
+
+from imageform._backend import reads_values
 
 __all__ = [
     "bc_distort_xp",
@@ -74,7 +78,7 @@ def bc_undistort_xp(
         j22 = rad + 2.0 * y * y * drad + 6.0 * p1 * y + 2.0 * p2 * x
         det = j11 * j22 - j12 * j12
         done = done | ((xp.abs(fx) <= lim) & (xp.abs(fy) <= lim))
-        if bool(xp.all(done)):
+        if reads_values(done) and bool(xp.all(done)):  # early exit on the host only
             break
         x = xp.where(done, x, x - (j22 * fx - j12 * fy) / det)
         y = xp.where(done, y, y - (j11 * fy - j12 * fx) / det)
@@ -114,7 +118,7 @@ def kb_undistort_xp(
         h, dh = _kb_poly(th, c)
         h = h - thd
         done = done | (xp.abs(h) <= tol * (1.0 + thd))
-        if bool(xp.all(done)):
+        if reads_values(done) and bool(xp.all(done)):  # early exit on the host only
             break
         th = xp.where(done, th, th - h / dh)
     ok = done & (dh > 0.0) & (th >= 0.0) & (th < math.pi / 2)
@@ -157,7 +161,7 @@ def division_distort_xp(
         g = rd - ru * (1.0 + k1 * rd2 + k2 * rd2 * rd2)
         dg = 1.0 - ru * (2.0 * k1 * rd + 4.0 * k2 * rd2 * rd)
         done = done | (xp.abs(g) <= tol * (1.0 + ru))
-        if bool(xp.all(done)):
+        if reads_values(done) and bool(xp.all(done)):  # early exit on the host only
             break
         rd = xp.where(done, rd, rd - g / dg)
     rd2 = rd * rd

@@ -21,9 +21,9 @@ from typing import Any, Literal, NamedTuple
 
 import numpy as np
 
-from imageform._backend import device_of, linalg, namespace, use_numba
+from imageform._backend import device_of, linalg, namespace, sign_of, use_numba
 from imageform._typing import Array, ArrayLike
-from imageform._validate import check_option, check_rotation, format_shape
+from imageform._validate import any_value, check_option, check_rotation, format_shape
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
 from imageform.geometry._checks import as_float, as_matrix, as_points, check_image_size
 from imageform.geometry._results import Projection
@@ -98,12 +98,12 @@ def _prepare(
 
 def _check_K(K: Array, xp: Any) -> None:
     if (
-        bool(xp.any(K[..., 2, 0] != 0))
-        or bool(xp.any(K[..., 2, 1] != 0))
-        or bool(xp.any(K[..., 1, 0] != 0))
+        any_value(K[..., 2, 0] != 0, xp)
+        or any_value(K[..., 2, 1] != 0, xp)
+        or any_value(K[..., 1, 0] != 0, xp)
     ):
         raise InvalidInputError("expected an upper-triangular K with last row (0, 0, k33)")
-    if bool(xp.any(K[..., 0, 0] * K[..., 1, 1] * K[..., 2, 2] == 0)):
+    if any_value(K[..., 0, 0] * K[..., 1, 1] * K[..., 2, 2] == 0, xp):
         raise InvalidInputError("K is singular (fx, fy or K[2, 2] is zero)")
 
 
@@ -276,11 +276,11 @@ def decompose_projection_matrix(P: ArrayLike) -> DecomposedProjection:
     M = Pm[..., :3]
     det = linalg(xp).det(M)
     scale = xp.max(xp.abs(M), axis=(-2, -1))
-    if bool(xp.any(xp.abs(det) <= 1e-12 * scale**3)):
+    if any_value(xp.abs(det) <= 1e-12 * scale**3, xp):
         raise DegenerateConfigurationError(
             "the left 3x3 block of P is singular: not a finite projective camera"
         )
-    sgn = xp.sign(det)[..., None, None]
+    sgn = sign_of(det, xp)[..., None, None]
     Pm = Pm * sgn
     M = Pm[..., :3]
     # RQ via QR of the row-reversed transpose.
@@ -288,7 +288,7 @@ def decompose_projection_matrix(P: ArrayLike) -> DecomposedProjection:
     Q, U = linalg(xp).qr(xp.matrix_transpose(Mf))
     Kq = xp.flip(xp.flip(xp.matrix_transpose(U), axis=-2), axis=-1)
     Rq = xp.flip(xp.matrix_transpose(Q), axis=-2)
-    d = xp.sign(xp.stack((Kq[..., 0, 0], Kq[..., 1, 1], Kq[..., 2, 2]), axis=-1))
+    d = sign_of(xp.stack((Kq[..., 0, 0], Kq[..., 1, 1], Kq[..., 2, 2]), axis=-1), xp)
     Kq = Kq * d[..., None, :]
     Rq = Rq * d[..., :, None]
     lam = Kq[..., 2, 2]
@@ -370,7 +370,7 @@ def unproject(
             f"expected depth broadcasting to uv's points {format_shape(tuple(p.shape[:-1]))}, "
             f"got shape {format_shape(tuple(z.shape))}"
         ) from None
-    if bool(xp.any(~(z > 0))):
+    if any_value(~(z > 0), xp):
         raise InvalidInputError("expected depth > 0 (points in front of the camera)")
     Km = as_matrix(K, "K", (3, 3), xp=xp, dtype=p.dtype, device=dev)
     _check_K(Km, xp)
