@@ -30,6 +30,7 @@ __all__ = [
     "Array",
     "asarray_like",
     "common_device",
+    "constant",
     "device_of",
     "float_dtype",
     "have_numba",
@@ -207,6 +208,39 @@ def common_device(*arrays: object) -> Any:
     return None
 
 
+#: Uploaded constants: (bytes, shape, library, dtype, device) -> array (small matrices and
+#: white points; bounded, cleared when full).
+_CONSTANTS: dict[tuple[Any, ...], Any] = {}
+_MAX_CONSTANTS = 1024
+
+
+def constant(values: np.ndarray, like: Any, xp: Any) -> Any:
+    """Return a NumPy constant (matrix, white point) as an ``xp`` array like ``like``.
+
+    NumPy: a cast copy. PyTorch and CuPy: uploaded once per device and dtype and cached, so a
+    call does not copy its constants host-to-device each time; inside ``torch.compile``
+    tracing the constant is made in the graph instead (no cache, no ``.tolist()``).
+    """
+    if isinstance(like, np.ndarray):
+        return np.ascontiguousarray(values, dtype=like.dtype)
+    dev = device_of(like)
+    if array_api_compat.is_torch_array(like):
+        import torch
+
+        if torch.compiler.is_compiling():
+            return torch.as_tensor(values, dtype=like.dtype, device=dev)
+    elif not array_api_compat.is_cupy_array(like):
+        return xp.asarray(values.tolist(), dtype=like.dtype, device=dev)
+    key = (values.tobytes(), values.shape, xp.__name__, str(like.dtype), str(dev))
+    out = _CONSTANTS.get(key)
+    if out is None:
+        if len(_CONSTANTS) >= _MAX_CONSTANTS:
+            _CONSTANTS.clear()
+        out = xp.asarray(np.ascontiguousarray(values), dtype=like.dtype, device=dev, copy=True)
+        _CONSTANTS[key] = out
+    return out
+
+
 def float_dtype(x: Any, xp: Any, *, integer: str = IMAGE_INTEGER_DTYPE) -> Any:
     """Return the floating dtype a computation on ``x`` runs in.
 
@@ -241,6 +275,10 @@ def asarray_like(x: object, xp: Any, dtype: Any = None, device: Any = None) -> A
     return xp.asarray(x, dtype=dtype)
 
 
+#: Host values (a tuple, not a union: ``torch.compile`` traces ``isinstance`` with it).
+_HOST_TYPES = (np.ndarray, np.generic, float, int)
+
+
 def _env_device_checks() -> bool:
     return os.environ.get("IMAGEFORM_DEVICE_CHECKS", "") not in ("", "0")
 
@@ -256,7 +294,7 @@ def reads_values(x: object) -> bool:
     ``IMAGEFORM_DEVICE_CHECKS=1`` to read device values too (each check then waits for the
     device). Dask arrays answer True; their checks run per chunk, lazily.
     """
-    if isinstance(x, np.ndarray | np.generic | float | int):
+    if isinstance(x, _HOST_TYPES):
         return True
     if array_api_compat.is_torch_array(x):
         import torch

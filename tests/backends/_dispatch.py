@@ -70,6 +70,10 @@ def _bool_index(args: Any) -> bool:
     return any(isinstance(t, torch.Tensor) and t.dtype == torch.bool for t in (indices or ()))
 
 
+#: Operators that make a 0-d tensor of a Python number.
+_SCALARS = {"aten::scalar_tensor"}
+
+
 class DeviceMixingError(AssertionError):
     """An operator got tensors on two devices (CUDA would refuse it)."""
 
@@ -88,8 +92,18 @@ class DeviceGuard(TorchDispatchMode):
 
     @property
     def kernels(self) -> int:
-        """Operators that would launch a kernel on CUDA (views and allocations excluded)."""
-        return sum(n for name, n in self.ops.items() if name not in _NO_KERNEL)
+        """Operators that compute on whole arrays (views, allocations and scalars excluded).
+
+        A Python number in ``where`` (``xp.where(m, x, 0.0)``) becomes ``scalar_tensor``: a
+        one-element fill, counted in :attr:`scalars`, not here (it moves no data, unlike
+        the full-size ``zeros_like`` it replaces).
+        """
+        return sum(n for name, n in self.ops.items() if name not in _NO_KERNEL | _SCALARS)
+
+    @property
+    def scalars(self) -> int:
+        """One-element tensors made from Python numbers (a tiny fill each on CUDA)."""
+        return sum(self.ops[name] for name in _SCALARS)
 
     def __torch_dispatch__(self, func: Any, types: Any, args: Any = (), kwargs: Any = None) -> Any:
         kwargs = kwargs or {}

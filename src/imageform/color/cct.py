@@ -374,7 +374,7 @@ def xy_to_cct(xy: object, *, method: str = "robertson1968", iterations: int = 20
     T = xp.clip(cct, 4000.0, 25000.0)  # start from Robertson's estimate, inside the domain
     for _ in range(n_iter):
         s = 1.0 / T
-        c = xp.where(T <= 7000.0, xp.ones_like(T), xp.zeros_like(T))
+        c = xp.astype(T <= 7000.0, T.dtype)
         lo, hi = _DAYLIGHT_LOW, _DAYLIGHT_HIGH
         dx_ds = c * ((3 * lo[0] * s + 2 * lo[1]) * s + lo[2]) + (1 - c) * (
             (3 * hi[0] * s + 2 * hi[1]) * s + hi[2]

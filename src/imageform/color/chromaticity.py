@@ -215,7 +215,7 @@ def _points_in_polygon(pts: Any, poly: np.ndarray, xp: Any) -> Any:
     crosses = (y1 > y) != (y2 > y)
     dy = y2 - y1
     # edges with dy = 0 never cross (crosses is False there): any finite divisor will do
-    xint = x1 + (y - y1) * (x2 - x1) / xp.where(dy == 0, xp.ones_like(dy), dy)
+    xint = x1 + (y - y1) * (x2 - x1) / xp.where(dy == 0, 1.0, dy)
     n = xp.sum(xp.astype(crosses & (x < xint), xp.int32), axis=-1)
     return n % 2 == 1
 

@@ -46,7 +46,7 @@ def _srgb_to_hsl(xp: Any, rgb: Any) -> Any:
     delta = mx - mn
     light = (mx + mn) / 2.0
     den = 1.0 - xp.abs(2.0 * light - 1.0)
-    s = xp.where(den == 0, xp.zeros_like(den), delta / xp.where(den == 0, xp.ones_like(den), den))
+    s = xp.where(den == 0, 0.0, delta / xp.where(den == 0, 1.0, den))
     return xp.stack([_hue(xp, r, g, b, mx, delta), s, light], axis=-1)
 
 
@@ -65,13 +65,13 @@ def _srgb_to_hsi(xp: Any, rgb: Any) -> Any:
     r, g, b = rgb[..., 0], rgb[..., 1], rgb[..., 2]
     i = (r + g + b) / 3.0
     mn = xp.minimum(xp.minimum(r, g), b)
-    s = xp.where(i == 0, xp.zeros_like(i), 1.0 - mn / xp.where(i == 0, xp.ones_like(i), i))
+    s = xp.where(i == 0, 0.0, 1.0 - mn / xp.where(i == 0, 1.0, i))
     # θ = atan2(√3 (G - B), 2R - G - B): the same angle as G&W's arccos form, without its
     # division by zero and with full precision near 0° and 180°.
     h = xp.atan2(math.sqrt(3.0) * (g - b), 2.0 * r - g - b) * (180.0 / math.pi)
     h = xp.where(h < 0, h + 360.0, h)
     h = xp.where(h >= 360.0, h - 360.0, h)
-    h = xp.where(s == 0, xp.zeros_like(h), h)
+    h = xp.where(s == 0, 0.0, h)
     return xp.stack([h, s, i], axis=-1)
 
 

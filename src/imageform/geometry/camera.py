@@ -133,7 +133,7 @@ def _project_xp(
 def _pixels(Xc: Array, K: Array, ndim: int, xp: Any) -> tuple[Array, Array]:
     z = Xc[..., 2]
     front = (z > 0) & (z < math.inf)
-    zs = xp.where(front, z, xp.ones_like(z))  # no division by zero; gradients stay finite
+    zs = xp.where(front, z, 1.0)  # no division by zero; gradients stay finite
     x = Xc[..., 0] / zs
     y = Xc[..., 1] / zs
     k = K / K[..., 2:3, 2:3]
@@ -538,7 +538,7 @@ class Camera:
         if self.distortion is None:
             return xy
         ideal, ok = self.distortion.undistort(xy)
-        return xp.where(ok[..., None], ideal, xp.full_like(ideal, float("nan")))
+        return xp.where(ok[..., None], ideal, float("nan"))
 
     def backproject(self, uv: ArrayLike) -> Array:
         """Return unit world-frame directions of rays through pixels ``uv`` (from ``center``)."""

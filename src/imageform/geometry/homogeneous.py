@@ -95,9 +95,9 @@ def _dehomogenize(points: ArrayLike, at_infinity: str) -> Dehomogenized:
             f"{n_inf} of the points have w = 0 (at infinity) and no Euclidean coordinates; "
             "pass at_infinity='nan' to get NaN, or use from_homogeneous_masked for a mask"
         )
-    safe_w = xp.where(w != 0, w, xp.ones_like(w))
+    safe_w = xp.where(w != 0, w, 1.0)
     out = p[..., :-1] / safe_w
-    out = xp.where(w != 0, out, xp.full_like(out, float("nan")))
+    out = xp.where(w != 0, out, float("nan"))
     return Dehomogenized(out, finite)
 
 
@@ -262,10 +262,10 @@ def _normalize_homogeneous_point(x: Array, xp: Any, *, what: str) -> Array:
         raise DegenerateConfigurationError(what)
     # Relative test: w is "zero" when it is at rounding level compared with (x, y).
     tiny = xp.abs(x[..., 2]) <= 8 * xp.finfo(x.dtype).eps * norm
-    w = xp.where(tiny, xp.ones_like(x[..., 2]), x[..., 2])
+    w = xp.where(tiny, 1.0, x[..., 2])
     finite_pt = x / w[..., None]
     dnorm = xp.sqrt(x[..., 0] ** 2 + x[..., 1] ** 2)
-    dnorm = xp.where(dnorm == 0, xp.ones_like(dnorm), dnorm)
+    dnorm = xp.where(dnorm == 0, 1.0, dnorm)
     sign = xp.where(x[..., 0] != 0, sign_of(x[..., 0], xp), sign_of(x[..., 1], xp))
     ideal = xp.stack(
         (x[..., 0] * sign / dnorm, x[..., 1] * sign / dnorm, xp.zeros_like(dnorm)), axis=-1
@@ -302,7 +302,7 @@ def are_collinear(points: ArrayLike, *, tol: float = 1e-9) -> Array:
         )
     centred = p - xp.mean(p, axis=-2, keepdims=True)
     s = linalg(xp).svdvals(centred)
-    return s[..., -1] <= tol * xp.where(s[..., 0] == 0, xp.ones_like(s[..., 0]), s[..., 0])
+    return s[..., -1] <= tol * xp.where(s[..., 0] == 0, 1.0, s[..., 0])
 
 
 def cross_ratio(a: ArrayLike, b: ArrayLike, c: ArrayLike, d: ArrayLike) -> Array:

@@ -154,9 +154,9 @@ def horizon_line(K: ArrayLike, R: ArrayLike | None = None, up: ArrayLike | str =
     ab = xp.sqrt(l[..., 0] ** 2 + l[..., 1] ** 2)
     scale = xp.sqrt(xp.sum(l * l, axis=-1))
     at_inf = ab <= 8 * xp.finfo(l.dtype).eps * scale
-    ab_safe = xp.where(at_inf, xp.ones_like(ab), ab)
+    ab_safe = xp.where(at_inf, 1.0, ab)
     sign = xp.where(l[..., 1] != 0, sign_of(l[..., 1], xp), sign_of(l[..., 0], xp))
-    sign = xp.where(sign == 0, xp.ones_like(sign), sign)
+    sign = xp.where(sign == 0, 1.0, sign)
     finite = l * (sign / ab_safe)[..., None]
     inf_line = xp.zeros_like(l) + xp.asarray([0.0, 0.0, 1.0], dtype=l.dtype, device=device_of(l))
     return xp.where(at_inf[..., None], inf_line, finite) + 0.0
@@ -366,7 +366,7 @@ def vanishing_point_from_lines(lines: ArrayLike, weights: ArrayLike | None = Non
     foot = -L[:, 2:3] * L[:, :2]
     centre = xp.mean(foot, axis=0)
     spread = xp.mean(xp.sqrt(xp.sum((foot - centre) ** 2, axis=-1)))
-    s = xp.where(spread > 0, spread / math.sqrt(2.0), xp.ones_like(spread))
+    s = xp.where(spread > 0, spread / math.sqrt(2.0), 1.0)
     # point transform x' = (x - centre) / s  ->  line transform l' = T^{-T} l
     a, b, c = L[:, 0], L[:, 1], L[:, 2]
     c2 = (c + a * centre[0] + b * centre[1]) / s
