@@ -236,9 +236,21 @@ def constant(values: np.ndarray, like: Any, xp: Any) -> Any:
     if out is None:
         if len(_CONSTANTS) >= _MAX_CONSTANTS:
             _CONSTANTS.clear()
-        out = xp.asarray(np.ascontiguousarray(values), dtype=like.dtype, device=dev, copy=True)
+        out = _upload(values, like, xp, dev)
         _CONSTANTS[key] = out
     return out
+
+
+def _upload(values: np.ndarray, like: Any, xp: Any, dev: Any) -> Any:
+    arr = np.ascontiguousarray(values)
+    if array_api_compat.is_torch_array(like):
+        import torch
+
+        # a plain tensor even when the first call runs under inference_mode: an inference
+        # tensor in the cache would break every later call that records gradients
+        with torch.inference_mode(False):
+            return torch.tensor(arr, dtype=like.dtype, device=dev)
+    return xp.asarray(arr, dtype=like.dtype, device=dev, copy=True)
 
 
 def float_dtype(x: Any, xp: Any, *, integer: str = IMAGE_INTEGER_DTYPE) -> Any:

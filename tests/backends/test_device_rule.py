@@ -101,3 +101,26 @@ def test_explicit_check_reads_on_a_device() -> None:
     # the implicit check of xy_to_xyz is not read on a device
     out = c.xy_to_xyz(torch.tensor([[0.7, 0.7]], dtype=torch.float64))
     assert tuple(out.shape) == (1, 3)
+
+
+def test_cached_constants_survive_inference_mode() -> None:
+    # the first call under inference_mode fills the constant cache; a later call with
+    # gradients must still work (an inference tensor cannot be saved for backward)
+    import imageform._backend as b
+
+    b._CONSTANTS.clear()
+    with torch.inference_mode():
+        c.convert(torch.rand(2, 2, 3, dtype=torch.float64), "srgb", "lab")
+    x = torch.rand(2, 2, 3, dtype=torch.float64, requires_grad=True)
+    c.convert(x, "srgb", "lab").sum().backward()
+    assert x.grad is not None and torch.isfinite(x.grad).all()
+
+
+def test_constants_are_uploaded_once() -> None:
+    import imageform._backend as b
+
+    x = torch.rand(2, 2, 3, dtype=torch.float32)
+    c.convert(x, "srgb", "lab")
+    n = len(b._CONSTANTS)
+    c.convert(x, "srgb", "lab")
+    assert len(b._CONSTANTS) == n > 0

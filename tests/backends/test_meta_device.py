@@ -66,17 +66,21 @@ def _run_on_meta(fn: Callable[..., Any], args: tuple[Any, ...], dtype: Any = Non
     return out
 
 
-@pytest.mark.parametrize("placement", ["all", "first"])
+@pytest.mark.parametrize("placement", ["all", "first", "last"])
 @pytest.mark.parametrize("case", CASES, ids=[cs.name for cs in CASES])
 def test_matrix_case_on_meta(case: Case, placement: str) -> None:
     if case.name in NEEDS_VALUES:
         pytest.skip(NEEDS_VALUES[case.name])
     ref = _result(case, case.fn(*case.args))
-    if placement == "first":
+    if placement in ("first", "last"):
+        # one argument on meta, the others NumPy (a GPU image with a K typed as a list):
+        # the computation follows the device array, the parameters move to it
         if len(case.args) < 2:
             pytest.skip("one array argument")
+        i = 0 if placement == "first" else len(case.args) - 1
+        args = [_meta(a) if j == i else a for j, a in enumerate(case.args)]
         with DeviceGuard() as guard:
-            out = _result(case, case.fn(_meta(case.args[0]), *case.args[1:]))
+            out = _result(case, case.fn(*args))
         assert not guard.syncs, f"operators that wait for the device: {guard.syncs}"
     else:
         out = _result(case, _run_on_meta(case.fn, case.args))

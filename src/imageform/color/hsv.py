@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from imageform._backend import device_of, namespace
+from imageform._backend import common_device, device_of, namespace
 from imageform._colormath import hexcone_hue as _hue
 from imageform._colormath import hsv_to_rgb as _hsv_to_srgb
 from imageform._colormath import rgb_to_hsv as _srgb_to_hsv
@@ -258,8 +258,8 @@ def hue_difference(h1: object, h2: object) -> Any:
     >>> float(hue_difference(350.0, 10.0))
     20.0
     """
-    a = as_float(h1, "h1", integer="float64")
-    xp = namespace(a)
+    xp = namespace(h1, h2)
+    a = as_float(h1, "h1", xp=xp, integer="float64", device=common_device(h1, h2))
     b = as_float(h2, "h2", xp=xp, dtype=a.dtype, device=device_of(a))
     try:
         np.broadcast_shapes(tuple(a.shape), tuple(b.shape))

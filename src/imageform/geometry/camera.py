@@ -21,7 +21,7 @@ from typing import Any, Literal, NamedTuple
 
 import numpy as np
 
-from imageform._backend import device_of, linalg, namespace, sign_of, use_numba
+from imageform._backend import common_device, device_of, linalg, namespace, sign_of, use_numba
 from imageform._typing import Array, ArrayLike
 from imageform._validate import any_value, check_option, check_rotation, format_shape
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
@@ -79,7 +79,7 @@ def _prepare(
     t: ArrayLike | None,
 ) -> tuple[Any, Array, Array, Array, Array]:
     xp = namespace(points, K, R, t)
-    X = as_points(points, "points", 3, xp=xp, finite=False)
+    X = as_points(points, "points", 3, xp=xp, finite=False, device=common_device(points, K, R, t))
     dev = device_of(X)
     Km = as_matrix(K, "K", (3, 3), xp=xp, dtype=X.dtype, device=dev)
     _check_K(Km, xp)
@@ -229,7 +229,7 @@ def projection_matrix(
            [  0.,   0.,   1.,   5.]])
     """
     xp = namespace(K, R, t)
-    Km = as_matrix(K, "K", (3, 3), xp=xp)
+    Km = as_matrix(K, "K", (3, 3), xp=xp, device=common_device(K, R, t))
     dev = device_of(Km)
     Rm = (
         xp.eye(3, dtype=Km.dtype, device=dev)
@@ -327,7 +327,7 @@ def backproject(
     """
     plane = check_option(image_plane, _PLANES, "image plane")
     xp = namespace(uv, K, R)
-    p = as_points(uv, "uv", 2, xp=xp)
+    p = as_points(uv, "uv", 2, xp=xp, device=common_device(uv, K, R))
     Km = as_matrix(K, "K", (3, 3), xp=xp, dtype=p.dtype, device=device_of(p))
     _check_K(Km, xp)
     Km = _plane_K(Km, plane, xp)
@@ -360,7 +360,7 @@ def unproject(
     """
     plane = check_option(image_plane, _PLANES, "image plane")
     xp = namespace(uv, depth, K, R, t)
-    p = as_points(uv, "uv", 2, xp=xp)
+    p = as_points(uv, "uv", 2, xp=xp, device=common_device(uv, depth, K, R, t))
     dev = device_of(p)
     z = as_float(depth, "depth", xp=xp, dtype=p.dtype, device=dev)
     try:

@@ -21,7 +21,7 @@ from typing import Any
 
 import numpy as np
 
-from imageform._backend import device_of, namespace
+from imageform._backend import common_device, device_of, namespace
 from imageform._typing import Array, ArrayLike, FloatArray
 from imageform._validate import any_value, as_real, check_rotation
 from imageform.errors import InvalidInputError
@@ -49,7 +49,7 @@ def _world_to_cam(
     points: ArrayLike, R: ArrayLike | None, t: ArrayLike | None, K: ArrayLike | None = None
 ) -> tuple[Any, Array]:
     xp = namespace(points, R, t, K)
-    X = as_points(points, "points", 3, xp=xp)
+    X = as_points(points, "points", 3, xp=xp, device=common_device(points, R, t, K))
     if R is not None:
         Rm = as_matrix(R, "R", (3, 3), xp=xp, dtype=X.dtype, device=device_of(X))
         check_rotation(Rm, "R", xp=xp)

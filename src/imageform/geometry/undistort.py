@@ -468,6 +468,8 @@ def undistort_image(
 def _remap_generic(image: Any, map_uv: Any, fill: float, xp: Any) -> Any:
     """remap_bilinear for non-NumPy Array-API arrays (same namespace and device out)."""
     img = as_image(image, "image", channels=None, xp=xp, range_check=False, finite=False)
+    if device_of(img) != common_device(image, map_uv):  # a NumPy image, a device map
+        img = xp.asarray(img, device=common_device(image, map_uv))
     if img.ndim < 2:
         raise InvalidInputError(
             f"expected image of shape (H, W) or (..., H, W, C), got {format_shape(img.shape)}"
