@@ -18,8 +18,16 @@ that compute, counted by a dispatch mode: what a CUDA run would launch), whether
 ran **without a host synchronisation** (CUDA: ``torch.cuda.set_sync_debug_mode("error")``
 around one call; a CPU cannot tell: "-") and the **ratio to kornia** (its time over
 imageform's: above 1, imageform is faster). ``--compile`` adds rows for the same imageform
-calls through ``torch.compile(fullgraph=True)`` (the fused path; compiling costs about a
-minute per call on first use).
+calls through ``torch.compile(fullgraph=True)`` (the fused path), for the first dtype only
+(compiling costs up to a minute per call on first use).
+
+On a lent GPU, the whole check is one command (about 5-8 minutes on an H100/H200, most of
+it compiling; the device's budget is 15)::
+
+    PYTHONPATH=src python -m pytest -q -n 0 -p no:cacheprovider \\
+        tests/backends/test_cuda_device.py tests/backends/test_meta_device.py; \\
+    OPENBLAS_NUM_THREADS=1 PYTHONPATH=src python benchmarks/bench_gpu.py --device cuda \\
+        --compile --out benchmarks/results/gpu-h200-DATE.md
 
 Run from the repository root::
 
@@ -148,9 +156,20 @@ class Op:
 
 def measure(ops: list[Op], device: Any, dtype: Any, repeat: int, ceiling: float) -> list[list[str]]:
     """Time, count and check every op; the ratio column is ``versus``'s time over this one's."""
-    times = {op.impl: timed(op.fn, device, repeat) for op in ops}
+    times: dict[str, float] = {}
+    failed: dict[str, str] = {}
+    for op in ops:  # one failing call (a compile error ...) costs its row, not the run
+        try:
+            times[op.impl] = timed(op.fn, device, repeat)
+        except Exception as exc:
+            failed[op.impl] = f"failed: {type(exc).__name__}: {str(exc).splitlines()[0][:80]}"
     rows = []
     for op in ops:
+        if op.impl in failed:
+            rows.append(
+                [op.name, str(dtype).removeprefix("torch."), op.impl, *"-----", failed[op.impl]]
+            )
+            continue
         t = times[op.impl]
         gbs = op.nbytes / t / 1e9
         ratio = f"{times[op.versus] / t:.2f}x" if op.versus in times else "-"
@@ -173,7 +192,7 @@ def measure(ops: list[Op], device: Any, dtype: Any, repeat: int, ceiling: float)
 def _compiled(fn: Callable[..., Any], *args: Any) -> Callable[[], Any]:
     import torch
 
-    cfn = torch.compile(fn, fullgraph=True)
+    cfn = torch.compile(fn, fullgraph=True)  # compiled on the first (warm-up) call
     return lambda: cfn(*args)
 
 
@@ -394,11 +413,10 @@ def main() -> None:
     ceiling = copy_bandwidth(device, 8 * h * w * 3 * 4 // 3, args.repeat)
     rows = []
     for dtype in dtypes:
+        comp = args.compile and dtype == dtypes[0]  # compiled rows: the first dtype only
         for make in (ops_lab, ops_ciede2000, ops_demosaic, ops_remap):
-            rows += measure(
-                make(device, dtype, h, w, args.compile), device, dtype, args.repeat, ceiling
-            )
-        proj = ops_projection(device, dtype, int(args.points), int(args.chunk), args.compile)
+            rows += measure(make(device, dtype, h, w, comp), device, dtype, args.repeat, ceiling)
+        proj = ops_projection(device, dtype, int(args.points), int(args.chunk), comp)
         rows += measure(proj, device, dtype, args.repeat, ceiling)
     cols = [
         "operation",
