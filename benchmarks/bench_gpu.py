@@ -1,26 +1,48 @@
 """imageform on PyTorch (CUDA when available, else CPU) against kornia and the memory bandwidth.
 
-Issue 9's GPU benchmark: sRGB -> CIELAB, CIEDE2000, projection of 10^8 points and
-demosaicing (bilinear, Malvar), imageform's namespace-generic code on PyTorch tensors against
-kornia (``kornia.color.rgb_to_lab``, ``kornia.color.raw_to_rgb`` (bilinear),
-``kornia.geometry.camera.project_points``) and against the device's memory bandwidth:
-the bytes an operation must move (read inputs + write outputs, once) divided by its time,
-next to the bandwidth of a plain tensor copy on the same device (``dst.copy_(src)``, 2 x
-bytes / time), the practical ceiling of a memory-bound kernel. Kornia has no ΔE: CIEDE2000
-is compared with the bandwidth only. Each library runs in its native layout (imageform
+Issues 9 and 29's GPU benchmark, one prepared script for a lent GPU: sRGB -> CIELAB,
+CIEDE2000, projection of 10^8 points, demosaicing (bilinear, Malvar) and bilinear remapping,
+each in every ``--dtypes`` (float32 and float64 by default), imageform's namespace-generic
+code on PyTorch tensors against kornia (``kornia.color.rgb_to_lab``,
+``kornia.color.raw_to_rgb`` (bilinear), ``kornia.geometry.camera.project_points``,
+``kornia.geometry.transform.remap``) and against the device's memory bandwidth: the bytes
+an operation must move (read inputs + write outputs, once) divided by its time, as a share
+of the bandwidth of a plain tensor copy on the same device (``dst.copy_(src)``, 2 x bytes /
+time), the practical ceiling of a memory-bound kernel. Kornia has no ΔE: CIEDE2000 is
+compared with the bandwidth only. Each library runs in its native layout (imageform
 channels-last ``(H, W, 3)``, kornia channels-first ``(1, 3, H, W)``); no transposes are timed.
+
+Per row: the median time, the share of the copy bandwidth, the **kernels per call** (on
+CUDA the kernels and copies the profiler sees in one call; on a CPU the PyTorch operators
+that compute, counted by a dispatch mode: what a CUDA run would launch), whether the call
+ran **without a host synchronisation** (CUDA: ``torch.cuda.set_sync_debug_mode("error")``
+around one call; a CPU cannot tell: "-") and the **ratio to kornia** (its time over
+imageform's: above 1, imageform is faster). ``--compile`` adds rows for the same imageform
+calls through ``torch.compile(fullgraph=True)`` (the fused path), for the first dtype only
+(compiling costs up to a minute per call on first use).
+
+On a lent GPU, the whole check is one command (about 5-8 minutes on an H100/H200, most of
+it compiling; the device's budget is 15)::
+
+    PYTHONPATH=src python -m pytest -q -n 0 -p no:cacheprovider \\
+        tests/backends/test_cuda_device.py tests/backends/test_meta_device.py; \\
+    OPENBLAS_NUM_THREADS=1 PYTHONPATH=src python benchmarks/bench_gpu.py --device cuda \\
+        --compile --out benchmarks/results/gpu-h200-DATE.md
 
 Run from the repository root::
 
     OPENBLAS_NUM_THREADS=1 PYTHONPATH=src python benchmarks/bench_gpu.py --device cuda \\
-        --out benchmarks/results/gpu-h100-DATE.md
+        --compile --out benchmarks/results/gpu-h100-DATE.md
     # on a CPU: fewer points, streamed in chunks the same way
     OPENBLAS_NUM_THREADS=1 PYTHONPATH=src python benchmarks/bench_gpu.py --device cpu \\
         --points 1e7 --size 1080x1920 --out benchmarks/results/gpu-cpu-DATE.md
+    # a smoke run (tiny inputs, seconds): every row, numbers meaningless
+    PYTHONPATH=src python benchmarks/bench_gpu.py --device cpu --smoke
 
 Timings are medians over ``--repeat`` runs after a warm-up run; on CUDA every timed call is
 bracketed by ``torch.cuda.synchronize()``. Projection streams ``--points`` points through
-the device in chunks of ``--chunk`` (one resident chunk re-used, so memory stays bounded).
+the device in chunks of ``--chunk`` (one resident chunk re-used, so memory stays bounded);
+its kernel count is per chunk.
 """
 
 from __future__ import annotations
@@ -32,6 +54,7 @@ import statistics
 import sys
 import time
 from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -73,14 +96,107 @@ def copy_bandwidth(device: Any, nbytes: int, repeat: int) -> float:
     return 2 * n * 4 / t / 1e9
 
 
-def _row(name: str, impl: str, t: float, nbytes: int, ceiling: float, extra: str) -> list[str]:
-    gbs = nbytes / t / 1e9
-    return [name, impl, f"{t * 1e3:.2f}", f"{gbs:.2f}", f"{100 * gbs / ceiling:.0f} %", extra]
+def kernels_per_call(fn: Callable[[], Any], device: Any) -> int:
+    """Kernels one call launches: CUDA kernels and copies (profiler), else computing operators.
+
+    On a CPU the operators are counted by a dispatch mode (views and allocations left out):
+    each would be one CUDA kernel, so the count is the GPU's without a GPU.
+    """
+    import torch
+
+    fn()
+    _sync(device)
+    if device.type == "cuda":
+        from torch.autograd import DeviceType
+        from torch.profiler import ProfilerActivity, profile
+
+        with profile(activities=[ProfilerActivity.CPU, ProfilerActivity.CUDA]) as prof:
+            fn()
+            torch.cuda.synchronize(device)
+        return sum(1 for e in prof.events() if e.device_type == DeviceType.CUDA)
+    from tests.backends._dispatch import DeviceGuard
+
+    with DeviceGuard() as guard:
+        fn()
+    return guard.kernels
 
 
-def bench_lab(
-    device: Any, dtype: Any, h: int, w: int, repeat: int, ceiling: float
-) -> list[list[str]]:
+def sync_free(fn: Callable[[], Any], device: Any) -> str:
+    """``"yes"`` if one call runs under ``set_sync_debug_mode("error")`` (CUDA), else why not."""
+    import torch
+
+    if device.type != "cuda":
+        return "-"
+    fn()
+    torch.cuda.synchronize(device)
+    torch.cuda.set_sync_debug_mode("error")
+    try:
+        fn()
+    except RuntimeError as exc:
+        return "no: " + str(exc).splitlines()[0][:40]
+    finally:
+        torch.cuda.set_sync_debug_mode("default")
+    return "yes"
+
+
+@dataclass
+class Op:
+    """One timed call: its name, implementation, function and the bytes it must move."""
+
+    name: str
+    impl: str
+    fn: Callable[[], Any]
+    nbytes: int
+    note: str = ""
+    #: the implementation whose time the ratio column divides by this one's (kornia's name)
+    versus: str | None = None
+    #: the call whose kernels are counted (default ``fn``; a streamed op: one chunk)
+    one_call: Callable[[], Any] | None = None
+
+
+def measure(ops: list[Op], device: Any, dtype: Any, repeat: int, ceiling: float) -> list[list[str]]:
+    """Time, count and check every op; the ratio column is ``versus``'s time over this one's."""
+    times: dict[str, float] = {}
+    failed: dict[str, str] = {}
+    for op in ops:  # one failing call (a compile error ...) costs its row, not the run
+        try:
+            times[op.impl] = timed(op.fn, device, repeat)
+        except Exception as exc:
+            failed[op.impl] = f"failed: {type(exc).__name__}: {str(exc).splitlines()[0][:80]}"
+    rows = []
+    for op in ops:
+        if op.impl in failed:
+            rows.append(
+                [op.name, str(dtype).removeprefix("torch."), op.impl, *"-----", failed[op.impl]]
+            )
+            continue
+        t = times[op.impl]
+        gbs = op.nbytes / t / 1e9
+        ratio = f"{times[op.versus] / t:.2f}x" if op.versus in times else "-"
+        rows.append(
+            [
+                op.name,
+                str(dtype).removeprefix("torch."),
+                op.impl,
+                f"{t * 1e3:.3f}",
+                f"{100 * gbs / ceiling:.1f} %",
+                str(kernels_per_call(op.one_call or op.fn, device)),
+                sync_free(op.fn, device) if op.impl.startswith("imageform") else "-",
+                ratio,
+                op.note,
+            ]
+        )
+    return rows
+
+
+def _compiled(fn: Callable[..., Any], *args: Any) -> Callable[[], Any]:
+    import torch
+
+    cfn = torch.compile(fn, fullgraph=True)  # compiled on the first (warm-up) call
+    return lambda: cfn(*args)
+
+
+def ops_lab(device: Any, dtype: Any, h: int, w: int, compile_: bool) -> list[Op]:
     import kornia
     import torch
 
@@ -93,17 +209,20 @@ def bench_lab(
     theirs = kornia.color.rgb_to_lab(rgb_k)[0].permute(1, 2, 0)
     diff = float((ours - theirs).abs().max())
     nbytes = 2 * rgb.numel() * rgb.element_size()  # read RGB, write Lab
-    t_i = timed(lambda: convert(rgb, "srgb", "lab"), device, repeat)
-    t_k = timed(lambda: kornia.color.rgb_to_lab(rgb_k), device, repeat)
-    return [
-        _row(f"sRGB→Lab {h}x{w}", "imageform", t_i, nbytes, ceiling, f"{t_k / t_i:.2f}x kornia"),
-        _row(f"sRGB→Lab {h}x{w}", "kornia", t_k, nbytes, ceiling, f"max |ΔLab| {diff:.1e}"),
+    name = f"sRGB→Lab {h}x{w}"
+    ops = [
+        Op(name, "imageform", lambda: convert(rgb, "srgb", "lab"), nbytes, versus="kornia"),
+        Op(
+            name, "kornia", lambda: kornia.color.rgb_to_lab(rgb_k), nbytes, f"max |ΔLab| {diff:.1e}"
+        ),
     ]
+    if compile_:
+        fn = _compiled(lambda x: convert(x, "srgb", "lab"), rgb)
+        ops.append(Op(name, "imageform compiled", fn, nbytes, versus="kornia"))
+    return ops
 
 
-def bench_ciede2000(
-    device: Any, dtype: Any, h: int, w: int, repeat: int, ceiling: float
-) -> list[list[str]]:
+def ops_ciede2000(device: Any, dtype: Any, h: int, w: int, compile_: bool) -> list[Op]:
     import torch
 
     from imageform.color import convert, delta_e_ciede2000
@@ -112,13 +231,15 @@ def bench_ciede2000(
     lab1 = convert(torch.rand((h, w, 3), generator=g, dtype=dtype), "srgb", "lab").to(device)
     lab2 = convert(torch.rand((h, w, 3), generator=g, dtype=dtype), "srgb", "lab").to(device)
     nbytes = (2 * lab1.numel() + h * w) * lab1.element_size()  # read 2 Lab, write ΔE
-    t_i = timed(lambda: delta_e_ciede2000(lab1, lab2), device, repeat)
-    return [_row(f"CIEDE2000 {h}x{w}", "imageform", t_i, nbytes, ceiling, "kornia: none")]
+    name = f"CIEDE2000 {h}x{w}"
+    ops = [Op(name, "imageform", lambda: delta_e_ciede2000(lab1, lab2), nbytes, "kornia: none")]
+    if compile_:
+        fn = _compiled(delta_e_ciede2000, lab1, lab2)
+        ops.append(Op(name, "imageform compiled", fn, nbytes, versus="imageform"))
+    return ops
 
 
-def bench_projection(
-    device: Any, dtype: Any, n_points: int, chunk: int, repeat: int, ceiling: float
-) -> list[list[str]]:
+def ops_projection(device: Any, dtype: Any, n_points: int, chunk: int, compile_: bool) -> list[Op]:
     import kornia
     import torch
 
@@ -134,30 +255,45 @@ def bench_projection(
     Kb = K[None]
     Xb = X[None]
 
-    def ours() -> None:
-        for _ in range(n_chunks):
-            project_points(X, K)
+    def streamed(fn: Callable[[], Any]) -> Callable[[], Any]:
+        def run() -> None:
+            for _ in range(n_chunks):
+                fn()
 
-    def theirs() -> None:
-        for _ in range(n_chunks):
-            kornia.geometry.camera.project_points(Xb, Kb)
+        return run
 
     uv = project_points(X, K).uv
     diff = float((uv - kornia.geometry.camera.project_points(Xb, Kb)[0]).abs().max())
     # read (N, 3), write uv (N, 2) and the validity mask (N bytes)
     nbytes = n_chunks * chunk * (5 * X.element_size() + 1)
-    t_i = timed(ours, device, repeat)
-    t_k = timed(theirs, device, repeat)
-    label = f"projection {n_chunks * chunk:.1e} pts ({n_chunks} x {chunk:.1e})"
-    return [
-        _row(label, "imageform", t_i, nbytes, ceiling, f"{t_k / t_i:.2f}x kornia"),
-        _row(label, "kornia", t_k, nbytes - n_chunks * chunk, ceiling, f"max |Δuv| {diff:.1e}"),
+    name = f"projection {n_chunks * chunk:.1e} pts ({n_chunks} x {chunk:.1e})"
+    ops = [
+        Op(
+            name,
+            "imageform",
+            streamed(lambda: project_points(X, K)),
+            nbytes,
+            versus="kornia",
+            one_call=lambda: project_points(X, K),
+        ),
+        Op(
+            name,
+            "kornia",
+            streamed(lambda: kornia.geometry.camera.project_points(Xb, Kb)),
+            nbytes - n_chunks * chunk,
+            f"max |Δuv| {diff:.1e}; no mask",
+            one_call=lambda: kornia.geometry.camera.project_points(Xb, Kb),
+        ),
     ]
+    if compile_:
+        cfn = _compiled(lambda x, k: project_points(x, k).uv, X, K)
+        ops.append(
+            Op(name, "imageform compiled", streamed(cfn), nbytes, versus="kornia", one_call=cfn)
+        )
+    return ops
 
 
-def bench_demosaic(
-    device: Any, dtype: Any, h: int, w: int, repeat: int, ceiling: float
-) -> list[list[str]]:
+def ops_demosaic(device: Any, dtype: Any, h: int, w: int, compile_: bool) -> list[Op]:
     import kornia
     import torch
 
@@ -170,18 +306,59 @@ def bench_demosaic(
     ours_bl = demosaic(raw, "RGGB", "bilinear")
     theirs = kornia.color.raw_to_rgb(raw_k, kornia.color.CFA.BG)[0].permute(1, 2, 0)
     diff = float((ours_bl - theirs).abs().max())  # same border handling: the whole image
-    t_b = timed(lambda: demosaic(raw, "RGGB", "bilinear"), device, repeat)
-    t_m = timed(lambda: demosaic(raw, "RGGB", "malvar"), device, repeat)
-    t_k = timed(lambda: kornia.color.raw_to_rgb(raw_k, kornia.color.CFA.BG), device, repeat)
-    lab = f"demosaic {h}x{w}"
-    return [
-        _row(lab, "imageform bilinear", t_b, nbytes, ceiling, f"{t_k / t_b:.2f}x kornia"),
-        _row(lab, "imageform malvar", t_m, nbytes, ceiling, f"{t_k / t_m:.2f}x kornia bilinear"),
-        _row(lab, "kornia bilinear", t_k, nbytes, ceiling, f"max |Δ| {diff:.1e}"),
+    name = f"demosaic {h}x{w}"
+    kb = "kornia bilinear"
+    ops = [
+        Op(
+            name, "imageform bilinear", lambda: demosaic(raw, "RGGB", "bilinear"), nbytes, versus=kb
+        ),
+        Op(name, "imageform malvar", lambda: demosaic(raw, "RGGB", "malvar"), nbytes, versus=kb),
+        Op(
+            name,
+            kb,
+            lambda: kornia.color.raw_to_rgb(raw_k, kornia.color.CFA.BG),
+            nbytes,
+            f"max |Δ| {diff:.1e}",
+        ),
     ]
+    if compile_:
+        fn = _compiled(lambda r: demosaic(r, "RGGB", "bilinear"), raw)
+        ops.append(Op(name, "imageform compiled bilinear", fn, nbytes, versus=kb))
+    return ops
 
 
-def _header(device: Any, dtype: Any, ceiling: float) -> str:
+def ops_remap(device: Any, dtype: Any, h: int, w: int, compile_: bool) -> list[Op]:
+    import kornia
+    import torch
+
+    from imageform.geometry import BrownConrady, remap_bilinear, undistortion_map
+
+    g = torch.Generator(device="cpu").manual_seed(5)
+    img = torch.rand((h, w, 3), generator=g, dtype=dtype).to(device)
+    K = torch.tensor(
+        [[0.8 * w, 0, w / 2], [0, 0.8 * w, h / 2], [0, 0, 1]], dtype=torch.float64, device=device
+    )
+    m = undistortion_map((h, w), K, BrownConrady(k1=-0.2, k2=0.05))  # float64 on the device
+    mx, my = m[None, ..., 0].to(dtype), m[None, ..., 1].to(dtype)
+    img_k = img.permute(2, 0, 1).contiguous()[None]
+    # read the map (2 values) and the image once, write the image
+    nbytes = (2 * h * w) * m.element_size() + 2 * img.numel() * img.element_size()
+
+    def theirs() -> Any:
+        return kornia.geometry.transform.remap(img_k, mx, my, align_corners=True)
+
+    diff = float((remap_bilinear(img, m) - theirs()[0].permute(1, 2, 0)).abs().max())
+    name = f"remap (undistort) {h}x{w}"
+    ops = [
+        Op(name, "imageform", lambda: remap_bilinear(img, m), nbytes, versus="kornia"),
+        Op(name, "kornia", theirs, nbytes, f"max |Δ| {diff:.1e} (border rules differ)"),
+    ]
+    if compile_:
+        ops.append(Op(name, "imageform compiled", _compiled(remap_bilinear, img, m), nbytes))
+    return ops
+
+
+def _header(device: Any, dtypes: list[Any], ceiling: float) -> str:
     import kornia
     import torch
 
@@ -198,7 +375,8 @@ def _header(device: Any, dtype: Any, ceiling: float) -> str:
             pass
         dev += f", {torch.get_num_threads()} torch threads, {os.cpu_count()} cores"
     return (
-        f"Device: {device.type} ({dev}) · dtype {str(dtype).removeprefix('torch.')} · "
+        f"Device: {device.type} ({dev}) · dtypes "
+        f"{', '.join(str(d).removeprefix('torch.') for d in dtypes)} · "
         f"torch {torch.__version__} · kornia {kornia.__version__} · "
         f"Python {platform.python_version()}\n\n"
         f"Measured copy bandwidth (ceiling): **{ceiling:.1f} GB/s**\n"
@@ -210,36 +388,65 @@ def main() -> None:
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--device", default=None, help="cuda or cpu (default: cuda if available)")
-    ap.add_argument("--dtype", default="float32", choices=["float32", "float64"])
+    ap.add_argument("--dtypes", default="float32,float64", help="comma-separated dtypes")
+    ap.add_argument("--dtype", default=None, help="one dtype (same as --dtypes with one)")
     ap.add_argument("--size", default="2160x3840", help="HxW of the images (4K UHD)")
     ap.add_argument("--points", type=float, default=1e8, help="points to project")
     ap.add_argument("--chunk", type=float, default=2.5e7, help="points per streamed chunk")
     ap.add_argument("--repeat", type=int, default=5)
+    ap.add_argument("--compile", action="store_true", help="also time torch.compile'd calls")
+    ap.add_argument("--smoke", action="store_true", help="tiny inputs, one repeat: a check")
     ap.add_argument("--note", default="", help="a paragraph for the file's header")
     ap.add_argument("--out", type=Path, default=None, help="also write the Markdown here")
     args = ap.parse_args()
+    if args.smoke:
+        args.size, args.points, args.chunk, args.repeat = "16x24", 1000.0, 500.0, 1
     name = args.device or ("cuda" if torch.cuda.is_available() else "cpu")
     if name.startswith("cuda") and not torch.cuda.is_available():
         raise SystemExit("--device cuda asked for, but torch.cuda.is_available() is False")
     device = torch.device(name)
-    dtype = getattr(torch, args.dtype)
+    names = [args.dtype] if args.dtype else args.dtypes.split(",")
+    if not set(names) <= {"float32", "float64"}:
+        raise SystemExit(f"--dtypes: float32 and/or float64, got {names}")
+    dtypes = [getattr(torch, n.strip()) for n in names]
     h, w = (int(v) for v in args.size.lower().split("x"))
     ceiling = copy_bandwidth(device, 8 * h * w * 3 * 4 // 3, args.repeat)
     rows = []
-    rows += bench_lab(device, dtype, h, w, args.repeat, ceiling)
-    rows += bench_ciede2000(device, dtype, h, w, args.repeat, ceiling)
-    rows += bench_projection(device, dtype, int(args.points), int(args.chunk), args.repeat, ceiling)
-    rows += bench_demosaic(device, dtype, h, w, args.repeat, ceiling)
-    cols = ["operation", "implementation", "median ms", "GB/s moved", "of copy BW", "notes"]
-    text = "# GPU / array benchmarks (issue 9)\n\n"
+    for dtype in dtypes:
+        comp = args.compile and dtype == dtypes[0]  # compiled rows: the first dtype only
+        for make in (ops_lab, ops_ciede2000, ops_demosaic, ops_remap):
+            rows += measure(make(device, dtype, h, w, comp), device, dtype, args.repeat, ceiling)
+        proj = ops_projection(device, dtype, int(args.points), int(args.chunk), comp)
+        rows += measure(proj, device, dtype, args.repeat, ceiling)
+    cols = [
+        "operation",
+        "dtype",
+        "implementation",
+        "median ms",
+        "of copy BW",
+        "kernels/call",
+        "no host sync",
+        "vs kornia",
+        "notes",
+    ]
+    text = "# GPU / array benchmarks (issues 9, 29)\n\n"
     if args.note:
         text += args.note.strip() + "\n\n"
-    text += _header(device, dtype, ceiling) + "\n" + markdown_table(cols, rows)
+    text += _header(device, dtypes, ceiling) + "\n" + markdown_table(cols, rows)
     text += (
-        "\nGB/s moved = bytes the operation must read and write once / median time "
-        "(sRGB→Lab 2 x 3 values per pixel; CIEDE2000 7 values per pixel; projection 3 in, 2 "
-        "out per point + a 1-byte mask (kornia: no mask); demosaicing 1 in, 3 out per "
-        "pixel). Copy BW = 2 x bytes / time of `dst.copy_(src)` on the same device.\n"
+        "\nOf copy BW = (bytes the operation must read and write once / median time) / the copy "
+        "bandwidth above (sRGB→Lab 2 x 3 values per pixel; CIEDE2000 7 values per pixel; "
+        "projection 3 in, 2 out per point + a 1-byte mask (kornia: no mask); demosaicing 1 in, "
+        "3 out per pixel; remap the float64 map, 3 in and 3 out per pixel). Kernels/call: "
+        + (
+            "CUDA kernels and copies in one call (torch.profiler)"
+            if device.type == "cuda"
+            else "PyTorch operators that compute (a dispatch-mode count: the kernels a CUDA "
+            "run launches, plus the 1-4 of imageform's value checks, which run on host memory "
+            "only)"
+        )
+        + "; projection: per chunk. vs kornia: kornia's time / this row's (above 1: faster; "
+        "CIEDE2000 compiled: vs eager imageform).\n"
     )
     print(text)
     if args.out is not None:

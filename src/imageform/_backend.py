@@ -29,6 +29,8 @@ __all__ = [
     "IMAGE_INTEGER_DTYPE",
     "Array",
     "asarray_like",
+    "common_device",
+    "constant",
     "device_of",
     "float_dtype",
     "have_numba",
@@ -36,7 +38,9 @@ __all__ = [
     "is_numpy_namespace",
     "linalg",
     "namespace",
+    "reads_values",
     "scalar",
+    "sign_of",
     "to_numpy",
     "use_numba",
 ]
@@ -190,6 +194,65 @@ def device_of(x: object) -> Any:
     return None
 
 
+def common_device(*arrays: object) -> Any:
+    """Device of the first non-NumPy array among ``arrays``, or ``None``.
+
+    For the parameters of a call that are not arrays of the computing library (Python lists,
+    defaults, NumPy constants): converting them with ``device=common_device(...)`` puts them
+    where the caller's data is, so a CUDA call never mixes in CPU tensors.
+    """
+    for a in arrays:
+        dev = device_of(a)
+        if dev is not None:
+            return dev
+    return None
+
+
+#: Uploaded constants: (bytes, shape, library, dtype, device) -> array (small matrices and
+#: white points; bounded, cleared when full).
+_CONSTANTS: dict[tuple[Any, ...], Any] = {}
+_MAX_CONSTANTS = 1024
+
+
+def constant(values: np.ndarray, like: Any, xp: Any) -> Any:
+    """Return a NumPy constant (matrix, white point) as an ``xp`` array like ``like``.
+
+    NumPy: a cast copy. PyTorch and CuPy: uploaded once per device and dtype and cached, so a
+    call does not copy its constants host-to-device each time; inside ``torch.compile``
+    tracing the constant is made in the graph instead (no cache, no ``.tolist()``).
+    """
+    if isinstance(like, np.ndarray):
+        return np.ascontiguousarray(values, dtype=like.dtype)
+    dev = device_of(like)
+    if array_api_compat.is_torch_array(like):
+        import torch
+
+        if torch.compiler.is_compiling():
+            return torch.as_tensor(values, dtype=like.dtype, device=dev)
+    elif not array_api_compat.is_cupy_array(like):
+        return xp.asarray(values.tolist(), dtype=like.dtype, device=dev)
+    key = (values.tobytes(), values.shape, xp.__name__, str(like.dtype), str(dev))
+    out = _CONSTANTS.get(key)
+    if out is None:
+        if len(_CONSTANTS) >= _MAX_CONSTANTS:
+            _CONSTANTS.clear()
+        out = _upload(values, like, xp, dev)
+        _CONSTANTS[key] = out
+    return out
+
+
+def _upload(values: np.ndarray, like: Any, xp: Any, dev: Any) -> Any:
+    arr = np.ascontiguousarray(values)
+    if array_api_compat.is_torch_array(like):
+        import torch
+
+        # a plain tensor even when the first call runs under inference_mode: an inference
+        # tensor in the cache would break every later call that records gradients
+        with torch.inference_mode(False):
+            return torch.tensor(arr, dtype=like.dtype, device=dev)
+    return xp.asarray(arr, dtype=like.dtype, device=dev, copy=True)
+
+
 def float_dtype(x: Any, xp: Any, *, integer: str = IMAGE_INTEGER_DTYPE) -> Any:
     """Return the floating dtype a computation on ``x`` runs in.
 
@@ -224,6 +287,56 @@ def asarray_like(x: object, xp: Any, dtype: Any = None, device: Any = None) -> A
     return xp.asarray(x, dtype=dtype)
 
 
+#: Host values (a tuple, not a union: ``torch.compile`` traces ``isinstance`` with it).
+_HOST_TYPES = (np.ndarray, np.generic, float, int)
+
+
+def _env_device_checks() -> bool:
+    return os.environ.get("IMAGEFORM_DEVICE_CHECKS", "") not in ("", "0")
+
+
+def reads_values(x: object) -> bool:
+    """Whether a boundary check may read the values of ``x`` (docs/design.md, "Devices").
+
+    True when the data is in host memory and reading it costs no synchronisation: NumPy
+    arrays, Python numbers, array-api-strict arrays, PyTorch tensors on the CPU (outside
+    ``torch.compile`` tracing, where values are unknown). False for everything else (CUDA,
+    ROCm, MPS and ``meta`` tensors, CuPy, JAX): there imageform checks shapes and dtypes only,
+    and a NaN or inf in the input comes out as NaN/inf in the output instead of an error. Set
+    ``IMAGEFORM_DEVICE_CHECKS=1`` to read device values too (each check then waits for the
+    device). Dask arrays answer True; their checks run per chunk, lazily.
+    """
+    if isinstance(x, _HOST_TYPES):
+        return True
+    if array_api_compat.is_torch_array(x):
+        import torch
+
+        if torch.compiler.is_compiling():
+            return False
+        if x.device.type == "cpu":
+            return True
+        return _env_device_checks()
+    if not _is_array(x) or array_api_compat.is_numpy_array(x) or array_api_compat.is_dask_array(x):
+        return True
+    if type(x).__module__.startswith("array_api_strict"):
+        return True
+    return _env_device_checks()
+
+
+def sign_of(x: Any, xp: Any) -> Any:
+    """``xp.sign(x)`` (NaN stays NaN) without array-api-compat's masked write on PyTorch.
+
+    array-api-compat patches ``torch.sign``'s NaN with ``out[isnan(x)] = nan``: a boolean
+    index, which on CUDA waits for the device (``nonzero``) and fails on ``meta``; one
+    ``where`` does the same on the device.
+    """
+    if array_api_compat.is_torch_array(x):
+        import torch
+
+        return torch.where(torch.isnan(x), x, torch.sign(x))
+    return xp.sign(x)
+
+
 def scalar(x: Any) -> float:
     """Convert a 0-d array (any library, any device, with or without gradient) to a Python float."""
     if hasattr(x, "detach"):
@@ -232,9 +345,16 @@ def scalar(x: Any) -> float:
 
 
 def to_numpy(x: object) -> np.ndarray:
-    """Return a NumPy view/copy of any array (moves GPU tensors to host, detaches gradients)."""
+    """Return a NumPy view/copy of any array (moves GPU tensors to host, detaches gradients).
+
+    An explicit copy to the host (CuPy refuses the implicit ``np.asarray``): for results
+    that are host objects by contract (reports, Python numbers), never inside a pointwise
+    computation.
+    """
     if array_api_compat.is_torch_array(x):
         return np.asarray(x.detach().cpu().numpy())
+    if array_api_compat.is_cupy_array(x):
+        return np.asarray(x.get())  # type: ignore[attr-defined]
     return np.asarray(x)
 
 

@@ -81,14 +81,14 @@ def srgb_encode(xp: Any, lin: Any) -> Any:
 def hexcone_hue(xp: Any, r: Any, g: Any, b: Any, mx: Any, delta: Any) -> Any:
     """Hexcone hue in degrees from RGB, max and chroma (delta); 0 where delta = 0."""
     zero = delta == 0
-    d = xp.where(zero, xp.ones_like(delta), delta)
+    d = xp.where(zero, 1.0, delta)
     hr = (g - b) / d
     hg = (b - r) / d + 2.0
     hb = (r - g) / d + 4.0
     h = xp.where(mx == r, hr, xp.where(mx == g, hg, hb)) * 60.0
     h = xp.where(h < 0, h + 360.0, h)
     h = xp.where(h >= 360.0, h - 360.0, h)
-    return xp.where(zero, xp.zeros_like(h), h)
+    return xp.where(zero, 0.0, h)
 
 
 def rgb_to_hsv(xp: Any, rgb: Any) -> Any:
@@ -100,7 +100,7 @@ def rgb_to_hsv(xp: Any, rgb: Any) -> Any:
     mx = xp.maximum(xp.maximum(r, g), b)
     mn = xp.minimum(xp.minimum(r, g), b)
     delta = mx - mn
-    s = xp.where(mx == 0, xp.zeros_like(mx), delta / xp.where(mx == 0, xp.ones_like(mx), mx))
+    s = xp.where(mx == 0, 0.0, delta / xp.where(mx == 0, 1.0, mx))
     return xp.stack([hexcone_hue(xp, r, g, b, mx, delta), s, mx], axis=-1)
 
 

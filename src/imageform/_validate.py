@@ -25,11 +25,13 @@ from imageform._backend import (
     float_dtype,
     is_dask_namespace,
     namespace,
+    reads_values,
     scalar,
 )
 from imageform.errors import InvalidInputError, UnknownOptionError
 
 __all__ = [
+    "any_value",
     "as_bool",
     "as_float",
     "as_image",
@@ -96,9 +98,10 @@ def _check_values(x: Any, xp: Any, name: str, *, finite: bool, range_check: bool
     """Run the value checks of :func:`check_finite` and :func:`as_image` on a float array.
 
     NaN/inf (``finite``) and 0-255 values stored as floats (``range_check``), from one
-    min/max reduction.
+    min/max reduction. Skipped where the values are on a device (:func:`reads_values`):
+    there NaN and inf propagate to the result instead (docs/design.md, "Devices").
     """
-    if not (finite or range_check) or math.prod(x.shape) == 0:
+    if not (finite or range_check) or math.prod(x.shape) == 0 or not reads_values(x):
         return
     lo, mx = _min_max(x, xp)
     if finite and not (math.isfinite(lo) and math.isfinite(mx)):
@@ -110,8 +113,22 @@ def _check_values(x: Any, xp: Any, name: str, *, finite: bool, range_check: bool
         )
 
 
+def any_value(cond: Any, xp: Any) -> bool:
+    """``bool(xp.any(cond))`` for a boundary check; False, unread, on device arrays.
+
+    The condition is read only where :func:`imageform._backend.reads_values` allows (host
+    memory); on a GPU (or ``meta``) it is skipped, so the check never waits for the device,
+    and the bad elements come out as NaN/inf or flagged in the function's documented mask
+    instead of an error (docs/design.md, "Devices").
+    """
+    return reads_values(cond) and bool(xp.any(cond))
+
+
 def check_finite(x: Any, name: str, xp: Any | None = None) -> None:
-    """Raise :class:`InvalidInputError` if ``x`` holds NaN or inf."""
+    """Raise :class:`InvalidInputError` if ``x`` holds NaN or inf.
+
+    On device arrays (:func:`imageform._backend.reads_values` is False) nothing is read.
+    """
     xp = namespace(x) if xp is None else xp
     if xp.isdtype(x.dtype, "real floating"):
         _check_values(x, xp, name, finite=True, range_check=False)
@@ -196,6 +213,8 @@ def check_rotation(R: Any, name: str = "R", *, xp: Any | None = None, atol: floa
     with ``max(atol, 1e-4)``.
     """
     xp = namespace(R) if xp is None else xp
+    if not reads_values(R):  # on a device: no synchronising check (docs/design.md)
+        return
     if R.dtype == xp.float32:
         atol = max(atol, 1e-4)
     eye = xp.eye(3, dtype=R.dtype, device=device_of(R))
@@ -814,8 +833,8 @@ def _all_finite(out: Any) -> bool:
     if isinstance(out, float | np.generic | np.ndarray):
         return bool(np.all(np.isfinite(out)))
     xp = namespace(out)
-    if is_dask_namespace(xp):
-        return True  # lazy: not computed here
+    if is_dask_namespace(xp) or not reads_values(out):
+        return True  # lazy, or on a device: not read here
     return bool(xp.all(xp.isfinite(out)))
 
 

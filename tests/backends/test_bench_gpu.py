@@ -14,27 +14,16 @@ def test_bench_gpu_runs_tiny(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) ->
     from benchmarks import bench_gpu
 
     out = tmp_path / "gpu.md"
-    argv = [
-        "bench_gpu.py",
-        "--device",
-        "cpu",
-        "--size",
-        "16x24",
-        "--points",
-        "1000",
-        "--chunk",
-        "500",
-        "--repeat",
-        "1",
-        "--note",
-        "tiny",
-        "--out",
-        str(out),
-    ]
+    argv = ["bench_gpu.py", "--device", "cpu", "--smoke", "--note", "tiny", "--out", str(out)]
     monkeypatch.setattr(sys, "argv", argv)
     bench_gpu.main()
     text = out.read_text()
-    rows = [r.split(" | ")[1] for r in text.splitlines() if r.startswith("| ") and "ms" not in r]
-    assert rows.count("imageform") == 3 and rows.count("kornia") == 2  # Lab, ΔE00, projection
-    assert {"imageform bilinear", "imageform malvar", "kornia bilinear"} <= set(rows)
+    rows = [r.split(" | ") for r in text.splitlines() if r.startswith("| ") and "ms" not in r]
+    for dtype in ("float32", "float64"):
+        impls = [r[2] for r in rows if r[1] == dtype]
+        # Lab, ΔE00, remap, projection; Lab, remap, projection
+        assert impls.count("imageform") == 4 and impls.count("kornia") == 3
+        assert {"imageform bilinear", "imageform malvar", "kornia bilinear"} <= set(impls)
+    kernels = {(r[0].removeprefix("| ").split()[0], r[1], r[2]): int(r[5]) for r in rows}
+    assert 0 < kernels[("sRGB→Lab", "float32", "imageform")] < 40  # counted per call
     assert "projection 1.0e+03 pts (2 x 5.0e+02)" in text and "tiny" in text

@@ -287,8 +287,6 @@ def ciede2000_twin(xp: Any, lab1: Any, lab2: Any, kL: float, kC: float, kH: floa
     """CIEDE2000 of two arrays of shape ``(..., 3)`` in namespace ``xp`` (the kernel's twin)."""
     L1, a1, b1 = lab1[..., 0], lab1[..., 1], lab1[..., 2]
     L2, a2, b2 = lab2[..., 0], lab2[..., 1], lab2[..., 2]
-    zero = xp.zeros_like(L1)
-    one = xp.ones_like(L1)
     C1 = xp.sqrt(a1 * a1 + b1 * b1)
     C2 = xp.sqrt(a2 * a2 + b2 * b2)
     Cb = 0.5 * (C1 + C2)
@@ -304,27 +302,27 @@ def ciede2000_twin(xp: Any, lab1: Any, lab2: Any, kL: float, kC: float, kH: floa
     dot = a1p * a2p + b1 * b2
     cross = a1p * b2 - a2p * b1
     low1 = (b1 > 0) | ((b1 == 0) & (a1p > 0))
-    sgn = xp.where((cross > 0) | ((cross == 0) & low1), one, -one)
+    sgn = xp.where((cross > 0) | ((cross == 0) & low1), 1.0, xp.full_like(L1, -1.0))
     acute = dot >= 0
     den = pr + dot
     # below sqrt(smallest normal) the reciprocals would overflow; there ΔH' <= 2 sqrt(C1'C2')
     # is below 1e-76 (float64), and a chroma that small is treated as zero (Sharma's rule)
     tiny = float(xp.finfo(L1.dtype).smallest_normal) ** 0.5
     den_ok = den > tiny
-    dh_acute = xp.where(den_ok, cross * xp.sqrt(2.0 / xp.where(den_ok, den, one)), zero)
+    dh_acute = xp.where(den_ok, cross * xp.sqrt(2.0 / xp.where(den_ok, den, 1.0)), 0.0)
     obt = 2.0 * (pr - dot)
-    dh_obtuse = sgn * xp.sqrt(xp.where(obt > 0, obt, zero))
+    dh_obtuse = sgn * xp.sqrt(xp.where(obt > 0, obt, 0.0))
     dH = xp.where(acute, dh_acute, dh_obtuse)
-    i1 = xp.where(C1p > tiny, 1.0 / xp.where(C1p > tiny, C1p, one), zero)
-    i2 = xp.where(C2p > tiny, 1.0 / xp.where(C2p > tiny, C2p, one), zero)
+    i1 = xp.where(C1p > tiny, 1.0 / xp.where(C1p > tiny, C1p, 1.0), 0.0)
+    i2 = xp.where(C2p > tiny, 1.0 / xp.where(C2p > tiny, C2p, 1.0), 0.0)
     u1x, u1y, u2x, u2y = a1p * i1, b1 * i1, a2p * i2, b2 * i2
     vx = xp.where(acute, u1x + u2x, sgn * (u2y - u1y))
     vy = xp.where(acute, u1y + u2y, -sgn * (u2x - u1x))
     n2 = vx * vx + vy * vy
     n_ok = n2 > 0
-    n = xp.sqrt(xp.where(n_ok, n2, one))
-    c = xp.where(n_ok, vx / n, one)
-    s = xp.where(n_ok, vy / n, zero)
+    n = xp.sqrt(xp.where(n_ok, n2, 1.0))
+    c = xp.where(n_ok, vx / n, 1.0)
+    s = xp.where(n_ok, vy / n, 0.0)
     c2 = c * c - s * s
     s2 = 2.0 * c * s
     c3 = c * c2 - s * s2

@@ -14,7 +14,7 @@ from collections.abc import Collection
 from typing import Any
 
 from imageform import _validate as _v
-from imageform._backend import is_dask_namespace, namespace
+from imageform._backend import is_dask_namespace, namespace, reads_values
 from imageform.errors import InvalidInputError
 
 __all__ = [
@@ -117,12 +117,15 @@ def check_option(value: object, valid: Collection[str], what: str, name: str = "
 
 
 def check_magnitude(arr: Any, name: str, xp: Any | None = None) -> None:
-    """Refuse values beyond :data:`MAX_COLOR_MAGNITUDE` (computed lazily for Dask: skipped)."""
+    """Refuse values beyond :data:`MAX_COLOR_MAGNITUDE`.
+
+    Skipped for Dask (lazy) and device arrays (:func:`imageform._backend.reads_values`).
+    """
     xp = namespace(arr) if xp is None else xp
-    if is_dask_namespace(xp) or math.prod(arr.shape) == 0:
+    if is_dask_namespace(xp) or math.prod(arr.shape) == 0 or not reads_values(arr):
         return
     limit = MAX_COLOR_MAGNITUDE["float32" if arr.dtype == xp.float32 else "float64"]
-    lo, hi = float(xp.min(arr)), float(xp.max(arr))
+    lo, hi = _v._min_max(arr, xp)  # one pass, detached
     if max(abs(lo), abs(hi)) > limit:
         raise InvalidInputError(
             f"expected {name} within ±{limit:g} (a colour value), got values {lo:.3g}..{hi:.3g}"

@@ -22,7 +22,7 @@ from typing import Any
 import numpy as np
 
 from imageform import _deprecate
-from imageform._backend import device_of, is_dask_namespace, namespace, to_numpy
+from imageform._backend import device_of, is_dask_namespace, namespace, reads_values, to_numpy
 from imageform._colormath import DAYLIGHT_HIGH as _DAYLIGHT_HIGH
 from imageform._colormath import DAYLIGHT_LOW as _DAYLIGHT_LOW
 from imageform._colormath import DAYLIGHT_RANGE as _DAYLIGHT_RANGE
@@ -30,7 +30,7 @@ from imageform._colormath import daylight_x as _daylight_x
 from imageform._colormath import daylight_xy as _daylight_xy
 from imageform._colormath import uv1960_from_xy as _uv_from_xy
 from imageform._dask import chunkwise
-from imageform._validate import as_int
+from imageform._validate import any_value, as_int
 from imageform.color._guard import as_float, as_points, check_option
 from imageform.color.cct_methods import (
     uv_to_cct_ohno2013,
@@ -171,7 +171,8 @@ def _robertson_inverse(xp: Any, xy: Any) -> tuple[Any, Any]:
     # signed distance of (u, v) from each isotemperature line (Wyszecki & Stiles, eq. 3(3.11))
     d = (v[..., None] - vt) * du - (u[..., None] - ut) * dv  # (..., 31)
     neg = d <= 0
-    if bool(xp.any(d[..., 0] < 0)) or not bool(xp.all(xp.any(neg[..., 1:], axis=-1))):
+    outside = (d[..., 0] < 0) | ~xp.any(neg[..., 1:], axis=-1)
+    if any_value(outside, xp):
         raise InvalidInputError(
             "xy outside the range of Robertson's method (CCT 1667 K to infinity)"
         )
@@ -194,7 +195,14 @@ def _robertson_inverse(xp: Any, xy: Any) -> tuple[Any, Any]:
     ddv = pick(dv, onehot_i) + f * (pick(dv, onehot_j) - pick(dv, onehot_i))
     n = xp.sqrt(ddu * ddu + ddv * ddv)
     duv = -((u - uL) * ddu + (v - vL) * ddv) / n
+    if not reads_values(outside):  # on a device: NaN where out of range, never a read-back
+        cct, duv = _nan_where(xp, outside, cct), _nan_where(xp, outside, duv)
     return cct, duv
+
+
+def _nan_where(xp: Any, bad: Any, x: Any) -> Any:
+    """``x`` with NaN where ``bad``: a device array's refusal (docs/design.md, "Devices")."""
+    return xp.where(bad, xp.asarray(math.nan, dtype=x.dtype, device=device_of(x)), x)
 
 
 def _robertson_forward(xp: Any, cct: Any, duv: Any) -> Any:
@@ -218,12 +226,16 @@ def _robertson_forward(xp: Any, cct: Any, duv: Any) -> Any:
     return _xy_from_uv(xp, uL - duv * ddu / n, vL - duv * ddv / n)
 
 
-def _check_cct_range(xp: Any, cct: Any, lo: float, hi: float, method: str) -> None:
-    if bool(xp.any(cct < lo)) or bool(xp.any(cct > hi)):
-        bad = float(xp.min(cct)) if bool(xp.any(cct < lo)) else float(xp.max(cct))
+def _check_cct_range(xp: Any, cct: Any, lo: float, hi: float, method: str) -> Any:
+    """Raise for a CCT outside ``[lo, hi]`` (host); on a device, the CCT with NaN there."""
+    if not reads_values(cct):
+        return _nan_where(xp, (cct < lo) | (cct > hi), cct)
+    if any_value(cct < lo, xp) or any_value(cct > hi, xp):
+        bad = float(xp.min(cct)) if any_value(cct < lo, xp) else float(xp.max(cct))
         raise InvalidInputError(
             f"CCT {bad:g} K outside the range of the {method} method ({lo:g} K to {hi:g} K)"
         )
+    return cct
 
 
 def cct_to_xy(cct: object, duv: object = 0.0, *, method: str = "robertson1968") -> Any:
@@ -268,8 +280,8 @@ def cct_to_xy(cct: object, duv: object = 0.0, *, method: str = "robertson1968") 
     m = check_option(method, CCT_TO_XY_METHODS, "CCT method")
     xp = namespace(cct, duv)
     T = as_float(cct, "cct", xp=xp)
-    D = as_float(duv, "duv", xp=xp, dtype=T.dtype)
-    if not is_dask_namespace(xp) and math.prod(D.shape) and float(xp.max(xp.abs(D))) > 1.0:
+    D = as_float(duv, "duv", xp=xp, dtype=T.dtype, device=device_of(T))
+    if not is_dask_namespace(xp) and any_value(xp.abs(D) > 1.0, xp):
         raise InvalidInputError("expected |duv| <= 1 (a distance in CIE 1960 uv)")
     try:
         T, D = xp.broadcast_arrays(T, D)
@@ -282,14 +294,18 @@ def cct_to_xy(cct: object, duv: object = 0.0, *, method: str = "robertson1968") 
 
 
 def _cct_to_xy_daylight(xp: Any, T: Any, D: Any) -> Any:
-    if bool(xp.any(D != 0)):
+    if any_value(D != 0, xp):
         raise InvalidInputError("the daylight method takes no duv (the locus is a curve)")
-    _check_cct_range(xp, T, *_DAYLIGHT_RANGE, "daylight")
+    T = _check_cct_range(xp, T, *_DAYLIGHT_RANGE, "daylight")
+    if not reads_values(D):
+        T = _nan_where(xp, D != 0, T)
     return _daylight_xy(xp, T)
 
 
 def _cct_to_xy_robertson(xp: Any, T: Any, D: Any) -> Any:
-    _check_cct_range(xp, T, _ROBERTSON_MIN_CCT, math.inf, "robertson1968")
+    T = _check_cct_range(xp, T, _ROBERTSON_MIN_CCT, math.inf, "robertson1968")
+    if not reads_values(D):
+        D = _nan_where(xp, xp.abs(D) > 1.0, D)
     return _robertson_forward(xp, T, D)
 
 
@@ -380,7 +396,8 @@ def _xy_to_cct_daylight(xp: Any, a: Any, n_iter: int) -> tuple[Any, Any]:
     lo_x = float(_daylight_x(np, np.asarray(_DAYLIGHT_RANGE[1])))
     hi_x = float(_daylight_x(np, np.asarray(_DAYLIGHT_RANGE[0])))
     tol = DAYLIGHT_X_TOLERANCE
-    if bool(xp.any(x < lo_x - tol)) or bool(xp.any(x > hi_x + tol)):
+    off_locus = (x < lo_x - tol) | (x > hi_x + tol)
+    if any_value(off_locus, xp):
         raise InvalidInputError(
             f"expected xy on the daylight locus, got x outside the daylight locus (x from "
             f"{lo_x:.5f} at 25000 K to {hi_x:.5f} at 4000 K)"
@@ -390,13 +407,15 @@ def _xy_to_cct_daylight(xp: Any, a: Any, n_iter: int) -> tuple[Any, Any]:
     T = xp.clip(cct, 4000.0, 25000.0)  # start from Robertson's estimate, inside the domain
     for _ in range(n_iter):
         s = 1.0 / T
-        c = xp.where(T <= 7000.0, xp.ones_like(T), xp.zeros_like(T))
+        c = xp.astype(T <= 7000.0, T.dtype)
         lo, hi = _DAYLIGHT_LOW, _DAYLIGHT_HIGH
         dx_ds = c * ((3 * lo[0] * s + 2 * lo[1]) * s + lo[2]) + (1 - c) * (
             (3 * hi[0] * s + 2 * hi[1]) * s + hi[2]
         )
         s = s - (_daylight_x(xp, T) - x) / dx_ds
         T = 1.0 / s
+    if not reads_values(off_locus):  # on a device: NaN off the locus, never a read-back
+        T = _nan_where(xp, off_locus, T)
     return T, duv
 
 

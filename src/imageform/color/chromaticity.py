@@ -17,9 +17,9 @@ import numpy as np
 import numpy.typing as npt
 
 from imageform import _deprecate
-from imageform._backend import device_of, namespace, to_numpy
+from imageform._backend import device_of, namespace, reads_values, to_numpy
 from imageform._dask import chunkwise
-from imageform._validate import as_real, as_real_ndarray, describe
+from imageform._validate import any_value, as_real, as_real_ndarray, describe
 from imageform.color._guard import as_bool, as_points, check_option
 from imageform.errors import InvalidInputError
 
@@ -215,7 +215,7 @@ def _points_in_polygon(pts: Any, poly: np.ndarray, xp: Any) -> Any:
     crosses = (y1 > y) != (y2 > y)
     dy = y2 - y1
     # edges with dy = 0 never cross (crosses is False there): any finite divisor will do
-    xint = x1 + (y - y1) * (x2 - x1) / xp.where(dy == 0, xp.ones_like(dy), dy)
+    xint = x1 + (y - y1) * (x2 - x1) / xp.where(dy == 0, 1.0, dy)
     n = xp.sum(xp.astype(crosses & (x < xint), xp.int32), axis=-1)
     return n % 2 == 1
 
@@ -250,9 +250,20 @@ def in_locus(points: object, coords: str = "xy", *, observer: int = 2) -> Any:
 
 
 def check_in_locus(points: object, coords: str = "xy", *, observer: int = 2) -> Any:
-    """``points`` as an array, raising :class:`InvalidInputError` if any lies outside the locus."""
+    """``points`` as an array, raising :class:`InvalidInputError` if any lies outside the locus.
+
+    An explicit check: it reads the answer on the host whatever the array's device (on a GPU
+    it waits for the device once); :func:`in_locus` gives the mask without reading it.
+    """
     xp = namespace(points)
     p = as_points(points, "points", 2, xp=xp)
+    _refuse_outside_locus(p, coords, observer, xp, explicit=True)
+    return p
+
+
+def _refuse_outside_locus(p: Any, coords: str, observer: int, xp: Any, *, explicit: bool) -> None:
+    if not (explicit or reads_values(p)):  # implicit check on a device: not read
+        return
     ok = in_locus(p, coords, observer=observer)
     if not bool(xp.all(ok)):
         pn, okn = to_numpy(p), to_numpy(ok)
@@ -262,7 +273,6 @@ def check_in_locus(points: object, coords: str = "xy", *, observer: int = 2) -> 
             f"chromaticity {name} = ({bad[0]:.4g}, {bad[1]:.4g}) lies outside the spectral "
             f"locus ({int(np.count_nonzero(~okn))} of {okn.size} points): no real colour has it"
         )
-    return p
 
 
 @chunkwise(1)
@@ -270,7 +280,10 @@ def xy_to_xyz(xy: object, Y: float = 1.0, *, check_locus: bool = True, observer:
     r"""XYZ of a chromaticity at luminance ``Y``: :math:`X = xY/y,\ Z = (1 - x - y)Y/y`.
 
     With ``check_locus`` (default) a chromaticity outside the spectral locus raises
-    :class:`InvalidInputError`: no real colour has it (CIE 015:2018 §7.3).
+    :class:`InvalidInputError`: no real colour has it (CIE 015:2018 §7.3). On device arrays
+    (a GPU; docs/design.md, "Devices") neither the locus nor ``y > 0`` is read: a point
+    outside gets the formula's value and ``y = 0`` gives inf (:func:`check_in_locus` is the
+    explicit check).
 
     Examples
     --------
@@ -281,8 +294,8 @@ def xy_to_xyz(xy: object, Y: float = 1.0, *, check_locus: bool = True, observer:
     p = as_points(xy, "xy", 2, xp=xp)
     Y = as_real(Y, "Y", nonnegative=True)
     if as_bool(check_locus, "check_locus"):
-        check_in_locus(p, observer=observer)
-    if bool(xp.any(p[..., 1] <= 0)):
+        _refuse_outside_locus(p, "xy", observer, xp, explicit=False)
+    if any_value(p[..., 1] <= 0, xp):
         raise InvalidInputError("expected y > 0 (y = 0 has no finite XYZ)")
     x, y = p[..., 0], p[..., 1]
     Yf = float(Y)

@@ -16,11 +16,11 @@ from __future__ import annotations
 import math
 from typing import Any
 
-from imageform._backend import device_of, namespace
+from imageform._backend import constant, namespace
 from imageform._dask import chunkwise
 from imageform.color._guard import as_image
 
-from .whitepoints import resolve_white
+from .whitepoints import named_white
 
 __all__ = [
     "lab_to_lch",
@@ -44,8 +44,7 @@ _KAPPA = 116.0 * _LIN_SLOPE  # 24389/27 = 903.296..., L* = κ Y/Yn below ε
 
 def _white_arr(white: Any, observer: int, like: Any) -> Any:
     xp = namespace(like)
-    w = resolve_white(white, observer=observer)
-    return xp.asarray(w.tolist(), dtype=like.dtype, device=device_of(like))
+    return constant(named_white(white, observer), like, xp)
 
 
 def _f(xp: Any, t: Any) -> Any:
@@ -186,7 +185,7 @@ def lch_to_lab(lch: object) -> Any:
 def _xyz_to_xyy(xp: Any, xyz: Any, w: Any) -> Any:
     s = xp.sum(xyz, axis=-1)
     zero = s == 0
-    safe = xp.where(zero, xp.ones_like(s), s)
+    safe = xp.where(zero, 1.0, s)
     wx = w[0] / (w[0] + w[1] + w[2])
     wy = w[1] / (w[0] + w[1] + w[2])
     cx = xp.where(zero, wx * xp.ones_like(s), xyz[..., 0] / safe)
@@ -197,9 +196,9 @@ def _xyz_to_xyy(xp: Any, xyz: Any, w: Any) -> Any:
 def _xyy_to_xyz(xp: Any, xyy: Any) -> Any:
     cx, cy, yy = xyy[..., 0], xyy[..., 1], xyy[..., 2]
     zero = cy == 0
-    safe = xp.where(zero, xp.ones_like(cy), cy)
-    x = xp.where(zero, xp.zeros_like(cy), cx * yy / safe)
-    z = xp.where(zero, xp.zeros_like(cy), (1.0 - cx - cy) * yy / safe)
+    safe = xp.where(zero, 1.0, cy)
+    x = xp.where(zero, 0.0, cx * yy / safe)
+    z = xp.where(zero, 0.0, (1.0 - cx - cy) * yy / safe)
     return xp.stack([x, yy, z], axis=-1)
 
 
@@ -243,7 +242,7 @@ def xyy_to_xyz(xyy: object) -> Any:
 def _uv_prime(xp: Any, xyz: Any) -> tuple[Any, Any, Any]:
     d = xyz[..., 0] + 15.0 * xyz[..., 1] + 3.0 * xyz[..., 2]
     zero = d == 0
-    safe = xp.where(zero, xp.ones_like(d), d)
+    safe = xp.where(zero, 1.0, d)
     return 4.0 * xyz[..., 0] / safe, 9.0 * xyz[..., 1] / safe, zero
 
 
@@ -253,8 +252,8 @@ def _xyz_to_luv(xp: Any, xyz: Any, w: Any) -> Any:
     up, vp, zero = _uv_prime(xp, xyz)
     fy = _f(xp, xyz[..., 1] / w[1])
     L = 116.0 * fy - 16.0
-    u = xp.where(zero, xp.zeros_like(L), 13.0 * L * (up - un))
-    v = xp.where(zero, xp.zeros_like(L), 13.0 * L * (vp - vn))
+    u = xp.where(zero, 0.0, 13.0 * L * (up - un))
+    v = xp.where(zero, 0.0, 13.0 * L * (vp - vn))
     return xp.stack([L, u, v], axis=-1)
 
 
@@ -264,13 +263,13 @@ def _luv_to_xyz(xp: Any, luv: Any, w: Any) -> Any:
     L = luv[..., 0]
     Y = w[1] * _f_inv(xp, (L + 16.0) / 116.0)
     zero = L == 0
-    safe = xp.where(zero, xp.ones_like(L), 13.0 * L)
+    safe = xp.where(zero, 1.0, 13.0 * L)
     up = luv[..., 1] / safe + un
     vp = luv[..., 2] / safe + vn
     vzero = vp == 0
-    vsafe = xp.where(vzero, xp.ones_like(vp), vp)
-    X = xp.where(zero | vzero, xp.zeros_like(L), Y * 9.0 * up / (4.0 * vsafe))
-    Z = xp.where(zero | vzero, xp.zeros_like(L), Y * (12.0 - 3.0 * up - 20.0 * vp) / (4.0 * vsafe))
+    vsafe = xp.where(vzero, 1.0, vp)
+    X = xp.where(zero | vzero, 0.0, Y * 9.0 * up / (4.0 * vsafe))
+    Z = xp.where(zero | vzero, 0.0, Y * (12.0 - 3.0 * up - 20.0 * vp) / (4.0 * vsafe))
     return xp.stack([X, Y, Z], axis=-1)
 
 

@@ -31,8 +31,8 @@ def _cmy_to_cmyk(xp: Any, cmy: Any) -> Any:
     k = xp.minimum(xp.minimum(cmy[..., 0], cmy[..., 1]), cmy[..., 2])
     den = 1.0 - k
     black = den == 0
-    safe = xp.where(black, xp.ones_like(den), den)
-    chans = [xp.where(black, xp.zeros_like(k), (cmy[..., i] - k) / safe) for i in range(3)]
+    safe = xp.where(black, 1.0, den)
+    chans = [xp.where(black, 0.0, (cmy[..., i] - k) / safe) for i in range(3)]
     return xp.stack([*chans, k], axis=-1)
 
 

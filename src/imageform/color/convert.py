@@ -49,7 +49,7 @@ from typing import Any
 import numpy as np
 
 from imageform import _deprecate
-from imageform._backend import device_of, namespace, use_numba
+from imageform._backend import constant, namespace, use_numba
 from imageform._dask import chunkwise
 from imageform._validate import check_name, describe
 from imageform.color._guard import as_float, as_image, check_option
@@ -59,7 +59,7 @@ from . import cielab, cmyk, gray, hsv, ycbcr
 from .opencv import _flip
 from .rgb_spaces import RGB_SPACES, _apply_matrix, rgb_to_xyz_matrix, xyz_to_rgb_matrix
 from .transfer import _decode_clean, _encode_clean
-from .whitepoints import resolve_white
+from .whitepoints import named_white
 
 __all__ = ["EDGES", "SPACES", "Edge", "convert", "path", "space_name", "srgb8_to_lab"]
 
@@ -109,8 +109,7 @@ _WHITE_SPACES = ("lab", "lch", "luv", "xyy")
 
 
 def _w(xp: Any, x: Any, p: dict[str, Any]) -> Any:
-    w = resolve_white(p["white"], observer=p.get("observer", 2))
-    return xp.asarray(w.tolist(), dtype=x.dtype, device=device_of(x))
+    return constant(named_white(p["white"], p.get("observer", 2)), x, xp)
 
 
 def _rgb_edges(key: str) -> list[Edge]:
@@ -181,6 +180,11 @@ EDGES: tuple[Edge, ...] = (
     Edge("xyz", "xyy", lambda xp, x, p: cielab._xyz_to_xyy(xp, x, _w(xp, x, p)), _WP, "xyz_to_xyy"),
     Edge("xyy", "xyz", lambda xp, x, p: cielab._xyy_to_xyz(xp, x), (), "xyy_to_xyz"),
 )
+
+# the default whites of the conversions (each RGB space's own) resolved once, so that a
+# conversion compiled cold by torch.compile finds them as constants
+for _k in RGB_SPACES:
+    named_white(_k)
 
 _ADJ: dict[str, list[Edge]] = {s: [] for s in SPACES}
 for _e in EDGES:

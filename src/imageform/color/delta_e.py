@@ -17,7 +17,7 @@ from typing import Any
 
 import numpy as np
 
-from imageform._backend import namespace, use_numba
+from imageform._backend import common_device, namespace, use_numba
 from imageform._dask import chunkwise
 from imageform._validate import as_real, format_shape
 from imageform.color._guard import as_points, check_magnitude, check_option
@@ -59,8 +59,9 @@ def check_positive(value: object, name: str) -> float:
 
 def _prepare(lab1: object, lab2: object) -> tuple[Any, Any, Any]:
     xp = namespace(lab1, lab2)
-    a = as_points(lab1, "lab1", 3, xp=xp)
-    b = as_points(lab2, "lab2", 3, xp=xp, device=None)
+    dev = common_device(lab1, lab2)
+    a = as_points(lab1, "lab1", 3, xp=xp, device=dev)
+    b = as_points(lab2, "lab2", 3, xp=xp, device=dev)
     check_magnitude(a, "lab1", xp)
     check_magnitude(b, "lab2", xp)
     dtype = xp.result_type(a.dtype, b.dtype)
@@ -91,9 +92,9 @@ def _delta_h_sq(xp: Any, a1: Any, b1: Any, a2: Any, b2: Any, C1: Any, C2: Any) -
     x = a1 * b2 - a2 * b1
     den = p + d
     ok = den > 0
-    acute = xp.where(ok, 2.0 * x * x / xp.where(ok, den, xp.ones_like(den)), xp.zeros_like(den))
+    acute = xp.where(ok, 2.0 * x * x / xp.where(ok, den, 1.0), 0.0)
     obtuse = 2.0 * (p - d)
-    return xp.where(d >= 0, acute, xp.where(obtuse > 0, obtuse, xp.zeros_like(obtuse)))
+    return xp.where(d >= 0, acute, xp.where(obtuse > 0, obtuse, 0.0))
 
 
 @chunkwise(1)
@@ -235,7 +236,7 @@ def delta_e_cmc(lab1: object, lab2: object, *, l: float = 2.0, c: float = 1.0) -
     )
     C14 = C1**4
     F = xp.sqrt(C14 / (C14 + 1900.0))
-    SL = xp.where(L1 < 16.0, xp.full_like(L1, 0.511), 0.040975 * L1 / (1.0 + 0.01765 * L1))
+    SL = xp.where(L1 < 16.0, 0.511, 0.040975 * L1 / (1.0 + 0.01765 * L1))
     SC = 0.0638 * C1 / (1.0 + 0.0131 * C1) + 0.638
     SH = SC * (F * T + 1.0 - F)
     tl = (L1 - b[..., 0]) / (l_ * SL)

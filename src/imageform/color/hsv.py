@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from imageform._backend import namespace
+from imageform._backend import common_device, device_of, namespace
 from imageform._colormath import hexcone_hue as _hue
 from imageform._colormath import hsv_to_rgb as _hsv_to_srgb
 from imageform._colormath import rgb_to_hsv as _srgb_to_hsv
@@ -46,7 +46,7 @@ def _srgb_to_hsl(xp: Any, rgb: Any) -> Any:
     delta = mx - mn
     light = (mx + mn) / 2.0
     den = 1.0 - xp.abs(2.0 * light - 1.0)
-    s = xp.where(den == 0, xp.zeros_like(den), delta / xp.where(den == 0, xp.ones_like(den), den))
+    s = xp.where(den == 0, 0.0, delta / xp.where(den == 0, 1.0, den))
     return xp.stack([_hue(xp, r, g, b, mx, delta), s, light], axis=-1)
 
 
@@ -65,13 +65,13 @@ def _srgb_to_hsi(xp: Any, rgb: Any) -> Any:
     r, g, b = rgb[..., 0], rgb[..., 1], rgb[..., 2]
     i = (r + g + b) / 3.0
     mn = xp.minimum(xp.minimum(r, g), b)
-    s = xp.where(i == 0, xp.zeros_like(i), 1.0 - mn / xp.where(i == 0, xp.ones_like(i), i))
+    s = xp.where(i == 0, 0.0, 1.0 - mn / xp.where(i == 0, 1.0, i))
     # θ = atan2(√3 (G - B), 2R - G - B): the same angle as G&W's arccos form, without its
     # division by zero and with full precision near 0° and 180°.
     h = xp.atan2(math.sqrt(3.0) * (g - b), 2.0 * r - g - b) * (180.0 / math.pi)
     h = xp.where(h < 0, h + 360.0, h)
     h = xp.where(h >= 360.0, h - 360.0, h)
-    h = xp.where(s == 0, xp.zeros_like(h), h)
+    h = xp.where(s == 0, 0.0, h)
     return xp.stack([h, s, i], axis=-1)
 
 
@@ -258,9 +258,9 @@ def hue_difference(h1: object, h2: object) -> Any:
     >>> float(hue_difference(350.0, 10.0))
     20.0
     """
-    a = as_float(h1, "h1", integer="float64")
-    xp = namespace(a)
-    b = as_float(h2, "h2", xp=xp, dtype=a.dtype)
+    xp = namespace(h1, h2)
+    a = as_float(h1, "h1", xp=xp, integer="float64", device=common_device(h1, h2))
+    b = as_float(h2, "h2", xp=xp, dtype=a.dtype, device=device_of(a))
     try:
         np.broadcast_shapes(tuple(a.shape), tuple(b.shape))
     except ValueError:

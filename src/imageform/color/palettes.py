@@ -16,6 +16,7 @@ from typing import Any
 
 import numpy as np
 
+from imageform._backend import device_of, to_numpy
 from imageform._validate import as_int, as_real, describe
 from imageform.color._guard import as_image, check_option
 from imageform.errors import InvalidInputError
@@ -99,6 +100,8 @@ def parse_colors(colors: object) -> np.ndarray:
                 )
             out.append([int(h[i : i + 2], 16) / 255.0 for i in (0, 2, 4)])
         return np.array(out)
+    if device_of(colors) is not None:  # a report on the host: one explicit copy of n colours
+        colors = to_numpy(colors)
     arr = np.asarray(as_image(colors, "colors"), dtype=np.float64)
     if arr.ndim != 2:
         raise InvalidInputError(f"expected colors of shape (n, 3), got {arr.shape}")

@@ -24,7 +24,7 @@ from typing import Any
 
 import numpy as np
 
-from imageform._backend import device_of, namespace
+from imageform._backend import constant, namespace
 from imageform._dask import chunkwise
 from imageform._validate import as_real_ndarray, describe
 from imageform.color._guard import as_image, check_option
@@ -257,7 +257,7 @@ def xyz_to_rgb_matrix(space: str | RGBSpace = "srgb") -> np.ndarray:
 def _apply_matrix(x: Any, m: np.ndarray) -> Any:
     """``x @ m.T`` in the namespace of ``x`` (m is float64 NumPy, cast to x's dtype)."""
     xp = namespace(x)
-    mt = xp.asarray(m.T.tolist(), dtype=x.dtype, device=device_of(x))
+    mt = constant(m.T, x, xp)
     return x @ mt
 
 

@@ -68,11 +68,11 @@ _ROMM_SLOPE = 16.0
 
 # ---------------------------------------------------------------- private kernels (clean arrays)
 def _gamma_decode(xp: Any, v: Any, gamma: float) -> Any:
-    return xp.sign(v) * xp.pow(xp.abs(v), gamma)
+    return xp.copysign(xp.pow(xp.abs(v), gamma), v)  # odd extension, NaN stays NaN
 
 
 def _gamma_encode(xp: Any, lin: Any, gamma: float) -> Any:
-    return xp.sign(lin) * xp.pow(xp.abs(lin), 1.0 / gamma)
+    return xp.copysign(xp.pow(xp.abs(lin), 1.0 / gamma), lin)
 
 
 def _bt_encode(xp: Any, lin: Any, alpha: float, beta: float) -> Any:

@@ -41,7 +41,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from imageform._backend import device_of, is_dask_namespace, namespace
-from imageform._validate import as_int, as_real, as_real_array, describe
+from imageform._validate import any_value, as_int, as_real, as_real_array, describe
 from imageform.color._guard import (
     as_bool,
     as_image,
@@ -479,7 +479,7 @@ def _gains(
     e = _estimate(xp, lin, m, percentile, p, sigma, illuminant, cct, space)
     if is_dask_namespace(xp):
         e = e.map_blocks(_check_estimate, dtype=e.dtype)  # lazily: raises at compute
-    elif not bool(xp.all(e > 0)):
+    elif any_value(~(e > 0), xp):
         _check_estimate(np.asarray(e))
     ref = xp.mean(e, axis=-1, keepdims=True) if norm == "mean" else e[..., 1:2]
     return ref / e

@@ -237,3 +237,25 @@ def resolve_white(white: Any, *, observer: int = 2, name: str = "white") -> np.n
         f"expected {name} as a name, (x, y) or (X, Y, Z) with Y > 0, all in [0, 1e6], "
         f"got {describe(white)}"
     )
+
+
+#: :func:`resolve_white`'s answers for names (read-only arrays), the lookup of every
+#: conversion that takes a white: a dict lookup instead of a resolution, and a constant
+#: ``torch.compile`` can trace (D65 is resolved when this module loads, so the default white
+#: compiles cold; other names after one eager call).
+_NAMED_WHITES: dict[tuple[str, int], np.ndarray] = {}
+
+
+def named_white(white: Any, observer: int = 2) -> np.ndarray:
+    """:func:`resolve_white` (XYZ, float64), cached for names; read-only for names."""
+    if isinstance(white, str) and isinstance(observer, int) and not isinstance(observer, bool):
+        w = _NAMED_WHITES.get((white, observer))
+        if w is None:
+            w = resolve_white(white, observer=observer)
+            w.setflags(write=False)
+            _NAMED_WHITES[(white, observer)] = w
+        return w
+    return resolve_white(white, observer=observer)
+
+
+named_white("D65")

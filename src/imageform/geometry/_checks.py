@@ -22,7 +22,7 @@ from typing import Any
 import array_api_compat
 import numpy as np
 
-from imageform._backend import is_dask_namespace, namespace, scalar, to_numpy
+from imageform._backend import is_dask_namespace, namespace, reads_values, scalar, to_numpy
 from imageform._validate import (
     as_float as _as_float,
 )
@@ -67,9 +67,14 @@ def _min_max(x: Any, xp: Any) -> tuple[float, float]:
 
 
 def check_bounded(x: Any, name: str, xp: Any | None = None, limit: float = MAX_MAGNITUDE) -> None:
-    """Refuse NaN, inf and ``|x| > limit`` in a real floating array, from one min/max pass."""
+    """Refuse NaN, inf and ``|x| > limit`` in a real floating array, from one min/max pass.
+
+    Device arrays (:func:`imageform._backend.reads_values` False) are not read.
+    """
     xp = namespace(x) if xp is None else xp
     if not xp.isdtype(x.dtype, "real floating") or math.prod(x.shape) == 0:
+        return
+    if not reads_values(x):
         return
     if is_dask_namespace(xp):  # the shared check computes what it must
         from imageform._validate import check_finite
@@ -179,8 +184,11 @@ def check_K(K: Any, xp: Any, name: str = "K", *, positive: bool = False) -> None
     """Refuse a K that is not upper-triangular with a non-zero diagonal (singular).
 
     When ``positive``, also refuse focal lengths ``K[0, 0] / K[2, 2]``, ``K[1, 1] / K[2, 2]``
-    that are not > 0. ``K`` has been through :func:`as_matrix` (finite).
+    that are not > 0. ``K`` has been through :func:`as_matrix` (finite). Device arrays
+    (:func:`imageform._backend.reads_values` False) are not read.
     """
+    if not reads_values(K):
+        return
     if (
         bool(xp.any(K[..., 2, 0] != 0))
         or bool(xp.any(K[..., 2, 1] != 0))

@@ -1,6 +1,8 @@
 """Array-API implementations of the distortion models (the plain twins of the kernels).
 
 Private: inputs are validated floating arrays of shape ``(..., 2)`` in namespace ``xp``;
+the Newton inverses stop early on host arrays and run ``max_iter`` steps on a device (no
+read-back: a fixed iteration count);
 coefficients are Python floats. Every function avoids in-place updates so that PyTorch
 gradients flow through the forward models.
 """
@@ -9,6 +11,8 @@ from __future__ import annotations
 
 import math
 from typing import Any
+
+from imageform._backend import reads_values
 
 __all__ = [
     "bc_distort_xp",
@@ -38,12 +42,29 @@ def bc_distort_xp(xy: Any, c: tuple[float, ...], xp: Any) -> Any:
     k1, k2, p1, p2, k3, k4, k5, k6 = c
     x, y = _split(xy)
     r2 = x * x + y * y
-    r4 = r2 * r2
-    r6 = r4 * r2
-    radial = (1.0 + k1 * r2 + k2 * r4 + k3 * r6) / (1.0 + k4 * r2 + k5 * r4 + k6 * r6)
+    r4 = r2 * r2 if (k2 or k3 or k5 or k6) else None
+    r6 = r4 * r2 if (k3 or k6) else None
+    radial = _terms(1.0, ((k1, r2), (k2, r4), (k3, r6)))  # zero terms left out: same numbers
+    if k4 or k5 or k6:
+        radial = radial / _terms(1.0, ((k4, r2), (k5, r4), (k6, r6)))
+    if not (p1 or p2):
+        return xp.stack([x * radial, y * radial], axis=-1)
     xd = x * radial + 2.0 * p1 * x * y + p2 * (r2 + 2.0 * x * x)
     yd = y * radial + p1 * (r2 + 2.0 * y * y) + 2.0 * p2 * x * y
     return xp.stack([xd, yd], axis=-1)
+
+
+def _terms(c0: float, terms: tuple[tuple[float, Any], ...]) -> Any:
+    """``c0 + c1 t1 + c2 t2 + ...`` left to right, the terms with ``c = 0`` left out.
+
+    Adding an exact zero changes nothing (but the sign of a zero), so the result is the
+    full sum's, with fewer operators on a device.
+    """
+    out: Any = c0
+    for coef, t in terms:
+        if coef:
+            out = out + coef * t
+    return out
 
 
 def bc_undistort_xp(
@@ -51,36 +72,52 @@ def bc_undistort_xp(
 ) -> tuple[Any, Any]:
     """Newton's method with the analytic Jacobian; see ``brown_conrady_undistort`` kernel."""
     k1, k2, p1, p2, k3, k4, k5, k6 = c
+    # the rational and tangential terms only when their coefficients are not zero (the
+    # same numbers: those terms are exact zeros), so a radial model runs fewer operators
+    rational = bool(k4 or k5 or k6)
+    tangential = bool(p1 or p2)
     xd, yd = _split(xyd)
     lim = tol * (1.0 + xp.sqrt(xd * xd + yd * yd))
     x, y = xd, yd
     done = xp.zeros_like(xd, dtype=xp.bool)
     det = xp.ones_like(xd)
-    b = xp.ones_like(xd)
+    b: Any = 1.0
     for _ in range(max_iter + 1):
         r2 = x * x + y * y
-        r4 = r2 * r2
-        r6 = r4 * r2
-        a = 1.0 + k1 * r2 + k2 * r4 + k3 * r6
-        b = 1.0 + k4 * r2 + k5 * r4 + k6 * r6
-        rad = a / b
-        drad = (
-            (k1 + 2.0 * k2 * r2 + 3.0 * k3 * r4) * b - a * (k4 + 2.0 * k5 * r2 + 3.0 * k6 * r4)
-        ) / (b * b)
-        fx = x * rad + 2.0 * p1 * x * y + p2 * (r2 + 2.0 * x * x) - xd
-        fy = y * rad + p1 * (r2 + 2.0 * y * y) + 2.0 * p2 * x * y - yd
-        j11 = rad + 2.0 * x * x * drad + 2.0 * p1 * y + 6.0 * p2 * x
-        j12 = 2.0 * x * y * drad + 2.0 * p1 * x + 2.0 * p2 * y
-        j22 = rad + 2.0 * y * y * drad + 6.0 * p1 * y + 2.0 * p2 * x
+        r4 = r2 * r2 if (k2 or k3 or rational) else None
+        r6 = r4 * r2 if (k3 or k6) else None
+        # 1 + k1 r² + k2 r⁴ + k3 r⁶ and its derivative in r², zero terms left out
+        a = _terms(1.0, ((k1, r2), (k2, r4), (k3, r6)))
+        da = _terms(k1, ((2.0 * k2, r2), (3.0 * k3, r4)))
+        if rational:
+            b = _terms(1.0, ((k4, r2), (k5, r4), (k6, r6)))
+            rad = a / b
+            drad = (da * b - a * _terms(k4, ((2.0 * k5, r2), (3.0 * k6, r4)))) / (b * b)
+        else:
+            rad, drad = a, da
+        if tangential:
+            fx = x * rad + 2.0 * p1 * x * y + p2 * (r2 + 2.0 * x * x) - xd
+            fy = y * rad + p1 * (r2 + 2.0 * y * y) + 2.0 * p2 * x * y - yd
+            j11 = rad + 2.0 * x * x * drad + 2.0 * p1 * y + 6.0 * p2 * x
+            j12 = 2.0 * x * y * drad + 2.0 * p1 * x + 2.0 * p2 * y
+            j22 = rad + 2.0 * y * y * drad + 6.0 * p1 * y + 2.0 * p2 * x
+        else:
+            fx = x * rad - xd
+            fy = y * rad - yd
+            j11 = rad + 2.0 * x * x * drad
+            j12 = 2.0 * x * y * drad
+            j22 = rad + 2.0 * y * y * drad
         det = j11 * j22 - j12 * j12
         done = done | ((xp.abs(fx) <= lim) & (xp.abs(fy) <= lim))
-        if bool(xp.all(done)):
+        if reads_values(done) and bool(xp.all(done)):  # early exit on the host only
             break
         x = xp.where(done, x, x - (j22 * fx - j12 * fy) / det)
         y = xp.where(done, y, y - (j11 * fy - j12 * fx) / det)
-    ok = done & (det > 0.0) & (b > 0.0)
-    x = xp.where(ok, x, _nan_like(x, xp))
-    y = xp.where(ok, y, _nan_like(y, xp))
+    ok = done & (det > 0.0)
+    if rational:
+        ok = ok & (b > 0.0)
+    x = xp.where(ok, x, math.nan)
+    y = xp.where(ok, y, math.nan)
     return xp.stack([x, y], axis=-1), ok
 
 
@@ -97,8 +134,8 @@ def kb_distort_xp(xy: Any, c: tuple[float, ...], xp: Any) -> Any:
     r = xp.sqrt(x * x + y * y)
     thd, _ = _kb_poly(xp.atan(r), c)
     pos = r > 0.0
-    safe_r = xp.where(pos, r, xp.ones_like(r))
-    s = xp.where(pos, thd / safe_r, xp.ones_like(r))
+    safe_r = xp.where(pos, r, 1.0)
+    s = xp.where(pos, thd / safe_r, 1.0)
     return xp.stack([x * s, y * s], axis=-1)
 
 
@@ -114,15 +151,15 @@ def kb_undistort_xp(
         h, dh = _kb_poly(th, c)
         h = h - thd
         done = done | (xp.abs(h) <= tol * (1.0 + thd))
-        if bool(xp.all(done)):
+        if reads_values(done) and bool(xp.all(done)):  # early exit on the host only
             break
         th = xp.where(done, th, th - h / dh)
     ok = done & (dh > 0.0) & (th >= 0.0) & (th < math.pi / 2)
     pos = thd > 0.0
-    safe_th = xp.where(ok, th, xp.zeros_like(th))
-    safe_thd = xp.where(pos, thd, xp.ones_like(thd))
-    s = xp.where(pos, xp.tan(safe_th) / safe_thd, xp.ones_like(thd))
-    s = xp.where(ok, s, _nan_like(s, xp))
+    safe_th = xp.where(ok, th, 0.0)
+    safe_thd = xp.where(pos, thd, 1.0)
+    s = xp.where(pos, xp.tan(safe_th) / safe_thd, 1.0)
+    s = xp.where(ok, s, math.nan)
     return xp.stack([xd * s, yd * s], axis=-1), ok
 
 
@@ -133,9 +170,9 @@ def division_undistort_xp(xyd: Any, c: tuple[float, ...], xp: Any) -> tuple[Any,
     r2 = xd * xd + yd * yd
     den = 1.0 + k1 * r2 + k2 * r2 * r2
     ok = den > 0.0
-    safe = xp.where(ok, den, xp.ones_like(den))
-    x = xp.where(ok, xd / safe, _nan_like(xd, xp))
-    y = xp.where(ok, yd / safe, _nan_like(yd, xp))
+    safe = xp.where(ok, den, 1.0)
+    x = xp.where(ok, xd / safe, math.nan)
+    y = xp.where(ok, yd / safe, math.nan)
     return xp.stack([x, y], axis=-1), ok
 
 
@@ -157,7 +194,7 @@ def division_distort_xp(
         g = rd - ru * (1.0 + k1 * rd2 + k2 * rd2 * rd2)
         dg = 1.0 - ru * (2.0 * k1 * rd + 4.0 * k2 * rd2 * rd)
         done = done | (xp.abs(g) <= tol * (1.0 + ru))
-        if bool(xp.all(done)):
+        if reads_values(done) and bool(xp.all(done)):  # early exit on the host only
             break
         rd = xp.where(done, rd, rd - g / dg)
     rd2 = rd * rd
@@ -166,7 +203,7 @@ def division_distort_xp(
     slope = den - rd * (2.0 * k1 * rd + 4.0 * k2 * rd2 * rd)
     ok = done & (den > 0.0) & (slope > 0.0) & (rd >= 0.0)
     pos = ru > 0.0
-    safe_ru = xp.where(pos, ru, xp.ones_like(ru))
-    s = xp.where(pos, rd / safe_ru, xp.ones_like(ru))
-    s = xp.where(ok, s, _nan_like(s, xp))
+    safe_ru = xp.where(pos, ru, 1.0)
+    s = xp.where(pos, rd / safe_ru, 1.0)
+    s = xp.where(ok, s, math.nan)
     return xp.stack([x * s, y * s], axis=-1), ok

@@ -33,25 +33,32 @@ def map_grid(
     dtype: Any,
     device: Any = None,
 ) -> Any:
-    """Source ``(u, v)`` for the output pixels ``rows[0]:rows[1]``, ``cols[0]:cols[1]``."""
+    """Source ``(u, v)`` for the output pixels ``rows[0]:rows[1]``, ``cols[0]:cols[1]``.
+
+    ``Km`` and ``Kn`` are NumPy matrices (their entries become Python floats) or ``xp``
+    arrays on ``device`` (their entries stay 0-d arrays there: nothing is read back).
+    """
     v = xp.astype(xp.arange(rows[0], rows[1], device=device), dtype)[:, None]
     u = xp.astype(xp.arange(cols[0], cols[1], device=device), dtype)[None, :]
     v, u = xp.broadcast_arrays(v, u)
-    fx, s, cx, fy, cy = (
-        float(Kn[0, 0]),
-        float(Kn[0, 1]),
-        float(Kn[0, 2]),
-        float(Kn[1, 1]),
-        float(Kn[1, 2]),
-    )
+    fx, s, cx, fy, cy = _entries(Kn)
     y = (v - cy) / fy
     x = (u - cx - s * y) / fx
     xy = xp.stack([x, y], axis=-1)
     if distortion is not None:
         xy = distortion.distort(xy)
-    us = float(Km[0, 0]) * xy[..., 0] + float(Km[0, 1]) * xy[..., 1] + float(Km[0, 2])
-    vs = float(Km[1, 1]) * xy[..., 1] + float(Km[1, 2])
+    kfx, ks, kcx, kfy, kcy = _entries(Km)
+    us = kfx * xy[..., 0] + ks * xy[..., 1] + kcx
+    vs = kfy * xy[..., 1] + kcy
     return xp.stack([us, vs], axis=-1)
+
+
+def _entries(M: Any) -> tuple[Any, ...]:
+    """``fx, s, cx, fy, cy`` of a K: floats from NumPy, 0-d arrays (on their device) else."""
+    idx = ((0, 0), (0, 1), (0, 2), (1, 1), (1, 2))
+    if isinstance(M, np.ndarray):
+        return tuple(float(M[i, j]) for i, j in idx)
+    return tuple(M[i, j] for i, j in idx)
 
 
 def remap_xp(img: Any, map_uv: Any, fill: float, xp: Any) -> Any:

@@ -21,9 +21,9 @@ from typing import Any, Literal, NamedTuple
 
 import numpy as np
 
-from imageform._backend import device_of, linalg, namespace, use_numba
+from imageform._backend import common_device, device_of, linalg, namespace, sign_of, use_numba
 from imageform._typing import Array, ArrayLike
-from imageform._validate import check_option, check_rotation, format_shape
+from imageform._validate import any_value, check_option, check_rotation, format_shape
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
 from imageform.geometry._checks import as_float, as_matrix, as_points, check_image_size
 from imageform.geometry._results import Projection
@@ -79,7 +79,7 @@ def _prepare(
     t: ArrayLike | None,
 ) -> tuple[Any, Array, Array, Array, Array]:
     xp = namespace(points, K, R, t)
-    X = as_points(points, "points", 3, xp=xp, finite=False)
+    X = as_points(points, "points", 3, xp=xp, finite=False, device=common_device(points, K, R, t))
     dev = device_of(X)
     Km = as_matrix(K, "K", (3, 3), xp=xp, dtype=X.dtype, device=dev)
     _check_K(Km, xp)
@@ -98,12 +98,12 @@ def _prepare(
 
 def _check_K(K: Array, xp: Any) -> None:
     if (
-        bool(xp.any(K[..., 2, 0] != 0))
-        or bool(xp.any(K[..., 2, 1] != 0))
-        or bool(xp.any(K[..., 1, 0] != 0))
+        any_value(K[..., 2, 0] != 0, xp)
+        or any_value(K[..., 2, 1] != 0, xp)
+        or any_value(K[..., 1, 0] != 0, xp)
     ):
         raise InvalidInputError("expected an upper-triangular K with last row (0, 0, k33)")
-    if bool(xp.any(K[..., 0, 0] * K[..., 1, 1] * K[..., 2, 2] == 0)):
+    if any_value(K[..., 0, 0] * K[..., 1, 1] * K[..., 2, 2] == 0, xp):
         raise InvalidInputError("K is singular (fx, fy or K[2, 2] is zero)")
 
 
@@ -133,7 +133,7 @@ def _project_xp(
 def _pixels(Xc: Array, K: Array, ndim: int, xp: Any) -> tuple[Array, Array]:
     z = Xc[..., 2]
     front = (z > 0) & (z < math.inf)
-    zs = xp.where(front, z, xp.ones_like(z))  # no division by zero; gradients stay finite
+    zs = xp.where(front, z, 1.0)  # no division by zero; gradients stay finite
     x = Xc[..., 0] / zs
     y = Xc[..., 1] / zs
     k = K / K[..., 2:3, 2:3]
@@ -229,7 +229,7 @@ def projection_matrix(
            [  0.,   0.,   1.,   5.]])
     """
     xp = namespace(K, R, t)
-    Km = as_matrix(K, "K", (3, 3), xp=xp)
+    Km = as_matrix(K, "K", (3, 3), xp=xp, device=common_device(K, R, t))
     dev = device_of(Km)
     Rm = (
         xp.eye(3, dtype=Km.dtype, device=dev)
@@ -276,11 +276,11 @@ def decompose_projection_matrix(P: ArrayLike) -> DecomposedProjection:
     M = Pm[..., :3]
     det = linalg(xp).det(M)
     scale = xp.max(xp.abs(M), axis=(-2, -1))
-    if bool(xp.any(xp.abs(det) <= 1e-12 * scale**3)):
+    if any_value(xp.abs(det) <= 1e-12 * scale**3, xp):
         raise DegenerateConfigurationError(
             "the left 3x3 block of P is singular: not a finite projective camera"
         )
-    sgn = xp.sign(det)[..., None, None]
+    sgn = sign_of(det, xp)[..., None, None]
     Pm = Pm * sgn
     M = Pm[..., :3]
     # RQ via QR of the row-reversed transpose.
@@ -288,7 +288,7 @@ def decompose_projection_matrix(P: ArrayLike) -> DecomposedProjection:
     Q, U = linalg(xp).qr(xp.matrix_transpose(Mf))
     Kq = xp.flip(xp.flip(xp.matrix_transpose(U), axis=-2), axis=-1)
     Rq = xp.flip(xp.matrix_transpose(Q), axis=-2)
-    d = xp.sign(xp.stack((Kq[..., 0, 0], Kq[..., 1, 1], Kq[..., 2, 2]), axis=-1))
+    d = sign_of(xp.stack((Kq[..., 0, 0], Kq[..., 1, 1], Kq[..., 2, 2]), axis=-1), xp)
     Kq = Kq * d[..., None, :]
     Rq = Rq * d[..., :, None]
     lam = Kq[..., 2, 2]
@@ -327,7 +327,7 @@ def backproject(
     """
     plane = check_option(image_plane, _PLANES, "image plane")
     xp = namespace(uv, K, R)
-    p = as_points(uv, "uv", 2, xp=xp)
+    p = as_points(uv, "uv", 2, xp=xp, device=common_device(uv, K, R))
     Km = as_matrix(K, "K", (3, 3), xp=xp, dtype=p.dtype, device=device_of(p))
     _check_K(Km, xp)
     Km = _plane_K(Km, plane, xp)
@@ -360,7 +360,7 @@ def unproject(
     """
     plane = check_option(image_plane, _PLANES, "image plane")
     xp = namespace(uv, depth, K, R, t)
-    p = as_points(uv, "uv", 2, xp=xp)
+    p = as_points(uv, "uv", 2, xp=xp, device=common_device(uv, depth, K, R, t))
     dev = device_of(p)
     z = as_float(depth, "depth", xp=xp, dtype=p.dtype, device=dev)
     try:
@@ -370,7 +370,7 @@ def unproject(
             f"expected depth broadcasting to uv's points {format_shape(tuple(p.shape[:-1]))}, "
             f"got shape {format_shape(tuple(z.shape))}"
         ) from None
-    if bool(xp.any(~(z > 0))):
+    if any_value(~(z > 0), xp):
         raise InvalidInputError("expected depth > 0 (points in front of the camera)")
     Km = as_matrix(K, "K", (3, 3), xp=xp, dtype=p.dtype, device=dev)
     _check_K(Km, xp)
@@ -538,7 +538,7 @@ class Camera:
         if self.distortion is None:
             return xy
         ideal, ok = self.distortion.undistort(xy)
-        return xp.where(ok[..., None], ideal, xp.full_like(ideal, float("nan")))
+        return xp.where(ok[..., None], ideal, float("nan"))
 
     def backproject(self, uv: ArrayLike) -> Array:
         """Return unit world-frame directions of rays through pixels ``uv`` (from ``center``)."""

@@ -27,7 +27,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from imageform._backend import namespace, to_numpy, use_numba
+from imageform._backend import common_device, namespace, to_numpy, use_numba
 from imageform._dask import is_dask_array
 from imageform._validate import as_int, as_real, check_rotation
 from imageform.errors import InvalidInputError
@@ -414,11 +414,12 @@ def project_points_distorted(
     ([[557.5, 240.0]], [True])
     """
     xp = namespace(points, K, R, t)
-    pts = as_points(points, "points", 3, xp=xp)
-    Km = as_matrix(K, "K", (3, 3), xp=xp, dtype=pts.dtype, batch=False)
-    Rm = as_matrix(R, "R", (3, 3), xp=xp, dtype=pts.dtype, batch=False)
+    dev = common_device(points, K, R, t)
+    pts = as_points(points, "points", 3, xp=xp, device=dev)
+    Km = as_matrix(K, "K", (3, 3), xp=xp, dtype=pts.dtype, batch=False, device=dev)
+    Rm = as_matrix(R, "R", (3, 3), xp=xp, dtype=pts.dtype, batch=False, device=dev)
     check_rotation(Rm, "R", xp=xp)
-    tv = as_points(t, "t", 3, xp=xp, dtype=pts.dtype)
+    tv = as_points(t, "t", 3, xp=xp, dtype=pts.dtype, device=dev)
     if tv.ndim != 1:
         raise InvalidInputError(f"expected t of shape (3,), got {tuple(tv.shape)}")
     _check_model(distortion)

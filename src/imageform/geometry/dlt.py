@@ -9,8 +9,9 @@ Zisserman Algorithm 7.1).
 
 from __future__ import annotations
 
-from imageform._backend import linalg, namespace
+from imageform._backend import common_device, linalg, namespace, sign_of
 from imageform._typing import Array, ArrayLike
+from imageform._validate import any_value
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
 from imageform.geometry._checks import as_points
 from imageform.geometry._normalize import similarity_normalization
@@ -53,8 +54,9 @@ def estimate_projection_matrix(points_3d: ArrayLike, points_2d: ArrayLike) -> Ar
     True
     """
     xp = namespace(points_3d, points_2d)
-    X = as_points(points_3d, "points_3d", 3, xp=xp)
-    x = as_points(points_2d, "points_2d", 2, xp=xp, dtype=X.dtype)
+    dev = common_device(points_3d, points_2d)
+    X = as_points(points_3d, "points_3d", 3, xp=xp, device=dev)
+    x = as_points(points_2d, "points_2d", 2, xp=xp, dtype=X.dtype, device=dev)
     if X.shape[:-1] != x.shape[:-1]:
         raise InvalidInputError(
             f"expected as many points_3d as points_2d, got {tuple(X.shape)} and {tuple(x.shape)}"
@@ -65,7 +67,7 @@ def estimate_projection_matrix(points_3d: ArrayLike, points_2d: ArrayLike) -> Ar
         )
     centred = X - xp.mean(X, axis=-2, keepdims=True)
     sv3 = linalg(xp).svdvals(centred)
-    if bool(xp.any(sv3[..., 2] <= 1e-9 * sv3[..., 0])):
+    if any_value(sv3[..., 2] <= 1e-9 * sv3[..., 0], xp):
         raise DegenerateConfigurationError(
             "the 3-D points are coplanar: a plane does not determine P (use estimate_homography)"
         )
@@ -80,10 +82,10 @@ def estimate_projection_matrix(points_3d: ArrayLike, points_2d: ArrayLike) -> Ar
     A = xp.concat((r1, r2), axis=-2)
     # full V when there are fewer equations than unknowns (N = 4 gives 8 x 9)
     _, sv, Vt = linalg(xp).svd(A, full_matrices=A.shape[-2] < A.shape[-1])
-    if bool(xp.any(sv[..., 10] <= 1e-12 * sv[..., 0])):
+    if any_value(sv[..., 10] <= 1e-12 * sv[..., 0], xp):
         raise DegenerateConfigurationError("the correspondences do not determine a unique P")
     Pn = xp.reshape(Vt[..., -1, :], (*Vt.shape[:-2], 3, 4))
     P = linalg(xp).inv(T2) @ Pn @ T3
     m3 = xp.sqrt(xp.sum(P[..., 2, :3] ** 2, axis=-1))
-    sign = xp.sign(linalg(xp).det(P[..., :3]))
+    sign = sign_of(linalg(xp).det(P[..., :3]), xp)
     return P * (sign / m3)[..., None, None]

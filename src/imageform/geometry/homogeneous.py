@@ -12,9 +12,9 @@ import functools
 from typing import Any, Literal, NamedTuple
 
 from imageform import _deprecate
-from imageform._backend import linalg, namespace
+from imageform._backend import common_device, linalg, namespace, sign_of
 from imageform._typing import Array, ArrayLike
-from imageform._validate import as_real, check_option
+from imageform._validate import any_value, as_real, check_option
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
 from imageform.geometry._checks import (
     MAX_MAGNITUDE,
@@ -89,15 +89,15 @@ def _dehomogenize(points: ArrayLike, at_infinity: str) -> Dehomogenized:
     p = _any_dim(points, "homogeneous points", 2, xp)
     w = p[..., -1:]
     finite = w[..., 0] != 0
-    if at_infinity == "raise" and not bool(xp.all(finite)):
+    if at_infinity == "raise" and any_value(~finite, xp):
         n_inf = int(xp.sum(xp.astype(~finite, xp.int64)))
         raise DegenerateConfigurationError(
             f"{n_inf} of the points have w = 0 (at infinity) and no Euclidean coordinates; "
             "pass at_infinity='nan' to get NaN, or use from_homogeneous_masked for a mask"
         )
-    safe_w = xp.where(w != 0, w, xp.ones_like(w))
+    safe_w = xp.where(w != 0, w, 1.0)
     out = p[..., :-1] / safe_w
-    out = xp.where(w != 0, out, xp.full_like(out, float("nan")))
+    out = xp.where(w != 0, out, float("nan"))
     return Dehomogenized(out, finite)
 
 
@@ -185,9 +185,9 @@ def from_homogeneous_masked(points: ArrayLike) -> Dehomogenized:
     return _dehomogenize(points, "nan")
 
 
-def _homog2(points: ArrayLike, name: str, xp: Any) -> Array:
+def _homog2(points: ArrayLike, name: str, xp: Any, device: Any = None) -> Array:
     """2-D points (..., 2) or homogeneous (..., 3) as homogeneous (..., 3)."""
-    p = as_points(points, name, (2, 3), xp=xp)
+    p = as_points(points, name, (2, 3), xp=xp, device=device)
     if p.shape[-1] == 2:
         ones = xp.ones((*p.shape[:-1], 1), dtype=p.dtype, device=getattr(p, "device", None))
         p = xp.concat((p, ones), axis=-1)
@@ -212,17 +212,18 @@ def line_through(p: ArrayLike, q: ArrayLike) -> Array:
     array([ 0.,  1., -1.])
     """
     xp = namespace(p, q)
-    hp, hq = _homog2(p, "p", xp), _homog2(q, "q", xp)
+    dev = common_device(p, q)
+    hp, hq = _homog2(p, "p", xp, dev), _homog2(q, "q", xp, dev)
     hp, hq = xp.broadcast_arrays(hp, hq)
     line = linalg(xp).cross(hp, hq)
     norm = xp.sqrt(line[..., 0] ** 2 + line[..., 1] ** 2)
-    if bool(xp.any(norm == 0)):
+    if any_value(norm == 0, xp):
         raise DegenerateConfigurationError(
             "the two points p and q coincide: no unique line through them"
         )
     line = line / norm[..., None]
     # Fix the sign so the representation is unique: first non-zero of (a, b) positive.
-    sign = xp.where(line[..., 0] != 0, xp.sign(line[..., 0]), xp.sign(line[..., 1]))
+    sign = xp.where(line[..., 0] != 0, sign_of(line[..., 0], xp), sign_of(line[..., 1], xp))
     return line * sign[..., None]
 
 
@@ -246,8 +247,9 @@ def intersect_lines(l1: ArrayLike, l2: ArrayLike) -> Array:
     array([1., 0., 0.])
     """
     xp = namespace(l1, l2)
-    a = as_points(l1, "l1", 3, xp=xp)
-    b = as_points(l2, "l2", 3, xp=xp)
+    dev = common_device(l1, l2)
+    a = as_points(l1, "l1", 3, xp=xp, device=dev)
+    b = as_points(l2, "l2", 3, xp=xp, device=dev)
     a, b = xp.broadcast_arrays(a, b)
     x = linalg(xp).cross(a, b)
     return _normalize_homogeneous_point(x, xp, what="the two lines l1 and l2 are identical")
@@ -256,15 +258,15 @@ def intersect_lines(l1: ArrayLike, l2: ArrayLike) -> Array:
 def _normalize_homogeneous_point(x: Array, xp: Any, *, what: str) -> Array:
     """Scale to ``w = 1`` where finite, to a unit direction (sign-fixed) where ``w = 0``."""
     norm = xp.sqrt(xp.sum(x * x, axis=-1))
-    if bool(xp.any(norm == 0)):
+    if any_value(norm == 0, xp):
         raise DegenerateConfigurationError(what)
     # Relative test: w is "zero" when it is at rounding level compared with (x, y).
     tiny = xp.abs(x[..., 2]) <= 8 * xp.finfo(x.dtype).eps * norm
-    w = xp.where(tiny, xp.ones_like(x[..., 2]), x[..., 2])
+    w = xp.where(tiny, 1.0, x[..., 2])
     finite_pt = x / w[..., None]
     dnorm = xp.sqrt(x[..., 0] ** 2 + x[..., 1] ** 2)
-    dnorm = xp.where(dnorm == 0, xp.ones_like(dnorm), dnorm)
-    sign = xp.where(x[..., 0] != 0, xp.sign(x[..., 0]), xp.sign(x[..., 1]))
+    dnorm = xp.where(dnorm == 0, 1.0, dnorm)
+    sign = xp.where(x[..., 0] != 0, sign_of(x[..., 0], xp), sign_of(x[..., 1], xp))
     ideal = xp.stack(
         (x[..., 0] * sign / dnorm, x[..., 1] * sign / dnorm, xp.zeros_like(dnorm)), axis=-1
     )
@@ -300,7 +302,7 @@ def are_collinear(points: ArrayLike, *, tol: float = 1e-9) -> Array:
         )
     centred = p - xp.mean(p, axis=-2, keepdims=True)
     s = linalg(xp).svdvals(centred)
-    return s[..., -1] <= tol * xp.where(s[..., 0] == 0, xp.ones_like(s[..., 0]), s[..., 0])
+    return s[..., -1] <= tol * xp.where(s[..., 0] == 0, 1.0, s[..., 0])
 
 
 def cross_ratio(a: ArrayLike, b: ArrayLike, c: ArrayLike, d: ArrayLike) -> Array:
@@ -318,21 +320,24 @@ def cross_ratio(a: ArrayLike, b: ArrayLike, c: ArrayLike, d: ArrayLike) -> Array
     1.3333333333333333
     """
     xp = namespace(a, b, c, d)
-    pa, pb, pc, pd = (as_points(v, n, 2, xp=xp) for v, n in zip((a, b, c, d), "abcd", strict=True))
+    dev = common_device(a, b, c, d)
+    pa, pb, pc, pd = (
+        as_points(v, n, 2, xp=xp, device=dev) for v, n in zip((a, b, c, d), "abcd", strict=True)
+    )
     pa, pb, pc, pd = xp.broadcast_arrays(pa, pb, pc, pd)
     stacked = xp.stack((pa, pb, pc, pd), axis=-2)
-    if not bool(xp.all(are_collinear(stacked, tol=1e-6))):
+    if any_value(~are_collinear(stacked, tol=1e-6), xp):
         raise DegenerateConfigurationError(
             "cross_ratio needs four collinear points a, b, c, d; they are not collinear"
         )
     # Signed positions along the unit direction from a to d (a = d leaves it undefined).
     dvec = pd - pa
     dnorm = xp.sqrt(xp.sum(dvec * dvec, axis=-1, keepdims=True))
-    if bool(xp.any(dnorm == 0)):
+    if any_value(dnorm == 0, xp):
         raise DegenerateConfigurationError("cross_ratio is undefined: a = d")
     t = xp.sum((stacked - pa[..., None, :]) * (dvec / dnorm)[..., None, :], axis=-1)
     ta, tb, tc, td = t[..., 0], t[..., 1], t[..., 2], t[..., 3]
     den = (tc - tb) * (td - ta)
-    if bool(xp.any(den == 0)):
+    if any_value(den == 0, xp):
         raise DegenerateConfigurationError("cross_ratio is undefined: b = c")
     return ((tc - ta) * (td - tb)) / den

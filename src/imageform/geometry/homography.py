@@ -11,8 +11,9 @@ from __future__ import annotations
 from itertools import combinations
 from typing import Any
 
-from imageform._backend import device_of, linalg, namespace
+from imageform._backend import common_device, device_of, linalg, namespace
 from imageform._typing import Array, ArrayLike
+from imageform._validate import any_value
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
 from imageform.geometry._checks import as_matrix, as_points
 from imageform.geometry._normalize import similarity_normalization
@@ -34,12 +35,12 @@ def _check_pairs(src: Array, dst: Array, n_min: int) -> None:
 
 
 def _check_not_collinear(p: Array, name: str, xp: Any) -> None:
-    if bool(xp.any(are_collinear(p, tol=1e-9))):
+    if any_value(are_collinear(p, tol=1e-9), xp):
         raise DegenerateConfigurationError(f"the {name} points are collinear: no unique homography")
     if p.shape[-2] == 4:
         for idx in combinations(range(4), 3):
             tri = xp.stack([p[..., i, :] for i in idx], axis=-2)
-            if bool(xp.any(are_collinear(tri, tol=1e-9))):
+            if any_value(are_collinear(tri, tol=1e-9), xp):
                 raise DegenerateConfigurationError(
                     f"three of the four {name} points are collinear: no unique homography"
                 )
@@ -92,7 +93,7 @@ def estimate_homography(src: ArrayLike, dst: ArrayLike) -> Array:
     A = xp.concat((r1, r2), axis=-2)
     # full V when there are fewer equations than unknowns (N = 4 gives 8 x 9)
     _, sv, Vt = linalg(xp).svd(A, full_matrices=A.shape[-2] < A.shape[-1])
-    if bool(xp.any(sv[..., 7] <= 1e-12 * sv[..., 0])):
+    if any_value(sv[..., 7] <= 1e-12 * sv[..., 0], xp):
         raise DegenerateConfigurationError(
             "the correspondences do not determine a unique homography"
         )
@@ -120,9 +121,9 @@ def apply_homography(H: ArrayLike, points: ArrayLike) -> Array:
            [11., 20.]])
     """
     xp = namespace(H, points)
-    p = as_points(points, "points", 2, xp=xp)
+    p = as_points(points, "points", 2, xp=xp, device=common_device(points, H))
     Hm = as_matrix(H, "H", (3, 3), xp=xp, dtype=p.dtype, device=device_of(p))
-    if not bool(xp.any(Hm != 0)):
+    if any_value(xp.all(Hm == 0), xp):
         raise InvalidInputError("expected a non-zero H (a zero matrix maps every point nowhere)")
     ones = xp.ones((*p.shape[:-1], 1), dtype=p.dtype, device=device_of(p))
     ph = xp.concat((p, ones), axis=-1) @ xp.matrix_transpose(Hm)

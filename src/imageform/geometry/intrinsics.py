@@ -17,9 +17,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from imageform import _deprecate
-from imageform._backend import namespace, to_numpy
+from imageform._backend import common_device, namespace, to_numpy
 from imageform._typing import Array, ArrayLike, FloatArray
-from imageform._validate import as_real, check_positive
+from imageform._validate import any_value, as_real, check_positive
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
 from imageform.geometry._checks import (
     MAX_MAGNITUDE,
@@ -50,16 +50,17 @@ def intrinsic_matrix(
            [  0.,   0.,   1.]])
     """
     xp = namespace(fx, fy, cx, cy, skew)
+    dev = common_device(fx, fy, cx, cy, skew)
     vals = [
-        as_float(v, n, xp=xp)
+        as_float(v, n, xp=xp, device=dev)
         for v, n in zip((fx, fy, cx, cy, skew), ("fx", "fy", "cx", "cy", "skew"), strict=True)
     ]
     dtype = xp.result_type(*vals)
     vals = [xp.astype(v, dtype) for v in vals]
     fx_, fy_, cx_, cy_, s_ = xp.broadcast_arrays(*vals)
-    if bool(xp.any(fx_ == 0)) or bool(xp.any(fy_ == 0)):
+    if any_value(fx_ == 0, xp) or any_value(fy_ == 0, xp):
         raise InvalidInputError("expected non-zero focal lengths fx, fy (K would be singular)")
-    if bool(xp.any(fx_ < 0)) or bool(xp.any(fy_ < 0)):
+    if any_value(fx_ < 0, xp) or any_value(fy_ < 0, xp):
         raise InvalidInputError(
             f"expected focal lengths fx > 0 and fy > 0, got fx min {float(xp.min(fx_)):g}, "
             f"fy min {float(xp.min(fy_)):g} (a negative focal length mirrors the image)"

@@ -21,9 +21,9 @@ from typing import Any
 
 import numpy as np
 
-from imageform._backend import device_of, namespace
+from imageform._backend import common_device, device_of, namespace
 from imageform._typing import Array, ArrayLike, FloatArray
-from imageform._validate import as_real, check_rotation
+from imageform._validate import any_value, as_real, check_rotation
 from imageform.errors import InvalidInputError
 from imageform.geometry._checks import (
     MAX_MAGNITUDE,
@@ -49,7 +49,7 @@ def _world_to_cam(
     points: ArrayLike, R: ArrayLike | None, t: ArrayLike | None, K: ArrayLike | None = None
 ) -> tuple[Any, Array]:
     xp = namespace(points, R, t, K)
-    X = as_points(points, "points", 3, xp=xp)
+    X = as_points(points, "points", 3, xp=xp, device=common_device(points, R, t, K))
     if R is not None:
         Rm = as_matrix(R, "R", (3, 3), xp=xp, dtype=X.dtype, device=device_of(X))
         check_rotation(Rm, "R", xp=xp)
@@ -137,7 +137,7 @@ def weak_perspective_project(
     else:
         d = as_real(depth, "depth", positive=True, maximum=MAX_MAGNITUDE)
         z0 = xp.asarray(d, dtype=X.dtype, device=device_of(X))
-    if bool(xp.any(~(z0 > 0))):
+    if any_value(~(z0 > 0), xp):
         raise InvalidInputError("weak perspective needs a reference depth Z0 > 0 (object in front)")
     x = X[..., 0] / z0
     y = X[..., 1] / z0

@@ -13,9 +13,9 @@ from __future__ import annotations
 
 from typing import Any, NamedTuple
 
-from imageform._backend import device_of, linalg, namespace
+from imageform._backend import common_device, device_of, linalg, namespace
 from imageform._typing import Array, ArrayLike
-from imageform._validate import as_real, check_rotation, describe, det3, format_shape
+from imageform._validate import any_value, as_real, check_rotation, describe, det3, format_shape
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
 from imageform.geometry._checks import as_float, as_matrix, as_points
 
@@ -293,7 +293,7 @@ def quaternion_to_matrix(q: ArrayLike) -> Array:
     xp = namespace(q)
     qq = as_points(q, "q (quaternion)", 4, xp=xp)
     n = xp.sqrt(xp.sum(qq * qq, axis=-1, keepdims=True))
-    if bool(xp.any(n == 0)):
+    if any_value(n == 0, xp):
         raise InvalidInputError("q: a zero quaternion does not represent a rotation")
     qq = qq / n
     w, x, y, z = qq[..., 0], qq[..., 1], qq[..., 2], qq[..., 3]
@@ -426,19 +426,20 @@ def look_at(eye: ArrayLike, target: ArrayLike, up: ArrayLike = (0.0, -1.0, 0.0))
     array([0., 0., 5.])
     """
     xp = namespace(eye, target, up)
-    e = as_points(eye, "eye", 3, xp=xp)
-    tg = as_points(target, "target", 3, xp=xp, dtype=e.dtype)
-    u = as_points(up, "up", 3, xp=xp, dtype=e.dtype)
+    dev = common_device(eye, target, up)
+    e = as_points(eye, "eye", 3, xp=xp, device=dev)
+    tg = as_points(target, "target", 3, xp=xp, dtype=e.dtype, device=dev)
+    u = as_points(up, "up", 3, xp=xp, dtype=e.dtype, device=dev)
     z = tg - e
     zn = xp.sqrt(xp.sum(z * z, axis=-1, keepdims=True))
-    if bool(xp.any(zn == 0)):
+    if any_value(zn == 0, xp):
         raise DegenerateConfigurationError("look_at: eye and target coincide")
     z = z / zn
     down = -u
     x = linalg(xp).cross(down, z)
     xn = xp.sqrt(xp.sum(x * x, axis=-1, keepdims=True))
     un = xp.sqrt(xp.sum(u * u, axis=-1, keepdims=True))
-    if bool(xp.any(xn <= 1e-12 * un)):
+    if any_value(xn <= 1e-12 * un, xp):
         raise DegenerateConfigurationError(
             "look_at: the viewing direction is parallel to 'up'; choose another up vector"
         )

@@ -20,10 +20,12 @@ from typing import Any
 import numpy as np
 
 from imageform._backend import (
+    common_device,
     device_of,
     is_dask_namespace,
     is_numpy_namespace,
     namespace,
+    reads_values,
     to_numpy,
     use_numba,
 )
@@ -289,6 +291,24 @@ def _intrinsics(K: Any, new_K: Any) -> tuple[np.ndarray, np.ndarray]:
     return Km, Kn
 
 
+def _intrinsics_on(K: Any, new_K: Any, xp: Any, device: Any) -> tuple[Any, Any]:
+    """``K`` and ``new_K`` for a map computed in ``xp`` on ``device``.
+
+    Host values (NumPy, lists, CPU tensors) are read and checked by :func:`_intrinsics`;
+    device arrays stay where they are, as float64 ``xp`` matrices, unread (docs/design.md,
+    "Devices").
+    """
+    if reads_values(K) and (new_K is None or reads_values(new_K)):
+        return _intrinsics(K, new_K)
+    Km = as_matrix(K, "K", (3, 3), batch=False, xp=xp, dtype=xp.float64, device=device)
+    Kn = (
+        Km
+        if new_K is None
+        else as_matrix(new_K, "new_K", (3, 3), batch=False, xp=xp, dtype=xp.float64, device=device)
+    )
+    return Km, Kn
+
+
 def undistortion_map(
     shape: tuple[int, int],
     K: Any,
@@ -314,12 +334,14 @@ def undistortion_map(
     """
     h, w = size_pair(shape, "shape (H, W)")
     check_memory(16.0 * h * w, "shape", f"a ({h}, {w}, 2) float64 map")
-    Km, Kn = _intrinsics(K, new_K)
-    _check_model(distortion)
     xp = namespace(K, new_K)
     if not is_numpy_namespace(xp):
-        dev = device_of(K) if device_of(K) is not None else device_of(new_K)
+        dev = common_device(K, new_K)
+        Km, Kn = _intrinsics_on(K, new_K, xp, dev)
+        _check_model(distortion)
         return map_grid((0, h), (0, w), Km, Kn, distortion, xp, xp.float64, dev)
+    Km, Kn = _intrinsics(K, new_K)
+    _check_model(distortion)
     v, u = np.mgrid[0:h, 0:w].astype(np.float64)
     xy = _inverse_k(Kn, u, v)
     if distortion is not None:
@@ -419,7 +441,7 @@ def undistort_image(
         for k in (K, new_K)
     )
     if not is_numpy_namespace(xp):
-        Km, Kn = _intrinsics(K, new_K)
+        Km, Kn = _intrinsics_on(K, new_K, xp, device_of(image))
         _check_model(distortion)
         m = map_grid(
             (0, out_hw[0]), (0, out_hw[1]), Km, Kn, distortion, xp, xp.float64, device_of(image)
@@ -446,6 +468,8 @@ def undistort_image(
 def _remap_generic(image: Any, map_uv: Any, fill: float, xp: Any) -> Any:
     """remap_bilinear for non-NumPy Array-API arrays (same namespace and device out)."""
     img = as_image(image, "image", channels=None, xp=xp, range_check=False, finite=False)
+    if device_of(img) != common_device(image, map_uv):  # a NumPy image, a device map
+        img = xp.asarray(img, device=common_device(image, map_uv))
     if img.ndim < 2:
         raise InvalidInputError(
             f"expected image of shape (H, W) or (..., H, W, C), got {format_shape(img.shape)}"

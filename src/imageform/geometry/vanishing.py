@@ -13,9 +13,9 @@ from __future__ import annotations
 import math
 from typing import Any
 
-from imageform._backend import device_of, linalg, namespace
+from imageform._backend import common_device, device_of, linalg, namespace, sign_of
 from imageform._typing import Array, ArrayLike
-from imageform._validate import as_real, check_rotation, describe, format_shape
+from imageform._validate import any_value, as_real, check_rotation, describe, format_shape
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
 from imageform.geometry._checks import as_float, as_matrix, as_points
 from imageform.geometry.homogeneous import _normalize_homogeneous_point, line_through
@@ -32,8 +32,10 @@ __all__ = [
 ]
 
 
-def _k_r(K: ArrayLike, R: ArrayLike | None, xp: Any, dtype: Any = None) -> tuple[Array, Array]:
-    Km = as_matrix(K, "K", (3, 3), xp=xp, dtype=dtype)
+def _k_r(
+    K: ArrayLike, R: ArrayLike | None, xp: Any, dtype: Any = None, device: Any = None
+) -> tuple[Array, Array]:
+    Km = as_matrix(K, "K", (3, 3), xp=xp, dtype=dtype, device=device)
     from imageform.geometry.camera import _check_K
 
     _check_K(Km, xp)
@@ -71,9 +73,9 @@ def vanishing_point(K: ArrayLike, direction: ArrayLike, R: ArrayLike | None = No
     array([1., 0., 0.])
     """
     xp = namespace(K, direction, R)
-    d = as_points(direction, "direction", 3, xp=xp)
-    Km, Rm = _k_r(K, R, xp, d.dtype)
-    if bool(xp.any(xp.sum(d * d, axis=-1) == 0)):
+    d = as_points(direction, "direction", 3, xp=xp, device=common_device(K, direction, R))
+    Km, Rm = _k_r(K, R, xp, d.dtype, device_of(d))
+    if any_value(xp.sum(d * d, axis=-1) == 0, xp):
         raise InvalidInputError("expected a non-zero direction")
     dc = d @ xp.matrix_transpose(Rm) if d.ndim >= 1 else d
     v = dc @ xp.matrix_transpose(Km)
@@ -142,9 +144,9 @@ def horizon_line(K: ArrayLike, R: ArrayLike | None = None, up: ArrayLike | str =
     """
     up = _up_vector(up)
     xp = namespace(K, R, up)
-    n = as_points(up, "up", 3, xp=xp)
-    Km, Rm = _k_r(K, R, xp, n.dtype)
-    if bool(xp.any(xp.sum(n * n, axis=-1) == 0)):
+    n = as_points(up, "up", 3, xp=xp, device=common_device(K, R, up))
+    Km, Rm = _k_r(K, R, xp, n.dtype, device_of(n))
+    if any_value(xp.sum(n * n, axis=-1) == 0, xp):
         raise InvalidInputError("expected a non-zero up direction")
     nc = n @ xp.matrix_transpose(Rm)
     # K^{-T} m for upper-triangular K: solve K^T l = m
@@ -152,9 +154,9 @@ def horizon_line(K: ArrayLike, R: ArrayLike | None = None, up: ArrayLike | str =
     ab = xp.sqrt(l[..., 0] ** 2 + l[..., 1] ** 2)
     scale = xp.sqrt(xp.sum(l * l, axis=-1))
     at_inf = ab <= 8 * xp.finfo(l.dtype).eps * scale
-    ab_safe = xp.where(at_inf, xp.ones_like(ab), ab)
-    sign = xp.where(l[..., 1] != 0, xp.sign(l[..., 1]), xp.sign(l[..., 0]))
-    sign = xp.where(sign == 0, xp.ones_like(sign), sign)
+    ab_safe = xp.where(at_inf, 1.0, ab)
+    sign = xp.where(l[..., 1] != 0, sign_of(l[..., 1], xp), sign_of(l[..., 0], xp))
+    sign = xp.where(sign == 0, 1.0, sign)
     finite = l * (sign / ab_safe)[..., None]
     inf_line = xp.zeros_like(l) + xp.asarray([0.0, 0.0, 1.0], dtype=l.dtype, device=device_of(l))
     return xp.where(at_inf[..., None], inf_line, finite) + 0.0
@@ -209,17 +211,18 @@ def perspective_type(
         check_rotation(Rm, "R", xp=xp)
     tol = as_real(tol, "tol", nonnegative=True, maximum=1e6)
     norms = xp.sqrt(xp.sum(D * D, axis=-1))
-    if bool(xp.any(norms == 0)):
+    if any_value(norms == 0, xp):
         raise InvalidInputError("expected non-zero directions")
     dz = (D @ xp.matrix_transpose(Rm))[..., 2]
     return int(xp.sum(xp.astype(xp.abs(dz) > tol * norms, xp.int64)))
 
 
-def _as_finite_vps(v: ArrayLike, name: str, xp: Any, like: Any = None) -> Array:
+def _as_finite_vps(v: ArrayLike, name: str, xp: Any, like: Any = None, device: Any = None) -> Array:
     dtype = None if like is None else like.dtype
-    p = as_points(v, name, (2, 3), xp=xp, dtype=dtype, device=device_of(like))
+    dev = device_of(like) if like is not None else device
+    p = as_points(v, name, (2, 3), xp=xp, dtype=dtype, device=dev)
     if p.shape[-1] == 3:
-        if bool(xp.any(p[..., 2] == 0)):
+        if any_value(p[..., 2] == 0, xp):
             raise DegenerateConfigurationError(
                 f"{name} is at infinity; this needs finite vanishing points"
             )
@@ -247,11 +250,11 @@ def focal_from_vanishing_points(v1: ArrayLike, v2: ArrayLike, principal_point: A
     500.0
     """
     xp = namespace(v1, v2, principal_point)
-    a = _as_finite_vps(v1, "v1", xp)
+    a = _as_finite_vps(v1, "v1", xp, device=common_device(v1, v2, principal_point))
     b = _as_finite_vps(v2, "v2", xp, a)
-    p = as_points(principal_point, "principal_point", 2, xp=xp, dtype=a.dtype)
+    p = as_points(principal_point, "principal_point", 2, xp=xp, dtype=a.dtype, device=device_of(a))
     f2 = -xp.sum((a - p) * (b - p), axis=-1)
-    if bool(xp.any(f2 <= 0)):
+    if any_value(f2 <= 0, xp):
         raise DegenerateConfigurationError(
             "(v1 - p)·(v2 - p) >= 0: these vanishing points are not of orthogonal directions "
             "for this principal point"
@@ -286,7 +289,7 @@ def intrinsics_from_vanishing_points(v1: ArrayLike, v2: ArrayLike, v3: ArrayLike
            [  0.,   0.,   1.]])
     """
     xp = namespace(v1, v2, v3)
-    a = _as_finite_vps(v1, "v1", xp)
+    a = _as_finite_vps(v1, "v1", xp, device=common_device(v1, v2, v3))
     b = _as_finite_vps(v2, "v2", xp, a)
     c = _as_finite_vps(v3, "v3", xp, a)
     if a.ndim != 1 or b.ndim != 1 or c.ndim != 1:
@@ -296,12 +299,12 @@ def intrinsics_from_vanishing_points(v1: ArrayLike, v2: ArrayLike, v3: ArrayLike
     r1, r2 = c - b, c - a
     det = r1[0] * r2[1] - r1[1] * r2[0]
     norm2 = xp.sum(r1 * r1) + xp.sum(r2 * r2)
-    if bool(xp.abs(det) <= 1e-12 * norm2):
+    if any_value(xp.abs(det) <= 1e-12 * norm2, xp):
         raise DegenerateConfigurationError("the three vanishing points v1, v2, v3 are collinear")
     s1, s2 = xp.sum(r1 * a), xp.sum(r2 * b)
     p = xp.stack([(s1 * r2[1] - r1[1] * s2) / det, (r1[0] * s2 - s1 * r2[0]) / det])
     f2 = xp.stack([-xp.sum((x - p) * (y - p)) for x, y in ((a, b), (b, c), (a, c))])
-    if bool(xp.any(f2 <= 0)):
+    if any_value(f2 <= 0, xp):
         raise DegenerateConfigurationError(
             "the triangle of vanishing points v1, v2, v3 is not acute: not three orthogonal "
             "directions"
@@ -354,7 +357,7 @@ def vanishing_point_from_lines(lines: ArrayLike, weights: ArrayLike | None = Non
     if L.ndim != 2 or L.shape[0] < 2:
         raise InvalidInputError(f"expected lines of shape (N, 3) with N >= 2, got {tuple(L.shape)}")
     ab = xp.sqrt(L[:, 0] ** 2 + L[:, 1] ** 2)
-    if bool(xp.any(ab == 0)):
+    if any_value(ab == 0, xp):
         raise InvalidInputError(
             "expected lines with (a, b) != (0, 0): a line at infinity has no direction"
         )
@@ -363,7 +366,7 @@ def vanishing_point_from_lines(lines: ArrayLike, weights: ArrayLike | None = Non
     foot = -L[:, 2:3] * L[:, :2]
     centre = xp.mean(foot, axis=0)
     spread = xp.mean(xp.sqrt(xp.sum((foot - centre) ** 2, axis=-1)))
-    s = xp.where(spread > 0, spread / math.sqrt(2.0), xp.ones_like(spread))
+    s = xp.where(spread > 0, spread / math.sqrt(2.0), 1.0)
     # point transform x' = (x - centre) / s  ->  line transform l' = T^{-T} l
     a, b, c = L[:, 0], L[:, 1], L[:, 2]
     c2 = (c + a * centre[0] + b * centre[1]) / s
@@ -371,7 +374,7 @@ def vanishing_point_from_lines(lines: ArrayLike, weights: ArrayLike | None = Non
     if weights is not None:
         w = as_float(weights, "weights", xp=xp, dtype=L.dtype)
         w = xp.reshape(w, (-1,))
-        if w.shape[0] != L.shape[0] or bool(xp.any(w < 0)):
+        if w.shape[0] != L.shape[0] or any_value(w < 0, xp):
             raise InvalidInputError(
                 f"expected weights: one non-negative weight per line ({L.shape[0]}), got "
                 f"shape {format_shape(tuple(w.shape))}"

@@ -1,0 +1,95 @@
+"""The device checks on a real GPU (issue 29): skipped where there is none.
+
+On a machine with CUDA (a lent GPU; ``benchmarks/bench_gpu.py`` is the timing half):
+
+- every backend-matrix case on CUDA tensors gives a CUDA tensor of NumPy's dtype and
+  numbers (``test_backends_matrix``'s tolerances);
+- every call of the pointwise set (``test_meta_device.POINTWISE``), after one warm-up call
+  (constants uploaded), runs under ``torch.cuda.set_sync_debug_mode("error")``: no host
+  synchronisation, and NumPy's numbers.
+
+Run: ``PYTHONPATH=src python -m pytest -q -n 0 tests/backends/test_cuda_device.py``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+import pytest
+
+torch = pytest.importorskip("torch")
+
+from tests.backends.test_backends_matrix import CASES, Case, _result  # noqa: E402
+from tests.backends.test_meta_device import NEEDS_VALUES, POINTWISE  # noqa: E402
+
+pytestmark = pytest.mark.skipif(not torch.cuda.is_available(), reason="no CUDA device")
+
+
+def _cuda(a: Any, dtype: str = "float64") -> Any:
+    return torch.asarray(np.asarray(a, dtype=dtype), device="cuda")
+
+
+def _host(x: Any) -> Any:
+    if isinstance(x, tuple):
+        return tuple(_host(v) for v in x)
+    return x.detach().cpu().numpy() if isinstance(x, torch.Tensor) else np.asarray(x)
+
+
+@pytest.mark.parametrize("case", CASES, ids=[cs.name for cs in CASES])
+def test_matrix_case_on_cuda(case: Case) -> None:
+    ref = np.asarray(_result(case, case.fn(*case.args)))
+    out = _result(case, case.fn(*[_cuda(a) for a in case.args]))
+    if case.same_kind:
+        assert isinstance(out, torch.Tensor) and out.device.type == "cuda", out
+        assert str(out.dtype).removeprefix("torch.") == ref.dtype.name
+    np.testing.assert_allclose(_host(out), ref, atol=case.atol, rtol=1e-12, equal_nan=True)
+
+
+#: Calls whose numbers are not comparable across libraries, and why (the no-sync check runs).
+NUMBERS_DIFFER = {
+    "convert[gray->lch]": "the hue of a grey is atan2 of rounding noise (undefined)",
+}
+
+
+@pytest.mark.parametrize("dtype", ["float32", "float64"])
+@pytest.mark.parametrize(("fn", "args"), [p[1:] for p in POINTWISE], ids=[p[0] for p in POINTWISE])
+def test_pointwise_set_never_syncs(
+    fn: Callable[..., Any], args: tuple[Any, ...], dtype: str
+) -> None:
+    ref = fn(*[np.asarray(a, dtype=dtype) for a in args])
+    xs = [_cuda(a, dtype) for a in args]
+    fn(*xs)  # warm-up: constants uploaded once
+    torch.cuda.synchronize()
+    torch.cuda.set_sync_debug_mode("error")
+    try:
+        out = fn(*xs)
+    finally:
+        torch.cuda.set_sync_debug_mode("default")
+    name = next(p[0] for p in POINTWISE if p[1] is fn)
+    if name not in NUMBERS_DIFFER:
+        _compare(out, ref, dtype)
+
+
+def _compare(out: Any, ref: Any, dtype: str) -> None:
+    """Each array of a result (a tuple or named tuple: each field) against NumPy's."""
+    outs = tuple(out) if isinstance(out, tuple) else (out,)
+    refs = tuple(ref) if isinstance(ref, tuple) else (ref,)
+    assert len(outs) == len(refs)
+    for o, r in zip(outs, refs, strict=True):
+        np.testing.assert_allclose(
+            np.asarray(_host(o), dtype=np.float64),
+            np.asarray(r, dtype=np.float64),
+            atol=2e-3 if dtype == "float32" else 1e-8,
+            rtol=1e-4 if dtype == "float32" else 1e-10,
+            equal_nan=True,
+        )
+
+
+def test_needs_values_still_work_on_cuda() -> None:
+    # the reports read values by contract: they copy to the host explicitly
+    names = set(NEEDS_VALUES)
+    for case in CASES:
+        if case.name in names:
+            case.fn(*[_cuda(a) for a in case.args])
