@@ -22,10 +22,15 @@ from imageform.simulate.result import SimulationResult
 pytest.importorskip("matplotlib")
 
 
-class _FakeScene(str):
-    """A scene stand-in: compares equal to its name, has no extra views."""
+_REAL_SCENE = imageform.simulate.default_scene()  # before any test replaces default_scene
 
-    config = SimpleNamespace(views=())
+
+class _FakeScene(str):
+    """A scene stand-in: compares equal to its name, has no extra views; its sensor (for the
+    truth camera file's tables) is the default scene's."""
+
+    config = SimpleNamespace(views=(), sensor=_REAL_SCENE.config.sensor)
+    sensor = _REAL_SCENE.sensor
 
 
 class FakePipeline:
