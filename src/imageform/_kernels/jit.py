@@ -189,11 +189,12 @@ def configure_cache() -> None:
 configure_cache()
 
 
-def njit(fn: Callable[..., Any] | None = None, /, **options: Any) -> Any:
+def njit(fn: Callable[..., Any] | str | None = None, /, **options: Any) -> Any:
     """``numba.njit`` with imageform's defaults: ``cache=True`` unless the kernel says otherwise.
 
-    Used as ``@njit``, ``@njit(parallel=True, ...)`` or ``njit(**options)(function)``, exactly
-    as ``numba.njit``; every other option is numba's.
+    Used as ``@njit``, ``@njit(parallel=True, ...)``, ``@njit("signature", ...)`` (compiled
+    when defined, for that signature only) or ``njit(**options)(function)``, exactly as
+    ``numba.njit``; every other option is numba's.
     """
     options.setdefault("cache", True)
     if getattr(numba.config, "BOUNDSCHECK", None):

@@ -176,8 +176,11 @@ def _fro_unit(M):  # type: ignore[no-untyped-def]  # pragma: no cover - compiled
 
 @njit(**_OPTS)
 def _jacobi(A, V):  # type: ignore[no-untyped-def]  # pragma: no cover - compiled
-    """Eigen-decompose the symmetric ``A`` (m, m) in place (cyclic Jacobi): ``A`` ends diagonal
-    (the eigenvalues), ``V``'s columns the eigenvectors (Golub & Van Loan, sec. 8.5)."""
+    """Eigen-decompose the symmetric ``A`` (m, m) in place by cyclic Jacobi rotations.
+
+    ``A`` ends diagonal (the eigenvalues), ``V``'s columns the eigenvectors (Golub & Van
+    Loan, *Matrix Computations*, sec. 8.5).
+    """
     m = A.shape[0]
     for i in range(m):
         for j in range(m):
@@ -221,7 +224,7 @@ def _jacobi(A, V):  # type: ignore[no-untyped-def]  # pragma: no cover - compile
 
 @njit(**_OPTS)
 def _min_eigvec(A, V, out):  # type: ignore[no-untyped-def]  # pragma: no cover - compiled
-    """The eigenvector of the smallest eigenvalue of the symmetric ``A`` (destroyed)."""
+    """Write the eigenvector of the smallest eigenvalue of the symmetric ``A`` (destroyed)."""
     _jacobi(A, V)
     k = 0
     for i in range(1, A.shape[0]):
@@ -286,11 +289,17 @@ def _svd3(M, U, s, V, A, W):  # type: ignore[no-untyped-def]  # pragma: no cover
 
 @njit(**_OPTS)
 def _nullspace(A, nr, m, nc, N, perm, tol):  # type: ignore[no-untyped-def]  # pragma: no cover
-    """The ``nc - m`` vectors of the null space of ``A[:nr, :nc]`` (rank ``m``) as rows of ``N``.
+    """Write the ``nc - m`` null vectors of ``A[:nr, :nc]`` (rank ``m``) as rows of ``N``.
 
     Gauss-Jordan elimination with complete pivoting (``A`` destroyed); the vectors are not
-    orthonormal. False when a pivot is below ``tol`` (rank deficient: a degenerate sample).
+    orthonormal. False when a pivot is below ``tol`` times the largest entry (rank deficient:
+    a degenerate sample).
     """
+    big = 0.0
+    for i in range(nr):
+        for j in range(nc):
+            big = max(big, abs(A[i, j]))
+    tol = tol * big
     for j in range(nc):
         perm[j] = j
     for r in range(m):
@@ -440,7 +449,7 @@ def _score(kind, M, p1, p2, thr2, limit):  # type: ignore[no-untyped-def]  # pra
 
 @njit(**_OPTS)
 def _select(kind, M, p1, p2, bound2, idx):  # type: ignore[no-untyped-def]  # pragma: no cover
-    """Indices of the correspondences with squared error below ``bound2`` into ``idx``."""
+    """Write the indices of the correspondences with squared error below ``bound2``; count."""
     m = 0
     for i in range(p1.shape[0]):
         if _sq(kind, M, p1, p2, i) < bound2:
@@ -539,7 +548,7 @@ def _residuals(kind, q, p1, p2, idx, m, aux, M, T, out):  # type: ignore[no-unty
             num, den = _sampson_parts(M, p1, p2, idx[j])
             out[j] = num / math.sqrt(den)
         n_out = m
-    for k in range(n_out):
+    for k in range(n_out):  # noqa: SIM110 - compiled: a plain loop
         if not math.isfinite(out[k]):
             return False
     return True
@@ -646,20 +655,17 @@ def _lm(kind, q, p1, p2, idx, m, aux, max_iter):  # type: ignore[no-untyped-def]
     for _ in range(max_iter):
         if kind <= _H_SYMMETRIC:
             _h_jac(kind, q, p1, p2, idx, m, aux, M, T, J)
-            continue_numeric = False
-        else:
-            continue_numeric = True
-        # central-difference Jacobian (F, E)
-        for c in range(npar if continue_numeric else 0):
-            h = 1e-6 * max(1.0, abs(q[c]))
-            for k in range(npar):
-                qn[k] = q[k]
-            qn[c] = q[c] + h
-            ok = _residuals(kind, qn, p1, p2, idx, m, aux, M, T, rp)
-            qn[c] = q[c] - h
-            ok &= _residuals(kind, qn, p1, p2, idx, m, aux, M, T, rn)
-            for k in range(nr):
-                J[k, c] = (rp[k] - rn[k]) / (2.0 * h) if ok else 0.0
+        else:  # central differences (F, E)
+            for c in range(npar):
+                h = 1e-6 * max(1.0, abs(q[c]))
+                for k in range(npar):
+                    qn[k] = q[k]
+                qn[c] = q[c] + h
+                ok = _residuals(kind, qn, p1, p2, idx, m, aux, M, T, rp)
+                qn[c] = q[c] - h
+                ok &= _residuals(kind, qn, p1, p2, idx, m, aux, M, T, rn)
+                for k in range(nr):
+                    J[k, c] = (rp[k] - rn[k]) / (2.0 * h) if ok else 0.0
         for a in range(npar):
             g[a] = 0.0
             for k in range(nr):
@@ -730,7 +736,11 @@ def _refine_support(mean_sq, threshold, dof, factor):  # type: ignore[no-untyped
         mid = math.sqrt(a * b)
         c = t2 / (mid * mid)
         lo = _chi2_cdf(c, dof)
-        ms = mid * mid * dof * _chi2_cdf(c, np.int64(dof + 2)) / lo if lo > 0 else t2 * dof / (dof + 2.0)
+        ms = (
+            mid * mid * dof * _chi2_cdf(c, np.int64(dof + 2)) / lo
+            if lo > 0
+            else t2 * dof / (dof + 2.0)
+        )
         if ms < m:
             a = mid
         else:
@@ -739,13 +749,13 @@ def _refine_support(mean_sq, threshold, dof, factor):  # type: ignore[no-untyped
     return min(max(3.0 * sigma, threshold), factor * threshold)
 
 
-
-
 # ---------------------------------------------------------------- epipolar helpers
 @njit(**_OPTS)
 def _rank2(F):  # type: ignore[no-untyped-def]  # pragma: no cover - compiled
-    """Replace ``F`` by the nearest rank-2 matrix (Frobenius): ``F (I - v vᵀ)``, ``v`` the
-    eigenvector of ``FᵀF``'s smallest eigenvalue."""
+    """Replace ``F`` by the nearest rank-2 matrix (Frobenius norm).
+
+    ``F (I - v vᵀ)``, ``v`` the eigenvector of ``FᵀF``'s smallest eigenvalue.
+    """
     A = np.empty((3, 3))
     V = np.empty((3, 3))
     v = np.empty(3)
@@ -759,7 +769,7 @@ def _rank2(F):  # type: ignore[no-untyped-def]  # pragma: no cover - compiled
 
 @njit(**_OPTS)
 def _epi_row(x1, y1, x2, y2, w, row):  # type: ignore[no-untyped-def]  # pragma: no cover
-    """The row ``w (x2 ⊗ x1)`` of ``x2ᵀ F x1 = 0`` (F row-major)."""
+    """Write the row ``w (x2 ⊗ x1)`` of ``x2ᵀ F x1 = 0`` (F row-major)."""
     row[0] = w * x2 * x1
     row[1] = w * x2 * y1
     row[2] = w * x2
@@ -911,7 +921,7 @@ def _project_e(E):  # type: ignore[no-untyped-def]  # pragma: no cover - compile
 
 @njit(**_OPTS)
 def _support(F, p1, p2, thr, factor, sel):  # type: ignore[no-untyped-def]  # pragma: no cover
-    """The refinement support (``_robust_core.refine_support``, dof 1) of ``F`` into ``sel``.
+    """Select the refinement support (``_robust_core.refine_support``, dof 1) of ``F``.
 
     Returns the support's bound and the number of selected correspondences.
     """
@@ -928,10 +938,38 @@ def _support(F, p1, p2, thr, factor, sel):  # type: ignore[no-untyped-def]  # pr
 
 
 @njit(**_OPTS)
+def _support_count(kind, M, p1, p2, thr, dof, factor):  # type: ignore[no-untyped-def]  # pragma: no cover
+    """Count the correspondences within the refinement support of ``M``.
+
+    The support is ``_robust_core.refine_support``'s: ``3σ̂`` between ``τ`` and
+    ``factor τ``, ``σ̂`` from the truncated mean squared error of the inliers. It counts the
+    inliers the noise model expects, not only those within ``τ``: with ``τ`` near ``σ``,
+    a third of the true inliers lie beyond ``τ``, and an adaptive count from the inliers
+    within ``τ`` alone draws several times the samples that the true inlier ratio asks for.
+    """
+    thr2 = thr * thr
+    e_sum = 0.0
+    cnt = 0
+    n = p1.shape[0]
+    for i in range(n):
+        e = _sq(kind, M, p1, p2, i)
+        if e < thr2:
+            e_sum += e
+            cnt += 1
+    wide = _refine_support(e_sum / cnt if cnt > 0 else 0.0, thr, dof, factor)
+    w2 = wide * wide
+    m = 0
+    for i in range(n):
+        if _sq(kind, M, p1, p2, i) < w2:
+            m += 1
+    return m
+
+
+@njit(**_OPTS)
 def _same(sel, m, sel2, m2):  # type: ignore[no-untyped-def]  # pragma: no cover - compiled
     if m != m2:
         return False
-    for k in range(m):
+    for k in range(m):  # noqa: SIM110 - compiled: a plain loop
         if sel[k] != sel2[k]:
             return False
     return True

@@ -20,6 +20,7 @@ from imageform._kernels.ransac import (
     _sample,
     _score,
     _select,
+    _support_count,
     _to_f,
     _trials_needed,
 )
@@ -69,8 +70,11 @@ def _mul_ql(a, b, s, out):  # type: ignore[no-untyped-def]  # pragma: no cover -
 
 @njit(**_OPTS)
 def _hessenberg(a, n):  # type: ignore[no-untyped-def]  # pragma: no cover - compiled
-    """Reduce ``a`` to upper Hessenberg form by stabilised elementary similarity transforms
-    (Wilkinson; Numerical Recipes ``elmhes``), in place."""
+    """Reduce ``a`` to upper Hessenberg form in place.
+
+    Stabilised elementary similarity transforms (Wilkinson 1965; Numerical Recipes'
+    ``elmhes``).
+    """
     for m in range(1, n - 1):
         x = 0.0
         i = m
@@ -133,7 +137,7 @@ def _horner(c, deg, x):  # type: ignore[no-untyped-def]  # pragma: no cover - co
 
 @njit(**_OPTS)
 def _root_in(c, deg, dc, a, b, fa, tol):  # type: ignore[no-untyped-def]  # pragma: no cover
-    """The root of ``c`` in ``[a, b]`` where it changes sign (Newton, bisection safeguard)."""
+    """Return the root of ``c`` in ``[a, b]``, a sign change (Newton, bisection safeguard)."""
     x = 0.5 * (a + b)
     for _ in range(80):
         f = _horner(c, deg, x)
@@ -206,7 +210,7 @@ def _real_roots(c, deg, D, roots, crit):  # type: ignore[no-untyped-def]  # prag
 
 @njit(**_OPTS)
 def _e5(q1, q2, idx, Es):  # type: ignore[no-untyped-def]  # pragma: no cover - compiled
-    """The real essential matrices (unit norm) through the 5 correspondences ``idx``; count.
+    """Write the real essential matrices (unit norm) through 5 correspondences; their count.
 
     As ``geometry._minimal.e5``: ``E = x X + y Y + z Z + W`` over the null space of the
     5 x 9 system, the ten cubics ``det E = 0``, ``2 E Eᵀ E - tr(E Eᵀ) E = 0`` (Nister 2004),
@@ -340,10 +344,13 @@ def _e5(q1, q2, idx, Es):  # type: ignore[no-untyped-def]  # pragma: no cover - 
 
 @njit(
     "int64(float64[:, ::1], float64[:, ::1], float64[:, ::1], float64[:, ::1], float64[:, ::1],"
-    " float64[:, ::1], float64, float64, int64, uint64, int64, float64, float64[:, ::1])",
+    " float64[:, ::1], float64, float64, int64, uint64, int64, float64, float64,"
+    " float64[:, ::1])",
     **_OPTS,
 )
-def essential_estimate(p1, p2, q1, q2, K1i, K2i, thr, conf, max_trials, seed, max_iter, factor, E_out):  # type: ignore[no-untyped-def]  # pragma: no cover
+def essential_estimate(  # type: ignore[no-untyped-def]  # pragma: no cover
+    p1, p2, q1, q2, K1i, K2i, thr, conf, max_trials, seed, max_iter, factor, term, E_out
+):
     """Robust ``E`` from pixels ``p1, p2`` (normalised ``q1, q2``): 5-point RANSAC + LO, LM.
 
     As ``twoview.find_essential_matrix``'s NumPy path: scored by the pixel Sampson distance
@@ -392,7 +399,9 @@ def essential_estimate(p1, p2, q1, q2, K1i, K2i, thr, conf, max_trials, seed, ma
                     _copy3(Elo, best)
                     best_sc = sc2
                     best_cnt = cnt2
-            needed = _trials_needed(best_cnt, n, np.int64(5), conf)
+            _to_f(best, K1i, K2i, F)
+            m = _support_count(np.int64(_F_ORTHO), F, p1, p2, thr, np.int64(1), term)
+            needed = _trials_needed(m, n, np.int64(5), conf)
     if best_cnt < 5:
         return -drawn
     _project_e(best)

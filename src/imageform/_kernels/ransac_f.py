@@ -23,6 +23,7 @@ from imageform._kernels.ransac import (
     _sample,
     _sampson_parts,
     _score,
+    _support_count,
     _trials_needed,
 )
 
@@ -86,7 +87,7 @@ def _det3(A):  # type: ignore[no-untyped-def]  # pragma: no cover - compiled
 
 @njit(**_OPTS)
 def _f7(p1, p2, idx, xs1, xs2, T1, T2, A, N, perm, Fs):  # type: ignore[no-untyped-def]  # pragma: no cover
-    """The one to three fundamental matrices (pixels, unit norm) of the 7-point sample ``idx``.
+    """Write the one to three fundamental matrices (pixels, unit norm) of a 7-point sample.
 
     As ``geometry._minimal.f7``: the pencil ``a F1 + (1 - a) F2`` of the null space of the
     7 x 9 system (Hartley-normalised), ``det = 0`` a cubic in ``a`` (H&Z sec. 11.1.2).
@@ -161,10 +162,10 @@ def _local_opt(F, p1, p2, thr, sel, w, out):  # type: ignore[no-untyped-def]  # 
 
 @njit(
     "int64(float64[:, ::1], float64[:, ::1], float64, float64, int64, uint64, int64, int64,"
-    " float64, float64[:, ::1])",
+    " float64, float64, float64[:, ::1])",
     **_OPTS,
 )
-def fundamental_estimate(p1, p2, thr, conf, max_trials, seed, pool, max_iter, factor, F_out):  # type: ignore[no-untyped-def]  # pragma: no cover
+def fundamental_estimate(p1, p2, thr, conf, max_trials, seed, pool, max_iter, factor, term, F_out):  # type: ignore[no-untyped-def]  # pragma: no cover
     """Robust ``F`` (``x2ᵀ F x1 = 0``): 7-point RANSAC + LO + runner-up pool, then LM.
 
     As ``twoview.find_fundamental_matrix``'s NumPy path (``_robust_core.ransac`` with
@@ -194,6 +195,8 @@ def fundamental_estimate(p1, p2, thr, conf, max_trials, seed, pool, max_iter, fa
     pool_F = np.empty((max(pool, 1), 3, 3))
     pool_sc = np.empty(max(pool, 1))
     n_pool = 0
+    kf = np.int64(_F_ORTHO)
+    kd = np.int64(1)
     best_sc = np.inf
     best_cnt = -1
     needed = float(max_trials)
@@ -221,7 +224,9 @@ def fundamental_estimate(p1, p2, thr, conf, max_trials, seed, pool, max_iter, fa
                             _copy3(Flo, best)
                             best_sc = sc2
                             best_cnt = cnt2
-                    needed = _trials_needed(best_cnt, n, np.int64(7), conf)
+                    needed = _trials_needed(
+                        _support_count(kf, best, p1, p2, thr, kd, term), n, np.int64(7), conf
+                    )
                 elif pool > 0:
                     # insert into the pool (sorted by score, the pool best first)
                     pos = n_pool
@@ -253,7 +258,9 @@ def fundamental_estimate(p1, p2, thr, conf, max_trials, seed, pool, max_iter, fa
                     best_sc = sc2
                     best_cnt = cnt2
         n_pool = 0
-        needed = _trials_needed(best_cnt, n, np.int64(7), conf)
+        needed = _trials_needed(
+            _support_count(kf, best, p1, p2, thr, kd, term), n, np.int64(7), conf
+        )
         if best_sc >= before or drawn >= min(needed, max_trials):
             break
     if best_cnt < 8:

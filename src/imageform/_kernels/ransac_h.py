@@ -22,6 +22,7 @@ from imageform._kernels.ransac import (
     _score,
     _select,
     _sq_h,
+    _support_count,
     _trials_needed,
 )
 
@@ -50,7 +51,7 @@ def _h_sample_good(sn, dn, idx):  # type: ignore[no-untyped-def]  # pragma: no c
 
 @njit(**_OPTS)
 def _h_rows(x, y, u, v, w, A, r):  # type: ignore[no-untyped-def]  # pragma: no cover - compiled
-    """The two DLT rows of ``(x, y) -> (u, v)`` (weight ``w``) into ``A[r], A[r + 1]``."""
+    """Write the two DLT rows of ``(x, y) -> (u, v)`` (weight ``w``) into ``A[r], A[r + 1]``."""
     A[r, 0] = 0.0
     A[r, 1] = 0.0
     A[r, 2] = 0.0
@@ -105,10 +106,10 @@ def _h_lsq(sn, dn, idx, m, Tdi, Ts, H):  # type: ignore[no-untyped-def]  # pragm
 
 @njit(
     "int64(float64[:, ::1], float64[:, ::1], float64, float64, int64, uint64, int64, int64,"
-    " float64, float64[:, ::1])",
+    " float64, float64, float64[:, ::1])",
     **_OPTS,
 )
-def homography_estimate(s, d, thr, conf, max_trials, seed, mode, max_iter, factor, H_out):  # type: ignore[no-untyped-def]  # pragma: no cover
+def homography_estimate(s, d, thr, conf, max_trials, seed, mode, max_iter, factor, term, H_out):  # type: ignore[no-untyped-def]  # pragma: no cover
     """Robust homography ``d ~ H s``: RANSAC + LO, then LM on the refinement support.
 
     ``mode``: 0 forward, 1 symmetric transfer error, -1 no refinement. Writes ``H_out``
@@ -171,7 +172,8 @@ def homography_estimate(s, d, thr, conf, max_trials, seed, mode, max_iter, facto
                 _copy3(Hlo, best)
                 best_sc = sc2
                 best_cnt = cnt2
-        needed = _trials_needed(best_cnt, n, np.int64(4), conf)
+        m = _support_count(np.int64(0), best, s, d, thr, np.int64(2), term)
+        needed = _trials_needed(m, n, np.int64(4), conf)
     if best_cnt < 4:
         return -drawn
     _copy3(best, H_out)

@@ -173,6 +173,7 @@ def _find_homography_numba(
         _REFINE_CODE[mode],
         n_iter,
         _robust_core.REFINE_FACTOR,
+        _robust_core.TERMINATION_FACTOR,
         H,
     )
     if drawn < 0:

@@ -341,7 +341,7 @@ def find_fundamental_matrix(
     if use_numba(p1):
         from imageform._kernels.ransac_f import fundamental_estimate
 
-        F = np.zeros((3, 3))
+        Fk: F64 = np.zeros((3, 3))
         drawn = int(
             fundamental_estimate(
                 np.ascontiguousarray(p1),
@@ -353,7 +353,8 @@ def find_fundamental_matrix(
                 _LO_POOL,
                 n_iter,
                 _robust_core.REFINE_FACTOR,
-                F,
+                _robust_core.TERMINATION_FACTOR,
+                Fk,
             )
         )
         if drawn < 0:
@@ -361,7 +362,7 @@ def find_fundamental_matrix(
                 f"no fundamental matrix with at least 8 inliers within {thr:g} px after "
                 f"{-drawn} samples"
             )
-        return _fundamental_result(F, p1, p2, thr, drawn, points1, points2)
+        return _fundamental_result(Fk, p1, p2, thr, drawn, points1, points2)
 
     def solve(idx: NDArray[np.intp]) -> F64:
         return f7(p1[idx], p2[idx])[0]
@@ -532,7 +533,8 @@ def find_essential_matrix(
     gen = as_rng(rng)
     n = p1.shape[0]
     q1, q2 = _normalised(p1, Ka), _normalised(p2, Kb)
-    Kai, Kbi = np.linalg.inv(Ka), np.linalg.inv(Kb)
+    Kai: F64 = np.asarray(np.linalg.inv(Ka), dtype=np.float64)
+    Kbi: F64 = np.asarray(np.linalg.inv(Kb), dtype=np.float64)
     if use_numba(p1):
         from imageform._kernels.ransac_e import essential_estimate
 
@@ -551,6 +553,7 @@ def find_essential_matrix(
                 np.uint64(gen.integers(0, 2**63 - 1)),
                 n_iter,
                 _robust_core.REFINE_FACTOR,
+                _robust_core.TERMINATION_FACTOR,
                 Em,
             )
         )
