@@ -35,6 +35,8 @@ F64 = NDArray[np.float64]
 
 _REFINE = ("symmetric", "forward", "none")
 _REFINE_CODE = {"forward": 0, "symmetric": 1, "none": -1}
+#: Sample and iteration counts beyond this are the same as unbounded (an int64 for numba).
+_INT_CAP = 2**62
 
 
 class HomographyResult(NamedTuple):
@@ -168,17 +170,17 @@ def _find_homography_numba(
         np.ascontiguousarray(d),
         thr,
         p,
-        trials,
+        min(trials, _INT_CAP),
         np.uint64(gen.integers(0, 2**63 - 1)),
         _REFINE_CODE[mode],
-        n_iter,
+        min(n_iter, _INT_CAP),
         _robust_core.REFINE_FACTOR,
         _robust_core.TERMINATION_FACTOR,
         H,
     )
     if drawn < 0:
         raise DegenerateConfigurationError(
-            f"no homography with at least 4 inliers within {thr:g} px after {-drawn} samples"
+            f"no homography from src to dst with at least 4 inliers within {thr:g} px after {-drawn} samples"
         )
     return _finish(H, s, d, thr, int(drawn), src, dst)
 
@@ -294,7 +296,7 @@ def find_homography(
     H, inl, drawn = ransac(n, 4, solve, sq, thr, p, trials, gen, local_opt)
     if H is None or inl.sum() < 4:
         raise DegenerateConfigurationError(
-            f"no homography with at least 4 inliers within {thr:g} px after {drawn} samples"
+            f"no homography from src to dst with at least 4 inliers within {thr:g} px after {drawn} samples"
         )
     if mode != "none" and inl.sum() > 4:
         H = _robust_core.refit_on_support(
