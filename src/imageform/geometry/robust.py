@@ -180,7 +180,8 @@ def _find_homography_numba(
     )
     if drawn < 0:
         raise DegenerateConfigurationError(
-            f"no homography from src to dst with at least 4 inliers within {thr:g} px after {-drawn} samples"
+            f"no homography from src to dst with at least 4 inliers within {thr:g} px after "
+            f"{-drawn} samples"
         )
     return _finish(H, s, d, thr, int(drawn), src, dst)
 
@@ -296,7 +297,8 @@ def find_homography(
     H, inl, drawn = ransac(n, 4, solve, sq, thr, p, trials, gen, local_opt)
     if H is None or inl.sum() < 4:
         raise DegenerateConfigurationError(
-            f"no homography from src to dst with at least 4 inliers within {thr:g} px after {drawn} samples"
+            f"no homography from src to dst with at least 4 inliers within {thr:g} px after "
+            f"{drawn} samples"
         )
     if mode != "none" and inl.sum() > 4:
         H = _robust_core.refit_on_support(
