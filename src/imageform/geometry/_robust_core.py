@@ -21,6 +21,7 @@ from imageform.geometry._checks import as_points
 
 __all__ = [
     "REFINE_FACTOR",
+    "TERMINATION_FACTOR",
     "check_confidence",
     "check_pairs",
     "hartley",
@@ -40,6 +41,15 @@ BATCH = 32
 #: Upper bound of the final least-squares support, as a multiple of the inlier threshold
 #: (see :func:`refine_support`).
 REFINE_FACTOR = 2.0
+
+#: Upper bound of the support whose inlier ratio sets the adaptive sample count of the
+#: compiled estimators (``imageform._kernels.ransac``), as a multiple of the threshold: the
+#: correspondences within ``3σ̂`` (``σ̂`` the noise estimated from the inliers, as
+#: :func:`refine_support`), clipped to ``[τ, TERMINATION_FACTOR τ]``. With ``τ`` near the
+#: noise, the inliers within ``τ`` are about two thirds of the true ones and a count from
+#: them draws several times the samples needed (issue 28: 1263 against 259 samples, the
+#: median fundamental 7-point scene of benchmarks/bench_twoview.py).
+TERMINATION_FACTOR = 1.5
 
 
 def check_pairs(a: object, b: object, name_a: str, name_b: str, n_min: int) -> tuple[F64, F64]:

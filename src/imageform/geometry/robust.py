@@ -14,6 +14,7 @@ import numpy as np
 import numpy.typing as npt
 from numpy.typing import NDArray
 
+from imageform._backend import use_numba
 from imageform._random import RNGLike, as_rng
 from imageform._validate import as_int, check_option, check_positive
 from imageform.errors import DegenerateConfigurationError
@@ -33,6 +34,9 @@ __all__ = ["HomographyResult", "find_homography"]
 F64 = NDArray[np.float64]
 
 _REFINE = ("symmetric", "forward", "none")
+_REFINE_CODE = {"forward": 0, "symmetric": 1, "none": -1}
+#: Sample and iteration counts beyond this are the same as unbounded (an int64 for numba).
+_INT_CAP = 2**62
 
 
 class HomographyResult(NamedTuple):
@@ -135,6 +139,53 @@ def _normalise_scale(H: F64) -> F64:
     return H / H[2, 2] if abs(H[2, 2]) > 1e-12 * np.linalg.norm(H) else H / np.linalg.norm(H)
 
 
+def _finish(
+    H: F64, s: F64, d: F64, thr: float, drawn: int, src: object, dst: object
+) -> HomographyResult:
+    H = _normalise_scale(H)
+    e = _sq_forward(H, s, d)
+    inl = e < thr * thr
+    rms = float(np.sqrt(np.mean(e[inl]))) if inl.any() else float("nan")
+    return HomographyResult(H.astype(result_dtype(src, dst)), inl, rms, drawn)
+
+
+def _find_homography_numba(
+    s: F64,
+    d: F64,
+    thr: float,
+    p: float,
+    trials: int,
+    mode: str,
+    n_iter: int,
+    gen: np.random.Generator,
+    src: object,
+    dst: object,
+) -> HomographyResult:
+    """:func:`find_homography` by the compiled kernel (same steps, see ``_kernels.ransac``)."""
+    from imageform._kernels.ransac_h import homography_estimate
+
+    H = np.zeros((3, 3))
+    drawn = homography_estimate(
+        np.ascontiguousarray(s),
+        np.ascontiguousarray(d),
+        thr,
+        p,
+        min(trials, _INT_CAP),
+        np.uint64(gen.integers(0, 2**63 - 1)),
+        _REFINE_CODE[mode],
+        min(n_iter, _INT_CAP),
+        _robust_core.REFINE_FACTOR,
+        _robust_core.TERMINATION_FACTOR,
+        H,
+    )
+    if drawn < 0:
+        raise DegenerateConfigurationError(
+            f"no homography from src to dst with at least 4 inliers within {thr:g} px after "
+            f"{-drawn} samples"
+        )
+    return _finish(H, s, d, thr, int(drawn), src, dst)
+
+
 def find_homography(
     src: npt.ArrayLike,
     dst: npt.ArrayLike,
@@ -216,6 +267,8 @@ def find_homography(
     mode = check_option(refine, _REFINE, "refine")
     n_iter = as_int(max_iter, "max_iter", minimum=0)
     gen = as_rng(rng)
+    if use_numba(s):
+        return _find_homography_numba(s, d, thr, p, trials, mode, n_iter, gen, src, dst)
     n = s.shape[0]
     sn, Ts = hartley(s)
     dn, Td = hartley(d)
@@ -244,7 +297,8 @@ def find_homography(
     H, inl, drawn = ransac(n, 4, solve, sq, thr, p, trials, gen, local_opt)
     if H is None or inl.sum() < 4:
         raise DegenerateConfigurationError(
-            f"no homography with at least 4 inliers within {thr:g} px after {drawn} samples"
+            f"no homography from src to dst with at least 4 inliers within {thr:g} px after "
+            f"{drawn} samples"
         )
     if mode != "none" and inl.sum() > 4:
         H = _robust_core.refit_on_support(
@@ -255,8 +309,4 @@ def find_homography(
             2,
             4,
         )
-    H = _normalise_scale(H)
-    e = _sq_forward(H, s, d)
-    inl = e < thr * thr
-    rms = float(np.sqrt(np.mean(e[inl]))) if inl.any() else float("nan")
-    return HomographyResult(H.astype(result_dtype(src, dst)), inl, rms, drawn)
+    return _finish(H, s, d, thr, drawn, src, dst)

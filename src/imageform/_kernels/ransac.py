@@ -1,0 +1,1012 @@
+r"""numba kernels of the robust two-view estimators (``imageform.geometry.robust``, ``.twoview``).
+
+One kernel per model runs the whole estimate in compiled code: the hypothesise-and-verify
+loop (minimal samples, minimal solver, MSAC score), the local optimisation of every new best
+hypothesis (LO-RANSAC, Chum, Matas & Kittler 2003), the adaptive trial count, and the final
+least-squares refinement on the refinement support (Levenberg-Marquardt, as the NumPy twins
+in ``imageform.geometry``):
+
+- :func:`homography_estimate`: 4-point DLT (Gauss-Jordan null vector of the 8 x 9 system in
+  Hartley-normalised coordinates), the sample rejected before solving when three of its
+  points are collinear or the four do not keep their orientation (a homography of a plane
+  seen from its front keeps the sign of every triangle; OpenCV's USAC ``isSampleGood``),
+  forward transfer error.
+- :func:`fundamental_estimate`: 7-point (the cubic ``det(α F1 + (1 - α) F2) = 0``, roots in
+  closed form), Sampson distance, Sampson-weighted 8-point refits as local optimisation,
+  the runner-up pool of issue 26.
+- :func:`essential_estimate`: 5-point (Nister 2004; the ten cubic constraints reduced by
+  Gauss-Jordan elimination, the action matrix of multiplication by ``x`` as in Stewenius,
+  Engels & Nister 2006), its real eigenvalues the real roots of its characteristic
+  polynomial (Hessenberg form, then the roots isolated between those of the polynomial's
+  derivatives), the eigenvectors by Gauss-Jordan elimination; Sampson distance in pixels.
+
+Speed comes from two things beyond compiled loops: no allocation per hypothesis, and the
+partial-evaluation bail-out of the score (``Σ min(e², τ²)`` grows monotonically, so the
+evaluation of a hypothesis stops as soon as it exceeds the score it has to beat: the
+hypothesis could not be kept, the result is exactly that of a full evaluation).
+
+The random samples come from a SplitMix64 generator seeded from the caller's
+``numpy.random.Generator`` (one draw), so a given ``rng`` gives the same result every time.
+All kernels take float64 arrays only, one explicit signature each, cached
+(:mod:`imageform._kernels.jit`); ``error_model="numpy"`` (a division by zero gives inf or
+NaN, tested for where it matters).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from imageform._kernels.jit import njit
+
+__all__: list[str] = []
+
+_OPTS = {"nogil": True, "error_model": "numpy"}
+
+# LM residual kinds
+_H_FORWARD = 0
+_H_SYMMETRIC = 1
+_F_ORTHO = 2
+_E_RT = 3
+
+
+# ---------------------------------------------------------------- random samples
+@njit(**_OPTS)
+def _rand(state):  # type: ignore[no-untyped-def]  # pragma: no cover - compiled
+    """SplitMix64 (Steele, Lea & Flood 2014): the next 64-bit value of ``state`` (uint64[1])."""
+    z = state[0] + np.uint64(0x9E3779B97F4A7C15)
+    state[0] = z
+    z = (z ^ (z >> np.uint64(30))) * np.uint64(0xBF58476D1CE4E5B9)
+    z = (z ^ (z >> np.uint64(27))) * np.uint64(0x94D049BB133111EB)
+    return z ^ (z >> np.uint64(31))
+
+
+@njit(**_OPTS)
+def _sample(state, n, s, idx):  # type: ignore[no-untyped-def]  # pragma: no cover - compiled
+    """``s`` distinct indices in ``[0, n)`` into ``idx``."""
+    for k in range(s):
+        while True:
+            r = np.int64(_rand(state) % np.uint64(n))
+            ok = True
+            for j in range(k):
+                if idx[j] == r:
+                    ok = False
+                    break
+            if ok:
+                idx[k] = r
+                break
+
+
+@njit(**_OPTS)
+def _trials_needed(n_inl, n, s, conf):  # type: ignore[no-untyped-def]  # pragma: no cover
+    eps = n_inl / n
+    if eps >= 1.0:
+        return 0.0
+    if eps <= 0.0:
+        return np.inf
+    denom = math.log1p(-(eps**s))
+    if denom == 0.0:
+        return np.inf
+    return math.log1p(-conf) / denom
+
+
+# ---------------------------------------------------------------- small linear algebra
+@njit(**_OPTS)
+def _hartley(p, idx, m, out, T):  # type: ignore[no-untyped-def]  # pragma: no cover
+    """Hartley-normalise the points ``p[idx[:m]]`` into ``out (m, 2)``, ``T (3, 3)``."""
+    cx = 0.0
+    cy = 0.0
+    for k in range(m):
+        cx += p[idx[k], 0]
+        cy += p[idx[k], 1]
+    cx /= m
+    cy /= m
+    d = 0.0
+    for k in range(m):
+        dx = p[idx[k], 0] - cx
+        dy = p[idx[k], 1] - cy
+        d += math.sqrt(dx * dx + dy * dy)
+    d /= m
+    sc = math.sqrt(2.0) / d if d > 0 else 1.0
+    for k in range(m):
+        out[k, 0] = (p[idx[k], 0] - cx) * sc
+        out[k, 1] = (p[idx[k], 1] - cy) * sc
+    for a in range(3):
+        for b in range(3):
+            T[a, b] = 0.0
+    T[0, 0] = sc
+    T[1, 1] = sc
+    T[0, 2] = -cx * sc
+    T[1, 2] = -cy * sc
+    T[2, 2] = 1.0
+
+
+@njit(**_OPTS)
+def _mat3(A, B, out):  # type: ignore[no-untyped-def]  # pragma: no cover - compiled
+    for i in range(3):
+        for j in range(3):
+            out[i, j] = A[i, 0] * B[0, j] + A[i, 1] * B[1, j] + A[i, 2] * B[2, j]
+
+
+@njit(**_OPTS)
+def _mat3_tn(A, B, out):  # type: ignore[no-untyped-def]  # pragma: no cover - compiled
+    """``out = Aᵀ B``."""
+    for i in range(3):
+        for j in range(3):
+            out[i, j] = A[0, i] * B[0, j] + A[1, i] * B[1, j] + A[2, i] * B[2, j]
+
+
+@njit(**_OPTS)
+def _copy3(A, out):  # type: ignore[no-untyped-def]  # pragma: no cover - compiled
+    for i in range(3):
+        for j in range(3):
+            out[i, j] = A[i, j]
+
+
+@njit(**_OPTS)
+def _inv3(A, out):  # type: ignore[no-untyped-def]  # pragma: no cover - compiled
+    c00 = A[1, 1] * A[2, 2] - A[1, 2] * A[2, 1]
+    c01 = A[1, 2] * A[2, 0] - A[1, 0] * A[2, 2]
+    c02 = A[1, 0] * A[2, 1] - A[1, 1] * A[2, 0]
+    det = A[0, 0] * c00 + A[0, 1] * c01 + A[0, 2] * c02
+    inv = 1.0 / det
+    out[0, 0] = c00 * inv
+    out[1, 0] = c01 * inv
+    out[2, 0] = c02 * inv
+    out[0, 1] = (A[0, 2] * A[2, 1] - A[0, 1] * A[2, 2]) * inv
+    out[1, 1] = (A[0, 0] * A[2, 2] - A[0, 2] * A[2, 0]) * inv
+    out[2, 1] = (A[0, 1] * A[2, 0] - A[0, 0] * A[2, 1]) * inv
+    out[0, 2] = (A[0, 1] * A[1, 2] - A[0, 2] * A[1, 1]) * inv
+    out[1, 2] = (A[0, 2] * A[1, 0] - A[0, 0] * A[1, 2]) * inv
+    out[2, 2] = (A[0, 0] * A[1, 1] - A[0, 1] * A[1, 0]) * inv
+
+
+@njit(**_OPTS)
+def _fro_unit(M):  # type: ignore[no-untyped-def]  # pragma: no cover - compiled
+    s = 0.0
+    for i in range(3):
+        for j in range(3):
+            s += M[i, j] * M[i, j]
+    s = math.sqrt(s)
+    for i in range(3):
+        for j in range(3):
+            M[i, j] /= s
+
+
+@njit(**_OPTS)
+def _jacobi(A, V):  # type: ignore[no-untyped-def]  # pragma: no cover - compiled
+    """Eigen-decompose the symmetric ``A`` (m, m) in place by cyclic Jacobi rotations.
+
+    ``A`` ends diagonal (the eigenvalues), ``V``'s columns the eigenvectors (Golub & Van
+    Loan, *Matrix Computations*, sec. 8.5).
+    """
+    m = A.shape[0]
+    for i in range(m):
+        for j in range(m):
+            V[i, j] = 1.0 if i == j else 0.0
+    for _ in range(60):
+        off = 0.0
+        dia = 0.0
+        for p in range(m):
+            dia += A[p, p] * A[p, p]
+            for q in range(p + 1, m):
+                off += A[p, q] * A[p, q]
+        if off <= 1e-32 * dia or off == 0.0:
+            break
+        for p in range(m - 1):
+            for q in range(p + 1, m):
+                apq = A[p, q]
+                if apq == 0.0:
+                    continue
+                theta = (A[q, q] - A[p, p]) / (2.0 * apq)
+                t = 1.0 / (abs(theta) + math.sqrt(theta * theta + 1.0))
+                if theta < 0.0:
+                    t = -t
+                c = 1.0 / math.sqrt(t * t + 1.0)
+                s = t * c
+                for k in range(m):
+                    akp = A[k, p]
+                    akq = A[k, q]
+                    A[k, p] = c * akp - s * akq
+                    A[k, q] = s * akp + c * akq
+                for k in range(m):
+                    apk = A[p, k]
+                    aqk = A[q, k]
+                    A[p, k] = c * apk - s * aqk
+                    A[q, k] = s * apk + c * aqk
+                for k in range(m):
+                    vkp = V[k, p]
+                    vkq = V[k, q]
+                    V[k, p] = c * vkp - s * vkq
+                    V[k, q] = s * vkp + c * vkq
+
+
+@njit(**_OPTS)
+def _min_eigvec(A, V, out):  # type: ignore[no-untyped-def]  # pragma: no cover - compiled
+    """Write the eigenvector of the smallest eigenvalue of the symmetric ``A`` (destroyed)."""
+    _jacobi(A, V)
+    k = 0
+    for i in range(1, A.shape[0]):
+        if A[i, i] < A[k, k]:
+            k = i
+    for i in range(A.shape[0]):
+        out[i] = V[i, k]
+
+
+@njit(**_OPTS)
+def _svd3(M, U, s, V, A, W):  # type: ignore[no-untyped-def]  # pragma: no cover - compiled
+    """``M = U diag(s) Vᵀ`` with ``U, V`` rotations, ``s`` descending (from ``MᵀM``).
+
+    ``A, W`` are (3, 3) scratch. The third column of ``U`` is ``u₁ x u₂`` (exact for rank 2).
+    """
+    _mat3_tn(M, M, A)
+    _jacobi(A, W)
+    # order the eigenvalues descending
+    o0, o1, o2 = 0, 1, 2
+    if A[o0, o0] < A[o1, o1]:
+        o0, o1 = o1, o0
+    if A[o1, o1] < A[o2, o2]:
+        o1, o2 = o2, o1
+    if A[o0, o0] < A[o1, o1]:
+        o0, o1 = o1, o0
+    order = (o0, o1, o2)
+    for c in range(3):
+        o = order[c]
+        s[c] = math.sqrt(max(A[o, o], 0.0))
+        for i in range(3):
+            V[i, c] = W[i, o]
+    # V a rotation
+    det = (
+        V[0, 0] * (V[1, 1] * V[2, 2] - V[1, 2] * V[2, 1])
+        - V[0, 1] * (V[1, 0] * V[2, 2] - V[1, 2] * V[2, 0])
+        + V[0, 2] * (V[1, 0] * V[2, 1] - V[1, 1] * V[2, 0])
+    )
+    if det < 0.0:
+        for i in range(3):
+            V[i, 2] = -V[i, 2]
+    for c in range(2):
+        nrm = 0.0
+        for i in range(3):
+            U[i, c] = M[i, 0] * V[0, c] + M[i, 1] * V[1, c] + M[i, 2] * V[2, c]
+            nrm += U[i, c] * U[i, c]
+        nrm = math.sqrt(nrm)
+        if nrm > 0.0:
+            for i in range(3):
+                U[i, c] /= nrm
+    if s[1] <= 1e-300:  # rank 1: any unit vector orthogonal to u1
+        a0, a1, a2 = 1.0, 0.0, 0.0
+        if abs(U[0, 0]) > 0.6:
+            a0, a1 = 0.0, 1.0
+        d = a0 * U[0, 0] + a1 * U[1, 0] + a2 * U[2, 0]
+        v0, v1, v2 = a0 - d * U[0, 0], a1 - d * U[1, 0], a2 - d * U[2, 0]
+        nrm = math.sqrt(v0 * v0 + v1 * v1 + v2 * v2)
+        U[0, 1], U[1, 1], U[2, 1] = v0 / nrm, v1 / nrm, v2 / nrm
+    U[0, 2] = U[1, 0] * U[2, 1] - U[2, 0] * U[1, 1]
+    U[1, 2] = U[2, 0] * U[0, 1] - U[0, 0] * U[2, 1]
+    U[2, 2] = U[0, 0] * U[1, 1] - U[1, 0] * U[0, 1]
+
+
+@njit(**_OPTS)
+def _nullspace(A, nr, m, nc, N, perm, tol):  # type: ignore[no-untyped-def]  # pragma: no cover
+    """Write the ``nc - m`` null vectors of ``A[:nr, :nc]`` (rank ``m``) as rows of ``N``.
+
+    Gauss-Jordan elimination with complete pivoting (``A`` destroyed); the vectors are not
+    orthonormal. False when a pivot is below ``tol`` times the largest entry (rank deficient:
+    a degenerate sample).
+    """
+    big = 0.0
+    for i in range(nr):
+        for j in range(nc):
+            big = max(big, abs(A[i, j]))
+    tol = tol * big
+    for j in range(nc):
+        perm[j] = j
+    for r in range(m):
+        best = 0.0
+        pi = r
+        pj = r
+        for i in range(r, nr):
+            for j in range(r, nc):
+                a = abs(A[i, j])
+                if a > best:
+                    best = a
+                    pi = i
+                    pj = j
+        if not best > tol:
+            return False
+        if pi != r:
+            for j in range(nc):
+                A[r, j], A[pi, j] = A[pi, j], A[r, j]
+        if pj != r:
+            for i in range(nr):
+                A[i, r], A[i, pj] = A[i, pj], A[i, r]
+            perm[r], perm[pj] = perm[pj], perm[r]
+        piv = 1.0 / A[r, r]
+        for j in range(r, nc):
+            A[r, j] *= piv
+        for i in range(nr):
+            if i != r:
+                f = A[i, r]
+                if f != 0.0:
+                    for j in range(r, nc):
+                        A[i, j] -= f * A[r, j]
+    for k in range(nc - m):
+        for j in range(nc):
+            N[k, j] = 0.0
+        N[k, perm[m + k]] = 1.0
+        for i in range(m):
+            N[k, perm[i]] = -A[i, m + k]
+    return True
+
+
+@njit(**_OPTS)
+def _solve(A, b, n, x):  # type: ignore[no-untyped-def]  # pragma: no cover - compiled
+    """Solve ``A[:n, :n] x = b[:n]`` (Gaussian elimination, partial pivoting; ``A, b`` destroyed).
+
+    False when singular.
+    """
+    for c in range(n):
+        p = c
+        for i in range(c + 1, n):
+            if abs(A[i, c]) > abs(A[p, c]):
+                p = i
+        if not abs(A[p, c]) > 0.0:
+            return False
+        if p != c:
+            for j in range(n):
+                A[c, j], A[p, j] = A[p, j], A[c, j]
+            b[c], b[p] = b[p], b[c]
+        for i in range(c + 1, n):
+            f = A[i, c] / A[c, c]
+            if f != 0.0:
+                for j in range(c, n):
+                    A[i, j] -= f * A[c, j]
+                b[i] -= f * b[c]
+    for i in range(n - 1, -1, -1):
+        v = b[i]
+        for j in range(i + 1, n):
+            v -= A[i, j] * x[j]
+        x[i] = v / A[i, i]
+    return True
+
+
+@njit(**_OPTS)
+def _rodrigues(w0, w1, w2, R):  # type: ignore[no-untyped-def]  # pragma: no cover - compiled
+    """``R = exp([w]ₓ)`` (Rodrigues' formula, series near 0)."""
+    th2 = w0 * w0 + w1 * w1 + w2 * w2
+    if th2 < 1e-12:
+        a, b = 1.0 - th2 / 6.0, 0.5 - th2 / 24.0
+    else:
+        th = math.sqrt(th2)
+        a, b = math.sin(th) / th, (1.0 - math.cos(th)) / th2
+    R[0, 0] = 1.0 + b * (w0 * w0 - th2)
+    R[1, 1] = 1.0 + b * (w1 * w1 - th2)
+    R[2, 2] = 1.0 + b * (w2 * w2 - th2)
+    R[0, 1] = -a * w2 + b * w0 * w1
+    R[1, 0] = a * w2 + b * w0 * w1
+    R[0, 2] = a * w1 + b * w0 * w2
+    R[2, 0] = -a * w1 + b * w0 * w2
+    R[1, 2] = -a * w0 + b * w1 * w2
+    R[2, 1] = a * w0 + b * w1 * w2
+
+
+# ---------------------------------------------------------------- errors and scores
+@njit(**_OPTS)
+def _sq_h(H, s, d, i):  # type: ignore[no-untyped-def]  # pragma: no cover - compiled
+    """Squared forward transfer error of correspondence ``i`` (inf at infinity)."""
+    x, y = s[i, 0], s[i, 1]
+    w = H[2, 0] * x + H[2, 1] * y + H[2, 2]
+    u = (H[0, 0] * x + H[0, 1] * y + H[0, 2]) / w - d[i, 0]
+    v = (H[1, 0] * x + H[1, 1] * y + H[1, 2]) / w - d[i, 1]
+    e = u * u + v * v
+    return e if e == e else np.inf
+
+
+@njit(**_OPTS)
+def _sampson_parts(F, p1, p2, i):  # type: ignore[no-untyped-def]  # pragma: no cover
+    x1, y1, x2, y2 = p1[i, 0], p1[i, 1], p2[i, 0], p2[i, 1]
+    a0 = F[0, 0] * x1 + F[0, 1] * y1 + F[0, 2]
+    a1 = F[1, 0] * x1 + F[1, 1] * y1 + F[1, 2]
+    a2 = F[2, 0] * x1 + F[2, 1] * y1 + F[2, 2]
+    b0 = F[0, 0] * x2 + F[1, 0] * y2 + F[2, 0]
+    b1 = F[0, 1] * x2 + F[1, 1] * y2 + F[2, 1]
+    num = x2 * a0 + y2 * a1 + a2
+    den = a0 * a0 + a1 * a1 + b0 * b0 + b1 * b1
+    return num, den
+
+
+@njit(**_OPTS)
+def _sq_f(F, p1, p2, i):  # type: ignore[no-untyped-def]  # pragma: no cover - compiled
+    num, den = _sampson_parts(F, p1, p2, i)
+    e = num * num / den
+    return e if e == e else np.inf
+
+
+@njit(**_OPTS)
+def _sq(kind, M, p1, p2, i):  # type: ignore[no-untyped-def]  # pragma: no cover - compiled
+    if kind <= _H_SYMMETRIC:
+        return _sq_h(M, p1, p2, i)
+    return _sq_f(M, p1, p2, i)
+
+
+@njit(**_OPTS)
+def _score(kind, M, p1, p2, thr2, limit):  # type: ignore[no-untyped-def]  # pragma: no cover
+    """MSAC score ``Σ min(e², τ²)`` and the inlier count; stops (count -1) above ``limit``."""
+    sc = 0.0
+    cnt = 0
+    for i in range(p1.shape[0]):
+        e = _sq(kind, M, p1, p2, i)
+        if e < thr2:
+            sc += e
+            cnt += 1
+        else:
+            sc += thr2
+        if sc > limit:
+            return sc, -1
+    return sc, cnt
+
+
+@njit(**_OPTS)
+def _select(kind, M, p1, p2, bound2, idx):  # type: ignore[no-untyped-def]  # pragma: no cover
+    """Write the indices of the correspondences with squared error below ``bound2``; count."""
+    m = 0
+    for i in range(p1.shape[0]):
+        if _sq(kind, M, p1, p2, i) < bound2:
+            idx[m] = i
+            m += 1
+    return m
+
+
+# ---------------------------------------------------------------- Levenberg-Marquardt
+@njit(**_OPTS)
+def _f_build(q, aux, F, T):  # type: ignore[no-untyped-def]  # pragma: no cover - compiled
+    """``F = T2ᵀ (U diag(1, σ, 0) Vᵀ) T1``, ``U = exp([q₀₋₂]ₓ) U0``, ``V = exp([q₃₋₅]ₓ) V0``.
+
+    ``aux``: ``T1, T2, U0, V0`` (Bartoli & Sturm 2004's orthonormal representation).
+    """
+    T1, T2, U0, V0 = aux[0], aux[1], aux[2], aux[3]
+    R = np.empty((3, 3))
+    U = np.empty((3, 3))
+    V = np.empty((3, 3))
+    _rodrigues(q[0], q[1], q[2], R)
+    _mat3(R, U0, U)
+    _rodrigues(q[3], q[4], q[5], R)
+    _mat3(R, V0, V)
+    for a in range(3):
+        for b in range(3):
+            R[a, b] = U[a, 0] * V[b, 0] + q[6] * U[a, 1] * V[b, 1]
+    _mat3(R, T1, U)
+    _mat3_tn(T2, U, F)
+
+
+@njit(**_OPTS)
+def _e_build(q, aux, E):  # type: ignore[no-untyped-def]  # pragma: no cover - compiled
+    """``E = [t]ₓ R / ‖·‖``, ``R = exp([q₀₋₂]ₓ) R0``, ``t ∝ t0 + q₃ b1 + q₄ b2``.
+
+    ``aux``: ``R0``, the rows ``t0, b1, b2``.
+    """
+    R0, tb = aux[0], aux[1]
+    T = np.empty((3, 3))
+    R = np.empty((3, 3))
+    _rodrigues(q[0], q[1], q[2], T)
+    _mat3(T, R0, R)
+    t0 = tb[0, 0] + q[3] * tb[1, 0] + q[4] * tb[2, 0]
+    t1 = tb[0, 1] + q[3] * tb[1, 1] + q[4] * tb[2, 1]
+    t2 = tb[0, 2] + q[3] * tb[1, 2] + q[4] * tb[2, 2]
+    nt = math.sqrt(t0 * t0 + t1 * t1 + t2 * t2)
+    t0, t1, t2 = t0 / nt, t1 / nt, t2 / nt
+    for b in range(3):
+        E[0, b] = -t2 * R[1, b] + t1 * R[2, b]
+        E[1, b] = t2 * R[0, b] - t0 * R[2, b]
+        E[2, b] = -t1 * R[0, b] + t0 * R[1, b]
+    _fro_unit(E)
+
+
+@njit(**_OPTS)
+def _residuals(kind, q, p1, p2, idx, m, aux, M, T, out):  # type: ignore[no-untyped-def]  # pragma: no cover
+    """Residuals of the selected correspondences at parameters ``q``; False if not finite.
+
+    ``aux``: H: ``Ts, Td, Tdi``; F: ``T1, T2, U0, V0``; E: ``R0, (t0, b1, b2), K1⁻¹, K2⁻¹``.
+    ``M, T`` (3, 3) scratch.
+    """
+    if kind <= _H_SYMMETRIC:
+        Ts, Td = aux[0], aux[1]
+        sd = 1.0 / Td[0, 0]
+        ss = 1.0 / Ts[0, 0]
+        for a in range(3):
+            for b in range(3):
+                M[a, b] = q[3 * a + b]
+        if kind == _H_SYMMETRIC:
+            _inv3(M, T)
+        k = 0
+        for j in range(m):
+            i = idx[j]
+            x = Ts[0, 0] * p1[i, 0] + Ts[0, 2]
+            y = Ts[1, 1] * p1[i, 1] + Ts[1, 2]
+            u = Td[0, 0] * p2[i, 0] + Td[0, 2]
+            v = Td[1, 1] * p2[i, 1] + Td[1, 2]
+            w = M[2, 0] * x + M[2, 1] * y + M[2, 2]
+            out[k] = ((M[0, 0] * x + M[0, 1] * y + M[0, 2]) / w - u) * sd
+            out[k + 1] = ((M[1, 0] * x + M[1, 1] * y + M[1, 2]) / w - v) * sd
+            k += 2
+            if kind == _H_SYMMETRIC:
+                w = T[2, 0] * u + T[2, 1] * v + T[2, 2]
+                out[k] = ((T[0, 0] * u + T[0, 1] * v + T[0, 2]) / w - x) * ss
+                out[k + 1] = ((T[1, 0] * u + T[1, 1] * v + T[1, 2]) / w - y) * ss
+                k += 2
+        n_out = k
+    else:
+        if kind == _F_ORTHO:
+            _f_build(q, aux, M, T)
+        else:
+            _e_build(q, aux, T)
+            _mat3(T, aux[2], M)
+            _mat3_tn(aux[3], M, T)
+            _copy3(T, M)
+        for j in range(m):
+            num, den = _sampson_parts(M, p1, p2, idx[j])
+            out[j] = num / math.sqrt(den)
+        n_out = m
+    for k in range(n_out):  # noqa: SIM110 - compiled: a plain loop
+        if not math.isfinite(out[k]):
+            return False
+    return True
+
+
+@njit(**_OPTS)
+def _h_jac(kind, q, p1, p2, idx, m, aux, M, Mi, J):  # type: ignore[no-untyped-def]  # pragma: no cover
+    """Analytic Jacobian of the homography residuals of :func:`_residuals` (row-major ``M``).
+
+    Forward: ``∂(a/w)/∂M₀ⱼ = xⱼ/w``, ``∂(a/w)/∂M₂ⱼ = -a xⱼ/w²``; backward through
+    ``∂M⁻¹/∂M_kl = -M⁻¹ E_kl M⁻¹``: ``∂r/∂M_kl = -(M⁻ᵀ α)_k (M⁻¹ y)_l`` with ``α`` the
+    gradient of the residual in the first row / third row of ``M⁻¹`` (H&Z sec. 4.2.2).
+    """
+    Ts, Td = aux[0], aux[1]
+    sd = 1.0 / Td[0, 0]
+    ss = 1.0 / Ts[0, 0]
+    for a in range(3):
+        for b in range(3):
+            M[a, b] = q[3 * a + b]
+    if kind == _H_SYMMETRIC:
+        _inv3(M, Mi)
+    k = 0
+    for j in range(m):
+        i = idx[j]
+        x = Ts[0, 0] * p1[i, 0] + Ts[0, 2]
+        y = Ts[1, 1] * p1[i, 1] + Ts[1, 2]
+        u = Td[0, 0] * p2[i, 0] + Td[0, 2]
+        v = Td[1, 1] * p2[i, 1] + Td[1, 2]
+        xa = M[0, 0] * x + M[0, 1] * y + M[0, 2]
+        xb = M[1, 0] * x + M[1, 1] * y + M[1, 2]
+        w = M[2, 0] * x + M[2, 1] * y + M[2, 2]
+        iw = sd / w
+        for c in range(9):
+            J[k, c] = 0.0
+            J[k + 1, c] = 0.0
+        J[k, 0] = x * iw
+        J[k, 1] = y * iw
+        J[k, 2] = iw
+        J[k, 6] = -x * iw * xa / w
+        J[k, 7] = -y * iw * xa / w
+        J[k, 8] = -iw * xa / w
+        J[k + 1, 3] = x * iw
+        J[k + 1, 4] = y * iw
+        J[k + 1, 5] = iw
+        J[k + 1, 6] = -x * iw * xb / w
+        J[k + 1, 7] = -y * iw * xb / w
+        J[k + 1, 8] = -iw * xb / w
+        k += 2
+        if kind == _H_SYMMETRIC:
+            c0 = Mi[0, 0] * u + Mi[0, 1] * v + Mi[0, 2]
+            e0 = Mi[1, 0] * u + Mi[1, 1] * v + Mi[1, 2]
+            f0 = Mi[2, 0] * u + Mi[2, 1] * v + Mi[2, 2]
+            for r in range(2):
+                # α: gradient of the residual in the rows 0 / 1 and 2 of M⁻¹ (times y)
+                a0 = ss / f0 if r == 0 else 0.0
+                a1 = ss / f0 if r == 1 else 0.0
+                a2 = -ss * (c0 if r == 0 else e0) / (f0 * f0)
+                for kk in range(3):
+                    g = Mi[0, kk] * a0 + Mi[1, kk] * a1 + Mi[2, kk] * a2
+                    J[k + r, 3 * kk] = -g * c0
+                    J[k + r, 3 * kk + 1] = -g * e0
+                    J[k + r, 3 * kk + 2] = -g * f0
+            k += 2
+
+
+@njit(**_OPTS)
+def _n_res(kind, m):  # type: ignore[no-untyped-def]  # pragma: no cover - compiled
+    if kind == _H_FORWARD:
+        return 2 * m
+    if kind == _H_SYMMETRIC:
+        return 4 * m
+    return m
+
+
+@njit(**_OPTS)
+def _lm(kind, q, p1, p2, idx, m, aux, max_iter):  # type: ignore[no-untyped-def]  # pragma: no cover
+    """Minimise the squared residuals over ``q`` (in place) by Levenberg-Marquardt.
+
+    As ``imageform.geometry._robust_core.levenberg_marquardt``: central-difference Jacobian,
+    damping ``λ D`` with ``D`` the diagonal of ``JᵀJ`` (Marquardt 1963), ``λ`` divided by 10
+    on a successful step, multiplied by 10 otherwise; stops when a step gains less than
+    ``1e-12`` of the cost.
+    """
+    npar = q.shape[0]
+    nr = _n_res(kind, m)
+    r = np.empty(nr)
+    rn = np.empty(nr)
+    rp = np.empty(nr)
+    J = np.empty((nr, npar))
+    A = np.empty((npar, npar))
+    Ad = np.empty((npar, npar))
+    g = np.empty(npar)
+    gd = np.empty(npar)
+    step = np.empty(npar)
+    qn = np.empty(npar)
+    M = np.empty((3, 3))
+    T = np.empty((3, 3))
+    if not _residuals(kind, q, p1, p2, idx, m, aux, M, T, r):
+        return
+    cost = 0.0
+    for k in range(nr):
+        cost += r[k] * r[k]
+    lam = 1e-3
+    for _ in range(max_iter):
+        if kind <= _H_SYMMETRIC:
+            _h_jac(kind, q, p1, p2, idx, m, aux, M, T, J)
+        else:  # central differences (F, E)
+            for c in range(npar):
+                h = 1e-6 * max(1.0, abs(q[c]))
+                for k in range(npar):
+                    qn[k] = q[k]
+                qn[c] = q[c] + h
+                ok = _residuals(kind, qn, p1, p2, idx, m, aux, M, T, rp)
+                qn[c] = q[c] - h
+                ok &= _residuals(kind, qn, p1, p2, idx, m, aux, M, T, rn)
+                for k in range(nr):
+                    J[k, c] = (rp[k] - rn[k]) / (2.0 * h) if ok else 0.0
+        for a in range(npar):
+            g[a] = 0.0
+            for k in range(nr):
+                g[a] += J[k, a] * r[k]
+            for b in range(a, npar):
+                v = 0.0
+                for k in range(nr):
+                    v += J[k, a] * J[k, b]
+                A[a, b] = v
+                A[b, a] = v
+        improved = False
+        gain = 0.0
+        while lam < 1e10:
+            for a in range(npar):
+                for b in range(npar):
+                    Ad[a, b] = A[a, b]
+                d = A[a, a] if A[a, a] > 0.0 else 1.0
+                Ad[a, a] += lam * d
+                gd[a] = -g[a]
+            if not _solve(Ad, gd, npar, step):
+                lam *= 10.0
+                continue
+            for a in range(npar):
+                qn[a] = q[a] + step[a]
+            cn = np.inf
+            if _residuals(kind, qn, p1, p2, idx, m, aux, M, T, rn):
+                cn = 0.0
+                for k in range(nr):
+                    cn += rn[k] * rn[k]
+            if math.isfinite(cn) and cn <= cost:
+                gain = cost - cn
+                for a in range(npar):
+                    q[a] = qn[a]
+                for k in range(nr):
+                    r[k] = rn[k]
+                cost = cn
+                lam = max(lam / 10.0, 1e-12)
+                improved = True
+                break
+            lam *= 10.0
+        if not improved or gain <= 1e-12 * max(cost, 1e-300):
+            break
+
+
+# ---------------------------------------------------------------- refinement support
+@njit(**_OPTS)
+def _chi2_cdf(c, k):  # type: ignore[no-untyped-def]  # pragma: no cover - compiled
+    if k == 1:
+        return math.erf(math.sqrt(c / 2.0))
+    if k == 2:
+        return -math.expm1(-c / 2.0)
+    if k == 3:
+        return math.erf(math.sqrt(c / 2.0)) - math.sqrt(2.0 * c / math.pi) * math.exp(-c / 2.0)
+    return 1.0 - math.exp(-c / 2.0) * (1.0 + c / 2.0)
+
+
+@njit(**_OPTS)
+def _refine_support(mean_sq, threshold, dof, factor):  # type: ignore[no-untyped-def]  # pragma: no cover
+    """As ``imageform.geometry._robust_core.refine_support`` from the inliers' mean ``e²``."""
+    m = mean_sq
+    t2 = threshold * threshold
+    if not math.isfinite(m) or m <= 0.0:
+        return threshold
+    if m >= t2 * dof / (dof + 2.0) * (1.0 - 1e-9):
+        return threshold * factor
+    a, b = 1e-12 * threshold, 1e6 * threshold
+    for _ in range(100):
+        mid = math.sqrt(a * b)
+        c = t2 / (mid * mid)
+        lo = _chi2_cdf(c, dof)
+        ms = (
+            mid * mid * dof * _chi2_cdf(c, np.int64(dof + 2)) / lo
+            if lo > 0
+            else t2 * dof / (dof + 2.0)
+        )
+        if ms < m:
+            a = mid
+        else:
+            b = mid
+    sigma = math.sqrt(a * b)
+    return min(max(3.0 * sigma, threshold), factor * threshold)
+
+
+# ---------------------------------------------------------------- epipolar helpers
+@njit(**_OPTS)
+def _rank2(F):  # type: ignore[no-untyped-def]  # pragma: no cover - compiled
+    """Replace ``F`` by the nearest rank-2 matrix (Frobenius norm).
+
+    ``F (I - v vᵀ)``, ``v`` the eigenvector of ``FᵀF``'s smallest eigenvalue.
+    """
+    A = np.empty((3, 3))
+    V = np.empty((3, 3))
+    v = np.empty(3)
+    _mat3_tn(F, F, A)
+    _min_eigvec(A, V, v)
+    for i in range(3):
+        fv = F[i, 0] * v[0] + F[i, 1] * v[1] + F[i, 2] * v[2]
+        for j in range(3):
+            F[i, j] -= fv * v[j]
+
+
+@njit(**_OPTS)
+def _epi_row(x1, y1, x2, y2, w, row):  # type: ignore[no-untyped-def]  # pragma: no cover
+    """Write the row ``w (x2 ⊗ x1)`` of ``x2ᵀ F x1 = 0`` (F row-major)."""
+    row[0] = w * x2 * x1
+    row[1] = w * x2 * y1
+    row[2] = w * x2
+    row[3] = w * y2 * x1
+    row[4] = w * y2 * y1
+    row[5] = w * y2
+    row[6] = w * x1
+    row[7] = w * y1
+    row[8] = w
+
+
+@njit(**_OPTS)
+def _f8(p1, p2, idx, m, w, F):  # type: ignore[no-untyped-def]  # pragma: no cover - compiled
+    """Weighted normalised 8-point fit on ``idx[:m]`` (weights ``w[:m]``) into ``F``, unit norm."""
+    n1 = np.empty((m, 2))
+    n2 = np.empty((m, 2))
+    T1 = np.empty((3, 3))
+    T2 = np.empty((3, 3))
+    _hartley(p1, idx, m, n1, T1)
+    _hartley(p2, idx, m, n2, T2)
+    AtA = np.zeros((9, 9))
+    row = np.empty(9)
+    for k in range(m):
+        _epi_row(n1[k, 0], n1[k, 1], n2[k, 0], n2[k, 1], w[k], row)
+        for a in range(9):
+            ra = row[a]
+            for b in range(a, 9):
+                AtA[a, b] += ra * row[b]
+    for a in range(9):
+        for b in range(a):
+            AtA[a, b] = AtA[b, a]
+    V = np.empty((9, 9))
+    f = np.empty(9)
+    _min_eigvec(AtA, V, f)
+    Fn = np.empty((3, 3))
+    for a in range(3):
+        for b in range(3):
+            Fn[a, b] = f[3 * a + b]
+    _rank2(Fn)
+    Tmp = np.empty((3, 3))
+    _mat3(Fn, T1, Tmp)
+    _mat3_tn(T2, Tmp, F)
+    _fro_unit(F)
+
+
+@njit(**_OPTS)
+def _to_f(E, K1i, K2i, F):  # type: ignore[no-untyped-def]  # pragma: no cover - compiled
+    """``F = K2⁻ᵀ E K1⁻¹``."""
+    T = np.empty((3, 3))
+    _mat3(E, K1i, T)
+    _mat3_tn(K2i, T, F)
+
+
+@njit(**_OPTS)
+def _refine_f(F, p1, p2, idx, m, max_iter):  # type: ignore[no-untyped-def]  # pragma: no cover
+    """LM on the Sampson distances of ``idx[:m]`` over ``F``'s orthonormal representation.
+
+    As ``imageform.geometry.twoview._refine_f``; ``F`` replaced when the result is finite.
+    """
+    aux = np.empty((4, 3, 3))
+    nb = np.empty((m, 2))
+    _hartley(p1, idx, m, nb, aux[0])
+    _hartley(p2, idx, m, nb, aux[1])
+    Ti1 = np.empty((3, 3))
+    Ti2 = np.empty((3, 3))
+    T = np.empty((3, 3))
+    Fn = np.empty((3, 3))
+    _inv3(aux[0], Ti1)
+    _inv3(aux[1], Ti2)
+    _mat3(F, Ti1, T)
+    _mat3_tn(Ti2, T, Fn)  # T2⁻ᵀ F T1⁻¹
+    s = np.empty(3)
+    _svd3(Fn, aux[2], s, aux[3], T, Ti1)
+    q = np.zeros(7)
+    q[6] = s[1] / s[0]
+    _lm(np.int64(_F_ORTHO), q, p1, p2, idx, m, aux, max_iter)
+    _f_build(q, aux, Fn, T)
+    ok = True
+    for a in range(3):
+        for b in range(3):
+            ok &= math.isfinite(Fn[a, b])
+    if ok:
+        _fro_unit(Fn)
+        _copy3(Fn, F)
+
+
+@njit(**_OPTS)
+def _refine_e(E, p1, p2, K1i, K2i, idx, m, max_iter):  # type: ignore[no-untyped-def]  # pragma: no cover
+    """LM over ``(R, t/‖t‖)`` on the pixel Sampson distances of ``idx[:m]`` (in place).
+
+    As ``imageform.geometry.twoview._refine_e``.
+    """
+    aux = np.empty((4, 3, 3))
+    U = np.empty((3, 3))
+    V = np.empty((3, 3))
+    s = np.empty(3)
+    A = np.empty((3, 3))
+    W = np.empty((3, 3))
+    _svd3(E, U, s, V, A, W)
+    # R0 = U W Vᵀ with W = [[0, -1, 0], [1, 0, 0], [0, 0, 1]]: columns (u2, -u1, u3)
+    for a in range(3):
+        for b in range(3):
+            aux[0, a, b] = U[a, 1] * V[b, 0] - U[a, 0] * V[b, 1] + U[a, 2] * V[b, 2]
+    t0 = (U[0, 2], U[1, 2], U[2, 2])
+    k = 0
+    if abs(t0[1]) < abs(t0[k]):
+        k = 1
+    if abs(t0[2]) < abs(t0[k]):
+        k = 2
+    e = (1.0 if k == 0 else 0.0, 1.0 if k == 1 else 0.0, 1.0 if k == 2 else 0.0)
+    b0 = t0[1] * e[2] - t0[2] * e[1]
+    b1 = t0[2] * e[0] - t0[0] * e[2]
+    b2 = t0[0] * e[1] - t0[1] * e[0]
+    nb = math.sqrt(b0 * b0 + b1 * b1 + b2 * b2)
+    b0, b1, b2 = b0 / nb, b1 / nb, b2 / nb
+    tb = aux[1]
+    tb[0, 0], tb[0, 1], tb[0, 2] = t0[0], t0[1], t0[2]
+    tb[1, 0], tb[1, 1], tb[1, 2] = b0, b1, b2
+    tb[2, 0] = t0[1] * b2 - t0[2] * b1
+    tb[2, 1] = t0[2] * b0 - t0[0] * b2
+    tb[2, 2] = t0[0] * b1 - t0[1] * b0
+    _copy3(K1i, aux[2])
+    _copy3(K2i, aux[3])
+    q = np.zeros(5)
+    _lm(np.int64(_E_RT), q, p1, p2, idx, m, aux, max_iter)
+    _e_build(q, aux, A)
+    ok = True
+    for a in range(3):
+        for b in range(3):
+            ok &= math.isfinite(A[a, b])
+    if ok:
+        _copy3(A, E)
+
+
+@njit(**_OPTS)
+def _project_e(E):  # type: ignore[no-untyped-def]  # pragma: no cover - compiled
+    """Nearest essential matrix ``U diag(1, 1, 0) Vᵀ`` (unit Frobenius norm), in place."""
+    U = np.empty((3, 3))
+    V = np.empty((3, 3))
+    s = np.empty(3)
+    A = np.empty((3, 3))
+    W = np.empty((3, 3))
+    _svd3(E, U, s, V, A, W)
+    for a in range(3):
+        for b in range(3):
+            E[a, b] = U[a, 0] * V[b, 0] + U[a, 1] * V[b, 1]
+    _fro_unit(E)
+
+
+@njit(**_OPTS)
+def _support(F, p1, p2, thr, factor, sel):  # type: ignore[no-untyped-def]  # pragma: no cover
+    """Select the refinement support (``_robust_core.refine_support``, dof 1) of ``F``.
+
+    Returns the support's bound and the number of selected correspondences.
+    """
+    thr2 = thr * thr
+    e_sum = 0.0
+    cnt = 0
+    for i in range(p1.shape[0]):
+        e = _sq_f(F, p1, p2, i)
+        if e < thr2:
+            e_sum += e
+            cnt += 1
+    wide = _refine_support(e_sum / cnt if cnt > 0 else 0.0, thr, np.int64(1), factor)
+    return wide, _select(np.int64(_F_ORTHO), F, p1, p2, wide * wide, sel)
+
+
+@njit(**_OPTS)
+def _support_count(kind, M, p1, p2, thr, dof, factor):  # type: ignore[no-untyped-def]  # pragma: no cover
+    """Count the correspondences within the refinement support of ``M``.
+
+    The support is ``_robust_core.refine_support``'s: ``3σ̂`` between ``τ`` and
+    ``factor τ``, ``σ̂`` from the truncated mean squared error of the inliers. It counts the
+    inliers the noise model expects, not only those within ``τ``: with ``τ`` near ``σ``,
+    a third of the true inliers lie beyond ``τ``, and an adaptive count from the inliers
+    within ``τ`` alone draws several times the samples that the true inlier ratio asks for.
+    """
+    thr2 = thr * thr
+    e_sum = 0.0
+    cnt = 0
+    n = p1.shape[0]
+    for i in range(n):
+        e = _sq(kind, M, p1, p2, i)
+        if e < thr2:
+            e_sum += e
+            cnt += 1
+    wide = _refine_support(e_sum / cnt if cnt > 0 else 0.0, thr, dof, factor)
+    w2 = wide * wide
+    m = 0
+    for i in range(n):
+        if _sq(kind, M, p1, p2, i) < w2:
+            m += 1
+    return m
+
+
+@njit(**_OPTS)
+def _same(sel, m, sel2, m2):  # type: ignore[no-untyped-def]  # pragma: no cover - compiled
+    if m != m2:
+        return False
+    for k in range(m):  # noqa: SIM110 - compiled: a plain loop
+        if sel[k] != sel2[k]:
+            return False
+    return True
+
+
+@njit(**_OPTS)
+def _refit_f(F, p1, p2, thr, factor, max_iter):  # type: ignore[no-untyped-def]  # pragma: no cover
+    """``_robust_core.refit_on_support`` for F (dof 1, at least 8, 3 rounds), in place."""
+    n = p1.shape[0]
+    sel = np.empty(n, dtype=np.int64)
+    sel2 = np.empty(n, dtype=np.int64)
+    wide, m = _support(F, p1, p2, thr, factor, sel)
+    for _ in range(3):
+        _refine_f(F, p1, p2, sel, m, max_iter)
+        m2 = _select(np.int64(_F_ORTHO), F, p1, p2, wide * wide, sel2)
+        if m2 < 8 or _same(sel, m, sel2, m2):
+            break
+        m = m2
+        for k in range(m):
+            sel[k] = sel2[k]
+
+
+@njit(**_OPTS)
+def _refit_e(E, p1, p2, K1i, K2i, thr, factor, max_iter):  # type: ignore[no-untyped-def]  # pragma: no cover
+    """``_robust_core.refit_on_support`` for E (dof 1, at least 5, 3 rounds), in place."""
+    n = p1.shape[0]
+    sel = np.empty(n, dtype=np.int64)
+    sel2 = np.empty(n, dtype=np.int64)
+    F = np.empty((3, 3))
+    _to_f(E, K1i, K2i, F)
+    wide, m = _support(F, p1, p2, thr, factor, sel)
+    for _ in range(3):
+        _refine_e(E, p1, p2, K1i, K2i, sel, m, max_iter)
+        _to_f(E, K1i, K2i, F)
+        m2 = _select(np.int64(_F_ORTHO), F, p1, p2, wide * wide, sel2)
+        if m2 < 5 or _same(sel, m, sel2, m2):
+            break
+        m = m2
+        for k in range(m):
+            sel[k] = sel2[k]

@@ -1,0 +1,271 @@
+"""numba kernel of :func:`imageform.geometry.find_fundamental_matrix` (see ``ransac``)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from imageform._kernels.jit import njit
+from imageform._kernels.ransac import (
+    _F_ORTHO,
+    _OPTS,
+    _copy3,
+    _epi_row,
+    _f8,
+    _fro_unit,
+    _hartley,
+    _mat3,
+    _mat3_tn,
+    _nullspace,
+    _rank2,
+    _refit_f,
+    _sample,
+    _sampson_parts,
+    _score,
+    _support_count,
+    _trials_needed,
+)
+
+__all__ = ["fundamental_estimate"]
+
+#: Multiples of τ of the local optimisation's Sampson-weighted 8-point refits (as
+#: ``twoview._LO_STEPS``).
+_LO_STEPS = (3.0, 2.0, 2.0, 2.0)
+
+
+@njit(**_OPTS)
+def _cubic_roots(c0, c1, c2, c3, roots):  # type: ignore[no-untyped-def]  # pragma: no cover
+    """Real roots of ``c0 + c1 a + c2 a² + c3 a³`` (``c3 ≠ 0``) into ``roots``; their number.
+
+    Closed form (trigonometric for three real roots, Cardano for one), then two Newton steps.
+    """
+    b = c2 / c3
+    c = c1 / c3
+    d = c0 / c3
+    p = c - b * b / 3.0
+    q = 2.0 * b * b * b / 27.0 - b * c / 3.0 + d
+    disc = q * q / 4.0 + p * p * p / 27.0
+    k = 0
+    if disc > 0.0:
+        sq = math.sqrt(disc)
+        u = -q / 2.0 + sq
+        v = -q / 2.0 - sq
+        u = math.copysign(abs(u) ** (1.0 / 3.0), u)
+        v = math.copysign(abs(v) ** (1.0 / 3.0), v)
+        roots[0] = u + v - b / 3.0
+        k = 1
+    elif p == 0.0:
+        roots[0] = -b / 3.0
+        k = 1
+    else:
+        r = math.sqrt(-p / 3.0)
+        arg = min(max(3.0 * q / (2.0 * p * r), -1.0), 1.0)
+        phi = math.acos(arg)
+        for j in range(3):
+            roots[j] = 2.0 * r * math.cos(phi / 3.0 - 2.0 * math.pi * j / 3.0) - b / 3.0
+        k = 3
+    for j in range(k):
+        a = roots[j]
+        for _ in range(2):
+            f = ((a + b) * a + c) * a + d
+            df = (3.0 * a + 2.0 * b) * a + c
+            if df != 0.0:
+                a -= f / df
+        roots[j] = a
+    return k
+
+
+@njit(**_OPTS)
+def _det3(A):  # type: ignore[no-untyped-def]  # pragma: no cover - compiled
+    return (
+        A[0, 0] * (A[1, 1] * A[2, 2] - A[1, 2] * A[2, 1])
+        - A[0, 1] * (A[1, 0] * A[2, 2] - A[1, 2] * A[2, 0])
+        + A[0, 2] * (A[1, 0] * A[2, 1] - A[1, 1] * A[2, 0])
+    )
+
+
+@njit(**_OPTS)
+def _f7(p1, p2, idx, xs1, xs2, T1, T2, A, N, perm, Fs):  # type: ignore[no-untyped-def]  # pragma: no cover
+    """Write the one to three fundamental matrices (pixels, unit norm) of a 7-point sample.
+
+    As ``geometry._minimal.f7``: the pencil ``a F1 + (1 - a) F2`` of the null space of the
+    7 x 9 system (Hartley-normalised), ``det = 0`` a cubic in ``a`` (H&Z sec. 11.1.2).
+    """
+    _hartley(p1, idx, np.int64(7), xs1, T1)
+    _hartley(p2, idx, np.int64(7), xs2, T2)
+    for k in range(7):
+        _epi_row(xs1[k, 0], xs1[k, 1], xs2[k, 0], xs2[k, 1], 1.0, A[k])
+    if not _nullspace(A, np.int64(7), np.int64(7), np.int64(9), N, perm, 1e-10):
+        return 0
+    M = np.empty((3, 3))
+    Tmp = np.empty((3, 3))
+    # det at a = 0, 1, -1, 2 -> cubic coefficients
+    dv = np.empty(4)
+    for j in range(4):
+        a = (0.0, 1.0, -1.0, 2.0)[j]
+        for r in range(3):
+            for c in range(3):
+                M[r, c] = a * N[1, 3 * r + c] + (1.0 - a) * N[0, 3 * r + c]
+        dv[j] = _det3(M)
+    c0 = dv[0]
+    # inverse Vandermonde of (0, 1, -1, 2), increasing powers
+    c1 = -dv[0] / 2.0 + dv[1] - dv[2] / 3.0 - dv[3] / 6.0
+    c2 = -dv[0] + dv[1] / 2.0 + dv[2] / 2.0
+    c3 = dv[0] / 2.0 - dv[1] / 2.0 - dv[2] / 6.0 + dv[3] / 6.0
+    scale = max(max(abs(c0), abs(c1)), max(abs(c2), abs(c3)))
+    if not abs(c3) > 1e-10 * scale:
+        return 0
+    roots = np.empty(3)
+    k = _cubic_roots(c0, c1, c2, c3, roots)
+    out = 0
+    for j in range(k):
+        a = roots[j]
+        for r in range(3):
+            for c in range(3):
+                M[r, c] = a * N[1, 3 * r + c] + (1.0 - a) * N[0, 3 * r + c]
+        _mat3(M, T1, Tmp)
+        _mat3_tn(T2, Tmp, Fs[out])
+        _fro_unit(Fs[out])
+        ok = True
+        for r in range(3):
+            for c in range(3):
+                ok &= math.isfinite(Fs[out, r, c])
+        if ok:
+            out += 1
+    return out
+
+
+@njit(**_OPTS)
+def _local_opt(F, p1, p2, thr, sel, w, out):  # type: ignore[no-untyped-def]  # pragma: no cover
+    """Sampson-weighted 8-point refits on the correspondences within 3τ, 2τ, 2τ, 2τ."""
+    _copy3(F, out)
+    n = p1.shape[0]
+    for mult in _LO_STEPS:
+        bound = (mult * thr) ** 2
+        m = 0
+        wsum = 0.0
+        for i in range(n):
+            num, den = _sampson_parts(out, p1, p2, i)
+            if num * num < bound * den:
+                sel[m] = i
+                w[m] = 1.0 / math.sqrt(den)
+                wsum += w[m]
+                m += 1
+        if m < 8:
+            break
+        wmean = wsum / m
+        for k in range(m):
+            w[k] /= wmean
+        _f8(p1, p2, sel, m, w, out)
+
+
+@njit(
+    "int64(float64[:, ::1], float64[:, ::1], float64, float64, int64, uint64, int64, int64,"
+    " float64, float64, float64[:, ::1])",
+    **_OPTS,
+)
+def fundamental_estimate(p1, p2, thr, conf, max_trials, seed, pool, max_iter, factor, term, F_out):  # type: ignore[no-untyped-def]  # pragma: no cover
+    """Robust ``F`` (``x2ᵀ F x1 = 0``): 7-point RANSAC + LO + runner-up pool, then LM.
+
+    As ``twoview.find_fundamental_matrix``'s NumPy path (``_robust_core.ransac`` with
+    ``pool``): every hypothesis that beats the best is locally optimised; the ``pool`` best
+    of the others are kept and locally optimised before sampling stops, sampling going on
+    when that improves the best and the adaptive count asks for more. Writes ``F_out``
+    (rank 2, refined) and returns the samples drawn, negated when no hypothesis had 8
+    inliers.
+    """
+    n = p1.shape[0]
+    thr2 = thr * thr
+    state = np.empty(1, dtype=np.uint64)
+    state[0] = seed
+    idx = np.empty(7, dtype=np.int64)
+    xs1 = np.empty((7, 2))
+    xs2 = np.empty((7, 2))
+    T1 = np.empty((3, 3))
+    T2 = np.empty((3, 3))
+    A = np.empty((7, 9))
+    N = np.empty((2, 9))
+    perm = np.empty(9, dtype=np.int64)
+    Fs = np.empty((3, 3, 3))
+    best = np.zeros((3, 3))
+    Flo = np.empty((3, 3))
+    sel = np.empty(n, dtype=np.int64)
+    w = np.empty(n)
+    pool_F = np.empty((max(pool, 1), 3, 3))
+    pool_sc = np.empty(max(pool, 1))
+    n_pool = 0
+    kf = np.int64(_F_ORTHO)
+    kd = np.int64(1)
+    best_sc = np.inf
+    best_cnt = -1
+    needed = float(max_trials)
+    drawn = 0
+    while True:
+        while drawn < min(needed, max_trials):
+            _sample(state, n, np.int64(7), idx)
+            drawn += 1
+            k = _f7(p1, p2, idx, xs1, xs2, T1, T2, A, N, perm, Fs)
+            for j in range(k):
+                F = Fs[j]
+                limit = pool_sc[pool - 1] if (pool > 0 and n_pool == pool) else np.inf
+                limit = max(limit, best_sc)
+                sc, cnt = _score(np.int64(_F_ORTHO), F, p1, p2, thr2, limit)
+                if cnt < 0:
+                    continue
+                if sc < best_sc:
+                    _copy3(F, best)
+                    best_sc = sc
+                    best_cnt = cnt
+                    if cnt > 7:
+                        _local_opt(F, p1, p2, thr, sel, w, Flo)
+                        sc2, cnt2 = _score(np.int64(_F_ORTHO), Flo, p1, p2, thr2, best_sc)
+                        if cnt2 >= 0 and sc2 < best_sc:
+                            _copy3(Flo, best)
+                            best_sc = sc2
+                            best_cnt = cnt2
+                    needed = _trials_needed(
+                        _support_count(kf, best, p1, p2, thr, kd, term), n, np.int64(7), conf
+                    )
+                elif pool > 0:
+                    # insert into the pool (sorted by score, the pool best first)
+                    pos = n_pool
+                    while pos > 0 and pool_sc[pos - 1] > sc:
+                        pos -= 1
+                    if pos < pool:
+                        last = min(n_pool, pool - 1)
+                        for q in range(last, pos, -1):
+                            pool_sc[q] = pool_sc[q - 1]
+                            _copy3(pool_F[q - 1], pool_F[q])
+                        pool_sc[pos] = sc
+                        _copy3(F, pool_F[pos])
+                        n_pool = min(n_pool + 1, pool)
+        if n_pool == 0:
+            break
+        before = best_sc
+        for r in range(n_pool):
+            F = pool_F[r]
+            sc, cnt = _score(np.int64(_F_ORTHO), F, p1, p2, thr2, np.inf)
+            if sc < best_sc:
+                _copy3(F, best)
+                best_sc = sc
+                best_cnt = cnt
+            if cnt > 7:
+                _local_opt(F, p1, p2, thr, sel, w, Flo)
+                sc2, cnt2 = _score(np.int64(_F_ORTHO), Flo, p1, p2, thr2, best_sc)
+                if cnt2 >= 0 and sc2 < best_sc:
+                    _copy3(Flo, best)
+                    best_sc = sc2
+                    best_cnt = cnt2
+        n_pool = 0
+        needed = _trials_needed(
+            _support_count(kf, best, p1, p2, thr, kd, term), n, np.int64(7), conf
+        )
+        if best_sc >= before or drawn >= min(needed, max_trials):
+            break
+    if best_cnt < 8:
+        return -drawn
+    _rank2(best)
+    _refit_f(best, p1, p2, thr, factor, max_iter)
+    _copy3(best, F_out)
+    return drawn
