@@ -44,10 +44,15 @@ def _add(a: tuple[int, ...], b: tuple[int, ...]) -> tuple[int, int, int]:
 _LL = np.array([[_INDEX[_add(a, b)] - 10 for b in _LIN] for a in _LIN], dtype=np.int64)
 #: (degree <= 2 monomial i) x linear -> index among all 20
 _QL = np.array([[_INDEX[_add(a, b)] for b in _LIN] for a in _BASIS], dtype=np.int64)
-#: x times each basis monomial, as an index among all 20
-_XB = np.array([_INDEX[_add((1, 0, 0), b)] for b in _BASIS], dtype=np.int64)
 #: a fixed rotation mixing the null-space basis (as ``geometry._minimal._MIX``)
 _MIX = np.ascontiguousarray(np.linalg.qr(np.random.default_rng(20041).normal(size=(4, 4)))[0])
+#: Nister's (2004) column order of the 20 monomials: the ten eliminated first (x³, y³, x²y,
+#: xy², x²z, x², y²z, y², xyz, xy), then x (z², z, 1), y (z², z, 1), (z³, z², z, 1)
+_NISTER = [(3, 0, 0), (0, 3, 0), (2, 1, 0), (1, 2, 0), (2, 0, 1), (2, 0, 0), (0, 2, 1)]
+_NISTER += [(0, 2, 0), (1, 1, 1), (1, 1, 0), (1, 0, 2), (1, 0, 1), (1, 0, 0), (0, 1, 2)]
+_NISTER += [(0, 1, 1), (0, 1, 0), (0, 0, 3), (0, 0, 2), (0, 0, 1), (0, 0, 0)]
+#: column ``c`` of the reordered system is column ``_NORD[c]`` of ``_CUBICS + _BASIS``
+_NORD = np.array([_INDEX[m] for m in _NISTER], dtype=np.int64)
 
 
 @njit(**_OPTS)
@@ -66,65 +71,6 @@ def _mul_ql(a, b, s, out):  # type: ignore[no-untyped-def]  # pragma: no cover -
         if a[i] != 0.0:
             for q in range(4):
                 out[_QL[i, q]] += s * a[i] * b[q]
-
-
-@njit(**_OPTS)
-def _hessenberg(a, n):  # type: ignore[no-untyped-def]  # pragma: no cover - compiled
-    """Reduce ``a`` to upper Hessenberg form in place.
-
-    Stabilised elementary similarity transforms (Wilkinson 1965; Numerical Recipes'
-    ``elmhes``).
-    """
-    for m in range(1, n - 1):
-        x = 0.0
-        i = m
-        for j in range(m, n):
-            if abs(a[j, m - 1]) > abs(x):
-                x = a[j, m - 1]
-                i = j
-        if i != m:
-            for j in range(m - 1, n):
-                a[i, j], a[m, j] = a[m, j], a[i, j]
-            for j in range(n):
-                a[j, i], a[j, m] = a[j, m], a[j, i]
-        if x != 0.0:
-            for i in range(m + 1, n):
-                y = a[i, m - 1]
-                if y != 0.0:
-                    y /= x
-                    a[i, m - 1] = y
-                    for j in range(m, n):
-                        a[i, j] -= y * a[m, j]
-                    for j in range(n):
-                        a[j, m] += y * a[j, i]
-    for i in range(2, n):
-        for j in range(i - 1):
-            a[i, j] = 0.0
-
-
-@njit(**_OPTS)
-def _charpoly(h, n, P):  # type: ignore[no-untyped-def]  # pragma: no cover - compiled
-    """Coefficients (increasing powers) of ``det(λ I - h)`` into ``P[n]``, ``h`` Hessenberg.
-
-    ``p_k = (λ - h_kk) p_{k-1} - Σ_{i<k} h_ik (Π_{j=i+1..k} h_j,j-1) p_{i-1}`` over the leading
-    principal submatrices (Wilkinson 1965, ch. 7).
-    """
-    for k in range(n + 1):
-        for d in range(n + 1):
-            P[k, d] = 0.0
-    P[0, 0] = 1.0
-    for k in range(1, n + 1):
-        kk = k - 1
-        for d in range(k):
-            P[k, d + 1] += P[k - 1, d]
-            P[k, d] -= h[kk, kk] * P[k - 1, d]
-        prod = 1.0
-        for i in range(k - 1, 0, -1):
-            prod *= h[i, i - 1]
-            c = h[i - 1, kk] * prod
-            if c != 0.0:
-                for d in range(i):
-                    P[k, d] -= c * P[i - 1, d]
 
 
 @njit(**_OPTS)
@@ -159,64 +105,131 @@ def _root_in(c, deg, dc, a, b, fa, tol):  # type: ignore[no-untyped-def]  # prag
 
 
 @njit(**_OPTS)
-def _real_roots(c, deg, D, roots, crit):  # type: ignore[no-untyped-def]  # pragma: no cover
-    """Real roots of ``c`` (increasing powers, ``c[deg] ≠ 0``) into ``roots``; their number.
+def _sign_changes(S, deg, ns, x):  # type: ignore[no-untyped-def]  # pragma: no cover - compiled
+    """Sign changes of the Sturm sequence ``S[:ns]`` (degrees ``deg``) at ``x``."""
+    count = 0
+    last = 0.0
+    for k in range(ns):
+        v = _horner(S[k], deg[k], x)
+        if v != 0.0:
+            if last != 0.0 and (v > 0.0) != (last > 0.0):
+                count += 1
+            last = v
+    return count
 
-    Isolated between the real roots of the derivative (found the same way, from the
-    derivative of order ``deg - 1`` down), inside the Cauchy bound; a root of even
-    multiplicity (no sign change) is missed.
+
+@njit(**_OPTS)
+def _sturm_roots(c, n, S, deg, roots):  # type: ignore[no-untyped-def]  # pragma: no cover
+    """Real roots of ``c[:n + 1]`` (increasing powers) into ``roots``; their number.
+
+    Sturm's sequence ``p, p', -rem(p, p'), ...`` counts the real roots in an interval
+    (Sturm 1835); bisection of the Fujiwara bound isolates each, then Newton's method with a
+    bisection safeguard polishes it (as Nister 2004, sec. 3.3). A multiple root counts once;
+    a leading coefficient below ``1e-14`` of the largest lowers the degree (roots near
+    infinity dropped).
     """
-    # Fujiwara's bound on the roots' moduli
+    big = 0.0
+    for i in range(n + 1):
+        big = max(big, abs(c[i]))
+    if not big > 0.0:
+        return 0
+    while n > 0 and abs(c[n]) <= 1e-14 * big:
+        n -= 1
+    if n < 1:
+        return 0
+    for i in range(n + 1):
+        S[0, i] = c[i] / c[n]
+    deg[0] = n
+    for i in range(n):
+        S[1, i] = (i + 1) * S[0, i + 1] / n
+    deg[1] = n - 1
+    ns = 2
+    while deg[ns - 1] > 0:
+        a = S[ns - 2]
+        b = S[ns - 1]
+        da = deg[ns - 2]
+        db = deg[ns - 1]
+        r = S[ns]
+        for i in range(da + 1):
+            r[i] = a[i]
+        for k in range(da - db, -1, -1):  # long division: r = a mod b
+            q = r[k + db] / b[db]
+            for i in range(db + 1):
+                r[k + i] -= q * b[i]
+        dr = db - 1
+        scale = 0.0
+        for i in range(dr + 1):
+            scale = max(scale, abs(r[i]))
+        while dr >= 0 and abs(r[dr]) <= 1e-13 * scale:
+            dr -= 1
+        if dr < 0 or not scale > 0.0:
+            break  # a multiple root: the sequence ends at the gcd
+        inv = 1.0 / abs(r[dr])  # -(a mod b), scaled by a positive factor
+        for i in range(dr + 1):
+            r[i] = -r[i] * inv
+        deg[ns] = dr
+        ns += 1
     bound = 0.0
-    for k in range(1, deg + 1):
-        bound = max(bound, abs(c[deg - k] / c[deg]) ** (1.0 / k))
+    for k in range(1, n + 1):
+        bound = max(bound, abs(S[0, n - k]) ** (1.0 / k))
     bound = 2.0 * bound * (1.0 + 1e-12) + 1e-300
-    # D[k] = k-th derivative
-    for i in range(deg + 1):
-        D[0, i] = c[i]
-    for k in range(1, deg):
-        for i in range(deg - k + 1):
-            D[k, i] = (i + 1) * D[k - 1, i + 1]
-    # the derivative of order deg - 1 is linear
-    nc = 1
-    crit[0] = -D[deg - 1, 0] / D[deg - 1, 1]
-    for k in range(deg - 2, -1, -1):
-        dg = deg - k
-        nr = 0
-        a = -bound
-        fa = _horner(D[k], dg, a)
-        for j in range(nc + 1):
-            b = crit[j] if j < nc else bound
-            if b <= a:
-                continue
-            b = min(b, bound)
-            fb = _horner(D[k], dg, b)
-            if fa == 0.0:
-                roots[nr] = a
-                nr += 1
-            elif (fa > 0.0) != (fb > 0.0) and fb != 0.0:
-                roots[nr] = _root_in(D[k], dg, D[k + 1], a, b, fa, 1e-15 if k == 0 else 1e-9)
-                nr += 1
-            a = b
-            fa = fb
-        if fa == 0.0:
-            roots[nr] = a
+    # bisection: a stack of intervals (lo, hi, changes at lo, changes at hi)
+    lo_s = np.empty(128)
+    hi_s = np.empty(128)
+    vlo_s = np.empty(128, dtype=np.int64)
+    vhi_s = np.empty(128, dtype=np.int64)
+    d0 = np.empty(n)
+    for i in range(n):
+        d0[i] = (i + 1) * S[0, i + 1]
+    lo_s[0] = -bound
+    hi_s[0] = bound
+    vlo_s[0] = _sign_changes(S, deg, ns, -bound)
+    vhi_s[0] = _sign_changes(S, deg, ns, bound)
+    top = 1
+    nr = 0
+    while top > 0:
+        top -= 1
+        lo = lo_s[top]
+        hi = hi_s[top]
+        vlo = vlo_s[top]
+        vhi = vhi_s[top]
+        cnt = vlo - vhi
+        if cnt <= 0:
+            continue
+        flo = _horner(S[0], n, lo)
+        fhi = _horner(S[0], n, hi)
+        if cnt == 1 and flo != 0.0 and fhi != 0.0 and (flo > 0.0) != (fhi > 0.0):
+            roots[nr] = _root_in(S[0], n, d0, lo, hi, flo, 1e-15)
             nr += 1
-        for j in range(nr):
-            crit[j] = roots[j]
-        nc = nr
-    return nc
+            continue
+        mid = 0.5 * (lo + hi)
+        if hi - lo <= 1e-12 * max(abs(mid), 1.0) or top + 2 > 128:
+            roots[nr] = mid  # a cluster (or a multiple root): one root
+            nr += 1
+            continue
+        vm = _sign_changes(S, deg, ns, mid)
+        lo_s[top] = lo
+        hi_s[top] = mid
+        vlo_s[top] = vlo
+        vhi_s[top] = vm
+        lo_s[top + 1] = mid
+        hi_s[top + 1] = hi
+        vlo_s[top + 1] = vm
+        vhi_s[top + 1] = vhi
+        top += 2
+    return nr
 
 
 @njit(**_OPTS)
 def _e5(q1, q2, idx, Es):  # type: ignore[no-untyped-def]  # pragma: no cover - compiled
     """Write the real essential matrices (unit norm) through 5 correspondences; their count.
 
-    As ``geometry._minimal.e5``: ``E = x X + y Y + z Z + W`` over the null space of the
-    5 x 9 system, the ten cubics ``det E = 0``, ``2 E Eᵀ E - tr(E Eᵀ) E = 0`` (Nister 2004),
-    Gauss-Jordan on the cubic monomials, the action matrix of ``x`` on ``{x², xy, xz, y², yz,
-    z², x, y, z, 1}`` (Stewenius, Engels & Nister 2006); its real eigenvalues ``x``, the
-    eigenvectors giving ``y, z``.
+    ``E = x X + y Y + z Z + W`` over the null space of the 5 x 9 system and the ten cubics
+    ``det E = 0``, ``2 E Eᵀ E - tr(E Eᵀ) E = 0`` (as ``geometry._minimal.e5``), solved by
+    Nister's (2004) hidden variable: Gauss-Jordan elimination of ``x³, y³, x²y, xy², x²z,
+    x², y²z, y², xyz, xy`` leaves three equations ``B(z) [x, y, 1]ᵀ = 0`` whose determinant
+    is of degree 10 in ``z``; its real roots (Sturm sequences, :func:`_sturm_roots`) give
+    ``z``, the null vector of ``B(z)`` gives ``x, y``.
     """
     A = np.empty((5, 9))
     for k in range(5):
@@ -274,62 +287,97 @@ def _e5(q1, q2, idx, Es):  # type: ignore[no-untyped-def]  # pragma: no cover - 
     _mul_ll(L[4], L[6], -1.0, cof[2])
     for j in range(3):
         _mul_ql(cof[j], L[j], 1.0, M[0])
-    # Gauss-Jordan: M[:, :10] C = M[:, 10:] (partial pivoting)
+    # Nister's column order; Gauss-Jordan on the ten eliminated monomials (partial pivoting)
+    G = np.empty((10, 20))
+    for r in range(10):
+        for c in range(20):
+            G[r, c] = M[r, _NORD[c]]
     for c in range(10):
         p = c
         for r in range(c + 1, 10):
-            if abs(M[r, c]) > abs(M[p, c]):
+            if abs(G[r, c]) > abs(G[p, c]):
                 p = r
-        if not abs(M[p, c]) > 0.0:
+        if not abs(G[p, c]) > 0.0:
             return 0
         if p != c:
-            for j in range(20):
-                M[c, j], M[p, j] = M[p, j], M[c, j]
-        piv = 1.0 / M[c, c]
-        for j in range(c, 20):
-            M[c, j] *= piv
+            for j in range(c, 20):
+                G[c, j], G[p, j] = G[p, j], G[c, j]
+        piv = 1.0 / G[c, c]
+        for j in range(c + 1, 20):
+            G[c, j] *= piv
         for r in range(10):
             if r != c:
-                f = M[r, c]
+                f = G[r, c]
                 if f != 0.0:
-                    for j in range(c, 20):
-                        M[r, j] -= f * M[c, j]
-    act = np.zeros((10, 10))
-    for j in range(10):
-        t = _XB[j]
-        if t < 10:
-            for k in range(10):
-                act[j, k] = -M[t, 10 + k]
-        else:
-            act[j, t - 10] = 1.0
-    for r in range(10):
-        for c in range(10):
-            if not math.isfinite(act[r, c]):
-                return 0
-    h = np.empty((10, 10))
-    for r in range(10):
-        for c in range(10):
-            h[r, c] = act[r, c]
-    _hessenberg(h, 10)
-    P = np.empty((11, 11))
-    _charpoly(h, 10, P)
-    D = np.empty((10, 11))
-    xs = np.empty(10)
-    crit = np.empty(10)
-    nx = _real_roots(P[10], 10, D, xs, crit)
-    Bm = np.empty((10, 10))
-    v = np.empty((1, 10))
+                    for j in range(c + 1, 20):
+                        G[r, j] -= f * G[c, j]
+    # <k> = <e> - z<f>, <l> = <g> - z<h>, <m> = <i> - z<j> (rows 4-9): B(z) [x, y, 1]ᵀ = 0,
+    # entries polynomials in z of degrees 3, 3, 4 (increasing powers)
+    B = np.zeros((3, 3, 5))
+    for q in range(3):
+        a = G[4 + 2 * q, 10:]
+        b = G[5 + 2 * q, 10:]
+        for v in range(2):  # x (columns 10-12: z², z, 1), y (13-15)
+            o = 3 * v
+            B[q, v, 0] = a[o + 2]
+            B[q, v, 1] = a[o + 1] - b[o + 2]
+            B[q, v, 2] = a[o] - b[o + 1]
+            B[q, v, 3] = -b[o]
+        B[q, 2, 0] = a[9]  # 1 (columns 16-19: z³, z², z, 1)
+        B[q, 2, 1] = a[8] - b[9]
+        B[q, 2, 2] = a[7] - b[8]
+        B[q, 2, 3] = a[6] - b[7]
+        B[q, 2, 4] = -b[6]
+    # det B(z): degree 10 (Nister 2004, eq. 26)
+    P = np.zeros(11)
+    t = np.empty(8)
+    for c0 in range(3):
+        c1 = (c0 + 1) % 3
+        c2 = (c0 + 2) % 3
+        # cofactor of B[0, c0]: B[1, c1] B[2, c2] - B[1, c2] B[2, c1]
+        for d in range(8):
+            t[d] = 0.0
+        for u in range(5):
+            for w in range(5):
+                if u + w < 8:
+                    t[u + w] += B[1, c1, u] * B[2, c2, w] - B[1, c2, u] * B[2, c1, w]
+        for u in range(5):
+            if B[0, c0, u] != 0.0:
+                for w in range(8):
+                    if u + w < 11:
+                        P[u + w] += B[0, c0, u] * t[w]
+    for d in range(11):
+        if not math.isfinite(P[d]):
+            return 0
+    S = np.empty((11, 11))
+    deg = np.empty(11, dtype=np.int64)
+    zs = np.empty(10)
+    nz = _sturm_roots(P, np.int64(10), S, deg, zs)
+    Bz = np.empty((3, 3))
     out = 0
-    for r in range(nx):
-        x = xs[r]
-        for a in range(10):
-            for b in range(10):
-                Bm[a, b] = act[a, b]
-            Bm[a, a] -= x
-        if not _nullspace(Bm, np.int64(10), np.int64(9), np.int64(10), v, perm, 0.0):
+    for r in range(nz):
+        z = zs[r]
+        for q in range(3):
+            for v in range(3):
+                Bz[q, v] = _horner(B[q, v], np.int64(4), z)
+        # [x, y, 1] ∝ the cross product of two rows of B(z) (the largest of the three)
+        bx = 0.0
+        by = 0.0
+        b1 = 0.0
+        best_n = 0.0
+        for q in range(3):
+            u = Bz[(q + 1) % 3]
+            w = Bz[(q + 2) % 3]
+            cx = u[1] * w[2] - u[2] * w[1]
+            cy = u[2] * w[0] - u[0] * w[2]
+            c1 = u[0] * w[1] - u[1] * w[0]
+            nn = cx * cx + cy * cy + c1 * c1
+            if nn > best_n:
+                bx, by, b1, best_n = cx, cy, c1, nn
+        if b1 == 0.0:
             continue
-        y = v[0, 7] / v[0, 9]
-        z = v[0, 8] / v[0, 9]
+        x = bx / b1
+        y = by / b1
         E = Es[out]
         ok = True
         for e in range(9):
