@@ -17,15 +17,21 @@ from imageform._kernels.ransac import (
     _project_e,
     _refine_e,
     _refit_e,
+    _same,
     _sample,
     _score,
     _select,
+    _support,
     _support_count,
     _to_f,
     _trials_needed,
 )
+from imageform._kernels.relative_pose import _cheirality, _in_front
 
 __all__ = ["essential_estimate"]
+
+#: at most this many rounds of the final refit (support, cheirality, LM)
+_REFIT_ROUNDS = 6
 
 # ---- 5-point: polynomials in (x, y, z) up to degree 3, monomials as in geometry._minimal
 _CUBICS = [(3, 0, 0), (2, 1, 0), (2, 0, 1), (1, 2, 0), (1, 1, 1)]
@@ -390,6 +396,59 @@ def _e5(q1, q2, idx, Es):  # type: ignore[no-untyped-def]  # pragma: no cover - 
     return out
 
 
+@njit(**_OPTS)
+def _local_opt(E, p1, p2, K1i, K2i, thr, thr2, best_sc, sel, F, Elo):  # type: ignore[no-untyped-def]  # pragma: no cover
+    """LO of a new best ``E``: LM over ``(R, t)`` (10 iterations) on the correspondences
+    within ``2τ``, then within ``τ``, into ``Elo``; returns its MSAC score and inlier count
+    (count -1 when not better than ``best_sc``)."""
+    _copy3(E, Elo)
+    for mult in (2.0, 1.0):
+        _to_f(Elo, K1i, K2i, F)
+        m = _select(np.int64(_F_ORTHO), F, p1, p2, (mult * thr) ** 2, sel)
+        if m < 6:
+            break
+        _refine_e(Elo, p1, p2, K1i, K2i, sel, m, np.int64(10))
+    _to_f(Elo, K1i, K2i, F)
+    return _score(np.int64(_F_ORTHO), F, p1, p2, thr2, best_sc)
+
+
+@njit(**_OPTS)
+def _refit_front(E, p1, p2, q1, q2, K1i, K2i, thr, factor, max_iter, rounds):  # type: ignore[no-untyped-def]  # pragma: no cover
+    """Final refit of ``E`` in place: LM on its refinement support, in front of the cameras.
+
+    Each round takes the support of the current ``E`` (``3σ̂`` clipped to ``[τ, factor τ]``,
+    ``σ̂`` from its inliers, as ``_robust_core.refine_support``), keeps the correspondences
+    that the factorisation of ``E`` chosen by the cheirality vote puts in front of both
+    cameras (an outlier that lies near its epipolar line by chance is behind a camera about
+    half the time), and refits on them; it stops when the support no longer changes.
+    """
+    n = p1.shape[0]
+    sel = np.empty(n, dtype=np.int64)
+    sel2 = np.empty(n, dtype=np.int64)
+    F = np.empty((3, 3))
+    U = np.empty((3, 3))
+    Rs = np.empty((2, 3, 3))
+    m = -1
+    for _ in range(rounds):
+        _to_f(E, K1i, K2i, F)
+        _, m2 = _support(F, p1, p2, thr, factor, sel2)
+        bi, bs, _ = _cheirality(E, q1, q2, sel2, m2, np.inf, U, Rs)
+        R = Rs[bi]
+        t0, t1, t2 = bs * U[0, 2], bs * U[1, 2], bs * U[2, 2]
+        k = 0
+        for j in range(m2):
+            i = sel2[j]
+            if _in_front(R, t0, t1, t2, q1[i, 0], q1[i, 1], q2[i, 0], q2[i, 1], np.inf):
+                sel2[k] = i
+                k += 1
+        if k < 5 or (m >= 0 and _same(sel, m, sel2, k)):
+            break
+        m = k
+        for j in range(m):
+            sel[j] = sel2[j]
+        _refine_e(E, p1, p2, K1i, K2i, sel, m, max_iter)
+
+
 @njit(
     "int64(float64[:, ::1], float64[:, ::1], float64[:, ::1], float64[:, ::1], float64[:, ::1],"
     " float64[:, ::1], float64, float64, int64, uint64, int64, float64, float64,"
@@ -434,15 +493,7 @@ def essential_estimate(  # type: ignore[no-untyped-def]  # pragma: no cover
             best_sc = sc
             best_cnt = cnt
             if cnt > 5:
-                _copy3(Es[j], Elo)
-                for mult in (2.0, 1.0):
-                    _to_f(Elo, K1i, K2i, F)
-                    m = _select(np.int64(_F_ORTHO), F, p1, p2, (mult * thr) ** 2, sel)
-                    if m < 6:
-                        break
-                    _refine_e(Elo, p1, p2, K1i, K2i, sel, m, np.int64(10))
-                _to_f(Elo, K1i, K2i, F)
-                sc2, cnt2 = _score(np.int64(_F_ORTHO), F, p1, p2, thr2, best_sc)
+                sc2, cnt2 = _local_opt(Es[j], p1, p2, K1i, K2i, thr, thr2, best_sc, sel, F, Elo)
                 if cnt2 >= 0 and sc2 < best_sc:
                     _copy3(Elo, best)
                     best_sc = sc2
@@ -454,5 +505,6 @@ def essential_estimate(  # type: ignore[no-untyped-def]  # pragma: no cover
         return -drawn
     _project_e(best)
     _refit_e(best, p1, p2, K1i, K2i, thr, factor, max_iter)
+    _refit_front(best, p1, p2, q1, q2, K1i, K2i, thr, factor, max_iter, np.int64(_REFIT_ROUNDS))
     _copy3(best, E_out)
     return drawn

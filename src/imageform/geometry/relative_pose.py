@@ -15,7 +15,7 @@ import numpy as np
 import numpy.typing as npt
 from numpy.typing import NDArray
 
-from imageform._backend import to_numpy
+from imageform._backend import to_numpy, use_numba
 from imageform._validate import as_bool, as_matrix, check_option, check_positive
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
 from imageform.geometry._robust_core import check_pairs, result_dtype
@@ -80,6 +80,8 @@ def _dehom(Xh: F64) -> F64:
 #: An essential matrix has singular values (s, s, 0): its second must be above this fraction
 #: of the first (rank 2, not 1 or 0), its third below it (not rank 3).
 _RANK_TOL = (1e-6, 0.1)
+
+_NONE_IN_FRONT = "no correspondence lies in front of both cameras for any factorisation of E"
 
 
 def _check_rank_2(E: NDArray[np.float64]) -> None:
@@ -171,6 +173,26 @@ def recover_pose(
             )
     _check_rank_2(Em)  # after every shape check
     q1, q2 = _normalised(p1, Ka), _normalised(p2, Kb)
+    dt = result_dtype(points1, points2)
+    if use_numba(p1):
+        from imageform._kernels.relative_pose import pose_from_essential
+
+        R, t = np.empty((3, 3)), np.empty(3)
+        X, good = np.empty((n, 3)), np.empty(n, dtype=bool)
+        m = pose_from_essential(
+            np.ascontiguousarray(Em),
+            np.ascontiguousarray(q1),
+            np.ascontiguousarray(q2),
+            np.ascontiguousarray(mask),
+            dmax,
+            R,
+            t,
+            X,
+            good,
+        )
+        if m == 0:
+            raise DegenerateConfigurationError(_NONE_IN_FRONT)
+        return RelativePose(R.astype(dt), t.astype(dt), good, X.astype(dt))
     U, _, Vt = np.linalg.svd(Em)
     if np.linalg.det(U) < 0:
         U = -U
@@ -205,11 +227,8 @@ def recover_pose(
         good = mask & (z1 > 0) & (z2 > 0) & (z1 < dmax) & (z2 < dmax)
     X = _dehom(Xh)
     if not good.any():
-        raise DegenerateConfigurationError(
-            "no correspondence lies in front of both cameras for any factorisation of E"
-        )
+        raise DegenerateConfigurationError(_NONE_IN_FRONT)
     X = np.where(good[:, None], X, np.nan)
-    dt = result_dtype(points1, points2)
     return RelativePose(R.astype(dt), (t / np.linalg.norm(t)).astype(dt), good, X.astype(dt))
 
 
