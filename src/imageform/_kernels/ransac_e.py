@@ -14,9 +14,11 @@ from imageform._kernels.ransac import (
     _epi_row,
     _fro_unit,
     _nullspace,
+    _mat3,
     _project_e,
-    _refine_e,
-    _refit_e,
+    _rodrigues,
+    _solve,
+    _svd3,
     _same,
     _sample,
     _score,
@@ -397,6 +399,231 @@ def _e5(q1, q2, idx, Es):  # type: ignore[no-untyped-def]  # pragma: no cover - 
 
 
 @njit(**_OPTS)
+def _sampson_rt(E, h1, h2, m, K1i, K2i, r):  # type: ignore[no-untyped-def]  # pragma: no cover
+    """Signed pixel Sampson distances of ``h1, h2`` (``K⁻¹ x``, (m, 3)) under ``E``; their
+    squared sum (``inf`` when not finite)."""
+    cost = 0.0
+    for i in range(m):
+        a0 = E[0, 0] * h1[i, 0] + E[0, 1] * h1[i, 1] + E[0, 2] * h1[i, 2]
+        a1 = E[1, 0] * h1[i, 0] + E[1, 1] * h1[i, 1] + E[1, 2] * h1[i, 2]
+        a2 = E[2, 0] * h1[i, 0] + E[2, 1] * h1[i, 1] + E[2, 2] * h1[i, 2]
+        b0 = E[0, 0] * h2[i, 0] + E[1, 0] * h2[i, 1] + E[2, 0] * h2[i, 2]
+        b1 = E[0, 1] * h2[i, 0] + E[1, 1] * h2[i, 1] + E[2, 1] * h2[i, 2]
+        b2 = E[0, 2] * h2[i, 0] + E[1, 2] * h2[i, 1] + E[2, 2] * h2[i, 2]
+        num = h2[i, 0] * a0 + h2[i, 1] * a1 + h2[i, 2] * a2
+        c0 = K2i[0, 0] * a0 + K2i[1, 0] * a1 + K2i[2, 0] * a2
+        c1 = K2i[0, 1] * a0 + K2i[1, 1] * a1 + K2i[2, 1] * a2
+        d0 = K1i[0, 0] * b0 + K1i[1, 0] * b1 + K1i[2, 0] * b2
+        d1 = K1i[0, 1] * b0 + K1i[1, 1] * b1 + K1i[2, 1] * b2
+        v = num / math.sqrt(c0 * c0 + c1 * c1 + d0 * d0 + d1 * d1)
+        r[i] = v
+        cost += v * v
+    return cost if math.isfinite(cost) else np.inf
+
+
+@njit(**_OPTS)
+def _e_of(R, t, E):  # type: ignore[no-untyped-def]  # pragma: no cover - compiled
+    """``E = [t]ₓ R``."""
+    for b in range(3):
+        E[0, b] = -t[2] * R[1, b] + t[1] * R[2, b]
+        E[1, b] = t[2] * R[0, b] - t[0] * R[2, b]
+        E[2, b] = -t[1] * R[0, b] + t[0] * R[1, b]
+
+
+@njit(**_OPTS)
+def _lm_e(E, p1, p2, K1i, K2i, idx, m, max_iter):  # type: ignore[no-untyped-def]  # pragma: no cover
+    """Refine ``E`` (in place) by Levenberg-Marquardt over ``(R, t/‖t‖)`` on the pixel
+    Sampson distances of ``idx[:m]``, the analytic Jacobian.
+
+    The objective of ``ransac._refine_e`` (5 degrees of freedom), linearised at the current
+    ``(R, t)`` each step: ``R ← exp([ω]ₓ) R``, ``t ← (t + β₁ b₁ + β₂ b₂)/‖·‖`` with ``b₁, b₂``
+    orthonormal to ``t``, so ``∂E/∂ωₖ = [t]ₓ [eₖ]ₓ R = eₖ (Rᵀt)ᵀ - tₖ R`` and
+    ``∂E/∂βⱼ = [bⱼ]ₓ R``; ``r = x₂ᵀFx₁ / ‖(Fx₁)₁,₂, (Fᵀx₂)₁,₂‖`` differentiated by the quotient
+    rule. Damping ``λ diag(JᵀJ)`` (Marquardt 1963), ``λ`` ÷10 on success, ×10 otherwise;
+    stops when a step gains less than ``1e-10`` of the cost. ``E`` is replaced (unit
+    Frobenius norm) when the result is finite.
+    """
+    h1 = np.empty((m, 3))
+    h2 = np.empty((m, 3))
+    for k in range(m):
+        i = idx[k]
+        for a in range(3):
+            h1[k, a] = K1i[a, 0] * p1[i, 0] + K1i[a, 1] * p1[i, 1] + K1i[a, 2]
+            h2[k, a] = K2i[a, 0] * p2[i, 0] + K2i[a, 1] * p2[i, 1] + K2i[a, 2]
+    U = np.empty((3, 3))
+    V = np.empty((3, 3))
+    sv = np.empty(3)
+    S1 = np.empty((3, 3))
+    S2 = np.empty((3, 3))
+    _svd3(E, U, sv, V, S1, S2)
+    R = np.empty((3, 3))
+    t = np.empty(3)
+    for a in range(3):
+        for b in range(3):
+            R[a, b] = U[a, 1] * V[b, 0] - U[a, 0] * V[b, 1] + U[a, 2] * V[b, 2]
+        t[a] = U[a, 2]
+    Ec = np.empty((3, 3))
+    _e_of(R, t, Ec)
+    r = np.empty(m)
+    rn = np.empty(m)
+    cost = _sampson_rt(Ec, h1, h2, m, K1i, K2i, r)
+    if not math.isfinite(cost):
+        return
+    dE = np.empty((5, 3, 3))
+    J = np.empty((m, 5))
+    A = np.empty((5, 5))
+    Ad = np.empty((5, 5))
+    g = np.empty(5)
+    gd = np.empty(5)
+    step = np.empty(5)
+    Rn = np.empty((3, 3))
+    tn = np.empty(3)
+    Q = np.empty((3, 3))
+    B = np.empty((2, 3))
+    lam = 1e-3
+    for _ in range(max_iter):
+        # tangent basis of t
+        k = 0
+        if abs(t[1]) < abs(t[k]):
+            k = 1
+        if abs(t[2]) < abs(t[k]):
+            k = 2
+        e0 = 1.0 if k == 0 else 0.0
+        e1 = 1.0 if k == 1 else 0.0
+        e2 = 1.0 if k == 2 else 0.0
+        B[0, 0] = t[1] * e2 - t[2] * e1
+        B[0, 1] = t[2] * e0 - t[0] * e2
+        B[0, 2] = t[0] * e1 - t[1] * e0
+        nb = math.sqrt(B[0, 0] ** 2 + B[0, 1] ** 2 + B[0, 2] ** 2)
+        for a in range(3):
+            B[0, a] /= nb
+        B[1, 0] = t[1] * B[0, 2] - t[2] * B[0, 1]
+        B[1, 1] = t[2] * B[0, 0] - t[0] * B[0, 2]
+        B[1, 2] = t[0] * B[0, 1] - t[1] * B[0, 0]
+        rt0 = R[0, 0] * t[0] + R[1, 0] * t[1] + R[2, 0] * t[2]
+        rt1 = R[0, 1] * t[0] + R[1, 1] * t[1] + R[2, 1] * t[2]
+        rt2 = R[0, 2] * t[0] + R[1, 2] * t[1] + R[2, 2] * t[2]
+        for c in range(3):
+            for a in range(3):
+                for b in range(3):
+                    dE[c, a, b] = -t[c] * R[a, b]
+            dE[c, c, 0] += rt0
+            dE[c, c, 1] += rt1
+            dE[c, c, 2] += rt2
+        for j in range(2):
+            _e_of(R, B[j], dE[3 + j])
+        # Jacobian (quotient rule on r = num / den)
+        for i in range(m):
+            x0, x1, x2 = h1[i, 0], h1[i, 1], h1[i, 2]
+            y0, y1, y2 = h2[i, 0], h2[i, 1], h2[i, 2]
+            a0 = Ec[0, 0] * x0 + Ec[0, 1] * x1 + Ec[0, 2] * x2
+            a1 = Ec[1, 0] * x0 + Ec[1, 1] * x1 + Ec[1, 2] * x2
+            a2 = Ec[2, 0] * x0 + Ec[2, 1] * x1 + Ec[2, 2] * x2
+            b0 = Ec[0, 0] * y0 + Ec[1, 0] * y1 + Ec[2, 0] * y2
+            b1 = Ec[0, 1] * y0 + Ec[1, 1] * y1 + Ec[2, 1] * y2
+            b2 = Ec[0, 2] * y0 + Ec[1, 2] * y1 + Ec[2, 2] * y2
+            num = y0 * a0 + y1 * a1 + y2 * a2
+            c0 = K2i[0, 0] * a0 + K2i[1, 0] * a1 + K2i[2, 0] * a2
+            c1 = K2i[0, 1] * a0 + K2i[1, 1] * a1 + K2i[2, 1] * a2
+            d0 = K1i[0, 0] * b0 + K1i[1, 0] * b1 + K1i[2, 0] * b2
+            d1 = K1i[0, 1] * b0 + K1i[1, 1] * b1 + K1i[2, 1] * b2
+            den = math.sqrt(c0 * c0 + c1 * c1 + d0 * d0 + d1 * d1)
+            ri = num / den
+            for c in range(5):
+                D = dE[c]
+                u0 = D[0, 0] * x0 + D[0, 1] * x1 + D[0, 2] * x2
+                u1 = D[1, 0] * x0 + D[1, 1] * x1 + D[1, 2] * x2
+                u2 = D[2, 0] * x0 + D[2, 1] * x1 + D[2, 2] * x2
+                w0 = D[0, 0] * y0 + D[1, 0] * y1 + D[2, 0] * y2
+                w1 = D[0, 1] * y0 + D[1, 1] * y1 + D[2, 1] * y2
+                w2 = D[0, 2] * y0 + D[1, 2] * y1 + D[2, 2] * y2
+                dnum = y0 * u0 + y1 * u1 + y2 * u2
+                dc0 = K2i[0, 0] * u0 + K2i[1, 0] * u1 + K2i[2, 0] * u2
+                dc1 = K2i[0, 1] * u0 + K2i[1, 1] * u1 + K2i[2, 1] * u2
+                dd0 = K1i[0, 0] * w0 + K1i[1, 0] * w1 + K1i[2, 0] * w2
+                dd1 = K1i[0, 1] * w0 + K1i[1, 1] * w1 + K1i[2, 1] * w2
+                dden = (c0 * dc0 + c1 * dc1 + d0 * dd0 + d1 * dd1) / den
+                J[i, c] = (dnum - ri * dden) / den
+        for a in range(5):
+            v = 0.0
+            for i in range(m):
+                v += J[i, a] * r[i]
+            g[a] = v
+            for b in range(a, 5):
+                v = 0.0
+                for i in range(m):
+                    v += J[i, a] * J[i, b]
+                A[a, b] = v
+                A[b, a] = v
+        improved = False
+        gain = 0.0
+        while lam < 1e10:
+            for a in range(5):
+                for b in range(5):
+                    Ad[a, b] = A[a, b]
+                d = A[a, a] if A[a, a] > 0.0 else 1.0
+                Ad[a, a] += lam * d
+                gd[a] = -g[a]
+            if not _solve(Ad, gd, np.int64(5), step):
+                lam *= 10.0
+                continue
+            _rodrigues(step[0], step[1], step[2], Q)
+            _mat3(Q, R, Rn)
+            nt = 0.0
+            for a in range(3):
+                tn[a] = t[a] + step[3] * B[0, a] + step[4] * B[1, a]
+                nt += tn[a] * tn[a]
+            nt = math.sqrt(nt)
+            for a in range(3):
+                tn[a] /= nt
+            _e_of(Rn, tn, Ec)
+            cn = _sampson_rt(Ec, h1, h2, m, K1i, K2i, rn)
+            if cn <= cost:
+                gain = cost - cn
+                cost = cn
+                _copy3(Rn, R)
+                for a in range(3):
+                    t[a] = tn[a]
+                for i in range(m):
+                    r[i] = rn[i]
+                lam = max(lam / 10.0, 1e-12)
+                improved = True
+                break
+            lam *= 10.0
+        _e_of(R, t, Ec)
+        if not improved or gain <= 1e-10 * cost:
+            break
+    ok = True
+    for a in range(3):
+        for b in range(3):
+            ok &= math.isfinite(Ec[a, b])
+    if ok:
+        _fro_unit(Ec)
+        _copy3(Ec, E)
+
+
+@njit(**_OPTS)
+def _refit_fixed(E, p1, p2, K1i, K2i, thr, factor, max_iter):  # type: ignore[no-untyped-def]  # pragma: no cover
+    """``ransac._refit_e`` with :func:`_lm_e`: up to 3 rounds on the refinement support
+    bound of the starting ``E``, reselected after each refit, in place."""
+    n = p1.shape[0]
+    sel = np.empty(n, dtype=np.int64)
+    sel2 = np.empty(n, dtype=np.int64)
+    F = np.empty((3, 3))
+    _to_f(E, K1i, K2i, F)
+    wide, m = _support(F, p1, p2, thr, factor, sel)
+    for _ in range(3):
+        _lm_e(E, p1, p2, K1i, K2i, sel, m, max_iter)
+        _to_f(E, K1i, K2i, F)
+        m2 = _select(np.int64(_F_ORTHO), F, p1, p2, wide * wide, sel2)
+        if m2 < 5 or _same(sel, m, sel2, m2):
+            break
+        m = m2
+        for k in range(m):
+            sel[k] = sel2[k]
+
+
+@njit(**_OPTS)
 def _local_opt(E, p1, p2, K1i, K2i, thr, thr2, best_sc, sel, F, Elo):  # type: ignore[no-untyped-def]  # pragma: no cover
     """LO of a new best ``E``: LM over ``(R, t)`` (10 iterations) on the correspondences
     within ``2τ``, then within ``τ``, into ``Elo``; returns its MSAC score and inlier count
@@ -407,7 +634,7 @@ def _local_opt(E, p1, p2, K1i, K2i, thr, thr2, best_sc, sel, F, Elo):  # type: i
         m = _select(np.int64(_F_ORTHO), F, p1, p2, (mult * thr) ** 2, sel)
         if m < 6:
             break
-        _refine_e(Elo, p1, p2, K1i, K2i, sel, m, np.int64(10))
+        _lm_e(Elo, p1, p2, K1i, K2i, sel, m, np.int64(10))
     _to_f(Elo, K1i, K2i, F)
     return _score(np.int64(_F_ORTHO), F, p1, p2, thr2, best_sc)
 
@@ -446,7 +673,7 @@ def _refit_front(E, p1, p2, q1, q2, K1i, K2i, thr, factor, max_iter, rounds):  #
         m = k
         for j in range(m):
             sel[j] = sel2[j]
-        _refine_e(E, p1, p2, K1i, K2i, sel, m, max_iter)
+        _lm_e(E, p1, p2, K1i, K2i, sel, m, max_iter)
 
 
 @njit(
@@ -504,7 +731,7 @@ def essential_estimate(  # type: ignore[no-untyped-def]  # pragma: no cover
     if best_cnt < 5:
         return -drawn
     _project_e(best)
-    _refit_e(best, p1, p2, K1i, K2i, thr, factor, max_iter)
+    _refit_fixed(best, p1, p2, K1i, K2i, thr, factor, max_iter)
     _refit_front(best, p1, p2, q1, q2, K1i, K2i, thr, factor, max_iter, np.int64(_REFIT_ROUNDS))
     _copy3(best, E_out)
     return drawn

@@ -57,7 +57,7 @@ _LO_STEPS = (3.0, 2.0, 2.0, 2.0)
 #: support bound 1, not ``_robust_core.TERMINATION_FACTOR``): with the wider support's
 #: count, the fewer samples left one frame of tests/geometry/test_sfm.py's walk-through
 #: with 10 PnP inliers instead of 12 (issue 28).
-_E_TERMINATION_FACTOR = 1.0
+_E_TERMINATION_FACTOR = 2.0
 
 
 class FundamentalResult(NamedTuple):
