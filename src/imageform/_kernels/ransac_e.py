@@ -16,12 +16,14 @@ from imageform._kernels.ransac import (
     _nullspace,
     _mat3,
     _project_e,
+    _rand,
     _rodrigues,
     _solve,
     _svd3,
     _same,
     _sample,
     _score,
+    _sq_f,
     _select,
     _support,
     _support_count,
@@ -34,6 +36,14 @@ __all__ = ["essential_estimate"]
 
 #: at most this many rounds of the final refit (support, cheirality, LM)
 _REFIT_ROUNDS = 6
+#: SPRT (Matas & Chum 2008): the time of one 5-point sample in units of one Sampson
+#: distance (about 14 µs / 10 ns), the mean number of models per sample, the prior
+#: probability that a correspondence agrees with a bad model (updated from the rejected
+#: models) and the weight of that prior in correspondences
+_SPRT_T_M = 1000.0
+_SPRT_M_S = 4.4
+_SPRT_DELTA0 = 0.05
+_SPRT_PRIOR = 200.0
 
 # ---- 5-point: polynomials in (x, y, z) up to degree 3, monomials as in geometry._minimal
 _CUBICS = [(3, 0, 0), (2, 1, 0), (2, 0, 1), (1, 2, 0), (1, 1, 1)]
@@ -676,6 +686,53 @@ def _refit_front(E, p1, p2, q1, q2, K1i, K2i, thr, factor, max_iter, rounds):  #
         _lm_e(E, p1, p2, K1i, K2i, sel, m, max_iter)
 
 
+@njit(**_OPTS)
+def _sprt_threshold(eps, delta):  # type: ignore[no-untyped-def]  # pragma: no cover - compiled
+    """Wald's decision threshold ``A`` of the SPRT that minimises the expected run time.
+
+    ``A = K + log A`` with ``K = t_M C / m_S + 1``, ``C = (1 - δ) log((1 - δ)/(1 - ε)) +
+    δ log(δ/ε)`` (Matas & Chum 2008, eqs. 2 and 7; fixed-point iteration).
+    """
+    C = (1.0 - delta) * math.log((1.0 - delta) / (1.0 - eps)) + delta * math.log(delta / eps)
+    K = _SPRT_T_M * C / _SPRT_M_S + 1.0
+    A = K
+    for _ in range(10):
+        A = K + math.log(A)
+    return A
+
+
+@njit(**_OPTS)
+def _score_sprt(F, p1, p2, thr2, limit, start, lam_in, lam_out, A):  # type: ignore[no-untyped-def]  # pragma: no cover
+    """MSAC score, inlier count and correspondences tested, from ``start`` on (cyclic).
+
+    The count is -1 when the score passes ``limit`` (cannot beat the best), -2 when the
+    SPRT's likelihood ratio passes ``A`` (a bad model: each correspondence within ``τ``
+    multiplies it by ``δ/ε``, each beyond by ``(1-δ)/(1-ε)``).
+    """
+    n = p1.shape[0]
+    sc = 0.0
+    cnt = 0
+    lam = 1.0
+    i = start
+    for j in range(n):
+        e = _sq_f(F, p1, p2, i)
+        if e < thr2:
+            sc += e
+            cnt += 1
+            lam *= lam_in
+        else:
+            sc += thr2
+            lam *= lam_out
+        if sc > limit:
+            return sc, np.int64(-1), cnt, j + 1
+        if lam > A:
+            return sc, np.int64(-2), cnt, j + 1
+        i += 1
+        if i == n:
+            i = 0
+    return sc, np.int64(cnt), cnt, n
+
+
 @njit(
     "int64(float64[:, ::1], float64[:, ::1], float64[:, ::1], float64[:, ::1], float64[:, ::1],"
     " float64[:, ::1], float64, float64, int64, uint64, int64, float64, float64,"
@@ -707,13 +764,27 @@ def essential_estimate(  # type: ignore[no-untyped-def]  # pragma: no cover
     best_cnt = -1
     needed = float(max_trials)
     drawn = 0
+    # SPRT: off (A = inf) until a best model gives ε
+    delta = _SPRT_DELTA0
+    seen_in = _SPRT_DELTA0 * _SPRT_PRIOR
+    seen = _SPRT_PRIOR
+    eps = 0.0
+    A = np.inf
+    lam_in = 1.0
+    lam_out = 1.0
     while drawn < min(needed, max_trials):
         _sample(state, n, np.int64(5), idx)
         drawn += 1
         k = _e5(q1, q2, idx, Es)
         for j in range(k):
             _to_f(Es[j], K1i, K2i, F)
-            sc, cnt = _score(np.int64(_F_ORTHO), F, p1, p2, thr2, best_sc)
+            start = np.int64(_rand(state) % np.uint64(n))
+            sc, cnt, c_in, tested = _score_sprt(
+                F, p1, p2, thr2, best_sc, start, lam_in, lam_out, A
+            )
+            if cnt < 0:  # rejected (a bad model): its agreement estimates δ
+                seen_in += c_in
+                seen += tested
             if cnt < 0 or not sc < best_sc:
                 continue
             _copy3(Es[j], best)
@@ -727,7 +798,22 @@ def essential_estimate(  # type: ignore[no-untyped-def]  # pragma: no cover
                     best_cnt = cnt2
             _to_f(best, K1i, K2i, F)
             m = _support_count(np.int64(_F_ORTHO), F, p1, p2, thr, np.int64(1), term)
+            # the SPRT's design from the best model (ε) and the rejected ones (δ)
+            delta = min(max(seen_in / seen, 1e-4), 0.5)
+            eps = best_cnt / n
+            if eps > 1.5 * delta and eps < 1.0:
+                A = _sprt_threshold(eps, delta)
+                lam_in = delta / eps
+                lam_out = (1.0 - delta) / (1.0 - eps)
+            else:
+                A = np.inf
+            # a good model passes the SPRT with probability about 1 - 1/A (Wald)
             needed = _trials_needed(m, n, np.int64(5), conf)
+            if math.isfinite(A) and math.isfinite(needed) and needed > 0.0:
+                pg = (m / n) ** 5
+                keep = 1.0 - 1.0 / A
+                if pg * keep < 1.0:
+                    needed = math.log1p(-conf) / math.log1p(-pg * keep)
     if best_cnt < 5:
         return -drawn
     _project_e(best)

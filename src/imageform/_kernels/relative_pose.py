@@ -19,7 +19,8 @@ def _dlt_point(P2, x1, y1, x2, y2, S, X):  # type: ignore[no-untyped-def]  # pra
     The right singular vector of the smallest singular value of the 4 x 4 DLT matrix
     ``A`` (H&Z sec. 12.2, no row scaling): the eigenvector of ``AᵀA`` of the smallest
     eigenvalue by inverse iteration from the closest points of the two rays (three steps;
-    the eigenvalue gap is the squared ratio of the pixel noise to the image size).
+    the eigenvalue gap is the squared ratio of the pixel noise to the image size; a shift of
+    ``1e-13`` of the largest entry keeps exact data regular).
     """
     # rows of A: x1 P1₃ - P1₁, y1 P1₃ - P1₂, x2 P2₃ - P2₁, y2 P2₃ - P2₂
     A = np.empty((4, 4))
@@ -45,7 +46,7 @@ def _dlt_point(P2, x1, y1, x2, y2, S, X):  # type: ignore[no-untyped-def]  # pra
             b[i] = X[i]
             for j in range(4):
                 L[i, j] = S[i, j]
-            L[i, i] += 1e-300  # never exactly singular
+            L[i, i] += 1e-13 * big  # a shift: never singular, even on exact data
         # Gaussian elimination with partial pivoting
         for c in range(4):
             p = c
