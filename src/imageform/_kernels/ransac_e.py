@@ -30,7 +30,6 @@ from imageform._kernels.ransac import (
     _to_f,
     _trials_needed,
 )
-from imageform._kernels.relative_pose import _cheirality, _in_front
 
 __all__ = ["essential_estimate"]
 
@@ -408,6 +407,70 @@ def _e5(q1, q2, idx, Es):  # type: ignore[no-untyped-def]  # pragma: no cover - 
     return out
 
 
+# ---- the cheirality vote (shared with relative_pose.pose_from_essential)
+@njit(**_OPTS)
+def _candidates(E, U, Rs):  # type: ignore[no-untyped-def]  # pragma: no cover - compiled
+    """``Rs[0] = U W Vᵀ``, ``Rs[1] = U Wᵀ Vᵀ`` from ``E = U diag(s) Vᵀ``; ``t = ±U[:, 2]``.
+
+    ``W = [[0, -1, 0], [1, 0, 0], [0, 0, 1]]``, ``U, V`` rotations (H&Z result 9.19).
+    """
+    V = np.empty((3, 3))
+    s = np.empty(3)
+    A = np.empty((3, 3))
+    W = np.empty((3, 3))
+    _svd3(E, U, s, V, A, W)
+    for a in range(3):
+        for b in range(3):
+            # columns of U W: (u2, -u1, u3); of U Wᵀ: (-u2, u1, u3)
+            Rs[0, a, b] = U[a, 1] * V[b, 0] - U[a, 0] * V[b, 1] + U[a, 2] * V[b, 2]
+            Rs[1, a, b] = -U[a, 1] * V[b, 0] + U[a, 0] * V[b, 1] + U[a, 2] * V[b, 2]
+
+
+@njit(**_OPTS)
+def _in_front(R, t0, t1, t2, x1, y1, x2, y2, dmax):  # type: ignore[no-untyped-def]  # pragma: no cover
+    """Whether the closest points of the two rays lie in front of both cameras, nearer than
+    ``dmax``: depths from ``λ₂ x̃₂ ≈ λ₁ R x̃₁ + t`` by least squares."""
+    a0 = R[0, 0] * x1 + R[0, 1] * y1 + R[0, 2]
+    a1 = R[1, 0] * x1 + R[1, 1] * y1 + R[1, 2]
+    a2 = R[2, 0] * x1 + R[2, 1] * y1 + R[2, 2]
+    aa = a0 * a0 + a1 * a1 + a2 * a2
+    ab = a0 * x2 + a1 * y2 + a2
+    bb = x2 * x2 + y2 * y2 + 1.0
+    at = a0 * t0 + a1 * t1 + a2 * t2
+    bt = x2 * t0 + y2 * t1 + t2
+    det = aa * bb - ab * ab
+    z1 = (ab * bt - bb * at) / det
+    z2 = (aa * bt - ab * at) / det
+    return 0.0 < z1 < dmax and 0.0 < z2 < dmax
+
+
+@njit(**_OPTS)
+def _cheirality(E, q1, q2, idx, m, dmax, U, Rs):  # type: ignore[no-untyped-def]  # pragma: no cover
+    """Choose the ``(R, t)`` of ``E`` with the most of ``idx[:m]`` in front of both cameras.
+
+    Returns ``(which R, sign of t, count)``; ``U, Rs`` receive the factorisation
+    (:func:`_candidates`).
+    """
+    _candidates(E, U, Rs)
+    best = -1
+    bi = 0
+    bs = 1.0
+    for ri in range(2):
+        R = Rs[ri]
+        for sg in (1.0, -1.0):
+            t0, t1, t2 = sg * U[0, 2], sg * U[1, 2], sg * U[2, 2]
+            cnt = 0
+            for k in range(m):
+                i = idx[k]
+                if _in_front(R, t0, t1, t2, q1[i, 0], q1[i, 1], q2[i, 0], q2[i, 1], dmax):
+                    cnt += 1
+            if cnt > best:
+                best = cnt
+                bi = ri
+                bs = sg
+    return bi, bs, best
+
+
 @njit(**_OPTS)
 def _sampson_rt(E, h1, h2, m, K1i, K2i, r):  # type: ignore[no-untyped-def]  # pragma: no cover
     """Signed pixel Sampson distances of ``h1, h2`` (``K⁻¹ x``, (m, 3)) under ``E``; their
@@ -613,27 +676,6 @@ def _lm_e(E, p1, p2, K1i, K2i, idx, m, max_iter):  # type: ignore[no-untyped-def
 
 
 @njit(**_OPTS)
-def _refit_fixed(E, p1, p2, K1i, K2i, thr, factor, max_iter):  # type: ignore[no-untyped-def]  # pragma: no cover
-    """``ransac._refit_e`` with :func:`_lm_e`: up to 3 rounds on the refinement support
-    bound of the starting ``E``, reselected after each refit, in place."""
-    n = p1.shape[0]
-    sel = np.empty(n, dtype=np.int64)
-    sel2 = np.empty(n, dtype=np.int64)
-    F = np.empty((3, 3))
-    _to_f(E, K1i, K2i, F)
-    wide, m = _support(F, p1, p2, thr, factor, sel)
-    for _ in range(3):
-        _lm_e(E, p1, p2, K1i, K2i, sel, m, max_iter)
-        _to_f(E, K1i, K2i, F)
-        m2 = _select(np.int64(_F_ORTHO), F, p1, p2, wide * wide, sel2)
-        if m2 < 5 or _same(sel, m, sel2, m2):
-            break
-        m = m2
-        for k in range(m):
-            sel[k] = sel2[k]
-
-
-@njit(**_OPTS)
 def _local_opt(E, p1, p2, K1i, K2i, thr, thr2, best_sc, sel, F, Elo):  # type: ignore[no-untyped-def]  # pragma: no cover
     """LO of a new best ``E``: LM over ``(R, t)`` (10 iterations) on the correspondences
     within ``2τ``, then within ``τ``, into ``Elo``; returns its MSAC score and inlier count
@@ -651,13 +693,15 @@ def _local_opt(E, p1, p2, K1i, K2i, thr, thr2, best_sc, sel, F, Elo):  # type: i
 
 @njit(**_OPTS)
 def _refit_front(E, p1, p2, q1, q2, K1i, K2i, thr, factor, max_iter, rounds):  # type: ignore[no-untyped-def]  # pragma: no cover
-    """Final refit of ``E`` in place: LM on its refinement support, in front of the cameras.
+    """Final refit of ``E`` in place: LM on its refinement support, then in front of the cameras.
 
-    Each round takes the support of the current ``E`` (``3σ̂`` clipped to ``[τ, factor τ]``,
-    ``σ̂`` from its inliers, as ``_robust_core.refine_support``), keeps the correspondences
-    that the factorisation of ``E`` chosen by the cheirality vote puts in front of both
-    cameras (an outlier that lies near its epipolar line by chance is behind a camera about
-    half the time), and refits on them; it stops when the support no longer changes.
+    First as ``ransac._refit_e`` (``_robust_core.refit_on_support``): up to 3 rounds on the
+    refinement support of the starting ``E`` (``3σ̂`` clipped to ``[τ, factor τ]``, ``σ̂``
+    from its inliers), reselected with that bound after each refit. Then up to ``rounds``
+    more, each on the support of the current ``E`` (its own ``σ̂``) less the correspondences
+    that the factorisation of ``E`` chosen by the cheirality vote puts behind a camera (an
+    outlier that lies near its epipolar line by chance is behind one about half the time),
+    until the support no longer changes.
     """
     n = p1.shape[0]
     sel = np.empty(n, dtype=np.int64)
@@ -665,9 +709,23 @@ def _refit_front(E, p1, p2, q1, q2, K1i, K2i, thr, factor, max_iter, rounds):  #
     F = np.empty((3, 3))
     U = np.empty((3, 3))
     Rs = np.empty((2, 3, 3))
-    m = -1
-    for _ in range(rounds):
+    _to_f(E, K1i, K2i, F)
+    wide, m = _support(F, p1, p2, thr, factor, sel)
+    if m < 5:
+        return
+    fixed = 3
+    for _ in range(fixed + rounds):
+        _lm_e(E, p1, p2, K1i, K2i, sel, m, max_iter)
         _to_f(E, K1i, K2i, F)
+        if fixed > 0:
+            fixed -= 1
+            k = _select(np.int64(_F_ORTHO), F, p1, p2, wide * wide, sel2)
+            if k >= 5 and not _same(sel, m, sel2, k):
+                m = k
+                for j in range(m):
+                    sel[j] = sel2[j]
+                continue
+            fixed = 0
         _, m2 = _support(F, p1, p2, thr, factor, sel2)
         bi, bs, _ = _cheirality(E, q1, q2, sel2, m2, np.inf, U, Rs)
         R = Rs[bi]
@@ -678,12 +736,11 @@ def _refit_front(E, p1, p2, q1, q2, K1i, K2i, thr, factor, max_iter, rounds):  #
             if _in_front(R, t0, t1, t2, q1[i, 0], q1[i, 1], q2[i, 0], q2[i, 1], np.inf):
                 sel2[k] = i
                 k += 1
-        if k < 5 or (m >= 0 and _same(sel, m, sel2, k)):
+        if k < 5 or _same(sel, m, sel2, k):
             break
         m = k
         for j in range(m):
             sel[j] = sel2[j]
-        _lm_e(E, p1, p2, K1i, K2i, sel, m, max_iter)
 
 
 @njit(**_OPTS)
@@ -817,7 +874,6 @@ def essential_estimate(  # type: ignore[no-untyped-def]  # pragma: no cover
     if best_cnt < 5:
         return -drawn
     _project_e(best)
-    _refit_fixed(best, p1, p2, K1i, K2i, thr, factor, max_iter)
     _refit_front(best, p1, p2, q1, q2, K1i, K2i, thr, factor, max_iter, np.int64(_REFIT_ROUNDS))
     _copy3(best, E_out)
     return drawn

@@ -7,7 +7,8 @@ import math
 import numpy as np
 
 from imageform._kernels.jit import njit
-from imageform._kernels.ransac import _OPTS, _svd3
+from imageform._kernels.ransac import _OPTS
+from imageform._kernels.ransac_e import _cheirality
 
 __all__ = ["pose_from_essential"]
 
@@ -81,69 +82,6 @@ def _dlt_point(P2, x1, y1, x2, y2, S, X):  # type: ignore[no-untyped-def]  # pra
     if X[3] < 0.0:
         for i in range(4):
             X[i] = -X[i]
-
-
-@njit(**_OPTS)
-def _candidates(E, U, Rs):  # type: ignore[no-untyped-def]  # pragma: no cover - compiled
-    """``Rs[0] = U W Vᵀ``, ``Rs[1] = U Wᵀ Vᵀ`` from ``E = U diag(s) Vᵀ``; ``t = ±U[:, 2]``.
-
-    ``W = [[0, -1, 0], [1, 0, 0], [0, 0, 1]]``, ``U, V`` rotations (H&Z result 9.19).
-    """
-    V = np.empty((3, 3))
-    s = np.empty(3)
-    A = np.empty((3, 3))
-    W = np.empty((3, 3))
-    _svd3(E, U, s, V, A, W)
-    for a in range(3):
-        for b in range(3):
-            # columns of U W: (u2, -u1, u3); of U Wᵀ: (-u2, u1, u3)
-            Rs[0, a, b] = U[a, 1] * V[b, 0] - U[a, 0] * V[b, 1] + U[a, 2] * V[b, 2]
-            Rs[1, a, b] = -U[a, 1] * V[b, 0] + U[a, 0] * V[b, 1] + U[a, 2] * V[b, 2]
-
-
-@njit(**_OPTS)
-def _in_front(R, t0, t1, t2, x1, y1, x2, y2, dmax):  # type: ignore[no-untyped-def]  # pragma: no cover
-    """Whether the closest points of the two rays lie in front of both cameras, nearer than
-    ``dmax``: depths from ``λ₂ x̃₂ ≈ λ₁ R x̃₁ + t`` by least squares."""
-    a0 = R[0, 0] * x1 + R[0, 1] * y1 + R[0, 2]
-    a1 = R[1, 0] * x1 + R[1, 1] * y1 + R[1, 2]
-    a2 = R[2, 0] * x1 + R[2, 1] * y1 + R[2, 2]
-    aa = a0 * a0 + a1 * a1 + a2 * a2
-    ab = a0 * x2 + a1 * y2 + a2
-    bb = x2 * x2 + y2 * y2 + 1.0
-    at = a0 * t0 + a1 * t1 + a2 * t2
-    bt = x2 * t0 + y2 * t1 + t2
-    det = aa * bb - ab * ab
-    z1 = (ab * bt - bb * at) / det
-    z2 = (aa * bt - ab * at) / det
-    return 0.0 < z1 < dmax and 0.0 < z2 < dmax
-
-
-@njit(**_OPTS)
-def _cheirality(E, q1, q2, idx, m, dmax, U, Rs):  # type: ignore[no-untyped-def]  # pragma: no cover
-    """Choose the ``(R, t)`` of ``E`` with the most of ``idx[:m]`` in front of both cameras.
-
-    Returns ``(which R, sign of t, count)``; ``U, Rs`` receive the factorisation
-    (:func:`_candidates`).
-    """
-    _candidates(E, U, Rs)
-    best = -1
-    bi = 0
-    bs = 1.0
-    for ri in range(2):
-        R = Rs[ri]
-        for sg in (1.0, -1.0):
-            t0, t1, t2 = sg * U[0, 2], sg * U[1, 2], sg * U[2, 2]
-            cnt = 0
-            for k in range(m):
-                i = idx[k]
-                if _in_front(R, t0, t1, t2, q1[i, 0], q1[i, 1], q2[i, 0], q2[i, 1], dmax):
-                    cnt += 1
-            if cnt > best:
-                best = cnt
-                bi = ri
-                bs = sg
-    return bi, bs, best
 
 
 @njit(
