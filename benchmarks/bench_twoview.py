@@ -398,7 +398,8 @@ def run(args: argparse.Namespace) -> str:
     rec: dict[tuple[str, str], list[tuple[float, float]]] = {}
 
     def add(task: str, who: str, err: float, sec: float) -> None:
-        rec.setdefault((task, who), []).append((err, sec))
+        if not args.essential_only or task.startswith(("essential", "recoverPose")):
+            rec.setdefault((task, who), []).append((err, sec))
 
     for s in range(args.scenes):
         _one_scene(s, args, add)
@@ -445,6 +446,9 @@ def main() -> None:
     ap.add_argument("--sigma", type=float, default=1.0)
     ap.add_argument("--h-thr", type=float, default=3.0)
     ap.add_argument("--f-thr", type=float, default=1.0)
+    ap.add_argument(
+        "--essential-only", action="store_true", help="table only the essential + pose rows"
+    )
     ap.add_argument("--kodak", default=None, help="folder of the Kodak PNGs: run that test only")
     args = ap.parse_args()
     print(run_kodak(args) if args.kodak else run(args))

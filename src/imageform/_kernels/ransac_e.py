@@ -13,20 +13,20 @@ from imageform._kernels.ransac import (
     _copy3,
     _epi_row,
     _fro_unit,
-    _nullspace,
     _mat3,
+    _nullspace,
     _project_e,
     _rand,
     _rodrigues,
-    _solve,
-    _svd3,
     _same,
     _sample,
     _score,
-    _sq_f,
     _select,
+    _solve,
+    _sq_f,
     _support,
     _support_count,
+    _svd3,
     _to_f,
     _trials_needed,
 )
@@ -428,8 +428,10 @@ def _candidates(E, U, Rs):  # type: ignore[no-untyped-def]  # pragma: no cover -
 
 @njit(**_OPTS)
 def _in_front(R, t0, t1, t2, x1, y1, x2, y2, dmax):  # type: ignore[no-untyped-def]  # pragma: no cover
-    """Whether the closest points of the two rays lie in front of both cameras, nearer than
-    ``dmax``: depths from ``λ₂ x̃₂ ≈ λ₁ R x̃₁ + t`` by least squares."""
+    """Whether a correspondence is in front of both cameras, nearer than ``dmax``.
+
+    The depths of the two rays' closest points, ``λ₂ x̃₂ ≈ λ₁ R x̃₁ + t`` by least squares.
+    """
     a0 = R[0, 0] * x1 + R[0, 1] * y1 + R[0, 2]
     a1 = R[1, 0] * x1 + R[1, 1] * y1 + R[1, 2]
     a2 = R[2, 0] * x1 + R[2, 1] * y1 + R[2, 2]
@@ -473,8 +475,10 @@ def _cheirality(E, q1, q2, idx, m, dmax, U, Rs):  # type: ignore[no-untyped-def]
 
 @njit(**_OPTS)
 def _sampson_rt(E, h1, h2, m, K1i, K2i, r):  # type: ignore[no-untyped-def]  # pragma: no cover
-    """Signed pixel Sampson distances of ``h1, h2`` (``K⁻¹ x``, (m, 3)) under ``E``; their
-    squared sum (``inf`` when not finite)."""
+    """Write the signed pixel Sampson distances of ``h1, h2`` under ``E``; their squared sum.
+
+    ``h1, h2`` (m, 3) are ``K⁻¹ x``; the sum is ``inf`` when not finite.
+    """
     cost = 0.0
     for i in range(m):
         a0 = E[0, 0] * h1[i, 0] + E[0, 1] * h1[i, 1] + E[0, 2] * h1[i, 2]
@@ -505,8 +509,9 @@ def _e_of(R, t, E):  # type: ignore[no-untyped-def]  # pragma: no cover - compil
 
 @njit(**_OPTS)
 def _lm_e(E, p1, p2, K1i, K2i, idx, m, max_iter):  # type: ignore[no-untyped-def]  # pragma: no cover
-    """Refine ``E`` (in place) by Levenberg-Marquardt over ``(R, t/‖t‖)`` on the pixel
-    Sampson distances of ``idx[:m]``, the analytic Jacobian.
+    """Refine ``E`` in place: Levenberg-Marquardt over ``(R, t/‖t‖)``, analytic Jacobian.
+
+    The pixel Sampson distances of ``idx[:m]`` are minimised.
 
     The objective of ``ransac._refine_e`` (5 degrees of freedom), linearised at the current
     ``(R, t)`` each step: ``R ← exp([ω]ₓ) R``, ``t ← (t + β₁ b₁ + β₂ b₂)/‖·‖`` with ``b₁, b₂``
@@ -677,9 +682,11 @@ def _lm_e(E, p1, p2, K1i, K2i, idx, m, max_iter):  # type: ignore[no-untyped-def
 
 @njit(**_OPTS)
 def _local_opt(E, p1, p2, K1i, K2i, thr, thr2, best_sc, sel, F, Elo):  # type: ignore[no-untyped-def]  # pragma: no cover
-    """LO of a new best ``E``: LM over ``(R, t)`` (10 iterations) on the correspondences
-    within ``2τ``, then within ``τ``, into ``Elo``; returns its MSAC score and inlier count
-    (count -1 when not better than ``best_sc``)."""
+    """Locally optimise a new best ``E`` into ``Elo``; return its MSAC score and inlier count.
+
+    LM over ``(R, t)`` (10 iterations) on the correspondences within ``2τ``, then within
+    ``τ``; the count is -1 when the score is not better than ``best_sc``.
+    """
     _copy3(E, Elo)
     for mult in (2.0, 1.0):
         _to_f(Elo, K1i, K2i, F)
@@ -693,7 +700,7 @@ def _local_opt(E, p1, p2, K1i, K2i, thr, thr2, best_sc, sel, F, Elo):  # type: i
 
 @njit(**_OPTS)
 def _refit_front(E, p1, p2, q1, q2, K1i, K2i, thr, factor, max_iter, rounds):  # type: ignore[no-untyped-def]  # pragma: no cover
-    """Final refit of ``E`` in place: LM on its refinement support, then in front of the cameras.
+    """Refit ``E`` in place: LM on its refinement support, then in front of the cameras.
 
     First as ``ransac._refit_e`` (``_robust_core.refit_on_support``): up to 3 rounds on the
     refinement support of the starting ``E`` (``3σ̂`` clipped to ``[τ, factor τ]``, ``σ̂``
@@ -802,10 +809,14 @@ def essential_estimate(  # type: ignore[no-untyped-def]  # pragma: no cover
     """Robust ``E`` from pixels ``p1, p2`` (normalised ``q1, q2``): 5-point RANSAC + LO, LM.
 
     As ``twoview.find_essential_matrix``'s NumPy path: scored by the pixel Sampson distance
-    of ``F = K2⁻ᵀ E K1⁻¹``; every new best locally optimised (LM over ``(R, t)``, 10
-    iterations, on the correspondences within 2τ then τ); the best projected to an
-    essential matrix and refined on its support. Writes ``E_out`` and returns the samples
-    drawn, negated when no hypothesis had 5 inliers.
+    of ``F = K2⁻ᵀ E K1⁻¹`` (MSAC), every new best locally optimised (:func:`_local_opt`),
+    the best projected to an essential matrix and refitted (:func:`_refit_front`). Each
+    hypothesis is verified from a random correspondence on and rejected early by Wald's
+    SPRT (:func:`_score_sprt`; ``ε`` the best model's inlier ratio, ``δ`` that of the
+    rejected ones); the adaptive count ``log(1 - p) / log(1 - ε_s⁵ (1 - 1/A))`` (``ε_s``
+    the best model's support, ``term`` τ wide) allows for the good models the SPRT rejects
+    (Matas & Chum 2008, sec. 4). Writes ``E_out`` and returns the samples drawn, negated
+    when no hypothesis had 5 inliers.
     """
     n = p1.shape[0]
     thr2 = thr * thr
@@ -836,9 +847,7 @@ def essential_estimate(  # type: ignore[no-untyped-def]  # pragma: no cover
         for j in range(k):
             _to_f(Es[j], K1i, K2i, F)
             start = np.int64(_rand(state) % np.uint64(n))
-            sc, cnt, c_in, tested = _score_sprt(
-                F, p1, p2, thr2, best_sc, start, lam_in, lam_out, A
-            )
+            sc, cnt, c_in, tested = _score_sprt(F, p1, p2, thr2, best_sc, start, lam_in, lam_out, A)
             if cnt < 0:  # rejected (a bad model): its agreement estimates δ
                 seen_in += c_in
                 seen += tested
