@@ -147,3 +147,49 @@ def test_compiled_path_reproducible() -> None:
     c = find_fundamental_matrix(n1, n2, rng=7)
     d = find_fundamental_matrix(n1, n2, rng=7)
     assert np.array_equal(c.F, d.F) and c.trials == d.trials
+
+
+def test_sturm_roots_find_every_real_root_of_a_degree_10_polynomial() -> None:
+    from imageform._kernels.ransac_e import _sturm_roots
+
+    rng = np.random.default_rng(5)
+    S, deg, out = np.empty((11, 11)), np.empty(11, np.int64), np.empty(10)
+    for trial in range(30):
+        real = np.sort(rng.uniform(-3, 3, 2 * (trial % 5 + 1)))  # 2 to 10 real roots
+        c = np.poly(real)
+        # the rest as complex pairs: x² + b x + 2 + k, b² < 4 (2 + k), no real roots
+        for k in range(4 - trial % 5):
+            c = np.polymul(c, [1.0, rng.uniform(-1, 1), 2.0 + k])
+        n = _sturm_roots(np.ascontiguousarray(c[::-1]), np.int64(10), S, deg, out)
+        assert n == len(real)
+        np.testing.assert_allclose(np.sort(out[:n]), real, atol=1e-8)
+
+
+def test_compiled_recover_pose_matches_the_numpy_path(monkeypatch: pytest.MonkeyPatch) -> None:
+    from imageform.geometry import recover_pose
+
+    for s in range(4):
+        _u1, _u2, n1, n2, _ = _noisy(200 + s, False)
+        res = find_essential_matrix(n1, n2, K, rng=s)
+        a = recover_pose(res.E, n1, n2, K, inliers=res.inliers)
+        monkeypatch.setenv("IMAGEFORM_DISABLE_NUMBA", "1")
+        b = recover_pose(res.E, n1, n2, K, inliers=res.inliers)
+        monkeypatch.delenv("IMAGEFORM_DISABLE_NUMBA")
+        np.testing.assert_allclose(a.R, b.R, atol=1e-9)
+        np.testing.assert_allclose(a.t, b.t, atol=1e-9)
+        assert np.array_equal(a.inliers, b.inliers)
+        np.testing.assert_allclose(a.points[a.inliers], b.points[b.inliers], rtol=1e-8)
+        assert np.isnan(a.points[~a.inliers]).all()
+
+
+def test_essential_refit_keeps_no_support_point_behind_a_camera() -> None:
+    """The final E's support, less the points behind a camera, is what it was refitted on."""
+    from imageform.geometry import recover_pose
+
+    for s in range(3):
+        _u1, _u2, n1, n2, out = _noisy(300 + s, False)
+        res = find_essential_matrix(n1, n2, K, rng=s)
+        pose = recover_pose(res.E, n1, n2, K, inliers=res.inliers, max_depth=1e9)
+        # nearly all true inliers kept, and no more outliers than the band lets through
+        assert (res.inliers & ~out).sum() >= 0.9 * (~out).sum()
+        assert (pose.inliers & out).sum() <= 3
