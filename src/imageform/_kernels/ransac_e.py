@@ -474,6 +474,28 @@ def _cheirality(E, q1, q2, idx, m, dmax, U, Rs):  # type: ignore[no-untyped-def]
 
 
 @njit(**_OPTS)
+def _parts(E, h1, h2, i, K1i, K2i):  # type: ignore[no-untyped-def]  # pragma: no cover
+    """``x₂ᵀ F x₁`` and the first two entries of ``F x₁`` and ``Fᵀ x₂``, ``F = K2⁻ᵀ E K1⁻¹``.
+
+    From ``h = K⁻¹ x`` (rows ``i`` of ``h1, h2``); all five are linear in ``E``.
+    """
+    num = 0.0
+    c0 = 0.0
+    c1 = 0.0
+    d0 = 0.0
+    d1 = 0.0
+    for r in range(3):
+        a = E[r, 0] * h1[i, 0] + E[r, 1] * h1[i, 1] + E[r, 2] * h1[i, 2]
+        b = E[0, r] * h2[i, 0] + E[1, r] * h2[i, 1] + E[2, r] * h2[i, 2]
+        num += h2[i, r] * a
+        c0 += K2i[r, 0] * a
+        c1 += K2i[r, 1] * a
+        d0 += K1i[r, 0] * b
+        d1 += K1i[r, 1] * b
+    return num, c0, c1, d0, d1
+
+
+@njit(**_OPTS)
 def _sampson_rt(E, h1, h2, m, K1i, K2i, r):  # type: ignore[no-untyped-def]  # pragma: no cover
     """Write the signed pixel Sampson distances of ``h1, h2`` under ``E``; their squared sum.
 
@@ -481,17 +503,7 @@ def _sampson_rt(E, h1, h2, m, K1i, K2i, r):  # type: ignore[no-untyped-def]  # p
     """
     cost = 0.0
     for i in range(m):
-        a0 = E[0, 0] * h1[i, 0] + E[0, 1] * h1[i, 1] + E[0, 2] * h1[i, 2]
-        a1 = E[1, 0] * h1[i, 0] + E[1, 1] * h1[i, 1] + E[1, 2] * h1[i, 2]
-        a2 = E[2, 0] * h1[i, 0] + E[2, 1] * h1[i, 1] + E[2, 2] * h1[i, 2]
-        b0 = E[0, 0] * h2[i, 0] + E[1, 0] * h2[i, 1] + E[2, 0] * h2[i, 2]
-        b1 = E[0, 1] * h2[i, 0] + E[1, 1] * h2[i, 1] + E[2, 1] * h2[i, 2]
-        b2 = E[0, 2] * h2[i, 0] + E[1, 2] * h2[i, 1] + E[2, 2] * h2[i, 2]
-        num = h2[i, 0] * a0 + h2[i, 1] * a1 + h2[i, 2] * a2
-        c0 = K2i[0, 0] * a0 + K2i[1, 0] * a1 + K2i[2, 0] * a2
-        c1 = K2i[0, 1] * a0 + K2i[1, 1] * a1 + K2i[2, 1] * a2
-        d0 = K1i[0, 0] * b0 + K1i[1, 0] * b1 + K1i[2, 0] * b2
-        d1 = K1i[0, 1] * b0 + K1i[1, 1] * b1 + K1i[2, 1] * b2
+        num, c0, c1, d0, d1 = _parts(E, h1, h2, i, K1i, K2i)
         v = num / math.sqrt(c0 * c0 + c1 * c1 + d0 * d0 + d1 * d1)
         r[i] = v
         cost += v * v
@@ -590,36 +602,13 @@ def _lm_e(E, p1, p2, K1i, K2i, idx, m, max_iter):  # type: ignore[no-untyped-def
             dE[c, c, 2] += rt2
         for j in range(2):
             _e_of(R, B[j], dE[3 + j])
-        # Jacobian (quotient rule on r = num / den)
+        # Jacobian (quotient rule on r = num / den; num, c, d linear in E)
         for i in range(m):
-            x0, x1, x2 = h1[i, 0], h1[i, 1], h1[i, 2]
-            y0, y1, y2 = h2[i, 0], h2[i, 1], h2[i, 2]
-            a0 = Ec[0, 0] * x0 + Ec[0, 1] * x1 + Ec[0, 2] * x2
-            a1 = Ec[1, 0] * x0 + Ec[1, 1] * x1 + Ec[1, 2] * x2
-            a2 = Ec[2, 0] * x0 + Ec[2, 1] * x1 + Ec[2, 2] * x2
-            b0 = Ec[0, 0] * y0 + Ec[1, 0] * y1 + Ec[2, 0] * y2
-            b1 = Ec[0, 1] * y0 + Ec[1, 1] * y1 + Ec[2, 1] * y2
-            b2 = Ec[0, 2] * y0 + Ec[1, 2] * y1 + Ec[2, 2] * y2
-            num = y0 * a0 + y1 * a1 + y2 * a2
-            c0 = K2i[0, 0] * a0 + K2i[1, 0] * a1 + K2i[2, 0] * a2
-            c1 = K2i[0, 1] * a0 + K2i[1, 1] * a1 + K2i[2, 1] * a2
-            d0 = K1i[0, 0] * b0 + K1i[1, 0] * b1 + K1i[2, 0] * b2
-            d1 = K1i[0, 1] * b0 + K1i[1, 1] * b1 + K1i[2, 1] * b2
+            num, c0, c1, d0, d1 = _parts(Ec, h1, h2, i, K1i, K2i)
             den = math.sqrt(c0 * c0 + c1 * c1 + d0 * d0 + d1 * d1)
             ri = num / den
             for c in range(5):
-                D = dE[c]
-                u0 = D[0, 0] * x0 + D[0, 1] * x1 + D[0, 2] * x2
-                u1 = D[1, 0] * x0 + D[1, 1] * x1 + D[1, 2] * x2
-                u2 = D[2, 0] * x0 + D[2, 1] * x1 + D[2, 2] * x2
-                w0 = D[0, 0] * y0 + D[1, 0] * y1 + D[2, 0] * y2
-                w1 = D[0, 1] * y0 + D[1, 1] * y1 + D[2, 1] * y2
-                w2 = D[0, 2] * y0 + D[1, 2] * y1 + D[2, 2] * y2
-                dnum = y0 * u0 + y1 * u1 + y2 * u2
-                dc0 = K2i[0, 0] * u0 + K2i[1, 0] * u1 + K2i[2, 0] * u2
-                dc1 = K2i[0, 1] * u0 + K2i[1, 1] * u1 + K2i[2, 1] * u2
-                dd0 = K1i[0, 0] * w0 + K1i[1, 0] * w1 + K1i[2, 0] * w2
-                dd1 = K1i[0, 1] * w0 + K1i[1, 1] * w1 + K1i[2, 1] * w2
+                dnum, dc0, dc1, dd0, dd1 = _parts(dE[c], h1, h2, i, K1i, K2i)
                 dden = (c0 * dc0 + c1 * dc1 + d0 * dd0 + d1 * dd1) / den
                 J[i, c] = (dnum - ri * dden) / den
         for a in range(5):
