@@ -78,6 +78,7 @@ BENCH_SCRIPTS: dict[str, str] = {
     "stain-glass": "benchmarks/check_stain_glass.py",
     "track": "benchmarks/bench_track.py",
     "twoview": "benchmarks/bench_twoview.py",
+    "twoview-e": "benchmarks/bench_twoview.py",
     "vision": "benchmarks/bench_vision.py",
     "vp-lsd": "benchmarks/check_vp_lsd.py",
     "vp-manhattan": "benchmarks/check_vp_manhattan.py",
