@@ -51,9 +51,8 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from imageform._colormath import srgb_decode, srgb_encode
-from imageform._validate import as_int, as_real, check_memory, describe, format_shape
+from imageform._validate import as_int, as_real, check_memory, describe, format_shape, real_array
 from imageform.analysis._arrays import image_in, is_dask
-from imageform.analysis._guard import real_array
 from imageform.analysis.chart_grid import ChartPatches, ChartWarning
 from imageform.errors import InvalidInputError
 

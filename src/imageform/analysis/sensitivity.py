@@ -40,8 +40,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from imageform._validate import as_bool, as_real, describe
-from imageform.analysis._guard import real_array
+from imageform._validate import as_bool, as_real, describe, real_array
 from imageform.errors import ImageformError, InvalidInputError
 from imageform.spectral import Spectrum, colorchecker_reflectances, illuminant
 

@@ -19,8 +19,17 @@ import numpy as np
 
 from imageform._backend import common_device, namespace, use_numba
 from imageform._dask import chunkwise
-from imageform._validate import as_real, format_shape
-from imageform.color._guard import as_points, check_magnitude, check_option
+from imageform._validate import (
+    as_points_strict as as_points,
+)
+from imageform._validate import (
+    as_real,
+    check_magnitude,
+    format_shape,
+)
+from imageform._validate import (
+    check_name as check_option,
+)
 from imageform.errors import InvalidInputError
 
 __all__ = [

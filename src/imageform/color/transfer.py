@@ -23,8 +23,9 @@ from imageform._colormath import pos_pow as _pos_pow
 from imageform._colormath import srgb_decode as _srgb_decode
 from imageform._colormath import srgb_encode as _srgb_encode
 from imageform._dask import chunkwise
+from imageform._validate import as_image_strict as as_image
+from imageform._validate import check_name as check_option
 from imageform._validate import check_positive
-from imageform.color._guard import as_image, check_option
 
 __all__ = [
     "ADOBE_RGB_GAMMA",

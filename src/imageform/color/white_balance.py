@@ -41,13 +41,21 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from imageform._backend import device_of, is_dask_namespace, namespace
-from imageform._validate import any_value, as_int, as_real, as_real_array, describe
-from imageform.color._guard import (
+from imageform._validate import (
+    any_value,
     as_bool,
-    as_image,
+    as_int,
+    as_real,
+    as_real_array,
     check_nonempty,
-    check_option,
     check_result_array,
+    describe,
+)
+from imageform._validate import (
+    as_image_strict as as_image,
+)
+from imageform._validate import (
+    check_name as check_option,
 )
 from imageform.color.rgb_spaces import xyz_to_linear_rgb
 from imageform.color.transfer import TRANSFER_FUNCTIONS, decode, encode

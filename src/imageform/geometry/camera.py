@@ -23,9 +23,23 @@ import numpy as np
 
 from imageform._backend import common_device, device_of, linalg, namespace, sign_of, use_numba
 from imageform._typing import Array, ArrayLike
-from imageform._validate import any_value, check_option, check_rotation, format_shape
+from imageform._validate import (
+    any_value,
+    check_image_size,
+    check_option,
+    check_rotation,
+    format_shape,
+)
+from imageform._validate import (
+    as_float_bounded as as_float,
+)
+from imageform._validate import (
+    as_matrix_bounded as as_matrix,
+)
+from imageform._validate import (
+    as_points_bounded as as_points,
+)
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
-from imageform.geometry._checks import as_float, as_matrix, as_points, check_image_size
 from imageform.geometry._results import Projection
 from imageform.geometry.intrinsics import Intrinsics
 

@@ -29,9 +29,17 @@ import numpy as np
 
 from imageform._backend import common_device, namespace, to_numpy, use_numba
 from imageform._dask import is_dask_array
+from imageform._validate import (
+    as_float_bounded as as_float,
+)
 from imageform._validate import as_int, as_real, check_rotation
+from imageform._validate import (
+    as_matrix_bounded as as_matrix,
+)
+from imageform._validate import (
+    as_points_bounded as as_points,
+)
 from imageform.errors import InvalidInputError
-from imageform.geometry._checks import as_float, as_matrix, as_points
 from imageform.geometry._distortion_xp import (
     bc_distort_xp,
     bc_undistort_xp,

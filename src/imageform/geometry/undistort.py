@@ -29,9 +29,22 @@ from imageform._backend import (
     to_numpy,
     use_numba,
 )
-from imageform._validate import as_bool, as_image, as_real, check_memory, format_shape
+from imageform._validate import (
+    MAX_MAGNITUDE,
+    as_bool,
+    as_image,
+    as_real,
+    check_memory,
+    format_shape,
+    size_pair,
+)
+from imageform._validate import (
+    as_float_bounded as as_float,
+)
+from imageform._validate import (
+    as_matrix_bounded as as_matrix,
+)
 from imageform.errors import InvalidInputError
-from imageform.geometry._checks import MAX_MAGNITUDE, as_float, as_matrix, size_pair
 from imageform.geometry._remap_xp import map_grid, remap_dask, remap_xp
 from imageform.geometry.distortion import BrownConrady, DistortionModel, _check_model
 

@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from imageform._validate import as_int, describe
+from imageform._validate import as_int, check_type, describe, real_array
 from imageform.color import (
     delta_e_ciede2000,
     linear_srgb_to_luminance,
@@ -31,7 +31,6 @@ from imageform.color import (
 from imageform.errors import InvalidInputError
 from imageform.geometry.camera import Camera
 from imageform.geometry.vanishing import horizon_line
-from imageform.simulate._guard import check_type, real_array
 from imageform.simulate._rng import RNGLike, random_source
 from imageform.simulate.config import ColorCheckerConfig
 from imageform.simulate.result import ColorCheckerTruth, PatchMeasurements, VanishingTruth
