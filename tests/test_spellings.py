@@ -31,9 +31,6 @@ _OFF = re.compile(f"^(?:{'|'.join(OFF_SPELLINGS)})$")
 
 #: ``module.qualname: parameter`` -> why it keeps its spelling today.
 ALLOWED: dict[str, str] = {
-    # another helper owns these files in this round (issue 30 leaves them to them)
-    "imageform.simulate.lab.render_lab_set: seed": "simulate lab set (camera-twin work)",
-    "imageform.io.raw.Development.to_integer: bits": "io/raw.py (raw-development work)",
     # already deprecated aliases, kept in the signature by random_source()
     "imageform.simulate.pipeline.simulate: seed": "deprecated alias of rng (random_source)",
     "imageform.simulate.truth.detect_vanishing: seed": "deprecated alias of rng (random_source)",

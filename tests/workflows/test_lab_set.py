@@ -47,7 +47,7 @@ def lab(tmp_path_factory: pytest.TempPathFactory) -> LabSet:
         optics={"model": "mtf50", "mtf50_cy_per_px": MTF50},
         color={"white_balance": [2.0, 1.0, 1.6]},
     )
-    return render_lab_set(cf, tmp_path_factory.mktemp("lab") / "lab", seed=0)
+    return render_lab_set(cf, tmp_path_factory.mktemp("lab") / "lab", rng=0)
 
 
 def test_layout_and_manifest(lab: LabSet) -> None:

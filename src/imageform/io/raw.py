@@ -27,6 +27,7 @@ from typing import Any
 
 import numpy as np
 
+from imageform import _deprecate
 from imageform._files import atomic_write, check_writable
 from imageform._validate import describe
 from imageform.errors import InvalidInputError
@@ -787,16 +788,18 @@ class Development:
         """The encoded output in [0, 1] (float32, turned for display; kept once read)."""
         return _orient(self._sensor_image(), self.orientation)
 
-    def to_integer(self, bits: int = 16) -> np.ndarray:
-        """Return the output image as uint8 (``bits=8``) or uint16 (``bits=16``), rounded.
+    @_deprecate.parameters(renamed={"bits": "bit_depth"})
+    def to_integer(self, bit_depth: int = 16) -> np.ndarray:
+        """Return the output image as uint8 (``bit_depth=8``) or uint16 (``bit_depth=16``), rounded.
 
         Rounded half up (the values are in [0, 1]), turned for display. 16 bits of a Bayer
         mosaic developed bilinearly whose ``image`` has not been read: written by the fused
-        pass itself (no float image is made), to the same values.
+        pass itself (no float image is made), to the same values. ``bits=`` is the
+        deprecated spelling of ``bit_depth=``.
         """
-        if bits not in (8, 16):
-            raise InvalidInputError(f"expected bits 8 or 16, got {describe(bits)}")
-        if bits == 16 and self._image is None and self._camera_rgb is None:
+        if bit_depth not in (8, 16):
+            raise InvalidInputError(f"expected bit_depth 8 or 16, got {describe(bit_depth)}")
+        if bit_depth == 16 and self._image is None and self._camera_rgb is None:
             from imageform._kernels.raw_develop import MODE_UINT16
 
             out = self._fused(MODE_UINT16)
@@ -804,8 +807,8 @@ class Development:
             from imageform._kernels.raw_develop import quantize
 
             image = self._sensor_image()
-            out = np.empty(image.shape, np.uint8 if bits == 8 else np.uint16)
-            quantize(image.reshape(-1), np.float32(2**bits - 1), out.reshape(-1))
+            out = np.empty(image.shape, np.uint8 if bit_depth == 8 else np.uint16)
+            quantize(image.reshape(-1), np.float32(2**bit_depth - 1), out.reshape(-1))
         return np.ascontiguousarray(_orient(out, self.orientation))
 
 
