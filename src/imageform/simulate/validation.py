@@ -31,7 +31,7 @@ from imageform.simulate.schema import (
     Field,
 )
 
-__all__ = ["check_field", "check_section", "find_line", "validate_scene_dict"]
+__all__ = ["find_line", "validate_scene_dict"]
 
 
 # ---- locating keys in the TOML text ---------------------------------------------------------
