@@ -57,11 +57,6 @@ ALLOWED: dict[str, str] = {
     "imageform.simulate.config.ImageConfig: centre_m": "scene-file key",
     "imageform.simulate.config.ObjectConfig: centre_m": "scene-file key",
     "imageform.simulate.config.PlaneConfig: centre_m": "scene-file key",
-    "imageform.simulate.result.ColorCheckerTruth: centres_uv": "read by simulate/lab.py",
-    # result fields written to JSON under the same key; left for later
-    "imageform.analysis.chart_detect.ChartDetection: centres": "result field and JSON key",
-    "imageform.analysis.chart_detect.ChartPhoto: centres": "result field",
-    "imageform.analysis.chart_input.ChartSample: centres": "result field and JSON key",
 }
 
 

@@ -231,7 +231,7 @@ def render_colorchecker(out: Path, cf: CameraFile, opt: LabOptions) -> ChartShot
     (out / "colorchecker").mkdir()
     cc_path = write_simulated_dng(res, cc_scene, out / "colorchecker" / "chart.dng")
     write_image(out / "colorchecker" / "developed.png", _linear16(_stage(res, "output")))
-    centers = res.colorchecker.centres_uv if res.colorchecker is not None else np.zeros((24, 2))
+    centers = res.colorchecker.centers_uv if res.colorchecker is not None else np.zeros((24, 2))
     quad = res.quads[0].corners if res.quads else np.zeros((4, 3))
     return ChartShot(
         path=cc_path,
