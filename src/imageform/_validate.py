@@ -1033,30 +1033,7 @@ def as_real_ndarray(
     if value is None:
         raise InvalidInputError(f"expected {name} as an array of numbers, got None")
     refuse_non_real(value, name)
-    try:
-        arr = np.asarray(value, dtype=np.float64)
-    except (TypeError, ValueError) as exc:
-        raise InvalidInputError(
-            f"expected {name} as an array of numbers, got {describe(value)}"
-        ) from exc
-    dims = None if ndim is None else ((ndim,) if isinstance(ndim, int) else tuple(ndim))
-    if dims is not None and arr.ndim not in dims:
-        want = " or ".join(f"{d}-d" for d in dims)
-        raise InvalidInputError(
-            f"expected {name} as a {want} array, got shape {format_shape(arr.shape)}"
-        )
-    if last is not None and (arr.ndim < 1 or arr.shape[-1] != last):
-        raise InvalidInputError(
-            f"expected {name} of shape (..., {last}), got {format_shape(arr.shape)}"
-        )
-    if arr.size < min_size:
-        raise InvalidInputError(
-            f"expected {name} with at least {min_size} value(s), got shape "
-            f"{format_shape(arr.shape)}"
-        )
-    if finite and arr.size and not np.isfinite(arr).all():
-        raise InvalidInputError(f"{name} contains NaN or inf")
-    return arr
+    return real_array(value, name, ndim=ndim, last=last, min_size=min_size, finite=finite)
 
 
 def check_name(value: object, valid: Collection[str], what: str, name: str = "") -> str:
@@ -1250,7 +1227,7 @@ def real_array(
     name: str,
     shape: tuple[int | None, ...] | None = None,
     *,
-    ndim: int | tuple[int, ...] | None = None,
+    ndim: int | Collection[int] | None = None,
     last: int | None = None,
     min_size: int = 0,
     finite: bool = True,
@@ -1276,7 +1253,12 @@ def real_array(
             f"expected {name} as an array of real numbers, got {describe(value)}"
         )
     value = _to_numpy_host(value)
-    arr = value if isinstance(value, np.ndarray) else np.asarray(value)
+    try:
+        arr = value if isinstance(value, np.ndarray) else np.asarray(value)
+    except (TypeError, ValueError) as exc:  # ragged nesting
+        raise InvalidInputError(
+            f"expected {name} as an array of real numbers, got {describe(value)}"
+        ) from exc
     if arr.dtype.kind not in "iuf":
         what = {"b": "bool values", "c": "complex values"}.get(arr.dtype.kind, f"dtype {arr.dtype}")
         raise InvalidInputError(f"expected {name} as real numbers, got {what}")
@@ -1287,7 +1269,7 @@ def real_array(
         raise InvalidInputError(
             f"expected {name} of shape {format_shape(shape)}, got {format_shape(arr.shape)}"
         )
-    dims = None if ndim is None else ((ndim,) if isinstance(ndim, int) else ndim)
+    dims = None if ndim is None else ((ndim,) if isinstance(ndim, int) else tuple(ndim))
     if dims is not None and arr.ndim not in dims:
         want = " or ".join(f"{d}-d" for d in dims)
         raise InvalidInputError(
