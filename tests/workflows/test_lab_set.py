@@ -105,11 +105,11 @@ def test_calibrate_gives_back_the_intrinsics(lab: LabSet, tmp_path: Path) -> Non
 def test_edge_mtf50_is_the_files(lab: LabSet) -> None:
     pytest.importorskip("rawpy")
     from imageform.io import read_raw
-    from imageform.workflows.characterize import _balanced_mosaic
+    from imageform.sensor import equalize_cfa
 
     raw = read_raw(lab.edge)
     blk = float(np.mean(raw.black_level))
-    img = _balanced_mosaic((raw.mosaic - blk) / (raw.white_level - blk), raw.cfa_pattern)
+    img = equalize_cfa((raw.mosaic - blk) / (raw.white_level - blk), str(raw.cfa_pattern))
     rois = find_slanted_edges(img)
     assert len(rois) == 4
     truth = tomllib.loads(lab.manifest.read_text())["truth"]
