@@ -69,9 +69,8 @@ import math
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-from imageform.analysis.sensitivity import relative_qe
 from imageform.errors import InvalidInputError
 from imageform.workflows._characterize_inputs import (
     LAB_MANIFEST,
@@ -97,6 +96,9 @@ from imageform.workflows._characterize_results import (
 )
 from imageform.workflows._spec import Input, Options, Output, Result, Run, Workflow, option
 
+if TYPE_CHECKING:  # at run time through __getattr__ (no NumPy for --help)
+    from imageform.analysis.sensitivity import relative_qe
+
 __all__ = [
     "LAB_MANIFEST",
     "PARTS",
@@ -110,6 +112,19 @@ __all__ = [
     "characterize_camera",
     "relative_qe",
 ]
+
+
+def __getattr__(name: str) -> Any:
+    """``relative_qe``: the library's (:func:`imageform.analysis.relative_qe`), imported on use.
+
+    (``imageform --help`` imports the workflows without NumPy.)
+    """
+    if name == "relative_qe":
+        from imageform.analysis.sensitivity import relative_qe
+
+        return relative_qe
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
 
 #: Each measurement and the subfolder names it is looked for under (first found wins).
 PARTS: Mapping[str, tuple[str, ...]] = {
@@ -179,6 +194,8 @@ def _tables(res: CameraCharacterization) -> dict[str, dict[str, Any]]:
                 "illuminant": c.illuminant,
             }
         if c.sensitivities is not None:
+            from imageform.analysis import relative_qe
+
             wl, rel = relative_qe(c.sensitivities)
             col["sensitivity"] = {
                 "wavelengths_nm": [float(w) for w in wl],
@@ -210,6 +227,8 @@ def _peak_qe(res: CameraCharacterization) -> float | None:
     )
     c = res.color
     if c is not None and c.sensitivities is not None:
+        from imageform.analysis import relative_qe
+
         wl, rel = relative_qe(c.sensitivities)
         g = float(np.interp(float(lam), wl, rel[:, 1]))
         if g > 0.05:
