@@ -84,14 +84,13 @@ def _kernel(names: tuple[str, ...], dtype: str, target: str = "cuda") -> Any:
         k = _KERNELS.get(key)
         if k is None:
             fns = functions(dtype, target)
-            c = _launch.cuda() if target == "cuda" else None
-            ns: dict[str, Any] = {"cuda": c}
+            ns: dict[str, Any] = {"cuda": _launch.cuda() if target == "cuda" else None}
             for j, name in enumerate(names):
                 ns[f"s{j}"] = fns[name]
             src = chain_source(names, target)
             exec(compile(src, f"<imageform chain {names}>", "exec"), ns)
             if target == "cuda":
-                k = c.jit(ns["kernel"])
+                k = _launch.cuda().jit(ns["kernel"])
             else:
                 from imageform._kernels.jit import njit
 
@@ -109,7 +108,7 @@ def _dtype_name(x: Any) -> str | None:
 
 
 def _flat(x: Any, channels: bool = True) -> Any:
-    """``x`` as ``(n, 3)`` (or ``(n,)`` with ``channels=False``) in its library, a view if it can."""
+    """Return ``x`` as ``(n, 3)`` (``(n,)``: ``channels=False``), a view where it can."""
     full = tuple(int(s) for s in x.shape)
     lead = full[:-1] if channels else full
     n = 1
@@ -157,7 +156,7 @@ def _params(steps: Sequence[Step]) -> tuple[tuple[str, ...], list[float]]:
 
 
 def run_chain_twin(x: np.ndarray, steps: Sequence[Step]) -> np.ndarray:
-    """The CPU twin of :func:`run_chain` on a NumPy array (same source, numba's CPU target).
+    """Run the CPU twin of :func:`run_chain` on a NumPy array (same source, numba's CPU target).
 
     The kernel body and the scalar functions are those of the CUDA kernel, compiled for the
     CPU with the same dtype (float32 arithmetic for float32 input): CI checks the kernels'
@@ -237,7 +236,7 @@ def run_delta_e(x: Any, y: Any, name: str, params: Sequence[float] = ()) -> Any:
 
 
 def run_delta_e_twin(x: np.ndarray, y: np.ndarray, name: str, params: Sequence[float] = ()) -> Any:
-    """The CPU twin of :func:`run_delta_e` (the same scalar function, numba's CPU target)."""
+    """Run the CPU twin of :func:`run_delta_e` (the same scalar function, numba's CPU target)."""
     dtype = _dtype_name(x)
     if dtype is None:
         raise TypeError(f"expected float32 or float64, got dtype {x.dtype}")
