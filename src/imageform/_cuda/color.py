@@ -31,6 +31,7 @@ __all__ = [
     "run_chain_twin",
     "run_delta_e",
     "run_delta_e_twin",
+    "run_elementwise",
     "supported",
 ]
 
@@ -114,7 +115,11 @@ def _flat(x: Any, channels: bool = True) -> Any:
     n = 1
     for s in lead:
         n *= int(s)
-    shape = (n, full[-1]) if channels else (n,)
+    return _reshape(x, (n, full[-1]) if channels else (n,))
+
+
+def _reshape(x: Any, shape: tuple[int, ...]) -> Any:
+    """Return ``x`` reshaped in its library (PyTorch, CuPy) or as a numba device array."""
     if _launch._is_torch(x) or _launch._is_cupy(x):
         return x.reshape(shape)
     d = _launch.as_device_array(x).reshape(shape)
@@ -186,6 +191,24 @@ def run_chain(x: Any, steps: Sequence[Step]) -> Any:
     n = int(xf.shape[0])
     _launch.launch_1d(_kernel(names, dtype), n, xf, of, n, *_cast(dtype, params))
     return out
+
+
+def run_elementwise(x: Any, steps: Sequence[Step]) -> Any:
+    """Apply channel-independent ``steps`` (transfer curves) to a CUDA array of any shape.
+
+    The array's elements are read three at a time (its size must be a multiple of 3); the
+    result has ``x``'s shape.
+    """
+    shape = tuple(int(s) for s in x.shape)
+    size = 1
+    for s in shape:
+        size *= s
+    if size % 3:
+        raise ValueError(f"expected a size that is a multiple of 3, got shape {shape}")
+    if shape[-1:] == (3,):
+        return run_chain(x, steps)
+    out = run_chain(_reshape(x, (size // 3, 3)), steps)
+    return _reshape(out, shape)
 
 
 _DE_SOURCE = """

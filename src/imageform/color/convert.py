@@ -382,6 +382,13 @@ def convert(
     if enc8 is not None and alpha == "keep":
         raise InvalidInputError("dtype='uint8' takes 3-channel images, not alpha='keep'")
 
+    if out is None and enc8 is None:
+        from imageform.color import _gpu
+
+        on_gpu = _gpu.convert(image, s, route, p)  # a CUDA array: one fused kernel
+        if on_gpu is not None:
+            return on_gpu
+
     extra_chan = None
     n = SPACES[s][0]
     arr: Any = image if hasattr(image, "shape") else np.asarray(image)

@@ -536,6 +536,12 @@ def apply_white_balance_gains(image: object, gains: Any, *, transfer: str = "srg
 
     ``gains`` is ``(..., 3)`` positive finite numbers (one triple per image of a batch).
     """
+    from imageform.color import _gpu
+
+    tname = check_option(transfer, TRANSFER_FUNCTIONS, "transfer function")
+    on_gpu = _gpu.gains(image, gains, tname)  # a CUDA image, 3 host gains: one kernel
+    if on_gpu is not None:
+        return on_gpu
     xp, lin, tname = _linear(image, transfer, -1)
     g = as_real_array(gains, "gains", positive=True)
     if g.ndim < 1 or g.shape[-1] != 3:
