@@ -25,7 +25,7 @@ from imageform import color as c
 from imageform._cuda import _launch
 from imageform._cuda.color import chain_source, run_chain_twin, run_delta_e_twin
 from imageform.color import _gpu
-from imageform.color.convert import path
+from imageform.color.convert import _kernel_steps, path
 from imageform.color.rgb_spaces import RGB_SPACES
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -90,7 +90,7 @@ def _with_white(route: list, params: dict[str, object]) -> dict[str, object]:
 def test_twin_convert(src: str, dst: str, params: dict[str, object], dtype: str) -> None:
     x = np.asarray(c.convert(RGB, "srgb", src)).astype(dtype)
     route = path(src, dst)
-    steps = _gpu.steps_for_route(route, _with_white(route, params))
+    steps = _kernel_steps(route, _with_white(route, params))
     assert steps, f"no kernel steps for {src} -> {dst}"
     got = run_chain_twin(x, steps)
     ref = np.asarray(c.convert(x, src, dst, **params))
@@ -139,8 +139,8 @@ def test_steps_cover_three_channel_routes() -> None:
         for d in three:
             if s != d:
                 p = {"white": "D65"}
-                assert _gpu.steps_for_route(path(s, d), p), (s, d)
-    assert _gpu.steps_for_route(path("srgb", "gray"), {"method": "rec601"}) == []
+                assert _kernel_steps(path(s, d), p), (s, d)
+    assert _kernel_steps(path("srgb", "gray"), {"method": "rec601"}) == []
 
 
 def test_host_arrays_are_not_cuda_arrays() -> None:

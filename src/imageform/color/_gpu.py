@@ -7,7 +7,10 @@ returned; otherwise these functions return ``None`` and the caller runs its Arra
 path. This module belongs to the colour package: it turns the colour parameters (the
 conversion route, whites, RGB spaces, Y'CbCr standards, transfer functions, adaptation
 matrices, gains) into the plain numbers the kernels take, so the kernels never import the
-domain packages (the same split as :mod:`imageform.color._fast` for the CPU kernels).
+domain packages (the same split as :mod:`imageform.color._fast` for the CPU kernels). The
+steps themselves are made where the parameters live (``transfer._kernel_step``,
+``convert._kernel_steps``): this module imports no other colour module but ``_guard``, so
+that they can all call it.
 
 Value checks: on device arrays the boundary checks read no values (``_backend.reads_values``
 is False; NaN and inf come out as NaN/inf). With ``IMAGEFORM_DEVICE_CHECKS=1`` the public
@@ -16,21 +19,16 @@ function's own checks run first (they wait for the device), then the kernel.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import Any
 
 import numpy as np
 
-__all__ = [
-    "adapt",
-    "convert",
-    "delta_e",
-    "gains",
-    "steps_for_route",
-    "transfer",
-    "transfer_step",
-    "wants",
-]
+__all__ = ["Step", "adapt", "convert", "delta_e", "gains", "transfer", "wants"]
+
+#: A kernel step: its name in :data:`imageform._cuda.scalar.NAMES` and its numbers
+#: (``("identity", ())``: nothing to do).
+Step = tuple[str, tuple[float, ...]]
 
 
 def wants(*arrays: object) -> bool:
@@ -56,119 +54,22 @@ def _checks_on(x: object) -> bool:
     return (_launch._is_torch(x) or _launch._is_cupy(x)) and reads_values(x)
 
 
-def transfer_step(name: str, decode: bool, gamma: float = 2.2) -> tuple[str, tuple[float, ...]]:
-    """Return the kernel step of transfer function ``name`` (:data:`TRANSFER_FUNCTIONS`)."""
-    from imageform.color import transfer as t
+def convert(image: Any, steps: Callable[[], list[Step]], check: Callable[[], Any]) -> Any:
+    """Run a conversion on a CUDA array in one kernel, or return None.
 
-    d = "dec" if decode else "enc"
-    if name == "srgb":
-        return (f"{d}_srgb", ())
-    if name == "gamma":
-        return (f"{d}_gamma", (gamma,))
-    if name == "adobe_rgb":
-        return (f"{d}_gamma", (t.ADOBE_RGB_GAMMA,))
-    if name == "rec709":
-        return (f"{d}_bt", (t._BT709_ALPHA, t._BT709_BETA))
-    if name == "rec2020":
-        return (f"{d}_bt", (t._BT2020_ALPHA, t._BT2020_BETA))
-    if name == "prophoto":
-        return (f"{d}_romm", ())
-    return ("gains", (1.0, 1.0, 1.0))  # "linear": the identity
-
-
-_SIMPLE = {
-    ("srgb", "bgr"): "swap",
-    ("bgr", "srgb"): "swap",
-    ("srgb", "cmy"): "invert",
-    ("cmy", "srgb"): "invert",
-    ("srgb", "hsv"): "rgb_hsv",
-    ("hsv", "srgb"): "hsv_rgb",
-    ("srgb", "hsl"): "rgb_hsl",
-    ("hsl", "srgb"): "hsl_rgb",
-    ("srgb", "hsi"): "rgb_hsi",
-    ("hsi", "srgb"): "hsi_rgb",
-    ("lab", "lch"): "lab_lch",
-    ("lch", "lab"): "lch_lab",
-    ("xyy", "xyz"): "xyy_xyz",
-}
-_WHITE = {
-    ("xyz", "lab"): "xyz_lab",
-    ("lab", "xyz"): "lab_xyz",
-    ("xyz", "luv"): "xyz_luv",
-    ("luv", "xyz"): "luv_xyz",
-    ("xyz", "xyy"): "xyz_xyy",
-}
-
-
-def _ycbcr_affine(p: dict[str, Any], forward: bool) -> tuple[float, ...]:
-    from imageform.color import ycbcr
-
-    _, kr, kb = ycbcr._coeffs(p.get("standard", "bt601"))
-    yg, yo, cg, co = ycbcr._scale(p.get("signal_range", "full"), p.get("bit_depth"))
-    kg = 1.0 - kr - kb
-    a = np.array(
-        [
-            [kr, kg, kb],
-            [-kr / (2 * (1 - kb)), -kg / (2 * (1 - kb)), 0.5],
-            [0.5, -kg / (2 * (1 - kr)), -kb / (2 * (1 - kr))],
-        ]
-    )
-    m = a * np.array([yg, cg, cg])[:, None]
-    off = np.array([yo, co, co])
-    if not forward:
-        m = np.linalg.inv(m)
-        off = -m @ off
-    return (*m.ravel().tolist(), *off.tolist())
-
-
-def steps_for_route(route: Sequence[Any], p: dict[str, Any]) -> list[tuple[str, tuple[float, ...]]]:
-    """Return the kernel steps of a :func:`~imageform.color.convert` route ([]: none).
-
-    Every edge between 3-channel spaces has a step; routes through ``gray`` (1 channel) or
-    ``cmyk`` (4) have none and return ``[]`` (the Array-API path runs).
+    ``steps()`` gives the route's kernel steps (``[]``: the route has none); ``check()``
+    runs the array path's boundary checks (only with ``IMAGEFORM_DEVICE_CHECKS=1``).
     """
-    from imageform.color.rgb_spaces import RGB_SPACES, rgb_to_xyz_matrix, xyz_to_rgb_matrix
-    from imageform.color.whitepoints import named_white
-
-    steps: list[tuple[str, tuple[float, ...]]] = []
-    for e in route:
-        s, d = e.src, e.dst
-        if s in RGB_SPACES and d == f"linear_{s}":
-            steps.append(transfer_step(RGB_SPACES[s].transfer, True))
-        elif d in RGB_SPACES and s == f"linear_{d}":
-            steps.append(transfer_step(RGB_SPACES[d].transfer, False))
-        elif s.startswith("linear_") and d == "xyz":
-            steps.append(("matrix", tuple(rgb_to_xyz_matrix(s[7:]).ravel().tolist())))
-        elif s == "xyz" and d.startswith("linear_"):
-            steps.append(("matrix", tuple(xyz_to_rgb_matrix(d[7:]).ravel().tolist())))
-        elif (s, d) in _SIMPLE:
-            steps.append((_SIMPLE[s, d], ()))
-        elif (s, d) in _WHITE:
-            w = named_white(p["white"], p.get("observer", 2))
-            steps.append((_WHITE[s, d], tuple(float(v) for v in w)))
-        elif (s, d) == ("srgb", "ycbcr"):
-            steps.append(("affine", _ycbcr_affine(p, True)))
-        elif (s, d) == ("ycbcr", "srgb"):
-            steps.append(("affine", _ycbcr_affine(p, False)))
-        else:
-            return []
-    return steps
-
-
-def convert(image: Any, src: str, route: Sequence[Any], p: dict[str, Any]) -> Any:
-    """Run :func:`imageform.color.convert` on a CUDA array in one kernel, or return None."""
-    if not route or not wants(image):
+    if not wants(image):
         return None
-    steps = steps_for_route(route, p)
-    if not steps:
+    chain = steps()
+    if not chain:
         return None
     if _checks_on(image):
-        from imageform.color.convert import _validate
-
-        _validate(image, src)
+        check()
     from imageform._cuda.color import run_chain
 
-    return run_chain(image, steps)
+    return run_chain(image, chain)
 
 
 def _elementwise(values: Any) -> bool:
@@ -185,13 +86,13 @@ def _elementwise(values: Any) -> bool:
     return _dtype_name(values) is not None and size > 0 and size % 3 == 0
 
 
-def transfer(values: Any, name: str, decode: bool, gamma: float = 2.2, what: str = "values") -> Any:
+def transfer(values: Any, step: Step, what: str = "values") -> Any:
     """Run a transfer function on a CUDA array in one kernel (elementwise), or return None.
 
     Arrays of any shape whose size is a multiple of 3 run (the kernel reads them as triples;
     the curve is applied to each element alone); others return None.
     """
-    if name == "linear" or not _elementwise(values):
+    if step[0] == "identity" or not _elementwise(values):
         return None
     if _checks_on(values):
         from imageform.color._guard import as_image
@@ -199,7 +100,7 @@ def transfer(values: Any, name: str, decode: bool, gamma: float = 2.2, what: str
         as_image(values, what, channels=None, range_check=not what.startswith("linear"))
     from imageform._cuda.color import run_elementwise
 
-    return run_elementwise(values, [transfer_step(name, decode, gamma)])
+    return run_elementwise(values, [step])
 
 
 def adapt(xyz: Any, mat: np.ndarray) -> Any:
@@ -215,7 +116,7 @@ def adapt(xyz: Any, mat: np.ndarray) -> Any:
     return run_chain(xyz, [("matrix", tuple(np.asarray(mat, float).ravel().tolist()))])
 
 
-def gains(image: Any, g: object, tname: str) -> Any:
+def gains(image: Any, g: object, decode: Step, encode: Step) -> Any:
     """Decode, multiply by 3 host gains, encode (``apply_white_balance_gains``), or None.
 
     Only gains given on the host (NumPy, lists) as 3 positive finite numbers run here: gains
@@ -234,11 +135,7 @@ def gains(image: Any, g: object, tname: str) -> Any:
         as_image(image, "image", channels=3)
     from imageform._cuda.color import run_chain
 
-    steps = [
-        transfer_step(tname, True),
-        ("gains", tuple(ga.tolist())),
-        transfer_step(tname, False),
-    ]
+    steps = [s for s in (decode, ("gains", tuple(ga.tolist())), encode) if s[0] != "identity"]
     return run_chain(image, steps)
 
 

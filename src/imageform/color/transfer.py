@@ -98,6 +98,24 @@ def _romm_decode(xp: Any, v: Any) -> Any:
     return xp.where(v < v_t, v / _ROMM_SLOPE, hi)
 
 
+def _kernel_step(name: str, decode: bool, gamma: float = 2.2) -> tuple[str, tuple[float, ...]]:
+    """Return the CUDA kernel step of transfer function ``name`` (:mod:`imageform._cuda`)."""
+    d = "dec" if decode else "enc"
+    if name == "srgb":
+        return (f"{d}_srgb", ())
+    if name == "gamma":
+        return (f"{d}_gamma", (gamma,))
+    if name == "adobe_rgb":
+        return (f"{d}_gamma", (ADOBE_RGB_GAMMA,))
+    if name == "rec709":
+        return (f"{d}_bt", (_BT709_ALPHA, _BT709_BETA))
+    if name == "rec2020":
+        return (f"{d}_bt", (_BT2020_ALPHA, _BT2020_BETA))
+    if name == "prophoto":
+        return (f"{d}_romm", ())
+    return ("identity", ())  # "linear"
+
+
 def _prep(values: object, name: str) -> tuple[Any, Any]:
     # encoded values must be in [0, 1]-ish (0-255 floats are caught); linear light may exceed 1
     x = as_image(values, name, channels=None, range_check=not name.startswith("linear"))
@@ -135,7 +153,7 @@ def srgb_to_linear(values: object) -> Any:
     >>> round(float(srgb_to_linear(0.5)), 6)
     0.214041
     """
-    gpu = _gpu_transfer(values, "srgb", True, what="sRGB values")
+    gpu = _gpu_transfer(values, _kernel_step("srgb", True), what="sRGB values")
     if gpu is not None:
         return gpu
     xp, v = _prep(values, "sRGB values")
@@ -168,7 +186,7 @@ def linear_to_srgb(values: object) -> Any:
     >>> round(float(linear_to_srgb(0.18)), 6)
     0.461356
     """
-    gpu = _gpu_transfer(values, "srgb", False, what="linear values")
+    gpu = _gpu_transfer(values, _kernel_step("srgb", False), what="linear values")
     if gpu is not None:
         return gpu
     xp, x = _prep(values, "linear values")
@@ -198,7 +216,7 @@ def gamma_to_linear(values: object, gamma: float = 2.2) -> Any:
     0.217638
     """
     g = check_positive(gamma, "gamma")
-    gpu = _gpu_transfer(values, "gamma", True, g, what="encoded values")
+    gpu = _gpu_transfer(values, _kernel_step("gamma", True, g), what="encoded values")
     if gpu is not None:
         return gpu
     xp, v = _prep(values, "encoded values")
@@ -215,7 +233,7 @@ def linear_to_gamma(values: object, gamma: float = 2.2) -> Any:
     0.5
     """
     g = check_positive(gamma, "gamma")
-    gpu = _gpu_transfer(values, "gamma", False, g, what="linear values")
+    gpu = _gpu_transfer(values, _kernel_step("gamma", False, g), what="linear values")
     if gpu is not None:
         return gpu
     xp, x = _prep(values, "linear values")
@@ -233,7 +251,7 @@ def adobe_rgb_to_linear(values: object) -> Any:
     >>> round(float(adobe_rgb_to_linear(0.5)), 6)
     0.217756
     """
-    gpu = _gpu_transfer(values, "adobe_rgb", True, what="Adobe RGB values")
+    gpu = _gpu_transfer(values, _kernel_step("adobe_rgb", True), what="Adobe RGB values")
     if gpu is not None:
         return gpu
     xp, v = _prep(values, "Adobe RGB values")
@@ -249,7 +267,7 @@ def linear_to_adobe_rgb(values: object) -> Any:
     >>> round(float(linear_to_adobe_rgb(0.217756)), 5)
     0.5
     """
-    gpu = _gpu_transfer(values, "adobe_rgb", False, what="linear values")
+    gpu = _gpu_transfer(values, _kernel_step("adobe_rgb", False), what="linear values")
     if gpu is not None:
         return gpu
     xp, x = _prep(values, "linear values")
@@ -271,7 +289,7 @@ def linear_to_rec709(values: object) -> Any:
     >>> round(float(linear_to_rec709(0.18)), 6)
     0.409008
     """
-    gpu = _gpu_transfer(values, "rec709", False, what="linear values")
+    gpu = _gpu_transfer(values, _kernel_step("rec709", False), what="linear values")
     if gpu is not None:
         return gpu
     xp, x = _prep(values, "linear values")
@@ -291,7 +309,7 @@ def rec709_to_linear(values: object) -> Any:
     >>> round(float(rec709_to_linear(0.409008)), 5)
     0.18
     """
-    gpu = _gpu_transfer(values, "rec709", True, what="Rec. 709 values")
+    gpu = _gpu_transfer(values, _kernel_step("rec709", True), what="Rec. 709 values")
     if gpu is not None:
         return gpu
     xp, v = _prep(values, "Rec. 709 values")
@@ -312,7 +330,7 @@ def linear_to_rec2020(values: object) -> Any:
     >>> round(float(linear_to_rec2020(0.18)), 6)
     0.408848
     """
-    gpu = _gpu_transfer(values, "rec2020", False, what="linear values")
+    gpu = _gpu_transfer(values, _kernel_step("rec2020", False), what="linear values")
     if gpu is not None:
         return gpu
     xp, x = _prep(values, "linear values")
@@ -328,7 +346,7 @@ def rec2020_to_linear(values: object) -> Any:
     >>> round(float(rec2020_to_linear(0.5)), 6)
     0.259719
     """
-    gpu = _gpu_transfer(values, "rec2020", True, what="Rec. 2020 values")
+    gpu = _gpu_transfer(values, _kernel_step("rec2020", True), what="Rec. 2020 values")
     if gpu is not None:
         return gpu
     xp, v = _prep(values, "Rec. 2020 values")
@@ -346,7 +364,7 @@ def linear_to_prophoto(values: object) -> Any:
     >>> round(float(linear_to_prophoto(0.18)), 6)
     0.385711
     """
-    gpu = _gpu_transfer(values, "prophoto", False, what="linear values")
+    gpu = _gpu_transfer(values, _kernel_step("prophoto", False), what="linear values")
     if gpu is not None:
         return gpu
     xp, x = _prep(values, "linear values")
@@ -362,7 +380,7 @@ def prophoto_to_linear(values: object) -> Any:
     >>> round(float(prophoto_to_linear(0.5)), 6)
     0.287175
     """
-    gpu = _gpu_transfer(values, "prophoto", True, what="ProPhoto values")
+    gpu = _gpu_transfer(values, _kernel_step("prophoto", True), what="ProPhoto values")
     if gpu is not None:
         return gpu
     xp, v = _prep(values, "ProPhoto values")
@@ -433,7 +451,7 @@ def decode(values: object, transfer: str = "srgb", *, gamma: float = 2.2) -> Any
     """
     name = check_option(transfer, TRANSFER_FUNCTIONS, "transfer function")
     g = check_positive(gamma, "gamma")
-    gpu = _gpu_transfer(values, name, True, g, what="encoded values")
+    gpu = _gpu_transfer(values, _kernel_step(name, True, g), what="encoded values")
     if gpu is not None:
         return gpu
     xp, v = _prep(values, "encoded values")
@@ -451,7 +469,7 @@ def encode(values: object, transfer: str = "srgb", *, gamma: float = 2.2) -> Any
     """
     name = check_option(transfer, TRANSFER_FUNCTIONS, "transfer function")
     g = check_positive(gamma, "gamma")
-    gpu = _gpu_transfer(values, name, False, g, what="linear values")
+    gpu = _gpu_transfer(values, _kernel_step(name, False, g), what="linear values")
     if gpu is not None:
         return gpu
     xp, x = _prep(values, "linear values")
