@@ -112,13 +112,17 @@ def _is_sim_array(x: object) -> bool:
 def is_cuda_array(x: object) -> bool:
     """Whether ``x`` lives in CUDA device memory (PyTorch CUDA, CuPy, ``__cuda_array_interface__``).
 
-    NumPy arrays and CPU or ``meta`` tensors answer False. Under the simulator its own
-    device arrays answer True too.
+    NumPy arrays, CPU or ``meta`` tensors and tensors being traced by ``torch.compile``
+    answer False. Under the simulator its own device arrays answer True too.
     """
     if isinstance(x, np.ndarray | np.generic | float | int | complex | bool):
         return False
     if _is_torch(x):
-        return x.device.type == "cuda"  # type: ignore[attr-defined]
+        import torch
+
+        # inside torch.compile tracing the tensor is a stand-in without memory: the traced
+        # Array-API path runs (and fuses) instead
+        return x.device.type == "cuda" and not torch.compiler.is_compiling()  # type: ignore[attr-defined]
     if _is_cupy(x) or _is_sim_array(x):
         return True
     try:
