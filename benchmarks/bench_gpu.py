@@ -469,8 +469,18 @@ def _header(device: Any, dtypes: list[Any], ceiling: float) -> str:
         f"{', '.join(str(d).removeprefix('torch.') for d in dtypes)} · "
         f"torch {torch.__version__} · kornia {kornia.__version__} · "
         f"Python {platform.python_version()}\n\n"
-        f"Measured copy bandwidth (ceiling): **{ceiling:.1f} GB/s**\n"
+        f"Measured copy bandwidth (ceiling): **{ceiling:.1f} GB/s** · imageform's CUDA "
+        f"kernels: {_kernel_status(device)}\n"
     )
+
+
+def _kernel_status(device: Any) -> str:
+    """Whether imageform's colour kernels ran (they do on CUDA tensors when numba can)."""
+    if device.type != "cuda":
+        return "not used (CPU tensors)"
+    from imageform._cuda import _launch
+
+    return _launch.status()
 
 
 def main() -> None:

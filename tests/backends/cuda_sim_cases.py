@@ -205,3 +205,24 @@ def test_detection() -> None:
     assert not _launch.is_cuda_array(1.0)
     out = _launch.empty_like(FakeDeviceArray(RGB), shape=(2, 3), dtype="float32")
     assert tuple(out.shape) == (2, 3) and out.dtype == np.float32
+
+
+def test_a_kernel_that_cannot_compile_switches_the_kernels_off(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    from numba.core.errors import TypingError
+
+    from imageform._cuda import color as kc
+
+    def broken(*args: Any) -> None:
+        raise TypingError("no NVVM here")
+
+    monkeypatch.setattr(_launch, "launch_1d", broken)
+    monkeypatch.setattr(kc, "_COMPILED", set())
+    monkeypatch.setattr(_launch, "_DISABLED", [""])
+    # the Array-API path then meets the stand-in, which it cannot read
+    warns = pytest.warns(RuntimeWarning, match="CUDA kernels are off")
+    with warns, pytest.raises((TypeError, ValueError)):
+        c.convert(FakeDeviceArray(RGB), "srgb", "lab")
+    assert not _launch.use_cuda()
+    assert _launch.status().startswith("off (TypingError")

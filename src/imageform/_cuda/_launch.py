@@ -36,11 +36,13 @@ import numpy as np
 __all__ = [
     "as_device_array",
     "cuda",
+    "disable",
     "empty_like",
     "is_cuda_array",
     "launch_1d",
     "launch_count",
     "simulated",
+    "status",
     "use_cuda",
 ]
 
@@ -51,6 +53,8 @@ _SIM_THREADS = 32
 
 _LOCK = threading.Lock()
 _LAUNCHES = [0]
+#: Why the kernels were switched off in this process (a failed first compile), or "".
+_DISABLED = [""]
 
 
 def _env_on(name: str) -> bool:
@@ -85,10 +89,11 @@ def _available() -> bool:
 def use_cuda() -> bool:
     """Whether imageform's CUDA kernels may run in this process.
 
-    False when ``IMAGEFORM_DISABLE_CUDA`` is set; otherwise True under numba's simulator
-    and when numba finds a CUDA device (checked once, on first use).
+    False when ``IMAGEFORM_DISABLE_CUDA`` is set or :func:`disable` was called; otherwise
+    True under numba's simulator and when numba finds a CUDA device (checked once, on first
+    use).
     """
-    if _env_on("IMAGEFORM_DISABLE_CUDA"):
+    if _env_on("IMAGEFORM_DISABLE_CUDA") or _DISABLED[0]:
         return False
     if simulated():
         return True
@@ -277,6 +282,37 @@ def launch_1d(kernel: Any, n: int, *args: Any) -> None:
             kernel[blocks, threads, stream](*dargs)
     else:
         kernel[blocks, threads, stream](*dargs)
+
+
+def disable(reason: str) -> None:
+    """Switch the kernels off for this process (the Array-API path runs), with one warning.
+
+    Called when numba's CUDA target cannot compile a kernel on this machine (no NVVM
+    library: ``pip install "imageform[cuda]"``), so that a missing toolkit costs speed, not
+    the call.
+    """
+    import warnings
+
+    if not _DISABLED[0]:
+        _DISABLED[0] = reason
+        warnings.warn(
+            f"imageform's CUDA kernels are off for this process: {reason}",
+            RuntimeWarning,
+            stacklevel=3,
+        )
+
+
+def status() -> str:
+    """One line: whether the kernels run here, on which numba CUDA target, or why not."""
+    if _env_on("IMAGEFORM_DISABLE_CUDA"):
+        return "off (IMAGEFORM_DISABLE_CUDA)"
+    if _DISABLED[0]:
+        return f"off ({_DISABLED[0]})"
+    if not use_cuda():
+        return "off (numba finds no CUDA device)"
+    c = cuda()
+    where = "simulator" if simulated() else str(c.get_current_device().name)
+    return f"on ({getattr(c, 'implementation', 'numba-cuda')} numba CUDA target, {where})"
 
 
 def launch_count() -> int:

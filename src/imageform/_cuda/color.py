@@ -25,6 +25,7 @@ from imageform._cuda import _launch
 from imageform._cuda.scalar import DELTA_E, NAMES, functions
 
 __all__ = [
+    "KernelUnavailable",
     "Step",
     "chain_source",
     "run_chain",
@@ -98,6 +99,33 @@ def _kernel(names: tuple[str, ...], dtype: str, target: str = "cuda") -> Any:
                 k = njit(cache=False)(ns["kernel"])
             _KERNELS[key] = k
     return k
+
+
+class KernelUnavailable(RuntimeError):
+    """numba's CUDA target could not compile a kernel here; the kernels are now off."""
+
+
+_COMPILED: set[tuple[Any, ...]] = set()
+
+
+def _guarded_launch(key: tuple[Any, ...], kernel: Any, n: int, *args: Any) -> None:
+    """Launch; a kernel's first launch (its compilation) that fails in numba turns them off.
+
+    A machine whose numba CUDA target lacks its compiler (NVVM) or cannot type a kernel
+    raises :class:`KernelUnavailable` after :func:`imageform._cuda._launch.disable`: the
+    callers then run the Array-API path. Errors after a kernel has run once propagate.
+    """
+    if key in _COMPILED:
+        _launch.launch_1d(kernel, n, *args)
+        return
+    try:
+        _launch.launch_1d(kernel, n, *args)
+    except Exception as exc:
+        if not type(exc).__module__.startswith("numba"):
+            raise
+        _launch.disable(f"{type(exc).__name__}: {str(exc).splitlines()[0][:200]}")
+        raise KernelUnavailable(str(exc)) from exc
+    _COMPILED.add(key)
 
 
 def _dtype_name(x: Any) -> str | None:
@@ -189,7 +217,9 @@ def run_chain(x: Any, steps: Sequence[Step]) -> Any:
     out = _launch.empty_like(x)
     xf, of = _flat(x), _flat(out)
     n = int(xf.shape[0])
-    _launch.launch_1d(_kernel(names, dtype), n, xf, of, n, *_cast(dtype, params))
+    _guarded_launch(
+        ("chain", names, dtype), _kernel(names, dtype), n, xf, of, n, *_cast(dtype, params)
+    )
     return out
 
 
@@ -254,7 +284,7 @@ def run_delta_e(x: Any, y: Any, name: str, params: Sequence[float] = ()) -> Any:
     n = int(xf.shape[0])
     of = _flat(out, channels=False)
     vals = _cast(dtype, params) if params else (0.0,)
-    _launch.launch_1d(_de_kernel(name, dtype), n, xf, yf, of, n, *vals)
+    _guarded_launch(("de", name, dtype), _de_kernel(name, dtype), n, xf, yf, of, n, *vals)
     return out
 
 

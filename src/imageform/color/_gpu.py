@@ -42,6 +42,16 @@ def wants(*arrays: object) -> bool:
     return all(supported(a) for a in arrays)
 
 
+def _guard(fn: Callable[..., Any], *args: Any) -> Any:
+    """``fn(*args)``, or None when the kernels turned out unusable here (then switched off)."""
+    from imageform._cuda.color import KernelUnavailable
+
+    try:
+        return fn(*args)
+    except KernelUnavailable:
+        return None
+
+
 def _checks_on(x: object) -> bool:
     """Whether the public function's own value checks run first (IMAGEFORM_DEVICE_CHECKS=1).
 
@@ -69,7 +79,7 @@ def convert(image: Any, steps: Callable[[], list[Step]], check: Callable[[], Any
         check()
     from imageform._cuda.color import run_chain
 
-    return run_chain(image, chain)
+    return _guard(run_chain, image, chain)
 
 
 def _elementwise(values: Any) -> bool:
@@ -100,7 +110,7 @@ def transfer(values: Any, step: Step, what: str = "values") -> Any:
         as_image(values, what, channels=None, range_check=not what.startswith("linear"))
     from imageform._cuda.color import run_elementwise
 
-    return run_elementwise(values, [step])
+    return _guard(run_elementwise, values, [step])
 
 
 def adapt(xyz: Any, mat: np.ndarray) -> Any:
@@ -113,7 +123,7 @@ def adapt(xyz: Any, mat: np.ndarray) -> Any:
         as_points(xyz, "xyz", 3)
     from imageform._cuda.color import run_chain
 
-    return run_chain(xyz, [("matrix", tuple(np.asarray(mat, float).ravel().tolist()))])
+    return _guard(run_chain, xyz, [("matrix", tuple(np.asarray(mat, float).ravel().tolist()))])
 
 
 def gains(image: Any, g: object, decode: Step, encode: Step) -> Any:
@@ -136,7 +146,7 @@ def gains(image: Any, g: object, decode: Step, encode: Step) -> Any:
     from imageform._cuda.color import run_chain
 
     steps = [s for s in (decode, ("gains", tuple(ga.tolist())), encode) if s[0] != "identity"]
-    return run_chain(image, steps)
+    return _guard(run_chain, image, steps)
 
 
 def delta_e(lab1: Any, lab2: Any, name: str, params: Sequence[float]) -> Any:
@@ -162,4 +172,4 @@ def delta_e(lab1: Any, lab2: Any, name: str, params: Sequence[float]) -> Any:
     if name == "de00":
         tiny = float(np.finfo(_dtype_name(lab1) or "float64").smallest_normal) ** 0.5
         ps.append(tiny)
-    return run_delta_e(lab1, lab2, name, ps)
+    return _guard(run_delta_e, lab1, lab2, name, ps)
