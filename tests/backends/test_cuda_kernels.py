@@ -32,6 +32,14 @@ ROOT = Path(__file__).resolve().parents[2]
 CASES = Path(__file__).with_name("cuda_sim_cases.py")
 
 
+def _measuring_coverage() -> bool:
+    try:
+        import coverage
+    except ImportError:  # pragma: no cover - coverage is a test dependency
+        return False
+    return coverage.Coverage.current() is not None
+
+
 def test_simulator_cases() -> None:
     env = dict(os.environ)
     env["NUMBA_ENABLE_CUDASIM"] = "1"
@@ -40,6 +48,8 @@ def test_simulator_cases() -> None:
         [str(ROOT / "src"), str(ROOT), *filter(None, [env.get("PYTHONPATH", "")])]
     )
     cmd = [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "-p", "no:xdist"]
+    if _measuring_coverage():  # the kernels' lines count towards CI's coverage too
+        cmd[1:3] = ["-m", "coverage", "run", "--parallel-mode", "-m", "pytest"]
     cmd += ["-o", "addopts=", str(CASES)]
     proc = subprocess.run(cmd, cwd=ROOT, env=env, capture_output=True, text=True, timeout=600)
     tail = (proc.stdout + proc.stderr)[-4000:]
