@@ -12,6 +12,15 @@ time), the practical ceiling of a memory-bound kernel. Kornia has no ΔE: CIEDE2
 compared with the bandwidth only. Each library runs in its native layout (imageform
 channels-last ``(H, W, 3)``, kornia channels-first ``(1, 3, H, W)``); no transposes are timed.
 
+The colour set (sRGB→Lab, Lab→sRGB, sRGB→linear, sRGB→HSV, ProPhoto→Luv, chromatic
+adaptation, white-balance gains, the four ΔE) runs imageform's fused numba-CUDA kernels on
+CUDA tensors (issue 29, docs/design.md "GPU kernels"); each such call has a second row,
+``imageform array-API``, the same call with ``IMAGEFORM_DISABLE_CUDA=1`` (the path before the
+kernels), and the header says whether the kernels ran (``_cuda._launch.status()``: numba's
+CUDA target needs its NVVM compiler, from numba-cuda's ``[cu12]``/``[cu13]`` extra or a CUDA
+toolkit; where it is missing, the kernels are off with one warning and both rows time the
+Array-API path). On CUDA the kernels-per-call column of a kernel row should read 1.
+
 Per row: the median time, the share of the copy bandwidth, the **kernels per call** (on
 CUDA the kernels and copies the profiler sees in one call; on a CPU the PyTorch operators
 that compute, counted by a dispatch mode: what a CUDA run would launch), whether the call
