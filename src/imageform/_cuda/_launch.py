@@ -73,8 +73,16 @@ def simulated() -> bool:
 @cache
 def cuda() -> Any:
     """Return numba's CUDA module (the ``numba-cuda`` package's when installed), imported once."""
-    from numba import cuda as numba_cuda
+    import warnings
 
+    from numba import cuda as numba_cuda
+    from numba.core.errors import NumbaPerformanceWarning
+
+    # a small image is a small grid: numba's low-occupancy note is no news for a pointwise
+    # kernel whose size is the caller's image (only this message is silenced)
+    warnings.filterwarnings(
+        "ignore", message=r"Grid size \d+ will likely", category=NumbaPerformanceWarning
+    )
     return numba_cuda
 
 
