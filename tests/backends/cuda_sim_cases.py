@@ -226,3 +226,33 @@ def test_a_kernel_that_cannot_compile_switches_the_kernels_off(
         c.convert(FakeDeviceArray(RGB), "srgb", "lab")
     assert not _launch.use_cuda()
     assert _launch.status().startswith("off (TypingError")
+
+
+CODES8 = np.round(RGB * 255).astype(np.uint8)
+
+
+@pytest.mark.parametrize(
+    ("image", "dst"),
+    [
+        (CODES8, "lab"),
+        (CODES8, "hsv"),
+        ((RGB * 65535).astype(np.uint16), "lab"),
+        (CODES8, "linear_srgb"),
+    ],
+)
+def test_code_values(image: np.ndarray, dst: str) -> None:
+    """uint8/uint16 encoded RGB: read as code / 255 (65535) in the kernel, float32 out."""
+    got = host(one_launch(c.convert, FakeDeviceArray(image), "srgb", dst))
+    ref = np.asarray(c.convert(image, "srgb", dst))
+    assert got.dtype == ref.dtype == np.float32
+    _close(got, ref, "float32", scale=100.0)
+    # (not lch: the hue of a grey pixel is undefined and float32 rounding picks one)
+    got = host(one_launch(c.convert, FakeDeviceArray(image), "prophoto", "luv"))
+    _close(got, np.asarray(c.convert(image, "prophoto", "luv")), "float32", scale=100.0)
+
+
+def test_code_values_transfer_and_gains() -> None:
+    got = host(one_launch(c.srgb_to_linear, FakeDeviceArray(CODES8)))
+    _close(got, np.asarray(c.srgb_to_linear(CODES8)), "float32")
+    got = host(one_launch(apply_white_balance_gains, FakeDeviceArray(CODES8), [1.2, 1.0, 0.9]))
+    _close(got, np.asarray(apply_white_balance_gains(CODES8, [1.2, 1.0, 0.9])), "float32")

@@ -165,3 +165,16 @@ def test_host_arrays_are_not_cuda_arrays() -> None:
 def test_disable_switch(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setenv("IMAGEFORM_DISABLE_CUDA", "1")
     assert not _launch.use_cuda()
+
+
+@pytest.mark.parametrize("dtype", ["uint8", "uint16"])
+def test_twin_code_values(dtype: str) -> None:
+    """uint8/uint16 code values: read as code / 255 (65535) in float32, as ``as_image`` does."""
+    top = 255 if dtype == "uint8" else 65535
+    x = np.round(RGB * top).astype(dtype)
+    route = path("srgb", "lab")
+    got = run_chain_twin(x, _kernel_steps(route, _with_white(route, {})))
+    ref = np.asarray(c.convert(x, "srgb", "lab"))
+    assert got.dtype == ref.dtype == np.float32
+    atol, rtol = TOL["float32"]
+    np.testing.assert_allclose(got, ref, atol=atol, rtol=rtol)

@@ -31,15 +31,18 @@ __all__ = ["Step", "adapt", "convert", "delta_e", "gains", "transfer", "wants"]
 Step = tuple[str, tuple[float, ...]]
 
 
-def wants(*arrays: object) -> bool:
-    """Whether every array is a CUDA array the kernels take (cheap for NumPy input)."""
+def wants(*arrays: object, integers: bool = False) -> bool:
+    """Whether every array is a CUDA array the kernels take (cheap for NumPy input).
+
+    ``integers``: uint8/uint16 code values too (encoded RGB images).
+    """
     from imageform._cuda import _launch
 
     if not all(_launch.is_cuda_array(a) for a in arrays):
         return False
     from imageform._cuda.color import supported
 
-    return all(supported(a) for a in arrays)
+    return all(supported(a, integers) for a in arrays)
 
 
 def _guard(fn: Callable[..., Any], *args: Any) -> Any:
@@ -64,13 +67,16 @@ def _checks_on(x: object) -> bool:
     return (_launch._is_torch(x) or _launch._is_cupy(x)) and reads_values(x)
 
 
-def convert(image: Any, steps: Callable[[], list[Step]], check: Callable[[], Any]) -> Any:
+def convert(
+    image: Any, steps: Callable[[], list[Step]], check: Callable[[], Any], integers: bool
+) -> Any:
     """Run a conversion on a CUDA array in one kernel, or return None.
 
     ``steps()`` gives the route's kernel steps (``[]``: the route has none); ``check()``
-    runs the array path's boundary checks (only with ``IMAGEFORM_DEVICE_CHECKS=1``).
+    runs the array path's boundary checks (only with ``IMAGEFORM_DEVICE_CHECKS=1``);
+    ``integers``: the source space takes uint8/uint16 code values.
     """
-    if not wants(image):
+    if not wants(image, integers=integers):
         return None
     chain = steps()
     if not chain:
@@ -85,7 +91,7 @@ def convert(image: Any, steps: Callable[[], list[Step]], check: Callable[[], Any
 def _elementwise(values: Any) -> bool:
     """Tell whether a CUDA array's elements can be read three at a time (size % 3 == 0)."""
     from imageform._cuda import _launch
-    from imageform._cuda.color import _dtype_name
+    from imageform._cuda.color import _dtype_name, _int_scale
 
     if not (_launch.is_cuda_array(values) and _launch.use_cuda()):
         return False
@@ -93,7 +99,8 @@ def _elementwise(values: Any) -> bool:
         return False
     shape = tuple(int(s) for s in getattr(values, "shape", ()))
     size = int(np.prod(shape)) if shape else 1
-    return _dtype_name(values) is not None and size > 0 and size % 3 == 0
+    known = _dtype_name(values) is not None or _int_scale(values) is not None
+    return known and size > 0 and size % 3 == 0
 
 
 def transfer(values: Any, step: Step, what: str = "values") -> Any:
@@ -132,7 +139,7 @@ def gains(image: Any, g: object, decode: Step, encode: Step) -> Any:
     Only gains given on the host (NumPy, lists) as 3 positive finite numbers run here: gains
     on the device would have to be read back to check them.
     """
-    if not wants(image) or len(tuple(image.shape)) < 3:
+    if not wants(image, integers=True) or len(tuple(image.shape)) < 3:
         return None
     if not isinstance(g, np.ndarray | list | tuple):
         return None

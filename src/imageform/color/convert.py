@@ -386,7 +386,12 @@ def convert(
         from imageform.color import _gpu
 
         # a CUDA array: one fused kernel for the whole route
-        on_gpu = _gpu.convert(image, lambda: _kernel_steps(route, p), lambda: _validate(image, s))
+        on_gpu = _gpu.convert(
+            image,
+            lambda: _kernel_steps(route, p),
+            lambda: _validate(image, s),
+            integers=s in _ENCODED_RGB,
+        )
         if on_gpu is not None:
             return on_gpu
 
