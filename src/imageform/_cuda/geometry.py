@@ -1,0 +1,354 @@
+r"""CUDA kernels of the camera geometry: projection, distortion, undistortion, remapping.
+
+One kernel launch per call, one thread per point or output pixel, every stage fused:
+
+- :func:`project`: world points through ``[R | t]``, Brown-Conrady and ``K`` to pixels (or
+  the pinhole alone), with the validity mask, in one pass (``R``, ``t`` and ``K`` read on the
+  device: nothing is copied to the host);
+- :func:`distort` and :func:`undistort`: Brown-Conrady and its Newton inverse, at most
+  ``max_iter`` steps per point (a fixed bound);
+- :func:`remap`: bilinear sampling of a ``(B, H, W, C)`` image at a ``(H', W', 2)`` map;
+- :func:`undistort_image`: the undistortion map computed where it is sampled (no map array).
+
+The per-point maths is written once. Brown-Conrady and its Newton inverse are the Python
+functions of the CPU kernels' scalar helpers,
+:func:`imageform._kernels.distortion.bc_distort_xy` and
+:func:`~imageform._kernels.distortion.bc_undistort_xy` (``.py_func``), compiled a second time
+here as CUDA device functions, so both targets run the same statements. The projection follows
+:mod:`imageform._kernels.project` and :mod:`imageform._kernels.project_distort` (the same
+tests, the same arithmetic), and the bilinear sample is the four-product formula of the
+NumPy twin :func:`imageform.geometry.undistort._remap_bilinear_numpy` (NaN propagates from
+any neighbour, as there).
+
+Numbers: float64 inputs give the NumPy path's numbers to rounding (the CUDA compiler may fuse
+multiply-adds); float32 inputs are computed partly in float64 (the distortion model's
+constants are float64) and stored as float32. Tests run every kernel under numba's CUDA
+simulator (``NUMBA_ENABLE_CUDASIM=1``) against the NumPy path and compile each one for
+``sm_90`` where NVVM is installed (``tests/backends/test_cuda_kernels.py``).
+
+This module also holds the few launch helpers the kernels need (:func:`is_cuda_array`,
+:func:`use_cuda`, :func:`launch_1d`, :func:`empty`); importing it imports nothing heavy:
+``numba.cuda`` is imported when a kernel is first needed.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+import os
+from typing import Any
+
+__all__ = [
+    "THREADS",
+    "distort",
+    "empty",
+    "is_cuda_array",
+    "launch_1d",
+    "launches",
+    "project",
+    "remap",
+    "undistort",
+    "undistort_image",
+    "use_cuda",
+]
+
+#: Threads per block of every 1-D launch.
+THREADS = 256
+
+# --- launch helpers ------------------------------------------------------------------------
+
+#: Kernel launches since the process started (tests count the launches of one call).
+_LAUNCHES = [0]
+
+
+def launches() -> int:
+    """Return the number of kernels launched through :func:`launch_1d` so far."""
+    return _LAUNCHES[0]
+
+
+def is_cuda_array(x: object) -> bool:
+    """Whether ``x`` is an array in GPU memory (``__cuda_array_interface__``: torch, CuPy).
+
+    Under numba's CUDA simulator (``NUMBA_ENABLE_CUDASIM=1``) NumPy arrays stand for device
+    arrays only where a test says so; this function never says so for them.
+    """
+    try:
+        return hasattr(x, "__cuda_array_interface__")
+    except Exception:  # a tensor whose property raises something other than AttributeError
+        return False
+
+
+@functools.cache
+def use_cuda() -> bool:
+    """Whether the CUDA kernels can run: numba's CUDA target imports and finds a device.
+
+    ``IMAGEFORM_DISABLE_CUDA`` (non-empty, not ``0``) turns them off (the Array-API path runs).
+    """
+    if os.environ.get("IMAGEFORM_DISABLE_CUDA", "") not in ("", "0"):
+        return False
+    try:
+        from numba import cuda
+    except Exception:  # numba missing or its CUDA target broken: the Array-API path runs
+        return False
+    try:
+        return bool(cuda.is_available())
+    except Exception:
+        return False
+
+
+def _device_view(x: Any) -> Any:
+    """A numba device array viewing ``x`` without synchronising (NumPy passes through)."""
+    if not is_cuda_array(x):
+        return x  # the simulator's stand-in, or a scalar
+    from numba import cuda
+
+    return cuda.as_cuda_array(x, sync=False)
+
+
+def _stream(args: tuple[Any, ...]) -> Any:
+    """The stream of the first array argument that names one (torch: its current stream)."""
+    from numba import cuda
+
+    for a in args:
+        if is_cuda_array(a):
+            s = a.__cuda_array_interface__.get("stream")
+            if isinstance(s, int) and s > 2:  # 1 and 2 are the legacy and per-thread defaults
+                return cuda.external_stream(s)
+            break
+    return 0
+
+
+def launch_1d(kernel: Any, n: int, *args: Any) -> None:
+    """Launch ``kernel`` on ``n`` threads (blocks of :data:`THREADS`) on the inputs' stream."""
+    if n <= 0:
+        return
+    stream = _stream(args)
+    views = tuple(_device_view(a) for a in args)
+    kernel[(n + THREADS - 1) // THREADS, THREADS, stream](*views)
+    _LAUNCHES[0] += 1
+
+
+def empty(like: Any, shape: tuple[int, ...], dtype: Any = None) -> Any:
+    """An uninitialised array of ``like``'s library and device (``dtype``: an xp dtype)."""
+    from imageform._backend import device_of, namespace
+
+    xp = namespace(like)
+    dev = device_of(like)
+    dt = like.dtype if dtype is None else dtype
+    if dev is None:
+        return xp.empty(shape, dtype=dt)
+    return xp.empty(shape, dtype=dt, device=dev)
+
+
+# --- kernels -------------------------------------------------------------------------------
+
+
+@functools.cache
+def _kernels() -> Any:
+    """Compile-on-first-use CUDA kernels (a namespace of numba CUDA dispatchers)."""
+    import types
+
+    from numba import cuda
+
+    from imageform._kernels.distortion import bc_distort_xy, bc_undistort_xy
+
+    distort_xy = cuda.jit(device=True)(bc_distort_xy.py_func)
+    undistort_xy = cuda.jit(device=True)(bc_undistort_xy.py_func)
+    k = types.SimpleNamespace()
+    k.distort_xy = distort_xy
+    k.undistort_xy = undistort_xy
+
+    def project_kernel(pts, K, R, t, k1, k2, p1, p2, k3, k4, k5, k6, distorted, uv, valid):  # type: ignore[no-untyped-def]
+        # pinhole (distorted False): as imageform._kernels.project (K divided by K[2, 2],
+        # valid = 0 < z < inf and a finite result); distorted: as
+        # imageform._kernels.project_distort (valid = z > 0)
+        i = cuda.grid(1)
+        if i >= pts.shape[0]:
+            return
+        X = pts[i, 0]
+        Y = pts[i, 1]
+        Z = pts[i, 2]
+        xc = R[0, 0] * X + R[0, 1] * Y + R[0, 2] * Z + t[0]
+        yc = R[1, 0] * X + R[1, 1] * Y + R[1, 2] * Z + t[1]
+        zc = R[2, 0] * X + R[2, 1] * Y + R[2, 2] * Z + t[2]
+        if distorted:
+            if zc > 0.0:
+                inv = 1.0 / zc
+                xd, yd = distort_xy(xc * inv, yc * inv, k1, k2, p1, p2, k3, k4, k5, k6)
+                uv[i, 0] = K[0, 0] * xd + K[0, 1] * yd + K[0, 2]
+                uv[i, 1] = K[1, 1] * yd + K[1, 2]
+                valid[i] = True
+            else:
+                uv[i, 0] = math.nan
+                uv[i, 1] = math.nan
+                valid[i] = False
+            return
+        n = K[2, 2]
+        u = math.nan
+        v = math.nan
+        if 0.0 < zc < math.inf:
+            x = xc / zc
+            y = yc / zc
+            u = (K[0, 0] / n) * x + (K[0, 1] / n) * y + K[0, 2] / n
+            v = (K[1, 1] / n) * y + K[1, 2] / n
+        ok = math.isfinite(u) and math.isfinite(v)
+        uv[i, 0] = u if ok else math.nan
+        uv[i, 1] = v if ok else math.nan
+        valid[i] = ok
+
+    def distort_kernel(xy, k1, k2, p1, p2, k3, k4, k5, k6, out):  # type: ignore[no-untyped-def]
+        i = cuda.grid(1)
+        if i >= xy.shape[0]:
+            return
+        xd, yd = distort_xy(xy[i, 0], xy[i, 1], k1, k2, p1, p2, k3, k4, k5, k6)
+        out[i, 0] = xd
+        out[i, 1] = yd
+
+    def undistort_kernel(xy, k1, k2, p1, p2, k3, k4, k5, k6, max_iter, tol, out, ok):  # type: ignore[no-untyped-def]
+        i = cuda.grid(1)
+        if i >= xy.shape[0]:
+            return
+        x, y, good = undistort_xy(
+            xy[i, 0], xy[i, 1], k1, k2, p1, p2, k3, k4, k5, k6, max_iter, tol
+        )
+        out[i, 0] = x
+        out[i, 1] = y
+        ok[i] = good
+
+    def sample(img, b, i, j, u, v, fill, out):  # type: ignore[no-untyped-def]
+        # bilinear at (u, v) into out[b, i, j, :]: the NumPy twin's arithmetic
+        h = img.shape[1]
+        w = img.shape[2]
+        nc = img.shape[3]
+        if not (u >= 0.0 and u <= w - 1 and v >= 0.0 and v <= h - 1):  # NaN: outside
+            for c in range(nc):
+                out[b, i, j, c] = fill
+            return
+        x0 = int(math.floor(u))  # <= w - 1 inside
+        y0 = int(math.floor(v))
+        x1 = x0 + 1 if x0 + 1 < w else w - 1
+        y1 = y0 + 1 if y0 + 1 < h else h - 1
+        ax = u - x0
+        ay = v - y0
+        w00 = (1.0 - ax) * (1.0 - ay)
+        w01 = ax * (1.0 - ay)
+        w10 = (1.0 - ax) * ay
+        w11 = ax * ay
+        for c in range(nc):
+            out[b, i, j, c] = (
+                w00 * img[b, y0, x0, c]
+                + w01 * img[b, y0, x1, c]
+                + w10 * img[b, y1, x0, c]
+                + w11 * img[b, y1, x1, c]
+            )
+
+    sample_d = cuda.jit(device=True)(sample)
+
+    def remap_kernel(img, mp, fill, out):  # type: ignore[no-untyped-def]
+        t = cuda.grid(1)
+        ho = out.shape[1]
+        wo = out.shape[2]
+        if t >= out.shape[0] * ho * wo:
+            return
+        b = t // (ho * wo)
+        r = t - b * (ho * wo)
+        i = r // wo
+        j = r - i * wo
+        sample_d(img, b, i, j, mp[i, j, 0], mp[i, j, 1], fill, out)
+
+    def undistort_image_kernel(img, Kn, Km, k1, k2, p1, p2, k3, k4, k5, k6, fill, out):  # type: ignore[no-untyped-def]
+        # the source position as imageform.geometry._remap_xp.map_grid computes it
+        t = cuda.grid(1)
+        ho = out.shape[1]
+        wo = out.shape[2]
+        if t >= out.shape[0] * ho * wo:
+            return
+        b = t // (ho * wo)
+        r = t - b * (ho * wo)
+        i = r // wo
+        j = r - i * wo
+        y = (float(i) - Kn[1, 2]) / Kn[1, 1]
+        x = (float(j) - Kn[0, 2] - Kn[0, 1] * y) / Kn[0, 0]
+        xd, yd = distort_xy(x, y, k1, k2, p1, p2, k3, k4, k5, k6)
+        us = Km[0, 0] * xd + Km[0, 1] * yd + Km[0, 2]
+        vs = Km[1, 1] * yd + Km[1, 2]
+        sample_d(img, b, i, j, us, vs, fill, out)
+
+    k.py = {
+        "project": project_kernel,
+        "distort": distort_kernel,
+        "undistort": undistort_kernel,
+        "remap": remap_kernel,
+        "undistort_image": undistort_image_kernel,
+    }
+    for name, fn in k.py.items():
+        setattr(k, name, cuda.jit(fn))
+    return k
+
+
+def _coeffs(coeffs: Any) -> tuple[float, ...]:
+    """The eight Brown-Conrady coefficients as Python floats (zeros for ``None``)."""
+    if coeffs is None:
+        return (0.0,) * 8
+    c = tuple(float(v) for v in coeffs)
+    return c + (0.0,) * (8 - len(c))
+
+
+def project(pts: Any, K: Any, R: Any, t: Any, coeffs: Any = None) -> tuple[Any, Any]:
+    """Project ``(N, 3)`` device points; ``coeffs`` Brown-Conrady's eight, or ``None`` (pinhole).
+
+    ``K``, ``R``, ``t`` device arrays of the points' dtype. Returns ``(uv (N, 2), valid (N,))``
+    of the points' library and device; one kernel launch.
+    """
+    from imageform._backend import namespace
+
+    n = int(pts.shape[0])
+    uv = empty(pts, (n, 2))
+    valid = empty(pts, (n,), namespace(pts).bool)
+    launch_1d(
+        _kernels().project, n, pts, K, R, t, *_coeffs(coeffs), coeffs is not None, uv, valid
+    )
+    return uv, valid
+
+
+def distort(xy: Any, coeffs: Any) -> Any:
+    """Brown-Conrady on ``(N, 2)`` device points; one launch."""
+    out = empty(xy, tuple(int(s) for s in xy.shape))
+    launch_1d(_kernels().distort, int(xy.shape[0]), xy, *_coeffs(coeffs), out)
+    return out
+
+
+def undistort(xy: Any, coeffs: Any, max_iter: int, tol: float) -> tuple[Any, Any]:
+    """Newton's inverse of Brown-Conrady on ``(N, 2)`` device points: ``(xy, ok)``; one launch."""
+    from imageform._backend import namespace
+
+    n = int(xy.shape[0])
+    out = empty(xy, (n, 2))
+    ok = empty(xy, (n,), namespace(xy).bool)
+    args = (xy, *_coeffs(coeffs), int(max_iter), float(tol), out, ok)
+    launch_1d(_kernels().undistort, n, *args)
+    return out, ok
+
+
+def remap(img: Any, map_uv: Any, fill: float) -> Any:
+    """Bilinear remap of a ``(B, H, W, C)`` float device image at ``(H', W', 2)``; one launch."""
+    b, _, _, c = (int(s) for s in img.shape)
+    ho, wo = int(map_uv.shape[0]), int(map_uv.shape[1])
+    out = empty(img, (b, ho, wo, c))
+    launch_1d(_kernels().remap, b * ho * wo, img, map_uv, float(fill), out)
+    return out
+
+
+def undistort_image(
+    img: Any, Kn: Any, Km: Any, coeffs: Any, out_hw: tuple[int, int], fill: float
+) -> Any:
+    """Undistort a ``(B, H, W, C)`` float device image (Brown-Conrady); one launch.
+
+    ``Kn``: the output's intrinsics, ``Km``: the source's, float64 device arrays ``(3, 3)``.
+    """
+    b, c = int(img.shape[0]), int(img.shape[3])
+    ho, wo = out_hw
+    out = empty(img, (b, ho, wo, c))
+    args = (img, Kn, Km, *_coeffs(coeffs), float(fill), out)
+    launch_1d(_kernels().undistort_image, b * ho * wo, *args)
+    return out
