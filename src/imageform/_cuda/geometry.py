@@ -36,6 +36,7 @@ from __future__ import annotations
 import functools
 import math
 import os
+import sys
 from typing import Any
 
 __all__ = [
@@ -45,6 +46,7 @@ __all__ = [
     "is_cuda_array",
     "launch_1d",
     "launches",
+    "on_cuda",
     "project",
     "remap",
     "undistort",
@@ -96,6 +98,25 @@ def use_cuda() -> bool:
         return False
 
 
+def on_cuda(*arrays: object, floats: bool = True) -> bool:
+    """Whether a call on ``arrays`` runs the CUDA kernels.
+
+    Every one a CUDA array, none recording gradients, not inside ``torch.compile``'s tracing,
+    the CUDA target available, and (``floats``) the first one float32 or float64.
+    """
+    if not arrays or not all(is_cuda_array(a) for a in arrays):
+        return False
+    # autograd and torch.compile keep the Array-API path (differentiable, traceable)
+    if any(getattr(a, "requires_grad", False) for a in arrays):
+        return False
+    torch = sys.modules.get("torch")
+    if torch is not None and torch.compiler.is_compiling():
+        return False
+    if floats and not str(getattr(arrays[0], "dtype", "")).endswith(("float32", "float64")):
+        return False
+    return use_cuda()
+
+
 def _device_view(x: Any) -> Any:
     """A numba device array viewing ``x`` without synchronising (NumPy passes through)."""
     if not is_cuda_array(x):
@@ -143,13 +164,27 @@ def empty(like: Any, shape: tuple[int, ...], dtype: Any = None) -> Any:
 # --- kernels -------------------------------------------------------------------------------
 
 
+#: ``numba.cuda``, imported by :func:`import_cuda`. A module global, not a local of the
+#: kernel factories: numba's simulator swaps the global named ``cuda`` of a kernel's module.
+cuda: Any = None
+
+
+def import_cuda() -> Any:
+    """Import ``numba.cuda`` into this module's global ``cuda`` (once) and return it."""
+    global cuda
+    if cuda is None:
+        from numba import cuda as numba_cuda
+
+        cuda = numba_cuda
+    return cuda
+
+
 @functools.cache
 def _kernels() -> Any:
     """Compile-on-first-use CUDA kernels (a namespace of numba CUDA dispatchers)."""
     import types
 
-    from numba import cuda
-
+    import_cuda()
     from imageform._kernels.distortion import bc_distort_xy, bc_undistort_xy
 
     distort_xy = cuda.jit(device=True)(bc_distort_xy.py_func)
