@@ -23,14 +23,24 @@ if os.environ.get("NUMBA_ENABLE_CUDASIM") != "1":
     raise SystemExit("run with NUMBA_ENABLE_CUDASIM=1 (numba's CUDA simulator)")
 
 import torch
+from numba.cuda.simulator.cudadrv.devicearray import FakeCUDAArray
 
-from imageform._cuda import geometry as g
+from imageform._cuda import _launch
 
-# tensors stand for device arrays; the simulator takes their NumPy views
-g.is_cuda_array = lambda x: isinstance(x, torch.Tensor)  # type: ignore[assignment]
-g.use_cuda = lambda: True  # type: ignore[assignment]
-g._device_view = lambda x: x.numpy() if isinstance(x, torch.Tensor) else x  # type: ignore[assignment]
-g._stream = lambda args: 0  # type: ignore[assignment]
+# CPU tensors stand for device arrays; the simulator runs the kernels on their NumPy views
+_is_cuda_array, _as_device_array = _launch.is_cuda_array, _launch.as_device_array
+
+
+def _stand_in_is(x: object) -> bool:
+    return isinstance(x, torch.Tensor) or _is_cuda_array(x)
+
+
+def _stand_in_as(x: Any) -> Any:
+    return FakeCUDAArray(x.numpy()) if isinstance(x, torch.Tensor) else _as_device_array(x)
+
+
+_launch.is_cuda_array = _stand_in_is  # type: ignore[assignment]
+_launch.as_device_array = _stand_in_as  # type: ignore[assignment]
 
 from imageform.geometry import (  # noqa: E402
     BrownConrady,
@@ -54,9 +64,9 @@ def _np(x: Any) -> Any:
 def check(name: str, fn: Callable[..., Any], args: tuple[Any, ...], tol: float, **kw: Any) -> None:
     """``fn`` on tensors (one kernel) against ``fn`` on NumPy arrays."""
     ref = _np(fn(*args, **kw))
-    before = g.launches()
+    before = _launch.launch_count()
     out = fn(*[torch.from_numpy(np.ascontiguousarray(a)) for a in args], **kw)
-    n = g.launches() - before
+    n = _launch.launch_count() - before
     assert n == 1, f"{name}: {n} kernel launches (expected 1)"
     outs = _np(out)
     refs = ref if isinstance(ref, tuple) else (ref,)
@@ -172,9 +182,9 @@ def develop_checks() -> None:
                 cpu = develop(raw, demosaic=method, linear=linear)
                 for what in ("camera_rgb", "image", "to_integer"):
                     gpu = develop(raw, demosaic=method, linear=linear, device="cuda")
-                    before = g.launches()
+                    before = _launch.launch_count()
                     got = gpu.to_integer(16) if what == "to_integer" else getattr(gpu, what)
-                    n = g.launches() - before
+                    n = _launch.launch_count() - before
                     ref = cpu.to_integer(16) if what == "to_integer" else getattr(cpu, what)
                     assert n == 1, f"develop {what}: {n} launches"
                     assert got.dtype == ref.dtype and got.shape == ref.shape

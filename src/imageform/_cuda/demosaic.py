@@ -25,7 +25,8 @@ from typing import Any
 
 import numpy as np
 
-from imageform._cuda.geometry import empty, import_cuda, launch_1d
+from imageform._cuda._launch import empty_like, launch_1d
+from imageform._cuda.geometry import import_cuda
 
 __all__ = ["MODE_CAMERA", "MODE_FLOAT", "MODE_UINT16", "demosaic", "develop_bayer"]
 
@@ -208,7 +209,7 @@ def demosaic(raw: Any, ry: int, rx: int, method: str, clip: bool) -> Any:
     One kernel launch.
     """
     nb, h, w = (int(s) for s in raw.shape)
-    out = empty(raw, (nb, h, w, 3))
+    out = empty_like(raw, (nb, h, w, 3))
     args = (raw, int(ry), int(rx), _METHODS[method], bool(clip), out)
     kern = _kernels().demosaic32 if str(raw.dtype).endswith("float32") else _kernels().demosaic64
     launch_1d(kern, nb * h * w, *args)
@@ -234,8 +235,7 @@ def develop_bayer(
     ``method`` (bilinear or malvar). The mosaic is copied to the device, developed in one
     launch, and the result copied back.
     """
-    from numba import cuda
-
+    cuda = import_cuda()
     h, w = mosaic.shape
     prm = np.concatenate([np.asarray(black, np.float32), np.asarray(scale, np.float32)])
     table = np.zeros(2, np.float32) if lut is None else np.asarray(lut, np.float32)

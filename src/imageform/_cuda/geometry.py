@@ -26,85 +26,47 @@ constants are float64) and stored as float32. Tests run every kernel under numba
 simulator (``NUMBA_ENABLE_CUDASIM=1``) against the NumPy path and compile each one for
 ``sm_90`` where NVVM is installed (``tests/backends/test_cuda_kernels.py``).
 
-This module also holds the few launch helpers the kernels need (:func:`is_cuda_array`,
-:func:`use_cuda`, :func:`launch_1d`, :func:`empty`); importing it imports nothing heavy:
-``numba.cuda`` is imported when a kernel is first needed.
+Arrays and launches go through :mod:`imageform._cuda._launch` (no copy, no host
+synchronisation, the producer's stream); :func:`on_cuda` is the dispatch test of the public
+functions. Importing this module imports nothing heavy: ``numba.cuda`` is imported when a
+kernel is first needed.
 """
 
 from __future__ import annotations
 
 import functools
 import math
-import os
 import sys
 from typing import Any
 
+import numpy as np
+
+from imageform._cuda import _launch
+from imageform._cuda._launch import empty_like, launch_1d
+
 __all__ = [
-    "THREADS",
     "distort",
-    "empty",
-    "is_cuda_array",
-    "launch_1d",
-    "launches",
+    "import_cuda",
     "on_cuda",
     "project",
     "remap",
+    "require_cuda",
     "undistort",
     "undistort_image",
-    "use_cuda",
 ]
 
-#: Threads per block of every 1-D launch.
-THREADS = 256
-
-# --- launch helpers ------------------------------------------------------------------------
-
-#: Kernel launches since the process started (tests count the launches of one call).
-_LAUNCHES = [0]
-
-
-def launches() -> int:
-    """Return the number of kernels launched through :func:`launch_1d` so far."""
-    return _LAUNCHES[0]
-
-
-def is_cuda_array(x: object) -> bool:
-    """Whether ``x`` is an array in GPU memory (``__cuda_array_interface__``: torch, CuPy).
-
-    Under numba's CUDA simulator (``NUMBA_ENABLE_CUDASIM=1``) NumPy arrays stand for device
-    arrays only where a test says so; this function never says so for them.
-    """
-    try:
-        return hasattr(x, "__cuda_array_interface__")
-    except Exception:  # a tensor whose property raises something other than AttributeError
-        return False
-
-
-@functools.cache
-def use_cuda() -> bool:
-    """Whether the CUDA kernels can run: numba's CUDA target imports and finds a device.
-
-    ``IMAGEFORM_DISABLE_CUDA`` (non-empty, not ``0``) turns them off (the Array-API path runs).
-    """
-    if os.environ.get("IMAGEFORM_DISABLE_CUDA", "") not in ("", "0"):
-        return False
-    try:
-        from numba import cuda
-    except Exception:  # numba missing or its CUDA target broken: the Array-API path runs
-        return False
-    try:
-        return bool(cuda.is_available())
-    except Exception:
-        return False
+# --- dispatch ------------------------------------------------------------------------------
 
 
 def on_cuda(*arrays: object, floats: bool = True) -> bool:
     """Whether a call on ``arrays`` runs the CUDA kernels.
 
-    Every one a CUDA array, none recording gradients, not inside ``torch.compile``'s tracing,
-    the CUDA target available, and (``floats``) the first one float32 or float64.
+    Every one a CUDA array (:func:`imageform._cuda._launch.is_cuda_array`), none recording
+    gradients, not inside ``torch.compile``'s tracing, the kernels usable
+    (:func:`~imageform._cuda._launch.use_cuda`), and (``floats``) the first one float32 or
+    float64. Importing this module imports no GPU library: this check is cheap on NumPy.
     """
-    if not arrays or not all(is_cuda_array(a) for a in arrays):
+    if not arrays or not all(_launch.is_cuda_array(a) for a in arrays):
         return False
     # autograd and torch.compile keep the Array-API path (differentiable, traceable)
     if any(getattr(a, "requires_grad", False) for a in arrays):
@@ -114,58 +76,24 @@ def on_cuda(*arrays: object, floats: bool = True) -> bool:
         return False
     if floats and not str(getattr(arrays[0], "dtype", "")).endswith(("float32", "float64")):
         return False
-    return use_cuda()
+    return _launch.use_cuda()
 
 
-def _device_view(x: Any) -> Any:
-    """A numba device array viewing ``x`` without synchronising (NumPy passes through)."""
-    if not is_cuda_array(x):
-        return x  # the simulator's stand-in, or a scalar
-    from numba import cuda
+def require_cuda(what: str) -> None:
+    """Raise :class:`~imageform.errors.InvalidInputError` (one line) unless the kernels can run.
 
-    return cuda.as_cuda_array(x, sync=False)
+    ``what`` names the request in the caller's words (``"--device cuda"``).
+    """
+    if not _launch.use_cuda():
+        from imageform.errors import InvalidInputError
 
-
-def _stream(args: tuple[Any, ...]) -> Any:
-    """The stream of the first array argument that names one (torch: its current stream)."""
-    from numba import cuda
-
-    for a in args:
-        if is_cuda_array(a):
-            s = a.__cuda_array_interface__.get("stream")
-            if isinstance(s, int) and s > 2:  # 1 and 2 are the legacy and per-thread defaults
-                return cuda.external_stream(s)
-            break
-    return 0
+        raise InvalidInputError(
+            f"{what}: no CUDA device is usable here (numba finds none); use the CPU"
+        )
 
 
-def launch_1d(kernel: Any, n: int, *args: Any) -> None:
-    """Launch ``kernel`` on ``n`` threads (blocks of :data:`THREADS`) on the inputs' stream."""
-    if n <= 0:
-        return
-    stream = _stream(args)
-    views = tuple(_device_view(a) for a in args)
-    kernel[(n + THREADS - 1) // THREADS, THREADS, stream](*views)
-    _LAUNCHES[0] += 1
-
-
-def empty(like: Any, shape: tuple[int, ...], dtype: Any = None) -> Any:
-    """An uninitialised array of ``like``'s library and device (``dtype``: an xp dtype)."""
-    from imageform._backend import device_of, namespace
-
-    xp = namespace(like)
-    dev = device_of(like)
-    dt = like.dtype if dtype is None else dtype
-    if dev is None:
-        return xp.empty(shape, dtype=dt)
-    return xp.empty(shape, dtype=dt, device=dev)
-
-
-# --- kernels -------------------------------------------------------------------------------
-
-
-#: ``numba.cuda``, imported by :func:`import_cuda`. A module global, not a local of the
-#: kernel factories: numba's simulator swaps the global named ``cuda`` of a kernel's module.
+#: ``numba.cuda``, set by :func:`import_cuda`. A module global, not a local of the kernel
+#: factories: numba's simulator swaps the global named ``cuda`` of a kernel's module.
 cuda: Any = None
 
 
@@ -173,10 +101,11 @@ def import_cuda() -> Any:
     """Import ``numba.cuda`` into this module's global ``cuda`` (once) and return it."""
     global cuda
     if cuda is None:
-        from numba import cuda as numba_cuda
-
-        cuda = numba_cuda
+        cuda = _launch.cuda()
     return cuda
+
+
+# --- kernels -------------------------------------------------------------------------------
 
 
 @functools.cache
@@ -335,11 +264,9 @@ def project(pts: Any, K: Any, R: Any, t: Any, coeffs: Any = None) -> tuple[Any, 
     ``K``, ``R``, ``t`` device arrays of the points' dtype. Returns ``(uv (N, 2), valid (N,))``
     of the points' library and device; one kernel launch.
     """
-    from imageform._backend import namespace
-
     n = int(pts.shape[0])
-    uv = empty(pts, (n, 2))
-    valid = empty(pts, (n,), namespace(pts).bool)
+    uv = empty_like(pts, (n, 2))
+    valid = empty_like(pts, (n,), np.bool_)
     launch_1d(
         _kernels().project, n, pts, K, R, t, *_coeffs(coeffs), coeffs is not None, uv, valid
     )
@@ -348,18 +275,16 @@ def project(pts: Any, K: Any, R: Any, t: Any, coeffs: Any = None) -> tuple[Any, 
 
 def distort(xy: Any, coeffs: Any) -> Any:
     """Brown-Conrady on ``(N, 2)`` device points; one launch."""
-    out = empty(xy, tuple(int(s) for s in xy.shape))
+    out = empty_like(xy)
     launch_1d(_kernels().distort, int(xy.shape[0]), xy, *_coeffs(coeffs), out)
     return out
 
 
 def undistort(xy: Any, coeffs: Any, max_iter: int, tol: float) -> tuple[Any, Any]:
     """Newton's inverse of Brown-Conrady on ``(N, 2)`` device points: ``(xy, ok)``; one launch."""
-    from imageform._backend import namespace
-
     n = int(xy.shape[0])
-    out = empty(xy, (n, 2))
-    ok = empty(xy, (n,), namespace(xy).bool)
+    out = empty_like(xy, (n, 2))
+    ok = empty_like(xy, (n,), np.bool_)
     args = (xy, *_coeffs(coeffs), int(max_iter), float(tol), out, ok)
     launch_1d(_kernels().undistort, n, *args)
     return out, ok
@@ -369,7 +294,7 @@ def remap(img: Any, map_uv: Any, fill: float) -> Any:
     """Bilinear remap of a ``(B, H, W, C)`` float device image at ``(H', W', 2)``; one launch."""
     b, _, _, c = (int(s) for s in img.shape)
     ho, wo = int(map_uv.shape[0]), int(map_uv.shape[1])
-    out = empty(img, (b, ho, wo, c))
+    out = empty_like(img, (b, ho, wo, c))
     launch_1d(_kernels().remap, b * ho * wo, img, map_uv, float(fill), out)
     return out
 
@@ -383,7 +308,7 @@ def undistort_image(
     """
     b, c = int(img.shape[0]), int(img.shape[3])
     ho, wo = out_hw
-    out = empty(img, (b, ho, wo, c))
+    out = empty_like(img, (b, ho, wo, c))
     args = (img, Kn, Km, *_coeffs(coeffs), float(fill), out)
     launch_1d(_kernels().undistort_image, b * ho * wo, *args)
     return out

@@ -940,12 +940,9 @@ def develop(
     if where_to not in ("cpu", "cuda"):
         raise InvalidInputError(f"unknown device {device!r}; valid: cpu, cuda")
     if where_to == "cuda":
-        from imageform._cuda.geometry import use_cuda
+        from imageform._cuda.geometry import require_cuda
 
-        if not use_cuda():
-            raise InvalidInputError(
-                "device='cuda': no CUDA device is usable here (numba finds none); use 'cpu'"
-            )
+        require_cuda("device='cuda'")
     method = str(demosaic).lower().replace("-", "_")
     if method not in DEMOSAIC_METHODS:
         raise InvalidInputError(
