@@ -39,8 +39,8 @@ def _stand_in_as(x: Any) -> Any:
     return FakeCUDAArray(x.numpy()) if isinstance(x, torch.Tensor) else _as_device_array(x)
 
 
-_launch.is_cuda_array = _stand_in_is  # type: ignore[assignment]
-_launch.as_device_array = _stand_in_as  # type: ignore[assignment]
+_launch.is_cuda_array = _stand_in_is
+_launch.as_device_array = _stand_in_as
 
 from imageform.geometry import (  # noqa: E402
     BrownConrady,
@@ -131,7 +131,7 @@ def main() -> None:
         check(f"remap_bilinear[gray,{dt}]", remap_bilinear, (img[0, ..., 0], m), tol * 1e-2)
         Ks = np.array([[9.0, 0.0, 5.2], [0.0, 8.5, 4.1], [0.0, 0.0, 1.0]])
 
-        def undist(im: Any) -> Any:
+        def undist(im: Any, Ks: np.ndarray = Ks) -> Any:
             return undistort_image(im, Ks, BC, out_shape=(7, 12), fill=-1.0)
 
         check(f"undistort_image[{dt}]", undist, (img[1],), tol * 1e-2)

@@ -169,7 +169,7 @@ def test_develop_device_cuda_under_simulator(tiny_dng: Path, tmp_path: Path) -> 
     for out, dev, extra in ((out_cpu, "cpu", {}), (out_gpu, "cuda", sim)):
         # imageform's own DNG reader (LibRaw refuses so small a frame)
         argv = ["develop", str(tiny_dng), "-o", str(out), "--device", dev, "--json"]
-        code = f"import sys; sys.modules['rawpy'] = None\nfrom imageform.cli import main\n"
+        code = "import sys; sys.modules['rawpy'] = None\nfrom imageform.cli import main\n"
         code += f"sys.exit(main({argv!r}))"
         proc = _run(["-c", code], **extra)
         assert proc.returncode == 0, proc.stdout + proc.stderr

@@ -28,7 +28,15 @@ import numpy as np
 from imageform._cuda._launch import empty_like, launch_1d
 from imageform._cuda.geometry import import_cuda
 
-__all__ = ["MODE_CAMERA", "MODE_FLOAT", "MODE_UINT16", "demosaic", "develop_bayer"]
+__all__ = [
+    "MODE_CAMERA",
+    "MODE_FLOAT",
+    "MODE_UINT16",
+    "demosaic",
+    "develop_bayer",
+    "develop_on_device",
+    "develop_parameters",
+]
 
 #: :func:`develop_bayer` outputs, as :mod:`imageform._kernels.raw_develop`'s.
 MODE_CAMERA, MODE_FLOAT, MODE_UINT16 = 0, 1, 2
@@ -66,7 +74,7 @@ def _kernels() -> Any:
     clip_d = cuda.jit(device=True)(clip01)
 
     def make_rgb_at(get: Any, T: Any) -> Any:
-        """A device function ``(R, G, B)`` at pixel ``(y, x)``, samples read by ``get``.
+        """Return a device function: ``(R, G, B)`` at pixel ``(y, x)``, samples read by ``get``.
 
         ``get(a, b, yy, xx)`` reads one (mirrored) sample as type ``T``; the constants are of
         type ``T`` (float32 arithmetic for float32 data, as the CPU kernels).
@@ -233,21 +241,58 @@ def develop_bayer(
     ``scale`` per photosite of the 2x2 tile, ``m`` camera RGB to the output's linear RGB,
     ``lut`` the transfer table or ``None`` for linear output), plus the demosaicing
     ``method`` (bilinear or malvar). The mosaic is copied to the device, developed in one
-    launch, and the result copied back.
+    launch (:func:`develop_on_device`), and the result copied back.
     """
     cuda = import_cuda()
     h, w = mosaic.shape
-    prm = np.concatenate([np.asarray(black, np.float32), np.asarray(scale, np.float32)])
+    prm = develop_parameters(black, scale)
     table = np.zeros(2, np.float32) if lut is None else np.asarray(lut, np.float32)
-    d_mosaic = cuda.to_device(np.ascontiguousarray(mosaic, dtype=np.uint16))
-    d_prm = cuda.to_device(np.ascontiguousarray(prm))
-    d_m = cuda.to_device(np.ascontiguousarray(m, dtype=np.float32))
-    d_lut = cuda.to_device(table)
-    shape_f = (h, w, 3) if mode != MODE_UINT16 else (0, 0, 3)
-    shape_u = (h, w, 3) if mode == MODE_UINT16 else (0, 0, 3)
-    out_f = cuda.device_array(shape_f, np.float32)
-    out_u = cuda.device_array(shape_u, np.uint16)
-    args = (d_mosaic, d_prm, int(ry), int(rx), _METHODS[method], d_m, d_lut, lut is not None)
-    launch_1d(_kernels().develop, h * w, *args, int(mode), out_f, out_u)
-    res = out_u if mode == MODE_UINT16 else out_f
-    return np.asarray(res.copy_to_host())
+    out = cuda.device_array((h, w, 3), np.uint16 if mode == MODE_UINT16 else np.float32)
+    develop_on_device(
+        cuda.to_device(np.ascontiguousarray(mosaic, dtype=np.uint16)),
+        cuda.to_device(prm),
+        ry,
+        rx,
+        method,
+        cuda.to_device(np.ascontiguousarray(m, dtype=np.float32)),
+        cuda.to_device(table),
+        lut is not None,
+        mode,
+        out,
+    )
+    return np.asarray(out.copy_to_host())
+
+
+def develop_parameters(black: np.ndarray, scale: np.ndarray) -> np.ndarray:
+    """Return the ``(4, 2)`` float32 parameters of the kernel: black levels above the scales."""
+    return np.ascontiguousarray(
+        np.concatenate([np.asarray(black, np.float32), np.asarray(scale, np.float32)])
+    )
+
+
+def develop_on_device(
+    mosaic: Any,
+    prm: Any,
+    ry: int,
+    rx: int,
+    method: str,
+    m: Any,
+    lut: Any,
+    encode: bool,
+    mode: int,
+    out: Any,
+) -> Any:
+    """Launch the development kernel on arrays already on the device (one launch, no copy).
+
+    ``mosaic`` ``(H, W)`` uint16, ``prm`` from :func:`develop_parameters`, ``m`` ``(3, 3)``
+    and ``lut`` float32, all device arrays of any library; ``out`` ``(H, W, 3)``: float32
+    (camera RGB or the float output) or uint16 (``MODE_UINT16``). Returns ``out``.
+    """
+    cuda = import_cuda()
+    h, w = (int(s) for s in mosaic.shape)
+    none_f = cuda.device_array((0, 0, 3), np.float32)
+    none_u = cuda.device_array((0, 0, 3), np.uint16)
+    out_f, out_u = (none_f, out) if mode == MODE_UINT16 else (out, none_u)
+    args = (mosaic, prm, int(ry), int(rx), _METHODS[method], m, lut, bool(encode), int(mode))
+    launch_1d(_kernels().develop, h * w, *args, out_f, out_u)
+    return out

@@ -172,9 +172,7 @@ def _kernels() -> Any:
         i = cuda.grid(1)
         if i >= xy.shape[0]:
             return
-        x, y, good = undistort_xy(
-            xy[i, 0], xy[i, 1], k1, k2, p1, p2, k3, k4, k5, k6, max_iter, tol
-        )
+        x, y, good = undistort_xy(xy[i, 0], xy[i, 1], k1, k2, p1, p2, k3, k4, k5, k6, max_iter, tol)
         out[i, 0] = x
         out[i, 1] = y
         ok[i] = good
@@ -188,8 +186,8 @@ def _kernels() -> Any:
             for c in range(nc):
                 out[b, i, j, c] = fill
             return
-        x0 = int(math.floor(u))  # <= w - 1 inside
-        y0 = int(math.floor(v))
+        x0 = int(u)  # u >= 0 inside: truncation is the floor (and x0 <= w - 1)
+        y0 = int(v)
         x1 = x0 + 1 if x0 + 1 < w else w - 1
         y1 = y0 + 1 if y0 + 1 < h else h - 1
         ax = u - x0
@@ -251,7 +249,7 @@ def _kernels() -> Any:
 
 
 def _coeffs(coeffs: Any) -> tuple[float, ...]:
-    """The eight Brown-Conrady coefficients as Python floats (zeros for ``None``)."""
+    """Return the eight Brown-Conrady coefficients as Python floats (zeros for ``None``)."""
     if coeffs is None:
         return (0.0,) * 8
     c = tuple(float(v) for v in coeffs)
@@ -267,9 +265,7 @@ def project(pts: Any, K: Any, R: Any, t: Any, coeffs: Any = None) -> tuple[Any, 
     n = int(pts.shape[0])
     uv = empty_like(pts, (n, 2))
     valid = empty_like(pts, (n,), np.bool_)
-    launch_1d(
-        _kernels().project, n, pts, K, R, t, *_coeffs(coeffs), coeffs is not None, uv, valid
-    )
+    launch_1d(_kernels().project, n, pts, K, R, t, *_coeffs(coeffs), coeffs is not None, uv, valid)
     return uv, valid
 
 

@@ -487,7 +487,9 @@ def _undistort_cuda(
     # host intrinsics: float64 device constants, uploaded once (imageform._backend.constant)
     like = xp.empty((0,), dtype=xp.float64, device=device_of(img))
     Km, Kn = (
-        M if cuda_geometry.on_cuda(M, floats=False) else constant(np.asarray(M, np.float64), like, xp)
+        M
+        if cuda_geometry.on_cuda(M, floats=False)
+        else constant(np.asarray(M, np.float64), like, xp)
         for M in (Km, Kn)
     )
     gray = img.ndim == 2

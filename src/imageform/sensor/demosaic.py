@@ -167,8 +167,8 @@ def demosaic(
         the other methods are computed on the host through NumPy and moved back (not
         differentiable). CUDA arrays that record no gradient run ``"bilinear"`` and
         ``"malvar"`` as one CUDA kernel (:mod:`imageform._cuda.demosaic`; the mirror and the
-        clipping fused, the same filters). A Dask mosaic gives a lazy Dask array: blocks with an even
-        overlap (chunks made even so that every block keeps the CFA phase), each
+        clipping fused, the same filters). A Dask mosaic gives a lazy Dask array: blocks
+        with an even overlap (chunks made even so that every block keeps the CFA phase), each
         demosaiced in memory and trimmed, equal to the in-memory result; values are
         validated when the blocks are computed.
 
