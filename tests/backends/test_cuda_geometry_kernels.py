@@ -177,3 +177,26 @@ def test_develop_device_cuda_under_simulator(tiny_dng: Path, tmp_path: Path) -> 
     gpu, cpu = np.load(out_gpu), np.load(out_cpu)
     assert gpu.shape == cpu.shape == (12, 16, 3)
     np.testing.assert_allclose(gpu, cpu, atol=2e-6, rtol=0)
+
+
+def test_develop_api_refuses_cuda_without_a_device(monkeypatch: pytest.MonkeyPatch) -> None:
+    from imageform.errors import InvalidInputError
+    from imageform.io import RawImage, develop
+
+    monkeypatch.setenv("IMAGEFORM_DISABLE_CUDA", "1")
+    raw = RawImage(
+        mosaic=np.full((4, 4), 1000, np.uint16),
+        black_level=np.zeros((2, 2)),
+        white_level=4095.0,
+        cfa_pattern="RGGB",
+        white_balance=np.ones(3),
+        xyz_to_camera=None,
+        camera_to_srgb=np.eye(3),
+        calibration_illuminant="D65",
+    )
+    with pytest.raises(InvalidInputError, match="device='cuda': no CUDA device") as info:
+        develop(raw, device="cuda")
+    assert "\n" not in str(info.value)
+    with pytest.raises(InvalidInputError, match="unknown device"):
+        develop(raw, device="tpu")
+    assert develop(raw, device="cpu").image.shape == (4, 4, 3)
