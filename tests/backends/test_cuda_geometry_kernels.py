@@ -7,7 +7,8 @@
 - :func:`test_kernels_compile_for_hopper`: every kernel, float32 and float64, compiled to PTX
   for ``sm_90`` by numba's CUDA target and NVVM (no device needed; skipped where NVVM is not
   installed): what the simulator cannot check (typing and lowering on the real target), with
-  the float32 demosaicing and development kernels free of float64 instructions.
+  the float32 demosaicing and development kernels free of float64 instructions and the image
+  kernels free of 64-bit integer divisions.
 - NumPy calls never import numba's CUDA target; ``imageform develop --device cuda`` and
   ``imageform batch develop --device cuda`` refuse in one line, non-zero, where no GPU is
   usable, and develop a raw file through the kernel under the simulator.
@@ -72,7 +73,7 @@ def test_simulator_check() -> None:
 
 
 _PTX = r"""
-import sys, types
+import re, sys, types
 try:
     import numba.cuda.dispatcher as d
     from numba import cuda, types as T
@@ -87,6 +88,10 @@ from imageform._cuda import demosaic as dm, geometry as g
 A = lambda dt, nd, layout="C": T.Array(dt, nd, layout)
 f64, f32, b1, i64 = T.float64, T.float32, T.boolean, T.int64
 kg, kd = g._kernels(), dm._kernels()
+def show(name, ptx):
+    f = "f64-ops" if ".f64" in ptx else "no-f64"
+    div = "div64" if re.search(r"\b(div|rem)\.[su]64", ptx) else "no-div64"
+    print("ok", name, f, div)
 for dt in (f64, f32):
     sigs = {
         "project": (A(dt, 2, "A"), A(dt, 2, "A"), A(dt, 2, "A"), A(dt, 1, "A"), *[f64] * 8, b1,
@@ -97,15 +102,13 @@ for dt in (f64, f32):
         "undistort_image": (A(dt, 4, "A"), A(f64, 2), A(f64, 2), *[f64] * 8, f64, A(dt, 4)),
     }
     for name, sig in sigs.items():
-        cuda.compile_ptx(kg.py[name], sig, cc=(9, 0))
-        print("ok", name, dt)
+        show(f"{name}[{dt}]", cuda.compile_ptx(kg.py[name], sig, cc=(9, 0))[0])
     name = "demosaic32" if dt == f32 else "demosaic64"
-    ptx, _ = cuda.compile_ptx(kd.py[name], (A(dt, 3, "A"), i64, i64, i64, b1, A(dt, 4)), cc=(9, 0))
-    print("ok", name, "f64-ops" if ".f64" in ptx else "no-f64")
+    sig = (A(dt, 3, "A"), i64, i64, i64, b1, A(dt, 4))
+    show(name, cuda.compile_ptx(kd.py[name], sig, cc=(9, 0))[0])
 sig = (A(T.uint16, 2), A(f32, 2), i64, i64, i64, A(f32, 2), A(f32, 1), b1, i64, A(f32, 3),
        A(T.uint16, 3))
-ptx, _ = cuda.compile_ptx(kd.py["develop"], sig, cc=(9, 0))
-print("ok develop", "f64-ops" if ".f64" in ptx else "no-f64")
+show("develop", cuda.compile_ptx(kd.py["develop"], sig, cc=(9, 0))[0])
 """
 
 
@@ -115,10 +118,14 @@ def test_kernels_compile_for_hopper() -> None:
     assert proc.returncode == 0, out[-4000:]
     if proc.stdout.startswith("SKIP"):
         pytest.skip(f"NVVM not available: {proc.stdout.strip()}")
-    lines = proc.stdout.splitlines()
-    assert len([ln for ln in lines if ln.startswith("ok ")]) == 13, out
+    lines = [ln for ln in proc.stdout.splitlines() if ln.startswith("ok ")]
+    assert len(lines) == 13, out
     # float32 data is demosaiced and developed in float32, as on the CPU
-    assert "ok demosaic32 no-f64" in lines and "ok develop no-f64" in lines, out
+    assert "ok demosaic32 no-f64 no-div64" in lines and "ok develop no-f64 no-div64" in lines, out
+    # the image kernels find their pixel from a 2-D grid: no 64-bit division (slow on a GPU)
+    for ln in lines:
+        if any(k in ln for k in ("remap", "undistort_image", "demosaic", "develop")):
+            assert ln.endswith("no-div64"), ln
 
 
 def test_numpy_calls_never_import_numba_cuda() -> None:

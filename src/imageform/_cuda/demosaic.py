@@ -25,8 +25,8 @@ from typing import Any
 
 import numpy as np
 
-from imageform._cuda._launch import empty_like, launch_1d
-from imageform._cuda.geometry import import_cuda
+from imageform._cuda._launch import empty_like
+from imageform._cuda.geometry import import_cuda, launch_rows
 
 __all__ = [
     "MODE_CAMERA",
@@ -123,24 +123,26 @@ def _kernels() -> Any:
         rgb_at_d = make_rgb_at(cuda.jit(device=True)(plain), T)
 
         def demosaic_kernel(raw, ry, rx, method, clip, out):  # type: ignore[no-untyped-def]
-            t = cuda.grid(1)
+            # a 2-D launch (launch_rows): thread (row y, column x), every image of the batch
             nb, h, w = raw.shape
-            if t >= nb * h * w:
+            x = cuda.blockIdx.x * cuda.blockDim.x + cuda.threadIdx.x
+            if x >= w:
                 return
-            b = t // (h * w)
-            r = t - b * (h * w)
-            y = r // w
-            x = r - y * w
-            rr, gg, bb = rgb_at_d(raw, b, y, x, h, w, ry, rx, method)
-            if clip:
-                zero = T(0.0)
-                one = T(1.0)
-                rr = clip_d(rr, zero, one)
-                gg = clip_d(gg, zero, one)
-                bb = clip_d(bb, zero, one)
-            out[b, y, x, 0] = rr
-            out[b, y, x, 1] = gg
-            out[b, y, x, 2] = bb
+            zero = T(0.0)
+            one = T(1.0)
+            y = cuda.blockIdx.y * cuda.blockDim.y + cuda.threadIdx.y
+            step = cuda.gridDim.y * cuda.blockDim.y
+            while y < h:  # no division (range() counts its trips)
+                for b in range(nb):
+                    rr, gg, bb = rgb_at_d(raw, b, y, x, h, w, ry, rx, method)
+                    if clip:
+                        rr = clip_d(rr, zero, one)
+                        gg = clip_d(gg, zero, one)
+                        bb = clip_d(bb, zero, one)
+                    out[b, y, x, 0] = rr
+                    out[b, y, x, 1] = gg
+                    out[b, y, x, 2] = bb
+                y += step
 
         return demosaic_kernel
 
@@ -153,14 +155,8 @@ def _kernels() -> Any:
 
     rgb_balanced_d = make_rgb_at(cuda.jit(device=True)(balanced), np.float32)
 
-    def develop_kernel(mosaic, prm, ry, rx, method, m, lut, encode, mode, out_f, out_u):  # type: ignore[no-untyped-def]
-        # prm (4, 2) float32: rows 0-1 the black level, rows 2-3 the scale of the 2x2 tile
-        t = cuda.grid(1)
+    def develop_pixel(mosaic, prm, y, x, ry, rx, method, m, lut, encode, mode, out_f, out_u):  # type: ignore[no-untyped-def]
         h, w = mosaic.shape
-        if t >= h * w:
-            return
-        y = t // w
-        x = t - y * w
         f = np.float32
         r, g, b = rgb_balanced_d(mosaic, prm, y, x, h, w, ry, rx, method)
         if mode == 0:
@@ -199,6 +195,20 @@ def _kernels() -> Any:
             out_u[y, x, 1] = int(v1 * top + half)
             out_u[y, x, 2] = int(v2 * top + half)
 
+    develop_pixel_d = cuda.jit(device=True)(develop_pixel)
+
+    def develop_kernel(mosaic, prm, ry, rx, method, m, lut, encode, mode, out_f, out_u):  # type: ignore[no-untyped-def]
+        # prm (4, 2) float32: rows 0-1 the black level, rows 2-3 the scale of the 2x2 tile;
+        # a 2-D launch (launch_rows): thread (row y, column x)
+        x = cuda.blockIdx.x * cuda.blockDim.x + cuda.threadIdx.x
+        if x >= mosaic.shape[1]:
+            return
+        y = cuda.blockIdx.y * cuda.blockDim.y + cuda.threadIdx.y
+        step = cuda.gridDim.y * cuda.blockDim.y
+        while y < mosaic.shape[0]:  # no division (range() counts its trips)
+            develop_pixel_d(mosaic, prm, y, x, ry, rx, method, m, lut, encode, mode, out_f, out_u)
+            y += step
+
     k = types.SimpleNamespace()
     k.py = {
         "demosaic32": make_demosaic(np.float32),
@@ -220,7 +230,7 @@ def demosaic(raw: Any, ry: int, rx: int, method: str, clip: bool) -> Any:
     out = empty_like(raw, (nb, h, w, 3))
     args = (raw, int(ry), int(rx), _METHODS[method], bool(clip), out)
     kern = _kernels().demosaic32 if str(raw.dtype).endswith("float32") else _kernels().demosaic64
-    launch_1d(kern, nb * h * w, *args)
+    launch_rows(kern, h, w, *args)
     return out
 
 
@@ -294,5 +304,5 @@ def develop_on_device(
     none_u = cuda.device_array((0, 0, 3), np.uint16)
     out_f, out_u = (none_f, out) if mode == MODE_UINT16 else (out, none_u)
     args = (mosaic, prm, int(ry), int(rx), _METHODS[method], m, lut, bool(encode), int(mode))
-    launch_1d(_kernels().develop, h * w, *args, out_f, out_u)
+    launch_rows(_kernels().develop, h, w, *args, out_f, out_u)
     return out

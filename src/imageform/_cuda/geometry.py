@@ -47,6 +47,7 @@ from imageform._cuda._launch import empty_like, launch_1d
 __all__ = [
     "distort",
     "import_cuda",
+    "launch_rows",
     "on_cuda",
     "project",
     "remap",
@@ -90,6 +91,41 @@ def require_cuda(what: str) -> None:
         raise InvalidInputError(
             f"{what}: no CUDA device is usable here (numba finds none); use the CPU"
         )
+
+
+#: Threads per block of :func:`launch_rows`: a warp along a row (coalesced), 8 rows.
+ROW_BLOCK = (32, 8)
+#: The largest grid height (CUDA's limit); taller images loop over rows in the kernel.
+_MAX_GRID_Y = 65535
+
+
+def launch_rows(kernel: Any, rows: int, cols: int, *args: Any) -> None:
+    """Launch ``kernel`` on a 2-D grid: ``x`` over ``cols``, ``y`` over ``rows``.
+
+    :func:`imageform._cuda._launch.launch_1d`'s conventions (device arrays of any library
+    viewed without a copy or a sync, the producer's stream and device, the launch counted),
+    with a 2-D grid of :data:`ROW_BLOCK` blocks, so that a kernel over an image finds its
+    pixel without 64-bit integer divisions (tens of instructions each on a GPU). The grid
+    height is capped at CUDA's 65535 blocks: kernels loop over rows with a stride of
+    ``gridDim.y * blockDim.y``, and guard ``column < cols``.
+    """
+    if rows <= 0 or cols <= 0:
+        return
+    first = next((a for a in args if _launch.is_cuda_array(a)), None)
+    dargs = tuple(_launch.as_device_array(a) if _launch.is_cuda_array(a) else a for a in args)
+    sim = _launch.simulated()
+    bx, by = (8, 4) if sim else ROW_BLOCK  # each simulated thread is a Python thread
+    grid = ((cols + bx - 1) // bx, min((rows + by - 1) // by, _MAX_GRID_Y))
+    stream = 0 if first is None else _launch._stream_for(first)
+    dev = None if first is None or sim else _launch._device_index(first)
+    with _launch._LOCK:
+        _launch._LAUNCHES[0] += 1
+    c = _launch.cuda()
+    if dev is not None and len(c.gpus) > 1 and c.get_current_device().id != dev:
+        with c.gpus[dev]:
+            kernel[grid, (bx, by), stream](*dargs)
+    else:
+        kernel[grid, (bx, by), stream](*dargs)
 
 
 #: ``numba.cuda``, set by :func:`import_cuda`. A module global, not a local of the kernel
@@ -207,34 +243,37 @@ def _kernels() -> Any:
     sample_d = cuda.jit(device=True)(sample)
 
     def remap_kernel(img, mp, fill, out):  # type: ignore[no-untyped-def]
-        t = cuda.grid(1)
-        ho = out.shape[1]
-        wo = out.shape[2]
-        if t >= out.shape[0] * ho * wo:
+        # a 2-D launch (launch_rows): thread (row i, column j); the position is read once
+        # and every image of the batch sampled there
+        j = cuda.blockIdx.x * cuda.blockDim.x + cuda.threadIdx.x
+        if j >= out.shape[2]:
             return
-        b = t // (ho * wo)
-        r = t - b * (ho * wo)
-        i = r // wo
-        j = r - i * wo
-        sample_d(img, b, i, j, mp[i, j, 0], mp[i, j, 1], fill, out)
+        i = cuda.blockIdx.y * cuda.blockDim.y + cuda.threadIdx.y
+        step = cuda.gridDim.y * cuda.blockDim.y
+        while i < out.shape[1]:  # no division (range() counts its trips)
+            u = mp[i, j, 0]
+            v = mp[i, j, 1]
+            for b in range(out.shape[0]):
+                sample_d(img, b, i, j, u, v, fill, out)
+            i += step
 
     def undistort_image_kernel(img, Kn, Km, k1, k2, p1, p2, k3, k4, k5, k6, fill, out):  # type: ignore[no-untyped-def]
-        # the source position as imageform.geometry._remap_xp.map_grid computes it
-        t = cuda.grid(1)
-        ho = out.shape[1]
-        wo = out.shape[2]
-        if t >= out.shape[0] * ho * wo:
+        # the source position as imageform.geometry._remap_xp.map_grid computes it, once per
+        # output pixel for the whole batch
+        j = cuda.blockIdx.x * cuda.blockDim.x + cuda.threadIdx.x
+        if j >= out.shape[2]:
             return
-        b = t // (ho * wo)
-        r = t - b * (ho * wo)
-        i = r // wo
-        j = r - i * wo
-        y = (float(i) - Kn[1, 2]) / Kn[1, 1]
-        x = (float(j) - Kn[0, 2] - Kn[0, 1] * y) / Kn[0, 0]
-        xd, yd = distort_xy(x, y, k1, k2, p1, p2, k3, k4, k5, k6)
-        us = Km[0, 0] * xd + Km[0, 1] * yd + Km[0, 2]
-        vs = Km[1, 1] * yd + Km[1, 2]
-        sample_d(img, b, i, j, us, vs, fill, out)
+        i = cuda.blockIdx.y * cuda.blockDim.y + cuda.threadIdx.y
+        step = cuda.gridDim.y * cuda.blockDim.y
+        while i < out.shape[1]:  # no division (range() counts its trips)
+            y = (float(i) - Kn[1, 2]) / Kn[1, 1]
+            x = (float(j) - Kn[0, 2] - Kn[0, 1] * y) / Kn[0, 0]
+            xd, yd = distort_xy(x, y, k1, k2, p1, p2, k3, k4, k5, k6)
+            us = Km[0, 0] * xd + Km[0, 1] * yd + Km[0, 2]
+            vs = Km[1, 1] * yd + Km[1, 2]
+            for b in range(out.shape[0]):
+                sample_d(img, b, i, j, us, vs, fill, out)
+            i += step
 
     k.py = {
         "project": project_kernel,
@@ -291,7 +330,7 @@ def remap(img: Any, map_uv: Any, fill: float) -> Any:
     b, _, _, c = (int(s) for s in img.shape)
     ho, wo = int(map_uv.shape[0]), int(map_uv.shape[1])
     out = empty_like(img, (b, ho, wo, c))
-    launch_1d(_kernels().remap, b * ho * wo, img, map_uv, float(fill), out)
+    launch_rows(_kernels().remap, ho, wo, img, map_uv, float(fill), out)
     return out
 
 
@@ -306,5 +345,5 @@ def undistort_image(
     ho, wo = out_hw
     out = empty_like(img, (b, ho, wo, c))
     args = (img, Kn, Km, *_coeffs(coeffs), float(fill), out)
-    launch_1d(_kernels().undistort_image, b * ho * wo, *args)
+    launch_rows(_kernels().undistort_image, ho, wo, *args)
     return out
