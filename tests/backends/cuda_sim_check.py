@@ -8,6 +8,7 @@ dispatches to a kernel is called on tensors and compared with the same call on N
 (the numba or NumPy path), and the kernels it launched are counted: one per call.
 
 Prints one line per check, ``ok NAME launches=N``; exits non-zero on the first failure.
+Importing it (pytest's ``--doctest-modules`` collection does) runs nothing.
 """
 
 from __future__ import annotations
@@ -18,38 +19,34 @@ from collections.abc import Callable
 from typing import Any
 
 import numpy as np
-
-if os.environ.get("NUMBA_ENABLE_CUDASIM") != "1":
-    raise SystemExit("run with NUMBA_ENABLE_CUDASIM=1 (numba's CUDA simulator)")
-
 import torch
-from numba.cuda.simulator.cudadrv.devicearray import FakeCUDAArray
 
 from imageform._cuda import _launch
-
-# CPU tensors stand for device arrays; the simulator runs the kernels on their NumPy views
-_is_cuda_array, _as_device_array = _launch.is_cuda_array, _launch.as_device_array
-
-
-def _stand_in_is(x: object) -> bool:
-    return isinstance(x, torch.Tensor) or _is_cuda_array(x)
-
-
-def _stand_in_as(x: Any) -> Any:
-    return FakeCUDAArray(x.numpy()) if isinstance(x, torch.Tensor) else _as_device_array(x)
-
-
-_launch.is_cuda_array = _stand_in_is
-_launch.as_device_array = _stand_in_as
-
-from imageform.geometry import (  # noqa: E402
+from imageform.geometry import (
     BrownConrady,
     project_points,
     project_points_distorted,
     remap_bilinear,
     undistort_image,
 )
-from imageform.sensor import demosaic  # noqa: E402
+from imageform.sensor import demosaic
+
+
+def stand_in_tensors() -> None:
+    """Let CPU tensors stand for device arrays (the simulator runs on their NumPy views)."""
+    from numba.cuda.simulator.cudadrv.devicearray import FakeCUDAArray
+
+    is_cuda_array, as_device_array = _launch.is_cuda_array, _launch.as_device_array
+
+    def stand_in_is(x: object) -> bool:
+        return isinstance(x, torch.Tensor) or is_cuda_array(x)
+
+    def stand_in_as(x: Any) -> Any:
+        return FakeCUDAArray(x.numpy()) if isinstance(x, torch.Tensor) else as_device_array(x)
+
+    _launch.is_cuda_array = stand_in_is
+    _launch.as_device_array = stand_in_as
+
 
 RNG = np.random.default_rng(29)
 BC = BrownConrady(k1=-0.21, k2=0.05, p1=0.002, p2=-0.001, k3=-0.01, k4=0.02, k5=0.001, k6=0.0)
@@ -219,5 +216,8 @@ def develop_checks() -> None:
 
 
 if __name__ == "__main__":
+    if os.environ.get("NUMBA_ENABLE_CUDASIM") != "1":
+        raise SystemExit("run with NUMBA_ENABLE_CUDASIM=1 (numba's CUDA simulator)")
+    stand_in_tensors()
     main()
     sys.exit(0)
