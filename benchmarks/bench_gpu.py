@@ -30,7 +30,8 @@ On a lent GPU, the whole check is one command (about 5-8 minutes on an H100/H200
 it compiling; the device's budget is 15)::
 
     PYTHONPATH=src python -m pytest -q -n 0 -p no:cacheprovider \\
-        tests/backends/test_cuda_device.py tests/backends/test_meta_device.py; \\
+        tests/backends/test_cuda_device.py tests/backends/test_meta_device.py \\
+        tests/backends/test_cuda_geometry_device.py; \\
     OPENBLAS_NUM_THREADS=1 PYTHONPATH=src python benchmarks/bench_gpu.py --device cuda \\
         --compile --out benchmarks/results/gpu-h200-DATE.md
 

@@ -126,6 +126,8 @@ def main() -> None:
         m[1, 1] = (10.0, 8.0)  # the last column and row, exactly
         check(f"remap_bilinear[{dt}]", remap_bilinear, (img, m), tol * 1e-2, fill=0.25)
         check(f"remap_bilinear[gray,{dt}]", remap_bilinear, (img[0, ..., 0], m), tol * 1e-2)
+        m32 = m.astype(np.float32)  # read as it is (no conversion kernel)
+        check(f"remap_bilinear[map32,{dt}]", remap_bilinear, (img, m32), tol * 1e-2)
         Ks = np.array([[9.0, 0.0, 5.2], [0.0, 8.5, 4.1], [0.0, 0.0, 1.0]])
 
         def undist(im: Any, Ks: np.ndarray = Ks) -> Any:

@@ -251,8 +251,8 @@ def _kernels() -> Any:
         i = cuda.blockIdx.y * cuda.blockDim.y + cuda.threadIdx.y
         step = cuda.gridDim.y * cuda.blockDim.y
         while i < out.shape[1]:  # no division (range() counts its trips)
-            u = mp[i, j, 0]
-            v = mp[i, j, 1]
+            u = float(mp[i, j, 0])  # float64 weights from a float32 map (exact positions)
+            v = float(mp[i, j, 1])
             for b in range(out.shape[0]):
                 sample_d(img, b, i, j, u, v, fill, out)
             i += step

@@ -515,15 +515,17 @@ def _remap_generic(image: Any, map_uv: Any, fill: float, xp: Any) -> Any:
     m = xp.asarray(map_uv, device=device_of(img))
     if m.ndim != 3 or m.shape[-1] != 2:
         raise InvalidInputError(f"expected map_uv of shape (H, W, 2), got {format_shape(m.shape)}")
-    m = xp.astype(m, xp.float64) if m.dtype != xp.float64 else m
     gray = img.ndim == 2
     x = img[..., None] if gray else img
     *lead, h, w, c = (int(n) for n in x.shape)
     from imageform._cuda import geometry as cuda_geometry
 
-    if cuda_geometry.on_cuda(x, m):  # one CUDA kernel (imageform._cuda.geometry)
+    if cuda_geometry.on_cuda(x) and cuda_geometry.on_cuda(m):
+        # one CUDA kernel (imageform._cuda.geometry); a float32 map is read as it is (its
+        # positions are exact in float64: the same numbers, no conversion kernel)
         out = cuda_geometry.remap(xp.reshape(x, (-1, h, w, c)), m, fill)
     else:
+        m = xp.astype(m, xp.float64) if m.dtype != xp.float64 else m
         out = remap_xp(xp.reshape(x, (-1, h, w, c)), m, fill, xp)
     out = xp.reshape(out, (*lead, int(m.shape[0]), int(m.shape[1]), c))
     return out[..., 0] if gray else out
