@@ -532,7 +532,6 @@ def ops_develop(device: Any, h: int, w: int) -> list[Op]:
     with the copies to and from the device.
     """
     import numpy as np
-    import torch
 
     from imageform._cuda.demosaic import MODE_UINT16, develop_on_device, develop_parameters
     from imageform.io import RawImage, develop
@@ -550,12 +549,16 @@ def ops_develop(device: Any, h: int, w: int) -> list[Op]:
         camera_to_srgb=np.eye(3),
         calibration_illuminant="D65",
     )
-    d_mosaic = torch.from_numpy(mosaic.astype(np.int32)).to(device).to(torch.uint16)
-    prm = torch.from_numpy(develop_parameters(np.full((2, 2), 64.0), np.full((2, 2), 1 / 4031)))
-    prm = prm.to(device)
-    m = torch.eye(3, dtype=torch.float32, device=device)
-    lut = torch.from_numpy(_transfer_table("srgb")).to(device)
-    out = torch.empty((h, w, 3), dtype=torch.uint16, device=device)
+    # numba device arrays (torch's uint16 support is partial); torch.cuda.synchronize()
+    # waits for them too (numba launches on the legacy default stream)
+    from imageform._cuda.geometry import import_cuda
+
+    cu = import_cuda()
+    d_mosaic = cu.to_device(mosaic)
+    prm = cu.to_device(develop_parameters(np.full((2, 2), 64.0), np.full((2, 2), 1 / 4031)))
+    m = cu.to_device(np.eye(3, dtype=np.float32))
+    lut = cu.to_device(_transfer_table("srgb"))
+    out = cu.device_array((h, w, 3), np.uint16)
     nbytes = 8 * h * w
     ops = []
     for method in ("bilinear", "malvar"):
