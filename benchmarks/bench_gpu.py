@@ -17,6 +17,15 @@ time), the practical ceiling of a memory-bound kernel. Kornia has no ΔE: CIEDE2
 compared with the bandwidth only. Each library runs in its native layout (imageform
 channels-last ``(H, W, 3)``, kornia channels-first ``(1, 3, H, W)``); no transposes are timed.
 
+The colour set (sRGB→Lab, Lab→sRGB, sRGB→linear, sRGB→HSV, ProPhoto→Luv, chromatic
+adaptation, white-balance gains, the four ΔE) runs imageform's fused numba-CUDA kernels on
+CUDA tensors (issue 29, docs/design.md "GPU kernels"); each such call has a second row,
+``imageform array-API``, the same call with ``IMAGEFORM_DISABLE_CUDA=1`` (the path before the
+kernels), and the header says whether the kernels ran (``_cuda._launch.status()``: numba's
+CUDA target needs its NVVM compiler, from numba-cuda's ``[cu12]``/``[cu13]`` extra or a CUDA
+toolkit; where it is missing, the kernels are off with one warning and both rows time the
+Array-API path). On CUDA the kernels-per-call column of a kernel row should read 1.
+
 Per row: the median time, the share of the copy bandwidth, the **kernels per call** (on
 CUDA the kernels and copies the profiler sees in one call; on a CPU the PyTorch operators
 that compute, counted by a dispatch mode: what a CUDA run would launch), whether the call
@@ -202,6 +211,26 @@ def _compiled(fn: Callable[..., Any], *args: Any) -> Callable[[], Any]:
     return lambda: cfn(*args)
 
 
+def _array_api(fn: Callable[[], Any]) -> Callable[[], Any]:
+    """``fn`` with imageform's CUDA kernels switched off (``IMAGEFORM_DISABLE_CUDA=1``)."""
+
+    def run() -> Any:
+        old = os.environ.get("IMAGEFORM_DISABLE_CUDA")
+        os.environ["IMAGEFORM_DISABLE_CUDA"] = "1"
+        try:
+            return fn()
+        finally:
+            if old is None:
+                del os.environ["IMAGEFORM_DISABLE_CUDA"]
+            else:
+                os.environ["IMAGEFORM_DISABLE_CUDA"] = old
+
+    return run
+
+
+AA = "imageform array-API"
+
+
 def ops_lab(device: Any, dtype: Any, h: int, w: int, compile_: bool) -> list[Op]:
     import kornia
     import torch
@@ -218,6 +247,7 @@ def ops_lab(device: Any, dtype: Any, h: int, w: int, compile_: bool) -> list[Op]
     name = f"sRGB→Lab {h}x{w}"
     ops = [
         Op(name, "imageform", lambda: convert(rgb, "srgb", "lab"), nbytes, versus="kornia"),
+        Op(name, AA, _array_api(lambda: convert(rgb, "srgb", "lab")), nbytes, versus="kornia"),
         Op(
             name, "kornia", lambda: kornia.color.rgb_to_lab(rgb_k), nbytes, f"max |ΔLab| {diff:.1e}"
         ),
@@ -238,7 +268,10 @@ def ops_ciede2000(device: Any, dtype: Any, h: int, w: int, compile_: bool) -> li
     lab2 = convert(torch.rand((h, w, 3), generator=g, dtype=dtype), "srgb", "lab").to(device)
     nbytes = (2 * lab1.numel() + h * w) * lab1.element_size()  # read 2 Lab, write ΔE
     name = f"CIEDE2000 {h}x{w}"
-    ops = [Op(name, "imageform", lambda: delta_e_ciede2000(lab1, lab2), nbytes, "kornia: none")]
+    ops = [
+        Op(name, "imageform", lambda: delta_e_ciede2000(lab1, lab2), nbytes, versus=AA),
+        Op(name, AA, _array_api(lambda: delta_e_ciede2000(lab1, lab2)), nbytes, "kornia: none"),
+    ]
     if compile_:
         fn = _compiled(delta_e_ciede2000, lab1, lab2)
         ops.append(Op(name, "imageform compiled", fn, nbytes, versus="imageform"))
@@ -584,6 +617,72 @@ def ops_develop(device: Any, h: int, w: int) -> list[Op]:
     return ops
 
 
+def ops_color(device: Any, dtype: Any, h: int, w: int, compile_: bool) -> list[Op]:
+    """The rest of the colour pointwise set (issue 29's fused kernels): one row per call.
+
+    Each imageform call is also timed on the Array-API path (``IMAGEFORM_DISABLE_CUDA=1``:
+    the path before the kernels); the ratio column of the kernel rows is kornia's time over
+    theirs where kornia has the operation, else the Array-API path's.
+    """
+    import kornia
+    import torch
+
+    from imageform.color import (
+        chromatic_adaptation,
+        convert,
+        delta_e_cie76,
+        delta_e_cie94,
+        delta_e_cmc,
+        srgb_to_linear,
+    )
+    from imageform.color.white_balance import apply_white_balance_gains
+
+    g = torch.Generator(device="cpu").manual_seed(6)
+    rgb = torch.rand((h, w, 3), generator=g, dtype=dtype).to(device)
+    rgb_k = rgb.permute(2, 0, 1).contiguous()[None]
+    lab = convert(rgb, "srgb", "lab")
+    lab_k = lab.permute(2, 0, 1).contiguous()[None]
+    lab2 = convert(torch.rand((h, w, 3), generator=g, dtype=dtype).to(device), "srgb", "lab")
+    xyz = convert(rgb, "srgb", "xyz")
+    img = 2 * rgb.numel() * rgb.element_size()  # read 3, write 3 values per pixel
+    de = (2 * lab.numel() + h * w) * lab.element_size()  # read 2 Lab, write ΔE
+    gains = [1.3, 1.0, 0.7]
+    calls: list[tuple[str, Callable[[], Any], int, Callable[[], Any] | None]] = [
+        (
+            "Lab→sRGB",
+            lambda: convert(lab, "lab", "srgb"),
+            img,
+            lambda: kornia.color.lab_to_rgb(lab_k),
+        ),
+        (
+            "sRGB→linear",
+            lambda: srgb_to_linear(rgb),
+            img,
+            lambda: kornia.color.rgb_to_linear_rgb(rgb_k),
+        ),
+        (
+            "sRGB→HSV",
+            lambda: convert(rgb, "srgb", "hsv"),
+            img,
+            lambda: kornia.color.rgb_to_hsv(rgb_k),
+        ),
+        ("ProPhoto→Luv", lambda: convert(rgb, "prophoto", "luv"), img, None),
+        ("adaptation D65→D50", lambda: chromatic_adaptation(xyz, "D65", "D50"), img, None),
+        ("white balance gains", lambda: apply_white_balance_gains(rgb, gains), img, None),
+        ("ΔE76", lambda: delta_e_cie76(lab, lab2), de, None),
+        ("ΔE94", lambda: delta_e_cie94(lab, lab2), de, None),
+        ("ΔE CMC", lambda: delta_e_cmc(lab, lab2), de, None),
+    ]
+    ops: list[Op] = []
+    for label, fn, nbytes, theirs in calls:
+        name = f"{label} {h}x{w}"
+        ops.append(Op(name, "imageform", fn, nbytes, versus="kornia" if theirs else AA))
+        ops.append(Op(name, AA, _array_api(fn), nbytes, versus="kornia" if theirs else None))
+        if theirs is not None:
+            ops.append(Op(name, "kornia", theirs, nbytes))
+    return ops
+
+
 def _header(device: Any, dtypes: list[Any], ceiling: float) -> str:
     import kornia
     import torch
@@ -605,8 +704,18 @@ def _header(device: Any, dtypes: list[Any], ceiling: float) -> str:
         f"{', '.join(str(d).removeprefix('torch.') for d in dtypes)} · "
         f"torch {torch.__version__} · kornia {kornia.__version__} · "
         f"Python {platform.python_version()}\n\n"
-        f"Measured copy bandwidth (ceiling): **{ceiling:.1f} GB/s**\n"
+        f"Measured copy bandwidth (ceiling): **{ceiling:.1f} GB/s** · imageform's CUDA "
+        f"kernels: {_kernel_status(device)}\n"
     )
+
+
+def _kernel_status(device: Any) -> str:
+    """Whether imageform's colour kernels ran (they do on CUDA tensors when numba can)."""
+    if device.type != "cuda":
+        return "not used (CPU tensors)"
+    from imageform._cuda import _launch
+
+    return _launch.status()
 
 
 def main() -> None:
@@ -642,8 +751,11 @@ def main() -> None:
     rows = []
     for dtype in dtypes:
         comp = args.compile and dtype == dtypes[0]  # compiled rows: the first dtype only
-        for make in (ops_lab, ops_ciede2000, ops_demosaic, ops_remap):
-            rows += measure(make(device, dtype, h, w, comp), device, dtype, args.repeat, ceiling)
+        for make in (ops_lab, ops_ciede2000, ops_color, ops_demosaic, ops_remap):
+            ops = make(device, dtype, h, w, comp)
+            for name in dict.fromkeys(op.name for op in ops):  # one group per operation
+                group = [op for op in ops if op.name == name]
+                rows += measure(group, device, dtype, args.repeat, ceiling)
         proj = ops_projection(device, dtype, int(args.points), int(args.chunk), comp)
         rows += measure(proj, device, dtype, args.repeat, ceiling)
         pts, chunk = int(args.points), int(args.chunk)
@@ -688,7 +800,10 @@ def main() -> None:
             "only)"
         )
         + "; projection: per chunk. vs kornia: kornia's time / this row's (above 1: faster; "
-        "CIEDE2000 compiled: vs eager imageform).\n"
+        "CIEDE2000 compiled: vs eager imageform; where kornia lacks the operation, the "
+        "imageform row's ratio is over the Array-API path's time). imageform: on CUDA "
+        "tensors the colour set runs imageform's fused numba-CUDA kernels (issue 29, one "
+        "launch per call); imageform array-API: the same call with IMAGEFORM_DISABLE_CUDA=1.\n"
     )
     print(text)
     if args.out is not None:

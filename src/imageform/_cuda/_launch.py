@@ -36,11 +36,13 @@ import numpy as np
 __all__ = [
     "as_device_array",
     "cuda",
+    "disable",
     "empty_like",
     "is_cuda_array",
     "launch_1d",
     "launch_count",
     "simulated",
+    "status",
     "use_cuda",
 ]
 
@@ -51,6 +53,8 @@ _SIM_THREADS = 32
 
 _LOCK = threading.Lock()
 _LAUNCHES = [0]
+#: Why the kernels were switched off in this process (a failed first compile), or "".
+_DISABLED = [""]
 
 
 def _env_on(name: str) -> bool:
@@ -69,8 +73,16 @@ def simulated() -> bool:
 @cache
 def cuda() -> Any:
     """Return numba's CUDA module (the ``numba-cuda`` package's when installed), imported once."""
-    from numba import cuda as numba_cuda
+    import warnings
 
+    from numba import cuda as numba_cuda
+    from numba.core.errors import NumbaPerformanceWarning
+
+    # a small image is a small grid: numba's low-occupancy note is no news for a pointwise
+    # kernel whose size is the caller's image (only this message is silenced)
+    warnings.filterwarnings(
+        "ignore", message=r"Grid size \d+ will likely", category=NumbaPerformanceWarning
+    )
     return numba_cuda
 
 
@@ -85,10 +97,11 @@ def _available() -> bool:
 def use_cuda() -> bool:
     """Whether imageform's CUDA kernels may run in this process.
 
-    False when ``IMAGEFORM_DISABLE_CUDA`` is set; otherwise True under numba's simulator
-    and when numba finds a CUDA device (checked once, on first use).
+    False when ``IMAGEFORM_DISABLE_CUDA`` is set or :func:`disable` was called; otherwise
+    True under numba's simulator and when numba finds a CUDA device (checked once, on first
+    use).
     """
-    if _env_on("IMAGEFORM_DISABLE_CUDA"):
+    if _env_on("IMAGEFORM_DISABLE_CUDA") or _DISABLED[0]:
         return False
     if simulated():
         return True
@@ -112,13 +125,17 @@ def _is_sim_array(x: object) -> bool:
 def is_cuda_array(x: object) -> bool:
     """Whether ``x`` lives in CUDA device memory (PyTorch CUDA, CuPy, ``__cuda_array_interface__``).
 
-    NumPy arrays and CPU or ``meta`` tensors answer False. Under the simulator its own
-    device arrays answer True too.
+    NumPy arrays, CPU or ``meta`` tensors and tensors being traced by ``torch.compile``
+    answer False. Under the simulator its own device arrays answer True too.
     """
     if isinstance(x, np.ndarray | np.generic | float | int | complex | bool):
         return False
     if _is_torch(x):
-        return x.device.type == "cuda"  # type: ignore[attr-defined]
+        import torch
+
+        # inside torch.compile tracing the tensor is a stand-in without memory: the traced
+        # Array-API path runs (and fuses) instead
+        return x.device.type == "cuda" and not torch.compiler.is_compiling()  # type: ignore[attr-defined]
     if _is_cupy(x) or _is_sim_array(x):
         return True
     try:
@@ -273,6 +290,37 @@ def launch_1d(kernel: Any, n: int, *args: Any) -> None:
             kernel[blocks, threads, stream](*dargs)
     else:
         kernel[blocks, threads, stream](*dargs)
+
+
+def disable(reason: str) -> None:
+    """Switch the kernels off for this process (the Array-API path runs), with one warning.
+
+    Called when numba's CUDA target cannot compile a kernel on this machine (no NVVM
+    library: ``pip install "imageform[cuda]"``), so that a missing toolkit costs speed, not
+    the call.
+    """
+    import warnings
+
+    if not _DISABLED[0]:
+        _DISABLED[0] = reason
+        warnings.warn(
+            f"imageform's CUDA kernels are off for this process: {reason}",
+            RuntimeWarning,
+            stacklevel=3,
+        )
+
+
+def status() -> str:
+    """One line: whether the kernels run here, on which numba CUDA target, or why not."""
+    if _env_on("IMAGEFORM_DISABLE_CUDA"):
+        return "off (IMAGEFORM_DISABLE_CUDA)"
+    if _DISABLED[0]:
+        return f"off ({_DISABLED[0]})"
+    if not use_cuda():
+        return "off (numba finds no CUDA device)"
+    c = cuda()
+    where = "simulator" if simulated() else str(c.get_current_device().name)
+    return f"on ({getattr(c, 'implementation', 'numba-cuda')} numba CUDA target, {where})"
 
 
 def launch_count() -> int:

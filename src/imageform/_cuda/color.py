@@ -25,12 +25,15 @@ from imageform._cuda import _launch
 from imageform._cuda.scalar import DELTA_E, NAMES, functions
 
 __all__ = [
+    "INT_SCALE",
+    "KernelUnavailable",
     "Step",
     "chain_source",
     "run_chain",
     "run_chain_twin",
     "run_delta_e",
     "run_delta_e_twin",
+    "run_elementwise",
     "supported",
 ]
 
@@ -41,13 +44,14 @@ _LOCK = threading.Lock()
 _KERNELS: dict[tuple[Any, ...], Any] = {}
 
 
-def chain_source(names: Sequence[str], target: str = "cuda") -> str:
+def chain_source(names: Sequence[str], target: str = "cuda", scale: float | None = None) -> str:
     """Return the Python source of the kernel that applies the steps ``names`` in turn.
 
     The kernel takes ``(x, out, n, p0, p1, ...)``: ``x`` and ``out`` of shape ``(n, 3)``
     (any strides), then every step's numbers in order. ``target="cuda"``: one thread per
     pixel (``cuda.grid(1)``); ``"cpu"``: the CPU twin, a loop over the pixels with the same
-    body.
+    body. ``scale``: integer code values in ``x`` (uint8: 255, uint16: 65535), read as
+    ``F(code) / F(scale)`` as the array path's ``as_image`` does.
     """
     args: list[str] = []
     body: list[str] = []
@@ -64,9 +68,11 @@ def chain_source(names: Sequence[str], target: str = "cuda") -> str:
             if target == "cuda"
             else ["    for i in range(n):"]
         ),
-        "        a = x[i, 0]",
-        "        b = x[i, 1]",
-        "        c = x[i, 2]",
+        *(
+            [f"        {v} = x[i, {j}]" for j, v in enumerate("abc")]
+            if scale is None
+            else [f"        {v} = F(x[i, {j}]) / F({float(scale)!r})" for j, v in enumerate("abc")]
+        ),
         *body,
         "        out[i, 0] = a",
         "        out[i, 1] = b",
@@ -75,8 +81,10 @@ def chain_source(names: Sequence[str], target: str = "cuda") -> str:
     return "\n".join(lines) + "\n"
 
 
-def _kernel(names: tuple[str, ...], dtype: str, target: str = "cuda") -> Any:
-    key = ("chain", names, dtype, target)
+def _kernel(
+    names: tuple[str, ...], dtype: str, target: str = "cuda", scale: float | None = None
+) -> Any:
+    key = ("chain", names, dtype, target, scale)
     k = _KERNELS.get(key)
     if k is not None:
         return k
@@ -85,9 +93,10 @@ def _kernel(names: tuple[str, ...], dtype: str, target: str = "cuda") -> Any:
         if k is None:
             fns = functions(dtype, target)
             ns: dict[str, Any] = {"cuda": _launch.cuda() if target == "cuda" else None}
+            ns["F"] = np.float32 if dtype == "float32" else np.float64
             for j, name in enumerate(names):
                 ns[f"s{j}"] = fns[name]
-            src = chain_source(names, target)
+            src = chain_source(names, target, scale)
             exec(compile(src, f"<imageform chain {names}>", "exec"), ns)
             if target == "cuda":
                 k = _launch.cuda().jit(ns["kernel"])
@@ -99,12 +108,48 @@ def _kernel(names: tuple[str, ...], dtype: str, target: str = "cuda") -> Any:
     return k
 
 
+class KernelUnavailable(RuntimeError):
+    """numba's CUDA target could not compile a kernel here; the kernels are now off."""
+
+
+_COMPILED: set[tuple[Any, ...]] = set()
+
+
+def _guarded_launch(key: tuple[Any, ...], kernel: Any, n: int, *args: Any) -> None:
+    """Launch; a kernel's first launch (its compilation) that fails in numba turns them off.
+
+    A machine whose numba CUDA target lacks its compiler (NVVM) or cannot type a kernel
+    raises :class:`KernelUnavailable` after :func:`imageform._cuda._launch.disable`: the
+    callers then run the Array-API path. Errors after a kernel has run once propagate.
+    """
+    if key in _COMPILED:
+        _launch.launch_1d(kernel, n, *args)
+        return
+    try:
+        _launch.launch_1d(kernel, n, *args)
+    except Exception as exc:
+        if not type(exc).__module__.startswith("numba"):
+            raise
+        _launch.disable(f"{type(exc).__name__}: {str(exc).splitlines()[0][:200]}")
+        raise KernelUnavailable(str(exc)) from exc
+    _COMPILED.add(key)
+
+
 def _dtype_name(x: Any) -> str | None:
     dt = str(getattr(x, "dtype", ""))
     for name in ("float32", "float64"):
         if dt.endswith(name):
             return name
     return None
+
+
+#: Full-range code values (docs/conventions.md): uint8 / 255, uint16 / 65535, in float32.
+INT_SCALE = {"uint8": 255.0, "uint16": 65535.0}
+
+
+def _int_scale(x: Any) -> float | None:
+    dt = str(getattr(x, "dtype", "")).removeprefix("torch.")
+    return INT_SCALE.get(dt)
 
 
 def _flat(x: Any, channels: bool = True) -> Any:
@@ -114,7 +159,11 @@ def _flat(x: Any, channels: bool = True) -> Any:
     n = 1
     for s in lead:
         n *= int(s)
-    shape = (n, full[-1]) if channels else (n,)
+    return _reshape(x, (n, full[-1]) if channels else (n,))
+
+
+def _reshape(x: Any, shape: tuple[int, ...]) -> Any:
+    """Return ``x`` reshaped in its library (PyTorch, CuPy) or as a numba device array."""
     if _launch._is_torch(x) or _launch._is_cupy(x):
         return x.reshape(shape)
     d = _launch.as_device_array(x).reshape(shape)
@@ -130,10 +179,12 @@ def _cast(dtype: str, values: Sequence[float]) -> tuple[Any, ...]:
     return tuple(f(v) for v in values)
 
 
-def supported(x: Any) -> bool:
+def supported(x: Any, integers: bool = False) -> bool:
     """Whether the kernels take ``x``: a CUDA array of float32/float64, shape ``(..., 3)``.
 
-    PyTorch tensors that record gradients are left to the Array-API path (autograd).
+    ``integers``: uint8/uint16 code values too (read as code / 255 or / 65535, computed and
+    returned in float32). PyTorch tensors that record gradients are left to the Array-API
+    path (autograd).
     """
     if not (_launch.use_cuda() and _launch.is_cuda_array(x)):
         return False
@@ -142,7 +193,7 @@ def supported(x: Any) -> bool:
         return False
     if _launch._is_torch(x) and x.requires_grad:
         return False
-    return _dtype_name(x) is not None
+    return _dtype_name(x) is not None or (integers and _int_scale(x) is not None)
 
 
 def _params(steps: Sequence[Step]) -> tuple[tuple[str, ...], list[float]]:
@@ -162,13 +213,15 @@ def run_chain_twin(x: np.ndarray, steps: Sequence[Step]) -> np.ndarray:
     CPU with the same dtype (float32 arithmetic for float32 input): CI checks the kernels'
     arithmetic with it without a GPU.
     """
-    dtype = _dtype_name(x)
+    dtype, scale = _dtype_name(x), _int_scale(x)
+    if dtype is None and scale is None:
+        raise TypeError(f"expected float32, float64, uint8 or uint16, got dtype {x.dtype}")
     if dtype is None:
-        raise TypeError(f"expected float32 or float64, got dtype {x.dtype}")
+        dtype = "float32"
     names, params = _params(steps)
     xf = np.ascontiguousarray(x).reshape(-1, 3)
-    out = np.empty_like(xf)
-    _kernel(names, dtype, "cpu")(xf, out, xf.shape[0], *_cast(dtype, params))
+    out = np.empty(xf.shape, dtype)
+    _kernel(names, dtype, "cpu", scale)(xf, out, xf.shape[0], *_cast(dtype, params))
     return out.reshape(x.shape)
 
 
@@ -177,15 +230,37 @@ def run_chain(x: Any, steps: Sequence[Step]) -> Any:
 
     Returns a new array of ``x``'s library, device, dtype and shape.
     """
-    dtype = _dtype_name(x)
+    dtype, scale = _dtype_name(x), _int_scale(x)
+    if dtype is None and scale is None:
+        raise TypeError(f"expected a float or uint8/uint16 CUDA array, got dtype {x.dtype}")
     if dtype is None:
-        raise TypeError(f"expected a float32 or float64 CUDA array, got dtype {x.dtype}")
+        dtype = "float32"  # code values compute in float32 (IMAGE_INTEGER_DTYPE)
     names, params = _params(steps)
-    out = _launch.empty_like(x)
+    out = _launch.empty_like(x, dtype=dtype if scale is not None else None)
     xf, of = _flat(x), _flat(out)
     n = int(xf.shape[0])
-    _launch.launch_1d(_kernel(names, dtype), n, xf, of, n, *_cast(dtype, params))
+    kernel = _kernel(names, dtype, "cuda", scale)
+    key = ("chain", names, dtype, scale)
+    _guarded_launch(key, kernel, n, xf, of, n, *_cast(dtype, params))
     return out
+
+
+def run_elementwise(x: Any, steps: Sequence[Step]) -> Any:
+    """Apply channel-independent ``steps`` (transfer curves) to a CUDA array of any shape.
+
+    The array's elements are read three at a time (its size must be a multiple of 3); the
+    result has ``x``'s shape.
+    """
+    shape = tuple(int(s) for s in x.shape)
+    size = 1
+    for s in shape:
+        size *= s
+    if size % 3:
+        raise ValueError(f"expected a size that is a multiple of 3, got shape {shape}")
+    if shape[-1:] == (3,):
+        return run_chain(x, steps)
+    out = run_chain(_reshape(x, (size // 3, 3)), steps)
+    return _reshape(out, shape)
 
 
 _DE_SOURCE = """
@@ -231,7 +306,7 @@ def run_delta_e(x: Any, y: Any, name: str, params: Sequence[float] = ()) -> Any:
     n = int(xf.shape[0])
     of = _flat(out, channels=False)
     vals = _cast(dtype, params) if params else (0.0,)
-    _launch.launch_1d(_de_kernel(name, dtype), n, xf, yf, of, n, *vals)
+    _guarded_launch(("de", name, dtype), _de_kernel(name, dtype), n, xf, yf, of, n, *vals)
     return out
 
 
