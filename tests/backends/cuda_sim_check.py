@@ -158,6 +158,38 @@ def main() -> None:
             )
     strided_checks()
     develop_checks()
+    fallback_check()  # last: it switches the kernels off for the process
+
+
+def fallback_check() -> None:
+    """A kernel that numba cannot compile turns the kernels off; the call still answers."""
+    import warnings
+
+    from numba.core.errors import TypingError
+
+    from imageform._cuda import geometry
+
+    class Broken:
+        def __getitem__(self, config: Any) -> Any:
+            def launch(*args: Any) -> None:
+                raise TypingError("cannot type this kernel (on purpose)")
+
+            return launch
+
+    geometry._kernels().distort = Broken()
+    geometry._COMPILED.clear()
+    xy = RNG.uniform(-0.6, 0.6, (7, 2))
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        got = BC.distort(torch.from_numpy(xy))
+    assert isinstance(got, torch.Tensor)
+    assert np.abs(got.numpy() - np.asarray(BC.distort(xy))).max() <= 1e-12
+    assert _launch.status().startswith("off (TypingError"), _launch.status()
+    assert any("kernels are off" in str(w.message) for w in caught)
+    before = _launch.launch_count()
+    demosaic(torch.from_numpy(RNG.uniform(0, 1, (6, 8))), "RGGB")  # the Array-API path now
+    assert _launch.launch_count() == before
+    print("ok fallback when a kernel cannot compile launches=1", flush=True)
 
 
 def strided_checks() -> None:

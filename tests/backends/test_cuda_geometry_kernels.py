@@ -67,6 +67,7 @@ def test_simulator_check() -> None:
         "demosaic[bilinear",
         "demosaic[malvar",
         "develop[",
+        "fallback",
     ):
         assert op in names, f"{op} not checked: {tail}"
     assert len(lines) >= 50, tail

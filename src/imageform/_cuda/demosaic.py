@@ -25,8 +25,9 @@ from typing import Any
 
 import numpy as np
 
+from imageform._cuda import _launch
 from imageform._cuda._launch import empty_like
-from imageform._cuda.geometry import import_cuda, launch_rows
+from imageform._cuda.geometry import guarded_launch, import_cuda, launch_rows
 
 __all__ = [
     "MODE_CAMERA",
@@ -220,17 +221,21 @@ def _kernels() -> Any:
     return k
 
 
-def demosaic(raw: Any, ry: int, rx: int, method: str, clip: bool) -> Any:
+def demosaic(raw: Any, ry: int, rx: int, method: str, clip: bool) -> Any | None:
     """Demosaic a float device mosaic ``(B, H, W)`` (red at ``(ry, rx)``) into ``(B, H, W, 3)``.
 
     ``method``: ``"bilinear"`` or ``"malvar"``; ``clip``: clip to [0, 1] in the same pass.
-    One kernel launch.
+    One kernel launch; ``None`` when the kernels turned out unusable (the caller's Array-API
+    path runs).
     """
     nb, h, w = (int(s) for s in raw.shape)
     out = empty_like(raw, (nb, h, w, 3))
     args = (raw, int(ry), int(rx), _METHODS[method], bool(clip), out)
-    kern = _kernels().demosaic32 if str(raw.dtype).endswith("float32") else _kernels().demosaic64
-    launch_rows(kern, h, w, *args)
+    f32 = str(raw.dtype).endswith("float32")
+    kern = _kernels().demosaic32 if f32 else _kernels().demosaic64
+    launch = lambda kernel, *a: launch_rows(kernel, h, w, *a)  # noqa: E731
+    if not guarded_launch(launch, "demosaic", kern, *args):
+        return None
     return out
 
 
@@ -304,5 +309,12 @@ def develop_on_device(
     none_u = cuda.device_array((0, 0, 3), np.uint16)
     out_f, out_u = (none_f, out) if mode == MODE_UINT16 else (out, none_u)
     args = (mosaic, prm, int(ry), int(rx), _METHODS[method], m, lut, bool(encode), int(mode))
-    launch_rows(_kernels().develop, h, w, *args, out_f, out_u)
+    launch = lambda kernel, *a: launch_rows(kernel, h, w, *a)  # noqa: E731
+    if not guarded_launch(launch, "develop", _kernels().develop, *args, out_f, out_u):
+        from imageform.errors import InvalidInputError
+
+        raise InvalidInputError(
+            "device='cuda': numba's CUDA target cannot compile the kernel here "
+            f"({_launch.status()}); use the CPU"
+        )
     return out

@@ -46,6 +46,7 @@ from imageform._cuda._launch import empty_like, launch_1d
 
 __all__ = [
     "distort",
+    "guarded_launch",
     "import_cuda",
     "launch_rows",
     "on_cuda",
@@ -126,6 +127,33 @@ def launch_rows(kernel: Any, rows: int, cols: int, *args: Any) -> None:
             kernel[grid, (bx, by), stream](*dargs)
     else:
         kernel[grid, (bx, by), stream](*dargs)
+
+
+#: Kernels (name and argument dtypes) that have compiled and run once in this process.
+_COMPILED: set[tuple[Any, ...]] = set()
+
+
+def guarded_launch(launch: Any, name: str, kernel: Any, *args: Any) -> bool:
+    """``launch(kernel, *args)``; False when its compilation failed (the kernels then off).
+
+    A machine whose numba CUDA target lacks its compiler (NVVM) or cannot type a kernel turns
+    the kernels off for the process (:func:`imageform._cuda._launch.disable`, one warning),
+    and the callers run the Array-API path, as the colour kernels do. Errors after a kernel
+    has compiled once, and errors that are not numba's, propagate.
+    """
+    key = (name, *(str(getattr(a, "dtype", type(a).__name__)) for a in args))
+    if key in _COMPILED:
+        launch(kernel, *args)
+        return True
+    try:
+        launch(kernel, *args)
+    except Exception as exc:
+        if not type(exc).__module__.startswith("numba"):
+            raise
+        _launch.disable(f"{type(exc).__name__}: {str(exc).splitlines()[0][:200]}")
+        return False
+    _COMPILED.add(key)
+    return True
 
 
 #: ``numba.cuda``, set by :func:`import_cuda`. A module global, not a local of the kernel
@@ -287,6 +315,16 @@ def _kernels() -> Any:
     return k
 
 
+def _points(n: int) -> Any:
+    """Return a launcher of ``n`` threads (:func:`imageform._cuda._launch.launch_1d`)."""
+    return lambda kernel, *args: launch_1d(kernel, n, *args)
+
+
+def _rows(rows: int, cols: int) -> Any:
+    """Return a launcher over a ``rows x cols`` image (:func:`launch_rows`)."""
+    return lambda kernel, *args: launch_rows(kernel, rows, cols, *args)
+
+
 def _coeffs(coeffs: Any) -> tuple[float, ...]:
     """Return the eight Brown-Conrady coefficients as Python floats (zeros for ``None``)."""
     if coeffs is None:
@@ -295,33 +333,39 @@ def _coeffs(coeffs: Any) -> tuple[float, ...]:
     return c + (0.0,) * (8 - len(c))
 
 
-def project(pts: Any, K: Any, R: Any, t: Any, coeffs: Any = None) -> tuple[Any, Any]:
+def project(pts: Any, K: Any, R: Any, t: Any, coeffs: Any = None) -> tuple[Any, Any] | None:
     """Project ``(N, 3)`` device points; ``coeffs`` Brown-Conrady's eight, or ``None`` (pinhole).
 
     ``K``, ``R``, ``t`` device arrays of the points' dtype. Returns ``(uv (N, 2), valid (N,))``
-    of the points' library and device; one kernel launch.
+    of the points' library and device; one kernel launch. ``None`` (every wrapper here) when
+    the kernels turned out unusable (:func:`guarded_launch`): the caller's Array-API path runs.
     """
     n = int(pts.shape[0])
     uv = empty_like(pts, (n, 2))
     valid = empty_like(pts, (n,), np.bool_)
-    launch_1d(_kernels().project, n, pts, K, R, t, *_coeffs(coeffs), coeffs is not None, uv, valid)
+    args = (pts, K, R, t, *_coeffs(coeffs), coeffs is not None, uv, valid)
+    if not guarded_launch(_points(n), "project", _kernels().project, *args):
+        return None
     return uv, valid
 
 
 def distort(xy: Any, coeffs: Any) -> Any:
     """Brown-Conrady on ``(N, 2)`` device points; one launch."""
     out = empty_like(xy)
-    launch_1d(_kernels().distort, int(xy.shape[0]), xy, *_coeffs(coeffs), out)
+    launch = _points(int(xy.shape[0]))
+    if not guarded_launch(launch, "distort", _kernels().distort, xy, *_coeffs(coeffs), out):
+        return None
     return out
 
 
-def undistort(xy: Any, coeffs: Any, max_iter: int, tol: float) -> tuple[Any, Any]:
+def undistort(xy: Any, coeffs: Any, max_iter: int, tol: float) -> tuple[Any, Any] | None:
     """Newton's inverse of Brown-Conrady on ``(N, 2)`` device points: ``(xy, ok)``; one launch."""
     n = int(xy.shape[0])
     out = empty_like(xy, (n, 2))
     ok = empty_like(xy, (n,), np.bool_)
     args = (xy, *_coeffs(coeffs), int(max_iter), float(tol), out, ok)
-    launch_1d(_kernels().undistort, n, *args)
+    if not guarded_launch(_points(n), "undistort", _kernels().undistort, *args):
+        return None
     return out, ok
 
 
@@ -330,7 +374,9 @@ def remap(img: Any, map_uv: Any, fill: float) -> Any:
     b, _, _, c = (int(s) for s in img.shape)
     ho, wo = int(map_uv.shape[0]), int(map_uv.shape[1])
     out = empty_like(img, (b, ho, wo, c))
-    launch_rows(_kernels().remap, ho, wo, img, map_uv, float(fill), out)
+    args = (img, map_uv, float(fill), out)
+    if not guarded_launch(_rows(ho, wo), "remap", _kernels().remap, *args):
+        return None
     return out
 
 
@@ -345,5 +391,6 @@ def undistort_image(
     ho, wo = out_hw
     out = empty_like(img, (b, ho, wo, c))
     args = (img, Kn, Km, *_coeffs(coeffs), float(fill), out)
-    launch_rows(_kernels().undistort_image, ho, wo, *args)
+    if not guarded_launch(_rows(ho, wo), "undistort_image", _kernels().undistort_image, *args):
+        return None
     return out

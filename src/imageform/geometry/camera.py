@@ -203,7 +203,9 @@ def project_points(
         from imageform._cuda import geometry as cuda_geometry
 
         if cuda_geometry.on_cuda(X, Km, Rm, tv):  # one CUDA kernel (pinhole)
-            return Projection(*cuda_geometry.project(X, Km, Rm, tv, None))
+            res = cuda_geometry.project(X, Km, Rm, tv, None)
+            if res is not None:  # None: the kernels are unusable here
+                return Projection(*res)
     if (
         X.ndim == 2
         and Km.ndim == 2

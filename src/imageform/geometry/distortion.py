@@ -176,8 +176,9 @@ class BrownConrady:
         xp = namespace(xy)
         arr = as_points(xy, "xy", 2, xp=xp)
         if _cuda_geometry().on_cuda(arr):  # one fused CUDA kernel (imageform._cuda.geometry)
-            flat = xp.reshape(arr, (-1, 2))
-            return xp.reshape(_cuda_geometry().distort(flat, self.coeffs), tuple(arr.shape))
+            out = _cuda_geometry().distort(xp.reshape(arr, (-1, 2)), self.coeffs)
+            if out is not None:  # None: the kernels are unusable here
+                return xp.reshape(out, tuple(arr.shape))
         if use_numba(arr, min_size=2 * NUMBA_MIN_POINTS):
             from imageform._kernels.distortion import brown_conrady_distort
 
@@ -208,8 +209,9 @@ class BrownConrady:
         it, t = _iter_args(max_iter, tol, xp, arr.dtype)
         if _cuda_geometry().on_cuda(arr):  # one CUDA kernel, at most max_iter Newton steps
             shape = tuple(arr.shape)
-            out, ok = _cuda_geometry().undistort(xp.reshape(arr, (-1, 2)), self.coeffs, it, t)
-            return Undistorted(xp.reshape(out, shape), xp.reshape(ok, shape[:-1]))
+            res = _cuda_geometry().undistort(xp.reshape(arr, (-1, 2)), self.coeffs, it, t)
+            if res is not None:  # None: the kernels are unusable here
+                return Undistorted(xp.reshape(res[0], shape), xp.reshape(res[1], shape[:-1]))
         if use_numba(arr, min_size=2 * NUMBA_MIN_POINTS):
             from imageform._kernels.distortion import brown_conrady_undistort
 
@@ -444,8 +446,10 @@ def project_points_distorted(
     ):  # one fused CUDA kernel (imageform._cuda.geometry)
         shape = tuple(pts.shape)
         coeffs = distortion.coeffs if distortion is not None else (0.0,) * 8
-        uv, valid = _cuda_geometry().project(xp.reshape(pts, (-1, 3)), Km, Rm, tv, coeffs)
-        return Projection(xp.reshape(uv, (*shape[:-1], 2)), xp.reshape(valid, shape[:-1]))
+        res = _cuda_geometry().project(xp.reshape(pts, (-1, 3)), Km, Rm, tv, coeffs)
+        if res is not None:  # None: the kernels are unusable here
+            uv, valid = res
+            return Projection(xp.reshape(uv, (*shape[:-1], 2)), xp.reshape(valid, shape[:-1]))
     if (
         isinstance(distortion, BrownConrady)
         and use_numba(pts, min_size=3 * NUMBA_MIN_POINTS)

@@ -499,6 +499,8 @@ def _undistort_cuda(
     out = cuda_geometry.undistort_image(
         xp.reshape(x, (-1, h, w, c)), Kn, Km, coeffs, out_hw, float(fill)
     )
+    if out is None:  # the kernels are unusable here
+        return None
     out = xp.reshape(out, (*lead, out_hw[0], out_hw[1], c))
     return out[..., 0] if gray else out
 
@@ -520,11 +522,13 @@ def _remap_generic(image: Any, map_uv: Any, fill: float, xp: Any) -> Any:
     *lead, h, w, c = (int(n) for n in x.shape)
     from imageform._cuda import geometry as cuda_geometry
 
+    out = None
     if cuda_geometry.on_cuda(x) and cuda_geometry.on_cuda(m):
         # one CUDA kernel (imageform._cuda.geometry); a float32 map is read as it is (its
-        # positions are exact in float64: the same numbers, no conversion kernel)
+        # positions are exact in float64: the same numbers, no conversion kernel); None when
+        # the kernels are unusable here
         out = cuda_geometry.remap(xp.reshape(x, (-1, h, w, c)), m, fill)
-    else:
+    if out is None:
         m = xp.astype(m, xp.float64) if m.dtype != xp.float64 else m
         out = remap_xp(xp.reshape(x, (-1, h, w, c)), m, fill, xp)
     out = xp.reshape(out, (*lead, int(m.shape[0]), int(m.shape[1]), c))

@@ -229,7 +229,8 @@ def demosaic(
             from imageform._cuda.demosaic import demosaic as demosaic_cuda
 
             out = demosaic_cuda(xp.reshape(arr, (-1, h, w)), ry, rx, method, clip)
-            return xp.reshape(out, (*shape[:-2], h, w, 3))
+            if out is not None:  # None: the kernels are unusable here
+                return xp.reshape(out, (*shape[:-2], h, w, 3))
         out = demosaic_xp(arr, ry, rx, method, xp)
         return xp.clip(out, 0.0, 1.0) if clip else out
     # the RGB result, the padded mosaic and the kernels' planes: about 8 float64 mosaics
