@@ -86,6 +86,18 @@ except Exception as exc:  # no NVVM (libnvvm) on this machine
     print("SKIP", type(exc).__name__, str(exc).splitlines()[0] if str(exc) else "")
     sys.exit(0)
 from imageform._cuda import demosaic as dm, geometry as g
+try:  # a numba CUDA target that wants a driver to compile device functions: cannot check here
+    dev = cuda.jit(device=True)(lambda x: x + 1.0)
+
+    def probe(a):
+        a[0] = dev(a[0])
+
+    cuda.compile_ptx(probe, (T.float64[::1],), cc=(9, 0))
+except Exception as exc:
+    if type(exc).__name__ != "CudaSupportError":
+        raise
+    print("SKIP", type(exc).__name__, "(device functions need a driver here)")
+    sys.exit(0)
 A = lambda dt, nd, layout="C": T.Array(dt, nd, layout)
 f64, f32, b1, i64 = T.float64, T.float32, T.boolean, T.int64
 kg, kd = g._kernels(), dm._kernels()
