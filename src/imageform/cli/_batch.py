@@ -42,6 +42,19 @@ def _options(wf: Workflow, kw: dict[str, Any]) -> Any:
         raise click.UsageError(str(exc)) from None
 
 
+def _refuse_absent_device(opts: Any) -> None:
+    """``--device cuda`` where no GPU is usable: one line, exit 1, before any job starts."""
+    if getattr(opts, "device", None) != "cuda":
+        return
+    from imageform._cuda.geometry import require_cuda
+
+    try:
+        require_cuda("--device cuda")
+    except ImageformError as exc:
+        click.echo(f"imageform: error: {exc}", err=True)
+        raise CommandExit(1) from None
+
+
 def _quiet_dask() -> None:
     """Silence dask's own warnings in this process.
 
@@ -88,6 +101,7 @@ def _batch_command(wf: Workflow) -> click.Command:
         scheduler, workers, suffix = kw.pop("scheduler"), kw.pop("workers"), kw.pop("suffix")
         force, as_json = bool(kw.pop("force")), bool(kw.pop("json_out"))
         opts = _options(wf, kw)
+        _refuse_absent_device(opts)
         if Path(out).is_dir():  # no job replaces a FIFO or a device (the runner renames over)
             refuse_special_inside(out)
         _quiet_dask()

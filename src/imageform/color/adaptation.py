@@ -175,6 +175,11 @@ def chromatic_adaptation(
     mat = chromatic_adaptation_matrix(
         src_white, dst_white, method, degree=degree, observer=observer
     )
+    from imageform.color import _gpu
+
+    on_gpu = _gpu.adapt(xyz, mat)  # a CUDA array: one kernel
+    if on_gpu is not None:
+        return on_gpu
     xp = namespace(xyz)
     x = as_points(xyz, "xyz", 3, xp=xp)
     mt = xp.asarray(mat.T.copy(), dtype=x.dtype, device=device_of(x))

@@ -58,7 +58,7 @@ from imageform._validate import (
     check_name as check_option,
 )
 from imageform.color.rgb_spaces import xyz_to_linear_rgb
-from imageform.color.transfer import TRANSFER_FUNCTIONS, decode, encode
+from imageform.color.transfer import TRANSFER_FUNCTIONS, _kernel_step, decode, encode
 from imageform.color.whitepoints import resolve_white, xy_to_xyz_white
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
 
@@ -544,6 +544,13 @@ def apply_white_balance_gains(image: object, gains: Any, *, transfer: str = "srg
 
     ``gains`` is ``(..., 3)`` positive finite numbers (one triple per image of a batch).
     """
+    from imageform.color import _gpu
+
+    tname = check_option(transfer, TRANSFER_FUNCTIONS, "transfer function")
+    # a CUDA image and 3 host gains: one kernel
+    on_gpu = _gpu.gains(image, gains, _kernel_step(tname, True), _kernel_step(tname, False))
+    if on_gpu is not None:
+        return on_gpu
     xp, lin, tname = _linear(image, transfer, -1)
     g = as_real_array(gains, "gains", positive=True)
     if g.ndim < 1 or g.shape[-1] != 3:

@@ -657,6 +657,7 @@ class Development:
         demosaic: str,
         orientation: int,
         notes: tuple[str, ...],
+        device: str = "cpu",
     ) -> None:
         self._raw = raw
         # the sensor's orientation: given for a linear raw and the other demosaicing methods;
@@ -673,6 +674,7 @@ class Development:
         self.demosaic = demosaic
         self.orientation = orientation
         self.notes = notes
+        self._device = device  # "cuda": the fused pass runs as one CUDA kernel
 
     def _fused(self, mode: int) -> np.ndarray:
         """Run the fused pass over the mosaic (``mode``: camera RGB, float or uint16 output)."""
@@ -685,6 +687,20 @@ class Development:
         black = np.asarray(raw.black_level, np.float64)
         scale = (self.gains[idx] / (raw.white_level - black)).astype(np.float32)
         red = str(raw.cfa_pattern).index("R")
+        if self._device == "cuda":
+            from imageform._cuda.demosaic import develop_bayer
+
+            return develop_bayer(
+                raw.mosaic,
+                black.astype(np.float32),
+                scale,
+                red // 2,
+                red % 2,
+                self.demosaic,
+                self._render,
+                self._table,
+                mode,
+            )
         shape = (h, w, 3)
         out_f = np.empty(shape if mode != MODE_UINT16 else (0, 0, 3), np.float32)
         out_u = np.empty(shape if mode == MODE_UINT16 else (0, 0, 3), np.uint16)
@@ -812,6 +828,9 @@ class Development:
         return np.ascontiguousarray(_orient(out, self.orientation))
 
 
+#: Demosaicing methods that ``develop(device="cuda")`` runs on the GPU.
+_CUDA_METHODS = ("bilinear", "malvar")
+
 #: Mosaics of fewer pixels are developed in the calling thread (waking the pool costs more).
 _THREADS_MIN_PIXELS = 1 << 16
 
@@ -842,6 +861,7 @@ def develop(
     space: str = "srgb",
     linear: bool = False,
     orient: bool = True,
+    device: str = "cpu",
 ) -> Development:
     r"""Develop a raw image with imageform's own pipeline, keeping every stage.
 
@@ -885,6 +905,12 @@ def develop(
     orient : bool
         Turn the result as the file's orientation tag says (as LibRaw does by default);
         False keeps the sensor's orientation.
+    device : {"cpu", "cuda"}
+        Where steps 1-6 of a Bayer mosaic run. ``"cuda"``: bilinear and Malvar development
+        as one CUDA kernel (:func:`imageform._cuda.demosaic.develop_bayer`: the mosaic copied
+        to the GPU, every stage fused per pixel in float32, the result copied back; the CPU
+        pass's arithmetic); other methods and linear raws stay on the CPU, with a note.
+        Raises when no CUDA device is usable.
 
     Returns
     -------
@@ -895,7 +921,7 @@ def develop(
     ------
     InvalidInputError
         An unknown method, space or white balance; a raw file with no photosite above its
-        black level (nothing to develop).
+        black level (nothing to develop); ``device="cuda"`` with no usable CUDA device.
     """
     from imageform.color import (
         RGB_SPACES,
@@ -913,6 +939,13 @@ def develop(
         raise InvalidInputError(
             f"expected raw as a RawImage (read_raw) or a path, got {describe(raw)}"
         )
+    where_to = str(device).lower()
+    if where_to not in ("cpu", "cuda"):
+        raise InvalidInputError(f"unknown device {device!r}; valid: cpu, cuda")
+    if where_to == "cuda":
+        from imageform._cuda.geometry import require_cuda
+
+        require_cuda("device='cuda'")
     method = str(demosaic).lower().replace("-", "_")
     if method not in DEMOSAIC_METHODS:
         raise InvalidInputError(
@@ -935,6 +968,12 @@ def develop(
             f"{where}: white level {raw.white_level:g} is not above the black level"
         )
     notes: list[str] = []
+    on_gpu = where_to == "cuda" and raw.cfa_pattern is not None and method in _CUDA_METHODS
+    if where_to == "cuda" and not on_gpu:
+        notes.append(
+            f"note: {'a linear raw' if raw.cfa_pattern is None else method + ' demosaicing'} "
+            "is developed on the CPU (the CUDA kernel does bilinear and malvar Bayer mosaics)"
+        )
     h, w = raw.mosaic.shape[:2]
     if h < 2 or w < 2:
         raise InvalidInputError(
@@ -948,7 +987,7 @@ def develop(
         cam *= (gains / span).astype(np.float32)
         np.clip(cam, 0.0, 1.0, out=cam)
         method = "none"
-    elif method != "bilinear":
+    elif method != "bilinear" and not on_gpu:
         idx = np.array(_cfa_indices(raw.cfa_pattern)).reshape(2, 2)
         scale = (gains[idx] / span).astype(np.float32)
         black32 = black.astype(np.float32)
@@ -1003,6 +1042,7 @@ def develop(
         demosaic=method,
         orientation=raw.orientation if orient else 0,
         notes=tuple(notes),
+        device="cuda" if on_gpu else "cpu",
     )
 
 

@@ -1,0 +1,337 @@
+"""Fused CUDA colour kernels: a chain of per-pixel steps, or a colour difference, in one launch.
+
+A colour conversion is a chain of steps (:data:`imageform._cuda.scalar.NAMES`: transfer
+curves, 3x3 matrices, CIELAB, LCh, Luv, xyY, HSV/HSL/HSI, Y'CbCr, gains); :func:`run_chain`
+generates one kernel per chain and dtype that reads a pixel once, applies every step in
+registers and writes it once, so ``convert(x, "srgb", "lab")`` is one launch whatever the
+length of its path. The steps' numbers (matrices, whites, exponents) are kernel arguments,
+not device arrays: a call uploads nothing. :func:`run_delta_e` is one launch per ΔE.
+
+Inputs are CUDA arrays of any library (:mod:`imageform._cuda._launch`), shape ``(..., 3)``,
+float32 or float64; the result is a new array of the input's library, device and dtype.
+The kernels are compiled by numba's CUDA target on first use of each chain and dtype (about
+a second each), then cached for the process.
+"""
+
+from __future__ import annotations
+
+import threading
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+
+from imageform._cuda import _launch
+from imageform._cuda.scalar import DELTA_E, NAMES, functions
+
+__all__ = [
+    "INT_SCALE",
+    "KernelUnavailable",
+    "Step",
+    "chain_source",
+    "run_chain",
+    "run_chain_twin",
+    "run_delta_e",
+    "run_delta_e_twin",
+    "run_elementwise",
+    "supported",
+]
+
+#: One step of a chain: its name in :data:`~imageform._cuda.scalar.NAMES` and its numbers.
+Step = tuple[str, tuple[float, ...]]
+
+_LOCK = threading.Lock()
+_KERNELS: dict[tuple[Any, ...], Any] = {}
+
+
+def chain_source(names: Sequence[str], target: str = "cuda", scale: float | None = None) -> str:
+    """Return the Python source of the kernel that applies the steps ``names`` in turn.
+
+    The kernel takes ``(x, out, n, p0, p1, ...)``: ``x`` and ``out`` of shape ``(n, 3)``
+    (any strides), then every step's numbers in order. ``target="cuda"``: one thread per
+    pixel (``cuda.grid(1)``); ``"cpu"``: the CPU twin, a loop over the pixels with the same
+    body. ``scale``: integer code values in ``x`` (uint8: 255, uint16: 65535), read as
+    ``F(code) / F(scale)`` as the array path's ``as_image`` does.
+    """
+    args: list[str] = []
+    body: list[str] = []
+    for k, name in enumerate(names):
+        ps = [f"p{len(args) + j}" for j in range(NAMES[name])]
+        args += ps
+        call = ", ".join(["a", "b", "c", *ps])
+        body.append(f"        a, b, c = s{k}({call})")
+    head = ", ".join(["x", "out", "n", *args])
+    lines = [
+        f"def kernel({head}):",
+        *(
+            ["    i = cuda.grid(1)", "    if i < n:"]
+            if target == "cuda"
+            else ["    for i in range(n):"]
+        ),
+        *(
+            [f"        {v} = x[i, {j}]" for j, v in enumerate("abc")]
+            if scale is None
+            else [f"        {v} = F(x[i, {j}]) / F({float(scale)!r})" for j, v in enumerate("abc")]
+        ),
+        *body,
+        "        out[i, 0] = a",
+        "        out[i, 1] = b",
+        "        out[i, 2] = c",
+    ]
+    return "\n".join(lines) + "\n"
+
+
+def _kernel(
+    names: tuple[str, ...], dtype: str, target: str = "cuda", scale: float | None = None
+) -> Any:
+    key = ("chain", names, dtype, target, scale)
+    k = _KERNELS.get(key)
+    if k is not None:
+        return k
+    with _LOCK:
+        k = _KERNELS.get(key)
+        if k is None:
+            fns = functions(dtype, target)
+            ns: dict[str, Any] = {"cuda": _launch.cuda() if target == "cuda" else None}
+            ns["F"] = np.float32 if dtype == "float32" else np.float64
+            for j, name in enumerate(names):
+                ns[f"s{j}"] = fns[name]
+            src = chain_source(names, target, scale)
+            exec(compile(src, f"<imageform chain {names}>", "exec"), ns)
+            if target == "cuda":
+                k = _launch.cuda().jit(ns["kernel"])
+            else:
+                from imageform._kernels.jit import njit
+
+                k = njit(cache=False)(ns["kernel"])
+            _KERNELS[key] = k
+    return k
+
+
+class KernelUnavailable(RuntimeError):
+    """numba's CUDA target could not compile a kernel here; the kernels are now off."""
+
+
+_COMPILED: set[tuple[Any, ...]] = set()
+
+
+def _guarded_launch(key: tuple[Any, ...], kernel: Any, n: int, *args: Any) -> None:
+    """Launch; a kernel's first launch (its compilation) that fails in numba turns them off.
+
+    A machine whose numba CUDA target lacks its compiler (NVVM) or cannot type a kernel
+    raises :class:`KernelUnavailable` after :func:`imageform._cuda._launch.disable`: the
+    callers then run the Array-API path. Errors after a kernel has run once propagate.
+    """
+    if key in _COMPILED:
+        _launch.launch_1d(kernel, n, *args)
+        return
+    try:
+        _launch.launch_1d(kernel, n, *args)
+    except Exception as exc:
+        if not type(exc).__module__.startswith("numba"):
+            raise
+        _launch.disable(f"{type(exc).__name__}: {str(exc).splitlines()[0][:200]}")
+        raise KernelUnavailable(str(exc)) from exc
+    _COMPILED.add(key)
+
+
+def _dtype_name(x: Any) -> str | None:
+    dt = str(getattr(x, "dtype", ""))
+    for name in ("float32", "float64"):
+        if dt.endswith(name):
+            return name
+    return None
+
+
+#: Full-range code values (docs/conventions.md): uint8 / 255, uint16 / 65535, in float32.
+INT_SCALE = {"uint8": 255.0, "uint16": 65535.0}
+
+
+def _int_scale(x: Any) -> float | None:
+    dt = str(getattr(x, "dtype", "")).removeprefix("torch.")
+    return INT_SCALE.get(dt)
+
+
+def _flat(x: Any, channels: bool = True) -> Any:
+    """Return ``x`` as ``(n, 3)`` (``(n,)``: ``channels=False``), a view where it can."""
+    full = tuple(int(s) for s in x.shape)
+    lead = full[:-1] if channels else full
+    n = 1
+    for s in lead:
+        n *= int(s)
+    return _reshape(x, (n, full[-1]) if channels else (n,))
+
+
+def _reshape(x: Any, shape: tuple[int, ...]) -> Any:
+    """Return ``x`` reshaped in its library (PyTorch, CuPy) or as a numba device array."""
+    if _launch._is_torch(x) or _launch._is_cupy(x):
+        return x.reshape(shape)
+    d = _launch.as_device_array(x).reshape(shape)
+    if isinstance(d, np.ndarray):  # the simulator's device arrays reshape to NumPy views
+        from numba.cuda.simulator.cudadrv.devicearray import FakeCUDAArray
+
+        d = FakeCUDAArray(d)
+    return d
+
+
+def _cast(dtype: str, values: Sequence[float]) -> tuple[Any, ...]:
+    f = np.float32 if dtype == "float32" else np.float64
+    return tuple(f(v) for v in values)
+
+
+def supported(x: Any, integers: bool = False) -> bool:
+    """Whether the kernels take ``x``: a CUDA array of float32/float64, shape ``(..., 3)``.
+
+    ``integers``: uint8/uint16 code values too (read as code / 255 or / 65535, computed and
+    returned in float32). PyTorch tensors that record gradients are left to the Array-API
+    path (autograd).
+    """
+    if not (_launch.use_cuda() and _launch.is_cuda_array(x)):
+        return False
+    shape = getattr(x, "shape", None)
+    if shape is None or len(shape) < 1 or int(shape[-1]) != 3:
+        return False
+    if _launch._is_torch(x) and x.requires_grad:
+        return False
+    return _dtype_name(x) is not None or (integers and _int_scale(x) is not None)
+
+
+def _params(steps: Sequence[Step]) -> tuple[tuple[str, ...], list[float]]:
+    names = tuple(s for s, _ in steps)
+    params: list[float] = []
+    for name, ps in steps:
+        if len(ps) != NAMES[name]:
+            raise ValueError(f"step {name} takes {NAMES[name]} numbers, got {len(ps)}")
+        params += list(ps)
+    return names, params
+
+
+def run_chain_twin(x: np.ndarray, steps: Sequence[Step]) -> np.ndarray:
+    """Run the CPU twin of :func:`run_chain` on a NumPy array (same source, numba's CPU target).
+
+    The kernel body and the scalar functions are those of the CUDA kernel, compiled for the
+    CPU with the same dtype (float32 arithmetic for float32 input): CI checks the kernels'
+    arithmetic with it without a GPU.
+    """
+    dtype, scale = _dtype_name(x), _int_scale(x)
+    if dtype is None and scale is None:
+        raise TypeError(f"expected float32, float64, uint8 or uint16, got dtype {x.dtype}")
+    if dtype is None:
+        dtype = "float32"
+    names, params = _params(steps)
+    xf = np.ascontiguousarray(x).reshape(-1, 3)
+    out = np.empty(xf.shape, dtype)
+    _kernel(names, dtype, "cpu", scale)(xf, out, xf.shape[0], *_cast(dtype, params))
+    return out.reshape(x.shape)
+
+
+def run_chain(x: Any, steps: Sequence[Step]) -> Any:
+    """Apply ``steps`` to every pixel of the CUDA array ``x`` (``(..., 3)``) in one launch.
+
+    Returns a new array of ``x``'s library, device, dtype and shape.
+    """
+    dtype, scale = _dtype_name(x), _int_scale(x)
+    if dtype is None and scale is None:
+        raise TypeError(f"expected a float or uint8/uint16 CUDA array, got dtype {x.dtype}")
+    if dtype is None:
+        dtype = "float32"  # code values compute in float32 (IMAGE_INTEGER_DTYPE)
+    names, params = _params(steps)
+    out = _launch.empty_like(x, dtype=dtype if scale is not None else None)
+    xf, of = _flat(x), _flat(out)
+    n = int(xf.shape[0])
+    kernel = _kernel(names, dtype, "cuda", scale)
+    key = ("chain", names, dtype, scale)
+    _guarded_launch(key, kernel, n, xf, of, n, *_cast(dtype, params))
+    return out
+
+
+def run_elementwise(x: Any, steps: Sequence[Step]) -> Any:
+    """Apply channel-independent ``steps`` (transfer curves) to a CUDA array of any shape.
+
+    The array's elements are read three at a time (its size must be a multiple of 3); the
+    result has ``x``'s shape.
+    """
+    shape = tuple(int(s) for s in x.shape)
+    size = 1
+    for s in shape:
+        size *= s
+    if size % 3:
+        raise ValueError(f"expected a size that is a multiple of 3, got shape {shape}")
+    if shape[-1:] == (3,):
+        return run_chain(x, steps)
+    out = run_chain(_reshape(x, (size // 3, 3)), steps)
+    return _reshape(out, shape)
+
+
+_DE_SOURCE = """
+def kernel(x, y, out, n, {params}):
+    i = cuda.grid(1)
+    if i < n:
+        out[i] = fn(x[i, 0], x[i, 1], x[i, 2], y[i, 0], y[i, 1], y[i, 2]{call})
+"""
+
+
+def _de_kernel(name: str, dtype: str) -> Any:
+    key = ("de", name, dtype)
+    k = _KERNELS.get(key)
+    if k is not None:
+        return k
+    with _LOCK:
+        k = _KERNELS.get(key)
+        if k is None:
+            c = _launch.cuda()
+            ps = [f"p{j}" for j in range(DELTA_E[name])]
+            src = _DE_SOURCE.format(
+                params=", ".join(ps) or "_unused", call="".join(", " + p for p in ps)
+            )
+            ns: dict[str, Any] = {"cuda": c, "fn": functions(dtype, "cuda")[name]}
+            exec(compile(src, f"<imageform delta_e {name}>", "exec"), ns)
+            k = c.jit(ns["kernel"])
+            _KERNELS[key] = k
+    return k
+
+
+def run_delta_e(x: Any, y: Any, name: str, params: Sequence[float] = ()) -> Any:
+    """ΔE ``name`` (``de76``, ``de94``, ``decmc``, ``de00``) of two same-shape CUDA arrays.
+
+    ``x`` and ``y``: ``(..., 3)`` CIELAB of one library and dtype; returns ``(...)``.
+    """
+    dtype = _dtype_name(x)
+    if dtype is None or _dtype_name(y) != dtype:
+        raise TypeError("expected two CUDA arrays of one float dtype")
+    if len(params) != DELTA_E[name]:
+        raise ValueError(f"{name} takes {DELTA_E[name]} numbers, got {len(params)}")
+    out = _launch.empty_like(x, shape=tuple(int(s) for s in x.shape)[:-1])
+    xf, yf = _flat(x), _flat(y)
+    n = int(xf.shape[0])
+    of = _flat(out, channels=False)
+    vals = _cast(dtype, params) if params else (0.0,)
+    _guarded_launch(("de", name, dtype), _de_kernel(name, dtype), n, xf, yf, of, n, *vals)
+    return out
+
+
+def run_delta_e_twin(x: np.ndarray, y: np.ndarray, name: str, params: Sequence[float] = ()) -> Any:
+    """Run the CPU twin of :func:`run_delta_e` (the same scalar function, numba's CPU target)."""
+    dtype = _dtype_name(x)
+    if dtype is None:
+        raise TypeError(f"expected float32 or float64, got dtype {x.dtype}")
+    fn = functions(dtype, "cpu")[name]
+    key = ("de-twin", name, dtype)
+    k = _KERNELS.get(key)
+    if k is None:
+        from imageform._kernels.jit import njit
+
+        ps = [f"p{j}" for j in range(DELTA_E[name])]
+        src = _DE_SOURCE.format(
+            params=", ".join(ps) or "_unused", call="".join(", " + p for p in ps)
+        ).replace("    i = cuda.grid(1)\n    if i < n:", "    for i in range(n):")
+        ns: dict[str, Any] = {"fn": fn}
+        exec(compile(src, f"<imageform delta_e twin {name}>", "exec"), ns)
+        k = njit(cache=False)(ns["kernel"])
+        _KERNELS[key] = k
+    xf = np.ascontiguousarray(x).reshape(-1, 3)
+    yf = np.ascontiguousarray(y).reshape(-1, 3)
+    out = np.empty(xf.shape[0], x.dtype)
+    vals = _cast(dtype, params) if params else (0.0,)
+    k(xf, yf, out, xf.shape[0], *vals)
+    return out.reshape(x.shape[:-1])
