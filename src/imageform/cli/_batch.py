@@ -280,6 +280,19 @@ class _Lazy(click.Group):
             return None
         return self._make(WORKFLOWS[key])
 
+    def format_commands(self, ctx: click.Context, formatter: click.HelpFormatter) -> None:
+        """List the subcommands from the registry's summaries, without building them.
+
+        A command's options may name choices in a module that loads NumPy; ``--help`` stays
+        light (tests/test_lazy_import.py).
+        """
+        from imageform.workflows.registry import WORKFLOWS
+
+        rows = [(name, WORKFLOWS[name].summary) for name in self.list_commands(ctx)]
+        if rows:
+            with formatter.section("Commands"):
+                formatter.write_dl(rows)
+
 
 def batch_group() -> click.Group:
     """``imageform batch``: one subcommand per workflow that runs file by file."""
