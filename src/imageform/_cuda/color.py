@@ -81,58 +81,49 @@ def chain_source(names: Sequence[str], target: str = "cuda", scale: float | None
     return "\n".join(lines) + "\n"
 
 
+def _cached(key: tuple[Any, ...], build: Any) -> Any:
+    """Return the kernel cached under ``key``, built by ``build()`` once per process."""
+    k = _KERNELS.get(key)
+    if k is None:
+        with _LOCK:
+            k = _KERNELS.get(key)
+            if k is None:
+                k = _KERNELS[key] = build()
+    return k
+
+
 def _kernel(
     names: tuple[str, ...], dtype: str, target: str = "cuda", scale: float | None = None
 ) -> Any:
-    key = ("chain", names, dtype, target, scale)
-    k = _KERNELS.get(key)
-    if k is not None:
-        return k
-    with _LOCK:
-        k = _KERNELS.get(key)
-        if k is None:
-            fns = functions(dtype, target)
-            ns: dict[str, Any] = {"cuda": _launch.cuda() if target == "cuda" else None}
-            ns["F"] = np.float32 if dtype == "float32" else np.float64
-            for j, name in enumerate(names):
-                ns[f"s{j}"] = fns[name]
-            src = chain_source(names, target, scale)
-            exec(compile(src, f"<imageform chain {names}>", "exec"), ns)
-            if target == "cuda":
-                k = _launch.cuda().jit(ns["kernel"])
-            else:
-                from imageform._kernels.jit import njit
+    def build() -> Any:
+        fns = functions(dtype, target)
+        ns: dict[str, Any] = {"cuda": _launch.cuda() if target == "cuda" else None}
+        ns["F"] = np.float32 if dtype == "float32" else np.float64
+        for j, name in enumerate(names):
+            ns[f"s{j}"] = fns[name]
+        src = chain_source(names, target, scale)
+        exec(compile(src, f"<imageform chain {names}>", "exec"), ns)
+        if target == "cuda":
+            return _launch.cuda().jit(ns["kernel"])
+        from imageform._kernels.jit import njit
 
-                k = njit(cache=False)(ns["kernel"])
-            _KERNELS[key] = k
-    return k
+        return njit(cache=False)(ns["kernel"])
+
+    return _cached(("chain", names, dtype, target, scale), build)
 
 
 class KernelUnavailable(RuntimeError):
     """numba's CUDA target could not compile a kernel here; the kernels are now off."""
 
 
-_COMPILED: set[tuple[Any, ...]] = set()
+def _run(key: tuple[Any, ...], kernel: Any, n: int, *args: Any) -> None:
+    """Launch over ``n`` pixels; :class:`KernelUnavailable` when numba cannot compile it here.
 
-
-def _guarded_launch(key: tuple[Any, ...], kernel: Any, n: int, *args: Any) -> None:
-    """Launch; a kernel's first launch (its compilation) that fails in numba turns them off.
-
-    A machine whose numba CUDA target lacks its compiler (NVVM) or cannot type a kernel
-    raises :class:`KernelUnavailable` after :func:`imageform._cuda._launch.disable`: the
-    callers then run the Array-API path. Errors after a kernel has run once propagate.
+    :func:`imageform._cuda._launch.guarded` has then switched the kernels off; the callers
+    run the Array-API path.
     """
-    if key in _COMPILED:
-        _launch.launch_1d(kernel, n, *args)
-        return
-    try:
-        _launch.launch_1d(kernel, n, *args)
-    except Exception as exc:
-        if not type(exc).__module__.startswith("numba"):
-            raise
-        _launch.disable(f"{type(exc).__name__}: {str(exc).splitlines()[0][:200]}")
-        raise KernelUnavailable(str(exc)) from exc
-    _COMPILED.add(key)
+    if not _launch.guarded(key, kernel, n, *args):
+        raise KernelUnavailable(_launch.status())
 
 
 def _dtype_name(x: Any) -> str | None:
@@ -241,7 +232,7 @@ def run_chain(x: Any, steps: Sequence[Step]) -> Any:
     n = int(xf.shape[0])
     kernel = _kernel(names, dtype, "cuda", scale)
     key = ("chain", names, dtype, scale)
-    _guarded_launch(key, kernel, n, xf, of, n, *_cast(dtype, params))
+    _run(key, kernel, n, xf, of, n, *_cast(dtype, params))
     return out
 
 
@@ -271,24 +262,28 @@ def kernel(x, y, out, n, {params}):
 """
 
 
-def _de_kernel(name: str, dtype: str) -> Any:
-    key = ("de", name, dtype)
-    k = _KERNELS.get(key)
-    if k is not None:
-        return k
-    with _LOCK:
-        k = _KERNELS.get(key)
-        if k is None:
-            c = _launch.cuda()
-            ps = [f"p{j}" for j in range(DELTA_E[name])]
-            src = _DE_SOURCE.format(
-                params=", ".join(ps) or "_unused", call="".join(", " + p for p in ps)
-            )
-            ns: dict[str, Any] = {"cuda": c, "fn": functions(dtype, "cuda")[name]}
-            exec(compile(src, f"<imageform delta_e {name}>", "exec"), ns)
-            k = c.jit(ns["kernel"])
-            _KERNELS[key] = k
-    return k
+def _de_source(name: str, target: str) -> str:
+    ps = [f"p{j}" for j in range(DELTA_E[name])]
+    src = _DE_SOURCE.format(params=", ".join(ps) or "_unused", call="".join(", " + p for p in ps))
+    if target == "cpu":
+        src = src.replace("    i = cuda.grid(1)\n    if i < n:", "    for i in range(n):")
+    return src
+
+
+def _de_kernel(name: str, dtype: str, target: str = "cuda") -> Any:
+    def build() -> Any:
+        ns: dict[str, Any] = {"fn": functions(dtype, target)[name]}
+        if target == "cuda":
+            ns["cuda"] = _launch.cuda()
+        src = _de_source(name, target)
+        exec(compile(src, f"<imageform delta_e {name} {target}>", "exec"), ns)
+        if target == "cuda":
+            return _launch.cuda().jit(ns["kernel"])
+        from imageform._kernels.jit import njit
+
+        return njit(cache=False)(ns["kernel"])
+
+    return _cached(("de", name, dtype, target), build)
 
 
 def run_delta_e(x: Any, y: Any, name: str, params: Sequence[float] = ()) -> Any:
@@ -306,7 +301,7 @@ def run_delta_e(x: Any, y: Any, name: str, params: Sequence[float] = ()) -> Any:
     n = int(xf.shape[0])
     of = _flat(out, channels=False)
     vals = _cast(dtype, params) if params else (0.0,)
-    _guarded_launch(("de", name, dtype), _de_kernel(name, dtype), n, xf, yf, of, n, *vals)
+    _run(("de", name, dtype), _de_kernel(name, dtype), n, xf, yf, of, n, *vals)
     return out
 
 
@@ -315,20 +310,7 @@ def run_delta_e_twin(x: np.ndarray, y: np.ndarray, name: str, params: Sequence[f
     dtype = _dtype_name(x)
     if dtype is None:
         raise TypeError(f"expected float32 or float64, got dtype {x.dtype}")
-    fn = functions(dtype, "cpu")[name]
-    key = ("de-twin", name, dtype)
-    k = _KERNELS.get(key)
-    if k is None:
-        from imageform._kernels.jit import njit
-
-        ps = [f"p{j}" for j in range(DELTA_E[name])]
-        src = _DE_SOURCE.format(
-            params=", ".join(ps) or "_unused", call="".join(", " + p for p in ps)
-        ).replace("    i = cuda.grid(1)\n    if i < n:", "    for i in range(n):")
-        ns: dict[str, Any] = {"fn": fn}
-        exec(compile(src, f"<imageform delta_e twin {name}>", "exec"), ns)
-        k = njit(cache=False)(ns["kernel"])
-        _KERNELS[key] = k
+    k = _de_kernel(name, dtype, "cpu")
     xf = np.ascontiguousarray(x).reshape(-1, 3)
     yf = np.ascontiguousarray(y).reshape(-1, 3)
     out = np.empty(xf.shape[0], x.dtype)
