@@ -66,12 +66,19 @@ def _env_on(name: str) -> bool:
     return os.environ.get(name, "") not in ("", "0")
 
 
+#: numba's answer, once numba is imported (it reads the variable once, at import).
+_SIMULATED: list[bool] = []
+
+
 def simulated() -> bool:
     """Whether numba's CUDA simulator is on (``NUMBA_ENABLE_CUDASIM``, read by numba at import)."""
+    if _SIMULATED:
+        return _SIMULATED[0]
     if "numba" in sys.modules:
         from numba.core import config
 
-        return bool(getattr(config, "ENABLE_CUDASIM", 0))
+        _SIMULATED.append(bool(getattr(config, "ENABLE_CUDASIM", 0)))
+        return _SIMULATED[0]
     return _env_on("NUMBA_ENABLE_CUDASIM")
 
 

@@ -126,12 +126,24 @@ def _run(key: tuple[Any, ...], kernel: Any, n: int, *args: Any) -> None:
         raise KernelUnavailable(_launch.status())
 
 
+# dtype object (NumPy's, PyTorch's, CuPy's) -> its name without the library's prefix
+_DTYPE_NAMES: dict[Any, str] = {}
+
+
+def _dtype_str(x: Any) -> str:
+    dt = getattr(x, "dtype", None)
+    try:
+        return _DTYPE_NAMES[dt]
+    except KeyError:
+        name = _DTYPE_NAMES[dt] = str("" if dt is None else dt).removeprefix("torch.")
+        return name
+    except TypeError:  # pragma: no cover - an unhashable dtype
+        return str(dt).removeprefix("torch.")
+
+
 def _dtype_name(x: Any) -> str | None:
-    dt = str(getattr(x, "dtype", ""))
-    for name in ("float32", "float64"):
-        if dt.endswith(name):
-            return name
-    return None
+    dt = _dtype_str(x)
+    return dt if dt in ("float32", "float64") else None
 
 
 #: Full-range code values (docs/conventions.md): uint8 / 255, uint16 / 65535, in float32.
@@ -139,8 +151,7 @@ INT_SCALE = {"uint8": 255.0, "uint16": 65535.0}
 
 
 def _int_scale(x: Any) -> float | None:
-    dt = str(getattr(x, "dtype", "")).removeprefix("torch.")
-    return INT_SCALE.get(dt)
+    return INT_SCALE.get(_dtype_str(x))
 
 
 def _flat(x: Any, channels: bool = True) -> Any:
@@ -179,12 +190,28 @@ def supported(x: Any, integers: bool = False) -> bool:
     """
     if not (_launch.use_cuda() and _launch.is_cuda_array(x)):
         return False
-    shape = getattr(x, "shape", None)
-    if shape is None or len(shape) < 1 or int(shape[-1]) != 3:
+    shape = tuple(getattr(x, "shape", ()))  # the simulator's shapes index from 0 only
+    if not shape or int(shape[-1]) != 3:
         return False
     if _launch._is_torch(x) and x.requires_grad:
         return False
     return _dtype_name(x) is not None or (integers and _int_scale(x) is not None)
+
+
+#: (steps, dtype) -> (names, the numbers as kernel arguments of the dtype)
+_PREPARED: dict[Any, tuple[tuple[str, ...], tuple[Any, ...]]] = {}
+
+
+def _prepared(steps: Sequence[Step], dtype: str) -> tuple[tuple[str, ...], tuple[Any, ...]]:
+    """:func:`_params` and :func:`_cast` of a chain, computed once per chain and dtype."""
+    key = (tuple(steps), dtype)
+    got = _PREPARED.get(key)
+    if got is None:
+        if len(_PREPARED) > 256:
+            _PREPARED.clear()
+        names, params = _params(steps)
+        got = _PREPARED[key] = (names, _cast(dtype, params))
+    return got
 
 
 def _params(steps: Sequence[Step]) -> tuple[tuple[str, ...], list[float]]:
@@ -226,13 +253,12 @@ def run_chain(x: Any, steps: Sequence[Step]) -> Any:
         raise TypeError(f"expected a float or uint8/uint16 CUDA array, got dtype {x.dtype}")
     if dtype is None:
         dtype = "float32"  # code values compute in float32 (IMAGE_INTEGER_DTYPE)
-    names, params = _params(steps)
+    names, values = _prepared(steps, dtype)
     out = _launch.empty_like(x, dtype=dtype if scale is not None else None)
     xf, of = _flat(x), _flat(out)
     n = int(xf.shape[0])
     kernel = _kernel(names, dtype, "cuda", scale)
-    key = ("chain", names, dtype, scale)
-    _run(key, kernel, n, xf, of, n, *_cast(dtype, params))
+    _run(("chain", names, dtype, scale), kernel, n, xf, of, n, *values)
     return out
 
 
