@@ -212,13 +212,11 @@ def test_a_kernel_that_cannot_compile_switches_the_kernels_off(
 ) -> None:
     from numba.core.errors import TypingError
 
-    from imageform._cuda import color as kc
-
     def broken(*args: Any) -> None:
         raise TypingError("no NVVM here")
 
     monkeypatch.setattr(_launch, "launch_1d", broken)
-    monkeypatch.setattr(kc, "_COMPILED", set())
+    monkeypatch.setattr(_launch, "_COMPILED", set())
     monkeypatch.setattr(_launch, "_DISABLED", [""])
     # the Array-API path then meets the stand-in, which it cannot read
     warns = pytest.warns(RuntimeWarning, match="CUDA kernels are off")

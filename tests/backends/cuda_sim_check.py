@@ -177,7 +177,7 @@ def fallback_check() -> None:
             return launch
 
     geometry._kernels().distort = Broken()
-    geometry._COMPILED.clear()
+    _launch._COMPILED.clear()
     xy = RNG.uniform(-0.6, 0.6, (7, 2))
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")

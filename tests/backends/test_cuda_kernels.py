@@ -178,3 +178,80 @@ def test_twin_code_values(dtype: str) -> None:
     assert got.dtype == ref.dtype == np.float32
     atol, rtol = TOL["float32"]
     np.testing.assert_allclose(got, ref, atol=atol, rtol=rtol)
+
+
+# --- the pointwise commands: --device cuda ---------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def tiny_pngs(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path]:
+    from imageform.io import write_image
+
+    rng = np.random.default_rng(29)
+    folder = tmp_path_factory.mktemp("png")
+    paths = (folder / "a.png", folder / "b.png")
+    for p in paths:
+        write_image(p, rng.integers(0, 256, size=(5, 7, 3)).astype(np.uint8))
+    return paths
+
+
+def _cli(argv: list[str], **env: str) -> subprocess.CompletedProcess[str]:
+    from tests.backends.test_cuda_geometry_kernels import _run
+
+    return _run(["-m", "imageform", *argv], **env)
+
+
+def test_pointwise_device_cuda_refused_in_one_line(
+    tiny_pngs: tuple[Path, Path], tmp_path: Path
+) -> None:
+    a, b = (str(p) for p in tiny_pngs)
+    out = tmp_path / "out.npy"
+    # no GPU here (and IMAGEFORM_DISABLE_CUDA stands for one that is absent where there is)
+    for argv in (
+        ["convert", a, "-o", str(out), "--to", "lab"],
+        ["white-balance", a, "-o", str(out)],
+        ["delta-e", a, b],
+        ["batch", "convert", str(tiny_pngs[0].parent / "*.png"), "-o", str(tmp_path / "b")],
+    ):
+        proc = _cli([*argv, "--device", "cuda"], IMAGEFORM_DISABLE_CUDA="1")
+        assert proc.returncode == 1, proc.stdout + proc.stderr
+        err = [ln for ln in proc.stderr.strip().splitlines() if ln.strip()]
+        assert len(err) == 1 and "--device cuda" in err[0], proc.stderr
+        assert not out.exists() and not (tmp_path / "b").exists()
+
+
+def test_pointwise_device_cuda_under_simulator(
+    tiny_pngs: tuple[Path, Path], tmp_path: Path
+) -> None:
+    """A tiny image through ``--device cuda`` (numba's simulator) gives the CPU's numbers."""
+    import json
+
+    a, b = (str(p) for p in tiny_pngs)
+    sim = {"NUMBA_ENABLE_CUDASIM": "1"}
+    runs = {
+        "lab": ["convert", a, "--to", "lab"],
+        "gray": ["convert", a, "--to", "gray"],  # no kernel: the CPU, with a note
+        "wb": ["white-balance", a, "--method", "shades-of-gray"],
+    }
+    for name, argv in runs.items():
+        got = {}
+        for dev, env in (("cpu", {}), ("cuda", sim)):
+            out = tmp_path / f"{name}-{dev}.npy"
+            proc = _cli([*argv, "-o", str(out), "--device", dev, "--json"], **env)
+            assert proc.returncode == 0, proc.stdout + proc.stderr
+            assert json.loads(proc.stdout)["device"] == dev
+            got[dev] = np.load(out)
+            if dev == "cuda":  # a note where no kernel ran (the gray route has none)
+                assert ("has no GPU kernel" in proc.stderr) == (name == "gray"), proc.stderr
+        assert got["cuda"].dtype == got["cpu"].dtype and got["cuda"].shape == got["cpu"].shape
+        atol = 1e-3 if name == "lab" else 1e-5  # float32: L* up to 100, the others up to 1
+        np.testing.assert_allclose(got["cuda"], got["cpu"], atol=atol, rtol=0, err_msg=name)
+    de = {}
+    for dev, env in (("cpu", {}), ("cuda", sim)):
+        proc = _cli(["delta-e", a, b, "--device", dev, "--json"], **env)
+        assert proc.returncode == 0, proc.stdout + proc.stderr
+        assert "no GPU kernel" not in proc.stderr, proc.stderr
+        de[dev] = json.loads(proc.stdout)
+    assert de["cuda"]["pixels"] == 35
+    for key in ("mean", "max"):
+        assert abs(de["cuda"][key] - de["cpu"][key]) <= 1e-3, (key, de)

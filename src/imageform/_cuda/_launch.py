@@ -12,7 +12,10 @@ arrays (docs/design.md, "GPU kernels"):
 - :func:`empty_like`: an uninitialised output in the input's library and on its device.
 - :func:`launch_1d`: one launch over ``n`` threads, on the stream of the first library
   array among the arguments (PyTorch's or CuPy's current stream, or the stream a
-  ``__cuda_array_interface__`` names), with the arguments turned into device arrays.
+  ``__cuda_array_interface__`` names), with the arguments turned into device arrays;
+  :func:`launch_rows` the same on a 2-D grid over an image's rows and columns.
+- :func:`guarded`: a launch whose first compilation failing in numba (no NVVM, a typing
+  error) switches the kernels off for the process instead of failing the call.
 - :func:`use_cuda`: whether kernels may run (a CUDA device, or numba's simulator).
 
 numba's CUDA target is imported on first use only (``import imageform`` does not touch it).
@@ -38,9 +41,11 @@ __all__ = [
     "cuda",
     "disable",
     "empty_like",
+    "guarded",
     "is_cuda_array",
     "launch_1d",
     "launch_count",
+    "launch_rows",
     "simulated",
     "status",
     "use_cuda",
@@ -61,12 +66,19 @@ def _env_on(name: str) -> bool:
     return os.environ.get(name, "") not in ("", "0")
 
 
+#: numba's answer, once numba is imported (it reads the variable once, at import).
+_SIMULATED: list[bool] = []
+
+
 def simulated() -> bool:
     """Whether numba's CUDA simulator is on (``NUMBA_ENABLE_CUDASIM``, read by numba at import)."""
+    if _SIMULATED:
+        return _SIMULATED[0]
     if "numba" in sys.modules:
         from numba.core import config
 
-        return bool(getattr(config, "ENABLE_CUDASIM", 0))
+        _SIMULATED.append(bool(getattr(config, "ENABLE_CUDASIM", 0)))
+        return _SIMULATED[0]
     return _env_on("NUMBA_ENABLE_CUDASIM")
 
 
@@ -265,6 +277,44 @@ def _device_index(x: Any) -> int | None:
     return None
 
 
+#: Threads per block of :func:`launch_rows`: a warp along a row (coalesced), 8 rows.
+ROW_BLOCK = (32, 8)
+_SIM_ROW_BLOCK = (8, 4)
+#: The largest grid height (CUDA's limit); taller images loop over rows in the kernel.
+_MAX_GRID_Y = 65535
+
+# Python numbers and NumPy scalars go to numba as they are (no array test on them)
+_SCALARS = (int, float, bool, np.generic)
+
+
+def _launch(kernel: Any, grid: tuple[int, ...], block: tuple[int, ...], args: Any) -> None:
+    """Launch ``kernel[grid, block, stream](*args)``, CUDA arrays viewed as device arrays.
+
+    Each argument is looked at once: numbers pass as they are, CUDA arrays of any library
+    become numba device arrays (:func:`as_device_array`; numba's own are passed as they
+    are), the first one names the stream and the device.
+    """
+    first = None
+    dargs = []
+    for a in args:
+        if not isinstance(a, _SCALARS) and is_cuda_array(a):
+            if first is None:
+                first = a
+            a = as_device_array(a)
+        dargs.append(a)
+    sim = simulated()
+    stream = 0 if first is None else _stream_for(first)
+    dev = None if first is None or sim else _device_index(first)
+    with _LOCK:
+        _LAUNCHES[0] += 1
+    c = cuda()
+    if dev is not None and len(c.gpus) > 1 and c.get_current_device().id != dev:
+        with c.gpus[dev]:
+            kernel[grid, block, stream](*dargs)
+    else:
+        kernel[grid, block, stream](*dargs)
+
+
 def launch_1d(kernel: Any, n: int, *args: Any) -> None:
     """Launch ``kernel`` over ``n`` threads (``cuda.grid(1)`` in ``[0, n)``; guard ``i < n``).
 
@@ -276,20 +326,53 @@ def launch_1d(kernel: Any, n: int, *args: Any) -> None:
     """
     if n <= 0:
         return
-    first = next((a for a in args if is_cuda_array(a)), None)
-    dargs = tuple(as_device_array(a) if is_cuda_array(a) else a for a in args)
     threads = _SIM_THREADS if simulated() else THREADS
-    blocks = (int(n) + threads - 1) // threads
-    stream = 0 if first is None else _stream_for(first)
-    dev = None if first is None or simulated() else _device_index(first)
-    with _LOCK:
-        _LAUNCHES[0] += 1
-    c = cuda()
-    if dev is not None and len(c.gpus) > 1 and c.get_current_device().id != dev:
-        with c.gpus[dev]:
-            kernel[blocks, threads, stream](*dargs)
-    else:
-        kernel[blocks, threads, stream](*dargs)
+    _launch(kernel, ((int(n) + threads - 1) // threads,), (threads,), args)
+
+
+def launch_rows(kernel: Any, rows: int, cols: int, *args: Any) -> None:
+    """Launch ``kernel`` on a 2-D grid: ``x`` over ``cols``, ``y`` over ``rows``.
+
+    :func:`launch_1d`'s conventions (device arrays of any library viewed without a copy or a
+    sync, the producer's stream and device, the launch counted), with a 2-D grid of
+    :data:`ROW_BLOCK` blocks, so that a kernel over an image finds its pixel without 64-bit
+    integer divisions (tens of instructions each on a GPU). The grid height is capped at
+    CUDA's 65535 blocks: kernels loop over rows with a stride of ``gridDim.y * blockDim.y``,
+    and guard ``column < cols``. Nothing is launched when either size is 0.
+    """
+    if rows <= 0 or cols <= 0:
+        return
+    bx, by = _SIM_ROW_BLOCK if simulated() else ROW_BLOCK  # a simulated thread: a Python one
+    grid = ((cols + bx - 1) // bx, min((rows + by - 1) // by, _MAX_GRID_Y))
+    _launch(kernel, grid, (bx, by), args)
+
+
+#: Kernels (their callers' keys) that have compiled and run once in this process.
+_COMPILED: set[Any] = set()
+
+
+def guarded(key: Any, kernel: Any, size: int | tuple[int, int], *args: Any) -> bool:
+    """Launch; False when the kernel's first compilation failed (the kernels are then off).
+
+    ``size``: ``n`` threads (:func:`launch_1d`) or ``(rows, cols)`` (:func:`launch_rows`);
+    ``key`` (hashable) names the kernel and what it is compiled for (its dtype). A machine
+    whose numba CUDA target lacks its compiler (NVVM) or cannot type a kernel turns the
+    kernels off for the process (:func:`disable`, one warning) and the caller runs the
+    Array-API path. Errors of a key that has run once, and errors that are not numba's,
+    propagate.
+    """
+    try:
+        if isinstance(size, tuple):
+            launch_rows(kernel, size[0], size[1], *args)
+        else:
+            launch_1d(kernel, size, *args)
+    except Exception as exc:
+        if key in _COMPILED or not type(exc).__module__.startswith("numba"):
+            raise
+        disable(f"{type(exc).__name__}: {str(exc).splitlines()[0][:200]}")
+        return False
+    _COMPILED.add(key)
+    return True
 
 
 def disable(reason: str) -> None:
@@ -324,5 +407,5 @@ def status() -> str:
 
 
 def launch_count() -> int:
-    """How many kernels :func:`launch_1d` has launched in this process (tests, benchmarks)."""
+    """How many kernels :func:`launch_1d` and :func:`launch_rows` have launched (tests, benches)."""
     return _LAUNCHES[0]

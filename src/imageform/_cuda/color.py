@@ -81,66 +81,69 @@ def chain_source(names: Sequence[str], target: str = "cuda", scale: float | None
     return "\n".join(lines) + "\n"
 
 
+def _cached(key: tuple[Any, ...], build: Any) -> Any:
+    """Return the kernel cached under ``key``, built by ``build()`` once per process."""
+    k = _KERNELS.get(key)
+    if k is None:
+        with _LOCK:
+            k = _KERNELS.get(key)
+            if k is None:
+                k = _KERNELS[key] = build()
+    return k
+
+
 def _kernel(
     names: tuple[str, ...], dtype: str, target: str = "cuda", scale: float | None = None
 ) -> Any:
-    key = ("chain", names, dtype, target, scale)
-    k = _KERNELS.get(key)
-    if k is not None:
-        return k
-    with _LOCK:
-        k = _KERNELS.get(key)
-        if k is None:
-            fns = functions(dtype, target)
-            ns: dict[str, Any] = {"cuda": _launch.cuda() if target == "cuda" else None}
-            ns["F"] = np.float32 if dtype == "float32" else np.float64
-            for j, name in enumerate(names):
-                ns[f"s{j}"] = fns[name]
-            src = chain_source(names, target, scale)
-            exec(compile(src, f"<imageform chain {names}>", "exec"), ns)
-            if target == "cuda":
-                k = _launch.cuda().jit(ns["kernel"])
-            else:
-                from imageform._kernels.jit import njit
+    def build() -> Any:
+        fns = functions(dtype, target)
+        ns: dict[str, Any] = {"cuda": _launch.cuda() if target == "cuda" else None}
+        ns["F"] = np.float32 if dtype == "float32" else np.float64
+        for j, name in enumerate(names):
+            ns[f"s{j}"] = fns[name]
+        src = chain_source(names, target, scale)
+        exec(compile(src, f"<imageform chain {names}>", "exec"), ns)
+        if target == "cuda":
+            return _launch.cuda().jit(ns["kernel"])
+        from imageform._kernels.jit import njit
 
-                k = njit(cache=False)(ns["kernel"])
-            _KERNELS[key] = k
-    return k
+        return njit(cache=False)(ns["kernel"])
+
+    return _cached(("chain", names, dtype, target, scale), build)
 
 
 class KernelUnavailable(RuntimeError):
     """numba's CUDA target could not compile a kernel here; the kernels are now off."""
 
 
-_COMPILED: set[tuple[Any, ...]] = set()
+def _run(key: tuple[Any, ...], kernel: Any, n: int, *args: Any) -> None:
+    """Launch over ``n`` pixels; :class:`KernelUnavailable` when numba cannot compile it here.
 
-
-def _guarded_launch(key: tuple[Any, ...], kernel: Any, n: int, *args: Any) -> None:
-    """Launch; a kernel's first launch (its compilation) that fails in numba turns them off.
-
-    A machine whose numba CUDA target lacks its compiler (NVVM) or cannot type a kernel
-    raises :class:`KernelUnavailable` after :func:`imageform._cuda._launch.disable`: the
-    callers then run the Array-API path. Errors after a kernel has run once propagate.
+    :func:`imageform._cuda._launch.guarded` has then switched the kernels off; the callers
+    run the Array-API path.
     """
-    if key in _COMPILED:
-        _launch.launch_1d(kernel, n, *args)
-        return
+    if not _launch.guarded(key, kernel, n, *args):
+        raise KernelUnavailable(_launch.status())
+
+
+# dtype object (NumPy's, PyTorch's, CuPy's) -> its name without the library's prefix
+_DTYPE_NAMES: dict[Any, str] = {}
+
+
+def _dtype_str(x: Any) -> str:
+    dt = getattr(x, "dtype", None)
     try:
-        _launch.launch_1d(kernel, n, *args)
-    except Exception as exc:
-        if not type(exc).__module__.startswith("numba"):
-            raise
-        _launch.disable(f"{type(exc).__name__}: {str(exc).splitlines()[0][:200]}")
-        raise KernelUnavailable(str(exc)) from exc
-    _COMPILED.add(key)
+        return _DTYPE_NAMES[dt]
+    except KeyError:
+        name = _DTYPE_NAMES[dt] = str("" if dt is None else dt).removeprefix("torch.")
+        return name
+    except TypeError:  # pragma: no cover - an unhashable dtype
+        return str(dt).removeprefix("torch.")
 
 
 def _dtype_name(x: Any) -> str | None:
-    dt = str(getattr(x, "dtype", ""))
-    for name in ("float32", "float64"):
-        if dt.endswith(name):
-            return name
-    return None
+    dt = _dtype_str(x)
+    return dt if dt in ("float32", "float64") else None
 
 
 #: Full-range code values (docs/conventions.md): uint8 / 255, uint16 / 65535, in float32.
@@ -148,8 +151,7 @@ INT_SCALE = {"uint8": 255.0, "uint16": 65535.0}
 
 
 def _int_scale(x: Any) -> float | None:
-    dt = str(getattr(x, "dtype", "")).removeprefix("torch.")
-    return INT_SCALE.get(dt)
+    return INT_SCALE.get(_dtype_str(x))
 
 
 def _flat(x: Any, channels: bool = True) -> Any:
@@ -188,12 +190,28 @@ def supported(x: Any, integers: bool = False) -> bool:
     """
     if not (_launch.use_cuda() and _launch.is_cuda_array(x)):
         return False
-    shape = getattr(x, "shape", None)
-    if shape is None or len(shape) < 1 or int(shape[-1]) != 3:
+    shape = tuple(getattr(x, "shape", ()))  # the simulator's shapes index from 0 only
+    if not shape or int(shape[-1]) != 3:
         return False
     if _launch._is_torch(x) and x.requires_grad:
         return False
     return _dtype_name(x) is not None or (integers and _int_scale(x) is not None)
+
+
+#: (steps, dtype) -> (names, the numbers as kernel arguments of the dtype)
+_PREPARED: dict[Any, tuple[tuple[str, ...], tuple[Any, ...]]] = {}
+
+
+def _prepared(steps: Sequence[Step], dtype: str) -> tuple[tuple[str, ...], tuple[Any, ...]]:
+    """:func:`_params` and :func:`_cast` of a chain, computed once per chain and dtype."""
+    key = (tuple(steps), dtype)
+    got = _PREPARED.get(key)
+    if got is None:
+        if len(_PREPARED) > 256:
+            _PREPARED.clear()
+        names, params = _params(steps)
+        got = _PREPARED[key] = (names, _cast(dtype, params))
+    return got
 
 
 def _params(steps: Sequence[Step]) -> tuple[tuple[str, ...], list[float]]:
@@ -235,13 +253,12 @@ def run_chain(x: Any, steps: Sequence[Step]) -> Any:
         raise TypeError(f"expected a float or uint8/uint16 CUDA array, got dtype {x.dtype}")
     if dtype is None:
         dtype = "float32"  # code values compute in float32 (IMAGE_INTEGER_DTYPE)
-    names, params = _params(steps)
+    names, values = _prepared(steps, dtype)
     out = _launch.empty_like(x, dtype=dtype if scale is not None else None)
     xf, of = _flat(x), _flat(out)
     n = int(xf.shape[0])
     kernel = _kernel(names, dtype, "cuda", scale)
-    key = ("chain", names, dtype, scale)
-    _guarded_launch(key, kernel, n, xf, of, n, *_cast(dtype, params))
+    _run(("chain", names, dtype, scale), kernel, n, xf, of, n, *values)
     return out
 
 
@@ -271,24 +288,28 @@ def kernel(x, y, out, n, {params}):
 """
 
 
-def _de_kernel(name: str, dtype: str) -> Any:
-    key = ("de", name, dtype)
-    k = _KERNELS.get(key)
-    if k is not None:
-        return k
-    with _LOCK:
-        k = _KERNELS.get(key)
-        if k is None:
-            c = _launch.cuda()
-            ps = [f"p{j}" for j in range(DELTA_E[name])]
-            src = _DE_SOURCE.format(
-                params=", ".join(ps) or "_unused", call="".join(", " + p for p in ps)
-            )
-            ns: dict[str, Any] = {"cuda": c, "fn": functions(dtype, "cuda")[name]}
-            exec(compile(src, f"<imageform delta_e {name}>", "exec"), ns)
-            k = c.jit(ns["kernel"])
-            _KERNELS[key] = k
-    return k
+def _de_source(name: str, target: str) -> str:
+    ps = [f"p{j}" for j in range(DELTA_E[name])]
+    src = _DE_SOURCE.format(params=", ".join(ps) or "_unused", call="".join(", " + p for p in ps))
+    if target == "cpu":
+        src = src.replace("    i = cuda.grid(1)\n    if i < n:", "    for i in range(n):")
+    return src
+
+
+def _de_kernel(name: str, dtype: str, target: str = "cuda") -> Any:
+    def build() -> Any:
+        ns: dict[str, Any] = {"fn": functions(dtype, target)[name]}
+        if target == "cuda":
+            ns["cuda"] = _launch.cuda()
+        src = _de_source(name, target)
+        exec(compile(src, f"<imageform delta_e {name} {target}>", "exec"), ns)
+        if target == "cuda":
+            return _launch.cuda().jit(ns["kernel"])
+        from imageform._kernels.jit import njit
+
+        return njit(cache=False)(ns["kernel"])
+
+    return _cached(("de", name, dtype, target), build)
 
 
 def run_delta_e(x: Any, y: Any, name: str, params: Sequence[float] = ()) -> Any:
@@ -306,7 +327,7 @@ def run_delta_e(x: Any, y: Any, name: str, params: Sequence[float] = ()) -> Any:
     n = int(xf.shape[0])
     of = _flat(out, channels=False)
     vals = _cast(dtype, params) if params else (0.0,)
-    _guarded_launch(("de", name, dtype), _de_kernel(name, dtype), n, xf, yf, of, n, *vals)
+    _run(("de", name, dtype), _de_kernel(name, dtype), n, xf, yf, of, n, *vals)
     return out
 
 
@@ -315,20 +336,7 @@ def run_delta_e_twin(x: np.ndarray, y: np.ndarray, name: str, params: Sequence[f
     dtype = _dtype_name(x)
     if dtype is None:
         raise TypeError(f"expected float32 or float64, got dtype {x.dtype}")
-    fn = functions(dtype, "cpu")[name]
-    key = ("de-twin", name, dtype)
-    k = _KERNELS.get(key)
-    if k is None:
-        from imageform._kernels.jit import njit
-
-        ps = [f"p{j}" for j in range(DELTA_E[name])]
-        src = _DE_SOURCE.format(
-            params=", ".join(ps) or "_unused", call="".join(", " + p for p in ps)
-        ).replace("    i = cuda.grid(1)\n    if i < n:", "    for i in range(n):")
-        ns: dict[str, Any] = {"fn": fn}
-        exec(compile(src, f"<imageform delta_e twin {name}>", "exec"), ns)
-        k = njit(cache=False)(ns["kernel"])
-        _KERNELS[key] = k
+    k = _de_kernel(name, dtype, "cpu")
     xf = np.ascontiguousarray(x).reshape(-1, 3)
     yf = np.ascontiguousarray(y).reshape(-1, 3)
     out = np.empty(xf.shape[0], x.dtype)

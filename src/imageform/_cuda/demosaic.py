@@ -26,8 +26,8 @@ from typing import Any
 import numpy as np
 
 from imageform._cuda import _launch
-from imageform._cuda._launch import empty_like
-from imageform._cuda.geometry import guarded_launch, import_cuda, launch_rows
+from imageform._cuda._launch import empty_like, guarded
+from imageform._cuda.geometry import import_cuda
 
 __all__ = [
     "MODE_CAMERA",
@@ -233,8 +233,7 @@ def demosaic(raw: Any, ry: int, rx: int, method: str, clip: bool) -> Any | None:
     args = (raw, int(ry), int(rx), _METHODS[method], bool(clip), out)
     f32 = str(raw.dtype).endswith("float32")
     kern = _kernels().demosaic32 if f32 else _kernels().demosaic64
-    launch = lambda kernel, *a: launch_rows(kernel, h, w, *a)  # noqa: E731
-    if not guarded_launch(launch, "demosaic", kern, *args):
+    if not guarded(("demosaic", str(raw.dtype)), kern, (h, w), *args):
         return None
     return out
 
@@ -309,8 +308,7 @@ def develop_on_device(
     none_u = cuda.device_array((0, 0, 3), np.uint16)
     out_f, out_u = (none_f, out) if mode == MODE_UINT16 else (out, none_u)
     args = (mosaic, prm, int(ry), int(rx), _METHODS[method], m, lut, bool(encode), int(mode))
-    launch = lambda kernel, *a: launch_rows(kernel, h, w, *a)  # noqa: E731
-    if not guarded_launch(launch, "develop", _kernels().develop, *args, out_f, out_u):
+    if not guarded(("develop", mode), _kernels().develop, (h, w), *args, out_f, out_u):
         from imageform.errors import InvalidInputError
 
         raise InvalidInputError(

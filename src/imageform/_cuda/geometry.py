@@ -42,13 +42,11 @@ from typing import Any
 import numpy as np
 
 from imageform._cuda import _launch
-from imageform._cuda._launch import empty_like, launch_1d
+from imageform._cuda._launch import empty_like, guarded
 
 __all__ = [
     "distort",
-    "guarded_launch",
     "import_cuda",
-    "launch_rows",
     "on_cuda",
     "project",
     "remap",
@@ -92,68 +90,6 @@ def require_cuda(what: str) -> None:
         raise InvalidInputError(
             f"{what}: no CUDA device is usable here (numba finds none); use the CPU"
         )
-
-
-#: Threads per block of :func:`launch_rows`: a warp along a row (coalesced), 8 rows.
-ROW_BLOCK = (32, 8)
-#: The largest grid height (CUDA's limit); taller images loop over rows in the kernel.
-_MAX_GRID_Y = 65535
-
-
-def launch_rows(kernel: Any, rows: int, cols: int, *args: Any) -> None:
-    """Launch ``kernel`` on a 2-D grid: ``x`` over ``cols``, ``y`` over ``rows``.
-
-    :func:`imageform._cuda._launch.launch_1d`'s conventions (device arrays of any library
-    viewed without a copy or a sync, the producer's stream and device, the launch counted),
-    with a 2-D grid of :data:`ROW_BLOCK` blocks, so that a kernel over an image finds its
-    pixel without 64-bit integer divisions (tens of instructions each on a GPU). The grid
-    height is capped at CUDA's 65535 blocks: kernels loop over rows with a stride of
-    ``gridDim.y * blockDim.y``, and guard ``column < cols``.
-    """
-    if rows <= 0 or cols <= 0:
-        return
-    first = next((a for a in args if _launch.is_cuda_array(a)), None)
-    dargs = tuple(_launch.as_device_array(a) if _launch.is_cuda_array(a) else a for a in args)
-    sim = _launch.simulated()
-    bx, by = (8, 4) if sim else ROW_BLOCK  # each simulated thread is a Python thread
-    grid = ((cols + bx - 1) // bx, min((rows + by - 1) // by, _MAX_GRID_Y))
-    stream = 0 if first is None else _launch._stream_for(first)
-    dev = None if first is None or sim else _launch._device_index(first)
-    with _launch._LOCK:
-        _launch._LAUNCHES[0] += 1
-    c = _launch.cuda()
-    if dev is not None and len(c.gpus) > 1 and c.get_current_device().id != dev:
-        with c.gpus[dev]:
-            kernel[grid, (bx, by), stream](*dargs)
-    else:
-        kernel[grid, (bx, by), stream](*dargs)
-
-
-#: Kernels (name and argument dtypes) that have compiled and run once in this process.
-_COMPILED: set[tuple[Any, ...]] = set()
-
-
-def guarded_launch(launch: Any, name: str, kernel: Any, *args: Any) -> bool:
-    """``launch(kernel, *args)``; False when its compilation failed (the kernels then off).
-
-    A machine whose numba CUDA target lacks its compiler (NVVM) or cannot type a kernel turns
-    the kernels off for the process (:func:`imageform._cuda._launch.disable`, one warning),
-    and the callers run the Array-API path, as the colour kernels do. Errors after a kernel
-    has compiled once, and errors that are not numba's, propagate.
-    """
-    key = (name, *(str(getattr(a, "dtype", type(a).__name__)) for a in args))
-    if key in _COMPILED:
-        launch(kernel, *args)
-        return True
-    try:
-        launch(kernel, *args)
-    except Exception as exc:
-        if not type(exc).__module__.startswith("numba"):
-            raise
-        _launch.disable(f"{type(exc).__name__}: {str(exc).splitlines()[0][:200]}")
-        return False
-    _COMPILED.add(key)
-    return True
 
 
 #: ``numba.cuda``, set by :func:`import_cuda`. A module global, not a local of the kernel
@@ -315,14 +251,9 @@ def _kernels() -> Any:
     return k
 
 
-def _points(n: int) -> Any:
-    """Return a launcher of ``n`` threads (:func:`imageform._cuda._launch.launch_1d`)."""
-    return lambda kernel, *args: launch_1d(kernel, n, *args)
-
-
-def _rows(rows: int, cols: int) -> Any:
-    """Return a launcher over a ``rows x cols`` image (:func:`launch_rows`)."""
-    return lambda kernel, *args: launch_rows(kernel, rows, cols, *args)
+def _dt(x: Any) -> str:
+    """Return the dtype's name (a :func:`~imageform._cuda._launch.guarded` key)."""
+    return str(x.dtype)
 
 
 def _coeffs(coeffs: Any) -> tuple[float, ...]:
@@ -338,13 +269,14 @@ def project(pts: Any, K: Any, R: Any, t: Any, coeffs: Any = None) -> tuple[Any, 
 
     ``K``, ``R``, ``t`` device arrays of the points' dtype. Returns ``(uv (N, 2), valid (N,))``
     of the points' library and device; one kernel launch. ``None`` (every wrapper here) when
-    the kernels turned out unusable (:func:`guarded_launch`): the caller's Array-API path runs.
+    the kernels turned out unusable (:func:`~imageform._cuda._launch.guarded`): the
+    caller's Array-API path runs.
     """
     n = int(pts.shape[0])
     uv = empty_like(pts, (n, 2))
     valid = empty_like(pts, (n,), np.bool_)
     args = (pts, K, R, t, *_coeffs(coeffs), coeffs is not None, uv, valid)
-    if not guarded_launch(_points(n), "project", _kernels().project, *args):
+    if not guarded(("project", _dt(pts)), _kernels().project, n, *args):
         return None
     return uv, valid
 
@@ -352,8 +284,8 @@ def project(pts: Any, K: Any, R: Any, t: Any, coeffs: Any = None) -> tuple[Any, 
 def distort(xy: Any, coeffs: Any) -> Any:
     """Brown-Conrady on ``(N, 2)`` device points; one launch."""
     out = empty_like(xy)
-    launch = _points(int(xy.shape[0]))
-    if not guarded_launch(launch, "distort", _kernels().distort, xy, *_coeffs(coeffs), out):
+    args = (xy, *_coeffs(coeffs), out)
+    if not guarded(("distort", _dt(xy)), _kernels().distort, int(xy.shape[0]), *args):
         return None
     return out
 
@@ -364,7 +296,7 @@ def undistort(xy: Any, coeffs: Any, max_iter: int, tol: float) -> tuple[Any, Any
     out = empty_like(xy, (n, 2))
     ok = empty_like(xy, (n,), np.bool_)
     args = (xy, *_coeffs(coeffs), int(max_iter), float(tol), out, ok)
-    if not guarded_launch(_points(n), "undistort", _kernels().undistort, *args):
+    if not guarded(("undistort", _dt(xy)), _kernels().undistort, n, *args):
         return None
     return out, ok
 
@@ -375,7 +307,7 @@ def remap(img: Any, map_uv: Any, fill: float) -> Any:
     ho, wo = int(map_uv.shape[0]), int(map_uv.shape[1])
     out = empty_like(img, (b, ho, wo, c))
     args = (img, map_uv, float(fill), out)
-    if not guarded_launch(_rows(ho, wo), "remap", _kernels().remap, *args):
+    if not guarded(("remap", _dt(img), _dt(map_uv)), _kernels().remap, (ho, wo), *args):
         return None
     return out
 
@@ -391,6 +323,7 @@ def undistort_image(
     ho, wo = out_hw
     out = empty_like(img, (b, ho, wo, c))
     args = (img, Kn, Km, *_coeffs(coeffs), float(fill), out)
-    if not guarded_launch(_rows(ho, wo), "undistort_image", _kernels().undistort_image, *args):
+    key = ("undistort_image", _dt(img))
+    if not guarded(key, _kernels().undistort_image, (ho, wo), *args):
         return None
     return out

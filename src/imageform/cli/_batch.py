@@ -148,7 +148,7 @@ def _chunked_command(wf: Workflow) -> click.Command:
             required=True,
             help="Output: a tiled .tif or a .zarr array.",
         ),
-        *[p for p in option_params(wf) if p.name not in ("bits", "out_of_range", "clip")],
+        *[p for p in option_params(wf) if p.name not in ("bits", "out_of_range", "clip", "device")],
         click.Option(
             ["--chunk"],
             type=click.INT,

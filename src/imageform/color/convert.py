@@ -234,6 +234,18 @@ def path(src: str, dst: str) -> list[Edge]:
     ['srgb_to_linear', 'linear_srgb_to_xyz', 'xyz_to_lab']
     """
     s, d = _space(src, "src"), _space(dst, "dst")
+    found = _PATHS.get((s, d))
+    if found is None:
+        found = _PATHS[s, d] = tuple(_shortest(s, d))
+    return list(found)
+
+
+#: Routes found by :func:`path` (the graph is fixed: each pair is searched once).
+_PATHS: dict[tuple[str, str], tuple[Edge, ...]] = {}
+
+
+def _shortest(s: str, d: str) -> list[Edge]:
+    """Breadth-first search of the conversion graph: the fewest edges from ``s`` to ``d``."""
     prev: dict[str, Edge | None] = {s: None}
     queue = deque([s])
     while queue:
@@ -492,8 +504,28 @@ def _kernel_steps(route: list[Edge], p: dict[str, Any]) -> list[tuple[str, tuple
     """Return the CUDA kernel steps of a route (:mod:`imageform._cuda`); [] when it has none.
 
     Every edge between 3-channel spaces has a step; routes through ``gray`` (1 channel) or
-    ``cmyk`` (4) have none and return ``[]`` (the Array-API path runs).
+    ``cmyk`` (4) have none and return ``[]`` (the Array-API path runs). The steps of a route
+    and hashable parameters are computed once per process (a GPU call does no more Python
+    work than it must before its launch).
     """
+    try:
+        key: Any = (tuple(route), tuple(sorted(p.items())))
+        hash(key)
+    except TypeError:  # a white given as an array: computed each time
+        return _steps_of(route, p)
+    steps = _STEPS.get(key)
+    if steps is None:
+        if len(_STEPS) > 256:
+            _STEPS.clear()
+        steps = _STEPS[key] = _steps_of(route, p)
+    return steps
+
+
+#: Kernel steps per route and parameters (:func:`_kernel_steps`).
+_STEPS: dict[Any, list[tuple[str, tuple[float, ...]]]] = {}
+
+
+def _steps_of(route: list[Edge], p: dict[str, Any]) -> list[tuple[str, tuple[float, ...]]]:
     steps: list[tuple[str, tuple[float, ...]]] = []
     for e in route:
         s, d = e.src, e.dst
