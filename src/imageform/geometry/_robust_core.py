@@ -15,9 +15,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from imageform._backend import to_numpy
+from imageform._validate import as_points_bounded as as_points
 from imageform._validate import check_positive, describe
 from imageform.errors import InvalidInputError
-from imageform.geometry._checks import as_points
 
 __all__ = [
     "REFINE_FACTOR",
