@@ -144,7 +144,10 @@ def test_real_chessboard_views(shared_data: Path) -> None:
         masks=scene["masks"],
     )
     assert 2 <= rec.registered.sum() <= 4, rec.notes
-    assert any("30 needed to start" in note for note in rec.notes)
+    # one pair starts and nothing else registers; which pair depends on the essential
+    # matrix's refit (frames 9 and 12 triangulated 10 points before its cheirality filter,
+    # issue 28, and 4 and 10 started; now 9 and 12 start)
+    assert rec.registered.sum() == 2, rec.notes
     assert np.all(rotation_errors(rec.R, np.asarray(scene["R"])) < 1.5)
     first = int(np.flatnonzero(rec.registered)[0])
     np.testing.assert_allclose(rec.R[first], np.eye(3), atol=1e-12)
