@@ -67,7 +67,7 @@ def test_7point_kernel_finds_what_the_numpy_solver_finds() -> None:
         x1, x2, *_ = _pair(100 + s, 7)
         u1, u2 = x1 * 800 + 320, x2 * 800 + 240
         k = _f7(u1, u2, np.arange(7), *bufs, np.empty((7, 9)), np.empty((2, 9)),
-                np.empty(9, np.int64), Fs)  # fmt: skip
+                np.empty(9, np.int64), Fs, np.empty((3, 3, 3)))  # fmt: skip
         ref, _ = f7(u1[None], u2[None])
         assert k == len(ref)
         for F in ref:

@@ -8,6 +8,7 @@ final model refined by Levenberg-Marquardt on the reprojection error of its inli
 
 from __future__ import annotations
 
+import math
 from typing import NamedTuple
 
 import numpy as np
@@ -157,7 +158,7 @@ def _find_homography_numba(
     trials: int,
     mode: str,
     n_iter: int,
-    gen: np.random.Generator,
+    rng: RNGLike,
     src: object,
     dst: object,
 ) -> HomographyResult:
@@ -165,25 +166,32 @@ def _find_homography_numba(
     from imageform._kernels.ransac_h import homography_estimate
 
     H = np.zeros((3, 3))
+    e = np.empty(s.shape[0])
     drawn = homography_estimate(
         np.ascontiguousarray(s),
         np.ascontiguousarray(d),
         thr,
         p,
         min(trials, _INT_CAP),
-        np.uint64(gen.integers(0, 2**63 - 1)),
+        _robust_core.kernel_seed(rng),
         _REFINE_CODE[mode],
         min(n_iter, _INT_CAP),
         _robust_core.REFINE_FACTOR,
         _robust_core.TERMINATION_FACTOR,
+        _robust_core.H_SUPPORT_WIDTH,
         H,
+        e,
     )
     if drawn < 0:
         raise DegenerateConfigurationError(
             f"no homography from src to dst with at least 4 inliers within {thr:g} px after "
             f"{-drawn} samples"
         )
-    return _finish(H, s, d, thr, int(drawn), src, dst)
+    # the kernel wrote the squared forward transfer errors of H (whose scale they ignore)
+    inl = e < thr * thr
+    rms = math.sqrt(float(np.mean(e[inl]))) if inl.any() else math.nan
+    H = _normalise_scale(H)
+    return HomographyResult(H.astype(result_dtype(src, dst)), inl, rms, int(drawn))
 
 
 def find_homography(
@@ -210,8 +218,9 @@ def find_homography(
     ``H`` minimises, by Levenberg-Marquardt, the symmetric transfer error
     ``Σ ‖x' - π(H x)‖² + ‖x - π(H⁻¹ x')‖²`` (``refine="symmetric"``, noise in both images)
     or the forward one (``"forward"``, as OpenCV) of the correspondences within the
-    refinement support (``3σ̂`` with ``σ̂`` the noise estimated from the inliers, between
-    ``τ`` and ``2τ``); the inliers are those within ``τ`` of the final ``H``.
+    refinement support (``4.29σ̂``, the 99.99 % quantile of a 2-D residual, with ``σ̂`` the
+    noise estimated from the inliers, between ``τ`` and ``2τ``); the inliers are those
+    within ``τ`` of the final ``H``.
 
     Parameters
     ----------
@@ -266,9 +275,9 @@ def find_homography(
     trials = as_int(max_trials, "max_trials", minimum=1)
     mode = check_option(refine, _REFINE, "refine")
     n_iter = as_int(max_iter, "max_iter", minimum=0)
-    gen = as_rng(rng)
     if use_numba(s):
-        return _find_homography_numba(s, d, thr, p, trials, mode, n_iter, gen, src, dst)
+        return _find_homography_numba(s, d, thr, p, trials, mode, n_iter, rng, src, dst)
+    gen = as_rng(rng)
     n = s.shape[0]
     sn, Ts = hartley(s)
     dn, Td = hartley(d)
@@ -308,5 +317,6 @@ def find_homography(
             thr,
             2,
             4,
+            width=_robust_core.H_SUPPORT_WIDTH,
         )
     return _finish(H, s, d, thr, drawn, src, dst)

@@ -342,12 +342,12 @@ def find_fundamental_matrix(
     """
     p1, p2 = check_pairs(points1, points2, "points1", "points2", 8)
     thr, p, trials, n_iter = _robust_args(threshold, confidence, max_trials, max_iter)
-    gen = as_rng(rng)
     n = p1.shape[0]
     if use_numba(p1):
         from imageform._kernels.ransac_f import fundamental_estimate
 
         Fk: F64 = np.zeros((3, 3))
+        e = np.empty(n)
         drawn = int(
             fundamental_estimate(
                 np.ascontiguousarray(p1),
@@ -355,12 +355,13 @@ def find_fundamental_matrix(
                 thr,
                 p,
                 min(trials, 2**62),
-                np.uint64(gen.integers(0, 2**63 - 1)),
+                _robust_core.kernel_seed(rng),
                 _LO_POOL,
                 min(n_iter, 2**62),
                 _robust_core.REFINE_FACTOR,
                 _robust_core.TERMINATION_FACTOR,
                 Fk,
+                e,
             )
         )
         if drawn < 0:
@@ -368,7 +369,8 @@ def find_fundamental_matrix(
                 f"no fundamental matrix with at least 8 inliers within {thr:g} px after "
                 f"{-drawn} samples"
             )
-        return _fundamental_result(Fk, p1, p2, thr, drawn, points1, points2)
+        return _fundamental_result(Fk, p1, p2, thr, drawn, points1, points2, e)
+    gen = as_rng(rng)
 
     def solve(idx: NDArray[np.intp]) -> F64:
         return f7(p1[idx], p2[idx])[0]
@@ -407,10 +409,19 @@ def find_fundamental_matrix(
 
 
 def _fundamental_result(
-    F: F64, p1: F64, p2: F64, thr: float, drawn: int, points1: object, points2: object
+    F: F64,
+    p1: F64,
+    p2: F64,
+    thr: float,
+    drawn: int,
+    points1: object,
+    points2: object,
+    e: F64 | None = None,
 ) -> FundamentalResult:
+    """Return the result of ``F``; ``e``: its squared Sampson distances, when computed."""
     F = _unit(F)
-    e = sampson_sq(F, p1, p2)
+    if e is None:
+        e = sampson_sq(F, p1, p2)
     inl = e < thr * thr
     rms = float(np.sqrt(np.mean(e[inl]))) if inl.any() else float("nan")
     return FundamentalResult(F.astype(result_dtype(points1, points2)), inl, rms, drawn)
