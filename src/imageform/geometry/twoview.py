@@ -300,7 +300,7 @@ def find_fundamental_matrix(
     Levenberg-Marquardt over the orthonormal representation ``F = U diag(1, σ, 0) Vᵀ``
     (Bartoli & Sturm 2004, CVIU 97), which keeps rank 2, the Sampson distances of the
     correspondences within the refinement support (``3σ̂`` with ``σ̂`` the noise estimated
-    from the inliers, between ``τ`` and ``2τ``); the inliers are those within ``τ`` of it.
+    from the inliers, between ``τ`` and ``3τ``); the inliers are those within ``τ`` of it.
 
     Parameters
     ----------
@@ -358,7 +358,7 @@ def find_fundamental_matrix(
                 _robust_core.kernel_seed(rng),
                 _LO_POOL,
                 min(n_iter, 2**62),
-                _robust_core.REFINE_FACTOR,
+                _robust_core.F_REFINE_FACTOR,
                 _robust_core.TERMINATION_FACTOR,
                 Fk,
                 e,
@@ -404,6 +404,7 @@ def find_fundamental_matrix(
         thr,
         1,
         8,
+        factor=_robust_core.F_REFINE_FACTOR,
     )
     return _fundamental_result(F, p1, p2, thr, drawn, points1, points2)
 
