@@ -86,7 +86,7 @@ def _trials_needed(n_inl, n, s, conf):  # type: ignore[no-untyped-def]  # pragma
         return 0.0
     if eps <= 0.0:
         return np.inf
-    return _trials_for(eps**s, conf)
+    return _trials_for(math.pow(eps, float(s)), conf)  # as Python: C pow, not powi
 
 
 @njit(**_OPTS)
@@ -417,6 +417,48 @@ def _nullspace(A, nr, m, nc, N, perm, tol):  # type: ignore[no-untyped-def]  # p
         N[k, perm[m + k]] = 1.0
         for i in range(m):
             N[k, perm[i]] = -A[i, m + k]
+    return True
+
+
+@njit(**_OPTS)
+def _null_partial(A, m, N):  # type: ignore[no-untyped-def]  # pragma: no cover - compiled
+    """Write the null space of ``A[:m, :9]`` (rank ``m``) as the rows of ``N`` (9 - m, 9).
+
+    Gaussian elimination with partial pivoting on the first ``m`` columns, then back
+    substitution with the last ``9 - m`` unknowns set to the unit vectors: a third of the
+    work of :func:`_nullspace`'s complete pivoting, which the caller falls back to on False
+    (a pivot below ``1e-10`` of the largest entry: the first ``m`` columns are nearly
+    dependent). ``A`` destroyed.
+    """
+    big = 0.0
+    for i in range(m):
+        for j in range(9):
+            big = max(big, abs(A[i, j]))
+    tol = 1e-10 * big
+    for c in range(m):
+        p = c
+        for i in range(c + 1, m):
+            if abs(A[i, c]) > abs(A[p, c]):
+                p = i
+        if not abs(A[p, c]) > tol:
+            return False
+        if p != c:
+            for j in range(c, 9):
+                A[c, j], A[p, j] = A[p, j], A[c, j]
+        inv = 1.0 / A[c, c]
+        for i in range(c + 1, m):
+            f = A[i, c] * inv
+            if f != 0.0:
+                for j in range(c + 1, 9):
+                    A[i, j] -= f * A[c, j]
+    for k in range(9 - m):
+        for j in range(m, 9):
+            N[k, j] = 1.0 if j == m + k else 0.0
+        for i in range(m - 1, -1, -1):
+            v = -A[i, m + k]
+            for j in range(i + 1, m):
+                v -= A[i, j] * N[k, j]
+            N[k, i] = v / A[i, i]
     return True
 
 

@@ -17,6 +17,7 @@ from imageform._kernels.ransac import (
     _hartley,
     _mat3,
     _mat3_tn,
+    _null_partial,
     _nullspace,
     _rand,
     _rank2,
@@ -91,47 +92,6 @@ def _det3(A):  # type: ignore[no-untyped-def]  # pragma: no cover - compiled
 
 
 @njit(**_OPTS)
-def _null79(A, N):  # type: ignore[no-untyped-def]  # pragma: no cover - compiled
-    """Write the null space of the 7 x 9 ``A`` (rank 7) as the rows of ``N`` (2, 9).
-
-    Gaussian elimination with partial pivoting on the first 7 columns, then back
-    substitution with ``(x₇, x₈) = (1, 0)`` and ``(0, 1)``: a third of the work of
-    :func:`._kernels.ransac._nullspace`'s complete pivoting (which the caller falls back to
-    on False: a pivot below ``1e-10`` of the largest entry). ``A`` destroyed.
-    """
-    big = 0.0
-    for i in range(7):
-        for j in range(9):
-            big = max(big, abs(A[i, j]))
-    tol = 1e-10 * big
-    for c in range(7):
-        p = c
-        for i in range(c + 1, 7):
-            if abs(A[i, c]) > abs(A[p, c]):
-                p = i
-        if not abs(A[p, c]) > tol:
-            return False
-        if p != c:
-            for j in range(c, 9):
-                A[c, j], A[p, j] = A[p, j], A[c, j]
-        inv = 1.0 / A[c, c]
-        for i in range(c + 1, 7):
-            f = A[i, c] * inv
-            if f != 0.0:
-                for j in range(c + 1, 9):
-                    A[i, j] -= f * A[c, j]
-    for k in range(2):
-        N[k, 7] = 1.0 if k == 0 else 0.0
-        N[k, 8] = 0.0 if k == 0 else 1.0
-        for i in range(6, -1, -1):
-            v = -A[i, 7 + k]
-            for j in range(i + 1, 7):
-                v -= A[i, j] * N[k, j]
-            N[k, i] = v / A[i, i]
-    return True
-
-
-@njit(**_OPTS)
 def _pencil_det(N, a, M):  # type: ignore[no-untyped-def]  # pragma: no cover - compiled
     """``det(a F1 + (1 - a) F2)`` of the null vectors ``N[1], N[0]`` (``M`` scratch)."""
     for r in range(3):
@@ -152,7 +112,7 @@ def _f7(p1, p2, idx, xs1, xs2, T1, T2, A, N, perm, Fs, W):  # type: ignore[no-un
     _hartley(p2, idx, np.int64(7), xs2, T2)
     for k in range(7):
         _epi_row(xs1[k, 0], xs1[k, 1], xs2[k, 0], xs2[k, 1], 1.0, A[k])
-    if not _null79(A, N):
+    if not _null_partial(A, np.int64(7), N):
         for k in range(7):
             _epi_row(xs1[k, 0], xs1[k, 1], xs2[k, 0], xs2[k, 1], 1.0, A[k])
         if not _nullspace(A, np.int64(7), np.int64(7), np.int64(9), N, perm, 1e-10):
@@ -249,7 +209,7 @@ def _needed(best, p1, p2, thr, term, conf, a_pass):  # type: ignore[no-untyped-d
         return _trials_needed(m, n, np.int64(7), conf)
     if m >= n:
         return 0.0
-    return _trials_for((m / n) ** 7 * a_pass, conf)
+    return _trials_for(math.pow(m / n, 7.0) * a_pass, conf)
 
 
 #: The SPRT's costs (Matas & Chum 2008): a 7-point hypothesis costs about 200 Sampson

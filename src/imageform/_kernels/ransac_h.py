@@ -16,6 +16,7 @@ from imageform._kernels.ransac import (
     _lm,
     _mat3,
     _min_eigvec_psd,
+    _null_partial,
     _nullspace,
     _same,
     _sample,
@@ -71,6 +72,14 @@ def _h_rows(x, y, u, v, w, A, r):  # type: ignore[no-untyped-def]  # pragma: no 
     A[r + 1, 6] = -u * x * w
     A[r + 1, 7] = -u * y * w
     A[r + 1, 8] = -u * w
+
+
+@njit(**_OPTS)
+def _h_sample_rows(sn, dn, idx, A):  # type: ignore[no-untyped-def]  # pragma: no cover
+    """Write the 8 x 9 DLT system of the 4 correspondences ``idx`` (normalised) into ``A``."""
+    for k in range(4):
+        i = idx[k]
+        _h_rows(sn[i, 0], sn[i, 1], dn[i, 0], dn[i, 1], 1.0, A, 2 * k)
 
 
 @njit(**_OPTS)
@@ -254,11 +263,11 @@ def homography_estimate(
         drawn += 1
         if not _h_sample_good(sn, dn, idx):
             continue
-        for k in range(4):
-            i = idx[k]
-            _h_rows(sn[i, 0], sn[i, 1], dn[i, 0], dn[i, 1], 1.0, A, 2 * k)
-        if not _nullspace(A, np.int64(8), np.int64(8), np.int64(9), N, perm, 1e-10):
-            continue
+        _h_sample_rows(sn, dn, idx, A)
+        if not _null_partial(A, np.int64(8), N):
+            _h_sample_rows(sn, dn, idx, A)
+            if not _nullspace(A, np.int64(8), np.int64(8), np.int64(9), N, perm, 1e-10):
+                continue
         _h_denorm(N[0], Tdi, Ts, Tmp, H)
         sc, cnt = _score(np.int64(0), H, s, d, thr2, best_sc)
         if cnt < 0 or not sc < best_sc:
