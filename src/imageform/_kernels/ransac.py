@@ -44,6 +44,10 @@ __all__: list[str] = []
 
 _OPTS = {"nogil": True, "error_model": "numpy"}
 
+#: The SPRT's initial ``δ``, the inlier ratio of a bad hypothesis (then the mean of the
+#: rejected ones'; :func:`_score_sprt`).
+_SPRT_DELTA0 = 0.05
+
 # LM residual kinds
 _H_FORWARD = 0
 _H_SYMMETRIC = 1
@@ -76,6 +80,38 @@ def _sample(state, n, s, idx):  # type: ignore[no-untyped-def]  # pragma: no cov
             if ok:
                 idx[k] = r
                 break
+
+
+@njit(**_OPTS)
+def _inliers_out(kind, M, p1, p2, thr2, order, inl_out, rms_out):  # type: ignore[no-untyped-def]  # pragma: no cover
+    """Write the inliers of ``M`` and their RMS error (NaN without any).
+
+    Into ``inl_out`` in the caller's order (``p1[i]`` is its ``order[i]``) and ``rms_out[0]``.
+    """
+    s = 0.0
+    cnt = 0
+    for i in range(p1.shape[0]):
+        e = _sq(kind, M, p1, p2, i)
+        ok = e < thr2
+        inl_out[order[i]] = ok
+        if ok:
+            s += e
+            cnt += 1
+    rms_out[0] = math.sqrt(s / cnt) if cnt > 0 else np.nan
+
+
+@njit(**_OPTS)
+def _shuffled(state, n):  # type: ignore[no-untyped-def]  # pragma: no cover - compiled
+    """Return a random permutation of ``range(n)`` (Fisher-Yates).
+
+    The verification order that the SPRT (:func:`_score_sprt`) assumes, whatever the order
+    of the input.
+    """
+    order = np.arange(n)
+    for i in range(n - 1, 0, -1):
+        j = np.int64(_rand(state) % np.uint64(i + 1))
+        order[i], order[j] = order[j], order[i]
+    return order
 
 
 @njit(**_OPTS)
@@ -617,6 +653,18 @@ def _sprt_a(eps, delta, t_m, m_s):  # type: ignore[no-untyped-def]  # pragma: no
     for _ in range(10):
         a = a0 + math.log(a)
     return math.log(a)
+
+
+@njit(**_OPTS)
+def _sprt_params(eps, delta, t_m, m_s):  # type: ignore[no-untyped-def]  # pragma: no cover
+    """``(log(δ/ε), log((1-δ)/(1-ε)), log A, 1 - 1/A)`` of the SPRT (:func:`_sprt_a`)."""
+    log_a = _sprt_a(eps, delta, t_m, m_s)
+    return (
+        math.log(delta / eps),
+        math.log((1.0 - delta) / (1.0 - eps)),
+        log_a,
+        1.0 - math.exp(-log_a),
+    )
 
 
 @njit(**_OPTS)

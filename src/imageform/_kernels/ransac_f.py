@@ -10,24 +10,25 @@ from imageform._kernels.jit import njit
 from imageform._kernels.ransac import (
     _F_ORTHO,
     _OPTS,
+    _SPRT_DELTA0,
     _copy3,
     _epi_row,
     _f8,
     _fro_unit,
     _hartley,
+    _inliers_out,
     _mat3,
     _mat3_tn,
     _null_partial,
     _nullspace,
-    _rand,
     _rank2,
     _refit_f,
     _sample,
     _sampson_parts,
     _score,
     _score_sprt,
-    _sprt_a,
-    _sq_f,
+    _shuffled,
+    _sprt_params,
     _support_count_n,
     _trials_for,
     _trials_needed,
@@ -214,32 +215,18 @@ def _needed(best, p1, p2, thr, term, conf, a_pass):  # type: ignore[no-untyped-d
 
 #: The SPRT's costs (Matas & Chum 2008): a 7-point hypothesis costs about 200 Sampson
 #: distances (a 7-point solve about 1 µs, a distance about 5 ns), 2 hypotheses per sample
-#: on average (1 or 3); the initial ``δ``, the inlier ratio of a bad hypothesis.
-_SPRT_TM = 200.0
-_SPRT_MS = 2.0
-_SPRT_DELTA0 = 0.05
-_SPRT_ON = True
-
-
-@njit(**_OPTS)
-def _sprt_params(eps, delta):  # type: ignore[no-untyped-def]  # pragma: no cover - compiled
-    """``(log(δ/ε), log((1-δ)/(1-ε)), log A, 1 - 1/A)`` of the SPRT (:func:`_sprt_a`)."""
-    log_a = _sprt_a(eps, delta, _SPRT_TM, _SPRT_MS)
-    return (
-        math.log(delta / eps),
-        math.log((1.0 - delta) / (1.0 - eps)),
-        log_a,
-        1.0 - math.exp(-log_a),
-    )
+#: on average (1 or 3).
+_TM = 200.0
+_MS = 2.0
 
 
 @njit(
     "int64(float64[:, ::1], float64[:, ::1], float64, float64, int64, uint64, int64, int64,"
-    " float64, float64, float64[:, ::1], float64[::1])",
+    " float64, float64, float64[:, ::1], boolean[::1], float64[::1])",
     **_OPTS,
 )
 def fundamental_estimate(
-    q1, q2, thr, conf, max_trials, seed, pool, max_iter, factor, term, F_out, e_out
+    q1, q2, thr, conf, max_trials, seed, pool, max_iter, factor, term, F_out, inl_out, rms_out
 ):  # type: ignore[no-untyped-def]  # pragma: no cover
     """Robust ``F`` (``x2ᵀ F x1 = 0``): 7-point RANSAC + SPRT + LO + runner-up pool, then LM.
 
@@ -252,18 +239,15 @@ def fundamental_estimate(
     outlier-free sample), ``δ`` the mean inlier ratio seen in the rejected ones; the
     correspondences are verified in a random order (a permuted copy), as the test assumes,
     and the adaptive count allows for the good hypotheses it rejects. Writes ``F_out``
-    (rank 2, refined) and its squared Sampson distances in ``e_out`` (N,), and returns the
-    samples drawn, negated when no hypothesis had 8 inliers.
+    (rank 2, refined, unit norm), its inliers (Sampson distance within ``τ``) in ``inl_out``
+    (N,) and their RMS in ``rms_out[0]``, and returns the samples drawn, negated when no
+    hypothesis had 8 inliers.
     """
     n = q1.shape[0]
     thr2 = thr * thr
     state = np.empty(1, dtype=np.uint64)
     state[0] = seed
-    # a random order of the correspondences (Fisher-Yates): the SPRT's premise
-    order = np.arange(n)
-    for i in range(n - 1, 0, -1):
-        j = np.int64(_rand(state) % np.uint64(i + 1))
-        order[i], order[j] = order[j], order[i]
+    order = _shuffled(state, n)
     p1 = np.empty((n, 2))
     p2 = np.empty((n, 2))
     for i in range(n):
@@ -318,16 +302,16 @@ def fundamental_estimate(
                         rej_n += 1
                         if rej_n % 64 == 0:
                             delta = min(max(rej_frac / rej_n, 1e-3), 0.5 * eps)
-                            log_in, log_out, log_a, a_pass = _sprt_params(eps, delta)
+                            log_in, log_out, log_a, a_pass = _sprt_params(eps, delta, _TM, _MS)
                 else:
                     sc, cnt = _score(np.int64(_F_ORTHO), F, p1, p2, thr2, limit)
                 if cnt < 0:
                     continue
                 if sc < best_sc:
-                    if _SPRT_ON and cnt / n > 2.0 * delta and cnt / n < 0.999:
+                    if cnt / n > 2.0 * delta and cnt / n < 0.999:
                         eps = cnt / n
                         sprt = True
-                        log_in, log_out, log_a, a_pass = _sprt_params(eps, delta)
+                        log_in, log_out, log_a, a_pass = _sprt_params(eps, delta, _TM, _MS)
                     best_sc, best_cnt = _adopt(
                         F, sc, cnt, p1, p2, thr, best, best_sc, best_cnt, sel, w, Flo
                     )
@@ -362,7 +346,7 @@ def fundamental_estimate(
         return -drawn
     _rank2(best)
     _refit_f(best, p1, p2, thr, factor, max_iter)
+    _fro_unit(best)
     _copy3(best, F_out)
-    for i in range(n):
-        e_out[order[i]] = _sq_f(best, p1, p2, i)
+    _inliers_out(np.int64(_F_ORTHO), best, p1, p2, thr2, order, inl_out, rms_out)
     return drawn

@@ -9,9 +9,11 @@ import numpy as np
 from imageform._kernels.jit import njit
 from imageform._kernels.ransac import (
     _OPTS,
+    _SPRT_DELTA0,
     _copy3,
     _fro_unit,
     _hartley,
+    _inliers_out,
     _inv3,
     _lm,
     _mat3,
@@ -21,14 +23,21 @@ from imageform._kernels.ransac import (
     _same,
     _sample,
     _score,
+    _score_sprt,
     _select,
+    _shuffled,
+    _sprt_params,
     _sq_h,
     _support_bound,
     _support_count_n,
-    _trials_needed,
+    _trials_for,
 )
 
 __all__ = ["homography_estimate"]
+
+#: The SPRT's cost of a 4-point hypothesis, in forward transfer errors (a sample check,
+#: an 8 x 9 null vector: about 100); one hypothesis per sample (Matas & Chum 2008).
+_H_TM = 100.0
 
 
 # ---------------------------------------------------------------- homography
@@ -217,22 +226,44 @@ def _h_refit(best, s, d, sn, dn, Tdi, Ts, thr, factor, width, n_inl, mode, max_i
 
 @njit(
     "int64(float64[:, ::1], float64[:, ::1], float64, float64, int64, uint64, int64, int64,"
-    " float64, float64, float64, float64[:, ::1], float64[::1])",
+    " float64, float64, float64, float64[:, ::1], boolean[::1], float64[::1])",
     **_OPTS,
 )
 def homography_estimate(
-    s, d, thr, conf, max_trials, seed, mode, max_iter, factor, term, width, H_out, e_out
+    src,
+    dst,
+    thr,
+    conf,
+    max_trials,
+    seed,
+    mode,
+    max_iter,
+    factor,
+    term,
+    width,
+    H_out,
+    inl_out,
+    rms_out,
 ):  # type: ignore[no-untyped-def]  # pragma: no cover
     """Robust homography ``d ~ H s``: RANSAC + LO, then LM on the refinement support.
 
     ``mode``: 0 forward, 1 symmetric transfer error, -1 no refinement; ``factor``,
     ``width``: the refinement support (:func:`_h_refit`); ``term``: the factor of the
     support whose inlier ratio sets the adaptive sample count. Writes ``H_out`` (pixels,
-    arbitrary scale) and the squared forward transfer errors of it in ``e_out`` (N,), and
-    returns the number of samples drawn, negated when no hypothesis had more than 4 inliers.
+    ``H[2, 2] = 1`` unless near 0, then unit norm), its inliers (within ``τ`` of the forward
+    transfer error) in ``inl_out`` (N,) and their RMS in ``rms_out[0]``, and returns the
+    number of samples drawn, negated when no hypothesis had more than 4 inliers.
     """
-    n = s.shape[0]
+    n = src.shape[0]
     thr2 = thr * thr
+    state = np.empty(1, dtype=np.uint64)
+    state[0] = seed
+    order = _shuffled(state, n)
+    s = np.empty((n, 2))
+    d = np.empty((n, 2))
+    for i in range(n):
+        s[i, 0], s[i, 1] = src[order[i], 0], src[order[i], 1]
+        d[i, 0], d[i, 1] = dst[order[i], 0], dst[order[i], 1]
     all_idx = np.arange(n)
     sn = np.empty((n, 2))
     dn = np.empty((n, 2))
@@ -242,8 +273,6 @@ def homography_estimate(
     _hartley(s, all_idx, n, sn, Ts)
     _hartley(d, all_idx, n, dn, Td)
     _inv3(Td, Tdi)
-    state = np.empty(1, dtype=np.uint64)
-    state[0] = seed
     idx = np.empty(4, dtype=np.int64)
     A = np.empty((8, 9))
     N = np.empty((1, 9))
@@ -256,6 +285,16 @@ def homography_estimate(
     buf = np.empty((5, 9, 9))
     best_sc = np.inf
     best_cnt = -1
+    # the SPRT (as the fundamental matrix's kernel): off until a best hypothesis gives ε
+    sprt = False
+    delta = _SPRT_DELTA0
+    rej_frac = 0.0
+    rej_n = 0
+    log_in = 0.0
+    log_out = 0.0
+    log_a = np.inf
+    a_pass = 1.0
+    eps = 0.0
     needed = float(max_trials)
     drawn = 0
     while drawn < min(needed, max_trials):
@@ -269,9 +308,24 @@ def homography_estimate(
             if not _nullspace(A, np.int64(8), np.int64(8), np.int64(9), N, perm, 1e-10):
                 continue
         _h_denorm(N[0], Tdi, Ts, Tmp, H)
-        sc, cnt = _score(np.int64(0), H, s, d, thr2, best_sc)
+        if sprt:
+            sc, cnt, tested, seen = _score_sprt(
+                np.int64(0), H, s, d, thr2, best_sc, log_in, log_out, log_a
+            )
+            if cnt == -2:  # rejected by the SPRT: δ from the rejected hypotheses
+                rej_frac += seen / tested
+                rej_n += 1
+                if rej_n % 16 == 0:
+                    delta = min(max(rej_frac / rej_n, 1e-3), 0.5 * eps)
+                    log_in, log_out, log_a, a_pass = _sprt_params(eps, delta, _H_TM, 1.0)
+        else:
+            sc, cnt = _score(np.int64(0), H, s, d, thr2, best_sc)
         if cnt < 0 or not sc < best_sc:
             continue
+        if cnt / n > 2.0 * delta and cnt / n < 0.999:
+            eps = cnt / n
+            sprt = True
+            log_in, log_out, log_a, a_pass = _sprt_params(eps, delta, _H_TM, 1.0)
         _copy3(H, best)
         best_sc = sc
         best_cnt = cnt
@@ -284,12 +338,18 @@ def homography_estimate(
                 best_cnt = cnt2
         # σ̂ of the count to 1e-8 (32 bisections): the count, not the bound, matters here
         m = _support_count_n(np.int64(0), best, s, d, thr, np.int64(2), term, np.int64(32))
-        needed = _trials_needed(m, n, np.int64(4), conf)
+        needed = _trials_for(math.pow(m / n, 4.0) * a_pass, conf) if m < n else 0.0
     if best_cnt < 4:
         return -drawn
     if mode >= 0 and best_cnt > 4:
         _h_refit(best, s, d, sn, dn, Tdi, Ts, thr, factor, width, best_cnt, mode, max_iter, buf)
-    _copy3(best, H_out)
-    for i in range(n):
-        e_out[i] = _sq_h(best, s, d, i)
+    nrm = 0.0
+    for a in range(3):
+        for b in range(3):
+            nrm += best[a, b] * best[a, b]
+    scale = best[2, 2] if abs(best[2, 2]) > 1e-12 * math.sqrt(nrm) else math.sqrt(nrm)
+    for a in range(3):
+        for b in range(3):
+            H_out[a, b] = best[a, b] / scale
+    _inliers_out(np.int64(0), H_out, s, d, thr2, order, inl_out, rms_out)
     return drawn

@@ -8,7 +8,6 @@ final model refined by Levenberg-Marquardt on the reprojection error of its inli
 
 from __future__ import annotations
 
-import math
 from typing import NamedTuple
 
 import numpy as np
@@ -165,8 +164,9 @@ def _find_homography_numba(
     """:func:`find_homography` by the compiled kernel (same steps, see ``_kernels.ransac``)."""
     from imageform._kernels.ransac_h import homography_estimate
 
-    H = np.zeros((3, 3))
-    e = np.empty(s.shape[0])
+    H = np.empty((3, 3))
+    inl = np.empty(s.shape[0], dtype=bool)
+    rms = np.empty(1)
     drawn = homography_estimate(
         np.ascontiguousarray(s),
         np.ascontiguousarray(d),
@@ -180,18 +180,16 @@ def _find_homography_numba(
         _robust_core.TERMINATION_FACTOR,
         _robust_core.H_SUPPORT_WIDTH,
         H,
-        e,
+        inl,
+        rms,
     )
     if drawn < 0:
         raise DegenerateConfigurationError(
             f"no homography from src to dst with at least 4 inliers within {thr:g} px after "
             f"{-drawn} samples"
         )
-    # the kernel wrote the squared forward transfer errors of H (whose scale they ignore)
-    inl = e < thr * thr
-    rms = math.sqrt(float(np.mean(e[inl]))) if inl.any() else math.nan
-    H = _normalise_scale(H)
-    return HomographyResult(H.astype(result_dtype(src, dst)), inl, rms, int(drawn))
+    # the kernel scaled H as _normalise_scale and wrote its inliers and their RMS
+    return HomographyResult(H.astype(result_dtype(src, dst)), inl, float(rms[0]), int(drawn))
 
 
 def find_homography(

@@ -346,8 +346,9 @@ def find_fundamental_matrix(
     if use_numba(p1):
         from imageform._kernels.ransac_f import fundamental_estimate
 
-        Fk: F64 = np.zeros((3, 3))
-        e = np.empty(n)
+        Fk: F64 = np.empty((3, 3))
+        inl = np.empty(n, dtype=bool)
+        rms = np.empty(1)
         drawn = int(
             fundamental_estimate(
                 np.ascontiguousarray(p1),
@@ -361,7 +362,8 @@ def find_fundamental_matrix(
                 _robust_core.F_REFINE_FACTOR,
                 _robust_core.TERMINATION_FACTOR,
                 Fk,
-                e,
+                inl,
+                rms,
             )
         )
         if drawn < 0:
@@ -369,7 +371,10 @@ def find_fundamental_matrix(
                 f"no fundamental matrix with at least 8 inliers within {thr:g} px after "
                 f"{-drawn} samples"
             )
-        return _fundamental_result(Fk, p1, p2, thr, drawn, points1, points2, e)
+        # the kernel wrote F (unit norm), its inliers and their RMS
+        Fk = Fk if Fk.flat[np.argmax(np.abs(Fk))] > 0 else -Fk  # _unit's sign
+        dtype = result_dtype(points1, points2)
+        return FundamentalResult(Fk.astype(dtype), inl, float(rms[0]), drawn)
     gen = as_rng(rng)
 
     def solve(idx: NDArray[np.intp]) -> F64:
@@ -410,19 +415,10 @@ def find_fundamental_matrix(
 
 
 def _fundamental_result(
-    F: F64,
-    p1: F64,
-    p2: F64,
-    thr: float,
-    drawn: int,
-    points1: object,
-    points2: object,
-    e: F64 | None = None,
+    F: F64, p1: F64, p2: F64, thr: float, drawn: int, points1: object, points2: object
 ) -> FundamentalResult:
-    """Return the result of ``F``; ``e``: its squared Sampson distances, when computed."""
     F = _unit(F)
-    if e is None:
-        e = sampson_sq(F, p1, p2)
+    e = sampson_sq(F, p1, p2)
     inl = e < thr * thr
     rms = float(np.sqrt(np.mean(e[inl]))) if inl.any() else float("nan")
     return FundamentalResult(F.astype(result_dtype(points1, points2)), inl, rms, drawn)
