@@ -65,7 +65,9 @@ def scene(seed: int, n: int, outliers: float, sigma: float, planar: bool) -> dic
     t = rng.normal(0.0, 1.0, 3) * [1.0, 0.5, 0.3]
     t = t / np.linalg.norm(t)
     X: np.ndarray = np.empty((0, 3))
-    while len(X) < n:
+    for _ in range(100):  # a few poses see (almost) none of the cloud: seed 2515, say
+        if len(X) >= n:
+            break
         Y = rng.uniform([-3, -2, 4], [3, 2, 10], (4 * n, 3))
         if planar:
             normal = np.array([0.2, -0.1, 1.0])
@@ -74,6 +76,8 @@ def scene(seed: int, n: int, outliers: float, sigma: float, planar: bool) -> dic
         inside = np.all((u1 >= 0) & (u1 < [W, H]) & (u2 >= 0) & (u2 < [W, H]), axis=1)
         inside &= (Y @ R.T + t)[:, 2] > 0.5
         X = np.concatenate([X, Y[inside]])[:n]
+    if len(X) < n:
+        raise ValueError(f"scene {seed}: the second camera sees fewer than {n} of its points")
     u1, u2 = _project(X, np.eye(3), np.zeros(3)), _project(X, R, t)
     n1 = u1 + rng.normal(0.0, sigma, u1.shape)
     n2 = u2 + rng.normal(0.0, sigma, u2.shape)
