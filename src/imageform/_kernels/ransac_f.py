@@ -225,9 +225,9 @@ _MS = 2.0
     " float64, float64, float64[:, ::1], boolean[::1], float64[::1])",
     **_OPTS,
 )
-def fundamental_estimate(
+def fundamental_estimate(  # type: ignore[no-untyped-def]
     q1, q2, thr, conf, max_trials, seed, pool, max_iter, factor, term, F_out, inl_out, rms_out
-):  # type: ignore[no-untyped-def]  # pragma: no cover
+):  # pragma: no cover
     """Robust ``F`` (``x2ᵀ F x1 = 0``): 7-point RANSAC + SPRT + LO + runner-up pool, then LM.
 
     As ``twoview.find_fundamental_matrix``'s NumPy path (``_robust_core.ransac`` with

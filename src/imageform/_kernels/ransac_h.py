@@ -229,7 +229,7 @@ def _h_refit(best, s, d, sn, dn, Tdi, Ts, thr, factor, width, n_inl, mode, max_i
     " float64, float64, float64, float64[:, ::1], boolean[::1], float64[::1])",
     **_OPTS,
 )
-def homography_estimate(
+def homography_estimate(  # type: ignore[no-untyped-def]
     src,
     dst,
     thr,
@@ -244,7 +244,7 @@ def homography_estimate(
     H_out,
     inl_out,
     rms_out,
-):  # type: ignore[no-untyped-def]  # pragma: no cover
+):  # pragma: no cover
     """Robust homography ``d ~ H s``: RANSAC + LO, then LM on the refinement support.
 
     ``mode``: 0 forward, 1 symmetric transfer error, -1 no refinement; ``factor``,
