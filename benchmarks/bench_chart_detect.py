@@ -117,7 +117,7 @@ def main() -> None:
         }
         if res is not None:
             det, pat = res
-            err = np.linalg.norm(det.centres - case.centres, axis=1) / case.pitch
+            err = np.linalg.norm(det.centers - case.centres, axis=1) / case.pitch
             use = pat.valid & ~case.occluded
             de = _de(pat.means[use], case.patches[use]) if use.any() else np.array([np.nan])
             r.update(
@@ -178,7 +178,7 @@ def main() -> None:
         times.append(t1 - t0)
         mtimes.append(time.perf_counter() - t1)
     big_err = float(
-        np.max(np.linalg.norm(det_big.centres - (big_case.centres * 4 + 1.5), axis=1))
+        np.max(np.linalg.norm(det_big.centers - (big_case.centres * 4 + 1.5), axis=1))
         / (4 * big_case.pitch)
     )
 

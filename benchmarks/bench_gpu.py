@@ -1,16 +1,30 @@
 """imageform on PyTorch (CUDA when available, else CPU) against kornia and the memory bandwidth.
 
 Issues 9 and 29's GPU benchmark, one prepared script for a lent GPU: sRGB -> CIELAB,
-CIEDE2000, projection of 10^8 points, demosaicing (bilinear, Malvar) and bilinear remapping,
-each in every ``--dtypes`` (float32 and float64 by default), imageform's namespace-generic
-code on PyTorch tensors against kornia (``kornia.color.rgb_to_lab``,
+CIEDE2000, projection of 10^8 points (pinhole, and with Brown-Conrady), Brown-Conrady and
+its inverse on 10^8 points, demosaicing (bilinear, Malvar), bilinear remapping and image
+undistortion, each in every ``--dtypes`` (float32 and float64 by default), imageform on
+PyTorch tensors (on CUDA the fused kernels of :mod:`imageform._cuda`, elsewhere the
+namespace-generic code) against kornia (``kornia.color.rgb_to_lab``,
 ``kornia.color.raw_to_rgb`` (bilinear), ``kornia.geometry.camera.project_points``,
-``kornia.geometry.transform.remap``) and against the device's memory bandwidth: the bytes
+``kornia.geometry.calibration.distort_points`` / ``undistort_points`` / ``undistort_image``,
+``kornia.geometry.transform.remap``); on CUDA also the raw development of a ``--raw-size``
+(24 Mpx) mosaic to 16-bit sRGB, the kernel alone (frames per second) and with the copies;
+and against the device's memory bandwidth: the bytes
 an operation must move (read inputs + write outputs, once) divided by its time, as a share
 of the bandwidth of a plain tensor copy on the same device (``dst.copy_(src)``, 2 x bytes /
 time), the practical ceiling of a memory-bound kernel. Kornia has no ΔE: CIEDE2000 is
 compared with the bandwidth only. Each library runs in its native layout (imageform
 channels-last ``(H, W, 3)``, kornia channels-first ``(1, 3, H, W)``); no transposes are timed.
+
+The colour set (sRGB→Lab, Lab→sRGB, sRGB→linear, sRGB→HSV, ProPhoto→Luv, chromatic
+adaptation, white-balance gains, the four ΔE) runs imageform's fused numba-CUDA kernels on
+CUDA tensors (issue 29, docs/design.md "GPU kernels"); each such call has a second row,
+``imageform array-API``, the same call with ``IMAGEFORM_DISABLE_CUDA=1`` (the path before the
+kernels), and the header says whether the kernels ran (``_cuda._launch.status()``: numba's
+CUDA target needs its NVVM compiler, from numba-cuda's ``[cu12]``/``[cu13]`` extra or a CUDA
+toolkit; where it is missing, the kernels are off with one warning and both rows time the
+Array-API path). On CUDA the kernels-per-call column of a kernel row should read 1.
 
 Per row: the median time, the share of the copy bandwidth, the **kernels per call** (on
 CUDA the kernels and copies the profiler sees in one call; on a CPU the PyTorch operators
@@ -25,7 +39,8 @@ On a lent GPU, the whole check is one command (about 5-8 minutes on an H100/H200
 it compiling; the device's budget is 15)::
 
     PYTHONPATH=src python -m pytest -q -n 0 -p no:cacheprovider \\
-        tests/backends/test_cuda_device.py tests/backends/test_meta_device.py; \\
+        tests/backends/test_cuda_device.py tests/backends/test_meta_device.py \\
+        tests/backends/test_cuda_geometry_device.py; \\
     OPENBLAS_NUM_THREADS=1 PYTHONPATH=src python benchmarks/bench_gpu.py --device cuda \\
         --compile --out benchmarks/results/gpu-h200-DATE.md
 
@@ -196,6 +211,26 @@ def _compiled(fn: Callable[..., Any], *args: Any) -> Callable[[], Any]:
     return lambda: cfn(*args)
 
 
+def _array_api(fn: Callable[[], Any]) -> Callable[[], Any]:
+    """``fn`` with imageform's CUDA kernels switched off (``IMAGEFORM_DISABLE_CUDA=1``)."""
+
+    def run() -> Any:
+        old = os.environ.get("IMAGEFORM_DISABLE_CUDA")
+        os.environ["IMAGEFORM_DISABLE_CUDA"] = "1"
+        try:
+            return fn()
+        finally:
+            if old is None:
+                del os.environ["IMAGEFORM_DISABLE_CUDA"]
+            else:
+                os.environ["IMAGEFORM_DISABLE_CUDA"] = old
+
+    return run
+
+
+AA = "imageform array-API"
+
+
 def ops_lab(device: Any, dtype: Any, h: int, w: int, compile_: bool) -> list[Op]:
     import kornia
     import torch
@@ -212,6 +247,7 @@ def ops_lab(device: Any, dtype: Any, h: int, w: int, compile_: bool) -> list[Op]
     name = f"sRGB→Lab {h}x{w}"
     ops = [
         Op(name, "imageform", lambda: convert(rgb, "srgb", "lab"), nbytes, versus="kornia"),
+        Op(name, AA, _array_api(lambda: convert(rgb, "srgb", "lab")), nbytes, versus="kornia"),
         Op(
             name, "kornia", lambda: kornia.color.rgb_to_lab(rgb_k), nbytes, f"max |ΔLab| {diff:.1e}"
         ),
@@ -232,7 +268,10 @@ def ops_ciede2000(device: Any, dtype: Any, h: int, w: int, compile_: bool) -> li
     lab2 = convert(torch.rand((h, w, 3), generator=g, dtype=dtype), "srgb", "lab").to(device)
     nbytes = (2 * lab1.numel() + h * w) * lab1.element_size()  # read 2 Lab, write ΔE
     name = f"CIEDE2000 {h}x{w}"
-    ops = [Op(name, "imageform", lambda: delta_e_ciede2000(lab1, lab2), nbytes, "kornia: none")]
+    ops = [
+        Op(name, "imageform", lambda: delta_e_ciede2000(lab1, lab2), nbytes, versus=AA),
+        Op(name, AA, _array_api(lambda: delta_e_ciede2000(lab1, lab2)), nbytes, "kornia: none"),
+    ]
     if compile_:
         fn = _compiled(delta_e_ciede2000, lab1, lab2)
         ops.append(Op(name, "imageform compiled", fn, nbytes, versus="imageform"))
@@ -358,6 +397,292 @@ def ops_remap(device: Any, dtype: Any, h: int, w: int, compile_: bool) -> list[O
     return ops
 
 
+#: The lens of the distortion rows (OpenCV's rational model, every coefficient used).
+_LENS = {"k1": -0.21, "k2": 0.05, "p1": 0.002, "p2": -0.001, "k3": -0.01, "k4": 0.02, "k5": 0.001}
+
+
+def _streamed(fn: Callable[[], Any], n_chunks: int) -> Callable[[], Any]:
+    def run() -> None:
+        for _ in range(n_chunks):
+            fn()
+
+    return run
+
+
+def ops_projection_distorted(
+    device: Any, dtype: Any, n_points: int, chunk: int, compile_: bool
+) -> list[Op]:
+    """Projection with Brown-Conrady (``Camera.project``'s path) against kornia's two steps."""
+    import kornia
+    import torch
+
+    from imageform.geometry import BrownConrady, project_points_distorted
+
+    chunk = min(chunk, n_points)
+    n_chunks = max(1, round(n_points / chunk))
+    g = torch.Generator(device="cpu").manual_seed(6)
+    X = (torch.rand((chunk, 3), generator=g, dtype=torch.float64) * 2 - 1).to(dtype)
+    X[:, 2] += 4.0
+    X = X.to(device)
+    K = torch.tensor([[800.0, 0, 640], [0, 800, 360], [0, 0, 1]], dtype=dtype, device=device)
+    R = torch.eye(3, dtype=dtype, device=device)
+    t = torch.zeros(3, dtype=dtype, device=device)
+    bc = BrownConrady(**_LENS)
+    dist = torch.tensor([[*bc.coeffs]], dtype=dtype, device=device)
+
+    def ours() -> Any:
+        return project_points_distorted(X, K, R, t, bc)
+
+    def theirs() -> Any:  # kornia: the pinhole, then the distortion of the pixel coordinates
+        uv = kornia.geometry.camera.project_points(X[None], K[None])
+        return kornia.geometry.calibration.distort_points(uv, K[None], dist)
+
+    diff = float((ours().uv - theirs()[0]).abs().max())
+    nbytes = n_chunks * chunk * (5 * X.element_size() + 1)
+    name = f"projection + distortion {n_chunks * chunk:.1e} pts ({n_chunks} x {chunk:.1e})"
+    ops = [
+        Op(name, "imageform", _streamed(ours, n_chunks), nbytes, versus="kornia", one_call=ours),
+        Op(
+            name,
+            "kornia",
+            _streamed(theirs, n_chunks),
+            nbytes - n_chunks * chunk,
+            f"max |Δuv| {diff:.1e}; no mask",
+            one_call=theirs,
+        ),
+    ]
+    if compile_:
+        cfn = _compiled(lambda x: project_points_distorted(x, K, R, t, bc).uv, X)
+        ops.append(Op(name, "imageform compiled", _streamed(cfn, n_chunks), nbytes, one_call=cfn))
+    return ops
+
+
+def ops_distortion(device: Any, dtype: Any, n_points: int, chunk: int, compile_: bool) -> list[Op]:
+    """Brown-Conrady and its inverse on points against kornia's ``distort/undistort_points``.
+
+    imageform works on normalised coordinates (``K`` applied by the caller), kornia on pixels
+    (``K`` inverted and applied inside); imageform's inverse is Newton's method (at most 20
+    steps, to 64 ulp), kornia's five fixed-point iterations (OpenCV's).
+    """
+    import kornia
+    import torch
+
+    from imageform.geometry import BrownConrady
+
+    chunk = min(chunk, n_points)
+    n_chunks = max(1, round(n_points / chunk))
+    g = torch.Generator(device="cpu").manual_seed(7)
+    xy = ((torch.rand((chunk, 2), generator=g, dtype=torch.float64) - 0.5) * 1.2).to(dtype)
+    xy = xy.to(device)
+    K = torch.tensor([[800.0, 0, 640], [0, 800, 360], [0, 0, 1]], dtype=dtype, device=device)
+    uv = xy * 800.0 + torch.tensor([640.0, 360.0], dtype=dtype, device=device)
+    bc = BrownConrady(**_LENS)
+    dist = torch.tensor([[*bc.coeffs]], dtype=dtype, device=device)
+    xyd = bc.distort(xy)
+    uvd = kornia.geometry.calibration.distort_points(uv[None], K[None], dist)
+
+    def und() -> Any:
+        return bc.undistort(xyd)
+
+    def k_und() -> Any:
+        return kornia.geometry.calibration.undistort_points(uvd, K[None], dist)
+
+    d_fwd = float((xyd * 800.0 + K[:2, 2] - uvd[0]).abs().max())
+    d_inv = float((und().xy * 800.0 + K[:2, 2] - k_und()[0]).abs().nan_to_num(0.0).max())
+    nb_fwd = n_chunks * chunk * 4 * xy.element_size()  # read 2, write 2
+    nb_inv = nb_fwd + n_chunks * chunk  # and the 1-byte mask
+    fwd = f"distort {n_chunks * chunk:.1e} pts"
+    inv = f"undistort (inverse) {n_chunks * chunk:.1e} pts"
+    return [
+        Op(
+            fwd,
+            "imageform",
+            _streamed(lambda: bc.distort(xy), n_chunks),
+            nb_fwd,
+            versus="kornia",
+            one_call=lambda: bc.distort(xy),
+        ),
+        Op(
+            fwd,
+            "kornia",
+            _streamed(
+                lambda: kornia.geometry.calibration.distort_points(uv[None], K[None], dist),
+                n_chunks,
+            ),
+            nb_fwd,
+            f"max |Δ| {d_fwd:.1e} px; kornia on pixels",
+            one_call=lambda: kornia.geometry.calibration.distort_points(uv[None], K[None], dist),
+        ),
+        Op(inv, "imageform", _streamed(und, n_chunks), nb_inv, versus="kornia", one_call=und),
+        Op(
+            inv,
+            "kornia",
+            _streamed(k_und, n_chunks),
+            nb_fwd,
+            f"max |Δ| {d_inv:.1e} px; kornia: 5 fixed-point steps, no mask",
+            one_call=k_und,
+        ),
+    ]
+
+
+def ops_undistort_image(device: Any, dtype: Any, h: int, w: int, compile_: bool) -> list[Op]:
+    """Undistortion of an image (the map computed where it is sampled) against kornia's."""
+    import kornia
+    import torch
+
+    from imageform.geometry import BrownConrady, undistort_image
+
+    g = torch.Generator(device="cpu").manual_seed(8)
+    img = torch.rand((h, w, 3), generator=g, dtype=dtype).to(device)
+    img_k = img.permute(2, 0, 1).contiguous()[None]
+    K = torch.tensor(
+        [[0.8 * w, 0, w / 2], [0, 0.8 * w, h / 2], [0, 0, 1]], dtype=torch.float64, device=device
+    )
+    bc = BrownConrady(k1=-0.2, k2=0.05, p1=0.001, p2=-0.001)
+    dist = torch.tensor([[*bc.coeffs[:5]]], dtype=dtype, device=device)
+    Kk = K.to(dtype)[None]
+
+    def ours() -> Any:
+        return undistort_image(img, K, bc)
+
+    def theirs() -> Any:
+        return kornia.geometry.calibration.undistort_image(img_k, Kk, dist)
+
+    diff = float((ours() - theirs()[0].permute(1, 2, 0)).abs().max())
+    nbytes = 2 * img.numel() * img.element_size()  # read the image once, write it
+    name = f"undistort image {h}x{w}"
+    return [
+        Op(name, "imageform", ours, nbytes, versus="kornia"),
+        Op(name, "kornia", theirs, nbytes, f"max |Δ| {diff:.1e} (border rules differ)"),
+    ]
+
+
+def ops_develop(device: Any, h: int, w: int) -> list[Op]:
+    """The whole raw development of a ``h x w`` Bayer mosaic on the GPU (CUDA only).
+
+    The kernel alone on device-resident arrays (uint16 mosaic in, 16-bit sRGB out: 8 bytes a
+    pixel; the frames per second in the notes), and ``develop(device="cuda").to_integer(16)``
+    with the copies to and from the device.
+    """
+    import numpy as np
+
+    from imageform._cuda.demosaic import MODE_UINT16, develop_on_device, develop_parameters
+    from imageform.io import RawImage, develop
+    from imageform.io.raw import _transfer_table
+
+    rng = np.random.default_rng(9)
+    mosaic = rng.integers(64, 4095, size=(h, w)).astype(np.uint16)
+    raw = RawImage(
+        mosaic=mosaic,
+        black_level=np.full((2, 2), 64.0),
+        white_level=4095.0,
+        cfa_pattern="RGGB",
+        white_balance=np.array([2.0, 1.0, 1.5]),
+        xyz_to_camera=np.array([[1.2, -0.3, -0.1], [-0.4, 1.3, 0.1], [-0.05, 0.2, 0.6]]),
+        camera_to_srgb=np.eye(3),
+        calibration_illuminant="D65",
+    )
+    # numba device arrays (torch's uint16 support is partial); torch.cuda.synchronize()
+    # waits for them too (numba launches on the legacy default stream)
+    from imageform._cuda.geometry import import_cuda
+
+    cu = import_cuda()
+    d_mosaic = cu.to_device(mosaic)
+    prm = cu.to_device(develop_parameters(np.full((2, 2), 64.0), np.full((2, 2), 1 / 4031)))
+    m = cu.to_device(np.eye(3, dtype=np.float32))
+    lut = cu.to_device(_transfer_table("srgb"))
+    out = cu.device_array((h, w, 3), np.uint16)
+    nbytes = 8 * h * w
+    ops = []
+    for method in ("bilinear", "malvar"):
+
+        def kernel(method: str = method) -> Any:
+            return develop_on_device(d_mosaic, prm, 0, 0, method, m, lut, True, MODE_UINT16, out)
+
+        def whole(method: str = method) -> Any:
+            return develop(raw, demosaic=method, device="cuda").to_integer(16)
+
+        t = timed(kernel, device, 5)
+        name = f"develop {h}x{w} raw -> 16-bit sRGB"
+        ops.append(Op(name, f"imageform {method} kernel", kernel, nbytes, f"{1 / t:.0f} fps"))
+        ops.append(
+            Op(
+                name,
+                f"imageform {method} with copies",
+                whole,
+                nbytes,
+                "host mosaic in, host RGB out",
+            )
+        )
+    return ops
+
+
+def ops_color(device: Any, dtype: Any, h: int, w: int, compile_: bool) -> list[Op]:
+    """The rest of the colour pointwise set (issue 29's fused kernels): one row per call.
+
+    Each imageform call is also timed on the Array-API path (``IMAGEFORM_DISABLE_CUDA=1``:
+    the path before the kernels); the ratio column of the kernel rows is kornia's time over
+    theirs where kornia has the operation, else the Array-API path's.
+    """
+    import kornia
+    import torch
+
+    from imageform.color import (
+        chromatic_adaptation,
+        convert,
+        delta_e_cie76,
+        delta_e_cie94,
+        delta_e_cmc,
+        srgb_to_linear,
+    )
+    from imageform.color.white_balance import apply_white_balance_gains
+
+    g = torch.Generator(device="cpu").manual_seed(6)
+    rgb = torch.rand((h, w, 3), generator=g, dtype=dtype).to(device)
+    rgb_k = rgb.permute(2, 0, 1).contiguous()[None]
+    lab = convert(rgb, "srgb", "lab")
+    lab_k = lab.permute(2, 0, 1).contiguous()[None]
+    lab2 = convert(torch.rand((h, w, 3), generator=g, dtype=dtype).to(device), "srgb", "lab")
+    xyz = convert(rgb, "srgb", "xyz")
+    img = 2 * rgb.numel() * rgb.element_size()  # read 3, write 3 values per pixel
+    de = (2 * lab.numel() + h * w) * lab.element_size()  # read 2 Lab, write ΔE
+    gains = [1.3, 1.0, 0.7]
+    calls: list[tuple[str, Callable[[], Any], int, Callable[[], Any] | None]] = [
+        (
+            "Lab→sRGB",
+            lambda: convert(lab, "lab", "srgb"),
+            img,
+            lambda: kornia.color.lab_to_rgb(lab_k),
+        ),
+        (
+            "sRGB→linear",
+            lambda: srgb_to_linear(rgb),
+            img,
+            lambda: kornia.color.rgb_to_linear_rgb(rgb_k),
+        ),
+        (
+            "sRGB→HSV",
+            lambda: convert(rgb, "srgb", "hsv"),
+            img,
+            lambda: kornia.color.rgb_to_hsv(rgb_k),
+        ),
+        ("ProPhoto→Luv", lambda: convert(rgb, "prophoto", "luv"), img, None),
+        ("adaptation D65→D50", lambda: chromatic_adaptation(xyz, "D65", "D50"), img, None),
+        ("white balance gains", lambda: apply_white_balance_gains(rgb, gains), img, None),
+        ("ΔE76", lambda: delta_e_cie76(lab, lab2), de, None),
+        ("ΔE94", lambda: delta_e_cie94(lab, lab2), de, None),
+        ("ΔE CMC", lambda: delta_e_cmc(lab, lab2), de, None),
+    ]
+    ops: list[Op] = []
+    for label, fn, nbytes, theirs in calls:
+        name = f"{label} {h}x{w}"
+        ops.append(Op(name, "imageform", fn, nbytes, versus="kornia" if theirs else AA))
+        ops.append(Op(name, AA, _array_api(fn), nbytes, versus="kornia" if theirs else None))
+        if theirs is not None:
+            ops.append(Op(name, "kornia", theirs, nbytes))
+    return ops
+
+
 def _header(device: Any, dtypes: list[Any], ceiling: float) -> str:
     import kornia
     import torch
@@ -379,8 +704,18 @@ def _header(device: Any, dtypes: list[Any], ceiling: float) -> str:
         f"{', '.join(str(d).removeprefix('torch.') for d in dtypes)} · "
         f"torch {torch.__version__} · kornia {kornia.__version__} · "
         f"Python {platform.python_version()}\n\n"
-        f"Measured copy bandwidth (ceiling): **{ceiling:.1f} GB/s**\n"
+        f"Measured copy bandwidth (ceiling): **{ceiling:.1f} GB/s** · imageform's CUDA "
+        f"kernels: {_kernel_status(device)}\n"
     )
+
+
+def _kernel_status(device: Any) -> str:
+    """Whether imageform's colour kernels ran (they do on CUDA tensors when numba can)."""
+    if device.type != "cuda":
+        return "not used (CPU tensors)"
+    from imageform._cuda import _launch
+
+    return _launch.status()
 
 
 def main() -> None:
@@ -393,6 +728,7 @@ def main() -> None:
     ap.add_argument("--size", default="2160x3840", help="HxW of the images (4K UHD)")
     ap.add_argument("--points", type=float, default=1e8, help="points to project")
     ap.add_argument("--chunk", type=float, default=2.5e7, help="points per streamed chunk")
+    ap.add_argument("--raw-size", default="4000x6000", help="HxW of the raw mosaic (24 Mpx)")
     ap.add_argument("--repeat", type=int, default=5)
     ap.add_argument("--compile", action="store_true", help="also time torch.compile'd calls")
     ap.add_argument("--smoke", action="store_true", help="tiny inputs, one repeat: a check")
@@ -401,6 +737,7 @@ def main() -> None:
     args = ap.parse_args()
     if args.smoke:
         args.size, args.points, args.chunk, args.repeat = "16x24", 1000.0, 500.0, 1
+        args.raw_size = "16x24"
     name = args.device or ("cuda" if torch.cuda.is_available() else "cpu")
     if name.startswith("cuda") and not torch.cuda.is_available():
         raise SystemExit("--device cuda asked for, but torch.cuda.is_available() is False")
@@ -414,10 +751,25 @@ def main() -> None:
     rows = []
     for dtype in dtypes:
         comp = args.compile and dtype == dtypes[0]  # compiled rows: the first dtype only
-        for make in (ops_lab, ops_ciede2000, ops_demosaic, ops_remap):
-            rows += measure(make(device, dtype, h, w, comp), device, dtype, args.repeat, ceiling)
+        for make in (ops_lab, ops_ciede2000, ops_color, ops_demosaic, ops_remap):
+            ops = make(device, dtype, h, w, comp)
+            for name in dict.fromkeys(op.name for op in ops):  # one group per operation
+                group = [op for op in ops if op.name == name]
+                rows += measure(group, device, dtype, args.repeat, ceiling)
         proj = ops_projection(device, dtype, int(args.points), int(args.chunk), comp)
         rows += measure(proj, device, dtype, args.repeat, ceiling)
+        pts, chunk = int(args.points), int(args.chunk)
+        for ops in (
+            ops_projection_distorted(device, dtype, pts, chunk, comp),
+            ops_distortion(device, dtype, pts, chunk, comp),
+            ops_undistort_image(device, dtype, h, w, comp),
+        ):
+            for name in dict.fromkeys(op.name for op in ops):  # one table block per operation
+                group = [op for op in ops if op.name == name]
+                rows += measure(group, device, dtype, args.repeat, ceiling)
+    if device.type == "cuda":  # the raw pipeline's kernel: CUDA only
+        rh, rw = (int(v) for v in args.raw_size.lower().split("x"))
+        rows += measure(ops_develop(device, rh, rw), device, "uint16", args.repeat, ceiling)
     cols = [
         "operation",
         "dtype",
@@ -436,8 +788,10 @@ def main() -> None:
     text += (
         "\nOf copy BW = (bytes the operation must read and write once / median time) / the copy "
         "bandwidth above (sRGB→Lab 2 x 3 values per pixel; CIEDE2000 7 values per pixel; "
-        "projection 3 in, 2 out per point + a 1-byte mask (kornia: no mask); demosaicing 1 in, "
-        "3 out per pixel; remap the float64 map, 3 in and 3 out per pixel). Kernels/call: "
+        "projection 3 in, 2 out per point + a 1-byte mask (kornia: no mask); distortion 2 in, "
+        "2 out per point (+ the mask for the inverse); demosaicing 1 in, 3 out per pixel; remap "
+        "the float64 map, 3 in and 3 out per pixel; undistortion 3 in and 3 out per pixel (no "
+        "map); development 2 bytes in, 6 out per pixel). Kernels/call: "
         + (
             "CUDA kernels and copies in one call (torch.profiler)"
             if device.type == "cuda"
@@ -446,7 +800,10 @@ def main() -> None:
             "only)"
         )
         + "; projection: per chunk. vs kornia: kornia's time / this row's (above 1: faster; "
-        "CIEDE2000 compiled: vs eager imageform).\n"
+        "CIEDE2000 compiled: vs eager imageform; where kornia lacks the operation, the "
+        "imageform row's ratio is over the Array-API path's time). imageform: on CUDA "
+        "tensors the colour set runs imageform's fused numba-CUDA kernels (issue 29, one "
+        "launch per call); imageform array-API: the same call with IMAGEFORM_DISABLE_CUDA=1.\n"
     )
     print(text)
     if args.out is not None:

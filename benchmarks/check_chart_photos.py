@@ -79,8 +79,8 @@ def main() -> None:
             rng=rng,
         )
         img = p.image.copy()
-        cu, cv = p.centres[WHITE]
-        half = int(0.5 * np.linalg.norm(p.centres[1] - p.centres[0]))
+        cu, cv = p.centers[WHITE]
+        half = int(0.5 * np.linalg.norm(p.centers[1] - p.centers[0]))
         img[int(cv) - half : int(cv) + half + 1, int(cu) - half : int(cu) + half + 1] = (
             0.8,
             0.75,

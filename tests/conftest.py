@@ -41,6 +41,17 @@ def _backends() -> list[str]:
 
 BACKENDS = _backends()
 
+#: Files run only in their own interpreter under numba's CUDA simulator (numba reads
+#: NUMBA_ENABLE_CUDASIM once, at import): ``test_cuda_kernels.py`` runs ``cuda_sim_cases.py``
+#: with ``python -m pytest`` and the variable set, ``test_cuda_geometry_kernels.py`` runs the
+#: script ``cuda_sim_check.py``. Any other run leaves them out of collection (the doctest
+#: collection would import them; the cases would show as a skipped module).
+collect_ignore = (
+    []
+    if os.environ.get("NUMBA_ENABLE_CUDASIM") == "1"
+    else ["backends/cuda_sim_cases.py", "backends/cuda_sim_check.py"]
+)
+
 
 @pytest.fixture(params=BACKENDS)
 def xp_name(request: pytest.FixtureRequest) -> str:

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 from functools import cache
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -173,3 +174,59 @@ def align_rms(est_centres: np.ndarray, true_centres: np.ndarray) -> float:
     fitted = s * e @ R.T + mu_t
     path = np.sum(np.linalg.norm(np.diff(true_centres, axis=0), axis=1))
     return float(np.sqrt(np.mean(np.sum((fitted - true_centres) ** 2, 1))) / path)
+
+
+#: OpenCV's chessboard views (``../shared/data/opencv-left``; left10 is not in the set).
+CHESSBOARD_VIEWS = [f"left{i:02d}.jpg" for i in (1, 2, 3, 4, 5, 6, 7, 8, 9, 11, 12, 13, 14)]
+
+
+def chessboard_views(folder: Path, dilate: int = 25) -> dict[str, Any]:
+    """A real multi-view set with known cameras: OpenCV's 13 views of a 9 x 6 chessboard.
+
+    The truth is imageform's own calibration of the views (``calibrate_camera`` on the
+    corners ``find_checkerboard`` finds, OpenCV's refinement window): ``K``, the lens
+    distortion and each view's board pose, the board's frame being the world (unit: one
+    square). The camera stood still and the board moved, so only the board moves with
+    that world: each view's mask is the convex hull of its corners dilated by ``dilate``
+    pixels (the outer squares and the board's white rim; the person holding it and the
+    room behind are left out).
+
+    Returns a dict with ``images`` (grey uint8), ``masks`` (uint8, 255 on the board),
+    ``K``, ``distortion``, ``R``, ``t`` (the views' world-to-camera poses), ``centres``
+    (the camera centres in the board's frame), ``rms`` (the calibration's, pixels) and
+    ``names``.
+    """
+    import cv2
+
+    from imageform.geometry import calibrate_camera, checkerboard_points, rvec_to_matrix
+    from imageform.geometry.checkerboard import find_checkerboard
+    from imageform.io import read_image
+
+    images = [np.asarray(read_image(folder / v))[..., 0] for v in CHESSBOARD_VIEWS]
+    corners = []
+    for name, im in zip(CHESSBOARD_VIEWS, images, strict=True):
+        found = find_checkerboard(im, (9, 6), half_window=11).corners
+        assert found is not None, f"no board found in {name}"
+        corners.append(np.asarray(found, np.float64).reshape(-1, 2))
+    h, w = images[0].shape
+    obj = checkerboard_points((9, 6), 1.0)
+    cal = calibrate_camera([obj] * len(images), corners, (w, h))
+    R = np.stack([np.asarray(rvec_to_matrix(r), np.float64) for r in cal.rvecs])
+    t = np.asarray(cal.tvecs, np.float64)
+    disk = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * dilate + 1, 2 * dilate + 1))
+    masks = []
+    for c in corners:
+        m = np.zeros((h, w), np.uint8)
+        cv2.fillConvexPoly(m, cv2.convexHull(c.astype(np.float32)).astype(np.int32), 255)
+        masks.append(cv2.dilate(m, disk) if dilate > 0 else m)
+    return {
+        "images": images,
+        "masks": masks,
+        "K": np.asarray(cal.K, np.float64),
+        "distortion": cal.distortion,
+        "R": R,
+        "t": t,
+        "centres": -np.einsum("nji,nj->ni", R, t),
+        "rms": float(cal.rms),
+        "names": list(CHESSBOARD_VIEWS),
+    }

@@ -84,6 +84,27 @@ def _pnp_data() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return X, uv, K
 
 
+def _chart_sample() -> Any:
+    photo = analysis.synthetic_chart_photo(rng=0)
+    return analysis.sample_chart(photo.image, layout="detect")
+
+
+def _development() -> Any:
+    from imageform import io
+
+    raw = io.RawImage(
+        mosaic=np.arange(64, dtype=np.uint16).reshape(8, 8) * 60,
+        black_level=np.full((2, 2), 60.0),
+        white_level=4095.0,
+        cfa_pattern="RGGB",
+        white_balance=np.array([1.9, 1.0, 1.6]),
+        xyz_to_camera=np.eye(3),
+        camera_to_srgb=np.eye(3),
+        calibration_illuminant="D65",
+    )
+    return io.develop(raw)
+
+
 #: (label, old call, new call, text the warning must contain)
 CASES: list[tuple[str, Callable[[], Any], Callable[[], Any], str]] = [
     # spectral: illuminant keyword-only
@@ -605,6 +626,45 @@ CASES: list[tuple[str, Callable[[], Any], Callable[[], Any], str]] = [
             ).matrix.T
         ),
         "transfer='linear'",
+    ),
+    # issue 30: one spelling (center, bit_depth, rng)
+    (
+        "ChartPhoto.centres and ChartPhoto(centres=)",
+        lambda: (
+            analysis.ChartPhoto(_IMG, np.eye(3), centres=np.ones((24, 2)), patches=_IMG[0]).centres
+        ),
+        lambda: (
+            analysis.ChartPhoto(_IMG, np.eye(3), centers=np.ones((24, 2)), patches=_IMG[0]).centers
+        ),
+        "use .centers instead",
+    ),
+    (
+        "ChartPhoto(centres=)",
+        lambda: analysis.ChartPhoto(_IMG, np.eye(3), centres=np.ones((24, 2)), patches=_IMG[0]),
+        lambda: analysis.ChartPhoto(_IMG, np.eye(3), centers=np.ones((24, 2)), patches=_IMG[0]),
+        "use centers= instead",
+    ),
+    (
+        "ColorCheckerTruth.centres_uv",
+        lambda: (
+            simulate.ColorCheckerTruth(("a",), np.zeros((1, 3)), np.ones((1, 2)), 1.0).centres_uv
+        ),
+        lambda: (
+            simulate.ColorCheckerTruth(("a",), np.zeros((1, 3)), np.ones((1, 2)), 1.0).centers_uv
+        ),
+        "use .centers_uv instead",
+    ),
+    (
+        "ChartDetection.centres and ChartSample.centres",
+        lambda: (_chart_sample().centres, _chart_sample().detection.centres),
+        lambda: (_chart_sample().centers, _chart_sample().detection.centers),
+        "use .centers instead",
+    ),
+    (
+        "Development.to_integer(bits=)",
+        lambda: _development().to_integer(bits=8),
+        lambda: _development().to_integer(bit_depth=8),
+        "use bit_depth= instead",
     ),
     (
         "simulate.apply_color_correction (image @ M)",

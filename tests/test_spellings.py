@@ -31,9 +31,6 @@ _OFF = re.compile(f"^(?:{'|'.join(OFF_SPELLINGS)})$")
 
 #: ``module.qualname: parameter`` -> why it keeps its spelling today.
 ALLOWED: dict[str, str] = {
-    # another helper owns these files in this round (issue 30 leaves them to them)
-    "imageform.simulate.lab.render_lab_set: seed": "simulate lab set (camera-twin work)",
-    "imageform.io.raw.Development.to_integer: bits": "io/raw.py (raw-development work)",
     # already deprecated aliases, kept in the signature by random_source()
     "imageform.simulate.pipeline.simulate: seed": "deprecated alias of rng (random_source)",
     "imageform.simulate.truth.detect_vanishing: seed": "deprecated alias of rng (random_source)",
@@ -60,11 +57,6 @@ ALLOWED: dict[str, str] = {
     "imageform.simulate.config.ImageConfig: centre_m": "scene-file key",
     "imageform.simulate.config.ObjectConfig: centre_m": "scene-file key",
     "imageform.simulate.config.PlaneConfig: centre_m": "scene-file key",
-    "imageform.simulate.result.ColorCheckerTruth: centres_uv": "read by simulate/lab.py",
-    # result fields written to JSON under the same key; left for later
-    "imageform.analysis.chart_detect.ChartDetection: centres": "result field and JSON key",
-    "imageform.analysis.chart_detect.ChartPhoto: centres": "result field",
-    "imageform.analysis.chart_input.ChartSample: centres": "result field and JSON key",
 }
 
 

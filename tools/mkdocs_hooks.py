@@ -71,6 +71,7 @@ BENCH_SCRIPTS: dict[str, str] = {
     "psf": "benchmarks/bench_psf.py",
     "raw": "benchmarks/bench_raw.py",
     "reconstruct": "benchmarks/bench_reconstruct.py",
+    "reconstruct-real": "benchmarks/bench_reconstruct_real.py",
     "remap": "benchmarks/bench_remap.py",
     "report": "benchmarks/bench_report.py",
     "sfr": "benchmarks/bench_sfr.py",

@@ -31,6 +31,7 @@ __all__ = [
     "module_getattr",
     "parameters",
     "renamed",
+    "renamed_fields",
     "renamed_property",
     "warn",
 ]
@@ -39,6 +40,7 @@ __all__ = [
 REMOVED_IN = "0.3.0"
 
 F = TypeVar("F", bound=Callable[..., Any])
+T = TypeVar("T", bound=type)
 
 _POSITIONAL = (inspect.Parameter.POSITIONAL_ONLY, inspect.Parameter.POSITIONAL_OR_KEYWORD)
 
@@ -65,7 +67,10 @@ def _public_name(fn: Callable[..., Any]) -> str:
 
 
 def parameters(
-    *, renamed: Mapping[str, str] | None = None, positional: Sequence[str] = ()
+    *,
+    renamed: Mapping[str, str] | None = None,
+    positional: Sequence[str] = (),
+    name: str | None = None,
 ) -> Callable[[F], F]:
     """Accept the old parameter names and the old positional calls, with a warning (a decorator).
 
@@ -77,6 +82,8 @@ def parameters(
         Keyword-only parameters (new names) that used to be positional, in their old order
         after the parameters that are still positional. A call with extra positional
         arguments passes them on by these names.
+    name : str, optional
+        The public name the warnings give (default: the function's own).
 
     Examples
     --------
@@ -99,11 +106,11 @@ def parameters(
         for new in (*renames.values(), *moved):
             if new not in params:
                 raise TypeError(f"{fn.__qualname__} has no parameter {new!r} to shim")
-        for name in moved:
-            if params[name].kind is not inspect.Parameter.KEYWORD_ONLY:
-                raise TypeError(f"{fn.__qualname__}: {name!r} is not keyword-only")
+        for kw in moved:
+            if params[kw].kind is not inspect.Parameter.KEYWORD_ONLY:
+                raise TypeError(f"{fn.__qualname__}: {kw!r} is not keyword-only")
         n_positional = sum(p.kind in _POSITIONAL for p in params.values())
-        name = _public_name(fn)
+        shown = name or _public_name(fn)
 
         @functools.wraps(fn)
         def wrapper(*args: Any, **kwargs: Any) -> Any:
@@ -111,24 +118,24 @@ def parameters(
                 for old, new in renames.items():
                     if old in kwargs:
                         if new in kwargs:
-                            raise TypeError(f"{name}() got both {old}= (deprecated) and {new}=")
-                        warn(f"{name}({old}=...)", f"use {new}= instead")
+                            raise TypeError(f"{shown}() got both {old}= (deprecated) and {new}=")
+                        warn(f"{shown}({old}=...)", f"use {new}= instead")
                         kwargs[new] = kwargs.pop(old)
             if len(args) > n_positional and moved:
                 extra = args[n_positional:]
                 if len(extra) > len(moved):
                     raise TypeError(
-                        f"{name}() takes at most {n_positional + len(moved)} positional "
+                        f"{shown}() takes at most {n_positional + len(moved)} positional "
                         f"arguments ({len(args)} given)"
                     )
                 names = moved[: len(extra)]
                 for key, value in zip(names, extra, strict=True):
                     if key in kwargs:
-                        raise TypeError(f"{name}() got multiple values for argument {key!r}")
+                        raise TypeError(f"{shown}() got multiple values for argument {key!r}")
                     kwargs[key] = value
                 args = args[:n_positional]
                 warn(
-                    f"passing {', '.join(names)} to {name}() by position",
+                    f"passing {', '.join(names)} to {shown}() by position",
                     f"pass {'it' if len(names) == 1 else 'them'} by keyword "
                     f"({', '.join(k + '=' for k in names)})",
                 )
@@ -172,6 +179,43 @@ def renamed_property(new: str, old_name: str) -> property:
     getter.__deprecated__ = advice  # type: ignore[attr-defined]
     prop = property(getter, doc=f"Deprecated alias of :attr:`{new}`: {advice}.")
     return prop
+
+
+def renamed_fields(renames: Mapping[str, str]) -> Callable[[T], T]:
+    """Keep the old names of a dataclass's (or NamedTuple's) fields (a class decorator).
+
+    Put it above ``@dataclass``.
+
+    Each old name becomes a read-only property of the new field (:func:`renamed_property`)
+    and a keyword the constructor still takes (:func:`parameters`), both with a warning.
+
+    Examples
+    --------
+    >>> from dataclasses import dataclass
+    >>> @renamed_fields({"centres": "centers"})
+    ... @dataclass(frozen=True)
+    ... class Chart:
+    ...     centers: tuple[float, float]
+    >>> import warnings
+    >>> with warnings.catch_warnings(record=True) as w:
+    ...     warnings.simplefilter("always")
+    ...     Chart(centres=(1.0, 2.0)).centres
+    (1.0, 2.0)
+    >>> len(w)
+    2
+    """
+
+    def deco(cls: T) -> T:
+        owner = _public_name(cast(Callable[..., Any], cls))
+        for old, new in renames.items():
+            setattr(cls, old, renamed_property(new, f"{owner}.{old}"))
+        # a NamedTuple's constructor is __new__, a dataclass's __init__
+        ctor = "__new__" if issubclass(cls, tuple) else "__init__"
+        shim = parameters(renamed=renames, name=owner)
+        setattr(cls, ctor, shim(getattr(cls, ctor)))
+        return cls
+
+    return deco
 
 
 class Lazy:

@@ -27,32 +27,66 @@ from imageform._backend import (
     namespace,
     reads_values,
     scalar,
+    to_numpy,
 )
 from imageform.errors import InvalidInputError, UnknownOptionError
 
 __all__ = [
+    "DEFAULT_MAX_MEMORY",
+    "MAX_COLOR_MAGNITUDE",
+    "MAX_MAGNITUDE",
+    "MAX_MEAN_ELECTRONS",
+    "MAX_SIDE",
     "any_value",
     "as_bool",
     "as_float",
+    "as_float_bounded",
+    "as_float_strict",
     "as_image",
+    "as_image_strict",
     "as_int",
     "as_matrix",
+    "as_matrix_bounded",
+    "as_path",
     "as_points",
+    "as_points_bounded",
+    "as_points_strict",
     "as_real",
+    "as_real_array",
+    "as_real_ndarray",
+    "as_reals",
+    "as_shape",
     "as_size",
+    "check_K",
+    "check_bounded",
+    "check_electrons",
     "check_finite",
     "check_image_size",
+    "check_magnitude",
     "check_memory",
+    "check_name",
     "check_nonempty",
+    "check_nonzero_rows",
     "check_option",
     "check_positive",
+    "check_real_values",
+    "check_result_array",
+    "check_rng",
     "check_rotation",
+    "check_type",
     "describe",
     "det3",
+    "dtype_kind",
+    "finite_result",
     "format_shape",
     "memory_limit",
+    "real_array",
+    "real_pair",
+    "refuse_non_real",
+    "shape_text",
     "shorten",
     "shorten_names",
+    "size_pair",
 ]
 
 
@@ -143,12 +177,19 @@ def as_float(
     device: Any = None,
     integer: str = COORD_INTEGER_DTYPE,
     finite: bool = True,
+    strict: bool = False,
+    bound: float | None = None,
 ) -> Any:
     """``x`` as a floating array of namespace ``xp``.
 
     ``dtype`` forces the result dtype (parameters follow their data argument); otherwise
-    the dtype policy of :func:`imageform._backend.float_dtype` applies.
+    the dtype policy of :func:`imageform._backend.float_dtype` applies. ``strict`` refuses
+    bool, complex, object and string values before any conversion
+    (:func:`refuse_non_real`); ``bound`` (with ``finite``) refuses magnitudes above it as well
+    as NaN and inf (:func:`check_bounded`), and a tensor asked for as NumPy (``xp=np``) is
+    moved to the host first.
     """
+    x = _prepare(x, name, xp, strict=strict, bound=bound)
     xp = namespace(x) if xp is None else xp
     if device is None:
         device = device_of(x)
@@ -156,9 +197,33 @@ def as_float(
     target = float_dtype(arr, xp, integer=integer) if dtype is None else dtype
     if arr.dtype != target:
         arr = xp.astype(arr, target)
-    if finite:
-        check_finite(arr, name, xp)
+    _check_float_values(arr, name, xp, finite=finite, bound=bound)
     return arr
+
+
+def _prepare(x: object, name: str, xp: Any, *, strict: bool, bound: float | None) -> Any:
+    """Run the checks before any conversion: the kind (``strict``), then the host copy."""
+    if strict:
+        refuse_non_real(x, name)
+    if bound is not None and xp is np and array_api_compat.is_torch_array(x):
+        return to_numpy(x)
+    return x
+
+
+def _check_float_values(arr: Any, name: str, xp: Any, *, finite: bool, bound: float | None) -> None:
+    """Run the value checks after the shape: NaN and inf, and the magnitude ``bound``."""
+    if finite and bound is not None:
+        check_bounded(arr, name, xp, bound)
+    elif finite:
+        check_finite(arr, name, xp)
+
+
+def _refuse_last_axis(x: object, name: str, dims: tuple[int, ...]) -> None:
+    """Refuse a wrong last axis from ``x.shape`` before any value is converted."""
+    shape = _shape_of(x)
+    if shape is not None and (not shape or shape[-1] not in dims):
+        want = " or ".join(f"(..., {d})" for d in dims)
+        raise InvalidInputError(f"expected {name} of shape {want}, got {format_shape(shape)}")
 
 
 def as_points(
@@ -170,15 +235,25 @@ def as_points(
     dtype: Any = None,
     device: Any = None,
     finite: bool = True,
+    strict: bool = False,
+    bound: float | None = None,
 ) -> Any:
-    """Points of shape ``(..., dim)`` as floats (integers compute in float64)."""
-    arr = as_float(x, name, xp=xp, dtype=dtype, device=device, finite=finite)
+    """Points of shape ``(..., dim)`` as floats (integers compute in float64).
+
+    The shape is checked before the values; ``strict`` and ``bound`` as in :func:`as_float`.
+    """
     dims = (dim,) if isinstance(dim, int) else tuple(dim)
+    if strict:
+        refuse_non_real(x, name)
+        _refuse_last_axis(x, name, dims)
+    x = _prepare(x, name, xp, strict=False, bound=bound)
+    arr = as_float(x, name, xp=xp, dtype=dtype, device=device, finite=False)
     if arr.ndim < 1 or arr.shape[-1] not in dims:
         want = " or ".join(f"(..., {d})" for d in dims)
         raise InvalidInputError(
             f"expected {name} of shape {want}, got {format_shape(tuple(arr.shape))}"
         )
+    _check_float_values(arr, name, xp, finite=finite, bound=bound)
     return arr
 
 
@@ -192,9 +267,14 @@ def as_matrix(
     device: Any = None,
     batch: bool = True,
     finite: bool = True,
+    bound: float | None = None,
 ) -> Any:
-    """Check a matrix (or batch of matrices when ``batch``) of trailing shape ``shape``."""
-    arr = as_float(x, name, xp=xp, dtype=dtype, device=device, finite=finite)
+    """Check a matrix (or batch of matrices when ``batch``) of trailing shape ``shape``.
+
+    The shape is checked before the values; ``bound`` as in :func:`as_float`.
+    """
+    x = _prepare(x, name, xp, strict=False, bound=bound)
+    arr = as_float(x, name, xp=xp, dtype=dtype, device=device, finite=False)
     ok = arr.ndim >= 2 and tuple(arr.shape[-2:]) == shape
     if ok and not batch and arr.ndim != 2:
         ok = False
@@ -203,6 +283,7 @@ def as_matrix(
         raise InvalidInputError(
             f"expected {name} of shape {want}, got {format_shape(tuple(arr.shape))}"
         )
+    _check_float_values(arr, name, xp, finite=finite, bound=bound)
     return arr
 
 
@@ -456,6 +537,7 @@ def as_size(
         isinstance(value, str | bytes)
         or not hasattr(value, "__len__")
         or not hasattr(value, "__iter__")
+        or getattr(value, "ndim", 1) != 1  # a 0-d tensor has a len() that raises
     ):
         raise InvalidInputError(f"expected {name} as {n} integers, got {describe(value)}")
     items = list(value)
@@ -538,7 +620,7 @@ def check_image_size(size: object, name: str = "image_size") -> tuple[int, int]:
     >>> check_image_size((640, 480))
     (640, 480)
     """
-    w, h = as_size(size, f"{name} (width, height)")
+    w, h = as_size(size, f"{name} (width, height)", maximum=MAX_SIDE)
     return w, h
 
 
@@ -584,6 +666,7 @@ def as_image(
     xp: Any | None = None,
     range_check: bool = True,
     finite: bool = True,
+    strict: bool = False,
 ) -> Any:
     """Check an image as floats, channels last, per the colour conventions of docs/conventions.md.
 
@@ -597,7 +680,14 @@ def as_image(
       moved last. A 4th (alpha) channel is rejected with a hint to split it off.
     - Dask arrays stay lazy: the value checks (finite, 0–255) run on each chunk when it is
       computed.
+    - ``strict`` (colour values): bool, complex, object and string values are refused before
+      any conversion, the channel count is checked from ``image.shape`` before any value is
+      read, and values read without the 0–1 range check (XYZ, Lab, HSV ...) are bounded by
+      :data:`MAX_COLOR_MAGNITUDE` (:func:`check_magnitude`).
     """
+    if strict:
+        refuse_non_real(image, name)
+        _refuse_channels(image, name, channels, channel_axis)
     xp = namespace(image) if xp is None else xp
     arr = _raw(image, name, xp, device_of(image))
     axis = -1
@@ -607,14 +697,9 @@ def as_image(
         axis = channel_axis % arr.ndim
         n = arr.shape[axis]
         if n != channels:
-            hint = (
-                "; an alpha channel? split it off (image[..., :3]) and handle it separately"
-                if channels == 3 and n == 4
-                else ""
-            )
             raise InvalidInputError(
                 f"expected {name} with {channels} channels on axis {channel_axis}, "
-                f"got shape {format_shape(tuple(arr.shape))}{hint}"
+                f"got shape {format_shape(tuple(arr.shape))}{_channel_hint(channels, n)}"
             )
     dt = arr.dtype
     if isinstance(image, list | tuple) and xp.isdtype(dt, "integral") and math.prod(arr.shape):
@@ -644,7 +729,31 @@ def as_image(
             _check_values(arr, xp, name, finite=finite, range_check=range_check)
     if channels is not None and axis != arr.ndim - 1:
         arr = xp.moveaxis(arr, axis, -1)
+    if strict and not range_check:
+        check_magnitude(arr, name)
     return arr
+
+
+def _channel_hint(channels: int | None, n: int) -> str:
+    if channels == 3 and n == 4:
+        return "; an alpha channel? split it off (image[..., :3]) and handle it separately"
+    return ""
+
+
+def _refuse_channels(image: object, name: str, channels: int | None, axis: object) -> None:
+    """Refuse a wrong channel count from ``image.shape``, before any value is converted."""
+    shape = _shape_of(image)
+    if (
+        channels is not None
+        and shape
+        and isinstance(axis, int)
+        and -len(shape) <= axis < len(shape)
+        and shape[axis] != channels
+    ):
+        raise InvalidInputError(
+            f"expected {name} with {channels} channels on axis {axis}, "
+            f"got shape {format_shape(shape)}{_channel_hint(channels, shape[axis])}"
+        )
 
 
 # --- h16optsens ---
@@ -741,7 +850,12 @@ def _to_numpy_host(x: object) -> Any:
 
 
 def as_reals(
-    value: object, name: str, n: int | None = None, *, positive: bool = False
+    value: object,
+    name: str,
+    n: int | None = None,
+    *,
+    positive: bool = False,
+    nonnegative: bool = False,
 ) -> tuple[float, ...]:
     """Convert a sequence of finite real numbers (``n`` of them if given) to a tuple of floats.
 
@@ -764,7 +878,10 @@ def as_reals(
         )
     if not items:
         raise InvalidInputError(f"expected {name} as a non-empty sequence of numbers, got none")
-    return tuple(as_real(v, f"{name}[{i}]", positive=positive) for i, v in enumerate(items))
+    return tuple(
+        as_real(v, f"{name}[{i}]", positive=positive, nonnegative=nonnegative)
+        for i, v in enumerate(items)
+    )
 
 
 def as_shape(
@@ -841,7 +958,7 @@ def _all_finite(out: Any) -> bool:
 # --- h16color ---
 
 
-def _dtype_kind(value: object) -> str:
+def dtype_kind(value: object) -> str:
     """Return NumPy's dtype kind of ``value`` without converting an array.
 
     ``"b"`` bool, ``"c"`` complex, ``"O"`` object, ``"U"`` string ...; ``""`` when it has
@@ -883,7 +1000,7 @@ def refuse_non_real(value: object, name: str) -> None:
     ...
     TypeError: expected xyz as real numbers, got bool values (cast with .astype(float) if meant)
     """
-    kind = _dtype_kind(value)
+    kind = dtype_kind(value)
     if kind == "b":
         raise TypeError(
             f"expected {name} as real numbers, got bool values (cast with .astype(float) if meant)"
@@ -916,30 +1033,7 @@ def as_real_ndarray(
     if value is None:
         raise InvalidInputError(f"expected {name} as an array of numbers, got None")
     refuse_non_real(value, name)
-    try:
-        arr = np.asarray(value, dtype=np.float64)
-    except (TypeError, ValueError) as exc:
-        raise InvalidInputError(
-            f"expected {name} as an array of numbers, got {describe(value)}"
-        ) from exc
-    dims = None if ndim is None else ((ndim,) if isinstance(ndim, int) else tuple(ndim))
-    if dims is not None and arr.ndim not in dims:
-        want = " or ".join(f"{d}-d" for d in dims)
-        raise InvalidInputError(
-            f"expected {name} as a {want} array, got shape {format_shape(arr.shape)}"
-        )
-    if last is not None and (arr.ndim < 1 or arr.shape[-1] != last):
-        raise InvalidInputError(
-            f"expected {name} of shape (..., {last}), got {format_shape(arr.shape)}"
-        )
-    if arr.size < min_size:
-        raise InvalidInputError(
-            f"expected {name} with at least {min_size} value(s), got shape "
-            f"{format_shape(arr.shape)}"
-        )
-    if finite and arr.size and not np.isfinite(arr).all():
-        raise InvalidInputError(f"{name} contains NaN or inf")
-    return arr
+    return real_array(value, name, ndim=ndim, last=last, min_size=min_size, finite=finite)
 
 
 def check_name(value: object, valid: Collection[str], what: str, name: str = "") -> str:
@@ -994,3 +1088,321 @@ def as_path(value: object, name: str) -> Any:
         if isinstance(text, str) and text.strip() and "\0" not in text:
             return Path(text)
     raise InvalidInputError(f"expected {name} as a file or folder name, got {describe(value)}")
+
+
+# --- one home (issue 30): the checks the packages once kept in modules of their own ---
+# (color/_guard.py, geometry/_checks.py, analysis/_guard.py, simulate/_guard.py,
+# sensor/_guard.py). The variants below are the shared functions with a keyword fixed, for
+# the packages whose rule it is: colour refuses non-real kinds first (``strict``), geometry
+# bounds coordinates (``bound``).
+
+#: Largest magnitude a colour value (RGB, XYZ, Lab, Luv, hue, ...) may have: 1e15 in float64,
+#: 1e5 in float32. No colour is near it, and the formulas' powers of it (L*'s cube,
+#: CIEDE2000's C*⁷) stay finite below it; larger values are refused instead of overflowing to
+#: inf or NaN.
+MAX_COLOR_MAGNITUDE = {"float64": 1e15, "float32": 1e5}
+
+#: The largest coordinate magnitude geometry accepts: products of three coordinates, a
+#: determinant or a cross product of such values stay finite in float64; beyond it a result
+#: would overflow to inf or NaN with only a RuntimeWarning.
+MAX_MAGNITUDE = 1e100
+
+#: The largest image side accepted (pixels); :func:`check_memory` bounds the area.
+MAX_SIDE = 2**31 - 1
+
+#: The largest mean number of electrons per pixel a capture draws: far beyond any full well
+#: (1e5-1e6 e⁻), and below NumPy's Poisson limit (about 9.2e18), which raises a bare
+#: ``ValueError: lam value too large`` naming nothing.
+MAX_MEAN_ELECTRONS = 1e15
+
+
+def _shape_of(x: object) -> tuple[int, ...] | None:
+    """Return the shape of an array-like that has one (NumPy, torch, Dask ...), unconverted."""
+    shape = getattr(x, "shape", None)
+    if shape is None or getattr(x, "ndim", None) is None:
+        return None
+    try:
+        return tuple(int(d) for d in shape)
+    except (TypeError, ValueError):  # unknown (NaN) Dask chunk sizes
+        return None
+
+
+def check_bounded(
+    x: Any,
+    name: str,
+    xp: Any | None = None,
+    limit: float = MAX_MAGNITUDE,
+    *,
+    finite: bool = True,
+    why: str = "beyond it, products overflow",
+) -> None:
+    """Refuse ``|x| > limit`` (and, when ``finite``, NaN and inf) from one min/max pass.
+
+    Only real floating arrays are read; device arrays (:func:`reads_values` False) are not.
+    A Dask array is computed for the NaN/inf check when ``finite``, else skipped.
+
+    Examples
+    --------
+    >>> check_bounded(np.array([1.0, -3e100]), "points")
+    Traceback (most recent call last):
+    ...
+    imageform.errors.InvalidInputError: expected points within ±1e+100 (beyond it, products overflow), got values -3e+100..1
+    """  # noqa: E501
+    xp = namespace(x) if xp is None else xp
+    if not xp.isdtype(x.dtype, "real floating") or math.prod(x.shape) == 0:
+        return
+    if not reads_values(x):
+        return
+    if is_dask_namespace(xp):
+        if finite:
+            check_finite(x, name, xp)
+        return
+    lo, hi = _min_max(x, xp)
+    if finite and not (math.isfinite(lo) and math.isfinite(hi)):
+        raise InvalidInputError(f"{name} contains NaN or inf")
+    if max(abs(lo), abs(hi)) > limit:
+        raise InvalidInputError(
+            f"expected {name} within ±{limit:g} ({why}), got values {lo:.3g}..{hi:.3g}"
+        )
+
+
+def check_magnitude(arr: Any, name: str, xp: Any | None = None) -> None:
+    """Refuse colour values beyond :data:`MAX_COLOR_MAGNITUDE` (NaN is left to the caller).
+
+    Skipped for Dask (lazy) and device arrays (:func:`reads_values`).
+    """
+    xp = namespace(arr) if xp is None else xp
+    limit = MAX_COLOR_MAGNITUDE["float32" if arr.dtype == xp.float32 else "float64"]
+    check_bounded(arr, name, xp, limit, finite=False, why="a colour value")
+
+
+def as_float_strict(x: object, name: str, **kw: Any) -> Any:
+    """:func:`as_float` with ``strict=True``: bool, complex, object, string refused first."""
+    return as_float(x, name, strict=True, **kw)
+
+
+def as_points_strict(x: object, name: str, dim: int | Collection[int], **kw: Any) -> Any:
+    """:func:`as_points` with ``strict=True``: the kind, then the shape, then the values."""
+    return as_points(x, name, dim, strict=True, **kw)
+
+
+def as_image_strict(image: object, name: str = "image", **kw: Any) -> Any:
+    """:func:`as_image` with ``strict=True``: the colour functions' image check."""
+    return as_image(image, name, strict=True, **kw)
+
+
+def as_float_bounded(x: object, name: str, **kw: Any) -> Any:
+    """:func:`as_float` with ``bound=MAX_MAGNITUDE``: geometry's coordinates."""
+    return as_float(x, name, bound=MAX_MAGNITUDE, **kw)
+
+
+def as_points_bounded(x: object, name: str, dim: int | Collection[int], **kw: Any) -> Any:
+    """:func:`as_points` with ``bound=MAX_MAGNITUDE``: geometry's points."""
+    return as_points(x, name, dim, bound=MAX_MAGNITUDE, **kw)
+
+
+def as_matrix_bounded(x: object, name: str, shape: tuple[int, int], **kw: Any) -> Any:
+    """:func:`as_matrix` with ``bound=MAX_MAGNITUDE``: geometry's matrices."""
+    return as_matrix(x, name, shape, bound=MAX_MAGNITUDE, **kw)
+
+
+def check_result_array(x: object, name: str) -> None:
+    """Refuse a field of a caller-built result container that is not a real, finite array.
+
+    The container is built by a caller (not by imageform); refused are bool, complex, object
+    and string values, NaN and inf. Lazy Dask arrays are not computed here.
+    """
+    if x is None:
+        raise TypeError(f"expected {name} as an array of numbers, got None")
+    refuse_non_real(x, name)
+    if not (hasattr(x, "shape") and hasattr(x, "dtype")):
+        x = as_real_ndarray(x, name, finite=False)
+    xp = namespace(x)
+    if not is_dask_namespace(xp):
+        check_finite(x, name, xp)
+
+
+def real_array(
+    value: object,
+    name: str,
+    shape: tuple[int | None, ...] | None = None,
+    *,
+    ndim: int | Collection[int] | None = None,
+    last: int | None = None,
+    min_size: int = 0,
+    finite: bool = True,
+) -> np.ndarray:
+    """Return ``value`` as a float64 NumPy array of real numbers, its shape checked first.
+
+    None, bool, complex, object and string values are refused by name before any conversion
+    (a tensor is copied to the host); then the shape: ``shape`` (``None`` for any length on
+    that axis), ``ndim`` dimensions (one of them), ``last`` values on the last axis, at least
+    ``min_size`` values; then NaN and inf unless ``finite=False``.
+
+    Examples
+    --------
+    >>> real_array([[1, 2, 3]], "stains", (None, 3)).tolist()
+    [[1.0, 2.0, 3.0]]
+    >>> real_array([1, 2], "stains", (None, 3))
+    Traceback (most recent call last):
+    ...
+    imageform.errors.InvalidInputError: expected stains of shape (?, 3), got (2,)
+    """
+    if value is None or isinstance(value, str | bytes | bool | np.bool_):
+        raise InvalidInputError(
+            f"expected {name} as an array of real numbers, got {describe(value)}"
+        )
+    value = _to_numpy_host(value)
+    try:
+        arr = value if isinstance(value, np.ndarray) else np.asarray(value)
+    except (TypeError, ValueError) as exc:  # ragged nesting
+        raise InvalidInputError(
+            f"expected {name} as an array of real numbers, got {describe(value)}"
+        ) from exc
+    if arr.dtype.kind not in "iuf":
+        what = {"b": "bool values", "c": "complex values"}.get(arr.dtype.kind, f"dtype {arr.dtype}")
+        raise InvalidInputError(f"expected {name} as real numbers, got {what}")
+    if shape is not None and (
+        arr.ndim != len(shape)
+        or any(want is not None and got != want for got, want in zip(arr.shape, shape, strict=True))
+    ):
+        raise InvalidInputError(
+            f"expected {name} of shape {format_shape(shape)}, got {format_shape(arr.shape)}"
+        )
+    dims = None if ndim is None else ((ndim,) if isinstance(ndim, int) else tuple(ndim))
+    if dims is not None and arr.ndim not in dims:
+        want = " or ".join(f"{d}-d" for d in dims)
+        raise InvalidInputError(
+            f"expected {name} as a {want} array, got shape {format_shape(arr.shape)}"
+        )
+    if last is not None and (arr.ndim < 1 or arr.shape[-1] != last):
+        raise InvalidInputError(
+            f"expected {name} of shape (..., {last}), got {format_shape(arr.shape)}"
+        )
+    if arr.size < min_size:
+        raise InvalidInputError(
+            f"expected {name} with at least {min_size} value(s), got shape "
+            f"{format_shape(arr.shape)}"
+        )
+    out = np.asarray(arr, dtype=np.float64)
+    if finite and out.size and not np.isfinite(out).all():
+        raise InvalidInputError(f"{name} contains NaN or inf")
+    return out
+
+
+def check_type(value: Any, cls: type | tuple[type, ...], name: str, what: str = "") -> Any:
+    """``value`` when it is an instance of ``cls``; else a :class:`TypeError` naming ``name``.
+
+    Examples
+    --------
+    >>> check_type(None, int, "rows", "an int")
+    Traceback (most recent call last):
+    ...
+    TypeError: expected rows as an int, got None
+    """
+    if not isinstance(value, cls):
+        if not what:
+            names = cls if isinstance(cls, tuple) else (cls,)
+            what = " or ".join(f"a {c.__name__}" for c in names)
+        raise TypeError(f"expected {name} as {what}, got {describe(value)}")
+    return value
+
+
+def check_nonzero_rows(m: np.ndarray, name: str) -> Any:
+    """Return the row norms of ``m``; refuse a zero-length row (it has no direction)."""
+    norms = np.linalg.norm(m, axis=-1)
+    if np.any(norms <= 1e-12):
+        i = int(np.argmin(norms))
+        raise InvalidInputError(f"expected {name} rows of non-zero length, row {i} is zero")
+    return norms
+
+
+def real_pair(
+    value: object,
+    name: str,
+    *,
+    positive: bool = False,
+    scalar_ok: bool = False,
+    limit: float = MAX_MAGNITUDE,
+) -> tuple[float, float]:
+    """Two finite reals ``(a, b)`` within ``±limit``; one number for both when ``scalar_ok``."""
+    if scalar_ok and (
+        isinstance(value, int | float | np.number)
+        or (getattr(value, "ndim", None) == 0 and not isinstance(value, str | bytes))
+    ):
+        v = as_real(value, name, positive=positive, maximum=limit, minimum=-limit)
+        return v, v
+    if getattr(value, "ndim", 1) != 1 or not hasattr(value, "__len__"):
+        raise InvalidInputError(f"expected {name} as 2 numbers, got {describe(value)}")
+    a, b = as_reals(value, name, 2)
+    return (
+        as_real(a, f"{name}[0]", positive=positive, maximum=limit, minimum=-limit),
+        as_real(b, f"{name}[1]", positive=positive, maximum=limit, minimum=-limit),
+    )
+
+
+def size_pair(value: object, name: str, *, minimum: int = 1) -> tuple[int, int]:
+    """Two integers ``(a, b)``, each in ``[minimum, MAX_SIDE]``."""
+    a, b = as_size(value, name, 2, minimum=minimum, maximum=MAX_SIDE)
+    return a, b
+
+
+def shape_text(x: Any) -> str:
+    """``(4, 2)``: the shape of an array for a message."""
+    return format_shape(tuple(x.shape))
+
+
+def check_K(K: Any, xp: Any, name: str = "K", *, positive: bool = False) -> None:
+    """Refuse a K that is not upper-triangular with a non-zero diagonal (singular).
+
+    When ``positive``, also refuse focal lengths ``K[0, 0] / K[2, 2]``, ``K[1, 1] / K[2, 2]``
+    that are not > 0. ``K`` has been through :func:`as_matrix` (finite). Device arrays
+    (:func:`reads_values` False) are not read.
+    """
+    if not reads_values(K):
+        return
+    if (
+        bool(xp.any(K[..., 2, 0] != 0))
+        or bool(xp.any(K[..., 2, 1] != 0))
+        or bool(xp.any(K[..., 1, 0] != 0))
+    ):
+        raise InvalidInputError(
+            f"expected an upper-triangular {name} with last row (0, 0, k33), got {describe(K)}"
+        )
+    if bool(xp.any(K[..., 0, 0] * K[..., 1, 1] * K[..., 2, 2] == 0)):
+        raise InvalidInputError(f"{name} is singular (fx, fy or {name}[2, 2] is zero)")
+    if positive:
+        fx = K[..., 0, 0] / K[..., 2, 2]
+        fy = K[..., 1, 1] / K[..., 2, 2]
+        if bool(xp.any(~(fx > 0))) or bool(xp.any(~(fy > 0))):
+            raise InvalidInputError(
+                f"expected focal lengths fx > 0 and fy > 0 in {name}, got fx min "
+                f"{float(xp.min(fx)):g}, fy min {float(xp.min(fy)):g} (a negative focal "
+                "length mirrors the image)"
+            )
+
+
+def check_rng(rng: object, name: str = "rng") -> object:
+    """Return ``rng`` unchanged when :func:`imageform._random.as_rng` takes it.
+
+    An int seed, a :class:`numpy.random.Generator`, a :class:`numpy.random.SeedSequence` or
+    None; anything else is refused in one line that never prints an array.
+    """
+    if (
+        rng is None
+        or isinstance(rng, np.random.Generator | np.random.SeedSequence)
+        or (isinstance(rng, numbers.Integral) and not isinstance(rng, bool | np.bool_))
+    ):
+        return rng
+    raise InvalidInputError(
+        f"expected {name} as an int seed, a numpy.random.Generator or None, got {describe(rng)}"
+    )
+
+
+def check_electrons(mean: float, names: str) -> None:
+    """Refuse a mean signal above :data:`MAX_MEAN_ELECTRONS` electrons per pixel."""
+    if not mean <= MAX_MEAN_ELECTRONS:
+        raise InvalidInputError(
+            f"expected {names} giving at most {MAX_MEAN_ELECTRONS:g} mean electrons per pixel, "
+            f"got {mean:.3g}"
+        )

@@ -83,12 +83,12 @@ def chart_case(
     img = photo.image.copy()
     n_occ = (0 if rng.uniform() < 0.8 else int(rng.integers(1, 4))) if occlude is None else occlude
     occluded = np.zeros(24, dtype=bool)
-    pitch = _pitch(photo.centres)
+    pitch = _pitch(photo.centers)
     if n_occ:
         # textured crops of another photograph over a few patches (not the whole chart)
         other = backgrounds[int(rng.integers(len(backgrounds)))]
         for k in rng.choice(24, n_occ, replace=False):
-            cu, cv = photo.centres[k]
+            cu, cv = photo.centers[k]
             half = int(np.ceil(0.45 * pitch))
             v0, v1 = max(int(cv) - half, 0), min(int(cv) + half + 1, img.shape[0])
             u0, u1 = max(int(cu) - half, 0), min(int(cu) + half + 1, img.shape[1])
@@ -101,4 +101,4 @@ def chart_case(
     quality = int(rng.integers(70, 96))
     params["jpeg_quality"] = quality
     params["occluded"] = float(occluded.sum())
-    return ChartCase(_jpeg(img, quality), photo.centres, pitch, occluded, photo.patches, params)
+    return ChartCase(_jpeg(img, quality), photo.centers, pitch, occluded, photo.patches, params)

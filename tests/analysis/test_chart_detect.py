@@ -53,7 +53,7 @@ def kodak(shared_data: Path) -> list[np.ndarray]:
 def test_detects_chart_in_real_photographs(kodak: list[np.ndarray], seed: int) -> None:
     case = chart_case(kodak, seed)
     det = detect_colorchecker(case.image)
-    err = np.linalg.norm(det.centres - case.centres, axis=1)
+    err = np.linalg.norm(det.centers - case.centres, axis=1)
     assert err.max() < case.pitch / 6, (seed, err.max(), case.pitch, case.params)
     assert det.score > 0.9
 
@@ -77,7 +77,7 @@ def test_not_found_is_imageform_error() -> None:
 def test_occluded_patches_are_flagged(kodak: list[np.ndarray]) -> None:
     case = chart_case(kodak, 4, occlude=3)
     det = detect_colorchecker(case.image)
-    assert np.linalg.norm(det.centres - case.centres, axis=1).max() < case.pitch / 6
+    assert np.linalg.norm(det.centers - case.centres, axis=1).max() < case.pitch / 6
     with pytest.warns(ChartWarning, match="missing"):
         pat = measure_chart_patches(case.image, det)
     assert not pat.valid[case.occluded].any()
@@ -88,11 +88,11 @@ def test_occluded_patches_are_flagged(kodak: list[np.ndarray]) -> None:
 def test_orientation_from_colours(rotation: float) -> None:
     photo = synthetic_chart_photo(rotation=rotation, tilt=0.0, width=0.4, rng=5)
     det = detect_colorchecker(photo.image)
-    assert np.linalg.norm(det.centres - photo.centres, axis=1).max() < 1.0
+    assert np.linalg.norm(det.centers - photo.centers, axis=1).max() < 1.0
     diff = (det.rotation - rotation + 180.0) % 360.0 - 180.0
     assert abs(diff) < 2.0
     # corners: top-left of the upright chart is nearest the dark-skin patch (0)
-    assert np.argmin(np.linalg.norm(det.corners - det.centres[0], axis=1)) == 0
+    assert np.argmin(np.linalg.norm(det.corners - det.centers[0], axis=1)) == 0
 
 
 def test_patch_means_match_the_truth_within_half_delta_e() -> None:
@@ -116,7 +116,7 @@ def test_measure_matches_chart_patches_on_a_cropped_chart() -> None:
     assert np.abs(ours.means - REF).max() < 1e-6
     assert det.rotation == pytest.approx(0.0, abs=0.5)
     # the centres are the patch centres (pixel-centre convention): cell 48, patch at 4 + 60
-    assert det.centres[0] == pytest.approx([80 + 4 + 19.5, 60 + 4 + 19.5], abs=0.2)
+    assert det.centers[0] == pytest.approx([80 + 4 + 19.5, 60 + 4 + 19.5], abs=0.2)
 
 
 def test_correction_from_a_photograph_with_a_cast() -> None:
@@ -149,12 +149,12 @@ def test_custom_reference_and_validation() -> None:
 def test_detection_to_dict_and_checks() -> None:
     det = detect_colorchecker(synthetic_chart_photo(rng=6).image)
     d = det.to_dict()
-    assert len(d["centres"]) == 24 and len(d["quads"][0]) == 4
+    assert len(d["centers"]) == 24 and len(d["quads"][0]) == 4
     with pytest.raises(InvalidInputError, match="found"):
         ChartDetection(
             det.homography,
             det.corners,
-            det.centres,
+            det.centers,
             det.quads,
             np.ones(23, bool),
             det.outliers,
@@ -169,7 +169,7 @@ def test_patches_outside_the_frame_are_missing() -> None:
     moved = ChartDetection(
         det.homography,
         det.corners,
-        det.centres,
+        det.centers,
         det.quads - [det.quads[:, :, 0].min() + 5000, 0],
         det.found,
         det.outliers,
@@ -221,8 +221,8 @@ def test_cli_chart(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     res = json.loads(capsys.readouterr().out)
     assert res["mean_after"] < 1.5 < res["mean_before"]
     data = json.loads(out.read_text())
-    assert data["kind"] == "colorchecker" and len(data["chart"]["centres"]) == 24
-    assert np.abs(np.asarray(data["chart"]["centres"]) - photo.centres).max() < 1.0
+    assert data["kind"] == "colorchecker" and len(data["chart"]["centers"]) == 24
+    assert np.abs(np.asarray(data["chart"]["centers"]) - photo.centers).max() < 1.0
     assert read_image(ov).shape == photo.image.shape
     assert main(["fit-correction", str(csv), "-o", str(tmp_path / "c2.json")]) == 0
     fixed = tmp_path / "fixed.png"
@@ -239,6 +239,6 @@ def test_cli_chart(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
 def test_tiny_chart_found_on_the_upsample(seed: int) -> None:
     # patch pitch about 7-8 pixels, blurred: missed at full resolution, found 2x upsampled
     photo = synthetic_chart_photo(width=0.07, tilt=30.0, blur=1.2, noise=0.01, rng=seed)
-    pitch = np.linalg.norm(photo.centres[1] - photo.centres[0])
+    pitch = np.linalg.norm(photo.centers[1] - photo.centers[0])
     det = detect_colorchecker(photo.image)
-    assert np.linalg.norm(det.centres - photo.centres, axis=1).max() < pitch / 6
+    assert np.linalg.norm(det.centers - photo.centers, axis=1).max() < pitch / 6

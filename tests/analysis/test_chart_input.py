@@ -89,7 +89,7 @@ def test_layouts_auto_cropped_detect() -> None:
     photo = synthetic_chart_photo(cast=(1.0, 0.9, 0.7), rng=3)
     s = sample_chart(photo.image)
     assert s.layout == "detect" and s.detection is not None
-    assert np.abs(s.centres - photo.centres).max() < 1.0
+    assert np.abs(s.centers - photo.centers).max() < 1.0
     assert np.median(_de(s.patches.means, photo.patches)) < 0.5
     d = s.to_dict()
     assert d["layout"] == "detect" and len(d["quads"]) == 24 and d["detection"]["score"] > 0.9

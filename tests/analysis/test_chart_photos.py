@@ -77,8 +77,8 @@ def _photo(
     )
     img = p.image.copy()
     if occlude is not None:  # a flat rectangle a little larger than the patch
-        cu, cv = p.centres[occlude]
-        half = int(0.5 * np.linalg.norm(p.centres[1] - p.centres[0]))
+        cu, cv = p.centers[occlude]
+        half = int(0.5 * np.linalg.norm(p.centers[1] - p.centers[0]))
         img[int(cv) - half : int(cv) + half + 1, int(cu) - half : int(cu) + half + 1] = occluder
     return _jpeg(img, int(rng.integers(80, 96)))
 
@@ -138,8 +138,8 @@ def test_a_nearly_right_photo_is_not_made_worse(
         rng=rng,
     )
     img = p.image.copy()
-    cu, cv = p.centres[WHITE]
-    half = int(0.5 * np.linalg.norm(p.centres[1] - p.centres[0]))
+    cu, cv = p.centers[WHITE]
+    half = int(0.5 * np.linalg.norm(p.centers[1] - p.centers[0]))
     img[int(cv) - half : int(cv) + half + 1, int(cu) - half : int(cu) + half + 1] = (0.8, 0.75, 0.7)
     pat = _measure(_jpeg(img, 90))
     assert np.flatnonzero(pat.missing).tolist() == [WHITE]

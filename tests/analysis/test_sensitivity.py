@@ -92,3 +92,17 @@ def test_refusals() -> None:
         estimate_camera_sensitivities(good, reflectances=np.ones((36, 24)))  # type: ignore[arg-type]
     with pytest.raises(InvalidInputError, match="light"):
         estimate_camera_sensitivities(good, light=5)  # type: ignore[arg-type]
+
+
+def test_relative_qe_divides_by_wavelength() -> None:
+    """QE is proportional to S(lambda) / lambda (photon counting), largest 1; the workflow's
+    name is the library's function."""
+    from imageform.analysis import relative_qe
+    from imageform.spectral import Spectrum
+    from imageform.workflows.characterize import relative_qe as from_workflow
+
+    assert from_workflow is relative_qe
+    _, qe = relative_qe(Spectrum(np.array([400.0, 800.0]), np.array([[1, 1, 1], [1, 1, 2.0]])))
+    np.testing.assert_allclose(qe, [[1.0, 1.0, 1.0], [0.5, 0.5, 1.0]])
+    with pytest.raises(TypeError, match="Spectrum"):
+        relative_qe(np.ones((2, 3)))

@@ -416,3 +416,29 @@ def test_simulator_rendered_edge_within_3_percent_of_its_own_mtf() -> None:
                 * _sub_box(f * math.sin(t), S)
             )
             assert r.mtf50[k] == pytest.approx(mtf_crossing(f, own, 0.5), rel=0.03)
+
+
+@pytest.mark.parametrize(("sigma", "angle"), [(0.0, 0.0), (0.6, 5.0), (1.3, 8.0)])
+def test_fit_gaussian_sigma_recovers_the_model(sigma: float, angle: float) -> None:
+    """A model SFR (a Gaussian times the tilted pixel aperture) gives its sigma back, NaN
+    samples and frequencies above Nyquist ignored."""
+    from imageform.analysis import fit_gaussian_sigma
+
+    f = np.linspace(0.0, 1.0, 101)
+    t = math.radians(angle)
+    s = np.exp(-2 * np.pi**2 * sigma**2 * f**2) * np.abs(
+        np.sinc(f * math.cos(t)) * np.sinc(f * math.sin(t))
+    )
+    s[70:] = np.nan
+    assert fit_gaussian_sigma(f, s, angle_deg=angle) == pytest.approx(sigma, abs=1e-3)
+
+
+def test_fit_gaussian_sigma_refusals() -> None:
+    from imageform.analysis import fit_gaussian_sigma
+
+    with pytest.raises(InvalidInputError, match="one length"):
+        fit_gaussian_sigma(np.linspace(0, 0.5, 5), np.ones(4))
+    with pytest.raises(InvalidInputError, match="finite value"):
+        fit_gaussian_sigma(np.linspace(0.6, 1.0, 5), np.ones(5))
+    with pytest.raises(InvalidInputError, match="angle_deg"):
+        fit_gaussian_sigma(np.linspace(0, 0.5, 5), np.ones(5), angle_deg=120.0)

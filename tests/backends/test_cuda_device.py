@@ -93,3 +93,58 @@ def test_needs_values_still_work_on_cuda() -> None:
     for case in CASES:
         if case.name in names:
             case.fn(*[_cuda(a) for a in case.args])
+
+
+def test_colour_kernels_one_launch_on_cuda() -> None:
+    """The colour set on CUDA tensors: one numba kernel per call, NumPy's numbers (issue 29)."""
+    from imageform import color as c
+    from imageform._cuda import _launch
+    from imageform.color.white_balance import apply_white_balance_gains
+
+    if not _launch.use_cuda():
+        pytest.skip(f"imageform's CUDA kernels: {_launch.status()}")
+    rng = np.random.default_rng(29)
+    rgb = rng.uniform(0.02, 0.98, (64, 48, 3))
+    lab = c.convert(rgb, "srgb", "lab")
+    lab2 = c.convert(rng.uniform(0.02, 0.98, (64, 48, 3)), "srgb", "lab")
+    xyz = c.convert(rgb, "srgb", "xyz")
+    calls: list[tuple[Callable[..., Any], tuple[Any, ...], dict[str, Any]]] = [
+        (c.convert, (rgb, "srgb", "lab"), {}),
+        (c.convert, (lab, "lab", "srgb"), {}),
+        (c.convert, (rgb, "prophoto", "luv"), {}),
+        (c.convert, (rgb, "srgb", "hsv"), {}),
+        (c.srgb_to_linear, (rgb,), {}),
+        (c.chromatic_adaptation, (xyz, "D65", "D50"), {}),
+        (apply_white_balance_gains, (rgb, [1.3, 1.0, 0.7]), {}),
+        (c.delta_e_cie76, (lab, lab2), {}),
+        (c.delta_e_cie94, (lab, lab2), {}),
+        (c.delta_e_cmc, (lab, lab2), {}),
+        (c.delta_e_ciede2000, (lab, lab2), {}),
+    ]
+    for dtype, atol in (("float64", 1e-9), ("float32", 2e-4)):
+        for fn, args, kw in calls:
+            ref = np.asarray(
+                fn(
+                    *[
+                        a.astype(dtype) if isinstance(a, np.ndarray) and a.ndim == 3 else a
+                        for a in args
+                    ],
+                    **kw,
+                )
+            )
+            dev = [
+                _cuda(a, dtype) if isinstance(a, np.ndarray) and a.ndim == 3 else a for a in args
+            ]
+            fn(*dev, **kw)  # compiles
+            before = _launch.launch_count()
+            torch.cuda.set_sync_debug_mode("error")
+            try:
+                out = fn(*dev, **kw)
+            finally:
+                torch.cuda.set_sync_debug_mode("default")
+            assert _launch.launch_count() - before == 1, fn.__name__
+            assert isinstance(out, torch.Tensor) and out.device.type == "cuda"
+            assert str(out.dtype).removeprefix("torch.") == dtype
+            np.testing.assert_allclose(
+                _host(out), ref, atol=atol, rtol=1e-5 if dtype == "float32" else 1e-10
+            )

@@ -21,10 +21,8 @@ from imageform.errors import InvalidInputError  # noqa: E402
 
 _MODULES = (
     "imageform._validate",
-    "imageform.color._guard",
     "imageform.color.cct",
     "imageform.color.chromaticity",
-    "imageform.geometry._checks",
     "imageform.geometry._distortion_xp",
     "imageform.geometry.undistort",
 )

@@ -344,7 +344,7 @@ def test_ome_tiff_pyramid_keeps_its_pixel_size(tmp_path: Path) -> None:
     """An OME-TIFF pyramid (0.25 um/px in its OME-XML) gives an OME-TIFF pyramid with the
     same PhysicalSizeX/Y, and resolution tags of 40000 px/cm at level 0, 20000 at level 1;
     an Aperio header's MPP is read the same way."""
-    from imageform.batch.chunked import _microns
+    from imageform.batch._lazy import _microns
 
     img = _image(512, 512)
     src = tmp_path / "in.ome.tif"

@@ -184,7 +184,6 @@ def test_lab_kernel_validates_in_one_pass(monkeypatch: pytest.MonkeyPatch) -> No
     import sys
 
     import imageform._validate
-    import imageform.color._guard
 
     conv = sys.modules["imageform.color.convert"]  # the module (the package exports the function)
     want = convert(BIG, "srgb", "lab")
@@ -193,7 +192,7 @@ def test_lab_kernel_validates_in_one_pass(monkeypatch: pytest.MonkeyPatch) -> No
         raise AssertionError("a separate validation pass ran")
 
     monkeypatch.setattr(imageform._validate, "check_finite", refuse)
-    monkeypatch.setattr(imageform.color._guard, "as_image", refuse)
+    monkeypatch.setattr(imageform._validate, "as_image_strict", refuse)
     monkeypatch.setattr(conv, "_validate", refuse)
     np.testing.assert_array_equal(convert(BIG, "srgb", "lab"), want)
 

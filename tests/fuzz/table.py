@@ -590,6 +590,8 @@ VALID: dict[str, C | Skip] = {
         V("emva_flats"), V("emva_darks"), V("emva_times"), photons=V("emva_photons")
     ),
     "imageform.sensor.mosaic": call(rgb=V("rgb")),
+    "imageform.sensor.superpixel": call(np.full((4, 6), 0.5), "RGGB"),
+    "imageform.sensor.equalize_cfa": call(np.full((4, 6), 0.5), "RGGB"),
     "imageform.sensor.photons_per_pixel": call(
         irradiance=1.0, wavelength_nm=550.0, pixel_area=1e-11, exposure_time=0.01
     ),
@@ -1469,6 +1471,9 @@ VALID.update(
         "imageform.analysis.mtf_crossing": call(
             np.linspace(0.0, 1.0, 11), np.linspace(1.0, 0.0, 11), 0.5
         ),
+        "imageform.analysis.fit_gaussian_sigma": call(
+            np.linspace(0.0, 0.5, 11), np.exp(-(np.linspace(0.0, 0.5, 11) ** 2)), angle_deg=5.0
+        ),
         "imageform.analysis.SFRResult": Skip("a result dataclass built by slanted_edge_sfr"),
         "imageform.analysis.SFRResult.channel": Skip("a method of a result dataclass"),
         "imageform.analysis.SlantedEdgeROI": Skip("a result dataclass built by find_slanted_edges"),
@@ -1580,7 +1585,7 @@ VALID.update(
             "needs a lab folder (render_lab_set, seconds); its refusals (no folder, an empty "
             "one, unreadable images, half a part) are tested in tests/workflows/test_characterize.py"
         ),
-        "imageform.workflows.characterize.relative_qe": call(V("spectrum")),
+        "imageform.analysis.relative_qe": call(V("spectrum")),
         "imageform.workflows.characterize.CharacterizeOptions": call(),
         "imageform.workflows.characterize.CharacterizeOptions.fields": call(),
         "imageform.workflows.characterize.CharacterizeOptions.types": call(),

@@ -135,7 +135,7 @@ def make_result(*, full: bool = True, width: int = W, height: int = H) -> Simula
         colorchecker=ColorCheckerTruth(
             names=tuple(f"patch {i + 1}" for i in range(24)),
             lab_d65=truth,
-            centres_uv=PATCH_CENTRES * [sx, sy],
+            centers_uv=PATCH_CENTRES * [sx, sy],
             sample_radius_px=RADIUS,
         ),
         patch_xy={

@@ -89,9 +89,9 @@ def test_patch_windows_cut_at_the_border() -> None:
 def test_patch_outside_image_is_not_measured(sim_result: SimulationResult) -> None:
     cc = sim_result.colorchecker
     assert cc is not None
-    centres = cc.centres_uv.copy()
+    centres = cc.centers_uv.copy()
     centres[3] = [-100.0, -100.0]
-    r = dataclasses.replace(sim_result, colorchecker=dataclasses.replace(cc, centres_uv=centres))
+    r = dataclasses.replace(sim_result, colorchecker=dataclasses.replace(cc, centers_uv=centres))
     m = measure_patches(r)
     assert m is not None and np.isnan(m.delta_e00[3]) and m.readings[3] == "not measured"
     assert np.isnan(m.snr_luminance_db[3]) and np.isfinite(m.delta_e00_mean)

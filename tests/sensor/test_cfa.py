@@ -178,3 +178,45 @@ def test_misshaped_rgb_is_refused_before_its_values_are_read() -> None:
     a = np.full((2000, 2000, 4), np.nan)
     with pytest.raises(InvalidInputError, match="expected rgb with 3 channels"):
         mosaic(a)
+
+
+@pytest.mark.parametrize("pattern", CFA_PATTERNS)
+def test_superpixel_is_the_mosaic_of_a_half_size_image(pattern: str) -> None:
+    """mosaic() of an image constant over each 2x2 cell, then superpixel(), gives it back."""
+    from imageform.sensor import superpixel
+
+    rng = np.random.default_rng(3)
+    small = rng.uniform(0.05, 0.95, (5, 7, 3))
+    full = np.repeat(np.repeat(small, 2, axis=0), 2, axis=1)
+    raw = np.asarray(mosaic(full, pattern))
+    np.testing.assert_allclose(superpixel(raw, pattern), small, atol=1e-12)
+    odd = np.pad(raw, ((0, 1), (0, 1)))  # the odd last row and column are dropped
+    np.testing.assert_allclose(superpixel(odd, pattern), small, atol=1e-12)
+
+
+@pytest.mark.parametrize("pattern", CFA_PATTERNS)
+def test_equalize_cfa_removes_the_pattern_of_a_grey_edge(pattern: str) -> None:
+    """A grey edge seen through the CFA with per-colour gains: equalised, the four
+    photosites of a cell agree (to the edge's own variation) and the greens keep their
+    levels."""
+    from imageform.sensor import equalize_cfa
+
+    x = np.arange(64)
+    edge = np.where(x[None, :] + 0.2 * np.arange(64)[:, None] < 32, 0.1, 0.8) * np.ones((64, 1))
+    gains = {"R": 0.5, "G": 1.0, "B": 0.7}
+    masks = cfa_masks((64, 64), pattern)
+    raw = edge * sum(masks[..., c] * g for c, g in enumerate(gains.values()))
+    out = equalize_cfa(raw, pattern)
+    np.testing.assert_allclose(out, edge, atol=1e-9)
+
+
+def test_superpixel_and_equalize_cfa_refuse_bad_input() -> None:
+    from imageform.sensor import equalize_cfa, superpixel
+
+    for fn in (superpixel, equalize_cfa):
+        with pytest.raises(InvalidInputError, match="raw"):
+            fn(np.zeros((1, 4)), "RGGB")
+        with pytest.raises(InvalidInputError, match="raw"):
+            fn(np.zeros((4, 4, 3)), "RGGB")
+        with pytest.raises(UnknownOptionError):
+            fn(np.zeros((4, 4)), "RGBX")

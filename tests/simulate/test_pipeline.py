@@ -57,7 +57,7 @@ def test_every_field_is_filled(small: SimulationResult) -> None:
     assert {q.name for q in small.quads} == {"ground with rails", "ColorChecker", "checkerboard"}
     assert all(q.corners.shape == (4, 3) for q in small.quads)
     cc = small.colorchecker
-    assert cc is not None and cc.lab_d65.shape == (24, 3) and cc.centres_uv.shape == (24, 2)
+    assert cc is not None and cc.lab_d65.shape == (24, 3) and cc.centers_uv.shape == (24, 2)
     assert cc.sample_radius_px > 1
     # ColorChecker "white 9.5" under D65: L* = 96.5 (BabelColor average, ±0.5)
     assert cc.lab_d65[18, 0] == pytest.approx(96.5, abs=0.6)
@@ -113,7 +113,7 @@ def test_snr_is_the_luminance_snr_of_the_colour_corrected_patches(
     assert cc is not None and small.patches is not None
     img = small.stage("color_corrected").image.astype(np.float64)
     y = img @ np.array([0.2126, 0.7152, 0.0722])
-    for k, (u, v) in enumerate(cc.centres_uv):
+    for k, (u, v) in enumerate(cc.centers_uv):
         r = cc.sample_radius_px
         win = y[
             int(np.ceil(v - r)) : int(np.floor(v + r)) + 1,

@@ -183,7 +183,7 @@ def chart_patches(scene: Any, raw: np.ndarray) -> np.ndarray:
     truth = colorchecker_truth(chart, scene.camera)
     out = np.zeros((24, 3))
     r = max(1, int(truth.sample_radius_px / 2))
-    for k, (u, v) in enumerate(truth.centres_uv):
+    for k, (u, v) in enumerate(truth.centers_uv):
         i, j = round(float(v) / 2 - 0.25), round(float(u) / 2 - 0.25)
         out[k] = sp[i - r : i + r + 1, j - r : j + r + 1].reshape(-1, 3).mean(axis=0)
     return out

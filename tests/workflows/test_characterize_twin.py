@@ -41,7 +41,7 @@ def small(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
     cf = CameraFile(cam, optics=optics)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        lab = render_lab_set(cf, root / "lab", seed=0)
+        lab = render_lab_set(cf, root / "lab", rng=0)
         res = characterize_camera(lab.folder)
     doc = tomllib.loads(lab.manifest.read_text())
     return {"lab": lab, "res": res, "doc": doc, "root": root}

@@ -47,7 +47,7 @@ def lab(tmp_path_factory: pytest.TempPathFactory) -> LabSet:
         optics={"model": "mtf50", "mtf50_cy_per_px": MTF50},
         color={"white_balance": [2.0, 1.0, 1.6]},
     )
-    return render_lab_set(cf, tmp_path_factory.mktemp("lab") / "lab", seed=0)
+    return render_lab_set(cf, tmp_path_factory.mktemp("lab") / "lab", rng=0)
 
 
 def test_layout_and_manifest(lab: LabSet) -> None:
@@ -105,11 +105,11 @@ def test_calibrate_gives_back_the_intrinsics(lab: LabSet, tmp_path: Path) -> Non
 def test_edge_mtf50_is_the_files(lab: LabSet) -> None:
     pytest.importorskip("rawpy")
     from imageform.io import read_raw
-    from imageform.workflows.characterize import _balanced_mosaic
+    from imageform.sensor import equalize_cfa
 
     raw = read_raw(lab.edge)
     blk = float(np.mean(raw.black_level))
-    img = _balanced_mosaic((raw.mosaic - blk) / (raw.white_level - blk), raw.cfa_pattern)
+    img = equalize_cfa((raw.mosaic - blk) / (raw.white_level - blk), str(raw.cfa_pattern))
     rois = find_slanted_edges(img)
     assert len(rois) == 4
     truth = tomllib.loads(lab.manifest.read_text())["truth"]

@@ -291,3 +291,42 @@ def test_a_video_and_a_glob(stand_in: tuple[Path, Path], tmp_path: Path) -> None
     out = tmp_path / "g"
     assert main(["reconstruct", str(frames / "f[12].png"), *cam, "-o", str(out)]) == 0
     assert [r["name"] for r in _read(out / "cameras.csv")] == ["f1.png", "f2.png"]
+
+
+def test_mask_option(
+    stand_in: tuple[Path, Path],
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """--mask: one image for every frame, passed on as booleans; a wrong size is one line."""
+    frames, camera = stand_in
+    seen: dict[str, object] = {}
+
+    def spy(images: list, K: object, distortion: object = None, **kw: object) -> Reconstruction:
+        seen.update(kw)
+        return _fake(images, K, distortion)
+
+    monkeypatch.setattr(imageform.geometry, "reconstruct_sequence", spy)
+    mask = np.zeros((48, 64), np.uint8)
+    mask[8:40, 8:56] = 255  # an endoscope's round field would do as well
+    write_image(tmp_path / "mask.png", mask)
+    cam = ["--camera", str(camera)]
+    assert main(["reconstruct", str(frames), *cam, "--mask", str(tmp_path / "mask.png"),
+                 "-o", str(tmp_path / "out")]) == 0  # fmt: skip
+    got = np.asarray(seen["masks"])
+    assert got.dtype == bool and np.array_equal(got, mask > 0)
+    write_image(tmp_path / "small.png", np.full((20, 30), 255, np.uint8))
+    err = _one_line_error(
+        ["reconstruct", str(frames), *cam, "--mask", str(tmp_path / "small.png")],
+        tmp_path / "o2",
+        capsys,
+    )
+    assert "--mask" in err and "30 x 20 px, the frames 64 x 48 px" in err
+    write_image(tmp_path / "zero.png", np.zeros((48, 64), np.uint8))
+    err = _one_line_error(
+        ["reconstruct", str(frames), *cam, "--mask", str(tmp_path / "zero.png")],
+        tmp_path / "o3",
+        capsys,
+    )
+    assert "zero everywhere" in err

@@ -68,12 +68,17 @@ from imageform.analysis.segmentation import (
     overlay_mask,
     segment_hsv,
 )
-from imageform.analysis.sensitivity import SensitivityEstimate, estimate_camera_sensitivities
+from imageform.analysis.sensitivity import (
+    SensitivityEstimate,
+    estimate_camera_sensitivities,
+    relative_qe,
+)
 from imageform.analysis.sfr import (
     SFR_LUMINANCE_WEIGHTS,
     SFRResult,
     SlantedEdgeROI,
     find_slanted_edges,
+    fit_gaussian_sigma,
     mtf_crossing,
     render_sfr_chart,
     render_slanted_edge,
@@ -123,6 +128,7 @@ __all__ = [
     "estimate_camera_sensitivities",
     "find_slanted_edges",
     "fit_color_correction",
+    "fit_gaussian_sigma",
     "macenko_normalize",
     "macenko_stains",
     "mask_iou",
@@ -132,6 +138,7 @@ __all__ = [
     "overlay_mask",
     "reinhard_normalize",
     "reinhard_stats",
+    "relative_qe",
     "render_sfr_chart",
     "render_slanted_edge",
     "root_polynomial_terms",

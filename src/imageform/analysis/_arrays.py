@@ -17,7 +17,7 @@ import numpy as np
 
 from imageform._backend import to_numpy
 from imageform._jsonio import write_json as _write_json
-from imageform._validate import as_image, as_path, check_nonempty, format_shape
+from imageform._validate import as_image, as_path, check_nonempty, describe, format_shape
 from imageform.errors import InvalidInputError
 
 __all__ = [
@@ -25,6 +25,7 @@ __all__ = [
     "image_in",
     "is_dask",
     "read_json",
+    "target_source",
     "write_json",
 ]
 
@@ -133,3 +134,24 @@ def read_json(path: str | Path, kind: str) -> dict[str, Any]:
         got = data.get("kind") if isinstance(data, dict) else type(data).__name__
         raise InvalidInputError(f"expected a {kind!r} JSON file in {p}, got kind {got!r}")
     return data
+
+
+def target_source(target: object, name: str, what: str) -> Any:
+    """Return a normalisation target that is not a statistics object: a JSON path or an image.
+
+    An existing JSON file is returned as its :class:`~pathlib.Path`; an image is validated under the
+    parameter's own ``name`` (never reported as ``image``).
+    """
+    from pathlib import Path
+
+    if target is None:
+        raise TypeError(f"expected {name} as an image, {what} or a JSON path, got None")
+    if isinstance(target, str | Path):
+        path = Path(target)
+        if not path.is_file():
+            raise InvalidInputError(
+                f"expected {name} as an image, {what} or an existing JSON file, got "
+                f"{describe(str(target))} (no such file)"
+            )
+        return path
+    return image_in(target, name)

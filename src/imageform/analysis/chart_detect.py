@@ -50,10 +50,10 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+from imageform import _deprecate
 from imageform._colormath import srgb_decode, srgb_encode
-from imageform._validate import as_int, as_real, check_memory, describe, format_shape
+from imageform._validate import as_int, as_real, check_memory, describe, format_shape, real_array
 from imageform.analysis._arrays import image_in, is_dask
-from imageform.analysis._guard import real_array
 from imageform.analysis.chart_grid import ChartPatches, ChartWarning
 from imageform.errors import InvalidInputError
 
@@ -75,6 +75,7 @@ class ChartNotFoundError(InvalidInputError):
     """No ColorChecker was found in the image (or none whose colours match the reference)."""
 
 
+@_deprecate.renamed_fields({"centres": "centers"})
 @dataclass(frozen=True)
 class ChartDetection:
     """A ColorChecker found in a photograph (:func:`detect_colorchecker`).
@@ -90,7 +91,7 @@ class ChartDetection:
     #: right, bottom right and bottom left.
     corners: np.ndarray
     #: (24, 2) patch centres, row by row.
-    centres: np.ndarray
+    centers: np.ndarray
     #: (24, 4, 2) sampling quadrilaterals (the inner part of each patch), corners in the
     #: same order as ``corners``.
     quads: np.ndarray
@@ -109,7 +110,7 @@ class ChartDetection:
 
     def __post_init__(self) -> None:
         """Arrays to float64/bool of the documented shapes."""
-        shapes = {"homography": (3, 3), "corners": (4, 2), "centres": (24, 2), "quads": (24, 4, 2)}
+        shapes = {"homography": (3, 3), "corners": (4, 2), "centers": (24, 2), "quads": (24, 4, 2)}
         for name, shape in shapes.items():
             object.__setattr__(self, name, real_array(getattr(self, name), name, shape))
         for name in ("found", "outliers"):
@@ -127,7 +128,7 @@ class ChartDetection:
         return {
             "homography": self.homography.tolist(),
             "corners": self.corners.tolist(),
-            "centres": self.centres.tolist(),
+            "centers": self.centers.tolist(),
             "quads": self.quads.tolist(),
             "found": self.found.tolist(),
             "outliers": self.outliers.tolist(),
@@ -706,7 +707,7 @@ def detect_colorchecker(
     >>> from imageform.analysis import synthetic_chart_photo
     >>> photo = synthetic_chart_photo(rng=3)
     >>> det = detect_colorchecker(photo.image)
-    >>> err = np.linalg.norm(det.centres - photo.centres, axis=1).max()
+    >>> err = np.linalg.norm(det.centers - photo.centers, axis=1).max()
     >>> bool(err < 1.0), bool(det.found.all())
     (True, True)
     """
@@ -877,6 +878,7 @@ def measure_chart_patches(
 # ---------------------------------------------------------------- synthetic chart photographs
 
 
+@_deprecate.renamed_fields({"centres": "centers"})
 class ChartPhoto(NamedTuple):
     """A synthetic photograph of a ColorChecker and its truth (:func:`synthetic_chart_photo`)."""
 
@@ -886,7 +888,7 @@ class ChartPhoto(NamedTuple):
     #: :attr:`ChartDetection.homography`).
     homography: np.ndarray
     #: (24, 2) true patch centres in the image, row by row.
-    centres: np.ndarray
+    centers: np.ndarray
     #: (24, 3) encoded sRGB of each patch at its centre, as lit (cast and shading), before
     #: blur and noise.
     patches: np.ndarray
@@ -985,7 +987,7 @@ def synthetic_chart_photo(
     Examples
     --------
     >>> p = synthetic_chart_photo(rng=1)
-    >>> p.image.shape, p.centres.shape
+    >>> p.image.shape, p.centers.shape
     ((512, 768, 3), (24, 2))
     """
     from scipy import ndimage

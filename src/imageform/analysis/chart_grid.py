@@ -15,9 +15,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from imageform._validate import as_int, as_real, describe, format_shape
+from imageform._validate import as_int, as_real, describe, format_shape, real_array
 from imageform.analysis._arrays import image_in, is_dask
-from imageform.analysis._guard import real_array
 from imageform.errors import ImageformWarning, InvalidInputError
 
 __all__ = ["ChartPatches", "ChartWarning", "chart_patches"]

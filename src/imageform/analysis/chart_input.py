@@ -30,6 +30,7 @@ from typing import Any
 
 import numpy as np
 
+from imageform import _deprecate
 from imageform._colormath import srgb_decode, srgb_encode
 from imageform._validate import (
     as_bool,
@@ -65,6 +66,7 @@ CHART_LAYOUTS = ("auto", "cropped", "detect")
 COLORCHECKER_NEUTRALS = (18, 19, 20, 21, 22, 23)
 
 
+@_deprecate.renamed_fields({"centres": "centers"})
 @dataclass(frozen=True)
 class ChartSample:
     """A chart's patches and where they were sampled in the image (:func:`sample_chart`).
@@ -81,7 +83,7 @@ class ChartSample:
     #: left of the upright chart).
     outline: np.ndarray
     #: (N, 2) patch centres.
-    centres: np.ndarray
+    centers: np.ndarray
     #: (N, 4, 2) the quadrilaterals that were averaged, corners in the order of ``outline``.
     quads: np.ndarray
     #: The detection (``layout="detect"``), else None.
@@ -92,7 +94,7 @@ class ChartSample:
         return {
             "layout": self.layout,
             "outline": self.outline.tolist(),
-            "centres": self.centres.tolist(),
+            "centers": self.centers.tolist(),
             "quads": self.quads.tolist(),
             "means_srgb": self.patches.means.tolist(),
             "saturated": self.patches.saturated.tolist(),
@@ -264,7 +266,7 @@ def sample_chart(
     pat = measure_chart_patches(
         rgb, det, max_std=max_std, saturation=saturation
     )  # its ChartWarning names the patches left out
-    return ChartSample(pat, "detect", det.corners, det.centres, det.quads, det)
+    return ChartSample(pat, "detect", det.corners, det.centers, det.quads, det)
 
 
 def _as_chart_patches(chart: object, name: str, layout: str = "auto") -> Any:

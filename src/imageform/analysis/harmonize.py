@@ -32,9 +32,9 @@ from imageform._validate import (
     check_option,
     describe,
     format_shape,
+    real_array,
 )
 from imageform.analysis._arrays import image_in, is_dask, read_json, write_json
-from imageform.analysis._guard import count, real_array
 from imageform.analysis.chart_grid import ChartPatches, ChartWarning, chart_patches
 from imageform.analysis.chart_input import _as_chart_patches
 from imageform.color.convert import convert
@@ -151,7 +151,7 @@ class ColorCorrection:
         object.__setattr__(self, "method", key)
         object.__setattr__(self, "degree", deg)
         object.__setattr__(self, "matrix", matrix)
-        object.__setattr__(self, "n_patches", count(self.n_patches, "n_patches"))
+        object.__setattr__(self, "n_patches", as_int(self.n_patches, "n_patches", minimum=0))
         tf = check_option(self.transfer, _TRANSFERS, "correction transfer")
         object.__setattr__(self, "transfer", tf)
 

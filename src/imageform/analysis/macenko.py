@@ -29,12 +29,20 @@ from imageform._validate import (
     as_int,
     as_matrix,
     as_real,
+    check_nonzero_rows,
     check_option,
     describe,
     format_shape,
+    real_array,
 )
-from imageform.analysis._arrays import exact_quantile, image_in, is_dask, read_json, write_json
-from imageform.analysis._guard import count, real_array, target_source, unit_rows
+from imageform.analysis._arrays import (
+    exact_quantile,
+    image_in,
+    is_dask,
+    read_json,
+    target_source,
+    write_json,
+)
 from imageform.analysis._sparse_nmf import sample_rows, sparse_nmf
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
 
@@ -392,12 +400,12 @@ class MacenkoStains:
     def __post_init__(self) -> None:
         """Two finite stain vectors of non-zero length, two finite concentrations."""
         s = real_array(self.stain_matrix, "stain_matrix", (2, 3))
-        unit_rows(s, "stain_matrix")
+        check_nonzero_rows(s, "stain_matrix")
         m = real_array(self.max_concentrations, "max_concentrations", (2,))
         object.__setattr__(self, "stain_matrix", s)
         object.__setattr__(self, "max_concentrations", m)
-        object.__setattr__(self, "n_pixels", count(self.n_pixels, "n_pixels"))
-        object.__setattr__(self, "n_total", count(self.n_total, "n_total"))
+        object.__setattr__(self, "n_pixels", as_int(self.n_pixels, "n_pixels", minimum=0))
+        object.__setattr__(self, "n_total", as_int(self.n_total, "n_total", minimum=0))
         i0 = _i0_value(self.i0, "i0", complete=True)
         object.__setattr__(self, "i0", (float(i0[0]), float(i0[1]), float(i0[2])))
         object.__setattr__(self, "base", _base(self.base))
@@ -493,7 +501,7 @@ def stain_concentrations(
         raise InvalidInputError(
             f"expected stain_matrix of shape (2, 3) or (3, 3), got {format_shape(s.shape)}"
         )
-    unit_rows(s, "stain_matrix")
+    check_nonzero_rows(s, "stain_matrix")
     od = optical_density(image, min_intensity=min_intensity, i0=i0, base=base)
     pinv = np.linalg.pinv(s).astype(od.dtype)  # (3, k)
     return od @ pinv

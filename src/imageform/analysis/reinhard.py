@@ -14,9 +14,8 @@ from typing import Any
 
 import numpy as np
 
-from imageform._validate import as_bool, describe, format_shape
-from imageform.analysis._arrays import image_in, is_dask, read_json, write_json
-from imageform.analysis._guard import count, real_triple, target_source
+from imageform._validate import as_bool, as_int, as_reals, describe, format_shape
+from imageform.analysis._arrays import image_in, is_dask, read_json, target_source, write_json
 from imageform.color.convert import convert
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
 
@@ -40,9 +39,9 @@ class ReinhardStats:
 
     def __post_init__(self) -> None:
         """Three finite means, three finite stds >= 0, a pixel count >= 0, the one space."""
-        object.__setattr__(self, "mean", real_triple(self.mean, "mean"))
-        object.__setattr__(self, "std", real_triple(self.std, "std", nonnegative=True))
-        object.__setattr__(self, "n_pixels", count(self.n_pixels, "n_pixels"))
+        object.__setattr__(self, "mean", as_reals(self.mean, "mean", 3))
+        object.__setattr__(self, "std", as_reals(self.std, "std", 3, nonnegative=True))
+        object.__setattr__(self, "n_pixels", as_int(self.n_pixels, "n_pixels", minimum=0))
         if self.space != REINHARD_SPACE:
             raise InvalidInputError(
                 f"expected space {REINHARD_SPACE!r}, got {describe(self.space)}"

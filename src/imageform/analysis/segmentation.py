@@ -17,9 +17,16 @@ import numpy as np
 
 from imageform._backend import use_numba
 from imageform._colormath import rgb_to_hsv
-from imageform._validate import as_int, as_real, check_memory, describe, format_shape
+from imageform._validate import (
+    as_int,
+    as_real,
+    as_reals,
+    check_memory,
+    describe,
+    dtype_kind,
+    format_shape,
+)
 from imageform.analysis._arrays import image_in, is_dask
-from imageform.analysis._guard import dtype_kind, real_triple
 from imageform.errors import DegenerateConfigurationError, ImageformWarning, InvalidInputError
 
 __all__ = [
@@ -327,7 +334,7 @@ def overlay_mask(
     a = as_real(alpha, "alpha")
     if not 0.0 <= a <= 1.0:
         raise InvalidInputError(f"expected alpha in [0, 1], got {a:g}")
-    c = np.asarray(real_triple(color, "color"), dtype=rgb.dtype)
+    c = np.asarray(as_reals(color, "color", 3), dtype=rgb.dtype)
     if not np.all((c >= 0) & (c <= 1)):
         raise InvalidInputError(f"expected color as 3 values in [0, 1], got {describe(color)}")
     w = m[..., None].astype(rgb.dtype) * rgb.dtype.type(a)

@@ -40,12 +40,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from imageform._validate import as_bool, as_real, describe
-from imageform.analysis._guard import real_array
+from imageform._validate import as_bool, as_real, describe, real_array
 from imageform.errors import ImageformError, InvalidInputError
 from imageform.spectral import Spectrum, colorchecker_reflectances, illuminant
 
-__all__ = ["SensitivityEstimate", "estimate_camera_sensitivities"]
+__all__ = ["SensitivityEstimate", "estimate_camera_sensitivities", "relative_qe"]
 
 
 @dataclass(frozen=True)
@@ -238,3 +237,34 @@ def estimate_camera_sensitivities(
         predicted * c_scale,
         rel,
     )
+
+
+def relative_qe(sensitivities: Spectrum) -> tuple[np.ndarray, np.ndarray]:
+    r"""Return the relative quantum efficiencies of estimated spectral sensitivities.
+
+    The efficiencies are for photon counting, largest 1; the sensitivities are in energy units
+    (response per unit of spectral power).
+
+    A photosite counts photons, :math:`N(\lambda) = E(\lambda)\,\lambda / (h c)`, so the
+    response per unit power is :math:`S(\lambda) \propto \mathrm{QE}(\lambda)\,\lambda`
+    and :math:`\mathrm{QE}(\lambda) \propto S(\lambda) / \lambda`.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from imageform.spectral import Spectrum
+    >>> wl, qe = relative_qe(Spectrum(np.array([400.0, 800.0]), np.array([[1, 1, 1], [1, 1, 2.0]])))
+    >>> qe[:, 2].tolist()
+    [1.0, 1.0]
+    """
+    if not isinstance(sensitivities, Spectrum):
+        raise TypeError(f"expected sensitivities as a Spectrum, got {describe(sensitivities)}")
+    wl = np.asarray(sensitivities.wavelengths, dtype=np.float64)
+    qe = np.asarray(sensitivities.values, dtype=np.float64).reshape(len(wl), -1) / wl[:, None]
+    peak = float(qe.max()) if qe.size else 0.0
+    if not peak > 0.0:
+        raise InvalidInputError("sensitivities: expected a positive value somewhere, got none")
+    return wl, qe / peak
+
+
+# ---------------------------------------------------------------- the whole

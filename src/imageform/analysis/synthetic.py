@@ -24,9 +24,10 @@ from imageform._validate import (
     as_reals,
     as_size,
     check_memory,
+    check_nonzero_rows,
     format_shape,
+    real_array,
 )
-from imageform.analysis._guard import real_array, unit_rows
 from imageform.errors import InvalidInputError
 
 __all__ = [
@@ -348,7 +349,7 @@ def synthetic_stain_image(
         raise InvalidInputError(
             f"expected stains of shape (2, 3) or (3, 3), got {format_shape(s.shape)}"
         )
-    unit_rows(s, "stains")  # a zero-length stain vector has no direction (NaN image)
+    check_nonzero_rows(s, "stains")  # a zero-length stain vector has no direction (NaN image)
     mc = np.asarray(as_float(max_concentration, "max_concentration"), dtype=np.float64)
     if mc.shape != (s.shape[0],) or np.any(mc < 0):
         raise InvalidInputError(

@@ -42,6 +42,19 @@ def _options(wf: Workflow, kw: dict[str, Any]) -> Any:
         raise click.UsageError(str(exc)) from None
 
 
+def _refuse_absent_device(opts: Any) -> None:
+    """``--device cuda`` where no GPU is usable: one line, exit 1, before any job starts."""
+    if getattr(opts, "device", None) != "cuda":
+        return
+    from imageform._cuda.geometry import require_cuda
+
+    try:
+        require_cuda("--device cuda")
+    except ImageformError as exc:
+        click.echo(f"imageform: error: {exc}", err=True)
+        raise CommandExit(1) from None
+
+
 def _quiet_dask() -> None:
     """Silence dask's own warnings in this process.
 
@@ -88,6 +101,7 @@ def _batch_command(wf: Workflow) -> click.Command:
         scheduler, workers, suffix = kw.pop("scheduler"), kw.pop("workers"), kw.pop("suffix")
         force, as_json = bool(kw.pop("force")), bool(kw.pop("json_out"))
         opts = _options(wf, kw)
+        _refuse_absent_device(opts)
         if Path(out).is_dir():  # no job replaces a FIFO or a device (the runner renames over)
             refuse_special_inside(out)
         _quiet_dask()
@@ -134,7 +148,7 @@ def _chunked_command(wf: Workflow) -> click.Command:
             required=True,
             help="Output: a tiled .tif or a .zarr array.",
         ),
-        *[p for p in option_params(wf) if p.name not in ("bits", "out_of_range", "clip")],
+        *[p for p in option_params(wf) if p.name not in ("bits", "out_of_range", "clip", "device")],
         click.Option(
             ["--chunk"],
             type=click.INT,
@@ -265,6 +279,19 @@ class _Lazy(click.Group):
         if key not in self._names():
             return None
         return self._make(WORKFLOWS[key])
+
+    def format_commands(self, ctx: click.Context, formatter: click.HelpFormatter) -> None:
+        """List the subcommands from the registry's summaries, without building them.
+
+        A command's options may name choices in a module that loads NumPy; ``--help`` stays
+        light (tests/test_lazy_import.py).
+        """
+        from imageform.workflows.registry import WORKFLOWS
+
+        rows = [(name, WORKFLOWS[name].summary) for name in self.list_commands(ctx)]
+        if rows:
+            with formatter.section("Commands"):
+                formatter.write_dl(rows)
 
 
 def batch_group() -> click.Group:

@@ -42,9 +42,9 @@ def dispatch(
     if (s, d) not in _KERNEL_PAIRS or image.dtype not in (np.float32, np.float64, np.uint8):
         return None
     from imageform._kernels import color_lab, color_simple
+    from imageform._validate import as_image_strict as as_image
     from imageform._validate import check_finite
     from imageform.color import ycbcr
-    from imageform.color._guard import as_image
     from imageform.color.rgb_spaces import rgb_to_xyz_matrix, xyz_to_rgb_matrix
     from imageform.color.whitepoints import resolve_white
 

@@ -19,8 +19,9 @@ import numpy as np
 
 from imageform._backend import device_of, namespace
 from imageform._dask import chunkwise
+from imageform._validate import as_points_strict as as_points
 from imageform._validate import as_real
-from imageform.color._guard import as_points, check_option
+from imageform._validate import check_name as check_option
 from imageform.color.whitepoints import resolve_white
 from imageform.errors import InvalidInputError
 
@@ -174,6 +175,11 @@ def chromatic_adaptation(
     mat = chromatic_adaptation_matrix(
         src_white, dst_white, method, degree=degree, observer=observer
     )
+    from imageform.color import _gpu
+
+    on_gpu = _gpu.adapt(xyz, mat)  # a CUDA array: one kernel
+    if on_gpu is not None:
+        return on_gpu
     xp = namespace(xyz)
     x = as_points(xyz, "xyz", 3, xp=xp)
     mt = xp.asarray(mat.T.copy(), dtype=x.dtype, device=device_of(x))

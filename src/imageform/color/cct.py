@@ -31,7 +31,15 @@ from imageform._colormath import daylight_xy as _daylight_xy
 from imageform._colormath import uv1960_from_xy as _uv_from_xy
 from imageform._dask import chunkwise
 from imageform._validate import any_value, as_int
-from imageform.color._guard import as_float, as_points, check_option
+from imageform._validate import (
+    as_float_strict as as_float,
+)
+from imageform._validate import (
+    as_points_strict as as_points,
+)
+from imageform._validate import (
+    check_name as check_option,
+)
 from imageform.color.cct_methods import (
     uv_to_cct_ohno2013,
     xy_to_cct_hernandez1999,

@@ -17,8 +17,7 @@ from typing import Any
 import numpy as np
 
 from imageform import _deprecate
-from imageform._validate import as_points, as_real, as_real_ndarray
-from imageform.color._guard import check_magnitude
+from imageform._validate import as_points, as_real, as_real_ndarray, check_magnitude
 from imageform.errors import InvalidInputError
 
 __all__ = [

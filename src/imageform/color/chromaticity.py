@@ -19,8 +19,9 @@ import numpy.typing as npt
 from imageform import _deprecate
 from imageform._backend import device_of, namespace, reads_values, to_numpy
 from imageform._dask import chunkwise
-from imageform._validate import any_value, as_real, as_real_ndarray, describe
-from imageform.color._guard import as_bool, as_points, check_option
+from imageform._validate import any_value, as_bool, as_real, as_real_ndarray, describe
+from imageform._validate import as_points_strict as as_points
+from imageform._validate import check_name as check_option
 from imageform.errors import InvalidInputError
 
 __all__ = [

@@ -18,7 +18,7 @@ from typing import Any
 
 from imageform._backend import constant, namespace
 from imageform._dask import chunkwise
-from imageform.color._guard import as_image
+from imageform._validate import as_image_strict as as_image
 
 from .whitepoints import named_white
 

@@ -15,7 +15,7 @@ from typing import Any
 
 from imageform._backend import namespace
 from imageform._dask import chunkwise
-from imageform.color._guard import as_image
+from imageform._validate import as_image_strict as as_image
 
 __all__ = [
     "cmy_to_cmyk",

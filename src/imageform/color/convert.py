@@ -51,14 +51,22 @@ import numpy as np
 from imageform import _deprecate
 from imageform._backend import constant, namespace, use_numba
 from imageform._dask import chunkwise
+from imageform._validate import (
+    as_float_strict as as_float,
+)
+from imageform._validate import (
+    as_image_strict as as_image,
+)
 from imageform._validate import check_name, describe
-from imageform.color._guard import as_float, as_image, check_option
+from imageform._validate import (
+    check_name as check_option,
+)
 from imageform.errors import InvalidInputError, UnknownOptionError
 
 from . import cielab, cmyk, gray, hsv, ycbcr
 from .opencv import _flip
 from .rgb_spaces import RGB_SPACES, _apply_matrix, rgb_to_xyz_matrix, xyz_to_rgb_matrix
-from .transfer import _decode_clean, _encode_clean
+from .transfer import _decode_clean, _encode_clean, _kernel_step
 from .whitepoints import named_white
 
 __all__ = ["EDGES", "SPACES", "Edge", "convert", "path", "space_name", "srgb8_to_lab"]
@@ -226,6 +234,18 @@ def path(src: str, dst: str) -> list[Edge]:
     ['srgb_to_linear', 'linear_srgb_to_xyz', 'xyz_to_lab']
     """
     s, d = _space(src, "src"), _space(dst, "dst")
+    found = _PATHS.get((s, d))
+    if found is None:
+        found = _PATHS[s, d] = tuple(_shortest(s, d))
+    return list(found)
+
+
+#: Routes found by :func:`path` (the graph is fixed: each pair is searched once).
+_PATHS: dict[tuple[str, str], tuple[Edge, ...]] = {}
+
+
+def _shortest(s: str, d: str) -> list[Edge]:
+    """Breadth-first search of the conversion graph: the fewest edges from ``s`` to ``d``."""
     prev: dict[str, Edge | None] = {s: None}
     queue = deque([s])
     while queue:
@@ -382,6 +402,19 @@ def convert(
     if enc8 is not None and alpha == "keep":
         raise InvalidInputError("dtype='uint8' takes 3-channel images, not alpha='keep'")
 
+    if out is None and enc8 is None:
+        from imageform.color import _gpu
+
+        # a CUDA array: one fused kernel for the whole route
+        on_gpu = _gpu.convert(
+            image,
+            lambda: _kernel_steps(route, p),
+            lambda: _validate(image, s),
+            integers=s in _ENCODED_RGB,
+        )
+        if on_gpu is not None:
+            return on_gpu
+
     extra_chan = None
     n = SPACES[s][0]
     arr: Any = image if hasattr(image, "shape") else np.asarray(image)
@@ -422,6 +455,100 @@ def convert(
         raise TypeError(f"out= takes NumPy results only, got {describe(res)}")
     _check_out(out, res.shape, res.dtype, image)[...] = res
     return out
+
+
+_KERNEL_SIMPLE = {
+    ("srgb", "bgr"): "swap",
+    ("bgr", "srgb"): "swap",
+    ("srgb", "cmy"): "invert",
+    ("cmy", "srgb"): "invert",
+    ("srgb", "hsv"): "rgb_hsv",
+    ("hsv", "srgb"): "hsv_rgb",
+    ("srgb", "hsl"): "rgb_hsl",
+    ("hsl", "srgb"): "hsl_rgb",
+    ("srgb", "hsi"): "rgb_hsi",
+    ("hsi", "srgb"): "hsi_rgb",
+    ("lab", "lch"): "lab_lch",
+    ("lch", "lab"): "lch_lab",
+    ("xyy", "xyz"): "xyy_xyz",
+}
+_KERNEL_WHITE = {
+    ("xyz", "lab"): "xyz_lab",
+    ("lab", "xyz"): "lab_xyz",
+    ("xyz", "luv"): "xyz_luv",
+    ("luv", "xyz"): "luv_xyz",
+    ("xyz", "xyy"): "xyz_xyy",
+}
+
+
+def _ycbcr_affine(p: dict[str, Any], forward: bool) -> tuple[float, ...]:
+    _, kr, kb = ycbcr._coeffs(p.get("standard", "bt601"))
+    yg, yo, cg, co = ycbcr._scale(p.get("signal_range", "full"), p.get("bit_depth"))
+    kg = 1.0 - kr - kb
+    a = np.array(
+        [
+            [kr, kg, kb],
+            [-kr / (2 * (1 - kb)), -kg / (2 * (1 - kb)), 0.5],
+            [0.5, -kg / (2 * (1 - kr)), -kb / (2 * (1 - kr))],
+        ]
+    )
+    m = a * np.array([yg, cg, cg])[:, None]
+    off = np.array([yo, co, co])
+    if not forward:
+        m = np.linalg.inv(m)
+        off = -m @ off
+    return (*m.ravel().tolist(), *off.tolist())
+
+
+def _kernel_steps(route: list[Edge], p: dict[str, Any]) -> list[tuple[str, tuple[float, ...]]]:
+    """Return the CUDA kernel steps of a route (:mod:`imageform._cuda`); [] when it has none.
+
+    Every edge between 3-channel spaces has a step; routes through ``gray`` (1 channel) or
+    ``cmyk`` (4) have none and return ``[]`` (the Array-API path runs). The steps of a route
+    and hashable parameters are computed once per process (a GPU call does no more Python
+    work than it must before its launch).
+    """
+    try:
+        key: Any = (tuple(route), tuple(sorted(p.items())))
+        hash(key)
+    except TypeError:  # a white given as an array: computed each time
+        return _steps_of(route, p)
+    steps = _STEPS.get(key)
+    if steps is None:
+        if len(_STEPS) > 256:
+            _STEPS.clear()
+        steps = _STEPS[key] = _steps_of(route, p)
+    return steps
+
+
+#: Kernel steps per route and parameters (:func:`_kernel_steps`).
+_STEPS: dict[Any, list[tuple[str, tuple[float, ...]]]] = {}
+
+
+def _steps_of(route: list[Edge], p: dict[str, Any]) -> list[tuple[str, tuple[float, ...]]]:
+    steps: list[tuple[str, tuple[float, ...]]] = []
+    for e in route:
+        s, d = e.src, e.dst
+        if s in RGB_SPACES and d == f"linear_{s}":
+            steps.append(_kernel_step(RGB_SPACES[s].transfer, True))
+        elif d in RGB_SPACES and s == f"linear_{d}":
+            steps.append(_kernel_step(RGB_SPACES[d].transfer, False))
+        elif s.startswith("linear_") and d == "xyz":
+            steps.append(("matrix", tuple(rgb_to_xyz_matrix(s[7:]).ravel().tolist())))
+        elif s == "xyz" and d.startswith("linear_"):
+            steps.append(("matrix", tuple(xyz_to_rgb_matrix(d[7:]).ravel().tolist())))
+        elif (s, d) in _KERNEL_SIMPLE:
+            steps.append((_KERNEL_SIMPLE[s, d], ()))
+        elif (s, d) in _KERNEL_WHITE:
+            w = named_white(p["white"], p.get("observer", 2))
+            steps.append((_KERNEL_WHITE[s, d], tuple(float(v) for v in w)))
+        elif (s, d) == ("srgb", "ycbcr"):
+            steps.append(("affine", _ycbcr_affine(p, True)))
+        elif (s, d) == ("ycbcr", "srgb"):
+            steps.append(("affine", _ycbcr_affine(p, False)))
+        else:
+            return []
+    return steps
 
 
 def _fast_path(

@@ -34,8 +34,9 @@ import numpy as np
 
 from imageform._backend import device_of, namespace
 from imageform._dask import chunkwise
-from imageform._validate import as_real
-from imageform.color._guard import as_bool, as_image, check_option
+from imageform._validate import as_bool, as_real
+from imageform._validate import as_image_strict as as_image
+from imageform._validate import check_name as check_option
 from imageform.errors import InvalidInputError
 
 __all__ = [

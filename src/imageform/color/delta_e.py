@@ -19,8 +19,18 @@ import numpy as np
 
 from imageform._backend import common_device, namespace, use_numba
 from imageform._dask import chunkwise
-from imageform._validate import as_real, format_shape
-from imageform.color._guard import as_points, check_magnitude, check_option
+from imageform._validate import (
+    as_points_strict as as_points,
+)
+from imageform._validate import (
+    as_real,
+    check_magnitude,
+    format_shape,
+)
+from imageform._validate import (
+    check_name as check_option,
+)
+from imageform.color import _gpu
 from imageform.errors import InvalidInputError
 
 __all__ = [
@@ -121,6 +131,9 @@ def delta_e_cie76(lab1: object, lab2: object) -> Any:
     >>> float(delta_e_cie76([50.0, 0.0, 0.0], [50.0, 3.0, 4.0]))
     5.0
     """
+    on_gpu = _gpu.delta_e(lab1, lab2, "de76", ())  # CUDA arrays: one kernel
+    if on_gpu is not None:
+        return on_gpu
     xp, a, b = _prepare(lab1, lab2)
     d = a - b
     return xp.sqrt(xp.sum(d * d, axis=-1))
@@ -173,6 +186,9 @@ def delta_e_cie94(
     kL_ = kl_default if kL is None else check_positive(kL, "kL")
     kC_ = check_positive(kC, "kC")
     kH_ = check_positive(kH, "kH")
+    on_gpu = _gpu.delta_e(lab1, lab2, "de94", (kL_, kC_, kH_, K1, K2))
+    if on_gpu is not None:
+        return on_gpu
     xp, a, b = _prepare(lab1, lab2)
     C1 = _chroma(xp, a)
     C2 = _chroma(xp, b)
@@ -221,6 +237,9 @@ def delta_e_cmc(lab1: object, lab2: object, *, l: float = 2.0, c: float = 1.0) -
     """
     l_ = check_positive(l, "l")
     c_ = check_positive(c, "c")
+    on_gpu = _gpu.delta_e(lab1, lab2, "decmc", (l_, c_))
+    if on_gpu is not None:
+        return on_gpu
     xp, a, b = _prepare(lab1, lab2)
     L1, a1, b1 = a[..., 0], a[..., 1], a[..., 2]
     C1 = _chroma(xp, a)
@@ -291,6 +310,9 @@ def delta_e_ciede2000(
     kL_ = check_positive(kL, "kL")
     kC_ = check_positive(kC, "kC")
     kH_ = check_positive(kH, "kH")
+    on_gpu = _gpu.delta_e(lab1, lab2, "de00", (kL_, kC_, kH_))
+    if on_gpu is not None:
+        return on_gpu
     xp, a, b = _prepare(lab1, lab2)
     # the kernels module (kernel and twin) imports numba: loaded on first use
     from imageform._kernels.delta_e import ciede2000_numba, ciede2000_twin

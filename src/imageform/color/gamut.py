@@ -21,7 +21,8 @@ import numpy as np
 from imageform._backend import device_of, namespace
 from imageform._dask import chunkwise
 from imageform._validate import as_int, as_real, describe
-from imageform.color._guard import as_points, check_option
+from imageform._validate import as_points_strict as as_points
+from imageform._validate import check_name as check_option
 from imageform.color.chromaticity import (
     polygon_area,
     spectral_locus,

@@ -19,7 +19,8 @@ from typing import Any
 
 from imageform._backend import namespace
 from imageform._dask import chunkwise
-from imageform.color._guard import as_image, check_option
+from imageform._validate import as_image_strict as as_image
+from imageform._validate import check_name as check_option
 
 from .transfer import _srgb_decode, _srgb_encode
 

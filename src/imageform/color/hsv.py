@@ -21,8 +21,9 @@ from imageform._colormath import hexcone_hue as _hue
 from imageform._colormath import hsv_to_rgb as _hsv_to_srgb
 from imageform._colormath import rgb_to_hsv as _srgb_to_hsv
 from imageform._dask import chunkwise
+from imageform._validate import as_float_strict as as_float
+from imageform._validate import as_image_strict as as_image
 from imageform._validate import as_real
-from imageform.color._guard import as_float, as_image
 from imageform.errors import InvalidInputError
 
 __all__ = [

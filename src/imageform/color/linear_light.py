@@ -19,8 +19,9 @@ from __future__ import annotations
 from typing import Any, NamedTuple
 
 from imageform._backend import namespace
-from imageform._validate import as_int
-from imageform.color._guard import as_bool, as_image, check_option
+from imageform._validate import as_bool, as_int
+from imageform._validate import as_image_strict as as_image
+from imageform._validate import check_name as check_option
 from imageform.errors import InvalidInputError
 
 from .transfer import TRANSFER_FUNCTIONS, _decode_clean, _encode_clean

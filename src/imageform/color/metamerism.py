@@ -18,8 +18,8 @@ from __future__ import annotations
 import numpy as np
 
 from imageform import _deprecate
-from imageform._validate import as_int, as_real
-from imageform.color._guard import as_bool, check_option
+from imageform._validate import as_bool, as_int, as_real
+from imageform._validate import check_name as check_option
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
 from imageform.spectral.integrate import (
     integration_weights,

@@ -17,8 +17,9 @@ from typing import Any
 import numpy as np
 
 from imageform._backend import device_of, to_numpy
+from imageform._validate import as_image_strict as as_image
 from imageform._validate import as_int, as_real, describe
-from imageform.color._guard import as_image, check_option
+from imageform._validate import check_name as check_option
 from imageform.errors import InvalidInputError
 
 __all__ = [

@@ -26,8 +26,9 @@ import numpy as np
 
 from imageform._backend import constant, namespace
 from imageform._dask import chunkwise
+from imageform._validate import as_image_strict as as_image
 from imageform._validate import as_real_ndarray, describe
-from imageform.color._guard import as_image, check_option
+from imageform._validate import check_name as check_option
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
 
 __all__ = [

@@ -26,8 +26,20 @@ from types import MappingProxyType
 from typing import Any, NamedTuple
 
 from imageform._backend import namespace
-from imageform._validate import describe
-from imageform.color._guard import as_bool, as_float, as_image, check_option, check_result_array
+from imageform._validate import (
+    as_bool,
+    check_result_array,
+    describe,
+)
+from imageform._validate import (
+    as_float_strict as as_float,
+)
+from imageform._validate import (
+    as_image_strict as as_image,
+)
+from imageform._validate import (
+    check_name as check_option,
+)
 from imageform.errors import InvalidInputError, UnknownOptionError
 
 __all__ = [

@@ -23,8 +23,10 @@ from imageform._colormath import pos_pow as _pos_pow
 from imageform._colormath import srgb_decode as _srgb_decode
 from imageform._colormath import srgb_encode as _srgb_encode
 from imageform._dask import chunkwise
+from imageform._validate import as_image_strict as as_image
+from imageform._validate import check_name as check_option
 from imageform._validate import check_positive
-from imageform.color._guard import as_image, check_option
+from imageform.color._gpu import transfer as _gpu_transfer
 
 __all__ = [
     "ADOBE_RGB_GAMMA",
@@ -97,6 +99,24 @@ def _romm_decode(xp: Any, v: Any) -> Any:
     return xp.where(v < v_t, v / _ROMM_SLOPE, hi)
 
 
+def _kernel_step(name: str, decode: bool, gamma: float = 2.2) -> tuple[str, tuple[float, ...]]:
+    """Return the CUDA kernel step of transfer function ``name`` (:mod:`imageform._cuda`)."""
+    d = "dec" if decode else "enc"
+    if name == "srgb":
+        return (f"{d}_srgb", ())
+    if name == "gamma":
+        return (f"{d}_gamma", (gamma,))
+    if name == "adobe_rgb":
+        return (f"{d}_gamma", (ADOBE_RGB_GAMMA,))
+    if name == "rec709":
+        return (f"{d}_bt", (_BT709_ALPHA, _BT709_BETA))
+    if name == "rec2020":
+        return (f"{d}_bt", (_BT2020_ALPHA, _BT2020_BETA))
+    if name == "prophoto":
+        return (f"{d}_romm", ())
+    return ("identity", ())  # "linear"
+
+
 def _prep(values: object, name: str) -> tuple[Any, Any]:
     # encoded values must be in [0, 1]-ish (0-255 floats are caught); linear light may exceed 1
     x = as_image(values, name, channels=None, range_check=not name.startswith("linear"))
@@ -134,6 +154,9 @@ def srgb_to_linear(values: object) -> Any:
     >>> round(float(srgb_to_linear(0.5)), 6)
     0.214041
     """
+    gpu = _gpu_transfer(values, _kernel_step("srgb", True), what="sRGB values")
+    if gpu is not None:
+        return gpu
     xp, v = _prep(values, "sRGB values")
     return _srgb_decode(xp, v)
 
@@ -164,6 +187,9 @@ def linear_to_srgb(values: object) -> Any:
     >>> round(float(linear_to_srgb(0.18)), 6)
     0.461356
     """
+    gpu = _gpu_transfer(values, _kernel_step("srgb", False), what="linear values")
+    if gpu is not None:
+        return gpu
     xp, x = _prep(values, "linear values")
     return _srgb_encode(xp, x)
 
@@ -191,6 +217,9 @@ def gamma_to_linear(values: object, gamma: float = 2.2) -> Any:
     0.217638
     """
     g = check_positive(gamma, "gamma")
+    gpu = _gpu_transfer(values, _kernel_step("gamma", True, g), what="encoded values")
+    if gpu is not None:
+        return gpu
     xp, v = _prep(values, "encoded values")
     return _gamma_decode(xp, v, g)
 
@@ -205,6 +234,9 @@ def linear_to_gamma(values: object, gamma: float = 2.2) -> Any:
     0.5
     """
     g = check_positive(gamma, "gamma")
+    gpu = _gpu_transfer(values, _kernel_step("gamma", False, g), what="linear values")
+    if gpu is not None:
+        return gpu
     xp, x = _prep(values, "linear values")
     return _gamma_encode(xp, x, g)
 
@@ -220,6 +252,9 @@ def adobe_rgb_to_linear(values: object) -> Any:
     >>> round(float(adobe_rgb_to_linear(0.5)), 6)
     0.217756
     """
+    gpu = _gpu_transfer(values, _kernel_step("adobe_rgb", True), what="Adobe RGB values")
+    if gpu is not None:
+        return gpu
     xp, v = _prep(values, "Adobe RGB values")
     return _gamma_decode(xp, v, ADOBE_RGB_GAMMA)
 
@@ -233,6 +268,9 @@ def linear_to_adobe_rgb(values: object) -> Any:
     >>> round(float(linear_to_adobe_rgb(0.217756)), 5)
     0.5
     """
+    gpu = _gpu_transfer(values, _kernel_step("adobe_rgb", False), what="linear values")
+    if gpu is not None:
+        return gpu
     xp, x = _prep(values, "linear values")
     return _gamma_encode(xp, x, ADOBE_RGB_GAMMA)
 
@@ -252,6 +290,9 @@ def linear_to_rec709(values: object) -> Any:
     >>> round(float(linear_to_rec709(0.18)), 6)
     0.409008
     """
+    gpu = _gpu_transfer(values, _kernel_step("rec709", False), what="linear values")
+    if gpu is not None:
+        return gpu
     xp, x = _prep(values, "linear values")
     return _bt_encode(xp, x, _BT709_ALPHA, _BT709_BETA)
 
@@ -269,6 +310,9 @@ def rec709_to_linear(values: object) -> Any:
     >>> round(float(rec709_to_linear(0.409008)), 5)
     0.18
     """
+    gpu = _gpu_transfer(values, _kernel_step("rec709", True), what="Rec. 709 values")
+    if gpu is not None:
+        return gpu
     xp, v = _prep(values, "Rec. 709 values")
     return _bt_decode(xp, v, _BT709_ALPHA, _BT709_BETA)
 
@@ -287,6 +331,9 @@ def linear_to_rec2020(values: object) -> Any:
     >>> round(float(linear_to_rec2020(0.18)), 6)
     0.408848
     """
+    gpu = _gpu_transfer(values, _kernel_step("rec2020", False), what="linear values")
+    if gpu is not None:
+        return gpu
     xp, x = _prep(values, "linear values")
     return _bt_encode(xp, x, _BT2020_ALPHA, _BT2020_BETA)
 
@@ -300,6 +347,9 @@ def rec2020_to_linear(values: object) -> Any:
     >>> round(float(rec2020_to_linear(0.5)), 6)
     0.259719
     """
+    gpu = _gpu_transfer(values, _kernel_step("rec2020", True), what="Rec. 2020 values")
+    if gpu is not None:
+        return gpu
     xp, v = _prep(values, "Rec. 2020 values")
     return _bt_decode(xp, v, _BT2020_ALPHA, _BT2020_BETA)
 
@@ -315,6 +365,9 @@ def linear_to_prophoto(values: object) -> Any:
     >>> round(float(linear_to_prophoto(0.18)), 6)
     0.385711
     """
+    gpu = _gpu_transfer(values, _kernel_step("prophoto", False), what="linear values")
+    if gpu is not None:
+        return gpu
     xp, x = _prep(values, "linear values")
     return _romm_encode(xp, x)
 
@@ -328,6 +381,9 @@ def prophoto_to_linear(values: object) -> Any:
     >>> round(float(prophoto_to_linear(0.5)), 6)
     0.287175
     """
+    gpu = _gpu_transfer(values, _kernel_step("prophoto", True), what="ProPhoto values")
+    if gpu is not None:
+        return gpu
     xp, v = _prep(values, "ProPhoto values")
     return _romm_decode(xp, v)
 
@@ -396,6 +452,9 @@ def decode(values: object, transfer: str = "srgb", *, gamma: float = 2.2) -> Any
     """
     name = check_option(transfer, TRANSFER_FUNCTIONS, "transfer function")
     g = check_positive(gamma, "gamma")
+    gpu = _gpu_transfer(values, _kernel_step(name, True, g), what="encoded values")
+    if gpu is not None:
+        return gpu
     xp, v = _prep(values, "encoded values")
     return _decode_clean(xp, v, name, g)
 
@@ -411,5 +470,8 @@ def encode(values: object, transfer: str = "srgb", *, gamma: float = 2.2) -> Any
     """
     name = check_option(transfer, TRANSFER_FUNCTIONS, "transfer function")
     g = check_positive(gamma, "gamma")
+    gpu = _gpu_transfer(values, _kernel_step(name, False, g), what="linear values")
+    if gpu is not None:
+        return gpu
     xp, x = _prep(values, "linear values")
     return _encode_clean(xp, x, name, g)

@@ -41,16 +41,24 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from imageform._backend import device_of, is_dask_namespace, namespace
-from imageform._validate import any_value, as_int, as_real, as_real_array, describe
-from imageform.color._guard import (
+from imageform._validate import (
+    any_value,
     as_bool,
-    as_image,
+    as_int,
+    as_real,
+    as_real_array,
     check_nonempty,
-    check_option,
     check_result_array,
+    describe,
+)
+from imageform._validate import (
+    as_image_strict as as_image,
+)
+from imageform._validate import (
+    check_name as check_option,
 )
 from imageform.color.rgb_spaces import xyz_to_linear_rgb
-from imageform.color.transfer import TRANSFER_FUNCTIONS, decode, encode
+from imageform.color.transfer import TRANSFER_FUNCTIONS, _kernel_step, decode, encode
 from imageform.color.whitepoints import resolve_white, xy_to_xyz_white
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
 
@@ -536,6 +544,13 @@ def apply_white_balance_gains(image: object, gains: Any, *, transfer: str = "srg
 
     ``gains`` is ``(..., 3)`` positive finite numbers (one triple per image of a batch).
     """
+    from imageform.color import _gpu
+
+    tname = check_option(transfer, TRANSFER_FUNCTIONS, "transfer function")
+    # a CUDA image and 3 host gains: one kernel
+    on_gpu = _gpu.gains(image, gains, _kernel_step(tname, True), _kernel_step(tname, False))
+    if on_gpu is not None:
+        return on_gpu
     xp, lin, tname = _linear(image, transfer, -1)
     g = as_real_array(gains, "gains", positive=True)
     if g.ndim < 1 or g.shape[-1] != 3:

@@ -35,8 +35,16 @@ import numpy as np
 from imageform import _deprecate
 from imageform._backend import namespace
 from imageform._dask import chunkwise
+from imageform._validate import (
+    as_float_strict as as_float,
+)
+from imageform._validate import (
+    as_image_strict as as_image,
+)
+from imageform._validate import (
+    check_name as check_option,
+)
 from imageform._validate import describe
-from imageform.color._guard import as_float, as_image, check_option
 from imageform.errors import InvalidInputError
 
 __all__ = [

@@ -18,9 +18,9 @@ from numpy.typing import NDArray
 
 from imageform._backend import to_numpy
 from imageform._random import as_rng
-from imageform._validate import check_positive, describe
+from imageform._validate import MAX_MAGNITUDE, check_positive, describe
+from imageform._validate import as_points_bounded as as_points
 from imageform.errors import InvalidInputError
-from imageform.geometry._checks import MAX_MAGNITUDE, as_points
 
 __all__ = [
     "F_REFINE_FACTOR",

@@ -21,18 +21,24 @@ import numpy.typing as npt
 from numpy.typing import NDArray
 
 from imageform._backend import to_numpy
-from imageform._validate import as_bool, as_int, as_real, check_option, describe
+from imageform._validate import (
+    as_bool,
+    as_int,
+    as_real,
+    check_image_size,
+    check_K,
+    check_memory,
+    check_option,
+    describe,
+    size_pair,
+)
+from imageform._validate import (
+    as_matrix_bounded as as_matrix,
+)
 from imageform.errors import (
     DegenerateConfigurationError,
     IllConditionedWarning,
     InvalidInputError,
-)
-from imageform.geometry._checks import (
-    as_matrix,
-    check_image_size,
-    check_K,
-    check_memory,
-    size_pair,
 )
 from imageform.geometry.calibration_refine import GLOBAL_NAMES, refine, rodrigues
 from imageform.geometry.calibration_result import CalibrationResult

@@ -12,9 +12,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from imageform._backend import to_numpy
+from imageform._validate import as_points_bounded as as_points
 from imageform._validate import describe
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
-from imageform.geometry._checks import as_points
 
 __all__ = ["MAX_VIEWS"]
 

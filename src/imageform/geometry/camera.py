@@ -23,9 +23,23 @@ import numpy as np
 
 from imageform._backend import common_device, device_of, linalg, namespace, sign_of, use_numba
 from imageform._typing import Array, ArrayLike
-from imageform._validate import any_value, check_option, check_rotation, format_shape
+from imageform._validate import (
+    any_value,
+    check_image_size,
+    check_option,
+    check_rotation,
+    format_shape,
+)
+from imageform._validate import (
+    as_float_bounded as as_float,
+)
+from imageform._validate import (
+    as_matrix_bounded as as_matrix,
+)
+from imageform._validate import (
+    as_points_bounded as as_points,
+)
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
-from imageform.geometry._checks import as_float, as_matrix, as_points, check_image_size
 from imageform.geometry._results import Projection
 from imageform.geometry.intrinsics import Intrinsics
 
@@ -183,7 +197,8 @@ def project_points(
         points whose pixel coordinates overflow the dtype, are invalid too.
 
     Preconditions: ``K`` upper-triangular and non-singular. NumPy input of a single camera
-    with more than 20 000 points runs a parallel numba kernel (same numbers).
+    with more than 20 000 points runs a parallel numba kernel (same numbers); CUDA arrays of
+    a single camera one CUDA kernel (:mod:`imageform._cuda.geometry`).
 
     Examples
     --------
@@ -198,6 +213,13 @@ def project_points(
     plane = check_option(image_plane, _PLANES, "image plane")
     xp, X, Km, Rm, tv = _prepare(points, K, R, t)
     Km = _plane_K(Km, plane, xp)
+    if X.ndim == 2 and Km.ndim == 2 and Rm.ndim == 2 and tv.ndim == 1:
+        from imageform._cuda import geometry as cuda_geometry
+
+        if cuda_geometry.on_cuda(X, Km, Rm, tv):  # one CUDA kernel (pinhole)
+            res = cuda_geometry.project(X, Km, Rm, tv, None)
+            if res is not None:  # None: the kernels are unusable here
+                return Projection(*res)
     if (
         X.ndim == 2
         and Km.ndim == 2

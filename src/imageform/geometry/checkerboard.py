@@ -48,9 +48,9 @@ from numpy.typing import NDArray
 
 from imageform import _deprecate
 from imageform._backend import to_numpy
-from imageform._validate import as_bool, as_int, as_real, describe, format_shape
+from imageform._validate import as_bool, as_int, as_real, describe, format_shape, size_pair
+from imageform._validate import as_float_bounded as as_float
 from imageform.errors import ImageformWarning, InvalidInputError
-from imageform.geometry._checks import as_float, size_pair
 from imageform.geometry.checkerboard_candidates import find_candidates
 from imageform.geometry.checkerboard_grid import (
     board_continues,

@@ -13,9 +13,9 @@ from numpy.typing import NDArray
 
 from imageform import _deprecate
 from imageform._backend import to_numpy, use_numba
-from imageform._validate import as_image, as_int, as_real, format_shape
+from imageform._validate import as_image, as_int, as_real, check_bounded, format_shape, size_pair
+from imageform._validate import as_points_bounded as as_points
 from imageform.errors import InvalidInputError
-from imageform.geometry._checks import as_points, check_bounded, size_pair
 
 __all__ = ["RefinedCorners", "as_gray", "gray_codes", "gray_from_codes", "refine", "refine_corners"]
 

@@ -29,9 +29,17 @@ import numpy as np
 
 from imageform._backend import common_device, namespace, to_numpy, use_numba
 from imageform._dask import is_dask_array
+from imageform._validate import (
+    as_float_bounded as as_float,
+)
 from imageform._validate import as_int, as_real, check_rotation
+from imageform._validate import (
+    as_matrix_bounded as as_matrix,
+)
+from imageform._validate import (
+    as_points_bounded as as_points,
+)
 from imageform.errors import InvalidInputError
-from imageform.geometry._checks import as_float, as_matrix, as_points
 from imageform.geometry._distortion_xp import (
     bc_distort_xp,
     bc_undistort_xp,
@@ -104,6 +112,13 @@ def _iter_args(max_iter: int, tol: float | None, xp: Any, dtype: Any) -> tuple[i
     return int(max_iter), t
 
 
+def _cuda_geometry() -> Any:
+    """:mod:`imageform._cuda.geometry` (imports no GPU library by itself)."""
+    from imageform._cuda import geometry
+
+    return geometry
+
+
 def _numpy_kernel_in(xy: Any) -> tuple[np.ndarray, tuple[int, ...]]:
     shape = tuple(xy.shape)
     return np.ascontiguousarray(np.asarray(xy).reshape(-1, 2)), shape
@@ -168,6 +183,10 @@ class BrownConrady:
             return _dask_points(lambda b: self.distort(b), xy)
         xp = namespace(xy)
         arr = as_points(xy, "xy", 2, xp=xp)
+        if _cuda_geometry().on_cuda(arr):  # one fused CUDA kernel (imageform._cuda.geometry)
+            out = _cuda_geometry().distort(xp.reshape(arr, (-1, 2)), self.coeffs)
+            if out is not None:  # None: the kernels are unusable here
+                return xp.reshape(out, tuple(arr.shape))
         if use_numba(arr, min_size=2 * NUMBA_MIN_POINTS):
             from imageform._kernels.distortion import brown_conrady_distort
 
@@ -196,6 +215,11 @@ class BrownConrady:
         xp = namespace(xy)
         arr = as_points(xy, "xy", 2, xp=xp)
         it, t = _iter_args(max_iter, tol, xp, arr.dtype)
+        if _cuda_geometry().on_cuda(arr):  # one CUDA kernel, at most max_iter Newton steps
+            shape = tuple(arr.shape)
+            res = _cuda_geometry().undistort(xp.reshape(arr, (-1, 2)), self.coeffs, it, t)
+            if res is not None:  # None: the kernels are unusable here
+                return Undistorted(xp.reshape(res[0], shape), xp.reshape(res[1], shape[:-1]))
         if use_numba(arr, min_size=2 * NUMBA_MIN_POINTS):
             from imageform._kernels.distortion import brown_conrady_undistort
 
@@ -403,7 +427,9 @@ def project_points_distorted(
     followed by the distortion model; the same composition as OpenCV's ``projectPoints``
     (which ignores skew and mirrors points behind the camera). Large NumPy inputs with
     :class:`BrownConrady` run one fused numba kernel
-    (:func:`imageform._kernels.project_distort.project_brown_conrady`).
+    (:func:`imageform._kernels.project_distort.project_brown_conrady`); CUDA arrays (PyTorch,
+    CuPy) with :class:`BrownConrady` or no distortion one fused CUDA kernel
+    (:mod:`imageform._cuda.geometry`).
 
     Examples
     --------
@@ -423,6 +449,15 @@ def project_points_distorted(
     if tv.ndim != 1:
         raise InvalidInputError(f"expected t of shape (3,), got {tuple(tv.shape)}")
     _check_model(distortion)
+    if (distortion is None or isinstance(distortion, BrownConrady)) and _cuda_geometry().on_cuda(
+        pts, Km, Rm, tv
+    ):  # one fused CUDA kernel (imageform._cuda.geometry)
+        shape = tuple(pts.shape)
+        coeffs = distortion.coeffs if distortion is not None else (0.0,) * 8
+        res = _cuda_geometry().project(xp.reshape(pts, (-1, 3)), Km, Rm, tv, coeffs)
+        if res is not None:  # None: the kernels are unusable here
+            uv, valid = res
+            return Projection(xp.reshape(uv, (*shape[:-1], 2)), xp.reshape(valid, shape[:-1]))
     if (
         isinstance(distortion, BrownConrady)
         and use_numba(pts, min_size=3 * NUMBA_MIN_POINTS)

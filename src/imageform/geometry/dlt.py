@@ -12,8 +12,8 @@ from __future__ import annotations
 from imageform._backend import common_device, linalg, namespace, sign_of
 from imageform._typing import Array, ArrayLike
 from imageform._validate import any_value
+from imageform._validate import as_points_bounded as as_points
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
-from imageform.geometry._checks import as_points
 from imageform.geometry._normalize import similarity_normalization
 
 __all__ = ["estimate_projection_matrix"]

@@ -14,15 +14,21 @@ from typing import Any, Literal, NamedTuple
 from imageform import _deprecate
 from imageform._backend import common_device, linalg, namespace, sign_of
 from imageform._typing import Array, ArrayLike
-from imageform._validate import any_value, as_real, check_option
-from imageform.errors import DegenerateConfigurationError, InvalidInputError
-from imageform.geometry._checks import (
+from imageform._validate import (
     MAX_MAGNITUDE,
-    as_float,
-    as_points,
+    any_value,
+    as_real,
     check_bounded,
+    check_option,
     shape_text,
 )
+from imageform._validate import (
+    as_float_bounded as as_float,
+)
+from imageform._validate import (
+    as_points_bounded as as_points,
+)
+from imageform.errors import DegenerateConfigurationError, InvalidInputError
 
 __all__ = [
     "Dehomogenized",

@@ -14,8 +14,9 @@ from typing import Any
 from imageform._backend import common_device, device_of, linalg, namespace
 from imageform._typing import Array, ArrayLike
 from imageform._validate import any_value
+from imageform._validate import as_matrix_bounded as as_matrix
+from imageform._validate import as_points_bounded as as_points
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
-from imageform.geometry._checks import as_matrix, as_points
 from imageform.geometry._normalize import similarity_normalization
 from imageform.geometry.homogeneous import are_collinear, from_homogeneous
 

@@ -19,17 +19,23 @@ import numpy as np
 from imageform import _deprecate
 from imageform._backend import common_device, namespace, to_numpy
 from imageform._typing import Array, ArrayLike, FloatArray
-from imageform._validate import any_value, as_real, check_positive
-from imageform.errors import DegenerateConfigurationError, InvalidInputError
-from imageform.geometry._checks import (
+from imageform._validate import (
     MAX_MAGNITUDE,
     MAX_SIDE,
-    as_float,
-    as_matrix,
+    any_value,
+    as_real,
     check_image_size,
     check_K,
+    check_positive,
     real_pair,
 )
+from imageform._validate import (
+    as_float_bounded as as_float,
+)
+from imageform._validate import (
+    as_matrix_bounded as as_matrix,
+)
+from imageform.errors import DegenerateConfigurationError, InvalidInputError
 
 __all__ = ["Intrinsics", "intrinsic_matrix", "projected_size"]
 

@@ -34,9 +34,16 @@ import numpy as np
 
 from imageform._backend import to_numpy
 from imageform._typing import ArrayLike, FloatArray
-from imageform._validate import as_image, as_real, check_positive, describe
+from imageform._validate import (
+    MAX_MAGNITUDE,
+    as_image,
+    as_real,
+    check_positive,
+    describe,
+    shape_text,
+)
+from imageform._validate import as_float_bounded as as_float
 from imageform.errors import InvalidInputError, UnknownOptionError
-from imageform.geometry._checks import MAX_MAGNITUDE, as_float, shape_text
 
 __all__ = ["LineSegments", "detect_line_segments"]
 

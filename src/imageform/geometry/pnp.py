@@ -17,9 +17,18 @@ import numpy.typing as npt
 from numpy.typing import NDArray
 
 from imageform._backend import to_numpy, use_numba
-from imageform._validate import as_bool, as_int
+from imageform._validate import (
+    as_bool,
+    as_int,
+    check_K,
+)
+from imageform._validate import (
+    as_matrix_bounded as as_matrix,
+)
+from imageform._validate import (
+    as_points_bounded as as_points,
+)
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
-from imageform.geometry._checks import as_matrix, as_points, check_K
 from imageform.geometry.calibration_refine import rodrigues
 from imageform.geometry.distortion import DistortionModel, _check_model
 from imageform.geometry.rotations import matrix_to_rvec

@@ -9,9 +9,8 @@ import numpy.typing as npt
 
 from imageform import _deprecate
 from imageform._random import RNGLike, as_rng
-from imageform._validate import as_int, check_positive
+from imageform._validate import as_int, check_positive, check_rng
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
-from imageform.geometry._checks import check_rng
 from imageform.geometry.distortion import DistortionModel
 from imageform.geometry.pnp import (
     PnPResult,

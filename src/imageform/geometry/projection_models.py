@@ -23,17 +23,23 @@ import numpy as np
 
 from imageform._backend import common_device, device_of, namespace
 from imageform._typing import Array, ArrayLike, FloatArray
-from imageform._validate import any_value, as_real, check_rotation
-from imageform.errors import InvalidInputError
-from imageform.geometry._checks import (
+from imageform._validate import (
     MAX_MAGNITUDE,
-    as_matrix,
-    as_points,
+    any_value,
+    as_real,
     check_image_size,
     check_K,
+    check_rotation,
     real_pair,
     shape_text,
 )
+from imageform._validate import (
+    as_matrix_bounded as as_matrix,
+)
+from imageform._validate import (
+    as_points_bounded as as_points,
+)
+from imageform.errors import InvalidInputError
 from imageform.geometry.camera import Projection, project_points
 
 __all__ = [

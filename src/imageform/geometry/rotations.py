@@ -16,8 +16,16 @@ from typing import Any, NamedTuple
 from imageform._backend import common_device, device_of, linalg, namespace
 from imageform._typing import Array, ArrayLike
 from imageform._validate import any_value, as_real, check_rotation, describe, det3, format_shape
+from imageform._validate import (
+    as_float_bounded as as_float,
+)
+from imageform._validate import (
+    as_matrix_bounded as as_matrix,
+)
+from imageform._validate import (
+    as_points_bounded as as_points,
+)
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
-from imageform.geometry._checks import as_float, as_matrix, as_points
 
 __all__ = [
     "Pose",

@@ -19,7 +19,8 @@ pipeline, each step a public function:
    a frame, a component that joins two keypoints of one frame rebuilt greedily);
 5. the initial pair: the pair with the most inliers among those with enough parallax
    (median triangulation angle of 2 degrees or more), its relative pose
-   (:func:`~imageform.geometry.recover_pose`) and its triangulated points;
+   (:func:`~imageform.geometry.recover_pose`) and its triangulated points, 30 at least
+   (else the next pair, five tried);
 6. incremental registration: each next frame's pose from its 2-D/3-D correspondences
    (:func:`~imageform.geometry.solve_pnp_ransac`; the ones it rejects are no views of
    those points), then every track of that frame seen by two registered frames
@@ -35,8 +36,9 @@ pipeline, each step a public function:
    re-triangulation, then adjustments without the observations beyond 2 pixels, the last
    one plain least squares.
 
-The reconstruction is up to a similarity (a rotation, a translation and a scale): the first
-camera is the world frame and the initial pair's baseline has length 1.
+The reconstruction is up to a similarity (a rotation, a translation and a scale): the
+first registered frame's camera (frame 0's, when it is registered) is the world frame and
+the initial pair's baseline has length 1.
 """
 
 from __future__ import annotations
@@ -86,7 +88,21 @@ class Features:
         return int(self.xy.shape[0])
 
 
-def detect_features(image: object, *, max_features: int = 4000) -> Features:
+def _as_mask(mask: object, shape: tuple[int, ...], name: str) -> NDArray[np.uint8]:
+    """Return a detection mask as OpenCV wants it: uint8, 255 where keypoints may be."""
+    m = np.asarray(mask)
+    if m.ndim == 3 and m.shape[-1] in (1, 3, 4):
+        m = m[..., 0]
+    if m.shape != tuple(shape[:2]):
+        raise InvalidInputError(
+            f"expected {name} of the image's size {shape[1]} x {shape[0]} px, got {describe(mask)}"
+        )
+    if m.dtype.kind not in "biuf":
+        raise InvalidInputError(f"expected {name} as booleans or numbers, got {describe(mask)}")
+    return np.where(m > 0, 255, 0).astype(np.uint8)
+
+
+def detect_features(image: object, *, max_features: int = 4000, mask: object = None) -> Features:
     """Detect SIFT keypoints and descriptors (OpenCV's SIFT, the ``reconstruct`` extra).
 
     Parameters
@@ -95,6 +111,10 @@ def detect_features(image: object, *, max_features: int = 4000) -> Features:
         uint8 (or floats in [0, 1]) grey or RGB.
     max_features : int
         Keep the strongest this many.
+    mask : array_like (H, W), optional
+        Where keypoints may be (nonzero or True): the scene that moves with the camera's
+        world, without e.g. an endoscope's dark vignetted corners or a static background
+        behind a moving object. None: everywhere.
 
     Returns
     -------
@@ -114,8 +134,9 @@ def detect_features(image: object, *, max_features: int = 4000) -> Features:
     if a.dtype != np.uint8:
         a = np.clip(a * (255.0 if a.dtype.kind == "f" and a.max() <= 1.0 else 1.0), 0, 255)
         a = np.round(a).astype(np.uint8)
+    m = None if mask is None else _as_mask(mask, a.shape, "mask")
     sift = cv2.SIFT_create(nfeatures=n)
-    kps, desc = sift.detectAndCompute(a, None)
+    kps, desc = sift.detectAndCompute(a, m)
     if desc is None or not kps:
         return Features(np.zeros((0, 2)), np.zeros((0, 128), np.float32), np.zeros(0), np.zeros(0))
     xy = np.array([k.pt for k in kps], np.float64)
@@ -179,8 +200,8 @@ class Reconstruction:
     Attributes
     ----------
     R : ndarray (n, 3, 3), t : ndarray (n, 3)
-        World to camera poses (NaN for frames not registered); the first registered frame
-        of the initial pair is the world frame.
+        World to camera poses (NaN for frames not registered); the first registered
+        frame's camera (frame 0's when it is registered) is the world frame.
     registered : ndarray (n,) bool
     points : ndarray (P, 3)
         The 3-D points.
@@ -236,13 +257,23 @@ def _project_obs(K: F64, R: F64, t: F64, X: F64) -> tuple[F64, F64]:
     return uv, z
 
 
+def _project_one(K: F64, R: F64, t: F64, X: F64) -> tuple[F64, F64]:
+    """Pixels and depths of points ``X`` (M, 3) seen by one camera ``R`` (3, 3), ``t`` (3,)."""
+    Xc = X @ R.T + t
+    z = Xc[:, 2]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        uv = (Xc @ K[:2].T) / np.where(z != 0, z, np.nan)[:, None]
+    return uv, z
+
+
 def _sum_blocks(idx: NDArray[np.int64], blocks: F64, n: int) -> F64:
     """Sum of the ``blocks`` (M, ...) that share an index, as (n, ...)."""
     shape = blocks.shape[1:]
     size = int(np.prod(shape))
     flat = (idx[:, None] * size + np.arange(size)).ravel()
     out = np.bincount(flat, weights=blocks.reshape(-1), minlength=n * size)
-    return out.reshape((n, *shape))
+    # (bincount of nothing is int64 zeros even with weights: float, as blocks are)
+    return out.astype(np.float64, copy=False).reshape((n, *shape))
 
 
 def _huber(r2: F64, delta: float) -> tuple[float, F64]:
@@ -657,6 +688,7 @@ def reconstruct_sequence(
     ratio: float = 0.8,
     threshold_px: float = 1.0,
     rng: int = 0,
+    masks: object = None,
 ) -> Reconstruction:
     """Reconstruct the cameras and a sparse point cloud from an ordered image sequence.
 
@@ -679,6 +711,10 @@ def reconstruct_sequence(
         The essential matrix's inlier threshold (Sampson distance, pixels).
     rng : int
         Seed of the RANSAC samplers.
+    masks : array_like (H, W) or sequence of them, optional
+        Where keypoints may be (nonzero): one mask for every frame (an endoscope's
+        vignetting) or one a frame (an object that moves in front of a static background;
+        only what moves rigidly with the scene may be kept). None: everywhere.
 
     Returns
     -------
@@ -689,7 +725,8 @@ def reconstruct_sequence(
     InvalidInputError
         Fewer than two frames, frames of different sizes.
     DegenerateConfigurationError
-        No pair of frames with enough matches and parallax to start from.
+        No pair of frames with enough matches and parallax to start from, or none whose
+        pose triangulates 30 points (five pairs tried).
     """
     from imageform.geometry.pnp_ransac import solve_pnp_ransac
     from imageform.geometry.relative_pose import recover_pose
@@ -703,7 +740,22 @@ def reconstruct_sequence(
     k = np.asarray(K, np.float64)
     win = as_int(window, "window", minimum=1, maximum=100)
     n = len(images)
-    feats = [detect_features(im, max_features=max_features) for im in images]
+    (shape,) = shapes
+    if masks is None:
+        per_frame: list[object] = [None] * n
+    elif isinstance(masks, (list, tuple)) or (
+        isinstance(masks, np.ndarray) and masks.ndim == 3 and masks.shape[1:] == shape
+    ):
+        if len(masks) != n:
+            raise InvalidInputError(f"expected {n} masks (one a frame), got {len(masks)}")
+        per_frame = [_as_mask(m, shape, f"masks[{i}]") for i, m in enumerate(masks)]
+    else:
+        one = _as_mask(masks, shape, "masks")
+        per_frame = [one] * n
+    feats = [
+        detect_features(im, max_features=max_features, mask=m)
+        for im, m in zip(images, per_frame, strict=True)
+    ]
     # undistorted (ideal pinhole) pixels of every keypoint
     ideal: list[F64] = []
     for feat in feats:
@@ -745,7 +797,10 @@ def reconstruct_sequence(
             pair_info[(i, j)] = (int(inl.sum()), 0.0, m[inl])
             return
         # parallax of the pair: the median angle between the rays of its inliers
-        rp = recover_pose(er.E, p1, p2, k, inliers=inl)
+        try:
+            rp = recover_pose(er.E, p1, p2, k, inliers=inl)
+        except DegenerateConfigurationError:  # no factorisation with points in front
+            return
         C2 = -np.asarray(rp.R).T @ np.asarray(rp.t).ravel()
         X = np.asarray(rp.points, np.float64)
         fin = np.all(np.isfinite(X), axis=1)
@@ -785,18 +840,11 @@ def reconstruct_sequence(
     if not cands:
         cands = [(v[0], key) for key, v in pair_info.items() if key[1] - key[0] <= win]
         notes.append("no pair with 2 degrees of parallax: started from the best matched one")
-    _, (i0, j0) = max(cands)
-    _, _, m0 = pair_info[(i0, j0)]
-    p1, p2 = ideal[i0][m0[:, 0]], ideal[j0][m0[:, 1]]
-    er = find_essential_matrix(p1, p2, k, threshold=threshold_px, rng=rng)
-    rp = recover_pose(er.E, p1, p2, k, inliers=np.asarray(er.inliers, bool))
     Rs = np.full((n, 3, 3), np.nan)
     ts = np.full((n, 3), np.nan)
-    Rs[i0], ts[i0] = np.eye(3), np.zeros(3)
-    Rs[j0], ts[j0] = np.asarray(rp.R, np.float64), np.asarray(rp.t, np.float64).ravel()
     registered = np.zeros(n, bool)
-    registered[[i0, j0]] = True
     P = np.full((n_tracks, 3), np.nan)  # each track's point (NaN: none yet)
+    i0 = j0 = -1  # the initial pair, once chosen
     h, w = np.asarray(images[0]).shape[:2]
     max_err = 4.0
 
@@ -867,11 +915,14 @@ def reconstruct_sequence(
     def complete(radius: float) -> int:
         """Add the views a track's matching missed; merge tracks that are one point.
 
-        Every point is projected into each registered frame that has no view of it; the
-        keypoint nearest the projection (within ``radius`` pixels, its descriptor near the
-        track's) becomes a view of it, or, when it is another point's view and the two
-        points are one (each reprojects within ``radius`` in all of the other's views, no
-        frame in common), the two tracks are merged. Returns how many views were added.
+        Every point is projected into each registered frame that has no view of it and
+        sees some of what one of its views sees (2 of a sample of 32 of that view's
+        points land in the frame: the work grows with what each frame sees, not with
+        the number of points times the number of frames); the keypoint nearest the
+        projection (within ``radius`` pixels, its descriptor near the track's) becomes a
+        view of it, or, when it is another point's view and the two points are one (each
+        reprojects within ``radius`` in all of the other's views, no frame in common), the
+        two tracks are merged. Returns how many views were added.
         """
         nonlocal o_frame, o_kp, o_track, o_uv, o_ok
         from scipy.spatial import cKDTree
@@ -891,18 +942,43 @@ def reconstruct_sequence(
         merges: list[tuple[int, int]] = []
         by_frame = np.argsort(o_frame, kind="stable")
         fstart = np.searchsorted(o_frame[by_frame], np.arange(n + 1))
-        for f in np.flatnonzero(registered).tolist():
-            seen = np.zeros(n_tracks, bool)
-            seen[o_track[by_frame[fstart[f] : fstart[f + 1]]]] = True
-            cand = np.flatnonzero(hp & ~seen & (ref >= 0))
+        reg = np.flatnonzero(registered)
+        # which frames see what frame f sees: a sample of each frame's points (at most
+        # 32) projected into every frame; frame g's points are candidates for f when 2 of
+        # its sample land in f. The candidates then grow with what f sees, not with the
+        # whole reconstruction (every point into every frame: quadratic in a long video)
+        pts_of: dict[int, NDArray[np.int64]] = {}
+        samples, sample_of = [], []
+        for g in reg.tolist():
+            obs = by_frame[fstart[g] : fstart[g + 1]]
+            pts = o_track[obs[ok_obs[obs] & hp[o_track[obs]]]]
+            pts_of[g] = pts
+            if pts.size:
+                pick = pts[np.linspace(0, pts.size - 1, min(32, pts.size)).astype(np.int64)]
+                samples.append(pick)
+                sample_of.append(np.full(pick.size, g, np.int64))
+        sample = np.concatenate(samples) if samples else np.zeros(0, np.int64)
+        sampled_in = np.concatenate(sample_of) if sample_of else np.zeros(0, np.int64)
+        stamp = np.zeros(n_tracks, np.int64)
+        seen_in = -np.ones(n_tracks, np.int64)
+        for f in reg.tolist():
+            pr, zs = _project_one(k, Rs[f], ts[f], P[sample])
+            lands = (zs > 0) & np.all((pr > -0.5) & (pr < [w - 0.5, h - 0.5]), axis=1)
+            overlap = np.flatnonzero(np.bincount(sampled_in[lands], minlength=n) >= 2)
+            overlap = overlap[overlap != f]
+            if overlap.size == 0:
+                continue
+            # their points, each once (the last write of a track's slot wins), without
+            # the ones f sees already: work in proportion to the candidates
+            every = np.concatenate([pts_of[g] for g in overlap.tolist()])
+            slot = np.arange(every.size)
+            stamp[every] = slot
+            cand = every[stamp[every] == slot]
+            seen_in[o_track[by_frame[fstart[f] : fstart[f + 1]]]] = f
+            cand = np.sort(cand[(seen_in[cand] != f) & (ref[cand] >= 0)])
             if cand.size == 0:
                 continue
-            proj, z = _project_obs(
-                k,
-                np.broadcast_to(Rs[f], (cand.size, 3, 3)),
-                np.broadcast_to(ts[f], (cand.size, 3)),
-                P[cand],
-            )
+            proj, z = _project_one(k, Rs[f], ts[f], P[cand])
             inside = (z > 0) & np.all((proj > -0.5) & (proj < [w - 0.5, h - 0.5]), axis=1)
             cand, proj = cand[inside], proj[inside]
             fin = np.all(np.isfinite(ideal[f]), axis=1)
@@ -970,8 +1046,34 @@ def reconstruct_sequence(
             gone[tb] = touched[ta] = touched[tb] = True
         return added + int(gone.sum())
 
-    triangulate(o_track[o_frame == i0])
-    adjust(2.0, 10)
+    # the start: the candidates in order of inliers, the first whose two views triangulate
+    # 30 points that pass the checks (a pair of repetitive texture, e.g. a chessboard, can
+    # pass RANSAC with a wrong pose that leaves a handful)
+    for _, (a, b) in sorted(cands, reverse=True)[:5]:
+        Rs[:], ts[:], P[:], registered[:] = np.nan, np.nan, np.nan, False
+        m0 = pair_info[(a, b)][2]
+        p1, p2 = ideal[a][m0[:, 0]], ideal[b][m0[:, 1]]
+        try:
+            er = find_essential_matrix(p1, p2, k, threshold=threshold_px, rng=rng)
+            rp = recover_pose(er.E, p1, p2, k, inliers=np.asarray(er.inliers, bool))
+        except (DegenerateConfigurationError, InvalidInputError) as exc:
+            notes.append(f"frames {a} and {b}: no pose to start from ({exc})")
+            continue
+        i0, j0 = a, b
+        Rs[i0], ts[i0] = np.eye(3), np.zeros(3)
+        Rs[j0], ts[j0] = np.asarray(rp.R, np.float64), np.asarray(rp.t, np.float64).ravel()
+        registered[[i0, j0]] = True
+        triangulate(o_track[o_frame == i0])
+        adjust(2.0, 10)
+        made = int(has_point().sum())
+        if made >= 30:
+            break
+        notes.append(f"frames {a} and {b}: {made} points triangulated (30 needed to start)")
+        i0 = j0 = -1
+    if i0 < 0:
+        raise DegenerateConfigurationError(
+            "no pair of frames triangulates 30 points to start from: " + "; ".join(notes[-3:])
+        )
     last_ba = 2
     # register the others: the frame that sees the most points first
     pending = [fi for fi in range(n) if not registered[fi]]
@@ -1018,8 +1120,17 @@ def reconstruct_sequence(
     filter_obs(2.0)
     adjust(0.0, 50)
     filter_obs(2.0)
-    # the output: the tracks with a point, renumbered
+    # the output in the first registered frame's camera frame (frame 0 when registered):
+    # X' = R_f X + t_f, R_i' = R_i R_f^T, t_i' = t_i - R_i' t_f (a rigid motion: the
+    # reprojections and the initial pair's baseline stay)
     hp = has_point()
+    f0 = int(np.flatnonzero(registered)[0])
+    Rf, tf = Rs[f0].copy(), ts[f0].copy()
+    Rs[registered] = Rs[registered] @ Rf.T
+    ts[registered] = ts[registered] - Rs[registered] @ tf
+    P[hp] = P[hp] @ Rf.T + tf
+    Rs[f0], ts[f0] = np.eye(3), np.zeros(3)
+    # the output: the tracks with a point, renumbered
     pid = -np.ones(n_tracks, np.int64)
     pid[hp] = np.arange(int(hp.sum()))
     ids = np.flatnonzero(registered[o_frame] & o_ok & hp[o_track])

@@ -24,16 +24,17 @@ from imageform._validate import (
     as_int,
     as_real,
     as_real_array,
+    check_bounded,
     check_memory,
     check_positive,
     describe,
+    size_pair,
 )
 from imageform.errors import (
     ConvergenceError,
     DegenerateConfigurationError,
     InvalidInputError,
 )
-from imageform.geometry._checks import check_bounded, size_pair
 from imageform.geometry.calibration import calibrate_camera
 from imageform.geometry.calibration_refine import (
     GLOBAL_NAMES,

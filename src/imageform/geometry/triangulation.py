@@ -14,9 +14,19 @@ import numpy.typing as npt
 from numpy.typing import NDArray
 
 from imageform._backend import to_numpy
-from imageform._validate import as_bool, as_int, as_real
+from imageform._validate import (
+    MAX_MAGNITUDE,
+    as_bool,
+    as_int,
+    as_real,
+)
+from imageform._validate import (
+    as_matrix_bounded as as_matrix,
+)
+from imageform._validate import (
+    as_points_bounded as as_points,
+)
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
-from imageform.geometry._checks import MAX_MAGNITUDE, as_matrix, as_points
 
 __all__ = ["TriangulationResult", "triangulate_points"]
 

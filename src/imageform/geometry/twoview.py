@@ -21,10 +21,9 @@ from numpy.typing import NDArray
 
 from imageform._backend import to_numpy, use_numba
 from imageform._random import RNGLike, as_rng
-from imageform._validate import as_int, as_matrix, as_real, describe
+from imageform._validate import MAX_MAGNITUDE, as_int, as_matrix, as_real, describe
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
 from imageform.geometry import _robust_core
-from imageform.geometry._checks import MAX_MAGNITUDE
 from imageform.geometry._minimal import e5, f7, f8, rank2, sampson_sq
 from imageform.geometry._robust_core import (
     check_confidence,

@@ -21,6 +21,7 @@ import numpy as np
 
 from imageform._backend import (
     common_device,
+    constant,
     device_of,
     is_dask_namespace,
     is_numpy_namespace,
@@ -29,9 +30,22 @@ from imageform._backend import (
     to_numpy,
     use_numba,
 )
-from imageform._validate import as_bool, as_image, as_real, check_memory, format_shape
+from imageform._validate import (
+    MAX_MAGNITUDE,
+    as_bool,
+    as_image,
+    as_real,
+    check_memory,
+    format_shape,
+    size_pair,
+)
+from imageform._validate import (
+    as_float_bounded as as_float,
+)
+from imageform._validate import (
+    as_matrix_bounded as as_matrix,
+)
 from imageform.errors import InvalidInputError
-from imageform.geometry._checks import MAX_MAGNITUDE, as_float, as_matrix, size_pair
 from imageform.geometry._remap_xp import map_grid, remap_dask, remap_xp
 from imageform.geometry.distortion import BrownConrady, DistortionModel, _check_model
 
@@ -443,6 +457,9 @@ def undistort_image(
     if not is_numpy_namespace(xp):
         Km, Kn = _intrinsics_on(K, new_K, xp, device_of(image))
         _check_model(distortion)
+        fused = _undistort_cuda(image, Km, Kn, distortion, out_hw, float(fill), xp)
+        if fused is not None:
+            return fused
         m = map_grid(
             (0, out_hw[0]), (0, out_hw[1]), Km, Kn, distortion, xp, xp.float64, device_of(image)
         )
@@ -465,6 +482,42 @@ def undistort_image(
     return remap_bilinear(image, m, fill=fill, keep_dtype=keep)
 
 
+def _undistort_cuda(
+    image: Any, Km: Any, Kn: Any, distortion: Any, out_hw: tuple[int, int], fill: float, xp: Any
+) -> Any:
+    """:func:`undistort_image` of a float CUDA image, Brown-Conrady or none: one CUDA kernel.
+
+    The source position of every output pixel is computed where it is sampled (no map);
+    ``None`` when the kernel does not apply (other models, integer images, no CUDA).
+    """
+    from imageform._cuda import geometry as cuda_geometry
+
+    if not (distortion is None or isinstance(distortion, BrownConrady)):
+        return None
+    if not cuda_geometry.on_cuda(image):
+        return None
+    img = as_image(image, "image", channels=None, xp=xp, range_check=False, finite=False)
+    # host intrinsics: float64 device constants, uploaded once (imageform._backend.constant)
+    like = xp.empty((0,), dtype=xp.float64, device=device_of(img))
+    Km, Kn = (
+        M
+        if cuda_geometry.on_cuda(M, floats=False)
+        else constant(np.asarray(M, np.float64), like, xp)
+        for M in (Km, Kn)
+    )
+    gray = img.ndim == 2
+    x = img[..., None] if gray else img
+    *lead, h, w, c = (int(n) for n in x.shape)
+    coeffs = distortion.coeffs if distortion is not None else None
+    out = cuda_geometry.undistort_image(
+        xp.reshape(x, (-1, h, w, c)), Kn, Km, coeffs, out_hw, float(fill)
+    )
+    if out is None:  # the kernels are unusable here
+        return None
+    out = xp.reshape(out, (*lead, out_hw[0], out_hw[1], c))
+    return out[..., 0] if gray else out
+
+
 def _remap_generic(image: Any, map_uv: Any, fill: float, xp: Any) -> Any:
     """remap_bilinear for non-NumPy Array-API arrays (same namespace and device out)."""
     img = as_image(image, "image", channels=None, xp=xp, range_check=False, finite=False)
@@ -477,11 +530,20 @@ def _remap_generic(image: Any, map_uv: Any, fill: float, xp: Any) -> Any:
     m = xp.asarray(map_uv, device=device_of(img))
     if m.ndim != 3 or m.shape[-1] != 2:
         raise InvalidInputError(f"expected map_uv of shape (H, W, 2), got {format_shape(m.shape)}")
-    m = xp.astype(m, xp.float64) if m.dtype != xp.float64 else m
     gray = img.ndim == 2
     x = img[..., None] if gray else img
     *lead, h, w, c = (int(n) for n in x.shape)
-    out = remap_xp(xp.reshape(x, (-1, h, w, c)), m, fill, xp)
+    from imageform._cuda import geometry as cuda_geometry
+
+    out = None
+    if cuda_geometry.on_cuda(x) and cuda_geometry.on_cuda(m):
+        # one CUDA kernel (imageform._cuda.geometry); a float32 map is read as it is (its
+        # positions are exact in float64: the same numbers, no conversion kernel); None when
+        # the kernels are unusable here
+        out = cuda_geometry.remap(xp.reshape(x, (-1, h, w, c)), m, fill)
+    if out is None:
+        m = xp.astype(m, xp.float64) if m.dtype != xp.float64 else m
+        out = remap_xp(xp.reshape(x, (-1, h, w, c)), m, fill, xp)
     out = xp.reshape(out, (*lead, int(m.shape[0]), int(m.shape[1]), c))
     return out[..., 0] if gray else out
 

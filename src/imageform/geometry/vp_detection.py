@@ -32,9 +32,15 @@ import numpy as np
 from imageform import _deprecate
 from imageform._random import RNGLike, as_rng
 from imageform._typing import ArrayLike, FloatArray
-from imageform._validate import as_int, as_real, check_positive, describe
+from imageform._validate import (
+    as_int,
+    as_real,
+    check_image_size,
+    check_positive,
+    check_rng,
+    describe,
+)
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
-from imageform.geometry._checks import check_image_size, check_rng
 from imageform.geometry.line_segments import LineSegments, detect_line_segments
 from imageform.geometry.vanishing import (
     focal_from_vanishing_points,

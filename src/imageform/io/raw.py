@@ -27,6 +27,7 @@ from typing import Any
 
 import numpy as np
 
+from imageform import _deprecate
 from imageform._files import atomic_write, check_writable
 from imageform._validate import describe
 from imageform.errors import InvalidInputError
@@ -656,6 +657,7 @@ class Development:
         demosaic: str,
         orientation: int,
         notes: tuple[str, ...],
+        device: str = "cpu",
     ) -> None:
         self._raw = raw
         # the sensor's orientation: given for a linear raw and the other demosaicing methods;
@@ -672,6 +674,7 @@ class Development:
         self.demosaic = demosaic
         self.orientation = orientation
         self.notes = notes
+        self._device = device  # "cuda": the fused pass runs as one CUDA kernel
 
     def _fused(self, mode: int) -> np.ndarray:
         """Run the fused pass over the mosaic (``mode``: camera RGB, float or uint16 output)."""
@@ -684,6 +687,20 @@ class Development:
         black = np.asarray(raw.black_level, np.float64)
         scale = (self.gains[idx] / (raw.white_level - black)).astype(np.float32)
         red = str(raw.cfa_pattern).index("R")
+        if self._device == "cuda":
+            from imageform._cuda.demosaic import develop_bayer
+
+            return develop_bayer(
+                raw.mosaic,
+                black.astype(np.float32),
+                scale,
+                red // 2,
+                red % 2,
+                self.demosaic,
+                self._render,
+                self._table,
+                mode,
+            )
         shape = (h, w, 3)
         out_f = np.empty(shape if mode != MODE_UINT16 else (0, 0, 3), np.float32)
         out_u = np.empty(shape if mode == MODE_UINT16 else (0, 0, 3), np.uint16)
@@ -787,16 +804,18 @@ class Development:
         """The encoded output in [0, 1] (float32, turned for display; kept once read)."""
         return _orient(self._sensor_image(), self.orientation)
 
-    def to_integer(self, bits: int = 16) -> np.ndarray:
-        """Return the output image as uint8 (``bits=8``) or uint16 (``bits=16``), rounded.
+    @_deprecate.parameters(renamed={"bits": "bit_depth"})
+    def to_integer(self, bit_depth: int = 16) -> np.ndarray:
+        """Return the output image as uint8 (``bit_depth=8``) or uint16 (``bit_depth=16``), rounded.
 
         Rounded half up (the values are in [0, 1]), turned for display. 16 bits of a Bayer
         mosaic developed bilinearly whose ``image`` has not been read: written by the fused
-        pass itself (no float image is made), to the same values.
+        pass itself (no float image is made), to the same values. ``bits=`` is the
+        deprecated spelling of ``bit_depth=``.
         """
-        if bits not in (8, 16):
-            raise InvalidInputError(f"expected bits 8 or 16, got {describe(bits)}")
-        if bits == 16 and self._image is None and self._camera_rgb is None:
+        if bit_depth not in (8, 16):
+            raise InvalidInputError(f"expected bit_depth 8 or 16, got {describe(bit_depth)}")
+        if bit_depth == 16 and self._image is None and self._camera_rgb is None:
             from imageform._kernels.raw_develop import MODE_UINT16
 
             out = self._fused(MODE_UINT16)
@@ -804,10 +823,13 @@ class Development:
             from imageform._kernels.raw_develop import quantize
 
             image = self._sensor_image()
-            out = np.empty(image.shape, np.uint8 if bits == 8 else np.uint16)
-            quantize(image.reshape(-1), np.float32(2**bits - 1), out.reshape(-1))
+            out = np.empty(image.shape, np.uint8 if bit_depth == 8 else np.uint16)
+            quantize(image.reshape(-1), np.float32(2**bit_depth - 1), out.reshape(-1))
         return np.ascontiguousarray(_orient(out, self.orientation))
 
+
+#: Demosaicing methods that ``develop(device="cuda")`` runs on the GPU.
+_CUDA_METHODS = ("bilinear", "malvar")
 
 #: Mosaics of fewer pixels are developed in the calling thread (waking the pool costs more).
 _THREADS_MIN_PIXELS = 1 << 16
@@ -839,6 +861,7 @@ def develop(
     space: str = "srgb",
     linear: bool = False,
     orient: bool = True,
+    device: str = "cpu",
 ) -> Development:
     r"""Develop a raw image with imageform's own pipeline, keeping every stage.
 
@@ -882,6 +905,12 @@ def develop(
     orient : bool
         Turn the result as the file's orientation tag says (as LibRaw does by default);
         False keeps the sensor's orientation.
+    device : {"cpu", "cuda"}
+        Where steps 1-6 of a Bayer mosaic run. ``"cuda"``: bilinear and Malvar development
+        as one CUDA kernel (:func:`imageform._cuda.demosaic.develop_bayer`: the mosaic copied
+        to the GPU, every stage fused per pixel in float32, the result copied back; the CPU
+        pass's arithmetic); other methods and linear raws stay on the CPU, with a note.
+        Raises when no CUDA device is usable.
 
     Returns
     -------
@@ -892,7 +921,7 @@ def develop(
     ------
     InvalidInputError
         An unknown method, space or white balance; a raw file with no photosite above its
-        black level (nothing to develop).
+        black level (nothing to develop); ``device="cuda"`` with no usable CUDA device.
     """
     from imageform.color import (
         RGB_SPACES,
@@ -910,6 +939,13 @@ def develop(
         raise InvalidInputError(
             f"expected raw as a RawImage (read_raw) or a path, got {describe(raw)}"
         )
+    where_to = str(device).lower()
+    if where_to not in ("cpu", "cuda"):
+        raise InvalidInputError(f"unknown device {device!r}; valid: cpu, cuda")
+    if where_to == "cuda":
+        from imageform._cuda.geometry import require_cuda
+
+        require_cuda("device='cuda'")
     method = str(demosaic).lower().replace("-", "_")
     if method not in DEMOSAIC_METHODS:
         raise InvalidInputError(
@@ -932,6 +968,12 @@ def develop(
             f"{where}: white level {raw.white_level:g} is not above the black level"
         )
     notes: list[str] = []
+    on_gpu = where_to == "cuda" and raw.cfa_pattern is not None and method in _CUDA_METHODS
+    if where_to == "cuda" and not on_gpu:
+        notes.append(
+            f"note: {'a linear raw' if raw.cfa_pattern is None else method + ' demosaicing'} "
+            "is developed on the CPU (the CUDA kernel does bilinear and malvar Bayer mosaics)"
+        )
     h, w = raw.mosaic.shape[:2]
     if h < 2 or w < 2:
         raise InvalidInputError(
@@ -945,7 +987,7 @@ def develop(
         cam *= (gains / span).astype(np.float32)
         np.clip(cam, 0.0, 1.0, out=cam)
         method = "none"
-    elif method != "bilinear":
+    elif method != "bilinear" and not on_gpu:
         idx = np.array(_cfa_indices(raw.cfa_pattern)).reshape(2, 2)
         scale = (gains[idx] / span).astype(np.float32)
         black32 = black.astype(np.float32)
@@ -1000,6 +1042,7 @@ def develop(
         demosaic=method,
         orientation=raw.orientation if orient else 0,
         notes=tuple(notes),
+        device="cuda" if on_gpu else "cpu",
     )
 
 

@@ -7,7 +7,14 @@ EMVA 1288 photon transfer and characterisation from frame stacks.
 from __future__ import annotations
 
 from imageform import _deprecate
-from imageform.sensor.cfa import CFA_PATTERNS, cfa_masks, cfa_pattern, mosaic
+from imageform.sensor.cfa import (
+    CFA_PATTERNS,
+    cfa_masks,
+    cfa_pattern,
+    equalize_cfa,
+    mosaic,
+    superpixel,
+)
 from imageform.sensor.demosaic import DEMOSAIC_METHODS, demosaic
 from imageform.sensor.emva import (
     EmvaResult,
@@ -62,6 +69,7 @@ __all__ = [
     "comparison_table",
     "demosaic",
     "emva_snr",
+    "equalize_cfa",
     "fit_photon_transfer",
     "fixed_pattern",
     "measure_emva",
@@ -73,6 +81,7 @@ __all__ = [
     "shutter_capture",
     "simulate_emva_frames",
     "simulate_photon_transfer",
+    "superpixel",
     "temporal_noise_dn",
 ]
 

@@ -165,8 +165,10 @@ def demosaic(
         arrays (PyTorch CPU/CUDA, CuPy ...) run ``"bilinear"`` and ``"malvar"`` in their own
         namespace, on their device (differentiable in PyTorch), equal to the NumPy path;
         the other methods are computed on the host through NumPy and moved back (not
-        differentiable). A Dask mosaic gives a lazy Dask array: blocks with an even
-        overlap (chunks made even so that every block keeps the CFA phase), each
+        differentiable). CUDA arrays that record no gradient run ``"bilinear"`` and
+        ``"malvar"`` as one CUDA kernel (:mod:`imageform._cuda.demosaic`; the mirror and the
+        clipping fused, the same filters). A Dask mosaic gives a lazy Dask array: blocks
+        with an even overlap (chunks made even so that every block keeps the CFA phase), each
         demosaiced in memory and trimmed, equal to the in-memory result; values are
         validated when the blocks are computed.
 
@@ -220,6 +222,15 @@ def demosaic(
         )
     if not is_numpy_namespace(xp) and method in XP_METHODS:
         ry, rx = _red_offset(pattern)
+        from imageform._cuda import geometry as cuda_geometry
+
+        if min(h, w) >= 4 and cuda_geometry.on_cuda(arr):
+            # one CUDA kernel, the mirror and the clipping fused (imageform._cuda.demosaic)
+            from imageform._cuda.demosaic import demosaic as demosaic_cuda
+
+            out = demosaic_cuda(xp.reshape(arr, (-1, h, w)), ry, rx, method, clip)
+            if out is not None:  # None: the kernels are unusable here
+                return xp.reshape(out, (*shape[:-2], h, w, 3))
         out = demosaic_xp(arr, ry, rx, method, xp)
         return xp.clip(out, 0.0, 1.0) if clip else out
     # the RGB result, the padded mosaic and the kernels' planes: about 8 float64 mosaics

@@ -25,12 +25,13 @@ from imageform._validate import (
     as_real,
     as_real_array,
     as_shape,
+    check_electrons,
     check_positive,
+    check_rng,
     describe,
     finite_result,
 )
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
-from imageform.sensor._guard import check_electrons, check_rng
 from imageform.sensor.model import PLANCK, SPEED_OF_LIGHT, SensorModel, photons_per_pixel
 from imageform.sensor.noise import QUANTIZATION_NOISE_DN
 

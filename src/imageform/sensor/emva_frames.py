@@ -30,14 +30,15 @@ from imageform._validate import (
     as_real,
     as_real_array,
     as_shape,
+    check_electrons,
     check_memory,
     check_positive,
+    check_rng,
     describe,
     finite_result,
     format_shape,
 )
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
-from imageform.sensor._guard import check_electrons, check_rng
 from imageform.sensor.model import PLANCK, SPEED_OF_LIGHT, SensorModel, photons_per_pixel
 from imageform.sensor.noise import QUANTIZATION_NOISE_DN
 

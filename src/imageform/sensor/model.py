@@ -29,16 +29,17 @@ from imageform._validate import (
     as_real,
     as_real_array,
     as_shape,
+    check_electrons,
     check_memory,
     check_option,
     check_positive,
     check_real_values,
+    check_rng,
     describe,
     finite_result,
     format_shape,
 )
 from imageform.errors import InvalidInputError
-from imageform.sensor._guard import check_electrons, check_rng
 from imageform.sensor.noise import FixedPattern, fixed_pattern
 
 __all__ = ["PLANCK", "SPEED_OF_LIGHT", "SensorModel", "photons_per_pixel"]

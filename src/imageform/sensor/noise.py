@@ -16,8 +16,7 @@ import numpy as np
 
 from imageform import _deprecate
 from imageform._random import RNGLike, as_rng
-from imageform._validate import as_real, as_shape, check_positive, finite_result
-from imageform.sensor._guard import check_rng
+from imageform._validate import as_real, as_shape, check_positive, check_rng, finite_result
 
 __all__ = [
     "QUANTIZATION_NOISE_DN",

@@ -32,8 +32,8 @@ from imageform.geometry.camera import Camera
 from imageform.geometry.distortion import BrownConrady, DivisionModel, KannalaBrandt
 from imageform.geometry.rotations import look_at
 from imageform.sensor.model import SensorModel
-from imageform.simulate._guard import check_section
 from imageform.simulate.schema import DISTORTION_COEFFICIENTS, SCENE_SCHEMA
+from imageform.simulate.validation import check_section
 
 __all__ = [
     "WORLD_UP",

@@ -25,10 +25,9 @@ from __future__ import annotations
 import numpy as np
 from scipy.optimize import nnls
 
-from imageform._validate import as_real, describe
+from imageform._validate import as_real, check_type, describe, real_array
 from imageform.errors import InvalidInputError, UnknownOptionError
 from imageform.sensor.model import PLANCK, SPEED_OF_LIGHT, SensorModel
-from imageform.simulate._guard import check_type, real_array
 from imageform.spectral import (
     COLORCHECKER_PATCHES,
     colorchecker_reflectances,

@@ -19,10 +19,9 @@ from typing import Any
 import numpy as np
 
 from imageform._backend import use_numba
-from imageform._validate import as_int, check_memory
+from imageform._validate import as_int, check_memory, check_type, real_array
 from imageform.errors import InvalidInputError
 from imageform.geometry.camera import Camera
-from imageform.simulate._guard import check_type, real_array
 from imageform.simulate.config import (
     CheckerboardConfig,
     ColorCheckerConfig,

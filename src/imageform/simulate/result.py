@@ -21,6 +21,7 @@ from typing import Any, Literal
 
 import numpy as np
 
+from imageform import _deprecate
 from imageform._validate import as_real, as_reals, as_size, describe
 from imageform.errors import InvalidInputError, UnknownOptionError
 from imageform.geometry.camera import Camera
@@ -87,18 +88,19 @@ class SceneQuad:
     corners: np.ndarray
 
 
+@_deprecate.renamed_fields({"centres_uv": "centers_uv"})
 @dataclass(frozen=True)
 class ColorCheckerTruth:
     """The 24 ColorChecker patches: names, ground-truth CIELAB, centres and sampling radius.
 
-    ``names`` (24,), ``lab_d65`` (24, 3) the ground-truth CIELAB under D65 (2°), ``centres_uv``
+    ``names`` (24,), ``lab_d65`` (24, 3) the ground-truth CIELAB under D65 (2°), ``centers_uv``
     (24, 2) the patch centres in the image (pixels) and ``sample_radius_px`` the radius of the
     square window sampled around each centre.
     """
 
     names: tuple[str, ...]
     lab_d65: np.ndarray
-    centres_uv: np.ndarray
+    centers_uv: np.ndarray
     sample_radius_px: float
 
 

@@ -22,13 +22,21 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from imageform._validate import as_int, as_real, as_real_array, as_reals, check_name, describe
+from imageform._validate import (
+    as_int,
+    as_real,
+    as_real_array,
+    as_reals,
+    check_name,
+    check_type,
+    describe,
+    real_array,
+)
 from imageform.errors import InvalidInputError, UnknownOptionError
 from imageform.geometry.camera import Camera
 from imageform.io import CameraColor, CameraOptics
 from imageform.sensor.emva import PhotonTransferData
 from imageform.sensor.model import SensorModel
-from imageform.simulate._guard import check_type, real_array
 from imageform.simulate.colorfit import _fit_matrix
 from imageform.simulate.config import LensConfig, SensorConfig
 from imageform.simulate.render import RenderOutput

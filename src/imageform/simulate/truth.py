@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from imageform._validate import as_int, describe
+from imageform._validate import as_int, check_type, describe, real_array
 from imageform.color import (
     delta_e_ciede2000,
     linear_srgb_to_luminance,
@@ -31,7 +31,6 @@ from imageform.color import (
 from imageform.errors import InvalidInputError
 from imageform.geometry.camera import Camera
 from imageform.geometry.vanishing import horizon_line
-from imageform.simulate._guard import check_type, real_array
 from imageform.simulate._rng import RNGLike, random_source
 from imageform.simulate.config import ColorCheckerConfig
 from imageform.simulate.result import ColorCheckerTruth, PatchMeasurements, VanishingTruth
@@ -116,11 +115,11 @@ def patch_windows(
         raise TypeError(f"expected truth as a ColorCheckerTruth, got {describe(truth)}")
     height = as_int(height, "height", minimum=0, maximum=10**9)
     width = as_int(width, "width", minimum=0, maximum=10**9)
-    c = np.asarray(truth.centres_uv, dtype=np.float64)
+    c = np.asarray(truth.centers_uv, dtype=np.float64)
     r = float(truth.sample_radius_px)
     if c.ndim != 2 or c.shape[1] != 2 or not np.isfinite(r) or r < 0:
         raise InvalidInputError(
-            f"expected centres_uv of shape (n, 2) and sample_radius_px >= 0, "
+            f"expected centers_uv of shape (n, 2) and sample_radius_px >= 0, "
             f"got {c.shape} and {truth.sample_radius_px!r}"
         )
     out: list[tuple[slice, slice] | None] = []
@@ -251,10 +250,10 @@ def measure_colorchecker(
 
     lab_truth = np.asarray(truth.lab_d65, dtype=np.float64)
     n = len(truth.names)
-    if lab_truth.shape != (n, 3) or np.asarray(truth.centres_uv).shape != (n, 2):
+    if lab_truth.shape != (n, 3) or np.asarray(truth.centers_uv).shape != (n, 2):
         raise InvalidInputError(
-            f"expected lab_d65 ({n}, 3) and centres_uv ({n}, 2) for {n} patch names, got "
-            f"{lab_truth.shape} and {np.asarray(truth.centres_uv).shape}"
+            f"expected lab_d65 ({n}, 3) and centers_uv ({n}, 2) for {n} patch names, got "
+            f"{lab_truth.shape} and {np.asarray(truth.centers_uv).shape}"
         )
     rgb = patch_means(output_linear_srgb, truth)[:, :3]
     lab, de = _lab_and_delta_e(rgb, lab_truth)

@@ -11,6 +11,7 @@ import math
 import re
 from typing import Any
 
+from imageform._validate import as_bool, as_int, as_real, as_reals, describe
 from imageform.errors import InvalidInputError, UnknownOptionError
 from imageform.simulate.budget import (
     BYTES_PER_PIXEL,
@@ -388,3 +389,111 @@ def _check_memory(render: dict[str, Any], ctx: _Ctx) -> None:
             f"bytes/pixel), more than the {format_bytes(have)} this machine has; reduce width "
             "and height",
         )
+
+
+# ---- the fields of the typed dataclasses, checked against the schema --------------------------
+
+
+def check_field(value: Any, spec: Any, name: str) -> Any:
+    """Check a dataclass field's value against its schema entry ``spec``.
+
+    ``spec`` is a :class:`imageform.simulate.schema.Field`: kind, choices and bounds, in the units
+    the typed config holds (already converted). ``None`` is accepted only for an optional key
+    (default ``None``).
+    """
+    if value is None:
+        if spec.default is None:
+            return None
+        raise TypeError(f"expected {name} as a {spec.kind} value, got None")
+    kind = spec.kind
+    if kind == "str":
+        if not isinstance(value, str):
+            raise TypeError(f"expected {name} as a string, got {describe(value)}")
+        if spec.choices:
+            key = value.strip().lower().replace("-", "_")
+            valid = {c.lower(): c for c in spec.choices}
+            if key in valid:
+                return valid[key]
+            if value in spec.choices:
+                return value
+            raise UnknownOptionError(
+                f"unknown {name} {describe(value, 30)}; valid: {', '.join(spec.choices)}"[:200]
+            )
+        return value
+    if kind == "bool":
+        return as_bool(value, name)
+    if kind == "int":
+        lo = spec.minimum if spec.minimum is not None else (1 if spec.positive else None)
+        hi = spec.maximum
+        return as_int(
+            value,
+            name,
+            minimum=None if lo is None else math.ceil(lo),
+            maximum=None if hi is None else math.floor(hi),
+        )
+    if kind == "float_or_auto" and isinstance(value, str):
+        if value.strip().lower() == "auto":
+            return "auto"
+        raise InvalidInputError(f"expected {name} as a number or 'auto', got {describe(value)}")
+    if kind in ("float", "float_or_auto"):
+        return _bounded(as_real(value, name), spec, name)
+    if kind == "reflectance":
+        if isinstance(value, str):
+            from imageform.spectral import COLORCHECKER_PATCHES
+
+            if value not in COLORCHECKER_PATCHES:
+                raise UnknownOptionError(
+                    f"unknown ColorChecker patch {describe(value, 30)} for {name}"
+                )
+            return value
+        return as_real(value, name, minimum=0.0, maximum=1.0)
+    if kind == "mat3":
+        if isinstance(value, str | bytes) or not hasattr(value, "__iter__"):
+            raise InvalidInputError(
+                f"expected {name} as 3 rows of 3 numbers, got {describe(value)}"
+            )
+        rows = list(value)
+        if len(rows) != 3:
+            raise InvalidInputError(
+                f"expected {name} as 3 rows of 3 numbers, got {describe(value)}"
+            )
+        return tuple(as_reals(r, f"{name}[{i}]", 3) for i, r in enumerate(rows))
+    n = {"vec2": 2, "vec3": 3, "ivec2": 2}.get(kind)
+    if n is None:  # pragma: no cover - a schema kind this module does not know
+        return value
+    if kind == "ivec2":
+        if isinstance(value, str | bytes) or not hasattr(value, "__iter__"):
+            raise InvalidInputError(f"expected {name} as 2 integers, got {describe(value)}")
+        items = list(value)
+        if len(items) != 2:
+            raise InvalidInputError(f"expected {name} as 2 integers, got {describe(value)}")
+        return tuple(as_int(v, f"{name}[{i}]", minimum=2) for i, v in enumerate(items))
+    out = as_reals(value, name, n)
+    return tuple(_bounded(x, spec, f"{name}[{i}]") for i, x in enumerate(out))
+
+
+def _bounded(x: float, spec: Any, name: str) -> float:
+    if spec.positive and x <= 0:
+        raise InvalidInputError(f"expected {name} > 0, got {x:g}")
+    if spec.minimum is not None and x < spec.minimum:
+        raise InvalidInputError(f"expected {name} >= {spec.minimum:g}, got {x:g}")
+    if spec.maximum is not None and x > spec.maximum:
+        raise InvalidInputError(f"expected {name} <= {spec.maximum:g}, got {x:g}")
+    if spec.dimension == "length" and abs(x) > MAX_LENGTH_M:
+        raise InvalidInputError(f"expected {name} within ±{MAX_LENGTH_M:g}, got {x:g}")
+    return x
+
+
+def check_section(obj: Any, schema: dict[str, Any], section: str) -> None:
+    """Check (and normalise, on a frozen dataclass) each field of ``obj`` that ``schema`` describes.
+
+    ``schema`` is a section of :data:`~imageform.simulate.schema.SCENE_SCHEMA`; the error names
+    ``section.field``.
+    """
+    import dataclasses
+
+    for f in dataclasses.fields(obj):
+        spec = schema.get(f.name)
+        if isinstance(spec, Field):
+            name = f"{section}.{f.name}" if section else f.name
+            object.__setattr__(obj, f.name, check_field(getattr(obj, f.name), spec, name))

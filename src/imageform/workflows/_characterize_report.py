@@ -231,7 +231,7 @@ def _chart_figure(c: Any) -> bytes | None:
     h, w = img.shape[:2]
     fig, ax = plt.subplots(figsize=(8, 8 * h / max(w, 1)))
     ax.imshow(img, extent=(u0 - 0.5, u1 - 0.5, v1 - 0.5, v0 - 0.5))
-    for k, (u, v) in enumerate(np.asarray(c.detection.centres)):
+    for k, (u, v) in enumerate(np.asarray(c.detection.centers)):
         de = float(np.asarray(c.delta_e00)[k])
         if math.isfinite(de):
             ax.text(

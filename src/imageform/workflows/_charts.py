@@ -201,7 +201,7 @@ def write_overlay(run: Any, path: Path, chart: ChartInput, flag: str) -> None:
     _draw(out, [s.outline], (1.0, 0.9, 0.0))
     _draw(out, [q for q, ok in zip(s.quads, valid, strict=True) if ok], (0.0, 1.0, 0.2))
     _draw(out, [q for q, ok in zip(s.quads, valid, strict=True) if not ok], (1.0, 0.0, 0.0))
-    c = s.centres[0]
+    c = s.centers[0]
     r = 0.25 * float(np.linalg.norm(s.quads[0][1] - s.quads[0][0]))
     _draw(
         out,

@@ -15,7 +15,17 @@ from typing import Any
 from imageform.errors import InvalidInputError
 from imageform.workflows._spec import Options, Run, option
 
-__all__ = ["ImageIn", "ImageOut", "read", "write", "write_mapped"]
+__all__ = [
+    "ImageIn",
+    "ImageOut",
+    "OnDevice",
+    "gpu_bands",
+    "on_gpu",
+    "read",
+    "refuse_absent_device",
+    "write",
+    "write_mapped",
+]
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -57,6 +67,82 @@ class ImageOut(Options):
             raise InvalidInputError(f"expected --bits 8 or 16, got {self.bits}")
         if self.clip:
             object.__setattr__(self, "out_of_range", "clip")
+
+
+@dataclass(frozen=True, kw_only=True)
+class OnDevice(Options):
+    """Where a pointwise command computes: the CPU, or the GPU's fused kernels."""
+
+    device: str = option(
+        "cpu",
+        help="Where the pixels are computed: cuda runs imageform's fused GPU kernels (numba's "
+        "CUDA target; refused in one line when no GPU is usable).",
+        choices=("cpu", "cuda"),
+    )
+
+
+def refuse_absent_device(opts: Any) -> None:
+    """``--device cuda`` where no GPU is usable: one-line InvalidInputError (read nothing first)."""
+    if getattr(opts, "device", "cpu") == "cuda":
+        from imageform._cuda.geometry import require_cuda
+
+        require_cuda("--device cuda")
+
+
+def on_gpu(run: Run, what: str, fn: Any, *arrays: Any, first: bool = True) -> Any:
+    """``fn(*arrays)`` on the GPU: the arrays copied there, ``fn``'s kernels, the result back.
+
+    Returns the NumPy result, or None where ``fn`` launched no kernel on them (a call the
+    kernels do not take, such as a conversion through ``gray``): a note says so and the
+    caller runs its CPU path. ``first``: the first call of a run, whose failure (the
+    Array-API path meeting a device array) is that answer; later calls' errors propagate.
+    Raises a one-line InvalidInputError where numba's CUDA target could not compile the
+    kernel (the kernels are then off for the process).
+    """
+    import numpy as np
+
+    from imageform._cuda import _launch
+
+    c = _launch.cuda()
+    dev = [c.to_device(np.ascontiguousarray(a)) for a in arrays]
+    before = _launch.launch_count()
+    out: Any = None
+    if first:
+        try:
+            out = fn(*dev)
+        except Exception:  # the Array-API path cannot read a device array: no kernel took it
+            out = None
+    else:
+        out = fn(*dev)
+    if out is not None and _launch.launch_count() > before and _launch.is_cuda_array(out):
+        return np.asarray(out.copy_to_host())
+    if not _launch.use_cuda():
+        raise InvalidInputError(
+            "--device cuda: numba's CUDA target cannot compile the kernels here "
+            f"({_launch.status()}); use the CPU"
+        )
+    run.note(f"note: --device cuda: {what} has no GPU kernel; it ran on the CPU")
+    return None
+
+
+def gpu_bands(run: Run, what: str, fn: Any) -> Any:
+    """Return a band function for :func:`write_mapped`: ``fn`` on the GPU (:func:`on_gpu`).
+
+    Where the first band launches no kernel, every band runs ``fn`` on the CPU (one note).
+    """
+    state: list[bool] = []  # [True]: the kernels take it; [False]: the CPU computes
+
+    def band(b: Any) -> Any:
+        if state == [False]:
+            return fn(b)
+        got = on_gpu(run, what, fn, b, first=not state)
+        if got is None:
+            state[:] = [False]
+            return fn(b)
+        state[:] = [True]
+        return got
+
+    return band
 
 
 def read(path: Path, opts: Any, *, alpha: str | None = None) -> Any:

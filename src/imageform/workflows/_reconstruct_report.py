@@ -132,16 +132,17 @@ def write_report(
         "<p>Structure from motion: SIFT keypoints matched between neighbouring frames, each "
         "pair verified by its essential matrix, an initial pair with parallax, the other "
         "frames registered by PnP, the points triangulated, then bundle adjustment of every "
-        "pose and point. The world is the camera frame of the initial pair's first frame (its "
-        "pose is r = t = 0 in cameras.csv); the scale is arbitrary (the "
-        "initial pair's baseline is 1).</p>" + hp.table(["", "value"], head, left=(0,))
+        "pose and point. The world is the camera frame of the first registered frame, frame 0 "
+        "whenever it is registered (its pose is r = t = 0 in cameras.csv); the scale "
+        "is arbitrary (the initial pair's baseline is 1).</p>"
+        + hp.table(["", "value"], head, left=(0,))
     )
     views = hp.figure(
         _views(rec),
         "cameras and points from above and from the side",
         "The points in their colour and the registered cameras (red: centres in frame order, "
         "arrows along the optical axes), from above and from the side (the world frame, that "
-        "of the initial pair's first camera: x right, y down, z forward). The axes show the "
+        "of the first registered camera: x right, y down, z forward). The axes show the "
         "points' 1st to 99th percentile and every camera.",
     )
     hists = hp.figure(

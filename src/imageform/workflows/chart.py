@@ -95,8 +95,8 @@ def _overlay(rgb: Any, det: Any, valid: Any) -> Any:
     _draw(out, [q for q, ok in zip(det.quads, valid, strict=True) if ok], (0.0, 1.0, 0.2))
     _draw(out, [q for q, ok in zip(det.quads, valid, strict=True) if not ok], (1.0, 0.0, 0.0))
     # the first patch (dark skin, top left of the upright chart) marked by a cross
-    c = det.centres[0]
-    r = 0.25 * float(np.linalg.norm(det.centres[1] - det.centres[0]))
+    c = det.centers[0]
+    r = 0.25 * float(np.linalg.norm(det.centers[1] - det.centers[0]))
     _draw(
         out,
         [np.array([c - [r, 0], c + [r, 0]]), np.array([c - [0, r], c + [0, r]])],
@@ -116,7 +116,7 @@ def _write_csv(path: Path, det: Any, pat: Any, ref: Any) -> None:
         w.writerow(["patch", "u", "v", "a_r", "a_g", "a_b", "b_r", "b_g", "b_b", "valid"])
         for k in np.flatnonzero(pat.valid):
             w.writerow(
-                [k, f"{det.centres[k, 0]:.3f}", f"{det.centres[k, 1]:.3f}"]
+                [k, f"{det.centers[k, 0]:.3f}", f"{det.centers[k, 1]:.3f}"]
                 + [f"{x:.6f}" for x in pat.means[k]]
                 + [f"{x:.6f}" for x in ref[k]]
                 + [int(pat.valid[k])]

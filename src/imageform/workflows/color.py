@@ -7,7 +7,17 @@ from pathlib import Path
 from typing import Any
 
 from imageform.errors import InvalidInputError
-from imageform.workflows._images import ImageIn, ImageOut, read, write, write_mapped
+from imageform.workflows._images import (
+    ImageIn,
+    ImageOut,
+    OnDevice,
+    gpu_bands,
+    on_gpu,
+    read,
+    refuse_absent_device,
+    write,
+    write_mapped,
+)
 from imageform.workflows._spec import (
     Input,
     Options,
@@ -56,7 +66,7 @@ DISPLAYABLE_SPACES = _DISPLAYABLE
 
 
 @dataclass(frozen=True, kw_only=True)
-class ConvertOptions(ImageIn, ImageOut):
+class ConvertOptions(ImageIn, ImageOut, OnDevice):
     """Options of ``imageform convert``."""
 
     src: str = option("srgb", flag="--from", help="Colour space of the input.", metavar="SPACE")
@@ -113,6 +123,7 @@ class ConvertOptions(ImageIn, ImageOut):
 
 def convert(run: Run, opts: ConvertOptions, *, out: Path, image: Path) -> Result:
     """``imageform convert``: one image file from one colour space to another."""
+    refuse_absent_device(opts)  # before any file is read
     from imageform.color import SPACES, convert, path
 
     src, dst = opts.src, opts.dst
@@ -122,9 +133,10 @@ def convert(run: Run, opts: ConvertOptions, *, out: Path, image: Path) -> Result
     if src != "gray" and img.shape[-1] == 1:
         raise InvalidInputError(f"{image} is a grey image; convert it with --from gray")
     params = opts.params()
-    n_out, dtype, lo, hi, shape = write_mapped(
-        run, out, img, lambda band: convert(band, src, dst, **params), opts, like=img
-    )
+    fn: Any = lambda band: convert(band, src, dst, **params)  # noqa: E731
+    if opts.device == "cuda":
+        fn = gpu_bands(run, f"{src} -> {dst} on a {img.dtype} image", fn)
+    n_out, dtype, lo, hi, shape = write_mapped(run, out, img, fn, opts, like=img)
     summary = {
         "input": image,
         "output": out,
@@ -137,6 +149,7 @@ def convert(run: Run, opts: ConvertOptions, *, out: Path, image: Path) -> Result
         "min": lo,
         "max": hi,
         "values_clipped": n_out,
+        "device": opts.device,
     }
     how = " -> ".join(summary["path"]) or "copy"
     return Result(summary, (f"{image} ({src}) -> {out} ({dst}): {how}",))
@@ -159,7 +172,7 @@ _WB_METHODS = (
 
 
 @dataclass(frozen=True, kw_only=True)
-class WhiteBalanceOptions(ImageIn, ImageOut):
+class WhiteBalanceOptions(ImageIn, ImageOut, OnDevice):
     """Options of ``imageform white-balance``."""
 
     method: str = option("gray-world", help="Illuminant estimate.", choices=_WB_METHODS)
@@ -218,6 +231,7 @@ def white_balance(run: Run, opts: WhiteBalanceOptions, *, out: Path, image: Path
     """``imageform white-balance``: estimate the illuminant and divide it out in linear light."""
     import numpy as np
 
+    refuse_absent_device(opts)  # before any file is read
     img = read(image, opts)
     if img.shape[-1] != 3:
         raise InvalidInputError(f"{image}: expected an RGB image, got {img.shape[-1]} channel(s)")
@@ -234,6 +248,8 @@ def white_balance(run: Run, opts: WhiteBalanceOptions, *, out: Path, image: Path
         )
         _charts.notes(run, chart, flag)
         balanced, gains = chart_white_balance(img, chart.patches, normalize=opts.normalize)
+        if opts.device == "cuda":
+            run.note("note: --device cuda: --method chart runs on the CPU")
         n_out = write(run, out, np.asarray(balanced), opts, like=img)
     else:  # the gains from the whole image, applied a band of rows at a time
         from imageform.color.white_balance import (
@@ -241,10 +257,12 @@ def white_balance(run: Run, opts: WhiteBalanceOptions, *, out: Path, image: Path
             white_balance_gains,
         )
 
+        # the estimate reads the whole image on the CPU; the gains are applied on the device
         gains = np.asarray(white_balance_gains(img, opts.method, **opts.params()))
-        n_out = write_mapped(
-            run, out, img, lambda band: apply_white_balance_gains(band, gains), opts, like=img
-        )[0]
+        fn: Any = lambda band: apply_white_balance_gains(band, gains)  # noqa: E731
+        if opts.device == "cuda":
+            fn = gpu_bands(run, f"the gains on a {img.dtype} image", fn)
+        n_out = write_mapped(run, out, img, fn, opts, like=img)[0]
     if chart is not None and opts.overlay is not None:
         _charts.write_overlay(run, opts.overlay, chart, flag)
     g = [float(v) for v in np.asarray(gains)]
@@ -254,6 +272,7 @@ def white_balance(run: Run, opts: WhiteBalanceOptions, *, out: Path, image: Path
         "method": opts.method,
         "gains": g,
         "values_clipped": n_out,
+        "device": opts.device,
     }
     if chart is not None:
         summary["chart"] = _charts.summary(chart)
@@ -272,7 +291,7 @@ _PERCENTILES = (50.0, 90.0, 95.0, 99.0)
 
 
 @dataclass(frozen=True, kw_only=True)
-class DeltaEOptions(ImageIn):
+class DeltaEOptions(ImageIn, OnDevice):
     """Options of ``imageform delta-e``."""
 
     method: str = option(
@@ -293,6 +312,7 @@ def delta_e(run: Run, opts: DeltaEOptions, *, out: None, reference: Path, test: 
     from imageform.color.delta_e import delta_e as de_fn
     from imageform.color.delta_e import describe_delta_e
 
+    refuse_absent_device(opts)  # before any file is read
     a, b = read(reference, opts), read(test, opts)
     for path, arr in ((reference, a), (test, b)):
         if arr.shape[-1] != 3:
@@ -304,7 +324,15 @@ def delta_e(run: Run, opts: DeltaEOptions, *, out: None, reference: Path, test: 
             f"images differ in size: {reference} is {a.shape[1]} x {a.shape[0]} px, "
             f"{test} {b.shape[1]} x {b.shape[0]} px"
         )
-    de = np.asarray(de_fn(convert(a, "srgb", "lab"), convert(b, "srgb", "lab"), opts.method))
+
+    def lab_delta_e(x: Any, y: Any) -> Any:
+        return de_fn(convert(x, "srgb", "lab"), convert(y, "srgb", "lab"), opts.method)
+
+    de = None
+    if opts.device == "cuda":  # three kernels: two conversions and the difference
+        de = on_gpu(run, f"delta-e of {a.dtype} images", lab_delta_e, a, b)
+    if de is None:
+        de = np.asarray(lab_delta_e(a, b))
     mean, worst = float(de.mean()), float(de.max())
     pct = {f"p{q:g}": float(np.percentile(de, q)) for q in _PERCENTILES}
     above1, above10 = float(np.mean(de > 1.0)), float(np.mean(de > 10.0))
@@ -327,6 +355,7 @@ def delta_e(run: Run, opts: DeltaEOptions, *, out: None, reference: Path, test: 
         "fraction_above_1": above1,
         "fraction_above_10": above10,
         "heatmap": opts.heatmap,
+        "device": opts.device,
     }
     text = [
         f"ΔE ({opts.method}) over {de.size} pixels",

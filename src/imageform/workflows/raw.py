@@ -32,11 +32,22 @@ class DevelopOptions(ImageOut, Options):
         choices="imageform.color:RGB_SPACES",
     )
     linear: bool = option(False, help="Leave the output linear (no transfer function).")
+    device: str = option(
+        "cpu",
+        help="Where the development runs: cuda develops bilinear and Malvar Bayer mosaics in "
+        "one GPU kernel (numba's CUDA target; refused in one line when no GPU is usable).",
+        choices=("cpu", "cuda"),
+    )
 
 
 def develop(run: Run, opts: DevelopOptions, *, raw: Path, out: Path) -> Result:
     """Read the raw file, develop it step by step, write the image."""
     import numpy as np
+
+    if opts.device == "cuda":  # refused in one line before any file is read
+        from imageform._cuda.geometry import require_cuda
+
+        require_cuda("--device cuda")
 
     from imageform.io import develop as develop_raw
     from imageform.io import image_format, read_raw
@@ -48,6 +59,7 @@ def develop(run: Run, opts: DevelopOptions, *, raw: Path, out: Path) -> Result:
         white_balance=opts.white_balance,
         space=opts.space,
         linear=opts.linear,
+        device=opts.device,
     )
     for note in dev.notes:
         run.note(note)
@@ -75,6 +87,7 @@ def develop(run: Run, opts: DevelopOptions, *, raw: Path, out: Path) -> Result:
         "camera_to_xyz": dev.camera_to_xyz.tolist(),
         "calibration_illuminant": img.calibration_illuminant,
         "demosaic": dev.demosaic,
+        "device": opts.device,
         "space": dev.space,
         "transfer": dev.transfer,
         "orientation": {"flip": img.orientation, "applied": dev.orientation == img.orientation},
@@ -107,6 +120,7 @@ WORKFLOWS = (
             ),
         ),
         Output("Output image (PNG 16-bit by default, JPEG, TIFF float32, .npy)."),
+        batch=True,
         group="colour",
         description="Linearise (black and white levels), white balance, demosaic, camera RGB "
         "to XYZ from the file's colour matrix, adaptation to the output white, encoding.",

@@ -63,6 +63,13 @@ class ReconstructOptions(Options):
     max_frames: int | None = option(
         None, help="Use at most this many frames (after --every).", minimum=2
     )
+    mask: Path | None = option(
+        None,
+        help="Image of the frames' size, nonzero where keypoints may be, one for every frame "
+        "(e.g. without an endoscope's dark vignetted corners).",
+        metavar="FILE",
+        input=True,
+    )
 
     def check(self) -> None:
         """Check that ``--ratio`` is in (0, 1]."""
@@ -110,6 +117,25 @@ def _read_frames(
             if opts.max_frames is not None and len(images) >= opts.max_frames:
                 break
     return images, names, info
+
+
+def _read_mask(path: Path, info: Any) -> Any:
+    """Read the ``--mask`` image as booleans (nonzero: keypoints allowed), the frames' size."""
+    import numpy as np
+
+    from imageform.io import read_image
+
+    m = np.asarray(read_image(path, alpha="drop"))
+    if m.ndim == 3:
+        m = m.max(axis=2)
+    if m.shape != (info.height, info.width):
+        raise InvalidInputError(
+            f"--mask {path} is {m.shape[1]} x {m.shape[0]} px, the frames {info.width} x "
+            f"{info.height} px"
+        )
+    if not np.any(m > 0):
+        raise InvalidInputError(f"--mask {path} is zero everywhere: no keypoint could be kept")
+    return m > 0
 
 
 def _metrics(rec: Any, names: list[str], seconds: dict[str, float]) -> dict[str, Any]:
@@ -164,6 +190,7 @@ def reconstruct(run: Run, opts: ReconstructOptions, *, out: Path, frames: str) -
             + (f" (one in {opts.every})" if opts.every > 1 else "")
             + "; reconstruct needs at least 2"
         )
+    mask = None if opts.mask is None else _read_mask(opts.mask, info)
     seconds["read"] = time.perf_counter() - t0
     if run.progress is not None:
         run.progress("reconstructing", 0.1)
@@ -175,6 +202,7 @@ def reconstruct(run: Run, opts: ReconstructOptions, *, out: Path, frames: str) -
         window=opts.window,
         max_features=opts.max_features,
         ratio=opts.ratio,
+        masks=mask,
     )
     seconds["reconstruct"] = time.perf_counter() - t1
     del images
@@ -196,8 +224,8 @@ def reconstruct(run: Run, opts: ReconstructOptions, *, out: Path, frames: str) -
         rec.points,
         rec.colors,
         rec.track_length,
-        comment=f"imageform reconstruct {Path(frames).name}: the world is the frame of the "
-        "initial pair's first camera",
+        comment=f"imageform reconstruct {Path(frames).name}: the world is the camera frame of "
+        "the first registered frame",
     )
     seconds["write"] = time.perf_counter() - t2
     metrics = {
@@ -265,8 +293,10 @@ WORKFLOWS = (
         description="SIFT keypoints matched between neighbouring frames (--window), each pair "
         "verified by its essential matrix (RANSAC), the pair with the most parallax first, "
         "the other frames registered by PnP, the points triangulated, then bundle adjustment "
-        "of every pose and point (needs imageform[reconstruct]). The world is the camera "
-        "frame of the initial pair's first frame, the initial pair's baseline 1. cameras.csv: "
+        "of every pose and point (needs imageform[reconstruct]); --mask keeps the keypoints to "
+        "a region of every frame. The world is the camera "
+        "frame of the first registered frame (frame 0 when registered), the initial pair's "
+        "baseline 1. cameras.csv: "
         "frame,name,registered,rx,ry,rz,tx,ty,tz,rms_px (world to camera); points.ply: x,y,z, "
         "colour, track_length. docs/reconstruction.md.",
     ),

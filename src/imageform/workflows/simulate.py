@@ -213,7 +213,7 @@ def simulate(run: Run, opts: SimulateOptions, *, out: Path) -> Result:
             )
         if run.progress is not None:
             run.progress("lab set", 1.0)
-        render_lab_set(read_camera(opts.camera), run.folder(lab_out), seed=opts.seed)
+        render_lab_set(read_camera(opts.camera), run.folder(lab_out), rng=opts.seed)
         lab_folder = opts.lab
     video = _render_trajectory(run, scene, opts, traj) if traj is not None else None
     wall = time.perf_counter() - t0

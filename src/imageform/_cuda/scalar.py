@@ -1,0 +1,551 @@
+r"""The per-pixel colour formulas as scalar code, one source for the CUDA kernels and their twin.
+
+Each function below maps the channels of one pixel (``a, b, c``) and the numbers of one
+conversion step to the pixel's new channels; they are the scalar form of the Array-API
+code of :mod:`imageform.color` (same formulas, same branches, same conventions for black,
+zero chroma and NaN), with every literal written ``F(...)`` so that one source compiles
+twice: ``F = float32`` keeps float32 pixels in float32 arithmetic on the GPU (the sRGB
+curve, ``pow`` and ``atan2`` run at float32 speed), ``F = float64`` gives float64.
+
+:func:`functions` compiles the source for a dtype and a target: ``"cuda"`` (numba CUDA
+device functions; the kernels of :mod:`imageform._cuda.color` call them), ``"cpu"``
+(``numba.njit``: the CPU twin, which compiles the same source with numba's CPU typing, so
+the kernels' code is type-checked and run on machines without a GPU) or ``"python"``
+(plain Python, for reading and debugging). NaN propagates as on the array path: every
+clip here is written so that a NaN comparison keeps the NaN (``x if not x < lo else lo``),
+never through ``min``/``max`` (CUDA's ``fmin``/``fmax`` drop NaN).
+
+Sources: the docstrings of the public functions (IEC 61966-2-1, ITU-R BT.709/2020, ISO
+22028-2, CIE 15:2004, Smith 1978, Gonzalez & Woods, CIE 116-1995, Clarke et al. 1984 (CMC),
+Sharma, Wu & Dalal 2005 (CIEDE2000)).
+"""
+
+from __future__ import annotations
+
+import math
+from functools import cache
+from typing import Any
+
+import numpy as np
+
+__all__ = ["NAMES", "SOURCE", "functions"]
+
+# fmt: off
+SOURCE = r'''
+def _clip_lo(x, lo):
+    return lo if x < lo else x
+
+
+def _clip(x, lo, hi):
+    if x < lo:
+        return lo
+    if x > hi:
+        return hi
+    return x
+
+
+def _sdec(v):
+    if v <= F(0.040449936):
+        return v / F(12.92)
+    return math.pow(_clip_lo((v + F(0.055)) / F(1.055), F(1e-30)), F(2.4))
+
+
+def _senc(x):
+    if x <= F(0.0031308):
+        return x * F(12.92)
+    return F(1.055) * math.pow(_clip_lo(x, F(1e-30)), F(1.0 / 2.4)) - F(0.055)
+
+
+def _gdec(v, g):
+    return math.copysign(math.pow(abs(v), g), v)
+
+
+def _genc(x, g):
+    return math.copysign(math.pow(abs(x), F(1.0) / g), x)
+
+
+def _btenc(x, alpha, beta):
+    if x < beta:
+        return F(4.5) * x
+    return alpha * math.pow(_clip_lo(x, F(1e-30)), F(0.45)) - (alpha - F(1.0))
+
+
+def _btdec(v, alpha, beta):
+    if v < F(4.5) * beta:
+        return v / F(4.5)
+    return math.pow(_clip_lo((v + (alpha - F(1.0))) / alpha, F(1e-30)), F(1.0 / 0.45))
+
+
+def _renc(x):
+    if x < F(1.0 / 512.0):
+        return F(16.0) * x
+    return math.pow(_clip_lo(x, F(1e-30)), F(1.0 / 1.8))
+
+
+def _rdec(v):
+    if v < F(16.0 / 512.0):
+        return v / F(16.0)
+    return math.pow(_clip_lo(v, F(1e-30)), F(1.8))
+
+
+def dec_srgb(a, b, c):
+    return _sdec(a), _sdec(b), _sdec(c)
+
+
+def enc_srgb(a, b, c):
+    return _senc(a), _senc(b), _senc(c)
+
+
+def dec_gamma(a, b, c, g):
+    return _gdec(a, g), _gdec(b, g), _gdec(c, g)
+
+
+def enc_gamma(a, b, c, g):
+    return _genc(a, g), _genc(b, g), _genc(c, g)
+
+
+def dec_bt(a, b, c, alpha, beta):
+    return _btdec(a, alpha, beta), _btdec(b, alpha, beta), _btdec(c, alpha, beta)
+
+
+def enc_bt(a, b, c, alpha, beta):
+    return _btenc(a, alpha, beta), _btenc(b, alpha, beta), _btenc(c, alpha, beta)
+
+
+def dec_romm(a, b, c):
+    return _rdec(a), _rdec(b), _rdec(c)
+
+
+def enc_romm(a, b, c):
+    return _renc(a), _renc(b), _renc(c)
+
+
+def matrix(a, b, c, m0, m1, m2, m3, m4, m5, m6, m7, m8):
+    return (m0 * a + m1 * b + m2 * c, m3 * a + m4 * b + m5 * c, m6 * a + m7 * b + m8 * c)
+
+
+def affine(a, b, c, m0, m1, m2, m3, m4, m5, m6, m7, m8, o0, o1, o2):
+    return (
+        m0 * a + m1 * b + m2 * c + o0,
+        m3 * a + m4 * b + m5 * c + o1,
+        m6 * a + m7 * b + m8 * c + o2,
+    )
+
+
+def gains(a, b, c, g0, g1, g2):
+    return a * g0, b * g1, c * g2
+
+
+def gains_clip(a, b, c, g0, g1, g2):
+    return (
+        _clip(a * g0, F(0.0), F(1.0)),
+        _clip(b * g1, F(0.0), F(1.0)),
+        _clip(c * g2, F(0.0), F(1.0)),
+    )
+
+
+def _flab(t):
+    if t > F(216.0 / 24389.0):
+        return math.pow(t, F(1.0 / 3.0))
+    return F(841.0 / 108.0) * t + F(4.0 / 29.0)
+
+
+def _flab_inv(u):
+    if u > F(6.0 / 29.0):
+        return u * u * u
+    return (u - F(4.0 / 29.0)) / F(841.0 / 108.0)
+
+
+def xyz_lab(a, b, c, wx, wy, wz):
+    fx = _flab(a / wx)
+    fy = _flab(b / wy)
+    fz = _flab(c / wz)
+    return F(116.0) * fy - F(16.0), F(500.0) * (fx - fy), F(200.0) * (fy - fz)
+
+
+def lab_xyz(a, b, c, wx, wy, wz):
+    fy = (a + F(16.0)) / F(116.0)
+    fx = fy + b / F(500.0)
+    fz = fy - c / F(200.0)
+    return _flab_inv(fx) * wx, _flab_inv(fy) * wy, _flab_inv(fz) * wz
+
+
+def _hue_deg(y, x):
+    h = math.atan2(y, x) * F(180.0 / math.pi)
+    if h < F(0.0):
+        h = h + F(360.0)
+    return h
+
+
+def lab_lch(a, b, c):
+    h = _hue_deg(c, b)
+    if h >= F(360.0):
+        h = h - F(360.0)
+    return a, math.sqrt(b * b + c * c), h
+
+
+def lch_lab(a, b, c):
+    h = c * F(math.pi / 180.0)
+    return a, b * math.cos(h), b * math.sin(h)
+
+
+def xyz_luv(a, b, c, wx, wy, wz):
+    wn = wx + F(15.0) * wy + F(3.0) * wz
+    un = F(4.0) * wx / wn
+    vn = F(9.0) * wy / wn
+    d = a + F(15.0) * b + F(3.0) * c
+    L = F(116.0) * _flab(b / wy) - F(16.0)
+    if d == F(0.0):
+        return L, F(0.0), F(0.0)
+    up = F(4.0) * a / d
+    vp = F(9.0) * b / d
+    return L, F(13.0) * L * (up - un), F(13.0) * L * (vp - vn)
+
+
+def luv_xyz(a, b, c, wx, wy, wz):
+    wn = wx + F(15.0) * wy + F(3.0) * wz
+    un = F(4.0) * wx / wn
+    vn = F(9.0) * wy / wn
+    y = wy * _flab_inv((a + F(16.0)) / F(116.0))
+    if a == F(0.0):
+        return F(0.0), y, F(0.0)
+    up = b / (F(13.0) * a) + un
+    vp = c / (F(13.0) * a) + vn
+    if vp == F(0.0):
+        return F(0.0), y, F(0.0)
+    return (
+        y * F(9.0) * up / (F(4.0) * vp),
+        y,
+        y * (F(12.0) - F(3.0) * up - F(20.0) * vp) / (F(4.0) * vp),
+    )
+
+
+def xyz_xyy(a, b, c, wx, wy, wz):
+    s = a + b + c
+    if s == F(0.0):
+        t = wx + wy + wz
+        return wx / t, wy / t, b
+    return a / s, b / s, b
+
+
+def xyy_xyz(a, b, c):
+    if b == F(0.0):
+        return F(0.0), c, F(0.0)
+    return a * c / b, c, (F(1.0) - a - b) * c / b
+
+
+def swap(a, b, c):
+    return c, b, a
+
+
+def invert(a, b, c):
+    return F(1.0) - a, F(1.0) - b, F(1.0) - c
+
+
+def _hexcone_hue(r, g, b, mx, delta):
+    if delta == F(0.0):
+        return F(0.0)
+    if mx == r:
+        h = (g - b) / delta
+    elif mx == g:
+        h = (b - r) / delta + F(2.0)
+    else:
+        h = (r - g) / delta + F(4.0)
+    h = h * F(60.0)
+    if h < F(0.0):
+        h = h + F(360.0)
+    if h >= F(360.0):
+        h = h - F(360.0)
+    return h
+
+
+def _max3(r, g, b):
+    m = r if r >= g else g
+    m = m if m >= b else b
+    if r != r or g != g or b != b:
+        return r + g + b
+    return m
+
+
+def _min3(r, g, b):
+    m = r if r <= g else g
+    m = m if m <= b else b
+    if r != r or g != g or b != b:
+        return r + g + b
+    return m
+
+
+def rgb_hsv(r, g, b):
+    mx = _max3(r, g, b)
+    delta = mx - _min3(r, g, b)
+    s = F(0.0) if mx == F(0.0) else delta / mx
+    return _hexcone_hue(r, g, b, mx, delta), s, mx
+
+
+def hsv_rgb(h, s, v):
+    k5 = (F(5.0) + h / F(60.0)) % F(6.0)
+    k3 = (F(3.0) + h / F(60.0)) % F(6.0)
+    k1 = (F(1.0) + h / F(60.0)) % F(6.0)
+    t5 = _clip(k5 if k5 <= F(4.0) - k5 else F(4.0) - k5, F(0.0), F(1.0))
+    t3 = _clip(k3 if k3 <= F(4.0) - k3 else F(4.0) - k3, F(0.0), F(1.0))
+    t1 = _clip(k1 if k1 <= F(4.0) - k1 else F(4.0) - k1, F(0.0), F(1.0))
+    return v - v * s * t5, v - v * s * t3, v - v * s * t1
+
+
+def rgb_hsl(r, g, b):
+    mx = _max3(r, g, b)
+    mn = _min3(r, g, b)
+    delta = mx - mn
+    light = (mx + mn) / F(2.0)
+    den = F(1.0) - abs(F(2.0) * light - F(1.0))
+    s = F(0.0) if den == F(0.0) else delta / den
+    return _hexcone_hue(r, g, b, mx, delta), s, light
+
+
+def _hsl_f(n, h, light, a):
+    k = (n + h / F(30.0)) % F(12.0)
+    t = _clip(k - F(3.0) if k - F(3.0) <= F(9.0) - k else F(9.0) - k, F(-1.0), F(1.0))
+    return light - a * t
+
+
+def hsl_rgb(h, s, light):
+    m = light if light <= F(1.0) - light else F(1.0) - light
+    a = s * m
+    return _hsl_f(F(0.0), h, light, a), _hsl_f(F(8.0), h, light, a), _hsl_f(F(4.0), h, light, a)
+
+
+def rgb_hsi(r, g, b):
+    i = (r + g + b) / F(3.0)
+    mn = _min3(r, g, b)
+    s = F(0.0) if i == F(0.0) else F(1.0) - mn / i
+    h = math.atan2(F(math.sqrt(3.0)) * (g - b), F(2.0) * r - g - b) * F(180.0 / math.pi)
+    if h < F(0.0):
+        h = h + F(360.0)
+    if h >= F(360.0):
+        h = h - F(360.0)
+    if s == F(0.0):
+        h = F(0.0)
+    return h, s, i
+
+
+def hsi_rgb(h, s, i):
+    sector = h // F(120.0)
+    hh = (h - F(120.0) * sector) * F(math.pi / 180.0)
+    x = i * (F(1.0) - s)
+    y = i * (F(1.0) + s * math.cos(hh) / math.cos(F(math.pi / 3.0) - hh))
+    z = F(3.0) * i - (x + y)
+    if sector == F(0.0):
+        return y, z, x
+    if sector == F(1.0):
+        return x, y, z
+    return z, x, y
+
+
+def _dh2(a1, b1, a2, b2, c1, c2):
+    p = c1 * c2
+    d = a1 * a2 + b1 * b2
+    x = a1 * b2 - a2 * b1
+    den = p + d
+    if d >= F(0.0):
+        if den > F(0.0):
+            return F(2.0) * x * x / den
+        return F(0.0)
+    obtuse = F(2.0) * (p - d)
+    return obtuse if obtuse > F(0.0) else F(0.0)
+
+
+def de76(l1, a1, b1, l2, a2, b2):
+    dl = l1 - l2
+    da = a1 - a2
+    db = b1 - b2
+    return math.sqrt(dl * dl + da * da + db * db)
+
+
+def de94(l1, a1, b1, l2, a2, b2, kl, kc, kh, k1, k2):
+    c1 = math.sqrt(a1 * a1 + b1 * b1)
+    c2 = math.sqrt(a2 * a2 + b2 * b2)
+    dh2 = _dh2(a1, b1, a2, b2, c1, c2)
+    tl = (l1 - l2) / kl
+    tc = (c1 - c2) / (kc * (F(1.0) + k1 * c1))
+    sh = kh * (F(1.0) + k2 * c1)
+    return math.sqrt(tl * tl + tc * tc + dh2 / (sh * sh))
+
+
+def decmc(l1, a1, b1, l2, a2, b2, ll, cc):
+    c1 = math.sqrt(a1 * a1 + b1 * b1)
+    c2 = math.sqrt(a2 * a2 + b2 * b2)
+    dh2 = _dh2(a1, b1, a2, b2, c1, c2)
+    h1 = _hue_deg(b1, a1)
+    rad = F(math.pi / 180.0)
+    if h1 >= F(164.0) and h1 <= F(345.0):
+        t = F(0.56) + abs(F(0.2) * math.cos((h1 + F(168.0)) * rad))
+    else:
+        t = F(0.36) + abs(F(0.4) * math.cos((h1 + F(35.0)) * rad))
+    c14 = c1 * c1 * c1 * c1
+    f = math.sqrt(c14 / (c14 + F(1900.0)))
+    sl = F(0.511) if l1 < F(16.0) else F(0.040975) * l1 / (F(1.0) + F(0.01765) * l1)
+    sc = F(0.0638) * c1 / (F(1.0) + F(0.0131) * c1) + F(0.638)
+    sh = sc * (f * t + F(1.0) - f)
+    tl = (l1 - l2) / (ll * sl)
+    tc = (c1 - c2) / (cc * sc)
+    return math.sqrt(tl * tl + tc * tc + dh2 / (sh * sh))
+
+
+def _pow7(x):
+    x2 = x * x
+    return x2 * x2 * x2 * x
+
+
+def de00(l1, a1, b1, l2, a2, b2, kl, kc, kh, tiny):
+    c1 = math.sqrt(a1 * a1 + b1 * b1)
+    c2 = math.sqrt(a2 * a2 + b2 * b2)
+    cb7 = _pow7(F(0.5) * (c1 + c2))
+    g1 = F(1.5) - F(0.5) * math.sqrt(cb7 / (cb7 + F(6103515625.0)))
+    a1p = g1 * a1
+    a2p = g1 * a2
+    c1p = math.sqrt(a1p * a1p + b1 * b1)
+    c2p = math.sqrt(a2p * a2p + b2 * b2)
+    dl = l2 - l1
+    dc = c2p - c1p
+    pr = c1p * c2p
+    dot = a1p * a2p + b1 * b2
+    cross = a1p * b2 - a2p * b1
+    low1 = b1 > F(0.0) or (b1 == F(0.0) and a1p > F(0.0))
+    sgn = F(1.0) if (cross > F(0.0) or (cross == F(0.0) and low1)) else F(-1.0)
+    acute = dot >= F(0.0)
+    if acute:
+        den = pr + dot
+        dh = cross * math.sqrt(F(2.0) / den) if den > tiny else F(0.0)
+    else:
+        obt = F(2.0) * (pr - dot)
+        dh = sgn * math.sqrt(obt if obt > F(0.0) else F(0.0))
+    i1 = F(1.0) / c1p if c1p > tiny else F(0.0)
+    i2 = F(1.0) / c2p if c2p > tiny else F(0.0)
+    u1x = a1p * i1
+    u1y = b1 * i1
+    u2x = a2p * i2
+    u2y = b2 * i2
+    if acute:
+        vx = u1x + u2x
+        vy = u1y + u2y
+    else:
+        vx = sgn * (u2y - u1y)
+        vy = -sgn * (u2x - u1x)
+    n2 = vx * vx + vy * vy
+    if n2 > F(0.0):
+        n = math.sqrt(n2)
+        c = vx / n
+        s = vy / n
+    else:
+        c = F(1.0)
+        s = F(0.0)
+    c2_ = c * c - s * s
+    s2_ = F(2.0) * c * s
+    c3_ = c * c2_ - s * s2_
+    s3_ = s * c2_ + c * s2_
+    c4_ = c2_ * c2_ - s2_ * s2_
+    s4_ = F(2.0) * c2_ * s2_
+    t = (
+        F(1.0)
+        - F(0.17) * (c * F(C30) + s * F(S30))
+        + F(0.24) * c2_
+        + F(0.32) * (c3_ * F(C6) - s3_ * F(S6))
+        - F(0.20) * (c4_ * F(C63) + s4_ * F(S63))
+    )
+    hb = math.atan2(s, c) * F(180.0 / math.pi)
+    if hb < F(0.0):
+        hb = hb + F(360.0)
+    x = (hb - F(275.0)) / F(25.0)
+    dtheta = F(30.0 * math.pi / 180.0) * math.exp(-(x * x))
+    lb = F(0.5) * (l1 + l2) - F(50.0)
+    lb2 = lb * lb
+    sl = F(1.0) + F(0.015) * lb2 / math.sqrt(F(20.0) + lb2)
+    cbp = F(0.5) * (c1p + c2p)
+    sc = F(1.0) + F(0.045) * cbp
+    sh = F(1.0) + F(0.015) * cbp * t
+    cbp7 = _pow7(cbp)
+    rc = F(2.0) * math.sqrt(cbp7 / (cbp7 + F(6103515625.0)))
+    rt = -math.sin(F(2.0) * dtheta) * rc
+    tl = dl / (kl * sl)
+    tc = dc / (kc * sc)
+    th = dh / (kh * sh)
+    return math.sqrt(tl * tl + tc * tc + th * th + rt * tc * th)
+'''
+# fmt: on
+
+#: The conversion steps (pixel -> pixel) the kernels compose, with their parameter counts.
+NAMES: dict[str, int] = {
+    "dec_srgb": 0,
+    "enc_srgb": 0,
+    "dec_gamma": 1,
+    "enc_gamma": 1,
+    "dec_bt": 2,
+    "enc_bt": 2,
+    "dec_romm": 0,
+    "enc_romm": 0,
+    "matrix": 9,
+    "affine": 12,
+    "gains": 3,
+    "gains_clip": 3,
+    "xyz_lab": 3,
+    "lab_xyz": 3,
+    "lab_lch": 0,
+    "lch_lab": 0,
+    "xyz_luv": 3,
+    "luv_xyz": 3,
+    "xyz_xyy": 3,
+    "xyy_xyz": 0,
+    "swap": 0,
+    "invert": 0,
+    "rgb_hsv": 0,
+    "hsv_rgb": 0,
+    "rgb_hsl": 0,
+    "hsl_rgb": 0,
+    "rgb_hsi": 0,
+    "hsi_rgb": 0,
+}
+
+#: The colour differences (two pixels -> one number), with their parameter counts.
+DELTA_E: dict[str, int] = {"de76": 0, "de94": 5, "decmc": 2, "de00": 4}
+
+_CONSTANTS = {
+    "C30": math.cos(math.radians(30.0)),
+    "S30": math.sin(math.radians(30.0)),
+    "C6": math.cos(math.radians(6.0)),
+    "S6": math.sin(math.radians(6.0)),
+    "C63": math.cos(math.radians(63.0)),
+    "S63": math.sin(math.radians(63.0)),
+}
+
+
+def _function_names() -> list[str]:
+    return [line[4 : line.index("(")] for line in SOURCE.splitlines() if line.startswith("def ")]
+
+
+@cache
+def functions(dtype: str, target: str) -> dict[str, Any]:
+    """Compile :data:`SOURCE` for ``dtype`` (``"float32"``/``"float64"``) and ``target``.
+
+    ``target``: ``"cuda"`` (numba CUDA device functions), ``"cpu"`` (``numba.njit``, the
+    CPU twin) or ``"python"``. Returns ``{name: function}``; the functions call each other
+    through the namespace they were compiled in, so each target's functions call their own.
+    """
+    F = np.float32 if dtype == "float32" else np.float64
+    ns: dict[str, Any] = {"math": math, "F": F, **_CONSTANTS}
+    exec(compile(SOURCE, f"<imageform._cuda.scalar {dtype}>", "exec"), ns)
+    names = _function_names()
+    if target == "python":
+        return {n: ns[n] for n in names}
+    if target == "cuda":
+        from imageform._cuda._launch import cuda
+
+        wrap = cuda().jit(device=True)
+    else:
+        import numba
+
+        wrap = numba.njit(inline="always")
+    # compile in definition order: a function's callees are defined (and wrapped) above it,
+    # and the wrapped object replaces the Python one in the namespace its callers read
+    for n in names:
+        ns[n] = wrap(ns[n])
+    return {n: ns[n] for n in names}

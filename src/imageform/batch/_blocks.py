@@ -1,0 +1,133 @@
+"""The per-block operations of chunked processing and their global statistics.
+
+Each block function maps one encoded RGB block to float32 with fixed parameters; the
+parameters that depend on the whole image (the white-balance illuminant, a slide's stain
+statistics) are measured first, by a dask reduction or on a reduced level or a subsample.
+Used by :mod:`imageform.batch.chunked`.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from imageform._validate import check_option
+from imageform.batch._lazy import _TiffMeta
+from imageform.errors import InvalidInputError
+
+#: The white-balance methods (of :data:`imageform.color.WHITE_BALANCE_METHODS`, the one
+#: list, which the test of the registries checks) whose illuminant is a streaming reduction
+#: (or needs none).
+_WB_METHODS = ("gray_world", "shades_of_gray", "manual")
+
+
+def _convert_block(block: np.ndarray, src: str, dst: str, params: dict[str, Any]) -> np.ndarray:
+    from imageform.color import convert
+
+    return np.asarray(convert(block, src, dst, **params), dtype=np.float32)
+
+
+def _balance_block(block: np.ndarray, gains: np.ndarray) -> np.ndarray:
+    from imageform._validate import as_image
+    from imageform.color.transfer import decode, encode
+
+    lin = decode(as_image(block, "image", channels=3), "srgb")
+    return np.asarray(encode(lin * gains, "srgb"), dtype=np.float32)
+
+
+def _linear_block(block: np.ndarray, p: float) -> np.ndarray:
+    from imageform._validate import as_image
+    from imageform.color.transfer import decode
+
+    lin = np.asarray(decode(as_image(block, "image", channels=3), "srgb"), dtype=np.float64)
+    return lin if p == 1.0 else lin**p
+
+
+def _wb_gains(x: Any, options: dict[str, Any]) -> np.ndarray:
+    """White-balance gains in linear light; the illuminant is a reduction over all blocks."""
+    from imageform.color.white_balance import white_balance
+
+    method = check_option(
+        options.get("method", "gray_world"),
+        _WB_METHODS,
+        "white-balance method for chunked processing",
+    )
+    normalize = check_option(options.get("normalize", "mean"), ("mean", "green"), "normalize")
+    if method == "manual":  # the gains do not depend on the image
+        probe = np.full((1, 1, 3), 0.5, dtype=np.float32)
+        kw = {k: options[k] for k in ("illuminant", "cct") if options.get(k) is not None}
+        return np.asarray(white_balance(probe, "manual", normalize=normalize, **kw).gains)
+    p = float(options.get("p", 6.0)) if method == "shades_of_gray" else 1.0
+    if p < 1.0:
+        raise InvalidInputError(f"expected Minkowski p >= 1, got {p!r}")
+    powered = x.map_blocks(_linear_block, p, dtype=np.float64)
+    e = np.asarray(powered.mean(axis=(0, 1)).compute()) ** (1.0 / p)
+    if not np.all(e > 0):
+        raise InvalidInputError(f"illuminant estimate {e.tolist()} has an empty channel")
+    ref = e.mean() if normalize == "mean" else e[1]
+    return (ref / e).astype(np.float32)
+
+
+def _stain_block(block: np.ndarray, method: str, target: Any, source: Any) -> np.ndarray:
+    from imageform import analysis
+
+    if method == "macenko":
+        out = analysis.macenko_normalize(block, target, source=source)
+    else:
+        out = analysis.reinhard_normalize(block, target, source_stats=source)
+    return np.asarray(out, dtype=np.float32)
+
+
+def _stain_stats(
+    x: Any,
+    opts: dict[str, Any],
+    src: Path,
+    meta: _TiffMeta | None,
+    stats_from: str,
+    budget: int,
+) -> tuple[Any, Any, str]:
+    """Return the target's statistics and the slide's own, with where they were measured.
+
+    The target's come from a JSON file or a reference image; the slide's are measured on a
+    reduced pyramid level (``level``; ``auto`` when the input has one: the largest level of
+    at most ``budget`` pixels, read whole, as whole-slide tools estimate on a thumbnail) or a
+    regular subsample of level 0 of at most that many pixels (every ``step``-th row and
+    column, read block by block: every tile of level 0 is decoded once). ``budget`` is
+    :data:`imageform.batch.chunked.STAIN_SAMPLE_PIXELS`, read when the run starts.
+    """
+    from imageform import analysis
+    from imageform.io import read_image
+
+    method = opts["method"]
+    kind = analysis.MacenkoStains if method == "macenko" else analysis.ReinhardStats
+    measure = analysis.macenko_stains if method == "macenko" else analysis.reinhard_stats
+    target = Path(opts["target"])
+    if not target.is_file():
+        raise InvalidInputError(f"--target {target} does not exist")
+    stats_t = kind.from_json(target) if target.suffix.lower() == ".json" else None
+    if stats_t is None:
+        ref = read_image(target)
+        stats_t = measure(ref[..., :3] if ref.ndim == 3 else ref)
+    levels = meta.levels if meta is not None else ()
+    if stats_from == "level" and len(levels) < 2:
+        raise InvalidInputError(
+            f"--stats-from level needs a pyramidal TIFF input; {src} has one level"
+        )
+    if stats_from != "subsample" and len(levels) > 1:
+        import tifffile
+
+        small = [k for k in range(1, len(levels)) if np.prod(levels[k]) <= budget]
+        k = small[0] if small else len(levels) - 1
+        h, w = levels[k]
+        step = max(1, int(np.ceil(np.sqrt(h * w / budget))))
+        with tifffile.TiffFile(src) as tf:
+            level = tf.series[0].levels[k].asarray()
+        where = f"pyramid level {k} ({w} x {h})" + (f", every {step}th pixel" if step > 1 else "")
+        return stats_t, measure(level[::step, ::step]), where
+    h, w = int(x.shape[0]), int(x.shape[1])
+    step = max(1, int(np.ceil(np.sqrt(h * w / budget))))
+    sample = np.asarray(x[::step, ::step].compute())
+    where = "level 0" + (f", every {step}th row and column" if step > 1 else ", every pixel")
+    return stats_t, measure(sample), where

@@ -1,0 +1,334 @@
+"""Reading one image larger than memory lazily: a TIFF or a Zarr array as a dask array.
+
+A tiled (or compressed strip) TIFF is read through tifffile's Zarr store; an uncompressed strip
+TIFF row band by row band with ``pread``; tiles larger than a block are decoded once
+(:class:`_DecodedOnce`). :func:`_tiff_meta` reads what a TIFF output copies from the input
+(pyramid levels, tile, compression, resolution, an OME-XML or Aperio pixel size).
+Used by :mod:`imageform.batch.chunked`.
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from imageform.errors import ImageformError, InvalidInputError
+
+__all__ = ["open_lazy"]
+
+
+def _kind(path: Path) -> str:
+    suffix = path.suffix.lower()
+    if suffix in (".tif", ".tiff"):
+        return "tiff"
+    if suffix == ".zarr":
+        return "zarr"
+    raise InvalidInputError(f"expected a tiled .tif/.tiff or a .zarr array, got {path}")
+
+
+class _ContiguousRows:
+    """The pixels of an uncompressed, contiguous (strip or single-strip) TIFF page, read by block.
+
+    Blocks are read with ``pread`` (one read per row of the block): a block costs its own samples,
+    never the whole strip (tifffile's Zarr store has one chunk per strip, and an uncompressed TIFF
+    is often one strip: the whole image).
+    """
+
+    def __init__(self, path: Path, offset: int, shape: tuple[int, ...], dtype: Any) -> None:
+        self.path, self.offset = path, offset
+        self.shape, self.dtype, self.ndim = shape, np.dtype(dtype), len(shape)
+
+    def __getitem__(self, key: Any) -> np.ndarray:
+        if not isinstance(key, tuple):
+            key = (key,)
+        key = key + (slice(None),) * (self.ndim - len(key))
+        if not all(isinstance(k, slice) for k in key[:2]):
+            raise TypeError("expected slices of rows and columns")
+        r0, r1, rstep = key[0].indices(self.shape[0])
+        c0, c1, cstep = key[1].indices(self.shape[1])
+        r1, c1 = max(r1, r0), max(c1, c0)
+        pixel = int(np.prod(self.shape[2:])) * self.dtype.itemsize
+        row_bytes, width = self.shape[1] * pixel, (c1 - c0) * pixel
+        out = np.empty((r1 - r0, c1 - c0, *self.shape[2:]), dtype=self.dtype)
+        flat = out.reshape(r1 - r0, -1).view(np.uint8)
+        with open(self.path, "rb") as fh:  # one read per row: only this block's columns
+            for i in range(r1 - r0):
+                buf = os.pread(fh.fileno(), width, self.offset + (r0 + i) * row_bytes + c0 * pixel)
+                if len(buf) != width:
+                    raise InvalidInputError(f"{self.path} is truncated (row {r0 + i} missing)")
+                flat[i] = np.frombuffer(buf, dtype=np.uint8)
+        return out[(slice(None, None, rstep), slice(None, None, cstep), *key[2:])]
+
+
+class _DecodedOnce:
+    """Blocks of a Zarr array whose chunks (TIFF tiles or strips) are larger than the blocks.
+
+    Zarr decodes a whole chunk for every block read from it: a 16384^2 single-tile TIFF was
+    decoded 256 times at ``--chunk 1024``. Here each decoded chunk is kept while the blocks inside
+    it are read, and decoded once (a lock per chunk: the blocks of a row run in parallel). The
+    cache holds the chunks of one block row and the next row of chunks (LRU), so that memory
+    stays bounded by a band of the image, and a chunk is decoded once when blocks go row by row.
+    """
+
+    def __init__(self, z: Any, chunk: int) -> None:
+        import threading
+        from collections import OrderedDict
+
+        self.z, self.shape, self.dtype, self.ndim = z, tuple(z.shape), np.dtype(z.dtype), z.ndim
+        self.cell = (int(z.chunks[0]), int(z.chunks[1]))
+        across = -(-self.shape[1] // self.cell[1])
+        self.capacity = (-(-chunk // self.cell[0]) + 1) * across
+        self.decodes = 0
+        self._cells: OrderedDict[tuple[int, int], np.ndarray] = OrderedDict()
+        self._lock = threading.Lock()
+        self._locks: dict[tuple[int, int], Any] = {}
+
+    def _decoded(self, i: int, j: int) -> np.ndarray:
+        import threading
+
+        key = (i, j)
+        with self._lock:
+            if key in self._cells:
+                self._cells.move_to_end(key)
+                return self._cells[key]
+            lock = self._locks.setdefault(key, threading.Lock())
+        with lock:
+            with self._lock:
+                if key in self._cells:
+                    return self._cells[key]
+            ch, cw = self.cell
+            a = np.asarray(self.z[i * ch : (i + 1) * ch, j * cw : (j + 1) * cw])
+            with self._lock:
+                self.decodes += 1
+                self._cells[key] = a
+                while len(self._cells) > self.capacity:
+                    self._cells.popitem(last=False)
+                self._locks.pop(key, None)
+            return a
+
+    def __getitem__(self, key: Any) -> np.ndarray:
+        if not isinstance(key, tuple):
+            key = (key,)
+        key = key + (slice(None),) * (self.ndim - len(key))
+        if not all(isinstance(k, slice) for k in key[:2]):
+            raise TypeError("expected slices of rows and columns")
+        r0, r1, rstep = key[0].indices(self.shape[0])
+        c0, c1, cstep = key[1].indices(self.shape[1])
+        r1, c1 = max(r1, r0), max(c1, c0)
+        out = np.empty((r1 - r0, c1 - c0, *self.shape[2:]), dtype=self.dtype)
+        ch, cw = self.cell
+        for i in range(r0 // ch, -(-r1 // ch)):
+            for j in range(c0 // cw, -(-c1 // cw)):
+                cell = self._decoded(i, j)
+                a0, a1 = max(r0, i * ch), min(r1, (i + 1) * ch)
+                b0, b1 = max(c0, j * cw), min(c1, (j + 1) * cw)
+                out[a0 - r0 : a1 - r0, b0 - c0 : b1 - c0] = cell[
+                    a0 - i * ch : a1 - i * ch, b0 - j * cw : b1 - j * cw
+                ]
+        return out[(slice(None, None, rstep), slice(None, None, cstep), *key[2:])]
+
+
+def _tiff_lazy(p: Path, chunk: int, da: Any, zarr: Any, opened: list[Any] | None) -> Any:
+    import tifffile
+
+    with tifffile.TiffFile(p) as tf:
+        page = tf.pages[0]
+        strips = (
+            isinstance(page, tifffile.TiffPage)
+            and not page.is_tiled
+            and page.compression == 1
+            and page.planarconfig == 1
+            and page.is_contiguous
+            and len(tf.series[0].levels) == 1
+        )
+        if strips:
+            src = _ContiguousRows(p, int(page.dataoffsets[0]), tuple(page.shape), page.dtype)
+    if strips:
+        if len(src.shape) != 3 or src.shape[-1] != 3:
+            raise InvalidInputError(f"{p}: expected an RGB image (H, W, 3), got {src.shape}")
+        st = p.stat()
+        return da.from_array(
+            src,
+            chunks=(chunk, chunk, 3),
+            name=f"imageform-strips-{p}-{st.st_size}-{st.st_mtime_ns}",
+            asarray=False,
+            fancy=False,
+        )
+    import weakref
+
+    store = tifffile.imread(p, aszarr=True)
+    arr = zarr.open(store, mode="r")
+    # the store holds the TIFF open: a caller that knows when it is done closes it (``opened``);
+    # else it is closed when the array goes, not at interpreter exit (an unclosed file is a
+    # ResourceWarning wherever the garbage collector happens to run)
+    if opened is not None:
+        opened.append(store)
+    weakref.finalize(arr, store.close)
+    return arr
+
+
+@dataclass(frozen=True)
+class _TiffMeta:
+    """What a TIFF output copies from a TIFF input.
+
+    The level sizes (level 0 first), the tile side (None: strips or non-square tiles),
+    compression (tifffile's tag value), resolution (pixels per unit, x and y), its unit and
+    level 0's description.
+    """
+
+    levels: tuple[tuple[int, int], ...]
+    tile: int | None
+    compression: int
+    resolution: tuple[float, float] | None
+    resolutionunit: int | None
+    description: str | None
+    ome: bool = False
+    microns: tuple[float, float] | None = None
+
+
+def _microns(desc: str) -> tuple[float, float] | None:
+    """Return the pixel size in micrometres (x, y) a TIFF description states, or None.
+
+    The description is an OME-XML (``PhysicalSizeX/Y``, in um) or an Aperio SVS one
+    (``MPP = ...``).
+    """
+    import re
+
+    if "Aperio" in desc[:200]:
+        m = re.search(r"\bMPP\s*=\s*([0-9.eE+-]+)", desc)
+        return (float(m.group(1)),) * 2 if m else None
+    xs = re.search(r'PhysicalSizeX="([0-9.eE+-]+)"', desc)
+    ys = re.search(r'PhysicalSizeY="([0-9.eE+-]+)"', desc)
+    units = re.findall(r'PhysicalSize[XY]Unit="([^"]*)"', desc)
+    if not xs or any(u not in ("µm", "um", "\u00b5m") for u in units):
+        return None
+    return float(xs.group(1)), float(ys.group(1)) if ys else float(xs.group(1))
+
+
+def _factor(big: tuple[int, int], small: tuple[int, int]) -> int:
+    """Return the whole reduction factor from ``big`` to ``small``, or 0 when there is none.
+
+    Each side of ``small`` is the floor or ceil of ``big / f``.
+    """
+    f = max(1, round(big[0] / max(small[0], 1)))
+    ok = all(s in (b // f, -(-b // f)) for b, s in zip(big, small, strict=True))
+    return f if f >= 2 and ok else 0
+
+
+def _tiff_meta(p: Path) -> _TiffMeta:
+    """Read the levels and tags of a TIFF's first series, the pyramid checked.
+
+    Every level is RGB like level 0, each a whole factor (2, 4, ...) smaller than the one
+    above.
+    """
+    import tifffile
+
+    with tifffile.TiffFile(p) as tf:
+        series = tf.series[0]
+        page = series.keyframe
+        levels: list[tuple[int, int]] = []
+        found: list[Any] = list(series.levels)
+        if isinstance(page, tifffile.TiffPage) and page.subifds:
+            # every SubIFD, not only those tifffile accepts as levels (it drops the others)
+            found = [series, *tifffile.TiffPages(page)]
+        for k, level in enumerate(found):
+            shape = tuple(int(v) for v in level.shape)
+            if len(shape) != 3 or shape[-1] != 3 or level.dtype != series.dtype:
+                raise InvalidInputError(
+                    f"{p}: pyramid level {k} is {level.dtype} {shape}; expected RGB "
+                    f"(H, W, 3) {series.dtype} like level 0"
+                )
+            if levels and not _factor(levels[-1], shape[:2]):
+                raise InvalidInputError(
+                    f"{p}: pyramid level {k} is {shape[1]} x {shape[0]}, not level {k - 1} "
+                    f"({levels[-1][1]} x {levels[-1][0]}) reduced by a whole factor"
+                )
+            levels.append((shape[0], shape[1]))
+        tile = None
+        if page.is_tiled and page.tilewidth == page.tilelength and page.tilewidth % 16 == 0:
+            tile = int(page.tilewidth)
+        tags = page.tags
+        res: tuple[float, float] | None = None
+        if "XResolution" in tags and "YResolution" in tags:
+            xr, yr = tags["XResolution"].value, tags["YResolution"].value
+            res = (xr[0] / xr[1], yr[0] / yr[1]) if xr[1] and yr[1] else None
+        unit = int(tags["ResolutionUnit"].value) if "ResolutionUnit" in tags else None
+        desc = page.description or None
+        microns = _microns(desc) if desc else None
+        if desc is not None and (
+            page.is_shaped or tf.is_ome or tf.is_svs or desc.lstrip()[:1] in ("{", "<")
+        ):
+            # tifffile's shape, an OME-XML or an Aperio header describe the input's file
+            # layout: the output is written afresh (OME-XML with the pixel size for OME)
+            desc = None
+        if microns is not None and (res is None or unit in (None, 1) or res == (1.0, 1.0)):
+            res, unit = (1e4 / microns[0], 1e4 / microns[1]), 3  # pixels per centimetre
+        return _TiffMeta(
+            tuple(levels), tile, int(page.compression), res, unit, desc, tf.is_ome, microns
+        )
+
+
+#: The largest block side: a block of 3 float64 channels stays under 2 GiB.
+_MAX_CHUNK = 16384
+
+
+def _chunk_size(chunk: object) -> int:
+    """Return the block side in pixels, 1 to 16384, refused by name otherwise."""
+    from imageform._validate import as_int
+
+    return as_int(chunk, "chunk", minimum=1, maximum=_MAX_CHUNK)
+
+
+def open_lazy(path: str | Path, chunk: int = 1024) -> Any:
+    """Open a TIFF or a Zarr array as a dask array of ``chunk x chunk`` blocks.
+
+    Nothing is read until the array is computed. A tiled (or compressed strip) TIFF is read
+    through tifffile's Zarr store, tile by tile (strip by strip: a compressed strip is
+    decoded whole); an uncompressed strip TIFF (one strip or many) row band by row band from
+    the file. Blocks have all channels (choose a multiple of the TIFF's tile size).
+    """
+    return _open_lazy(path, chunk, None)
+
+
+def _open_lazy(path: str | Path, chunk: int, opened: list[Any] | None) -> Any:
+    """:func:`open_lazy`; the TIFF stores it opens are appended to ``opened`` (if given)."""
+    from imageform._optional import require
+    from imageform._validate import as_path
+
+    p = as_path(path, "path")
+    chunk = _chunk_size(chunk)
+    da = require("dask.array", what="imageform chunked")
+    zarr = require("zarr", what="imageform chunked")
+    if not p.exists():
+        raise InvalidInputError(f"input {p} does not exist")
+    try:
+        if _kind(p) == "tiff":
+            z: Any = _tiff_lazy(p, chunk, da, zarr, opened)
+            if not isinstance(z, (zarr.Array, zarr.Group)):
+                return z  # an uncompressed strip TIFF, already a dask array
+        else:
+            z = zarr.open(str(p), mode="r")
+    except (ImageformError, MemoryError):
+        raise
+    except Exception as exc:  # a damaged file: tifffile's, zarr's or numcodecs' own errors
+        text = str(exc).strip().splitlines()
+        reason = text[0][:120] if text else type(exc).__name__
+        raise InvalidInputError(f"cannot read {p}: {reason}") from exc
+    if isinstance(z, zarr.Group):  # a pyramid: level 0 is the full resolution
+        z = z["0"]
+    if z.ndim != 3 or z.shape[-1] != 3:
+        raise InvalidInputError(f"{p}: expected an RGB image (H, W, 3), got shape {z.shape}")
+    if z.chunks[0] > chunk or z.chunks[1] > chunk:  # tiles or strips larger than a block
+        st = p.stat()
+        return da.from_array(
+            _DecodedOnce(z, chunk),
+            chunks=(chunk, chunk, z.shape[-1]),
+            name=f"imageform-decoded-once-{p}-{st.st_size}-{st.st_mtime_ns}-{chunk}",
+            asarray=False,
+            fancy=False,
+        )
+    return da.from_zarr(z, chunks=(chunk, chunk, z.shape[-1]))

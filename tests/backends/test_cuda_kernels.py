@@ -1,0 +1,257 @@
+"""The CUDA colour kernels without a GPU (issue 29): the simulator run and the CPU twin.
+
+Two checks that need no device:
+
+- :func:`test_simulator_cases` runs ``cuda_sim_cases.py`` in a fresh interpreter with
+  ``NUMBA_ENABLE_CUDASIM=1`` (numba reads it once, at its first import, so it cannot be
+  switched on inside this run): the public functions dispatch stand-in device arrays to the
+  generated kernels, which must give the NumPy path's numbers with one launch per call.
+- the CPU twin: the same generated kernel bodies and scalar functions compiled by numba's
+  CPU target for the input's dtype, so the float32 arithmetic a GPU would run (the
+  simulator runs Python floats) is checked against the NumPy path here.
+"""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from imageform import color as c
+from imageform._cuda import _launch
+from imageform._cuda.color import chain_source, run_chain_twin, run_delta_e_twin
+from imageform.color import _gpu
+from imageform.color.convert import _kernel_steps, path
+from imageform.color.rgb_spaces import RGB_SPACES
+
+ROOT = Path(__file__).resolve().parents[2]
+CASES = Path(__file__).with_name("cuda_sim_cases.py")
+
+
+def _measuring_coverage() -> bool:
+    try:
+        import coverage
+    except ImportError:  # pragma: no cover - coverage is a test dependency
+        return False
+    return coverage.Coverage.current() is not None
+
+
+def test_simulator_cases() -> None:
+    env = dict(os.environ)
+    env["NUMBA_ENABLE_CUDASIM"] = "1"
+    env.pop("IMAGEFORM_DISABLE_CUDA", None)
+    env["PYTHONPATH"] = os.pathsep.join(
+        [str(ROOT / "src"), str(ROOT), *filter(None, [env.get("PYTHONPATH", "")])]
+    )
+    cmd = [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "-p", "no:xdist"]
+    if _measuring_coverage():  # the kernels' lines count towards CI's coverage too
+        cmd[1:3] = ["-m", "coverage", "run", "--parallel-mode", "-m", "pytest"]
+    cmd += ["-o", "addopts=", str(CASES)]
+    proc = subprocess.run(cmd, cwd=ROOT, env=env, capture_output=True, text=True, timeout=600)
+    tail = (proc.stdout + proc.stderr)[-4000:]
+    assert proc.returncode == 0, tail
+    assert " passed" in proc.stdout and "skipped" not in proc.stdout.splitlines()[-1], tail
+
+
+_rng = np.random.default_rng(291)
+RGB = _rng.uniform(0.02, 0.98, size=(40, 3))
+RGB[0] = [0.5, 0.5, 0.5]
+RGB[1] = [0.0, 0.0, 0.0]
+
+# routes that use every step of imageform._cuda.scalar.NAMES between them
+ROUTES = [
+    ("srgb", "lab", {}),
+    ("lab", "srgb", {}),
+    ("prophoto", "luv", {"white": "D50"}),
+    ("luv", "rec2020", {}),
+    ("adobe_rgb", "lch", {}),
+    ("lch", "rec709", {}),
+    ("srgb", "xyy", {}),
+    ("xyy", "srgb", {}),
+    ("srgb", "hsv", {}),
+    ("hsv", "srgb", {}),
+    ("srgb", "hsl", {}),
+    ("hsl", "bgr", {}),
+    ("srgb", "hsi", {}),
+    ("hsi", "cmy", {}),
+    ("srgb", "ycbcr", {"signal_range": "limited"}),
+    ("ycbcr", "srgb", {"signal_range": "limited"}),
+]
+# float32 in float32 arithmetic: the twin is as far from the float64 result as NumPy's own
+# float32 path (measured: 3e-5 for L*, 8e-5 for hue in degrees, 2e-5 for 8-bit codes)
+TOL: dict[str, tuple[float, float]] = {"float64": (1e-9, 1e-10), "float32": (2e-4, 1e-5)}
+
+
+def _with_white(route: list, params: dict[str, object]) -> dict[str, object]:
+    """The parameters convert() hands its edges (its default white: the route's RGB space's)."""
+    p = dict(params)
+    if any("white" in e.params for e in route) and p.get("white") is None:
+        rgb = [k for k in RGB_SPACES for e in route if f"linear_{k}" in (e.src, e.dst)]
+        p["white"] = rgb[0] if rgb else "D65"
+    return p
+
+
+@pytest.mark.parametrize("dtype", ["float64", "float32"])
+@pytest.mark.parametrize(("src", "dst", "params"), ROUTES)
+def test_twin_convert(src: str, dst: str, params: dict[str, object], dtype: str) -> None:
+    x = np.asarray(c.convert(RGB, "srgb", src)).astype(dtype)
+    route = path(src, dst)
+    steps = _kernel_steps(route, _with_white(route, params))
+    assert steps, f"no kernel steps for {src} -> {dst}"
+    got = run_chain_twin(x, steps)
+    ref = np.asarray(c.convert(x, src, dst, **params))
+    atol, rtol = TOL[dtype]
+    assert got.dtype == np.dtype(dtype)
+    np.testing.assert_allclose(got, ref, atol=atol, rtol=rtol)
+
+
+LAB1 = np.asarray(c.convert(RGB, "srgb", "lab"))
+LAB2 = np.asarray(c.convert(_rng.uniform(0.02, 0.98, size=(40, 3)), "srgb", "lab"))
+LAB2[0] = LAB1[2] * [1, -1, -1]
+LAB1[0] = LAB1[2]
+
+
+@pytest.mark.parametrize("dtype", ["float64", "float32"])
+@pytest.mark.parametrize(
+    ("name", "params", "fn"),
+    [
+        ("de76", (), c.delta_e_cie76),
+        ("de94", (1.0, 1.0, 1.0, 0.045, 0.015), c.delta_e_cie94),
+        ("decmc", (2.0, 1.0), c.delta_e_cmc),
+        ("de00", (1.0, 1.0, 1.0), c.delta_e_ciede2000),
+    ],
+)
+def test_twin_delta_e(name: str, params: tuple[float, ...], fn: object, dtype: str) -> None:
+    a, b = LAB1.astype(dtype), LAB2.astype(dtype)
+    ps = list(params)
+    if name == "de00":
+        ps.append(float(np.finfo(np.dtype(dtype)).smallest_normal) ** 0.5)
+    got = run_delta_e_twin(a, b, name, ps)
+    ref = np.asarray(fn(a, b))  # type: ignore[operator]
+    atol, rtol = TOL[dtype]
+    np.testing.assert_allclose(got, ref, atol=atol, rtol=rtol)
+
+
+def test_chain_source_is_one_pass() -> None:
+    src = chain_source(["dec_srgb", "matrix", "xyz_lab"])
+    assert src.count("x[i,") == 3 and src.count("out[i,") == 3
+    assert "cuda.grid(1)" in src
+    assert "for i in range(n)" in chain_source(["swap"], "cpu")
+
+
+def test_steps_cover_three_channel_routes() -> None:
+    three = [k for k, (n, _) in c.SPACES.items() if n == 3]
+    for s in three:
+        for d in three:
+            if s != d:
+                p = {"white": "D65"}
+                assert _kernel_steps(path(s, d), p), (s, d)
+    assert _kernel_steps(path("srgb", "gray"), {"method": "rec601"}) == []
+
+
+def test_host_arrays_are_not_cuda_arrays() -> None:
+    assert not _launch.is_cuda_array(RGB)
+    assert not _launch.is_cuda_array([1.0, 2.0, 3.0])
+    assert not _gpu.wants(RGB)
+    torch = pytest.importorskip("torch")
+    assert not _launch.is_cuda_array(torch.zeros(3))
+    assert not _launch.is_cuda_array(torch.empty(3, device="meta"))
+
+
+def test_disable_switch(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setenv("IMAGEFORM_DISABLE_CUDA", "1")
+    assert not _launch.use_cuda()
+
+
+@pytest.mark.parametrize("dtype", ["uint8", "uint16"])
+def test_twin_code_values(dtype: str) -> None:
+    """uint8/uint16 code values: read as code / 255 (65535) in float32, as ``as_image`` does."""
+    top = 255 if dtype == "uint8" else 65535
+    x = np.round(RGB * top).astype(dtype)
+    route = path("srgb", "lab")
+    got = run_chain_twin(x, _kernel_steps(route, _with_white(route, {})))
+    ref = np.asarray(c.convert(x, "srgb", "lab"))
+    assert got.dtype == ref.dtype == np.float32
+    atol, rtol = TOL["float32"]
+    np.testing.assert_allclose(got, ref, atol=atol, rtol=rtol)
+
+
+# --- the pointwise commands: --device cuda ---------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def tiny_pngs(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path]:
+    from imageform.io import write_image
+
+    rng = np.random.default_rng(29)
+    folder = tmp_path_factory.mktemp("png")
+    paths = (folder / "a.png", folder / "b.png")
+    for p in paths:
+        write_image(p, rng.integers(0, 256, size=(5, 7, 3)).astype(np.uint8))
+    return paths
+
+
+def _cli(argv: list[str], **env: str) -> subprocess.CompletedProcess[str]:
+    from tests.backends.test_cuda_geometry_kernels import _run
+
+    return _run(["-m", "imageform", *argv], **env)
+
+
+def test_pointwise_device_cuda_refused_in_one_line(
+    tiny_pngs: tuple[Path, Path], tmp_path: Path
+) -> None:
+    a, b = (str(p) for p in tiny_pngs)
+    out = tmp_path / "out.npy"
+    # no GPU here (and IMAGEFORM_DISABLE_CUDA stands for one that is absent where there is)
+    for argv in (
+        ["convert", a, "-o", str(out), "--to", "lab"],
+        ["white-balance", a, "-o", str(out)],
+        ["delta-e", a, b],
+        ["batch", "convert", str(tiny_pngs[0].parent / "*.png"), "-o", str(tmp_path / "b")],
+    ):
+        proc = _cli([*argv, "--device", "cuda"], IMAGEFORM_DISABLE_CUDA="1")
+        assert proc.returncode == 1, proc.stdout + proc.stderr
+        err = [ln for ln in proc.stderr.strip().splitlines() if ln.strip()]
+        assert len(err) == 1 and "--device cuda" in err[0], proc.stderr
+        assert not out.exists() and not (tmp_path / "b").exists()
+
+
+def test_pointwise_device_cuda_under_simulator(
+    tiny_pngs: tuple[Path, Path], tmp_path: Path
+) -> None:
+    """A tiny image through ``--device cuda`` (numba's simulator) gives the CPU's numbers."""
+    import json
+
+    a, b = (str(p) for p in tiny_pngs)
+    sim = {"NUMBA_ENABLE_CUDASIM": "1"}
+    runs = {
+        "lab": ["convert", a, "--to", "lab"],
+        "gray": ["convert", a, "--to", "gray"],  # no kernel: the CPU, with a note
+        "wb": ["white-balance", a, "--method", "shades-of-gray"],
+    }
+    for name, argv in runs.items():
+        got = {}
+        for dev, env in (("cpu", {}), ("cuda", sim)):
+            out = tmp_path / f"{name}-{dev}.npy"
+            proc = _cli([*argv, "-o", str(out), "--device", dev, "--json"], **env)
+            assert proc.returncode == 0, proc.stdout + proc.stderr
+            assert json.loads(proc.stdout)["device"] == dev
+            got[dev] = np.load(out)
+            if dev == "cuda":  # a note where no kernel ran (the gray route has none)
+                assert ("has no GPU kernel" in proc.stderr) == (name == "gray"), proc.stderr
+        assert got["cuda"].dtype == got["cpu"].dtype and got["cuda"].shape == got["cpu"].shape
+        atol = 1e-3 if name == "lab" else 1e-5  # float32: L* up to 100, the others up to 1
+        np.testing.assert_allclose(got["cuda"], got["cpu"], atol=atol, rtol=0, err_msg=name)
+    de = {}
+    for dev, env in (("cpu", {}), ("cuda", sim)):
+        proc = _cli(["delta-e", a, b, "--device", dev, "--json"], **env)
+        assert proc.returncode == 0, proc.stdout + proc.stderr
+        assert "no GPU kernel" not in proc.stderr, proc.stderr
+        de[dev] = json.loads(proc.stdout)
+    assert de["cuda"]["pixels"] == 35
+    for key in ("mean", "max"):
+        assert abs(de["cuda"][key] - de["cpu"][key]) <= 1e-3, (key, de)
