@@ -8,6 +8,7 @@ before NumPy, numba and OpenCV are imported). Run::
 
     python benchmarks/bench_twoview.py [--scenes 30] [--repeat 3]
     python benchmarks/bench_twoview.py --outliers 0.5 --sigma 0.5
+    python benchmarks/bench_twoview.py --scenes 100 --tasks homography,fundamental
     python benchmarks/bench_twoview.py --kodak ../shared/data/kodak
 
 Every scene (seeded) is a random 3-D point cloud (or a plane, for the homography) seen by
@@ -41,6 +42,8 @@ import numpy as np
 from benchmarks._common import header, markdown_table
 
 K = np.array([[800.0, 0.0, 320.0], [0.0, 800.0, 240.0], [0.0, 0.0, 1.0]])
+#: What ``--tasks`` can choose (all by default); ``essential`` includes recoverPose.
+TASKS = ("homography", "fundamental", "essential", "triangulation")
 W, H = 640, 480
 
 
@@ -62,7 +65,9 @@ def scene(seed: int, n: int, outliers: float, sigma: float, planar: bool) -> dic
     t = rng.normal(0.0, 1.0, 3) * [1.0, 0.5, 0.3]
     t = t / np.linalg.norm(t)
     X: np.ndarray = np.empty((0, 3))
-    while len(X) < n:
+    for _ in range(100):  # a few poses see (almost) none of the cloud: seed 2515, say
+        if len(X) >= n:
+            break
         Y = rng.uniform([-3, -2, 4], [3, 2, 10], (4 * n, 3))
         if planar:
             normal = np.array([0.2, -0.1, 1.0])
@@ -71,6 +76,8 @@ def scene(seed: int, n: int, outliers: float, sigma: float, planar: bool) -> dic
         inside = np.all((u1 >= 0) & (u1 < [W, H]) & (u2 >= 0) & (u2 < [W, H]), axis=1)
         inside &= (Y @ R.T + t)[:, 2] > 0.5
         X = np.concatenate([X, Y[inside]])[:n]
+    if len(X) < n:
+        raise ValueError(f"scene {seed}: the second camera sees fewer than {n} of its points")
     u1, u2 = _project(X, np.eye(3), np.zeros(3)), _project(X, R, t)
     n1 = u1 + rng.normal(0.0, sigma, u1.shape)
     n2 = u2 + rng.normal(0.0, sigma, u2.shape)
@@ -122,31 +129,32 @@ def _one_scene(
         q = np.c_[u1, np.ones(len(u1))] @ Hm.T
         return float(np.sqrt(np.mean(np.sum((q[:, :2] / q[:, 2:] - u2) ** 2, -1))))
 
-    cv2.setRNGSeed(s)
-    Hc, t_c = _timed(lambda: cv2.findHomography(n1, n2, cv2.RANSAC, args.h_thr)[0], args.repeat)
-    add(
-        "homography: RMS transfer error of the true points (px)",
-        "OpenCV findHomography RANSAC",
-        h_err(Hc),
-        t_c,
-    )
-    cv2.setRNGSeed(s)
-    Hm, t_m = _timed(
-        lambda: cv2.findHomography(n1, n2, cv2.USAC_MAGSAC, args.h_thr)[0], args.repeat
-    )
-    add(
-        "homography: RMS transfer error of the true points (px)",
-        "OpenCV findHomography USAC_MAGSAC",
-        h_err(Hm),
-        t_m,
-    )
-    res, t_i = _timed(lambda: find_homography(n1, n2, threshold=args.h_thr, rng=s), args.repeat)
-    add(
-        "homography: RMS transfer error of the true points (px)",
-        "imageform find_homography",
-        h_err(res.H),
-        t_i,
-    )
+    if "homography" in args.tasks:
+        cv2.setRNGSeed(s)
+        Hc, t_c = _timed(lambda: cv2.findHomography(n1, n2, cv2.RANSAC, args.h_thr)[0], args.repeat)
+        add(
+            "homography: RMS transfer error of the true points (px)",
+            "OpenCV findHomography RANSAC",
+            h_err(Hc),
+            t_c,
+        )
+        cv2.setRNGSeed(s)
+        Hm, t_m = _timed(
+            lambda: cv2.findHomography(n1, n2, cv2.USAC_MAGSAC, args.h_thr)[0], args.repeat
+        )
+        add(
+            "homography: RMS transfer error of the true points (px)",
+            "OpenCV findHomography USAC_MAGSAC",
+            h_err(Hm),
+            t_m,
+        )
+        res, t_i = _timed(lambda: find_homography(n1, n2, threshold=args.h_thr, rng=s), args.repeat)
+        add(
+            "homography: RMS transfer error of the true points (px)",
+            "imageform find_homography",
+            h_err(res.H),
+            t_i,
+        )
 
     # --- fundamental / essential / pose (general scene) ---------------------------
     sc = scene(2000 + s, args.n, args.outliers, args.sigma, planar=False)
@@ -155,161 +163,166 @@ def _one_scene(
     def f_err(F: np.ndarray) -> float:
         return float(np.sqrt(np.mean(sampson_sq(F, u1, u2))))
 
-    cv2.setRNGSeed(s)
-    Fc, t_c = _timed(
-        lambda: cv2.findFundamentalMat(n1, n2, cv2.FM_RANSAC, args.f_thr, 0.999)[0], args.repeat
-    )
-    add(
-        "fundamental: RMS Sampson distance of the true points (px)",
-        "OpenCV findFundamentalMat FM_RANSAC",
-        f_err(Fc[:3]),
-        t_c,
-    )
-    cv2.setRNGSeed(s)
-    Fm, t_m = _timed(
-        lambda: cv2.findFundamentalMat(n1, n2, cv2.USAC_MAGSAC, args.f_thr, 0.999)[0],
-        args.repeat,
-    )
-    add(
-        "fundamental: RMS Sampson distance of the true points (px)",
-        "OpenCV findFundamentalMat USAC_MAGSAC",
-        f_err(Fm[:3]),
-        t_m,
-    )
-    resf, t_i = _timed(
-        lambda: find_fundamental_matrix(n1, n2, threshold=args.f_thr, rng=s), args.repeat
-    )
-    add(
-        "fundamental: RMS Sampson distance of the true points (px)",
-        "imageform find_fundamental_matrix",
-        f_err(resf.F),
-        t_i,
-    )
+    if "fundamental" in args.tasks:
+        cv2.setRNGSeed(s)
+        Fc, t_c = _timed(
+            lambda: cv2.findFundamentalMat(n1, n2, cv2.FM_RANSAC, args.f_thr, 0.999)[0], args.repeat
+        )
+        add(
+            "fundamental: RMS Sampson distance of the true points (px)",
+            "OpenCV findFundamentalMat FM_RANSAC",
+            f_err(Fc[:3]),
+            t_c,
+        )
+        cv2.setRNGSeed(s)
+        Fm, t_m = _timed(
+            lambda: cv2.findFundamentalMat(n1, n2, cv2.USAC_MAGSAC, args.f_thr, 0.999)[0],
+            args.repeat,
+        )
+        add(
+            "fundamental: RMS Sampson distance of the true points (px)",
+            "OpenCV findFundamentalMat USAC_MAGSAC",
+            f_err(Fm[:3]),
+            t_m,
+        )
+        resf, t_i = _timed(
+            lambda: find_fundamental_matrix(n1, n2, threshold=args.f_thr, rng=s), args.repeat
+        )
+        add(
+            "fundamental: RMS Sampson distance of the true points (px)",
+            "imageform find_fundamental_matrix",
+            f_err(resf.F),
+            t_i,
+        )
 
-    cv2.setRNGSeed(s)
-    (Ec, mc), t_c = _timed(
-        lambda: cv2.findEssentialMat(n1, n2, K, cv2.RANSAC, 0.999, args.f_thr), args.repeat
-    )
-    rese, t_i = _timed(
-        lambda: find_essential_matrix(n1, n2, K, threshold=args.f_thr, rng=s), args.repeat
-    )
-    cv2.setRNGSeed(s)
-    (Em, mm), t_m = _timed(
-        lambda: cv2.findEssentialMat(n1, n2, K, cv2.USAC_MAGSAC, 0.999, args.f_thr), args.repeat
-    )
-    mc = mc.ravel().astype(bool)
-    Ec = Ec[:3]
-    mm = mm.ravel().astype(bool)
-    Em = Em[:3]
-    (_, Rm, tm, _), t_pm = _timed(
-        lambda: cv2.recoverPose(Em, n1, n2, K, mask=mm.astype(np.uint8).copy()), args.repeat
-    )
-    # pose of each library from its own E
-    (_, Rc, tc, _), t_pc = _timed(
-        lambda: cv2.recoverPose(Ec, n1, n2, K, mask=mc.astype(np.uint8).copy()), args.repeat
-    )
-    pose, t_pi = _timed(lambda: recover_pose(rese.E, n1, n2, K, inliers=rese.inliers), args.repeat)
-    add(
-        "essential + pose: rotation error (deg)",
-        "OpenCV findEssentialMat RANSAC + recoverPose",
-        _angle_deg(Rc, sc["R"]),
-        t_c + t_pc,
-    )
-    add(
-        "essential + pose: rotation error (deg)",
-        "OpenCV findEssentialMat USAC_MAGSAC + recoverPose",
-        _angle_deg(Rm, sc["R"]),
-        t_m + t_pm,
-    )
-    add(
-        "essential + pose: rotation error (deg)",
-        "imageform find_essential_matrix + recover_pose",
-        _angle_deg(pose.R, sc["R"]),
-        t_i + t_pi,
-    )
-    add(
-        "essential + pose: translation direction error (deg)",
-        "OpenCV findEssentialMat RANSAC + recoverPose",
-        _dir_deg(tc.ravel(), sc["t"]),
-        t_c + t_pc,
-    )
-    add(
-        "essential + pose: translation direction error (deg)",
-        "OpenCV findEssentialMat USAC_MAGSAC + recoverPose",
-        _dir_deg(tm.ravel(), sc["t"]),
-        t_m + t_pm,
-    )
-    add(
-        "essential + pose: translation direction error (deg)",
-        "imageform find_essential_matrix + recover_pose",
-        _dir_deg(pose.t, sc["t"]),
-        t_i + t_pi,
-    )
-    # recoverPose alone, on the same (OpenCV's) E and mask
-    (_, Rc2, _tc2, _), t_c = _timed(
-        lambda: cv2.recoverPose(Ec, n1, n2, K, mask=mc.astype(np.uint8).copy()), args.repeat
-    )
-    pose2, t_i = _timed(lambda: recover_pose(Ec, n1, n2, K, inliers=mc), args.repeat)
-    add(
-        "recoverPose on the same E: rotation error (deg)",
-        "OpenCV recoverPose",
-        _angle_deg(Rc2, sc["R"]),
-        t_c,
-    )
-    add(
-        "recoverPose on the same E: rotation error (deg)",
-        "imageform recover_pose",
-        _angle_deg(pose2.R, sc["R"]),
-        t_i,
-    )
+    if "essential" in args.tasks:
+        cv2.setRNGSeed(s)
+        (Ec, mc), t_c = _timed(
+            lambda: cv2.findEssentialMat(n1, n2, K, cv2.RANSAC, 0.999, args.f_thr), args.repeat
+        )
+        rese, t_i = _timed(
+            lambda: find_essential_matrix(n1, n2, K, threshold=args.f_thr, rng=s), args.repeat
+        )
+        cv2.setRNGSeed(s)
+        (Em, mm), t_m = _timed(
+            lambda: cv2.findEssentialMat(n1, n2, K, cv2.USAC_MAGSAC, 0.999, args.f_thr), args.repeat
+        )
+        mc = mc.ravel().astype(bool)
+        Ec = Ec[:3]
+        mm = mm.ravel().astype(bool)
+        Em = Em[:3]
+        (_, Rm, tm, _), t_pm = _timed(
+            lambda: cv2.recoverPose(Em, n1, n2, K, mask=mm.astype(np.uint8).copy()), args.repeat
+        )
+        # pose of each library from its own E
+        (_, Rc, tc, _), t_pc = _timed(
+            lambda: cv2.recoverPose(Ec, n1, n2, K, mask=mc.astype(np.uint8).copy()), args.repeat
+        )
+        pose, t_pi = _timed(
+            lambda: recover_pose(rese.E, n1, n2, K, inliers=rese.inliers), args.repeat
+        )
+        add(
+            "essential + pose: rotation error (deg)",
+            "OpenCV findEssentialMat RANSAC + recoverPose",
+            _angle_deg(Rc, sc["R"]),
+            t_c + t_pc,
+        )
+        add(
+            "essential + pose: rotation error (deg)",
+            "OpenCV findEssentialMat USAC_MAGSAC + recoverPose",
+            _angle_deg(Rm, sc["R"]),
+            t_m + t_pm,
+        )
+        add(
+            "essential + pose: rotation error (deg)",
+            "imageform find_essential_matrix + recover_pose",
+            _angle_deg(pose.R, sc["R"]),
+            t_i + t_pi,
+        )
+        add(
+            "essential + pose: translation direction error (deg)",
+            "OpenCV findEssentialMat RANSAC + recoverPose",
+            _dir_deg(tc.ravel(), sc["t"]),
+            t_c + t_pc,
+        )
+        add(
+            "essential + pose: translation direction error (deg)",
+            "OpenCV findEssentialMat USAC_MAGSAC + recoverPose",
+            _dir_deg(tm.ravel(), sc["t"]),
+            t_m + t_pm,
+        )
+        add(
+            "essential + pose: translation direction error (deg)",
+            "imageform find_essential_matrix + recover_pose",
+            _dir_deg(pose.t, sc["t"]),
+            t_i + t_pi,
+        )
+        # recoverPose alone, on the same (OpenCV's) E and mask
+        (_, Rc2, _tc2, _), t_c = _timed(
+            lambda: cv2.recoverPose(Ec, n1, n2, K, mask=mc.astype(np.uint8).copy()), args.repeat
+        )
+        pose2, t_i = _timed(lambda: recover_pose(Ec, n1, n2, K, inliers=mc), args.repeat)
+        add(
+            "recoverPose on the same E: rotation error (deg)",
+            "OpenCV recoverPose",
+            _angle_deg(Rc2, sc["R"]),
+            t_c,
+        )
+        add(
+            "recoverPose on the same E: rotation error (deg)",
+            "imageform recover_pose",
+            _angle_deg(pose2.R, sc["R"]),
+            t_i,
+        )
 
     # --- triangulation (true cameras, noisy inlier pixels) -----------------------------
-    inl = ~sc["out"]
-    P1 = K @ np.hstack([np.eye(3), np.zeros((3, 1))])
-    P2 = K @ np.hstack([sc["R"], sc["t"][:, None]])
-    a, b = n1[inl], n2[inl]
-    Xt = sc["X"][inl]
+    if "triangulation" in args.tasks:
+        inl = ~sc["out"]
+        P1 = K @ np.hstack([np.eye(3), np.zeros((3, 1))])
+        P2 = K @ np.hstack([sc["R"], sc["t"][:, None]])
+        a, b = n1[inl], n2[inl]
+        Xt = sc["X"][inl]
 
-    def x_err(X: np.ndarray) -> float:
-        return float(np.median(np.linalg.norm(X - Xt, axis=-1)))
+        def x_err(X: np.ndarray) -> float:
+            return float(np.median(np.linalg.norm(X - Xt, axis=-1)))
 
-    Xc, t_c = _timed(lambda: cv2.triangulatePoints(P1, P2, a.T, b.T), args.repeat)
-    add(
-        "triangulation: median 3-D error (baseline = 1)",
-        "OpenCV triangulatePoints",
-        x_err((Xc[:3] / Xc[3]).T),
-        t_c,
-    )
-
-    def reproj(X: np.ndarray) -> float:
-        h1, h2 = X @ P1[:, :3].T + P1[:, 3], X @ P2[:, :3].T + P2[:, 3]
-        e = np.sum((h1[:, :2] / h1[:, 2:] - a) ** 2 + (h2[:, :2] / h2[:, 2:] - b) ** 2, -1)
-        return float(np.median(np.sqrt(e / 2.0)))
-
-    add(
-        "triangulation: median reprojection error, both views (px)",
-        "OpenCV triangulatePoints",
-        reproj((Xc[:3] / Xc[3]).T),
-        t_c,
-    )
-    for method in ("linear", "midpoint", "optimal"):
-
-        def tri(m: str = method) -> Any:
-            return triangulate_two_view(P1, P2, a, b, method=m)
-
-        r, t_i = _timed(tri, args.repeat)
-        add(
-            "triangulation: median reprojection error, both views (px)",
-            f"imageform triangulate_two_view {method}",
-            reproj(r.points),
-            t_i,
-        )
+        Xc, t_c = _timed(lambda: cv2.triangulatePoints(P1, P2, a.T, b.T), args.repeat)
         add(
             "triangulation: median 3-D error (baseline = 1)",
-            f"imageform triangulate_two_view {method}",
-            x_err(r.points),
-            t_i,
+            "OpenCV triangulatePoints",
+            x_err((Xc[:3] / Xc[3]).T),
+            t_c,
         )
+
+        def reproj(X: np.ndarray) -> float:
+            h1, h2 = X @ P1[:, :3].T + P1[:, 3], X @ P2[:, :3].T + P2[:, 3]
+            e = np.sum((h1[:, :2] / h1[:, 2:] - a) ** 2 + (h2[:, :2] / h2[:, 2:] - b) ** 2, -1)
+            return float(np.median(np.sqrt(e / 2.0)))
+
+        add(
+            "triangulation: median reprojection error, both views (px)",
+            "OpenCV triangulatePoints",
+            reproj((Xc[:3] / Xc[3]).T),
+            t_c,
+        )
+        for method in ("linear", "midpoint", "optimal"):
+
+            def tri(m: str = method) -> Any:
+                return triangulate_two_view(P1, P2, a, b, method=m)
+
+            r, t_i = _timed(tri, args.repeat)
+            add(
+                "triangulation: median reprojection error, both views (px)",
+                f"imageform triangulate_two_view {method}",
+                reproj(r.points),
+                t_i,
+            )
+            add(
+                "triangulation: median 3-D error (baseline = 1)",
+                f"imageform triangulate_two_view {method}",
+                x_err(r.points),
+                t_i,
+            )
 
 
 def run_kodak(args: argparse.Namespace) -> str:
@@ -450,6 +463,12 @@ def main() -> None:
         "--essential-only", action="store_true", help="table only the essential + pose rows"
     )
     ap.add_argument("--kodak", default=None, help="folder of the Kodak PNGs: run that test only")
+    ap.add_argument(
+        "--tasks",
+        default=",".join(TASKS),
+        type=lambda v: v.split(","),
+        help="comma-separated subset of " + ", ".join(TASKS),
+    )
     args = ap.parse_args()
     print(run_kodak(args) if args.kodak else run(args))
 

@@ -67,7 +67,7 @@ def test_7point_kernel_finds_what_the_numpy_solver_finds() -> None:
         x1, x2, *_ = _pair(100 + s, 7)
         u1, u2 = x1 * 800 + 320, x2 * 800 + 240
         k = _f7(u1, u2, np.arange(7), *bufs, np.empty((7, 9)), np.empty((2, 9)),
-                np.empty(9, np.int64), Fs)  # fmt: skip
+                np.empty(9, np.int64), Fs, np.empty((3, 3, 3)))  # fmt: skip
         ref, _ = f7(u1[None], u2[None])
         assert k == len(ref)
         for F in ref:
@@ -193,3 +193,70 @@ def test_essential_refit_keeps_no_support_point_behind_a_camera() -> None:
         # nearly all true inliers kept, and no more outliers than the band lets through
         assert (res.inliers & ~out).sum() >= 0.9 * (~out).sum()
         assert (pose.inliers & out).sum() <= 3
+
+
+def test_trials_needed_kernel_equals_the_numpy_twin() -> None:
+    """``_kernels.ransac._trials_needed`` mirrors ``_robust_core.trials_needed`` exactly."""
+    from imageform._kernels.ransac import _trials_needed
+    from imageform.geometry._robust_core import trials_needed
+
+    for n in (7, 50, 200, 10_000):
+        for n_inl in sorted({0, 1, n // 3, n // 2, n - 1, n}):
+            for s in (4, 5, 7):
+                for conf in (0.5, 0.99, 0.999, 1 - 1e-9):
+                    assert _trials_needed(n_inl, n, s, conf) == trials_needed(n_inl, n, s, conf)
+
+
+def test_support_bound_kernel_equals_the_numpy_twin() -> None:
+    """``_support_bound`` (early exit, any width and factor) is ``refine_support`` to the bit."""
+    from imageform._kernels.ransac import _refine_support, _support_bound
+    from imageform.geometry._robust_core import refine_support
+
+    rng = np.random.default_rng(0)
+    for _ in range(300):
+        thr = float(rng.uniform(0.1, 5.0))
+        dof = int(rng.integers(1, 3))
+        m = float(rng.uniform(0.0, 0.7)) * thr * thr
+        width, factor = float(rng.uniform(2.0, 5.0)), float(rng.uniform(1.5, 4.0))
+        ref = refine_support(np.array([m]), thr, dof, width, factor)
+        assert _support_bound(m, thr, dof, factor, width, 100) == ref
+        assert _refine_support(m, thr, dof, 2.0) == refine_support(np.array([m]), thr, dof)
+
+
+def test_min_eigvec_psd_matches_eigh() -> None:
+    """Inverse iteration on the Cholesky factor: the eigenvector of the smallest eigenvalue,
+    also for exact (rank-deficient) and near-degenerate least-squares matrices."""
+    from imageform._kernels.ransac import _min_eigvec_psd
+
+    rng = np.random.default_rng(1)
+    for t in range(200):
+        m = int(rng.integers(9, 120))
+        X = rng.normal(size=(m, 9)) * rng.uniform(0.01, 10.0, 9)
+        if t % 3 == 0:  # a null vector, up to a little noise
+            X[:, 0] = X[:, 1:] @ rng.normal(size=8) + rng.normal(size=m) * 10 ** rng.uniform(
+                -12, -3
+            )
+        A = X.T @ X
+        out = np.empty(9)
+        _min_eigvec_psd(A.copy(), np.empty((9, 9)), np.empty(9), np.empty(9), np.empty((9, 9)), out)
+        w, V = np.linalg.eigh(A)
+        assert _best(out[None], V[:, 0]) < 1e-8 * max(1.0, w[-1] / max(w[1] - w[0], 1e-300))
+
+
+def test_fundamental_kernel_exact_with_the_outliers_first() -> None:
+    """The SPRT verifies the correspondences in a random order: outliers listed first (a good
+    hypothesis would fail the test on the first ones) still give the exact F."""
+    x1, x2, R, t = _pair(7, 120)
+    u1, u2 = x1 @ K[:2, :2].T + K[:2, 2], x2 @ K[:2, :2].T + K[:2, 2]
+    tx = np.array([[0, -t[2], t[1]], [t[2], 0, -t[0]], [-t[1], t[0], 0]])
+    Ki = np.linalg.inv(K)
+    Ft = Ki.T @ tx @ R @ Ki
+    rng = np.random.default_rng(3)
+    for i in range(48):  # outliers at least 5 px from their epipolar line
+        while True:
+            u2[i] = rng.uniform([0, 0], [640, 480])
+            if sampson_sq(Ft, u1[i : i + 1], u2[i : i + 1])[0] > 25.0:
+                break
+    res = find_fundamental_matrix(u1, u2, rng=1)
+    assert _best(res.F[None], Ft) < 1e-9
+    assert np.array_equal(res.inliers, np.arange(120) >= 48) and res.rms < 1e-9

@@ -204,12 +204,16 @@ def test_fundamental_no_worse_than_opencv() -> None:
 
 def _fundamental_errors(seeds: range) -> np.ndarray:
     """RMS Sampson distance (px) of the true points under the F found on the noisy scenes
-    of benchmarks/bench_twoview.py (200 points, 30 % outliers, σ = 1 px, τ = 1 px)."""
+    of benchmarks/bench_twoview.py (200 points, 30 % outliers, σ = 1 px, τ = 1 px); the
+    scenes the second camera does not see (seed 515 of the first 1000) are left out."""
     from benchmarks.bench_twoview import scene as bench_scene
 
     out = []
     for s in seeds:
-        sc = bench_scene(2000 + s, 200, 0.3, 1.0, planar=False)
+        try:
+            sc = bench_scene(2000 + s, 200, 0.3, 1.0, planar=False)
+        except ValueError:
+            continue
         F = find_fundamental_matrix(sc["n1"], sc["n2"], threshold=1.0, rng=s).F
         out.append(np.sqrt(np.mean(sampson_sq(F, sc["u1"], sc["u2"]))))
     return np.asarray(out)
@@ -228,8 +232,13 @@ def test_fundamental_worst_case_near_the_best_over_seeds() -> None:
 
 @pytest.mark.slow
 def test_fundamental_worst_case_near_the_best_over_1000_seeds() -> None:
-    """The same over 1000 scenes (before: 7 of the first 300 above 1 px, up to 1.84 px)."""
+    """The same over 1000 scenes (before: 7 of the first 300 above 1 px, up to 1.84 px).
+
+    Issue 28: about 4 s since the compiled estimators; it never ended before because the
+    scene of seed 515 looped for ever (the second camera sees none of its points).
+    """
     err = _fundamental_errors(range(1000))
+    assert len(err) == 999
     assert np.median(err) < 0.35
     assert err.max() < 1.0, (int(np.argmax(err)), float(err.max()))
 

@@ -20,10 +20,17 @@ in ``imageform.geometry``):
   polynomial (Hessenberg form, then the roots isolated between those of the polynomial's
   derivatives), the eigenvectors by Gauss-Jordan elimination; Sampson distance in pixels.
 
-Speed comes from two things beyond compiled loops: no allocation per hypothesis, and the
+Speed comes from more than compiled loops: no allocation per hypothesis; the
 partial-evaluation bail-out of the score (``Σ min(e², τ²)`` grows monotonically, so the
 evaluation of a hypothesis stops as soon as it exceeds the score it has to beat: the
-hypothesis could not be kept, the result is exactly that of a full evaluation).
+hypothesis could not be kept, the result is exactly that of a full evaluation); for H and F,
+Wald's sequential probability ratio test (:func:`_score_sprt`, Matas & Chum 2008), which
+rejects most bad hypotheses after a dozen or two correspondences (verified in a random
+order, as the test assumes), the adaptive count allowing for the good ones it rejects;
+null spaces of the minimal systems by partial pivoting (:func:`_null_partial`, complete
+pivoting as the fallback); least-squares fits by inverse iteration on a Cholesky factor
+(:func:`_min_eigvec_psd`) instead of Jacobi sweeps, and the homography's ``AᵀA`` from 24
+moments per correspondence (issue 28).
 
 The random samples come from a SplitMix64 generator seeded from the caller's
 ``numpy.random.Generator`` (one draw), so a given ``rng`` gives the same result every time.
@@ -43,6 +50,10 @@ from imageform._kernels.jit import njit
 __all__: list[str] = []
 
 _OPTS = {"nogil": True, "error_model": "numpy"}
+
+#: The SPRT's initial ``δ``, the inlier ratio of a bad hypothesis (then the mean of the
+#: rejected ones'; :func:`_score_sprt`).
+_SPRT_DELTA0 = 0.05
 
 # LM residual kinds
 _H_FORWARD = 0
@@ -79,13 +90,52 @@ def _sample(state, n, s, idx):  # type: ignore[no-untyped-def]  # pragma: no cov
 
 
 @njit(**_OPTS)
+def _inliers_out(kind, M, p1, p2, thr2, order, inl_out, rms_out):  # type: ignore[no-untyped-def]  # pragma: no cover
+    """Write the inliers of ``M`` and their RMS error (NaN without any).
+
+    Into ``inl_out`` in the caller's order (``p1[i]`` is its ``order[i]``) and ``rms_out[0]``.
+    """
+    s = 0.0
+    cnt = 0
+    for i in range(p1.shape[0]):
+        e = _sq(kind, M, p1, p2, i)
+        ok = e < thr2
+        inl_out[order[i]] = ok
+        if ok:
+            s += e
+            cnt += 1
+    rms_out[0] = math.sqrt(s / cnt) if cnt > 0 else np.nan
+
+
+@njit(**_OPTS)
+def _shuffled(state, n):  # type: ignore[no-untyped-def]  # pragma: no cover - compiled
+    """Return a random permutation of ``range(n)`` (Fisher-Yates).
+
+    The verification order that the SPRT (:func:`_score_sprt`) assumes, whatever the order
+    of the input.
+    """
+    order = np.arange(n)
+    for i in range(n - 1, 0, -1):
+        j = np.int64(_rand(state) % np.uint64(i + 1))
+        order[i], order[j] = order[j], order[i]
+    return order
+
+
+@njit(**_OPTS)
 def _trials_needed(n_inl, n, s, conf):  # type: ignore[no-untyped-def]  # pragma: no cover
+    """``imageform.geometry._robust_core.trials_needed`` (a test pins the two equal)."""
     eps = n_inl / n
     if eps >= 1.0:
         return 0.0
     if eps <= 0.0:
         return np.inf
-    denom = math.log1p(-(eps**s))
+    return _trials_for(math.pow(eps, float(s)), conf)  # as Python: C pow, not powi
+
+
+@njit(**_OPTS)
+def _trials_for(p_good, conf):  # type: ignore[no-untyped-def]  # pragma: no cover - compiled
+    """``log(1 - p) / log(1 - p_good)``: samples for one good one with probability ``conf``."""
+    denom = math.log1p(-p_good)
     if denom == 0.0:
         return np.inf
     return math.log1p(-conf) / denom
@@ -235,6 +285,79 @@ def _min_eigvec(A, V, out):  # type: ignore[no-untyped-def]  # pragma: no cover 
 
 
 @njit(**_OPTS)
+def _min_eigvec_psd(A, L, x, y, V, out):  # type: ignore[no-untyped-def]  # pragma: no cover
+    """Write the eigenvector of the smallest eigenvalue of the symmetric PSD ``A`` (m, m).
+
+    Inverse iteration (Golub & Van Loan sec. 8.2.2) on the Cholesky factor ``L`` of
+    ``A + μ I`` (``μ = 1e-13 tr A``, which keeps an exact-data ``A`` of rank ``m - 1``
+    factorisable): a few triangular solves where the smallest eigenvalue is well separated,
+    which it is for a least-squares fit on many points (a few hundred flops against the
+    tens of thousands of a Jacobi sweep). Falls back to :func:`_min_eigvec` (``A``
+    destroyed) when the factorisation fails or 30 steps do not converge. ``x, y`` (m,) and
+    ``V`` (m, m) scratch.
+    """
+    m = A.shape[0]
+    tr = 0.0
+    for i in range(m):
+        tr += A[i, i]
+    ok = tr > 0.0 and math.isfinite(tr)
+    mu = 1e-13 * tr
+    for j in range(m):
+        if not ok:
+            break
+        sj = A[j, j] + mu
+        for k in range(j):
+            sj -= L[j, k] * L[j, k]
+        if not sj > 0.0:
+            ok = False
+            break
+        dj = math.sqrt(sj)
+        L[j, j] = dj
+        for i in range(j + 1, m):
+            v = A[i, j]
+            for k in range(j):
+                v -= L[i, k] * L[j, k]
+            L[i, j] = v / dj
+    if ok:
+        ok = False
+        for i in range(m):  # start: the uniform unit vector
+            x[i] = 1.0 / math.sqrt(m)
+        for _ in range(30):
+            for i in range(m):  # L z = x (z in y), then Lᵀ y = z
+                v = x[i]
+                for k in range(i):
+                    v -= L[i, k] * y[k]
+                y[i] = v / L[i, i]
+            for i in range(m - 1, -1, -1):
+                v = y[i]
+                for k in range(i + 1, m):
+                    v -= L[k, i] * y[k]
+                y[i] = v / L[i, i]
+            nrm = 0.0
+            dot = 0.0
+            for i in range(m):
+                nrm += y[i] * y[i]
+                dot += y[i] * x[i]
+            nrm = math.sqrt(nrm)
+            if not (nrm > 0.0 and math.isfinite(nrm)):
+                break
+            sgn = 1.0 / nrm if dot >= 0.0 else -1.0 / nrm
+            diff = 0.0
+            for i in range(m):
+                yi = y[i] * sgn
+                diff = max(diff, abs(yi - x[i]))
+                x[i] = yi
+            if diff < 1e-14:
+                ok = True
+                break
+    if ok:
+        for i in range(m):
+            out[i] = x[i]
+    else:
+        _min_eigvec(A, V, out)
+
+
+@njit(**_OPTS)
 def _svd3(M, U, s, V, A, W):  # type: ignore[no-untyped-def]  # pragma: no cover - compiled
     """``M = U diag(s) Vᵀ`` with ``U, V`` rotations, ``s`` descending (from ``MᵀM``).
 
@@ -337,6 +460,48 @@ def _nullspace(A, nr, m, nc, N, perm, tol):  # type: ignore[no-untyped-def]  # p
         N[k, perm[m + k]] = 1.0
         for i in range(m):
             N[k, perm[i]] = -A[i, m + k]
+    return True
+
+
+@njit(**_OPTS)
+def _null_partial(A, m, N):  # type: ignore[no-untyped-def]  # pragma: no cover - compiled
+    """Write the null space of ``A[:m, :9]`` (rank ``m``) as the rows of ``N`` (9 - m, 9).
+
+    Gaussian elimination with partial pivoting on the first ``m`` columns, then back
+    substitution with the last ``9 - m`` unknowns set to the unit vectors: a third of the
+    work of :func:`_nullspace`'s complete pivoting, which the caller falls back to on False
+    (a pivot below ``1e-10`` of the largest entry: the first ``m`` columns are nearly
+    dependent). ``A`` destroyed.
+    """
+    big = 0.0
+    for i in range(m):
+        for j in range(9):
+            big = max(big, abs(A[i, j]))
+    tol = 1e-10 * big
+    for c in range(m):
+        p = c
+        for i in range(c + 1, m):
+            if abs(A[i, c]) > abs(A[p, c]):
+                p = i
+        if not abs(A[p, c]) > tol:
+            return False
+        if p != c:
+            for j in range(c, 9):
+                A[c, j], A[p, j] = A[p, j], A[c, j]
+        inv = 1.0 / A[c, c]
+        for i in range(c + 1, m):
+            f = A[i, c] * inv
+            if f != 0.0:
+                for j in range(c + 1, 9):
+                    A[i, j] -= f * A[c, j]
+    for k in range(9 - m):
+        for j in range(m, 9):
+            N[k, j] = 1.0 if j == m + k else 0.0
+        for i in range(m - 1, -1, -1):
+            v = -A[i, m + k]
+            for j in range(i + 1, m):
+                v -= A[i, j] * N[k, j]
+            N[k, i] = v / A[i, i]
     return True
 
 
@@ -448,6 +613,68 @@ def _score(kind, M, p1, p2, thr2, limit):  # type: ignore[no-untyped-def]  # pra
 
 
 @njit(**_OPTS)
+def _score_sprt(kind, M, p1, p2, thr2, limit, log_in, log_out, log_a):  # type: ignore[no-untyped-def]  # pragma: no cover
+    """:func:`_score` with Wald's sequential probability ratio test (SPRT).
+
+    Randomised RANSAC of Matas & Chum (2008), "Randomized RANSAC with sequential
+    probability ratio test", PAMI 30(10): while the correspondences are verified, the log
+    likelihood ratio of "a bad model" against "a good model" grows by ``log_in =
+    log(δ/ε)`` for an inlier and ``log_out = log((1 - δ)/(1 - ε))`` for an outlier (``ε``
+    the inlier ratio of a good model, ``δ`` that of a bad one); the model is rejected as
+    soon as it exceeds ``log A``, after a dozen correspondences for most bad models where
+    the MSAC bound needs most of them. A good model is rejected with probability about
+    ``1/A``. Returns ``(score, inliers, verified, inliers seen)``: ``inliers`` is -1 when
+    the score exceeds ``limit``, -2 when the test rejects the model.
+    """
+    sc = 0.0
+    cnt = 0
+    lam = 0.0
+    n = p1.shape[0]
+    for i in range(n):
+        e = _sq(kind, M, p1, p2, i)
+        if e < thr2:
+            sc += e
+            cnt += 1
+            lam += log_in
+        else:
+            sc += thr2
+            lam += log_out
+            if lam > log_a:
+                return sc, -2, i + 1, cnt
+        if sc > limit:
+            return sc, -1, i + 1, cnt
+    return sc, cnt, n, cnt
+
+
+@njit(**_OPTS)
+def _sprt_a(eps, delta, t_m, m_s):  # type: ignore[no-untyped-def]  # pragma: no cover - compiled
+    """Decision threshold ``log A`` of the SPRT (Matas & Chum 2008, eq. 13).
+
+    ``A* = t_M C / m_S + 1 + log A*`` (iterated from ``A₀ = t_M C / m_S + 1``), ``C = (1 -
+    δ) log((1 - δ)/(1 - ε)) + δ log(δ/ε)``; ``t_M`` the time of a hypothesis in units of
+    one correspondence's verification, ``m_S`` the hypotheses per sample.
+    """
+    c = (1.0 - delta) * math.log((1.0 - delta) / (1.0 - eps)) + delta * math.log(delta / eps)
+    a0 = t_m * c / m_s + 1.0
+    a = a0
+    for _ in range(10):
+        a = a0 + math.log(a)
+    return math.log(a)
+
+
+@njit(**_OPTS)
+def _sprt_params(eps, delta, t_m, m_s):  # type: ignore[no-untyped-def]  # pragma: no cover
+    """``(log(δ/ε), log((1-δ)/(1-ε)), log A, 1 - 1/A)`` of the SPRT (:func:`_sprt_a`)."""
+    log_a = _sprt_a(eps, delta, t_m, m_s)
+    return (
+        math.log(delta / eps),
+        math.log((1.0 - delta) / (1.0 - eps)),
+        log_a,
+        1.0 - math.exp(-log_a),
+    )
+
+
+@njit(**_OPTS)
 def _select(kind, M, p1, p2, bound2, idx):  # type: ignore[no-untyped-def]  # pragma: no cover
     """Write the indices of the correspondences with squared error below ``bound2``; count."""
     m = 0
@@ -504,6 +731,33 @@ def _e_build(q, aux, E):  # type: ignore[no-untyped-def]  # pragma: no cover - c
 
 
 @njit(**_OPTS)
+def _h_setup(kind, q, aux, M, Mi):  # type: ignore[no-untyped-def]  # pragma: no cover - compiled
+    """Fill ``M`` from the row-major ``q`` (``Mi``: its inverse, for the symmetric error).
+
+    Returns the normalised -> pixel scales ``(sd, ss)`` of ``dst`` and ``src`` (``aux``:
+    ``Ts, Td``).
+    """
+    for a in range(3):
+        for b in range(3):
+            M[a, b] = q[3 * a + b]
+    if kind == _H_SYMMETRIC:
+        _inv3(M, Mi)
+    return 1.0 / aux[1, 0, 0], 1.0 / aux[0, 0, 0]
+
+
+@njit(**_OPTS)
+def _h_point(aux, p1, p2, i):  # type: ignore[no-untyped-def]  # pragma: no cover - compiled
+    """Correspondence ``i`` in Hartley-normalised coordinates: ``(x, y)`` source, ``(u, v)``."""
+    Ts, Td = aux[0], aux[1]
+    return (
+        Ts[0, 0] * p1[i, 0] + Ts[0, 2],
+        Ts[1, 1] * p1[i, 1] + Ts[1, 2],
+        Td[0, 0] * p2[i, 0] + Td[0, 2],
+        Td[1, 1] * p2[i, 1] + Td[1, 2],
+    )
+
+
+@njit(**_OPTS)
 def _residuals(kind, q, p1, p2, idx, m, aux, M, T, out):  # type: ignore[no-untyped-def]  # pragma: no cover
     """Residuals of the selected correspondences at parameters ``q``; False if not finite.
 
@@ -511,21 +765,10 @@ def _residuals(kind, q, p1, p2, idx, m, aux, M, T, out):  # type: ignore[no-unty
     ``M, T`` (3, 3) scratch.
     """
     if kind <= _H_SYMMETRIC:
-        Ts, Td = aux[0], aux[1]
-        sd = 1.0 / Td[0, 0]
-        ss = 1.0 / Ts[0, 0]
-        for a in range(3):
-            for b in range(3):
-                M[a, b] = q[3 * a + b]
-        if kind == _H_SYMMETRIC:
-            _inv3(M, T)
+        sd, ss = _h_setup(kind, q, aux, M, T)
         k = 0
         for j in range(m):
-            i = idx[j]
-            x = Ts[0, 0] * p1[i, 0] + Ts[0, 2]
-            y = Ts[1, 1] * p1[i, 1] + Ts[1, 2]
-            u = Td[0, 0] * p2[i, 0] + Td[0, 2]
-            v = Td[1, 1] * p2[i, 1] + Td[1, 2]
+            x, y, u, v = _h_point(aux, p1, p2, idx[j])
             w = M[2, 0] * x + M[2, 1] * y + M[2, 2]
             out[k] = ((M[0, 0] * x + M[0, 1] * y + M[0, 2]) / w - u) * sd
             out[k + 1] = ((M[1, 0] * x + M[1, 1] * y + M[1, 2]) / w - v) * sd
@@ -562,21 +805,10 @@ def _h_jac(kind, q, p1, p2, idx, m, aux, M, Mi, J):  # type: ignore[no-untyped-d
     ``∂M⁻¹/∂M_kl = -M⁻¹ E_kl M⁻¹``: ``∂r/∂M_kl = -(M⁻ᵀ α)_k (M⁻¹ y)_l`` with ``α`` the
     gradient of the residual in the first row / third row of ``M⁻¹`` (H&Z sec. 4.2.2).
     """
-    Ts, Td = aux[0], aux[1]
-    sd = 1.0 / Td[0, 0]
-    ss = 1.0 / Ts[0, 0]
-    for a in range(3):
-        for b in range(3):
-            M[a, b] = q[3 * a + b]
-    if kind == _H_SYMMETRIC:
-        _inv3(M, Mi)
+    sd, ss = _h_setup(kind, q, aux, M, Mi)
     k = 0
     for j in range(m):
-        i = idx[j]
-        x = Ts[0, 0] * p1[i, 0] + Ts[0, 2]
-        y = Ts[1, 1] * p1[i, 1] + Ts[1, 2]
-        u = Td[0, 0] * p2[i, 0] + Td[0, 2]
-        v = Td[1, 1] * p2[i, 1] + Td[1, 2]
+        x, y, u, v = _h_point(aux, p1, p2, idx[j])
         xa = M[0, 0] * x + M[0, 1] * y + M[0, 2]
         xb = M[1, 0] * x + M[1, 1] * y + M[1, 2]
         w = M[2, 0] * x + M[2, 1] * y + M[2, 2]
@@ -725,6 +957,17 @@ def _chi2_cdf(c, k):  # type: ignore[no-untyped-def]  # pragma: no cover - compi
 @njit(**_OPTS)
 def _refine_support(mean_sq, threshold, dof, factor):  # type: ignore[no-untyped-def]  # pragma: no cover
     """As ``imageform.geometry._robust_core.refine_support`` from the inliers' mean ``e²``."""
+    return _support_bound(mean_sq, threshold, dof, factor, 3.0, np.int64(100))
+
+
+@njit(**_OPTS)
+def _support_bound(mean_sq, threshold, dof, factor, width, iters):  # type: ignore[no-untyped-def]  # pragma: no cover
+    """``width σ̂`` clipped to ``[τ, factor τ]``, ``σ̂`` by ``iters`` bisections (log scale).
+
+    The bracket ``[1e-12 τ, 1e6 τ]`` is 41.4 wide in ``log σ``: 32 bisections give
+    ``σ̂`` to 1e-8 (enough for a count), 100 to the last bit. The loop ends early, with
+    the same result, once a step leaves the bracket unchanged (every later step would too).
+    """
     m = mean_sq
     t2 = threshold * threshold
     if not math.isfinite(m) or m <= 0.0:
@@ -732,7 +975,7 @@ def _refine_support(mean_sq, threshold, dof, factor):  # type: ignore[no-untyped
     if m >= t2 * dof / (dof + 2.0) * (1.0 - 1e-9):
         return threshold * factor
     a, b = 1e-12 * threshold, 1e6 * threshold
-    for _ in range(100):
+    for _ in range(iters):
         mid = math.sqrt(a * b)
         c = t2 / (mid * mid)
         lo = _chi2_cdf(c, dof)
@@ -741,12 +984,15 @@ def _refine_support(mean_sq, threshold, dof, factor):  # type: ignore[no-untyped
             if lo > 0
             else t2 * dof / (dof + 2.0)
         )
+        a0, b0 = a, b
         if ms < m:
             a = mid
         else:
             b = mid
+        if a == a0 and b == b0:
+            break
     sigma = math.sqrt(a * b)
-    return min(max(3.0 * sigma, threshold), factor * threshold)
+    return min(max(width * sigma, threshold), factor * threshold)
 
 
 # ---------------------------------------------------------------- epipolar helpers
@@ -803,7 +1049,7 @@ def _f8(p1, p2, idx, m, w, F):  # type: ignore[no-untyped-def]  # pragma: no cov
             AtA[a, b] = AtA[b, a]
     V = np.empty((9, 9))
     f = np.empty(9)
-    _min_eigvec(AtA, V, f)
+    _min_eigvec_psd(AtA, np.empty((9, 9)), np.empty(9), np.empty(9), V, f)
     Fn = np.empty((3, 3))
     for a in range(3):
         for b in range(3):
@@ -947,6 +1193,12 @@ def _support_count(kind, M, p1, p2, thr, dof, factor):  # type: ignore[no-untype
     a third of the true inliers lie beyond ``τ``, and an adaptive count from the inliers
     within ``τ`` alone draws several times the samples that the true inlier ratio asks for.
     """
+    return _support_count_n(kind, M, p1, p2, thr, dof, factor, np.int64(100))
+
+
+@njit(**_OPTS)
+def _support_count_n(kind, M, p1, p2, thr, dof, factor, iters):  # type: ignore[no-untyped-def]  # pragma: no cover
+    """:func:`_support_count` with ``σ̂`` from ``iters`` bisections (:func:`_support_bound`)."""
     thr2 = thr * thr
     e_sum = 0.0
     cnt = 0
@@ -956,7 +1208,7 @@ def _support_count(kind, M, p1, p2, thr, dof, factor):  # type: ignore[no-untype
         if e < thr2:
             e_sum += e
             cnt += 1
-    wide = _refine_support(e_sum / cnt if cnt > 0 else 0.0, thr, dof, factor)
+    wide = _support_bound(e_sum / cnt if cnt > 0 else 0.0, thr, dof, factor, 3.0, iters)
     w2 = wide * wide
     m = 0
     for i in range(n):

@@ -10,20 +10,27 @@ from imageform._kernels.jit import njit
 from imageform._kernels.ransac import (
     _F_ORTHO,
     _OPTS,
+    _SPRT_DELTA0,
     _copy3,
     _epi_row,
     _f8,
     _fro_unit,
     _hartley,
+    _inliers_out,
     _mat3,
     _mat3_tn,
+    _null_partial,
     _nullspace,
     _rank2,
     _refit_f,
     _sample,
     _sampson_parts,
     _score,
-    _support_count,
+    _score_sprt,
+    _shuffled,
+    _sprt_params,
+    _support_count_n,
+    _trials_for,
     _trials_needed,
 )
 
@@ -86,37 +93,46 @@ def _det3(A):  # type: ignore[no-untyped-def]  # pragma: no cover - compiled
 
 
 @njit(**_OPTS)
-def _f7(p1, p2, idx, xs1, xs2, T1, T2, A, N, perm, Fs):  # type: ignore[no-untyped-def]  # pragma: no cover
+def _pencil_det(N, a, M):  # type: ignore[no-untyped-def]  # pragma: no cover - compiled
+    """``det(a F1 + (1 - a) F2)`` of the null vectors ``N[1], N[0]`` (``M`` scratch)."""
+    for r in range(3):
+        for c in range(3):
+            M[r, c] = a * N[1, 3 * r + c] + (1.0 - a) * N[0, 3 * r + c]
+    return _det3(M)
+
+
+@njit(**_OPTS)
+def _f7(p1, p2, idx, xs1, xs2, T1, T2, A, N, perm, Fs, W):  # type: ignore[no-untyped-def]  # pragma: no cover
     """Write the one to three fundamental matrices (pixels, unit norm) of a 7-point sample.
 
     As ``geometry._minimal.f7``: the pencil ``a F1 + (1 - a) F2`` of the null space of the
     7 x 9 system (Hartley-normalised), ``det = 0`` a cubic in ``a`` (H&Z sec. 11.1.2).
+    ``W`` (3, 3, 3) scratch (no allocation per sample).
     """
     _hartley(p1, idx, np.int64(7), xs1, T1)
     _hartley(p2, idx, np.int64(7), xs2, T2)
     for k in range(7):
         _epi_row(xs1[k, 0], xs1[k, 1], xs2[k, 0], xs2[k, 1], 1.0, A[k])
-    if not _nullspace(A, np.int64(7), np.int64(7), np.int64(9), N, perm, 1e-10):
-        return 0
-    M = np.empty((3, 3))
-    Tmp = np.empty((3, 3))
-    # det at a = 0, 1, -1, 2 -> cubic coefficients
-    dv = np.empty(4)
-    for j in range(4):
-        a = (0.0, 1.0, -1.0, 2.0)[j]
-        for r in range(3):
-            for c in range(3):
-                M[r, c] = a * N[1, 3 * r + c] + (1.0 - a) * N[0, 3 * r + c]
-        dv[j] = _det3(M)
-    c0 = dv[0]
-    # inverse Vandermonde of (0, 1, -1, 2), increasing powers
-    c1 = -dv[0] / 2.0 + dv[1] - dv[2] / 3.0 - dv[3] / 6.0
-    c2 = -dv[0] + dv[1] / 2.0 + dv[2] / 2.0
-    c3 = dv[0] / 2.0 - dv[1] / 2.0 - dv[2] / 6.0 + dv[3] / 6.0
+    if not _null_partial(A, np.int64(7), N):
+        for k in range(7):
+            _epi_row(xs1[k, 0], xs1[k, 1], xs2[k, 0], xs2[k, 1], 1.0, A[k])
+        if not _nullspace(A, np.int64(7), np.int64(7), np.int64(9), N, perm, 1e-10):
+            return 0
+    M = W[0]
+    Tmp = W[1]
+    roots = W[2, 0]
+    # det at a = 0, 1, -1, 2 -> cubic coefficients (inverse Vandermonde, increasing powers)
+    d0 = _pencil_det(N, 0.0, M)
+    d1 = _pencil_det(N, 1.0, M)
+    dm = _pencil_det(N, -1.0, M)
+    d2 = _pencil_det(N, 2.0, M)
+    c0 = d0
+    c1 = -d0 / 2.0 + d1 - dm / 3.0 - d2 / 6.0
+    c2 = -d0 + d1 / 2.0 + dm / 2.0
+    c3 = d0 / 2.0 - d1 / 2.0 - dm / 6.0 + d2 / 6.0
     scale = max(max(abs(c0), abs(c1)), max(abs(c2), abs(c3)))
     if not abs(c3) > 1e-10 * scale:
         return 0
-    roots = np.empty(3)
     k = _cubic_roots(c0, c1, c2, c3, roots)
     out = 0
     for j in range(k):
@@ -160,25 +176,83 @@ def _local_opt(F, p1, p2, thr, sel, w, out):  # type: ignore[no-untyped-def]  # 
         _f8(p1, p2, sel, m, w, out)
 
 
+@njit(**_OPTS)
+def _adopt(F, sc, cnt, p1, p2, thr, best, best_sc, best_cnt, sel, w, Flo):  # type: ignore[no-untyped-def]  # pragma: no cover
+    """Keep ``F`` (MSAC score ``sc``, ``cnt`` inliers) if it beats the best, then LO.
+
+    LO-RANSAC (:func:`_local_opt`) when ``F`` has more than 7 inliers, its result kept when
+    it scores better still. Returns the best's score and inlier count.
+    """
+    if sc < best_sc:
+        _copy3(F, best)
+        best_sc = sc
+        best_cnt = cnt
+    if cnt > 7:
+        _local_opt(F, p1, p2, thr, sel, w, Flo)
+        sc2, cnt2 = _score(np.int64(_F_ORTHO), Flo, p1, p2, thr * thr, best_sc)
+        if cnt2 >= 0 and sc2 < best_sc:
+            _copy3(Flo, best)
+            best_sc = sc2
+            best_cnt = cnt2
+    return best_sc, best_cnt
+
+
+@njit(**_OPTS)
+def _needed(best, p1, p2, thr, term, conf, a_pass):  # type: ignore[no-untyped-def]  # pragma: no cover
+    """Adaptive sample count from the inlier ratio ``ε`` within the support of ``best``.
+
+    ``log(1 - p) / log(1 - ε⁷ a_pass)``, ``a_pass`` the probability that the SPRT keeps a
+    good hypothesis (1 without it).
+    """
+    n = p1.shape[0]
+    m = _support_count_n(np.int64(_F_ORTHO), best, p1, p2, thr, np.int64(1), term, np.int64(32))
+    if a_pass >= 1.0:
+        return _trials_needed(m, n, np.int64(7), conf)
+    if m >= n:
+        return 0.0
+    return _trials_for(math.pow(m / n, 7.0) * a_pass, conf)
+
+
+#: The SPRT's costs (Matas & Chum 2008): a 7-point hypothesis costs about 200 Sampson
+#: distances (a 7-point solve about 1 µs, a distance about 5 ns), 2 hypotheses per sample
+#: on average (1 or 3).
+_TM = 200.0
+_MS = 2.0
+
+
 @njit(
     "int64(float64[:, ::1], float64[:, ::1], float64, float64, int64, uint64, int64, int64,"
-    " float64, float64, float64[:, ::1])",
+    " float64, float64, float64[:, ::1], boolean[::1], float64[::1])",
     **_OPTS,
 )
-def fundamental_estimate(p1, p2, thr, conf, max_trials, seed, pool, max_iter, factor, term, F_out):  # type: ignore[no-untyped-def]  # pragma: no cover
-    """Robust ``F`` (``x2ᵀ F x1 = 0``): 7-point RANSAC + LO + runner-up pool, then LM.
+def fundamental_estimate(  # type: ignore[no-untyped-def]
+    q1, q2, thr, conf, max_trials, seed, pool, max_iter, factor, term, F_out, inl_out, rms_out
+):  # pragma: no cover
+    """Robust ``F`` (``x2ᵀ F x1 = 0``): 7-point RANSAC + SPRT + LO + runner-up pool, then LM.
 
     As ``twoview.find_fundamental_matrix``'s NumPy path (``_robust_core.ransac`` with
     ``pool``): every hypothesis that beats the best is locally optimised; the ``pool`` best
     of the others are kept and locally optimised before sampling stops, sampling going on
-    when that improves the best and the adaptive count asks for more. Writes ``F_out``
-    (rank 2, refined) and returns the samples drawn, negated when no hypothesis had 8
-    inliers.
+    when that improves the best and the adaptive count asks for more. Beyond it,
+    hypotheses are verified with Wald's SPRT (:func:`._kernels.ransac._score_sprt`) once a
+    best hypothesis gives ``ε`` (its inlier ratio before LO: that of a hypothesis from an
+    outlier-free sample), ``δ`` the mean inlier ratio seen in the rejected ones; the
+    correspondences are verified in a random order (a permuted copy), as the test assumes,
+    and the adaptive count allows for the good hypotheses it rejects. Writes ``F_out``
+    (rank 2, refined, unit norm), its inliers (Sampson distance within ``τ``) in ``inl_out``
+    (N,) and their RMS in ``rms_out[0]``, and returns the samples drawn, negated when no
+    hypothesis had 8 inliers.
     """
-    n = p1.shape[0]
+    n = q1.shape[0]
     thr2 = thr * thr
     state = np.empty(1, dtype=np.uint64)
     state[0] = seed
+    order = _shuffled(state, n)
+    p1 = np.empty((n, 2))
+    p2 = np.empty((n, 2))
+    for i in range(n):
+        p1[i, 0], p1[i, 1] = q1[order[i], 0], q1[order[i], 1]
+        p2[i, 0], p2[i, 1] = q2[order[i], 0], q2[order[i], 1]
     idx = np.empty(7, dtype=np.int64)
     xs1 = np.empty((7, 2))
     xs2 = np.empty((7, 2))
@@ -188,6 +262,7 @@ def fundamental_estimate(p1, p2, thr, conf, max_trials, seed, pool, max_iter, fa
     N = np.empty((2, 9))
     perm = np.empty(9, dtype=np.int64)
     Fs = np.empty((3, 3, 3))
+    W = np.empty((3, 3, 3))
     best = np.zeros((3, 3))
     Flo = np.empty((3, 3))
     sel = np.empty(n, dtype=np.int64)
@@ -195,38 +270,52 @@ def fundamental_estimate(p1, p2, thr, conf, max_trials, seed, pool, max_iter, fa
     pool_F = np.empty((max(pool, 1), 3, 3))
     pool_sc = np.empty(max(pool, 1))
     n_pool = 0
-    kf = np.int64(_F_ORTHO)
-    kd = np.int64(1)
     best_sc = np.inf
     best_cnt = -1
+    # SPRT state: off until a best hypothesis gives ε
+    sprt = False
+    eps = 0.0
+    delta = _SPRT_DELTA0
+    rej_frac = 0.0
+    rej_n = 0
+    log_in = 0.0
+    log_out = 0.0
+    log_a = np.inf
+    a_pass = 1.0
     needed = float(max_trials)
     drawn = 0
     while True:
         while drawn < min(needed, max_trials):
             _sample(state, n, np.int64(7), idx)
             drawn += 1
-            k = _f7(p1, p2, idx, xs1, xs2, T1, T2, A, N, perm, Fs)
+            k = _f7(p1, p2, idx, xs1, xs2, T1, T2, A, N, perm, Fs, W)
             for j in range(k):
                 F = Fs[j]
                 limit = pool_sc[pool - 1] if (pool > 0 and n_pool == pool) else np.inf
                 limit = max(limit, best_sc)
-                sc, cnt = _score(np.int64(_F_ORTHO), F, p1, p2, thr2, limit)
+                if sprt:
+                    sc, cnt, tested, seen = _score_sprt(
+                        np.int64(_F_ORTHO), F, p1, p2, thr2, limit, log_in, log_out, log_a
+                    )
+                    if cnt == -2:  # rejected by the SPRT: δ from the rejected hypotheses
+                        rej_frac += seen / tested
+                        rej_n += 1
+                        if rej_n % 64 == 0:
+                            delta = min(max(rej_frac / rej_n, 1e-3), 0.5 * eps)
+                            log_in, log_out, log_a, a_pass = _sprt_params(eps, delta, _TM, _MS)
+                else:
+                    sc, cnt = _score(np.int64(_F_ORTHO), F, p1, p2, thr2, limit)
                 if cnt < 0:
                     continue
                 if sc < best_sc:
-                    _copy3(F, best)
-                    best_sc = sc
-                    best_cnt = cnt
-                    if cnt > 7:
-                        _local_opt(F, p1, p2, thr, sel, w, Flo)
-                        sc2, cnt2 = _score(np.int64(_F_ORTHO), Flo, p1, p2, thr2, best_sc)
-                        if cnt2 >= 0 and sc2 < best_sc:
-                            _copy3(Flo, best)
-                            best_sc = sc2
-                            best_cnt = cnt2
-                    needed = _trials_needed(
-                        _support_count(kf, best, p1, p2, thr, kd, term), n, np.int64(7), conf
+                    if cnt / n > 2.0 * delta and cnt / n < 0.999:
+                        eps = cnt / n
+                        sprt = True
+                        log_in, log_out, log_a, a_pass = _sprt_params(eps, delta, _TM, _MS)
+                    best_sc, best_cnt = _adopt(
+                        F, sc, cnt, p1, p2, thr, best, best_sc, best_cnt, sel, w, Flo
                     )
+                    needed = _needed(best, p1, p2, thr, term, conf, a_pass)
                 elif pool > 0:
                     # insert into the pool (sorted by score, the pool best first)
                     pos = n_pool
@@ -246,26 +335,18 @@ def fundamental_estimate(p1, p2, thr, conf, max_trials, seed, pool, max_iter, fa
         for r in range(n_pool):
             F = pool_F[r]
             sc, cnt = _score(np.int64(_F_ORTHO), F, p1, p2, thr2, np.inf)
-            if sc < best_sc:
-                _copy3(F, best)
-                best_sc = sc
-                best_cnt = cnt
-            if cnt > 7:
-                _local_opt(F, p1, p2, thr, sel, w, Flo)
-                sc2, cnt2 = _score(np.int64(_F_ORTHO), Flo, p1, p2, thr2, best_sc)
-                if cnt2 >= 0 and sc2 < best_sc:
-                    _copy3(Flo, best)
-                    best_sc = sc2
-                    best_cnt = cnt2
+            best_sc, best_cnt = _adopt(
+                F, sc, cnt, p1, p2, thr, best, best_sc, best_cnt, sel, w, Flo
+            )
         n_pool = 0
-        needed = _trials_needed(
-            _support_count(kf, best, p1, p2, thr, kd, term), n, np.int64(7), conf
-        )
+        needed = _needed(best, p1, p2, thr, term, conf, a_pass)
         if best_sc >= before or drawn >= min(needed, max_trials):
             break
     if best_cnt < 8:
         return -drawn
     _rank2(best)
     _refit_f(best, p1, p2, thr, factor, max_iter)
+    _fro_unit(best)
     _copy3(best, F_out)
+    _inliers_out(np.int64(_F_ORTHO), best, p1, p2, thr2, order, inl_out, rms_out)
     return drawn

@@ -8,23 +8,29 @@ Internal to :mod:`imageform.geometry`.
 
 from __future__ import annotations
 
+import functools
 import math
+import numbers
 from collections.abc import Callable
 
 import numpy as np
 from numpy.typing import NDArray
 
 from imageform._backend import to_numpy
+from imageform._random import as_rng
+from imageform._validate import MAX_MAGNITUDE, check_positive, describe
 from imageform._validate import as_points_bounded as as_points
-from imageform._validate import check_positive, describe
 from imageform.errors import InvalidInputError
 
 __all__ = [
+    "F_REFINE_FACTOR",
+    "H_SUPPORT_WIDTH",
     "REFINE_FACTOR",
     "TERMINATION_FACTOR",
     "check_confidence",
     "check_pairs",
     "hartley",
+    "kernel_seed",
     "levenberg_marquardt",
     "ransac",
     "refine_support",
@@ -42,6 +48,24 @@ BATCH = 32
 #: (see :func:`refine_support`).
 REFINE_FACTOR = 2.0
 
+#: Upper bound of the fundamental matrix's refinement support, as a multiple of the
+#: threshold (:data:`REFINE_FACTOR` for the others). The Sampson distance's support is
+#: ``3σ̂``; with the threshold near the noise (``τ = σ``, as the 1 px default and
+#: benchmarks/bench_twoview.py's first setting), a bound of ``2τ`` cut it at ``2σ``, leaving
+#: out 4.6 % of the true inliers, and the model that chose the support kept them out: issue
+#: 28, median error of the true points over 100 of its scenes 0.276 px with ``2τ``, 0.247 px
+#: with ``3τ`` (OpenCV's USAC_MAGSAC 0.288 px).
+F_REFINE_FACTOR = 3.0
+
+#: Width of the homography's refinement support in units of the noise ``σ̂`` (see
+#: :func:`refine_support`; 3 for the 1-D epipolar residuals): the 99.99 % quantile of the
+#: norm of a 2-D Gaussian residual, ``sqrt(-2 ln 1e-4) = 4.29``. The support is chosen by the
+#: model that is then fitted to it, so the true inliers left out (the tail beyond ``3σ̂``,
+#: 1.1 % of a 2-D residual) pull the fit towards that model: issue 28, 56 of the 4200 true
+#: inliers of benchmarks/bench_twoview.py's 30 planar scenes beyond ``3σ̂`` cost 5 % of the
+#: median accuracy (0.361 against 0.343 px with all of them).
+H_SUPPORT_WIDTH = math.sqrt(-2.0 * math.log(1e-4))
+
 #: Upper bound of the support whose inlier ratio sets the adaptive sample count of the
 #: compiled estimators (``imageform._kernels.ransac``), as a multiple of the threshold: the
 #: correspondences within ``3σ̂`` (``σ̂`` the noise estimated from the inliers, as
@@ -54,6 +78,9 @@ TERMINATION_FACTOR = 1.5
 
 def check_pairs(a: object, b: object, name_a: str, name_b: str, n_min: int) -> tuple[F64, F64]:
     """Two point sets ``(N, 2)`` of the same length ``N >= n_min``, finite, as float64."""
+    plain = _plain_pairs(a, b, n_min)
+    if plain is not None:
+        return plain
     pa = np.asarray(to_numpy(as_points(a, name_a, 2)), dtype=np.float64)
     pb = np.asarray(to_numpy(as_points(b, name_b, 2)), dtype=np.float64)
     if pa.ndim != 2:
@@ -70,6 +97,48 @@ def check_pairs(a: object, b: object, name_a: str, name_b: str, n_min: int) -> t
             f"expected at least {n_min} correspondences in {name_a}, {name_b}, got {pa.shape[0]}"
         )
     return pa, pb
+
+
+def _plain_pairs(a: object, b: object, n_min: int) -> tuple[F64, F64] | None:
+    """Check the common case of :func:`check_pairs` in a few microseconds, else None.
+
+    Two float32 / float64 NumPy arrays (N, 2), ``N >= n_min``, every value finite and within
+    ``MAX_MAGNITUDE``: what the full checks accept from such arrays (a tenth of a
+    millisecond, as much as a robust homography's whole estimate). Anything else (None)
+    goes through the full checks, which say what is wrong.
+    """
+    if type(a) is not np.ndarray or type(b) is not np.ndarray:
+        return None
+    if a.dtype not in _FLOATS or b.dtype not in _FLOATS or a.ndim != 2 or b.ndim != 2:
+        return None
+    if a.shape[1] != 2 or b.shape[1] != 2 or a.shape[0] != b.shape[0] or a.shape[0] < n_min:
+        return None
+    pa = np.asarray(a, dtype=np.float64)
+    pb = np.asarray(b, dtype=np.float64)
+    lo = min(float(pa.min()), float(pb.min()))
+    hi = max(float(pa.max()), float(pb.max()))
+    if not (math.isfinite(lo) and math.isfinite(hi) and max(-lo, hi) <= MAX_MAGNITUDE):
+        return None
+    return pa, pb
+
+
+_FLOATS = (np.dtype(np.float64), np.dtype(np.float32))
+
+
+def kernel_seed(rng: object) -> np.uint64:
+    """Return a compiled sampler's seed: one draw ``as_rng(rng).integers(0, 2**63 - 1)``.
+
+    For an int seed the draw is cached: building a Generator costs tens of microseconds, a
+    tenth of a robust homography's estimate.
+    """
+    if isinstance(rng, numbers.Integral) and not isinstance(rng, bool) and int(rng) >= 0:
+        return _int_seed(int(rng))
+    return np.uint64(as_rng(rng).integers(0, 2**63 - 1))
+
+
+@functools.lru_cache(maxsize=1024)
+def _int_seed(seed: int) -> np.uint64:
+    return np.uint64(np.random.default_rng(seed).integers(0, 2**63 - 1))
 
 
 def result_dtype(*inputs: object) -> type[np.floating]:
@@ -289,15 +358,17 @@ def _chi2_cdf(c: float, k: int) -> float:
     return 1.0 - math.exp(-c / 2.0) * (1.0 + c / 2.0)
 
 
-def refine_support(sq_err: F64, threshold: float, dof: int) -> float:
+def refine_support(
+    sq_err: F64, threshold: float, dof: int, width: float = 3.0, factor: float = REFINE_FACTOR
+) -> float:
     """Residual bound of the correspondences used by the final least-squares refinement.
 
     The consensus threshold ``τ`` clips the tail of the inlier distribution (at ``τ = σ``
     a third of the inliers of a 1-D residual lie beyond it), which costs accuracy. The
     noise ``σ̂`` is estimated from the inliers' mean squared residual ``m`` corrected for
     the truncation, ``m = σ² k P(χ²_{k+2} < τ²/σ²) / P(χ²_k < τ²/σ²)`` for a residual
-    with ``k = dof`` Gaussian components, and the support is ``3 σ̂`` clipped to
-    ``[τ, REFINE_FACTOR τ]`` (a wider least-squares support than the consensus threshold,
+    with ``k = dof`` Gaussian components, and the support is ``width σ̂`` (default ``3 σ̂``)
+    clipped to ``[τ, factor τ]`` (a wider least-squares support than the consensus threshold,
     as the threshold multiplier of Lebeda, Matas & Chum (2012), "Fixing the locally
     optimized RANSAC", BMVC). Exact data (``σ̂ = 0``) keep ``τ``.
     """
@@ -306,7 +377,7 @@ def refine_support(sq_err: F64, threshold: float, dof: int) -> float:
     if not np.isfinite(m) or m <= 0.0:
         return threshold
     if m >= t2 * dof / (dof + 2.0) * (1.0 - 1e-9):
-        return threshold * REFINE_FACTOR
+        return threshold * factor
 
     def mean_sq(sig: float) -> float:
         c = t2 / (sig * sig)
@@ -321,7 +392,7 @@ def refine_support(sq_err: F64, threshold: float, dof: int) -> float:
         else:
             b = mid
     sigma = math.sqrt(a * b)
-    return float(min(max(3.0 * sigma, threshold), REFINE_FACTOR * threshold))
+    return float(min(max(width * sigma, threshold), factor * threshold))
 
 
 def refit_on_support(
@@ -332,15 +403,17 @@ def refit_on_support(
     dof: int,
     min_points: int,
     rounds: int = 3,
+    width: float = 3.0,
+    factor: float = REFINE_FACTOR,
 ) -> F64:
     """Refit ``model`` by least squares on the correspondences within its support.
 
-    The support is what :func:`refine_support` sets; refits go on until the support stops
-    changing (or falls under ``min_points``), at most ``rounds`` times; ``refit(model,
-    selected)`` fits once.
+    The support is what :func:`refine_support` sets (``width``, ``factor``); refits go on
+    until the support stops changing (or falls under ``min_points``), at most ``rounds``
+    times; ``refit(model, selected)`` fits once.
     """
     e0 = sq_error(model)
-    wide = refine_support(e0[e0 < threshold * threshold], threshold, dof)
+    wide = refine_support(e0[e0 < threshold * threshold], threshold, dof, width, factor)
     sel = e0 < wide * wide
     for _ in range(rounds):
         model = refit(model, sel)

@@ -157,33 +157,39 @@ def _find_homography_numba(
     trials: int,
     mode: str,
     n_iter: int,
-    gen: np.random.Generator,
+    rng: RNGLike,
     src: object,
     dst: object,
 ) -> HomographyResult:
     """:func:`find_homography` by the compiled kernel (same steps, see ``_kernels.ransac``)."""
     from imageform._kernels.ransac_h import homography_estimate
 
-    H = np.zeros((3, 3))
+    H = np.empty((3, 3))
+    inl = np.empty(s.shape[0], dtype=bool)
+    rms = np.empty(1)
     drawn = homography_estimate(
         np.ascontiguousarray(s),
         np.ascontiguousarray(d),
         thr,
         p,
         min(trials, _INT_CAP),
-        np.uint64(gen.integers(0, 2**63 - 1)),
+        _robust_core.kernel_seed(rng),
         _REFINE_CODE[mode],
         min(n_iter, _INT_CAP),
         _robust_core.REFINE_FACTOR,
         _robust_core.TERMINATION_FACTOR,
+        _robust_core.H_SUPPORT_WIDTH,
         H,
+        inl,
+        rms,
     )
     if drawn < 0:
         raise DegenerateConfigurationError(
             f"no homography from src to dst with at least 4 inliers within {thr:g} px after "
             f"{-drawn} samples"
         )
-    return _finish(H, s, d, thr, int(drawn), src, dst)
+    # the kernel scaled H as _normalise_scale and wrote its inliers and their RMS
+    return HomographyResult(H.astype(result_dtype(src, dst)), inl, float(rms[0]), int(drawn))
 
 
 def find_homography(
@@ -210,8 +216,9 @@ def find_homography(
     ``H`` minimises, by Levenberg-Marquardt, the symmetric transfer error
     ``Σ ‖x' - π(H x)‖² + ‖x - π(H⁻¹ x')‖²`` (``refine="symmetric"``, noise in both images)
     or the forward one (``"forward"``, as OpenCV) of the correspondences within the
-    refinement support (``3σ̂`` with ``σ̂`` the noise estimated from the inliers, between
-    ``τ`` and ``2τ``); the inliers are those within ``τ`` of the final ``H``.
+    refinement support (``4.29σ̂``, the 99.99 % quantile of a 2-D residual, with ``σ̂`` the
+    noise estimated from the inliers, between ``τ`` and ``2τ``); the inliers are those
+    within ``τ`` of the final ``H``.
 
     Parameters
     ----------
@@ -266,9 +273,9 @@ def find_homography(
     trials = as_int(max_trials, "max_trials", minimum=1)
     mode = check_option(refine, _REFINE, "refine")
     n_iter = as_int(max_iter, "max_iter", minimum=0)
-    gen = as_rng(rng)
     if use_numba(s):
-        return _find_homography_numba(s, d, thr, p, trials, mode, n_iter, gen, src, dst)
+        return _find_homography_numba(s, d, thr, p, trials, mode, n_iter, rng, src, dst)
+    gen = as_rng(rng)
     n = s.shape[0]
     sn, Ts = hartley(s)
     dn, Td = hartley(d)
@@ -308,5 +315,6 @@ def find_homography(
             thr,
             2,
             4,
+            width=_robust_core.H_SUPPORT_WIDTH,
         )
     return _finish(H, s, d, thr, drawn, src, dst)

@@ -304,7 +304,7 @@ def find_fundamental_matrix(
     Levenberg-Marquardt over the orthonormal representation ``F = U diag(1, σ, 0) Vᵀ``
     (Bartoli & Sturm 2004, CVIU 97), which keeps rank 2, the Sampson distances of the
     correspondences within the refinement support (``3σ̂`` with ``σ̂`` the noise estimated
-    from the inliers, between ``τ`` and ``2τ``); the inliers are those within ``τ`` of it.
+    from the inliers, between ``τ`` and ``3τ``); the inliers are those within ``τ`` of it.
 
     Parameters
     ----------
@@ -346,12 +346,13 @@ def find_fundamental_matrix(
     """
     p1, p2 = check_pairs(points1, points2, "points1", "points2", 8)
     thr, p, trials, n_iter = _robust_args(threshold, confidence, max_trials, max_iter)
-    gen = as_rng(rng)
     n = p1.shape[0]
     if use_numba(p1):
         from imageform._kernels.ransac_f import fundamental_estimate
 
-        Fk: F64 = np.zeros((3, 3))
+        Fk: F64 = np.empty((3, 3))
+        inl = np.empty(n, dtype=bool)
+        rms = np.empty(1)
         drawn = int(
             fundamental_estimate(
                 np.ascontiguousarray(p1),
@@ -359,12 +360,14 @@ def find_fundamental_matrix(
                 thr,
                 p,
                 min(trials, 2**62),
-                np.uint64(gen.integers(0, 2**63 - 1)),
+                _robust_core.kernel_seed(rng),
                 _LO_POOL,
                 min(n_iter, 2**62),
-                _robust_core.REFINE_FACTOR,
+                _robust_core.F_REFINE_FACTOR,
                 _robust_core.TERMINATION_FACTOR,
                 Fk,
+                inl,
+                rms,
             )
         )
         if drawn < 0:
@@ -372,7 +375,11 @@ def find_fundamental_matrix(
                 f"no fundamental matrix with at least 8 inliers within {thr:g} px after "
                 f"{-drawn} samples"
             )
-        return _fundamental_result(Fk, p1, p2, thr, drawn, points1, points2)
+        # the kernel wrote F (unit norm), its inliers and their RMS
+        Fk = Fk if Fk.flat[np.argmax(np.abs(Fk))] > 0 else -Fk  # _unit's sign
+        dtype = result_dtype(points1, points2)
+        return FundamentalResult(Fk.astype(dtype), inl, float(rms[0]), drawn)
+    gen = as_rng(rng)
 
     def solve(idx: NDArray[np.intp]) -> F64:
         return f7(p1[idx], p2[idx])[0]
@@ -406,6 +413,7 @@ def find_fundamental_matrix(
         thr,
         1,
         8,
+        factor=_robust_core.F_REFINE_FACTOR,
     )
     return _fundamental_result(F, p1, p2, thr, drawn, points1, points2)
 
