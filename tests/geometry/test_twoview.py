@@ -235,10 +235,11 @@ def test_fundamental_worst_case_near_the_best_over_1000_seeds() -> None:
     """The same over 1000 scenes (before: 7 of the first 300 above 1 px, up to 1.84 px).
 
     Issue 28: about 4 s since the compiled estimators; it never ended before because the
-    scene of seed 515 looped for ever (the second camera sees none of its points).
+    scene of seed 515 looped for ever (the second camera sees none of its points): that
+    scene is left out and seed 1000 taken instead, so 1000 scenes are checked.
     """
-    err = _fundamental_errors(range(1000))
-    assert len(err) == 999
+    err = _fundamental_errors(range(1001))
+    assert len(err) == 1000
     assert np.median(err) < 0.35
     assert err.max() < 1.0, (int(np.argmax(err)), float(err.max()))
 
