@@ -68,6 +68,7 @@ __all__ = [
     "check_nonempty",
     "check_nonzero_rows",
     "check_option",
+    "check_path",
     "check_positive",
     "check_real_values",
     "check_result_array",
@@ -1088,6 +1089,17 @@ def as_path(value: object, name: str) -> Any:
         if isinstance(text, str) and text.strip() and "\0" not in text:
             return Path(text)
     raise InvalidInputError(f"expected {name} as a file or folder name, got {describe(value)}")
+
+
+def check_path(path: object, name: str) -> None:
+    """Raise :class:`TypeError` naming ``name`` unless ``path`` is a str or os.PathLike.
+
+    An empty string is refused too. Unlike :func:`as_path` (an
+    :class:`~imageform.errors.InvalidInputError`), a wrong type is a :class:`TypeError`: the
+    report functions' rule (moved from ``imageform.report._checks``, issue 30).
+    """
+    if not isinstance(path, str | os.PathLike) or (isinstance(path, str) and not path):
+        raise TypeError(f"expected {name} as a non-empty path (str or Path), got {path!r:.40}")
 
 
 # --- one home (issue 30): the checks the packages once kept in modules of their own ---
