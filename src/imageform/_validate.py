@@ -68,6 +68,7 @@ __all__ = [
     "check_nonempty",
     "check_nonzero_rows",
     "check_option",
+    "check_path",
     "check_positive",
     "check_real_values",
     "check_result_array",
@@ -808,9 +809,9 @@ def as_real_array(
     if ndim is not None:
         dims = (ndim,) if isinstance(ndim, int) else tuple(ndim)
         if arr.ndim not in dims:
-            want = " or ".join(str(d) for d in dims)
+            want = " or ".join(f"{d}-d" for d in dims)
             raise InvalidInputError(
-                f"expected {name} with {want} dimension(s), got shape {format_shape(arr.shape)}"
+                f"expected {name} as a {want} array, got shape {format_shape(arr.shape)}"
             )
     arr = arr.astype(np.float64, copy=False)
     if check:
@@ -828,15 +829,15 @@ def check_real_values(
 ) -> None:
     """Run the value checks of :func:`as_real_array` on a float NumPy array (one min/max pass).
 
-    NaN always, inf unless ``finite=False``, and the sign.
+    NaN always, inf unless ``finite=False`` (one message, "contains NaN or inf"), and the sign.
     """
     if not arr.size:
         return
     lo, hi = float(np.min(arr)), float(np.max(arr))
+    if finite and not (math.isfinite(lo) and math.isfinite(hi)):
+        raise InvalidInputError(f"{name} contains NaN or inf")
     if math.isnan(lo) or math.isnan(hi):
         raise InvalidInputError(f"{name} contains NaN")
-    if finite and not (math.isfinite(lo) and math.isfinite(hi)):
-        raise InvalidInputError(f"{name} contains inf")
     if positive and lo <= 0:
         raise InvalidInputError(f"expected {name} > 0, got min {lo:g}")
     if nonnegative and lo < 0:
@@ -1090,6 +1091,17 @@ def as_path(value: object, name: str) -> Any:
     raise InvalidInputError(f"expected {name} as a file or folder name, got {describe(value)}")
 
 
+def check_path(path: object, name: str) -> None:
+    """Raise :class:`TypeError` naming ``name`` unless ``path`` is a str or os.PathLike.
+
+    An empty string is refused too. Unlike :func:`as_path` (an
+    :class:`~imageform.errors.InvalidInputError`), a wrong type is a :class:`TypeError`: the
+    report functions' rule (moved from ``imageform.report._checks``, issue 30).
+    """
+    if not isinstance(path, str | os.PathLike) or (isinstance(path, str) and not path):
+        raise TypeError(f"expected {name} as a non-empty path (str or Path), got {path!r:.40}")
+
+
 # --- one home (issue 30): the checks the packages once kept in modules of their own ---
 # (color/_guard.py, geometry/_checks.py, analysis/_guard.py, simulate/_guard.py,
 # sensor/_guard.py). The variants below are the shared functions with a keyword fixed, for
@@ -1234,8 +1246,9 @@ def real_array(
 ) -> np.ndarray:
     """Return ``value`` as a float64 NumPy array of real numbers, its shape checked first.
 
-    None, bool, complex, object and string values are refused by name before any conversion
-    (a tensor is copied to the host); then the shape: ``shape`` (``None`` for any length on
+    The conversion is :func:`as_real_array`'s (None, bool, complex, object and string values
+    are refused by name before any value is read; a tensor is copied to the host); then the
+    shape: ``shape`` (``None`` for any length on
     that axis), ``ndim`` dimensions (one of them), ``last`` values on the last axis, at least
     ``min_size`` values; then NaN and inf unless ``finite=False``.
 
@@ -1248,32 +1261,13 @@ def real_array(
     ...
     imageform.errors.InvalidInputError: expected stains of shape (?, 3), got (2,)
     """
-    if value is None or isinstance(value, str | bytes | bool | np.bool_):
-        raise InvalidInputError(
-            f"expected {name} as an array of real numbers, got {describe(value)}"
-        )
-    value = _to_numpy_host(value)
-    try:
-        arr = value if isinstance(value, np.ndarray) else np.asarray(value)
-    except (TypeError, ValueError) as exc:  # ragged nesting
-        raise InvalidInputError(
-            f"expected {name} as an array of real numbers, got {describe(value)}"
-        ) from exc
-    if arr.dtype.kind not in "iuf":
-        what = {"b": "bool values", "c": "complex values"}.get(arr.dtype.kind, f"dtype {arr.dtype}")
-        raise InvalidInputError(f"expected {name} as real numbers, got {what}")
+    arr = as_real_array(value, name, ndim=ndim, check=False)
     if shape is not None and (
         arr.ndim != len(shape)
         or any(want is not None and got != want for got, want in zip(arr.shape, shape, strict=True))
     ):
         raise InvalidInputError(
             f"expected {name} of shape {format_shape(shape)}, got {format_shape(arr.shape)}"
-        )
-    dims = None if ndim is None else ((ndim,) if isinstance(ndim, int) else tuple(ndim))
-    if dims is not None and arr.ndim not in dims:
-        want = " or ".join(f"{d}-d" for d in dims)
-        raise InvalidInputError(
-            f"expected {name} as a {want} array, got shape {format_shape(arr.shape)}"
         )
     if last is not None and (arr.ndim < 1 or arr.shape[-1] != last):
         raise InvalidInputError(
@@ -1284,10 +1278,9 @@ def real_array(
             f"expected {name} with at least {min_size} value(s), got shape "
             f"{format_shape(arr.shape)}"
         )
-    out = np.asarray(arr, dtype=np.float64)
-    if finite and out.size and not np.isfinite(out).all():
-        raise InvalidInputError(f"{name} contains NaN or inf")
-    return out
+    if finite:
+        check_real_values(arr, name)
+    return arr
 
 
 def check_type(value: Any, cls: type | tuple[type, ...], name: str, what: str = "") -> Any:

@@ -42,8 +42,7 @@ def dispatch(
     if (s, d) not in _KERNEL_PAIRS or image.dtype not in (np.float32, np.float64, np.uint8):
         return None
     from imageform._kernels import color_lab, color_simple
-    from imageform._validate import as_image_strict as as_image
-    from imageform._validate import check_finite
+    from imageform._validate import as_image_strict, check_finite
     from imageform.color import ycbcr
     from imageform.color.rgb_spaces import rgb_to_xyz_matrix, xyz_to_rgb_matrix
     from imageform.color.whitepoints import resolve_white
@@ -58,7 +57,7 @@ def dispatch(
         w = resolve_white(p["white"], observer=p.get("observer", 2))
         m = rgb_to_xyz_matrix("srgb") / w[:, None]
         if image.dtype == np.float64:
-            as_image(image, "srgb image")
+            as_image_strict(image, "srgb image")
         res, stats = color_lab.srgb_to_lab(image, m, out)
     elif (s, d) == ("lab", "srgb"):
         check_finite(image, "lab image")
@@ -93,7 +92,7 @@ def dispatch(
         if not finite:
             check_finite(image, f"{s} image")  # confirms (a non-finite sum may be overflow)
         if s == "srgb" and outside:
-            as_image(image, "srgb image")  # raises for plainly 0-255 floats
+            as_image_strict(image, "srgb image")  # raises for plainly 0-255 floats
     return res
 
 

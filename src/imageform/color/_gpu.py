@@ -112,9 +112,9 @@ def transfer(values: Any, step: Step, what: str = "values") -> Any:
     if step[0] == "identity" or not _elementwise(values):
         return None
     if _checks_on(values):
-        from imageform._validate import as_image_strict as as_image
+        from imageform._validate import as_image_strict
 
-        as_image(values, what, channels=None, range_check=not what.startswith("linear"))
+        as_image_strict(values, what, channels=None, range_check=not what.startswith("linear"))
     from imageform._cuda.color import run_elementwise
 
     return _guard(run_elementwise, values, [step])
@@ -125,9 +125,9 @@ def adapt(xyz: Any, mat: np.ndarray) -> Any:
     if not wants(xyz):
         return None
     if _checks_on(xyz):
-        from imageform._validate import as_points_strict as as_points
+        from imageform._validate import as_points_strict
 
-        as_points(xyz, "xyz", 3)
+        as_points_strict(xyz, "xyz", 3)
     from imageform._cuda.color import run_chain
 
     return _guard(run_chain, xyz, [("matrix", tuple(np.asarray(mat, float).ravel().tolist()))])
@@ -147,9 +147,9 @@ def gains(image: Any, g: object, decode: Step, encode: Step) -> Any:
     if ga.shape != (3,) or not (np.isfinite(ga).all() and (ga > 0).all()):
         return None  # the array path explains the error
     if _checks_on(image):
-        from imageform._validate import as_image_strict as as_image
+        from imageform._validate import as_image_strict
 
-        as_image(image, "image", channels=3)
+        as_image_strict(image, "image", channels=3)
     from imageform._cuda.color import run_chain
 
     steps = [s for s in (decode, ("gains", tuple(ga.tolist())), encode) if s[0] != "identity"]
@@ -169,11 +169,10 @@ def delta_e(lab1: Any, lab2: Any, name: str, params: Sequence[float]) -> Any:
     if type(lab1) is not type(lab2):
         return None
     if _checks_on(lab1):
-        from imageform._validate import as_points_strict as as_points
-        from imageform._validate import check_magnitude
+        from imageform._validate import as_points_strict, check_magnitude
 
         for x, what in ((lab1, "lab1"), (lab2, "lab2")):
-            check_magnitude(as_points(x, what, 3), what, x.__array_namespace__())
+            check_magnitude(as_points_strict(x, what, 3), what, x.__array_namespace__())
     from imageform._cuda.color import _dtype_name, run_delta_e
 
     ps = list(params)

@@ -19,9 +19,7 @@ import numpy as np
 
 from imageform._backend import device_of, namespace
 from imageform._dask import chunkwise
-from imageform._validate import as_points_strict as as_points
-from imageform._validate import as_real
-from imageform._validate import check_name as check_option
+from imageform._validate import as_points_strict, as_real, check_name
 from imageform.color.whitepoints import resolve_white
 from imageform.errors import InvalidInputError
 
@@ -109,7 +107,7 @@ def chromatic_adaptation_matrix(
     >>> M.round(7)[0].tolist()
     [1.0478112, 0.0228866, -0.050127]
     """
-    key = check_option(method, _CAT, "chromatic adaptation method")
+    key = check_name(method, _CAT, "chromatic adaptation method")
     D = as_real(degree, "degree")
     if not 0.0 <= D <= 1.0:
         raise InvalidInputError(f"expected degree of adaptation D in [0, 1], got {degree!r}")
@@ -181,6 +179,6 @@ def chromatic_adaptation(
     if on_gpu is not None:
         return on_gpu
     xp = namespace(xyz)
-    x = as_points(xyz, "xyz", 3, xp=xp)
+    x = as_points_strict(xyz, "xyz", 3, xp=xp)
     mt = xp.asarray(mat.T.copy(), dtype=x.dtype, device=device_of(x))
     return x @ mt

@@ -30,15 +30,12 @@ from imageform._colormath import daylight_x as _daylight_x
 from imageform._colormath import daylight_xy as _daylight_xy
 from imageform._colormath import uv1960_from_xy as _uv_from_xy
 from imageform._dask import chunkwise
-from imageform._validate import any_value, as_int
 from imageform._validate import (
-    as_float_strict as as_float,
-)
-from imageform._validate import (
-    as_points_strict as as_points,
-)
-from imageform._validate import (
-    check_name as check_option,
+    any_value,
+    as_float_strict,
+    as_int,
+    as_points_strict,
+    check_name,
 )
 from imageform.color.cct_methods import (
     uv_to_cct_ohno2013,
@@ -136,7 +133,7 @@ def xy_to_uv1960(xy: object) -> Any:
     [0.19783, 0.31222]
     """
     xp = namespace(xy)
-    a = as_points(xy, "xy", 2, xp=xp)
+    a = as_points_strict(xy, "xy", 2, xp=xp)
     u, v = _uv_from_xy(xp, a)
     return xp.stack([u, v], axis=-1)
 
@@ -162,7 +159,7 @@ def uv1960_to_xy(uv: object) -> Any:
     [0.31271, 0.32902]
     """
     xp = namespace(uv)
-    a = as_points(uv, "uv", 2, xp=xp)
+    a = as_points_strict(uv, "uv", 2, xp=xp)
     return _xy_from_uv(xp, a[..., 0], a[..., 1])
 
 
@@ -285,10 +282,10 @@ def cct_to_xy(cct: object, duv: object = 0.0, *, method: str = "robertson1968") 
     >>> [round(float(c), 4) for c in cct_to_xy(6500 * 1.4388 / 1.4380, method="daylight")]
     [0.3127, 0.3291]
     """
-    m = check_option(method, CCT_TO_XY_METHODS, "CCT method")
+    m = check_name(method, CCT_TO_XY_METHODS, "CCT method")
     xp = namespace(cct, duv)
-    T = as_float(cct, "cct", xp=xp)
-    D = as_float(duv, "duv", xp=xp, dtype=T.dtype, device=device_of(T))
+    T = as_float_strict(cct, "cct", xp=xp)
+    D = as_float_strict(duv, "duv", xp=xp, dtype=T.dtype, device=device_of(T))
     if not is_dask_namespace(xp) and any_value(xp.abs(D) > 1.0, xp):
         raise InvalidInputError("expected |duv| <= 1 (a distance in CIE 1960 uv)")
     try:
@@ -370,10 +367,10 @@ def xy_to_cct(xy: object, *, method: str = "robertson1968", iterations: int = 20
     >>> round(float(xy_to_cct([0.31271, 0.32902])[0]))
     6503
     """
-    m = check_option(method, XY_TO_CCT_METHODS, "CCT method")
+    m = check_name(method, XY_TO_CCT_METHODS, "CCT method")
     n_iter = as_int(iterations, "iterations", minimum=1, maximum=1000)
     xp = namespace(xy)
-    a = as_points(xy, "xy", 2, xp=xp)
+    a = as_points_strict(xy, "xy", 2, xp=xp)
     return XY_TO_CCT_METHODS[m](xp, a, n_iter)
 
 

@@ -19,9 +19,15 @@ import numpy.typing as npt
 from imageform import _deprecate
 from imageform._backend import device_of, namespace, reads_values, to_numpy
 from imageform._dask import chunkwise
-from imageform._validate import any_value, as_bool, as_real, as_real_ndarray, describe
-from imageform._validate import as_points_strict as as_points
-from imageform._validate import check_name as check_option
+from imageform._validate import (
+    any_value,
+    as_bool,
+    as_points_strict,
+    as_real,
+    as_real_ndarray,
+    check_name,
+    describe,
+)
 from imageform.errors import InvalidInputError
 
 __all__ = [
@@ -76,7 +82,7 @@ def xy_to_uv_prime(xy: object) -> Any:
     >>> [round(float(v), 4) for v in xy_to_uv_prime([0.3127, 0.3290])]
     [0.1978, 0.4683]
     """
-    p = as_points(xy, "xy", 2)
+    p = as_points_strict(xy, "xy", 2)
     xp = namespace(p)
     x, y = p[..., 0], p[..., 1]
     d = -2.0 * x + 12.0 * y + 3.0
@@ -94,7 +100,7 @@ def uv_prime_to_xy(uv: object) -> Any:
     >>> [round(float(v), 4) for v in uv_prime_to_xy([0.19783, 0.46832])]
     [0.3127, 0.329]
     """
-    p = as_points(uv, "uv", 2)
+    p = as_points_strict(uv, "uv", 2)
     xp = namespace(p)
     u, v = p[..., 0], p[..., 1]
     d = 6.0 * u - 16.0 * v + 12.0
@@ -156,8 +162,8 @@ def spectral_locus(
     >>> [round(float(v), 4) for v in xy[wl == 520][0]]
     [0.0743, 0.8338]
     """
-    c = check_option(coords, CHROMATICITY_COORDS, "chromaticity diagram", "coords")
-    o = check_option(str(observer), ("2", "10"), "observer")
+    c = check_name(coords, CHROMATICITY_COORDS, "chromaticity diagram", "coords")
+    o = check_name(str(observer), ("2", "10"), "observer")
     rng = as_real_ndarray(wavelength_range, "wavelength_range")
     if rng.shape != (2,):
         raise InvalidInputError(
@@ -244,7 +250,7 @@ def in_locus(points: object, coords: str = "xy", *, observer: int = 2) -> Any:
     [True, False]
     """
     xp = namespace(points)
-    p = as_points(points, "points", 2, xp=xp)
+    p = as_points_strict(points, "points", 2, xp=xp)
     return _points_in_polygon(
         p, spectral_locus(observer=observer, coords=coords).chromaticities, xp
     )
@@ -257,7 +263,7 @@ def check_in_locus(points: object, coords: str = "xy", *, observer: int = 2) -> 
     it waits for the device once); :func:`in_locus` gives the mask without reading it.
     """
     xp = namespace(points)
-    p = as_points(points, "points", 2, xp=xp)
+    p = as_points_strict(points, "points", 2, xp=xp)
     _refuse_outside_locus(p, coords, observer, xp, explicit=True)
     return p
 
@@ -292,7 +298,7 @@ def xy_to_xyz(xy: object, Y: float = 1.0, *, check_locus: bool = True, observer:
     [0.95043, 1.0, 1.0889]
     """
     xp = namespace(xy)
-    p = as_points(xy, "xy", 2, xp=xp)
+    p = as_points_strict(xy, "xy", 2, xp=xp)
     Y = as_real(Y, "Y", nonnegative=True)
     if as_bool(check_locus, "check_locus"):
         _refuse_outside_locus(p, "xy", observer, xp, explicit=False)

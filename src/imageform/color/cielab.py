@@ -18,7 +18,7 @@ from typing import Any
 
 from imageform._backend import constant, namespace
 from imageform._dask import chunkwise
-from imageform._validate import as_image_strict as as_image
+from imageform._validate import as_image_strict
 
 from .whitepoints import named_white
 
@@ -104,7 +104,7 @@ def xyz_to_lab(xyz: object, white: Any = "D65", *, observer: int = 2) -> Any:
     >>> xyz_to_lab([0.18, 0.18, 0.18], white="E").round(4).tolist()
     [49.4961, 0.0, 0.0]
     """
-    x = as_image(xyz, "XYZ", range_check=False)
+    x = as_image_strict(xyz, "XYZ", range_check=False)
     xp = namespace(x)
     return _xyz_to_lab(xp, x, _white_arr(white, observer, x))
 
@@ -126,7 +126,7 @@ def lab_to_xyz(lab: object, white: Any = "D65", *, observer: int = 2) -> Any:
     >>> lab_to_xyz([50.0, 0.0, 0.0], white="E").round(6).tolist()
     [0.184187, 0.184187, 0.184187]
     """
-    x = as_image(lab, "Lab", range_check=False)
+    x = as_image_strict(lab, "Lab", range_check=False)
     xp = namespace(x)
     return _lab_to_xyz(xp, x, _white_arr(white, observer, x))
 
@@ -165,7 +165,7 @@ def lab_to_lch(lab: object) -> Any:
     >>> lab_to_lch([50.0, 0.0, 10.0]).round(6).tolist()
     [50.0, 10.0, 90.0]
     """
-    x = as_image(lab, "Lab", range_check=False)
+    x = as_image_strict(lab, "Lab", range_check=False)
     return _lab_to_lch(namespace(x), x)
 
 
@@ -178,7 +178,7 @@ def lch_to_lab(lch: object) -> Any:
     >>> lch_to_lab([50.0, 10.0, 180.0]).round(6).tolist()
     [50.0, -10.0, 0.0]
     """
-    x = as_image(lch, "LCh", range_check=False)
+    x = as_image_strict(lch, "LCh", range_check=False)
     return _lch_to_lab(namespace(x), x)
 
 
@@ -218,7 +218,7 @@ def xyz_to_xyy(xyz: object, white: Any = "D65", *, observer: int = 2) -> Any:
     >>> xyz_to_xyy([0.95047, 1.0, 1.08883]).round(4).tolist()
     [0.3127, 0.329, 1.0]
     """
-    x = as_image(xyz, "XYZ", range_check=False)
+    x = as_image_strict(xyz, "XYZ", range_check=False)
     return _xyz_to_xyy(namespace(x), x, _white_arr(white, observer, x))
 
 
@@ -235,7 +235,7 @@ def xyy_to_xyz(xyy: object) -> Any:
     >>> xyy_to_xyz([0.3127, 0.3290, 1.0]).round(6).tolist()
     [0.950456, 1.0, 1.089058]
     """
-    x = as_image(xyy, "xyY", range_check=False)
+    x = as_image_strict(xyy, "xyY", range_check=False)
     return _xyy_to_xyz(namespace(x), x)
 
 
@@ -291,7 +291,7 @@ def xyz_to_luv(xyz: object, white: Any = "D65", *, observer: int = 2) -> Any:
     >>> xyz_to_luv([0.18, 0.18, 0.18], white="E").round(4).tolist()
     [49.4961, 0.0, 0.0]
     """
-    x = as_image(xyz, "XYZ", range_check=False)
+    x = as_image_strict(xyz, "XYZ", range_check=False)
     return _xyz_to_luv(namespace(x), x, _white_arr(white, observer, x))
 
 
@@ -310,5 +310,5 @@ def luv_to_xyz(luv: object, white: Any = "D65", *, observer: int = 2) -> Any:
     >>> luv_to_xyz([50.0, 0.0, 0.0], white="E").round(6).tolist()
     [0.184187, 0.184187, 0.184187]
     """
-    x = as_image(luv, "Luv", range_check=False)
+    x = as_image_strict(luv, "Luv", range_check=False)
     return _luv_to_xyz(namespace(x), x, _white_arr(white, observer, x))

@@ -15,7 +15,7 @@ from typing import Any
 
 from imageform._backend import namespace
 from imageform._dask import chunkwise
-from imageform._validate import as_image_strict as as_image
+from imageform._validate import as_image_strict
 
 __all__ = [
     "cmy_to_cmyk",
@@ -63,7 +63,7 @@ def srgb_to_cmy(image: object) -> Any:
     >>> srgb_to_cmy([1.0, 0.25, 0.0]).tolist()
     [0.0, 0.75, 1.0]
     """
-    x = as_image(image, "sRGB image")
+    x = as_image_strict(image, "sRGB image")
     return 1.0 - x
 
 
@@ -76,7 +76,7 @@ def cmy_to_srgb(cmy: object) -> Any:
     >>> cmy_to_srgb([0.0, 0.75, 1.0]).tolist()
     [1.0, 0.25, 0.0]
     """
-    x = as_image(cmy, "CMY")
+    x = as_image_strict(cmy, "CMY")
     return 1.0 - x
 
 
@@ -93,7 +93,7 @@ def cmy_to_cmyk(cmy: object) -> Any:
     >>> cmy_to_cmyk([0.5, 0.75, 1.0]).tolist()
     [0.0, 0.5, 1.0, 0.5]
     """
-    x = as_image(cmy, "CMY")
+    x = as_image_strict(cmy, "CMY")
     return _cmy_to_cmyk(namespace(x), x)
 
 
@@ -106,7 +106,7 @@ def cmyk_to_cmy(cmyk: object) -> Any:
     >>> cmyk_to_cmy([0.0, 0.5, 1.0, 0.5]).tolist()
     [0.5, 0.75, 1.0]
     """
-    x = as_image(cmyk, "CMYK", channels=4)
+    x = as_image_strict(cmyk, "CMYK", channels=4)
     return _cmyk_to_cmy(namespace(x), x)
 
 
@@ -119,7 +119,7 @@ def srgb_to_cmyk(image: object) -> Any:
     >>> srgb_to_cmyk([0.0, 0.0, 0.0]).tolist()
     [0.0, 0.0, 0.0, 1.0]
     """
-    x = as_image(image, "sRGB image")
+    x = as_image_strict(image, "sRGB image")
     return _cmy_to_cmyk(namespace(x), 1.0 - x)
 
 
@@ -132,5 +132,5 @@ def cmyk_to_srgb(cmyk: object) -> Any:
     >>> cmyk_to_srgb([0.0, 0.5, 1.0, 0.5]).tolist()
     [0.5, 0.25, 0.0]
     """
-    x = as_image(cmyk, "CMYK", channels=4)
+    x = as_image_strict(cmyk, "CMYK", channels=4)
     return 1.0 - _cmyk_to_cmy(namespace(x), x)

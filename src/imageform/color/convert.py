@@ -52,14 +52,10 @@ from imageform import _deprecate
 from imageform._backend import constant, namespace, use_numba
 from imageform._dask import chunkwise
 from imageform._validate import (
-    as_float_strict as as_float,
-)
-from imageform._validate import (
-    as_image_strict as as_image,
-)
-from imageform._validate import check_name, describe
-from imageform._validate import (
-    check_name as check_option,
+    as_float_strict,
+    as_image_strict,
+    check_name,
+    describe,
 )
 from imageform.errors import InvalidInputError, UnknownOptionError
 
@@ -267,9 +263,9 @@ def _shortest(s: str, d: str) -> list[Edge]:
 def _validate(image: object, src: str) -> Any:
     n = SPACES[src][0]
     if src in _ENCODED_RGB:
-        return as_image(image, f"{src} image", channels=n)
+        return as_image_strict(image, f"{src} image", channels=n)
     if src == "ycbcr":
-        x = as_float(image, "ycbcr image", integer="float32")
+        x = as_float_strict(image, "ycbcr image", integer="float32")
     else:
         raw = np.asarray(image) if not hasattr(image, "dtype") else image
         kind = getattr(getattr(raw, "dtype", None), "kind", "f")
@@ -278,7 +274,7 @@ def _validate(image: object, src: str) -> Any:
                 f"expected {src} values as floats, got integer dtype {raw.dtype}; 8-bit OpenCV "
                 "layouts are read with imageform.color.from_opencv"
             )
-        x = as_image(image, f"{src} image", channels=None, range_check=False)
+        x = as_image_strict(image, f"{src} image", channels=None, range_check=False)
     if x.ndim < 1 or x.shape[-1] != n:
         raise InvalidInputError(
             f"expected {src} image with {n} channels on axis -1, got shape {tuple(x.shape)}"
@@ -383,9 +379,9 @@ def convert(
             f"parameter(s) {', '.join(extra)} not used converting {s} -> {d}; valid here: {names}"
         )
     p = dict(params)
-    alpha = check_option(p.pop("alpha", "reject"), ("reject", "keep"), "alpha handling")
+    alpha = check_name(p.pop("alpha", "reject"), ("reject", "keep"), "alpha handling")
     if "method" in allowed:
-        p["method"] = check_option(p.get("method", "rec601"), gray.GRAY_METHODS, "grey method")
+        p["method"] = check_name(p.get("method", "rec601"), gray.GRAY_METHODS, "grey method")
     if "white" in allowed and p.get("white") is None:
         rgb = [
             k for k in RGB_SPACES for e in route if e.src == f"linear_{k}" or e.dst == f"linear_{k}"
@@ -447,7 +443,7 @@ def convert(
             res = to_opencv(res, enc8)
     if extra_chan is not None:
         xp = namespace(res)
-        a = as_image(extra_chan, "alpha", channels=None, range_check=False)
+        a = as_image_strict(extra_chan, "alpha", channels=None, range_check=False)
         res = xp.concat([res, xp.astype(a, res.dtype)], axis=-1)
     if out is None or (fast is not None and buf is not None):
         return res if out is None else out  # the kernels wrote into out

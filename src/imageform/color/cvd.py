@@ -34,9 +34,7 @@ import numpy as np
 
 from imageform._backend import device_of, namespace
 from imageform._dask import chunkwise
-from imageform._validate import as_bool, as_real
-from imageform._validate import as_image_strict as as_image
-from imageform._validate import check_name as check_option
+from imageform._validate import as_bool, as_image_strict, as_real, check_name
 from imageform.errors import InvalidInputError
 
 __all__ = [
@@ -83,7 +81,7 @@ def _deficiency(name: object) -> str:
         if key in CVD_DEFICIENCIES:
             return key
     valid = [*CVD_DEFICIENCIES, *_ALIASES]
-    return check_option(name, valid, "colour-vision deficiency", "deficiency")
+    return check_name(name, valid, "colour-vision deficiency", "deficiency")
 
 
 def _method(name: object) -> str:
@@ -92,7 +90,7 @@ def _method(name: object) -> str:
         key = _METHOD_ALIASES.get(key, key)
         if key in CVD_METHODS:
             return key
-    return check_option(name, CVD_METHODS, "CVD simulation method")
+    return check_name(name, CVD_METHODS, "CVD simulation method")
 
 
 def _severity(severity: object) -> float:
@@ -280,7 +278,7 @@ def simulate_cvd(
     [0.367322, 0.280085, -0.01182]
     """
     d, s, m = _deficiency(deficiency), _severity(severity), _method(method)
-    img = as_image(image, "image")
+    img = as_image_strict(image, "image")
     xp = namespace(img)
     from imageform.color.transfer import linear_to_srgb, srgb_to_linear
 

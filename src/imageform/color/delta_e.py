@@ -20,15 +20,11 @@ import numpy as np
 from imageform._backend import common_device, namespace, use_numba
 from imageform._dask import chunkwise
 from imageform._validate import (
-    as_points_strict as as_points,
-)
-from imageform._validate import (
+    as_points_strict,
     as_real,
     check_magnitude,
+    check_name,
     format_shape,
-)
-from imageform._validate import (
-    check_name as check_option,
 )
 from imageform.color import _gpu
 from imageform.errors import InvalidInputError
@@ -70,8 +66,8 @@ def check_positive(value: object, name: str) -> float:
 def _prepare(lab1: object, lab2: object) -> tuple[Any, Any, Any]:
     xp = namespace(lab1, lab2)
     dev = common_device(lab1, lab2)
-    a = as_points(lab1, "lab1", 3, xp=xp, device=dev)
-    b = as_points(lab2, "lab2", 3, xp=xp, device=dev)
+    a = as_points_strict(lab1, "lab1", 3, xp=xp, device=dev)
+    b = as_points_strict(lab2, "lab2", 3, xp=xp, device=dev)
     check_magnitude(a, "lab1", xp)
     check_magnitude(b, "lab2", xp)
     dtype = xp.result_type(a.dtype, b.dtype)
@@ -181,7 +177,7 @@ def delta_e_cie94(
     >>> round(float(delta_e_cie94([50.0, 2.6772, -79.7751], [50.0, 0.0, -82.7485])), 3)
     1.395
     """
-    key = check_option(application, _CIE94_APPLICATIONS, "CIE94 application")
+    key = check_name(application, _CIE94_APPLICATIONS, "CIE94 application")
     kl_default, K1, K2 = _CIE94_APPLICATIONS[key]
     kL_ = kl_default if kL is None else check_positive(kL, "kL")
     kC_ = check_positive(kC, "kC")
@@ -365,13 +361,13 @@ def delta_e(
     >>> float(delta_e([50.0, 0.0, 0.0], [50.0, 3.0, 4.0], method="cie76"))
     5.0
     """
-    m = check_option(method, DELTA_E_METHODS, "ΔE method")
+    m = check_name(method, DELTA_E_METHODS, "ΔE method")
     # every parameter is checked, also those the chosen method does not use
     if kL is not None:
         check_positive(kL, "kL")
     for value, name in ((kC, "kC"), (kH, "kH"), (l, "l"), (c, "c")):
         check_positive(value, name)
-    check_option(application, _CIE94_APPLICATIONS, "CIE94 application")
+    check_name(application, _CIE94_APPLICATIONS, "CIE94 application")
     kw: dict[str, dict[str, Any]] = {
         "cie76": {},
         "cie94": {"application": application, "kL": kL, "kC": kC, "kH": kH},

@@ -20,9 +20,7 @@ import numpy as np
 
 from imageform._backend import device_of, namespace
 from imageform._dask import chunkwise
-from imageform._validate import as_int, as_real, describe
-from imageform._validate import as_points_strict as as_points
-from imageform._validate import check_name as check_option
+from imageform._validate import as_int, as_points_strict, as_real, check_name, describe
 from imageform.color.chromaticity import (
     polygon_area,
     spectral_locus,
@@ -57,7 +55,7 @@ def gamut_triangle(space: str | RGBSpace = "srgb", coords: str = "xy") -> np.nda
     >>> gamut_triangle("srgb").tolist()
     [[0.64, 0.33], [0.3, 0.6], [0.15, 0.06]]
     """
-    c = check_option(coords, ("xy", "uv"), "chromaticity diagram", "coords")
+    c = check_name(coords, ("xy", "uv"), "chromaticity diagram", "coords")
     tri = np.array(rgb_space(space).primaries_xy, dtype=np.float64)
     return tri if c == "xy" else np.asarray(xy_to_uv_prime(tri))
 
@@ -209,12 +207,12 @@ def in_gamut(
     >>> in_gamut([[0.3127, 0.329], [0.17, 0.797]], kind="xy").tolist()
     [True, False]
     """
-    k = check_option(kind, _KINDS, "gamut test kind")
+    k = check_name(kind, _KINDS, "gamut test kind")
     tol = as_real(tol, "tol", nonnegative=True, allow_inf=True)
     sp = rgb_space(space)
     xp = namespace(values)
     if k == "xy":
-        p = as_points(values, "values (xy)", 2, xp=xp)
+        p = as_points_strict(values, "values (xy)", 2, xp=xp)
         tri = gamut_triangle(sp)
         # barycentric test (closed triangle, tolerance tol): lam = M^-1 (p - a)
         a, b, c = tri
@@ -223,7 +221,7 @@ def in_gamut(
         lam = d @ _const(minv.T, p, xp)
         l0 = 1.0 - lam[..., 0] - lam[..., 1]
         return (lam[..., 0] >= -tol) & (lam[..., 1] >= -tol) & (l0 >= -tol)
-    v = as_points(values, f"values ({k})", 3, xp=xp)
+    v = as_points_strict(values, f"values ({k})", 3, xp=xp)
     rgb = v if k == "linear_rgb" else v @ _const(np.linalg.inv(sp.matrix_to_xyz()).T, v, xp)
     return xp.all((rgb >= -tol) & (rgb <= 1.0 + tol), axis=-1)
 
@@ -259,10 +257,10 @@ def gamut_map(
     """
     from imageform.color.cielab import lab_to_lch, lab_to_xyz, lch_to_lab, xyz_to_lab
 
-    m = check_option(method, GAMUT_MAPPING_METHODS, "gamut mapping method")
+    m = check_name(method, GAMUT_MAPPING_METHODS, "gamut mapping method")
     sp = rgb_space(space)
     xp = namespace(xyz)
-    v = as_points(xyz, "xyz", 3, xp=xp)
+    v = as_points_strict(xyz, "xyz", 3, xp=xp)
     to_rgb_t = _const(np.linalg.inv(sp.matrix_to_xyz()).T, v, xp)
     rgb = v @ to_rgb_t
     if m == "clip":

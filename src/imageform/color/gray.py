@@ -19,8 +19,7 @@ from typing import Any
 
 from imageform._backend import namespace
 from imageform._dask import chunkwise
-from imageform._validate import as_image_strict as as_image
-from imageform._validate import check_name as check_option
+from imageform._validate import as_image_strict, check_name
 
 from .transfer import _srgb_decode, _srgb_encode
 
@@ -84,8 +83,8 @@ def srgb_to_gray(image: object, method: str = "rec601") -> Any:
     >>> round(float(srgb_to_gray([1.0, 0.0, 0.0], "rec709")[0]), 4)
     0.4984
     """
-    m = check_option(method, GRAY_METHODS, "grey method")
-    x = as_image(image, "sRGB image")
+    m = check_name(method, GRAY_METHODS, "grey method")
+    x = as_image_strict(image, "sRGB image")
     return _srgb_to_gray(namespace(x), x, m)
 
 
@@ -98,7 +97,7 @@ def gray_to_srgb(gray: object) -> Any:
     >>> gray_to_srgb([0.5]).tolist()
     [0.5, 0.5, 0.5]
     """
-    x = as_image(gray, "gray", channels=1)
+    x = as_image_strict(gray, "gray", channels=1)
     return _gray_to_srgb(namespace(x), x)
 
 
@@ -115,5 +114,5 @@ def linear_srgb_to_luminance(image: object) -> Any:
     >>> linear_srgb_to_luminance([0.0, 1.0, 0.0]).tolist()
     [0.7152]
     """
-    x = as_image(image, "linear sRGB image", range_check=False)
+    x = as_image_strict(image, "linear sRGB image", range_check=False)
     return _weighted(x, _REC709)

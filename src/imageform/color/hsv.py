@@ -21,9 +21,7 @@ from imageform._colormath import hexcone_hue as _hue
 from imageform._colormath import hsv_to_rgb as _hsv_to_srgb
 from imageform._colormath import rgb_to_hsv as _srgb_to_hsv
 from imageform._dask import chunkwise
-from imageform._validate import as_float_strict as as_float
-from imageform._validate import as_image_strict as as_image
-from imageform._validate import as_real
+from imageform._validate import as_float_strict, as_image_strict, as_real
 from imageform.errors import InvalidInputError
 
 __all__ = [
@@ -91,7 +89,7 @@ def _hsi_to_srgb(xp: Any, hsi: Any) -> Any:
 
 
 def _rgb_in(image: object) -> tuple[Any, Any]:
-    x = as_image(image, "sRGB image")
+    x = as_image_strict(image, "sRGB image")
     return namespace(x), x
 
 
@@ -142,7 +140,7 @@ def hsv_to_srgb(hsv: object) -> Any:
     >>> hsv_to_srgb([30.0, 1.0, 1.0]).round(6).tolist()
     [1.0, 0.5, 0.0]
     """
-    x = as_image(hsv, "HSV", range_check=False)
+    x = as_image_strict(hsv, "HSV", range_check=False)
     return _hsv_to_srgb(namespace(x), x)
 
 
@@ -176,7 +174,7 @@ def hsl_to_srgb(hsl: object) -> Any:
     >>> hsl_to_srgb([30.0, 1.0, 0.5]).round(6).tolist()
     [1.0, 0.5, 0.0]
     """
-    x = as_image(hsl, "HSL", range_check=False)
+    x = as_image_strict(hsl, "HSL", range_check=False)
     return _hsl_to_srgb(namespace(x), x)
 
 
@@ -215,7 +213,7 @@ def hsi_to_srgb(hsi: object) -> Any:
     >>> hsi_to_srgb([120.0, 1.0, 1.0 / 3.0]).round(6).tolist()
     [0.0, 1.0, 0.0]
     """
-    x = as_image(hsi, "HSI", range_check=False)
+    x = as_image_strict(hsi, "HSI", range_check=False)
     return _hsi_to_srgb(namespace(x), x)
 
 
@@ -243,7 +241,7 @@ def hue_undefined_mask(values: object, *, atol: float = 0.0) -> Any:
     >>> hue_undefined_mask([[0.0, 0.0, 0.5], [30.0, 0.2, 0.5]]).tolist()
     [True, False]
     """
-    x = as_image(values, "values", range_check=False)
+    x = as_image_strict(values, "values", range_check=False)
     atol = as_real(atol, "atol", nonnegative=True)
     return x[..., 1] <= atol
 
@@ -260,8 +258,8 @@ def hue_difference(h1: object, h2: object) -> Any:
     20.0
     """
     xp = namespace(h1, h2)
-    a = as_float(h1, "h1", xp=xp, integer="float64", device=common_device(h1, h2))
-    b = as_float(h2, "h2", xp=xp, dtype=a.dtype, device=device_of(a))
+    a = as_float_strict(h1, "h1", xp=xp, integer="float64", device=common_device(h1, h2))
+    b = as_float_strict(h2, "h2", xp=xp, dtype=a.dtype, device=device_of(a))
     try:
         np.broadcast_shapes(tuple(a.shape), tuple(b.shape))
     except ValueError:
@@ -299,7 +297,7 @@ def hue_in_range(hue: object, start: float, stop: float) -> Any:
     >>> hue_in_range([350.0, 10.0, 30.0, 180.0], 340, 20).tolist()
     [True, True, False, False]
     """
-    h = as_float(hue, "hue", integer="float64")
+    h = as_float_strict(hue, "hue", integer="float64")
     xp = namespace(h)
     s = as_real(start, "start (a hue)") % 360.0
     e = as_real(stop, "stop (a hue)") % 360.0

@@ -19,9 +19,7 @@ from __future__ import annotations
 from typing import Any, NamedTuple
 
 from imageform._backend import namespace
-from imageform._validate import as_bool, as_int
-from imageform._validate import as_image_strict as as_image
-from imageform._validate import check_name as check_option
+from imageform._validate import as_bool, as_image_strict, as_int, check_name
 from imageform.errors import InvalidInputError
 
 from .transfer import TRANSFER_FUNCTIONS, _decode_clean, _encode_clean
@@ -54,8 +52,8 @@ def mean_linear_light(
     >>> float(mean_linear_light([0.0, 1.0]).round(4))
     0.7354
     """
-    name = check_option(transfer, TRANSFER_FUNCTIONS, "transfer function")
-    x = as_image(image, "image", channels=None)
+    name = check_name(transfer, TRANSFER_FUNCTIONS, "transfer function")
+    x = as_image_strict(image, "image", channels=None)
     if axis is None:
         axes: tuple[int, ...] = tuple(range(x.ndim))
     else:
@@ -110,10 +108,10 @@ def downsample(
     ...     linear_light=False)[0, 0, 0])
     (0.7354, 0.5)
     """
-    name = check_option(transfer, TRANSFER_FUNCTIONS, "transfer function")
+    name = check_name(transfer, TRANSFER_FUNCTIONS, "transfer function")
     factor = as_int(factor, "factor", minimum=1)
     linear_light = as_bool(linear_light, "linear_light")
-    x = as_image(image, "image", channels=None)
+    x = as_image_strict(image, "image", channels=None)
     if x.ndim < 3:
         raise InvalidInputError(f"expected an image of shape (..., H, W, C), got {tuple(x.shape)}")
     if x.shape[-3] < factor or x.shape[-2] < factor:

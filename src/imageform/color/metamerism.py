@@ -18,8 +18,7 @@ from __future__ import annotations
 import numpy as np
 
 from imageform import _deprecate
-from imageform._validate import as_bool, as_int, as_real
-from imageform._validate import check_name as check_option
+from imageform._validate import as_bool, as_int, as_real, check_name
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
 from imageform.spectral.integrate import (
     integration_weights,
@@ -172,7 +171,7 @@ def metamer(
     True
     """
     s = _check(spectrum, "spectrum")
-    k = check_option(kind, _KINDS, "spectrum kind")
+    k = check_name(kind, _KINDS, "spectrum kind")
     strength = as_real(strength, "strength")
     if not 0.0 < strength <= 1.0:
         raise InvalidInputError(f"expected 0 < strength <= 1, got {strength}")

@@ -24,13 +24,9 @@ from typing import Any
 from imageform._backend import namespace
 from imageform._dask import chunkwise
 from imageform._validate import (
-    as_float_strict as as_float,
-)
-from imageform._validate import (
-    as_image_strict as as_image,
-)
-from imageform._validate import (
-    check_name as check_option,
+    as_float_strict,
+    as_image_strict,
+    check_name,
 )
 from imageform.errors import InvalidInputError
 
@@ -63,7 +59,7 @@ def srgb_to_bgr(image: object) -> Any:
     >>> srgb_to_bgr([1.0, 0.5, 0.0]).tolist()
     [0.0, 0.5, 1.0]
     """
-    x = as_image(image, "sRGB image")
+    x = as_image_strict(image, "sRGB image")
     return _flip(namespace(x), x)
 
 
@@ -76,7 +72,7 @@ def bgr_to_srgb(image: object) -> Any:
     >>> bgr_to_srgb([0.0, 0.5, 1.0]).tolist()
     [1.0, 0.5, 0.0]
     """
-    x = as_image(image, "BGR image")
+    x = as_image_strict(image, "BGR image")
     return _flip(namespace(x), x)
 
 
@@ -114,8 +110,8 @@ def to_opencv(values: object, convention: str) -> Any:
     >>> to_opencv([60.0, -10.0, 20.0], "lab8").tolist()
     [153, 118, 148]
     """
-    conv = check_option(convention, OPENCV_CONVENTIONS, "OpenCV convention")
-    x = as_float(values, "values", integer="float32")
+    conv = check_name(convention, OPENCV_CONVENTIONS, "OpenCV convention")
+    x = as_float_strict(values, "values", integer="float32")
     if x.ndim < 1 or x.shape[-1] != 3:
         raise InvalidInputError(
             f"expected values with 3 channels on axis -1, got shape {tuple(x.shape)}"
@@ -149,8 +145,8 @@ def from_opencv(values: object, convention: str) -> Any:
     >>> from_opencv([153, 118, 148], "lab8").round(3).tolist()
     [60.0, -10.0, 20.0]
     """
-    conv = check_option(convention, OPENCV_CONVENTIONS, "OpenCV convention")
-    x = as_float(values, "values", integer="float32")
+    conv = check_name(convention, OPENCV_CONVENTIONS, "OpenCV convention")
+    x = as_float_strict(values, "values", integer="float32")
     if x.ndim < 1 or x.shape[-1] != 3:
         raise InvalidInputError(
             f"expected values with 3 channels on axis -1, got shape {tuple(x.shape)}"

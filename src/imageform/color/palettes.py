@@ -17,9 +17,7 @@ from typing import Any
 import numpy as np
 
 from imageform._backend import device_of, to_numpy
-from imageform._validate import as_image_strict as as_image
-from imageform._validate import as_int, as_real, describe
-from imageform._validate import check_name as check_option
+from imageform._validate import as_image_strict, as_int, as_real, check_name, describe
 from imageform.errors import InvalidInputError
 
 __all__ = [
@@ -103,7 +101,7 @@ def parse_colors(colors: object) -> np.ndarray:
         return np.array(out)
     if device_of(colors) is not None:  # a report on the host: one explicit copy of n colours
         colors = to_numpy(colors)
-    arr = np.asarray(as_image(colors, "colors"), dtype=np.float64)
+    arr = np.asarray(as_image_strict(colors, "colors"), dtype=np.float64)
     if arr.ndim != 2:
         raise InvalidInputError(f"expected colors of shape (n, 3), got {arr.shape}")
     if np.any(arr < 0) or np.any(arr > 1):
@@ -122,7 +120,7 @@ def palette(name: str, n: int | None = None) -> np.ndarray:
     >>> palette("okabe_ito", 2).round(3).tolist()
     [[0.0, 0.0, 0.0], [0.902, 0.624, 0.0]]
     """
-    key = check_option(name, PALETTES, "palette", "name")
+    key = check_name(name, PALETTES, "palette", "name")
     if n is not None:
         n = as_int(n, "n", minimum=1)
     if key == "viridis":

@@ -26,9 +26,7 @@ import numpy as np
 
 from imageform._backend import constant, namespace
 from imageform._dask import chunkwise
-from imageform._validate import as_image_strict as as_image
-from imageform._validate import as_real_ndarray, describe
-from imageform._validate import check_name as check_option
+from imageform._validate import as_image_strict, as_real_ndarray, check_name, describe
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
 
 __all__ = [
@@ -84,7 +82,7 @@ class RGBSpace:
                 )
         if not white[1] > 0:
             raise InvalidInputError(f"expected white_xy with y > 0, got {white.tolist()}")
-        check_option(self.transfer, TRANSFER_FUNCTIONS, "transfer function")
+        check_name(self.transfer, TRANSFER_FUNCTIONS, "transfer function")
         pairs = tuple((float(x), float(y)) for x, y in prim)
         object.__setattr__(self, "primaries_xy", pairs)
         object.__setattr__(self, "white_xy", (float(white[0]), float(white[1])))
@@ -188,7 +186,7 @@ def rgb_space(space: str | RGBSpace) -> RGBSpace:
         key = _space_key(space)
         if key in RGB_SPACES:
             return RGB_SPACES[key]
-    return RGB_SPACES[check_option(space, RGB_SPACES, "RGB space")]
+    return RGB_SPACES[check_name(space, RGB_SPACES, "RGB space")]
 
 
 def _xy_to_xyz_col(xy: tuple[float, float]) -> np.ndarray:
@@ -285,7 +283,7 @@ def linear_rgb_to_xyz(rgb: object, space: str | RGBSpace = "srgb") -> Any:
     [0.9643, 1.0, 0.8251]
     """
     m = rgb_to_xyz_matrix(space)
-    x = as_image(rgb, "linear RGB", range_check=False)
+    x = as_image_strict(rgb, "linear RGB", range_check=False)
     return _apply_matrix(x, m)
 
 
@@ -301,7 +299,7 @@ def xyz_to_linear_rgb(xyz: object, space: str | RGBSpace = "srgb") -> Any:
     [1.0, 1.0, 1.0]
     """
     m = xyz_to_rgb_matrix(space)
-    x = as_image(xyz, "XYZ", range_check=False)
+    x = as_image_strict(xyz, "XYZ", range_check=False)
     return _apply_matrix(x, m)
 
 

@@ -28,17 +28,11 @@ from typing import Any, NamedTuple
 from imageform._backend import namespace
 from imageform._validate import (
     as_bool,
+    as_float_strict,
+    as_image_strict,
+    check_name,
     check_result_array,
     describe,
-)
-from imageform._validate import (
-    as_float_strict as as_float,
-)
-from imageform._validate import (
-    as_image_strict as as_image,
-)
-from imageform._validate import (
-    check_name as check_option,
 )
 from imageform.errors import InvalidInputError, UnknownOptionError
 
@@ -182,8 +176,8 @@ def chroma_subsample(
     ((4, 6), (2, 3, 2))
     """
     _, (fv, fh) = _scheme(scheme)
-    site = check_option(siting, CHROMA_SITINGS, "chroma siting")
-    img = as_image(ycbcr, "ycbcr", range_check=False)
+    site = check_name(siting, CHROMA_SITINGS, "chroma siting")
+    img = as_image_strict(ycbcr, "ycbcr", range_check=False)
     if img.ndim < 3:
         raise InvalidInputError(f"expected ycbcr of shape (..., H, W, 3), got {tuple(img.shape)}")
     xp = namespace(img)
@@ -236,11 +230,11 @@ def chroma_upsample(
     [0.0, 0.1, 0.3, 0.4]
     """
     _, (fv, fh) = _scheme(scheme)
-    site = check_option(siting, CHROMA_SITINGS, "chroma siting")
-    how = check_option(method, ("bilinear", "nearest"), "chroma upsampling method")
+    site = check_name(siting, CHROMA_SITINGS, "chroma siting")
+    how = check_name(method, ("bilinear", "nearest"), "chroma upsampling method")
     xp = namespace(luma, chroma)
-    y = as_float(luma, "luma", xp=xp, integer="float32")
-    c = as_float(chroma, "chroma", xp=xp, dtype=y.dtype)
+    y = as_float_strict(luma, "luma", xp=xp, integer="float32")
+    c = as_float_strict(chroma, "chroma", xp=xp, dtype=y.dtype)
     if y.ndim < 2 or c.ndim != y.ndim + 1 or c.shape[-1] != 2:
         raise InvalidInputError(
             f"expected luma (..., H, W) and chroma (..., h, w, 2), got {tuple(y.shape)} and "
@@ -339,7 +333,7 @@ def subsampling_delta_e(
     from imageform.color.convert import convert
     from imageform.color.delta_e import delta_e_ciede2000
 
-    img = as_image(image, "image")
+    img = as_image_strict(image, "image")
     rt = subsample_round_trip(
         img, scheme, siting=siting, method=method, standard=standard, clip=clip
     )

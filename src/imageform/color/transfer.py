@@ -23,9 +23,7 @@ from imageform._colormath import pos_pow as _pos_pow
 from imageform._colormath import srgb_decode as _srgb_decode
 from imageform._colormath import srgb_encode as _srgb_encode
 from imageform._dask import chunkwise
-from imageform._validate import as_image_strict as as_image
-from imageform._validate import check_name as check_option
-from imageform._validate import check_positive
+from imageform._validate import as_image_strict, check_name, check_positive
 from imageform.color._gpu import transfer as _gpu_transfer
 
 __all__ = [
@@ -119,7 +117,7 @@ def _kernel_step(name: str, decode: bool, gamma: float = 2.2) -> tuple[str, tupl
 
 def _prep(values: object, name: str) -> tuple[Any, Any]:
     # encoded values must be in [0, 1]-ish (0-255 floats are caught); linear light may exceed 1
-    x = as_image(values, name, channels=None, range_check=not name.startswith("linear"))
+    x = as_image_strict(values, name, channels=None, range_check=not name.startswith("linear"))
     return namespace(x), x
 
 
@@ -450,7 +448,7 @@ def decode(values: object, transfer: str = "srgb", *, gamma: float = 2.2) -> Any
     >>> round(float(decode(0.5, "gamma", gamma=2.2)), 6)
     0.217638
     """
-    name = check_option(transfer, TRANSFER_FUNCTIONS, "transfer function")
+    name = check_name(transfer, TRANSFER_FUNCTIONS, "transfer function")
     g = check_positive(gamma, "gamma")
     gpu = _gpu_transfer(values, _kernel_step(name, True, g), what="encoded values")
     if gpu is not None:
@@ -468,7 +466,7 @@ def encode(values: object, transfer: str = "srgb", *, gamma: float = 2.2) -> Any
     >>> round(float(encode(0.214041, "srgb")), 5)
     0.5
     """
-    name = check_option(transfer, TRANSFER_FUNCTIONS, "transfer function")
+    name = check_name(transfer, TRANSFER_FUNCTIONS, "transfer function")
     g = check_positive(gamma, "gamma")
     gpu = _gpu_transfer(values, _kernel_step(name, False, g), what="linear values")
     if gpu is not None:

@@ -44,18 +44,14 @@ from imageform._backend import device_of, is_dask_namespace, namespace
 from imageform._validate import (
     any_value,
     as_bool,
+    as_image_strict,
     as_int,
     as_real,
     as_real_array,
+    check_name,
     check_nonempty,
     check_result_array,
     describe,
-)
-from imageform._validate import (
-    as_image_strict as as_image,
-)
-from imageform._validate import (
-    check_name as check_option,
 )
 from imageform.color.rgb_spaces import xyz_to_linear_rgb
 from imageform.color.transfer import TRANSFER_FUNCTIONS, _kernel_step, decode, encode
@@ -113,7 +109,7 @@ class WhiteBalanceResult(_WhiteBalanceResult):
 
 def _method(method: str, percentile: float | None) -> tuple[str, float]:
     valid = (*WHITE_BALANCE_METHODS, *_ALIASES)
-    key = check_option(method, valid, "white-balance method")
+    key = check_name(method, valid, "white-balance method")
     if percentile is None:
         percentile = 100.0 if key == "max_rgb" else 99.0
     return _ALIASES.get(key, key), as_real(percentile, "percentile")
@@ -253,10 +249,10 @@ def _check_params(
 
 
 def _linear(image: object, transfer: str, channel_axis: int) -> tuple[Any, Any, str]:
-    tname = check_option(transfer, TRANSFER_FUNCTIONS, "transfer function")
+    tname = check_name(transfer, TRANSFER_FUNCTIONS, "transfer function")
     axis = as_int(channel_axis, "channel_axis")
     try:
-        img = as_image(image, "image", channels=3, channel_axis=axis)
+        img = as_image_strict(image, "image", channels=3, channel_axis=axis)
     except InvalidInputError as exc:
         if axis == -1 or "channels on axis" not in str(exc):
             raise
@@ -464,7 +460,7 @@ def white_balance(
     ([1.25, 1.0, 0.8333], [0.5, 0.5, 0.5])
     """
     m, percentile = _method(method, percentile)
-    norm = check_option(normalize, ("mean", "green"), "gain normalisation", "normalize")
+    norm = check_name(normalize, ("mean", "green"), "gain normalisation", "normalize")
     _check_params(m, percentile, p, sigma, illuminant, cct)
     xp, lin, tname = _linear(image, transfer, channel_axis)
     gains = _gains(xp, lin, m, norm, percentile, p, sigma, illuminant, cct, space)
@@ -521,7 +517,7 @@ def white_balance_gains(
     time (the ``imageform white-balance`` command: bounded memory). Internal.
     """
     m, percentile = _method(method, percentile)
-    norm = check_option(normalize, ("mean", "green"), "gain normalisation", "normalize")
+    norm = check_name(normalize, ("mean", "green"), "gain normalisation", "normalize")
     _check_params(m, percentile, p, sigma, illuminant, cct)
     a = image if isinstance(image, np.ndarray) else None
     if a is None or a.ndim != 3 or a.shape[0] < 2:
@@ -546,7 +542,7 @@ def apply_white_balance_gains(image: object, gains: Any, *, transfer: str = "srg
     """
     from imageform.color import _gpu
 
-    tname = check_option(transfer, TRANSFER_FUNCTIONS, "transfer function")
+    tname = check_name(transfer, TRANSFER_FUNCTIONS, "transfer function")
     # a CUDA image and 3 host gains: one kernel
     on_gpu = _gpu.gains(image, gains, _kernel_step(tname, True), _kernel_step(tname, False))
     if on_gpu is not None:

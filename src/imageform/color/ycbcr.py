@@ -36,15 +36,11 @@ from imageform import _deprecate
 from imageform._backend import namespace
 from imageform._dask import chunkwise
 from imageform._validate import (
-    as_float_strict as as_float,
+    as_float_strict,
+    as_image_strict,
+    check_name,
+    describe,
 )
-from imageform._validate import (
-    as_image_strict as as_image,
-)
-from imageform._validate import (
-    check_name as check_option,
-)
-from imageform._validate import describe
 from imageform.errors import InvalidInputError
 
 __all__ = [
@@ -68,7 +64,7 @@ _RANGES = ("full", "limited")
 
 
 def _coeffs(standard: str) -> tuple[str, float, float]:
-    key = check_option(
+    key = check_name(
         standard.replace(".", "") if isinstance(standard, str) else standard,
         YCBCR_STANDARDS,
         "Y'CbCr standard",
@@ -79,7 +75,7 @@ def _coeffs(standard: str) -> tuple[str, float, float]:
 
 def _scale(signal_range: str, bits: int | None) -> tuple[float, float, float, float]:
     """(y_gain, y_offset, c_gain, c_offset) from analog to the requested scale."""
-    rng = check_option(signal_range, _RANGES, "Y'CbCr signal_range")
+    rng = check_name(signal_range, _RANGES, "Y'CbCr signal_range")
     if bits is not None and (
         isinstance(bits, bool | np.bool_)
         or not isinstance(bits, int | np.integer)
@@ -176,7 +172,7 @@ def rgb_to_ycbcr(
     """
     _, kr, kb = _coeffs(standard)
     sc = _scale(signal_range, bit_depth)
-    x = as_image(image, "R'G'B' image")
+    x = as_image_strict(image, "R'G'B' image")
     return _rgb_to_ycbcr(namespace(x), x, kr, kb, sc)
 
 
@@ -203,7 +199,7 @@ def ycbcr_to_rgb(
     _, kr, kb = _coeffs(standard)
     sc = _scale(signal_range, bit_depth)
     _check_codes(ycbcr, signal_range, bit_depth)
-    x = as_float(ycbcr, "ycbcr", integer="float32")
+    x = as_float_strict(ycbcr, "ycbcr", integer="float32")
     if x.ndim < 1 or x.shape[-1] != 3:
         raise InvalidInputError(
             f"expected ycbcr (Y'CbCr) with 3 channels on axis -1, got shape {tuple(x.shape)}"

@@ -24,6 +24,7 @@ from imageform._backend import to_numpy
 from imageform._validate import (
     as_bool,
     as_int,
+    as_matrix_bounded,
     as_real,
     check_image_size,
     check_K,
@@ -31,9 +32,6 @@ from imageform._validate import (
     check_option,
     describe,
     size_pair,
-)
-from imageform._validate import (
-    as_matrix_bounded as as_matrix,
 )
 from imageform.errors import (
     DegenerateConfigurationError,
@@ -239,7 +237,7 @@ def calibrate_camera(
     tol = as_real(tol, "tol", minimum=0.0, maximum=1.0)
     if K_init is not None:
         K_given = np.asarray(
-            to_numpy(as_matrix(K_init, "K_init", (3, 3), batch=False)), dtype=np.float64
+            to_numpy(as_matrix_bounded(K_init, "K_init", (3, 3), batch=False)), dtype=np.float64
         )
         check_K(K_given, np, "K_init", positive=True)
         K_given = K_given / K_given[2, 2]

@@ -12,8 +12,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from imageform._backend import to_numpy
-from imageform._validate import as_points_bounded as as_points
-from imageform._validate import describe
+from imageform._validate import as_points_bounded, describe
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
 
 __all__ = ["MAX_VIEWS"]
@@ -56,8 +55,8 @@ def _views(
         raise InvalidInputError("expected object_points of at least one view, got none")
     out_o, out_i = [], []
     for k, (o, i) in enumerate(zip(objs, imgs, strict=True)):
-        oa = np.asarray(to_numpy(as_points(o, f"object_points[{k}]", 3)), dtype=np.float64)
-        ia = np.asarray(to_numpy(as_points(i, f"{image_name}[{k}]", 2)), dtype=np.float64)
+        oa = np.asarray(to_numpy(as_points_bounded(o, f"object_points[{k}]", 3)), dtype=np.float64)
+        ia = np.asarray(to_numpy(as_points_bounded(i, f"{image_name}[{k}]", 2)), dtype=np.float64)
         if oa.ndim != 2 or ia.ndim != 2 or oa.shape[0] != ia.shape[0]:
             raise InvalidInputError(
                 f"view {k}: expected object_points (N, 3) and {image_name} (N, 2) with the same "

@@ -25,19 +25,13 @@ from imageform._backend import common_device, device_of, linalg, namespace, sign
 from imageform._typing import Array, ArrayLike
 from imageform._validate import (
     any_value,
+    as_float_bounded,
+    as_matrix_bounded,
+    as_points_bounded,
     check_image_size,
     check_option,
     check_rotation,
     format_shape,
-)
-from imageform._validate import (
-    as_float_bounded as as_float,
-)
-from imageform._validate import (
-    as_matrix_bounded as as_matrix,
-)
-from imageform._validate import (
-    as_points_bounded as as_points,
 )
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
 from imageform.geometry._results import Projection
@@ -93,19 +87,21 @@ def _prepare(
     t: ArrayLike | None,
 ) -> tuple[Any, Array, Array, Array, Array]:
     xp = namespace(points, K, R, t)
-    X = as_points(points, "points", 3, xp=xp, finite=False, device=common_device(points, K, R, t))
+    X = as_points_bounded(
+        points, "points", 3, xp=xp, finite=False, device=common_device(points, K, R, t)
+    )
     dev = device_of(X)
-    Km = as_matrix(K, "K", (3, 3), xp=xp, dtype=X.dtype, device=dev)
+    Km = as_matrix_bounded(K, "K", (3, 3), xp=xp, dtype=X.dtype, device=dev)
     _check_K(Km, xp)
     if R is None:
         Rm = xp.eye(3, dtype=X.dtype, device=dev)
     else:
-        Rm = as_matrix(R, "R", (3, 3), xp=xp, dtype=X.dtype, device=dev)
+        Rm = as_matrix_bounded(R, "R", (3, 3), xp=xp, dtype=X.dtype, device=dev)
         check_rotation(Rm, "R", xp=xp)
     tv = (
         xp.zeros(3, dtype=X.dtype, device=dev)
         if t is None
-        else as_points(t, "t", 3, xp=xp, dtype=X.dtype, device=dev)
+        else as_points_bounded(t, "t", 3, xp=xp, dtype=X.dtype, device=dev)
     )
     return xp, X, Km, Rm, tv
 
@@ -251,19 +247,19 @@ def projection_matrix(
            [  0.,   0.,   1.,   5.]])
     """
     xp = namespace(K, R, t)
-    Km = as_matrix(K, "K", (3, 3), xp=xp, device=common_device(K, R, t))
+    Km = as_matrix_bounded(K, "K", (3, 3), xp=xp, device=common_device(K, R, t))
     dev = device_of(Km)
     Rm = (
         xp.eye(3, dtype=Km.dtype, device=dev)
         if R is None
-        else as_matrix(R, "R", (3, 3), xp=xp, dtype=Km.dtype, device=dev)
+        else as_matrix_bounded(R, "R", (3, 3), xp=xp, dtype=Km.dtype, device=dev)
     )
     if R is not None:
         check_rotation(Rm, "R", xp=xp)
     tv = (
         xp.zeros(3, dtype=Km.dtype, device=dev)
         if t is None
-        else as_points(t, "t", 3, xp=xp, dtype=Km.dtype, device=dev)
+        else as_points_bounded(t, "t", 3, xp=xp, dtype=Km.dtype, device=dev)
     )
     batch = np.broadcast_shapes(tuple(Rm.shape[:-2]), tuple(tv.shape[:-1]))
     Rm = xp.broadcast_to(Rm, (*batch, 3, 3))
@@ -294,7 +290,7 @@ def decompose_projection_matrix(P: ArrayLike) -> DecomposedProjection:
            [  0.,   0.,   1.]]), array([1., 2., 3.]))
     """
     xp = namespace(P)
-    Pm = as_matrix(P, "P", (3, 4), xp=xp)
+    Pm = as_matrix_bounded(P, "P", (3, 4), xp=xp)
     M = Pm[..., :3]
     det = linalg(xp).det(M)
     scale = xp.max(xp.abs(M), axis=(-2, -1))
@@ -349,13 +345,13 @@ def backproject(
     """
     plane = check_option(image_plane, _PLANES, "image plane")
     xp = namespace(uv, K, R)
-    p = as_points(uv, "uv", 2, xp=xp, device=common_device(uv, K, R))
-    Km = as_matrix(K, "K", (3, 3), xp=xp, dtype=p.dtype, device=device_of(p))
+    p = as_points_bounded(uv, "uv", 2, xp=xp, device=common_device(uv, K, R))
+    Km = as_matrix_bounded(K, "K", (3, 3), xp=xp, dtype=p.dtype, device=device_of(p))
     _check_K(Km, xp)
     Km = _plane_K(Km, plane, xp)
     d = _Kinv_apply(p, Km, xp)
     if R is not None:
-        Rm = as_matrix(R, "R", (3, 3), xp=xp, dtype=p.dtype, device=device_of(p))
+        Rm = as_matrix_bounded(R, "R", (3, 3), xp=xp, dtype=p.dtype, device=device_of(p))
         check_rotation(Rm, "R", xp=xp)
         d = d @ Rm  # row vectors: (Rᵀ d)ᵀ = dᵀ R
     return d / xp.sqrt(xp.sum(d * d, axis=-1, keepdims=True))
@@ -382,9 +378,9 @@ def unproject(
     """
     plane = check_option(image_plane, _PLANES, "image plane")
     xp = namespace(uv, depth, K, R, t)
-    p = as_points(uv, "uv", 2, xp=xp, device=common_device(uv, depth, K, R, t))
+    p = as_points_bounded(uv, "uv", 2, xp=xp, device=common_device(uv, depth, K, R, t))
     dev = device_of(p)
-    z = as_float(depth, "depth", xp=xp, dtype=p.dtype, device=dev)
+    z = as_float_bounded(depth, "depth", xp=xp, dtype=p.dtype, device=dev)
     try:
         np.broadcast_shapes(tuple(z.shape), tuple(p.shape[:-1]))
     except ValueError:
@@ -394,14 +390,14 @@ def unproject(
         ) from None
     if any_value(~(z > 0), xp):
         raise InvalidInputError("expected depth > 0 (points in front of the camera)")
-    Km = as_matrix(K, "K", (3, 3), xp=xp, dtype=p.dtype, device=dev)
+    Km = as_matrix_bounded(K, "K", (3, 3), xp=xp, dtype=p.dtype, device=dev)
     _check_K(Km, xp)
     Km = _plane_K(Km, plane, xp)
     Xc = _Kinv_apply(p, Km, xp) * z[..., None]
     if t is not None:
-        Xc = Xc - as_points(t, "t", 3, xp=xp, dtype=p.dtype, device=dev)
+        Xc = Xc - as_points_bounded(t, "t", 3, xp=xp, dtype=p.dtype, device=dev)
     if R is not None:
-        Rm = as_matrix(R, "R", (3, 3), xp=xp, dtype=p.dtype, device=dev)
+        Rm = as_matrix_bounded(R, "R", (3, 3), xp=xp, dtype=p.dtype, device=dev)
         check_rotation(Rm, "R", xp=xp)
         Xc = Xc @ Rm
     return Xc
@@ -445,7 +441,7 @@ class Camera:
         if isinstance(self.K, Intrinsics) and self.image_size is None:
             object.__setattr__(self, "image_size", self.K.image_size)
         xp = namespace(K, self.R, self.t)
-        Km = as_matrix(K, "K", (3, 3), xp=xp, batch=False)
+        Km = as_matrix_bounded(K, "K", (3, 3), xp=xp, batch=False)
         _check_K(Km, xp)
         fx, fy = float(Km[0, 0] / Km[2, 2]), float(Km[1, 1] / Km[2, 2])
         if not (fx > 0 and fy > 0):
@@ -454,9 +450,9 @@ class Camera:
                 "(a negative focal length mirrors the image; the inverted image of a camera "
                 "obscura is image_plane='real')"
             )
-        Rm = as_matrix(self.R, "R", (3, 3), xp=xp, batch=False, dtype=Km.dtype)
+        Rm = as_matrix_bounded(self.R, "R", (3, 3), xp=xp, batch=False, dtype=Km.dtype)
         check_rotation(Rm, "R", xp=xp)
-        tv = as_points(self.t, "t", 3, xp=xp, dtype=Km.dtype)
+        tv = as_points_bounded(self.t, "t", 3, xp=xp, dtype=Km.dtype)
         if tv.ndim != 1:
             raise InvalidInputError(f"expected t of shape (3,), got {tuple(tv.shape)}")
         object.__setattr__(self, "K", Km / Km[2, 2])
@@ -529,7 +525,7 @@ class Camera:
     def world_to_camera(self, points: ArrayLike) -> Array:
         """``X_cam = R X + t`` for points ``(..., 3)``."""
         xp = namespace(points, self.R)
-        X = as_points(points, "points", 3, xp=xp)
+        X = as_points_bounded(points, "points", 3, xp=xp)
         R = xp.asarray(self.R, dtype=X.dtype, device=device_of(X))
         return X @ xp.matrix_transpose(R) + xp.asarray(self.t, dtype=X.dtype, device=device_of(X))
 
@@ -554,7 +550,7 @@ class Camera:
         model this is ``K⁻¹ (u, v, 1)``.
         """
         xp = namespace(uv, self.K)
-        p = as_points(uv, "uv", 2, xp=xp)
+        p = as_points_bounded(uv, "uv", 2, xp=xp)
         K = xp.asarray(self.K, dtype=p.dtype, device=device_of(p))
         xy = _Kinv_apply(p, K, xp)[..., :2]
         if self.distortion is None:
@@ -583,7 +579,7 @@ class Camera:
         if self.image_size is None:
             raise InvalidInputError("in_image needs the camera's image_size")
         xp = namespace(uv)
-        p = as_points(uv, "uv", 2, xp=xp, finite=False)
+        p = as_points_bounded(uv, "uv", 2, xp=xp, finite=False)
         w, h = self.image_size
         return (
             (p[..., 0] >= -0.5)

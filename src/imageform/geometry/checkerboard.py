@@ -48,8 +48,15 @@ from numpy.typing import NDArray
 
 from imageform import _deprecate
 from imageform._backend import to_numpy
-from imageform._validate import as_bool, as_int, as_real, describe, format_shape, size_pair
-from imageform._validate import as_float_bounded as as_float
+from imageform._validate import (
+    as_bool,
+    as_float_bounded,
+    as_int,
+    as_real,
+    describe,
+    format_shape,
+    size_pair,
+)
 from imageform.errors import ImageformWarning, InvalidInputError
 from imageform.geometry.checkerboard_candidates import find_candidates
 from imageform.geometry.checkerboard_grid import (
@@ -127,7 +134,9 @@ class CheckerboardResult:
         )
         n = self.pattern_size[0] * self.pattern_size[1]
         if self.corners is not None:
-            c = np.asarray(to_numpy(as_float(self.corners, "corners", xp=np, dtype=np.float64)))
+            c = np.asarray(
+                to_numpy(as_float_bounded(self.corners, "corners", xp=np, dtype=np.float64))
+            )
             if c.shape != (n, 2):
                 raise InvalidInputError(
                     f"expected corners of shape ({n}, 2) for pattern_size {self.pattern_size}, "
@@ -137,7 +146,7 @@ class CheckerboardResult:
         elif self.found:
             raise InvalidInputError("expected corners (N, 2) when found is True, got None")
         if self.status is not None:
-            st = np.asarray(to_numpy(as_float(self.status, "status", xp=np, finite=True)))
+            st = np.asarray(to_numpy(as_float_bounded(self.status, "status", xp=np, finite=True)))
             if st.shape != (n,) or np.any(st != np.round(st)):
                 raise InvalidInputError(
                     f"expected status as ({n},) integers, got {describe(self.status)}"

@@ -13,8 +13,15 @@ from numpy.typing import NDArray
 
 from imageform import _deprecate
 from imageform._backend import to_numpy, use_numba
-from imageform._validate import as_image, as_int, as_real, check_bounded, format_shape, size_pair
-from imageform._validate import as_points_bounded as as_points
+from imageform._validate import (
+    as_image,
+    as_int,
+    as_points_bounded,
+    as_real,
+    check_bounded,
+    format_shape,
+    size_pair,
+)
 from imageform.errors import InvalidInputError
 
 __all__ = ["RefinedCorners", "as_gray", "gray_codes", "gray_from_codes", "refine", "refine_corners"]
@@ -166,7 +173,9 @@ def refine_corners(
     (array([[20.3, 19.6]]), array([0]))
     """
     gray = as_gray(image)
-    pts = np.asarray(to_numpy(as_points(corners, "corners", 2, dtype=None)), dtype=np.float64)
+    pts = np.asarray(
+        to_numpy(as_points_bounded(corners, "corners", 2, dtype=None)), dtype=np.float64
+    )
     if pts.ndim != 2:
         raise InvalidInputError(
             f"expected corners of shape (N, 2), got {format_shape(tuple(pts.shape))}"

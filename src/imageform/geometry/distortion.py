@@ -30,14 +30,12 @@ import numpy as np
 from imageform._backend import common_device, namespace, to_numpy, use_numba
 from imageform._dask import is_dask_array
 from imageform._validate import (
-    as_float_bounded as as_float,
-)
-from imageform._validate import as_int, as_real, check_rotation
-from imageform._validate import (
-    as_matrix_bounded as as_matrix,
-)
-from imageform._validate import (
-    as_points_bounded as as_points,
+    as_float_bounded,
+    as_int,
+    as_matrix_bounded,
+    as_points_bounded,
+    as_real,
+    check_rotation,
 )
 from imageform.errors import InvalidInputError
 from imageform.geometry._distortion_xp import (
@@ -168,7 +166,7 @@ class BrownConrady:
     def from_opencv(cls, dist_coeffs: Any) -> BrownConrady:
         """From OpenCV's 4, 5 or 8 ``distCoeffs`` ``(k1, k2, p1, p2[, k3[, k4, k5, k6]])``."""
         d = np.asarray(
-            to_numpy(as_float(dist_coeffs, "dist_coeffs", xp=np, dtype=np.float64)),
+            to_numpy(as_float_bounded(dist_coeffs, "dist_coeffs", xp=np, dtype=np.float64)),
             dtype=np.float64,
         ).ravel()
         if d.size not in (4, 5, 8):
@@ -182,7 +180,7 @@ class BrownConrady:
         if is_dask_array(xy):  # pointwise: lazily, one task per chunk
             return _dask_points(lambda b: self.distort(b), xy)
         xp = namespace(xy)
-        arr = as_points(xy, "xy", 2, xp=xp)
+        arr = as_points_bounded(xy, "xy", 2, xp=xp)
         if _cuda_geometry().on_cuda(arr):  # one fused CUDA kernel (imageform._cuda.geometry)
             out = _cuda_geometry().distort(xp.reshape(arr, (-1, 2)), self.coeffs)
             if out is not None:  # None: the kernels are unusable here
@@ -213,7 +211,7 @@ class BrownConrady:
         if is_dask_array(xy):  # pointwise: lazily, one task per chunk
             return _dask_pair(lambda b: self.undistort(b, max_iter, tol), xy)
         xp = namespace(xy)
-        arr = as_points(xy, "xy", 2, xp=xp)
+        arr = as_points_bounded(xy, "xy", 2, xp=xp)
         it, t = _iter_args(max_iter, tol, xp, arr.dtype)
         if _cuda_geometry().on_cuda(arr):  # one CUDA kernel, at most max_iter Newton steps
             shape = tuple(arr.shape)
@@ -270,7 +268,7 @@ class DivisionModel:
         if is_dask_array(xy):  # pointwise: lazily, one task per chunk
             return _dask_points(lambda b: self.distort(b, max_iter, tol), xy)
         xp = namespace(xy)
-        arr = as_points(xy, "xy", 2, xp=xp)
+        arr = as_points_bounded(xy, "xy", 2, xp=xp)
         it, t = _iter_args(max_iter, tol, xp, arr.dtype)
         out, _ = division_distort_xp(arr, self.coeffs, xp, it, t)
         return out
@@ -283,7 +281,7 @@ class DivisionModel:
         if is_dask_array(xy):  # pointwise: lazily, one task per chunk
             return _dask_pair(lambda b: self.undistort(b, max_iter, tol), xy)
         xp = namespace(xy)
-        arr = as_points(xy, "xy", 2, xp=xp)
+        arr = as_points_bounded(xy, "xy", 2, xp=xp)
         _iter_args(max_iter, tol, xp, arr.dtype)
         return Undistorted(*division_undistort_xp(arr, self.coeffs, xp))
 
@@ -328,7 +326,7 @@ class KannalaBrandt:
         if is_dask_array(xy):  # pointwise: lazily, one task per chunk
             return _dask_points(lambda b: self.distort(b), xy)
         xp = namespace(xy)
-        arr = as_points(xy, "xy", 2, xp=xp)
+        arr = as_points_bounded(xy, "xy", 2, xp=xp)
         if use_numba(arr, min_size=2 * NUMBA_MIN_POINTS):
             from imageform._kernels.distortion import kannala_brandt_distort
 
@@ -350,7 +348,7 @@ class KannalaBrandt:
         if is_dask_array(xy):  # pointwise: lazily, one task per chunk
             return _dask_pair(lambda b: self.undistort(b, max_iter, tol), xy)
         xp = namespace(xy)
-        arr = as_points(xy, "xy", 2, xp=xp)
+        arr = as_points_bounded(xy, "xy", 2, xp=xp)
         it, t = _iter_args(max_iter, tol, xp, arr.dtype)
         if use_numba(arr, min_size=2 * NUMBA_MIN_POINTS):
             from imageform._kernels.distortion import kannala_brandt_undistort
@@ -441,11 +439,11 @@ def project_points_distorted(
     """
     xp = namespace(points, K, R, t)
     dev = common_device(points, K, R, t)
-    pts = as_points(points, "points", 3, xp=xp, device=dev)
-    Km = as_matrix(K, "K", (3, 3), xp=xp, dtype=pts.dtype, batch=False, device=dev)
-    Rm = as_matrix(R, "R", (3, 3), xp=xp, dtype=pts.dtype, batch=False, device=dev)
+    pts = as_points_bounded(points, "points", 3, xp=xp, device=dev)
+    Km = as_matrix_bounded(K, "K", (3, 3), xp=xp, dtype=pts.dtype, batch=False, device=dev)
+    Rm = as_matrix_bounded(R, "R", (3, 3), xp=xp, dtype=pts.dtype, batch=False, device=dev)
     check_rotation(Rm, "R", xp=xp)
-    tv = as_points(t, "t", 3, xp=xp, dtype=pts.dtype, device=dev)
+    tv = as_points_bounded(t, "t", 3, xp=xp, dtype=pts.dtype, device=dev)
     if tv.ndim != 1:
         raise InvalidInputError(f"expected t of shape (3,), got {tuple(tv.shape)}")
     _check_model(distortion)

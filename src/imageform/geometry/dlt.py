@@ -11,8 +11,7 @@ from __future__ import annotations
 
 from imageform._backend import common_device, linalg, namespace, sign_of
 from imageform._typing import Array, ArrayLike
-from imageform._validate import any_value
-from imageform._validate import as_points_bounded as as_points
+from imageform._validate import any_value, as_points_bounded
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
 from imageform.geometry._normalize import similarity_normalization
 
@@ -55,8 +54,8 @@ def estimate_projection_matrix(points_3d: ArrayLike, points_2d: ArrayLike) -> Ar
     """
     xp = namespace(points_3d, points_2d)
     dev = common_device(points_3d, points_2d)
-    X = as_points(points_3d, "points_3d", 3, xp=xp, device=dev)
-    x = as_points(points_2d, "points_2d", 2, xp=xp, dtype=X.dtype, device=dev)
+    X = as_points_bounded(points_3d, "points_3d", 3, xp=xp, device=dev)
+    x = as_points_bounded(points_2d, "points_2d", 2, xp=xp, dtype=X.dtype, device=dev)
     if X.shape[:-1] != x.shape[:-1]:
         raise InvalidInputError(
             f"expected as many points_3d as points_2d, got {tuple(X.shape)} and {tuple(x.shape)}"

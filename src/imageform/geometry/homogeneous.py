@@ -17,16 +17,12 @@ from imageform._typing import Array, ArrayLike
 from imageform._validate import (
     MAX_MAGNITUDE,
     any_value,
+    as_float_bounded,
+    as_points_bounded,
     as_real,
     check_bounded,
     check_option,
     shape_text,
-)
-from imageform._validate import (
-    as_float_bounded as as_float,
-)
-from imageform._validate import (
-    as_points_bounded as as_points,
 )
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
 
@@ -44,7 +40,7 @@ __all__ = [
 
 def _any_dim(points: ArrayLike, name: str, n_min: int, xp: Any) -> Array:
     """Points ``(..., n)`` with ``n >= n_min`` (the shape checked before the values)."""
-    p = as_float(points, name, xp=xp, finite=False)
+    p = as_float_bounded(points, name, xp=xp, finite=False)
     if p.ndim < 1 or not n_min <= p.shape[-1] <= 1 << 16:
         raise InvalidInputError(
             f"expected {name} of shape (..., n) with n >= {n_min}, got {shape_text(p)}"
@@ -193,7 +189,7 @@ def from_homogeneous_masked(points: ArrayLike) -> Dehomogenized:
 
 def _homog2(points: ArrayLike, name: str, xp: Any, device: Any = None) -> Array:
     """2-D points (..., 2) or homogeneous (..., 3) as homogeneous (..., 3)."""
-    p = as_points(points, name, (2, 3), xp=xp, device=device)
+    p = as_points_bounded(points, name, (2, 3), xp=xp, device=device)
     if p.shape[-1] == 2:
         ones = xp.ones((*p.shape[:-1], 1), dtype=p.dtype, device=getattr(p, "device", None))
         p = xp.concat((p, ones), axis=-1)
@@ -254,8 +250,8 @@ def intersect_lines(l1: ArrayLike, l2: ArrayLike) -> Array:
     """
     xp = namespace(l1, l2)
     dev = common_device(l1, l2)
-    a = as_points(l1, "l1", 3, xp=xp, device=dev)
-    b = as_points(l2, "l2", 3, xp=xp, device=dev)
+    a = as_points_bounded(l1, "l1", 3, xp=xp, device=dev)
+    b = as_points_bounded(l2, "l2", 3, xp=xp, device=dev)
     a, b = xp.broadcast_arrays(a, b)
     x = linalg(xp).cross(a, b)
     return _normalize_homogeneous_point(x, xp, what="the two lines l1 and l2 are identical")
@@ -301,7 +297,7 @@ def are_collinear(points: ArrayLike, *, tol: float = 1e-9) -> Array:
     """
     tol = as_real(tol, "tol", nonnegative=True, maximum=1e6)
     xp = namespace(points)
-    p = as_points(points, "points", 2, xp=xp)
+    p = as_points_bounded(points, "points", 2, xp=xp)
     if p.ndim < 2 or p.shape[-2] < 2:
         raise InvalidInputError(
             f"expected points of shape (..., N, 2) with N >= 2, got {tuple(p.shape)}"
@@ -328,7 +324,8 @@ def cross_ratio(a: ArrayLike, b: ArrayLike, c: ArrayLike, d: ArrayLike) -> Array
     xp = namespace(a, b, c, d)
     dev = common_device(a, b, c, d)
     pa, pb, pc, pd = (
-        as_points(v, n, 2, xp=xp, device=dev) for v, n in zip((a, b, c, d), "abcd", strict=True)
+        as_points_bounded(v, n, 2, xp=xp, device=dev)
+        for v, n in zip((a, b, c, d), "abcd", strict=True)
     )
     pa, pb, pc, pd = xp.broadcast_arrays(pa, pb, pc, pd)
     stacked = xp.stack((pa, pb, pc, pd), axis=-2)

@@ -23,17 +23,13 @@ from imageform._validate import (
     MAX_MAGNITUDE,
     MAX_SIDE,
     any_value,
+    as_float_bounded,
+    as_matrix_bounded,
     as_real,
     check_image_size,
     check_K,
     check_positive,
     real_pair,
-)
-from imageform._validate import (
-    as_float_bounded as as_float,
-)
-from imageform._validate import (
-    as_matrix_bounded as as_matrix,
 )
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
 
@@ -58,7 +54,7 @@ def intrinsic_matrix(
     xp = namespace(fx, fy, cx, cy, skew)
     dev = common_device(fx, fy, cx, cy, skew)
     vals = [
-        as_float(v, n, xp=xp, device=dev)
+        as_float_bounded(v, n, xp=xp, device=dev)
         for v, n in zip((fx, fy, cx, cy, skew), ("fx", "fy", "cx", "cy", "skew"), strict=True)
     ]
     dtype = xp.result_type(*vals)
@@ -150,7 +146,7 @@ class Intrinsics:
     @classmethod
     def from_matrix(cls, K: ArrayLike, image_size: tuple[int, int] | None = None) -> Intrinsics:
         """From a 3×3 K with ``K[2] = (0, 0, 1)`` (scale it first if not)."""
-        M = np.asarray(to_numpy(as_matrix(K, "K", (3, 3), batch=False)), dtype=np.float64)
+        M = np.asarray(to_numpy(as_matrix_bounded(K, "K", (3, 3), batch=False)), dtype=np.float64)
         check_K(M, np, "K", positive=True)
         M = M / M[2, 2]
         return cls(M[0, 0], M[1, 1], M[0, 2], M[1, 2], M[0, 1], image_size)

@@ -36,13 +36,13 @@ from imageform._backend import to_numpy
 from imageform._typing import ArrayLike, FloatArray
 from imageform._validate import (
     MAX_MAGNITUDE,
+    as_float_bounded,
     as_image,
     as_real,
     check_positive,
     describe,
     shape_text,
 )
-from imageform._validate import as_float_bounded as as_float
 from imageform.errors import InvalidInputError, UnknownOptionError
 
 __all__ = ["LineSegments", "detect_line_segments"]
@@ -69,7 +69,7 @@ class LineSegments:
     def __post_init__(self) -> None:
         """Check the arrays (one width and NFA per segment) and keep float64 NumPy copies."""
         e = np.asarray(
-            to_numpy(as_float(_host(self.endpoints), "endpoints", xp=np, dtype=np.float64))
+            to_numpy(as_float_bounded(_host(self.endpoints), "endpoints", xp=np, dtype=np.float64))
         )
         if e.ndim != 3 or e.shape[1:] != (2, 2):
             raise InvalidInputError(f"expected endpoints of shape (N, 2, 2), got {shape_text(e)}")
@@ -78,7 +78,7 @@ class LineSegments:
         for name in ("widths", "log10_nfa"):
             v = np.asarray(
                 to_numpy(
-                    as_float(
+                    as_float_bounded(
                         _host(getattr(self, name)), name, xp=np, dtype=np.float64, finite=False
                     )
                 )

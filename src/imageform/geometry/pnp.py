@@ -20,13 +20,9 @@ from imageform._backend import to_numpy, use_numba
 from imageform._validate import (
     as_bool,
     as_int,
+    as_matrix_bounded,
+    as_points_bounded,
     check_K,
-)
-from imageform._validate import (
-    as_matrix_bounded as as_matrix,
-)
-from imageform._validate import (
-    as_points_bounded as as_points,
 )
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
 from imageform.geometry.calibration_refine import rodrigues
@@ -303,13 +299,13 @@ def _pnp_result(
 def _validate(
     object_points: Any, image_points: Any, K: Any, distortion: Any
 ) -> tuple[F64, F64, F64, tuple[int, ...], Any]:
-    X0 = to_numpy(as_points(object_points, "object_points", 3))
-    uv0 = to_numpy(as_points(image_points, "image_points", 2))
+    X0 = to_numpy(as_points_bounded(object_points, "object_points", 3))
+    uv0 = to_numpy(as_points_bounded(image_points, "image_points", 2))
     # float32 in -> float32 out (computation in float64 either way)
     out_dtype = np.float32 if X0.dtype == uv0.dtype == np.float32 else np.float64
     X = np.asarray(X0, dtype=np.float64)
     uv = np.asarray(uv0, dtype=np.float64)
-    Km = np.asarray(to_numpy(as_matrix(K, "K", (3, 3), batch=False)), dtype=np.float64)
+    Km = np.asarray(to_numpy(as_matrix_bounded(K, "K", (3, 3), batch=False)), dtype=np.float64)
     if X.ndim < 2 or X.shape[:-1] != uv.shape[:-1]:
         raise InvalidInputError(
             "expected object_points (..., N, 3) and image_points (..., N, 2) with the same "

@@ -26,18 +26,14 @@ from imageform._typing import Array, ArrayLike, FloatArray
 from imageform._validate import (
     MAX_MAGNITUDE,
     any_value,
+    as_matrix_bounded,
+    as_points_bounded,
     as_real,
     check_image_size,
     check_K,
     check_rotation,
     real_pair,
     shape_text,
-)
-from imageform._validate import (
-    as_matrix_bounded as as_matrix,
-)
-from imageform._validate import (
-    as_points_bounded as as_points,
 )
 from imageform.errors import InvalidInputError
 from imageform.geometry.camera import Projection, project_points
@@ -55,13 +51,13 @@ def _world_to_cam(
     points: ArrayLike, R: ArrayLike | None, t: ArrayLike | None, K: ArrayLike | None = None
 ) -> tuple[Any, Array]:
     xp = namespace(points, R, t, K)
-    X = as_points(points, "points", 3, xp=xp, device=common_device(points, R, t, K))
+    X = as_points_bounded(points, "points", 3, xp=xp, device=common_device(points, R, t, K))
     if R is not None:
-        Rm = as_matrix(R, "R", (3, 3), xp=xp, dtype=X.dtype, device=device_of(X))
+        Rm = as_matrix_bounded(R, "R", (3, 3), xp=xp, dtype=X.dtype, device=device_of(X))
         check_rotation(Rm, "R", xp=xp)
         X = X @ xp.matrix_transpose(Rm)
     if t is not None:
-        X = X + as_points(t, "t", 3, xp=xp, dtype=X.dtype, device=device_of(X))
+        X = X + as_points_bounded(t, "t", 3, xp=xp, dtype=X.dtype, device=device_of(X))
     return xp, X
 
 
@@ -131,7 +127,7 @@ def weak_perspective_project(
            [ 60., -20.]])
     """
     xp, X = _world_to_cam(points, R, t, K)
-    Km = as_matrix(K, "K", (3, 3), xp=xp, dtype=X.dtype, device=device_of(X))
+    Km = as_matrix_bounded(K, "K", (3, 3), xp=xp, dtype=X.dtype, device=device_of(X))
     check_K(Km, xp)
     if depth is None:
         if X.ndim >= 2 and X.shape[-2] == 0:
@@ -164,7 +160,7 @@ def weak_perspective_matrix(K: ArrayLike, depth: float) -> FloatArray:
            [  0.,   0.,   0.,   5.]])
     """
     z0 = as_real(depth, "depth", positive=True, maximum=MAX_MAGNITUDE)
-    Km = np.asarray(as_matrix(K, "K", (3, 3), batch=False), dtype=np.float64)
+    Km = np.asarray(as_matrix_bounded(K, "K", (3, 3), batch=False), dtype=np.float64)
     return Km @ np.array([[1.0, 0, 0, 0], [0, 1, 0, 0], [0, 0, 0, z0]])
 
 

@@ -15,15 +15,16 @@ from typing import Any, NamedTuple
 
 from imageform._backend import common_device, device_of, linalg, namespace
 from imageform._typing import Array, ArrayLike
-from imageform._validate import any_value, as_real, check_rotation, describe, det3, format_shape
 from imageform._validate import (
-    as_float_bounded as as_float,
-)
-from imageform._validate import (
-    as_matrix_bounded as as_matrix,
-)
-from imageform._validate import (
-    as_points_bounded as as_points,
+    any_value,
+    as_float_bounded,
+    as_matrix_bounded,
+    as_points_bounded,
+    as_real,
+    check_rotation,
+    describe,
+    det3,
+    format_shape,
 )
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
 
@@ -84,7 +85,7 @@ def axis_rotation(axis: str, angle: ArrayLike) -> Array:
 
 
 def _as_angle(angle: ArrayLike, xp: Any, name: str = "angle") -> Array:
-    return as_float(angle, name, xp=xp)
+    return as_float_bounded(angle, name, xp=xp)
 
 
 def _axis_rotation(i: int, a: Array, xp: Any) -> Array:
@@ -122,7 +123,7 @@ def euler_to_matrix(angles: ArrayLike, order: str) -> Array:
     """
     order = _check_order(order)
     xp = namespace(angles)
-    a = as_points(angles, "angles", 3, xp=xp)
+    a = as_points_bounded(angles, "angles", 3, xp=xp)
     mats = [_axis_rotation(_AXES[c.lower()], a[..., i], xp) for i, c in enumerate(order)]
     if order.islower():
         return mats[2] @ mats[1] @ mats[0]
@@ -146,7 +147,7 @@ def matrix_to_euler(R: ArrayLike, order: str) -> Array:
     """
     order = _check_order(order)
     xp = namespace(R)
-    M = as_matrix(R, "R", (3, 3), xp=xp)
+    M = as_matrix_bounded(R, "R", (3, 3), xp=xp)
     check_rotation(M, "R", xp=xp)
     intrinsic = order.isupper()
     seq = order.lower()
@@ -230,7 +231,7 @@ def rvec_to_matrix(rvec: ArrayLike) -> Array:
            [ 0.,  0.,  1.]])
     """
     xp = namespace(rvec)
-    r = as_points(rvec, "rvec", 3, xp=xp)
+    r = as_points_bounded(rvec, "rvec", 3, xp=xp)
     theta2 = xp.sum(r * r, axis=-1)
     theta = xp.sqrt(theta2)
     small = theta2 < 1e-8
@@ -299,7 +300,7 @@ def quaternion_to_matrix(q: ArrayLike) -> Array:
            [ 0.,  0.,  1.]])
     """
     xp = namespace(q)
-    qq = as_points(q, "q (quaternion)", 4, xp=xp)
+    qq = as_points_bounded(q, "q (quaternion)", 4, xp=xp)
     n = xp.sqrt(xp.sum(qq * qq, axis=-1, keepdims=True))
     if any_value(n == 0, xp):
         raise InvalidInputError("q: a zero quaternion does not represent a rotation")
@@ -325,7 +326,7 @@ def matrix_to_quaternion(R: ArrayLike) -> Array:
     array([0.707107, 0.      , 0.      , 0.707107])
     """
     xp = namespace(R)
-    M = as_matrix(R, "R", (3, 3), xp=xp)
+    M = as_matrix_bounded(R, "R", (3, 3), xp=xp)
     check_rotation(M, "R", xp=xp)
     m00, m11, m22 = M[..., 0, 0], M[..., 1, 1], M[..., 2, 2]
     tr = m00 + m11 + m22
@@ -391,7 +392,7 @@ def is_rotation(R: ArrayLike, *, atol: float = 1e-6) -> Array:
     False
     """
     xp = namespace(R)
-    M = as_matrix(R, "R", (3, 3), xp=xp)
+    M = as_matrix_bounded(R, "R", (3, 3), xp=xp)
     eye = xp.eye(3, dtype=M.dtype, device=device_of(M))
     atol = as_real(atol, "atol", nonnegative=True, maximum=1.0)
     orth = xp.max(xp.abs(M @ xp.matrix_transpose(M) - eye), axis=(-2, -1)) <= atol
@@ -435,9 +436,9 @@ def look_at(eye: ArrayLike, target: ArrayLike, up: ArrayLike = (0.0, -1.0, 0.0))
     """
     xp = namespace(eye, target, up)
     dev = common_device(eye, target, up)
-    e = as_points(eye, "eye", 3, xp=xp, device=dev)
-    tg = as_points(target, "target", 3, xp=xp, dtype=e.dtype, device=dev)
-    u = as_points(up, "up", 3, xp=xp, dtype=e.dtype, device=dev)
+    e = as_points_bounded(eye, "eye", 3, xp=xp, device=dev)
+    tg = as_points_bounded(target, "target", 3, xp=xp, dtype=e.dtype, device=dev)
+    u = as_points_bounded(up, "up", 3, xp=xp, dtype=e.dtype, device=dev)
     z = tg - e
     zn = xp.sqrt(xp.sum(z * z, axis=-1, keepdims=True))
     if any_value(zn == 0, xp):

@@ -18,13 +18,9 @@ from imageform._validate import (
     MAX_MAGNITUDE,
     as_bool,
     as_int,
+    as_matrix_bounded,
+    as_points_bounded,
     as_real,
-)
-from imageform._validate import (
-    as_matrix_bounded as as_matrix,
-)
-from imageform._validate import (
-    as_points_bounded as as_points,
 )
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
 
@@ -139,8 +135,10 @@ def triangulate_points(
     >>> res.points.round(9).tolist(), bool(res.valid[0])
     ([[0.2, -0.1, 5.0]], True)
     """
-    P = np.asarray(to_numpy(as_matrix(projection_matrices, "projection_matrices", (3, 4))), float)
-    uv0 = to_numpy(as_points(image_points, "image_points", 2, finite=False))
+    P = np.asarray(
+        to_numpy(as_matrix_bounded(projection_matrices, "projection_matrices", (3, 4))), float
+    )
+    uv0 = to_numpy(as_points_bounded(image_points, "image_points", 2, finite=False))
     out_dtype = np.float32 if uv0.dtype == np.float32 else np.float64  # float32 in -> out
     uv = np.asarray(uv0, dtype=np.float64)
     if P.ndim != 3 or uv.ndim != 3 or uv.shape[0] != P.shape[0]:

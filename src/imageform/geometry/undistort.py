@@ -33,17 +33,13 @@ from imageform._backend import (
 from imageform._validate import (
     MAX_MAGNITUDE,
     as_bool,
+    as_float_bounded,
     as_image,
+    as_matrix_bounded,
     as_real,
     check_memory,
     format_shape,
     size_pair,
-)
-from imageform._validate import (
-    as_float_bounded as as_float,
-)
-from imageform._validate import (
-    as_matrix_bounded as as_matrix,
 )
 from imageform.errors import InvalidInputError
 from imageform.geometry._remap_xp import map_grid, remap_dask, remap_xp
@@ -241,7 +237,9 @@ def remap_bilinear(image: Any, map_uv: Any, *, fill: float = 0.0, keep_dtype: bo
     if isinstance(map_uv, np.ndarray) and map_uv.dtype in (np.float32, np.float64):
         m = map_uv  # float32 maps are sampled as they are (no float64 copy)
     else:
-        m = np.asarray(to_numpy(as_float(map_uv, "map_uv", xp=np, finite=False)), np.float64)
+        m = np.asarray(
+            to_numpy(as_float_bounded(map_uv, "map_uv", xp=np, finite=False)), np.float64
+        )
     if m.ndim != 3 or m.shape[-1] != 2:
         raise InvalidInputError(f"expected map_uv of shape (H, W, 2), got {format_shape(m.shape)}")
     check_memory(
@@ -291,11 +289,13 @@ def _inverse_k(Km: np.ndarray, u: np.ndarray, v: np.ndarray) -> np.ndarray:
 
 def _intrinsics(K: Any, new_K: Any) -> tuple[np.ndarray, np.ndarray]:
     """``K`` and ``new_K`` (default ``K``) as float64 ``(3, 3)``, checked upper triangular."""
-    Km = np.asarray(to_numpy(as_matrix(K, "K", (3, 3), batch=False)), dtype=np.float64)
+    Km = np.asarray(to_numpy(as_matrix_bounded(K, "K", (3, 3), batch=False)), dtype=np.float64)
     Kn = (
         Km
         if new_K is None
-        else np.asarray(to_numpy(as_matrix(new_K, "new_K", (3, 3), batch=False)), np.float64)
+        else np.asarray(
+            to_numpy(as_matrix_bounded(new_K, "new_K", (3, 3), batch=False)), np.float64
+        )
     )
     for name, M in (("K", Km), ("new_K", Kn)):
         if M[0, 0] == 0 or M[1, 1] == 0 or M[1, 0] != 0 or M[2].tolist() != [0.0, 0.0, 1.0]:
@@ -314,11 +314,13 @@ def _intrinsics_on(K: Any, new_K: Any, xp: Any, device: Any) -> tuple[Any, Any]:
     """
     if reads_values(K) and (new_K is None or reads_values(new_K)):
         return _intrinsics(K, new_K)
-    Km = as_matrix(K, "K", (3, 3), batch=False, xp=xp, dtype=xp.float64, device=device)
+    Km = as_matrix_bounded(K, "K", (3, 3), batch=False, xp=xp, dtype=xp.float64, device=device)
     Kn = (
         Km
         if new_K is None
-        else as_matrix(new_K, "new_K", (3, 3), batch=False, xp=xp, dtype=xp.float64, device=device)
+        else as_matrix_bounded(
+            new_K, "new_K", (3, 3), batch=False, xp=xp, dtype=xp.float64, device=device
+        )
     )
     return Km, Kn
 

@@ -15,15 +15,15 @@ from typing import Any
 
 from imageform._backend import common_device, device_of, linalg, namespace, sign_of
 from imageform._typing import Array, ArrayLike
-from imageform._validate import any_value, as_real, check_rotation, describe, format_shape
 from imageform._validate import (
-    as_float_bounded as as_float,
-)
-from imageform._validate import (
-    as_matrix_bounded as as_matrix,
-)
-from imageform._validate import (
-    as_points_bounded as as_points,
+    any_value,
+    as_float_bounded,
+    as_matrix_bounded,
+    as_points_bounded,
+    as_real,
+    check_rotation,
+    describe,
+    format_shape,
 )
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
 from imageform.geometry.homogeneous import _normalize_homogeneous_point, line_through
@@ -43,14 +43,14 @@ __all__ = [
 def _k_r(
     K: ArrayLike, R: ArrayLike | None, xp: Any, dtype: Any = None, device: Any = None
 ) -> tuple[Array, Array]:
-    Km = as_matrix(K, "K", (3, 3), xp=xp, dtype=dtype, device=device)
+    Km = as_matrix_bounded(K, "K", (3, 3), xp=xp, dtype=dtype, device=device)
     from imageform.geometry.camera import _check_K
 
     _check_K(Km, xp)
     if R is None:
         Rm = xp.eye(3, dtype=Km.dtype, device=device_of(Km))
     else:
-        Rm = as_matrix(R, "R", (3, 3), xp=xp, dtype=Km.dtype, device=device_of(Km))
+        Rm = as_matrix_bounded(R, "R", (3, 3), xp=xp, dtype=Km.dtype, device=device_of(Km))
         check_rotation(Rm, "R", xp=xp)
     return Km, Rm
 
@@ -81,7 +81,7 @@ def vanishing_point(K: ArrayLike, direction: ArrayLike, R: ArrayLike | None = No
     array([1., 0., 0.])
     """
     xp = namespace(K, direction, R)
-    d = as_points(direction, "direction", 3, xp=xp, device=common_device(K, direction, R))
+    d = as_points_bounded(direction, "direction", 3, xp=xp, device=common_device(K, direction, R))
     Km, Rm = _k_r(K, R, xp, d.dtype, device_of(d))
     if any_value(xp.sum(d * d, axis=-1) == 0, xp):
         raise InvalidInputError("expected a non-zero direction")
@@ -152,7 +152,7 @@ def horizon_line(K: ArrayLike, R: ArrayLike | None = None, up: ArrayLike | str =
     """
     up = _up_vector(up)
     xp = namespace(K, R, up)
-    n = as_points(up, "up", 3, xp=xp, device=common_device(K, R, up))
+    n = as_points_bounded(up, "up", 3, xp=xp, device=common_device(K, R, up))
     Km, Rm = _k_r(K, R, xp, n.dtype, device_of(n))
     if any_value(xp.sum(n * n, axis=-1) == 0, xp):
         raise InvalidInputError("expected a non-zero up direction")
@@ -207,13 +207,13 @@ def perspective_type(
     3
     """
     xp = namespace(directions, R)
-    D = as_points(directions, "directions", 3, xp=xp)
+    D = as_points_bounded(directions, "directions", 3, xp=xp)
     if D.ndim != 2:
         raise InvalidInputError(f"expected directions of shape (N, 3), got {tuple(D.shape)}")
     Rm = (
         xp.eye(3, dtype=D.dtype, device=device_of(D))
         if R is None
-        else as_matrix(R, "R", (3, 3), xp=xp, dtype=D.dtype, batch=False)
+        else as_matrix_bounded(R, "R", (3, 3), xp=xp, dtype=D.dtype, batch=False)
     )
     if R is not None:
         check_rotation(Rm, "R", xp=xp)
@@ -228,7 +228,7 @@ def perspective_type(
 def _as_finite_vps(v: ArrayLike, name: str, xp: Any, like: Any = None, device: Any = None) -> Array:
     dtype = None if like is None else like.dtype
     dev = device_of(like) if like is not None else device
-    p = as_points(v, name, (2, 3), xp=xp, dtype=dtype, device=dev)
+    p = as_points_bounded(v, name, (2, 3), xp=xp, dtype=dtype, device=dev)
     if p.shape[-1] == 3:
         if any_value(p[..., 2] == 0, xp):
             raise DegenerateConfigurationError(
@@ -260,7 +260,9 @@ def focal_from_vanishing_points(v1: ArrayLike, v2: ArrayLike, principal_point: A
     xp = namespace(v1, v2, principal_point)
     a = _as_finite_vps(v1, "v1", xp, device=common_device(v1, v2, principal_point))
     b = _as_finite_vps(v2, "v2", xp, a)
-    p = as_points(principal_point, "principal_point", 2, xp=xp, dtype=a.dtype, device=device_of(a))
+    p = as_points_bounded(
+        principal_point, "principal_point", 2, xp=xp, dtype=a.dtype, device=device_of(a)
+    )
     f2 = -xp.sum((a - p) * (b - p), axis=-1)
     if any_value(f2 <= 0, xp):
         raise DegenerateConfigurationError(
@@ -327,7 +329,7 @@ def intrinsics_from_vanishing_points(v1: ArrayLike, v2: ArrayLike, v3: ArrayLike
 def lines_from_segments(segments: ArrayLike) -> Array:
     """Homogeneous lines ``(..., N, 3)`` through segments ``(..., N, 2, 2)`` of ``(u, v)`` ends."""
     xp = namespace(segments)
-    s = as_points(segments, "segments", 2, xp=xp)
+    s = as_points_bounded(segments, "segments", 2, xp=xp)
     if s.ndim < 2 or s.shape[-2] != 2:
         raise InvalidInputError(f"expected segments of shape (..., 2, 2), got {tuple(s.shape)}")
     try:
@@ -361,7 +363,7 @@ def vanishing_point_from_lines(lines: ArrayLike, weights: ArrayLike | None = Non
     array([4., 2., 1.])
     """
     xp = namespace(lines, weights)
-    L = as_points(lines, "lines", 3, xp=xp)
+    L = as_points_bounded(lines, "lines", 3, xp=xp)
     if L.ndim != 2 or L.shape[0] < 2:
         raise InvalidInputError(f"expected lines of shape (N, 3) with N >= 2, got {tuple(L.shape)}")
     ab = xp.sqrt(L[:, 0] ** 2 + L[:, 1] ** 2)
@@ -380,7 +382,7 @@ def vanishing_point_from_lines(lines: ArrayLike, weights: ArrayLike | None = Non
     c2 = (c + a * centre[0] + b * centre[1]) / s
     Ln = xp.stack((a, b, c2), axis=-1)
     if weights is not None:
-        w = as_float(weights, "weights", xp=xp, dtype=L.dtype)
+        w = as_float_bounded(weights, "weights", xp=xp, dtype=L.dtype)
         w = xp.reshape(w, (-1,))
         if w.shape[0] != L.shape[0] or any_value(w < 0, xp):
             raise InvalidInputError(

@@ -1,10 +1,14 @@
-"""Boundary checks of the report functions (issue 16)."""
+"""Boundary checks of the report functions (issue 16).
+
+Only the checks of imageform.simulate's types live here; the generic ones (``check_path``)
+are in :mod:`imageform._validate` (issue 30).
+"""
 
 from __future__ import annotations
 
 from imageform.simulate import SimulationResult
 
-__all__ = ["check_measurements", "check_path", "check_result"]
+__all__ = ["check_measurements", "check_result"]
 
 
 def check_result(result: object, name: str = "result") -> None:
@@ -25,11 +29,3 @@ def check_measurements(measurements: object, name: str = "measurements") -> None
             f"expected {name} as PatchMeasurements (imageform.report.measure_patches), "
             f"got {type(measurements).__name__}"
         )
-
-
-def check_path(path: object, name: str) -> None:
-    """Raise :class:`TypeError` naming ``name`` unless ``path`` is a str or os.PathLike."""
-    import os
-
-    if not isinstance(path, str | os.PathLike) or (isinstance(path, str) and not path):
-        raise TypeError(f"expected {name} as a non-empty path (str or Path), got {path!r:.40}")

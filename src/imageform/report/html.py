@@ -26,10 +26,9 @@ from typing import Any
 import numpy as np
 
 from imageform._jsonio import write_json
-from imageform._validate import describe
+from imageform._validate import check_path, describe
 from imageform.errors import InvalidInputError
 from imageform.report import html_parts as hp
-from imageform.report._checks import check_path
 from imageform.report.metrics import (
     METRICS_VERSION,
     PLACED_METRICS,
