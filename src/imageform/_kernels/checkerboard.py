@@ -111,8 +111,10 @@ def _refine_corners(
     max_iter: int,
     eps: float,
 ) -> tuple[NDArray[np.float64], NDArray[np.int64]]:  # pragma: no cover - numba-compiled
-    """:func:`refine_corners_numba`'s kernel: the image is ``image32`` if ``is32`` else
-    ``image64`` (its values are used as float64 either way: the same numbers)."""
+    """:func:`refine_corners_numba`'s kernel: ``image32`` if ``is32``, else ``image64``.
+
+    The values are used as float64 either way: the same numbers.
+    """
     n = corners.shape[0]
     height, width = image32.shape if is32 else image64.shape
     out = corners.copy()

@@ -40,15 +40,16 @@ index from its runtime shape, which LLVM then versions on (falling back to scala
 sampling loop has one version for each of 1, 3 and 4 channels (unrolled), one generic.
 
 One-channel images take a third way (``_remap_rows_grey``, in a kernel of its own,
-``_remap_grey_tasks``, so that a one-channel remap compiles none of the general loops: 2.5 s of
+``_remap_grey_tasks``, so that a one-channel remap compiles none of the general loops: 4.5 s of
 CPU less on a first ``imageform simulate``, whose lateral colour remaps one channel at a time;
-and a colour remap compiles none of this one): locate and sample fused in one loop that LLVM vectorises with gathers. Two things make that possible: the results go to a
-buffer on the stack (an intrinsic, ``_stack_block``), which LLVM knows aliases no input, so
-the gathers may run ahead of the stores; and a uint8 pair ``I00, I01`` comes from one
-unaligned 32-bit load (``_word``; the lower pair's word is read two bytes early and
-shifted, so that no load leaves the image). A second loop rounds or converts the block into
-the output. The arithmetic is the general loops' (equal results bit for bit); a 1 MP uint8
-remap takes 1.5 ms instead of 2.7 ms on one thread of the development machine.
+and a colour remap compiles none of this one): locate and sample fused in one loop that LLVM
+vectorises with gathers. Two things make that possible: the results go to a buffer on the stack
+(an intrinsic, ``_stack_block``), which LLVM knows aliases no input, so the gathers may run
+ahead of the stores; and a uint8 pair ``I00, I01`` comes from one unaligned 32-bit load
+(``_word``; the lower pair's word is read two bytes early and shifted, so that no load leaves
+the image). A second loop rounds or converts the block into the output. The arithmetic is the
+general loops' (equal results bit for bit); a 1 MP uint8 remap takes 1.5 ms instead of 2.7 ms
+on one thread of the development machine.
 
 The plain twin of both is :func:`imageform.geometry.undistort._remap_bilinear_numpy` on the
 map from :func:`~imageform.geometry.undistort.undistortion_map`; tests check agreement to
