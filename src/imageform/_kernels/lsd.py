@@ -104,8 +104,11 @@ def region_rectangles(labels, n_regions, mag):  # type: ignore[no-untyped-def]  
                 sw[r] += w
                 sx[r] += w * x
                 sy[r] += w * y
-    cx = sx / sw
-    cy = sy / sw
+    cx = np.empty(n_regions)  # element loops, not array expressions (compiled seconds longer)
+    cy = np.empty(n_regions)
+    for r in range(n_regions):
+        cx[r] = sx[r] / sw[r]
+        cy[r] = sy[r] / sw[r]
     ixx = np.zeros(n_regions)
     iyy = np.zeros(n_regions)
     ixy = np.zeros(n_regions)
@@ -169,13 +172,15 @@ def rect_alignment_counts(rects, angle, tau):  # type: ignore[no-untyped-def]  #
         w0, w1 = rects[r, 5] - 0.5, rects[r, 6] + 0.5
         c = math.cos(th)
         s = math.sin(th)
-        # bounding box of the rectangle
-        xs = np.array([l0 * c - w0 * s, l0 * c - w1 * s, l1 * c - w0 * s, l1 * c - w1 * s]) + cx
-        ys = np.array([l0 * s + w0 * c, l0 * s + w1 * c, l1 * s + w0 * c, l1 * s + w1 * c]) + cy
-        xa = max(0, math.floor(xs.min()))
-        xb = min(W - 1, math.ceil(xs.max()))
-        ya = max(0, math.floor(ys.min()))
-        yb = min(H - 1, math.ceil(ys.max()))
+        # bounding box of the rectangle (scalars: no small arrays to compile)
+        x00, x01 = l0 * c - w0 * s + cx, l0 * c - w1 * s + cx
+        x10, x11 = l1 * c - w0 * s + cx, l1 * c - w1 * s + cx
+        y00, y01 = l0 * s + w0 * c + cy, l0 * s + w1 * c + cy
+        y10, y11 = l1 * s + w0 * c + cy, l1 * s + w1 * c + cy
+        xa = max(0, math.floor(min(min(x00, x01), min(x10, x11))))
+        xb = min(W - 1, math.ceil(max(max(x00, x01), max(x10, x11))))
+        ya = max(0, math.floor(min(min(y00, y01), min(y10, y11))))
+        yb = min(H - 1, math.ceil(max(max(y00, y01), max(y10, y11))))
         total = 0
         aligned = 0
         for y in range(ya, yb + 1):
