@@ -35,8 +35,13 @@ def grow_regions(angle, order, tau, min_size):  # type: ignore[no-untyped-def]  
     ``min_size`` are discarded (label -1 stays on their pixels as 'used').
     """
     H, W = angle.shape
-    labels = np.full((H, W), -1, dtype=np.int32)
-    used = np.zeros((H, W), dtype=np.bool_)
+    # np.empty and fill loops: each np.zeros / np.full signature is one more compilation
+    labels = np.empty((H, W), dtype=np.int32)
+    used = np.empty((H, W), dtype=np.bool_)
+    for y in range(H):
+        for x in range(W):
+            labels[y, x] = -1
+            used[y, x] = False
     stack_y = np.empty(H * W, dtype=np.int32)
     stack_x = np.empty(H * W, dtype=np.int32)
     n_regions = 0
@@ -93,9 +98,14 @@ def region_rectangles(labels, n_regions, mag):  # type: ignore[no-untyped-def]  
     coordinates of pixel centres (u = column, v = row).
     """
     H, W = labels.shape
-    sw = np.zeros(n_regions)
-    sx = np.zeros(n_regions)
-    sy = np.zeros(n_regions)
+    sw = np.empty(n_regions)  # np.empty and fill loops, as in grow_regions
+    sx = np.empty(n_regions)
+    sy = np.empty(n_regions)
+    ixx = np.empty(n_regions)
+    iyy = np.empty(n_regions)
+    ixy = np.empty(n_regions)
+    for r in range(n_regions):
+        sw[r] = sx[r] = sy[r] = ixx[r] = iyy[r] = ixy[r] = 0.0
     for y in range(H):
         for x in range(W):
             r = labels[y, x]
@@ -109,9 +119,6 @@ def region_rectangles(labels, n_regions, mag):  # type: ignore[no-untyped-def]  
     for r in range(n_regions):
         cx[r] = sx[r] / sw[r]
         cy[r] = sy[r] / sw[r]
-    ixx = np.zeros(n_regions)
-    iyy = np.zeros(n_regions)
-    ixy = np.zeros(n_regions)
     for y in range(H):
         for x in range(W):
             r = labels[y, x]
@@ -122,9 +129,9 @@ def region_rectangles(labels, n_regions, mag):  # type: ignore[no-untyped-def]  
                 ixx[r] += w * dy * dy
                 iyy[r] += w * dx * dx
                 ixy[r] -= w * dx * dy
-    rects = np.zeros((n_regions, 7))
-    dirx = np.zeros(n_regions)
-    diry = np.zeros(n_regions)
+    rects = np.empty((n_regions, 7))  # every entry written below
+    dirx = np.empty(n_regions)
+    diry = np.empty(n_regions)
     for r in range(n_regions):
         # smallest eigenvalue's eigenvector of [[ixx, ixy], [ixy, iyy]] is the line direction
         lam = 0.5 * (ixx[r] + iyy[r] - math.sqrt((ixx[r] - iyy[r]) ** 2 + 4.0 * ixy[r] ** 2))
@@ -165,7 +172,7 @@ def rect_alignment_counts(rects, angle, tau):  # type: ignore[no-untyped-def]  #
     """
     H, W = angle.shape
     n = rects.shape[0]
-    out = np.zeros((n, 2), dtype=np.int64)
+    out = np.empty((n, 2), dtype=np.int64)  # every entry written below
     for r in range(n):
         cx, cy, th = rects[r, 0], rects[r, 1], rects[r, 2]
         l0, l1 = rects[r, 3] - 0.5, rects[r, 4] + 0.5
