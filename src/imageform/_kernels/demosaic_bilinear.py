@@ -33,7 +33,7 @@ def bilinear_numba(P: np.ndarray, oy: int, ox: int, h: int, w: int) -> np.ndarra
 
 @njit(nogil=True, fastmath=False)
 def _bilinear_tasks(
-    c0: int, c1: int, P: np.ndarray, oy: int, ox: int, h: int, w: int, out: np.ndarray
+    task0: int, task1: int, P: np.ndarray, oy: int, ox: int, h: int, w: int, out: np.ndarray
 ) -> None:  # pragma: no cover
     # Unit-stride row views indexed from 0 (vectorisable), the phase selects, then the three
     # results are interleaved into the output (as in demosaic_malvar).
@@ -41,7 +41,7 @@ def _bilinear_tasks(
     q = t(0.25)
     half = t(0.5)
     # rows in chunks of 16, so that each chunk allocates its row buffers once
-    for chunk in range(c0, c1):
+    for chunk in range(task0, task1):
         bg = np.empty(w, P.dtype)  # green
         bk = np.empty(w, P.dtype)  # the colour of this row (red in red rows)
         bo = np.empty(w, P.dtype)  # the other one

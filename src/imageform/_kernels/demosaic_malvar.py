@@ -40,7 +40,7 @@ def malvar_numba(P: np.ndarray, oy: int, ox: int, h: int, w: int) -> np.ndarray:
 
 @njit(nogil=True, fastmath=False)
 def _malvar_tasks(
-    c0: int, c1: int, P: np.ndarray, oy: int, ox: int, h: int, w: int, out: np.ndarray
+    task0: int, task1: int, P: np.ndarray, oy: int, ox: int, h: int, w: int, out: np.ndarray
 ) -> None:
     # Every filter is evaluated at every pixel of a row from unit-stride row views (loop
     # indices from 0, so no negative-index wraparound: LLVM can vectorise), the phase then
@@ -49,7 +49,7 @@ def _malvar_tasks(
     c2, c4, c5, c6 = t(2.0), t(4.0), t(5.0), t(6.0)
     half, c15, eighth = t(0.5), t(1.5), t(0.125)
     # rows in chunks of 16, so that each chunk allocates its row buffers once
-    for chunk in range(c0, c1):
+    for chunk in range(task0, task1):
         bg = np.empty(w, P.dtype)  # green
         bk = np.empty(w, P.dtype)  # the colour of this row (red in red rows)
         bo = np.empty(w, P.dtype)  # the other one

@@ -144,8 +144,8 @@ def _refine_numpy(R, G, B, hor, r_m, g1, g2, b_m):  # type: ignore[no-untyped-de
 
 @njit(nogil=True, fastmath=False)
 def _menon_tasks(
-    b0: int,
-    b1: int,
+    task0: int,
+    task1: int,
     P_all: np.ndarray,
     oy_all: int,
     ox: int,
@@ -156,11 +156,11 @@ def _menon_tasks(
     block: int,
     out_all: np.ndarray,
 ) -> None:
-    # slabs b0 .. b1 - 1 of ``block`` output rows (each slab recomputes its 11-row halo):
+    # slabs task0 .. task1 - 1 of ``block`` output rows (each slab recomputes its 11-row halo):
     # fewer barriers and cache-sized working sets than one parallel region per pass. The
     # slab's passes are in this kernel's loop, not a kernel of their own: a called kernel is
     # optimised and compiled to machine code again inside its caller (0.7 s of CPU more).
-    for slab in range(b0, b1):
+    for slab in range(task0, task1):
         ya = slab * block
         yb = min(h_all, ya + block)
         s0 = ya + oy_all - RADIUS - 1
