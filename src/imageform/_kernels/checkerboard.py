@@ -153,19 +153,20 @@ def _refine_corners(
             x0 = int(fx) - hx - 1
             y0 = int(fy) - hy - 1
             bx = 1.0 - ax
-            if x0 >= 0 and x0 + ww + 2 <= width - 1:
-                # inside the image: contiguous reads, no clamping (the same numbers)
+            if x0 >= 0 and x0 + ww + 2 <= width - 1 and is32:
+                # inside the image: contiguous reads, no clamping (the same numbers); the
+                # dtype tested outside the row loop (inside it, 1.17x the time)
                 for i in range(wh + 3):
-                    yi = min(max(y0 + i, 0), height - 1)
+                    r32 = image32[min(max(y0 + i, 0), height - 1), x0 : x0 + ww + 3]
                     hr = hrow[i]
-                    if is32:
-                        r32 = image32[yi, x0 : x0 + ww + 3]
-                        for j in range(ww + 2):
-                            hr[j] = bx * r32[j] + ax * r32[j + 1]
-                    else:
-                        r64 = image64[yi, x0 : x0 + ww + 3]
-                        for j in range(ww + 2):
-                            hr[j] = bx * r64[j] + ax * r64[j + 1]
+                    for j in range(ww + 2):
+                        hr[j] = bx * r32[j] + ax * r32[j + 1]
+            elif x0 >= 0 and x0 + ww + 2 <= width - 1:
+                for i in range(wh + 3):
+                    r64 = image64[min(max(y0 + i, 0), height - 1), x0 : x0 + ww + 3]
+                    hr = hrow[i]
+                    for j in range(ww + 2):
+                        hr[j] = bx * r64[j] + ax * r64[j + 1]
             else:
                 for j in range(ww + 3):
                     xcol[j] = min(max(x0 + j, 0), width - 1)
