@@ -130,7 +130,11 @@ def test_small_and_large_remaps_share_one_compiled_kernel() -> None:
     img = np.arange(64, dtype=np.uint8).reshape(1, 8, 8, 1)
     m = np.stack(np.meshgrid(np.arange(8.0), np.arange(8.0)), axis=-1).astype(np.float32)
     outs = []
-    before = set(R._remap_tasks.signatures)  # other tests may have compiled other dtypes
+
+    def compiled() -> set[object]:  # one-channel images have a kernel of their own
+        return {*R._remap_tasks.signatures, *R._remap_grey_tasks.signatures}
+
+    before = compiled()  # other tests may have compiled other dtypes
     for run in (R.remap_bilinear_serial, R.remap_bilinear):
         out = np.zeros_like(img)
         run(img, m, 1.0, 0.0, out, np.empty(0, np.float32), np.empty(0, np.int32), 255.0)
@@ -138,7 +142,7 @@ def test_small_and_large_remaps_share_one_compiled_kernel() -> None:
     np.testing.assert_array_equal(outs[0], img)
     np.testing.assert_array_equal(outs[1], img)
     # the small and the large call added at most one compilation (none if already there)
-    assert len(set(R._remap_tasks.signatures) - before) <= 1
+    assert len(compiled() - before) <= 1
 
 
 def test_boundscheck_compiles_are_not_cached(tmp_path: Path) -> None:
@@ -368,11 +372,11 @@ def test_without_numba_cache_dir_the_users_cache_folder(tmp_path: Path) -> None:
     assert not list(site.rglob("*.nbi")), "nothing is written beside the source"
 
 
-def test_checkerboard_candidates_compile_one_kernel_per_8bit_or_other() -> None:
-    """uint16, float16, float32, float64 and read-only images share one compiled saddle
-    kernel (float32), and 8-bit images another: each specialisation costs seconds of
-    compilation on a first run (the float16 image of issue 25: 25-40 s)."""
-    from imageform._kernels.checkerboard import saddle_maxima_numba
+def test_checkerboard_candidates_compile_one_kernel() -> None:
+    """uint8, uint16, float16, float32, float64 and read-only images share one compiled
+    saddle kernel (an 8-bit and a float32 image in, one of them empty): each specialisation
+    costs seconds of compilation on a first run (the float16 image of issue 25: 25-40 s)."""
+    from imageform._kernels.checkerboard import _saddle_maxima
     from imageform.geometry.checkerboard_candidates import find_candidates
 
     rng = np.random.default_rng(0)
@@ -390,10 +394,29 @@ def test_checkerboard_candidates_compile_one_kernel_per_8bit_or_other() -> None:
         (base * 255).astype(np.uint8),
         ro8,
     ]
-    before = set(saddle_maxima_numba.signatures)  # other tests call the kernel directly
+    before = set(_saddle_maxima.signatures)  # other tests call the kernel directly
     results = [find_candidates(im, 1.5) for im in images]
-    added = set(saddle_maxima_numba.signatures) - before
-    kinds = {(str(sig[0].dtype), sig[0].mutable) for sig in added}
-    assert kinds <= {("float32", True), ("uint8", True)}, kinds
+    added = set(_saddle_maxima.signatures) - before
+    kinds = {
+        (str(sig[0].dtype), sig[0].mutable, str(sig[1].dtype), sig[1].mutable) for sig in added
+    }
+    assert kinds <= {("uint8", True, "float32", True)}, kinds
     # the conversion gives the same bits as the kernel's own (float32 then / scale)
     np.testing.assert_array_equal(results[2].xy, results[4].xy)
+
+
+def test_corner_refinement_compiles_one_kernel_for_float32_and_float64() -> None:
+    """float32 and float64 images share one compiled refinement kernel (characterize refines
+    on both), with the same numbers: float32 values are read as float64 either way."""
+    from imageform._kernels.checkerboard import _refine_corners, refine_corners_numba
+
+    v, u = np.mgrid[0:40, 0:40] * 1.0
+    img = np.where((u < 20.3) ^ (v < 19.6), 0.9, 0.1)
+    img32 = img.astype(np.float32)
+    pts = np.array([[19.0, 21.0], [21.5, 18.5]])
+    before = set(_refine_corners.signatures)
+    a = refine_corners_numba(img32, pts, 5, 5, 30, 1e-3)
+    b = refine_corners_numba(img32.astype(np.float64), pts, 5, 5, 30, 1e-3)
+    assert len(set(_refine_corners.signatures) - before) <= 1
+    np.testing.assert_array_equal(a[0], b[0])
+    np.testing.assert_array_equal(a[1], b[1])

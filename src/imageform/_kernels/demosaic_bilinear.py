@@ -10,26 +10,38 @@ the convolution of the masked planes with ``[[0,1,0],[1,4,1],[0,1,0]]/4`` (green
 from __future__ import annotations
 
 import numpy as np
-from numba import prange
 
 from imageform._kernels.demosaic_common import crop, phase_masks, shift
-from imageform._kernels.jit import njit, parallel_pays, serial_twin
+from imageform._kernels.jit import njit, parallel_pays, run_tasks
 
 __all__ = ["RADIUS", "bilinear_int_numba", "bilinear_int_numpy", "bilinear_numba", "bilinear_numpy"]
 
 RADIUS = 1
 
 
-@njit(parallel=True, fastmath=False)
 def bilinear_numba(P: np.ndarray, oy: int, ox: int, h: int, w: int) -> np.ndarray:
+    """Bilinear demosaicing of an RGGB-phased padded mosaic (``RADIUS`` pixels of padding).
+
+    Rows in chunks of 16 on numba's threads (:func:`imageform._kernels.jit.run_tasks`: a
+    serial ``nogil`` kernel, not a ``parallel=True`` one, whose parallel lowering cost about
+    a second of CPU more on a first run).
+    """
+    out = np.empty((h, w, 3), dtype=P.dtype)
+    run_tasks(_bilinear_tasks, (h + 15) // 16, P, oy, ox, h, w, out)
+    return out
+
+
+@njit(nogil=True, fastmath=False)
+def _bilinear_tasks(
+    task0: int, task1: int, P: np.ndarray, oy: int, ox: int, h: int, w: int, out: np.ndarray
+) -> None:  # pragma: no cover
     # Unit-stride row views indexed from 0 (vectorisable), the phase selects, then the three
     # results are interleaved into the output (as in demosaic_malvar).
-    out = np.empty((h, w, 3), dtype=P.dtype)
     t = P.dtype.type
     q = t(0.25)
     half = t(0.5)
     # rows in chunks of 16, so that each chunk allocates its row buffers once
-    for chunk in prange((h + 15) // 16):
+    for chunk in range(task0, task1):
         bg = np.empty(w, P.dtype)  # green
         bk = np.empty(w, P.dtype)  # the colour of this row (red in red rows)
         bo = np.empty(w, P.dtype)  # the other one
@@ -61,7 +73,6 @@ def bilinear_numba(P: np.ndarray, oy: int, ox: int, h: int, w: int) -> np.ndarra
                 o[j, 1] = bg[j]
                 o[j, k] = bk[j]
                 o[j, 2 - k] = bo[j]
-    return out
 
 
 def bilinear_numpy(P: np.ndarray, oy: int, ox: int, h: int, w: int) -> np.ndarray:
@@ -200,14 +211,14 @@ _GREEN_R16 = _make_rows(False, True, True)
 _GREEN_B16 = _make_rows(False, False, True)
 
 
-@njit(parallel=True, error_model="numpy")
-def _int_rows(raw, ry, rx, out, ov, n):  # type: ignore[no-untyped-def]
-    # Unpadded mosaic (red at row % 2 == ry, column % 2 == rx); edges mirrored about the edge
-    # pixel (index -1 reads 1, as numpy.pad(mode="reflect") in the float path). ``ov``: the
-    # flat output; n = w // 2 - 1 (n < 2: the per-pixel loop only).
+@njit(nogil=True, error_model="numpy")
+def _int_rows(i0, i1, raw, ry, rx, out, ov, n):  # type: ignore[no-untyped-def]
+    # Rows i0 .. i1 - 1 of an unpadded mosaic (red at row % 2 == ry, column % 2 == rx); edges
+    # mirrored about the edge pixel (index -1 reads 1, as numpy.pad(mode="reflect") in the
+    # float path). ``ov``: the flat output; n = w // 2 - 1 (n < 2: the per-pixel loop only).
     h, w = raw.shape
     wide = raw.itemsize == 2
-    for i in prange(h):
+    for i in range(i0, i1):
         up = i - 1 if i > 0 else 1
         dn = i + 1 if i < h - 1 else h - 2
         u = raw[up]
@@ -247,14 +258,12 @@ def _int_rows(raw, ry, rx, out, ov, n):  # type: ignore[no-untyped-def]
             jl = j - 1 if j > 0 else 1
             jr = j + 1 if j < w - 1 else w - 2
             _px_int(u, c, d, o, jl, j, jr, (j & 1) == par, k)
-    return out
 
 
-_int_rows_serial = serial_twin(_int_rows, error_model="numpy")
-#: Mosaics of fewer pixels run the rows in the calling thread (waking numba's pool costs
-#: more than it gains there). On the idle 2-core machine two threads gain 1.3x at 96 x 96
-#: and 1.6-2.3x from 128 x 128 up; the earlier 1 << 22 was measured while the serial twin
-#: shared the parallel kernel's cache entries (:func:`imageform._kernels.jit.serial_twin`).
+#: Mosaics of fewer pixels run the rows in the calling thread (waking threads costs more than
+#: it gains there). On the idle 2-core machine two threads gain 1.3x at 96 x 96 and 1.6-2.3x
+#: from 128 x 128 up. One compiled kernel serves both (:func:`imageform._kernels.jit.run_tasks`;
+#: a ``parallel=True`` kernel and its serial twin were two compilations).
 PARALLEL_MIN_PIXELS = 1 << 14
 
 
@@ -271,7 +280,8 @@ def bilinear_int_numba(
     h, w = raw.shape
     if parallel is None:
         parallel = parallel_pays(h * w, PARALLEL_MIN_PIXELS)
-    (_int_rows if parallel else _int_rows_serial)(raw, ry, rx, out, out.reshape(-1), w // 2 - 1)
+    args = (raw, ry, rx, out, out.reshape(-1), w // 2 - 1)
+    run_tasks(_int_rows, h, *args, threads=None if parallel else 1)
     return out
 
 

@@ -20,20 +20,21 @@ sensor color electronic camera", US patent 5,629,734 (1997). Radius: 3 pixels.
 from __future__ import annotations
 
 import numpy as np
-from numba import prange
 
 from imageform._kernels.demosaic_common import crop, phase_masks, shift
-from imageform._kernels.jit import njit
+from imageform._kernels.jit import njit, run_tasks
 
 __all__ = ["RADIUS", "hamilton_adams_numba", "hamilton_adams_numpy"]
 
 RADIUS = 3
 
 
-@njit(parallel=True, fastmath=False)
-def _green(P: np.ndarray, y0: int, y1: int, x0: int, x1: int) -> np.ndarray:
-    G = np.empty_like(P)
-    for y in prange(y0, y1):
+@njit(nogil=True, fastmath=False)
+def _green(
+    t0: int, t1: int, P: np.ndarray, y0: int, x0: int, x1: int, G: np.ndarray
+) -> None:  # pragma: no cover
+    # rows y0 + t0 .. y0 + t1 - 1
+    for y in range(y0 + t0, y0 + t1):
         c0 = P[y]
         u1 = P[y - 1]
         d1 = P[y + 1]
@@ -56,13 +57,14 @@ def _green(P: np.ndarray, y0: int, y1: int, x0: int, x1: int) -> np.ndarray:
                 G[y, x] = gv
             else:
                 G[y, x] = 0.5 * (gh + gv)
-    return G
 
 
-@njit(parallel=True, fastmath=False)
-def _chroma(P: np.ndarray, G: np.ndarray, oy: int, ox: int, h: int, w: int) -> np.ndarray:
-    out = np.empty((h, w, 3), dtype=P.dtype)
-    for i in prange(h):
+@njit(nogil=True, fastmath=False)
+def _chroma(
+    i0: int, i1: int, P: np.ndarray, G: np.ndarray, oy: int, ox: int, w: int, out: np.ndarray
+) -> None:  # pragma: no cover
+    # output rows i0 .. i1 - 1
+    for i in range(i0, i1):
         y = i + oy
         red_row = y % 2 == 0
         for j in range(w):
@@ -100,13 +102,20 @@ def _chroma(P: np.ndarray, G: np.ndarray, oy: int, ox: int, h: int, w: int) -> n
                 else:
                     out[i, j, 0] = o
                     out[i, j, 2] = c
-    return out
 
 
 def hamilton_adams_numba(P: np.ndarray, oy: int, ox: int, h: int, w: int) -> np.ndarray:
-    """Hamilton-Adams on an RGGB-phased padded mosaic (needs ``RADIUS`` pixels of padding)."""
-    G = _green(P, oy - 1, oy + h + 1, ox - 1, ox + w + 1)
-    return _chroma(P, G, oy, ox, h, w)
+    """Hamilton-Adams on an RGGB-phased padded mosaic (needs ``RADIUS`` pixels of padding).
+
+    Both passes run their rows on numba's threads (:func:`imageform._kernels.jit.run_tasks`:
+    serial ``nogil`` kernels, not ``parallel=True`` ones, whose parallel lowering cost about
+    two seconds of CPU more on a first run).
+    """
+    G = np.empty_like(P)
+    run_tasks(_green, h + 2, P, oy - 1, ox - 1, ox + w + 1, G)
+    out = np.empty((h, w, 3), dtype=P.dtype)
+    run_tasks(_chroma, h, P, G, oy, ox, w, out)
+    return out
 
 
 def hamilton_adams_numpy(P: np.ndarray, oy: int, ox: int, h: int, w: int) -> np.ndarray:

@@ -17,27 +17,39 @@ of Bayer-patterned color images", ICASSP 2004, vol. 3, pp. 485-488. Radius: 2 pi
 from __future__ import annotations
 
 import numpy as np
-from numba import prange
 
 from imageform._kernels.demosaic_common import crop, phase_masks, shift
-from imageform._kernels.jit import njit
+from imageform._kernels.jit import njit, run_tasks
 
 __all__ = ["RADIUS", "malvar_numba", "malvar_numpy"]
 
 RADIUS = 2
 
 
-@njit(parallel=True, fastmath=False)
 def malvar_numba(P: np.ndarray, oy: int, ox: int, h: int, w: int) -> np.ndarray:
+    """Malvar-He-Cutler on an RGGB-phased padded mosaic (needs ``RADIUS`` pixels of padding).
+
+    Rows in chunks of 16 on numba's threads (:func:`imageform._kernels.jit.run_tasks`: a
+    serial ``nogil`` kernel, not a ``parallel=True`` one, whose parallel lowering cost about
+    a second of CPU more on a first run).
+    """
+    out = np.empty((h, w, 3), dtype=P.dtype)
+    run_tasks(_malvar_tasks, (h + 15) // 16, P, oy, ox, h, w, out)
+    return out
+
+
+@njit(nogil=True, fastmath=False)
+def _malvar_tasks(
+    task0: int, task1: int, P: np.ndarray, oy: int, ox: int, h: int, w: int, out: np.ndarray
+) -> None:
     # Every filter is evaluated at every pixel of a row from unit-stride row views (loop
     # indices from 0, so no negative-index wraparound: LLVM can vectorise), the phase then
     # selects; the three results are interleaved into the output in a second loop.
-    out = np.empty((h, w, 3), dtype=P.dtype)
     t = P.dtype.type
     c2, c4, c5, c6 = t(2.0), t(4.0), t(5.0), t(6.0)
     half, c15, eighth = t(0.5), t(1.5), t(0.125)
     # rows in chunks of 16, so that each chunk allocates its row buffers once
-    for chunk in prange((h + 15) // 16):
+    for chunk in range(task0, task1):
         bg = np.empty(w, P.dtype)  # green
         bk = np.empty(w, P.dtype)  # the colour of this row (red in red rows)
         bo = np.empty(w, P.dtype)  # the other one
@@ -80,7 +92,6 @@ def malvar_numba(P: np.ndarray, oy: int, ox: int, h: int, w: int) -> np.ndarray:
                 o[j, 1] = bg[j]
                 o[j, k] = bk[j]
                 o[j, 2 - k] = bo[j]
-    return out
 
 
 def malvar_numpy(P: np.ndarray, oy: int, ox: int, h: int, w: int) -> np.ndarray:

@@ -142,227 +142,219 @@ def _refine_numpy(R, G, B, hor, r_m, g1, g2, b_m):  # type: ignore[no-untyped-de
     return R2, G, B2
 
 
-@njit(fastmath=False)
-def _menon_slab(
-    P: np.ndarray, oy: int, ox: int, h: int, w: int, refine: bool, soft: bool, out: np.ndarray
-) -> None:
-    # All passes on one slab of rows (P starts at an even padded row, so the RGGB phase
-    # holds). Each pass computes a band that shrinks by the radius of what it reads, so no
-    # pass reads a value the previous one did not write; the output rows lie inside margin 11.
-    H, W = P.shape
-    t = P.dtype.type
-    half, quarter, third = t(0.5), t(0.25), t(1.0 / 3.0)
-    three, zero, one = t(3.0), t(0.0), t(1.0)
-    Dh = np.empty_like(P)
-    Dv = np.empty_like(P)
-    G = np.empty_like(P)
-    R = np.empty_like(P)
-    B = np.empty_like(P)
-    hor = np.empty(P.shape, dtype=np.uint8)
-    # Passes 1-3 and 8 evaluate every pixel of a row from unit-stride row views indexed from
-    # 0 (vectorisable; the values at green sites are discarded by the phase select).
-    # 1-2. chrominance gradients, margin 4. The chrominance X - G_H is
-    # X/2 - (left + right)/2 + (left2 + right2)/4 (eq. 3).
-    n = W - 8
-    for y in range(4, H - 4):
-        c = P[y, 4 : 4 + n]
-        cm1, cp1 = P[y, 3 : 3 + n], P[y, 5 : 5 + n]
-        cm2, cp2 = P[y, 2 : 2 + n], P[y, 6 : 6 + n]
-        cp3, cp4 = P[y, 7 : 7 + n], P[y, 8 : 8 + n]
-        u1, d1 = P[y - 1, 4 : 4 + n], P[y + 1, 4 : 4 + n]
-        u2, d2 = P[y - 2, 4 : 4 + n], P[y + 2, 4 : 4 + n]
-        d3, d4 = P[y + 3, 4 : 4 + n], P[y + 4, 4 : 4 + n]
-        dhr, dvr = Dh[y, 4 : 4 + n], Dv[y, 4 : 4 + n]
-        for k in range(n):
-            ch0 = half * c[k] - half * (cm1[k] + cp1[k]) + quarter * (cm2[k] + cp2[k])
-            ch2 = half * cp2[k] - half * (cp1[k] + cp3[k]) + quarter * (c[k] + cp4[k])
-            cv0 = half * c[k] - half * (u1[k] + d1[k]) + quarter * (u2[k] + d2[k])
-            cv2 = half * d2[k] - half * (d1[k] + d3[k]) + quarter * (c[k] + d4[k])
-            dhr[k] = abs(ch0 - ch2)
-            dvr[k] = abs(cv0 - cv2)
-    # 3. decision over the 5x5 window (eq. 9) and green, margin 6
-    n = W - 12
-    for y in range(6, H - 6):
-        h00, h0m2 = Dh[y, 6 : 6 + n], Dh[y, 4 : 4 + n]
-        hu1m1, hd1m1 = Dh[y - 1, 5 : 5 + n], Dh[y + 1, 5 : 5 + n]
-        hu2, hd2 = Dh[y - 2, 6 : 6 + n], Dh[y + 2, 6 : 6 + n]
-        hu2m2, hd2m2 = Dh[y - 2, 4 : 4 + n], Dh[y + 2, 4 : 4 + n]
-        v00, vu2 = Dv[y, 6 : 6 + n], Dv[y - 2, 6 : 6 + n]
-        vu1m1, vu1p1 = Dv[y - 1, 5 : 5 + n], Dv[y - 1, 7 : 7 + n]
-        v0m2, v0p2 = Dv[y, 4 : 4 + n], Dv[y, 8 : 8 + n]
-        vu2m2, vu2p2 = Dv[y - 2, 4 : 4 + n], Dv[y - 2, 8 : 8 + n]
-        c = P[y, 6 : 6 + n]
-        cm1, cp1 = P[y, 5 : 5 + n], P[y, 7 : 7 + n]
-        cm2, cp2 = P[y, 4 : 4 + n], P[y, 8 : 8 + n]
-        u1, d1 = P[y - 1, 6 : 6 + n], P[y + 1, 6 : 6 + n]
-        u2, d2 = P[y - 2, 6 : 6 + n], P[y + 2, 6 : 6 + n]
-        gr, hr = G[y, 6 : 6 + n], hor[y, 6 : 6 + n]
-        par = (6 + y) & 1  # (k + par) even: a red/blue site
-        for k in range(n):
-            dh = (
-                three * (h00[k] + h0m2[k])
-                + hu1m1[k]
-                + hd1m1[k]
-                + hu2[k]
-                + hd2[k]
-                + hu2m2[k]
-                + hd2m2[k]
-            )
-            dv = (
-                three * (v00[k] + vu2[k])
-                + vu1m1[k]
-                + vu1p1[k]
-                + v0m2[k]
-                + v0p2[k]
-                + vu2m2[k]
-                + vu2p2[k]
-            )
-            ck = c[k]
-            gh = half * (cm1[k] + cp1[k]) + half * ck - quarter * (cm2[k] + cp2[k])
-            gv = half * (u1[k] + d1[k]) + half * ck - quarter * (u2[k] + d2[k])
-            is_h = dv >= dh
-            hr[k] = 1 if is_h else 0
-            if soft:  # weights dv^2 : dh^2 for the horizontal : vertical estimates
-                a = dh * dh
-                b = dv * dv
-                ab = a + b
-                blend = (b * gh + a * gv) / (ab if ab != zero else one)
-                g = blend if ab != zero else half * (gh + gv)
-            else:
-                g = gh if is_h else gv
-            gr[k] = g if ((k + par) & 1) == 0 else ck
-    # Passes 5-7 update a plane in place: each row is computed into a buffer first and
-    # merged at the sites it updates, so that the loops carry no dependence (vectorisable).
-    t1 = np.empty(W, P.dtype)
-    t2 = np.empty(W, P.dtype)
-    # 4. red and blue at green sites from colour differences, margin 7 (the value written
-    # for the other colour at red/blue sites is replaced in pass 5 wherever it is read)
-    n = W - 14
-    for y in range(7, H - 7):
-        red_row = y % 2 == 0
-        pu, pd = P[y - 1, 7 : 7 + n], P[y + 1, 7 : 7 + n]
-        p0, pm, pp = P[y, 7 : 7 + n], P[y, 6 : 6 + n], P[y, 8 : 8 + n]
-        gu, gd = G[y - 1, 7 : 7 + n], G[y + 1, 7 : 7 + n]
-        g0, gm, gp = G[y, 7 : 7 + n], G[y, 6 : 6 + n], G[y, 8 : 8 + n]
-        own, oth = (R[y], B[y]) if red_row else (B[y], R[y])  # colour of this row, the other
-        Rh, Rv = own[7 : 7 + n], oth[7 : 7 + n]
-        par = (7 + y) & 1
-        for k in range(n):
-            g = g0[k]
-            hz = g + half * ((pm[k] - gm[k]) + (pp[k] - gp[k]))
-            Rh[k] = p0[k] if ((k + par) & 1) == 0 else hz
-            Rv[k] = g + half * ((pu[k] - gu[k]) + (pd[k] - gd[k]))
-    # 5. red at blue sites, blue at red sites along the chosen direction, margin 8
-    n = W - 16
-    for y in range(8, H - 8):
-        red_row = y % 2 == 0
-        r0, rm, rp = R[y, 8 : 8 + n], R[y, 7 : 7 + n], R[y, 9 : 9 + n]
-        b0, bm, bp = B[y, 8 : 8 + n], B[y, 7 : 7 + n], B[y, 9 : 9 + n]
-        ru, rd = R[y - 1, 8 : 8 + n], R[y + 1, 8 : 8 + n]
-        bu, bd = B[y - 1, 8 : 8 + n], B[y + 1, 8 : 8 + n]
-        p0, hr = P[y, 8 : 8 + n], hor[y, 8 : 8 + n]
-        o0 = b0 if red_row else r0
-        sign = -half if red_row else half
-        par = (8 + y) & 1
-        for k in range(n):
-            dh = (rm[k] - bm[k]) + (rp[k] - bp[k])
-            dv = (ru[k] - bu[k]) + (rd[k] - bd[k])
-            d = dh if hr[k] else dv  # both computed: a select, not a branch
-            t1[k] = p0[k] + sign * d
-        for k in range(n):
-            o0[k] = t1[k] if ((k + par) & 1) == 0 else o0[k]
-    if refine:
-        # 6. green at red/blue sites from the directional 3-tap mean of X - G, margin 9
-        n = W - 18
-        for y in range(9, H - 9):
-            X = R if y % 2 == 0 else B
-            x0, xm, xp = X[y, 9 : 9 + n], X[y, 8 : 8 + n], X[y, 10 : 10 + n]
-            xu, xd = X[y - 1, 9 : 9 + n], X[y + 1, 9 : 9 + n]
-            g0, gm, gp = G[y, 9 : 9 + n], G[y, 8 : 8 + n], G[y, 10 : 10 + n]
-            gu, gd = G[y - 1, 9 : 9 + n], G[y + 1, 9 : 9 + n]
-            p0, hr = P[y, 9 : 9 + n], hor[y, 9 : 9 + n]
-            par = (9 + y) & 1
-            for k in range(n):
-                c = x0[k] - g0[k]
-                mh = (xm[k] - gm[k]) + c + (xp[k] - gp[k])
-                mv = (xu[k] - gu[k]) + c + (xd[k] - gd[k])
-                m = mh if hr[k] else mv
-                t1[k] = p0[k] - m * third
-            for k in range(n):
-                g0[k] = t1[k] if ((k + par) & 1) == 0 else g0[k]
-        # 7. red and blue at green sites from the refined differences, margin 10
-        n = W - 20
-        for y in range(10, H - 10):
-            red_row = y % 2 == 0
-            g0, gm, gp = G[y, 10 : 10 + n], G[y, 9 : 9 + n], G[y, 11 : 11 + n]
-            gu, gd = G[y - 1, 10 : 10 + n], G[y + 1, 10 : 10 + n]
-            if red_row:  # red left/right, blue above/below
-                hp, vp = R, B
-            else:
-                hp, vp = B, R
-            h0, hm, hpp = hp[y, 10 : 10 + n], hp[y, 9 : 9 + n], hp[y, 11 : 11 + n]
-            v0, vu, vd = vp[y, 10 : 10 + n], vp[y - 1, 10 : 10 + n], vp[y + 1, 10 : 10 + n]
-            par = (10 + y) & 1
-            for k in range(n):
-                g = g0[k]
-                t1[k] = g + half * ((hm[k] - gm[k]) + (hpp[k] - gp[k]))
-                t2[k] = g + half * ((vu[k] - gu[k]) + (vd[k] - gd[k]))
-            for k in range(n):
-                is_g = ((k + par) & 1) == 1
-                h0[k] = t1[k] if is_g else h0[k]
-                v0[k] = t2[k] if is_g else v0[k]
-    # 8. output; with refinement, red (blue) at blue (red) sites from the 3-tap mean of R - B
-    rbuf = np.empty(w, P.dtype)
-    bbuf = np.empty(w, P.dtype)
-    for i in range(h):
-        y = i + oy
-        red_row = y % 2 == 0
-        r0, rm, rp = R[y, ox : ox + w], R[y, ox - 1 : ox - 1 + w], R[y, ox + 1 : ox + 1 + w]
-        ru, rd = R[y - 1, ox : ox + w], R[y + 1, ox : ox + w]
-        b0, bm, bp = B[y, ox : ox + w], B[y, ox - 1 : ox - 1 + w], B[y, ox + 1 : ox + 1 + w]
-        bu, bd = B[y - 1, ox : ox + w], B[y + 1, ox : ox + w]
-        g0, p0, hr = G[y, ox : ox + w], P[y, ox : ox + w], hor[y, ox : ox + w]
-        par = (ox + y) & 1  # (j + par) even: a red/blue site
-        sr = zero if red_row else third  # R = P + sr * d at blue sites
-        sb = -third if red_row else zero  # B = P + sb * d at red sites
-        for j in range(w):
-            cd = r0[j] - b0[j]
-            dh = (rm[j] - bm[j]) + cd + (rp[j] - bp[j])
-            dv = (ru[j] - bu[j]) + cd + (rd[j] - bd[j])
-            d = dh if hr[j] else dv
-            rb_site = refine and ((j + par) & 1) == 0
-            rbuf[j] = p0[j] + sr * d if rb_site else r0[j]
-            bbuf[j] = p0[j] + sb * d if rb_site else b0[j]
-        o = out[i]
-        for j in range(w):
-            o[j, 0] = rbuf[j]
-            o[j, 1] = g0[j]
-            o[j, 2] = bbuf[j]
-
-
 @njit(nogil=True, fastmath=False)
 def _menon_tasks(
-    b0: int,
-    b1: int,
-    P: np.ndarray,
-    oy: int,
+    task0: int,
+    task1: int,
+    P_all: np.ndarray,
+    oy_all: int,
     ox: int,
-    h: int,
+    h_all: int,
     w: int,
     refine: bool,
     soft: bool,
     block: int,
-    out: np.ndarray,
+    out_all: np.ndarray,
 ) -> None:
-    # slabs b0 .. b1 - 1 of ``block`` output rows (each slab recomputes its 11-row halo):
-    # fewer barriers and cache-sized working sets than one parallel region per pass
-    for b in range(b0, b1):
-        y0 = b * block
-        y1 = min(h, y0 + block)
-        s = y0 + oy - RADIUS - 1
-        s -= s % 2
-        e = y1 + oy + RADIUS + 1
-        _menon_slab(P[s:e], y0 + oy - s, ox, y1 - y0, w, refine, soft, out[y0:y1])
+    # slabs task0 .. task1 - 1 of ``block`` output rows (each slab recomputes its 11-row halo):
+    # fewer barriers and cache-sized working sets than one parallel region per pass. The
+    # slab's passes are in this kernel's loop, not a kernel of their own: a called kernel is
+    # optimised and compiled to machine code again inside its caller (0.7 s of CPU more).
+    for slab in range(task0, task1):
+        ya = slab * block
+        yb = min(h_all, ya + block)
+        s0 = ya + oy_all - RADIUS - 1
+        s0 -= s0 % 2
+        s1 = yb + oy_all + RADIUS + 1
+        P = P_all[s0:s1]
+        oy = ya + oy_all - s0
+        h = yb - ya
+        out = out_all[ya:yb]
+        # All passes on one slab of rows (P starts at an even padded row, so the RGGB phase
+        # holds). Each pass computes a band that shrinks by the radius of what it reads, so no
+        # pass reads a value the previous one did not write; the output rows lie inside margin 11.
+        # Each row read is one unit-stride view starting at the leftmost column the pass reads
+        # there, indexed ``k + offset`` from 0 (vectorisable: LLVM sees no negative index; a
+        # view per offset compiled seconds longer, indices ``x - 1`` from the row's start ran
+        # three times slower).
+        H, W = P.shape
+        t = P.dtype.type
+        half, quarter, third = t(0.5), t(0.25), t(1.0 / 3.0)
+        three, zero, one = t(3.0), t(0.0), t(1.0)
+        Dh = np.empty_like(P)
+        Dv = np.empty_like(P)
+        G = np.empty_like(P)
+        R = np.empty_like(P)
+        B = np.empty_like(P)
+        hor = np.empty(P.shape, dtype=np.uint8)
+        # Passes 1-3 and 8 evaluate every pixel of a row (vectorisable; the values at green
+        # sites are discarded by the phase select).
+        # 1-2. chrominance gradients, margin 4 (column 4 + k). The chrominance X - G_H is
+        # X/2 - (left + right)/2 + (left2 + right2)/4 (eq. 3).
+        n = W - 8
+        for y in range(4, H - 4):
+            p0 = P[y, 2:]  # column 4 + k at k + 2
+            u1, d1 = P[y - 1, 4:], P[y + 1, 4:]
+            u2, d2 = P[y - 2, 4:], P[y + 2, 4:]
+            d3, d4 = P[y + 3, 4:], P[y + 4, 4:]
+            dhr, dvr = Dh[y, 4:], Dv[y, 4:]
+            for k in range(n):
+                c = p0[k + 2]
+                ch0 = half * c - half * (p0[k + 1] + p0[k + 3]) + quarter * (p0[k] + p0[k + 4])
+                ch2 = half * p0[k + 4] - half * (p0[k + 3] + p0[k + 5]) + quarter * (c + p0[k + 6])
+                cv0 = half * c - half * (u1[k] + d1[k]) + quarter * (u2[k] + d2[k])
+                cv2 = half * d2[k] - half * (d1[k] + d3[k]) + quarter * (c + d4[k])
+                dhr[k] = abs(ch0 - ch2)
+                dvr[k] = abs(cv0 - cv2)
+        # 3. decision over the 5x5 window (eq. 9) and green, margin 6 (column 6 + k)
+        n = W - 12
+        for y in range(6, H - 6):
+            h0, hu2, hd2 = Dh[y, 4:], Dh[y - 2, 4:], Dh[y + 2, 4:]  # column 6 + k at k + 2
+            hu1, hd1 = Dh[y - 1, 5:], Dh[y + 1, 5:]
+            v0, vu2 = Dv[y, 4:], Dv[y - 2, 4:]
+            vu1 = Dv[y - 1, 5:]
+            p0 = P[y, 4:]
+            u1, d1 = P[y - 1, 6:], P[y + 1, 6:]
+            u2, d2 = P[y - 2, 6:], P[y + 2, 6:]
+            gr, hr = G[y, 6:], hor[y, 6:]
+            par = (6 + y) & 1  # (k + par) even: a red/blue site
+            for k in range(n):
+                dh = (
+                    three * (h0[k + 2] + h0[k])
+                    + hu1[k]
+                    + hd1[k]
+                    + hu2[k + 2]
+                    + hd2[k + 2]
+                    + hu2[k]
+                    + hd2[k]
+                )
+                dv = (
+                    three * (v0[k + 2] + vu2[k + 2])
+                    + vu1[k]
+                    + vu1[k + 2]
+                    + v0[k]
+                    + v0[k + 4]
+                    + vu2[k]
+                    + vu2[k + 4]
+                )
+                ck = p0[k + 2]
+                gh = half * (p0[k + 1] + p0[k + 3]) + half * ck - quarter * (p0[k] + p0[k + 4])
+                gv = half * (u1[k] + d1[k]) + half * ck - quarter * (u2[k] + d2[k])
+                is_h = dv >= dh
+                hr[k] = 1 if is_h else 0
+                if soft:  # weights dv^2 : dh^2 for the horizontal : vertical estimates
+                    a = dh * dh
+                    b = dv * dv
+                    ab = a + b
+                    blend = (b * gh + a * gv) / (ab if ab != zero else one)
+                    g = blend if ab != zero else half * (gh + gv)
+                else:
+                    g = gh if is_h else gv
+                gr[k] = g if ((k + par) & 1) == 0 else ck
+        # Passes 5-7 update a plane in place: each row is computed into a buffer first and
+        # merged at the sites it updates, so that the loops carry no dependence (vectorisable).
+        t1 = np.empty(W, P.dtype)
+        t2 = np.empty(W, P.dtype)
+        # 4. red and blue at green sites from colour differences, margin 7 (the value written
+        # for the other colour at red/blue sites is replaced in pass 5 wherever it is read)
+        n = W - 14
+        for y in range(7, H - 7):
+            red_row = y % 2 == 0
+            pu, pd = P[y - 1, 7:], P[y + 1, 7:]
+            p0, g0 = P[y, 6:], G[y, 6:]  # column 7 + k at k + 1
+            gu, gd = G[y - 1, 7:], G[y + 1, 7:]
+            own, oth = (R[y], B[y]) if red_row else (B[y], R[y])  # colour of this row, the other
+            Rh, Rv = own[7:], oth[7:]
+            par = (7 + y) & 1
+            for k in range(n):
+                g = g0[k + 1]
+                hz = g + half * ((p0[k] - g0[k]) + (p0[k + 2] - g0[k + 2]))
+                Rh[k] = p0[k + 1] if ((k + par) & 1) == 0 else hz
+                Rv[k] = g + half * ((pu[k] - gu[k]) + (pd[k] - gd[k]))
+        # 5. red at blue sites, blue at red sites along the chosen direction, margin 8
+        n = W - 16
+        for y in range(8, H - 8):
+            red_row = y % 2 == 0
+            r0, b0 = R[y, 7:], B[y, 7:]  # column 8 + k at k + 1
+            ru, rd = R[y - 1, 8:], R[y + 1, 8:]
+            bu, bd = B[y - 1, 8:], B[y + 1, 8:]
+            p0, hr = P[y, 8:], hor[y, 8:]
+            o0 = b0 if red_row else r0
+            sign = -half if red_row else half
+            par = (8 + y) & 1
+            for k in range(n):
+                dh = (r0[k] - b0[k]) + (r0[k + 2] - b0[k + 2])
+                dv = (ru[k] - bu[k]) + (rd[k] - bd[k])
+                d = dh if hr[k] else dv  # both computed: a select, not a branch
+                t1[k] = p0[k] + sign * d
+            for k in range(n):
+                o0[k + 1] = t1[k] if ((k + par) & 1) == 0 else o0[k + 1]
+        if refine:
+            # 6. green at red/blue sites from the directional 3-tap mean of X - G, margin 9
+            n = W - 18
+            for y in range(9, H - 9):
+                X = R if y % 2 == 0 else B
+                x0, g0 = X[y, 8:], G[y, 8:]  # column 9 + k at k + 1
+                xu, xd = X[y - 1, 9:], X[y + 1, 9:]
+                gu, gd = G[y - 1, 9:], G[y + 1, 9:]
+                p0, hr = P[y, 9:], hor[y, 9:]
+                par = (9 + y) & 1
+                for k in range(n):
+                    c = x0[k + 1] - g0[k + 1]
+                    mh = (x0[k] - g0[k]) + c + (x0[k + 2] - g0[k + 2])
+                    mv = (xu[k] - gu[k]) + c + (xd[k] - gd[k])
+                    m = mh if hr[k] else mv
+                    t1[k] = p0[k] - m * third
+                for k in range(n):
+                    g0[k + 1] = t1[k] if ((k + par) & 1) == 0 else g0[k + 1]
+            # 7. red and blue at green sites from the refined differences, margin 10
+            n = W - 20
+            for y in range(10, H - 10):
+                red_row = y % 2 == 0
+                g0 = G[y, 9:]  # column 10 + k at k + 1
+                gu, gd = G[y - 1, 10:], G[y + 1, 10:]
+                if red_row:  # red left/right, blue above/below
+                    hp, vp = R, B
+                else:
+                    hp, vp = B, R
+                h0 = hp[y, 9:]
+                v0, vu, vd = vp[y, 10:], vp[y - 1, 10:], vp[y + 1, 10:]
+                par = (10 + y) & 1
+                for k in range(n):
+                    g = g0[k + 1]
+                    t1[k] = g + half * ((h0[k] - g0[k]) + (h0[k + 2] - g0[k + 2]))
+                    t2[k] = g + half * ((vu[k] - gu[k]) + (vd[k] - gd[k]))
+                for k in range(n):
+                    is_g = ((k + par) & 1) == 1
+                    h0[k + 1] = t1[k] if is_g else h0[k + 1]
+                    v0[k] = t2[k] if is_g else v0[k]
+        # 8. output; with refinement, red (blue) at blue (red) sites from the 3-tap mean of R - B
+        rbuf = np.empty(w, P.dtype)
+        bbuf = np.empty(w, P.dtype)
+        for i in range(h):
+            y = i + oy
+            red_row = y % 2 == 0
+            r0, b0 = R[y, ox - 1 :], B[y, ox - 1 :]  # column ox + j at j + 1
+            ru, rd = R[y - 1, ox:], R[y + 1, ox:]
+            bu, bd = B[y - 1, ox:], B[y + 1, ox:]
+            g0, p0, hr = G[y, ox:], P[y, ox:], hor[y, ox:]
+            par = (ox + y) & 1  # (j + par) even: a red/blue site
+            sr = zero if red_row else third  # R = P + sr * d at blue sites
+            sb = -third if red_row else zero  # B = P + sb * d at red sites
+            for j in range(w):
+                rc, bc = r0[j + 1], b0[j + 1]
+                cd = rc - bc
+                dh = (r0[j] - b0[j]) + cd + (r0[j + 2] - b0[j + 2])
+                dv = (ru[j] - bu[j]) + cd + (rd[j] - bd[j])
+                d = dh if hr[j] else dv
+                rb_site = refine and ((j + par) & 1) == 0
+                rbuf[j] = p0[j] + sr * d if rb_site else rc
+                bbuf[j] = p0[j] + sb * d if rb_site else bc
+            o = out[i]
+            for j in range(w):
+                o[j, 0] = rbuf[j]
+                o[j, 1] = g0[j]
+                o[j, 2] = bbuf[j]
 
 
 def _menon(

@@ -6,6 +6,11 @@ that both agree (forward to 1e-14, inverse to 1e-12 in normalised units for floa
 
 Coefficient vectors follow OpenCV's order: Brown-Conrady ``(k1, k2, p1, p2, k3, k4, k5,
 k6)``, Kannala-Brandt ``(k1, k2, k3, k4)``.
+
+The points run on numba's threads through :func:`imageform._kernels.jit.run_tasks` (serial
+``nogil`` kernels over a range of points), not ``parallel=True`` loops: numba's parallel
+lowering cost about a second of CPU per kernel on a first run (the simulator's
+``brown_conrady_undistort``).
 """
 
 from __future__ import annotations
@@ -13,9 +18,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import prange
 
-from imageform._kernels.jit import njit
+from imageform._kernels.jit import njit, run_tasks
 
 __all__ = [
     "bc_distort_point",
@@ -118,23 +122,41 @@ def bc_undistort_xy(
     return math.nan, math.nan, False
 
 
-@njit(parallel=True)
-def brown_conrady_distort(
-    xy: np.ndarray, c: np.ndarray, out: np.ndarray
+def brown_conrady_distort(xy: np.ndarray, c: np.ndarray, out: np.ndarray) -> None:
+    """Brown-Conrady forward model of every point of ``xy`` (N, 2) into ``out``."""
+    run_tasks(_bc_distort, xy.shape[0], xy, c, out)
+
+
+@njit(nogil=True)
+def _bc_distort(
+    i0: int, i1: int, xy: np.ndarray, c: np.ndarray, out: np.ndarray
 ) -> None:  # pragma: no cover
-    for i in prange(xy.shape[0]):
+    for i in range(np.uint64(i0), np.uint64(i1)):  # unsigned: no wrap-around code
         xd, yd = bc_distort_point(xy[i, 0], xy[i, 1], c)
         out[i, 0] = xd
         out[i, 1] = yd
 
 
-@njit(parallel=True)
 def brown_conrady_undistort(
     xyd: np.ndarray, c: np.ndarray, max_iter: int, tol: float, out: np.ndarray, ok: np.ndarray
-) -> None:  # pragma: no cover
+) -> None:
     """Newton's method on ``distort(x) - x_d = 0`` from ``x = x_d``; NaN where it fails."""
+    run_tasks(_bc_undistort, xyd.shape[0], xyd, c, max_iter, tol, out, ok)
+
+
+@njit(nogil=True)
+def _bc_undistort(
+    i0: int,
+    i1: int,
+    xyd: np.ndarray,
+    c: np.ndarray,
+    max_iter: int,
+    tol: float,
+    out: np.ndarray,
+    ok: np.ndarray,
+) -> None:  # pragma: no cover
     k1, k2, p1, p2, k3, k4, k5, k6 = c[0], c[1], c[2], c[3], c[4], c[5], c[6], c[7]
-    for i in prange(xyd.shape[0]):
+    for i in range(np.uint64(i0), np.uint64(i1)):  # unsigned: no wrap-around code
         x, y, good = bc_undistort_xy(
             xyd[i, 0], xyd[i, 1], k1, k2, p1, p2, k3, k4, k5, k6, max_iter, tol
         )
@@ -143,12 +165,17 @@ def brown_conrady_undistort(
         ok[i] = good
 
 
-@njit(parallel=True)
-def kannala_brandt_distort(
-    xy: np.ndarray, c: np.ndarray, out: np.ndarray
+def kannala_brandt_distort(xy: np.ndarray, c: np.ndarray, out: np.ndarray) -> None:
+    """Kannala-Brandt forward model of every point of ``xy`` (N, 2) into ``out``."""
+    run_tasks(_kb_distort, xy.shape[0], xy, c, out)
+
+
+@njit(nogil=True)
+def _kb_distort(
+    i0: int, i1: int, xy: np.ndarray, c: np.ndarray, out: np.ndarray
 ) -> None:  # pragma: no cover
     k1, k2, k3, k4 = c[0], c[1], c[2], c[3]
-    for i in prange(xy.shape[0]):
+    for i in range(np.uint64(i0), np.uint64(i1)):  # unsigned: no wrap-around code
         x = xy[i, 0]
         y = xy[i, 1]
         r = math.sqrt(x * x + y * y)
@@ -160,14 +187,27 @@ def kannala_brandt_distort(
         out[i, 1] = y * s
 
 
-@njit(parallel=True)
 def kannala_brandt_undistort(
     xyd: np.ndarray, c: np.ndarray, max_iter: int, tol: float, out: np.ndarray, ok: np.ndarray
-) -> None:  # pragma: no cover
+) -> None:
     """Newton's method on ``θ (1 + k1 θ² + ...) = θ_d`` from ``θ = θ_d``."""
+    run_tasks(_kb_undistort, xyd.shape[0], xyd, c, max_iter, tol, out, ok)
+
+
+@njit(nogil=True)
+def _kb_undistort(
+    i0: int,
+    i1: int,
+    xyd: np.ndarray,
+    c: np.ndarray,
+    max_iter: int,
+    tol: float,
+    out: np.ndarray,
+    ok: np.ndarray,
+) -> None:  # pragma: no cover
     k1, k2, k3, k4 = c[0], c[1], c[2], c[3]
     half_pi = 0.5 * math.pi
-    for i in prange(xyd.shape[0]):
+    for i in range(np.uint64(i0), np.uint64(i1)):  # unsigned: no wrap-around code
         xd = xyd[i, 0]
         yd = xyd[i, 1]
         thd = math.sqrt(xd * xd + yd * yd)

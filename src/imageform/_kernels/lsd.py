@@ -35,8 +35,13 @@ def grow_regions(angle, order, tau, min_size):  # type: ignore[no-untyped-def]  
     ``min_size`` are discarded (label -1 stays on their pixels as 'used').
     """
     H, W = angle.shape
-    labels = np.full((H, W), -1, dtype=np.int32)
-    used = np.zeros((H, W), dtype=np.bool_)
+    # np.empty and fill loops: each np.zeros / np.full signature is one more compilation
+    labels = np.empty((H, W), dtype=np.int32)
+    used = np.empty((H, W), dtype=np.bool_)
+    for y in range(H):
+        for x in range(W):
+            labels[y, x] = -1
+            used[y, x] = False
     stack_y = np.empty(H * W, dtype=np.int32)
     stack_x = np.empty(H * W, dtype=np.int32)
     n_regions = 0
@@ -93,9 +98,14 @@ def region_rectangles(labels, n_regions, mag):  # type: ignore[no-untyped-def]  
     coordinates of pixel centres (u = column, v = row).
     """
     H, W = labels.shape
-    sw = np.zeros(n_regions)
-    sx = np.zeros(n_regions)
-    sy = np.zeros(n_regions)
+    sw = np.empty(n_regions)  # np.empty and fill loops, as in grow_regions
+    sx = np.empty(n_regions)
+    sy = np.empty(n_regions)
+    ixx = np.empty(n_regions)
+    iyy = np.empty(n_regions)
+    ixy = np.empty(n_regions)
+    for r in range(n_regions):
+        sw[r] = sx[r] = sy[r] = ixx[r] = iyy[r] = ixy[r] = 0.0
     for y in range(H):
         for x in range(W):
             r = labels[y, x]
@@ -104,11 +114,11 @@ def region_rectangles(labels, n_regions, mag):  # type: ignore[no-untyped-def]  
                 sw[r] += w
                 sx[r] += w * x
                 sy[r] += w * y
-    cx = sx / sw
-    cy = sy / sw
-    ixx = np.zeros(n_regions)
-    iyy = np.zeros(n_regions)
-    ixy = np.zeros(n_regions)
+    cx = np.empty(n_regions)  # element loops, not array expressions (compiled seconds longer)
+    cy = np.empty(n_regions)
+    for r in range(n_regions):
+        cx[r] = sx[r] / sw[r]
+        cy[r] = sy[r] / sw[r]
     for y in range(H):
         for x in range(W):
             r = labels[y, x]
@@ -119,9 +129,9 @@ def region_rectangles(labels, n_regions, mag):  # type: ignore[no-untyped-def]  
                 ixx[r] += w * dy * dy
                 iyy[r] += w * dx * dx
                 ixy[r] -= w * dx * dy
-    rects = np.zeros((n_regions, 7))
-    dirx = np.zeros(n_regions)
-    diry = np.zeros(n_regions)
+    rects = np.empty((n_regions, 7))  # every entry written below
+    dirx = np.empty(n_regions)
+    diry = np.empty(n_regions)
     for r in range(n_regions):
         # smallest eigenvalue's eigenvector of [[ixx, ixy], [ixy, iyy]] is the line direction
         lam = 0.5 * (ixx[r] + iyy[r] - math.sqrt((ixx[r] - iyy[r]) ** 2 + 4.0 * ixy[r] ** 2))
@@ -162,20 +172,22 @@ def rect_alignment_counts(rects, angle, tau):  # type: ignore[no-untyped-def]  #
     """
     H, W = angle.shape
     n = rects.shape[0]
-    out = np.zeros((n, 2), dtype=np.int64)
+    out = np.empty((n, 2), dtype=np.int64)  # every entry written below
     for r in range(n):
         cx, cy, th = rects[r, 0], rects[r, 1], rects[r, 2]
         l0, l1 = rects[r, 3] - 0.5, rects[r, 4] + 0.5
         w0, w1 = rects[r, 5] - 0.5, rects[r, 6] + 0.5
         c = math.cos(th)
         s = math.sin(th)
-        # bounding box of the rectangle
-        xs = np.array([l0 * c - w0 * s, l0 * c - w1 * s, l1 * c - w0 * s, l1 * c - w1 * s]) + cx
-        ys = np.array([l0 * s + w0 * c, l0 * s + w1 * c, l1 * s + w0 * c, l1 * s + w1 * c]) + cy
-        xa = max(0, math.floor(xs.min()))
-        xb = min(W - 1, math.ceil(xs.max()))
-        ya = max(0, math.floor(ys.min()))
-        yb = min(H - 1, math.ceil(ys.max()))
+        # bounding box of the rectangle (scalars: no small arrays to compile)
+        x00, x01 = l0 * c - w0 * s + cx, l0 * c - w1 * s + cx
+        x10, x11 = l1 * c - w0 * s + cx, l1 * c - w1 * s + cx
+        y00, y01 = l0 * s + w0 * c + cy, l0 * s + w1 * c + cy
+        y10, y11 = l1 * s + w0 * c + cy, l1 * s + w1 * c + cy
+        xa = max(0, math.floor(min(min(x00, x01), min(x10, x11))))
+        xb = min(W - 1, math.ceil(max(max(x00, x01), max(x10, x11))))
+        ya = max(0, math.floor(min(min(y00, y01), min(y10, y11))))
+        yb = min(H - 1, math.ceil(max(max(y00, y01), max(y10, y11))))
         total = 0
         aligned = 0
         for y in range(ya, yb + 1):

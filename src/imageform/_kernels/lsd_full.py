@@ -288,8 +288,8 @@ def rect_nfa(rec, angles, log_nt):  # type: ignore[no-untyped-def]  # pragma: no
     vx1, vy1 = cx[(off + 1) % 4], cy[(off + 1) % 4]
     vx2, vy2 = cx[(off + 2) % 4], cy[(off + 2) % 4]
     vx3, vy3 = cx[(off + 3) % 4], cy[(off + 3) % 4]
-    pts = 0
-    alg = 0
+    pts = np.int64(0)  # not the literal 0: nfa would also be compiled for Literal[int](0)
+    alg = np.int64(0)
     x = math.ceil(vx0) - 1
     y = math.ceil(vy0)
     ye = -1.7976931348623157e308
@@ -489,6 +489,17 @@ def _refine(reg_x, reg_y, size, modgrad, reg_angle, prec, p, rec, used, angles, 
 
 
 @njit(**_JIT)
+def _copy12(dst, src):  # type: ignore[no-untyped-def]  # pragma: no cover
+    """``dst[:] = src`` for two rectangles, as an element loop.
+
+    numba 0.68 compiles an array-to-slice copy with its shape-mismatch message (an f-string:
+    ``str``, ``join``, ``repr``), about 5 s of CPU on a first ``imageform vanishing``.
+    """
+    for i in range(12):
+        dst[i] = src[i]
+
+
+@njit(**_JIT)
 def _rect_improve(rec, angles, log_nt, log_eps):  # type: ignore[no-untyped-def]  # pragma: no cover
     """Improve a rectangle as LSD does (``rec`` is updated in place).
 
@@ -506,21 +517,21 @@ def _rect_improve(rec, angles, log_nt, log_eps):  # type: ignore[no-untyped-def]
         v = rect_nfa(r, angles, log_nt)
         if v > log_nfa:
             log_nfa = v
-            rec[:] = r
+            _copy12(rec, r)
     if log_nfa > log_eps:
         return log_nfa
-    r[:] = rec
+    _copy12(r, rec)
     for _ in range(5):
         if r[4] - delta >= 0.5:
             r[4] -= delta
             v = rect_nfa(r, angles, log_nt)
             if v > log_nfa:
-                rec[:] = r
+                _copy12(rec, r)
                 log_nfa = v
     if log_nfa > log_eps:
         return log_nfa
     for sign in (1.0, -1.0):
-        r[:] = rec
+        _copy12(r, rec)
         for _ in range(5):
             if r[4] - delta >= 0.5:
                 r[0] += sign * -r[9] * delta_2
@@ -530,18 +541,18 @@ def _rect_improve(rec, angles, log_nt, log_eps):  # type: ignore[no-untyped-def]
                 r[4] -= delta
                 v = rect_nfa(r, angles, log_nt)
                 if v > log_nfa:
-                    rec[:] = r
+                    _copy12(rec, r)
                     log_nfa = v
         if log_nfa > log_eps:
             return log_nfa
-    r[:] = rec
+    _copy12(r, rec)
     for _ in range(5):
         r[11] /= 2.0
         r[10] = r[11] * math.pi
         v = rect_nfa(r, angles, log_nt)
         if v > log_nfa:
             log_nfa = v
-            rec[:] = r
+            _copy12(rec, r)
     return log_nfa
 
 
@@ -577,7 +588,9 @@ def _detect(angles, modgrad, list_x, list_y, prec, p, log_nt, log_eps, density_t
             log_nfa = math.nan
         if n_out == out.shape[0]:
             grown = np.empty((2 * n_out, 7))
-            grown[:n_out] = out
+            for i in range(n_out):  # element loops: see _copy12
+                for j in range(7):
+                    grown[i, j] = out[i, j]
             out = grown
         out[n_out, 0] = rec[0] + 0.5
         out[n_out, 1] = rec[1] + 0.5

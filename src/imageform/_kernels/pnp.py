@@ -1,17 +1,19 @@
 """Numba kernel: batched Levenberg-Marquardt refinement of PnP poses.
 
-One problem at a time per loop iteration (``prange`` over problems), no temporaries: the
-6x6 normal equations are accumulated point by point. Same algorithm, parametrisation
-(``R ← exp([δω]×) R``, ``t ← t + δt``), damping schedule and cheirality rule as the plain
-twin :func:`imageform.geometry.pnp.refine_pose`; a test checks agreement to 1e-9.
+One problem at a time per loop iteration, the problems on numba's threads through
+:func:`imageform._kernels.jit.run_tasks` (a serial ``nogil`` kernel over a range of problems: a
+``parallel=True`` ``prange`` cost seconds of CPU more to compile on a first ``imageform
+pose``), no temporaries: the 6x6 normal equations are accumulated point by point. Same
+algorithm, parametrisation (``R ← exp([δω]×) R``, ``t ← t + δt``), damping schedule and
+cheirality rule as the plain twin :func:`imageform.geometry.pnp.refine_pose`; a test checks
+agreement to 1e-9.
 """
 
 from __future__ import annotations
 
 import numpy as np
-from numba import prange
 
-from imageform._kernels.jit import njit
+from imageform._kernels.jit import njit, run_tasks
 
 __all__ = ["refine_pose_batch"]
 
@@ -94,12 +96,27 @@ def _solve(M, g, x):  # type: ignore[no-untyped-def]  # pragma: no cover
         x[c] = acc / M[c, c]
 
 
-@njit(parallel=True)
-def refine_pose_batch(R, t, X, uv, K, w, max_iter, tol, rms):  # type: ignore[no-untyped-def]  # pragma: no cover
+def refine_pose_batch(
+    R: np.ndarray,
+    t: np.ndarray,
+    X: np.ndarray,
+    uv: np.ndarray,
+    K: np.ndarray,
+    w: np.ndarray,
+    max_iter: int,
+    tol: float,
+    rms: np.ndarray,
+) -> None:
     """Refine ``R (B, 3, 3)``, ``t (B, 3)`` in place; write the weighted RMS to ``rms (B,)``."""
-    B, N = X.shape[0], X.shape[1]
+    run_tasks(_refine_tasks, X.shape[0], R, t, X, uv, K, w, max_iter, tol, rms)
+
+
+@njit(nogil=True)
+def _refine_tasks(b0, b1, R, t, X, uv, K, w, max_iter, tol, rms):  # type: ignore[no-untyped-def]  # pragma: no cover
+    # problems b0 .. b1 - 1
+    N = X.shape[1]
     fx, s, fy = K[0, 0], K[0, 1], K[1, 1]
-    for b in prange(B):
+    for b in range(b0, b1):
         Rb = R[b].copy()
         tb = t[b].copy()
         Rn = np.empty((3, 3))

@@ -11,24 +11,27 @@ and keeps the nearest ``s`` with ``0 <= a < 1`` and ``0 <= b < 1``. Outputs: the
 miss). Rays with NaN coordinates miss. The twin is
 :func:`imageform.simulate.render.raycast_quads_numpy`; ``tests/simulate/test_render.py``
 checks they agree (same index, a and b to 1e-12).
+
+The rays run on numba's threads through :func:`imageform._kernels.jit.run_tasks` (a serial
+``nogil`` kernel over a range of rays), not a ``parallel=True`` ``prange``: numba's parallel
+lowering cost about a second of CPU more on a first ``imageform simulate``.
 """
 
 from __future__ import annotations
 
 import numpy as np
-from numba import prange
 
-from imageform._kernels.jit import njit
+from imageform._kernels.jit import njit, run_tasks
 
 __all__ = ["raycast_quads"]
 
 
-@njit(parallel=True, fastmath=False, nogil=True)
-def _raycast_kernel(xy, origin, normal, ga, gb, idx, a_out, b_out, depth):  # type: ignore[no-untyped-def]  # pragma: no cover
-    n = xy.shape[0]
+@njit(fastmath=False, nogil=True)
+def _raycast_kernel(i0, i1, xy, origin, normal, ga, gb, idx, a_out, b_out, depth):  # type: ignore[no-untyped-def]  # pragma: no cover
+    # rays i0 .. i1 - 1
     nq = origin.shape[0]
     inf = np.inf
-    for i in prange(n):
+    for i in range(np.uint64(i0), np.uint64(i1)):  # unsigned: no wrap-around code
         dx = xy[i, 0]
         dy = xy[i, 1]
         best = inf
@@ -80,5 +83,5 @@ def raycast_quads(
     o, nq, ga, gb = (
         np.ascontiguousarray(v, dtype=np.float64) for v in (origin, normal, dual_a, dual_b)
     )
-    _raycast_kernel(pts, o, nq, ga, gb, idx, a, b, depth)
+    run_tasks(_raycast_kernel, n, pts, o, nq, ga, gb, idx, a, b, depth)
     return idx, a, b, depth
