@@ -11,10 +11,13 @@ pipeline, each step a public function:
    nearest);
 3. geometric verification of each pair by the essential matrix
    (:func:`~imageform.geometry.find_essential_matrix`, 5-point LO-RANSAC) on the
-   undistorted keypoints; the pairs are the sequential neighbours of a video and, for loop
-   closures, the frames farther away whose visual words vote alike (a small vocabulary,
-   k-means of the descriptors, tf-idf histograms compared by cosine; Sivic & Zisserman
-   2003);
+   undistorted keypoints, then the cheirality check of its pose
+   (:func:`~imageform.geometry.recover_pose`): the inliers whose point lies behind a
+   camera fit the twisted pair (a symmetric or repeated texture) and go, and a pair whose
+   twisted pair explains half as many matches as its pose is ambiguous and not used; the
+   pairs are the sequential neighbours of a video and, for loop closures, the frames
+   farther away whose visual words vote alike (a small vocabulary, k-means of the
+   descriptors, tf-idf histograms compared by cosine; Sivic & Zisserman 2003);
 4. tracks: the verified matches joined across frames (connected components; one keypoint
    a frame, a component that joins two keypoints of one frame rebuilt greedily);
 5. the initial pair: the pair with the most inliers among those with enough parallax
