@@ -11,10 +11,13 @@ pipeline, each step a public function:
    nearest);
 3. geometric verification of each pair by the essential matrix
    (:func:`~imageform.geometry.find_essential_matrix`, 5-point LO-RANSAC) on the
-   undistorted keypoints; the pairs are the sequential neighbours of a video and, for loop
-   closures, the frames farther away whose visual words vote alike (a small vocabulary,
-   k-means of the descriptors, tf-idf histograms compared by cosine; Sivic & Zisserman
-   2003);
+   undistorted keypoints, then the cheirality check of its pose
+   (:func:`~imageform.geometry.recover_pose`): the inliers whose point lies behind a
+   camera fit the twisted pair (a symmetric or repeated texture) and go, and a pair whose
+   twisted pair explains half as many matches as its pose is ambiguous and not used; the
+   pairs are the sequential neighbours of a video and, for loop closures, the frames
+   farther away whose visual words vote alike (a small vocabulary, k-means of the
+   descriptors, tf-idf histograms compared by cosine; Sivic & Zisserman 2003);
 4. tracks: the verified matches joined across frames (connected components; one keypoint
    a frame, a component that joins two keypoints of one frame rebuilt greedily);
 5. the initial pair: the pair with the most inliers among those with enough parallax
@@ -233,6 +236,30 @@ def _angle_deg(C1: F64, C2: F64, X: F64) -> F64:
     a, b = X - C1, X - C2
     c = np.sum(a * b, axis=1) / (np.linalg.norm(a, axis=1) * np.linalg.norm(b, axis=1) + 1e-300)
     return np.degrees(np.arccos(np.clip(c, -1.0, 1.0)))
+
+
+def _behind(K: F64, R: F64, t: F64, p1: F64, p2: F64, min_parallax: float) -> NDArray[np.bool_]:
+    r"""Which correspondences of a relative pose lie behind one of the two cameras.
+
+    The depths :math:`\lambda_1, \lambda_2` of the two rays' closest points, from
+    :math:`\lambda_2 \tilde x_2 \approx \lambda_1 R \tilde x_1 + t` by least squares
+    (normalised coordinates; as :func:`~imageform.geometry.recover_pose`'s cheirality
+    test, Hartley & Zisserman 2004, sec. 9.6.3); a correspondence is behind when a depth
+    is not positive and its rays are ``min_parallax`` radians apart or more (nearly
+    parallel rays, a point near infinity, have a depth of either sign within the noise).
+    """
+    Ki = np.linalg.inv(K)
+    h1 = np.column_stack([p1, np.ones(len(p1))]) @ Ki.T
+    h2 = np.column_stack([p2, np.ones(len(p2))]) @ Ki.T
+    a = h1 @ R.T
+    aa, ab, bb = np.sum(a * a, 1), np.sum(a * h2, 1), np.sum(h2 * h2, 1)
+    at, bt = a @ t, h2 @ t
+    det = aa * bb - ab * ab
+    with np.errstate(divide="ignore", invalid="ignore"):
+        z1 = (ab * bt - bb * at) / det
+        z2 = (aa * bt - ab * at) / det
+        parallax = np.arccos(np.clip(ab / np.sqrt(aa * bb), -1.0, 1.0))
+    return ~((z1 > 0) & (z2 > 0)) & (parallax >= min_parallax)
 
 
 def _skew_batch(v: F64) -> F64:
@@ -775,6 +802,8 @@ def reconstruct_sequence(
         )
     offset = np.concatenate([[0], np.cumsum(textured)]).astype(np.int64)
     pair_info: dict[tuple[int, int], tuple[int, float, NDArray[np.int64]]] = {}
+    # rays closer than this (radians) meet on either side of the cameras within the noise
+    min_parallax = float(np.arctan(3.0 * threshold_px / min(abs(k[0, 0]), abs(k[1, 1]))))
 
     def verify(i: int, j: int) -> None:
         """Match frames i and j, keep the essential matrix's inliers and the parallax."""
@@ -793,17 +822,28 @@ def reconstruct_sequence(
         inl = np.asarray(er.inliers, bool)
         if inl.sum() < 30:
             return
-        if j - i > win:  # a loop closure: never the initial pair, its parallax unused
-            pair_info[(i, j)] = (int(inl.sum()), 0.0, m[inl])
-            return
-        # parallax of the pair: the median angle between the rays of its inliers
         try:
             rp = recover_pose(er.E, p1, p2, k, inliers=inl)
         except DegenerateConfigurationError:  # no factorisation with points in front
             return
+        # cheirality: an inlier of E whose point lies behind a camera of the chosen pose
+        # fits the twisted pair (the same E, the second camera turned half a turn about
+        # the baseline), e.g. a patch matched to its copy in a symmetric texture: no view
+        # of one point. When the twisted pair explains half as many matches as the pose
+        # chosen (two rigid scenes in the matches), which one is the scene is a coin's
+        # toss: the pair is not used (its views come back by completion once both frames
+        # are registered)
+        behind = inl & _behind(k, np.asarray(rp.R), np.asarray(rp.t).ravel(), p1, p2, min_parallax)
+        inl &= ~behind
+        if inl.sum() < 30 or behind.sum() >= 0.5 * inl.sum():
+            return
+        if j - i > win:  # a loop closure: never the initial pair, its parallax unused
+            pair_info[(i, j)] = (int(inl.sum()), 0.0, m[inl])
+            return
+        # parallax of the pair: the median angle between the rays of its inliers
         C2 = -np.asarray(rp.R).T @ np.asarray(rp.t).ravel()
         X = np.asarray(rp.points, np.float64)
-        fin = np.all(np.isfinite(X), axis=1)
+        fin = np.all(np.isfinite(X), axis=1) & inl
         ang = float(np.median(_angle_deg(np.zeros(3), C2, X[fin]))) if fin.any() else 0.0
         pair_info[(i, j)] = (int(inl.sum()), ang, m[inl])
 
