@@ -80,6 +80,7 @@ BENCH_SCRIPTS: dict[str, str] = {
     "track": "benchmarks/bench_track.py",
     "twoview": "benchmarks/bench_twoview.py",
     "twoview-e": "benchmarks/bench_twoview.py",
+    "twoview-f": "benchmarks/bench_twoview.py",
     "vision": "benchmarks/bench_vision.py",
     "vp-lsd": "benchmarks/check_vp_lsd.py",
     "vp-manhattan": "benchmarks/check_vp_manhattan.py",
