@@ -260,3 +260,40 @@ def test_fundamental_kernel_exact_with_the_outliers_first() -> None:
     res = find_fundamental_matrix(u1, u2, rng=1)
     assert _best(res.F[None], Ft) < 1e-9
     assert np.array_equal(res.inliers, np.arange(120) >= 48) and res.rms < 1e-9
+
+
+def test_oriented_epipolar_constraint_keeps_true_samples_and_drops_a_point_behind() -> None:
+    """``ransac_f._oriented`` (Chum, Werner & Matas 2004): the true F passes every sample of
+    points in front of both cameras; a sample with one correspondence whose point in image 1
+    is moved to the epipole's other side along its epipolar line (``x1' = 2 e1 - x1``, a
+    point in front of one camera and behind the other) fails, although it satisfies
+    ``x2ᵀ F x1' = 0`` exactly."""
+    from imageform._kernels.ransac_f import _oriented
+
+    rng = np.random.default_rng(3)
+    R, _ = np.linalg.qr(np.eye(3) + 0.05 * rng.normal(size=(3, 3)))
+    R *= np.sign(np.linalg.det(R))
+    t = np.array([0.5, 0.1, 0.05])
+    X = np.column_stack([rng.uniform(-1, 1, 40), rng.uniform(-1, 1, 40), rng.uniform(4, 8, 40)])
+
+    def proj(P: np.ndarray) -> np.ndarray:
+        h = P @ K.T
+        return h[:, :2] / h[:, 2:]
+
+    tx = np.array([[0, -t[2], t[1]], [t[2], 0, -t[0]], [-t[1], t[0], 0]])
+    Ki = np.linalg.inv(K)
+    F = Ki.T @ tx @ R @ Ki
+    F /= np.linalg.norm(F)
+    p1, p2 = proj(X), proj(X @ R.T + t)
+    idx = np.arange(40, dtype=np.int64)
+    for k in range(0, 35, 7):
+        assert _oriented(F, p1, p2, idx[k:], 7)
+        assert _oriented(-F, p1, p2, idx[k:], 7)  # the sign of F does not matter
+    e1 = np.linalg.svd(F)[2][-1]
+    e1 = e1[:2] / e1[2]
+    q1 = p1.copy()
+    q1[3] = 2.0 * e1 - p1[3]
+    h1, h2 = np.append(q1[3], 1.0), np.append(p2[3], 1.0)
+    assert abs(h2 @ F @ h1) < 1e-9 * np.linalg.norm(h1) * np.linalg.norm(h2)
+    assert _oriented(F, p1, p2, idx, 7)
+    assert not _oriented(F, q1, p2, idx, 7)
