@@ -81,6 +81,7 @@ BENCH_SCRIPTS: dict[str, str] = {
     "twoview": "benchmarks/bench_twoview.py",
     "twoview-e": "benchmarks/bench_twoview.py",
     "twoview-f": "benchmarks/bench_twoview.py",
+    "twoview-h": "benchmarks/bench_twoview.py",
     "vision": "benchmarks/bench_vision.py",
     "vp-lsd": "benchmarks/check_vp_lsd.py",
     "vp-manhattan": "benchmarks/check_vp_manhattan.py",

@@ -297,3 +297,30 @@ def test_oriented_epipolar_constraint_keeps_true_samples_and_drops_a_point_behin
     assert abs(h2 @ F @ h1) < 1e-9 * np.linalg.norm(h1) * np.linalg.norm(h2)
     assert _oriented(F, p1, p2, idx, 7)
     assert not _oriented(F, q1, p2, idx, 7)
+
+
+def test_homography_refit_linear_start_is_intact() -> None:
+    """The refit's linear DLT fits hand LM an intact start: with no LM iteration at all the
+    kernel's H is the least-squares fit of the noisy inliers (before, its output aliased the
+    denormalisation's scratch and LM had to climb back from a corrupted H)."""
+    from imageform._kernels.ransac_h import homography_estimate
+    from imageform.geometry import _robust_core as rc
+
+    x1, x2, _, _ = _pair(5, 150, planar=True)
+    u1, u2 = x1 @ K[:2, :2].T + K[:2, 2], x2 @ K[:2, :2].T + K[:2, 2]
+    rng = np.random.default_rng(2)
+    n2 = u2 + rng.normal(0.0, 0.5, u2.shape)
+    n2[:50] = rng.uniform([0, 0], [640, 480], (50, 2))
+    for mode in (0, 1):
+        H = np.empty((3, 3))
+        inl = np.empty(150, dtype=bool)
+        rms = np.empty(1)
+        drawn = homography_estimate(
+            np.ascontiguousarray(u1), np.ascontiguousarray(n2), 3.0, 0.999, 2000,
+            rc.kernel_seed(0), mode, 0, rc.REFINE_FACTOR, rc.TERMINATION_FACTOR,
+            rc.H_SUPPORT_WIDTH, H, inl, rms,
+        )  # fmt: skip
+        assert drawn > 0
+        q = np.c_[u1, np.ones(150)] @ H.T
+        err = np.sqrt(np.mean(np.sum((q[:, :2] / q[:, 2:] - u2) ** 2, -1)))
+        assert err < 0.3 and inl[50:].mean() > 0.95

@@ -187,11 +187,12 @@ def _h_refit(best, s, d, sn, dn, Tdi, Ts, thr, factor, width, n_inl, mode, max_i
     sel = np.empty(n, dtype=np.int64)
     sel2 = np.empty(n, dtype=np.int64)
     m = _select(np.int64(0), best, s, d, w2, sel)
+    Hl = np.empty((3, 3))  # not buf[3]: _h_lsq denormalises through buf[3]
     for _ in range(3):  # cheap linear fits first: LM then starts next to its minimum
         if m < 5:
             break
-        _h_lsq(sn, dn, sel, m, Tdi, Ts, buf[3], buf)
-        _copy3(buf[3], best)
+        _h_lsq(sn, dn, sel, m, Tdi, Ts, Hl, buf)
+        _copy3(Hl, best)
         m2 = _select(np.int64(0), best, s, d, w2, sel2)
         if m2 < 4 or _same(sel, m, sel2, m2):
             break
