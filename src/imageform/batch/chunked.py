@@ -131,7 +131,7 @@ def _options(cmd: str, options: Any) -> dict[str, Any]:
     """
     import dataclasses
 
-    from imageform.batch.runner import batch_options
+    from imageform.batch._plan import batch_options
 
     given = options
     if isinstance(options, dict) and cmd == "white_balance" and "method" in options:
