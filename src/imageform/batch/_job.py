@@ -8,15 +8,15 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-from imageform._files import publish
+from imageform._files import atomic_write
 from imageform.batch._plan import batch_options, batch_workflow
 from imageform.batch._temps import _RUN_ID, _temp_path
 from imageform.errors import InvalidInputError
 from imageform.workflows import Options
 
 
-def _fsync(path: Path, *, directory: bool = False) -> None:
-    fd = os.open(path, os.O_RDONLY | (os.O_DIRECTORY if directory else 0))
+def _fsync_folder(path: Path) -> None:
+    fd = os.open(path, os.O_RDONLY | os.O_DIRECTORY)
     try:
         os.fsync(fd)
     finally:
@@ -42,7 +42,8 @@ def run_job(
     """Run ``command`` on one file and publish ``out_path`` atomically (runs on a worker).
 
     The workflow writes a temporary file in the output's folder; it is fsync-ed and renamed
-    onto ``out_path`` (``os.replace``, atomic on POSIX), then the folder is fsync-ed. An
+    onto ``out_path`` (:func:`imageform._files.atomic_write`: ``os.replace``, atomic on POSIX,
+    never onto a FIFO or a device), then the folder is fsync-ed. An
     exception removes the temporary file and comes back as ``{"ok": False, "error": ...}``.
     ``hold_s`` waits between writing and renaming (a test hook: it widens the window in
     which a killed worker leaves a partial file behind). ``run_id`` names the run in the
@@ -59,17 +60,22 @@ def run_job(
         raise InvalidInputError(f"expected run_id as 12 hex digits, got {describe(run_id)}")
     tmp = _temp_path(out, run_id)
     t0 = time.perf_counter()
+    results: list[Any] = []
     try:
         opts = batch_options(command, options)
         out.parent.mkdir(parents=True, exist_ok=True)
-        result = run_file(batch_workflow(command).name, in_file, tmp, opts)
-        if hold_s > 0:
-            time.sleep(hold_s)
-        _fsync(tmp)
-        publish(tmp, out)  # never onto a FIFO or a device (imageform._files)
-        _fsync(out.parent, directory=True)
+
+        def write(part: Path) -> None:
+            results.append(run_file(batch_workflow(command).name, in_file, part, opts))
+            if hold_s > 0:
+                time.sleep(hold_s)
+
+        # fsync-ed and renamed, never onto a FIFO or a device; removed on error (imageform._files)
+        atomic_write(out, write, part=tmp)
+        _fsync_folder(out.parent)
     except Exception as exc:
         tmp.unlink(missing_ok=True)
         msg = str(exc).splitlines()[0] if str(exc) else ""
         return {"ok": False, "error": f"{type(exc).__name__}: {msg}".rstrip(": ")}
+    result = results[0]
     return {"ok": True, "metrics": _metrics(result.summary), "seconds": time.perf_counter() - t0}
