@@ -533,10 +533,20 @@ class Outputs:
             self.discard()
 
 
-def atomic_write(final: str | Path, write: Callable[[Path], object]) -> None:
+def atomic_write(
+    final: str | Path,
+    write: Callable[[Path], object],
+    *,
+    folder: bool = False,
+    part: Path | None = None,
+) -> None:
     """Call ``write(temporary_path)``, then rename the temporary onto ``final`` (overwriting it).
 
-    On any error the temporary is removed and ``final`` is untouched.
+    On any error (Ctrl-C included) the temporary is removed and ``final`` is untouched.
+    ``folder``: the output is a folder (a Zarr store), swapped in whole (:func:`publish`).
+    ``part``: the temporary's path, a sibling of ``final``; by default
+    ``.NAME.<pid>-<random>.partSUFFIX``, which :func:`remove_stale_parts` removes once its
+    process is gone (``imageform batch`` names its own: its writers run on other hosts).
 
     Examples
     --------
@@ -547,20 +557,21 @@ def atomic_write(final: str | Path, write: Callable[[Path], object]) -> None:
     'hello'
     """
     final = Path(final)
-    refuse_special(final)
+    refuse_special(final, folder=folder)
     if _is_temporary(final):  # a temporary file already (its owner renames it): in place
         write(final)
         if not os.path.lexists(final):
             raise ImageformError(f"output {final} was not written")
         return
-    part = _part_name(final, secrets.token_hex(4))
+    if part is None:
+        part = _part_name(final, secrets.token_hex(4))
     try:
         write(part)
         if not os.path.lexists(part):
             raise ImageformError(f"output {final} was not written")
         _fsync(part)
         with signals_deferred():
-            publish(part, final)
+            publish(part, final, folder=folder)
     except BaseException:
         _remove(part)
         raise

@@ -25,8 +25,8 @@ from imageform.batch import (
     process_chunked,
     run_job,
 )
+from imageform.batch._temps import _remove_stale_temps, _run_lock, _temp_path
 from imageform.batch.chunked import open_lazy
-from imageform.batch.runner import _remove_stale_temps, _run_lock, _temp_path
 from imageform.errors import ImageformError
 from imageform.io import write_image
 

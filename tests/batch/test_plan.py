@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from imageform.batch import batch_options, batch_workflow, plan_jobs, run_batch, run_job
-from imageform.batch.runner import _remove_stale_temps, temp_pattern
+from imageform.batch._temps import _remove_stale_temps, temp_pattern
 from imageform.errors import InvalidInputError, UnknownOptionError
 from imageform.io import read_image, write_image
 

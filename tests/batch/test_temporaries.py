@@ -11,7 +11,8 @@ import pytest
 
 import imageform.io.image_io
 from imageform._files import Outputs, atomic_write
-from imageform.batch.runner import Job, _remove_stale_temps, _temp_path, run_job
+from imageform.batch._temps import _remove_stale_temps, _temp_path
+from imageform.batch.runner import Job, run_job
 from imageform.io import write_image
 
 

@@ -26,18 +26,15 @@ description follow the input's. benchmarks/bench_wsi.py measures a 40000 x 40000
 
 from __future__ import annotations
 
-import glob
 import os
-import shutil
 import time
-import uuid
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from imageform._files import publish
+from imageform._files import atomic_write, remove_stale_parts
 from imageform._validate import check_option
 from imageform.batch._blocks import (
     _WB_METHODS,
@@ -97,18 +94,6 @@ class ChunkedResult:
     stats_from: str | None = None
 
 
-def _temp(path: Path) -> Path:
-    return path.with_name(f".{path.name}.{uuid.uuid4().hex[:12]}.tmp{path.suffix}")
-
-
-def _remove_stale(path: Path) -> None:
-    """Remove the temporaries of ``path`` that a killed run left behind."""
-    for stale in path.parent.glob(f".{glob.escape(path.name)}.*.tmp{glob.escape(path.suffix)}"):
-        shutil.rmtree(stale, ignore_errors=True) if stale.is_dir() else stale.unlink(
-            missing_ok=True
-        )
-
-
 #: Options of each command that chunked processing honours (the others must keep their
 #: default).
 _HONOURED = {
@@ -131,7 +116,7 @@ def _options(cmd: str, options: Any) -> dict[str, Any]:
     """
     import dataclasses
 
-    from imageform.batch.runner import batch_options
+    from imageform.batch._plan import batch_options
 
     given = options
     if isinstance(options, dict) and cmd == "white_balance" and "method" in options:
@@ -286,7 +271,7 @@ def process_chunked(
     if out_kind == "zarr" and pyramid == "build":
         raise InvalidInputError(f"--pyramid build needs a .tif output, got {dst_p}")
     dask = require("dask", what="imageform chunked")
-    _remove_stale(dst_p)  # left by a run killed mid-write (SIGKILL cannot be caught)
+    remove_stale_parts(dst_p)  # left by a run killed mid-write (SIGKILL cannot be caught)
     opened: list[Any] = []  # the TIFF stores this run opens: closed when it ends
     try:
         x = _open_lazy(src_p, chunk, opened)
@@ -335,22 +320,19 @@ def process_chunked(
             if out_dtype != "float32" and not displayable:
                 raise InvalidInputError(f"{opts.get('to')} values are not in [0, 1]: use float32")
             comp = _out_compression(compression, meta, out_dtype) if out_kind == "tiff" else None
-            tmp = _temp(dst_p)
-            try:
+            written: list[int] = []
+
+            def write(tmp: Path) -> None:
                 if out_kind == "zarr":
-                    clipped = _write_zarr(tmp, x, op, out_dtype, chunk)
+                    written.append(_write_zarr(tmp, x, op, out_dtype, chunk))
                 else:
                     spec = _TiffSpec(levels, tile, str(comp), workers, meta)
-                    clipped = _write_tiff(tmp, x, op, out_dtype, chunk, spec)
-                # the one place an output appears: a FIFO or a device at dst is never replaced,
-                # a Zarr folder is swapped in whole (imageform._files.publish)
-                publish(tmp, dst_p, folder=out_kind == "zarr")
-            except BaseException:
-                if tmp.is_dir():
-                    shutil.rmtree(tmp, ignore_errors=True)
-                else:
-                    tmp.unlink(missing_ok=True)
-                raise
+                    written.append(_write_tiff(tmp, x, op, out_dtype, chunk, spec))
+
+            # all or nothing (imageform._files): a FIFO or a device at dst is never replaced, a
+            # Zarr folder is swapped in whole, an error or Ctrl-C removes the temporary
+            atomic_write(dst_p, write, folder=out_kind == "zarr")
+            clipped = written[0]
         return ChunkedResult(
             dst_p,
             tuple(int(v) for v in x.shape),
