@@ -50,8 +50,19 @@ def _run(args: list[str], **extra: str) -> subprocess.CompletedProcess[str]:
     )
 
 
+def _measuring_coverage() -> bool:
+    try:
+        import coverage
+    except ImportError:  # pragma: no cover - coverage is a test dependency
+        return False
+    return coverage.Coverage.current() is not None
+
+
 def test_simulator_check() -> None:
-    proc = _run([str(CHECK)], NUMBA_ENABLE_CUDASIM="1")
+    # under --cov the kernels' lines (run as Python by the simulator) count towards CI's
+    # coverage: a parallel-mode data file in the root, combined by pytest-cov at the end
+    cov = ["-m", "coverage", "run", "--parallel-mode"] if _measuring_coverage() else []
+    proc = _run([*cov, str(CHECK)], NUMBA_ENABLE_CUDASIM="1")
     tail = (proc.stdout + proc.stderr)[-4000:]
     assert proc.returncode == 0, tail
     lines = [ln for ln in proc.stdout.splitlines() if ln.startswith("ok ")]
