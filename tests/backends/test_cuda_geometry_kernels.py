@@ -40,6 +40,10 @@ def _env(**extra: str) -> dict[str, str]:
 
 
 def _run(args: list[str], **extra: str) -> subprocess.CompletedProcess[str]:
+    # under --cov, modules and scripts run by the simulator count towards CI's coverage too:
+    # a parallel-mode data file in the root, combined by pytest-cov at the end
+    if (args[0] == "-m" or args[0].endswith(".py")) and _measuring_coverage():
+        args = ["-m", "coverage", "run", "--parallel-mode", *args]
     return subprocess.run(
         [sys.executable, *args],
         cwd=ROOT,
@@ -59,10 +63,7 @@ def _measuring_coverage() -> bool:
 
 
 def test_simulator_check() -> None:
-    # under --cov the kernels' lines (run as Python by the simulator) count towards CI's
-    # coverage: a parallel-mode data file in the root, combined by pytest-cov at the end
-    cov = ["-m", "coverage", "run", "--parallel-mode"] if _measuring_coverage() else []
-    proc = _run([*cov, str(CHECK)], NUMBA_ENABLE_CUDASIM="1")
+    proc = _run([str(CHECK)], NUMBA_ENABLE_CUDASIM="1")
     tail = (proc.stdout + proc.stderr)[-4000:]
     assert proc.returncode == 0, tail
     lines = [ln for ln in proc.stdout.splitlines() if ln.startswith("ok ")]
