@@ -14,7 +14,11 @@ pipeline, each step a public function:
    undistorted keypoints, then the cheirality check of its pose
    (:func:`~imageform.geometry.recover_pose`): the inliers whose point lies behind a
    camera fit the twisted pair (a symmetric or repeated texture) and go, and a pair whose
-   twisted pair explains half as many matches as its pose is ambiguous and not used; the
+   twisted pair explains half as many matches as its pose is ambiguous and not used; a
+   pair whose essential matrix fits the mirrored copies alone (more of them than true
+   matches, its pose half a turn off, nothing behind a camera) is found by the loops of
+   three verified frames: the pair whose relative rotation breaks more loops (by 30
+   degrees) than it closes goes, greedily (Zach, Klopschitz & Pollefeys 2010); the
    pairs are the sequential neighbours of a video and, for loop closures, the frames
    farther away whose visual words vote alike (a small vocabulary, k-means of the
    descriptors, tf-idf histograms compared by cosine; Sivic & Zisserman 2003);
@@ -260,6 +264,45 @@ def _behind(K: F64, R: F64, t: F64, p1: F64, p2: F64, min_parallax: float) -> ND
         z2 = (aa * bt - ab * at) / det
         parallax = np.arccos(np.clip(ab / np.sqrt(aa * bb), -1.0, 1.0))
     return ~((z1 > 0) & (z2 > 0)) & (parallax >= min_parallax)
+
+
+def _inconsistent_pairs(
+    rot: dict[tuple[int, int], F64], tol_deg: float = 30.0
+) -> list[tuple[int, int]]:
+    r"""Find the verified pairs whose relative rotations the loops of three frames contradict.
+
+    For frames :math:`i < j < l` whose three pairs are verified, the rotations close the
+    loop, :math:`R_{jl} R_{ij} \approx R_{il}` (``rot[(i, j)]`` maps frame i's camera frame
+    to frame j's); a pair whose essential matrix fits the matches of a mirrored texture's
+    copies alone (more of them than true matches; in front of its cameras, so no
+    cheirality test within the pair can tell) is half a turn off and breaks the loops it
+    is in. Greedily, the pair in the most loops off by ``tol_deg`` or more, when those
+    are more than the loops it closes, goes; then the loops are counted again (Zach,
+    Klopschitz & Pollefeys 2010, loop constraints on relative rotations).
+    """
+    keys = set(rot)
+    dropped: list[tuple[int, int]] = []
+    cos_tol = np.cos(np.radians(tol_deg))
+    while True:
+        bad: dict[tuple[int, int], int] = dict.fromkeys(keys, 0)
+        good: dict[tuple[int, int], int] = dict.fromkeys(keys, 0)
+        frames = sorted({f for key in keys for f in key})
+        for i, j in keys:
+            for l_ in frames:
+                if l_ <= j or (i, l_) not in keys or (j, l_) not in keys:
+                    continue
+                d = rot[(j, l_)] @ rot[(i, j)] @ rot[(i, l_)].T
+                closed = (np.trace(d) - 1.0) / 2.0 > cos_tol
+                for key in ((i, j), (j, l_), (i, l_)):
+                    if closed:
+                        good[key] += 1
+                    else:
+                        bad[key] += 1
+        worst = max(keys, key=lambda q: (bad[q] - good[q], q), default=None)
+        if worst is None or bad[worst] <= good[worst]:
+            return dropped
+        keys.discard(worst)
+        dropped.append(worst)
 
 
 def _skew_batch(v: F64) -> F64:
@@ -802,6 +845,7 @@ def reconstruct_sequence(
         )
     offset = np.concatenate([[0], np.cumsum(textured)]).astype(np.int64)
     pair_info: dict[tuple[int, int], tuple[int, float, NDArray[np.int64]]] = {}
+    pair_rot: dict[tuple[int, int], F64] = {}  # each verified pair's relative rotation
     # rays closer than this (radians) meet on either side of the cameras within the noise
     min_parallax = float(np.arctan(3.0 * threshold_px / min(abs(k[0, 0]), abs(k[1, 1]))))
 
@@ -837,6 +881,7 @@ def reconstruct_sequence(
         inl &= ~behind
         if inl.sum() < 30 or behind.sum() >= 0.5 * inl.sum():
             return
+        pair_rot[(i, j)] = np.asarray(rp.R, np.float64)
         if j - i > win:  # a loop closure: never the initial pair, its parallax unused
             pair_info[(i, j)] = (int(inl.sum()), 0.0, m[inl])
             return
@@ -852,6 +897,10 @@ def reconstruct_sequence(
             verify(i, j)
     for i, j in _similar_pairs([f.descriptors for f in feats], win, 2, rng):
         verify(i, j)
+    # a pair whose whole support is a mirrored texture's copies (its pose half a turn off,
+    # no match behind a camera) breaks the loops of three frames it is in: it goes
+    for key in _inconsistent_pairs(pair_rot):
+        del pair_info[key]
     if not pair_info:
         raise DegenerateConfigurationError(
             "no pair of frames has 30 verified matches: too little overlap or texture"
