@@ -195,6 +195,16 @@ def _copy3(A, out):  # type: ignore[no-untyped-def]  # pragma: no cover - compil
 
 
 @njit(**_OPTS)
+def _finite3(A):  # type: ignore[no-untyped-def]  # pragma: no cover - compiled
+    """Whether every entry of the 3 x 3 ``A`` is finite (a refit that failed is not kept)."""
+    ok = True
+    for i in range(3):
+        for j in range(3):
+            ok &= math.isfinite(A[i, j])
+    return ok
+
+
+@njit(**_OPTS)
 def _inv3(A, out):  # type: ignore[no-untyped-def]  # pragma: no cover - compiled
     c00 = A[1, 1] * A[2, 2] - A[1, 2] * A[2, 1]
     c01 = A[1, 2] * A[2, 0] - A[1, 0] * A[2, 2]
@@ -1096,11 +1106,7 @@ def _refine_f(F, p1, p2, idx, m, max_iter):  # type: ignore[no-untyped-def]  # p
     q[6] = s[1] / s[0]
     _lm(np.int64(_F_ORTHO), q, p1, p2, idx, m, aux, max_iter)
     _f_build(q, aux, Fn, T)
-    ok = True
-    for a in range(3):
-        for b in range(3):
-            ok &= math.isfinite(Fn[a, b])
-    if ok:
+    if _finite3(Fn):
         _fro_unit(Fn)
         _copy3(Fn, F)
 
@@ -1145,11 +1151,7 @@ def _refine_e(E, p1, p2, K1i, K2i, idx, m, max_iter):  # type: ignore[no-untyped
     q = np.zeros(5)
     _lm(np.int64(_E_RT), q, p1, p2, idx, m, aux, max_iter)
     _e_build(q, aux, A)
-    ok = True
-    for a in range(3):
-        for b in range(3):
-            ok &= math.isfinite(A[a, b])
-    if ok:
+    if _finite3(A):
         _copy3(A, E)
 
 

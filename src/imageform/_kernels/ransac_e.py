@@ -12,6 +12,7 @@ from imageform._kernels.ransac import (
     _OPTS,
     _copy3,
     _epi_row,
+    _finite3,
     _fro_unit,
     _mat3,
     _nullspace,
@@ -660,11 +661,7 @@ def _lm_e(E, p1, p2, K1i, K2i, idx, m, max_iter):  # type: ignore[no-untyped-def
         _e_of(R, t, Ec)
         if not improved or gain <= 1e-10 * cost:
             break
-    ok = True
-    for a in range(3):
-        for b in range(3):
-            ok &= math.isfinite(Ec[a, b])
-    if ok:
+    if _finite3(Ec):
         _fro_unit(Ec)
         _copy3(Ec, E)
 
