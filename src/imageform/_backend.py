@@ -269,6 +269,47 @@ def float_dtype(x: Any, xp: Any, *, integer: str = IMAGE_INTEGER_DTYPE) -> Any:
     return getattr(xp, integer)
 
 
+#: Host arrays up to this many values go through the upload cache (:func:`asarray_like`).
+_SMALL_HOST = 64
+
+
+def _cached_host(x: np.ndarray, xp: Any, dtype: Any, device: Any) -> Any:
+    """``x`` on a GPU ``device`` as ``dtype``, uploaded once and cached; else None.
+
+    PyTorch CUDA tensors and CuPy arrays only (a CPU or ``meta`` tensor costs no copy, and
+    ``torch.compile`` makes constants in its graph); the shape is ``x``'s, 0-d included.
+    """
+    name = getattr(xp, "__name__", "")
+    if "torch" in name:
+        import torch
+
+        if torch.compiler.is_compiling() or torch.device(device).type in ("cpu", "meta"):
+            return None
+    elif "cupy" not in name:
+        return None
+    return upload_cached(x, xp, dtype, device)
+
+
+def upload_cached(x: np.ndarray, xp: Any, dtype: Any, device: Any) -> Any:
+    """Return host ``x`` as an ``xp`` array on ``device`` (``dtype``), from the upload cache."""
+    name = getattr(xp, "__name__", "")
+    key = (x.tobytes(), x.shape, x.dtype.str, name, str(dtype), str(device))
+    out = _CONSTANTS.get(key)
+    if out is None:
+        if len(_CONSTANTS) >= _MAX_CONSTANTS:
+            _CONSTANTS.clear()
+        host = np.array(x, order="C")  # 0-d stays 0-d (ascontiguousarray makes it 1-d)
+        if "torch" in name:
+            import torch
+
+            with torch.inference_mode(False):  # see _upload
+                out = torch.tensor(host, dtype=dtype, device=device)
+        else:
+            out = xp.asarray(host, dtype=dtype, device=device, copy=True)
+        _CONSTANTS[key] = out
+    return out
+
+
 def asarray_like(x: object, xp: Any, dtype: Any = None, device: Any = None) -> Any:
     """Convert ``x`` to an array of namespace ``xp`` (optionally with ``dtype``/``device``)."""
     if not is_numpy_namespace(xp) and (
@@ -277,6 +318,13 @@ def asarray_like(x: object, xp: Any, dtype: Any = None, device: Any = None) -> A
         # Python numbers and lists are read by NumPy's rules (a float list is float64), as
         # on the NumPy path, not by the other library's default dtype (torch: float32)
         x = np.asarray(x)
+        if device is not None and x.size <= _SMALL_HOST and x.dtype.kind in "biuf":
+            # a small host matrix (K, R, t, coefficients) with device data: uploaded once
+            # and cached, as constants are, so a call does not copy it host-to-device
+            # each time (a pageable copy synchronises the stream)
+            cached = _cached_host(x, xp, dtype, device)
+            if cached is not None:
+                return cached
     elif _is_array(x) and namespace(x) is xp and (device is None or device == device_of(x)):
         # already an array of this namespace: no copy, the autograd graph is kept
         return x if dtype is None or x.dtype == dtype else xp.astype(x, dtype)  # type: ignore[attr-defined]

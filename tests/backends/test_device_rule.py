@@ -122,3 +122,23 @@ def test_constants_are_uploaded_once() -> None:
     n = len(b._CONSTANTS)
     c.convert(x, "srgb", "lab")
     assert len(b._CONSTANTS) == n > 0
+
+
+@pytest.mark.parametrize("value", [0.0, [1.0, 2.0, 3.0], np.eye(3)], ids=["0-d", "1-d", "2-d"])
+def test_small_host_arrays_upload_once_and_keep_their_shape(value: object) -> None:
+    """A small host matrix given with device data (K, R, t, a skew of 0.0) is uploaded once.
+
+    The cache behind ``asarray_like`` for CUDA/CuPy targets (a pageable host-to-device copy
+    per call synchronises the stream: seen on a lent H200); checked here through its upload
+    function, which a CPU can run. A 0-d value stays 0-d (``intrinsic_matrix``'s skew).
+    """
+    import imageform._backend as b
+
+    host = np.asarray(value, dtype=np.float64)
+    first = b.upload_cached(host, torch, torch.float32, torch.device("cpu"))
+    again = b.upload_cached(host.copy(), torch, torch.float32, torch.device("cpu"))
+    assert again is first
+    assert tuple(first.shape) == host.shape and first.dtype == torch.float32
+    np.testing.assert_array_equal(first.numpy(), host.astype(np.float32))
+    # a CPU or meta target is not cached: no copy to save
+    assert b._cached_host(host, torch, None, torch.device("meta")) is None

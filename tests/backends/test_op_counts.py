@@ -51,7 +51,7 @@ CALLS: dict[str, tuple[Callable[[], Any], int]] = {
     "delta_e_cmc": (lambda: c.delta_e_cmc(_m(64, 64, 3), _m(64, 64, 3)), 81),
     "chromatic_adaptation": (lambda: c.chromatic_adaptation(_m(64, 64, 3), "D65", "D50"), 2),
     "white_balance": (lambda: c.white_balance(_m(64, 64, 3)).image, 20),
-    "project_points": (lambda: g.project_points(_m(1000, 3), K).uv, 33),
+    "project_points": (lambda: g.project_points(_m(1000, 3), K).uv, 24),
     "project_points_distorted": (
         lambda: g.project_points_distorted(_m(1000, 3), K, np.eye(3), np.zeros(3), BC)[0],
         52,

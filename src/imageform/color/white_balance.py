@@ -40,7 +40,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from imageform._backend import device_of, is_dask_namespace, namespace
+from imageform._backend import constant, device_of, is_dask_namespace, namespace
 from imageform._validate import (
     any_value,
     as_bool,
@@ -212,7 +212,8 @@ def _manual(xp: Any, like: Any, illuminant: Any, cct: float | None, space: str) 
     else:
         xyz = resolve_white(illuminant, name="illuminant")
     rgb = xyz_to_linear_rgb(xyz, space)
-    e = xp.asarray([float(v) for v in rgb], dtype=like.dtype, device=device_of(like))
+    # a constant: uploaded once per device and dtype (no copy, no stream sync per call)
+    e = constant(np.asarray([float(v) for v in rgb], dtype=np.float64), like, xp)
     return xp.broadcast_to(e, (*tuple(like.shape[:-3]), 3))
 
 

@@ -21,7 +21,16 @@ from typing import Any, Literal, NamedTuple
 
 import numpy as np
 
-from imageform._backend import common_device, device_of, linalg, namespace, sign_of, use_numba
+from imageform._backend import (
+    common_device,
+    constant,
+    device_of,
+    linalg,
+    namespace,
+    reads_values,
+    sign_of,
+    use_numba,
+)
 from imageform._typing import Array, ArrayLike
 from imageform._validate import (
     any_value,
@@ -74,10 +83,7 @@ def _plane_K(K: Array, plane: str, xp: Any) -> Array:
     """
     if plane == "virtual":
         return K
-    sign = xp.asarray(
-        [[-1.0, -1.0, 1.0], [-1.0, -1.0, 1.0], [1.0, 1.0, 1.0]], dtype=K.dtype, device=device_of(K)
-    )
-    return K * sign
+    return K * constant(_REAL_PLANE_SIGN, K, xp)
 
 
 def _prepare(
@@ -93,20 +99,27 @@ def _prepare(
     dev = device_of(X)
     Km = as_matrix_bounded(K, "K", (3, 3), xp=xp, dtype=X.dtype, device=dev)
     _check_K(Km, xp)
-    if R is None:
-        Rm = xp.eye(3, dtype=X.dtype, device=dev)
+    if R is None:  # constants: uploaded once per device (no kernel per call on a GPU)
+        Rm = constant(_EYE3, X, xp)
     else:
         Rm = as_matrix_bounded(R, "R", (3, 3), xp=xp, dtype=X.dtype, device=dev)
         check_rotation(Rm, "R", xp=xp)
     tv = (
-        xp.zeros(3, dtype=X.dtype, device=dev)
+        constant(_ZERO3, X, xp)
         if t is None
         else as_points_bounded(t, "t", 3, xp=xp, dtype=X.dtype, device=dev)
     )
     return xp, X, Km, Rm, tv
 
 
+_EYE3 = np.eye(3)
+_REAL_PLANE_SIGN = np.array([[-1.0, -1.0, 1.0], [-1.0, -1.0, 1.0], [1.0, 1.0, 1.0]])
+_ZERO3 = np.zeros(3)
+
+
 def _check_K(K: Array, xp: Any) -> None:
+    if not reads_values(K):  # a device K is not read: build no comparisons (no kernels)
+        return
     if (
         any_value(K[..., 2, 0] != 0, xp)
         or any_value(K[..., 2, 1] != 0, xp)
