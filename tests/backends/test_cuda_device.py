@@ -3,7 +3,8 @@
 On a machine with CUDA (a lent GPU; ``benchmarks/bench_gpu.py`` is the timing half):
 
 - every backend-matrix case on CUDA tensors gives a CUDA tensor of NumPy's dtype and
-  numbers (``test_backends_matrix``'s tolerances);
+  numbers (``test_backends_matrix``'s tolerances), and on CuPy arrays a CuPy array (CuPy's
+  ``asnumpy`` refuses implicit conversion, so a NumPy call on device data fails the case);
 - every call of the pointwise set (``test_meta_device.POINTWISE``), after one warm-up call
   (constants uploaded), runs under ``torch.cuda.set_sync_debug_mode("error")``: no host
   synchronisation, and NumPy's numbers.
@@ -45,6 +46,19 @@ def test_matrix_case_on_cuda(case: Case) -> None:
         assert isinstance(out, torch.Tensor) and out.device.type == "cuda", out
         assert str(out.dtype).removeprefix("torch.") == ref.dtype.name
     np.testing.assert_allclose(_host(out), ref, atol=case.atol, rtol=1e-12, equal_nan=True)
+
+
+@pytest.mark.parametrize("case", CASES, ids=[cs.name for cs in CASES])
+def test_matrix_case_on_cupy(case: Case) -> None:
+    """The same matrix on CuPy arrays: CuPy out, NumPy's numbers, no implicit NumPy copy."""
+    cupy = pytest.importorskip("cupy")
+    ref = np.asarray(_result(case, case.fn(*case.args)))
+    out = _result(case, case.fn(*[cupy.asarray(np.asarray(a, dtype="float64")) for a in case.args]))
+    if case.same_kind:
+        assert isinstance(out, cupy.ndarray), type(out)
+        assert out.dtype.name == ref.dtype.name
+    got = cupy.asnumpy(out) if isinstance(out, cupy.ndarray) else _host(out)
+    np.testing.assert_allclose(got, ref, atol=case.atol, rtol=1e-12, equal_nan=True)
 
 
 #: Calls whose numbers are not comparable across libraries, and why (the no-sync check runs).

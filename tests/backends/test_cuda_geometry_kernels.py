@@ -195,10 +195,14 @@ def test_develop_device_cuda_refused_in_one_line(tiny_dng: Path, tmp_path: Path)
         assert not out.exists()
 
 
-def test_develop_device_cuda_under_simulator(tiny_dng: Path, tmp_path: Path) -> None:
+def check_develop_cli(tiny_dng: Path, tmp_path: Path, gpu_env: dict[str, str]) -> None:
+    """``develop --device cuda`` (and ``batch develop``) give ``--device cpu``'s numbers.
+
+    ``gpu_env`` is the environment of the CUDA runs: numba's simulator here, ``{}`` on a
+    real GPU (``test_cuda_cli_device.py``).
+    """
     out_gpu, out_cpu = tmp_path / "gpu.npy", tmp_path / "cpu.npy"
-    sim = {"NUMBA_ENABLE_CUDASIM": "1"}
-    for out, dev, extra in ((out_cpu, "cpu", {}), (out_gpu, "cuda", sim)):
+    for out, dev, extra in ((out_cpu, "cpu", {}), (out_gpu, "cuda", gpu_env)):
         # imageform's own DNG reader (LibRaw refuses so small a frame)
         argv = ["develop", str(tiny_dng), "-o", str(out), "--device", dev, "--json"]
         code = "import sys; sys.modules['rawpy'] = None\nfrom imageform.cli import main\n"
@@ -206,9 +210,14 @@ def test_develop_device_cuda_under_simulator(tiny_dng: Path, tmp_path: Path) -> 
         proc = _run(["-c", code], **extra)
         assert proc.returncode == 0, proc.stdout + proc.stderr
         assert f'"device": "{dev}"' in proc.stdout
+        assert "kernels are off" not in proc.stderr, proc.stderr
     gpu, cpu = np.load(out_gpu), np.load(out_cpu)
     assert gpu.shape == cpu.shape == (12, 16, 3)
     np.testing.assert_allclose(gpu, cpu, atol=2e-6, rtol=0)
+
+
+def test_develop_device_cuda_under_simulator(tiny_dng: Path, tmp_path: Path) -> None:
+    check_develop_cli(tiny_dng, tmp_path, {"NUMBA_ENABLE_CUDASIM": "1"})
 
 
 def test_develop_api_refuses_cuda_without_a_device(monkeypatch: pytest.MonkeyPatch) -> None:

@@ -167,6 +167,33 @@ def test_disable_switch(monkeypatch: pytest.MonkeyPatch) -> None:
     assert not _launch.use_cuda()
 
 
+def test_first_compile_failure_inside_numba_turns_the_kernels_off(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """numba-cuda 0.30.4 on NumPy 2.5 (seen on a lent H200): the lowering module's import fails
+    with a plain AttributeError in numba's code at the first compile; that turns the kernels
+    off with one warning (the Array-API path runs), while other errors still propagate."""
+    ns: dict[str, object] = {"__name__": "numba.cuda.np.arrayobj"}
+    exec(
+        "def fail(*a):\n    raise AttributeError(\"module 'numpy' has no attribute 'row_stack'\")",
+        ns,
+    )
+    monkeypatch.setattr(_launch, "launch_1d", ns["fail"])
+    monkeypatch.setattr(_launch, "_DISABLED", [""])
+    with pytest.warns(RuntimeWarning, match="row_stack"):
+        assert _launch.guarded(("probe", "float32"), None, 4) is False
+    assert "row_stack" in _launch.status()
+
+    def ours(*a: object) -> None:
+        raise AttributeError("an error of imageform's own")
+
+    monkeypatch.setattr(_launch, "launch_1d", ours)
+    monkeypatch.setattr(_launch, "_DISABLED", [""])
+    with pytest.raises(AttributeError, match="imageform's own"):
+        _launch.guarded(("probe", "float64"), None, 4)
+    assert _launch._DISABLED == [""]
+
+
 @pytest.mark.parametrize("dtype", ["uint8", "uint16"])
 def test_twin_code_values(dtype: str) -> None:
     """uint8/uint16 code values: read as code / 255 (65535) in float32, as ``as_image`` does."""
@@ -220,14 +247,17 @@ def test_pointwise_device_cuda_refused_in_one_line(
         assert not out.exists() and not (tmp_path / "b").exists()
 
 
-def test_pointwise_device_cuda_under_simulator(
-    tiny_pngs: tuple[Path, Path], tmp_path: Path
+def check_pointwise_cli(
+    tiny_pngs: tuple[Path, Path], tmp_path: Path, gpu_env: dict[str, str]
 ) -> None:
-    """A tiny image through ``--device cuda`` (numba's simulator) gives the CPU's numbers."""
+    """A tiny image through ``--device cuda`` gives ``--device cpu``'s numbers.
+
+    ``gpu_env`` is the environment of the CUDA runs: numba's simulator here, ``{}`` on a
+    real GPU (``test_cuda_cli_device.py``).
+    """
     import json
 
     a, b = (str(p) for p in tiny_pngs)
-    sim = {"NUMBA_ENABLE_CUDASIM": "1"}
     runs = {
         "lab": ["convert", a, "--to", "lab"],
         "gray": ["convert", a, "--to", "gray"],  # no kernel: the CPU, with a note
@@ -235,7 +265,7 @@ def test_pointwise_device_cuda_under_simulator(
     }
     for name, argv in runs.items():
         got = {}
-        for dev, env in (("cpu", {}), ("cuda", sim)):
+        for dev, env in (("cpu", {}), ("cuda", gpu_env)):
             out = tmp_path / f"{name}-{dev}.npy"
             proc = _cli([*argv, "-o", str(out), "--device", dev, "--json"], **env)
             assert proc.returncode == 0, proc.stdout + proc.stderr
@@ -243,15 +273,23 @@ def test_pointwise_device_cuda_under_simulator(
             got[dev] = np.load(out)
             if dev == "cuda":  # a note where no kernel ran (the gray route has none)
                 assert ("has no GPU kernel" in proc.stderr) == (name == "gray"), proc.stderr
+                assert "kernels are off" not in proc.stderr, proc.stderr
         assert got["cuda"].dtype == got["cpu"].dtype and got["cuda"].shape == got["cpu"].shape
         atol = 1e-3 if name == "lab" else 1e-5  # float32: L* up to 100, the others up to 1
         np.testing.assert_allclose(got["cuda"], got["cpu"], atol=atol, rtol=0, err_msg=name)
     de = {}
-    for dev, env in (("cpu", {}), ("cuda", sim)):
+    for dev, env in (("cpu", {}), ("cuda", gpu_env)):
         proc = _cli(["delta-e", a, b, "--device", dev, "--json"], **env)
         assert proc.returncode == 0, proc.stdout + proc.stderr
         assert "no GPU kernel" not in proc.stderr, proc.stderr
+        assert "kernels are off" not in proc.stderr, proc.stderr
         de[dev] = json.loads(proc.stdout)
     assert de["cuda"]["pixels"] == 35
     for key in ("mean", "max"):
         assert abs(de["cuda"][key] - de["cpu"][key]) <= 1e-3, (key, de)
+
+
+def test_pointwise_device_cuda_under_simulator(
+    tiny_pngs: tuple[Path, Path], tmp_path: Path
+) -> None:
+    check_pointwise_cli(tiny_pngs, tmp_path, {"NUMBA_ENABLE_CUDASIM": "1"})

@@ -359,7 +359,9 @@ def guarded(key: Any, kernel: Any, size: int | tuple[int, int], *args: Any) -> b
     whose numba CUDA target lacks its compiler (NVVM) or cannot type a kernel turns the
     kernels off for the process (:func:`disable`, one warning) and the caller runs the
     Array-API path. Errors of a key that has run once, and errors that are not numba's,
-    propagate.
+    propagate. numba's errors include any exception raised inside numba's own code on the
+    first compilation, such as numba-cuda 0.30 meeting NumPy 2.5 (``np.row_stack`` is gone
+    and numba's CUDA lowering module fails to import: an AttributeError, not a numba type).
     """
     try:
         if isinstance(size, tuple):
@@ -367,7 +369,7 @@ def guarded(key: Any, kernel: Any, size: int | tuple[int, int], *args: Any) -> b
         else:
             launch_1d(kernel, size, *args)
     except Exception as exc:
-        if key in _COMPILED or not type(exc).__module__.startswith("numba"):
+        if key in _COMPILED or not _raised_by_numba(exc):
             raise
         disable(f"{type(exc).__name__}: {str(exc).splitlines()[0][:200]}")
         return False
@@ -391,6 +393,17 @@ def disable(reason: str) -> None:
             RuntimeWarning,
             stacklevel=3,
         )
+
+
+def _raised_by_numba(exc: BaseException) -> bool:
+    """Whether ``exc`` is numba's: its type is numba's, or numba's code raised it."""
+    if type(exc).__module__.startswith("numba"):
+        return True
+    tb = exc.__traceback__
+    while tb is not None and tb.tb_next is not None:  # the innermost frame raised it
+        tb = tb.tb_next
+    name = str(tb.tb_frame.f_globals.get("__name__", "")) if tb is not None else ""
+    return name == "numba" or name.startswith(("numba.", "numba_cuda"))
 
 
 def status() -> str:

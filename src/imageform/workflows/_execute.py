@@ -127,6 +127,9 @@ def execute(
                 warnings.simplefilter("ignore", PendingDeprecationWarning)
                 warnings.simplefilter("always", UserWarning)
                 warnings.simplefilter("always", RuntimeWarning)
+                # numba's low-occupancy note on a small image's grid (a UserWarning) is no
+                # news for a pointwise kernel whose size is the caller's image
+                warnings.filterwarnings("ignore", message=r"Grid size \d+ will likely")
                 function = resolve(wf.function)
                 result: Result = function(
                     run, opts, out=None if out is None else Path(out), **inputs
