@@ -111,11 +111,14 @@ def copy_bandwidth(device: Any, nbytes: int, repeat: int) -> float:
     return 2 * n * 4 / t / 1e9
 
 
-def kernels_per_call(fn: Callable[[], Any], device: Any) -> int:
-    """Kernels one call launches: CUDA kernels and copies (profiler), else computing operators.
+def kernels_per_call(fn: Callable[[], Any], device: Any) -> tuple[int, float | None]:
+    """Kernels one call launches, and their device time in seconds (CUDA; else None).
 
-    On a CPU the operators are counted by a dispatch mode (views and allocations left out):
-    each would be one CUDA kernel, so the count is the GPU's without a GPU.
+    CUDA: the kernels and copies the profiler sees over three calls, and the sum of their
+    durations on the device, both per call (the kernels' own time, without the host's
+    Python, launch latency and synchronisation that the wall-clock median includes). On a
+    CPU the operators are counted by a dispatch mode (views and allocations left out): each
+    would be one CUDA kernel, so the count is the GPU's without a GPU.
     """
     import torch
 
@@ -125,15 +128,36 @@ def kernels_per_call(fn: Callable[[], Any], device: Any) -> int:
         from torch.autograd import DeviceType
         from torch.profiler import ProfilerActivity, profile
 
+        calls = 3
         with profile(activities=[ProfilerActivity.CPU, ProfilerActivity.CUDA]) as prof:
-            fn()
+            for _ in range(calls):
+                fn()
             torch.cuda.synchronize(device)
-        return sum(1 for e in prof.events() if e.device_type == DeviceType.CUDA)
+        kern = [e for e in prof.events() if e.device_type == DeviceType.CUDA]
+        busy = sum(e.time_range.elapsed_us() for e in kern) * 1e-6 / calls
+        return round(len(kern) / calls), busy
     from tests.backends._dispatch import DeviceGuard
 
     with DeviceGuard() as guard:
         fn()
-    return guard.kernels
+    return guard.kernels, None
+
+
+def queued(fn: Callable[[], Any], device: Any, calls: int = 20) -> float | None:
+    """Seconds per call of ``calls`` back-to-back calls and one synchronisation (CUDA).
+
+    The throughput a pipeline sees: the host's work for one call overlaps the device's for
+    the one before, so this is the larger of the two per call. None on a CPU.
+    """
+    if device.type != "cuda":
+        return None
+    fn()
+    _sync(device)
+    t0 = time.perf_counter()
+    for _ in range(calls):
+        fn()
+    _sync(device)
+    return (time.perf_counter() - t0) / calls
 
 
 def sync_free(fn: Callable[[], Any], device: Any) -> str:
@@ -167,6 +191,8 @@ class Op:
     versus: str | None = None
     #: the call whose kernels are counted (default ``fn``; a streamed op: one chunk)
     one_call: Callable[[], Any] | None = None
+    #: chunks per call of a streamed op (its kernel time is one chunk's times this)
+    chunks: int = 1
 
 
 def measure(ops: list[Op], device: Any, dtype: Any, repeat: int, ceiling: float) -> list[list[str]]:
@@ -182,12 +208,16 @@ def measure(ops: list[Op], device: Any, dtype: Any, repeat: int, ceiling: float)
     for op in ops:
         if op.impl in failed:
             rows.append(
-                [op.name, str(dtype).removeprefix("torch."), op.impl, *"-----", failed[op.impl]]
+                [op.name, str(dtype).removeprefix("torch."), op.impl, *"--------", failed[op.impl]]
             )
             continue
         t = times[op.impl]
         gbs = op.nbytes / t / 1e9
         ratio = f"{times[op.versus] / t:.2f}x" if op.versus in times else "-"
+        count, busy = kernels_per_call(op.one_call or op.fn, device)
+        if busy and op.one_call is not None:  # a streamed op: busy is one chunk's
+            busy *= op.chunks
+        q = queued(op.fn, device)
         rows.append(
             [
                 op.name,
@@ -195,12 +225,17 @@ def measure(ops: list[Op], device: Any, dtype: Any, repeat: int, ceiling: float)
                 op.impl,
                 f"{t * 1e3:.3f}",
                 f"{100 * gbs / ceiling:.1f} %",
-                str(kernels_per_call(op.one_call or op.fn, device)),
+                "-" if not busy else f"{busy * 1e3:.3f}",
+                "-" if not busy else f"{100 * op.nbytes / busy / 1e9 / ceiling:.1f} %",
+                "-" if q is None else f"{q * 1e3:.3f}",
+                str(count),
                 sync_free(op.fn, device) if op.impl.startswith("imageform") else "-",
                 ratio,
                 op.note,
             ]
         )
+    for row in rows:  # progress on stderr: a run cut short still shows what it measured
+        print("| " + " | ".join(row) + " |", file=sys.stderr, flush=True)
     return rows
 
 
@@ -313,6 +348,7 @@ def ops_projection(device: Any, dtype: Any, n_points: int, chunk: int, compile_:
             streamed(lambda: project_points(X, K)),
             nbytes,
             versus="kornia",
+            chunks=n_chunks,
             one_call=lambda: project_points(X, K),
         ),
         Op(
@@ -321,13 +357,22 @@ def ops_projection(device: Any, dtype: Any, n_points: int, chunk: int, compile_:
             streamed(lambda: kornia.geometry.camera.project_points(Xb, Kb)),
             nbytes - n_chunks * chunk,
             f"max |Δuv| {diff:.1e}; no mask",
+            chunks=n_chunks,
             one_call=lambda: kornia.geometry.camera.project_points(Xb, Kb),
         ),
     ]
     if compile_:
         cfn = _compiled(lambda x, k: project_points(x, k).uv, X, K)
         ops.append(
-            Op(name, "imageform compiled", streamed(cfn), nbytes, versus="kornia", one_call=cfn)
+            Op(
+                name,
+                "imageform compiled",
+                streamed(cfn),
+                nbytes,
+                versus="kornia",
+                chunks=n_chunks,
+                one_call=cfn,
+            )
         )
     return ops
 
@@ -441,19 +486,37 @@ def ops_projection_distorted(
     nbytes = n_chunks * chunk * (5 * X.element_size() + 1)
     name = f"projection + distortion {n_chunks * chunk:.1e} pts ({n_chunks} x {chunk:.1e})"
     ops = [
-        Op(name, "imageform", _streamed(ours, n_chunks), nbytes, versus="kornia", one_call=ours),
+        Op(
+            name,
+            "imageform",
+            _streamed(ours, n_chunks),
+            nbytes,
+            versus="kornia",
+            chunks=n_chunks,
+            one_call=ours,
+        ),
         Op(
             name,
             "kornia",
             _streamed(theirs, n_chunks),
             nbytes - n_chunks * chunk,
             f"max |Δuv| {diff:.1e}; no mask",
+            chunks=n_chunks,
             one_call=theirs,
         ),
     ]
     if compile_:
         cfn = _compiled(lambda x: project_points_distorted(x, K, R, t, bc).uv, X)
-        ops.append(Op(name, "imageform compiled", _streamed(cfn, n_chunks), nbytes, one_call=cfn))
+        ops.append(
+            Op(
+                name,
+                "imageform compiled",
+                _streamed(cfn, n_chunks),
+                nbytes,
+                chunks=n_chunks,
+                one_call=cfn,
+            )
+        )
     return ops
 
 
@@ -500,6 +563,7 @@ def ops_distortion(device: Any, dtype: Any, n_points: int, chunk: int, compile_:
             _streamed(lambda: bc.distort(xy), n_chunks),
             nb_fwd,
             versus="kornia",
+            chunks=n_chunks,
             one_call=lambda: bc.distort(xy),
         ),
         Op(
@@ -511,15 +575,25 @@ def ops_distortion(device: Any, dtype: Any, n_points: int, chunk: int, compile_:
             ),
             nb_fwd,
             f"max |Δ| {d_fwd:.1e} px; kornia on pixels",
+            chunks=n_chunks,
             one_call=lambda: kornia.geometry.calibration.distort_points(uv[None], K[None], dist),
         ),
-        Op(inv, "imageform", _streamed(und, n_chunks), nb_inv, versus="kornia", one_call=und),
+        Op(
+            inv,
+            "imageform",
+            _streamed(und, n_chunks),
+            nb_inv,
+            versus="kornia",
+            chunks=n_chunks,
+            one_call=und,
+        ),
         Op(
             inv,
             "kornia",
             _streamed(k_und, n_chunks),
             nb_fwd,
             f"max |Δ| {d_inv:.1e} px; kornia: 5 fixed-point steps, no mask",
+            chunks=n_chunks,
             one_call=k_und,
         ),
     ]
@@ -776,6 +850,9 @@ def main() -> None:
         "implementation",
         "median ms",
         "of copy BW",
+        "kernel ms",
+        "kernel of copy BW",
+        "queued ms",
         "kernels/call",
         "no host sync",
         "vs kornia",
@@ -799,7 +876,13 @@ def main() -> None:
             "run launches, plus the 1-4 of imageform's value checks, which run on host memory "
             "only)"
         )
-        + "; projection: per chunk. vs kornia: kornia's time / this row's (above 1: faster; "
+        + "; projection: per chunk. Kernel ms: the device time of the call's kernels "
+        "(torch.profiler, mean of three calls; streamed ops: every chunk), so kernel of copy "
+        "BW is the kernels' own share (a kernel that mostly reads can pass 100 %: the copy "
+        "reads and writes equal bytes; inputs smaller than the 60 MB L2 stay in it between "
+        "calls); the gap to the median is the host's time per call (see "
+        "profile_gpu_host.py). Queued ms: 20 calls back to back, one synchronisation, per "
+        "call (a pipeline's rate: host and device overlap). vs kornia: kornia's time / this row's (above 1: faster; "
         "CIEDE2000 compiled: vs eager imageform; where kornia lacks the operation, the "
         "imageform row's ratio is over the Array-API path's time). imageform: on CUDA "
         "tensors the colour set runs imageform's fused numba-CUDA kernels (issue 29, one "

@@ -67,6 +67,8 @@ BENCH_SCRIPTS: dict[str, str] = {
     "fuzz": "tests/fuzz/__main__.py",
     "geometry": "benchmarks/bench_geometry.py",
     "gpu-cpu": "benchmarks/bench_gpu.py",
+    "gpu-h200": "benchmarks/bench_gpu.py",
+    "gpu-host-h200": "benchmarks/profile_gpu_host.py",
     "lsd": "benchmarks/bench_lsd.py",
     "psf": "benchmarks/bench_psf.py",
     "raw": "benchmarks/bench_raw.py",

@@ -27,7 +27,7 @@ def test_bench_gpu_runs_tiny(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) ->
         assert impls.count("imageform") == 17 and impls.count("kornia") == 10
         assert impls.count("imageform array-API") == 11
         assert {"imageform bilinear", "imageform malvar", "kornia bilinear"} <= set(impls)
-    kernels = {(r[0].removeprefix("| ").split()[0], r[1], r[2]): int(r[5]) for r in rows}
+    kernels = {(r[0].removeprefix("| ").split()[0], r[1], r[2]): int(r[8]) for r in rows}
     assert 0 < kernels[("sRGB→Lab", "float32", "imageform")] < 40  # counted per call
     assert "projection 1.0e+03 pts (2 x 5.0e+02)" in text and "tiny" in text
     assert "projection + distortion" in text and "undistort image 16x24" in text

@@ -1,0 +1,64 @@
+#!/usr/bin/env bash
+# One lent GPU's whole check for issue 29, as one command (the device's budget is 15 minutes:
+# start, this script, transfers). Run from the repository root on the lent machine:
+#
+#     bash benchmarks/gpu_lease.sh            # results under $OUT (default ./gpu-out)
+#
+# Python packages the machine's image lacks travel as wheels in .whl/ (imageform's
+# array-api-compat and imagecodecs, kornia and kornia_rs for the peer rows, dask and
+# distributed for `batch`); they are installed into /tmp/site, never over the image's own.
+# Steps, each under its own time limit so that a stuck one costs its step, not the lease:
+#   1. env.txt: the device, driver, library versions, whether imageform's CUDA kernels run;
+#   2. the timing table, benchmarks/bench_gpu.py (gpu-<device>-<date>.md; progress rows in
+#      bench-progress.log as they are measured);
+#   3. host-profile.txt: the host's time per call (benchmarks/profile_gpu_host.py);
+#   4. the device tests (tests.log): the backend matrix on torch CUDA and CuPy, the
+#      pointwise set under set_sync_debug_mode("error"), the geometry/demosaic kernels, the
+#      --device cuda commands, the meta-device matrix.
+set -u
+OUT=${OUT:-gpu-out}
+mkdir -p "$OUT"
+export PYTHONUNBUFFERED=1 OPENBLAS_NUM_THREADS=1
+if compgen -G ".whl/*.whl" >/dev/null; then
+  python3 -m pip install -q --no-index --no-deps --no-compile --no-cache-dir --upgrade \
+    --target /tmp/site .whl/*.whl || echo "wheel install failed" >&2
+  export PYTHONPATH=/tmp/site
+fi
+export PYTHONPATH="src:.:${PYTHONPATH:-}"
+STAMP=$(date -u +%Y-%m-%d)
+
+status() { timeout 120 python3 -c "from imageform._cuda import _launch; import numpy as np, torch
+x = torch.rand(8, 8, 3, device='cuda', dtype=torch.float64)
+from imageform import color as c
+c.convert(x, 'srgb', 'lab'); torch.cuda.synchronize()
+print('imageform CUDA kernels:', _launch.status())" 2>&1 | tail -3; }
+
+{
+  date -u
+  nvidia-smi --query-gpu=name,driver_version,memory.total,clocks.max.sm,clocks.max.mem --format=csv
+  python3 -c "import sys, numpy, numba, torch, cupy; print(sys.version.split()[0], 'numpy', numpy.__version__, 'numba', numba.__version__, 'torch', torch.__version__, 'cupy', cupy.__version__)"
+  python3 -m pip show numba-cuda kornia 2>/dev/null | grep -E "^(Name|Version)"
+  S=$(status); echo "$S"
+  if echo "$S" | grep -q "kernels: off" && [ -d /usr/local/cuda ]; then
+    export CUDA_HOME=/usr/local/cuda
+    echo "retry with CUDA_HOME=$CUDA_HOME"; status
+  fi
+} 2>&1 | tee "$OUT/env.txt"
+grep -q "^retry with CUDA_HOME" "$OUT/env.txt" && export CUDA_HOME=/usr/local/cuda
+
+DEV=$(nvidia-smi --query-gpu=name --format=csv,noheader | head -1 | tr -cd 'A-Za-z0-9' | tr A-Z a-z | sed 's/^nvidia//')
+timeout "${BENCH_S:-300}" python3 benchmarks/bench_gpu.py --device cuda \
+  --note "One run on a lent machine (benchmarks/gpu_lease.sh): $(tail -1 "$OUT/env.txt")." \
+  --out "$OUT/gpu-${DEV:-gpu}-$STAMP.md" 2>"$OUT/bench-progress.log" >/dev/null
+echo "bench exit $?" | tee -a "$OUT/bench-progress.log"
+
+timeout 90 python3 benchmarks/profile_gpu_host.py >"$OUT/host-profile.txt" 2>&1
+head -16 "$OUT/host-profile.txt"
+
+timeout "${TESTS_S:-210}" python3 -m pytest -q -n 8 -p no:cacheprovider -rfEs \
+  tests/backends/test_cuda_device.py tests/backends/test_cuda_geometry_device.py \
+  tests/backends/test_cuda_cli_device.py tests/backends/test_meta_device.py \
+  >"$OUT/tests.log" 2>&1
+echo "tests exit $?" >>"$OUT/tests.log"
+grep -E "^(FAILED|ERROR|SKIPPED)" "$OUT/tests.log" | head -40
+tail -3 "$OUT/tests.log"
