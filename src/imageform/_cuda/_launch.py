@@ -294,6 +294,19 @@ def _launch(kernel: Any, grid: tuple[int, ...], block: tuple[int, ...], args: An
     become numba device arrays (:func:`as_device_array`; numba's own are passed as they
     are), the first one names the stream and the device.
     """
+    sim = simulated()
+    key = None
+    if not sim and _fast_on():
+        from imageform._cuda import _fastlaunch
+
+        key = _fastlaunch.key_of(kernel, args, _SCALARS)
+        run = _fastlaunch.launcher(key)
+        if run is not None:  # checked against numba's own packing (_fastlaunch.prepare)
+            first = next(a for a in args if not isinstance(a, _SCALARS))
+            with _LOCK:
+                _LAUNCHES[0] += 1
+            run(kernel[grid, block, _stream_for(first)], args)
+            return
     first = None
     dargs = []
     for a in args:
@@ -302,7 +315,6 @@ def _launch(kernel: Any, grid: tuple[int, ...], block: tuple[int, ...], args: An
                 first = a
             a = as_device_array(a)
         dargs.append(a)
-    sim = simulated()
     stream = 0 if first is None else _stream_for(first)
     dev = None if first is None or sim else _device_index(first)
     with _LOCK:
@@ -311,8 +323,21 @@ def _launch(kernel: Any, grid: tuple[int, ...], block: tuple[int, ...], args: An
     if dev is not None and len(c.gpus) > 1 and c.get_current_device().id != dev:
         with c.gpus[dev]:
             kernel[grid, block, stream](*dargs)
-    else:
-        kernel[grid, block, stream](*dargs)
+        return
+    config = kernel[grid, block, stream]
+    config(*dargs)
+    if key is not None:  # the first launch of this signature: check the fast packing once
+        from imageform._cuda import _fastlaunch
+
+        _fastlaunch.prepare(key, kernel, config, args, dargs)
+
+
+@cache
+def _fast_on() -> bool:
+    """Fast launches (:mod:`imageform._cuda._fastlaunch`): on, unless turned off; one GPU."""
+    from imageform._cuda import _fastlaunch
+
+    return _fastlaunch.enabled() and len(cuda().gpus) == 1
 
 
 def launch_1d(kernel: Any, n: int, *args: Any) -> None:
