@@ -64,10 +64,16 @@ def main() -> None:
         ("BrownConrady.distort (64 pts)", lambda: bc.distort(xy)),
         ("empty_like + copy_ (8x8x3)", lambda: empty.copy_(rgb)),
     ]
-    print(f"imageform CUDA kernels: {_launch.status()}\n")
+    from imageform._cuda import _fastlaunch
+
+    print(f"imageform CUDA kernels: {_launch.status()}")
+    print(f"fast launch (IMAGEFORM_CUDA_FAST_LAUNCH): {_fastlaunch.enabled()}\n")
     print("| call (tiny input) | host µs per call (median of 5 x 300) |\n|---|---|")
     for name, fn in rows:
         print(f"| {name} | {per_call_us(fn):.1f} |")
+    ready = list(_fastlaunch._READY.values())
+    fast = sum(r is not None for r in ready)
+    print(f"\nfast launch: {fast} of {len(ready)} kernel signatures passed the packing check")
     prof = cProfile.Profile()
     prof.enable()
     for _ in range(300):
