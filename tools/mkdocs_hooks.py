@@ -69,6 +69,7 @@ BENCH_SCRIPTS: dict[str, str] = {
     "gpu-cpu": "benchmarks/bench_gpu.py",
     "gpu-h200": "benchmarks/bench_gpu.py",
     "gpu-host-h200": "benchmarks/profile_gpu_host.py",
+    "sass-colour": "benchmarks/sass_colour.py",
     "lsd": "benchmarks/bench_lsd.py",
     "psf": "benchmarks/bench_psf.py",
     "raw": "benchmarks/bench_raw.py",

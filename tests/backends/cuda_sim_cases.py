@@ -84,6 +84,9 @@ def test_convert_from_and_to_srgb(space: str, dtype: str) -> None:
     rgb = RGB.astype(dtype)
     got = host(one_launch(c.convert, FakeDeviceArray(rgb), "srgb", space))
     ref = np.asarray(c.convert(rgb, "srgb", space))
+    if space == "lch":  # a grey's hue is atan2 of rounding noise: undefined, not compared
+        grey = ref[..., 1] < 1e-3
+        got[..., 2][grey] = ref[..., 2][grey] = 0.0
     # hue in degrees and code values (ycbcr) are on a larger scale than [0, 1]
     _close(got, ref, dtype, scale=360.0)
 
