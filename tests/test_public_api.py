@@ -11,8 +11,10 @@ from packages (docs/design.md, "Public API").
 from __future__ import annotations
 
 import importlib
+import inspect
 import pkgutil
 import re
+from collections.abc import Iterator
 from pathlib import Path
 
 import imageform
@@ -65,29 +67,60 @@ def test_every_public_subpackage_is_a_namespace() -> None:
     assert on_disk - _namespace_names() == set()
 
 
+def _import_problems(text: str, where: str) -> list[str]:
+    """The imports in ``text`` that are not from a published namespace or name something
+    that namespace's ``__all__`` does not export."""
+    wrong: list[str] = []
+    namespaces = _namespace_names()
+    for m in _FROM.finditer(text):
+        at = f"{where}:{text.count(chr(10), 0, m.start()) + 1}"
+        module = m.group(1)
+        if not _is_public(module):
+            continue  # a page on internals may show a private module
+        if module not in namespaces:
+            wrong.append(f"{at}: from {module} import ... (import from its package)")
+            continue
+        names = re.findall(r"(\w+)(?:\s+as\s+\w+)?", re.sub(r"#.*", "", m.group(2)))
+        exported = set(importlib.import_module(module).__all__)
+        wrong += [f"{at}: {module}.{x} is not exported" for x in names if x not in exported]
+    for m in _IMPORT.finditer(text):
+        if _is_public(m.group(1)) and m.group(1) not in namespaces:
+            at = f"{where}:{text.count(chr(10), 0, m.start()) + 1}"
+            wrong.append(f"{at}: import {m.group(1)} (import its package)")
+    return wrong
+
+
 def test_the_pages_import_from_packages() -> None:
     """Every import the pages, the README and the gallery show is from a published namespace,
     and names only what that namespace's ``__all__`` exports."""
     wrong: list[str] = []
-    namespaces = _namespace_names()
     for path in _user_files():
-        text = path.read_text(encoding="utf-8")
-        for m in _FROM.finditer(text):
-            where = f"{path.relative_to(ROOT)}:{text.count(chr(10), 0, m.start()) + 1}"
-            module = m.group(1)
-            if not _is_public(module):
-                continue  # a page on internals may show a private module
-            if module not in namespaces:
-                wrong.append(f"{where}: from {module} import ... (import from its package)")
-                continue
-            names = re.findall(r"(\w+)(?:\s+as\s+\w+)?", re.sub(r"#.*", "", m.group(2)))
-            exported = set(importlib.import_module(module).__all__)
-            wrong += [f"{where}: {module}.{x} is not exported" for x in names if x not in exported]
-        for m in _IMPORT.finditer(text):
-            if _is_public(m.group(1)) and m.group(1) not in namespaces:
-                where = f"{path.relative_to(ROOT)}:{text.count(chr(10), 0, m.start()) + 1}"
-                wrong.append(f"{where}: import {m.group(1)} (import its package)")
+        wrong += _import_problems(path.read_text(encoding="utf-8"), str(path.relative_to(ROOT)))
     assert wrong == [], "\n".join(wrong)
+
+
+def _documented() -> Iterator[tuple[str, object]]:
+    """``(name, object)`` for every namespace and every function, class and method of their
+    ``__all__``: what the API reference renders, docstring examples included."""
+    for mod in public_namespaces():
+        yield mod.__name__, mod
+        for name in mod.__all__:
+            obj = getattr(mod, name)
+            if inspect.isfunction(obj) or inspect.isclass(obj):
+                yield f"{mod.__name__}.{name}", obj
+            if inspect.isclass(obj):
+                for key, raw in vars(obj).items():
+                    fn = getattr(raw, "__func__", getattr(raw, "fget", raw))
+                    if not key.startswith("_") and inspect.isfunction(fn):
+                        yield f"{mod.__name__}.{name}.{key}", fn
+
+
+def test_the_reference_docstrings_import_from_packages() -> None:
+    """The examples of the docstrings the API reference renders import from packages too."""
+    wrong: list[str] = []
+    for where, obj in _documented():
+        wrong += _import_problems(inspect.getdoc(obj) or "", where)
+    assert wrong == [], "\n".join(sorted(set(wrong)))
 
 
 def test_the_pages_name_exported_objects_by_their_package() -> None:
