@@ -1,12 +1,16 @@
 """The public API of imageform as text, and the command that rewrites its snapshot.
 
-Every module of the ``imageform`` package whose dotted name has no private part (no
-component starting with ``_``) and that defines ``__all__`` contributes every name of its
-``__all__``: functions with their signature, classes with their constructor signature and
-public members (methods, properties, class attributes), other objects with their type.
-Objects marked deprecated by :mod:`imageform._deprecate` (``__deprecated__``) say so, and
-a module ``__getattr__`` built by :func:`imageform._deprecate.module_getattr` lists the old
-names it still serves.
+The published API is package-level (as scikit-image's ``__init__.pyi`` makes it): the
+namespaces are ``imageform`` and the modules its ``__all__`` lists (its subpackages and
+:mod:`imageform.errors`), and every name of their ``__all__`` is listed: functions with their
+signature, classes with their constructor signature and public members (methods,
+properties, class attributes), other objects with their type. The submodules of a package
+(``imageform.geometry.checkerboard_grid``, ...) are its implementation: import from the
+package; a name that only a submodule's ``__all__`` lists is shared inside imageform and its
+tests, is not in the API reference and may change without a deprecation (docs/design.md,
+"Public API"). Objects marked deprecated by :mod:`imageform._deprecate` (``__deprecated__``)
+say so, and a module ``__getattr__`` built by :func:`imageform._deprecate.module_getattr`
+lists the old names it still serves.
 
 ``tests/test_api_snapshot.py`` compares this text with ``tests/api_snapshot.txt``. After a
 deliberate API change, rewrite the snapshot from the repository root and commit it with the
@@ -33,8 +37,24 @@ _ADDRESS = re.compile(r" at 0x[0-9a-fA-F]+")
 _P = inspect.Parameter
 
 
+def public_namespaces() -> list[ModuleType]:
+    """The published namespaces, by name: ``imageform`` and the modules of its ``__all__``."""
+    import imageform
+
+    names = [
+        f"imageform.{name}"
+        for name in imageform.__all__
+        if inspect.ismodule(getattr(imageform, name, None))
+    ]
+    return [importlib.import_module(n) for n in ["imageform", *sorted(names)]]
+
+
 def public_modules() -> list[ModuleType]:
-    """``imageform`` and its public submodules that define ``__all__``, by name."""
+    """``imageform`` and every public submodule that defines ``__all__``, by name.
+
+    More than :func:`public_namespaces`: the checks of every public signature (spellings,
+    registries, docstrings) also read the submodules, the implementation of the packages.
+    """
     import imageform
 
     names = ["imageform"]
@@ -167,10 +187,11 @@ def module_lines(mod: ModuleType) -> list[str]:
 def render() -> str:
     """The whole snapshot text."""
     out: list[str] = [
-        "# The public API of imageform: every name of every __all__ (generated).",
+        "# The public API of imageform: every name of the __all__ of imageform and of each",
+        "# namespace its __all__ lists; submodules are implementation (generated).",
         f"# Regenerate after a deliberate change: {REGEN}",
     ]
-    for mod in public_modules():
+    for mod in public_namespaces():
         out += ["", *module_lines(mod)]
     return "\n".join(out) + "\n"
 
@@ -181,7 +202,7 @@ def main() -> int:
     n = sum(
         1 for line in text.splitlines() if line.startswith("  ") and not line.startswith("    ")
     )
-    print(f"wrote {SNAPSHOT} ({n} public names)")
+    print(f"wrote {SNAPSHOT} ({len(public_namespaces())} namespaces, {n} public names)")
     return 0
 
 

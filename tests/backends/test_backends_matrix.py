@@ -303,6 +303,7 @@ EXCLUDED: dict[str, str] = {
     "bundle_adjust": "estimation (scipy's sparse least squares), NumPy-only by design",
     "reconstruct_sequence": "structure from motion over image files, NumPy-only by design",
     "detect_line_segments": "LSD detector, NumPy-only by design",
+    "lsd_segments": "LSD with every parameter, NumPy-only by design",
     "detect_vanishing_points": "VP detector, NumPy-only by design",
     # no array input: built from names/parameters; they return NumPy constants
     "checkerboard_points": "no array input (pattern size -> NumPy grid)",

@@ -509,7 +509,7 @@ VALID: dict[str, C | Skip] = {
     "imageform.report.chromaticity_plot.planckian_locus": call(
         temperatures=np.array([3000.0, 5000.0])
     ),
-    "imageform.report.chromaticity_plot.plot_chromaticity_diagram": call(),
+    "imageform.report.plot_chromaticity_diagram": call(),
     "imageform.report.display.raw_to_uint16": call(image=V("rgb")),
     "imageform.report.display.stage_display_image": call(image=V("rgb"), kind="linear"),
     "imageform.report.figures_color.photon_transfer_summary": call(result=V("result")),
@@ -929,7 +929,7 @@ DOCUMENTED_NONFINITE: dict[tuple[str, str, str], str] = {
 #: in the slow run only.
 SLOW: frozenset[str] = frozenset(
     {
-        "imageform.report.chromaticity_plot.plot_chromaticity_diagram",
+        "imageform.report.plot_chromaticity_diagram",
         "imageform.report.write_report",
         "imageform.simulate.simulate",
         "imageform.simulate.render_scene",
@@ -938,7 +938,7 @@ SLOW: frozenset[str] = frozenset(
         # whole workflow): fuzzed by the full run only
         "imageform.geometry.stereo_calibrate",
         "imageform.geometry.calibrate_camera",
-        "imageform.geometry.lsd.lsd_segments",
+        "imageform.geometry.lsd_segments",
         "imageform.geometry.find_essential_matrix",
         "imageform.geometry.find_fundamental_matrix",
         "imageform.geometry.find_homography",
@@ -1175,7 +1175,7 @@ VALID.update(
         ),
         "imageform.geometry.fundamental_7point": call(V("pts1_7"), V("pts2_7")),
         "imageform.geometry.fundamental_8point": call(V("pts1"), V("pts2")),
-        "imageform.geometry.lsd.lsd_segments": call(V("gray")),
+        "imageform.geometry.lsd_segments": call(V("gray")),
         "imageform.geometry.recover_pose": call(V("E"), V("pts1"), V("pts2"), V("K")),
         "imageform.geometry.rectification_map": call(V("K"), V("brown"), V("R"), V("P"), (8, 6)),
         "imageform.geometry.solve_pnp_batch": call(V("points3"), V("points3_uv"), V("K")),
@@ -1234,7 +1234,7 @@ VALID.update(
         "imageform.simulate.stages.wave_defocus_blur": call(
             np.full((8, 8, 3), 0.5), 1.0, f_number=4.0, pixel_pitch=3e-6
         ),
-        "imageform.simulate.stages.diffraction_psf_kernel": call(
+        "imageform.simulate.diffraction_psf_kernel": call(
             (450e-9, 550e-9, 650e-9), f_number=4.0, pixel_pitch=2e-6
         ),
         "imageform.analysis.ColorCorrection.from_json": call(V("correction_json")),
@@ -1569,16 +1569,16 @@ VALID.update(
         "imageform.workflows.CameraCharacterization.summary": Skip(
             "a method of a result dataclass"
         ),
-        "imageform.workflows.characterize.ColorMeasurement": Skip(
+        "imageform.workflows.ColorMeasurement": Skip(
             "a result dataclass built by characterize_camera"
         ),
-        "imageform.workflows.characterize.GeometryMeasurement": Skip(
+        "imageform.workflows.GeometryMeasurement": Skip(
             "a result dataclass built by characterize_camera"
         ),
-        "imageform.workflows.characterize.NoiseMeasurement": Skip(
+        "imageform.workflows.NoiseMeasurement": Skip(
             "a result dataclass built by characterize_camera"
         ),
-        "imageform.workflows.characterize.SharpnessMeasurement": Skip(
+        "imageform.workflows.SharpnessMeasurement": Skip(
             "a result dataclass built by characterize_camera"
         ),
         "imageform.workflows.characterize_camera": Skip(
@@ -1639,7 +1639,7 @@ VALID.update(
         "imageform.io.VideoWriter.write": Skip("a method of a writer of files"),
         "imageform.io.open_video": Skip("reads a video or a device (tests/io/test_video.py)"),
         "imageform.io.read_plan": Skip("reads a plan file (its doctest, tests/workflows)"),
-        "imageform.report.overlays.draw_pose_overlay": Skip(
+        "imageform.report.draw_pose_overlay": Skip(
             "draws a BoardTracker result on a frame (tests/workflows/test_track.py)"
         ),
         "imageform.simulate.Trajectory": Skip("a record built by read_trajectory"),

@@ -24,7 +24,7 @@ import numpy as np
 
 from imageform.geometry import BoardTracker, look_at, rvec_to_matrix
 from imageform.io import Plan, VideoWriter, open_video
-from imageform.report.overlays import draw_pose_overlay
+from imageform.report import draw_pose_overlay
 from imageform.simulate import Trajectory, board_poses, load_scene, render_frames
 
 scene = load_scene(

@@ -85,6 +85,7 @@ from imageform.analysis.sfr import (
     slanted_edge_sfr,
 )
 from imageform.analysis.synthetic import (
+    COLORCHECKER_SRGB8,
     LabeledImage,
     StainMixture,
     synthetic_chart_image,
@@ -97,6 +98,7 @@ from imageform.analysis.synthetic import (
 __all__ = [
     "CHART_LAYOUTS",
     "COLORCHECKER_NEUTRALS",
+    "COLORCHECKER_SRGB8",
     "CORRECTION_METHODS",
     "SFR_LUMINANCE_WEIGHTS",
     "STAIN_NORMALIZATION_METHODS",

@@ -118,7 +118,7 @@ def chart_patches(
 
     Examples
     --------
-    >>> from imageform.analysis.synthetic import synthetic_chart_image
+    >>> from imageform.analysis import synthetic_chart_image
     >>> p = chart_patches(synthetic_chart_image())
     >>> (p.means[0] * 255).round(3).tolist(), bool(p.valid.all())
     ([115.0, 82.0, 68.0], True)

@@ -671,7 +671,7 @@ def macenko_stains(
 
     Examples
     --------
-    >>> from imageform.analysis.synthetic import synthetic_stain_image
+    >>> from imageform.analysis import synthetic_stain_image
     >>> img, S, _ = synthetic_stain_image(rng=0)
     >>> est = macenko_stains(img, transparent="norm", i0=1.0)  # the generator's I0
     >>> [round(stain_angle(est.stain_matrix[i], S[i]), 1) for i in range(2)]
@@ -777,7 +777,7 @@ def macenko_normalize(
 
     Examples
     --------
-    >>> from imageform.analysis.synthetic import synthetic_stain_image
+    >>> from imageform.analysis import synthetic_stain_image
     >>> a, _, _ = synthetic_stain_image(max_concentration=(0.6, 1.0), rng=0)
     >>> b, _, _ = synthetic_stain_image(rng=1)
     >>> out = macenko_normalize(a, b, i0=1.0)  # the generator's I0 (no glass to estimate it)
@@ -891,7 +891,7 @@ def vahadane_stains(
 
     Examples
     --------
-    >>> from imageform.analysis.synthetic import synthetic_stain_image
+    >>> from imageform.analysis import synthetic_stain_image
     >>> img, S, _ = synthetic_stain_image(rng=0)
     >>> est = vahadane_stains(img)
     >>> [bool(stain_angle(est.stain_matrix[i], S[i]) < 1.0) for i in range(2)]

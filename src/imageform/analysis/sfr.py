@@ -790,7 +790,7 @@ def find_slanted_edges(
 
     Examples
     --------
-    >>> from imageform.analysis.sfr import render_slanted_edge
+    >>> from imageform.analysis import render_slanted_edge
     >>> img = np.full((120, 120), 0.8)
     >>> img[30:90, 30:90] = 0.2
     >>> find_slanted_edges(img)  # an upright square: no slanted edge

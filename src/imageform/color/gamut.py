@@ -250,7 +250,7 @@ def gamut_map(
 
     Examples
     --------
-    >>> from imageform.color.rgb_spaces import linear_rgb_to_xyz
+    >>> from imageform.color import linear_rgb_to_xyz
     >>> p3_green = linear_rgb_to_xyz([0.0, 1.0, 0.0], "display_p3")
     >>> [round(float(v), 3) for v in gamut_map(p3_green, "srgb")]
     [0.0, 0.966, 0.013]

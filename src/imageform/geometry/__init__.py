@@ -61,6 +61,7 @@ from imageform.geometry.homogeneous import (
 from imageform.geometry.homography import apply_homography, estimate_homography
 from imageform.geometry.intrinsics import Intrinsics, intrinsic_matrix, projected_size
 from imageform.geometry.line_segments import LineSegments, detect_line_segments
+from imageform.geometry.lsd import lsd_segments
 from imageform.geometry.pnp import PnPResult, solve_pnp
 from imageform.geometry.pnp_batch import solve_pnp_batch
 from imageform.geometry.pnp_ransac import solve_pnp_ransac
@@ -207,6 +208,7 @@ __all__ = [
     "line_through",
     "lines_from_segments",
     "look_at",
+    "lsd_segments",
     "match_features",
     "matrix_to_euler",
     "matrix_to_quaternion",

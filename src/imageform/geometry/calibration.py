@@ -218,8 +218,7 @@ def calibrate_camera(
 
     Examples
     --------
-    >>> from imageform.geometry.distortion import project_points_distorted
-    >>> from imageform.geometry.rotations import rvec_to_matrix
+    >>> from imageform.geometry import project_points_distorted, rvec_to_matrix
     >>> obj = checkerboard_points((9, 6), 25.0)
     >>> K = np.array([[800.0, 0, 320], [0, 800, 240], [0, 0, 1]])
     >>> views = [([0.3, 0.1, 0], [-100, -60, 380]), ([-0.2, 0.3, 0.1], [-90, -70, 400]),

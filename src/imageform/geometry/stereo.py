@@ -264,7 +264,7 @@ def stereo_calibrate(
     Examples
     --------
     >>> from imageform.geometry import checkerboard_points, project_points_distorted
-    >>> from imageform.geometry.rotations import rvec_to_matrix
+    >>> from imageform.geometry import rvec_to_matrix
     >>> obj = checkerboard_points((9, 6), 25.0)
     >>> K = np.array([[800.0, 0, 320], [0, 800, 240], [0, 0, 1]])
     >>> R, T = rvec_to_matrix([0.0, -0.05, 0.0]), np.array([-120.0, 0.0, 0.0])

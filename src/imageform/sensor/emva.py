@@ -125,7 +125,7 @@ def simulate_photon_transfer(
 
     Examples
     --------
-    >>> from imageform.sensor.presets import cmos_preset
+    >>> from imageform.sensor import cmos_preset
     >>> d = simulate_photon_transfer(cmos_preset(), irradiance=0.05, wavelength_nm=550,
     ...                              exposure_times=[1e-3], rng=0, shape=(8, 8))
     >>> d.mean_dn.shape
@@ -230,7 +230,7 @@ def fit_photon_transfer(data: PhotonTransferData, *, fit_fraction: float = 0.7) 
 
     Examples
     --------
-    >>> from imageform.sensor.presets import cmos_preset
+    >>> from imageform.sensor import cmos_preset
     >>> s = cmos_preset(prnu=0.0)
     >>> d = simulate_photon_transfer(s, irradiance=0.05, wavelength_nm=550,
     ...     exposure_times=np.linspace(0, 4e-3, 12), rng=1, shape=(48, 48))

@@ -24,7 +24,7 @@ from imageform.simulate.result import (
 )
 from imageform.simulate.scene import Scene, SceneObject, default_scene, load_scene
 from imageform.simulate.schema import SCENE_SCHEMA
-from imageform.simulate.stages import gaussian_sigma_for_mtf50
+from imageform.simulate.stages import diffraction_psf_kernel, gaussian_sigma_for_mtf50
 from imageform.simulate.trajectory import (
     MAX_TRAJECTORY_FRAMES,
     Trajectory,
@@ -57,6 +57,7 @@ __all__ = [
     "apply_color_correction",
     "board_poses",
     "default_scene",
+    "diffraction_psf_kernel",
     "fit_color_correction",
     "gaussian_sigma_for_mtf50",
     "load_scene",

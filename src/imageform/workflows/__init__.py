@@ -23,17 +23,28 @@ from imageform.workflows._spec import (
     flag_of,
     normalize_choice,
 )
-from imageform.workflows.characterize import CameraCharacterization, characterize_camera
+from imageform.workflows.characterize import (
+    CameraCharacterization,
+    ColorMeasurement,
+    GeometryMeasurement,
+    NoiseMeasurement,
+    SharpnessMeasurement,
+    characterize_camera,
+)
 from imageform.workflows.registry import WORKFLOWS, get_workflow
 
 __all__ = [
     "WORKFLOWS",
     "CameraCharacterization",
+    "ColorMeasurement",
+    "GeometryMeasurement",
     "Input",
+    "NoiseMeasurement",
     "Options",
     "Output",
     "Result",
     "Run",
+    "SharpnessMeasurement",
     "Workflow",
     "characterize_camera",
     "choice_names",
