@@ -61,6 +61,24 @@ def _workflows_analysis() -> Any:
     return wf
 
 
+def _workflows_color() -> Any:
+    from imageform.workflows import color as wf
+
+    return wf
+
+
+def _get_workflow(name: str) -> Any:
+    from imageform.workflows import get_workflow
+
+    return get_workflow(name)
+
+
+def _batch_options(command: str, options: dict[str, Any]) -> Any:
+    from imageform.batch import batch_options
+
+    return batch_options(command, options)
+
+
 def _segments() -> geometry.LineSegments:
     """Segments towards two vanishing points, (600, 240) and (-200, 260), plus noise lines."""
     rng = np.random.default_rng(5)
@@ -665,6 +683,25 @@ CASES: list[tuple[str, Callable[[], Any], Callable[[], Any], str]] = [
         lambda: _development().to_integer(bits=8),
         lambda: _development().to_integer(bit_depth=8),
         "use bit_depth= instead",
+    ),
+    # workflows: an options field renamed with its flag (issue 30: --bits is --bit-depth)
+    (
+        "ConvertOptions(bits=) and .bits",
+        lambda: _workflows_color().ConvertOptions(bits=16).bits,
+        lambda: _workflows_color().ConvertOptions(bit_depth=16).bit_depth,
+        "use bit_depth= instead",
+    ),
+    (
+        "Workflow.make_options(bits=)",
+        lambda: _get_workflow("demosaic").make_options(bits=8).bit_depth,
+        lambda: _get_workflow("demosaic").make_options(bit_depth=8).bit_depth,
+        "use bit_depth= instead",
+    ),
+    (
+        "batch_options {'--bits': 16}",
+        lambda: _batch_options("develop", {"--bits": 16}).bit_depth,
+        lambda: _batch_options("develop", {"--bit-depth": 16}).bit_depth,
+        "use --bit-depth (bit_depth)",
     ),
     (
         "simulate.apply_color_correction (image @ M)",
