@@ -44,13 +44,6 @@ ALLOWED: dict[str, str] = {
     # not a random seed: the lattice node a breadth-first walk starts from
     "imageform.geometry.checkerboard_grid.label_lattice: seed": "a seed node, not randomness",
     "imageform.geometry.checkerboard_grid.lattice_rectangle: seed": "a seed node, not randomness",
-    # scene-file keys (TOML): renaming them changes every scene file; left for later
-    "imageform.simulate.config.CheckerboardConfig: centre_m": "scene-file key",
-    "imageform.simulate.config.ColorCheckerConfig: centre_m": "scene-file key",
-    "imageform.simulate.config.GroundConfig: centre_m": "scene-file key",
-    "imageform.simulate.config.ImageConfig: centre_m": "scene-file key",
-    "imageform.simulate.config.ObjectConfig: centre_m": "scene-file key",
-    "imageform.simulate.config.PlaneConfig: centre_m": "scene-file key",
 }
 
 

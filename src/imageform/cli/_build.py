@@ -132,7 +132,7 @@ def option_params(wf: Workflow) -> list[click.Parameter]:
 
 
 def _renamed(wf: Workflow) -> dict[str, dataclasses.Field[Any]]:
-    """The old names of a workflow's options fields (kept one release): old -> the field."""
+    """Return the old names of a workflow's options fields (kept one release): old -> field."""
     fields = {f.name: f for f in wf.options.fields()}
     renamed: dict[str, str] = getattr(wf.options, "__renamed_fields__", {})
     return {old: fields[new] for old, new in renamed.items()}

@@ -168,8 +168,8 @@ def read(path: Path, opts: Any, *, alpha: str | None = None) -> Any:
 def write(run: Run, path: Path, image: Any, opts: Any, *, like: Any = None) -> int:
     """Write ``image`` (floats in [0, 1] or integers) to the output ``path``; return the clip count.
 
-    The options' bit depth and out-of-range policy (an :class:`ImageOut`) apply; the count is how many
-    values lay outside [0, 1] in an integer output (each clipped, noted once).
+    The options' bit depth and out-of-range policy (an :class:`ImageOut`) apply; the count is how
+    many values lay outside [0, 1] in an integer output (each clipped, noted once).
 
     ``like`` is the input array whose depth the output keeps (uint16 in, 16-bit PNG out).
     TIFF output is float32 unless ``--bit-depth`` asks for integers; ``.npy`` keeps the dtype.
