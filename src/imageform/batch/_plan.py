@@ -202,11 +202,11 @@ def batch_options(command: str | Workflow, options: Options | Mapping[str, Any] 
         name = by_flag.get(_key(k)) if isinstance(k, str) else None
         if name is None:
             valid = ", ".join(sorted(flag_of(f) for f in wf.options.fields()))
-            if len(valid) > 90:
-                valid = valid[:90].rsplit(", ", 1)[0] + f", ... (imageform {wf.name} --help)"
-            raise UnknownOptionError(
-                f"unknown option {describe(k)} of batch {wf.name}; valid: {valid}"
-            )
+            head = f"unknown option {describe(k)} of batch {wf.name}; valid: "
+            more = f", ... (imageform {wf.name} --help)"
+            if len(head) + len(valid) > 200:  # one line of at most 200 characters
+                valid = valid[: 200 - len(head) - len(more)].rsplit(", ", 1)[0] + more
+            raise UnknownOptionError(head + valid)
         values[name] = v
     opts = wf.make_options(**values)
     _no_extra_outputs(wf, opts)
