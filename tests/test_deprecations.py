@@ -61,6 +61,24 @@ def _workflows_analysis() -> Any:
     return wf
 
 
+def _workflows_color() -> Any:
+    from imageform.workflows import color as wf
+
+    return wf
+
+
+def _get_workflow(name: str) -> Any:
+    from imageform.workflows import get_workflow
+
+    return get_workflow(name)
+
+
+def _batch_options(command: str, options: dict[str, Any]) -> Any:
+    from imageform.batch import batch_options
+
+    return batch_options(command, options)
+
+
 def _segments() -> geometry.LineSegments:
     """Segments towards two vanishing points, (600, 240) and (-200, 260), plus noise lines."""
     rng = np.random.default_rng(5)
@@ -666,6 +684,25 @@ CASES: list[tuple[str, Callable[[], Any], Callable[[], Any], str]] = [
         lambda: _development().to_integer(bit_depth=8),
         "use bit_depth= instead",
     ),
+    # workflows: an options field renamed with its flag (issue 30: --bits is --bit-depth)
+    (
+        "ConvertOptions(bits=) and .bits",
+        lambda: _workflows_color().ConvertOptions(bits=16).bits,
+        lambda: _workflows_color().ConvertOptions(bit_depth=16).bit_depth,
+        "use bit_depth= instead",
+    ),
+    (
+        "Workflow.make_options(bits=)",
+        lambda: _get_workflow("demosaic").make_options(bits=8).bit_depth,
+        lambda: _get_workflow("demosaic").make_options(bit_depth=8).bit_depth,
+        "use bit_depth= instead",
+    ),
+    (
+        "batch_options {'--bits': 16}",
+        lambda: _batch_options("develop", {"--bits": 16}).bit_depth,
+        lambda: _batch_options("develop", {"--bit-depth": 16}).bit_depth,
+        "use --bit-depth (bit_depth)",
+    ),
     (
         "simulate.apply_color_correction (image @ M)",
         lambda: simulate.apply_color_correction(
@@ -771,3 +808,56 @@ def test_rng_generator_accepted_where_seed_was() -> None:
     a = analysis.synthetic_stain_image((8, 8), rng=g1).image
     np.testing.assert_array_equal(a, analysis.synthetic_stain_image((8, 8), rng=g2).image)
     assert not np.array_equal(a, analysis.synthetic_stain_image((8, 8), rng=g1).image)
+
+
+# -- renamed file keys (issue 30): still read, one warning naming the new key -------------------
+def test_scene_key_centre_m_is_read_with_one_warning(tmp_path: Any) -> None:
+    from imageform.errors import ImageformWarning, UnknownOptionError
+
+    new = {"objects": [{"type": "plane", "center_m": [0.0, 0.0, 0.1]}] * 2}
+    old = {"objects": [{"type": "plane", "centre_m": [0.0, 0.0, 0.1]}] * 2}
+    with pytest.warns(ImageformWarning) as record:
+        got = simulate.load_scene(old)
+    messages = [str(w.message) for w in record]
+    assert len(messages) == 1, messages
+    assert "objects[0].centre_m" in messages[0] and "write center_m (2 objects" in messages[0]
+    assert f"removed in imageform {_deprecate.REMOVED_IN}" in messages[0]
+    assert got.config == simulate.load_scene(new).config
+    toml = tmp_path / "old.toml"
+    toml.write_text('[[objects]]\ntype = "plane"\ncentre_m = [0.0, 0.0, 0.1]\n')
+    with pytest.warns(ImageformWarning, match=r"old\.toml, line 3\) is deprecated"):
+        simulate.load_scene(toml)
+    both = {"objects": [{"type": "plane", "centre_m": [0.0] * 3, "center_m": [0.0] * 3}]}
+    with pytest.raises(InvalidInputError, match="give center_m or its deprecated spelling"):
+        simulate.load_scene(both)
+    with pytest.raises(UnknownOptionError, match="unknown key"):  # only objects took centre_m
+        simulate.load_scene({"render": {"centre_m": [0.0] * 3}})
+
+
+def test_object_config_centre_m() -> None:
+    from imageform.simulate.config import PlaneConfig
+
+    kw = {"type": "plane", "name": "p", "normal": (0.0, -1.0, 0.0), "up": None}
+    kw |= {"size_m": (1.0, 1.0), "reflectance": 0.5}
+    want = PlaneConfig(center_m=(0.0, 0.0, 1.0), **kw)
+    with pytest.warns(DeprecationWarning, match="use center_m= instead"):
+        got = PlaneConfig(centre_m=(0.0, 0.0, 1.0), **kw)
+    assert got == want
+    with pytest.warns(DeprecationWarning, match=r"use \.center_m instead"):
+        assert got.centre_m == (0.0, 0.0, 1.0)
+
+
+def test_lab_key_patch_centres_px_is_read_with_one_warning(tmp_path: Any) -> None:
+    from imageform.errors import ImageformWarning
+    from imageform.workflows._characterize_inputs import LAB_MANIFEST, _manifest
+
+    head = 'format = "imageform-lab"\n[colorchecker]\n'
+    (tmp_path / LAB_MANIFEST).write_text(head + "patch_centres_px = [[1.0, 2.0]]\n")
+    with pytest.warns(ImageformWarning, match="patch_centres_px is deprecated.*patch_centers_px"):
+        doc = _manifest(tmp_path)
+    assert doc["colorchecker"] == {"patch_centers_px": [[1.0, 2.0]]}
+    (tmp_path / LAB_MANIFEST).write_text(
+        head + "patch_centres_px = [[1.0, 2.0]]\npatch_centers_px = [[1.0, 2.0]]\n"
+    )
+    with pytest.raises(InvalidInputError, match="not both"):
+        _manifest(tmp_path)

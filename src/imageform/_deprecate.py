@@ -188,6 +188,7 @@ def renamed_fields(renames: Mapping[str, str]) -> Callable[[T], T]:
 
     Each old name becomes a read-only property of the new field (:func:`renamed_property`)
     and a keyword the constructor still takes (:func:`parameters`), both with a warning.
+    The class's ``__renamed_fields__`` maps the old names to the new ones (with its bases').
 
     Examples
     --------
@@ -209,6 +210,10 @@ def renamed_fields(renames: Mapping[str, str]) -> Callable[[T], T]:
         owner = _public_name(cast(Callable[..., Any], cls))
         for old, new in renames.items():
             setattr(cls, old, renamed_property(new, f"{owner}.{old}"))
+        # old -> new, read by whoever accepts the old names elsewhere (the command line's
+        # hidden flags of an options dataclass, imageform batch's option mappings)
+        merged = {**getattr(cls, "__renamed_fields__", {}), **renames}
+        cls.__renamed_fields__ = merged  # type: ignore[attr-defined]
         # a NamedTuple's constructor is __new__, a dataclass's __init__
         ctor = "__new__" if issubclass(cls, tuple) else "__init__"
         shim = parameters(renamed=renames, name=owner)

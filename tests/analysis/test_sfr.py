@@ -361,7 +361,7 @@ def _slanted_square(S: int, N: float = 8.0) -> np.ndarray:
                 {
                     "type": "plane",
                     "name": "dark square",
-                    "centre_m": [0.0, 0.0, 0.0],
+                    "center_m": [0.0, 0.0, 0.0],
                     "normal": [0.0, -1.0, 0.0],
                     "up": [math.sin(a), 0.0, math.cos(a)],
                     "size_m": [0.024, 0.024],

@@ -43,7 +43,8 @@ def test_convert_to_lab_tiff_and_back(
 def test_16bit_png_and_ycbcr_params(rgb_png: Path, tmp_path: Path) -> None:
     out = tmp_path / "p3.png"
     assert (
-        main(["convert", str(rgb_png), "-o", str(out), "--to", "display_p3", "--bits", "16"]) == 0
+        main(["convert", str(rgb_png), "-o", str(out), "--to", "display_p3", "--bit-depth", "16"])
+        == 0
     )
     assert read_image(out).dtype == np.uint16
     ycc = tmp_path / "ycc.npy"
@@ -63,6 +64,24 @@ def test_16bit_png_and_ycbcr_params(rgb_png: Path, tmp_path: Path) -> None:
     ]
     assert main(args) == 0
     assert read_image(ycc)[..., 0].min() >= 64 and read_image(ycc)[..., 0].max() <= 940
+
+
+def test_the_old_bits_flag_still_works_with_a_note(
+    rgb_png: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``--bits`` is the deprecated spelling of ``--bit-depth`` (issue 30): hidden, one note."""
+    out = tmp_path / "p3.png"
+    assert (
+        main(["convert", str(rgb_png), "-o", str(out), "--to", "display_p3", "--bits", "16"]) == 0
+    )
+    assert read_image(out).dtype == np.uint16
+    err = capsys.readouterr().err
+    assert err.count("--bits is deprecated") == 1 and "use --bit-depth" in err
+    assert main(["convert", "--help"]) == 0
+    assert "--bits" not in capsys.readouterr().out
+    both = ["convert", str(rgb_png), "-o", str(out), "--bits", "16", "--bit-depth", "8"]
+    assert main([*both, "--force"]) == 2
+    assert "--bit-depth or the deprecated --bits, not both" in capsys.readouterr().err
 
 
 def test_errors(rgb_png: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:

@@ -189,3 +189,21 @@ def test_no_command_is_bridged() -> None:
         for sub in subs:
             assert sub is not None
             assert not any(getattr(p, "type", None) is click.UNPROCESSED for p in sub.params)
+
+
+@pytest.mark.parametrize(
+    "name", [n for n, w in WORKFLOWS.items() if "bit_depth" in {f.name for f in w.options.fields()}]
+)
+def test_the_old_bits_flag_stays_hidden_beside_bit_depth(name: str) -> None:
+    """Issue 30: ``--bit-depth`` is the flag; ``--bits`` (its old spelling) is still taken,
+    hidden, on the command and in ``imageform batch``, and ``bits=`` by the options class."""
+    wf = WORKFLOWS[name]
+    assert getattr(wf.options, "__renamed_fields__", {}).get("bits") == "bit_depth"
+    cmd = build_command(wf)
+    old = [p for p in cmd.params if isinstance(p, click.Option) and "--bits" in p.opts]
+    assert len(old) == 1 and old[0].hidden and "--bit-depth" in _flags(cmd)
+    required = {
+        f.name: EXAMPLES[f.name] for f in wf.options.fields() if f.default is dataclasses.MISSING
+    }
+    with pytest.warns(DeprecationWarning, match="use bit_depth="):
+        assert wf.options(**required, bits=16).bit_depth == 16

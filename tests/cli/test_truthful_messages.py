@@ -192,7 +192,7 @@ def test_fifo_or_folder_as_input_says_what_it_is(
     assert main(["simulate", "--scene", str(odd), "-o", str(tmp_path / "sim")]) == 1
     assert f"--scene {odd} {said}" in _line(capsys)
     scene = tmp_path / "scene.toml"
-    scene.write_text(f'[[objects]]\ntype = "image"\ncentre_m = [0, 0, 0]\npath = "{odd.name}"\n')
+    scene.write_text(f'[[objects]]\ntype = "image"\ncenter_m = [0, 0, 0]\npath = "{odd.name}"\n')
     assert main(["simulate", "--scene", str(scene), "-o", str(tmp_path / "sim")]) == 1
     line = _line(capsys)
     assert f"'{odd.name}' {said}" in line and "not found" not in line

@@ -119,7 +119,7 @@ GUESS: dict[str, list[str]] = {
     "up": ["(0.0, -1.0, 0.0)"],
     "eye": ["(0.0, 0.0, -5.0)"],
     "normal": ["(0.0, 0.0, -1.0)"],
-    "centre_m": ["(0.0, 0.0, 0.0)"],
+    "center_m": ["(0.0, 0.0, 0.0)"],
     "magnification": ["0.1"],
     "gains": ["np.array([1.0, 1.1, 0.9])"],
     "matrix": ["np.eye(3)"],

@@ -226,7 +226,7 @@ def test_develop_writes_16_bit_png(
         out = tmp_path / f"{name}.png"
         assert main(["develop", str(path), "-o", str(out)]) == 0
         assert imagecodecs.imread(out).dtype == np.uint16, name
-    assert main(["develop", str(base[0]), "-o", str(tmp_path / "8.png"), "--bits", "8"]) == 0
+    assert main(["develop", str(base[0]), "-o", str(tmp_path / "8.png"), "--bit-depth", "8"]) == 0
     assert imagecodecs.imread(tmp_path / "8.png").dtype == np.uint8
 
 

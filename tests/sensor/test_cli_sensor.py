@@ -55,7 +55,7 @@ def test_demosaic_json_and_16_bit(tmp_path: Path, capsys: pytest.CaptureFixture[
             str(out),
             "--method",
             "malvar",
-            "--bits",
+            "--bit-depth",
             "16",
             "--json",
         ]

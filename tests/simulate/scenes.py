@@ -47,7 +47,7 @@ def calibration_view(
         "objects": [
             {
                 "type": "checkerboard",
-                "centre_m": [0.0, 0.0, 0.0],
+                "center_m": [0.0, 0.0, 0.0],
                 "normal": [0.0, -1.0, 0.0],
                 "squares": [10, 7],
                 "square_size_m": 0.02,
@@ -89,7 +89,7 @@ def rails_scene(width: int = 640, height: int = 360) -> dict[str, Any]:
         "objects": [
             {
                 "type": "ground",
-                "centre_m": [0.0, 2.9, 0.0],
+                "center_m": [0.0, 2.9, 0.0],
                 "size_m": [0.3, 6.0],
                 "rail_count": 2,
                 "rail_width_m": 0.002,
@@ -109,5 +109,5 @@ def colorchecker_scene(width: int = 480, height: int = 320) -> dict[str, Any]:
         "camera": {"fx_px": 520.0, "eye_m": [0.0, -0.15, 0.0], "target_m": [0.0, 0.0, 0.0]},
         "lens": {"f_number": 4.0, "focus_distance_m": 0.15},
         "processing": {"white_balance": "gray_world", "color_correction": "colorchecker"},
-        "objects": [{"type": "colorchecker", "centre_m": [0.0, 0.0, 0.0], "width_m": 0.12}],
+        "objects": [{"type": "colorchecker", "center_m": [0.0, 0.0, 0.0], "width_m": 0.12}],
     }

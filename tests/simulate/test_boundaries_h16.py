@@ -164,7 +164,7 @@ def test_black_scene_names_exposure_key() -> None:
 def test_huge_chart_renders_without_index_error() -> None:
     # a chart 900 km wide fills the view: the run is finite (no IndexError)
     scene = load_scene(
-        BASE + NO_CHART + '[[objects]]\ntype = "colorchecker"\ncentre_m = [0, 0, 2]\n'
+        BASE + NO_CHART + '[[objects]]\ntype = "colorchecker"\ncenter_m = [0, 0, 2]\n'
         "normal = [0, -1, 0]\nwidth_m = 9e5\n"
     )
     res = simulate(scene, rng=0)
@@ -173,7 +173,7 @@ def test_huge_chart_renders_without_index_error() -> None:
 
 def test_huge_chart_fitted_names_the_key() -> None:
     scene = load_scene(
-        BASE + '[[objects]]\ntype = "colorchecker"\ncentre_m = [0, 0, 2]\nnormal = [0, 0, -1]\n'
+        BASE + '[[objects]]\ntype = "colorchecker"\ncenter_m = [0, 0, 2]\nnormal = [0, 0, -1]\n'
         "width_m = 9e5\n"
     )
     with pytest.raises((InvalidInputError, DegenerateConfigurationError)) as info:
@@ -195,7 +195,7 @@ def test_result_holds_paths_relative_to_the_scene(tmp_path: Path) -> None:
         BASE
         + NO_CHART
         + '[illuminant]\ntype = "file"\nfile = "spd.csv"\n'
-        + '[[objects]]\ntype = "image"\npath = "tex/t.png"\ncentre_m = [0, 0, 0]\nwidth_m = 0.05\n'
+        + '[[objects]]\ntype = "image"\npath = "tex/t.png"\ncenter_m = [0, 0, 0]\nwidth_m = 0.05\n'
     )
     res = simulate(load_scene(scene_file), rng=0)
     assert res.config["objects"][0]["path"] == "tex/t.png"
@@ -299,7 +299,7 @@ def test_delta_e_patches_missing_rows_only_whole() -> None:
     ("extra", "names"),
     [
         ("[sensor]\nfoo = 1\n", ("sensor.foo", "line 6", "more")),
-        ('[[objects]]\ntype = "ground"\ncentre_m = [0, 0, 0]\nfoo = 1\n', ("objects[0].foo",)),
+        ('[[objects]]\ntype = "ground"\ncenter_m = [0, 0, 0]\nfoo = 1\n', ("objects[0].foo",)),
         ('[illuminant]\nname = "' + "x" * 100_000 + '"\n', ("illuminant.name", "line 6")),
         ("[camera]\nt_m = [0, 0, " + "9" * 5000 + "]\n", ("TOML",)),
         ('[processing]\noutput_space = "' + "x" * 100_000 + '"\n', ("processing.output_space",)),
@@ -316,7 +316,7 @@ def test_rail_count_bounded() -> None:
     # 10**18 rails: one pass over the ground's rays each, would render for ever
     text = (
         BASE
-        + '[[objects]]\ntype = "ground"\ncentre_m = [0, 0, 0]\nrail_count = 1000000000000000000\n'
+        + '[[objects]]\ntype = "ground"\ncenter_m = [0, 0, 0]\nrail_count = 1000000000000000000\n'
     )
     with pytest.raises(InvalidInputError) as info:
         load_scene(text)

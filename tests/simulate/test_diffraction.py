@@ -28,9 +28,9 @@ def _scene(**lens: Any) -> dict[str, Any]:
         "sensor": {"noise": False, "exposure_time_s": 0.002},
         "processing": {"white_balance": "none", "color_correction": "none", "demosaic": "bilinear"},
         "objects": [
-            {"type": "plane", "centre_m": [0.0, 0.0, 0.0], "size_m": [20.0, 20.0],
+            {"type": "plane", "center_m": [0.0, 0.0, 0.0], "size_m": [20.0, 20.0],
              "reflectance": 0.2},
-            {"type": "plane", "centre_m": [0.0, -0.001, 0.0], "size_m": [0.005, 0.005],
+            {"type": "plane", "center_m": [0.0, -0.001, 0.0], "size_m": [0.005, 0.005],
              "reflectance": 0.9},
         ],
     }  # fmt: skip

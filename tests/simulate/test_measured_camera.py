@@ -43,7 +43,7 @@ def _flat_scene(noise: bool = True):  # type: ignore[no-untyped-def]
             "objects": [
                 {
                     "type": "plane",
-                    "centre_m": [0.0, 0.0, 0.0],
+                    "center_m": [0.0, 0.0, 0.0],
                     "normal": [0.0, -1.0, 0.0],
                     "size_m": [2.0, 2.0],
                     "reflectance": 0.5,

@@ -214,7 +214,7 @@ def test_measure_false_renders_the_same_stages_without_measuring() -> None:
 
 
 def test_colorchecker_options_need_a_chart() -> None:
-    scene = load_scene({"objects": [{"type": "plane", "centre_m": [0, 0, 0]}]})
+    scene = load_scene({"objects": [{"type": "plane", "center_m": [0, 0, 0]}]})
     with pytest.raises(InvalidInputError, match="needs a colorchecker object"):
         simulate(scene)
     with pytest.raises(InvalidInputError, match="expected a Scene"):

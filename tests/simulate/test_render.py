@@ -23,7 +23,7 @@ def _plane_scene(**changes: Any) -> dict[str, Any]:
         "objects": [
             {
                 "type": "plane",
-                "centre_m": [0.0, 0.0, 0.0],
+                "center_m": [0.0, 0.0, 0.0],
                 "size_m": [20.0, 20.0],
                 "reflectance": 0.5,
             }
@@ -60,7 +60,7 @@ def test_raycast_kernel_matches_its_numpy_twin() -> None:
 def test_camera_obscura_inverts_the_image() -> None:
     d = _plane_scene(
         render={"supersampling": 2},
-        objects=[{"type": "colorchecker", "centre_m": [0.0, 0.0, 0.0], "width_m": 1.5}],
+        objects=[{"type": "colorchecker", "center_m": [0.0, 0.0, 0.0], "width_m": 1.5}],
     )
     virtual = render_scene(load_scene(d)).rate
     d["camera"]["image_plane"] = "real"
@@ -103,7 +103,7 @@ def test_doubling_exposure_doubles_the_raw_signal(noise: bool) -> None:
 
 def test_rendered_patches_match_spectral_integration() -> None:
     d = _plane_scene(
-        objects=[{"type": "colorchecker", "centre_m": [0.0, 0.0, 0.0], "width_m": 1.5}],
+        objects=[{"type": "colorchecker", "center_m": [0.0, 0.0, 0.0], "width_m": 1.5}],
         lens={"vignetting": "none"},
         illuminant={"type": "cie", "name": "A"},
     )
@@ -128,7 +128,7 @@ def test_distortion_bends_straight_lines_barrel() -> None:
         objects=[
             {
                 "type": "checkerboard",
-                "centre_m": [0.0, 0.0, 0.0],
+                "center_m": [0.0, 0.0, 0.0],
                 "squares": [8, 6],
                 "square_size_m": 0.25,
             }
@@ -149,7 +149,7 @@ def test_defocus_blurs_only_out_of_focus_depths() -> None:
     board = [
         {
             "type": "checkerboard",
-            "centre_m": [0.0, 0.0, 0.0],
+            "center_m": [0.0, 0.0, 0.0],
             "squares": [8, 6],
             "square_size_m": 0.2,
         }
@@ -171,7 +171,7 @@ def test_defocus_blurs_only_out_of_focus_depths() -> None:
 
 
 def test_lateral_chromatic_aberration_magnifies_red() -> None:
-    board = [{"type": "plane", "centre_m": [0.0, 0.0, 0.0], "size_m": [1.0, 1.0]}]
+    board = [{"type": "plane", "center_m": [0.0, 0.0, 0.0], "size_m": [1.0, 1.0]}]
     d = _plane_scene(
         objects=board,
         lens={"vignetting": "none", "defocus": False, "lateral_ca": [1.05, 1.0, 0.95]},

@@ -29,11 +29,11 @@ focal_length_mm = 1.0
 
 [[objects]]
 type = "plane"
-centre_m = [0.0, 0.0, 0.0]
+center_m = [0.0, 0.0, 0.0]
 
 [[objects]]
 type = "checkerboard"
-centre_m = [0.0, 0.0, 0.0]
+center_m = [0.0, 0.0, 0.0]
 squares = [6, 4]
 """
 
@@ -112,7 +112,7 @@ def test_bad_choices_list_the_valid_ones() -> None:
         load_scene({"processing": {"demosaic": "magic"}})
     with pytest.raises(UnknownOptionError, match=r"unknown ColorChecker patch 'reddish'"):
         load_scene(
-            {"objects": [{"type": "plane", "centre_m": [0, 0, 0], "reflectance": "reddish"}]}
+            {"objects": [{"type": "plane", "center_m": [0, 0, 0], "reflectance": "reddish"}]}
         )
 
 
@@ -123,13 +123,13 @@ def test_missing_files_and_keys(tmp_path: Path) -> None:
         load_scene(
             {
                 "objects": [
-                    {"type": "image", "centre_m": [0, 0, 0], "path": str(tmp_path / "missing.png")}
+                    {"type": "image", "center_m": [0, 0, 0], "path": str(tmp_path / "missing.png")}
                 ]
             }
         )
     with pytest.raises(InvalidInputError, match=r"file not found: .*spd\.csv"):
         load_scene({"illuminant": {"type": "file", "file": str(tmp_path / "spd.csv")}})
-    with pytest.raises(InvalidInputError, match=r"objects\[0\].*missing key 'centre_m'"):
+    with pytest.raises(InvalidInputError, match=r"objects\[0\].*missing key 'center_m'"):
         load_scene({"objects": [{"type": "plane"}]})
     with pytest.raises(InvalidInputError, match="needs the key 'file'"):
         load_scene({"illuminant": {"type": "file"}})
@@ -236,7 +236,7 @@ def test_the_memory_estimate_counts_textures(
     write_image(tmp_path / "tex.png", np.zeros((1000, 1000, 3), np.uint8))
     scene = {
         "render": {"width": 64, "height": 48},
-        "objects": [{"type": "image", "centre_m": [0, 0, 0], "path": str(tmp_path / "tex.png")}],
+        "objects": [{"type": "image", "center_m": [0, 0, 0], "path": str(tmp_path / "tex.png")}],
     }
     monkeypatch.setenv("IMAGEFORM_MAX_MEMORY", "64MiB")  # the render alone: 1.4 MB
     with pytest.raises(InvalidInputError) as err:

@@ -26,7 +26,7 @@ def test_not_utf8_names_the_file(tmp_path: Path) -> None:
         ("[lens]\nf_number = 1e308\n", r"lens\.f_number \(scene string, line 6\).*<= 1000"),
         ("[camera]\nfx_px = -500.0\n", r"camera\.fx_px \(scene string, line 6\).*> 0"),
         (
-            '[[objects]]\ntype = "colorchecker"\ncentre_m = [0, 0, 2]\nnormal = [0, 0, -1]\n'
+            '[[objects]]\ntype = "colorchecker"\ncenter_m = [0, 0, 2]\nnormal = [0, 0, -1]\n'
             "width_m = 1e300\n",
             r"objects\[0\]\.width_m \(scene string, line 9\).*within",
         ),

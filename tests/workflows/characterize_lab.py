@@ -79,7 +79,7 @@ def _scene(name: str, camera: dict, objects: list, S: int, light: str = "D65") -
 def checkerboard_scene(eye: Any, up: Any, target: Any, S: int = 2) -> dict:
     board = {
         "type": "checkerboard",
-        "centre_m": [0.0, 0.0, 0.0],
+        "center_m": [0.0, 0.0, 0.0],
         "normal": [0.0, -1.0, 0.0],
         "squares": [10, 7],
         "square_size_m": 0.02,
@@ -93,7 +93,7 @@ def edge_scene() -> dict:
     square = {
         "type": "plane",
         "name": "dark square",
-        "centre_m": [0.0, 0.0, 0.0],
+        "center_m": [0.0, 0.0, 0.0],
         "normal": [0.0, -1.0, 0.0],
         "up": [math.sin(a), 0.0, math.cos(a)],
         "size_m": [0.08, 0.08],
@@ -105,7 +105,7 @@ def edge_scene() -> dict:
 
 
 def chart_scene(S: int = 2) -> dict:
-    chart = {"type": "colorchecker", "centre_m": [0.0, 0.0, 0.0], "width_m": 0.20}
+    chart = {"type": "colorchecker", "center_m": [0.0, 0.0, 0.0], "width_m": 0.20}
     return _scene("colorchecker", _camera((0.0, -0.3, 0.0), (0.0, 0.0, 0.0)), [chart], S)
 
 

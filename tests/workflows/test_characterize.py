@@ -299,7 +299,7 @@ def _chart_scene(size: tuple[int, int], eye: list[float]) -> Any:
             "illuminant": {"type": "cie", "name": "D65", "illuminance_lux": 1000.0},
             "camera": {"fx_px": 500.0, "eye_m": eye, "target_m": [0.0, 0.0, 0.0]},
             "lens": {"defocus": False, "vignetting": "none", "f_number": 4.0},
-            "objects": [{"type": "colorchecker", "centre_m": [0.0, 0.0, 0.0], "width_m": 0.12}],
+            "objects": [{"type": "colorchecker", "center_m": [0.0, 0.0, 0.0], "width_m": 0.12}],
         }
     )
 

@@ -65,7 +65,7 @@ def test_layout_and_manifest(lab: LabSet) -> None:
     truth = doc["truth"]
     assert truth["fx"] == FX and truth["read_noise_e"] == 2.5
     assert truth["system_gain_dn_per_e"] == pytest.approx(0.4, rel=1e-12)
-    assert len(doc["colorchecker"]["patch_centres_px"]) == 24
+    assert len(doc["colorchecker"]["patch_centers_px"]) == 24
     cf = read_camera(lab.camera)
     assert cf.sensor is not None and cf.sensor.read_noise_e == 2.5
     assert cf.optics is not None and cf.optics.mtf50_cy_per_px == MTF50

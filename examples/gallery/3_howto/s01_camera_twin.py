@@ -126,7 +126,7 @@ scene = load_scene(
         "illuminant": {"type": "cie", "name": "D65", "illuminance_lux": 1000.0},
         "camera": {"eye_m": [0.0, -0.2, 0.0], "target_m": [0.0, 0.0, 0.0]},
         "lens": {"defocus": False, "vignetting": "none"},
-        "objects": [{"type": "colorchecker", "centre_m": [0.0, 0.0, 0.0], "width_m": 0.12}],
+        "objects": [{"type": "colorchecker", "center_m": [0.0, 0.0, 0.0], "width_m": 0.12}],
     }
 )
 from imageform.color import delta_e_ciede2000

@@ -41,7 +41,7 @@ scene = load_scene(
         "processing": {"demosaic": "malvar", "white_balance": "gray_world",
                        "color_correction": "none", "lens_shading_correction": False},
         "objects": [
-            {"type": "checkerboard", "centre_m": [0.0, 0.0, 0.0], "squares": [10, 7],
+            {"type": "checkerboard", "center_m": [0.0, 0.0, 0.0], "squares": [10, 7],
              "square_size_m": 0.02},
         ],
     }

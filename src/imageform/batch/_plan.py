@@ -12,6 +12,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from imageform import _deprecate
 from imageform._files import glob_base, glob_paths, glob_regex
 from imageform.errors import ImageformError, InvalidInputError, UnknownOptionError
 from imageform.workflows import Options, Workflow, flag_of, get_workflow
@@ -186,16 +187,26 @@ def batch_options(command: str | Workflow, options: Options | Mapping[str, Any] 
         )
     by_flag = {_key(flag_of(f)): f.name for f in wf.options.fields()}
     by_flag.update({f.name: f.name for f in wf.options.fields()})
+    renamed: dict[str, str] = getattr(wf.options, "__renamed_fields__", {})
     values: dict[str, Any] = {}
     for k, v in dict(options or {}).items():
+        if isinstance(k, str) and _key(k) in renamed and _key(k) not in by_flag:
+            new = renamed[_key(k)]  # an old name (issue 30), kept one release
+            flag = next(flag_of(f) for f in wf.options.fields() if f.name == new)
+            if any(by_flag.get(_key(o)) == new for o in options or {} if isinstance(o, str)):
+                raise InvalidInputError(
+                    f"batch {wf.name}: give {flag} ({new}) or the deprecated {k!r}, not both"
+                )
+            _deprecate.warn(f"batch {wf.name} option {k!r}", f"use {flag} ({new})")
+            k = new
         name = by_flag.get(_key(k)) if isinstance(k, str) else None
         if name is None:
             valid = ", ".join(sorted(flag_of(f) for f in wf.options.fields()))
-            if len(valid) > 90:
-                valid = valid[:90].rsplit(", ", 1)[0] + f", ... (imageform {wf.name} --help)"
-            raise UnknownOptionError(
-                f"unknown option {describe(k)} of batch {wf.name}; valid: {valid}"
-            )
+            head = f"unknown option {describe(k)} of batch {wf.name}; valid: "
+            more = f", ... (imageform {wf.name} --help)"
+            if len(head) + len(valid) > 200:  # one line of at most 200 characters
+                valid = valid[: 200 - len(head) - len(more)].rsplit(", ", 1)[0] + more
+            raise UnknownOptionError(head + valid)
         values[name] = v
     opts = wf.make_options(**values)
     _no_extra_outputs(wf, opts)

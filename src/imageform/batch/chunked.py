@@ -130,7 +130,7 @@ def _options(cmd: str, options: Any) -> dict[str, Any]:
         value = getattr(opts, f.name)
         if f.name in honoured:
             out[honoured[f.name]] = value
-        elif f.name in ("alpha", "max_pixels", "bits", "out_of_range", "clip"):
+        elif f.name in ("alpha", "max_pixels", "bit_depth", "out_of_range", "clip"):
             continue  # reading and writing are chunked's own (--dtype)
         elif value != f.default:
             from imageform.workflows import flag_of

@@ -16,7 +16,7 @@ from typing import Any
 import click
 
 from imageform._files import refuse_special, refuse_special_inside
-from imageform.cli._build import CommandExit, _naming_files, option_params
+from imageform.cli._build import CommandExit, _naming_files, option_params, take_old_flags
 from imageform.errors import ImageformError
 from imageform.workflows import Workflow
 
@@ -37,7 +37,7 @@ def _extra_outputs(wf: Workflow) -> set[str]:
 
 def _options(wf: Workflow, kw: dict[str, Any]) -> Any:
     try:
-        return wf.make_options(**kw)
+        return wf.make_options(**take_old_flags(wf, kw))
     except ImageformError as exc:
         raise click.UsageError(str(exc)) from None
 
@@ -148,7 +148,11 @@ def _chunked_command(wf: Workflow) -> click.Command:
             required=True,
             help="Output: a tiled .tif or a .zarr array.",
         ),
-        *[p for p in option_params(wf) if p.name not in ("bits", "out_of_range", "clip", "device")],
+        *[
+            p
+            for p in option_params(wf)
+            if p.name not in ("bit_depth", "bits", "out_of_range", "clip", "device")
+        ],
         click.Option(
             ["--chunk"],
             type=click.INT,

@@ -31,6 +31,7 @@ __all__ = [
     "emit",
     "expand_inputs",
     "option_params",
+    "take_old_flags",
 ]
 
 #: Exit codes of every command.
@@ -126,7 +127,62 @@ def option_params(wf: Workflow) -> list[click.Parameter]:
                 **kw,
             )
         )
+    params += _old_flags(wf)
     return params
+
+
+def _renamed(wf: Workflow) -> dict[str, dataclasses.Field[Any]]:
+    """Return the old names of a workflow's options fields (kept one release): old -> field."""
+    fields = {f.name: f for f in wf.options.fields()}
+    renamed: dict[str, str] = getattr(wf.options, "__renamed_fields__", {})
+    return {old: fields[new] for old, new in renamed.items()}
+
+
+def _old_flags(wf: Workflow) -> list[click.Parameter]:
+    """Hidden options under the old flags of renamed fields (``--bits``: ``--bit-depth``).
+
+    :func:`take_old_flags` turns their values into the new fields', with a note.
+    """
+    params: list[click.Parameter] = []
+    hints = wf.options.types()
+    for old, f in _renamed(wf).items():
+        tp, _ = _unwrap(hints[f.name])
+        if tp is bool or typing.get_origin(tp) is tuple:  # pragma: no cover - none yet
+            raise TypeError(f"{old}: only a scalar option keeps its old flag")
+        params.append(
+            click.Option(
+                ["--" + old.replace("_", "-"), old],
+                type=_click_type(tp),
+                default=None,
+                hidden=True,
+                help=f"Deprecated: {flag_of(f)}.",
+            )
+        )
+    return params
+
+
+def take_old_flags(wf: Workflow, kw: dict[str, Any]) -> dict[str, Any]:
+    """Give the values of old flags (:func:`_old_flags`) to their new fields, with a note each.
+
+    ``kw`` are the command's values by parameter name; an old flag and its new one together
+    are a usage error.
+    """
+    from imageform._deprecate import REMOVED_IN
+
+    for old, f in _renamed(wf).items():
+        value = kw.pop(old, None)
+        if value is None:
+            continue
+        old_flag, new_flag = "--" + old.replace("_", "-"), flag_of(f)
+        if kw.get(f.name) not in (None, f.default):
+            raise click.UsageError(f"give {new_flag} or the deprecated {old_flag}, not both")
+        click.echo(
+            f"imageform: note: {old_flag} is deprecated and will be removed in imageform "
+            f"{REMOVED_IN}; use {new_flag}",
+            err=True,
+        )
+        kw[f.name] = value
+    return kw
 
 
 # ---------------------------------------------------------------- running
@@ -307,7 +363,7 @@ def build_command(wf: Workflow) -> click.Command:
             value = kw.pop(inp.name)
             inputs[inp.name] = expand_inputs(value) if inp.many else value
         try:
-            opts = wf.make_options(**kw)
+            opts = wf.make_options(**take_old_flags(wf, kw))
         except ImageformError as exc:
             raise click.UsageError(str(exc)) from None
         from imageform.workflows import execute

@@ -179,7 +179,7 @@ def render_checkerboards(
     scale = (fx * board_w / (0.62 * w)) / 0.3  # distance for 0.3 m in the test views
     board_obj = {
         "type": "checkerboard",
-        "centre_m": [0.0, 0.0, 0.0],
+        "center_m": [0.0, 0.0, 0.0],
         "normal": [0.0, -1.0, 0.0],
         "squares": [opt.cols + 1, opt.rows + 1],
         "square_size_m": square,
@@ -219,7 +219,7 @@ def render_colorchecker(out: Path, cf: CameraFile, opt: LabOptions) -> ChartShot
     fx = float(np.asarray(cf.camera.K, dtype=np.float64)[0, 0])
     chart_w = 0.12
     dist = fx * chart_w / (0.7 * w)
-    chart = {"type": "colorchecker", "centre_m": [0.0, 0.0, 0.0], "width_m": chart_w}
+    chart = {"type": "colorchecker", "center_m": [0.0, 0.0, 0.0], "width_m": chart_w}
     automatic = cf.color is None or (cf.color.white_balance is None and cf.color.ccm is None)
     cc_base = _base_scene((w, h), opt.supersampling, [chart]).with_changes(
         camera={"eye_m": [0.01 * dist, -dist, 0.01 * dist], "target_m": [0.0, 0.0, 0.0]}
@@ -259,7 +259,7 @@ def render_edge(out: Path, cf: CameraFile, opt: LabOptions) -> tuple[Path, Any]:
         {
             "type": "plane",
             "name": "ground",
-            "centre_m": [0.0, 0.01 * e_dist, 0.0],
+            "center_m": [0.0, 0.01 * e_dist, 0.0],
             "normal": [0.0, -1.0, 0.0],
             "size_m": [8 * side, 8 * side],
             "reflectance": 0.8,
@@ -267,7 +267,7 @@ def render_edge(out: Path, cf: CameraFile, opt: LabOptions) -> tuple[Path, Any]:
         {
             "type": "plane",
             "name": "dark square",
-            "centre_m": [0.0, 0.0, 0.0],
+            "center_m": [0.0, 0.0, 0.0],
             "normal": [0.0, -1.0, 0.0],
             "up": [math.sin(a), 0.0, math.cos(a)],
             "size_m": [side, side],
@@ -425,7 +425,7 @@ def write_manifest(
         f"processing = {toml_value('automatic' if chart.automatic else 'fixed')}"
         "  # automatic: the camera white-balances and corrects each scene itself",
         f"corners_px = {toml_value([list(map(float, c)) for c in chart.corners_px])}",
-        f"patch_centres_px = {toml_value([list(map(float, c)) for c in chart.centers_px])}",
+        f"patch_centers_px = {toml_value([list(map(float, c)) for c in chart.centers_px])}",
         "",
         "[edge]",
         f"image = {toml_value(edge_path.relative_to(out).as_posix())}",

@@ -26,6 +26,7 @@ from typing import Any
 
 import numpy as np
 
+from imageform import _deprecate
 from imageform._validate import as_real, check_image_size, check_option, finite_result
 from imageform.errors import InvalidInputError
 from imageform.geometry.camera import Camera
@@ -436,32 +437,40 @@ class ProcessingConfig:
         check_section(self, SCENE_SCHEMA["processing"], "processing")
 
 
+#: ``centre_m``, the old name of the objects' ``center_m`` (issue 30), kept one release: the
+#: constructors take it and ``.centre_m`` reads ``center_m`` (a DeprecationWarning); a scene
+#: file's ``centre_m`` key is read by :func:`~imageform.simulate.validation.validate_scene_dict`.
+_center_m = _deprecate.renamed_fields({"centre_m": "center_m"})
+
+
+@_center_m
 @dataclass(frozen=True)
 class ObjectConfig:
-    """The pose every ``[[objects]]`` entry has: ``type``, ``name``, ``centre_m`` and orientation.
+    """The pose every ``[[objects]]`` entry has: ``type``, ``name``, ``center_m`` and orientation.
 
-    ``centre_m`` is in world coordinates, ``normal`` is the front face's normal and ``up`` the world
+    ``center_m`` is in world coordinates, ``normal`` is the front face's normal and ``up`` the world
     direction of its top edge (``None``: z, or y for a horizontal object).
     """
 
     type: str
     name: str
-    centre_m: Vec3
+    center_m: Vec3
     normal: Vec3
     up: Vec3 | None
 
     def __post_init__(self) -> None:
-        """Check each field against the schema's keys of its ``type``; ``centre_m`` is required."""
+        """Check each field against the schema's keys of its ``type``; ``center_m`` is required."""
         schema = SCENE_SCHEMA["objects"]
         if not isinstance(self.type, str) or self.type not in schema:
             raise TypeError(f"expected type as one of {', '.join(schema)}, got {self.type!r:.40}")
         check_section(self, schema[self.type], "objects")
-        if self.centre_m is None:
+        if self.center_m is None:
             raise TypeError(
-                "expected objects.centre_m as 3 numbers (the object's position), got None"
+                "expected objects.center_m as 3 numbers (the object's position), got None"
             )
 
 
+@_center_m
 @dataclass(frozen=True)
 class CheckerboardConfig(ObjectConfig):
     """A checkerboard: ``squares`` (columns, rows) of ``square_size_m``.
@@ -476,6 +485,7 @@ class CheckerboardConfig(ObjectConfig):
     light_reflectance: Reflectance
 
 
+@_center_m
 @dataclass(frozen=True)
 class ColorCheckerConfig(ObjectConfig):
     """A ColorChecker Classic (6 x 4 patches, BabelColor average spectra), ``width_m`` wide.
@@ -488,6 +498,7 @@ class ColorCheckerConfig(ObjectConfig):
     frame_reflectance: Reflectance
 
 
+@_center_m
 @dataclass(frozen=True)
 class GroundConfig(ObjectConfig):
     """A ground of ``size_m`` (across, along) with rails and sleepers.
@@ -507,6 +518,7 @@ class GroundConfig(ObjectConfig):
     sleeper_reflectance: Reflectance
 
 
+@_center_m
 @dataclass(frozen=True)
 class ImageConfig(ObjectConfig):
     """A photograph (``path``, relative to the scene file) ``width_m`` wide."""
@@ -515,6 +527,7 @@ class ImageConfig(ObjectConfig):
     width_m: float
 
 
+@_center_m
 @dataclass(frozen=True)
 class PlaneConfig(ObjectConfig):
     """A uniform rectangle of ``size_m`` (width, height)."""

@@ -351,7 +351,7 @@ def _objects(cfg: SceneConfig, base: Path | None) -> tuple[SceneObject, ...]:
     for o in cfg.objects:
         right, down, _ = _object_frame(o)
         w, h = _object_size(o, base)
-        c = np.asarray(o.centre_m, float)
+        c = np.asarray(o.center_m, float)
         tl = c - right * w / 2 - down * h / 2
         corners = np.stack([tl, tl + right * w, tl + right * w + down * h, tl + down * h])
         out.append(SceneObject(o.type, o.name, corners, o))

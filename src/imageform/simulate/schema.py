@@ -136,7 +136,7 @@ DISTORTION_MODELS: tuple[str, ...] = tuple(DISTORTION_COEFFICIENTS)
 _POSE = {
     "type": Field("str", None, "object kind", choices=OBJECT_TYPES),
     "name": Field("str", "", "label in the report (default: the type and its index)"),
-    "centre_m": Field("vec3", None, "world position of the object's centre (m)", "length"),
+    "center_m": Field("vec3", None, "world position of the object's centre (m)", "length"),
     "normal": Field("vec3", (0.0, -1.0, 0.0), "front-face normal (towards the viewer)"),
     "up": Field("vec3", None, "world direction of the object's top edge (default z, or y)"),
 }

@@ -273,6 +273,48 @@ def _table(data: Any, schema: dict[str, Any], path: tuple[Any, ...], ctx: _Ctx) 
     return out
 
 
+#: Renamed keys of ``[[objects]]`` (issue 30: one spelling, American ``center``): old -> new.
+#: A scene with an old key still loads, with one warning per old key naming its new one.
+_RENAMED_OBJECT_KEYS = {"centre_m": "center_m"}
+
+
+def _new_keys(
+    obj: dict[str, Any],
+    path: tuple[Any, ...],
+    ctx: _Ctx,
+    seen: dict[str, list[tuple[Any, ...]]],
+) -> dict[str, Any]:
+    """Return ``obj`` with its old keys (:data:`_RENAMED_OBJECT_KEYS`) renamed (noted in seen)."""
+    if not any(old in obj for old in _RENAMED_OBJECT_KEYS):
+        return obj
+    out = dict(obj)
+    for old, new in _RENAMED_OBJECT_KEYS.items():
+        if old not in out:
+            continue
+        if new in out:
+            ctx.fail((*path, old), f"give {new} or its deprecated spelling {old}, not both")
+        seen.setdefault(old, []).append((*path, old))
+        out = {new if k == old else k: v for k, v in out.items()}
+    return out
+
+
+def _warn_old_keys(seen: dict[str, list[tuple[Any, ...]]], ctx: _Ctx) -> None:
+    """One warning per old key a scene uses (:func:`_new_keys`), at its first place."""
+    import warnings
+
+    from imageform._deprecate import REMOVED_IN
+    from imageform.errors import ImageformWarning
+
+    for old, paths in seen.items():
+        many = f" ({len(paths)} objects use {old})" if len(paths) > 1 else ""
+        warnings.warn(
+            f"scene key {ctx.where(paths[0])} is deprecated and will be removed in "
+            f"imageform {REMOVED_IN}; write {_RENAMED_OBJECT_KEYS[old]}{many}",
+            ImageformWarning,
+            stacklevel=5,  # the caller of load_scene
+        )
+
+
 def validate_scene_dict(
     data: dict[str, Any], text: str | None = None, origin: str = "scene"
 ) -> dict[str, Any]:
@@ -310,18 +352,21 @@ def validate_scene_dict(
     if not isinstance(objs, list):
         ctx.fail(("objects",), "expected an array of tables ([[objects]])")
     out["objects"] = []
+    old_keys: dict[str, list[tuple[Any, ...]]] = {}
     for i, obj in enumerate(objs):
         if not isinstance(obj, dict) or "type" not in obj:
             ctx.fail(("objects", i), f"expected a table with a 'type' ({', '.join(OBJECT_TYPES)})")
+        obj = _new_keys(obj, ("objects", i), ctx, old_keys)
         t = _check_value(obj["type"], _POSE["type"], "type", ("objects", i, "type"), ctx)
         checked = _table(obj, SCENE_SCHEMA["objects"][t], ("objects", i), ctx)
-        if checked["centre_m"] is None:
-            ctx.fail(("objects", i), "missing key 'centre_m' (the object's position, m)")
+        if checked["center_m"] is None:
+            ctx.fail(("objects", i), "missing key 'center_m' (the object's position, m)")
         if t == "image" and checked["path"] is None:
             ctx.fail(("objects", i), "missing key 'path' (the image file)")
         if not checked["name"]:
             checked["name"] = f"{t}{i}"
         out["objects"].append(checked)
+    _warn_old_keys(old_keys, ctx)
     views = data.get("views", [])
     if not isinstance(views, list):
         ctx.fail(("views",), "expected an array of tables ([[views]])")

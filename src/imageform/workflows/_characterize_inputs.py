@@ -46,7 +46,7 @@ _MANIFEST_KEYS: dict[str, tuple[str, ...]] = {
         "developed",
         "processing",
         "corners_px",
-        "patch_centres_px",
+        "patch_centers_px",
     ),
     "edge": (
         "transfer",
@@ -71,6 +71,9 @@ _MANIFEST_KEYS: dict[str, tuple[str, ...]] = {
     ),
     "truth": (),  # any key: the true values of a simulated camera (shown in the report)
 }
+#: Renamed keys of lab.toml (issue 30: one spelling, American ``center``), (table, old) -> new:
+#: an old key is still read, with one warning naming its new one.
+_RENAMED_MANIFEST_KEYS = {("colorchecker", "patch_centres_px"): "patch_centers_px"}
 #: Top-level keys of lab.toml (render_lab_set writes them).
 _MANIFEST_TOP = ("format", "version", "camera", "camera_file", "seed")
 _FRAME_NAME = re.compile(r"^(?:(?:flat|dark)s?_)?([0-9][0-9.eE+-]*)_([0-9]+)$")
@@ -105,6 +108,7 @@ def _manifest(folder: Path) -> dict[str, Any]:
             raise InvalidInputError(f"{path}: expected [{section}] as a table")
         if section == "truth":
             continue
+        _rename_keys(path, section, body)
         unknown = sorted(set(body) - set(_MANIFEST_KEYS[section]))
         if unknown:
             raise InvalidInputError(
@@ -112,6 +116,29 @@ def _manifest(folder: Path) -> dict[str, Any]:
                 f"{', '.join(_MANIFEST_KEYS[section])}"[:200]
             )
     return doc
+
+
+def _rename_keys(path: Path, section: str, body: dict[str, Any]) -> None:
+    """Rename the old keys of ``[section]`` (:data:`_RENAMED_MANIFEST_KEYS`) in place, warning."""
+    import warnings
+
+    from imageform._deprecate import REMOVED_IN
+    from imageform.errors import ImageformWarning
+
+    for (table, old), new in _RENAMED_MANIFEST_KEYS.items():
+        if table != section or old not in body:
+            continue
+        if new in body:
+            raise InvalidInputError(
+                f"{path}: give [{section}] {new} or its deprecated spelling {old}, not both"
+            )
+        warnings.warn(
+            f"{path}: [{section}] {old} is deprecated and will be removed in imageform "
+            f"{REMOVED_IN}; write {new}",
+            ImageformWarning,
+            stacklevel=4,
+        )
+        body[new] = body.pop(old)
 
 
 def _get(doc: Mapping[str, Any], section: str, key: str, kind: type, default: Any) -> Any:

@@ -1,7 +1,7 @@
 """Options and helpers every image-reading or image-writing workflow shares.
 
 The out-of-range policy lives here, once: integer outputs (PNG, JPEG, and TIFF with
-``--bits``) cannot hold values outside [0, 1]; by default they are clipped and a note says
+``--bit-depth``) cannot hold values outside [0, 1]; by default they are clipped and a note says
 how many (``--out-of-range error`` refuses instead); float outputs (TIFF, ``.npy``) keep every
 value as computed.
 """
@@ -12,6 +12,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from imageform import _deprecate
 from imageform.errors import InvalidInputError
 from imageform.workflows._spec import Options, Run, option
 
@@ -20,6 +21,7 @@ __all__ = [
     "ImageOut",
     "OnDevice",
     "gpu_bands",
+    "image_out_renames",
     "on_gpu",
     "read",
     "refuse_absent_device",
@@ -48,7 +50,7 @@ class ImageIn(Options):
 class ImageOut(Options):
     """How output images are written."""
 
-    bits: int | None = option(
+    bit_depth: int | None = option(
         None,
         help="Bits per sample of PNG output (8 or 16; JPEG: 8) or of an integer TIFF; "
         "default: 16 for 16-bit input, else 8 (TIFF: float32).",
@@ -63,10 +65,17 @@ class ImageOut(Options):
 
     def check(self) -> None:
         super().check()
-        if self.bits is not None and self.bits not in (8, 16):
-            raise InvalidInputError(f"expected --bits 8 or 16, got {self.bits}")
+        if self.bit_depth is not None and self.bit_depth not in (8, 16):
+            raise InvalidInputError(f"expected --bit-depth 8 or 16, got {self.bit_depth}")
         if self.clip:
             object.__setattr__(self, "out_of_range", "clip")
+
+
+#: The old names of :class:`ImageOut`'s fields (issue 30: one spelling per concept), kept one
+#: release: put it above ``@dataclass`` of every options class with ImageOut. The constructor
+#: takes ``bits=`` and ``.bits`` reads ``bit_depth`` (a DeprecationWarning); the command line
+#: takes the hidden ``--bits`` and ``imageform batch``'s option mappings ``bits`` (a note).
+image_out_renames = _deprecate.renamed_fields({"bits": "bit_depth"})
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -159,18 +168,18 @@ def read(path: Path, opts: Any, *, alpha: str | None = None) -> Any:
 def write(run: Run, path: Path, image: Any, opts: Any, *, like: Any = None) -> int:
     """Write ``image`` (floats in [0, 1] or integers) to the output ``path``; return the clip count.
 
-    The options' bits and out-of-range policy (an :class:`ImageOut`) apply; the count is how many
-    values lay outside [0, 1] in an integer output (each clipped, noted once).
+    The options' bit depth and out-of-range policy (an :class:`ImageOut`) apply; the count is how
+    many values lay outside [0, 1] in an integer output (each clipped, noted once).
 
     ``like`` is the input array whose depth the output keeps (uint16 in, 16-bit PNG out).
-    TIFF output is float32 unless ``--bits`` asks for integers; ``.npy`` keeps the dtype.
+    TIFF output is float32 unless ``--bit-depth`` asks for integers; ``.npy`` keeps the dtype.
     """
     import numpy as np
 
     from imageform.io import image_format, write_image
 
     fmt = image_format(path)
-    bits = getattr(opts, "bits", None)
+    bits = getattr(opts, "bit_depth", None)
     policy = getattr(opts, "out_of_range", "clip")
     a = np.asarray(image)
     if fmt in ("png", "jpeg") and bits is None:
@@ -208,7 +217,7 @@ def write_mapped(
     ``fn`` works pixel by pixel: a colour conversion, a CVD simulation, white-balance gains. The
     same file as ``write(run, path, fn(image), opts, like=like)``, but the whole result never
     exists as floats: each band is computed and stored straight as the output's samples (8 or
-    16-bit integers for PNG/JPEG and ``--bits``, float32 for a float TIFF), so that a 100 Mpx
+    16-bit integers for PNG/JPEG and ``--bit-depth``, float32 for a float TIFF), so that a 100 Mpx
     image goes through in a fraction of the memory budget (``IMAGEFORM_MAX_MEMORY``).
 
     Returns the clip count (values outside [0, 1] in an integer output), the computed dtype, the
@@ -219,7 +228,7 @@ def write_mapped(
     from imageform.io import image_format, write_image
 
     fmt = image_format(path)
-    bits = getattr(opts, "bits", None)
+    bits = getattr(opts, "bit_depth", None)
     policy = getattr(opts, "out_of_range", "clip")
     a = np.asarray(image)
     if fmt in ("png", "jpeg") and bits is None:

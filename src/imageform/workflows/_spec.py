@@ -444,7 +444,8 @@ class Workflow:
     def make_options(self, **values: Any) -> Options:
         """Return the options from keyword values (unknown names refused, with the valid ones)."""
         known = {f.name for f in self.options.fields()}
-        unknown = sorted(set(values) - known)
+        old = set(getattr(self.options, "__renamed_fields__", {}))  # kept with a warning
+        unknown = sorted(set(values) - known - old)
         if unknown:
             raise UnknownOptionError(
                 f"unknown option(s) {', '.join(unknown)} of {self.name}; valid: "

@@ -19,7 +19,7 @@ from typing import Any
 from imageform import _deprecate
 from imageform.errors import InvalidInputError
 from imageform.workflows import _charts
-from imageform.workflows._images import ImageIn, ImageOut, read, write
+from imageform.workflows._images import ImageIn, ImageOut, image_out_renames, read, write
 from imageform.workflows._spec import Input, Output, Result, Run, Workflow, option
 
 __all__ = [
@@ -152,6 +152,7 @@ def segment(run: Run, opts: SegmentOptions, *, out: Path, image: Path) -> Result
 # ---------------------------------------------------------------- stain normalisation
 
 
+@image_out_renames
 @dataclass(frozen=True, kw_only=True)
 class StainNormalizeOptions(ImageIn, ImageOut):
     """Options of ``imageform stain-normalize`` (and ``imageform batch stain-normalize``)."""
@@ -373,6 +374,7 @@ def fit_correction(run: Run, opts: FitCorrectionOptions, *, out: Path, charts: A
     return Result(summary, tuple(text))
 
 
+@image_out_renames
 @dataclass(frozen=True, kw_only=True)
 class HarmonizeOptions(ImageIn, ImageOut):
     """Options of ``imageform harmonize`` (and ``imageform batch harmonize``)."""

@@ -10,7 +10,7 @@ from pathlib import Path
 from typing import Any
 
 from imageform.errors import ConvergenceError, DegenerateConfigurationError, InvalidInputError
-from imageform.workflows._images import ImageIn, ImageOut, read, write
+from imageform.workflows._images import ImageIn, ImageOut, image_out_renames, read, write
 from imageform.workflows._spec import (
     IMAGE_SUFFIXES,
     Input,
@@ -579,6 +579,7 @@ def _dictionary_hint(grey: object, dictionary: str) -> str:
 # ---------------------------------------------------------------- undistort
 
 
+@image_out_renames
 @dataclass(frozen=True, kw_only=True)
 class UndistortOptions(ImageIn, ImageOut):
     """Options of ``imageform undistort``."""

@@ -12,6 +12,7 @@ from imageform.workflows._images import (
     ImageOut,
     OnDevice,
     gpu_bands,
+    image_out_renames,
     on_gpu,
     read,
     refuse_absent_device,
@@ -65,6 +66,7 @@ DISPLAYABLE_SPACES = _DISPLAYABLE
 # ---------------------------------------------------------------- convert
 
 
+@image_out_renames
 @dataclass(frozen=True, kw_only=True)
 class ConvertOptions(ImageIn, ImageOut, OnDevice):
     """Options of ``imageform convert``."""
@@ -171,6 +173,7 @@ _WB_METHODS = (
 )
 
 
+@image_out_renames
 @dataclass(frozen=True, kw_only=True)
 class WhiteBalanceOptions(ImageIn, ImageOut, OnDevice):
     """Options of ``imageform white-balance``."""
@@ -372,6 +375,7 @@ def delta_e(run: Run, opts: DeltaEOptions, *, out: None, reference: Path, test: 
 # ---------------------------------------------------------------- colour-vision deficiency
 
 
+@image_out_renames
 @dataclass(frozen=True, kw_only=True)
 class CvdOptions(ImageIn, ImageOut):
     """Options of ``imageform cvd``."""

@@ -6,12 +6,13 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from imageform.workflows._images import ImageOut, write
+from imageform.workflows._images import ImageOut, image_out_renames, write
 from imageform.workflows._spec import Input, Options, Output, Result, Run, Workflow, option
 
 __all__ = ["WORKFLOWS", "DevelopOptions"]
 
 
+@image_out_renames
 @dataclass(frozen=True, kw_only=True)
 class DevelopOptions(ImageOut, Options):
     """Options of ``imageform develop``."""
@@ -63,11 +64,11 @@ def develop(run: Run, opts: DevelopOptions, *, raw: Path, out: Path) -> Result:
     )
     for note in dev.notes:
         run.note(note)
-    # a developed raw is 16 bits a channel in PNG (docs/raw.md) unless --bits says otherwise;
+    # a developed raw is 16 bits a channel in PNG (docs/raw.md) unless --bit-depth says otherwise;
     # 16-bit samples come straight from the developer (a bilinear Bayer development writes them
     # in its one fused pass, no float image made), the same values as rounding the float image
     fmt = image_format(out)
-    if (fmt == "png" and opts.bits in (None, 16)) or (fmt == "tiff" and opts.bits == 16):
+    if (fmt == "png" and opts.bit_depth in (None, 16)) or (fmt == "tiff" and opts.bit_depth == 16):
         image = dev.to_integer(16)
     else:
         image = dev.image

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from imageform.errors import InvalidInputError
-from imageform.workflows._images import ImageIn, ImageOut, read, write
+from imageform.workflows._images import ImageIn, ImageOut, image_out_renames, read, write
 from imageform.workflows._spec import Input, Output, Result, Run, Workflow, option
 
 __all__ = ["WORKFLOWS", "DemosaicOptions", "MosaicOptions"]
@@ -26,6 +26,7 @@ _PATTERNS = ("rggb", "bggr", "grbg", "gbrg")
 _DEMOSAIC_METHODS = ("bilinear", "malvar", "hamilton_adams", "menon", "menon_soft")
 
 
+@image_out_renames
 @dataclass(frozen=True, kw_only=True)
 class MosaicOptions(ImageIn, ImageOut):
     """Options of ``imageform mosaic``."""
@@ -60,6 +61,7 @@ def mosaic(run: Run, opts: MosaicOptions, *, out: Path, image: Path) -> Result:
     return Result(summary, tuple(text))
 
 
+@image_out_renames
 @dataclass(frozen=True, kw_only=True)
 class DemosaicOptions(ImageIn, ImageOut):
     """Options of ``imageform demosaic``."""

@@ -45,7 +45,10 @@ class SimulateOptions(Options):
         metavar="FOLDER",
     )
     seed: int = option(
-        0, help="Seed of the sensor noise (the same seed, the same pixels).", minimum=0
+        0,
+        help="Seed of the sensor noise, an integer (rng= in Python): the same seed, the same "
+        "pixels.",
+        minimum=0,
     )
     raw: Path | None = option(
         None,

@@ -33,7 +33,9 @@ class VanishingOptions(ImageIn):
         metavar="FILE",
         input=True,
     )
-    seed: int = option(0, help="RANSAC seed (results are reproducible).", minimum=0)
+    seed: int = option(
+        0, help="RANSAC seed, an integer (rng= in Python): results are reproducible.", minimum=0
+    )
     principal_point: str = option(
         "center",
         # "centre" and "orthocentre": the spellings before issue 30, still accepted
