@@ -23,6 +23,7 @@ from typing import Any
 import numpy as np
 
 from imageform._colormath import srgb_decode, srgb_encode
+from imageform._typing import Array, ArrayLike
 from imageform._validate import (
     as_bool,
     as_float,
@@ -66,7 +67,7 @@ CORRECTION_METHODS: MappingProxyType[str, tuple[int, ...]] = MappingProxyType(
 _N_TERMS = {1: 3, 2: 6, 3: 13}
 
 
-def root_polynomial_terms(rgb: Any, degree: int) -> Any:
+def root_polynomial_terms(rgb: ArrayLike, degree: int) -> Array:
     r"""Root-polynomial expansion of linear RGB (Finlayson et al. 2015, eq. (9)-(10)).
 
     degree 1: (R, G, B); degree 2 adds :math:`\sqrt{RG}, \sqrt{GB}, \sqrt{RB}` (6 terms);
@@ -247,8 +248,8 @@ def _paired_patches(
 
 
 def fit_color_correction(
-    measured: object,
-    reference: object,
+    measured: ArrayLike,
+    reference: ArrayLike,
     method: str = "linear",
     degree: int = 2,
     *,
@@ -469,8 +470,8 @@ class CorrectionReport:
 
 
 def correction_report(
-    measured: object,
-    reference: object,
+    measured: ArrayLike,
+    reference: ArrayLike,
     correction: ColorCorrection,
     *,
     chart_layout: str = "auto",

@@ -26,6 +26,7 @@ from types import MappingProxyType
 from typing import Any, NamedTuple
 
 from imageform._backend import namespace
+from imageform._typing import Array, ArrayLike
 from imageform._validate import (
     as_bool,
     as_float_strict,
@@ -141,7 +142,7 @@ class SubsampledChroma(_SubsampledChroma):
 
 
 def chroma_subsample(
-    ycbcr: object, scheme: str = "4:2:0", *, siting: str = "left"
+    ycbcr: ArrayLike, scheme: str = "4:2:0", *, siting: str = "left"
 ) -> SubsampledChroma:
     r"""Split Y'CbCr into full-resolution luma and subsampled chroma.
 
@@ -192,13 +193,13 @@ def chroma_subsample(
 
 
 def chroma_upsample(
-    luma: object,
-    chroma: object,
+    luma: ArrayLike,
+    chroma: ArrayLike,
     scheme: str = "4:2:0",
     *,
     siting: str = "left",
     method: str = "bilinear",
-) -> Any:
+) -> Array:
     r"""Rebuild full-resolution Y'CbCr from luma and subsampled chroma.
 
     .. math:: C(i) = (1 - t)\,C_{sub}[k] + t\,C_{sub}[k + 1],\quad
@@ -256,14 +257,14 @@ def chroma_upsample(
 
 
 def subsample_round_trip(
-    image: object,
+    image: ArrayLike,
     scheme: str = "4:2:0",
     *,
     siting: str = "left",
     method: str = "bilinear",
     standard: str = "bt601",
     clip: bool = False,
-) -> Any:
+) -> Array:
     """Round-trip sRGB -> Y'CbCr -> subsample -> upsample -> sRGB, as a codec's colour path does.
 
     Parameters
@@ -302,14 +303,14 @@ def subsample_round_trip(
 
 
 def subsampling_delta_e(
-    image: object,
+    image: ArrayLike,
     scheme: str = "4:2:0",
     *,
     siting: str = "left",
     method: str = "bilinear",
     standard: str = "bt601",
     clip: bool = True,
-) -> Any:
+) -> Array:
     r"""Per-pixel CIEDE2000 between an sRGB image and its chroma-subsampled round trip.
 
     .. math:: \Delta E_{00}\big(\mathrm{Lab}(I),\ \mathrm{Lab}(U(S(I)))\big)

@@ -29,6 +29,7 @@ import numpy as np
 
 from imageform._backend import common_device, namespace, to_numpy, use_numba
 from imageform._dask import is_dask_array
+from imageform._typing import ArrayLike
 from imageform._validate import (
     as_float_bounded,
     as_int,
@@ -389,7 +390,7 @@ def _project_xp(points: Any, K: Any, R: Any, t: Any, distortion: Any, xp: Any) -
 
 
 def project_points_distorted(
-    points: Any, K: Any, R: Any, t: Any, distortion: DistortionModel | None
+    points: ArrayLike, K: ArrayLike, R: ArrayLike, t: ArrayLike, distortion: DistortionModel | None
 ) -> Projection:
     r"""Project world points through ``[R | t]``, a distortion model and ``K`` to pixels.
 

@@ -22,6 +22,9 @@ from imageform.errors import InvalidInputError, UnknownOptionError
 from imageform.io._camera_toml import Reader, short_list
 
 if TYPE_CHECKING:
+    from imageform.geometry.distortion import DistortionModel
+
+if TYPE_CHECKING:
     from imageform.geometry import CalibrationResult, Camera
     from imageform.io._camera_tables import CameraColor, CameraOptics, CameraSensor
 
@@ -270,7 +273,7 @@ class CameraFile:
         )
 
 
-def distortion_name(model: Any) -> str:
+def distortion_name(model: DistortionModel | None) -> str:
     """Return the camera-file name of a distortion model object (``none`` for None).
 
     Examples

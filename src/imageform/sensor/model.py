@@ -24,6 +24,7 @@ import numpy as np
 
 from imageform import _deprecate
 from imageform._random import RNGLike, as_rng
+from imageform._typing import ArrayLike
 from imageform._validate import (
     as_int,
     as_real,
@@ -58,7 +59,7 @@ def _positive_field(obj: object, name: str, *, allow_zero: bool = False) -> None
 
 
 def photons_per_pixel(
-    irradiance: Any, wavelength_nm: float, *, pixel_area: float, exposure_time: float
+    irradiance: ArrayLike, wavelength_nm: float, *, pixel_area: float, exposure_time: float
 ) -> np.ndarray:
     r"""Mean photons reaching a pixel: irradiance × area × time over the photon energy.
 
