@@ -18,7 +18,7 @@ import warnings
 from dataclasses import dataclass
 from pathlib import Path
 from types import MappingProxyType
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 
@@ -248,12 +248,12 @@ def _paired_patches(
 
 
 def fit_color_correction(
-    measured: ArrayLike,
-    reference: ArrayLike,
+    measured: ArrayLike | ChartPatches,
+    reference: ArrayLike | ChartPatches,
     method: str = "linear",
     degree: int = 2,
     *,
-    transfer: str = "srgb",
+    transfer: Literal["srgb", "linear"] = "srgb",
     saturation: float | None = 1.0,
     chart_layout: str = "auto",
     never_worse: bool = True,
@@ -470,8 +470,8 @@ class CorrectionReport:
 
 
 def correction_report(
-    measured: ArrayLike,
-    reference: ArrayLike,
+    measured: ArrayLike | ChartPatches,
+    reference: ArrayLike | ChartPatches,
     correction: ColorCorrection,
     *,
     chart_layout: str = "auto",

@@ -605,10 +605,10 @@ def macenko_stains(
     max_percentile: float = 99.0,
     min_pixels: int = 100,
     min_intensity: float = MIN_INTENSITY,
-    transparent: str = "any_channel",
+    transparent: Literal["any_channel", "norm"] = "any_channel",
     i0: Literal["auto"] | float | ArrayLike = "auto",
     base: str = "e",
-    method: str = "macenko",
+    method: Literal["macenko", "vahadane"] = "macenko",
 ) -> MacenkoStains:
     r"""Estimate the two stain vectors and their maximum concentrations (Macenko 2009).
 
@@ -739,10 +739,10 @@ def macenko_normalize(
     max_percentile: float = 99.0,
     min_pixels: int = 100,
     min_intensity: float = MIN_INTENSITY,
-    transparent: str = "any_channel",
+    transparent: Literal["any_channel", "norm"] = "any_channel",
     i0: Literal["auto"] | float | ArrayLike = "auto",
     base: str = "e",
-    method: str = "macenko",
+    method: Literal["macenko", "vahadane"] = "macenko",
 ) -> Array:
     r"""Re-render ``image`` with ``target``'s stain vectors and concentration range.
 

@@ -48,7 +48,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Sequence
-from typing import Any, NamedTuple
+from typing import Any, Literal, NamedTuple
 
 import numpy as np
 
@@ -458,7 +458,7 @@ def slanted_edge_sfr(
     *,
     oversampling: int = 4,
     edge_order: int = 1,
-    derivative: str = "central",
+    derivative: Literal["central", "two_point"] = "central",
     weights: Sequence[float] = SFR_LUMINANCE_WEIGHTS,
 ) -> SFRResult:
     r"""ISO 12233 e-SFR of one slanted edge (the slanted-edge MTF of Burns 2000).

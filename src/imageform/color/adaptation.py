@@ -13,6 +13,7 @@ adaptation (1: complete, the default).
 from __future__ import annotations
 
 from types import MappingProxyType
+from typing import Literal
 
 import numpy as np
 
@@ -65,7 +66,7 @@ CAT_MATRICES: MappingProxyType[str, np.ndarray] = MappingProxyType(_CAT)
 def chromatic_adaptation_matrix(
     src_white: str | ArrayLike,
     dst_white: str | ArrayLike,
-    method: str = "bradford",
+    method: Literal["bradford", "cat02", "cat16", "von_kries", "xyz_scaling"] = "bradford",
     *,
     degree: float = 1.0,
     observer: int = 2,
@@ -130,7 +131,7 @@ def chromatic_adaptation(
     xyz: ArrayLike,
     src_white: str | ArrayLike,
     dst_white: str | ArrayLike,
-    method: str = "bradford",
+    method: Literal["bradford", "cat02", "cat16", "von_kries", "xyz_scaling"] = "bradford",
     *,
     degree: float = 1.0,
     observer: int = 2,

@@ -17,7 +17,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from types import MappingProxyType
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 
@@ -244,7 +244,12 @@ def _check_cct_range(xp: Any, cct: Any, lo: float, hi: float, method: str) -> An
     return cct
 
 
-def cct_to_xy(cct: ArrayLike, duv: ArrayLike = 0.0, *, method: str = "robertson1968") -> Array:
+def cct_to_xy(
+    cct: ArrayLike,
+    duv: ArrayLike = 0.0,
+    *,
+    method: Literal["robertson1968", "daylight"] = "robertson1968",
+) -> Array:
     r"""Chromaticity ``xy`` of a correlated colour temperature (and Duv).
 
     ``"robertson1968"``: the point at ``cct`` on the Planckian locus, interpolated linearly
@@ -323,7 +328,14 @@ CCT_TO_XY_METHODS: MappingProxyType[str, Callable[[Any, Any, Any], Any]] = Mappi
 )
 
 
-def xy_to_cct(xy: ArrayLike, *, method: str = "robertson1968", iterations: int = 20) -> Array:
+def xy_to_cct(
+    xy: ArrayLike,
+    *,
+    method: Literal[
+        "robertson1968", "daylight", "mccamy1992", "hernandez1999", "ohno2013"
+    ] = "robertson1968",
+    iterations: int = 20,
+) -> Array:
     r"""Correlated colour temperature and Duv of chromaticities ``xy``.
 
     ``"robertson1968"``: with the signed distances

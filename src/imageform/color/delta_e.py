@@ -13,7 +13,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from types import MappingProxyType
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 
@@ -141,7 +141,7 @@ def delta_e_cie94(
     lab1: ArrayLike,
     lab2: ArrayLike,
     *,
-    application: str = "graphic_arts",
+    application: Literal["graphic_arts", "textiles"] = "graphic_arts",
     kL: float | None = None,
     kC: float = 1.0,
     kH: float = 1.0,
@@ -329,7 +329,7 @@ def delta_e(
     kL: float | None = None,
     kC: float = 1.0,
     kH: float = 1.0,
-    application: str = "graphic_arts",
+    application: Literal["graphic_arts", "textiles"] = "graphic_arts",
     l: float = 2.0,
     c: float = 1.0,
 ) -> Array:

@@ -15,7 +15,7 @@ Grey images have a channel axis of size 1: shape (..., 1).
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, Literal
 
 from imageform._backend import namespace
 from imageform._dask import chunkwise
@@ -55,7 +55,7 @@ def _gray_to_srgb(xp: Any, g: Any) -> Any:
 
 
 @chunkwise(1)
-def srgb_to_gray(image: ArrayLike, method: str = "rec601") -> Array:
+def srgb_to_gray(image: ArrayLike, method: Literal["rec601", "rec709"] = "rec601") -> Array:
     r"""Convert encoded sRGB to an encoded grey image, shape (..., 1).
 
     .. math::

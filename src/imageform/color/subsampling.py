@@ -23,7 +23,7 @@ repeats, ``method="nearest"``); edges are replicated.
 from __future__ import annotations
 
 from types import MappingProxyType
-from typing import Any, NamedTuple
+from typing import Any, Literal, NamedTuple
 
 from imageform._backend import namespace
 from imageform._typing import Array, ArrayLike
@@ -142,7 +142,10 @@ class SubsampledChroma(_SubsampledChroma):
 
 
 def chroma_subsample(
-    ycbcr: ArrayLike, scheme: str = "4:2:0", *, siting: str = "left"
+    ycbcr: ArrayLike,
+    scheme: Literal["4:4:4", "4:2:2", "4:2:0"] = "4:2:0",
+    *,
+    siting: Literal["left", "center", "top_left"] = "left",
 ) -> SubsampledChroma:
     r"""Split Y'CbCr into full-resolution luma and subsampled chroma.
 
@@ -195,10 +198,10 @@ def chroma_subsample(
 def chroma_upsample(
     luma: ArrayLike,
     chroma: ArrayLike,
-    scheme: str = "4:2:0",
+    scheme: Literal["4:4:4", "4:2:2", "4:2:0"] = "4:2:0",
     *,
-    siting: str = "left",
-    method: str = "bilinear",
+    siting: Literal["left", "center", "top_left"] = "left",
+    method: Literal["bilinear", "nearest"] = "bilinear",
 ) -> Array:
     r"""Rebuild full-resolution Y'CbCr from luma and subsampled chroma.
 
@@ -258,11 +261,11 @@ def chroma_upsample(
 
 def subsample_round_trip(
     image: ArrayLike,
-    scheme: str = "4:2:0",
+    scheme: Literal["4:4:4", "4:2:2", "4:2:0"] = "4:2:0",
     *,
-    siting: str = "left",
-    method: str = "bilinear",
-    standard: str = "bt601",
+    siting: Literal["left", "center", "top_left"] = "left",
+    method: Literal["bilinear", "nearest"] = "bilinear",
+    standard: Literal["bt601", "bt709", "bt2020"] = "bt601",
     clip: bool = False,
 ) -> Array:
     """Round-trip sRGB -> Y'CbCr -> subsample -> upsample -> sRGB, as a codec's colour path does.
@@ -304,11 +307,11 @@ def subsample_round_trip(
 
 def subsampling_delta_e(
     image: ArrayLike,
-    scheme: str = "4:2:0",
+    scheme: Literal["4:4:4", "4:2:2", "4:2:0"] = "4:2:0",
     *,
-    siting: str = "left",
-    method: str = "bilinear",
-    standard: str = "bt601",
+    siting: Literal["left", "center", "top_left"] = "left",
+    method: Literal["bilinear", "nearest"] = "bilinear",
+    standard: Literal["bt601", "bt709", "bt2020"] = "bt601",
     clip: bool = True,
 ) -> Array:
     r"""Per-pixel CIEDE2000 between an sRGB image and its chroma-subsampled round trip.

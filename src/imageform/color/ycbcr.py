@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import math
 from types import MappingProxyType
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 
@@ -136,9 +136,9 @@ def _ycbcr_to_rgb(xp: Any, ycc: Any, kr: float, kb: float, sc: tuple[float, ...]
 @chunkwise(1)
 def rgb_to_ycbcr(
     image: ArrayLike,
-    standard: str = "bt601",
+    standard: Literal["bt601", "bt709", "bt2020"] = "bt601",
     *,
-    signal_range: str = "full",
+    signal_range: Literal["full", "limited"] = "full",
     bit_depth: int | None = None,
 ) -> Array:
     """Convert encoded R'G'B' to Y'CbCr (analog or code values), see the module docstring.
@@ -181,9 +181,9 @@ def rgb_to_ycbcr(
 @chunkwise(1)
 def ycbcr_to_rgb(
     ycbcr: ArrayLike,
-    standard: str = "bt601",
+    standard: Literal["bt601", "bt709", "bt2020"] = "bt601",
     *,
-    signal_range: str = "full",
+    signal_range: Literal["full", "limited"] = "full",
     bit_depth: int | None = None,
 ) -> Array:
     """Y'CbCr (analog or code values) to encoded R'G'B'; inverse of :func:`rgb_to_ycbcr`.
@@ -212,9 +212,9 @@ def ycbcr_to_rgb(
 @chunkwise(1)
 def srgb_to_ycbcr(
     image: ArrayLike,
-    standard: str = "bt601",
+    standard: Literal["bt601", "bt709", "bt2020"] = "bt601",
     *,
-    signal_range: str = "full",
+    signal_range: Literal["full", "limited"] = "full",
     bit_depth: int | None = None,
 ) -> Array:
     """sRGB-encoded values to Y'CbCr: :func:`rgb_to_ycbcr` applied to the sRGB values.
@@ -234,9 +234,9 @@ def srgb_to_ycbcr(
 @chunkwise(1)
 def ycbcr_to_srgb(
     ycbcr: ArrayLike,
-    standard: str = "bt601",
+    standard: Literal["bt601", "bt709", "bt2020"] = "bt601",
     *,
-    signal_range: str = "full",
+    signal_range: Literal["full", "limited"] = "full",
     bit_depth: int | None = None,
 ) -> Array:
     """Y'CbCr to sRGB-encoded values; inverse of :func:`srgb_to_ycbcr`.
