@@ -210,11 +210,7 @@ def _vienot_matrix(d: str) -> np.ndarray:
     return np.asarray(t_inv @ _projection(_MISSING[d], white, third) @ t)
 
 
-def cvd_matrix(
-    deficiency: str,
-    severity: float = 1.0,
-    method: str = "machado2009",
-) -> np.ndarray:
+def cvd_matrix(deficiency: str, severity: float = 1.0, method: str = "machado2009") -> np.ndarray:
     """Return the linear-sRGB matrix of a linear model (Machado 2009 or Viénot 1999), (3, 3).
 
     Brettel (1997) is piecewise linear: see :func:`brettel_planes`.

@@ -454,10 +454,7 @@ def _normalise(p: Path, arr: np.ndarray, alpha: str, has_alpha: bool) -> np.ndar
 
 
 def read_image(
-    path: str | Path,
-    *,
-    alpha: str = "reject",
-    max_pixels: int | None = None,
+    path: str | Path, *, alpha: str = "reject", max_pixels: int | None = None
 ) -> np.ndarray:
     """Read an image file as ``(H, W, C)``: uint8/uint16 as stored, floats as stored.
 

@@ -42,10 +42,7 @@ CCT_TICKS = (1500.0, 2000.0, 2856.0, 4000.0, 5000.0, 6500.0, 10000.0)
 
 
 def planckian_locus(
-    temperatures: Sequence[float] | np.ndarray,
-    coords: str = "xy",
-    *,
-    observer: int = 2,
+    temperatures: Sequence[float] | np.ndarray, coords: str = "xy", *, observer: int = 2
 ) -> np.ndarray:
     """Return the chromaticities (N, 2) of black bodies, integrated from Planck's law.
 
