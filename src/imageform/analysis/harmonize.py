@@ -23,7 +23,7 @@ from typing import Any, Literal
 import numpy as np
 
 from imageform._colormath import srgb_decode, srgb_encode
-from imageform._typing import Array, ArrayLike
+from imageform._typing import ArrayLike
 from imageform._validate import (
     as_bool,
     as_float,
@@ -67,7 +67,7 @@ CORRECTION_METHODS: MappingProxyType[str, tuple[int, ...]] = MappingProxyType(
 _N_TERMS = {1: 3, 2: 6, 3: 13}
 
 
-def root_polynomial_terms(rgb: ArrayLike, degree: int) -> Array:
+def root_polynomial_terms(rgb: ArrayLike, degree: int) -> np.ndarray:
     r"""Root-polynomial expansion of linear RGB (Finlayson et al. 2015, eq. (9)-(10)).
 
     degree 1: (R, G, B); degree 2 adds :math:`\sqrt{RG}, \sqrt{GB}, \sqrt{RB}` (6 terms);

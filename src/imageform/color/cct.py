@@ -335,7 +335,7 @@ def xy_to_cct(
         "robertson1968", "daylight", "mccamy1992", "hernandez1999", "ohno2013"
     ] = "robertson1968",
     iterations: int = 20,
-) -> Array:
+) -> tuple[Array, Array]:
     r"""Correlated colour temperature and Duv of chromaticities ``xy``.
 
     ``"robertson1968"``: with the signed distances

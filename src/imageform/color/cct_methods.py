@@ -12,7 +12,6 @@ and Duv.
 from __future__ import annotations
 
 import functools
-from typing import Any
 
 import numpy as np
 
@@ -205,7 +204,7 @@ def _ohno_table(start: float, end: float, spacing: float) -> np.ndarray:
 
 def uv_to_cct_ohno2013(
     uv: ArrayLike, *, spacing: float = 1.001, correction: bool = False
-) -> tuple[Any, Any]:
+) -> tuple[Array, Array]:
     r"""CCT and Duv from CIE 1960 ``(u, v)`` by Ohno's combined method (2013/2014).
 
     A table of Planckian ``(T_i, u_i, v_i)`` (1000 K to 100000 K, geometric steps of

@@ -52,7 +52,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
@@ -756,7 +756,7 @@ def _build_tracks(
 
 
 def reconstruct_sequence(
-    images: list[Any],
+    images: Sequence[ArrayLike],
     K: ArrayLike,
     distortion: DistortionModel | None = None,
     *,

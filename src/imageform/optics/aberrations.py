@@ -23,7 +23,7 @@ import numpy as np
 
 from imageform import _deprecate
 from imageform._backend import to_numpy
-from imageform._typing import Array, ArrayLike
+from imageform._typing import ArrayLike
 from imageform._validate import (
     as_image,
     as_int,
@@ -122,7 +122,7 @@ def spherical_aberration(
     sa_coefficient: float,
     field_coefficient: float = 0.0,
     center: tuple[float, float] | None = None,
-) -> Array:
+) -> np.ndarray:
     r"""Blur an image by spherical aberration at a given aperture, growing across the field.
 
     ``focal_length`` and ``pixel_pitch`` in metres; ``center`` ``(c_u, c_v)`` in pixels
@@ -174,7 +174,7 @@ def lateral_chromatic_aberration(
     *,
     center: tuple[float, float] | None = None,
     fill: float = 0.0,
-) -> Array:
+) -> np.ndarray:
     r"""Scale each channel about the optical centre by its own magnification (colour fringes).
 
     .. math::
@@ -347,7 +347,7 @@ def axial_chromatic_aberration(
     focus: float,
     pixel_pitch: float,
     reference: int = 1,
-) -> Array:
+) -> np.ndarray:
     r"""Blur each channel by its own defocus disc (:func:`axial_chromatic_blur_diameters`).
 
     .. math::

@@ -138,7 +138,7 @@ def blur_by_radius(
     step: float = 0.5,
     max_layers: int = 48,
     kernel: Callable[[float], np.ndarray] | None = None,
-) -> Array:
+) -> np.ndarray:
     r"""Blur each pixel with a disc PSF of its own radius (pixels), by layered interpolation.
 
     .. math::
@@ -244,7 +244,7 @@ def defocus_blur(
     focus: float,
     pixel_pitch: float,
     step: float = 0.5,
-) -> Array:
+) -> np.ndarray:
     r"""Depth-dependent defocus: each pixel blurred by the disc of its circle of confusion.
 
     .. math::

@@ -13,7 +13,7 @@ import numpy as np
 
 from imageform import _deprecate
 from imageform._backend import to_numpy
-from imageform._typing import Array, ArrayLike
+from imageform._typing import ArrayLike
 from imageform._validate import (
     as_image,
     as_real_array,
@@ -93,7 +93,9 @@ def cos4_falloff(
     return np.cos(field_angle(shape, focal_length_px=focal_length_px, center=center)) ** 4
 
 
-def pupil_overlap_fraction(pupil_radius: float, stop_radius: float, offset: ArrayLike) -> Array:
+def pupil_overlap_fraction(
+    pupil_radius: float, stop_radius: float, offset: ArrayLike
+) -> np.ndarray:
     r"""Fraction of a circular pupil (radius ``a``) inside a circle of radius ``b`` at ``offset``.
 
     .. math::
@@ -178,7 +180,7 @@ def mechanical_vignetting(
     return np.asarray(finite_result("the vignetting", lambda: _overlap(a, b, d), **names))
 
 
-def apply_vignetting(image: ArrayLike, falloff: ArrayLike) -> Array:
+def apply_vignetting(image: ArrayLike, falloff: ArrayLike) -> np.ndarray:
     """Multiply an image ``(H, W)`` or ``(H, W, C)`` by a relative-illumination map ``(H, W)``.
 
     Examples

@@ -126,7 +126,7 @@ def rolling_shutter_points(
 
 
 def shutter_capture(
-    render: Callable[[float], Any],
+    render: Callable[[float], ArrayLike],
     *,
     exposure_time: float,
     mode: str,

@@ -159,7 +159,9 @@ def _board(scene: Any) -> tuple[Any, tuple[int, int], float] | None:
     return obj, (cols - 1, rows - 1), float(obj.config.square_size_m)
 
 
-def board_poses(scene: Scene, trajectory: Trajectory) -> tuple[str, list[tuple[Any, Any]]] | None:
+def board_poses(
+    scene: Scene, trajectory: Trajectory
+) -> tuple[str, list[tuple[np.ndarray, np.ndarray]]] | None:
     """Return the scene's checkerboard in each frame's camera frame (mm); None without one.
 
     The board frame: the origin at the first inner corner (one square in from the top-left
