@@ -23,7 +23,7 @@ from typing import Any, Literal
 import numpy as np
 
 from imageform._colormath import srgb_decode, srgb_encode
-from imageform._typing import ArrayLike
+from imageform._typing import Array, ArrayLike
 from imageform._validate import (
     as_bool,
     as_float,
@@ -156,7 +156,7 @@ class ColorCorrection:
         tf = check_option(self.transfer, _TRANSFERS, "correction transfer")
         object.__setattr__(self, "transfer", tf)
 
-    def apply(self, image: object, *, clip: bool = False) -> Any:
+    def apply(self, image: ArrayLike, *, clip: bool = False) -> Array:
         """Correct an image from device A (NumPy, uint8/uint16, or Dask chunk-wise).
 
         With ``transfer="srgb"`` the encoded sRGB image is decoded to linear light,

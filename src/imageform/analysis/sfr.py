@@ -165,7 +165,7 @@ class SlantedEdgeROI(NamedTuple):
         """``(x, y, width, height)``, as :func:`slanted_edge_sfr`'s ``roi``."""
         return (self.x, self.y, self.width, self.height)
 
-    def crop(self, image: Any) -> np.ndarray:
+    def crop(self, image: ArrayLike) -> np.ndarray:
         """Return the ROI's pixels of ``image`` (a view); the ROI must lie inside ``image``."""
         if image is None or isinstance(image, str | bytes):
             raise InvalidInputError(f"expected image as an array, got {describe(image)}")

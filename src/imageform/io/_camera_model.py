@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from imageform._typing import ArrayLike
 from imageform._validate import as_bool, as_int, as_real, describe
 from imageform.errors import InvalidInputError, UnknownOptionError
 from imageform.io._camera_toml import Reader, short_list
@@ -258,7 +259,7 @@ class CameraFile:
         std = {k: float(v) for k, v in result.std.items() if math.isfinite(v)}
         return cls(camera, False, std, prov)
 
-    def with_pose(self, R: Any, t: Any, **provenance: Any) -> CameraFile:
+    def with_pose(self, R: ArrayLike, t: ArrayLike, **provenance: Any) -> CameraFile:
         """Return the same camera with the pose ``X_cam = R X_world + t``.
 
         Pose standard deviations are dropped, provenance fields replaced by ``provenance``.

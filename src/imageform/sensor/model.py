@@ -18,7 +18,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 
@@ -271,7 +270,7 @@ class SensorModel:
     @_deprecate.parameters(renamed={"input": "quantity"})
     def mean_electrons(
         self,
-        signal: Any,
+        signal: ArrayLike,
         *,
         exposure_time: float,
         quantity: str = "electrons",
@@ -370,7 +369,7 @@ class SensorModel:
     @_deprecate.parameters(renamed={"input": "quantity"})
     def capture(
         self,
-        signal: Any,
+        signal: ArrayLike,
         *,
         exposure_time: float,
         rng: RNGLike,
@@ -448,7 +447,7 @@ class SensorModel:
         dn = np.clip(np.floor(analog + 0.5), 0, self.max_dn)  # the ADC's range (physics)
         return dn.astype(np.uint16)
 
-    def normalize(self, dn: Any) -> np.ndarray:
+    def normalize(self, dn: ArrayLike) -> np.ndarray:
         r"""Raw DN to floats: black level subtracted, white (``2^b - 1``) mapped to 1.
 
         .. math:: \frac{y - y_0}{(2^b - 1) - y_0}
