@@ -19,7 +19,7 @@ import numpy as np
 from imageform.errors import ImageformError, InvalidInputError
 
 if TYPE_CHECKING:
-    from dask.array import Array as DaskArray
+    import dask.array
 
 __all__ = ["open_lazy"]
 
@@ -286,7 +286,7 @@ def _chunk_size(chunk: object) -> int:
     return as_int(chunk, "chunk", minimum=1, maximum=_MAX_CHUNK)
 
 
-def open_lazy(path: str | Path, chunk: int = 1024) -> DaskArray:
+def open_lazy(path: str | Path, chunk: int = 1024) -> dask.array.Array:
     """Open a TIFF or a Zarr array as a dask array of ``chunk x chunk`` blocks.
 
     Nothing is read until the array is computed. A tiled (or compressed strip) TIFF is read
