@@ -52,6 +52,8 @@ import numpy as np
 
 from imageform import _deprecate
 from imageform._colormath import srgb_decode, srgb_encode
+from imageform._random import RNGLike
+from imageform._typing import ArrayLike
 from imageform._validate import as_int, as_real, check_memory, describe, format_shape, real_array
 from imageform.analysis._arrays import image_in, is_dask
 from imageform.analysis.chart_grid import ChartPatches, ChartWarning
@@ -663,9 +665,9 @@ def _search(
 
 
 def detect_colorchecker(
-    image: object,
+    image: ArrayLike,
     *,
-    reference: object = None,
+    reference: ArrayLike | None = None,
     max_size: int = 1024,
     min_score: float = 0.8,
     sample: float = 0.5,
@@ -784,7 +786,7 @@ def _quad_mask_bounds(quad: np.ndarray, hgt: int, wid: int) -> tuple[slice, slic
 
 
 def measure_chart_patches(
-    image: object,
+    image: ArrayLike,
     chart: ChartDetection,
     *,
     max_std: float = 0.04,
@@ -939,17 +941,17 @@ def _chart_homography(
 
 
 def synthetic_chart_photo(
-    background: object = None,
+    background: ArrayLike | None = None,
     *,
     shape: tuple[int, int] = (512, 768),
     width: float | None = None,
     tilt: float | None = None,
     rotation: float | None = None,
-    cast: object = None,
+    cast: ArrayLike | None = None,
     shading: float = 0.3,
     blur: float = 0.7,
     noise: float = 0.01,
-    rng: Any = 0,
+    rng: RNGLike = 0,
 ) -> ChartPhoto:
     """Render a ColorChecker photographed in a scene: the test input of :func:`detect_colorchecker`.
 

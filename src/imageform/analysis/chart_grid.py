@@ -15,6 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from imageform._typing import ArrayLike
 from imageform._validate import as_int, as_real, describe, format_shape, real_array
 from imageform.analysis._arrays import image_in, is_dask
 from imageform.errors import ImageformWarning, InvalidInputError
@@ -76,7 +77,7 @@ class ChartPatches:
 
 
 def chart_patches(
-    image: object,
+    image: ArrayLike,
     rows: int = 4,
     cols: int = 6,
     *,

@@ -32,6 +32,7 @@ import numpy as np
 
 from imageform import _deprecate
 from imageform._colormath import srgb_decode, srgb_encode
+from imageform._typing import ArrayLike
 from imageform._validate import (
     as_bool,
     as_int,
@@ -158,7 +159,7 @@ def _looks_cropped(pat: ChartPatches, rows: int, cols: int, min_score: float) ->
 
 
 def sample_chart(
-    image: object,
+    image: ArrayLike,
     layout: str = "auto",
     *,
     rows: int = 4,
@@ -321,8 +322,8 @@ def _balance_block(rgb: np.ndarray, gains: np.ndarray, clip: bool) -> np.ndarray
 
 
 def chart_white_balance(
-    image: object,
-    chart: object = None,
+    image: ArrayLike,
+    chart: ArrayLike | ChartSample | ChartPatches | None = None,
     *,
     chart_layout: str = "auto",
     normalize: str = "mean",

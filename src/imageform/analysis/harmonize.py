@@ -18,11 +18,12 @@ import warnings
 from dataclasses import dataclass
 from pathlib import Path
 from types import MappingProxyType
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 
 from imageform._colormath import srgb_decode, srgb_encode
+from imageform._typing import Array, ArrayLike
 from imageform._validate import (
     as_bool,
     as_float,
@@ -66,7 +67,7 @@ CORRECTION_METHODS: MappingProxyType[str, tuple[int, ...]] = MappingProxyType(
 _N_TERMS = {1: 3, 2: 6, 3: 13}
 
 
-def root_polynomial_terms(rgb: Any, degree: int) -> Any:
+def root_polynomial_terms(rgb: ArrayLike, degree: int) -> np.ndarray:
     r"""Root-polynomial expansion of linear RGB (Finlayson et al. 2015, eq. (9)-(10)).
 
     degree 1: (R, G, B); degree 2 adds :math:`\sqrt{RG}, \sqrt{GB}, \sqrt{RB}` (6 terms);
@@ -155,7 +156,7 @@ class ColorCorrection:
         tf = check_option(self.transfer, _TRANSFERS, "correction transfer")
         object.__setattr__(self, "transfer", tf)
 
-    def apply(self, image: object, *, clip: bool = False) -> Any:
+    def apply(self, image: ArrayLike, *, clip: bool = False) -> Array:
         """Correct an image from device A (NumPy, uint8/uint16, or Dask chunk-wise).
 
         With ``transfer="srgb"`` the encoded sRGB image is decoded to linear light,
@@ -247,12 +248,12 @@ def _paired_patches(
 
 
 def fit_color_correction(
-    measured: object,
-    reference: object,
+    measured: ArrayLike | ChartPatches,
+    reference: ArrayLike | ChartPatches,
     method: str = "linear",
     degree: int = 2,
     *,
-    transfer: str = "srgb",
+    transfer: Literal["srgb", "linear"] = "srgb",
     saturation: float | None = 1.0,
     chart_layout: str = "auto",
     never_worse: bool = True,
@@ -469,8 +470,8 @@ class CorrectionReport:
 
 
 def correction_report(
-    measured: object,
-    reference: object,
+    measured: ArrayLike | ChartPatches,
+    reference: ArrayLike | ChartPatches,
     correction: ColorCorrection,
     *,
     chart_layout: str = "auto",

@@ -19,11 +19,12 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 from types import MappingProxyType
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 
 from imageform import _deprecate
+from imageform._typing import Array, ArrayLike
 from imageform._validate import (
     as_float,
     as_int,
@@ -139,7 +140,7 @@ def _glass_share(flat: Any, i0: np.ndarray, tol: float) -> float:
 
 
 def estimate_background(
-    image: object,
+    image: ArrayLike,
     *,
     percentile: float = 99.0,
     min_background: float = 0.8,
@@ -239,7 +240,7 @@ def estimate_background(
 
 
 def background_intensity(
-    image: object,
+    image: ArrayLike,
     *,
     percentile: float = 99.0,
     min_background: float = 0.8,
@@ -296,12 +297,12 @@ def _resolve_i0_source(image: object, i0: object) -> tuple[np.ndarray, str]:
 
 
 def optical_density(
-    image: object,
+    image: ArrayLike,
     *,
     min_intensity: float = MIN_INTENSITY,
-    i0: object = 1.0,
+    i0: Literal["auto"] | float | ArrayLike = 1.0,
     base: str = "e",
-) -> Any:
+) -> Array:
     r"""Optical density per channel: :math:`OD = -\ln(\max(I, I_{min}) / I_0)`.
 
     ``I`` is the encoded value in [0, 1] read as transmitted intensity (as Macenko and
@@ -355,7 +356,7 @@ def optical_density(
     return log_i0 - np.log(np.maximum(rgb, floor)) * rgb.dtype.type(scale)
 
 
-def stain_angle(u: object, v: object) -> float:
+def stain_angle(u: ArrayLike, v: ArrayLike) -> float:
     r"""Angle in degrees between two stain (OD) vectors: :math:`\arccos(\hat u \cdot \hat v)`.
 
     Examples
@@ -463,13 +464,13 @@ class MacenkoStains:
 
 
 def stain_concentrations(
-    image: object,
-    stain_matrix: object,
+    image: ArrayLike,
+    stain_matrix: ArrayLike,
     *,
     min_intensity: float = MIN_INTENSITY,
-    i0: object = 1.0,
+    i0: float | ArrayLike = 1.0,
     base: str = "e",
-) -> Any:
+) -> Array:
     r"""Colour deconvolution: least-squares concentrations :math:`C = OD\, S^+`.
 
     Parameters
@@ -597,17 +598,17 @@ def _check_params(beta: float, alpha: float, max_percentile: float) -> None:
 
 
 def macenko_stains(
-    image: object,
+    image: ArrayLike,
     *,
     beta: float = 0.15,
     alpha: float = 1.0,
     max_percentile: float = 99.0,
     min_pixels: int = 100,
     min_intensity: float = MIN_INTENSITY,
-    transparent: str = "any_channel",
-    i0: object = "auto",
+    transparent: Literal["any_channel", "norm"] = "any_channel",
+    i0: Literal["auto"] | float | ArrayLike = "auto",
     base: str = "e",
-    method: str = "macenko",
+    method: Literal["macenko", "vahadane"] = "macenko",
 ) -> MacenkoStains:
     r"""Estimate the two stain vectors and their maximum concentrations (Macenko 2009).
 
@@ -729,8 +730,8 @@ def _reconstruct(
 
 
 def macenko_normalize(
-    image: object,
-    target: object,
+    image: ArrayLike,
+    target: ArrayLike,
     *,
     source: MacenkoStains | None = None,
     beta: float = 0.15,
@@ -738,11 +739,11 @@ def macenko_normalize(
     max_percentile: float = 99.0,
     min_pixels: int = 100,
     min_intensity: float = MIN_INTENSITY,
-    transparent: str = "any_channel",
-    i0: object = "auto",
+    transparent: Literal["any_channel", "norm"] = "any_channel",
+    i0: Literal["auto"] | float | ArrayLike = "auto",
     base: str = "e",
-    method: str = "macenko",
-) -> Any:
+    method: Literal["macenko", "vahadane"] = "macenko",
+) -> Array:
     r"""Re-render ``image`` with ``target``'s stain vectors and concentration range.
 
     .. math:: C = OD\,S_s^+, \quad C' = C \,\frac{C^{99}_t}{C^{99}_s}, \quad
@@ -830,14 +831,14 @@ def macenko_normalize(
 
 
 def vahadane_stains(
-    image: object,
+    image: ArrayLike,
     *,
     lam: float = 0.1,
     beta: float = 0.15,
     max_percentile: float = 99.0,
     min_pixels: int = 100,
     min_intensity: float = MIN_INTENSITY,
-    i0: object = "auto",
+    i0: Literal["auto"] | float | ArrayLike = "auto",
     base: str = "e",
     max_pixels: int = 20_000,
     iterations: int = 200,

@@ -14,6 +14,7 @@ from typing import Any
 
 import numpy as np
 
+from imageform._typing import Array, ArrayLike
 from imageform._validate import as_bool, as_int, as_reals, describe, format_shape
 from imageform.analysis._arrays import image_in, is_dask, read_json, target_source, write_json
 from imageform.color.convert import convert
@@ -86,7 +87,7 @@ def _lab(rgb: Any) -> Any:
     return np.asarray(convert(rgb, "srgb", "lab"))
 
 
-def reinhard_stats(image: object, mask: object = None) -> ReinhardStats:
+def reinhard_stats(image: ArrayLike, mask: ArrayLike | None = None) -> ReinhardStats:
     r"""Mean and standard deviation of L*, a*, b* over the image (or its ``mask``).
 
     .. math:: \mu_k = \frac{1}{N}\sum_{i \in M} c_{ik}, \quad
@@ -181,13 +182,13 @@ def _transfer(
 
 
 def reinhard_normalize(
-    image: object,
-    target: object,
+    image: ArrayLike,
+    target: ArrayLike,
     *,
-    mask: object = None,
+    mask: ArrayLike | None = None,
     source_stats: ReinhardStats | None = None,
     clip: bool = False,
-) -> Any:
+) -> Array:
     r"""Match the L*a*b* mean and standard deviation of ``image`` to ``target``'s.
 
     .. math:: c'_k = \frac{\sigma^t_k}{\sigma^s_k}(c_k - \mu^s_k) + \mu^t_k,

@@ -17,6 +17,7 @@ import numpy as np
 
 from imageform._backend import use_numba
 from imageform._colormath import rgb_to_hsv
+from imageform._typing import Array, ArrayLike
 from imageform._validate import (
     as_int,
     as_real,
@@ -154,7 +155,7 @@ def _clean(mask: np.ndarray, open_radius: int, close_radius: int, min_area: int)
 
 
 def segment_hsv(
-    image: object,
+    image: ArrayLike,
     h: tuple[float, float] | None = None,
     s: tuple[float, float] | None = None,
     v: tuple[float, float] | None = None,
@@ -296,11 +297,11 @@ def _mask_in(mask: object, name: str) -> Any:
 
 
 def overlay_mask(
-    image: object,
-    mask: object,
+    image: ArrayLike,
+    mask: ArrayLike,
     color: tuple[float, float, float] = (0.0, 1.0, 0.0),
     alpha: float = 0.4,
-) -> Any:
+) -> Array:
     r"""Blend ``color`` over the masked pixels: :math:`I' = (1 - \alpha M) I + \alpha M c`.
 
     Parameters
@@ -341,7 +342,7 @@ def overlay_mask(
     return rgb * (1 - w) + w * c
 
 
-def mask_iou(a: object, b: object) -> float:
+def mask_iou(a: ArrayLike, b: ArrayLike) -> float:
     r"""Intersection over union of two boolean masks: :math:`|A \cap B| / |A \cup B|`.
 
     Two empty masks have no IoU: :class:`DegenerateConfigurationError`.

@@ -37,9 +37,11 @@ good ridge parameter", Technometrics 21(2):215-223, 1979.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Literal
 
 import numpy as np
 
+from imageform._typing import ArrayLike
 from imageform._validate import as_bool, as_real, describe, real_array
 from imageform.errors import ImageformError, InvalidInputError
 from imageform.spectral import Spectrum, colorchecker_reflectances, illuminant
@@ -98,12 +100,12 @@ def _gcv_weight(a: np.ndarray, d: np.ndarray, c: np.ndarray) -> float:
 
 
 def estimate_camera_sensitivities(
-    camera_rgb: object,
+    camera_rgb: ArrayLike,
     reflectances: Spectrum | None = None,
     *,
     light: str | Spectrum = "D65",
-    wavelengths: object = None,
-    smoothness: object = 0.1,
+    wavelengths: ArrayLike | None = None,
+    smoothness: float | ArrayLike | Literal["gcv"] = 0.1,
     nonnegative: bool = True,
 ) -> SensitivityEstimate:
     r"""Estimate a camera's R, G, B spectral sensitivities from its raw responses to a chart.

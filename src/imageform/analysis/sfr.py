@@ -48,11 +48,12 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Sequence
-from typing import Any, NamedTuple
+from typing import Any, Literal, NamedTuple
 
 import numpy as np
 
 from imageform import _deprecate
+from imageform._typing import ArrayLike
 from imageform._validate import (
     as_int,
     as_real,
@@ -164,7 +165,7 @@ class SlantedEdgeROI(NamedTuple):
         """``(x, y, width, height)``, as :func:`slanted_edge_sfr`'s ``roi``."""
         return (self.x, self.y, self.width, self.height)
 
-    def crop(self, image: Any) -> np.ndarray:
+    def crop(self, image: ArrayLike) -> np.ndarray:
         """Return the ROI's pixels of ``image`` (a view); the ROI must lie inside ``image``."""
         if image is None or isinstance(image, str | bytes):
             raise InvalidInputError(f"expected image as an array, got {describe(image)}")
@@ -352,7 +353,7 @@ def _spectrum(lsf: np.ndarray, q: int, derivative: str, nfft: int) -> tuple[np.n
     return f[sel], sfr[sel]
 
 
-def mtf_crossing(frequency: Any, mtf: Any, level: float) -> float:
+def mtf_crossing(frequency: ArrayLike, mtf: ArrayLike, level: float) -> float:
     r"""Return the lowest frequency where a falling MTF reaches ``level`` (linear interpolation).
 
     ``mtf_crossing(f, m, 0.5)`` is MTF50: the first ``i`` with ``m[i+1] <= level < m[i]``
@@ -384,7 +385,7 @@ def mtf_crossing(frequency: Any, mtf: Any, level: float) -> float:
     return float(f[i - 1] + t * (f[i] - f[i - 1]))
 
 
-def fit_gaussian_sigma(frequency: Any, sfr: Any, *, angle_deg: float = 0.0) -> float:
+def fit_gaussian_sigma(frequency: ArrayLike, sfr: ArrayLike, *, angle_deg: float = 0.0) -> float:
     r"""Fit the Gaussian PSF sigma (pixels) to a measured SFR, the pixel aperture included.
 
     The model is the Gaussian's MTF times the square pixel's aperture taken across an edge
@@ -452,12 +453,12 @@ def fit_gaussian_sigma(frequency: Any, sfr: Any, *, angle_deg: float = 0.0) -> f
 
 
 def slanted_edge_sfr(
-    image: Any,
+    image: ArrayLike,
     roi: Sequence[int] | None = None,
     *,
     oversampling: int = 4,
     edge_order: int = 1,
-    derivative: str = "central",
+    derivative: Literal["central", "two_point"] = "central",
     weights: Sequence[float] = SFR_LUMINANCE_WEIGHTS,
 ) -> SFRResult:
     r"""ISO 12233 e-SFR of one slanted edge (the slanted-edge MTF of Burns 2000).
@@ -760,7 +761,7 @@ def _subpixel_side(
 
 
 def find_slanted_edges(
-    image: Any,
+    image: ArrayLike,
     *,
     min_angle: float = 2.0,
     max_angle: float = 10.0,

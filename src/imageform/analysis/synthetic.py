@@ -17,6 +17,7 @@ import numpy as np
 from imageform import _deprecate
 from imageform._colormath import hsv_to_rgb, srgb_decode, srgb_encode
 from imageform._random import RNGLike, as_rng
+from imageform._typing import ArrayLike
 from imageform._validate import (
     as_float,
     as_int,
@@ -370,7 +371,7 @@ def synthetic_stain_image(
 
 
 def synthetic_chart_image(
-    srgb: object = None,
+    srgb: ArrayLike | None = None,
     rows: int = 4,
     cols: int = 6,
     patch: int = 24,

@@ -12,11 +12,14 @@ from __future__ import annotations
 import os
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from imageform.errors import ImageformError, InvalidInputError
+
+if TYPE_CHECKING:
+    import dask.array
 
 __all__ = ["open_lazy"]
 
@@ -283,7 +286,7 @@ def _chunk_size(chunk: object) -> int:
     return as_int(chunk, "chunk", minimum=1, maximum=_MAX_CHUNK)
 
 
-def open_lazy(path: str | Path, chunk: int = 1024) -> Any:
+def open_lazy(path: str | Path, chunk: int = 1024) -> dask.array.Array:
     """Open a TIFF or a Zarr array as a dask array of ``chunk x chunk`` blocks.
 
     Nothing is read until the array is computed. A tiled (or compressed strip) TIFF is read

@@ -30,7 +30,7 @@ import os
 import time
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 
@@ -151,12 +151,12 @@ def process_chunked(
     options: dict[str, Any] | None = None,
     *,
     chunk: int = 1024,
-    dtype: str | None = None,
+    dtype: Literal["uint8", "uint16", "float32"] | None = None,
     tile: int | None = None,
     force: bool = False,
     num_workers: int | None = None,
     pyramid: str = "auto",
-    compression: str | None = None,
+    compression: Literal["none", "zlib", "lzw", "zstd", "jpeg"] | None = None,
     stats_from: str = "auto",
 ) -> ChunkedResult:
     r"""Apply ``convert``, ``white_balance`` or ``stain_normalize`` chunk-wise.

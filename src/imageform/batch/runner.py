@@ -38,7 +38,7 @@ import threading
 import time
 from collections.abc import Callable, Iterator, Mapping
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 # the parts, in private modules; their public names are this module's
 from imageform.batch._job import run_job
@@ -57,6 +57,9 @@ from imageform.batch._plan import (
 from imageform.batch._temps import _remove_stale_temps, _run_lock
 from imageform.errors import InvalidInputError
 from imageform.workflows import Options
+
+if TYPE_CHECKING:
+    from rich.console import Console
 
 __all__ = [
     "MANIFEST",
@@ -381,7 +384,7 @@ def _run_on(
                 client.cancel(list(pending), force=True)
 
 
-def print_summary(report: BatchReport, console: Any = None) -> None:
+def print_summary(report: BatchReport, console: Console | None = None) -> None:
     """Print the counts and the failures (input and reason).
 
     A rich table on a terminal, one ``failed: INPUT: REASON`` line each otherwise.

@@ -13,12 +13,13 @@ adaptation (1: complete, the default).
 from __future__ import annotations
 
 from types import MappingProxyType
-from typing import Any
+from typing import Literal
 
 import numpy as np
 
 from imageform._backend import device_of, namespace
 from imageform._dask import chunkwise
+from imageform._typing import Array, ArrayLike
 from imageform._validate import as_points_strict, as_real, check_name
 from imageform.color.whitepoints import resolve_white
 from imageform.errors import InvalidInputError
@@ -63,9 +64,9 @@ CAT_MATRICES: MappingProxyType[str, np.ndarray] = MappingProxyType(_CAT)
 
 
 def chromatic_adaptation_matrix(
-    src_white: Any,
-    dst_white: Any,
-    method: str = "bradford",
+    src_white: str | ArrayLike,
+    dst_white: str | ArrayLike,
+    method: Literal["bradford", "cat02", "cat16", "von_kries", "xyz_scaling"] = "bradford",
     *,
     degree: float = 1.0,
     observer: int = 2,
@@ -127,14 +128,14 @@ def chromatic_adaptation_matrix(
 
 @chunkwise(1)
 def chromatic_adaptation(
-    xyz: object,
-    src_white: Any,
-    dst_white: Any,
-    method: str = "bradford",
+    xyz: ArrayLike,
+    src_white: str | ArrayLike,
+    dst_white: str | ArrayLike,
+    method: Literal["bradford", "cat02", "cat16", "von_kries", "xyz_scaling"] = "bradford",
     *,
     degree: float = 1.0,
     observer: int = 2,
-) -> Any:
+) -> Array:
     r"""Adapt XYZ seen under ``src_white`` to the corresponding colours under ``dst_white``.
 
     .. math:: XYZ_d = M\,XYZ_s,\quad M = M_{CAT}^{-1}\,\mathrm{diag}(\rho_d/\rho_s)\,M_{CAT}

@@ -17,7 +17,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from types import MappingProxyType
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 
@@ -30,6 +30,7 @@ from imageform._colormath import daylight_x as _daylight_x
 from imageform._colormath import daylight_xy as _daylight_xy
 from imageform._colormath import uv1960_from_xy as _uv_from_xy
 from imageform._dask import chunkwise
+from imageform._typing import Array, ArrayLike
 from imageform._validate import (
     any_value,
     as_float_strict,
@@ -109,7 +110,7 @@ def _xy_from_uv(xp: Any, u: Any, v: Any) -> Any:
 
 
 @chunkwise(1)
-def xy_to_uv1960(xy: object) -> Any:
+def xy_to_uv1960(xy: ArrayLike) -> Array:
     r"""CIE 1931 ``xy`` to CIE 1960 UCS ``uv``.
 
     .. math:: u = \frac{4x}{-2x + 12y + 3},\quad v = \frac{6y}{-2x + 12y + 3}
@@ -139,7 +140,7 @@ def xy_to_uv1960(xy: object) -> Any:
 
 
 @chunkwise(1)
-def uv1960_to_xy(uv: object) -> Any:
+def uv1960_to_xy(uv: ArrayLike) -> Array:
     r"""CIE 1960 UCS ``uv`` to CIE 1931 ``xy``.
 
     .. math:: x = \frac{3u}{2u - 8v + 4},\quad y = \frac{2v}{2u - 8v + 4}
@@ -243,7 +244,12 @@ def _check_cct_range(xp: Any, cct: Any, lo: float, hi: float, method: str) -> An
     return cct
 
 
-def cct_to_xy(cct: object, duv: object = 0.0, *, method: str = "robertson1968") -> Any:
+def cct_to_xy(
+    cct: ArrayLike,
+    duv: ArrayLike = 0.0,
+    *,
+    method: Literal["robertson1968", "daylight"] = "robertson1968",
+) -> Array:
     r"""Chromaticity ``xy`` of a correlated colour temperature (and Duv).
 
     ``"robertson1968"``: the point at ``cct`` on the Planckian locus, interpolated linearly
@@ -322,7 +328,14 @@ CCT_TO_XY_METHODS: MappingProxyType[str, Callable[[Any, Any, Any], Any]] = Mappi
 )
 
 
-def xy_to_cct(xy: object, *, method: str = "robertson1968", iterations: int = 20) -> Any:
+def xy_to_cct(
+    xy: ArrayLike,
+    *,
+    method: Literal[
+        "robertson1968", "daylight", "mccamy1992", "hernandez1999", "ohno2013"
+    ] = "robertson1968",
+    iterations: int = 20,
+) -> tuple[Array, Array]:
     r"""Correlated colour temperature and Duv of chromaticities ``xy``.
 
     ``"robertson1968"``: with the signed distances

@@ -12,11 +12,11 @@ and Duv.
 from __future__ import annotations
 
 import functools
-from typing import Any
 
 import numpy as np
 
 from imageform import _deprecate
+from imageform._typing import Array, ArrayLike
 from imageform._validate import as_points, as_real, as_real_ndarray, check_magnitude
 from imageform.errors import InvalidInputError
 
@@ -56,7 +56,7 @@ def _xy(xy: object) -> np.ndarray:
     return np.asarray(as_points(xy, "xy", 2), dtype=np.float64)
 
 
-def xy_to_cct_mccamy1992(xy: object) -> Any:
+def xy_to_cct_mccamy1992(xy: ArrayLike) -> Array:
     r"""CCT by McCamy's cubic in the epicentre slope (1992).
 
     .. math:: n = \frac{x - 0.3320}{y - 0.1858},\qquad
@@ -91,7 +91,7 @@ def xy_to_cct_mccamy1992(xy: object) -> Any:
     return ((-449.0 * n + 3525.0) * n - 6823.3) * n + 5520.33
 
 
-def xy_to_cct_hernandez1999(xy: object) -> Any:
+def xy_to_cct_hernandez1999(xy: ArrayLike) -> Array:
     r"""CCT by Hernández-Andrés, Lee & Romero's exponential fit (1999).
 
     .. math:: n = \frac{x - x_e}{y - y_e},\qquad
@@ -150,7 +150,7 @@ def _cmf_1nm() -> tuple[np.ndarray, np.ndarray]:
     return wl[keep], np.asarray(c.values, dtype=np.float64)[keep]
 
 
-def planckian_uv(cct: object) -> np.ndarray:
+def planckian_uv(cct: ArrayLike) -> np.ndarray:
     r"""CIE 1960 ``(u, v)`` of a black body at ``cct`` kelvin (CIE 1931 2° observer).
 
     .. math:: X_i = \sum_\lambda \lambda^{-5} (e^{c_2/\lambda T} - 1)^{-1}
@@ -203,8 +203,8 @@ def _ohno_table(start: float, end: float, spacing: float) -> np.ndarray:
 
 
 def uv_to_cct_ohno2013(
-    uv: object, *, spacing: float = 1.001, correction: bool = False
-) -> tuple[Any, Any]:
+    uv: ArrayLike, *, spacing: float = 1.001, correction: bool = False
+) -> tuple[Array, Array]:
     r"""CCT and Duv from CIE 1960 ``(u, v)`` by Ohno's combined method (2013/2014).
 
     A table of Planckian ``(T_i, u_i, v_i)`` (1000 K to 100000 K, geometric steps of
@@ -304,7 +304,7 @@ def uv_to_cct_ohno2013(
     return cct.reshape(shape), duv.reshape(shape)
 
 
-def cct_to_uv_ohno2013(cct: object, duv: object = 0.0) -> np.ndarray:
+def cct_to_uv_ohno2013(cct: ArrayLike, duv: ArrayLike = 0.0) -> np.ndarray:
     r"""CIE 1960 ``(u, v)`` at ``cct`` kelvin, ``duv`` off the Planckian locus (Ohno 2014).
 
     .. math:: (u, v) = (u_0 - D_{uv} \sin\theta,\; v_0 + D_{uv} \cos\theta),\quad

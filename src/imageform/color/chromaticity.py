@@ -19,6 +19,7 @@ import numpy.typing as npt
 from imageform import _deprecate
 from imageform._backend import device_of, namespace, reads_values, to_numpy
 from imageform._dask import chunkwise
+from imageform._typing import Array, ArrayLike
 from imageform._validate import (
     any_value,
     as_bool,
@@ -53,7 +54,7 @@ LOCUS_RANGE = (380.0, 780.0)
 
 
 @chunkwise(1)
-def xyz_to_xy(xyz: object, white: Any = "D65") -> Any:
+def xyz_to_xy(xyz: ArrayLike, white: str | ArrayLike = "D65") -> Array:
     """Chromaticity ``(x, y)`` of XYZ, shape (..., 3) -> (..., 2).
 
     Black (X + Y + Z = 0) has no chromaticity; it gets the white's, as
@@ -70,7 +71,7 @@ def xyz_to_xy(xyz: object, white: Any = "D65") -> Any:
 
 
 @chunkwise(1)
-def xy_to_uv_prime(xy: object) -> Any:
+def xy_to_uv_prime(xy: ArrayLike) -> Array:
     r"""CIE 1976 UCS :math:`(u', v')` from :math:`(x, y)`, shape (..., 2).
 
     .. math:: u' = \frac{4x}{-2x + 12y + 3},\quad v' = \frac{9y}{-2x + 12y + 3}
@@ -90,7 +91,7 @@ def xy_to_uv_prime(xy: object) -> Any:
 
 
 @chunkwise(1)
-def uv_prime_to_xy(uv: object) -> Any:
+def uv_prime_to_xy(uv: ArrayLike) -> Array:
     r"""Invert :func:`xy_to_uv_prime` (CIE 015:2018 eq. 8.3).
 
     :math:`x = 9u'/(6u' - 16v' + 12)`, :math:`y = 4v'/(6u' - 16v' + 12)`.
@@ -108,7 +109,7 @@ def uv_prime_to_xy(uv: object) -> Any:
 
 
 @chunkwise(1)
-def xyz_to_uv_prime(xyz: object, white: Any = "D65") -> Any:
+def xyz_to_uv_prime(xyz: ArrayLike, white: str | ArrayLike = "D65") -> Array:
     """:math:`(u', v')` of XYZ, shape (..., 3) -> (..., 2) (black gets the white's).
 
     Examples
@@ -228,7 +229,7 @@ def _points_in_polygon(pts: Any, poly: np.ndarray, xp: Any) -> Any:
 
 
 @chunkwise(1)
-def in_locus(points: object, coords: str = "xy", *, observer: int = 2) -> Any:
+def in_locus(points: ArrayLike, coords: str = "xy", *, observer: int = 2) -> Array:
     """Test where chromaticities lie inside the spectral locus (physically realisable).
 
     Parameters
@@ -256,7 +257,7 @@ def in_locus(points: object, coords: str = "xy", *, observer: int = 2) -> Any:
     )
 
 
-def check_in_locus(points: object, coords: str = "xy", *, observer: int = 2) -> Any:
+def check_in_locus(points: ArrayLike, coords: str = "xy", *, observer: int = 2) -> Array:
     """``points`` as an array, raising :class:`InvalidInputError` if any lies outside the locus.
 
     An explicit check: it reads the answer on the host whatever the array's device (on a GPU
@@ -283,7 +284,9 @@ def _refuse_outside_locus(p: Any, coords: str, observer: int, xp: Any, *, explic
 
 
 @chunkwise(1)
-def xy_to_xyz(xy: object, Y: float = 1.0, *, check_locus: bool = True, observer: int = 2) -> Any:
+def xy_to_xyz(
+    xy: ArrayLike, Y: float = 1.0, *, check_locus: bool = True, observer: int = 2
+) -> Array:
     r"""XYZ of a chromaticity at luminance ``Y``: :math:`X = xY/y,\ Z = (1 - x - y)Y/y`.
 
     With ``check_locus`` (default) a chromaticity outside the spectral locus raises

@@ -18,6 +18,7 @@ from typing import Any
 
 from imageform._backend import constant, namespace
 from imageform._dask import chunkwise
+from imageform._typing import Array, ArrayLike
 from imageform._validate import as_image_strict
 
 from .whitepoints import named_white
@@ -70,7 +71,7 @@ def _lab_to_xyz(xp: Any, lab: Any, w: Any) -> Any:
 
 
 @chunkwise(1)
-def xyz_to_lab(xyz: object, white: Any = "D65", *, observer: int = 2) -> Any:
+def xyz_to_lab(xyz: ArrayLike, white: str | ArrayLike = "D65", *, observer: int = 2) -> Array:
     r"""CIE XYZ to CIELAB.
 
     .. math::
@@ -110,7 +111,7 @@ def xyz_to_lab(xyz: object, white: Any = "D65", *, observer: int = 2) -> Any:
 
 
 @chunkwise(1)
-def lab_to_xyz(lab: object, white: Any = "D65", *, observer: int = 2) -> Any:
+def lab_to_xyz(lab: ArrayLike, white: str | ArrayLike = "D65", *, observer: int = 2) -> Array:
     r"""CIELAB to CIE XYZ; inverse of :func:`xyz_to_lab`.
 
     .. math::
@@ -151,7 +152,7 @@ def _lch_to_lab(xp: Any, lch: Any) -> Any:
 
 
 @chunkwise(1)
-def lab_to_lch(lab: object) -> Any:
+def lab_to_lch(lab: ArrayLike) -> Array:
     r"""CIELAB to CIELCh_ab: chroma and hue angle in degrees [0, 360).
 
     .. math:: C^*_{ab} = \sqrt{a^{*2} + b^{*2}}, \quad h_{ab} = \operatorname{atan2}(b^*, a^*)
@@ -170,7 +171,7 @@ def lab_to_lch(lab: object) -> Any:
 
 
 @chunkwise(1)
-def lch_to_lab(lch: object) -> Any:
+def lch_to_lab(lch: ArrayLike) -> Array:
     r"""CIELCh_ab to CIELAB: :math:`a^* = C^* \cos h`, :math:`b^* = C^* \sin h`.
 
     Examples
@@ -203,7 +204,7 @@ def _xyy_to_xyz(xp: Any, xyy: Any) -> Any:
 
 
 @chunkwise(1)
-def xyz_to_xyy(xyz: object, white: Any = "D65", *, observer: int = 2) -> Any:
+def xyz_to_xyy(xyz: ArrayLike, white: str | ArrayLike = "D65", *, observer: int = 2) -> Array:
     r"""CIE XYZ to chromaticity and luminance xyY.
 
     .. math:: x = X / (X + Y + Z), \quad y = Y / (X + Y + Z), \quad Y = Y
@@ -223,7 +224,7 @@ def xyz_to_xyy(xyz: object, white: Any = "D65", *, observer: int = 2) -> Any:
 
 
 @chunkwise(1)
-def xyy_to_xyz(xyy: object) -> Any:
+def xyy_to_xyz(xyy: ArrayLike) -> Array:
     """Chromaticity xyY to CIE XYZ: :math:`X = xY/y`, :math:`Z = (1 - x - y) Y / y`.
 
     Rows with y = 0 give X = Z = 0 (their Y must be 0 for a physical colour).
@@ -274,7 +275,7 @@ def _luv_to_xyz(xp: Any, luv: Any, w: Any) -> Any:
 
 
 @chunkwise(1)
-def xyz_to_luv(xyz: object, white: Any = "D65", *, observer: int = 2) -> Any:
+def xyz_to_luv(xyz: ArrayLike, white: str | ArrayLike = "D65", *, observer: int = 2) -> Array:
     r"""CIE XYZ to CIELUV.
 
     .. math::
@@ -296,7 +297,7 @@ def xyz_to_luv(xyz: object, white: Any = "D65", *, observer: int = 2) -> Any:
 
 
 @chunkwise(1)
-def luv_to_xyz(luv: object, white: Any = "D65", *, observer: int = 2) -> Any:
+def luv_to_xyz(luv: ArrayLike, white: str | ArrayLike = "D65", *, observer: int = 2) -> Array:
     r"""CIELUV to CIE XYZ; inverse of :func:`xyz_to_luv` (L* = 0 gives black).
 
     .. math::

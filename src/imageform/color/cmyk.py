@@ -15,6 +15,7 @@ from typing import Any
 
 from imageform._backend import namespace
 from imageform._dask import chunkwise
+from imageform._typing import Array, ArrayLike
 from imageform._validate import as_image_strict
 
 __all__ = [
@@ -42,7 +43,7 @@ def _cmyk_to_cmy(xp: Any, cmyk: Any) -> Any:
 
 
 @chunkwise(1)
-def srgb_to_cmy(image: object) -> Any:
+def srgb_to_cmy(image: ArrayLike) -> Array:
     """Convert encoded RGB to CMY: :math:`(C, M, Y) = 1 - (R, G, B)`.
 
     Parameters
@@ -68,7 +69,7 @@ def srgb_to_cmy(image: object) -> Any:
 
 
 @chunkwise(1)
-def cmy_to_srgb(cmy: object) -> Any:
+def cmy_to_srgb(cmy: ArrayLike) -> Array:
     """CMY to encoded RGB: :math:`(R, G, B) = 1 - (C, M, Y)`.
 
     Examples
@@ -81,7 +82,7 @@ def cmy_to_srgb(cmy: object) -> Any:
 
 
 @chunkwise(1)
-def cmy_to_cmyk(cmy: object) -> Any:
+def cmy_to_cmyk(cmy: ArrayLike) -> Array:
     r"""CMY to CMYK with K = min(C, M, Y) and the remaining inks rescaled by 1/(1 - K).
 
     .. math:: K = \min(C, M, Y), \quad C' = (C - K)/(1 - K) \ldots
@@ -98,7 +99,7 @@ def cmy_to_cmyk(cmy: object) -> Any:
 
 
 @chunkwise(1)
-def cmyk_to_cmy(cmyk: object) -> Any:
+def cmyk_to_cmy(cmyk: ArrayLike) -> Array:
     """CMYK to CMY: :math:`C = C'(1 - K) + K` (and likewise M, Y).
 
     Examples
@@ -111,7 +112,7 @@ def cmyk_to_cmy(cmyk: object) -> Any:
 
 
 @chunkwise(1)
-def srgb_to_cmyk(image: object) -> Any:
+def srgb_to_cmyk(image: ArrayLike) -> Array:
     """Convert encoded RGB to CMYK (via CMY), shape (..., 4).
 
     Examples
@@ -124,7 +125,7 @@ def srgb_to_cmyk(image: object) -> Any:
 
 
 @chunkwise(1)
-def cmyk_to_srgb(cmyk: object) -> Any:
+def cmyk_to_srgb(cmyk: ArrayLike) -> Array:
     """CMYK to encoded RGB: :math:`R = (1 - C')(1 - K)` (and likewise G, B).
 
     Examples

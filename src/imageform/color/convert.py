@@ -47,10 +47,12 @@ from types import MappingProxyType
 from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 
 from imageform import _deprecate
 from imageform._backend import constant, namespace, use_numba
 from imageform._dask import chunkwise
+from imageform._typing import Array, ArrayLike
 from imageform._validate import (
     as_float_strict,
     as_image_strict,
@@ -317,14 +319,14 @@ def _float_dtype(arr: Any) -> Any:
 
 @chunkwise(1)
 def convert(
-    image: object,
+    image: ArrayLike,
     src: str,
     dst: str,
     *,
-    out: Any = None,
-    dtype: Any = None,
-    **params: Any,
-) -> Any:
+    out: np.ndarray | None = None,
+    dtype: npt.DTypeLike | None = None,
+    **params: ArrayLike,
+) -> Array:
     """Convert ``image`` from colour space ``src`` to ``dst`` along the conversion graph.
 
     Parameters
@@ -585,7 +587,11 @@ def _srgb8_to_lab_numpy(image: np.ndarray, m: np.ndarray) -> np.ndarray:
 
 
 def srgb8_to_lab(
-    image: object, *, white: Any = None, observer: Any = 2, out: Any = None
+    image: ArrayLike,
+    *,
+    white: str | ArrayLike | None = None,
+    observer: int = 2,
+    out: np.ndarray | None = None,
 ) -> np.ndarray:
     r"""Return CIELAB (float32) of an 8-bit sRGB image, from tables (fast, unrounded).
 

@@ -34,6 +34,7 @@ import numpy as np
 
 from imageform._backend import device_of, namespace
 from imageform._dask import chunkwise
+from imageform._typing import Array, ArrayLike
 from imageform._validate import as_bool, as_image_strict, as_real, check_name
 from imageform.errors import InvalidInputError
 
@@ -231,14 +232,14 @@ def cvd_matrix(deficiency: str, severity: float = 1.0, method: str = "machado200
 
 @chunkwise(1)
 def simulate_cvd(
-    image: object,
+    image: ArrayLike,
     deficiency: str,
     severity: float = 1.0,
     method: str = "machado2009",
     *,
     linear: bool = False,
     clip: bool = False,
-) -> Any:
+) -> Array:
     r"""Simulate how an image looks to a protan, deutan or tritan observer.
 
     The model acts on linear sRGB: encoded input (``linear=False``, the default) is decoded

@@ -13,12 +13,13 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from types import MappingProxyType
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 
 from imageform._backend import common_device, namespace, use_numba
 from imageform._dask import chunkwise
+from imageform._typing import Array, ArrayLike
 from imageform._validate import (
     as_points_strict,
     as_real,
@@ -104,7 +105,7 @@ def _delta_h_sq(xp: Any, a1: Any, b1: Any, a2: Any, b2: Any, C1: Any, C2: Any) -
 
 
 @chunkwise(1)
-def delta_e_cie76(lab1: object, lab2: object) -> Any:
+def delta_e_cie76(lab1: ArrayLike, lab2: ArrayLike) -> Array:
     r"""CIE 1976 colour difference ΔE*ab: the Euclidean distance in CIELAB.
 
     .. math:: \Delta E^*_{ab} = \sqrt{(\Delta L^*)^2 + (\Delta a^*)^2 + (\Delta b^*)^2}
@@ -137,14 +138,14 @@ def delta_e_cie76(lab1: object, lab2: object) -> Any:
 
 @chunkwise(1)
 def delta_e_cie94(
-    lab1: object,
-    lab2: object,
+    lab1: ArrayLike,
+    lab2: ArrayLike,
     *,
-    application: str = "graphic_arts",
+    application: Literal["graphic_arts", "textiles"] = "graphic_arts",
     kL: float | None = None,
     kC: float = 1.0,
     kH: float = 1.0,
-) -> Any:
+) -> Array:
     r"""CIE 1994 colour difference ΔE*94 (``lab1`` is the reference).
 
     .. math::
@@ -196,7 +197,7 @@ def delta_e_cie94(
 
 
 @chunkwise(1)
-def delta_e_cmc(lab1: object, lab2: object, *, l: float = 2.0, c: float = 1.0) -> Any:
+def delta_e_cmc(lab1: ArrayLike, lab2: ArrayLike, *, l: float = 2.0, c: float = 1.0) -> Array:
     r"""CMC l:c colour difference (``lab1`` is the reference).
 
     .. math::
@@ -261,8 +262,8 @@ def delta_e_cmc(lab1: object, lab2: object, *, l: float = 2.0, c: float = 1.0) -
 
 @chunkwise(1)
 def delta_e_ciede2000(
-    lab1: object, lab2: object, *, kL: float = 1.0, kC: float = 1.0, kH: float = 1.0
-) -> Any:
+    lab1: ArrayLike, lab2: ArrayLike, *, kL: float = 1.0, kC: float = 1.0, kH: float = 1.0
+) -> Array:
     r"""CIEDE2000 colour difference ΔE00.
 
     .. math::
@@ -321,17 +322,17 @@ def delta_e_ciede2000(
 
 @chunkwise(1)
 def delta_e(
-    lab1: object,
-    lab2: object,
+    lab1: ArrayLike,
+    lab2: ArrayLike,
     method: str = "ciede2000",
     *,
     kL: float | None = None,
     kC: float = 1.0,
     kH: float = 1.0,
-    application: str = "graphic_arts",
+    application: Literal["graphic_arts", "textiles"] = "graphic_arts",
     l: float = 2.0,
     c: float = 1.0,
-) -> Any:
+) -> Array:
     r"""Colour difference between CIELAB colours by the named method.
 
     .. math:: \Delta E = f_{\text{method}}(L^*_1 a^*_1 b^*_1,\ L^*_2 a^*_2 b^*_2)

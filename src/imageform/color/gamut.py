@@ -20,6 +20,7 @@ import numpy as np
 
 from imageform._backend import device_of, namespace
 from imageform._dask import chunkwise
+from imageform._typing import Array, ArrayLike
 from imageform._validate import as_int, as_points_strict, as_real, check_name, describe
 from imageform.color.chromaticity import (
     polygon_area,
@@ -187,12 +188,12 @@ def gamut_figures(spaces: Sequence[str] = ("srgb", "display_p3", "rec2020")) -> 
 
 @chunkwise(1)
 def in_gamut(
-    values: object,
+    values: ArrayLike,
     space: str | RGBSpace = "srgb",
     *,
     kind: str = "xyz",
     tol: float = 1e-9,
-) -> Any:
+) -> Array:
     r"""Test where colours lie inside an RGB space's gamut.
 
     ``kind="xyz"`` (shape (..., 3), white Y = 1): linear RGB of the space in
@@ -233,12 +234,12 @@ def _const(m: np.ndarray, like: Any, xp: Any) -> Any:
 
 @chunkwise(1)
 def gamut_map(
-    xyz: object,
+    xyz: ArrayLike,
     space: str | RGBSpace = "srgb",
     *,
     method: str = "lch_chroma",
     iterations: int = 40,
-) -> Any:
+) -> Array:
     """Map XYZ (white Y = 1) into an RGB space's gamut; returns linear RGB in [0, 1].
 
     ``"clip"`` clips each linear RGB channel to [0, 1] (simple; shifts hue and lightness).

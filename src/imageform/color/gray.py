@@ -15,10 +15,11 @@ Grey images have a channel axis of size 1: shape (..., 1).
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, Literal
 
 from imageform._backend import namespace
 from imageform._dask import chunkwise
+from imageform._typing import Array, ArrayLike
 from imageform._validate import as_image_strict, check_name
 
 from .transfer import _srgb_decode, _srgb_encode
@@ -54,7 +55,7 @@ def _gray_to_srgb(xp: Any, g: Any) -> Any:
 
 
 @chunkwise(1)
-def srgb_to_gray(image: object, method: str = "rec601") -> Any:
+def srgb_to_gray(image: ArrayLike, method: Literal["rec601", "rec709"] = "rec601") -> Array:
     r"""Convert encoded sRGB to an encoded grey image, shape (..., 1).
 
     .. math::
@@ -89,7 +90,7 @@ def srgb_to_gray(image: object, method: str = "rec601") -> Any:
 
 
 @chunkwise(1)
-def gray_to_srgb(gray: object) -> Any:
+def gray_to_srgb(gray: ArrayLike) -> Array:
     """Convert a grey image (..., 1) to sRGB (..., 3) by repeating the value (R = G = B).
 
     Examples
@@ -102,7 +103,7 @@ def gray_to_srgb(gray: object) -> Any:
 
 
 @chunkwise(1)
-def linear_srgb_to_luminance(image: object) -> Any:
+def linear_srgb_to_luminance(image: ArrayLike) -> Array:
     """Relative luminance Y of linear sRGB, shape (..., 1): the Y of CIE XYZ.
 
     .. math:: Y = 0.2126 R + 0.7152 G + 0.0722 B

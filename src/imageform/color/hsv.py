@@ -21,6 +21,7 @@ from imageform._colormath import hexcone_hue as _hue
 from imageform._colormath import hsv_to_rgb as _hsv_to_srgb
 from imageform._colormath import rgb_to_hsv as _srgb_to_hsv
 from imageform._dask import chunkwise
+from imageform._typing import Array, ArrayLike
 from imageform._validate import as_float_strict, as_image_strict, as_real
 from imageform.errors import InvalidInputError
 
@@ -94,7 +95,7 @@ def _rgb_in(image: object) -> tuple[Any, Any]:
 
 
 @chunkwise(1)
-def srgb_to_hsv(image: object) -> Any:
+def srgb_to_hsv(image: ArrayLike) -> Array:
     r"""Convert encoded RGB to HSV (hexcone model).
 
     .. math::
@@ -127,7 +128,7 @@ def srgb_to_hsv(image: object) -> Any:
 
 
 @chunkwise(1)
-def hsv_to_srgb(hsv: object) -> Any:
+def hsv_to_srgb(hsv: ArrayLike) -> Array:
     r"""Convert HSV to encoded RGB.
 
     :math:`f(n) = V - VS\max(0, \min(k, 4 - k, 1))`, :math:`k = (n + H/60) \bmod 6` for
@@ -145,7 +146,7 @@ def hsv_to_srgb(hsv: object) -> Any:
 
 
 @chunkwise(1)
-def srgb_to_hsl(image: object) -> Any:
+def srgb_to_hsl(image: ArrayLike) -> Array:
     r"""Convert encoded RGB to HSL (double hexcone).
 
     L = (max + min)/2, :math:`S = \Delta / (1 - |2L - 1|)`, H as in HSV.
@@ -163,7 +164,7 @@ def srgb_to_hsl(image: object) -> Any:
 
 
 @chunkwise(1)
-def hsl_to_srgb(hsl: object) -> Any:
+def hsl_to_srgb(hsl: ArrayLike) -> Array:
     r"""Convert HSL to encoded RGB.
 
     :math:`f(n) = L - a \max(-1, \min(k - 3, 9 - k, 1))`, :math:`a = S \min(L, 1 - L)`,
@@ -179,7 +180,7 @@ def hsl_to_srgb(hsl: object) -> Any:
 
 
 @chunkwise(1)
-def srgb_to_hsi(image: object) -> Any:
+def srgb_to_hsi(image: ArrayLike) -> Array:
     r"""Convert encoded RGB to HSI (Gonzalez & Woods).
 
     .. math::
@@ -202,7 +203,7 @@ def srgb_to_hsi(image: object) -> Any:
 
 
 @chunkwise(1)
-def hsi_to_srgb(hsi: object) -> Any:
+def hsi_to_srgb(hsi: ArrayLike) -> Array:
     """HSI to encoded RGB, sector by sector (Gonzalez & Woods eq. (6-20)-(6-30)).
 
     Hue must be in [0, 360). Not every HSI triple is an RGB colour in [0, 1]; nothing is
@@ -219,7 +220,7 @@ def hsi_to_srgb(hsi: object) -> Any:
 
 # ---------------------------------------------------------------- hue helpers
 @chunkwise(1)
-def hue_undefined_mask(values: object, *, atol: float = 0.0) -> Any:
+def hue_undefined_mask(values: ArrayLike, *, atol: float = 0.0) -> Array:
     """Boolean mask of pixels whose hue is undefined: saturation (channel 1) ``<= atol``.
 
     Works for HSV, HSL and HSI arrays (saturation is channel 1 in all three).
@@ -247,7 +248,7 @@ def hue_undefined_mask(values: object, *, atol: float = 0.0) -> Any:
 
 
 @chunkwise(0)
-def hue_difference(h1: object, h2: object) -> Any:
+def hue_difference(h1: ArrayLike, h2: ArrayLike) -> Array:
     r"""Signed hue difference ``h2 - h1`` wrapped to [-180, 180) degrees.
 
     .. math:: \Delta h = ((h_2 - h_1 + 180) \bmod 360) - 180
@@ -270,7 +271,7 @@ def hue_difference(h1: object, h2: object) -> Any:
 
 
 @chunkwise(0)
-def hue_distance(h1: object, h2: object) -> Any:
+def hue_distance(h1: ArrayLike, h2: ArrayLike) -> Array:
     r"""Unsigned angular distance between hues in degrees, in [0, 180].
 
     .. math:: d = \min(|h_1 - h_2| \bmod 360,\; 360 - |h_1 - h_2| \bmod 360)
@@ -286,7 +287,7 @@ def hue_distance(h1: object, h2: object) -> Any:
 
 
 @chunkwise(0)
-def hue_in_range(hue: object, start: float, stop: float) -> Any:
+def hue_in_range(hue: ArrayLike, start: float, stop: float) -> Array:
     """Mask of hues inside the arc from ``start`` to ``stop`` degrees, counter-clockwise.
 
     The arc may wrap around 0/360: ``hue_in_range(h, 340, 20)`` selects reds from 340° to

@@ -19,6 +19,7 @@ from __future__ import annotations
 from typing import Any, NamedTuple
 
 from imageform._backend import namespace
+from imageform._typing import Array, ArrayLike
 from imageform._validate import as_bool, as_image_strict, as_int, check_name
 from imageform.errors import InvalidInputError
 
@@ -28,8 +29,8 @@ __all__ = ["LinearLightComparison", "downsample", "linear_light_error", "mean_li
 
 
 def mean_linear_light(
-    image: object, axis: int | tuple[int, ...] | None = None, *, transfer: str = "srgb"
-) -> Any:
+    image: ArrayLike, axis: int | tuple[int, ...] | None = None, *, transfer: str = "srgb"
+) -> Array:
     r"""Mean of encoded values computed in linear light, returned encoded.
 
     .. math:: \bar V = \mathrm{enc}\Big(\frac1N \sum_i \mathrm{dec}(V_i)\Big)
@@ -77,8 +78,8 @@ def _box(xp: Any, x: Any, f: int) -> Any:
 
 
 def downsample(
-    image: object, factor: int, *, linear_light: bool = True, transfer: str = "srgb"
-) -> Any:
+    image: ArrayLike, factor: int, *, linear_light: bool = True, transfer: str = "srgb"
+) -> Array:
     """Shrink an image by an integer ``factor`` with a box filter (mean of f x f blocks).
 
     With ``linear_light=True`` (the right way) the blocks are averaged in linear light;
@@ -135,7 +136,7 @@ class LinearLightComparison(NamedTuple):
 
 
 def linear_light_error(
-    image: object, factor: int = 2, *, transfer: str = "srgb"
+    image: ArrayLike, factor: int = 2, *, transfer: str = "srgb"
 ) -> LinearLightComparison:
     """Downsample both ways and report the error of averaging encoded values.
 

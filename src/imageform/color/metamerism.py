@@ -15,6 +15,8 @@ and takes the largest step :math:`r' = r + \tau b` that keeps the result physica
 
 from __future__ import annotations
 
+from typing import Literal
+
 import numpy as np
 
 from imageform import _deprecate
@@ -122,7 +124,7 @@ def metamer(
     *,
     observer: int | str = 2,
     illuminant: str | Spectrum | None = "D65",
-    kind: str = "reflectance",
+    kind: Literal["reflectance", "light"] = "reflectance",
     strength: float = 0.95,
     max_frequency: int = 8,
 ) -> Spectrum:

@@ -23,6 +23,7 @@ from typing import Any
 
 from imageform._backend import namespace
 from imageform._dask import chunkwise
+from imageform._typing import Array, ArrayLike
 from imageform._validate import (
     as_float_strict,
     as_image_strict,
@@ -51,7 +52,7 @@ def _flip(xp: Any, x: Any) -> Any:
 
 
 @chunkwise(1)
-def srgb_to_bgr(image: object) -> Any:
+def srgb_to_bgr(image: ArrayLike) -> Array:
     """Reverse the channel order RGB -> BGR (values unchanged).
 
     Examples
@@ -64,7 +65,7 @@ def srgb_to_bgr(image: object) -> Any:
 
 
 @chunkwise(1)
-def bgr_to_srgb(image: object) -> Any:
+def bgr_to_srgb(image: ArrayLike) -> Array:
     """Reverse the channel order BGR -> RGB (``cv2.imread`` output to imageform's order).
 
     Examples
@@ -82,7 +83,7 @@ def _round_u8(xp: Any, x: Any) -> Any:
 
 
 @chunkwise(1)
-def to_opencv(values: object, convention: str) -> Any:
+def to_opencv(values: ArrayLike, convention: str) -> Array:
     """Convert imageform values (float, RGB order, degrees) to OpenCV's layout ``convention``.
 
     Parameters
@@ -132,7 +133,7 @@ def to_opencv(values: object, convention: str) -> Any:
 
 
 @chunkwise(1)
-def from_opencv(values: object, convention: str) -> Any:
+def from_opencv(values: ArrayLike, convention: str) -> Array:
     """OpenCV's layout ``convention`` back to imageform values (float, RGB order, degrees).
 
     uint8 input is read as OpenCV's code values (not divided by 255 first). The result is

@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 
 from imageform._backend import device_of, to_numpy
+from imageform._typing import ArrayLike
 from imageform._validate import as_image_strict, as_int, as_real, check_name, describe
 from imageform.errors import InvalidInputError
 
@@ -74,7 +75,7 @@ def viridis(n: int = 256) -> np.ndarray:
     return np.array(_viridis()[idx])
 
 
-def parse_colors(colors: object) -> np.ndarray:
+def parse_colors(colors: str | Sequence[str] | ArrayLike) -> np.ndarray:
     """Parse colours into encoded sRGB floats (n, 3).
 
     Hex strings (``"#E69F00"``, ``"E69F00"``, ``"#E90"``), one comma-separated string, or an
@@ -167,7 +168,7 @@ class PaletteCheck:
 
 
 def palette_check(
-    colors: object,
+    colors: str | Sequence[str] | ArrayLike,
     *,
     threshold: float = 10.0,
     method: str = "machado2009",

@@ -26,6 +26,7 @@ import numpy as np
 
 from imageform._backend import constant, namespace
 from imageform._dask import chunkwise
+from imageform._typing import Array, ArrayLike
 from imageform._validate import as_image_strict, as_real_ndarray, check_name, describe
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
 
@@ -261,7 +262,7 @@ def _apply_matrix(x: Any, m: np.ndarray) -> Any:
 
 
 @chunkwise(1)
-def linear_rgb_to_xyz(rgb: object, space: str | RGBSpace = "srgb") -> Any:
+def linear_rgb_to_xyz(rgb: ArrayLike, space: str | RGBSpace = "srgb") -> Array:
     r"""Linear RGB of ``space`` to CIE XYZ (relative to the space's white, Y = 1 there).
 
     .. math:: (X, Y, Z)^T = M\,(R, G, B)^T
@@ -288,7 +289,7 @@ def linear_rgb_to_xyz(rgb: object, space: str | RGBSpace = "srgb") -> Any:
 
 
 @chunkwise(1)
-def xyz_to_linear_rgb(xyz: object, space: str | RGBSpace = "srgb") -> Any:
+def xyz_to_linear_rgb(xyz: ArrayLike, space: str | RGBSpace = "srgb") -> Array:
     """CIE XYZ to linear RGB of ``space`` (the inverse of :func:`linear_rgb_to_xyz`).
 
     Out-of-gamut colours give components below 0 or above 1; nothing is clipped.
@@ -304,7 +305,7 @@ def xyz_to_linear_rgb(xyz: object, space: str | RGBSpace = "srgb") -> Any:
 
 
 @chunkwise(1)
-def linear_srgb_to_xyz(rgb: object) -> Any:
+def linear_srgb_to_xyz(rgb: ArrayLike) -> Array:
     r"""Linear sRGB to CIE XYZ with the derived IEC 61966-2-1 matrix (D65, Y = 1).
 
     .. math::
@@ -335,7 +336,7 @@ def linear_srgb_to_xyz(rgb: object) -> Any:
 
 
 @chunkwise(1)
-def xyz_to_linear_srgb(xyz: object) -> Any:
+def xyz_to_linear_srgb(xyz: ArrayLike) -> Array:
     """CIE XYZ (D65, Y = 1) to linear sRGB; inverse of :func:`linear_srgb_to_xyz`.
 
     Source: IEC 61966-2-1:1999, clause 5.3 (matrix derived, not the printed 4-digit one).

@@ -23,9 +23,10 @@ repeats, ``method="nearest"``); edges are replicated.
 from __future__ import annotations
 
 from types import MappingProxyType
-from typing import Any, NamedTuple
+from typing import Any, Literal, NamedTuple
 
 from imageform._backend import namespace
+from imageform._typing import Array, ArrayLike
 from imageform._validate import (
     as_bool,
     as_float_strict,
@@ -141,7 +142,10 @@ class SubsampledChroma(_SubsampledChroma):
 
 
 def chroma_subsample(
-    ycbcr: object, scheme: str = "4:2:0", *, siting: str = "left"
+    ycbcr: ArrayLike,
+    scheme: Literal["4:4:4", "4:2:2", "4:2:0"] = "4:2:0",
+    *,
+    siting: Literal["left", "center", "top_left"] = "left",
 ) -> SubsampledChroma:
     r"""Split Y'CbCr into full-resolution luma and subsampled chroma.
 
@@ -192,13 +196,13 @@ def chroma_subsample(
 
 
 def chroma_upsample(
-    luma: object,
-    chroma: object,
-    scheme: str = "4:2:0",
+    luma: ArrayLike,
+    chroma: ArrayLike,
+    scheme: Literal["4:4:4", "4:2:2", "4:2:0"] = "4:2:0",
     *,
-    siting: str = "left",
-    method: str = "bilinear",
-) -> Any:
+    siting: Literal["left", "center", "top_left"] = "left",
+    method: Literal["bilinear", "nearest"] = "bilinear",
+) -> Array:
     r"""Rebuild full-resolution Y'CbCr from luma and subsampled chroma.
 
     .. math:: C(i) = (1 - t)\,C_{sub}[k] + t\,C_{sub}[k + 1],\quad
@@ -256,14 +260,14 @@ def chroma_upsample(
 
 
 def subsample_round_trip(
-    image: object,
-    scheme: str = "4:2:0",
+    image: ArrayLike,
+    scheme: Literal["4:4:4", "4:2:2", "4:2:0"] = "4:2:0",
     *,
-    siting: str = "left",
-    method: str = "bilinear",
-    standard: str = "bt601",
+    siting: Literal["left", "center", "top_left"] = "left",
+    method: Literal["bilinear", "nearest"] = "bilinear",
+    standard: Literal["bt601", "bt709", "bt2020"] = "bt601",
     clip: bool = False,
-) -> Any:
+) -> Array:
     """Round-trip sRGB -> Y'CbCr -> subsample -> upsample -> sRGB, as a codec's colour path does.
 
     Parameters
@@ -302,14 +306,14 @@ def subsample_round_trip(
 
 
 def subsampling_delta_e(
-    image: object,
-    scheme: str = "4:2:0",
+    image: ArrayLike,
+    scheme: Literal["4:4:4", "4:2:2", "4:2:0"] = "4:2:0",
     *,
-    siting: str = "left",
-    method: str = "bilinear",
-    standard: str = "bt601",
+    siting: Literal["left", "center", "top_left"] = "left",
+    method: Literal["bilinear", "nearest"] = "bilinear",
+    standard: Literal["bt601", "bt709", "bt2020"] = "bt601",
     clip: bool = True,
-) -> Any:
+) -> Array:
     r"""Per-pixel CIEDE2000 between an sRGB image and its chroma-subsampled round trip.
 
     .. math:: \Delta E_{00}\big(\mathrm{Lab}(I),\ \mathrm{Lab}(U(S(I)))\big)

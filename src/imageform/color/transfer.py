@@ -23,6 +23,7 @@ from imageform._colormath import pos_pow as _pos_pow
 from imageform._colormath import srgb_decode as _srgb_decode
 from imageform._colormath import srgb_encode as _srgb_encode
 from imageform._dask import chunkwise
+from imageform._typing import Array, ArrayLike
 from imageform._validate import as_image_strict, check_name, check_positive
 from imageform.color._gpu import transfer as _gpu_transfer
 
@@ -123,7 +124,7 @@ def _prep(values: object, name: str) -> tuple[Any, Any]:
 
 # ---------------------------------------------------------------- public functions
 @chunkwise(1)
-def srgb_to_linear(values: object) -> Any:
+def srgb_to_linear(values: ArrayLike) -> Array:
     r"""Decode sRGB values to linear light (the IEC 61966-2-1 piecewise curve, exact).
 
     .. math::
@@ -160,7 +161,7 @@ def srgb_to_linear(values: object) -> Any:
 
 
 @chunkwise(1)
-def linear_to_srgb(values: object) -> Any:
+def linear_to_srgb(values: ArrayLike) -> Array:
     r"""Encode linear light as sRGB (IEC 61966-2-1, exact).
 
     .. math::
@@ -193,7 +194,7 @@ def linear_to_srgb(values: object) -> Any:
 
 
 @chunkwise(1)
-def gamma_to_linear(values: object, gamma: float = 2.2) -> Any:
+def gamma_to_linear(values: ArrayLike, gamma: float = 2.2) -> Array:
     r"""Decode a pure power law: :math:`L = \operatorname{sign}(V) |V|^{\gamma}`.
 
     The lecture's display gamma is 2.2 (the default).
@@ -223,7 +224,7 @@ def gamma_to_linear(values: object, gamma: float = 2.2) -> Any:
 
 
 @chunkwise(1)
-def linear_to_gamma(values: object, gamma: float = 2.2) -> Any:
+def linear_to_gamma(values: ArrayLike, gamma: float = 2.2) -> Array:
     r"""Encode with a pure power law: :math:`V = \operatorname{sign}(L) |L|^{1/\gamma}`.
 
     Examples
@@ -240,7 +241,7 @@ def linear_to_gamma(values: object, gamma: float = 2.2) -> Any:
 
 
 @chunkwise(1)
-def adobe_rgb_to_linear(values: object) -> Any:
+def adobe_rgb_to_linear(values: ArrayLike) -> Array:
     """Decode Adobe RGB (1998): :math:`L = V^{563/256}` (odd extension below 0).
 
     Source: Adobe RGB (1998) Color Image Encoding, v2005-05, clause 4.3.1.2.
@@ -258,7 +259,7 @@ def adobe_rgb_to_linear(values: object) -> Any:
 
 
 @chunkwise(1)
-def linear_to_adobe_rgb(values: object) -> Any:
+def linear_to_adobe_rgb(values: ArrayLike) -> Array:
     """Encode Adobe RGB (1998): :math:`V = L^{256/563}`.
 
     Examples
@@ -274,7 +275,7 @@ def linear_to_adobe_rgb(values: object) -> Any:
 
 
 @chunkwise(1)
-def linear_to_rec709(values: object) -> Any:
+def linear_to_rec709(values: ArrayLike) -> Array:
     r"""Rec. 709 OETF (camera encoding).
 
     .. math::
@@ -296,7 +297,7 @@ def linear_to_rec709(values: object) -> Any:
 
 
 @chunkwise(1)
-def rec709_to_linear(values: object) -> Any:
+def rec709_to_linear(values: ArrayLike) -> Array:
     """Inverse of the Rec. 709 OETF (breakpoint 4.5 x 0.018 = 0.081).
 
     Note: this inverts the camera OETF; a Rec. 709 *display* decodes with the BT.1886 EOTF.
@@ -316,7 +317,7 @@ def rec709_to_linear(values: object) -> Any:
 
 
 @chunkwise(1)
-def linear_to_rec2020(values: object) -> Any:
+def linear_to_rec2020(values: ArrayLike) -> Array:
     """Rec. 2020 OETF: Rec. 709's curve with α = 1.09929682680944, β = 0.018053968510807.
 
     The exact α, β of BT.2020-2 are used (colour-science's default, for 10-bit systems, uses
@@ -337,7 +338,7 @@ def linear_to_rec2020(values: object) -> Any:
 
 
 @chunkwise(1)
-def rec2020_to_linear(values: object) -> Any:
+def rec2020_to_linear(values: ArrayLike) -> Array:
     """Inverse of the Rec. 2020 OETF.
 
     Examples
@@ -353,7 +354,7 @@ def rec2020_to_linear(values: object) -> Any:
 
 
 @chunkwise(1)
-def linear_to_prophoto(values: object) -> Any:
+def linear_to_prophoto(values: ArrayLike) -> Array:
     """ProPhoto (ROMM RGB) encoding: 16 L below 1/512, :math:`L^{1/1.8}` above.
 
     Source: ISO 22028-2:2013, clause 5.3.
@@ -371,7 +372,7 @@ def linear_to_prophoto(values: object) -> Any:
 
 
 @chunkwise(1)
-def prophoto_to_linear(values: object) -> Any:
+def prophoto_to_linear(values: ArrayLike) -> Array:
     """ProPhoto (ROMM RGB) decoding: V / 16 below 1/32, :math:`V^{1.8}` above.
 
     Examples
@@ -431,7 +432,7 @@ def _encode_clean(xp: Any, x: Any, name: str, gamma: float = 2.2) -> Any:
 
 
 @chunkwise(1)
-def decode(values: object, transfer: str = "srgb", *, gamma: float = 2.2) -> Any:
+def decode(values: ArrayLike, transfer: str = "srgb", *, gamma: float = 2.2) -> Array:
     """Decode encoded values to linear light with the transfer function named ``transfer``.
 
     Parameters
@@ -458,7 +459,7 @@ def decode(values: object, transfer: str = "srgb", *, gamma: float = 2.2) -> Any
 
 
 @chunkwise(1)
-def encode(values: object, transfer: str = "srgb", *, gamma: float = 2.2) -> Any:
+def encode(values: ArrayLike, transfer: str = "srgb", *, gamma: float = 2.2) -> Array:
     """Encode linear light with the transfer function named ``transfer`` (see :func:`decode`).
 
     Examples

@@ -41,6 +41,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from imageform._backend import constant, device_of, is_dask_namespace, namespace
+from imageform._typing import Array, ArrayLike
 from imageform._validate import (
     any_value,
     as_bool,
@@ -271,18 +272,18 @@ def _linear(image: object, transfer: str, channel_axis: int) -> tuple[Any, Any, 
 
 
 def estimate_illuminant(
-    image: object,
+    image: ArrayLike,
     method: str = "gray_world",
     *,
     transfer: str = "srgb",
     percentile: float | None = None,
     p: float = 6.0,
     sigma: float = 1.0,
-    illuminant: Any = None,
+    illuminant: str | ArrayLike | None = None,
     cct: float | None = None,
     space: str = "srgb",
     channel_axis: int = -1,
-) -> Any:
+) -> Array:
     r"""Estimate the illuminant's colour in linear RGB from an image (see the module notes).
 
     .. math:: e_c = \left(\mathrm{mean}_x\,|\partial^n \rho_{c,\sigma}(x)|^p\right)^{1/p}
@@ -398,7 +399,7 @@ WHITE_BALANCE_METHODS: MappingProxyType[str, Callable[..., Any]] = MappingProxyT
 
 
 def white_balance(
-    image: object,
+    image: ArrayLike,
     method: str = "gray_world",
     *,
     transfer: str = "srgb",
@@ -406,7 +407,7 @@ def white_balance(
     percentile: float | None = None,
     p: float = 6.0,
     sigma: float = 1.0,
-    illuminant: Any = None,
+    illuminant: str | ArrayLike | None = None,
     cct: float | None = None,
     space: str = "srgb",
     clip: bool = False,
@@ -500,7 +501,7 @@ def _apply(xp: Any, lin: Any, gains: Any, tname: str, clip: bool) -> Any:
 
 
 def white_balance_gains(
-    image: object,
+    image: ArrayLike,
     method: str = "gray_world",
     *,
     transfer: str = "srgb",
@@ -508,10 +509,10 @@ def white_balance_gains(
     percentile: float | None = None,
     p: float = 6.0,
     sigma: float = 1.0,
-    illuminant: Any = None,
+    illuminant: str | ArrayLike | None = None,
     cct: float | None = None,
     space: str = "srgb",
-) -> Any:
+) -> Array:
     """Return the gains :func:`white_balance` finds for ``image`` (not applied).
 
     With :func:`apply_white_balance_gains`, the same as :func:`white_balance`, a band of rows at a
@@ -536,7 +537,9 @@ def white_balance_gains(
     return _gains(xp, lin, m, norm, percentile, p, sigma, illuminant, cct, space)
 
 
-def apply_white_balance_gains(image: object, gains: Any, *, transfer: str = "srgb") -> Any:
+def apply_white_balance_gains(
+    image: ArrayLike, gains: ArrayLike, *, transfer: str = "srgb"
+) -> Array:
     """Apply ``gains`` (from :func:`white_balance_gains`) as :func:`white_balance` does.
 
     ``gains`` is ``(..., 3)`` positive finite numbers (one triple per image of a batch).

@@ -22,6 +22,7 @@ from typing import Any
 import numpy as np
 
 from imageform import _deprecate
+from imageform._typing import ArrayLike
 from imageform._validate import as_real_ndarray, describe, refuse_non_real
 from imageform.errors import InvalidInputError, UnknownOptionError
 
@@ -184,7 +185,7 @@ def whitepoint_xyz(name: str, *, observer: int = 2) -> np.ndarray:
 
 
 @_deprecate.parameters(positional=("observer",))
-def resolve_white(white: Any, *, observer: int = 2, name: str = "white") -> np.ndarray:
+def resolve_white(white: str | ArrayLike, *, observer: int = 2, name: str = "white") -> np.ndarray:
     """Resolve a ``white=`` argument to XYZ (float64, shape (3,), Y as given or 1).
 
     Accepted forms: an illuminant name (``"D65"``, see :data:`WHITEPOINTS_XY`); an RGB space

@@ -28,13 +28,14 @@ from __future__ import annotations
 
 import math
 from types import MappingProxyType
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 
 from imageform import _deprecate
 from imageform._backend import namespace
 from imageform._dask import chunkwise
+from imageform._typing import Array, ArrayLike
 from imageform._validate import (
     as_float_strict,
     as_image_strict,
@@ -134,12 +135,12 @@ def _ycbcr_to_rgb(xp: Any, ycc: Any, kr: float, kb: float, sc: tuple[float, ...]
 @_deprecate.parameters(renamed={"range": "signal_range", "bits": "bit_depth"})
 @chunkwise(1)
 def rgb_to_ycbcr(
-    image: object,
-    standard: str = "bt601",
+    image: ArrayLike,
+    standard: Literal["bt601", "bt709", "bt2020"] = "bt601",
     *,
-    signal_range: str = "full",
+    signal_range: Literal["full", "limited"] = "full",
     bit_depth: int | None = None,
-) -> Any:
+) -> Array:
     """Convert encoded R'G'B' to Y'CbCr (analog or code values), see the module docstring.
 
     Parameters
@@ -179,12 +180,12 @@ def rgb_to_ycbcr(
 @_deprecate.parameters(renamed={"range": "signal_range", "bits": "bit_depth"})
 @chunkwise(1)
 def ycbcr_to_rgb(
-    ycbcr: object,
-    standard: str = "bt601",
+    ycbcr: ArrayLike,
+    standard: Literal["bt601", "bt709", "bt2020"] = "bt601",
     *,
-    signal_range: str = "full",
+    signal_range: Literal["full", "limited"] = "full",
     bit_depth: int | None = None,
-) -> Any:
+) -> Array:
     """Y'CbCr (analog or code values) to encoded R'G'B'; inverse of :func:`rgb_to_ycbcr`.
 
     Integer code values (e.g. uint8, uint16 for 10-bit) are read as numbers, not rescaled.
@@ -210,12 +211,12 @@ def ycbcr_to_rgb(
 @_deprecate.parameters(renamed={"range": "signal_range", "bits": "bit_depth"})
 @chunkwise(1)
 def srgb_to_ycbcr(
-    image: object,
-    standard: str = "bt601",
+    image: ArrayLike,
+    standard: Literal["bt601", "bt709", "bt2020"] = "bt601",
     *,
-    signal_range: str = "full",
+    signal_range: Literal["full", "limited"] = "full",
     bit_depth: int | None = None,
-) -> Any:
+) -> Array:
     """sRGB-encoded values to Y'CbCr: :func:`rgb_to_ycbcr` applied to the sRGB values.
 
     This is what JPEG (BT.601, full range, 8 bits) and OpenCV's ``COLOR_RGB2YCrCb`` do with
@@ -232,12 +233,12 @@ def srgb_to_ycbcr(
 @_deprecate.parameters(renamed={"range": "signal_range", "bits": "bit_depth"})
 @chunkwise(1)
 def ycbcr_to_srgb(
-    ycbcr: object,
-    standard: str = "bt601",
+    ycbcr: ArrayLike,
+    standard: Literal["bt601", "bt709", "bt2020"] = "bt601",
     *,
-    signal_range: str = "full",
+    signal_range: Literal["full", "limited"] = "full",
     bit_depth: int | None = None,
-) -> Any:
+) -> Array:
     """Y'CbCr to sRGB-encoded values; inverse of :func:`srgb_to_ycbcr`.
 
     Examples

@@ -42,6 +42,7 @@ from importlib import resources
 import numpy as np
 from numpy.typing import NDArray
 
+from imageform._typing import ArrayLike
 from imageform._validate import as_int, as_real, describe, format_shape
 from imageform.errors import InvalidInputError, UnknownOptionError
 
@@ -494,7 +495,7 @@ def _rotated_codes(name: str) -> NDArray[np.uint8]:
 
 
 def detect_aruco_markers(
-    image: object,
+    image: ArrayLike,
     dictionary: str | ArucoDictionary = "6x6_250",
     *,
     min_side_px: float = 12.0,
@@ -835,7 +836,7 @@ def _search_numpy(
     return found
 
 
-def identify_aruco_dictionary(image: object, *, min_markers: int = 2) -> str | None:
+def identify_aruco_dictionary(image: ArrayLike, *, min_markers: int = 2) -> str | None:
     """Name the predefined dictionary whose markers an image shows, or None.
 
     OpenCV's predefined dictionaries of one marker size are prefixes of each other

@@ -28,6 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from imageform._typing import ArrayLike
 from imageform._validate import as_int, as_real, describe
 from imageform.errors import InvalidInputError
 from imageform.geometry.aruco import (
@@ -226,7 +227,7 @@ class CharucoCorners:
 
 
 def detect_charuco(
-    image: object,
+    image: ArrayLike,
     board: CharucoBoard,
     *,
     markers: ArucoMarkers | None = None,

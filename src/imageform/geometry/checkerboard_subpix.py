@@ -13,6 +13,7 @@ from numpy.typing import NDArray
 
 from imageform import _deprecate
 from imageform._backend import to_numpy, use_numba
+from imageform._typing import ArrayLike
 from imageform._validate import (
     as_image,
     as_int,
@@ -44,7 +45,7 @@ class RefinedCorners(NamedTuple):
     status: NDArray[np.int64]
 
 
-def as_gray(image: object) -> NDArray[np.floating]:
+def as_gray(image: ArrayLike) -> NDArray[np.floating]:
     """Make a grey NumPy image (H, W): float32 for integer/float32 input, float64 for float64."""
     arr = as_image(image, "image", channels=None, range_check=False)
     # float32 (integer and float32 input) or float64 (float64 input): docs/conventions.md
@@ -70,7 +71,7 @@ def as_gray(image: object) -> NDArray[np.floating]:
 _SCALE = {np.dtype(np.uint8): 255.0, np.dtype(np.uint16): 65535.0}
 
 
-def gray_codes(image: object) -> tuple[NDArray[np.number], float, float]:
+def gray_codes(image: ArrayLike) -> tuple[NDArray[np.number], float, float]:
     """Return the grey image as stored, its scale and its span: ``(codes, scale, max - min)``.
 
     ``codes / scale`` is :func:`as_gray` (see :func:`gray_from_codes`) and the span is 0

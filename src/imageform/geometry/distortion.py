@@ -29,6 +29,7 @@ import numpy as np
 
 from imageform._backend import common_device, namespace, to_numpy, use_numba
 from imageform._dask import is_dask_array
+from imageform._typing import Array, ArrayLike
 from imageform._validate import (
     as_float_bounded,
     as_int,
@@ -163,7 +164,7 @@ class BrownConrady:
         return tuple(float(v) for v in astuple(self))
 
     @classmethod
-    def from_opencv(cls, dist_coeffs: Any) -> BrownConrady:
+    def from_opencv(cls, dist_coeffs: ArrayLike) -> BrownConrady:
         """From OpenCV's 4, 5 or 8 ``distCoeffs`` ``(k1, k2, p1, p2[, k3[, k4, k5, k6]])``."""
         d = np.asarray(
             to_numpy(as_float_bounded(dist_coeffs, "dist_coeffs", xp=np, dtype=np.float64)),
@@ -175,7 +176,7 @@ class BrownConrady:
             )
         return cls(*(float(v) for v in d))
 
-    def distort(self, xy: Any) -> Any:
+    def distort(self, xy: ArrayLike) -> Array:
         """Distort ideal normalised coordinates ``(..., 2)``; see the class docstring."""
         if is_dask_array(xy):  # pointwise: lazily, one task per chunk
             return _dask_points(lambda b: self.distort(b), xy)
@@ -194,7 +195,7 @@ class BrownConrady:
             return out.reshape(shape)
         return bc_distort_xp(arr, self.coeffs, xp)
 
-    def undistort(self, xy: Any, max_iter: int = 20, tol: float | None = None) -> Undistorted:
+    def undistort(self, xy: ArrayLike, max_iter: int = 20, tol: float | None = None) -> Undistorted:
         """Invert :meth:`distort` by Newton's method: :class:`Undistorted` ``(xy, valid)``.
 
         Starts from ``x = x_d`` and stops when ``|distort(x) - x_d| <= tol (1 + |x_d|)`` in
@@ -263,7 +264,7 @@ class DivisionModel:
         """``(k1, k2)`` as floats."""
         return (float(self.k1), float(self.k2))
 
-    def distort(self, xy: Any, max_iter: int = 30, tol: float | None = None) -> Any:
+    def distort(self, xy: ArrayLike, max_iter: int = 30, tol: float | None = None) -> Array:
         """Distort ideal coordinates ``(..., 2)``; NaN where no distorted point exists."""
         if is_dask_array(xy):  # pointwise: lazily, one task per chunk
             return _dask_points(lambda b: self.distort(b, max_iter, tol), xy)
@@ -273,7 +274,7 @@ class DivisionModel:
         out, _ = division_distort_xp(arr, self.coeffs, xp, it, t)
         return out
 
-    def undistort(self, xy: Any, max_iter: int = 30, tol: float | None = None) -> Undistorted:
+    def undistort(self, xy: ArrayLike, max_iter: int = 30, tol: float | None = None) -> Undistorted:
         """Closed-form undistortion; ``valid`` is False where ``1 + k1 r² + k2 r⁴ <= 0``.
 
         ``max_iter`` and ``tol`` are accepted for a uniform interface and unused.
@@ -321,7 +322,7 @@ class KannalaBrandt:
         """``(k1, k2, k3, k4)`` as floats (the order of OpenCV fisheye coefficients)."""
         return tuple(float(v) for v in astuple(self))
 
-    def distort(self, xy: Any) -> Any:
+    def distort(self, xy: ArrayLike) -> Array:
         """Distort ideal normalised coordinates ``(..., 2)``."""
         if is_dask_array(xy):  # pointwise: lazily, one task per chunk
             return _dask_points(lambda b: self.distort(b), xy)
@@ -336,7 +337,7 @@ class KannalaBrandt:
             return out.reshape(shape)
         return kb_distort_xp(arr, self.coeffs, xp)
 
-    def undistort(self, xy: Any, max_iter: int = 20, tol: float | None = None) -> Undistorted:
+    def undistort(self, xy: ArrayLike, max_iter: int = 20, tol: float | None = None) -> Undistorted:
         """Invert :meth:`distort`: :class:`Undistorted` ``(xy, valid)``, NaN where not valid.
 
         Examples
@@ -389,7 +390,7 @@ def _project_xp(points: Any, K: Any, R: Any, t: Any, distortion: Any, xp: Any) -
 
 
 def project_points_distorted(
-    points: Any, K: Any, R: Any, t: Any, distortion: DistortionModel | None
+    points: ArrayLike, K: ArrayLike, R: ArrayLike, t: ArrayLike, distortion: DistortionModel | None
 ) -> Projection:
     r"""Project world points through ``[R | t]``, a distortion model and ``K`` to pixels.
 

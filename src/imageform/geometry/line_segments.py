@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Literal
 
 import array_api_compat
 import numpy as np
@@ -156,7 +157,7 @@ def _gradient(img: FloatArray) -> tuple[FloatArray, FloatArray]:
 def detect_line_segments(
     image: ArrayLike,
     *,
-    method: str = "lsd",
+    method: Literal["lsd", "simple"] = "lsd",
     sigma: float = 0.6,
     angle_tolerance: float = math.radians(22.5),
     min_length: float | None = None,

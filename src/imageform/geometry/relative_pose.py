@@ -9,7 +9,7 @@
 
 from __future__ import annotations
 
-from typing import NamedTuple
+from typing import Literal, NamedTuple
 
 import numpy as np
 import numpy.typing as npt
@@ -273,7 +273,7 @@ def triangulate_two_view(
     points1: npt.ArrayLike,
     points2: npt.ArrayLike,
     *,
-    method: str = "optimal",
+    method: Literal["optimal", "linear", "midpoint"] = "optimal",
     check_depth: bool = True,
 ) -> TwoViewPoints:
     """3-D points from their pixels in two views with projection matrices ``P1, P2``.

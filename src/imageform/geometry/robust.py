@@ -8,7 +8,7 @@ final model refined by Levenberg-Marquardt on the reprojection error of its inli
 
 from __future__ import annotations
 
-from typing import NamedTuple
+from typing import Literal, NamedTuple
 
 import numpy as np
 import numpy.typing as npt
@@ -199,7 +199,7 @@ def find_homography(
     threshold: float = 3.0,
     confidence: float = 0.999,
     max_trials: int = 2000,
-    refine: str = "symmetric",
+    refine: Literal["symmetric", "forward", "none"] = "symmetric",
     max_iter: int = 50,
     rng: RNGLike = 0,
 ) -> HomographyResult:

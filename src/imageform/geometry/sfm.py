@@ -50,14 +50,19 @@ the initial pair's baseline has length 1.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
 
+from imageform._typing import ArrayLike
 from imageform._validate import as_int, as_real, as_real_array, describe
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
+
+if TYPE_CHECKING:
+    from imageform.geometry.distortion import DistortionModel
 
 __all__ = [
     "Features",
@@ -109,7 +114,9 @@ def _as_mask(mask: object, shape: tuple[int, ...], name: str) -> NDArray[np.uint
     return np.where(m > 0, 255, 0).astype(np.uint8)
 
 
-def detect_features(image: object, *, max_features: int = 4000, mask: object = None) -> Features:
+def detect_features(
+    image: ArrayLike, *, max_features: int = 4000, mask: ArrayLike | None = None
+) -> Features:
     """Detect SIFT keypoints and descriptors (OpenCV's SIFT, the ``reconstruct`` extra).
 
     Parameters
@@ -749,16 +756,16 @@ def _build_tracks(
 
 
 def reconstruct_sequence(
-    images: list[Any],
-    K: object,
-    distortion: object = None,
+    images: Sequence[ArrayLike],
+    K: ArrayLike,
+    distortion: DistortionModel | None = None,
     *,
     window: int = 3,
     max_features: int = 4000,
     ratio: float = 0.8,
     threshold_px: float = 1.0,
     rng: int = 0,
-    masks: object = None,
+    masks: ArrayLike | Sequence[ArrayLike | None] | None = None,
 ) -> Reconstruction:
     """Reconstruct the cameras and a sparse point cloud from an ordered image sequence.
 
@@ -831,7 +838,7 @@ def reconstruct_sequence(
     for feat in feats:
         if distortion is not None and len(feat):
             xy = (feat.xy - k[:2, 2]) / np.diag(k)[:2]
-            und, ok = distortion.undistort(xy)  # type: ignore[attr-defined]
+            und, ok = distortion.undistort(xy)
             und = np.asarray(und, np.float64)
             und[~np.asarray(ok, bool)] = np.nan
             ideal.append(und * np.diag(k)[:2] + k[:2, 2])

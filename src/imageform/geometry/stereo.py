@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from collections.abc import Collection, Sequence
 from dataclasses import dataclass, field
-from typing import Any, NamedTuple
+from typing import TYPE_CHECKING, Any, NamedTuple
 
 import numpy as np
 import numpy.typing as npt
@@ -46,6 +46,9 @@ from imageform.geometry.calibration_refine import (
 from imageform.geometry.calibration_result import CalibrationResult
 from imageform.geometry.calibration_views import _views
 from imageform.geometry.distortion import BrownConrady
+
+if TYPE_CHECKING:
+    from imageform.geometry.distortion import DistortionModel
 
 __all__ = [
     "StereoCalibrationResult",
@@ -587,9 +590,9 @@ def _matrix(value: Any, name: str, shape: tuple[int, ...]) -> F64:
 
 def stereo_rectify(
     K1: npt.ArrayLike,
-    distortion1: Any,
+    distortion1: DistortionModel | None,
     K2: npt.ArrayLike,
-    distortion2: Any,
+    distortion2: DistortionModel | None,
     image_size: tuple[int, int],
     R: npt.ArrayLike,
     T: npt.ArrayLike,
@@ -739,7 +742,7 @@ def stereo_rectify(
 
 def rectification_map(
     K: npt.ArrayLike,
-    distortion: Any,
+    distortion: DistortionModel | None,
     R_rect: npt.ArrayLike,
     P: npt.ArrayLike,
     image_size: tuple[int, int],

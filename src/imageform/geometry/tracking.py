@@ -39,6 +39,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from imageform._typing import ArrayLike
 from imageform._validate import as_int, as_real, describe
 from imageform.errors import InvalidInputError
 from imageform.geometry.charuco import CharucoBoard
@@ -309,7 +310,7 @@ class BoardTracker:
 
     # -- one frame ------------------------------------------------------------------------
 
-    def update(self, image: object) -> BoardPose:
+    def update(self, image: ArrayLike) -> BoardPose:
         """Find the board in ``image`` (a frame, (H, W) or (H, W, 3)) and solve its pose."""
         from imageform.geometry.pnp import solve_pnp
         from imageform.geometry.rotations import matrix_to_rvec

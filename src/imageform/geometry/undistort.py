@@ -30,6 +30,7 @@ from imageform._backend import (
     to_numpy,
     use_numba,
 )
+from imageform._typing import Array, ArrayLike
 from imageform._validate import (
     MAX_MAGNITUDE,
     as_bool,
@@ -174,7 +175,9 @@ def _same_kind(image: Any, map_uv: Any) -> None:
         )
 
 
-def remap_bilinear(image: Any, map_uv: Any, *, fill: float = 0.0, keep_dtype: bool = False) -> Any:
+def remap_bilinear(
+    image: ArrayLike, map_uv: ArrayLike, *, fill: float = 0.0, keep_dtype: bool = False
+) -> Array:
     r"""Sample ``image`` at the source positions ``map_uv`` by bilinear interpolation.
 
     .. math::
@@ -327,11 +330,11 @@ def _intrinsics_on(K: Any, new_K: Any, xp: Any, device: Any) -> tuple[Any, Any]:
 
 def undistortion_map(
     shape: tuple[int, int],
-    K: Any,
+    K: ArrayLike,
     distortion: DistortionModel,
     *,
-    new_K: Any = None,
-) -> Any:
+    new_K: ArrayLike | None = None,
+) -> Array:
     r"""Source pixel ``(u, v)`` in the distorted image for every pixel of the ideal image.
 
     .. math::
@@ -368,15 +371,15 @@ def undistortion_map(
 
 
 def undistort_image(
-    image: Any,
-    K: Any,
+    image: ArrayLike,
+    K: ArrayLike,
     distortion: DistortionModel,
     *,
-    new_K: Any = None,
+    new_K: ArrayLike | None = None,
     out_shape: tuple[int, int] | None = None,
     fill: float = 0.0,
     keep_dtype: bool = False,
-) -> Any:
+) -> Array:
     r"""Remove lens distortion from an image by inverse mapping and bilinear sampling.
 
     .. math::

@@ -17,9 +17,13 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from imageform._typing import ArrayLike
 from imageform._validate import as_bool, as_int, as_real, describe
 from imageform.errors import InvalidInputError, UnknownOptionError
 from imageform.io._camera_toml import Reader, short_list
+
+if TYPE_CHECKING:
+    from imageform.geometry.distortion import DistortionModel
 
 if TYPE_CHECKING:
     from imageform.geometry import CalibrationResult, Camera
@@ -255,7 +259,7 @@ class CameraFile:
         std = {k: float(v) for k, v in result.std.items() if math.isfinite(v)}
         return cls(camera, False, std, prov)
 
-    def with_pose(self, R: Any, t: Any, **provenance: Any) -> CameraFile:
+    def with_pose(self, R: ArrayLike, t: ArrayLike, **provenance: Any) -> CameraFile:
         """Return the same camera with the pose ``X_cam = R X_world + t``.
 
         Pose standard deviations are dropped, provenance fields replaced by ``provenance``.
@@ -270,7 +274,7 @@ class CameraFile:
         )
 
 
-def distortion_name(model: Any) -> str:
+def distortion_name(model: DistortionModel | None) -> str:
     """Return the camera-file name of a distortion model object (``none`` for None).
 
     Examples

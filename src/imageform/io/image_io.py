@@ -40,6 +40,7 @@ import numpy as np
 
 from imageform import _deprecate
 from imageform._files import atomic_write, check_writable, not_a_regular_file
+from imageform._typing import ArrayLike
 from imageform._validate import (
     as_path,
     check_memory,
@@ -582,7 +583,7 @@ def _quantise_all(
 @_deprecate.parameters(renamed={"bits": "bit_depth"})
 def write_image(
     path: str | Path,
-    image: Any,
+    image: ArrayLike,
     *,
     bit_depth: int | None = None,
     out_of_range: str = "error",

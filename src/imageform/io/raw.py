@@ -23,12 +23,13 @@ import math
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 
 from imageform import _deprecate
 from imageform._files import atomic_write, check_writable
+from imageform._typing import ArrayLike
 from imageform._validate import describe
 from imageform.errors import InvalidInputError
 
@@ -102,13 +103,13 @@ def _cfa_indices(pattern: str) -> tuple[int, int, int, int]:
 
 def write_dng(
     path: str | Path,
-    mosaic: Any,
+    mosaic: ArrayLike,
     *,
     cfa_pattern: str = "RGGB",
     black_level: float = 0.0,
     white_level: float | None = None,
-    color_matrix: Any,
-    as_shot_neutral: Any = (1.0, 1.0, 1.0),
+    color_matrix: ArrayLike,
+    as_shot_neutral: ArrayLike = (1.0, 1.0, 1.0),
     calibration_illuminant: str = "D65",
     camera_model: str = "imageform simulated camera",
 ) -> Path:
@@ -857,7 +858,7 @@ def develop(
     raw: RawImage | str | Path,
     *,
     demosaic: str = "bilinear",
-    white_balance: Any = "camera",
+    white_balance: Literal["camera", "daylight", "none"] | ArrayLike = "camera",
     space: str = "srgb",
     linear: bool = False,
     orient: bool = True,

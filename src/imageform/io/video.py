@@ -33,6 +33,7 @@ from typing import Any
 
 import numpy as np
 
+from imageform._typing import ArrayLike
 from imageform._validate import describe
 from imageform.errors import InvalidInputError
 
@@ -445,7 +446,7 @@ class VideoWriter:
             stream.options = {"crf": str(self._quality), "preset": self._preset}
         self._stream = stream
 
-    def write(self, image: Any) -> None:
+    def write(self, image: ArrayLike) -> None:
         """Encode one frame: ``(H, W, 3)`` uint8 RGB (every frame the size of the first).
 
         H.264 and MJPEG with 4:2:0 chroma need an even width and height: an odd one is

@@ -23,6 +23,7 @@ import numpy as np
 
 from imageform import _deprecate
 from imageform._backend import to_numpy
+from imageform._typing import ArrayLike
 from imageform._validate import (
     as_image,
     as_int,
@@ -113,7 +114,7 @@ def spherical_blur_radius(*, focal_length: float, f_number: float, sa_coefficien
 
 @_deprecate.parameters(renamed={"centre": "center"})
 def spherical_aberration(
-    image: Any,
+    image: ArrayLike,
     *,
     focal_length: float,
     f_number: float,
@@ -121,7 +122,7 @@ def spherical_aberration(
     sa_coefficient: float,
     field_coefficient: float = 0.0,
     center: tuple[float, float] | None = None,
-) -> Any:
+) -> np.ndarray:
     r"""Blur an image by spherical aberration at a given aperture, growing across the field.
 
     ``focal_length`` and ``pixel_pitch`` in metres; ``center`` ``(c_u, c_v)`` in pixels
@@ -168,12 +169,12 @@ def spherical_aberration(
 
 @_deprecate.parameters(renamed={"centre": "center"})
 def lateral_chromatic_aberration(
-    image: Any,
+    image: ArrayLike,
     magnification: Sequence[float],
     *,
     center: tuple[float, float] | None = None,
     fill: float = 0.0,
-) -> Any:
+) -> np.ndarray:
     r"""Scale each channel about the optical centre by its own magnification (colour fringes).
 
     .. math::
@@ -275,7 +276,7 @@ def chromatic_focal_lengths(*, focal_length: float, abbe_number: float) -> Chrom
 
 
 def axial_chromatic_blur_diameters(
-    depth: Any,
+    depth: ArrayLike,
     *,
     focal_lengths: Sequence[float],
     f_number: float,
@@ -338,15 +339,15 @@ def axial_chromatic_blur_diameters(
 
 
 def axial_chromatic_aberration(
-    image: Any,
-    depth: Any,
+    image: ArrayLike,
+    depth: ArrayLike,
     *,
     focal_lengths: Sequence[float],
     f_number: float,
     focus: float,
     pixel_pitch: float,
     reference: int = 1,
-) -> Any:
+) -> np.ndarray:
     r"""Blur each channel by its own defocus disc (:func:`axial_chromatic_blur_diameters`).
 
     .. math::

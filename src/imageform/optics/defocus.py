@@ -20,6 +20,7 @@ import numpy as np
 
 from imageform import _deprecate
 from imageform._backend import to_numpy
+from imageform._typing import Array, ArrayLike
 from imageform._validate import (
     as_image,
     as_int,
@@ -131,13 +132,13 @@ def _convolve(img: np.ndarray, kernel: np.ndarray) -> np.ndarray:
 
 
 def blur_by_radius(
-    image: Any,
-    radius_px: Any,
+    image: ArrayLike,
+    radius_px: ArrayLike,
     *,
     step: float = 0.5,
     max_layers: int = 48,
     kernel: Callable[[float], np.ndarray] | None = None,
-) -> Any:
+) -> np.ndarray:
     r"""Blur each pixel with a disc PSF of its own radius (pixels), by layered interpolation.
 
     .. math::
@@ -210,8 +211,8 @@ def blur_by_radius(
 
 @_deprecate.parameters(renamed={"f": "focal_length"})
 def defocus_radius_px(
-    depth: Any, *, focal_length: float, f_number: float, focus: float, pixel_pitch: float
-) -> Any:
+    depth: ArrayLike, *, focal_length: float, f_number: float, focus: float, pixel_pitch: float
+) -> Array:
     r"""Radius in pixels of the defocus disc of points at ``depth``: half the CoC over the pitch.
 
     ``depth``, ``focal_length``, ``focus`` and ``pixel_pitch`` in metres.
@@ -235,15 +236,15 @@ def defocus_radius_px(
 
 @_deprecate.parameters(renamed={"f": "focal_length"})
 def defocus_blur(
-    image: Any,
-    depth: Any,
+    image: ArrayLike,
+    depth: ArrayLike,
     *,
     focal_length: float,
     f_number: float,
     focus: float,
     pixel_pitch: float,
     step: float = 0.5,
-) -> Any:
+) -> np.ndarray:
     r"""Depth-dependent defocus: each pixel blurred by the disc of its circle of confusion.
 
     .. math::

@@ -10,10 +10,10 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any
 
 from imageform import _deprecate
 from imageform._backend import namespace
+from imageform._typing import Array, ArrayLike
 from imageform._validate import as_float, as_real, check_positive, finite_result
 from imageform.errors import InvalidInputError
 
@@ -170,7 +170,9 @@ def depth_of_field(
 
 
 @_deprecate.parameters(renamed={"f": "focal_length"})
-def circle_of_confusion(depth: Any, *, focal_length: float, f_number: float, focus: float) -> Any:
+def circle_of_confusion(
+    depth: ArrayLike, *, focal_length: float, f_number: float, focus: float
+) -> Array:
     r"""Blur-spot diameter on the sensor (m) of a point at ``depth`` when focused at ``focus``.
 
     .. math::

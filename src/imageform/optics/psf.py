@@ -23,6 +23,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+from imageform._typing import Array, ArrayLike
 from imageform._validate import (
     as_int,
     as_real,
@@ -117,7 +118,7 @@ def noll_to_nm(j: int) -> tuple[int, int]:
     return n, (m_abs if j % 2 == 0 else -m_abs)
 
 
-def zernike_radial(n: int, m: int, rho: Any) -> np.ndarray:
+def zernike_radial(n: int, m: int, rho: ArrayLike) -> np.ndarray:
     r"""Evaluate the Zernike radial polynomial :math:`R_n^{|m|}(\rho)` (unnormalised, ``R(1) = 1``).
 
     .. math::
@@ -159,7 +160,7 @@ def _radial(n: int, m: int, r: np.ndarray, *, check: bool = True) -> np.ndarray:
     return finite_result(f"the radial polynomial R_{n}^{m}", total, rho=r)
 
 
-def zernike(j: int, rho: Any, theta: Any) -> np.ndarray:
+def zernike(j: int, rho: ArrayLike, theta: ArrayLike) -> np.ndarray:
     r"""Noll's ``j``-th Zernike polynomial, unit RMS over the unit disc.
 
     .. math::
@@ -226,7 +227,9 @@ def _coefficients(coefficients: Any) -> dict[int, float]:
     return out
 
 
-def zernike_wavefront(coefficients: Any, rho: Any, theta: Any) -> np.ndarray:
+def zernike_wavefront(
+    coefficients: Mapping[int, float] | ArrayLike, rho: ArrayLike, theta: ArrayLike
+) -> np.ndarray:
     r"""Compute the wavefront :math:`W(\rho, \theta) = \sum_j c_j Z_j(\rho, \theta)`.
 
     ``coefficients`` is a mapping ``{j: c_j}`` (Noll ``j``) or a sequence whose index 0 is
@@ -256,7 +259,7 @@ def zernike_wavefront(coefficients: Any, rho: Any, theta: Any) -> np.ndarray:
         ) from None
 
 
-def zernike_defocus(coc: Any, *, f_number: float) -> Any:
+def zernike_defocus(coc: ArrayLike, *, f_number: float) -> Array:
     r"""Return the Zernike defocus coefficient (Noll ``j = 4``) of a geometric blur circle.
 
     The coefficient is in metres RMS.
@@ -305,11 +308,11 @@ def _disc_grid(diameter: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
 
 def pupil_function(
-    coefficients: Any = None,
+    coefficients: Mapping[int, float] | ArrayLike | None = None,
     *,
     wavelength: float,
     n_samples: float = 256,
-    aperture: Any = None,
+    aperture: ArrayLike | None = None,
 ) -> np.ndarray:
     r"""Return the complex pupil function :math:`P = A\,\exp(2\pi i\,W / \lambda)`.
 
@@ -381,7 +384,7 @@ def _as_aperture(aperture: Any) -> np.ndarray:
     return a
 
 
-def psf_from_pupil(pupil: Any, *, pad_to: int) -> np.ndarray:
+def psf_from_pupil(pupil: ArrayLike, *, pad_to: int) -> np.ndarray:
     r"""Compute the intensity PSF of ``pupil`` zero-padded to ``pad_to`` samples (Fraunhofer FFT).
 
     .. math::
@@ -485,14 +488,14 @@ def _sampled_psf(
 
 
 def diffraction_psf(
-    coefficients: Any = None,
+    coefficients: Mapping[int, float] | ArrayLike | None = None,
     *,
     wavelength: float,
     f_number: float,
     pixel_pitch: float,
     size: int | None = 64,
     n_pupil: int = 256,
-    aperture: Any = None,
+    aperture: ArrayLike | None = None,
 ) -> np.ndarray:
     r"""Compute the diffraction PSF of an (aberrated) circular pupil, sampled at ``pixel_pitch``.
 
@@ -567,7 +570,7 @@ def diffraction_psf(
 
 
 def polychromatic_psf(
-    coefficients: Any = None,
+    coefficients: Mapping[int, float] | ArrayLike | None = None,
     *,
     wavelengths: Sequence[float] | np.ndarray,
     weights: Sequence[float] | np.ndarray | None = None,
@@ -575,7 +578,7 @@ def polychromatic_psf(
     pixel_pitch: float,
     size: int = 64,
     n_pupil: int = 256,
-    aperture: Any = None,
+    aperture: ArrayLike | None = None,
 ) -> np.ndarray:
     r"""Compute a polychromatic PSF: the weighted sum of unit-sum monochromatic PSFs.
 
@@ -632,7 +635,7 @@ def polychromatic_psf(
 
 
 def field_psfs(
-    coefficients: Any,
+    coefficients: ArrayLike,
     *,
     wavelength: float,
     f_number: float,
@@ -680,7 +683,7 @@ def field_psfs(
 # --- transfer functions -------------------------------------------------------------------
 
 
-def otf(psf: Any, *, pixel_pitch: float) -> TransferFunction:
+def otf(psf: ArrayLike, *, pixel_pitch: float) -> TransferFunction:
     r"""Compute the optical transfer function of a sampled PSF, frequencies in cycles/mm.
 
     .. math::
@@ -714,7 +717,7 @@ def otf(psf: Any, *, pixel_pitch: float) -> TransferFunction:
     return TransferFunction(fx, fy, value)
 
 
-def mtf(psf: Any, *, pixel_pitch: float) -> TransferFunction:
+def mtf(psf: ArrayLike, *, pixel_pitch: float) -> TransferFunction:
     r"""Compute the modulation transfer function :math:`|\mathrm{OTF}|` (1 at zero frequency).
 
     Frequencies in cycles/mm, on the grid of :func:`otf`.
@@ -732,7 +735,9 @@ def mtf(psf: Any, *, pixel_pitch: float) -> TransferFunction:
     return TransferFunction(t.fx, t.fy, np.abs(t.value))
 
 
-def diffraction_limited_mtf(frequency: Any, *, wavelength: float, f_number: float) -> np.ndarray:
+def diffraction_limited_mtf(
+    frequency: ArrayLike, *, wavelength: float, f_number: float
+) -> np.ndarray:
     r"""Compute the MTF of an aberration-free circular pupil (incoherent light).
 
     .. math::
@@ -760,7 +765,7 @@ def diffraction_limited_mtf(frequency: Any, *, wavelength: float, f_number: floa
     return (2 / np.pi) * (np.arccos(x) - x * np.sqrt(1 - x * x))
 
 
-def pixel_mtf(frequency: Any, *, pixel_pitch: float, fill_factor: float = 1.0) -> np.ndarray:
+def pixel_mtf(frequency: ArrayLike, *, pixel_pitch: float, fill_factor: float = 1.0) -> np.ndarray:
     r"""Compute the MTF of a square pixel aperture (uniform response over its active area).
 
     .. math::

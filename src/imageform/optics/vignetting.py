@@ -8,12 +8,12 @@ center ``(c_u, c_v)`` in pixels and ``f_px`` the focal length in pixels: here th
 from __future__ import annotations
 
 import math
-from typing import Any
 
 import numpy as np
 
 from imageform import _deprecate
 from imageform._backend import to_numpy
+from imageform._typing import ArrayLike
 from imageform._validate import (
     as_image,
     as_real_array,
@@ -93,7 +93,9 @@ def cos4_falloff(
     return np.cos(field_angle(shape, focal_length_px=focal_length_px, center=center)) ** 4
 
 
-def pupil_overlap_fraction(pupil_radius: float, stop_radius: float, offset: Any) -> Any:
+def pupil_overlap_fraction(
+    pupil_radius: float, stop_radius: float, offset: ArrayLike
+) -> np.ndarray:
     r"""Fraction of a circular pupil (radius ``a``) inside a circle of radius ``b`` at ``offset``.
 
     .. math::
@@ -178,7 +180,7 @@ def mechanical_vignetting(
     return np.asarray(finite_result("the vignetting", lambda: _overlap(a, b, d), **names))
 
 
-def apply_vignetting(image: Any, falloff: Any) -> Any:
+def apply_vignetting(image: ArrayLike, falloff: ArrayLike) -> np.ndarray:
     """Multiply an image ``(H, W)`` or ``(H, W, C)`` by a relative-illumination map ``(H, W)``.
 
     Examples

@@ -9,10 +9,11 @@ from __future__ import annotations
 import functools
 from collections.abc import Iterable, Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from imageform._typing import ArrayLike
 from imageform._validate import (
     as_bool,
     as_int,
@@ -22,6 +23,10 @@ from imageform._validate import (
     describe,
 )
 from imageform.errors import InvalidInputError
+
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
+    from matplotlib.figure import Figure
 
 __all__ = ["CCT_TICKS", "planckian_locus", "plot_chromaticity_diagram"]
 
@@ -117,14 +122,14 @@ def plot_chromaticity_diagram(
     spaces: Sequence[str] = ("srgb", "display_p3", "rec2020"),
     *,
     coords: str = "xy",
-    points: Any = None,
+    points: ArrayLike | None = None,
     point_labels: Sequence[str] | None = None,
     planckian: bool = True,
     observer: int = 2,
     resolution: int = 300,
-    ax: Any = None,
+    ax: Axes | None = None,
     path: str | Path | None = None,
-) -> Any:
+) -> Figure:
     """Draw the CIE 1931 xy (or 1976 u'v') chromaticity diagram; returns the Figure.
 
     The spectral locus (CIE 015:2018 CMFs) is filled with approximate colours (display only:

@@ -7,6 +7,8 @@ that the report, the stage files and the figures agree. The kinds are documented
 
 from __future__ import annotations
 
+from typing import Literal
+
 import numpy as np
 
 from imageform._validate import as_real, check_name, describe, format_shape
@@ -40,7 +42,7 @@ def _as_rgb(a: np.ndarray, name: str) -> np.ndarray:
 
 def stage_display_image(
     image: np.ndarray,
-    kind: str,
+    kind: Literal["linear", "raw", "srgb"],
     *,
     white_level: float | None = None,
     percentile: float = DISPLAY_PERCENTILE,

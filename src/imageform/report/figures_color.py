@@ -10,13 +10,16 @@ note. matplotlib is imported inside the functions (the optional ``plot`` extra).
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any, overload
 
 import numpy as np
 
 from imageform.report._checks import check_measurements, check_result
 from imageform.report.patches import PatchMeasurements
 from imageform.simulate.result import SimulationResult
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 __all__ = [
     "DELTA_E_BANDS",
@@ -113,7 +116,7 @@ def _zoom_background(ax: Any) -> None:
 
 def plot_patch_chromaticity(
     result: SimulationResult, measurements: PatchMeasurements | None = None
-) -> Any:
+) -> Figure | None:
     """Plot every patch at each stage of ``result.patch_xy`` on the CIE 1931 xy diagram.
 
     The stages are e.g. before and after white balance, after colour correction; a thin line joins
@@ -181,7 +184,11 @@ def _bar_colours(m: PatchMeasurements) -> np.ndarray:
     return np.clip(m.truth_srgb, 0.0, 1.0)
 
 
-def plot_delta_e(measurements: PatchMeasurements | None) -> Any:
+@overload
+def plot_delta_e(measurements: PatchMeasurements) -> Figure: ...
+@overload
+def plot_delta_e(measurements: None) -> None: ...
+def plot_delta_e(measurements: PatchMeasurements | None) -> Figure | None:
     """Plot a bar chart of CIEDE2000 per patch (bars in the patch's true colour).
 
     With the mean and the lecture's bands at 1, 3 and 10. ``None`` without measurements.
@@ -211,7 +218,11 @@ def plot_delta_e(measurements: PatchMeasurements | None) -> Any:
     return fig
 
 
-def plot_patch_snr(measurements: PatchMeasurements | None) -> Any:
+@overload
+def plot_patch_snr(measurements: PatchMeasurements) -> Figure: ...
+@overload
+def plot_patch_snr(measurements: None) -> None: ...
+def plot_patch_snr(measurements: PatchMeasurements | None) -> Figure | None:
     """Plot a bar chart of ``snr_luminance_db`` of every patch (the SNR of the window's luminance).
 
     ``None`` without measurements.
@@ -280,7 +291,11 @@ def photon_transfer_summary(result: SimulationResult) -> dict[str, Any] | None:
     return out
 
 
-def plot_photon_transfer(summary: dict[str, Any] | None) -> Any:
+@overload
+def plot_photon_transfer(summary: dict[str, Any]) -> Figure: ...
+@overload
+def plot_photon_transfer(summary: None) -> None: ...
+def plot_photon_transfer(summary: dict[str, Any] | None) -> Figure | None:
     """Plot the photon-transfer curve: temporal variance against mean signal, both dark-corrected.
 
     As in EMVA 1288 4.0, §6.3, eq. 31, with the fitted line ``σ² = K μ`` up to saturation.

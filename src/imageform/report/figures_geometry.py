@@ -18,10 +18,11 @@ object left of the camera is drawn left, a nearer one lower (:func:`top_view_pro
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from imageform._typing import ArrayLike
 from imageform._validate import (
     as_int,
     as_real_array,
@@ -33,6 +34,10 @@ from imageform.errors import InvalidInputError
 from imageform.report._checks import check_result
 from imageform.simulate.result import SimulationResult
 from imageform.simulate.truth import vanishing_errors
+
+if TYPE_CHECKING:
+    import PIL.Image
+    from matplotlib.figure import Figure
 
 __all__ = [
     "image_corner_pixels",
@@ -60,7 +65,7 @@ def image_corner_pixels(width: int, height: int) -> np.ndarray:
     return np.array([[-0.5, -0.5], [w - 0.5, -0.5], [w - 0.5, h - 0.5], [-0.5, h - 0.5]])
 
 
-def top_view_axes(R: Any, world_up: Any) -> tuple[np.ndarray, np.ndarray]:
+def top_view_axes(R: ArrayLike, world_up: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
     """Return the unit vectors ``(right, ahead)`` of the top view in world coordinates.
 
     ``ahead`` is the camera's optical axis (or, looking straight down, its image-up direction)
@@ -92,7 +97,7 @@ def top_view_axes(R: Any, world_up: Any) -> tuple[np.ndarray, np.ndarray]:
     raise InvalidInputError("the camera's axes are degenerate with world_up")  # pragma: no cover
 
 
-def top_view_project(points: Any, data: dict[str, Any]) -> np.ndarray:
+def top_view_project(points: ArrayLike, data: dict[str, Any]) -> np.ndarray:
     """Project world points ``(N, 3)`` to top-view coordinates ``(N, 2)`` (metres).
 
     The coordinates are right of the camera and ahead of it (the camera centre at the origin).
@@ -138,7 +143,7 @@ def top_view_data(result: SimulationResult) -> dict[str, Any]:
     }
 
 
-def plot_top_view(data: dict[str, Any]) -> Any:
+def plot_top_view(data: dict[str, Any]) -> Figure:
     """Plot the scene from above (looking down ``world_up``), the camera looking up the page.
 
     The figure shows the objects' outlines, the camera centre at the origin, the frustum rays
@@ -252,7 +257,7 @@ def vanishing_summary(result: SimulationResult) -> dict[str, Any] | None:
     }
 
 
-def vanishing_overlay(result: SimulationResult, display: np.ndarray) -> Any:
+def vanishing_overlay(result: SimulationResult, display: np.ndarray) -> PIL.Image.Image | None:
     """Return the output picture ``display`` (uint8 RGB) with the vanishing points and horizons.
 
     The true and detected ones are drawn by

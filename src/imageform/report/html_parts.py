@@ -10,13 +10,17 @@ import base64
 import html
 import io
 from collections.abc import Iterable, Sequence
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from imageform._jsonio import dumps
+from imageform._typing import ArrayLike
 from imageform._validate import as_int, describe, format_shape
 from imageform.errors import InvalidInputError
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 __all__ = [
     "CSS",
@@ -105,7 +109,7 @@ PAGE_JPEG_QUALITY = 85
 
 
 def page_jpeg(
-    rgb: Any, *, max_width: int = PAGE_IMAGE_MAX_WIDTH, quality: int = PAGE_JPEG_QUALITY
+    rgb: ArrayLike, *, max_width: int = PAGE_IMAGE_MAX_WIDTH, quality: int = PAGE_JPEG_QUALITY
 ) -> bytes:
     """Encode an 8-bit RGB picture ``(H, W, 3)`` (or a PIL image) as JPEG bytes for the page.
 
@@ -138,7 +142,7 @@ def _rgb8(rgb: object) -> np.ndarray:
     return np.ascontiguousarray(arr)
 
 
-def figure_png(fig: Any, dpi: int = 100) -> bytes:
+def figure_png(fig: Figure, dpi: int = 100) -> bytes:
     """Return the matplotlib figure as PNG bytes; the figure is closed."""
     import matplotlib.pyplot as plt
 

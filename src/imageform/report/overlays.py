@@ -4,13 +4,21 @@ from __future__ import annotations
 
 import functools
 import math
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from imageform._typing import ArrayLike
 from imageform._validate import as_real, as_real_array, check_memory, describe, format_shape
 from imageform.errors import InvalidInputError
+
+if TYPE_CHECKING:
+    import PIL.Image
+
+    from imageform.geometry.distortion import DistortionModel
+    from imageform.geometry.tracking import BoardPose
+    from imageform.geometry.vp_detection import VanishingPointResult
+    from imageform.io.plan import Plan
 
 __all__ = [
     "DETECTED_COLOUR",
@@ -100,7 +108,7 @@ def _draw_line(
         draw.line(pts, fill=colour, width=2 * k)
 
 
-def draw_vanishing_overlay(image: ArrayLike, result: Any) -> Any:
+def draw_vanishing_overlay(image: ArrayLike, result: VanishingPointResult) -> PIL.Image.Image:
     """Draw the segments coloured by vanishing point and the horizon, as an RGB PIL image.
 
     VPs inside the view are marked, the horizon is white over black. ``result`` is a
@@ -135,7 +143,7 @@ def draw_vanishing_truth_overlay(
     detected_vanishing_point: ArrayLike | None = None,
     detected_horizon: ArrayLike | None = None,
     max_margin: float = 0.5,
-) -> Any:
+) -> PIL.Image.Image:
     """Draw the true and the detected vanishing point and horizon on ``image`` (RGB PIL image).
 
     The true vanishing point is a bluish-green ring and cross, the true horizon bluish-green over
@@ -329,11 +337,11 @@ def _draw_in_place(
 
 def draw_pose_overlay(
     image: ArrayLike,
-    pose: Any,
+    pose: BoardPose,
     K: ArrayLike,
-    distortion: Any = None,
+    distortion: DistortionModel | None = None,
     *,
-    plan: Any = None,
+    plan: Plan | None = None,
     axis_length: float | None = None,
     label: str | None = None,
 ) -> np.ndarray:

@@ -15,11 +15,11 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 
 from imageform._random import RNGLike, as_rng
+from imageform._typing import ArrayLike
 from imageform._validate import (
     as_int,
     as_real,
@@ -89,7 +89,7 @@ def simulate_photon_transfer(
     *,
     irradiance: float,
     wavelength_nm: float,
-    exposure_times: Any,
+    exposure_times: ArrayLike,
     rng: RNGLike,
     shape: tuple[int, int] = (64, 64),
     channel: int = 0,

@@ -25,6 +25,7 @@ from typing import Any
 import numpy as np
 
 from imageform._random import RNGLike, as_rng
+from imageform._typing import ArrayLike
 from imageform._validate import (
     as_int,
     as_real,
@@ -159,7 +160,7 @@ def simulate_emva_frames(
     *,
     irradiance: float,
     wavelength_nm: float,
-    exposure_times: Any,
+    exposure_times: ArrayLike,
     rng: RNGLike,
     frames: int = 2,
     shape: tuple[int, int] = (64, 64),
@@ -340,11 +341,11 @@ def _fit_origin(x: np.ndarray, y: np.ndarray) -> float:
 
 
 def measure_emva(
-    flats: Any,
-    darks: Any,
-    exposure_times: Any,
+    flats: ArrayLike,
+    darks: ArrayLike,
+    exposure_times: ArrayLike,
     *,
-    photons: Any = None,
+    photons: ArrayLike | None = None,
     fit_fraction: float = 0.7,
     spatial_index: int | None = None,
 ) -> EmvaMeasurement:

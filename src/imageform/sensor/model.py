@@ -18,12 +18,12 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 
 from imageform import _deprecate
 from imageform._random import RNGLike, as_rng
+from imageform._typing import ArrayLike
 from imageform._validate import (
     as_int,
     as_real,
@@ -58,7 +58,7 @@ def _positive_field(obj: object, name: str, *, allow_zero: bool = False) -> None
 
 
 def photons_per_pixel(
-    irradiance: Any, wavelength_nm: float, *, pixel_area: float, exposure_time: float
+    irradiance: ArrayLike, wavelength_nm: float, *, pixel_area: float, exposure_time: float
 ) -> np.ndarray:
     r"""Mean photons reaching a pixel: irradiance × area × time over the photon energy.
 
@@ -270,7 +270,7 @@ class SensorModel:
     @_deprecate.parameters(renamed={"input": "quantity"})
     def mean_electrons(
         self,
-        signal: Any,
+        signal: ArrayLike,
         *,
         exposure_time: float,
         quantity: str = "electrons",
@@ -369,7 +369,7 @@ class SensorModel:
     @_deprecate.parameters(renamed={"input": "quantity"})
     def capture(
         self,
-        signal: Any,
+        signal: ArrayLike,
         *,
         exposure_time: float,
         rng: RNGLike,
@@ -447,7 +447,7 @@ class SensorModel:
         dn = np.clip(np.floor(analog + 0.5), 0, self.max_dn)  # the ADC's range (physics)
         return dn.astype(np.uint16)
 
-    def normalize(self, dn: Any) -> np.ndarray:
+    def normalize(self, dn: ArrayLike) -> np.ndarray:
         r"""Raw DN to floats: black level subtracted, white (``2^b - 1``) mapped to 1.
 
         .. math:: \frac{y - y_0}{(2^b - 1) - y_0}

@@ -13,6 +13,7 @@ from typing import Any
 
 import numpy as np
 
+from imageform._typing import ArrayLike
 from imageform._validate import (
     as_int,
     as_real,
@@ -70,7 +71,7 @@ def row_start_times(rows: int, *, mode: str, line_time: float) -> np.ndarray:
 
 
 def rolling_shutter_points(
-    points_uv: Any, velocity_uv: Any, *, line_time: float, t0: float = 0.0
+    points_uv: ArrayLike, velocity_uv: ArrayLike, *, line_time: float, t0: float = 0.0
 ) -> np.ndarray:
     r"""Where a rolling shutter records points moving at constant velocity (instant exposure).
 
@@ -125,7 +126,7 @@ def rolling_shutter_points(
 
 
 def shutter_capture(
-    render: Callable[[float], Any],
+    render: Callable[[float], ArrayLike],
     *,
     exposure_time: float,
     mode: str,

@@ -16,7 +16,7 @@ import warnings
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -40,6 +40,9 @@ from imageform.simulate.config import (
 from imageform.simulate.textures import load_texture, resolve_path
 from imageform.simulate.validation import _Ctx, one_line, validate_scene_dict
 from imageform.spectral.spectrum import Spectrum
+
+if TYPE_CHECKING:
+    from imageform.simulate.measured_sensor import MeasuredCamera
 
 __all__ = ["Scene", "SceneObject", "default_scene", "load_scene"]
 
@@ -133,7 +136,7 @@ class Scene:
         origin = _where(self).origin
         return _build(_plain(cfg), None, origin, self.base_dir, self.measured)
 
-    def with_measured(self, measured: Any) -> Scene:
+    def with_measured(self, measured: MeasuredCamera | None) -> Scene:
         """Return the same scene rendered through a measured camera's tables.
 
         ``measured`` is a :class:`imageform.simulate.measured.MeasuredCamera`, or None for the

@@ -25,13 +25,17 @@ import csv
 import math
 from collections.abc import Callable, Iterator
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import NDArray
 
+from imageform._typing import ArrayLike
 from imageform._validate import describe
 from imageform.errors import InvalidInputError
+
+if TYPE_CHECKING:
+    from imageform.simulate.scene import Scene
 
 __all__ = ["MAX_TRAJECTORY_FRAMES", "Trajectory", "board_poses", "read_trajectory", "render_frames"]
 
@@ -72,7 +76,7 @@ class Trajectory:
         return float(1.0 / np.median(np.diff(self.times)))
 
 
-def read_trajectory(path: str | Path, *, up: Any = (0.0, 0.0, 1.0)) -> Trajectory:
+def read_trajectory(path: str | Path, *, up: ArrayLike = (0.0, 0.0, 1.0)) -> Trajectory:
     """Read a trajectory CSV (``time_s`` and a pose or an eye and a target per row).
 
     Parameters
@@ -155,7 +159,9 @@ def _board(scene: Any) -> tuple[Any, tuple[int, int], float] | None:
     return obj, (cols - 1, rows - 1), float(obj.config.square_size_m)
 
 
-def board_poses(scene: Any, trajectory: Trajectory) -> tuple[str, list[tuple[Any, Any]]] | None:
+def board_poses(
+    scene: Scene, trajectory: Trajectory
+) -> tuple[str, list[tuple[np.ndarray, np.ndarray]]] | None:
     """Return the scene's checkerboard in each frame's camera frame (mm); None without one.
 
     The board frame: the origin at the first inner corner (one square in from the top-left
@@ -179,7 +185,7 @@ def board_poses(scene: Any, trajectory: Trajectory) -> tuple[str, list[tuple[Any
 
 
 def render_frames(
-    scene: Any,
+    scene: Scene,
     trajectory: Trajectory,
     *,
     rng: int = 0,

@@ -8,9 +8,12 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from imageform.errors import InvalidInputError
+
+if TYPE_CHECKING:
+    from imageform.io.camera_file import CameraFile
 
 Progress = Callable[[str, float], None]
 
@@ -165,7 +168,7 @@ class CameraCharacterization:
             p for p in ("geometry", "sharpness", "noise", "color") if getattr(self, p) is not None
         )
 
-    def camera_file(self) -> Any:
+    def camera_file(self) -> CameraFile:
         """Return the :class:`~imageform.io.CameraFile` of the geometry.
 
         A camera with the default intrinsics of the image size when no checkerboard was

@@ -6,7 +6,7 @@ Warnings are turned into one-line notes.
 from __future__ import annotations
 
 import warnings
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
@@ -40,7 +40,7 @@ def execute(
     out: str | Path | None = None,
     force: bool = False,
     progress: Callable[[str, float], None] | None = None,
-    **inputs: Any,
+    **inputs: str | Path | Sequence[str | Path],
 ) -> Result:
     """Run ``workflow`` on files: check its outputs, compute, write them all or nothing.
 
