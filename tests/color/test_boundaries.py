@@ -157,7 +157,7 @@ def test_white_balance_parameters_are_checked_whatever_the_method() -> None:
         with pytest.raises(ImageformError) as exc:
             white_balance(img, "gray_world", **kw)
         _one_line(exc, next(iter(kw)))
-    with pytest.raises(InvalidInputError) as exc:
+    with pytest.raises(InvalidInputError) as exc, pytest.warns(DeprecationWarning):
         estimate_illuminant(np.full((4, 5, 3), 0.5), channel_axis=0)
     _one_line(exc, "channel_axis")
 

@@ -40,6 +40,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+from imageform import _deprecate
 from imageform._backend import constant, device_of, is_dask_namespace, namespace
 from imageform._typing import Array, ArrayLike
 from imageform._validate import (
@@ -253,6 +254,12 @@ def _check_params(
 def _linear(image: object, transfer: str, channel_axis: int) -> tuple[Any, Any, str]:
     tname = check_name(transfer, TRANSFER_FUNCTIONS, "transfer function")
     axis = as_int(channel_axis, "channel_axis")
+    if axis != -1:  # images are channels-last everywhere (docs/conventions.md)
+        _deprecate.warn(
+            "channel_axis=",
+            "move the channels last first (numpy.moveaxis(image, axis, -1))",
+            stacklevel=4,
+        )
     try:
         img = as_image_strict(image, "image", channels=3, channel_axis=axis)
     except InvalidInputError as exc:
@@ -310,7 +317,8 @@ def estimate_illuminant(
     space : str
         ``manual``: the RGB space of the image (its primaries convert the white to RGB).
     channel_axis : int
-        Axis of the colour channels.
+        Deprecated (removed in imageform 0.3.0): images are channels-last everywhere; move
+        the channels last first (``numpy.moveaxis(image, axis, -1)``).
 
     Returns
     -------
@@ -434,7 +442,8 @@ def white_balance(
         Clip the balanced linear values to [0, 1] before encoding (only when asked: the gains
         can push highlights above 1).
     channel_axis : int
-        Axis of the colour channels of the input (the output is channels-last).
+        Deprecated (removed in imageform 0.3.0): images are channels-last everywhere; move
+        the channels last first (``numpy.moveaxis(image, axis, -1)``).
 
     Returns
     -------
