@@ -16,9 +16,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-torch = pytest.importorskip("torch")
-if not torch.cuda.is_available():  # one skip for the module, not one per case
-    pytest.skip("no CUDA device", allow_module_level=True)
+from tests.backends._gpu import torch_with_cuda
+
+torch = torch_with_cuda()
 
 from tests.backends.test_cuda_geometry_kernels import (  # noqa: E402
     _run,

@@ -20,9 +20,9 @@ from typing import Any
 import numpy as np
 import pytest
 
-torch = pytest.importorskip("torch")
-if not torch.cuda.is_available():  # one skip for the module, not one per case
-    pytest.skip("no CUDA device", allow_module_level=True)
+from tests.backends._gpu import torch_with_cuda
+
+torch = torch_with_cuda()
 
 from tests.backends.test_backends_matrix import CASES, Case, _result  # noqa: E402
 from tests.backends.test_meta_device import NEEDS_VALUES, POINTWISE  # noqa: E402

@@ -107,3 +107,31 @@ def test_switch(monkeypatch: pytest.MonkeyPatch) -> None:
     assert not fl.enabled()
     monkeypatch.delenv("IMAGEFORM_CUDA_FAST_LAUNCH")
     assert fl.enabled()
+
+
+def test_descriptions_from_the_key_are_reused() -> None:
+    from numba.core import types
+
+    t = torch.zeros((3, 4), dtype=torch.float32)
+    scalars = (int, float, bool, np.generic)
+    descs: list[Any] = []
+    key = fl.key_of(len, [t, 2.0], scalars, descs)
+    assert key is not None and descs[1] is None and descs[0] == fl.describe(t)
+    kinds = fl.kinds_of([types.Array(types.float32, 2, "C"), types.float64], types)
+    assert fl.same_arguments(
+        fl.pack(kinds, [t, 2.0], "ctypes", descs), fl.pack(kinds, [t, 2.0], "ctypes")
+    )
+
+
+def test_a_failing_fast_launch_falls_back_for_good() -> None:
+    key = ("probe", 1)
+
+    def broken(*_: Any) -> None:
+        raise TypeError("a packing this numba does not take")
+
+    fl._READY[key] = broken
+    assert fl.launcher(key) is broken
+    fl.forget(key)
+    assert fl.launcher(key) is None  # numba's path from now on
+    fl.forget(None)  # a launch without a key: nothing to forget
+    del fl._READY[key]

@@ -20,9 +20,9 @@ from typing import Any
 import numpy as np
 import pytest
 
-torch = pytest.importorskip("torch")
-if not torch.cuda.is_available():  # one skip for the module, not one per case
-    pytest.skip("no CUDA device", allow_module_level=True)
+from tests.backends._gpu import torch_with_cuda
+
+torch = torch_with_cuda()
 
 from imageform._cuda import _launch  # noqa: E402
 from imageform.geometry import (  # noqa: E402

@@ -32,9 +32,13 @@ import sys
 from collections.abc import Callable, Sequence
 from typing import Any
 
+from imageform._cuda._libs import is_cupy as _is_cupy
+from imageform._cuda._libs import is_torch as _is_torch
+
 __all__ = [
     "describe",
     "enabled",
+    "forget",
     "key_of",
     "kinds_of",
     "launcher",
@@ -51,16 +55,6 @@ _READY: dict[tuple[Any, ...], Callable[..., None] | None] = {}
 def enabled() -> bool:
     """Whether fast launches may run (``IMAGEFORM_CUDA_FAST_LAUNCH`` unset or not ``0``)."""
     return os.environ.get("IMAGEFORM_CUDA_FAST_LAUNCH", "1") not in ("0", "")
-
-
-def _is_torch(x: object) -> bool:
-    torch = sys.modules.get("torch")
-    return torch is not None and isinstance(x, torch.Tensor)
-
-
-def _is_cupy(x: object) -> bool:
-    cupy = sys.modules.get("cupy")
-    return cupy is not None and isinstance(x, cupy.ndarray)
 
 
 def _c_strides(shape: Sequence[int], itemsize: int) -> tuple[int, ...]:
@@ -100,22 +94,32 @@ def describe(x: Any) -> tuple[int, int, int, tuple[int, ...], tuple[int, ...], b
     return None
 
 
-def key_of(kernel: Any, args: Sequence[Any], scalars: tuple[type, ...]) -> tuple[Any, ...] | None:
+def key_of(
+    kernel: Any,
+    args: Sequence[Any],
+    scalars: tuple[type, ...],
+    descs: list[Any] | None = None,
+) -> tuple[Any, ...] | None:
     """Return the signature a launch of ``kernel`` on ``args`` compiles for, or None.
 
     Arrays by dtype, dimensions and C-contiguity (numba's layout ``C`` or ``A``), numbers by
     their Python or NumPy type: together they pick one compiled overload. None: an argument
-    this module cannot describe (numba's path).
+    this module cannot describe (numba's path). ``descs``, if given, receives each
+    argument's :func:`describe` (None for a number), for :func:`pack` to reuse.
     """
     parts: list[Any] = [id(kernel)]
     for a in args:
         if isinstance(a, scalars):
             parts.append(type(a))
+            if descs is not None:
+                descs.append(None)
             continue
         d = describe(a)
         if d is None:
             return None
         parts.append((d[6], len(d[3]), d[5]))
+        if descs is not None:
+            descs.append(d)
     return tuple(parts)
 
 
@@ -153,21 +157,27 @@ def kinds_of(types_: Sequence[Any], types_module: Any) -> tuple[str, ...]:
     return tuple(out)
 
 
-def pack(kinds: Sequence[str], args: Sequence[Any], flavour: str) -> list[Any]:
+def pack(
+    kinds: Sequence[str],
+    args: Sequence[Any],
+    flavour: str,
+    descs: Sequence[Any] | None = None,
+) -> list[Any]:
     """Return the kernel arguments numba's ``_Kernel._prepare_args`` would pass for ``args``.
 
     ``kinds``: :func:`kinds_of` the overload's argument types. Arrays expand to meminfo,
     parent, item count, item size, data pointer, shape, byte strides; ``"core"`` passes
     those as Python integers (numba-cuda), ``"ctypes"`` as ``c_void_p``/``c_ssize_t`` (the
     built-in target). Numbers go as the C type of their numba type (a boolean as a Python
-    bool for ``"core"``, ``c_uint8`` otherwise), as numba does. Raises TypeError for an array
-    this module cannot describe.
+    bool for ``"core"``, ``c_uint8`` otherwise), as numba does. ``descs``: the arguments'
+    :func:`describe` from :func:`key_of` (else they are described here). Raises TypeError for
+    an array this module cannot describe.
     """
     out: list[Any] = []
     core = flavour == "core"
-    for kind, v in zip(kinds, args, strict=True):
+    for i, (kind, v) in enumerate(zip(kinds, args, strict=True)):
         if kind == "array":
-            d = describe(v)
+            d = describe(v) if descs is None else descs[i]
             if d is None:
                 raise TypeError(f"no fast description of {type(v).__name__}")
             ptr, size, itemsize, shape, strides, _, _ = d
@@ -236,6 +246,12 @@ def prepare(
         _READY[key] = None
 
 
+def forget(key: tuple[Any, ...] | None) -> None:
+    """Send ``key``'s launches through numba from now on (its fast launch raised)."""
+    if key is not None:
+        _READY[key] = None
+
+
 def launcher(key: tuple[Any, ...] | None) -> Callable[..., None] | None:
     """Return the checked launcher of ``key``, or None (numba's path)."""
     return None if key is None else _READY.get(key)
@@ -251,24 +267,24 @@ def _launcher(overload: Any, flavour: str, kinds: tuple[str, ...]) -> Callable[.
         kern = cufunc.kernel
         configs: dict[tuple[Any, ...], Any] = {}
 
-        def run_core(config: Any, args: Sequence[Any]) -> None:
+        def run_core(config: Any, args: Sequence[Any], descs: Sequence[Any]) -> None:
             dims = (config.griddim, config.blockdim)
             cfg = configs.get(dims)
             if cfg is None:
                 cfg = launch_config(grid=dims[0], block=dims[1], shmem_size=0, **{coop: False})
                 configs[dims] = cfg
-            launch(config.stream, cfg, kern, *pack(kinds, args, "core"))
+            launch(config.stream, cfg, kern, *pack(kinds, args, "core", descs))
 
         return run_core
     driver = mod.driver
     zero = driver.binding.CUstream(0) if getattr(driver, "USE_NV_BINDING", False) else None
     handle = cufunc.handle
 
-    def run_ctypes(config: Any, args: Sequence[Any]) -> None:
+    def run_ctypes(config: Any, args: Sequence[Any], descs: Sequence[Any]) -> None:
         stream = config.stream
         sh = (stream and stream.handle) or zero
         driver.launch_kernel(
-            handle, *config.griddim, *config.blockdim, 0, sh, pack(kinds, args, "ctypes")
+            handle, *config.griddim, *config.blockdim, 0, sh, pack(kinds, args, "ctypes", descs)
         )
 
     return run_ctypes

@@ -36,6 +36,8 @@ from typing import Any
 
 import numpy as np
 
+from imageform._cuda._libs import is_cupy, is_torch
+
 __all__ = [
     "as_device_array",
     "cuda",
@@ -120,14 +122,8 @@ def use_cuda() -> bool:
     return _available()
 
 
-def _is_torch(x: object) -> bool:
-    torch = sys.modules.get("torch")
-    return torch is not None and isinstance(x, torch.Tensor)
-
-
-def _is_cupy(x: object) -> bool:
-    cupy = sys.modules.get("cupy")
-    return cupy is not None and isinstance(x, cupy.ndarray)
+_is_torch = is_torch
+_is_cupy = is_cupy
 
 
 def _is_sim_array(x: object) -> bool:
@@ -299,14 +295,19 @@ def _launch(kernel: Any, grid: tuple[int, ...], block: tuple[int, ...], args: An
     if not sim and _fast_on():
         from imageform._cuda import _fastlaunch
 
-        key = _fastlaunch.key_of(kernel, args, _SCALARS)
+        descs: list[Any] = []
+        key = _fastlaunch.key_of(kernel, args, _SCALARS, descs)
         run = _fastlaunch.launcher(key)
         if run is not None:  # checked against numba's own packing (_fastlaunch.prepare)
             first = next(a for a in args if not isinstance(a, _SCALARS))
-            with _LOCK:
-                _LAUNCHES[0] += 1
-            run(kernel[grid, block, _stream_for(first)], args)
-            return
+            try:
+                run(kernel[grid, block, _stream_for(first)], args, descs)
+            except Exception:  # never the call's failure: numba's path from now on
+                _fastlaunch.forget(key)
+            else:
+                with _LOCK:
+                    _LAUNCHES[0] += 1
+                return
     first = None
     dargs = []
     for a in args:
