@@ -118,9 +118,24 @@ def _cuda_geometry() -> Any:
     return geometry
 
 
-def _numpy_kernel_in(xy: Any) -> tuple[np.ndarray, tuple[int, ...]]:
+def _numba_points(kernel: str, xy: Any, coeffs: tuple[float, ...], *newton: Any) -> Any:
+    """Run the points kernel ``kernel`` of :mod:`imageform._kernels.distortion` on NumPy ``xy``.
+
+    ``newton``: none for a forward model (the distorted points come back), ``(max_iter, tol)``
+    for an inverse (:class:`Undistorted`, with the kernel's convergence flags).
+    """
+    from imageform._kernels import distortion as kernels
+
     shape = tuple(xy.shape)
-    return np.ascontiguousarray(np.asarray(xy).reshape(-1, 2)), shape
+    flat = np.ascontiguousarray(np.asarray(xy).reshape(-1, 2))
+    out = np.empty_like(flat)
+    run = getattr(kernels, kernel)
+    if not newton:
+        run(flat, np.asarray(coeffs), out)
+        return out.reshape(shape)
+    ok = np.empty(flat.shape[0], dtype=np.bool_)
+    run(flat, np.asarray(coeffs), *newton, out, ok)
+    return Undistorted(out.reshape(shape), ok.reshape(shape[:-1]))
 
 
 @dataclass(frozen=True)
@@ -187,12 +202,7 @@ class BrownConrady:
             if out is not None:  # None: the kernels are unusable here
                 return xp.reshape(out, tuple(arr.shape))
         if use_numba(arr, min_size=2 * NUMBA_MIN_POINTS):
-            from imageform._kernels.distortion import brown_conrady_distort
-
-            flat, shape = _numpy_kernel_in(arr)
-            out = np.empty_like(flat)
-            brown_conrady_distort(flat, np.asarray(self.coeffs), out)
-            return out.reshape(shape)
+            return _numba_points("brown_conrady_distort", arr, self.coeffs)
         return bc_distort_xp(arr, self.coeffs, xp)
 
     def undistort(self, xy: ArrayLike, max_iter: int = 20, tol: float | None = None) -> Undistorted:
@@ -220,13 +230,7 @@ class BrownConrady:
             if res is not None:  # None: the kernels are unusable here
                 return Undistorted(xp.reshape(res[0], shape), xp.reshape(res[1], shape[:-1]))
         if use_numba(arr, min_size=2 * NUMBA_MIN_POINTS):
-            from imageform._kernels.distortion import brown_conrady_undistort
-
-            flat, shape = _numpy_kernel_in(arr)
-            out = np.empty_like(flat)
-            ok = np.empty(flat.shape[0], dtype=np.bool_)
-            brown_conrady_undistort(flat, np.asarray(self.coeffs), it, t, out, ok)
-            return Undistorted(out.reshape(shape), ok.reshape(shape[:-1]))
+            return _numba_points("brown_conrady_undistort", arr, self.coeffs, it, t)
         return Undistorted(*bc_undistort_xp(arr, self.coeffs, xp, it, t))
 
 
@@ -329,12 +333,7 @@ class KannalaBrandt:
         xp = namespace(xy)
         arr = as_points_bounded(xy, "xy", 2, xp=xp)
         if use_numba(arr, min_size=2 * NUMBA_MIN_POINTS):
-            from imageform._kernels.distortion import kannala_brandt_distort
-
-            flat, shape = _numpy_kernel_in(arr)
-            out = np.empty_like(flat)
-            kannala_brandt_distort(flat, np.asarray(self.coeffs), out)
-            return out.reshape(shape)
+            return _numba_points("kannala_brandt_distort", arr, self.coeffs)
         return kb_distort_xp(arr, self.coeffs, xp)
 
     def undistort(self, xy: ArrayLike, max_iter: int = 20, tol: float | None = None) -> Undistorted:
@@ -352,13 +351,7 @@ class KannalaBrandt:
         arr = as_points_bounded(xy, "xy", 2, xp=xp)
         it, t = _iter_args(max_iter, tol, xp, arr.dtype)
         if use_numba(arr, min_size=2 * NUMBA_MIN_POINTS):
-            from imageform._kernels.distortion import kannala_brandt_undistort
-
-            flat, shape = _numpy_kernel_in(arr)
-            out = np.empty_like(flat)
-            ok = np.empty(flat.shape[0], dtype=np.bool_)
-            kannala_brandt_undistort(flat, np.asarray(self.coeffs), it, t, out, ok)
-            return Undistorted(out.reshape(shape), ok.reshape(shape[:-1]))
+            return _numba_points("kannala_brandt_undistort", arr, self.coeffs, it, t)
         return Undistorted(*kb_undistort_xp(arr, self.coeffs, xp, it, t))
 
 
