@@ -512,6 +512,27 @@ def _remap_rows_grey(
                     ob[t] = O(res[t])
 
 
+@njit(inline="always", error_model="numpy", fastmath={"contract"})
+def _block_buffers(kcar: np.ndarray, acc: np.ndarray) -> tuple[np.ndarray, ...]:
+    """Return one thread's locate buffers (module docstring, 1): ``kidx, ax, ay, ok``."""
+    kidx = np.empty(_BLK, kcar.dtype)
+    ax = np.empty(_BLK, acc.dtype)
+    ay = np.empty(_BLK, acc.dtype)
+    ok = np.empty(_BLK, np.bool_)
+    return (kidx, ax, ay, ok)
+
+
+@njit(inline="always", error_model="numpy", fastmath={"contract"})
+def _task_rows(t: int, nblk: int, ho: int) -> tuple[int, int, int]:
+    """Task ``t`` of a batch remap: image ``t // nblk``, its row block ``t % nblk``.
+
+    Returns the image's index and the block's output rows ``i0:i1`` (of ``ho``).
+    """
+    b = t // nblk
+    blk = t - b * nblk
+    return b, blk * ho // nblk, (blk + 1) * ho // nblk
+
+
 @njit(nogil=True, error_model="numpy", fastmath={"contract"})
 def _remap_tasks(
     t0: int,
@@ -531,18 +552,11 @@ def _remap_tasks(
     ho, wo = map_uv.shape[0], map_uv.shape[1]
     mf = map_uv.ravel()
     rounded = hi > 0.0
-    kidx = np.empty(_BLK, kcar.dtype)
-    ax = np.empty(_BLK, acc.dtype)
-    ay = np.empty(_BLK, acc.dtype)
-    ok = np.empty(_BLK, np.bool_)
-    bufs = (kidx, ax, ay, ok)
+    bufs = _block_buffers(kcar, acc)
     for t in range(t0, t1):
-        b = t // nblk
-        blk = t - b * nblk
-        flat = img[b].ravel()
+        b, i0, i1 = _task_rows(t, nblk, ho)
         of = out[b].ravel()
-        i0, i1 = blk * ho // nblk, (blk + 1) * ho // nblk
-        _remap_rows(flat, mf, i0, i1, wo, h, w, nc, scale, fill, rounded, hi, of, bufs)
+        _remap_rows(img[b].ravel(), mf, i0, i1, wo, h, w, nc, scale, fill, rounded, hi, of, bufs)
 
 
 @njit(nogil=True, error_model="numpy", fastmath={"contract"})
@@ -565,12 +579,9 @@ def _remap_grey_tasks(
     mf = map_uv.ravel()
     rounded = hi > 0.0
     for t in range(t0, t1):
-        b = t // nblk
-        blk = t - b * nblk
-        flat = img[b].ravel()
+        b, i0, i1 = _task_rows(t, nblk, ho)
         of = out[b].ravel()
-        i0, i1 = blk * ho // nblk, (blk + 1) * ho // nblk
-        _remap_rows_grey(flat, mf, i0, i1, wo, h, w, scale, fill, rounded, of, acc)
+        _remap_rows_grey(img[b].ravel(), mf, i0, i1, wo, h, w, scale, fill, rounded, of, acc)
 
 
 def remap_bilinear(
@@ -709,17 +720,11 @@ def _undistort_tasks(
     ho = out.shape[1]
     wo = out.shape[2]
     rounded = hi > 0.0
-    kidx = np.empty(_BLK, kcar.dtype)
-    ax = np.empty(_BLK, acc.dtype)
-    ay = np.empty(_BLK, acc.dtype)
-    ok = np.empty(_BLK, np.bool_)
-    bufs = (kidx, ax, ay, ok)
+    bufs = _block_buffers(kcar, acc)
     for t in range(t0, t1):
-        b = t // nblk
-        blk = t - b * nblk
+        b, i0, i1 = _task_rows(t, nblk, ho)
         flat = img[b].ravel()
         of = out[b].ravel()
-        i0, i1 = blk * ho // nblk, (blk + 1) * ho // nblk
         _undistort_rows(flat, i0, i1, wo, h, w, nc, p, rational, scale, fill, rounded, hi, of, bufs)
 
 
