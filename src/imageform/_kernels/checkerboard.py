@@ -152,35 +152,11 @@ def _refine_corners(
             ay = cy - fy
             x0 = int(fx) - hx - 1
             y0 = int(fy) - hy - 1
-            bx = 1.0 - ax
-            if x0 >= 0 and x0 + ww + 2 <= width - 1 and is32:
-                # inside the image: contiguous reads, no clamping (the same numbers); the
-                # dtype tested outside the row loop (inside it, 1.17x the time)
-                for i in range(wh + 3):
-                    r32 = image32[min(max(y0 + i, 0), height - 1), x0 : x0 + ww + 3]
-                    hr = hrow[i]
-                    for j in range(ww + 2):
-                        hr[j] = bx * r32[j] + ax * r32[j + 1]
-            elif x0 >= 0 and x0 + ww + 2 <= width - 1:
-                for i in range(wh + 3):
-                    r64 = image64[min(max(y0 + i, 0), height - 1), x0 : x0 + ww + 3]
-                    hr = hrow[i]
-                    for j in range(ww + 2):
-                        hr[j] = bx * r64[j] + ax * r64[j + 1]
+            # the dtype tested outside the row loops (inside them, 1.17x the time)
+            if is32:
+                _blend_rows(image32, x0, y0, ax, hrow, xcol)
             else:
-                for j in range(ww + 3):
-                    xcol[j] = min(max(x0 + j, 0), width - 1)
-                for i in range(wh + 3):
-                    yi = min(max(y0 + i, 0), height - 1)
-                    hr = hrow[i]
-                    if is32:
-                        r32 = image32[yi]
-                        for j in range(ww + 2):
-                            hr[j] = bx * r32[xcol[j]] + ax * r32[xcol[j + 1]]
-                    else:
-                        r64 = image64[yi]
-                        for j in range(ww + 2):
-                            hr[j] = bx * r64[xcol[j]] + ax * r64[xcol[j + 1]]
+                _blend_rows(image64, x0, y0, ax, hrow, xcol)
             for i in range(wh + 2):
                 for j in range(ww + 2):
                     patch[i, j] = (1.0 - ay) * hrow[i, j] + ay * hrow[i + 1, j]
@@ -232,6 +208,42 @@ def _refine_corners(
         out[k, 1] = cy
         status[k] = st
     return out, status
+
+
+@njit(fastmath=False, inline="always")  # inlined: as a call, 1.03x the time
+def _blend_rows(
+    image: NDArray[np.floating],
+    x0: int,
+    y0: int,
+    ax: float,
+    hrow: NDArray[np.float64],
+    xcol: NDArray[np.int64],
+) -> None:  # pragma: no cover - numba-compiled
+    """Blend image rows ``y0 + i`` (clamped) along u at ``x0 + j + ax`` into ``hrow[i, j]``.
+
+    :func:`_refine_corners`'s rows (``hrow`` is ``(wh + 3, ww + 2)``; ``xcol`` holds
+    ``ww + 3`` column indices), edge pixels replicated, for a float32 or a float64 image (read
+    as float64: the same numbers). A window inside the image is read contiguously, without
+    clamping (the same numbers).
+    """
+    height, width = image.shape
+    wh = hrow.shape[0] - 3
+    ww = hrow.shape[1] - 2
+    bx = 1.0 - ax
+    if x0 >= 0 and x0 + ww + 2 <= width - 1:
+        for i in range(wh + 3):
+            r = image[min(max(y0 + i, 0), height - 1), x0 : x0 + ww + 3]
+            hr = hrow[i]
+            for j in range(ww + 2):
+                hr[j] = bx * r[j] + ax * r[j + 1]
+        return
+    for j in range(ww + 3):
+        xcol[j] = min(max(x0 + j, 0), width - 1)
+    for i in range(wh + 3):
+        r = image[min(max(y0 + i, 0), height - 1)]
+        hr = hrow[i]
+        for j in range(ww + 2):
+            hr[j] = bx * r[xcol[j]] + ax * r[xcol[j + 1]]
 
 
 def refine_corners_numpy(
