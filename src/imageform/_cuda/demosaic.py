@@ -27,7 +27,7 @@ import numpy as np
 
 from imageform._cuda import _launch
 from imageform._cuda._launch import empty_like, guarded
-from imageform._cuda.geometry import import_cuda
+from imageform._cuda.geometry import import_cuda, row_grid
 
 __all__ = [
     "MODE_CAMERA",
@@ -73,6 +73,7 @@ def _kernels() -> Any:
         return zero if v < zero else (one if v > one else v)
 
     clip_d = cuda.jit(device=True)(clip01)
+    row_grid_d = row_grid()
 
     def make_rgb_at(get: Any, T: Any) -> Any:
         """Return a device function: ``(R, G, B)`` at pixel ``(y, x)``, samples read by ``get``.
@@ -126,14 +127,12 @@ def _kernels() -> Any:
         def demosaic_kernel(raw, ry, rx, method, clip, out):  # type: ignore[no-untyped-def]
             # a 2-D launch (launch_rows): thread (row y, column x), every image of the batch
             nb, h, w = raw.shape
-            x = cuda.blockIdx.x * cuda.blockDim.x + cuda.threadIdx.x
+            x, y, step = row_grid_d()
             if x >= w:
                 return
             zero = T(0.0)
             one = T(1.0)
-            y = cuda.blockIdx.y * cuda.blockDim.y + cuda.threadIdx.y
-            step = cuda.gridDim.y * cuda.blockDim.y
-            while y < h:  # no division (range() counts its trips)
+            while y < h:
                 for b in range(nb):
                     rr, gg, bb = rgb_at_d(raw, b, y, x, h, w, ry, rx, method)
                     if clip:
@@ -201,12 +200,10 @@ def _kernels() -> Any:
     def develop_kernel(mosaic, prm, ry, rx, method, m, lut, encode, mode, out_f, out_u):  # type: ignore[no-untyped-def]
         # prm (4, 2) float32: rows 0-1 the black level, rows 2-3 the scale of the 2x2 tile;
         # a 2-D launch (launch_rows): thread (row y, column x)
-        x = cuda.blockIdx.x * cuda.blockDim.x + cuda.threadIdx.x
+        x, y, step = row_grid_d()
         if x >= mosaic.shape[1]:
             return
-        y = cuda.blockIdx.y * cuda.blockDim.y + cuda.threadIdx.y
-        step = cuda.gridDim.y * cuda.blockDim.y
-        while y < mosaic.shape[0]:  # no division (range() counts its trips)
+        while y < mosaic.shape[0]:
             develop_pixel_d(mosaic, prm, y, x, ry, rx, method, m, lut, encode, mode, out_f, out_u)
             y += step
 

@@ -51,6 +51,7 @@ __all__ = [
     "project",
     "remap",
     "require_cuda",
+    "row_grid",
     "undistort",
     "undistort_image",
 ]
@@ -103,6 +104,25 @@ def import_cuda() -> Any:
     if cuda is None:
         cuda = _launch.cuda()
     return cuda
+
+
+@functools.cache
+def row_grid() -> Any:
+    """Return the prologue of the kernels on a 2-D grid, a device function (compiled once).
+
+    On :func:`~imageform._cuda._launch.launch_rows`'s grid, ``x, y, step = row_grid_d()`` in a
+    kernel (``row_grid_d = row_grid()``) gives the thread's column ``x``, its first row ``y``
+    and the row stride ``step`` (the grid's height is capped at CUDA's limit). The kernel
+    returns when ``x`` is past the last column, then loops ``while y < rows: ...; y += step``
+    (no division: ``range()`` counts its trips).
+    """
+    import_cuda()
+
+    def grid_rows():  # type: ignore[no-untyped-def]
+        x, y = cuda.grid(2)
+        return x, y, cuda.gridsize(2)[1]
+
+    return cuda.jit(device=True)(grid_rows)
 
 
 # --- kernels -------------------------------------------------------------------------------
@@ -205,16 +225,15 @@ def _kernels() -> Any:
             )
 
     sample_d = cuda.jit(device=True)(sample)
+    row_grid_d = row_grid()
 
     def remap_kernel(img, mp, fill, out):  # type: ignore[no-untyped-def]
         # a 2-D launch (launch_rows): thread (row i, column j); the position is read once
         # and every image of the batch sampled there
-        j = cuda.blockIdx.x * cuda.blockDim.x + cuda.threadIdx.x
+        j, i, step = row_grid_d()
         if j >= out.shape[2]:
             return
-        i = cuda.blockIdx.y * cuda.blockDim.y + cuda.threadIdx.y
-        step = cuda.gridDim.y * cuda.blockDim.y
-        while i < out.shape[1]:  # no division (range() counts its trips)
+        while i < out.shape[1]:
             u = float(mp[i, j, 0])  # float64 weights from a float32 map (exact positions)
             v = float(mp[i, j, 1])
             for b in range(out.shape[0]):
@@ -224,12 +243,10 @@ def _kernels() -> Any:
     def undistort_image_kernel(img, Kn, Km, k1, k2, p1, p2, k3, k4, k5, k6, fill, out):  # type: ignore[no-untyped-def]
         # the source position as imageform.geometry._remap_xp.map_grid computes it, once per
         # output pixel for the whole batch
-        j = cuda.blockIdx.x * cuda.blockDim.x + cuda.threadIdx.x
+        j, i, step = row_grid_d()
         if j >= out.shape[2]:
             return
-        i = cuda.blockIdx.y * cuda.blockDim.y + cuda.threadIdx.y
-        step = cuda.gridDim.y * cuda.blockDim.y
-        while i < out.shape[1]:  # no division (range() counts its trips)
+        while i < out.shape[1]:
             y = (float(i) - Kn[1, 2]) / Kn[1, 1]
             x = (float(j) - Kn[0, 2] - Kn[0, 1] * y) / Kn[0, 0]
             xd, yd = distort_xy(x, y, k1, k2, p1, p2, k3, k4, k5, k6)
