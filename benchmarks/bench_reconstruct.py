@@ -26,7 +26,9 @@ import statistics
 import sys
 import tempfile
 import time
+from collections.abc import Callable, Sequence
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -49,6 +51,73 @@ def run_imageform(frames: list[np.ndarray], K: np.ndarray, threads: int) -> dict
     return {"C": C, "reg": rec.registered, "points": rec.points.shape[0], "time": dt, "cpu": dc}
 
 
+def pycolmap_options(threads: int, model: str, params: Sequence[float]) -> tuple[Any, ...]:
+    """pycolmap's options as the benchmarks set them: ``(reader, extraction, matching, mapping)``.
+
+    One camera ``model`` with ``params`` (COLMAP's order), kept fixed (``ba_refine_*`` off);
+    features and matching on the CPU; ``threads`` threads each; mapping seed 0.
+    """
+    import pycolmap
+
+    reader = pycolmap.ImageReaderOptions()
+    reader.camera_model = model
+    reader.camera_params = ",".join(str(float(v)) for v in params)
+    extraction = pycolmap.FeatureExtractionOptions()
+    extraction.num_threads = threads
+    extraction.use_gpu = False
+    matching = pycolmap.FeatureMatchingOptions()
+    matching.num_threads = threads
+    matching.use_gpu = False
+    opts = pycolmap.IncrementalPipelineOptions()
+    opts.num_threads = threads
+    opts.ba_refine_focal_length = False
+    opts.ba_refine_principal_point = False
+    opts.ba_refine_extra_params = False
+    opts.random_seed = 0
+    return reader, extraction, matching, opts
+
+
+def pycolmap_reconstruct(
+    root: Path, images: Path, options: tuple[Any, ...], match: Callable[[Path], object]
+) -> tuple[dict[int, Any], float, float]:
+    """Features, ``match(database)`` and incremental mapping of ``images``: the models, times.
+
+    ``options`` from :func:`pycolmap_options`; the database and the models go in ``root``.
+    Returns the models, the wall and the CPU seconds of the whole.
+    """
+    import pycolmap
+
+    reader, extraction, _, opts = options
+    db = root / "database.db"
+    t0, c0 = time.perf_counter(), time.process_time()
+    pycolmap.extract_features(
+        db,
+        images,
+        camera_mode=pycolmap.CameraMode.SINGLE,
+        reader_options=reader,
+        extraction_options=extraction,
+        device=pycolmap.Device.cpu,
+    )
+    match(db)
+    maps = pycolmap.incremental_mapping(db, images, root / "sparse", options=opts)
+    return maps, time.perf_counter() - t0, time.process_time() - c0
+
+
+def pycolmap_poses(maps: dict[int, Any], names: list[str]) -> tuple[np.ndarray, np.ndarray, int]:
+    """Camera centres and rotations (NaN where not registered) of the largest model, points."""
+    C = np.full((len(names), 3), np.nan)
+    R = np.full((len(names), 3, 3), np.nan)
+    points = 0
+    if maps:
+        best = max(maps.values(), key=lambda r: r.num_reg_images())
+        points = best.num_points3D()
+        for image in best.images.values():
+            if image.has_pose:
+                C[names.index(image.name)] = image.projection_center()
+                R[names.index(image.name)] = image.cam_from_world().rotation.matrix()
+    return C, R, points
+
+
 def run_pycolmap(frames: list[np.ndarray], K: np.ndarray, threads: int) -> dict[str, object]:
     import cv2
     import pycolmap
@@ -60,46 +129,17 @@ def run_pycolmap(frames: list[np.ndarray], K: np.ndarray, threads: int) -> dict[
         names = [f"{i:04d}.png" for i in range(len(frames))]
         for name, f in zip(names, frames, strict=True):
             cv2.imwrite(str(images / name), f[..., ::-1])
-        db = root / "database.db"
-        reader = pycolmap.ImageReaderOptions()
-        reader.camera_model = "PINHOLE"
-        reader.camera_params = ",".join(str(v) for v in (K[0, 0], K[1, 1], K[0, 2], K[1, 2]))
-        extraction = pycolmap.FeatureExtractionOptions()
-        extraction.num_threads = threads
-        extraction.use_gpu = False
-        matching = pycolmap.FeatureMatchingOptions()
-        matching.num_threads = threads
-        matching.use_gpu = False
+        options = pycolmap_options(threads, "PINHOLE", (K[0, 0], K[1, 1], K[0, 2], K[1, 2]))
         pairing = pycolmap.SequentialPairingOptions()
         pairing.num_threads = threads
-        opts = pycolmap.IncrementalPipelineOptions()
-        opts.num_threads = threads
-        opts.ba_refine_focal_length = False
-        opts.ba_refine_principal_point = False
-        opts.ba_refine_extra_params = False
-        opts.random_seed = 0
-        t0, c0 = time.perf_counter(), time.process_time()
-        pycolmap.extract_features(
-            db,
-            images,
-            camera_mode=pycolmap.CameraMode.SINGLE,
-            reader_options=reader,
-            extraction_options=extraction,
-            device=pycolmap.Device.cpu,
-        )
-        pycolmap.match_sequential(
-            db, matching_options=matching, pairing_options=pairing, device=pycolmap.Device.cpu
-        )
-        maps = pycolmap.incremental_mapping(db, images, root / "sparse", options=opts)
-        dt, dc = time.perf_counter() - t0, time.process_time() - c0
-    C = np.full((len(frames), 3), np.nan)
-    points = 0
-    if maps:
-        best = max(maps.values(), key=lambda r: r.num_reg_images())
-        points = best.num_points3D()
-        for image in best.images.values():
-            if image.has_pose:
-                C[names.index(image.name)] = image.projection_center()
+
+        def match(db: Path) -> None:
+            pycolmap.match_sequential(
+                db, matching_options=options[2], pairing_options=pairing, device=pycolmap.Device.cpu
+            )
+
+        maps, dt, dc = pycolmap_reconstruct(root, images, options, match)
+    C, _, points = pycolmap_poses(maps, names)
     reg = np.all(np.isfinite(C), axis=1)
     return {"C": C, "reg": reg, "points": points, "time": dt, "cpu": dc}
 

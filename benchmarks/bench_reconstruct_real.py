@@ -40,6 +40,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from benchmarks._common import header, markdown_table
+from benchmarks.bench_reconstruct import pycolmap_options, pycolmap_poses, pycolmap_reconstruct
 from tests import sfm_scenes
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -150,48 +151,19 @@ def run_pycolmap(scene: dict[str, Any], masked: bool, threads: int, ratio: float
         for name, im, m in zip(names, images, scene["masks"], strict=True):
             cv2.imwrite(str(folder / name), im)
             cv2.imwrite(str(mask_folder / f"{name}.png"), m)  # COLMAP: IMAGE_NAME.png
-        db = root / "database.db"
-        reader = pycolmap.ImageReaderOptions()
-        reader.camera_model = "FULL_OPENCV"  # fx fy cx cy k1 k2 p1 p2 k3 k4 k5 k6
+        # FULL_OPENCV: fx fy cx cy k1 k2 p1 p2 k3 k4 k5 k6
         params = (K[0, 0], K[1, 1], K[0, 2], K[1, 2], d.k1, d.k2, d.p1, d.p2, d.k3, 0, 0, 0)
-        reader.camera_params = ",".join(str(float(v)) for v in params)
+        options = pycolmap_options(threads, "FULL_OPENCV", params)
+        reader, _, matching, _ = options
         if masked:
             reader.mask_path = str(mask_folder)
-        extraction = pycolmap.FeatureExtractionOptions()
-        extraction.num_threads = threads
-        extraction.use_gpu = False
-        matching = pycolmap.FeatureMatchingOptions()
-        matching.num_threads = threads
-        matching.use_gpu = False
         matching.sift.max_ratio = ratio
-        opts = pycolmap.IncrementalPipelineOptions()
-        opts.num_threads = threads
-        opts.ba_refine_focal_length = False
-        opts.ba_refine_principal_point = False
-        opts.ba_refine_extra_params = False
-        opts.random_seed = 0
-        t0, c0 = time.perf_counter(), time.process_time()
-        pycolmap.extract_features(
-            db,
-            folder,
-            camera_mode=pycolmap.CameraMode.SINGLE,
-            reader_options=reader,
-            extraction_options=extraction,
-            device=pycolmap.Device.cpu,
-        )
-        pycolmap.match_exhaustive(db, matching_options=matching, device=pycolmap.Device.cpu)
-        maps = pycolmap.incremental_mapping(db, folder, root / "sparse", options=opts)
-        dt, dc = time.perf_counter() - t0, time.process_time() - c0
-    C = np.full((len(images), 3), np.nan)
-    R = np.full((len(images), 3, 3), np.nan)
-    points = 0
-    if maps:
-        best = max(maps.values(), key=lambda r: r.num_reg_images())
-        points = best.num_points3D()
-        for image in best.images.values():
-            if image.has_pose:
-                C[names.index(image.name)] = image.projection_center()
-                R[names.index(image.name)] = image.cam_from_world().rotation.matrix()
+
+        def match(db: Path) -> None:
+            pycolmap.match_exhaustive(db, matching_options=matching, device=pycolmap.Device.cpu)
+
+        maps, dt, dc = pycolmap_reconstruct(root, folder, options, match)
+    C, R, points = pycolmap_poses(maps, names)
     note = "" if maps else "no model"
     return {"C": C, "R": R, "points": points, "time": dt, "cpu": dc, "note": note}
 
