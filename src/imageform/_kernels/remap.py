@@ -58,6 +58,7 @@ map from :func:`~imageform.geometry.undistort.undistortion_map`; tests check agr
 
 from __future__ import annotations
 
+import functools
 import sys
 from typing import Any
 
@@ -614,18 +615,8 @@ def remap_bilinear(
     run_tasks(_remap_tasks, img.shape[0] * nblk, *args, threads=threads)
 
 
-def remap_bilinear_serial(
-    img: np.ndarray,
-    map_uv: np.ndarray,
-    scale: float,
-    fill: float,
-    out: np.ndarray,
-    acc: np.ndarray,
-    kcar: np.ndarray,
-    hi: float,
-) -> None:
-    """:func:`remap_bilinear` in the calling thread (small images: no pool to wake)."""
-    remap_bilinear(img, map_uv, scale, fill, out, acc, kcar, hi, threads=1)
+#: :func:`remap_bilinear` in the calling thread (small images: no pool to wake).
+remap_bilinear_serial = functools.partial(remap_bilinear, threads=1)
 
 
 @njit(error_model="numpy", fastmath={"contract"})
@@ -757,20 +748,8 @@ def undistort_brown_conrady(
     run_tasks(_undistort_tasks, img.shape[0] * nblk, *args, threads=threads)
 
 
-def undistort_brown_conrady_serial(
-    img: np.ndarray,
-    k_new: np.ndarray,
-    k_src: np.ndarray,
-    coeffs: np.ndarray,
-    scale: float,
-    fill: float,
-    out: np.ndarray,
-    acc: np.ndarray,
-    kcar: np.ndarray,
-    hi: float,
-) -> None:
-    """:func:`undistort_brown_conrady` in the calling thread."""
-    undistort_brown_conrady(img, k_new, k_src, coeffs, scale, fill, out, acc, kcar, hi, threads=1)
+#: :func:`undistort_brown_conrady` in the calling thread.
+undistort_brown_conrady_serial = functools.partial(undistort_brown_conrady, threads=1)
 
 
 #: Outputs of fewer samples (pixels x channels x images) run in the calling thread. On the
