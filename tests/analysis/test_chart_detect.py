@@ -60,18 +60,42 @@ def test_detects_chart_in_real_photographs(kodak: list[np.ndarray], seed: int) -
 
 def test_no_chart_in_kodak_photographs(kodak: list[np.ndarray]) -> None:
     for img in kodak[::3]:
-        with pytest.raises(ChartNotFoundError) as info:
-            detect_colorchecker(np.round(img * 255).astype(np.uint8))
-        msg = str(info.value)
-        assert "\n" not in msg and len(msg) < 200 and msg.startswith("no ColorChecker found")
+        det = detect_colorchecker(np.round(img * 255).astype(np.uint8))
+        assert not det.found
+        msg = det.reason
+        assert msg and "\n" not in msg and len(msg) < 200
 
 
-def test_not_found_is_imageform_error() -> None:
+def test_not_found_is_a_result_and_measuring_it_raises() -> None:
+    # docs/conventions.md "Not found": the detector answers found=False with the reason
+    flat = np.full((200, 300, 3), 0.5)
+    det = detect_colorchecker(flat)
+    assert not det.found and "flat square region" in det.reason
+    assert np.isnan(det.centers).all() and det.centers.shape == (24, 2)
+    assert det.quads.shape == (24, 4, 2) and np.isnan(det.homography).all()
+    assert not det.segmented.any() and not det.outliers.any()
+    assert np.isnan(det.score) and np.isnan(det.rotation)
+    d = det.to_dict()
+    assert d["found"] is False and d["centers"] is None and d["reason"] == det.reason
+    small = detect_colorchecker(np.full((8, 300, 3), 0.5))
+    assert not small.found and "too small" in small.reason
+    # what needs the chart raises ChartNotFoundError (an ImageformError), one line
     assert issubclass(ChartNotFoundError, ImageformError)
-    with pytest.raises(ChartNotFoundError, match="flat square region"):
-        detect_colorchecker(np.full((200, 300, 3), 0.5))
-    with pytest.raises(ChartNotFoundError, match="too small"):
-        detect_colorchecker(np.full((8, 300, 3), 0.5))
+    with pytest.raises(ChartNotFoundError, match="^no ColorChecker found in the image: 0 flat"):
+        measure_chart_patches(flat, det)
+    # a found=False record is checked like a found one; NaN only when not found
+    with pytest.raises(InvalidInputError, match="homography contains NaN"):
+        ChartDetection(
+            det.homography,
+            det.corners,
+            det.centers,
+            det.quads,
+            det.segmented,
+            det.outliers,
+            1.0,
+            0.0,
+            found=True,
+        )
 
 
 def test_occluded_patches_are_flagged(kodak: list[np.ndarray]) -> None:
@@ -142,15 +166,15 @@ def test_custom_reference_and_validation() -> None:
     with pytest.raises(TypeError, match="ChartDetection"):
         measure_chart_patches(photo.image, "chart")  # type: ignore[arg-type]
     # a grey "reference" cannot be recognised: no chart matches it
-    with pytest.raises(ChartNotFoundError):
-        detect_colorchecker(photo.image, reference=np.full((24, 3), 0.5))
+    assert not detect_colorchecker(photo.image, reference=np.full((24, 3), 0.5)).found
 
 
 def test_detection_to_dict_and_checks() -> None:
     det = detect_colorchecker(synthetic_chart_photo(rng=6).image)
     d = det.to_dict()
     assert len(d["centers"]) == 24 and len(d["quads"][0]) == 4
-    with pytest.raises(InvalidInputError, match="found"):
+    assert d["found"] is True and d["reason"] == "" and len(d["segmented"]) == 24
+    with pytest.raises(InvalidInputError, match="segmented"):
         ChartDetection(
             det.homography,
             det.corners,
@@ -171,7 +195,7 @@ def test_patches_outside_the_frame_are_missing() -> None:
         det.corners,
         det.centers,
         det.quads - [det.quads[:, :, 0].min() + 5000, 0],
-        det.found,
+        det.segmented,
         det.outliers,
         det.score,
         det.rotation,

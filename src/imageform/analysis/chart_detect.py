@@ -33,7 +33,8 @@ segmentation detector of colour-checker-detection and OpenCV's ``mcc`` module):
    max(4 × median, 10) ΔE*ab from its reference (leave-one-out, in CIELAB: dark patches
    count, and a channel clipped at the gamut's edge, the cyan's red, barely does). The score
    is that fit's :math:`R^2` without the outliers; the best window and orientation above
-   ``min_score`` wins, otherwise :class:`ChartNotFoundError`.
+   ``min_score`` wins; otherwise the detection comes back with ``found`` False and the
+   reason (a photograph without a chart is an answer, not an error).
 
 Coordinates are imageform's pixel convention (docs/conventions.md): ``(u, v)`` = (column,
 row), integer values at pixel centres. Chart coordinates are ``(column, row)`` of the
@@ -54,7 +55,15 @@ from imageform import _deprecate
 from imageform._colormath import srgb_decode, srgb_encode
 from imageform._random import RNGLike
 from imageform._typing import ArrayLike
-from imageform._validate import as_int, as_real, check_memory, describe, format_shape, real_array
+from imageform._validate import (
+    as_bool,
+    as_int,
+    as_real,
+    check_memory,
+    describe,
+    format_shape,
+    real_array,
+)
 from imageform.analysis._arrays import image_in, is_dask
 from imageform.analysis.chart_grid import ChartPatches, ChartWarning
 from imageform.errors import InvalidInputError
@@ -74,15 +83,24 @@ _LEVELS = (0.012, 0.025, 0.05, 0.1)
 
 
 class ChartNotFoundError(InvalidInputError):
-    """No ColorChecker was found in the image (or none whose colours match the reference)."""
+    """A function that needs a colour chart got an image without one.
+
+    Raised by the functions that measure a chart (:func:`measure_chart_patches` of a
+    detection with ``found`` False, :func:`~imageform.analysis.sample_chart`, a colour
+    correction fitted to a photograph); the detector itself, :func:`detect_colorchecker`,
+    returns its :class:`ChartDetection` with ``found`` False instead (docs/conventions.md,
+    "Not found").
+    """
 
 
 @_deprecate.renamed_fields({"centres": "centers"})
 @dataclass(frozen=True)
 class ChartDetection:
-    """A ColorChecker found in a photograph (:func:`detect_colorchecker`).
+    """The outcome of :func:`detect_colorchecker`: a ColorChecker found in a photograph, or not.
 
-    All positions are image pixels ``(u, v)`` (column, row; pixel centres at integers).
+    All positions are image pixels ``(u, v)`` (column, row; pixel centres at integers). When
+    no chart was found (``found`` False, ``reason`` says why), the arrays keep their shapes
+    and hold NaN (``segmented`` and ``outliers`` False), ``score`` and ``rotation`` are NaN.
     """
 
     #: (3, 3) homography from chart ``(column, row)`` (patch pitches, patch k at
@@ -98,8 +116,9 @@ class ChartDetection:
     #: same order as ``corners``.
     quads: np.ndarray
     #: (24,) bool: the patch was segmented in the photograph (others are placed by the
-    #: homography: occluded, merged with the surround, or too blurred).
-    found: np.ndarray
+    #: homography: occluded, merged with the surround, or too blurred). This field was
+    #: named ``found`` before the chart-level ``found`` below.
+    segmented: np.ndarray
     #: (24,) bool: patches whose colour disagrees with the fit of the other patches
     #: (leave-one-out; left out of the score; likely occluded or covered by a reflection).
     outliers: np.ndarray
@@ -109,34 +128,75 @@ class ChartDetection:
     #: In-plane rotation of the chart in degrees, (-180, 180]: the image direction of the
     #: chart's rows (left to right), clockwise from the image's +u axis as seen on screen.
     rotation: float
+    #: True when a chart was found; False when the image shows none (the other fields are
+    #: then NaN / False).
+    found: bool = True
+    #: Why no chart was found, in one line ("" when found).
+    reason: str = ""
 
     def __post_init__(self) -> None:
-        """Arrays to float64/bool of the documented shapes."""
+        """Arrays to float64/bool of the documented shapes (finite when found)."""
+        object.__setattr__(self, "found", as_bool(self.found, "found"))
+        if not isinstance(self.reason, str):
+            raise InvalidInputError(f"expected reason as a str, got {describe(self.reason)}")
         shapes = {"homography": (3, 3), "corners": (4, 2), "centers": (24, 2), "quads": (24, 4, 2)}
         for name, shape in shapes.items():
-            object.__setattr__(self, name, real_array(getattr(self, name), name, shape))
-        for name in ("found", "outliers"):
+            arr = real_array(getattr(self, name), name, shape, finite=self.found)
+            object.__setattr__(self, name, arr)
+        for name in ("segmented", "outliers"):
             arr = np.asarray(getattr(self, name))
             if arr.dtype != np.bool_ or arr.shape != (24,):
                 raise InvalidInputError(
                     f"expected {name} as booleans of shape (24,), got {describe(arr)}"
                 )
             object.__setattr__(self, name, arr)
-        object.__setattr__(self, "score", as_real(self.score, "score"))
-        object.__setattr__(self, "rotation", as_real(self.rotation, "rotation"))
+        for name in ("score", "rotation"):
+            value = getattr(self, name)
+            if self.found or not (isinstance(value, float | np.floating) and np.isnan(value)):
+                value = as_real(value, name)  # NaN only when not found
+            object.__setattr__(self, name, float(value))
 
     def to_dict(self) -> dict[str, Any]:
-        """Return the detection as JSON-ready lists."""
+        """Return the detection as JSON-ready values (positions None when not found)."""
+        if not self.found:
+            return {
+                "found": False,
+                "reason": self.reason,
+                **dict.fromkeys(("homography", "corners", "centers", "quads")),
+                "segmented": self.segmented.tolist(),
+                "outliers": self.outliers.tolist(),
+                "score": None,
+                "rotation_degrees": None,
+            }
         return {
+            "found": True,
+            "reason": "",
             "homography": self.homography.tolist(),
             "corners": self.corners.tolist(),
             "centers": self.centers.tolist(),
             "quads": self.quads.tolist(),
-            "found": self.found.tolist(),
+            "segmented": self.segmented.tolist(),
             "outliers": self.outliers.tolist(),
             "score": self.score,
             "rotation_degrees": self.rotation,
         }
+
+
+def _not_found(reason: str) -> ChartDetection:
+    """The detection of a photograph without a chart: NaN positions, ``found`` False."""
+    no = np.zeros(_ROWS * _COLS, dtype=bool)
+    return ChartDetection(
+        homography=np.full((3, 3), np.nan),
+        corners=np.full((4, 2), np.nan),
+        centers=np.full((_ROWS * _COLS, 2), np.nan),
+        quads=np.full((_ROWS * _COLS, 4, 2), np.nan),
+        segmented=no,
+        outliers=no.copy(),
+        score=float("nan"),
+        rotation=float("nan"),
+        found=False,
+        reason=reason,
+    )
 
 
 # ---------------------------------------------------------------- geometry helpers
@@ -698,11 +758,18 @@ def detect_colorchecker(
     Returns
     -------
     ChartDetection
+        The chart's homography, corners, patch centres and quads, score and rotation with
+        ``found`` True; or, when the image holds no 4 × 6 lattice of flat patches whose
+        colours match the reference (or is under 16 pixels on a side), ``found`` False, the
+        ``reason`` in one line and NaN positions. A photograph without a chart is not an
+        error; :func:`measure_chart_patches` of a detection that found nothing raises
+        :class:`ChartNotFoundError`.
 
     Raises
     ------
-    ChartNotFoundError
-        No 4 × 6 lattice of flat patches whose colours match the reference.
+    InvalidInputError
+        ``image`` is not an RGB image, or ``reference``, ``max_size``, ``min_score`` or
+        ``sample`` is out of range.
 
     Examples
     --------
@@ -710,8 +777,11 @@ def detect_colorchecker(
     >>> photo = synthetic_chart_photo(rng=3)
     >>> det = detect_colorchecker(photo.image)
     >>> err = np.linalg.norm(det.centers - photo.centers, axis=1).max()
-    >>> bool(err < 1.0), bool(det.found.all())
-    (True, True)
+    >>> det.found, bool(err < 1.0), bool(det.segmented.all())
+    (True, True, True)
+    >>> empty = detect_colorchecker(np.full((120, 160, 3), 0.5))
+    >>> empty.found, empty.reason
+    (False, '0 flat square region(s) in the image, a ColorChecker shows 24')
     """
     from imageform.analysis.synthetic import COLORCHECKER_SRGB8
 
@@ -728,7 +798,7 @@ def detect_colorchecker(
         raise InvalidInputError(f"expected reference in [0, 1], got {describe(ref)}")
     ref_lin = srgb_decode(np, ref)
     if min(rgb.shape[:2]) < 16:
-        raise ChartNotFoundError(
+        return _not_found(
             f"image of {rgb.shape[0]}x{rgb.shape[1]} pixels is too small to hold a colour chart"
         )
     work, f = _work_image(rgb, max_size, full)
@@ -746,10 +816,10 @@ def detect_colorchecker(
             res, work = res_up, up
             scale = np.array([[0.5, 0.0, -0.25], [0.0, 0.5, -0.25], [0.0, 0.0, 1.0]])
     if not isinstance(res, tuple):
-        raise ChartNotFoundError(f"no ColorChecker found in the image: {res}")
+        return _not_found(res)
     r2, hc, out, chart_xy = res
-    found = np.zeros(_ROWS * _COLS, dtype=bool)
-    found[(chart_xy[:, 1] * _COLS + chart_xy[:, 0]).astype(int)] = True
+    segmented = np.zeros(_ROWS * _COLS, dtype=bool)
+    segmented[(chart_xy[:, 1] * _COLS + chart_xy[:, 0]).astype(int)] = True
     hf = scale @ hc
     hf = hf / hf[2, 2]
     unit = np.array([[-0.5, -0.5], [0.5, -0.5], [0.5, 0.5], [-0.5, 0.5]])
@@ -760,7 +830,7 @@ def detect_colorchecker(
     rot = float(np.degrees(np.arctan2(row_dir[0, 1], row_dir[0, 0])))
     if rot <= -180.0:
         rot += 360.0
-    return ChartDetection(hf, corners, centres, quads, found, out, float(r2), rot)
+    return ChartDetection(hf, corners, centres, quads, segmented, out, float(r2), rot)
 
 
 def _quad_mask_bounds(quad: np.ndarray, hgt: int, wid: int) -> tuple[slice, slice, np.ndarray]:
@@ -822,6 +892,13 @@ def measure_chart_patches(
     ChartPatches
         Row by row in the reference chart's order (upright), whatever the photo's rotation.
 
+    Raises
+    ------
+    ChartNotFoundError
+        ``chart.found`` is False: the detection found no chart to measure.
+    InvalidInputError
+        No patch of the chart is usable, or an argument is out of range.
+
     Examples
     --------
     >>> from imageform.analysis import synthetic_chart_photo
@@ -832,6 +909,8 @@ def measure_chart_patches(
     """
     if not isinstance(chart, ChartDetection):
         raise TypeError(f"expected chart as a ChartDetection, got {describe(chart)}")
+    if not chart.found:
+        raise ChartNotFoundError(f"no ColorChecker found in the image: {chart.reason}")
     rgb, full = _rgb_in(image)
     max_std = as_real(max_std, "max_std", nonnegative=True)
     saturation = as_real(saturation, "saturation", positive=True)

@@ -256,14 +256,13 @@ def sample_chart(
             )
     if is_dask(rgb):
         rgb = np.asarray(rgb.compute())
-    try:
-        det = detect_colorchecker(rgb, max_size=max_size, min_score=min_score)
-    except ChartNotFoundError:
+    det = detect_colorchecker(rgb, max_size=max_size, min_score=min_score)
+    if not det.found:
         grid_note = "" if how == "detect" else "neither a chart that fills the frame nor "
         raise ChartNotFoundError(
             f"no ColorChecker found in {label} ({grid_note}a chart in the photograph); pass "
             "layout='cropped' for a chart cropped to fill the frame, or the patch values"
-        ) from None
+        )
     pat = measure_chart_patches(
         rgb, det, max_std=max_std, saturation=saturation
     )  # its ChartWarning names the patches left out

@@ -60,7 +60,8 @@ class VanishingPointResult:
     ----------
     vanishing_points : (M, 3)
         Homogeneous vanishing points (``w = 1`` finite, ``w = 0`` at infinity), M <= 3,
-        the orthogonal triplet (or pair) when one was found.
+        the orthogonal triplet (or pair) when one was found; M = 0 when the image shows
+        none (fewer than two line segments, or no point they support).
     labels : (N,)
         For each segment, the index of its vanishing point, or -1.
     segments : LineSegments
@@ -470,7 +471,11 @@ def detect_vanishing_points(
     -------
     VanishingPointResult
         The orthogonal triplet (or pair), the segments' labels, K when two or more of the
-        points are finite, the vertical point and the horizon.
+        points are finite, the vertical point and the horizon. An image with no vanishing
+        point to find (fewer than two line segments, a flat image, segments that support no
+        common point) is not an error: ``vanishing_points`` is then ``(0, 3)``, ``scores``
+        ``(0,)``, every label -1, ``K``, ``vertical`` and ``horizon`` None and
+        ``perspective`` 0.
 
     Notes
     -----
@@ -483,9 +488,15 @@ def detect_vanishing_points(
     Raises
     ------
     InvalidInputError
-        If neither or both of ``image`` and ``segments`` are given.
-    DegenerateConfigurationError
-        If fewer than two line segments are found.
+        If neither or both of ``image`` and ``segments`` are given, or an option is out of
+        range.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> res = detect_vanishing_points(np.full((120, 160), 0.5))  # a flat image: no lines
+    >>> res.vanishing_points.shape, len(res.segments), res.K, res.horizon, res.perspective
+    ((0, 3), 0, None, None, 0)
     """
     if (image is None) == (segments is None):
         raise InvalidInputError("give either an image or segments (with image_size)")
@@ -509,10 +520,6 @@ def detect_vanishing_points(
     infinity_factor = as_real(infinity_factor, "infinity_factor", positive=True, maximum=1e50)
     tol = as_real(orthogonality_tolerance, "orthogonality_tolerance", positive=True, maximum=1.5)
     pp_mode, pp_given = _principal_point(principal_point)
-    if len(segments) < 2:
-        raise DegenerateConfigurationError(
-            f"found {len(segments)} line segment(s); vanishing points need at least two"
-        )
     w, h = image_size
     centre = np.array([(w - 1) / 2, (h - 1) / 2])
     pp = centre if pp_given is None else pp_given

@@ -357,7 +357,7 @@ def _chart_patches(im: _Image, max_size: int) -> tuple[Any, Any, Any]:
 
     import numpy as np
 
-    from imageform.analysis import detect_colorchecker, measure_chart_patches
+    from imageform.analysis import ChartNotFoundError, detect_colorchecker, measure_chart_patches
     from imageform.color import linear_to_srgb
     from imageform.sensor import superpixel
 
@@ -370,6 +370,8 @@ def _chart_patches(im: _Image, max_size: int) -> tuple[Any, Any, Any]:
     else:
         lin, enc = np.asarray(im.linear), np.asarray(im.encoded)
     det = detect_colorchecker(enc, max_size=max_size)
+    if not det.found:
+        raise ChartNotFoundError(f"no ColorChecker found in the image: {det.reason}")
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         pat = measure_chart_patches(np.clip(lin, 0.0, None), det, max_std=1.0, saturation=0.999)

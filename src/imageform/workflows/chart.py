@@ -131,6 +131,7 @@ def chart(run: Run, opts: ChartOptions, *, out: Path, image: Path) -> Result:
 
     from imageform._jsonio import write_json
     from imageform.analysis import (
+        ChartNotFoundError,
         ChartPatches,
         ChartWarning,
         correction_report,
@@ -145,6 +146,8 @@ def chart(run: Run, opts: ChartOptions, *, out: Path, image: Path) -> Result:
     if img.ndim != 3 or img.shape[-1] != 3:
         raise InvalidInputError(f"{image}: expected an RGB image, got shape {img.shape}")
     det = detect_colorchecker(img, max_size=opts.max_size, min_score=opts.min_score)
+    if not det.found:
+        raise ChartNotFoundError(f"no ColorChecker found in the image: {det.reason}")
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", ChartWarning)
         pat = measure_chart_patches(img, det, max_std=_MAX_STD)
@@ -208,7 +211,7 @@ def chart(run: Run, opts: ChartOptions, *, out: Path, image: Path) -> Result:
         "score": det.score,
         "rotation_degrees": det.rotation,
         "corners": det.corners,
-        "patches_found": int(det.found.sum()),
+        "patches_found": int(det.segmented.sum()),
         "patches_valid": int(pat.valid.sum()),
         "patches_left_out": left_out,
         "method": corr.method,
@@ -219,7 +222,7 @@ def chart(run: Run, opts: ChartOptions, *, out: Path, image: Path) -> Result:
     }
     text = [
         f"ColorChecker found: score R2 {det.score:.4f}, rotation {det.rotation:.1f} deg, "
-        f"{int(det.found.sum())} of 24 patches segmented, {int(pat.valid.sum())} usable"
+        f"{int(det.segmented.sum())} of 24 patches segmented, {int(pat.valid.sum())} usable"
         + (f", {n_out} left out" if n_out else ""),
         "corners (u, v): " + ", ".join(f"({u:.1f}, {v:.1f})" for u, v in det.corners),
         f"{corr.method} (degree {corr.degree}) correction to the chart's sRGB values, "

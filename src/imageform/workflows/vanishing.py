@@ -14,7 +14,7 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
-from imageform.errors import InvalidInputError
+from imageform.errors import DegenerateConfigurationError, InvalidInputError
 from imageform.workflows._images import ImageIn, read, write
 from imageform.workflows._spec import Input, Output, Result, Run, Workflow, option
 
@@ -145,6 +145,11 @@ def vanishing(run: Run, opts: VanishingOptions, *, out: Path | None, image: Path
             opts.principal_point, opts.principal_point
         )
     res = detect_vanishing_points(arr, rng=opts.seed, principal_point=pp)
+    if len(res.segments) < 2:
+        # the library answers "none found" (an empty set); the command fails, as before
+        raise DegenerateConfigurationError(
+            f"found {len(res.segments)} line segment(s); vanishing points need at least two"
+        )
     K_est = res.K
     summary: dict[str, Any] = {
         "image": image,
