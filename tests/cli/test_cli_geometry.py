@@ -118,3 +118,9 @@ def test_vanishing_command(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -
     bad.write_bytes(b"not an image")
     assert main(["vanishing", str(bad)]) == 1
     assert "cannot read" in capsys.readouterr().err
+    # a flat image: the library answers "no vanishing point", the command still fails in one line
+    blank = tmp_path / "blank.png"
+    Image.fromarray(np.full((64, 96, 3), 128, np.uint8)).save(blank)
+    assert main(["vanishing", str(blank)]) == 1
+    err = capsys.readouterr().err.strip()
+    assert err == "imageform: error: found 0 line segment(s); vanishing points need at least two"
