@@ -11,6 +11,10 @@ working for callers who do not know about imageform.
   a singular matrix); the message names the cause.
 - :class:`ConvergenceError` — an iterative solver did not reach its tolerance in ``max_iter``.
 
+An image that simply lacks what a detector looks for is not an error: the detector returns
+its result with ``found`` False (one object) or an empty collection (any number of objects);
+see docs/conventions.md, "Not found".
+
 Every warning imageform issues is an :class:`ImageformWarning` (a ``UserWarning``), so that
 ``warnings.filterwarnings("ignore", category=ImageformWarning)`` silences them all and the
 command line turns each into one ``imageform: warning: ...`` line.

@@ -117,7 +117,7 @@ class ChartDetection:
     quads: np.ndarray
     #: (24,) bool: the patch was segmented in the photograph (others are placed by the
     #: homography: occluded, merged with the surround, or too blurred). This field was
-    #: named ``found`` before the chart-level ``found`` below.
+    #: named ``found`` in imageform 0.1, before the chart-level ``found`` below.
     segmented: np.ndarray
     #: (24,) bool: patches whose colour disagrees with the fit of the other patches
     #: (leave-one-out; left out of the score; likely occluded or covered by a reflection).

@@ -207,7 +207,7 @@ def match_features(
     return np.column_stack([idx, best[idx]]).astype(np.int64)
 
 
-@dataclass
+@dataclass(frozen=True)
 class Reconstruction:
     """The result of :func:`reconstruct_sequence`.
 
