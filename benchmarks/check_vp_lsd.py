@@ -38,16 +38,14 @@ def _row_at(line: np.ndarray, u: float) -> float:
 
 
 def _vp(img: np.ndarray, method: str):  # type: ignore[no-untyped-def]
-    from imageform.errors import DegenerateConfigurationError
     from imageform.geometry import detect_line_segments, detect_vanishing_points
 
     seg = detect_line_segments(img, method=method)
-    try:
-        return seg, detect_vanishing_points(
-            segments=seg, image_size=(img.shape[1], img.shape[0]), rng=0
-        )
-    except DegenerateConfigurationError:
+    if len(seg) < 2:  # no vanishing point to find (the detector returns an empty set)
         return seg, None
+    return seg, detect_vanishing_points(
+        segments=seg, image_size=(img.shape[1], img.shape[0]), rng=0
+    )
 
 
 def renders() -> list[tuple[object, ...]]:

@@ -48,12 +48,10 @@ ONE: dict[str, Callable[[], Any]] = {
     "geometry.find_checkerboard": lambda: geometry.find_checkerboard(GREY, (9, 6)),
     "analysis.detect_colorchecker": lambda: analysis.detect_colorchecker(GREY),
     "analysis.estimate_background": lambda: analysis.estimate_background(GREY),
-    "geometry.BoardTracker.update (checkerboard)": lambda: geometry.BoardTracker(
-        (9, 6), K
-    ).update(GREY),
-    "geometry.BoardTracker.update (charuco)": lambda: geometry.BoardTracker(BOARD, K).update(
-        GREY8
+    "geometry.BoardTracker.update (checkerboard)": lambda: geometry.BoardTracker((9, 6), K).update(
+        GREY
     ),
+    "geometry.BoardTracker.update (charuco)": lambda: geometry.BoardTracker(BOARD, K).update(GREY8),
 }
 MANY: dict[str, Callable[[], Any]] = {
     "geometry.detect_aruco_markers": lambda: geometry.detect_aruco_markers(GREY, "4x4_50"),
@@ -61,9 +59,9 @@ MANY: dict[str, Callable[[], Any]] = {
     "geometry.detect_line_segments": lambda: geometry.detect_line_segments(GREY),
     "geometry.detect_features": lambda: geometry.detect_features(GREY[..., 0]),
     "geometry.lsd_segments": lambda: geometry.lsd_segments(GREY[..., 0])[0],
-    "geometry.detect_vanishing_points": lambda: geometry.detect_vanishing_points(
-        GREY
-    ).vanishing_points,
+    "geometry.detect_vanishing_points": lambda: (
+        geometry.detect_vanishing_points(GREY).vanishing_points
+    ),
     "analysis.find_slanted_edges": lambda: analysis.find_slanted_edges(GREY),
     # one result per view, each found=False: the boards found are none
     "geometry.find_checkerboards": lambda: [

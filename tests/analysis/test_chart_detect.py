@@ -81,7 +81,7 @@ def test_not_found_is_a_result_and_measuring_it_raises() -> None:
     assert not small.found and "too small" in small.reason
     # what needs the chart raises ChartNotFoundError (an ImageformError), one line
     assert issubclass(ChartNotFoundError, ImageformError)
-    with pytest.raises(ChartNotFoundError, match="^no ColorChecker found in the image: 0 flat"):
+    with pytest.raises(ChartNotFoundError, match=r"^no ColorChecker found in the image: 0 flat"):
         measure_chart_patches(flat, det)
     # a found=False record is checked like a found one; NaN only when not found
     with pytest.raises(InvalidInputError, match="homography contains NaN"):

@@ -183,7 +183,7 @@ class ChartDetection:
 
 
 def _not_found(reason: str) -> ChartDetection:
-    """The detection of a photograph without a chart: NaN positions, ``found`` False."""
+    """Return the detection of a photograph without a chart: NaN positions, ``found`` False."""
     no = np.zeros(_ROWS * _COLS, dtype=bool)
     return ChartDetection(
         homography=np.full((3, 3), np.nan),
