@@ -391,7 +391,8 @@ def parameters(func: Any, entry: C, *, defaults: str = "all") -> dict[str, Any]:
 
 def _walk_finite(x: Any, depth: int = 0) -> bool:
     """True when every float in ``x`` (arrays, numbers, and containers 3 levels deep) is
-    finite; objects imageform does not return as data are ignored."""
+    finite; objects imageform does not return as data are ignored, and so is a result with
+    ``found`` False (docs/conventions.md, "Not found": its fields are NaN by contract)."""
     if depth > 3:
         return True
     if hasattr(x, "detach") and hasattr(x, "cpu"):  # a torch tensor (torch in, torch out)
@@ -411,6 +412,8 @@ def _walk_finite(x: Any, depth: int = 0) -> bool:
     if isinstance(x, list | tuple):
         return all(_walk_finite(v, depth + 1) for v in list(x)[:64])
     if dataclasses.is_dataclass(x) and not isinstance(x, type):
+        if getattr(x, "found", None) is False:  # not found: NaN fields are documented
+            return True
         return all(_walk_finite(getattr(x, f.name), depth + 1) for f in dataclasses.fields(x))
     return True
 
