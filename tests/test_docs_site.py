@@ -8,6 +8,7 @@ fail under CI (``CI`` set), where .ci/run installs them.
 
 from __future__ import annotations
 
+import fcntl
 import functools
 import http.server
 import importlib
@@ -62,14 +63,20 @@ def site(tmp_path_factory: pytest.TempPathFactory) -> Path:
         "MPLBACKEND": "Agg",
         "PYTHONPATH": str(ROOT / "src"),
     }
-    done = subprocess.run(
-        [sys.executable, "-m", "mkdocs", "build", "--strict", "--site-dir", str(out)],
-        cwd=ROOT,
-        env=env,
-        capture_output=True,
-        text=True,
-        check=False,
-    )
+    # the build writes the gallery into docs/generated: two xdist workers that both build
+    # (this module's tests split between them) take turns, or the gallery races
+    lock_dir = ROOT / "docs" / "generated"
+    lock_dir.mkdir(parents=True, exist_ok=True)
+    with open(lock_dir / ".build.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        done = subprocess.run(
+            [sys.executable, "-m", "mkdocs", "build", "--strict", "--site-dir", str(out)],
+            cwd=ROOT,
+            env=env,
+            capture_output=True,
+            text=True,
+            check=False,
+        )
     log = done.stdout + done.stderr
     assert done.returncode == 0, f"mkdocs build --strict failed:\n{log[-4000:]}"
     warnings = [line for line in log.splitlines() if "WARNING" in line]
