@@ -197,7 +197,8 @@ def _h_refit(best, s, d, sn, dn, Tdi, Ts, thr, factor, width, n_inl, mode, max_i
         if m2 < 4 or _same(sel, m, sel2, m2):
             break
         m = m2
-        sel[:m] = sel2[:m]
+        for k in range(m):  # a loop: a slice copy compiles a shape check (seconds)
+            sel[k] = sel2[k]
     aux = np.empty((3, 3, 3))
     scratch = np.empty((n, 2))
     Tmp = np.empty((3, 3))
@@ -222,7 +223,8 @@ def _h_refit(best, s, d, sn, dn, Tdi, Ts, thr, factor, width, n_inl, mode, max_i
         if m2 < 4 or _same(sel, m, sel2, m2):
             break
         m = m2
-        sel[:m] = sel2[:m]
+        for k in range(m):  # a loop: a slice copy compiles a shape check (seconds)
+            sel[k] = sel2[k]
 
 
 @njit(

@@ -7,8 +7,7 @@ import math
 import numpy as np
 
 from imageform._kernels.jit import njit
-from imageform._kernels.ransac import _OPTS
-from imageform._kernels.ransac_e import _cheirality
+from imageform._kernels.ransac import _OPTS, _cheirality
 
 __all__ = ["pose_from_essential"]
 
