@@ -49,7 +49,7 @@ from imageform._kernels.jit import njit
 
 __all__: list[str] = []
 
-_OPTS = {"nogil": True, "error_model": "numpy"}
+_OPTS = {"nogil": True, "error_model": "numpy", "no_cfunc_wrapper": True}
 
 #: The SPRT's initial ``δ``, the inlier ratio of a bad hypothesis (then the mean of the
 #: rejected ones'; :func:`_score_sprt`).
