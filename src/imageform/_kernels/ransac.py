@@ -49,7 +49,22 @@ from imageform._kernels.jit import njit
 
 __all__: list[str] = []
 
-_OPTS = {"nogil": True, "error_model": "numpy", "no_cfunc_wrapper": True}
+#: Options of a kernel called only from compiled code: neither the wrapper that Python calls
+#: nor a C callback (``no_cpython_wrapper``, ``no_cfunc_wrapper``) is built, optimised and
+#: compiled to machine code for it (a sixth of a cold compilation). Calling such a kernel
+#: from Python crashes the interpreter: one that Python (a test) calls takes ``_PY_OPTS``.
+_OPTS = {
+    "nogil": True,
+    "error_model": "numpy",
+    "no_cfunc_wrapper": True,
+    "no_cpython_wrapper": True,
+}
+#: Options of a kernel called from Python: the estimators, and the helpers the tests call.
+_PY_OPTS = {"nogil": True, "error_model": "numpy", "no_cfunc_wrapper": True}
+#: A helper with one call site in one kernel: typed inside its caller (numba's IR inlining),
+#: one compilation less, and its code not optimised and compiled to machine code once more
+#: at its own level (a called kernel is, inside every caller).
+_ONCE = {**_OPTS, "inline": "always"}
 
 #: The SPRT's initial ``δ``, the inlier ratio of a bad hypothesis (then the mean of the
 #: rejected ones'; :func:`_score_sprt`).
@@ -120,7 +135,7 @@ def _shuffled(state, n):  # type: ignore[no-untyped-def]  # pragma: no cover - c
     return order
 
 
-@njit(**_OPTS)
+@njit(**_PY_OPTS)
 def _trials_needed(n_inl, n, s, conf):  # type: ignore[no-untyped-def]  # pragma: no cover
     """``imageform.geometry._robust_core.trials_needed`` (a test pins the two equal)."""
     eps = n_inl / n
@@ -141,7 +156,7 @@ def _trials_for(p_good, conf):  # type: ignore[no-untyped-def]  # pragma: no cov
 
 
 # ---------------------------------------------------------------- small linear algebra
-@njit(**_OPTS)
+@njit(**_PY_OPTS)
 def _hartley(p, idx, m, out, T):  # type: ignore[no-untyped-def]  # pragma: no cover
     """Hartley-normalise the points ``p[idx[:m]]`` into ``out (m, 2)``, ``T (3, 3)``."""
     cx = 0.0
@@ -293,7 +308,7 @@ def _min_eigvec(A, V, out):  # type: ignore[no-untyped-def]  # pragma: no cover 
         out[i] = V[i, k]
 
 
-@njit(**_OPTS)
+@njit(**_PY_OPTS)
 def _min_eigvec_psd(A, L, x, y, V, out):  # type: ignore[no-untyped-def]  # pragma: no cover
     """Write the eigenvector of the smallest eigenvalue of the symmetric PSD ``A`` (m, m).
 
@@ -743,7 +758,7 @@ def _h_point(aux, p1, p2, i):  # type: ignore[no-untyped-def]  # pragma: no cove
     )
 
 
-@njit(**_OPTS)
+@njit(**_PY_OPTS)
 def _residuals(kind, q, p1, p2, idx, m, aux, M, T, out):  # type: ignore[no-untyped-def]  # pragma: no cover
     """Residuals of the selected correspondences at parameters ``q``; False if not finite.
 
@@ -777,7 +792,7 @@ def _residuals(kind, q, p1, p2, idx, m, aux, M, T, out):  # type: ignore[no-unty
     return True
 
 
-@njit(**_OPTS)
+@njit(**_PY_OPTS)
 def _h_jac(kind, q, p1, p2, idx, m, aux, M, Mi, J):  # type: ignore[no-untyped-def]  # pragma: no cover
     """Analytic Jacobian of the homography residuals of :func:`_residuals` (row-major ``M``).
 
@@ -937,13 +952,13 @@ def _chi2_cdf(c, k):  # type: ignore[no-untyped-def]  # pragma: no cover - compi
     return 1.0 - math.exp(-c / 2.0) * (1.0 + c / 2.0)
 
 
-@njit(**_OPTS)
+@njit(**_PY_OPTS)
 def _refine_support(mean_sq, threshold, dof, factor):  # type: ignore[no-untyped-def]  # pragma: no cover
     """As ``imageform.geometry._robust_core.refine_support`` from the inliers' mean ``e²``."""
     return _support_bound(mean_sq, threshold, dof, factor, 3.0, np.int64(100))
 
 
-@njit(**_OPTS)
+@njit(**_PY_OPTS)
 def _support_bound(mean_sq, threshold, dof, factor, width, iters):  # type: ignore[no-untyped-def]  # pragma: no cover
     """``width σ̂`` clipped to ``[τ, factor τ]``, ``σ̂`` by ``iters`` bisections (log scale).
 
@@ -1114,7 +1129,7 @@ def _support(F, p1, p2, thr, factor, sel):  # type: ignore[no-untyped-def]  # pr
     return wide, _select(np.int64(_F_ORTHO), F, p1, p2, wide * wide, sel)
 
 
-@njit(**_OPTS)
+@njit(**_ONCE)
 def _support_count(kind, M, p1, p2, thr, dof, factor):  # type: ignore[no-untyped-def]  # pragma: no cover
     """Count the correspondences within the refinement support of ``M``.
 

@@ -9,7 +9,9 @@ import numpy as np
 from imageform._kernels.jit import njit
 from imageform._kernels.ransac import (
     _F_ORTHO,
+    _ONCE,
     _OPTS,
+    _PY_OPTS,
     _cheirality,
     _copy3,
     _epi_row,
@@ -138,7 +140,7 @@ def _sign_changes(S, deg, ns, x):  # type: ignore[no-untyped-def]  # pragma: no 
     return count
 
 
-@njit(**_OPTS)
+@njit(**_PY_OPTS)
 def _sturm_roots(c, n, S, deg, roots):  # type: ignore[no-untyped-def]  # pragma: no cover
     """Real roots of ``c[:n + 1]`` (increasing powers) into ``roots``; their number.
 
@@ -240,7 +242,7 @@ def _sturm_roots(c, n, S, deg, roots):  # type: ignore[no-untyped-def]  # pragma
     return nr
 
 
-@njit(**_OPTS)
+@njit(**_PY_OPTS)
 def _e5(q1, q2, idx, Es):  # type: ignore[no-untyped-def]  # pragma: no cover - compiled
     """Write the real essential matrices (unit norm) through 5 correspondences; their count.
 
@@ -602,7 +604,7 @@ def _lm_e(E, p1, p2, K1i, K2i, idx, m, max_iter):  # type: ignore[no-untyped-def
         _copy3(Ec, E)
 
 
-@njit(**_OPTS)
+@njit(**_ONCE)
 def _local_opt(E, p1, p2, K1i, K2i, thr, thr2, best_sc, sel, F, Elo):  # type: ignore[no-untyped-def]  # pragma: no cover
     """Locally optimise a new best ``E`` into ``Elo``; return its MSAC score and inlier count.
 
@@ -620,7 +622,7 @@ def _local_opt(E, p1, p2, K1i, K2i, thr, thr2, best_sc, sel, F, Elo):  # type: i
     return _score(np.int64(_F_ORTHO), F, p1, p2, thr2, best_sc)
 
 
-@njit(**_OPTS)
+@njit(**_ONCE)
 def _refit_front(E, p1, p2, q1, q2, K1i, K2i, thr, factor, max_iter, rounds):  # type: ignore[no-untyped-def]  # pragma: no cover
     """Refit ``E`` in place: LM on its refinement support, then in front of the cameras.
 
@@ -723,7 +725,7 @@ def _score_sprt(F, p1, p2, thr2, limit, start, lam_in, lam_out, A):  # type: ign
     "int64(float64[:, ::1], float64[:, ::1], float64[:, ::1], float64[:, ::1], float64[:, ::1],"
     " float64[:, ::1], float64, float64, int64, uint64, int64, float64, float64,"
     " float64[:, ::1])",
-    **_OPTS,
+    **_PY_OPTS,
 )
 def essential_estimate(  # type: ignore[no-untyped-def]  # pragma: no cover
     p1, p2, q1, q2, K1i, K2i, thr, conf, max_trials, seed, max_iter, factor, term, E_out
