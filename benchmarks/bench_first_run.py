@@ -9,7 +9,8 @@ Run from the repository root::
 Each command of README's list runs as a fresh process (``python -m imageform ...``), as a
 user runs it, on small inputs made once before timing (the built-in scene's outputs, a lab
 set from ``imageform simulate --lab``, a DNG from ``--raw``, Kodak ``kodim01``, OpenCV's
-``left*.jpg`` checkerboards, synthetic correspondences and stereo views); their numba cache
+``left*.jpg`` checkerboards, synthetic correspondences and stereo views, 8 frames of
+``bench_reconstruct.py``'s room walk at 320 x 240 for ``reconstruct``); their numba cache
 is a folder of their own, so that they fill nothing the timed runs use.
 
 *first*: ``NUMBA_CACHE_DIR`` points at a new empty folder (a new machine: nothing compiled);
@@ -94,6 +95,27 @@ img = (rng.uniform(0, 1, (48, 64, 3)) * 255).astype(np.uint8)
 for k in range(3):
     write_image(work / "many" / f"im{k}.png", img)
 write_image(work / "tiles.tif", np.repeat(img, 4, axis=0).astype(np.float32) / 255.0)
+"""
+
+# imageform reconstruct's input: 8 frames (320 x 240) of the room walk of bench_reconstruct.py
+# (tests/sfm_scenes.py, as tests/workflows/test_reconstruct.py) and their camera file
+_ROOM = r"""
+import sys
+from pathlib import Path
+import numpy as np
+sys.path.insert(0, sys.argv[2])
+from tests import sfm_scenes
+from imageform.geometry import Camera
+from imageform.io import write_camera, write_image
+
+room = Path(sys.argv[1]) / "room"
+(room / "frames").mkdir(parents=True)
+K = np.array([[240.0, 0.0, 159.5], [0.0, 240.0, 119.5], [0.0, 0.0, 1.0]])
+rng = np.random.default_rng(5)
+for i, pose in enumerate(sfm_scenes.poses(16)[:8]):
+    frame = sfm_scenes.render(K, pose, (320, 240), rng=rng)
+    write_image(room / "frames" / f"view{i}.png", frame)
+write_camera(room / "camera.toml", Camera(K, image_size=(320, 240)))
 """
 
 
@@ -300,6 +322,17 @@ def _commands(w: Path) -> dict[str, list[str]]:
             "--force",
         ],
         "cache": ["cache"],
+        "reconstruct": [
+            "reconstruct",
+            str(w / "room" / "frames"),
+            "--camera",
+            str(w / "room" / "camera.toml"),
+            "-o",
+            f"{o}/room",
+            "--max-features",
+            "1000",
+            "--force",
+        ],
     }
 
 
@@ -316,6 +349,7 @@ def _inputs(python: str, src: Path | None, w: Path) -> None:
             raise SystemExit(f"input: imageform {' '.join(args)} failed:\n{done.stderr[-2000:]}")
 
     subprocess.run([python, "-c", _INPUTS, str(w)], env=env, check=True)
+    subprocess.run([python, "-c", _ROOM, str(w), str(ROOT)], env=env, check=True)
     im("mosaic", str(KODAK), "-o", str(w / "mosaic.png"))
     im("simulate", "-o", str(w / "sim0"))
     im(

@@ -82,23 +82,6 @@ def _python(code: str, env: dict[str, str]) -> str:
     return done.stdout
 
 
-def test_serial_twin_is_its_own_kernel() -> None:
-    from numba import prange
-
-    @jit.njit(parallel=True, cache=False)
-    def total(a):  # type: ignore[no-untyped-def]
-        s = 0.0
-        for i in prange(a.size):
-            s += a[i]
-        return s
-
-    twin = jit.serial_twin(total, cache=False)
-    assert twin.py_func is not total.py_func
-    assert twin.py_func.__qualname__.endswith("total_serial")
-    assert not twin.targetoptions.get("parallel") and total.targetoptions.get("parallel")
-    assert twin(np.arange(10.0)) == total(np.arange(10.0)) == 45.0
-
-
 def test_run_tasks_cuts_the_tasks_over_the_threads() -> None:
     """jit.run_tasks: every task once, one contiguous run per thread (the caller's first);
     threads=1 runs them all in the calling thread."""

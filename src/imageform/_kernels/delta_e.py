@@ -34,9 +34,8 @@ import math
 from typing import Any
 
 import numpy as np
-from numba import prange
 
-from imageform._kernels.jit import njit
+from imageform._kernels.jit import njit, run_tasks
 
 __all__ = ["ciede2000_numba", "ciede2000_twin"]
 
@@ -260,13 +259,26 @@ def _ciede2000_block(
         res[j] = _de00(L1[j], A1[j], B1[j], L2[j], A2[j], B2[j], ikL, ikC, ikH)
 
 
-@njit(parallel=True, error_model="numpy")
-def _ciede2000_loop(
-    lab1: np.ndarray, lab2: np.ndarray, out: np.ndarray, ikL: float, ikC: float, ikH: float
+@njit(error_model="numpy", nogil=True)
+def _ciede2000_tasks(
+    t0: int,
+    t1: int,
+    lab1: np.ndarray,
+    lab2: np.ndarray,
+    out: np.ndarray,
+    ikL: float,
+    ikC: float,
+    ikH: float,
 ) -> None:  # pragma: no cover - numba
+    """Blocks ``t0 .. t1 - 1`` of :data:`_BLOCK` pixels (a task of :func:`jit.run_tasks`).
+
+    A serial ``nogil`` kernel run on numba's threads, not a ``parallel=True`` ``prange``:
+    numba's parallel lowering (and its gufunc) cost seconds of CPU more to compile on a first
+    ``imageform delta-e``, and one compiled kernel serves small inputs too (one
+    specialisation: ``ciede2000_numba`` passes C-contiguous float64 arrays only).
+    """
     n = out.shape[0]
-    nblocks = (n + _BLOCK - 1) // _BLOCK
-    for bi in prange(nblocks):
+    for bi in range(t0, t1):
         start = bi * _BLOCK
         _ciede2000_block(lab1, lab2, out, start, min(start + _BLOCK, n), ikL, ikC, ikH)
 
@@ -279,7 +291,8 @@ def ciede2000_numba(
     p1 = np.ascontiguousarray(lab1, dtype=np.float64).reshape(-1, 3)
     p2 = np.ascontiguousarray(lab2, dtype=np.float64).reshape(-1, 3)
     out = np.empty(p1.shape[0], dtype=np.float64)
-    _ciede2000_loop(p1, p2, out, 1.0 / kL, 1.0 / kC, 1.0 / kH)
+    nblocks = (out.shape[0] + _BLOCK - 1) // _BLOCK
+    run_tasks(_ciede2000_tasks, nblocks, p1, p2, out, 1.0 / kL, 1.0 / kC, 1.0 / kH)
     return out.reshape(shape)
 
 

@@ -39,7 +39,6 @@ import os
 import sys
 import tempfile
 import threading
-import types
 from collections.abc import Callable
 from concurrent.futures import Future, ThreadPoolExecutor
 from pathlib import Path
@@ -56,7 +55,6 @@ __all__ = [
     "njit",
     "parallel_pays",
     "run_tasks",
-    "serial_twin",
     "user_cache_dir",
 ]
 
@@ -206,43 +204,8 @@ def njit(fn: Callable[..., Any] | str | None = None, /, **options: Any) -> Any:
     return numba.njit(fn, **options)
 
 
-def serial_twin(kernel: Any, /, **options: Any) -> Any:
-    """Compile a ``parallel=True`` kernel's loops again, serially (``prange`` runs as ``range``).
-
-    For small inputs, where waking numba's thread pool costs more than it gains. The twin is
-    a copy of the kernel's Python function under the name ``<name>_serial``: numba names a
-    kernel's cache files after the function's qualified name and first line and keys their
-    entries on the signature and the bytecode, not on ``parallel``, so
-    ``njit(**options)(kernel.py_func)`` would share the kernel's cache entries, and whichever
-    of the two compiled first was loaded for both (the parallel remap then ran on one thread
-    on every machine whose cache the serial twin had filled first).
-
-    Parameters
-    ----------
-    kernel : numba dispatcher
-        The parallel kernel.
-    **options
-        Options of the twin, as :func:`njit`'s (``parallel`` is not passed on).
-
-    Returns
-    -------
-    numba dispatcher
-        The serial twin, cached under its own name.
-    """
-    fn = kernel.py_func
-    twin = types.FunctionType(
-        fn.__code__, fn.__globals__, fn.__name__ + "_serial", fn.__defaults__, fn.__closure__
-    )
-    twin.__qualname__ = fn.__qualname__ + "_serial"
-    twin.__module__ = fn.__module__
-    twin.__doc__ = fn.__doc__
-    twin.__kwdefaults__ = fn.__kwdefaults__
-    options.pop("parallel", None)
-    return njit(twin, **options)
-
-
 def parallel_pays(n: int, threshold: int) -> bool:
-    """Whether to run the parallel kernel for ``n`` items rather than its serial twin.
+    """Whether to run the parallel kernel for ``n`` items rather than its serial one.
 
     True when ``n`` reaches ``threshold`` and numba's pool has more than one thread: with one
     thread the parallel kernel only adds the pool's scheduling (a 1 MP uint8 HSV conversion:

@@ -49,7 +49,22 @@ from imageform._kernels.jit import njit
 
 __all__: list[str] = []
 
-_OPTS = {"nogil": True, "error_model": "numpy"}
+#: Options of a kernel called only from compiled code: neither the wrapper that Python calls
+#: nor a C callback (``no_cpython_wrapper``, ``no_cfunc_wrapper``) is built, optimised and
+#: compiled to machine code for it (a sixth of a cold compilation). Calling such a kernel
+#: from Python crashes the interpreter: one that Python (a test) calls takes ``_PY_OPTS``.
+_OPTS = {
+    "nogil": True,
+    "error_model": "numpy",
+    "no_cfunc_wrapper": True,
+    "no_cpython_wrapper": True,
+}
+#: Options of a kernel called from Python: the estimators, and the helpers the tests call.
+_PY_OPTS = {"nogil": True, "error_model": "numpy", "no_cfunc_wrapper": True}
+#: A helper with one call site in one kernel: typed inside its caller (numba's IR inlining),
+#: one compilation less, and its code not optimised and compiled to machine code once more
+#: at its own level (a called kernel is, inside every caller).
+_ONCE = {**_OPTS, "inline": "always"}
 
 #: The SPRT's initial ``δ``, the inlier ratio of a bad hypothesis (then the mean of the
 #: rejected ones'; :func:`_score_sprt`).
@@ -59,7 +74,6 @@ _SPRT_DELTA0 = 0.05
 _H_FORWARD = 0
 _H_SYMMETRIC = 1
 _F_ORTHO = 2
-_E_RT = 3
 
 
 # ---------------------------------------------------------------- random samples
@@ -121,7 +135,7 @@ def _shuffled(state, n):  # type: ignore[no-untyped-def]  # pragma: no cover - c
     return order
 
 
-@njit(**_OPTS)
+@njit(**_PY_OPTS)
 def _trials_needed(n_inl, n, s, conf):  # type: ignore[no-untyped-def]  # pragma: no cover
     """``imageform.geometry._robust_core.trials_needed`` (a test pins the two equal)."""
     eps = n_inl / n
@@ -142,7 +156,7 @@ def _trials_for(p_good, conf):  # type: ignore[no-untyped-def]  # pragma: no cov
 
 
 # ---------------------------------------------------------------- small linear algebra
-@njit(**_OPTS)
+@njit(**_PY_OPTS)
 def _hartley(p, idx, m, out, T):  # type: ignore[no-untyped-def]  # pragma: no cover
     """Hartley-normalise the points ``p[idx[:m]]`` into ``out (m, 2)``, ``T (3, 3)``."""
     cx = 0.0
@@ -294,7 +308,7 @@ def _min_eigvec(A, V, out):  # type: ignore[no-untyped-def]  # pragma: no cover 
         out[i] = V[i, k]
 
 
-@njit(**_OPTS)
+@njit(**_PY_OPTS)
 def _min_eigvec_psd(A, L, x, y, V, out):  # type: ignore[no-untyped-def]  # pragma: no cover
     """Write the eigenvector of the smallest eigenvalue of the symmetric PSD ``A`` (m, m).
 
@@ -718,29 +732,6 @@ def _f_build(q, aux, F, T):  # type: ignore[no-untyped-def]  # pragma: no cover 
 
 
 @njit(**_OPTS)
-def _e_build(q, aux, E):  # type: ignore[no-untyped-def]  # pragma: no cover - compiled
-    """``E = [t]ₓ R / ‖·‖``, ``R = exp([q₀₋₂]ₓ) R0``, ``t ∝ t0 + q₃ b1 + q₄ b2``.
-
-    ``aux``: ``R0``, the rows ``t0, b1, b2``.
-    """
-    R0, tb = aux[0], aux[1]
-    T = np.empty((3, 3))
-    R = np.empty((3, 3))
-    _rodrigues(q[0], q[1], q[2], T)
-    _mat3(T, R0, R)
-    t0 = tb[0, 0] + q[3] * tb[1, 0] + q[4] * tb[2, 0]
-    t1 = tb[0, 1] + q[3] * tb[1, 1] + q[4] * tb[2, 1]
-    t2 = tb[0, 2] + q[3] * tb[1, 2] + q[4] * tb[2, 2]
-    nt = math.sqrt(t0 * t0 + t1 * t1 + t2 * t2)
-    t0, t1, t2 = t0 / nt, t1 / nt, t2 / nt
-    for b in range(3):
-        E[0, b] = -t2 * R[1, b] + t1 * R[2, b]
-        E[1, b] = t2 * R[0, b] - t0 * R[2, b]
-        E[2, b] = -t1 * R[0, b] + t0 * R[1, b]
-    _fro_unit(E)
-
-
-@njit(**_OPTS)
 def _h_setup(kind, q, aux, M, Mi):  # type: ignore[no-untyped-def]  # pragma: no cover - compiled
     """Fill ``M`` from the row-major ``q`` (``Mi``: its inverse, for the symmetric error).
 
@@ -767,11 +758,11 @@ def _h_point(aux, p1, p2, i):  # type: ignore[no-untyped-def]  # pragma: no cove
     )
 
 
-@njit(**_OPTS)
+@njit(**_PY_OPTS)
 def _residuals(kind, q, p1, p2, idx, m, aux, M, T, out):  # type: ignore[no-untyped-def]  # pragma: no cover
     """Residuals of the selected correspondences at parameters ``q``; False if not finite.
 
-    ``aux``: H: ``Ts, Td, Tdi``; F: ``T1, T2, U0, V0``; E: ``R0, (t0, b1, b2), K1⁻¹, K2⁻¹``.
+    ``aux``: H: ``Ts, Td, Tdi``; F: ``T1, T2, U0, V0``.
     ``M, T`` (3, 3) scratch.
     """
     if kind <= _H_SYMMETRIC:
@@ -789,14 +780,8 @@ def _residuals(kind, q, p1, p2, idx, m, aux, M, T, out):  # type: ignore[no-unty
                 out[k + 1] = ((T[1, 0] * u + T[1, 1] * v + T[1, 2]) / w - y) * ss
                 k += 2
         n_out = k
-    else:
-        if kind == _F_ORTHO:
-            _f_build(q, aux, M, T)
-        else:
-            _e_build(q, aux, T)
-            _mat3(T, aux[2], M)
-            _mat3_tn(aux[3], M, T)
-            _copy3(T, M)
+    else:  # _F_ORTHO
+        _f_build(q, aux, M, T)
         for j in range(m):
             num, den = _sampson_parts(M, p1, p2, idx[j])
             out[j] = num / math.sqrt(den)
@@ -807,7 +792,7 @@ def _residuals(kind, q, p1, p2, idx, m, aux, M, T, out):  # type: ignore[no-unty
     return True
 
 
-@njit(**_OPTS)
+@njit(**_PY_OPTS)
 def _h_jac(kind, q, p1, p2, idx, m, aux, M, Mi, J):  # type: ignore[no-untyped-def]  # pragma: no cover
     """Analytic Jacobian of the homography residuals of :func:`_residuals` (row-major ``M``).
 
@@ -967,13 +952,13 @@ def _chi2_cdf(c, k):  # type: ignore[no-untyped-def]  # pragma: no cover - compi
     return 1.0 - math.exp(-c / 2.0) * (1.0 + c / 2.0)
 
 
-@njit(**_OPTS)
+@njit(**_PY_OPTS)
 def _refine_support(mean_sq, threshold, dof, factor):  # type: ignore[no-untyped-def]  # pragma: no cover
     """As ``imageform.geometry._robust_core.refine_support`` from the inliers' mean ``e²``."""
     return _support_bound(mean_sq, threshold, dof, factor, 3.0, np.int64(100))
 
 
-@njit(**_OPTS)
+@njit(**_PY_OPTS)
 def _support_bound(mean_sq, threshold, dof, factor, width, iters):  # type: ignore[no-untyped-def]  # pragma: no cover
     """``width σ̂`` clipped to ``[τ, factor τ]``, ``σ̂`` by ``iters`` bisections (log scale).
 
@@ -1112,50 +1097,6 @@ def _refine_f(F, p1, p2, idx, m, max_iter):  # type: ignore[no-untyped-def]  # p
 
 
 @njit(**_OPTS)
-def _refine_e(E, p1, p2, K1i, K2i, idx, m, max_iter):  # type: ignore[no-untyped-def]  # pragma: no cover
-    """LM over ``(R, t/‖t‖)`` on the pixel Sampson distances of ``idx[:m]`` (in place).
-
-    As ``imageform.geometry.twoview._refine_e``.
-    """
-    aux = np.empty((4, 3, 3))
-    U = np.empty((3, 3))
-    V = np.empty((3, 3))
-    s = np.empty(3)
-    A = np.empty((3, 3))
-    W = np.empty((3, 3))
-    _svd3(E, U, s, V, A, W)
-    # R0 = U W Vᵀ with W = [[0, -1, 0], [1, 0, 0], [0, 0, 1]]: columns (u2, -u1, u3)
-    for a in range(3):
-        for b in range(3):
-            aux[0, a, b] = U[a, 1] * V[b, 0] - U[a, 0] * V[b, 1] + U[a, 2] * V[b, 2]
-    t0 = (U[0, 2], U[1, 2], U[2, 2])
-    k = 0
-    if abs(t0[1]) < abs(t0[k]):
-        k = 1
-    if abs(t0[2]) < abs(t0[k]):
-        k = 2
-    e = (1.0 if k == 0 else 0.0, 1.0 if k == 1 else 0.0, 1.0 if k == 2 else 0.0)
-    b0 = t0[1] * e[2] - t0[2] * e[1]
-    b1 = t0[2] * e[0] - t0[0] * e[2]
-    b2 = t0[0] * e[1] - t0[1] * e[0]
-    nb = math.sqrt(b0 * b0 + b1 * b1 + b2 * b2)
-    b0, b1, b2 = b0 / nb, b1 / nb, b2 / nb
-    tb = aux[1]
-    tb[0, 0], tb[0, 1], tb[0, 2] = t0[0], t0[1], t0[2]
-    tb[1, 0], tb[1, 1], tb[1, 2] = b0, b1, b2
-    tb[2, 0] = t0[1] * b2 - t0[2] * b1
-    tb[2, 1] = t0[2] * b0 - t0[0] * b2
-    tb[2, 2] = t0[0] * b1 - t0[1] * b0
-    _copy3(K1i, aux[2])
-    _copy3(K2i, aux[3])
-    q = np.zeros(5)
-    _lm(np.int64(_E_RT), q, p1, p2, idx, m, aux, max_iter)
-    _e_build(q, aux, A)
-    if _finite3(A):
-        _copy3(A, E)
-
-
-@njit(**_OPTS)
 def _project_e(E):  # type: ignore[no-untyped-def]  # pragma: no cover - compiled
     """Nearest essential matrix ``U diag(1, 1, 0) Vᵀ`` (unit Frobenius norm), in place."""
     U = np.empty((3, 3))
@@ -1188,7 +1129,7 @@ def _support(F, p1, p2, thr, factor, sel):  # type: ignore[no-untyped-def]  # pr
     return wide, _select(np.int64(_F_ORTHO), F, p1, p2, wide * wide, sel)
 
 
-@njit(**_OPTS)
+@njit(**_ONCE)
 def _support_count(kind, M, p1, p2, thr, dof, factor):  # type: ignore[no-untyped-def]  # pragma: no cover
     """Count the correspondences within the refinement support of ``M``.
 
@@ -1249,21 +1190,69 @@ def _refit_f(F, p1, p2, thr, factor, max_iter):  # type: ignore[no-untyped-def] 
             sel[k] = sel2[k]
 
 
+# ---------------------------------------------------------------- the cheirality vote
+# (of ransac_e.essential_estimate and relative_pose.pose_from_essential: here, not in
+# ransac_e, so that recover_pose does not compile the essential matrix's estimator)
 @njit(**_OPTS)
-def _refit_e(E, p1, p2, K1i, K2i, thr, factor, max_iter):  # type: ignore[no-untyped-def]  # pragma: no cover
-    """``_robust_core.refit_on_support`` for E (dof 1, at least 5, 3 rounds), in place."""
-    n = p1.shape[0]
-    sel = np.empty(n, dtype=np.int64)
-    sel2 = np.empty(n, dtype=np.int64)
-    F = np.empty((3, 3))
-    _to_f(E, K1i, K2i, F)
-    wide, m = _support(F, p1, p2, thr, factor, sel)
-    for _ in range(3):
-        _refine_e(E, p1, p2, K1i, K2i, sel, m, max_iter)
-        _to_f(E, K1i, K2i, F)
-        m2 = _select(np.int64(_F_ORTHO), F, p1, p2, wide * wide, sel2)
-        if m2 < 5 or _same(sel, m, sel2, m2):
-            break
-        m = m2
-        for k in range(m):
-            sel[k] = sel2[k]
+def _candidates(E, U, Rs):  # type: ignore[no-untyped-def]  # pragma: no cover - compiled
+    """``Rs[0] = U W Vᵀ``, ``Rs[1] = U Wᵀ Vᵀ`` from ``E = U diag(s) Vᵀ``; ``t = ±U[:, 2]``.
+
+    ``W = [[0, -1, 0], [1, 0, 0], [0, 0, 1]]``, ``U, V`` rotations (H&Z result 9.19).
+    """
+    V = np.empty((3, 3))
+    s = np.empty(3)
+    A = np.empty((3, 3))
+    W = np.empty((3, 3))
+    _svd3(E, U, s, V, A, W)
+    for a in range(3):
+        for b in range(3):
+            # columns of U W: (u2, -u1, u3); of U Wᵀ: (-u2, u1, u3)
+            Rs[0, a, b] = U[a, 1] * V[b, 0] - U[a, 0] * V[b, 1] + U[a, 2] * V[b, 2]
+            Rs[1, a, b] = -U[a, 1] * V[b, 0] + U[a, 0] * V[b, 1] + U[a, 2] * V[b, 2]
+
+
+@njit(**_OPTS)
+def _in_front(R, t0, t1, t2, x1, y1, x2, y2, dmax):  # type: ignore[no-untyped-def]  # pragma: no cover
+    """Whether a correspondence is in front of both cameras, nearer than ``dmax``.
+
+    The depths of the two rays' closest points, ``λ₂ x̃₂ ≈ λ₁ R x̃₁ + t`` by least squares.
+    """
+    a0 = R[0, 0] * x1 + R[0, 1] * y1 + R[0, 2]
+    a1 = R[1, 0] * x1 + R[1, 1] * y1 + R[1, 2]
+    a2 = R[2, 0] * x1 + R[2, 1] * y1 + R[2, 2]
+    aa = a0 * a0 + a1 * a1 + a2 * a2
+    ab = a0 * x2 + a1 * y2 + a2
+    bb = x2 * x2 + y2 * y2 + 1.0
+    at = a0 * t0 + a1 * t1 + a2 * t2
+    bt = x2 * t0 + y2 * t1 + t2
+    det = aa * bb - ab * ab
+    z1 = (ab * bt - bb * at) / det
+    z2 = (aa * bt - ab * at) / det
+    return 0.0 < z1 < dmax and 0.0 < z2 < dmax
+
+
+@njit(**_OPTS)
+def _cheirality(E, q1, q2, idx, m, dmax, U, Rs):  # type: ignore[no-untyped-def]  # pragma: no cover
+    """Choose the ``(R, t)`` of ``E`` with the most of ``idx[:m]`` in front of both cameras.
+
+    Returns ``(which R, sign of t, count)``; ``U, Rs`` receive the factorisation
+    (:func:`_candidates`).
+    """
+    _candidates(E, U, Rs)
+    best = -1
+    bi = 0
+    bs = 1.0
+    for ri in range(2):
+        R = Rs[ri]
+        for sg in (1.0, -1.0):
+            t0, t1, t2 = sg * U[0, 2], sg * U[1, 2], sg * U[2, 2]
+            cnt = 0
+            for k in range(m):
+                i = idx[k]
+                if _in_front(R, t0, t1, t2, q1[i, 0], q1[i, 1], q2[i, 0], q2[i, 1], dmax):
+                    cnt += 1
+            if cnt > best:
+                best = cnt
+                bi = ri
+                bs = sg
+    return bi, bs, best

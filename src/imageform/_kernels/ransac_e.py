@@ -9,11 +9,15 @@ import numpy as np
 from imageform._kernels.jit import njit
 from imageform._kernels.ransac import (
     _F_ORTHO,
+    _ONCE,
     _OPTS,
+    _PY_OPTS,
+    _cheirality,
     _copy3,
     _epi_row,
     _finite3,
     _fro_unit,
+    _in_front,
     _mat3,
     _nullspace,
     _project_e,
@@ -136,7 +140,7 @@ def _sign_changes(S, deg, ns, x):  # type: ignore[no-untyped-def]  # pragma: no 
     return count
 
 
-@njit(**_OPTS)
+@njit(**_PY_OPTS)
 def _sturm_roots(c, n, S, deg, roots):  # type: ignore[no-untyped-def]  # pragma: no cover
     """Real roots of ``c[:n + 1]`` (increasing powers) into ``roots``; their number.
 
@@ -238,7 +242,7 @@ def _sturm_roots(c, n, S, deg, roots):  # type: ignore[no-untyped-def]  # pragma
     return nr
 
 
-@njit(**_OPTS)
+@njit(**_PY_OPTS)
 def _e5(q1, q2, idx, Es):  # type: ignore[no-untyped-def]  # pragma: no cover - compiled
     """Write the real essential matrices (unit norm) through 5 correspondences; their count.
 
@@ -408,72 +412,6 @@ def _e5(q1, q2, idx, Es):  # type: ignore[no-untyped-def]  # pragma: no cover - 
     return out
 
 
-# ---- the cheirality vote (shared with relative_pose.pose_from_essential)
-@njit(**_OPTS)
-def _candidates(E, U, Rs):  # type: ignore[no-untyped-def]  # pragma: no cover - compiled
-    """``Rs[0] = U W Vᵀ``, ``Rs[1] = U Wᵀ Vᵀ`` from ``E = U diag(s) Vᵀ``; ``t = ±U[:, 2]``.
-
-    ``W = [[0, -1, 0], [1, 0, 0], [0, 0, 1]]``, ``U, V`` rotations (H&Z result 9.19).
-    """
-    V = np.empty((3, 3))
-    s = np.empty(3)
-    A = np.empty((3, 3))
-    W = np.empty((3, 3))
-    _svd3(E, U, s, V, A, W)
-    for a in range(3):
-        for b in range(3):
-            # columns of U W: (u2, -u1, u3); of U Wᵀ: (-u2, u1, u3)
-            Rs[0, a, b] = U[a, 1] * V[b, 0] - U[a, 0] * V[b, 1] + U[a, 2] * V[b, 2]
-            Rs[1, a, b] = -U[a, 1] * V[b, 0] + U[a, 0] * V[b, 1] + U[a, 2] * V[b, 2]
-
-
-@njit(**_OPTS)
-def _in_front(R, t0, t1, t2, x1, y1, x2, y2, dmax):  # type: ignore[no-untyped-def]  # pragma: no cover
-    """Whether a correspondence is in front of both cameras, nearer than ``dmax``.
-
-    The depths of the two rays' closest points, ``λ₂ x̃₂ ≈ λ₁ R x̃₁ + t`` by least squares.
-    """
-    a0 = R[0, 0] * x1 + R[0, 1] * y1 + R[0, 2]
-    a1 = R[1, 0] * x1 + R[1, 1] * y1 + R[1, 2]
-    a2 = R[2, 0] * x1 + R[2, 1] * y1 + R[2, 2]
-    aa = a0 * a0 + a1 * a1 + a2 * a2
-    ab = a0 * x2 + a1 * y2 + a2
-    bb = x2 * x2 + y2 * y2 + 1.0
-    at = a0 * t0 + a1 * t1 + a2 * t2
-    bt = x2 * t0 + y2 * t1 + t2
-    det = aa * bb - ab * ab
-    z1 = (ab * bt - bb * at) / det
-    z2 = (aa * bt - ab * at) / det
-    return 0.0 < z1 < dmax and 0.0 < z2 < dmax
-
-
-@njit(**_OPTS)
-def _cheirality(E, q1, q2, idx, m, dmax, U, Rs):  # type: ignore[no-untyped-def]  # pragma: no cover
-    """Choose the ``(R, t)`` of ``E`` with the most of ``idx[:m]`` in front of both cameras.
-
-    Returns ``(which R, sign of t, count)``; ``U, Rs`` receive the factorisation
-    (:func:`_candidates`).
-    """
-    _candidates(E, U, Rs)
-    best = -1
-    bi = 0
-    bs = 1.0
-    for ri in range(2):
-        R = Rs[ri]
-        for sg in (1.0, -1.0):
-            t0, t1, t2 = sg * U[0, 2], sg * U[1, 2], sg * U[2, 2]
-            cnt = 0
-            for k in range(m):
-                i = idx[k]
-                if _in_front(R, t0, t1, t2, q1[i, 0], q1[i, 1], q2[i, 0], q2[i, 1], dmax):
-                    cnt += 1
-            if cnt > best:
-                best = cnt
-                bi = ri
-                bs = sg
-    return bi, bs, best
-
-
 @njit(**_OPTS)
 def _parts(E, h1, h2, i, K1i, K2i):  # type: ignore[no-untyped-def]  # pragma: no cover
     """``x₂ᵀ F x₁`` and the first two entries of ``F x₁`` and ``Fᵀ x₂``, ``F = K2⁻ᵀ E K1⁻¹``.
@@ -526,7 +464,7 @@ def _lm_e(E, p1, p2, K1i, K2i, idx, m, max_iter):  # type: ignore[no-untyped-def
 
     The pixel Sampson distances of ``idx[:m]`` are minimised.
 
-    The objective of ``ransac._refine_e`` (5 degrees of freedom), linearised at the current
+    The objective of ``twoview._refine_e`` (5 degrees of freedom), linearised at the current
     ``(R, t)`` each step: ``R ← exp([ω]ₓ) R``, ``t ← (t + β₁ b₁ + β₂ b₂)/‖·‖`` with ``b₁, b₂``
     orthonormal to ``t``, so ``∂E/∂ωₖ = [t]ₓ [eₖ]ₓ R = eₖ (Rᵀt)ᵀ - tₖ R`` and
     ``∂E/∂βⱼ = [bⱼ]ₓ R``; ``r = x₂ᵀFx₁ / ‖(Fx₁)₁,₂, (Fᵀx₂)₁,₂‖`` differentiated by the quotient
@@ -666,7 +604,7 @@ def _lm_e(E, p1, p2, K1i, K2i, idx, m, max_iter):  # type: ignore[no-untyped-def
         _copy3(Ec, E)
 
 
-@njit(**_OPTS)
+@njit(**_ONCE)
 def _local_opt(E, p1, p2, K1i, K2i, thr, thr2, best_sc, sel, F, Elo):  # type: ignore[no-untyped-def]  # pragma: no cover
     """Locally optimise a new best ``E`` into ``Elo``; return its MSAC score and inlier count.
 
@@ -684,11 +622,11 @@ def _local_opt(E, p1, p2, K1i, K2i, thr, thr2, best_sc, sel, F, Elo):  # type: i
     return _score(np.int64(_F_ORTHO), F, p1, p2, thr2, best_sc)
 
 
-@njit(**_OPTS)
+@njit(**_ONCE)
 def _refit_front(E, p1, p2, q1, q2, K1i, K2i, thr, factor, max_iter, rounds):  # type: ignore[no-untyped-def]  # pragma: no cover
     """Refit ``E`` in place: LM on its refinement support, then in front of the cameras.
 
-    First as ``ransac._refit_e`` (``_robust_core.refit_on_support``): up to 3 rounds on the
+    First as ``_robust_core.refit_on_support`` (dof 1, at least 5): up to 3 rounds on the
     refinement support of the starting ``E`` (``3σ̂`` clipped to ``[τ, factor τ]``, ``σ̂``
     from its inliers), reselected with that bound after each refit. Then up to ``rounds``
     more, each on the support of the current ``E`` (its own ``σ̂``) less the correspondences
@@ -787,7 +725,7 @@ def _score_sprt(F, p1, p2, thr2, limit, start, lam_in, lam_out, A):  # type: ign
     "int64(float64[:, ::1], float64[:, ::1], float64[:, ::1], float64[:, ::1], float64[:, ::1],"
     " float64[:, ::1], float64, float64, int64, uint64, int64, float64, float64,"
     " float64[:, ::1])",
-    **_OPTS,
+    **_PY_OPTS,
 )
 def essential_estimate(  # type: ignore[no-untyped-def]  # pragma: no cover
     p1, p2, q1, q2, K1i, K2i, thr, conf, max_trials, seed, max_iter, factor, term, E_out

@@ -9,7 +9,9 @@ import numpy as np
 from imageform._kernels.jit import njit
 from imageform._kernels.ransac import (
     _F_ORTHO,
+    _ONCE,
     _OPTS,
+    _PY_OPTS,
     _SPRT_DELTA0,
     _copy3,
     _epi_row,
@@ -101,7 +103,7 @@ def _pencil_det(N, a, M):  # type: ignore[no-untyped-def]  # pragma: no cover - 
     return _det3(M)
 
 
-@njit(**_OPTS)
+@njit(**_PY_OPTS)
 def _oriented(F, p1, p2, idx, m):  # type: ignore[no-untyped-def]  # pragma: no cover - compiled
     """Whether the sample ``idx[:m]`` satisfies the oriented epipolar constraint of ``F``.
 
@@ -136,7 +138,7 @@ def _oriented(F, p1, p2, idx, m):  # type: ignore[no-untyped-def]  # pragma: no 
     return not (pos and neg)
 
 
-@njit(**_OPTS)
+@njit(**_PY_OPTS)
 def _f7(p1, p2, idx, xs1, xs2, T1, T2, A, N, perm, Fs, W):  # type: ignore[no-untyped-def]  # pragma: no cover
     """Write the one to three fundamental matrices (pixels, unit norm) of a 7-point sample.
 
@@ -187,7 +189,7 @@ def _f7(p1, p2, idx, xs1, xs2, T1, T2, A, N, perm, Fs, W):  # type: ignore[no-un
     return out
 
 
-@njit(**_OPTS)
+@njit(**_ONCE)
 def _local_opt(F, p1, p2, thr, sel, w, out):  # type: ignore[no-untyped-def]  # pragma: no cover
     """Sampson-weighted 8-point refits on the correspondences within 3τ, 2τ, 2τ, 2τ."""
     _copy3(F, out)
@@ -258,7 +260,7 @@ _MS = 2.0
 @njit(
     "int64(float64[:, ::1], float64[:, ::1], float64, float64, int64, uint64, int64, int64,"
     " float64, float64, float64[:, ::1], boolean[::1], float64[::1])",
-    **_OPTS,
+    **_PY_OPTS,
 )
 def fundamental_estimate(  # type: ignore[no-untyped-def]
     q1, q2, thr, conf, max_trials, seed, pool, max_iter, factor, term, F_out, inl_out, rms_out

@@ -8,7 +8,9 @@ import numpy as np
 
 from imageform._kernels.jit import njit
 from imageform._kernels.ransac import (
+    _ONCE,
     _OPTS,
+    _PY_OPTS,
     _SPRT_DELTA0,
     _copy3,
     _fro_unit,
@@ -155,7 +157,7 @@ def _h_lsq(sn, dn, idx, m, Tdi, Ts, H, buf):  # type: ignore[no-untyped-def]  # 
     _h_denorm(h, Tdi, Ts, buf[3], H)
 
 
-@njit(**_OPTS)
+@njit(**_ONCE)
 def _h_local_opt(H, s, d, sn, dn, Tdi, Ts, thr, sel, buf, out):  # type: ignore[no-untyped-def]  # pragma: no cover
     """LO-RANSAC: least-squares DLT on the inliers within 2, 1.5, 1 τ of the previous fit."""
     _copy3(H, out)
@@ -166,7 +168,7 @@ def _h_local_opt(H, s, d, sn, dn, Tdi, Ts, thr, sel, buf, out):  # type: ignore[
         _h_lsq(sn, dn, sel, m, Tdi, Ts, out, buf)
 
 
-@njit(**_OPTS)
+@njit(**_ONCE)
 def _h_refit(best, s, d, sn, dn, Tdi, Ts, thr, factor, width, n_inl, mode, max_iter, buf):  # type: ignore[no-untyped-def]  # pragma: no cover
     """Refit ``best`` in place on its refinement support (dof 2, at least 4, 3 rounds).
 
@@ -197,7 +199,8 @@ def _h_refit(best, s, d, sn, dn, Tdi, Ts, thr, factor, width, n_inl, mode, max_i
         if m2 < 4 or _same(sel, m, sel2, m2):
             break
         m = m2
-        sel[:m] = sel2[:m]
+        for k in range(m):  # a loop: a slice copy compiles a shape check (seconds)
+            sel[k] = sel2[k]
     aux = np.empty((3, 3, 3))
     scratch = np.empty((n, 2))
     Tmp = np.empty((3, 3))
@@ -222,13 +225,14 @@ def _h_refit(best, s, d, sn, dn, Tdi, Ts, thr, factor, width, n_inl, mode, max_i
         if m2 < 4 or _same(sel, m, sel2, m2):
             break
         m = m2
-        sel[:m] = sel2[:m]
+        for k in range(m):  # a loop: a slice copy compiles a shape check (seconds)
+            sel[k] = sel2[k]
 
 
 @njit(
     "int64(float64[:, ::1], float64[:, ::1], float64, float64, int64, uint64, int64, int64,"
     " float64, float64, float64, float64[:, ::1], boolean[::1], float64[::1])",
-    **_OPTS,
+    **_PY_OPTS,
 )
 def homography_estimate(  # type: ignore[no-untyped-def]
     src,

@@ -7,8 +7,7 @@ import math
 import numpy as np
 
 from imageform._kernels.jit import njit
-from imageform._kernels.ransac import _OPTS
-from imageform._kernels.ransac_e import _cheirality
+from imageform._kernels.ransac import _OPTS, _PY_OPTS, _cheirality
 
 __all__ = ["pose_from_essential"]
 
@@ -87,7 +86,7 @@ def _dlt_point(P2, x1, y1, x2, y2, S, X):  # type: ignore[no-untyped-def]  # pra
 @njit(
     "int64(float64[:, ::1], float64[:, ::1], float64[:, ::1], boolean[::1], float64,"
     " float64[:, ::1], float64[::1], float64[:, ::1], boolean[::1])",
-    **_OPTS,
+    **_PY_OPTS,
 )
 def pose_from_essential(E, q1, q2, mask, dmax, R_out, t_out, X_out, good_out):  # type: ignore[no-untyped-def]  # pragma: no cover
     """``recover_pose``'s NumPy path, compiled: the four ``(R, t)`` of ``E``, the cheirality vote.
