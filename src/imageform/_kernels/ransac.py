@@ -1097,14 +1097,20 @@ def _refine_f(F, p1, p2, idx, m, max_iter):  # type: ignore[no-untyped-def]  # p
 
 
 @njit(**_OPTS)
-def _project_e(E):  # type: ignore[no-untyped-def]  # pragma: no cover - compiled
-    """Nearest essential matrix ``U diag(1, 1, 0) Vᵀ`` (unit Frobenius norm), in place."""
-    U = np.empty((3, 3))
-    V = np.empty((3, 3))
+def _svd_uv(E, U, V):  # type: ignore[no-untyped-def]  # pragma: no cover - compiled
+    """``U``, ``V`` of ``E = U diag(s) Vᵀ`` (rotations; the singular values are not kept)."""
     s = np.empty(3)
     A = np.empty((3, 3))
     W = np.empty((3, 3))
     _svd3(E, U, s, V, A, W)
+
+
+@njit(**_OPTS)
+def _project_e(E):  # type: ignore[no-untyped-def]  # pragma: no cover - compiled
+    """Nearest essential matrix ``U diag(1, 1, 0) Vᵀ`` (unit Frobenius norm), in place."""
+    U = np.empty((3, 3))
+    V = np.empty((3, 3))
+    _svd_uv(E, U, V)
     for a in range(3):
         for b in range(3):
             E[a, b] = U[a, 0] * V[b, 0] + U[a, 1] * V[b, 1]
@@ -1200,10 +1206,7 @@ def _candidates(E, U, Rs):  # type: ignore[no-untyped-def]  # pragma: no cover -
     ``W = [[0, -1, 0], [1, 0, 0], [0, 0, 1]]``, ``U, V`` rotations (H&Z result 9.19).
     """
     V = np.empty((3, 3))
-    s = np.empty(3)
-    A = np.empty((3, 3))
-    W = np.empty((3, 3))
-    _svd3(E, U, s, V, A, W)
+    _svd_uv(E, U, V)
     for a in range(3):
         for b in range(3):
             # columns of U W: (u2, -u1, u3); of U Wᵀ: (-u2, u1, u3)
