@@ -31,6 +31,8 @@ import os
 import pkgutil
 import random
 import resource
+import shutil
+import tempfile
 import time
 import traceback
 import warnings
@@ -658,6 +660,19 @@ def _limit_memory() -> None:
 
 
 def _worker(conn: Any) -> None:
+    # a fuzzed path argument ("abc") is relative: it lands in a folder of the worker's own,
+    # removed when the worker ends, not in the repository (nor left in the system's /tmp)
+    scratch = tempfile.mkdtemp(prefix="imageform-fuzz-")
+    os.chdir(scratch)
+    # the values' temporary files and folders (values._tmpdir) go there too
+    os.environ.setdefault("IMAGEFORM_FUZZ_TMP", scratch)
+    try:
+        _serve(conn)
+    finally:
+        shutil.rmtree(scratch, ignore_errors=True)
+
+
+def _serve(conn: Any) -> None:
     os.environ["IMAGEFORM_MAX_MEMORY"] = IMAGEFORM_MEMORY
     os.environ.setdefault("OMP_NUM_THREADS", "1")
     os.environ.setdefault("NUMBA_NUM_THREADS", "1")
