@@ -231,26 +231,7 @@ def constant(values: np.ndarray, like: Any, xp: Any) -> Any:
             return torch.as_tensor(values, dtype=like.dtype, device=dev)
     elif not array_api_compat.is_cupy_array(like):
         return xp.asarray(values.tolist(), dtype=like.dtype, device=dev)
-    key = (values.tobytes(), values.shape, xp.__name__, str(like.dtype), str(dev))
-    out = _CONSTANTS.get(key)
-    if out is None:
-        if len(_CONSTANTS) >= _MAX_CONSTANTS:
-            _CONSTANTS.clear()
-        out = _upload(values, like, xp, dev)
-        _CONSTANTS[key] = out
-    return out
-
-
-def _upload(values: np.ndarray, like: Any, xp: Any, dev: Any) -> Any:
-    arr = np.ascontiguousarray(values)
-    if array_api_compat.is_torch_array(like):
-        import torch
-
-        # a plain tensor even when the first call runs under inference_mode: an inference
-        # tensor in the cache would break every later call that records gradients
-        with torch.inference_mode(False):
-            return torch.tensor(arr, dtype=like.dtype, device=dev)
-    return xp.asarray(arr, dtype=like.dtype, device=dev, copy=True)
+    return upload_cached(values, xp, like.dtype, dev)
 
 
 def float_dtype(x: Any, xp: Any, *, integer: str = IMAGE_INTEGER_DTYPE) -> Any:
@@ -302,7 +283,10 @@ def upload_cached(x: np.ndarray, xp: Any, dtype: Any, device: Any) -> Any:
         if "torch" in name:
             import torch
 
-            with torch.inference_mode(False):  # see _upload
+            # a plain tensor even when the first call runs under inference_mode: an
+            # inference tensor in the cache would break every later call that records
+            # gradients
+            with torch.inference_mode(False):
                 out = torch.tensor(host, dtype=dtype, device=device)
         else:
             out = xp.asarray(host, dtype=dtype, device=device, copy=True)
