@@ -342,9 +342,16 @@ def test_ctrl_c_while_the_workers_start_is_one_line(tmp_path: Path, delay: float
     leaked-semaphore warning, no process left."""
     import psutil
 
+    import shutil
+
     (tmp_path / "in").mkdir()
-    for i in range(4):
-        write_image(tmp_path / "in" / f"x{i}.png", np.full((8, 8, 3), 40 + i, np.uint8))
+    # enough work that the run is still going ``delay`` s after the workers start, even on a
+    # fast machine (four 8x8 images were all done within 1.5 s on CI's): 200 copies of a
+    # 512x512 image, about 30 ms each there
+    first = tmp_path / "in" / "x000.png"
+    write_image(first, np.random.default_rng(0).integers(1, 256, (512, 512, 3), np.uint8))
+    for i in range(1, 200):
+        shutil.copyfile(first, tmp_path / "in" / f"x{i:03d}.png")
     proc = subprocess.Popen(
         _imageform("batch", "convert", f"{tmp_path}/in/*.png", "-o", str(tmp_path / "out"),
                    "--to", "rec2020", "--workers", "2"),
