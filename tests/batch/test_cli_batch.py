@@ -8,6 +8,7 @@ import contextlib
 import json
 import os
 import re
+import shutil
 import signal
 import subprocess
 import sys
@@ -341,8 +342,6 @@ def test_ctrl_c_while_the_workers_start_is_one_line(tmp_path: Path, delay: float
     exists (they import, start, connect): one line, exit 130, no worker traceback, no
     leaked-semaphore warning, no process left."""
     import psutil
-
-    import shutil
 
     (tmp_path / "in").mkdir()
     # enough work that the run is still going ``delay`` s after the workers start, even on a
