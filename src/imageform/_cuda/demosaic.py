@@ -191,13 +191,16 @@ def _kernels() -> Any:
 def demosaic(raw: Any, ry: int, rx: int, method: str, clip: bool) -> Any | None:
     """Demosaic a float device mosaic ``(B, H, W)`` (red at ``(ry, rx)``) into ``(B, H, W, 3)``.
 
-    ``method``: ``"bilinear"`` or ``"malvar"``; ``clip``: clip to [0, 1] in the same pass;
-    ``H, W >= 4``. One kernel launch (:mod:`imageform._cuda.demosaic_quads`, a thread per 2x2
-    quad); ``None`` when the kernels turned out unusable (the caller's Array-API path runs).
+    ``method``: ``"bilinear"`` or ``"malvar"``; ``clip``: clip to [0, 1] in the same pass.
+    One kernel launch (:mod:`imageform._cuda.demosaic_quads`, a thread per 2x2 quad);
+    ``None`` when the kernels turned out unusable or the mosaic is smaller than 4 x 4 (the
+    kernels' mirror reads up to 3 pixels past an edge): the caller's Array-API path runs.
     """
     from imageform._cuda.demosaic_quads import kernels
 
     nb, h, w = (int(s) for s in raw.shape)
+    if min(h, w) < 4:
+        return None
     out = empty_like(raw, (nb, h, w, 3))
     bits = 32 if str(raw.dtype).endswith("float32") else 64
     # one thread per 2x2 quad; the output viewed as (B, H, 3 W) value rows
