@@ -178,6 +178,12 @@ def demosaic_checks(method: str, dt: str, tol: float) -> None:
             allow_odd=True,
             clip=clip,
         )
+    if dt == "float32":  # integer and half mosaics reach the float32 kernel converted
+        for src in ("uint8", "uint16", "float16"):
+            top = np.iinfo(src).max if src.startswith("uint") else 1.0
+            raw = (own.uniform(0.0, 1.0, (6, 10)) * top).astype(src)
+            check(f"demosaic[{method},GBRG,{src}]", demosaic, (raw,), tol, pattern="GBRG",
+                  method=method)  # fmt: skip
 
 
 def fallback_check() -> None:
