@@ -70,6 +70,7 @@ BENCH_SCRIPTS: dict[str, str] = {
     "gpu-h200": "benchmarks/bench_gpu.py",
     "gpu-host-h200": "benchmarks/profile_gpu_host.py",
     "sass-colour": "benchmarks/sass_colour.py",
+    "sass-demosaic": "benchmarks/sass_demosaic.py",
     "lsd": "benchmarks/bench_lsd.py",
     "psf": "benchmarks/bench_psf.py",
     "raw": "benchmarks/bench_raw.py",

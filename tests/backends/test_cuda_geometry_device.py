@@ -117,3 +117,29 @@ def test_develop_on_the_gpu() -> None:
         # float32 in the same order; the GPU may fuse multiply-adds (a few ulp)
         np.testing.assert_allclose(gpu.image, cpu.image, atol=1e-5, rtol=0)
         assert np.abs(gpu.to_integer(16).astype(int) - cpu.to_integer(16)).max() <= 1
+
+
+@pytest.mark.parametrize("dtype", ["float32", "float64"])
+@pytest.mark.parametrize("method", ["bilinear", "malvar"])
+def test_demosaic_quads_every_pattern_and_edge(method: str, dtype: str) -> None:
+    """The quad kernels on the device's blocks (32 x 8 quads: a warp a row, its barrier).
+
+    Every CFA pattern, a batch of two, odd sizes (a cut quad in the last row and column),
+    mosaics whose blocks are all edge blocks (70 x 90) and with inner blocks (131 x 261:
+    inner from the second block row and column on), clipped and not: the NumPy path's
+    numbers (the same sums; the GPU may fuse a multiply-add: a few ulp).
+    """
+    rng = np.random.default_rng(2929)
+    atol = 2e-6 if dtype == "float32" else 1e-14
+    for pattern in ("RGGB", "GRBG", "GBRG", "BGGR"):
+        for shape in ((2, 70, 90, 1), (131, 261)):
+            raw = rng.uniform(-0.05, 1.05, shape).astype(dtype)
+            x = torch.asarray(raw, device="cuda")
+            for clip in (False, True):
+                ref = np.asarray(demosaic(raw, pattern, method, clip=clip, allow_odd=True))
+                before = _launch.launch_count()
+                got = demosaic(x, pattern, method, clip=clip, allow_odd=True)
+                assert _launch.launch_count() - before == 1
+                np.testing.assert_allclose(
+                    _host(got), ref, atol=atol, rtol=0, err_msg=f"{pattern} {shape} {clip}"
+                )

@@ -8,7 +8,8 @@
   for ``sm_90`` by numba's CUDA target and NVVM (no device needed; skipped where NVVM is not
   installed): what the simulator cannot check (typing and lowering on the real target), with
   the float32 demosaicing and development kernels free of float64 instructions and the image
-  kernels free of 64-bit integer divisions.
+  kernels free of 64-bit integer divisions. The demosaicing kernels are compiled for the
+  block ``launch_rows`` launches (:func:`test_quad_kernels_know_the_launch_block`).
 - NumPy calls never import numba's CUDA target; ``imageform develop --device cuda`` and
   ``imageform batch develop --device cuda`` refuse in one line, non-zero, where no GPU is
   usable, and develop a raw file through the kernel under the simulator.
@@ -97,7 +98,7 @@ try:
 except Exception as exc:  # no NVVM (libnvvm) on this machine
     print("SKIP", type(exc).__name__, str(exc).splitlines()[0] if str(exc) else "")
     sys.exit(0)
-from imageform._cuda import demosaic as dm, geometry as g
+from imageform._cuda import demosaic as dm, demosaic_quads as dq, geometry as g
 try:  # a numba CUDA target that wants a driver to compile device functions: cannot check here
     dev = cuda.jit(device=True)(lambda x: x + 1.0)
 
@@ -112,7 +113,7 @@ except Exception as exc:
     sys.exit(0)
 A = lambda dt, nd, layout="C": T.Array(dt, nd, layout)
 f64, f32, b1, i64 = T.float64, T.float32, T.boolean, T.int64
-kg, kd = g._kernels(), dm._kernels()
+kg, kd, kq = g._kernels(), dm._kernels(), dq.kernels()
 def show(name, ptx):
     f = "f64-ops" if ".f64" in ptx else "no-f64"
     div = "div64" if re.search(r"\b(div|rem)\.[su]64", ptx) else "no-div64"
@@ -128,9 +129,11 @@ for dt in (f64, f32):
     }
     for name, sig in sigs.items():
         show(f"{name}[{dt}]", cuda.compile_ptx(kg.py[name], sig, cc=(9, 0))[0])
-    name = "demosaic32" if dt == f32 else "demosaic64"
-    sig = (A(dt, 3, "A"), i64, i64, i64, b1, A(dt, 4))
-    show(name, cuda.compile_ptx(kd.py[name], sig, cc=(9, 0))[0])
+    for method in ("bilinear", "malvar"):
+        name = f"{method}{32 if dt == f32 else 64}"
+        for layout in ("C", "A"):  # a contiguous mosaic, a strided view
+            sig = (A(dt, 3, layout), i64, i64, b1, A(dt, 3))
+            show(f"{name}[{layout}]", cuda.compile_ptx(kq.py[name], sig, cc=(9, 0))[0])
 sig = (A(T.uint16, 2), A(f32, 2), i64, i64, i64, A(f32, 2), A(f32, 1), b1, i64, A(f32, 3),
        A(T.uint16, 3))
 show("develop", cuda.compile_ptx(kd.py["develop"], sig, cc=(9, 0))[0])
@@ -144,13 +147,31 @@ def test_kernels_compile_for_hopper() -> None:
     if proc.stdout.startswith("SKIP"):
         pytest.skip(f"NVVM not available: {proc.stdout.strip()}")
     lines = [ln for ln in proc.stdout.splitlines() if ln.startswith("ok ")]
-    assert len(lines) == 13, out
+    assert len(lines) == 19, out
     # float32 data is demosaiced and developed in float32, as on the CPU
-    assert "ok demosaic32 no-f64 no-div64" in lines and "ok develop no-f64 no-div64" in lines, out
+    for name in ("bilinear32[C]", "bilinear32[A]", "malvar32[C]", "malvar32[A]", "develop"):
+        assert f"ok {name} no-f64 no-div64" in lines, out
     # the image kernels find their pixel from a 2-D grid: no 64-bit division (slow on a GPU)
     for ln in lines:
-        if any(k in ln for k in ("remap", "undistort_image", "demosaic", "develop")):
+        if any(k in ln for k in ("remap", "undistort_image", "bilinear", "malvar", "develop")):
             assert ln.endswith("no-div64"), ln
+
+
+def test_quad_kernels_know_the_launch_block(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The demosaicing kernels are compiled for the block ``launch_rows`` launches.
+
+    Their staging tile's size and offsets are compile-time constants
+    (:func:`imageform._cuda.demosaic_quads.block_shape`); another block would store wrong
+    values, so a change of ``launch_rows``'s blocks must change that function too.
+    """
+    from imageform._cuda import _launch, demosaic_quads
+
+    seen = []
+    monkeypatch.setattr(_launch, "_launch", lambda k, grid, block, args: seen.append(block))
+    for rows, cols in ((2, 2), (540, 960), (1080, 1920), (3, 10**6), (10**6, 3)):
+        _launch.launch_rows(None, rows, cols)
+    assert set(seen) == {demosaic_quads.block_shape()}
+    assert demosaic_quads.block_shape()[0] == 32  # a warp along a row: its barrier is a warp's
 
 
 def test_numpy_calls_never_import_numba_cuda() -> None:

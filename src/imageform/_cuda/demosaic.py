@@ -1,21 +1,21 @@
-r"""CUDA kernels of demosaicing and raw development: one launch per call, one thread a pixel.
+r"""CUDA kernels of demosaicing and raw development: one launch per call.
 
 - :func:`demosaic`: bilinear and Malvar-He-Cutler on a float ``(B, H, W)`` Bayer mosaic into
-  ``(B, H, W, 3)``, the optional clipping to [0, 1] fused. The mosaic is read in place with
-  the phase-preserving mirror about the edge pixel (index ``-k`` reads ``k``), which is what
+  ``(B, H, W, 3)``, the optional clipping to [0, 1] fused, one thread per 2x2 CFA quad
+  (:mod:`imageform._cuda.demosaic_quads`). The mosaic is read in place with the
+  phase-preserving mirror about the edge pixel (index ``-k`` reads ``k``), which is what
   :func:`imageform.sensor.demosaic` builds with ``numpy.pad(mode="reflect")``: no padded copy
   is made. The filters are those of :mod:`imageform._kernels.demosaic_bilinear` and
-  :mod:`imageform._kernels.demosaic_malvar` (the same sums in the same order), evaluated for
-  the one phase of the pixel; float32 mosaics are computed in float32 (the constants typed),
-  as the CPU kernels do.
-- :func:`develop_bayer`: :func:`imageform._kernels.raw_develop.develop_rows` per pixel (the
-  digital numbers linearised, white-balanced and clipped per photosite of the 3x3 or 5x5
-  window, bilinear or Malvar demosaicing, the 3x3 matrix, clipping, the transfer table,
-  float32 or uint16 rounded half up): the whole raw pipeline of ``imageform develop`` in one
-  kernel, float32 throughout as on the CPU.
+  :mod:`imageform._kernels.demosaic_malvar` (the same sums in the same order); float32
+  mosaics are computed in float32 (the constants typed), as the CPU kernels do.
+- :func:`develop_bayer`: :func:`imageform._kernels.raw_develop.develop_rows` per pixel, one
+  thread a pixel (the digital numbers linearised, white-balanced and clipped per photosite of
+  the 3x3 or 5x5 window, bilinear or Malvar demosaicing, the 3x3 matrix, clipping, the
+  transfer table, float32 or uint16 rounded half up): the whole raw pipeline of ``imageform
+  develop`` in one kernel, float32 throughout as on the CPU.
 
 Tests run the kernels under numba's CUDA simulator against the NumPy twins and compile them
-for ``sm_90`` where NVVM is installed (``tests/backends/test_cuda_kernels.py``).
+for ``sm_90`` where NVVM is installed (``tests/backends/test_cuda_geometry_kernels.py``).
 """
 
 from __future__ import annotations
@@ -118,34 +118,6 @@ def _kernels() -> Any:
 
         return cuda.jit(device=True)(rgb_at)
 
-    def make_demosaic(T: Any) -> Any:
-        def plain(raw, b, y, x):  # type: ignore[no-untyped-def]
-            return raw[b, y, x]
-
-        rgb_at_d = make_rgb_at(cuda.jit(device=True)(plain), T)
-
-        def demosaic_kernel(raw, ry, rx, method, clip, out):  # type: ignore[no-untyped-def]
-            # a 2-D launch (launch_rows): thread (row y, column x), every image of the batch
-            nb, h, w = raw.shape
-            x, y, step = row_grid_d()
-            if x >= w:
-                return
-            zero = T(0.0)
-            one = T(1.0)
-            while y < h:
-                for b in range(nb):
-                    rr, gg, bb = rgb_at_d(raw, b, y, x, h, w, ry, rx, method)
-                    if clip:
-                        rr = clip_d(rr, zero, one)
-                        gg = clip_d(gg, zero, one)
-                        bb = clip_d(bb, zero, one)
-                    out[b, y, x, 0] = rr
-                    out[b, y, x, 1] = gg
-                    out[b, y, x, 2] = bb
-                y += step
-
-        return demosaic_kernel
-
     def balanced(mosaic, prm, y, x):  # type: ignore[no-untyped-def]
         # clip((DN - B_s) k_s, 0, 1) of the photosite (y, x): raw_develop._balance_row
         p = y & 1
@@ -209,8 +181,6 @@ def _kernels() -> Any:
 
     k = types.SimpleNamespace()
     k.py = {
-        "demosaic32": make_demosaic(np.float32),
-        "demosaic64": make_demosaic(np.float64),
         "develop": develop_kernel,
     }
     for name, fn in k.py.items():
@@ -222,15 +192,21 @@ def demosaic(raw: Any, ry: int, rx: int, method: str, clip: bool) -> Any | None:
     """Demosaic a float device mosaic ``(B, H, W)`` (red at ``(ry, rx)``) into ``(B, H, W, 3)``.
 
     ``method``: ``"bilinear"`` or ``"malvar"``; ``clip``: clip to [0, 1] in the same pass.
-    One kernel launch; ``None`` when the kernels turned out unusable (the caller's Array-API
-    path runs).
+    One kernel launch (:mod:`imageform._cuda.demosaic_quads`, a thread per 2x2 quad);
+    ``None`` when the kernels turned out unusable or the mosaic is smaller than 4 x 4 (the
+    kernels' mirror reads up to 3 pixels past an edge): the caller's Array-API path runs.
     """
+    from imageform._cuda.demosaic_quads import kernels
+
     nb, h, w = (int(s) for s in raw.shape)
+    if min(h, w) < 4:
+        return None
     out = empty_like(raw, (nb, h, w, 3))
-    args = (raw, int(ry), int(rx), _METHODS[method], bool(clip), out)
-    f32 = str(raw.dtype).endswith("float32")
-    kern = _kernels().demosaic32 if f32 else _kernels().demosaic64
-    if not guarded(("demosaic", str(raw.dtype)), kern, (h, w), *args):
+    bits = 32 if str(raw.dtype).endswith("float32") else 64
+    # one thread per 2x2 quad; the output viewed as (B, H, 3 W) value rows
+    args = (raw, int(ry), int(rx), bool(clip), out.reshape((nb, h, 3 * w)))
+    size = ((h + 1) // 2, (w + 1) // 2)
+    if not guarded(("demosaic", method, bits), getattr(kernels(), f"{method}{bits}"), size, *args):
         return None
     return out
 
