@@ -135,3 +135,61 @@ def test_a_failing_fast_launch_falls_back_for_good() -> None:
     assert fl.launcher(key) is None  # numba's path from now on
     fl.forget(None)  # a launch without a key: nothing to forget
     del fl._READY[key]
+
+
+_DRY = """
+import json, sys
+from benchmarks import profile_gpu_host as p
+from imageform._cuda import _fastlaunch, _launch
+
+with p.dry_device(sys.argv[1]):
+    fns = p.calls("meta")
+    gpu_rows = [r for r in p.ROWS if not r.startswith("NumPy")]
+    before = _launch.launch_count()
+    for name in gpu_rows:
+        fns[name]()  # the first launch of its signature: numba's path, then the check
+    first = dict(p.COUNTS)
+    for name in gpu_rows:
+        fns[name]()
+        fns[name]()
+    print(json.dumps({
+        "rows": len(gpu_rows),
+        "first": first,
+        "then": dict(p.COUNTS),
+        "launches": _launch.launch_count() - before,
+        "checked": [v is not None for v in _fastlaunch._READY.values()],
+    }))
+"""
+
+
+@pytest.mark.parametrize("flavour", ["core", "ctypes"])
+def test_dry_device_calls_launch_fast(flavour: str) -> None:
+    """``profile_gpu_host.py --dry``'s stand-ins: every profiled public call on ``meta``
+    tensors reaches the launch primitive through the fast launch, one launch per call, its
+    signature checked against numba's own packing after the first launch."""
+    import json
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[2]
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(root / "src"), str(root)])}
+    env.pop("IMAGEFORM_DISABLE_CUDA", None)
+    env.pop("NUMBA_ENABLE_CUDASIM", None)
+    proc = subprocess.run(
+        [sys.executable, "-c", _DRY, flavour],
+        capture_output=True,
+        text=True,
+        env=env,
+        cwd=root,
+        timeout=300,
+        check=False,
+    )
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    got = json.loads(proc.stdout.strip().splitlines()[-1])
+    n = got["rows"]
+    assert got["first"] == {"fast": 0, "numba": n}
+    assert got["then"] == {"fast": 2 * n, "numba": n}
+    assert got["launches"] == 3 * n
+    assert got["checked"] == [True] * n

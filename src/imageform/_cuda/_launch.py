@@ -125,6 +125,10 @@ def use_cuda() -> bool:
 _is_torch = is_torch
 _is_cupy = is_cupy
 
+#: PyTorch device types whose tensors the kernels take (benchmarks/profile_gpu_host.py
+#: ``--dry`` adds ``"meta"`` to drive the dispatch without a GPU).
+_DEVICE_TYPES: tuple[str, ...] = ("cuda",)
+
 
 def _is_sim_array(x: object) -> bool:
     return simulated() and type(x).__name__ == "FakeCUDAArray"
@@ -143,7 +147,7 @@ def is_cuda_array(x: object) -> bool:
 
         # inside torch.compile tracing the tensor is a stand-in without memory: the traced
         # Array-API path runs (and fuses) instead
-        return x.device.type == "cuda" and not torch.compiler.is_compiling()  # type: ignore[attr-defined]
+        return x.device.type in _DEVICE_TYPES and not torch.compiler.is_compiling()  # type: ignore[attr-defined]
     if _is_cupy(x) or _is_sim_array(x):
         return True
     try:
