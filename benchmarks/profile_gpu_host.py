@@ -14,7 +14,7 @@ through imageform's dispatch, :mod:`imageform._cuda._launch` and the fast launch
 as on a device) down to the launch primitive, which is a stub. The stand-ins:
 
 - the tensors are PyTorch ``meta`` tensors (shape, dtype, strides, no memory), counted as
-  CUDA tensors (``_launch._DEVICE_TYPES``); the device rule treats them as a GPU's (no value
+  CUDA tensors (``_launch._META_AS_CUDA``); the device rule treats them as a GPU's (no value
   is read);
 - numba's CUDA module is a stand-in (``jit`` gives kernels that record their overload on the
   first launch; one GPU; ``external_stream``), and the first launch of a signature, which on
@@ -254,17 +254,17 @@ def dry_device(flavour: str = "core") -> Iterator[None]:
     cuda = _Cuda(flavour)
     saved = {
         "cuda": _launch.cuda,
-        "_DEVICE_TYPES": _launch._DEVICE_TYPES,
+        "_META_AS_CUDA": _launch._META_AS_CUDA,
         "as_device_array": _launch.as_device_array,
     }
     saved_stream = torch.cuda.current_stream
     setattr(_launch, "cuda", lambda: cuda)  # noqa: B010 - stand-ins, put back on exit
-    setattr(_launch, "_DEVICE_TYPES", (*_launch._DEVICE_TYPES, "meta"))  # noqa: B010
+    setattr(_launch, "_META_AS_CUDA", True)  # noqa: B010
     setattr(  # noqa: B010
         _launch, "as_device_array", lambda x: x if isinstance(x, _DeviceArray) else _DeviceArray(x)
     )
-    for fn in ("_available", "_fast_on"):
-        getattr(_launch, fn).cache_clear()
+    _launch._available.cache_clear()
+    _launch.refresh_switches()
     geometry.cuda = None
     # PyTorch's default stream (handle 0), as on a device outside torch.cuda.stream(...)
     stream0 = pytypes.SimpleNamespace(cuda_stream=0)
@@ -274,8 +274,8 @@ def dry_device(flavour: str = "core") -> Iterator[None]:
     finally:
         for k, v in saved.items():
             setattr(_launch, k, v)
-        for fn in ("_available", "_fast_on"):
-            getattr(_launch, fn).cache_clear()
+        _launch._available.cache_clear()
+        _launch.refresh_switches()
         setattr(torch.cuda, "current_stream", saved_stream)  # noqa: B010
 
 
