@@ -241,6 +241,26 @@ def path(src: str, dst: str) -> list[Edge]:
 #: Routes found by :func:`path` (the graph is fixed: each pair is searched once).
 _PATHS: dict[tuple[str, str], tuple[Edge, ...]] = {}
 
+#: (src, dst) -> (route, the parameters it accepts, its default white) (:func:`_route`)
+_ROUTES: dict[tuple[str, str], tuple[list[Edge], frozenset[str], str]] = {}
+
+
+def _route(s: str, d: str) -> tuple[list[Edge], frozenset[str], str]:
+    """Return the route between canonical names, its parameters and its default white.
+
+    :func:`path`'s route, the parameters it accepts (``alpha`` included) and the white it
+    defaults to (its RGB space's own, else D65), computed once per pair.
+    """
+    got = _ROUTES.get((s, d))
+    if got is None:
+        route = path(s, d)
+        allowed = frozenset({p for e in route for p in e.params} | set(_GLOBAL_PARAMS))
+        rgb = [
+            k for k in RGB_SPACES for e in route if e.src == f"linear_{k}" or e.dst == f"linear_{k}"
+        ]
+        got = _ROUTES[s, d] = (route, allowed, rgb[0] if rgb else "D65")
+    return got
+
 
 def _shortest(s: str, d: str) -> list[Edge]:
     """Breadth-first search of the conversion graph: the fewest edges from ``s`` to ``d``."""
@@ -372,23 +392,21 @@ def convert(
         _deprecate.warn("imageform.color.convert(bits=...)", "use bit_depth= instead")
         params["bit_depth"] = params.pop("bits")
     s, d = _space(src, "src"), _space(dst, "dst")
-    route = path(s, d)
-    allowed = {p for e in route for p in e.params} | set(_GLOBAL_PARAMS)
-    extra = sorted(set(params) - allowed)
-    if extra:
-        names = ", ".join(sorted(allowed)) or "none"
-        raise UnknownOptionError(
-            f"parameter(s) {', '.join(extra)} not used converting {s} -> {d}; valid here: {names}"
-        )
+    route, allowed, white = _route(s, d)
+    if params:
+        extra = sorted(set(params) - allowed)
+        if extra:
+            names = ", ".join(sorted(allowed)) or "none"
+            raise UnknownOptionError(
+                f"parameter(s) {', '.join(extra)} not used converting {s} -> {d}; "
+                f"valid here: {names}"
+            )
     p = dict(params)
     alpha = check_name(p.pop("alpha", "reject"), ("reject", "keep"), "alpha handling")
     if "method" in allowed:
         p["method"] = check_name(p.get("method", "rec601"), gray.GRAY_METHODS, "grey method")
     if "white" in allowed and p.get("white") is None:
-        rgb = [
-            k for k in RGB_SPACES for e in route if e.src == f"linear_{k}" or e.dst == f"linear_{k}"
-        ]
-        p["white"] = rgb[0] if rgb else "D65"
+        p["white"] = white
 
     if dtype is not None and not _is_uint8(dtype):
         raise InvalidInputError(f"expected dtype None or 'uint8', got {describe(dtype)}")
@@ -506,12 +524,11 @@ def _kernel_steps(route: list[Edge], p: dict[str, Any]) -> list[tuple[str, tuple
     and hashable parameters are computed once per process (a GPU call does no more Python
     work than it must before its launch).
     """
+    key: Any = (tuple(route), tuple(sorted(p.items())))
     try:
-        key: Any = (tuple(route), tuple(sorted(p.items())))
-        hash(key)
+        steps = _STEPS.get(key)
     except TypeError:  # a white given as an array: computed each time
         return _steps_of(route, p)
-    steps = _STEPS.get(key)
     if steps is None:
         if len(_STEPS) > 256:
             _STEPS.clear()
