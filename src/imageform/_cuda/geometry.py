@@ -36,6 +36,7 @@ from __future__ import annotations
 
 import functools
 import math
+import struct
 import sys
 from typing import Any
 
@@ -285,7 +286,7 @@ def _dt(x: Any) -> str:
         return str(dt).removeprefix("torch.")
 
 
-#: coefficients (and the signs of their zeros) -> their kernel arguments (:func:`_coeffs`)
+#: the coefficients' float64 bytes -> their kernel arguments (:func:`_coeffs`)
 _COEFFS: dict[Any, _launch.Constants] = {}
 
 
@@ -293,17 +294,23 @@ def _coeffs(coeffs: Any) -> _launch.Constants:
     """Return the eight Brown-Conrady coefficients as kernel arguments (zeros for ``None``).
 
     Python floats, packed once per set of coefficients for the fast launch (a model's
-    coefficients are the same from call to call).
+    coefficients are the same from call to call); looked up by their float64 bytes (a
+    zero's sign included, so the kernel gets the very numbers).
     """
-    c = (0.0,) * 8 if coeffs is None else tuple(float(v) for v in coeffs)
-    c += (0.0,) * (8 - len(c))
-    # -0.0 == 0.0: a zero's sign is part of the key, so the kernel gets the very numbers
-    key: Any = c if 0.0 not in c else (c, tuple(math.copysign(1.0, v) for v in c))
-    got = _COEFFS.get(key)
+    c = (0.0,) * 8 if coeffs is None else tuple(coeffs)
+    try:
+        key: Any = struct.pack(f"{len(c)}d", *c)
+    except struct.error:  # not numbers: float() says why
+        key = None
+    got = None if key is None else _COEFFS.get(key)
     if got is None:
-        if len(_COEFFS) > 256:
-            _COEFFS.clear()
-        got = _COEFFS[key] = _launch.Constants(c)
+        vals = tuple(float(v) for v in c)
+        vals += (0.0,) * (8 - len(vals))
+        got = _launch.Constants(vals)
+        if key is not None:
+            if len(_COEFFS) > 256:
+                _COEFFS.clear()
+            _COEFFS[key] = got
     return got
 
 
