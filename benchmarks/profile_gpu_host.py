@@ -163,7 +163,7 @@ def _overload_module(flavour: str) -> pytypes.ModuleType:
             got: list[Any] = []
             _Kernel._prepare_args(pytypes.SimpleNamespace(extensions=[]), ty, val, 0, retr, got)
             if flavour == "core" and isinstance(ty, types.Array):
-                got = [int(v.value or 0) for v in got]
+                got = [int(getattr(v, "value", v) or 0) for v in got]
             elif flavour == "core" and ty == types.boolean:
                 got = [bool(val)]
             out += got
