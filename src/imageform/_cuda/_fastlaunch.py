@@ -128,7 +128,7 @@ def _kind_of(t: type) -> int:
     cupy = sys.modules.get("cupy")
     if t is Constants:
         k = _CONSTANTS
-    elif issubclass(t, int | float | np.generic):  # bool is an int
+    elif issubclass(t, (int, float, np.generic)):  # bool is an int
         k = _SCALAR
     elif torch is not None and issubclass(t, torch.Tensor):
         k = _TORCH
@@ -160,7 +160,7 @@ def _scalar_packer(t: type, flavour: str) -> Callable[[Any], Any] | None:
     except KeyError:
         pass
     c: Callable[[Any], Any] | None
-    if issubclass(t, bool | np.bool_):
+    if issubclass(t, (bool, np.bool_)):
         c = _as_bool if flavour == "core" else _as_uint8
     elif issubclass(t, int):
         c = ctypes.c_int64

@@ -175,12 +175,14 @@ _META_AS_CUDA = False
 #: a CuPy array, or another type (its ``__cuda_array_interface__`` is asked).
 _HOST, _TORCH, _CUPY, _OTHER = 0, 1, 2, 3
 _KINDS: dict[type, int] = {}
+# a tuple, not a union of types: torch.compile traces this test (a union is an error there)
+_HOST_TYPES = (np.ndarray, np.generic, float, int, complex, bool, str, list, tuple)
 
 
 def _kind_of(t: type) -> int:
     torch = sys.modules.get("torch")
     cupy = sys.modules.get("cupy")
-    if issubclass(t, np.ndarray | np.generic | float | int | complex | bool | str | list | tuple):
+    if issubclass(t, _HOST_TYPES):
         k = _HOST
     elif torch is not None and issubclass(t, torch.Tensor):
         k = _TORCH
@@ -188,7 +190,8 @@ def _kind_of(t: type) -> int:
         k = _CUPY
     else:
         k = _OTHER
-    _KINDS[t] = k
+    if torch is None or not torch.compiler.is_compiling():
+        _KINDS[t] = k  # not while torch.compile traces (a global mutation breaks the graph)
     return k
 
 

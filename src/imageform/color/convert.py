@@ -40,6 +40,7 @@ RGB spaces with different whites (ProPhoto's D50, the others' D65) are joined th
 
 from __future__ import annotations
 
+import sys
 from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -234,8 +235,19 @@ def path(src: str, dst: str) -> list[Edge]:
     s, d = _space(src, "src"), _space(dst, "dst")
     found = _PATHS.get((s, d))
     if found is None:
-        found = _PATHS[s, d] = tuple(_shortest(s, d))
+        found = tuple(_shortest(s, d))
+        if not _tracing():
+            _PATHS[s, d] = found
     return list(found)
+
+
+def _tracing() -> bool:
+    """Tell whether ``torch.compile`` is tracing (no cache is filled then).
+
+    A global dict changed while tracing breaks the graph.
+    """
+    torch = sys.modules.get("torch")
+    return torch is not None and bool(torch.compiler.is_compiling())
 
 
 #: Routes found by :func:`path` (the graph is fixed: each pair is searched once).
@@ -258,7 +270,9 @@ def _route(s: str, d: str) -> tuple[list[Edge], frozenset[str], str]:
         rgb = [
             k for k in RGB_SPACES for e in route if e.src == f"linear_{k}" or e.dst == f"linear_{k}"
         ]
-        got = _ROUTES[s, d] = (route, allowed, rgb[0] if rgb else "D65")
+        got = (route, allowed, rgb[0] if rgb else "D65")
+        if not _tracing():
+            _ROUTES[s, d] = got
     return got
 
 
