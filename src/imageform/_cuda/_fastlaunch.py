@@ -279,9 +279,17 @@ def pack_call(kernel: Any, args: Sequence[Any]) -> tuple[tuple[Any, ...], list[A
         elif kind == _OTHER:
             return None
         else:
-            part, pre, ptr, post = _array_fields(a, kind, core)
             if first is None:
                 first = a
+            # a C-contiguous PyTorch tensor of a known shape (the common case): inline
+            got = _LAYOUTS.get((a.shape, a.dtype, core)) if kind == _TORCH else None
+            if got is not None and a.is_contiguous():
+                parts.append(got[0])
+                out += got[1]
+                out.append(a.data_ptr() if core else ctypes.c_void_p(a.data_ptr()))
+                out += got[2]
+                continue
+            part, pre, ptr, post = _array_fields(a, kind, core)
             parts.append(part)
             out += pre
             out.append(ptr if core else ctypes.c_void_p(ptr))

@@ -328,6 +328,7 @@ def _torch_stream(x: Any) -> int:
     torch = sys.modules["torch"]
     raw = getattr(torch._C, "_cuda_getCurrentRawStream", None)
     if raw is not None and x.is_cuda:
+        _RAW_STREAM[0] = raw
         return int(raw(x.get_device()))
     return int(torch.cuda.current_stream(x.device).cuda_stream)
 
@@ -345,6 +346,22 @@ def _stream_handle(x: Any) -> int | None:
     except Exception:
         return None
     return None if s is None else int(s)
+
+
+def _fast_stream(x: Any) -> Any:
+    """:func:`_stream_for` of a fast launch (not simulated): a CUDA tensor's in one C call."""
+    if _RAW_STREAM[0] is not None and x.is_cuda and _KINDS.get(type(x)) == _TORCH:
+        handle = _RAW_STREAM[0](x.get_device())
+        if not handle:  # PyTorch's default stream
+            return 0
+        st = _STREAMS.get(handle)
+        if st is not None:
+            return st
+    return _stream_for(x)
+
+
+#: ``torch._C._cuda_getCurrentRawStream`` once PyTorch has a CUDA tensor here (else None)
+_RAW_STREAM: list[Any] = [None]
 
 
 def _stream_for(x: Any) -> Any:
@@ -402,7 +419,7 @@ def _launch(kernel: Any, grid: tuple[int, ...], block: tuple[int, ...], args: An
             run = _fastlaunch._READY.get(key)
             if run is not None:  # checked against numba's own packing (_fastlaunch.prepare)
                 try:
-                    run(grid, block, _stream_for(first), packed)
+                    run(grid, block, _fast_stream(first), packed)
                 except Exception:  # never the call's failure: numba's path from now on
                     _fastlaunch.forget(key)
                 else:
