@@ -249,9 +249,12 @@ def _compiled(fn: Callable[..., Any], *args: Any) -> Callable[[], Any]:
 def _array_api(fn: Callable[[], Any]) -> Callable[[], Any]:
     """``fn`` with imageform's CUDA kernels switched off (``IMAGEFORM_DISABLE_CUDA=1``)."""
 
+    from imageform._cuda import _launch
+
     def run() -> Any:
         old = os.environ.get("IMAGEFORM_DISABLE_CUDA")
         os.environ["IMAGEFORM_DISABLE_CUDA"] = "1"
+        _launch.refresh_switches()  # the switches are read once, not in every call
         try:
             return fn()
         finally:
@@ -259,6 +262,7 @@ def _array_api(fn: Callable[[], Any]) -> Callable[[], Any]:
                 del os.environ["IMAGEFORM_DISABLE_CUDA"]
             else:
                 os.environ["IMAGEFORM_DISABLE_CUDA"] = old
+            _launch.refresh_switches()
 
     return run
 

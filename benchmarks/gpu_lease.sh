@@ -11,7 +11,9 @@
 #   1. env.txt: the device, driver, library versions, whether imageform's CUDA kernels run;
 #   2. the timing table, benchmarks/bench_gpu.py (gpu-<device>-<date>.md; progress rows in
 #      bench-progress.log as they are measured);
-#   3. host-profile.txt: the host's time per call (benchmarks/profile_gpu_host.py);
+#   3. host-profile.txt: the host's time per call, one row per fused call with its cProfile
+#      (benchmarks/profile_gpu_host.py), and host-profile-dry.txt: the same with --dry (no
+#      device: a stub launch) on this machine's CPU, for comparison with the CPU-only runs;
 #   4. the device tests (tests.log): the backend matrix on torch CUDA and CuPy, the
 #      pointwise set under set_sync_debug_mode("error"), the geometry/demosaic kernels, the
 #      --device cuda commands, the meta-device matrix.
@@ -52,8 +54,12 @@ timeout "${BENCH_S:-300}" python3 benchmarks/bench_gpu.py --device cuda \
   --out "$OUT/gpu-${DEV:-gpu}-$STAMP.md" 2>"$OUT/bench-progress.log" >/dev/null
 echo "bench exit $?" | tee -a "$OUT/bench-progress.log"
 
-timeout 90 python3 benchmarks/profile_gpu_host.py >"$OUT/host-profile.txt" 2>&1
-head -16 "$OUT/host-profile.txt"
+# host time per call on the device (every row's first call compiles its kernel), then the
+# same calls --dry on this machine's CPU (stub launch), to relate the two measurements
+timeout "${HOST_S:-150}" python3 benchmarks/profile_gpu_host.py >"$OUT/host-profile.txt" 2>&1
+echo "host profile exit $?" >>"$OUT/host-profile.txt"
+grep -E "^(\| |imageform|fast launch|host profile)" "$OUT/host-profile.txt" | head -30
+timeout 60 python3 benchmarks/profile_gpu_host.py --dry --top 10 >"$OUT/host-profile-dry.txt" 2>&1
 
 timeout "${TESTS_S:-210}" python3 -m pytest -q -n 8 -p no:cacheprovider -rfEs \
   tests/backends/test_cuda_device.py tests/backends/test_cuda_geometry_device.py \

@@ -68,6 +68,7 @@ BENCH_SCRIPTS: dict[str, str] = {
     "geometry": "benchmarks/bench_geometry.py",
     "gpu-cpu": "benchmarks/bench_gpu.py",
     "gpu-h200": "benchmarks/bench_gpu.py",
+    "gpu-host-dry": "benchmarks/profile_gpu_host.py",
     "gpu-host-h200": "benchmarks/profile_gpu_host.py",
     "sass-colour": "benchmarks/sass_colour.py",
     "sass-demosaic": "benchmarks/sass_demosaic.py",

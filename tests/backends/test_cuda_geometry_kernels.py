@@ -242,10 +242,12 @@ def test_develop_device_cuda_under_simulator(tiny_dng: Path, tmp_path: Path) -> 
 
 
 def test_develop_api_refuses_cuda_without_a_device(monkeypatch: pytest.MonkeyPatch) -> None:
+    from imageform._cuda import _launch
     from imageform.errors import InvalidInputError
     from imageform.io import RawImage, develop
 
     monkeypatch.setenv("IMAGEFORM_DISABLE_CUDA", "1")
+    monkeypatch.setattr(_launch, "_USE", [None])  # read again (once), put back after
     raw = RawImage(
         mosaic=np.full((4, 4), 1000, np.uint16),
         black_level=np.zeros((2, 2)),

@@ -164,6 +164,7 @@ def test_host_arrays_are_not_cuda_arrays() -> None:
 
 def test_disable_switch(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setenv("IMAGEFORM_DISABLE_CUDA", "1")
+    monkeypatch.setattr(_launch, "_USE", [None])  # read again (once), put back after
     assert not _launch.use_cuda()
 
 

@@ -23,6 +23,11 @@ Under numba's simulator (``NUMBA_ENABLE_CUDASIM=1`` set before numba is imported
 code runs on the CPU, one Python thread per CUDA thread: CI tests the kernels that way, with
 stand-in objects that export a ``__cuda_array_interface__`` pointing at host memory.
 ``IMAGEFORM_DISABLE_CUDA=1`` turns the kernels off (the Array-API path runs instead).
+
+The environment switches (``IMAGEFORM_DISABLE_CUDA``, ``IMAGEFORM_DEVICE_CHECKS`` as the
+kernels' dispatch reads it, ``IMAGEFORM_CUDA_FAST_LAUNCH``) are read once, on first use, not
+in every call (an ``os.environ`` lookup costs about a microsecond); a program or test that
+changes one at run time calls :func:`refresh_switches` after.
 """
 
 from __future__ import annotations
@@ -36,11 +41,15 @@ from typing import Any
 
 import numpy as np
 
+from imageform._cuda import _fastlaunch
+from imageform._cuda._fastlaunch import Constants, expand
 from imageform._cuda._libs import is_cupy, is_torch
 
 __all__ = [
+    "Constants",
     "as_device_array",
     "cuda",
+    "device_checks",
     "disable",
     "empty_like",
     "guarded",
@@ -48,6 +57,7 @@ __all__ = [
     "launch_1d",
     "launch_count",
     "launch_rows",
+    "refresh_switches",
     "simulated",
     "status",
     "use_cuda",
@@ -108,22 +118,81 @@ def _available() -> bool:
         return False
 
 
+#: The switches read from the environment once (:func:`refresh_switches`): whether the
+#: kernels may run (None: not read yet), and IMAGEFORM_DEVICE_CHECKS.
+_USE: list[bool | None] = [None]
+_CHECKS: list[bool | None] = [None]
+
+
 def use_cuda() -> bool:
     """Whether imageform's CUDA kernels may run in this process.
 
     False when ``IMAGEFORM_DISABLE_CUDA`` is set or :func:`disable` was called; otherwise
-    True under numba's simulator and when numba finds a CUDA device (checked once, on first
-    use).
+    True under numba's simulator and when numba finds a CUDA device. Checked once, on first
+    use (:func:`refresh_switches` checks again).
     """
-    if _env_on("IMAGEFORM_DISABLE_CUDA") or _DISABLED[0]:
+    if _DISABLED[0]:
         return False
-    if simulated():
-        return True
-    return _available()
+    on = _USE[0]
+    if on is None:
+        on = _USE[0] = not _env_on("IMAGEFORM_DISABLE_CUDA") and (simulated() or _available())
+    return on
+
+
+def device_checks() -> bool:
+    """Whether ``IMAGEFORM_DEVICE_CHECKS`` asks for the value checks on device arrays.
+
+    The kernels' dispatch reads it here (once, :func:`refresh_switches`), not through
+    :func:`imageform._backend.reads_values` in every call.
+    """
+    on = _CHECKS[0]
+    if on is None:
+        on = _CHECKS[0] = _env_on("IMAGEFORM_DEVICE_CHECKS")
+    return on
+
+
+def refresh_switches() -> None:
+    """Read the environment switches again (after a change of ``os.environ`` at run time).
+
+    ``IMAGEFORM_DISABLE_CUDA``, ``IMAGEFORM_DEVICE_CHECKS`` and ``IMAGEFORM_CUDA_FAST_LAUNCH``
+    are read once, on first use, so that a call does not pay for reading them; tests and
+    benchmarks that switch the kernels off for a while (``bench_gpu.py``'s Array-API rows)
+    call this after setting and after restoring the variable.
+    """
+    _USE[0] = None
+    _CHECKS[0] = None
+    _FAST[0] = None
 
 
 _is_torch = is_torch
 _is_cupy = is_cupy
+
+#: Whether ``meta`` tensors count as CUDA tensors: only benchmarks/profile_gpu_host.py
+#: ``--dry`` sets it, to drive the dispatch down to a stub launch without a GPU.
+_META_AS_CUDA = False
+
+#: What :func:`is_cuda_array` knows of a type: host (never a CUDA array), a PyTorch tensor,
+#: a CuPy array, or another type (its ``__cuda_array_interface__`` is asked).
+_HOST, _TORCH, _CUPY, _OTHER = 0, 1, 2, 3
+_KINDS: dict[type, int] = {}
+# a tuple, not a union of types: torch.compile traces this test (a union is an error there)
+_HOST_TYPES = (np.ndarray, np.generic, float, int, complex, bool, str, list, tuple)
+
+
+def _kind_of(t: type) -> int:
+    torch = sys.modules.get("torch")
+    cupy = sys.modules.get("cupy")
+    if issubclass(t, _HOST_TYPES):
+        k = _HOST
+    elif torch is not None and issubclass(t, torch.Tensor):
+        k = _TORCH
+    elif cupy is not None and issubclass(t, cupy.ndarray):
+        k = _CUPY
+    else:
+        k = _OTHER
+    if torch is None or not torch.compiler.is_compiling():
+        _KINDS[t] = k  # not while torch.compile traces (a global mutation breaks the graph)
+    return k
 
 
 def _is_sim_array(x: object) -> bool:
@@ -134,22 +203,32 @@ def is_cuda_array(x: object) -> bool:
     """Whether ``x`` lives in CUDA device memory (PyTorch CUDA, CuPy, ``__cuda_array_interface__``).
 
     NumPy arrays, CPU or ``meta`` tensors and tensors being traced by ``torch.compile``
-    answer False. Under the simulator its own device arrays answer True too.
+    answer False. Under the simulator its own device arrays answer True too. One dictionary
+    lookup of the type decides which test applies.
     """
-    if isinstance(x, np.ndarray | np.generic | float | int | complex | bool):
-        return False
-    if _is_torch(x):
-        import torch
-
+    t = type(x)
+    kind = _KINDS.get(t)
+    if kind is None:
+        kind = _kind_of(t)
+    if kind == _TORCH:
         # inside torch.compile tracing the tensor is a stand-in without memory: the traced
         # Array-API path runs (and fuses) instead
-        return x.device.type == "cuda" and not torch.compiler.is_compiling()  # type: ignore[attr-defined]
-    if _is_cupy(x) or _is_sim_array(x):
+        if x.is_cuda or (_META_AS_CUDA and x.is_meta):  # type: ignore[attr-defined]
+            return not _compiling()
+        return False
+    if kind == _HOST:
+        return False
+    if kind == _CUPY or _is_sim_array(x):
         return True
     try:
         return isinstance(x.__cuda_array_interface__, dict)  # type: ignore[attr-defined]
     except Exception:
         return False
+
+
+def _compiling() -> bool:
+    """Whether ``torch.compile`` is tracing (PyTorch imported: a tensor was seen)."""
+    return bool(sys.modules["torch"].compiler.is_compiling())
 
 
 def _interface(x: Any) -> dict[str, Any]:
@@ -212,15 +291,19 @@ def empty_like(x: Any, shape: Any = None, dtype: Any = None) -> Any:
     name, or the library's own dtype). PyTorch gives a tensor, CuPy an array, anything else
     (and the simulator's stand-ins) a numba device array.
     """
+    t = type(x)
+    kind = _KINDS.get(t)
+    if kind is None:
+        kind = _kind_of(t)
+    if kind == _TORCH:
+        torch = sys.modules["torch"]
+        tdt = x.dtype if dtype is None else _TORCH_DTYPES.get(dtype)
+        if tdt is None:
+            tdt = dtype if isinstance(dtype, torch.dtype) else getattr(torch, np.dtype(dtype).name)
+            _TORCH_DTYPES[dtype] = tdt
+        return torch.empty(x.shape if shape is None else shape, dtype=tdt, device=x.device)
     shp = tuple(int(s) for s in (x.shape if shape is None else shape))
-    if _is_torch(x):
-        import torch
-
-        tdt = x.dtype if dtype is None else dtype
-        if not isinstance(tdt, torch.dtype):
-            tdt = getattr(torch, np.dtype(tdt).name)
-        return torch.empty(shp, dtype=tdt, device=x.device)
-    if _is_cupy(x):
+    if kind == _CUPY:
         import cupy
 
         with x.device:
@@ -228,15 +311,31 @@ def empty_like(x: Any, shape: Any = None, dtype: Any = None) -> Any:
     return cuda().device_array(shp, dtype=_numpy_dtype(x, dtype))
 
 
+#: dtype (a NumPy dtype or name, a PyTorch dtype) -> the PyTorch dtype (:func:`empty_like`)
+_TORCH_DTYPES: dict[Any, Any] = {}
+
 # (library stream handle) -> numba stream object
 _STREAMS: dict[int, Any] = {}
 
 
+def _torch_stream(x: Any) -> int:
+    """Return the handle of PyTorch's current stream on ``x``'s device.
+
+    ``torch._C._cuda_getCurrentRawStream(index)`` (what ``torch.compile``'s generated code
+    calls) is one C call; ``torch.cuda.current_stream(device)`` builds a Stream object
+    (several microseconds). The same handle either way.
+    """
+    torch = sys.modules["torch"]
+    raw = getattr(torch._C, "_cuda_getCurrentRawStream", None)
+    if raw is not None and x.is_cuda:
+        _RAW_STREAM[0] = raw
+        return int(raw(x.get_device()))
+    return int(torch.cuda.current_stream(x.device).cuda_stream)
+
+
 def _stream_handle(x: Any) -> int | None:
     if _is_torch(x):
-        import torch
-
-        return int(torch.cuda.current_stream(x.device).cuda_stream)
+        return _torch_stream(x)
     if _is_cupy(x):
         import cupy
 
@@ -247,6 +346,22 @@ def _stream_handle(x: Any) -> int | None:
     except Exception:
         return None
     return None if s is None else int(s)
+
+
+def _fast_stream(x: Any) -> Any:
+    """:func:`_stream_for` of a fast launch (not simulated): a CUDA tensor's in one C call."""
+    if _RAW_STREAM[0] is not None and x.is_cuda and _KINDS.get(type(x)) == _TORCH:
+        handle = _RAW_STREAM[0](x.get_device())
+        if not handle:  # PyTorch's default stream
+            return 0
+        st = _STREAMS.get(handle)
+        if st is not None:
+            return st
+    return _stream_for(x)
+
+
+#: ``torch._C._cuda_getCurrentRawStream`` once PyTorch has a CUDA tensor here (else None)
+_RAW_STREAM: list[Any] = [None]
 
 
 def _stream_for(x: Any) -> Any:
@@ -286,31 +401,35 @@ _SCALARS = (int, float, bool, np.generic)
 def _launch(kernel: Any, grid: tuple[int, ...], block: tuple[int, ...], args: Any) -> None:
     """Launch ``kernel[grid, block, stream](*args)``, CUDA arrays viewed as device arrays.
 
-    Each argument is looked at once: numbers pass as they are, CUDA arrays of any library
-    become numba device arrays (:func:`as_device_array`; numba's own are passed as they
-    are), the first one names the stream and the device.
+    ``grid`` and ``block``: 3-tuples. A signature that passed the fast launch's check
+    (:mod:`imageform._cuda._fastlaunch`) is launched from its packed arguments; otherwise
+    numba launches: each argument is looked at once, numbers pass as they are,
+    :class:`Constants` as their numbers, CUDA arrays of any library become numba device
+    arrays (:func:`as_device_array`; numba's own are passed as they are), the first one
+    names the stream and the device.
     """
-    sim = simulated()
     key = None
-    if not sim and _fast_on():
-        from imageform._cuda import _fastlaunch
-
-        descs: list[Any] = []
-        key = _fastlaunch.key_of(kernel, args, _SCALARS, descs)
-        run = _fastlaunch.launcher(key)
-        if run is not None:  # checked against numba's own packing (_fastlaunch.prepare)
-            first = next(a for a in args if not isinstance(a, _SCALARS))
-            try:
-                run(kernel[grid, block, _stream_for(first)], args, descs)
-            except Exception:  # never the call's failure: numba's path from now on
-                _fastlaunch.forget(key)
-            else:
-                with _LOCK:
-                    _LAUNCHES[0] += 1
-                return
+    fast = _FAST[0]
+    if fast is None:
+        fast = _fast_on()
+    if fast:
+        got = _fastlaunch.pack_call(kernel, args)
+        if got is not None:
+            key, packed, first = got
+            run = _fastlaunch._READY.get(key)
+            if run is not None:  # checked against numba's own packing (_fastlaunch.prepare)
+                try:
+                    run(grid, block, _fast_stream(first), packed)
+                except Exception:  # never the call's failure: numba's path from now on
+                    _fastlaunch.forget(key)
+                else:
+                    with _LOCK:
+                        _LAUNCHES[0] += 1
+                    return
+    sim = simulated()
     first = None
     dargs = []
-    for a in args:
+    for a in expand(args):
         if not isinstance(a, _SCALARS) and is_cuda_array(a):
             if first is None:
                 first = a
@@ -328,17 +447,23 @@ def _launch(kernel: Any, grid: tuple[int, ...], block: tuple[int, ...], args: An
     config = kernel[grid, block, stream]
     config(*dargs)
     if key is not None:  # the first launch of this signature: check the fast packing once
-        from imageform._cuda import _fastlaunch
-
         _fastlaunch.prepare(key, kernel, config, args, dargs)
 
 
-@cache
-def _fast_on() -> bool:
-    """Fast launches (:mod:`imageform._cuda._fastlaunch`): on, unless turned off; one GPU."""
-    from imageform._cuda import _fastlaunch
+#: Whether fast launches run (None: not decided yet; :func:`refresh_switches`).
+_FAST: list[bool | None] = [None]
 
-    return _fastlaunch.enabled() and len(cuda().gpus) == 1
+
+def _fast_on() -> bool:
+    """Fast launches (:mod:`imageform._cuda._fastlaunch`): on, unless turned off; one GPU.
+
+    Never under the simulator. Decided on the first launch (numba's CUDA module is imported
+    by then).
+    """
+    on = _FAST[0] = (
+        not simulated() and _fastlaunch.enabled() and use_cuda() and len(cuda().gpus) == 1
+    )
+    return on
 
 
 def launch_1d(kernel: Any, n: int, *args: Any) -> None:
@@ -353,7 +478,7 @@ def launch_1d(kernel: Any, n: int, *args: Any) -> None:
     if n <= 0:
         return
     threads = _SIM_THREADS if simulated() else THREADS
-    _launch(kernel, ((int(n) + threads - 1) // threads,), (threads,), args)
+    _launch(kernel, ((int(n) + threads - 1) // threads, 1, 1), (threads, 1, 1), args)
 
 
 def launch_rows(kernel: Any, rows: int, cols: int, *args: Any) -> None:
@@ -369,8 +494,8 @@ def launch_rows(kernel: Any, rows: int, cols: int, *args: Any) -> None:
     if rows <= 0 or cols <= 0:
         return
     bx, by = _SIM_ROW_BLOCK if simulated() else ROW_BLOCK  # a simulated thread: a Python one
-    grid = ((cols + bx - 1) // bx, min((rows + by - 1) // by, _MAX_GRID_Y))
-    _launch(kernel, grid, (bx, by), args)
+    grid = ((cols + bx - 1) // bx, min((rows + by - 1) // by, _MAX_GRID_Y), 1)
+    _launch(kernel, grid, (bx, by, 1), args)
 
 
 #: Kernels (their callers' keys) that have compiled and run once in this process.
@@ -381,6 +506,8 @@ def guarded(key: Any, kernel: Any, size: int | tuple[int, int], *args: Any) -> b
     """Launch; False when the kernel's first compilation failed (the kernels are then off).
 
     ``size``: ``n`` threads (:func:`launch_1d`) or ``(rows, cols)`` (:func:`launch_rows`);
+    ``args``: the kernel's arguments, numbers that are the same in every call optionally
+    grouped as one :class:`Constants` (packed once for the fast launch);
     ``key`` (hashable) names the kernel and what it is compiled for (its dtype). A machine
     whose numba CUDA target lacks its compiler (NVVM) or cannot type a kernel turns the
     kernels off for the process (:func:`disable`, one warning) and the caller runs the
@@ -434,11 +561,12 @@ def _raised_by_numba(exc: BaseException) -> bool:
 
 def status() -> str:
     """One line: whether the kernels run here, on which numba CUDA target, or why not."""
-    if _env_on("IMAGEFORM_DISABLE_CUDA"):
+    on = use_cuda()
+    if not on and _env_on("IMAGEFORM_DISABLE_CUDA"):
         return "off (IMAGEFORM_DISABLE_CUDA)"
     if _DISABLED[0]:
         return f"off ({_DISABLED[0]})"
-    if not use_cuda():
+    if not on:
         return "off (numba finds no CUDA device)"
     c = cuda()
     where = "simulator" if simulated() else str(c.get_current_device().name)

@@ -156,6 +156,8 @@ def _int_scale(x: Any) -> float | None:
 
 def _flat(x: Any, channels: bool = True) -> Any:
     """Return ``x`` as ``(n, 3)`` (``(n,)``: ``channels=False``), a view where it can."""
+    if _launch._is_torch(x):
+        return x.reshape(-1, x.shape[-1]) if channels else x.reshape(-1)
     full = tuple(int(s) for s in x.shape)
     lead = full[:-1] if channels else full
     n = 1
@@ -198,19 +200,24 @@ def supported(x: Any, integers: bool = False) -> bool:
     return _dtype_name(x) is not None or (integers and _int_scale(x) is not None)
 
 
-#: (steps, dtype) -> (names, the numbers as kernel arguments of the dtype)
-_PREPARED: dict[Any, tuple[tuple[str, ...], tuple[Any, ...]]] = {}
+#: (steps, dtype, code-value scale) -> (kernel, its guarded key, the numbers as kernel
+#: arguments of the dtype, packed once for the fast launch)
+_PREPARED: dict[Any, tuple[Any, tuple[Any, ...], _launch.Constants]] = {}
 
 
-def _prepared(steps: Sequence[Step], dtype: str) -> tuple[tuple[str, ...], tuple[Any, ...]]:
-    """:func:`_params` and :func:`_cast` of a chain, computed once per chain and dtype."""
-    key = (tuple(steps), dtype)
+def _prepared(
+    steps: Sequence[Step], dtype: str, scale: float | None
+) -> tuple[Any, tuple[Any, ...], _launch.Constants]:
+    """Return the kernel, key and numbers of a chain (once per chain, dtype and scale)."""
+    key = (tuple(steps), dtype, scale)
     got = _PREPARED.get(key)
     if got is None:
         if len(_PREPARED) > 256:
             _PREPARED.clear()
         names, params = _params(steps)
-        got = _PREPARED[key] = (names, _cast(dtype, params))
+        kernel = _kernel(names, dtype, "cuda", scale)
+        values = _launch.Constants(_cast(dtype, params))
+        got = _PREPARED[key] = (kernel, ("chain", names, dtype, scale), values)
     return got
 
 
@@ -248,17 +255,18 @@ def run_chain(x: Any, steps: Sequence[Step]) -> Any:
 
     Returns a new array of ``x``'s library, device, dtype and shape.
     """
-    dtype, scale = _dtype_name(x), _int_scale(x)
+    name = _dtype_str(x)
+    dtype = name if name in ("float32", "float64") else None
+    scale = INT_SCALE.get(name)
     if dtype is None and scale is None:
         raise TypeError(f"expected a float or uint8/uint16 CUDA array, got dtype {x.dtype}")
     if dtype is None:
         dtype = "float32"  # code values compute in float32 (IMAGE_INTEGER_DTYPE)
-    names, values = _prepared(steps, dtype)
+    kernel, key, values = _prepared(steps, dtype, scale)
     out = _launch.empty_like(x, dtype=dtype if scale is not None else None)
     xf, of = _flat(x), _flat(out)
     n = int(xf.shape[0])
-    kernel = _kernel(names, dtype, "cuda", scale)
-    _run(("chain", names, dtype, scale), kernel, n, xf, of, n, *values)
+    _run(key, kernel, n, xf, of, n, values)
     return out
 
 
@@ -320,15 +328,35 @@ def run_delta_e(x: Any, y: Any, name: str, params: Sequence[float] = ()) -> Any:
     dtype = _dtype_name(x)
     if dtype is None or _dtype_name(y) != dtype:
         raise TypeError("expected two CUDA arrays of one float dtype")
-    if len(params) != DELTA_E[name]:
-        raise ValueError(f"{name} takes {DELTA_E[name]} numbers, got {len(params)}")
-    out = _launch.empty_like(x, shape=tuple(int(s) for s in x.shape)[:-1])
+    kernel, key, vals = _de_prepared(name, dtype, tuple(params))
+    lead = x.shape[:-1] if _launch._is_torch(x) else tuple(int(s) for s in x.shape)[:-1]
+    out = _launch.empty_like(x, shape=lead)
     xf, yf = _flat(x), _flat(y)
     n = int(xf.shape[0])
     of = _flat(out, channels=False)
-    vals = _cast(dtype, params) if params else (0.0,)
-    _run(("de", name, dtype), _de_kernel(name, dtype), n, xf, yf, of, n, *vals)
+    _run(key, kernel, n, xf, yf, of, n, vals)
     return out
+
+
+#: (ΔE name, dtype, its parameters) -> (kernel, its guarded key, the parameters as kernel
+#: arguments of the dtype)
+_DE_PREPARED: dict[Any, tuple[Any, tuple[Any, ...], _launch.Constants]] = {}
+
+
+def _de_prepared(
+    name: str, dtype: str, params: tuple[float, ...]
+) -> tuple[Any, tuple[Any, ...], _launch.Constants]:
+    """Return the kernel, key and numbers of a ΔE (once per name, dtype and parameters)."""
+    key = (name, dtype, params)
+    got = _DE_PREPARED.get(key)
+    if got is None:
+        if len(params) != DELTA_E[name]:
+            raise ValueError(f"{name} takes {DELTA_E[name]} numbers, got {len(params)}")
+        if len(_DE_PREPARED) > 256:
+            _DE_PREPARED.clear()
+        vals = _launch.Constants(_cast(dtype, params) if params else (0.0,))
+        got = _DE_PREPARED[key] = (_de_kernel(name, dtype), ("de", name, dtype), vals)
+    return got
 
 
 def run_delta_e_twin(x: np.ndarray, y: np.ndarray, name: str, params: Sequence[float] = ()) -> Any:

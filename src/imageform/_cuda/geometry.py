@@ -36,6 +36,7 @@ from __future__ import annotations
 
 import functools
 import math
+import struct
 import sys
 from typing import Any
 
@@ -67,15 +68,16 @@ def on_cuda(*arrays: object, floats: bool = True) -> bool:
     (:func:`~imageform._cuda._launch.use_cuda`), and (``floats``) the first one float32 or
     float64. Importing this module imports no GPU library: this check is cheap on NumPy.
     """
-    if not arrays or not all(_launch.is_cuda_array(a) for a in arrays):
+    if not arrays:
         return False
-    # autograd and torch.compile keep the Array-API path (differentiable, traceable)
-    if any(getattr(a, "requires_grad", False) for a in arrays):
-        return False
+    for a in arrays:
+        # autograd and torch.compile keep the Array-API path (differentiable, traceable)
+        if not _launch.is_cuda_array(a) or getattr(a, "requires_grad", False):
+            return False
     torch = sys.modules.get("torch")
     if torch is not None and torch.compiler.is_compiling():
         return False
-    if floats and not str(getattr(arrays[0], "dtype", "")).endswith(("float32", "float64")):
+    if floats and _dt(arrays[0]) not in ("float32", "float64"):
         return False
     return _launch.use_cuda()
 
@@ -268,17 +270,48 @@ def _kernels() -> Any:
     return k
 
 
+#: a library's dtype object -> its name without the library's prefix
+_DTYPE_NAMES: dict[Any, str] = {}
+
+
 def _dt(x: Any) -> str:
-    """Return the dtype's name (a :func:`~imageform._cuda._launch.guarded` key)."""
-    return str(x.dtype)
+    """Return the dtype's name (``"float32"``; a :func:`~imageform._cuda._launch.guarded` key)."""
+    dt = getattr(x, "dtype", None)
+    try:
+        return _DTYPE_NAMES[dt]
+    except KeyError:
+        name = _DTYPE_NAMES[dt] = str("" if dt is None else dt).removeprefix("torch.")
+        return name
+    except TypeError:  # pragma: no cover - an unhashable dtype
+        return str(dt).removeprefix("torch.")
 
 
-def _coeffs(coeffs: Any) -> tuple[float, ...]:
-    """Return the eight Brown-Conrady coefficients as Python floats (zeros for ``None``)."""
-    if coeffs is None:
-        return (0.0,) * 8
-    c = tuple(float(v) for v in coeffs)
-    return c + (0.0,) * (8 - len(c))
+#: the coefficients' float64 bytes -> their kernel arguments (:func:`_coeffs`)
+_COEFFS: dict[Any, _launch.Constants] = {}
+
+
+def _coeffs(coeffs: Any) -> _launch.Constants:
+    """Return the eight Brown-Conrady coefficients as kernel arguments (zeros for ``None``).
+
+    Python floats, packed once per set of coefficients for the fast launch (a model's
+    coefficients are the same from call to call); looked up by their float64 bytes (a
+    zero's sign included, so the kernel gets the very numbers).
+    """
+    c = (0.0,) * 8 if coeffs is None else tuple(coeffs)
+    try:
+        key: Any = struct.pack(f"{len(c)}d", *c)
+    except struct.error:  # not numbers: float() says why
+        key = None
+    got = None if key is None else _COEFFS.get(key)
+    if got is None:
+        vals = tuple(float(v) for v in c)
+        vals += (0.0,) * (8 - len(vals))
+        got = _launch.Constants(vals)
+        if key is not None:
+            if len(_COEFFS) > 256:
+                _COEFFS.clear()
+            _COEFFS[key] = got
+    return got
 
 
 def project(pts: Any, K: Any, R: Any, t: Any, coeffs: Any = None) -> tuple[Any, Any] | None:
@@ -292,7 +325,7 @@ def project(pts: Any, K: Any, R: Any, t: Any, coeffs: Any = None) -> tuple[Any, 
     n = int(pts.shape[0])
     uv = empty_like(pts, (n, 2))
     valid = empty_like(pts, (n,), np.bool_)
-    args = (pts, K, R, t, *_coeffs(coeffs), coeffs is not None, uv, valid)
+    args = (pts, K, R, t, _coeffs(coeffs), coeffs is not None, uv, valid)
     if not guarded(("project", _dt(pts)), _kernels().project, n, *args):
         return None
     return uv, valid
@@ -301,7 +334,7 @@ def project(pts: Any, K: Any, R: Any, t: Any, coeffs: Any = None) -> tuple[Any, 
 def distort(xy: Any, coeffs: Any) -> Any:
     """Brown-Conrady on ``(N, 2)`` device points; one launch."""
     out = empty_like(xy)
-    args = (xy, *_coeffs(coeffs), out)
+    args = (xy, _coeffs(coeffs), out)
     if not guarded(("distort", _dt(xy)), _kernels().distort, int(xy.shape[0]), *args):
         return None
     return out
@@ -312,7 +345,7 @@ def undistort(xy: Any, coeffs: Any, max_iter: int, tol: float) -> tuple[Any, Any
     n = int(xy.shape[0])
     out = empty_like(xy, (n, 2))
     ok = empty_like(xy, (n,), np.bool_)
-    args = (xy, *_coeffs(coeffs), int(max_iter), float(tol), out, ok)
+    args = (xy, _coeffs(coeffs), int(max_iter), float(tol), out, ok)
     if not guarded(("undistort", _dt(xy)), _kernels().undistort, n, *args):
         return None
     return out, ok
@@ -339,7 +372,7 @@ def undistort_image(
     b, c = int(img.shape[0]), int(img.shape[3])
     ho, wo = out_hw
     out = empty_like(img, (b, ho, wo, c))
-    args = (img, Kn, Km, *_coeffs(coeffs), float(fill), out)
+    args = (img, Kn, Km, _coeffs(coeffs), float(fill), out)
     key = ("undistort_image", _dt(img))
     if not guarded(key, _kernels().undistort_image, (ho, wo), *args):
         return None

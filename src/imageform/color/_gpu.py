@@ -24,34 +24,60 @@ from typing import Any
 
 import numpy as np
 
+# imports no GPU library and not numba (numba's CUDA target is imported on first launch)
+from imageform._cuda import _launch
+
 __all__ = ["Step", "adapt", "convert", "delta_e", "gains", "transfer", "wants"]
 
 #: A kernel step: its name in :data:`imageform._cuda.scalar.NAMES` and its numbers
 #: (``("identity", ())``: nothing to do).
 Step = tuple[str, tuple[float, ...]]
 
+#: :mod:`imageform._cuda.color`, imported on the first CUDA array (:func:`_kernels`)
+_CC: Any = None
+
+
+def _kernels() -> Any:
+    """Return :mod:`imageform._cuda.color` (imported once, when a CUDA array first comes)."""
+    global _CC
+    if _CC is None:
+        from imageform._cuda import color
+
+        _CC = color
+    return _CC
+
 
 def wants(*arrays: object, integers: bool = False) -> bool:
     """Whether every array is a CUDA array the kernels take (cheap for NumPy input).
 
-    ``integers``: uint8/uint16 code values too (encoded RGB images).
+    A CUDA array (:func:`imageform._cuda._launch.is_cuda_array`) of float32/float64 (and,
+    with ``integers``, uint8/uint16 code values: encoded RGB images), shape ``(..., 3)``,
+    not recording gradients (autograd keeps the Array-API path), and the kernels usable.
     """
-    from imageform._cuda import _launch
-
-    if not all(_launch.is_cuda_array(a) for a in arrays):
+    for a in arrays:
+        if not _launch.is_cuda_array(a):
+            return False
+    if not _launch.use_cuda():
         return False
-    from imageform._cuda.color import supported
+    cc = _CC or _kernels()
+    for a in arrays:
+        shape = a.shape if _launch._is_torch(a) else tuple(getattr(a, "shape", ()))  # type: ignore[attr-defined]
+        if not shape or shape[-1] != 3 or getattr(a, "requires_grad", False):
+            return False
+        name = cc._dtype_str(a)
+        if name not in _FLOATS and not (integers and name in cc.INT_SCALE):
+            return False
+    return True
 
-    return all(supported(a, integers) for a in arrays)
+
+_FLOATS = frozenset({"float32", "float64"})
 
 
 def _guard(fn: Callable[..., Any], *args: Any) -> Any:
     """``fn(*args)``, or None when the kernels turned out unusable here (then switched off)."""
-    from imageform._cuda.color import KernelUnavailable
-
     try:
         return fn(*args)
-    except KernelUnavailable:
+    except (_CC or _kernels()).KernelUnavailable:
         return None
 
 
@@ -59,10 +85,12 @@ def _checks_on(x: object) -> bool:
     """Whether the public function's own value checks run first (IMAGEFORM_DEVICE_CHECKS=1).
 
     Only for PyTorch and CuPy arrays (the array path's checks take them); other CUDA arrays
-    are checked for shape and dtype only.
+    are checked for shape and dtype only. The switch is read once
+    (:func:`imageform._cuda._launch.device_checks`).
     """
+    if not _launch.device_checks():
+        return False
     from imageform._backend import reads_values
-    from imageform._cuda import _launch
 
     return (_launch._is_torch(x) or _launch._is_cupy(x)) and reads_values(x)
 
@@ -83,23 +111,20 @@ def convert(
         return None
     if _checks_on(image):
         check()
-    from imageform._cuda.color import run_chain
-
-    return _guard(run_chain, image, chain)
+    return _guard((_CC or _kernels()).run_chain, image, chain)
 
 
 def _elementwise(values: Any) -> bool:
     """Tell whether a CUDA array's elements can be read three at a time (size % 3 == 0)."""
-    from imageform._cuda import _launch
-    from imageform._cuda.color import _dtype_name, _int_scale
-
     if not (_launch.is_cuda_array(values) and _launch.use_cuda()):
         return False
     if _launch._is_torch(values) and values.requires_grad:
         return False
+    cc = _CC or _kernels()
     shape = tuple(int(s) for s in getattr(values, "shape", ()))
     size = int(np.prod(shape)) if shape else 1
-    known = _dtype_name(values) is not None or _int_scale(values) is not None
+    name = cc._dtype_str(values)
+    known = name in _FLOATS or name in cc.INT_SCALE
     return known and size > 0 and size % 3 == 0
 
 
@@ -115,9 +140,7 @@ def transfer(values: Any, step: Step, what: str = "values") -> Any:
         from imageform._validate import as_image_strict
 
         as_image_strict(values, what, channels=None, range_check=not what.startswith("linear"))
-    from imageform._cuda.color import run_elementwise
-
-    return _guard(run_elementwise, values, [step])
+    return _guard((_CC or _kernels()).run_elementwise, values, [step])
 
 
 def adapt(xyz: Any, mat: np.ndarray) -> Any:
@@ -128,9 +151,11 @@ def adapt(xyz: Any, mat: np.ndarray) -> Any:
         from imageform._validate import as_points_strict
 
         as_points_strict(xyz, "xyz", 3)
-    from imageform._cuda.color import run_chain
-
-    return _guard(run_chain, xyz, [("matrix", tuple(np.asarray(mat, float).ravel().tolist()))])
+    return _guard(
+        (_CC or _kernels()).run_chain,
+        xyz,
+        [("matrix", tuple(np.asarray(mat, float).ravel().tolist()))],
+    )
 
 
 def gains(image: Any, g: object, decode: Step, encode: Step) -> Any:
@@ -150,10 +175,8 @@ def gains(image: Any, g: object, decode: Step, encode: Step) -> Any:
         from imageform._validate import as_image_strict
 
         as_image_strict(image, "image", channels=3)
-    from imageform._cuda.color import run_chain
-
     steps = [s for s in (decode, ("gains", tuple(ga.tolist())), encode) if s[0] != "identity"]
-    return _guard(run_chain, image, steps)
+    return _guard((_CC or _kernels()).run_chain, image, steps)
 
 
 def delta_e(lab1: Any, lab2: Any, name: str, params: Sequence[float]) -> Any:
@@ -164,19 +187,27 @@ def delta_e(lab1: Any, lab2: Any, name: str, params: Sequence[float]) -> Any:
     """
     if not wants(lab1, lab2):
         return None
-    if tuple(lab1.shape) != tuple(lab2.shape) or str(lab1.dtype) != str(lab2.dtype):
+    if type(lab1) is not type(lab2) or lab1.dtype != lab2.dtype:
         return None
-    if type(lab1) is not type(lab2):
+    if tuple(lab1.shape) != tuple(lab2.shape):
         return None
     if _checks_on(lab1):
         from imageform._validate import as_points_strict, check_magnitude
 
         for x, what in ((lab1, "lab1"), (lab2, "lab2")):
             check_magnitude(as_points_strict(x, what, 3), what, x.__array_namespace__())
-    from imageform._cuda.color import _dtype_name, run_delta_e
-
-    ps = list(params)
+    ps = tuple(params)
     if name == "de00":
-        tiny = float(np.finfo(_dtype_name(lab1) or "float64").smallest_normal) ** 0.5
-        ps.append(tiny)
-    return _guard(run_delta_e, lab1, lab2, name, ps)
+        ps += (_tiny(_CC._dtype_str(lab1)),)
+    return _guard((_CC or _kernels()).run_delta_e, lab1, lab2, name, ps)
+
+
+#: dtype name -> the square root of its smallest normal number (CIEDE2000's guard)
+_TINY: dict[str, float] = {}
+
+
+def _tiny(dtype: str) -> float:
+    got = _TINY.get(dtype)
+    if got is None:
+        got = _TINY[dtype] = float(np.finfo(dtype).smallest_normal) ** 0.5
+    return got

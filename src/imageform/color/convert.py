@@ -40,6 +40,7 @@ RGB spaces with different whites (ProPhoto's D50, the others' D65) are joined th
 
 from __future__ import annotations
 
+import sys
 from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -234,12 +235,45 @@ def path(src: str, dst: str) -> list[Edge]:
     s, d = _space(src, "src"), _space(dst, "dst")
     found = _PATHS.get((s, d))
     if found is None:
-        found = _PATHS[s, d] = tuple(_shortest(s, d))
+        found = tuple(_shortest(s, d))
+        if not _tracing():
+            _PATHS[s, d] = found
     return list(found)
+
+
+def _tracing() -> bool:
+    """Tell whether ``torch.compile`` is tracing (no cache is filled then).
+
+    A global dict changed while tracing breaks the graph.
+    """
+    torch = sys.modules.get("torch")
+    return torch is not None and bool(torch.compiler.is_compiling())
 
 
 #: Routes found by :func:`path` (the graph is fixed: each pair is searched once).
 _PATHS: dict[tuple[str, str], tuple[Edge, ...]] = {}
+
+#: (src, dst) -> (route, the parameters it accepts, its default white) (:func:`_route`)
+_ROUTES: dict[tuple[str, str], tuple[list[Edge], frozenset[str], str]] = {}
+
+
+def _route(s: str, d: str) -> tuple[list[Edge], frozenset[str], str]:
+    """Return the route between canonical names, its parameters and its default white.
+
+    :func:`path`'s route, the parameters it accepts (``alpha`` included) and the white it
+    defaults to (its RGB space's own, else D65), computed once per pair.
+    """
+    got = _ROUTES.get((s, d))
+    if got is None:
+        route = path(s, d)
+        allowed = frozenset({p for e in route for p in e.params} | set(_GLOBAL_PARAMS))
+        rgb = [
+            k for k in RGB_SPACES for e in route if e.src == f"linear_{k}" or e.dst == f"linear_{k}"
+        ]
+        got = (route, allowed, rgb[0] if rgb else "D65")
+        if not _tracing():
+            _ROUTES[s, d] = got
+    return got
 
 
 def _shortest(s: str, d: str) -> list[Edge]:
@@ -372,23 +406,21 @@ def convert(
         _deprecate.warn("imageform.color.convert(bits=...)", "use bit_depth= instead")
         params["bit_depth"] = params.pop("bits")
     s, d = _space(src, "src"), _space(dst, "dst")
-    route = path(s, d)
-    allowed = {p for e in route for p in e.params} | set(_GLOBAL_PARAMS)
-    extra = sorted(set(params) - allowed)
-    if extra:
-        names = ", ".join(sorted(allowed)) or "none"
-        raise UnknownOptionError(
-            f"parameter(s) {', '.join(extra)} not used converting {s} -> {d}; valid here: {names}"
-        )
+    route, allowed, white = _route(s, d)
+    if params:
+        extra = sorted(set(params) - allowed)
+        if extra:
+            names = ", ".join(sorted(allowed)) or "none"
+            raise UnknownOptionError(
+                f"parameter(s) {', '.join(extra)} not used converting {s} -> {d}; "
+                f"valid here: {names}"
+            )
     p = dict(params)
     alpha = check_name(p.pop("alpha", "reject"), ("reject", "keep"), "alpha handling")
     if "method" in allowed:
         p["method"] = check_name(p.get("method", "rec601"), gray.GRAY_METHODS, "grey method")
     if "white" in allowed and p.get("white") is None:
-        rgb = [
-            k for k in RGB_SPACES for e in route if e.src == f"linear_{k}" or e.dst == f"linear_{k}"
-        ]
-        p["white"] = rgb[0] if rgb else "D65"
+        p["white"] = white
 
     if dtype is not None and not _is_uint8(dtype):
         raise InvalidInputError(f"expected dtype None or 'uint8', got {describe(dtype)}")
@@ -506,12 +538,11 @@ def _kernel_steps(route: list[Edge], p: dict[str, Any]) -> list[tuple[str, tuple
     and hashable parameters are computed once per process (a GPU call does no more Python
     work than it must before its launch).
     """
+    key: Any = (tuple(route), tuple(sorted(p.items())))
     try:
-        key: Any = (tuple(route), tuple(sorted(p.items())))
-        hash(key)
+        steps = _STEPS.get(key)
     except TypeError:  # a white given as an array: computed each time
         return _steps_of(route, p)
-    steps = _STEPS.get(key)
     if steps is None:
         if len(_STEPS) > 256:
             _STEPS.clear()

@@ -176,7 +176,18 @@ class BrownConrady:
     @property
     def coeffs(self) -> tuple[float, ...]:
         """``(k1, k2, p1, p2, k3, k4, k5, k6)`` as floats (OpenCV's ``distCoeffs`` order)."""
-        return tuple(float(v) for v in astuple(self))
+        # the fields read directly: dataclasses.astuple deep-copies each one (a dozen Python
+        # calls in every distortion call on a GPU, whose host time is the call's)
+        return (
+            float(self.k1),
+            float(self.k2),
+            float(self.p1),
+            float(self.p2),
+            float(self.k3),
+            float(self.k4),
+            float(self.k5),
+            float(self.k6),
+        )
 
     @classmethod
     def from_opencv(cls, dist_coeffs: ArrayLike) -> BrownConrady:
