@@ -170,7 +170,9 @@ def test_quad_kernels_know_the_launch_block(monkeypatch: pytest.MonkeyPatch) -> 
     monkeypatch.setattr(_launch, "_launch", lambda k, grid, block, args: seen.append(block))
     for rows, cols in ((2, 2), (540, 960), (1080, 1920), (3, 10**6), (10**6, 3)):
         _launch.launch_rows(None, rows, cols)
-    assert set(seen) == {demosaic_quads.block_shape()}
+    # the launcher passes (x, y, z) blocks (z = 1) since the one-pass launch
+    assert {tuple(b[:2]) for b in seen} == {demosaic_quads.block_shape()}
+    assert all(len(b) == 2 or b[2] == 1 for b in seen)
     assert demosaic_quads.block_shape()[0] == 32  # a warp along a row: its barrier is a warp's
 
 
