@@ -11,14 +11,20 @@ agreement to 1e-9.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from imageform._kernels.jit import njit, run_tasks
 
 __all__ = ["refine_pose_batch"]
 
+#: Options of the helpers, which only compiled code calls: no Python wrapper and no C
+#: callback is built, optimised and compiled to machine code for them (as ``ransac._OPTS``).
+_OPTS = {"no_cfunc_wrapper": True, "no_cpython_wrapper": True}
 
-@njit
+
+@njit(**_OPTS)
 def _cost(R, t, X, uv, K, w):  # type: ignore[no-untyped-def]  # pragma: no cover
     c = 0.0
     for i in range(X.shape[0]):
@@ -36,7 +42,7 @@ def _cost(R, t, X, uv, K, w):  # type: ignore[no-untyped-def]  # pragma: no cove
     return c
 
 
-@njit
+@njit(**_OPTS)
 def _rodrigues_left(d0, d1, d2, R, out):  # type: ignore[no-untyped-def]  # pragma: no cover
     """Write ``exp([d]x) R`` into ``out``, in scalars.
 
@@ -47,8 +53,8 @@ def _rodrigues_left(d0, d1, d2, R, out):  # type: ignore[no-untyped-def]  # prag
     if th2 < 1e-12:
         a, b = 1.0 - th2 / 6.0, 0.5 - th2 / 24.0
     else:
-        th = np.sqrt(th2)
-        a, b = np.sin(th) / th, (1.0 - np.cos(th)) / th2
+        th = math.sqrt(th2)
+        a, b = math.sin(th) / th, (1.0 - math.cos(th)) / th2
     # E = I + a S + b S @ S, S = [d]x; S @ S = d d^T - |d|^2 I
     e00 = 1.0 + b * (d0 * d0 - th2)
     e11 = 1.0 + b * (d1 * d1 - th2)
@@ -63,7 +69,7 @@ def _rodrigues_left(d0, d1, d2, R, out):  # type: ignore[no-untyped-def]  # prag
         out[2, j] = e20 * r0 + e21 * r1 + e22 * r2
 
 
-@njit
+@njit(**_OPTS)
 def _solve(M, g, x):  # type: ignore[no-untyped-def]  # pragma: no cover
     """Solve ``M x = g`` into ``x`` (``M`` overwritten).
 
@@ -113,24 +119,32 @@ def refine_pose_batch(
 
 @njit(nogil=True)
 def _refine_tasks(b0, b1, R, t, X, uv, K, w, max_iter, tol, rms):  # type: ignore[no-untyped-def]  # pragma: no cover
-    # problems b0 .. b1 - 1
+    # problems b0 .. b1 - 1; scratch allocated once, copies and fills in element loops (no
+    # array expressions, slice assignments or .copy(): each costs compilation on a first run)
     N = X.shape[1]
     fx, s, fy = K[0, 0], K[0, 1], K[1, 1]
+    Rb = np.empty((3, 3))
+    tb = np.empty(3)
+    Rn = np.empty((3, 3))
+    tn = np.empty(3)
+    A = np.empty((6, 6))
+    M = np.empty((6, 6))
+    g = np.empty(6)
+    Ju = np.empty(6)
+    Jv = np.empty(6)
+    step = np.empty(6)
     for b in range(b0, b1):
-        Rb = R[b].copy()
-        tb = t[b].copy()
-        Rn = np.empty((3, 3))
-        tn = np.empty(3)
+        for j in range(3):
+            tb[j] = t[b, j]
+            for k in range(3):
+                Rb[j, k] = R[b, j, k]
         cost = _cost(Rb, tb, X[b], uv[b], K, w[b])
         lam = 1e-3
-        A = np.empty((6, 6))
-        g = np.empty(6)
-        Ju = np.empty(6)
-        Jv = np.empty(6)
-        step = np.empty(6)
         for _it in range(max_iter):
-            A[:, :] = 0.0
-            g[:] = 0.0
+            for j in range(6):
+                g[j] = 0.0
+                for k in range(6):
+                    A[j, k] = 0.0
             for i in range(N):
                 wi = w[b, i]
                 if wi == 0.0:
@@ -161,15 +175,16 @@ def _refine_tasks(b0, b1, R, t, X, uv, K, w, max_iter, tol, rms):  # type: ignor
             for j in range(6):
                 for k in range(j):
                     A[j, k] = A[k, j]
-            M = A.copy()
             for j in range(6):
+                for k in range(6):
+                    M[j, k] = A[j, k]
                 M[j, j] += lam * (A[j, j] if A[j, j] != 0.0 else 1.0)
             _solve(M, g, step)  # the step is minus the solution
             _rodrigues_left(-step[0], -step[1], -step[2], Rb, Rn)
             for j in range(3):
                 tn[j] = tb[j] - step[3 + j]
             costn = _cost(Rn, tn, X[b], uv[b], K, w[b])
-            if np.isfinite(costn) and costn <= cost:
+            if math.isfinite(costn) and costn <= cost:
                 gain = cost - costn
                 for j in range(3):
                     tb[j] = tn[j]
@@ -191,4 +206,4 @@ def _refine_tasks(b0, b1, R, t, X, uv, K, w, max_iter, tol, rms):  # type: ignor
         wsum = 0.0
         for i in range(N):
             wsum += w[b, i]
-        rms[b] = np.sqrt(cost / max(wsum, 1.0))
+        rms[b] = math.sqrt(cost / max(wsum, 1.0))

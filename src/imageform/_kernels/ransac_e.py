@@ -667,7 +667,7 @@ def _refit_front(E, p1, p2, q1, q2, K1i, K2i, thr, factor, max_iter, rounds):  #
             if _in_front(R, t0, t1, t2, q1[i, 0], q1[i, 1], q2[i, 0], q2[i, 1], np.inf):
                 sel2[k] = i
                 k += 1
-        if k < 5 or _same(sel, m, sel2, k):
+        if k < 5 or _same(sel, m, sel2, np.int64(k)):  # not Literal[int](0): one compilation
             break
         m = k
         for j in range(m):

@@ -103,7 +103,10 @@ def pose_from_essential(E, q1, q2, mask, dmax, R_out, t_out, X_out, good_out):  
             m += 1
     U = np.empty((3, 3))
     Rs = np.empty((2, 3, 3))
-    bi, bs, _ = _cheirality(E, q1, q2, idx, m, dmax, U, Rs)
+    # np.int64(m): typed from its first assignment, m is Literal[int](0) until numba's type
+    # inference reaches the loop's increment, and a kernel called with it is compiled for
+    # that literal too (a whole second compilation of the cheirality vote, about a second)
+    bi, bs, _ = _cheirality(E, q1, q2, idx, np.int64(m), dmax, U, Rs)
     for a in range(3):
         for b in range(3):
             R_out[a, b] = Rs[bi, a, b]
