@@ -1,10 +1,13 @@
-"""Static size of the colour chain kernels in Hopper machine code (sm_90), without a GPU.
+"""Static size of the colour kernels in Hopper machine code (sm_90), without a GPU.
 
-For each route the CUDA kernel of :mod:`imageform._cuda.color` is compiled to PTX by numba
-(NVVM: a CUDA toolkit's ``libnvvm``), to machine code by ``ptxas -arch=sm_90 -O3``, and
-disassembled by ``cuobjdump -sass`` (it needs ``nvdisasm``); the table counts instructions,
-special-function-unit instructions (``MUFU``) and calls (slow paths of ``powf``, IEEE
-division, ...). A static count is not a timing: the kernels of a pointwise conversion are
+For each route (and each colour difference) the CUDA kernel of :mod:`imageform._cuda.color`
+is compiled to PTX by numba (NVVM: a CUDA toolkit's ``libnvvm``), to machine code by
+``ptxas -arch=sm_90 -O3``, and disassembled by ``cuobjdump -sass`` (it needs ``nvdisasm``);
+the table counts instructions, the kernel body's instructions (``body``: before the first
+subroutine that a ``CALL`` enters, padding ``NOP`` excluded: the slow paths of IEEE
+division, ``sqrt`` and ``sinf``'s large-argument reduction live in those subroutines, which
+a pixel of ordinary values never enters), special-function-unit instructions (``MUFU``) and
+calls. A static count is not a timing: the kernels of a pointwise conversion are
 compute-bound at 4K on an H100/H200 when they run a few hundred instructions per pixel, so
 fewer instructions on the path every pixel takes is what this tracks between device runs.
 ``ptxas``, ``cuobjdump`` and ``nvdisasm`` must be on PATH (the pip wheels
@@ -21,6 +24,7 @@ import sys
 import tempfile
 import types
 from pathlib import Path
+from typing import Any
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
@@ -32,41 +36,76 @@ ROUTES = [
     ("prophoto", "luv"),
     ("srgb", "hsv"),
 ]
+#: The colour differences of :data:`imageform._cuda.scalar.DELTA_E`.
+DELTA_E = ["de76", "de94", "decmc", "de00"]
+
+_INSN = re.compile(r"^\s+/\*([0-9a-f]{4,})\*/\s+(.*?)\s*;", re.M)
+_CALL = re.compile(r"CALL\.\S+\s+(0x[0-9a-f]+)")
 
 
-def main() -> None:
+def counts(sass: str) -> tuple[int, int, int, int]:
+    """(instructions, body instructions, MUFU, CALL) of one kernel's SASS listing."""
+    insns = [(int(a, 16), text) for a, text in _INSN.findall(sass)]
+    targets = [int(t, 16) for t in _CALL.findall(sass)]
+    end = min(targets) if targets else max((a for a, _ in insns), default=0) + 1
+    body = sum(1 for a, text in insns if a < end and not text.startswith("NOP"))
+    return len(insns), body, sass.count("MUFU"), sass.count("CALL")
+
+
+def _sass(ptx: str, tmp: Path) -> str:
+    ptx_path, cubin = tmp / "k.ptx", tmp / "k.cubin"
+    ptx_path.write_text(ptx)
+    subprocess.run(["ptxas", "-arch=sm_90", "-O3", str(ptx_path), "-o", str(cubin)], check=True)
+    return subprocess.run(
+        ["cuobjdump", "-sass", str(cubin)], capture_output=True, text=True, check=True
+    ).stdout
+
+
+def rows() -> list[tuple[str, str, tuple[int, int, int, int]]]:
+    """(route or ΔE, dtype, counts) for every route and colour difference, both dtypes."""
     import numba.cuda.dispatcher as d
     import numpy as np
     from numba import cuda
     from numba import types as T
 
     from imageform._cuda import color as cc
+    from imageform._cuda.scalar import DELTA_E as NPARAMS
     from imageform.color.convert import _kernel_steps, path
     from tests.backends.test_cuda_kernels import _with_white
 
     # device functions compile for the current device's compute capability: name one
     d.get_current_device = lambda: types.SimpleNamespace(compute_capability=(9, 0))
-    print("| route | dtype | SASS instructions | MUFU | calls |\n|---|---|---|---|---|")
+    out: list[tuple[str, str, tuple[int, int, int, int]]] = []
+    dtypes: tuple[tuple[str, Any], ...] = (("float32", T.float32), ("float64", T.float64))
     with tempfile.TemporaryDirectory() as tmp:
-        ptx_path, cubin = Path(tmp) / "k.ptx", Path(tmp) / "k.cubin"
         for src, dst in ROUTES:
             route = path(src, dst)
             names, params = cc._params(_kernel_steps(route, _with_white(route, {})))
-            for dt, nb in (("float32", T.float32), ("float64", T.float64)):
+            for dt, nb in dtypes:
                 vals = cc._cast(dt, params)
                 sig = (T.Array(nb, 2, "C"), T.Array(nb, 2, "C"), T.int64) + tuple(
                     T.float32 if isinstance(v, np.float32) else T.float64 for v in vals
                 )
                 kernel = cc._kernel(names, dt, "cuda", None)
-                ptx_path.write_text(cuda.compile_ptx(kernel.py_func, sig, cc=(9, 0))[0])
-                subprocess.run(
-                    ["ptxas", "-arch=sm_90", "-O3", str(ptx_path), "-o", str(cubin)], check=True
-                )
-                sass = subprocess.run(
-                    ["cuobjdump", "-sass", str(cubin)], capture_output=True, text=True, check=True
-                ).stdout
-                n = len(re.findall(r"^\s+/\*[0-9a-f]{4}\*/", sass, re.M))
-                print(f"| {src}→{dst} | {dt} | {n} | {sass.count('MUFU')} | {sass.count('CALL')} |")
+                ptx = cuda.compile_ptx(kernel.py_func, sig, cc=(9, 0))[0]
+                out.append((f"{src}→{dst}", dt, counts(_sass(ptx, Path(tmp)))))
+        for name in DELTA_E:
+            for dt, nb in dtypes:
+                arr = T.Array(nb, 2, "C")
+                # run_delta_e: the numbers in the dtype, or one unused Python float
+                ps = (nb,) * NPARAMS[name] if NPARAMS[name] else (T.float64,)
+                sig = (arr, arr, T.Array(nb, 1, "C"), T.int64, *ps)
+                kernel = cc._de_kernel(name, dt, "cuda")
+                ptx = cuda.compile_ptx(kernel.py_func, sig, cc=(9, 0))[0]
+                out.append((name, dt, counts(_sass(ptx, Path(tmp)))))
+    return out
+
+
+def main() -> None:
+    print("| kernel | dtype | SASS instructions | body | MUFU | calls |")
+    print("|---|---|---|---|---|---|")
+    for name, dt, (n, body, mufu, calls) in rows():
+        print(f"| {name} | {dt} | {n} | {body} | {mufu} | {calls} |")
 
 
 if __name__ == "__main__":
