@@ -106,6 +106,12 @@ def test_twin_convert(src: str, dst: str, params: dict[str, object], dtype: str)
     ref = np.asarray(c.convert(x, src, dst, **params))
     atol, rtol = TOL[dtype]
     assert got.dtype == np.dtype(dtype)
+    if dst == "lch" and dtype == "float32":
+        # a grey's hue is atan2 of float32 rounding noise (undefined, as on the device tests):
+        # the kernels' cube root (scalar._cbrt, ~1 ulp) and NumPy's round a grey's a*, b* to
+        # different noise; its chroma is still compared
+        grey = ref[..., 1] < 1e-3
+        got[grey, 2] = ref[grey, 2]
     np.testing.assert_allclose(got, ref, atol=atol, rtol=rtol)
 
 

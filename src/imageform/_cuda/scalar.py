@@ -47,7 +47,7 @@ def _clip(x, lo, hi):
 def _sdec(v):
     if v <= F(0.040449936):
         return v * F(1.0 / 12.92)
-    return _powp(_clip_lo((v + F(0.055)) * F(1.0 / 1.055), F(1e-30)), F(2.4))
+    return _pow24(_clip_lo((v + F(0.055)) * F(1.0 / 1.055), F(1e-30)))
 
 
 def _senc(x):
@@ -146,7 +146,7 @@ def gains_clip(a, b, c, g0, g1, g2):
 
 def _flab(t):
     if t > F(216.0 / 24389.0):
-        return _powp(t, F(1.0 / 3.0))
+        return _cbrt(t)
     return F(841.0 / 108.0) * t + F(4.0 / 29.0)
 
 
@@ -397,14 +397,14 @@ def _pow7(x):
 
 
 def de00(l1, a1, b1, l2, a2, b2, kl, kc, kh, tiny):
-    c1 = math.sqrt(a1 * a1 + b1 * b1)
-    c2 = math.sqrt(a2 * a2 + b2 * b2)
+    c1 = _sqrt(a1 * a1 + b1 * b1)
+    c2 = _sqrt(a2 * a2 + b2 * b2)
     cb7 = _pow7(F(0.5) * (c1 + c2))
-    g1 = F(1.5) - F(0.5) * math.sqrt(cb7 / (cb7 + F(6103515625.0)))
+    g1 = F(1.5) - F(0.5) * _r7(cb7)
     a1p = g1 * a1
     a2p = g1 * a2
-    c1p = math.sqrt(a1p * a1p + b1 * b1)
-    c2p = math.sqrt(a2p * a2p + b2 * b2)
+    c1p = _sqrt(a1p * a1p + b1 * b1)
+    c2p = _sqrt(a2p * a2p + b2 * b2)
     dl = l2 - l1
     dc = c2p - c1p
     pr = c1p * c2p
@@ -415,12 +415,12 @@ def de00(l1, a1, b1, l2, a2, b2, kl, kc, kh, tiny):
     acute = dot >= F(0.0)
     if acute:
         den = pr + dot
-        dh = cross * math.sqrt(F(2.0) / den) if den > tiny else F(0.0)
+        dh = cross * _sqrt(_div(F(2.0), den)) if den > tiny else F(0.0)
     else:
         obt = F(2.0) * (pr - dot)
-        dh = sgn * math.sqrt(obt if obt > F(0.0) else F(0.0))
-    i1 = F(1.0) / c1p if c1p > tiny else F(0.0)
-    i2 = F(1.0) / c2p if c2p > tiny else F(0.0)
+        dh = sgn * _sqrt(obt if obt > F(0.0) else F(0.0))
+    i1 = _div(F(1.0), c1p) if c1p > tiny else F(0.0)
+    i2 = _div(F(1.0), c2p) if c2p > tiny else F(0.0)
     u1x = a1p * i1
     u1y = b1 * i1
     u2x = a2p * i2
@@ -433,9 +433,7 @@ def de00(l1, a1, b1, l2, a2, b2, kl, kc, kh, tiny):
         vy = -sgn * (u2x - u1x)
     n2 = vx * vx + vy * vy
     if n2 > F(0.0):
-        n = math.sqrt(n2)
-        c = vx / n
-        s = vy / n
+        c, s = _unit(vx, vy, n2)
     else:
         c = F(1.0)
         s = F(0.0)
@@ -455,21 +453,21 @@ def de00(l1, a1, b1, l2, a2, b2, kl, kc, kh, tiny):
     hb = math.atan2(s, c) * F(180.0 / math.pi)
     if hb < F(0.0):
         hb = hb + F(360.0)
-    x = (hb - F(275.0)) / F(25.0)
-    dtheta = F(30.0 * math.pi / 180.0) * math.exp(-(x * x))
+    x = _div(hb - F(275.0), F(25.0))
+    dtheta = F(30.0 * math.pi / 180.0) * _exp(-(x * x))
     lb = F(0.5) * (l1 + l2) - F(50.0)
     lb2 = lb * lb
-    sl = F(1.0) + F(0.015) * lb2 / math.sqrt(F(20.0) + lb2)
+    sl = F(1.0) + _div(F(0.015) * lb2, _sqrt(F(20.0) + lb2))
     cbp = F(0.5) * (c1p + c2p)
     sc = F(1.0) + F(0.045) * cbp
     sh = F(1.0) + F(0.015) * cbp * t
     cbp7 = _pow7(cbp)
-    rc = F(2.0) * math.sqrt(cbp7 / (cbp7 + F(6103515625.0)))
-    rt = -math.sin(F(2.0) * dtheta) * rc
-    tl = dl / (kl * sl)
-    tc = dc / (kc * sc)
-    th = dh / (kh * sh)
-    return math.sqrt(tl * tl + tc * tc + th * th + rt * tc * th)
+    rc = F(2.0) * _r7(cbp7)
+    rt = -_sin(F(2.0) * dtheta) * rc
+    tl = _div(dl, kl * sl)
+    tc = _div(dc, kc * sc)
+    th = _div(dh, kh * sh)
+    return _sqrt(tl * tl + tc * tc + th * th + rt * tc * th)
 '''
 # fmt: on
 
@@ -538,6 +536,202 @@ _POWP = {
     "float64": "def _powp(x, p):\n    return math.pow(x, p)\n",
 }
 
+# The helpers the formulas above call for their costly operations (issue 29). float64: the
+# exact operations (IEEE division and sqrt, libdevice's pow/exp/sin), so float64 kernels are
+# what they were. float32: the GPU's fast approximations, each with a documented error bound
+# (CUDA C++ Programming Guide, "Mathematical Functions", intrinsic functions; PTX ISA,
+# ``lg2.approx``/``ex2.approx``/``div.approx``/``rsqrt.approx``/``sin.approx``), refined by
+# one Newton step where a result feeds CIELAB (cube root, the sRGB decoding power):
+#
+# ================  ============================  ==========================================
+# helper            GPU (float32)                 bound of the approximation
+# ================  ============================  ==========================================
+# ``_lg2(x)``       ``__nv_fast_log2f``           2^-22 absolute for x in [0.5, 2],
+#                   (``lg2.approx.f32``)          else 2 ulp
+# ``_ex2(x)``       ``__nv_exp2f``                2 ulp (full range)
+#                   (``ex2.approx.f32``)
+# ``_div(x, y)``    ``__nv_fast_fdividef``        2 ulp for 2^-126 <= |y| <= 2^126; 0 above
+#                   (``div.approx.f32``)          (callers keep |y| below 2^126)
+# ``_rsqrt(x)``     ``__nv_rsqrtf``               2 ulp
+#                   (``rsqrt.approx.f32``)
+# ``_sqrt(x)``      ``x * _rsqrt(x)``             3 ulp (0, inf and NaN returned as is)
+# ``_exp(x)``       ``__nv_fast_expf``            2 + floor(|1.173 x|) ulp
+# ``_sin(x)``       ``__nv_fast_sinf``            2^-21.41 absolute for x in [-pi, pi]
+#                   (``sin.approx.f32``)          (callers' arguments: [0, pi/3])
+# ``_cbrt(t)``      ``_ex2(_lg2(t) / 3)``, one    about 1 ulp after the step (its initial
+#                   Newton step                   relative error ~7e-7 squares away)
+# ``_pow24(u)``     ``u^2 z``, ``z = u^0.4`` by   about 2 ulp after the step
+#                   ``_ex2``/``_lg2``, one Newton
+#                   step on ``z^5 = u^2``
+# ================  ============================  ==========================================
+#
+# The simulator runs Python, and the CPU twin numba's CPU target, neither of which has these
+# instructions: there (``_EMULATED``) each approximation is the float64 result moved by twice
+# its bound, up or down by a fixed pattern of the argument, then rounded to float32, so the
+# twin's float32 results carry at least the GPU's error and the twin tests
+# (tests/backends/test_cuda_kernels.py) check the kernels' tolerance with it; the one-step
+# refinements (``_cbrt``, ``_pow24``) are the same code on every target.
+_EXACT = r"""
+def _div(x, y):
+    return x / y
+
+
+def _sqrt(x):
+    return math.sqrt(x)
+
+
+def _exp(x):
+    return math.exp(x)
+
+
+def _sin(x):
+    return math.sin(x)
+
+
+def _cbrt(t):
+    return _powp(t, F(1.0 / 3.0))
+
+
+def _pow24(u):
+    return _powp(u, F(2.4))
+
+
+def _r7(c7):
+    return math.sqrt(c7 / (c7 + F(6103515625.0)))
+
+
+def _unit(x, y, n2):
+    n = math.sqrt(n2)
+    return x / n, y / n
+"""
+
+_DEVICE = r"""
+def _lg2(x):
+    return fast_log2f(x)
+
+
+def _ex2(x):
+    return exp2f(x)
+
+
+def _div(x, y):
+    return fast_fdividef(x, y)
+
+
+def _rsqrt(x):
+    return rsqrtf(x)
+
+
+def _exp(x):
+    return fast_expf(x)
+
+
+def _sin(x):
+    return fast_sinf(x)
+"""
+
+# twice each bound of the table above (relative, or absolute where marked), for the emulation
+_BOUNDS = {
+    "E_LG2_ABS": 2.0 * 2.0**-22,
+    "E_LG2": 2.0 * 2.0**-22,
+    "E_EX2": 2.0 * 2.0**-22,
+    "E_DIV": 2.0 * 2.0**-22,
+    "E_RSQ": 2.0 * 2.0**-22,
+    "E_EXP": 2.0 * 2.0**-23,
+    "E_SIN_ABS": 2.0 * 2.0**-21.41,
+}
+
+_EMULATED = r"""
+def _flip(d):
+    return 1.0 if (d * 4096.0) % 2.0 < 1.0 else -1.0
+
+
+def _lg2(x):
+    d = float(x)
+    v = math.log2(d)
+    if not abs(v) < 1e30:
+        return F(v)
+    e = E_LG2_ABS if d >= 0.5 and d <= 2.0 else E_LG2 * abs(v)
+    return F(v + e * _flip(d))
+
+
+def _ex2(x):
+    d = float(x)
+    return F(2.0**d * (1.0 + E_EX2 * _flip(d)))
+
+
+def _div(x, y):
+    n = float(x)
+    d = float(y)
+    if abs(d) > 2.0**126:
+        return F(0.0) * x
+    if d == 0.0:
+        return F(n * math.copysign(math.inf, d))
+    return F(n / d * (1.0 + E_DIV * _flip(n - d)))
+
+
+def _rsqrt(x):
+    d = float(x)
+    if d == 0.0:
+        return F(math.inf)
+    return F(1.0 / math.sqrt(d) * (1.0 + E_RSQ * _flip(d)))
+
+
+def _exp(x):
+    d = float(x)
+    return F(math.exp(d) * (1.0 + E_EXP * (2.0 + 1.173 * abs(d)) * _flip(d)))
+
+
+def _sin(x):
+    d = float(x)
+    return F(math.sin(d) + E_SIN_ABS * _flip(d))
+"""
+
+# float32 on every target: built on the primitives of _DEVICE or _EMULATED
+_FAST = r"""
+def _sqrt(x):
+    if x > F(0.0) and x < F(math.inf):
+        return x * _rsqrt(x)
+    return x
+
+
+def _cbrt(t):
+    r = _ex2(_lg2(t) * F(1.0 / 3.0))
+    r2 = r * r
+    c = r - (r2 * r - t) * _div(F(1.0 / 3.0), r2)
+    return c if c == c else r
+
+
+def _pow24(u):
+    z = _ex2(_lg2(u) * F(0.4))
+    u2 = u * u
+    z2 = z * z
+    z4 = z2 * z2
+    z = z - (z4 * z - u2) * _div(F(0.2), z4) if z4 < F(2.0**126) else z
+    return u2 * z
+
+
+def _r7(c7):
+    return _rsqrt(F(1.0) + _div(F(6103515625.0), c7))
+
+
+def _unit(x, y, n2):
+    r = _rsqrt(n2)
+    return x * r, y * r
+"""
+
+
+def _prelude(dtype: str, target: str) -> str:
+    """Return the helpers' source for ``dtype`` and ``target`` (GPU or emulated float32)."""
+    if dtype == "float64":
+        return _POWP[dtype] + _EXACT
+    if target == "cuda":
+        from imageform._cuda._launch import simulated
+
+        if not simulated():
+            return _POWP[dtype] + _DEVICE + _FAST
+    return _POWP[dtype] + _EMULATED + _FAST
+
 
 @cache
 def functions(dtype: str, target: str) -> dict[str, Any]:
@@ -548,8 +742,13 @@ def functions(dtype: str, target: str) -> dict[str, Any]:
     through the namespace they were compiled in, so each target's functions call their own.
     """
     F = np.float32 if dtype == "float32" else np.float64
-    ns: dict[str, Any] = {"math": math, "F": F, **_CONSTANTS}
-    source = _POWP[dtype] + SOURCE
+    ns: dict[str, Any] = {"math": math, "F": F, **_CONSTANTS, **_BOUNDS}
+    source = _prelude(dtype, target) + SOURCE
+    if "fast_log2f" in source:
+        from numba.cuda import libdevice
+
+        for name in ("fast_log2f", "exp2f", "fast_fdividef", "rsqrtf", "fast_expf", "fast_sinf"):
+            ns[name] = getattr(libdevice, name)
     exec(compile(source, f"<imageform._cuda.scalar {dtype}>", "exec"), ns)
     names = _function_names(source)
     if target == "python":
