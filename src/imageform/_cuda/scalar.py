@@ -53,7 +53,7 @@ def _sdec(v):
 def _senc(x):
     if x <= F(0.0031308):
         return x * F(12.92)
-    return F(1.055) * _powp(_clip_lo(x, F(1e-30)), F(1.0 / 2.4)) - F(0.055)
+    return F(1.055) * _pow512(_clip_lo(x, F(1e-30))) - F(0.055)
 
 
 def _gdec(v, g):
@@ -153,20 +153,20 @@ def _flab(t):
 def _flab_inv(u):
     if u > F(6.0 / 29.0):
         return u * u * u
-    return (u - F(4.0 / 29.0)) / F(841.0 / 108.0)
+    return _div(u - F(4.0 / 29.0), F(841.0 / 108.0))
 
 
 def xyz_lab(a, b, c, wx, wy, wz):
-    fx = _flab(a / wx)
-    fy = _flab(b / wy)
-    fz = _flab(c / wz)
+    fx = _flab(_divr(a, wx))
+    fy = _flab(_divr(b, wy))
+    fz = _flab(_divr(c, wz))
     return F(116.0) * fy - F(16.0), F(500.0) * (fx - fy), F(200.0) * (fy - fz)
 
 
 def lab_xyz(a, b, c, wx, wy, wz):
-    fy = (a + F(16.0)) / F(116.0)
-    fx = fy + b / F(500.0)
-    fz = fy - c / F(200.0)
+    fy = _div(a + F(16.0), F(116.0))
+    fx = fy + _div(b, F(500.0))
+    fz = fy - _div(c, F(200.0))
     return _flab_inv(fx) * wx, _flab_inv(fy) * wy, _flab_inv(fz) * wz
 
 
@@ -348,7 +348,7 @@ def _dh2(a1, b1, a2, b2, c1, c2):
     den = p + d
     if d >= F(0.0):
         if den > F(0.0):
-            return F(2.0) * x * x / den
+            return _div(F(2.0) * x * x, den)
         return F(0.0)
     obtuse = F(2.0) * (p - d)
     return obtuse if obtuse > F(0.0) else F(0.0)
@@ -362,33 +362,32 @@ def de76(l1, a1, b1, l2, a2, b2):
 
 
 def de94(l1, a1, b1, l2, a2, b2, kl, kc, kh, k1, k2):
-    c1 = math.sqrt(a1 * a1 + b1 * b1)
-    c2 = math.sqrt(a2 * a2 + b2 * b2)
+    c1 = _sqrt(a1 * a1 + b1 * b1)
+    c2 = _sqrt(a2 * a2 + b2 * b2)
     dh2 = _dh2(a1, b1, a2, b2, c1, c2)
-    tl = (l1 - l2) / kl
-    tc = (c1 - c2) / (kc * (F(1.0) + k1 * c1))
+    tl = _div(l1 - l2, kl)
+    tc = _div(c1 - c2, kc * (F(1.0) + k1 * c1))
     sh = kh * (F(1.0) + k2 * c1)
-    return math.sqrt(tl * tl + tc * tc + dh2 / (sh * sh))
+    return _sqrt(tl * tl + tc * tc + _div(dh2, sh * sh))
 
 
 def decmc(l1, a1, b1, l2, a2, b2, ll, cc):
-    c1 = math.sqrt(a1 * a1 + b1 * b1)
-    c2 = math.sqrt(a2 * a2 + b2 * b2)
+    c1 = _sqrt(a1 * a1 + b1 * b1)
+    c2 = _sqrt(a2 * a2 + b2 * b2)
     dh2 = _dh2(a1, b1, a2, b2, c1, c2)
     h1 = _hue_deg(b1, a1)
-    rad = F(math.pi / 180.0)
     if h1 >= F(164.0) and h1 <= F(345.0):
-        t = F(0.56) + abs(F(0.2) * math.cos((h1 + F(168.0)) * rad))
+        t = F(0.56) + abs(F(0.2) * _cosd(h1 + F(168.0)))
     else:
-        t = F(0.36) + abs(F(0.4) * math.cos((h1 + F(35.0)) * rad))
+        t = F(0.36) + abs(F(0.4) * _cosd(h1 + F(35.0)))
     c14 = c1 * c1 * c1 * c1
-    f = math.sqrt(c14 / (c14 + F(1900.0)))
-    sl = F(0.511) if l1 < F(16.0) else F(0.040975) * l1 / (F(1.0) + F(0.01765) * l1)
-    sc = F(0.0638) * c1 / (F(1.0) + F(0.0131) * c1) + F(0.638)
+    f = _sqrt(_div(c14, c14 + F(1900.0)))
+    sl = F(0.511) if l1 < F(16.0) else _div(F(0.040975) * l1, F(1.0) + F(0.01765) * l1)
+    sc = _div(F(0.0638) * c1, F(1.0) + F(0.0131) * c1) + F(0.638)
     sh = sc * (f * t + F(1.0) - f)
-    tl = (l1 - l2) / (ll * sl)
-    tc = (c1 - c2) / (cc * sc)
-    return math.sqrt(tl * tl + tc * tc + dh2 / (sh * sh))
+    tl = _div(l1 - l2, ll * sl)
+    tc = _div(c1 - c2, cc * sc)
+    return _sqrt(tl * tl + tc * tc + _div(dh2, sh * sh))
 
 
 def _pow7(x):
@@ -576,6 +575,10 @@ def _div(x, y):
     return x / y
 
 
+def _divr(x, y):
+    return x / y
+
+
 def _sqrt(x):
     return math.sqrt(x)
 
@@ -590,6 +593,14 @@ def _sin(x):
 
 def _cbrt(t):
     return _powp(t, F(1.0 / 3.0))
+
+
+def _pow512(x):
+    return _powp(x, F(1.0 / 2.4))
+
+
+def _cosd(d):
+    return math.cos(d * F(math.pi / 180.0))
 
 
 def _pow24(u):
@@ -628,7 +639,22 @@ def _exp(x):
 
 def _sin(x):
     return fast_sinf(x)
+
+
+def _cos(x):
+    return fast_cosf(x)
 """
+
+#: The libdevice functions of _DEVICE.
+_LIBDEVICE = (
+    "fast_log2f",
+    "exp2f",
+    "fast_fdividef",
+    "rsqrtf",
+    "fast_expf",
+    "fast_sinf",
+    "fast_cosf",
+)
 
 # twice each bound of the table above (relative, or absolute where marked), for the emulation
 _BOUNDS = {
@@ -639,6 +665,7 @@ _BOUNDS = {
     "E_RSQ": 2.0 * 2.0**-22,
     "E_EXP": 2.0 * 2.0**-23,
     "E_SIN_ABS": 2.0 * 2.0**-21.41,
+    "E_COS_ABS": 2.0 * 2.0**-21.19,
 }
 
 _EMULATED = r"""
@@ -685,6 +712,11 @@ def _exp(x):
 def _sin(x):
     d = float(x)
     return F(math.sin(d) + E_SIN_ABS * _flip(d))
+
+
+def _cos(x):
+    d = float(x)
+    return F(math.cos(d) + E_COS_ABS * _flip(d))
 """
 
 # float32 on every target: built on the primitives of _DEVICE or _EMULATED
@@ -709,6 +741,29 @@ def _pow24(u):
     z4 = z2 * z2
     z = z - (z4 * z - u2) * _div(F(0.2), z4) if z4 < F(2.0**126) else z
     return u2 * z
+
+
+def _pow512(x):
+    y = _ex2(_lg2(x) * F(5.0 / 12.0))
+    if x < F(2.0**20):
+        x2 = x * x
+        y2 = y * y
+        y4 = y2 * y2
+        y12 = y4 * y4 * y4
+        y = y - (y12 - x2 * x2 * x) * _div(F(1.0 / 12.0) * y, y12)
+    return y
+
+
+def _cosd(d):
+    if d > F(180.0):
+        d = d - F(360.0)
+    return _cos(d * F(math.pi / 180.0))
+
+
+def _divr(x, y):
+    r = _div(F(1.0), y)
+    q = x * r
+    return q + (x - q * y) * r
 
 
 def _r7(c7):
@@ -747,7 +802,7 @@ def functions(dtype: str, target: str) -> dict[str, Any]:
     if "fast_log2f" in source:
         from numba.cuda import libdevice
 
-        for name in ("fast_log2f", "exp2f", "fast_fdividef", "rsqrtf", "fast_expf", "fast_sinf"):
+        for name in _LIBDEVICE:
             ns[name] = getattr(libdevice, name)
     exec(compile(source, f"<imageform._cuda.scalar {dtype}>", "exec"), ns)
     names = _function_names(source)
