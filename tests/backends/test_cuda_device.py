@@ -25,6 +25,7 @@ from tests.backends._gpu import torch_with_cuda
 torch = torch_with_cuda()
 
 from tests.backends.test_backends_matrix import CASES, Case, _result  # noqa: E402
+from tests.backends.test_cuda_kernels import APPROX_CASES, approx_errors  # noqa: E402
 from tests.backends.test_meta_device import NEEDS_VALUES, POINTWISE  # noqa: E402
 
 
@@ -162,3 +163,69 @@ def test_colour_kernels_one_launch_on_cuda() -> None:
             np.testing.assert_allclose(
                 _host(out), ref, atol=atol, rtol=1e-5 if dtype == "float32" else 1e-10
             )
+
+
+def test_float32_kernels_against_float64() -> None:
+    """The float32 kernels (the GPU's fast approximations, issue 29) against NumPy's float64.
+
+    NumPy's float64 result of the same float32 input, within ``F32_VS_F64``: the bound the
+    CPU twin meets with each approximation emulated at twice its documented error
+    (``test_cuda_kernels.test_twin_float32_against_float64``); 65 536 pixels each.
+    """
+    from imageform import color as c
+    from imageform._cuda import _launch
+    from tests.backends.test_cuda_kernels import F32_DELTA_E, F32_ROUTES, F32_VS_F64, f32_sample
+
+    if not _launch.use_cuda():
+        pytest.skip(f"imageform's CUDA kernels: {_launch.status()}")
+    atol, rtol = F32_VS_F64
+    rgb, lab1, lab2 = f32_sample(1 << 16)
+    for src, dst in F32_ROUTES:
+        x = np.asarray(c.convert(rgb, "srgb", src)).astype(np.float32)
+        out = c.convert(_cuda(x, "float32"), src, dst)
+        assert str(out.dtype) == "torch.float32"
+        ref = np.asarray(c.convert(x.astype(np.float64), src, dst))
+        np.testing.assert_allclose(_host(out), ref, atol=atol, rtol=rtol, err_msg=f"{src}->{dst}")
+    a, b = lab1.astype(np.float32), lab2.astype(np.float32)
+    for name, _, fn in F32_DELTA_E:
+        out = fn(_cuda(a, "float32"), _cuda(b, "float32"))
+        ref = np.asarray(fn(a.astype(np.float64), b.astype(np.float64)))
+        np.testing.assert_allclose(_host(out), ref, atol=atol, rtol=rtol, err_msg=name)
+
+
+@pytest.mark.parametrize("name", [cs[0] for cs in APPROX_CASES])
+def test_fast_approximations_within_their_bounds_on_the_device(name: str) -> None:
+    """Each float32 helper of ``imageform._cuda.scalar`` on the GPU within its documented bound.
+
+    The primitives (``lg2.approx``, ``ex2.approx``, ``div.approx``, ``rsqrt.approx``,
+    ``__expf``, ``sin.approx``, ``cos.approx``) against the CUDA Programming Guide's bounds,
+    the Newton-refined roots against their few ulp (``test_cuda_kernels.APPROX_CASES``):
+    the emulation of the CPU twin assumes these bounds.
+    """
+    from imageform._cuda import _launch
+    from imageform._cuda.scalar import functions
+
+    if not _launch.use_cuda():
+        pytest.skip(f"imageform's CUDA kernels: {_launch.status()}")
+    cuda = _launch.cuda()
+    fn = functions("float32", "cuda")[name]
+    args = tuple(
+        np.asarray(a, np.float32) for a in next(cs[1] for cs in APPROX_CASES if cs[0] == name)
+    )
+    n = args[0].size
+    xs = [f"x{k}" for k in range(len(args))]
+    call = ", ".join(f"{x}[i]" for x in xs)
+    # `cuda` a global of the kernel, as in the library's generated kernels
+    src = (
+        f"def kernel({', '.join(xs)}, out):\n"
+        "    i = cuda.grid(1)\n"
+        "    if i < out.size:\n"
+        f"        out[i] = fn({call})\n"
+    )
+    ns: dict[str, Any] = {"cuda": cuda, "fn": fn}
+    exec(compile(src, f"<device check {name}>", "exec"), ns)
+    kernel = cuda.jit(ns["kernel"])
+    out = cuda.device_array(n, np.float32)
+    kernel[(n + 255) // 256, 256](*[cuda.to_device(a) for a in args], out)
+    ratio = approx_errors(name, out.copy_to_host(), args)
+    assert ratio.max() <= 1.0, (name, float(ratio.max()), float(args[0][ratio.argmax()]))

@@ -566,7 +566,8 @@ _POWP = {
 #
 # The simulator runs Python, and the CPU twin numba's CPU target, neither of which has these
 # instructions: there (``_EMULATED``) each approximation is the float64 result moved by twice
-# its bound, up or down by a fixed pattern of the argument, then rounded to float32, so the
+# its bound (an ulp bound read at its largest relative size, n ulp as n 2^-23 of the result),
+# up or down by a fixed pattern of the argument, then rounded to float32, so the
 # twin's float32 results carry at least the GPU's error and the twin tests
 # (tests/backends/test_cuda_kernels.py) check the kernels' tolerance with it; the one-step
 # refinements (``_cbrt``, ``_pow24``) are the same code on every target.
@@ -659,7 +660,7 @@ _LIBDEVICE = (
 # twice each bound of the table above (relative, or absolute where marked), for the emulation
 _BOUNDS = {
     "E_LG2_ABS": 2.0 * 2.0**-22,
-    "E_LG2": 2.0 * 2.0**-22,
+    "E_LG2": 2.0 * 2.0**-22,  # 2 ulp of the result: at most 2^-22 of it
     "E_EX2": 2.0 * 2.0**-22,
     "E_DIV": 2.0 * 2.0**-22,
     "E_RSQ": 2.0 * 2.0**-22,
@@ -706,7 +707,10 @@ def _rsqrt(x):
 
 def _exp(x):
     d = float(x)
-    return F(math.exp(d) * (1.0 + E_EXP * (2.0 + 1.173 * abs(d)) * _flip(d)))
+    k = 1.173 * abs(d)
+    if not k < 1e30:  # NaN, +-inf
+        return F(math.exp(d))
+    return F(math.exp(d) * (1.0 + E_EXP * (2.0 + float(math.floor(k))) * _flip(d)))
 
 
 def _sin(x):
