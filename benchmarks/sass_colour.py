@@ -80,8 +80,9 @@ def rows() -> list[tuple[str, str, tuple[int, int, int, int]]]:
     with tempfile.TemporaryDirectory() as tmp:
         for src, dst in ROUTES:
             route = path(src, dst)
-            names, params = cc._params(_kernel_steps(route, _with_white(route, {})))
+            steps = _kernel_steps(route, _with_white(route, {}))
             for dt, nb in dtypes:
+                names, params = cc._chain_params(steps, dt)  # as run_chain launches it
                 vals = cc._cast(dt, params)
                 sig = (T.Array(nb, 2, "C"), T.Array(nb, 2, "C"), T.int64) + tuple(
                     T.float32 if isinstance(v, np.float32) else T.float64 for v in vals

@@ -163,6 +163,13 @@ def xyz_lab(a, b, c, wx, wy, wz):
     return F(116.0) * fy - F(16.0), F(500.0) * (fx - fy), F(200.0) * (fy - fz)
 
 
+def xyz_lab1(a, b, c):
+    fx = _flab(a)
+    fy = _flab(b)
+    fz = _flab(c)
+    return F(116.0) * fy - F(16.0), F(500.0) * (fx - fy), F(200.0) * (fy - fz)
+
+
 def lab_xyz(a, b, c, wx, wy, wz):
     fy = _div(a + F(16.0), F(116.0))
     fx = fy + _div(b, F(500.0))
@@ -485,6 +492,7 @@ NAMES: dict[str, int] = {
     "gains": 3,
     "gains_clip": 3,
     "xyz_lab": 3,
+    "xyz_lab1": 0,  # XYZ already divided by the white (color._fold_white)
     "lab_xyz": 3,
     "lab_lch": 0,
     "lch_lab": 0,
