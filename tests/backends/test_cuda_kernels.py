@@ -449,3 +449,64 @@ def test_twin_delta_e_float32_against_float64(
     got = run_delta_e_twin(a, b, name, ps)
     ref = np.asarray(fn(a.astype(np.float64), b.astype(np.float64)))
     np.testing.assert_allclose(got, ref, atol=F32_VS_F64[0], rtol=F32_VS_F64[1])
+
+
+_COLOUR_PTX = r"""
+import sys, types
+sys.path.insert(0, ".")
+try:
+    import numba.cuda.dispatcher as d
+    from numba import cuda
+    d.get_current_device = lambda: types.SimpleNamespace(compute_capability=(9, 0))
+    dev = cuda.jit(device=True)(lambda x: x + 1.0)
+    def probe(a):
+        a[0] = dev(a[0])
+    from numba import types as T
+    cuda.compile_ptx(probe, (T.float64[::1],), cc=(9, 0))
+except Exception as exc:  # no NVVM, or device functions that want a driver
+    print("SKIP", type(exc).__name__)
+    sys.exit(0)
+from numba import types as T
+from imageform._cuda import color as cc
+from imageform._cuda.scalar import DELTA_E
+from imageform.color.convert import _kernel_steps, path
+from tests.backends.test_cuda_kernels import F32_ROUTES, _with_white
+def kinds(ptx):
+    code = [ln for ln in ptx.splitlines() if ".param" not in ln]  # de76's unused float64
+    # rcp.approx.ftz.f64: the seed of libdevice's IEEE float64 division and pow, not ours
+    approx = ptx.replace("rcp.approx.ftz.f64", "")
+    return ("approx" if ".approx" in approx else "exact",
+            "f64" if any(".f64" in ln for ln in code) else "no-f64")
+for dt, nb in (("float32", T.float32), ("float64", T.float64)):
+    for src, dst in F32_ROUTES:
+        route = path(src, dst)
+        names, vals = cc._prepared(_kernel_steps(route, _with_white(route, {})), dt)
+        sig = (T.Array(nb, 2, "C"), T.Array(nb, 2, "C"), T.int64) + (nb,) * len(vals)
+        ptx = cuda.compile_ptx(cc._kernel(names, dt).py_func, sig, cc=(9, 0))[0]
+        print("ok", dt, f"{src}->{dst}", *kinds(ptx))
+    for name, k in DELTA_E.items():
+        arr = T.Array(nb, 2, "C")
+        sig = (arr, arr, T.Array(nb, 1, "C"), T.int64) + ((nb,) * k if k else (T.float64,))
+        ptx = cuda.compile_ptx(cc._de_kernel(name, dt).py_func, sig, cc=(9, 0))[0]
+        print("ok", dt, name, *kinds(ptx))
+"""
+
+
+def test_colour_ptx_approximates_float32_only() -> None:
+    """PTX for sm_90 (NVVM, no GPU): float32 kernels use the fast approximations and no
+    float64 instruction; float64 kernels no approximation at all (issue 29)."""
+    from tests.backends.test_cuda_geometry_kernels import _run
+
+    proc = _run(["-c", _COLOUR_PTX])
+    out = proc.stdout + proc.stderr
+    assert proc.returncode == 0, out[-4000:]
+    if proc.stdout.startswith("SKIP"):
+        pytest.skip(f"NVVM not available: {proc.stdout.strip()}")
+    lines = [ln.split() for ln in proc.stdout.splitlines() if ln.startswith("ok ")]
+    assert len(lines) == 2 * (len(F32_ROUTES) + 4), out
+    for _, dt, name, approx, f64 in lines:
+        if dt == "float64":
+            assert approx == "exact", name
+        else:
+            assert f64 == "no-f64", name
+            assert approx == ("exact" if name == "de76" else "approx"), name
