@@ -814,8 +814,11 @@ def functions(dtype: str, target: str) -> dict[str, Any]:
     if "fast_log2f" in source:
         from numba.cuda import libdevice
 
-        for name in _LIBDEVICE:
-            ns[name] = getattr(libdevice, name)
+        found = {name: getattr(libdevice, name, None) for name in _LIBDEVICE}
+        if all(found.values()):
+            ns.update(found)
+        else:  # a numba CUDA target without one of them: the exact operations
+            source = _POWP[dtype] + _EXACT + SOURCE
     exec(compile(source, f"<imageform._cuda.scalar {dtype}>", "exec"), ns)
     names = _function_names(source)
     if target == "python":
