@@ -14,6 +14,12 @@ fewer instructions on the path every pixel takes is what this tracks between dev
 ``nvidia-cuda-cuobjdump`` and ``nvidia-cuda-nvdisasm`` carry the last two).
 
     PYTHONPATH=src:. python benchmarks/sass_colour.py
+    PYTHONPATH=src:. python benchmarks/sass_colour.py --accuracy   # needs no CUDA tools
+
+``--accuracy`` prints instead the float32 kernels' error against NumPy's float64 result
+of the same float32 input, run by the CPU twin with each GPU approximation emulated at
+twice its documented bound (:mod:`imageform._cuda.scalar`), on 100 000 pixels of
+``tests/backends/test_cuda_kernels.f32_sample``.
 """
 
 from __future__ import annotations
@@ -102,7 +108,47 @@ def rows() -> list[tuple[str, str, tuple[int, int, int, int]]]:
     return out
 
 
+def accuracy(n: int = 100_000) -> None:
+    """Print the float32 kernels' largest error against float64 (the CPU twin, emulated)."""
+    import numpy as np
+
+    from imageform import color as c
+    from imageform._cuda.color import run_chain_twin, run_delta_e_twin
+    from imageform.color.convert import _kernel_steps, path
+    from tests.backends import test_cuda_kernels as t
+
+    rgb, lab1, lab2 = t.f32_sample(n)
+    atol, rtol = t.F32_VS_F64
+    print("| kernel | largest error per channel | NumPy float32's | share of the bound |")
+    print("|---|---|---|---|")
+    for src, dst in t.F32_ROUTES:
+        x = np.asarray(c.convert(rgb, "srgb", src)).astype(np.float32)
+        route = path(src, dst)
+        got = run_chain_twin(x, _kernel_steps(route, t._with_white(route, {})))
+        ref = np.asarray(c.convert(x.astype(np.float64), src, dst))
+        own = np.abs(np.asarray(c.convert(x, src, dst)) - ref).max(0)
+        err = np.abs(got - ref)
+        share = (err / (atol + rtol * np.abs(ref))).max()
+        print(
+            f"| {src}→{dst} | {', '.join(f'{v:.1e}' for v in err.max(0))} | "
+            f"{', '.join(f'{v:.1e}' for v in own)} | {share:.0%} |"
+        )
+    a, b = lab1.astype(np.float32), lab2.astype(np.float32)
+    for name, params, fn in t.F32_DELTA_E:
+        ps = list(params)
+        if name == "de00":
+            ps.append(float(np.finfo(np.float32).smallest_normal) ** 0.5)
+        ref = np.asarray(fn(a.astype(np.float64), b.astype(np.float64)))
+        err = np.abs(run_delta_e_twin(a, b, name, ps) - ref)
+        own = np.abs(np.asarray(fn(a, b)) - ref).max()
+        share = (err / (atol + rtol * np.abs(ref))).max()
+        print(f"| {name} | {err.max():.1e} | {own:.1e} | {share:.0%} |")
+
+
 def main() -> None:
+    if "--accuracy" in sys.argv[1:]:
+        accuracy()
+        return
     print("| kernel | dtype | SASS instructions | body | MUFU | calls |")
     print("|---|---|---|---|---|---|")
     for name, dt, (n, body, mufu, calls) in rows():
