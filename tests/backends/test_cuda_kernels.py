@@ -362,6 +362,13 @@ def _exp_bound(x: np.ndarray, ref: np.ndarray) -> np.ndarray:
 
 
 _G = np.geomspace
+_TH = np.linspace(-np.pi, np.pi, 4001)[1:-1]  # the unit circle (atan2's +-180 cut left out)
+
+
+def _deg_bound(x: np.ndarray, ref: np.ndarray) -> float:
+    return 6e-5
+
+
 #: (helper, arguments (float32 grids), float64 reference, documented bound of |error|)
 APPROX_CASES: list[tuple[str, tuple[np.ndarray, ...], Any, Any]] = [
     ("_lg2", (_G(1e-6, 1e6, 4001),), np.log2, _lg2_bound),
@@ -375,6 +382,9 @@ APPROX_CASES: list[tuple[str, tuple[np.ndarray, ...], Any, Any]] = [
     ("_cbrt", (_G(216.0 / 24389.0, 4.0, 4001),), np.cbrt, _ulp_bound(1.5)),
     ("_pow24", (_G(0.0904, 4.0, 4001),), lambda u: u**2.4, _ulp_bound(3.0)),
     ("_pow512", (_G(0.0031308, 4.0, 4001),), lambda x: x ** (1.0 / 2.4), _ulp_bound(2.0)),
+    # CIEDE2000's mean hue in degrees (a polynomial, no emulation): 6e-5 degrees (4 ulp of
+    # 180 in float32; atan2f's result times 180/pi rounds to 1-2 of them too)
+    ("_atan2d", (np.sin(_TH), np.cos(_TH)), lambda y, x: np.degrees(np.arctan2(y, x)), _deg_bound),
 ]
 #: the primitives (not the refined roots): the emulation carries twice their bound
 EMULATED = ("_lg2", "_ex2", "_div", "_rsqrt", "_exp", "_sin", "_cos")
@@ -394,7 +404,7 @@ def _twin_helper(name: str) -> Any:
     from imageform._cuda.scalar import functions
 
     fn = functions("float32", "cpu")[name]
-    if name == "_div":
+    if name in ("_div", "_atan2d"):
 
         @numba.njit
         def two(x: np.ndarray, y: np.ndarray, out: np.ndarray) -> None:  # pragma: no cover
