@@ -5,7 +5,11 @@ conversion step to the pixel's new channels; they are the scalar form of the Arr
 code of :mod:`imageform.color` (same formulas, same branches, same conventions for black,
 zero chroma and NaN), with every literal written ``F(...)`` so that one source compiles
 twice: ``F = float32`` keeps float32 pixels in float32 arithmetic on the GPU (the sRGB
-curve, ``pow`` and ``atan2`` run at float32 speed), ``F = float64`` gives float64.
+curve, ``pow`` and ``atan2`` run at float32 speed), ``F = float64`` gives float64. The
+costly operations (division, ``sqrt``, powers, cube root, ``exp``, ``sin``/``cos``) go
+through helpers that are the exact operations in float64 and, in float32, the GPU's fast
+approximations with their documented bounds, emulated at twice those bounds on the CPU twin
+and the simulator (issue 29; the table above ``_EXACT``).
 
 :func:`functions` compiles the source for a dtype and a target: ``"cuda"`` (numba CUDA
 device functions; the kernels of :mod:`imageform._cuda.color` call them), ``"cpu"``
