@@ -490,7 +490,7 @@ def kinds(ptx):
 for dt, nb in (("float32", T.float32), ("float64", T.float64)):
     for src, dst in F32_ROUTES:
         route = path(src, dst)
-        names, vals = cc._prepared(_kernel_steps(route, _with_white(route, {})), dt)
+        names, vals = cc._chain_params(_kernel_steps(route, _with_white(route, {})), dt)
         sig = (T.Array(nb, 2, "C"), T.Array(nb, 2, "C"), T.int64) + (nb,) * len(vals)
         ptx = cuda.compile_ptx(cc._kernel(names, dt).py_func, sig, cc=(9, 0))[0]
         print("ok", dt, f"{src}->{dst}", *kinds(ptx))
