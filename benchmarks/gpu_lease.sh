@@ -17,7 +17,12 @@
 #   4. the device tests (tests.log): the backend matrix on torch CUDA and CuPy, the
 #      pointwise set under set_sync_debug_mode("error"), the geometry/demosaic kernels, the
 #      --device cuda commands, the meta-device matrix.
+# One `run` call may last 600 s and the step limits add up to 720 s (bench 300, host 150 + 60,
+# tests 210): STEPS picks steps for one call, e.g. STEPS=env,bench then STEPS=env,host,tests
+# (default: all four; env is cheap and installs the wheels, so give it in every call).
 set -u
+STEPS=${STEPS:-env,bench,host,tests}
+want() { case ",$STEPS," in *",$1,"*) return 0 ;; *) return 1 ;; esac; }
 OUT=${OUT:-gpu-out}
 mkdir -p "$OUT"
 export PYTHONUNBUFFERED=1 OPENBLAS_NUM_THREADS=1
@@ -49,18 +54,23 @@ print('imageform CUDA kernels:', _launch.status())" 2>&1 | tail -3; }
 grep -q "^retry with CUDA_HOME" "$OUT/env.txt" && export CUDA_HOME=/usr/local/cuda
 
 DEV=$(nvidia-smi --query-gpu=name --format=csv,noheader | head -1 | tr -cd 'A-Za-z0-9' | tr A-Z a-z | sed 's/^nvidia//')
+if want bench; then
 timeout "${BENCH_S:-300}" python3 benchmarks/bench_gpu.py --device cuda \
   --note "One run on a lent machine (benchmarks/gpu_lease.sh): $(tail -1 "$OUT/env.txt")." \
   --out "$OUT/gpu-${DEV:-gpu}-$STAMP.md" 2>"$OUT/bench-progress.log" >/dev/null
 echo "bench exit $?" | tee -a "$OUT/bench-progress.log"
+fi
 
 # host time per call on the device (every row's first call compiles its kernel), then the
 # same calls --dry on this machine's CPU (stub launch), to relate the two measurements
+if want host; then
 timeout "${HOST_S:-150}" python3 benchmarks/profile_gpu_host.py >"$OUT/host-profile.txt" 2>&1
 echo "host profile exit $?" >>"$OUT/host-profile.txt"
 grep -E "^(\| |imageform|fast launch|host profile)" "$OUT/host-profile.txt" | head -30
 timeout 60 python3 benchmarks/profile_gpu_host.py --dry --top 10 >"$OUT/host-profile-dry.txt" 2>&1
+fi
 
+want tests || exit 0
 timeout "${TESTS_S:-210}" python3 -m pytest -q -n 8 -p no:cacheprovider -rfEs \
   tests/backends/test_cuda_device.py tests/backends/test_cuda_geometry_device.py \
   tests/backends/test_cuda_cli_device.py tests/backends/test_meta_device.py \
