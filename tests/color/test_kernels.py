@@ -216,3 +216,57 @@ def test_lab_kernel_hot_loop_vectorised_at_full_width() -> None:
     ir = "".join(fn.inspect_llvm().values())
     assert "x i64>" not in ir  # no 64-bit lanes
     assert re.search(r"<(8|16) x float>", ir)
+
+
+def test_colour_kernels_compile_no_parallel_kernel() -> None:
+    # issue 25: a parallel=True kernel (numba's parallel lowering and its gufunc) compiles
+    # much slower than a serial one; the chunks run on threads through jit.run_tasks, and one
+    # compiled kernel serves one thread and many (no serial twin)
+    numba = pytest.importorskip("numba")
+    from imageform._kernels import color_lab, color_u8
+
+    kernels = [
+        (mod.__name__, name, k)
+        for mod in (color_lab, color_u8)
+        for name, k in vars(mod).items()
+        if isinstance(k, numba.core.registry.CPUDispatcher)
+    ]
+    assert len(kernels) > 20
+    assert [name for _, name, k in kernels if k.targetoptions.get("parallel")] == []
+    assert [name for _, name, k in kernels if name.endswith("_tasks")] == [
+        "_srgb_to_lab_f32_tasks",
+        "_srgb_to_lab_f64_tasks",
+        "_lab_to_srgb_f32_tasks",
+        "_lab_to_srgb_f64_tasks",
+        "_lab8_tasks",
+        "_labf_tasks",
+        "_hsv8_tasks",
+    ]
+
+
+@pytest.mark.parametrize("size", [(7, 9), (400, 500)])  # one chunk; several (65536 px each)
+def test_colour_kernels_same_result_on_one_thread_and_two(size: tuple[int, int]) -> None:
+    numba = pytest.importorskip("numba")
+    rng = np.random.default_rng(12)
+    u8 = rng.integers(0, 256, (*size, 3), dtype=np.uint8)
+    f32 = u8.astype(np.float32) / np.float32(255)
+    lab32 = convert(f32, "srgb", "lab")
+    calls = {
+        "srgb->lab f32": lambda: convert(f32, "srgb", "lab"),
+        "srgb->lab f64": lambda: convert(f32.astype(np.float64), "srgb", "lab"),
+        "lab->srgb f32": lambda: convert(lab32, "lab", "srgb"),
+        "lab->srgb f64": lambda: convert(lab32.astype(np.float64), "lab", "srgb"),
+        "lab8": lambda: convert(u8, "srgb", "lab", dtype="uint8"),
+        "lab from uint8": lambda: convert(u8, "srgb", "lab"),
+        "hsv8": lambda: convert(u8, "srgb", "hsv", dtype="uint8"),
+    }
+    threads = numba.get_num_threads()
+    try:
+        numba.set_num_threads(1)
+        one = {k: np.asarray(f()) for k, f in calls.items()}
+        numba.set_num_threads(min(2, numba.config.NUMBA_NUM_THREADS))
+        two = {k: np.asarray(f()) for k, f in calls.items()}
+    finally:
+        numba.set_num_threads(threads)
+    for k in calls:
+        np.testing.assert_array_equal(one[k], two[k], err_msg=k)

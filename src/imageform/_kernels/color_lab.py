@@ -1,4 +1,4 @@
-r"""Fused numba kernels: sRGB (float32 / float64 / uint8) <-> CIELAB, parallel over pixel chunks.
+r"""Fused numba kernels: sRGB (float32 / float64 / uint8) <-> CIELAB, threads over pixel chunks.
 
 Plain twin: the array path of :func:`imageform.color.convert` (``srgb_to_linear`` ->
 ``linear_srgb_to_xyz`` -> ``xyz_to_lab`` and back) computing the same equations;
@@ -20,6 +20,11 @@ The hot loops have no calls, no data-dependent branches (selects only) and no re
 and use ``error_model="numpy"`` so that LLVM vectorises them. float64 input runs the exact
 formulas in float64.
 
+Chunks of :data:`_BLOCK` pixels run on numba's threads through
+:func:`imageform._kernels.jit.run_tasks`: one serial ``nogil`` kernel per conversion, which
+also serves a single chunk or a single thread in the calling thread (the ``parallel=True``
+``prange`` wrappers and their serial twins before issue 25 compiled much slower).
+
 The boundary checks of float32 / uint8 input (NaN/inf, values outside [0, 1]) are gathered
 in the conversion's own pass over memory: each sub-block of :data:`_SUB` pixels is
 converted, then counted and summed while it is still in the L1 cache. Gathered inside the
@@ -31,14 +36,13 @@ from __future__ import annotations
 
 from typing import Any
 
-import numba as nb
 import numpy as np
 
-from imageform._kernels.jit import njit, parallel_pays
+from imageform._kernels.jit import njit, run_tasks
 
 __all__ = ["lab_to_srgb", "srgb_to_lab"]
 
-_BLOCK = 65536  # pixels per parallel chunk; each chunk runs a serial (vectorisable) loop
+_BLOCK = 65536  # pixels per chunk (a task of run_tasks); each runs a serial (vectorisable) loop
 _SUB = 2048  # pixels per sub-block of a chunk: 24 kB of float32 input, checked while in L1
 
 # the same constants as imageform.color.transfer / cielab (IEC 61966-2-1, CIE 15:2004)
@@ -317,40 +321,49 @@ def _lab_to_srgb_f64_serial(src, dst, mi):  # type: ignore[no-untyped-def]
         _lab_exact_rgb(src[3 * i], src[3 * i + 1], src[3 * i + 2], mi, dst, 3 * i)
 
 
-@njit(parallel=True)
-def _srgb_to_lab_f32(src, dst, m, scale, stats):  # type: ignore[no-untyped-def]
+@njit(nogil=True, error_model="numpy")
+def _srgb_to_lab_f32_tasks(t0, t1, src, dst, m, scale, stats):  # type: ignore[no-untyped-def]
+    """Chunks ``t0 .. t1 - 1`` of :data:`_BLOCK` pixels, each with its own row of ``stats``.
+
+    A task of :func:`imageform._kernels.jit.run_tasks`: a serial ``nogil`` kernel run on
+    numba's threads, not a ``parallel=True`` ``prange`` (numba's parallel lowering and its
+    gufunc cost seconds of CPU more to compile on a first ``imageform convert``), and the
+    same compiled kernel serves one chunk or one thread in the calling thread (no serial
+    twin to compile).
+    """
     n = src.shape[0] // 3
-    for c in nb.prange((n + _BLOCK - 1) // _BLOCK):
+    for c in range(t0, t1):
         lo = c * _BLOCK
         hi = min(n, lo + _BLOCK)
         _srgb_to_lab_f32_serial(src[3 * lo : 3 * hi], dst[3 * lo : 3 * hi], m, scale, stats, c)
 
 
-@njit(parallel=True)
-def _srgb_to_lab_f64(src, dst, m):  # type: ignore[no-untyped-def]
-    n = src.shape[0] // 3
-    for c in nb.prange((n + _BLOCK - 1) // _BLOCK):
-        lo = c * _BLOCK
-        hi = min(n, lo + _BLOCK)
-        _srgb_to_lab_f64_serial(src[3 * lo : 3 * hi], dst[3 * lo : 3 * hi], m)
+@njit(nogil=True, error_model="numpy")
+def _srgb_to_lab_f64_tasks(t0, t1, src, dst, m):  # type: ignore[no-untyped-def]
+    """Chunks ``t0 .. t1 - 1`` of :data:`_BLOCK` pixels (a task of ``run_tasks``), float64."""
+    lo = t0 * _BLOCK
+    hi = min(src.shape[0] // 3, t1 * _BLOCK)
+    _srgb_to_lab_f64_serial(src[3 * lo : 3 * hi], dst[3 * lo : 3 * hi], m)
 
 
-@njit(parallel=True)
-def _lab_to_srgb_f32(src, dst, m):  # type: ignore[no-untyped-def]
-    n = src.shape[0] // 3
-    for c in nb.prange((n + _BLOCK - 1) // _BLOCK):
-        lo = c * _BLOCK
-        hi = min(n, lo + _BLOCK)
-        _lab_to_srgb_f32_serial(src[3 * lo : 3 * hi], dst[3 * lo : 3 * hi], m)
+@njit(nogil=True, error_model="numpy")
+def _lab_to_srgb_f32_tasks(t0, t1, src, dst, m):  # type: ignore[no-untyped-def]
+    """Chunks ``t0 .. t1 - 1`` of :data:`_BLOCK` pixels (a task of ``run_tasks``), float32."""
+    lo = t0 * _BLOCK
+    hi = min(src.shape[0] // 3, t1 * _BLOCK)
+    _lab_to_srgb_f32_serial(src[3 * lo : 3 * hi], dst[3 * lo : 3 * hi], m)
 
 
-@njit(parallel=True)
-def _lab_to_srgb_f64(src, dst, m):  # type: ignore[no-untyped-def]
-    n = src.shape[0] // 3
-    for c in nb.prange((n + _BLOCK - 1) // _BLOCK):
-        lo = c * _BLOCK
-        hi = min(n, lo + _BLOCK)
-        _lab_to_srgb_f64_serial(src[3 * lo : 3 * hi], dst[3 * lo : 3 * hi], m)
+@njit(nogil=True, error_model="numpy")
+def _lab_to_srgb_f64_tasks(t0, t1, src, dst, m):  # type: ignore[no-untyped-def]
+    """Chunks ``t0 .. t1 - 1`` of :data:`_BLOCK` pixels (a task of ``run_tasks``), float64."""
+    lo = t0 * _BLOCK
+    hi = min(src.shape[0] // 3, t1 * _BLOCK)
+    _lab_to_srgb_f64_serial(src[3 * lo : 3 * hi], dst[3 * lo : 3 * hi], m)
+
+
+def _chunks(n_pixels: int) -> int:
+    return (n_pixels + _BLOCK - 1) // _BLOCK
 
 
 @njit(inline="always", **_JIT)
@@ -377,16 +390,14 @@ def srgb_to_lab(
     src = np.ascontiguousarray(image).reshape(-1)
     if image.dtype == np.float64:
         dst = np.empty(src.shape, np.float64) if out is None else out.reshape(-1)
-        _srgb_to_lab_f64(src, dst, m)
+        run_tasks(_srgb_to_lab_f64_tasks, _chunks(src.size // 3), src, dst, m)
         return dst.reshape(image.shape), None
     dst = np.empty(src.shape, np.float32) if out is None else out.reshape(-1)
     scale = np.float32(1.0 / 255.0) if image.dtype == np.uint8 else np.float32(1.0)
     m32 = m.astype(np.float32)
     stats = new_stats(src.size // 3)
-    if parallel_pays(src.size // 3, _BLOCK + 1):  # more than one chunk, more than one thread
-        _srgb_to_lab_f32(src, dst, m32, scale, stats)
-    else:  # one chunk, or one thread: the pool's scheduling would only add its cost
-        _srgb_to_lab_f32_serial(src, dst, m32, scale, stats, 0)
+    # one chunk, or one thread: run in the calling thread (run_tasks)
+    run_tasks(_srgb_to_lab_f32_tasks, _chunks(src.size // 3), src, dst, m32, scale, stats)
     outside, finite = summarize(stats)
     if finite and outside:
         px = src.reshape(-1, 3).astype(np.float32) * scale
@@ -400,10 +411,10 @@ def lab_to_srgb(lab: np.ndarray, mi: np.ndarray) -> np.ndarray:
     src = np.ascontiguousarray(lab).reshape(-1)
     dst = np.empty(src.shape, lab.dtype)
     if lab.dtype == np.float64:
-        _lab_to_srgb_f64(src, dst, mi)
+        run_tasks(_lab_to_srgb_f64_tasks, _chunks(src.size // 3), src, dst, mi)
     else:
         mi32 = mi.astype(np.float32)
-        _lab_to_srgb_f32(src, dst, mi32)
+        run_tasks(_lab_to_srgb_f32_tasks, _chunks(src.size // 3), src, dst, mi32)
         if dst.size and dst.max() > _ENC_MAX:
             idx = np.flatnonzero((dst.reshape(-1, 3) > _ENC_MAX).any(axis=1))
             _lab_to_srgb_f32_fixup(src, dst, mi32, idx)

@@ -15,22 +15,23 @@ integer tables (``t`` in 16-bit fixed point, as OpenCV's 8-bit path does, but fi
 the CIELAB :math:`f(t)` a table of :math:`2^{16} + 8` float32 samples read at the nearest
 one (error < 6e-5 in f, < 0.06 in a*), so the error is dominated by the final rounding to
 8 bits (half a code of each channel). The loops are serial over a flat ``(N * 3,)`` slice
-run over chunks by a ``prange`` wrapper (table reads: scalar code, no gathers).
+(table reads: scalar code, no gathers), run over work items of :data:`_BLOCK` pixels on
+numba's threads by :func:`imageform._kernels.jit.run_tasks` (one compiled kernel per
+conversion: no ``parallel=True`` wrapper, whose parallel lowering compiles much slower).
 """
 
 from __future__ import annotations
 
 from typing import Any
 
-import numba as nb
 import numpy as np
 
-from imageform._kernels.jit import njit, parallel_pays
+from imageform._kernels.jit import njit, parallel_pays, run_tasks
 
 __all__ = ["DECODE_LUT", "srgb8_to_hsv8", "srgb8_to_lab8", "srgb8_to_lab_f32"]
 
 _F32 = np.float32
-#: Pixels per parallel work item.
+#: Pixels per work item (:func:`imageform._kernels.jit.run_tasks` cuts at these bounds).
 _BLOCK = 16384
 #: Images of fewer pixels (under 4 work items) run the serial loop in the calling thread:
 #: waking numba's thread pool costs more than it gains there.
@@ -113,13 +114,17 @@ def _lab8_serial(src, dst, tx, tab, lt):  # type: ignore[no-untyped-def]
         dst[3 * i + 2] = _sat8(_F32(200) * (fy - tab[z]) + _F32(128))  # b* + 128
 
 
-@njit(parallel=True)
-def _lab8(src, dst, tx, tab, lt):  # type: ignore[no-untyped-def]
-    n = src.shape[0] // 3
-    for c in nb.prange((n + _BLOCK - 1) // _BLOCK):
-        lo = c * _BLOCK
-        hi = min(n, lo + _BLOCK)
-        _lab8_serial(src[3 * lo : 3 * hi], dst[3 * lo : 3 * hi], tx, tab, lt)
+@njit(nogil=True, error_model="numpy")
+def _lab8_tasks(t0, t1, src, dst, tx, tab, lt):  # type: ignore[no-untyped-def]
+    """Work items ``t0 .. t1 - 1`` of :data:`_BLOCK` pixels (a task of ``run_tasks``).
+
+    A serial ``nogil`` kernel, not a ``parallel=True`` ``prange``: numba's parallel lowering
+    and its gufunc cost seconds of CPU more to compile on a first run, and the same compiled
+    kernel serves small images in the calling thread (no serial twin to compile).
+    """
+    lo = t0 * _BLOCK
+    hi = min(src.shape[0] // 3, t1 * _BLOCK)
+    _lab8_serial(src[3 * lo : 3 * hi], dst[3 * lo : 3 * hi], tx, tab, lt)
 
 
 @njit(**_JIT)
@@ -141,13 +146,12 @@ def _labf_serial(src, dst, tx, tab):  # type: ignore[no-untyped-def]
         dst[3 * i + 2] = _F32(200) * (fy - fz)
 
 
-@njit(parallel=True)
-def _labf(src, dst, tx, tab):  # type: ignore[no-untyped-def]
-    n = src.shape[0] // 3
-    for c in nb.prange((n + _BLOCK - 1) // _BLOCK):
-        lo = c * _BLOCK
-        hi = min(n, lo + _BLOCK)
-        _labf_serial(src[3 * lo : 3 * hi], dst[3 * lo : 3 * hi], tx, tab)
+@njit(nogil=True, error_model="numpy")
+def _labf_tasks(t0, t1, src, dst, tx, tab):  # type: ignore[no-untyped-def]
+    """Work items ``t0 .. t1 - 1`` of :data:`_BLOCK` pixels (a task of ``run_tasks``)."""
+    lo = t0 * _BLOCK
+    hi = min(src.shape[0] // 3, t1 * _BLOCK)
+    _labf_serial(src[3 * lo : 3 * hi], dst[3 * lo : 3 * hi], tx, tab)
 
 
 @njit(**_JIT)
@@ -176,13 +180,23 @@ def _hsv8_serial(src, dst):  # type: ignore[no-untyped-def]
         dst[3 * i + 2] = np.uint8(np.int32(mx))
 
 
-@njit(parallel=True)
-def _hsv8(src, dst):  # type: ignore[no-untyped-def]
-    n = src.shape[0] // 3
-    for c in nb.prange((n + _BLOCK - 1) // _BLOCK):
-        lo = c * _BLOCK
-        hi = min(n, lo + _BLOCK)
-        _hsv8_serial(src[3 * lo : 3 * hi], dst[3 * lo : 3 * hi])
+@njit(nogil=True, error_model="numpy")
+def _hsv8_tasks(t0, t1, src, dst):  # type: ignore[no-untyped-def]
+    """Work items ``t0 .. t1 - 1`` of :data:`_BLOCK` pixels (a task of ``run_tasks``)."""
+    lo = t0 * _BLOCK
+    hi = min(src.shape[0] // 3, t1 * _BLOCK)
+    _hsv8_serial(src[3 * lo : 3 * hi], dst[3 * lo : 3 * hi])
+
+
+def _run(kernel: Any, src: np.ndarray, *args: Any) -> None:
+    """Run ``kernel`` over the work items of the flat ``(N * 3,)`` image ``src``.
+
+    On numba's threads (:func:`imageform._kernels.jit.run_tasks`) from
+    :data:`PARALLEL_MIN_PIXELS` up, in the calling thread below.
+    """
+    n = src.size // 3
+    threads = None if parallel_pays(n, PARALLEL_MIN_PIXELS) else 1
+    run_tasks(kernel, (n + _BLOCK - 1) // _BLOCK, src, *args, threads=threads)
 
 
 def _flat_out(image: np.ndarray, out: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
@@ -199,8 +213,7 @@ def srgb8_to_lab8(image: np.ndarray, m: np.ndarray, out: np.ndarray | None = Non
     ``out`` (C-contiguous uint8 of the image's shape, checked by the caller) is written in place.
     """
     src, res = _flat_out(image, out)
-    run = _lab8 if parallel_pays(src.size // 3, PARALLEL_MIN_PIXELS) else _lab8_serial
-    run(src, res.reshape(-1), xyz_tables(m), F_TABLE, L_TABLE)
+    _run(_lab8_tasks, src, res.reshape(-1), xyz_tables(m), F_TABLE, L_TABLE)
     return res
 
 
@@ -210,14 +223,12 @@ def srgb8_to_lab_f32(image: np.ndarray, m: np.ndarray, out: np.ndarray) -> np.nd
     ``out``: C-contiguous float32 of the image's shape (checked by the caller).
     """
     src = np.ascontiguousarray(image).reshape(-1)
-    run = _labf if parallel_pays(src.size // 3, PARALLEL_MIN_PIXELS) else _labf_serial
-    run(src, out.reshape(-1), xyz_tables(m, FINE_BITS), F_TABLE)
+    _run(_labf_tasks, src, out.reshape(-1), xyz_tables(m, FINE_BITS), F_TABLE)
     return out
 
 
 def srgb8_to_hsv8(image: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
     """uint8 sRGB (..., 3) -> uint8 HSV (H/2 in [0, 180), 255 S, V), as ``COLOR_RGB2HSV``."""
     src, res = _flat_out(image, out)
-    run = _hsv8 if parallel_pays(src.size // 3, PARALLEL_MIN_PIXELS) else _hsv8_serial
-    run(src, res.reshape(-1))
+    _run(_hsv8_tasks, src, res.reshape(-1))
     return res
