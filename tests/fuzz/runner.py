@@ -659,13 +659,14 @@ def _limit_memory() -> None:
     resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
 
 
-def _worker(conn: Any) -> None:
-    # a fuzzed path argument ("abc") is relative: it lands in a folder of the worker's own,
-    # removed when the worker ends, not in the repository (nor left in the system's /tmp)
-    scratch = tempfile.mkdtemp(prefix="imageform-fuzz-")
+def _worker(conn: Any, root: str) -> None:
+    # a fuzzed path argument ("abc") is relative: it lands in a folder of the worker's own
+    # inside the run's folder ``root``, removed when the worker ends (and ``root`` with
+    # whatever a killed worker left, when the run ends: :func:`run`), not in the repository
+    scratch = tempfile.mkdtemp(prefix="worker-", dir=root)
     os.chdir(scratch)
     # the values' temporary files and folders (values._tmpdir) go there too
-    os.environ.setdefault("IMAGEFORM_FUZZ_TMP", scratch)
+    os.environ["IMAGEFORM_FUZZ_TMP"] = scratch
     try:
         _serve(conn)
     finally:
@@ -710,10 +711,30 @@ def run(
     workers: int = 1,
     timeout: float = 20.0,
     progress: Callable[[int, int], None] | None = None,
+    tmp: str | os.PathLike[str] | None = None,
 ) -> list[Outcome]:
     """Run ``tasks`` in ``workers`` forked processes (tasks of one callable go to one
     worker, in order), each call under ``timeout`` seconds; a worker that times out or dies
-    is replaced."""
+    is replaced.
+
+    The workers' files (their working folders, the values' temporary files) go in one
+    ``imageform-fuzz-*`` folder under ``tmp`` (default: the system's temporary folder),
+    removed when the run ends, also what a killed worker could not remove itself.
+    """
+    root = tempfile.mkdtemp(prefix="imageform-fuzz-", dir=tmp)
+    try:
+        return _run(tasks, workers, timeout, progress, root)
+    finally:
+        shutil.rmtree(root, ignore_errors=True)
+
+
+def _run(
+    tasks: Iterable[Task],
+    workers: int,
+    timeout: float,
+    progress: Callable[[int, int], None] | None,
+    root: str,
+) -> list[Outcome]:
     ctx = mp.get_context("spawn")  # fork after OpenMP/torch threads started is unsafe
     groups: dict[str, list[Task]] = {}
     for t in tasks:
@@ -724,7 +745,7 @@ def run(
 
     def start() -> tuple[Any, Any]:
         parent, child = ctx.Pipe()
-        p = ctx.Process(target=_worker, args=(child,), daemon=True)
+        p = ctx.Process(target=_worker, args=(child, root), daemon=True)
         p.start()
         child.close()
         try:

@@ -13,6 +13,9 @@ malformed arguments (see :mod:`tests.fuzz.runner`).
 
 from __future__ import annotations
 
+import os
+from pathlib import Path
+
 import pytest
 
 from tests.fuzz.known import KNOWN
@@ -139,3 +142,43 @@ def test_a_short_parameter_name_is_found_only_as_a_word() -> None:
     assert _names_param("expected max-iter >= 1", "max_iter")
     assert _names_param("image_size (width, height)[0]: expected ...", "image_size")
     assert not _names_param("expected xyz of shape (..., 3)", "xy")
+
+
+def test_values_remove_their_temporary_folders(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from tests.fuzz.values import V, remove_tmpdirs, resolve
+
+    monkeypatch.setenv("IMAGEFORM_FUZZ_TMP", str(tmp_path))
+    folder = resolve(V("tmpdir"))
+    resolve(V("tmpfile_png")).write_bytes(b"x")
+    (folder / "f.txt").write_text("x")
+    assert len(list(tmp_path.iterdir())) == 2
+    remove_tmpdirs()  # also registered with atexit
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_run_leaves_no_temporary_folder(tmp_path: Path) -> None:
+    # the workers' folders and the values' temporary files (about 33 imageform-fuzz-* folders
+    # per default run were left in /tmp): removed when the run ends, also those of a worker
+    # killed (on a timeout or a crash), which cannot remove its own
+    import multiprocessing
+    import signal
+
+    tasks = [t for t in all_tasks() if t.name == "imageform.batch.plan_jobs"][:2]
+    assert len(tasks) == 2
+    seen: list[list[Path]] = []
+
+    def kill_the_worker_at_the_end(done: int, total: int) -> None:
+        if done == total:
+            seen.append([p for d in tmp_path.iterdir() for p in d.iterdir()])
+            for p in multiprocessing.active_children():
+                os.kill(p.pid, signal.SIGKILL)
+                p.join()
+
+    outcomes = run(
+        tasks, workers=1, timeout=TIMEOUT, progress=kill_the_worker_at_the_end, tmp=tmp_path
+    )
+    assert [o.result for o in outcomes if o.kind == "valid"] == ["ok"]
+    assert seen and seen[0]  # the killed worker's folder (with the values' files) was there
+    assert list(tmp_path.iterdir()) == []

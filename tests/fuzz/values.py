@@ -7,8 +7,10 @@ handed to every call, so that a callable that writes into its input cannot poiso
 
 from __future__ import annotations
 
+import atexit
 import copy
 import os
+import shutil
 import tempfile
 import warnings
 from collections.abc import Callable
@@ -116,9 +118,29 @@ def _result() -> Any:
         return simulate(_scene(), rng=0)
 
 
+#: The folders :func:`_tmpdir` made in this process, removed by :func:`remove_tmpdirs`.
+_MADE: list[Path] = []
+
+
 def _tmpdir() -> Path:
+    """A new empty folder, under ``IMAGEFORM_FUZZ_TMP`` (a fuzz worker's scratch) if set.
+
+    Removed by :func:`remove_tmpdirs` (at the latest when the process exits; the runner also
+    removes a killed worker's whole scratch folder).
+    """
     base = os.environ.get("IMAGEFORM_FUZZ_TMP") or None
-    return Path(tempfile.mkdtemp(prefix="imageform-fuzz-", dir=base))
+    path = Path(tempfile.mkdtemp(prefix="imageform-fuzz-", dir=base))
+    _MADE.append(path)
+    return path
+
+
+def remove_tmpdirs() -> None:
+    """Remove every folder :func:`_tmpdir` made in this process (and what is in it)."""
+    while _MADE:
+        shutil.rmtree(_MADE.pop(), ignore_errors=True)
+
+
+atexit.register(remove_tmpdirs)
 
 
 def _chart() -> np.ndarray:
