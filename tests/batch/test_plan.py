@@ -141,3 +141,15 @@ def test_plan_refuses_an_output_folder_linked_into_the_inputs(tmp_path: Path) ->
     (tmp_path / "in_link").symlink_to(tmp_path / "in", target_is_directory=True)
     with pytest.raises(InvalidInputError, match="match the input glob"):
         plan_jobs(f"{tmp_path}/in_link/**/*.png", tmp_path / "in" / "out")
+
+
+def test_runner_exports_the_plan_names_from_one_list() -> None:
+    # the plan's public names are listed once, in batch._plan (duplicates: the list was
+    # written again in batch.runner); runner re-exports them and the package exports both
+    import imageform.batch as batch
+    from imageform.batch import _plan, runner
+
+    assert set(_plan.__all__) <= set(runner.__all__) <= set(batch.__all__)
+    assert len(runner.__all__) == len(set(runner.__all__))
+    for name in runner.__all__:
+        assert getattr(runner, name) is getattr(batch, name)

@@ -41,6 +41,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 # the parts, in private modules; their public names are this module's
+from imageform.batch import _plan
 from imageform.batch._job import run_job
 from imageform.batch._manifest import MANIFEST, _entry, _Manifest, _read_manifest
 from imageform.batch._plan import (
@@ -61,20 +62,9 @@ from imageform.workflows import Options
 if TYPE_CHECKING:
     from rich.console import Console
 
-__all__ = [
-    "MANIFEST",
-    "BatchInterrupted",
-    "BatchReport",
-    "Job",
-    "JobResult",
-    "NoWorkersError",
-    "batch_options",
-    "batch_workflow",
-    "plan_jobs",
-    "print_summary",
-    "run_batch",
-    "run_job",
-]
+# the plan's public names (the commands, the jobs, their results) are this module's too
+__all__ = ["MANIFEST", "print_summary", "run_batch", "run_job"]
+__all__ += _plan.__all__
 
 
 # ---------------------------------------------------------------- the run (on the client)
