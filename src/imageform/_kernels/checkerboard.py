@@ -49,6 +49,7 @@ from numpy.typing import NDArray
 from imageform._kernels.jit import njit
 
 __all__ = [
+    "SaddleMaxima",
     "corner_window_weights",
     "gaussian_weights",
     "lattice_problem_numba",
@@ -334,6 +335,13 @@ def gaussian_weights(sigma: float, truncate: float = 3.0) -> NDArray[np.float64]
     return w / w.sum()
 
 
+#: ``(smooth, peak, ys, xs, values)`` of :func:`saddle_maxima_numba` and its twin: the smoothed
+#: image, the largest response, the maxima's rows and columns and their 3 x 3 neighbourhoods.
+SaddleMaxima = tuple[
+    NDArray[np.floating], float, NDArray[np.int64], NDArray[np.int64], NDArray[np.floating]
+]
+
+
 def saddle_maxima_numba(
     gray: NDArray[np.number],
     taps: NDArray[np.floating],
@@ -341,13 +349,7 @@ def saddle_maxima_numba(
     border: int,
     relative: float,
     scale: float | np.floating,
-) -> tuple[
-    NDArray[np.floating],
-    float,
-    NDArray[np.int64],
-    NDArray[np.int64],
-    NDArray[np.floating],
-]:
+) -> SaddleMaxima:
     """Smoothing, saddle response and its local maxima in one pass over the image.
 
     ``gray`` is passed to the compiled kernel (:func:`_saddle_maxima`) beside an empty array
@@ -372,13 +374,7 @@ def _saddle_maxima(
     border: int,
     relative: float,
     scale: float | np.floating,
-) -> tuple[
-    NDArray[np.floating],
-    float,
-    NDArray[np.int64],
-    NDArray[np.int64],
-    NDArray[np.floating],
-]:  # pragma: no cover - numba-compiled
+) -> SaddleMaxima:  # pragma: no cover - numba-compiled
     """:func:`saddle_maxima_numba`'s kernel: ``gray`` is ``gray8`` if ``is8`` else ``grayf``.
 
     The image read is ``gray / scale`` in the dtype of ``taps`` (``gray`` as given: uint8
@@ -567,13 +563,7 @@ def saddle_maxima_numpy(
     border: int,
     relative: float,
     scale: float | np.floating,
-) -> tuple[
-    NDArray[np.floating],
-    float,
-    NDArray[np.int64],
-    NDArray[np.int64],
-    NDArray[np.floating],
-]:
+) -> SaddleMaxima:
     """Plain twin of :func:`saddle_maxima_numba`: all maxima above ``relative`` times the peak."""
     smooth, resp = smooth_saddle_numpy(gray.astype(taps.dtype) / taps.dtype.type(scale), taps)
     peak = max(float(resp.max()), 0.0)
@@ -622,23 +612,31 @@ def sample_bilinear_numba(
     image: NDArray[np.floating], u: NDArray[np.float64], v: NDArray[np.float64]
 ) -> NDArray[np.float64]:  # pragma: no cover - numba-compiled
     """Bilinear samples of ``image`` at ``(u, v)`` (any equal shapes), edges replicated."""
-    h, w = image.shape
     uf = u.ravel()
     vf = v.ravel()
     out = np.empty(uf.size)
     for k in range(uf.size):
-        x = min(max(uf[k], 0.0), w - 1.0)
-        y = min(max(vf[k], 0.0), h - 1.0)
-        x0 = min(int(np.floor(x)), w - 2) if w > 1 else 0
-        y0 = min(int(np.floor(y)), h - 2) if h > 1 else 0
-        ax = x - x0
-        ay = y - y0
-        x1 = min(x0 + 1, w - 1)
-        y1 = min(y0 + 1, h - 1)
-        out[k] = (1.0 - ay) * ((1.0 - ax) * image[y0, x0] + ax * image[y0, x1]) + ay * (
-            (1.0 - ax) * image[y1, x0] + ax * image[y1, x1]
-        )
+        out[k] = _bilinear_clamped(image, uf[k], vf[k])
     return out.reshape(u.shape)
+
+
+@njit(fastmath=False, inline="always")
+def _bilinear_clamped(
+    image: NDArray[np.floating], x: float, y: float
+) -> float:  # pragma: no cover - numba-compiled
+    """Bilinear sample of ``image`` at ``(x, y)``, edges replicated (inlined by its callers)."""
+    h, w = image.shape
+    x = min(max(x, 0.0), w - 1.0)
+    y = min(max(y, 0.0), h - 1.0)
+    x0 = min(int(np.floor(x)), w - 2) if w > 1 else 0
+    y0 = min(int(np.floor(y)), h - 2) if h > 1 else 0
+    ax = x - x0
+    ay = y - y0
+    x1 = min(x0 + 1, w - 1)
+    y1 = min(y0 + 1, h - 1)
+    return (1.0 - ay) * ((1.0 - ax) * image[y0, x0] + ax * image[y0, x1]) + ay * (
+        (1.0 - ax) * image[y1, x0] + ax * image[y1, x1]
+    )
 
 
 def sample_bilinear_numpy(
@@ -705,17 +703,7 @@ def ring_test_numba(
                 ) + ay * ((1.0 - ax) * smooth[y0 + 1, x0] + ax * smooth[y0 + 1, x0 + 1])
         else:
             for s in range(ns):
-                x = min(max(px + offsets[s, 0], 0.0), w - 1.0)
-                y = min(max(py + offsets[s, 1], 0.0), h - 1.0)
-                x0 = min(int(np.floor(x)), w - 2) if w > 1 else 0
-                y0 = min(int(np.floor(y)), h - 2) if h > 1 else 0
-                ax = x - x0
-                ay = y - y0
-                x1 = min(x0 + 1, w - 1)
-                y1 = min(y0 + 1, h - 1)
-                vals[s] = (1.0 - ay) * ((1.0 - ax) * smooth[y0, x0] + ax * smooth[y0, x1]) + ay * (
-                    (1.0 - ax) * smooth[y1, x0] + ax * smooth[y1, x1]
-                )
+                vals[s] = _bilinear_clamped(smooth, px + offsets[s, 0], py + offsets[s, 1])
         lo = vals[0]
         hi = vals[0]
         for s in range(1, ns):
