@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import types
 import typing
 from pathlib import Path
 from typing import Any
@@ -49,7 +50,7 @@ def _bad_values(tp: Any) -> list[Any]:
         bad += [2.5, "3", True, 10**30, math.nan]
     elif kind is float:
         bad += [math.nan, math.inf, "3", 1 + 1j]
-    elif kind is str:
+    elif kind is str or typing.get_origin(kind) is typing.Literal:
         bad += [3, ["a", "b"]]
     elif kind is Path:
         bad += [0, ""]
@@ -154,6 +155,9 @@ def test_options_base_has_no_unchecked_field_type() -> None:
         assert issubclass(wf.options, Options)
         for name, tp in typing.get_type_hints(wf.options).items():
             args = [a for a in typing.get_args(tp) if a is not type(None)] or [tp]
+            if typing.get_origin(tp) is typing.Literal:  # a choice's names: checked as text
+                args = [str]
+            args = [str if typing.get_origin(a) is typing.Literal else a for a in args]
             if typing.get_origin(tp) is tuple:
                 args = [a for a in typing.get_args(tp) if a is not Ellipsis]
             assert set(args) <= known, (wf.name, name, tp)
@@ -164,3 +168,27 @@ def test_hsv_ranges_are_finite_pairs(text: str) -> None:
     with pytest.raises(InvalidInputError, match="--h") as info:
         get_workflow("segment").make_options(h=text)
     assert len(str(info.value)) <= 200
+
+
+def test_choice_fields_are_typed_with_their_names() -> None:
+    # issue 30: an option that takes one of a fixed set of names says so in its type
+    # (Literal), and its choices are those names (choices=get_args(the Literal)); only the
+    # options whose names live in a library registry ("module:NAME", imported on use so
+    # that --help imports no NumPy) stay str
+    for name, wf in WORKFLOWS.items():
+        hints = typing.get_type_hints(wf.options)
+        for f in dataclasses.fields(wf.options):
+            choices = f.metadata.get("choices")
+            tp = hints[f.name]
+            core = [a for a in typing.get_args(tp) if a is not type(None)]
+            if typing.get_origin(tp) in (typing.Union, types.UnionType) and len(core) == 1:
+                tp = core[0]
+            where = f"{name} {f.name}"
+            if choices is None:
+                assert typing.get_origin(tp) is not typing.Literal, where
+            elif isinstance(choices, str):
+                assert tp is str, where
+            else:
+                assert typing.get_origin(tp) is typing.Literal, where
+                assert tuple(choices) == typing.get_args(tp), where
+                assert f.default is None or f.default in choices, where

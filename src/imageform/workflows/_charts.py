@@ -16,7 +16,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal, get_args
 
 from imageform.errors import InvalidInputError
 from imageform.workflows._images import read
@@ -32,7 +32,8 @@ __all__ = [
 ]
 
 #: Values of ``--chart-layout`` (as :data:`imageform.analysis.CHART_LAYOUTS`).
-CHART_LAYOUTS = ("auto", "cropped", "detect")
+ChartLayout = Literal["auto", "cropped", "detect"]
+CHART_LAYOUTS: tuple[str, ...] = get_args(ChartLayout)
 CHART_LAYOUT_HELP = (
     "How the chart is found in an image: auto (a chart cropped to fill the frame when its "
     "grid validates, else a ColorChecker detected anywhere in the photograph), cropped, detect."

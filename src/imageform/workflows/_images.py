@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal, get_args
 
 from imageform import _deprecate
 from imageform.errors import InvalidInputError
@@ -29,15 +29,20 @@ __all__ = [
     "write_mapped",
 ]
 
+#: The choices of the options shared by the workflows (``choices=get_args(...)``).
+Alpha = Literal["reject", "drop", "keep"]
+OutOfRange = Literal["clip", "error"]
+Device = Literal["cpu", "cuda"]
+
 
 @dataclass(frozen=True, kw_only=True)
 class ImageIn(Options):
     """How input images are read."""
 
-    alpha: str = option(
+    alpha: Alpha = option(
         "reject",
         help="Transparent pixels in an input: reject, drop (ignore the alpha channel) or keep.",
-        choices=("reject", "drop", "keep"),
+        choices=get_args(Alpha),
     )
     max_pixels: int | None = option(
         None,
@@ -56,10 +61,10 @@ class ImageOut(Options):
         "default: 16 for 16-bit input, else 8 (TIFF: float32).",
         metavar="8|16",
     )
-    out_of_range: str = option(
+    out_of_range: OutOfRange = option(
         "clip",
         help="Values outside [0, 1] in integer output: clip (with a note) or error.",
-        choices=("clip", "error"),
+        choices=get_args(OutOfRange),
     )
     clip: bool = option(False, help="Same as --out-of-range clip.", hidden=True)
 
@@ -82,11 +87,11 @@ image_out_renames = _deprecate.renamed_fields({"bits": "bit_depth"})
 class OnDevice(Options):
     """Where a pointwise command computes: the CPU, or the GPU's fused kernels."""
 
-    device: str = option(
+    device: Device = option(
         "cpu",
         help="Where the pixels are computed: cuda runs imageform's fused GPU kernels (numba's "
         "CUDA target; refused in one line when no GPU is usable).",
-        choices=("cpu", "cuda"),
+        choices=get_args(Device),
     )
 
 

@@ -232,7 +232,7 @@ def _checked(value: Any, hint: Any, f: dataclasses.Field[Any], label: str) -> An
         return as_int(value, label, minimum=lo, maximum=_INT_MAX if hi is None else hi)
     if tp is float:
         return as_real(value, label, minimum=lo, maximum=hi)
-    if tp is str:
+    if tp is str or typing.get_origin(tp) is typing.Literal:  # Literal: a choice's names
         if isinstance(value, str):
             return str(value)
         raise InvalidInputError(f"expected {label} as text, got {describe(value)}")

@@ -14,13 +14,14 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal, get_args
 
 from imageform import _deprecate
 from imageform.errors import InvalidInputError
 from imageform.workflows import _charts
 from imageform.workflows._images import ImageIn, ImageOut, image_out_renames, read, write
 from imageform.workflows._spec import Input, Output, Result, Run, Workflow, option
+from imageform.workflows.chart import CorrectionMethod
 
 __all__ = [
     "WORKFLOWS",
@@ -34,7 +35,8 @@ _CSV_COLUMNS = ("a_r", "a_g", "a_b", "b_r", "b_g", "b_b")
 # Stain-normalisation methods: imageform.analysis.STAIN_NORMALIZATION_METHODS (the one
 # registry), spelled out so that --help imports no NumPy; tests/test_registries.py checks
 # that they are the same. This module's public STAIN_METHODS is deprecated.
-_STAIN_METHODS = ("macenko", "reinhard")
+_StainMethod = Literal["macenko", "reinhard"]
+_STAIN_METHODS = get_args(_StainMethod)
 __getattr__ = _deprecate.module_getattr(
     "imageform.workflows.analysis",
     {
@@ -162,7 +164,7 @@ class StainNormalizeOptions(ImageIn, ImageOut):
         input=True,
         metavar="FILE",
     )
-    method: str = option(
+    method: _StainMethod = option(
         "macenko",
         help="Macenko (optical-density stain vectors) or Reinhard (CIELAB statistics).",
         choices=_STAIN_METHODS,
@@ -234,14 +236,14 @@ def stain_normalize(run: Run, opts: StainNormalizeOptions, *, out: Path, image: 
 
 # imageform.analysis.CORRECTION_METHODS (the one list), spelled out so that --help imports
 # no NumPy; tests/test_registries.py checks that they are the same.
-_CORRECTION_METHODS = ("linear", "root_polynomial")
+_CORRECTION_METHODS = get_args(CorrectionMethod)
 
 
 @dataclass(frozen=True, kw_only=True)
 class FitCorrectionOptions(ImageIn):
     """Options of ``imageform fit-correction``."""
 
-    method: str = option(
+    method: CorrectionMethod = option(
         "linear",
         help="linear (3x3 in linear light) or root-polynomial.",
         choices=_CORRECTION_METHODS,
@@ -251,7 +253,7 @@ class FitCorrectionOptions(ImageIn):
         4, help="Rows of the grid of a chart cropped to fill the frame.", minimum=1, maximum=1000
     )
     cols: int = option(6, help="Columns of that grid.", minimum=1, maximum=1000)
-    chart_layout: str = option(
+    chart_layout: _charts.ChartLayout = option(
         "auto", help=_charts.CHART_LAYOUT_HELP, choices=_charts.CHART_LAYOUTS
     )
     overlay: Path | None = option(
@@ -399,13 +401,13 @@ class HarmonizeOptions(ImageIn, ImageOut):
         input=True,
         metavar="FILE",
     )
-    method: str = option(
+    method: CorrectionMethod = option(
         "linear",
         help="--chart: linear (3x3 in linear light) or root-polynomial.",
         choices=_CORRECTION_METHODS,
     )
     degree: int = option(2, help="--chart: root-polynomial degree (1 to 3).", minimum=1, maximum=3)
-    chart_layout: str = option(
+    chart_layout: _charts.ChartLayout = option(
         "auto", help=_charts.CHART_LAYOUT_HELP, choices=_charts.CHART_LAYOUTS
     )
     overlay: Path | None = option(

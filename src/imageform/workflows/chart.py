@@ -21,7 +21,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal, get_args
 
 from imageform.errors import InvalidInputError
 from imageform.workflows._images import ImageIn, read
@@ -30,14 +30,19 @@ from imageform.workflows._spec import Input, Output, Result, Run, Workflow, opti
 __all__ = ["WORKFLOWS", "ChartOptions"]
 
 
+#: Values of a chart correction's ``--method`` (also ``fit-correction``, ``harmonize``):
+#: a 3x3 matrix in linear light or root-polynomial.
+CorrectionMethod = Literal["linear", "root_polynomial"]
+
+
 @dataclass(frozen=True, kw_only=True)
 class ChartOptions(ImageIn):
     """Options of ``imageform chart``."""
 
-    method: str = option(
+    method: CorrectionMethod = option(
         "linear",
         help="Correction model: linear (3x3 in linear light) or root-polynomial.",
-        choices=("linear", "root_polynomial"),
+        choices=get_args(CorrectionMethod),
     )
     degree: int = option(2, help="Root-polynomial degree (1 to 3).")
     min_score: float = option(

@@ -4,9 +4,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal, get_args
 
 from imageform.errors import InvalidInputError
+from imageform.workflows._charts import ChartLayout
 from imageform.workflows._images import (
     ImageIn,
     ImageOut,
@@ -65,6 +66,15 @@ DISPLAYABLE_SPACES = _DISPLAYABLE
 
 # ---------------------------------------------------------------- convert
 
+_YccStandard = Literal["bt601", "bt709", "bt2020"]
+_YccRange = Literal["full", "limited"]
+_GrayMethod = Literal["rec601", "rec709"]
+#: ``delta-e --method`` and the simulation models of ``cvd`` and ``palette-check``.
+_DeltaEMethod = Literal["ciede2000", "cie76", "cie94", "cmc"]
+_CvdMethod = Literal["machado2009", "brettel1997", "vienot1999"]
+#: ``gamut --coords``: CIE 1931 xy or CIE 1976 u'v'.
+_Coords = Literal["xy", "uv"]
+
 
 @image_out_renames
 @dataclass(frozen=True, kw_only=True)
@@ -79,15 +89,15 @@ class ConvertOptions(ImageIn, ImageOut, OnDevice):
         metavar="SPACE",
     )
     white: str | None = option(None, help="Reference white for lab, luv, lch, xyy (e.g. D65).")
-    standard: str | None = option(
-        None, help="Y'CbCr standard.", choices=("bt601", "bt709", "bt2020")
+    standard: _YccStandard | None = option(
+        None, help="Y'CbCr standard.", choices=get_args(_YccStandard)
     )
-    ycc_range: str | None = option(
-        None, flag="--range", help="Y'CbCr range.", choices=("full", "limited")
+    ycc_range: _YccRange | None = option(
+        None, flag="--range", help="Y'CbCr range.", choices=get_args(_YccRange)
     )
     code_bits: int | None = option(None, help="Y'CbCr code-value bits (8, 10).", metavar="N")
-    gray_method: str | None = option(
-        None, flag="--gray-method", help="Grey conversion.", choices=("rec601", "rec709")
+    gray_method: _GrayMethod | None = option(
+        None, flag="--gray-method", help="Grey conversion.", choices=get_args(_GrayMethod)
     )
 
     def check(self) -> None:
@@ -162,7 +172,7 @@ def convert(run: Run, opts: ConvertOptions, *, out: Path, image: Path) -> Result
 #: ``--method``: :data:`imageform.color.WHITE_BALANCE_METHODS` (the one registry) with the
 #: ``max_rgb`` alias, and ``chart``. Spelled out so that ``--help`` imports no NumPy;
 #: tests/test_registries.py checks it against the registry.
-_WB_METHODS = (
+_WbMethod = Literal[
     "gray_world",
     "white_patch",
     "max_rgb",
@@ -170,7 +180,9 @@ _WB_METHODS = (
     "gray_edge",
     "manual",
     "chart",
-)
+]
+_WB_METHODS = get_args(_WbMethod)
+_WbNormalize = Literal["mean", "green"]
 
 
 @image_out_renames
@@ -178,7 +190,7 @@ _WB_METHODS = (
 class WhiteBalanceOptions(ImageIn, ImageOut, OnDevice):
     """Options of ``imageform white-balance``."""
 
-    method: str = option("gray-world", help="Illuminant estimate.", choices=_WB_METHODS)
+    method: _WbMethod = option("gray_world", help="Illuminant estimate.", choices=_WB_METHODS)
     percentile: float | None = option(
         None, help="white-patch: percentile of each channel (0-100; default 99, max-rgb 100)."
     )
@@ -186,8 +198,10 @@ class WhiteBalanceOptions(ImageIn, ImageOut, OnDevice):
     sigma: float = option(1.0, help="gray-edge: Gaussian scale in pixels.")
     illuminant: str | None = option(None, help="manual: illuminant name, e.g. A, D50, F2.")
     cct: float | None = option(None, help="manual: correlated colour temperature in kelvin.")
-    normalize: str = option(
-        "mean", help="Keep the mean grey level or the green channel.", choices=("mean", "green")
+    normalize: _WbNormalize = option(
+        "mean",
+        help="Keep the mean grey level or the green channel.",
+        choices=get_args(_WbNormalize),
     )
     chart: Path | None = option(
         None,
@@ -196,11 +210,11 @@ class WhiteBalanceOptions(ImageIn, ImageOut, OnDevice):
         input=True,
         metavar="FILE",
     )
-    chart_layout: str = option(
+    chart_layout: ChartLayout = option(
         "auto",
         help="chart: how the chart is found in an image: auto (a cropped chart when its grid "
         "validates, else detected anywhere in the photograph), cropped, detect.",
-        choices=("auto", "cropped", "detect"),
+        choices=get_args(ChartLayout),
     )
     overlay: Path | None = option(
         None,
@@ -297,10 +311,10 @@ _PERCENTILES = (50.0, 90.0, 95.0, 99.0)
 class DeltaEOptions(ImageIn, OnDevice):
     """Options of ``imageform delta-e``."""
 
-    method: str = option(
+    method: _DeltaEMethod = option(
         "ciede2000",
         help="Colour-difference formula.",
-        choices=("ciede2000", "cie76", "cie94", "cmc"),
+        choices=get_args(_DeltaEMethod),
     )
     heatmap: Path | None = option(
         None, help="Also write a heat map of ΔE (PNG, colour scale 0 to 10).", output=True
@@ -385,10 +399,10 @@ class CvdOptions(ImageIn, ImageOut):
         help="protan, deutan or tritan (also protanopia, deuteranomaly ...).",
     )
     severity: float = option(1.0, help="0 (normal vision) to 1 (dichromat).")
-    method: str = option(
+    method: _CvdMethod = option(
         "machado2009",
         help="Simulation model.",
-        choices=("machado2009", "brettel1997", "vienot1999"),
+        choices=get_args(_CvdMethod),
     )
 
 
@@ -429,8 +443,8 @@ class GamutOptions(Options):
     spaces: str = option(
         "srgb,display-p3,rec2020", help="Comma-separated RGB spaces (srgb, adobe-rgb, ...)."
     )
-    coords: str = option(
-        "xy", help="Diagram coordinates for -o: xy or uv (u'v').", choices=("xy", "uv")
+    coords: _Coords = option(
+        "xy", help="Diagram coordinates for -o: xy or uv (u'v').", choices=get_args(_Coords)
     )
 
     def names(self) -> list[str]:
@@ -482,10 +496,10 @@ class PaletteCheckOptions(Options):
     """Options of ``imageform palette-check``."""
 
     threshold: float = option(10.0, help="Smallest acceptable ΔE00 between two colours.")
-    method: str = option(
+    method: _CvdMethod = option(
         "machado2009",
         help="Colour-vision-deficiency model.",
-        choices=("machado2009", "brettel1997", "vienot1999"),
+        choices=get_args(_CvdMethod),
     )
 
 

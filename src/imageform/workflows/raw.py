@@ -4,12 +4,16 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal, get_args
 
-from imageform.workflows._images import ImageOut, image_out_renames, write
+from imageform.workflows._images import Device, ImageOut, image_out_renames, write
 from imageform.workflows._spec import Input, Options, Output, Result, Run, Workflow, option
 
 __all__ = ["WORKFLOWS", "DevelopOptions"]
+
+
+#: ``develop --white-balance``: the as-shot gains, LibRaw's daylight gains, or none.
+_RawWhiteBalance = Literal["camera", "daylight", "none"]
 
 
 @image_out_renames
@@ -22,10 +26,10 @@ class DevelopOptions(ImageOut, Options):
         help="Demosaicing method (bilinear matches LibRaw's LINEAR).",
         choices="imageform.sensor.demosaic:DEMOSAIC_METHODS",
     )
-    white_balance: str = option(
+    white_balance: _RawWhiteBalance = option(
         "camera",
         help="White balance: the as-shot gains (camera), LibRaw's daylight gains, or none.",
-        choices=("camera", "daylight", "none"),
+        choices=get_args(_RawWhiteBalance),
     )
     space: str = option(
         "srgb",
@@ -33,11 +37,11 @@ class DevelopOptions(ImageOut, Options):
         choices="imageform.color:RGB_SPACES",
     )
     linear: bool = option(False, help="Leave the output linear (no transfer function).")
-    device: str = option(
+    device: Device = option(
         "cpu",
         help="Where the development runs: cuda develops bilinear and Malvar Bayer mosaics in "
         "one GPU kernel (numba's CUDA target; refused in one line when no GPU is usable).",
-        choices=("cpu", "cuda"),
+        choices=get_args(Device),
     )
 
 

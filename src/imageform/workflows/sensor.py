@@ -11,6 +11,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Literal, get_args
 
 from imageform.errors import InvalidInputError
 from imageform.workflows._images import ImageIn, ImageOut, image_out_renames, read, write
@@ -19,11 +20,13 @@ from imageform.workflows._spec import Input, Output, Result, Run, Workflow, opti
 __all__ = ["WORKFLOWS", "DemosaicOptions", "MosaicOptions"]
 
 #: The Bayer patterns (imageform.sensor.CFA_PATTERNS, in the normalised spelling).
-_PATTERNS = ("rggb", "bggr", "grbg", "gbrg")
+_Pattern = Literal["rggb", "bggr", "grbg", "gbrg"]
+_PATTERNS = get_args(_Pattern)
 #: imageform.sensor.DEMOSAIC_METHODS (kept literal: ``--help`` imports no numerical code).
 # imageform.sensor.DEMOSAIC_METHODS (the one list), spelled out so that --help imports no
 # NumPy; tests/test_registries.py checks that they are the same.
-_DEMOSAIC_METHODS = ("bilinear", "malvar", "hamilton_adams", "menon", "menon_soft")
+_DemosaicMethod = Literal["bilinear", "malvar", "hamilton_adams", "menon", "menon_soft"]
+_DEMOSAIC_METHODS = get_args(_DemosaicMethod)
 
 
 @image_out_renames
@@ -31,7 +34,7 @@ _DEMOSAIC_METHODS = ("bilinear", "malvar", "hamilton_adams", "menon", "menon_sof
 class MosaicOptions(ImageIn, ImageOut):
     """Options of ``imageform mosaic``."""
 
-    pattern: str = option(
+    pattern: _Pattern = option(
         "rggb", help="Bayer pattern of the colour filter array.", choices=_PATTERNS
     )
 
@@ -66,8 +69,8 @@ def mosaic(run: Run, opts: MosaicOptions, *, out: Path, image: Path) -> Result:
 class DemosaicOptions(ImageIn, ImageOut):
     """Options of ``imageform demosaic``."""
 
-    pattern: str = option("rggb", help="Bayer pattern of the mosaic.", choices=_PATTERNS)
-    method: str = option("menon", help="Demosaicing method.", choices=_DEMOSAIC_METHODS)
+    pattern: _Pattern = option("rggb", help="Bayer pattern of the mosaic.", choices=_PATTERNS)
+    method: _DemosaicMethod = option("menon", help="Demosaicing method.", choices=_DEMOSAIC_METHODS)
     allow_odd: bool = option(
         False,
         help="Accept an odd height or width (the 2x2 cell is cut at the bottom/right edge, "

@@ -10,13 +10,17 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal, get_args
 
 from imageform.errors import InvalidInputError
 from imageform.workflows._images import ImageIn, read
 from imageform.workflows._spec import Input, Output, Result, Run, Workflow, _describe, option
 
 __all__ = ["WORKFLOWS", "SfrOptions"]
+
+
+#: ``sfr --transfer``: the encoding of integer images.
+_Transfer = Literal["srgb", "linear"]
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -29,11 +33,11 @@ class SfrOptions(ImageIn):
         "slanted edge; default: find the edges of a chart of dark squares.",
         metavar="X,Y,W,H",
     )
-    transfer: str = option(
+    transfer: _Transfer = option(
         "srgb",
         help="Encoding of integer images: srgb (decoded to linear first) or linear. Float "
         "images are taken as linear.",
-        choices=("srgb", "linear"),
+        choices=get_args(_Transfer),
     )
     min_angle: float = option(2.0, help="Smallest edge angle (deg) kept by the edge finder.")
     max_angle: float = option(10.0, help="Largest edge angle (deg) kept by the edge finder.")

@@ -12,13 +12,17 @@ from __future__ import annotations
 
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal, get_args
 
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
 from imageform.workflows._images import ImageIn, read, write
 from imageform.workflows._spec import Input, Output, Result, Run, Workflow, option
 
 __all__ = ["WORKFLOWS", "VanishingOptions"]
+
+
+#: ``--principal-point`` ("centre" and "orthocentre": the spellings before issue 30).
+_PrincipalPoint = Literal["center", "orthocenter", "camera", "centre", "orthocentre"]
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -36,10 +40,10 @@ class VanishingOptions(ImageIn):
     seed: int = option(
         0, help="RANSAC seed, an integer (rng= in Python): results are reproducible.", minimum=0
     )
-    principal_point: str = option(
+    principal_point: _PrincipalPoint = option(
         "center",
         # "centre" and "orthocentre": the spellings before issue 30, still accepted
-        choices=("center", "orthocenter", "camera", "centre", "orthocentre"),
+        choices=get_args(_PrincipalPoint),
         help="Where the estimated K's principal point is: the image centre, the orthocentre "
         "of three finite vanishing points, or the camera file's (needs --camera; the focal "
         "length is then estimated alone).",
