@@ -59,6 +59,7 @@ BENCH_SCRIPTS: dict[str, str] = {
     "chunked": "benchmarks/bench_chunked.py",
     "chunked-strips": "benchmarks/bench_chunked.py",
     "color": "benchmarks/bench_color.py",
+    "compile-literals": "benchmarks/compile_literals.py",
     "delta-e": "benchmarks/bench_delta_e.py",
     "demosaic": "benchmarks/bench_demosaic.py",
     "distortion": "benchmarks/bench_distortion.py",

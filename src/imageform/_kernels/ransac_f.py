@@ -210,7 +210,7 @@ def _local_opt(F, p1, p2, thr, sel, w, out):  # type: ignore[no-untyped-def]  # 
         wmean = wsum / m
         for k in range(m):
             w[k] /= wmean
-        _f8(p1, p2, sel, m, w, out)
+        _f8(p1, p2, sel, np.int64(m), w, out)  # not Literal[int](0): one compilation
 
 
 @njit(**_OPTS)
@@ -310,7 +310,7 @@ def fundamental_estimate(  # type: ignore[no-untyped-def]
     pool_sc = np.empty(max(pool, 1))
     n_pool = 0
     best_sc = np.inf
-    best_cnt = -1
+    best_cnt = np.int64(-1)  # not Literal[int](-1): _adopt compiles once
     # SPRT state: off until a best hypothesis gives ε
     sprt = False
     eps = 0.0

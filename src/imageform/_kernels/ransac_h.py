@@ -147,11 +147,13 @@ def _h_lsq(sn, dn, idx, m, Tdi, Ts, H, buf):  # type: ignore[no-untyped-def]  # 
         for b in range(3):
             A[a, 3 + b] = 0.0
             A[3 + b, a] = 0.0
-    _block3(A, 0, 0, 1.0, P[0], P[1], P[2], P[3], P[4], P[5])
-    _block3(A, 3, 3, 1.0, P[0], P[1], P[2], P[3], P[4], P[5])
-    _block3(A, 6, 6, 1.0, S[0], S[1], S[2], S[3], S[4], S[5])
-    _block3(A, 0, 6, -1.0, U[0], U[1], U[2], U[3], U[4], U[5])
-    _block3(A, 3, 6, -1.0, V[0], V[1], V[2], V[3], V[4], V[5])
+    # the offsets as np.int64: literal ints would compile _block3 once per pair of literals
+    o0, o3, o6 = np.int64(0), np.int64(3), np.int64(6)
+    _block3(A, o0, o0, 1.0, P[0], P[1], P[2], P[3], P[4], P[5])
+    _block3(A, o3, o3, 1.0, P[0], P[1], P[2], P[3], P[4], P[5])
+    _block3(A, o6, o6, 1.0, S[0], S[1], S[2], S[3], S[4], S[5])
+    _block3(A, o0, o6, -1.0, U[0], U[1], U[2], U[3], U[4], U[5])
+    _block3(A, o3, o6, -1.0, V[0], V[1], V[2], V[3], V[4], V[5])
     h = buf[4, 0]
     _min_eigvec_psd(A, buf[1], buf[4, 1], buf[4, 2], buf[2], h)
     _h_denorm(h, Tdi, Ts, buf[3], H)
