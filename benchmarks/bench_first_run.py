@@ -241,7 +241,7 @@ def _commands(w: Path) -> dict[str, list[str]]:
         ],
         "vanishing": ["vanishing", str(stage), "--json"],
         "lens": ["lens", "--focal", "50mm", "--f-number", "2.8", "--focus", "2m"],
-        "sfr": ["sfr", str(lab / "edge" / "edge.png"), "--transfer", "linear"],
+        "sfr": ["sfr", str(lab / "edge" / "edge.dng")],  # the lab set writes its edge as a DNG
         "convert": [
             "convert",
             str(KODAK),

@@ -57,3 +57,31 @@ def test_sfr_refusals(tmp_path: Path) -> None:
         execute("sfr", image=src, out=None)
     with pytest.raises(InvalidInputError, match="--roi"):
         get_workflow("sfr").make_options(roi="1,2,3").check()
+
+
+def test_sfr_of_a_raw_file_is_measured_on_its_mosaic(tmp_path: Path) -> None:
+    """A DNG (what ``simulate --lab`` writes for its edge): black level removed, the CFA's
+    four photosites balanced, one channel ``raw`` with the grey chart's MTF50 (0.2201, as
+    test_sfr_chart_npy_to_csv); a colour cast (gains 0.5, 1, 0.7 on R, G, B) changes nothing."""
+    from imageform.io import write_dng
+
+    lin = render_sfr_chart((160, 200), grid=(1, 1), angle_deg=5.0, sigma=0.8, supersampling=4)
+    gains = np.ones_like(lin)
+    gains[0::2, 0::2] = 0.5  # R of RGGB
+    gains[1::2, 1::2] = 0.7  # B
+    black, white = 64.0, 4095.0
+    dn = np.round(black + (white - black) * 0.9 * lin * gains).astype(np.uint16)
+    src = tmp_path / "edge.dng"
+    write_dng(src, dn, cfa_pattern="RGGB", black_level=black, white_level=white,
+              color_matrix=np.eye(3))  # fmt: skip
+    before = src.read_bytes()
+    res = execute("sfr", image=src, out=tmp_path / "sfr.csv")
+    edges = res.summary["edges"]
+    assert len(edges) == 4
+    assert all(list(e["channels"]) == ["raw"] for e in edges)
+    m50 = [e["channels"]["raw"]["mtf50"] for e in edges]
+    assert np.allclose(m50, 0.2201, rtol=0.03), m50
+    assert res.summary["transfer"] == "linear"
+    assert src.read_bytes() == before  # the input untouched
+    with (tmp_path / "sfr.csv").open() as fh:
+        assert {row[1] for row in list(csv.reader(fh))[1:]} == {"raw"}

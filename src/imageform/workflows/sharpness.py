@@ -3,7 +3,11 @@
 With ``--roi x,y,w,h`` one edge region is measured; without it the slanted edges of a chart
 of dark squares are found (:func:`imageform.analysis.find_slanted_edges`) and every one is
 measured (:func:`imageform.analysis.slanted_edge_sfr`). 8- and 16-bit images are decoded
-from sRGB to linear values first unless ``--transfer linear`` (raw or linear files).
+from sRGB to linear values first unless ``--transfer linear`` (raw or linear files). A raw
+file (``.dng``, ``.nef``, ...; what ``imageform simulate --lab`` writes for its edge) is
+measured on its mosaic, black level removed and the four photosites of the CFA balanced onto
+the greens' levels (:func:`imageform.sensor.equalize_cfa`, as ``imageform characterize``
+does): one channel, ``raw``, at the sensor's full sampling, without demosaicing.
 """
 
 from __future__ import annotations
@@ -76,6 +80,31 @@ def _linear(img: Any, transfer: str) -> Any:
     return np.asarray(srgb_to_linear(vals)) if transfer == "srgb" else vals
 
 
+def _edge_image(image: Path, opts: SfrOptions) -> tuple[Any, tuple[str, ...] | None]:
+    """Return the linear image to measure and its channel names (None: the SFR's own).
+
+    A raw file: its mosaic less the black level, over the white level's span, with the CFA's
+    photosites balanced (one channel, ``raw``); ``--transfer`` does not apply to it.
+    """
+    import numpy as np
+
+    from imageform.workflows._characterize_inputs import _RAW_SUFFIXES
+
+    if image.suffix.lower() not in _RAW_SUFFIXES:
+        return _linear(read(image, opts), opts.transfer), None
+    from imageform.io import read_raw
+    from imageform.sensor import equalize_cfa
+
+    r = read_raw(image, max_pixels=opts.max_pixels)
+    if r.cfa_pattern is None:
+        raise InvalidInputError(f"{image} holds no Bayer mosaic; develop it and measure that")
+    mosaic = np.asarray(r.mosaic, dtype=np.float64)
+    h, w = mosaic.shape
+    black = np.tile(np.asarray(r.black_level, np.float64).reshape(2, 2), (h // 2 + 1, w // 2 + 1))
+    span = float(r.white_level) - float(np.mean(black))
+    return equalize_cfa((mosaic - black[:h, :w]) / span, r.cfa_pattern), ("raw",)
+
+
 def sfr(run: Run, opts: SfrOptions, *, out: Path | None, image: Path) -> Result:
     """``imageform sfr``: MTF50/MTF10 per edge and channel; ``-o`` writes the SFR curves."""
     from rich.table import Table
@@ -84,7 +113,7 @@ def sfr(run: Run, opts: SfrOptions, *, out: Path | None, image: Path) -> Result:
     from imageform.workflows._tables import write_table
 
     image = Path(image)
-    arr = _linear(read(image, opts), opts.transfer)
+    arr, names = _edge_image(image, opts)
     roi = opts.region()
     if roi is not None:
         regions = [(roi, "roi")]
@@ -103,9 +132,10 @@ def sfr(run: Run, opts: SfrOptions, *, out: Path | None, image: Path) -> Result:
         t.add_column(col, justify="right")
     for k, (reg, side) in enumerate(regions):
         res = slanted_edge_sfr(arr, reg)
+        channels = names or res.channels
         chans = {
             c: {"mtf50": float(res.mtf50[i]), "mtf10": float(res.mtf10[i])}
-            for i, c in enumerate(res.channels)
+            for i, c in enumerate(channels)
         }
         edges.append(
             {
@@ -117,7 +147,7 @@ def sfr(run: Run, opts: SfrOptions, *, out: Path | None, image: Path) -> Result:
                 "channels": chans,
             }
         )
-        for i, c in enumerate(res.channels):
+        for i, c in enumerate(channels):
             t.add_row(
                 str(k),
                 ",".join(str(v) for v in reg),
@@ -129,7 +159,8 @@ def sfr(run: Run, opts: SfrOptions, *, out: Path | None, image: Path) -> Result:
             rows += [[k, c, f, s] for f, s in zip(res.frequency, res.sfr[:, i], strict=True)]
     if out is not None:
         write_table(run.file(out), ("edge", "channel", "frequency_cy_per_px", "sfr"), rows)
-    summary = {"image": str(image), "transfer": opts.transfer, "edges": edges}
+    transfer = opts.transfer if names is None else "linear"  # a raw mosaic is linear
+    summary = {"image": str(image), "transfer": transfer, "edges": edges}
     head = f"{len(edges)} edge(s) measured" + (f" -> {out}" if out is not None else "")
     return Result(summary, (head, t))
 
@@ -140,13 +171,20 @@ WORKFLOWS = (
         "Slanted-edge SFR (ISO 12233 e-SFR): MTF50, MTF10 and the MTF curves of a photograph.",
         "imageform.workflows.sharpness:sfr",
         SfrOptions,
-        (Input("image", "A photograph of a slanted edge or an SFR chart (PNG, TIFF, .npy)."),),
+        (
+            Input(
+                "image",
+                "A photograph of a slanted edge or an SFR chart (PNG, TIFF, .npy, or a raw "
+                "file such as .dng: measured on its mosaic).",
+            ),
+        ),
         Output("CSV to write: edge, channel, frequency (cycles/pixel), SFR.", required=False),
         suffixes=(".csv",),
         group="optics",
         description="Without --roi the edges of a chart of dark squares turned a few degrees "
         "are found and each is measured. Frequencies are in cycles/pixel along the edge "
         "normal (Nyquist 0.5). Integer images are decoded from sRGB to linear first unless "
-        "--transfer linear.",
+        "--transfer linear. A raw file is measured on its mosaic (black level removed, the "
+        "CFA's photosites balanced on a neutral edge): one channel, raw.",
     ),
 )
