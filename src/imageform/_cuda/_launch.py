@@ -51,6 +51,7 @@ __all__ = [
     "cuda",
     "device_checks",
     "disable",
+    "dtype_name",
     "empty_like",
     "guarded",
     "is_cuda_array",
@@ -272,6 +273,25 @@ def as_device_array(x: Any) -> Any:
     if c.is_cuda_array(x) and not (_is_torch(x) or _is_cupy(x)) and hasattr(x, "gpu_data"):
         return x
     return c.from_cuda_array_interface(_interface(x), owner=x, sync=False)
+
+
+#: a library's dtype object (NumPy's, PyTorch's, CuPy's) -> its name without the prefix
+_DTYPE_NAMES: dict[Any, str] = {}
+
+
+def dtype_name(x: Any) -> str:
+    """Return the name of ``x``'s dtype without its library's prefix (``"float32"``).
+
+    Cached per dtype object: a kernel's :func:`guarded` key costs one dict lookup per call.
+    """
+    dt = getattr(x, "dtype", None)
+    try:
+        return _DTYPE_NAMES[dt]
+    except KeyError:
+        name = _DTYPE_NAMES[dt] = str("" if dt is None else dt).removeprefix("torch.")
+        return name
+    except TypeError:  # pragma: no cover - an unhashable dtype
+        return str(dt).removeprefix("torch.")
 
 
 def _numpy_dtype(x: Any, dtype: Any) -> np.dtype[Any]:

@@ -126,23 +126,8 @@ def _run(key: tuple[Any, ...], kernel: Any, n: int, *args: Any) -> None:
         raise KernelUnavailable(_launch.status())
 
 
-# dtype object (NumPy's, PyTorch's, CuPy's) -> its name without the library's prefix
-_DTYPE_NAMES: dict[Any, str] = {}
-
-
-def _dtype_str(x: Any) -> str:
-    dt = getattr(x, "dtype", None)
-    try:
-        return _DTYPE_NAMES[dt]
-    except KeyError:
-        name = _DTYPE_NAMES[dt] = str("" if dt is None else dt).removeprefix("torch.")
-        return name
-    except TypeError:  # pragma: no cover - an unhashable dtype
-        return str(dt).removeprefix("torch.")
-
-
 def _dtype_name(x: Any) -> str | None:
-    dt = _dtype_str(x)
+    dt = _launch.dtype_name(x)
     return dt if dt in ("float32", "float64") else None
 
 
@@ -151,7 +136,7 @@ INT_SCALE = {"uint8": 255.0, "uint16": 65535.0}
 
 
 def _int_scale(x: Any) -> float | None:
-    return INT_SCALE.get(_dtype_str(x))
+    return INT_SCALE.get(_launch.dtype_name(x))
 
 
 def _flat(x: Any, channels: bool = True) -> Any:
@@ -286,7 +271,7 @@ def run_chain(x: Any, steps: Sequence[Step]) -> Any:
 
     Returns a new array of ``x``'s library, device, dtype and shape.
     """
-    name = _dtype_str(x)
+    name = _launch.dtype_name(x)
     dtype = name if name in ("float32", "float64") else None
     scale = INT_SCALE.get(name)
     if dtype is None and scale is None:

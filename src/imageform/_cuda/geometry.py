@@ -43,6 +43,7 @@ from typing import Any
 import numpy as np
 
 from imageform._cuda import _launch
+from imageform._cuda._launch import dtype_name as _dt
 from imageform._cuda._launch import empty_like, guarded
 
 __all__ = [
@@ -268,22 +269,6 @@ def _kernels() -> Any:
     for name, fn in k.py.items():
         setattr(k, name, cuda.jit(fn))
     return k
-
-
-#: a library's dtype object -> its name without the library's prefix
-_DTYPE_NAMES: dict[Any, str] = {}
-
-
-def _dt(x: Any) -> str:
-    """Return the dtype's name (``"float32"``; a :func:`~imageform._cuda._launch.guarded` key)."""
-    dt = getattr(x, "dtype", None)
-    try:
-        return _DTYPE_NAMES[dt]
-    except KeyError:
-        name = _DTYPE_NAMES[dt] = str("" if dt is None else dt).removeprefix("torch.")
-        return name
-    except TypeError:  # pragma: no cover - an unhashable dtype
-        return str(dt).removeprefix("torch.")
 
 
 #: the coefficients' float64 bytes -> their kernel arguments (:func:`_coeffs`)

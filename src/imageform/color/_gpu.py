@@ -64,7 +64,7 @@ def wants(*arrays: object, integers: bool = False) -> bool:
         shape = a.shape if _launch._is_torch(a) else tuple(getattr(a, "shape", ()))  # type: ignore[attr-defined]
         if not shape or shape[-1] != 3 or getattr(a, "requires_grad", False):
             return False
-        name = cc._dtype_str(a)
+        name = _launch.dtype_name(a)
         if name not in _FLOATS and not (integers and name in cc.INT_SCALE):
             return False
     return True
@@ -123,7 +123,7 @@ def _elementwise(values: Any) -> bool:
     cc = _CC or _kernels()
     shape = tuple(int(s) for s in getattr(values, "shape", ()))
     size = int(np.prod(shape)) if shape else 1
-    name = cc._dtype_str(values)
+    name = _launch.dtype_name(values)
     known = name in _FLOATS or name in cc.INT_SCALE
     return known and size > 0 and size % 3 == 0
 
@@ -198,7 +198,7 @@ def delta_e(lab1: Any, lab2: Any, name: str, params: Sequence[float]) -> Any:
             check_magnitude(as_points_strict(x, what, 3), what, x.__array_namespace__())
     ps = tuple(params)
     if name == "de00":
-        ps += (_tiny(_CC._dtype_str(lab1)),)
+        ps += (_tiny(_launch.dtype_name(lab1)),)
     return _guard((_CC or _kernels()).run_delta_e, lab1, lab2, name, ps)
 
 
