@@ -39,10 +39,11 @@ index from its runtime shape, which LLVM then versions on (falling back to scala
 1-D indices keep the locate loop vectorised (4 to 8 times faster on a 1 MP map). The
 sampling loop has one version for each of 1, 3 and 4 channels (unrolled), one generic.
 
-One-channel images take a third way (``_remap_rows_grey``, in a kernel of its own,
-``_remap_grey_tasks``, so that a one-channel remap compiles none of the general loops: 4.5 s of
-CPU less on a first ``imageform simulate``, whose lateral colour remaps one channel at a time;
-and a colour remap compiles none of this one): locate and sample fused in one loop that LLVM
+One-channel images take a third way (``_remap_grey_tasks``, a kernel of its own, so that a
+one-channel remap compiles none of the general loops: 4.5 s of CPU less on a first ``imageform
+simulate``, whose lateral colour remaps one channel at a time; and a colour remap compiles none
+of this one; its row loop written in it, on flat views made by the caller: no called kernel
+and no ``ravel`` to compile, 0.35 s of CPU less): locate and sample fused in one loop that LLVM
 vectorises with gathers. Two things make that possible: the results go to a buffer on the stack
 (an intrinsic, ``_stack_block``), which LLVM knows aliases no input, so the gathers may run
 ahead of the stores; and a uint8 pair ``I00, I01`` comes from one unaligned 32-bit load
@@ -470,49 +471,6 @@ def _grey_block(
             res[t] = sc * r if inside else fl
 
 
-@njit(error_model="numpy", fastmath={"contract"})
-def _remap_rows_grey(
-    flat: np.ndarray,
-    mf: np.ndarray,
-    i0: int,
-    i1: int,
-    wo: int,
-    h: int,
-    w: int,
-    scale: float,
-    fill: float,
-    rounded: bool,
-    of: np.ndarray,
-    acc: np.ndarray,
-) -> None:
-    """Output rows ``i0:i1`` of a one-channel image (``h, w >= 2``).
-
-    The same arithmetic as :func:`_remap_rows` (equal results bit for bit), in one loop that
-    vectorises: the source pairs are gathered, the results go to a stack buffer, and a second
-    loop converts them into the output (rounded when ``rounded``).
-    """
-    res: np.ndarray = _stack_block(acc)
-    T = acc.dtype.type
-    O = of.dtype.type
-    sc = T(scale)
-    fl = T(fill)
-    magic = T(12582912.0) if T(16777217.0) == T(16777216.0) else T(6755399441055744.0)
-    for i in range(i0, i1):
-        for j0 in range(0, wo, _BLK):
-            n = min(_BLK, wo - j0)
-            base = i * wo + j0
-            mb = mf[2 * base : 2 * (base + n)]
-            ob = of[base : base + n]
-            if rounded:
-                _grey_block(flat, mb, n, h, w, sc, fl, True, res)
-                for t in range(n):
-                    ob[t] = O(np.int32((res[t] + magic) - magic))  # ties to even, as _sample
-            else:
-                _grey_block(flat, mb, n, h, w, sc, fl, False, res)
-                for t in range(n):
-                    ob[t] = O(res[t])
-
-
 @njit(inline="always", error_model="numpy", fastmath={"contract"})
 def _block_buffers(kcar: np.ndarray, acc: np.ndarray) -> tuple[np.ndarray, ...]:
     """Return one thread's locate buffers (module docstring, 1): ``kidx, ax, ay, ok``."""
@@ -565,7 +523,11 @@ def _remap_grey_tasks(
     t0: int,
     t1: int,
     img: np.ndarray,
-    map_uv: np.ndarray,
+    mf: np.ndarray,
+    h: int,
+    w: int,
+    ho: int,
+    wo: int,
     scale: float,
     fill: float,
     out: np.ndarray,
@@ -574,15 +536,38 @@ def _remap_grey_tasks(
     nblk: int,
 ) -> None:  # pragma: no cover
     # tasks t0 .. t1 - 1 of a one-channel remap_bilinear (h, w >= 2): a kernel of its own, so
-    # that a grey remap (the simulator's lateral colour) compiles none of the general loops
-    _, h, w, _ = img.shape
-    ho, wo = map_uv.shape[0], map_uv.shape[1]
-    mf = map_uv.ravel()
+    # that a grey remap (the simulator's lateral colour) compiles none of the general loops.
+    # img (B, h w), out (B, ho wo) and mf (ho wo 2): flat views made by the caller (no ravel
+    # to compile). The rows' loop is written here, not in a kernel of its own: a called
+    # kernel is compiled on its own and then optimised again inside its caller.
+    # Output rows i0:i1 of image b: the same arithmetic as _remap_rows (equal results bit for
+    # bit), in one loop that vectorises (the source pairs gathered, the results into a stack
+    # buffer), then a second loop that converts them into the output (rounded when rounded).
+    res: np.ndarray = _stack_block(acc)
+    T = acc.dtype.type
+    O = out.dtype.type
+    sc = T(scale)
+    fl = T(fill)
+    magic = T(12582912.0) if T(16777217.0) == T(16777216.0) else T(6755399441055744.0)
     rounded = hi > 0.0
     for t in range(t0, t1):
         b, i0, i1 = _task_rows(t, nblk, ho)
-        of = out[b].ravel()
-        _remap_rows_grey(img[b].ravel(), mf, i0, i1, wo, h, w, scale, fill, rounded, of, acc)
+        flat = img[b]
+        of = out[b]
+        for i in range(i0, i1):
+            for j0 in range(0, wo, _BLK):
+                n = wo - j0 if wo - j0 < _BLK else _BLK  # no min() overload to compile
+                base = i * wo + j0
+                mb = mf[2 * base : 2 * (base + n)]
+                ob = of[base : base + n]
+                if rounded:
+                    _grey_block(flat, mb, n, h, w, sc, fl, True, res)
+                    for k in range(n):
+                        ob[k] = O(np.int32((res[k] + magic) - magic))  # ties to even (_sample)
+                else:
+                    _grey_block(flat, mb, n, h, w, sc, fl, False, res)
+                    for k in range(n):
+                        ob[k] = O(res[k])
 
 
 def remap_bilinear(
@@ -608,8 +593,10 @@ def remap_bilinear(
     nblk = min(map_uv.shape[0], _BLOCKS)
     _, h, w, nc = img.shape
     if _LITTLE and nc == 1 and h >= 2 and w >= 2:
-        args_grey = (img, map_uv, scale, fill, out, acc, hi, nblk)
-        run_tasks(_remap_grey_tasks, img.shape[0] * nblk, *args_grey, threads=threads)
+        b, ho, wo = out.shape[0], out.shape[1], out.shape[2]
+        flat, mf, of = img.reshape(b, h * w), map_uv.reshape(-1), out.reshape(b, ho * wo)
+        args_grey = (flat, mf, h, w, ho, wo, scale, fill, of, acc, hi, nblk)
+        run_tasks(_remap_grey_tasks, b * nblk, *args_grey, threads=threads)
         return
     args = (img, map_uv, scale, fill, out, acc, kcar, hi, nblk)
     run_tasks(_remap_tasks, img.shape[0] * nblk, *args, threads=threads)
