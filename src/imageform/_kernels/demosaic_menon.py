@@ -162,7 +162,7 @@ def _menon_tasks(
     # optimised and compiled to machine code again inside its caller (0.7 s of CPU more).
     for slab in range(task0, task1):
         ya = slab * block
-        yb = min(h_all, ya + block)
+        yb = ya + block if ya + block < h_all else h_all  # min() is one more compilation
         s0 = ya + oy_all - RADIUS - 1
         s0 -= s0 % 2
         s1 = yb + oy_all + RADIUS + 1
@@ -253,8 +253,10 @@ def _menon_tasks(
                 gr[k] = g if ((k + par) & 1) == 0 else ck
         # Passes 5-7 update a plane in place: each row is computed into a buffer first and
         # merged at the sites it updates, so that the loops carry no dependence (vectorisable).
-        t1 = np.empty(W, P.dtype)
-        t2 = np.empty(W, P.dtype)
+        # t1, t2 and pass 8's rbuf, bbuf: rows of one array of np.empty_like's signature above
+        # (an np.empty of another signature would be one more compilation)
+        rows = np.empty_like(P[:4])
+        t1, t2 = rows[0], rows[1]
         # 4. red and blue at green sites from colour differences, margin 7 (the value written
         # for the other colour at red/blue sites is replaced in pass 5 wherever it is read)
         n = W - 14
@@ -329,8 +331,7 @@ def _menon_tasks(
                     h0[k + 1] = t1[k] if is_g else h0[k + 1]
                     v0[k] = t2[k] if is_g else v0[k]
         # 8. output; with refinement, red (blue) at blue (red) sites from the 3-tap mean of R - B
-        rbuf = np.empty(w, P.dtype)
-        bbuf = np.empty(w, P.dtype)
+        rbuf, bbuf = rows[2], rows[3]  # w <= W
         for i in range(h):
             y = i + oy
             red_row = y % 2 == 0
