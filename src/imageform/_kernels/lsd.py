@@ -15,6 +15,12 @@ from imageform._kernels.jit import njit
 
 __all__ = ["grow_regions", "rect_alignment_counts", "region_rectangles"]
 
+# Compile time (a first ``imageform simulate`` compiles all three): every np.empty signature
+# and every min/max or ``**`` overload is a compilation of its own (20-120 ms each), so the
+# work arrays are rows of one array of the same np.empty signature as the result, min/max
+# are selects and squares products (the same values bit for bit: numba's ``min(a, b)`` is
+# ``b if b < a else a``, ``max(a, b)`` is ``b if b > a else a``, ``x ** 2`` is ``x * x``).
+
 
 @njit
 def _angle_diff(a: float, b: float) -> float:  # pragma: no cover - numba
@@ -42,8 +48,9 @@ def grow_regions(angle, order, tau, min_size):  # type: ignore[no-untyped-def]  
         for x in range(W):
             labels[y, x] = -1
             used[y, x] = False
-    stack_y = np.empty(H * W, dtype=np.int32)
-    stack_x = np.empty(H * W, dtype=np.int32)
+    stacks = np.empty((2, H * W), dtype=np.int32)  # labels' np.empty signature
+    stack_y = stacks[0]
+    stack_x = stacks[1]
     n_regions = 0
     for s in range(order.shape[0]):
         idx = order[s]
@@ -98,12 +105,11 @@ def region_rectangles(labels, n_regions, mag):  # type: ignore[no-untyped-def]  
     coordinates of pixel centres (u = column, v = row).
     """
     H, W = labels.shape
-    sw = np.empty(n_regions)  # np.empty and fill loops, as in grow_regions
-    sx = np.empty(n_regions)
-    sy = np.empty(n_regions)
-    ixx = np.empty(n_regions)
-    iyy = np.empty(n_regions)
-    ixy = np.empty(n_regions)
+    # the per-region sums: rows of one array of rects' np.empty signature (and fill loops, as
+    # in grow_regions)
+    acc = np.empty((10, n_regions))
+    sw, sx, sy, ixx, iyy, ixy = acc[0], acc[1], acc[2], acc[3], acc[4], acc[5]
+    cx, cy, dirx, diry = acc[6], acc[7], acc[8], acc[9]
     for r in range(n_regions):
         sw[r] = sx[r] = sy[r] = ixx[r] = iyy[r] = ixy[r] = 0.0
     for y in range(H):
@@ -114,9 +120,7 @@ def region_rectangles(labels, n_regions, mag):  # type: ignore[no-untyped-def]  
                 sw[r] += w
                 sx[r] += w * x
                 sy[r] += w * y
-    cx = np.empty(n_regions)  # element loops, not array expressions (compiled seconds longer)
-    cy = np.empty(n_regions)
-    for r in range(n_regions):
+    for r in range(n_regions):  # element loops, not array expressions (compiled seconds longer)
         cx[r] = sx[r] / sw[r]
         cy[r] = sy[r] / sw[r]
     for y in range(H):
@@ -130,11 +134,10 @@ def region_rectangles(labels, n_regions, mag):  # type: ignore[no-untyped-def]  
                 iyy[r] += w * dx * dx
                 ixy[r] -= w * dx * dy
     rects = np.empty((n_regions, 7))  # every entry written below
-    dirx = np.empty(n_regions)
-    diry = np.empty(n_regions)
     for r in range(n_regions):
         # smallest eigenvalue's eigenvector of [[ixx, ixy], [ixy, iyy]] is the line direction
-        lam = 0.5 * (ixx[r] + iyy[r] - math.sqrt((ixx[r] - iyy[r]) ** 2 + 4.0 * ixy[r] ** 2))
+        d = ixx[r] - iyy[r]
+        lam = 0.5 * (ixx[r] + iyy[r] - math.sqrt(d * d + 4.0 * (ixy[r] * ixy[r])))
         if abs(ixx[r]) > abs(iyy[r]):
             theta = math.atan2(lam - ixx[r], ixy[r])
         else:
@@ -156,10 +159,11 @@ def region_rectangles(labels, n_regions, mag):  # type: ignore[no-untyped-def]  
                 dy = y - cy[r]
                 l = dx * dirx[r] + dy * diry[r]
                 w = -dx * diry[r] + dy * dirx[r]
-                rects[r, 3] = min(rects[r, 3], l)
-                rects[r, 4] = max(rects[r, 4], l)
-                rects[r, 5] = min(rects[r, 5], w)
-                rects[r, 6] = max(rects[r, 6], w)
+                l3, l4, w5, w6 = rects[r, 3], rects[r, 4], rects[r, 5], rects[r, 6]
+                rects[r, 3] = l if l < l3 else l3  # min and max (see the top of this file)
+                rects[r, 4] = l if l > l4 else l4
+                rects[r, 5] = w if w < w5 else w5
+                rects[r, 6] = w if w > w6 else w6
     return rects
 
 
@@ -184,10 +188,19 @@ def rect_alignment_counts(rects, angle, tau):  # type: ignore[no-untyped-def]  #
         x10, x11 = l1 * c - w0 * s + cx, l1 * c - w1 * s + cx
         y00, y01 = l0 * s + w0 * c + cy, l0 * s + w1 * c + cy
         y10, y11 = l1 * s + w0 * c + cy, l1 * s + w1 * c + cy
-        xa = max(0, math.floor(min(min(x00, x01), min(x10, x11))))
-        xb = min(W - 1, math.ceil(max(max(x00, x01), max(x10, x11))))
-        ya = max(0, math.floor(min(min(y00, y01), min(y10, y11))))
-        yb = min(H - 1, math.ceil(max(max(y00, y01), max(y10, y11))))
+        # min and max as selects (see the top of this file)
+        xlo0, xlo1 = x01 if x01 < x00 else x00, x11 if x11 < x10 else x10
+        xhi0, xhi1 = x01 if x01 > x00 else x00, x11 if x11 > x10 else x10
+        ylo0, ylo1 = y01 if y01 < y00 else y00, y11 if y11 < y10 else y10
+        yhi0, yhi1 = y01 if y01 > y00 else y00, y11 if y11 > y10 else y10
+        xa = math.floor(xlo1 if xlo1 < xlo0 else xlo0)
+        xb = math.ceil(xhi1 if xhi1 > xhi0 else xhi0)
+        ya = math.floor(ylo1 if ylo1 < ylo0 else ylo0)
+        yb = math.ceil(yhi1 if yhi1 > yhi0 else yhi0)
+        xa = xa if xa > 0 else 0
+        xb = xb if xb < W - 1 else W - 1
+        ya = ya if ya > 0 else 0
+        yb = yb if yb < H - 1 else H - 1
         total = 0
         aligned = 0
         for y in range(ya, yb + 1):
