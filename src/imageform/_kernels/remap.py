@@ -41,16 +41,17 @@ sampling loop has one version for each of 1, 3 and 4 channels (unrolled), one ge
 
 One-channel images take a third way (``_remap_grey_tasks``, a kernel of its own, so that a
 one-channel remap compiles none of the general loops: 4.5 s of CPU less on a first ``imageform
-simulate``, whose lateral colour remaps one channel at a time; and a colour remap compiles none
-of this one; its row loop written in it, on flat views made by the caller: no called kernel
-and no ``ravel`` to compile, 0.35 s of CPU less): locate and sample fused in one loop that LLVM
-vectorises with gathers. Two things make that possible: the results go to a buffer on the stack
-(an intrinsic, ``_stack_block``), which LLVM knows aliases no input, so the gathers may run
-ahead of the stores; and a uint8 pair ``I00, I01`` comes from one unaligned 32-bit load
-(``_word``; the lower pair's word is read two bytes early and shifted, so that no load leaves
-the image). A second loop rounds or converts the block into the output. The arithmetic is the
-general loops' (equal results bit for bit); a 1 MP uint8 remap takes 1.5 ms instead of 2.7 ms
-on one thread of the development machine.
+simulate``, whose lateral colour remaps one channel at a time; and a colour remap compiles none of
+this one; its loops written in it, on flat views made by the caller: no called kernel, no inlined
+helper and no ``ravel`` to compile, and one copy of the block loop for rounded and float outputs:
+0.6 s of CPU less, first-run-2026-11-28f.md): locate and sample fused in one loop that LLVM
+vectorises with gathers. Two things make that possible: the results go to a buffer on the stack (an
+intrinsic, ``_stack_block``), which LLVM knows aliases no input, so the gathers may run ahead of
+the stores; and a uint8 pair ``I00, I01`` comes from one unaligned 32-bit load (``_word``; the
+lower pair's word is read two bytes early and shifted, so that no load leaves the image). A second
+loop rounds or converts the block into the output. The arithmetic is the general loops' (equal
+results bit for bit); a 1 MP uint8 remap takes 1.5 ms instead of 2.7 ms on one thread of the
+development machine.
 
 The plain twin of both is :func:`imageform.geometry.undistort._remap_bilinear_numpy` on the
 map from :func:`~imageform.geometry.undistort.undistortion_map`; tests check agreement to
@@ -422,53 +423,6 @@ def _pair_impl(flat: Any, k: Any, zero: Any, lower: Any) -> object:
 
 
 @njit(inline="always", error_model="numpy", fastmath={"contract"})
-def _grey_block(
-    flat: np.ndarray,
-    mb: np.ndarray,
-    n: int,
-    h: int,
-    w: int,
-    sc: float,
-    fl: float,
-    res: np.ndarray,
-) -> None:
-    """One block of a one-channel remap into the stack buffer ``res``.
-
-    Locate (as :func:`_locate`) and sample (as :func:`_sample`) fused in one loop; LLVM
-    vectorises it with gathers. ``res`` gets the float result times ``sc`` (1 for a rounded
-    remap: ``1 * r`` is ``r`` bit for bit, and one copy of this loop is compiled, not two) or
-    ``fill``.
-    """
-    M = mb.dtype.type
-    T = res.dtype.type
-    zero = M(0)
-    wm1 = M(w - 1)
-    hm1 = M(h - 1)
-    xmax = np.int32(w - 2)
-    ymax = np.int32(h - 2)
-    tz = T(0)
-    for t in range(n):
-        u = mb[2 * t]
-        v = mb[2 * t + 1]
-        inside = (u >= zero) & (u <= wm1) & (v >= zero) & (v <= hm1)
-        uc = u if inside else zero
-        vc = v if inside else zero
-        x0 = np.int32(uc)  # uc >= 0: truncation is floor
-        y0 = np.int32(vc)
-        x0 = x0 if x0 < xmax else xmax
-        y0 = y0 if y0 < ymax else ymax
-        a = T(uc - M(x0))
-        b = T(vc - M(y0))
-        k = np.int64(y0) * w + x0
-        i00, i01 = _pair(flat, k, tz, False)
-        i10, i11 = _pair(flat, k + w, tz, True)
-        top = i00 + a * (i01 - i00)
-        bot = i10 + a * (i11 - i10)
-        r = top + b * (bot - top)
-        res[t] = sc * r if inside else fl
-
-
-@njit(inline="always", error_model="numpy", fastmath={"contract"})
 def _block_buffers(kcar: np.ndarray, acc: np.ndarray) -> tuple[np.ndarray, ...]:
     """Return one thread's locate buffers (module docstring, 1): ``kidx, ax, ay, ok``."""
     kidx = np.empty(_BLK, kcar.dtype)
@@ -537,18 +491,27 @@ def _remap_grey_tasks(
     # img (B, h w), out (B, ho wo) and mf (ho wo 2): flat views made by the caller (no ravel
     # to compile). The rows' loop is written here, not in a kernel of its own: a called
     # kernel is compiled on its own and then optimised again inside its caller.
-    # Output rows i0:i1 of image b: the same arithmetic as _remap_rows (equal results bit for
-    # bit), in one loop that vectorises (the source pairs gathered, the results into a stack
-    # buffer), then a second loop that converts them into the output (rounded when rounded).
+    # The same arithmetic as _remap_rows (equal results bit for bit). No inline="always"
+    # helpers either: numba's IR inlining costs compile time of its own.
     res: np.ndarray = _stack_block(acc)
     T = acc.dtype.type
     O = out.dtype.type
+    M = mf.dtype.type
     rounded = hi > 0.0
     sc = T(1.0) if rounded else T(scale)  # rounded: codes, not scaled
     fl = T(fill)
     magic = T(12582912.0) if T(16777217.0) == T(16777216.0) else T(6755399441055744.0)
+    zero = M(0)
+    wm1 = M(w - 1)
+    hm1 = M(h - 1)
+    xmax = np.int32(w - 2)
+    ymax = np.int32(h - 2)
+    tz = T(0)
     for t in range(t0, t1):
-        b, i0, i1 = _task_rows(t, nblk, ho)
+        b = t // nblk  # image b, its row block blk: output rows i0:i1 (as _task_rows)
+        blk = t - b * nblk
+        i0 = blk * ho // nblk
+        i1 = (blk + 1) * ho // nblk
         flat = img[b]
         of = out[b]
         for i in range(i0, i1):
@@ -557,10 +520,32 @@ def _remap_grey_tasks(
                 base = i * wo + j0
                 mb = mf[2 * base : 2 * (base + n)]
                 ob = of[base : base + n]
-                _grey_block(flat, mb, n, h, w, sc, fl, res)
+                # one block: locate (as _locate) and sample (as _sample) fused in one loop
+                # that LLVM vectorises with gathers; res gets sc * the result (sc = 1 when
+                # rounded: 1 * r is r bit for bit, and this loop is compiled once) or fill
+                for k in range(n):
+                    u = mb[2 * k]
+                    v = mb[2 * k + 1]
+                    inside = (u >= zero) & (u <= wm1) & (v >= zero) & (v <= hm1)
+                    uc = u if inside else zero
+                    vc = v if inside else zero
+                    x0 = np.int32(uc)  # uc >= 0: truncation is floor
+                    y0 = np.int32(vc)
+                    x0 = x0 if x0 < xmax else xmax
+                    y0 = y0 if y0 < ymax else ymax
+                    ax = T(uc - M(x0))
+                    ay = T(vc - M(y0))
+                    q = np.int64(y0) * w + x0
+                    i00, i01 = _pair(flat, q, tz, False)
+                    i10, i11 = _pair(flat, q + w, tz, True)
+                    top = i00 + ax * (i01 - i00)
+                    bot = i10 + ax * (i11 - i10)
+                    r = top + ay * (bot - top)
+                    res[k] = sc * r if inside else fl
+                # then into the output, rounded (ties to even, as _sample) or converted
                 if rounded:
                     for k in range(n):
-                        ob[k] = O(np.int32((res[k] + magic) - magic))  # ties to even (_sample)
+                        ob[k] = O(np.int32((res[k] + magic) - magic))
                 else:
                     for k in range(n):
                         ob[k] = O(res[k])
