@@ -16,10 +16,10 @@ from imageform._kernels.jit import njit
 __all__ = ["grow_regions", "rect_alignment_counts", "region_rectangles"]
 
 # Compile time (a first ``imageform simulate`` compiles all three): every np.empty signature
-# and every min/max or ``**`` overload is a compilation of its own (20-120 ms each), so the
-# work arrays are rows of one array of the same np.empty signature as the result, min/max
-# are selects and squares products (the same values bit for bit: numba's ``min(a, b)`` is
-# ``b if b < a else a``, ``max(a, b)`` is ``b if b > a else a``, ``x ** 2`` is ``x * x``).
+# and every ``**`` overload is a compilation of its own (20-120 ms each), so the work arrays
+# are rows of one array of the same np.empty signature as the result, and squares are
+# products (``x ** 2`` is ``x * x`` bit for bit). min/max stay: written as conditional
+# expressions they cost more compile time (each is two more blocks) than the overloads.
 
 
 @njit
@@ -159,11 +159,10 @@ def region_rectangles(labels, n_regions, mag):  # type: ignore[no-untyped-def]  
                 dy = y - cy[r]
                 l = dx * dirx[r] + dy * diry[r]
                 w = -dx * diry[r] + dy * dirx[r]
-                l3, l4, w5, w6 = rects[r, 3], rects[r, 4], rects[r, 5], rects[r, 6]
-                rects[r, 3] = l if l < l3 else l3  # min and max (see the top of this file)
-                rects[r, 4] = l if l > l4 else l4
-                rects[r, 5] = w if w < w5 else w5
-                rects[r, 6] = w if w > w6 else w6
+                rects[r, 3] = min(rects[r, 3], l)
+                rects[r, 4] = max(rects[r, 4], l)
+                rects[r, 5] = min(rects[r, 5], w)
+                rects[r, 6] = max(rects[r, 6], w)
     return rects
 
 
@@ -188,19 +187,10 @@ def rect_alignment_counts(rects, angle, tau):  # type: ignore[no-untyped-def]  #
         x10, x11 = l1 * c - w0 * s + cx, l1 * c - w1 * s + cx
         y00, y01 = l0 * s + w0 * c + cy, l0 * s + w1 * c + cy
         y10, y11 = l1 * s + w0 * c + cy, l1 * s + w1 * c + cy
-        # min and max as selects (see the top of this file)
-        xlo0, xlo1 = x01 if x01 < x00 else x00, x11 if x11 < x10 else x10
-        xhi0, xhi1 = x01 if x01 > x00 else x00, x11 if x11 > x10 else x10
-        ylo0, ylo1 = y01 if y01 < y00 else y00, y11 if y11 < y10 else y10
-        yhi0, yhi1 = y01 if y01 > y00 else y00, y11 if y11 > y10 else y10
-        xa = math.floor(xlo1 if xlo1 < xlo0 else xlo0)
-        xb = math.ceil(xhi1 if xhi1 > xhi0 else xhi0)
-        ya = math.floor(ylo1 if ylo1 < ylo0 else ylo0)
-        yb = math.ceil(yhi1 if yhi1 > yhi0 else yhi0)
-        xa = xa if xa > 0 else 0
-        xb = xb if xb < W - 1 else W - 1
-        ya = ya if ya > 0 else 0
-        yb = yb if yb < H - 1 else H - 1
+        xa = max(0, math.floor(min(min(x00, x01), min(x10, x11))))
+        xb = min(W - 1, math.ceil(max(max(x00, x01), max(x10, x11))))
+        ya = max(0, math.floor(min(min(y00, y01), min(y10, y11))))
+        yb = min(H - 1, math.ceil(max(max(y00, y01), max(y10, y11))))
         total = 0
         aligned = 0
         for y in range(ya, yb + 1):
