@@ -60,6 +60,7 @@ BENCH_SCRIPTS: dict[str, str] = {
     "chunked-strips": "benchmarks/bench_chunked.py",
     "color": "benchmarks/bench_color.py",
     "compile-literals": "benchmarks/compile_literals.py",
+    "compile-simulate": "benchmarks/bench_first_run.py",
     "delta-e": "benchmarks/bench_delta_e.py",
     "demosaic": "benchmarks/bench_demosaic.py",
     "distortion": "benchmarks/bench_distortion.py",

@@ -44,7 +44,7 @@ one-channel remap compiles none of the general loops: 4.5 s of CPU less on a fir
 simulate``, whose lateral colour remaps one channel at a time; and a colour remap compiles none of
 this one; its loops written in it, on flat views made by the caller: no called kernel, no inlined
 helper and no ``ravel`` to compile, and one copy of the block loop for rounded and float outputs:
-0.6 s of CPU less, first-run-2026-11-28f.md): locate and sample fused in one loop that LLVM
+0.6 s of CPU less, compile-simulate-2026-11-28.md): locate and sample fused in one loop that LLVM
 vectorises with gathers. Two things make that possible: the results go to a buffer on the stack (an
 intrinsic, ``_stack_block``), which LLVM knows aliases no input, so the gathers may run ahead of
 the stores; and a uint8 pair ``I00, I01`` comes from one unaligned 32-bit load (``_word``; the
