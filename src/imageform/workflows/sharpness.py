@@ -86,23 +86,17 @@ def _edge_image(image: Path, opts: SfrOptions) -> tuple[Any, tuple[str, ...] | N
     A raw file: its mosaic less the black level, over the white level's span, with the CFA's
     photosites balanced (one channel, ``raw``); ``--transfer`` does not apply to it.
     """
-    import numpy as np
-
-    from imageform.workflows._characterize_inputs import _RAW_SUFFIXES
+    from imageform.workflows._characterize_inputs import _RAW_SUFFIXES, _read_photo
 
     if image.suffix.lower() not in _RAW_SUFFIXES:
         return _linear(read(image, opts), opts.transfer), None
-    from imageform.io import read_raw
     from imageform.sensor import equalize_cfa
 
-    r = read_raw(image, max_pixels=opts.max_pixels)
-    if r.cfa_pattern is None:
+    # the raw branch of characterize's reader: black level removed, scaled to 1 at white
+    im = _read_photo(image, {}, "linear", opts.max_pixels, None)
+    if im.cfa is None:
         raise InvalidInputError(f"{image} holds no Bayer mosaic; develop it and measure that")
-    mosaic = np.asarray(r.mosaic, dtype=np.float64)
-    h, w = mosaic.shape
-    black = np.tile(np.asarray(r.black_level, np.float64).reshape(2, 2), (h // 2 + 1, w // 2 + 1))
-    span = float(r.white_level) - float(np.mean(black))
-    return equalize_cfa((mosaic - black[:h, :w]) / span, r.cfa_pattern), ("raw",)
+    return equalize_cfa(im.mosaic, im.cfa), ("raw",)
 
 
 def sfr(run: Run, opts: SfrOptions, *, out: Path | None, image: Path) -> Result:
