@@ -34,7 +34,6 @@ __all__ = [
     "run_delta_e",
     "run_delta_e_twin",
     "run_elementwise",
-    "supported",
 ]
 
 #: One step of a chain: its name in :data:`~imageform._cuda.scalar.NAMES` and its numbers.
@@ -166,23 +165,6 @@ def _reshape(x: Any, shape: tuple[int, ...]) -> Any:
 def _cast(dtype: str, values: Sequence[float]) -> tuple[Any, ...]:
     f = np.float32 if dtype == "float32" else np.float64
     return tuple(f(v) for v in values)
-
-
-def supported(x: Any, integers: bool = False) -> bool:
-    """Whether the kernels take ``x``: a CUDA array of float32/float64, shape ``(..., 3)``.
-
-    ``integers``: uint8/uint16 code values too (read as code / 255 or / 65535, computed and
-    returned in float32). PyTorch tensors that record gradients are left to the Array-API
-    path (autograd).
-    """
-    if not (_launch.use_cuda() and _launch.is_cuda_array(x)):
-        return False
-    shape = tuple(getattr(x, "shape", ()))  # the simulator's shapes index from 0 only
-    if not shape or int(shape[-1]) != 3:
-        return False
-    if _launch._is_torch(x) and x.requires_grad:
-        return False
-    return _dtype_name(x) is not None or (integers and _int_scale(x) is not None)
 
 
 #: (steps, dtype, code-value scale) -> (kernel, its guarded key, the numbers as kernel
