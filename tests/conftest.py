@@ -13,6 +13,11 @@ ROOT = Path(__file__).resolve().parents[1]
 #: ../shared/data relative to the project root; override with IMAGEFORM_DATA.
 DATA = Path(os.environ.get("IMAGEFORM_DATA", ROOT.parent / "shared" / "data"))
 
+# A command's first run starts a second process that compiles kernels ahead
+# (imageform._kernels.ahead); the test run's workers share one warmed cache and the cores
+# already, so the commands they run start none. tests/test_compile_ahead.py turns it on.
+os.environ.setdefault("IMAGEFORM_COMPILE_AHEAD", "0")
+
 
 @pytest.fixture(scope="session")
 def shared_data() -> Path:

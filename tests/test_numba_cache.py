@@ -37,6 +37,7 @@ def _kernels() -> list[tuple[str, Any]]:
     for info in pkgutil.iter_modules(kernels_pkg.__path__):
         module = importlib.import_module(f"imageform._kernels.{info.name}")
         for name, value in vars(module).items():
+            value = value.dispatcher if isinstance(value, jit.Deferred) else value
             if isinstance(value, CPUDispatcher) and value.__module__ == module.__name__:
                 out.append((f"{info.name}.{name}", value))
     return out

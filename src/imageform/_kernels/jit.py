@@ -48,6 +48,7 @@ import numba
 from numba.core import caching
 
 __all__ = [
+    "Deferred",
     "PackageCacheLocator",
     "cache_location",
     "cache_root",
@@ -187,21 +188,75 @@ def configure_cache() -> None:
 configure_cache()
 
 
+#: While a second process compiles kernels ahead (:mod:`imageform._kernels.ahead`), its
+#: ``ready(module)``: called before a task kernel runs and before a deferred kernel compiles.
+_WAIT: Callable[[str | None], None] | None = None
+
+
 def njit(fn: Callable[..., Any] | str | None = None, /, **options: Any) -> Any:
     """``numba.njit`` with imageform's defaults: ``cache=True`` unless the kernel says otherwise.
 
     Used as ``@njit``, ``@njit(parallel=True, ...)``, ``@njit("signature", ...)`` (compiled
     for that signature alone, when the module is imported) or ``njit(**options)(function)``,
-    exactly as ``numba.njit``; every other option is numba's.
+    exactly as ``numba.njit``; every other option is numba's. ``@njit("signature", lazy=True)``
+    compiles for that signature alone too, but at the first call (:class:`Deferred`): importing
+    the module compiles nothing, so a second process can compile its callees ahead
+    (:mod:`imageform._kernels.ahead`).
     """
     options.setdefault("cache", True)
+    lazy = bool(options.pop("lazy", False))
     if getattr(numba.config, "BOUNDSCHECK", None):
         # numba's cache key has no bounds-check flag: checked code saved into the shared cache
         # would be loaded by every later run (a remap 30 times slower), so none is saved
         options["cache"] = False
+    if lazy:
+        if not isinstance(fn, str):
+            raise TypeError("njit(lazy=True) takes the signature to compile for")
+        signature = fn
+        return lambda function: Deferred(numba.njit(**options)(function), signature)
     if fn is None:
         return numba.njit(**options)
     return numba.njit(fn, **options)
+
+
+class Deferred:
+    """A kernel compiled for one signature at its first call, then for no other.
+
+    As ``numba.njit("signature")`` (arguments converted to that signature's types, or a
+    ``TypeError``) without compiling when its module is imported. The first call waits for a
+    second process that may be compiling its callees (:func:`imageform._kernels.ahead.ready`).
+    Called from Python only (a jitted caller calls :attr:`dispatcher`).
+    """
+
+    def __init__(self, dispatcher: Any, signature: str) -> None:
+        self.dispatcher = dispatcher
+        self.signature = signature
+        self.__wrapped__ = dispatcher.py_func
+        self.__doc__ = dispatcher.py_func.__doc__
+        self._lock = threading.Lock()
+        self._compiled = False
+
+    def compile(self) -> None:
+        """Compile (or load from the cache) the kernel for its signature; once."""
+        with self._lock:
+            if self._compiled:
+                return
+            if _WAIT is not None:  # a second process may be compiling its callees
+                _WAIT(None)
+            self.dispatcher.compile(self.signature)
+            self.dispatcher.disable_compile()
+            self._compiled = True
+
+    def __call__(self, *args: Any) -> Any:
+        if not self._compiled:
+            self.compile()
+        return self.dispatcher(*args)
+
+    def __getattr__(self, name: str) -> Any:  # py_func, signatures, overloads, ...
+        return getattr(self.dispatcher, name)
+
+    def __repr__(self) -> str:
+        return f"Deferred({self.dispatcher.py_func.__qualname__}, {self.signature!r})"
 
 
 def parallel_pays(n: int, threshold: int) -> bool:
@@ -251,6 +306,8 @@ def run_tasks(kernel: Any, n_tasks: int, *args: Any, threads: int | None = None)
     ``numba.get_num_threads()`` (``NUMBA_NUM_THREADS``, ``numba.set_num_threads``); 1 runs
     every task in the calling thread.
     """
+    if _WAIT is not None:  # a second process may be compiling this kernel
+        _WAIT(kernel.py_func.__module__.rpartition(".")[2])
     k = min(n_tasks, threads if threads is not None else numba.get_num_threads())
     if k <= 1:
         if n_tasks > 0:

@@ -726,6 +726,7 @@ def _score_sprt(F, p1, p2, thr2, limit, start, lam_in, lam_out, A):  # type: ign
     " float64[:, ::1], float64, float64, int64, uint64, int64, float64, float64,"
     " float64[:, ::1])",
     **_PY_OPTS,
+    lazy=True,
 )
 def essential_estimate(  # type: ignore[no-untyped-def]  # pragma: no cover
     p1, p2, q1, q2, K1i, K2i, thr, conf, max_trials, seed, max_iter, factor, term, E_out

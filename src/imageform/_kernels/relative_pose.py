@@ -87,6 +87,7 @@ def _dlt_point(P2, x1, y1, x2, y2, S, X):  # type: ignore[no-untyped-def]  # pra
     "int64(float64[:, ::1], float64[:, ::1], float64[:, ::1], boolean[::1], float64,"
     " float64[:, ::1], float64[::1], float64[:, ::1], boolean[::1])",
     **_PY_OPTS,
+    lazy=True,
 )
 def pose_from_essential(E, q1, q2, mask, dmax, R_out, t_out, X_out, good_out):  # type: ignore[no-untyped-def]  # pragma: no cover
     """``recover_pose``'s NumPy path, compiled: the four ``(R, t)`` of ``E``, the cheirality vote.

@@ -89,6 +89,8 @@ def warm_cache(jobs: int | None = None) -> list[tuple[str, float, str]]:
     """
     n = max(1, jobs or os.cpu_count() or 1)
     env = {**os.environ, "MPLBACKEND": "Agg"}
+    if n > 1:  # the jobs use the cores already: no second process per command (_kernels.ahead)
+        env["IMAGEFORM_COMPILE_AHEAD"] = "0"
     done: list[tuple[str, float, str]] = []
     with tempfile.TemporaryDirectory(prefix="imageform-warm-") as tmp:
         work = Path(tmp)

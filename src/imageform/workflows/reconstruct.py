@@ -171,6 +171,7 @@ def reconstruct(run: Run, opts: ReconstructOptions, *, out: Path, frames: str) -
             'pip install "imageform[plot]"'
         )
     from imageform._jsonio import write_json
+    from imageform._kernels import ahead
     from imageform.geometry import matrix_to_rvec, reconstruct_sequence
     from imageform.io import read_camera
     from imageform.workflows._ply import write_points_ply
@@ -192,6 +193,7 @@ def reconstruct(run: Run, opts: ReconstructOptions, *, out: Path, frames: str) -
         )
     mask = None if opts.mask is None else _read_mask(opts.mask, info)
     seconds["read"] = time.perf_counter() - t0
+    ahead.start("reconstruct")  # a first run: its kernels compiled on two cores
     if run.progress is not None:
         run.progress("reconstructing", 0.1)
     t1 = time.perf_counter()

@@ -159,6 +159,7 @@ def simulate(run: Run, opts: SimulateOptions, *, out: Path) -> Result:
             "imageform simulate draws its report with matplotlib, which is not installed: "
             'pip install "imageform[plot]"'
         )
+    from imageform._kernels import ahead
     from imageform.io import CameraFile, Provenance, read_camera, write_camera
     from imageform.report.html import write_report
     from imageform.simulate import default_scene, load_scene
@@ -177,6 +178,7 @@ def simulate(run: Run, opts: SimulateOptions, *, out: Path) -> Result:
         from imageform.simulate import read_trajectory
 
         traj = read_trajectory(opts.trajectory, up=scene.config.camera.up)
+    ahead.start("simulate")  # a first run: its kernels compiled on two cores
     result = simulate_scene(scene, progress=run.progress, rng=opts.seed)
     if run.progress is not None:
         run.progress("writing the report", 1.0)

@@ -1,0 +1,339 @@
+"""A command's first run compiles its kernels on two cores: a second process compiles ahead.
+
+numba compiles in one thread per process (a process-wide compiler lock), so a command's first
+run on a new machine compiles its kernels one after the other while the other cores idle:
+17 s of ``imageform reconstruct``'s 18 s, 5 s of ``imageform simulate``'s 10 s. Kernels are
+cached on disk (:mod:`imageform._kernels.jit`), and numba looks in that cache before it
+compiles any kernel, also a kernel called from the one it is compiling. So a second process
+that compiles some of the command's kernels into the cache while the command compiles the
+others, or renders, shares the work: when the command reaches those kernels, it loads them.
+
+:data:`PLANS` says, for each command that gains from it, which kernels the second process
+compiles (``child``), and which the command compiles first itself (``here``), each with the
+signature the command uses (``benchmarks/compile_plan.py`` records a command's compilations on
+an empty cache and proposes the split; figures in ``benchmarks/results/compile-ahead-*.md``).
+The command calls :func:`start` once its arguments are checked; before it calls a kernel
+that the second process may still be compiling, :func:`ready` waits for that process to be
+done with that kernel's module (``jit.run_tasks`` and the deferred kernels of ``jit.njit``
+call it), so that nothing is compiled twice.
+
+:func:`start` does nothing when the cache already holds every kernel of the plan (every run
+after the first), when numba is disabled or checks bounds (no cache then), when the cache
+cannot be written, on a single core, or when ``IMAGEFORM_COMPILE_AHEAD=0``. The second
+process is ``python -m imageform._kernels.ahead ENTRIES`` (the plan's entries the cache lacks,
+as JSON): it prints each module's name once it has compiled that module's kernels, exits
+quietly on Ctrl-C, and is ended when the command exits. Whatever goes wrong in it (a kernel
+that no longer has the planned signature, a crash), the command compiles what it needs itself,
+as without it: the results never depend on it.
+
+A ``here`` entry must not be a deferred kernel (``jit.njit(..., lazy=True)``): its first
+compilation waits for the second process.
+"""
+
+from __future__ import annotations
+
+import atexit
+import contextlib
+import importlib
+import json
+import os
+import subprocess
+import sys
+import threading
+from pathlib import Path
+from typing import Any, NamedTuple
+
+__all__ = ["PLANS", "Entry", "Plan", "enabled", "pending", "ready", "start"]
+
+#: how long :func:`ready` waits for the second process at most (s); then the command compiles
+_WAIT_S = 300.0
+
+
+class Entry(NamedTuple):
+    """One kernel to compile, with its callees (each cached on its own).
+
+    Its module in ``imageform._kernels``, its name, the argument types in numba's signature
+    syntax (``"(float64[:, ::1], int64)"``).
+    """
+
+    module: str
+    kernel: str
+    signature: str
+
+
+class Plan(NamedTuple):
+    """The second process's kernels (in order) and those the command compiles first."""
+
+    child: tuple[Entry, ...]
+    here: tuple[Entry, ...] = ()
+
+
+_A2 = "float64[:, ::1]"
+_A1 = "float64[::1]"
+_A3 = "float64[:, :, ::1]"
+_I1 = "int64[::1]"
+
+#: The plans, from ``benchmarks/compile_plan.py`` (its figures: benchmarks/results).
+PLANS: dict[str, Plan] = {
+    # rendering and optics (3 s of NumPy) overlap the demosaicing and line-segment kernels
+    "simulate": Plan(
+        child=(
+            Entry(
+                "demosaic_menon",
+                "_menon_tasks",
+                f"(int64, int64, {_A2}, int64, int64, int64, int64, boolean, boolean, int64,"
+                f" {_A3})",
+            ),
+            Entry(
+                "lsd",
+                "grow_regions",
+                f"({_A2}, {_I1}, float64, int64)",
+            ),
+            Entry("lsd", "region_rectangles", f"(int32[:, ::1], int64, {_A2})"),
+            Entry("lsd", "rect_alignment_counts", f"({_A2}, {_A2}, float64)"),
+        ),
+    ),
+    # the essential matrix's estimator (13.4 s of 17.1) split at its callees: the 5-point
+    # solver here, the LM refinement there; the estimator itself then compiles in 3 s
+    "reconstruct": Plan(
+        child=(
+            Entry("ransac", "_sample", f"(uint64[::1], int64, int64, {_I1})"),
+            Entry("ransac", "_select", f"(int64, {_A2}, {_A2}, {_A2}, float64, {_I1})"),
+            Entry(
+                "ransac",
+                "_support_count_n",
+                f"(int64, {_A2}, {_A2}, {_A2}, float64, int64, float64, int64)",
+            ),
+            Entry("ransac", "_project_e", f"({_A2})"),
+            Entry(
+                "ransac_e",
+                "_score_sprt",
+                f"({_A2}, {_A2}, {_A2}, float64, float64, int64, float64, float64, float64)",
+            ),
+            Entry("ransac_e", "_lm_e", f"({_A2}, {_A2}, {_A2}, {_A2}, {_A2}, {_I1}, int64, int64)"),
+            Entry(
+                "relative_pose",
+                "pose_from_essential",
+                f"({_A2}, {_A2}, {_A2}, boolean[::1], float64, {_A2}, {_A1}, {_A2}, boolean[::1])",
+            ),
+        ),
+        here=(
+            Entry("ransac_e", "_e5", f"({_A2}, {_A2}, {_I1}, {_A3})"),
+            Entry("ransac", "_to_f", f"({_A2}, {_A2}, {_A2}, {_A2})"),
+            Entry("ransac", "_support", f"({_A2}, {_A2}, {_A2}, float64, float64, {_I1})"),
+            Entry(
+                "ransac",
+                "_cheirality",
+                f"({_A2}, {_A2}, {_A2}, {_I1}, int64, float64, {_A2}, {_A3})",
+            ),
+            Entry(
+                "pnp",
+                "_refine_tasks",
+                f"(int64, int64, {_A3}, {_A2}, {_A3}, {_A3}, {_A2}, {_A2}, int64, float64, {_A1})",
+            ),
+        ),
+    ),
+}
+
+
+def _signature(text: str) -> tuple[Any, ...]:
+    from numba.core import sigutils
+
+    args, _ = sigutils.normalize_signature("none" + text)  # "(x)" alone is not a tuple
+    return tuple(args)
+
+
+def compile_entry(entry: Entry) -> None:
+    """Compile ``entry``'s kernel (and its callees) for its signature, into the cache.
+
+    A kernel of ``jit.njit(signature, lazy=True)`` compiles as at its first call: numba's
+    cache key holds the signature as it was given (its text), not only the types.
+    """
+    module = importlib.import_module(f"imageform._kernels.{entry.module}")
+    kernel = getattr(module, entry.kernel)
+    if hasattr(kernel, "dispatcher"):  # jit.Deferred
+        kernel.compile()
+    else:
+        kernel.compile(_signature(entry.signature))
+
+
+def enabled() -> bool:
+    """Whether a second process may compile ahead here (see the module's documentation)."""
+    if os.environ.get("IMAGEFORM_COMPILE_AHEAD", "") in ("0", "false", "no", "off"):
+        return False
+    if os.environ.get("IMAGEFORM_DISABLE_NUMBA", "") not in ("", "0"):
+        return False
+    try:
+        cores = len(os.sched_getaffinity(0))
+    except (AttributeError, OSError):  # not Linux
+        cores = os.cpu_count() or 1
+    if cores < 2:
+        return False
+    from imageform._backend import have_numba
+
+    if not have_numba():
+        return False
+    import numba
+
+    config = numba.config
+    return not (getattr(config, "BOUNDSCHECK", None) or getattr(config, "DISABLE_JIT", 0))
+
+
+def _cached(entry: Entry, folder: Path) -> bool:
+    return any(folder.glob(f"{entry.module}.{entry.kernel}-*.nbi"))
+
+
+def pending(command: str) -> tuple[Entry, ...]:
+    """Return the entries of ``command``'s plan that the cache does not hold yet.
+
+    None when imageform's cache folder cannot be written: nothing is compiled ahead then.
+    """
+    plan = PLANS.get(command)
+    if plan is None:
+        return ()
+    from imageform._kernels.jit import cache_location
+
+    folder, why = cache_location()
+    entries = plan.child + plan.here
+    if why == "in-tree":
+        return ()
+    return tuple(e for e in entries if not _cached(e, folder))
+
+
+class _Child:
+    """The second process, and a thread that reads which modules it has compiled."""
+
+    def __init__(self, entries: tuple[Entry, ...]) -> None:
+        self.waiting = {e.module for e in entries}
+        self.done: set[str] = set()
+        self.ended = threading.Event()
+        self.changed = threading.Condition()
+        env = {**os.environ, "IMAGEFORM_COMPILE_AHEAD": "0"}  # its own commands: none
+        self.proc = subprocess.Popen(
+            [sys.executable, "-m", "imageform._kernels.ahead", json.dumps(entries)],
+            stdin=subprocess.DEVNULL,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.DEVNULL,
+            env=env,
+            text=True,
+        )
+        self.reader = threading.Thread(target=self._read, name="imageform-ahead", daemon=True)
+        self.reader.start()
+
+    def _read(self) -> None:
+        assert self.proc.stdout is not None
+        for line in self.proc.stdout:
+            with self.changed:
+                self.done.add(line.strip())
+                self.changed.notify_all()
+        with self.changed:
+            self.ended.set()
+            self.changed.notify_all()
+
+    def wait(self, module: str | None) -> None:
+        wanted = self.waiting if module is None else {module}
+        with self.changed:
+            self.changed.wait_for(
+                lambda: wanted <= self.done or self.ended.is_set(), timeout=_WAIT_S
+            )
+
+    def stop(self) -> None:
+        if self.proc.poll() is None:
+            self.proc.terminate()
+            try:
+                self.proc.wait(timeout=5)
+            except subprocess.TimeoutExpired:  # pragma: no cover - a stuck child
+                self.proc.kill()
+                self.proc.wait()
+        if self.proc.stdout is not None:
+            self.proc.stdout.close()
+
+
+_CHILD: _Child | None = None
+_LOCK = threading.Lock()
+
+
+def start(command: str) -> bool:
+    """Start compiling ``command``'s planned kernels ahead; return whether a process started.
+
+    Then compiles the plan's ``here`` entries in this process. Nothing happens when the cache
+    holds them all already, or when :func:`enabled` says no.
+    """
+    global _CHILD
+    if command not in PLANS or not enabled():
+        return False
+    todo = pending(command)
+    if not todo:
+        return False
+    plan = PLANS[command]
+    child = tuple(e for e in plan.child if e in todo)
+    started = False
+    with _LOCK:
+        if _CHILD is None and child:
+            try:
+                _CHILD = _Child(child)
+            except OSError:  # no interpreter to start (a frozen application): compile here
+                _CHILD = None
+            else:
+                atexit.register(_stop)
+                from imageform._kernels import jit
+
+                jit._WAIT = ready
+                started = True
+    for entry in plan.here:
+        if entry in todo:
+            # a stale plan: the command compiles the kernel on use
+            with contextlib.suppress(Exception):
+                compile_entry(entry)
+    return started
+
+
+def ready(module: str | None = None) -> None:
+    """Wait until the second process has compiled its kernels of ``module`` (if it has any).
+
+    ``None``: all its kernels. Returns at once when no second process runs.
+    """
+    child = _CHILD
+    if child is None or (module is not None and module not in child.waiting):
+        return
+    child.wait(module)
+
+
+def _stop() -> None:
+    global _CHILD
+    with _LOCK:
+        child, _CHILD = _CHILD, None
+    if child is not None:
+        from imageform._kernels import jit
+
+        jit._WAIT = None
+        child.stop()
+
+
+def _main(argv: list[str]) -> int:
+    """Run the second process: compile the entries (JSON); print each module's name when done."""
+    try:
+        entries = [Entry(*map(str, e)) for e in json.loads(argv[0])] if len(argv) == 1 else None
+    except (ValueError, TypeError):
+        entries = None
+    if entries is None:
+        print(
+            'usage: python -m imageform._kernels.ahead \'[["module", "kernel", "(types)"], ...]\'',
+            file=sys.stderr,
+        )
+        return 2
+    try:
+        for k, entry in enumerate(entries):
+            with contextlib.suppress(Exception):  # the command compiles it itself
+                compile_entry(entry)
+            if k + 1 == len(entries) or entries[k + 1].module != entry.module:
+                print(entry.module, flush=True)
+    except KeyboardInterrupt:  # Ctrl-C reaches the whole process group: leave quietly
+        return 130
+    except BrokenPipeError:  # the command has ended
+        return 0
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(_main(sys.argv[1:]))
