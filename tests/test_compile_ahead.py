@@ -48,15 +48,13 @@ def test_every_entry_names_a_kernel_with_its_signature(command: str, entry: ahea
         from numba.core import sigutils
 
         assert tuple(sigutils.normalize_signature(kernel.signature)[0]) == args
-        assert entry not in ahead.PLANS[command].here  # it would wait for the second process
 
 
-def test_a_modules_entries_are_together_in_the_second_process() -> None:
-    """The second process reports a module once its last entry of it is compiled."""
+def test_a_here_entry_is_not_a_child_entry() -> None:
     for plan in ahead.PLANS.values():
-        modules = [e.module for e in plan.child]
-        runs = [m for i, m in enumerate(modules) if i == 0 or modules[i - 1] != m]
-        assert len(runs) == len(set(runs)), modules
+        assert not {(e.module, e.kernel) for e in plan.here} & {
+            (e.module, e.kernel) for e in plan.child
+        }
 
 
 def test_nothing_starts_when_off_or_unplanned(monkeypatch: pytest.MonkeyPatch) -> None:
@@ -69,7 +67,7 @@ def test_nothing_starts_when_off_or_unplanned(monkeypatch: pytest.MonkeyPatch) -
     monkeypatch.delenv("IMAGEFORM_DISABLE_NUMBA")
     assert ahead.start("no-such-command") is False
     assert ahead.pending("no-such-command") == ()
-    ahead.ready("lsd")  # no second process: returns at once
+    ahead.ready("lsd.grow_regions")  # no second process: returns at once
     ahead.ready()
 
 
@@ -111,10 +109,23 @@ _RUN = textwrap.dedent(
         ),
         here=(E("ransac", "_finite3", f"({A2})"),),
     )
+    from numba.core import event
+    compiled = []
+
+    class Seen(event.Listener):
+        def on_start(self, e):
+            pass
+
+        def on_end(self, e):
+            compiled.append(e.data["dispatcher"].py_func.__qualname__)
+
+    event.register("numba:compile", Seen())
     folder = cache_location()[0]
     before = [e.kernel for e in ahead.pending("t")]
     started = ahead.start("t")
-    ahead.ready("ransac")
+    # at once: this process waits for the second one, then loads the kernel from the cache
+    ahead.compile_entry(ahead.PLANS["t"].child[2])
+    ahead.ready("ransac._copy3")
     child = ahead._CHILD
     ahead.ready()
     done = sorted(child.done)
@@ -122,7 +133,8 @@ _RUN = textwrap.dedent(
     names = sorted(p.name.split("-")[0] for p in folder.glob("*.nbi"))
     print(json.dumps({"before": before, "started": started, "done": done, "names": names,
                       "after": [e.kernel for e in ahead.pending("t")],
-                      "again": ahead.start("t"), "code": child.proc.returncode}))
+                      "again": ahead.start("t"), "code": child.proc.returncode,
+                      "compiled": compiled}))
     """
 )
 
@@ -151,12 +163,20 @@ def test_the_second_process_fills_the_cache_then_nothing_starts(tmp_path: Path) 
     out = _run(tmp_path / "cache")
     assert out["started"] is True
     assert set(out["before"]) == {"_copy3", "no_such_kernel", "_fro_unit", "_e_of", "_finite3"}
-    assert out["done"] == ["ransac", "ransac_e"]
+    assert out["done"] == [
+        "ransac._copy3",
+        "ransac._fro_unit",
+        "ransac.no_such_kernel",
+        "ransac_e._e_of",
+    ]
     names = set(out["names"])
     assert {"ransac._copy3", "ransac._fro_unit", "ransac_e._e_of", "ransac._finite3"} <= names
     assert out["after"] == ["no_such_kernel"]  # a stale entry never counts as cached ...
     assert out["again"] is True  # ... so the plan tests above keep every entry real
     assert out["code"] in (0, -signal.SIGTERM)  # done, or ended by the command's exit
+    compiled = set(out["compiled"])
+    assert "_finite3" in compiled  # this process's entry
+    assert not {"_copy3", "_fro_unit", "_e_of"} & compiled  # waited for, then loaded
 
 
 def test_a_single_core_starts_nothing(tmp_path: Path) -> None:
@@ -185,7 +205,7 @@ def test_a_single_core_starts_nothing(tmp_path: Path) -> None:
 def test_ready_returns_when_the_second_process_dies(monkeypatch: pytest.MonkeyPatch) -> None:
     """A child that ends without reporting (a crash) does not hold the command."""
     child = ahead._Child.__new__(ahead._Child)
-    child.waiting = {"lsd"}
+    child.waiting = {"lsd.grow_regions"}
     child.done = set()
     import threading
 
@@ -197,7 +217,7 @@ def test_ready_returns_when_the_second_process_dies(monkeypatch: pytest.MonkeyPa
     child.reader = threading.Thread(target=child._read, daemon=True)
     child.reader.start()
     monkeypatch.setattr(ahead, "_CHILD", child)
-    ahead.ready("lsd")
+    ahead.ready("lsd.grow_regions")
     ahead.ready()
     assert child.ended.is_set() and child.done == set()
     child.stop()

@@ -12,22 +12,22 @@ others, or renders, shares the work: when the command reaches those kernels, it 
 compiles (``child``), and which the command compiles first itself (``here``), each with the
 signature the command uses (``benchmarks/compile_plan.py`` records a command's compilations on
 an empty cache and proposes the split; figures in ``benchmarks/results/compile-ahead-*.md``).
-The command calls :func:`start` once its arguments are checked; before it calls a kernel
-that the second process may still be compiling, :func:`ready` waits for that process to be
-done with that kernel's module (``jit.run_tasks`` and the deferred kernels of ``jit.njit``
-call it), so that nothing is compiled twice.
+The command calls :func:`start` once its arguments are checked. Every imageform kernel calls
+:func:`ready` before it compiles a signature (``jit.njit`` wraps numba's ``compile``, which
+runs at a call from Python and while a kernel that calls it is typed): when the second
+process has that kernel in its plan, the command waits until it is compiled and then loads it
+from the cache, so that nothing is compiled twice.
 
 :func:`start` does nothing when the cache already holds every kernel of the plan (every run
 after the first), when numba is disabled or checks bounds (no cache then), when the cache
 cannot be written, on a single core, or when ``IMAGEFORM_COMPILE_AHEAD=0``. The second
 process is ``python -m imageform._kernels.ahead ENTRIES`` (the plan's entries the cache lacks,
-as JSON): it prints each module's name once it has compiled that module's kernels, exits
-quietly on Ctrl-C, and is ended when the command exits. Whatever goes wrong in it (a kernel
+as JSON): it prints each kernel's name once it has compiled it, exits quietly on Ctrl-C, and
+is ended when the command exits. Whatever goes wrong in it (a kernel
 that no longer has the planned signature, a crash), the command compiles what it needs itself,
 as without it: the results never depend on it.
 
-A ``here`` entry must not be a deferred kernel (``jit.njit(..., lazy=True)``): its first
-compilation waits for the second process.
+A ``here`` entry must not call a ``child`` entry: it would wait for the second process.
 """
 
 from __future__ import annotations
@@ -73,8 +73,70 @@ _A1 = "float64[::1]"
 _A3 = "float64[:, :, ::1]"
 _I1 = "int64[::1]"
 
+#: the checkerboard detector's kernels (calibrate, stereo-calibrate, characterize): the
+#: candidates' three here, the refinement and the lattice's three in the second process
+_BOARD_HERE = (
+    Entry(
+        "checkerboard",
+        "_saddle_maxima",
+        "(uint8[:, ::1], float32[:, ::1], boolean, float32[::1], int64, int64, float64, float32)",
+    ),
+    Entry("checkerboard", "ring_test_numba", f"(float32[:, ::1], {_A2}, {_A2}, float64)"),
+    Entry("checkerboard", "neighbors_numba", f"({_A2}, {_A3}, float64, int64, float64)"),
+)
+_BOARD_CHILD = (
+    Entry(
+        "checkerboard",
+        "_refine_corners",
+        f"(float32[:, ::1], {_A2}, boolean, {_A2}, int64, int64, int64, float64)",
+    ),
+    Entry(
+        "checkerboard",
+        "lattice_rectangle_numba",
+        f"(int64, {_A3}, int64[:, :, ::1], {_A2}, int64, float64)",
+    ),
+    Entry("checkerboard", "lattice_problem_numba", f"({_A3}, float64)"),
+)
+
 #: The plans, from ``benchmarks/compile_plan.py`` (its figures: benchmarks/results).
 PLANS: dict[str, Plan] = {
+    "calibrate": Plan(child=_BOARD_CHILD, here=_BOARD_HERE),
+    "stereo-calibrate": Plan(child=_BOARD_CHILD, here=_BOARD_HERE),
+    "characterize": Plan(
+        child=(Entry("chart", "flat_gradient_numba", "(float32[:, :, ::1], float32[::1])"),)
+        + _BOARD_CHILD,
+        here=_BOARD_HERE
+        + (
+            Entry("chart", "region_moments_numba", "(int32[:, ::1], int64)"),
+            Entry("chart", "block_mean_numba", f"({_A3}, int64, float64)"),
+        ),
+    ),
+    # the full line-segment detector (lsd_full.lsd, 5.9 s) split at its callees
+    "vanishing": Plan(
+        child=(
+            Entry("lsd_full", "gaussian_sampler", f"({_A2}, float64, float64)"),
+            Entry(
+                "lsd_full",
+                "region_grow",
+                f"(int32, int32, {_A2}, int32[::1], int32[::1], uint8[:, ::1], float64)",
+            ),
+            Entry(
+                "lsd_full",
+                "_refine",
+                f"(int32[::1], int32[::1], int64, {_A2}, float64, float64, float64, {_A1},"
+                f" uint8[:, ::1], {_A2}, float64)",
+            ),
+        ),
+        here=(
+            Entry("lsd_full", "ll_angle", f"({_A2}, float64, int64)"),
+            Entry(
+                "lsd_full",
+                "_region2rect",
+                f"(int32[::1], int32[::1], int64, {_A2}, float64, float64, float64, {_A1})",
+            ),
+            Entry("lsd_full", "_rect_improve", f"({_A1}, {_A2}, float64, float64)"),
+        ),
+    ),
     # rendering and optics (3 s of NumPy) overlap the demosaicing and line-segment kernels
     "simulate": Plan(
         child=(
@@ -204,7 +266,7 @@ class _Child:
     """The second process, and a thread that reads which modules it has compiled."""
 
     def __init__(self, entries: tuple[Entry, ...]) -> None:
-        self.waiting = {e.module for e in entries}
+        self.waiting = {f"{e.module}.{e.kernel}" for e in entries}
         self.done: set[str] = set()
         self.ended = threading.Event()
         self.changed = threading.Condition()
@@ -230,8 +292,8 @@ class _Child:
             self.ended.set()
             self.changed.notify_all()
 
-    def wait(self, module: str | None) -> None:
-        wanted = self.waiting if module is None else {module}
+    def wait(self, name: str | None) -> None:
+        wanted = self.waiting if name is None else {name}
         with self.changed:
             self.changed.wait_for(
                 lambda: wanted <= self.done or self.ended.is_set(), timeout=_WAIT_S
@@ -288,15 +350,16 @@ def start(command: str) -> bool:
     return started
 
 
-def ready(module: str | None = None) -> None:
-    """Wait until the second process has compiled its kernels of ``module`` (if it has any).
+def ready(name: str | None = None) -> None:
+    """Wait until the second process has compiled kernel ``name`` (``"module.kernel"``).
 
-    ``None``: all its kernels. Returns at once when no second process runs.
+    Returns at once when no second process runs or it does not compile that kernel; ``None``
+    waits for all its kernels. Every imageform kernel calls it before it compiles (``jit``).
     """
     child = _CHILD
-    if child is None or (module is not None and module not in child.waiting):
+    if child is None or (name is not None and name not in child.waiting):
         return
-    child.wait(module)
+    child.wait(name)
 
 
 def _stop() -> None:
@@ -311,7 +374,7 @@ def _stop() -> None:
 
 
 def _main(argv: list[str]) -> int:
-    """Run the second process: compile the entries (JSON); print each module's name when done."""
+    """Run the second process: compile the entries (JSON); print each one's name when done."""
     try:
         entries = [Entry(*map(str, e)) for e in json.loads(argv[0])] if len(argv) == 1 else None
     except (ValueError, TypeError):
@@ -323,11 +386,10 @@ def _main(argv: list[str]) -> int:
         )
         return 2
     try:
-        for k, entry in enumerate(entries):
+        for entry in entries:
             with contextlib.suppress(Exception):  # the command compiles it itself
                 compile_entry(entry)
-            if k + 1 == len(entries) or entries[k + 1].module != entry.module:
-                print(entry.module, flush=True)
+            print(f"{entry.module}.{entry.kernel}", flush=True)
     except KeyboardInterrupt:  # Ctrl-C reaches the whole process group: leave quietly
         return 130
     except BrokenPipeError:  # the command has ended

@@ -189,8 +189,29 @@ configure_cache()
 
 
 #: While a second process compiles kernels ahead (:mod:`imageform._kernels.ahead`), its
-#: ``ready(module)``: called before a task kernel runs and before a deferred kernel compiles.
-_WAIT: Callable[[str | None], None] | None = None
+#: ``ready("module.kernel")``: called before a kernel compiles (or loads from the cache).
+_WAIT: Callable[[str], None] | None = None
+
+
+def _waits(dispatcher: Any) -> Any:
+    """Make ``dispatcher`` call :data:`_WAIT` with its name before it compiles a signature.
+
+    numba calls a dispatcher's ``compile`` for every new signature: at a call from Python, and
+    while typing a kernel that calls it; so the wait covers callees compiled inside a caller.
+    """
+    if not isinstance(dispatcher, numba.core.dispatcher.Dispatcher):
+        return dispatcher
+    fn = dispatcher.py_func
+    name = f"{(fn.__module__ or '').rpartition('.')[2]}.{fn.__qualname__}"
+    plain = dispatcher.compile
+
+    def compile(sig: Any) -> Any:
+        if _WAIT is not None:
+            _WAIT(name)
+        return plain(sig)
+
+    dispatcher.compile = compile  # type: ignore[method-assign]
+    return dispatcher
 
 
 def njit(fn: Callable[..., Any] | str | None = None, /, **options: Any) -> Any:
@@ -213,10 +234,12 @@ def njit(fn: Callable[..., Any] | str | None = None, /, **options: Any) -> Any:
         if not isinstance(fn, str):
             raise TypeError("njit(lazy=True) takes the signature to compile for")
         signature = fn
-        return lambda function: Deferred(numba.njit(**options)(function), signature)
+        return lambda function: Deferred(_waits(numba.njit(**options)(function)), signature)
     if fn is None:
-        return numba.njit(**options)
-    return numba.njit(fn, **options)
+        return lambda function: _waits(numba.njit(**options)(function))
+    if isinstance(fn, str):  # an explicit signature: compiled now, when the module is imported
+        return numba.njit(fn, **options)
+    return _waits(numba.njit(fn, **options))
 
 
 class Deferred:
@@ -241,8 +264,6 @@ class Deferred:
         with self._lock:
             if self._compiled:
                 return
-            if _WAIT is not None:  # a second process may be compiling its callees
-                _WAIT(None)
             self.dispatcher.compile(self.signature)
             self.dispatcher.disable_compile()
             self._compiled = True
@@ -306,8 +327,6 @@ def run_tasks(kernel: Any, n_tasks: int, *args: Any, threads: int | None = None)
     ``numba.get_num_threads()`` (``NUMBA_NUM_THREADS``, ``numba.set_num_threads``); 1 runs
     every task in the calling thread.
     """
-    if _WAIT is not None:  # a second process may be compiling this kernel
-        _WAIT(kernel.py_func.__module__.rpartition(".")[2])
     k = min(n_tasks, threads if threads is not None else numba.get_num_threads())
     if k <= 1:
         if n_tasks > 0:

@@ -202,7 +202,6 @@ def detect_line_segments(
     """
     from scipy import ndimage, stats  # imported on use: scipy.stats alone costs 0.2 s
 
-    from imageform._kernels import ahead
     from imageform._kernels.lsd import grow_regions, rect_alignment_counts, region_rectangles
 
     if method not in ("lsd", "simple"):
@@ -240,7 +239,6 @@ def detect_line_segments(
     log_ntests = 2.5 * math.log10(W * H)
     # a region can only pass if even all its pixels aligned give NFA <= eps
     min_size = max(2, math.ceil((log_ntests - log10_eps) / -math.log10(p)))
-    ahead.ready("lsd")  # a second process may be compiling these kernels (a first run)
     labels, n_regions = grow_regions(ang, order, angle_tolerance, min_size)
     if n_regions == 0:
         empty = np.zeros((0, 2, 2))

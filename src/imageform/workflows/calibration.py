@@ -377,6 +377,7 @@ def calibrate(run: Run, opts: CalibrateOptions, *, out: Path, images: list[Path]
 
     Zhang, then Levenberg-Marquardt on every reprojection error.
     """
+    from imageform._kernels import ahead
     from imageform.geometry import checkerboard_points
     from imageform.geometry.checkerboard import find_checkerboard
 
@@ -384,6 +385,7 @@ def calibrate(run: Run, opts: CalibrateOptions, *, out: Path, images: list[Path]
     if charuco is not None:
         return _calibrate_charuco(run, opts, out=out, images=images, squares=charuco)
     cols, rows = parse_board(opts.board)
+    ahead.start("calibrate")  # a first run: its kernels compiled on two cores
     square = opts.square_mm()
     shape0: tuple[int, int] | None = None
     corners, names = [], []

@@ -394,6 +394,7 @@ def characterize(run: Run, opts: CharacterizeOptions, *, out: Path, folder: str)
     """
     import importlib.util
 
+    from imageform._kernels import ahead
     from imageform.workflows._characterize_report import write_outputs
 
     if importlib.util.find_spec("matplotlib") is None:
@@ -405,6 +406,7 @@ def characterize(run: Run, opts: CharacterizeOptions, *, out: Path, folder: str)
     if out.resolve() == src.resolve() or src.resolve() in out.resolve().parents:
         raise InvalidInputError(f"the output folder {out} must not be inside FOLDER {src}")
     _check_folder(out, run.outputs.force)
+    ahead.start("characterize")  # a first run: its kernels compiled on two cores
     res = characterize_camera(src, progress=run.progress, max_pixels=opts.max_pixels)
     tmp = run.folder(out)
     written = write_outputs(res, tmp)

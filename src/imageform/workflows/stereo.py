@@ -141,6 +141,7 @@ def stereo_calibrate_cmd(
     """``imageform stereo-calibrate``: a stereo camera file from checkerboard pairs."""
     import numpy as np
 
+    from imageform._kernels import ahead
     from imageform.geometry import checkerboard_points, stereo_calibrate
     from imageform.io import StereoCameraFile, write_stereo_camera
 
@@ -154,6 +155,7 @@ def stereo_calibrate_cmd(
             f"{len(lefts)} left and {len(rights)} right"
         )
     board = parse_board(opts.board)
+    ahead.start("stereo-calibrate")  # a first run: its kernels compiled on two cores
     if run.progress is not None:
         run.progress("detecting", 0.0)
     size_l, found_l = _detect(run, opts, lefts, board)

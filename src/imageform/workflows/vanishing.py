@@ -114,6 +114,7 @@ def vanishing(run: Run, opts: VanishingOptions, *, out: Path | None, image: Path
     """``imageform vanishing``: line segments, vanishing points, K and the horizon."""
     import numpy as np
 
+    from imageform._kernels import ahead
     from imageform.geometry import detect_vanishing_points
 
     img = read(image, opts)
@@ -148,6 +149,7 @@ def vanishing(run: Run, opts: VanishingOptions, *, out: Path | None, image: Path
         pp = {"centre": "center", "orthocentre": "orthocenter"}.get(
             opts.principal_point, opts.principal_point
         )
+    ahead.start("vanishing")  # a first run: its kernels compiled on two cores
     res = detect_vanishing_points(arr, rng=opts.seed, principal_point=pp)
     if len(res.segments) < 2:
         # the library answers "none found" (an empty set); the command fails, as before
