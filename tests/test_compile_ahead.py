@@ -14,7 +14,9 @@ import signal
 import subprocess
 import sys
 import textwrap
+import time
 from pathlib import Path
+from typing import cast
 
 import numpy as np
 import pytest
@@ -162,19 +164,25 @@ def test_the_second_process_fills_the_cache_then_nothing_starts(tmp_path: Path) 
     own; both land in the cache, the child exits 0, and a second start finds nothing to do."""
     out = _run(tmp_path / "cache")
     assert out["started"] is True
-    assert set(out["before"]) == {"_copy3", "no_such_kernel", "_fro_unit", "_e_of", "_finite3"}
+    assert set(cast(list[str], out["before"])) == {
+        "_copy3",
+        "no_such_kernel",
+        "_fro_unit",
+        "_e_of",
+        "_finite3",
+    }
     assert out["done"] == [
         "ransac._copy3",
         "ransac._fro_unit",
         "ransac.no_such_kernel",
         "ransac_e._e_of",
     ]
-    names = set(out["names"])
+    names = set(cast(list[str], out["names"]))
     assert {"ransac._copy3", "ransac._fro_unit", "ransac_e._e_of", "ransac._finite3"} <= names
     assert out["after"] == ["no_such_kernel"]  # a stale entry never counts as cached ...
     assert out["again"] is True  # ... so the plan tests above keep every entry real
     assert out["code"] in (0, -signal.SIGTERM)  # done, or ended by the command's exit
-    compiled = set(out["compiled"])
+    compiled = set(cast(list[str], out["compiled"]))
     assert "_finite3" in compiled  # this process's entry
     assert not {"_copy3", "_fro_unit", "_e_of"} & compiled  # waited for, then loaded
 
@@ -305,3 +313,84 @@ def test_simulate_writes_the_same_files_with_and_without_the_second_process(
         m.pop("step_times_s", None)
     assert m0 == m1
     assert np.isfinite(float(len(m0)))
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    # a zombie (ended, not yet reaped by its parent) counts as gone
+    stat = Path(f"/proc/{pid}/stat")
+    return not (stat.exists() and stat.read_text().split(")")[-1].split()[0] == "Z")
+
+
+@pytest.mark.skipif(not hasattr(os, "killpg"), reason="process groups: POSIX")
+def test_ctrl_c_on_a_first_run_ends_both_processes_in_one_line(tmp_path: Path) -> None:
+    """Ctrl-C (SIGINT to the terminal's process group) while the second process compiles:
+    the command's one line and exit 130, no traceback from either process, none left."""
+    if not Path(f"/proc/{os.getpid()}/task/{os.getpid()}/children").exists():
+        pytest.skip("needs /proc/PID/task/TID/children (Linux) to find the second process")
+    text = (ROOT / "examples" / "scenes" / "default.toml").read_text()
+    text = text.replace("width = 1280", "width = 320").replace("height = 720", "height = 180")
+    (tmp_path / "small.toml").write_text(text)
+    env = {
+        **os.environ,
+        "PYTHONPATH": str(SRC),
+        "NUMBA_CACHE_DIR": str(tmp_path / "cache"),
+        "IMAGEFORM_COMPILE_AHEAD": "1",
+        "MPLBACKEND": "Agg",
+    }
+    run = subprocess.Popen(
+        [sys.executable, "-m", "imageform", "simulate", "--scene", "small.toml", "-o", "out"],
+        cwd=tmp_path,
+        env=env,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        start_new_session=True,  # its own process group, as a terminal's foreground job
+    )
+    children: set[int] = set()
+    t0 = time.monotonic()
+    while not children and time.monotonic() - t0 < 120 and run.poll() is None:
+        kids = Path(f"/proc/{run.pid}/task/{run.pid}/children")
+        if kids.exists():
+            children = {int(p) for p in kids.read_text().split()}
+        time.sleep(0.05)
+    assert children, "no second process started"
+    time.sleep(0.5)
+    os.killpg(run.pid, signal.SIGINT)
+    _, err = run.communicate(timeout=120)
+    assert run.returncode == 130, err
+    assert err.strip().splitlines() == ["imageform: interrupted; nothing new was written"]
+    t1 = time.monotonic()
+    while any(_alive(p) for p in children) and time.monotonic() - t1 < 10:
+        time.sleep(0.05)
+    assert not any(_alive(p) for p in children)
+    assert not (tmp_path / "out").exists()
+
+
+def test_a_ctrl_c_inside_a_finalizer_is_raised_again_not_printed(
+    capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The command's hook for exceptions raised in ``__del__``: a KeyboardInterrupt there (a
+    Ctrl-C landing in llvmlite's finalizers while numba compiles) interrupts the main thread
+    again, silently; any other is printed by Python's own hook, as before."""
+    from imageform.cli import _interrupt_in_finalizer
+
+    class Interrupted:
+        def __del__(self) -> None:
+            raise KeyboardInterrupt
+
+    class Broken:
+        def __del__(self) -> None:
+            raise ValueError("boom")
+
+    monkeypatch.setattr(sys, "unraisablehook", _interrupt_in_finalizer)
+    with pytest.raises(KeyboardInterrupt):
+        Interrupted()
+        for _ in range(100):
+            time.sleep(0.01)
+    assert capsys.readouterr().err == ""
+    Broken()
+    assert "ValueError: boom" in capsys.readouterr().err

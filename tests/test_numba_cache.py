@@ -106,6 +106,34 @@ def test_run_tasks_cuts_the_tasks_over_the_threads() -> None:
     assert seen == []
 
 
+def test_run_tasks_compiles_in_the_calling_thread_only() -> None:
+    """A kernel's first run through jit.run_tasks compiles in the calling thread, never in a
+    worker (a Ctrl-C in the caller's compilation while a worker compiled hung the command)."""
+    import threading
+
+    from numba.core import event
+
+    @jit.njit(nogil=True, cache=False)
+    def kernel(t0, t1, out):  # type: ignore[no-untyped-def]
+        for t in range(t0, t1):
+            out[t] = 2.0 * t
+
+    where: list[int] = []
+
+    class Seen(event.Listener):
+        def on_start(self, e: Any) -> None:
+            where.append(threading.get_ident())
+
+        def on_end(self, e: Any) -> None:
+            pass
+
+    out = np.zeros(8)
+    with event.install_listener("numba:compile", Seen()):
+        jit.run_tasks(kernel, 8, out, threads=4)
+    assert where and set(where) == {threading.get_ident()}
+    assert out.tolist() == [2.0 * t for t in range(8)]
+
+
 def test_small_and_large_remaps_share_one_compiled_kernel() -> None:
     """The remap in the calling thread (small images) and on numba's threads is one kernel:
     one compilation, where a serial twin and a parallel=True kernel were two."""

@@ -59,6 +59,7 @@ BENCH_SCRIPTS: dict[str, str] = {
     "chunked": "benchmarks/bench_chunked.py",
     "chunked-strips": "benchmarks/bench_chunked.py",
     "color": "benchmarks/bench_color.py",
+    "compile-ahead": "benchmarks/bench_compile_ahead.py",
     "compile-literals": "benchmarks/compile_literals.py",
     "compile-simulate": "benchmarks/bench_first_run.py",
     "delta-e": "benchmarks/bench_delta_e.py",

@@ -156,7 +156,8 @@ PLANS: dict[str, Plan] = {
         ),
     ),
     # the essential matrix's estimator (13.4 s of 17.1) split at its callees: the 5-point
-    # solver here, the LM refinement there; the estimator itself then compiles in 3 s
+    # solver here, the LM refinement there; the estimator itself then compiles in 3 s, while
+    # the second process goes on with what the command needs after it (the pose, PnP)
     "reconstruct": Plan(
         child=(
             Entry("ransac", "_sample", f"(uint64[::1], int64, int64, {_I1})"),
@@ -178,6 +179,11 @@ PLANS: dict[str, Plan] = {
                 "pose_from_essential",
                 f"({_A2}, {_A2}, {_A2}, boolean[::1], float64, {_A2}, {_A1}, {_A2}, boolean[::1])",
             ),
+            Entry(
+                "pnp",
+                "_refine_tasks",
+                f"(int64, int64, {_A3}, {_A2}, {_A3}, {_A3}, {_A2}, {_A2}, int64, float64, {_A1})",
+            ),
         ),
         here=(
             Entry("ransac_e", "_e5", f"({_A2}, {_A2}, {_I1}, {_A3})"),
@@ -187,11 +193,6 @@ PLANS: dict[str, Plan] = {
                 "ransac",
                 "_cheirality",
                 f"({_A2}, {_A2}, {_A2}, {_I1}, int64, float64, {_A2}, {_A3})",
-            ),
-            Entry(
-                "pnp",
-                "_refine_tasks",
-                f"(int64, int64, {_A3}, {_A2}, {_A3}, {_A3}, {_A2}, {_A2}, int64, float64, {_A1})",
             ),
         ),
     ),
@@ -248,7 +249,7 @@ def _cached(entry: Entry, folder: Path) -> bool:
 def pending(command: str) -> tuple[Entry, ...]:
     """Return the entries of ``command``'s plan that the cache does not hold yet.
 
-    None when imageform's cache folder cannot be written: nothing is compiled ahead then.
+    Empty when imageform's cache folder cannot be written: nothing is compiled ahead then.
     """
     plan = PLANS.get(command)
     if plan is None:
@@ -256,14 +257,13 @@ def pending(command: str) -> tuple[Entry, ...]:
     from imageform._kernels.jit import cache_location
 
     folder, why = cache_location()
-    entries = plan.child + plan.here
     if why == "in-tree":
         return ()
-    return tuple(e for e in entries if not _cached(e, folder))
+    return tuple(e for e in plan.child + plan.here if not _cached(e, folder))
 
 
 class _Child:
-    """The second process, and a thread that reads which modules it has compiled."""
+    """The second process, and a thread that reads which kernels it has compiled."""
 
     def __init__(self, entries: tuple[Entry, ...]) -> None:
         self.waiting = {f"{e.module}.{e.kernel}" for e in entries}
@@ -284,10 +284,11 @@ class _Child:
 
     def _read(self) -> None:
         assert self.proc.stdout is not None
-        for line in self.proc.stdout:
-            with self.changed:
-                self.done.add(line.strip())
-                self.changed.notify_all()
+        with contextlib.suppress(OSError, ValueError):  # the pipe closed under it
+            for line in self.proc.stdout:
+                with self.changed:
+                    self.done.add(line.strip())
+                    self.changed.notify_all()
         with self.changed:
             self.ended.set()
             self.changed.notify_all()
@@ -307,7 +308,8 @@ class _Child:
             except subprocess.TimeoutExpired:  # pragma: no cover - a stuck child
                 self.proc.kill()
                 self.proc.wait()
-        if self.proc.stdout is not None:
+        self.reader.join(timeout=5)  # it reads to the end of the pipe, then ends
+        if self.proc.stdout is not None and not self.reader.is_alive():
             self.proc.stdout.close()
 
 

@@ -332,6 +332,11 @@ def run_tasks(kernel: Any, n_tasks: int, *args: Any, threads: int | None = None)
         if n_tasks > 0:
             kernel(0, n_tasks, *args)
         return
+    if isinstance(kernel, numba.core.dispatcher.Dispatcher):
+        # compiled (or loaded) in this thread, never in the pool's: a Ctrl-C that lands in a
+        # compilation here while a worker compiles too left llvmlite's lock held by this
+        # thread, and the worker, which this thread then waits for, waiting on it (a hang)
+        kernel(0, 0, *args)
     cut = [n_tasks * i // k for i in range(k + 1)]
     pool = _pool(k - 1)
     futures: list[Future[Any]] = [

@@ -41,6 +41,24 @@ def _on_sigterm(signum: int, frame: FrameType | None) -> None:
 _INTERRUPTED = "imageform: interrupted; nothing new was written"
 
 
+def _interrupt_in_finalizer(unraisable: sys.UnraisableHookArgs) -> None:
+    """Raise a Ctrl-C that landed in a finalizer again, in the main thread, instead of printing it.
+
+    Python prints an exception raised inside ``__del__`` ("Exception ignored in ...") and goes
+    on: a Ctrl-C that lands in one of llvmlite's finalizers while numba compiles (a first run)
+    printed ten lines and was lost. Every other unraisable exception is printed as before.
+    """
+    if isinstance(unraisable.exc_value, KeyboardInterrupt):
+        import _thread
+
+        # from another thread, a moment later: called here, it would raise in this hook
+        timer = threading.Timer(0.05, _thread.interrupt_main)
+        timer.daemon = True
+        timer.start()
+        return
+    sys.__unraisablehook__(unraisable)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``imageform`` console script; returns the exit code.
 
@@ -48,6 +66,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     when the signal lands while the command is already finishing (a signal held back during
     the final renames is delivered when they are done).
     """
+    if argv is None:  # run as a program: its hooks are ours
+        sys.unraisablehook = _interrupt_in_finalizer
     try:
         code = _main(argv)
     except KeyboardInterrupt:
@@ -65,7 +85,12 @@ def main(argv: Sequence[str] | None = None) -> int:
         if code == 130:
             # interrupted: leave now, with exit code 130. The interpreter's shutdown would
             # re-raise a KeyboardInterrupt noticed late (in a thread join, say) as death by
-            # SIGINT; everything this command wrote is already renamed or removed.
+            # SIGINT; everything this command wrote is already renamed or removed. A second
+            # process compiling ahead (a first run) is ended here: atexit does not run.
+            ahead = sys.modules.get("imageform._kernels.ahead")
+            if ahead is not None:
+                with contextlib.suppress(Exception):
+                    ahead._stop()
             for stream in (sys.stdout, sys.stderr):
                 with contextlib.suppress(Exception):
                     stream.flush()
