@@ -27,6 +27,24 @@ SRC = Path(__file__).resolve().parents[1] / "src"
 ROOT = SRC.parent
 
 
+def _python(code: str, cache: Path | None = None, **env: str) -> subprocess.CompletedProcess[str]:
+    """``python -c code`` with this checkout's sources, the second process on, a fresh cache."""
+    extra = {} if cache is None else {"NUMBA_CACHE_DIR": str(cache)}
+    return subprocess.run(
+        [sys.executable, "-c", code],
+        capture_output=True,
+        text=True,
+        env={
+            **os.environ,
+            "PYTHONPATH": str(SRC),
+            "IMAGEFORM_COMPILE_AHEAD": "1",
+            **extra,
+            **env,
+        },
+        timeout=300,
+    )
+
+
 def _entries() -> list[tuple[str, ahead.Entry]]:
     return [(command, e) for command, plan in ahead.PLANS.items() for e in plan.child + plan.here]
 
@@ -142,19 +160,7 @@ _RUN = textwrap.dedent(
 
 
 def _run(cache: Path, **env: str) -> dict[str, object]:
-    done = subprocess.run(
-        [sys.executable, "-c", _RUN],
-        capture_output=True,
-        text=True,
-        env={
-            **os.environ,
-            "PYTHONPATH": str(SRC),
-            "NUMBA_CACHE_DIR": str(cache),
-            "IMAGEFORM_COMPILE_AHEAD": "1",
-            **env,
-        },
-        timeout=300,
-    )
+    done = _python(_RUN, cache, **env)
     assert done.returncode == 0, done.stderr[-3000:]
     return dict(json.loads(done.stdout.strip().splitlines()[-1]))
 
@@ -195,18 +201,7 @@ def test_a_single_core_starts_nothing(tmp_path: Path) -> None:
         "from imageform._kernels import ahead\n"
         "print(ahead.enabled(), ahead.start('simulate'), ahead._CHILD)"
     )
-    done = subprocess.run(
-        [sys.executable, "-c", code],
-        capture_output=True,
-        text=True,
-        env={
-            **os.environ,
-            "PYTHONPATH": str(SRC),
-            "NUMBA_CACHE_DIR": str(tmp_path / "cache"),
-            "IMAGEFORM_COMPILE_AHEAD": "1",
-        },
-        timeout=300,
-    )
+    done = _python(code, tmp_path / "cache")
     assert done.stdout.split() == ["False", "False", "None"], done.stderr[-2000:]
 
 
@@ -251,13 +246,7 @@ def test_a_deferred_kernel_compiles_at_its_first_call_for_its_signature_only() -
             print("ok")
         """
     )
-    done = subprocess.run(
-        [sys.executable, "-c", code],
-        capture_output=True,
-        text=True,
-        env={**os.environ, "PYTHONPATH": str(SRC)},
-        timeout=300,
-    )
+    done = _python(code)
     assert done.returncode == 0 and done.stdout.strip() == "ok", done.stderr[-2000:]
 
 

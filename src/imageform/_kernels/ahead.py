@@ -43,6 +43,8 @@ import threading
 from pathlib import Path
 from typing import Any, NamedTuple
 
+from imageform._jsonio import dumps
+
 __all__ = ["PLANS", "Entry", "Plan", "enabled", "pending", "ready", "start"]
 
 #: how long :func:`ready` waits for the second process at most (s); then the command compiles
@@ -272,7 +274,12 @@ class _Child:
         self.changed = threading.Condition()
         env = {**os.environ, "IMAGEFORM_COMPILE_AHEAD": "0"}  # its own commands: none
         self.proc = subprocess.Popen(
-            [sys.executable, "-m", "imageform._kernels.ahead", json.dumps(entries)],
+            [
+                sys.executable,
+                "-m",
+                "imageform._kernels.ahead",
+                dumps([list(e) for e in entries], indent=None),
+            ],
             stdin=subprocess.DEVNULL,
             stdout=subprocess.PIPE,
             stderr=subprocess.DEVNULL,
