@@ -149,7 +149,7 @@ _RUN = textwrap.dedent(
     child = ahead._CHILD
     ahead.ready()
     done = sorted(child.done)
-    ahead._stop()
+    ahead.stop()
     names = sorted(p.name.split("-")[0] for p in folder.glob("*.nbi"))
     print(json.dumps({"before": before, "started": started, "done": done, "names": names,
                       "after": [e.kernel for e in ahead.pending("t")],

@@ -38,6 +38,7 @@ __all__ = [
     "is_numpy_namespace",
     "linalg",
     "namespace",
+    "numba_enabled",
     "reads_values",
     "scalar",
     "sign_of",
@@ -398,17 +399,25 @@ def to_numpy(x: object) -> np.ndarray:
     return np.asarray(x)
 
 
-def use_numba(*arrays: object, min_size: int = 0) -> bool:
-    """Whether a hot path should run its numba kernel for these arrays.
+def numba_enabled() -> bool:
+    """Whether imageform's numba kernels run at all.
 
-    True only for NumPy arrays (numba cannot take other libraries' arrays), when numba
-    imports, ``IMAGEFORM_DISABLE_NUMBA`` is not set, and the first array has at least
-    ``min_size`` elements (below that, compilation and call overhead dominate).
+    True when numba imports and ``IMAGEFORM_DISABLE_NUMBA`` is not set.
     """
     if os.environ.get("IMAGEFORM_DISABLE_NUMBA", "") not in ("", "0"):
         return False
+    return have_numba()
+
+
+def use_numba(*arrays: object, min_size: int = 0) -> bool:
+    """Whether a hot path should run its numba kernel for these arrays.
+
+    True only for NumPy arrays (numba cannot take other libraries' arrays), when
+    :func:`numba_enabled`, and the first array has at least ``min_size`` elements (below
+    that, compilation and call overhead dominate).
+    """
     if not all(isinstance(a, np.ndarray) for a in arrays):
         return False
-    if not have_numba():
+    if not numba_enabled():
         return False
     return bool(arrays) and arrays[0].size >= min_size  # type: ignore[attr-defined]

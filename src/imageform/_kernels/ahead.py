@@ -45,7 +45,7 @@ from typing import Any, NamedTuple
 
 from imageform._jsonio import dumps
 
-__all__ = ["PLANS", "Entry", "Plan", "enabled", "pending", "ready", "start"]
+__all__ = ["PLANS", "Entry", "Plan", "enabled", "pending", "ready", "start", "stop"]
 
 #: how long :func:`ready` waits for the second process at most (s); then the command compiles
 _WAIT_S = 300.0
@@ -226,17 +226,15 @@ def enabled() -> bool:
     """Whether a second process may compile ahead here (see the module's documentation)."""
     if os.environ.get("IMAGEFORM_COMPILE_AHEAD", "") in ("0", "false", "no", "off"):
         return False
-    if os.environ.get("IMAGEFORM_DISABLE_NUMBA", "") not in ("", "0"):
-        return False
     try:
         cores = len(os.sched_getaffinity(0))
     except (AttributeError, OSError):  # not Linux
         cores = os.cpu_count() or 1
     if cores < 2:
         return False
-    from imageform._backend import have_numba
+    from imageform._backend import numba_enabled
 
-    if not have_numba():
+    if not numba_enabled():
         return False
     import numba
 
@@ -346,7 +344,7 @@ def start(command: str) -> bool:
             except OSError:  # no interpreter to start (a frozen application): compile here
                 _CHILD = None
             else:
-                atexit.register(_stop)
+                atexit.register(stop)
                 from imageform._kernels import jit
 
                 jit._WAIT = ready
@@ -371,7 +369,8 @@ def ready(name: str | None = None) -> None:
     child.wait(name)
 
 
-def _stop() -> None:
+def stop() -> None:
+    """End the second process, if one runs (at exit; on Ctrl-C, by the command line)."""
     global _CHILD
     with _LOCK:
         child, _CHILD = _CHILD, None

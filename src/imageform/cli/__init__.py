@@ -90,7 +90,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             ahead = sys.modules.get("imageform._kernels.ahead")
             if ahead is not None:
                 with contextlib.suppress(Exception):
-                    ahead._stop()
+                    ahead.stop()
             for stream in (sys.stdout, sys.stderr):
                 with contextlib.suppress(Exception):
                     stream.flush()
