@@ -18,7 +18,7 @@ is a folder of their own, so that they fill nothing the timed runs use.
 repetition takes a new folder per command. ``--warm-cache``: also time ``imageform cache
 --warm`` into a new empty folder, then the same command again from a copy of the package at
 another path (a second clone or a reinstall of the same version on the same machine: it
-should find everything compiled). ``--profile``: each first run also records the seconds
+should find everything compiled). ``--profile``: each first run also records the CPU seconds
 numba spends compiling each kernel (numba's ``numba:compile`` events; nested compilations
 are counted inside their caller) and prints the largest per command. The table gives
 medians, the range, and the load average at the start and at the end (the machine is shared;
@@ -130,31 +130,78 @@ def _env(src: Path | None, cache: Path | None) -> dict[str, str]:
     return env
 
 
-# the profiler: numba's compile events, timed; the command then runs as `python -m imageform`
-_PROFILE = r"""
-import atexit, json, os, runpy, sys, time
-from numba.core import event as ev
+# numba's compile events, recorded in a child process (the one listener of this script,
+# compile_plan.py and compile_literals.py): ``records`` gets one dict per compilation, in the
+# order they end (callees before callers): the kernel ("module.qualname", the module's last
+# part), its module and qualname, the dispatcher's id, whether it is imageform's, the argument
+# types (numba's text, and as a signature in numba's syntax where one can be written), CPU
+# seconds with its nested compilations (incl) and without (own), the indices of those it
+# nested (kids), its nesting depth and its index n.
+LISTENER = r"""
+import time
+from numba.core import event as ev, types
 
-records, stack = [], []
+
+def _compact(t):
+    if isinstance(t, types.Array) and t.mutable and t.aligned and t.ndim > 0:
+        dims = [":"] * t.ndim
+        if t.layout == "C":
+            dims[-1] = "::1"
+        elif t.layout == "F":
+            dims[0] = "::1"
+        dtype = "boolean" if str(t.dtype) == "bool" else str(t.dtype)
+        return f"{dtype}[{', '.join(dims)}]"
+    if isinstance(t, types.UniTuple):
+        return f"UniTuple({_compact(t.dtype)}, {t.count})"
+    if isinstance(t, types.Tuple):
+        return "Tuple((" + ", ".join(_compact(x) for x in t.types) + ",))"
+    if isinstance(t, types.Boolean):
+        return "boolean"
+    if isinstance(t, (types.Integer, types.Float, types.Complex)):
+        return str(t)
+    return None
+
+
+records, _stack = [], []
+
 
 class _Timer(ev.Listener):
     def on_start(self, event):
-        stack.append(time.perf_counter())
+        _stack.append([time.process_time(), 0.0, []])
 
     def on_end(self, event):
-        t0 = stack.pop()
-        fn = event.data["dispatcher"].py_func
-        records.append({"kernel": fn.__module__.rsplit(".", 1)[-1] + "." + fn.__qualname__,
-                        "args": str(event.data["args"])[:160], "s": time.perf_counter() - t0,
-                        "depth": len(stack)})
+        t0, inner, kids = _stack.pop()
+        dt = time.process_time() - t0
+        disp = event.data["dispatcher"]
+        fn = disp.py_func
+        module = fn.__module__ or ""
+        parts = [_compact(a) for a in event.data["args"]]
+        rec = {"kernel": module.rsplit(".", 1)[-1] + "." + fn.__qualname__, "module": module,
+               "qualname": fn.__qualname__, "id": id(disp),
+               "ours": module.startswith("imageform."), "args": str(event.data["args"]),
+               "signature": None if None in parts else "(" + ", ".join(parts) + ")",
+               "incl": dt, "own": dt - inner, "kids": kids, "depth": len(_stack),
+               "n": len(records)}
+        records.append(rec)
+        if _stack:
+            _stack[-1][1] += dt
+            _stack[-1][2].append(rec["n"])
+
 
 ev.register("numba:compile", _Timer())
-atexit.register(lambda: Path_out.write_text(json.dumps(records)))
-from pathlib import Path
-Path_out = Path(os.environ["IF_PROFILE_OUT"])
+"""
+
+# the profiler: the listener, then the command as `python -m imageform`; the records are
+# written to IF_PROFILE_OUT at exit
+_PROFILE = (
+    LISTENER
+    + r"""
+import atexit, json, os, runpy, sys
+atexit.register(lambda: open(os.environ["IF_PROFILE_OUT"], "w").write(json.dumps(records)))
 sys.argv = ["imageform", *sys.argv[1:]]
 runpy.run_module("imageform", run_name="__main__", alter_sys=True)
 """
+)
 
 
 def _cpu() -> float:
@@ -475,12 +522,12 @@ def main() -> None:
             f"{med(clone, 0):.1f} s",
         ]
     if compiled:
-        lines += ["", "Seconds compiling (first run), the largest kernels per command:", ""]
+        lines += ["", "CPU seconds compiling (first run), the largest kernels per command:", ""]
         for name, recs in compiled.items():
             top = [r for r in recs if r["depth"] == 0]
-            total = sum(float(str(r["s"])) for r in top)
-            big = sorted(top, key=lambda r: -float(str(r["s"])))[:4]
-            what = ", ".join(f"{r['kernel']} {float(str(r['s'])):.1f}" for r in big)
+            total = sum(float(str(r["incl"])) for r in top)
+            big = sorted(top, key=lambda r: -float(str(r["incl"])))[:4]
+            what = ", ".join(f"{r['kernel']} {float(str(r['incl'])):.1f}" for r in big)
             lines.append(f"- `{name}`: {total:.1f} s in {len(recs)} compilations; {what}")
     text = "\n".join(lines)
     print(text)

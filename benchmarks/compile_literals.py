@@ -8,21 +8,22 @@ Run from the repository root::
         --before DIR [--rounds 3]
 
 Listing (the default): one fresh process, ``NUMBA_CACHE_DIR`` a new empty folder,
-``NUMBA_NUM_THREADS=1``, imports the kernel modules (the estimators with an explicit signature
-compile on import), first-calls the two-view estimators, then runs the CLI commands
-``calibrate``, ``pose --ransac``, ``simulate`` and ``vanishing`` in the same process (on
-``bench_first_run.py``'s inputs). numba's ``numba:compile`` events give every compilation
-(the dispatcher and its argument types) with its CPU seconds (``time.process_time``,
-including the kernels compiled inside it, and *self*: without them); every imageform kernel
-compiled for more than one signature is listed, each signature with its seconds, a
-``Literal`` one flagged: a call site passing an integer that numba types as a literal (a
-count that starts at ``m = 0`` is ``Literal[int](0)``) compiles the called kernel once more,
-for that literal.
+``NUMBA_NUM_THREADS=1``, imports the kernel modules and compiles their estimators with an
+explicit signature (on import; a deferred one, ``njit(..., lazy=True)``, at once), first-calls
+the two-view estimators, then runs the CLI commands ``calibrate``, ``pose --ransac``,
+``simulate`` and ``vanishing`` in the same process (on ``bench_first_run.py``'s inputs). numba's
+``numba:compile`` events give every compilation (the dispatcher and its argument types) with its
+CPU seconds (``time.process_time``, including the kernels compiled inside it, and *self*:
+without them); every imageform kernel compiled for more than one signature is listed, each
+signature with its seconds, a ``Literal`` one flagged: a call site passing an integer that numba
+types as a literal (a count that starts at ``m = 0`` is ``Literal[int](0)``) compiles the called
+kernel once more, for that literal.
 
 ``--cold``: the cold compile of each named kernel module, before (``--before``, a ``src``
 folder of the other version) and after (``--src``), interleaved, ``--rounds`` rounds: each
 run a fresh process with a new empty ``NUMBA_CACHE_DIR``, ``NUMBA_NUM_THREADS=1``, CPU seconds
-(``time.process_time``) of ``import imageform._kernels.<module>``.
+(``time.process_time``) of ``import imageform._kernels.<module>`` and of its deferred kernels'
+compilation.
 """
 
 from __future__ import annotations
@@ -38,38 +39,22 @@ from pathlib import Path
 from typing import Any
 
 ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from benchmarks import bench_first_run as bfr  # noqa: E402
 
 DEFAULT_TARGETS = (
     "ransac_f,ransac_h,ransac_e,relative_pose,pnp,checkerboard,call:twoview,"
     "cli:calibrate,cli:pose,cli:simulate,cli:vanishing"
 )
 
-# the child: records numba's compile events, then imports / calls / runs each target
-_CHILD = r"""
+# the child: records numba's compile events (bench_first_run's listener), then imports /
+# calls / runs each target
+_CHILD = (
+    bfr.LISTENER
+    + r"""
 import importlib, json, os, sys, time
-from numba.core import event as ev
 
-records, stack = [], []
-
-
-class _Timer(ev.Listener):
-    def on_start(self, event):
-        stack.append([time.process_time(), 0.0])
-
-    def on_end(self, event):
-        t0, inner = stack.pop()
-        dt = time.process_time() - t0
-        if stack:
-            stack[-1][1] += dt
-        disp = event.data["dispatcher"]
-        fn = disp.py_func
-        records.append({"kernel": fn.__module__.rsplit(".", 1)[-1] + "." + fn.__qualname__,
-                        "ours": fn.__module__.startswith("imageform."), "id": id(disp),
-                        "args": str(event.data["args"]), "s": dt, "self": dt - inner,
-                        "depth": len(stack)})
-
-
-ev.register("numba:compile", _Timer())
 work = os.environ["IF_WORK"]
 
 
@@ -112,31 +97,33 @@ for target in sys.argv[1].split(","):
     elif target == "call:twoview":
         twoview()
     else:
-        importlib.import_module("imageform._kernels." + target)
+        from imageform._kernels.jit import Deferred
+
+        module = importlib.import_module("imageform._kernels." + target)
+        for kernel in list(vars(module).values()):  # deferred: compiled at the first call
+            if isinstance(kernel, Deferred):
+                kernel.compile()
     records.append({"target": target, "s": time.process_time() - t0})
 with open(os.environ["IF_OUT"], "w") as f:
     json.dump(records, f)
 """
+)
 
 _COLD = r"""
 import importlib, sys, time
 t0 = time.process_time()
-importlib.import_module("imageform._kernels." + sys.argv[1])
+from imageform._kernels.jit import Deferred
+module = importlib.import_module("imageform._kernels." + sys.argv[1])
+for kernel in list(vars(module).values()):  # deferred: compiled at the first call
+    if isinstance(kernel, Deferred):
+        kernel.compile()
 print(time.process_time() - t0)
 """
 
 
 def _env(src: Path, cache: Path) -> dict[str, str]:
-    env = {k: v for k, v in os.environ.items() if not k.startswith(("NUMBA_", "_IMAGEFORM"))}
-    env.update(
-        OPENBLAS_NUM_THREADS="1",
-        NUMBA_NUM_THREADS="1",
-        MPLBACKEND="Agg",
-        PYTHONPATH=str(src),
-        NUMBA_CACHE_DIR=str(cache),
-        XDG_CACHE_HOME=str(cache.parent / (cache.name + "-xdg")),
-    )
-    return env
+    """bench_first_run's environment, on one numba thread."""
+    return {**bfr._env(src, cache), "NUMBA_NUM_THREADS": "1"}
 
 
 def _cli_inputs(src: Path, w: Path, targets: str) -> dict[str, list[str]]:
@@ -145,9 +132,6 @@ def _cli_inputs(src: Path, w: Path, targets: str) -> dict[str, list[str]]:
     The lab set, DNG, mosaic and correction only when a target needs them, the room walk only
     for ``reconstruct``.
     """
-    sys.path.insert(0, str(ROOT))
-    from benchmarks import bench_first_run as bfr
-
     env = _env(src, w / "inputs-cache")
     (w / "out").mkdir(exist_ok=True)
     if not (w / "cam.toml").exists():
@@ -191,12 +175,12 @@ def listing(src: Path, targets: str, w: Path) -> None:
             print(f"  {r['target']}: FAILED ({r['failed']})")
         elif "target" in r:
             print(f"  {r['target']}: {r['s']:.2f} CPU s")
-    total = sum(r["self"] for r in events)
+    total = sum(r["own"] for r in events)
     print(f"{len(events)} compilations, {total:.1f} CPU s compiling (self seconds, summed)")
     theirs = [r for r in events if not r["ours"]]
     print(
         f"  of which numba's own overload implementations: {len(theirs)}, "
-        f"{sum(r['self'] for r in theirs):.1f} CPU s (each its own dispatcher: not listed)"
+        f"{sum(r['own'] for r in theirs):.1f} CPU s (each its own dispatcher: not listed)"
     )
     # one dispatcher: the same Python function compiled for several signatures
     by: dict[str, list[dict[str, Any]]] = {}
@@ -206,13 +190,13 @@ def listing(src: Path, targets: str, w: Path) -> None:
     dup = {k: v for k, v in by.items() if len(v) > 1}
     if not dup:
         print("no kernel compiled more than once")
-    for k, v in sorted(dup.items(), key=lambda kv: -sum(float(r["s"]) for r in kv[1])):
+    for k, v in sorted(dup.items(), key=lambda kv: -sum(float(r["incl"]) for r in kv[1])):
         lit = any("Literal" in str(r["args"]) for r in v)
         name = k.split("#")[0]
         print(f"{name}: {len(v)} compilations{'  [LITERAL]' if lit else ''}")
         for r in v:
             flag = "LITERAL " if "Literal" in str(r["args"]) else ""
-            print(f"    {flag}{float(r['s']):6.2f} s (self {float(r['self']):5.2f}) {r['args']}")
+            print(f"    {flag}{float(r['incl']):6.2f} s (self {float(r['own']):5.2f}) {r['args']}")
 
 
 def cold(src: Path, before: Path, modules: list[str], rounds: int) -> None:

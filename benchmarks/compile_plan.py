@@ -28,56 +28,7 @@ from typing import Any
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from benchmarks.bench_first_run import _commands, _env, _inputs  # noqa: E402
-
-_RECORD = r"""
-import atexit, json, os, runpy, sys, time
-from numba.core import event as ev, types
-
-def compact(t):
-    if isinstance(t, types.Array) and t.mutable and t.aligned and t.ndim > 0:
-        dims = [":"] * t.ndim
-        if t.layout == "C":
-            dims[-1] = "::1"
-        elif t.layout == "F":
-            dims[0] = "::1"
-        dtype = "boolean" if str(t.dtype) == "bool" else str(t.dtype)
-        return f"{dtype}[{', '.join(dims)}]"
-    if isinstance(t, types.UniTuple):
-        return f"UniTuple({compact(t.dtype)}, {t.count})"
-    if isinstance(t, types.Tuple):
-        return "Tuple((" + ", ".join(compact(x) for x in t.types) + ",))"
-    if isinstance(t, types.Boolean):
-        return "boolean"
-    if isinstance(t, (types.Integer, types.Float, types.Complex)):
-        return str(t)
-    return None
-
-records, stack = [], []
-
-class T(ev.Listener):
-    def on_start(self, event):
-        stack.append([time.process_time(), 0.0, []])
-
-    def on_end(self, event):
-        t0, inner, kids = stack.pop()
-        dt = time.process_time() - t0
-        fn = event.data["dispatcher"].py_func
-        parts = [compact(a) for a in event.data["args"]]
-        rec = {"module": fn.__module__, "kernel": fn.__qualname__, "incl": dt, "own": dt - inner,
-               "kids": kids, "depth": len(stack), "n": len(records),
-               "signature": None if None in parts else "(" + ", ".join(parts) + ")"}
-        records.append(rec)
-        if stack:
-            stack[-1][1] += dt
-            stack[-1][2].append(rec["n"])
-
-ev.register("numba:compile", T())
-out = os.environ["IF_RECORD_OUT"]
-atexit.register(lambda: open(out, "w").write(json.dumps(records)))
-sys.argv = ["imageform", *sys.argv[1:]]
-runpy.run_module("imageform", run_name="__main__", alter_sys=True)
-"""
+from benchmarks.bench_first_run import _PROFILE, _commands, _env, _inputs  # noqa: E402
 
 _PREFIX = "imageform._kernels."
 
@@ -88,17 +39,17 @@ def record(command: str, inputs: Path, work: Path) -> list[dict[str, Any]]:
     args = [a.replace(str(inputs / "out"), str(work / "out")) for a in args]
     (work / "out").mkdir(exist_ok=True)
     cache = work / "cache"
-    env = {**_env(ROOT / "src", cache), "IF_RECORD_OUT": str(work / "rec.json")}
+    env = {**_env(ROOT / "src", cache), "IF_PROFILE_OUT": str(work / "rec.json")}
     env["IMAGEFORM_COMPILE_AHEAD"] = "0"
     done = subprocess.run(
-        [sys.executable, "-c", _RECORD, *args], env=env, cwd=work, capture_output=True, text=True
+        [sys.executable, "-c", _PROFILE, *args], env=env, cwd=work, capture_output=True, text=True
     )
     if done.returncode != 0:
         raise SystemExit(f"imageform {command} failed:\n{done.stderr[-2000:]}")
     return list(json.loads((work / "rec.json").read_text()))
 
 
-def _ours(rec: dict[str, Any]) -> bool:
+def _ours(rec: dict[str, Any]) -> bool:  # a kernel of imageform._kernels
     return str(rec["module"]).startswith(_PREFIX)
 
 
@@ -148,14 +99,13 @@ def main() -> None:
     print(f"imageform {a.command}: {len(records)} compilations, {total:.2f} s CPU compiling")
     for r in records:
         if r["depth"] == 0 or r["incl"] >= 0.1:
-            name = str(r["module"]).removeprefix(_PREFIX) + "." + r["kernel"]
-            print(f"{'  ' * r['depth']}{name}: {r['incl']:.2f} s ({r['own']:.2f} own)")
+            print(f"{'  ' * r['depth']}{r['kernel']}: {r['incl']:.2f} s ({r['own']:.2f} own)")
     if a.check:
         sys.path.insert(0, str(ROOT / "src"))
         from imageform._kernels.ahead import PLANS
 
         seen = {
-            (str(r["module"]).removeprefix(_PREFIX), r["kernel"], r["signature"]) for r in records
+            (str(r["module"]).removeprefix(_PREFIX), r["qualname"], r["signature"]) for r in records
         }
         plan = PLANS[a.command]
         stale = [e for e in plan.child + plan.here if tuple(e) not in seen]
@@ -167,7 +117,8 @@ def main() -> None:
         print(f"{label} ({sum(r['incl'] for r in entries):.2f} s):")
         for r in entries:
             mod = str(r["module"]).removeprefix(_PREFIX)
-            print(f'    Entry("{mod}", "{r["kernel"]}", "{r["signature"]}"),  # {r["incl"]:.2f} s')
+            entry = f'Entry("{mod}", "{r["qualname"]}", "{r["signature"]}")'
+            print(f"    {entry},  # {r['incl']:.2f} s")
 
 
 if __name__ == "__main__":
