@@ -10,6 +10,7 @@ orientation and size, or is refused in one line.
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -243,3 +244,281 @@ def test_json_reports_the_orientation(
     assert doc["orientation"] == {"flip": 6, "applied": True}
     h, w = read_raw(path).mosaic.shape
     assert doc["output_size"] == [h, w]
+
+
+def _rational(values: object) -> tuple[int, ...]:
+    """TIFF (S)RATIONAL values as tifffile writes them: numerator, denominator pairs."""
+    out: list[int] = []
+    for v in np.ravel(np.asarray(values, np.float64)):
+        out += [round(float(v) * 10000), 10000]
+    return tuple(out)
+
+
+#: XYZ to camera RGB of the made-up camera under CIE A (its second matrix in two-matrix files).
+CM_A = np.array([[0.90, -0.20, -0.05], [-0.50, 1.40, 0.15], [-0.10, 0.30, 0.80]])
+
+
+def _two_matrices(
+    base: tuple[Path, list[tuple], np.ndarray], name: str, ill: tuple[int, int], **more: object
+) -> Path:
+    """The base DNG with CM_A as ColorMatrix1 and CM as ColorMatrix2 under illuminants ``ill``."""
+    extra = [
+        (50721, 10, 9, _rational(CM_A), True),
+        (50722, 10, 9, _rational(CM), True),
+        (50778, 3, 1, ill[0], True),
+        (50779, 3, 1, ill[1], True),
+    ]
+    return _variant(base, name, drop={50721, 50778}, extra=extra + list(more.get("extra", ())))  # type: ignore[call-overload]
+
+
+def _assert_libraw_matrix(raw: object, path: Path) -> None:
+    """LibRaw's rgb_cam for the file is the one of imageform's matrix (the same matrix picked)."""
+    from imageform.io.raw import _libraw_rgb_cam
+
+    with rawpy.imread(str(path)) as r:
+        theirs = np.asarray(r.color_matrix, np.float64)[:3, :3]
+    ours = _libraw_rgb_cam(np.asarray(raw.xyz_to_camera))[0]  # type: ignore[attr-defined]
+    np.testing.assert_allclose(ours, theirs, atol=2e-3)
+
+
+@pytest.mark.parametrize(
+    ("ill", "picked", "name"),
+    [
+        ((17, 21), CM, "D65"),  # Adobe's converter: StdA first, D65 second
+        ((21, 17), CM_A, "D65"),  # D65 first: its matrix (here CM_A's slot)
+        ((17, 23), CM, "D50"),  # no D65: the first daylight kind (D50)
+        ((20, 23), CM_A, "D55"),  # two daylight kinds: the first
+        ((17, 24), CM, "D65"),  # no daylight kind at all: the last matrix (unknown code: D65)
+    ],
+)
+def test_two_colour_matrices_picked_as_libraw(
+    base: tuple[Path, list[tuple], np.ndarray],
+    ill: tuple[int, int],
+    picked: np.ndarray,
+    name: str,
+) -> None:
+    """Which of two ColorMatrix tags a DNG is developed with: LibRaw's rule (its identify)."""
+    path = _two_matrices(base, f"two{ill[0]}_{ill[1]}", ill)
+    raw = read_raw(path)
+    if ill == (21, 17):  # D65 is ColorMatrix1 here, which holds CM_A
+        picked = CM_A
+    np.testing.assert_allclose(raw.xyz_to_camera, picked, atol=1e-4)
+    assert raw.calibration_illuminant == name
+    _assert_libraw_matrix(raw, path)
+    assert _mean_de00(develop(raw).image, _libraw(path)) < 0.05
+
+
+def test_camera_calibration_and_analog_balance_as_libraw(
+    base: tuple[Path, list[tuple], np.ndarray],
+) -> None:
+    """The matrix is diag(AnalogBalance) CameraCalibration ColorMatrix (DNG 1.4, ch. 6)."""
+    cc = np.array([[1.05, 0.03, -0.02], [0.01, 0.98, 0.02], [-0.03, 0.04, 1.10]])
+    ab = np.array([1.2, 1.0, 0.8])
+    path = _variant(
+        base,
+        "calibrated",
+        extra=[(50723, 10, 9, _rational(cc), True), (50727, 5, 3, _rational(ab), True)],
+    )
+    raw = read_raw(path)
+    np.testing.assert_allclose(raw.xyz_to_camera, np.diag(ab) @ cc @ CM, atol=1e-4)
+    _assert_libraw_matrix(raw, path)
+    assert _mean_de00(develop(raw).image, _libraw(path)) < 0.05
+    # with two matrices, the calibration of the picked one (CameraCalibration2 for D65)
+    path2 = _two_matrices(
+        base,
+        "calibrated2",
+        (17, 21),
+        extra=[
+            (50723, 10, 9, _rational(np.eye(3) * 0.9), True),
+            (50724, 10, 9, _rational(cc), True),
+        ],
+    )
+    raw2 = read_raw(path2)
+    np.testing.assert_allclose(raw2.xyz_to_camera, cc @ CM, atol=1e-4)
+    _assert_libraw_matrix(raw2, path2)
+
+
+def test_a_single_matrix_is_not_adapted_from_its_illuminant(
+    base: tuple[Path, list[tuple], np.ndarray],
+) -> None:
+    """One matrix labelled CIE A (or D50): LibRaw, like Adobe's DNG SDK for one matrix, takes a
+    white-balanced white as D65's; so does develop (it adapted from A before, 2.6 ΔE00 off)."""
+    for code, label in ((17, "A"), (23, "D50")):
+        path = _variant(base, f"single{code}", drop={50778}, extra=[(50778, 3, 1, code, True)])
+        raw = read_raw(path)
+        assert raw.calibration_illuminant == label
+        dev = develop(raw)
+        np.testing.assert_allclose(dev.adaptation, np.eye(3))
+        assert _mean_de00(dev.image, _libraw(path)) < 0.05
+
+
+@pytest.mark.parametrize("how", ["none", "white_xy"])
+def test_no_as_shot_white_balance_falls_back_as_libraw(
+    base: tuple[Path, list[tuple], np.ndarray],
+    how: str,
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """No AsShotNeutral (and LibRaw does not read AsShotWhiteXY for the gains): LibRaw's
+    use_camera_wb falls back to its automatic white balance; develop did refuse 'camera'."""
+    from imageform.cli import main
+
+    extra = [(50729, 5, 2, _rational([0.3127, 0.3290]), True)] if how == "white_xy" else []
+    path = _variant(base, f"nowb_{how}", drop={50728}, extra=extra)
+    raw = read_raw(path)
+    assert raw.white_balance is None
+    dev = develop(raw)
+    assert any("no as-shot white balance" in n for n in dev.notes)
+    np.testing.assert_allclose(dev.gains, develop(raw, white_balance="auto").gains)
+    assert _mean_de00(dev.image, _libraw(path)) < 0.2
+    assert main(["develop", str(path), "-o", str(tmp_path / "x.png")]) == 0
+    err = capsys.readouterr().err
+    assert "no as-shot white balance" in err and err.count("\n") == 1
+
+
+def test_automatic_white_balance_as_libraw(base: tuple[Path, list[tuple], np.ndarray]) -> None:
+    """white_balance='auto': dcraw's -a (LibRaw's use_auto_wb), unsaturated 8x8 blocks."""
+    from imageform.io.raw import _auto_gains
+
+    raw = read_raw(base[0])
+    auto = develop(raw, white_balance="auto")
+    ref = _libraw(base[0], use_camera_wb=False, use_auto_wb=True)
+    assert _mean_de00(auto.image, ref) < 0.2
+    # a saturated block is left out: saturating one 8x8 block's red changes nothing
+    sat = replace(raw, mosaic=raw.mosaic.copy())
+    sat.mosaic[8:16, 8:16] = 4095
+    np.testing.assert_allclose(_auto_gains(sat), _auto_gains(raw), rtol=2e-3)
+    # an odd-sized frame: the last blocks are partial
+    odd = replace(raw, mosaic=raw.mosaic[:251, :379])
+    assert np.all(np.isfinite(_auto_gains(odd)))
+
+
+def _monochrome(base: tuple[Path, list[tuple], np.ndarray], name: str, grey: np.ndarray) -> Path:
+    """A monochrome DNG (LinearRaw, one sample a pixel, no colour tags), as a Leica Monochrom
+    writes it. tifffile writes LinearRaw with three samples only: the tag is set afterwards."""
+    import tifffile
+
+    colour = {33421, 33422, 50710, 50711, 50721, 50728, 50778}
+    path = _variant(base, name, data=grey, photometric=1, drop=colour)
+    with tifffile.TiffFile(path) as tf:
+        at = tf.pages[0].tags[262].valueoffset  # type: ignore[union-attr]
+    with path.open("r+b") as fh:
+        fh.seek(at)
+        fh.write(np.uint16(34892).tobytes())  # little-endian, as tifffile wrote the file
+    return path
+
+
+def test_monochrome_raw_develops_grey(
+    base: tuple[Path, list[tuple], np.ndarray], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A sensor without colour filters was refused ("a 1x1 1-colour CFA"); LibRaw develops it
+    to one grey channel, and so does develop, to LibRaw's values."""
+    import json
+
+    import imagecodecs
+
+    from imageform.cli import main
+
+    grey = base[2][..., 1].copy()
+    path = _monochrome(base, "mono", grey)
+    raw = read_raw(path)
+    assert raw.monochrome and raw.cfa_pattern is None and raw.mosaic.shape == grey.shape
+    np.testing.assert_array_equal(raw.mosaic, grey)
+    assert raw.white_balance is None and raw.xyz_to_camera is None
+    for linear, gamma in ((False, (2.4, 12.92)), (True, (1, 1))):
+        dev = develop(raw, linear=linear)
+        ref = _libraw(path, gamma=gamma)
+        assert ref.shape == grey.shape + (1,)
+        assert dev.image.shape == grey.shape and dev.demosaic == "none" and not dev.notes
+        assert np.abs(dev.image - ref[..., 0]).max() < 2e-4
+    assert develop(raw).to_integer(16).shape == grey.shape
+    assert develop(raw, space="prophoto").image.shape == grey.shape  # grey in any space
+    out = tmp_path / "mono.png"
+    assert main(["develop", str(path), "-o", str(out), "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["monochrome"] is True and doc["cfa_pattern"] is None
+    written = imagecodecs.imread(out)
+    assert written.shape == grey.shape and written.dtype == np.uint16
+
+
+@pytest.mark.parametrize("layout", ["BGGR", "GRBG", "GBRG", "odd", "active_area", "crop",
+                                    "linearization", "black_delta"])  # fmt: skip
+def test_more_dng_layouts_match_libraw(
+    base: tuple[Path, list[tuple], np.ndarray], layout: str
+) -> None:
+    """The other Bayer phases, odd sizes, ActiveArea (margins cut), DefaultCrop (LibRaw does not
+    crop), a LinearizationTable and BlackLevelDeltaH/V: each as LibRaw develops it."""
+    import tifffile
+
+    from imageform.sensor import mosaic as make_mosaic
+
+    with tifffile.TiffFile(base[0]) as tf:
+        data = tf.pages[0].asarray()
+    cam = _camera_rgb()
+    change: dict[str, object] = {}
+    if layout in ("BGGR", "GRBG", "GBRG"):
+        codes = {"BGGR": (2, 1, 1, 0), "GRBG": (1, 0, 2, 1), "GBRG": (1, 2, 0, 1)}[layout]
+        change = {
+            "data": np.round(64 + make_mosaic(cam, layout) * (4095 - 64)).astype(np.uint16),
+            "drop": {33422},
+            "extra": [(33422, 1, 4, codes, True)],
+        }
+    elif layout == "odd":
+        change = {"data": data[:255, :383].copy()}
+    elif layout == "active_area":
+        change = {"extra": [(50829, 4, 4, (2, 4, 250, 380), True)]}
+    elif layout == "crop":
+        change = {"extra": [(50719, 4, 2, (4, 4), True), (50720, 4, 2, (370, 240), True)]}
+    elif layout == "linearization":  # stored as indices of a quadratic table to 12 bits
+        table = np.round((np.arange(1024) / 1023.0) ** 2 * 4095).astype(np.uint16)
+        change = {
+            "data": np.searchsorted(table, data).clip(0, 1023).astype(np.uint16),
+            "extra": [(50712, 3, 1024, tuple(table.tolist()), True)],
+        }
+    else:  # black_delta: a black level drifting across rows and columns
+        dh, dv = np.linspace(0, 10, data.shape[1]), np.linspace(0, 6, data.shape[0])
+        drift = np.clip(data + dh[None, :] + dv[:, None], 0, 4095).round().astype(np.uint16)
+        change = {
+            "data": drift,
+            "extra": [
+                (50715, 10, data.shape[1], _rational(dh), True),
+                (50716, 10, data.shape[0], _rational(dv), True),
+            ],
+        }
+    path = _variant(base, f"layout_{layout}", **change)
+    ours = develop(path).image
+    ref = _libraw(path)
+    assert ours.shape == ref.shape
+    assert _mean_de00(ours, ref) < 0.05
+
+
+@pytest.mark.parametrize("kind", ["cfa", "linear", "cfa_black"])
+def test_floating_point_dng_develops(base: tuple[Path, list[tuple], np.ndarray], kind: str) -> None:
+    """A DNG of 32-bit floats with WhiteLevel 1.0 (an HDR merge, some converters): LibRaw opens
+    it but leaves every sample 0 (a black image); read_raw reads the samples with tifffile,
+    and the development equals the integer file's."""
+    import tifffile
+
+    with tifffile.TiffFile(base[0]) as tf:
+        data = tf.pages[0].asarray()
+    levels = [(50717, 11, 1, 1.0, True)]
+    if kind == "linear":
+        floats = (base[2].astype(np.float64) - 64) / (4095 - 64)
+        path = _variant(base, "float_lin", data=floats.astype(np.float32), photometric=34892,
+                        drop={33421, 33422, 50710, 50711, 50713, 50714, 50717},
+                        extra=levels + [(50714, 11, 1, 0.0, True)])  # fmt: skip
+        reference = _variant(base, "int_lin", data=base[2], photometric=34892,
+                             drop={33421, 33422, 50710, 50711})  # fmt: skip
+    else:
+        black = 0.02 if kind == "cfa_black" else 0.0
+        floats = black + (1 - black) * (data.astype(np.float64) - 64) / (4095 - 64)
+        path = _variant(base, f"float_{kind}", data=floats.astype(np.float32),
+                        drop={50713, 50714, 50717},
+                        extra=levels + [(50714, 11, 1, black, True)])  # fmt: skip
+        reference = base[0]
+    with rawpy.imread(str(path)) as r:
+        assert not np.any(r.raw_image_visible)  # what LibRaw gives: nothing
+    raw = read_raw(path)
+    assert raw.metadata["raw_type"] == "float" and raw.white_level == 65535.0
+    dev = develop(raw)
+    assert _mean_de00(dev.image, develop(reference).image) < 0.02

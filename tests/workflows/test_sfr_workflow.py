@@ -85,3 +85,37 @@ def test_sfr_of_a_raw_file_is_measured_on_its_mosaic(tmp_path: Path) -> None:
     assert src.read_bytes() == before  # the input untouched
     with (tmp_path / "sfr.csv").open() as fh:
         assert {row[1] for row in list(csv.reader(fh))[1:]} == {"raw"}
+
+
+def test_sfr_of_monochrome_and_linear_raws(tmp_path: Path) -> None:
+    """A monochrome raw is measured on its one channel (``raw``), a linear (demosaiced) raw on
+    its three; both crashed in the reader (a 2x2 black-level tile taken for granted)."""
+    import tifffile
+
+    from imageform.io import write_dng
+
+    lin = render_sfr_chart((160, 200), grid=(1, 1), angle_deg=5.0, sigma=0.8, supersampling=4)
+    black, white = 64.0, 4095.0
+    dn = np.round(black + (white - black) * 0.9 * lin).astype(np.uint16)
+    base = write_dng(tmp_path / "base.dng", dn, cfa_pattern="RGGB", black_level=black,
+                     white_level=white, color_matrix=np.eye(3))  # fmt: skip
+    with tifffile.TiffFile(base) as tf:
+        tags = [(t.code, t.dtype, t.count, t.value, True) for t in tf.pages[0].tags]
+    keep = [t for t in tags if t[0] >= 50706 and t[0] not in (50710, 50711, 50728)]
+    mono = tmp_path / "mono.dng"
+    tifffile.imwrite(mono, dn, photometric=1, extratags=keep)
+    with tifffile.TiffFile(mono) as tf:
+        at = tf.pages[0].tags[262].valueoffset  # type: ignore[union-attr]
+    with mono.open("r+b") as fh:  # LinearRaw with one sample (tifffile writes three only)
+        fh.seek(at)
+        fh.write(np.uint16(34892).tobytes())
+    linear = tmp_path / "linear.dng"
+    tifffile.imwrite(linear, np.repeat(dn[..., None], 3, axis=-1), photometric=34892,
+                     extratags=keep)  # fmt: skip
+    for path, channels in ((mono, ["raw"]), (linear, ["R", "G", "B", "Y"])):
+        edges = execute("sfr", image=path, out=None).summary["edges"]
+        assert len(edges) == 4, path.name
+        for e in edges:
+            assert list(e["channels"]) == channels
+            m50 = [c["mtf50"] for c in e["channels"].values()]
+            assert np.allclose(m50, 0.2201, rtol=0.03), (path.name, m50)

@@ -67,7 +67,11 @@ _BLACK_LEVEL = 50714
 _WHITE_LEVEL = 50717
 _COLOR_MATRIX_1 = 50721
 _COLOR_MATRIX_2 = 50722
+_CAMERA_CALIBRATION_1 = 50723
+_CAMERA_CALIBRATION_2 = 50724
+_ANALOG_BALANCE = 50727
 _AS_SHOT_NEUTRAL = 50728
+_AS_SHOT_WHITE_XY = 50729
 _CALIBRATION_ILLUMINANT_1 = 50778
 _CALIBRATION_ILLUMINANT_2 = 50779
 _PHOTOMETRIC_CFA = 32803
@@ -252,14 +256,17 @@ class RawImage:
     mosaic : ndarray (H, W) or (H, W, 3) uint16
         The visible Bayer mosaic in digital numbers, in the sensor's orientation; for a
         linear raw (a DNG with PhotometricInterpretation LinearRaw, as phones and
-        converters write them: already demosaiced) the three channels of every pixel.
-    black_level : ndarray (2, 2) or (3,)
+        converters write them: already demosaiced) the three channels of every pixel; for
+        a monochrome sensor (no colour filters: Leica Monochrom, scientific cameras) its
+        one grey value a pixel, (H, W) with ``cfa_pattern`` None.
+    black_level : ndarray (2, 2), (3,) or (1,)
         The black level of each photosite of the 2x2 tile (the mosaic's ``[0:2, 0:2]``);
-        of each channel for a linear raw.
+        of each channel for a linear raw; the one level of a monochrome sensor.
     white_level : float
         The largest code (saturation).
     cfa_pattern : str or None
-        The 2x2 tile read row by row (``"RGGB"``, ...); None for a linear raw.
+        The 2x2 tile read row by row (``"RGGB"``, ...); None for a linear raw and a
+        monochrome sensor (:attr:`monochrome` tells them apart).
     white_balance : ndarray (3,) or None
         The as-shot white balance gains (R, G, B) with green 1 (None if the file has none).
     xyz_to_camera : ndarray (3, 3) or None
@@ -290,9 +297,18 @@ class RawImage:
     metadata: dict[str, Any] = field(default_factory=dict)
     orientation: int = 0
 
+    @property
+    def monochrome(self) -> bool:
+        """True for a monochrome sensor: a 2-D mosaic with no colour filter array."""
+        return self.cfa_pattern is None and np.ndim(self.mosaic) == 2
+
 
 def _dng_tags(path: Path) -> dict[str, Any]:
-    """ColorMatrix1/2, CalibrationIlluminant1/2 and UniqueCameraModel of a DNG (tifffile)."""
+    """Return the colour tags and UniqueCameraModel of a DNG's first IFD (tifffile).
+
+    ColorMatrix1/2, CameraCalibration1/2, CalibrationIlluminant1/2, AnalogBalance and
+    AsShotWhiteXY, by short names (``cm1``, ``cc1``, ``ill1``, ``ab``, ``white_xy``, ...).
+    """
     import tifffile
 
     try:
@@ -303,8 +319,12 @@ def _dng_tags(path: Path) -> dict[str, Any]:
                 for code, name in (
                     (_COLOR_MATRIX_1, "cm1"),
                     (_COLOR_MATRIX_2, "cm2"),
+                    (_CAMERA_CALIBRATION_1, "cc1"),
+                    (_CAMERA_CALIBRATION_2, "cc2"),
                     (_CALIBRATION_ILLUMINANT_1, "ill1"),
                     (_CALIBRATION_ILLUMINANT_2, "ill2"),
+                    (_ANALOG_BALANCE, "ab"),
+                    (_AS_SHOT_WHITE_XY, "white_xy"),
                     (_UNIQUE_CAMERA_MODEL, "model"),
                 ):
                     if code in tags and name not in found:
@@ -315,11 +335,62 @@ def _dng_tags(path: Path) -> dict[str, Any]:
     return found
 
 
+def _reals(value: Any) -> np.ndarray:
+    """Return a TIFF tag's values as floats: (S)RATIONAL pairs (tifffile's integers) divided."""
+    a = np.asarray(value).ravel()
+    v = a.astype(np.float64)
+    if a.dtype.kind in "iu" and v.size % 2 == 0 and np.all(v[1::2] != 0):
+        return v[0::2] / v[1::2]
+    return v
+
+
 def _matrix(value: Any) -> np.ndarray:
-    v = np.asarray(value, dtype=np.float64).ravel()
-    if v.size == 18:  # numerator, denominator pairs
-        v = v[0::2] / v[1::2]
-    return v[:9].reshape(3, 3)
+    return _reals(value)[:9].reshape(3, 3)
+
+
+#: EXIF LightSource codes LibRaw takes as daylight when it picks a DNG's colour matrix:
+#: Daylight, D55, D75, D50 and Flash (after D65 itself).
+_DAYLIGHT_CODES = (1, 20, 22, 23, 4)
+
+
+def _dng_colour(tags: dict[str, Any]) -> tuple[np.ndarray | None, int]:
+    r"""Return a DNG's XYZ-to-camera matrix and its illuminant's code, as LibRaw picks them.
+
+    With two matrices and both illuminants given, the one of D65, else the first of a
+    daylight kind (:data:`_DAYLIGHT_CODES`); otherwise the last matrix in the file
+    (ColorMatrix2 when there are two). The matrix is :math:`\mathrm{diag}(AB)\,CC\,CM`:
+    the AnalogBalance, the CameraCalibration of the same index and the ColorMatrix, as the
+    DNG specification (1.4, chapter 6) composes them and LibRaw's ``identify`` does; where no
+    matrix is picked by illuminant, LibRaw (dcraw's ``parse_tiff_ifd``) also scales the
+    columns by AsShotWhiteXY over D65's white, and so does this.
+    """
+    cms = {i: _matrix(tags[f"cm{i}"]) for i in (1, 2) if f"cm{i}" in tags}
+    if not cms:
+        return None, 0
+    ills = {i: int(np.ravel(tags.get(f"ill{i}", 0))[0]) for i in (1, 2)}
+    pick = None
+    if len(cms) == 2 and ills[1] > 0 and ills[2] > 0:
+        pick = next((i for i in (1, 2) if ills[i] == 21), None)
+        if pick is None:
+            pick = next((i for i in (1, 2) if ills[i] in _DAYLIGHT_CODES), None)
+    by_illuminant = pick is not None
+    if pick is None:
+        pick = max(cms)
+    cc = np.eye(3)
+    if by_illuminant:
+        if f"cc{pick}" in tags:
+            cc = _reals(tags[f"cc{pick}"])[:9].reshape(3, 3)
+    else:  # the last calibration in the file, as the TIFF parser keeps it
+        for i in (1, 2):
+            if f"cc{i}" in tags:
+                cc = _reals(tags[f"cc{i}"])[:9].reshape(3, 3)
+    ab = _reals(tags["ab"])[:3] if "ab" in tags else np.ones(3)
+    m = np.diag(ab) @ cc @ cms[pick]
+    if not by_illuminant and "white_xy" in tags:
+        x, y = _reals(tags["white_xy"])[:2]
+        d65 = np.array([0.950456, 1.0, 1.088754])  # LibRaw_constants::d65_white
+        m = m * (np.array([x, y, 1.0 - x - y]) / d65)[None, :]
+    return m, ills[pick]
 
 
 def read_raw(path: str | Path, *, max_pixels: int | None = None) -> RawImage:
@@ -386,7 +457,14 @@ def read_raw(path: str | Path, *, max_pixels: int | None = None) -> RawImage:
         desc = r.color_desc.decode("ascii", "replace")
         per_channel = np.asarray(r.black_level_per_channel, dtype=np.float64)
         pattern: str | None
-        if r.raw_pattern is None:  # a linear raw (LinearRaw DNG): every pixel has its colours
+        if r.num_colors == 1:  # a monochrome sensor (no CFA): one grey value a pixel
+            visible = np.asarray(r.raw_image_visible)
+            if visible.ndim == 3:
+                visible = visible[..., 0]
+            mosaic = np.array(visible, dtype=np.uint16, copy=True)
+            pattern = None
+            black = per_channel[:1].copy()
+        elif r.raw_pattern is None:  # a linear raw (LinearRaw DNG): every pixel has its colours
             visible = np.asarray(r.raw_image_visible)
             if visible.ndim != 3 or r.num_colors != 3 or any(c not in "RGB" for c in desc[:3]):
                 raise InvalidInputError(
@@ -409,6 +487,7 @@ def read_raw(path: str | Path, *, max_pixels: int | None = None) -> RawImage:
             black = per_channel[pat].astype(np.float64)
         flip = int(r.sizes.flip)
         white = float(r.white_level)
+        window = (int(r.sizes.top_margin), int(r.sizes.left_margin))
         wb4 = np.asarray(r.camera_whitebalance, dtype=np.float64)
         gains = None
         if wb4[1] > 0 and wb4[0] > 0 and wb4[2] > 0:
@@ -417,6 +496,11 @@ def read_raw(path: str | Path, *, max_pixels: int | None = None) -> RawImage:
         rgb_cam = np.array(r.color_matrix, dtype=np.float64)[:3, :3]
         cam_xyz = np.array(r.rgb_xyz_matrix, dtype=np.float64)[:3, :3]
         raw_type = str(r.raw_type).split(".")[-1].lower()
+    if not np.any(mosaic):  # LibRaw decodes no floating-point samples: tifffile does
+        floats = _float_samples(p, window, mosaic.shape, pattern is not None)
+        if floats is not None:
+            mosaic, black, white = floats
+            raw_type = "float"
     meta: dict[str, Any] = {
         "path": str(p),
         "raw_type": raw_type,
@@ -431,16 +515,17 @@ def read_raw(path: str | Path, *, max_pixels: int | None = None) -> RawImage:
         names = {v: k for k, v in CALIBRATION_ILLUMINANTS.items()}
         if "model" in tags:
             meta["camera_model"] = str(tags["model"]).strip("\x00")
-        pick = "1"
-        if "cm2" in tags and int(tags.get("ill2", 0)) == 21 and int(tags.get("ill1", 0)) != 21:
-            pick = "2"
-        if f"cm{pick}" in tags:
-            xyz_to_camera = _matrix(tags[f"cm{pick}"])
-            code = int(tags.get(f"ill{pick}", 0))
+        dng_matrix, code = _dng_colour(tags)
+        if dng_matrix is not None:
+            xyz_to_camera = dng_matrix
             illum = names.get(code, "D65")
             meta["calibration_illuminant_code"] = code
     if xyz_to_camera is not None and illum is None:
         illum = "D65"  # LibRaw's matrices are for D65
+    if mosaic.ndim == 2 and pattern is None:  # monochrome: no colours to balance or convert
+        gains, xyz_to_camera, illum = None, None, None
+        rgb_cam = np.zeros((3, 3))
+        meta["monochrome"] = True
     return RawImage(
         mosaic=mosaic,
         black_level=black,
@@ -499,6 +584,61 @@ _LIBRAW_XYZ_RGB = np.array(
         [0.0193339, 0.1191920, 0.9503041],
     ]
 )
+
+
+def _float_samples(
+    p: Path, origin: tuple[int, int], shape: tuple[int, ...], cfa: bool
+) -> tuple[np.ndarray, np.ndarray, float] | None:
+    """Read a floating-point DNG's raw samples (tifffile), as 16-bit codes with their levels.
+
+    LibRaw (as rawpy builds it) opens a DNG of 16-, 24- or 32-bit floats (HDR merges, some
+    converters) but leaves its samples at zero, so it develops to black. The full-resolution
+    raw IFD (IFD 0 or a SubIFD with NewSubfileType 0) is read here, cut to LibRaw's visible
+    window (``origin``, ``shape``), and scaled so that the white level (DNG: 1.0 unless
+    WhiteLevel says otherwise) is 65535; values above white are clipped, as the development
+    clips highlights. Returns (mosaic, black level, white level), or None when the file holds
+    no such IFD.
+    """
+    import tifffile
+
+    try:
+        with tifffile.TiffFile(p) as tf:
+            first = tf.pages[0]
+            pages = [first, *(getattr(first, "pages", None) or [])]
+            for page in pages:
+                tags = {t.code: t.value for t in page.tags}
+                if int(tags.get(254, 0)) & 1 or page.dtype is None or page.dtype.kind != "f":
+                    continue  # a preview (reduced resolution), or not floats
+                data = np.asarray(page.asarray(), dtype=np.float64)
+                break
+            else:
+                return None
+    except Exception:  # not a TIFF tifffile can decode: nothing more to read
+        return None
+    (top, left), (h, w) = origin, shape[:2]
+    data = data[top : top + h, left : left + w]
+    if data.shape[:2] != (h, w) or data.ndim != len(shape):
+        return None
+    channels = 1 if data.ndim == 2 else data.shape[2]
+    white = float(np.min(_reals(tags.get(_WHITE_LEVEL, 1.0))))
+    levels = _reals(tags.get(_BLACK_LEVEL, 0.0))
+    dim = tuple(int(v) for v in np.ravel(tags.get(_BLACK_LEVEL_REPEAT_DIM, (1, 1))))
+    if cfa:
+        black = (
+            levels.reshape(2, 2)
+            if dim == (2, 2) and levels.size == 4
+            else np.full((2, 2), float(levels[0]))
+        )
+    else:
+        black = levels[:channels] if levels.size >= channels else np.full(channels, levels[0])
+    if not np.isfinite(white) or white <= float(np.max(black)):
+        return None
+    scale = 65535.0 / white
+    codes = np.round(np.clip(np.nan_to_num(data, nan=0.0), 0.0, white) * scale)
+    mosaic = codes.astype(np.uint16)
+    if data.ndim == 3:
+        mosaic = np.ascontiguousarray(mosaic[..., :3] if channels >= 3 else mosaic[..., 0])
+    return mosaic, np.asarray(black, np.float64) * scale, 65535.0
 
 
 def _libraw_rgb_cam(xyz_to_camera: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -567,7 +707,10 @@ def _read_plain_dng(p: Path, limit: int) -> RawImage | None:
     else:
         return None
     white = float(np.ravel(tags.get(_WHITE_LEVEL, 65535))[0])
-    cam_xyz = _matrix(tags[_COLOR_MATRIX_1])
+    colour = _dng_tags(p)
+    cam_xyz, code = _dng_colour(colour)
+    if cam_xyz is None:
+        return None
     rgb_cam, daylight = _libraw_rgb_cam(cam_xyz)
     gains = None
     if _AS_SHOT_NEUTRAL in tags:
@@ -576,7 +719,6 @@ def _read_plain_dng(p: Path, limit: int) -> RawImage | None:
         if neutral.size == 3 and np.all(neutral > 0):
             gains = (1.0 / neutral) / (1.0 / neutral[1])
     names = {v: k for k, v in CALIBRATION_ILLUMINANTS.items()}
-    code = int(tags.get(_CALIBRATION_ILLUMINANT_1, 0))
     model = tags.get(_UNIQUE_CAMERA_MODEL)
     meta: dict[str, Any] = {
         "path": str(p),
@@ -631,9 +773,9 @@ class Development:
     gains : ndarray (3,)
         The white balance gains applied (R, G, B; the smallest is 1).
     camera_to_xyz : ndarray (3, 3)
-        White-balanced camera RGB to XYZ under the calibration illuminant.
+        White-balanced camera RGB to XYZ, white-balanced white on D65's white.
     adaptation : ndarray (3, 3)
-        Bradford, the calibration illuminant's white to the output space's white.
+        Bradford, D65's white to the output space's white.
     space, transfer, demosaic : str
         The output space, its encoding and the demosaicing method (``"none"`` for a linear
         raw).
@@ -770,7 +912,9 @@ class Development:
         """``linear`` times each photosite's gain, clipped to [0, 1] (sensor orientation)."""
         raw = self._raw
         out = self.linear
-        if raw.cfa_pattern is None:
+        if raw.monochrome:
+            pass  # one grey channel: no colours to balance (the gains are 1)
+        elif raw.cfa_pattern is None:
             out *= self.gains.astype(np.float32)
         else:
             idx = np.array(_cfa_indices(raw.cfa_pattern)).reshape(2, 2)
@@ -803,7 +947,10 @@ class Development:
     @property
     def image(self) -> np.ndarray:
         """The encoded output in [0, 1] (float32, turned for display; kept once read)."""
-        return _orient(self._sensor_image(), self.orientation)
+        image = self._sensor_image()
+        if self._raw.monochrome:  # the three equal channels of a grey development: one
+            image = image[..., 0]
+        return _orient(image, self.orientation)
 
     @_deprecate.parameters(renamed={"bits": "bit_depth"})
     def to_integer(self, bit_depth: int = 16) -> np.ndarray:
@@ -826,6 +973,8 @@ class Development:
             image = self._sensor_image()
             out = np.empty(image.shape, np.uint8 if bit_depth == 8 else np.uint16)
             quantize(image.reshape(-1), np.float32(2**bit_depth - 1), out.reshape(-1))
+        if self._raw.monochrome:
+            out = out[..., 0]
         return np.ascontiguousarray(_orient(out, self.orientation))
 
 
@@ -841,6 +990,8 @@ def _black_plane(raw: RawImage) -> np.ndarray:
     black = np.asarray(raw.black_level, np.float64)
     if raw.mosaic.ndim == 3:
         return black.reshape(1, 1, -1)
+    if raw.monochrome:
+        return np.full(raw.mosaic.shape, float(black.ravel()[0]))
     h, w = raw.mosaic.shape
     return np.tile(black, (h // 2 + 1, w // 2 + 1))[:h, :w]
 
@@ -858,7 +1009,7 @@ def develop(
     raw: RawImage | str | Path,
     *,
     demosaic: str = "bilinear",
-    white_balance: Literal["camera", "daylight", "none"] | ArrayLike = "camera",
+    white_balance: Literal["camera", "auto", "daylight", "none"] | ArrayLike = "camera",
     space: str = "srgb",
     linear: bool = False,
     orient: bool = True,
@@ -873,14 +1024,17 @@ def develop(
     3. Demosaic with :func:`imageform.sensor.demosaic` (``demosaic`` names the method); a
        linear raw has every colour already and is not demosaiced.
     4. Camera RGB to XYZ: :math:`M = C^{-1}\,\mathrm{diag}(C\,\mathbf w)`, with C the
-       colour matrix (XYZ to camera) and :math:`\mathbf w` the XYZ of the calibration
-       illuminant's white (Y = 1), so that white-balanced white (1, 1, 1) maps to
-       :math:`\mathbf w` (the normalisation of dcraw/LibRaw's ``cam_xyz_coeff``, which
-       scales the rows of :math:`C` by its camera response to white). A file with no colour
-       matrix at all (LibRaw knows none for the camera either) is developed as if camera RGB
-       were linear sRGB, with a note (:attr:`Development.notes`).
-    5. Bradford chromatic adaptation from :math:`\mathbf w` to the output space's white
-       (identity for a D65 matrix and sRGB).
+       colour matrix (XYZ to camera) and :math:`\mathbf w` the XYZ of D65's white (Y = 1),
+       so that white-balanced white (1, 1, 1) maps to :math:`\mathbf w` (the normalisation
+       of dcraw/LibRaw's ``cam_xyz_coeff``, which scales the rows of :math:`C` by its
+       camera response to white). The file's calibration illuminant chooses between two
+       matrices (:func:`read_raw`, LibRaw's rule) but is not adapted from: LibRaw, and
+       Adobe's DNG SDK for a single matrix, take a white-balanced white as the output's
+       white whatever the matrix's illuminant. A file with no colour matrix at all (LibRaw
+       knows none for the camera either) is developed as if camera RGB were linear sRGB,
+       with a note (:attr:`Development.notes`); a monochrome raw stays grey.
+    5. Bradford chromatic adaptation from D65 to the output space's white (identity for
+       sRGB, Display P3, Rec. 2020; D65 to D50 for ProPhoto RGB).
     6. XYZ to the output space's linear RGB, clipped to [0, 1], encoded with the space's
        transfer function (``linear=True``: not encoded).
     7. Turned for display as the file's orientation says (LibRaw's ``user_flip``).
@@ -896,8 +1050,11 @@ def develop(
         From :func:`read_raw`, or a raw file's path.
     demosaic : str
         A method of :data:`imageform.sensor.DEMOSAIC_METHODS`.
-    white_balance : "camera", "daylight", "none" or array_like (3,)
-        The as-shot gains, LibRaw's daylight gains, none, or R, G, B gains.
+    white_balance : "camera", "auto", "daylight", "none" or array_like (3,)
+        The as-shot gains (a file with none: ``"auto"``, with a note, as LibRaw does),
+        LibRaw's automatic white balance (the reciprocal of each colour's mean over the
+        unsaturated 8 x 8 blocks, dcraw's ``-a``), LibRaw's daylight gains, none, or R, G, B
+        gains. A monochrome raw has no colours to balance: its gains are 1.
     space : str
         An RGB space of :data:`imageform.color.RGB_SPACES` (``"srgb"``, ``"display_p3"``,
         ``"prophoto"``, ...).
@@ -956,7 +1113,8 @@ def develop(
     if key not in RGB_SPACES:
         raise InvalidInputError(f"unknown space {space!r}; valid: {', '.join(RGB_SPACES)}")
     out_space = RGB_SPACES[key]
-    gains = _gains(raw, white_balance)
+    notes: list[str] = []
+    gains = _gains(raw, white_balance, notes)
     where = raw.metadata.get("path") or "the raw image"
     black = np.asarray(raw.black_level, np.float64)
     if raw.mosaic.size == 0 or float(raw.mosaic.max()) <= float(black.min()):
@@ -968,7 +1126,6 @@ def develop(
         raise InvalidInputError(
             f"{where}: white level {raw.white_level:g} is not above the black level"
         )
-    notes: list[str] = []
     on_gpu = where_to == "cuda" and raw.cfa_pattern is not None and method in _CUDA_METHODS
     if where_to == "cuda" and not on_gpu:
         notes.append(
@@ -982,7 +1139,15 @@ def develop(
         )
     # 1-3. linearise and white-balance, demosaic: the fused pass for a bilinear Bayer mosaic
     cam: np.ndarray | None = None
-    if raw.cfa_pattern is None:  # a linear raw: every pixel has its colours
+    if raw.monochrome:  # one grey value a pixel: the three channels of a grey image
+        grey = raw.mosaic.astype(np.float32)
+        grey -= np.float32(black.ravel()[0])
+        grey *= np.float32(1.0 / float(np.ravel(span)[0]))
+        np.clip(grey, 0.0, 1.0, out=grey)
+        cam = np.repeat(grey[..., None], 3, axis=-1)
+        del grey
+        method = "none"
+    elif raw.cfa_pattern is None:  # a linear raw: every pixel has its colours
         cam = raw.mosaic.astype(np.float32)
         cam -= black.astype(np.float32)
         cam *= (gains / span).astype(np.float32)
@@ -1002,19 +1167,18 @@ def develop(
         cam = np.asarray(_demosaic(balanced, raw.cfa_pattern, method, allow_odd=True))
         del balanced
         cam = np.ascontiguousarray(cam, dtype=np.float32)
-    # 4. camera RGB -> XYZ under the calibration illuminant
-    ill = raw.calibration_illuminant or "D65"
-    white = np.asarray(xy_to_xyz_white(whitepoint_xy(ill)), np.float64)
+    # 4. camera RGB -> XYZ, white-balanced white on D65's (LibRaw's cam_xyz_coeff)
+    white = np.asarray(xy_to_xyz_white(whitepoint_xy("D65")), np.float64)
     srgb_to_xyz = np.asarray(rgb_to_xyz_matrix("srgb"), np.float64)
     if raw.xyz_to_camera is not None:
         C = np.asarray(raw.xyz_to_camera, np.float64)
         cam_to_xyz = np.linalg.inv(C) @ np.diag(C @ white)
+    elif raw.monochrome:  # grey in linear sRGB: grey in any output space
+        cam_to_xyz = srgb_to_xyz
     elif np.any(np.asarray(raw.camera_to_srgb)):  # LibRaw's camera -> sRGB only
         cam_to_xyz = srgb_to_xyz @ np.asarray(raw.camera_to_srgb, np.float64)
-        white = np.asarray(xy_to_xyz_white(whitepoint_xy("D65")), np.float64)
     else:  # no colour matrix, and LibRaw knows none for this camera
         cam_to_xyz = srgb_to_xyz
-        white = np.asarray(xy_to_xyz_white(whitepoint_xy("D65")), np.float64)
         notes.append(
             "note: the file has no colour matrix and LibRaw knows none for this camera: "
             "camera RGB developed as if it were linear sRGB"
@@ -1047,16 +1211,68 @@ def develop(
     )
 
 
-def _gains(raw: RawImage, white_balance: Any) -> np.ndarray:
+def _auto_gains(raw: RawImage) -> np.ndarray:
+    """Return LibRaw's automatic white balance gains (R, G, B) of a raw image, green 1.
+
+    dcraw's ``-a`` (LibRaw's ``use_auto_wb``, and its fallback for ``use_camera_wb`` when a
+    file has no as-shot balance): the image is cut into 8 x 8 blocks from its top-left
+    corner; a block with any photosite above ``white_level - 25`` is skipped; over the
+    others each colour's multiplier is its count over its sum of (DN - black, floored at 0),
+    the reciprocal of its mean. The two greens of a Bayer tile are pooled here (LibRaw
+    scales them apart; they differ by the sensor's green imbalance only).
+    """
+    m = np.asarray(raw.mosaic)
+    h, w = m.shape[:2]
+    hb, wb = -(-h // 8), -(-w // 8)
+
+    def blocks(a: np.ndarray, op: Any) -> np.ndarray:
+        pad = np.zeros((hb * 8, wb * 8) + a.shape[2:], a.dtype)
+        pad[:h, :w] = a
+        return np.asarray(op(pad.reshape(hb, 8, wb, 8, *a.shape[2:]), axis=(1, 3)))
+
+    peak = blocks(m, np.max)
+    ok = (peak.max(axis=-1) if m.ndim == 3 else peak) <= raw.white_level - 25
+    val = np.clip(m.astype(np.float64) - _black_plane(raw), 0.0, None)
+    sums = np.zeros(3)
+    counts = np.zeros(3)
+    if m.ndim == 3:
+        sums = blocks(val, np.sum)[ok].sum(axis=0)
+        counts = np.full(3, float(blocks(np.ones((h, w)), np.sum)[ok].sum()))
+    else:
+        idx = np.array(_cfa_indices(str(raw.cfa_pattern))).reshape(2, 2)
+        for i in (0, 1):
+            for j in (0, 1):
+                site = np.zeros((h, w), bool)
+                site[i::2, j::2] = True
+                sums[idx[i, j]] += float(blocks(np.where(site, val, 0.0), np.sum)[ok].sum())
+                counts[idx[i, j]] += float(blocks(site.astype(np.float64), np.sum)[ok].sum())
+    if np.any(sums <= 0):
+        return np.ones(3)
+    mul = counts / sums
+    return mul / mul[1]
+
+
+def _gains(raw: RawImage, white_balance: Any, notes: list[str]) -> np.ndarray:
+    """Return the white balance gains (R, G, B; smallest 1); what had to be assumed in ``notes``.
+
+    ``"camera"`` for a file with no as-shot white balance falls back, as LibRaw's
+    ``use_camera_wb`` does, to its automatic white balance (:func:`_auto_gains`), with a
+    note; a monochrome sensor has no colours to balance (gains 1, whatever was asked).
+    """
+    if raw.monochrome:
+        return np.ones(3)
     if isinstance(white_balance, str):
         wb = white_balance.lower()
+        if wb == "camera" and raw.white_balance is None:
+            notes.append(
+                "note: the file has no as-shot white balance: gains from the image's "
+                "average (LibRaw's automatic white balance)"
+            )
+            wb = "auto"
         if wb == "camera":
-            if raw.white_balance is None:
-                raise InvalidInputError(
-                    "white_balance='camera': the file has no as-shot white balance; "
-                    "give 'daylight', 'none' or three gains"
-                )
             g = np.asarray(raw.white_balance, np.float64)
+        elif wb == "auto":
+            g = _auto_gains(raw)
         elif wb == "daylight":
             day = raw.metadata.get("daylight_white_balance")
             if day is None:
@@ -1066,8 +1282,8 @@ def _gains(raw: RawImage, white_balance: Any) -> np.ndarray:
             g = np.ones(3)
         else:
             raise InvalidInputError(
-                f"unknown white_balance {white_balance!r}; valid: camera, daylight, none, "
-                "or three gains"
+                f"unknown white_balance {white_balance!r}; valid: camera, auto, daylight, "
+                "none, or three gains"
             )
     else:
         g = np.asarray(white_balance, np.float64)

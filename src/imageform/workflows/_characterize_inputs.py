@@ -247,6 +247,15 @@ def _read_photo(
 
         r = read_raw(path, max_pixels=max_pixels)
         mosaic = np.asarray(r.mosaic, dtype=np.float64)
+        if r.cfa_pattern is None:  # a monochrome or linear (demosaiced) raw: no mosaic
+            from imageform.color import linear_to_srgb
+
+            blk = np.asarray(r.black_level, dtype=np.float64)
+            lin = (mosaic - (blk if mosaic.ndim == 3 else blk[0])) / (r.white_level - blk)
+            if mosaic.ndim == 2:  # a monochrome sensor: its one channel three times
+                lin = np.repeat(lin[..., None], 3, axis=-1)
+            enc = np.asarray(linear_to_srgb(np.clip(lin, 0.0, 1.0)))
+            return _Image(path.name, encoded=enc, linear=lin, grey=mosaic.ndim == 2)
         blk = np.asarray(r.black_level, dtype=np.float64).reshape(2, 2)  # the 2x2 tile's
         h, w = mosaic.shape
         blk_full = np.tile(blk, (h // 2 + 1, w // 2 + 1))[:h, :w]

@@ -12,8 +12,8 @@ from imageform.workflows._spec import Input, Options, Output, Result, Run, Workf
 __all__ = ["WORKFLOWS", "DevelopOptions"]
 
 
-#: ``develop --white-balance``: the as-shot gains, LibRaw's daylight gains, or none.
-_RawWhiteBalance = Literal["camera", "daylight", "none"]
+#: ``develop --white-balance``: the as-shot gains, LibRaw's automatic or daylight gains, or none.
+_RawWhiteBalance = Literal["camera", "auto", "daylight", "none"]
 
 
 @image_out_renames
@@ -28,7 +28,8 @@ class DevelopOptions(ImageOut, Options):
     )
     white_balance: _RawWhiteBalance = option(
         "camera",
-        help="White balance: the as-shot gains (camera), LibRaw's daylight gains, or none.",
+        help="White balance: the as-shot gains (camera; a file with none: auto, with a note), "
+        "LibRaw's automatic (auto, the image's average) or daylight gains, or none.",
         choices=get_args(_RawWhiteBalance),
     )
     space: str = option(
@@ -79,13 +80,18 @@ def develop(run: Run, opts: DevelopOptions, *, raw: Path, out: Path) -> Result:
     write(run, out, image, opts, like=np.zeros(1, np.uint16))
     h, w = img.mosaic.shape[:2]
     oh, ow = image.shape[:2]
-    kind = f"{img.cfa_pattern} mosaic" if img.cfa_pattern else "linear (demosaiced) raw"
+    kind = (
+        f"{img.cfa_pattern} mosaic"
+        if img.cfa_pattern
+        else ("monochrome raw" if img.monochrome else "linear (demosaiced) raw")
+    )
     summary: dict[str, Any] = {
         "raw": raw,
         "out": out,
         "size": [w, h],
         "output_size": [ow, oh],
         "cfa_pattern": img.cfa_pattern,
+        "monochrome": img.monochrome,
         "black_level": np.asarray(img.black_level).tolist(),
         "white_level": img.white_level,
         "gains": dev.gains.tolist(),

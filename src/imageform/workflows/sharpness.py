@@ -84,7 +84,8 @@ def _edge_image(image: Path, opts: SfrOptions) -> tuple[Any, tuple[str, ...] | N
     """Return the linear image to measure and its channel names (None: the SFR's own).
 
     A raw file: its mosaic less the black level, over the white level's span, with the CFA's
-    photosites balanced (one channel, ``raw``); ``--transfer`` does not apply to it.
+    photosites balanced (one channel, ``raw``); a monochrome raw its one channel (``raw``), a
+    linear raw its three; ``--transfer`` does not apply to them.
     """
     from imageform.workflows._characterize_inputs import _RAW_SUFFIXES, _read_photo
 
@@ -94,8 +95,12 @@ def _edge_image(image: Path, opts: SfrOptions) -> tuple[Any, tuple[str, ...] | N
 
     # the raw branch of characterize's reader: black level removed, scaled to 1 at white
     im = _read_photo(image, {}, "linear", opts.max_pixels, None)
-    if im.cfa is None:
-        raise InvalidInputError(f"{image} holds no Bayer mosaic; develop it and measure that")
+    if im.mosaic is None:  # a monochrome or linear raw: its linear values as they are
+        import numpy as np
+
+        lin = np.asarray(im.linear)
+        return (lin[..., 0], ("raw",)) if im.grey else (lin, None)
+    assert im.cfa is not None
     return equalize_cfa(im.mosaic, im.cfa), ("raw",)
 
 
