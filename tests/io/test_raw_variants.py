@@ -522,3 +522,36 @@ def test_floating_point_dng_develops(base: tuple[Path, list[tuple], np.ndarray],
     assert raw.metadata["raw_type"] == "float" and raw.white_level == 65535.0
     dev = develop(raw)
     assert _mean_de00(dev.image, develop(reference).image) < 0.02
+
+
+def test_raw_pixel_limit(
+    base: tuple[Path, list[tuple], np.ndarray], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Raws default to 200 Mpx (a 102 Mpx GFX100 or 151 Mpx IQ4 file was over the images' 100
+    Mpx); IMAGEFORM_MAX_PIXELS and max_pixels still rule when given."""
+    from imageform.io import RAW_MAX_PIXELS, max_pixels
+
+    assert RAW_MAX_PIXELS >= 151_000_000 + 10_000_000 > max_pixels()
+    with pytest.raises(InvalidInputError, match="pixels"):
+        read_raw(base[0], max_pixels=1000)
+    monkeypatch.setenv("IMAGEFORM_MAX_PIXELS", "1000")
+    with pytest.raises(InvalidInputError, match="pixels"):
+        read_raw(base[0])
+    monkeypatch.setenv("IMAGEFORM_MAX_PIXELS", "")
+    assert read_raw(base[0]).mosaic.size == base[2][..., 0].size
+
+
+def test_characterize_frames_refuse_a_linear_raw(
+    base: tuple[Path, list[tuple], np.ndarray],
+) -> None:
+    """characterize's EMVA frames need photosite values: a linear raw is refused in one line,
+    a monochrome raw is one grey frame."""
+    from imageform.workflows._characterize_inputs import _frame
+
+    path = _variant(base, "lin_frame", data=base[2], photometric=34892,
+                    drop={33421, 33422, 50710, 50711})  # fmt: skip
+    with pytest.raises(InvalidInputError, match="linear") as e:
+        _frame(path, {}, None)
+    assert "\n" not in str(e.value)
+    grey, cfa = _frame(_monochrome(base, "mono_frame", base[2][..., 0].copy()), {}, None)
+    assert cfa is None and grey.shape == base[2].shape[:2]

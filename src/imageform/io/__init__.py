@@ -37,6 +37,7 @@ from imageform.io.plan import PLAN_MESH_SUFFIXES, Plan, read_plan
 from imageform.io.png import read_png, write_png
 from imageform.io.raw import (
     CALIBRATION_ILLUMINANTS,
+    RAW_MAX_PIXELS,
     Development,
     RawImage,
     develop,
@@ -69,6 +70,7 @@ __all__ = [
     "IMAGE_FORMATS",
     "OPTICS_MODELS",
     "PLAN_MESH_SUFFIXES",
+    "RAW_MAX_PIXELS",
     "STEREO_FILE_FORMAT",
     "STEREO_FILE_VERSION",
     "VIDEO_SUFFIXES",

@@ -35,12 +35,18 @@ from imageform.errors import InvalidInputError
 
 __all__ = [
     "CALIBRATION_ILLUMINANTS",
+    "RAW_MAX_PIXELS",
     "Development",
     "RawImage",
     "develop",
     "read_raw",
     "write_dng",
 ]
+
+#: The default pixel limit of :func:`read_raw` (the header's raw size, margins included):
+#: above the 151 Mpx of the largest medium-format sensors (Phase One IQ4), so every camera's
+#: raw reads without ``IMAGEFORM_MAX_PIXELS``.
+RAW_MAX_PIXELS = 200_000_000
 
 #: EXIF LightSource codes of the DNG CalibrationIlluminant tags (EXIF 2.3, tag 0x9208) that
 #: name a CIE illuminant imageform knows, by name.
@@ -408,7 +414,9 @@ def read_raw(path: str | Path, *, max_pixels: int | None = None) -> RawImage:
         The raw file.
     max_pixels : int, optional
         Refuse a file whose header declares more pixels than this (before anything is
-        decoded); default :func:`imageform.io.max_pixels` (``IMAGEFORM_MAX_PIXELS``, 100 Mpx).
+        decoded); default ``IMAGEFORM_MAX_PIXELS`` when set, else :data:`RAW_MAX_PIXELS`
+        (200 Mpx: medium-format sensors reach 151 Mpx, and a raw header counts the masked
+        margins too; images have 100 Mpx, :func:`imageform.io.max_pixels`).
 
     Returns
     -------
@@ -426,7 +434,11 @@ def read_raw(path: str | Path, *, max_pixels: int | None = None) -> RawImage:
     """
     from imageform.io.image_io import ImageInfo, _check_pixels, _pixel_limit
 
-    limit = _pixel_limit(max_pixels)
+    limit = (
+        RAW_MAX_PIXELS
+        if max_pixels is None and not os.environ.get("IMAGEFORM_MAX_PIXELS", "").strip()
+        else _pixel_limit(max_pixels)
+    )
     if not isinstance(path, str | os.PathLike):
         raise TypeError(f"expected path as a file path, got {describe(path)}")
     p = Path(path)

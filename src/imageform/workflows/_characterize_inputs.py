@@ -342,6 +342,11 @@ def _frame(path: Path, doc: Mapping[str, Any], max_pixels: int | None) -> tuple[
         from imageform.io import read_raw
 
         r = read_raw(path, max_pixels=max_pixels)
+        if r.mosaic.ndim == 3:
+            raise InvalidInputError(
+                f"{path.name}: a linear (demosaiced) raw holds no photosite values; EMVA 1288 "
+                "needs the sensor's own frames"
+            )
         return np.asarray(r.mosaic, dtype=np.float64), r.cfa_pattern
     img = read_image(path, alpha="drop", max_pixels=max_pixels)
     if img.shape[-1] != 1:
