@@ -555,3 +555,28 @@ def test_characterize_frames_refuse_a_linear_raw(
     assert "\n" not in str(e.value)
     grey, cfa = _frame(_monochrome(base, "mono_frame", base[2][..., 0].copy()), {}, None)
     assert cfa is None and grey.shape == base[2].shape[:2]
+
+
+def test_floating_point_dng_in_a_tiled_subifd(
+    base: tuple[Path, list[tuple], np.ndarray], tmp_path: Path
+) -> None:
+    """As converters lay a DNG out: IFD 0 a preview with the colour tags, the raw image (tiled
+    floats here) in a SubIFD with its CFA and level tags."""
+    import tifffile
+
+    path0, tags, _ = base
+    with tifffile.TiffFile(path0) as tf:
+        data = tf.pages[0].asarray()
+    raw_codes = {33421, 33422, 50710, 50711}
+    ifd0 = [t for t in tags if t[0] not in raw_codes | {50713, 50714, 50717}]
+    in_raw = [t for t in tags if t[0] in raw_codes]
+    in_raw += [(50714, 11, 1, 0.0, True), (50717, 11, 1, 1.0, True)]
+    floats = ((data.astype(np.float64) - 64) / (4095 - 64)).astype(np.float32)
+    path = tmp_path / "subifd.dng"
+    with tifffile.TiffWriter(path) as tw:
+        tw.write(np.zeros((32, 48, 3), np.uint8), photometric="rgb", subifds=1, subfiletype=1,
+                 extratags=ifd0)  # fmt: skip
+        tw.write(floats, photometric=32803, subfiletype=0, tile=(64, 64), extratags=in_raw)
+    raw = read_raw(path)
+    assert raw.metadata["raw_type"] == "float" and raw.cfa_pattern == "RGGB"
+    assert _mean_de00(develop(raw).image, develop(path0).image) < 0.02
