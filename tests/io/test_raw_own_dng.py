@@ -1,12 +1,13 @@
 """The DNG imageform writes develops without the ``raw`` extra (issue 25).
 
 ``imageform simulate --raw`` writes a DNG; ``imageform develop`` of that file needed rawpy
-(LibRaw), which README's install does not bring. Without rawpy, :func:`read_raw` reads such a
-plain DNG (one uncompressed CFA image) with tifffile, to the values LibRaw gives.
+(LibRaw), which README's install does not bring. Without rawpy, :func:`read_raw` reads a DNG
+with tifffile, to the values LibRaw gives.
 """
 
 from __future__ import annotations
 
+import importlib.util
 import sys
 from pathlib import Path
 
@@ -105,12 +106,14 @@ def test_develop_command_without_rawpy(
     assert not (tmp_path / "y.png").exists()
 
 
-def test_compressed_or_cropped_dng_needs_libraw(
+def test_cropped_dng_reads_without_rawpy_as_libraw(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
+    """An ActiveArea (masked margins cut) is read without LibRaw too, to LibRaw's values; a
+    file that is no DNG still needs the extra."""
     import tifffile
 
-    path = write_dng(tmp_path / "x.dng", _mosaic(), white_level=4095, color_matrix=CM)
+    path = write_dng(tmp_path / "x.dng", _mosaic(3, (64, 96)), white_level=4095, color_matrix=CM)
     with tifffile.TiffFile(path) as tf:
         tags = [
             (t.code, t.dtype, t.count, t.value, True) for t in tf.pages[0].tags if t.code >= 33421
@@ -118,11 +121,19 @@ def test_compressed_or_cropped_dng_needs_libraw(
         data = tf.pages[0].asarray()
     cropped = tmp_path / "cropped.dng"
     tifffile.imwrite(
-        cropped, data, photometric=32803, extratags=[*tags, (50829, 3, 4, (0, 0, 12, 14), True)]
+        cropped, data, photometric=32803, extratags=[*tags, (50829, 3, 4, (2, 4, 62, 92), True)]
     )
+    libraw = read_raw(cropped) if importlib.util.find_spec("rawpy") else None
     monkeypatch.setitem(sys.modules, "rawpy", None)
+    own = read_raw(cropped)
+    np.testing.assert_array_equal(own.mosaic, data[2:62, 4:92])
+    if libraw is not None:
+        np.testing.assert_array_equal(own.mosaic, libraw.mosaic)
+        assert own.cfa_pattern == libraw.cfa_pattern
+    other = tmp_path / "y.nef"
+    other.write_bytes(b"II*\x00" + bytes(64))
     with pytest.raises(ImageformError, match=r"imageform\[raw\]"):
-        read_raw(cropped)
+        read_raw(other)
 
 
 def test_own_dng_orientation_without_rawpy(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:

@@ -580,3 +580,109 @@ def test_floating_point_dng_in_a_tiled_subifd(
     raw = read_raw(path)
     assert raw.metadata["raw_type"] == "float" and raw.cfa_pattern == "RGGB"
     assert _mean_de00(develop(raw).image, develop(path0).image) < 0.02
+
+
+def _variants_libraw_reads(base: tuple[Path, list[tuple], np.ndarray]) -> dict[str, Path]:
+    """DNG variants LibRaw reads, to hold imageform's own DNG reader against."""
+    import tifffile
+
+    with tifffile.TiffFile(base[0]) as tf:
+        data = tf.pages[0].asarray()
+    table = np.round((np.arange(1024) / 1023.0) ** 2 * 4095).astype(np.uint16)
+    offsets = np.array([[0, 8], [16, 24]])
+    black4 = np.clip(data + np.tile(offsets, (data.shape[0] // 2, data.shape[1] // 2)), 0, 4095)
+    return {
+        "base": base[0],
+        "black4": _variant(base, "own_black4", data=black4.astype(np.uint16),
+                           drop={50713, 50714},
+                           extra=[(50713, 3, 2, (2, 2), True),
+                                  (50714, 4, 4, tuple(64 + offsets.ravel()), True)]),
+        "two_matrices": _two_matrices(base, "own_two", (17, 21)),
+        "calibrated": _variant(base, "own_cal", extra=[
+            (50723, 10, 9, _rational(np.diag([1.1, 1.0, 0.9]) + 0.02), True),
+            (50727, 5, 3, _rational([1.2, 1.0, 0.8]), True)]),
+        "linear": _variant(base, "own_linear", data=base[2], photometric=34892,
+                           drop={33421, 33422, 50710, 50711}),
+        "mono": _monochrome(base, "own_mono", base[2][..., 1].copy()),
+        "active_area_odd": _variant(base, "own_area", extra=[(50829, 4, 4, (3, 5, 251, 381),
+                                                              True)]),
+        "linearization": _variant(base, "own_lin_table",
+                                  data=np.searchsorted(table, data).clip(0, 1023).astype(np.uint16),
+                                  extra=[(50712, 3, 1024, tuple(table.tolist()), True)]),
+        "orientation": _variant(base, "own_orient", extra=[(274, 3, 1, 6, True)]),
+        "bggr": _variant(base, "own_bggr", drop={33422}, extra=[(33422, 1, 4, (2, 1, 1, 0),
+                                                                 True)]),
+    }  # fmt: skip
+
+
+def test_own_dng_reader_agrees_with_libraw(
+    base: tuple[Path, list[tuple], np.ndarray], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """imageform's DNG reader (tifffile: for DNGs LibRaw cannot decode, or without rawpy)
+    gives LibRaw's RawImage on every variant LibRaw reads: the same samples, levels, pattern,
+    gains, matrix and orientation, and a development within 0.05 ΔE00."""
+    import sys
+
+    from imageform.io.raw import _read_dng
+
+    for name, path in _variants_libraw_reads(base).items():
+        theirs = read_raw(path)
+        ours = _read_dng(path, 10**9)
+        assert ours is not None, name
+        assert ours.metadata["reader"] == "tifffile"
+        np.testing.assert_array_equal(ours.mosaic, theirs.mosaic, err_msg=name)
+        np.testing.assert_allclose(ours.black_level, theirs.black_level, err_msg=name)
+        assert ours.white_level == theirs.white_level, name
+        assert ours.cfa_pattern == theirs.cfa_pattern and ours.monochrome == theirs.monochrome
+        assert ours.orientation == theirs.orientation, name
+        if theirs.white_balance is None:
+            assert ours.white_balance is None, name
+        else:
+            np.testing.assert_allclose(ours.white_balance, theirs.white_balance, rtol=1e-4)
+        if theirs.xyz_to_camera is None:
+            assert ours.xyz_to_camera is None, name
+        else:
+            np.testing.assert_allclose(ours.xyz_to_camera, theirs.xyz_to_camera, atol=1e-6)
+            np.testing.assert_allclose(ours.camera_to_srgb, theirs.camera_to_srgb, atol=1e-3)
+        a, b = develop(ours).image, develop(theirs).image
+        assert a.shape == b.shape, name
+        if a.ndim == 3:
+            assert _mean_de00(a, b) < 0.05, name
+        else:
+            assert np.abs(a - b).max() < 1e-5, name
+    # and read_raw itself takes that reader when rawpy is not installed
+    monkeypatch.setitem(sys.modules, "rawpy", None)
+    assert read_raw(base[0]).metadata["reader"] == "tifffile"
+
+
+@pytest.mark.parametrize("kind", ["cfa", "linear"])
+def test_jpeg_xl_dng_that_libraw_cannot_read(
+    base: tuple[Path, list[tuple], np.ndarray], kind: str
+) -> None:
+    """DNG 1.7's JPEG XL compression (52546), as recent phones write their raws: LibRaw (as
+    rawpy builds it) refuses the file; read_raw reads it with tifffile and develops it as the
+    uncompressed file."""
+    import tifffile
+
+    imagecodecs = pytest.importorskip("imagecodecs")
+    if not imagecodecs.JPEGXL.available:  # pragma: no cover - depends on the wheel
+        pytest.skip("imagecodecs without JPEG XL")
+    path0, tags, lin = base
+    with tifffile.TiffFile(path0) as tf:
+        data = tf.pages[0].asarray()
+    if kind == "linear":
+        keep = [t for t in tags if t[0] not in (33421, 33422, 50710, 50711)]
+        plain = _variant(base, "plain_linear", data=lin, photometric=34892,
+                         drop={33421, 33422, 50710, 50711})  # fmt: skip
+        pixels, photometric = lin, 34892
+    else:
+        keep, plain, pixels, photometric = tags, path0, data, 32803
+    path = path0.with_name(f"jxl_{kind}.dng")
+    tifffile.imwrite(path, pixels, photometric=photometric, extratags=keep, tile=(128, 128),
+                     compression=52546, compressionargs={"lossless": True})  # fmt: skip
+    with pytest.raises(rawpy.LibRawFileUnsupportedError):
+        rawpy.imread(str(path)).raw_type  # noqa: B018 - rawpy opens the file lazily
+    raw = read_raw(path)
+    assert raw.metadata["reader"] == "tifffile" and raw.metadata["libraw"]
+    np.testing.assert_array_equal(raw.mosaic, read_raw(plain).mosaic)
+    assert _mean_de00(develop(raw).image, develop(plain).image) < 0.01

@@ -68,6 +68,10 @@ _CFA_REPEAT_PATTERN_DIM = 33421
 _CFA_PATTERN = 33422
 _CFA_PLANE_COLOR = 50710
 _CFA_LAYOUT = 50711
+_LINEARIZATION_TABLE = 50712
+_BLACK_LEVEL_DELTA_H = 50715
+_BLACK_LEVEL_DELTA_V = 50716
+_ACTIVE_AREA = 50829
 _BLACK_LEVEL_REPEAT_DIM = 50713
 _BLACK_LEVEL = 50714
 _WHITE_LEVEL = 50717
@@ -334,24 +338,31 @@ def _dng_tags(path: Path) -> dict[str, Any]:
                     (_UNIQUE_CAMERA_MODEL, "model"),
                 ):
                     if code in tags and name not in found:
-                        found[name] = tags[code].value
+                        tag = tags[code]
+                        found[name] = (
+                            tag.value if name in ("model", "ill1", "ill2") else _tag_reals(tag)
+                        )
                 break
     except Exception:  # not a TIFF-based raw: nothing more to read
         return {}
     return found
 
 
-def _reals(value: Any) -> np.ndarray:
-    """Return a TIFF tag's values as floats: (S)RATIONAL pairs (tifffile's integers) divided."""
-    a = np.asarray(value).ravel()
-    v = a.astype(np.float64)
-    if a.dtype.kind in "iu" and v.size % 2 == 0 and np.all(v[1::2] != 0):
-        return v[0::2] / v[1::2]
+def _tag_reals(tag: Any) -> np.ndarray:
+    """Return a tifffile tag's values as floats.
+
+    A (S)RATIONAL's numerator/denominator pairs divided; any other type's values as they are.
+    """
+    v = np.asarray(tag.value if not isinstance(tag.value, bytes) else list(tag.value))
+    v = v.ravel().astype(np.float64)
+    if int(tag.dtype) in (5, 10) and v.size % 2 == 0:  # RATIONAL, SRATIONAL
+        den = v[1::2]
+        return np.divide(v[0::2], den, out=np.zeros(den.size), where=den != 0)
     return v
 
 
 def _matrix(value: Any) -> np.ndarray:
-    return _reals(value)[:9].reshape(3, 3)
+    return np.asarray(value, dtype=np.float64).ravel()[:9].reshape(3, 3)
 
 
 #: EXIF LightSource codes LibRaw takes as daylight when it picks a DNG's colour matrix:
@@ -385,15 +396,15 @@ def _dng_colour(tags: dict[str, Any]) -> tuple[np.ndarray | None, int]:
     cc = np.eye(3)
     if by_illuminant:
         if f"cc{pick}" in tags:
-            cc = _reals(tags[f"cc{pick}"])[:9].reshape(3, 3)
+            cc = _matrix(tags[f"cc{pick}"])
     else:  # the last calibration in the file, as the TIFF parser keeps it
         for i in (1, 2):
             if f"cc{i}" in tags:
-                cc = _reals(tags[f"cc{i}"])[:9].reshape(3, 3)
-    ab = _reals(tags["ab"])[:3] if "ab" in tags else np.ones(3)
+                cc = _matrix(tags[f"cc{i}"])
+    ab = np.asarray(tags["ab"], np.float64)[:3] if "ab" in tags else np.ones(3)
     m = np.diag(ab) @ cc @ cms[pick]
     if not by_illuminant and "white_xy" in tags:
-        x, y = _reals(tags["white_xy"])[:2]
+        x, y = np.asarray(tags["white_xy"], np.float64)[:2]
         d65 = np.array([0.950456, 1.0, 1.088754])  # LibRaw_constants::d65_white
         m = m * (np.array([x, y, 1.0 - x - y]) / d65)[None, :]
     return m, ills[pick]
@@ -447,7 +458,7 @@ def read_raw(path: str | Path, *, max_pixels: int | None = None) -> RawImage:
     if importlib.util.find_spec("rawpy") is None:
         # without LibRaw, a DNG as imageform writes it (one uncompressed CFA image) is read
         # with tifffile; any other raw file needs the extra (the message says so)
-        own = _read_plain_dng(p, limit)
+        own = _read_dng(p, limit)
         if own is not None:
             return own
     rawpy = _rawpy()
@@ -462,6 +473,11 @@ def read_raw(path: str | Path, *, max_pixels: int | None = None) -> RawImage:
         raise
     except Exception as exc:  # LibRawFileUnsupportedError, LibRawIOError, ...
         r.close()
+        # a DNG LibRaw cannot decode (JPEG XL of DNG 1.7, deflate or LZW integers): tifffile
+        own = _read_dng(p, limit)
+        if own is not None:
+            own.metadata["libraw"] = type(exc).__name__
+            return own
         raise InvalidInputError(
             f"{p} is not a raw file LibRaw can read ({type(exc).__name__})"
         ) from None
@@ -499,7 +515,6 @@ def read_raw(path: str | Path, *, max_pixels: int | None = None) -> RawImage:
             black = per_channel[pat].astype(np.float64)
         flip = int(r.sizes.flip)
         white = float(r.white_level)
-        window = (int(r.sizes.top_margin), int(r.sizes.left_margin))
         wb4 = np.asarray(r.camera_whitebalance, dtype=np.float64)
         gains = None
         if wb4[1] > 0 and wb4[0] > 0 and wb4[2] > 0:
@@ -508,10 +523,11 @@ def read_raw(path: str | Path, *, max_pixels: int | None = None) -> RawImage:
         rgb_cam = np.array(r.color_matrix, dtype=np.float64)[:3, :3]
         cam_xyz = np.array(r.rgb_xyz_matrix, dtype=np.float64)[:3, :3]
         raw_type = str(r.raw_type).split(".")[-1].lower()
-    if not np.any(mosaic):  # LibRaw decodes no floating-point samples: tifffile does
-        floats = _float_samples(p, window, mosaic.shape, pattern is not None)
-        if floats is not None:
-            mosaic, black, white = floats
+    if not np.any(mosaic):  # LibRaw opens floating-point DNGs but decodes no sample
+        own = _read_dng(p, limit)
+        floats = own is not None and own.metadata["raw_type"] == "float"
+        if own is not None and floats and own.mosaic.shape == mosaic.shape:
+            mosaic, black, white = own.mosaic, own.black_level, own.white_level
             raw_type = "float"
     meta: dict[str, Any] = {
         "path": str(p),
@@ -588,7 +604,7 @@ def _orient(image: np.ndarray, flip: int) -> np.ndarray:
 
 #: sRGB (D65) to XYZ as LibRaw writes it (``LibRaw_constants::xyz_rgb``): its ``rgb_cam`` for
 #: a DNG is computed from the file's colour matrix with these values (dcraw's
-#: ``cam_xyz_coeff``), so :func:`_read_plain_dng` uses them too.
+#: ``cam_xyz_coeff``), so :func:`_read_dng` uses them too.
 _LIBRAW_XYZ_RGB = np.array(
     [
         [0.4124564, 0.3575761, 0.1804375],
@@ -596,61 +612,6 @@ _LIBRAW_XYZ_RGB = np.array(
         [0.0193339, 0.1191920, 0.9503041],
     ]
 )
-
-
-def _float_samples(
-    p: Path, origin: tuple[int, int], shape: tuple[int, ...], cfa: bool
-) -> tuple[np.ndarray, np.ndarray, float] | None:
-    """Read a floating-point DNG's raw samples (tifffile), as 16-bit codes with their levels.
-
-    LibRaw (as rawpy builds it) opens a DNG of 16-, 24- or 32-bit floats (HDR merges, some
-    converters) but leaves its samples at zero, so it develops to black. The full-resolution
-    raw IFD (IFD 0 or a SubIFD with NewSubfileType 0) is read here, cut to LibRaw's visible
-    window (``origin``, ``shape``), and scaled so that the white level (DNG: 1.0 unless
-    WhiteLevel says otherwise) is 65535; values above white are clipped, as the development
-    clips highlights. Returns (mosaic, black level, white level), or None when the file holds
-    no such IFD.
-    """
-    import tifffile
-
-    try:
-        with tifffile.TiffFile(p) as tf:
-            first = tf.pages[0]
-            pages = [first, *(getattr(first, "pages", None) or [])]
-            for page in pages:
-                tags = {t.code: t.value for t in page.tags}
-                if int(tags.get(254, 0)) & 1 or page.dtype is None or page.dtype.kind != "f":
-                    continue  # a preview (reduced resolution), or not floats
-                data = np.asarray(page.asarray(), dtype=np.float64)
-                break
-            else:
-                return None
-    except Exception:  # not a TIFF tifffile can decode: nothing more to read
-        return None
-    (top, left), (h, w) = origin, shape[:2]
-    data = data[top : top + h, left : left + w]
-    if data.shape[:2] != (h, w) or data.ndim != len(shape):
-        return None
-    channels = 1 if data.ndim == 2 else data.shape[2]
-    white = float(np.min(_reals(tags.get(_WHITE_LEVEL, 1.0))))
-    levels = _reals(tags.get(_BLACK_LEVEL, 0.0))
-    dim = tuple(int(v) for v in np.ravel(tags.get(_BLACK_LEVEL_REPEAT_DIM, (1, 1))))
-    if cfa:
-        black = (
-            levels.reshape(2, 2)
-            if dim == (2, 2) and levels.size == 4
-            else np.full((2, 2), float(levels[0]))
-        )
-    else:
-        black = levels[:channels] if levels.size >= channels else np.full(channels, levels[0])
-    if not np.isfinite(white) or white <= float(np.max(black)):
-        return None
-    scale = 65535.0 / white
-    codes = np.round(np.clip(np.nan_to_num(data, nan=0.0), 0.0, white) * scale)
-    mosaic = codes.astype(np.uint16)
-    if data.ndim == 3:
-        mosaic = np.ascontiguousarray(mosaic[..., :3] if channels >= 3 else mosaic[..., 0])
-    return mosaic, np.asarray(black, np.float64) * scale, 65535.0
 
 
 def _libraw_rgb_cam(xyz_to_camera: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -668,14 +629,49 @@ def _libraw_rgb_cam(xyz_to_camera: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return rgb_cam, daylight
 
 
-def _read_plain_dng(p: Path, limit: int) -> RawImage | None:
-    """Read a DNG as :func:`write_dng` writes it, with tifffile (no LibRaw needed).
+#: PhotometricInterpretation of a DNG's raw image: a colour filter array, or LinearRaw.
+_PHOTOMETRIC_LINEAR_RAW = 34892
 
-    One uncompressed 16-bit CFA image with a 2x2 RGB ``CFAPattern``, one black level or one
-    per photosite, ``ColorMatrix1`` and, optionally, ``AsShotNeutral``; the same
-    :class:`RawImage` as LibRaw gives (its ``rgb_cam`` by its own formula,
-    :func:`_libraw_rgb_cam`). None for anything else (compressed, cropped, linear, other
-    CFAs, other raw formats): those need LibRaw.
+
+def _ints(value: Any) -> list[int]:
+    """Return a TIFF tag's values as integers (BYTE tags come from tifffile as bytes)."""
+    if isinstance(value, bytes | bytearray):
+        return list(value)
+    return [int(v) for v in np.ravel(value)]
+
+
+def _dng_raw_page(tf: Any) -> Any:
+    """Return a DNG's full-resolution raw IFD: IFD 0 or one of its SubIFDs, or None.
+
+    The first page whose NewSubfileType says "full resolution" (bit 0 clear) and whose
+    PhotometricInterpretation is CFA or LinearRaw, as LibRaw looks for it.
+    """
+    first = tf.pages[0]
+    for page in [first, *(getattr(first, "pages", None) or [])]:
+        tags = page.tags
+        if int(tags.valueof(254, 0)) & 1:
+            continue  # a reduced-resolution preview
+        if int(tags.valueof(262, 0)) in (_PHOTOMETRIC_CFA, _PHOTOMETRIC_LINEAR_RAW):
+            return page
+    return None
+
+
+def _read_dng(p: Path, limit: int) -> RawImage | None:
+    """Read a DNG with tifffile, as LibRaw reads it: for DNGs LibRaw cannot decode, or no LibRaw.
+
+    What LibRaw does, here for any raw IFD tifffile (with imagecodecs) decodes: JPEG XL (DNG
+    1.7, as recent phones write), deflate, LZW or uncompressed, tiled or in strips, integers
+    or floats (scaled so that the white level, 1.0 unless WhiteLevel says otherwise, is
+    65535; values above it clipped, as the development clips highlights); a 2x2 RGB CFA,
+    LinearRaw of three samples, or one sample (monochrome). The LinearizationTable is
+    applied, the image cut to its ActiveArea (the CFA pattern starts at the area's corner;
+    like LibRaw, a CFA image's crop starts at an even row and column), BlackLevel (with
+    BlackLevelRepeatDim) and WhiteLevel read (default 2^bits - 1), BlackLevelDeltaH/V
+    subtracted from the samples; the colour matrix picked and composed by
+    :func:`_dng_colour`, ``rgb_cam`` by LibRaw's formula (:func:`_libraw_rgb_cam`),
+    AsShotNeutral as the gains, the Orientation tag. DefaultCrop and opcode lists are not
+    applied (LibRaw applies neither). None for a file that is not such a DNG, or that tifffile
+    cannot decode.
     """
     import tifffile
 
@@ -683,64 +679,125 @@ def _read_plain_dng(p: Path, limit: int) -> RawImage | None:
 
     try:
         with tifffile.TiffFile(p) as tf:
-            page = tf.pages[0]
-            tags = {t.code: t.value for t in page.tags}  # type: ignore[union-attr]
-            plain = (
-                _DNG_VERSION in tags
-                and tags.get(262) == _PHOTOMETRIC_CFA
-                and tags.get(259) == 1
-                and tags.get(277, 1) == 1
-                and tags.get(258) == 16
-                and tuple(tags.get(_CFA_REPEAT_PATTERN_DIM, ())) == (2, 2)
-                and _COLOR_MATRIX_1 in tags
-                and not ({50719, 50720, 50829} & tags.keys())  # DefaultCrop*, ActiveArea
-            )
-            if not plain:
+            ifd0 = tf.pages[0].tags  # type: ignore[union-attr]
+            if _DNG_VERSION not in ifd0:
                 return None
+            page = _dng_raw_page(tf)
+            if page is None:
+                return None
+            objects = {t.code: t for t in page.tags}
+            tags = {code: t.value for code, t in objects.items()}
+            levels_of = {  # read while the file is open (tifffile loads large tags lazily)
+                code: _tag_reals(objects[code])
+                for code in (_BLACK_LEVEL, _WHITE_LEVEL, _BLACK_LEVEL_DELTA_H, _BLACK_LEVEL_DELTA_V)
+                if code in objects
+            }
+            neutral_tag = objects.get(_AS_SHOT_NEUTRAL, ifd0.get(_AS_SHOT_NEUTRAL))
+            neutral = None if neutral_tag is None else _tag_reals(neutral_tag)
             info = ImageInfo(int(tags[256]), int(tags[257]), 1, "", "raw")
             _check_pixels(p, info, limit)
-            mosaic = np.ascontiguousarray(page.asarray(), dtype=np.uint16)
+            data = np.asarray(page.asarray())
+            flip = _EXIF_TO_FLIP.get(int(ifd0.valueof(274, 1)), 0)
     except InvalidInputError:
         raise
-    except Exception:  # not a TIFF, or one tifffile cannot read: LibRaw's business
+    except Exception:  # not a TIFF, or one tifffile cannot decode: LibRaw's business
         return None
-    cfa = bytes(tags[_CFA_PATTERN])
-    if len(cfa) != 4 or sorted(cfa) != [0, 1, 1, 2]:
+    linear_raw = int(tags.get(262, 0)) == _PHOTOMETRIC_LINEAR_RAW
+    if linear_raw and data.ndim == 3 and data.shape[2] == 1:
+        data = data[..., 0]
+    if linear_raw and not (data.ndim == 2 or data.shape[2] >= 3):
         return None
-    pattern = "".join("RGB"[i] for i in cfa)
-    levels = np.asarray(tags.get(_BLACK_LEVEL, 0), dtype=np.float64).ravel()
-    if levels.size == 8:  # rationals
-        levels = levels[0::2] / levels[1::2]
-    dim = tuple(tags.get(_BLACK_LEVEL_REPEAT_DIM, (1, 1)))
-    if dim == (1, 1) and levels.size == 1:
-        black = np.full((2, 2), float(levels[0]))
-    elif dim == (2, 2) and levels.size == 4:
-        black = levels.reshape(2, 2)
+    pattern: str | None = None
+    if not linear_raw:
+        dims = tuple(int(v) for v in np.ravel(tags.get(_CFA_REPEAT_PATTERN_DIM, ())))
+        cfa = _ints(tags.get(_CFA_PATTERN, ()))
+        planes = _ints(tags.get(_CFA_PLANE_COLOR, (0, 1, 2)))
+        letters = "".join("RGB"[planes[c]] if c < len(planes) and planes[c] < 3 else "?"
+                          for c in cfa)  # fmt: skip
+        if dims != (2, 2) or len(cfa) != 4 or sorted(letters) != ["B", "G", "G", "R"]:
+            raise InvalidInputError(
+                f"{p}: a {dims[0] if dims else 0}x{dims[1] if len(dims) > 1 else 0} CFA "
+                f"(first row {letters[: dims[1] if len(dims) > 1 else 0]}) is not supported: "
+                "only 2x2 RGB Bayer tiles"
+            )
+        pattern = letters
+        if data.ndim != 2:
+            return None
+    floats = data.dtype.kind == "f"
+    values = np.asarray(data, dtype=np.float64)
+    if _LINEARIZATION_TABLE in tags and not floats:
+        table = np.asarray(tags[_LINEARIZATION_TABLE], dtype=np.float64).ravel()
+        values = table[np.clip(data.astype(np.int64), 0, table.size - 1)]
+    area = [int(v) for v in np.ravel(tags.get(_ACTIVE_AREA, ()))]
+    if len(area) == 4 and area[2] > area[0] and area[3] > area[1]:
+        top, left, bottom, right = area
+        if pattern is not None:  # the CFA starts at the area's corner; LibRaw's crop at an
+            dt, dl = top & 1, left & 1  # even row and column, the pattern shifted to match
+            pattern = "".join(pattern[2 * ((i + dt) % 2) + (j + dl) % 2]
+                              for i in (0, 1) for j in (0, 1))  # fmt: skip
+            top, left = top + dt, left + dl
+        values = values[top:bottom, left:right]
+    h, w = values.shape[:2]
+    for code, axis in ((_BLACK_LEVEL_DELTA_H, 1), (_BLACK_LEVEL_DELTA_V, 0)):
+        if code in levels_of:
+            delta = levels_of[code]
+            if delta.size >= (w if axis == 1 else h):
+                shape = (1, w) if axis == 1 else (h, 1)
+                step = delta[: shape[axis]].reshape(shape)
+                values = values - (step[..., None] if values.ndim == 3 else step)
+    channels = 1 if values.ndim == 2 else values.shape[2]
+    bits = int(np.ravel(tags.get(258, 16))[0])
+    white = (
+        float(np.min(levels_of[_WHITE_LEVEL]))
+        if _WHITE_LEVEL in levels_of
+        else (1.0 if floats else float(2**bits - 1))
+    )
+    levels = levels_of.get(_BLACK_LEVEL, np.zeros(1))
+    rep = tuple(int(v) for v in np.ravel(tags.get(_BLACK_LEVEL_REPEAT_DIM, (1, 1))))
+    if pattern is not None:
+        black = (
+            levels.reshape(2, 2)
+            if rep == (2, 2) and levels.size == 4
+            else np.full((2, 2), float(levels.mean()))
+        )
     else:
+        want = min(channels, 3)
+        black = levels[:want] if levels.size >= want else np.full(want, float(levels[0]))
+    if not np.isfinite(white) or white <= 0:
         return None
-    white = float(np.ravel(tags.get(_WHITE_LEVEL, 65535))[0])
+    scale = 65535.0 / white if (floats or white > 65535) else 1.0
+    codes = np.round(np.clip(np.nan_to_num(values, nan=0.0) * scale, 0.0, 65535.0))
+    mosaic = codes.astype(np.uint16)
+    if mosaic.ndim == 3:
+        mosaic = np.ascontiguousarray(mosaic[..., :3])
+    black = np.asarray(black, np.float64) * scale
+    white *= scale
     colour = _dng_tags(p)
     cam_xyz, code = _dng_colour(colour)
-    if cam_xyz is None:
-        return None
-    rgb_cam, daylight = _libraw_rgb_cam(cam_xyz)
-    gains = None
-    if _AS_SHOT_NEUTRAL in tags:
-        neutral = np.asarray(tags[_AS_SHOT_NEUTRAL], dtype=np.float64).ravel()
-        neutral = neutral[0::2] / neutral[1::2] if neutral.size == 6 else neutral
-        if neutral.size == 3 and np.all(neutral > 0):
-            gains = (1.0 / neutral) / (1.0 / neutral[1])
     names = {v: k for k, v in CALIBRATION_ILLUMINANTS.items()}
-    model = tags.get(_UNIQUE_CAMERA_MODEL)
+    model = colour.get("model")
     meta: dict[str, Any] = {
         "path": str(p),
-        "raw_type": "flat",
+        "raw_type": "float" if floats else ("stack" if mosaic.ndim == 3 else "flat"),
         "color_desc": "RGBG",
-        "daylight_white_balance": daylight.tolist(),
+        "daylight_white_balance": None,
         "camera_model": str(model).strip("\x00") if model is not None else None,
-        "calibration_illuminant_code": code,
         "reader": "tifffile",
     }
+    gains = None
+    rgb_cam = np.zeros((3, 3))
+    illum: str | None = None
+    if mosaic.ndim == 2 and pattern is None:  # monochrome
+        meta["monochrome"] = True
+        cam_xyz = None
+    elif cam_xyz is not None:
+        rgb_cam, daylight = _libraw_rgb_cam(cam_xyz)
+        meta["daylight_white_balance"] = daylight.tolist()
+        meta["calibration_illuminant_code"] = code
+        illum = names.get(code, "D65")
+    usable = neutral is not None and neutral.size >= 3 and bool(np.all(neutral[:3] > 0))
+    if usable and neutral is not None and not meta.get("monochrome"):
+        gains = (1.0 / neutral[:3]) / (1.0 / neutral[1])
     return RawImage(
         mosaic=mosaic,
         black_level=black,
@@ -749,9 +806,9 @@ def _read_plain_dng(p: Path, limit: int) -> RawImage | None:
         white_balance=gains,
         xyz_to_camera=cam_xyz,
         camera_to_srgb=rgb_cam,
-        calibration_illuminant=names.get(code, "D65"),
+        calibration_illuminant=illum,
         metadata=meta,
-        orientation=_EXIF_TO_FLIP.get(int(tags.get(274, 1)), 0),
+        orientation=flip,
     )
 
 
