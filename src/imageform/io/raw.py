@@ -724,7 +724,7 @@ def _read_dng(p: Path, limit: int) -> RawImage | None:
         if data.ndim != 2:
             return None
     floats = data.dtype.kind == "f"
-    values = np.asarray(data, dtype=np.float64)
+    values = data  # integers stay integers unless a table, deltas or scaling need floats
     if _LINEARIZATION_TABLE in tags and not floats:
         table = np.asarray(tags[_LINEARIZATION_TABLE], dtype=np.float64).ravel()
         values = table[np.clip(data.astype(np.int64), 0, table.size - 1)]
@@ -744,7 +744,9 @@ def _read_dng(p: Path, limit: int) -> RawImage | None:
             if delta.size >= (w if axis == 1 else h):
                 shape = (1, w) if axis == 1 else (h, 1)
                 step = delta[: shape[axis]].reshape(shape)
-                values = values - (step[..., None] if values.ndim == 3 else step)
+                values = np.asarray(values, np.float64) - (
+                    step[..., None] if values.ndim == 3 else step
+                )
     channels = 1 if values.ndim == 2 else values.shape[2]
     bits = int(np.ravel(tags.get(258, 16))[0])
     white = (
@@ -766,10 +768,13 @@ def _read_dng(p: Path, limit: int) -> RawImage | None:
     if not np.isfinite(white) or white <= 0:
         return None
     scale = 65535.0 / white if (floats or white > 65535) else 1.0
-    codes = np.round(np.clip(np.nan_to_num(values, nan=0.0) * scale, 0.0, 65535.0))
-    mosaic = codes.astype(np.uint16)
-    if mosaic.ndim == 3:
-        mosaic = np.ascontiguousarray(mosaic[..., :3])
+    if values.ndim == 3:
+        values = values[..., :3]
+    if values.dtype in (np.uint8, np.uint16) and scale == 1.0:  # the samples as they are
+        mosaic = np.ascontiguousarray(values, dtype=np.uint16)
+    else:
+        codes = np.nan_to_num(np.asarray(values, np.float64), nan=0.0) * scale
+        mosaic = np.round(np.clip(codes, 0.0, 65535.0, out=codes), out=codes).astype(np.uint16)
     black = np.asarray(black, np.float64) * scale
     white *= scale
     colour = _dng_tags(p)
