@@ -194,16 +194,40 @@ def test_a_black_frame_is_refused(
     assert not (tmp_path / "x.png").exists()
 
 
-def test_xtrans_is_refused_naming_the_pattern(base: tuple[Path, list[tuple], np.ndarray]) -> None:
-    xt = [[1, 1, 0, 1, 1, 2], [1, 1, 2, 1, 1, 0], [2, 0, 1, 0, 2, 1]]
-    xt += [[1, 1, 2, 1, 1, 0], [1, 1, 0, 1, 1, 2], [0, 2, 1, 2, 0, 1]]
+def test_xtrans_develops_through_libraw_linear_interpolation(
+    base: tuple[Path, list[tuple], np.ndarray], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A 6x6 X-Trans CFA (Fujifilm) was refused; it is demosaiced by LibRaw's own linear
+    interpolation (what its LINEAR mode does for X-Trans) and developed by imageform's
+    pipeline, to LibRaw's rendering. Without LibRaw it is refused in one line, named."""
+    import sys
+
+    import tifffile
+
+    xt = np.array([[1, 1, 0, 1, 1, 2], [1, 1, 2, 1, 1, 0], [2, 0, 1, 0, 2, 1],
+                   [1, 1, 2, 1, 1, 0], [1, 1, 0, 1, 1, 2], [0, 2, 1, 2, 0, 1]])  # fmt: skip
+    cam = _camera_rgb()
+    h, w = cam.shape[:2]
+    which = np.tile(xt, (h // 6 + 1, w // 6 + 1))[:h, :w]
+    mos = np.take_along_axis(cam, which[..., None], axis=2)[..., 0]
     path = _variant(
         base,
         "xtrans",
+        data=np.round(64 + mos * (4095 - 64)).astype(np.uint16),
         drop={33421, 33422},
-        extra=[(33421, 3, 2, (6, 6), True), (33422, 1, 36, tuple(np.ravel(xt).tolist()), True)],
+        extra=[(33421, 3, 2, (6, 6), True), (33422, 1, 36, tuple(xt.ravel().tolist()), True)],
     )
-    with pytest.raises(InvalidInputError, match=r"6x6 X-Trans CFA \(first row GGRGGB\)") as e:
+    raw = read_raw(path)
+    assert raw.metadata["xtrans"] == "GGRGGB" and raw.metadata["raw_type"] == "xtrans"
+    assert raw.cfa_pattern is None and raw.mosaic.shape == (h, w, 3)
+    dev = develop(raw)
+    assert dev.demosaic == "libraw_linear" and not dev.notes
+    assert _mean_de00(dev.image, _libraw(path)) < 0.1
+    assert "X-Trans" in develop(raw, demosaic="malvar").notes[0]
+    with tifffile.TiffFile(path) as tf:
+        assert tf.pages[0].tags[33421].value == (6, 6)
+    monkeypatch.setitem(sys.modules, "rawpy", None)
+    with pytest.raises(InvalidInputError, match=r"6x6 CFA \(first row GGRGGB\)") as e:
         read_raw(path)
     assert "\n" not in str(e.value)
 

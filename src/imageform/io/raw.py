@@ -411,13 +411,14 @@ def _dng_colour(tags: dict[str, Any]) -> tuple[np.ndarray | None, int]:
 
 
 def read_raw(path: str | Path, *, max_pixels: int | None = None) -> RawImage:
-    """Read a raw file with LibRaw (rawpy): DNG, CR2, NEF, ARW, RAF (Bayer), ORF, RW2, ...
+    """Read a raw file with LibRaw (rawpy): DNG, CR2, CR3, NEF, ARW, RAF, ORF, RW2, ...
 
-    Needs the optional extra ``imageform[raw]`` (rawpy), except for a DNG as
-    :func:`write_dng` and ``imageform simulate --raw`` write it (one uncompressed CFA image),
-    which is read with tifffile when rawpy is not installed, to the same values (LibRaw's
-    ``rgb_cam`` formula included). Only Bayer sensors with a 2x2 RGB tile are supported (not
-    X-Trans, not four-colour sensors).
+    Needs the optional extra ``imageform[raw]`` (rawpy), except for DNGs, which are read with
+    tifffile when rawpy is not installed or LibRaw cannot decode them (JPEG XL, ...), to the
+    values LibRaw gives (:func:`_read_dng`). Bayer sensors with a 2x2 RGB tile give their
+    mosaic; linear (demosaiced) raws their three channels; monochrome sensors their one;
+    Fujifilm's X-Trans is demosaiced by LibRaw's linear interpolation and given as a linear
+    raw (``metadata["xtrans"]``). Four-colour sensors are refused.
 
     Parameters
     ----------
@@ -433,8 +434,8 @@ def read_raw(path: str | Path, *, max_pixels: int | None = None) -> RawImage:
     -------
     RawImage
         The visible mosaic, levels, CFA pattern, as-shot white balance and colour matrices.
-        For a DNG, ``xyz_to_camera`` is its ColorMatrix (the one of a D65 illuminant if it
-        has two, else ColorMatrix1); for other files LibRaw's ``rgb_xyz_matrix``.
+        For a DNG, ``xyz_to_camera`` is its colour matrix as LibRaw picks and composes it
+        (:func:`_dng_colour`); for other files LibRaw's ``rgb_xyz_matrix``.
 
     Raises
     ------
@@ -485,6 +486,7 @@ def read_raw(path: str | Path, *, max_pixels: int | None = None) -> RawImage:
         desc = r.color_desc.decode("ascii", "replace")
         per_channel = np.asarray(r.black_level_per_channel, dtype=np.float64)
         pattern: str | None
+        xtrans: str | None = None
         if r.num_colors == 1:  # a monochrome sensor (no CFA): one grey value a pixel
             visible = np.asarray(r.raw_image_visible)
             if visible.ndim == 3:
@@ -502,6 +504,15 @@ def read_raw(path: str | Path, *, max_pixels: int | None = None) -> RawImage:
             mosaic = np.array(visible[..., :3], dtype=np.uint16, copy=True)
             pattern = None
             black = per_channel[:3].copy()
+        elif (
+            np.shape(r.raw_pattern) == (6, 6)
+            and r.num_colors == 3
+            and all(c in "RGB" for c in desc[:3])
+        ):  # X-Trans: demosaiced by LibRaw's linear interpolation, as its LINEAR mode does
+            mosaic = _libraw_linear_demosaic(r)
+            pattern = None
+            black = np.zeros(3)
+            xtrans = "".join(desc[int(i)] for i in np.asarray(r.raw_pattern)[0])
         else:
             pat = np.asarray(r.raw_pattern)
             if r.num_colors != 3 or pat.shape != (2, 2) or any(c not in "RGB" for c in desc[:3]):
@@ -514,7 +525,7 @@ def read_raw(path: str | Path, *, max_pixels: int | None = None) -> RawImage:
             mosaic = np.array(r.raw_image_visible, dtype=np.uint16, copy=True)
             black = per_channel[pat].astype(np.float64)
         flip = int(r.sizes.flip)
-        white = float(r.white_level)
+        white = float(r.white_level) if xtrans is None else 65535.0
         wb4 = np.asarray(r.camera_whitebalance, dtype=np.float64)
         gains = None
         if wb4[1] > 0 and wb4[0] > 0 and wb4[2] > 0:
@@ -550,6 +561,10 @@ def read_raw(path: str | Path, *, max_pixels: int | None = None) -> RawImage:
             meta["calibration_illuminant_code"] = code
     if xyz_to_camera is not None and illum is None:
         illum = "D65"  # LibRaw's matrices are for D65
+    if xtrans is not None:
+        meta["xtrans"] = xtrans.replace("G2", "G")  # the first row of the 6x6 pattern
+        raw_type = "xtrans"
+        meta["raw_type"] = raw_type
     if mosaic.ndim == 2 and pattern is None:  # monochrome: no colours to balance or convert
         gains, xyz_to_camera, illum = None, None, None
         rgb_cam = np.zeros((3, 3))
@@ -571,6 +586,36 @@ def read_raw(path: str | Path, *, max_pixels: int | None = None) -> RawImage:
 #: LibRaw's flip codes (``sizes.flip``) of the eight TIFF/EXIF orientations, by EXIF code.
 _EXIF_TO_FLIP = {1: 0, 2: 1, 3: 3, 4: 2, 5: 4, 6: 6, 7: 7, 8: 5}
 _FLIPS = frozenset(_EXIF_TO_FLIP.values())
+
+
+def _libraw_linear_demosaic(r: Any) -> np.ndarray:
+    """Return camera RGB of a raw LibRaw has open, demosaiced by LibRaw's linear interpolation.
+
+    For colour filter arrays imageform's demosaicing does not take (Fujifilm's 6x6 X-Trans):
+    ``postprocess`` with LibRaw's LINEAR method (dcraw's ``lin_interpolate``, which any
+    periodic CFA takes: each missing colour the weighted mean of its 3x3 neighbours, weight 2
+    beside, 1 across), no white balance (gains 1), camera colours (``output_color`` raw), linear
+    16-bit output, no brightening, sensor orientation: the black level subtracted and white at
+    65535, per pixel three camera channels that the rest of :func:`develop` takes as a linear
+    raw. Demosaicing is linear, so balancing before or after it gives the same values (below
+    clipping).
+    """
+    rawpy = _rawpy()
+    return np.ascontiguousarray(
+        r.postprocess(
+            demosaic_algorithm=rawpy.DemosaicAlgorithm.LINEAR,
+            use_camera_wb=False,
+            use_auto_wb=False,
+            user_wb=[1.0, 1.0, 1.0, 1.0],
+            output_color=rawpy.ColorSpace.raw,
+            gamma=(1, 1),
+            no_auto_bright=True,
+            output_bps=16,
+            user_flip=0,
+            adjust_maximum_thr=0.0,
+        ),
+        dtype=np.uint16,
+    )
 
 
 def _cfa_name(pattern: np.ndarray, desc: str, colours: int) -> str:
@@ -1226,7 +1271,13 @@ def develop(
         cam -= black.astype(np.float32)
         cam *= (gains / span).astype(np.float32)
         np.clip(cam, 0.0, 1.0, out=cam)
-        method = "none"
+        xtrans = raw.metadata.get("xtrans")
+        if xtrans and method != "bilinear":
+            notes.append(
+                f"note: an X-Trans CFA (first row {xtrans}) is demosaiced by LibRaw's linear "
+                f"interpolation; {method} demosaicing is for 2x2 Bayer tiles"
+            )
+        method = "libraw_linear" if xtrans else "none"
     elif method != "bilinear" and not on_gpu:
         idx = np.array(_cfa_indices(raw.cfa_pattern)).reshape(2, 2)
         scale = (gains[idx] / span).astype(np.float32)
