@@ -80,11 +80,12 @@ def develop(run: Run, opts: DevelopOptions, *, raw: Path, out: Path) -> Result:
     write(run, out, image, opts, like=np.zeros(1, np.uint16))
     h, w = img.mosaic.shape[:2]
     oh, ow = image.shape[:2]
-    kind = (
-        f"{img.cfa_pattern} mosaic"
-        if img.cfa_pattern
-        else ("monochrome raw" if img.monochrome else "linear (demosaiced) raw")
-    )
+    if img.cfa_pattern:
+        kind = f"{img.cfa_pattern} mosaic"
+    elif img.metadata.get("xtrans"):
+        kind = "X-Trans mosaic (demosaiced by LibRaw's linear interpolation)"
+    else:
+        kind = "monochrome raw" if img.monochrome else "linear (demosaiced) raw"
     summary: dict[str, Any] = {
         "raw": raw,
         "out": out,
@@ -92,6 +93,7 @@ def develop(run: Run, opts: DevelopOptions, *, raw: Path, out: Path) -> Result:
         "output_size": [ow, oh],
         "cfa_pattern": img.cfa_pattern,
         "monochrome": img.monochrome,
+        "xtrans": img.metadata.get("xtrans"),
         "black_level": np.asarray(img.black_level).tolist(),
         "white_level": img.white_level,
         "gains": dev.gains.tolist(),
