@@ -78,6 +78,7 @@ BENCH_SCRIPTS: dict[str, str] = {
     "lsd": "benchmarks/bench_lsd.py",
     "psf": "benchmarks/bench_psf.py",
     "raw": "benchmarks/bench_raw.py",
+    "raw-variants": "benchmarks/check_raw_variants.py",
     "reconstruct": "benchmarks/bench_reconstruct.py",
     "reconstruct-real": "benchmarks/bench_reconstruct_real.py",
     "remap": "benchmarks/bench_remap.py",
