@@ -226,6 +226,14 @@ def test_xtrans_develops_through_libraw_linear_interpolation(
     assert "X-Trans" in develop(raw, demosaic="malvar").notes[0]
     with tifffile.TiffFile(path) as tf:
         assert tf.pages[0].tags[33421].value == (6, 6)
+
+    def broken(r: object) -> np.ndarray:
+        raise MemoryError
+
+    with monkeypatch.context() as m:  # LibRaw's own failure: one line, named
+        m.setattr("imageform.io.raw._libraw_linear_demosaic", broken)
+        with pytest.raises(InvalidInputError, match="could not demosaic its X-Trans"):
+            read_raw(path)
     monkeypatch.setitem(sys.modules, "rawpy", None)
     with pytest.raises(InvalidInputError, match=r"6x6 CFA \(first row GGRGGB\)") as e:
         read_raw(path)

@@ -509,7 +509,12 @@ def read_raw(path: str | Path, *, max_pixels: int | None = None) -> RawImage:
             and r.num_colors == 3
             and all(c in "RGB" for c in desc[:3])
         ):  # X-Trans: demosaiced by LibRaw's linear interpolation, as its LINEAR mode does
-            mosaic = _libraw_linear_demosaic(r)
+            try:
+                mosaic = _libraw_linear_demosaic(r)
+            except Exception as exc:  # LibRaw's own failure, named in one line
+                raise InvalidInputError(
+                    f"{p}: LibRaw could not demosaic its X-Trans CFA ({type(exc).__name__})"
+                ) from None
             pattern = None
             black = np.zeros(3)
             xtrans = "".join(desc[int(i)] for i in np.asarray(r.raw_pattern)[0])
