@@ -153,10 +153,9 @@ def _measure(listing: Path) -> None:
     """Develop every file with the imageform on sys.path; print one JSON object."""
     import warnings
 
-    import rawpy
-
     from imageform.color import decode, delta_e, linear_srgb_to_xyz, xyz_to_lab
     from imageform.io import develop
+    from tests.io.test_raw_variants import _libraw as libraw
 
     warnings.simplefilter("ignore")
 
@@ -166,21 +165,12 @@ def _measure(listing: Path) -> None:
             a = np.repeat(a[..., None], 3, axis=-1)
         return np.asarray(xyz_to_lab(linear_srgb_to_xyz(decode(a, "srgb"))))
 
-    settings = {
-        "use_camera_wb": True,
-        "no_auto_bright": True,
-        "output_bps": 16,
-        "gamma": (2.4, 12.92),
-        "demosaic_algorithm": rawpy.DemosaicAlgorithm.LINEAR,
-        "adjust_maximum_thr": 0.0,
-    }
     result: dict[str, str] = {}
     for name, (path, twin) in json.loads(listing.read_text()).items():
         try:
             ours = develop(path).image
             if twin is None:
-                with rawpy.imread(path) as r:
-                    ref = r.postprocess(**settings) / 65535.0
+                ref = libraw(Path(path))  # the tests' matched settings
                 ref = ref[..., 0] if ref.shape[-1] == 1 else ref
                 against = "LibRaw"
             else:
