@@ -430,3 +430,28 @@ def test_charuco_views(tmp_path: Path) -> None:
     for key, want in (("fx", 700.0), ("fy", 705.0), ("cx", 322.0), ("cy", 238.0)):
         assert g[key] == pytest.approx(want, rel=3e-3), key
     assert g["k1"] == pytest.approx(-0.12, rel=0.05)
+
+
+def test_linear_raw_chart_is_camera_rgb(lab: dict[str, Any], tmp_path: Path) -> None:
+    """A ColorChecker as a linear (demosaiced) raw, as phones and LibRaw's X-Trans path give
+    it, is camera RGB for characterize (it crashed on the black level's shape): its patch
+    means are the mosaic's, within the demosaicing's few per cent."""
+    import tifffile
+
+    from imageform.sensor import demosaic
+    from imageform.workflows._characterize_inputs import _read_photo
+    from imageform.workflows._characterize_measure import _chart_patches
+
+    dng = next((lab["root"] / "set" / "colorchecker").glob("*.dng"))
+    with tifffile.TiffFile(dng) as tf:
+        tags = [(t.code, t.dtype, t.count, t.value, True) for t in tf.pages[0].tags]
+        mosaic = tf.pages[0].asarray()
+    keep = [t for t in tags if t[0] >= 50706 and t[0] not in (50710, 50711)]
+    rgb = np.asarray(demosaic(mosaic / 65535.0, "RGGB", method="bilinear")) * 65535.0
+    linear = tmp_path / "chart.dng"
+    tifffile.imwrite(linear, np.round(rgb).astype(np.uint16), photometric=34892, extratags=keep)
+    im = _read_photo(linear, {}, "srgb", None, None)
+    assert im.camera is not None and im.mosaic is None and im.encoded is None
+    _, ours, _ = _chart_patches(im, 1024)
+    _, ref, _ = _chart_patches(_read_photo(dng, {}, "srgb", None, None), 1024)
+    np.testing.assert_allclose(ours, ref, rtol=0.05, atol=0.002)

@@ -252,10 +252,11 @@ def _read_photo(
 
             blk = np.asarray(r.black_level, dtype=np.float64)
             lin = (mosaic - (blk if mosaic.ndim == 3 else blk[0])) / (r.white_level - blk)
-            if mosaic.ndim == 2:  # a monochrome sensor: its one channel three times
-                lin = np.repeat(lin[..., None], 3, axis=-1)
+            if mosaic.ndim == 3:  # camera RGB, demosaiced (by the camera or by LibRaw)
+                return _Image(path.name, linear=lin, camera=lin)
+            lin = np.repeat(lin[..., None], 3, axis=-1)  # monochrome: one channel three times
             enc = np.asarray(linear_to_srgb(np.clip(lin, 0.0, 1.0)))
-            return _Image(path.name, encoded=enc, linear=lin, grey=mosaic.ndim == 2)
+            return _Image(path.name, encoded=enc, linear=lin, grey=True)
         blk = np.asarray(r.black_level, dtype=np.float64).reshape(2, 2)  # the 2x2 tile's
         h, w = mosaic.shape
         blk_full = np.tile(blk, (h // 2 + 1, w // 2 + 1))[:h, :w]
@@ -309,6 +310,8 @@ def _grey(im: _Image) -> Any:
         assert im.cfa is not None
         rgb = _demosaiced(im.mosaic, im.cfa)
         return rgb.mean(axis=-1)
+    if im.encoded is None and im.camera is not None:  # a linear raw: its camera RGB
+        return np.asarray(im.camera).mean(axis=-1)
     assert im.encoded is not None
     return np.asarray(im.encoded).mean(axis=-1)
 
