@@ -718,3 +718,40 @@ def test_jpeg_xl_dng_that_libraw_cannot_read(
     assert raw.metadata["reader"] == "tifffile" and raw.metadata["libraw"]
     np.testing.assert_array_equal(raw.mosaic, read_raw(plain).mosaic)
     assert _mean_de00(develop(raw).image, develop(plain).image) < 0.01
+
+
+def test_own_dng_reader_edges(base: tuple[Path, list[tuple], np.ndarray], tmp_path: Path) -> None:
+    """Black level deltas subtracted from each sample, as the DNG specification defines them
+    (LibRaw adds their means to its black level instead: 0.28 ΔE00 apart here); automatic
+    white balance of a linear raw as LibRaw's; a TIFF that is no DNG, or a DNG with only a
+    preview, is not read (None: LibRaw's business)."""
+    import tifffile
+
+    from imageform.io.raw import _read_dng
+
+    with tifffile.TiffFile(base[0]) as tf:
+        data = tf.pages[0].asarray()
+    dh, dv = np.linspace(0, 10, data.shape[1]), np.linspace(0, 6, data.shape[0])
+    drift = np.clip(data + dh[None, :] + dv[:, None], 0, 4095).round().astype(np.uint16)
+    delta = _variant(base, "own_delta", data=drift, extra=[
+        (50715, 10, data.shape[1], _rational(dh), True),
+        (50716, 10, data.shape[0], _rational(dv), True)])  # fmt: skip
+    ours = _read_dng(delta, 10**9)
+    assert ours is not None
+    assert _mean_de00(develop(ours).image, develop(base[0]).image) < 0.01  # the drift undone
+    assert _mean_de00(develop(ours).image, _libraw(delta)) < 0.5
+    linear = _variant(base, "own_auto_lin", data=base[2], photometric=34892,
+                      drop={33421, 33422, 50710, 50711})  # fmt: skip
+    own_lin = _read_dng(linear, 10**9)
+    assert own_lin is not None
+    auto = develop(own_lin, white_balance="auto").image
+    assert _mean_de00(auto, _libraw(linear, use_camera_wb=False, use_auto_wb=True)) < 0.05
+    plain = tmp_path / "plain.tif"
+    tifffile.imwrite(plain, data)
+    assert _read_dng(plain, 10**9) is None
+    preview = tmp_path / "preview.dng"
+    tifffile.imwrite(preview, np.zeros((8, 8, 3), np.uint8), photometric="rgb", subfiletype=1,
+                     extratags=[t for t in base[1] if t[0] == 50706])  # fmt: skip
+    assert _read_dng(preview, 10**9) is None
+    with pytest.raises(InvalidInputError, match="pixels"):
+        _read_dng(base[0], 100)
