@@ -34,8 +34,9 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def _write_variants(folder: Path) -> dict[str, tuple[str, str | None]]:
-    """Write the variants; return name -> (file, integer twin or None: LibRaw is the reference)."""
+def _write_variants(folder: Path) -> dict[str, tuple[str, str | None, dict[str, object]]]:
+    """Write the variants; return name -> (file, integer twin or None: LibRaw is the reference,
+    options: ``develop``'s and, under ``"libraw"``, LibRaw's beyond the matched settings)."""
     import tifffile
 
     from imageform.io import write_dng
@@ -59,10 +60,12 @@ def _write_variants(folder: Path) -> dict[str, tuple[str, str | None]]:
     base = (path, tags, lin)
     rat = tv._rational
     cfa_tags = {33421, 33422, 50710, 50711}
-    out: dict[str, tuple[str, str | None]] = {"Bayer RGGB, one matrix (D65)": (str(path), None)}
+    out: dict[str, tuple[str, str | None, dict[str, object]]] = {
+        "Bayer RGGB, one matrix (D65)": (str(path), None, {})
+    }
 
-    def add(name: str, p: Path, twin: Path | None = None) -> None:
-        out[name] = (str(p), None if twin is None else str(twin))
+    def add(name: str, p: Path, twin: Path | None = None, **options: object) -> None:
+        out[name] = (str(p), None if twin is None else str(twin), options)
 
     add("two matrices, StdA + D65", tv._two_matrices(base, "v_a_d65", (17, 21)))
     add("two matrices, StdA + D50", tv._two_matrices(base, "v_a_d50", (17, 23)))
@@ -146,6 +149,14 @@ def _write_variants(folder: Path) -> dict[str, tuple[str, str | None]]:
         ),
     )
     add("orientation 6 (portrait)", tv._variant(base, "v_orient", extra=[(274, 3, 1, 6, True)]))
+    dark = tv._variant(base, "v_dark", data=np.round(64 + (dn - 64.0) * 0.35).astype(np.uint16))
+    add(
+        "a third of the light, LibRaw's default look (auto-bright, BT.709 curve)",
+        dark,
+        auto_bright=True,
+        transfer="rec709",
+        libraw={"no_auto_bright": False, "gamma": (2.222, 4.5)},
+    )
     return out
 
 
@@ -166,11 +177,14 @@ def _measure(listing: Path) -> None:
         return np.asarray(xyz_to_lab(linear_srgb_to_xyz(decode(a, "srgb"))))
 
     result: dict[str, str] = {}
-    for name, (path, twin) in json.loads(listing.read_text()).items():
+    for name, (path, twin, options) in json.loads(listing.read_text()).items():
+        theirs = options.pop("libraw", {})
+        if "gamma" in theirs:
+            theirs["gamma"] = tuple(theirs["gamma"])
         try:
-            ours = develop(path).image
+            ours = develop(path, **options).image
             if twin is None:
-                ref = libraw(Path(path))  # the tests' matched settings
+                ref = libraw(Path(path), **theirs)  # the tests' matched settings
                 ref = ref[..., 0] if ref.shape[-1] == 1 else ref
                 against = "LibRaw"
             else:

@@ -755,3 +755,39 @@ def test_own_dng_reader_edges(base: tuple[Path, list[tuple], np.ndarray], tmp_pa
     assert _read_dng(preview, 10**9) is None
     with pytest.raises(InvalidInputError, match="pixels"):
         _read_dng(base[0], 100)
+
+
+def test_libraw_default_look(
+    base: tuple[Path, list[tuple], np.ndarray], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """LibRaw's own defaults brighten (1 % of the brightest channel at white) and encode with
+    BT.709's curve: auto_bright=True and transfer="rec709" give that rendering; an
+    underexposed file (a third of the light) shows the difference (7 ΔE00 without)."""
+    import json
+
+    import tifffile
+
+    from imageform.cli import main
+
+    with tifffile.TiffFile(base[0]) as tf:
+        data = tf.pages[0].asarray()
+    dark = _variant(base, "dark", data=np.round(64 + (data - 64.0) * 0.35).astype(np.uint16))
+    for transfer, gamma in (("srgb", (2.4, 12.92)), ("rec709", (2.222, 4.5))):
+        ref = _libraw(dark, gamma=gamma, no_auto_bright=False)
+        dev = develop(dark, transfer=transfer, auto_bright=True)
+        assert 1.5 < dev.brightness < 1.8
+        assert float(dev.linear_rgb.max()) == 1.0
+        assert _mean_de00(dev.image, ref) < 0.1
+        assert _mean_de00(develop(dark, transfer=transfer).image, ref) > 5.0
+    mono = _monochrome(base, "mono_bright", base[2][..., 1].copy())
+    ref = _libraw(mono, no_auto_bright=False)[..., 0]
+    assert np.abs(develop(mono, auto_bright=True).image - ref).max() < 5e-4
+    with pytest.raises(InvalidInputError, match="unknown transfer 'gamma'"):
+        develop(dark, transfer="gamma")
+    with pytest.raises(InvalidInputError, match="disagree"):
+        develop(dark, linear=True, transfer="srgb")
+    out = tmp_path / "look.png"
+    assert main(["develop", str(dark), "-o", str(out), "--auto-bright", "--transfer", "rec709",
+                 "--json"]) == 0  # fmt: skip
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["transfer"] == "rec709" and doc["brightness"] > 1.5

@@ -907,6 +907,8 @@ class Development:
         The flip applied (:attr:`RawImage.orientation`; 0 when ``orient=False``).
     notes : tuple of str
         What the development had to assume (no colour matrix in the file, say).
+    brightness : float
+        The factor on the linear output (``develop(auto_bright=True)``; 1 otherwise).
     """
 
     def __init__(
@@ -942,6 +944,7 @@ class Development:
         self.orientation = orientation
         self.notes = notes
         self._device = device  # "cuda": the fused pass runs as one CUDA kernel
+        self.brightness = 1.0  # auto_bright's factor on the linear output
 
     def _fused(self, mode: int) -> np.ndarray:
         """Run the fused pass over the mosaic (``mode``: camera RGB, float or uint16 output)."""
@@ -1060,11 +1063,11 @@ class Development:
 
     @property
     def linear_rgb(self) -> np.ndarray:
-        """The output space's linear RGB, clipped to [0, 1] (float32, turned for display)."""
+        """The output space's linear RGB (times :attr:`brightness`), clipped to [0, 1]."""
         from imageform.color import rgb_to_xyz_matrix
 
         to_rgb = np.linalg.inv(np.asarray(rgb_to_xyz_matrix(self.space), np.float64))
-        m = (to_rgb @ self.adaptation @ self.camera_to_xyz).astype(np.float32)
+        m = (to_rgb @ self.adaptation @ self.camera_to_xyz * self.brightness).astype(np.float32)
         out = self.camera_rgb @ m.T
         return np.clip(out, 0.0, 1.0, out=out)
 
@@ -1138,6 +1141,8 @@ def develop(
     linear: bool = False,
     orient: bool = True,
     device: str = "cpu",
+    transfer: str | None = None,
+    auto_bright: bool = False,
 ) -> Development:
     r"""Develop a raw image with imageform's own pipeline, keeping every stage.
 
@@ -1187,6 +1192,15 @@ def develop(
     orient : bool
         Turn the result as the file's orientation tag says (as LibRaw does by default);
         False keeps the sensor's orientation.
+    transfer : str, optional
+        The output's encoding, a name of :data:`imageform.color.TRANSFER_FUNCTIONS` other
+        than ``"gamma"``; default the space's own (``"linear"`` is ``linear=True``).
+        ``"rec709"`` is LibRaw's default curve (``gamma=(2.222, 4.5)``, BT.709).
+    auto_bright : bool
+        Brighten as LibRaw does by default (its ``no_auto_bright`` off): the linear output
+        scaled so that 1 % of the pixels of its brightest channel reach white
+        (:func:`_auto_bright`, :attr:`Development.brightness`). Off by default: the
+        development's white is the sensor's.
     device : {"cpu", "cuda"}
         Where steps 1-6 of a Bayer mosaic run. ``"cuda"``: bilinear and Malvar development
         as one CUDA kernel (:func:`imageform._cuda.demosaic.develop_bayer`: the mosaic copied
@@ -1237,6 +1251,17 @@ def develop(
     if key not in RGB_SPACES:
         raise InvalidInputError(f"unknown space {space!r}; valid: {', '.join(RGB_SPACES)}")
     out_space = RGB_SPACES[key]
+    encoding = "linear" if linear else out_space.transfer
+    if transfer is not None:
+        from imageform.color import TRANSFER_FUNCTIONS
+
+        named = str(transfer).lower().replace("-", "_")
+        valid = [t for t in TRANSFER_FUNCTIONS if t != "gamma"]
+        if named not in valid:
+            raise InvalidInputError(f"unknown transfer {transfer!r}; valid: {', '.join(valid)}")
+        if linear and named != "linear":
+            raise InvalidInputError(f"linear=True and transfer={transfer!r} disagree")
+        encoding = named
     notes: list[str] = []
     gains = _gains(raw, white_balance, notes)
     where = raw.metadata.get("path") or "the raw image"
@@ -1323,22 +1348,46 @@ def develop(
     # 6. output space, clip, encode: one pass
     to_rgb = np.linalg.inv(np.asarray(rgb_to_xyz_matrix(key), np.float64))
     m = (to_rgb @ cat @ cam_to_xyz).astype(np.float32)
-    transfer = "linear" if linear else out_space.transfer
-    return Development(
+    dev = Development(
         raw=raw,
         gains=gains,
         camera_rgb=cam,
         render=m,
-        table=None if linear else _transfer_table(out_space.transfer),
+        table=None if encoding == "linear" else _transfer_table(encoding),
         camera_to_xyz=cam_to_xyz,
         adaptation=cat,
         space=key,
-        transfer=transfer,
+        transfer=encoding,
         demosaic=method,
         orientation=raw.orientation if orient else 0,
         notes=tuple(notes),
         device="cuda" if on_gpu else "cpu",
     )
+    if auto_bright:
+        dev.brightness = _auto_bright(dev._sensor_camera_rgb(), m)
+        dev._render = (m * np.float32(dev.brightness)).astype(np.float32)
+    return dev
+
+
+def _auto_bright(camera_rgb: np.ndarray, render: np.ndarray) -> float:
+    """Return LibRaw's automatic brightening factor of a development (dcraw's auto-bright).
+
+    LibRaw's ``dcraw_make_mem_image`` (``no_auto_bright`` off, ``auto_bright_thr`` 0.01,
+    ``bright`` 1): a histogram of each channel of the linear output as 16-bit codes in bins
+    of 8; from the top, the first bin above 32 at which more than 1 % of the pixels lie at or
+    above it; the largest such bin over the channels, times 8, is taken as white (the factor
+    65535 over it, at least 1). Computed on the output's linear RGB, clipped to [0, 1].
+    """
+    lin = camera_rgb.reshape(-1, 3) @ np.asarray(render, np.float32).T
+    np.clip(lin, 0.0, 1.0, out=lin)
+    perc = int(lin.shape[0] * 0.01)
+    t_white = 0
+    for c in range(3):
+        bins = np.bincount((lin[:, c] * 65535.0).astype(np.int64) >> 3, minlength=8192)[:8192]
+        above = np.cumsum(bins[::-1])[::-1]  # pixels at or above each bin
+        hit = np.nonzero(above[33:] > perc)[0]
+        t_white = max(t_white, 33 + int(hit[-1]) if hit.size else 32)
+    return 65535.0 / (8.0 * t_white)
 
 
 def _auto_gains(raw: RawImage) -> np.ndarray:

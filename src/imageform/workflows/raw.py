@@ -14,6 +14,8 @@ __all__ = ["WORKFLOWS", "DevelopOptions"]
 
 #: ``develop --white-balance``: the as-shot gains, LibRaw's automatic or daylight gains, or none.
 _RawWhiteBalance = Literal["camera", "auto", "daylight", "none"]
+#: ``develop --transfer``: the encodings of imageform.color.TRANSFER_FUNCTIONS but "gamma".
+_RawTransfer = Literal["srgb", "rec709", "rec2020", "adobe_rgb", "prophoto", "linear"]
 
 
 @image_out_renames
@@ -38,6 +40,15 @@ class DevelopOptions(ImageOut, Options):
         choices="imageform.color:RGB_SPACES",
     )
     linear: bool = option(False, help="Leave the output linear (no transfer function).")
+    transfer: _RawTransfer | None = option(
+        None,
+        help="Encode with this curve instead of the space's own (rec709: LibRaw's default).",
+        choices=get_args(_RawTransfer),
+    )
+    auto_bright: bool = option(
+        False,
+        help="Brighten as LibRaw does by default: 1 % of the brightest channel's pixels at white.",
+    )
     device: Device = option(
         "cpu",
         help="Where the development runs: cuda develops bilinear and Malvar Bayer mosaics in "
@@ -66,6 +77,8 @@ def develop(run: Run, opts: DevelopOptions, *, raw: Path, out: Path) -> Result:
         space=opts.space,
         linear=opts.linear,
         device=opts.device,
+        transfer=opts.transfer,
+        auto_bright=opts.auto_bright,
     )
     for note in dev.notes:
         run.note(note)
@@ -103,6 +116,7 @@ def develop(run: Run, opts: DevelopOptions, *, raw: Path, out: Path) -> Result:
         "device": opts.device,
         "space": dev.space,
         "transfer": dev.transfer,
+        "brightness": dev.brightness,
         "orientation": {"flip": img.orientation, "applied": dev.orientation == img.orientation},
         "notes": list(dev.notes),
     }
