@@ -10,6 +10,7 @@ main output is ``-o/--out``, ``--force`` overwrites, ``--json`` prints the resul
 from __future__ import annotations
 
 import contextlib
+import gc
 import os
 import signal
 import sys
@@ -56,7 +57,25 @@ def _interrupt_in_finalizer(unraisable: sys.UnraisableHookArgs) -> None:
         timer.daemon = True
         timer.start()
         return
+    if _half_built_by_an_interrupt(unraisable):
+        return
     sys.__unraisablehook__(unraisable)
+
+
+def _half_built_by_an_interrupt(unraisable: sys.UnraisableHookArgs) -> bool:
+    """Return True for an AttributeError in the finalizer of one of llvmlite's objects.
+
+    A Ctrl-C that lands in such an object's constructor while numba compiles leaves it
+    without its handle; its ``__del__`` then fails ("'PipelineTuningOptions' object has no
+    attribute '_as_parameter_'") when it is collected, after the command has said it was
+    interrupted: nine lines of traceback for nothing wrong.
+    """
+    where = getattr(unraisable.object, "__module__", None) or type(unraisable.object).__module__
+    return isinstance(unraisable.exc_value, AttributeError) and str(where).startswith("llvmlite")
+
+
+def _quiet(unraisable: sys.UnraisableHookArgs) -> None:
+    """Say nothing of an exception in a finalizer (the command is leaving after an interrupt)."""
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -83,6 +102,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         except KeyboardInterrupt:
             code = 130
         if code == 130:
+            # objects half-built when the interrupt landed may fail in their finalizers from
+            # here on: nothing to say about them, the command has said it was interrupted
+            sys.unraisablehook = _quiet
+            gc.disable()
             # interrupted: leave now, with exit code 130. The interpreter's shutdown would
             # re-raise a KeyboardInterrupt noticed late (in a thread join, say) as death by
             # SIGINT; everything this command wrote is already renamed or removed. A second
