@@ -75,6 +75,9 @@ __all__ = [
 MAX_MINKOWSKI_P = 1e4
 #: Largest ``sigma`` (pixels) of the grey-edge derivative filter (bounds the kernel size).
 MAX_SIGMA = 1000.0
+#: Largest white balance gain :func:`apply_white_balance_gains` takes: real gains are a few
+#: units (a tungsten-lit blue channel about 3); a million is an error, not a gain.
+MAX_GAIN = 1e6
 #: Other spellings of :data:`WHITE_BALANCE_METHODS` (British, and ``max_rgb``: a white
 #: patch at the 100th percentile), each mapped to its method (read-only).
 WHITE_BALANCE_ALIASES: MappingProxyType[str, str] = MappingProxyType(
@@ -565,5 +568,9 @@ def apply_white_balance_gains(
     if g.ndim < 1 or g.shape[-1] != 3:
         raise InvalidInputError(
             f"expected gains as 3 positive numbers (R, G, B), got {describe(gains)}"
+        )
+    if float(g.max()) > MAX_GAIN:
+        raise InvalidInputError(
+            f"expected gains <= {MAX_GAIN:g} (a white balance gain), got {float(g.max()):g}"
         )
     return _apply(xp, lin, xp.asarray(g, dtype=lin.dtype, device=device_of(lin)), tname, False)

@@ -40,7 +40,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from imageform._typing import ArrayLike
-from imageform._validate import as_int, as_real, describe
+from imageform._validate import as_int, as_matrix, as_real, describe
 from imageform.errors import InvalidInputError
 from imageform.geometry.charuco import CharucoBoard
 
@@ -168,14 +168,9 @@ class BoardTracker:
                 f"expected board as a CharucoBoard or (cols, rows) inner corners, got "
                 f"{describe(board)}"
             )
-        try:
-            k = np.asarray(K, dtype=np.float64)
-        except (TypeError, ValueError):
-            raise InvalidInputError(
-                f"expected K as a finite (3, 3) matrix, got {describe(K)}"
-            ) from None
-        if k.shape != (3, 3) or not np.all(np.isfinite(k)) or k[2, 2] == 0:
-            raise InvalidInputError(f"expected K as a finite (3, 3) matrix, got {describe(K)}")
+        k = np.asarray(as_matrix(K, "K", (3, 3), batch=False), dtype=np.float64)
+        if k[2, 2] == 0:
+            raise InvalidInputError(f"expected K with K[2, 2] != 0, got {describe(K)}")
         self.K = k
         if distortion is not None:
             _check_model(distortion)

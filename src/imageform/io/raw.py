@@ -1277,9 +1277,12 @@ def develop(
         )
     on_gpu = where_to == "cuda" and raw.cfa_pattern is not None and method in _CUDA_METHODS
     if where_to == "cuda" and not on_gpu:
+        what = method + " demosaicing"
+        if raw.cfa_pattern is None:
+            what = "a monochrome raw" if raw.monochrome else "a linear raw"
         notes.append(
-            f"note: {'a linear raw' if raw.cfa_pattern is None else method + ' demosaicing'} "
-            "is developed on the CPU (the CUDA kernel does bilinear and malvar Bayer mosaics)"
+            f"note: {what} is developed on the CPU (the CUDA kernel does bilinear and malvar "
+            "Bayer mosaics)"
         )
     h, w = raw.mosaic.shape[:2]
     if h < 2 or w < 2:

@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from imageform._validate import describe
+from imageform._validate import as_bool
 from imageform.errors import ImageformWarning, InvalidInputError
 from imageform.simulate._rng import RNGLike, random_source
 from imageform.simulate.config import GroundConfig
@@ -274,8 +274,7 @@ def simulate(
     """
     if not isinstance(scene, Scene):
         raise InvalidInputError(f"expected a Scene (load_scene), got {type(scene).__name__}")
-    if not isinstance(measure, bool):
-        raise InvalidInputError(f"expected measure as True or False, got {describe(measure)}")
+    measure = as_bool(measure, "measure")  # NumPy's bools too
     if progress is not None and not callable(progress):
         raise TypeError(
             f"expected progress as a callable progress(step, fraction) or None, got "
