@@ -56,6 +56,7 @@ BENCH_SCRIPTS: dict[str, str] = {
     "chart-photos": "benchmarks/check_chart_photos.py",
     "charuco": "benchmarks/bench_charuco.py",
     "checkerboard": "benchmarks/bench_checkerboard.py",
+    "checkerboard-large": "benchmarks/check_checkerboard_large.py",
     "chunked": "benchmarks/bench_chunked.py",
     "chunked-strips": "benchmarks/bench_chunked.py",
     "color": "benchmarks/bench_color.py",

@@ -88,6 +88,10 @@ __all__ = [
 DEFAULT_SIGMAS = (2.0, 1.2, 3.5)
 #: Seeds (strongest candidates) tried per scale.
 MAX_SEEDS = 40
+#: Longest side (pixels) of the averaged copy a large image is searched on too
+#: (:func:`find_checkerboard`): above 2000 px always, up to 2000 px (a video frame) when the
+#: board is not found at full resolution or some corner did not converge.
+COARSE_SIZE = 1000
 
 
 class CheckerboardNotFoundWarning(ImageformWarning):
@@ -394,13 +398,89 @@ def find_checkerboard(
     sigmas: tuple[float, ...] = DEFAULT_SIGMAS if sigma is None else (float(sigma),)
     reason, best = "no checkerboard found", -1
     gray = _Gray(codes, scale)
+    factor = math.ceil(max(codes.shape[:2]) / COARSE_SIZE) if sigma is None else 1
+    full: CheckerboardResult | None = None
     for s in sigmas:
         grid, why, n = _detect(gray, cols, rows, s)
         if grid is not None:
-            return _finish(gray.float, grid, size, s, refine, half_window, max_iter, tol)
+            full = _finish(gray.float, grid, size, s, refine, half_window, max_iter, tol)
+            if factor == 1 or not full.found:
+                return full
+            break
         if n > best:
             reason, best = why, n
+    steady = full is not None and (full.status is None or not np.any(full.status))
+    if factor > 2 or (factor == 2 and not steady):  # not for a video frame found cleanly
+        # a large photograph (a phone's 12 Mpx): squares of 100-300 px whose edges are
+        # several pixels wide defeat the fixed smoothing scales, and corners refined at full
+        # resolution on such edges wander; the board is also sought on a copy averaged over
+        # factor x factor blocks. Of the boards found, the one whose corners lie closest to
+        # a plane's projection (a homography) is kept: sharp photographs keep their full
+        # resolution, blurred or blocky ones the averaged copy's steadier corners
+        found = [r for r in (full, _coarse(gray, factor, size, refine, half_window, max_iter, tol))
+                 if r is not None and r.found]  # fmt: skip
+        if found:
+            return min(found, key=lambda r: _plane_rms(r.corners, size))
+    if full is not None:
+        return full
     return CheckerboardResult(False, None, reason, size)
+
+
+def _coarse(
+    gray: _Gray,
+    factor: int,
+    size: tuple[int, int],
+    refine: bool,
+    half_window: int | None,
+    max_iter: int,
+    tol: float,
+) -> CheckerboardResult | None:
+    """Find the board on ``gray`` averaged over ``factor`` x ``factor`` blocks, in full pixels.
+
+    Found there and refined there; its corners, mapped to full pixels, and the same corners
+    refined again at full resolution are the two candidates, the one closer to a plane's
+    projection returned (:func:`_plane_rms`). None when the averaged copy shows no board.
+    """
+    coarse = _block_mean(gray.float, factor)
+    codes, scale, _ = gray_codes(coarse)
+    small = _Gray(codes, scale)
+    for s in DEFAULT_SIGMAS:
+        grid, _, _ = _detect(small, *size, s)
+        if grid is None:
+            continue
+        found = _finish(small.float, grid, size, s, refine, None, max_iter, tol)
+        if not found.found:
+            continue
+        assert found.corners is not None
+        up = found.corners * factor + (factor - 1) / 2.0  # block centres, in full pixels
+        if not refine or found.status is None:
+            return CheckerboardResult(True, up, "", size, None, s * factor)
+        fine = _finish(gray.float, up.reshape(grid.shape), size, s * factor, refine,
+                       half_window, max_iter, tol)  # fmt: skip
+        if fine.found and _plane_rms(fine.corners, size) < _plane_rms(up, size):
+            return fine
+        return _found(up, size, found.status, s * factor)
+    return None
+
+
+def _plane_rms(corners: NDArray[np.float64] | None, size: tuple[int, int]) -> float:
+    """RMS distance (px) of a board's corners to the best homography of its flat lattice."""
+    from imageform.geometry.homography import apply_homography, estimate_homography
+
+    assert corners is not None
+    cols, rows = size
+    j, i = np.mgrid[0:rows, 0:cols]
+    board = np.column_stack([i.ravel(), j.ravel()]).astype(np.float64)
+    H = estimate_homography(board, corners)
+    fit = np.asarray(apply_homography(H, board))
+    return float(np.sqrt(np.mean(np.sum((fit - corners) ** 2, axis=1))))
+
+
+def _block_mean(image: NDArray[np.floating], factor: int) -> NDArray[np.float64]:
+    """Average ``image`` over ``factor x factor`` blocks (a trailing partial block dropped)."""
+    h, w = (image.shape[0] // factor) * factor, (image.shape[1] // factor) * factor
+    blocks = np.asarray(image[:h, :w], np.float64).reshape(h // factor, factor, w // factor, factor)
+    return blocks.mean(axis=(1, 3))
 
 
 def _finish(
