@@ -791,3 +791,14 @@ def test_libraw_default_look(
                  "--json"]) == 0  # fmt: skip
     doc = json.loads(capsys.readouterr().out)
     assert doc["transfer"] == "rec709" and doc["brightness"] > 1.5
+
+
+def test_develop_transfer_choices_are_the_transfer_functions() -> None:
+    """``imageform develop --transfer`` offers what ``develop(transfer=)`` takes: every
+    transfer function but ``gamma`` (it needs an exponent)."""
+    from typing import get_args
+
+    from imageform.color import TRANSFER_FUNCTIONS
+    from imageform.workflows.raw import _RawTransfer
+
+    assert set(get_args(_RawTransfer)) == set(TRANSFER_FUNCTIONS) - {"gamma"}

@@ -314,37 +314,37 @@ class RawImage:
 
 
 def _dng_tags(path: Path) -> dict[str, Any]:
-    """Return the colour tags and UniqueCameraModel of a DNG's first IFD (tifffile).
-
-    ColorMatrix1/2, CameraCalibration1/2, CalibrationIlluminant1/2, AnalogBalance and
-    AsShotWhiteXY, by short names (``cm1``, ``cc1``, ``ill1``, ``ab``, ``white_xy``, ...).
-    """
+    """Return :func:`_colour_tags` of a DNG's first IFD (tifffile); {} for no TIFF."""
     import tifffile
 
     try:
         with tifffile.TiffFile(path) as tf:
-            found: dict[str, Any] = {}
-            for page in tf.pages:
-                tags = page.tags  # type: ignore[union-attr]
-                for code, name in (
-                    (_COLOR_MATRIX_1, "cm1"),
-                    (_COLOR_MATRIX_2, "cm2"),
-                    (_CAMERA_CALIBRATION_1, "cc1"),
-                    (_CAMERA_CALIBRATION_2, "cc2"),
-                    (_CALIBRATION_ILLUMINANT_1, "ill1"),
-                    (_CALIBRATION_ILLUMINANT_2, "ill2"),
-                    (_ANALOG_BALANCE, "ab"),
-                    (_AS_SHOT_WHITE_XY, "white_xy"),
-                    (_UNIQUE_CAMERA_MODEL, "model"),
-                ):
-                    if code in tags and name not in found:
-                        tag = tags[code]
-                        found[name] = (
-                            tag.value if name in ("model", "ill1", "ill2") else _tag_reals(tag)
-                        )
-                break
+            return _colour_tags(tf.pages[0].tags)  # type: ignore[union-attr]
     except Exception:  # not a TIFF-based raw: nothing more to read
         return {}
+
+
+def _colour_tags(tags: Any) -> dict[str, Any]:
+    """Return the colour tags and UniqueCameraModel of one IFD's tifffile tags.
+
+    ColorMatrix1/2, CameraCalibration1/2, CalibrationIlluminant1/2, AnalogBalance and
+    AsShotWhiteXY, by short names (``cm1``, ``cc1``, ``ill1``, ``ab``, ``white_xy``, ...).
+    """
+    found: dict[str, Any] = {}
+    for code, name in (
+        (_COLOR_MATRIX_1, "cm1"),
+        (_COLOR_MATRIX_2, "cm2"),
+        (_CAMERA_CALIBRATION_1, "cc1"),
+        (_CAMERA_CALIBRATION_2, "cc2"),
+        (_CALIBRATION_ILLUMINANT_1, "ill1"),
+        (_CALIBRATION_ILLUMINANT_2, "ill2"),
+        (_ANALOG_BALANCE, "ab"),
+        (_AS_SHOT_WHITE_XY, "white_xy"),
+        (_UNIQUE_CAMERA_MODEL, "model"),
+    ):
+        if code in tags:
+            tag = tags[code]
+            found[name] = tag.value if name in ("model", "ill1", "ill2") else _tag_reals(tag)
     return found
 
 
@@ -744,6 +744,7 @@ def _read_dng(p: Path, limit: int) -> RawImage | None:
             }
             neutral_tag = objects.get(_AS_SHOT_NEUTRAL, ifd0.get(_AS_SHOT_NEUTRAL))
             neutral = None if neutral_tag is None else _tag_reals(neutral_tag)
+            colour = _colour_tags(ifd0)
             info = ImageInfo(int(tags[256]), int(tags[257]), 1, "", "raw")
             _check_pixels(p, info, limit)
             data = np.asarray(page.asarray())
@@ -827,7 +828,6 @@ def _read_dng(p: Path, limit: int) -> RawImage | None:
         mosaic = np.round(np.clip(codes, 0.0, 65535.0, out=codes), out=codes).astype(np.uint16)
     black = np.asarray(black, np.float64) * scale
     white *= scale
-    colour = _dng_tags(p)
     cam_xyz, code = _dng_colour(colour)
     names = {v: k for k, v in CALIBRATION_ILLUMINANTS.items()}
     model = colour.get("model")
@@ -1291,19 +1291,13 @@ def develop(
         )
     # 1-3. linearise and white-balance, demosaic: the fused pass for a bilinear Bayer mosaic
     cam: np.ndarray | None = None
-    if raw.monochrome:  # one grey value a pixel: the three channels of a grey image
-        grey = raw.mosaic.astype(np.float32)
-        grey -= np.float32(black.ravel()[0])
-        grey *= np.float32(1.0 / float(np.ravel(span)[0]))
-        np.clip(grey, 0.0, 1.0, out=grey)
-        cam = np.repeat(grey[..., None], 3, axis=-1)
-        del grey
-        method = "none"
-    elif raw.cfa_pattern is None:  # a linear raw: every pixel has its colours
-        cam = raw.mosaic.astype(np.float32)
+    if raw.cfa_pattern is None:  # a linear raw (every pixel has its colours) or a grey one
+        cam = (raw.mosaic[..., None] if raw.monochrome else raw.mosaic).astype(np.float32)
         cam -= black.astype(np.float32)
-        cam *= (gains / span).astype(np.float32)
+        cam *= (gains[: cam.shape[-1]] / span).astype(np.float32)
         np.clip(cam, 0.0, 1.0, out=cam)
+        if raw.monochrome:  # the three channels of a grey image
+            cam = np.repeat(cam, 3, axis=-1)
         xtrans = raw.metadata.get("xtrans")
         if xtrans and method != "bilinear":
             notes.append(
