@@ -10,7 +10,6 @@ main output is ``-o/--out``, ``--force`` overwrites, ``--json`` prints the resul
 from __future__ import annotations
 
 import contextlib
-import gc
 import os
 import signal
 import sys
@@ -105,7 +104,6 @@ def main(argv: Sequence[str] | None = None) -> int:
             # objects half-built when the interrupt landed may fail in their finalizers from
             # here on: nothing to say about them, the command has said it was interrupted
             sys.unraisablehook = _quiet
-            gc.disable()
             # interrupted: leave now, with exit code 130. The interpreter's shutdown would
             # re-raise a KeyboardInterrupt noticed late (in a thread join, say) as death by
             # SIGINT; everything this command wrote is already renamed or removed. A second
