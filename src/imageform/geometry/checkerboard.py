@@ -441,7 +441,9 @@ def _coarse(
     refined again at full resolution are the two candidates, the one closer to a plane's
     projection returned (:func:`_plane_rms`). None when the averaged copy shows no board.
     """
-    coarse = _block_mean(gray.float, factor)
+    from imageform._kernels.chart import block_mean_numpy
+
+    coarse = block_mean_numpy(np.asarray(gray.float)[..., None], factor, 1.0)[..., 0]
     codes, scale, _ = gray_codes(coarse)
     small = _Gray(codes, scale)
     for s in DEFAULT_SIGMAS:
@@ -465,22 +467,14 @@ def _coarse(
 
 def _plane_rms(corners: NDArray[np.float64] | None, size: tuple[int, int]) -> float:
     """RMS distance (px) of a board's corners to the best homography of its flat lattice."""
+    from imageform.geometry.calibration import checkerboard_points
     from imageform.geometry.homography import apply_homography, estimate_homography
 
     assert corners is not None
-    cols, rows = size
-    j, i = np.mgrid[0:rows, 0:cols]
-    board = np.column_stack([i.ravel(), j.ravel()]).astype(np.float64)
+    board = checkerboard_points(size, 1.0)[:, :2]  # the detector's order, row by row
     H = estimate_homography(board, corners)
     fit = np.asarray(apply_homography(H, board))
     return float(np.sqrt(np.mean(np.sum((fit - corners) ** 2, axis=1))))
-
-
-def _block_mean(image: NDArray[np.floating], factor: int) -> NDArray[np.float64]:
-    """Average ``image`` over ``factor x factor`` blocks (a trailing partial block dropped)."""
-    h, w = (image.shape[0] // factor) * factor, (image.shape[1] // factor) * factor
-    blocks = np.asarray(image[:h, :w], np.float64).reshape(h // factor, factor, w // factor, factor)
-    return blocks.mean(axis=(1, 3))
 
 
 def _finish(
