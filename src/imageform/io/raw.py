@@ -1113,12 +1113,12 @@ _THREADS_MIN_PIXELS = 1 << 16
 
 
 def _black_plane(raw: RawImage) -> np.ndarray:
-    """Return the black level of every photosite (or channel), broadcast to the mosaic."""
+    """Return the black level of every photosite (or channel), broadcastable to the mosaic."""
     black = np.asarray(raw.black_level, np.float64)
     if raw.mosaic.ndim == 3:
         return black.reshape(1, 1, -1)
     if raw.monochrome:
-        return np.full(raw.mosaic.shape, float(black.ravel()[0]))
+        return black.reshape(1, 1)
     h, w = raw.mosaic.shape
     return np.tile(black, (h // 2 + 1, w // 2 + 1))[:h, :w]
 
