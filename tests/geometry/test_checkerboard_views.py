@@ -19,6 +19,9 @@ from imageform.geometry.checkerboard import (
 )
 from tests.geometry.checkerboard_support import (
     PATTERN,
+    board_corners,
+    homography,
+    render_board,
 )
 
 cv2 = pytest.importorskip("cv2")
@@ -128,6 +131,31 @@ def test_sub_grid_of_a_partly_hidden_board_is_refused_left04(
     res = find_checkerboard(hidden, pattern)
     assert not res.found
     assert "continues" in res.reason
+
+
+@pytest.mark.parametrize("row", [2, 4])
+def test_a_line_past_the_board_edge_is_not_the_board_going_on(row: int) -> None:
+    """A 7 x 7 board on a bright wall with little margin and a thin dark line (a cable, a
+    door frame) ending at its edge beside one dark-parity cell: past the edge the cells read
+    bright, dark, bright as if the board went on, and the grid was refused ("continues after
+    the last row"), as on a real webcam view of a poster on a glass door. The edge's would-be
+    inner corners are not X-corners: found, corners exact."""
+    cols = rows = 7
+    H = homography(30.0, (320, 240), 0.1, 0.0, cols, rows)
+    img = render_board(cols, rows, H, (480, 640), blur=1.0)
+    vv, uu = np.mgrid[0:480, 0:640].astype(np.float64)
+    Hi = np.linalg.inv(H)
+    w = Hi[2, 0] * uu + Hi[2, 1] * vv + Hi[2, 2]
+    X = (Hi[0, 0] * uu + Hi[0, 1] * vv + Hi[0, 2]) / w
+    Y = (Hi[1, 0] * uu + Hi[1, 1] * vv + Hi[1, 2]) / w
+    wall = X > cols + 1.15  # 0.15 squares of margin
+    img = np.where(wall, 0.85, img)
+    img = np.where(wall & (Y > row + 0.4) & (Y < row + 0.6), 0.1, img)
+    u8 = np.clip(np.round(ndimage.gaussian_filter(img, 0.8) * 255), 0, 255).astype(np.uint8)
+    res = find_checkerboard(u8, (cols, rows))
+    assert res.found, res.reason
+    truth = board_corners(cols, rows, H)
+    assert np.max(np.linalg.norm(res.corners - truth, axis=1)) < 0.1
 
 
 @pytest.mark.slow

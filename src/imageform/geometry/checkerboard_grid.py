@@ -297,7 +297,10 @@ def board_continues(
     to a half cell beyond it, in the middle of each cell. Past a real board's last inner
     row lie its outer squares and then the margin or background, which do not alternate;
     if instead three or more neighbouring cells there (inside the image) alternate with the
-    board's own parity by at least a sixth of its contrast, the board goes on.
+    board's own parity by at least a sixth of its contrast, and two or more of the
+    extrapolated points of row ``k + 1`` beside them are X-corners (:func:`_saddles`:
+    clutter past a board's edge can alternate by chance, the edge has no X-corners), the
+    board goes on.
     A board cut within a quarter cell of row ``k + 1`` cannot be told from a smaller one.
     ``own``: the grid's :func:`cell_means`, when the caller has them.
     """
@@ -334,14 +337,58 @@ def board_continues(
         ).reshape(pts.shape[:-1])
         m = vals.mean(axis=0)
         agree = ((m - mid) * parity * sense > contrast / 3.0) & inside
-        if _longest_run(agree) >= 3:
-            return name
+        runs = _runs(agree, 3)  # cells start..stop-1, their corners start..stop
+        if not runs:
+            continue
+        saddle = _saddles(gray, p1, p1 - g[-1], contrast)
+        for start, stop in runs:
+            if np.count_nonzero(saddle[start : stop + 1]) >= 2:
+                return name
     return None
 
 
-def _longest_run(flags: NDArray[np.bool_]) -> int:
-    best = run = 0
-    for f in flags.tolist():
-        run = run + 1 if f else 0
-        best = max(best, run)
-    return best
+def _runs(flags: NDArray[np.bool_], least: int) -> list[tuple[int, int]]:
+    """``(start, stop)`` of every run of at least ``least`` consecutive True flags."""
+    out, start = [], None
+    for i, f in enumerate([*flags.tolist(), False]):
+        if f and start is None:
+            start = i
+        elif not f and start is not None:
+            if i - start >= least:
+                out.append((start, i))
+            start = None
+    return out
+
+
+def _saddles(
+    gray: NDArray[np.floating],
+    points: NDArray[np.float64],
+    outward: NDArray[np.float64],
+    contrast: float,
+) -> NDArray[np.bool_]:
+    """Whether each of ``points`` (N, 2), a row of would-be inner corners, is an X-corner.
+
+    The four quadrants around a point, along the row and ``outward`` (N, 2), are read a
+    quarter to two fifths of a cell away: at an inner corner of a board the diagonal
+    quadrants are equal and the adjacent ones differ by the board's ``contrast``; on a
+    board's outer edge (an L-shaped corner of an outer square and the margin) or on
+    background, two adjacent quadrants are equal or a diagonal pair is not. A point whose
+    quadrants are not all inside the image is not one.
+    """
+    from scipy import ndimage
+
+    h, w = gray.shape
+    along = np.gradient(points, axis=0)  # (N, 2) one cell along the row
+    q = []
+    for su, sv in ((1, 1), (-1, -1), (1, -1), (-1, 1)):
+        d = su * along + sv * outward
+        q.append(points[None] + np.array([0.25, 0.4])[:, None, None] * d[None])  # (2, N, 2)
+    pts = np.stack(q)  # (4, 2, N, 2)
+    inside = np.all((pts >= 0) & (pts <= [w - 1, h - 1]), axis=(0, 1, 3))
+    vals = ndimage.map_coordinates(
+        gray, [pts[..., 1].ravel(), pts[..., 0].ravel()], order=1, mode="nearest"
+    ).reshape(pts.shape[:-1])
+    pp, mm, pm, mp = vals.mean(axis=1)  # (N,) each
+    across = np.min(np.abs(np.stack([pp - pm, pp - mp, mm - pm, mm - mp])), axis=0)
+    diagonal = np.maximum(np.abs(pp - mm), np.abs(pm - mp))
+    return (across - diagonal > contrast / 4.0) & inside
