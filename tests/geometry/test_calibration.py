@@ -288,3 +288,33 @@ def test_ill_conditioned_setups_warn() -> None:
             calibrate_camera([OBJ] * 4, uv, (640, 480), fix=("k1", "k2", "p1", "p2", "k3"))
         except DegenerateConfigurationError:
             pytest.skip("closed form refused the fronto-parallel set (also acceptable)")
+
+
+def _one_orientation(noise: float) -> tuple[np.ndarray, list[np.ndarray]]:
+    """Ten views of a 7 x 5 board held at one orientation (about 11 deg of tilt, normals
+    within 4 deg: a board held at arm's length and moved, not turned; as in a real webcam
+    set), 320 x 240, f = 300 px."""
+    obj = checkerboard_points((7, 5), 25.0)
+    K = np.array([[300.0, 0, 160], [0, 300, 120], [0, 0, 1]])
+    rng = np.random.default_rng(0)
+    uv = []
+    for _ in range(10):
+        R = rvec_to_matrix(np.array([0.19, 0.02, 0.0]) + rng.normal(0, 0.01, 3))
+        t = np.array([-80.0, -50.0, 600.0]) + rng.normal(0, [10, 10, 30])
+        p = project_points_distorted(obj, K, R, t, BrownConrady(k1=-0.05))[0]
+        uv.append(p + rng.normal(0, noise, p.shape))
+    return obj, uv
+
+
+@pytest.mark.filterwarnings("ignore:the points of all views span")
+def test_views_of_one_orientation_name_the_cause() -> None:
+    """Zhang's focal length needs the board's plane at different orientations: with one
+    orientation the refinement wanders along the valley where focal length and distance
+    trade (on exact points it never stops) and used to fail with "did not converge; raise
+    max_iter"; now it says why, and a fit that does stop warns the same."""
+    obj, uv = _one_orientation(0.0)
+    with pytest.raises(DegenerateConfigurationError, match="nearly one orientation"):
+        calibrate_camera([obj] * 10, uv, (320, 240))
+    obj, uv = _one_orientation(0.1)
+    with pytest.warns(IllConditionedWarning, match="nearly one orientation"):
+        calibrate_camera([obj] * 10, uv, (320, 240))

@@ -34,6 +34,7 @@ from imageform._validate import (
     size_pair,
 )
 from imageform.errors import (
+    ConvergenceError,
     DegenerateConfigurationError,
     IllConditionedWarning,
     InvalidInputError,
@@ -57,6 +58,9 @@ F64 = NDArray[np.float64]
 MIN_GOOD_VIEWS = 3
 #: Largest board tilt (degrees) below which the focal length is poorly determined.
 MIN_TILT_DEG = 10.0
+#: Largest angle (degrees) between two views' board normals below which the views are
+#: nearly one orientation: the focal length then trades against the board's distance.
+MIN_SPREAD_DEG = 5.0
 #: Fraction of the image area that the points of all views should span.
 MIN_COVERAGE = 0.25
 
@@ -112,13 +116,7 @@ def _warn_conditioning(
             "(10-20 recommended) at different tilts"
         )
     if planar:
-        R = rodrigues(rvecs)
-        tilt = np.degrees(np.arccos(np.clip(np.abs(R[:, 2, 2]), 0.0, 1.0)))
-        if float(tilt.max()) < MIN_TILT_DEG:
-            notes.append(
-                f"the board is tilted at most {tilt.max():.1f} deg from fronto-parallel; tilts "
-                f"of {MIN_TILT_DEG:g} deg or more are needed to determine the focal length"
-            )
+        notes.extend(_orientation_problems(rvecs))
     pts = np.concatenate(imgs)
     w, h = image_size
     span = (np.ptp(pts[:, 0]) * np.ptp(pts[:, 1])) / float(w * h)
@@ -132,6 +130,31 @@ def _warn_conditioning(
     for n in notes:
         warnings.warn(n, IllConditionedWarning, stacklevel=3)
     return tuple(notes)
+
+
+def _orientation_problems(rvecs: F64) -> list[str]:
+    """What the boards' orientations leave undetermined (Zhang 2000, sec. 3.3): tilt, spread.
+
+    The focal length is fixed by the foreshortening of a tilted plane, and only when the
+    views' planes are not parallel: the same tilt in every view leaves a valley in which
+    focal length and board distance trade against each other.
+    """
+    R = rodrigues(rvecs)
+    normal = R[:, :, 2]  # the board's normal in camera coordinates, one per view
+    tilt = np.degrees(np.arccos(np.clip(np.abs(normal[:, 2]), 0.0, 1.0)))
+    if float(tilt.max()) < MIN_TILT_DEG:
+        return [
+            f"the board is tilted at most {tilt.max():.1f} deg from fronto-parallel; tilts "
+            f"of {MIN_TILT_DEG:g} deg or more are needed to determine the focal length"
+        ]
+    spread = np.degrees(np.arccos(np.clip(np.abs(normal @ normal.T), 0.0, 1.0)))
+    if len(rvecs) > 1 and float(spread.max()) < MIN_SPREAD_DEG:
+        return [
+            f"the board has nearly one orientation in every view (normals within "
+            f"{spread.max():.1f} deg of each other); the focal length is not determined: "
+            "tilt it differently across views (20-45 deg, about different axes)"
+        ]
+    return []
 
 
 def calibrate_camera(
@@ -200,15 +223,17 @@ def calibrate_camera(
         Mismatched point arrays, NaN, a bad ``image_size``, an unknown parameter name.
     DegenerateConfigurationError
         Fewer observations than parameters, fewer than 4 points in a view, a non-planar
-        target that is coplanar in a view (DLT), no tilt at all.
+        target that is coplanar in a view (DLT), no tilt at all; a refinement that did not
+        converge when the boards' tilts or orientations leave the focal length open.
     ConvergenceError
         The refinement did not converge within ``max_iter`` evaluations.
 
     Warns
     -----
     IllConditionedWarning
-        Fewer than 3 views of a planar target, less than 10 deg of tilt, points covering
-        less than a quarter of the image, nearly singular normal equations.
+        Fewer than 3 views of a planar target, less than 10 deg of tilt, board normals
+        within 5 deg of each other, points covering less than a quarter of the image,
+        nearly singular normal equations.
 
     Notes
     -----
@@ -275,16 +300,24 @@ def calibrate_camera(
         K0[0, 1] = 0.0
     g0 = np.array([K0[0, 0], K0[1, 1], K0[0, 2], K0[1, 2], K0[0, 1], *d0.coeffs[:5]])
     view = np.concatenate([np.full(o.shape[0], k, dtype=np.intp) for k, o in enumerate(objs)])
-    out = refine(
-        g0,
-        rv0,
-        tv0,
-        np.concatenate(objs),
-        np.concatenate(imgs),
-        view,
-        free,
-        max_iter=max_iter,
-        tol=tol,
-    )
+    try:
+        out = refine(
+            g0,
+            rv0,
+            tv0,
+            np.concatenate(objs),
+            np.concatenate(imgs),
+            view,
+            free,
+            max_iter=max_iter,
+            tol=tol,
+        )
+    except ConvergenceError as err:
+        why = _orientation_problems(rv0) if planar else []
+        if why:  # the refinement wandered along the valley the views leave open
+            raise DegenerateConfigurationError(
+                f"{why[0]} (the refinement found no minimum in {max_iter} iterations)"
+            ) from err
+        raise
     notes = _warn_conditioning(planar, out.rvecs, imgs, size, out.cond)
     return CalibrationResult.from_fit(out, view, size, free, notes)
