@@ -148,9 +148,9 @@ def test_a_line_past_the_board_edge_is_not_the_board_going_on(row: int) -> None:
     w = Hi[2, 0] * uu + Hi[2, 1] * vv + Hi[2, 2]
     X = (Hi[0, 0] * uu + Hi[0, 1] * vv + Hi[0, 2]) / w
     Y = (Hi[1, 0] * uu + Hi[1, 1] * vv + Hi[1, 2]) / w
-    wall = X > cols + 1.15  # 0.15 squares of margin
+    wall = cols + 1.15 < X  # 0.15 squares of margin
     img = np.where(wall, 0.85, img)
-    img = np.where(wall & (Y > row + 0.4) & (Y < row + 0.6), 0.1, img)
+    img = np.where(wall & (np.abs(Y - row - 0.5) < 0.1), 0.1, img)
     u8 = np.clip(np.round(ndimage.gaussian_filter(img, 0.8) * 255), 0, 255).astype(np.uint8)
     res = find_checkerboard(u8, (cols, rows))
     assert res.found, res.reason

@@ -133,7 +133,7 @@ def _warn_conditioning(
 
 
 def _orientation_problems(rvecs: F64) -> list[str]:
-    """What the boards' orientations leave undetermined (Zhang 2000, sec. 3.3): tilt, spread.
+    """Name what the boards' orientations leave open (Zhang 2000, sec. 3.3): tilt, spread.
 
     The focal length is fixed by the foreshortening of a tilted plane, and only when the
     views' planes are not parallel: the same tilt in every view leaves a valley in which
