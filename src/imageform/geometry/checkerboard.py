@@ -352,8 +352,9 @@ def find_checkerboard(
         Squares must be at least about ``5 sigma`` pixels wide.
     half_window : int, optional
         Half size of the refinement window (OpenCV's ``winSize``); by default
-        ``min(11, max(2, floor(0.4 * shortest grid step)))`` so that the window never
-        reaches the neighbouring corners.
+        ``min(11, max(2, floor(0.4 s), min(5, floor(0.5 s))))`` for the shortest grid
+        step ``s``, so that the window never reaches the neighbouring corners (half the
+        step, up to 5 px, where squares are small: blurred narrow squares need it).
     max_iter, tol : int, float
         Refinement stopping rule: at most ``max_iter`` iterations, or a step of at most
         ``tol`` pixels (OpenCV's ``TermCriteria(EPS + COUNT, 30, 0.001)``; ``eps`` is the
