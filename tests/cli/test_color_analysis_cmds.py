@@ -71,3 +71,29 @@ def test_white_balance_command(pair, tmp_path, capsys) -> None:  # type: ignore[
     y = str(tmp_path / "y.png")
     assert main(["white-balance", str(a), "-o", y, "--method", "nope"]) == 2
     assert "gray-world" in capsys.readouterr().err
+
+
+def test_delta_e_reads_each_file_s_declared_space(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The same picture exported in sRGB and in Display P3 (with its profile): 0.13 dE00
+    apart read as declared; read both as sRGB (the old behaviour, or an untagged export)
+    2.6 apart, nearly every pixel above 1."""
+    from imageform.color import convert
+    from imageform.io import write_image
+
+    a = np.random.default_rng(0).random((20, 30, 3)) * 0.8 + 0.1
+    write_image(tmp_path / "ref.png", a, bit_depth=16)
+    p3 = np.clip(np.asarray(convert(a, "srgb", "display_p3")), 0, 1)
+    write_image(tmp_path / "p3.png", p3, color_space="display_p3", bit_depth=16)
+    write_image(tmp_path / "bare.png", p3, bit_depth=16)
+    ref, tagged, bare = (str(tmp_path / n) for n in ("ref.png", "p3.png", "bare.png"))
+    assert main(["delta-e", ref, tagged, "--json"]) == 0
+    got = capsys.readouterr()
+    payload = json.loads(got.out)
+    assert payload["spaces"] == ["srgb", "display_p3"] and payload["mean"] < 0.05
+    assert "p3.png declares display_p3" in got.err
+    assert main(["delta-e", ref, bare, "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["mean"] > 1.0
+    assert main(["delta-e", ref, bare, "--from", "lab"]) == 2  # a usage error
+    assert "delta-e compares RGB images" in capsys.readouterr().err

@@ -356,10 +356,35 @@ class DeltaEOptions(ImageIn, OnDevice):
     heatmap: Path | None = option(
         None, help="Also write a heat map of ΔE (PNG, colour scale 0 to 10).", output=True
     )
+    src: str = option(
+        "auto",
+        flag="--from",
+        help=(
+            "RGB space of both images; auto: the one each file declares (ICC profile, PNG "
+            "sRGB chunk, EXIF), else srgb."
+        ),
+        metavar="SPACE",
+    )
+
+    def check(self) -> None:
+        """Check the options and normalise the ``--from`` space name (an RGB space)."""
+        super().check()
+        from imageform.color import RGB_SPACES, space_name
+
+        if str(self.src).strip().lower() == "auto":
+            object.__setattr__(self, "src", "auto")
+            return
+        name = space_name(self.src, "--from (src)")
+        if name.removeprefix("linear_") not in RGB_SPACES:
+            raise InvalidInputError(
+                f"--from {name}: delta-e compares RGB images; give an RGB space "
+                f"({', '.join(RGB_SPACES)}, or a linear_ one) or auto"
+            )
+        object.__setattr__(self, "src", name)
 
 
 def delta_e(run: Run, opts: DeltaEOptions, *, out: None, reference: Path, test: Path) -> Result:
-    """``imageform delta-e``: ΔE between two sRGB images of the same size."""
+    """``imageform delta-e``: ΔE between two RGB images of the same size."""
     import numpy as np
 
     from imageform.color.convert import convert
@@ -379,8 +404,16 @@ def delta_e(run: Run, opts: DeltaEOptions, *, out: None, reference: Path, test: 
             f"{test} {b.shape[1]} x {b.shape[0]} px"
         )
 
+    spaces = [opts.src, opts.src]
+    if opts.src == "auto":
+        from imageform.io import image_color_space
+
+        spaces = [_declared_space(run, p, image_color_space(p), grey=False)
+                  for p in (reference, test)]  # fmt: skip
+    sa, sb = spaces
+
     def lab_delta_e(x: Any, y: Any) -> Any:
-        return de_fn(convert(x, "srgb", "lab"), convert(y, "srgb", "lab"), opts.method)
+        return de_fn(convert(x, sa, "lab"), convert(y, sb, "lab"), opts.method)
 
     de = None
     if opts.device == "cuda":  # three kernels: two conversions and the difference
@@ -398,6 +431,7 @@ def delta_e(run: Run, opts: DeltaEOptions, *, out: None, reference: Path, test: 
         rgb = colormaps["magma"](np.clip(de / 10.0, 0.0, 1.0))[..., :3]
         write_image(run.file(opts.heatmap), rgb)
     summary = {
+        "spaces": spaces,
         "reference": reference,
         "test": test,
         "method": opts.method,
