@@ -422,8 +422,9 @@ def _refine_sides(
         if abs(det) < 1e-12:
             return None
         out[k] = ((b1 * c2 - b2 * c1) / det, (c1 * a2 - c2 * a1) / det)
-    if np.max(np.hypot(*(out - quad).T)) > 3.0:
-        return None
+    shortest = float(np.min(np.hypot(*(np.roll(quad, -1, axis=0) - quad).T)))
+    if np.max(np.hypot(*(out - quad).T)) > max(3.0, 0.03 * shortest):
+        return None  # as imageform._kernels.aruco._corner_tolerance
     return out
 
 
