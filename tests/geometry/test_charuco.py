@@ -86,14 +86,21 @@ def test_marker_image_refusals() -> None:
 
 
 @pytest.mark.parametrize(
-    ("squares", "square", "marker", "name", "px"),
-    [((5, 7), 30.0, 24.0, "4x4_50", 60), ((8, 6), 1.0, 0.8, "6x6_250", 80)],
+    ("squares", "square", "marker", "name", "px", "legacy"),
+    [
+        ((5, 7), 30.0, 24.0, "4x4_50", 60, False),
+        ((8, 6), 1.0, 0.8, "6x6_250", 80, False),
+        ((8, 6), 1.0, 0.8, "6x6_250", 80, True),
+        ((5, 6), 30.0, 22.0, "5x5_100", 60, True),
+        ((5, 7), 30.0, 24.0, "4x4_50", 60, True),
+    ],
 )
 def test_board_image_equals_opencv(
-    squares: tuple[int, int], square: float, marker: float, name: str, px: int
+    squares: tuple[int, int], square: float, marker: float, name: str, px: int, legacy: bool
 ) -> None:
-    board = CharucoBoard(squares, square, marker, name)
+    board = CharucoBoard(squares, square, marker, name, legacy=legacy)
     ref_board = cv2.aruco.CharucoBoard(squares, square, marker, _cv_dict(name))
+    ref_board.setLegacyPattern(legacy)
     cols, rows = squares
     ref = ref_board.generateImage((cols * px + 2 * 20, rows * px + 2 * 20), marginSize=20)
     np.testing.assert_array_equal(board.image(px, margin_px=20), ref)
@@ -114,6 +121,30 @@ def test_board_refusals() -> None:
         CharucoBoard((5, 7), float("nan"), 20.0)
     with pytest.raises(UnknownOptionError):
         CharucoBoard((5, 7), 30.0, 20.0, "8x8_50")
+    with pytest.raises(InvalidInputError, match="legacy as True or False"):
+        CharucoBoard((5, 6), 30.0, 20.0, legacy="yes")  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize(
+    ("squares", "printed_legacy"), [((5, 6), True), ((6, 8), True), ((6, 8), False)]
+)
+def test_boards_of_either_layout_give_the_true_corners(
+    squares: tuple[int, int], printed_legacy: bool
+) -> None:
+    """A board of even rows printed by OpenCV before 4.6 (its legacy layout, markers in the
+    other squares) is read with the true ids however the board is declared; it gave 10 of 20
+    corners of a 5 x 6 board each one square off (wrong ids), and none of a 6 x 8 board."""
+    printed = CharucoBoard(squares, 30.0, 22.0, "5x5_100", legacy=printed_legacy)
+    rng = np.random.default_rng(11)
+    for k, declared in enumerate((False, True)):
+        img, truth = _composite(
+            rng, printed, _kodak(5 + k), square_px=40, blur=0.7, noise=0.01, cut=k == 1
+        )
+        found = detect_charuco(img, CharucoBoard(squares, 30.0, 22.0, "5x5_100", legacy=declared))
+        assert len(found) >= 0.5 * printed.n_corners
+        assert found.board.legacy == printed_legacy
+        err = np.hypot(*(found.corners - truth[found.ids]).T)
+        assert err.max() < 0.5, err.max()
 
 
 # ------------------------------------------------------------------ markers

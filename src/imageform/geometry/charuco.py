@@ -12,6 +12,10 @@ Layout (OpenCV's, tested against ``cv2.aruco.CharucoBoard.generateImage``): ``sq
 odd, and the white squares hold markers ``0, 1, 2, ...`` row by row, each centred in its
 square. Inner corner ``k = r (cols - 1) + c`` sits at ``((c + 1) s, (r + 1) s, 0)`` on the
 board (``s`` the square length; x to the right, y down the printed board, z into it).
+OpenCV before 4.6 drew boards with an even number of rows the other way round (the top-left
+square white, holding marker 0: its ``setLegacyPattern(true)``, here ``legacy=True``); the
+inner corners and their ids are the same in both layouts, and :func:`detect_charuco` reads a
+board of either layout whichever it is told (the markers found decide).
 
 Corner detection (:func:`detect_charuco`): the markers are found and decoded
 (:func:`imageform.geometry.detect_aruco_markers`); each inner corner with at least
@@ -23,7 +27,7 @@ stays clear of the markers, and kept when it converged near the prediction.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from numpy.typing import NDArray
@@ -69,7 +73,9 @@ class CharucoBoard:
     """A ChArUco board of ``squares = (cols, rows)`` squares with markers from ``dictionary``.
 
     The squares have side ``square_length``, the markers side ``marker_length`` (OpenCV's
-    ``CharucoBoard((cols, rows), square_length, marker_length, dictionary)``).
+    ``CharucoBoard((cols, rows), square_length, marker_length, dictionary)``). ``legacy``:
+    OpenCV's layout before 4.6 (``setLegacyPattern(true)``), which differs on boards with an
+    even number of rows: their top-left square is white and holds marker 0.
 
     Lengths are in the unit the calibration should use (mm, m, ...).
 
@@ -92,6 +98,7 @@ class CharucoBoard:
     square_length: float
     marker_length: float
     dictionary: str = "6x6_250"
+    legacy: bool = False
 
     def __post_init__(self) -> None:
         """Check the squares, lengths (markers smaller than squares) and the dictionary."""
@@ -111,6 +118,11 @@ class CharucoBoard:
         object.__setattr__(self, "marker_length", m)
         d = aruco_dictionary(self.dictionary)
         object.__setattr__(self, "dictionary", d.name)
+        if not isinstance(self.legacy, bool | np.bool_):
+            raise InvalidInputError(
+                f"expected legacy as True or False, got {describe(self.legacy)}"
+            )
+        object.__setattr__(self, "legacy", bool(self.legacy))
         if self.n_markers > d.size:
             raise InvalidInputError(
                 f"a {cols} x {rows} board needs {self.n_markers} markers; dictionary "
@@ -129,11 +141,16 @@ class CharucoBoard:
         cols, rows = self.squares
         return (cols - 1) * (rows - 1)
 
+    @property
+    def white_parity(self) -> int:
+        """``(r + c) % 2`` of the white squares: 1, or 0 for a legacy board of even rows."""
+        return 0 if self.legacy and self.squares[1] % 2 == 0 else 1
+
     def marker_squares(self) -> NDArray[np.int64]:
         """``(n_markers, 2)``: the ``(row, col)`` of each marker's square, by marker id."""
         cols, rows = self.squares
         r, c = np.divmod(np.arange(cols * rows), cols)
-        white = (r + c) % 2 == 1
+        white = (r + c) % 2 == self.white_parity
         return np.column_stack([r[white], c[white]]).astype(np.int64)
 
     def corner_points(self) -> NDArray[np.float64]:
@@ -254,7 +271,9 @@ def detect_charuco(
     Returns
     -------
     CharucoCorners
-        Sorted by id; empty when no corner qualifies.
+        Sorted by id; empty when no corner qualifies. On a board of an even number of rows,
+        whose two layouts differ (see :class:`CharucoBoard`), both are tried and the one giving
+        more corners is kept (the board's own on a tie); its ``board`` says which.
 
     Raises
     ------
@@ -268,8 +287,6 @@ def detect_charuco(
     >>> len(found), found.corners[0].round(1).tolist()
     (24, [89.5, 89.5])
     """
-    from imageform.geometry.checkerboard_subpix import RefinedCorners, refine
-
     if not isinstance(board, CharucoBoard):
         raise InvalidInputError(f"expected board as a CharucoBoard, got {describe(board)}")
     g = _gray01(image)
@@ -279,6 +296,22 @@ def detect_charuco(
         markers = detect_aruco_markers(g, board.dictionary)
     elif not isinstance(markers, ArucoMarkers):
         raise InvalidInputError(f"expected markers as ArucoMarkers, got {describe(markers)}")
+    found = _corners(g, board, markers, need, shift)
+    if board.squares[1] % 2 == 0 and len(markers) >= need:
+        # OpenCV before 4.6 put the markers of such a board in the other squares: markers
+        # read in the wrong layout give few corners (their squares' colours are swapped)
+        other = _corners(g, replace(board, legacy=not board.legacy), markers, need, shift)
+        if len(other) > len(found):
+            return other
+    return found
+
+
+def _corners(
+    g: NDArray[np.float64], board: CharucoBoard, markers: ArucoMarkers, need: int, shift: float
+) -> CharucoCorners:
+    """Find the corners of ``board`` (in its layout) from the ``markers`` found in ``g``."""
+    from imageform.geometry.checkerboard_subpix import RefinedCorners, refine
+
     keep = markers.ids < board.n_markers
     ids_m, corners_m = markers.ids[keep], markers.corners[keep]
     empty = CharucoCorners(np.zeros(0, np.int64), np.zeros((0, 2)), markers, board)
@@ -374,7 +407,7 @@ def _printed(board: CharucoBoard, xy: NDArray[np.float64]) -> NDArray[np.float64
     n = d.marker_size + 2
     col = np.clip(np.floor(xy[..., 0]).astype(np.int64), 0, cols - 1)
     row = np.clip(np.floor(xy[..., 1]).astype(np.int64), 0, rows - 1)
-    white = (row + col) % 2 == 1
+    white = (row + col) % 2 == board.white_parity
     out = white.astype(np.float64)
     at = np.zeros((rows, cols), dtype=np.int64)
     sq = board.marker_squares()
@@ -431,7 +464,8 @@ def _seen_whole(
     corner = np.column_stack([c + 1.0, r + 1.0])  # board, square units
     frac = board.marker_length / board.square_length
     margin = (1.0 - frac) / 2.0
-    # quadrant directions; the top-left square (r, c) is black when r + c is even
+    # quadrant directions; the top-left square (r, c) is black when r + c is even (odd on a
+    # legacy board of even rows)
     quads = np.array([[-1.0, -1.0], [1.0, 1.0], [1.0, -1.0], [-1.0, 1.0]])
     tb = (np.arange(_GRID_BLACK) + 0.5) / _GRID_BLACK * 0.6 + 0.2
     tw = (np.arange(_GRID_WHITE) + 0.5) / _GRID_WHITE
@@ -448,7 +482,7 @@ def _seen_whole(
     near = ts < 0.5  # the half of each margin nearer the corner
 
     # per corner: the black and the white quadrants' directions (m, 2, 2)
-    first = ((r + c) % 2 == 0)[:, None, None]
+    first = ((r + c) % 2 != board.white_parity)[:, None, None]
     qb = np.where(first, quads[None, :2], quads[None, 2:])
     qw = np.where(first, quads[None, 2:], quads[None, :2])
 

@@ -532,9 +532,16 @@ def _calibrate_charuco(
     shape0: tuple[int, int] | None = None
     objs, corners, names, missed = [], [], [], []
     first_missed: object = None
+    legacy_noted = False
     for f, grey in _read_views(run, opts, images):
         shape0 = (int(grey.shape[0]), int(grey.shape[1]))
         found = detect_charuco(grey, board)
+        if found.board.legacy and len(found) and not legacy_noted:
+            run.note(
+                f"{f}: the markers are in OpenCV's legacy layout (boards of even rows drawn "
+                "before OpenCV 4.6: the top-left square white); read as such"
+            )
+            legacy_noted = True
         if len(found) >= MIN_CHARUCO_CORNERS:
             objs.append(found.object_points())
             corners.append(found.corners)
