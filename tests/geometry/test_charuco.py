@@ -418,6 +418,31 @@ def test_charuco_clean_views_recall_at_least_opencv() -> None:
     assert ours >= theirs and ours >= 0.9 * 12 * board.n_corners, (ours, theirs)
 
 
+REAL = Path(__file__).resolve().parents[1] / "data" / "charuco"
+
+
+def test_real_photograph_of_a_legacy_board() -> None:
+    """A webcam photograph (tests/data/charuco/README.md) of an 8 x 6 board printed by OpenCV
+    4.5.5, held by hand with its centre covered: its markers are in the legacy layout, and
+    the board declared the current way gives OpenCV's 28 corners (legacy pattern) within
+    0.5 px; it gave none."""
+    from imageform.io import read_image
+
+    img = read_image(REAL / "mex_charuco_pose_test.png")[..., 0]
+    found = detect_charuco(img, CharucoBoard((8, 6), 40.0, 30.0, "4x4_50"))
+    assert found.board.legacy and len(found) >= 26
+    cv_board = cv2.aruco.CharucoBoard(
+        (8, 6), 40.0, 30.0, cv2.aruco.getPredefinedDictionary(cv2.aruco.DICT_4X4_50)
+    )
+    cv_board.setLegacyPattern(True)
+    corners, ids, _, _ = cv2.aruco.CharucoDetector(cv_board).detectBoard(img)
+    theirs = dict(zip(ids.ravel().tolist(), corners.reshape(-1, 2), strict=True))
+    assert set(found.ids.tolist()) <= set(theirs)
+    pairs = zip(found.ids.tolist(), found.corners, strict=True)
+    err = [np.hypot(*(p - theirs[i])) for i, p in pairs]
+    assert max(err) < 0.5
+
+
 def test_charuco_with_markers_under_twelve_pixels() -> None:
     """A small board in a small image (a 320 x 240 phone frame of a tablet showing a 5 x 5
     board had markers of 6-11 px): markers down to 6 px are read, the corners found where
