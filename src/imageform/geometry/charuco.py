@@ -58,7 +58,8 @@ _BLACK_SPREAD, _WHITE_FLOOR = 0.3, 0.3
 #: white squares' means give (1 when sharp): below it blur has merged the margins with the
 #: markers' borders and the saddle is not resolved.
 _MIN_RESOLVED = 0.6
-#: Largest relative difference between the contrasts the two white squares give.
+#: Largest relative difference between the contrasts the two white squares give, each as a
+#: share of its own white margins' contrast.
 _WHITE_AGREE = 0.35
 #: Below this resolved share (see ``_MIN_RESOLVED``) a corner is refined again through a
 #: window a pixel larger, and refused when the two points are farther apart than
@@ -452,7 +453,8 @@ def _seen_whole(
     black and white whatever the blur, since blur keeps a square's mean. The corner is kept
     when the black samples are uniform (none above their median by ``_BLACK_SPREAD C``),
     no white-margin sample falls below the black level plus ``_WHITE_FLOOR C``, the two white
-    squares give the same ``C`` (within ``_WHITE_AGREE``), and the margins next to the
+    squares give the same ``C`` as a share of their own margins' contrast (within
+    ``_WHITE_AGREE``: light falling off across the board changes both), and the margins next to the
     corner keep ``_MIN_RESOLVED`` of ``C`` (a blur that merges them with the markers' black
     borders leaves no saddle to refine). An occluder over part of the squares breaks one of
     these; samples outside the image are left out (a corner by the image border is judged
@@ -542,7 +544,18 @@ def _seen_whole(
     )
     with np.errstate(divide="ignore", invalid="ignore"):
         cval = np.where((n_use > 0) & (printed_blk > 0.02), (mean_blk - black) / printed_blk, 0.0)
-    agree = (n_use < 2) | (np.abs(con[:, 0] - con[:, 1]) <= _WHITE_AGREE * cval)
+    # the two white squares' contrasts, each against its own white margins (light that
+    # falls off across a large board, or a camera's exposure and tone curve, part the two
+    # squares' contrasts but not their shares of their own margins' contrast); against the
+    # block's contrast where a square's margins are not in the image
+    own_vs, own_ok = vs.reshape(m, 2, -1), oks.reshape(m, 2, -1)
+    margin_w = np.stack([_masked_median(own_vs[:, j], own_ok[:, j]) for j in range(2)], 1)
+    lit = (own_ok.sum(-1) >= 3) & (margin_w - black[:, None] > _MIN_CONTRAST)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        own = con / (margin_w - black[:, None])
+        agree_own = np.abs(own[:, 0] - own[:, 1]) <= _WHITE_AGREE * 0.5 * (own[:, 0] + own[:, 1])
+    agree_block = np.abs(con[:, 0] - con[:, 1]) <= _WHITE_AGREE * cval
+    agree = (n_use < 2) | np.where(lit.all(1), agree_own, agree_block)
     b_max = np.where(okb, vb, -np.inf).max(1)
     s_min = np.where(oks, vs, np.inf).min(1)
     near_all = np.tile(near, 4)[None] & oks  # two margins per white square, two squares
