@@ -110,6 +110,39 @@ def test_board_image_equals_opencv(
     assert board.n_markers == len(ref_board.getIds())
 
 
+@pytest.mark.parametrize(
+    ("squares", "first", "name", "px"),
+    [((3, 3), 4, "5x5_100", 56), ((5, 7), 20, "4x4_50", 64), ((6, 4), 9, "6x6_250", 64)],
+)
+def test_board_from_a_later_marker_equals_opencv(
+    squares: tuple[int, int], first: int, name: str, px: int
+) -> None:
+    board = CharucoBoard(squares, 40.0, 30.0, name, first_marker=first)
+    ids = np.arange(first, first + board.n_markers)
+    ref_board = cv2.aruco.CharucoBoard(squares, 40.0, 30.0, _cv_dict(name), ids)
+    cols, rows = squares
+    ref = ref_board.generateImage((cols * px + 40, rows * px + 40), marginSize=20)
+    np.testing.assert_array_equal(board.image(px, margin_px=20), ref)
+
+
+def test_two_boards_of_one_dictionary_in_one_view() -> None:
+    """A rig of two 3 x 3 boards, markers 0-3 and 4-7 of one dictionary (two real sets held
+    such rigs, read through OpenCV's ``ids``): each board is read with its own corners, and
+    none of the other's (a board from marker 0 took only the first)."""
+    first = CharucoBoard((3, 3), 40.0, 30.0, "5x5_100")
+    second = CharucoBoard((3, 3), 40.0, 30.0, "5x5_100", first_marker=4)
+    canvas = np.full((260, 500), 255, np.uint8)
+    canvas[20:240, 20:240] = first.image(60, margin_px=20)
+    canvas[20:240, 260:480] = second.image(60, margin_px=20)
+    img = cv2.GaussianBlur(canvas, (0, 0), 0.8)
+    one, two = detect_charuco(img, first), detect_charuco(img, second)
+    assert one.ids.tolist() == two.ids.tolist() == [0, 1, 2, 3]
+    np.testing.assert_allclose(two.corners - one.corners, [[240.0, 0.0]] * 4, atol=0.05)
+    np.testing.assert_allclose(one.corners[0], [99.5, 99.5], atol=0.05)
+    with pytest.raises(InvalidInputError, match="needs 4 markers from marker 48; dictionary"):
+        CharucoBoard((3, 3), 40.0, 30.0, "4x4_50", first_marker=48)
+
+
 def test_board_refusals() -> None:
     with pytest.raises(InvalidInputError, match="marker_length smaller than square_length"):
         CharucoBoard((5, 7), 30.0, 30.0)

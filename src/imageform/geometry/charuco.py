@@ -77,6 +77,9 @@ class CharucoBoard:
     ``CharucoBoard((cols, rows), square_length, marker_length, dictionary)``). ``legacy``:
     OpenCV's layout before 4.6 (``setLegacyPattern(true)``), which differs on boards with an
     even number of rows: their top-left square is white and holds marker 0.
+    ``first_marker``: the dictionary id of the board's first marker, the others following
+    (OpenCV's ``ids=np.arange(first, first + n_markers)``), for rigs of several boards from
+    one dictionary; board marker ``k`` is dictionary marker ``first_marker + k``.
 
     Lengths are in the unit the calibration should use (mm, m, ...).
 
@@ -84,7 +87,7 @@ class CharucoBoard:
     ------
     InvalidInputError
         Fewer than 2 squares along a side, a marker not smaller than its square, or more
-        white squares than the dictionary has markers.
+        white squares (after ``first_marker``) than the dictionary has markers.
 
     Examples
     --------
@@ -100,6 +103,7 @@ class CharucoBoard:
     marker_length: float
     dictionary: str = "6x6_250"
     legacy: bool = False
+    first_marker: int = 0
 
     def __post_init__(self) -> None:
         """Check the squares, lengths (markers smaller than squares) and the dictionary."""
@@ -124,9 +128,12 @@ class CharucoBoard:
                 f"expected legacy as True or False, got {describe(self.legacy)}"
             )
         object.__setattr__(self, "legacy", bool(self.legacy))
-        if self.n_markers > d.size:
+        first = as_int(self.first_marker, "first_marker", minimum=0, maximum=d.size - 1)
+        object.__setattr__(self, "first_marker", first)
+        if first + self.n_markers > d.size:
+            start = f" from marker {first}" if first else ""
             raise InvalidInputError(
-                f"a {cols} x {rows} board needs {self.n_markers} markers; dictionary "
+                f"a {cols} x {rows} board needs {self.n_markers} markers{start}; dictionary "
                 f"{d.name} has {d.size}"
             )
 
@@ -148,7 +155,10 @@ class CharucoBoard:
         return 0 if self.legacy and self.squares[1] % 2 == 0 else 1
 
     def marker_squares(self) -> NDArray[np.int64]:
-        """``(n_markers, 2)``: the ``(row, col)`` of each marker's square, by marker id."""
+        """``(n_markers, 2)``: the ``(row, col)`` of each marker's square, by board marker.
+
+        Board marker ``k`` is dictionary marker ``first_marker + k``.
+        """
         cols, rows = self.squares
         r, c = np.divmod(np.arange(cols * rows), cols)
         white = (r + c) % 2 == self.white_parity
@@ -162,7 +172,7 @@ class CharucoBoard:
         return np.column_stack([(c + 1) * s, (r + 1) * s, np.zeros(r.shape)])
 
     def marker_points(self) -> NDArray[np.float64]:
-        """``(n_markers, 4, 3)``: each marker's corners on the board, by marker id.
+        """``(n_markers, 4, 3)``: each marker's corners on the board, by board marker.
 
         The corners are top-left, top-right, bottom-right, bottom-left as printed.
         """
@@ -214,7 +224,7 @@ class CharucoBoard:
                 y, x = margin + r * sp, margin + c * sp
                 if (r, c) in whites:
                     out[y + off : y + off + mp, x + off : x + off + mp] = aruco_marker_image(
-                        mid, d, size_px=mp
+                        self.first_marker + mid, d, size_px=mp
                     )
                     mid += 1
                 else:
@@ -313,8 +323,9 @@ def _corners(
     """Find the corners of ``board`` (in its layout) from the ``markers`` found in ``g``."""
     from imageform.geometry.checkerboard_subpix import RefinedCorners, refine
 
-    keep = markers.ids < board.n_markers
-    ids_m, corners_m = markers.ids[keep], markers.corners[keep]
+    ids_m = markers.ids - board.first_marker  # the board's own marker numbers
+    keep = (ids_m >= 0) & (ids_m < board.n_markers)
+    ids_m, corners_m = ids_m[keep], markers.corners[keep]
     empty = CharucoCorners(np.zeros(0, np.int64), np.zeros((0, 2)), markers, board)
     if len(ids_m) == 0:
         return empty
@@ -421,7 +432,9 @@ def _printed(board: CharucoBoard, xy: NDArray[np.float64]) -> NDArray[np.float64
     inside = white & (cu >= 0) & (cu < n) & (cv >= 0) & (cv < n)
     bits = (cu >= 1) & (cu <= n - 2) & (cv >= 1) & (cv <= n - 2)
     code = d.codes[
-        np.clip(mid, 0, d.size - 1), np.clip(cv - 1, 0, n - 3), np.clip(cu - 1, 0, n - 3)
+        np.clip(mid + board.first_marker, 0, d.size - 1),
+        np.clip(cv - 1, 0, n - 3),
+        np.clip(cu - 1, 0, n - 3),
     ]
     out[inside] = np.where(bits[inside], code[inside], 0).astype(np.float64)
     return out

@@ -300,6 +300,13 @@ class CalibrateOptions(_BoardChecks, ImageIn):
         "aruco_original).",
         choices="imageform.geometry.aruco:ARUCO_DICTIONARIES",
     )
+    first_marker: int = option(
+        0,
+        help="ChArUco: the dictionary id of the board's first marker (the others follow), "
+        "for a board of a rig of several from one dictionary.",
+        minimum=0,
+        maximum=1023,
+    )
 
     def check(self) -> None:
         """Check the board; a ChArUco board needs a ``--marker`` smaller than ``--square``."""
@@ -308,6 +315,8 @@ class CalibrateOptions(_BoardChecks, ImageIn):
         if charuco is None:
             if self.marker is not None:
                 raise InvalidInputError("--marker is for a ChArUco --board charuco:COLSxROWS")
+            if self.first_marker:
+                raise InvalidInputError("--first-marker is for a ChArUco --board charuco:COLSxROWS")
             return
         if self.marker is None:
             raise InvalidInputError(
@@ -527,7 +536,13 @@ def _calibrate_charuco(
     """
     from imageform.geometry import CharucoBoard, detect_charuco
 
-    board = CharucoBoard(squares, opts.square_mm(), opts.marker_mm(), opts.dictionary)
+    board = CharucoBoard(
+        squares,
+        opts.square_mm(),
+        opts.marker_mm(),
+        opts.dictionary,
+        first_marker=opts.first_marker,
+    )
     cols, rows = squares
     shape0: tuple[int, int] | None = None
     objs, corners, names, missed = [], [], [], []
@@ -565,6 +580,7 @@ def _calibrate_charuco(
     command = (
         f"imageform calibrate --board charuco:{cols}x{rows} --square {opts.square} "
         f"--marker {opts.marker} --dictionary {opts.dictionary}"
+        + (f" --first-marker {opts.first_marker}" if opts.first_marker else "")
     )
     return _calibrate_views(run, opts, out, len(images), names, objs, corners, shape0, command)
 
