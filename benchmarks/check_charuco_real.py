@@ -58,6 +58,8 @@ class PhotoSet:
     dictionary: str
     legacy: bool
     what: str
+    first_marker: int = 0
+    folder: str = ""
 
 
 SETS = (
@@ -122,7 +124,35 @@ SETS = (
         "4x4_250",
         False,
         "phone 3024 x 4032, three 3 x 3 boards (ids 0-3, 4-7, 8-11) on walls and floor; "
-        "the first board read",
+        "board 1 (markers 0-3) here",
+    ),
+    PhotoSet(
+        "floor_3x3 #2",
+        "github.com/Milotrince/charuco-lidar-calibration data/test_img.jpg",
+        "none stated",
+        "*.jpg",
+        (3, 3),
+        192.0,
+        138.0,
+        "4x4_250",
+        False,
+        "the same view: board 2 (markers 4-7)",
+        first_marker=4,
+        folder="floor_3x3",
+    ),
+    PhotoSet(
+        "floor_3x3 #3",
+        "github.com/Milotrince/charuco-lidar-calibration data/test_img.jpg",
+        "none stated",
+        "*.jpg",
+        (3, 3),
+        192.0,
+        138.0,
+        "4x4_250",
+        False,
+        "the same view: board 3 (markers 8-11)",
+        first_marker=8,
+        folder="floor_3x3",
     ),
     PhotoSet(
         "basler_3x3",
@@ -135,7 +165,22 @@ SETS = (
         30.0,
         "5x5_100",
         False,
-        "Basler 2064 x 1544 mono, two 3 x 3 boards (ids 0-3, 4-7); the first board read",
+        "Basler 2064 x 1544 mono, two 3 x 3 boards (ids 0-3, 4-7); board 1 here",
+    ),
+    PhotoSet(
+        "basler_3x3 #2",
+        "github.com/banksAcc/Halcon_Charuco_comparison history: Basler_acA2040-35gm_*.tiff "
+        "(commits 0a2bff6^, d0fc4a4; one view each)",
+        "Apache-2.0 (ChArUco/LICENSE)",
+        "*.tiff",
+        (3, 3),
+        40.0,
+        30.0,
+        "5x5_100",
+        False,
+        "the same views: the second board (markers 4-7)",
+        first_marker=4,
+        folder="basler_3x3",
     ),
 )
 
@@ -208,12 +253,16 @@ def run_set(
     files = sorted(folder.glob(s.pattern))
     if not files:
         return None
-    board = CharucoBoard(s.squares, s.square, s.marker, s.dictionary)
+    if s.first_marker and "first_marker" not in CharucoBoard.__dataclass_fields__:
+        return [s.name, len(files), "(no first_marker in this version)"], []
+    extra = {"first_marker": s.first_marker} if s.first_marker else {}
+    board = CharucoBoard(s.squares, s.square, s.marker, s.dictionary, **extra)
     cv_board = cv2.aruco.CharucoBoard(
         s.squares,
         s.square,
         s.marker,
         cv2.aruco.getPredefinedDictionary(getattr(cv2.aruco, CV_DICTS[s.dictionary])),
+        np.arange(s.first_marker, s.first_marker + board.n_markers),
     )
     cv_board.setLegacyPattern(s.legacy)
     detector = cv2.aruco.CharucoDetector(cv_board)
@@ -303,9 +352,9 @@ def main() -> None:
     for s in SETS:
         if ns.only and s.name not in ns.only:
             continue
-        res = run_set(s, ns.photos / s.name, rng)
+        res = run_set(s, ns.photos / (s.folder or s.name), rng)
         if res is None:
-            print(f"(no photographs for {s.name} under {ns.photos / s.name})", file=sys.stderr)
+            print(f"(no photographs for {s.name} under {ns.photos})", file=sys.stderr)
             continue
         summaries.append(res[0])
         rows.extend(res[1])
@@ -318,6 +367,9 @@ def main() -> None:
         board = f"{s.squares[0]} x {s.squares[1]} squares, {s.dictionary}, "
         board += f"square/marker {s.square:g}/{s.marker:g}"
         legacy = ", OpenCV legacy layout" if s.legacy else ""
+        if s.first_marker:
+            print(f"- `{s.name}`: {s.what}")
+            continue
         print(f"- `{s.name}`: {s.source}; licence {s.licence}; {board}{legacy}; {s.what}")
     print()
     print(
