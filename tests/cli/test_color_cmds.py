@@ -105,3 +105,54 @@ def test_errors(rgb_png: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str
         == 0
     )
     assert read_image(tmp_path / "a.npy").shape == (4, 4, 4)
+
+
+def test_convert_reads_the_space_the_file_declares(
+    rgb_png: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A phone's photograph in Display P3 carries its ICC profile: read as sRGB its
+    saturated colours land several dE00 off. ``--from auto`` (the default) reads the
+    profile, says so in one note, and ``--from`` still overrides; ``--to display_p3``
+    embeds the profile, so the next command reads it back."""
+    a = read_image(rgb_png)
+    p3 = tmp_path / "p3.png"
+    write_image(p3, a, color_space="display_p3")  # the same codes, declared Display P3
+    lab = tmp_path / "lab.tif"
+    assert main(["convert", str(p3), "-o", str(lab), "--to", "lab", "--json"]) == 0
+    out = capsys.readouterr()
+    payload = json.loads(out.out)
+    assert payload["from"] == "display_p3" and payload["declared"] == "display_p3"
+    assert "declares display_p3 in its ICC profile" in out.err
+    np.testing.assert_allclose(read_image(lab), convert(a, "display_p3", "lab"), atol=1e-4)
+    plain = tmp_path / "plain.tif"
+    assert main(["convert", str(p3), "-o", str(plain), "--to", "lab", "--from", "srgb"]) == 0
+    assert "declares" not in capsys.readouterr().err
+    from imageform.color import delta_e_ciede2000
+
+    de = np.asarray(delta_e_ciede2000(read_image(lab), read_image(plain)))
+    assert float(de.max()) > 5.0  # what reading it as sRGB cost
+    # the way back: sRGB -> Display P3 (tagged) -> sRGB (read as tagged)
+    tagged = tmp_path / "tagged.png"
+    assert main(["convert", str(rgb_png), "-o", str(tagged), "--to", "display_p3", "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["icc_profile_written"] is True
+    back = tmp_path / "back.png"
+    assert main(["convert", str(tagged), "-o", str(back), "--bit-depth", "8"]) == 0
+    diff = np.abs(read_image(back).astype(int) - a.astype(int))
+    assert np.median(diff) <= 1
+
+
+def test_convert_auto_grey_and_unknown_profiles(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from PIL import Image
+
+    grey = tmp_path / "g.png"
+    write_image(grey, np.linspace(0, 1, 12).reshape(3, 4))
+    assert main(["convert", str(grey), "-o", str(tmp_path / "g.tif"), "--to", "lab"]) == 0
+    wide = tmp_path / "wide.jpg"
+    profile = Path(__file__).resolve().parents[1] / "data" / "icc" / "WideGamutCompat-v2.icc"
+    Image.new("RGB", (4, 4), (200, 30, 40)).save(wide, icc_profile=profile.read_bytes())
+    capsys.readouterr()
+    assert main(["convert", str(wide), "-o", str(tmp_path / "w.tif"), "--to", "lab"]) == 0
+    err = capsys.readouterr().err
+    assert "ICC profile imageform does not recognise (AWGC); read as srgb" in err

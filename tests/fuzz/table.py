@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 from imageform.geometry import Camera, CharucoBoard
-from imageform.io import CameraColor, CameraFile, CameraOptics
+from imageform.io import CameraColor, CameraFile, CameraOptics, icc_profile, parse_icc
 from tests.fuzz.runner import C, Skip, call, method
 from tests.fuzz.values import V
 
@@ -438,16 +438,22 @@ VALID: dict[str, C | Skip] = {
     "imageform.io.CameraSensor": call(read_noise_e=2.0, system_gain_dn_per_e=0.5),
     "imageform.io.CameraSensor.from_table": call({"read_noise_e": 2.0, "cfa": "RGGB"}),
     "imageform.io.CameraSensor.to_dict": method(call(read_noise_e=2.0)),
+    "imageform.io.DeclaredColorSpace": Skip("a result NamedTuple (no validation of its own)"),
+    "imageform.io.IccProfile": Skip("a result NamedTuple (no validation of its own)"),
     "imageform.io.ImageInfo": Skip("a result NamedTuple (no validation of its own)"),
     "imageform.io.Provenance": call(),
     "imageform.io.WrittenImage": Skip("a result NamedTuple (no validation of its own)"),
     "imageform.io.camera_file.distortion_name": call(None),
+    "imageform.io.icc_profile": call(space="display_p3"),
+    "imageform.io.identify_icc": call(parse_icc(icc_profile("display_p3"))),
+    "imageform.io.image_color_space": call(V("png_file")),
     "imageform.io.image_format": call(path=V("tmpfile_png")),
     "imageform.io.image_info": call(V("png_file")),
     "imageform.io.max_pixels": call(),
     "imageform.io.read_camera": call(V("camera_file")),
     "imageform.io.read_image": call(V("png_file")),
     "imageform.io.read_png": call(V("png_file")),
+    "imageform.io.parse_icc": call(icc_profile("adobe_rgb")),
     "imageform.io.write_camera": call(path=V("tmpfile_png"), camera=V("camera")),
     "imageform.io.write_image": call(path=V("tmpfile_png"), image=V("rgb")),
     "imageform.io.write_png": call(V("tmpfile_png"), V("rgb_u8")),

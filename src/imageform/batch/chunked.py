@@ -109,6 +109,15 @@ _HONOURED = {
 }
 
 
+def _declared(path: Path) -> str:
+    """Name the RGB space an image file declares (``image_color_space``), or srgb."""
+    from imageform.io import IMAGE_FORMATS, image_color_space
+
+    if path.suffix.lower() not in IMAGE_FORMATS or not path.is_file():
+        return "srgb"  # a Zarr store declares nothing imageform reads
+    return image_color_space(path).name or "srgb"
+
+
 def _options(cmd: str, options: Any) -> dict[str, Any]:
     """Return the options of ``cmd``, as the names the block functions use.
 
@@ -302,6 +311,8 @@ def process_chunked(
         with dask.config.set(scheduler="threads", num_workers=workers):
             if cmd == "convert":
                 s, d = opts["from"], opts["to"]
+                if s == "auto":  # the space the file declares (ICC profile), else sRGB
+                    s = _declared(src_p)
                 params = {k: opts[k] for k in ("white",) if opts.get(k) is not None}
                 op: tuple[Any, ...] = (_convert_block, s, d, params)
                 displayable = d in DISPLAYABLE_SPACES

@@ -279,6 +279,13 @@ def _detect(
                     )
             continue
         problem = lattice_problem(grid)
+        if problem is not None and not problem.startswith("the grid's cells"):
+            # a response peak sits up to ~2 px off its corner where squares are small and
+            # foreshortened (a board turned steeply, a wide-angle lens): the bend and spacing
+            # tests are made again on the sub-pixel corners before the grid is dropped
+            sharp = _sharpened(image.float, grid)
+            if lattice_problem(sharp) is None:
+                grid, problem = sharp, None
         means = None if problem is not None else cell_means(image.float, grid)
         if means is not None and not cell_parity_ok(means):
             problem = "the cells of the grid do not alternate dark and bright"
@@ -345,8 +352,9 @@ def find_checkerboard(
         Squares must be at least about ``5 sigma`` pixels wide.
     half_window : int, optional
         Half size of the refinement window (OpenCV's ``winSize``); by default
-        ``min(11, max(2, floor(0.4 * shortest grid step)))`` so that the window never
-        reaches the neighbouring corners.
+        ``min(11, max(2, floor(0.4 s), min(5, floor(0.5 s))))`` for the shortest grid
+        step ``s``, so that the window never reaches the neighbouring corners (half the
+        step, up to 5 px, where squares are small: blurred narrow squares need it).
     max_iter, tol : int, float
         Refinement stopping rule: at most ``max_iter`` iterations, or a step of at most
         ``tol`` pixels (OpenCV's ``TermCriteria(EPS + COUNT, 30, 0.001)``; ``eps`` is the
@@ -477,6 +485,28 @@ def _plane_rms(corners: NDArray[np.float64] | None, size: tuple[int, int]) -> fl
     return float(np.sqrt(np.mean(np.sum((fit - corners) ** 2, axis=1))))
 
 
+def _half_window(grid: NDArray[np.float64]) -> int:
+    """Give the refinement's default half window: 0.4 of the shortest grid step, 2-11 px.
+
+    Where squares are small (the shortest step under 12.5 px: a board far away or turned
+    steeply) the window takes half the step, up to 5 px: a window of 2-3 px on an edge
+    blurred over 2 px left corners 0.4-0.8 px off (median) and up to 3.6 px, half the step
+    brought them to 0.1-0.2 px (rendered views through a wide-angle lens, 11 x 8 board).
+    """
+    step = min(
+        float(np.linalg.norm(np.diff(grid, axis=0), axis=-1).min()),
+        float(np.linalg.norm(np.diff(grid, axis=1), axis=-1).min()),
+    )
+    return min(11, max(2, math.floor(0.4 * step), min(5, math.floor(0.5 * step))))
+
+
+def _sharpened(gray: NDArray[np.floating], grid: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``grid`` (R, C, 2) with each corner refined as :func:`_finish` refines it."""
+    hw = _half_window(grid)
+    refined, _ = refine_clean(gray, grid.reshape(-1, 2), hw, hw, 30, 1e-3)
+    return refined.reshape(grid.shape)
+
+
 def _finish(
     gray: NDArray[np.floating],
     grid: NDArray[np.float64],
@@ -491,11 +521,7 @@ def _finish(
     if not refine:
         return CheckerboardResult(True, pts.copy(), "", size, None, sigma)
     if half_window is None:
-        step = min(
-            float(np.linalg.norm(np.diff(grid, axis=0), axis=-1).min()),
-            float(np.linalg.norm(np.diff(grid, axis=1), axis=-1).min()),
-        )
-        half_window = min(11, max(2, math.floor(0.4 * step)))
+        half_window = _half_window(grid)
     refined, status = refine_clean(gray, pts, half_window, half_window, max_iter, tol)
     problem = lattice_problem(refined.reshape(grid.shape))
     if problem is not None:

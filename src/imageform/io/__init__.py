@@ -1,7 +1,8 @@
 """imageform.io: the one place where files are read and written.
 
 Images (PNG 8/16-bit, JPEG, TIFF, ``.npy``) with one rule for shape, alpha, orientation and
-memory bounds (:func:`read_image`, :func:`write_image`); raw files (:func:`write_dng`,
+memory bounds (:func:`read_image`, :func:`write_image`), and the colour space a file
+declares in its ICC profile or tags (:func:`image_color_space`); raw files (:func:`write_dng`,
 :func:`read_raw`, :func:`develop`, docs/raw.md); the one camera file, versioned TOML
 (:func:`read_camera`, :func:`write_camera`, docs/camera-file.md); video files, image
 sequences and capture devices (:func:`open_video`, :class:`VideoWriter`, PyAV).
@@ -22,11 +23,20 @@ from imageform.io.camera_file import (
     read_camera,
     write_camera,
 )
+from imageform.io.icc import (
+    RGB_PROFILED,
+    DeclaredColorSpace,
+    IccProfile,
+    icc_profile,
+    identify_icc,
+    parse_icc,
+)
 from imageform.io.image_io import (
     DEFAULT_MAX_PIXELS,
     IMAGE_FORMATS,
     ImageInfo,
     WrittenImage,
+    image_color_space,
     image_format,
     image_info,
     max_pixels,
@@ -71,6 +81,7 @@ __all__ = [
     "OPTICS_MODELS",
     "PLAN_MESH_SUFFIXES",
     "RAW_MAX_PIXELS",
+    "RGB_PROFILED",
     "STEREO_FILE_FORMAT",
     "STEREO_FILE_VERSION",
     "VIDEO_SUFFIXES",
@@ -79,8 +90,10 @@ __all__ = [
     "CameraOptics",
     "CameraSensitivity",
     "CameraSensor",
+    "DeclaredColorSpace",
     "Development",
     "Frame",
+    "IccProfile",
     "ImageInfo",
     "Plan",
     "Provenance",
@@ -91,10 +104,14 @@ __all__ = [
     "VideoWriter",
     "WrittenImage",
     "develop",
+    "icc_profile",
+    "identify_icc",
+    "image_color_space",
     "image_format",
     "image_info",
     "max_pixels",
     "open_video",
+    "parse_icc",
     "read_camera",
     "read_image",
     "read_plan",

@@ -34,7 +34,7 @@ import threading
 import warnings
 from pathlib import Path
 from types import MappingProxyType
-from typing import Any, NamedTuple
+from typing import TYPE_CHECKING, Any, NamedTuple
 
 import numpy as np
 
@@ -51,11 +51,15 @@ from imageform._validate import (
 )
 from imageform.errors import InvalidInputError
 
+if TYPE_CHECKING:
+    from imageform.io.icc import DeclaredColorSpace
+
 __all__ = [
     "DEFAULT_MAX_PIXELS",
     "IMAGE_FORMATS",
     "ImageInfo",
     "WrittenImage",
+    "image_color_space",
     "image_format",
     "image_info",
     "max_pixels",
@@ -589,6 +593,7 @@ def write_image(
     out_of_range: str = "error",
     quality: int = 95,
     clip: bool | None = None,
+    color_space: str | None = None,
 ) -> WrittenImage:
     """Write an image atomically; the format follows the suffix.
 
@@ -609,6 +614,11 @@ def write_image(
         JPEG quality, 1 to 100.
     clip : bool, optional
         Deprecated: ``clip=True`` is ``out_of_range="clip"``.
+    color_space : str, optional
+        The RGB space the values are in: its ICC profile (:func:`icc_profile`) is embedded
+        in a PNG (``iCCP``), JPEG or TIFF so that viewers and :func:`image_color_space`
+        read the colours as meant. None or ``srgb``: nothing is embedded (sRGB is what an
+        untagged file means); a space without a shipped profile is refused.
 
     Returns
     -------
@@ -640,6 +650,11 @@ def write_image(
     p = check_writable(path, "path")
     fmt = image_format(p)
     out_of_range = check_option(out_of_range, _OUT_OF_RANGE, "out-of-range policy")
+    profile = None
+    if color_space is not None:
+        from imageform.io.icc import embedded_profile
+
+        profile = embedded_profile(color_space)  # refuses a space without one
     bits = bit_depth
     if bits is not None and (isinstance(bits, bool) or bits not in (8, 16)):
         raise InvalidInputError(f"expected bit_depth 8 or 16, got {describe(bits)}")
@@ -664,8 +679,10 @@ def write_image(
         if bits is not None:
             a, n_out = _quantise(a, bits, out_of_range, p)
         channels = a.shape[-1] if a.ndim == 3 else 1
-        extra = {"extrasamples": ["unassalpha"]} if channels in (2, 4) else {}
+        extra: dict[str, Any] = {"extrasamples": ["unassalpha"]} if channels in (2, 4) else {}
         photometric = "rgb" if channels in (3, 4) else "minisblack"
+        if profile is not None and channels in (3, 4):
+            extra["iccprofile"] = profile
         atomic_write(p, lambda t: tifffile.imwrite(t, a, photometric=photometric, **extra))
         return WrittenImage(bits if a.dtype.kind == "u" else None, n_out)
     depth = bits if bits is not None else (16 if a.dtype == np.uint16 else 8)
@@ -675,14 +692,96 @@ def write_image(
         if a.ndim == 3 and a.shape[-1] in (2, 4):
             raise InvalidInputError(f"JPEG has no alpha channel; write {p.stem}.png to keep it")
     q, n_out = _quantise(a, depth, out_of_range, p)
+    rgb = q.ndim == 3 and q.shape[-1] in (3, 4)
     if fmt == "png":
         import imagecodecs
 
-        atomic_write(p, lambda t: t.write_bytes(imagecodecs.png_encode(q, level=6)))
+        def png(t: Path) -> None:
+            data = bytes(imagecodecs.png_encode(q, level=6))
+            t.write_bytes(_with_iccp(data, profile) if profile is not None and rgb else data)
+
+        atomic_write(p, png)
     else:
         from PIL import Image
 
         if not isinstance(quality, int) or not 1 <= quality <= 100:
             raise InvalidInputError(f"expected JPEG quality 1 to 100, got {quality!r}")
-        atomic_write(p, lambda t: Image.fromarray(q).save(t, format="JPEG", quality=quality))
+        icc = {"icc_profile": profile} if profile is not None and rgb else {}
+        atomic_write(p, lambda t: Image.fromarray(q).save(t, format="JPEG", quality=quality, **icc))
     return WrittenImage(depth, n_out)
+
+
+def _with_iccp(png: bytes, profile: bytes) -> bytes:
+    """``png`` with an ``iCCP`` chunk (PNG 3rd ed. sec. 11.3.2.3) right after ``IHDR``."""
+    import struct
+    import zlib
+
+    body = b"icc\0\0" + zlib.compress(profile)  # name, NUL, compression method 0
+    chunk = struct.pack(">I", len(body)) + b"iCCP" + body
+    chunk += struct.pack(">I", zlib.crc32(b"iCCP" + body) & 0xFFFFFFFF)
+    end = 8 + 8 + 13 + 4  # signature, IHDR's length and type, its 13 bytes, its CRC
+    return png[:end] + chunk + png[end:]
+
+
+def image_color_space(path: str | Path) -> DeclaredColorSpace:
+    """Return the colour space an image file declares.
+
+    In this order: an embedded ICC profile (JPEG APP2, PNG ``iCCP``, TIFF tag 34675) named
+    by :func:`identify_icc`; PNG's ``sRGB`` chunk; EXIF ``ColorSpace`` 1 (sRGB), or
+    uncalibrated with the interoperability index ``R03`` (Adobe RGB, the DCF option camera
+    JPEGs use). A profile imageform does not recognise gives ``name`` None with its
+    description; ``.npy`` files and files that declare nothing give ``(None, "none", "")``.
+
+    Parameters
+    ----------
+    path : str or Path
+        A ``.png``, ``.jpg``/``.jpeg``, ``.tif``/``.tiff`` or ``.npy`` file.
+
+    Returns
+    -------
+    DeclaredColorSpace
+
+    Raises
+    ------
+    InvalidInputError
+        A missing or unreadable file, or a corrupt embedded profile.
+
+    Examples
+    --------
+    >>> import tempfile, os
+    >>> import numpy as np
+    >>> from imageform.io import image_color_space, write_image
+    >>> p = os.path.join(tempfile.mkdtemp(), "p3.png")
+    >>> _ = write_image(p, np.full((2, 2, 3), 0.5), color_space="display_p3")
+    >>> image_color_space(p)
+    DeclaredColorSpace(name='display_p3', source='icc', description='sP3')
+    """
+    from imageform.io.icc import DeclaredColorSpace, identify_icc, parse_icc
+
+    fmt = image_format(path)
+    p = Path(path)
+    if not p.is_file():
+        raise InvalidInputError(f"cannot read {p}: no such file")
+    if fmt == "npy":
+        return DeclaredColorSpace(None, "none", "")
+    from PIL import Image, UnidentifiedImageError
+
+    try:
+        with Image.open(p) as im:
+            icc = im.info.get("icc_profile")
+            srgb_chunk = fmt == "png" and "srgb" in im.info
+            exif = im.getexif()
+            cs = exif.get_ifd(0x8769).get(0xA001)
+            interop = exif.get_ifd(0xA005).get(0x0001)
+    except (OSError, UnidentifiedImageError, ValueError, SyntaxError) as err:
+        raise InvalidInputError(f"cannot read {p}: {err}") from None
+    if icc:
+        prof = parse_icc(icc)
+        return DeclaredColorSpace(identify_icc(prof), "icc", prof.description)
+    if srgb_chunk:
+        return DeclaredColorSpace("srgb", "png-srgb", "")
+    if cs == 1:
+        return DeclaredColorSpace("srgb", "exif", "")
+    if cs == 0xFFFF and isinstance(interop, str) and interop.strip("\0") == "R03":
+        return DeclaredColorSpace("adobe_rgb", "exif", "")
+    return DeclaredColorSpace(None, "none", "")

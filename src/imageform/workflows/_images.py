@@ -215,7 +215,14 @@ def band_rows(shape: tuple[int, ...], band_bytes: int = BAND_BYTES) -> int:
 
 
 def write_mapped(
-    run: Run, path: Path, image: Any, fn: Any, opts: Any, *, like: Any = None
+    run: Run,
+    path: Path,
+    image: Any,
+    fn: Any,
+    opts: Any,
+    *,
+    like: Any = None,
+    color_space: str | None = None,
 ) -> tuple[int, Any, Any, Any, tuple[int, ...]]:
     """Write ``fn(image)`` to ``path``, computed a band of rows at a time.
 
@@ -227,6 +234,7 @@ def write_mapped(
 
     Returns the clip count (values outside [0, 1] in an integer output), the computed dtype, the
     per-channel minimum and maximum of the computed values, and the result's shape.
+    ``color_space``: the RGB space whose ICC profile the file carries (``write_image``).
     """
     import numpy as np
 
@@ -288,7 +296,7 @@ def write_mapped(
     shape = tuple(dest.shape)
     if dest.ndim == 3 and dest.shape[-1] == 1 and fmt != "npy":
         dest = dest[..., 0]
-    write_image(run.file(path), dest, bit_depth=bits, out_of_range=policy)
+    write_image(run.file(path), dest, bit_depth=bits, out_of_range=policy, color_space=color_space)
     if n_out:
         run.note(
             f"note: {n_out} values outside [0, 1] were clipped to fit the "

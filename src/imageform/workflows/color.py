@@ -81,7 +81,15 @@ _Coords = Literal["xy", "uv"]
 class ConvertOptions(ImageIn, ImageOut, OnDevice):
     """Options of ``imageform convert``."""
 
-    src: str = option("srgb", flag="--from", help="Colour space of the input.", metavar="SPACE")
+    src: str = option(
+        "auto",
+        flag="--from",
+        help=(
+            "Colour space of the input; auto: the one the file declares (ICC profile, PNG "
+            "sRGB chunk, EXIF), else srgb (gray for a grey image)."
+        ),
+        metavar="SPACE",
+    )
     dst: str = option(
         "srgb",
         flag="--to",
@@ -105,7 +113,10 @@ class ConvertOptions(ImageIn, ImageOut, OnDevice):
         super().check()
         from imageform.color import space_name
 
-        object.__setattr__(self, "src", space_name(self.src, "--from (src)"))
+        if str(self.src).strip().lower() == "auto":
+            object.__setattr__(self, "src", "auto")
+        else:
+            object.__setattr__(self, "src", space_name(self.src, "--from (src)"))
         object.__setattr__(self, "dst", space_name(self.dst, "--to (dst)"))
 
     def check_output(self, path: Path) -> None:
@@ -137,22 +148,30 @@ def convert(run: Run, opts: ConvertOptions, *, out: Path, image: Path) -> Result
     """``imageform convert``: one image file from one colour space to another."""
     refuse_absent_device(opts)  # before any file is read
     from imageform.color import SPACES, convert, path
+    from imageform.io import RGB_PROFILED, image_color_space
 
-    src, dst = opts.src, opts.dst
-    edges = path(src, dst)
+    dst = opts.dst
     opts.check_output(out)
     img = read(image, opts)
+    src, declared = opts.src, None
+    if src == "auto":
+        declared = image_color_space(image)
+        src = _declared_space(run, image, declared, grey=img.shape[-1] == 1)
+    edges = path(src, dst)
     if src != "gray" and img.shape[-1] == 1:
         raise InvalidInputError(f"{image} is a grey image; convert it with --from gray")
     params = opts.params()
     fn: Any = lambda band: convert(band, src, dst, **params)  # noqa: E731
     if opts.device == "cuda":
         fn = gpu_bands(run, f"{src} -> {dst} on a {img.dtype} image", fn)
-    n_out, dtype, lo, hi, shape = write_mapped(run, out, img, fn, opts, like=img)
+    tag = dst if dst in RGB_PROFILED else None
+    n_out, dtype, lo, hi, shape = write_mapped(run, out, img, fn, opts, like=img, color_space=tag)
     summary = {
         "input": image,
         "output": out,
         "from": src,
+        "declared": None if declared is None else declared.name,
+        "icc_profile_written": tag not in (None, "srgb"),
         "to": dst,
         "path": [e.function for e in edges],
         "shape": list(shape),
@@ -165,6 +184,24 @@ def convert(run: Run, opts: ConvertOptions, *, out: Path, image: Path) -> Result
     }
     how = " -> ".join(summary["path"]) or "copy"
     return Result(summary, (f"{image} ({src}) -> {out} ({dst}): {how}",))
+
+
+def _declared_space(run: Run, image: Path, declared: Any, *, grey: bool) -> str:
+    """``--from auto``: the space ``image`` declares, else srgb (gray for a grey image)."""
+    if grey:
+        return "gray"
+    if declared.name is not None:
+        if declared.name != "srgb":
+            how = "its ICC profile" if declared.source == "icc" else "its EXIF tags"
+            run.note(f"note: {image} declares {declared.name} in {how}; read as {declared.name}"
+                     " (--from overrides)")  # fmt: skip
+        return str(declared.name)
+    if declared.source == "icc":
+        run.note(
+            f"note: {image} carries an ICC profile imageform does not recognise "
+            f"({declared.description or 'no description'}); read as srgb (--from overrides)"
+        )
+    return "srgb"
 
 
 # ---------------------------------------------------------------- white balance

@@ -1,0 +1,334 @@
+"""Colour spaces that image files declare: ICC profiles, PNG's sRGB chunk, EXIF.
+
+A phone writes its photographs in Display P3, a camera set to Adobe RGB writes Adobe RGB,
+a raw converter often ProPhoto; the pixel values mean different colours in each. The file
+says which in an embedded ICC profile (ICC.1:2010, the matrix/TRC form every RGB working
+space uses), in PNG's ``sRGB`` chunk, or in EXIF's ``ColorSpace`` tag (1: sRGB;
+uncalibrated with the DCF interoperability index ``R03``: Adobe RGB). Reading those values
+as sRGB is wrong by several CIEDE2000 on saturated colours.
+
+:func:`~imageform.io.image_color_space` reads what a file declares and names the matching space of
+:data:`imageform.color.RGB_SPACES` (or its ``linear_`` twin): a profile's primaries and
+white, brought back from the profile connection space (D50) through its ``chad`` tag (or
+Bradford from its ``wtpt`` for version 2 profiles), within 0.003 in xy, and its tone curves
+within 0.004 of the space's decoding at six levels. :func:`icc_profile` gives the profile
+imageform embeds when it writes an image in one of those spaces (small public-domain
+profiles, ``io/data/icc/README.md``).
+"""
+
+from __future__ import annotations
+
+import struct
+from functools import cache
+from importlib import resources
+from typing import NamedTuple
+
+import numpy as np
+from numpy.typing import NDArray
+
+from imageform.errors import InvalidInputError
+
+__all__ = [
+    "RGB_PROFILED",
+    "DeclaredColorSpace",
+    "IccProfile",
+    "icc_profile",
+    "identify_icc",
+    "parse_icc",
+]
+
+#: The profile connection space's white, ICC.1:2010 sec. 7.2.16 (D50, s15Fixed16 values).
+_D50 = np.array([0.9642, 1.0, 0.8249])
+#: Bradford cone response (Lam 1985; ICC.1:2010 annex E).
+_BRADFORD = np.array(
+    [[0.8951, 0.2664, -0.1614], [-0.7502, 1.7135, 0.0367], [0.0389, -0.0685, 1.0296]]
+)
+#: Profiles imageform embeds, per space (io/data/icc/README.md: source and licence).
+_SHIPPED = {
+    "srgb": "sRGB-v2-magic.icc",
+    "display_p3": "DisplayP3-v2-magic.icc",
+    "adobe_rgb": "AdobeCompat-v2.icc",
+    "prophoto": "ProPhoto-v2-magic.icc",
+    "rec2020": "Rec2020-v2-magic.icc",
+    "rec709": "Rec709-v2-magic.icc",
+    "linear_srgb": "scRGB-v2.icc",
+}
+#: Spaces with a shipped ICC profile (embedded by ``write_image(..., color_space=...)``).
+RGB_PROFILED = tuple(_SHIPPED)
+_XY_TOL = 0.003
+_TRC_TOL = 0.004
+_LEVELS = np.array([0.02, 0.1, 0.25, 0.5, 0.75, 0.95])
+
+
+class IccProfile(NamedTuple):
+    """What imageform reads of an ICC profile.
+
+    ``version`` (major, minor), ``color_space`` (the data colour space signature: ``RGB``,
+    ``GRAY``, ``CMYK`` ...), ``description``; for matrix/TRC RGB profiles ``matrix`` (3, 3)
+    (columns: the red, green and blue colorants in the PCS, D50), ``white`` (native white
+    XYZ: ``chad``⁻¹ D50, or ``wtpt``), ``primaries_xy`` (3, 2) and ``white_xy`` at the
+    native white, ``curves`` (three callables from encoded to linear); otherwise None.
+    """
+
+    version: tuple[int, int]
+    color_space: str
+    description: str
+    matrix: NDArray[np.float64] | None
+    white: NDArray[np.float64] | None
+    primaries_xy: NDArray[np.float64] | None
+    white_xy: NDArray[np.float64] | None
+    curves: tuple[object, object, object] | None
+
+
+class DeclaredColorSpace(NamedTuple):
+    """The colour space an image file declares (:func:`image_color_space`).
+
+    ``name``: a space of :data:`imageform.color.SPACES` (``srgb``, ``display_p3``,
+    ``adobe_rgb``, ``prophoto``, ``rec2020``, ``rec709`` or a ``linear_`` twin), or None
+    when the file declares nothing or a profile imageform does not recognise. ``source``:
+    ``icc``, ``png-srgb``, ``exif`` or ``none``. ``description``: the profile's own
+    description (``""`` without one).
+    """
+
+    name: str | None
+    source: str
+    description: str
+
+
+def _s15(b: bytes) -> float:
+    return struct.unpack(">i", b)[0] / 65536.0
+
+
+def _curve(data: bytes, off: int, size: int) -> object:
+    """One tone curve (``curv`` or ``para``, ICC.1:2010 sec. 10.5, 10.16) as a function."""
+    sig = data[off : off + 4]
+    if sig == b"curv":
+        (n,) = struct.unpack(">I", data[off + 8 : off + 12])
+        if n == 0:
+            return lambda x: np.asarray(x, dtype=np.float64)
+        if n == 1:
+            g = struct.unpack(">H", data[off + 12 : off + 14])[0] / 256.0
+            return lambda x: np.power(np.clip(x, 0.0, 1.0), g)
+        if off + 12 + 2 * n > len(data):
+            raise InvalidInputError("ICC profile: a curve runs past the end of the profile")
+        table = np.frombuffer(data, ">u2", n, off + 12).astype(np.float64) / 65535.0
+        grid = np.linspace(0.0, 1.0, n)
+        return lambda x: np.interp(np.clip(x, 0.0, 1.0), grid, table)
+    if sig == b"para":
+        (kind,) = struct.unpack(">H", data[off + 8 : off + 10])
+        count = {0: 1, 1: 3, 2: 4, 3: 5, 4: 7}.get(kind)
+        if count is None:
+            raise InvalidInputError(f"ICC profile: unknown parametric curve type {kind}")
+        p = [_s15(data[off + 12 + 4 * i : off + 16 + 4 * i]) for i in range(count)]
+        # every type as Y = (aX + b)^g + e for X >= d, else cX + f (ICC.1:2010 table 68)
+        g, a, b, c, d, e, f = 1.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0
+        if kind == 0:
+            g = p[0]
+        elif kind in (1, 2):
+            g, a, b = p[:3]
+            d = -b / a if a else 0.0
+            if kind == 2:
+                e = f = p[3]
+        else:
+            g, a, b, c, d = p[:5]
+            if kind == 4:
+                e, f = p[5], p[6]
+
+        def para(x: object) -> NDArray[np.float64]:
+            x = np.clip(np.asarray(x, dtype=np.float64), 0.0, 1.0)
+            hi = np.power(np.maximum(a * x + b, 0.0), g) + e
+            return np.where(x >= d, hi, c * x + f)
+
+        return para
+    raise InvalidInputError(f"ICC profile: unknown tone curve type {sig!r}")
+
+
+def _text(data: bytes, off: int, size: int) -> str:
+    """Read a ``desc`` (v2), ``mluc`` (v4) or ``text`` tag as a string ("" if unreadable)."""
+    sig = data[off : off + 4]
+    try:
+        if sig == b"desc":
+            (n,) = struct.unpack(">I", data[off + 8 : off + 12])
+            return data[off + 12 : off + 12 + n].split(b"\0")[0].decode("latin-1").strip()
+        if sig == b"mluc":
+            (count,) = struct.unpack(">I", data[off + 8 : off + 12])
+            if count == 0:
+                return ""
+            length, start = struct.unpack(">II", data[off + 20 : off + 28])
+            raw = data[off + start : off + start + length]
+            return raw.decode("utf-16-be", errors="replace").rstrip("\0").strip()
+        if sig == b"text":
+            return data[off + 8 : off + size].split(b"\0")[0].decode("latin-1").strip()
+    except (struct.error, UnicodeDecodeError):
+        return ""
+    return ""
+
+
+def _xy(xyz: NDArray[np.float64]) -> NDArray[np.float64]:
+    s = xyz.sum(axis=0)
+    return np.stack([xyz[0] / s, xyz[1] / s], axis=-1)
+
+
+def parse_icc(data: bytes) -> IccProfile:
+    r"""Read an ICC profile's header, description and matrix/TRC tags.
+
+    ICC.1:2010 (profile version 4.3) and ICC.1:2001-04 (version 2): the 128-byte header,
+    the tag table, ``desc``/``mluc``, ``wtpt``, ``chad``, ``rXYZ``/``gXYZ``/``bXYZ`` and
+    ``rTRC``/``gTRC``/``bTRC`` (``curv`` tables and gammas, ``para`` curves of types 0-4).
+    The colorants are in the PCS (D50); the native white and primaries are
+
+    .. math:: \mathbf{w} = C^{-1}\,\mathbf{w}_{D50},\qquad \mathbf{p}_i = C^{-1}\,\mathbf{c}_i
+
+    with ``C`` the ``chad`` matrix, or Bradford from ``wtpt`` to D50 for a version 2
+    profile without ``chad`` (ICC.1:2010 annex E).
+
+    Parameters
+    ----------
+    data : bytes
+        The whole profile.
+
+    Returns
+    -------
+    IccProfile
+
+    Raises
+    ------
+    InvalidInputError
+        Not an ICC profile (no ``acsp`` signature), truncated, or a tag that points outside
+        it.
+
+    Examples
+    --------
+    >>> from imageform.io import icc_profile, parse_icc
+    >>> p = parse_icc(icc_profile("display_p3"))
+    >>> p.color_space, p.primaries_xy.round(3).tolist()
+    ('RGB', [[0.68, 0.32], [0.265, 0.69], [0.15, 0.06]])
+    """
+    if not isinstance(data, (bytes, bytearray, memoryview)):
+        raise InvalidInputError(
+            f"expected data, an ICC profile, as bytes; got {type(data).__name__}"
+        )
+    data = bytes(data)
+    if len(data) < 132 or data[36:40] != b"acsp":
+        raise InvalidInputError("not an ICC profile (no 'acsp' signature in its header)")
+    version = (data[8], data[9] >> 4)
+    space = data[16:20].decode("latin-1").strip()
+    (count,) = struct.unpack(">I", data[128:132])
+    if 132 + 12 * count > len(data):
+        raise InvalidInputError("ICC profile: its tag table runs past the end of the profile")
+    tags: dict[bytes, tuple[int, int]] = {}
+    for i in range(count):
+        sig, off, size = struct.unpack(">4sII", data[132 + 12 * i : 144 + 12 * i])
+        if off + size > len(data) or size < 8:
+            raise InvalidInputError(f"ICC profile: tag {sig!r} points outside the profile")
+        tags[sig] = (off, size)
+
+    def xyz(sig: bytes) -> NDArray[np.float64]:
+        off, _ = tags[sig]
+        return np.array([_s15(data[off + 8 + 4 * k : off + 12 + 4 * k]) for k in range(3)])
+
+    description = ""
+    if b"desc" in tags:
+        description = _text(data, *tags[b"desc"])
+    rgb = (b"rXYZ", b"gXYZ", b"bXYZ", b"rTRC", b"gTRC", b"bTRC")
+    if space != "RGB" or not all(t in tags for t in rgb):
+        return IccProfile(version, space, description, None, None, None, None, None)
+    M = np.stack([xyz(b"rXYZ"), xyz(b"gXYZ"), xyz(b"bXYZ")], axis=1)
+    if b"chad" in tags:
+        off, _ = tags[b"chad"]
+        chad = np.array([_s15(data[off + 8 + 4 * k : off + 12 + 4 * k]) for k in range(9)])
+        back = np.linalg.inv(chad.reshape(3, 3))
+    elif b"wtpt" in tags and version[0] < 4:
+        w = xyz(b"wtpt")  # version 2: the native white, adapted to D50 (Bradford)
+        lms_w, lms_d50 = _BRADFORD @ w, _BRADFORD @ _D50
+        back = np.linalg.inv(_BRADFORD) @ np.diag(lms_w / lms_d50) @ _BRADFORD
+    else:
+        back = np.eye(3)
+    native = back @ M
+    white = back @ _D50
+    curves = tuple(_curve(data, *tags[t]) for t in (b"rTRC", b"gTRC", b"bTRC"))
+    return IccProfile(
+        version, space, description, M, white, _xy(native), _xy(white[:, None])[0],
+        curves,  # type: ignore[arg-type]
+    )  # fmt: skip
+
+
+@cache
+def _references() -> tuple[tuple[str, NDArray[np.float64], NDArray[np.float64], NDArray], ...]:
+    """(name, primaries xy, white xy, decoded levels) of every encoded RGB space."""
+    from imageform.color import RGB_SPACES, convert, rgb_space
+
+    out = []
+    for name in RGB_SPACES:
+        s = rgb_space(name)
+        ramp = np.repeat(_LEVELS[:, None], 3, axis=1)[None]  # (1, 6, 3) greys
+        linear = np.asarray(convert(ramp, name, f"linear_{name}"))[0, :, 0]
+        out.append((name, np.array(s.primaries_xy), np.array(s.white_xy), linear))
+    return tuple(out)
+
+
+def identify_icc(profile: IccProfile) -> str | None:
+    """Name the space of :data:`imageform.color.SPACES` an RGB profile describes, or None.
+
+    The native primaries and white (see :func:`parse_icc`) within 0.003 in xy of the
+    space's, and each tone curve within 0.004 of the space's decoding (its ``linear_``
+    twin for straight curves) at the levels 0.02, 0.1, 0.25, 0.5, 0.75 and 0.95.
+
+    Examples
+    --------
+    >>> from imageform.io import icc_profile, identify_icc, parse_icc
+    >>> identify_icc(parse_icc(icc_profile("adobe_rgb")))
+    'adobe_rgb'
+    """
+    if not isinstance(profile, IccProfile):
+        raise InvalidInputError(
+            f"expected profile, an IccProfile (parse_icc), got {type(profile).__name__}"
+        )
+    if profile.primaries_xy is None or profile.curves is None or profile.white_xy is None:
+        return None
+    levels = np.stack([np.asarray(c(_LEVELS)) for c in profile.curves])  # type: ignore[operator]
+    for name, prim, white, decoded in _references():
+        if np.max(np.abs(profile.primaries_xy - prim)) > _XY_TOL:
+            continue
+        if np.max(np.abs(profile.white_xy - white)) > _XY_TOL:
+            continue
+        if np.max(np.abs(levels - decoded)) <= _TRC_TOL:
+            return name
+        if np.max(np.abs(levels - _LEVELS)) <= _TRC_TOL:
+            return f"linear_{name}"
+    return None
+
+
+def icc_profile(space: str) -> bytes:
+    """Return the ICC profile imageform embeds for an RGB ``space`` (bytes).
+
+    ``srgb``, ``display_p3``, ``adobe_rgb``, ``prophoto``, ``rec2020``, ``rec709`` and
+    ``linear_srgb`` (scRGB): Clinton Ingram's Compact ICC Profiles (CC0), version 2, listed
+    with their source in ``imageform/io/data/icc/README.md``.
+
+    Raises
+    ------
+    InvalidInputError
+        A space without a shipped profile.
+    """
+    from imageform.color import space_name
+
+    name = space_name(space, "space")
+    if name not in _SHIPPED:
+        raise InvalidInputError(
+            f"no ICC profile is shipped for {name}; spaces with one: {', '.join(_SHIPPED)}"
+        )
+    return _read_shipped(_SHIPPED[name])
+
+
+@cache
+def _read_shipped(file: str) -> bytes:
+    return (resources.files("imageform.io") / "data" / "icc" / file).read_bytes()
+
+
+def embedded_profile(space: str) -> bytes | None:
+    """Return the profile :func:`~imageform.io.write_image` embeds for ``space`` (sRGB: None)."""
+    from imageform.color import space_name
+
+    name = space_name(space, "color_space")
+    return None if name == "srgb" else icc_profile(name)
