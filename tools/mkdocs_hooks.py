@@ -55,6 +55,7 @@ BENCH_SCRIPTS: dict[str, str] = {
     "chart-input": "benchmarks/check_chart_input.py",
     "chart-photos": "benchmarks/check_chart_photos.py",
     "charuco": "benchmarks/bench_charuco.py",
+    "charuco-real": "benchmarks/check_charuco_real.py",
     "checkerboard": "benchmarks/bench_checkerboard.py",
     "checkerboard-large": "benchmarks/check_checkerboard_large.py",
     "chunked": "benchmarks/bench_chunked.py",

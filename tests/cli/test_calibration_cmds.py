@@ -268,6 +268,80 @@ def test_calibrate_charuco_views(tmp_path: Path, capsys: pytest.CaptureFixture[s
     )
 
 
+def test_calibrate_charuco_legacy_board(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """A board of even rows printed by OpenCV before 4.6 (markers in the other squares) is
+    calibrated from with the plain --board charuco:8x6, and the output says how it was read
+    (it gave no corner: 'found ... in 0 view(s)')."""
+    from PIL import Image
+
+    from imageform.geometry import CharucoBoard
+    from tests.geometry.test_charuco import _render_view
+
+    board = CharucoBoard((8, 6), 20.0, 15.0, "6x6_250", legacy=True)
+    px = 64
+    art = board.image(px, margin_px=px)
+    K_true = np.array([[700.0, 0, 322.0], [0, 705.0, 238.0], [0, 0, 1]])
+    rng = np.random.default_rng(6)
+    for k in range(5):
+        rvec = np.array([rng.uniform(-0.5, 0.5), rng.uniform(-0.5, 0.5), rng.uniform(-0.3, 0.3)])
+        tvec = np.array([-80.0 + rng.uniform(-20, 20), -60.0 + rng.uniform(-20, 20), 330])
+        img = _render_view(board, art, px, K_true, np.zeros(5), rvec, tvec, (640, 480))
+        Image.fromarray(img).save(tmp_path / f"view{k:02d}.png")
+    out = tmp_path / "cam.toml"
+    argv = ["calibrate", str(tmp_path / "view*.png"), "--board", "charuco:8x6"]
+    argv += ["--square", "20mm", "--marker", "15mm", "-o", str(out)]
+    assert main(argv) == 0, capsys.readouterr().err
+    assert "legacy layout" in capsys.readouterr().err
+    cam = read_camera(out).camera
+    np.testing.assert_allclose(np.asarray(cam.K)[[0, 1], [0, 1]], [700.0, 705.0], rtol=1e-2)
+
+
+def test_calibrate_charuco_board_from_a_later_marker(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """--first-marker: a board whose markers start at 60 of 6x6_250 (a rig's second board)
+    is calibrated from; without it no view has a marker of the board."""
+    from PIL import Image
+
+    from imageform.geometry import CharucoBoard
+    from tests.geometry.test_charuco import _render_view
+
+    board = CharucoBoard((7, 5), 20.0, 15.0, "6x6_250", first_marker=60)
+    px = 64
+    art = board.image(px, margin_px=px)
+    K_true = np.array([[700.0, 0, 322.0], [0, 705.0, 238.0], [0, 0, 1]])
+    rng = np.random.default_rng(7)
+    for k in range(4):
+        rvec = np.array([rng.uniform(-0.5, 0.5), rng.uniform(-0.5, 0.5), rng.uniform(-0.3, 0.3)])
+        tvec = np.array([-70.0 + rng.uniform(-20, 20), -50.0 + rng.uniform(-20, 20), 300])
+        img = _render_view(board, art, px, K_true, np.zeros(5), rvec, tvec, (640, 480))
+        Image.fromarray(img).save(tmp_path / f"view{k:02d}.png")
+    out = tmp_path / "cam.toml"
+    argv = ["calibrate", str(tmp_path / "view*.png"), "--board", "charuco:7x5"]
+    argv += ["--square", "20mm", "--marker", "15mm", "-o", str(out)]
+    assert main(argv) == 1
+    assert "in 0 view(s)" in capsys.readouterr().err
+    assert main([*argv, "--first-marker", "60"]) == 0, capsys.readouterr().err
+    cam = read_camera(out).camera
+    np.testing.assert_allclose(np.asarray(cam.K)[[0, 1], [0, 1]], [700.0, 705.0], rtol=1e-2)
+    assert (
+        main(
+            [
+                "calibrate",
+                str(tmp_path / "view00.png"),
+                "--board",
+                "9x6",
+                "--first-marker",
+                "4",
+                "-o",
+                str(out),
+            ]
+        )
+        == 2
+    )
+    assert "--first-marker is for a ChArUco" in capsys.readouterr().err
+
+
 def test_calibrate_charuco_refusals(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     from PIL import Image
 

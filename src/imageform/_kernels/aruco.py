@@ -326,13 +326,28 @@ def _quad(
 
 
 @njit(nogil=True, error_model="numpy")
+def _corner_tolerance(shortest_side: float) -> float:  # pragma: no cover - compiled
+    """Largest move (px) of a quad's corner from its extreme boundary pixel to the fitted sides.
+
+    3 px, or 3 % of the shortest side when larger: a marker of a few hundred pixels (a
+    12-megapixel photograph of a printed board) has corners rounded by the lens and the
+    print and sides bent with the paper by several pixels. 3 % is the share of its perimeter
+    OpenCV's contour approximation allows a marker (``polygonalApproxAccuracyRate``), and
+    keeps the decoding's samples (the middle 40 % of each cell) in their cells up to
+    9 x 9 cells.
+    """
+    return max(3.0, 0.03 * shortest_side)
+
+
+@njit(nogil=True, error_model="numpy")
 def _refine_sides(
     quad: NDArray[np.float64], pts: NDArray[np.float64], out: NDArray[np.float64]
 ) -> bool:  # pragma: no cover - compiled
     """Put the corners where the four fitted sides meet into ``out``.
 
     False when a side has too few pixels, two sides are parallel or a corner moves more
-    than 3 px.
+    than ``_corner_tolerance`` of the shortest side (3 px, or 3 % of the side on large
+    markers).
 
     Each side is the total-least-squares line through the boundary pixels along it, moved
     half a pixel outwards (boundary pixel centres lie half a pixel inside the dark edge).
@@ -382,6 +397,12 @@ def _refine_sides(
         lines[k, 1] = ly
         lines[k, 2] = -(lx * mx + ly * my) - 0.5
     worst = 0.0
+    shortest = math.inf
+    for k in range(4):
+        shortest = min(
+            shortest,
+            math.hypot(quad[(k + 1) % 4, 0] - quad[k, 0], quad[(k + 1) % 4, 1] - quad[k, 1]),
+        )
     for k in range(4):
         a1, b1, c1 = lines[(k + 3) % 4, 0], lines[(k + 3) % 4, 1], lines[(k + 3) % 4, 2]
         a2, b2, c2 = lines[k, 0], lines[k, 1], lines[k, 2]
@@ -391,7 +412,7 @@ def _refine_sides(
         out[k, 0] = (b1 * c2 - b2 * c1) / det
         out[k, 1] = (c1 * a2 - c2 * a1) / det
         worst = max(worst, math.hypot(out[k, 0] - quad[k, 0], out[k, 1] - quad[k, 1]))
-    return worst <= 3.0
+    return worst <= _corner_tolerance(shortest)
 
 
 @njit(nogil=True, error_model="numpy")

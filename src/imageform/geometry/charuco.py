@@ -12,6 +12,10 @@ Layout (OpenCV's, tested against ``cv2.aruco.CharucoBoard.generateImage``): ``sq
 odd, and the white squares hold markers ``0, 1, 2, ...`` row by row, each centred in its
 square. Inner corner ``k = r (cols - 1) + c`` sits at ``((c + 1) s, (r + 1) s, 0)`` on the
 board (``s`` the square length; x to the right, y down the printed board, z into it).
+OpenCV before 4.6 drew boards with an even number of rows the other way round (the top-left
+square white, holding marker 0: its ``setLegacyPattern(true)``, here ``legacy=True``); the
+inner corners and their ids are the same in both layouts, and :func:`detect_charuco` reads a
+board of either layout whichever it is told (the markers found decide).
 
 Corner detection (:func:`detect_charuco`): the markers are found and decoded
 (:func:`imageform.geometry.detect_aruco_markers`); each inner corner with at least
@@ -23,7 +27,7 @@ stays clear of the markers, and kept when it converged near the prediction.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from numpy.typing import NDArray
@@ -54,7 +58,8 @@ _BLACK_SPREAD, _WHITE_FLOOR = 0.3, 0.3
 #: white squares' means give (1 when sharp): below it blur has merged the margins with the
 #: markers' borders and the saddle is not resolved.
 _MIN_RESOLVED = 0.6
-#: Largest relative difference between the contrasts the two white squares give.
+#: Largest relative difference between the contrasts the two white squares give, each as a
+#: share of its own white margins' contrast.
 _WHITE_AGREE = 0.35
 #: Below this resolved share (see ``_MIN_RESOLVED``) a corner is refined again through a
 #: window a pixel larger, and refused when the two points are farther apart than
@@ -69,7 +74,12 @@ class CharucoBoard:
     """A ChArUco board of ``squares = (cols, rows)`` squares with markers from ``dictionary``.
 
     The squares have side ``square_length``, the markers side ``marker_length`` (OpenCV's
-    ``CharucoBoard((cols, rows), square_length, marker_length, dictionary)``).
+    ``CharucoBoard((cols, rows), square_length, marker_length, dictionary)``). ``legacy``:
+    OpenCV's layout before 4.6 (``setLegacyPattern(true)``), which differs on boards with an
+    even number of rows: their top-left square is white and holds marker 0.
+    ``first_marker``: the dictionary id of the board's first marker, the others following
+    (OpenCV's ``ids=np.arange(first, first + n_markers)``), for rigs of several boards from
+    one dictionary; board marker ``k`` is dictionary marker ``first_marker + k``.
 
     Lengths are in the unit the calibration should use (mm, m, ...).
 
@@ -77,7 +87,7 @@ class CharucoBoard:
     ------
     InvalidInputError
         Fewer than 2 squares along a side, a marker not smaller than its square, or more
-        white squares than the dictionary has markers.
+        white squares (after ``first_marker``) than the dictionary has markers.
 
     Examples
     --------
@@ -92,6 +102,8 @@ class CharucoBoard:
     square_length: float
     marker_length: float
     dictionary: str = "6x6_250"
+    legacy: bool = False
+    first_marker: int = 0
 
     def __post_init__(self) -> None:
         """Check the squares, lengths (markers smaller than squares) and the dictionary."""
@@ -111,9 +123,17 @@ class CharucoBoard:
         object.__setattr__(self, "marker_length", m)
         d = aruco_dictionary(self.dictionary)
         object.__setattr__(self, "dictionary", d.name)
-        if self.n_markers > d.size:
+        if not isinstance(self.legacy, bool | np.bool_):
             raise InvalidInputError(
-                f"a {cols} x {rows} board needs {self.n_markers} markers; dictionary "
+                f"expected legacy as True or False, got {describe(self.legacy)}"
+            )
+        object.__setattr__(self, "legacy", bool(self.legacy))
+        first = as_int(self.first_marker, "first_marker", minimum=0, maximum=d.size - 1)
+        object.__setattr__(self, "first_marker", first)
+        if first + self.n_markers > d.size:
+            start = f" from marker {first}" if first else ""
+            raise InvalidInputError(
+                f"a {cols} x {rows} board needs {self.n_markers} markers{start}; dictionary "
                 f"{d.name} has {d.size}"
             )
 
@@ -129,11 +149,19 @@ class CharucoBoard:
         cols, rows = self.squares
         return (cols - 1) * (rows - 1)
 
+    @property
+    def white_parity(self) -> int:
+        """``(r + c) % 2`` of the white squares: 1, or 0 for a legacy board of even rows."""
+        return 0 if self.legacy and self.squares[1] % 2 == 0 else 1
+
     def marker_squares(self) -> NDArray[np.int64]:
-        """``(n_markers, 2)``: the ``(row, col)`` of each marker's square, by marker id."""
+        """``(n_markers, 2)``: the ``(row, col)`` of each marker's square, by board marker.
+
+        Board marker ``k`` is dictionary marker ``first_marker + k``.
+        """
         cols, rows = self.squares
         r, c = np.divmod(np.arange(cols * rows), cols)
-        white = (r + c) % 2 == 1
+        white = (r + c) % 2 == self.white_parity
         return np.column_stack([r[white], c[white]]).astype(np.int64)
 
     def corner_points(self) -> NDArray[np.float64]:
@@ -144,7 +172,7 @@ class CharucoBoard:
         return np.column_stack([(c + 1) * s, (r + 1) * s, np.zeros(r.shape)])
 
     def marker_points(self) -> NDArray[np.float64]:
-        """``(n_markers, 4, 3)``: each marker's corners on the board, by marker id.
+        """``(n_markers, 4, 3)``: each marker's corners on the board, by board marker.
 
         The corners are top-left, top-right, bottom-right, bottom-left as printed.
         """
@@ -196,7 +224,7 @@ class CharucoBoard:
                 y, x = margin + r * sp, margin + c * sp
                 if (r, c) in whites:
                     out[y + off : y + off + mp, x + off : x + off + mp] = aruco_marker_image(
-                        mid, d, size_px=mp
+                        self.first_marker + mid, d, size_px=mp
                     )
                     mid += 1
                 else:
@@ -254,7 +282,9 @@ def detect_charuco(
     Returns
     -------
     CharucoCorners
-        Sorted by id; empty when no corner qualifies.
+        Sorted by id; empty when no corner qualifies. On a board of an even number of rows,
+        whose two layouts differ (see :class:`CharucoBoard`), both are tried and the one giving
+        more corners is kept (the board's own on a tie); its ``board`` says which.
 
     Raises
     ------
@@ -268,8 +298,6 @@ def detect_charuco(
     >>> len(found), found.corners[0].round(1).tolist()
     (24, [89.5, 89.5])
     """
-    from imageform.geometry.checkerboard_subpix import RefinedCorners, refine
-
     if not isinstance(board, CharucoBoard):
         raise InvalidInputError(f"expected board as a CharucoBoard, got {describe(board)}")
     g = _gray01(image)
@@ -279,8 +307,25 @@ def detect_charuco(
         markers = detect_aruco_markers(g, board.dictionary)
     elif not isinstance(markers, ArucoMarkers):
         raise InvalidInputError(f"expected markers as ArucoMarkers, got {describe(markers)}")
-    keep = markers.ids < board.n_markers
-    ids_m, corners_m = markers.ids[keep], markers.corners[keep]
+    found = _corners(g, board, markers, need, shift)
+    if board.squares[1] % 2 == 0 and len(markers) >= need:
+        # OpenCV before 4.6 put the markers of such a board in the other squares: markers
+        # read in the wrong layout give few corners (their squares' colours are swapped)
+        other = _corners(g, replace(board, legacy=not board.legacy), markers, need, shift)
+        if len(other) > len(found):
+            return other
+    return found
+
+
+def _corners(
+    g: NDArray[np.float64], board: CharucoBoard, markers: ArucoMarkers, need: int, shift: float
+) -> CharucoCorners:
+    """Find the corners of ``board`` (in its layout) from the ``markers`` found in ``g``."""
+    from imageform.geometry.checkerboard_subpix import RefinedCorners, refine
+
+    ids_m = markers.ids - board.first_marker  # the board's own marker numbers
+    keep = (ids_m >= 0) & (ids_m < board.n_markers)
+    ids_m, corners_m = ids_m[keep], markers.corners[keep]
     empty = CharucoCorners(np.zeros(0, np.int64), np.zeros((0, 2)), markers, board)
     if len(ids_m) == 0:
         return empty
@@ -374,7 +419,7 @@ def _printed(board: CharucoBoard, xy: NDArray[np.float64]) -> NDArray[np.float64
     n = d.marker_size + 2
     col = np.clip(np.floor(xy[..., 0]).astype(np.int64), 0, cols - 1)
     row = np.clip(np.floor(xy[..., 1]).astype(np.int64), 0, rows - 1)
-    white = (row + col) % 2 == 1
+    white = (row + col) % 2 == board.white_parity
     out = white.astype(np.float64)
     at = np.zeros((rows, cols), dtype=np.int64)
     sq = board.marker_squares()
@@ -387,7 +432,9 @@ def _printed(board: CharucoBoard, xy: NDArray[np.float64]) -> NDArray[np.float64
     inside = white & (cu >= 0) & (cu < n) & (cv >= 0) & (cv < n)
     bits = (cu >= 1) & (cu <= n - 2) & (cv >= 1) & (cv <= n - 2)
     code = d.codes[
-        np.clip(mid, 0, d.size - 1), np.clip(cv - 1, 0, n - 3), np.clip(cu - 1, 0, n - 3)
+        np.clip(mid + board.first_marker, 0, d.size - 1),
+        np.clip(cv - 1, 0, n - 3),
+        np.clip(cu - 1, 0, n - 3),
     ]
     out[inside] = np.where(bits[inside], code[inside], 0).astype(np.float64)
     return out
@@ -419,7 +466,8 @@ def _seen_whole(
     black and white whatever the blur, since blur keeps a square's mean. The corner is kept
     when the black samples are uniform (none above their median by ``_BLACK_SPREAD C``),
     no white-margin sample falls below the black level plus ``_WHITE_FLOOR C``, the two white
-    squares give the same ``C`` (within ``_WHITE_AGREE``), and the margins next to the
+    squares give the same ``C`` as a share of their own margins' contrast (within
+    ``_WHITE_AGREE``: light falling off across the board changes both), and the margins next to the
     corner keep ``_MIN_RESOLVED`` of ``C`` (a blur that merges them with the markers' black
     borders leaves no saddle to refine). An occluder over part of the squares breaks one of
     these; samples outside the image are left out (a corner by the image border is judged
@@ -431,7 +479,8 @@ def _seen_whole(
     corner = np.column_stack([c + 1.0, r + 1.0])  # board, square units
     frac = board.marker_length / board.square_length
     margin = (1.0 - frac) / 2.0
-    # quadrant directions; the top-left square (r, c) is black when r + c is even
+    # quadrant directions; the top-left square (r, c) is black when r + c is even (odd on a
+    # legacy board of even rows)
     quads = np.array([[-1.0, -1.0], [1.0, 1.0], [1.0, -1.0], [-1.0, 1.0]])
     tb = (np.arange(_GRID_BLACK) + 0.5) / _GRID_BLACK * 0.6 + 0.2
     tw = (np.arange(_GRID_WHITE) + 0.5) / _GRID_WHITE
@@ -448,7 +497,7 @@ def _seen_whole(
     near = ts < 0.5  # the half of each margin nearer the corner
 
     # per corner: the black and the white quadrants' directions (m, 2, 2)
-    first = ((r + c) % 2 == 0)[:, None, None]
+    first = ((r + c) % 2 != board.white_parity)[:, None, None]
     qb = np.where(first, quads[None, :2], quads[None, 2:])
     qw = np.where(first, quads[None, 2:], quads[None, :2])
 
@@ -508,7 +557,18 @@ def _seen_whole(
     )
     with np.errstate(divide="ignore", invalid="ignore"):
         cval = np.where((n_use > 0) & (printed_blk > 0.02), (mean_blk - black) / printed_blk, 0.0)
-    agree = (n_use < 2) | (np.abs(con[:, 0] - con[:, 1]) <= _WHITE_AGREE * cval)
+    # the two white squares' contrasts, each against its own white margins (light that
+    # falls off across a large board, or a camera's exposure and tone curve, part the two
+    # squares' contrasts but not their shares of their own margins' contrast); against the
+    # block's contrast where a square's margins are not in the image
+    own_vs, own_ok = vs.reshape(m, 2, -1), oks.reshape(m, 2, -1)
+    margin_w = np.stack([_masked_median(own_vs[:, j], own_ok[:, j]) for j in range(2)], 1)
+    lit = (own_ok.sum(-1) >= 3) & (margin_w - black[:, None] > _MIN_CONTRAST)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        own = con / (margin_w - black[:, None])
+        agree_own = np.abs(own[:, 0] - own[:, 1]) <= _WHITE_AGREE * 0.5 * (own[:, 0] + own[:, 1])
+    agree_block = np.abs(con[:, 0] - con[:, 1]) <= _WHITE_AGREE * cval
+    agree = (n_use < 2) | np.where(lit.all(1), agree_own, agree_block)
     b_max = np.where(okb, vb, -np.inf).max(1)
     s_min = np.where(oks, vs, np.inf).min(1)
     near_all = np.tile(near, 4)[None] & oks  # two margins per white square, two squares

@@ -300,6 +300,13 @@ class CalibrateOptions(_BoardChecks, ImageIn):
         "aruco_original).",
         choices="imageform.geometry.aruco:ARUCO_DICTIONARIES",
     )
+    first_marker: int = option(
+        0,
+        help="ChArUco: the dictionary id of the board's first marker (the others follow), "
+        "for a board of a rig of several from one dictionary.",
+        minimum=0,
+        maximum=1023,
+    )
 
     def check(self) -> None:
         """Check the board; a ChArUco board needs a ``--marker`` smaller than ``--square``."""
@@ -308,6 +315,8 @@ class CalibrateOptions(_BoardChecks, ImageIn):
         if charuco is None:
             if self.marker is not None:
                 raise InvalidInputError("--marker is for a ChArUco --board charuco:COLSxROWS")
+            if self.first_marker:
+                raise InvalidInputError("--first-marker is for a ChArUco --board charuco:COLSxROWS")
             return
         if self.marker is None:
             raise InvalidInputError(
@@ -527,14 +536,27 @@ def _calibrate_charuco(
     """
     from imageform.geometry import CharucoBoard, detect_charuco
 
-    board = CharucoBoard(squares, opts.square_mm(), opts.marker_mm(), opts.dictionary)
+    board = CharucoBoard(
+        squares,
+        opts.square_mm(),
+        opts.marker_mm(),
+        opts.dictionary,
+        first_marker=opts.first_marker,
+    )
     cols, rows = squares
     shape0: tuple[int, int] | None = None
     objs, corners, names, missed = [], [], [], []
     first_missed: object = None
+    legacy_noted = False
     for f, grey in _read_views(run, opts, images):
         shape0 = (int(grey.shape[0]), int(grey.shape[1]))
         found = detect_charuco(grey, board)
+        if found.board.legacy and len(found) and not legacy_noted:
+            run.note(
+                f"{f}: the markers are in OpenCV's legacy layout (boards of even rows drawn "
+                "before OpenCV 4.6: the top-left square white); read as such"
+            )
+            legacy_noted = True
         if len(found) >= MIN_CHARUCO_CORNERS:
             objs.append(found.object_points())
             corners.append(found.corners)
@@ -558,6 +580,7 @@ def _calibrate_charuco(
     command = (
         f"imageform calibrate --board charuco:{cols}x{rows} --square {opts.square} "
         f"--marker {opts.marker} --dictionary {opts.dictionary}"
+        + (f" --first-marker {opts.first_marker}" if opts.first_marker else "")
     )
     return _calibrate_views(run, opts, out, len(images), names, objs, corners, shape0, command)
 
