@@ -337,3 +337,68 @@ def test_no_sea_horizon_on_a_facade(shared_data: Path) -> None:
     if not path.is_file():
         pytest.skip("../shared/data/kodak is not available")
     assert detect_vanishing_points(np.asarray(read_image(path))).horizon is None
+
+
+def _toward(points: list[np.ndarray], n: int, rng: np.random.Generator) -> list[np.ndarray]:
+    """``n`` segments for each homogeneous point of ``points`` (``w = 0``: parallel ones),
+    their midpoints spread over the 768 x 512 frame, 40 to 120 px long."""
+    segs = []
+    for v in points:
+        for _ in range(n):
+            m = rng.uniform([20.0, 20.0], [748.0, 492.0])
+            d = v[:2] - m * v[2]
+            d = d / np.linalg.norm(d) * rng.uniform(20.0, 60.0)
+            segs.append(np.stack([m - d, m + d]))
+    return segs
+
+
+def _segments(segs: list[np.ndarray]) -> object:
+    from imageform.geometry import LineSegments
+
+    n = len(segs)
+    return LineSegments(np.array(segs), np.ones(n), np.full(n, -10.0))
+
+
+def test_one_point_perspective_is_not_outvoted_by_weak_points_that_give_a_focal_length() -> None:
+    """A level camera looking straight down a hall (a real atrium photograph did this): the
+    verticals and the transverse horizontals are parallel in the image (points at infinity),
+    the hall's direction vanishes at the principal point; no focal length can be had. Two
+    weak clusters of segments on the horizon's row, with the vertical, would make a triplet
+    that does give one (f^2 = 500 * 1000). The strong one-point-perspective set is the
+    answer: K None, the horizon through the central point, level."""
+    p = K[:2, 2]
+    true = [np.array([0.0, 1.0, 0.0]), np.array([1.0, 0.0, 0.0]), np.array([*p, 1.0])]
+    weak = [np.array([p[0] - 500.0, p[1], 1.0]), np.array([p[0] + 1000.0, p[1], 1.0])]
+    rng = np.random.default_rng(5)
+    seg = _segments(_toward(true, 40, rng) + _toward(weak, 6, rng))
+    res = detect_vanishing_points(segments=seg, image_size=(768, 512))
+    assert len(res.vanishing_points) == 3 and res.K is None
+    found = sorted(
+        ("inf" if v[2] == 0 or np.hypot(*(v[:2] - p)) > 1e4 else "finite")
+        for v in res.vanishing_points
+    )
+    assert found == ["finite", "inf", "inf"]
+    assert res.horizon is not None
+    for u in (0.0, 767.0):
+        assert _row_at(res.horizon, u) == pytest.approx(p[1], abs=1.0)
+
+
+def test_a_pair_no_focal_length_makes_orthogonal_is_passed_over() -> None:
+    """Three-point perspective, the third direction weakly seen (no orthogonal triplet): the
+    best-supported pair was returned whether or not its directions can be orthogonal. A
+    strong point B with an acute angle at the principal point to the vertical point A,
+    ``(A - p).(B - p) > 0``, is no scene direction orthogonal to A for any focal length; the
+    orthogonal pair A, C (f = 700 px) is the answer, with its K."""
+    R = camera_rotation(0.3, 0.6, 0.0)
+    A, C = (vanishing_point(K, d, R) for d in (np.array([0, 1.0, 0]), np.array([1.0, 0, 0])))
+    A, C = A / A[2], C / C[2]
+    B = np.array([K[0, 2] + 0.8 * (A[0] - K[0, 2]) + 900.0, A[1] + 300.0, 1.0])
+    assert (A[:2] - K[:2, 2]) @ (B[:2] - K[:2, 2]) > 0
+    rng = np.random.default_rng(6)
+    seg = _segments(_toward([A], 60, rng) + _toward([B], 45, rng) + _toward([C], 30, rng))
+    res = detect_vanishing_points(segments=seg, image_size=(768, 512))
+    assert res.K is not None
+    assert res.K[0, 0] == pytest.approx(700.0, rel=0.01)
+    assert len(res.vanishing_points) == 2
+    for v in res.vanishing_points:
+        assert min(np.hypot(*(v[:2] / v[2] - t[:2])) for t in (A, C)) < 5.0

@@ -238,6 +238,44 @@ def _manhattan_K(
     return np.array([[f, 0.0, pp[0]], [0.0, f, pp[1]], [0.0, 0.0, 1.0]])
 
 
+#: The longest focal length (image diagonals; a 35 mm-equivalent 86 mm lens) that
+#: :func:`_orthogonal_for_some_f` tries for a set with fewer than two finite points: their
+#: orthogonality does not fix ``f``, and at a long enough ``f`` any finite point would pass.
+_ONE_FINITE_F = 2.0
+
+
+def _orthogonal_for_some_f(
+    vps: list[FloatArray], pp: FloatArray, diag: float, far: float, tol: float
+) -> bool:
+    """Whether some focal length makes the points' directions pairwise orthogonal within tol.
+
+    A set of vanishing points belongs to orthogonal scene directions only if, for some focal
+    length ``f`` (square pixels, zero skew, principal point ``pp``), every pair of
+    directions ``K⁻¹ vᵢ`` is within ``tol`` (radians) of perpendicular (Hartley &
+    Zisserman §8.8: ``vᵢᵀ ω vⱼ = 0``). This is the check the focal-length fit of
+    :func:`_manhattan_K` makes, for the sets it cannot fit: with fewer than two finite
+    points ``f`` is not determined, but the set still has to be orthogonal: two points at
+    infinity need perpendicular image directions (three never are), a finite point with
+    points at infinity needs ``(v - p) ⟂ d`` (and, with two of them, ``v`` at ``p``: the
+    optical axis) up to ``tol``, at a focal length up to ``_ONE_FINITE_F`` image diagonals.
+    With two finite points it refuses a pair with ``(v₁ - p)·(v₂ - p) > 0`` (an acute angle
+    at ``p``: no ``f`` makes them orthogonal). ``f`` is searched log-spaced from 0.15 image
+    diagonals (to 10 with two finite points, the range of the fit); points beyond ``far``
+    count as at infinity.
+    """
+    pts = []
+    for v in vps:
+        v = np.asarray(v, dtype=np.float64)
+        pts.append(v if _is_finite(v, pp, far) else np.array([v[0], v[1], 0.0]))
+    longest = 10.0 if sum(p[2] != 0 for p in pts) >= 2 else _ONE_FINITE_F
+    f = np.exp(np.linspace(math.log(0.15 * diag), math.log(longest * diag), 241))
+    d = _directions(pts, pp, f)  # (F, M, 3)
+    worst = np.zeros(len(f))
+    for i, j in itertools.combinations(range(len(pts)), 2):
+        worst = np.maximum(worst, np.abs(np.einsum("fk,fk->f", d[:, i], d[:, j])))
+    return bool(worst.min() <= math.sin(tol))
+
+
 def _level_horizon(
     vps: FloatArray, vertical: int, centre: FloatArray, far: float
 ) -> FloatArray | None:
@@ -530,23 +568,34 @@ def detect_vanishing_points(
     )
     cands = [(_normalise(v, far), inl, sc) for v, inl, sc in cands]
     best: tuple[float, tuple[int, ...], FloatArray | None] = (-1.0, (), None)
+    # the set holds the best-supported point (a scene's dominant direction is one of its
+    # Manhattan directions): sets of weak points only are where chance alignments agree
+    top = int(np.argmax([c[2] for c in cands])) if cands else -1
     for r in (3, 2):
         for combo in itertools.combinations(range(len(cands)), r):
+            if top not in combo:
+                continue
             trial = [cands[i][0] for i in combo]
             if pp_mode == "orthocenter":
                 K = _triplet_K(trial, centre, diag, far) if r == 3 else None
             else:
                 K = _manhattan_K(trial, [cands[i][2] for i in combo], pp, diag, far, tol)
-            if r == 3 and K is None:
-                continue
+            if (
+                r == 3
+                and K is None
+                and (pp_mode == "orthocenter" or sum(_is_finite(v, pp, far) for v in trial) >= 2)
+            ):
+                continue  # fitted and refused (or not fitted: the orthocentre needs three)
+            if K is None and not _orthogonal_for_some_f(trial, pp, diag, far, tol):
+                continue  # no focal length makes these directions orthogonal
             score = sum(cands[i][2] for i in combo)
             if score > best[0]:
                 best = (score, combo, K)
         if best[1]:
             break
     combo, K = best[1], best[2]
-    if not combo:
-        combo = tuple(range(min(1, len(cands))))
+    if not combo:  # no orthogonal set: the two best-supported points, without K
+        combo = tuple(sorted(np.argsort([-c[2] for c in cands], kind="stable")[:2].tolist()))
     vps = np.array([cands[i][0] for i in combo]) if combo else np.zeros((0, 3))
     scores = np.array([cands[i][2] for i in combo])
     labels = np.full(len(segments), -1, dtype=np.int64)
@@ -577,7 +626,7 @@ def detect_vanishing_points(
         horizon = _level_horizon(vps, vertical, centre, far)
     if horizon is None and len(vps):
         # no vanishing point gives the horizon: a level camera over open water sees it
-        sea = _visible_horizon(segments, labels >= 0, w, h)
+        sea = _visible_horizon(segments, np.ones(len(segments), dtype=bool), w, h)
         if sea is not None:
             horizon = sea
             if vertical is not None and tilt[vertical] < math.cos(_SEA_TILT):
