@@ -402,3 +402,25 @@ def test_a_pair_no_focal_length_makes_orthogonal_is_passed_over() -> None:
     assert len(res.vanishing_points) == 2
     for v in res.vanishing_points:
         assert min(np.hypot(*(v[:2] / v[2] - t[:2])) for t in (A, C)) < 5.0
+
+
+def test_rolled_one_point_perspective_keeps_its_vertical_and_horizon() -> None:
+    """A camera rolled 10 degrees down a hall whose point is just above the image centre
+    (as in a real atrium photograph, rolled): the direction from the centre to that point
+    is nearer the columns than the rolled verticals are, and it was taken for the vertical
+    point (no horizon). The vertical point is the one whose segments are most nearly
+    vertical; the horizon passes through the hall's point at the roll's tilt."""
+    p = K[:2, 2]
+    a = math.radians(10.0)
+    up = np.array([math.sin(a), math.cos(a), 0.0])
+    across = np.array([math.cos(a), -math.sin(a), 0.0])
+    hall = np.array([p[0] + 3.0, p[1] - 60.0, 1.0])
+    rng = np.random.default_rng(7)
+    seg = _segments(_toward([up, across, hall], 40, rng))
+    res = detect_vanishing_points(segments=seg, image_size=(768, 512))
+    assert res.K is None and res.vertical is not None and res.horizon is not None
+    v = res.vanishing_points[res.vertical]
+    assert abs(v[:2] @ up[:2]) / np.hypot(*v[:2]) > math.cos(math.radians(1.0))
+    tilt = math.degrees(math.atan2(-res.horizon[0], res.horizon[1]))
+    assert tilt == pytest.approx(-10.0, abs=0.5)
+    assert _row_at(res.horizon, hall[0]) == pytest.approx(hall[1], abs=1.0)

@@ -618,10 +618,20 @@ def detect_vanishing_points(
             np.asarray(horizon_line(K, None, up)), [vps[i] for i in range(len(vps)) if i != k]
         )
     elif len(vps) >= 2:
-        # without K: the vertical point is the one most in line with the image's columns
-        for v in vps:
-            d = v[:2] - centre * v[2]
-            tilt.append(abs(d[1]) / max(np.hypot(*d), 1e-300))
+        # without K: the vertical point is the one whose segments are most in line with the
+        # image's columns (length-weighted mean |cos| of their angle to the columns). The
+        # direction from the image centre to the point says the same for a point far
+        # from the centre, nothing for one near it: the central point of a hall, just
+        # above the centre, was taken for the vertical one of a rolled camera.
+        ends = segments.endpoints[:, 1] - segments.endpoints[:, 0]
+        size = np.hypot(ends[:, 0], ends[:, 1])
+        for j, v in enumerate(vps):
+            mine = labels == j
+            if size[mine].sum() > 0:
+                tilt.append(float(np.abs(ends[mine, 1]).sum() / size[mine].sum()))
+            else:
+                d = v[:2] - centre * v[2]
+                tilt.append(abs(d[1]) / max(np.hypot(*d), 1e-300))
         vertical = int(np.argmax(tilt))
         horizon = _level_horizon(vps, vertical, centre, far)
     if horizon is None and len(vps):
