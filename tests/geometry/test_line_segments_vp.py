@@ -424,3 +424,42 @@ def test_rolled_one_point_perspective_keeps_its_vertical_and_horizon() -> None:
     tilt = math.degrees(math.atan2(-res.horizon[0], res.horizon[1]))
     assert tilt == pytest.approx(-10.0, abs=0.5)
     assert _row_at(res.horizon, hall[0]) == pytest.approx(hall[1], abs=1.0)
+
+
+def test_no_focal_length_from_two_horizontal_points_orthogonal_by_chance() -> None:
+    """Clutter with no vertical direction (a real photograph of sand ripples): the two
+    best-supported points are not orthogonal for any focal length; a weaker point happens to
+    be orthogonal to the best one (f about 2.3 image diagonals). Two near-horizontal
+    directions reached past the second-best point give no K (it gave f +37 % and a horizon
+    tilted 21 degrees): the pair searched for past a non-orthogonal second point has to
+    hold the vertical direction. The two best points are returned, without K."""
+    p = K[:2, 2]
+    A = np.array([p[0] + 1000.0, p[1] - 320.0, 1.0])
+    B = np.array([p[0] + 280.0, p[1] - 70.0, 1.0])  # (A - p).(B - p) > 0
+    C = np.array([p[0] - 4980.0, p[1] + 1970.0, 1.0])  # (A - p).(C - p) < 0
+    assert (A[:2] - p) @ (B[:2] - p) > 0 > (A[:2] - p) @ (C[:2] - p)
+    rng = np.random.default_rng(8)
+    seg = _segments(_toward([A], 60, rng) + _toward([B], 35, rng) + _toward([C], 25, rng))
+    res = detect_vanishing_points(segments=seg, image_size=(768, 512))
+    assert res.K is None and len(res.vanishing_points) == 2
+    for v in res.vanishing_points:
+        assert min(np.hypot(*(v[:2] / v[2] - t[:2])) for t in (A, B)) < 10.0
+
+
+def test_a_set_without_focal_length_is_made_of_the_best_supported_points() -> None:
+    """A facade seen square on (verticals and horizontals parallel in the image, the two
+    strongest points) with clutter: a weak point near the image centre, weaker than the
+    clutter's, passes the loose orthogonality check a set without K gets (f is unknown)
+    and made a triplet whose 'horizon' ran through it (a real photograph of a statue). A
+    set without K is admitted only as the best-supported points: here the facade's pair,
+    which gives no horizon."""
+    p = K[:2, 2]
+    up, across = np.array([0.0, 1.0, 0.0]), np.array([1.0, 0.0, 0.0])
+    clutter = [np.array([p[0] + dx, p[1] + dy, 1.0]) for dx, dy in ((900, 700), (-1500, -900))]
+    weak = np.array([p[0] - 100.0, p[1] + 50.0, 1.0])
+    rng = np.random.default_rng(9)
+    segs = _toward([up, across], 40, rng) + _toward(clutter, 14, rng) + _toward([weak], 9, rng)
+    res = detect_vanishing_points(segments=_segments(segs), image_size=(768, 512))
+    assert res.K is None and len(res.vanishing_points) == 2
+    assert all(v[2] == 0 or np.hypot(*(v[:2] / v[2] - p)) > 1e4 for v in res.vanishing_points)
+    assert res.horizon is None

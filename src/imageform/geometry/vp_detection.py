@@ -244,6 +244,11 @@ def _manhattan_K(
 _ONE_FINITE_F = 2.0
 
 
+#: A point whose segments run within 15 degrees of the image's columns on average (the mean
+#: |cos| of their angle to them at least this) is taken for a vertical direction.
+_UPRIGHT = math.cos(math.radians(15.0))
+
+
 def _orthogonal_for_some_f(
     vps: list[FloatArray], pp: FloatArray, diag: float, far: float, tol: float
 ) -> bool:
@@ -570,10 +575,21 @@ def detect_vanishing_points(
     best: tuple[float, tuple[int, ...], FloatArray | None] = (-1.0, (), None)
     # the set holds the best-supported point (a scene's dominant direction is one of its
     # Manhattan directions): sets of weak points only are where chance alignments agree
-    top = int(np.argmax([c[2] for c in cands])) if cands else -1
+    support = [c[2] for c in cands]
+    top = int(np.argmax(support)) if cands else -1
+    ranked = np.argsort(support, kind="stable")[::-1].tolist()
+    first_two = tuple(sorted(ranked[:2]))
+    # how near the image's columns each point's segments run (length-weighted mean |cos|)
+    span = segments.endpoints[:, 1] - segments.endpoints[:, 0]
+    size = np.hypot(span[:, 0], span[:, 1])
+    upright = [float(np.abs(span[c[1], 1]).sum() / max(size[c[1]].sum(), 1e-300)) for c in cands]
     for r in (3, 2):
         for combo in itertools.combinations(range(len(cands)), r):
             if top not in combo:
+                continue
+            if r == 2 and combo != first_two and max(upright[i] for i in combo) < _UPRIGHT:
+                # a pair past the second-best point holds the vertical direction: two
+                # horizontal ones orthogonal by chance are common in clutter (sand ripples)
                 continue
             trial = [cands[i][0] for i in combo]
             if pp_mode == "orthocenter":
@@ -586,8 +602,13 @@ def detect_vanishing_points(
                 and (pp_mode == "orthocenter" or sum(_is_finite(v, pp, far) for v in trial) >= 2)
             ):
                 continue  # fitted and refused (or not fitted: the orthocentre needs three)
-            if K is None and not _orthogonal_for_some_f(trial, pp, diag, far, tol):
-                continue  # no focal length makes these directions orthogonal
+            if K is None and (
+                combo != tuple(sorted(ranked[:r]))
+                or not _orthogonal_for_some_f(trial, pp, diag, far, tol)
+            ):
+                # no focal length makes these directions orthogonal; or, with none fitted,
+                # they are not the best-supported points (a loose check: f is unknown)
+                continue
             score = sum(cands[i][2] for i in combo)
             if score > best[0]:
                 best = (score, combo, K)
