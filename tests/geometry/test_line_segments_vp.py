@@ -432,7 +432,8 @@ def test_no_focal_length_from_two_horizontal_points_orthogonal_by_chance() -> No
     be orthogonal to the best one (f about 2.3 image diagonals). Two near-horizontal
     directions reached past the second-best point give no K (it gave f +37 % and a horizon
     tilted 21 degrees): the pair searched for past a non-orthogonal second point has to
-    hold the vertical direction. The two best points are returned, without K."""
+    hold the vertical direction. The two best points are returned, without K, and neither
+    is called vertical (their segments run nearer the rows than the columns)."""
     p = K[:2, 2]
     A = np.array([p[0] + 1000.0, p[1] - 320.0, 1.0])
     B = np.array([p[0] + 280.0, p[1] - 70.0, 1.0])  # (A - p).(B - p) > 0
@@ -444,6 +445,7 @@ def test_no_focal_length_from_two_horizontal_points_orthogonal_by_chance() -> No
     assert res.K is None and len(res.vanishing_points) == 2
     for v in res.vanishing_points:
         assert min(np.hypot(*(v[:2] / v[2] - t[:2])) for t in (A, B)) < 10.0
+    assert res.vertical is None and res.horizon is None
 
 
 def test_a_set_without_focal_length_is_made_of_the_best_supported_points() -> None:

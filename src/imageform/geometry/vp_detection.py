@@ -70,7 +70,8 @@ class VanishingPointResult:
     vertical : int or None
         Index of the vertical vanishing point (the direction closest to the image's y axis);
         None when the two points found are both horizontal (the horizon then comes from
-        their cross product, the vertical direction), or when the horizon is the visible one
+        their cross product, the vertical direction), when, without K, no point's segments
+        run nearer the image's columns than its rows, or when the horizon is the visible one
         of open water and no point lies near the image's columns.
     horizon : (3,) or None
         The horizon ``(a, b, c)``, ``a u + b v + c = 0``, ``a² + b² = 1``: from K and the
@@ -244,9 +245,9 @@ def _manhattan_K(
 _ONE_FINITE_F = 2.0
 
 
-#: A point whose segments run within 15 degrees of the image's columns on average (the mean
-#: |cos| of their angle to them at least this) is taken for a vertical direction.
-_UPRIGHT = math.cos(math.radians(15.0))
+#: A point whose segments run nearer the image's columns than its rows (the length-weighted
+#: mean |cos| of their angle to the columns at least cos 45°) can be the vertical direction.
+_UPRIGHT = math.cos(math.radians(45.0))
 
 
 def _orthogonal_for_some_f(
@@ -588,7 +589,7 @@ def detect_vanishing_points(
             if top not in combo:
                 continue
             if r == 2 and combo != first_two and max(upright[i] for i in combo) < _UPRIGHT:
-                # a pair past the second-best point holds the vertical direction: two
+                # a pair past the second-best point holds a vertical direction: two
                 # horizontal ones orthogonal by chance are common in clutter (sand ripples)
                 continue
             trial = [cands[i][0] for i in combo]
@@ -654,7 +655,10 @@ def detect_vanishing_points(
                 d = v[:2] - centre * v[2]
                 tilt.append(abs(d[1]) / max(np.hypot(*d), 1e-300))
         vertical = int(np.argmax(tilt))
-        horizon = _level_horizon(vps, vertical, centre, far)
+        if tilt[vertical] < _UPRIGHT:
+            vertical = None  # no point's segments run nearer the columns than the rows
+        else:
+            horizon = _level_horizon(vps, vertical, centre, far)
     if horizon is None and len(vps):
         # no vanishing point gives the horizon: a level camera over open water sees it
         sea = _visible_horizon(segments, np.ones(len(segments), dtype=bool), w, h)
