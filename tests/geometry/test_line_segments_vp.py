@@ -465,3 +465,17 @@ def test_a_set_without_focal_length_is_made_of_the_best_supported_points() -> No
     assert res.K is None and len(res.vanishing_points) == 2
     assert all(v[2] == 0 or np.hypot(*(v[:2] / v[2] - p)) > 1e4 for v in res.vanishing_points)
     assert res.horizon is None
+
+
+@pytest.mark.parametrize("roll", [0.0, 0.15])
+def test_one_point_perspective_render_gives_its_three_points_and_horizon(roll: float) -> None:
+    """A render of a camera looking along one of the scene's axes (one-point perspective:
+    the other two axes vanish at infinity, no focal length to be had): the three points
+    and the horizon through the central one; only two points and no horizon before."""
+    R = camera_rotation(0.0, 0.0, roll)
+    res = detect_vanishing_points(render_manhattan(K, R, np.zeros(3), seed=3))
+    assert len(res.vanishing_points) == 3 and res.K is None and res.perspective == 1
+    assert res.horizon is not None
+    truth = horizon_line(K, R)
+    for u in (0.0, 383.5, 767.0):
+        assert _row_at(res.horizon, u) == pytest.approx(_row_at(truth, u), abs=1.5)
