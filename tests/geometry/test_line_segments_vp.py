@@ -479,3 +479,18 @@ def test_one_point_perspective_render_gives_its_three_points_and_horizon(roll: f
     truth = horizon_line(K, R)
     for u in (0.0, 383.5, 767.0):
         assert _row_at(res.horizon, u) == pytest.approx(_row_at(truth, u), abs=1.5)
+
+
+def test_no_focal_length_from_weak_points_on_a_beach(shared_data: Path) -> None:
+    """kodim12, a couple on a beach (the shore, the sea, no buildings): a triplet of the
+    second to fourth best points (none of them the dominant, near-level direction) gave
+    f = 6587 px and a horizon 220 px above the frame. A set has to hold the best-supported
+    point: no K, no horizon from vanishing points."""
+    from imageform.io import read_image
+
+    path = shared_data / "kodak" / "kodim12.png"
+    if not path.is_file():
+        pytest.skip("../shared/data/kodak is not available")
+    res = detect_vanishing_points(np.asarray(read_image(path)))
+    assert res.K is None
+    assert res.horizon is None or -(res.horizon[2] / res.horizon[1]) > 0
