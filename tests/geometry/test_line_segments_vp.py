@@ -337,3 +337,160 @@ def test_no_sea_horizon_on_a_facade(shared_data: Path) -> None:
     if not path.is_file():
         pytest.skip("../shared/data/kodak is not available")
     assert detect_vanishing_points(np.asarray(read_image(path))).horizon is None
+
+
+def _toward(points: list[np.ndarray], n: int, rng: np.random.Generator) -> list[np.ndarray]:
+    """``n`` segments for each homogeneous point of ``points`` (``w = 0``: parallel ones),
+    their midpoints spread over the 768 x 512 frame, 40 to 120 px long."""
+    segs = []
+    for v in points:
+        for _ in range(n):
+            m = rng.uniform([20.0, 20.0], [748.0, 492.0])
+            d = v[:2] - m * v[2]
+            d = d / np.linalg.norm(d) * rng.uniform(20.0, 60.0)
+            segs.append(np.stack([m - d, m + d]))
+    return segs
+
+
+def _segments(segs: list[np.ndarray]) -> object:
+    from imageform.geometry import LineSegments
+
+    n = len(segs)
+    return LineSegments(np.array(segs), np.ones(n), np.full(n, -10.0))
+
+
+def test_one_point_perspective_is_not_outvoted_by_weak_points_that_give_a_focal_length() -> None:
+    """A level camera looking straight down a hall (a real atrium photograph did this): the
+    verticals and the transverse horizontals are parallel in the image (points at infinity),
+    the hall's direction vanishes at the principal point; no focal length can be had. Two
+    weak clusters of segments on the horizon's row, with the vertical, would make a triplet
+    that does give one (f^2 = 500 * 1000). The strong one-point-perspective set is the
+    answer: K None, the horizon through the central point, level."""
+    p = K[:2, 2]
+    true = [np.array([0.0, 1.0, 0.0]), np.array([1.0, 0.0, 0.0]), np.array([*p, 1.0])]
+    weak = [np.array([p[0] - 500.0, p[1], 1.0]), np.array([p[0] + 1000.0, p[1], 1.0])]
+    rng = np.random.default_rng(5)
+    seg = _segments(_toward(true, 40, rng) + _toward(weak, 6, rng))
+    res = detect_vanishing_points(segments=seg, image_size=(768, 512))
+    assert len(res.vanishing_points) == 3 and res.K is None
+    found = sorted(
+        ("inf" if v[2] == 0 or np.hypot(*(v[:2] - p)) > 1e4 else "finite")
+        for v in res.vanishing_points
+    )
+    assert found == ["finite", "inf", "inf"]
+    assert res.horizon is not None
+    for u in (0.0, 767.0):
+        assert _row_at(res.horizon, u) == pytest.approx(p[1], abs=1.0)
+
+
+def test_a_pair_no_focal_length_makes_orthogonal_is_passed_over() -> None:
+    """Three-point perspective, the third direction weakly seen (no orthogonal triplet): the
+    best-supported pair was returned whether or not its directions can be orthogonal. A
+    strong point B with an acute angle at the principal point to the vertical point A,
+    ``(A - p).(B - p) > 0``, is no scene direction orthogonal to A for any focal length; the
+    orthogonal pair A, C (f = 700 px) is the answer, with its K."""
+    R = camera_rotation(0.3, 0.6, 0.0)
+    A, C = (vanishing_point(K, d, R) for d in (np.array([0, 1.0, 0]), np.array([1.0, 0, 0])))
+    A, C = A / A[2], C / C[2]
+    B = np.array([K[0, 2] + 0.8 * (A[0] - K[0, 2]) + 900.0, A[1] + 300.0, 1.0])
+    assert (A[:2] - K[:2, 2]) @ (B[:2] - K[:2, 2]) > 0
+    rng = np.random.default_rng(6)
+    seg = _segments(_toward([A], 60, rng) + _toward([B], 45, rng) + _toward([C], 30, rng))
+    res = detect_vanishing_points(segments=seg, image_size=(768, 512))
+    assert res.K is not None
+    assert res.K[0, 0] == pytest.approx(700.0, rel=0.01)
+    assert len(res.vanishing_points) == 2
+    for v in res.vanishing_points:
+        assert min(np.hypot(*(v[:2] / v[2] - t[:2])) for t in (A, C)) < 5.0
+
+
+def test_rolled_one_point_perspective_keeps_its_vertical_and_horizon() -> None:
+    """A camera rolled 10 degrees down a hall whose point is just above the image centre
+    (as in a real atrium photograph, rolled): the direction from the centre to that point
+    is nearer the columns than the rolled verticals are, and it was taken for the vertical
+    point (no horizon). The vertical point is the one whose segments are most nearly
+    vertical; the horizon passes through the hall's point at the roll's tilt."""
+    p = K[:2, 2]
+    a = math.radians(10.0)
+    up = np.array([math.sin(a), math.cos(a), 0.0])
+    across = np.array([math.cos(a), -math.sin(a), 0.0])
+    hall = np.array([p[0] + 3.0, p[1] - 60.0, 1.0])
+    rng = np.random.default_rng(7)
+    seg = _segments(_toward([up, across, hall], 40, rng))
+    res = detect_vanishing_points(segments=seg, image_size=(768, 512))
+    assert res.K is None and res.vertical is not None and res.horizon is not None
+    v = res.vanishing_points[res.vertical]
+    assert abs(v[:2] @ up[:2]) / np.hypot(*v[:2]) > math.cos(math.radians(1.0))
+    tilt = math.degrees(math.atan2(-res.horizon[0], res.horizon[1]))
+    assert tilt == pytest.approx(-10.0, abs=0.5)
+    assert _row_at(res.horizon, hall[0]) == pytest.approx(hall[1], abs=1.0)
+
+
+def test_no_focal_length_from_two_horizontal_points_orthogonal_by_chance() -> None:
+    """Clutter with no vertical direction (a real photograph of sand ripples): the two
+    best-supported points are not orthogonal for any focal length; a weaker point happens to
+    be orthogonal to the best one (f about 2.3 image diagonals). Two near-horizontal
+    directions reached past the second-best point give no K (it gave f +37 % and a horizon
+    tilted 21 degrees): the pair searched for past a non-orthogonal second point has to
+    hold the vertical direction. The two best points are returned, without K, and neither
+    is called vertical (their segments run nearer the rows than the columns)."""
+    p = K[:2, 2]
+    A = np.array([p[0] + 1000.0, p[1] - 320.0, 1.0])
+    B = np.array([p[0] + 280.0, p[1] - 70.0, 1.0])  # (A - p).(B - p) > 0
+    C = np.array([p[0] - 4980.0, p[1] + 1970.0, 1.0])  # (A - p).(C - p) < 0
+    assert (A[:2] - p) @ (B[:2] - p) > 0 > (A[:2] - p) @ (C[:2] - p)
+    rng = np.random.default_rng(8)
+    seg = _segments(_toward([A], 60, rng) + _toward([B], 35, rng) + _toward([C], 25, rng))
+    res = detect_vanishing_points(segments=seg, image_size=(768, 512))
+    assert res.K is None and len(res.vanishing_points) == 2
+    for v in res.vanishing_points:
+        assert min(np.hypot(*(v[:2] / v[2] - t[:2])) for t in (A, B)) < 10.0
+    assert res.vertical is None and res.horizon is None
+
+
+def test_a_set_without_focal_length_is_made_of_the_best_supported_points() -> None:
+    """A facade seen square on (verticals and horizontals parallel in the image, the two
+    strongest points) with clutter: a weak point near the image centre, weaker than the
+    clutter's, passes the loose orthogonality check a set without K gets (f is unknown)
+    and made a triplet whose 'horizon' ran through it (a real photograph of a statue). A
+    set without K is admitted only as the best-supported points: here the facade's pair,
+    which gives no horizon."""
+    p = K[:2, 2]
+    up, across = np.array([0.0, 1.0, 0.0]), np.array([1.0, 0.0, 0.0])
+    clutter = [np.array([p[0] + dx, p[1] + dy, 1.0]) for dx, dy in ((900, 700), (-1500, -900))]
+    weak = np.array([p[0] - 100.0, p[1] + 50.0, 1.0])
+    rng = np.random.default_rng(9)
+    segs = _toward([up, across], 40, rng) + _toward(clutter, 14, rng) + _toward([weak], 9, rng)
+    res = detect_vanishing_points(segments=_segments(segs), image_size=(768, 512))
+    assert res.K is None and len(res.vanishing_points) == 2
+    assert all(v[2] == 0 or np.hypot(*(v[:2] / v[2] - p)) > 1e4 for v in res.vanishing_points)
+    assert res.horizon is None
+
+
+@pytest.mark.parametrize("roll", [0.0, 0.15])
+def test_one_point_perspective_render_gives_its_three_points_and_horizon(roll: float) -> None:
+    """A render of a camera looking along one of the scene's axes (one-point perspective:
+    the other two axes vanish at infinity, no focal length to be had): the three points
+    and the horizon through the central one; only two points and no horizon before."""
+    R = camera_rotation(0.0, 0.0, roll)
+    res = detect_vanishing_points(render_manhattan(K, R, np.zeros(3), seed=3))
+    assert len(res.vanishing_points) == 3 and res.K is None and res.perspective == 1
+    assert res.horizon is not None
+    truth = horizon_line(K, R)
+    for u in (0.0, 383.5, 767.0):
+        assert _row_at(res.horizon, u) == pytest.approx(_row_at(truth, u), abs=1.5)
+
+
+def test_no_focal_length_from_weak_points_on_a_beach(shared_data: Path) -> None:
+    """kodim12, a couple on a beach (the shore, the sea, no buildings): a triplet of the
+    second to fourth best points (none of them the dominant, near-level direction) gave
+    f = 6587 px and a horizon 220 px above the frame. A set has to hold the best-supported
+    point: no K, no horizon from vanishing points."""
+    from imageform.io import read_image
+
+    path = shared_data / "kodak" / "kodim12.png"
+    if not path.is_file():
+        pytest.skip("../shared/data/kodak is not available")
+    res = detect_vanishing_points(np.asarray(read_image(path)))
+    assert res.K is None
+    assert res.horizon is None or -(res.horizon[2] / res.horizon[1]) > 0

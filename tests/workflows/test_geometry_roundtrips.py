@@ -258,3 +258,19 @@ def test_vanishing_honours_distortion_and_pose(tmp_path: Path) -> None:
     with contextlib.redirect_stderr(err):
         assert main(["vanishing", str(img), "--principal-point", "camera"]) == 1
     assert "--principal-point camera needs --camera" in err.getvalue()
+
+
+def test_vanishing_says_why_there_is_no_focal_length(tmp_path: Path) -> None:
+    """A one-point-perspective render (the camera looks along a scene axis): three points,
+    the horizon, and a line saying why K is not given (it said nothing)."""
+    from tests.geometry.scene_render import render_manhattan
+
+    K = np.array([[700.0, 0.0, 383.5], [0.0, 700.0, 255.5], [0.0, 0.0, 1.0]])
+    img = tmp_path / "hall.png"
+    write_image(img, render_manhattan(K, np.eye(3), np.zeros(3), seed=3))
+    out = io.StringIO()
+    with contextlib.redirect_stdout(out):
+        assert main(["vanishing", str(img)]) == 0
+    text = out.getvalue()
+    assert "3 vanishing points" in text and "horizon:" in text
+    assert "K: not determined: fewer than two of the points are finite" in text

@@ -70,7 +70,8 @@ class VanishingPointResult:
     vertical : int or None
         Index of the vertical vanishing point (the direction closest to the image's y axis);
         None when the two points found are both horizontal (the horizon then comes from
-        their cross product, the vertical direction), or when the horizon is the visible one
+        their cross product, the vertical direction), when, without K, no point's segments
+        run nearer the image's columns than its rows, or when the horizon is the visible one
         of open water and no point lies near the image's columns.
     horizon : (3,) or None
         The horizon ``(a, b, c)``, ``a u + b v + c = 0``, ``a² + b² = 1``: from K and the
@@ -236,6 +237,49 @@ def _manhattan_K(
     if any(abs(float(d[i] @ d[j])) > math.sin(tol) for i, j in pairs):
         return None
     return np.array([[f, 0.0, pp[0]], [0.0, f, pp[1]], [0.0, 0.0, 1.0]])
+
+
+#: The longest focal length (image diagonals; a 35 mm-equivalent 86 mm lens) that
+#: :func:`_orthogonal_for_some_f` tries for a set with fewer than two finite points: their
+#: orthogonality does not fix ``f``, and at a long enough ``f`` any finite point would pass.
+_ONE_FINITE_F = 2.0
+
+
+#: A point whose segments run nearer the image's columns than its rows (the length-weighted
+#: mean |cos| of their angle to the columns at least cos 45°) can be the vertical direction.
+_UPRIGHT = math.cos(math.radians(45.0))
+
+
+def _orthogonal_for_some_f(
+    vps: list[FloatArray], pp: FloatArray, diag: float, far: float, tol: float
+) -> bool:
+    """Whether some focal length makes the points' directions pairwise orthogonal within tol.
+
+    A set of vanishing points belongs to orthogonal scene directions only if, for some focal
+    length ``f`` (square pixels, zero skew, principal point ``pp``), every pair of
+    directions ``K⁻¹ vᵢ`` is within ``tol`` (radians) of perpendicular (Hartley &
+    Zisserman §8.8: ``vᵢᵀ ω vⱼ = 0``). This is the check the focal-length fit of
+    :func:`_manhattan_K` makes, for the sets it cannot fit: with fewer than two finite
+    points ``f`` is not determined, but the set still has to be orthogonal: two points at
+    infinity need perpendicular image directions (three never are), a finite point with
+    points at infinity needs ``(v - p) ⟂ d`` (and, with two of them, ``v`` at ``p``: the
+    optical axis) up to ``tol``, at a focal length up to ``_ONE_FINITE_F`` image diagonals.
+    With two finite points it refuses a pair with ``(v₁ - p)·(v₂ - p) > 0`` (an acute angle
+    at ``p``: no ``f`` makes them orthogonal). ``f`` is searched log-spaced from 0.15 image
+    diagonals (to 10 with two finite points, the range of the fit); points beyond ``far``
+    count as at infinity.
+    """
+    pts = []
+    for v in vps:
+        v = np.asarray(v, dtype=np.float64)
+        pts.append(v if _is_finite(v, pp, far) else np.array([v[0], v[1], 0.0]))
+    longest = 10.0 if sum(p[2] != 0 for p in pts) >= 2 else _ONE_FINITE_F
+    f = np.exp(np.linspace(math.log(0.15 * diag), math.log(longest * diag), 241))
+    d = _directions(pts, pp, f)  # (F, M, 3)
+    worst = np.zeros(len(f))
+    for i, j in itertools.combinations(range(len(pts)), 2):
+        worst = np.maximum(worst, np.abs(np.einsum("fk,fk->f", d[:, i], d[:, j])))
+    return bool(worst.min() <= math.sin(tol))
 
 
 def _level_horizon(
@@ -530,14 +574,41 @@ def detect_vanishing_points(
     )
     cands = [(_normalise(v, far), inl, sc) for v, inl, sc in cands]
     best: tuple[float, tuple[int, ...], FloatArray | None] = (-1.0, (), None)
+    # the set holds the best-supported point (a scene's dominant direction is one of its
+    # Manhattan directions): sets of weak points only are where chance alignments agree
+    support = [c[2] for c in cands]
+    top = int(np.argmax(support)) if cands else -1
+    ranked = np.argsort(support, kind="stable")[::-1].tolist()
+    first_two = tuple(sorted(ranked[:2]))
+    # how near the image's columns each point's segments run (length-weighted mean |cos|)
+    span = segments.endpoints[:, 1] - segments.endpoints[:, 0]
+    size = np.hypot(span[:, 0], span[:, 1])
+    upright = [float(np.abs(span[c[1], 1]).sum() / max(size[c[1]].sum(), 1e-300)) for c in cands]
     for r in (3, 2):
         for combo in itertools.combinations(range(len(cands)), r):
+            if top not in combo:
+                continue
+            if r == 2 and combo != first_two and max(upright[i] for i in combo) < _UPRIGHT:
+                # a pair past the second-best point holds a vertical direction: two
+                # horizontal ones orthogonal by chance are common in clutter (sand ripples)
+                continue
             trial = [cands[i][0] for i in combo]
             if pp_mode == "orthocenter":
                 K = _triplet_K(trial, centre, diag, far) if r == 3 else None
             else:
                 K = _manhattan_K(trial, [cands[i][2] for i in combo], pp, diag, far, tol)
-            if r == 3 and K is None:
+            if (
+                r == 3
+                and K is None
+                and (pp_mode == "orthocenter" or sum(_is_finite(v, pp, far) for v in trial) >= 2)
+            ):
+                continue  # fitted and refused (or not fitted: the orthocentre needs three)
+            if K is None and (
+                combo != tuple(sorted(ranked[:r]))
+                or not _orthogonal_for_some_f(trial, pp, diag, far, tol)
+            ):
+                # no focal length makes these directions orthogonal; or, with none fitted,
+                # they are not the best-supported points (a loose check: f is unknown)
                 continue
             score = sum(cands[i][2] for i in combo)
             if score > best[0]:
@@ -545,8 +616,8 @@ def detect_vanishing_points(
         if best[1]:
             break
     combo, K = best[1], best[2]
-    if not combo:
-        combo = tuple(range(min(1, len(cands))))
+    if not combo:  # no orthogonal set: the two best-supported points, without K
+        combo = tuple(sorted(np.argsort([-c[2] for c in cands], kind="stable")[:2].tolist()))
     vps = np.array([cands[i][0] for i in combo]) if combo else np.zeros((0, 3))
     scores = np.array([cands[i][2] for i in combo])
     labels = np.full(len(segments), -1, dtype=np.int64)
@@ -569,15 +640,28 @@ def detect_vanishing_points(
             np.asarray(horizon_line(K, None, up)), [vps[i] for i in range(len(vps)) if i != k]
         )
     elif len(vps) >= 2:
-        # without K: the vertical point is the one most in line with the image's columns
-        for v in vps:
-            d = v[:2] - centre * v[2]
-            tilt.append(abs(d[1]) / max(np.hypot(*d), 1e-300))
+        # without K: the vertical point is the one whose segments are most in line with the
+        # image's columns (length-weighted mean |cos| of their angle to the columns). The
+        # direction from the image centre to the point says the same for a point far
+        # from the centre, nothing for one near it: the central point of a hall, just
+        # above the centre, was taken for the vertical one of a rolled camera.
+        ends = segments.endpoints[:, 1] - segments.endpoints[:, 0]
+        size = np.hypot(ends[:, 0], ends[:, 1])
+        for j, v in enumerate(vps):
+            mine = labels == j
+            if size[mine].sum() > 0:
+                tilt.append(float(np.abs(ends[mine, 1]).sum() / size[mine].sum()))
+            else:
+                d = v[:2] - centre * v[2]
+                tilt.append(abs(d[1]) / max(np.hypot(*d), 1e-300))
         vertical = int(np.argmax(tilt))
-        horizon = _level_horizon(vps, vertical, centre, far)
+        if tilt[vertical] < _UPRIGHT:
+            vertical = None  # no point's segments run nearer the columns than the rows
+        else:
+            horizon = _level_horizon(vps, vertical, centre, far)
     if horizon is None and len(vps):
         # no vanishing point gives the horizon: a level camera over open water sees it
-        sea = _visible_horizon(segments, labels >= 0, w, h)
+        sea = _visible_horizon(segments, np.ones(len(segments), dtype=bool), w, h)
         if sea is not None:
             horizon = sea
             if vertical is not None and tilt[vertical] < math.cos(_SEA_TILT):
