@@ -26,6 +26,7 @@ EXTRAS = {
     "av": "video",
     "trimesh": "video",
     "cv2": "reconstruct",
+    "pillow_heif": "heif",
 }
 
 

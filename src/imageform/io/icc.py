@@ -86,8 +86,8 @@ class DeclaredColorSpace(NamedTuple):
     ``name``: a space of :data:`imageform.color.SPACES` (``srgb``, ``display_p3``,
     ``adobe_rgb``, ``prophoto``, ``rec2020``, ``rec709`` or a ``linear_`` twin), or None
     when the file declares nothing or a profile imageform does not recognise. ``source``:
-    ``icc``, ``png-srgb``, ``exif`` or ``none``. ``description``: the profile's own
-    description (``""`` without one).
+    ``icc``, ``png-srgb``, ``nclx`` (HEIF's H.273 code points), ``exif`` or ``none``.
+    ``description``: the profile's own description (``""`` without one).
     """
 
     name: str | None

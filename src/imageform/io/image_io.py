@@ -1,4 +1,4 @@
-"""The one image reader and writer: PNG, JPEG, TIFF and NumPy ``.npy``.
+"""The one image reader and writer: PNG, JPEG, TIFF and NumPy ``.npy``; HEIF read.
 
 One rule for every format:
 
@@ -22,7 +22,10 @@ One rule for every format:
   error unless ``out_of_range="clip"``. TIFF and ``.npy`` store the array as it is.
 
 16-bit PNG is decoded and encoded with imagecodecs (libpng), JPEG with Pillow, TIFF with
-tifffile.
+tifffile. HEIF/HEIC (phones' photographs: ``.heic``, ``.heif``, ``.hif``) is read through
+libheif (the ``heif`` extra, pillow-heif): 8 bits as uint8, 10 and 12 bits as uint16 scaled to
+the full range as a 16-bit PNG; the container's rotation and mirroring are applied by libheif
+(HEIF's own orientation, which the EXIF tag in such files only repeats). It is not written.
 """
 
 from __future__ import annotations
@@ -76,6 +79,9 @@ IMAGE_FORMATS = MappingProxyType(
         ".tif": "tiff",
         ".tiff": "tiff",
         ".npy": "npy",
+        ".heic": "heif",
+        ".heif": "heif",
+        ".hif": "heif",
     }
 )
 
@@ -138,7 +144,7 @@ def max_pixels() -> int:
 
 
 def image_format(path: str | Path) -> str:
-    """Return the format of ``path`` from its suffix (png, jpeg, tiff, npy); others raise.
+    """Return the format of ``path`` from its suffix (png, jpeg, tiff, npy, heif); others raise.
 
     Examples
     --------
@@ -245,6 +251,10 @@ def image_info(path: str | Path) -> ImageInfo:
             raise
         except Exception as exc:
             raise InvalidInputError(f"cannot read {p}: {_one_line(exc)}") from None
+    if fmt == "heif":
+        f = _open_heif(p)
+        w, h = f.size
+        return ImageInfo(w, h, len(f.mode.split(";")[0]), _heif_dtype(f), "heif")
     from PIL import Image, UnidentifiedImageError
 
     try:
@@ -507,9 +517,41 @@ def read_image(
         arr = _read_pillow(p, limit)
     elif fmt == "tiff":
         arr, has_alpha = _read_tiff(p, limit)
+    elif fmt == "heif":
+        arr = _read_heif(p, limit)
+        has_alpha = arr.ndim == 3 and arr.shape[-1] in (2, 4)
     else:
         arr = _read_npy(p, limit)
     return _normalise(p, arr, alpha, has_alpha)
+
+
+def _open_heif(p: Path) -> Any:
+    """Open a HEIF file with libheif (pillow-heif), its header only; one line if it cannot."""
+    from imageform._optional import require
+
+    pillow_heif = require("pillow_heif", what=f"reading {p.name} (HEIF)")
+    try:
+        return pillow_heif.open_heif(p, convert_hdr_to_8bit=False)
+    except (OSError, ValueError, RuntimeError) as exc:
+        raise InvalidInputError(f"cannot read {p}: {_one_line(exc)}") from None
+
+
+def _heif_dtype(f: Any) -> str:
+    return "uint16" if int(f.info.get("bit_depth", 8) or 8) > 8 else "uint8"
+
+
+def _read_heif(p: Path, limit: int) -> np.ndarray:
+    """Decode a HEIF image: uint8, or uint16 (10/12 bits scaled to 16) for deeper ones."""
+    f = _open_heif(p)
+    w, h = f.size
+    _check_pixels(p, ImageInfo(w, h, len(f.mode.split(";")[0]), _heif_dtype(f), "heif"), limit)
+    try:
+        arr = np.asarray(f)
+    except (OSError, ValueError, RuntimeError) as exc:
+        raise InvalidInputError(f"cannot read {p}: {_one_line(exc)}") from None
+    if arr.dtype not in (np.uint8, np.uint16):
+        raise InvalidInputError(f"cannot read {p}: unsupported HEIF samples {arr.dtype}")
+    return np.array(arr)  # its own memory, not libheif's buffer
 
 
 def _pixel_limit(value: object) -> int:
@@ -670,6 +712,10 @@ def write_image(
         )
     if a.dtype.kind not in "fu" or a.dtype.itemsize > 8:
         raise InvalidInputError(f"expected floats, uint8 or uint16 to write {p}, got {a.dtype}")
+    if fmt == "heif":
+        raise InvalidInputError(
+            f"imageform reads HEIF but does not write it; write {p.stem}.png, .jpg or .tif"
+        )
     if fmt == "npy":
         atomic_write(p, lambda t: np.save(t, a, allow_pickle=False))
         return WrittenImage(None, 0)
@@ -726,8 +772,10 @@ def _with_iccp(png: bytes, profile: bytes) -> bytes:
 def image_color_space(path: str | Path) -> DeclaredColorSpace:
     """Return the colour space an image file declares.
 
-    In this order: an embedded ICC profile (JPEG APP2, PNG ``iCCP``, TIFF tag 34675) named
-    by :func:`identify_icc`; PNG's ``sRGB`` chunk; EXIF ``ColorSpace`` 1 (sRGB), or
+    In this order: an embedded ICC profile (JPEG APP2, PNG ``iCCP``, TIFF tag 34675, HEIF's
+    ``colr`` box) named by :func:`identify_icc`; HEIF's ``nclx`` colour description (H.273
+    code points: BT.709/sRGB, Display P3 or BT.2020 primaries with the sRGB, BT.709 or a
+    linear transfer); PNG's ``sRGB`` chunk; EXIF ``ColorSpace`` 1 (sRGB), or
     uncalibrated with the interoperability index ``R03`` (Adobe RGB, the DCF option camera
     JPEGs use). A profile imageform does not recognise gives ``name`` None with its
     description; ``.npy`` files and files that declare nothing give ``(None, "none", "")``.
@@ -764,6 +812,12 @@ def image_color_space(path: str | Path) -> DeclaredColorSpace:
         raise InvalidInputError(f"cannot read {p}: no such file")
     if fmt == "npy":
         return DeclaredColorSpace(None, "none", "")
+    if fmt == "heif":
+        info = _open_heif(p).info
+        if info.get("icc_profile"):
+            prof = parse_icc(info["icc_profile"])
+            return DeclaredColorSpace(identify_icc(prof), "icc", prof.description)
+        return _nclx_space(info.get("nclx_profile"))
     from PIL import Image, UnidentifiedImageError
 
     try:
@@ -785,3 +839,38 @@ def image_color_space(path: str | Path) -> DeclaredColorSpace:
     if cs == 0xFFFF and isinstance(interop, str) and interop.strip("\0") == "R03":
         return DeclaredColorSpace("adobe_rgb", "exif", "")
     return DeclaredColorSpace(None, "none", "")
+
+
+#: HEIF's ``nclx`` colour description (ITU-T H.273 code points): (colour primaries, transfer
+#: characteristics) -> imageform's space. Primaries 1: BT.709/sRGB, 9: BT.2020, 12: P3 with
+#: D65 (SMPTE EG 432-1); transfer 13: sRGB (IEC 61966-2-1), 1/6/14/15: the BT.709 OETF's
+#: family, 8: linear.
+_NCLX = {
+    (1, 13): "srgb",
+    (12, 13): "display_p3",
+    (1, 1): "rec709",
+    (1, 6): "rec709",
+    (1, 14): "rec709",
+    (1, 15): "rec709",
+    (9, 1): "rec2020",
+    (9, 6): "rec2020",
+    (9, 14): "rec2020",
+    (9, 15): "rec2020",
+    (1, 8): "linear_srgb",
+    (12, 8): "linear_display_p3",
+    (9, 8): "linear_rec2020",
+}
+
+
+def _nclx_space(nclx: Any) -> DeclaredColorSpace:
+    """Name the space a HEIF ``nclx`` box declares (H.273 code points), or None."""
+    from imageform.io.icc import DeclaredColorSpace
+
+    if not isinstance(nclx, dict):
+        return DeclaredColorSpace(None, "none", "")
+    prim = int(nclx.get("color_primaries", 2) or 2)
+    trc = int(nclx.get("transfer_characteristics", 2) or 2)
+    if prim == 2 and trc == 2:  # both "unspecified"
+        return DeclaredColorSpace(None, "none", "")
+    text = f"nclx primaries {prim}, transfer {trc}"
+    return DeclaredColorSpace(_NCLX.get((prim, trc)), "nclx", text)

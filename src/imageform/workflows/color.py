@@ -192,7 +192,11 @@ def _declared_space(run: Run, image: Path, declared: Any, *, grey: bool) -> str:
         return "gray"
     if declared.name is not None:
         if declared.name != "srgb":
-            how = "its ICC profile" if declared.source == "icc" else "its EXIF tags"
+            how = {
+                "icc": "its ICC profile",
+                "nclx": "its HEIF colour box (nclx)",
+                "png-srgb": "its sRGB chunk",
+            }.get(declared.source, "its EXIF tags")
             run.note(f"note: {image} declares {declared.name} in {how}; read as {declared.name}"
                      " (--from overrides)")  # fmt: skip
         return str(declared.name)
