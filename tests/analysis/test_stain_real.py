@@ -137,9 +137,9 @@ def test_a_tile_of_one_colour_is_refused(colour: tuple[int, int, int]) -> None:
     """Before, macenko_stains returned two identical vectors (and normalisation failed
     later on a singular matrix)."""
     img8 = np.broadcast_to(np.asarray(colour, dtype=np.uint8), (32, 32, 3)).copy()
-    with pytest.raises(DegenerateConfigurationError, match="Macenko: .* one colour"):
+    with pytest.raises(DegenerateConfigurationError, match=r"Macenko: .* one colour"):
         macenko_stains(img8)
-    with pytest.raises(DegenerateConfigurationError, match="Vahadane: .* one colour"):
+    with pytest.raises(DegenerateConfigurationError, match=r"Vahadane: .* one colour"):
         vahadane_stains(img8)
 
 
