@@ -137,27 +137,28 @@ def _glass_mode(flat: Any, cand: np.ndarray, tol: float) -> tuple[np.ndarray, fl
     """
     lo, hi = cand * np.exp(-tol), cand * np.exp(tol)
     near = ((flat >= lo) & (flat <= hi)).all(axis=1)
-    w = near.astype(np.float64)
-    lazy = is_dask(flat)
-    if lazy:
+    parts: list[Any]
+    if is_dask(flat):
+        import dask
         import dask.array as da
 
-        bincount: Any = da.bincount
-    else:
-        bincount = np.bincount
-    parts: list[Any] = [w.sum()]
-    for c in range(3):
-        v = flat[:, c].astype(np.float64)
-        idx = (v * 255.0 + 0.5).astype(np.int64)
-        idx = idx.clip(0, 255) if lazy else np.clip(idx, 0, 255)
-        parts += [
-            bincount(idx, weights=w, minlength=256),
-            bincount(idx, weights=w * v, minlength=256),
-        ]
-    if lazy:
-        import dask
-
+        w = near.astype(np.float64)
+        parts = [w.sum()]
+        for c in range(3):
+            v = flat[:, c].astype(np.float64)
+            idx = (v * 255.0 + 0.5).astype(np.int64).clip(0, 255)
+            parts += [
+                da.bincount(idx, weights=w, minlength=256),
+                da.bincount(idx, weights=w * v, minlength=256),
+            ]
         parts = list(dask.compute(*parts))
+    else:
+        sel = np.asarray(flat)[near]
+        parts = [sel.shape[0]]
+        for c in range(3):
+            v = sel[:, c].astype(np.float64)
+            idx = np.clip((v * 255.0 + 0.5).astype(np.int64), 0, 255)
+            parts += [np.bincount(idx, minlength=256), np.bincount(idx, weights=v, minlength=256)]
     count = float(parts[0])
     share = count / max(int(flat.shape[0]), 1)
     if count == 0.0:
