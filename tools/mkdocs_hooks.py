@@ -88,6 +88,7 @@ BENCH_SCRIPTS: dict[str, str] = {
     "sfr": "benchmarks/bench_sfr.py",
     "stain": "benchmarks/bench_stain.py",
     "stain-glass": "benchmarks/check_stain_glass.py",
+    "stain-real": "benchmarks/check_stain_real.py",
     "track": "benchmarks/bench_track.py",
     "twoview": "benchmarks/bench_twoview.py",
     "twoview-e": "benchmarks/bench_twoview.py",

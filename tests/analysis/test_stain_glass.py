@@ -141,7 +141,10 @@ def test_real_slide_has_glass() -> None:
     ihc = np.asarray(data.immunohistochemistry())
     est = estimate_background(ihc)
     assert est.found and est.glass_fraction > 0.01  # the lumen and the left edge
-    np.testing.assert_allclose(est.i0 * 255, 239, atol=2)
+    # the glass's most frequent value: the flat glass at the left edge, (236, 236, 234) in
+    # 3,300 pixels (the lumen is brighter, 240-248, and the 99th percentile, 239, lies in its
+    # tail and the pale stroma's)
+    np.testing.assert_allclose(est.i0 * 255, (236, 236, 234), atol=1)
 
 
 def test_i0_source_round_trips_json(tmp_path: Path) -> None:

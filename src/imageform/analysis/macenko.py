@@ -117,8 +117,9 @@ class BackgroundEstimate:
 
     ``i0`` (3,) is the estimate, or :data:`REFERENCE_I0` for every channel when no glass was
     found (``found`` False; ``reason`` says why, in one line, and is empty otherwise).
-    ``glass_fraction`` is the share of the pixels within ``max_tint`` of the candidate in
-    every channel (the bright mode; 0 when the candidate was rejected before counting).
+    ``glass_fraction`` is the share of the pixels within ``max_tint`` of ``i0`` in every
+    channel (the glass; of the candidate when no glass was found, 0 when the candidate was
+    rejected before counting).
     """
 
     i0: np.ndarray
@@ -127,16 +128,77 @@ class BackgroundEstimate:
     reason: str = ""
 
 
-def _glass_share(flat: Any, i0: np.ndarray, tol: float) -> float:
-    """Share of pixels within ``tol`` (ln units) of ``i0`` in every channel."""
-    lo, hi = i0 * np.exp(-tol), i0 * np.exp(tol)
-    near = ((flat >= lo) & (flat <= hi)).all(axis=1)
-    share = near.astype(np.float64).mean()
-    if is_dask(share):
-        import dask
+def _glass_mode(flat: Any, cand: np.ndarray, tol: float) -> tuple[np.ndarray, float]:
+    """Per-channel mode of the pixels within ``tol`` (ln units) of ``cand`` in every channel.
 
-        share = dask.compute(share)[0]
-    return float(share)
+    Histograms of those pixels in bins of one 8-bit code, smoothed by (1, 2, 1)/4; the mode
+    is the centroid of the tallest bin and its two neighbours (sub-code). Also returns the
+    share of such pixels (the mode is ``cand`` when there are none).
+    """
+    lo, hi = cand * np.exp(-tol), cand * np.exp(tol)
+    near = ((flat >= lo) & (flat <= hi)).all(axis=1)
+    parts: list[Any]
+    if is_dask(flat):
+        import dask
+        import dask.array as da
+
+        w = near.astype(np.float64)
+        parts = [w.sum()]
+        for c in range(3):
+            v = flat[:, c].astype(np.float64)
+            idx = (v * 255.0 + 0.5).astype(np.int64).clip(0, 255)
+            parts += [
+                da.bincount(idx, weights=w, minlength=256),
+                da.bincount(idx, weights=w * v, minlength=256),
+            ]
+        parts = list(dask.compute(*parts))
+    else:
+        sel = np.asarray(flat)[near]
+        parts = [sel.shape[0]]
+        for c in range(3):
+            v = sel[:, c].astype(np.float64)
+            idx = np.clip((v * 255.0 + 0.5).astype(np.int64), 0, 255)
+            parts += [np.bincount(idx, minlength=256), np.bincount(idx, weights=v, minlength=256)]
+    count = float(parts[0])
+    share = count / max(int(flat.shape[0]), 1)
+    if count == 0.0:
+        return np.asarray(cand, dtype=np.float64), 0.0
+    mode = np.empty(3)
+    for c in range(3):
+        counts = np.asarray(parts[1 + 2 * c], dtype=np.float64)
+        sums = np.asarray(parts[2 + 2 * c], dtype=np.float64)
+        smooth = np.convolve(counts, [0.25, 0.5, 0.25], mode="same")
+        k = int(np.argmax(smooth))
+        sl = slice(max(k - 1, 0), k + 2)
+        mode[c] = sums[sl].sum() / counts[sl].sum()
+    return mode, share
+
+
+#: Rounds of :func:`_climb` (each moves I0 by at most ``max_tint``; it stops when I0 stays).
+_GLASS_ROUNDS = 8
+
+
+def _climb(
+    flat: Any, mode: np.ndarray, share: float, tol: float, min_background: float
+) -> tuple[np.ndarray, float]:
+    """Re-centre the window on the mode until it stays (hill-climbing to the glass's mode).
+
+    The percentile can lie more than ``tol`` above the glass in one channel (the noise tail,
+    a brighter strip of glass), and then the window around it misses most of the glass. A
+    move that would leave the glass (darker than ``min_background`` or tinted by more than
+    ``tol``) is not taken.
+    """
+    for _ in range(_GLASS_ROUNDS):
+        moved, near = _glass_mode(flat, mode, tol)
+        if near == 0.0 or not np.all(moved >= min_background):
+            break
+        if float(np.log(moved.max() / moved.min())) > tol:
+            break
+        step = float(np.max(np.abs(moved - mode)))
+        mode, share = moved, near
+        if step < 0.5 / 255.0:
+            break
+    return mode, share
 
 
 def estimate_background(
@@ -161,6 +223,16 @@ def estimate_background(
        ``max_tint`` of it in every channel (the per-channel percentiles of two tissues, one
        pink and one blue, can make a neutral candidate that no pixel is near).
 
+    :math:`I_0` is then the glass's most frequent value, not the percentile: the percentile
+    lies in the upper tail of the glass's noise, JPEG ringing and brighter strips of glass
+    (4-10 codes above the glass on real scans), so glass rendered darker than it comes out
+    stained after normalisation. Per channel, the histogram (bins of one 8-bit code,
+    smoothed by (1, 2, 1)/4) of the pixels within ``max_tint`` of the current estimate in
+    every channel gives the mode (centroid of the tallest bin and its neighbours); the
+    window is re-centred on it until it stays (at most 8 rounds; a move to a darker than
+    ``min_background`` or tinted mode is not taken). HistomicsTK likewise takes the median
+    of the background pixels.
+
     Otherwise the tile has no glass and :math:`I_0` is :data:`REFERENCE_I0` (240/255,
     Macenko's reference code and torchstain) for every channel, with ``found`` False and the
     failed check in ``reason``.
@@ -170,7 +242,7 @@ def estimate_background(
     image : array_like, shape (..., 3)
         Encoded RGB (uint8/uint16/floats in [0, 1]) or Dask (exact two-pass quantiles).
     percentile : float
-        Percentile of each channel taken as :math:`I_0` (99: at least 1 % glass).
+        Percentile of each channel taken as the candidate (99: at least 1 % glass).
     min_background : float
         The darkest glass accepted, in (0, 1].
     max_tint : float
@@ -186,7 +258,8 @@ def estimate_background(
     Notes
     -----
     Source: Macenko et al. 2009, sec. 2 (I₀, "the intensity of the incident light"; the
-    reference code fixes it at 240 of 255).
+    reference code fixes it at 240 of 255); the mode as a background estimate: HistomicsTK's
+    ``background_intensity`` (median of background samples).
 
     Examples
     --------
@@ -229,14 +302,18 @@ def estimate_background(
             "in ln units)"
         )
         return BackgroundEstimate(default, False, 0.0, f"no glass: {why}")
-    share = _glass_share(flat, i0, float(max_tint))
+    mode, share = _glass_mode(flat, i0, float(max_tint))
+    if share >= min_glass:
+        mode, share = _climb(flat, mode, share, float(max_tint), float(min_background))
     if share < min_glass:
         why = (
             f"{share:.2%} of the pixels are near {seen} (within max_tint {max_tint:g}), "
             f"fewer than min_glass {min_glass:g}"
         )
         return BackgroundEstimate(default, False, share, f"no glass: {why}")
-    return BackgroundEstimate(np.minimum(i0, 1.0), True, share)
+    # the percentile sits in the upper tail of the glass's noise and JPEG's ringing: I0 is
+    # the glass's most frequent intensity
+    return BackgroundEstimate(np.minimum(mode, 1.0), True, share)
 
 
 def background_intensity(
@@ -539,12 +616,14 @@ def _count(keep: Any, beta: float, min_pixels: int, rule: str, what: str) -> int
     return n
 
 
-def _fit(od: Any, beta: float, alpha: float, min_pixels: int, rule: str) -> tuple[np.ndarray, int]:
+def _fit(
+    od: Any, beta: float, alpha: float, min_pixels: int, rule: str, what: str = "Macenko"
+) -> tuple[np.ndarray, int]:
     """Stain matrix (2, 3) from OD pixels, NumPy or Dask (same formulas, same order)."""
     flat = od.reshape((-1, 3)).astype(np.float64)
     keep = _keep_mask(flat, beta, rule)
     w = keep.astype(np.float64)
-    n = _count(keep, beta, min_pixels, rule, "Macenko")
+    n = _count(keep, beta, min_pixels, rule, what)
     lazy = is_dask(flat)
     # covariance of the kept OD vectors as sums (a reduction in Dask), then its eigenvectors
     s1 = (flat * w[:, None]).sum(axis=0)
@@ -577,14 +656,40 @@ def _fit(od: Any, beta: float, alpha: float, min_pixels: int, rule: str) -> tupl
     v_max = plane @ np.array([np.cos(hi), np.sin(hi)])
     # hematoxylin first: the vector with the larger red OD component (Macenko's heuristic)
     stains = np.stack([v_min, v_max] if v_min[0] > v_max[0] else [v_max, v_min])
-    return stains / np.linalg.norm(stains, axis=1, keepdims=True), n
+    stains = stains / np.linalg.norm(stains, axis=1, keepdims=True)
+    sv = np.linalg.svd(stains, compute_uv=False)
+    if not sv[-1] > 1e-6 * sv[0]:
+        raise DegenerateConfigurationError(
+            f"{what}: the {n} pixels with optical density >= beta={beta:g} all have one "
+            "colour (the extreme directions of their OD coincide), so two stains cannot be "
+            "separated; is this a tile of one flat colour (blank, black, a pen mark)?"
+        )
+    return stains, n
 
 
-def _max_conc(od: Any, stains: np.ndarray, percentile: float) -> np.ndarray:
-    c = od.reshape((-1, 3)).astype(np.float64) @ np.linalg.pinv(stains)
+#: Pixels within this of :math:`I_0` in every channel (ln units, :func:`estimate_background`'s
+#: ``max_tint``) are glass for :func:`macenko_stains`'s maximum concentrations.
+_GLASS_TOLERANCE = 0.04
+
+
+def _max_conc(od: Any, stains: np.ndarray, percentile: float, base: str) -> np.ndarray:
+    """Percentile of each stain's concentration over the pixels that are not glass.
+
+    Glass (every channel's OD within 0.04 of 0) holds no stain: counted,
+    it would lower the percentile with the share of glass in the tile, and a tile that is
+    mostly glass would be normalised several times darker than the same tissue without.
+    """
+    flat = od.reshape((-1, 3)).astype(np.float64)
+    c = flat @ np.linalg.pinv(stains)
+    tol = _GLASS_TOLERANCE / (_LN10 if base == "10" else 1.0)
+    keep = (abs(flat) > tol).any(axis=1)
     if is_dask(c):
-        return np.array([exact_quantile(c[:, i], percentile) for i in range(2)])
-    return np.percentile(c, percentile, axis=0)
+        n = keep.sum().compute()
+        if int(n) == 0:
+            keep = keep | True
+        return np.array([exact_quantile(c[:, i][keep], percentile) for i in range(2)])
+    tissue = c[keep]
+    return np.percentile(tissue if tissue.shape[0] else c, percentile, axis=0)
 
 
 def _check_params(beta: float, alpha: float, max_percentile: float) -> None:
@@ -620,7 +725,14 @@ def macenko_stains(
        :math:`v = V(\cos\varphi, \sin\varphi)^T`, the one with larger red OD first
        (hematoxylin).
     4. Concentrations :math:`C = OD\, S^+` (least squares, all pixels); their 99th
-       percentile per stain is the robust maximum.
+       percentile per stain over the pixels that are not glass (glass: every channel's
+       :math:`|OD| \le 0.04`, ``max_tint`` of :func:`estimate_background`)
+       is the robust maximum. The reference code takes it over every pixel, glass
+       included, so the maximum falls with the share of glass in the tile (a tile that is
+       90 % glass is normalised several times darker than the same tissue without glass);
+       on tiles without glass the two agree.
+    5. Raises :class:`DegenerateConfigurationError` when the two vectors coincide (a tile of
+       one flat colour: blank, black, a pen mark) rather than returning them.
 
     The defaults are the reference code's (Macenko's MATLAB code, its Python port
     ``HEnorm_python``, torchstain): ln OD, β = 0.15, α = 1. With I₀ = 240/255 given and
@@ -640,7 +752,8 @@ def macenko_stains(
     alpha : float
         Percentile (in %) for the robust extreme angles (1 in the paper).
     max_percentile : float
-        Percentile of concentrations taken as the maximum (99 in the paper).
+        Percentile of concentrations taken as the maximum (99 in the paper), over the
+        pixels that are not glass.
     min_pixels : int
         Fewer kept pixels raise :class:`DegenerateConfigurationError` (no tissue).
     min_intensity : float
@@ -697,7 +810,7 @@ def macenko_stains(
     i0v, i0_from = _resolve_i0_source(rgb, i0)
     od = optical_density(rgb, min_intensity=min_intensity, i0=i0v, base=key)
     stains, n = _fit(od, float(beta), float(alpha), max(min_pixels, 2), rule)
-    maxc = _max_conc(od, stains, float(max_percentile))
+    maxc = _max_conc(od, stains, float(max_percentile), key)
     n_total = int(np.prod(rgb.shape[:-1]))
     i0t = (float(i0v[0]), float(i0v[1]), float(i0v[2]))
     return MacenkoStains(stains, maxc, n, i0t, key, "macenko", n_total, i0_from)
@@ -859,7 +972,8 @@ def vahadane_stains(
        moves by less than 1e-7; the reference implementation (Vahadane's MATLAB code,
        StainTools) uses SPAMS' online dictionary learning on the same objective.
     3. Rows of ``H`` normalised, hematoxylin (larger red OD) first; the concentrations
-       and their 99th percentile as in Macenko (least squares over all pixels), so the
+       and their 99th percentile as in Macenko (least squares over all pixels, the
+       percentile over those that are not glass), so the
        result normalises with :func:`~imageform.analysis.macenko_normalize`.
 
     Parameters
@@ -914,7 +1028,7 @@ def vahadane_stains(
     flat: Any = od.reshape((-1, 3)).astype(np.float64)
     keep = _keep_mask(flat, float(beta), "norm")
     n = _count(keep, float(beta), max(int(min_pixels), 2), "norm", "Vahadane")
-    h0, _ = _fit(od, float(beta), 1.0, max(int(min_pixels), 2), "norm")
+    h0, _ = _fit(od, float(beta), 1.0, max(int(min_pixels), 2), "norm", "Vahadane")
     tissue = flat[keep]
     if is_dask(tissue):
         tissue = tissue.compute()
@@ -927,7 +1041,7 @@ def vahadane_stains(
     h = h / norms
     if h[0, 0] < h[1, 0]:
         h = h[::-1]
-    maxc = _max_conc(od, h, float(max_percentile))
+    maxc = _max_conc(od, h, float(max_percentile), key)
     i0t = (float(i0v[0]), float(i0v[1]), float(i0v[2]))
     n_total = int(np.prod(rgb.shape[:-1]))
     return MacenkoStains(h.copy(), maxc, n, i0t, key, "vahadane", n_total, i0_from)
