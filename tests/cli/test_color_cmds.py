@@ -156,3 +156,16 @@ def test_convert_auto_grey_and_unknown_profiles(
     assert main(["convert", str(wide), "-o", str(tmp_path / "w.tif"), "--to", "lab"]) == 0
     err = capsys.readouterr().err
     assert "ICC profile imageform does not recognise (AWGC); read as srgb" in err
+
+
+def test_white_balance_keeps_the_input_s_profile(rgb_png: Path, tmp_path: Path) -> None:
+    from imageform.io import image_color_space
+
+    p3 = tmp_path / "p3.png"
+    write_image(p3, read_image(rgb_png), color_space="display_p3")
+    out = tmp_path / "wb.png"
+    assert main(["white-balance", str(p3), "-o", str(out)]) == 0
+    assert image_color_space(out).name == "display_p3"
+    plain = tmp_path / "wb_plain.png"
+    assert main(["white-balance", str(rgb_png), "-o", str(plain)]) == 0
+    assert image_color_space(plain).name is None

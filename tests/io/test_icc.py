@@ -208,3 +208,38 @@ def test_npy_declares_nothing(tmp_path: Path) -> None:
     p = tmp_path / "a.npy"
     np.save(p, np.zeros((2, 2, 3)))
     assert image_color_space(p) == DeclaredColorSpace(None, "none", "")
+
+
+def test_encoded_space_names_the_profile_of_a_development() -> None:
+    from imageform.io.icc import encoded_space
+
+    assert encoded_space("display_p3", "srgb") == "display_p3"
+    assert encoded_space("prophoto", "prophoto") == "prophoto"
+    assert encoded_space("srgb", "rec709") == "rec709"  # LibRaw's default output
+    assert encoded_space("srgb", "linear") == "linear_srgb"
+    assert encoded_space("display_p3", "linear") is None  # no shipped linear P3 profile
+    assert encoded_space("prophoto", "srgb") is None
+
+
+@pytest.mark.parametrize(
+    ("args", "want"),
+    [
+        ([], None),
+        (["--space", "display-p3"], "display_p3"),
+        (["--space", "prophoto"], "prophoto"),
+        (["--transfer", "rec709"], "rec709"),
+    ],
+)
+def test_develop_tags_its_output(tmp_path: Path, args: list[str], want: str | None) -> None:
+    """A raw developed into Display P3 or ProPhoto was written untagged: every viewer (and
+    the next imageform command) took it for sRGB."""
+    pytest.importorskip("rawpy")
+    from imageform.cli import main
+    from imageform.io import write_dng
+
+    rng = np.random.default_rng(3)
+    mosaic = (rng.random((32, 48)) * 3000 + 200).astype(np.uint16)
+    dng = write_dng(tmp_path / "a.dng", mosaic, white_level=4095, color_matrix=np.eye(3))
+    out = tmp_path / "a.png"
+    assert main(["develop", str(dng), "-o", str(out), *args]) == 0
+    assert image_color_space(out).name == want

@@ -326,6 +326,27 @@ def _read_shipped(file: str) -> bytes:
     return (resources.files("imageform.io") / "data" / "icc" / file).read_bytes()
 
 
+def encoded_space(space: str, transfer: str) -> str | None:
+    """Name the space of RGB ``space`` encoded with ``transfer``, when a profile holds it.
+
+    The space's own curve gives the space; ``linear`` its ``linear_`` twin; sRGB's (or
+    BT.709's) primaries with BT.709's curve are ``rec709`` (LibRaw's default output). None
+    when no shipped profile describes the pair (the file is then written untagged).
+    """
+    from imageform.color import rgb_space
+
+    own = rgb_space(space).transfer
+    if transfer == own:
+        name = space
+    elif transfer == "linear":
+        name = f"linear_{space}"
+    elif space in ("srgb", "rec709") and transfer == "rec709":
+        name = "rec709"
+    else:
+        return None
+    return name if name in _SHIPPED else None
+
+
 def embedded_profile(space: str) -> bytes | None:
     """Return the profile :func:`~imageform.io.write_image` embeds for ``space`` (sRGB: None)."""
     from imageform.color import space_name

@@ -818,6 +818,17 @@ def image_color_space(path: str | Path) -> DeclaredColorSpace:
             prof = parse_icc(info["icc_profile"])
             return DeclaredColorSpace(identify_icc(prof), "icc", prof.description)
         return _nclx_space(info.get("nclx_profile"))
+    if fmt == "tiff":  # tifffile: Pillow opens no float or 16-bit RGB TIFF
+        try:
+            with _tifffile().TiffFile(p) as tif:
+                tag = tif.pages.first.tags.get(34675)
+                icc_tiff = bytes(tag.value) if tag is not None else b""
+        except Exception as exc:
+            raise InvalidInputError(f"cannot read {p}: {_one_line(exc)}") from None
+        if icc_tiff:
+            prof = parse_icc(icc_tiff)
+            return DeclaredColorSpace(identify_icc(prof), "icc", prof.description)
+        return DeclaredColorSpace(None, "none", "")
     from PIL import Image, UnidentifiedImageError
 
     try:

@@ -170,13 +170,22 @@ def read(path: Path, opts: Any, *, alpha: str | None = None) -> Any:
     )
 
 
-def write(run: Run, path: Path, image: Any, opts: Any, *, like: Any = None) -> int:
+def write(
+    run: Run,
+    path: Path,
+    image: Any,
+    opts: Any,
+    *,
+    like: Any = None,
+    color_space: str | None = None,
+) -> int:
     """Write ``image`` (floats in [0, 1] or integers) to the output ``path``; return the clip count.
 
     The options' bit depth and out-of-range policy (an :class:`ImageOut`) apply; the count is how
     many values lay outside [0, 1] in an integer output (each clipped, noted once).
 
     ``like`` is the input array whose depth the output keeps (uint16 in, 16-bit PNG out).
+    ``color_space``: the RGB space whose ICC profile the file carries (``write_image``).
     TIFF output is float32 unless ``--bit-depth`` asks for integers; ``.npy`` keeps the dtype.
     """
     import numpy as np
@@ -193,7 +202,9 @@ def write(run: Run, path: Path, image: Any, opts: Any, *, like: Any = None) -> i
             bits = 8
     if fmt == "tiff" and bits is None and a.dtype.kind == "f":
         a = a.astype(np.float32, copy=False)
-    written = write_image(run.file(path), a, bit_depth=bits, out_of_range=policy)
+    written = write_image(
+        run.file(path), a, bit_depth=bits, out_of_range=policy, color_space=color_space
+    )
     if written.out_of_range:
         run.note(
             f"note: {written.out_of_range} values outside [0, 1] were clipped to fit the "

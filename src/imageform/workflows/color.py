@@ -293,6 +293,10 @@ def white_balance(run: Run, opts: WhiteBalanceOptions, *, out: Path, image: Path
     img = read(image, opts)
     if img.shape[-1] != 3:
         raise InvalidInputError(f"{image}: expected an RGB image, got {img.shape[-1]} channel(s)")
+    from imageform.io import RGB_PROFILED, image_color_space
+
+    declared = image_color_space(image).name  # the output keeps the input's profile
+    tag = declared if declared in RGB_PROFILED else None
     chart = None
     flag = "IMAGE" if opts.chart is None else "--chart"
     if normalize_choice(opts.method, _WB_METHODS, "--method") == "chart":
@@ -308,7 +312,7 @@ def white_balance(run: Run, opts: WhiteBalanceOptions, *, out: Path, image: Path
         balanced, gains = chart_white_balance(img, chart.patches, normalize=opts.normalize)
         if opts.device == "cuda":
             run.note("note: --device cuda: --method chart runs on the CPU")
-        n_out = write(run, out, np.asarray(balanced), opts, like=img)
+        n_out = write(run, out, np.asarray(balanced), opts, like=img, color_space=tag)
     else:  # the gains from the whole image, applied a band of rows at a time
         from imageform.color.white_balance import (
             apply_white_balance_gains,
@@ -320,7 +324,7 @@ def white_balance(run: Run, opts: WhiteBalanceOptions, *, out: Path, image: Path
         fn: Any = lambda band: apply_white_balance_gains(band, gains)  # noqa: E731
         if opts.device == "cuda":
             fn = gpu_bands(run, f"the gains on a {img.dtype} image", fn)
-        n_out = write_mapped(run, out, img, fn, opts, like=img)[0]
+        n_out = write_mapped(run, out, img, fn, opts, like=img, color_space=tag)[0]
     if chart is not None and opts.overlay is not None:
         _charts.write_overlay(run, opts.overlay, chart, flag)
     g = [float(v) for v in np.asarray(gains)]

@@ -90,7 +90,10 @@ def develop(run: Run, opts: DevelopOptions, *, raw: Path, out: Path) -> Result:
         image = dev.to_integer(16)
     else:
         image = dev.image
-    write(run, out, image, opts, like=np.zeros(1, np.uint16))
+    from imageform.io.icc import encoded_space
+
+    tag = encoded_space(dev.space, dev.transfer)  # viewers then show the colours as meant
+    write(run, out, image, opts, like=np.zeros(1, np.uint16), color_space=tag)
     h, w = img.mosaic.shape[:2]
     oh, ow = image.shape[:2]
     if img.cfa_pattern:
@@ -116,6 +119,7 @@ def develop(run: Run, opts: DevelopOptions, *, raw: Path, out: Path) -> Result:
         "device": opts.device,
         "space": dev.space,
         "transfer": dev.transfer,
+        "icc_profile": tag if tag not in (None, "srgb") else None,
         "brightness": dev.brightness,
         "orientation": {"flip": img.orientation, "applied": dev.orientation == img.orientation},
         "notes": list(dev.notes),
