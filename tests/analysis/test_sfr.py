@@ -442,3 +442,82 @@ def test_fit_gaussian_sigma_refusals() -> None:
         fit_gaussian_sigma(np.linspace(0.6, 1.0, 5), np.ones(5))
     with pytest.raises(InvalidInputError, match="angle_deg"):
         fit_gaussian_sigma(np.linspace(0, 0.5, 5), np.ones(5), angle_deg=120.0)
+
+
+# --- finding edges in real charts: grey surrounds, notched sides, clutter beside an edge -------
+
+
+def _square_on_grey_surround() -> np.ndarray:
+    """A dark square (0.2) on its own grey surround (0.45), on white paper with a black patch.
+
+    Like the ISO 12233 e-SFR charts: the halfway threshold of the whole image (0.46) takes
+    the surround as dark too, so only a level between the square's two greys separates it.
+    """
+    chart = render_sfr_chart(
+        (160, 160), grid=(1, 1), angle_deg=5.0, sigma=0.8, low=0.2, high=0.45, supersampling=4
+    )
+    img = np.full((300, 400), 0.9)
+    img[70:230, 40:200] = chart
+    img[100:180, 260:340] = 0.02
+    return img
+
+
+def test_find_edges_of_a_square_on_its_own_grey_surround() -> None:
+    img = _square_on_grey_surround()
+    rois = find_slanted_edges(img)
+    assert sorted(r.side for r in rois) == ["bottom", "left", "right", "top"]
+    f50 = crossing(lambda f: gauss_truth(f, 0.8, 5.0), 0.5)
+    for roi in rois:
+        assert abs(roi.angle) == pytest.approx(5.0, abs=0.1)
+        assert slanted_edge_sfr(img, roi.roi).mtf50[0] == pytest.approx(f50, rel=0.02)
+
+
+def _left_side(img: np.ndarray) -> tuple[float, float, float]:
+    (roi,) = [r for r in find_slanted_edges(img) if r.side == "left"]
+    return roi.center[0], roi.center[1], math.tan(math.radians(roi.angle))
+
+
+def test_a_notched_side_is_not_an_edge() -> None:
+    img = render_sfr_chart((160, 200), grid=(1, 1), angle_deg=5.0, sigma=0.8, supersampling=4)
+    u0, v0, slope = _left_side(img)
+    notched = img.copy()
+    for v in range(int(v0) - 6, int(v0) + 7):  # a 13-row notch, 5 px deep, mid-side
+        u = u0 + slope * (v - v0)
+        notched[v, int(u) - 2 : int(u) + 6] = 0.8
+    rois = find_slanted_edges(notched)
+    assert sorted(r.side for r in rois) == ["bottom", "right", "top"]
+
+
+def test_a_faint_line_beside_an_edge_drops_its_roi() -> None:
+    # a printed guide line 12 px from the side, 30 % of the contrast: inside the side's ROI,
+    # where ISO 12233 wants a uniform area
+    img = render_sfr_chart((160, 200), grid=(1, 1), angle_deg=5.0, sigma=0.8, supersampling=4)
+    u0, v0, slope = _left_side(img)
+    lined = img.copy()
+    for v in range(int(v0) - 30, int(v0) + 31):
+        u = u0 - 12 + slope * (v - v0)
+        lined[v, round(u) - 1 : round(u) + 1] = 0.62
+    rois = find_slanted_edges(lined)
+    assert sorted(r.side for r in rois) == ["bottom", "right", "top"]
+
+
+def test_an_edge_crop_is_found_whole() -> None:
+    # sfrmat's input: a crop around one edge, both areas reaching the border
+    f50 = crossing(lambda f: gauss_truth(f, 0.8, 5.0), 0.5)
+    for ori, side in (("vertical", "right"), ("horizontal", "bottom")):
+        img = render_slanted_edge((100, 60), angle_deg=5.0, sigma=0.8, orientation=ori)
+        (roi,) = find_slanted_edges(img)
+        assert (roi.x, roi.y) == (0, 0) and roi.crop(img).shape == img.shape
+        assert (roi.orientation, roi.side) == (ori, side)
+        assert abs(roi.angle) == pytest.approx(5.0, abs=0.1)
+        assert slanted_edge_sfr(img, roi.roi).mtf50[0] == pytest.approx(f50, rel=0.02)
+    flipped = render_slanted_edge((100, 60), angle_deg=5.0, sigma=0.8)[:, ::-1]
+    assert [r.side for r in find_slanted_edges(flipped)] == ["left"]
+    # not one edge: a bar (two edges), an upright edge, an edge too steep for max_angle
+    rise = render_slanted_edge((100, 60), angle_deg=5.0, center=(20, 50))  # light from u=20
+    fall = render_slanted_edge((100, 60), angle_deg=5.0, center=(19, 50))[:, ::-1]  # to u=40
+    bar = rise + fall - 0.8
+    assert bar[50, [5, 30, 55]].round(1).tolist() == [0.2, 0.8, 0.2]
+    assert find_slanted_edges(bar) == []
+    assert find_slanted_edges(render_slanted_edge((100, 60), angle_deg=0.0)) == []
+    assert find_slanted_edges(render_slanted_edge((100, 60), angle_deg=15.0)) == []

@@ -82,6 +82,12 @@ __all__ = [
 SFR_LUMINANCE_WEIGHTS: tuple[float, float, float] = (0.213, 0.715, 0.072)
 
 _DERIVATIVES = ("central", "two_point")
+#: find_slanted_edges thresholds the image at this many levels across its range (and its middle)
+_N_LEVELS = 16
+#: largest RMS distance (px) of a side's threshold crossings from a parabola through them
+_MAX_BEND_RMS = 0.5
+#: largest difference (deg) between the threshold fit's and the e-SFR's angle of a found edge
+_MAX_ANGLE_GAP = 1.0
 _MAX_CORRECTION = 10.0
 
 
@@ -770,19 +776,31 @@ def find_slanted_edges(
     roi_width: int | None = None,
     weights: Sequence[float] = SFR_LUMINANCE_WEIGHTS,
 ) -> list[SlantedEdgeROI]:
-    """Find measurable slanted edges in a photograph of dark squares on a light background.
+    """Find measurable slanted edges in a photograph of dark squares on a lighter surround.
 
-    The image is thresholded halfway between its 2nd and 98th percentiles; each dark
-    connected component (scipy's 4-connected labelling) that does not touch the border, is
-    at least ``min_size`` pixels across and fills at least 60 % of its bounding box is taken
-    as a square. Its four sides are fitted by least squares through the sub-pixel threshold
-    crossings of the middle half of its rows (left, right sides) and columns (top, bottom).
-    A side whose angle from the vertical/horizontal is within ``[min_angle, max_angle]``
-    degrees gets an ROI centred on its midpoint, ``roi_length`` of the side long (the middle
-    part, away from the corners; longer, up to 80 % of the side, where the edge would not
-    cross one whole pixel along it, else the side is skipped) and ``roi_width`` pixels
-    across (default: 60 % of the side, at most 64); ROIs that leave the image, or in which a
-    row (column) crosses the threshold more than once (another square inside), are dropped.
+    The image is thresholded halfway between its 2nd and 98th percentiles, then at 15 levels
+    evenly spaced between them (a chart's square often sits on a grey surround of its own
+    among other patches, and only a level between the square's two greys separates it); at
+    each level, each dark connected component (scipy's 4-connected labelling) that does not
+    touch the border, is at least ``min_size`` pixels across and fills at least 60 % of its
+    bounding box is taken as a square. Its four sides are fitted by least squares through
+    the sub-pixel threshold crossings of the middle half of its rows (left, right sides) and
+    columns (top, bottom); a side whose crossings stray more than 0.5 px RMS from a parabola
+    through them (a notch, a corner, another shape joined to it) is skipped. A side whose
+    angle from the vertical/horizontal is within ``[min_angle, max_angle]`` degrees gets an
+    ROI centred on its midpoint, ``roi_length`` of the side long (the middle part, away from
+    the corners; longer, up to 80 % of the side, where the edge would not cross one whole
+    pixel along it, else the side is skipped) and ``roi_width`` pixels across (default: 60 %
+    of the side, at most 64); ROIs that leave the image, or in which a row (column) crosses
+    the threshold more than once (another square inside), are dropped. Of the ROIs that
+    several levels find on one edge, the one whose level is nearest the middle of the
+    edge's two greys is kept. A kept ROI must hold one edge, which the e-SFR measures: each
+    line across it crosses the levels 1/4 and 3/4 of the way between the ROI's 5th and 95th
+    percentiles once (ISO 12233 wants uniform areas on both sides of the edge), and
+    :func:`slanted_edge_sfr` accepts it and finds the edge within 1 deg of the threshold
+    fit. If no square gives an edge and the whole image passes that test with an angle in
+    range, the image is taken as an edge crop (the input of ``sfrmat``) and returned as one
+    ROI (its ``side`` names the side of the dark area the edge bounds).
 
     Returns
     -------
@@ -810,29 +828,37 @@ def find_slanted_edges(
     p2, p98 = np.percentile(g, [2.0, 98.0])
     if p98 - p2 <= 0:
         return []
-    t = 0.5 * (p2 + p98)
-    dark = g < t
-    labels, _n = ndimage.label(dark)
-    found: list[SlantedEdgeROI] = []
-    for lab, sl in enumerate(ndimage.find_objects(labels), start=1):
-        if sl is None:
-            continue
-        r0, r1, c0, c1 = sl[0].start, sl[0].stop, sl[1].start, sl[1].stop
-        if r0 == 0 or c0 == 0 or r1 == H or c1 == W:
-            continue
-        hh, ww = r1 - r0, c1 - c0
-        if min(hh, ww) < msz:
-            continue
-        m = labels[r0:r1, c0:c1] == lab
-        if m.sum() < 0.6 * hh * ww:
-            continue
-        side = math.sqrt(float(m.sum()))
-        for name in ("left", "right", "top", "bottom"):
-            roi = _side_roi(g, m, t, (r0, c0), name, side, frac, rw)
-            if roi is None:
+    # the midpoint first (a two-tone chart), then levels across the whole range: a square on a
+    # grey surround of its own, among other patches, separates only between its two greys
+    levels = [0.5 * (p2 + p98)]
+    levels += list(p2 + (p98 - p2) * (np.arange(1, _N_LEVELS) / _N_LEVELS))
+    best: list[tuple[float, SlantedEdgeROI]] = []
+    for t in levels:
+        dark = g < t
+        labels, _n = ndimage.label(dark)
+        for lab, sl in enumerate(ndimage.find_objects(labels), start=1):
+            if sl is None:
                 continue
-            if lo_a <= abs(roi.angle) <= hi_a and _clean(dark, roi):
-                found.append(roi)
+            r0, r1, c0, c1 = sl[0].start, sl[0].stop, sl[1].start, sl[1].stop
+            if r0 == 0 or c0 == 0 or r1 == H or c1 == W:
+                continue
+            hh, ww = r1 - r0, c1 - c0
+            if min(hh, ww) < msz:
+                continue
+            m = labels[r0:r1, c0:c1] == lab
+            if m.sum() < 0.6 * hh * ww:
+                continue
+            side = math.sqrt(float(m.sum()))
+            for name in ("left", "right", "top", "bottom"):
+                roi = _side_roi(g, m, t, (r0, c0), name, side, frac, rw)
+                if roi is None or not lo_a <= abs(roi.angle) <= hi_a or not _clean(dark, roi):
+                    continue
+                _keep(best, roi, _level_offset(g, roi, t))
+    found = [roi for _score, roi in best if _measurable(g, roi)]
+    if not found:  # an edge crop (sfrmat's input): the whole image as one ROI
+        whole = _whole_image_edge(g)
+        if whole is not None and lo_a <= abs(whole.angle) <= hi_a:
+            found = [whole]
     found.sort(key=lambda r: (round(r.center[1]), r.center[0]))
     return found
 
@@ -865,6 +891,12 @@ def _side_roi(
         step = -1
     pos = _subpixel_side(gg, t, sel + o_line, first + o_across, step)
     yl = (sel + o_line).astype(np.float64)
+    # a straight (or gently bent, by distortion) edge: a corner, a notch or another shape
+    # merged with the square leaves crossings off any smooth curve
+    if sel.size >= 6:
+        bend = pos - np.polyval(np.polyfit(yl, pos, 2), yl)
+        if float(np.sqrt(np.mean(bend**2))) > _MAX_BEND_RMS:
+            return None
     b, a = np.polyfit(yl, pos, 1)
     angle = math.degrees(math.atan(b))
     mid_line = 0.5 * (lines[0] + lines[-1]) + o_line
@@ -896,3 +928,90 @@ def _clean(dark: np.ndarray, roi: SlantedEdgeROI) -> bool:
         d = d.T
     changes = np.count_nonzero(np.diff(d.astype(np.int8), axis=1), axis=1)
     return bool((changes == 1).all())
+
+
+def _level_offset(g: np.ndarray, roi: SlantedEdgeROI, t: float) -> float:
+    """How far ``t`` is from the middle of the ROI's two greys, in units of their difference.
+
+    The greys are the ROI's 5th and 95th percentiles; 0 is a threshold halfway between them
+    (where the crossings sit on the edge itself), 0.5 one at either grey.
+    """
+    a = g[roi.y : roi.y + roi.height, roi.x : roi.x + roi.width]
+    lo, hi = np.percentile(a, [5.0, 95.0])
+    if hi <= lo:
+        return math.inf
+    return float(abs(t - 0.5 * (lo + hi)) / (hi - lo))
+
+
+def _keep(best: list[tuple[float, SlantedEdgeROI]], roi: SlantedEdgeROI, score: float) -> None:
+    """Add ``roi`` to ``best`` unless an ROI on the same edge has a better (lower) score.
+
+    Two ROIs are on one edge when they have one orientation and their centres are closer
+    than a quarter of the shorter ROI's length along the edge.
+    """
+    along = roi.height if roi.orientation == "vertical" else roi.width
+    for i, (sc, other) in enumerate(best):
+        o_along = other.height if other.orientation == "vertical" else other.width
+        if other.orientation != roi.orientation:
+            continue
+        du = roi.center[0] - other.center[0]
+        dv = roi.center[1] - other.center[1]
+        if math.hypot(du, dv) < 0.25 * min(along, o_along):
+            if score < sc:
+                best[i] = (score, roi)
+            return
+    best.append((score, roi))
+
+
+def _measurable(g: np.ndarray, roi: SlantedEdgeROI) -> bool:
+    """Whether the ROI holds one edge the e-SFR measures, at the threshold fit's angle.
+
+    One edge: every line across it crosses the levels a quarter and three quarters of the
+    way between the ROI's two greys (its 5th and 95th percentiles) once, so that no other
+    edge, or part of one, lies in the ROI (ISO 12233 wants uniform areas on both sides).
+
+    The e-SFR locates the edge by the centroids of the rows' derivatives, not by a threshold;
+    on a straight edge both agree within a fraction of a degree. A ROI the e-SFR refuses
+    (too few phases, too narrow) or where the two angles differ by more than 1 deg (a glyph,
+    a rounded shape) is not a slanted edge.
+    """
+    a = roi.crop(g)
+    lo, hi = np.percentile(a, [5.0, 95.0])
+    for level in (lo + 0.25 * (hi - lo), lo + 0.75 * (hi - lo)):
+        if not _clean(g < level, roi):
+            return False
+    try:
+        r = slanted_edge_sfr(g, roi.roi)
+    except DegenerateConfigurationError:
+        return False
+    return r.orientation == roi.orientation and abs(r.angle - roi.angle) <= _MAX_ANGLE_GAP
+
+
+def _whole_image_edge(g: np.ndarray) -> SlantedEdgeROI | None:
+    """Return the whole image as one ROI if it is a crop around one slanted edge, else None.
+
+    The e-SFR's own fit gives the orientation and angle; :func:`_measurable`'s test then
+    checks that every line crosses between the two greys once. ``side`` names the side of
+    the dark area the edge bounds (``"right"``: dark on the left of a vertical edge).
+    """
+    H, W = g.shape
+    if min(H, W) < 8:
+        return None
+    try:
+        r = slanted_edge_sfr(g)
+    except DegenerateConfigurationError:
+        return None
+    vertical = r.orientation == "vertical"
+    p = r.edge[-1]
+    mid = (H - 1) / 2.0 if vertical else (W - 1) / 2.0
+    across = float(np.polyval(p, mid))
+    if vertical:
+        dark_first = g[:, : W // 2].mean() < g[:, W // 2 :].mean()
+        side = "right" if dark_first else "left"
+        center = (across, mid)
+    else:
+        dark_first = g[: H // 2].mean() < g[H // 2 :].mean()
+        side = "bottom" if dark_first else "top"
+        center = (mid, across)
+    roi = SlantedEdgeROI(0, 0, W, H, r.angle, r.orientation, side, center)
+    return roi if _measurable(g, roi) else None

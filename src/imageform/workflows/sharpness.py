@@ -120,8 +120,9 @@ def sfr(run: Run, opts: SfrOptions, *, out: Path | None, image: Path) -> Result:
         found = find_slanted_edges(arr, min_angle=opts.min_angle, max_angle=opts.max_angle)
         if not found:
             raise InvalidInputError(
-                f"no slanted edge found in {image} (dark squares turned {opts.min_angle:g}-"
-                f"{opts.max_angle:g} deg on a light background); give one with --roi x,y,w,h"
+                f"no slanted edge found in {image} (neither dark squares turned "
+                f"{opts.min_angle:g}-{opts.max_angle:g} deg on a lighter surround nor one such "
+                "edge across the whole image); give one with --roi x,y,w,h"
             )
         regions = [(r.roi, r.side) for r in found]
     edges: list[dict[str, Any]] = []
@@ -181,9 +182,10 @@ WORKFLOWS = (
         suffixes=(".csv",),
         group="optics",
         description="Without --roi the edges of a chart of dark squares turned a few degrees "
-        "are found and each is measured. Frequencies are in cycles/pixel along the edge "
-        "normal (Nyquist 0.5). Integer images are decoded from sRGB to linear first unless "
-        "--transfer linear. A raw file is measured on its mosaic (black level removed, the "
-        "CFA's photosites balanced on a neutral edge): one channel, raw.",
+        "are found and each is measured (an image that is one edge crop is measured whole). "
+        "Frequencies are in cycles/pixel along the edge normal (Nyquist 0.5). Integer "
+        "images are decoded from sRGB to linear first unless --transfer linear. A raw file "
+        "is measured on its mosaic (black level removed, the CFA's photosites balanced on a "
+        "neutral edge): one channel, raw.",
     ),
 )
