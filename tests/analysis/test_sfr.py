@@ -521,3 +521,26 @@ def test_an_edge_crop_is_found_whole() -> None:
     assert find_slanted_edges(bar) == []
     assert find_slanted_edges(render_slanted_edge((100, 60), angle_deg=0.0)) == []
     assert find_slanted_edges(render_slanted_edge((100, 60), angle_deg=15.0)) == []
+
+
+@pytest.mark.parametrize(
+    ("angle", "shape"),
+    [
+        (20.0, (120, 120)),
+        (35.0, (120, 120)),
+        (41.0, (120, 120)),
+        (43.0, (120, 120)),
+        (25.0, (200, 100)),
+    ],
+)
+def test_steep_edges_bin_along_the_rows(angle: float, shape: tuple[int, int]) -> None:
+    # binning the distance along the normal steps q cos(theta) bins per pixel: the phases
+    # bunch at some angles (-2.6 % at 20 deg, +3 % at 35 and 41, +8 % at 43) and a tall ROI
+    # of a steep edge kept only a few pixels of ESF (+13 % at 25 deg); along the rows (ISO,
+    # sfrmat3) a row's pixels are q bins apart at every angle
+    edge = render_slanted_edge(shape, angle_deg=angle, sigma=0.6, supersampling=8)
+    r = slanted_edge_sfr(edge)
+    assert r.angle == pytest.approx(angle, abs=0.05)
+    assert r.mtf50[0] == pytest.approx(
+        crossing(lambda f: gauss_truth(f, 0.6, angle), 0.5), rel=0.01
+    )

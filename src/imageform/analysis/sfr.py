@@ -7,10 +7,12 @@ the modulation transfer of a camera from one slightly slanted straight edge:
    ``[-0.5, 0.5]``), recomputed once inside a Hamming window centred on the first fit;
 2. a polynomial ``x = p(y)`` (a line by default, order 1; ISO 12233:2017 and Burns's
    ``sfrmat4``/``sfrmat5`` allow higher orders) is fitted to those locations by least squares;
-3. every pixel is projected onto the edge normal, ``d = (x - p(y)) cos(atan(p'(y)))``, and the
-   pixel values are averaged in bins of ``1/oversampling`` pixel (4x by default): the
+3. every pixel's distance to the edge along its row, ``x - p(y)``, is binned in
+   ``1/oversampling`` pixel (4x by default) and the pixel values averaged per bin: the
    super-resolved edge spread function (ESF) — possible because the slant spreads the
-   pixels' phases over the bin;
+   rows' phases over the bin; a bin is ``cos(theta)/oversampling`` pixel along the edge
+   normal and the frequencies are scaled by it (the cos correction of ISO 12233:2014 and
+   ``sfrmat3``);
 4. the line spread function (LSF) is the ESF's derivative (ISO's FIR ``[-0.5, 0, 0.5]``),
    multiplied by a Hamming window centred on the LSF's centroid;
 5. the SFR is ``|DFT(LSF)|`` normalised by its value at zero frequency, divided by the
@@ -116,8 +118,9 @@ class SFRResult(NamedTuple):
         edge's column as a function of the row for a vertical edge (row of column for a
         horizontal one), in ROI pixel coordinates (pixel centres at integers).
     esf : ndarray, shape (m, k)
-        The oversampled edge spread functions (bins of ``1/oversampling`` pixel), each from
-        the first distance every row of the ROI reaches on its channel's own edge fit.
+        The oversampled edge spread functions (bins of ``1/oversampling`` pixel along the
+        rows, ``cos(angle)/oversampling`` along the normal), over the distances the ROI's
+        middle row reaches on its channel's own edge fit.
     lsf : ndarray, shape (m, k)
         The windowed line spread functions.
     oversampling : int
@@ -297,23 +300,35 @@ def _fit_edge(a: np.ndarray, order: int) -> np.ndarray:
     return np.asarray(p)
 
 
-def _project(a: np.ndarray, p: np.ndarray, q: int) -> np.ndarray:
-    """ESF: pixel values averaged in bins of ``1/q`` pixel of distance to the edge."""
+def _project(a: np.ndarray, p: np.ndarray, q: int, cos_ref: float) -> np.ndarray:
+    """ESF: pixel values averaged in bins of ``1/q`` pixel of distance to the edge along the rows.
+
+    As in ISO 12233 and ``sfrmat3``, the distance is taken along the row, ``x - p(y)``: a
+    row's pixels then fall ``q`` bins apart with one sub-bin phase, and the rows' phases
+    (``q p(y)`` modulo 1) cover the bin evenly over a whole number of phase cycles. (Binning
+    the distance along the normal, ``(x - p(y)) cos(theta)``, steps ``q cos(theta)`` bins per
+    pixel: at some angles the phases bunch within the bins and bias the SFR by several
+    percent, e.g. +6 % at 14 deg.) A bin is ``cos_ref / q`` pixel along the normal; on a
+    curved edge each row's distance is scaled by ``cos(theta(y)) / cos_ref``. The bins are
+    those the middle row reaches (the ends seen by about half of the rows), empty bins
+    interpolated.
+    """
     h, w = a.shape
     rows = np.arange(h, dtype=np.float64)
     xe = np.polyval(p, rows)
-    slope = np.polyval(np.polyder(p), rows) if len(p) > 1 else np.zeros(h)
-    cos = np.cos(np.arctan(slope))
     cols = np.arange(w, dtype=np.float64)
-    d = (cols[None, :] - xe[:, None]) * cos[:, None]
+    d = cols[None, :] - xe[:, None]
+    if len(p) > 2:  # a curved edge: the local normal distance, in units of the reference
+        slope = np.polyval(np.polyder(p), rows)
+        d = d * (np.cos(np.arctan(slope)) / cos_ref)[:, None]
     idx = np.rint(d * q).astype(np.int64)
-    # only the distances every row reaches (no partially covered bins at the ends)
-    lo = int(idx[:, 0].max())
-    hi = int(idx[:, -1].min())
+    mid = (h - 1) // 2
+    lo = int(idx[mid, 0])
+    hi = int(idx[mid, -1])
     if hi - lo < 4 * q:
         raise DegenerateConfigurationError(
-            f"the image (or its roi) is too narrow across the edge: {(hi - lo) / q:.1f} px seen "
-            "by every row; widen it or centre the edge"
+            f"the image (or its roi) is too narrow across the edge: {(hi - lo) / q:.1f} px "
+            "across it; widen it or centre the edge"
         )
     keep = (idx >= lo) & (idx <= hi)
     b = idx[keep] - lo
@@ -347,13 +362,18 @@ def _lsf(esf: np.ndarray, derivative: str) -> np.ndarray:
     return np.asarray(lsf * _hamming(lsf.size, mid))
 
 
-def _spectrum(lsf: np.ndarray, q: int, derivative: str, nfft: int) -> tuple[np.ndarray, np.ndarray]:
-    """Frequencies (cycles/pixel) and corrected SFR of ``lsf`` on an ``nfft``-point DFT."""
+def _spectrum(
+    lsf: np.ndarray, q: int, derivative: str, nfft: int, cos_ref: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """Return the frequencies (cycles/pixel along the normal) and corrected SFR of ``lsf``.
+
+    ``lsf`` has bins of ``cos_ref / q`` pixel along the normal; the DFT has ``nfft`` points.
+    """
     spec = np.abs(np.fft.rfft(lsf, n=nfft))
-    f = np.fft.rfftfreq(nfft, d=1.0 / q)
+    f = np.fft.rfftfreq(nfft, d=cos_ref / q)
     sfr = spec / spec[0]
     step = 2.0 if derivative == "central" else 1.0
-    transfer = np.sinc(step * f / q)
+    transfer = np.sinc(step * f * cos_ref / q)
     sfr = sfr / np.maximum(np.abs(transfer), 1.0 / _MAX_CORRECTION)
     sel = f <= 1.0 + 1e-12
     return f[sel], sfr[sel]
@@ -499,25 +519,30 @@ def slanted_edge_sfr(
 
     Notes
     -----
-    With the edge ``x = p(y)`` and :math:`\theta(y) = \arctan p'(y)`, each pixel's distance to
-    the edge along its normal is :math:`d = (x - p(y))\cos\theta`; the ESF is the mean pixel
-    value in bins :math:`\mathrm{round}(q d)`, the LSF its windowed derivative, and
+    With the edge ``x = p(y)`` and :math:`\theta = \arctan p'(y_\mathrm{mid})`, each pixel's
+    distance to the edge along its row, :math:`x - p(y)`, is binned in :math:`\mathrm{round}(q
+    (x - p(y)))` (on a curved edge scaled by :math:`\cos\theta(y)/\cos\theta`); a bin is
+    :math:`\cos\theta / q` pixel along the normal. The ESF is the mean pixel value per bin,
+    the LSF its windowed derivative, and
 
     .. math:: \mathrm{SFR}(f_k) = \frac{|\sum_n \mathrm{LSF}_n e^{-2\pi i k n / N}|}
-              {|\sum_n \mathrm{LSF}_n|} \Big/ D(f_k), \qquad f_k = \frac{k q}{N},
+              {|\sum_n \mathrm{LSF}_n|} \Big/ D(f_k), \qquad f_k = \frac{k q}{N \cos\theta},
 
-    with :math:`D` the derivative's transfer (ISO 12233:2017 e-SFR; Burns 2000). Projecting
-    along the normal (rather than along the rows as in ISO 12233:2000) is the
-    :math:`\cos\theta` frequency correction of ISO 12233:2014 and ``sfrmat3``. The ESF binning
-    (a box of ``1/q`` pixel) is not corrected, as in ISO: it lowers the SFR by
-    :math:`\mathrm{sinc}(f/q)`, 2.6 % at Nyquist for ``q = 4``.
+    with :math:`D` the derivative's transfer (ISO 12233:2017 e-SFR; Burns 2000). The
+    :math:`1/\cos\theta` frequency scale is the correction of ISO 12233:2014 and
+    ``sfrmat3``; binning along the row (as they do) keeps a row's pixels exactly ``q`` bins
+    apart, where binning the normal distance would bunch the phases at some angles. The ESF
+    binning (a box of :math:`\cos\theta/q` pixel along the normal) is not corrected, as in
+    ISO: it lowers the SFR by :math:`\mathrm{sinc}(f\cos\theta/q)`, at most 2.6 % at
+    Nyquist for ``q = 4``. Angles where :math:`q\tan\theta` is close to an integer (14.0
+    deg for ``q = 4``) spread the phases poorly, as in every e-SFR.
 
     Examples
     --------
     >>> edge = render_slanted_edge((64, 64), angle_deg=5.0, sigma=0.8)
     >>> r = slanted_edge_sfr(edge)
     >>> r.channels, round(float(r.mtf50[0]), 3), round(r.angle, 2)
-    (('Y',), 0.219, 5.0)
+    (('Y',), 0.22, 5.0)
     """
     img = _crop(_as_image(image), roi)
     q = as_int(oversampling, "oversampling", minimum=1, maximum=16)
@@ -553,11 +578,12 @@ def slanted_edge_sfr(
     rows_used = h
     if order == 1:  # a whole number of phase cycles (sfrmat3)
         rows_used = max(8, min(h, round(math.floor(abs(slope) * h) / abs(slope))))
+    cos_ref = math.cos(math.atan(slope))  # the ESF bins are cos_ref / q px along the normal
     fits, esfs, lsfs = [], [], []
     for a in planes:
         a = a[:rows_used]
         p = _fit_edge(a, order)
-        esf = _project(a, p, q)
+        esf = _project(a, p, q, cos_ref)
         fits.append(p)
         esfs.append(esf)
     m = min(e.size for e in esfs)
@@ -569,8 +595,8 @@ def slanted_edge_sfr(
     freq = np.empty(0)
     curves, m50, m10 = [], [], []
     for lsf in lsfs:
-        freq, s = _spectrum(lsf, q, deriv, nfft)
-        ff, sf = _spectrum(lsf, q, deriv, fine)
+        freq, s = _spectrum(lsf, q, deriv, nfft, cos_ref)
+        ff, sf = _spectrum(lsf, q, deriv, fine, cos_ref)
         curves.append(s)
         m50.append(mtf_crossing(ff, sf, 0.5))
         m10.append(mtf_crossing(ff, sf, 0.1))
