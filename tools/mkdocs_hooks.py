@@ -86,6 +86,7 @@ BENCH_SCRIPTS: dict[str, str] = {
     "remap": "benchmarks/bench_remap.py",
     "report": "benchmarks/bench_report.py",
     "sfr": "benchmarks/bench_sfr.py",
+    "sfr-real": "benchmarks/check_sfr_real.py",
     "stain": "benchmarks/bench_stain.py",
     "stain-glass": "benchmarks/check_stain_glass.py",
     "stain-real": "benchmarks/check_stain_real.py",
