@@ -779,17 +779,15 @@ def _subpixel_side(
 
     ``first`` is the first dark pixel seen walking in direction ``step``.
     """
-    out = np.empty(lines.size)
     n = g.shape[1]
-    for i, (r, j) in enumerate(zip(lines, first, strict=True)):
-        k = j - step  # the light neighbour
-        if 0 <= k < n:
-            a, b = g[r, k], g[r, j]
-            frac = (a - t) / (a - b) if a != b else 0.5
-            out[i] = k + step * float(np.clip(frac, 0.0, 1.0))
-        else:
-            out[i] = float(j)
-    return out
+    k = first - step  # the light neighbour
+    inside = (k >= 0) & (k < n)
+    kk = np.clip(k, 0, n - 1)
+    a, b = g[lines, kk], g[lines, first]
+    den = a - b
+    frac = np.where(den != 0, (a - t) / np.where(den != 0, den, 1.0), 0.5)
+    out = np.where(inside, kk + step * np.clip(frac, 0.0, 1.0), first.astype(np.float64))
+    return np.asarray(out, dtype=np.float64)
 
 
 def find_slanted_edges(
