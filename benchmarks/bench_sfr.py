@@ -7,7 +7,7 @@ times the square pixel's sinc(f cos t) sinc(f sin t) along the edge normal. Run 
 repository root::
 
     OPENBLAS_NUM_THREADS=1 PYTHONPATH=src python benchmarks/bench_sfr.py \\
-        --out benchmarks/results/sfr-2026-11-25.md
+        --out benchmarks/results/sfr-2026-11-29.md
 """
 
 from __future__ import annotations
