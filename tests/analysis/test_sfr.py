@@ -544,3 +544,17 @@ def test_steep_edges_bin_along_the_rows(angle: float, shape: tuple[int, int]) ->
     assert r.mtf50[0] == pytest.approx(
         crossing(lambda f: gauss_truth(f, 0.6, angle), 0.5), rel=0.01
     )
+
+
+def test_a_found_roi_must_be_measured_at_its_angle() -> None:
+    # the finder's last check: the e-SFR accepts the ROI and finds the edge within 1 deg of
+    # the threshold fit (a glyph's rounded side passes a threshold fit but not this)
+    from imageform.analysis.sfr import SlantedEdgeROI, _measurable
+
+    img = render_slanted_edge((100, 60), angle_deg=5.0, sigma=0.8)
+    ok = SlantedEdgeROI(0, 0, 60, 100, 5.0, "vertical", "right", (29.5, 49.5))
+    assert _measurable(img, ok)
+    assert not _measurable(img, ok._replace(angle=7.0))  # another angle: another edge
+    assert not _measurable(img, ok._replace(orientation="horizontal"))
+    # 10 rows: the edge moves 0.87 px along it, less than one phase cycle: e-SFR refuses
+    assert not _measurable(img, ok._replace(height=10))

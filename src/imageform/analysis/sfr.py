@@ -1006,7 +1006,7 @@ def _measurable(g: np.ndarray, roi: SlantedEdgeROI) -> bool:
             return False
     try:
         r = slanted_edge_sfr(g, roi.roi)
-    except DegenerateConfigurationError:
+    except (DegenerateConfigurationError, InvalidInputError):
         return False
     return r.orientation == roi.orientation and abs(r.angle - roi.angle) <= _MAX_ANGLE_GAP
 
