@@ -558,3 +558,34 @@ def test_a_found_roi_must_be_measured_at_its_angle() -> None:
     assert not _measurable(img, ok._replace(orientation="horizontal"))
     # 10 rows: the edge moves 0.87 px along it, less than one phase cycle: e-SFR refuses
     assert not _measurable(img, ok._replace(height=10))
+
+
+def _wedge(angle: float, sigma: float, s: int = 8) -> np.ndarray:
+    """A dark triangle (0.2 on 0.8) with one side ``angle`` deg from the vertical, blurred.
+
+    Like a blade of the ISO 12233:2017/2023 chart's pinwheels: its bounding box is half
+    empty, so it is no square. Rendered at ``s`` x ``s`` sub-samples per pixel.
+    """
+    from scipy import ndimage
+
+    h, w = 200, 200
+    v, u = (np.mgrid[0 : h * s, 0 : w * s] + 0.5) / s
+    t = math.radians(angle)
+    # the left side through (60, 30) turned `angle`, a level top side, a 45 deg diagonal
+    inside = ((u - 60) * math.cos(t) - (v - 30) * math.sin(t) > 0) & (v > 30) & (u + v < 230)
+    img = np.where(inside, 0.2, 0.8)
+    img = ndimage.gaussian_filter(img, sigma * s, mode="nearest")
+    return np.asarray(img.reshape(h, s, w, s).mean(axis=(1, 3)))
+
+
+def test_find_the_straight_side_of_a_wedge() -> None:
+    img = _wedge(5.0, 0.8)
+    rois = [r for r in find_slanted_edges(img) if r.side == "left"]
+    assert len(rois) == 1
+    assert abs(rois[0].angle) == pytest.approx(5.0, abs=0.15)
+    f50 = crossing(lambda f: gauss_truth(f, 0.8, 5.0), 0.5)
+    assert slanted_edge_sfr(img, rois[0].roi).mtf50[0] == pytest.approx(f50, rel=0.03)
+    # the side is 130 rows long: an ROI of half of it, 65 rows, is kept with min_size=60 and
+    # dropped with min_size=80 (a short straight run is mostly a glyph's stroke)
+    assert [r.side for r in find_slanted_edges(img, min_size=60)].count("left") == 1
+    assert [r.side for r in find_slanted_edges(img, min_size=80)].count("left") == 0

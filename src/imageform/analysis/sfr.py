@@ -826,6 +826,12 @@ def find_slanted_edges(
     range, the image is taken as an edge crop (the input of ``sfrmat``) and returned as one
     ROI (its ``side`` names the side of the dark area the edge bounds).
 
+    A dark component that fills less than 60 % of its bounding box (a wedge, such as the
+    blades of the ISO 12233:2017/2023 chart's pinwheels) is no square: its outline seen from
+    each side is cut where it jumps (another part of the shape takes over) into straight
+    runs, and each run long enough for an ROI of ``min_size`` pixels along it, less 20 % at
+    each end, is taken as a square's side of that length (the same fit, tests and ROI).
+
     Returns
     -------
     list of SlantedEdgeROI
@@ -870,7 +876,10 @@ def find_slanted_edges(
             if min(hh, ww) < msz:
                 continue
             m = labels[r0:r1, c0:c1] == lab
-            if m.sum() < 0.6 * hh * ww:
+            if m.sum() < 0.6 * hh * ww:  # not a square: the straight runs of its outline
+                for run_roi in _outline_rois(g, m, t, (r0, c0), msz, hi_a, frac, rw):
+                    if lo_a <= abs(run_roi.angle) <= hi_a and _clean(dark, run_roi):
+                        _keep(best, run_roi, _level_offset(g, run_roi, t))
                 continue
             side = math.sqrt(float(m.sum()))
             for name in ("left", "right", "top", "bottom"):
@@ -1039,3 +1048,51 @@ def _whole_image_edge(g: np.ndarray) -> SlantedEdgeROI | None:
         center = (mid, across)
     roi = SlantedEdgeROI(0, 0, W, H, r.angle, r.orientation, side, center)
     return roi if _measurable(g, roi) else None
+
+
+def _outline_rois(
+    g: np.ndarray,
+    m: np.ndarray,
+    t: float,
+    origin: tuple[int, int],
+    min_len: int,
+    max_angle: float,
+    frac: float,
+    rw: int | None,
+) -> list[SlantedEdgeROI]:
+    """ROIs on the straight, near-axis runs of a dark shape's outline seen from each side.
+
+    For a shape that is not a square (the blades of the ISO 12233:2017/2023 e-SFR chart's
+    pinwheels, a wedge, a bar): the first dark pixel of each line seen from the left (right,
+    top, bottom) traces the outline; it is cut where it jumps by more than
+    ``1.5 + tan(max_angle)`` pixels between lines (another part of the shape takes over).
+    Each run long enough for an ROI of ``min_len`` lines (``frac`` of the run; shorter runs
+    are mostly glyphs' strokes) is trimmed by 20 % at each end (the corners) and treated as
+    a square's side of that length (:func:`_side_roi`: the sub-pixel crossings, the
+    straightness test, the ROI).
+    """
+    out: list[SlantedEdgeROI] = []
+    jump = 1.5 + math.tan(math.radians(max_angle))
+    for name in ("left", "right", "top", "bottom"):
+        mm = m if name in ("left", "right") else m.T
+        lines = np.nonzero(mm.any(axis=1))[0]
+        if lines.size < min_len:
+            continue
+        sub = mm[lines]
+        if name in ("left", "top"):
+            first = np.argmax(sub, axis=1)
+        else:
+            first = sub.shape[1] - 1 - np.argmax(sub[:, ::-1], axis=1)
+        cut = np.nonzero((np.abs(np.diff(first)) > jump) | (np.diff(lines) > 1))[0] + 1
+        for run in np.split(np.arange(lines.size), cut):
+            if run.size * frac < min_len:  # an ROI shorter than min_len: a glyph's stroke
+                continue
+            k = int(0.2 * run.size)
+            keep = np.zeros_like(mm)
+            sel = lines[run[k : run.size - k]]
+            keep[sel] = mm[sel]
+            mask = keep if name in ("left", "right") else keep.T
+            roi = _side_roi(g, mask, t, origin, name, float(run.size), frac, rw)
+            if roi is not None:
+                out.append(roi)
+    return out
