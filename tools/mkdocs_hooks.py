@@ -58,6 +58,7 @@ BENCH_SCRIPTS: dict[str, str] = {
     "charuco-real": "benchmarks/check_charuco_real.py",
     "checkerboard": "benchmarks/bench_checkerboard.py",
     "checkerboard-large": "benchmarks/check_checkerboard_large.py",
+    "checkerboard-real": "benchmarks/check_checkerboard_real.py",
     "chunked": "benchmarks/bench_chunked.py",
     "chunked-strips": "benchmarks/bench_chunked.py",
     "color": "benchmarks/bench_color.py",
