@@ -169,3 +169,27 @@ def test_white_balance_keeps_the_input_s_profile(rgb_png: Path, tmp_path: Path) 
     plain = tmp_path / "wb_plain.png"
     assert main(["white-balance", str(rgb_png), "-o", str(plain)]) == 0
     assert image_color_space(plain).name is None
+
+
+def test_info_says_what_a_file_holds(
+    rgb_png: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from PIL import Image
+
+    p3 = tmp_path / "p3.png"
+    write_image(p3, read_image(rgb_png), color_space="display_p3")
+    assert main(["info", str(p3), "--json"]) == 0
+    got = json.loads(capsys.readouterr().out)
+    assert (got["format"], got["width"], got["height"], got["channels"], got["dtype"]) == (
+        "png", 16, 12, 3, "uint8")  # fmt: skip
+    assert (got["color_space"], got["color_space_source"], got["description"]) == (
+        "display_p3", "icc", "sP3")  # fmt: skip
+    j = tmp_path / "turned.jpg"
+    exif = Image.Exif()
+    exif[0x0112] = 6
+    Image.new("RGB", (8, 4)).save(j, exif=exif)
+    assert main(["info", str(j)]) == 0
+    out = capsys.readouterr().out
+    assert "not declared (read as sRGB)" in out and "EXIF orientation 6" in out
+    assert main(["info", str(tmp_path / "missing.png")]) == 1
+    assert main(["info", str(tmp_path / "a.txt")]) == 1

@@ -599,9 +599,72 @@ def palette_check(run: Run, opts: PaletteCheckOptions, *, out: None, colors: str
     return Result(r.as_dict(), tuple(text), check_failed=not ok)
 
 
-_IMG = Input("image", "Input image (PNG, JPEG, TIFF or .npy).")
+_IMG = Input("image", "Input image (PNG, JPEG, TIFF, .npy; HEIF with the heif extra).")
+
+
+@dataclass(frozen=True, kw_only=True)
+class InfoOptions(Options):
+    """Options of ``imageform info``."""
+
+
+def info(run: Run, opts: InfoOptions, *, out: None, image: Path) -> Result:
+    """``imageform info``: what an image file holds, from its header, and its colour space."""
+    from imageform.io import image_color_space, image_info
+
+    head = image_info(image)
+    declared = image_color_space(image)
+    orientation = _exif_orientation(image, head.format)
+    summary = {
+        "image": image,
+        "format": head.format,
+        "width": head.width,
+        "height": head.height,
+        "channels": head.channels,
+        "dtype": head.dtype,
+        "megapixels": round(head.width * head.height / 1e6, 3),
+        "color_space": declared.name,
+        "color_space_source": declared.source,
+        "description": declared.description or None,
+        "exif_orientation": orientation,
+    }
+    space = declared.name or "not declared (read as sRGB)"
+    if declared.name is None and declared.source == "icc":
+        space = f"an ICC profile imageform does not recognise ({declared.description})"
+    how = {"none": ""}.get(declared.source, f" ({declared.source})")
+    text = [
+        f"{image}: {head.format}, {head.width} x {head.height} px, {head.channels} channel(s), "
+        f"{head.dtype}",
+        f"colour space: {space}{how}",
+    ]
+    if orientation not in (None, 1):
+        text.append(f"EXIF orientation {orientation}: read_image turns it upright")
+    return Result(summary, tuple(text))
+
+
+def _exif_orientation(path: Path, fmt: str) -> int | None:
+    """Read the EXIF orientation tag of a JPEG, PNG or TIFF (None when absent or unreadable)."""
+    if fmt not in ("jpeg", "png", "tiff"):
+        return None
+    from PIL import Image, UnidentifiedImageError
+
+    try:
+        with Image.open(path) as im:
+            value = im.getexif().get(0x0112)
+    except (OSError, UnidentifiedImageError, ValueError, SyntaxError):
+        return None
+    return int(value) if value else None
+
 
 WORKFLOWS = (
+    Workflow(
+        "info",
+        "What an image file holds: size, channels, sample type, its colour space, orientation.",
+        "imageform.workflows.color:info",
+        InfoOptions,
+        (_IMG,),
+        None,
+        group="colour",
+    ),
     Workflow(
         "convert",
         "Convert an image between colour spaces (sRGB, Lab, HSV, Y'CbCr, XYZ ...).",
@@ -614,7 +677,7 @@ WORKFLOWS = (
     ),
     Workflow(
         "white-balance",
-        "White-balance an sRGB image in linear light and print the gains.",
+        "White-balance an RGB image in linear light and print the gains.",
         "imageform.workflows.color:white_balance",
         WhiteBalanceOptions,
         (_IMG,),
@@ -624,10 +687,13 @@ WORKFLOWS = (
     ),
     Workflow(
         "delta-e",
-        "Colour difference (ΔE) between two sRGB images: mean, max, percentiles, heat map.",
+        "Colour difference (ΔE) between two RGB images: mean, max, percentiles, heat map.",
         "imageform.workflows.color:delta_e",
         DeltaEOptions,
-        (Input("reference", "Reference image (sRGB)."), Input("test", "Test image, same size.")),
+        (
+            Input("reference", "Reference image (RGB, in the space it declares or --from)."),
+            Input("test", "Test image, same size."),
+        ),
         None,
         group="colour",
     ),
