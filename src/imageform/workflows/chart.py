@@ -75,22 +75,14 @@ class ChartOptions(ImageIn):
     def check(self) -> None:
         """Check ``--degree`` (1 to 3), ``--max-size``, ``--min-score`` (-1 to 1), ``--from``."""
         from imageform._validate import as_int, as_real
-        from imageform.color import RGB_SPACES, space_name
+        from imageform.workflows._images import rgb_space_or_auto
 
         super().check()
         as_int(self.degree, "--degree", minimum=1, maximum=3)
         as_int(self.max_size, "--max-size", minimum=64, maximum=100_000)
         as_real(self.min_score, "--min-score", minimum=-1.0, maximum=1.0)
-        if str(self.src).strip().lower() == "auto":
-            object.__setattr__(self, "src", "auto")
-            return
-        name = space_name(self.src, "--from (src)")
-        if name not in RGB_SPACES:
-            raise InvalidInputError(
-                f"--from {name}: a photograph of a chart is encoded RGB; give one of "
-                f"{', '.join(RGB_SPACES)} or auto"
-            )
-        object.__setattr__(self, "src", name)
+        src = rgb_space_or_auto(self.src, "a photograph of a chart is encoded RGB")
+        object.__setattr__(self, "src", src)
 
 
 def _draw(img: Any, polylines: list[Any], colour: tuple[float, float, float]) -> None:

@@ -17,6 +17,7 @@ from imageform.workflows._images import (
     on_gpu,
     read,
     refuse_absent_device,
+    rgb_space_or_auto,
     write,
     write_mapped,
 )
@@ -377,18 +378,8 @@ class DeltaEOptions(ImageIn, OnDevice):
     def check(self) -> None:
         """Check the options and normalise the ``--from`` space name (an RGB space)."""
         super().check()
-        from imageform.color import RGB_SPACES, space_name
-
-        if str(self.src).strip().lower() == "auto":
-            object.__setattr__(self, "src", "auto")
-            return
-        name = space_name(self.src, "--from (src)")
-        if name.removeprefix("linear_") not in RGB_SPACES:
-            raise InvalidInputError(
-                f"--from {name}: delta-e compares RGB images; give an RGB space "
-                f"({', '.join(RGB_SPACES)}, or a linear_ one) or auto"
-            )
-        object.__setattr__(self, "src", name)
+        src = rgb_space_or_auto(self.src, "delta-e compares RGB images", linear=True)
+        object.__setattr__(self, "src", src)
 
 
 def delta_e(run: Run, opts: DeltaEOptions, *, out: None, reference: Path, test: Path) -> Result:
