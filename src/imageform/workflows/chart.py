@@ -168,9 +168,9 @@ def chart(run: Run, opts: ChartOptions, *, out: Path, image: Path) -> Result:
     space = opts.src
     if space == "auto":
         from imageform.io import image_color_space
-        from imageform.workflows.color import _declared_space
+        from imageform.workflows._images import declared_space
 
-        space = _declared_space(run, image, image_color_space(image), grey=False)
+        space = declared_space(run, image, image_color_space(image), grey=False)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", ChartWarning)
         pat = measure_chart_patches(img, det, max_std=_MAX_STD)

@@ -12,6 +12,7 @@ from imageform.workflows._images import (
     ImageIn,
     ImageOut,
     OnDevice,
+    declared_space,
     gpu_bands,
     image_out_renames,
     on_gpu,
@@ -157,7 +158,7 @@ def convert(run: Run, opts: ConvertOptions, *, out: Path, image: Path) -> Result
     src, declared = opts.src, None
     if src == "auto":
         declared = image_color_space(image)
-        src = _declared_space(run, image, declared, grey=img.shape[-1] == 1)
+        src = declared_space(run, image, declared, grey=img.shape[-1] == 1)
     edges = path(src, dst)
     if src != "gray" and img.shape[-1] == 1:
         raise InvalidInputError(f"{image} is a grey image; convert it with --from gray")
@@ -185,28 +186,6 @@ def convert(run: Run, opts: ConvertOptions, *, out: Path, image: Path) -> Result
     }
     how = " -> ".join(summary["path"]) or "copy"
     return Result(summary, (f"{image} ({src}) -> {out} ({dst}): {how}",))
-
-
-def _declared_space(run: Run, image: Path, declared: Any, *, grey: bool) -> str:
-    """``--from auto``: the space ``image`` declares, else srgb (gray for a grey image)."""
-    if grey:
-        return "gray"
-    if declared.name is not None:
-        if declared.name != "srgb":
-            how = {
-                "icc": "its ICC profile",
-                "nclx": "its HEIF colour box (nclx)",
-                "png-srgb": "its sRGB chunk",
-            }.get(declared.source, "its EXIF tags")
-            run.note(f"note: {image} declares {declared.name} in {how}; read as {declared.name}"
-                     " (--from overrides)")  # fmt: skip
-        return str(declared.name)
-    if declared.source == "icc":
-        run.note(
-            f"note: {image} carries an ICC profile imageform does not recognise "
-            f"({declared.description or 'no description'}); read as srgb (--from overrides)"
-        )
-    return "srgb"
 
 
 # ---------------------------------------------------------------- white balance
@@ -407,7 +386,7 @@ def delta_e(run: Run, opts: DeltaEOptions, *, out: None, reference: Path, test: 
     if opts.src == "auto":
         from imageform.io import image_color_space
 
-        spaces = [_declared_space(run, p, image_color_space(p), grey=False)
+        spaces = [declared_space(run, p, image_color_space(p), grey=False)
                   for p in (reference, test)]  # fmt: skip
     sa, sb = spaces
 
