@@ -32,9 +32,23 @@ segmentation detector of colour-checker-detection and OpenCV's ``mcc`` module):
    reflection) when the fit of the *other* patches predicts its colour more than
    max(4 × median, 10) ΔE*ab from its reference (leave-one-out, in CIELAB: dark patches
    count, and a channel clipped at the gamut's edge, the cyan's red, barely does). The score
-   is that fit's :math:`R^2` without the outliers; the best window and orientation above
-   ``min_score`` wins; otherwise the detection comes back with ``found`` False and the
-   reason (a photograph without a chart is an answer, not an error).
+   is that fit's :math:`R^2` without the outliers. Several spoiled patches at once (glare
+   over a corner of the chart) mask one another in the leave-one-out tests, so when that
+   :math:`R^2` is under 0.95 a least-median-of-squares fit (Rousseeuw 1984; affine fits to
+   400 random 6-patch subsets, the least median ΔE*ab wins) judges the outliers as well and
+   the better score is kept. Every window that overlaps the lattice is tried (a chart cut by
+   the frame beside a stray square). The best window and orientation above ``min_score``
+   wins.
+6. **Uneven light.** When no window passes, a shadow across the chart or light falling off
+   along it may be why: each patch's colour is then scaled by its own light, which no affine
+   map absorbs. The lattices are scored again by the colour homography
+   :math:`r_k \approx s_k A m_k` (a 3 × 3 :math:`A`, a light :math:`s_k` per patch;
+   Finlayson, Gong and Fisher, "Color Homography: Theory and Applications", IEEE TPAMI
+   41(1), 2019, by their alternating least squares), by its adjusted :math:`R^2` (one
+   parameter per patch more: a lattice of unrelated colours does not pass), and a chart
+   found so comes with a :class:`~imageform.analysis.ChartWarning` naming the range of the
+   lights. Otherwise the detection comes back with ``found`` False and the reason (a
+   photograph without a chart is an answer, not an error).
 
 Coordinates are imageform's pixel convention (docs/conventions.md): ``(u, v)`` = (column,
 row), integer values at pixel centres. Chart coordinates are ``(column, row)`` of the
@@ -761,10 +775,13 @@ def _best_window(
     key_set = {(int(a), int(b)) for a, b in keys}
     for quarter in range(4):
         wu, wv = (_COLS, _ROWS) if quarter % 2 == 0 else (_ROWS, _COLS)
+        # every window that overlaps the lattice: one whose patches run past the lattice (a
+        # chart cut by the frame) can hold as many found patches as one shifted onto a
+        # stray candidate beside the chart; the counts below choose
         placements = [
             (u0, v0)
-            for u0 in range(min(umin, umax - wu + 1), max(umin, umax - wu + 1) + 1)
-            for v0 in range(min(vmin, vmax - wv + 1), max(vmin, vmax - wv + 1) + 1)
+            for u0 in range(umin - wu + 1, umax + 1)
+            for v0 in range(vmin - wv + 1, vmax + 1)
         ]
         counts = [
             sum((u0 <= a < u0 + wu) and (v0 <= b < v0 + wv) for a, b in key_set)
@@ -905,6 +922,12 @@ def detect_colorchecker(
     InvalidInputError
         ``image`` is not an RGB image, or ``reference``, ``max_size``, ``min_score`` or
         ``sample`` is out of range.
+
+    Warns
+    -----
+    ChartWarning
+        The chart was found only with a light per patch (a shadow across it, or light
+        falling off along it): a colour correction fitted to it is biased by the light.
 
     Examples
     --------
