@@ -131,3 +131,30 @@ def test_chart_cut_by_the_frame_beside_stray_squares(seed: int) -> None:
     inside = np.arange(24) % 6 < 5
     err = np.linalg.norm(det.centers - p.centers, axis=1)[inside]
     assert err.max() < pitch / 6
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_small_chart_in_a_large_photograph(seed: int) -> None:
+    """A chart of 23-24 px per patch in a 3200 x 2400 frame (a phone photograph of a chart
+    on a cluttered desk, shrunk): block-averaged 4 x 4 to 1024 px it was 6 px per patch and
+    merged into its surround (not found in 6 of 6); the search now looks once more at twice
+    the resolution."""
+    from scipy import ndimage
+
+    rng = np.random.default_rng([33, seed])
+    p = synthetic_chart_photo(
+        shape=(480, 640),
+        width=0.25,
+        tilt=rng.uniform(0.0, 30.0),
+        rotation=rng.uniform(-180.0, 180.0),
+        noise=0.005,
+        rng=rng,
+    )
+    smooth = rng.uniform(0.1, 0.9, (12, 16, 3))
+    big = ndimage.zoom(smooth, (200, 200, 1), order=3, grid_mode=True, mode="nearest")
+    big = np.clip(big, 0.0, 1.0)
+    big[900:1380, 1200:1840] = p.image
+    centres = p.centers + [1200, 900]
+    det = detect_colorchecker(big)
+    assert det.found, det.reason
+    assert np.linalg.norm(det.centers - centres, axis=1).max() < _pitch(centres) / 6

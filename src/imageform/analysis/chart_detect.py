@@ -12,6 +12,9 @@ segmentation detector of colour-checker-detection and OpenCV's ``mcc`` module):
 1. **Flat regions.** The photograph is block-averaged to at most ``max_size`` pixels on its
    long side; the colour gradient magnitude of the Gaussian-smoothed image is thresholded at
    several levels, and the 4-connected regions below each threshold are candidate patches.
+   When no chart is found there, a photograph larger than ``max_size`` is searched once
+   more at twice that resolution (a small chart in a large photograph), one at or under it
+   on a 2x bilinear upsample.
 2. **Square-ish candidates**, by moments: an affine image of a square (any rotation, tilt
    or shear) of area :math:`A` and covariance :math:`\Sigma` has
    :math:`A / (12 \sqrt{\det \Sigma}) = 1` (a uniform square of side *s* has variance
@@ -886,7 +889,8 @@ def detect_colorchecker(
 ) -> ChartDetection:
     """Find a ColorChecker Classic (4 × 6) anywhere in a photograph.
 
-    Any position, scale (down to about 10 pixels per patch at the working resolution), in-plane
+    Any position, scale (down to about 10 pixels per patch at the working resolution, i.e.
+    about 5 f pixels in a photograph block-averaged by f to ``max_size``), in-plane
     rotation (upside down included: the patch colours fix it), perspective tilt to about
     45 degrees, clutter, blur, noise, uneven light and another illuminant. The method is in
     the module docstring (:mod:`imageform.analysis.chart_detect`).
@@ -900,7 +904,8 @@ def detect_colorchecker(
         ColorChecker (:data:`~imageform.analysis.synthetic.COLORCHECKER_SRGB8` / 255).
     max_size : int, keyword-only
         The long side of the working image (block-averaged by an integer factor): the
-        speed / smallest-chart trade-off.
+        speed / smallest-chart trade-off (a photograph without a chart is searched again at
+        twice this size).
     min_score : float, keyword-only
         The least :math:`R^2` of the affine colour fit that accepts a chart (0 to 1).
     sample : float, keyword-only
@@ -963,7 +968,15 @@ def detect_colorchecker(
     # work pixel -> image pixel (pixel centres): block means of f x f pixels
     scale = np.array([[f, 0.0, (f - 1) / 2.0], [0.0, f, (f - 1) / 2.0], [0.0, 0.0, 1.0]])
     res = _search(work, ref_lin, min_score)
-    if not isinstance(res, tuple) and f == 1:
+    if not isinstance(res, tuple) and f > 1:
+        # not found on the block means: a chart of under about 10 * f pixels per patch in a
+        # large photograph merged into its surround; once more at twice the resolution
+        fine, f_fine = _work_image(rgb, 2 * max_size, full)
+        res_fine = _search(fine, ref_lin, min_score)
+        if isinstance(res_fine, tuple):
+            res, work, f = res_fine, fine, f_fine
+            scale = np.array([[f, 0.0, (f - 1) / 2.0], [0.0, f, (f - 1) / 2.0], [0.0, 0.0, 1.0]])
+    elif not isinstance(res, tuple):
         # not found at full resolution: small charts (patch pitch under about 12 pixels)
         # separate better on a 2x bilinear upsample (o -> o / 2 - 0.25 in image pixels)
         from scipy import ndimage
