@@ -54,6 +54,7 @@ BENCH_SCRIPTS: dict[str, str] = {
     "chart-detect": "benchmarks/bench_chart_detect.py",
     "chart-input": "benchmarks/check_chart_input.py",
     "chart-photos": "benchmarks/check_chart_photos.py",
+    "chart-real": "benchmarks/check_chart_real.py",
     "charuco": "benchmarks/bench_charuco.py",
     "charuco-real": "benchmarks/check_charuco_real.py",
     "checkerboard": "benchmarks/bench_checkerboard.py",
