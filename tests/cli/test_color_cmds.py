@@ -169,3 +169,60 @@ def test_white_balance_keeps_the_input_s_profile(rgb_png: Path, tmp_path: Path) 
     plain = tmp_path / "wb_plain.png"
     assert main(["white-balance", str(rgb_png), "-o", str(plain)]) == 0
     assert image_color_space(plain).name is None
+
+
+def test_info_says_what_a_file_holds(
+    rgb_png: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from PIL import Image
+
+    p3 = tmp_path / "p3.png"
+    write_image(p3, read_image(rgb_png), color_space="display_p3")
+    assert main(["info", str(p3), "--json"]) == 0
+    got = json.loads(capsys.readouterr().out)
+    assert (got["format"], got["width"], got["height"], got["channels"], got["dtype"]) == (
+        "png", 16, 12, 3, "uint8")  # fmt: skip
+    assert (got["color_space"], got["color_space_source"], got["description"]) == (
+        "display_p3", "icc", "sP3")  # fmt: skip
+    j = tmp_path / "turned.jpg"
+    exif = Image.Exif()
+    exif[0x0112] = 6
+    Image.new("RGB", (8, 4)).save(j, exif=exif)
+    assert main(["info", str(j)]) == 0
+    out = capsys.readouterr().out
+    assert "not declared (read as sRGB)" in out and "EXIF orientation 6" in out
+    assert main(["info", str(tmp_path / "missing.png")]) == 1
+    assert main(["info", str(tmp_path / "a.txt")]) == 1
+
+
+def test_chart_reads_a_photograph_in_the_space_it_declares(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A ColorChecker photographed and saved in Display P3 (its profile embedded), as a
+    phone saves it: its patch means are brought to sRGB before the comparison with the
+    chart's sRGB values, so it measures as the sRGB photograph does; read as sRGB it
+    measured several dE00 worse."""
+    from imageform.analysis import synthetic_chart_photo
+
+    photo = synthetic_chart_photo(rng=1, noise=0.0)
+    srgb = np.clip(photo.image, 0, 1)
+    a, b = tmp_path / "srgb.png", tmp_path / "p3.png"
+    write_image(a, srgb, bit_depth=16)
+    p3 = np.clip(np.asarray(convert(srgb, "srgb", "display_p3")), 0, 1)
+    write_image(b, p3, bit_depth=16, color_space="display_p3")
+    res = {}
+    for name, path, extra in (("srgb", a, []), ("p3", b, []), ("as-srgb", b, ["--from", "srgb"])):
+        out = tmp_path / f"{name}.json"
+        assert main(["chart", str(path), "-o", str(out), "--json", *extra]) == 0
+        res[name] = json.loads(capsys.readouterr().out)
+    from imageform.color import delta_e_ciede2000
+
+    def means(name: str) -> np.ndarray:
+        payload = json.loads((tmp_path / f"{name}.json").read_text())
+        return np.asarray(convert(np.asarray(payload["patches"]["means_srgb"]), "srgb", "lab"))
+
+    assert res["p3"]["mean_before"] == pytest.approx(res["srgb"]["mean_before"], abs=0.05)
+    same = np.asarray(delta_e_ciede2000(means("srgb"), means("p3")))
+    wrong = np.asarray(delta_e_ciede2000(means("srgb"), means("as-srgb")))
+    assert same.max() < 0.1 and wrong.mean() > 2.0, (same.max(), wrong.mean())
+    assert json.loads((tmp_path / "p3.json").read_text())["image_space"] == "display_p3"

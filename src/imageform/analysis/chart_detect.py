@@ -12,6 +12,9 @@ segmentation detector of colour-checker-detection and OpenCV's ``mcc`` module):
 1. **Flat regions.** The photograph is block-averaged to at most ``max_size`` pixels on its
    long side; the colour gradient magnitude of the Gaussian-smoothed image is thresholded at
    several levels, and the 4-connected regions below each threshold are candidate patches.
+   When no chart is found there, a photograph larger than ``max_size`` is searched once
+   more at twice that resolution (a small chart in a large photograph), one at or under it
+   on a 2x bilinear upsample.
 2. **Square-ish candidates**, by moments: an affine image of a square (any rotation, tilt
    or shear) of area :math:`A` and covariance :math:`\Sigma` has
    :math:`A / (12 \sqrt{\det \Sigma}) = 1` (a uniform square of side *s* has variance
@@ -32,9 +35,23 @@ segmentation detector of colour-checker-detection and OpenCV's ``mcc`` module):
    reflection) when the fit of the *other* patches predicts its colour more than
    max(4 × median, 10) ΔE*ab from its reference (leave-one-out, in CIELAB: dark patches
    count, and a channel clipped at the gamut's edge, the cyan's red, barely does). The score
-   is that fit's :math:`R^2` without the outliers; the best window and orientation above
-   ``min_score`` wins; otherwise the detection comes back with ``found`` False and the
-   reason (a photograph without a chart is an answer, not an error).
+   is that fit's :math:`R^2` without the outliers. Several spoiled patches at once (glare
+   over a corner of the chart) mask one another in the leave-one-out tests, so when that
+   :math:`R^2` is under 0.95 a least-median-of-squares fit (Rousseeuw 1984; affine fits to
+   400 random 6-patch subsets, the least median ΔE*ab wins) judges the outliers as well and
+   the better score is kept. Every window that overlaps the lattice is tried (a chart cut by
+   the frame beside a stray square). The best window and orientation above ``min_score``
+   wins.
+6. **Uneven light.** When no window passes, a shadow across the chart or light falling off
+   along it may be why: each patch's colour is then scaled by its own light, which no affine
+   map absorbs. The lattices are scored again by the colour homography
+   :math:`r_k \approx s_k A m_k` (a 3 × 3 :math:`A`, a light :math:`s_k` per patch;
+   Finlayson, Gong and Fisher, "Color Homography: Theory and Applications", IEEE TPAMI
+   41(1), 2019, by their alternating least squares), by its adjusted :math:`R^2` (one
+   parameter per patch more: a lattice of unrelated colours does not pass), and a chart
+   found so comes with a :class:`~imageform.analysis.ChartWarning` naming the range of the
+   lights. Otherwise the detection comes back with ``found`` False and the reason (a
+   photograph without a chart is an answer, not an error).
 
 Coordinates are imageform's pixel convention (docs/conventions.md): ``(u, v)`` = (column,
 row), integer values at pixel centres. Chart coordinates are ``(column, row)`` of the
@@ -619,20 +636,140 @@ def _colour_fit(
         back = out & (err <= _bound(err[use]))
         use |= back
         out &= ~back
+    r2 = _r2(x, ref_lin, use)
+    if r2 < _ROBUST_BELOW:
+        # several patches off at once (glare over a corner of the chart) mask one another
+        # in the leave-one-out tests: a least-median-of-squares fit does not see them
+        r2_lms, out_lms = _lmeds_fit(x, ref_lin, lab_ref, usable)
+        if r2_lms > r2:
+            return r2_lms, out_lms
+    return r2, out
+
+
+def _r2(x: np.ndarray, ref_lin: np.ndarray, use: np.ndarray) -> float:
+    """R² of the least-squares fit ref ~ x W over the patches ``use`` (-1: too few)."""
     if use.sum() < 14:
-        return -1.0, out
+        return -1.0
     w, *_ = np.linalg.lstsq(x[use], ref_lin[use], rcond=None)
     res = ref_lin[use] - x[use] @ w
     tot = ref_lin[use] - ref_lin[use].mean(axis=0)
     ss_tot = float(np.sum(tot * tot))
     if ss_tot < 1e-9:  # a reference without distinct colours identifies nothing
-        return -1.0, out
+        return -1.0
+    return 1.0 - float(np.sum(res * res)) / ss_tot
+
+
+#: Below this R² of the plain fit, :func:`_colour_fit` also tries the least-median fit.
+_ROBUST_BELOW = 0.95
+#: Random 6-patch subsets the least-median fit tries (a fixed seed: the same answer each run).
+_LMEDS_TRIALS = 400
+
+
+def _lmeds_fit(
+    x: np.ndarray, ref_lin: np.ndarray, lab_ref: np.ndarray, usable: np.ndarray
+) -> tuple[float, np.ndarray]:
+    """R² and outliers of a least-median-of-squares affine fit (Rousseeuw 1984).
+
+    Affine fits to random 6-patch subsets of the usable patches; the one whose median
+    CIELAB ΔE*ab over all usable patches is least is the robust fit. Patches it predicts
+    more than ``max(4 × median, 10)`` ΔE*ab from their references are outliers (at most six,
+    as in :func:`_colour_fit`: more and the window is not a chart with a few spoiled
+    patches); R² is that of the least-squares fit of the others.
+    """
+    idx = np.flatnonzero(usable)
+    none = np.zeros(len(x), dtype=bool)
+    if len(idx) < 14:
+        return -1.0, none
+    gen = np.random.default_rng(0)
+    sub = np.argsort(gen.random((_LMEDS_TRIALS, len(idx))), axis=1)[:, :6]
+    xs, rs = x[idx[sub]], ref_lin[idx[sub]]  # (T, 6, 4), (T, 6, 3)
+    xt = np.swapaxes(xs, 1, 2)
+    w = np.linalg.solve(xt @ xs + 1e-9 * np.eye(4), xt @ rs)  # (T, 4, 3)
+    d = _lab_from_linear(np.einsum("nj,tjc->tnc", x[idx], w)) - lab_ref[idx][None]
+    err = np.sqrt((d * d).sum(axis=-1))  # (T, m)
+    best = err[int(np.argmin(np.median(err, axis=1)))]
+    bad = best > _bound(best)
+    if bad.sum() > 6:
+        return -1.0, none
+    out = none.copy()
+    out[idx[bad]] = True
+    return _r2(x, ref_lin, usable & ~out), out
+
+
+def _shading_fit(
+    meas: np.ndarray, ref_lin: np.ndarray, usable: np.ndarray
+) -> tuple[float, np.ndarray, np.ndarray]:
+    r"""R², outliers and per-patch light of a colour homography fit (unevenly lit charts).
+
+    A shadow across the chart, or light falling off along it, scales each patch's linear
+    colour by its own factor: :math:`r_k \approx s_k A m_k` with :math:`A` a 3 × 3 matrix
+    and :math:`s_k` the light on patch *k* (the colour homography of Finlayson, Gong and
+    Fisher, "Color Homography: Theory and Applications", IEEE TPAMI 41(1), 2019), solved by
+    their alternating least squares. The affine fit of :func:`_colour_fit` cannot absorb
+    such light; this one can (the colours still have to match, up to brightness). Outliers
+    as in :func:`_colour_fit` (at most six, dropped worst first). Returns the adjusted
+    :math:`R^2 = 1 - (1 - R^2)(n - 1)/(n - p - 1)` of :math:`s_k A m_k` against the
+    references (*n* = 3 values per patch, *p* = 9 + one light per patch: the lights would
+    otherwise let an arbitrary lattice of colours score as high as a chart), the outliers, and
+    the factors over their median (NaN for patches left out).
+    """
+    m = srgb_decode(np, np.clip(meas, 0.0, 1.0))
+    lab_ref = _lab_from_linear(ref_lin)
+    use = usable.copy()
+    out = np.zeros(len(meas), dtype=bool)
+    gains = np.full(len(meas), np.nan)
+
+    def fit(sel: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        s = np.ones(int(sel.sum()))
+        ms, rs = m[sel], ref_lin[sel]
+        a = np.eye(3)
+        for _ in range(30):
+            a, *_ = np.linalg.lstsq(ms * s[:, None], rs, rcond=None)
+            p = ms @ a
+            s = np.clip((rs * p).sum(axis=1) / np.maximum((p * p).sum(axis=1), 1e-12), 0.02, 50.0)
+        p_all = m @ a
+        r_all = ref_lin
+        s_all = np.clip(
+            (r_all * p_all).sum(axis=1) / np.maximum((p_all * p_all).sum(axis=1), 1e-12), 0.02, 50.0
+        )
+        return p_all * s_all[:, None], s_all
+
+    for _ in range(7):
+        if use.sum() < 14:
+            return -1.0, out, gains
+        pred, s_all = fit(use)
+        d = _lab_from_linear(pred) - lab_ref
+        err = np.sqrt((d * d).sum(axis=1))
+        worst = int(np.argmax(np.where(use, err, -1.0)))
+        if err[worst] <= _bound(err[use]) or out.sum() >= 6:
+            break
+        out[worst] = True
+        use[worst] = False
+    res = ref_lin[use] - pred[use]
+    tot = ref_lin[use] - ref_lin[use].mean(axis=0)
+    ss_tot = float(np.sum(tot * tot))
+    if ss_tot < 1e-9:
+        return -1.0, out, gains
+    gains[use] = s_all[use] / np.median(s_all[use])
+    # adjusted R² (Ezekiel 1930): 3 values per patch, 9 + one light per patch parameters; a
+    # free light per patch would otherwise let an arbitrary lattice of colours fit as well
+    n_obs, n_par = 3 * int(use.sum()), 9 + int(use.sum())
     r2 = 1.0 - float(np.sum(res * res)) / ss_tot
-    return r2, out
+    return 1.0 - (1.0 - r2) * (n_obs - 1) / (n_obs - n_par - 1), out, gains
+
+
+def _window_fit(
+    mean: np.ndarray, ref_lin: np.ndarray, usable: np.ndarray, shading: bool
+) -> tuple[float, np.ndarray]:
+    """R² and outliers of the affine fit, or of the colour homography with ``shading``."""
+    if shading:
+        r2, out, _ = _shading_fit(mean, ref_lin, usable)
+        return r2, out
+    return _colour_fit(mean, ref_lin, usable)
 
 
 def _best_window(
-    work: np.ndarray, h: np.ndarray, keys: np.ndarray, ref_lin: np.ndarray
+    work: np.ndarray, h: np.ndarray, keys: np.ndarray, ref_lin: np.ndarray, shading: bool = False
 ) -> tuple[float, np.ndarray, np.ndarray] | None:
     """Best (score, chart->lattice map, outliers) over windows and quarter turns."""
     umin, vmin = keys.min(axis=0).astype(int)
@@ -641,10 +778,13 @@ def _best_window(
     key_set = {(int(a), int(b)) for a, b in keys}
     for quarter in range(4):
         wu, wv = (_COLS, _ROWS) if quarter % 2 == 0 else (_ROWS, _COLS)
+        # every window that overlaps the lattice: one whose patches run past the lattice (a
+        # chart cut by the frame) can hold as many found patches as one shifted onto a
+        # stray candidate beside the chart; the counts below choose
         placements = [
             (u0, v0)
-            for u0 in range(min(umin, umax - wu + 1), max(umin, umax - wu + 1) + 1)
-            for v0 in range(min(vmin, vmax - wv + 1), max(vmin, vmax - wv + 1) + 1)
+            for u0 in range(umin - wu + 1, umax + 1)
+            for v0 in range(vmin - wv + 1, vmax + 1)
         ]
         counts = [
             sum((u0 <= a < u0 + wu) and (v0 <= b < v0 + wv) for a, b in key_set)
@@ -660,7 +800,7 @@ def _best_window(
             hc = h @ a
             mean, spread = _sample(work, hc)
             usable = (spread < 0.08) & (mean.max(axis=1) < 0.98)
-            r2, out = _colour_fit(mean, ref_lin, usable)
+            r2, out = _window_fit(mean, ref_lin, usable, shading)
             if best is None or r2 > best[0]:
                 best = (r2, a, out)
     return best
@@ -668,11 +808,12 @@ def _best_window(
 
 def _search(
     work: np.ndarray, ref_lin: np.ndarray, min_score: float
-) -> tuple[float, np.ndarray, np.ndarray, np.ndarray] | str:
+) -> tuple[float, np.ndarray, np.ndarray, np.ndarray, np.ndarray | None] | str:
     """Search the work image for the chart.
 
-    Returns (score, chart -> work homography, outliers, chart coordinates of the segmented patches),
-    or why none was found.
+    Returns (score, chart -> work homography, outliers, chart coordinates of the segmented
+    patches, the light on each patch over its median when the chart was accepted only by the
+    colour homography of :func:`_shading_fit`, else None), or why none was found.
     """
     cand = _candidates(work)
     n_cand = len(cand["area"])
@@ -682,6 +823,7 @@ def _search(
     order = np.argsort(-score, kind="stable")
     tried: set[int] = set()
     best: tuple[float, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None = None
+    lattices: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
     attempts = 0
     for hyp in order:
         if score[hyp] < 6 or attempts >= 8:
@@ -695,6 +837,7 @@ def _search(
             continue
         h, idx, keys = grown
         tried.update(int(i) for i in idx)
+        lattices.append(grown)
         win = _best_window(work, h, keys, ref_lin)
         if win is None:
             continue
@@ -705,8 +848,18 @@ def _search(
             break
     if best is None:
         return "no 4x6 lattice of flat patches"
+    shading = False
     if best[0] < min_score:
-        return f"best candidate's colour fit R2 = {best[0]:.2f} < min_score = {min_score:g}"
+        # a shadow across the chart or light falling off along it: the lattices again, each
+        # patch under its own light (the colours have to match up to brightness)
+        shaded = None
+        for h, idx, keys in lattices:
+            win = _best_window(work, h, keys, ref_lin, shading=True)
+            if win is not None and (shaded is None or win[0] > shaded[0]):
+                shaded = (win[0], h, win[1], idx, keys, win[2])
+        if shaded is None or shaded[0] < min_score:
+            return f"best candidate's colour fit R2 = {best[0]:.2f} < min_score = {min_score:g}"
+        best, shading = shaded, True
     r2, h, a, idx, keys, out = best
     # chart coordinates of the matched candidates, refit chart -> work directly
     chart_xy = _apply_h(np.linalg.inv(a), keys)
@@ -715,10 +868,12 @@ def _search(
     hc = _fit_h(chart_xy, pts) if len(pts) >= 4 else h @ a
     # the score and the outliers again, sampled through the refitted homography
     mean, spread = _sample(work, hc)
-    r2_final, out_final = _colour_fit(mean, ref_lin, (spread < 0.08) & (mean.max(axis=1) < 0.98))
+    usable = (spread < 0.08) & (mean.max(axis=1) < 0.98)
+    r2_final, out_final = _window_fit(mean, ref_lin, usable, shading)
     if r2_final >= r2 or r2_final >= min_score:
         r2, out = r2_final, out_final
-    return r2, hc, out, chart_xy
+    light = _shading_fit(mean, ref_lin, usable & ~out)[2] if shading else None
+    return r2, hc, out, chart_xy, light
 
 
 # ---------------------------------------------------------------- public API
@@ -734,7 +889,8 @@ def detect_colorchecker(
 ) -> ChartDetection:
     """Find a ColorChecker Classic (4 × 6) anywhere in a photograph.
 
-    Any position, scale (down to about 10 pixels per patch at the working resolution), in-plane
+    Any position, scale (down to about 10 pixels per patch at the working resolution, i.e.
+    about 5 f pixels in a photograph block-averaged by f to ``max_size``), in-plane
     rotation (upside down included: the patch colours fix it), perspective tilt to about
     45 degrees, clutter, blur, noise, uneven light and another illuminant. The method is in
     the module docstring (:mod:`imageform.analysis.chart_detect`).
@@ -748,7 +904,8 @@ def detect_colorchecker(
         ColorChecker (:data:`~imageform.analysis.synthetic.COLORCHECKER_SRGB8` / 255).
     max_size : int, keyword-only
         The long side of the working image (block-averaged by an integer factor): the
-        speed / smallest-chart trade-off.
+        speed / smallest-chart trade-off (a photograph without a chart is searched again at
+        twice this size).
     min_score : float, keyword-only
         The least :math:`R^2` of the affine colour fit that accepts a chart (0 to 1).
     sample : float, keyword-only
@@ -770,6 +927,12 @@ def detect_colorchecker(
     InvalidInputError
         ``image`` is not an RGB image, or ``reference``, ``max_size``, ``min_score`` or
         ``sample`` is out of range.
+
+    Warns
+    -----
+    ChartWarning
+        The chart was found only with a light per patch (a shadow across it, or light
+        falling off along it): a colour correction fitted to it is biased by the light.
 
     Examples
     --------
@@ -805,7 +968,15 @@ def detect_colorchecker(
     # work pixel -> image pixel (pixel centres): block means of f x f pixels
     scale = np.array([[f, 0.0, (f - 1) / 2.0], [0.0, f, (f - 1) / 2.0], [0.0, 0.0, 1.0]])
     res = _search(work, ref_lin, min_score)
-    if not isinstance(res, tuple) and f == 1:
+    if not isinstance(res, tuple) and f > 1:
+        # not found on the block means: a chart of under about 10 * f pixels per patch in a
+        # large photograph merged into its surround; once more at twice the resolution
+        fine, f_fine = _work_image(rgb, 2 * max_size, full)
+        res_fine = _search(fine, ref_lin, min_score)
+        if isinstance(res_fine, tuple):
+            res, work, f = res_fine, fine, f_fine
+            scale = np.array([[f, 0.0, (f - 1) / 2.0], [0.0, f, (f - 1) / 2.0], [0.0, 0.0, 1.0]])
+    elif not isinstance(res, tuple):
         # not found at full resolution: small charts (patch pitch under about 12 pixels)
         # separate better on a 2x bilinear upsample (o -> o / 2 - 0.25 in image pixels)
         from scipy import ndimage
@@ -817,7 +988,19 @@ def detect_colorchecker(
             scale = np.array([[0.5, 0.0, -0.25], [0.0, 0.5, -0.25], [0.0, 0.0, 1.0]])
     if not isinstance(res, tuple):
         return _not_found(res)
-    r2, hc, out, chart_xy = res
+    r2, hc, out, chart_xy, light = res
+    if light is not None:
+        import warnings
+
+        lo, hi = np.nanmin(light), np.nanmax(light)
+        warnings.warn(
+            "detect_colorchecker: the light on the chart is uneven (a shadow or a light "
+            f"fall-off: patches at x{lo:.2f} to x{hi:.2f} of the median brightness); found by "
+            f"colour up to brightness (R2 = {r2:.2f}), a colour correction fitted to it is "
+            "biased by the light",
+            ChartWarning,
+            stacklevel=2,
+        )
     segmented = np.zeros(_ROWS * _COLS, dtype=bool)
     segmented[(chart_xy[:, 1] * _COLS + chart_xy[:, 0]).astype(int)] = True
     hf = scale @ hc

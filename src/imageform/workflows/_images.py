@@ -315,3 +315,44 @@ def write_mapped(
             "(--out-of-range error refuses instead)"
         )
     return n_out, dtype, lo, hi, shape
+
+
+def rgb_space_or_auto(value: Any, why: str, *, linear: bool = False) -> str:
+    """``--from``: ``auto`` (the space the file declares) or an RGB space's name.
+
+    ``linear``: the ``linear_`` twins are taken too. Anything else is one line saying
+    ``why`` an RGB space is needed.
+    """
+    from imageform.color import RGB_SPACES, space_name
+
+    if str(value).strip().lower() == "auto":
+        return "auto"
+    name = space_name(value, "--from (src)")
+    if name not in RGB_SPACES and not (linear and name.removeprefix("linear_") in RGB_SPACES):
+        twins = ", or a linear_ one" if linear else ""
+        raise InvalidInputError(
+            f"--from {name}: {why}; give an RGB space ({', '.join(RGB_SPACES)}{twins}) or auto"
+        )
+    return name
+
+
+def declared_space(run: Run, image: Path, declared: Any, *, grey: bool) -> str:
+    """``--from auto``: the space ``image`` declares, else srgb (gray for a grey image)."""
+    if grey:
+        return "gray"
+    if declared.name is not None:
+        if declared.name != "srgb":
+            how = {
+                "icc": "its ICC profile",
+                "nclx": "its HEIF colour box (nclx)",
+                "png-srgb": "its sRGB chunk",
+            }.get(declared.source, "its EXIF tags")
+            run.note(f"note: {image} declares {declared.name} in {how}; read as {declared.name}"
+                     " (--from overrides)")  # fmt: skip
+        return str(declared.name)
+    if declared.source == "icc":
+        run.note(
+            f"note: {image} carries an ICC profile imageform does not recognise "
+            f"({declared.description or 'no description'}); read as srgb (--from overrides)"
+        )
+    return "srgb"

@@ -62,15 +62,27 @@ class ChartOptions(ImageIn):
         help="Also write the correction alone (.json, read by harmonize --correction).",
         output=True,
     )
+    src: str = option(
+        "auto",
+        flag="--from",
+        help=(
+            "RGB space of the photograph; auto: the one the file declares (ICC profile, "
+            "EXIF), else srgb. The patch means are brought to sRGB from it."
+        ),
+        metavar="SPACE",
+    )
 
     def check(self) -> None:
-        """Check ``--degree`` (1 to 3), ``--max-size`` and ``--min-score`` (-1 to 1)."""
+        """Check ``--degree`` (1 to 3), ``--max-size``, ``--min-score`` (-1 to 1), ``--from``."""
         from imageform._validate import as_int, as_real
+        from imageform.workflows._images import rgb_space_or_auto
 
         super().check()
         as_int(self.degree, "--degree", minimum=1, maximum=3)
         as_int(self.max_size, "--max-size", minimum=64, maximum=100_000)
         as_real(self.min_score, "--min-score", minimum=-1.0, maximum=1.0)
+        src = rgb_space_or_auto(self.src, "a photograph of a chart is encoded RGB")
+        object.__setattr__(self, "src", src)
 
 
 def _draw(img: Any, polylines: list[Any], colour: tuple[float, float, float]) -> None:
@@ -153,9 +165,22 @@ def chart(run: Run, opts: ChartOptions, *, out: Path, image: Path) -> Result:
     det = detect_colorchecker(img, max_size=opts.max_size, min_score=opts.min_score)
     if not det.found:
         raise ChartNotFoundError(f"no ColorChecker found in the image: {det.reason}")
+    space = opts.src
+    if space == "auto":
+        from imageform.io import image_color_space
+        from imageform.workflows._images import declared_space
+
+        space = declared_space(run, image, image_color_space(image), grey=False)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", ChartWarning)
         pat = measure_chart_patches(img, det, max_std=_MAX_STD)
+        if space != "srgb":  # the patch means as sRGB values (floats: nothing clipped)
+            from imageform.color import convert
+
+            means_srgb = np.asarray(convert(np.where(np.isfinite(pat.means), pat.means, 0.0),
+                                            space, "srgb"))  # fmt: skip
+            pat = ChartPatches(np.where(np.isfinite(pat.means), means_srgb, np.nan),
+                               pat.std, pat.saturated, pat.missing)  # fmt: skip
         ref = np.asarray(COLORCHECKER_SRGB8, dtype=np.float64) / 255.0
         means = np.where(np.isfinite(pat.means), pat.means, 0.0)
         filled = ChartPatches(means, pat.std, pat.saturated, pat.missing)
@@ -178,6 +203,7 @@ def chart(run: Run, opts: ChartOptions, *, out: Path, image: Path) -> Result:
         "kind": "colorchecker",
         "image": str(image),
         "image_size": [int(img.shape[1]), int(img.shape[0])],
+        "image_space": space,
         "chart": det.to_dict(),
         "patches": {
             "means_srgb": pat.means.tolist(),

@@ -12,11 +12,13 @@ from imageform.workflows._images import (
     ImageIn,
     ImageOut,
     OnDevice,
+    declared_space,
     gpu_bands,
     image_out_renames,
     on_gpu,
     read,
     refuse_absent_device,
+    rgb_space_or_auto,
     write,
     write_mapped,
 )
@@ -156,7 +158,7 @@ def convert(run: Run, opts: ConvertOptions, *, out: Path, image: Path) -> Result
     src, declared = opts.src, None
     if src == "auto":
         declared = image_color_space(image)
-        src = _declared_space(run, image, declared, grey=img.shape[-1] == 1)
+        src = declared_space(run, image, declared, grey=img.shape[-1] == 1)
     edges = path(src, dst)
     if src != "gray" and img.shape[-1] == 1:
         raise InvalidInputError(f"{image} is a grey image; convert it with --from gray")
@@ -184,28 +186,6 @@ def convert(run: Run, opts: ConvertOptions, *, out: Path, image: Path) -> Result
     }
     how = " -> ".join(summary["path"]) or "copy"
     return Result(summary, (f"{image} ({src}) -> {out} ({dst}): {how}",))
-
-
-def _declared_space(run: Run, image: Path, declared: Any, *, grey: bool) -> str:
-    """``--from auto``: the space ``image`` declares, else srgb (gray for a grey image)."""
-    if grey:
-        return "gray"
-    if declared.name is not None:
-        if declared.name != "srgb":
-            how = {
-                "icc": "its ICC profile",
-                "nclx": "its HEIF colour box (nclx)",
-                "png-srgb": "its sRGB chunk",
-            }.get(declared.source, "its EXIF tags")
-            run.note(f"note: {image} declares {declared.name} in {how}; read as {declared.name}"
-                     " (--from overrides)")  # fmt: skip
-        return str(declared.name)
-    if declared.source == "icc":
-        run.note(
-            f"note: {image} carries an ICC profile imageform does not recognise "
-            f"({declared.description or 'no description'}); read as srgb (--from overrides)"
-        )
-    return "srgb"
 
 
 # ---------------------------------------------------------------- white balance
@@ -377,18 +357,8 @@ class DeltaEOptions(ImageIn, OnDevice):
     def check(self) -> None:
         """Check the options and normalise the ``--from`` space name (an RGB space)."""
         super().check()
-        from imageform.color import RGB_SPACES, space_name
-
-        if str(self.src).strip().lower() == "auto":
-            object.__setattr__(self, "src", "auto")
-            return
-        name = space_name(self.src, "--from (src)")
-        if name.removeprefix("linear_") not in RGB_SPACES:
-            raise InvalidInputError(
-                f"--from {name}: delta-e compares RGB images; give an RGB space "
-                f"({', '.join(RGB_SPACES)}, or a linear_ one) or auto"
-            )
-        object.__setattr__(self, "src", name)
+        src = rgb_space_or_auto(self.src, "delta-e compares RGB images", linear=True)
+        object.__setattr__(self, "src", src)
 
 
 def delta_e(run: Run, opts: DeltaEOptions, *, out: None, reference: Path, test: Path) -> Result:
@@ -416,7 +386,7 @@ def delta_e(run: Run, opts: DeltaEOptions, *, out: None, reference: Path, test: 
     if opts.src == "auto":
         from imageform.io import image_color_space
 
-        spaces = [_declared_space(run, p, image_color_space(p), grey=False)
+        spaces = [declared_space(run, p, image_color_space(p), grey=False)
                   for p in (reference, test)]  # fmt: skip
     sa, sb = spaces
 
@@ -599,9 +569,72 @@ def palette_check(run: Run, opts: PaletteCheckOptions, *, out: None, colors: str
     return Result(r.as_dict(), tuple(text), check_failed=not ok)
 
 
-_IMG = Input("image", "Input image (PNG, JPEG, TIFF or .npy).")
+_IMG = Input("image", "Input image (PNG, JPEG, TIFF, .npy; HEIF with the heif extra).")
+
+
+@dataclass(frozen=True, kw_only=True)
+class InfoOptions(Options):
+    """Options of ``imageform info``."""
+
+
+def info(run: Run, opts: InfoOptions, *, out: None, image: Path) -> Result:
+    """``imageform info``: what an image file holds, from its header, and its colour space."""
+    from imageform.io import image_color_space, image_info
+
+    head = image_info(image)
+    declared = image_color_space(image)
+    orientation = _exif_orientation(image, head.format)
+    summary = {
+        "image": image,
+        "format": head.format,
+        "width": head.width,
+        "height": head.height,
+        "channels": head.channels,
+        "dtype": head.dtype,
+        "megapixels": round(head.width * head.height / 1e6, 3),
+        "color_space": declared.name,
+        "color_space_source": declared.source,
+        "description": declared.description or None,
+        "exif_orientation": orientation,
+    }
+    space = declared.name or "not declared (read as sRGB)"
+    if declared.name is None and declared.source == "icc":
+        space = f"an ICC profile imageform does not recognise ({declared.description})"
+    how = {"none": ""}.get(declared.source, f" ({declared.source})")
+    text = [
+        f"{image}: {head.format}, {head.width} x {head.height} px, {head.channels} channel(s), "
+        f"{head.dtype}",
+        f"colour space: {space}{how}",
+    ]
+    if orientation not in (None, 1):
+        text.append(f"EXIF orientation {orientation}: read_image turns it upright")
+    return Result(summary, tuple(text))
+
+
+def _exif_orientation(path: Path, fmt: str) -> int | None:
+    """Read the EXIF orientation tag of a JPEG, PNG or TIFF (None when absent or unreadable)."""
+    if fmt not in ("jpeg", "png", "tiff"):
+        return None
+    from PIL import Image, UnidentifiedImageError
+
+    try:
+        with Image.open(path) as im:
+            value = im.getexif().get(0x0112)
+    except (OSError, UnidentifiedImageError, ValueError, SyntaxError):
+        return None
+    return int(value) if value else None
+
 
 WORKFLOWS = (
+    Workflow(
+        "info",
+        "What an image file holds: size, channels, sample type, its colour space, orientation.",
+        "imageform.workflows.color:info",
+        InfoOptions,
+        (_IMG,),
+        None,
+        group="colour",
+    ),
     Workflow(
         "convert",
         "Convert an image between colour spaces (sRGB, Lab, HSV, Y'CbCr, XYZ ...).",
@@ -614,7 +647,7 @@ WORKFLOWS = (
     ),
     Workflow(
         "white-balance",
-        "White-balance an sRGB image in linear light and print the gains.",
+        "White-balance an RGB image in linear light and print the gains.",
         "imageform.workflows.color:white_balance",
         WhiteBalanceOptions,
         (_IMG,),
@@ -624,10 +657,13 @@ WORKFLOWS = (
     ),
     Workflow(
         "delta-e",
-        "Colour difference (ΔE) between two sRGB images: mean, max, percentiles, heat map.",
+        "Colour difference (ΔE) between two RGB images: mean, max, percentiles, heat map.",
         "imageform.workflows.color:delta_e",
         DeltaEOptions,
-        (Input("reference", "Reference image (sRGB)."), Input("test", "Test image, same size.")),
+        (
+            Input("reference", "Reference image (RGB, in the space it declares or --from)."),
+            Input("test", "Test image, same size."),
+        ),
         None,
         group="colour",
     ),

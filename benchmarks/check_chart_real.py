@@ -1,0 +1,226 @@
+"""ColorChecker detection on real photographs of real charts, and on harder copies of them.
+
+Run::
+
+    OPENBLAS_NUM_THREADS=1 PYTHONPATH=src:. python benchmarks/check_chart_real.py FOLDER
+
+``FOLDER`` holds photographs (JPEG/PNG) of X-Rite ColorChecker Classic charts, or of other
+scenes (a photograph without a Classic is counted as found or not). The photographs of the
+2026-11-29 table come from public repositories, not this one (their licences differ):
+jarrelscy/ColorCheckerDetector (7, MIT; printed charts and one on a screen, phone photos of
+cluttered desks and floors), karnehen/ColorChecker (3, seeds beside a Classic), luimoli/
+ColorcheckerCalibration (4, a machine-vision camera under CWF, D65, TL84 light),
+pedrodiamel/colorchecker-detection (1, MIT), QiuJueqin/color-checker-extraction (2, MIT:
+a ColorChecker Passport and a Digital SG, which is not a Classic) and 2vin/color-correction
+(1, MIT, a portrait without a chart).
+
+Per photograph: found or not and the time of :func:`detect_colorchecker`, and where OpenCV's
+``mcc`` detector (``cv2.mcc``, MCC24) finds the chart too, the median and largest difference
+of the patch means (8-bit units). Then the photographs that both detectors find are made
+harder, with the geometry known (the chart's centres of the original photograph carried
+through the change): turned 90, 180 and 270 degrees; shrunk to a patch pitch of 12 and 8
+pixels, and to 24 and 12 pixels at the photograph's own size (pasted into the middle of a blurred
+copy of itself); JPEG quality 15; low light (linear light x 0.06, shot noise, JPEG 85); glare (a
+white blob, 90 % at its centre, sigma 0.8 pitch, over patches 7, 8, 13, 14); a shadow's edge
+(encoded values x 0.35 on one side of the line through patches 2 and 21); a strong
+perspective (the top edge of the frame squeezed to 40 %); cropped through the last
+column of patches. A variant counts as found when the median centre error is under a
+quarter pitch.
+"""
+
+from __future__ import annotations
+
+import io
+import sys
+import time
+import warnings
+from pathlib import Path
+
+import numpy as np
+
+from benchmarks._common import header, markdown_table
+from imageform.analysis import ChartWarning, detect_colorchecker, measure_chart_patches
+
+
+def _read(path: Path) -> np.ndarray:
+    from PIL import Image
+
+    return np.asarray(Image.open(path).convert("RGB"))
+
+
+def _jpeg(a: np.ndarray, quality: int) -> np.ndarray:
+    from PIL import Image
+
+    b = io.BytesIO()
+    Image.fromarray(a).save(b, "JPEG", quality=quality)
+    return np.asarray(Image.open(b))
+
+
+def _pitch(c: np.ndarray) -> float:
+    return float(np.median(np.linalg.norm(np.diff(c.reshape(4, 6, 2), axis=1), axis=2)))
+
+
+def _mcc(im: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+    """OpenCV's mcc: the patch means (24, 3) in [0, 1] and the patch centres, or None."""
+    import cv2
+
+    det = cv2.mcc.CCheckerDetector.create()
+    det.setColorChartType(cv2.mcc.MCC24)
+    det.setUseDnnModel(False)
+    if not det.process(cv2.cvtColor(im, cv2.COLOR_RGB2BGR), 1):
+        return None
+    ch = det.getBestColorChecker()
+    means = np.asarray(ch.getChartsRGB(False)).reshape(-1, 3) / 255.0
+    centres = np.asarray(ch.getColorCharts()).reshape(-1, 4, 2).mean(axis=1)
+    return means, centres
+
+
+def _variants(
+    im: np.ndarray, c0: np.ndarray, seed: int
+) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    """Harder copies of a photograph and the chart's patch centres in each."""
+    import cv2
+
+    rng = np.random.default_rng(seed)
+    h, w = im.shape[:2]
+    out = {
+        "rot90": (np.ascontiguousarray(np.rot90(im, 1)), np.c_[c0[:, 1], w - 1 - c0[:, 0]]),
+        "rot180": (np.ascontiguousarray(im[::-1, ::-1]), np.c_[w - 1 - c0[:, 0], h - 1 - c0[:, 1]]),
+        "rot270": (np.ascontiguousarray(np.rot90(im, -1)), np.c_[h - 1 - c0[:, 1], c0[:, 0]]),
+    }
+    pitch = _pitch(c0)
+    for target in (12, 8):
+        s = target / pitch
+        if s < 1:
+            size = (max(16, round(w * s)), max(16, round(h * s)))
+            sm = cv2.resize(im, size, interpolation=cv2.INTER_AREA)
+            sx, sy = sm.shape[1] / w, sm.shape[0] / h
+            out[f"pitch {target} px"] = (
+                sm,
+                np.c_[(c0[:, 0] + 0.5) * sx - 0.5, (c0[:, 1] + 0.5) * sy - 0.5],
+            )
+    # the same at the photograph's own size: the shrunk photograph pasted into the middle of
+    # a blurred copy of itself (sigma 2 pitches: no patches left in it)
+    for target in (24, 12):
+        s = target / pitch
+        if s < 0.5:
+            sm = cv2.resize(im, (round(w * s), round(h * s)), interpolation=cv2.INTER_AREA)
+            canvas = cv2.GaussianBlur(im, (0, 0), 2 * pitch)
+            y0, x0 = (h - sm.shape[0]) // 2, (w - sm.shape[1]) // 2
+            canvas[y0 : y0 + sm.shape[0], x0 : x0 + sm.shape[1]] = sm
+            sx, sy = sm.shape[1] / w, sm.shape[0] / h
+            small = np.c_[(c0[:, 0] + 0.5) * sx - 0.5 + x0, (c0[:, 1] + 0.5) * sy - 0.5 + y0]
+            out[f"pitch {target} px, full frame"] = (canvas, small)
+    out["JPEG q15"] = (_jpeg(im, 15), c0)
+    lin = (im / 255.0) ** 2.2 * 0.06
+    noisy = lin + rng.normal(0.0, 1.0, lin.shape) * np.sqrt(lin * 0.002 + 1e-5)
+    low = (np.clip(noisy, 0, 1) ** (1 / 2.2) * 255).round().astype(np.uint8)
+    out["low light"] = (_jpeg(low, 85), c0)
+    vv, uu = np.mgrid[:h, :w]
+    cu, cv = c0[[7, 8, 13, 14]].mean(axis=0)
+    g = np.exp(-((uu - cu) ** 2 + (vv - cv) ** 2) / (2 * (0.8 * pitch) ** 2))[..., None]
+    out["glare"] = ((im + (255 - im) * 0.9 * g).round().astype(np.uint8), c0)
+    (au, av), (bu, bv) = c0[2], c0[21]
+    side = (bu - au) * (vv - av) - (bv - av) * (uu - au) > 0
+    out["shadow"] = ((im * np.where(side, 0.35, 1.0)[..., None]).round().astype(np.uint8), c0)
+    src = np.array([[0, 0], [w, 0], [w, h], [0, h]], dtype=np.float32)
+    dst = np.array([[w * 0.3, h * 0.1], [w * 0.7, h * 0.1], [w, h], [0, h]], dtype=np.float32)
+    hm = cv2.getPerspectiveTransform(src, dst)
+    q = np.c_[c0 + 0.5, np.ones(24)] @ hm.T
+    warped = cv2.warpPerspective(im, hm, (w, h), flags=cv2.INTER_AREA)
+    out["perspective"] = (warped, q[:, :2] / q[:, 2:] - 0.5)
+    cols = c0.reshape(4, 6, 2)
+    rowdir = cols[:, 5].mean(axis=0) - cols[:, 0].mean(axis=0)
+    ax = 0 if abs(rowdir[0]) > abs(rowdir[1]) else 1
+    cut = round(float(cols[:, 5, ax].mean()))
+    keep_low = rowdir[ax] > 0
+    sl = slice(0, cut) if keep_low else slice(cut, None)
+    crop = im[:, sl] if ax == 0 else im[sl]
+    shift = np.zeros(2)
+    shift[ax] = 0 if keep_low else cut
+    out["cropped"] = (np.ascontiguousarray(crop), c0 - shift)
+    return out
+
+
+def _found_at(im: np.ndarray, truth: np.ndarray) -> tuple[bool, float]:
+    t0 = time.perf_counter()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", ChartWarning)
+        det = detect_colorchecker(im)
+    dt = time.perf_counter() - t0
+    if not det.found:
+        return False, dt
+    err = np.linalg.norm(det.centers - truth, axis=1) / _pitch(truth)
+    return bool(np.median(err) < 0.25), dt
+
+
+def main(folder: str) -> str:
+    paths = sorted(
+        p for p in Path(folder).iterdir() if p.suffix.lower() in {".jpg", ".jpeg", ".png"}
+    )
+    rows, both = [], []
+    for path in paths:
+        im = _read(path)
+        t0 = time.perf_counter()
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", ChartWarning)
+            det = detect_colorchecker(im)
+            dt = time.perf_counter() - t0
+            ours = measure_chart_patches(im, det).means if det.found else None
+        peer = _mcc(im)
+        diff = "-"
+        if ours is not None and peer is not None:
+            d = np.abs(ours - peer[0]).max(axis=1) * 255
+            diff = f"{np.median(d):.1f} / {d.max():.1f}"
+            both.append((path.name, im, det.centers))
+        rows.append(
+            (
+                path.name,
+                f"{im.shape[1]}x{im.shape[0]}",
+                "yes" if det.found else "no",
+                f"{det.score:.2f}" if det.found else det.reason,
+                f"{dt:.2f}",
+                "yes" if peer is not None else "no",
+                diff,
+            )
+        )
+    text = markdown_table(
+        (
+            "photograph",
+            "size",
+            "imageform found",
+            "score / reason",
+            "s",
+            "mcc found",
+            "patch means vs mcc, median / max (8-bit)",
+        ),
+        rows,
+    )
+    tally: dict[str, list[int]] = {}
+    worst: dict[str, float] = {}
+    for i, (_, im, c0) in enumerate(both):
+        for name, (vim, truth) in _variants(im, c0, i).items():
+            ok, dt = _found_at(vim, truth)
+            peer = _mcc(vim)
+            pok = peer is not None and len(peer[1]) == 24
+            if pok:
+                assert peer is not None
+                perr = np.linalg.norm(peer[1] - truth, axis=1) / _pitch(truth)
+                pok = bool(np.median(perr) < 0.25)
+            t = tally.setdefault(name, [0, 0, 0])
+            t[0] += ok
+            t[1] += pok
+            t[2] += 1
+            worst[name] = max(worst.get(name, 0.0), dt)
+    vrows = [(n, f"{a} / {c}", f"{b} / {c}", f"{worst[n]:.2f}") for n, (a, b, c) in tally.items()]
+    text += "\nHarder copies of the photographs both detectors find:\n\n" + markdown_table(
+        ("variant", "imageform found", "mcc found", "imageform slowest s"), vrows
+    )
+    return text
+
+
+if __name__ == "__main__":
+    if len(sys.argv) != 2:
+        raise SystemExit("usage: check_chart_real.py FOLDER_OF_PHOTOGRAPHS")
+    print(header("ColorChecker detection on real photographs"))
+    print(main(sys.argv[1]))
