@@ -207,3 +207,58 @@ def test_real_chessboard_views(shared_data: Path) -> None:
     assert np.all(rotation_errors(rec.R, np.asarray(scene["R"])) < 1.5)
     first = int(np.flatnonzero(rec.registered)[0])
     np.testing.assert_allclose(rec.R[first], np.eye(3), atol=1e-12)
+
+
+def test_large_image_features_are_found_reduced_and_mapped_back() -> None:
+    # SIFT doubles its input first: a 24 Mpx photograph would cost it ~5 GB and a minute.
+    # An image larger than max_size is reduced; its keypoints come back in full-image
+    # pixels, so a known sub-pixel shift between two such images is measured as it is.
+    import cv2
+
+    from imageform.geometry import detect_features
+
+    rng = np.random.default_rng(3)
+    small = cv2.GaussianBlur(rng.random((300, 400)).astype(np.float32), (0, 0), 2.0)
+    big = cv2.resize(small, (1600, 1200), interpolation=cv2.INTER_CUBIC)
+    big = np.clip((big - big.min()) / np.ptp(big) * 255, 0, 255).astype(np.uint8)
+    dx, dy = 6.3, -2.7
+    moved = cv2.warpAffine(
+        big, np.array([[1.0, 0, dx], [0, 1, dy]]), (1600, 1200), flags=cv2.INTER_CUBIC
+    )
+    f1 = detect_features(big, max_size=800, max_features=800)
+    f2 = detect_features(moved, max_size=800, max_features=800)
+    assert len(f1) > 100
+    # SIFT saw 800 x 600 px: every keypoint is at least ~2 full-image pixels in size
+    assert f1.scale.min() > 2.0 * 1.6
+    m = match_features(f1.descriptors, f2.descriptors)
+    d = f2.xy[m[:, 1]] - f1.xy[m[:, 0]]
+    inside = (f1.xy[m[:, 0]] > 20).all(1) & (f1.xy[m[:, 0]] < [1580, 1180]).all(1)
+    assert inside.sum() > 50
+    assert np.allclose(np.median(d[inside], axis=0), [dx, dy], atol=0.1)
+    # and where the full image's own keypoints are (pixel centre to pixel centre)
+    full = detect_features(big, max_size=None, max_features=4000)
+    m = match_features(f1.descriptors, full.descriptors)
+    assert len(m) > 50
+    assert np.allclose(np.median(full.xy[m[:, 1]] - f1.xy[m[:, 0]], axis=0), 0.0, atol=0.15)
+    # the mask is reduced with the image
+    mask = np.zeros((1200, 1600), bool)
+    mask[:, :800] = True
+    fm = detect_features(big, max_size=800, mask=mask)
+    assert len(fm) > 0 and fm.xy[:, 0].max() < 800 + 4
+    # max_size=None: the full image, as before
+    assert detect_features(big[:200, :200], max_size=None).xy.shape[1] == 2
+    with pytest.raises(InvalidInputError, match="max_size"):
+        detect_features(big, max_size=10)
+
+
+def test_keypoints_are_where_the_blobs_are() -> None:
+    # a Gaussian blob's SIFT keypoint is at its centre: OpenCV's default upscaling of the
+    # first octave put it a quarter pixel down and right
+    from imageform.geometry import detect_features
+
+    ys, xs = np.mgrid[0:200, 0:240].astype(float)
+    for cx, cy, sigma in [(100.0, 80.0, 3.0), (120.3, 90.7, 3.0), (111.6, 95.2, 6.0)]:
+        im = 255 * np.exp(-((xs - cx) ** 2 + (ys - cy) ** 2) / (2 * sigma**2))
+        f = detect_features(im.astype(np.uint8), max_features=8)
+        near = np.linalg.norm(f.xy - [cx, cy], axis=1)
+        assert near.min() < 0.05, (cx, cy, f.xy)

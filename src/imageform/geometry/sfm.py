@@ -115,9 +115,23 @@ def _as_mask(mask: object, shape: tuple[int, ...], name: str) -> NDArray[np.uint
 
 
 def detect_features(
-    image: ArrayLike, *, max_features: int = 4000, mask: ArrayLike | None = None
+    image: ArrayLike,
+    *,
+    max_features: int = 4000,
+    mask: ArrayLike | None = None,
+    max_size: int | None = 3200,
 ) -> Features:
-    """Detect SIFT keypoints and descriptors (OpenCV's SIFT, the ``reconstruct`` extra).
+    r"""Detect SIFT keypoints and descriptors (OpenCV's SIFT, the ``reconstruct`` extra).
+
+    An image whose longer side exceeds ``max_size`` is first reduced by area averaging to
+    that size, by the factor :math:`s = \text{max\_size} / \max(H, W)`, and the keypoints
+    are mapped back to the full image, pixel centres to pixel centres:
+    :math:`x = (x_s + \tfrac12)/s - \tfrac12`, sizes divided by :math:`s`. SIFT doubles
+    its input before the first octave (Lowe 2004, IJCV 60(2), sec. 3.3), so a 24 Mpx
+    photograph costs it about 5 GB and a minute, while the keypoints that survive the
+    ``max_features`` cut are the coarse, stable ones a reduced image keeps as well; COLMAP
+    caps its SIFT input the same way (``SiftExtraction.max_image_size``, 3200;
+    Schönberger & Frahm 2016) and OpenSfM too (``feature_process_size``).
 
     Parameters
     ----------
@@ -129,15 +143,21 @@ def detect_features(
         Where keypoints may be (nonzero or True): the scene that moves with the camera's
         world, without e.g. an endoscope's dark vignetted corners or a static background
         behind a moving object. None: everywhere.
+    max_size : int or None
+        Longest side, pixels, SIFT sees (at least 64); None: the full image always.
 
     Returns
     -------
     Features
+        Positions and sizes in the full image's pixels. The first octave is the image
+        doubled with pixel ``x`` at ``2x`` exactly (OpenCV's ``enable_precise_upscale``;
+        its default puts every keypoint a quarter pixel down and right).
     """
     from imageform._optional import require
 
     cv2 = require("cv2", what="imageform reconstruct's keypoints (SIFT)")
     n = as_int(max_features, "max_features", minimum=8, maximum=1_000_000)
+    cap = None if max_size is None else as_int(max_size, "max_size", minimum=64)
     a = np.asarray(image)
     if a.ndim == 3 and a.shape[-1] == 3:
         a = a @ np.array([0.299, 0.587, 0.114])
@@ -149,15 +169,27 @@ def detect_features(
         a = np.clip(a * (255.0 if a.dtype.kind == "f" and a.max() <= 1.0 else 1.0), 0, 255)
         a = np.round(a).astype(np.uint8)
     m = None if mask is None else _as_mask(mask, a.shape, "mask")
-    sift = cv2.SIFT_create(nfeatures=n)
+    h, w = a.shape
+    sx = sy = 1.0
+    if cap is not None and max(h, w) > cap:
+        ws, hs = max(round(w * cap / max(h, w)), 1), max(round(h * cap / max(h, w)), 1)
+        a = cv2.resize(a, (ws, hs), interpolation=cv2.INTER_AREA)
+        if m is not None:
+            m = cv2.resize(m, (ws, hs), interpolation=cv2.INTER_NEAREST)
+        sx, sy = w / ws, h / hs
+    # the doubled first octave must map pixel x to 2x: OpenCV's default resize maps it to
+    # 2x + 1/2 and every keypoint lands a quarter pixel off, down and right
+    sift = cv2.SIFT_create(nfeatures=n, enable_precise_upscale=True)
     kps, desc = sift.detectAndCompute(a, m)
     if desc is None or not kps:
         return Features(np.zeros((0, 2)), np.zeros((0, 128), np.float32), np.zeros(0), np.zeros(0))
     xy = np.array([k.pt for k in kps], np.float64)
+    if sx != 1.0 or sy != 1.0:
+        xy = (xy + 0.5) * np.array([sx, sy]) - 0.5
     return Features(
         xy,
         np.asarray(desc, np.float32),
-        np.array([k.size for k in kps], np.float64),
+        np.array([k.size for k in kps], np.float64) * (0.5 * (sx + sy)),
         np.array([k.angle for k in kps], np.float64),
     )
 
