@@ -262,3 +262,37 @@ def test_keypoints_are_where_the_blobs_are() -> None:
         f = detect_features(im.astype(np.uint8), max_features=8)
         near = np.linalg.norm(f.xy - [cx, cy], axis=1)
         assert near.min() < 0.05, (cx, cy, f.xy)
+
+
+def test_sixteen_bit_and_rgba_frames_have_the_keypoints_of_eight_bit_ones() -> None:
+    # a 16-bit PNG or TIFF (uint16 over 0..65535) is the same picture as its 8-bit copy:
+    # clipped at 255 it was white and had no keypoint
+    from imageform.geometry import detect_features
+
+    K = np.array([[300.0, 0, 199.5], [0, 300.0, 149.5], [0, 0, 1]])
+    frames, _ = sfm_scenes.sequence(K, 2, (400, 300))
+    im = np.asarray(frames[0], np.uint8)
+    ref = detect_features(im)
+    assert len(ref) > 100
+    for other in (
+        im.astype(np.uint16) * 257,
+        np.concatenate([im, np.full(im.shape[:2] + (1,), 255, np.uint8)], axis=-1),
+    ):
+        f = detect_features(other)  # grey levels may round the other way: a few differ
+        m = match_features(ref.descriptors, f.descriptors)
+        assert len(m) > 0.9 * len(ref)
+        assert np.median(np.linalg.norm(f.xy[m[:, 1]] - ref.xy[m[:, 0]], axis=1)) < 0.01
+    with pytest.raises(InvalidInputError, match="numbers"):
+        detect_features(im.astype(str))
+
+
+def test_sixteen_bit_frames_reconstruct_with_their_colours() -> None:
+    K = np.array([[300.0, 0, 199.5], [0, 300.0, 149.5], [0, 0, 1]])
+    frames, _ = sfm_scenes.sequence(K, 3, (400, 300))
+    ref = reconstruct_sequence(frames, K, window=2)
+    wide = reconstruct_sequence([np.asarray(f, np.uint16) * 257 for f in frames], K, window=2)
+    assert ref.registered.sum() >= 2
+    assert np.array_equal(wide.registered, ref.registered)
+    assert abs(len(wide.points) - len(ref.points)) < 0.1 * len(ref.points)
+    # colours of a 16-bit frame are its 8-bit ones, not wrapped modulo 256
+    assert abs(float(np.median(wide.colors)) - float(np.median(ref.colors))) < 2

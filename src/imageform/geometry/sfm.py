@@ -114,6 +114,22 @@ def _as_mask(mask: object, shape: tuple[int, ...], name: str) -> NDArray[np.uint
     return np.where(m > 0, 255, 0).astype(np.uint8)
 
 
+def _as_uint8(values: ArrayLike, dtype: np.dtype, image: ArrayLike) -> NDArray[np.uint8]:
+    """Return ``values`` of an image of type ``dtype`` as uint8.
+
+    Integers other than uint8 (a 16-bit PNG or TIFF) span their type's range; floats are in
+    [0, 1] when ``image`` has none beyond 1, else in [0, 255].
+    """
+    v = np.asarray(values, np.float64)
+    if dtype == np.uint8:
+        gain = 1.0
+    elif dtype.kind in "ui":
+        gain = 255.0 / float(np.iinfo(dtype).max)
+    else:
+        gain = 255.0 if dtype.kind == "f" and np.max(image) <= 1.0 else 1.0
+    return np.round(np.clip(v * gain, 0, 255)).astype(np.uint8)
+
+
 def detect_features(
     image: ArrayLike,
     *,
@@ -135,8 +151,10 @@ def detect_features(
 
     Parameters
     ----------
-    image : array_like (H, W) or (H, W, 3)
-        uint8 (or floats in [0, 1]) grey or RGB.
+    image : array_like (H, W), (H, W, 3) or (H, W, 4)
+        Grey, RGB or RGBA (the alpha ignored): uint8, other integers over their type's
+        range (uint16: 0 to 65535, as a 16-bit PNG or TIFF), or floats in [0, 1] (floats
+        beyond 1: in [0, 255]).
     max_features : int
         Keep the strongest this many.
     mask : array_like (H, W), optional
@@ -159,15 +177,17 @@ def detect_features(
     n = as_int(max_features, "max_features", minimum=8, maximum=1_000_000)
     cap = None if max_size is None else as_int(max_size, "max_size", minimum=64)
     a = np.asarray(image)
-    if a.ndim == 3 and a.shape[-1] == 3:
-        a = a @ np.array([0.299, 0.587, 0.114])
+    dtype = a.dtype
+    if dtype.kind in "uif" and a.ndim == 3 and a.shape[-1] in (3, 4):
+        a = a[..., :3] @ np.array([0.299, 0.587, 0.114])
     elif a.ndim == 3 and a.shape[-1] == 1:
         a = a[..., 0]
-    if a.ndim != 2 or a.size == 0:
-        raise InvalidInputError(f"expected image as (H, W) or (H, W, 3), got {describe(image)}")
+    if a.ndim != 2 or a.size == 0 or dtype.kind not in "uif":
+        raise InvalidInputError(
+            f"expected image as (H, W), (H, W, 3) or (H, W, 4) numbers, got {describe(image)}"
+        )
     if a.dtype != np.uint8:
-        a = np.clip(a * (255.0 if a.dtype.kind == "f" and a.max() <= 1.0 else 1.0), 0, 255)
-        a = np.round(a).astype(np.uint8)
+        a = _as_uint8(a, dtype, a)
     m = None if mask is None else _as_mask(mask, a.shape, "mask")
     h, w = a.shape
     sx = sy = 1.0
@@ -1284,6 +1304,6 @@ def reconstruct_sequence(
         xy = np.round(feats[f].xy[o_kp[first[sel]]]).astype(np.int64)
         x = np.clip(xy[:, 0], 0, im.shape[1] - 1)
         y = np.clip(xy[:, 1], 0, im.shape[0] - 1)
-        v = im[y, x]
+        v = _as_uint8(im[y, x], im.dtype, im)
         colors[sel] = v[:, :3] if v.ndim == 2 else v[:, None]
     return Reconstruction(Rs, ts, registered, Pout, colors, length, rms, notes, residuals)
