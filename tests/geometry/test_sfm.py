@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from imageform.errors import InvalidInputError
+from imageform.errors import DegenerateConfigurationError, InvalidInputError
 from imageform.geometry import bundle_adjust, match_features, reconstruct_sequence
 from imageform.geometry.rotations import rvec_to_matrix
 from tests import sfm_scenes
@@ -296,3 +296,19 @@ def test_sixteen_bit_frames_reconstruct_with_their_colours() -> None:
     assert abs(len(wide.points) - len(ref.points)) < 0.1 * len(ref.points)
     # colours of a 16-bit frame are its 8-bit ones, not wrapped modulo 256
     assert abs(float(np.median(wide.colors)) - float(np.median(ref.colors))) < 2
+
+
+def test_a_pan_is_said_to_be_one() -> None:
+    # a camera turned about its centre: no parallax, no reconstruction; the error says why
+    import cv2
+
+    rng = np.random.default_rng(5)
+    tex = cv2.GaussianBlur(rng.random((480, 640)).astype(np.float32), (0, 0), 1.5)
+    tex = np.round((tex - tex.min()) / np.ptp(tex) * 255).astype(np.uint8)
+    K = np.array([[500.0, 0, 319.5], [0, 500.0, 239.5], [0, 0, 1]])
+    frames = []
+    for i in range(3):
+        R = np.asarray(rvec_to_matrix([0.01 * i, np.radians(4.0 * i), 0.0]))
+        frames.append(cv2.warpPerspective(tex, K @ R @ np.linalg.inv(K), (640, 480)))
+    with pytest.raises(DegenerateConfigurationError, match="fit one homography: the camera turned"):
+        reconstruct_sequence(frames, K, window=2)

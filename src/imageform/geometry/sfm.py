@@ -807,6 +807,39 @@ def _build_tracks(
     return out, np.bincount(track)
 
 
+def _homography_hint(
+    pair_info: dict[tuple[int, int], tuple[int, float, NDArray[np.int64]]],
+    ideal: list[F64],
+    pair: tuple[int, int],
+    threshold_px: float,
+    rng: int,
+) -> str:
+    """Say whether the best pair's matches fit one homography: a pan, or one plane.
+
+    Two views related by a homography (a camera turned about its centre, or a plane) are
+    the planar or panoramic case of COLMAP's two-view geometry: 80 % of the essential
+    matrix's inliers within the same error of one homography (Schönberger & Frahm 2016).
+    """
+    from imageform.geometry.robust import find_homography
+
+    a, b = pair
+    m = pair_info[pair][2]
+    try:
+        res = find_homography(
+            ideal[a][m[:, 0]], ideal[b][m[:, 1]], threshold=2.0 * threshold_px, rng=rng
+        )
+        share = float(np.mean(res.inliers))
+    except (DegenerateConfigurationError, InvalidInputError):
+        share = 0.0
+    if share < 0.8:
+        return ""
+    return (
+        f"{share:.0%} of the matches of frames {a} and {b} fit one homography: the camera "
+        "turned about its centre without moving (a pan) or moved too little, or the scene is "
+        "one plane; "
+    )
+
+
 def reconstruct_sequence(
     images: Sequence[ArrayLike],
     K: ArrayLike,
@@ -1219,8 +1252,11 @@ def reconstruct_sequence(
         notes.append(f"frames {a} and {b}: {made} points triangulated (30 needed to start)")
         i0 = j0 = -1
     if i0 < 0:
+        why = "; ".join(notes[-3:])
+        if cands:
+            why = _homography_hint(pair_info, ideal, max(cands)[1], threshold_px, rng) + why
         raise DegenerateConfigurationError(
-            "no pair of frames triangulates 30 points to start from: " + "; ".join(notes[-3:])
+            "no pair of frames triangulates 30 points to start from: " + why
         )
     last_ba = 2
     # register the others: the frame that sees the most points first
