@@ -312,3 +312,40 @@ def test_a_pan_is_said_to_be_one() -> None:
         frames.append(cv2.warpPerspective(tex, K @ R @ np.linalg.inv(K), (640, 480)))
     with pytest.raises(DegenerateConfigurationError, match="fit one homography: the camera turned"):
         reconstruct_sequence(frames, K, window=2)
+
+
+def test_real_street_photographs_against_opensfm() -> None:
+    """Three iPhone photographs of a street (OpenSfM's Berlin set, tests/data/sfm/README.md):
+    every view registered, the relative rotations within a degree of OpenSfM's own
+    reconstruction, the baseline's direction within 2 degrees and its length ratio within
+    3 %."""
+    import json
+
+    import cv2
+
+    from imageform.geometry import BrownConrady
+
+    folder = Path(__file__).resolve().parents[1] / "data" / "sfm" / "berlin"
+    ref = json.loads((folder / "reference.json").read_text())
+    cam = next(iter(ref["cameras"].values()))
+    names = sorted(ref["shots"])
+    images = [cv2.imread(str(folder / n))[..., ::-1] for n in names]
+    h, w = images[0].shape[:2]
+    f = cam["focal"] * max(w, h)
+    K = np.array([[f, 0, (w - 1) / 2], [0, f, (h - 1) / 2], [0, 0, 1]])
+    rec = reconstruct_sequence(images, K, BrownConrady(k1=cam["k1"], k2=cam["k2"]), window=2)
+    assert rec.registered.all() and len(rec.points) > 300
+    assert np.nanmax(rec.rms_px) < 0.6
+    R = [np.asarray(rvec_to_matrix(ref["shots"][n]["rotation"])) for n in names]
+    C = np.array(
+        [-Ri.T @ np.asarray(ref["shots"][n]["translation"]) for Ri, n in zip(R, names, strict=True)]
+    )
+    Ce = np.array([-Ri.T @ ti for Ri, ti in zip(rec.R, rec.t, strict=True)])
+    for i, j in [(0, 1), (0, 2), (1, 2)]:
+        dR = (rec.R[j] @ rec.R[i].T).T @ (R[j] @ R[i].T)
+        assert np.degrees(np.arccos(np.clip((np.trace(dR) - 1) / 2, -1, 1))) < 1.0
+    d, dt = rec.R[0] @ (Ce[2] - Ce[0]), R[0] @ (C[2] - C[0])
+    cos = d @ dt / np.linalg.norm(d) / np.linalg.norm(dt)
+    assert np.degrees(np.arccos(min(cos, 1.0))) < 2.0
+    ratio = np.linalg.norm(Ce[1] - Ce[0]) / np.linalg.norm(Ce[2] - Ce[0])
+    assert abs(ratio / (np.linalg.norm(C[1] - C[0]) / np.linalg.norm(C[2] - C[0])) - 1) < 0.03
