@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from imageform.errors import InvalidInputError
+from imageform.errors import DegenerateConfigurationError, InvalidInputError
 from imageform.geometry import bundle_adjust, match_features, reconstruct_sequence
 from imageform.geometry.rotations import rvec_to_matrix
 from tests import sfm_scenes
@@ -207,3 +207,145 @@ def test_real_chessboard_views(shared_data: Path) -> None:
     assert np.all(rotation_errors(rec.R, np.asarray(scene["R"])) < 1.5)
     first = int(np.flatnonzero(rec.registered)[0])
     np.testing.assert_allclose(rec.R[first], np.eye(3), atol=1e-12)
+
+
+def test_large_image_features_are_found_reduced_and_mapped_back() -> None:
+    # SIFT doubles its input first: a 24 Mpx photograph would cost it ~5 GB and a minute.
+    # An image larger than max_size is reduced; its keypoints come back in full-image
+    # pixels, so a known sub-pixel shift between two such images is measured as it is.
+    import cv2
+
+    from imageform.geometry import detect_features
+
+    rng = np.random.default_rng(3)
+    small = cv2.GaussianBlur(rng.random((300, 400)).astype(np.float32), (0, 0), 2.0)
+    big = cv2.resize(small, (1600, 1200), interpolation=cv2.INTER_CUBIC)
+    big = np.clip((big - big.min()) / np.ptp(big) * 255, 0, 255).astype(np.uint8)
+    dx, dy = 6.3, -2.7
+    moved = cv2.warpAffine(
+        big, np.array([[1.0, 0, dx], [0, 1, dy]]), (1600, 1200), flags=cv2.INTER_CUBIC
+    )
+    f1 = detect_features(big, max_size=800, max_features=800)
+    f2 = detect_features(moved, max_size=800, max_features=800)
+    assert len(f1) > 100
+    # SIFT saw 800 x 600 px: every keypoint is at least ~2 full-image pixels in size
+    assert f1.scale.min() > 2.0 * 1.6
+    m = match_features(f1.descriptors, f2.descriptors)
+    d = f2.xy[m[:, 1]] - f1.xy[m[:, 0]]
+    inside = (f1.xy[m[:, 0]] > 20).all(1) & (f1.xy[m[:, 0]] < [1580, 1180]).all(1)
+    assert inside.sum() > 50
+    assert np.allclose(np.median(d[inside], axis=0), [dx, dy], atol=0.1)
+    # and where the full image's own keypoints are (pixel centre to pixel centre)
+    full = detect_features(big, max_size=None, max_features=4000)
+    m = match_features(f1.descriptors, full.descriptors)
+    assert len(m) > 50
+    assert np.allclose(np.median(full.xy[m[:, 1]] - f1.xy[m[:, 0]], axis=0), 0.0, atol=0.15)
+    # the mask is reduced with the image
+    mask = np.zeros((1200, 1600), bool)
+    mask[:, :800] = True
+    fm = detect_features(big, max_size=800, mask=mask)
+    assert len(fm) > 0 and fm.xy[:, 0].max() < 800 + 4
+    # max_size=None: the full image, as before
+    assert detect_features(big[:200, :200], max_size=None).xy.shape[1] == 2
+    with pytest.raises(InvalidInputError, match="max_size"):
+        detect_features(big, max_size=10)
+
+
+def test_keypoints_are_where_the_blobs_are() -> None:
+    # a Gaussian blob's SIFT keypoint is at its centre: OpenCV's default upscaling of the
+    # first octave put it a quarter pixel down and right
+    from imageform.geometry import detect_features
+
+    ys, xs = np.mgrid[0:200, 0:240].astype(float)
+    for cx, cy, sigma in [(100.0, 80.0, 3.0), (120.3, 90.7, 3.0), (111.6, 95.2, 6.0)]:
+        im = 255 * np.exp(-((xs - cx) ** 2 + (ys - cy) ** 2) / (2 * sigma**2))
+        f = detect_features(im.astype(np.uint8), max_features=8)
+        near = np.linalg.norm(f.xy - [cx, cy], axis=1)
+        assert near.min() < 0.05, (cx, cy, f.xy)
+
+
+def test_sixteen_bit_and_rgba_frames_have_the_keypoints_of_eight_bit_ones() -> None:
+    # a 16-bit PNG or TIFF (uint16 over 0..65535) is the same picture as its 8-bit copy:
+    # clipped at 255 it was white and had no keypoint
+    from imageform.geometry import detect_features
+
+    K = np.array([[300.0, 0, 199.5], [0, 300.0, 149.5], [0, 0, 1]])
+    frames, _ = sfm_scenes.sequence(K, 2, (400, 300))
+    im = np.asarray(frames[0], np.uint8)
+    ref = detect_features(im)
+    assert len(ref) > 100
+    for other in (
+        im.astype(np.uint16) * 257,
+        np.concatenate([im, np.full(im.shape[:2] + (1,), 255, np.uint8)], axis=-1),
+    ):
+        f = detect_features(other)  # grey levels may round the other way: a few differ
+        m = match_features(ref.descriptors, f.descriptors)
+        assert len(m) > 0.9 * len(ref)
+        assert np.median(np.linalg.norm(f.xy[m[:, 1]] - ref.xy[m[:, 0]], axis=1)) < 0.01
+    with pytest.raises(InvalidInputError, match="numbers"):
+        detect_features(im.astype(str))
+
+
+def test_sixteen_bit_frames_reconstruct_with_their_colours() -> None:
+    K = np.array([[300.0, 0, 199.5], [0, 300.0, 149.5], [0, 0, 1]])
+    frames, _ = sfm_scenes.sequence(K, 3, (400, 300))
+    ref = reconstruct_sequence(frames, K, window=2)
+    wide = reconstruct_sequence([np.asarray(f, np.uint16) * 257 for f in frames], K, window=2)
+    assert ref.registered.sum() >= 2
+    assert np.array_equal(wide.registered, ref.registered)
+    assert abs(len(wide.points) - len(ref.points)) < 0.1 * len(ref.points)
+    # colours of a 16-bit frame are its 8-bit ones, not wrapped modulo 256
+    assert abs(float(np.median(wide.colors)) - float(np.median(ref.colors))) < 2
+
+
+def test_a_pan_is_said_to_be_one() -> None:
+    # a camera turned about its centre: no parallax, no reconstruction; the error says why
+    import cv2
+
+    rng = np.random.default_rng(5)
+    tex = cv2.GaussianBlur(rng.random((480, 640)).astype(np.float32), (0, 0), 1.5)
+    tex = np.round((tex - tex.min()) / np.ptp(tex) * 255).astype(np.uint8)
+    K = np.array([[500.0, 0, 319.5], [0, 500.0, 239.5], [0, 0, 1]])
+    frames = []
+    for i in range(3):
+        R = np.asarray(rvec_to_matrix([0.01 * i, np.radians(4.0 * i), 0.0]))
+        frames.append(cv2.warpPerspective(tex, K @ R @ np.linalg.inv(K), (640, 480)))
+    with pytest.raises(DegenerateConfigurationError, match="fit one homography: the camera turned"):
+        reconstruct_sequence(frames, K, window=2)
+
+
+def test_real_street_photographs_against_opensfm() -> None:
+    """Three iPhone photographs of a street (OpenSfM's Berlin set, tests/data/sfm/README.md):
+    every view registered, the relative rotations within a degree of OpenSfM's own
+    reconstruction, the baseline's direction within 2 degrees and its length ratio within
+    3 %."""
+    import json
+
+    import cv2
+
+    from imageform.geometry import BrownConrady
+
+    folder = Path(__file__).resolve().parents[1] / "data" / "sfm" / "berlin"
+    ref = json.loads((folder / "reference.json").read_text())
+    cam = next(iter(ref["cameras"].values()))
+    names = sorted(ref["shots"])
+    images = [cv2.imread(str(folder / n))[..., ::-1] for n in names]
+    h, w = images[0].shape[:2]
+    f = cam["focal"] * max(w, h)
+    K = np.array([[f, 0, (w - 1) / 2], [0, f, (h - 1) / 2], [0, 0, 1]])
+    rec = reconstruct_sequence(images, K, BrownConrady(k1=cam["k1"], k2=cam["k2"]), window=2)
+    assert rec.registered.all() and len(rec.points) > 300
+    assert np.nanmax(rec.rms_px) < 0.6
+    R = [np.asarray(rvec_to_matrix(ref["shots"][n]["rotation"])) for n in names]
+    C = np.array(
+        [-Ri.T @ np.asarray(ref["shots"][n]["translation"]) for Ri, n in zip(R, names, strict=True)]
+    )
+    Ce = np.array([-Ri.T @ ti for Ri, ti in zip(rec.R, rec.t, strict=True)])
+    for i, j in [(0, 1), (0, 2), (1, 2)]:
+        dR = (rec.R[j] @ rec.R[i].T).T @ (R[j] @ R[i].T)
+        assert np.degrees(np.arccos(np.clip((np.trace(dR) - 1) / 2, -1, 1))) < 1.0
+    d, dt = rec.R[0] @ (Ce[2] - Ce[0]), R[0] @ (C[2] - C[0])
+    cos = d @ dt / np.linalg.norm(d) / np.linalg.norm(dt)
+    assert np.degrees(np.arccos(min(cos, 1.0))) < 2.0
+    ratio = np.linalg.norm(Ce[1] - Ce[0]) / np.linalg.norm(Ce[2] - Ce[0])
+    assert abs(ratio / (np.linalg.norm(C[1] - C[0]) / np.linalg.norm(C[2] - C[0])) - 1) < 0.03

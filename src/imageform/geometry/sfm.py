@@ -114,50 +114,102 @@ def _as_mask(mask: object, shape: tuple[int, ...], name: str) -> NDArray[np.uint
     return np.where(m > 0, 255, 0).astype(np.uint8)
 
 
+def _as_uint8(values: ArrayLike, dtype: np.dtype, image: ArrayLike) -> NDArray[np.uint8]:
+    """Return ``values`` of an image of type ``dtype`` as uint8.
+
+    Integers other than uint8 (a 16-bit PNG or TIFF) span their type's range; floats are in
+    [0, 1] when ``image`` has none beyond 1, else in [0, 255].
+    """
+    v = np.asarray(values, np.float64)
+    if dtype == np.uint8:
+        gain = 1.0
+    elif dtype.kind in "ui":
+        gain = 255.0 / float(np.iinfo(dtype).max)
+    else:
+        gain = 255.0 if dtype.kind == "f" and np.max(image) <= 1.0 else 1.0
+    return np.round(np.clip(v * gain, 0, 255)).astype(np.uint8)
+
+
 def detect_features(
-    image: ArrayLike, *, max_features: int = 4000, mask: ArrayLike | None = None
+    image: ArrayLike,
+    *,
+    max_features: int = 4000,
+    mask: ArrayLike | None = None,
+    max_size: int | None = 3200,
 ) -> Features:
-    """Detect SIFT keypoints and descriptors (OpenCV's SIFT, the ``reconstruct`` extra).
+    r"""Detect SIFT keypoints and descriptors (OpenCV's SIFT, the ``reconstruct`` extra).
+
+    An image whose longer side exceeds ``max_size`` is first reduced by area averaging to
+    that size, by the factor :math:`s = \text{max\_size} / \max(H, W)`, and the keypoints
+    are mapped back to the full image, pixel centres to pixel centres:
+    :math:`x = (x_s + \tfrac12)/s - \tfrac12`, sizes divided by :math:`s`. SIFT doubles
+    its input before the first octave (Lowe 2004, IJCV 60(2), sec. 3.3), so a 24 Mpx
+    photograph costs it about 5 GB and a minute, while the keypoints that survive the
+    ``max_features`` cut are the coarse, stable ones a reduced image keeps as well; COLMAP
+    caps its SIFT input the same way (``SiftExtraction.max_image_size``, 3200;
+    Schönberger & Frahm 2016) and OpenSfM too (``feature_process_size``).
 
     Parameters
     ----------
-    image : array_like (H, W) or (H, W, 3)
-        uint8 (or floats in [0, 1]) grey or RGB.
+    image : array_like (H, W), (H, W, 3) or (H, W, 4)
+        Grey, RGB or RGBA (the alpha ignored): uint8, other integers over their type's
+        range (uint16: 0 to 65535, as a 16-bit PNG or TIFF), or floats in [0, 1] (floats
+        beyond 1: in [0, 255]).
     max_features : int
         Keep the strongest this many.
     mask : array_like (H, W), optional
         Where keypoints may be (nonzero or True): the scene that moves with the camera's
         world, without e.g. an endoscope's dark vignetted corners or a static background
         behind a moving object. None: everywhere.
+    max_size : int or None
+        Longest side, pixels, SIFT sees (at least 64); None: the full image always.
 
     Returns
     -------
     Features
+        Positions and sizes in the full image's pixels. The first octave is the image
+        doubled with pixel ``x`` at ``2x`` exactly (OpenCV's ``enable_precise_upscale``;
+        its default puts every keypoint a quarter pixel down and right).
     """
     from imageform._optional import require
 
     cv2 = require("cv2", what="imageform reconstruct's keypoints (SIFT)")
     n = as_int(max_features, "max_features", minimum=8, maximum=1_000_000)
+    cap = None if max_size is None else as_int(max_size, "max_size", minimum=64)
     a = np.asarray(image)
-    if a.ndim == 3 and a.shape[-1] == 3:
-        a = a @ np.array([0.299, 0.587, 0.114])
+    dtype = a.dtype
+    if dtype.kind in "uif" and a.ndim == 3 and a.shape[-1] in (3, 4):
+        a = a[..., :3] @ np.array([0.299, 0.587, 0.114])
     elif a.ndim == 3 and a.shape[-1] == 1:
         a = a[..., 0]
-    if a.ndim != 2 or a.size == 0:
-        raise InvalidInputError(f"expected image as (H, W) or (H, W, 3), got {describe(image)}")
+    if a.ndim != 2 or a.size == 0 or dtype.kind not in "uif":
+        raise InvalidInputError(
+            f"expected image as (H, W), (H, W, 3) or (H, W, 4) numbers, got {describe(image)}"
+        )
     if a.dtype != np.uint8:
-        a = np.clip(a * (255.0 if a.dtype.kind == "f" and a.max() <= 1.0 else 1.0), 0, 255)
-        a = np.round(a).astype(np.uint8)
+        a = _as_uint8(a, dtype, a)
     m = None if mask is None else _as_mask(mask, a.shape, "mask")
-    sift = cv2.SIFT_create(nfeatures=n)
+    h, w = a.shape
+    sx = sy = 1.0
+    if cap is not None and max(h, w) > cap:
+        ws, hs = max(round(w * cap / max(h, w)), 1), max(round(h * cap / max(h, w)), 1)
+        a = cv2.resize(a, (ws, hs), interpolation=cv2.INTER_AREA)
+        if m is not None:
+            m = cv2.resize(m, (ws, hs), interpolation=cv2.INTER_NEAREST)
+        sx, sy = w / ws, h / hs
+    # the doubled first octave must map pixel x to 2x: OpenCV's default resize maps it to
+    # 2x + 1/2 and every keypoint lands a quarter pixel off, down and right
+    sift = cv2.SIFT_create(nfeatures=n, enable_precise_upscale=True)
     kps, desc = sift.detectAndCompute(a, m)
     if desc is None or not kps:
         return Features(np.zeros((0, 2)), np.zeros((0, 128), np.float32), np.zeros(0), np.zeros(0))
     xy = np.array([k.pt for k in kps], np.float64)
+    if sx != 1.0 or sy != 1.0:
+        xy = (xy + 0.5) * np.array([sx, sy]) - 0.5
     return Features(
         xy,
         np.asarray(desc, np.float32),
-        np.array([k.size for k in kps], np.float64),
+        np.array([k.size for k in kps], np.float64) * (0.5 * (sx + sy)),
         np.array([k.angle for k in kps], np.float64),
     )
 
@@ -755,6 +807,39 @@ def _build_tracks(
     return out, np.bincount(track)
 
 
+def _homography_hint(
+    pair_info: dict[tuple[int, int], tuple[int, float, NDArray[np.int64]]],
+    ideal: list[F64],
+    pair: tuple[int, int],
+    threshold_px: float,
+    rng: int,
+) -> str:
+    """Say whether the best pair's matches fit one homography: a pan, or one plane.
+
+    Two views related by a homography (a camera turned about its centre, or a plane) are
+    the planar or panoramic case of COLMAP's two-view geometry: 80 % of the essential
+    matrix's inliers within the same error of one homography (Schönberger & Frahm 2016).
+    """
+    from imageform.geometry.robust import find_homography
+
+    a, b = pair
+    m = pair_info[pair][2]
+    try:
+        res = find_homography(
+            ideal[a][m[:, 0]], ideal[b][m[:, 1]], threshold=2.0 * threshold_px, rng=rng
+        )
+        share = float(np.mean(res.inliers))
+    except (DegenerateConfigurationError, InvalidInputError):
+        share = 0.0
+    if share < 0.8:
+        return ""
+    return (
+        f"{share:.0%} of the matches of frames {a} and {b} fit one homography: the camera "
+        "turned about its centre without moving (a pan) or moved too little, or the scene is "
+        "one plane; "
+    )
+
+
 def reconstruct_sequence(
     images: Sequence[ArrayLike],
     K: ArrayLike,
@@ -1167,8 +1252,11 @@ def reconstruct_sequence(
         notes.append(f"frames {a} and {b}: {made} points triangulated (30 needed to start)")
         i0 = j0 = -1
     if i0 < 0:
+        why = "; ".join(notes[-3:])
+        if cands:
+            why = _homography_hint(pair_info, ideal, max(cands)[1], threshold_px, rng) + why
         raise DegenerateConfigurationError(
-            "no pair of frames triangulates 30 points to start from: " + "; ".join(notes[-3:])
+            "no pair of frames triangulates 30 points to start from: " + why
         )
     last_ba = 2
     # register the others: the frame that sees the most points first
@@ -1252,6 +1340,6 @@ def reconstruct_sequence(
         xy = np.round(feats[f].xy[o_kp[first[sel]]]).astype(np.int64)
         x = np.clip(xy[:, 0], 0, im.shape[1] - 1)
         y = np.clip(xy[:, 1], 0, im.shape[0] - 1)
-        v = im[y, x]
+        v = _as_uint8(im[y, x], im.dtype, im)
         colors[sel] = v[:, :3] if v.ndim == 2 else v[:, None]
     return Reconstruction(Rs, ts, registered, Pout, colors, length, rms, notes, residuals)
