@@ -226,3 +226,17 @@ def test_chart_reads_a_photograph_in_the_space_it_declares(
     wrong = np.asarray(delta_e_ciede2000(means("srgb"), means("as-srgb")))
     assert same.max() < 0.1 and wrong.mean() > 2.0, (same.max(), wrong.mean())
     assert json.loads((tmp_path / "p3.json").read_text())["image_space"] == "display_p3"
+
+
+def test_info_of_a_raw_file(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    pytest.importorskip("rawpy")
+    from imageform.io import write_dng
+
+    mosaic = (np.random.default_rng(4).random((16, 24)) * 3000 + 200).astype(np.uint16)
+    dng = write_dng(tmp_path / "a.dng", mosaic, black_level=64, white_level=4095,
+                    color_matrix=np.eye(3), cfa_pattern="GRBG")  # fmt: skip
+    assert main(["info", str(dng), "--json"]) == 0
+    got = json.loads(capsys.readouterr().out)
+    assert (got["format"], got["width"], got["height"], got["cfa_pattern"]) == (
+        "raw", 24, 16, "GRBG")  # fmt: skip
+    assert got["white_level"] == 4095 and np.allclose(got["black_level"], 64)
