@@ -39,10 +39,6 @@ __all__ = [
 
 #: The profile connection space's white, ICC.1:2010 sec. 7.2.16 (D50, s15Fixed16 values).
 _D50 = np.array([0.9642, 1.0, 0.8249])
-#: Bradford cone response (Lam 1985; ICC.1:2010 annex E).
-_BRADFORD = np.array(
-    [[0.8951, 0.2664, -0.1614], [-0.7502, 1.7135, 0.0367], [0.0389, -0.0685, 1.0296]]
-)
 #: Profiles imageform embeds, per space (io/data/icc/README.md: source and licence).
 _SHIPPED = {
     "srgb": "sRGB-v2-magic.icc",
@@ -239,9 +235,10 @@ def parse_icc(data: bytes) -> IccProfile:
         chad = np.array([_s15(data[off + 8 + 4 * k : off + 12 + 4 * k]) for k in range(9)])
         back = np.linalg.inv(chad.reshape(3, 3))
     elif b"wtpt" in tags and version[0] < 4:
-        w = xyz(b"wtpt")  # version 2: the native white, adapted to D50 (Bradford)
-        lms_w, lms_d50 = _BRADFORD @ w, _BRADFORD @ _D50
-        back = np.linalg.inv(_BRADFORD) @ np.diag(lms_w / lms_d50) @ _BRADFORD
+        from imageform.color import chromatic_adaptation_matrix
+
+        # version 2: wtpt is the native white, the colorants adapted to D50 by Bradford
+        back = np.asarray(chromatic_adaptation_matrix(_D50, xyz(b"wtpt"), "bradford"))
     else:
         back = np.eye(3)
     native = back @ M
@@ -324,6 +321,12 @@ def icc_profile(space: str) -> bytes:
 @cache
 def _read_shipped(file: str) -> bytes:
     return (resources.files("imageform.io") / "data" / "icc" / file).read_bytes()
+
+
+def declared_by_profile(data: bytes) -> DeclaredColorSpace:
+    """Name what an embedded ICC profile ``data`` declares: its space and description."""
+    prof = parse_icc(data)
+    return DeclaredColorSpace(identify_icc(prof), "icc", prof.description)
 
 
 def encoded_space(space: str, transfer: str) -> str | None:

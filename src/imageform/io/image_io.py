@@ -252,9 +252,7 @@ def image_info(path: str | Path) -> ImageInfo:
         except Exception as exc:
             raise InvalidInputError(f"cannot read {p}: {_one_line(exc)}") from None
     if fmt == "heif":
-        f = _open_heif(p)
-        w, h = f.size
-        return ImageInfo(w, h, len(f.mode.split(";")[0]), _heif_dtype(f), "heif")
+        return _heif_info(_open_heif(p))
     from PIL import Image, UnidentifiedImageError
 
     try:
@@ -536,15 +534,17 @@ def _open_heif(p: Path) -> Any:
         raise InvalidInputError(f"cannot read {p}: {_one_line(exc)}") from None
 
 
-def _heif_dtype(f: Any) -> str:
-    return "uint16" if int(f.info.get("bit_depth", 8) or 8) > 8 else "uint8"
+def _heif_info(f: Any) -> ImageInfo:
+    """Read the header of an open HEIF file: 10 and 12 bits come as uint16."""
+    w, h = f.size
+    deep = int(f.info.get("bit_depth", 8) or 8) > 8
+    return ImageInfo(w, h, len(f.mode.split(";")[0]), "uint16" if deep else "uint8", "heif")
 
 
 def _read_heif(p: Path, limit: int) -> np.ndarray:
     """Decode a HEIF image: uint8, or uint16 (10/12 bits scaled to 16) for deeper ones."""
     f = _open_heif(p)
-    w, h = f.size
-    _check_pixels(p, ImageInfo(w, h, len(f.mode.split(";")[0]), _heif_dtype(f), "heif"), limit)
+    _check_pixels(p, _heif_info(f), limit)
     try:
         arr = np.asarray(f)
     except (OSError, ValueError, RuntimeError) as exc:
@@ -804,7 +804,7 @@ def image_color_space(path: str | Path) -> DeclaredColorSpace:
     >>> image_color_space(p)
     DeclaredColorSpace(name='display_p3', source='icc', description='sP3')
     """
-    from imageform.io.icc import DeclaredColorSpace, identify_icc, parse_icc
+    from imageform.io.icc import DeclaredColorSpace, declared_by_profile
 
     fmt = image_format(path)
     p = Path(path)
@@ -815,8 +815,7 @@ def image_color_space(path: str | Path) -> DeclaredColorSpace:
     if fmt == "heif":
         info = _open_heif(p).info
         if info.get("icc_profile"):
-            prof = parse_icc(info["icc_profile"])
-            return DeclaredColorSpace(identify_icc(prof), "icc", prof.description)
+            return declared_by_profile(info["icc_profile"])
         return _nclx_space(info.get("nclx_profile"))
     if fmt == "tiff":  # tifffile: Pillow opens no float or 16-bit RGB TIFF
         try:
@@ -825,10 +824,7 @@ def image_color_space(path: str | Path) -> DeclaredColorSpace:
                 icc_tiff = bytes(tag.value) if tag is not None else b""
         except Exception as exc:
             raise InvalidInputError(f"cannot read {p}: {_one_line(exc)}") from None
-        if icc_tiff:
-            prof = parse_icc(icc_tiff)
-            return DeclaredColorSpace(identify_icc(prof), "icc", prof.description)
-        return DeclaredColorSpace(None, "none", "")
+        return declared_by_profile(icc_tiff) if icc_tiff else DeclaredColorSpace(None, "none", "")
     from PIL import Image, UnidentifiedImageError
 
     try:
@@ -841,8 +837,7 @@ def image_color_space(path: str | Path) -> DeclaredColorSpace:
     except (OSError, UnidentifiedImageError, ValueError, SyntaxError) as err:
         raise InvalidInputError(f"cannot read {p}: {err}") from None
     if icc:
-        prof = parse_icc(icc)
-        return DeclaredColorSpace(identify_icc(prof), "icc", prof.description)
+        return declared_by_profile(icc)
     if srgb_chunk:
         return DeclaredColorSpace("srgb", "png-srgb", "")
     if cs == 1:
