@@ -253,20 +253,25 @@ def lattice_problem_numpy(grid: NDArray[np.float64], max_bend: float = 0.3) -> s
     return None
 
 
-def cell_means(gray: NDArray[np.floating], grid: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Mean brightness of each cell ``(R-1, C-1)`` sampled around the cell centre."""
+def _sample(gray: NDArray[np.floating], pts: NDArray[np.float64]) -> NDArray[np.floating]:
+    """Bilinear samples of ``gray`` at the (u, v) points ``pts`` (..., 2), edges repeated."""
     from scipy import ndimage
 
+    vals = ndimage.map_coordinates(
+        gray, [pts[..., 1].ravel(), pts[..., 0].ravel()], order=1, mode="nearest"
+    )
+    return np.asarray(vals).reshape(pts.shape[:-1])
+
+
+def cell_means(gray: NDArray[np.floating], grid: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Mean brightness of each cell ``(R-1, C-1)`` sampled around the cell centre."""
     centre = 0.25 * (grid[:-1, :-1] + grid[:-1, 1:] + grid[1:, :-1] + grid[1:, 1:])
     # samples a third of the way from the centre to each corner
     pts = [centre]
     for corner in (grid[:-1, :-1], grid[:-1, 1:], grid[1:, :-1], grid[1:, 1:]):
         pts.append(centre + (corner - centre) / 3.0)
     p = np.stack(pts)  # (5, R-1, C-1, 2)
-    vals = ndimage.map_coordinates(
-        gray, [p[..., 1].ravel(), p[..., 0].ravel()], order=1, mode="nearest"
-    ).reshape(p.shape[:-1])
-    return vals.mean(axis=0)
+    return _sample(gray, p).mean(axis=0)
 
 
 def cell_parity_ok(means: NDArray[np.float64]) -> bool:
@@ -304,8 +309,6 @@ def board_continues(
     A board cut within a quarter cell of row ``k + 1`` cannot be told from a smaller one.
     ``own``: the grid's :func:`cell_means`, when the caller has them.
     """
-    from scipy import ndimage
-
     h, w = gray.shape
     if own is None:
         own = cell_means(gray, grid)
@@ -332,10 +335,7 @@ def board_continues(
         inside = np.all((pts >= 0) & (pts <= [w - 1, h - 1]), axis=(0, 2))
         if inside.sum() < 3:
             continue
-        vals = ndimage.map_coordinates(
-            gray, [pts[..., 1].ravel(), pts[..., 0].ravel()], order=1, mode="nearest"
-        ).reshape(pts.shape[:-1])
-        m = vals.mean(axis=0)
+        m = _sample(gray, pts).mean(axis=0)
         agree = ((m - mid) * parity * sense > contrast / 3.0) & inside
         runs = _runs(agree, 3)  # cells start..stop-1, their corners start..stop
         if not runs:
@@ -375,8 +375,6 @@ def _saddles(
     background, two adjacent quadrants are equal or a diagonal pair is not. A point whose
     quadrants are not all inside the image is not one.
     """
-    from scipy import ndimage
-
     h, w = gray.shape
     along = np.gradient(points, axis=0)  # (N, 2) one cell along the row
     q = []
@@ -385,10 +383,7 @@ def _saddles(
         q.append(points[None] + np.array([0.25, 0.4])[:, None, None] * d[None])  # (2, N, 2)
     pts = np.stack(q)  # (4, 2, N, 2)
     inside = np.all((pts >= 0) & (pts <= [w - 1, h - 1]), axis=(0, 1, 3))
-    vals = ndimage.map_coordinates(
-        gray, [pts[..., 1].ravel(), pts[..., 0].ravel()], order=1, mode="nearest"
-    ).reshape(pts.shape[:-1])
-    pp, mm, pm, mp = vals.mean(axis=1)  # (N,) each
+    pp, mm, pm, mp = _sample(gray, pts).mean(axis=1)  # (N,) each
     across = np.min(np.abs(np.stack([pp - pm, pp - mp, mm - pm, mm - mp])), axis=0)
     diagonal = np.maximum(np.abs(pp - mm), np.abs(pm - mp))
     return (across - diagonal > contrast / 4.0) & inside
