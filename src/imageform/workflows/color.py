@@ -583,7 +583,9 @@ def info(run: Run, opts: InfoOptions, *, out: None, image: Path) -> Result:
     from imageform.workflows._characterize_inputs import _RAW_SUFFIXES
 
     if Path(image).suffix.lower() in _RAW_SUFFIXES:
-        return _raw_info(image)
+        from imageform.workflows.raw import raw_info
+
+        return raw_info(image)
     head = image_info(image)
     declared = image_color_space(image)
     orientation = _exif_orientation(image, head.format)
@@ -611,45 +613,6 @@ def info(run: Run, opts: InfoOptions, *, out: None, image: Path) -> Result:
     ]
     if orientation not in (None, 1):
         text.append(f"EXIF orientation {orientation}: read_image turns it upright")
-    return Result(summary, tuple(text))
-
-
-def _raw_info(path: Path) -> Result:
-    """``imageform info`` of a raw file: its sensor layout and levels (``read_raw``)."""
-    import numpy as np
-
-    from imageform.io import read_raw
-
-    raw = read_raw(path)
-    h, w = raw.mosaic.shape[:2]
-    if raw.cfa_pattern:
-        kind = f"{raw.cfa_pattern} mosaic"
-    elif raw.metadata.get("xtrans"):
-        kind = "X-Trans (demosaiced by LibRaw's linear interpolation)"
-    else:
-        kind = "monochrome" if raw.monochrome else "linear (demosaiced)"
-    summary = {
-        "image": path,
-        "format": "raw",
-        "width": w,
-        "height": h,
-        "layout": kind,
-        "cfa_pattern": raw.cfa_pattern,
-        "black_level": np.asarray(raw.black_level).tolist(),
-        "white_level": raw.white_level,
-        "camera_model": raw.metadata.get("camera_model"),
-        "calibration_illuminant": raw.calibration_illuminant,
-        "as_shot_white_balance": None
-        if raw.white_balance is None
-        else np.asarray(raw.white_balance).tolist(),
-        "orientation": raw.orientation,
-    }
-    model = summary["camera_model"] or "camera not named"
-    text = [
-        f"{path}: raw ({model}), {w} x {h} photosites, {kind}",
-        f"black level {np.round(np.asarray(raw.black_level), 1).tolist()}, white level "
-        f"{raw.white_level:g}; develop with imageform develop",
-    ]
     return Result(summary, tuple(text))
 
 

@@ -57,6 +57,49 @@ class DevelopOptions(ImageOut, Options):
     )
 
 
+def raw_layout(img: Any) -> str:
+    """Describe a :class:`~imageform.io.RawImage`'s sensor layout in words."""
+    if img.cfa_pattern:
+        return f"{img.cfa_pattern} mosaic"
+    if img.metadata.get("xtrans"):
+        return "X-Trans mosaic (demosaiced by LibRaw's linear interpolation)"
+    return "monochrome raw" if img.monochrome else "linear (demosaiced) raw"
+
+
+def raw_info(path: Path) -> Result:
+    """``imageform info`` of a raw file: its sensor layout and levels (``read_raw``)."""
+    import numpy as np
+
+    from imageform.io import read_raw
+
+    raw = read_raw(path)
+    h, w = raw.mosaic.shape[:2]
+    kind = raw_layout(raw)
+    summary = {
+        "image": path,
+        "format": "raw",
+        "width": w,
+        "height": h,
+        "layout": kind,
+        "cfa_pattern": raw.cfa_pattern,
+        "black_level": np.asarray(raw.black_level).tolist(),
+        "white_level": raw.white_level,
+        "camera_model": raw.metadata.get("camera_model"),
+        "calibration_illuminant": raw.calibration_illuminant,
+        "as_shot_white_balance": None
+        if raw.white_balance is None
+        else np.asarray(raw.white_balance).tolist(),
+        "orientation": raw.orientation,
+    }
+    model = summary["camera_model"] or "camera not named"
+    text = [
+        f"{path}: raw ({model}), {w} x {h} photosites, {kind}",
+        f"black level {np.round(np.asarray(raw.black_level), 1).tolist()}, white level "
+        f"{raw.white_level:g}; develop with imageform develop",
+    ]
+    return Result(summary, tuple(text))
+
+
 def develop(run: Run, opts: DevelopOptions, *, raw: Path, out: Path) -> Result:
     """Read the raw file, develop it step by step, write the image."""
     import numpy as np
@@ -96,12 +139,7 @@ def develop(run: Run, opts: DevelopOptions, *, raw: Path, out: Path) -> Result:
     write(run, out, image, opts, like=np.zeros(1, np.uint16), color_space=tag)
     h, w = img.mosaic.shape[:2]
     oh, ow = image.shape[:2]
-    if img.cfa_pattern:
-        kind = f"{img.cfa_pattern} mosaic"
-    elif img.metadata.get("xtrans"):
-        kind = "X-Trans mosaic (demosaiced by LibRaw's linear interpolation)"
-    else:
-        kind = "monochrome raw" if img.monochrome else "linear (demosaiced) raw"
+    kind = raw_layout(img)
     summary: dict[str, Any] = {
         "raw": raw,
         "out": out,
