@@ -144,3 +144,13 @@ def test_from_must_be_an_rgb_space(tmp_path: Path, capsys, command: str) -> None
     assert main([command, srgb, "-o", str(out), *extra, "--from", "lab"]) == 2
     assert "give an RGB space" in capsys.readouterr().err
     assert not out.exists()
+
+
+def test_batch_segment_reads_each_files_space(tmp_path: Path, capsys) -> None:  # type: ignore[no-untyped-def]
+    _pair(tmp_path, _tissue(noise=0.01), "t")  # t.png and t-p3.png
+    args = ["--h", "300:345", "--s", "0.335:1", "--v", "0.5:1", "--min-area", "0"]
+    out = tmp_path / "masks"
+    assert main(["batch", "segment", str(tmp_path / "t*.png"), "-o", str(out), *args]) == 0
+    capsys.readouterr()
+    a, b = (np.asarray(read_image(out / n)) > 0 for n in ("t.png", "t-p3.png"))
+    assert a.mean() > 0.2 and np.mean(a != b) < 0.002

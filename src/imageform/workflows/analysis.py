@@ -545,6 +545,7 @@ WORKFLOWS = (
         (_IMG,),
         Output("Mask to write (PNG, 0 / 255)."),
         suffixes=(".png", ".tif", ".tiff", ".npy"),
+        batch=True,
         group="analysis",
     ),
     Workflow(

@@ -680,7 +680,7 @@ WORKFLOWS = (
     ),
     Workflow(
         "cvd",
-        "Simulate colour-vision deficiency (protan, deutan, tritan) on an sRGB image.",
+        "Simulate colour-vision deficiency (protan, deutan, tritan) on an RGB image.",
         "imageform.workflows.color:cvd",
         CvdOptions,
         (_IMG,),
