@@ -37,7 +37,14 @@ from numpy.typing import NDArray
 
 from imageform._kernels.jit import njit
 
-__all__ = ["cell_means", "component_quads", "dark_components"]
+__all__ = [
+    "block_means",
+    "box_integral",
+    "box_integral_roi",
+    "cell_means",
+    "component_quads",
+    "dark_components",
+]
 
 
 @njit(nogil=True, error_model="numpy")
@@ -70,45 +77,74 @@ def box_integral(g: NDArray[np.float64], pad: int) -> NDArray[np.float64]:  # pr
 
     ``out[i, j]`` is the sum of the padded image's rows ``< i`` and columns ``< j``, so any
     window of the padded image sums with four look-ups; shape ``(H + 2 pad + 1,
-    W + 2 pad + 1)``.
+    W + 2 pad + 1)``. :func:`box_integral_roi` of the whole image.
     """
     hgt, wid = g.shape
-    cols = np.empty(wid + 2 * pad, dtype=np.int64)
-    for k in range(wid + 2 * pad):
-        cols[k] = _reflect(k - pad, wid)
-    rows = hgt + 2 * pad
-    width = wid + 2 * pad
+    return box_integral_roi(g, pad, 0, hgt, 0, wid)
+
+
+@njit(nogil=True, error_model="numpy")
+def box_integral_roi(
+    g: NDArray[np.float64], pad: int, r0: int, r1: int, c0: int, c1: int
+) -> NDArray[np.float64]:  # pragma: no cover - compiled
+    """Return the integral image of rows ``r0 - pad .. r1 + pad - 1`` and columns ``c0 - pad ..
+    c1 + pad - 1`` of ``g`` with its edges reflected (SciPy's ``mode="reflect"``).
+
+    The region ``g[r0:r1, c0:c1]``'s every ``(2 pad + 1)``-wide window sums from it as from
+    :func:`box_integral` of the whole image (the same additions in the same order: equal to
+    the last bit), so :func:`dark_components` of the region gives the whole image's
+    threshold there; shape ``(r1 - r0 + 2 pad + 1, c1 - c0 + 2 pad + 1)``.
+    """
+    hgt, wid = g.shape
+    width = c1 - c0 + 2 * pad
+    rows = r1 - r0 + 2 * pad
+    cols = np.empty(width, dtype=np.int64)
+    for k in range(width):
+        cols[k] = _reflect(c0 + k - pad, wid)
     out = np.empty((rows + 1, width + 1))  # every entry written below
     out[0, :] = 0.0
     out[:, 0] = 0.0
-    # each row's running sums first (four rows at a time: four independent chains of
-    # additions keep the processor busy), then the sums down the columns
-    for i0 in range(0, rows, 4):
-        n = min(4, rows - i0)
-        r0 = g[_reflect(i0 - pad, hgt)]
-        r1 = g[_reflect(min(i0 + 1, rows - 1) - pad, hgt)]
-        r2 = g[_reflect(min(i0 + 2, rows - 1) - pad, hgt)]
-        r3 = g[_reflect(min(i0 + 3, rows - 1) - pad, hgt)]
-        o0 = out[i0 + 1]
-        o1 = out[min(i0 + 2, rows)]
-        o2 = out[min(i0 + 3, rows)]
-        o3 = out[min(i0 + 4, rows)]
-        s0 = s1 = s2 = s3 = 0.0
+    # each row's running sum added to the row above as it goes (one pass); two rows at a
+    # time: two independent chains of additions keep the processor busy
+    for i0 in range(0, rows, 2):
+        two = i0 + 1 < rows
+        ra = g[_reflect(r0 + i0 - pad, hgt)]
+        rb = g[_reflect(r0 + min(i0 + 1, rows - 1) - pad, hgt)]
+        above = out[i0]
+        oa = out[i0 + 1]
+        ob = out[min(i0 + 2, rows)]
+        sa = 0.0
+        sb = 0.0
         for j in range(width):
             c = cols[j]
-            s0 += r0[c]
-            s1 += r1[c]
-            s2 += r2[c]
-            s3 += r3[c]
-            o0[j + 1] = s0
-            o1[j + 1] = s1 if n > 1 else o1[j + 1]
-            o2[j + 1] = s2 if n > 2 else o2[j + 1]
-            o3[j + 1] = s3 if n > 3 else o3[j + 1]
-    for i in range(1, rows + 1):
-        above = out[i - 1]
-        here = out[i]
-        for j in range(1, width + 1):
-            here[j] += above[j]
+            sa += ra[c]
+            sb += rb[c]
+            va = sa + above[j + 1]
+            oa[j + 1] = va
+            if two:
+                ob[j + 1] = sb + va
+    return out
+
+
+@njit(nogil=True, error_model="numpy")
+def block_means(g: NDArray[np.float64], f: int) -> NDArray[np.float64]:  # pragma: no cover
+    """Return ``g`` reduced ``f`` times: the mean of each ``f x f`` block (a last partial row or
+    column of blocks dropped), OpenCV's ``resize(INTER_AREA)`` at an integer factor."""
+    hgt, wid = g.shape
+    h2, w2 = hgt // f, wid // f
+    out = np.zeros((h2, w2))
+    inv = 1.0 / (f * f)
+    for i in range(h2):
+        o = out[i]
+        for di in range(f):
+            row = g[i * f + di]
+            for j in range(w2):
+                acc = 0.0
+                for dj in range(f):
+                    acc += row[j * f + dj]
+                o[j] += acc
+        for j in range(w2):
+            o[j] *= inv
     return out
 
 

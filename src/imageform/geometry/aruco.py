@@ -566,8 +566,11 @@ def detect_aruco_markers(
     )
     from imageform._backend import use_numba
 
-    search = _search_numba if use_numba(g) else _search_numpy
-    found = search(g, sorted(wins, reverse=True), d, rotated, min_side, max_bits, border_rate)
+    args = (g, sorted(wins, reverse=True), d, rotated, min_side, max_bits, border_rate)
+    if use_numba(g):
+        found = _search_numba(*args, reduce=_reduction(g.shape, min_side))
+    else:
+        found = _search_numpy(*args)
     ids = np.array(sorted(found), dtype=np.int64)
     corners = np.array([found[i][1] for i in ids], dtype=np.float64).reshape(-1, 4, 2)
     hamming = np.array([found[i][2] for i in ids], dtype=np.int64)
@@ -579,6 +582,71 @@ def detect_aruco_markers(
 _Found = dict[int, tuple[float, NDArray[np.float64], int]]
 
 
+def _reduction(shape: tuple[int, int], min_side: float) -> int:
+    """The factor (1, 2, 4, ...) the candidates of an image of ``shape`` are looked for at.
+
+    OpenCV's detector looks for markers of a perimeter at least 3 % of the image's larger
+    side (``minMarkerPerimeterRate``), a side of 0.75 %: on a large image such a marker is
+    still ``min_side`` pixels wide on the image reduced ``f`` times, so the thresholds and
+    components are found there (``f²`` times fewer pixels) and each candidate's quad fitted
+    again at full resolution (OpenCV's ``aprilTagQuadDecimate`` and Aruco3's
+    ``minMarkerLengthRatioOriginalImg`` do the same). 1 up to a larger side of
+    ``267 min_side`` (1600 px at the default 6 px).
+    """
+    f = 1
+    while 0.0075 * max(shape) / (2 * f) >= min_side:
+        f *= 2
+    return f
+
+
+def _components(
+    g: NDArray[np.float64],
+    integral: NDArray[np.float64],
+    pad: int,
+    win: int,
+    cap: list[int],
+) -> tuple[NDArray[np.int64], NDArray[np.int64], NDArray[np.int64], NDArray[np.int64]]:
+    """:func:`imageform._kernels.aruco.dark_components` of ``g``, asked again with more room
+    (``cap[0]`` runs, kept for the next window) when its runs overflow."""
+    from imageform._kernels.aruco import dark_components
+
+    hgt, wid = g.shape
+    # room for the runs (a photograph has about one run in 20 pixels, a row at most (W + 1) / 2)
+    # and the labels (half the runs: photographs start one in 3 to 10): four times more when a
+    # window needs it
+    worst = hgt * ((wid + 1) // 2) + 2
+    if cap[0] <= 0:
+        cap[0] = min(worst, hgt * wid // 16 + 4096)
+    while True:
+        c = min(cap[0], worst)
+        cap_labels = c if c == worst else c // 2 + 1024
+        out = dark_components(g, integral, pad, int(win), 0.02, c, cap_labels)
+        if len(out[3]) or c == worst:
+            return out
+        cap[0] = min(worst, 4 * c)
+
+
+def _sized(
+    stats: NDArray[np.int64], min_side: float, max_area: float, boxes: NDArray[np.float64]
+) -> NDArray[np.int64]:
+    """The components of ``stats`` large enough for a marker and not decoded already."""
+    if len(stats) < 2:
+        return np.zeros(0, dtype=np.int64)
+    area = stats[:, 0]
+    hh = stats[:, 2] - stats[:, 1] + 1
+    ww = stats[:, 4] - stats[:, 3] + 1
+    ok = (area >= min_side * min_side * 0.5) & (hh >= min_side * 0.7) & (ww >= min_side * 0.7)
+    ok &= hh * ww <= max_area
+    ok[0] = False
+    cand = np.nonzero(ok)[0]
+    if len(cand) == 0:
+        return cand
+    cy = 0.5 * (stats[cand, 1] + stats[cand, 2] + 1)
+    cx = 0.5 * (stats[cand, 3] + stats[cand, 4] + 1)
+    size = (hh * ww)[cand].astype(np.float64)
+    return cand[~_inside(boxes, cx, cy, size)]  # decoded already, at a larger window
+
+
 def _search_numba(
     g: NDArray[np.float64],
     wins: list[int],
@@ -587,72 +655,74 @@ def _search_numba(
     min_side: float,
     max_bits: int,
     border_rate: float,
+    reduce: int = 1,
 ) -> _Found:
     """Find the markers of ``g`` at each threshold window (largest first): numba kernels.
 
     The same steps and verdicts as :func:`_search_numpy` (tested): the per-pixel and
     per-component work in ``imageform._kernels.aruco``, the decoding batched over the
-    candidates of a window.
+    candidates of a window. With ``reduce`` > 1 (:func:`_reduction`) the components are
+    found on ``g`` reduced that many times (block means, the window reduced too) and each
+    one with a quad there is found again in its neighbourhood at full resolution, with the
+    full image's threshold (:func:`imageform._kernels.aruco.box_integral_roi`): the markers
+    and corners are those of the full-resolution search, less the markers under ``reduce``
+    times ``min_side``.
     """
-    from imageform._kernels.aruco import (
-        box_integral,
-        cell_means,
-        component_quads,
-        dark_components,
-    )
+    from imageform._kernels.aruco import block_means, box_integral, component_quads
 
     hgt, wid = g.shape
     cells = d.marker_size + 2
     found: _Found = {}
-    min_area = min_side * min_side * 0.5
     max_area = 0.9 * hgt * wid
     boxes = np.zeros((0, 5))
-    pad = max(wins) // 2
-    integral = box_integral(g, pad)  # every window's local means from one table
-    # room for the runs (a photograph has about one run in 20 pixels, a row at most (W + 1) / 2)
-    # and the labels (half the runs: photographs start one in 3 to 10): four times more when a
-    # window needs it
-    worst = hgt * ((wid + 1) // 2) + 2
-    cap = min(worst, hgt * wid // 16 + 4096)
-    for win in wins:
-        while True:
-            cap_labels = cap if cap == worst else cap // 2 + 1024
-            runs, comp_runs, comp_ptr, stats = dark_components(
-                g, integral, pad, int(win), 0.02, cap, cap_labels
+    cap = [0]
+    if reduce > 1:
+        small = block_means(g, reduce)
+        wins_small = [max(3, (w // reduce) | 1) for w in wins]
+        pad = max(wins_small) // 2
+        integral = box_integral(small, pad)
+        full: list[NDArray[np.float64]] = []
+        spent = [0]
+    else:
+        pad = max(wins) // 2
+        integral = box_integral(g, pad)  # every window's local means from one table
+    for w_i, win in enumerate(wins):
+        if reduce == 1:
+            runs, comp_runs, comp_ptr, stats = _components(g, integral, pad, win, cap)
+            cand = _sized(stats, min_side, max_area, boxes)
+            if len(cand) == 0:
+                continue
+            quads, status = component_quads(
+                runs, comp_runs, comp_ptr, cand, stats, float(min_side)
             )
-            if len(stats) or cap == worst:
-                break
-            cap = min(worst, 4 * cap)
-        if len(stats) < 2:
+            good = np.nonzero(status == 0)[0]
+            quads, st = quads[good], stats[cand[good]]
+        else:
+            quads, st = _search_reduced(
+                g,
+                small,
+                integral,
+                pad,
+                wins_small[w_i],
+                win,
+                reduce,
+                cap,
+                full,
+                spent,
+                max(wins) // 2,
+                min_side,
+                max_area,
+                boxes,
+                (d, rotated, max_bits, border_rate),
+            )
+        if len(quads) == 0:
             continue
-        area = stats[:, 0]
-        hh = stats[:, 2] - stats[:, 1] + 1
-        ww = stats[:, 4] - stats[:, 3] + 1
-        ok = (area >= min_area) & (hh >= min_side * 0.7) & (ww >= min_side * 0.7)
-        ok &= hh * ww <= max_area
-        ok[0] = False
-        cand = np.nonzero(ok)[0]
-        if len(cand) == 0:
-            continue
-        cy = 0.5 * (stats[cand, 1] + stats[cand, 2] + 1)
-        cx = 0.5 * (stats[cand, 3] + stats[cand, 4] + 1)
-        size = (hh * ww)[cand].astype(np.float64)
-        cand = cand[~_inside(boxes, cx, cy, size)]  # decoded already, at a larger window
-        if len(cand) == 0:
-            continue
-        quads, status = component_quads(runs, comp_runs, comp_ptr, cand, stats, float(min_side))
-        good = np.nonzero(status == 0)[0]
-        if len(good) == 0:
-            continue
-        decoded = _decode(
-            cell_means(g, quads[good], cells), d, cells, rotated, max_bits, border_rate
-        )
-        st = stats[cand].tolist()
+        decoded = _decode(_cell_means(g, quads, cells), d, cells, rotated, max_bits, border_rate)
         new_boxes: list[tuple[float, float, float, float, float]] = []
-        for j, hit in zip(good.tolist(), decoded, strict=True):
+        for quad, row, hit in zip(quads, st.tolist(), decoded, strict=True):
             if hit is None:
                 continue
-            _, top, bottom, left, right = st[j]
+            _, top, bottom, left, right = row
             s_cx, s_cy = 0.5 * (left + right + 1), 0.5 * (top + bottom + 1)
             s_size = float((bottom - top + 1) * (right - left + 1))
             if any(
@@ -661,7 +731,6 @@ def _search_numba(
             ):
                 continue  # decoded already, at this window (an earlier component)
             mid, rot, dist, contrast = hit
-            quad = quads[j]
             # observed == np.rot90(code, rot) (counter-clockwise turns): the printed top-left
             # corner is the observed corner (4 - rot) % 4
             ordered = quad[[(0 - rot) % 4, (1 - rot) % 4, (2 - rot) % 4, (3 - rot) % 4]]
@@ -676,6 +745,122 @@ def _search_numba(
         if new_boxes:
             boxes = np.vstack([boxes, np.array(new_boxes)])
     return found
+
+
+def _cell_means(
+    g: NDArray[np.float64], quads: NDArray[np.float64], cells: int
+) -> NDArray[np.float64]:
+    """:func:`imageform._kernels.aruco.cell_means` of ``quads`` (m, 4, 2) in ``g``."""
+    from imageform._kernels.aruco import cell_means
+
+    return np.asarray(cell_means(g, np.ascontiguousarray(quads), cells))
+
+
+def _search_reduced(
+    g: NDArray[np.float64],
+    small: NDArray[np.float64],
+    integral: NDArray[np.float64],
+    pad: int,
+    win_small: int,
+    win: int,
+    f: int,
+    cap: list[int],
+    full: list[NDArray[np.float64]],
+    spent: list[int],
+    pad_full: int,
+    min_side: float,
+    max_area: float,
+    boxes: NDArray[np.float64],
+    read: tuple[ArucoDictionary, NDArray[np.uint8], int, float],
+) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
+    """The full-resolution quads (m, 4, 2) and component stats (m, 5) of one window, from the
+    candidates of ``small`` (``g`` reduced ``f`` times).
+
+    Each component of ``small`` with a quad gives a region of ``g`` (its box scaled up, with
+    a margin of a quarter of its side and ``2 f`` pixels), thresholded there with the full
+    image's local means (the region's own
+    :func:`imageform._kernels.aruco.box_integral_roi` while the regions' tables, ``spent[0]``
+    entries so far, cost less than half the image's; then ``full[0]``, the image's
+    :func:`imageform._kernels.aruco.box_integral` padded by ``pad_full``); its components that do not touch the
+    region's border (a component that does may go on outside it) are the full image's own,
+    and go through the same size checks and quad fitting as in the full-resolution search.
+    A quad of ``small`` at least 3 pixels a cell whose cells read nowhere near a marker
+    there (contrast under half the decoder's, or not a code within one more bit, with a
+    border 15 % more wrong) is not looked at again.
+    """
+    from imageform._kernels.aruco import box_integral, box_integral_roi, component_quads
+
+    hgt, wid = g.shape
+    runs, comp_runs, comp_ptr, stats = _components(small, integral, pad, win_small, cap)
+    cand = _sized(stats, min_side, max_area / (f * f), boxes / np.array([f, f, f, f, f * f]))
+    empty = np.zeros((0, 4, 2)), np.zeros((0, 5), dtype=np.int64)
+    if len(cand) == 0:
+        return empty
+    quads, status = component_quads(runs, comp_runs, comp_ptr, cand, stats, float(min_side))
+    good = np.nonzero(status == 0)[0]
+    if len(good) == 0:
+        return empty
+    d, rotated, max_bits, border_rate = read
+    cells = d.marker_size + 2
+    q = quads[good]
+    e = np.roll(q, -1, axis=1) - q
+    shortest = np.hypot(e[..., 0], e[..., 1]).min(axis=1)
+    hits = _decode(
+        _cell_means(small, q, cells), d, cells, rotated, max_bits + 1, border_rate + 0.15, 0.04
+    )
+    good = good[[h is not None or s < 3 * cells for h, s in zip(hits, shortest, strict=True)]]
+    if len(good) == 0:
+        return empty
+    out_q: list[NDArray[np.float64]] = []
+    out_s: list[NDArray[np.int64]] = []
+    regions: list[tuple[int, int, int, int]] = []
+    for j in good.tolist():
+        _, top, bottom, left, right = stats[cand[j]].tolist()
+        side = f * max(bottom - top + 1, right - left + 1)
+        m = side // 4 + 2 * f
+        r0, r1 = max(0, top * f - m), min(hgt, (bottom + 1) * f + m)
+        c0, c1 = max(0, left * f - m), min(wid, (right + 1) * f + m)
+        if any(a0 <= r0 and r1 <= a1 and b0 <= c0 and c1 <= b1 for a0, a1, b0, b1 in regions):
+            continue  # inside a region searched already
+        regions.append((r0, r1, c0, c1))
+        # the region's own table while the regions' tables cost less than the image's
+        half = win // 2
+        cost = (r1 - r0 + 2 * half) * (c1 - c0 + 2 * half)
+        if not full and spent[0] + cost <= (hgt + 2 * pad_full) * (wid + 2 * pad_full) // 2:
+            spent[0] += cost
+            view, p_view = box_integral_roi(g, half, r0, r1, c0, c1), half
+        else:
+            if not full:
+                full.append(box_integral(g, pad_full))
+            # the region's rows and columns: padded row r0 - pad_full is the image's row r0
+            view = full[0][r0 : r1 + 2 * pad_full + 1, c0 : c1 + 2 * pad_full + 1]
+            p_view = pad_full
+        sub = g[r0:r1, c0:c1]
+        runs_r, comp_runs_r, comp_ptr_r, st = _components(sub, view, p_view, win, [0])
+        if len(st) < 2:
+            continue
+        h_r, w_r = r1 - r0, c1 - c0
+        inner = (
+            ((st[:, 1] > 0) | (r0 == 0))
+            & ((st[:, 2] < h_r - 1) | (r1 == hgt))
+            & ((st[:, 3] > 0) | (c0 == 0))
+            & ((st[:, 4] < w_r - 1) | (c1 == wid))
+        )
+        st_full = st + np.array([0, r0, r0, c0, c0])
+        cand_r = _sized(st_full, min_side, max_area, boxes)
+        cand_r = cand_r[inner[cand_r]]
+        if len(cand_r) == 0:
+            continue
+        q_r, status_r = component_quads(
+            runs_r, comp_runs_r, comp_ptr_r, cand_r, st, float(min_side)
+        )
+        ok = np.nonzero(status_r == 0)[0]
+        if len(ok):
+            out_q.append(q_r[ok] + np.array([c0, r0], dtype=np.float64))
+            out_s.append(st_full[cand_r[ok]])
+    if not out_q:
+        return empty
+    return np.concatenate(out_q), np.concatenate(out_s)
 
 
 def _inside(
@@ -709,6 +894,7 @@ def _decode(
     rotated: NDArray[np.uint8],
     max_bits: int,
     border_rate: float,
+    min_contrast: float = 0.08,
 ) -> list[tuple[int, int, int, float] | None]:
     """Read the cells of several quads at once: ``(id, rotation, distance, contrast)`` or None.
 
@@ -739,7 +925,7 @@ def _decode(
     dmin = flat[rows, best]
     out: list[tuple[int, int, int, float] | None] = []
     for j in range(m):
-        if contrast[j] < 0.08 or bad[j] or dmin[j] > max_bits:
+        if contrast[j] < min_contrast or bad[j] or dmin[j] > max_bits:
             out.append(None)
             continue
         mid, rot = divmod(int(best[j]), 4)
