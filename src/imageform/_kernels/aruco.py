@@ -191,24 +191,33 @@ def dark_components(
     nr = 0
     prev_lo = 0  # the previous row's runs: prev_lo .. prev_hi - 1
     prev_hi = 0
-    dark = np.empty(wid + 1, dtype=np.bool_)
-    dark[wid] = False  # a sentinel ending the last run
+    # dark[1 + j]: pixel j dark (0 or 1), with a light pixel either side; flip[j]: whether
+    # the row changes between pixels j - 1 and j (a run starts at j or ended at j - 1), read
+    # eight at a time: rows are mostly without transitions
+    n_words = (wid + 8) // 8
+    dark = np.zeros(8 * n_words + 1, dtype=np.uint8)
+    flip = np.zeros(8 * n_words, dtype=np.uint8)
+    words = flip.view(np.uint64)
     trans = np.empty(wid + 2, dtype=np.int64)
     for i in range(hgt):
-        top = integral[i + lo]
-        bottom = integral[i + hi]
+        # the four corners of every window of the row as slices: the compiler vectorises
+        a = integral[i + hi, hi : hi + wid]
+        b = integral[i + lo, hi : hi + wid]
+        c = integral[i + hi, lo : lo + wid]
+        d = integral[i + lo, lo : lo + wid]
         gi = g[i]
-        for j in range(wid):  # branch-free: the compiler vectorises it
-            box = bottom[j + hi] - top[j + hi] - bottom[j + lo] + top[j + lo]
-            dark[j] = gi[j] < box * inv - offset
-        # the row's runs from its dark/light transitions (a branch-free compaction)
-        n_trans = 0
-        was = False
+        dk = dark[1 : wid + 1]
+        for j in range(wid):
+            dk[j] = np.uint8(gi[j] < (a[j] - b[j] - c[j] + d[j]) * inv - offset)
         for j in range(wid + 1):
-            now = dark[j]
-            trans[n_trans] = j
-            n_trans += now != was
-            was = now
+            flip[j] = dark[j] ^ dark[j + 1]
+        n_trans = 0
+        for w in range(n_words):
+            if words[w] != 0:
+                for j in range(8 * w, 8 * w + 8):
+                    if flip[j]:
+                        trans[n_trans] = j
+                        n_trans += 1
         if nr + n_trans // 2 > cap or n_prov + n_trans // 2 > cap_labels:
             empty = np.zeros(0, dtype=np.int64)
             return np.zeros((0, 3), dtype=np.int64), empty, empty, np.zeros((0, 5), np.int64)

@@ -37,10 +37,8 @@ from imageform._validate import as_int, as_real, describe
 from imageform.errors import InvalidInputError
 from imageform.geometry.aruco import (
     ArucoMarkers,
-    _apply_h,
     _bilinear,
     _gray01,
-    _homography,
     aruco_dictionary,
     aruco_marker_image,
     detect_aruco_markers,
@@ -329,67 +327,24 @@ def _corners(
     empty = CharucoCorners(np.zeros(0, np.int64), np.zeros((0, 2)), markers, board)
     if len(ids_m) == 0:
         return empty
-    cols, rows = board.squares
-    squares = board.marker_squares()
-    mpts = board.marker_points()[:, :, :2]
-    at_square = {(int(squares[i, 0]), int(squares[i, 1])): k for k, i in enumerate(ids_m)}
-    s = board.square_length
-    cand_ids, cand_xy, cand_hw, cand_scale, cand_hom = [], [], [], [], []
-    h_img, w_img = g.shape
-    for cid in range((cols - 1) * (rows - 1)):
-        r, c = divmod(cid, cols - 1)
-        # squares around corner (r, c): rows r-1 .. r+2, cols c-1 .. c+2
-        near = [
-            at_square[(rr, cc)]
-            for rr in range(r - 1, r + 3)
-            for cc in range(c - 1, c + 3)
-            if (rr, cc) in at_square
-        ]
-        adjacent = [
-            at_square[(rr, cc)] for rr in (r, r + 1) for cc in (c, c + 1) if (rr, cc) in at_square
-        ]
-        if len(near) < need or not adjacent:
-            continue
-        src = np.concatenate([mpts[ids_m[k]] for k in near])
-        dst = np.concatenate([corners_m[k] for k in near])
-        hom = _homography(src / s, dst)
-        board_xy = np.array([[(c + 1.0), (r + 1.0)]])
-        p = _apply_h(hom, board_xy)[0]
-        if not (np.all(np.isfinite(p)) and 2 <= p[0] <= w_img - 3 and 2 <= p[1] <= h_img - 3):
-            continue
-        # local scale: pixels per square, and the distance to the nearest marker corner
-        q = _apply_h(hom, board_xy + np.array([[0.5, 0.0], [0.0, 0.5]]))
-        scale = 2.0 * float(min(np.hypot(*(q[0] - p)), np.hypot(*(q[1] - p))))
-        d_marker = float(
-            np.min(np.hypot(*(np.concatenate([corners_m[k] for k in adjacent]) - p).T))
-        )
-        # the window stays clear of the markers' corners (0.6 d keeps a marker corner at
-        # distance d, on the diagonal, outside the square window)
-        hw = max(2, min(int(0.6 * d_marker), int(0.3 * scale), 25))
-        cand_ids.append(cid)
-        cand_xy.append(p)
-        cand_hw.append(hw)
-        cand_scale.append(scale)
-        cand_hom.append(hom)
-    if not cand_ids:
+    cand, homs, xy, hws, scales = _predicted(board, ids_m, corners_m, need, g.shape)
+    if len(cand) == 0:
         return empty
-    xy = np.asarray(cand_xy)
-    hws = np.asarray(cand_hw)
-    out_k, out_xy = [], []
+    ok = np.zeros(len(cand), dtype=bool)
+    found = np.zeros_like(xy)
     for hw in np.unique(hws):
         sel = np.nonzero(hws == hw)[0]
         # refine_corners without re-checking g (grey, finite, in [0, 1] already)
         ref = RefinedCorners(*refine(g, np.ascontiguousarray(xy[sel]), int(hw), int(hw), 40, 1e-4))
-        for j, k in enumerate(sel):
-            moved = float(np.hypot(*(ref.corners[j] - xy[k])))
-            if ref.status[j] in (0, 1) and moved <= shift * cand_scale[k] and moved < hw:
-                out_k.append(k)
-                out_xy.append(ref.corners[j])
-    if not out_k:
+        moved = np.hypot(*(ref.corners - xy[sel]).T)
+        ok[sel] = ((ref.status == 0) | (ref.status == 1)) & (moved <= shift * scales[sel])
+        ok[sel] &= moved < hw
+        found[sel] = ref.corners
+    ks = np.nonzero(ok)[0]
+    if len(ks) == 0:
         return empty
-    ks = np.asarray(out_k)
-    found = np.asarray(out_xy)
-    whole, resolved = _seen_whole(g, board, np.asarray(cand_ids)[ks], np.stack(cand_hom)[ks], found)
+    found = found[ks]
+    whole, resolved = _seen_whole(g, board, cand[ks], homs[ks], found)
     # a blurred saddle must give the same point through a window a pixel larger: where the
     # blur lets the markers' borders into the window the point depends on the window
     blurred = np.nonzero(whole & (resolved < _SHARP))[0]
@@ -399,17 +354,113 @@ def _corners(
             *refine(g, np.ascontiguousarray(found[sel]), int(hw) + 1, int(hw) + 1, 40, 1e-4)
         )
         whole[sel] &= np.hypot(*(alt.corners - found[sel]).T) <= _MAX_WINDOW_SHIFT
-    out_ids = [cand_ids[k] for k in ks[whole]]
-    out_xy = list(found[whole])
-    if not out_ids:
+    if not whole.any():
         return empty
-    order = np.argsort(out_ids)
-    return CharucoCorners(
-        np.asarray(out_ids, dtype=np.int64)[order],
-        np.asarray(out_xy, dtype=np.float64)[order],
-        markers,
-        board,
-    )
+    # the candidates are in id order already
+    return CharucoCorners(cand[ks[whole]], found[whole], markers, board)
+
+
+def _predicted(
+    board: CharucoBoard,
+    ids_m: NDArray[np.int64],
+    corners_m: NDArray[np.float64],
+    need: int,
+    shape: tuple[int, int],
+) -> tuple[
+    NDArray[np.int64],
+    NDArray[np.float64],
+    NDArray[np.float64],
+    NDArray[np.int64],
+    NDArray[np.float64],
+]:
+    """The corners predicted from the markers (board markers ``ids_m``, found at ``corners_m``).
+
+    Each inner corner ``(r, c)`` with at least ``need`` markers in the 4 x 4 squares around it
+    (rows ``r - 1 .. r + 2``, columns ``c - 1 .. c + 2``), one of them in the 2 x 2 squares
+    touching it, is mapped through the homography fitted to those markers' corners (DLT,
+    board in square units, all corners at once: one SVD of the stacked systems, a missing
+    marker's rows left zero, which changes no singular vector) and kept when at least 2 px
+    inside the image. Returns the corner ids (in order), the homographies (m, 3, 3), the
+    predicted pixels (m, 2), the refinement half-windows and the local scales (pixels per
+    square: twice the shorter of the half-square steps along x and y from the corner).
+    """
+    cols, rows = board.squares
+    h_img, w_img = shape
+    s = board.square_length
+    squares = board.marker_squares()
+    # the found markers on a grid of squares with a frame of one square (-1: none)
+    at = np.full((rows + 2, cols + 2), -1, dtype=np.int64)
+    at[squares[ids_m, 0] + 1, squares[ids_m, 1] + 1] = np.arange(len(ids_m))
+    r, c = np.divmod(np.arange((cols - 1) * (rows - 1)), cols - 1)
+    d4 = np.arange(-1, 3)
+    near = at[(r[:, None, None] + d4[None, :, None] + 1), (c[:, None, None] + d4[None, None, :] + 1)]
+    near = near.reshape(len(r), 16)  # row by row, as the squares around the corner
+    adjacent = near[:, [5, 6, 9, 10]]
+    keep = ((near >= 0).sum(1) >= need) & (adjacent >= 0).any(1)
+    cand = np.nonzero(keep)[0]
+    if len(cand) == 0:
+        z = np.zeros(0)
+        return cand, np.zeros((0, 3, 3)), np.zeros((0, 2)), z.astype(np.int64), z
+    near, adjacent = near[cand], adjacent[cand]
+    # at most 8 of the 16 squares hold markers: compact them (in order) into 8 slots
+    slot = np.argsort(near < 0, axis=1, kind="stable")[:, :8]
+    idx = np.take_along_axis(near, slot, 1)  # (m, 8), -1 past the corner's markers
+    there = idx >= 0
+    mpts = board.marker_points()[:, :, :2] / s
+    src = np.where(there[..., None, None], mpts[ids_m[idx]], 0.0).reshape(len(cand), 32, 2)
+    dst = np.where(there[..., None, None], corners_m[idx], 0.0).reshape(len(cand), 32, 2)
+    live = np.repeat(there, 4, axis=1).astype(np.float64)
+    x, y = src[..., 0], src[..., 1]
+    u, v = -dst[..., 0], -dst[..., 1]
+    one, zero = live, np.zeros_like(x)
+    # per point the rows (x y 1 0 0 0 -ux -uy -u) and (0 0 0 x y 1 -vx -vy -v), zero for a
+    # missing marker
+    ra = np.stack((x, y, one, zero, zero, zero, u * x, u * y, u * live), -1)
+    rb = np.stack((zero, zero, zero, x, y, one, v * x, v * y, v * live), -1)
+    a = np.stack((ra, rb), 2).reshape(len(cand), 64, 9)
+    _, _, vt = np.linalg.svd(a, full_matrices=False)
+    homs = vt[:, -1].reshape(-1, 3, 3)
+    h22 = homs[:, 2, 2]
+    scale_h = np.where(np.abs(h22) > 1e-15, h22, 1.0)
+    homs = homs / scale_h[:, None, None]
+    rr, cc = r[cand], c[cand]
+
+    def at_board(bx: NDArray[np.float64], by: NDArray[np.float64]) -> NDArray[np.float64]:
+        w = homs[:, 2, 0] * bx + homs[:, 2, 1] * by + homs[:, 2, 2]
+        return np.stack(
+            (
+                (homs[:, 0, 0] * bx + homs[:, 0, 1] * by + homs[:, 0, 2]) / w,
+                (homs[:, 1, 0] * bx + homs[:, 1, 1] * by + homs[:, 1, 2]) / w,
+            ),
+            -1,
+        )
+
+    with np.errstate(divide="ignore", invalid="ignore"):
+        p = at_board(cc + 1.0, rr + 1.0)
+        inside = (
+            np.isfinite(p).all(1)
+            & (p[:, 0] >= 2)
+            & (p[:, 0] <= w_img - 3)
+            & (p[:, 1] >= 2)
+            & (p[:, 1] <= h_img - 3)
+        )
+        # local scale: pixels per square, and the distance to the nearest marker corner
+        qx, qy = at_board(cc + 1.5, rr + 1.0), at_board(cc + 1.0, rr + 1.5)
+    scale = 2.0 * np.minimum(np.hypot(*(qx - p).T), np.hypot(*(qy - p).T))
+    adj = np.where((adjacent >= 0)[..., None, None], corners_m[adjacent], np.inf)
+    with np.errstate(invalid="ignore"):
+        d_marker = np.hypot(*(adj - p[:, None, None, :]).transpose(3, 0, 1, 2)).min((1, 2))
+    # the window stays clear of the markers' corners (0.6 d keeps a marker corner at
+    # distance d, on the diagonal, outside the square window)
+    with np.errstate(invalid="ignore"):
+        hw = np.maximum(
+            2,
+            np.minimum(
+                np.minimum(np.floor(0.6 * d_marker), np.floor(0.3 * np.nan_to_num(scale))), 25
+            ),
+        )
+    k = np.nonzero(inside)[0]
+    return cand[k], homs[k], p[k], hw[k].astype(np.int64), scale[k]
 
 
 def _printed(board: CharucoBoard, xy: NDArray[np.float64]) -> NDArray[np.float64]:
