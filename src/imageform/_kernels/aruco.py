@@ -80,12 +80,19 @@ def box_integral(g: NDArray[np.float64], pad: int) -> NDArray[np.float64]:  # pr
     W + 2 pad + 1)``. :func:`box_integral_roi` of the whole image.
     """
     hgt, wid = g.shape
-    return box_integral_roi(g, pad, 0, hgt, 0, wid)
+    out = np.empty((hgt + 2 * pad + 1, wid + 2 * pad + 1))
+    return box_integral_roi(g, pad, 0, hgt, 0, wid, out)
 
 
 @njit(nogil=True, error_model="numpy")
 def box_integral_roi(
-    g: NDArray[np.float64], pad: int, r0: int, r1: int, c0: int, c1: int
+    g: NDArray[np.float64],
+    pad: int,
+    r0: int,
+    r1: int,
+    c0: int,
+    c1: int,
+    out: NDArray[np.float64],
 ) -> NDArray[np.float64]:  # pragma: no cover - compiled
     """Return the integral image of rows ``r0 - pad .. r1 + pad - 1`` and columns ``c0 - pad ..
     c1 + pad - 1`` of ``g`` with its edges reflected (SciPy's ``mode="reflect"``).
@@ -93,7 +100,8 @@ def box_integral_roi(
     The region ``g[r0:r1, c0:c1]``'s every ``(2 pad + 1)``-wide window sums from it as from
     :func:`box_integral` of the whole image (the same additions in the same order: equal to
     the last bit), so :func:`dark_components` of the region gives the whole image's
-    threshold there; shape ``(r1 - r0 + 2 pad + 1, c1 - c0 + 2 pad + 1)``.
+    threshold there; written into ``out``, of shape ``(r1 - r0 + 2 pad + 1, c1 - c0 + 2 pad +
+    1)`` (a buffer the caller may reuse), and returned.
     """
     hgt, wid = g.shape
     width = c1 - c0 + 2 * pad
@@ -101,7 +109,6 @@ def box_integral_roi(
     cols = np.empty(width, dtype=np.int64)
     for k in range(width):
         cols[k] = _reflect(c0 + k - pad, wid)
-    out = np.empty((rows + 1, width + 1))  # every entry written below
     out[0, :] = 0.0
     out[:, 0] = 0.0
     # each row's running sum added to the row above as it goes (one pass); two rows at a
@@ -758,3 +765,52 @@ def cell_means(
                         )
                 out[c, ci * cells + cj] = acc / 9.0
     return out
+
+
+@njit(nogil=True, error_model="numpy")
+def sample_quadrants(
+    g: NDArray[np.float64],
+    homs: NDArray[np.float64],
+    corner: NDArray[np.float64],
+    dirs: NDArray[np.float64],
+    grid: NDArray[np.float64],
+) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:  # pragma: no cover - compiled
+    """Sample ``g`` at board points around ChArUco corners (``imageform.geometry.charuco``).
+
+    Corner ``i``'s points are ``corner[i] + dirs[i, k] * grid[t]`` (board units; two
+    quadrant directions ``k``, the ``P`` points of ``grid`` in each), mapped to pixels by
+    ``homs[i]``; returns the values ``(m, 2 P)`` (bilinear, edges clamped, as
+    ``geometry.aruco._bilinear``) and whether each point fell in the image (a point outside
+    is sampled at pixel (0, 0)).
+    """
+    hgt, wid = g.shape
+    m = homs.shape[0]
+    p = grid.shape[0]
+    vals = np.empty((m, 2 * p))
+    ok = np.empty((m, 2 * p), dtype=np.bool_)
+    for i in range(m):
+        h = homs[i]
+        for k in range(2):
+            for t in range(p):
+                bx = corner[i, 0] + dirs[i, k, 0] * grid[t, 0]
+                by = corner[i, 1] + dirs[i, k, 1] * grid[t, 1]
+                w = bx * h[2, 0] + by * h[2, 1] + h[2, 2]
+                u = (bx * h[0, 0] + by * h[0, 1] + h[0, 2]) / w
+                v = (bx * h[1, 0] + by * h[1, 1] + h[1, 2]) / w
+                inside = (
+                    math.isfinite(u)
+                    and math.isfinite(v)
+                    and 0.0 <= u <= wid - 1.0
+                    and 0.0 <= v <= hgt - 1.0
+                )
+                if not inside:
+                    u = 0.0
+                    v = 0.0
+                u0 = min(int(math.floor(u)), wid - 2)
+                v0 = min(int(math.floor(v)), hgt - 2)
+                fu, fv = u - u0, v - v0
+                vals[i, k * p + t] = (1 - fv) * ((1 - fu) * g[v0, u0] + fu * g[v0, u0 + 1]) + fv * (
+                    (1 - fu) * g[v0 + 1, u0] + fu * g[v0 + 1, u0 + 1]
+                )
+                ok[i, k * p + t] = inside
+    return vals, ok

@@ -34,6 +34,7 @@ Recognition 47(6):2280-2292, 2014.
 from __future__ import annotations
 
 import math
+import threading
 import weakref
 from dataclasses import dataclass, field
 from functools import lru_cache
@@ -599,6 +600,32 @@ def _reduction(shape: tuple[int, int], min_side: float) -> int:
     return f
 
 
+#: Each thread's work buffer for :func:`_table` (a fresh table of a few megabytes costs
+#: more in page faults, zeroed by the system, than the sums written into it).
+_WORK = threading.local()
+#: Largest table kept between calls (entries: 32 MB).
+_MAX_KEPT = 4_000_000
+
+
+def _table(g: NDArray[np.float64], pad: int) -> NDArray[np.float64]:
+    """:func:`imageform._kernels.aruco.box_integral` of ``g``, in this thread's buffer when
+    small enough: valid until the next call in the same thread."""
+    from imageform._kernels.aruco import box_integral_roi
+
+    hgt, wid = g.shape
+    shape = (hgt + 2 * pad + 1, wid + 2 * pad + 1)
+    size = shape[0] * shape[1]
+    if size > _MAX_KEPT:
+        out = np.empty(shape)
+    else:
+        buf = getattr(_WORK, "table", None)
+        if buf is None or buf.size < size:
+            buf = np.empty(max(size, 1 << 20))
+            _WORK.table = buf
+        out = buf[:size].reshape(shape)
+    return np.asarray(box_integral_roi(g, pad, 0, hgt, 0, wid, out))
+
+
 def _components(
     g: NDArray[np.float64],
     integral: NDArray[np.float64],
@@ -668,7 +695,7 @@ def _search_numba(
     and corners are those of the full-resolution search, less the markers under ``reduce``
     times ``min_side``.
     """
-    from imageform._kernels.aruco import block_means, box_integral, component_quads
+    from imageform._kernels.aruco import block_means, component_quads
 
     hgt, wid = g.shape
     cells = d.marker_size + 2
@@ -680,12 +707,12 @@ def _search_numba(
         small = block_means(g, reduce)
         wins_small = [max(3, (w // reduce) | 1) for w in wins]
         pad = max(wins_small) // 2
-        integral = box_integral(small, pad)
+        integral = _table(small, pad)
         full: list[NDArray[np.float64]] = []
         spent = [0]
     else:
         pad = max(wins) // 2
-        integral = box_integral(g, pad)  # every window's local means from one table
+        integral = _table(g, pad)  # every window's local means from one table
     for w_i, win in enumerate(wins):
         if reduce == 1:
             runs, comp_runs, comp_ptr, stats = _components(g, integral, pad, win, cap)
@@ -828,7 +855,8 @@ def _search_reduced(
         cost = (r1 - r0 + 2 * half) * (c1 - c0 + 2 * half)
         if not full and spent[0] + cost <= (hgt + 2 * pad_full) * (wid + 2 * pad_full) // 2:
             spent[0] += cost
-            view, p_view = box_integral_roi(g, half, r0, r1, c0, c1), half
+            view = np.empty((r1 - r0 + 2 * half + 1, c1 - c0 + 2 * half + 1))
+            view, p_view = box_integral_roi(g, half, r0, r1, c0, c1, view), half
         else:
             if not full:
                 full.append(box_integral(g, pad_full))

@@ -28,6 +28,7 @@ stays clear of the markers, and kept when it converged near the prediction.
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+from functools import lru_cache
 
 import numpy as np
 from numpy.typing import NDArray
@@ -491,6 +492,25 @@ def _printed(board: CharucoBoard, xy: NDArray[np.float64]) -> NDArray[np.float64
     return out
 
 
+@lru_cache(maxsize=32)
+def _printed_white(board: CharucoBoard) -> NDArray[np.float64]:
+    """``(n_corners, 2 P)``: the printed board (1 white, 0 black) at the white squares' dense
+    grid of each corner (:func:`_seen_whole`'s ``(qw, gw)`` points), by corner id."""
+    cols, rows = board.squares
+    ids = np.arange((cols - 1) * (rows - 1))
+    r, c = np.divmod(ids, cols - 1)
+    corner = np.column_stack([c + 1.0, r + 1.0])
+    tw = (np.arange(_GRID_WHITE) + 0.5) / _GRID_WHITE
+    gw = np.stack(np.meshgrid(tw, tw), -1).reshape(-1, 2)
+    quads = np.array([[-1.0, -1.0], [1.0, 1.0], [1.0, -1.0], [-1.0, 1.0]])
+    first = ((r + c) % 2 != board.white_parity)[:, None, None]
+    qw = np.where(first, quads[None, 2:], quads[None, :2])
+    pts = (corner[:, None, None, :] + qw[:, :, None, :] * gw[None, None]).reshape(len(ids), -1, 2)
+    out = _printed(board, pts)
+    out.setflags(write=False)
+    return out
+
+
 def _masked_median(v: NDArray[np.float64], ok: NDArray[np.bool_]) -> NDArray[np.float64]:
     """Median of each row of ``v`` (m, P) over its ``ok`` entries (0 for a row without any)."""
     srt = np.sort(np.where(ok, v, np.inf), axis=1)
@@ -557,8 +577,7 @@ def _seen_whole(
         pts = corner[:, None, None, :] + dirs[:, :, None, :] * grid[None, None]
         return pts.reshape(m, -1, 2)
 
-    pb, pw, ps = points(qb, gb), points(qw, gw), points(qw, strip)
-    pf = points(qb, gw)  # the black squares whole, for the block's mean
+    # the black squares whole (qb, gw), for the block's mean
     # homographies moved so that the corner lands on the refined pixel
     pc = np.einsum("mij,mj->mi", homs, np.column_stack([corner, np.ones(m)]))
     shift = np.zeros_like(homs)
@@ -566,6 +585,23 @@ def _seen_whole(
     shift[:, :2, 2] = xy - pc[:, :2] / pc[:, 2:]
     hs = shift @ homs
     h_img, w_img = g.shape
+
+    from imageform._backend import use_numba
+
+    if use_numba(g):
+        from imageform._kernels.aruco import sample_quadrants
+
+        def sampled(
+            dirs: NDArray[np.float64], grid: NDArray[np.float64]
+        ) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
+            return sample_quadrants(g, hs, corner, np.ascontiguousarray(dirs), grid)
+
+    else:
+
+        def sampled(
+            dirs: NDArray[np.float64], grid: NDArray[np.float64]
+        ) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
+            return sample(points(dirs, grid))
 
     def sample(pts: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
         q = np.concatenate([pts, np.ones((*pts.shape[:2], 1))], -1) @ np.swapaxes(hs, 1, 2)
@@ -581,15 +617,15 @@ def _seen_whole(
         vals = _bilinear(g, np.where(ok[..., None], uv, 0.0).reshape(-1, 2)).reshape(ok.shape)
         return vals, ok
 
-    vb, okb = sample(pb)
-    vw, okw = sample(pw)
-    vs, oks = sample(ps)
+    vb, okb = sampled(qb, gb)
+    vw, okw = sampled(qw, gw)
+    vs, oks = sampled(qw, strip)
     nb = okb.sum(1)
     black = _masked_median(vb, okb)
     # each white square's contrast: (mean - black) / printed white share, same points
     okw2 = okw.reshape(m, 2, -1)
     n_in = okw2.sum(-1)
-    printed_w = _printed(board, pw)
+    printed_w = _printed_white(board)[ids]
     share = np.where(okw2, printed_w.reshape(m, 2, -1), 0.0).sum(-1) / np.maximum(n_in, 1)
     mean_w = np.where(okw2, vw.reshape(m, 2, -1), 0.0).sum(-1) / np.maximum(n_in, 1)
     usable = (n_in >= gw.shape[0] // 4) & (share > 0.05)
@@ -600,7 +636,7 @@ def _seen_whole(
     # squares' margins into the black squares stays in the block, and what crosses the
     # block's outline is on average as much in as out, so the block's mean against its
     # printed mean gives the contrast whatever the blur
-    vf, okf = sample(pf)
+    vf, okf = sampled(qb, gw)
     n_blk = okw.sum(1) + okf.sum(1)
     printed_blk = np.where(okw, printed_w, 0.0).sum(1) / np.maximum(n_blk, 1)
     mean_blk = (np.where(okw, vw, 0.0).sum(1) + np.where(okf, vf, 0.0).sum(1)) / np.maximum(
