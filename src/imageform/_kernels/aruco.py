@@ -41,9 +41,12 @@ __all__ = [
     "block_means",
     "box_integral",
     "box_integral_roi",
+    "box_integral_u8",
     "cell_means",
     "component_quads",
     "dark_components",
+    "dark_components_u8",
+    "sample_quadrants",
 ]
 
 
@@ -134,6 +137,32 @@ def box_integral_roi(
 
 
 @njit(nogil=True, error_model="numpy")
+def box_integral_u8(
+    g8: NDArray[np.uint8], pad: int, out: NDArray[np.int32]
+) -> NDArray[np.int32]:  # pragma: no cover - compiled
+    """:func:`box_integral` of a uint8 image in integers (exact), into ``out`` (shape ``(H +
+    2 pad + 1, W + 2 pad + 1)``; its sums must fit 31 bits: ``255 (H + 2 pad) (W + 2 pad) <
+    2³¹``), returned."""
+    hgt, wid = g8.shape
+    width = wid + 2 * pad
+    rows = hgt + 2 * pad
+    cols = np.empty(width, dtype=np.int64)
+    for k in range(width):
+        cols[k] = _reflect(k - pad, wid)
+    out[0, :] = 0
+    out[:, 0] = 0
+    for i in range(rows):
+        row = g8[_reflect(i - pad, hgt)]
+        above = out[i]
+        here = out[i + 1]
+        acc = np.int32(0)
+        for j in range(width):
+            acc += np.int32(row[cols[j]])
+            here[j + 1] = acc + above[j + 1]
+    return out
+
+
+@njit(nogil=True, error_model="numpy")
 def block_means(g: NDArray[np.float64], f: int) -> NDArray[np.float64]:  # pragma: no cover
     """Return ``g`` reduced ``f`` times: the mean of each ``f x f`` block (a last partial row or
     column of blocks dropped), OpenCV's ``resize(INTER_AREA)`` at an integer factor."""
@@ -169,6 +198,57 @@ def dark_components(
 ]:  # pragma: no cover - compiled
     """Threshold ``g`` against its ``win x win`` local mean and label the dark components.
 
+    See :func:`_labelled`: ``integral`` is :func:`box_integral` of ``g``.
+    """
+    return _labelled(g, integral, _EMPTY_U8, _EMPTY_I32, False, pad, win, offset, cap, cap_labels)
+
+
+@njit(nogil=True, error_model="numpy")
+def dark_components_u8(
+    g8: NDArray[np.uint8],
+    integral: NDArray[np.int32],
+    pad: int,
+    win: int,
+    cap: int,
+    cap_labels: int,
+) -> tuple[
+    NDArray[np.int64], NDArray[np.int64], NDArray[np.int64], NDArray[np.int64]
+]:  # pragma: no cover - compiled
+    """:func:`dark_components` of ``g8 / 255`` with the offset 0.02, in integers.
+
+    ``integral`` is :func:`box_integral_u8` of ``g8``. A pixel is dark when ``g8 / 255 <
+    S / (255 w²) - 0.02`` (``S`` its window's sum of ``g8``, ``w`` the window), that is
+    ``10 g8 w² < 10 S - 51 w²``, which never holds with equality for an odd ``w`` (``51
+    w²`` is odd): the floating-point test of :func:`dark_components`, whose rounding is far
+    below the one code step, ``1 / (2550 w²)``, the two sides then differ by, gives the same
+    pixels (tested), at a quarter of the memory traffic; ``10 S`` must fit 31 bits
+    (``w <= 917``).
+    """
+    return _labelled(_EMPTY_F64, _EMPTY_F64, g8, integral, True, pad, win, 0.02, cap, cap_labels)
+
+
+_EMPTY_F64 = np.zeros((0, 0))
+_EMPTY_U8 = np.zeros((0, 0), dtype=np.uint8)
+_EMPTY_I32 = np.zeros((0, 0), dtype=np.int32)
+
+
+@njit(nogil=True, error_model="numpy")
+def _labelled(
+    g: NDArray[np.float64],
+    integral: NDArray[np.float64],
+    g8: NDArray[np.uint8],
+    integral32: NDArray[np.int32],
+    exact: bool,
+    pad: int,
+    win: int,
+    offset: float,
+    cap: int,
+    cap_labels: int,
+) -> tuple[
+    NDArray[np.int64], NDArray[np.int64], NDArray[np.int64], NDArray[np.int64]
+]:  # pragma: no cover - compiled
+    """Threshold ``g`` against its ``win x win`` local mean and label the dark components.
+
     ``integral`` is :func:`box_integral` of ``g`` with ``pad >= win // 2``; ``cap`` and
     ``cap_labels`` the most runs and provisional labels expected (``H * ((W + 1) // 2)`` at
     worst): with more, every output is empty (``stats`` with no rows) and the caller asks
@@ -183,11 +263,14 @@ def dark_components(
     area, first row, last row, first column, last column (inclusive) of each component
     (row 0 unused).
     """
-    hgt, wid = g.shape
+    hgt, wid = g8.shape if exact else g.shape
     r = win // 2
     lo = pad - r
     hi = pad + r + 1
     inv = 1.0 / (win * win)
+    k10 = np.int32(10 * win * win)
+    k51 = np.int32(51 * win * win)
+    ten = np.int32(10)
     # one new label a run at most: sized once (growing inside the loop would make numba
     # count references on every access); filled as they are made
     runs = np.empty((cap, 3), dtype=np.int64)
@@ -208,14 +291,24 @@ def dark_components(
     trans = np.empty(wid + 2, dtype=np.int64)
     for i in range(hgt):
         # the four corners of every window of the row as slices: the compiler vectorises
-        a = integral[i + hi, hi : hi + wid]
-        b = integral[i + lo, hi : hi + wid]
-        c = integral[i + hi, lo : lo + wid]
-        d = integral[i + lo, lo : lo + wid]
-        gi = g[i]
         dk = dark[1 : wid + 1]
-        for j in range(wid):
-            dk[j] = np.uint8(gi[j] < (a[j] - b[j] - c[j] + d[j]) * inv - offset)
+        if exact:
+            a32 = integral32[i + hi, hi : hi + wid]
+            b32 = integral32[i + lo, hi : hi + wid]
+            c32 = integral32[i + hi, lo : lo + wid]
+            d32 = integral32[i + lo, lo : lo + wid]
+            g8i = g8[i]
+            for j in range(wid):
+                box = a32[j] - b32[j] - c32[j] + d32[j]
+                dk[j] = np.uint8(np.int32(g8i[j]) * k10 < ten * box - k51)
+        else:
+            a = integral[i + hi, hi : hi + wid]
+            b = integral[i + lo, hi : hi + wid]
+            c = integral[i + hi, lo : lo + wid]
+            d = integral[i + lo, lo : lo + wid]
+            gi = g[i]
+            for j in range(wid):
+                dk[j] = np.uint8(gi[j] < (a[j] - b[j] - c[j] + d[j]) * inv - offset)
         for j in range(wid + 1):
             flip[j] = dark[j] ^ dark[j + 1]
         n_trans = 0

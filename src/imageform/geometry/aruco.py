@@ -39,6 +39,7 @@ import weakref
 from dataclasses import dataclass, field
 from functools import lru_cache
 from importlib import resources
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -546,8 +547,41 @@ def detect_aruco_markers(
     >>> m.ids.tolist(), np.round(m.corners[0], 1).tolist()
     ([7], [[99.5, 59.5], [219.5, 59.5], [219.5, 179.5], [99.5, 179.5]])
     """
+    return _detect(
+        image,
+        dictionary,
+        min_side_px=min_side_px,
+        windows=windows,
+        error_correction_rate=error_correction_rate,
+        max_border_errors=max_border_errors,
+    )
+
+
+def _detect(
+    image: ArrayLike,
+    dictionary: str | ArucoDictionary = "6x6_250",
+    *,
+    source: object = None,
+    min_side_px: float = 6.0,
+    windows: tuple[int, ...] | None = None,
+    error_correction_rate: float = 0.6,
+    max_border_errors: float = 0.35,
+) -> ArucoMarkers:
+    """:func:`detect_aruco_markers`; ``source``: the caller's image that ``image`` (already
+    :func:`_gray01`) was made from, whose uint8 codes, when it is a uint8 grey image, give
+    the threshold in integers (the same pixels, :func:`imageform._kernels.aruco.dark_components_u8`)."""
     d = aruco_dictionary(dictionary)
     g = _gray01(image)
+    if source is None:
+        source = image
+    g8 = (
+        source
+        if isinstance(source, np.ndarray)
+        and source.dtype == np.uint8
+        and source.ndim == 2
+        and source.shape == g.shape
+        else None
+    )
     min_side = as_real(min_side_px, "min_side_px", positive=True, maximum=1e5)
     rate = as_real(error_correction_rate, "error_correction_rate", nonnegative=True, maximum=1.0)
     border_rate = as_real(max_border_errors, "max_border_errors", nonnegative=True, maximum=1.0)
@@ -569,7 +603,7 @@ def detect_aruco_markers(
 
     args = (g, sorted(wins, reverse=True), d, rotated, min_side, max_bits, border_rate)
     if use_numba(g):
-        found = _search_numba(*args, reduce=_reduction(g.shape, min_side))
+        found = _search_numba(*args, reduce=_reduction(g.shape, min_side), g8=g8)
     else:
         found = _search_numpy(*args)
     ids = np.array(sorted(found), dtype=np.int64)
@@ -607,35 +641,41 @@ _WORK = threading.local()
 _MAX_KEPT = 4_000_000
 
 
-def _table(g: NDArray[np.float64], pad: int) -> NDArray[np.float64]:
-    """:func:`imageform._kernels.aruco.box_integral` of ``g``, in this thread's buffer when
-    small enough: valid until the next call in the same thread."""
-    from imageform._kernels.aruco import box_integral_roi
+def _table(g: NDArray[np.float64] | NDArray[np.uint8], pad: int) -> NDArray[Any]:
+    """:func:`imageform._kernels.aruco.box_integral` of ``g`` (``box_integral_u8``, int32, of
+    a uint8 ``g``), in this thread's buffer when small enough: valid until the next call in
+    the same thread."""
+    from imageform._kernels.aruco import box_integral_roi, box_integral_u8
 
     hgt, wid = g.shape
     shape = (hgt + 2 * pad + 1, wid + 2 * pad + 1)
     size = shape[0] * shape[1]
+    dtype = np.int32 if g.dtype == np.uint8 else np.float64
+    key = "table32" if dtype == np.int32 else "table"
     if size > _MAX_KEPT:
-        out = np.empty(shape)
+        out = np.empty(shape, dtype=dtype)
     else:
-        buf = getattr(_WORK, "table", None)
+        buf = getattr(_WORK, key, None)
         if buf is None or buf.size < size:
-            buf = np.empty(max(size, 1 << 20))
-            _WORK.table = buf
+            buf = np.empty(max(size, 1 << 20), dtype=dtype)
+            setattr(_WORK, key, buf)
         out = buf[:size].reshape(shape)
+    if dtype == np.int32:
+        return np.asarray(box_integral_u8(g, pad, out))
     return np.asarray(box_integral_roi(g, pad, 0, hgt, 0, wid, out))
 
 
 def _components(
-    g: NDArray[np.float64],
-    integral: NDArray[np.float64],
+    g: NDArray[np.float64] | NDArray[np.uint8],
+    integral: NDArray[np.float64] | NDArray[np.int32],
     pad: int,
     win: int,
     cap: list[int],
 ) -> tuple[NDArray[np.int64], NDArray[np.int64], NDArray[np.int64], NDArray[np.int64]]:
-    """:func:`imageform._kernels.aruco.dark_components` of ``g``, asked again with more room
-    (``cap[0]`` runs, kept for the next window) when its runs overflow."""
-    from imageform._kernels.aruco import dark_components
+    """:func:`imageform._kernels.aruco.dark_components` of ``g`` (``dark_components_u8`` of a
+    uint8 ``g``), asked again with more room (``cap[0]`` runs, kept for the next window) when
+    its runs overflow."""
+    from imageform._kernels.aruco import dark_components, dark_components_u8
 
     hgt, wid = g.shape
     # room for the runs (a photograph has about one run in 20 pixels, a row at most (W + 1) / 2)
@@ -647,7 +687,10 @@ def _components(
     while True:
         c = min(cap[0], worst)
         cap_labels = c if c == worst else c // 2 + 1024
-        out = dark_components(g, integral, pad, int(win), 0.02, c, cap_labels)
+        if g.dtype == np.uint8:
+            out = dark_components_u8(g, integral, pad, int(win), c, cap_labels)
+        else:
+            out = dark_components(g, integral, pad, int(win), 0.02, c, cap_labels)
         if len(out[3]) or c == worst:
             return out
         cap[0] = min(worst, 4 * c)
@@ -683,6 +726,7 @@ def _search_numba(
     max_bits: int,
     border_rate: float,
     reduce: int = 1,
+    g8: NDArray[np.uint8] | None = None,
 ) -> _Found:
     """Find the markers of ``g`` at each threshold window (largest first): numba kernels.
 
@@ -712,10 +756,18 @@ def _search_numba(
         spent = [0]
     else:
         pad = max(wins) // 2
-        integral = _table(g, pad)  # every window's local means from one table
+        hgt_p, wid_p = hgt + 2 * pad, wid + 2 * pad
+        if g8 is not None and 255 * hgt_p * wid_p < 2**31 and 2 * pad + 1 <= 917:
+            g8 = np.ascontiguousarray(g8)
+            integral = _table(g8, pad)  # in integers, exact (dark_components_u8)
+        else:
+            g8 = None
+            integral = _table(g, pad)  # every window's local means from one table
     for w_i, win in enumerate(wins):
         if reduce == 1:
-            runs, comp_runs, comp_ptr, stats = _components(g, integral, pad, win, cap)
+            runs, comp_runs, comp_ptr, stats = _components(
+                g if g8 is None else g8, integral, pad, win, cap
+            )
             cand = _sized(stats, min_side, max_area, boxes)
             if len(cand) == 0:
                 continue

@@ -39,10 +39,10 @@ from imageform.errors import InvalidInputError
 from imageform.geometry.aruco import (
     ArucoMarkers,
     _bilinear,
+    _detect,
     _gray01,
     aruco_dictionary,
     aruco_marker_image,
-    detect_aruco_markers,
 )
 
 __all__ = ["CharucoBoard", "CharucoCorners", "detect_charuco"]
@@ -303,7 +303,7 @@ def detect_charuco(
     need = as_int(min_markers, "min_markers", minimum=1, maximum=16)
     shift = as_real(max_shift, "max_shift", positive=True, maximum=1.0)
     if markers is None:
-        markers = detect_aruco_markers(g, board.dictionary)
+        markers = _detect(g, board.dictionary, source=image)
     elif not isinstance(markers, ArucoMarkers):
         raise InvalidInputError(f"expected markers as ArucoMarkers, got {describe(markers)}")
     found = _corners(g, board, markers, need, shift)
