@@ -46,6 +46,7 @@ __all__ = [
     "component_quads",
     "dark_components",
     "dark_components_u8",
+    "decode_cells",
     "sample_quadrants",
 ]
 
@@ -907,3 +908,86 @@ def sample_quadrants(
                 )
                 ok[i, k * p + t] = inside
     return vals, ok
+
+
+@njit(nogil=True, error_model="numpy")
+def decode_cells(
+    means: NDArray[np.float64],
+    rotated: NDArray[np.uint8],
+    cells: int,
+    max_bits: int,
+    border_rate: float,
+    min_contrast: float,
+) -> tuple[NDArray[np.int64], NDArray[np.int64], NDArray[np.int64], NDArray[np.float64]]:
+    """Read the cells of each quad (``means`` (m, cells²), row by row) against the codes.
+
+    ``geometry.aruco._decode`` in one pass: Otsu's split of the quad's cell means (white
+    above), its border cells (at most ``border_rate`` of them white), the nearest code of
+    ``rotated`` (n, 4, inner bits) over the four rotations (first of the smallest distance).
+    Returns the code (-1 when refused: contrast under ``min_contrast``, border, or more than
+    ``max_bits`` apart), rotation, distance and contrast (max - min of the means) of each.
+    """
+    m, n = means.shape
+    n_codes = rotated.shape[0]
+    n_bits = rotated.shape[2]
+    code = np.full(m, -1, dtype=np.int64)
+    rot = np.zeros(m, dtype=np.int64)
+    dist = np.zeros(m, dtype=np.int64)
+    contrast = np.zeros(m)
+    v = np.empty(n)
+    csum = np.empty(n)
+    inner = np.empty(n_bits, dtype=np.uint8)
+    n_border = cells * cells - (cells - 2) * (cells - 2)
+    for q in range(m):
+        row = means[q]
+        lo = row[0]
+        hi = row[0]
+        for t in range(n):
+            v[t] = row[t]
+            lo = min(lo, row[t])
+            hi = max(hi, row[t])
+        contrast[q] = hi - lo
+        v.sort()
+        acc = 0.0
+        for t in range(n):
+            acc += v[t]
+            csum[t] = acc
+        best = -1.0
+        k = 0
+        for i in range(1, n):
+            m0 = csum[i - 1] / i
+            m1 = (csum[n - 1] - csum[i - 1]) / (n - i)
+            between = (i / n) * (1 - i / n) * (m0 - m1) ** 2
+            if between > best or i == 1:
+                best = between
+                k = i - 1
+        thr = 0.5 * (v[k] + v[k + 1])
+        white_border = 0
+        b = 0
+        for r in range(cells):
+            for c in range(cells):
+                white = row[r * cells + c] > thr
+                if r == 0 or c == 0 or r == cells - 1 or c == cells - 1:
+                    white_border += white
+                else:
+                    inner[b] = white
+                    b += 1
+        if hi - lo < min_contrast or white_border > border_rate * n_border:
+            continue
+        dmin = n_bits + 1
+        arg = 0
+        for k_code in range(n_codes):
+            for k_rot in range(4):
+                d = 0
+                ref = rotated[k_code, k_rot]
+                for t in range(n_bits):
+                    d += ref[t] != inner[t]
+                if d < dmin:
+                    dmin = d
+                    arg = k_code * 4 + k_rot
+        if dmin > max_bits:
+            continue
+        code[q] = arg // 4
+        rot[q] = arg % 4
+        dist[q] = dmin
+    return code, rot, dist, contrast

@@ -265,9 +265,31 @@ def _diagonal_cross(q: NDArray[np.float64]) -> NDArray[np.float64]:
 _MADE: weakref.WeakValueDictionary[int, NDArray[np.float64]] = weakref.WeakValueDictionary()
 
 
-def _gray01(image: object) -> NDArray[np.float64]:
+def _gray01(image: object, *, scratch: bool = False) -> NDArray[np.float64]:
+    """``image`` as grey values in [0, 1] (float64; an image this function made, as it is).
+
+    ``scratch``: a uint8 grey image of up to ``_MAX_KEPT`` pixels is converted into this
+    thread's work buffer (valid until the next such call in the thread: for a detection
+    that does not hand the grey image back), sparing a fresh array's page faults.
+    """
     if isinstance(image, np.ndarray) and _MADE.get(id(image)) is image:
         return image
+    if (
+        scratch
+        and isinstance(image, np.ndarray)
+        and image.dtype == np.uint8
+        and image.ndim == 2
+        and min(image.shape) >= 8
+        and image.size <= _MAX_KEPT
+    ):
+        buf = getattr(_WORK, "grey", None)
+        if buf is None or buf.size < image.size:
+            buf = np.empty(max(image.size, 1 << 20))
+            _WORK.grey = buf
+        g = buf[: image.size].reshape(image.shape)
+        np.true_divide(image, 255.0, out=g)  # as _gray01_checked: the same values
+        _MADE[id(g)] = g
+        return g
     g = _gray01_checked(image)
     if g is not image:
         _MADE[id(g)] = g
@@ -571,7 +593,7 @@ def _detect(
     :func:`_gray01`) was made from, whose uint8 codes, when it is a uint8 grey image, give
     the threshold in integers (the same pixels, :func:`imageform._kernels.aruco.dark_components_u8`)."""
     d = aruco_dictionary(dictionary)
-    g = _gray01(image)
+    g = _gray01(image, scratch=True)
     if source is None:
         source = image
     g8 = (
@@ -796,7 +818,7 @@ def _search_numba(
             )
         if len(quads) == 0:
             continue
-        decoded = _decode(_cell_means(g, quads, cells), d, cells, rotated, max_bits, border_rate)
+        decoded = _decoded(_cell_means(g, quads, cells), rotated, cells, max_bits, border_rate)
         new_boxes: list[tuple[float, float, float, float, float]] = []
         for quad, row, hit in zip(quads, st.tolist(), decoded, strict=True):
             if hit is None:
@@ -824,6 +846,28 @@ def _search_numba(
         if new_boxes:
             boxes = np.vstack([boxes, np.array(new_boxes)])
     return found
+
+
+def _decoded(
+    means: NDArray[np.float64],
+    rotated: NDArray[np.uint8],
+    cells: int,
+    max_bits: int,
+    border_rate: float,
+    min_contrast: float = 0.08,
+) -> list[tuple[int, int, int, float] | None]:
+    """:func:`_decode` by :func:`imageform._kernels.aruco.decode_cells` (the same verdicts)."""
+    from imageform._kernels.aruco import decode_cells
+
+    code, rot, dist, contrast = decode_cells(
+        means, np.ascontiguousarray(rotated), cells, max_bits, border_rate, min_contrast
+    )
+    return [
+        None if k < 0 else (k, r, t, c)
+        for k, r, t, c in zip(
+            code.tolist(), rot.tolist(), dist.tolist(), contrast.tolist(), strict=True
+        )
+    ]
 
 
 def _cell_means(
@@ -884,8 +928,8 @@ def _search_reduced(
     q = quads[good]
     e = np.roll(q, -1, axis=1) - q
     shortest = np.hypot(e[..., 0], e[..., 1]).min(axis=1)
-    hits = _decode(
-        _cell_means(small, q, cells), d, cells, rotated, max_bits + 1, border_rate + 0.15, 0.04
+    hits = _decoded(
+        _cell_means(small, q, cells), rotated, cells, max_bits + 1, border_rate + 0.15, 0.04
     )
     good = good[[h is not None or s < 3 * cells for h, s in zip(hits, shortest, strict=True)]]
     if len(good) == 0:

@@ -299,7 +299,7 @@ def detect_charuco(
     """
     if not isinstance(board, CharucoBoard):
         raise InvalidInputError(f"expected board as a CharucoBoard, got {describe(board)}")
-    g = _gray01(image)
+    g = _gray01(image, scratch=True)
     need = as_int(min_markers, "min_markers", minimum=1, maximum=16)
     shift = as_real(max_shift, "max_shift", positive=True, maximum=1.0)
     if markers is None:
