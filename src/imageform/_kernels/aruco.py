@@ -98,14 +98,16 @@ def box_integral_roi(
     c1: int,
     out: NDArray[np.float64],
 ) -> NDArray[np.float64]:  # pragma: no cover - compiled
-    """Return the integral image of rows ``r0 - pad .. r1 + pad - 1`` and columns ``c0 - pad ..
-    c1 + pad - 1`` of ``g`` with its edges reflected (SciPy's ``mode="reflect"``).
+    """Return the integral image of a region of ``g`` and ``pad`` pixels around it.
 
-    The region ``g[r0:r1, c0:c1]``'s every ``(2 pad + 1)``-wide window sums from it as from
-    :func:`box_integral` of the whole image (the same additions in the same order: equal to
-    the last bit), so :func:`dark_components` of the region gives the whole image's
-    threshold there; written into ``out``, of shape ``(r1 - r0 + 2 pad + 1, c1 - c0 + 2 pad +
-    1)`` (a buffer the caller may reuse), and returned.
+    Rows ``r0 - pad .. r1 + pad - 1`` and columns ``c0 - pad .. c1 + pad - 1`` of ``g``, its
+    edges reflected (SciPy's ``mode="reflect"``). Every window up to ``2 pad + 1`` wide
+    around a pixel of ``g[r0:r1, c0:c1]`` sums from it as from :func:`box_integral` of the
+    whole image, to rounding (a few units in the last place of the table's entries, far
+    below the step between two 8-bit codes that decides a threshold), so
+    :func:`dark_components` of the region gives the whole image's dark pixels there. Written
+    into ``out``, of shape ``(r1 - r0 + 2 pad + 1, c1 - c0 + 2 pad + 1)`` (a buffer the
+    caller may reuse), and returned.
     """
     hgt, wid = g.shape
     width = c1 - c0 + 2 * pad
@@ -141,9 +143,11 @@ def box_integral_roi(
 def box_integral_u8(
     g8: NDArray[np.uint8], pad: int, out: NDArray[np.int32]
 ) -> NDArray[np.int32]:  # pragma: no cover - compiled
-    """:func:`box_integral` of a uint8 image in integers (exact), into ``out`` (shape ``(H +
-    2 pad + 1, W + 2 pad + 1)``; its sums must fit 31 bits: ``255 (H + 2 pad) (W + 2 pad) <
-    2³¹``), returned."""
+    """Return :func:`box_integral` of a uint8 image in integers (exact), written into ``out``.
+
+    ``out`` has the shape ``(H + 2 pad + 1, W + 2 pad + 1)``; its sums must fit 31 bits:
+    ``255 (H + 2 pad) (W + 2 pad) < 2³¹``.
+    """
     hgt, wid = g8.shape
     width = wid + 2 * pad
     rows = hgt + 2 * pad
@@ -165,8 +169,11 @@ def box_integral_u8(
 
 @njit(nogil=True, error_model="numpy")
 def block_means(g: NDArray[np.float64], f: int) -> NDArray[np.float64]:  # pragma: no cover
-    """Return ``g`` reduced ``f`` times: the mean of each ``f x f`` block (a last partial row or
-    column of blocks dropped), OpenCV's ``resize(INTER_AREA)`` at an integer factor."""
+    """Return ``g`` reduced ``f`` times: the mean of each ``f x f`` block.
+
+    A last partial row or column of blocks is dropped; OpenCV's ``resize(INTER_AREA)`` at an
+    integer factor.
+    """
     hgt, wid = g.shape
     h2, w2 = hgt // f, wid // f
     out = np.zeros((h2, w2))
@@ -900,8 +907,8 @@ def sample_quadrants(
                 if not inside:
                     u = 0.0
                     v = 0.0
-                u0 = min(int(math.floor(u)), wid - 2)
-                v0 = min(int(math.floor(v)), hgt - 2)
+                u0 = min(math.floor(u), wid - 2)
+                v0 = min(math.floor(v), hgt - 2)
                 fu, fv = u - u0, v - v0
                 vals[i, k * p + t] = (1 - fv) * ((1 - fu) * g[v0, u0] + fu * g[v0, u0 + 1]) + fv * (
                     (1 - fu) * g[v0 + 1, u0] + fu * g[v0 + 1, u0 + 1]

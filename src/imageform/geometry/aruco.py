@@ -589,9 +589,12 @@ def _detect(
     error_correction_rate: float = 0.6,
     max_border_errors: float = 0.35,
 ) -> ArucoMarkers:
-    """:func:`detect_aruco_markers`; ``source``: the caller's image that ``image`` (already
-    :func:`_gray01`) was made from, whose uint8 codes, when it is a uint8 grey image, give
-    the threshold in integers (the same pixels, :func:`imageform._kernels.aruco.dark_components_u8`)."""
+    """Find the markers as :func:`detect_aruco_markers` does, given the caller's image.
+
+    ``source``: the caller's image that ``image`` (already :func:`_gray01`) was made from;
+    when it is a uint8 grey image its codes give the threshold in integers (the same pixels,
+    :func:`imageform._kernels.aruco.dark_components_u8`).
+    """
     d = aruco_dictionary(dictionary)
     g = _gray01(image, scratch=True)
     if source is None:
@@ -640,7 +643,7 @@ _Found = dict[int, tuple[float, NDArray[np.float64], int]]
 
 
 def _reduction(shape: tuple[int, int], min_side: float) -> int:
-    """The factor (1, 2, 4, ...) the candidates of an image of ``shape`` are looked for at.
+    """Return the factor (1, 2, 4, ...) by which an image of ``shape`` is reduced for candidates.
 
     OpenCV's detector looks for markers of a perimeter at least 3 % of the image's larger
     side (``minMarkerPerimeterRate``), a side of 0.75 %: on a large image such a marker is
@@ -664,9 +667,11 @@ _MAX_KEPT = 4_000_000
 
 
 def _table(g: NDArray[np.float64] | NDArray[np.uint8], pad: int) -> NDArray[Any]:
-    """:func:`imageform._kernels.aruco.box_integral` of ``g`` (``box_integral_u8``, int32, of
-    a uint8 ``g``), in this thread's buffer when small enough: valid until the next call in
-    the same thread."""
+    """Return :func:`imageform._kernels.aruco.box_integral` of ``g``, in a work buffer.
+
+    ``box_integral_u8`` (int32) of a uint8 ``g``; in this thread's buffer when small enough:
+    valid until the next call in the same thread.
+    """
     from imageform._kernels.aruco import box_integral_roi, box_integral_u8
 
     hgt, wid = g.shape
@@ -694,9 +699,11 @@ def _components(
     win: int,
     cap: list[int],
 ) -> tuple[NDArray[np.int64], NDArray[np.int64], NDArray[np.int64], NDArray[np.int64]]:
-    """:func:`imageform._kernels.aruco.dark_components` of ``g`` (``dark_components_u8`` of a
-    uint8 ``g``), asked again with more room (``cap[0]`` runs, kept for the next window) when
-    its runs overflow."""
+    """Label the dark components of ``g`` (:func:`imageform._kernels.aruco.dark_components`).
+
+    ``dark_components_u8`` of a uint8 ``g``; asked again with more room (``cap[0]`` runs,
+    kept for the next window) when its runs overflow.
+    """
     from imageform._kernels.aruco import dark_components, dark_components_u8
 
     hgt, wid = g.shape
@@ -721,7 +728,7 @@ def _components(
 def _sized(
     stats: NDArray[np.int64], min_side: float, max_area: float, boxes: NDArray[np.float64]
 ) -> NDArray[np.int64]:
-    """The components of ``stats`` large enough for a marker and not decoded already."""
+    """Return the components of ``stats`` large enough for a marker, not decoded already."""
     if len(stats) < 2:
         return np.zeros(0, dtype=np.int64)
     area = stats[:, 0]
@@ -793,9 +800,7 @@ def _search_numba(
             cand = _sized(stats, min_side, max_area, boxes)
             if len(cand) == 0:
                 continue
-            quads, status = component_quads(
-                runs, comp_runs, comp_ptr, cand, stats, float(min_side)
-            )
+            quads, status = component_quads(runs, comp_runs, comp_ptr, cand, stats, float(min_side))
             good = np.nonzero(status == 0)[0]
             quads, st = quads[good], stats[cand[good]]
         else:
@@ -896,17 +901,19 @@ def _search_reduced(
     boxes: NDArray[np.float64],
     read: tuple[ArucoDictionary, NDArray[np.uint8], int, float],
 ) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
-    """The full-resolution quads (m, 4, 2) and component stats (m, 5) of one window, from the
-    candidates of ``small`` (``g`` reduced ``f`` times).
+    """Find one window's full-resolution quads (m, 4, 2) and component stats (m, 5).
+
+    The candidates come from ``small`` (``g`` reduced ``f`` times).
 
     Each component of ``small`` with a quad gives a region of ``g`` (its box scaled up, with
     a margin of a quarter of its side and ``2 f`` pixels), thresholded there with the full
     image's local means (the region's own
     :func:`imageform._kernels.aruco.box_integral_roi` while the regions' tables, ``spent[0]``
     entries so far, cost less than half the image's; then ``full[0]``, the image's
-    :func:`imageform._kernels.aruco.box_integral` padded by ``pad_full``); its components that do not touch the
-    region's border (a component that does may go on outside it) are the full image's own,
-    and go through the same size checks and quad fitting as in the full-resolution search.
+    :func:`imageform._kernels.aruco.box_integral` padded by ``pad_full``); its components
+    that do not touch the region's border (a component that does may go on outside it) are
+    the full image's own, and go through the same size checks and quad fitting as in the
+    full-resolution search.
     A quad of ``small`` at least 3 pixels a cell whose cells read nowhere near a marker
     there (contrast under half the decoder's, or not a code within one more bit, with a
     border 15 % more wrong) is not looked at again.

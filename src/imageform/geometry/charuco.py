@@ -374,7 +374,7 @@ def _predicted(
     NDArray[np.int64],
     NDArray[np.float64],
 ]:
-    """The corners predicted from the markers (board markers ``ids_m``, found at ``corners_m``).
+    """Predict the corners from the markers (board markers ``ids_m``, found at ``corners_m``).
 
     Each inner corner ``(r, c)`` with at least ``need`` markers in the 4 x 4 squares around it
     (rows ``r - 1 .. r + 2``, columns ``c - 1 .. c + 2``), one of them in the 2 x 2 squares
@@ -394,7 +394,7 @@ def _predicted(
     at[squares[ids_m, 0] + 1, squares[ids_m, 1] + 1] = np.arange(len(ids_m))
     r, c = np.divmod(np.arange((cols - 1) * (rows - 1)), cols - 1)
     d4 = np.arange(-1, 3)
-    near = at[(r[:, None, None] + d4[None, :, None] + 1), (c[:, None, None] + d4[None, None, :] + 1)]
+    near = at[r[:, None, None] + d4[None, :, None] + 1, c[:, None, None] + d4[None, None, :] + 1]
     near = near.reshape(len(r), 16)  # row by row, as the squares around the corner
     adjacent = near[:, [5, 6, 9, 10]]
     keep = ((near >= 0).sum(1) >= need) & (adjacent >= 0).any(1)
@@ -494,8 +494,10 @@ def _printed(board: CharucoBoard, xy: NDArray[np.float64]) -> NDArray[np.float64
 
 @lru_cache(maxsize=32)
 def _printed_white(board: CharucoBoard) -> NDArray[np.float64]:
-    """``(n_corners, 2 P)``: the printed board (1 white, 0 black) at the white squares' dense
-    grid of each corner (:func:`_seen_whole`'s ``(qw, gw)`` points), by corner id."""
+    """Return the printed board (1 white, 0 black) at each corner's white squares' grid.
+
+    ``(n_corners, 2 P)``, by corner id: :func:`_seen_whole`'s ``(qw, gw)`` points.
+    """
     cols, rows = board.squares
     ids = np.arange((cols - 1) * (rows - 1))
     r, c = np.divmod(ids, cols - 1)
