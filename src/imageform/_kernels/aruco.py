@@ -48,6 +48,7 @@ __all__ = [
     "dark_components_u8",
     "decode_cells",
     "sample_quadrants",
+    "unit_grey",
 ]
 
 
@@ -998,3 +999,14 @@ def decode_cells(
         rot[q] = arg % 4
         dist[q] = dmin
     return code, rot, dist, contrast
+
+
+@njit(nogil=True, error_model="numpy")
+def unit_grey(g8: NDArray[np.uint8], out: NDArray[np.float64]) -> None:  # pragma: no cover
+    """Write ``g8 / 255`` into ``out`` (the same values as NumPy's ``true_divide``)."""
+    hgt, wid = g8.shape
+    for i in range(hgt):
+        src = g8[i]
+        dst = out[i]
+        for j in range(wid):
+            dst[j] = src[j] / 255.0
