@@ -187,7 +187,7 @@ def test_decode_cells_gives_the_twins_verdicts() -> None:
         means = rng.random((300, cells * cells))
         for j in range(150):  # codes read with a few flipped cells and noise
             code = np.zeros((cells, cells))
-            code[1:-1, 1:-1] = np.rot90(d.codes[rng.integers(d.size)], rng.integers(4))
+            code[1:-1, 1:-1] = np.rot90(d.codes[rng.integers(d.size)], int(rng.integers(4)))
             code = np.where(rng.random(code.shape) < 0.05, 1 - code, code)
             means[j] = (0.2 + 0.6 * code + rng.normal(0, 0.05, code.shape)).ravel()
         means[5] = 0.5  # no contrast
