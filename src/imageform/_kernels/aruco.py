@@ -14,14 +14,23 @@ r"""numba kernels of the ArUco marker detector (``imageform.geometry.aruco``).
   filled component's area) and the sides fitted to the boundary pixels (total least
   squares), corners where they meet.
 - :func:`cell_means`: the mean grey of each marker cell, sampled bilinearly at ``3 x 3``
-  points through the homography of the unit square onto the quad.
+  points through the homography of the unit square onto the quad; :func:`decode_cells`:
+  Otsu's split of a quad's cells, its border and the nearest code.
+- :func:`box_integral_u8` and :func:`dark_components_u8`: the same threshold of a uint8
+  image in integers (the same dark pixels, a quarter of the memory traffic);
+  :func:`box_integral_roi`: the table of a region of the image, for the full-resolution
+  look at a candidate found on the image reduced by :func:`block_means`; :func:`unit_grey`:
+  uint8 to [0, 1].
+- :func:`sample_quadrants`: the ChArUco corners' squares sampled through their local
+  homographies (``imageform.geometry.charuco``'s seen-whole check).
 
 Work per window is proportional to the image (the threshold) plus the runs and boundary
 pixels of the candidates, not their bounding boxes: a large textured blob of a photograph
 costs its runs, not the area it spans. All are serial (a call is a few milliseconds on a
-720p frame; parallelism belongs across frames), compiled for one signature each (float64
-image), cached, with NumPy's division semantics (``error_model="numpy"``: a division by
-zero gives inf or NaN, as the NumPy steps they replace did, never an exception). The
+720p frame; parallelism belongs across frames), compiled for few signatures (float64 or
+uint8 image, whole or a region's view), cached, with NumPy's division semantics
+(``error_model="numpy"``: a division by zero gives inf or NaN, as the NumPy steps they
+replace did, never an exception). The
 Python pipeline around them is :func:`imageform.geometry.detect_aruco_markers`, whose
 NumPy/SciPy twin (the component by component implementation they replace, run under
 ``IMAGEFORM_DISABLE_NUMBA``) gives the same markers to 1e-9 px
