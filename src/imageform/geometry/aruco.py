@@ -167,6 +167,12 @@ def aruco_dictionary(name: str | ArucoDictionary = "6x6_250") -> ArucoDictionary
             f"unknown ArUco dictionary name {shown!r}; expected 4x4_50 ... 7x7_1000 "
             "(sizes 4-7, counts 50/100/250/1000) or aruco_original"
         )
+    return _named(key)
+
+
+@lru_cache(maxsize=32)
+def _named(key: str) -> ArucoDictionary:
+    """Make the predefined dictionary ``key`` (once: it is immutable)."""
     tables = _tables()
     if key == "aruco_original":
         s, n, corr = 5, 1024, 1
