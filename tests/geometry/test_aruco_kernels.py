@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from imageform.geometry import CharucoBoard, aruco_dictionary, detect_charuco
+from imageform.geometry import CharucoBoard, aruco_dictionary, detect_aruco_markers, detect_charuco
 from imageform.geometry.aruco import _rotated_codes, _search_numba, _search_numpy
 from tests.geometry.test_charuco import _composite, _kodak
 
@@ -213,7 +213,10 @@ def test_reduced_search_finds_the_full_resolution_markers() -> None:
     bg = cv2.resize(_kodak(7), (2400, 1800), interpolation=cv2.INTER_LINEAR)
     img, _ = _composite(rng, board, bg, square_px=160, blur=1.0, noise=0.01, cut=False)
     g = img / 255.0
-    assert _reduction(g.shape, 12.0) == 1 and _reduction(g.shape, 6.0) == 2
+    assert _reduction(g.shape, None) == 2  # the default: markers of 0.75 % of 2400 px kept
+    assert _reduction(g.shape, 6.0) == 1 and _reduction(g.shape, 11.0) == 1  # asked for 6 px
+    assert _reduction(g.shape, 12.0) == 2 and _reduction(g.shape, 48.0) == 2  # at most 0.75 %
+    assert _reduction((1200, 1599), None) == 1
     d = aruco_dictionary("5x5_100")
     wins = sorted({max(3, int(2400 * f) | 1) for f in (0.015, 0.04, 0.10)}, reverse=True)
     args = (d, _rotated_codes(d.name), 6.0, int(d.max_correction_bits * 0.6), 0.35)
@@ -223,3 +226,19 @@ def test_reduced_search_finds_the_full_resolution_markers() -> None:
     assert len(full) == 17
     # the integer threshold of the uint8 image: the same markers again
     _same(_search_numba(g, wins, *args, g8=img), full)
+
+
+def test_min_side_px_asks_for_the_full_resolution_search() -> None:
+    """Small ChArUco markers (about 20 px) in a 4000 x 3000 view: the default's reduced search
+    (markers of 0.75 % of the larger side, as OpenCV's default) may drop some; ``min_side_px=6``
+    searches at full resolution and finds every marker, as the search did before."""
+    import cv2
+
+    board = CharucoBoard((7, 5), 30.0, 22.0, "5x5_100")
+    rng = np.random.default_rng(3)
+    bg = cv2.resize(_kodak(3), (4000, 3000), interpolation=cv2.INTER_LINEAR)
+    img, _ = _composite(rng, board, bg, square_px=28, blur=0.7, noise=0.01, cut=False)
+    full = detect_aruco_markers(img, "5x5_100", min_side_px=6)
+    assert len(full) == 17
+    default = detect_aruco_markers(img, "5x5_100")
+    assert set(default.ids.tolist()) <= set(full.ids.tolist())

@@ -536,7 +536,7 @@ def detect_aruco_markers(
     image: ArrayLike,
     dictionary: str | ArucoDictionary = "6x6_250",
     *,
-    min_side_px: float = 6.0,
+    min_side_px: float | None = None,
     windows: tuple[int, ...] | None = None,
     error_correction_rate: float = 0.6,
     max_border_errors: float = 0.35,
@@ -549,15 +549,18 @@ def detect_aruco_markers(
         Grey or RGB (uint8, uint16, or floats: [0, 1] or any scale).
     dictionary : str or ArucoDictionary
         See :func:`aruco_dictionary`.
-    min_side_px : float, keyword-only
-        Smallest marker side, in pixels, looked for (6: a 4x4 marker's six cells at a pixel
-        each still decode in photographs; a smaller one gives no more markers but false
-        ones in clutter). On a large image the candidates are found on the image reduced
+    min_side_px : float, optional, keyword-only
+        Smallest marker side, in pixels, looked for. Default (None): on an image up to
+        1600 px on its larger side, 6 px (a 4x4 marker's six cells at a pixel each still
+        decode in photographs; a smaller one gives no more markers but false ones in
+        clutter); on a larger image the candidates are found on the image reduced
         ``f = 2, 4, ...`` times (the largest ``f`` that keeps a marker of 0.75 % of the
         larger side, OpenCV's smallest by its ``minMarkerPerimeterRate`` 0.03, at least
-        ``min_side_px`` wide there), then fitted and read at full resolution: the smallest
-        marker found is then about ``f min_side_px`` (12 px from a larger side of 1600 px,
-        24 px from 3200 px), still below OpenCV's.
+        6 px wide there), then fitted and read at full resolution: the smallest marker found
+        is then about ``6 f`` px (12 px from a larger side of 1600 px, 24 px from 3200 px),
+        still below OpenCV's. A number: markers down to that side, the image reduced only
+        as far as that allows (``min_side_px=6`` searches a 12 Mpx photograph at full
+        resolution: slower, and small markers with thin margins are kept).
     windows : tuple of int, optional, keyword-only
         Side lengths (pixels, odd) of the adaptive threshold's local-mean windows; default
         three sizes scaled with the image (about 1.5 %, 4 % and 10 % of its larger side).
@@ -602,7 +605,7 @@ def _detect(
     dictionary: str | ArucoDictionary = "6x6_250",
     *,
     source: object = None,
-    min_side_px: float = 6.0,
+    min_side_px: float | None = None,
     windows: tuple[int, ...] | None = None,
     error_correction_rate: float = 0.6,
     max_border_errors: float = 0.35,
@@ -625,7 +628,10 @@ def _detect(
         and source.shape == g.shape
         else None
     )
-    min_side = as_real(min_side_px, "min_side_px", positive=True, maximum=1e5)
+    if min_side_px is None:
+        min_side, most = 6.0, None
+    else:
+        min_side = most = as_real(min_side_px, "min_side_px", positive=True, maximum=1e5)
     rate = as_real(error_correction_rate, "error_correction_rate", nonnegative=True, maximum=1.0)
     border_rate = as_real(max_border_errors, "max_border_errors", nonnegative=True, maximum=1.0)
     hgt, wid = g.shape
@@ -646,7 +652,7 @@ def _detect(
 
     args = (g, sorted(wins, reverse=True), d, rotated, min_side, max_bits, border_rate)
     if use_numba(g):
-        found = _search_numba(*args, reduce=_reduction(g.shape, min_side), g8=g8)
+        found = _search_numba(*args, reduce=_reduction(g.shape, most), g8=g8)
     else:
         found = _search_numpy(*args)
     ids = np.array(sorted(found), dtype=np.int64)
@@ -660,19 +666,19 @@ def _detect(
 _Found = dict[int, tuple[float, NDArray[np.float64], int]]
 
 
-def _reduction(shape: tuple[int, int], min_side: float) -> int:
+def _reduction(shape: tuple[int, int], min_side: float | None) -> int:
     """Return the factor (1, 2, 4, ...) by which an image of ``shape`` is reduced for candidates.
 
     OpenCV's detector looks for markers of a perimeter at least 3 % of the image's larger
     side (``minMarkerPerimeterRate``), a side of 0.75 %: on a large image such a marker is
-    still ``min_side`` pixels wide on the image reduced ``f`` times, so the thresholds and
-    components are found there (``f²`` times fewer pixels) and each candidate's quad fitted
-    again at full resolution (OpenCV's ``aprilTagQuadDecimate`` and Aruco3's
-    ``minMarkerLengthRatioOriginalImg`` do the same). 1 up to a larger side of
-    ``267 min_side`` (1600 px at the default 6 px).
+    still 6 pixels wide on the image reduced ``f`` times, so the thresholds and components
+    are found there (``f²`` times fewer pixels) and each candidate's quad fitted again at
+    full resolution (OpenCV's ``aprilTagQuadDecimate`` and Aruco3's
+    ``minMarkerLengthRatioOriginalImg`` do the same). 1 up to a larger side of 1600 px.
+    ``min_side`` (the caller's ``min_side_px``): no further than keeps such a marker 6 px wide.
     """
     f = 1
-    while 0.0075 * max(shape) / (2 * f) >= min_side:
+    while 0.0075 * max(shape) / (2 * f) >= 6.0 and (min_side is None or 12.0 * f <= min_side):
         f *= 2
     return f
 
