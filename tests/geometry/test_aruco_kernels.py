@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from imageform.geometry import CharucoBoard, aruco_dictionary, detect_charuco
+from imageform.geometry import CharucoBoard, aruco_dictionary, detect_aruco_markers, detect_charuco
 from imageform.geometry.aruco import _rotated_codes, _search_numba, _search_numpy
 from tests.geometry.test_charuco import _composite, _kodak
 
@@ -125,3 +125,120 @@ def test_large_marker_with_bowed_sides_is_read_by_both_twins(k1: float) -> None:
     fast, slow = _both(g, "4x4_50")
     _same(fast, slow)
     assert sorted(fast) == [3]
+
+
+def test_integer_threshold_gives_the_float_thresholds_components() -> None:
+    """A uint8 image thresholded in integers (``10 g w² < 10 S - 51 w²``) gives the dark pixels
+    of the floating-point test on ``g / 255``: the same runs and components."""
+    from imageform._kernels.aruco import (
+        box_integral,
+        box_integral_u8,
+        dark_components,
+        dark_components_u8,
+    )
+
+    rng = np.random.default_rng(8)
+    images = [rng.integers(0, 256, (90, 130)).astype(np.uint8)]
+    images.append(np.clip(_kodak(5), 0, 255).round().astype(np.uint8))
+    for g8 in images:
+        pad = 40
+        table = box_integral_u8(g8, pad, np.empty((g8.shape[0] + 81, g8.shape[1] + 81), np.int32))
+        np.testing.assert_array_equal(table, np.round(box_integral(g8 / 255.0, pad) * 255))
+        for win in (3, 15, 81):
+            cap = g8.shape[0] * ((g8.shape[1] + 1) // 2) + 2
+            fast = dark_components_u8(g8, table, pad, win, cap, cap)
+            slow = dark_components(
+                g8 / 255.0, box_integral(g8 / 255.0, pad), pad, win, 0.02, cap, cap
+            )
+            for a, b in zip(fast, slow, strict=True):
+                np.testing.assert_array_equal(a, b)
+
+
+def test_region_table_equals_the_images() -> None:
+    from imageform._kernels.aruco import box_integral, box_integral_roi, dark_components
+
+    g = np.random.default_rng(2).random((70, 90))
+    pad = 12
+    whole = box_integral(g, pad)
+    r0, r1, c0, c1 = 5, 40, 0, 33
+    part = box_integral_roi(g, pad, r0, r1, c0, c1, np.empty((r1 - r0 + 25, c1 - c0 + 25)))
+    # differences of the tables (window sums) agree to rounding inside the region
+    a = whole[r0 : r1 + 2 * pad + 1, c0 : c1 + 2 * pad + 1]
+    np.testing.assert_allclose(
+        a[25:, 25:] - a[:-25, 25:] - a[25:, :-25] + a[:-25, :-25],
+        part[25:, 25:] - part[:-25, 25:] - part[25:, :-25] + part[:-25, :-25],
+        rtol=1e-12,
+    )
+    cap = 70 * 46
+    sub = np.ascontiguousarray(g[r0:r1, c0:c1])
+    runs_part = dark_components(sub, part, pad, 25, 0.02, cap, cap)[0]
+    runs_view = dark_components(sub, np.ascontiguousarray(a), pad, 25, 0.02, cap, cap)[0]
+    np.testing.assert_array_equal(runs_part, runs_view)
+
+
+def test_decode_cells_gives_the_twins_verdicts() -> None:
+    from imageform._kernels.aruco import decode_cells
+    from imageform.geometry.aruco import _decode
+
+    rng = np.random.default_rng(0)
+    for name in ("4x4_50", "5x5_100", "6x6_250", "4x4_1000"):
+        d = aruco_dictionary(name)
+        cells, rot = d.marker_size + 2, _rotated_codes(name)
+        means = rng.random((300, cells * cells))
+        for j in range(150):  # codes read with a few flipped cells and noise
+            code = np.zeros((cells, cells))
+            code[1:-1, 1:-1] = np.rot90(d.codes[rng.integers(d.size)], int(rng.integers(4)))
+            code = np.where(rng.random(code.shape) < 0.05, 1 - code, code)
+            means[j] = (0.2 + 0.6 * code + rng.normal(0, 0.05, code.shape)).ravel()
+        means[5] = 0.5  # no contrast
+        for bits, border, contrast in ((1, 0.35, 0.08), (3, 0.5, 0.04), (0, 0.35, 0.08)):
+            want = _decode(means, d, cells, rot, bits, border, contrast)
+            code_, r, dist, con = decode_cells(means, rot, cells, bits, border, contrast)
+            got = [
+                None if code_[j] < 0 else (int(code_[j]), int(r[j]), int(dist[j]), float(con[j]))
+                for j in range(len(means))
+            ]
+            assert got == want
+
+
+def test_reduced_search_finds_the_full_resolution_markers() -> None:
+    """A large view (2400 x 1800) searched on the image reduced twice and each candidate
+    fitted again at full resolution: the markers and corners of the full-resolution search."""
+    import cv2
+
+    from imageform.geometry.aruco import _reduction
+
+    board = CharucoBoard((7, 5), 30.0, 22.0, "5x5_100")
+    rng = np.random.default_rng(11)
+    bg = cv2.resize(_kodak(7), (2400, 1800), interpolation=cv2.INTER_LINEAR)
+    img, _ = _composite(rng, board, bg, square_px=160, blur=1.0, noise=0.01, cut=False)
+    g = img / 255.0
+    assert _reduction(g.shape, None) == 2  # the default: markers of 0.75 % of 2400 px kept
+    assert _reduction(g.shape, 6.0) == 1 and _reduction(g.shape, 11.0) == 1  # asked for 6 px
+    assert _reduction(g.shape, 12.0) == 2 and _reduction(g.shape, 48.0) == 2  # at most 0.75 %
+    assert _reduction((1200, 1599), None) == 1
+    d = aruco_dictionary("5x5_100")
+    wins = sorted({max(3, int(2400 * f) | 1) for f in (0.015, 0.04, 0.10)}, reverse=True)
+    args = (d, _rotated_codes(d.name), 6.0, int(d.max_correction_bits * 0.6), 0.35)
+    full = _search_numba(g, wins, *args)
+    reduced = _search_numba(g, wins, *args, reduce=2)
+    _same(reduced, full)
+    assert len(full) == 17
+    # the integer threshold of the uint8 image: the same markers again
+    _same(_search_numba(g, wins, *args, g8=img), full)
+
+
+def test_min_side_px_asks_for_the_full_resolution_search() -> None:
+    """Small ChArUco markers (about 20 px) in a 4000 x 3000 view: the default's reduced search
+    (markers of 0.75 % of the larger side, as OpenCV's default) may drop some; ``min_side_px=6``
+    searches at full resolution and finds every marker, as the search did before."""
+    import cv2
+
+    board = CharucoBoard((7, 5), 30.0, 22.0, "5x5_100")
+    rng = np.random.default_rng(3)
+    bg = cv2.resize(_kodak(3), (4000, 3000), interpolation=cv2.INTER_LINEAR)
+    img, _ = _composite(rng, board, bg, square_px=28, blur=0.7, noise=0.01, cut=False)
+    full = detect_aruco_markers(img, "5x5_100", min_side_px=6)
+    assert len(full) == 17
+    default = detect_aruco_markers(img, "5x5_100")
+    assert set(default.ids.tolist()) <= set(full.ids.tolist())

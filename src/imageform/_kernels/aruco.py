@@ -14,14 +14,23 @@ r"""numba kernels of the ArUco marker detector (``imageform.geometry.aruco``).
   filled component's area) and the sides fitted to the boundary pixels (total least
   squares), corners where they meet.
 - :func:`cell_means`: the mean grey of each marker cell, sampled bilinearly at ``3 x 3``
-  points through the homography of the unit square onto the quad.
+  points through the homography of the unit square onto the quad; :func:`decode_cells`:
+  Otsu's split of a quad's cells, its border and the nearest code.
+- :func:`box_integral_u8` and :func:`dark_components_u8`: the same threshold of a uint8
+  image in integers (the same dark pixels, a quarter of the memory traffic);
+  :func:`box_integral_roi`: the table of a region of the image, for the full-resolution
+  look at a candidate found on the image reduced by :func:`block_means`; :func:`unit_grey`:
+  uint8 to [0, 1].
+- :func:`sample_quadrants`: the ChArUco corners' squares sampled through their local
+  homographies (``imageform.geometry.charuco``'s seen-whole check).
 
 Work per window is proportional to the image (the threshold) plus the runs and boundary
 pixels of the candidates, not their bounding boxes: a large textured blob of a photograph
 costs its runs, not the area it spans. All are serial (a call is a few milliseconds on a
-720p frame; parallelism belongs across frames), compiled for one signature each (float64
-image), cached, with NumPy's division semantics (``error_model="numpy"``: a division by
-zero gives inf or NaN, as the NumPy steps they replace did, never an exception). The
+720p frame; parallelism belongs across frames), compiled for few signatures (float64 or
+uint8 image, whole or a region's view), cached, with NumPy's division semantics
+(``error_model="numpy"``: a division by zero gives inf or NaN, as the NumPy steps they
+replace did, never an exception). The
 Python pipeline around them is :func:`imageform.geometry.detect_aruco_markers`, whose
 NumPy/SciPy twin (the component by component implementation they replace, run under
 ``IMAGEFORM_DISABLE_NUMBA``) gives the same markers to 1e-9 px
@@ -37,7 +46,19 @@ from numpy.typing import NDArray
 
 from imageform._kernels.jit import njit
 
-__all__ = ["cell_means", "component_quads", "dark_components"]
+__all__ = [
+    "block_means",
+    "box_integral",
+    "box_integral_roi",
+    "box_integral_u8",
+    "cell_means",
+    "component_quads",
+    "dark_components",
+    "dark_components_u8",
+    "decode_cells",
+    "sample_quadrants",
+    "unit_grey",
+]
 
 
 @njit(nogil=True, error_model="numpy")
@@ -70,45 +91,114 @@ def box_integral(g: NDArray[np.float64], pad: int) -> NDArray[np.float64]:  # pr
 
     ``out[i, j]`` is the sum of the padded image's rows ``< i`` and columns ``< j``, so any
     window of the padded image sums with four look-ups; shape ``(H + 2 pad + 1,
-    W + 2 pad + 1)``.
+    W + 2 pad + 1)``. :func:`box_integral_roi` of the whole image.
     """
     hgt, wid = g.shape
-    cols = np.empty(wid + 2 * pad, dtype=np.int64)
-    for k in range(wid + 2 * pad):
-        cols[k] = _reflect(k - pad, wid)
-    rows = hgt + 2 * pad
-    width = wid + 2 * pad
-    out = np.empty((rows + 1, width + 1))  # every entry written below
+    out = np.empty((hgt + 2 * pad + 1, wid + 2 * pad + 1))
+    return box_integral_roi(g, pad, 0, hgt, 0, wid, out)
+
+
+@njit(nogil=True, error_model="numpy")
+def box_integral_roi(
+    g: NDArray[np.float64],
+    pad: int,
+    r0: int,
+    r1: int,
+    c0: int,
+    c1: int,
+    out: NDArray[np.float64],
+) -> NDArray[np.float64]:  # pragma: no cover - compiled
+    """Return the integral image of a region of ``g`` and ``pad`` pixels around it.
+
+    Rows ``r0 - pad .. r1 + pad - 1`` and columns ``c0 - pad .. c1 + pad - 1`` of ``g``, its
+    edges reflected (SciPy's ``mode="reflect"``). Every window up to ``2 pad + 1`` wide
+    around a pixel of ``g[r0:r1, c0:c1]`` sums from it as from :func:`box_integral` of the
+    whole image, to rounding (a few units in the last place of the table's entries, far
+    below the step between two 8-bit codes that decides a threshold), so
+    :func:`dark_components` of the region gives the whole image's dark pixels there. Written
+    into ``out``, of shape ``(r1 - r0 + 2 pad + 1, c1 - c0 + 2 pad + 1)`` (a buffer the
+    caller may reuse), and returned.
+    """
+    hgt, wid = g.shape
+    width = c1 - c0 + 2 * pad
+    rows = r1 - r0 + 2 * pad
+    cols = np.empty(width, dtype=np.int64)
+    for k in range(width):
+        cols[k] = _reflect(c0 + k - pad, wid)
     out[0, :] = 0.0
     out[:, 0] = 0.0
-    # each row's running sums first (four rows at a time: four independent chains of
-    # additions keep the processor busy), then the sums down the columns
-    for i0 in range(0, rows, 4):
-        n = min(4, rows - i0)
-        r0 = g[_reflect(i0 - pad, hgt)]
-        r1 = g[_reflect(min(i0 + 1, rows - 1) - pad, hgt)]
-        r2 = g[_reflect(min(i0 + 2, rows - 1) - pad, hgt)]
-        r3 = g[_reflect(min(i0 + 3, rows - 1) - pad, hgt)]
-        o0 = out[i0 + 1]
-        o1 = out[min(i0 + 2, rows)]
-        o2 = out[min(i0 + 3, rows)]
-        o3 = out[min(i0 + 4, rows)]
-        s0 = s1 = s2 = s3 = 0.0
+    # each row's running sum added to the row above as it goes (one pass); two rows at a
+    # time: two independent chains of additions keep the processor busy
+    for i0 in range(0, rows, 2):
+        two = i0 + 1 < rows
+        ra = g[_reflect(r0 + i0 - pad, hgt)]
+        rb = g[_reflect(r0 + min(i0 + 1, rows - 1) - pad, hgt)]
+        above = out[i0]
+        oa = out[i0 + 1]
+        ob = out[min(i0 + 2, rows)]
+        sa = 0.0
+        sb = 0.0
         for j in range(width):
             c = cols[j]
-            s0 += r0[c]
-            s1 += r1[c]
-            s2 += r2[c]
-            s3 += r3[c]
-            o0[j + 1] = s0
-            o1[j + 1] = s1 if n > 1 else o1[j + 1]
-            o2[j + 1] = s2 if n > 2 else o2[j + 1]
-            o3[j + 1] = s3 if n > 3 else o3[j + 1]
-    for i in range(1, rows + 1):
-        above = out[i - 1]
-        here = out[i]
-        for j in range(1, width + 1):
-            here[j] += above[j]
+            sa += ra[c]
+            sb += rb[c]
+            va = sa + above[j + 1]
+            oa[j + 1] = va
+            if two:
+                ob[j + 1] = sb + va
+    return out
+
+
+@njit(nogil=True, error_model="numpy")
+def box_integral_u8(
+    g8: NDArray[np.uint8], pad: int, out: NDArray[np.int32]
+) -> NDArray[np.int32]:  # pragma: no cover - compiled
+    """Return :func:`box_integral` of a uint8 image in integers (exact), written into ``out``.
+
+    ``out`` has the shape ``(H + 2 pad + 1, W + 2 pad + 1)``; its sums must fit 31 bits:
+    ``255 (H + 2 pad) (W + 2 pad) < 2³¹``.
+    """
+    hgt, wid = g8.shape
+    width = wid + 2 * pad
+    rows = hgt + 2 * pad
+    cols = np.empty(width, dtype=np.int64)
+    for k in range(width):
+        cols[k] = _reflect(k - pad, wid)
+    out[0, :] = 0
+    out[:, 0] = 0
+    for i in range(rows):
+        row = g8[_reflect(i - pad, hgt)]
+        above = out[i]
+        here = out[i + 1]
+        acc = np.int32(0)
+        for j in range(width):
+            acc += np.int32(row[cols[j]])
+            here[j + 1] = acc + above[j + 1]
+    return out
+
+
+@njit(nogil=True, error_model="numpy")
+def block_means(g: NDArray[np.float64], f: int) -> NDArray[np.float64]:  # pragma: no cover
+    """Return ``g`` reduced ``f`` times: the mean of each ``f x f`` block.
+
+    A last partial row or column of blocks is dropped; OpenCV's ``resize(INTER_AREA)`` at an
+    integer factor.
+    """
+    hgt, wid = g.shape
+    h2, w2 = hgt // f, wid // f
+    out = np.zeros((h2, w2))
+    inv = 1.0 / (f * f)
+    for i in range(h2):
+        o = out[i]
+        for di in range(f):
+            row = g[i * f + di]
+            for j in range(w2):
+                acc = 0.0
+                for dj in range(f):
+                    acc += row[j * f + dj]
+                o[j] += acc
+        for j in range(w2):
+            o[j] *= inv
     return out
 
 
@@ -116,6 +206,57 @@ def box_integral(g: NDArray[np.float64], pad: int) -> NDArray[np.float64]:  # pr
 def dark_components(
     g: NDArray[np.float64],
     integral: NDArray[np.float64],
+    pad: int,
+    win: int,
+    offset: float,
+    cap: int,
+    cap_labels: int,
+) -> tuple[
+    NDArray[np.int64], NDArray[np.int64], NDArray[np.int64], NDArray[np.int64]
+]:  # pragma: no cover - compiled
+    """Threshold ``g`` against its ``win x win`` local mean and label the dark components.
+
+    See :func:`_labelled`: ``integral`` is :func:`box_integral` of ``g``.
+    """
+    return _labelled(g, integral, _EMPTY_U8, _EMPTY_I32, False, pad, win, offset, cap, cap_labels)
+
+
+@njit(nogil=True, error_model="numpy")
+def dark_components_u8(
+    g8: NDArray[np.uint8],
+    integral: NDArray[np.int32],
+    pad: int,
+    win: int,
+    cap: int,
+    cap_labels: int,
+) -> tuple[
+    NDArray[np.int64], NDArray[np.int64], NDArray[np.int64], NDArray[np.int64]
+]:  # pragma: no cover - compiled
+    """:func:`dark_components` of ``g8 / 255`` with the offset 0.02, in integers.
+
+    ``integral`` is :func:`box_integral_u8` of ``g8``. A pixel is dark when ``g8 / 255 <
+    S / (255 w²) - 0.02`` (``S`` its window's sum of ``g8``, ``w`` the window), that is
+    ``10 g8 w² < 10 S - 51 w²``, which never holds with equality for an odd ``w`` (``51
+    w²`` is odd): the floating-point test of :func:`dark_components`, whose rounding is far
+    below the one code step, ``1 / (2550 w²)``, the two sides then differ by, gives the same
+    pixels (tested), at a quarter of the memory traffic; ``10 S`` must fit 31 bits
+    (``w <= 917``).
+    """
+    return _labelled(_EMPTY_F64, _EMPTY_F64, g8, integral, True, pad, win, 0.02, cap, cap_labels)
+
+
+_EMPTY_F64 = np.zeros((0, 0))
+_EMPTY_U8 = np.zeros((0, 0), dtype=np.uint8)
+_EMPTY_I32 = np.zeros((0, 0), dtype=np.int32)
+
+
+@njit(nogil=True, error_model="numpy")
+def _labelled(
+    g: NDArray[np.float64],
+    integral: NDArray[np.float64],
+    g8: NDArray[np.uint8],
+    integral32: NDArray[np.int32],
+    exact: bool,
     pad: int,
     win: int,
     offset: float,
@@ -140,11 +281,14 @@ def dark_components(
     area, first row, last row, first column, last column (inclusive) of each component
     (row 0 unused).
     """
-    hgt, wid = g.shape
+    hgt, wid = g8.shape if exact else g.shape
     r = win // 2
     lo = pad - r
     hi = pad + r + 1
     inv = 1.0 / (win * win)
+    k10 = np.int32(10 * win * win)
+    k51 = np.int32(51 * win * win)
+    ten = np.int32(10)
     # one new label a run at most: sized once (growing inside the loop would make numba
     # count references on every access); filled as they are made
     runs = np.empty((cap, 3), dtype=np.int64)
@@ -155,24 +299,43 @@ def dark_components(
     nr = 0
     prev_lo = 0  # the previous row's runs: prev_lo .. prev_hi - 1
     prev_hi = 0
-    dark = np.empty(wid + 1, dtype=np.bool_)
-    dark[wid] = False  # a sentinel ending the last run
+    # dark[1 + j]: pixel j dark (0 or 1), with a light pixel either side; flip[j]: whether
+    # the row changes between pixels j - 1 and j (a run starts at j or ended at j - 1), read
+    # eight at a time: rows are mostly without transitions
+    n_words = (wid + 8) // 8
+    dark = np.zeros(8 * n_words + 1, dtype=np.uint8)
+    flip = np.zeros(8 * n_words, dtype=np.uint8)
+    words = flip.view(np.uint64)
     trans = np.empty(wid + 2, dtype=np.int64)
     for i in range(hgt):
-        top = integral[i + lo]
-        bottom = integral[i + hi]
-        gi = g[i]
-        for j in range(wid):  # branch-free: the compiler vectorises it
-            box = bottom[j + hi] - top[j + hi] - bottom[j + lo] + top[j + lo]
-            dark[j] = gi[j] < box * inv - offset
-        # the row's runs from its dark/light transitions (a branch-free compaction)
-        n_trans = 0
-        was = False
+        # the four corners of every window of the row as slices: the compiler vectorises
+        dk = dark[1 : wid + 1]
+        if exact:
+            a32 = integral32[i + hi, hi : hi + wid]
+            b32 = integral32[i + lo, hi : hi + wid]
+            c32 = integral32[i + hi, lo : lo + wid]
+            d32 = integral32[i + lo, lo : lo + wid]
+            g8i = g8[i]
+            for j in range(wid):
+                box = a32[j] - b32[j] - c32[j] + d32[j]
+                dk[j] = np.uint8(np.int32(g8i[j]) * k10 < ten * box - k51)
+        else:
+            a = integral[i + hi, hi : hi + wid]
+            b = integral[i + lo, hi : hi + wid]
+            c = integral[i + hi, lo : lo + wid]
+            d = integral[i + lo, lo : lo + wid]
+            gi = g[i]
+            for j in range(wid):
+                dk[j] = np.uint8(gi[j] < (a[j] - b[j] - c[j] + d[j]) * inv - offset)
         for j in range(wid + 1):
-            now = dark[j]
-            trans[n_trans] = j
-            n_trans += now != was
-            was = now
+            flip[j] = dark[j] ^ dark[j + 1]
+        n_trans = 0
+        for w in range(n_words):
+            if words[w] != 0:
+                for j in range(8 * w, 8 * w + 8):
+                    if flip[j]:
+                        trans[n_trans] = j
+                        n_trans += 1
         if nr + n_trans // 2 > cap or n_prov + n_trans // 2 > cap_labels:
             empty = np.zeros(0, dtype=np.int64)
             return np.zeros((0, 3), dtype=np.int64), empty, empty, np.zeros((0, 5), np.int64)
@@ -713,3 +876,146 @@ def cell_means(
                         )
                 out[c, ci * cells + cj] = acc / 9.0
     return out
+
+
+@njit(nogil=True, error_model="numpy")
+def sample_quadrants(
+    g: NDArray[np.float64],
+    homs: NDArray[np.float64],
+    corner: NDArray[np.float64],
+    dirs: NDArray[np.float64],
+    grid: NDArray[np.float64],
+) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:  # pragma: no cover - compiled
+    """Sample ``g`` at board points around ChArUco corners (``imageform.geometry.charuco``).
+
+    Corner ``i``'s points are ``corner[i] + dirs[i, k] * grid[t]`` (board units; two
+    quadrant directions ``k``, the ``P`` points of ``grid`` in each), mapped to pixels by
+    ``homs[i]``; returns the values ``(m, 2 P)`` (bilinear, edges clamped, as
+    ``geometry.aruco._bilinear``) and whether each point fell in the image (a point outside
+    is sampled at pixel (0, 0)).
+    """
+    hgt, wid = g.shape
+    m = homs.shape[0]
+    p = grid.shape[0]
+    vals = np.empty((m, 2 * p))
+    ok = np.empty((m, 2 * p), dtype=np.bool_)
+    for i in range(m):
+        h = homs[i]
+        for k in range(2):
+            for t in range(p):
+                bx = corner[i, 0] + dirs[i, k, 0] * grid[t, 0]
+                by = corner[i, 1] + dirs[i, k, 1] * grid[t, 1]
+                w = bx * h[2, 0] + by * h[2, 1] + h[2, 2]
+                u = (bx * h[0, 0] + by * h[0, 1] + h[0, 2]) / w
+                v = (bx * h[1, 0] + by * h[1, 1] + h[1, 2]) / w
+                inside = (
+                    math.isfinite(u)
+                    and math.isfinite(v)
+                    and 0.0 <= u <= wid - 1.0
+                    and 0.0 <= v <= hgt - 1.0
+                )
+                if not inside:
+                    u = 0.0
+                    v = 0.0
+                u0 = min(math.floor(u), wid - 2)
+                v0 = min(math.floor(v), hgt - 2)
+                fu, fv = u - u0, v - v0
+                vals[i, k * p + t] = (1 - fv) * ((1 - fu) * g[v0, u0] + fu * g[v0, u0 + 1]) + fv * (
+                    (1 - fu) * g[v0 + 1, u0] + fu * g[v0 + 1, u0 + 1]
+                )
+                ok[i, k * p + t] = inside
+    return vals, ok
+
+
+@njit(nogil=True, error_model="numpy")
+def decode_cells(
+    means: NDArray[np.float64],
+    rotated: NDArray[np.uint8],
+    cells: int,
+    max_bits: int,
+    border_rate: float,
+    min_contrast: float,
+) -> tuple[NDArray[np.int64], NDArray[np.int64], NDArray[np.int64], NDArray[np.float64]]:
+    """Read the cells of each quad (``means`` (m, cells²), row by row) against the codes.
+
+    ``geometry.aruco._decode`` in one pass: Otsu's split of the quad's cell means (white
+    above), its border cells (at most ``border_rate`` of them white), the nearest code of
+    ``rotated`` (n, 4, inner bits) over the four rotations (first of the smallest distance).
+    Returns the code (-1 when refused: contrast under ``min_contrast``, border, or more than
+    ``max_bits`` apart), rotation, distance and contrast (max - min of the means) of each.
+    """
+    m, n = means.shape
+    n_codes = rotated.shape[0]
+    n_bits = rotated.shape[2]
+    code = np.full(m, -1, dtype=np.int64)
+    rot = np.zeros(m, dtype=np.int64)
+    dist = np.zeros(m, dtype=np.int64)
+    contrast = np.zeros(m)
+    v = np.empty(n)
+    csum = np.empty(n)
+    inner = np.empty(n_bits, dtype=np.uint8)
+    n_border = cells * cells - (cells - 2) * (cells - 2)
+    for q in range(m):
+        row = means[q]
+        lo = row[0]
+        hi = row[0]
+        for t in range(n):
+            v[t] = row[t]
+            lo = min(lo, row[t])
+            hi = max(hi, row[t])
+        contrast[q] = hi - lo
+        v.sort()
+        acc = 0.0
+        for t in range(n):
+            acc += v[t]
+            csum[t] = acc
+        best = -1.0
+        k = 0
+        for i in range(1, n):
+            m0 = csum[i - 1] / i
+            m1 = (csum[n - 1] - csum[i - 1]) / (n - i)
+            between = (i / n) * (1 - i / n) * (m0 - m1) ** 2
+            if between > best or i == 1:
+                best = between
+                k = i - 1
+        thr = 0.5 * (v[k] + v[k + 1])
+        white_border = 0
+        b = 0
+        for r in range(cells):
+            for c in range(cells):
+                white = row[r * cells + c] > thr
+                if r == 0 or c == 0 or r == cells - 1 or c == cells - 1:
+                    white_border += white
+                else:
+                    inner[b] = white
+                    b += 1
+        if hi - lo < min_contrast or white_border > border_rate * n_border:
+            continue
+        dmin = n_bits + 1
+        arg = 0
+        for k_code in range(n_codes):
+            for k_rot in range(4):
+                d = 0
+                ref = rotated[k_code, k_rot]
+                for t in range(n_bits):
+                    d += ref[t] != inner[t]
+                if d < dmin:
+                    dmin = d
+                    arg = k_code * 4 + k_rot
+        if dmin > max_bits:
+            continue
+        code[q] = arg // 4
+        rot[q] = arg % 4
+        dist[q] = dmin
+    return code, rot, dist, contrast
+
+
+@njit(nogil=True, error_model="numpy")
+def unit_grey(g8: NDArray[np.uint8], out: NDArray[np.float64]) -> None:  # pragma: no cover
+    """Write ``g8 / 255`` into ``out`` (the same values as NumPy's ``true_divide``)."""
+    hgt, wid = g8.shape
+    for i in range(hgt):
+        src = g8[i]
+        dst = out[i]
+        for j in range(wid):
+            dst[j] = src[j] / 255.0

@@ -34,10 +34,12 @@ Recognition 47(6):2280-2292, 2014.
 from __future__ import annotations
 
 import math
+import threading
 import weakref
 from dataclasses import dataclass, field
 from functools import lru_cache
 from importlib import resources
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -165,6 +167,12 @@ def aruco_dictionary(name: str | ArucoDictionary = "6x6_250") -> ArucoDictionary
             f"unknown ArUco dictionary name {shown!r}; expected 4x4_50 ... 7x7_1000 "
             "(sizes 4-7, counts 50/100/250/1000) or aruco_original"
         )
+    return _named(key)
+
+
+@lru_cache(maxsize=32)
+def _named(key: str) -> ArucoDictionary:
+    """Make the predefined dictionary ``key`` (once: it is immutable)."""
     tables = _tables()
     if key == "aruco_original":
         s, n, corr = 5, 1024, 1
@@ -263,9 +271,38 @@ def _diagonal_cross(q: NDArray[np.float64]) -> NDArray[np.float64]:
 _MADE: weakref.WeakValueDictionary[int, NDArray[np.float64]] = weakref.WeakValueDictionary()
 
 
-def _gray01(image: object) -> NDArray[np.float64]:
+def _gray01(image: object, *, scratch: bool = False) -> NDArray[np.float64]:
+    """``image`` as grey values in [0, 1] (float64; an image this function made, as it is).
+
+    ``scratch``: a uint8 grey image of up to ``_MAX_KEPT`` pixels is converted into this
+    thread's work buffer (valid until the next such call in the thread: for a detection
+    that does not hand the grey image back), sparing a fresh array's page faults.
+    """
     if isinstance(image, np.ndarray) and _MADE.get(id(image)) is image:
         return image
+    if (
+        scratch
+        and isinstance(image, np.ndarray)
+        and image.dtype == np.uint8
+        and image.ndim == 2
+        and min(image.shape) >= 8
+        and image.size <= _MAX_KEPT
+    ):
+        buf = getattr(_WORK, "grey", None)
+        if buf is None or buf.size < image.size:
+            buf = np.empty(max(image.size, 1 << 20))
+            _WORK.grey = buf
+        g = buf[: image.size].reshape(image.shape)
+        from imageform._backend import use_numba
+
+        if use_numba(image):
+            from imageform._kernels.aruco import unit_grey
+
+            unit_grey(np.ascontiguousarray(image), g)  # the same values as true_divide
+        else:
+            np.true_divide(image, 255.0, out=g)  # as _gray01_checked: the same values
+        _MADE[id(g)] = g
+        return g
     g = _gray01_checked(image)
     if g is not image:
         _MADE[id(g)] = g
@@ -499,7 +536,7 @@ def detect_aruco_markers(
     image: ArrayLike,
     dictionary: str | ArucoDictionary = "6x6_250",
     *,
-    min_side_px: float = 6.0,
+    min_side_px: float | None = None,
     windows: tuple[int, ...] | None = None,
     error_correction_rate: float = 0.6,
     max_border_errors: float = 0.35,
@@ -512,10 +549,18 @@ def detect_aruco_markers(
         Grey or RGB (uint8, uint16, or floats: [0, 1] or any scale).
     dictionary : str or ArucoDictionary
         See :func:`aruco_dictionary`.
-    min_side_px : float, keyword-only
-        Smallest marker side, in pixels, looked for (6: a 4x4 marker's six cells at a pixel
-        each still decode in photographs; a smaller one gives no more markers but false
-        ones in clutter).
+    min_side_px : float, optional, keyword-only
+        Smallest marker side, in pixels, looked for. Default (None): on an image up to
+        1600 px on its larger side, 6 px (a 4x4 marker's six cells at a pixel each still
+        decode in photographs; a smaller one gives no more markers but false ones in
+        clutter); on a larger image the candidates are found on the image reduced
+        ``f = 2, 4, ...`` times (the largest ``f`` that keeps a marker of 0.75 % of the
+        larger side, OpenCV's smallest by its ``minMarkerPerimeterRate`` 0.03, at least
+        6 px wide there), then fitted and read at full resolution: the smallest marker found
+        is then about ``6 f`` px (12 px from a larger side of 1600 px, 24 px from 3200 px),
+        still below OpenCV's. A number: markers down to that side, the image reduced only
+        as far as that allows (``min_side_px=6`` searches a 12 Mpx photograph at full
+        resolution: slower, and small markers with thin margins are kept).
     windows : tuple of int, optional, keyword-only
         Side lengths (pixels, odd) of the adaptive threshold's local-mean windows; default
         three sizes scaled with the image (about 1.5 %, 4 % and 10 % of its larger side).
@@ -545,9 +590,48 @@ def detect_aruco_markers(
     >>> m.ids.tolist(), np.round(m.corners[0], 1).tolist()
     ([7], [[99.5, 59.5], [219.5, 59.5], [219.5, 179.5], [99.5, 179.5]])
     """
+    return _detect(
+        image,
+        dictionary,
+        min_side_px=min_side_px,
+        windows=windows,
+        error_correction_rate=error_correction_rate,
+        max_border_errors=max_border_errors,
+    )
+
+
+def _detect(
+    image: ArrayLike,
+    dictionary: str | ArucoDictionary = "6x6_250",
+    *,
+    source: object = None,
+    min_side_px: float | None = None,
+    windows: tuple[int, ...] | None = None,
+    error_correction_rate: float = 0.6,
+    max_border_errors: float = 0.35,
+) -> ArucoMarkers:
+    """Find the markers as :func:`detect_aruco_markers` does, given the caller's image.
+
+    ``source``: the caller's image that ``image`` (already :func:`_gray01`) was made from;
+    when it is a uint8 grey image its codes give the threshold in integers (the same pixels,
+    :func:`imageform._kernels.aruco.dark_components_u8`).
+    """
     d = aruco_dictionary(dictionary)
-    g = _gray01(image)
-    min_side = as_real(min_side_px, "min_side_px", positive=True, maximum=1e5)
+    g = _gray01(image, scratch=True)
+    if source is None:
+        source = image
+    g8 = (
+        source
+        if isinstance(source, np.ndarray)
+        and source.dtype == np.uint8
+        and source.ndim == 2
+        and source.shape == g.shape
+        else None
+    )
+    if min_side_px is None:
+        min_side, most = 6.0, None
+    else:
+        min_side = most = as_real(min_side_px, "min_side_px", positive=True, maximum=1e5)
     rate = as_real(error_correction_rate, "error_correction_rate", nonnegative=True, maximum=1.0)
     border_rate = as_real(max_border_errors, "max_border_errors", nonnegative=True, maximum=1.0)
     hgt, wid = g.shape
@@ -566,8 +650,11 @@ def detect_aruco_markers(
     )
     from imageform._backend import use_numba
 
-    search = _search_numba if use_numba(g) else _search_numpy
-    found = search(g, sorted(wins, reverse=True), d, rotated, min_side, max_bits, border_rate)
+    args = (g, sorted(wins, reverse=True), d, rotated, min_side, max_bits, border_rate)
+    if use_numba(g):
+        found = _search_numba(*args, reduce=_reduction(g.shape, most), g8=g8)
+    else:
+        found = _search_numpy(*args)
     ids = np.array(sorted(found), dtype=np.int64)
     corners = np.array([found[i][1] for i in ids], dtype=np.float64).reshape(-1, 4, 2)
     hamming = np.array([found[i][2] for i in ids], dtype=np.int64)
@@ -579,6 +666,110 @@ def detect_aruco_markers(
 _Found = dict[int, tuple[float, NDArray[np.float64], int]]
 
 
+def _reduction(shape: tuple[int, int], min_side: float | None) -> int:
+    """Return the factor (1, 2, 4, ...) by which an image of ``shape`` is reduced for candidates.
+
+    OpenCV's detector looks for markers of a perimeter at least 3 % of the image's larger
+    side (``minMarkerPerimeterRate``), a side of 0.75 %: on a large image such a marker is
+    still 6 pixels wide on the image reduced ``f`` times, so the thresholds and components
+    are found there (``f²`` times fewer pixels) and each candidate's quad fitted again at
+    full resolution (OpenCV's ``aprilTagQuadDecimate`` and Aruco3's
+    ``minMarkerLengthRatioOriginalImg`` do the same). 1 up to a larger side of 1600 px.
+    ``min_side`` (the caller's ``min_side_px``): no further than keeps such a marker 6 px wide.
+    """
+    f = 1
+    while 0.0075 * max(shape) / (2 * f) >= 6.0 and (min_side is None or 12.0 * f <= min_side):
+        f *= 2
+    return f
+
+
+#: Each thread's work buffer for :func:`_table` (a fresh table of a few megabytes costs
+#: more in page faults, zeroed by the system, than the sums written into it).
+_WORK = threading.local()
+#: Largest table kept between calls (entries: 32 MB).
+_MAX_KEPT = 4_000_000
+
+
+def _table(g: NDArray[np.float64] | NDArray[np.uint8], pad: int) -> NDArray[Any]:
+    """Return :func:`imageform._kernels.aruco.box_integral` of ``g``, in a work buffer.
+
+    ``box_integral_u8`` (int32) of a uint8 ``g``; in this thread's buffer when small enough:
+    valid until the next call in the same thread.
+    """
+    from imageform._kernels.aruco import box_integral_roi, box_integral_u8
+
+    hgt, wid = g.shape
+    shape = (hgt + 2 * pad + 1, wid + 2 * pad + 1)
+    size = shape[0] * shape[1]
+    dtype = np.int32 if g.dtype == np.uint8 else np.float64
+    key = "table32" if dtype == np.int32 else "table"
+    if size > _MAX_KEPT:
+        out = np.empty(shape, dtype=dtype)
+    else:
+        buf = getattr(_WORK, key, None)
+        if buf is None or buf.size < size:
+            buf = np.empty(max(size, 1 << 20), dtype=dtype)
+            setattr(_WORK, key, buf)
+        out = buf[:size].reshape(shape)
+    if dtype == np.int32:
+        return np.asarray(box_integral_u8(g, pad, out))
+    return np.asarray(box_integral_roi(g, pad, 0, hgt, 0, wid, out))
+
+
+def _components(
+    g: NDArray[np.float64] | NDArray[np.uint8],
+    integral: NDArray[np.float64] | NDArray[np.int32],
+    pad: int,
+    win: int,
+    cap: list[int],
+) -> tuple[NDArray[np.int64], NDArray[np.int64], NDArray[np.int64], NDArray[np.int64]]:
+    """Label the dark components of ``g`` (:func:`imageform._kernels.aruco.dark_components`).
+
+    ``dark_components_u8`` of a uint8 ``g``; asked again with more room (``cap[0]`` runs,
+    kept for the next window) when its runs overflow.
+    """
+    from imageform._kernels.aruco import dark_components, dark_components_u8
+
+    hgt, wid = g.shape
+    # room for the runs (a photograph has about one run in 20 pixels, a row at most (W + 1) / 2)
+    # and the labels (half the runs: photographs start one in 3 to 10): four times more when a
+    # window needs it
+    worst = hgt * ((wid + 1) // 2) + 2
+    if cap[0] <= 0:
+        cap[0] = min(worst, hgt * wid // 16 + 4096)
+    while True:
+        c = min(cap[0], worst)
+        cap_labels = c if c == worst else c // 2 + 1024
+        if g.dtype == np.uint8:
+            out = dark_components_u8(g, integral, pad, int(win), c, cap_labels)
+        else:
+            out = dark_components(g, integral, pad, int(win), 0.02, c, cap_labels)
+        if len(out[3]) or c == worst:
+            return out
+        cap[0] = min(worst, 4 * c)
+
+
+def _sized(
+    stats: NDArray[np.int64], min_side: float, max_area: float, boxes: NDArray[np.float64]
+) -> NDArray[np.int64]:
+    """Return the components of ``stats`` large enough for a marker, not decoded already."""
+    if len(stats) < 2:
+        return np.zeros(0, dtype=np.int64)
+    area = stats[:, 0]
+    hh = stats[:, 2] - stats[:, 1] + 1
+    ww = stats[:, 4] - stats[:, 3] + 1
+    ok = (area >= min_side * min_side * 0.5) & (hh >= min_side * 0.7) & (ww >= min_side * 0.7)
+    ok &= hh * ww <= max_area
+    ok[0] = False
+    cand = np.nonzero(ok)[0]
+    if len(cand) == 0:
+        return cand
+    cy = 0.5 * (stats[cand, 1] + stats[cand, 2] + 1)
+    cx = 0.5 * (stats[cand, 3] + stats[cand, 4] + 1)
+    size = (hh * ww)[cand].astype(np.float64)
+    return cand[~_inside(boxes, cx, cy, size)]  # decoded already, at a larger window
+
+
 def _search_numba(
     g: NDArray[np.float64],
     wins: list[int],
@@ -587,72 +778,81 @@ def _search_numba(
     min_side: float,
     max_bits: int,
     border_rate: float,
+    reduce: int = 1,
+    g8: NDArray[np.uint8] | None = None,
 ) -> _Found:
     """Find the markers of ``g`` at each threshold window (largest first): numba kernels.
 
     The same steps and verdicts as :func:`_search_numpy` (tested): the per-pixel and
     per-component work in ``imageform._kernels.aruco``, the decoding batched over the
-    candidates of a window.
+    candidates of a window. With ``reduce`` > 1 (:func:`_reduction`) the components are
+    found on ``g`` reduced that many times (block means, the window reduced too) and each
+    one with a quad there is found again in its neighbourhood at full resolution, with the
+    full image's threshold (:func:`imageform._kernels.aruco.box_integral_roi`): the markers
+    and corners are those of the full-resolution search, less the markers under ``reduce``
+    times ``min_side``.
     """
-    from imageform._kernels.aruco import (
-        box_integral,
-        cell_means,
-        component_quads,
-        dark_components,
-    )
+    from imageform._kernels.aruco import block_means, component_quads
 
     hgt, wid = g.shape
     cells = d.marker_size + 2
     found: _Found = {}
-    min_area = min_side * min_side * 0.5
     max_area = 0.9 * hgt * wid
     boxes = np.zeros((0, 5))
-    pad = max(wins) // 2
-    integral = box_integral(g, pad)  # every window's local means from one table
-    # room for the runs (a photograph has about one run in 20 pixels, a row at most (W + 1) / 2)
-    # and the labels (half the runs: photographs start one in 3 to 10): four times more when a
-    # window needs it
-    worst = hgt * ((wid + 1) // 2) + 2
-    cap = min(worst, hgt * wid // 16 + 4096)
-    for win in wins:
-        while True:
-            cap_labels = cap if cap == worst else cap // 2 + 1024
-            runs, comp_runs, comp_ptr, stats = dark_components(
-                g, integral, pad, int(win), 0.02, cap, cap_labels
+    cap = [0]
+    if reduce > 1:
+        small = block_means(g, reduce)
+        wins_small = [max(3, (w // reduce) | 1) for w in wins]
+        pad = max(wins_small) // 2
+        integral = _table(small, pad)
+        full: list[NDArray[np.float64]] = []
+        spent = [0]
+    else:
+        pad = max(wins) // 2
+        hgt_p, wid_p = hgt + 2 * pad, wid + 2 * pad
+        if g8 is not None and 255 * hgt_p * wid_p < 2**31 and 2 * pad + 1 <= 917:
+            g8 = np.ascontiguousarray(g8)
+            integral = _table(g8, pad)  # in integers, exact (dark_components_u8)
+        else:
+            g8 = None
+            integral = _table(g, pad)  # every window's local means from one table
+    for w_i, win in enumerate(wins):
+        if reduce == 1:
+            runs, comp_runs, comp_ptr, stats = _components(
+                g if g8 is None else g8, integral, pad, win, cap
             )
-            if len(stats) or cap == worst:
-                break
-            cap = min(worst, 4 * cap)
-        if len(stats) < 2:
+            cand = _sized(stats, min_side, max_area, boxes)
+            if len(cand) == 0:
+                continue
+            quads, status = component_quads(runs, comp_runs, comp_ptr, cand, stats, float(min_side))
+            good = np.nonzero(status == 0)[0]
+            quads, st = quads[good], stats[cand[good]]
+        else:
+            quads, st = _search_reduced(
+                g,
+                small,
+                integral,
+                pad,
+                wins_small[w_i],
+                win,
+                reduce,
+                cap,
+                full,
+                spent,
+                max(wins) // 2,
+                min_side,
+                max_area,
+                boxes,
+                (d, rotated, max_bits, border_rate),
+            )
+        if len(quads) == 0:
             continue
-        area = stats[:, 0]
-        hh = stats[:, 2] - stats[:, 1] + 1
-        ww = stats[:, 4] - stats[:, 3] + 1
-        ok = (area >= min_area) & (hh >= min_side * 0.7) & (ww >= min_side * 0.7)
-        ok &= hh * ww <= max_area
-        ok[0] = False
-        cand = np.nonzero(ok)[0]
-        if len(cand) == 0:
-            continue
-        cy = 0.5 * (stats[cand, 1] + stats[cand, 2] + 1)
-        cx = 0.5 * (stats[cand, 3] + stats[cand, 4] + 1)
-        size = (hh * ww)[cand].astype(np.float64)
-        cand = cand[~_inside(boxes, cx, cy, size)]  # decoded already, at a larger window
-        if len(cand) == 0:
-            continue
-        quads, status = component_quads(runs, comp_runs, comp_ptr, cand, stats, float(min_side))
-        good = np.nonzero(status == 0)[0]
-        if len(good) == 0:
-            continue
-        decoded = _decode(
-            cell_means(g, quads[good], cells), d, cells, rotated, max_bits, border_rate
-        )
-        st = stats[cand].tolist()
+        decoded = _decoded(_cell_means(g, quads, cells), rotated, cells, max_bits, border_rate)
         new_boxes: list[tuple[float, float, float, float, float]] = []
-        for j, hit in zip(good.tolist(), decoded, strict=True):
+        for quad, row, hit in zip(quads, st.tolist(), decoded, strict=True):
             if hit is None:
                 continue
-            _, top, bottom, left, right = st[j]
+            _, top, bottom, left, right = row
             s_cx, s_cy = 0.5 * (left + right + 1), 0.5 * (top + bottom + 1)
             s_size = float((bottom - top + 1) * (right - left + 1))
             if any(
@@ -661,7 +861,6 @@ def _search_numba(
             ):
                 continue  # decoded already, at this window (an earlier component)
             mid, rot, dist, contrast = hit
-            quad = quads[j]
             # observed == np.rot90(code, rot) (counter-clockwise turns): the printed top-left
             # corner is the observed corner (4 - rot) % 4
             ordered = quad[[(0 - rot) % 4, (1 - rot) % 4, (2 - rot) % 4, (3 - rot) % 4]]
@@ -676,6 +875,147 @@ def _search_numba(
         if new_boxes:
             boxes = np.vstack([boxes, np.array(new_boxes)])
     return found
+
+
+def _decoded(
+    means: NDArray[np.float64],
+    rotated: NDArray[np.uint8],
+    cells: int,
+    max_bits: int,
+    border_rate: float,
+    min_contrast: float = 0.08,
+) -> list[tuple[int, int, int, float] | None]:
+    """:func:`_decode` by :func:`imageform._kernels.aruco.decode_cells` (the same verdicts)."""
+    from imageform._kernels.aruco import decode_cells
+
+    code, rot, dist, contrast = decode_cells(
+        means, np.ascontiguousarray(rotated), cells, max_bits, border_rate, min_contrast
+    )
+    return [
+        None if k < 0 else (k, r, t, c)
+        for k, r, t, c in zip(
+            code.tolist(), rot.tolist(), dist.tolist(), contrast.tolist(), strict=True
+        )
+    ]
+
+
+def _cell_means(
+    g: NDArray[np.float64], quads: NDArray[np.float64], cells: int
+) -> NDArray[np.float64]:
+    """:func:`imageform._kernels.aruco.cell_means` of ``quads`` (m, 4, 2) in ``g``."""
+    from imageform._kernels.aruco import cell_means
+
+    return np.asarray(cell_means(g, np.ascontiguousarray(quads), cells))
+
+
+def _search_reduced(
+    g: NDArray[np.float64],
+    small: NDArray[np.float64],
+    integral: NDArray[np.float64],
+    pad: int,
+    win_small: int,
+    win: int,
+    f: int,
+    cap: list[int],
+    full: list[NDArray[np.float64]],
+    spent: list[int],
+    pad_full: int,
+    min_side: float,
+    max_area: float,
+    boxes: NDArray[np.float64],
+    read: tuple[ArucoDictionary, NDArray[np.uint8], int, float],
+) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
+    """Find one window's full-resolution quads (m, 4, 2) and component stats (m, 5).
+
+    The candidates come from ``small`` (``g`` reduced ``f`` times).
+
+    Each component of ``small`` with a quad gives a region of ``g`` (its box scaled up, with
+    a margin of a quarter of its side and ``2 f`` pixels), thresholded there with the full
+    image's local means (the region's own
+    :func:`imageform._kernels.aruco.box_integral_roi` while the regions' tables, ``spent[0]``
+    entries so far, cost less than half the image's; then ``full[0]``, the image's
+    :func:`imageform._kernels.aruco.box_integral` padded by ``pad_full``); its components
+    that do not touch the region's border (a component that does may go on outside it) are
+    the full image's own, and go through the same size checks and quad fitting as in the
+    full-resolution search.
+    A quad of ``small`` at least 3 pixels a cell whose cells read nowhere near a marker
+    there (contrast under half the decoder's, or not a code within one more bit, with a
+    border 15 % more wrong) is not looked at again.
+    """
+    from imageform._kernels.aruco import box_integral, box_integral_roi, component_quads
+
+    hgt, wid = g.shape
+    runs, comp_runs, comp_ptr, stats = _components(small, integral, pad, win_small, cap)
+    cand = _sized(stats, min_side, max_area / (f * f), boxes / np.array([f, f, f, f, f * f]))
+    empty = np.zeros((0, 4, 2)), np.zeros((0, 5), dtype=np.int64)
+    if len(cand) == 0:
+        return empty
+    quads, status = component_quads(runs, comp_runs, comp_ptr, cand, stats, float(min_side))
+    good = np.nonzero(status == 0)[0]
+    if len(good) == 0:
+        return empty
+    d, rotated, max_bits, border_rate = read
+    cells = d.marker_size + 2
+    q = quads[good]
+    e = np.roll(q, -1, axis=1) - q
+    shortest = np.hypot(e[..., 0], e[..., 1]).min(axis=1)
+    hits = _decoded(
+        _cell_means(small, q, cells), rotated, cells, max_bits + 1, border_rate + 0.15, 0.04
+    )
+    good = good[[h is not None or s < 3 * cells for h, s in zip(hits, shortest, strict=True)]]
+    if len(good) == 0:
+        return empty
+    out_q: list[NDArray[np.float64]] = []
+    out_s: list[NDArray[np.int64]] = []
+    regions: list[tuple[int, int, int, int]] = []
+    for j in good.tolist():
+        _, top, bottom, left, right = stats[cand[j]].tolist()
+        side = f * max(bottom - top + 1, right - left + 1)
+        m = side // 4 + 2 * f
+        r0, r1 = max(0, top * f - m), min(hgt, (bottom + 1) * f + m)
+        c0, c1 = max(0, left * f - m), min(wid, (right + 1) * f + m)
+        if any(a0 <= r0 and r1 <= a1 and b0 <= c0 and c1 <= b1 for a0, a1, b0, b1 in regions):
+            continue  # inside a region searched already
+        regions.append((r0, r1, c0, c1))
+        # the region's own table while the regions' tables cost less than the image's
+        half = win // 2
+        cost = (r1 - r0 + 2 * half) * (c1 - c0 + 2 * half)
+        if not full and spent[0] + cost <= (hgt + 2 * pad_full) * (wid + 2 * pad_full) // 2:
+            spent[0] += cost
+            view = np.empty((r1 - r0 + 2 * half + 1, c1 - c0 + 2 * half + 1))
+            view, p_view = box_integral_roi(g, half, r0, r1, c0, c1, view), half
+        else:
+            if not full:
+                full.append(box_integral(g, pad_full))
+            # the region's rows and columns: padded row r0 - pad_full is the image's row r0
+            view = full[0][r0 : r1 + 2 * pad_full + 1, c0 : c1 + 2 * pad_full + 1]
+            p_view = pad_full
+        sub = g[r0:r1, c0:c1]
+        runs_r, comp_runs_r, comp_ptr_r, st = _components(sub, view, p_view, win, [0])
+        if len(st) < 2:
+            continue
+        h_r, w_r = r1 - r0, c1 - c0
+        inner = (
+            ((st[:, 1] > 0) | (r0 == 0))
+            & ((st[:, 2] < h_r - 1) | (r1 == hgt))
+            & ((st[:, 3] > 0) | (c0 == 0))
+            & ((st[:, 4] < w_r - 1) | (c1 == wid))
+        )
+        st_full = st + np.array([0, r0, r0, c0, c0])
+        cand_r = _sized(st_full, min_side, max_area, boxes)
+        cand_r = cand_r[inner[cand_r]]
+        if len(cand_r) == 0:
+            continue
+        q_r, status_r = component_quads(
+            runs_r, comp_runs_r, comp_ptr_r, cand_r, st, float(min_side)
+        )
+        ok = np.nonzero(status_r == 0)[0]
+        if len(ok):
+            out_q.append(q_r[ok] + np.array([c0, r0], dtype=np.float64))
+            out_s.append(st_full[cand_r[ok]])
+    if not out_q:
+        return empty
+    return np.concatenate(out_q), np.concatenate(out_s)
 
 
 def _inside(
@@ -709,6 +1049,7 @@ def _decode(
     rotated: NDArray[np.uint8],
     max_bits: int,
     border_rate: float,
+    min_contrast: float = 0.08,
 ) -> list[tuple[int, int, int, float] | None]:
     """Read the cells of several quads at once: ``(id, rotation, distance, contrast)`` or None.
 
@@ -739,7 +1080,7 @@ def _decode(
     dmin = flat[rows, best]
     out: list[tuple[int, int, int, float] | None] = []
     for j in range(m):
-        if contrast[j] < 0.08 or bad[j] or dmin[j] > max_bits:
+        if contrast[j] < min_contrast or bad[j] or dmin[j] > max_bits:
             out.append(None)
             continue
         mid, rot = divmod(int(best[j]), 4)

@@ -28,6 +28,7 @@ stays clear of the markers, and kept when it converged near the prediction.
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+from functools import lru_cache
 
 import numpy as np
 from numpy.typing import NDArray
@@ -37,13 +38,11 @@ from imageform._validate import as_int, as_real, describe
 from imageform.errors import InvalidInputError
 from imageform.geometry.aruco import (
     ArucoMarkers,
-    _apply_h,
     _bilinear,
+    _detect,
     _gray01,
-    _homography,
     aruco_dictionary,
     aruco_marker_image,
-    detect_aruco_markers,
 )
 
 __all__ = ["CharucoBoard", "CharucoCorners", "detect_charuco"]
@@ -300,11 +299,11 @@ def detect_charuco(
     """
     if not isinstance(board, CharucoBoard):
         raise InvalidInputError(f"expected board as a CharucoBoard, got {describe(board)}")
-    g = _gray01(image)
+    g = _gray01(image, scratch=True)
     need = as_int(min_markers, "min_markers", minimum=1, maximum=16)
     shift = as_real(max_shift, "max_shift", positive=True, maximum=1.0)
     if markers is None:
-        markers = detect_aruco_markers(g, board.dictionary)
+        markers = _detect(g, board.dictionary, source=image)
     elif not isinstance(markers, ArucoMarkers):
         raise InvalidInputError(f"expected markers as ArucoMarkers, got {describe(markers)}")
     found = _corners(g, board, markers, need, shift)
@@ -329,67 +328,24 @@ def _corners(
     empty = CharucoCorners(np.zeros(0, np.int64), np.zeros((0, 2)), markers, board)
     if len(ids_m) == 0:
         return empty
-    cols, rows = board.squares
-    squares = board.marker_squares()
-    mpts = board.marker_points()[:, :, :2]
-    at_square = {(int(squares[i, 0]), int(squares[i, 1])): k for k, i in enumerate(ids_m)}
-    s = board.square_length
-    cand_ids, cand_xy, cand_hw, cand_scale, cand_hom = [], [], [], [], []
-    h_img, w_img = g.shape
-    for cid in range((cols - 1) * (rows - 1)):
-        r, c = divmod(cid, cols - 1)
-        # squares around corner (r, c): rows r-1 .. r+2, cols c-1 .. c+2
-        near = [
-            at_square[(rr, cc)]
-            for rr in range(r - 1, r + 3)
-            for cc in range(c - 1, c + 3)
-            if (rr, cc) in at_square
-        ]
-        adjacent = [
-            at_square[(rr, cc)] for rr in (r, r + 1) for cc in (c, c + 1) if (rr, cc) in at_square
-        ]
-        if len(near) < need or not adjacent:
-            continue
-        src = np.concatenate([mpts[ids_m[k]] for k in near])
-        dst = np.concatenate([corners_m[k] for k in near])
-        hom = _homography(src / s, dst)
-        board_xy = np.array([[(c + 1.0), (r + 1.0)]])
-        p = _apply_h(hom, board_xy)[0]
-        if not (np.all(np.isfinite(p)) and 2 <= p[0] <= w_img - 3 and 2 <= p[1] <= h_img - 3):
-            continue
-        # local scale: pixels per square, and the distance to the nearest marker corner
-        q = _apply_h(hom, board_xy + np.array([[0.5, 0.0], [0.0, 0.5]]))
-        scale = 2.0 * float(min(np.hypot(*(q[0] - p)), np.hypot(*(q[1] - p))))
-        d_marker = float(
-            np.min(np.hypot(*(np.concatenate([corners_m[k] for k in adjacent]) - p).T))
-        )
-        # the window stays clear of the markers' corners (0.6 d keeps a marker corner at
-        # distance d, on the diagonal, outside the square window)
-        hw = max(2, min(int(0.6 * d_marker), int(0.3 * scale), 25))
-        cand_ids.append(cid)
-        cand_xy.append(p)
-        cand_hw.append(hw)
-        cand_scale.append(scale)
-        cand_hom.append(hom)
-    if not cand_ids:
+    cand, homs, xy, hws, scales = _predicted(board, ids_m, corners_m, need, g.shape)
+    if len(cand) == 0:
         return empty
-    xy = np.asarray(cand_xy)
-    hws = np.asarray(cand_hw)
-    out_k, out_xy = [], []
+    ok = np.zeros(len(cand), dtype=bool)
+    found = np.zeros_like(xy)
     for hw in np.unique(hws):
         sel = np.nonzero(hws == hw)[0]
         # refine_corners without re-checking g (grey, finite, in [0, 1] already)
         ref = RefinedCorners(*refine(g, np.ascontiguousarray(xy[sel]), int(hw), int(hw), 40, 1e-4))
-        for j, k in enumerate(sel):
-            moved = float(np.hypot(*(ref.corners[j] - xy[k])))
-            if ref.status[j] in (0, 1) and moved <= shift * cand_scale[k] and moved < hw:
-                out_k.append(k)
-                out_xy.append(ref.corners[j])
-    if not out_k:
+        moved = np.hypot(*(ref.corners - xy[sel]).T)
+        ok[sel] = ((ref.status == 0) | (ref.status == 1)) & (moved <= shift * scales[sel])
+        ok[sel] &= moved < hw
+        found[sel] = ref.corners
+    ks = np.nonzero(ok)[0]
+    if len(ks) == 0:
         return empty
-    ks = np.asarray(out_k)
-    found = np.asarray(out_xy)
-    whole, resolved = _seen_whole(g, board, np.asarray(cand_ids)[ks], np.stack(cand_hom)[ks], found)
+    found = found[ks]
+    whole, resolved = _seen_whole(g, board, cand[ks], homs[ks], found)
     # a blurred saddle must give the same point through a window a pixel larger: where the
     # blur lets the markers' borders into the window the point depends on the window
     blurred = np.nonzero(whole & (resolved < _SHARP))[0]
@@ -399,17 +355,113 @@ def _corners(
             *refine(g, np.ascontiguousarray(found[sel]), int(hw) + 1, int(hw) + 1, 40, 1e-4)
         )
         whole[sel] &= np.hypot(*(alt.corners - found[sel]).T) <= _MAX_WINDOW_SHIFT
-    out_ids = [cand_ids[k] for k in ks[whole]]
-    out_xy = list(found[whole])
-    if not out_ids:
+    if not whole.any():
         return empty
-    order = np.argsort(out_ids)
-    return CharucoCorners(
-        np.asarray(out_ids, dtype=np.int64)[order],
-        np.asarray(out_xy, dtype=np.float64)[order],
-        markers,
-        board,
-    )
+    # the candidates are in id order already
+    return CharucoCorners(cand[ks[whole]], found[whole], markers, board)
+
+
+def _predicted(
+    board: CharucoBoard,
+    ids_m: NDArray[np.int64],
+    corners_m: NDArray[np.float64],
+    need: int,
+    shape: tuple[int, int],
+) -> tuple[
+    NDArray[np.int64],
+    NDArray[np.float64],
+    NDArray[np.float64],
+    NDArray[np.int64],
+    NDArray[np.float64],
+]:
+    """Predict the corners from the markers (board markers ``ids_m``, found at ``corners_m``).
+
+    Each inner corner ``(r, c)`` with at least ``need`` markers in the 4 x 4 squares around it
+    (rows ``r - 1 .. r + 2``, columns ``c - 1 .. c + 2``), one of them in the 2 x 2 squares
+    touching it, is mapped through the homography fitted to those markers' corners (DLT,
+    board in square units, all corners at once: one SVD of the stacked systems, a missing
+    marker's rows left zero, which changes no singular vector) and kept when at least 2 px
+    inside the image. Returns the corner ids (in order), the homographies (m, 3, 3), the
+    predicted pixels (m, 2), the refinement half-windows and the local scales (pixels per
+    square: twice the shorter of the half-square steps along x and y from the corner).
+    """
+    cols, rows = board.squares
+    h_img, w_img = shape
+    s = board.square_length
+    squares = board.marker_squares()
+    # the found markers on a grid of squares with a frame of one square (-1: none)
+    at = np.full((rows + 2, cols + 2), -1, dtype=np.int64)
+    at[squares[ids_m, 0] + 1, squares[ids_m, 1] + 1] = np.arange(len(ids_m))
+    r, c = np.divmod(np.arange((cols - 1) * (rows - 1)), cols - 1)
+    d4 = np.arange(-1, 3)
+    near = at[r[:, None, None] + d4[None, :, None] + 1, c[:, None, None] + d4[None, None, :] + 1]
+    near = near.reshape(len(r), 16)  # row by row, as the squares around the corner
+    adjacent = near[:, [5, 6, 9, 10]]
+    keep = ((near >= 0).sum(1) >= need) & (adjacent >= 0).any(1)
+    cand = np.nonzero(keep)[0]
+    if len(cand) == 0:
+        z = np.zeros(0)
+        return cand, np.zeros((0, 3, 3)), np.zeros((0, 2)), z.astype(np.int64), z
+    near, adjacent = near[cand], adjacent[cand]
+    # at most 8 of the 16 squares hold markers: compact them (in order) into 8 slots
+    slot = np.argsort(near < 0, axis=1, kind="stable")[:, :8]
+    idx = np.take_along_axis(near, slot, 1)  # (m, 8), -1 past the corner's markers
+    there = idx >= 0
+    mpts = board.marker_points()[:, :, :2] / s
+    src = np.where(there[..., None, None], mpts[ids_m[idx]], 0.0).reshape(len(cand), 32, 2)
+    dst = np.where(there[..., None, None], corners_m[idx], 0.0).reshape(len(cand), 32, 2)
+    live = np.repeat(there, 4, axis=1).astype(np.float64)
+    x, y = src[..., 0], src[..., 1]
+    u, v = -dst[..., 0], -dst[..., 1]
+    one, zero = live, np.zeros_like(x)
+    # per point the rows (x y 1 0 0 0 -ux -uy -u) and (0 0 0 x y 1 -vx -vy -v), zero for a
+    # missing marker
+    ra = np.stack((x, y, one, zero, zero, zero, u * x, u * y, u * live), -1)
+    rb = np.stack((zero, zero, zero, x, y, one, v * x, v * y, v * live), -1)
+    a = np.stack((ra, rb), 2).reshape(len(cand), 64, 9)
+    _, _, vt = np.linalg.svd(a, full_matrices=False)
+    homs = vt[:, -1].reshape(-1, 3, 3)
+    h22 = homs[:, 2, 2]
+    scale_h = np.where(np.abs(h22) > 1e-15, h22, 1.0)
+    homs = homs / scale_h[:, None, None]
+    rr, cc = r[cand], c[cand]
+
+    def at_board(bx: NDArray[np.float64], by: NDArray[np.float64]) -> NDArray[np.float64]:
+        w = homs[:, 2, 0] * bx + homs[:, 2, 1] * by + homs[:, 2, 2]
+        return np.stack(
+            (
+                (homs[:, 0, 0] * bx + homs[:, 0, 1] * by + homs[:, 0, 2]) / w,
+                (homs[:, 1, 0] * bx + homs[:, 1, 1] * by + homs[:, 1, 2]) / w,
+            ),
+            -1,
+        )
+
+    with np.errstate(divide="ignore", invalid="ignore"):
+        p = at_board(cc + 1.0, rr + 1.0)
+        inside = (
+            np.isfinite(p).all(1)
+            & (p[:, 0] >= 2)
+            & (p[:, 0] <= w_img - 3)
+            & (p[:, 1] >= 2)
+            & (p[:, 1] <= h_img - 3)
+        )
+        # local scale: pixels per square, and the distance to the nearest marker corner
+        qx, qy = at_board(cc + 1.5, rr + 1.0), at_board(cc + 1.0, rr + 1.5)
+    scale = 2.0 * np.minimum(np.hypot(*(qx - p).T), np.hypot(*(qy - p).T))
+    adj = np.where((adjacent >= 0)[..., None, None], corners_m[adjacent], np.inf)
+    with np.errstate(invalid="ignore"):
+        d_marker = np.hypot(*(adj - p[:, None, None, :]).transpose(3, 0, 1, 2)).min((1, 2))
+    # the window stays clear of the markers' corners (0.6 d keeps a marker corner at
+    # distance d, on the diagonal, outside the square window)
+    with np.errstate(invalid="ignore"):
+        hw = np.maximum(
+            2,
+            np.minimum(
+                np.minimum(np.floor(0.6 * d_marker), np.floor(0.3 * np.nan_to_num(scale))), 25
+            ),
+        )
+    k = np.nonzero(inside)[0]
+    return cand[k], homs[k], p[k], hw[k].astype(np.int64), scale[k]
 
 
 def _printed(board: CharucoBoard, xy: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -437,6 +489,27 @@ def _printed(board: CharucoBoard, xy: NDArray[np.float64]) -> NDArray[np.float64
         np.clip(cu - 1, 0, n - 3),
     ]
     out[inside] = np.where(bits[inside], code[inside], 0).astype(np.float64)
+    return out
+
+
+@lru_cache(maxsize=32)
+def _printed_white(board: CharucoBoard) -> NDArray[np.float64]:
+    """Return the printed board (1 white, 0 black) at each corner's white squares' grid.
+
+    ``(n_corners, 2 P)``, by corner id: :func:`_seen_whole`'s ``(qw, gw)`` points.
+    """
+    cols, rows = board.squares
+    ids = np.arange((cols - 1) * (rows - 1))
+    r, c = np.divmod(ids, cols - 1)
+    corner = np.column_stack([c + 1.0, r + 1.0])
+    tw = (np.arange(_GRID_WHITE) + 0.5) / _GRID_WHITE
+    gw = np.stack(np.meshgrid(tw, tw), -1).reshape(-1, 2)
+    quads = np.array([[-1.0, -1.0], [1.0, 1.0], [1.0, -1.0], [-1.0, 1.0]])
+    first = ((r + c) % 2 != board.white_parity)[:, None, None]
+    qw = np.where(first, quads[None, 2:], quads[None, :2])
+    pts = (corner[:, None, None, :] + qw[:, :, None, :] * gw[None, None]).reshape(len(ids), -1, 2)
+    out = _printed(board, pts)
+    out.setflags(write=False)
     return out
 
 
@@ -506,8 +579,7 @@ def _seen_whole(
         pts = corner[:, None, None, :] + dirs[:, :, None, :] * grid[None, None]
         return pts.reshape(m, -1, 2)
 
-    pb, pw, ps = points(qb, gb), points(qw, gw), points(qw, strip)
-    pf = points(qb, gw)  # the black squares whole, for the block's mean
+    # the black squares whole (qb, gw), for the block's mean
     # homographies moved so that the corner lands on the refined pixel
     pc = np.einsum("mij,mj->mi", homs, np.column_stack([corner, np.ones(m)]))
     shift = np.zeros_like(homs)
@@ -515,6 +587,23 @@ def _seen_whole(
     shift[:, :2, 2] = xy - pc[:, :2] / pc[:, 2:]
     hs = shift @ homs
     h_img, w_img = g.shape
+
+    from imageform._backend import use_numba
+
+    if use_numba(g):
+        from imageform._kernels.aruco import sample_quadrants
+
+        def sampled(
+            dirs: NDArray[np.float64], grid: NDArray[np.float64]
+        ) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
+            return sample_quadrants(g, hs, corner, np.ascontiguousarray(dirs), grid)
+
+    else:
+
+        def sampled(
+            dirs: NDArray[np.float64], grid: NDArray[np.float64]
+        ) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
+            return sample(points(dirs, grid))
 
     def sample(pts: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
         q = np.concatenate([pts, np.ones((*pts.shape[:2], 1))], -1) @ np.swapaxes(hs, 1, 2)
@@ -530,15 +619,15 @@ def _seen_whole(
         vals = _bilinear(g, np.where(ok[..., None], uv, 0.0).reshape(-1, 2)).reshape(ok.shape)
         return vals, ok
 
-    vb, okb = sample(pb)
-    vw, okw = sample(pw)
-    vs, oks = sample(ps)
+    vb, okb = sampled(qb, gb)
+    vw, okw = sampled(qw, gw)
+    vs, oks = sampled(qw, strip)
     nb = okb.sum(1)
     black = _masked_median(vb, okb)
     # each white square's contrast: (mean - black) / printed white share, same points
     okw2 = okw.reshape(m, 2, -1)
     n_in = okw2.sum(-1)
-    printed_w = _printed(board, pw)
+    printed_w = _printed_white(board)[ids]
     share = np.where(okw2, printed_w.reshape(m, 2, -1), 0.0).sum(-1) / np.maximum(n_in, 1)
     mean_w = np.where(okw2, vw.reshape(m, 2, -1), 0.0).sum(-1) / np.maximum(n_in, 1)
     usable = (n_in >= gw.shape[0] // 4) & (share > 0.05)
@@ -549,7 +638,7 @@ def _seen_whole(
     # squares' margins into the black squares stays in the block, and what crosses the
     # block's outline is on average as much in as out, so the block's mean against its
     # printed mean gives the contrast whatever the blur
-    vf, okf = sample(pf)
+    vf, okf = sampled(qb, gw)
     n_blk = okw.sum(1) + okf.sum(1)
     printed_blk = np.where(okw, printed_w, 0.0).sum(1) / np.maximum(n_blk, 1)
     mean_blk = (np.where(okw, vw, 0.0).sum(1) + np.where(okf, vf, 0.0).sum(1)) / np.maximum(
