@@ -465,9 +465,11 @@ def _model(value: Any, name: str, method: str) -> Any:
 def _globals(cal: CalibrationResult) -> F64:
     K = cal.K
     d = cal.distortion
-    if not isinstance(d, BrownConrady):
+    if not isinstance(d, BrownConrady) or cal.model != "brown_conrady":
+        got = cal.model if isinstance(d, BrownConrady) else f"{type(d).__name__} distortion"
         raise InvalidInputError(
-            f"expected a Brown-Conrady calibration, got {type(d).__name__} distortion"
+            f"expected a Brown-Conrady calibration (k1, k2, p1, p2, k3), got {got}: "
+            "stereo_calibrate refines Brown-Conrady cameras only"
         )
     return np.array([K[0, 0], K[1, 1], K[0, 2], K[1, 2], K[0, 1], *d.coeffs[:5]], dtype=float)
 
