@@ -7,7 +7,7 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal, get_args
 
 from imageform.errors import ConvergenceError, DegenerateConfigurationError, InvalidInputError
 from imageform.workflows._images import ImageIn, ImageOut, image_out_renames, read, write
@@ -42,7 +42,7 @@ MAX_BOARD_CORNERS = 200
 #: Fewest pixels a square of the board may span (the detector needs about 5 sigma).
 _MIN_SQUARE_PX = 4
 #: The lens models of ``--model`` (``calibrate_camera``'s names; ``-`` and ``_`` are one).
-MODELS = ("brown_conrady", "rational", "kannala_brandt")
+Model = Literal["brown_conrady", "rational", "kannala_brandt"]
 
 
 _BOARD = re.compile(
@@ -290,13 +290,13 @@ class CalibrateOptions(_BoardChecks, ImageIn):
         metavar="NAME",
     )
     skew: bool = option(False, help="Estimate the skew (default: 0, as OpenCV).")
-    model: str = option(
+    model: Model = option(
         "brown_conrady",
         help="Lens model: brown-conrady (k1, k2, p1, p2, k3; OpenCV's calibrateCamera), "
         "rational (also k4, k5, k6; CALIB_RATIONAL_MODEL, to about 120 deg) or kannala-brandt "
         "(fisheye k1 ... k4; cv::fisheye, to 180 deg and beyond). docs/calibration.md says "
         "which to choose.",
-        choices=MODELS,
+        choices=get_args(Model),
     )
     max_iter: int | None = option(
         None,
