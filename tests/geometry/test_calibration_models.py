@@ -312,3 +312,41 @@ def test_rational_matches_opencv() -> None:
     d_cv = BrownConrady.from_opencv(Dc.ravel()[:8])
     assert _field_error(res.K, res.distortion, Kc, d_cv, 55.0) < 0.01
     np.testing.assert_allclose(Kc, WIDE_K, atol=1.5)  # both recover the truth
+
+
+# ---------------------------------------------------------------- stereo
+
+
+def test_stereo_fisheye_recovers_the_rig() -> None:
+    from imageform.geometry import stereo_calibrate
+
+    objs, uvl = wide_views(FISH_K, FISH_D, FISH_SIZE, 10, 150, seed=5, noise=0.0)
+    R = rvec_to_matrix([0.0, -0.08, 0.02])
+    T = np.array([-60.0, 1.0, 2.0])
+    rng = np.random.default_rng(5)
+    K_r = FISH_K + [[4.0, 0, -3], [0, 4.0, 2], [0, 0, 0]]
+    d_r = KannalaBrandt(0.015, -0.01, 0.003, -0.0005)
+    # the right camera's pixels of the same board poses (the left's recovered per view)
+    left = calibrate_camera(objs, uvl, FISH_SIZE, model="kannala_brandt")
+    uvr = [
+        project_points_distorted(o, K_r, R @ Rk, R @ t + T, d_r)[0] + rng.normal(0, 0.1, (54, 2))
+        for o, Rk, t in zip(objs, left.rotations, left.tvecs, strict=True)
+    ]
+    uvl = [u + rng.normal(0, 0.1, u.shape) for u in uvl]
+    rig = stereo_calibrate(objs, uvl, uvr, FISH_SIZE, model="kannala_brandt")
+    assert rig.left.model == rig.right.model == "kannala_brandt"
+    assert isinstance(rig.right.distortion, KannalaBrandt)
+    assert set(rig.right.std) == {"fx", "fy", "cx", "cy", "skew", "k1", "k2", "k3", "k4"}
+    assert rig.rms < 0.15
+    np.testing.assert_allclose(rig.T, T, atol=0.5)
+    np.testing.assert_allclose(rig.R, R, atol=2e-3)
+    np.testing.assert_allclose(rig.right.K, K_r, atol=1.5)
+    with pytest.raises(InvalidInputError, match="expected left as a kannala_brandt calibration"):
+        stereo_calibrate(
+            objs,
+            uvl,
+            uvr,
+            FISH_SIZE,
+            model="kannala_brandt",
+            left=calibrate_camera(objs, uvl, FISH_SIZE),
+        )
