@@ -1,8 +1,9 @@
 """Camera calibration: Zhang's method for planar targets, DLT for 3-D rigs, then LM.
 
 :func:`calibrate_camera` estimates the intrinsics ``K`` (``fx, fy, cx, cy`` and optionally
-the skew), Brown-Conrady distortion ``(k1, k2, p1, p2, k3)`` (any of them can be fixed) and
-one pose per view from known object points and their detected pixels, and returns a
+the skew), the lens distortion (Brown-Conrady ``(k1, k2, p1, p2, k3)`` by default, OpenCV's
+rational ``k1 ... k6`` or the Kannala-Brandt fisheye ``k1 ... k4``; any parameter can be
+fixed) and one pose per view from known object points and their detected pixels, and returns a
 :class:`CalibrationResult` with the reprojection errors (overall RMS as OpenCV defines it,
 per view and per point) and the standard deviations of the parameters.
 
