@@ -263,7 +263,7 @@ def calibrate_camera(
     - ``"kannala_brandt"``: ``(k1, k2, k3, k4)``, ``θ = atan r``,
       ``θ_d = θ (1 + k1 θ² + k2 θ⁴ + k3 θ⁶ + k4 θ⁸)``, ``(x_d, y_d) = (θ_d / r) (x, y)``
       (Kannala & Brandt 2006, IEEE TPAMI 28(8), eq. (6); OpenCV's ``cv::fisheye``): fisheye
-      and endoscope lenses, fields of view to 180 deg and beyond.
+      and endoscope lenses, fields of view to 180 deg (rays to 90 deg from the axis).
 
     Initial values: for a planar target (all ``Z = 0``) Zhang's closed form from the
     homographies (Zhang 2000, "A flexible new technique for camera calibration", IEEE TPAMI

@@ -294,7 +294,7 @@ class CalibrateOptions(_BoardChecks, ImageIn):
         "brown_conrady",
         help="Lens model: brown-conrady (k1, k2, p1, p2, k3; OpenCV's calibrateCamera), "
         "rational (also k4, k5, k6; CALIB_RATIONAL_MODEL, to about 120 deg) or kannala-brandt "
-        "(fisheye k1 ... k4; cv::fisheye, to 180 deg and beyond). docs/calibration.md says "
+        "(fisheye k1 ... k4; cv::fisheye, to 180 deg). docs/calibration.md says "
         "which to choose.",
         choices=get_args(Model),
     )
