@@ -15,10 +15,17 @@ Sources of truth:
 
 from __future__ import annotations
 
+import contextlib
+
 import numpy as np
 import pytest
 
-from imageform.errors import InvalidInputError, UnknownOptionError
+from imageform.errors import (
+    ConvergenceError,
+    DegenerateConfigurationError,
+    InvalidInputError,
+    UnknownOptionError,
+)
 from imageform.geometry import (
     BrownConrady,
     KannalaBrandt,
@@ -156,12 +163,16 @@ def test_fisheye_recovers_truth(fov: int) -> None:
     assert _field_error(res.K, res.distortion, FISH_K, FISH_D, fov / 2) < 0.5
 
 
-def test_fisheye_zhang_start_alone_is_not_better() -> None:
-    """The equidistant start reaches the fit a pinhole start reaches, or a lower one."""
+def test_fisheye_keeps_the_better_of_two_starts() -> None:
+    """``auto`` refines from cv::fisheye's equidistant start and from Zhang's, and keeps the
+    lower cost: never worse than either alone."""
     objs, uvs = wide_views(FISH_K, FISH_D, FISH_SIZE, 10, 160, seed=1)
     auto = calibrate_camera(objs, uvs, FISH_SIZE, model="kannala_brandt")
-    eq = calibrate_camera(objs, uvs, FISH_SIZE, model="kannala_brandt", method="equidistant")
-    assert auto.rms <= eq.rms + 1e-12
+    alone = [calibrate_camera(objs, uvs, FISH_SIZE, model="kannala_brandt", method="equidistant")]
+    # the pinhole start may fail on a wide lens: then the equidistant one is kept
+    with contextlib.suppress(ConvergenceError, DegenerateConfigurationError):
+        alone.append(calibrate_camera(objs, uvs, FISH_SIZE, model="kannala_brandt", method="zhang"))
+    assert all(auto.rms <= a.rms + 1e-12 for a in alone)
     assert auto.rms < 0.15
 
 

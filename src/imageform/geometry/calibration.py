@@ -387,6 +387,7 @@ def calibrate_camera(
         raise InvalidInputError(
             f"method 'equidistant' starts a fisheye (model 'kannala_brandt'), not model {model!r}"
         )
+    both = method == "auto" and model == "kannala_brandt" and planar and K_init is None
     if method == "auto":
         method = "zhang" if planar else "dlt"
         if model == "kannala_brandt":
@@ -421,14 +422,19 @@ def calibrate_camera(
     starts = []  # (K, rvecs, tvecs) to refine from; the lowest cost is kept
     if method == "equidistant":
         assert isinstance(d0, KannalaBrandt)  # method "equidistant" is the fisheye's alone
-        starts.append(_equidistant_start(objs, imgs, size, K_given, d0, planar))
-        if planar and K_init is None:
+        try:
+            starts.append(_equidistant_start(objs, imgs, size, K_given, d0, planar))
+        except DegenerateConfigurationError:
+            if not both:
+                raise
+        if both:
             try:  # Zhang's pinhole start too: it wins on a moderately wide lens
                 H = homographies(objs, imgs)
                 K0 = zhang_intrinsics(H, size, skew=skew)
                 starts.append((K0, *poses_from_homographies(H, K0)))
             except (DegenerateConfigurationError, np.linalg.LinAlgError):
-                pass
+                if not starts:
+                    raise
     elif method == "zhang":
         H = homographies(objs, imgs)
         K0 = zhang_intrinsics(H, size, skew=skew) if K_given is None else K_given
