@@ -404,3 +404,78 @@ def test_identify_aruco_dictionary() -> None:
     assert identify_aruco_dictionary(np.full((200, 200), 255, np.uint8)) is None
     with pytest.raises(InvalidInputError, match="min_markers"):
         identify_aruco_dictionary(np.zeros((50, 50)), min_markers=0)
+
+
+def _fisheye_board(K, d, rvec, tvec, size, board=(9, 6), square=25.0, ss=2) -> np.ndarray:
+    """8-bit grey view of a checkerboard (one white square of margin) by a fisheye camera.
+
+    Each of ``ss x ss`` samples per pixel is unwarped by ``d`` (Kannala-Brandt) to its ray,
+    which meets the board plane ``Z = 0`` at ``λ Rᵀ d - Rᵀ t``; rays beyond 90 deg are dark.
+    """
+    w, h = size
+    R = rodrigues(np.asarray(rvec, float)[None])[0]
+    Rt_t = R.T @ np.asarray(tvec, float)
+    v, u = np.mgrid[0:h, 0:w].astype(float)
+    acc = np.zeros((h, w))
+    cols, rows = board
+    for dy in (np.arange(ss) + 0.5) / ss - 0.5:
+        for dx in (np.arange(ss) + 0.5) / ss - 0.5:
+            xd = np.stack([(u + dx - K[0, 2]) / K[0, 0], (v + dy - K[1, 2]) / K[1, 1]], -1)
+            xy, ok = d.undistort(xd.reshape(-1, 2))
+            rb = np.c_[xy, np.ones(len(xy))] @ R
+            lam = Rt_t[2] / rb[:, 2]
+            bx, by = ((lam[:, None] * rb - Rt_t)[:, :2] / square).T
+            inside = (bx > -1) & (bx < cols) & (by > -1) & (by < rows)
+            margin = (bx > -2) & (bx < cols + 1) & (by > -2) & (by < rows + 1)
+            val = np.where((np.floor(bx) + np.floor(by)) % 2 == 0, 0.1, 0.9)
+            img = np.where(inside, val, np.where(margin, 0.9, 0.45))
+            acc += np.where(np.asarray(ok) & (lam > 0), img, 0.05).reshape(h, w)
+    return np.round(255 * acc / ss**2).astype(np.uint8)
+
+
+def test_calibrate_fisheye_then_undistort(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """`imageform calibrate --model kannala-brandt` on views rendered through a fisheye
+    (about 180 deg across the width) gives back K and the distortion of the rendering; the
+    camera file says kannala_brandt, and `imageform undistort` with it straightens the
+    board's rows (the corners found in the undistorted view lie on lines within 0.3 px)."""
+    from PIL import Image
+
+    from imageform.geometry.checkerboard import find_checkerboard
+
+    K_true = np.array([[200.0, 0.0, 321.0], [0.0, 201.0, 238.0], [0.0, 0.0, 1.0]])
+    d_true = KannalaBrandt(0.03, -0.01, 0.002, 0.0)
+    rng = np.random.default_rng(2)
+    for k in range(7):
+        rvec = [rng.uniform(-0.5, 0.5), rng.uniform(-0.5, 0.5), rng.uniform(-0.3, 0.3)]
+        tvec = [-112.0 + rng.uniform(-80, 80), -62.0 + rng.uniform(-60, 60), rng.uniform(150, 220)]
+        img = _fisheye_board(K_true, d_true, rvec, tvec, (640, 480))
+        Image.fromarray(img).save(tmp_path / f"view{k:02d}.png")
+    out = tmp_path / "fish.toml"
+    argv = ["calibrate", str(tmp_path / "view*.png"), "--board", "9x6", "--square", "25mm"]
+    assert main([*argv, "--model", "kannala-brandt", "-o", str(out), "--json"]) == 0
+    summary = json.loads(capsys.readouterr().out)
+    assert summary["model"] == "kannala_brandt" and summary["rms_px"] < 0.2
+    assert set(summary["distortion"]) == {"model", "k1", "k2", "k3", "k4"}
+    cf = read_camera(out)
+    assert cf.distortion_model == "kannala_brandt"
+    assert "--model kannala-brandt" in (cf.provenance.command or "")
+    np.testing.assert_allclose(np.asarray(cf.camera.K), K_true, atol=1.0)
+    assert abs(cf.camera.distortion.k1 - 0.03) < 0.01
+    flat = tmp_path / "flat.png"
+    assert (
+        main(["undistort", str(tmp_path / "view00.png"), "--camera", str(out), "-o", str(flat)])
+        == 0
+    )
+    det = find_checkerboard(np.asarray(Image.open(flat), dtype=float) / 255.0, (9, 6))
+    assert det.found
+    for row in np.asarray(det.corners).reshape(6, 9, 2):
+        centred = row - row.mean(axis=0)
+        assert np.linalg.svd(centred, compute_uv=False)[1] / np.sqrt(9) < 0.3
+    capsys.readouterr()
+    # --fix names of another model are refused in one line
+    assert main([*argv, "--model", "kannala-brandt", "--fix", "p1", "-o", str(out), "--force"]) == 2
+    assert "unknown --fix (--model kannala-brandt) 'p1'" in capsys.readouterr().err
+    assert main([*argv, "--model", "fisheye", "-o", str(out), "--force"]) == 2
+    assert "fisheye" in capsys.readouterr().err

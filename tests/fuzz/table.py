@@ -286,6 +286,7 @@ VALID: dict[str, C | Skip] = {
     "imageform.geometry.calibration_refine.RefineOutput": Skip(
         "an internal record of the calibration refinement (fuzzed through calibrate_camera)"
     ),
+    "imageform.geometry.calibration_refine.global_names": call("kannala_brandt"),
     "imageform.geometry.calibration_refine.project_views": Skip(
         "an internal step of calibrate_camera on its packed parameter vector (fuzzed through calibrate_camera)"
     ),

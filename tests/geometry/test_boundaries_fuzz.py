@@ -76,8 +76,9 @@ def test_stereo_calibrate_names_the_side(bad: object) -> None:
     ("name", "value"),
     [
         ("max_iter", np.inf),
-        ("max_iter", None),
+        ("max_iter", 0),  # None is the model's default budget
         ("max_iter", [1]),
+        ("model", "fisheye"),
         ("tol", 1j),
         ("tol", np.nan),
         ("tol", -1.0),

@@ -1,8 +1,9 @@
 """Camera calibration: Zhang's method for planar targets, DLT for 3-D rigs, then LM.
 
 :func:`calibrate_camera` estimates the intrinsics ``K`` (``fx, fy, cx, cy`` and optionally
-the skew), Brown-Conrady distortion ``(k1, k2, p1, p2, k3)`` (any of them can be fixed) and
-one pose per view from known object points and their detected pixels, and returns a
+the skew), the lens distortion (Brown-Conrady ``(k1, k2, p1, p2, k3)`` by default, OpenCV's
+rational ``k1 ... k6`` or the Kannala-Brandt fisheye ``k1 ... k4``; any parameter can be
+fixed) and one pose per view from known object points and their detected pixels, and returns a
 :class:`CalibrationResult` with the reprojection errors (overall RMS as OpenCV defines it,
 per view and per point) and the standard deviations of the parameters.
 
@@ -39,7 +40,13 @@ from imageform.errors import (
     IllConditionedWarning,
     InvalidInputError,
 )
-from imageform.geometry.calibration_refine import GLOBAL_NAMES, refine, rodrigues
+from imageform.geometry.calibration_refine import (
+    CALIBRATION_MODELS,
+    RefineOutput,
+    global_names,
+    refine,
+    rodrigues,
+)
 from imageform.geometry.calibration_result import CalibrationResult
 from imageform.geometry.calibration_views import _views
 from imageform.geometry.calibration_zhang import (
@@ -48,7 +55,8 @@ from imageform.geometry.calibration_zhang import (
     poses_from_homographies,
     zhang_intrinsics,
 )
-from imageform.geometry.distortion import BrownConrady
+from imageform.geometry.distortion import BrownConrady, KannalaBrandt
+from imageform.geometry.homography import estimate_homography
 
 __all__ = ["CalibrationResult", "calibrate_camera", "checkerboard_points"]
 
@@ -90,7 +98,7 @@ def _is_planar_z0(objs: list[F64]) -> bool:
     return all(float(np.abs(o[:, 2]).max()) <= 1e-9 * scale for o in objs)
 
 
-def _check_fix(fix: Collection[str], skew: bool) -> NDArray[np.bool_]:
+def _check_fix(fix: Collection[str], skew: bool, model: str) -> NDArray[np.bool_]:
     if isinstance(fix, str):
         fix = (fix,)
     if not hasattr(fix, "__iter__") or getattr(fix, "ndim", 1) == 0:
@@ -99,10 +107,11 @@ def _check_fix(fix: Collection[str], skew: bool) -> NDArray[np.bool_]:
     for f in items:
         if not isinstance(f, str):
             raise InvalidInputError(f"expected fix as parameter names (str), got {describe(f)}")
-    names = {check_option(f, GLOBAL_NAMES, "calibration parameter in fix") for f in items}
-    free = np.array([n not in names for n in GLOBAL_NAMES])
+    every = global_names(model)
+    names = {check_option(f, every, f"{model} calibration parameter in fix") for f in items}
+    free = np.array([n not in names for n in every])
     if not skew:
-        free[GLOBAL_NAMES.index("skew")] = False
+        free[every.index("skew")] = False
     return free
 
 
@@ -157,6 +166,66 @@ def _orientation_problems(rvecs: F64) -> list[str]:
     return []
 
 
+#: Iteration budget of the refinement of each model when ``max_iter`` is not given: the
+#: rational model's numerator and denominator nearly share a factor, and the refinement
+#: walks that long valley for hundreds of iterations before it stops.
+DEFAULT_MAX_ITER = {"brown_conrady": 100, "rational": 1000, "kannala_brandt": 100}
+#: Largest ray angle (degrees) from the axis of the points that start a fisheye calibration:
+#: near 90 deg the pinhole coordinates ``tan θ`` of the unwarped points run to infinity.
+MAX_START_ANGLE_DEG = 80.0
+
+
+def _equidistant_start(
+    objs: list[F64],
+    imgs: list[F64],
+    size: tuple[int, int],
+    K_given: F64 | None,
+    d0: KannalaBrandt,
+    planar: bool,
+) -> tuple[F64, F64, F64]:
+    r"""K and poses that start a fisheye calibration, as ``cv::fisheye::calibrate`` does.
+
+    ``f = max(w, h) / π`` (an equidistant lens, ``r_d = f θ``, whose 180 deg field spans the
+    image), the principal point at the image centre (or ``K_given``); each view's pixels are
+    unwarped through ``d0`` to pinhole coordinates ``tan θ (cos φ, sin φ)``, the points beyond
+    :data:`MAX_START_ANGLE_DEG` dropped, and the pose comes from the homography of the board
+    to them (``K = I``; Zhang 2000, sec. 3.1), or the DLT of a 3-D rig.
+    """
+    w, h = size
+    if K_given is None:
+        f = max(w, h) / np.pi
+        K0 = np.array([[f, 0.0, (w - 1) / 2.0], [0.0, f, (h - 1) / 2.0], [0.0, 0.0, 1.0]])
+    else:
+        K0 = K_given
+    lim = np.tan(np.radians(MAX_START_ANGLE_DEG))
+    rv, tv = [], []
+    for k, (o, i) in enumerate(zip(objs, imgs, strict=True)):
+        xd = np.linalg.solve(K0, np.c_[i, np.ones(len(i))].T).T[:, :2]
+        xy, ok = d0.undistort(xd)
+        ok = np.asarray(ok) & (np.hypot(xy[:, 0], xy[:, 1]) < lim)
+        if int(ok.sum()) < 6:
+            raise DegenerateConfigurationError(
+                f"view {k}: fewer than 6 points within {MAX_START_ANGLE_DEG:g} deg of the "
+                "axis at the start of the fisheye calibration; give K_init"
+            )
+        if planar:
+            H = np.asarray(estimate_homography(o[ok, :2], xy[ok]), dtype=np.float64)
+            r, t = poses_from_homographies(H[None], np.eye(3))
+            rv.append(r[0])
+            tv.append(t[0])
+        else:
+            _, r, t = dlt_init([o[ok]], [xy[ok]])
+            rv.append(r[0])
+            tv.append(t[0])
+    return K0, np.stack(rv), np.stack(tv)
+
+
+def _behind_camera(objs: list[F64], rvecs: F64, tvecs: F64) -> bool:
+    """Whether a point of some view is at or behind the camera (``Z_c <= 0``) in these poses."""
+    R = rodrigues(rvecs)
+    return any(bool(np.any(o @ R[k][2] + tvecs[k][2] <= 0.0)) for k, o in enumerate(objs))
+
+
 def calibrate_camera(
     object_points: Sequence[npt.ArrayLike],
     image_points: Sequence[npt.ArrayLike],
@@ -165,15 +234,16 @@ def calibrate_camera(
     skew: bool = False,
     fix: Collection[str] = (),
     K_init: npt.ArrayLike | None = None,
-    distortion_init: BrownConrady | None = None,
+    distortion_init: BrownConrady | KannalaBrandt | None = None,
     method: str = "auto",
-    max_iter: int = 100,
+    max_iter: int | None = None,
     tol: float = 1e-10,
+    model: str = "brown_conrady",
 ) -> CalibrationResult:
     r"""Calibrate a camera from views of a known target: closed form, then Levenberg-Marquardt.
 
-    Minimises the reprojection error over ``K``, Brown-Conrady ``(k1, k2, p1, p2, k3)`` and
-    the poses ``(R_k, t_k)`` of the V views:
+    Minimises the reprojection error over ``K``, the lens model's coefficients ``d`` and the
+    poses ``(R_k, t_k)`` of the V views:
 
     .. math::
 
@@ -181,13 +251,32 @@ def calibrate_camera(
         \left\| \mathbf{u}_{ki} - \pi\!\left(K, d, R_k \mathbf{X}_{ki} + \mathbf{t}_k
         \right) \right\|^2
 
+    The models (``model``), on the normalised coordinates ``(x, y) = (X_c/Z_c, Y_c/Z_c)``,
+    ``r² = x² + y²``:
+
+    - ``"brown_conrady"`` (default): ``(k1, k2, p1, p2, k3)``,
+      ``x_d = x (1 + k1 r² + k2 r⁴ + k3 r⁶) + 2 p1 x y + p2 (r² + 2 x²)`` (OpenCV's
+      ``calibrateCamera``).
+    - ``"rational"``: ``(k1, k2, p1, p2, k3, k4, k5, k6)``, the radial factor
+      ``(1 + k1 r² + k2 r⁴ + k3 r⁶) / (1 + k4 r² + k5 r⁴ + k6 r⁶)`` (OpenCV's
+      ``CALIB_RATIONAL_MODEL``); wide-angle lenses to about 120 deg.
+    - ``"kannala_brandt"``: ``(k1, k2, k3, k4)``, ``θ = atan r``,
+      ``θ_d = θ (1 + k1 θ² + k2 θ⁴ + k3 θ⁶ + k4 θ⁸)``, ``(x_d, y_d) = (θ_d / r) (x, y)``
+      (Kannala & Brandt 2006, IEEE TPAMI 28(8), eq. (6); OpenCV's ``cv::fisheye``): fisheye
+      and endoscope lenses, fields of view to 180 deg (rays to 90 deg from the axis).
+
     Initial values: for a planar target (all ``Z = 0``) Zhang's closed form from the
     homographies (Zhang 2000, "A flexible new technique for camera calibration", IEEE TPAMI
     22(11), sec. 3.1 and appendix B); for a non-planar rig the normalised DLT per view and
     its RQ decomposition (Hartley & Zisserman, 2nd ed., Algorithm 7.1, sec. 6.2.4) —
     OpenCV's ``calibrateCamera`` cannot start from a 3-D rig without ``K_init``.
-    Distortion starts at zero. The refinement is ``scipy.optimize.least_squares`` (TRF)
-    with the block-sparse Jacobian structure.
+    Kannala-Brandt starts as ``cv::fisheye::calibrate`` does (``method="equidistant"``):
+    ``f = max(w, h) / π``, the principal point at the image centre, each view's pose from
+    the homography of the board to its pixels unwarped by the equidistant model (rays
+    beyond 80 deg dropped); for a planar target it also starts from Zhang's pinhole
+    closed form and keeps the fit of lower cost. Distortion starts at zero (or
+    ``distortion_init``). The refinement is Levenberg-Marquardt with the analytic,
+    block-sparse Jacobian of each model.
 
     Parameters
     ----------
@@ -201,15 +290,25 @@ def calibrate_camera(
     skew : bool
         Estimate the skew ``K[0, 1]`` (default: fixed at 0, as OpenCV).
     fix : collection of str
-        Parameters held at their initial values: any of ``fx, fy, cx, cy, skew, k1, k2, p1,
-        p2, k3`` (fixing e.g. ``k3`` as OpenCV's ``CALIB_FIX_K3``; a fixed distortion
-        coefficient keeps its ``distortion_init`` value, 0 by default).
+        Parameters held at their initial values: any of ``fx, fy, cx, cy, skew`` and the
+        model's coefficients (Brown-Conrady ``k1, k2, p1, p2, k3``; rational also ``k4, k5,
+        k6``; Kannala-Brandt ``k1 ... k4``, no ``p1, p2``) (fixing e.g. ``k3`` as OpenCV's
+        ``CALIB_FIX_K3``; a fixed distortion coefficient keeps its ``distortion_init``
+        value, 0 by default).
     K_init, distortion_init : optional
-        Initial ``K`` (3, 3) (skips the closed form) and distortion.
-    method : {"auto", "zhang", "dlt"}
-        Initialiser; ``auto`` is Zhang for a planar ``Z = 0`` target, DLT otherwise.
+        Initial ``K`` (3, 3) (skips the closed form) and distortion: a
+        :class:`~imageform.geometry.BrownConrady` (``brown_conrady``, ``rational``) or a
+        :class:`~imageform.geometry.KannalaBrandt` (``kannala_brandt``).
+    method : {"auto", "zhang", "dlt", "equidistant"}
+        Initialiser; ``auto`` is Zhang for a planar ``Z = 0`` target, DLT otherwise, and
+        for ``kannala_brandt`` the equidistant start (and Zhang's, for a planar target).
+        ``equidistant`` is for ``kannala_brandt`` only.
     max_iter, tol : int, float
-        Iteration budget and the relative tolerances of the refinement.
+        Iteration budget (default :data:`DEFAULT_MAX_ITER` of the model: 100, 1000 for
+        ``rational``) and the relative tolerances of the refinement.
+    model : {"brown_conrady", "rational", "kannala_brandt"}
+        The lens model to fit (the camera file's names; ``rational`` is written as
+        ``brown_conrady`` with ``k4, k5, k6``).
 
     Returns
     -------
@@ -220,7 +319,8 @@ def calibrate_camera(
     Raises
     ------
     InvalidInputError
-        Mismatched point arrays, NaN, a bad ``image_size``, an unknown parameter name.
+        Mismatched point arrays, NaN, a bad ``image_size``, an unknown model, a parameter
+        name in ``fix`` that the model does not have, a ``distortion_init`` of another model.
     DegenerateConfigurationError
         Fewer observations than parameters, fewer than 4 points in a view, a non-planar
         target that is coplanar in a view (DLT), no tilt at all; a refinement that did not
@@ -253,28 +353,51 @@ def calibrate_camera(
     >>> res = calibrate_camera([obj] * 3, uv, (640, 480))
     >>> round(float(res.K[0, 0]), 6), round(res.distortion.k1, 6)
     (800.0, -0.1)
+
+    A fisheye (Kannala-Brandt) lens:
+
+    >>> from imageform.geometry import KannalaBrandt
+    >>> K = np.array([[300.0, 0, 320], [0, 300, 240], [0, 0, 1]])
+    >>> fish = [([0.3, 0.1, 0], [-100, -60, 200]), ([-0.2, 0.3, 0.1], [-90, -70, 150]),
+    ...         ([0.1, -0.35, -0.1], [-150, -50, 190]), ([0.0, 0.5, 0.0], [20, -80, 160])]
+    >>> uv = [project_points_distorted(obj, K, rvec_to_matrix(r), t, KannalaBrandt(k1=0.05))[0]
+    ...       for r, t in fish]
+    >>> res = calibrate_camera([obj] * 4, uv, (640, 480), model="kannala_brandt")
+    >>> round(float(res.K[0, 0]), 6), round(res.distortion.k1, 6), res.rms < 1e-9
+    (300.0, 0.05, True)
     """
     objs, imgs = _views(object_points, image_points)
     size = check_image_size(image_size)
     skew = as_bool(skew, "skew")
+    model = check_option(model, CALIBRATION_MODELS, "calibration model")
+    if max_iter is None:
+        max_iter = DEFAULT_MAX_ITER[model]
     max_iter = as_int(max_iter, "max_iter", minimum=1, maximum=10**6)
     tol = as_real(tol, "tol", minimum=0.0, maximum=1.0)
+    K_given = None
     if K_init is not None:
         K_given = np.asarray(
             to_numpy(as_matrix_bounded(K_init, "K_init", (3, 3), batch=False)), dtype=np.float64
         )
         check_K(K_given, np, "K_init", positive=True)
         K_given = K_given / K_given[2, 2]
-    method = check_option(method, ("auto", "zhang", "dlt"), "calibration method")
+    method = check_option(method, ("auto", "zhang", "dlt", "equidistant"), "calibration method")
     planar = _is_planar_z0(objs)
+    if method == "equidistant" and model != "kannala_brandt":
+        raise InvalidInputError(
+            f"method 'equidistant' starts a fisheye (model 'kannala_brandt'), not model {model!r}"
+        )
+    both = method == "auto" and model == "kannala_brandt" and planar and K_init is None
     if method == "auto":
         method = "zhang" if planar else "dlt"
+        if model == "kannala_brandt":
+            method = "equidistant"
     if method == "zhang" and not planar:
         raise InvalidInputError(
             "method 'zhang' needs a planar target with Z = 0 in every view; the object "
             "points have Z != 0 (use method 'dlt' for a 3-D rig)"
         )
-    free = _check_fix(fix, skew)
+    free = _check_fix(fix, skew, model)
     n_obs = 2 * sum(o.shape[0] for o in objs)
     n_par = int(free.sum()) + 6 * len(objs)
     if n_obs <= n_par:
@@ -282,42 +405,86 @@ def calibrate_camera(
             f"{n_obs // 2} points in {len(objs)} views give {n_obs} equations for {n_par} "
             "parameters; add views or points, or fix parameters"
         )
-    d0 = distortion_init if distortion_init is not None else BrownConrady()
-    if not isinstance(d0, BrownConrady):
+    d_cls = KannalaBrandt if model == "kannala_brandt" else BrownConrady
+    d0 = distortion_init if distortion_init is not None else d_cls()
+    if not isinstance(d0, d_cls):
         raise InvalidInputError(
-            f"expected distortion_init to be BrownConrady, got {type(d0).__name__}"
+            f"expected distortion_init to be {d_cls.__name__} (model {model!r}), got "
+            f"{type(d0).__name__}"
         )
-    if method == "zhang":
+    n_coef = len(global_names(model)) - 5
+    if model == "brown_conrady" and any(d0.coeffs[5:]):
+        raise InvalidInputError(
+            "distortion_init has rational terms k4, k5, k6; model 'brown_conrady' fits "
+            "k1, k2, p1, p2, k3 only (use model 'rational')"
+        )
+    coef0 = d0.coeffs[:n_coef]
+    starts = []  # (K, rvecs, tvecs) to refine from; the lowest cost is kept
+    if method == "equidistant":
+        assert isinstance(d0, KannalaBrandt)  # method "equidistant" is the fisheye's alone
+        try:
+            starts.append(_equidistant_start(objs, imgs, size, K_given, d0, planar))
+        except DegenerateConfigurationError:
+            if not both:
+                raise
+        if both:
+            try:  # Zhang's pinhole start too: it wins on a moderately wide lens
+                H = homographies(objs, imgs)
+                K0 = zhang_intrinsics(H, size, skew=skew)
+                starts.append((K0, *poses_from_homographies(H, K0)))
+            except (DegenerateConfigurationError, np.linalg.LinAlgError):
+                if not starts:
+                    raise
+    elif method == "zhang":
         H = homographies(objs, imgs)
-        K0 = zhang_intrinsics(H, size, skew=skew) if K_init is None else K_given
-        rv0, tv0 = poses_from_homographies(H, K0)
+        K0 = zhang_intrinsics(H, size, skew=skew) if K_given is None else K_given
+        starts.append((K0, *poses_from_homographies(H, K0)))
     else:
         K0, rv0, tv0 = dlt_init(objs, imgs)
-        if K_init is not None:
-            K0 = K_given
-    if not skew:
-        K0 = K0.copy()
-        K0[0, 1] = 0.0
-    g0 = np.array([K0[0, 0], K0[1, 1], K0[0, 2], K0[1, 2], K0[0, 1], *d0.coeffs[:5]])
+        starts.append((K_given if K_given is not None else K0, rv0, tv0))
     view = np.concatenate([np.full(o.shape[0], k, dtype=np.intp) for k, o in enumerate(objs)])
-    try:
-        out = refine(
-            g0,
-            rv0,
-            tv0,
-            np.concatenate(objs),
-            np.concatenate(imgs),
-            view,
-            free,
-            max_iter=max_iter,
-            tol=tol,
-        )
-    except ConvergenceError as err:
+    best: RefineOutput | None = None
+    failure: ConvergenceError | None = None
+    rv0 = starts[0][1]
+    behind = 0
+    for K0, rv, tv in starts:
+        if model != "brown_conrady" and _behind_camera(objs, rv, tv):
+            behind += 1  # the fisheye projection has no image there: not a start
+            continue
+        if not skew:
+            K0 = K0.copy()
+            K0[0, 1] = 0.0
+        g0 = np.array([K0[0, 0], K0[1, 1], K0[0, 2], K0[1, 2], K0[0, 1], *coef0])
+        try:
+            out = refine(
+                g0,
+                rv,
+                tv,
+                np.concatenate(objs),
+                np.concatenate(imgs),
+                view,
+                free,
+                max_iter=max_iter,
+                tol=tol,
+                model=model,
+            )
+        except ConvergenceError as err:
+            failure = failure or err
+            continue
+        if best is None or float(np.sum(out.residuals**2)) < float(np.sum(best.residuals**2)):
+            best, rv0 = out, rv
+    if best is None:
+        if failure is None:
+            raise DegenerateConfigurationError(
+                f"no initial pose puts every point in front of the camera ({behind} start(s) "
+                "tried); give K_init, or check the object points against the image points"
+            )
         why = _orientation_problems(rv0) if planar else []
         if why:  # the refinement wandered along the valley the views leave open
             raise DegenerateConfigurationError(
                 f"{why[0]} (the refinement found no minimum in {max_iter} iterations)"
-            ) from err
-        raise
+            ) from failure
+        raise failure
+    out = best
     notes = _warn_conditioning(planar, out.rvecs, imgs, size, out.cond)
-    return CalibrationResult.from_fit(out, view, size, free, notes)
+    return CalibrationResult.from_fit(out, view, size, free, notes, model)

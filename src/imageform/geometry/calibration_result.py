@@ -14,9 +14,9 @@ from numpy.typing import NDArray
 from imageform._files import atomic_write, check_writable
 from imageform._validate import describe
 from imageform.errors import InvalidInputError
-from imageform.geometry.calibration_refine import GLOBAL_NAMES, RefineOutput, rodrigues
+from imageform.geometry.calibration_refine import RefineOutput, global_names, rodrigues
 from imageform.geometry.camera import Camera
-from imageform.geometry.distortion import BrownConrady
+from imageform.geometry.distortion import BrownConrady, KannalaBrandt
 
 __all__ = ["CalibrationResult"]
 
@@ -32,8 +32,10 @@ class CalibrationResult:
     ----------
     K : ndarray (3, 3)
         Intrinsic matrix ``[[fx, skew, cx], [0, fy, cy], [0, 0, 1]]`` in pixels.
-    distortion : BrownConrady
-        ``(k1, k2, p1, p2, k3)`` (the rational terms are 0).
+    distortion : BrownConrady or KannalaBrandt
+        The fitted lens model: :class:`BrownConrady` ``(k1, k2, p1, p2, k3)`` (the rational
+        terms 0) for ``model="brown_conrady"``, with ``k4, k5, k6`` for ``"rational"``;
+        :class:`KannalaBrandt` ``(k1, k2, k3, k4)`` for ``"kannala_brandt"``.
     image_size : (int, int)
         ``(width, height)``.
     rvecs, tvecs : ndarray (V, 3)
@@ -45,7 +47,8 @@ class CalibrationResult:
     residuals : tuple of ndarray (N_k, 2)
         Observed minus reprojected pixels of each view; ``np.hypot`` gives per-point errors.
     std : dict str -> float
-        Standard deviation of each global parameter (``fx ... k3``; 0 when fixed).
+        Standard deviation of each global parameter (``fx, fy, cx, cy, skew`` and the
+        model's coefficients; 0 when fixed).
     std_poses : ndarray (V, 6)
         Standard deviations of ``(rvec, t)`` per view.
     fixed : tuple of str
@@ -54,10 +57,12 @@ class CalibrationResult:
         The ill-conditioning warnings that were issued.
     n_evaluations : int
         Residual evaluations of the refinement.
+    model : str
+        The calibration model: ``"brown_conrady"``, ``"rational"`` or ``"kannala_brandt"``.
     """
 
     K: F64
-    distortion: BrownConrady
+    distortion: BrownConrady | KannalaBrandt
     image_size: tuple[int, int]
     rvecs: F64 = field(repr=False)
     tvecs: F64 = field(repr=False)
@@ -69,6 +74,7 @@ class CalibrationResult:
     fixed: tuple[str, ...] = ()
     warnings: tuple[str, ...] = field(default=(), repr=False)
     n_evaluations: int = field(default=0, repr=False)
+    model: str = "brown_conrady"
 
     @classmethod
     def from_fit(
@@ -78,27 +84,34 @@ class CalibrationResult:
         size: tuple[int, int],
         free: NDArray[np.bool_],
         notes: tuple[str, ...],
+        model: str = "brown_conrady",
     ) -> CalibrationResult:
         """Assemble the result from the refinement output (internal)."""
         g = out.globals_
+        names = global_names(model)
+        coeffs = (float(v) for v in g[5:])
+        distortion: BrownConrady | KannalaBrandt = (
+            KannalaBrandt(*coeffs) if model == "kannala_brandt" else BrownConrady(*coeffs)
+        )
         K = np.array([[g[0], g[4], g[2]], [0.0, g[1], g[3]], [0.0, 0.0, 1.0]])
         V = out.rvecs.shape[0]
         res = tuple(out.residuals[view == k] for k in range(V))
         sq = np.sum(out.residuals**2, axis=1)
         return cls(
             K=K,
-            distortion=BrownConrady(*(float(v) for v in g[5:10])),
+            distortion=distortion,
             image_size=size,
             rvecs=out.rvecs,
             tvecs=out.tvecs,
             rms=float(np.sqrt(sq.mean())),
             per_view_rms=np.array([np.sqrt(np.mean(sq[view == k])) for k in range(V)]),
             residuals=res,
-            std={n: float(s) for n, s in zip(GLOBAL_NAMES, out.std_globals, strict=True)},
+            std={n: float(s) for n, s in zip(names, out.std_globals, strict=True)},
             std_poses=out.std_poses,
-            fixed=tuple(n for n, f in zip(GLOBAL_NAMES, free, strict=True) if not f),
+            fixed=tuple(n for n, f in zip(names, free, strict=True) if not f),
             warnings=notes,
             n_evaluations=out.n_iter,
+            model=model,
         )
 
     @property
@@ -136,6 +149,12 @@ class CalibrationResult:
             DeprecationWarning,
             stacklevel=2,
         )
+        if self.model != "brown_conrady":
+            raise InvalidInputError(
+                f"the deprecated to_toml writes Brown-Conrady k1 ... k3 only, not model "
+                f"{self.model!r}: use imageform.io.write_camera(path, "
+                "imageform.io.CameraFile.from_calibration(result))"
+            )
         K = self.K
         vals: dict[str, float] = {
             "fx": K[0, 0],

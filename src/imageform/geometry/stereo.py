@@ -26,6 +26,7 @@ from imageform._validate import (
     as_real_array,
     check_bounded,
     check_memory,
+    check_option,
     check_positive,
     describe,
     size_pair,
@@ -35,17 +36,18 @@ from imageform.errors import (
     DegenerateConfigurationError,
     InvalidInputError,
 )
-from imageform.geometry.calibration import calibrate_camera
+from imageform.geometry.calibration import DEFAULT_MAX_ITER, calibrate_camera
 from imageform.geometry.calibration_refine import (
-    GLOBAL_NAMES,
+    CALIBRATION_MODELS,
     _skew,
+    global_names,
     levenberg_marquardt,
     project_views,
     rodrigues,
 )
 from imageform.geometry.calibration_result import CalibrationResult
 from imageform.geometry.calibration_views import _views
-from imageform.geometry.distortion import BrownConrady
+from imageform.geometry.distortion import BrownConrady, KannalaBrandt
 
 if TYPE_CHECKING:
     from imageform.geometry.distortion import DistortionModel
@@ -193,8 +195,9 @@ def stereo_calibrate(
     fix_intrinsics: bool = False,
     fix: Collection[str] = (),
     skew: bool = False,
-    max_iter: int = 100,
+    max_iter: int | None = None,
     tol: float = 1e-12,
+    model: str = "brown_conrady",
 ) -> StereoCalibrationResult:
     r"""Calibrate a stereo pair: both cameras and ``(R, T)`` by a joint Levenberg-Marquardt.
 
@@ -235,12 +238,17 @@ def stereo_calibrate(
         Keep both cameras' ``K`` and distortion at the single-camera values and refine only
         the poses (OpenCV's ``CALIB_FIX_INTRINSIC``).
     fix : collection of str
-        Parameters held fixed in both cameras (names as in ``calibrate_camera``: ``fx, fy,
-        cx, cy, skew, k1, k2, p1, p2, k3``; e.g. ``("k3",)`` as ``CALIB_FIX_K3``).
+        Parameters held fixed in both cameras (names as in ``calibrate_camera`` for the
+        ``model``: ``fx, fy, cx, cy, skew, k1, k2, p1, p2, k3`` for Brown-Conrady; e.g.
+        ``("k3",)`` as ``CALIB_FIX_K3``).
     skew : bool
         Estimate the skew of both cameras (default fixed at 0).
     max_iter, tol : int, float
-        Iteration budget and relative tolerance of the joint refinement.
+        Iteration budget (default the model's, as ``calibrate_camera``: 100, 1000 for
+        ``rational``) and relative tolerance of the joint refinement.
+    model : {"brown_conrady", "rational", "kannala_brandt"}
+        The lens model of both cameras (``calibrate_camera``'s; ``left`` and ``right``,
+        when given, must be calibrations of this model).
 
     Returns
     -------
@@ -285,6 +293,9 @@ def stereo_calibrate(
     objs, imgs_l = _views(object_points, image_points_left, "image_points_left")
     objs_r, imgs_r = _views(object_points, image_points_right, "image_points_right")
     del objs_r
+    model = check_option(model, CALIBRATION_MODELS, "calibration model")
+    if max_iter is None:
+        max_iter = DEFAULT_MAX_ITER[model]
     max_iter = as_int(max_iter, "max_iter", minimum=1, maximum=10**6)
     tol = as_real(tol, "tol", minimum=0.0, maximum=1.0)
     size_l = _size(image_size, "image_size")
@@ -300,11 +311,11 @@ def stereo_calibrate(
         raise TypeError(f"expected fix as parameter names (str), got {describe(fix)}")
     fix_t = (fix,) if isinstance(fix, str) else tuple(fix)
     if left is None:
-        cal_l = calibrate_camera(objs, imgs_l, size_l, skew=skew, fix=fix_t)
+        cal_l = calibrate_camera(objs, imgs_l, size_l, skew=skew, fix=fix_t, model=model)
     else:
         cal_l = _as_calibration(left, "left")
     if right is None:
-        cal_r = calibrate_camera(objs, imgs_r, size_r, skew=skew, fix=fix_t)
+        cal_r = calibrate_camera(objs, imgs_r, size_r, skew=skew, fix=fix_t, model=model)
     else:
         cal_r = _as_calibration(right, "right")
     # each view's pose in each camera: from the single-camera fits, or by PnP when the
@@ -317,14 +328,15 @@ def stereo_calibrate(
     if not np.linalg.norm(T0) > 0:
         raise DegenerateConfigurationError("the two cameras are at the same place (T = 0)")
 
-    gl0 = _globals(cal_l)
-    gr0 = _globals(cal_r)
+    gl0 = _globals(cal_l, model, "left")
+    gr0 = _globals(cal_r, model, "right")
+    names = global_names(model)
     if fix_intrinsics:
-        free_l = np.zeros(10, dtype=bool)
-        free_r = np.zeros(10, dtype=bool)
+        free_l = np.zeros(len(names), dtype=bool)
+        free_r = np.zeros(len(names), dtype=bool)
     else:
-        free_l = np.array([n not in cal_l.fixed and n not in fix_t for n in GLOBAL_NAMES])
-        free_r = np.array([n not in cal_r.fixed and n not in fix_t for n in GLOBAL_NAMES])
+        free_l = np.array([n not in cal_l.fixed and n not in fix_t for n in names])
+        free_r = np.array([n not in cal_r.fixed and n not in fix_t for n in names])
         if not skew:
             free_l[4] = free_r[4] = False
     il, ir = np.flatnonzero(free_l), np.flatnonzero(free_r)
@@ -355,8 +367,8 @@ def stereo_calibrate(
 
     def fun(p: F64) -> F64:
         gl, gr, rr, T, rv, tv = unpack(p)
-        ul = project_views(gl, rv, tv, obj, view)[0]
-        ur = project_views(gr, rr[None], T[None], left_frame(rv, tv), zero_view)[0]
+        ul = project_views(gl, rv, tv, obj, view, model=model)[0]
+        ur = project_views(gr, rr[None], T[None], left_frame(rv, tv), zero_view, model=model)[0]
         return np.concatenate([(ul - uv_l).ravel(), (ur - uv_r).ravel()])
 
     rows = np.arange(M)[:, None, None]
@@ -365,9 +377,9 @@ def stereo_calibrate(
 
     def jac(p: F64) -> F64:
         gl, gr, rr, T, rv, tv = unpack(p)
-        _, Jgl, Jpl = project_views(gl, rv, tv, obj, view, jac=True)
+        _, Jgl, Jpl = project_views(gl, rv, tv, obj, view, jac=True, model=model)
         Y = left_frame(rv, tv)
-        _, Jgr, Jrel = project_views(gr, rr[None], T[None], Y, zero_view, jac=True)
+        _, Jgr, Jrel = project_views(gr, rr[None], T[None], Y, zero_view, jac=True, model=model)
         assert Jgl is not None and Jpl is not None and Jgr is not None and Jrel is not None
         Jc_r = Jrel[:, :, 3:] @ rodrigues(rr[None])[0]  # d u_r / d Y
         Jpose_r = np.concatenate([Jc_r @ _dcam_drvec(rv, view, obj), Jc_r], axis=-1)
@@ -404,28 +416,30 @@ def stereo_calibrate(
             (gr, ir, nl, cal_r, rv_right, tv_right, size_r),
         )
     ):
-        sd = np.zeros(10)
+        sd = np.zeros(len(names))
         sd[idx] = std[off : off + idx.size]
         K = np.array([[g[0], g[4], g[2]], [0.0, g[1], g[3]], [0.0, 0.0, 1.0]])
+        coeffs = (float(v) for v in g[5:])
         cams.append(
             CalibrationResult(
                 K=K,
-                distortion=BrownConrady(*(float(v) for v in g[5:10])),
+                distortion=(
+                    KannalaBrandt(*coeffs) if model == "kannala_brandt" else BrownConrady(*coeffs)
+                ),
                 image_size=size,
                 rvecs=rvs,
                 tvecs=tvs,
                 rms=float(np.sqrt(sq[c].mean())),
                 per_view_rms=per_view[:, c],
                 residuals=tuple(res[c][view == k] for k in range(V)),
-                std={n: float(s) for n, s in zip(GLOBAL_NAMES, sd, strict=True)},
+                std={n: float(s) for n, s in zip(names, sd, strict=True)},
                 std_poses=std[o_pose:].reshape(V, 6) if c == 0 else np.full((V, 6), np.nan),
                 fixed=tuple(
-                    n
-                    for n, f in zip(GLOBAL_NAMES, free_l if c == 0 else free_r, strict=True)
-                    if not f
+                    n for n, f in zip(names, free_l if c == 0 else free_r, strict=True) if not f
                 ),
                 warnings=cal.warnings,
                 n_evaluations=n_it,
+                model=model,
             )
         )
     return StereoCalibrationResult(
@@ -462,14 +476,18 @@ def _model(value: Any, name: str, method: str) -> Any:
     return value
 
 
-def _globals(cal: CalibrationResult) -> F64:
+def _globals(cal: CalibrationResult, model: str, side: str) -> F64:
+    """``(fx, fy, cx, cy, skew, coefficients of model)`` of a calibration of that model."""
     K = cal.K
     d = cal.distortion
-    if not isinstance(d, BrownConrady):
+    cls = KannalaBrandt if model == "kannala_brandt" else BrownConrady
+    if not isinstance(d, cls) or cal.model != model:
+        got = cal.model if isinstance(d, cls) else f"{type(d).__name__} distortion"
         raise InvalidInputError(
-            f"expected a Brown-Conrady calibration, got {type(d).__name__} distortion"
+            f"expected {side} as a {model} calibration (the model of stereo_calibrate), got {got}"
         )
-    return np.array([K[0, 0], K[1, 1], K[0, 2], K[1, 2], K[0, 1], *d.coeffs[:5]], dtype=float)
+    n = len(global_names(model)) - 5
+    return np.array([K[0, 0], K[1, 1], K[0, 2], K[1, 2], K[0, 1], *d.coeffs[:n]], dtype=float)
 
 
 def _poses(cal: CalibrationResult, objs: list[F64], imgs: list[F64]) -> tuple[F64, F64]:

@@ -7,7 +7,7 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal, get_args
 
 from imageform.errors import ConvergenceError, DegenerateConfigurationError, InvalidInputError
 from imageform.workflows._images import ImageIn, ImageOut, image_out_renames, read, write
@@ -41,7 +41,8 @@ MIN_VIEWS = 3
 MAX_BOARD_CORNERS = 200
 #: Fewest pixels a square of the board may span (the detector needs about 5 sigma).
 _MIN_SQUARE_PX = 4
-_PARAMETERS = ("fx", "fy", "cx", "cy", "skew", "k1", "k2", "p1", "p2", "k3")
+#: The lens models of ``--model`` (``calibrate_camera``'s names; ``-`` and ``_`` are one).
+Model = Literal["brown_conrady", "rational", "kannala_brandt"]
 
 
 _BOARD = re.compile(
@@ -199,8 +200,9 @@ def board_reading(text: str) -> dict[str, Any]:
 class _BoardChecks:
     """The option checks a checkerboard calibration shares (``calibrate``, ``stereo-calibrate``).
 
-    The board, the square size, ``--fix`` names, ``--skew``, ``--half-window``. Mixed in before the
-    options' base class; adds no field.
+    The board, the square size, ``--fix`` names (those of ``--model`` where the command has
+    one, else Brown-Conrady's), ``--skew``, ``--half-window``. Mixed in before the options' base
+    class; adds no field.
     """
 
     board: str
@@ -219,7 +221,12 @@ class _BoardChecks:
                 "checkerboard --board COLSxROWS of inner corners"
             )
         self.square_mm()
-        fixed = tuple(normalize_choice(f, _PARAMETERS, "--fix") for f in self.fix)
+        from imageform.geometry.calibration_refine import global_names
+
+        model = getattr(self, "model", "brown_conrady")
+        names = global_names(model)
+        what = "--fix" if model == "brown_conrady" else f"--fix (--model {model.replace('_', '-')})"
+        fixed = tuple(normalize_choice(f, names, what) for f in self.fix)
         object.__setattr__(self, "fix", fixed)
         if self.skew and "skew" in fixed:
             raise InvalidInputError("--skew estimates the skew; --fix skew holds it: not both")
@@ -277,15 +284,24 @@ class CalibrateOptions(_BoardChecks, ImageIn):
     )
     fix: tuple[str, ...] = option(
         (),
-        help="Hold a parameter at its initial value (repeatable): fx, fy, cx, cy, skew, k1, "
-        "k2, p1, p2, k3.",
+        help="Hold a parameter at its initial value (repeatable): fx, fy, cx, cy, skew and the "
+        "model's k1, k2, p1, p2, k3 (brown-conrady; rational also k4, k5, k6; kannala-brandt "
+        "k1, k2, k3, k4).",
         metavar="NAME",
     )
     skew: bool = option(False, help="Estimate the skew (default: 0, as OpenCV).")
-    max_iter: int = option(
-        100,
-        help="Most iterations of the Levenberg-Marquardt refinement (raise it when it does not "
-        "converge).",
+    model: Model = option(
+        "brown_conrady",
+        help="Lens model: brown-conrady (k1, k2, p1, p2, k3; OpenCV's calibrateCamera), "
+        "rational (also k4, k5, k6; CALIB_RATIONAL_MODEL, to about 120 deg) or kannala-brandt "
+        "(fisheye k1 ... k4; cv::fisheye, to 180 deg). docs/calibration.md says "
+        "which to choose.",
+        choices=get_args(Model),
+    )
+    max_iter: int | None = option(
+        None,
+        help="Most iterations of the Levenberg-Marquardt refinement (default 100; 1000 for "
+        "--model rational; raise it when it does not converge).",
         minimum=1,
         maximum=1_000_000,
     )
@@ -455,18 +471,24 @@ def _calibrate_views(
     import numpy as np
 
     from imageform.geometry import calibrate_camera
+    from imageform.geometry.calibration import DEFAULT_MAX_ITER
+    from imageform.geometry.calibration_refine import MODEL_COEFFICIENTS
     from imageform.io import CameraFile, write_camera
     from imageform.workflows._tables import write_table
 
-    with _converging(opts.max_iter):
+    max_iter = DEFAULT_MAX_ITER[opts.model] if opts.max_iter is None else opts.max_iter
+    with _converging(max_iter):
         res = calibrate_camera(
             objs,
             corners,
             (shape[1], shape[0]),
             skew=opts.skew,
             fix=opts.fix,
-            max_iter=opts.max_iter,
+            max_iter=max_iter,
+            model=opts.model,
         )
+    if opts.model != "brown_conrady":
+        command += f" --model {opts.model.replace('_', '-')}"
     command += "".join(f" --fix {p}" for p in opts.fix) + (" --skew" if opts.skew else "")
     cf = CameraFile.from_calibration(res, images=names, command=command)
     write_camera(run.file(out), cf)
@@ -487,6 +509,7 @@ def _calibrate_views(
         for n, e, p, c in zip(names, res.per_view_rms, res.per_point_errors, corners, strict=True)
     ]
     K, d = res.K, res.distortion
+    coef_names = MODEL_COEFFICIENTS[res.model]
     board = board_reading(opts.board)
     summary = {
         "output": out,
@@ -499,9 +522,10 @@ def _calibrate_views(
         "cx": K[0, 2],
         "cy": K[1, 2],
         "skew": K[0, 1],
+        "model": res.model,
         "distortion": {
-            "model": "brown_conrady",
-            **dict(zip(("k1", "k2", "p1", "p2", "k3"), d.coeffs[:5], strict=True)),
+            "model": "kannala_brandt" if res.model == "kannala_brandt" else "brown_conrady",
+            **dict(zip(coef_names, d.coeffs[: len(coef_names)], strict=True)),
         },
         "board": {k: v for k, v in board.items() if k != "line"},
         "std": res.std,
@@ -516,7 +540,11 @@ def _calibrate_views(
         f"RMS {res.rms:.4f} px over {len(names)} views; fx {K[0, 0]:.3f} ± {res.std['fx']:.3f}, "
         f"fy {K[1, 1]:.3f} ± {res.std['fy']:.3f}, cx {K[0, 2]:.3f}, cy {K[1, 2]:.3f}"
     )
-    text.append(f"k1, k2, p1, p2, k3: {', '.join(f'{c:.6g}' for c in d.coeffs[:5])}")
+    coefs = ", ".join(f"{c:.6g}" for c in d.coeffs[: len(coef_names)])
+    label = ", ".join(coef_names)
+    if res.model != "brown_conrady":
+        label = f"{res.model.replace('_', '-')} {label}"
+    text.append(f"{label}: {coefs}")
     text.append(f"wrote {out}")
     return Result(summary, tuple(text))
 
@@ -687,9 +715,11 @@ WORKFLOWS = (
         Output("Camera file to write (TOML, docs/camera-file.md)."),
         suffixes=(".toml",),
         group="geometry",
-        description=f"Needs the board in at least {MIN_VIEWS} views. Zhang's closed form, then "
-        "Levenberg-Marquardt on all reprojection errors; K, Brown-Conrady k1, k2, p1, p2, k3, "
-        "their standard deviations and the RMS go to the camera file.",
+        description=f"Needs the board in at least {MIN_VIEWS} views. Zhang's closed form (a "
+        "fisheye: cv::fisheye's equidistant start too), then Levenberg-Marquardt on all "
+        "reprojection errors; K, the --model's coefficients (Brown-Conrady k1, k2, p1, p2, k3 "
+        "by default; rational k1 ... k6; Kannala-Brandt fisheye k1 ... k4), their standard "
+        "deviations and the RMS go to the camera file.",
     ),
     Workflow(
         "undistort",

@@ -5,7 +5,7 @@ from __future__ import annotations
 import os
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, get_args
 
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
 from imageform.workflows._images import ImageIn, read
@@ -19,6 +19,7 @@ from imageform.workflows._spec import (
 )
 from imageform.workflows.calibration import (
     MIN_VIEWS,
+    Model,
     _BoardChecks,
     _converging,
     board_hint,
@@ -46,7 +47,8 @@ class StereoCalibrateOptions(_BoardChecks, ImageIn):
     fix: tuple[str, ...] = option(
         (),
         help="Hold a parameter of both cameras at its initial value (repeatable): fx, fy, cx, "
-        "cy, skew, k1, k2, p1, p2, k3.",
+        "cy, skew and the model's k1, k2, p1, p2, k3 (brown-conrady; rational also k4, k5, k6; "
+        "kannala-brandt k1, k2, k3, k4).",
         metavar="NAME",
     )
     fix_intrinsics: bool = option(
@@ -58,10 +60,16 @@ class StereoCalibrateOptions(_BoardChecks, ImageIn):
     half_window: int | None = option(
         None, help="Sub-pixel window half size (OpenCV's tutorial: 11); default adaptive."
     )
-    max_iter: int = option(
-        100,
-        help="Most iterations of the joint Levenberg-Marquardt refinement (raise it when it does "
-        "not converge).",
+    model: Model = option(
+        "brown_conrady",
+        help="Lens model of both cameras: brown-conrady (k1, k2, p1, p2, k3), rational (also "
+        "k4, k5, k6) or kannala-brandt (fisheye k1 ... k4), as imageform calibrate --model.",
+        choices=get_args(Model),
+    )
+    max_iter: int | None = option(
+        None,
+        help="Most iterations of the joint Levenberg-Marquardt refinement (default 100; 1000 for "
+        "--model rational; raise it when it does not converge).",
         minimum=1,
         maximum=1_000_000,
     )
@@ -176,7 +184,10 @@ def stereo_calibrate_cmd(
     if run.progress is not None:
         run.progress("calibrating", 1.0)
     obj = checkerboard_points(board, opts.square_mm())
-    with _converging(opts.max_iter):
+    from imageform.geometry.calibration import DEFAULT_MAX_ITER
+
+    max_iter = DEFAULT_MAX_ITER[opts.model] if opts.max_iter is None else opts.max_iter
+    with _converging(max_iter):
         rig = stereo_calibrate(
             [obj] * len(pairs),
             [p[2] for p in pairs],
@@ -186,9 +197,12 @@ def stereo_calibrate_cmd(
             fix_intrinsics=opts.fix_intrinsics,
             fix=opts.fix,
             skew=opts.skew,
-            max_iter=opts.max_iter,
+            max_iter=max_iter,
+            model=opts.model,
         )
     command = f"imageform stereo-calibrate --board {board[0]}x{board[1]} --square {opts.square}"
+    if opts.model != "brown_conrady":
+        command += f" --model {opts.model.replace('_', '-')}"
     command += "".join(f" --fix {p}" for p in opts.fix) + (" --skew" if opts.skew else "")
     command += " --fix-intrinsics" if opts.fix_intrinsics else ""
     sf = StereoCameraFile.from_calibration(
@@ -210,6 +224,7 @@ def stereo_calibrate_cmd(
         for p, e in zip(pairs, rig.per_view_rms, strict=True)
     ]
     reading = board_reading(opts.board)
+    n = len(rig.left.std) - 5  # the model's coefficients
     summary = {
         "output": out,
         "board": {k: v for k, v in reading.items() if k != "line"},
@@ -223,8 +238,9 @@ def stereo_calibrate_cmd(
         "std_T": rig.std_T.tolist(),
         "baseline": rig.baseline,
         "unit": "mm",
-        "left": {"K": rig.left.K.tolist(), "distortion": list(rig.left.distortion.coeffs[:5])},
-        "right": {"K": rig.right.K.tolist(), "distortion": list(rig.right.distortion.coeffs[:5])},
+        "model": rig.left.model,
+        "left": {"K": rig.left.K.tolist(), "distortion": list(rig.left.distortion.coeffs[:n])},
+        "right": {"K": rig.right.K.tolist(), "distortion": list(rig.right.distortion.coeffs[:n])},
         "per_pair": per_pair,
     }
     text = [reading["line"], f"{'left':<20} {'right':<20} {'RMS l px':>8} {'RMS r px':>8}"]
