@@ -172,11 +172,49 @@ class StainNormalizeOptions(ImageIn, ImageOut):
     save_target: Path | None = option(
         None, help="Also save the target's statistics as JSON (reused with --target).", output=True
     )
+    mask: str | None = option(
+        None,
+        help="Pixels the statistics are taken on: auto (no pen ink, black ink, dark folds; "
+        "the default for macenko), he (also brown dye and grey, H&E only), none (every "
+        "pixel; the default for reinhard) or a mask image (non-zero: use).",
+        metavar="auto|he|none|FILE",
+    )
 
     def check(self) -> None:
         """Check the options and take ``target`` as a path."""
         super().check()
         object.__setattr__(self, "target", Path(self.target))
+        if self.mask is not None:
+            key = str(self.mask).strip().lower()
+            object.__setattr__(self, "mask", key if key in _MASK_WORDS else str(self.mask))
+
+
+#: The words ``--mask`` takes (anything else is a mask image's path).
+_MASK_WORDS = ("auto", "he", "none")
+
+
+def _stain_mask(opts: StainNormalizeOptions, img: Any, *, target: bool = False) -> Any:
+    """What ``--mask`` means for one image: a keyword for Macenko, booleans for Reinhard."""
+    import numpy as np
+
+    from imageform import analysis
+
+    key = opts.mask or ("auto" if opts.method == "macenko" else "none")
+    if key not in _MASK_WORDS:
+        if target:  # a mask image belongs to the image, the target gets the default
+            key = "auto" if opts.method == "macenko" else "none"
+        else:
+            m = np.asarray(read(Path(key), opts, alpha="drop"))
+            m = m.any(axis=-1) if m.ndim == 3 else m
+            if m.shape != img.shape[:-1]:
+                raise InvalidInputError(
+                    f"{key}: expected a mask of the image's size {img.shape[1]} x "
+                    f"{img.shape[0]}, got {m.shape[-1]} x {m.shape[0]}"
+                )
+            return m != 0
+    if opts.method == "macenko" or key == "none":
+        return None if key == "none" else key
+    return analysis.tissue_mask(img, he=key == "he")
 
 
 def _stain_target(opts: StainNormalizeOptions) -> Any:
@@ -186,9 +224,10 @@ def _stain_target(opts: StainNormalizeOptions) -> Any:
         kind = analysis.MacenkoStains if opts.method == "macenko" else analysis.ReinhardStats
         return kind.from_json(opts.target)
     ref = _rgb(opts.target, opts)
-    return (
-        analysis.macenko_stains(ref) if opts.method == "macenko" else analysis.reinhard_stats(ref)
-    )
+    mask = _stain_mask(opts, ref, target=True)
+    if opts.method == "macenko":
+        return analysis.macenko_stains(ref, mask=mask)
+    return analysis.reinhard_stats(ref, mask)
 
 
 def stain_normalize(run: Run, opts: StainNormalizeOptions, *, out: Path, image: Path) -> Result:
@@ -199,11 +238,12 @@ def stain_normalize(run: Run, opts: StainNormalizeOptions, *, out: Path, image: 
 
     img = _rgb(image, opts)
     stats = _stain_target(opts)
-    source = analysis.macenko_stains(img) if opts.method == "macenko" else None
+    mask = _stain_mask(opts, img)
+    source = analysis.macenko_stains(img, mask=mask) if opts.method == "macenko" else None
     if source is not None:
         result = analysis.macenko_normalize(img, stats, source=source)
     else:
-        result = analysis.reinhard_normalize(img, stats)
+        result = analysis.reinhard_normalize(img, stats, mask=mask)
     n_out = write(run, out, np.asarray(result), opts, like=img)
     if opts.save_target is not None:
         stats.to_json(run.file(opts.save_target))
