@@ -65,9 +65,9 @@ def _angle(a: np.ndarray, b: np.ndarray) -> float:
 
 
 def _stains(img: np.ndarray, method: str, mask: object) -> np.ndarray:
-    from imageform.analysis import macenko_stains
+    from imageform.analysis import STAIN_VECTOR_METHODS
 
-    return np.asarray(macenko_stains(img, method=method, mask=mask).stain_matrix)
+    return np.asarray(STAIN_VECTOR_METHODS[method](img, mask=mask).stain_matrix)
 
 
 def _ink(pen: Path) -> dict[str, np.ndarray]:
@@ -139,20 +139,20 @@ def main() -> None:
 
     rows = []
     for name in ("pen_green", "small_pen_green", "pen_black", "pen_red"):
-        img = _read(args.pen / f"{name}.png")
+        thumb = _read(args.pen / f"{name}.png")
         hand = _read_mask(args.pen / f"{name}_mask.png")
-        auto = tissue_mask(img)
-        glass = tissue_mask(img, pen=False, dark=False)
+        auto = tissue_mask(thumb)
+        glass = tissue_mask(thumb, pen=False, dark=False)
         row = [name, f"{hand.mean():.1%}", f"{1 - auto[hand].mean():.1%}"]
         row.append(f"{auto[glass & ~hand].mean():.1%}")
         if name.endswith("pen_green"):
-            ref_mask = ~hand & tissue_mask(img, glass=False, pen=False, dark=False, he=True)
+            ref_mask = ~hand & tissue_mask(thumb, glass=False, pen=False, dark=False, he=True)
             if name == "pen_green":
                 ref_mask[400:500, 120:230] = False  # the blue dot, not in the hand mask
             for method in ("macenko", "vahadane"):
-                ref = _stains(img, method, ref_mask)
+                best = _stains(thumb, method, ref_mask)
                 for mask in (None, "auto", "he"):
-                    row.append(f"{_angle(_stains(img, method, mask), ref):.1f}")
+                    row.append(f"{_angle(_stains(thumb, method, mask), best):.1f}")
         else:
             row += ["-"] * 6
         rows.append(row)
@@ -203,8 +203,7 @@ def main() -> None:
         for k, r in (("none", "clean"), ("auto", "clean"), ("auto", "ideal"))
     ]
     summary = [
-        [case]
-        + [f"{worst.get((case, f'{m} {k} {r}'), float('nan')):.2f}" for m, k, r in kinds]
+        [case] + [f"{worst.get((case, f'{m} {k} {r}'), float('nan')):.2f}" for m, k, r in kinds]
         for case in (*inks, "fold")
     ]
     heads = [

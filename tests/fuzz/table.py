@@ -68,6 +68,7 @@ VALID: dict[str, C | Skip] = {
     "imageform.analysis.synthetic_endoscopy_image": call(),
     "imageform.analysis.synthetic_shading_scene": call(),
     "imageform.analysis.synthetic_stain_image": call(),
+    "imageform.analysis.tissue_mask": call(image=V("rgb")),
     "imageform.batch.BatchReport": call("white_balance", (V("job_result"),)),
     "imageform.batch.BatchReport.count": method(V("batch_report"), status="done"),
     "imageform.batch.BatchReport.to_dict": method(V("batch_report")),

@@ -85,7 +85,6 @@ from imageform.analysis.sfr import (
     render_slanted_edge,
     slanted_edge_sfr,
 )
-from imageform.analysis.tissue import TISSUE_MASK_RULES, tissue_mask
 from imageform.analysis.synthetic import (
     COLORCHECKER_SRGB8,
     LabeledImage,
@@ -96,6 +95,7 @@ from imageform.analysis.synthetic import (
     synthetic_shading_scene,
     synthetic_stain_image,
 )
+from imageform.analysis.tissue import TISSUE_MASK_RULES, tissue_mask
 
 __all__ = [
     "CHART_LAYOUTS",

@@ -600,18 +600,24 @@ def _keep_mask(flat: Any, beta: float, rule: str) -> Any:
     return (flat * flat).sum(axis=1) >= beta * beta
 
 
-def _count(keep: Any, beta: float, min_pixels: int, rule: str, what: str) -> int:
+def _count(keep: Any, beta: float, min_pixels: int, rule: str, what: str, use: Any = None) -> int:
     n = keep.astype(np.float64).sum()
+    lost = 0 if use is None else (~use).astype(np.float64).sum()
     if is_dask(n):
         import dask
 
-        n = dask.compute(n)[0]
+        n, lost = dask.compute(n, lost)
     n = int(n)
     if n < min_pixels:
+        why = "is there tissue in the image?"
+        if int(lost):
+            why = (
+                f"the tissue mask left out {int(lost)} pixels (pen ink, black ink, dark "
+                "folds: mask=None keeps them)"
+            )
         raise DegenerateConfigurationError(
             f"{what}: only {n} pixels have optical density >= beta={beta:g} (transparent "
-            f"rule {rule!r}), fewer than min_pixels={describe(min_pixels, 24)}; is there "
-            "tissue in the image?"
+            f"rule {rule!r}), fewer than min_pixels={describe(min_pixels, 24)}; {why}"
         )
     return n
 
@@ -634,7 +640,7 @@ def _fit(
     if use is not None:
         keep = keep & use
     w = keep.astype(np.float64)
-    n = _count(keep, beta, min_pixels, rule, what)
+    n = _count(keep, beta, min_pixels, rule, what, use)
     lazy = is_dask(flat)
     # covariance of the kept OD vectors as sums (a reduction in Dask), then its eigenvectors
     s1 = (flat * w[:, None]).sum(axis=0)
@@ -741,12 +747,13 @@ def _mask_flat(mask: object, rgb: Any, i0v: np.ndarray) -> Any:
                 f"got {describe(mask)}"
             )
         return arr.reshape(-1)
-    if np.dtype(mask.dtype) != np.bool_ or tuple(mask.shape) != shape:
+    lazy: Any = mask
+    if np.dtype(lazy.dtype) != np.bool_ or tuple(lazy.shape) != shape:
         raise InvalidInputError(
             f"expected mask as 'auto', None or booleans of shape {format_shape(shape)}, "
             f"got {describe(mask)}"
         )
-    return mask.reshape(-1)
+    return lazy.reshape(-1)
 
 
 def _check_params(beta: float, alpha: float, max_percentile: float) -> None:
@@ -771,7 +778,7 @@ def macenko_stains(
     i0: Literal["auto"] | float | ArrayLike = "auto",
     base: str = "e",
     method: Literal["macenko", "vahadane"] = "macenko",
-    mask: Literal["auto"] | ArrayLike | None = "auto",
+    mask: Literal["auto", "he", "none"] | ArrayLike | None = "auto",
 ) -> MacenkoStains:
     r"""Estimate the two stain vectors and their maximum concentrations (Macenko 2009).
 
@@ -926,7 +933,7 @@ def macenko_normalize(
     i0: Literal["auto"] | float | ArrayLike = "auto",
     base: str = "e",
     method: Literal["macenko", "vahadane"] = "macenko",
-    mask: Literal["auto"] | ArrayLike | None = "auto",
+    mask: Literal["auto", "he", "none"] | ArrayLike | None = "auto",
 ) -> Array:
     r"""Re-render ``image`` with ``target``'s stain vectors and concentration range.
 
@@ -1031,7 +1038,7 @@ def vahadane_stains(
     base: str = "e",
     max_pixels: int = 20_000,
     iterations: int = 200,
-    mask: Literal["auto"] | ArrayLike | None = "auto",
+    mask: Literal["auto", "he", "none"] | ArrayLike | None = "auto",
 ) -> MacenkoStains:
     r"""Estimate two stain vectors by sparse non-negative factorisation (Vahadane 2016).
 
@@ -1110,7 +1117,7 @@ def vahadane_stains(
     keep = _keep_mask(flat, float(beta), "norm")
     if use is not None:
         keep = keep & use
-    n = _count(keep, float(beta), max(int(min_pixels), 2), "norm", "Vahadane")
+    n = _count(keep, float(beta), max(int(min_pixels), 2), "norm", "Vahadane", use)
     h0, _ = _fit(od, float(beta), 1.0, max(int(min_pixels), 2), "norm", "Vahadane", use)
     tissue = flat[keep]
     if is_dask(tissue):

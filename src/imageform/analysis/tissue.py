@@ -16,7 +16,7 @@ from typing import Any, Literal
 
 import numpy as np
 
-from imageform._typing import ArrayLike
+from imageform._typing import Array, ArrayLike
 from imageform._validate import as_int, as_real, describe, format_shape
 from imageform.analysis._arrays import image_in, is_dask
 from imageform.analysis.macenko import MIN_INTENSITY, _resolve_i0
@@ -27,8 +27,7 @@ __all__ = ["TISSUE_MASK_RULES", "tissue_mask"]
 #: The rules of :func:`tissue_mask`, each name mapped to what it drops (read-only).
 TISSUE_MASK_RULES: MappingProxyType[str, str] = MappingProxyType(
     {
-        "glass": "optical density ||OD||_2 < beta: glass, unstained (Macenko's transparent "
-        "pixels)",
+        "glass": "optical density ||OD||_2 < beta: glass, unstained (Macenko's transparent pixels)",
         "pen": "green, cyan and blue marker ink: OD_red >= pen_min_od and OD_green < "
         "0.5 OD_red (green ink) or OD_blue < 0.35 OD_red with OD_green < OD_red (blue ink); "
         "H&E and DAB absorb green at least half as much as red",
@@ -69,11 +68,12 @@ _GREY_OD = 0.3
 _DARK_LUMA = 0.08
 
 
-#: Ink over tissue and the ink's own spread (the pen rule's hysteresis): a red-dominant OD,
-#: OD_G < 0.8 OD_R, or OD_B < 0.3 OD_R with OD_G < 0.9 OD_R, joined to a pen pixel. Green
-#: ink over a nucleus reads OD_G/OD_R ~ 0.7 (hematoxylin 0.6-1.3); HistoQC's blue ink
-#: OD_G/OD_R 0.5-0.83 (at most 0.22 % of the pixels of 18 real tiles pass the blue test).
-_WEAK_RATIO = 0.8
+#: Ink over tissue and the ink's own spread (the pen rule's hysteresis): OD_G < OD_R, or
+#: OD_B < 0.3 OD_R with OD_G < 0.9 OD_R, joined to a pen pixel. Green ink over a nucleus
+#: reads OD_G/OD_R ~ 0.7, over eosin up to ~0.95 (H&E tissue: median 1.0-3.7); HistoQC's
+#: blue ink OD_G/OD_R 0.5-0.83 (at most 0.22 % of the pixels of 18 real tiles pass the
+#: blue test).
+_WEAK_RATIO = 1.0
 _WEAK_BLUE = 0.3
 
 
@@ -104,7 +104,7 @@ def _artefacts(
 
 
 def _pixel_artefacts(rgb: Any, i0v: np.ndarray, he: bool = False) -> Any:
-    """The default artefact flags of single pixels (no neighbours: no morphology)."""
+    """Return the default artefact flags of single pixels (no neighbours: no morphology)."""
     p = {"pen": True, "dark": True, "he": he, "pen_min_od": 0.3, "dark_luminance": _DARK_LUMA}
     if is_dask(rgb):
         return rgb.map_blocks(
@@ -127,8 +127,11 @@ def _cross(ndim: int) -> np.ndarray:
 
 
 def _grow(bad: np.ndarray, weak: np.ndarray, margin: int) -> np.ndarray:
-    """Flags without a flagged 8-neighbour dropped (speckle); the ink-over-tissue regions
-    that touch what is left added (hysteresis); then dilated by ``margin`` pixels."""
+    """Return the artefact flags cleaned, grown into ink over tissue and dilated.
+
+    Flags without a flagged 8-neighbour are dropped (speckle); the ``weak`` regions that
+    touch what is left are added (hysteresis); the result grows by ``margin`` pixels.
+    """
     from scipy import ndimage
 
     if bad.ndim < 2 or not bad.any():
@@ -169,7 +172,7 @@ def tissue_mask(
     pen_min_od: float = 0.3,
     dark_luminance: float = 0.08,
     margin: int = 1,
-) -> Any:
+) -> Array:
     r"""Pixels of stained tissue: True where a pixel is neither glass nor an artefact.
 
     With :math:`OD = \ln(I_0 / \max(I, 1/255))` per channel (:math:`I_0` from the glass,
@@ -182,16 +185,24 @@ def tissue_mask(
     - **pen** (``pen``): marker ink is a dye that is neither hematoxylin, eosin nor DAB;
       all three absorb green at least half as much as red, while green and cyan ink
       absorbs red and transmits green, :math:`OD_G < 0.5\, OD_R`, and blue ink transmits
-      blue, :math:`OD_B < 0.35\, OD_R` with :math:`OD_G < OD_R`; with
-      :math:`OD_R \ge` ``pen_min_od`` (pale pink pixels have small, noisy ratios). Red
-      ink is eosin's colour and is not found (as HistoQC, which needs a separate model).
+      blue, :math:`OD_B < 0.35\, OD_R` with :math:`OD_G < 0.8\, OD_R`; with
+      :math:`OD_R \ge` ``pen_min_od`` (pale pink pixels have small, noisy ratios). Ink
+      over tissue adds the tissue's OD: the flags grow (hysteresis, 4-connected) into the
+      touching pixels with :math:`OD_G < OD_R`, or :math:`OD_B < 0.3\, OD_R` with
+      :math:`OD_G < 0.9\, OD_R`. Red ink is eosin's colour and is not found (as in
+      HistoQC, which needs a model of its own for it).
     - **dark** (``dark``): black ink, folds and debris: luma :math:`0.2125R + 0.7154G +
       0.0721B <` ``dark_luminance`` of the encoded values (HistoQC's dark-tissue rule, at
-      0.15 there: 0.1 here, as 0.15 drops 1-3.5 % of the dense nuclei of real tiles), or a
-      neutral OD, :math:`\max_c OD_c \le 1.5 \min_c OD_c` with mean OD ≥ 1 (black and
-      grey ink over tissue: stains are tinted, hematoxylin's OD spans 2.3x).
+      0.15 there: 0.08 here, as 0.1-0.15 drops 1-3.5 % of the dense nuclei of real tiles),
+      or a neutral OD, :math:`\max_c OD_c \le 1.5 \min_c OD_c` with mean OD ≥ 1 (black
+      ink over tissue; stains are tinted, hematoxylin's OD spans 2.4x). On IHC, dense
+      hematoxylin + DAB is near-neutral and can be dropped: ``dark=False`` there.
+    - **he** (``he``, off by default): H&E slides only. Yellow, orange and brown margin
+      dye and pigment, :math:`OD_B > 1.2\, OD_G` (H&E absorb green more than blue), and
+      grey (a label, the slide's edge, dirt): :math:`\max_c OD_c \le 1.25 \min_c OD_c`
+      with mean OD ≥ 0.3. DAB is brown and hematoxylin + DAB grey: off for IHC.
 
-    The artefact flags lose isolated pixels (a flag needs a flagged 4-neighbour) and grow
+    A flag without a flagged neighbour (8-connected) is dropped as speckle, the rest grow
     by ``margin`` pixels (4-connected), which takes the stroke's blended rim with it.
 
     Parameters
@@ -201,13 +212,15 @@ def tissue_mask(
         (lazy; the rules are per pixel and the morphology reads ``margin + 1`` pixels
         across chunk edges).
     glass, pen, dark : bool
-        Which rules apply.
+        Which rules apply (``he`` below).
     i0 : "auto" or float or sequence of 3 floats
         Incident light, as in :func:`~imageform.analysis.macenko_stains`.
     beta : float
         OD norm below which a pixel is glass (ln units, 0.15 as Macenko).
     pen_min_od : float
         The least red OD of ink, in [0, 10].
+    he : bool
+        Also the H&E-only rules (brown dye, grey).
     dark_luminance : float
         Luma below which a pixel is dark, in [0, 1].
     margin : int
@@ -238,7 +251,7 @@ def tissue_mask(
     >>> tile[:2, 6:] = (0.05, 0.05, 0.04)                   # black ink
     >>> m = tissue_mask(tile, i0=0.94, margin=0)
     >>> int(m.sum()), bool(m[3, 3]), bool(m[6, 6]), bool(m[0, 7]), bool(m[0, 0])
-    (26, True, False, False, False)
+    (32, True, False, False, False)
     """
     rgb = image_in(image, nonempty=True)
     if rgb.ndim < 3:
@@ -262,7 +275,7 @@ def tissue_mask(
     log_i0 = np.log(_resolve_i0(rgb, i0))
     if not is_dask(rgb):
         return _block(np.asarray(rgb), log_i0, params, flags["glass"], float(beta))
-    depth = {ax: params["margin"] + 1 for ax in (rgb.ndim - 3, rgb.ndim - 2)}
+    depth = dict.fromkeys((rgb.ndim - 3, rgb.ndim - 2), params["margin"] + 1)
     whole = rgb.rechunk({rgb.ndim - 1: 3})
 
     def block(blk: np.ndarray) -> np.ndarray:

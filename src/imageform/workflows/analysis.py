@@ -194,7 +194,7 @@ _MASK_WORDS = ("auto", "he", "none")
 
 
 def _stain_mask(opts: StainNormalizeOptions, img: Any, *, target: bool = False) -> Any:
-    """What ``--mask`` means for one image: a keyword for Macenko, booleans for Reinhard."""
+    """Return what ``--mask`` means for one image: a keyword (Macenko) or booleans."""
     import numpy as np
 
     from imageform import analysis
@@ -204,14 +204,14 @@ def _stain_mask(opts: StainNormalizeOptions, img: Any, *, target: bool = False) 
         if target:  # a mask image belongs to the image, the target gets the default
             key = "auto" if opts.method == "macenko" else "none"
         else:
-            m = np.asarray(read(Path(key), opts, alpha="drop"))
-            m = m.any(axis=-1) if m.ndim == 3 else m
+            raw = np.asarray(read(Path(key), opts, alpha="drop"))
+            m = (raw != 0).any(axis=-1) if raw.ndim == 3 else raw != 0
             if m.shape != img.shape[:-1]:
                 raise InvalidInputError(
                     f"{key}: expected a mask of the image's size {img.shape[1]} x "
                     f"{img.shape[0]}, got {m.shape[-1]} x {m.shape[0]}"
                 )
-            return m != 0
+            return m
     if opts.method == "macenko" or key == "none":
         return None if key == "none" else key
     return analysis.tissue_mask(img, he=key == "he")
