@@ -49,7 +49,7 @@ VALID: dict[str, C | Skip] = {
     ),
     "imageform.analysis.fit_color_correction": call(V("rgb_chart"), V("rgb_chart")),
     "imageform.analysis.macenko_normalize": call(V("stain"), V("stain")),
-    "imageform.analysis.macenko_stains": call(image=V("rgb_big")),
+    "imageform.analysis.macenko_stains": call(image=V("rgb_big"), mask=None),  # noise: no tissue
     "imageform.analysis.mask_iou": call(np.eye(4, dtype=bool), np.eye(4, dtype=bool)),
     "imageform.analysis.optical_density": call(image=V("rgb")),
     "imageform.analysis.overlay_mask": call(image=V("rgb"), mask=np.ones((6, 8), dtype=bool)),

@@ -45,6 +45,8 @@ from imageform.analysis._arrays import (
     write_json,
 )
 from imageform.analysis._sparse_nmf import sample_rows, sparse_nmf
+from imageform.analysis._tissue_rules import DEFAULTS as MASK_DEFAULTS
+from imageform.analysis._tissue_rules import keep_mask, pixel_artefacts
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
 
 __all__ = [
@@ -731,13 +733,10 @@ def _mask_flat(mask: object, rgb: Any, i0v: np.ndarray) -> Any:
         key = check_option(mask, MASK_CHOICES, "mask")
         if key == "none":
             return None
-        from imageform.analysis.tissue import tissue_mask
-
+        he = key == "he"
         if rgb.ndim < 3:  # a list of pixels: the per-pixel rules, no neighbours
-            from imageform.analysis.tissue import _pixel_artefacts
-
-            return ~_pixel_artefacts(rgb, i0v, key == "he").reshape(-1)
-        return tissue_mask(rgb, glass=False, he=key == "he", i0=i0v).reshape(-1)
+            return ~pixel_artefacts(rgb, i0v, he).reshape(-1)
+        return keep_mask(rgb, i0v, {**MASK_DEFAULTS, "he": he}, False, 0.0).reshape(-1)
     shape = tuple(rgb.shape[:-1])
     if not is_dask(mask):
         arr = np.asarray(mask)
