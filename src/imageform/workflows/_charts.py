@@ -120,11 +120,14 @@ def read_chart(
     rows: int = 4,
     cols: int = 6,
     image: Any = None,
+    run: Any = None,
 ) -> ChartInput:
     """Read the chart argument ``flag`` (e.g. ``--chart``).
 
     A CSV of patch values or an image (``image``: the array already read from ``path``),
-    sampled as ``layout`` says.
+    sampled as ``layout`` says. With ``run``, an image's patch means are brought to sRGB from
+    the space the options' ``--from`` names or the file declares (``patches_in_srgb``); without,
+    they stay in the file's own encoding.
     """
     import warnings
 
@@ -156,7 +159,12 @@ def read_chart(
         ) from None
     except InvalidInputError as exc:  # layout cropped: the grid holds no flat patch
         raise InvalidInputError(f"{flag} {path}: {exc}") from None
-    return ChartInput(path, _filled(sample.patches), None, sample, img)
+    patches = sample.patches
+    if run is not None:
+        from imageform.workflows._images import input_space, patches_in_srgb
+
+        patches = patches_in_srgb(patches, input_space(run, path, opts))
+    return ChartInput(path, _filled(patches), None, sample, img)
 
 
 def _filled(pat: Any) -> Any:

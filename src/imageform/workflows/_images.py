@@ -20,9 +20,13 @@ __all__ = [
     "ImageIn",
     "ImageOut",
     "OnDevice",
+    "RgbFrom",
     "gpu_bands",
     "image_out_renames",
+    "in_srgb",
+    "input_space",
     "on_gpu",
+    "patches_in_srgb",
     "read",
     "refuse_absent_device",
     "write",
@@ -356,3 +360,75 @@ def declared_space(run: Run, image: Path, declared: Any, *, grey: bool) -> str:
             f"({declared.description or 'no description'}); read as srgb (--from overrides)"
         )
     return "srgb"
+
+
+@dataclass(frozen=True, kw_only=True)
+class RgbFrom(Options):
+    """``--from``: the RGB space the input images are encoded in (``auto``: each file's own).
+
+    The commands that take it work on sRGB values (thresholds, stain statistics, chart
+    references are sRGB's): an image that declares another space is brought to sRGB first
+    (:func:`input_space`, :func:`in_srgb`).
+    """
+
+    src: str = option(
+        "auto",
+        flag="--from",
+        help=(
+            "RGB space of the input images; auto: the one each file declares (ICC profile, PNG "
+            "sRGB chunk, EXIF, HEIF), else srgb. Other spaces are brought to sRGB first."
+        ),
+        metavar="SPACE",
+    )
+
+    def check(self) -> None:
+        """Check ``--from`` (auto or an RGB space)."""
+        super().check()
+        why = "this command reads encoded RGB images"
+        object.__setattr__(self, "src", rgb_space_or_auto(self.src, why))
+
+
+def input_space(run: Run, path: Path, opts: Any) -> str:
+    """Return the RGB space of the image file ``path``: ``--from``, or (auto) its declared one."""
+    src = str(getattr(opts, "src", "srgb"))
+    if src != "auto":
+        return src
+    from imageform.io import image_color_space
+
+    return declared_space(run, path, image_color_space(path), grey=False)
+
+
+def in_srgb(run: Run, path: Path, image: Any, space: str, *, clip: bool) -> Any:
+    """``image`` (encoded in ``space``) as encoded sRGB; unchanged when ``space`` is srgb.
+
+    Floats from :func:`imageform.color.convert`; ``clip``: colours outside sRGB's gamut are
+    clipped to [0, 1] (for methods defined on [0, 1] only), with a note saying how many pixels.
+    """
+    if space == "srgb":
+        return image
+    import numpy as np
+
+    from imageform.color import convert
+
+    out = np.asarray(convert(image, space, "srgb"))
+    if clip:
+        outside = int(np.count_nonzero(((out < 0.0) | (out > 1.0)).any(axis=-1)))
+        if outside:
+            run.note(f"note: {outside} pixels of {path} lie outside sRGB's gamut; clipped to it")
+        out = np.clip(out, 0.0, 1.0)
+    return out
+
+
+def patches_in_srgb(patches: Any, space: str) -> Any:
+    """ChartPatches measured in ``space`` with their means as sRGB (floats: none clipped)."""
+    if space == "srgb":
+        return patches
+    import numpy as np
+
+    from imageform.analysis import ChartPatches
+    from imageform.color import convert
+
+    ok = np.isfinite(patches.means)
+    means = np.asarray(convert(np.where(ok, patches.means, 0.0), space, "srgb"))
+    return ChartPatches(np.where(ok, means, np.nan), patches.std, patches.saturated,
+                        patches.missing)  # fmt: skip

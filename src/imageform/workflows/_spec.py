@@ -398,8 +398,9 @@ class Run:
         return Path(part) if part is not None else Path(self.outputs.folder(path))
 
     def note(self, text: str) -> None:
-        """Add a one-line note for the user (stderr)."""
-        self.notes.append(text)
+        """Add a one-line note for the user (stderr); a note already given is not repeated."""
+        if text not in self.notes:
+            self.notes.append(text)
 
 
 @dataclass(frozen=True)

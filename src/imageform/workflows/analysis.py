@@ -19,7 +19,16 @@ from typing import Any, Literal, get_args
 from imageform import _deprecate
 from imageform.errors import InvalidInputError
 from imageform.workflows import _charts
-from imageform.workflows._images import ImageIn, ImageOut, image_out_renames, read, write
+from imageform.workflows._images import (
+    ImageIn,
+    ImageOut,
+    RgbFrom,
+    image_out_renames,
+    in_srgb,
+    input_space,
+    read,
+    write,
+)
 from imageform.workflows._spec import Input, Output, Result, Run, Workflow, option
 from imageform.workflows.chart import CorrectionMethod
 
@@ -55,6 +64,13 @@ def _rgb(path: Path, opts: Any) -> Any:
     return img
 
 
+def _srgb(run: Run, path: Path, opts: Any, *, clip: bool) -> tuple[Any, Any, str]:
+    """Read an RGB image; return it as read, as sRGB (``--from``/declared space), the space."""
+    img = _rgb(path, opts)
+    space = input_space(run, path, opts)
+    return img, in_srgb(run, path, img, space, clip=clip), space
+
+
 # ---------------------------------------------------------------- segment
 
 
@@ -78,7 +94,7 @@ def _range(text: str | None, flag: str) -> tuple[float, float] | None:
 
 
 @dataclass(frozen=True, kw_only=True)
-class SegmentOptions(ImageIn):
+class SegmentOptions(ImageIn, RgbFrom):
     """Options of ``imageform segment``."""
 
     h: str | None = option(
@@ -116,7 +132,7 @@ def segment(run: Run, opts: SegmentOptions, *, out: Path, image: Path) -> Result
     from imageform.analysis import overlay_mask, segment_hsv
     from imageform.io import write_image
 
-    img = _rgb(image, opts)
+    read_as, img, space = _srgb(run, image, opts, clip=True)
     seg = segment_hsv(
         img,
         _range(opts.h, "--h"),
@@ -129,9 +145,10 @@ def segment(run: Run, opts: SegmentOptions, *, out: Path, image: Path) -> Result
     )
     write_image(run.file(out), np.where(seg.mask, np.uint8(255), np.uint8(0))[..., None])
     if opts.overlay is not None:
-        write(run, opts.overlay, overlay_mask(img, seg.mask), opts, like=img)
+        write(run, opts.overlay, overlay_mask(img, seg.mask), opts, like=read_as)
     summary = {
         "input": image,
+        "from": space,
         "mask": out,
         "overlay": opts.overlay,
         "tissue_fraction": seg.fraction,
@@ -156,7 +173,7 @@ def segment(run: Run, opts: SegmentOptions, *, out: Path, image: Path) -> Result
 
 @image_out_renames
 @dataclass(frozen=True, kw_only=True)
-class StainNormalizeOptions(ImageIn, ImageOut):
+class StainNormalizeOptions(ImageIn, ImageOut, RgbFrom):
     """Options of ``imageform stain-normalize`` (and ``imageform batch stain-normalize``)."""
 
     target: Path = option(
@@ -217,13 +234,13 @@ def _stain_mask(opts: StainNormalizeOptions, img: Any, *, target: bool = False) 
     return analysis.tissue_mask(img, he=key == "he")
 
 
-def _stain_target(opts: StainNormalizeOptions) -> Any:
+def _stain_target(run: Run, opts: StainNormalizeOptions) -> Any:
     from imageform import analysis
 
     if opts.target.suffix.lower() == ".json":
         kind = analysis.MacenkoStains if opts.method == "macenko" else analysis.ReinhardStats
         return kind.from_json(opts.target)
-    ref = _rgb(opts.target, opts)
+    ref = _srgb(run, opts.target, opts, clip=True)[1]
     mask = _stain_mask(opts, ref, target=True)
     if opts.method == "macenko":
         return analysis.macenko_stains(ref, mask=mask)
@@ -236,19 +253,20 @@ def stain_normalize(run: Run, opts: StainNormalizeOptions, *, out: Path, image: 
 
     from imageform import analysis
 
-    img = _rgb(image, opts)
-    stats = _stain_target(opts)
+    read_as, img, space = _srgb(run, image, opts, clip=True)
+    stats = _stain_target(run, opts)
     mask = _stain_mask(opts, img)
     source = analysis.macenko_stains(img, mask=mask) if opts.method == "macenko" else None
     if source is not None:
         result = analysis.macenko_normalize(img, stats, source=source)
     else:
         result = analysis.reinhard_normalize(img, stats, mask=mask)
-    n_out = write(run, out, np.asarray(result), opts, like=img)
+    n_out = write(run, out, np.asarray(result), opts, like=read_as)
     if opts.save_target is not None:
         stats.to_json(run.file(opts.save_target))
     summary: dict[str, Any] = {
         "input": image,
+        "from": space,
         "output": out,
         "method": opts.method,
         "target": opts.target,
@@ -280,7 +298,7 @@ _CORRECTION_METHODS = get_args(CorrectionMethod)
 
 
 @dataclass(frozen=True, kw_only=True)
-class FitCorrectionOptions(ImageIn):
+class FitCorrectionOptions(ImageIn, RgbFrom):
     """Options of ``imageform fit-correction``."""
 
     method: CorrectionMethod = option(
@@ -359,6 +377,7 @@ def fit_correction(run: Run, opts: FitCorrectionOptions, *, out: Path, charts: A
             f"{' '.join(str(p) for p in files) or 'nothing'}"
         )
     kw: dict[str, Any] = {"layout": opts.chart_layout, "rows": opts.rows, "cols": opts.cols}
+    kw["run"] = run  # image charts' patch means in sRGB (--from, or the space declared)
     chart_a = _charts.read_chart(files[0], opts, flag="CHART_A", **kw)
     chart_b = _charts.read_chart(files[1], opts, flag="CHART_B", **kw) if len(files) == 2 else None
     if csvs[0] and chart_a.reference is None:
@@ -418,7 +437,7 @@ def fit_correction(run: Run, opts: FitCorrectionOptions, *, out: Path, charts: A
 
 @image_out_renames
 @dataclass(frozen=True, kw_only=True)
-class HarmonizeOptions(ImageIn, ImageOut):
+class HarmonizeOptions(ImageIn, ImageOut, RgbFrom):
     """Options of ``imageform harmonize`` (and ``imageform batch harmonize``)."""
 
     correction: Path | None = option(
@@ -499,18 +518,23 @@ def harmonize(run: Run, opts: HarmonizeOptions, *, out: Path, image: Path) -> Re
             "expected --correction FILE (from imageform fit-correction) or --chart FILE (a "
             "chart to fit one from), got neither"
         )
-    img = _rgb(image, opts)
-    summary: dict[str, Any] = {"input": image, "output": out}
+    read_as, img, space = _srgb(run, image, opts, clip=False)
+    summary: dict[str, Any] = {"input": image, "output": out, "from": space}
     if opts.chart is not None:
         same = opts.chart.resolve() == Path(image).resolve()
         chart = _charts.read_chart(
-            opts.chart, opts, flag="--chart", layout=opts.chart_layout, image=img if same else None
+            opts.chart,
+            opts,
+            flag="--chart",
+            layout=opts.chart_layout,
+            image=read_as if same else None,
+            run=run,
         )
         ref_in = (
             None
             if opts.reference is None
             else _charts.read_chart(
-                opts.reference, opts, flag="--reference", layout=opts.chart_layout
+                opts.reference, opts, flag="--reference", layout=opts.chart_layout, run=run
             )
         )
         ref = _reference_patches(chart, ref_in, "--chart")
@@ -532,7 +556,7 @@ def harmonize(run: Run, opts: HarmonizeOptions, *, out: Path, image: Path) -> Re
         corr = ColorCorrection.from_json(opts.correction)  # type: ignore[arg-type]
         summary["correction"] = opts.correction
     result = np.asarray(corr.apply(img))
-    n_out = write(run, out, result, opts, like=img)
+    n_out = write(run, out, result, opts, like=read_as)
     if opts.chart is not None:
         if opts.save_correction is not None:
             corr.to_json(run.file(opts.save_correction))
@@ -561,6 +585,7 @@ WORKFLOWS = (
         (_IMG,),
         Output("Mask to write (PNG, 0 / 255)."),
         suffixes=(".png", ".tif", ".tiff", ".npy"),
+        batch=True,
         group="analysis",
     ),
     Workflow(

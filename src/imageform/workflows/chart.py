@@ -24,7 +24,7 @@ from pathlib import Path
 from typing import Any, Literal, get_args
 
 from imageform.errors import InvalidInputError
-from imageform.workflows._images import ImageIn, read
+from imageform.workflows._images import ImageIn, patches_in_srgb, read
 from imageform.workflows._spec import Input, Output, Result, Run, Workflow, option
 
 __all__ = ["WORKFLOWS", "ChartOptions"]
@@ -174,13 +174,7 @@ def chart(run: Run, opts: ChartOptions, *, out: Path, image: Path) -> Result:
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", ChartWarning)
         pat = measure_chart_patches(img, det, max_std=_MAX_STD)
-        if space != "srgb":  # the patch means as sRGB values (floats: nothing clipped)
-            from imageform.color import convert
-
-            means_srgb = np.asarray(convert(np.where(np.isfinite(pat.means), pat.means, 0.0),
-                                            space, "srgb"))  # fmt: skip
-            pat = ChartPatches(np.where(np.isfinite(pat.means), means_srgb, np.nan),
-                               pat.std, pat.saturated, pat.missing)  # fmt: skip
+        pat = patches_in_srgb(pat, space)  # the means as sRGB values (floats: none clipped)
         ref = np.asarray(COLORCHECKER_SRGB8, dtype=np.float64) / 255.0
         means = np.where(np.isfinite(pat.means), pat.means, 0.0)
         filled = ChartPatches(means, pat.std, pat.saturated, pat.missing)

@@ -12,9 +12,11 @@ from imageform.workflows._images import (
     ImageIn,
     ImageOut,
     OnDevice,
+    RgbFrom,
     declared_space,
     gpu_bands,
     image_out_renames,
+    input_space,
     on_gpu,
     read,
     refuse_absent_device,
@@ -440,7 +442,7 @@ def delta_e(run: Run, opts: DeltaEOptions, *, out: None, reference: Path, test: 
 
 @image_out_renames
 @dataclass(frozen=True, kw_only=True)
-class CvdOptions(ImageIn, ImageOut):
+class CvdOptions(ImageIn, ImageOut, RgbFrom):
     """Options of ``imageform cvd``."""
 
     deficiency: str = option(
@@ -457,21 +459,25 @@ class CvdOptions(ImageIn, ImageOut):
 
 def cvd(run: Run, opts: CvdOptions, *, out: Path, image: Path) -> Result:
     """``imageform cvd``: what a colour-vision deficient observer sees (in linear RGB)."""
+    from imageform.color import convert
     from imageform.color.cvd import simulate_cvd
+    from imageform.io import RGB_PROFILED
 
     arr = read(image, opts)
     if arr.shape[-1] != 3:
         raise InvalidInputError(f"{image}: expected an RGB image, got {arr.shape[-1]} channel(s)")
-    n_out = write_mapped(
-        run,
-        out,
-        arr,
-        lambda band: simulate_cvd(band, opts.deficiency, opts.severity, opts.method),
-        opts,
-        like=arr,
-    )[0]
+    space = input_space(run, image, opts)
+
+    def band(b: Any) -> Any:  # the models are defined on sRGB: there and back (floats)
+        srgb = b if space == "srgb" else convert(b, space, "srgb")
+        seen = simulate_cvd(srgb, opts.deficiency, opts.severity, opts.method)
+        return seen if space == "srgb" else convert(seen, "srgb", space)
+
+    tag = space if space in RGB_PROFILED else None
+    n_out = write_mapped(run, out, arr, band, opts, like=arr, color_space=tag)[0]
     summary = {
         "input": image,
+        "from": space,
         "output": out,
         "deficiency": opts.deficiency,
         "severity": opts.severity,
@@ -674,7 +680,7 @@ WORKFLOWS = (
     ),
     Workflow(
         "cvd",
-        "Simulate colour-vision deficiency (protan, deutan, tritan) on an sRGB image.",
+        "Simulate colour-vision deficiency (protan, deutan, tritan) on an RGB image.",
         "imageform.workflows.color:cvd",
         CvdOptions,
         (_IMG,),
