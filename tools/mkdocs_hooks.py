@@ -92,6 +92,7 @@ BENCH_SCRIPTS: dict[str, str] = {
     "sfr-real": "benchmarks/check_sfr_real.py",
     "stain": "benchmarks/bench_stain.py",
     "stain-glass": "benchmarks/check_stain_glass.py",
+    "stain-artefacts": "benchmarks/check_stain_artefacts.py",
     "stain-real": "benchmarks/check_stain_real.py",
     "track": "benchmarks/bench_track.py",
     "twoview": "benchmarks/bench_twoview.py",

@@ -264,8 +264,10 @@ def test_normalise_ihc_to_a_target_and_back(ihc: np.ndarray) -> None:
     np.testing.assert_allclose(t2.max_concentrations, ti.max_concentrations, rtol=0.02)
     # IHC -> synthetic: the slide's OD off the two-stain plane is dropped by the
     # reconstruction, which changes which pixels pass beta and the angle percentiles:
-    # measured 1.2° / 3.0° and max concentrations within 10 %
-    to = macenko_stains(macenko_normalize(ihc, tb))
+    # measured 1.2° / 3.0° and max concentrations within 10 %; measured on every pixel, as
+    # the densest hematoxylin + DAB (Ruifrok's vectors) is near-neutral and dark: the
+    # default mask drops it as dark (13 % lower DAB maximum)
+    to = macenko_stains(macenko_normalize(ihc, tb), mask=None)
     assert max(stain_angle(to.stain_matrix[i], tb.stain_matrix[i]) for i in range(2)) < 4.0
     np.testing.assert_allclose(to.max_concentrations, tb.max_concentrations, rtol=0.12)
     # Reinhard: exact up to float32 (uint8 input computes in float32)

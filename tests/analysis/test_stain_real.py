@@ -138,9 +138,12 @@ def test_a_tile_of_one_colour_is_refused(colour: tuple[int, int, int]) -> None:
     later on a singular matrix)."""
     img8 = np.broadcast_to(np.asarray(colour, dtype=np.uint8), (32, 32, 3)).copy()
     with pytest.raises(DegenerateConfigurationError, match=r"Macenko: .* one colour"):
-        macenko_stains(img8)
+        macenko_stains(img8, mask=None)
     with pytest.raises(DegenerateConfigurationError, match=r"Vahadane: .* one colour"):
-        vahadane_stains(img8)
+        vahadane_stains(img8, mask=None)
+    if colour != (200, 120, 170):  # black and dark grey: the tissue mask's dark rule
+        with pytest.raises(DegenerateConfigurationError, match=r"tissue mask left out"):
+            macenko_stains(img8)
 
 
 def test_chunked_glass_estimate_and_maxima_match_in_memory() -> None:

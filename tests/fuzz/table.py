@@ -49,7 +49,7 @@ VALID: dict[str, C | Skip] = {
     ),
     "imageform.analysis.fit_color_correction": call(V("rgb_chart"), V("rgb_chart")),
     "imageform.analysis.macenko_normalize": call(V("stain"), V("stain")),
-    "imageform.analysis.macenko_stains": call(image=V("rgb_big")),
+    "imageform.analysis.macenko_stains": call(image=V("rgb_big"), mask=None),  # noise: no tissue
     "imageform.analysis.mask_iou": call(np.eye(4, dtype=bool), np.eye(4, dtype=bool)),
     "imageform.analysis.optical_density": call(image=V("rgb")),
     "imageform.analysis.overlay_mask": call(image=V("rgb"), mask=np.ones((6, 8), dtype=bool)),
@@ -68,6 +68,7 @@ VALID: dict[str, C | Skip] = {
     "imageform.analysis.synthetic_endoscopy_image": call(),
     "imageform.analysis.synthetic_shading_scene": call(),
     "imageform.analysis.synthetic_stain_image": call(),
+    "imageform.analysis.tissue_mask": call(image=V("rgb")),
     "imageform.batch.BatchReport": call("white_balance", (V("job_result"),)),
     "imageform.batch.BatchReport.count": method(V("batch_report"), status="done"),
     "imageform.batch.BatchReport.to_dict": method(V("batch_report")),

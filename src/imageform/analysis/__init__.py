@@ -3,7 +3,8 @@
 - HSV tissue segmentation (the lecture's endoscopy case study): :func:`segment_hsv`,
   :func:`overlay_mask`, :func:`mask_iou`.
 - Stain normalisation for pathology: :func:`reinhard_normalize` (CIELAB statistics),
-  :func:`macenko_normalize` (optical density, stain vectors by SVD).
+  :func:`macenko_normalize` (optical density, stain vectors by SVD); the tissue without
+  glass, pen ink, black ink and dark folds, :func:`tissue_mask`.
 - Colour harmonisation between devices from a chart: :func:`fit_color_correction`,
   :func:`chart_patches`, :func:`correction_report`; a ColorChecker found in an uncropped
   photograph by :func:`detect_colorchecker` and measured by :func:`measure_chart_patches`;
@@ -94,6 +95,7 @@ from imageform.analysis.synthetic import (
     synthetic_shading_scene,
     synthetic_stain_image,
 )
+from imageform.analysis.tissue import TISSUE_MASK_RULES, tissue_mask
 
 __all__ = [
     "CHART_LAYOUTS",
@@ -103,6 +105,7 @@ __all__ = [
     "SFR_LUMINANCE_WEIGHTS",
     "STAIN_NORMALIZATION_METHODS",
     "STAIN_VECTOR_METHODS",
+    "TISSUE_MASK_RULES",
     "BackgroundEstimate",
     "ChartDetection",
     "ChartNotFoundError",
@@ -155,5 +158,6 @@ __all__ = [
     "synthetic_he_tile",
     "synthetic_shading_scene",
     "synthetic_stain_image",
+    "tissue_mask",
     "vahadane_stains",
 ]

@@ -189,11 +189,49 @@ class StainNormalizeOptions(ImageIn, ImageOut, RgbFrom):
     save_target: Path | None = option(
         None, help="Also save the target's statistics as JSON (reused with --target).", output=True
     )
+    mask: str | None = option(
+        None,
+        help="Pixels the statistics are taken on: auto (no pen ink, black ink, dark folds; "
+        "the default for macenko), he (also brown dye and grey, H&E only), none (every "
+        "pixel; the default for reinhard) or a mask image (non-zero: use).",
+        metavar="auto|he|none|FILE",
+    )
 
     def check(self) -> None:
         """Check the options and take ``target`` as a path."""
         super().check()
         object.__setattr__(self, "target", Path(self.target))
+        if self.mask is not None:
+            key = str(self.mask).strip().lower()
+            object.__setattr__(self, "mask", key if key in _MASK_WORDS else str(self.mask))
+
+
+#: The words ``--mask`` takes (anything else is a mask image's path).
+_MASK_WORDS = ("auto", "he", "none")
+
+
+def _stain_mask(opts: StainNormalizeOptions, img: Any, *, target: bool = False) -> Any:
+    """Return what ``--mask`` means for one image: a keyword (Macenko) or booleans."""
+    import numpy as np
+
+    from imageform import analysis
+
+    key = opts.mask or ("auto" if opts.method == "macenko" else "none")
+    if key not in _MASK_WORDS:
+        if target:  # a mask image belongs to the image, the target gets the default
+            key = "auto" if opts.method == "macenko" else "none"
+        else:
+            raw = np.asarray(read(Path(key), opts, alpha="drop"))
+            m = (raw != 0).any(axis=-1) if raw.ndim == 3 else raw != 0
+            if m.shape != img.shape[:-1]:
+                raise InvalidInputError(
+                    f"{key}: expected a mask of the image's size {img.shape[1]} x "
+                    f"{img.shape[0]}, got {m.shape[-1]} x {m.shape[0]}"
+                )
+            return m
+    if opts.method == "macenko" or key == "none":
+        return None if key == "none" else key
+    return analysis.tissue_mask(img, he=key == "he")
 
 
 def _stain_target(run: Run, opts: StainNormalizeOptions) -> Any:
@@ -203,9 +241,10 @@ def _stain_target(run: Run, opts: StainNormalizeOptions) -> Any:
         kind = analysis.MacenkoStains if opts.method == "macenko" else analysis.ReinhardStats
         return kind.from_json(opts.target)
     ref = _srgb(run, opts.target, opts, clip=True)[1]
-    return (
-        analysis.macenko_stains(ref) if opts.method == "macenko" else analysis.reinhard_stats(ref)
-    )
+    mask = _stain_mask(opts, ref, target=True)
+    if opts.method == "macenko":
+        return analysis.macenko_stains(ref, mask=mask)
+    return analysis.reinhard_stats(ref, mask)
 
 
 def stain_normalize(run: Run, opts: StainNormalizeOptions, *, out: Path, image: Path) -> Result:
@@ -216,11 +255,12 @@ def stain_normalize(run: Run, opts: StainNormalizeOptions, *, out: Path, image: 
 
     read_as, img, space = _srgb(run, image, opts, clip=True)
     stats = _stain_target(run, opts)
-    source = analysis.macenko_stains(img) if opts.method == "macenko" else None
+    mask = _stain_mask(opts, img)
+    source = analysis.macenko_stains(img, mask=mask) if opts.method == "macenko" else None
     if source is not None:
         result = analysis.macenko_normalize(img, stats, source=source)
     else:
-        result = analysis.reinhard_normalize(img, stats)
+        result = analysis.reinhard_normalize(img, stats, mask=mask)
     n_out = write(run, out, np.asarray(result), opts, like=read_as)
     if opts.save_target is not None:
         stats.to_json(run.file(opts.save_target))

@@ -1,0 +1,164 @@
+"""The rules of :func:`imageform.analysis.tissue_mask`, on clean arrays (no validation).
+
+Shared by :mod:`imageform.analysis.tissue` (the public function) and the stain estimators
+of :mod:`imageform.analysis.macenko` (``mask="auto"``), which import it and not each other.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from imageform.analysis._arrays import is_dask
+
+#: The floor of intensities before the logarithm (``macenko.MIN_INTENSITY``, 1/255).
+_FLOOR = 1.0 / 255.0
+
+#: Luma of encoded RGB (ITU-R BT.709 weights, as scikit-image's ``rgb2gray`` and HistoQC).
+_LUMA = np.array([0.2125, 0.7154, 0.0721])
+
+#: OD ratios of the pen rule: green ink absorbs red 2-9x more than green (HistoQC's green
+#: marker: median OD_g/OD_r 0.27, 99th percentile 0.75 at the stroke's edge); on 18 H&E/IHC
+#: tiles the 0.1st percentile of OD_g/OD_r is 0.55. Blue ink absorbs little blue
+#: (OD_b/OD_r 0.11 on HistoQC's blue dot, hematoxylin 0.45-0.72).
+_GREEN_RATIO = 0.5
+_BLUE_RATIO = 0.35
+_BLUE_GREEN = 0.8
+
+#: Neutral OD (black ink): max/min of the three ODs at most this, with mean OD at least 1.
+_NEUTRAL_RATIO = 1.5
+_NEUTRAL_OD = 1.0
+
+#: Brown rule: H&E absorb green more than blue (OD_b/OD_g 99.9th percentile 0.7-1.2 on 16
+#: H&E tiles); yellow-brown dyes and DAB absorb blue most.
+_BROWN_RATIO = 1.2
+
+#: Grey rule (H&E): a neutral OD (max/min <= 1.25) with mean OD >= 0.3; on 16 H&E tiles at
+#: most 0.2 % of the absorbing pixels, on scikit-image's IHC slide 3.5 % (hematoxylin + DAB).
+_GREY_RATIO = 1.25
+_GREY_OD = 0.3
+
+#: Default luma of the dark rule (HistoQC: 0.15; 0.1 drops 1-3.5 % of dense nuclei).
+_DARK_LUMA = 0.08
+
+
+#: Ink over tissue and the ink's own spread (the pen rule's hysteresis): OD_G < OD_R, or
+#: OD_B < 0.3 OD_R with OD_G < 0.9 OD_R, joined to a pen pixel. Green ink over a nucleus
+#: reads OD_G/OD_R ~ 0.7, over eosin up to ~0.95 (H&E tissue: median 1.0-3.7); HistoQC's
+#: blue ink OD_G/OD_R 0.5-0.83 (at most 0.22 % of the pixels of 18 real tiles pass the
+#: blue test).
+_WEAK_RATIO = 1.0
+_WEAK_BLUE = 0.3
+
+
+def _artefacts(
+    rgb: np.ndarray, log_i0: np.ndarray, p: dict[str, Any]
+) -> tuple[np.ndarray, np.ndarray]:
+    """Per-pixel flags of one block: (artefact, ink over tissue), before the morphology."""
+    od = log_i0 - np.log(np.maximum(rgb, _FLOOR))
+    r, g, b = od[..., 0], od[..., 1], od[..., 2]
+    bad = np.zeros(rgb.shape[:-1], dtype=bool)
+    weak = np.zeros(rgb.shape[:-1], dtype=bool)
+    if p["pen"]:
+        strong = r >= p["pen_min_od"]
+        green = g < _GREEN_RATIO * r
+        blue = (b < _BLUE_RATIO * r) & (g < _BLUE_GREEN * r)
+        bad |= strong & (green | blue)
+        weak = strong & ((g < _WEAK_RATIO * r) | ((b < _WEAK_BLUE * r) & (g < 0.9 * r)))
+    if p.get("he", False):
+        lo = np.maximum(od.min(axis=-1), 1e-6)
+        grey = (od.max(axis=-1) <= _GREY_RATIO * lo) & (od.mean(axis=-1) >= _GREY_OD)
+        bad |= ((b > _BROWN_RATIO * g) & (b >= p["pen_min_od"])) | grey
+    if p["dark"]:
+        luma = rgb @ _LUMA
+        lo = np.maximum(od.min(axis=-1), 1e-6)
+        neutral = (od.max(axis=-1) <= _NEUTRAL_RATIO * lo) & (od.mean(axis=-1) >= _NEUTRAL_OD)
+        bad |= (luma < p["dark_luminance"]) | neutral
+    return bad, weak
+
+
+def pixel_artefacts(rgb: Any, i0v: np.ndarray, he: bool = False) -> Any:
+    """Return the default artefact flags of single pixels (no neighbours: no morphology)."""
+    p = {**DEFAULTS, "he": he}
+    if is_dask(rgb):
+        return rgb.map_blocks(
+            lambda b: _artefacts(b, np.log(i0v), p)[0], drop_axis=rgb.ndim - 1, dtype=bool
+        )
+    return _artefacts(np.asarray(rgb), np.log(i0v), p)[0]
+
+
+def _cross(ndim: int) -> np.ndarray:
+    """4-connectivity in the last two axes (no links across the batch axes)."""
+    cross = np.zeros((3,) * ndim, dtype=bool)
+    centre = (1,) * ndim
+    cross[centre] = True
+    for ax in (ndim - 2, ndim - 1):
+        for d in (0, 2):
+            idx = list(centre)
+            idx[ax] = d
+            cross[tuple(idx)] = True
+    return cross
+
+
+def _grow(bad: np.ndarray, weak: np.ndarray, margin: int) -> np.ndarray:
+    """Return the artefact flags cleaned, grown into ink over tissue and dilated.
+
+    Flags without a flagged 8-neighbour are dropped (speckle); the ``weak`` regions that
+    touch what is left are added (hysteresis); the result grows by ``margin`` pixels.
+    """
+    from scipy import ndimage
+
+    if bad.ndim < 2 or not bad.any():
+        return bad
+    cross = _cross(bad.ndim)
+    square = np.zeros((3,) * bad.ndim, dtype=np.uint8)
+    square[(1,) * (bad.ndim - 2) + (slice(None), slice(None))] = 1
+    n = ndimage.convolve(bad.astype(np.uint8), square, mode="constant")
+    core = bad & (n >= 2)
+    if weak.any() and core.any():
+        labels, _ = ndimage.label(weak | core, structure=cross)
+        hit = np.unique(labels[core])
+        core |= np.isin(labels, hit[hit > 0])
+    if margin == 0:
+        return core
+    return ndimage.binary_dilation(core, structure=cross, iterations=margin)
+
+
+def _block(
+    rgb: np.ndarray, log_i0: np.ndarray, p: dict[str, Any], glass: bool, beta: float
+) -> np.ndarray:
+    keep = ~_grow(*_artefacts(rgb, log_i0, p), p["margin"])
+    if glass:
+        od = log_i0 - np.log(np.maximum(rgb, _FLOOR))
+        keep &= (od * od).sum(axis=-1) >= beta * beta
+    return keep
+
+
+#: The defaults of :func:`imageform.analysis.tissue_mask`'s thresholds.
+DEFAULTS: dict[str, Any] = {
+    "pen": True,
+    "dark": True,
+    "he": False,
+    "pen_min_od": 0.3,
+    "dark_luminance": _DARK_LUMA,
+    "margin": 1,
+}
+
+
+def keep_mask(rgb: Any, i0v: np.ndarray, params: dict[str, Any], glass: bool, beta: float) -> Any:
+    """Return the tissue mask of an image (NumPy or Dask) with a resolved I0."""
+    log_i0 = np.log(i0v)
+    if not is_dask(rgb):
+        return _block(np.asarray(rgb), log_i0, params, glass, beta)
+    depth = dict.fromkeys((rgb.ndim - 3, rgb.ndim - 2), params["margin"] + 1)
+    whole = rgb.rechunk({rgb.ndim - 1: 3})
+
+    def block(blk: np.ndarray) -> np.ndarray:
+        keep = _block(blk, log_i0, params, glass, beta)
+        return np.repeat(keep[..., None], 3, axis=-1)  # the block's shape: trimmed as is
+
+    over = whole.map_overlap(
+        block, depth={**depth, rgb.ndim - 1: 0}, boundary="none", dtype=bool, trim=True
+    )
+    return over[..., 0]
