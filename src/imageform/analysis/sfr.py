@@ -268,6 +268,14 @@ def _hamming(n: int, mid: float) -> np.ndarray:
     return 0.54 + 0.46 * np.cos(np.pi * arg)
 
 
+def _hamming_rows(n: int, mids: np.ndarray) -> np.ndarray:
+    """Return one :func:`_hamming` window of ``n`` samples per centre in ``mids`` (rows)."""
+    k = np.arange(n, dtype=np.float64)
+    wid = np.maximum(np.maximum(mids, n - 1 - mids), 1.0)
+    arg = np.clip((k[None, :] - mids[:, None]) / wid[:, None], -1.0, 1.0)
+    return np.asarray(0.54 + 0.46 * np.cos(np.pi * arg))
+
+
 def _row_centroids(a: np.ndarray, windows: np.ndarray | None) -> np.ndarray:
     """Edge location per row: the centroid of ``a[:, j+1] - a[:, j]`` (at ``j + 0.5``)."""
     d = np.diff(a, axis=1)
@@ -293,7 +301,7 @@ def _fit_edge(a: np.ndarray, order: int) -> np.ndarray:
         )
     p = np.polyfit(rows, c, order)
     n = a.shape[1] - 1
-    win = np.stack([_hamming(n, float(np.polyval(p, r)) - 0.5) for r in rows])
+    win = _hamming_rows(n, np.polyval(p, rows) - 0.5)
     c2 = _row_centroids(a, win)
     if np.isfinite(c2).all():
         p = np.polyfit(rows, c2, order)
@@ -478,6 +486,49 @@ def fit_gaussian_sigma(frequency: ArrayLike, sfr: ArrayLike, *, angle_deg: float
     return float(r.x)
 
 
+def _edge_stages(
+    img: np.ndarray, lum: np.ndarray, q: int, order: int, deriv: str
+) -> tuple[str, int, float, list[np.ndarray], list[np.ndarray], list[np.ndarray]]:
+    """Run the e-SFR up to the LSFs (steps 1-4 of the module's list), each channel then Y.
+
+    Returns the orientation, the rows used, ``cos(theta)`` of the luminance fit, and per
+    plane (R, G, B, Y, or Y alone) the edge polynomial, the ESF and the windowed LSF; raises
+    DegenerateConfigurationError where the e-SFR cannot measure the region.
+    """
+    gy, gx = np.abs(np.diff(lum, axis=0)).mean(), np.abs(np.diff(lum, axis=1)).mean()
+    orientation = "vertical" if gx >= gy else "horizontal"
+    if orientation == "horizontal":
+        img = np.swapaxes(img, 0, 1)
+        lum = lum.T
+    h, wid = lum.shape
+    if h < 8 or wid < 8:
+        raise InvalidInputError(
+            f"expected an ROI of at least 8 pixels along and across the edge, got {h} x {wid}"
+        )
+    planes = [lum] if img.ndim == 2 else [img[:, :, 0], img[:, :, 1], img[:, :, 2], lum]
+    p_lum = _fit_edge(lum, order)
+    slope = float(np.polyval(np.polyder(p_lum), (h - 1) / 2.0))
+    if abs(slope) * h < 1.0:
+        raise DegenerateConfigurationError(
+            f"the edge in image is too close to {orientation}: it moves {abs(slope) * h:.2f} px "
+            f"over {h} rows (needs >= 1); tilt it 2-10 deg"
+        )
+    rows_used = h
+    if order == 1:  # a whole number of phase cycles (sfrmat3)
+        rows_used = max(8, min(h, round(math.floor(abs(slope) * h) / abs(slope))))
+    cos_ref = math.cos(math.atan(slope))  # the ESF bins are cos_ref / q px along the normal
+    fits, esfs = [], []
+    for a in planes:
+        a = a[:rows_used]
+        p = _fit_edge(a, order)
+        esfs.append(_project(a, p, q, cos_ref))
+        fits.append(p)
+    m = min(e.size for e in esfs)
+    esfs = [e[:m] for e in esfs]
+    lsfs = [_lsf(e, deriv) for e in esfs]
+    return orientation, rows_used, cos_ref, fits, esfs, lsfs
+
+
 def slanted_edge_sfr(
     image: ArrayLike,
     roi: Sequence[int] | None = None,
@@ -551,45 +602,8 @@ def slanted_edge_sfr(
     w = _weights(weights)
 
     lum = _luminance(img, w)
-    gy, gx = np.abs(np.diff(lum, axis=0)).mean(), np.abs(np.diff(lum, axis=1)).mean()
-    orientation = "vertical" if gx >= gy else "horizontal"
-    if orientation == "horizontal":
-        img = np.swapaxes(img, 0, 1)
-        lum = lum.T
-    h, wid = lum.shape
-    if h < 8 or wid < 8:
-        raise InvalidInputError(
-            f"expected an ROI of at least 8 pixels along and across the edge, got {h} x {wid}"
-        )
-    if img.ndim == 2:
-        planes = [lum]
-        names: tuple[str, ...] = ("Y",)
-    else:
-        planes = [img[:, :, 0], img[:, :, 1], img[:, :, 2], lum]
-        names = ("R", "G", "B", "Y")
-
-    p_lum = _fit_edge(lum, order)
-    slope = float(np.polyval(np.polyder(p_lum), (h - 1) / 2.0))
-    if abs(slope) * h < 1.0:
-        raise DegenerateConfigurationError(
-            f"the edge in image is too close to {orientation}: it moves {abs(slope) * h:.2f} px "
-            f"over {h} rows (needs >= 1); tilt it 2-10 deg"
-        )
-    rows_used = h
-    if order == 1:  # a whole number of phase cycles (sfrmat3)
-        rows_used = max(8, min(h, round(math.floor(abs(slope) * h) / abs(slope))))
-    cos_ref = math.cos(math.atan(slope))  # the ESF bins are cos_ref / q px along the normal
-    fits, esfs, lsfs = [], [], []
-    for a in planes:
-        a = a[:rows_used]
-        p = _fit_edge(a, order)
-        esf = _project(a, p, q, cos_ref)
-        fits.append(p)
-        esfs.append(esf)
-    m = min(e.size for e in esfs)
-    esfs = [e[:m] for e in esfs]
-    for e in esfs:
-        lsfs.append(_lsf(e, deriv))
+    orientation, rows_used, cos_ref, fits, esfs, lsfs = _edge_stages(img, lum, q, order, deriv)
+    names: tuple[str, ...] = ("Y",) if img.ndim == 2 else ("R", "G", "B", "Y")
     nfft = lsfs[0].size
     fine = max(8 * nfft, 4096)
     freq = np.empty(0)
@@ -790,6 +804,61 @@ def _subpixel_side(
     return np.asarray(out, dtype=np.float64)
 
 
+def _components_at(g: np.ndarray, t: float, msz: int) -> list[tuple[int, int, np.ndarray]]:
+    """Dark components of ``g < t`` at least ``msz`` pixels across, off the image's border.
+
+    Returns ``(r0, c0, mask)`` each: the top-left pixel in ``g`` and the mask over its
+    bounding box (scipy's 4-connected labelling).
+    """
+    from scipy import ndimage
+
+    H, W = g.shape
+    labels, _n = ndimage.label(g < t)
+    out = []
+    for lab, sl in enumerate(ndimage.find_objects(labels), start=1):
+        if sl is None:
+            continue
+        r0, r1, c0, c1 = sl[0].start, sl[0].stop, sl[1].start, sl[1].stop
+        if r0 == 0 or c0 == 0 or r1 == H or c1 == W or min(r1 - r0, c1 - c0) < msz:
+            continue
+        out.append((r0, c0, labels[r0:r1, c0:c1] == lab))
+    return out
+
+
+def _pick_levels(
+    g: np.ndarray, found: Sequence[tuple[float, int, int, np.ndarray]]
+) -> list[tuple[float, int, int, np.ndarray]]:
+    """Each component of ``found`` (``(t, r0, c0, mask)``) once, at its best level.
+
+    A component seen at several levels (the same bounding box within 2 px) is kept at the
+    level ``t`` nearest the middle of its grey and its surround's (:func:`_component_greys`,
+    measured where it is first seen: they hardly move with the level).
+    """
+    comps: dict[tuple[int, int], list[list[Any]]] = {}  # by box corner / 8: score, t, r0, ...
+    out: list[list[Any]] = []
+    for t, r0, c0, m in found:
+        bx = (r0, c0, r0 + m.shape[0], c0 + m.shape[1])
+        near = [
+            e
+            for i in (r0 // 8 - 1, r0 // 8, r0 // 8 + 1)
+            for j in (c0 // 8 - 1, c0 // 8, c0 // 8 + 1)
+            for e in comps.get((i, j), [])
+        ]
+        for entry in sorted(near, key=lambda e: e[6]):  # the first seen first, as a list
+            if all(abs(x - y) <= 2 for x, y in zip(entry[5], bx, strict=True)):
+                score = _offset(t, entry[4])
+                if score < entry[0]:
+                    entry[:4] = [score, t, (r0, c0), m]
+                    entry[5] = bx
+                break
+        else:
+            greys = _component_greys(g, m, r0, c0)
+            entry = [_offset(t, greys), t, (r0, c0), m, greys, bx, len(out)]
+            comps.setdefault((r0 // 8, c0 // 8), []).append(entry)
+            out.append(entry)
+    return [(e[1], e[2][0], e[2][1], e[3]) for e in out]
+
+
 def find_slanted_edges(
     image: ArrayLike,
     *,
@@ -847,8 +916,6 @@ def find_slanted_edges(
     >>> find_slanted_edges(img)  # an upright square: no slanted edge
     []
     """
-    from scipy import ndimage
-
     img = _as_image(image)
     lo_a = as_real(min_angle, "min_angle", nonnegative=True, maximum=40.0)
     hi_a = as_real(max_angle, "max_angle", minimum=lo_a, maximum=40.0)
@@ -856,7 +923,6 @@ def find_slanted_edges(
     frac = as_real(roi_length, "roi_length", positive=True, maximum=0.9)
     rw = None if roi_width is None else as_int(roi_width, "roi_width", minimum=8)
     g = _luminance(img, _weights(weights))
-    H, W = g.shape
     p2, p98 = np.percentile(g, [2.0, 98.0])
     if p98 - p2 <= 0:
         return []
@@ -866,31 +932,9 @@ def find_slanted_edges(
     levels += list(p2 + (p98 - p2) * (np.arange(1, _N_LEVELS) / _N_LEVELS))
     # each component once, at the level nearest the middle of its two greys (a two-tone
     # square is seen at every level, a square on a grey surround at several)
-    comps: list[tuple[float, float, int, int, np.ndarray]] = []  # score, t, r0, c0, mask
-    for t in levels:
-        labels, _n = ndimage.label(g < t)
-        for lab, sl in enumerate(ndimage.find_objects(labels), start=1):
-            if sl is None:
-                continue
-            r0, r1, c0, c1 = sl[0].start, sl[0].stop, sl[1].start, sl[1].stop
-            if r0 == 0 or c0 == 0 or r1 == H or c1 == W or min(r1 - r0, c1 - c0) < msz:
-                continue
-            m = labels[r0:r1, c0:c1] == lab
-            score = _component_offset(g, m, r0, c0, t)
-            for k, (sc, _t, q0, d0, mk) in enumerate(comps):
-                if (
-                    abs(q0 - r0) <= 2
-                    and abs(d0 - c0) <= 2
-                    and abs(q0 + mk.shape[0] - r1) <= 2
-                    and abs(d0 + mk.shape[1] - c1) <= 2
-                ):
-                    if score < sc:
-                        comps[k] = (score, t, r0, c0, m)
-                    break
-            else:
-                comps.append((score, t, r0, c0, m))
+    comps = _pick_levels(g, [(t, *c) for t in levels for c in _components_at(g, t, msz)])
     best: list[tuple[float, SlantedEdgeROI]] = []
-    for _sc, t, r0, c0, m in comps:
+    for t, r0, c0, m in comps:
         hh, ww = m.shape
         if m.sum() < 0.6 * hh * ww:  # not a square: the straight runs of its outline
             rois = _outline_rois(g, m, t, (r0, c0), msz, hi_a, frac, rw)
@@ -980,13 +1024,12 @@ def _clean(g: np.ndarray, t: float, roi: SlantedEdgeROI) -> bool:
     return bool((changes == 1).all())
 
 
-def _component_offset(g: np.ndarray, m: np.ndarray, r0: int, c0: int, t: float) -> float:
-    """How far ``t`` is from the middle of a component's grey and its surround's.
+def _component_greys(g: np.ndarray, m: np.ndarray, r0: int, c0: int) -> tuple[float, float]:
+    """Return a component's grey and its surround's (NaN, NaN where they cannot be told).
 
     The greys are the medians of ``g`` inside the component's mask ``m`` (top-left pixel
     ``r0, c0``) and over the rest of its bounding box grown by a tenth of its size (at
-    least 2 pixels; every ``step``-th pixel of a large box); in units of their difference
-    (0: halfway, 0.5: at either grey).
+    least 2 pixels; every ``step``-th pixel of a large box).
     """
     H, W = g.shape
     hh, ww = m.shape
@@ -999,9 +1042,17 @@ def _component_offset(g: np.ndarray, m: np.ndarray, r0: int, c0: int, t: float) 
     step = max(1, math.isqrt(box.size // 40000))  # medians of a large shape: a subsample
     box, inside = box[::step, ::step], inside[::step, ::step]
     if inside.all() or not inside.any():
-        return math.inf
-    lo, hi = float(np.median(box[inside])), float(np.median(box[~inside]))
-    if hi <= lo:
+        return math.nan, math.nan
+    return float(np.median(box[inside])), float(np.median(box[~inside]))
+
+
+def _offset(t: float, greys: tuple[float, float]) -> float:
+    """How far ``t`` is from the middle of two greys ``(lo, hi)``, in units of their difference.
+
+    0: halfway, 0.5: at either grey; infinite when ``hi`` is not above ``lo`` (or NaN).
+    """
+    lo, hi = greys
+    if not hi > lo:
         return math.inf
     return abs(t - 0.5 * (lo + hi)) / (hi - lo)
 
@@ -1056,11 +1107,12 @@ def _measurable(g: np.ndarray, roi: SlantedEdgeROI) -> bool:
     for level in (lo + 0.25 * (hi - lo), lo + 0.75 * (hi - lo)):
         if not _clean(g, level, roi):
             return False
-    try:
-        r = slanted_edge_sfr(g, roi.roi)
+    try:  # the e-SFR's steps up to the LSF (its spectrum is not needed here)
+        orientation, _r, _c, fits, _e, _l = _edge_stages(a, a, 4, 1, "central")
     except (DegenerateConfigurationError, InvalidInputError):
         return False
-    return r.orientation == roi.orientation and abs(r.angle - roi.angle) <= _MAX_ANGLE_GAP
+    angle = math.degrees(math.atan(float(fits[-1][0])))
+    return orientation == roi.orientation and abs(angle - roi.angle) <= _MAX_ANGLE_GAP
 
 
 def _whole_image_edge(g: np.ndarray) -> SlantedEdgeROI | None:
