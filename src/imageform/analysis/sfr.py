@@ -804,25 +804,50 @@ def _subpixel_side(
     return np.asarray(out, dtype=np.float64)
 
 
-def _components_at(g: np.ndarray, t: float, msz: int) -> list[tuple[int, int, np.ndarray]]:
+def _components_at(
+    g: np.ndarray, t: float, msz: int, *, kernel: bool | None = None
+) -> list[tuple[int, int, np.ndarray]]:
     """Dark components of ``g < t`` at least ``msz`` pixels across, off the image's border.
 
     Returns ``(r0, c0, mask)`` each: the top-left pixel in ``g`` and the mask over its
-    bounding box (scipy's 4-connected labelling).
+    bounding box (4-connected labelling), in the order of their first pixels. The numba
+    kernel :func:`imageform._kernels.components.label_below` labels where numba imports
+    (``kernel=None``), else its twin, scipy's ``ndimage.label`` and ``find_objects``.
     """
-    from scipy import ndimage
-
     H, W = g.shape
-    labels, _n = ndimage.label(g < t)
-    out = []
-    for lab, sl in enumerate(ndimage.find_objects(labels), start=1):
-        if sl is None:
-            continue
-        r0, r1, c0, c1 = sl[0].start, sl[0].stop, sl[1].start, sl[1].stop
-        if r0 == 0 or c0 == 0 or r1 == H or c1 == W or min(r1 - r0, c1 - c0) < msz:
-            continue
-        out.append((r0, c0, labels[r0:r1, c0:c1] == lab))
-    return out
+    if kernel is None:
+        from imageform._backend import have_numba
+
+        kernel = have_numba()
+    if kernel:
+        from imageform._kernels.components import dark_runs, paint_runs
+
+        runs, comp, boxes = dark_runs(np.ascontiguousarray(g, dtype=np.float64), float(t))
+        r0, r1, c0, c1 = boxes.T
+        keep = (r0 > 0) & (c0 > 0) & (r1 < H) & (c1 < W) & (np.minimum(r1 - r0, c1 - c0) >= msz)
+        sel = np.nonzero(keep)[0]
+        if not sel.size:
+            return []
+        masks = paint_runs(runs, comp, sel, boxes)
+        return [(int(r0[k]), int(c0[k]), mk) for k, mk in zip(sel, masks, strict=True)]
+    else:
+        from scipy import ndimage
+
+        labels, _n = ndimage.label(g < t)
+        boxes = np.array(
+            [
+                (s[0].start, s[0].stop, s[1].start, s[1].stop)
+                for s in ndimage.find_objects(labels)
+                if s is not None
+            ],
+            dtype=np.int64,
+        ).reshape(-1, 4)
+    r0, r1, c0, c1 = boxes.T
+    keep = (r0 > 0) & (c0 > 0) & (r1 < H) & (c1 < W) & (np.minimum(r1 - r0, c1 - c0) >= msz)
+    return [
+        (int(r0[k]), int(c0[k]), labels[r0[k] : r1[k], c0[k] : c1[k]] == k + 1)
+        for k in np.nonzero(keep)[0]
+    ]
 
 
 def _pick_levels(
@@ -957,9 +982,22 @@ def find_slanted_edges(
     return found
 
 
+def _outline(m: np.ndarray, name: str) -> tuple[np.ndarray, np.ndarray]:
+    """Return the lines of mask ``m`` with a dark pixel and the first one seen from ``name``.
+
+    The lines are rows for ``left``/``right``, columns for ``top``/``bottom``.
+    """
+    mm = m if name in ("left", "right") else m.T
+    lines = np.nonzero(mm.any(axis=1))[0]
+    sub = mm[lines]
+    if name in ("left", "top"):
+        return lines, np.argmax(sub, axis=1)
+    return lines, sub.shape[1] - 1 - np.argmax(sub[:, ::-1], axis=1)
+
+
 def _side_roi(
     g: np.ndarray,
-    m: np.ndarray,
+    m: np.ndarray | tuple[np.ndarray, np.ndarray],
     t: float,
     origin: tuple[int, int],
     name: str,
@@ -967,22 +1005,17 @@ def _side_roi(
     frac: float,
     rw: int | None,
 ) -> SlantedEdgeROI | None:
+    """Return the ROI on side ``name`` of a component (its mask ``m`` or its :func:`_outline`)."""
     vertical = name in ("left", "right")
-    mm = m if vertical else m.T
     gg = g if vertical else g.T
     o_line, o_across = origin if vertical else origin[::-1]
-    lines = np.nonzero(mm.any(axis=1))[0]
+    lines, first_all = _outline(m, name) if isinstance(m, np.ndarray) else m
     n = lines.size
-    sel = lines[int(0.25 * n) : int(np.ceil(0.75 * n))]
+    cut = slice(int(0.25 * n), int(np.ceil(0.75 * n)))
+    sel, first = lines[cut], first_all[cut]
     if sel.size < 4:
         return None
-    sub = mm[sel]
-    if name in ("left", "top"):
-        first = np.argmax(sub, axis=1)
-        step = 1
-    else:
-        first = sub.shape[1] - 1 - np.argmax(sub[:, ::-1], axis=1)
-        step = -1
+    step = 1 if name in ("left", "top") else -1
     pos = _subpixel_side(gg, t, sel + o_line, first + o_across, step)
     yl = (sel + o_line).astype(np.float64)
     # a straight (or gently bent, by distortion) edge: a corner, a notch or another shape
@@ -1169,25 +1202,20 @@ def _outline_rois(
     out: list[SlantedEdgeROI] = []
     jump = 1.5 + math.tan(math.radians(max_angle))
     for name in ("left", "right", "top", "bottom"):
-        mm = m if name in ("left", "right") else m.T
-        lines = np.nonzero(mm.any(axis=1))[0]
+        if (m.shape[0] if name in ("left", "right") else m.shape[1]) < min_len:
+            continue
+        lines, first = _outline(m, name)
         if lines.size < min_len:
             continue
-        sub = mm[lines]
-        if name in ("left", "top"):
-            first = np.argmax(sub, axis=1)
-        else:
-            first = sub.shape[1] - 1 - np.argmax(sub[:, ::-1], axis=1)
         cut = np.nonzero((np.abs(np.diff(first)) > jump) | (np.diff(lines) > 1))[0] + 1
         for run in np.split(np.arange(lines.size), cut):
             if run.size * frac < min_len:  # an ROI shorter than min_len: a glyph's stroke
                 continue
             k = int(0.2 * run.size)
-            keep = np.zeros_like(mm)
-            sel = lines[run[k : run.size - k]]
-            keep[sel] = mm[sel]
-            mask = keep if name in ("left", "right") else keep.T
-            roi = _side_roi(g, mask, t, origin, name, float(run.size), frac, rw)
+            part = run[k : run.size - k]
+            roi = _side_roi(
+                g, (lines[part], first[part]), t, origin, name, float(run.size), frac, rw
+            )
             if roi is not None:
                 out.append(roi)
     return out

@@ -1,0 +1,129 @@
+"""Numba kernels: the 4-connected components of ``g < t`` as runs, their boxes and masks.
+
+The plain twin is scipy's ``ndimage.label(g < t)`` followed by ``ndimage.find_objects``
+(:func:`imageform.analysis.sfr._components_at` runs either; the tests check that both give
+the same components, boxes and masks, in the same order). ``find_slanted_edges`` labels
+the image at 16 levels; on a 12.8-megapixel photograph scipy's label image, its second pass
+for the boxes and the boolean image made for each level took about 60 % of its time. Here
+each level is one scan of the image that thresholds as it goes and records the runs of dark
+pixels of each row; a run touching one of the previous row's runs (4-connectivity: they
+share a column) is joined to it with a union-find (run-based two-pass labelling: L. He, Y.
+Chao, K. Suzuki, "A run-based two-scan labeling algorithm", IEEE Trans. Image Processing 17,
+2008). No label image is written; a component's mask is painted from its runs only when it
+is kept.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from imageform._kernels.jit import njit
+
+__all__ = ["dark_runs", "paint_runs"]
+
+
+@njit
+def _root(parent, i):  # type: ignore[no-untyped-def]  # pragma: no cover - numba
+    while parent[i] != i:
+        parent[i] = parent[parent[i]]
+        i = parent[i]
+    return i
+
+
+@njit
+def dark_runs(g, t):  # type: ignore[no-untyped-def]  # pragma: no cover - numba
+    """Return the runs of ``g < t`` and the 4-connected components they form.
+
+    Returns ``(runs, comp, boxes)``: ``runs`` (m, 3) each run's row, first and last + 1
+    column, in raster order; ``comp`` (m,) its component, numbered 0, 1, ... in the raster
+    order of the components' first pixels (scipy's ``label`` numbers them so, from 1);
+    ``boxes`` (n, 4) each component's ``r0, r1, c0, c1`` (rows ``r0:r1``, columns ``c0:c1``).
+    """
+    h, w = g.shape
+    m = 0
+    for i in range(h):
+        inside = False
+        for j in range(w):
+            dark = g[i, j] < t
+            if dark and not inside:
+                m += 1
+            inside = dark
+    runs = np.empty((m, 3), dtype=np.int64)
+    parent = np.empty(m, dtype=np.int64)
+    k = 0
+    prev_lo = 0
+    prev_hi = 0
+    for i in range(h):
+        row_lo = k
+        j = 0
+        p = prev_lo
+        while j < w:
+            if not g[i, j] < t:
+                j += 1
+                continue
+            s = j
+            while j < w and g[i, j] < t:
+                j += 1
+            runs[k, 0] = i
+            runs[k, 1] = s
+            runs[k, 2] = j
+            parent[k] = k
+            # the previous row's runs that share a column with [s, j)
+            while p < prev_hi and runs[p, 2] <= s:
+                p += 1
+            q = p
+            while q < prev_hi and runs[q, 1] < j:
+                a = _root(parent, q)
+                b = _root(parent, k)
+                if a < b:
+                    parent[b] = a
+                elif b < a:
+                    parent[a] = b
+                q += 1
+            k += 1
+        prev_lo = row_lo
+        prev_hi = k
+    # a component's root is its first run (the smallest index): numbering the roots in
+    # order numbers the components in the raster order of their first pixels
+    comp = np.empty(m, dtype=np.int64)
+    n = 0
+    for r in range(m):
+        a = _root(parent, r)
+        if a == r:
+            comp[r] = n
+            n += 1
+        else:
+            comp[r] = comp[a]
+    boxes = np.empty((n, 4), dtype=np.int64)
+    boxes[:, 0] = h
+    boxes[:, 1] = 0
+    boxes[:, 2] = w
+    boxes[:, 3] = 0
+    for r in range(m):
+        c = comp[r]
+        boxes[c, 0] = min(boxes[c, 0], runs[r, 0])
+        boxes[c, 1] = max(boxes[c, 1], runs[r, 0] + 1)
+        boxes[c, 2] = min(boxes[c, 2], runs[r, 1])
+        boxes[c, 3] = max(boxes[c, 3], runs[r, 2])
+    return runs, comp, boxes
+
+
+@njit
+def paint_runs(runs, comp, keep, boxes):  # type: ignore[no-untyped-def]  # pragma: no cover
+    """Return the masks (over their boxes) of the components ``keep`` (sorted), as a list."""
+    masks = []
+    slot = np.full(boxes.shape[0], -1, dtype=np.int64)
+    for i in range(keep.size):
+        c = keep[i]
+        slot[c] = i
+        masks.append(np.zeros((boxes[c, 1] - boxes[c, 0], boxes[c, 3] - boxes[c, 2]), np.bool_))
+    for r in range(runs.shape[0]):
+        i = slot[comp[r]]
+        if i < 0:
+            continue
+        c = comp[r]
+        mk = masks[i]
+        row = runs[r, 0] - boxes[c, 0]
+        for j in range(runs[r, 1] - boxes[c, 2], runs[r, 2] - boxes[c, 2]):
+            mk[row, j] = True
+    return masks
