@@ -589,3 +589,40 @@ def test_find_the_straight_side_of_a_wedge() -> None:
     # dropped with min_size=80 (a short straight run is mostly a glyph's stroke)
     assert [r.side for r in find_slanted_edges(img, min_size=60)].count("left") == 1
     assert [r.side for r in find_slanted_edges(img, min_size=80)].count("left") == 0
+
+
+def _fields() -> list[tuple[np.ndarray, float]]:
+    """Smoothed noise of several grains and sizes (1-row, 1-column too), with thresholds."""
+    from scipy import ndimage
+
+    rng = np.random.default_rng(7)
+    out = []
+    for h, w, sigma in [(1, 40, 1.0), (40, 1, 1.0), (37, 53, 0.0), (64, 80, 1.5), (90, 70, 3.0)]:
+        g = ndimage.gaussian_filter(rng.random((h, w)), sigma)
+        out += [(g, float(np.quantile(g, q))) for q in (0.2, 0.5, 0.8)]
+    out.append((render_sfr_chart((120, 160), grid=(2, 2), supersampling=2), 0.5))
+    return out
+
+
+def test_component_kernel_matches_scipy_labelling() -> None:
+    """The numba run-based labelling gives scipy's components, boxes, masks and order."""
+    pytest.importorskip("numba")
+    from imageform.analysis.sfr import _components_at
+
+    for g, t in _fields():
+        for msz in (1, 3, 8):
+            fast = _components_at(g, t, msz, kernel=True)
+            twin = _components_at(g, t, msz, kernel=False)
+            assert [(a, b, m.shape) for a, b, m in fast] == [(a, b, m.shape) for a, b, m in twin]
+            assert all((x[2] == y[2]).all() for x, y in zip(fast, twin, strict=True))
+
+
+def test_outline_kernel_matches_its_twin() -> None:
+    pytest.importorskip("numba")
+    from imageform.analysis.sfr import _components_at, _outline
+
+    for g, t in _fields():
+        for _r, _c, m in _components_at(g, t, 1, kernel=False):
+            for name in ("left", "right", "top", "bottom"):
+                a, b = _outline(m, name, True), _outline(m, name, False)
+                assert (a[0] == b[0]).all() and (a[1] == b[1]).all()

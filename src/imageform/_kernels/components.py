@@ -127,3 +127,29 @@ def paint_runs(runs, comp, keep, boxes):  # type: ignore[no-untyped-def]  # prag
         for j in range(runs[r, 1] - boxes[c, 2], runs[r, 2] - boxes[c, 2]):
             mk[row, j] = True
     return masks
+
+
+@njit
+def outline(m):  # type: ignore[no-untyped-def]  # pragma: no cover - numba
+    """Return the first dark pixel of each row and column of mask ``m``, from each side.
+
+    Returns ``(left, right, top, bottom)``: per row the first dark column seen from the
+    left and from the right, per column the first dark row seen from the top and from the
+    bottom; -1 where the row (column) has no dark pixel. The twin:
+    ``imageform.analysis.sfr._outline`` (``argmax`` over the mask's lines).
+    """
+    h, w = m.shape
+    left = np.full(h, -1, dtype=np.int64)
+    right = np.full(h, -1, dtype=np.int64)
+    top = np.full(w, -1, dtype=np.int64)
+    bottom = np.full(w, -1, dtype=np.int64)
+    for i in range(h):
+        for j in range(w):
+            if m[i, j]:
+                if left[i] < 0:
+                    left[i] = j
+                right[i] = j
+                if top[j] < 0:
+                    top[j] = i
+                bottom[j] = i
+    return left, right, top, bottom

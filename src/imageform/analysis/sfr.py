@@ -966,8 +966,8 @@ def find_slanted_edges(
         else:
             side = math.sqrt(float(m.sum()))
             found_sides = [
-                _side_roi(g, m, t, (r0, c0), name, side, frac, rw)
-                for name in ("left", "right", "top", "bottom")
+                _side_roi(g, o, t, (r0, c0), name, side, frac, rw)
+                for name, o in _outlines(m).items()
             ]
             rois = [r for r in found_sides if r is not None]
         for roi in rois:
@@ -982,17 +982,44 @@ def find_slanted_edges(
     return found
 
 
-def _outline(m: np.ndarray, name: str) -> tuple[np.ndarray, np.ndarray]:
+def _outline(m: np.ndarray, name: str, kernel: bool | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Return the lines of mask ``m`` with a dark pixel and the first one seen from ``name``.
 
-    The lines are rows for ``left``/``right``, columns for ``top``/``bottom``.
+    The lines are rows for ``left``/``right``, columns for ``top``/``bottom``; the numba
+    kernel :func:`imageform._kernels.components.outline` where numba imports
+    (``kernel=None``), else ``argmax`` over the lines (its twin).
     """
+    if kernel is None:
+        from imageform._backend import have_numba
+
+        kernel = have_numba()
+    if kernel:
+        from imageform._kernels.components import outline
+
+        first = outline(m)[("left", "right", "top", "bottom").index(name)]
+        lines = np.nonzero(first >= 0)[0]
+        return lines, first[lines]
     mm = m if name in ("left", "right") else m.T
     lines = np.nonzero(mm.any(axis=1))[0]
     sub = mm[lines]
     if name in ("left", "top"):
         return lines, np.argmax(sub, axis=1)
     return lines, sub.shape[1] - 1 - np.argmax(sub[:, ::-1], axis=1)
+
+
+def _outlines(m: np.ndarray) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    """:func:`_outline` of ``m`` from each of the four sides (one pass of the kernel)."""
+    from imageform._backend import have_numba
+
+    if not have_numba():
+        return {name: _outline(m, name, False) for name in ("left", "right", "top", "bottom")}
+    from imageform._kernels.components import outline
+
+    out = {}
+    for name, first in zip(("left", "right", "top", "bottom"), outline(m), strict=True):
+        lines = np.nonzero(first >= 0)[0]
+        out[name] = (lines, first[lines])
+    return out
 
 
 def _side_roi(
@@ -1201,10 +1228,9 @@ def _outline_rois(
     """
     out: list[SlantedEdgeROI] = []
     jump = 1.5 + math.tan(math.radians(max_angle))
-    for name in ("left", "right", "top", "bottom"):
-        if (m.shape[0] if name in ("left", "right") else m.shape[1]) < min_len:
-            continue
-        lines, first = _outline(m, name)
+    if max(m.shape) < min_len:
+        return out
+    for name, (lines, first) in _outlines(m).items():
         if lines.size < min_len:
             continue
         cut = np.nonzero((np.abs(np.diff(first)) > jump) | (np.diff(lines) > 1))[0] + 1
