@@ -626,3 +626,25 @@ def test_outline_kernel_matches_its_twin() -> None:
             for name in ("left", "right", "top", "bottom"):
                 a, b = _outline(m, name, True), _outline(m, name, False)
                 assert (a[0] == b[0]).all() and (a[1] == b[1]).all()
+
+
+def test_lsf_window_does_not_depend_on_where_the_edge_lies() -> None:
+    """The LSF's Hamming window spans the ESF array centred on the LSF (sfrmat3, ISO 12233).
+
+    A window reaching from the LSF to the far end of the array (as before 2026-11-29) grew
+    when the edge lay off the ROI's middle and tapered a long-tailed LSF (flare) less: the
+    same edge read 0.3 % apart at four places in one ROI, and 0.6 % below sfrmat3 on its
+    own edge crops.
+    """
+    from scipy.special import ndtr
+
+    def esf(d: np.ndarray) -> np.ndarray:
+        return np.asarray(0.85 * ndtr(d / 0.7) + 0.15 * ndtr(d / 6.0))
+
+    m50 = []
+    for off in (0.0, 12.0, -20.0, 30.0):
+        img = render_slanted_edge(
+            (200, 100), angle_deg=5.0, esf=esf, center=(49.5 + off, 99.5), supersampling=8
+        )
+        m50.append(float(slanted_edge_sfr(img).mtf50[0]))
+    assert np.ptp(m50) / np.mean(m50) < 5e-4
