@@ -648,3 +648,20 @@ def test_lsf_window_does_not_depend_on_where_the_edge_lies() -> None:
         )
         m50.append(float(slanted_edge_sfr(img).mtf50[0]))
     assert np.ptp(m50) / np.mean(m50) < 5e-4
+
+
+def test_light_squares_on_a_dark_surround_are_found() -> None:
+    """The inverted chart (light squares on dark) gives the same ROIs and MTF50 (0 before)."""
+    img = render_sfr_chart((240, 320), grid=(2, 3), angle_deg=5.0, sigma=0.8, supersampling=4)
+    dark = find_slanted_edges(img)
+    light = find_slanted_edges(1.0 - img)
+    assert len(light) == 24
+    assert [r.roi for r in light] == [r.roi for r in dark]
+    assert [r.side for r in light] == [r.side for r in dark]
+    for r in light:
+        assert slanted_edge_sfr(1.0 - img, r.roi).mtf50[0] == pytest.approx(
+            slanted_edge_sfr(img, r.roi).mtf50[0], rel=1e-9
+        )
+    # both polarities in one image: each half's 24 edges
+    both = np.concatenate([img, 1.0 - img], axis=1)
+    assert len(find_slanted_edges(both)) == 48

@@ -41,9 +41,9 @@ The pixel values must be linear in exposure (ISO applies the inverse OECF first)
 gamma-encoded images before measuring.
 
 :func:`find_slanted_edges` finds measurable edges in a photograph of dark squares on a light
-background turned a few degrees (the motif of the ISO 12233:2014 e-SFR chart and of most
-SFR charts), and :func:`render_slanted_edge` renders an ideal edge of known ESF by
-supersampled area integration, to test the method.
+background (or light squares on a dark one) turned a few degrees (the motif of the ISO
+12233:2014 e-SFR chart and of most SFR charts), and :func:`render_slanted_edge` renders an
+ideal edge of known ESF by supersampled area integration, to test the method.
 
 References
 ----------
@@ -921,33 +921,35 @@ def find_slanted_edges(
     roi_width: int | None = None,
     weights: Sequence[float] = SFR_LUMINANCE_WEIGHTS,
 ) -> list[SlantedEdgeROI]:
-    """Find measurable slanted edges in a photograph of dark squares on a lighter surround.
+    """Find measurable slanted edges in a photograph of squares darker or lighter than around.
 
     The image is thresholded halfway between its 2nd and 98th percentiles, then at 15 levels
-    evenly spaced between them (a chart's square often sits on a grey surround of its own
-    among other patches, and only a level between the square's two greys separates it); at
-    each level, each dark connected component (scipy's 4-connected labelling) that does not
-    touch the border, is at least ``min_size`` pixels across and fills at least 60 % of its
-    bounding box is taken as a square. Its four sides are fitted by least squares through
-    the sub-pixel threshold crossings of the middle half of its rows (left, right sides) and
-    columns (top, bottom); a side whose crossings stray more than 0.5 px RMS from a parabola
-    through them (a notch, a corner, another shape joined to it) is skipped. A side whose
-    angle from the vertical/horizontal is within ``[min_angle, max_angle]`` degrees gets an
-    ROI centred on its midpoint, ``roi_length`` of the side long (the middle part, away from
-    the corners; longer, up to 80 % of the side, where the edge would not cross one whole
-    pixel along it, else the side is skipped) and ``roi_width`` pixels across (default: 60 %
-    of the side, at most 64); ROIs that leave the image, or in which a row (column) crosses
-    the threshold more than once (another square inside), are dropped. A component seen at
-    several levels (same bounding box within 2 px) is fitted once, at the level nearest the
-    middle of its grey and its surround's; of the ROIs that several components give on one
-    edge, the one whose level is nearest the middle of the edge's two greys is kept. A kept
-    ROI must hold one edge, which the e-SFR measures: each line across it crosses the levels
-    1/4 and 3/4 of the way between the ROI's 5th and 95th percentiles once (ISO 12233 wants
-    uniform areas on both sides of the edge), and
-    :func:`slanted_edge_sfr` accepts it and finds the edge within 1 deg of the threshold
-    fit. If no square gives an edge and the whole image passes that test with an angle in
-    range, the image is taken as an edge crop (the input of ``sfrmat``) and returned as one
-    ROI (its ``side`` names the side of the dark area the edge bounds).
+    evenly spaced between them (a chart's square often sits on a grey surround of its own among
+    other patches, and only a level between the square's two greys separates it); at each level,
+    each dark connected component (4-connected labelling: a numba kernel, or scipy's) that does
+    not touch the border, is at least ``min_size`` pixels across and fills at least 60 % of its
+    bounding box is taken as a square. Its four sides are fitted by least squares through the
+    sub-pixel threshold crossings of the middle half of its rows (left, right sides) and columns
+    (top, bottom); a side whose crossings stray more than 0.5 px RMS from a parabola through
+    them (a notch, a corner, another shape joined to it) is skipped. A side whose angle from the
+    vertical/horizontal is within ``[min_angle, max_angle]`` degrees gets an ROI centred on its
+    midpoint, ``roi_length`` of the side long (the middle part, away from the corners; longer,
+    up to 80 % of the side, where the edge would not cross one whole pixel along it, else the
+    side is skipped) and ``roi_width`` pixels across (default: 60 % of the side, at most 64);
+    ROIs that leave the image, or in which a row (column) crosses the threshold more than once
+    (another square inside), are dropped. A component seen at several levels (same bounding box
+    within 2 px) is fitted once, at the level nearest the middle of its grey and its surround's;
+    of the ROIs that several components give on one edge, the one whose level is nearest the
+    middle of the edge's two greys is kept. Light squares on a darker surround are searched the
+    same way in the negated image (the light components of each level), and their ROIs join the
+    dark squares' (``side`` names the light square's side); an edge found from both sides is
+    kept once. A kept ROI must hold one edge, which the e-SFR measures: each line across it
+    crosses the levels 1/4 and 3/4 of the way between the ROI's 5th and 95th percentiles once
+    (ISO 12233 wants uniform areas on both sides of the edge), and :func:`slanted_edge_sfr`
+    accepts it and finds the edge within 1 deg of the threshold fit. If no square gives an edge
+    and the whole image passes that test with an angle in range, the image is taken as an edge
+    crop (the input of ``sfrmat``) and returned as one ROI (its ``side`` names the side of the
+    dark area the edge bounds).
 
     A dark component that fills less than 60 % of its bounding box (a wedge, such as the
     blades of the ISO 12233:2017/2023 chart's pinwheels) is no square: its outline seen from
@@ -982,24 +984,27 @@ def find_slanted_edges(
     # grey surround of its own, among other patches, separates only between its two greys
     levels = [0.5 * (p2 + p98)]
     levels += list(p2 + (p98 - p2) * (np.arange(1, _N_LEVELS) / _N_LEVELS))
-    # each component once, at the level nearest the middle of its two greys (a two-tone
-    # square is seen at every level, a square on a grey surround at several)
-    comps = _pick_levels(g, [(t, *c) for t in levels for c in _components_at(g, t, msz)])
     best: list[tuple[float, SlantedEdgeROI]] = []
-    for t, r0, c0, m in comps:
-        hh, ww = m.shape
-        if m.sum() < 0.6 * hh * ww:  # not a square: the straight runs of its outline
-            rois = _outline_rois(g, m, t, (r0, c0), msz, hi_a, frac, rw)
-        else:
-            side = math.sqrt(float(m.sum()))
-            found_sides = [
-                _side_roi(g, o, t, (r0, c0), name, side, frac, rw)
-                for name, o in _outlines(m).items()
-            ]
-            rois = [r for r in found_sides if r is not None]
-        for roi in rois:
-            if lo_a <= abs(roi.angle) <= hi_a and _clean(g, t, roi):
-                _keep(best, roi, _level_offset(g, roi, t))
+    # dark squares on a light surround, then light squares on a dark one: the same search in
+    # the negated image (-g < -t where g > t); the tests below do not depend on the polarity
+    for gg, lv in ((g, levels), (-g, [-t for t in levels])):
+        # each component once, at the level nearest the middle of its two greys (a two-tone
+        # square is seen at every level, a square on a grey surround at several)
+        comps = _pick_levels(gg, [(t, *c) for t in lv for c in _components_at(gg, t, msz)])
+        for t, r0, c0, m in comps:
+            hh, ww = m.shape
+            if m.sum() < 0.6 * hh * ww:  # not a square: the straight runs of its outline
+                rois = _outline_rois(gg, m, t, (r0, c0), msz, hi_a, frac, rw)
+            else:
+                side = math.sqrt(float(m.sum()))
+                found_sides = [
+                    _side_roi(gg, o, t, (r0, c0), name, side, frac, rw)
+                    for name, o in _outlines(m).items()
+                ]
+                rois = [r for r in found_sides if r is not None]
+            for roi in rois:
+                if lo_a <= abs(roi.angle) <= hi_a and _clean(gg, t, roi):
+                    _keep(best, roi, _level_offset(gg, roi, t))
     found = [roi for _score, roi in best if _measurable(g, roi)]
     if not found:  # an edge crop (sfrmat's input): the whole image as one ROI
         whole = _whole_image_edge(g)
