@@ -40,29 +40,24 @@ def dark_runs(g, t):  # type: ignore[no-untyped-def]  # pragma: no cover - numba
     ``boxes`` (n, 4) each component's ``r0, r1, c0, c1`` (rows ``r0:r1``, columns ``c0:c1``).
     """
     h, w = g.shape
-    m = 0
-    for i in range(h):
-        inside = False
-        for j in range(w):
-            dark = g[i, j] < t
-            if dark and not inside:
-                m += 1
-            inside = dark
-    runs = np.empty((m, 3), dtype=np.int64)
-    parent = np.empty(m, dtype=np.int64)
+    # room for the most runs a row can hold; np.empty leaves the pages untouched until used
+    cap = h * ((w + 1) // 2)
+    runs = np.empty((cap, 3), dtype=np.int64)
+    parent = np.empty(cap, dtype=np.int64)
     k = 0
     prev_lo = 0
     prev_hi = 0
     for i in range(h):
+        row = g[i]
         row_lo = k
         j = 0
         p = prev_lo
         while j < w:
-            if not g[i, j] < t:
+            if not row[j] < t:
                 j += 1
                 continue
             s = j
-            while j < w and g[i, j] < t:
+            while j < w and row[j] < t:
                 j += 1
             runs[k, 0] = i
             runs[k, 1] = s
@@ -83,6 +78,8 @@ def dark_runs(g, t):  # type: ignore[no-untyped-def]  # pragma: no cover - numba
             k += 1
         prev_lo = row_lo
         prev_hi = k
+    m = k
+    runs = runs[:m]
     # a component's root is its first run (the smallest index): numbering the roots in
     # order numbers the components in the raster order of their first pixels
     comp = np.empty(m, dtype=np.int64)
