@@ -611,10 +611,16 @@ def test_component_kernel_matches_scipy_labelling() -> None:
 
     for g, t in _fields():
         for msz in (1, 3, 8):
-            fast = _components_at(g, t, msz, kernel=True)
-            twin = _components_at(g, t, msz, kernel=False)
-            assert [(a, b, m.shape) for a, b, m in fast] == [(a, b, m.shape) for a, b, m in twin]
-            assert all((x[2] == y[2]).all() for x, y in zip(fast, twin, strict=True))
+            # the dark (g < t) and the light (g > t) components, from one scan
+            for fast, twin in zip(
+                _components_at(g, t, msz, kernel=True),
+                _components_at(g, t, msz, kernel=False),
+                strict=True,
+            ):
+                assert [(a, b, m.shape) for a, b, m in fast] == [
+                    (a, b, m.shape) for a, b, m in twin
+                ]
+                assert all((x[2] == y[2]).all() for x, y in zip(fast, twin, strict=True))
 
 
 def test_outline_kernel_matches_its_twin() -> None:
@@ -622,7 +628,8 @@ def test_outline_kernel_matches_its_twin() -> None:
     from imageform.analysis.sfr import _components_at, _outline
 
     for g, t in _fields():
-        for _r, _c, m in _components_at(g, t, 1, kernel=False):
+        dark, light = _components_at(g, t, 1, kernel=False)
+        for _r, _c, m in dark + light:
             for name in ("left", "right", "top", "bottom"):
                 a, b = _outline(m, name, True), _outline(m, name, False)
                 assert (a[0] == b[0]).all() and (a[1] == b[1]).all()

@@ -19,7 +19,7 @@ import numpy as np
 
 from imageform._kernels.jit import njit
 
-__all__ = ["dark_runs", "paint_runs"]
+__all__ = ["level_runs", "outline", "paint_runs"]
 
 
 @njit
@@ -31,54 +31,33 @@ def _root(parent, i):  # type: ignore[no-untyped-def]  # pragma: no cover - numb
 
 
 @njit
-def dark_runs(g, t):  # type: ignore[no-untyped-def]  # pragma: no cover - numba
-    """Return the runs of ``g < t`` and the 4-connected components they form.
+def _join(runs, parent, k, i, s, e, p, prev_hi):  # type: ignore[no-untyped-def]  # pragma: no cover
+    """Record run ``k`` (row ``i``, columns ``s:e``) and join it to the runs above it.
 
-    Returns ``(runs, comp, boxes)``: ``runs`` (m, 3) each run's row, first and last + 1
-    column, in raster order; ``comp`` (m,) its component, numbered 0, 1, ... in the raster
-    order of the components' first pixels (scipy's ``label`` numbers them so, from 1);
-    ``boxes`` (n, 4) each component's ``r0, r1, c0, c1`` (rows ``r0:r1``, columns ``c0:c1``).
+    The previous row's runs that share a column with it are searched from index ``p`` on,
+    below ``prev_hi``; returns the new ``p``.
     """
-    h, w = g.shape
-    # room for the most runs a row can hold; np.empty leaves the pages untouched until used
-    cap = h * ((w + 1) // 2)
-    runs = np.empty((cap, 3), dtype=np.int64)
-    parent = np.empty(cap, dtype=np.int64)
-    k = 0
-    prev_lo = 0
-    prev_hi = 0
-    for i in range(h):
-        row = g[i]
-        row_lo = k
-        j = 0
-        p = prev_lo
-        while j < w:
-            if not row[j] < t:
-                j += 1
-                continue
-            s = j
-            while j < w and row[j] < t:
-                j += 1
-            runs[k, 0] = i
-            runs[k, 1] = s
-            runs[k, 2] = j
-            parent[k] = k
-            # the previous row's runs that share a column with [s, j)
-            while p < prev_hi and runs[p, 2] <= s:
-                p += 1
-            q = p
-            while q < prev_hi and runs[q, 1] < j:
-                a = _root(parent, q)
-                b = _root(parent, k)
-                if a < b:
-                    parent[b] = a
-                elif b < a:
-                    parent[a] = b
-                q += 1
-            k += 1
-        prev_lo = row_lo
-        prev_hi = k
-    m = k
+    runs[k, 0] = i
+    runs[k, 1] = s
+    runs[k, 2] = e
+    parent[k] = k
+    while p < prev_hi and runs[p, 2] <= s:
+        p += 1
+    q = p
+    while q < prev_hi and runs[q, 1] < e:
+        a = _root(parent, q)
+        b = _root(parent, k)
+        if a < b:
+            parent[b] = a
+        elif b < a:
+            parent[a] = b
+        q += 1
+    return p
+
+
+@njit
+def _resolve(runs, parent, m, h, w):  # type: ignore[no-untyped-def]  # pragma: no cover
+    """Return ``(runs, comp, boxes)`` of the first ``m`` runs, components in raster order."""
     runs = runs[:m]
     # a component's root is its first run (the smallest index): numbering the roots in
     # order numbers the components in the raster order of their first pixels
@@ -103,6 +82,50 @@ def dark_runs(g, t):  # type: ignore[no-untyped-def]  # pragma: no cover - numba
         boxes[c, 2] = min(boxes[c, 2], runs[r, 1])
         boxes[c, 3] = max(boxes[c, 3], runs[r, 2])
     return runs, comp, boxes
+
+
+@njit
+def level_runs(g, t):  # type: ignore[no-untyped-def]  # pragma: no cover - numba
+    """Return the runs and 4-connected components of ``g < t`` and of ``g > t``, in one scan.
+
+    Returns ``(dark, light)``, each ``(runs, comp, boxes)``: ``runs`` (m, 3) each run's
+    row, first and last + 1 column, in raster order; ``comp`` (m,) its component, numbered
+    0, 1, ... in the raster order of the components' first pixels (scipy's ``label``
+    numbers them so, from 1); ``boxes`` (n, 4) each component's ``r0, r1, c0, c1`` (rows
+    ``r0:r1``, columns ``c0:c1``).
+    """
+    h, w = g.shape
+    # room for the most runs a row can hold; np.empty leaves the pages untouched until used
+    cap = h * ((w + 1) // 2)
+    d_runs = np.empty((cap, 3), dtype=np.int64)
+    d_parent = np.empty(cap, dtype=np.int64)
+    l_runs = np.empty((cap, 3), dtype=np.int64)
+    l_parent = np.empty(cap, dtype=np.int64)
+    dk = 0
+    lk = 0
+    d_lo = d_hi = l_lo = l_hi = 0
+    for i in range(h):
+        row = g[i]
+        d_row, l_row = dk, lk
+        dp, lp = d_lo, l_lo
+        j = 0
+        while j < w:
+            v = row[j]
+            s = j
+            j += 1
+            if v < t:
+                while j < w and row[j] < t:
+                    j += 1
+                dp = _join(d_runs, d_parent, dk, i, s, j, dp, d_hi)
+                dk += 1
+            elif v > t:
+                while j < w and row[j] > t:
+                    j += 1
+                lp = _join(l_runs, l_parent, lk, i, s, j, lp, l_hi)
+                lk += 1
+        d_lo, d_hi = d_row, dk
+        l_lo, l_hi = l_row, lk
+    return _resolve(d_runs, d_parent, dk, h, w), _resolve(l_runs, l_parent, lk, h, w)
 
 
 @njit

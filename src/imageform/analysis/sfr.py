@@ -831,50 +831,50 @@ def _subpixel_side(
     return np.asarray(out, dtype=np.float64)
 
 
+Components = list[tuple[int, int, np.ndarray]]
+
+
 def _components_at(
     g: np.ndarray, t: float, msz: int, *, kernel: bool | None = None
-) -> list[tuple[int, int, np.ndarray]]:
-    """Dark components of ``g < t`` at least ``msz`` pixels across, off the image's border.
+) -> tuple[Components, Components]:
+    """Components of ``g < t`` and of ``g > t`` at least ``msz`` px across, off the border.
 
-    Returns ``(r0, c0, mask)`` each: the top-left pixel in ``g`` and the mask over its
-    bounding box (4-connected labelling), in the order of their first pixels. The numba
-    kernel :func:`imageform._kernels.components.label_below` labels where numba imports
-    (``kernel=None``), else its twin, scipy's ``ndimage.label`` and ``find_objects``.
+    Returns the dark and the light components, ``(r0, c0, mask)`` each: the top-left pixel
+    in ``g`` and the mask over its bounding box (4-connected labelling), in the order of
+    their first pixels. The numba kernel :func:`imageform._kernels.components.level_runs`
+    labels both in one scan where numba imports (``kernel=None``), else its twin, scipy's
+    ``ndimage.label`` and ``find_objects`` on each.
     """
     H, W = g.shape
     if kernel is None:
         from imageform._backend import have_numba
 
         kernel = have_numba()
+    out: list[Components] = []
     if kernel:
-        from imageform._kernels.components import dark_runs, paint_runs
+        from imageform._kernels.components import level_runs, paint_runs
 
-        runs, comp, boxes = dark_runs(np.ascontiguousarray(g, dtype=np.float64), float(t))
-        r0, r1, c0, c1 = boxes.T
-        keep = (r0 > 0) & (c0 > 0) & (r1 < H) & (c1 < W) & (np.minimum(r1 - r0, c1 - c0) >= msz)
-        sel = np.nonzero(keep)[0]
-        if not sel.size:
-            return []
-        masks = paint_runs(runs, comp, sel, boxes)
-        return [(int(r0[k]), int(c0[k]), mk) for k, mk in zip(sel, masks, strict=True)]
-    else:
-        from scipy import ndimage
+        for runs, comp, boxes in level_runs(np.ascontiguousarray(g, dtype=np.float64), float(t)):
+            r0, r1, c0, c1 = boxes.T
+            ok = (r0 > 0) & (c0 > 0) & (r1 < H) & (c1 < W) & (np.minimum(r1 - r0, c1 - c0) >= msz)
+            sel = np.nonzero(ok)[0]
+            masks = paint_runs(runs, comp, sel, boxes) if sel.size else []
+            out.append([(int(r0[k]), int(c0[k]), mk) for k, mk in zip(sel, masks, strict=True)])
+        return out[0], out[1]
+    from scipy import ndimage
 
-        labels, _n = ndimage.label(g < t)
-        boxes = np.array(
-            [
-                (s[0].start, s[0].stop, s[1].start, s[1].stop)
-                for s in ndimage.find_objects(labels)
-                if s is not None
-            ],
-            dtype=np.int64,
-        ).reshape(-1, 4)
-    r0, r1, c0, c1 = boxes.T
-    keep = (r0 > 0) & (c0 > 0) & (r1 < H) & (c1 < W) & (np.minimum(r1 - r0, c1 - c0) >= msz)
-    return [
-        (int(r0[k]), int(c0[k]), labels[r0[k] : r1[k], c0[k] : c1[k]] == k + 1)
-        for k in np.nonzero(keep)[0]
-    ]
+    for part in (g < t, g > t):
+        labels, _n = ndimage.label(part)
+        found: Components = []
+        for lab, sl in enumerate(ndimage.find_objects(labels), start=1):
+            if sl is None:
+                continue
+            r0, r1, c0, c1 = sl[0].start, sl[0].stop, sl[1].start, sl[1].stop
+            if r0 == 0 or c0 == 0 or r1 == H or c1 == W or min(r1 - r0, c1 - c0) < msz:
+                continue
+            found.append((r0, c0, labels[r0:r1, c0:c1] == lab))
+        out.append(found)
+    return out[0], out[1]
 
 
 def _pick_levels(
@@ -987,10 +987,12 @@ def find_slanted_edges(
     best: list[tuple[float, SlantedEdgeROI]] = []
     # dark squares on a light surround, then light squares on a dark one: the same search in
     # the negated image (-g < -t where g > t); the tests below do not depend on the polarity
-    for gg, lv in ((g, levels), (-g, [-t for t in levels])):
+    per_level = [_components_at(g, t, msz) for t in levels]  # (dark, light) at each level
+    for k, gg, lv in ((0, g, levels), (1, -g, [-t for t in levels])):
         # each component once, at the level nearest the middle of its two greys (a two-tone
         # square is seen at every level, a square on a grey surround at several)
-        comps = _pick_levels(gg, [(t, *c) for t in lv for c in _components_at(gg, t, msz)])
+        seen = [(t, *c) for t, cs in zip(lv, per_level, strict=True) for c in cs[k]]
+        comps = _pick_levels(gg, seen)
         for t, r0, c0, m in comps:
             hh, ww = m.shape
             if m.sum() < 0.6 * hh * ww:  # not a square: the straight runs of its outline
