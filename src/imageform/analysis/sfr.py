@@ -897,7 +897,13 @@ def _pick_levels(
             for e in comps.get((i, j), [])
         ]
         for entry in sorted(near, key=lambda e: e[6]):  # the first seen first, as a list
-            if all(abs(x - y) <= 2 for x, y in zip(entry[5], bx, strict=True)):
+            e0, e1, e2, e3 = entry[5]
+            if (
+                abs(e0 - r0) <= 2
+                and abs(e1 - c0) <= 2
+                and abs(e2 - bx[2]) <= 2
+                and abs(e3 - bx[3]) <= 2
+            ):
                 score = _offset(t, entry[4])
                 if score < entry[0]:
                     entry[:4] = [score, t, (r0, c0), m]
