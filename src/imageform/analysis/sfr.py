@@ -309,13 +309,23 @@ def _fit_edge(a: np.ndarray, order: int) -> np.ndarray:
         raise DegenerateConfigurationError(
             "no edge found in image (or its roi): a row has no contrast"
         )
-    p = np.polyfit(rows, c, order)
+    p = _polyfit(rows, c, order)
     n = a.shape[1] - 1
     win = _hamming_rows(n, np.polyval(p, rows) - 0.5)
     c2 = _row_centroids(a, win)
     if np.isfinite(c2).all():
-        p = np.polyfit(rows, c2, order)
+        p = _polyfit(rows, c2, order)
     return np.asarray(p)
+
+
+def _polyfit(x: np.ndarray, y: np.ndarray, order: int) -> np.ndarray:
+    """``numpy.polyfit(x, y, order)``; a line by its closed form (the same to ~1e-15)."""
+    if order != 1:
+        return np.asarray(np.polyfit(x, y, order))
+    xm, ym = float(x.mean()), float(y.mean())
+    dx = x - xm
+    b = float(dx @ (y - ym)) / float(dx @ dx)
+    return np.array([b, ym - b * xm])
 
 
 def _project(a: np.ndarray, p: np.ndarray, q: int, cos_ref: float) -> np.ndarray:
