@@ -1101,7 +1101,7 @@ def _side_roi(
         bend = pos - np.polyval(np.polyfit(yl, pos, 2), yl)
         if float(np.sqrt(np.mean(bend**2))) > _MAX_BEND_RMS:
             return None
-    b, a = np.polyfit(yl, pos, 1)
+    b, a = _polyfit(yl, pos, 1)
     angle = math.degrees(math.atan(b))
     mid_line = 0.5 * (lines[0] + lines[-1]) + o_line
     mid_across = a + b * mid_line
@@ -1278,7 +1278,7 @@ def _outline_rois(
     """
     out: list[SlantedEdgeROI] = []
     jump = 1.5 + math.tan(math.radians(max_angle))
-    if max(m.shape) < min_len:
+    if max(m.shape) * frac < min_len:  # no run can be long enough
         return out
     for name, (lines, first) in _outlines(m).items():
         if lines.size < min_len:
