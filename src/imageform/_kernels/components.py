@@ -95,12 +95,14 @@ def level_runs(g, t):  # type: ignore[no-untyped-def]  # pragma: no cover - numb
     ``r0:r1``, columns ``c0:c1``).
     """
     h, w = g.shape
-    # room for the most runs a row can hold; np.empty leaves the pages untouched until used
+    # room for the most runs the rows can hold (int32: 16 bytes a run, 6.4 million runs
+    # reserved per polarity for 12.8 megapixels); np.empty leaves the pages untouched until
+    # used, and a run is written only where the image has one
     cap = h * ((w + 1) // 2)
-    d_runs = np.empty((cap, 3), dtype=np.int64)
-    d_parent = np.empty(cap, dtype=np.int64)
-    l_runs = np.empty((cap, 3), dtype=np.int64)
-    l_parent = np.empty(cap, dtype=np.int64)
+    d_runs = np.empty((cap, 3), dtype=np.int32)
+    d_parent = np.empty(cap, dtype=np.int32)
+    l_runs = np.empty((cap, 3), dtype=np.int32)
+    l_parent = np.empty(cap, dtype=np.int32)
     dk = 0
     lk = 0
     d_lo = d_hi = l_lo = l_hi = 0
