@@ -267,19 +267,12 @@ def _luminance(img: np.ndarray, weights: Any) -> np.ndarray:
 # --- the e-SFR steps ------------------------------------------------------------------------
 
 
-def _hamming(n: int, mid: float) -> np.ndarray:
-    """Return a Hamming window over ``n`` samples centred on ``mid`` (``sfrmat3``'s ``ahamming``).
-
-    The window is ``0.54 + 0.46 cos(pi (k - mid) / w)`` with ``w`` the larger distance to an end.
-    """
-    k = np.arange(n, dtype=np.float64)
-    wid = max(mid, n - 1 - mid, 1.0)
-    arg = np.clip((k - mid) / wid, -1.0, 1.0)
-    return 0.54 + 0.46 * np.cos(np.pi * arg)
-
-
 def _hamming_rows(n: int, mids: np.ndarray) -> np.ndarray:
-    """Return one :func:`_hamming` window of ``n`` samples per centre in ``mids`` (rows)."""
+    """Return one Hamming window of ``n`` samples per centre in ``mids`` (a row each).
+
+    ``0.54 + 0.46 cos(pi (k - mid) / w)`` with ``w`` the larger distance to an end
+    (``sfrmat3``'s ``ahamming``), 0.08 beyond.
+    """
     k = np.arange(n, dtype=np.float64)
     wid = np.maximum(np.maximum(mids, n - 1 - mids), 1.0)
     arg = np.clip((k[None, :] - mids[:, None]) / wid[:, None], -1.0, 1.0)
