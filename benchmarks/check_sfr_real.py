@@ -3,7 +3,7 @@
 Run::
 
     OPENBLAS_NUM_THREADS=1 PYTHONPATH=src:. python benchmarks/check_sfr_real.py IMAGE_DIR \\
-        [--out benchmarks/results/sfr-real-2026-11-29.md]
+        [--out benchmarks/results/sfr-real-2026-11-29b.md] [--large s3_ISO_DSC_300_mono.jpg]
 
 ``IMAGE_DIR`` holds real photographs or crops of slanted edges (PNG, JPEG, TIFF, BMP; 8 or 16
 bits, grey or RGB). The images of ``benchmarks/results/sfr-real-2026-11-29.md`` are not in
@@ -30,7 +30,11 @@ derivative and its ``fir2fix`` correction, a centred Hamming window, MTF50 by li
 interpolation on the DFT grid). Columns: the luminance MTF50 of both (cycles/pixel) and their
 ratio, the largest SFR difference up to Nyquist, the angles, and imageform's MTF50 on the
 image transposed (the edge turned 90 deg: the same edge) and on the image JPEG-compressed
-again (quality 50, Pillow; both methods on the same pixels).
+again (quality 50, Pillow; both methods on the same pixels). Each image is also searched
+inverted (its largest value minus the linear image: light squares on a dark surround) and
+the ROIs found there compared with the upright image's. ``--large NAME`` times
+``find_slanted_edges`` (median of 3 after one run) on the image ``NAME`` enlarged 3x
+(bilinear; ``s3_ISO_DSC_300_mono.jpg`` gives 3654 x 3492, 12.8 megapixels).
 """
 
 from __future__ import annotations
@@ -226,10 +230,13 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("images", type=Path)
     ap.add_argument("--out", type=Path)
+    ap.add_argument("--large", help="an image of IMAGE_DIR to time enlarged 3x")
     args = ap.parse_args()
     files = sorted(p for p in args.images.iterdir() if p.suffix.lower() in SUFFIXES)
     found_rows, rows = [], []
     ratios: list[float] = []
+    # one-off costs out of the first image's seconds: imports, loading numba's compiled kernels
+    find_slanted_edges(np.pad(np.full((40, 40), 0.2), 20, constant_values=0.8))
     t0 = time.perf_counter()
     for path in files:
         raw = _load(path)
@@ -242,7 +249,13 @@ def main() -> None:
             rois, note = [], f"{type(e).__name__}: {e}"
         dt = time.perf_counter() - t
         kind = f"{raw.dtype}, {'RGB' if raw.ndim == 3 else 'grey'}, {raw.shape[1]}x{raw.shape[0]}"
-        found_rows.append([path.name, kind, len(rois), f"{dt:.2f}", note])
+        try:
+            inv = find_slanted_edges(lin.max() - lin)
+            same = len({r.roi for r in inv} & {r.roi for r in rois})
+            inverted = f"{len(inv)} ({same})"
+        except Exception as e:
+            inverted = f"{type(e).__name__}: {e}"
+        found_rows.append([path.name, kind, len(rois), f"{dt:.2f}", inverted, note])
         jp = _linear(_jpeg(raw, 50))
         for roi in rois:
             cells: list[str] = [path.name, ",".join(map(str, roi.roi)), roi.side]
@@ -274,7 +287,9 @@ def main() -> None:
         f"{os.getloadavg()[0]:.1f}): the seconds are indicative only.\n\n"
         "## Edges found (find_slanted_edges)\n\n"
     )
-    text += markdown_table(("image", "pixels", "edges", "s", "error"), found_rows)
+    text += markdown_table(
+        ("image", "pixels", "edges", "s", "edges inverted (same ROIs)", "error"), found_rows
+    )
     text += "\n## Each edge: imageform (IF) and sfrmat3 (S3), luminance, cycles/pixel\n\n"
     text += markdown_table(
         (
@@ -297,6 +312,24 @@ def main() -> None:
         text += (
             f"\nIF/S3 MTF50 over {r.size} edges: median {np.median(r):.4f}, range "
             f"{r.min():.4f} - {r.max():.4f}.\n"
+        )
+    if args.large:
+        from scipy import ndimage
+
+        big = ndimage.zoom(_linear(_load(args.images / args.large)), 3, order=1)
+        found = find_slanted_edges(big)
+        times = []
+        for _ in range(3):
+            t = time.perf_counter()
+            find_slanted_edges(big)
+            times.append(time.perf_counter() - t)
+        text += (
+            f"\n## find_slanted_edges on a {big.shape[1]} x {big.shape[0]} photograph "
+            f"({big.size / 1e6:.1f} Mpx: {args.large} enlarged 3x, bilinear)\n\n"
+            f"{len(found)} edges, median {np.median(times):.2f} s of 3 runs after one "
+            f"(load average {os.getloadavg()[0]:.1f}); ROIs "
+            + "; ".join(",".join(map(str, r.roi)) for r in found)
+            + ".\n"
         )
     print(text)
     if args.out:

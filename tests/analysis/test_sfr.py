@@ -589,3 +589,86 @@ def test_find_the_straight_side_of_a_wedge() -> None:
     # dropped with min_size=80 (a short straight run is mostly a glyph's stroke)
     assert [r.side for r in find_slanted_edges(img, min_size=60)].count("left") == 1
     assert [r.side for r in find_slanted_edges(img, min_size=80)].count("left") == 0
+
+
+def _fields() -> list[tuple[np.ndarray, float]]:
+    """Smoothed noise of several grains and sizes (1-row, 1-column too), with thresholds."""
+    from scipy import ndimage
+
+    rng = np.random.default_rng(7)
+    out = []
+    for h, w, sigma in [(1, 40, 1.0), (40, 1, 1.0), (37, 53, 0.0), (64, 80, 1.5), (90, 70, 3.0)]:
+        g = ndimage.gaussian_filter(rng.random((h, w)), sigma)
+        out += [(g, float(np.quantile(g, q))) for q in (0.2, 0.5, 0.8)]
+    out.append((render_sfr_chart((120, 160), grid=(2, 2), supersampling=2), 0.5))
+    return out
+
+
+def test_component_kernel_matches_scipy_labelling() -> None:
+    """The numba run-based labelling gives scipy's components, boxes, masks and order."""
+    pytest.importorskip("numba")
+    from imageform.analysis.sfr import _components_at
+
+    for g, t in _fields():
+        for msz in (1, 3, 8):
+            # the dark (g < t) and the light (g > t) components, from one scan
+            for fast, twin in zip(
+                _components_at(g, t, msz, kernel=True),
+                _components_at(g, t, msz, kernel=False),
+                strict=True,
+            ):
+                assert [(a, b, m.shape) for a, b, m in fast] == [
+                    (a, b, m.shape) for a, b, m in twin
+                ]
+                assert all((x[2] == y[2]).all() for x, y in zip(fast, twin, strict=True))
+
+
+def test_outline_kernel_matches_its_twin() -> None:
+    pytest.importorskip("numba")
+    from imageform.analysis.sfr import _components_at, _outline
+
+    for g, t in _fields():
+        dark, light = _components_at(g, t, 1, kernel=False)
+        for _r, _c, m in dark + light:
+            for name in ("left", "right", "top", "bottom"):
+                a, b = _outline(m, name, True), _outline(m, name, False)
+                assert (a[0] == b[0]).all() and (a[1] == b[1]).all()
+
+
+def test_lsf_window_does_not_depend_on_where_the_edge_lies() -> None:
+    """The LSF's Hamming window spans the ESF array centred on the LSF (sfrmat3, ISO 12233).
+
+    A window reaching from the LSF to the far end of the array (as before 2026-11-29) grew
+    when the edge lay off the ROI's middle and tapered a long-tailed LSF (flare) less: the
+    same edge read 0.3 % apart at four places in one ROI, and 0.6 % below sfrmat3 on its
+    own edge crops.
+    """
+    from scipy.special import ndtr
+
+    def esf(d: np.ndarray) -> np.ndarray:
+        return np.asarray(0.85 * ndtr(d / 0.7) + 0.15 * ndtr(d / 6.0))
+
+    m50 = []
+    for off in (0.0, 12.0, -20.0, 30.0):
+        img = render_slanted_edge(
+            (200, 100), angle_deg=5.0, esf=esf, center=(49.5 + off, 99.5), supersampling=8
+        )
+        m50.append(float(slanted_edge_sfr(img).mtf50[0]))
+    assert np.ptp(m50) / np.mean(m50) < 5e-4
+
+
+def test_light_squares_on_a_dark_surround_are_found() -> None:
+    """The inverted chart (light squares on dark) gives the same ROIs and MTF50 (0 before)."""
+    img = render_sfr_chart((240, 320), grid=(2, 3), angle_deg=5.0, sigma=0.8, supersampling=4)
+    dark = find_slanted_edges(img)
+    light = find_slanted_edges(1.0 - img)
+    assert len(light) == 24
+    assert [r.roi for r in light] == [r.roi for r in dark]
+    assert [r.side for r in light] == [r.side for r in dark]
+    for r in light:
+        assert slanted_edge_sfr(1.0 - img, r.roi).mtf50[0] == pytest.approx(
+            slanted_edge_sfr(img, r.roi).mtf50[0], rel=1e-9
+        )
+    # both polarities in one image: each half's 24 edges
+    both = np.concatenate([img, 1.0 - img], axis=1)
+    assert len(find_slanted_edges(both)) == 48

@@ -14,7 +14,8 @@ the modulation transfer of a camera from one slightly slanted straight edge:
    normal and the frequencies are scaled by it (the cos correction of ISO 12233:2014 and
    ``sfrmat3``);
 4. the line spread function (LSF) is the ESF's derivative (ISO's FIR ``[-0.5, 0, 0.5]``),
-   multiplied by a Hamming window centred on the LSF's centroid;
+   multiplied by a Hamming window as long as the ESF array, centred on the LSF's centroid
+   (zero beyond: ``sfrmat3`` centres the LSF in the array and windows the array);
 5. the SFR is ``|DFT(LSF)|`` normalised by its value at zero frequency, divided by the
    derivative filter's own transfer (the "finite-difference correction",
    :math:`\mathrm{sinc}(2 f \Delta)` for the three-tap FIR, :math:`\mathrm{sinc}(f\Delta)`
@@ -22,6 +23,15 @@ the modulation transfer of a camera from one slightly slanted straight edge:
    1/\text{oversampling}` pixel), capped at 10 like ``sfrmat3``;
 6. MTF50 and MTF10 are the lowest frequencies where the SFR falls to 0.5 and 0.1 (linear
    interpolation on the zero-padded DFT of the same windowed LSF).
+
+Against ``sfrmat3`` on the same crop the SFR agrees at the DFT frequencies but for the
+derivative correction, which ``sfrmat3``'s ``fir2fix`` evaluates one frequency sample too
+high (``x = pi i / (N/2 + 2)`` at the sample ``i - 1``; here the FIR's exact transfer,
+``sinc(2 k / N)`` at sample ``k``: about 0.1 % lower SFR near MTF50); and ``sfrmat3`` reads
+MTF50 by linear interpolation between DFT samples ``q / (N cos theta)`` apart, which on
+the convex part of a falling SFR reads high (0.5 % on its own 300 x 125 crops); the
+zero-padded DFT here reads the windowed LSF's transform itself. On rendered edges of known
+MTF both read within 0.5 %.
 
 Frequencies are in **cycles/pixel along the edge normal** (multiply by the pixel pitch's
 inverse for cycles/mm); Nyquist is 0.5. Colour images give R, G, B and the luminance record
@@ -31,9 +41,9 @@ The pixel values must be linear in exposure (ISO applies the inverse OECF first)
 gamma-encoded images before measuring.
 
 :func:`find_slanted_edges` finds measurable edges in a photograph of dark squares on a light
-background turned a few degrees (the motif of the ISO 12233:2014 e-SFR chart and of most
-SFR charts), and :func:`render_slanted_edge` renders an ideal edge of known ESF by
-supersampled area integration, to test the method.
+background (or light squares on a dark one) turned a few degrees (the motif of the ISO
+12233:2014 e-SFR chart and of most SFR charts), and :func:`render_slanted_edge` renders an
+ideal edge of known ESF by supersampled area integration, to test the method.
 
 References
 ----------
@@ -257,15 +267,16 @@ def _luminance(img: np.ndarray, weights: Any) -> np.ndarray:
 # --- the e-SFR steps ------------------------------------------------------------------------
 
 
-def _hamming(n: int, mid: float) -> np.ndarray:
-    """Return a Hamming window over ``n`` samples centred on ``mid`` (``sfrmat3``'s ``ahamming``).
+def _hamming_rows(n: int, mids: np.ndarray) -> np.ndarray:
+    """Return one Hamming window of ``n`` samples per centre in ``mids`` (a row each).
 
-    The window is ``0.54 + 0.46 cos(pi (k - mid) / w)`` with ``w`` the larger distance to an end.
+    ``0.54 + 0.46 cos(pi (k - mid) / w)`` with ``w`` the larger distance to an end
+    (``sfrmat3``'s ``ahamming``), 0.08 beyond.
     """
     k = np.arange(n, dtype=np.float64)
-    wid = max(mid, n - 1 - mid, 1.0)
-    arg = np.clip((k - mid) / wid, -1.0, 1.0)
-    return 0.54 + 0.46 * np.cos(np.pi * arg)
+    wid = np.maximum(np.maximum(mids, n - 1 - mids), 1.0)
+    arg = np.clip((k[None, :] - mids[:, None]) / wid[:, None], -1.0, 1.0)
+    return np.asarray(0.54 + 0.46 * np.cos(np.pi * arg))
 
 
 def _row_centroids(a: np.ndarray, windows: np.ndarray | None) -> np.ndarray:
@@ -291,13 +302,23 @@ def _fit_edge(a: np.ndarray, order: int) -> np.ndarray:
         raise DegenerateConfigurationError(
             "no edge found in image (or its roi): a row has no contrast"
         )
-    p = np.polyfit(rows, c, order)
+    p = _polyfit(rows, c, order)
     n = a.shape[1] - 1
-    win = np.stack([_hamming(n, float(np.polyval(p, r)) - 0.5) for r in rows])
+    win = _hamming_rows(n, np.polyval(p, rows) - 0.5)
     c2 = _row_centroids(a, win)
     if np.isfinite(c2).all():
-        p = np.polyfit(rows, c2, order)
+        p = _polyfit(rows, c2, order)
     return np.asarray(p)
+
+
+def _polyfit(x: np.ndarray, y: np.ndarray, order: int) -> np.ndarray:
+    """``numpy.polyfit(x, y, order)``; a line by its closed form (the same to ~1e-15)."""
+    if order != 1:
+        return np.asarray(np.polyfit(x, y, order))
+    xm, ym = float(x.mean()), float(y.mean())
+    dx = x - xm
+    b = float(dx @ (y - ym)) / float(dx @ dx)
+    return np.array([b, ym - b * xm])
 
 
 def _project(a: np.ndarray, p: np.ndarray, q: int, cos_ref: float) -> np.ndarray:
@@ -359,7 +380,24 @@ def _lsf(esf: np.ndarray, derivative: str) -> np.ndarray:
     lsf = lsf * np.sign(s)
     pos = np.clip(lsf, 0.0, None)
     mid = float((pos * np.arange(lsf.size)).sum() / pos.sum())
-    return np.asarray(lsf * _hamming(lsf.size, mid))
+    return np.asarray(lsf * _lsf_window(lsf.size, mid))
+
+
+def _lsf_window(n: int, mid: float) -> np.ndarray:
+    """Return the LSF's Hamming window: the array's length, centred on the LSF's centroid.
+
+    ``0.54 + 0.46 cos(2 pi (k - mid) / (n - 1))`` for ``|k - mid| <= (n - 1) / 2``, 0 beyond:
+    ``sfrmat3`` (and ``sfrmat5`` with its Hamming option) shifts the LSF so that its centre
+    is the array's middle, which drops the samples that leave the array, and windows it with
+    a symmetric Hamming window over the array (``ahamming(nn, (nn + 1) / 2)``), as ISO
+    12233:2017's e-SFR windows the LSF centred on itself. Its width does not grow when the
+    edge lies off the ROI's middle (a window reaching the far end then tapers the LSF's long
+    tail less and lowered MTF50 by 0.6 % on ``sfrmat3``'s own edge crops).
+    """
+    k = np.arange(n, dtype=np.float64)
+    half = max((n - 1) / 2.0, 1.0)
+    arg = (k - mid) / half
+    return np.where(np.abs(arg) <= 1.0, 0.54 + 0.46 * np.cos(np.pi * np.clip(arg, -1, 1)), 0.0)
 
 
 def _spectrum(
@@ -478,6 +516,49 @@ def fit_gaussian_sigma(frequency: ArrayLike, sfr: ArrayLike, *, angle_deg: float
     return float(r.x)
 
 
+def _edge_stages(
+    img: np.ndarray, lum: np.ndarray, q: int, order: int, deriv: str
+) -> tuple[str, int, float, list[np.ndarray], list[np.ndarray], list[np.ndarray]]:
+    """Run the e-SFR up to the LSFs (steps 1-4 of the module's list), each channel then Y.
+
+    Returns the orientation, the rows used, ``cos(theta)`` of the luminance fit, and per
+    plane (R, G, B, Y, or Y alone) the edge polynomial, the ESF and the windowed LSF; raises
+    DegenerateConfigurationError where the e-SFR cannot measure the region.
+    """
+    gy, gx = np.abs(np.diff(lum, axis=0)).mean(), np.abs(np.diff(lum, axis=1)).mean()
+    orientation = "vertical" if gx >= gy else "horizontal"
+    if orientation == "horizontal":
+        img = np.swapaxes(img, 0, 1)
+        lum = lum.T
+    h, wid = lum.shape
+    if h < 8 or wid < 8:
+        raise InvalidInputError(
+            f"expected an ROI of at least 8 pixels along and across the edge, got {h} x {wid}"
+        )
+    planes = [lum] if img.ndim == 2 else [img[:, :, 0], img[:, :, 1], img[:, :, 2], lum]
+    p_lum = _fit_edge(lum, order)
+    slope = float(np.polyval(np.polyder(p_lum), (h - 1) / 2.0))
+    if abs(slope) * h < 1.0:
+        raise DegenerateConfigurationError(
+            f"the edge in image is too close to {orientation}: it moves {abs(slope) * h:.2f} px "
+            f"over {h} rows (needs >= 1); tilt it 2-10 deg"
+        )
+    rows_used = h
+    if order == 1:  # a whole number of phase cycles (sfrmat3)
+        rows_used = max(8, min(h, round(math.floor(abs(slope) * h) / abs(slope))))
+    cos_ref = math.cos(math.atan(slope))  # the ESF bins are cos_ref / q px along the normal
+    fits, esfs = [], []
+    for a in planes:
+        a = a[:rows_used]
+        p = _fit_edge(a, order)
+        esfs.append(_project(a, p, q, cos_ref))
+        fits.append(p)
+    m = min(e.size for e in esfs)
+    esfs = [e[:m] for e in esfs]
+    lsfs = [_lsf(e, deriv) for e in esfs]
+    return orientation, rows_used, cos_ref, fits, esfs, lsfs
+
+
 def slanted_edge_sfr(
     image: ArrayLike,
     roi: Sequence[int] | None = None,
@@ -551,45 +632,8 @@ def slanted_edge_sfr(
     w = _weights(weights)
 
     lum = _luminance(img, w)
-    gy, gx = np.abs(np.diff(lum, axis=0)).mean(), np.abs(np.diff(lum, axis=1)).mean()
-    orientation = "vertical" if gx >= gy else "horizontal"
-    if orientation == "horizontal":
-        img = np.swapaxes(img, 0, 1)
-        lum = lum.T
-    h, wid = lum.shape
-    if h < 8 or wid < 8:
-        raise InvalidInputError(
-            f"expected an ROI of at least 8 pixels along and across the edge, got {h} x {wid}"
-        )
-    if img.ndim == 2:
-        planes = [lum]
-        names: tuple[str, ...] = ("Y",)
-    else:
-        planes = [img[:, :, 0], img[:, :, 1], img[:, :, 2], lum]
-        names = ("R", "G", "B", "Y")
-
-    p_lum = _fit_edge(lum, order)
-    slope = float(np.polyval(np.polyder(p_lum), (h - 1) / 2.0))
-    if abs(slope) * h < 1.0:
-        raise DegenerateConfigurationError(
-            f"the edge in image is too close to {orientation}: it moves {abs(slope) * h:.2f} px "
-            f"over {h} rows (needs >= 1); tilt it 2-10 deg"
-        )
-    rows_used = h
-    if order == 1:  # a whole number of phase cycles (sfrmat3)
-        rows_used = max(8, min(h, round(math.floor(abs(slope) * h) / abs(slope))))
-    cos_ref = math.cos(math.atan(slope))  # the ESF bins are cos_ref / q px along the normal
-    fits, esfs, lsfs = [], [], []
-    for a in planes:
-        a = a[:rows_used]
-        p = _fit_edge(a, order)
-        esf = _project(a, p, q, cos_ref)
-        fits.append(p)
-        esfs.append(esf)
-    m = min(e.size for e in esfs)
-    esfs = [e[:m] for e in esfs]
-    for e in esfs:
-        lsfs.append(_lsf(e, deriv))
+    orientation, rows_used, cos_ref, fits, esfs, lsfs = _edge_stages(img, lum, q, order, deriv)
+    names: tuple[str, ...] = ("Y",) if img.ndim == 2 else ("R", "G", "B", "Y")
     nfft = lsfs[0].size
     fine = max(8 * nfft, 4096)
     freq = np.empty(0)
@@ -790,6 +834,92 @@ def _subpixel_side(
     return np.asarray(out, dtype=np.float64)
 
 
+Components = list[tuple[int, int, np.ndarray]]
+
+
+def _components_at(
+    g: np.ndarray, t: float, msz: int, *, kernel: bool | None = None
+) -> tuple[Components, Components]:
+    """Components of ``g < t`` and of ``g > t`` at least ``msz`` px across, off the border.
+
+    Returns the dark and the light components, ``(r0, c0, mask)`` each: the top-left pixel
+    in ``g`` and the mask over its bounding box (4-connected labelling), in the order of
+    their first pixels. The numba kernel :func:`imageform._kernels.components.level_runs`
+    labels both in one scan where numba imports (``kernel=None``), else its twin, scipy's
+    ``ndimage.label`` and ``find_objects`` on each.
+    """
+    H, W = g.shape
+    if kernel is None:
+        from imageform._backend import have_numba
+
+        kernel = have_numba()
+    out: list[Components] = []
+    if kernel:
+        from imageform._kernels.components import level_runs, paint_runs
+
+        for runs, comp, boxes in level_runs(np.ascontiguousarray(g, dtype=np.float64), float(t)):
+            r0, r1, c0, c1 = boxes.T
+            ok = (r0 > 0) & (c0 > 0) & (r1 < H) & (c1 < W) & (np.minimum(r1 - r0, c1 - c0) >= msz)
+            sel = np.nonzero(ok)[0]
+            masks = paint_runs(runs, comp, sel, boxes) if sel.size else []
+            out.append([(int(r0[k]), int(c0[k]), mk) for k, mk in zip(sel, masks, strict=True)])
+        return out[0], out[1]
+    from scipy import ndimage
+
+    for part in (g < t, g > t):
+        labels, _n = ndimage.label(part)
+        found: Components = []
+        for lab, sl in enumerate(ndimage.find_objects(labels), start=1):
+            if sl is None:
+                continue
+            r0, r1, c0, c1 = sl[0].start, sl[0].stop, sl[1].start, sl[1].stop
+            if r0 == 0 or c0 == 0 or r1 == H or c1 == W or min(r1 - r0, c1 - c0) < msz:
+                continue
+            found.append((r0, c0, labels[r0:r1, c0:c1] == lab))
+        out.append(found)
+    return out[0], out[1]
+
+
+def _pick_levels(
+    g: np.ndarray, found: Sequence[tuple[float, int, int, np.ndarray]]
+) -> list[tuple[float, int, int, np.ndarray]]:
+    """Each component of ``found`` (``(t, r0, c0, mask)``) once, at its best level.
+
+    A component seen at several levels (the same bounding box within 2 px) is kept at the
+    level ``t`` nearest the middle of its grey and its surround's (:func:`_component_greys`,
+    measured where it is first seen: they hardly move with the level).
+    """
+    comps: dict[tuple[int, int], list[list[Any]]] = {}  # by box corner / 8: score, t, r0, ...
+    out: list[list[Any]] = []
+    for t, r0, c0, m in found:
+        bx = (r0, c0, r0 + m.shape[0], c0 + m.shape[1])
+        near = [
+            e
+            for i in (r0 // 8 - 1, r0 // 8, r0 // 8 + 1)
+            for j in (c0 // 8 - 1, c0 // 8, c0 // 8 + 1)
+            for e in comps.get((i, j), [])
+        ]
+        for entry in sorted(near, key=lambda e: e[6]):  # the first seen first, as a list
+            e0, e1, e2, e3 = entry[5]
+            if (
+                abs(e0 - r0) <= 2
+                and abs(e1 - c0) <= 2
+                and abs(e2 - bx[2]) <= 2
+                and abs(e3 - bx[3]) <= 2
+            ):
+                score = _offset(t, entry[4])
+                if score < entry[0]:
+                    entry[:4] = [score, t, (r0, c0), m]
+                    entry[5] = bx
+                break
+        else:
+            greys = _component_greys(g, m, r0, c0)
+            entry = [_offset(t, greys), t, (r0, c0), m, greys, bx, len(out)]
+            comps.setdefault((r0 // 8, c0 // 8), []).append(entry)
+            out.append(entry)
+    return [(e[1], e[2][0], e[2][1], e[3]) for e in out]
+
+
 def find_slanted_edges(
     image: ArrayLike,
     *,
@@ -800,33 +930,35 @@ def find_slanted_edges(
     roi_width: int | None = None,
     weights: Sequence[float] = SFR_LUMINANCE_WEIGHTS,
 ) -> list[SlantedEdgeROI]:
-    """Find measurable slanted edges in a photograph of dark squares on a lighter surround.
+    """Find measurable slanted edges in a photograph of squares darker or lighter than around.
 
     The image is thresholded halfway between its 2nd and 98th percentiles, then at 15 levels
-    evenly spaced between them (a chart's square often sits on a grey surround of its own
-    among other patches, and only a level between the square's two greys separates it); at
-    each level, each dark connected component (scipy's 4-connected labelling) that does not
-    touch the border, is at least ``min_size`` pixels across and fills at least 60 % of its
-    bounding box is taken as a square. Its four sides are fitted by least squares through
-    the sub-pixel threshold crossings of the middle half of its rows (left, right sides) and
-    columns (top, bottom); a side whose crossings stray more than 0.5 px RMS from a parabola
-    through them (a notch, a corner, another shape joined to it) is skipped. A side whose
-    angle from the vertical/horizontal is within ``[min_angle, max_angle]`` degrees gets an
-    ROI centred on its midpoint, ``roi_length`` of the side long (the middle part, away from
-    the corners; longer, up to 80 % of the side, where the edge would not cross one whole
-    pixel along it, else the side is skipped) and ``roi_width`` pixels across (default: 60 %
-    of the side, at most 64); ROIs that leave the image, or in which a row (column) crosses
-    the threshold more than once (another square inside), are dropped. A component seen at
-    several levels (same bounding box within 2 px) is fitted once, at the level nearest the
-    middle of its grey and its surround's; of the ROIs that several components give on one
-    edge, the one whose level is nearest the middle of the edge's two greys is kept. A kept
-    ROI must hold one edge, which the e-SFR measures: each line across it crosses the levels
-    1/4 and 3/4 of the way between the ROI's 5th and 95th percentiles once (ISO 12233 wants
-    uniform areas on both sides of the edge), and
-    :func:`slanted_edge_sfr` accepts it and finds the edge within 1 deg of the threshold
-    fit. If no square gives an edge and the whole image passes that test with an angle in
-    range, the image is taken as an edge crop (the input of ``sfrmat``) and returned as one
-    ROI (its ``side`` names the side of the dark area the edge bounds).
+    evenly spaced between them (a chart's square often sits on a grey surround of its own among
+    other patches, and only a level between the square's two greys separates it); at each level,
+    each dark connected component (4-connected labelling: a numba kernel, or scipy's) that does
+    not touch the border, is at least ``min_size`` pixels across and fills at least 60 % of its
+    bounding box is taken as a square. Its four sides are fitted by least squares through the
+    sub-pixel threshold crossings of the middle half of its rows (left, right sides) and columns
+    (top, bottom); a side whose crossings stray more than 0.5 px RMS from a parabola through
+    them (a notch, a corner, another shape joined to it) is skipped. A side whose angle from the
+    vertical/horizontal is within ``[min_angle, max_angle]`` degrees gets an ROI centred on its
+    midpoint, ``roi_length`` of the side long (the middle part, away from the corners; longer,
+    up to 80 % of the side, where the edge would not cross one whole pixel along it, else the
+    side is skipped) and ``roi_width`` pixels across (default: 60 % of the side, at most 64);
+    ROIs that leave the image, or in which a row (column) crosses the threshold more than once
+    (another square inside), are dropped. A component seen at several levels (same bounding box
+    within 2 px) is fitted once, at the level nearest the middle of its grey and its surround's;
+    of the ROIs that several components give on one edge, the one whose level is nearest the
+    middle of the edge's two greys is kept. Light squares on a darker surround are searched the
+    same way in the negated image (the light components of each level), and their ROIs join the
+    dark squares' (``side`` names the light square's side); an edge found from both sides is
+    kept once. A kept ROI must hold one edge, which the e-SFR measures: each line across it
+    crosses the levels 1/4 and 3/4 of the way between the ROI's 5th and 95th percentiles once
+    (ISO 12233 wants uniform areas on both sides of the edge), and :func:`slanted_edge_sfr`
+    accepts it and finds the edge within 1 deg of the threshold fit. If no square gives an edge
+    and the whole image passes that test with an angle in range, the image is taken as an edge
+    crop (the input of ``sfrmat``) and returned as one ROI (its ``side`` names the side of the
+    dark area the edge bounds).
 
     A dark component that fills less than 60 % of its bounding box (a wedge, such as the
     blades of the ISO 12233:2017/2023 chart's pinwheels) is no square: its outline seen from
@@ -847,8 +979,6 @@ def find_slanted_edges(
     >>> find_slanted_edges(img)  # an upright square: no slanted edge
     []
     """
-    from scipy import ndimage
-
     img = _as_image(image)
     lo_a = as_real(min_angle, "min_angle", nonnegative=True, maximum=40.0)
     hi_a = as_real(max_angle, "max_angle", minimum=lo_a, maximum=40.0)
@@ -856,7 +986,6 @@ def find_slanted_edges(
     frac = as_real(roi_length, "roi_length", positive=True, maximum=0.9)
     rw = None if roi_width is None else as_int(roi_width, "roi_width", minimum=8)
     g = _luminance(img, _weights(weights))
-    H, W = g.shape
     p2, p98 = np.percentile(g, [2.0, 98.0])
     if p98 - p2 <= 0:
         return []
@@ -864,46 +993,29 @@ def find_slanted_edges(
     # grey surround of its own, among other patches, separates only between its two greys
     levels = [0.5 * (p2 + p98)]
     levels += list(p2 + (p98 - p2) * (np.arange(1, _N_LEVELS) / _N_LEVELS))
-    # each component once, at the level nearest the middle of its two greys (a two-tone
-    # square is seen at every level, a square on a grey surround at several)
-    comps: list[tuple[float, float, int, int, np.ndarray]] = []  # score, t, r0, c0, mask
-    for t in levels:
-        labels, _n = ndimage.label(g < t)
-        for lab, sl in enumerate(ndimage.find_objects(labels), start=1):
-            if sl is None:
-                continue
-            r0, r1, c0, c1 = sl[0].start, sl[0].stop, sl[1].start, sl[1].stop
-            if r0 == 0 or c0 == 0 or r1 == H or c1 == W or min(r1 - r0, c1 - c0) < msz:
-                continue
-            m = labels[r0:r1, c0:c1] == lab
-            score = _component_offset(g, m, r0, c0, t)
-            for k, (sc, _t, q0, d0, mk) in enumerate(comps):
-                if (
-                    abs(q0 - r0) <= 2
-                    and abs(d0 - c0) <= 2
-                    and abs(q0 + mk.shape[0] - r1) <= 2
-                    and abs(d0 + mk.shape[1] - c1) <= 2
-                ):
-                    if score < sc:
-                        comps[k] = (score, t, r0, c0, m)
-                    break
-            else:
-                comps.append((score, t, r0, c0, m))
     best: list[tuple[float, SlantedEdgeROI]] = []
-    for _sc, t, r0, c0, m in comps:
-        hh, ww = m.shape
-        if m.sum() < 0.6 * hh * ww:  # not a square: the straight runs of its outline
-            rois = _outline_rois(g, m, t, (r0, c0), msz, hi_a, frac, rw)
-        else:
-            side = math.sqrt(float(m.sum()))
-            found_sides = [
-                _side_roi(g, m, t, (r0, c0), name, side, frac, rw)
-                for name in ("left", "right", "top", "bottom")
-            ]
-            rois = [r for r in found_sides if r is not None]
-        for roi in rois:
-            if lo_a <= abs(roi.angle) <= hi_a and _clean(g, t, roi):
-                _keep(best, roi, _level_offset(g, roi, t))
+    # dark squares on a light surround, then light squares on a dark one: the same search in
+    # the negated image (-g < -t where g > t); the tests below do not depend on the polarity
+    per_level = [_components_at(g, t, msz) for t in levels]  # (dark, light) at each level
+    for k, gg, lv in ((0, g, levels), (1, -g, [-t for t in levels])):
+        # each component once, at the level nearest the middle of its two greys (a two-tone
+        # square is seen at every level, a square on a grey surround at several)
+        seen = [(t, *c) for t, cs in zip(lv, per_level, strict=True) for c in cs[k]]
+        comps = _pick_levels(gg, seen)
+        for t, r0, c0, m in comps:
+            hh, ww = m.shape
+            if m.sum() < 0.6 * hh * ww:  # not a square: the straight runs of its outline
+                rois = _outline_rois(gg, m, t, (r0, c0), msz, hi_a, frac, rw)
+            else:
+                side = math.sqrt(float(m.sum()))
+                found_sides = [
+                    _side_roi(gg, o, t, (r0, c0), name, side, frac, rw)
+                    for name, o in _outlines(m).items()
+                ]
+                rois = [r for r in found_sides if r is not None]
+            for roi in rois:
+                if lo_a <= abs(roi.angle) <= hi_a and _clean(gg, t, roi):
+                    _keep(best, roi, _level_offset(gg, roi, t))
     found = [roi for _score, roi in best if _measurable(g, roi)]
     if not found:  # an edge crop (sfrmat's input): the whole image as one ROI
         whole = _whole_image_edge(g)
@@ -913,9 +1025,49 @@ def find_slanted_edges(
     return found
 
 
+def _outline(m: np.ndarray, name: str, kernel: bool | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Return the lines of mask ``m`` with a dark pixel and the first one seen from ``name``.
+
+    The lines are rows for ``left``/``right``, columns for ``top``/``bottom``; the numba
+    kernel :func:`imageform._kernels.components.outline` where numba imports
+    (``kernel=None``), else ``argmax`` over the lines (its twin).
+    """
+    if kernel is None:
+        from imageform._backend import have_numba
+
+        kernel = have_numba()
+    if kernel:
+        from imageform._kernels.components import outline
+
+        first = outline(m)[("left", "right", "top", "bottom").index(name)]
+        lines = np.nonzero(first >= 0)[0]
+        return lines, first[lines]
+    mm = m if name in ("left", "right") else m.T
+    lines = np.nonzero(mm.any(axis=1))[0]
+    sub = mm[lines]
+    if name in ("left", "top"):
+        return lines, np.argmax(sub, axis=1)
+    return lines, sub.shape[1] - 1 - np.argmax(sub[:, ::-1], axis=1)
+
+
+def _outlines(m: np.ndarray) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    """:func:`_outline` of ``m`` from each of the four sides (one pass of the kernel)."""
+    from imageform._backend import have_numba
+
+    if not have_numba():
+        return {name: _outline(m, name, False) for name in ("left", "right", "top", "bottom")}
+    from imageform._kernels.components import outline
+
+    out = {}
+    for name, first in zip(("left", "right", "top", "bottom"), outline(m), strict=True):
+        lines = np.nonzero(first >= 0)[0]
+        out[name] = (lines, first[lines])
+    return out
+
+
 def _side_roi(
     g: np.ndarray,
-    m: np.ndarray,
+    m: np.ndarray | tuple[np.ndarray, np.ndarray],
     t: float,
     origin: tuple[int, int],
     name: str,
@@ -923,22 +1075,17 @@ def _side_roi(
     frac: float,
     rw: int | None,
 ) -> SlantedEdgeROI | None:
+    """Return the ROI on side ``name`` of a component (its mask ``m`` or its :func:`_outline`)."""
     vertical = name in ("left", "right")
-    mm = m if vertical else m.T
     gg = g if vertical else g.T
     o_line, o_across = origin if vertical else origin[::-1]
-    lines = np.nonzero(mm.any(axis=1))[0]
+    lines, first_all = _outline(m, name) if isinstance(m, np.ndarray) else m
     n = lines.size
-    sel = lines[int(0.25 * n) : int(np.ceil(0.75 * n))]
+    cut = slice(int(0.25 * n), int(np.ceil(0.75 * n)))
+    sel, first = lines[cut], first_all[cut]
     if sel.size < 4:
         return None
-    sub = mm[sel]
-    if name in ("left", "top"):
-        first = np.argmax(sub, axis=1)
-        step = 1
-    else:
-        first = sub.shape[1] - 1 - np.argmax(sub[:, ::-1], axis=1)
-        step = -1
+    step = 1 if name in ("left", "top") else -1
     pos = _subpixel_side(gg, t, sel + o_line, first + o_across, step)
     yl = (sel + o_line).astype(np.float64)
     # a straight (or gently bent, by distortion) edge: a corner, a notch or another shape
@@ -947,7 +1094,7 @@ def _side_roi(
         bend = pos - np.polyval(np.polyfit(yl, pos, 2), yl)
         if float(np.sqrt(np.mean(bend**2))) > _MAX_BEND_RMS:
             return None
-    b, a = np.polyfit(yl, pos, 1)
+    b, a = _polyfit(yl, pos, 1)
     angle = math.degrees(math.atan(b))
     mid_line = 0.5 * (lines[0] + lines[-1]) + o_line
     mid_across = a + b * mid_line
@@ -980,13 +1127,12 @@ def _clean(g: np.ndarray, t: float, roi: SlantedEdgeROI) -> bool:
     return bool((changes == 1).all())
 
 
-def _component_offset(g: np.ndarray, m: np.ndarray, r0: int, c0: int, t: float) -> float:
-    """How far ``t`` is from the middle of a component's grey and its surround's.
+def _component_greys(g: np.ndarray, m: np.ndarray, r0: int, c0: int) -> tuple[float, float]:
+    """Return a component's grey and its surround's (NaN, NaN where they cannot be told).
 
     The greys are the medians of ``g`` inside the component's mask ``m`` (top-left pixel
     ``r0, c0``) and over the rest of its bounding box grown by a tenth of its size (at
-    least 2 pixels; every ``step``-th pixel of a large box); in units of their difference
-    (0: halfway, 0.5: at either grey).
+    least 2 pixels; every ``step``-th pixel of a large box).
     """
     H, W = g.shape
     hh, ww = m.shape
@@ -999,9 +1145,17 @@ def _component_offset(g: np.ndarray, m: np.ndarray, r0: int, c0: int, t: float) 
     step = max(1, math.isqrt(box.size // 40000))  # medians of a large shape: a subsample
     box, inside = box[::step, ::step], inside[::step, ::step]
     if inside.all() or not inside.any():
-        return math.inf
-    lo, hi = float(np.median(box[inside])), float(np.median(box[~inside]))
-    if hi <= lo:
+        return math.nan, math.nan
+    return float(np.median(box[inside])), float(np.median(box[~inside]))
+
+
+def _offset(t: float, greys: tuple[float, float]) -> float:
+    """How far ``t`` is from the middle of two greys ``(lo, hi)``, in units of their difference.
+
+    0: halfway, 0.5: at either grey; infinite when ``hi`` is not above ``lo`` (or NaN).
+    """
+    lo, hi = greys
+    if not hi > lo:
         return math.inf
     return abs(t - 0.5 * (lo + hi)) / (hi - lo)
 
@@ -1056,11 +1210,12 @@ def _measurable(g: np.ndarray, roi: SlantedEdgeROI) -> bool:
     for level in (lo + 0.25 * (hi - lo), lo + 0.75 * (hi - lo)):
         if not _clean(g, level, roi):
             return False
-    try:
-        r = slanted_edge_sfr(g, roi.roi)
+    try:  # the e-SFR's steps up to the LSF (its spectrum is not needed here)
+        orientation, _r, _c, fits, _e, _l = _edge_stages(a, a, 4, 1, "central")
     except (DegenerateConfigurationError, InvalidInputError):
         return False
-    return r.orientation == roi.orientation and abs(r.angle - roi.angle) <= _MAX_ANGLE_GAP
+    angle = math.degrees(math.atan(float(fits[-1][0])))
+    return orientation == roi.orientation and abs(angle - roi.angle) <= _MAX_ANGLE_GAP
 
 
 def _whole_image_edge(g: np.ndarray) -> SlantedEdgeROI | None:
@@ -1116,26 +1271,20 @@ def _outline_rois(
     """
     out: list[SlantedEdgeROI] = []
     jump = 1.5 + math.tan(math.radians(max_angle))
-    for name in ("left", "right", "top", "bottom"):
-        mm = m if name in ("left", "right") else m.T
-        lines = np.nonzero(mm.any(axis=1))[0]
+    if max(m.shape) * frac < min_len:  # no run can be long enough
+        return out
+    for name, (lines, first) in _outlines(m).items():
         if lines.size < min_len:
             continue
-        sub = mm[lines]
-        if name in ("left", "top"):
-            first = np.argmax(sub, axis=1)
-        else:
-            first = sub.shape[1] - 1 - np.argmax(sub[:, ::-1], axis=1)
         cut = np.nonzero((np.abs(np.diff(first)) > jump) | (np.diff(lines) > 1))[0] + 1
         for run in np.split(np.arange(lines.size), cut):
             if run.size * frac < min_len:  # an ROI shorter than min_len: a glyph's stroke
                 continue
             k = int(0.2 * run.size)
-            keep = np.zeros_like(mm)
-            sel = lines[run[k : run.size - k]]
-            keep[sel] = mm[sel]
-            mask = keep if name in ("left", "right") else keep.T
-            roi = _side_roi(g, mask, t, origin, name, float(run.size), frac, rw)
+            part = run[k : run.size - k]
+            roi = _side_roi(
+                g, (lines[part], first[part]), t, origin, name, float(run.size), frac, rw
+            )
             if roi is not None:
                 out.append(roi)
     return out
