@@ -136,6 +136,7 @@ def detect_features(
     max_features: int = 4000,
     mask: ArrayLike | None = None,
     max_size: int | None = 3200,
+    contrast_threshold: float = 0.04,
 ) -> Features:
     r"""Detect SIFT keypoints and descriptors (OpenCV's SIFT, the ``reconstruct`` extra).
 
@@ -163,6 +164,13 @@ def detect_features(
         behind a moving object. None: everywhere.
     max_size : int or None
         Longest side, pixels, SIFT sees (at least 64); None: the full image always.
+    contrast_threshold : float
+        SIFT's contrast threshold (OpenCV's ``contrastThreshold``, Lowe 2004 sec. 4: an
+        extremum of the difference of Gaussians weaker than
+        :math:`\tfrac12\,\text{contrast\_threshold} / 3` of the grey range is dropped), in
+        (0, 1). 0.04, OpenCV's default, suits photographs; the smooth, low-contrast tissue of
+        an endoscope's frames keeps a few tens of keypoints with it, and 0.01 ten times as
+        many (``benchmarks/check_endo_real.py``).
 
     Returns
     -------
@@ -176,6 +184,7 @@ def detect_features(
     cv2 = require("cv2", what="imageform reconstruct's keypoints (SIFT)")
     n = as_int(max_features, "max_features", minimum=8, maximum=1_000_000)
     cap = None if max_size is None else as_int(max_size, "max_size", minimum=64)
+    ct = as_real(contrast_threshold, "contrast_threshold", positive=True, maximum=1.0)
     a = np.asarray(image)
     dtype = a.dtype
     if dtype.kind in "uif" and a.ndim == 3 and a.shape[-1] in (3, 4):
@@ -199,7 +208,7 @@ def detect_features(
         sx, sy = w / ws, h / hs
     # the doubled first octave must map pixel x to 2x: OpenCV's default resize maps it to
     # 2x + 1/2 and every keypoint lands a quarter pixel off, down and right
-    sift = cv2.SIFT_create(nfeatures=n, enable_precise_upscale=True)
+    sift = cv2.SIFT_create(nfeatures=n, contrastThreshold=ct, enable_precise_upscale=True)
     kps, desc = sift.detectAndCompute(a, m)
     if desc is None or not kps:
         return Features(np.zeros((0, 2)), np.zeros((0, 128), np.float32), np.zeros(0), np.zeros(0))
@@ -851,6 +860,7 @@ def reconstruct_sequence(
     threshold_px: float = 1.0,
     rng: int = 0,
     masks: ArrayLike | Sequence[ArrayLike | None] | None = None,
+    contrast_threshold: float = 0.04,
 ) -> Reconstruction:
     """Reconstruct the cameras and a sparse point cloud from an ordered image sequence.
 
@@ -877,6 +887,8 @@ def reconstruct_sequence(
         Where keypoints may be (nonzero): one mask for every frame (an endoscope's
         vignetting) or one a frame (an object that moves in front of a static background;
         only what moves rigidly with the scene may be kept). None: everywhere.
+    contrast_threshold : float
+        SIFT's contrast threshold (:func:`detect_features`): 0.01 for endoscopic tissue.
 
     Returns
     -------
@@ -915,7 +927,7 @@ def reconstruct_sequence(
         one = _as_mask(masks, shape, "masks")
         per_frame = [one] * n
     feats = [
-        detect_features(im, max_features=max_features, mask=m)
+        detect_features(im, max_features=max_features, mask=m, contrast_threshold=contrast_threshold)
         for im, m in zip(images, per_frame, strict=True)
     ]
     # undistorted (ideal pinhole) pixels of every keypoint
@@ -941,9 +953,12 @@ def reconstruct_sequence(
     # rays closer than this (radians) meet on either side of the cameras within the noise
     min_parallax = float(np.arctan(3.0 * threshold_px / min(abs(k[0, 0]), abs(k[1, 1]))))
 
+    seen = {"matches": 0, "inliers": 0}  # the best pair's counts, for the error message
+
     def verify(i: int, j: int) -> None:
         """Match frames i and j, keep the essential matrix's inliers and the parallax."""
         m = match_features(feats[i].descriptors, feats[j].descriptors, ratio=ratio)
+        seen["matches"] = max(seen["matches"], int(m.shape[0]))
         if m.shape[0] < 30:
             return
         p1, p2 = ideal[i][m[:, 0]], ideal[j][m[:, 1]]
@@ -956,6 +971,7 @@ def reconstruct_sequence(
         except (DegenerateConfigurationError, InvalidInputError):
             return
         inl = np.asarray(er.inliers, bool)
+        seen["inliers"] = max(seen["inliers"], int(inl.sum()))
         if inl.sum() < 30:
             return
         try:
@@ -995,7 +1011,9 @@ def reconstruct_sequence(
         del pair_info[key]
     if not pair_info:
         raise DegenerateConfigurationError(
-            "no pair of frames has 30 verified matches: too little overlap or texture"
+            "no pair of frames has 30 verified matches: too little overlap or texture "
+            f"(keypoints a frame: median {int(np.median(textured))}; the best pair: "
+            f"{seen['matches']} matches, {seen['inliers']} fit one essential matrix)"
         )
     edges = np.concatenate(
         [
