@@ -33,7 +33,12 @@ def _unit(image: object, name: str) -> NDArray[np.float32]:
         a = a[..., :3]
     elif a.ndim == 3 and a.shape[-1] == 1:
         a = a[..., 0]
-    if a.ndim not in (2, 3) or a.size == 0 or a.dtype.kind not in "uif":
+    if (
+        a.ndim not in (2, 3)
+        or (a.ndim == 3 and a.shape[-1] != 3)
+        or a.size == 0
+        or (a.dtype.kind not in "uif")
+    ):
         raise InvalidInputError(
             f"expected {name} as (H, W), (H, W, 3) or (H, W, 4) numbers, got {describe(image)}"
         )
@@ -125,11 +130,16 @@ def field_of_view_mask(
     st = as_real(still, "still", nonnegative=True, maximum=1.0)
     if not isinstance(overlays, bool | np.bool_):
         raise InvalidInputError(f"expected overlays as True or False, got {describe(overlays)}")
-    arr = np.asarray(images) if isinstance(images, np.ndarray) else None
-    if arr is not None and arr.ndim in (2, 3) and not (arr.ndim == 3 and arr.shape[-1] > 4):
-        frames: list[object] = [arr]  # one frame
+    if isinstance(images, list | tuple):
+        frames: list[object] = list(images)
+    elif hasattr(images, "__array__") and getattr(images, "ndim", 0) >= 2:
+        arr = np.asarray(images)
+        one = arr.ndim == 2 or (arr.ndim == 3 and arr.shape[-1] <= 4)
+        frames = [arr] if one else list(arr)
     else:
-        frames = list(images)  # type: ignore[arg-type]
+        raise InvalidInputError(
+            f"expected images as a list of frames or an array, got {describe(images)}"
+        )
     if not frames:
         raise InvalidInputError("expected at least one frame, got none")
     pick = np.unique(np.linspace(0, len(frames) - 1, min(len(frames), _MAX_FRAMES)).round())

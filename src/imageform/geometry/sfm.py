@@ -913,6 +913,7 @@ def reconstruct_sequence(
         raise InvalidInputError(f"expected frames of one size, got {sorted(shapes)}")
     k = np.asarray(K, np.float64)
     win = as_int(window, "window", minimum=1, maximum=100)
+    ct = as_real(contrast_threshold, "contrast_threshold", positive=True, maximum=1.0)
     n = len(images)
     (shape,) = shapes
     if masks is None:
@@ -927,7 +928,7 @@ def reconstruct_sequence(
         one = _as_mask(masks, shape, "masks")
         per_frame = [one] * n
     feats = [
-        detect_features(im, max_features=max_features, mask=m, contrast_threshold=contrast_threshold)
+        detect_features(im, max_features=max_features, mask=m, contrast_threshold=ct)
         for im, m in zip(images, per_frame, strict=True)
     ]
     # undistorted (ideal pinhole) pixels of every keypoint

@@ -111,7 +111,7 @@ def _check_folder(out: Path, force: bool) -> None:
 
 
 def _hint(opts: ReconstructOptions) -> str:
-    """What to try when no pair starts: the options not yet used for an endoscope's video."""
+    """Say what to try when no pair starts: the options not yet used for an endoscope."""
     tries = []
     if opts.mask is None and not opts.auto_mask:
         tries.append("--auto-mask (an endoscope's black border and overlays)")
@@ -175,7 +175,7 @@ def _read_mask(path: Path, info: Any) -> Any:
 
 
 def _masks(images: list[Any], opts: ReconstructOptions, info: Any) -> tuple[Any, dict[str, Any]]:
-    """The keypoint masks of the frames (one, one a frame, or None) and their shares."""
+    """Return the keypoint masks of the frames (one, one a frame, or None), their shares."""
     import numpy as np
 
     from imageform.geometry import field_of_view_mask, highlight_mask
@@ -269,6 +269,10 @@ def reconstruct(run: Run, opts: ReconstructOptions, *, out: Path, frames: str) -
         )
     except DegenerateConfigurationError as exc:
         raise DegenerateConfigurationError(f"{frames}: {exc}{_hint(opts)}") from exc
+    except InvalidInputError as exc:
+        if not str(exc).startswith("no texture"):  # the frames' texture, not an option
+            raise
+        raise InvalidInputError(f"{frames}: {exc}{_hint(opts)}") from exc
     seconds["reconstruct"] = time.perf_counter() - t1
     del images
     folder = run.folder(out)
