@@ -52,7 +52,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -436,6 +436,7 @@ def _schur_lm(
     delta: float,
     max_iter: int,
     ftol: float = 1e-10,
+    A: F64 | None = None,
 ) -> tuple[F64, F64, F64]:
     r"""Levenberg-Marquardt on the reprojection error, the points eliminated (Schur complement).
 
@@ -451,6 +452,9 @@ def _schur_lm(
     :math:`\delta p = V^{-1} (g_p - W^T \delta c)` (Triggs et al. 2000, "Bundle adjustment:
     a modern synthesis", sec. 6.1). Huber's loss by iterative reweighting; Marquardt's
     damping (the diagonal scaled by ``1 + lambda``). Cameras with ``fixed`` set stay.
+    ``A`` (M, 2, 2), optional: each observation's residual and Jacobian are mapped by it
+    (the lens's local linear map from undistorted to image pixels: the error is measured in
+    the image, where the keypoint's noise is, not where a fisheye stretches it).
     """
     from scipy.linalg import cho_factor, cho_solve
 
@@ -516,6 +520,8 @@ def _schur_lm(
     def evaluate(R: F64, t: F64, X: F64) -> tuple[F64, F64, float, F64]:
         proj, z = _project_obs(K, R[ci], t[ci], X[pi])
         r = proj - uv
+        if A is not None:
+            r = np.einsum("mij,mj->mi", A, r)
         r2 = np.sum(r * r, axis=1)
         bad = ~((z > 0) & np.isfinite(r2))
         r = np.where(bad[:, None], 0.0, r)
@@ -538,6 +544,8 @@ def _schur_lm(
         Jp[:, 0, 2] = -(fx * Xc[:, 0] + sk * Xc[:, 1]) / z**2
         Jp[:, 1, 1] = fy / z
         Jp[:, 1, 2] = -fy * Xc[:, 1] / z**2
+        if A is not None:
+            Jp = A @ Jp
         Jx = Jp @ R[ci]  # d/dX
         Jc = np.concatenate([-Jp @ _skew_batch(RX), Jp], axis=2)[has]  # d/d(omega, t)
         wJx = Jx * w[:, None, None]
@@ -816,6 +824,43 @@ def _build_tracks(
     return out, np.bincount(track)
 
 
+def _image_jacobian(k: F64, distortion: DistortionModel | None, uv: F64) -> F64:
+    r"""Return the lens's local linear map from undistorted to image pixels, (N, 2, 2).
+
+    :math:`A = K_2\, J_d(\hat x)\, K_2^{-1}`, :math:`J_d` the Jacobian of the distortion at
+    the undistorted normalised point :math:`\hat x` (central differences, step
+    :math:`10^{-6}`), :math:`K_2` the upper left 2 x 2 of ``K``: an error :math:`\delta` in
+    undistorted pixels is :math:`A \delta` in the image. The identity without distortion
+    and where the point is not finite.
+    """
+    n = uv.shape[0]
+    out = np.broadcast_to(np.eye(2), (n, 2, 2)).copy()
+    if distortion is None or n == 0:
+        return out
+    k2 = k[:2, :2]
+    k2i = np.linalg.inv(k2)
+    xn = (uv - k[:2, 2]) @ k2i.T
+    fin = np.all(np.isfinite(xn), axis=1)
+    h = 1e-6
+    cols = []
+    for e in (np.array([h, 0.0]), np.array([0.0, h])):
+        plus = np.asarray(distortion.distort(xn[fin] + e), np.float64)
+        minus = np.asarray(distortion.distort(xn[fin] - e), np.float64)
+        cols.append((plus - minus) / (2 * h))
+    jd = np.stack(cols, axis=2)  # (m, 2, 2): d distorted / d undistorted
+    a = k2 @ jd @ k2i
+    good = np.all(np.isfinite(a), axis=(1, 2))
+    out[np.flatnonzero(fin)[good]] = a[good]
+    return out
+
+
+def _magnification(A: F64) -> F64:
+    """How much the undistortion stretches a pixel (area), ``1 / sqrt(|det A|)``."""
+    det = np.abs(A[:, 0, 0] * A[:, 1, 1] - A[:, 0, 1] * A[:, 1, 0])
+    with np.errstate(divide="ignore"):
+        return np.asarray(1.0 / np.sqrt(det), np.float64)
+
+
 def _homography_hint(
     pair_info: dict[tuple[int, int], tuple[int, float, NDArray[np.int64]]],
     ideal: list[F64],
@@ -942,6 +987,11 @@ def reconstruct_sequence(
             ideal.append(und * np.diag(k)[:2] + k[:2, 2])
         else:
             ideal.append(feat.xy.copy())
+    # the lens's local linear map from undistorted to image pixels at every keypoint: a
+    # fisheye's undistortion stretches the rim twenty times, and so the keypoints' noise
+    lin = [_image_jacobian(k, distortion, u) for u in ideal]
+    all_A = np.concatenate(lin)
+    all_mag = _magnification(all_A)
     notes: list[str] = []
     textured = [len(feat) for feat in feats]
     if max(textured) < 50:
@@ -956,6 +1006,21 @@ def reconstruct_sequence(
 
     seen = {"matches": 0, "inliers": 0}  # the best pair's counts, for the error message
 
+    def stretch(*frames_kps: Any) -> float:
+        """Return the undistortion's median stretch of keypoints (frame, indices, ...), >= 1.
+
+        The estimators' thresholds are in undistorted pixels, one for all: scaled by it, a
+        fisheye's rim keeps its matches (a scale for the whole set, a compromise; the
+        bundle adjustment and its filters measure each observation in the image).
+        """
+        if distortion is None:
+            return 1.0
+        it = iter(frames_kps)
+        mags = [all_mag[offset[f] + np.asarray(kp)] for f, kp in zip(it, it, strict=True)]
+        v = np.concatenate(mags)
+        v = v[np.isfinite(v)]
+        return max(1.0, float(np.median(v))) if v.size else 1.0
+
     def verify(i: int, j: int) -> None:
         """Match frames i and j, keep the essential matrix's inliers and the parallax."""
         m = match_features(feats[i].descriptors, feats[j].descriptors, ratio=ratio)
@@ -968,7 +1033,8 @@ def reconstruct_sequence(
         if m.shape[0] < 30:
             return
         try:
-            er = find_essential_matrix(p1, p2, k, threshold=threshold_px, rng=rng)
+            thr = threshold_px * stretch(i, m[:, 0], j, m[:, 1])
+            er = find_essential_matrix(p1, p2, k, threshold=thr, rng=rng)
         except (DegenerateConfigurationError, InvalidInputError):
             return
         inl = np.asarray(er.inliers, bool)
@@ -1032,6 +1098,7 @@ def reconstruct_sequence(
     o_track = node_track[nodes].astype(np.int64)
     all_uv = np.concatenate(ideal)
     o_uv = all_uv[nodes]
+    o_A = all_A[nodes]
     o_ok = np.all(np.isfinite(o_uv), axis=1)
     kp_track = [node_track[offset[f] : offset[f + 1]].copy() for f in range(n)]
     desc = [f.descriptors for f in feats]
@@ -1051,6 +1118,13 @@ def reconstruct_sequence(
     def has_point() -> NDArray[np.bool_]:
         return np.all(np.isfinite(P), axis=1)
 
+    def image_error(ids: NDArray[np.int64], proj: F64) -> F64:
+        """Reprojection errors of observations ``ids`` in image pixels (through ``o_A``)."""
+        d = proj - o_uv[ids]
+        if distortion is not None:
+            d = np.einsum("mij,mj->mi", o_A[ids], d)
+        return np.asarray(np.linalg.norm(d, axis=1), np.float64)
+
     def triangulate(tids: NDArray[np.int64]) -> None:
         """Triangulate the tracks ``tids`` (no point yet) from their registered views."""
         tids = np.unique(tids)
@@ -1069,7 +1143,7 @@ def reconstruct_sequence(
         X[~fin] = 0.0
         # checks: in front of every view, within max_err pixels, rays 1.5 degrees apart
         proj, z = _project_obs(k, Rs[fr], ts[fr], X[col])
-        err = np.linalg.norm(proj - o_uv[sel], axis=1)
+        err = image_error(sel, proj)
         fine = (z > 0) & (err < max_err)
         bad = np.bincount(col, weights=~fine, minlength=tids.size) > 0
         C = -np.einsum("mji,mj->mi", Rs[fr], ts[fr])
@@ -1096,7 +1170,17 @@ def reconstruct_sequence(
         t0 = np.where(registered[:, None], ts, 0.0)
         pts, pslot = np.unique(o_track[ids], return_inverse=True)
         Rn, tn, Xn = _schur_lm(
-            k, R0, t0, P[pts], o_frame[ids], pslot, o_uv[ids], fixed, delta, iters
+            k,
+            R0,
+            t0,
+            P[pts],
+            o_frame[ids],
+            pslot,
+            o_uv[ids],
+            fixed,
+            delta,
+            iters,
+            A=None if distortion is None else o_A[ids],
         )
         Rs[registered], ts[registered] = Rn[registered], tn[registered]
         P[pts] = Xn
@@ -1106,7 +1190,7 @@ def reconstruct_sequence(
         ids = np.flatnonzero(registered[o_frame] & has_point()[o_track] & o_ok)
         fr = o_frame[ids]
         proj, z = _project_obs(k, Rs[fr], ts[fr], P[o_track[ids]])
-        err = np.linalg.norm(proj - o_uv[ids], axis=1)
+        err = image_error(ids, proj)
         o_ok[ids[~((z > 0) & (err < limit))]] = False
         use = registered[o_frame] & o_ok
         views = np.bincount(o_track[use], minlength=n_tracks)
@@ -1124,7 +1208,7 @@ def reconstruct_sequence(
         reprojects within ``radius`` in all of the other's views, no frame in common), the
         two tracks are merged. Returns how many views were added.
         """
-        nonlocal o_frame, o_kp, o_track, o_uv, o_ok
+        nonlocal o_frame, o_kp, o_track, o_uv, o_ok, o_A
         from scipy.spatial import cKDTree
 
         hp = has_point()
@@ -1212,6 +1296,7 @@ def reconstruct_sequence(
             o_kp = np.concatenate([o_kp, nk_])
             o_track = np.concatenate([o_track, np.concatenate(new_t)])
             o_uv = np.concatenate([o_uv, all_uv[offset[nf_] + nk_]])
+            o_A = np.concatenate([o_A, all_A[offset[nf_] + nk_]])
             o_ok = np.concatenate([o_ok, np.ones(nf_.size, bool)])
             added = int(nf_.size)
         # merges: the second track's views join the first, if the two points are one (a
@@ -1235,7 +1320,7 @@ def reconstruct_sequence(
                 proj, z = _project_obs(
                     k, Rs[o_frame[both]], ts[o_frame[both]], np.broadcast_to(X, (both.size, 3))
                 )
-                err = np.linalg.norm(proj - o_uv[both], axis=1)
+                err = image_error(both, proj)
                 fine &= bool(np.all((z > 0) & (err < radius)))
             if not fine:
                 continue
@@ -1254,7 +1339,8 @@ def reconstruct_sequence(
         m0 = pair_info[(a, b)][2]
         p1, p2 = ideal[a][m0[:, 0]], ideal[b][m0[:, 1]]
         try:
-            er = find_essential_matrix(p1, p2, k, threshold=threshold_px, rng=rng)
+            thr = threshold_px * stretch(a, m0[:, 0], b, m0[:, 1])
+            er = find_essential_matrix(p1, p2, k, threshold=thr, rng=rng)
             rp = recover_pose(er.E, p1, p2, k, inliers=np.asarray(er.inliers, bool))
         except (DegenerateConfigurationError, InvalidInputError) as exc:
             notes.append(f"frames {a} and {b}: no pose to start from ({exc})")
@@ -1291,7 +1377,8 @@ def reconstruct_sequence(
             notes.append(f"frame {fi}: {kps.size} 2-D/3-D correspondences (12 needed)")
             continue
         try:
-            res = solve_pnp_ransac(P[tr[kps]], ideal[fi][kps], k, threshold=3.0, rng=rng)
+            thr = 3.0 * stretch(fi, kps)
+            res = solve_pnp_ransac(P[tr[kps]], ideal[fi][kps], k, threshold=thr, rng=rng)
         except (DegenerateConfigurationError, InvalidInputError):
             notes.append(f"frame {fi}: PnP failed")
             continue
@@ -1341,7 +1428,7 @@ def reconstruct_sequence(
     length = np.bincount(pid[o_track[ids]], minlength=Pout.shape[0]).astype(np.int64)
     fr = o_frame[ids]
     proj, _ = _project_obs(k, Rs[fr], ts[fr], P[o_track[ids]])
-    e2 = np.sum((proj - o_uv[ids]) ** 2, axis=1)
+    e2 = image_error(ids, proj) ** 2
     residuals = np.sqrt(e2)  # every kept observation's reprojection error, after the final BA
     cnt = np.bincount(fr, minlength=n)
     with np.errstate(invalid="ignore", divide="ignore"):
