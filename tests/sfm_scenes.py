@@ -106,8 +106,9 @@ def render(
         scale = pw / 1.6  # one photo per 1.6 m, tiled (mirrored) across the plane
         x = np.mod(a * scale, 2 * pw)
         y = np.mod((sv - b) * scale, 2 * ph)
-        x = np.where(x >= pw, 2 * pw - 1 - x, x).astype(np.float32)
-        y = np.where(y >= ph, 2 * ph - 1 - y, y).astype(np.float32)
+        # pixels with no ray (NaN) sample the corner: OpenCV's reflection loops on NaN
+        x = np.where(ok, np.where(x >= pw, 2 * pw - 1 - x, x), 0).astype(np.float32)
+        y = np.where(ok, np.where(y >= ph, 2 * ph - 1 - y, y), 0).astype(np.float32)
         sample = cv2.remap(
             photo, x, y, interpolation=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REFLECT
         )
