@@ -73,8 +73,9 @@ def render(
     *,
     noise: float = 1.5,
     rng: np.random.Generator | None = None,
+    distortion: Any = None,
 ) -> np.ndarray:
-    """One frame of the room, uint8 RGB."""
+    """One frame of the room, uint8 RGB (through ``distortion``'s lens when given)."""
     import cv2
 
     photos = _photos()
@@ -82,7 +83,12 @@ def render(
     w, h = size
     C = -R.T @ t
     u, v = np.meshgrid(np.arange(w, dtype=np.float64), np.arange(h, dtype=np.float64))
-    rays = np.stack([u, v, np.ones_like(u)], -1) @ np.linalg.inv(K).T @ R  # world directions
+    xn = np.stack([u, v, np.ones_like(u)], -1) @ np.linalg.inv(K).T
+    if distortion is not None:  # the ideal point of each pixel (NaN: no ray, left black)
+        und, ok = distortion.undistort(xn[..., :2].reshape(-1, 2))
+        und = np.where(np.asarray(ok)[:, None], np.asarray(und), np.nan)
+        xn = np.concatenate([und.reshape(h, w, 2), np.ones((h, w, 1))], axis=2)
+    rays = xn @ R  # world directions
     best = np.full((h, w), np.inf)
     out = np.zeros((h, w, 3), np.float64)
     for k, (p0, nrm, ax_u, ax_v, su, sv) in enumerate(_PLANES):
@@ -100,8 +106,9 @@ def render(
         scale = pw / 1.6  # one photo per 1.6 m, tiled (mirrored) across the plane
         x = np.mod(a * scale, 2 * pw)
         y = np.mod((sv - b) * scale, 2 * ph)
-        x = np.where(x >= pw, 2 * pw - 1 - x, x).astype(np.float32)
-        y = np.where(y >= ph, 2 * ph - 1 - y, y).astype(np.float32)
+        # pixels with no ray (NaN) sample the corner: OpenCV's reflection loops on NaN
+        x = np.where(ok, np.where(x >= pw, 2 * pw - 1 - x, x), 0).astype(np.float32)
+        y = np.where(ok, np.where(y >= ph, 2 * ph - 1 - y, y), 0).astype(np.float32)
         sample = cv2.remap(
             photo, x, y, interpolation=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REFLECT
         )

@@ -85,6 +85,7 @@ BENCH_SCRIPTS: dict[str, str] = {
     "raw": "benchmarks/bench_raw.py",
     "raw-variants": "benchmarks/check_raw_variants.py",
     "reconstruct": "benchmarks/bench_reconstruct.py",
+    "endo-real": "benchmarks/check_endo_real.py",
     "reconstruct-real": "benchmarks/bench_reconstruct_real.py",
     "remap": "benchmarks/bench_remap.py",
     "report": "benchmarks/bench_report.py",

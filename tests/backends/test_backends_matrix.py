@@ -299,6 +299,8 @@ EXCLUDED: dict[str, str] = {
     "aruco_marker_image": "prints a uint8 marker image (NumPy)",
     "refine_corners": "checkerboard corner refinement, NumPy-only by design",
     "detect_features": "image detector (OpenCV's SIFT), NumPy-only by design",
+    "field_of_view_mask": "a mask from a video's frames (OpenCV components), NumPy-only",
+    "highlight_mask": "a keypoint mask of one frame (OpenCV dilation), NumPy-only",
     "match_features": "descriptor matching on host, NumPy-only by design",
     "bundle_adjust": "estimation (scipy's sparse least squares), NumPy-only by design",
     "reconstruct_sequence": "structure from motion over image files, NumPy-only by design",

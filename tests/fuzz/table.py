@@ -1630,6 +1630,10 @@ VALID.update(
         "imageform.geometry.detect_features": Skip(
             "needs the reconstruct extra (OpenCV's SIFT); tests/geometry/test_sfm.py"
         ),
+        "imageform.geometry.field_of_view_mask": call(
+            [np.pad(np.full((12, 12), 120, np.uint8), 4)] * 3, margin=1
+        ),
+        "imageform.geometry.highlight_mask": call(np.full((8, 8, 3), 250, np.uint8)),
         "imageform.geometry.match_features": call(
             np.linspace(0.0, 1.0, 40, dtype=np.float32).reshape(5, 8),
             np.linspace(0.0, 1.0, 40, dtype=np.float32).reshape(5, 8),

@@ -257,6 +257,8 @@ def test_bad_input_is_one_line_and_writes_nothing(
     big = write_camera(tmp_path / "big.toml", Camera(K, image_size=(160, 120)))
     err = _one_line_error(["reconstruct", str(unrelated), "--camera", str(big)], out, capsys)
     assert "no pair of frames has 30 verified matches" in err
+    assert "keypoints a frame: median" in err and "the best pair:" in err
+    assert "try --auto-mask" in err
     # the camera file: missing, or for another image size
     missing = ["--camera", str(tmp_path / "nope.toml")]
     assert "nope.toml" in _one_line_error(["reconstruct", str(few), *missing], out, capsys)

@@ -48,6 +48,7 @@ from imageform.geometry.distortion import (
     project_points_distorted,
 )
 from imageform.geometry.dlt import estimate_projection_matrix
+from imageform.geometry.frame_masks import field_of_view_mask, highlight_mask
 from imageform.geometry.homogeneous import (
     Dehomogenized,
     are_collinear,
@@ -189,6 +190,7 @@ __all__ = [
     "estimate_homography",
     "estimate_projection_matrix",
     "euler_to_matrix",
+    "field_of_view_mask",
     "find_checkerboard",
     "find_checkerboards",
     "find_essential_matrix",
@@ -199,6 +201,7 @@ __all__ = [
     "from_homogeneous_masked",
     "fundamental_7point",
     "fundamental_8point",
+    "highlight_mask",
     "horizon_line",
     "identify_aruco_dictionary",
     "intersect_lines",

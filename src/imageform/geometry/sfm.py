@@ -52,7 +52,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -136,6 +136,7 @@ def detect_features(
     max_features: int = 4000,
     mask: ArrayLike | None = None,
     max_size: int | None = 3200,
+    contrast_threshold: float = 0.04,
 ) -> Features:
     r"""Detect SIFT keypoints and descriptors (OpenCV's SIFT, the ``reconstruct`` extra).
 
@@ -163,6 +164,13 @@ def detect_features(
         behind a moving object. None: everywhere.
     max_size : int or None
         Longest side, pixels, SIFT sees (at least 64); None: the full image always.
+    contrast_threshold : float
+        SIFT's contrast threshold (OpenCV's ``contrastThreshold``, Lowe 2004 sec. 4: an
+        extremum of the difference of Gaussians weaker than
+        :math:`\tfrac12\,\text{contrast\_threshold} / 3` of the grey range is dropped), in
+        (0, 1). 0.04, OpenCV's default, suits photographs; the smooth, low-contrast tissue of
+        an endoscope's frames keeps a few tens of keypoints with it, and 0.01 ten times as
+        many (``benchmarks/check_endo_real.py``).
 
     Returns
     -------
@@ -176,6 +184,7 @@ def detect_features(
     cv2 = require("cv2", what="imageform reconstruct's keypoints (SIFT)")
     n = as_int(max_features, "max_features", minimum=8, maximum=1_000_000)
     cap = None if max_size is None else as_int(max_size, "max_size", minimum=64)
+    ct = as_real(contrast_threshold, "contrast_threshold", positive=True, maximum=1.0)
     a = np.asarray(image)
     dtype = a.dtype
     if dtype.kind in "uif" and a.ndim == 3 and a.shape[-1] in (3, 4):
@@ -199,7 +208,7 @@ def detect_features(
         sx, sy = w / ws, h / hs
     # the doubled first octave must map pixel x to 2x: OpenCV's default resize maps it to
     # 2x + 1/2 and every keypoint lands a quarter pixel off, down and right
-    sift = cv2.SIFT_create(nfeatures=n, enable_precise_upscale=True)
+    sift = cv2.SIFT_create(nfeatures=n, contrastThreshold=ct, enable_precise_upscale=True)
     kps, desc = sift.detectAndCompute(a, m)
     if desc is None or not kps:
         return Features(np.zeros((0, 2)), np.zeros((0, 128), np.float32), np.zeros(0), np.zeros(0))
@@ -427,6 +436,7 @@ def _schur_lm(
     delta: float,
     max_iter: int,
     ftol: float = 1e-10,
+    A: F64 | None = None,
 ) -> tuple[F64, F64, F64]:
     r"""Levenberg-Marquardt on the reprojection error, the points eliminated (Schur complement).
 
@@ -442,6 +452,9 @@ def _schur_lm(
     :math:`\delta p = V^{-1} (g_p - W^T \delta c)` (Triggs et al. 2000, "Bundle adjustment:
     a modern synthesis", sec. 6.1). Huber's loss by iterative reweighting; Marquardt's
     damping (the diagonal scaled by ``1 + lambda``). Cameras with ``fixed`` set stay.
+    ``A`` (M, 2, 2), optional: each observation's residual and Jacobian are mapped by it
+    (the lens's local linear map from undistorted to image pixels: the error is measured in
+    the image, where the keypoint's noise is, not where a fisheye stretches it).
     """
     from scipy.linalg import cho_factor, cho_solve
 
@@ -507,6 +520,8 @@ def _schur_lm(
     def evaluate(R: F64, t: F64, X: F64) -> tuple[F64, F64, float, F64]:
         proj, z = _project_obs(K, R[ci], t[ci], X[pi])
         r = proj - uv
+        if A is not None:
+            r = np.einsum("mij,mj->mi", A, r)
         r2 = np.sum(r * r, axis=1)
         bad = ~((z > 0) & np.isfinite(r2))
         r = np.where(bad[:, None], 0.0, r)
@@ -529,6 +544,8 @@ def _schur_lm(
         Jp[:, 0, 2] = -(fx * Xc[:, 0] + sk * Xc[:, 1]) / z**2
         Jp[:, 1, 1] = fy / z
         Jp[:, 1, 2] = -fy * Xc[:, 1] / z**2
+        if A is not None:
+            Jp = A @ Jp
         Jx = Jp @ R[ci]  # d/dX
         Jc = np.concatenate([-Jp @ _skew_batch(RX), Jp], axis=2)[has]  # d/d(omega, t)
         wJx = Jx * w[:, None, None]
@@ -807,6 +824,43 @@ def _build_tracks(
     return out, np.bincount(track)
 
 
+def _image_jacobian(k: F64, distortion: DistortionModel | None, uv: F64) -> F64:
+    r"""Return the lens's local linear map from undistorted to image pixels, (N, 2, 2).
+
+    :math:`A = K_2\, J_d(\hat x)\, K_2^{-1}`, :math:`J_d` the Jacobian of the distortion at
+    the undistorted normalised point :math:`\hat x` (central differences, step
+    :math:`10^{-6}`), :math:`K_2` the upper left 2 x 2 of ``K``: an error :math:`\delta` in
+    undistorted pixels is :math:`A \delta` in the image. The identity without distortion
+    and where the point is not finite.
+    """
+    n = uv.shape[0]
+    out = np.broadcast_to(np.eye(2), (n, 2, 2)).copy()
+    if distortion is None or n == 0:
+        return out
+    k2 = k[:2, :2]
+    k2i = np.linalg.inv(k2)
+    xn = (uv - k[:2, 2]) @ k2i.T
+    fin = np.all(np.isfinite(xn), axis=1)
+    h = 1e-6
+    cols = []
+    for e in (np.array([h, 0.0]), np.array([0.0, h])):
+        plus = np.asarray(distortion.distort(xn[fin] + e), np.float64)
+        minus = np.asarray(distortion.distort(xn[fin] - e), np.float64)
+        cols.append((plus - minus) / (2 * h))
+    jd = np.stack(cols, axis=2)  # (m, 2, 2): d distorted / d undistorted
+    a = k2 @ jd @ k2i
+    good = np.all(np.isfinite(a), axis=(1, 2))
+    out[np.flatnonzero(fin)[good]] = a[good]
+    return out
+
+
+def _magnification(A: F64) -> F64:
+    """How much the undistortion stretches a pixel (area), ``1 / sqrt(|det A|)``."""
+    det = np.abs(A[:, 0, 0] * A[:, 1, 1] - A[:, 0, 1] * A[:, 1, 0])
+    with np.errstate(divide="ignore"):
+        return np.asarray(1.0 / np.sqrt(det), np.float64)
+
+
 def _homography_hint(
     pair_info: dict[tuple[int, int], tuple[int, float, NDArray[np.int64]]],
     ideal: list[F64],
@@ -851,6 +905,7 @@ def reconstruct_sequence(
     threshold_px: float = 1.0,
     rng: int = 0,
     masks: ArrayLike | Sequence[ArrayLike | None] | None = None,
+    contrast_threshold: float = 0.04,
 ) -> Reconstruction:
     """Reconstruct the cameras and a sparse point cloud from an ordered image sequence.
 
@@ -877,6 +932,8 @@ def reconstruct_sequence(
         Where keypoints may be (nonzero): one mask for every frame (an endoscope's
         vignetting) or one a frame (an object that moves in front of a static background;
         only what moves rigidly with the scene may be kept). None: everywhere.
+    contrast_threshold : float
+        SIFT's contrast threshold (:func:`detect_features`): 0.01 for endoscopic tissue.
 
     Returns
     -------
@@ -901,6 +958,7 @@ def reconstruct_sequence(
         raise InvalidInputError(f"expected frames of one size, got {sorted(shapes)}")
     k = np.asarray(K, np.float64)
     win = as_int(window, "window", minimum=1, maximum=100)
+    ct = as_real(contrast_threshold, "contrast_threshold", positive=True, maximum=1.0)
     n = len(images)
     (shape,) = shapes
     if masks is None:
@@ -915,7 +973,7 @@ def reconstruct_sequence(
         one = _as_mask(masks, shape, "masks")
         per_frame = [one] * n
     feats = [
-        detect_features(im, max_features=max_features, mask=m)
+        detect_features(im, max_features=max_features, mask=m, contrast_threshold=ct)
         for im, m in zip(images, per_frame, strict=True)
     ]
     # undistorted (ideal pinhole) pixels of every keypoint
@@ -929,6 +987,11 @@ def reconstruct_sequence(
             ideal.append(und * np.diag(k)[:2] + k[:2, 2])
         else:
             ideal.append(feat.xy.copy())
+    # the lens's local linear map from undistorted to image pixels at every keypoint: a
+    # fisheye's undistortion stretches the rim twenty times, and so the keypoints' noise
+    lin = [_image_jacobian(k, distortion, u) for u in ideal]
+    all_A = np.concatenate(lin)
+    all_mag = _magnification(all_A)
     notes: list[str] = []
     textured = [len(feat) for feat in feats]
     if max(textured) < 50:
@@ -941,9 +1004,27 @@ def reconstruct_sequence(
     # rays closer than this (radians) meet on either side of the cameras within the noise
     min_parallax = float(np.arctan(3.0 * threshold_px / min(abs(k[0, 0]), abs(k[1, 1]))))
 
+    seen = {"matches": 0, "inliers": 0}  # the best pair's counts, for the error message
+
+    def stretch(*frames_kps: Any) -> float:
+        """Return the undistortion's median stretch of keypoints (frame, indices, ...), >= 1.
+
+        The estimators' thresholds are in undistorted pixels, one for all: scaled by it, a
+        fisheye's rim keeps its matches (a scale for the whole set, a compromise; the
+        bundle adjustment and its filters measure each observation in the image).
+        """
+        if distortion is None:
+            return 1.0
+        it = iter(frames_kps)
+        mags = [all_mag[offset[f] + np.asarray(kp)] for f, kp in zip(it, it, strict=True)]
+        v = np.concatenate(mags)
+        v = v[np.isfinite(v)]
+        return max(1.0, float(np.median(v))) if v.size else 1.0
+
     def verify(i: int, j: int) -> None:
         """Match frames i and j, keep the essential matrix's inliers and the parallax."""
         m = match_features(feats[i].descriptors, feats[j].descriptors, ratio=ratio)
+        seen["matches"] = max(seen["matches"], int(m.shape[0]))
         if m.shape[0] < 30:
             return
         p1, p2 = ideal[i][m[:, 0]], ideal[j][m[:, 1]]
@@ -952,10 +1033,12 @@ def reconstruct_sequence(
         if m.shape[0] < 30:
             return
         try:
-            er = find_essential_matrix(p1, p2, k, threshold=threshold_px, rng=rng)
+            thr = threshold_px * stretch(i, m[:, 0], j, m[:, 1])
+            er = find_essential_matrix(p1, p2, k, threshold=thr, rng=rng)
         except (DegenerateConfigurationError, InvalidInputError):
             return
         inl = np.asarray(er.inliers, bool)
+        seen["inliers"] = max(seen["inliers"], int(inl.sum()))
         if inl.sum() < 30:
             return
         try:
@@ -995,7 +1078,9 @@ def reconstruct_sequence(
         del pair_info[key]
     if not pair_info:
         raise DegenerateConfigurationError(
-            "no pair of frames has 30 verified matches: too little overlap or texture"
+            "no pair of frames has 30 verified matches: too little overlap or texture "
+            f"(keypoints a frame: median {int(np.median(textured))}; the best pair: "
+            f"{seen['matches']} matches, {seen['inliers']} fit one essential matrix)"
         )
     edges = np.concatenate(
         [
@@ -1013,6 +1098,7 @@ def reconstruct_sequence(
     o_track = node_track[nodes].astype(np.int64)
     all_uv = np.concatenate(ideal)
     o_uv = all_uv[nodes]
+    o_A = all_A[nodes]
     o_ok = np.all(np.isfinite(o_uv), axis=1)
     kp_track = [node_track[offset[f] : offset[f + 1]].copy() for f in range(n)]
     desc = [f.descriptors for f in feats]
@@ -1032,6 +1118,13 @@ def reconstruct_sequence(
     def has_point() -> NDArray[np.bool_]:
         return np.all(np.isfinite(P), axis=1)
 
+    def image_error(ids: NDArray[np.int64], proj: F64) -> F64:
+        """Reprojection errors of observations ``ids`` in image pixels (through ``o_A``)."""
+        d = proj - o_uv[ids]
+        if distortion is not None:
+            d = np.einsum("mij,mj->mi", o_A[ids], d)
+        return np.asarray(np.linalg.norm(d, axis=1), np.float64)
+
     def triangulate(tids: NDArray[np.int64]) -> None:
         """Triangulate the tracks ``tids`` (no point yet) from their registered views."""
         tids = np.unique(tids)
@@ -1050,7 +1143,7 @@ def reconstruct_sequence(
         X[~fin] = 0.0
         # checks: in front of every view, within max_err pixels, rays 1.5 degrees apart
         proj, z = _project_obs(k, Rs[fr], ts[fr], X[col])
-        err = np.linalg.norm(proj - o_uv[sel], axis=1)
+        err = image_error(sel, proj)
         fine = (z > 0) & (err < max_err)
         bad = np.bincount(col, weights=~fine, minlength=tids.size) > 0
         C = -np.einsum("mji,mj->mi", Rs[fr], ts[fr])
@@ -1077,7 +1170,17 @@ def reconstruct_sequence(
         t0 = np.where(registered[:, None], ts, 0.0)
         pts, pslot = np.unique(o_track[ids], return_inverse=True)
         Rn, tn, Xn = _schur_lm(
-            k, R0, t0, P[pts], o_frame[ids], pslot, o_uv[ids], fixed, delta, iters
+            k,
+            R0,
+            t0,
+            P[pts],
+            o_frame[ids],
+            pslot,
+            o_uv[ids],
+            fixed,
+            delta,
+            iters,
+            A=None if distortion is None else o_A[ids],
         )
         Rs[registered], ts[registered] = Rn[registered], tn[registered]
         P[pts] = Xn
@@ -1087,7 +1190,7 @@ def reconstruct_sequence(
         ids = np.flatnonzero(registered[o_frame] & has_point()[o_track] & o_ok)
         fr = o_frame[ids]
         proj, z = _project_obs(k, Rs[fr], ts[fr], P[o_track[ids]])
-        err = np.linalg.norm(proj - o_uv[ids], axis=1)
+        err = image_error(ids, proj)
         o_ok[ids[~((z > 0) & (err < limit))]] = False
         use = registered[o_frame] & o_ok
         views = np.bincount(o_track[use], minlength=n_tracks)
@@ -1105,7 +1208,7 @@ def reconstruct_sequence(
         reprojects within ``radius`` in all of the other's views, no frame in common), the
         two tracks are merged. Returns how many views were added.
         """
-        nonlocal o_frame, o_kp, o_track, o_uv, o_ok
+        nonlocal o_frame, o_kp, o_track, o_uv, o_ok, o_A
         from scipy.spatial import cKDTree
 
         hp = has_point()
@@ -1193,6 +1296,7 @@ def reconstruct_sequence(
             o_kp = np.concatenate([o_kp, nk_])
             o_track = np.concatenate([o_track, np.concatenate(new_t)])
             o_uv = np.concatenate([o_uv, all_uv[offset[nf_] + nk_]])
+            o_A = np.concatenate([o_A, all_A[offset[nf_] + nk_]])
             o_ok = np.concatenate([o_ok, np.ones(nf_.size, bool)])
             added = int(nf_.size)
         # merges: the second track's views join the first, if the two points are one (a
@@ -1216,7 +1320,7 @@ def reconstruct_sequence(
                 proj, z = _project_obs(
                     k, Rs[o_frame[both]], ts[o_frame[both]], np.broadcast_to(X, (both.size, 3))
                 )
-                err = np.linalg.norm(proj - o_uv[both], axis=1)
+                err = image_error(both, proj)
                 fine &= bool(np.all((z > 0) & (err < radius)))
             if not fine:
                 continue
@@ -1235,7 +1339,8 @@ def reconstruct_sequence(
         m0 = pair_info[(a, b)][2]
         p1, p2 = ideal[a][m0[:, 0]], ideal[b][m0[:, 1]]
         try:
-            er = find_essential_matrix(p1, p2, k, threshold=threshold_px, rng=rng)
+            thr = threshold_px * stretch(a, m0[:, 0], b, m0[:, 1])
+            er = find_essential_matrix(p1, p2, k, threshold=thr, rng=rng)
             rp = recover_pose(er.E, p1, p2, k, inliers=np.asarray(er.inliers, bool))
         except (DegenerateConfigurationError, InvalidInputError) as exc:
             notes.append(f"frames {a} and {b}: no pose to start from ({exc})")
@@ -1272,7 +1377,8 @@ def reconstruct_sequence(
             notes.append(f"frame {fi}: {kps.size} 2-D/3-D correspondences (12 needed)")
             continue
         try:
-            res = solve_pnp_ransac(P[tr[kps]], ideal[fi][kps], k, threshold=3.0, rng=rng)
+            thr = 3.0 * stretch(fi, kps)
+            res = solve_pnp_ransac(P[tr[kps]], ideal[fi][kps], k, threshold=thr, rng=rng)
         except (DegenerateConfigurationError, InvalidInputError):
             notes.append(f"frame {fi}: PnP failed")
             continue
@@ -1322,7 +1428,7 @@ def reconstruct_sequence(
     length = np.bincount(pid[o_track[ids]], minlength=Pout.shape[0]).astype(np.int64)
     fr = o_frame[ids]
     proj, _ = _project_obs(k, Rs[fr], ts[fr], P[o_track[ids]])
-    e2 = np.sum((proj - o_uv[ids]) ** 2, axis=1)
+    e2 = image_error(ids, proj) ** 2
     residuals = np.sqrt(e2)  # every kept observation's reprojection error, after the final BA
     cnt = np.bincount(fr, minlength=n)
     with np.errstate(invalid="ignore", divide="ignore"):

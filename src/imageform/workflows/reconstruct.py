@@ -17,7 +17,7 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
 
-from imageform.errors import InvalidInputError
+from imageform.errors import DegenerateConfigurationError, InvalidInputError
 from imageform.workflows._spec import Input, Options, Output, Result, Run, Workflow, option
 
 __all__ = ["CAMERA_COLUMNS", "WORKFLOWS", "ReconstructOptions"]
@@ -70,12 +70,34 @@ class ReconstructOptions(Options):
         metavar="FILE",
         input=True,
     )
+    auto_mask: bool = option(
+        False,
+        help="Find where keypoints may be from the frames: an endoscope's aperture without "
+        "its black border and burned-in overlays, and a margin off its edge.",
+    )
+    highlights: bool = option(
+        False,
+        help="Keep keypoints off the specular highlights (bright, nearly white pixels) of "
+        "every frame: they move with the light, not with the tissue.",
+    )
+    contrast_threshold: float = option(
+        0.04,
+        help="SIFT's contrast threshold, in (0, 1): 0.01 finds ten times as many keypoints "
+        "on smooth, low-contrast tissue (endoscopy).",
+        maximum=1.0,
+    )
 
     def check(self) -> None:
-        """Check that ``--ratio`` is in (0, 1]."""
+        """Check ``--ratio``, ``--contrast-threshold``, and ``--mask`` without ``--auto-mask``."""
         super().check()
         if not 0 < self.ratio <= 1:
             raise InvalidInputError(f"expected --ratio in (0, 1], got {self.ratio:g}")
+        if not 0 < self.contrast_threshold < 1:
+            raise InvalidInputError(
+                f"expected --contrast-threshold in (0, 1), got {self.contrast_threshold:g}"
+            )
+        if self.mask is not None and self.auto_mask:
+            raise InvalidInputError("expected --mask FILE or --auto-mask, got both")
 
 
 def _check_folder(out: Path, force: bool) -> None:
@@ -86,6 +108,20 @@ def _check_folder(out: Path, force: bool) -> None:
             f"output folder {out} exists and is not an imageform reconstruct output; "
             "choose a new folder (--force replaces only a previous reconstruction)"
         )
+
+
+def _hint(opts: ReconstructOptions) -> str:
+    """Say what to try when no pair starts: the options not yet used for an endoscope."""
+    tries = []
+    if opts.mask is None and not opts.auto_mask:
+        tries.append("--auto-mask (an endoscope's black border and overlays)")
+    if not opts.highlights:
+        tries.append("--highlights (specular highlights)")
+    if opts.contrast_threshold > 0.01:
+        tries.append("--contrast-threshold 0.01 (smooth, low-contrast tissue)")
+    if opts.every == 1:
+        tries.append("--every 2 or more (more motion between frames)")
+    return "; try " + ", ".join(tries) if tries else ""
 
 
 def _fmt(x: float) -> str:
@@ -136,6 +172,29 @@ def _read_mask(path: Path, info: Any) -> Any:
     if not np.any(m > 0):
         raise InvalidInputError(f"--mask {path} is zero everywhere: no keypoint could be kept")
     return m > 0
+
+
+def _masks(images: list[Any], opts: ReconstructOptions, info: Any) -> tuple[Any, dict[str, Any]]:
+    """Return the keypoint masks of the frames (one, one a frame, or None), their shares."""
+    import numpy as np
+
+    from imageform.geometry import field_of_view_mask, highlight_mask
+
+    if opts.mask is not None:
+        fov = _read_mask(opts.mask, info)
+    elif opts.auto_mask:
+        fov = field_of_view_mask(images)
+    else:
+        fov = None
+    shares: dict[str, Any] = {}
+    if fov is not None:
+        shares["field_of_view_share"] = round(float(np.mean(fov)), 4)
+    if not opts.highlights:
+        return fov, shares
+    spec = [highlight_mask(im) for im in images]
+    shares["highlight_share_mean"] = round(float(np.mean([s.mean() for s in spec])), 4)
+    keep = [~s if fov is None else fov & ~s for s in spec]
+    return keep, shares
 
 
 def _metrics(rec: Any, names: list[str], seconds: dict[str, float]) -> dict[str, Any]:
@@ -191,21 +250,29 @@ def reconstruct(run: Run, opts: ReconstructOptions, *, out: Path, frames: str) -
             + (f" (one in {opts.every})" if opts.every > 1 else "")
             + "; reconstruct needs at least 2"
         )
-    mask = None if opts.mask is None else _read_mask(opts.mask, info)
+    mask, mask_shares = _masks(images, opts, info)
     seconds["read"] = time.perf_counter() - t0
     ahead.start("reconstruct")  # a first run: its kernels compiled on two cores
     if run.progress is not None:
         run.progress("reconstructing", 0.1)
     t1 = time.perf_counter()
-    rec = reconstruct_sequence(
-        images,
-        cam.K,
-        cam.distortion,
-        window=opts.window,
-        max_features=opts.max_features,
-        ratio=opts.ratio,
-        masks=mask,
-    )
+    try:
+        rec = reconstruct_sequence(
+            images,
+            cam.K,
+            cam.distortion,
+            window=opts.window,
+            max_features=opts.max_features,
+            ratio=opts.ratio,
+            masks=mask,
+            contrast_threshold=opts.contrast_threshold,
+        )
+    except DegenerateConfigurationError as exc:
+        raise DegenerateConfigurationError(f"{frames}: {exc}{_hint(opts)}") from exc
+    except InvalidInputError as exc:
+        if not str(exc).startswith("no texture"):  # the frames' texture, not an option
+            raise
+        raise InvalidInputError(f"{frames}: {exc}{_hint(opts)}") from exc
     seconds["reconstruct"] = time.perf_counter() - t1
     del images
     folder = run.folder(out)
@@ -236,6 +303,7 @@ def reconstruct(run: Run, opts: ReconstructOptions, *, out: Path, frames: str) -
         "source": {"frames": frames, "width": info.width, "height": info.height},
         "camera": str(opts.camera),
         **_metrics(rec, names, seconds),
+        "masks": mask_shares,
         "options": {k: (str(v) if isinstance(v, Path) else v) for k, v in asdict(opts).items()},
     }
     if run.progress is not None:
@@ -296,7 +364,8 @@ WORKFLOWS = (
         "verified by its essential matrix (RANSAC), the pair with the most parallax first, "
         "the other frames registered by PnP, the points triangulated, then bundle adjustment "
         "of every pose and point (needs imageform[reconstruct]); --mask keeps the keypoints to "
-        "a region of every frame. The world is the camera "
+        "a region of every frame, --auto-mask finds an endoscope's aperture, --highlights keeps "
+        "them off specular highlights. The world is the camera "
         "frame of the first registered frame (frame 0 when registered), the initial pair's "
         "baseline 1. cameras.csv: "
         "frame,name,registered,rx,ry,rz,tx,ty,tz,rms_px (world to camera); points.ply: x,y,z, "

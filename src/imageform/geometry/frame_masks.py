@@ -1,0 +1,254 @@
+"""Where keypoints may be in an endoscope's frames: its field of view, without the highlights.
+
+An endoscope's video shows the scene through a round (or octagonal) aperture inside black
+corners, often with burned-in text, and its light, which rides on the tip, paints specular
+highlights that move with the camera instead of with the tissue. A keypoint on the edge of
+the aperture, on the text or on a highlight stays put, or moves the wrong way, while the
+camera moves: structure from motion takes such matches for the scene and its poses go wrong
+or never start. These two functions say where keypoints may be;
+:func:`imageform.geometry.reconstruct_sequence` takes them as ``masks``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+from numpy.typing import NDArray
+
+from imageform._typing import ArrayLike
+from imageform._validate import as_int, as_real, describe
+from imageform.errors import InvalidInputError
+
+__all__ = ["field_of_view_mask", "highlight_mask"]
+
+#: At most this many frames, evenly spaced, enter the field of view's statistics.
+_MAX_FRAMES = 64
+
+
+def _unit(image: object, name: str) -> NDArray[np.float32]:
+    """Return ``image`` as float32 in [0, 1]: (H, W) or (H, W, 3), the alpha dropped."""
+    a = np.asarray(image)
+    if a.ndim == 3 and a.shape[-1] in (3, 4):
+        a = a[..., :3]
+    elif a.ndim == 3 and a.shape[-1] == 1:
+        a = a[..., 0]
+    if (
+        a.ndim not in (2, 3)
+        or (a.ndim == 3 and a.shape[-1] != 3)
+        or a.size == 0
+        or (a.dtype.kind not in "uif")
+    ):
+        raise InvalidInputError(
+            f"expected {name} as (H, W), (H, W, 3) or (H, W, 4) numbers, got {describe(image)}"
+        )
+    if a.dtype.kind in "ui":
+        return a.astype(np.float32) / np.float32(np.iinfo(a.dtype).max)
+    f = a.astype(np.float32)
+    if not np.all(np.isfinite(f)):
+        raise InvalidInputError(f"expected {name} without NaN or inf")
+    return f / np.float32(255.0) if float(f.max()) > 1.0 else f
+
+
+def _disc(radius: int) -> NDArray[np.uint8]:
+    d = 2 * radius + 1
+    yy, xx = np.mgrid[:d, :d] - radius
+    return (xx**2 + yy**2 <= radius**2 + radius).astype(np.uint8)
+
+
+def field_of_view_mask(
+    images: Sequence[ArrayLike] | ArrayLike,
+    *,
+    dark: float = 0.1,
+    margin: int = 8,
+    overlays: bool = True,
+    still: float = 0.004,
+) -> NDArray[np.bool_]:
+    r"""Return where an endoscope's frames see the scene: its aperture, without overlays.
+
+    From the frames of one video (one camera, one aperture): the per-pixel median
+    :math:`m(x)` of the grey frames (the mean of the colour channels) over up to 64 frames,
+    evenly spaced. The aperture is the largest 8-connected region where
+    :math:`m(x) > \text{dark} \cdot m_{99}`, :math:`m_{99}` the 99th percentile of
+    :math:`m` (the black corners and borders are out), its holes filled (a dark lumen in the
+    middle is scene). With ``overlays`` and three frames or more, the pixels that never
+    change, :math:`\operatorname{std}_t I(x, t) < \text{still}` on the [0, 1] scale
+    (burned-in text, an icon, a clock: what moves with the camera moves in the image),
+    are taken out too, unless they are half the aperture or more (a camera that did not
+    move: nothing to tell the overlays by). The region is then eroded by a disc of radius
+    ``margin`` pixels: SIFT's descriptor of a keypoint near the edge sees the edge, which
+    stands still while the tissue moves (Lowe 2004, IJCV 60(2), sec. 6.1: the descriptor
+    window is 16 x 16 samples at the keypoint's scale).
+
+    Parameters
+    ----------
+    images : sequence of array_like (H, W), (H, W, 3) or (H, W, 4), or one of them
+        The frames (uint8, other integers over their type's range, or floats in [0, 1]).
+        One frame gives the aperture alone.
+    dark : float
+        The border's level as a share of :math:`m_{99}`, in (0, 1).
+    margin : int
+        Pixels taken off the aperture's edge and around each overlay, >= 0.
+    overlays : bool
+        Take out the pixels that never change.
+    still : float
+        The temporal standard deviation (of [0, 1] grey) under which a pixel never changes;
+        a video codec's noise on a fixed caption is a few thousandths.
+
+    Returns
+    -------
+    ndarray of bool (H, W)
+        True where keypoints may be.
+
+    Raises
+    ------
+    InvalidInputError
+        Frames of different sizes or not images, parameters out of range, or an aperture
+        that the margin erodes away.
+
+    References
+    ----------
+    D. G. Lowe, "Distinctive image features from scale-invariant keypoints", IJCV 60(2),
+    2004. Endoscopic SLAM systems mask the same regions with a drawn image (e.g. NR-SLAM's
+    ``data/endomapper/endoscopy_borders.png``, github.com/endomapper/NR-SLAM); this finds
+    it from the frames.
+
+    Examples
+    --------
+    >>> frame = np.zeros((60, 80), np.uint8)
+    >>> yy, xx = np.mgrid[:60, :80]
+    >>> frame[(xx - 40) ** 2 + (yy - 30) ** 2 < 25**2] = 120
+    >>> m = field_of_view_mask([frame], margin=3)
+    >>> bool(m[30, 40]), bool(m[30, 14]), bool(m[0, 0])
+    (True, False, False)
+    """
+    from imageform._optional import require
+
+    cv2 = require("cv2", what="field_of_view_mask")
+    d = as_real(dark, "dark", positive=True, maximum=0.999)
+    r = as_int(margin, "margin", minimum=0, maximum=10_000)
+    st = as_real(still, "still", nonnegative=True, maximum=1.0)
+    if not isinstance(overlays, bool | np.bool_):
+        raise InvalidInputError(f"expected overlays as True or False, got {describe(overlays)}")
+    if isinstance(images, list | tuple):
+        frames: list[object] = list(images)
+    elif hasattr(images, "__array__") and getattr(images, "ndim", 0) >= 2:
+        arr = np.asarray(images)
+        one = arr.ndim == 2 or (arr.ndim == 3 and arr.shape[-1] <= 4)
+        frames = [arr] if one else list(arr)
+    else:
+        raise InvalidInputError(
+            f"expected images as a list of frames or an array, got {describe(images)}"
+        )
+    if not frames:
+        raise InvalidInputError("expected at least one frame, got none")
+    pick = np.unique(np.linspace(0, len(frames) - 1, min(len(frames), _MAX_FRAMES)).round())
+    greys = []
+    for i in pick.astype(int).tolist():
+        g = _unit(frames[i], f"images[{i}]")
+        greys.append(g.mean(axis=2) if g.ndim == 3 else g)
+    shapes = {g.shape for g in greys}
+    if len(shapes) != 1:
+        raise InvalidInputError(f"expected frames of one size, got {sorted(shapes)}")
+    stack = np.stack(greys)
+    med = np.median(stack, axis=0)
+    top = float(np.percentile(med, 99))
+    bright = (med > d * top).astype(np.uint8) if top > 0 else np.zeros(med.shape, np.uint8)
+    n, labels, stats, _ = cv2.connectedComponentsWithStats(bright, connectivity=8)
+    if n < 2:
+        raise InvalidInputError("expected frames with a bright aperture, got black frames")
+    big = 1 + int(np.argmax(stats[1:, cv2.CC_STAT_AREA]))
+    inside = labels == big
+    # holes: the parts of the outside that the image's border does not reach
+    outside = (~inside).astype(np.uint8)
+    h, w = outside.shape
+    flood = np.pad(outside, 1, constant_values=1)
+    cv2.floodFill(flood, np.zeros((h + 4, w + 4), np.uint8), (0, 0), 2)
+    inside |= flood[1:-1, 1:-1] == 1
+    keep = inside.copy()
+    if overlays and stack.shape[0] >= 3:
+        fixed = inside & (stack.std(axis=0) < st)
+        if fixed.sum() < 0.5 * inside.sum():
+            keep &= ~fixed
+    if r:
+        # erode: a pixel stays when no pixel out of ``keep`` lies within the disc
+        keep = cv2.erode(keep.astype(np.uint8), _disc(r), borderValue=0) > 0
+    if not keep.any():
+        raise InvalidInputError(
+            f"the field of view is empty after a margin of {r} px: expected a smaller margin"
+        )
+    return keep
+
+
+def highlight_mask(
+    image: ArrayLike,
+    *,
+    value: float = 0.9,
+    saturation: float = 0.3,
+    grow: int = 4,
+) -> NDArray[np.bool_]:
+    r"""Return the specular highlights of a frame: bright, nearly white pixels, grown.
+
+    A highlight is where the endoscope's light is mirrored by wet tissue: the brightest
+    channel is near full scale and the colour nearly white,
+
+    .. math::
+
+        V = \max(R, G, B) \ge \text{value}, \qquad
+        S = \frac{\max(R, G, B) - \min(R, G, B)}{\max(R, G, B)} \le \text{saturation},
+
+    (HSV's value and saturation on the [0, 1] scale; a grey frame: :math:`V \ge` value),
+    then grown by a disc of ``grow`` pixels, the halo around the saturated core. Bright
+    tissue saturates one channel (red) but keeps its colour, so it stays. The highlights
+    move with the light, not with the tissue: a keypoint on one matches the same highlight
+    in the next frame, a match that no rigid scene explains.
+
+    Parameters
+    ----------
+    image : array_like (H, W), (H, W, 3) or (H, W, 4)
+        One frame: uint8, other integers over their type's range, or floats in [0, 1].
+    value : float
+        The least brightness of a highlight, in (0, 1].
+    saturation : float
+        The most saturation of a highlight, in [0, 1].
+    grow : int
+        Pixels added around each highlight, >= 0.
+
+    Returns
+    -------
+    ndarray of bool (H, W)
+        True on the highlights (where keypoints should not be).
+
+    References
+    ----------
+    M. Arnold, A. Ghosh, S. Ameling, G. Lacey, "Automatic segmentation and inpainting of
+    specular highlights for endoscopic imaging", EURASIP J. Image Video Process. 2010,
+    814319 (thresholds on brightness and saturation, then dilation).
+
+    Examples
+    --------
+    >>> frame = np.zeros((20, 20, 3), np.uint8)
+    >>> frame[:] = (200, 90, 70)        # tissue
+    >>> frame[8:11, 8:11] = 255         # a highlight
+    >>> m = highlight_mask(frame, grow=1)
+    >>> int(m.sum()), bool(m[0, 0])
+    (25, False)
+    """
+    from imageform._optional import require
+
+    cv2 = require("cv2", what="highlight_mask")
+    v = as_real(value, "value", positive=True, maximum=1.0)
+    s = as_real(saturation, "saturation", nonnegative=True, maximum=1.0)
+    g = as_int(grow, "grow", minimum=0, maximum=10_000)
+    a = _unit(image, "image")
+    if a.ndim == 2:
+        spec = a >= v
+    else:
+        hi = a.max(axis=2)
+        lo = a.min(axis=2)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            sat = np.where(hi > 0, (hi - lo) / hi, 0.0)
+        spec = (hi >= v) & (sat <= s)
+    if g and spec.any():
+        spec = cv2.dilate(spec.astype(np.uint8), _disc(g)) > 0
+    return spec

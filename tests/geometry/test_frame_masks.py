@@ -1,0 +1,157 @@
+"""field_of_view_mask and highlight_mask: an endoscope's aperture, overlays and highlights.
+
+Synthetic frames with a known aperture, caption and highlight, and the real colonoscopy
+frames of tests/data/endo (C3VD v3, CC BY 4.0; README there)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+from imageform.errors import InvalidInputError
+from imageform.geometry import detect_features, field_of_view_mask, highlight_mask
+
+cv2 = pytest.importorskip("cv2")
+
+_ONE: Any = 1  # not a bool
+_HALF: Any = 1.5  # not an integer
+ENDO = Path(__file__).resolve().parents[1] / "data" / "endo"
+
+
+def _endo_frames() -> list[np.ndarray]:
+    from imageform.io import read_image
+
+    return [np.asarray(read_image(p)) for p in sorted(ENDO.glob("c3vdv3_f*.jpg"))]
+
+
+def _scope_video(n: int = 6) -> tuple[list[np.ndarray], np.ndarray, np.ndarray]:
+    """Frames of a moving texture seen through a round aperture, with a fixed caption.
+
+    Returns the frames, the aperture and the caption's box (both boolean images)."""
+    h, w = 120, 160
+    rng = np.random.default_rng(3)
+    paper = cv2.GaussianBlur(rng.random((h, w + 10 * n)).astype(np.float32), (0, 0), 2.0)
+    paper = (40 + 180 * (paper - paper.min()) / np.ptp(paper)).astype(np.uint8)
+    yy, xx = np.mgrid[:h, :w]
+    aperture = (xx - 80) ** 2 + (yy - 60) ** 2 < 55**2
+    caption = np.zeros((h, w), bool)
+    caption[50:60, 60:100] = True  # burned-in text inside the aperture
+    frames = []
+    for i in range(n):
+        f = np.where(aperture, paper[:, 10 * i : 10 * i + w], 0).astype(np.uint8)
+        f[caption] = np.where((xx[caption] // 3) % 2 == 0, 250, 30)
+        f[3:9, 3:40] = 255  # text in the black corner
+        frames.append(np.repeat(f[..., None], 3, axis=2))
+    return frames, aperture, caption
+
+
+def test_aperture_caption_and_margin() -> None:
+    frames, aperture, caption = _scope_video()
+    m = field_of_view_mask(frames, margin=4)
+    assert m.dtype == bool and m.shape == aperture.shape
+    assert not np.any(m & ~aperture)  # the black border and its text are out
+    assert not np.any(m & caption)  # the caption never changes: out
+    # the margin: nothing within 4 px of the aperture's edge or of the caption
+    near = cv2.dilate((~aperture | caption).astype(np.uint8), np.ones((7, 7), np.uint8)) > 0
+    assert not np.any(m & near)
+    assert m[60, 40] and m[20, 80]  # the scene stays
+    # the caption stays without the overlay test, and with a single frame
+    assert field_of_view_mask(frames, margin=0, overlays=False)[55, 70]
+    assert field_of_view_mask(frames[0], margin=0)[55, 70]
+
+
+def test_a_still_camera_keeps_its_scene() -> None:
+    """Frames that never change: no overlay can be told apart, the aperture stays whole."""
+    frames, aperture, _ = _scope_video(1)
+    m = field_of_view_mask(frames * 4, margin=0)
+    assert np.array_equal(m, aperture)
+
+
+def test_a_dark_lumen_in_the_middle_is_scene() -> None:
+    frames, aperture, _ = _scope_video(3)
+    for f in frames:
+        f[45:75, 65:95] = 2  # a dark hole in the middle of every frame
+    m = field_of_view_mask(frames, margin=0, overlays=False)
+    assert m[60, 80] and np.array_equal(m, aperture)
+
+
+def test_real_colonoscopy_aperture() -> None:
+    """C3VD's Olympus octagon: the black corners out, the middle in, 8 px off the edge."""
+    frames = _endo_frames()
+    assert len(frames) == 10
+    m = field_of_view_mask(frames)
+    h, w = m.shape
+    assert (h, w) == (448, 445)
+    assert not m[:20, :20].any() and not m[-20:, -20:].any()  # the octagon's corners
+    assert m[h // 2, w // 2] and m[h // 2, 20] and m[20, w // 2]
+    assert 0.84 < m.mean() < 0.9
+    # SIFT at the endoscope's contrast: keypoints on the aperture's edge without the mask,
+    # none there with it
+    edge = cv2.dilate((~field_of_view_mask(frames, margin=0)).astype(np.uint8), np.ones((9, 9)))
+    f = frames[0]
+    free = detect_features(f, contrast_threshold=0.01)
+    on_edge = edge[np.round(free.xy[:, 1]).astype(int), np.round(free.xy[:, 0]).astype(int)] > 0
+    assert on_edge.sum() >= 10
+    kept = detect_features(f, contrast_threshold=0.01, mask=m)
+    assert not np.any(
+        edge[np.round(kept.xy[:, 1]).astype(int), np.round(kept.xy[:, 0]).astype(int)]
+    )
+
+
+def test_contrast_threshold_on_endoscopic_tissue() -> None:
+    """OpenCV's default SIFT contrast keeps a few tens of keypoints on the tissue; 0.01 many."""
+    frames = _endo_frames()
+    m = field_of_view_mask(frames)
+    default = len(detect_features(frames[0], mask=m))
+    low = len(detect_features(frames[0], mask=m, contrast_threshold=0.01))
+    assert default < 50 and low > 4 * max(default, 1)
+    bad: Any
+    for bad in (0.0, -0.1, 1.5, float("nan"), "0.01"):
+        with pytest.raises(InvalidInputError, match="contrast_threshold"):
+            detect_features(frames[0], contrast_threshold=bad)
+
+
+def test_highlights() -> None:
+    frame = np.zeros((30, 40, 3), np.uint8)
+    frame[:] = (255, 120, 90)  # saturated red tissue: not a highlight
+    frame[10:13, 20:23] = (250, 248, 252)  # a highlight
+    m = highlight_mask(frame, grow=2)
+    assert m.dtype == bool and m.shape == (30, 40)
+    assert m[11, 21] and m[9, 19] and not m[0, 0]
+    assert int(highlight_mask(frame, grow=0).sum()) == 9
+    # floats in [0, 1], uint16, grey, RGBA
+    assert np.array_equal(highlight_mask(frame / 255.0, grow=2), m)
+    assert np.array_equal(highlight_mask(frame.astype(np.uint16) * 257, grow=2), m)
+    rgba = np.concatenate([frame, np.zeros((30, 40, 1), np.uint8)], axis=2)
+    assert np.array_equal(highlight_mask(rgba, grow=2), m)
+    grey = frame.mean(axis=2)
+    assert highlight_mask(grey, grow=0).sum() == 9
+    # real frames: a few thousandths of the image, in the aperture
+    shares = [highlight_mask(f).mean() for f in _endo_frames()]
+    assert 0.001 < float(np.mean(shares)) < 0.02
+
+
+@pytest.mark.parametrize(
+    ("call", "match"),
+    [
+        (lambda: field_of_view_mask([]), "at least one frame"),
+        (lambda: field_of_view_mask([np.zeros((9, 9)), np.zeros((8, 9))]), "one size"),
+        (lambda: field_of_view_mask([np.zeros((9, 9), np.uint8)]), "black frames"),
+        (lambda: field_of_view_mask([np.full((9, 9), 99, np.uint8)], margin=9), "margin"),
+        (lambda: field_of_view_mask([np.ones((9, 9))], dark=0), "dark"),
+        (lambda: field_of_view_mask([np.ones((9, 9))], margin=-1), "margin"),
+        (lambda: field_of_view_mask([np.ones((9, 9))], overlays=_ONE), "overlays"),
+        (lambda: field_of_view_mask([np.full((9, 9), np.nan)]), "NaN"),
+        (lambda: field_of_view_mask([np.array(["a"])]), "numbers"),
+        (lambda: highlight_mask(np.ones((4, 4)), value=0), "value"),
+        (lambda: highlight_mask(np.ones((4, 4)), saturation=2), "saturation"),
+        (lambda: highlight_mask(np.ones((4, 4)), grow=_HALF), "grow"),
+        (lambda: highlight_mask(np.ones((4, 4, 5))), "image"),
+    ],
+)
+def test_errors(call: object, match: str) -> None:
+    with pytest.raises(InvalidInputError, match=match):
+        call()  # type: ignore[operator]
