@@ -148,7 +148,6 @@ def _edge_points(img: FloatArray, threshold: float) -> tuple[FloatArray, FloatAr
     g = ndimage.gaussian_filter(img, 1.0, mode="nearest")
     gy, gx = np.gradient(g)
     mag = np.hypot(gx, gy)
-    h, w = img.shape
     cand = mag > threshold
     cand[:3] = cand[-3:] = False
     cand[:, :3] = cand[:, -3:] = False

@@ -1,0 +1,290 @@
+"""Lens distortion from one photograph's straight lines (plumb lines) against known distortion.
+
+Run::
+
+    OPENBLAS_NUM_THREADS=1 PYTHONPATH=src python -m benchmarks.check_plumb_line
+
+``estimate_distortion_from_lines`` on images whose distortion is known:
+
+1. Synthetic: Kodak photographs with straight edges (``../shared/data/kodak``) and a rendered
+   checkerboard (4 x 4 samples a pixel), warped with the division model (coordinates over the
+   centre-to-corner distance) so that the corner moves by 5, 10 and 20 % (barrel, k = -0.048,
+   -0.091, -0.167) and by -10 % (pincushion, k = 0.111), and unwarped (expected: no
+   distortion found). The k found, its error, whether distortion was reported, the time.
+2. ``--photos DIR``: the same on the photographs of a folder, and the focal length from
+   vanishing points (``benchmarks/check_vp_real.py``'s 11 %-barrel copy, λ = -0.1) without and
+   with the correction (what ``imageform vanishing --distortion`` does) against the
+   undistorted photograph's and the EXIF one (``DIR/truth.csv``, column ``f_px``).
+3. ``--calibrated DIR --camera FILE``: a real wide-angle camera calibrated with a board
+   (``imageform calibrate``): each frame's estimate against the camera file's distortion, as
+   pixel displacements over the image: the undistortion of every 8th pixel by the
+   estimate and by the calibration, the estimate's mapped onto the calibration's by the best
+   scale and shift (a plumb-line estimate fixes straightness, not the focal length), the
+   largest and the RMS difference (over the image, and within half the image height of the
+   centre, where a board calibration has its points).
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import math
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from benchmarks._common import header, markdown_table
+
+ROOT = Path(__file__).resolve().parents[1]
+KODAK = ROOT / ".." / "shared" / "data" / "kodak"
+KODAK_LINES = ("kodim01.png", "kodim08.png", "kodim16.png", "kodim22.png", "kodim24.png")
+#: corner displacement (r_u / r_d - 1) -> k = 1 / (1 + p) - 1
+CASES = {"none": 0.0, "barrel 5 %": 0.05, "barrel 10 %": 0.10, "barrel 20 %": 0.20}
+CASES_PIN = {"pincushion 10 %": -0.10}
+
+
+def _k(p: float) -> float:
+    return 1.0 / (1.0 + p) - 1.0
+
+
+def distort(img: np.ndarray, k: float) -> np.ndarray:
+    """The image as a lens with division distortion ``k`` would show it (same size)."""
+    from imageform.geometry import DivisionModel, remap_bilinear
+
+    if k == 0:
+        return img
+    h, w = img.shape[:2]
+    c = np.array([(w - 1) / 2, (h - 1) / 2])
+    s = math.hypot(*c)
+    v, u = np.mgrid[0:h, 0:w].astype(np.float64)
+    x = np.stack(((u - c[0]) / s, (v - c[1]) / s), axis=-1)
+    xu, _ = DivisionModel(k1=k).undistort(x)
+    return np.asarray(remap_bilinear(img, np.asarray(xu) * s + c, keep_dtype=True))
+
+
+def board(w: int = 640, h: int = 480, square: int = 40) -> np.ndarray:
+    """A rendered checkerboard filling the frame, 4 x 4 samples a pixel, uint8."""
+    v, u = (np.mgrid[0 : 4 * h, 0 : 4 * w] + 0.5) / 4 - 0.5
+    b = ((u // square + v // square) % 2).reshape(h, 4, w, 4).mean(axis=(1, 3))
+    return np.round(40 + 160 * b).astype(np.uint8)
+
+
+def _read(path: Path) -> np.ndarray:
+    """An image file as uint8 grey or RGB."""
+    from imageform.io import read_image
+
+    img = np.asarray(read_image(path))
+    if img.dtype != np.uint8:
+        img = np.clip(np.round(np.asarray(img, dtype=np.float64) * 255), 0, 255).astype(np.uint8)
+    return img[..., 0] if img.shape[-1] == 1 else img[..., :3]
+
+
+def _estimate(img: np.ndarray) -> tuple[Any, float]:
+    from imageform.geometry import estimate_distortion_from_lines
+
+    t0 = time.perf_counter()
+    try:
+        res = estimate_distortion_from_lines(img)
+    except ValueError as exc:  # too few lines
+        return str(exc), time.perf_counter() - t0
+    return res, time.perf_counter() - t0
+
+
+def synthetic(images: dict[str, np.ndarray], pincushion: bool = True) -> list[tuple[object, ...]]:
+    rows: list[tuple[object, ...]] = []
+    cases = dict(CASES, **(CASES_PIN if pincushion else {}))
+    for name, img in images.items():
+        for case, p in cases.items():
+            k = _k(p)
+            res, dt = _estimate(distort(img, k))
+            if isinstance(res, str):
+                rows.append((name, case, f"{k:.4f}", "-", "-", "error: " + res[:60], f"{dt:.1f}"))
+                continue
+            err = f"{100 * (res.k1 / k - 1):+.1f} %" if k else f"{res.k1:+.4f} (abs)"
+            rows.append(
+                (
+                    name,
+                    case,
+                    f"{k:.4f}",
+                    f"{res.k1:.4f} ± {res.k1_std:.4f}",
+                    err,
+                    "yes" if res.found else "none",
+                    f"{dt:.1f}",
+                )
+            )
+    return rows
+
+
+def _f(img: np.ndarray) -> float:
+    from imageform.geometry import detect_vanishing_points
+
+    K = detect_vanishing_points(img).K
+    return math.nan if K is None else float(K[0, 0])
+
+
+def _corrected(img: np.ndarray) -> np.ndarray:
+    from imageform.geometry import estimate_distortion_from_lines, undistort_image
+
+    est = estimate_distortion_from_lines(img)
+    if not est.found:
+        return img
+    return np.asarray(undistort_image(img, est.K, est.distortion, keep_dtype=True))
+
+
+def vanishing(folder: Path) -> list[tuple[object, ...]]:
+    from benchmarks.check_vp_real import _barrel
+
+    truth: dict[str, float] = {}
+    if (folder / "truth.csv").is_file():
+        with open(folder / "truth.csv", newline="") as fh:
+            truth = {r["file"]: float(r["f_px"]) for r in csv.DictReader(fh) if r.get("f_px")}
+    rows: list[tuple[object, ...]] = []
+    for path in sorted(p for p in folder.iterdir() if p.suffix.lower() in (".jpg", ".png")):
+        rgb = _read(path)
+        rgb = rgb if rgb.ndim == 3 else np.repeat(rgb[..., None], 3, axis=-1)
+        f0 = _f(rgb)
+        bent = _barrel(rgb, -0.1)
+        f1 = _f(bent)
+        f2 = _f(_corrected(bent))
+        ft = truth.get(path.name)
+
+        def cell(f: float, ref: float | None = f0) -> str:
+            if not math.isfinite(f):
+                return "-"
+            if ref is None or not math.isfinite(ref):
+                return f"{f:.0f}"
+            return f"{f:.0f} ({100 * (f / ref - 1):+.1f} %)"
+
+        rows.append(
+            (
+                path.name,
+                f"{f0:.0f}" if math.isfinite(f0) else "-",
+                cell(f1),
+                cell(f2),
+                f"{ft:.0f}" if ft else "-",
+                cell(f0, ft),
+                cell(f1, ft),
+                cell(f2, ft),
+            )
+        )
+    return rows
+
+
+def _undistorted_px(cam: Any, uv: np.ndarray) -> np.ndarray:
+    """Undistorted pixel positions of distorted pixels ``uv`` (the camera's own K)."""
+    K = np.asarray(cam.K, dtype=np.float64)
+    x = (uv - K[:2, 2]) / np.diag(K)[:2]
+    xu, ok = cam.distortion.undistort(x)
+    out = np.asarray(xu) * np.diag(K)[:2] + K[:2, 2]
+    out[~np.asarray(ok)] = np.nan
+    return out
+
+
+def compare(folder: Path, camera: Path) -> list[tuple[object, ...]]:
+    from imageform.geometry import Camera
+    from imageform.io import read_camera
+
+    cal = read_camera(camera).camera
+    w, h = cal.image_size
+    v, u = np.mgrid[0:h:8, 0:w:8].astype(np.float64)
+    uv = np.stack((u.ravel(), v.ravel()), axis=-1)
+    ref = _undistorted_px(cal, uv)
+    ref_disp = np.hypot(*(ref - uv).T)
+    rows: list[tuple[object, ...]] = []
+    for path in sorted(folder.glob("*.jpg")):
+        img = _read(path)
+        if img.shape[1] != w or img.shape[0] != h:
+            continue
+        res, dt = _estimate(img)
+        if isinstance(res, str):
+            rows.append((path.name, "-", "-", "-", "-", "error: " + res[:60], "-", f"{dt:.1f}"))
+            continue
+        est = _undistorted_px(Camera(res.K, distortion=res.distortion), uv)
+        ok = np.isfinite(est).all(1) & np.isfinite(ref).all(1)
+        # the best scale a and shift b with a * est + b ~ ref (least squares)
+        A = np.zeros((2 * ok.sum(), 3))
+        A[0::2, 0], A[1::2, 0] = est[ok, 0], est[ok, 1]
+        A[0::2, 1] = 1.0
+        A[1::2, 2] = 1.0
+        sol = np.linalg.lstsq(A, ref[ok].ravel(), rcond=None)[0]
+        fit = est[ok] * sol[0] + sol[1:]
+        diff = np.hypot(*(fit - ref[ok]).T)
+        inner = np.hypot(*(uv[ok] - [(w - 1) / 2, (h - 1) / 2]).T) <= h / 2
+        rows.append(
+            (
+                path.name,
+                f"{res.k1:.4f} ± {res.k1_std:.4f}",
+                len(res.lines),
+                f"{res.max_displacement_px:.1f}",
+                f"{ref_disp.max():.1f}",
+                f"{diff.max():.1f} / {np.sqrt((diff**2).mean()):.1f}",
+                f"{diff[inner].max():.1f} / {np.sqrt((diff[inner] ** 2).mean()):.1f}",
+                f"{dt:.1f}",
+            )
+        )
+    return rows
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--photos", type=Path, help="a folder of photographs (and truth.csv)")
+    parser.add_argument("--calibrated", type=Path, help="frames of a calibrated camera")
+    parser.add_argument("--camera", type=Path, help="the camera file of --calibrated")
+    parser.add_argument("--skip-synthetic", action="store_true")
+    args = parser.parse_args()
+    print(header("Lens distortion from straight lines (plumb lines)"))
+    cols = ("image", "distortion", "k true", "k found ± std", "error", "reported", "s")
+    if not args.skip_synthetic:
+        images = {"board 640x480": board()}
+        for name in KODAK_LINES:
+            if (KODAK / name).is_file():
+                images[name] = _read(KODAK / name)
+        print("## Synthetic distortion: Kodak photographs and a rendered board\n")
+        print(markdown_table(cols, synthetic(images)))
+    if args.photos is not None:
+        photos = {
+            p.name: _read(p)
+            for p in sorted(args.photos.iterdir())
+            if p.suffix.lower() in (".jpg", ".png")
+        }
+        print(f"## Synthetic distortion: the photographs of {args.photos.name}\n")
+        print(markdown_table(cols, synthetic(photos, pincushion=False)))
+        print("## Focal length from vanishing points on the 11 %-barrel copies\n")
+        print(
+            markdown_table(
+                (
+                    "photograph",
+                    "f original",
+                    "f barrel (vs original)",
+                    "f barrel corrected (vs original)",
+                    "f EXIF",
+                    "original vs EXIF",
+                    "barrel vs EXIF",
+                    "corrected vs EXIF",
+                ),
+                vanishing(args.photos),
+            )
+        )
+    if args.calibrated is not None and args.camera is not None:
+        print(f"## One frame against the calibration of {args.camera.name}\n")
+        print(
+            markdown_table(
+                (
+                    "frame",
+                    "k found ± std",
+                    "lines",
+                    "estimate's corner shift px",
+                    "calibrated largest shift px",
+                    "difference max / RMS px",
+                    "within h/2 of the centre",
+                    "s",
+                ),
+                compare(args.calibrated, args.camera),
+            )
+        )
+
+
+if __name__ == "__main__":
+    main()
