@@ -23,9 +23,11 @@ Pipeline of :func:`estimate_distortion_from_lines`:
    of the truncated squared error ``min(e_i², τ²)`` weighted by the chain's points, so a
    curved object or a chance alignment does not pull it; chains within τ there are inliers.
 5. Refinement: ``k`` (and with ``estimate_centre=True`` the distortion centre) by
-   Levenberg-Marquardt-type least squares (a soft-L1 loss of 1 px) on the distances of the
-   inlier chains' points to their lines (variable projection: each line is the total
-   least-squares fit at the current parameters). Steps 3-5 are repeated once at the new ``k``.
+   bounded trust-region least squares (a soft-L1 loss of 1 px) on the distances of the
+   inlier chains' points to their lines, measured in the distorted image to first order
+   (Sampson: the corrected distance over ``|Jᵀ n|``, so squeezing the image does not pay);
+   each line is the total least-squares fit at the current parameters (variable
+   projection). Steps 3-5 are repeated twice more at the new ``k``.
 
 Coordinates are normalised by the distance ``s`` from the image centre to a corner pixel's
 centre, ``x = (u - c) / s``, so ``k`` has one meaning whatever the image size: a pixel at the
@@ -182,7 +184,7 @@ def _correct(
 
 def _accumulate(
     xu: FloatArray, normal_angle: FloatArray, rho_max: float, weights: FloatArray | None = None
-) -> tuple[FloatArray, FloatArray, FloatArray]:
+) -> FloatArray:
     """Hough votes ``(θ, ρ)``; each point votes at its orientation +- the window."""
     n_rho = int(2 * rho_max / _RHO_BIN) + 1
     base = np.round(normal_angle / math.pi * _THETA_BINS).astype(np.int64)
@@ -201,7 +203,7 @@ def _accumulate(
             None if weights is None else weights[ok],
             minlength=acc.size,
         )
-    return acc.reshape(_THETA_BINS, n_rho), base, np.array([rho_max, n_rho])
+    return acc.reshape(_THETA_BINS, n_rho)
 
 
 class _Setup:
@@ -229,7 +231,7 @@ def _concentration(setup: _Setup, k: float, rho_max: float, n_peaks: int) -> flo
     from scipy import ndimage
 
     xu, ang, _ = setup.corrected(k)
-    acc, _, _ = _accumulate(xu, ang, rho_max)
+    acc = _accumulate(xu, ang, rho_max)
     peaks = acc[(acc == ndimage.maximum_filter(acc, size=(7, 5), mode="wrap")) & (acc > 0)]
     top = np.partition(peaks, len(peaks) - n_peaks)[-n_peaks:] if len(peaks) > n_peaks else peaks
     return float(top.sum())
@@ -243,7 +245,8 @@ def _chains(
     free = np.ones(len(xu), dtype=bool)
     out: list[np.ndarray] = []
     min_votes = max(5.0, 0.5 * min_length)
-    acc, _, (rm, n_rho) = _accumulate(xu, ang, rho_max)
+    acc = _accumulate(xu, ang, rho_max)
+    n_rho = acc.shape[1]
     for _ in range(4 * n_lines):
         if len(out) >= n_lines:
             break
@@ -251,9 +254,9 @@ def _chains(
         if acc.flat[best] < min_votes:
             break
         idx_free = np.nonzero(free)[0]
-        tb, rb = divmod(best, int(n_rho))
+        tb, rb = divmod(best, n_rho)
         th = tb * math.pi / _THETA_BINS
-        rho = rb * _RHO_BIN - rm
+        rho = rb * _RHO_BIN - rho_max
         n = np.array([math.cos(th), math.sin(th)])
         dist = xu[idx_free] @ n - rho
         dang = np.abs((ang[idx_free] - th + math.pi / 2) % math.pi - math.pi / 2)
@@ -282,7 +285,7 @@ def _chains(
                     out.append(piece)
         if used.any():
             free &= ~used
-            gone, _, _ = _accumulate(xu[used], ang[used], rho_max)
+            gone = _accumulate(xu[used], ang[used], rho_max)
             acc -= gone
     return out
 
@@ -295,14 +298,19 @@ def _chain_errors(setup: _Setup, chains: list[np.ndarray], ks: FloatArray) -> Fl
     x = setup.x[idx]
     out = np.empty((len(ks), len(chains)))
     for j, k in enumerate(ks):
-        xu, d, _ = _correct(x, float(k))
-        res = _line_distances(xu, lab, cnt) * d * setup.s
+        res = _distances(x, float(k), lab, cnt) * setup.s
         out[j] = np.sqrt(np.bincount(lab, res * res) / cnt)
     return out
 
 
-def _line_distances(xu: FloatArray, lab: np.ndarray, cnt: FloatArray) -> FloatArray:
-    """Signed distance of each point to its chain's total least-squares line."""
+def _distances(x: FloatArray, k: float, lab: np.ndarray, cnt: FloatArray) -> FloatArray:
+    r"""Distance of each point to its chain's line, in the distorted image (first order).
+
+    The chain's line ``n·x_u = ρ`` is the total least-squares fit to the corrected points;
+    the distance is ``(n·x_u - ρ) / |Jᵀ n|`` with ``J = ∂x_u/∂x_d`` (Sampson's first-order
+    distance), so a correction that squeezes the image does not look straighter.
+    """
+    xu, d, _ = _correct(x, k)
     mx = np.bincount(lab, xu[:, 0]) / cnt
     my = np.bincount(lab, xu[:, 1]) / cnt
     dx, dy = xu[:, 0] - mx[lab], xu[:, 1] - my[lab]
@@ -310,11 +318,21 @@ def _line_distances(xu: FloatArray, lab: np.ndarray, cnt: FloatArray) -> FloatAr
     syy = np.bincount(lab, dy * dy)
     sxy = np.bincount(lab, dx * dy)
     phi = 0.5 * np.arctan2(2.0 * sxy, sxx - syy)  # the principal direction
-    return -dx * np.sin(phi)[lab] + dy * np.cos(phi)[lab]
+    nx, ny = -np.sin(phi)[lab], np.cos(phi)[lab]
+    xn = x[:, 0] * nx + x[:, 1] * ny
+    # J = I / d - 2 k x xᵀ / d² (symmetric): Jᵀ n = n / d - 2 k (x·n) x / d²
+    g = 2.0 * k * xn / (d * d)
+    jx, jy = nx / d - g * x[:, 0], ny / d - g * x[:, 1]
+    return (dx * nx + dy * ny) / np.hypot(jx, jy)
 
 
 def _refine(
-    setup: _Setup, chains: list[np.ndarray], k0: float, estimate_centre: bool, max_iter: int
+    setup: _Setup,
+    chains: list[np.ndarray],
+    k0: float,
+    bounds: tuple[float, float],
+    estimate_centre: bool,
+    max_iter: int,
 ) -> tuple[float, FloatArray, float, int]:
     """Least squares on the inlier chains: ``(k, centre, k_std, nfev)``."""
     from scipy.optimize import least_squares
@@ -327,13 +345,18 @@ def _refine(
 
     def residuals(p: FloatArray) -> FloatArray:
         c = p[1:3] * s + setup.centre if estimate_centre else setup.centre
-        x = (pts - c) / s
-        xu, d, _ = _correct(x, float(p[0]))
-        return _line_distances(xu, lab, cnt) * d * s
+        return _distances((pts - c) / s, float(p[0]), lab, cnt) * s
 
     p0 = np.array([k0, 0.0, 0.0]) if estimate_centre else np.array([k0])
+    lo = [bounds[0], -0.25, -0.25] if estimate_centre else [bounds[0]]
+    hi = [bounds[1], 0.25, 0.25] if estimate_centre else [bounds[1]]
     sol = least_squares(
-        residuals, p0, loss="soft_l1", f_scale=1.0, max_nfev=max_iter * (len(p0) + 1)
+        residuals,
+        np.clip(p0, lo, hi),
+        bounds=(lo, hi),
+        loss="soft_l1",
+        f_scale=1.0,
+        max_nfev=max_iter * (len(p0) + 1),
     )
     if not np.isfinite(sol.x).all():  # pragma: no cover - least_squares keeps finite steps
         raise DegenerateConfigurationError("the distortion refinement diverged")
@@ -389,8 +412,9 @@ def estimate_distortion_from_lines(
         Refine the centre too (from one image it is weakly determined: keep the default
         unless the lines cover the image).
     k_range : (float, float)
-        The search range of ``k1`` (corner displacements from ``1/(1+k)-1``: the default
-        -0.6 to 0.6 covers +150 % to -37.5 %).
+        The range of ``k1``, ``-0.99 <= low < 0 < high <= 1`` (``r / (1 + k r²)`` stays
+        monotonic to the corners for ``k <= 1``); corner displacements ``1/(1+k)-1``: the
+        default -0.6 to 0.6 covers +150 % to -37.5 %.
     min_lines : int
         Fewer straight-line chains than this raise :class:`DegenerateConfigurationError`.
     n_lines : int
@@ -448,7 +472,7 @@ def estimate_distortion_from_lines(
         raise InvalidInputError(f"expected an image of at least 16 x 16 pixels, got {w} x {h}")
     estimate_centre = as_bool(estimate_centre, "estimate_centre")
     try:
-        lo, hi = (as_real(v, "k_range", minimum=-0.99, maximum=10.0) for v in k_range)
+        lo, hi = (as_real(v, "k_range", minimum=-0.99, maximum=1.0) for v in k_range)
     except TypeError:
         raise InvalidInputError(
             f"expected k_range as two numbers (low, high), got {describe(k_range)}"
@@ -501,7 +525,7 @@ def estimate_distortion_from_lines(
         chains = [c for c, e in zip(chains, e_at, strict=True) if e <= tolerance]
         if len(chains) < min_lines:
             break
-        k, c_new, k_std, _ = _refine(setup, chains, k, estimate_centre, max_iter)
+        k, c_new, k_std, _ = _refine(setup, chains, k, (lo, hi), estimate_centre, max_iter)
         if estimate_centre:
             setup = _Setup(pts, normals, c_new, s)
     if len(chains) < min_lines:

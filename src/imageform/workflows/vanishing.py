@@ -153,6 +153,10 @@ def vanishing(run: Run, opts: VanishingOptions, *, out: Path | None, image: Path
     from imageform._kernels import ahead
     from imageform.geometry import detect_vanishing_points
 
+    if opts.distortion and opts.camera is not None:
+        raise InvalidInputError(
+            "--distortion estimates what --camera's file gives: use one of them"
+        )
     img = read(image, opts)
     arr = img[..., 0] if img.shape[-1] == 1 else img[..., :3]
     if arr.dtype == np.uint16:
@@ -179,10 +183,6 @@ def vanishing(run: Run, opts: VanishingOptions, *, out: Path | None, image: Path
             )
     plumb: dict[str, Any] | None = None
     if opts.distortion:
-        if cf is not None:
-            raise InvalidInputError(
-                "--distortion estimates what --camera's file gives: use one of them"
-            )
         arr, plumb = _remove_distortion(run, arr, image)
     if opts.principal_point == "camera":
         if cf is None:
