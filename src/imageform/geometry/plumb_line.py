@@ -471,12 +471,12 @@ def estimate_distortion_from_lines(
     if min(h, w) < 16:
         raise InvalidInputError(f"expected an image of at least 16 x 16 pixels, got {w} x {h}")
     estimate_centre = as_bool(estimate_centre, "estimate_centre")
-    try:
-        lo, hi = (as_real(v, "k_range", minimum=-0.99, maximum=1.0) for v in k_range)
-    except TypeError:
+    pair = np.asarray(k_range, dtype=object)
+    if pair.shape != (2,):
         raise InvalidInputError(
             f"expected k_range as two numbers (low, high), got {describe(k_range)}"
-        ) from None
+        )
+    lo, hi = (as_real(v, "k_range", minimum=-0.99, maximum=1.0) for v in pair)
     if not lo < 0.0 < hi:
         raise InvalidInputError(f"expected k_range with low < 0 < high, got ({lo:g}, {hi:g})")
     min_lines = as_int(min_lines, "min_lines", minimum=1, maximum=10000)
