@@ -75,6 +75,16 @@ def test_straight_board_is_no_distortion() -> None:
     assert res.K[0, 0] == pytest.approx(math.hypot(159.5, 119.5))
 
 
+@settings(max_examples=4, deadline=None)
+@given(square=st.integers(14, 48), shift=st.integers(0, 13), wide=st.booleans())
+def test_straight_grid_is_never_distorted(square: int, shift: int, wide: bool) -> None:
+    """k = 0 on a straight grid, whatever its cell size and phase (a property)."""
+    img = _board(320 if wide else 240, 240 if wide else 320, square)
+    img = np.roll(img, (shift, 2 * shift), axis=(0, 1))
+    res = estimate_distortion_from_lines(img)
+    assert not res.found and abs(res.k1) < 0.005
+
+
 def test_undistorting_with_the_estimate_straightens_the_board() -> None:
     img = _board(k=_k(0.15))
     res = estimate_distortion_from_lines(img)
