@@ -47,12 +47,14 @@ def _board(w: int = 320, h: int = 240, square: int = 40, k: float = 0.0) -> np.n
 
 
 def _distort(img: np.ndarray, k: float) -> np.ndarray:
+    """The image through a division-model lens, scaled so that no pixel falls outside it."""
     h, w = img.shape[:2]
     c = np.array([(w - 1) / 2, (h - 1) / 2])
     s = math.hypot(*c)
     v, u = np.mgrid[0:h, 0:w].astype(np.float64)
     xu, _ = DivisionModel(k1=k).undistort(np.stack(((u - c[0]) / s, (v - c[1]) / s), -1))
-    return np.asarray(remap_bilinear(img, np.asarray(xu) * s + c, keep_dtype=True))
+    scale = s * min(1.0, 1.0 + k)  # no black corners: their bent edge would be a plumb line
+    return np.asarray(remap_bilinear(img, np.asarray(xu) * scale + c, keep_dtype=True))
 
 
 @pytest.mark.parametrize("corner", [0.05, 0.10, 0.20, -0.10])
@@ -94,16 +96,12 @@ def test_undistorting_with_the_estimate_straightens_the_board() -> None:
 
 
 @pytest.mark.skipif(not (KODAK / "kodim01.png").is_file(), reason="shared data not present")
-@pytest.mark.parametrize("corner", [0.0, 0.10])
-def test_photograph(corner: float) -> None:
+def test_photograph_without_distortion() -> None:
+    """A photograph of a facade (short, imperfect lines) is not reported as distorted."""
     from imageform.io import read_image
 
-    img = np.asarray(read_image(KODAK / "kodim01.png"))[::2, ::2]
-    res = estimate_distortion_from_lines(_distort(img, _k(corner)))
-    if corner == 0:
-        assert not res.found
-    else:
-        assert res.found and res.k1 == pytest.approx(_k(corner), rel=0.05)
+    res = estimate_distortion_from_lines(np.asarray(read_image(KODAK / "kodim01.png")))
+    assert not res.found
 
 
 def test_centre_given_and_estimated() -> None:
@@ -225,7 +223,8 @@ def test_vanishing_distortion_option(tmp_path: Path, capsys: pytest.CaptureFixtu
     assert payload["distortion"]["found"] is True
     assert payload["distortion"]["k1"] == pytest.approx(-0.1, rel=0.1)
     assert "undistorted with the distortion of its" in captured.err
-    assert abs(payload["K"][0][0] - 700.0) < 35.0
+    # the copy is magnified 1 / (1 + k) at the centre (no black corners): f = 700 / 0.9
+    assert payload["K"][0][0] == pytest.approx(700.0 / 0.9, rel=0.03)
     cam = tmp_path / "cam.toml"
     cam.write_text("")  # never read: the two options are refused together first
     assert main(["vanishing", str(src), "--distortion", "--camera", str(cam)]) == 1

@@ -11,23 +11,31 @@ Pipeline of :func:`estimate_distortion_from_lines`:
 1. Edge points with sub-pixel position and gradient direction (Gaussian σ = 1 px, central
    differences, non-maximum suppression along the gradient, a parabola through the three
    magnitudes for the sub-pixel offset).
-2. A distortion-aware Hough transform (Alemán-Flores et al. 2014): for each ``k`` on a grid
-   the edge points and their orientations are corrected and vote for lines ``(θ, ρ)``; the
-   ``k`` whose accumulator is most concentrated (the sum of squared cell counts) straightens
-   the most edges.
-3. Lines at that ``k``: sequential peaks of the accumulator; each peak's points (within
-   ``tolerance`` pixels and 6° of it) are cut into chains at gaps, and chains shorter than
-   ``min_length`` are dropped: the chains are the collinear-after-correction groups.
-4. Consensus over lines: each chain's straightness error (RMS distance to its own total
-   least-squares line) is computed on a fine ``k`` grid; ``k`` minimises the sum over chains
-   of the truncated squared error ``min(e_i², τ²)`` weighted by the chain's points, so a
-   curved object or a chance alignment does not pull it; chains within τ there are inliers.
+2. Edge contours, independent of the distortion (Bukhari & Dailey 2013 work on such
+   contours): connected edge pixels of one polarity whose direction stays within a 45° sector,
+   at least ``min_length`` long.
+3. Consensus over the contours: each one's straightness error (RMS distance, in distorted
+   pixels, to its own total least-squares line after correction) is computed on a grid of
+   ``k``; ``k`` minimises the sum over contours of the truncated squared error
+   ``min(e_i², τ²)`` weighted by the contour's points, so a curved object does not pull it.
+4. Lines collinear after that correction (Alemán-Flores et al. 2014's distortion-aware
+   Hough transform at that ``k``: sequential peaks, the points within ``tolerance`` pixels
+   and 6° of each, cut into chains at gaps) join the contours (pieces of one line across
+   gaps); the consensus is taken again within ±0.05 of ``k``, and the chains within τ there
+   are the inliers.
 5. Refinement: ``k`` (and with ``estimate_centre=True`` the distortion centre) by
    bounded trust-region least squares (a soft-L1 loss of 1 px) on the distances of the
    inlier chains' points to their lines, measured in the distorted image to first order
    (Sampson: the corrected distance over ``|Jᵀ n|``, so squeezing the image does not pay);
    each line is the total least-squares fit at the current parameters (variable
-   projection). Steps 3-5 are repeated twice more at the new ``k``.
+   projection). Steps 4-5 are repeated twice more at the new ``k``.
+
+What it can measure: the bend of a line grows with its length squared; on 640 x 480
+photographs whose straight edges are 100-250 px long, a 5-10 % corner displacement bends
+them by a few tenths of a pixel, near the straightness of the edges themselves, and the
+estimate is unreliable (``benchmarks/results/plumb-line-2026-11-29.md``); long lines (a
+board, architecture across the frame, a wide-angle lens's strong bend) give ``k`` to a few
+per cent.
 
 Coordinates are normalised by the distance ``s`` from the image centre to a corner pixel's
 centre, ``x = (u - c) / s``, so ``k`` has one meaning whatever the image size: a pixel at the
@@ -168,6 +176,54 @@ def _edge_points(img: FloatArray, threshold: float) -> tuple[FloatArray, FloatAr
     return pts, np.stack((nx, ny), axis=-1)
 
 
+def _contours(
+    pts: FloatArray, normals: FloatArray, shape: tuple[int, int], min_length: float
+) -> list[np.ndarray]:
+    """Index arrays of the edge contours: connected edge pixels of one polarity and direction.
+
+    The gradient direction (signed: the two sides of a thin bar are two contours) is cut into
+    16 sectors of 45 degrees overlapping by half, so that an arc turning by up to 22.5 degrees
+    lies whole in one; each sector's edge pixels, closed over one-pixel gaps, are labelled
+    (8-connected). Longest first, a contour is kept when it is ``min_length`` long and at
+    most half of its points belong to a contour kept before.
+    """
+    from scipy import ndimage
+
+    h, w = shape
+    iu = np.clip(np.round(pts[:, 0]).astype(np.int64), 0, w - 1)
+    iv = np.clip(np.round(pts[:, 1]).astype(np.int64), 0, h - 1)
+    ang = np.arctan2(normals[:, 1], normals[:, 0]) % (2 * math.pi)
+    step = math.pi / 8
+    cands: list[np.ndarray] = []
+    for j in range(16):
+        sel = np.nonzero(((ang - j * step) % (2 * math.pi)) < 2 * step)[0]
+        if len(sel) < 3:
+            continue
+        mask = np.zeros((h, w), dtype=bool)
+        mask[iv[sel], iu[sel]] = True
+        lab, n = ndimage.label(ndimage.binary_closing(mask) | mask, structure=np.ones((3, 3)))
+        if n == 0:
+            continue
+        ids = lab[iv[sel], iu[sel]]
+        order = np.argsort(ids, kind="stable")
+        bounds = np.searchsorted(ids[order], np.arange(1, n + 2))
+        for a in range(n):
+            members = sel[order[bounds[a] : bounds[a + 1]]]
+            if len(members) < max(3, 0.8 * min_length):
+                continue
+            p = pts[members]
+            if np.hypot(*np.ptp(p, axis=0)) >= min_length:
+                cands.append(members)
+    cands.sort(key=len, reverse=True)
+    taken = np.zeros(len(pts), dtype=bool)
+    out = []
+    for c in cands:
+        if taken[c].mean() <= 0.5:
+            out.append(c[~taken[c]])
+            taken[c] = True
+    return out
+
+
 def _correct(
     x: FloatArray, k: float, tangent: FloatArray | None = None
 ) -> tuple[FloatArray, FloatArray, FloatArray | None]:
@@ -227,16 +283,6 @@ class _Setup:
         return xu, ang, d
 
 
-def _concentration(setup: _Setup, k: float, rho_max: float, n_peaks: int) -> float:
-    from scipy import ndimage
-
-    xu, ang, _ = setup.corrected(k)
-    acc = _accumulate(xu, ang, rho_max)
-    peaks = acc[(acc == ndimage.maximum_filter(acc, size=(7, 5), mode="wrap")) & (acc > 0)]
-    top = np.partition(peaks, len(peaks) - n_peaks)[-n_peaks:] if len(peaks) > n_peaks else peaks
-    return float(top.sum())
-
-
 def _chains(
     setup: _Setup, k: float, rho_max: float, tol: float, min_length: float, n_lines: int
 ) -> list[np.ndarray]:
@@ -287,6 +333,26 @@ def _chains(
             free &= ~used
             gone = _accumulate(xu[used], ang[used], rho_max)
             acc -= gone
+    return out
+
+
+def _consensus(setup: _Setup, chains: list[np.ndarray], ks: FloatArray, tolerance: float) -> float:
+    """Return the ``k`` of ``ks`` minimising the chains' truncated squared straightness error."""
+    err = _chain_errors(setup, chains, ks)
+    weight = np.array([len(c) for c in chains], dtype=np.float64)
+    cost = (np.minimum(err * err, tolerance * tolerance) * weight).sum(1)
+    return float(ks[int(np.argmin(cost))])
+
+
+def _distinct(chains: list[np.ndarray]) -> list[np.ndarray]:
+    """Return the chains without the points already in a longer one (a contour is a line too)."""
+    taken: set[int] = set()
+    out = []
+    for c in sorted(chains, key=len, reverse=True):
+        rest = np.array([i for i in c.tolist() if i not in taken], dtype=np.int64)
+        if len(rest) >= 0.5 * len(c) and len(rest) >= 3:
+            out.append(rest)
+            taken.update(rest.tolist())
     return out
 
 
@@ -397,10 +463,10 @@ def estimate_distortion_from_lines(
         \mathbf{x} = (\mathbf{u} - \mathbf{c}) / s,
 
     maps a straight scene line's image (an arc) to a straight line; ``k1`` is the value that
-    makes the image's long edges straightest: a distortion-aware Hough transform
-    (Alemán-Flores et al. 2014) for a first value and the lines, a consensus over the lines
-    (truncated squared straightness error) and least-squares refinement (see
-    :mod:`imageform.geometry.plumb_line`).
+    makes the image's long edges straightest: a consensus over the edge contours and the
+    lines collinear after correction (a truncated squared straightness error; the lines
+    from a distortion-aware Hough transform, Alemán-Flores et al. 2014) and least-squares
+    refinement (see :mod:`imageform.geometry.plumb_line`).
 
     Parameters
     ----------
@@ -418,7 +484,7 @@ def estimate_distortion_from_lines(
     min_lines : int
         Fewer straight-line chains than this raise :class:`DegenerateConfigurationError`.
     n_lines : int
-        The most chains extracted per pass.
+        The most Hough lines extracted per pass (the 200 longest contours are used too).
     min_length : float, optional
         Shortest chain, pixels (default 5 % of the image diagonal, at least 20 px).
     tolerance : float
@@ -494,6 +560,7 @@ def estimate_distortion_from_lines(
         c0 = c_arr
     s = float(math.hypot((w - 1) / 2.0, (h - 1) / 2.0))
 
+    max_chains = 200
     pts, normals = _edge_points(img, edge_threshold)
     if len(pts) < 3 * min_lines:
         raise DegenerateConfigurationError(
@@ -502,27 +569,23 @@ def estimate_distortion_from_lines(
         )
     setup = _Setup(pts, normals, c0, s)
     rho_max = 2.0 * diag
-    coarse = np.arange(lo, hi + 1e-12, 0.02)
-    if len(pts) > 40000:  # the coarse search on a sample
-        pick = np.random.default_rng(0).choice(len(pts), 40000, replace=False)
-        sub = _Setup(pts[pick], normals[pick], c0, s)
-    else:
-        sub = setup
-    scores = [_concentration(sub, float(k), rho_max, n_lines) for k in coarse]
-    k = float(coarse[int(np.argmax(scores))])
+    contours = _contours(pts, normals, (h, w), min_length)[:max_chains]
     fine = np.arange(lo, hi + 1e-12, 0.0025)
     chains: list[np.ndarray] = []
     k_std = math.inf
+    k = 0.0
+    if len(contours) >= min_lines:
+        k = _consensus(setup, contours, fine, tolerance)
     for _ in range(3):
-        chains = _chains(setup, k, rho_max, tolerance, min_length, n_lines)
-        if len(chains) < min_lines:
+        # the contours and the lines collinear at k (pieces of a line joined across gaps)
+        lines = _chains(setup, k, rho_max, tolerance, min_length, n_lines)
+        cand = contours + lines
+        if len(cand) < min_lines:
             break
-        err = _chain_errors(setup, chains, fine)
-        weight = np.array([len(c) for c in chains], dtype=np.float64)
-        cost = (np.minimum(err * err, tolerance * tolerance) * weight).sum(1)
-        k = float(fine[int(np.argmin(cost))])
-        e_at = _chain_errors(setup, chains, np.array([k]))[0]
-        chains = [c for c, e in zip(chains, e_at, strict=True) if e <= tolerance]
+        window = fine[np.abs(fine - k) <= 0.05 + 1e-12]
+        k = _consensus(setup, cand, window, tolerance)
+        e_at = _chain_errors(setup, cand, np.array([k]))[0]
+        chains = _distinct([c for c, e in zip(cand, e_at, strict=True) if e <= tolerance])
         if len(chains) < min_lines:
             break
         k, c_new, k_std, _ = _refine(setup, chains, k, (lo, hi), estimate_centre, max_iter)
