@@ -358,7 +358,7 @@ def estimate_distortion_from_lines(
     *,
     centre: ArrayLike | None = None,
     estimate_centre: bool = False,
-    k_range: tuple[float, float] = (-0.6, 0.6),
+    k_range: tuple[float, float] = (-0.9, 0.6),
     min_lines: int = 3,
     n_lines: int = 40,
     min_length: float | None = None,
@@ -394,7 +394,7 @@ def estimate_distortion_from_lines(
     k_range : (float, float)
         The range of ``k1``, ``-0.99 <= low < 0 < high <= 1`` (``r / (1 + k r²)`` stays
         monotonic to the corners for ``k <= 1``); corner displacements ``1/(1+k)-1``: the
-        default -0.6 to 0.6 covers +150 % to -37.5 %.
+        default -0.9 to 0.6 covers +900 % (a fisheye) to -37.5 %.
     min_lines : int
         Fewer straight-line chains than this raise :class:`DegenerateConfigurationError`.
     n_lines : int
