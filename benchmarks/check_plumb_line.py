@@ -13,7 +13,8 @@ Run::
    distortion found). The k found, its error, whether distortion was reported, the time.
    The warp is scaled so that every pixel shows the photograph (``distort``); the same
    with black corners (the warped frame's border, a perfect plumb line, in view) is shown
-   apart.
+   apart. A photograph's own lens may already bend it: the error is also given for the
+   change of k from the unwarped photograph's estimate (to first order the added k).
 2. ``--photos DIR``: the same on the photographs of a folder, and the focal length from
    vanishing points on 11 %-barrel copies (λ = -0.1): ``benchmarks/check_vp_real.py``'s
    (black corners) and one without black corners (magnified 1/0.9 at the centre: its f is
@@ -110,15 +111,22 @@ def synthetic(
     rows: list[tuple[object, ...]] = []
     cases = dict(CASES, **(CASES_PIN if pincushion else {}))
     for name, img in images.items():
+        k_none = math.nan  # what the photograph shows unwarped (its own lens)
         for case, p in cases.items():
             k = _k(p)
             if border and k >= 0:
                 continue
             res, dt = _estimate(distort(img, k, border))
             if isinstance(res, str):
-                rows.append((name, case, f"{k:.4f}", "-", "-", "error: " + res[:60], f"{dt:.1f}"))
+                rows.append(
+                    (name, case, f"{k:.4f}", "-", "-", "-", "error: " + res[:60], f"{dt:.1f}")
+                )
                 continue
+            if k == 0:
+                k_none = res.k1
             err = f"{100 * (res.k1 / k - 1):+.1f} %" if k else f"{res.k1:+.4f} (abs)"
+            step = res.k1 - (0.0 if border or math.isnan(k_none) else k_none)
+            err2 = f"{100 * (step / k - 1):+.1f} %" if k and not border else "-"
             rows.append(
                 (
                     name,
@@ -126,6 +134,7 @@ def synthetic(
                     f"{k:.4f}",
                     f"{res.k1:.4f} ± {res.k1_std:.4f}",
                     err,
+                    err2,
                     "yes" if res.found else "none",
                     f"{dt:.1f}",
                 )
@@ -262,9 +271,19 @@ def main() -> None:
     parser.add_argument("--calibrated", type=Path, help="frames of a calibrated camera")
     parser.add_argument("--camera", type=Path, help="the camera file of --calibrated")
     parser.add_argument("--skip-synthetic", action="store_true")
+    parser.add_argument("--skip-vanishing", action="store_true", help="with --photos")
     args = parser.parse_args()
     print(header("Lens distortion from straight lines (plumb lines)"))
-    cols = ("image", "distortion", "k true", "k found ± std", "error", "reported", "s")
+    cols = (
+        "image",
+        "distortion",
+        "k true",
+        "k found ± std",
+        "error",
+        "error of k found - k found unwarped",
+        "reported",
+        "s",
+    )
     if not args.skip_synthetic:
         images = {"board 640x480": board()}
         for name in KODAK_LINES:
@@ -282,6 +301,7 @@ def main() -> None:
         }
         print(f"## Synthetic distortion: the photographs of {args.photos.name}\n")
         print(markdown_table(cols, synthetic(photos, pincushion=False)))
+    if args.photos is not None and not args.skip_vanishing:
         print("## Focal length from vanishing points on the 11 %-barrel copies\n")
         print(
             markdown_table(
