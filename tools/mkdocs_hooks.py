@@ -81,6 +81,7 @@ BENCH_SCRIPTS: dict[str, str] = {
     "sass-colour": "benchmarks/sass_colour.py",
     "sass-demosaic": "benchmarks/sass_demosaic.py",
     "lsd": "benchmarks/bench_lsd.py",
+    "plumb-line": "benchmarks/check_plumb_line.py",
     "psf": "benchmarks/bench_psf.py",
     "raw": "benchmarks/bench_raw.py",
     "raw-variants": "benchmarks/check_raw_variants.py",

@@ -307,6 +307,7 @@ EXCLUDED: dict[str, str] = {
     "detect_line_segments": "LSD detector, NumPy-only by design",
     "lsd_segments": "LSD with every parameter, NumPy-only by design",
     "detect_vanishing_points": "VP detector, NumPy-only by design",
+    "estimate_distortion_from_lines": "plumb-line distortion from an image, NumPy-only by design",
     # no array input: built from names/parameters; they return NumPy constants
     "checkerboard_points": "no array input (pattern size -> NumPy grid)",
     "camera_rotation": "no array input (Python float angles)",

@@ -274,6 +274,9 @@ VALID: dict[str, C | Skip] = {
         "a result NamedTuple (no validation of its own)"
     ),
     "imageform.geometry.Undistorted": Skip("a result NamedTuple (no validation of its own)"),
+    "imageform.geometry.PlumbLineResult": Skip(
+        "a result dataclass built by estimate_distortion_from_lines"
+    ),
     "imageform.geometry.VanishingPointResult": Skip(
         "a result dataclass built by detect_vanishing_points"
     ),
@@ -353,6 +356,7 @@ VALID: dict[str, C | Skip] = {
     "imageform.geometry.detect_vanishing_points": call(
         segments=V("segments"), image_size=(16, 12), max_trials=50
     ),
+    "imageform.geometry.estimate_distortion_from_lines": call(V("board_grey"), min_lines=1),
     "imageform.geometry.estimate_homography": call(
         V("uv"), np.array([[3.1, 4.2], [5.3, 6.4], [8.6, 3.1], [10.25, 7.5]])
     ),

@@ -377,6 +377,8 @@ FIXTURES: dict[str, Callable[[], Any]] = {
     "rgb": _rgb,
     "rgb_u8": lambda: (_rgb() * 255).astype(np.uint8),
     "rgb_big": lambda: _rng().uniform(0.05, 0.95, (32, 40, 3)),
+    # straight edges: a 48 x 64 checkerboard of 12 px squares (estimate_distortion_from_lines)
+    "board_grey": lambda: ((np.mgrid[0:48, 0:64] // 12).sum(0) % 2) * 0.6 + 0.2,
     "gray": lambda: _rgb()[..., 1],
     "rgb4": lambda: _rng().uniform(0.05, 0.95, (4, 3)),
     "rgb1": lambda: np.array([0.2, 0.5, 0.7]),

@@ -63,6 +63,7 @@ from imageform.geometry.homography import apply_homography, estimate_homography
 from imageform.geometry.intrinsics import Intrinsics, intrinsic_matrix, projected_size
 from imageform.geometry.line_segments import LineSegments, detect_line_segments
 from imageform.geometry.lsd import lsd_segments
+from imageform.geometry.plumb_line import PlumbLineResult, estimate_distortion_from_lines
 from imageform.geometry.pnp import PnPResult, solve_pnp
 from imageform.geometry.pnp_batch import solve_pnp_batch
 from imageform.geometry.pnp_ransac import solve_pnp_ransac
@@ -157,6 +158,7 @@ __all__ = [
     "Intrinsics",
     "KannalaBrandt",
     "LineSegments",
+    "PlumbLineResult",
     "PnPResult",
     "Pose",
     "Projection",
@@ -187,6 +189,7 @@ __all__ = [
     "detect_line_segments",
     "detect_vanishing_points",
     "essential_5point",
+    "estimate_distortion_from_lines",
     "estimate_homography",
     "estimate_projection_matrix",
     "euler_to_matrix",

@@ -637,10 +637,24 @@ def _dictionary_hint(grey: object, dictionary: str) -> str:
 class UndistortOptions(ImageIn, ImageOut):
     """Options of ``imageform undistort``."""
 
-    camera: Path = option(
-        help="Camera file (docs/camera-file.md) of the input image: K and distortion.",
+    camera: Path | None = option(
+        None,
+        help="Camera file (docs/camera-file.md) of the input image: K and distortion "
+        "(or --from-lines).",
         metavar="FILE",
         input=True,
+    )
+    from_lines: bool = option(
+        False,
+        help="Estimate the distortion from the image's own straight lines (plumb lines; "
+        "the one-parameter division model about the image centre) instead of a camera file.",
+    )
+    estimate: Path | None = option(
+        None,
+        help="With --from-lines: also write the estimate as a camera file (division model; "
+        "its focal length is the centre-to-corner distance, not a measured one).",
+        metavar="FILE",
+        output=True,
     )
     camera_out: Path | None = option(
         None,
@@ -649,6 +663,43 @@ class UndistortOptions(ImageIn, ImageOut):
         metavar="FILE",
         output=True,
     )
+
+
+def _from_lines(run: Run, img: Any, image: Path, opts: UndistortOptions) -> tuple[Any, Any]:
+    """Return the camera file estimated from the image's straight lines and its summary."""
+    import numpy as np
+
+    from imageform.geometry import Camera, estimate_distortion_from_lines
+    from imageform.io import CameraFile, Provenance
+
+    arr = np.asarray(img)
+    arr = arr[..., 0] if arr.shape[-1] == 1 else arr[..., :3]
+    if arr.dtype == np.uint16:
+        arr = arr.astype(np.float64) / 65535.0
+    res = estimate_distortion_from_lines(arr)
+    h, w = int(arr.shape[0]), int(arr.shape[1])
+    cam = Camera(res.K, image_size=(w, h), distortion=res.distortion if res.found else None)
+    prov = Provenance(
+        command="imageform undistort --from-lines",
+        rms_px=res.residual_px,
+        points_used=sum(len(c) for c in res.lines),
+        images=(image.name,),
+        fixed=("fx", "fy", "cx", "cy"),
+    )
+    std = {"k1": res.k1_std} if res.found else {}
+    summary = {
+        "k1": res.k1,
+        "k1_std": res.k1_std,
+        "found": res.found,
+        "centre": res.centre,
+        "scale_px": float(res.K[0, 0]),
+        "lines": len(res.lines),
+        "straightness_rms_px": res.residual_px,
+        "straightness_rms_before_px": res.residual_before_px,
+        "max_displacement_px": res.max_displacement_px,
+        "corner_distortion": res.corner_distortion,
+    }
+    return CameraFile(cam, std=std, provenance=prov), summary
 
 
 def undistort(run: Run, opts: UndistortOptions, *, out: Path, image: Path) -> Result:
@@ -661,10 +712,20 @@ def undistort(run: Run, opts: UndistortOptions, *, out: Path, image: Path) -> Re
     from imageform.geometry.undistort import undistort_image
     from imageform.io import read_camera, write_camera
 
-    cf = read_camera(opts.camera)
-    cam = cf.camera
+    if (opts.camera is None) == (not opts.from_lines):
+        raise InvalidInputError("give either --camera FILE or --from-lines")
+    if opts.estimate is not None and not opts.from_lines:
+        raise InvalidInputError("--estimate needs --from-lines (it writes the estimated camera)")
     img = read(image, opts)
     h, w = int(img.shape[0]), int(img.shape[1])
+    lines: dict[str, Any] = {}
+    if opts.camera is not None:
+        cf = read_camera(opts.camera)
+        none = f"{opts.camera} has no distortion (model none)"
+    else:
+        cf, lines = _from_lines(run, img, image, opts)
+        none = f"no distortion found in the straight lines of {image}"
+    cam = cf.camera
     if cam.image_size is not None and tuple(cam.image_size) != (w, h):
         raise InvalidInputError(
             f"camera file {opts.camera} is for {cam.image_size[0]} x {cam.image_size[1]} px "
@@ -672,7 +733,7 @@ def undistort(run: Run, opts: UndistortOptions, *, out: Path, image: Path) -> Re
         )
     model = cf.distortion_model
     if cam.distortion is None:
-        run.note(f"note: {opts.camera} has no distortion (model none): the image is copied")
+        run.note(f"note: {none}: the image is copied")
         result = img
     else:
         result = undistort_image(img, np.asarray(cam.K), cam.distortion)
@@ -683,11 +744,14 @@ def undistort(run: Run, opts: UndistortOptions, *, out: Path, image: Path) -> Re
         from imageform.geometry import Camera
 
         flat = Camera(cam.K, cam.R, cam.t, (w, h), cam.image_plane, None)
-        prov = replace(cf.provenance, command="imageform undistort", based_on=opts.camera.name)
+        based_on = opts.camera.name if opts.camera is not None else image.name
+        prov = replace(cf.provenance, command="imageform undistort", based_on=based_on)
         std = {
             k: v for k, v in cf.std.items() if k in ("fx", "fy", "cx", "cy", "skew", "rvec", "t")
         }
         write_camera(run.file(opts.camera_out), replace(cf, camera=flat, std=std, provenance=prov))
+    if opts.estimate is not None:
+        write_camera(run.file(opts.estimate), cf)
     coeffs = list(cam.distortion.coeffs) if cam.distortion is not None else []
     summary = {
         "input": image,
@@ -698,10 +762,29 @@ def undistort(run: Run, opts: UndistortOptions, *, out: Path, image: Path) -> Re
         "model": model,
         "coefficients": coeffs,
         "values_clipped": n_out,
+        "estimate": opts.estimate,
+        "from_lines": lines or None,
     }
-    text = [f"wrote {out} ({w} x {h}, {model} distortion removed)"]
+    text = []
+    if lines:
+        text.append(
+            f"distortion from {lines['lines']} straight lines: division k1 = {lines['k1']:.4f} "
+            f"+- {lines['k1_std']:.4f} (coordinates over {lines['scale_px']:.1f} px from the "
+            f"centre), corner {100 * lines['corner_distortion']:+.1f} %, "
+            f"{lines['max_displacement_px']:.1f} px; lines straight to "
+            f"{lines['straightness_rms_px']:.2f} px RMS ({lines['straightness_rms_before_px']:.2f} "
+            "px before)"
+            if lines["found"]
+            else f"no distortion found from {lines['lines']} straight lines (k1 = "
+            f"{lines['k1']:.4f} +- {lines['k1_std']:.4f} straightens them from "
+            f"{lines['straightness_rms_before_px']:.2f} to {lines['straightness_rms_px']:.2f} "
+            "px RMS only)"
+        )
+    text.append(f"wrote {out} ({w} x {h}, {model} distortion removed)")
     if opts.camera_out is not None:
         text.append(f"wrote {opts.camera_out} (the same camera, distortion none)")
+    if opts.estimate is not None:
+        text.append(f"wrote {opts.estimate} (the estimated camera, {model} distortion)")
     return Result(summary, tuple(text))
 
 
@@ -723,7 +806,8 @@ WORKFLOWS = (
     ),
     Workflow(
         "undistort",
-        "Remove lens distortion from an image with a camera file (any distortion model).",
+        "Remove lens distortion from an image with a camera file (any distortion model), or "
+        "estimated from its straight lines (--from-lines).",
         "imageform.workflows.calibration:undistort",
         UndistortOptions,
         (Input("image", "Distorted image (PNG, JPEG, TIFF or .npy)."),),

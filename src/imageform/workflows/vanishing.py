@@ -37,6 +37,11 @@ class VanishingOptions(ImageIn):
         metavar="FILE",
         input=True,
     )
+    distortion: bool = option(
+        False,
+        help="Estimate the lens distortion from the photograph's own straight lines (plumb "
+        "lines, division model) and remove it before finding lines (without --camera).",
+    )
     seed: int = option(
         0, help="RANSAC seed, an integer (rng= in Python): results are reproducible.", minimum=0
     )
@@ -110,6 +115,37 @@ def _world_axes(res: Any, K: Any, R: Any) -> list[dict[str, Any]]:
     return out
 
 
+def _remove_distortion(run: Run, arr: Any, image: Path) -> tuple[Any, dict[str, Any]]:
+    """Return the photograph undistorted with the distortion of its straight lines, and it."""
+    import numpy as np
+
+    from imageform.geometry import estimate_distortion_from_lines
+    from imageform.geometry.undistort import undistort_image
+
+    est = estimate_distortion_from_lines(arr)
+    info = {
+        "k1": est.k1,
+        "k1_std": est.k1_std,
+        "found": est.found,
+        "scale_px": float(est.K[0, 0]),
+        "lines": len(est.lines),
+        "max_displacement_px": est.max_displacement_px,
+    }
+    if not est.found:
+        run.note(
+            f"note: no distortion found in the straight lines of {image} (k1 = {est.k1:.4f}): "
+            "the photograph is used as it is"
+        )
+        return arr, info
+    out = np.asarray(undistort_image(arr, est.K, est.distortion))
+    run.note(
+        f"note: {image} was undistorted with the distortion of its {len(est.lines)} straight "
+        f"lines (division k1 = {est.k1:.4f} on coordinates over {est.K[0, 0]:.1f} px, corner "
+        f"{est.max_displacement_px:.1f} px) before finding lines"
+    )
+    return out, info
+
+
 def vanishing(run: Run, opts: VanishingOptions, *, out: Path | None, image: Path) -> Result:
     """``imageform vanishing``: line segments, vanishing points, K and the horizon."""
     import numpy as np
@@ -117,6 +153,10 @@ def vanishing(run: Run, opts: VanishingOptions, *, out: Path | None, image: Path
     from imageform._kernels import ahead
     from imageform.geometry import detect_vanishing_points
 
+    if opts.distortion and opts.camera is not None:
+        raise InvalidInputError(
+            "--distortion estimates what --camera's file gives: use one of them"
+        )
     img = read(image, opts)
     arr = img[..., 0] if img.shape[-1] == 1 else img[..., :3]
     if arr.dtype == np.uint16:
@@ -141,6 +181,9 @@ def vanishing(run: Run, opts: VanishingOptions, *, out: Path | None, image: Path
                 f"note: {image} was undistorted with the {cf.distortion_model} model of "
                 f"{opts.camera} before finding lines"
             )
+    plumb: dict[str, Any] | None = None
+    if opts.distortion:
+        arr, plumb = _remove_distortion(run, arr, image)
     if opts.principal_point == "camera":
         if cf is None:
             raise InvalidInputError("--principal-point camera needs --camera FILE")
@@ -161,6 +204,7 @@ def vanishing(run: Run, opts: VanishingOptions, *, out: Path | None, image: Path
         "image": image,
         "camera": opts.camera,
         "segments": len(res.segments),
+        "distortion": plumb,
     }
     extra: dict[str, Any] = {}
     if cf is not None:
