@@ -25,6 +25,7 @@ from imageform.errors import InvalidInputError
 __all__ = [
     "F_REFINE_FACTOR",
     "H_SUPPORT_WIDTH",
+    "MAGSAC_REACH",
     "REFINE_FACTOR",
     "TERMINATION_FACTOR",
     "check_confidence",
@@ -65,6 +66,11 @@ F_REFINE_FACTOR = 3.0
 #: inliers of benchmarks/bench_twoview.py's 30 planar scenes beyond ``3σ̂`` cost 5 % of the
 #: median accuracy (0.361 against 0.343 px with all of them).
 H_SUPPORT_WIDTH = math.sqrt(-2.0 * math.log(1e-4))
+
+#: Reach of MAGSAC++'s marginalised loss (Barath et al. 2020) as a multiple of the inlier
+#: threshold: ``k σ_max = MAGSAC_REACH τ``, residuals beyond it count as outliers (loss 1,
+#: weight 0). See ``imageform._kernels.ransac._magsac`` and docs/two-view.md.
+MAGSAC_REACH = 3.0
 
 #: Upper bound of the support whose inlier ratio sets the adaptive sample count of the
 #: compiled estimators (``imageform._kernels.ransac``), as a multiple of the threshold: the

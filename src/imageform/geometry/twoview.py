@@ -577,8 +577,8 @@ def find_essential_matrix(
                 min(trials, 2**62),
                 np.uint64(gen.integers(0, 2**63 - 1)),
                 min(n_iter, 2**62),
-                _robust_core.REFINE_FACTOR,
                 _E_TERMINATION_FACTOR,
+                _robust_core.MAGSAC_REACH,
                 Em,
             )
         )
