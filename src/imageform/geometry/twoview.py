@@ -60,8 +60,14 @@ _LO_STEPS = (3.0, 2.0, 2.0, 2.0)
 #: samples (issue 28).
 _E_TERMINATION_FACTOR = 2.0
 
-#: At most this many rounds of the essential matrix's final refit in front of the cameras.
-_E_FRONT_ROUNDS = 6
+#: The essential matrix's MAGSAC++ IRLS (as ``imageform._kernels.ransac_e``): rounds and
+#: tolerance of the local optimisation, the runner-up pool, the final IRLS's rounds and LM
+#: steps per round.
+_E_LO_ROUNDS = 10
+_E_LO_TOL = 1e-12
+_E_POOL = 8
+_E_IRLS_ROUNDS = 10
+_E_IRLS_ITER = 2
 
 
 class FundamentalResult(NamedTuple):
@@ -448,8 +454,21 @@ def _some_rt(E: F64) -> tuple[F64, F64]:
     return U @ W @ Vt, U[:, 2].copy()
 
 
-def _refine_e(E: F64, q1: F64, q2: F64, K1: F64, K2: F64, p1: F64, p2: F64, max_iter: int) -> F64:
-    """LM over ``(R, t̂)`` (3 + 2 parameters) on the pixel Sampson distances."""
+def _refine_e(
+    E: F64,
+    q1: F64,
+    q2: F64,
+    K1: F64,
+    K2: F64,
+    p1: F64,
+    p2: F64,
+    max_iter: int,
+    sw: F64 | None = None,
+) -> F64:
+    """LM over ``(R, t̂)`` (3 + 2 parameters) on the pixel Sampson distances.
+
+    Each distance multiplied by ``sw`` (square roots of weights) when given.
+    """
     R0, t0 = _some_rt(E)
     # tangent basis of the unit sphere at t0
     a = np.eye(3)[int(np.argmin(np.abs(t0)))]
@@ -469,7 +488,7 @@ def _refine_e(E: F64, q1: F64, q2: F64, K1: F64, K2: F64, p1: F64, p2: F64, max_
         Ftx2 = p2 @ F[:2, :] + F[2, :]
         num = np.sum(p2 * Fx1[:, :2], -1) + Fx1[:, 2]
         den = np.sqrt(Fx1[:, 0] ** 2 + Fx1[:, 1] ** 2 + Ftx2[:, 0] ** 2 + Ftx2[:, 1] ** 2)
-        return num / den
+        return num / den if sw is None else sw * num / den
 
     with np.errstate(all="ignore"):
         q, _ = levenberg_marquardt(residual, np.zeros(5), max_iter=max_iter)
@@ -603,34 +622,44 @@ def find_essential_matrix(
         E = (U * np.array([1.0, 1.0, 0.0])) @ Vt
         return E / np.linalg.norm(E)
 
+    def weighted_step(E: F64, sel: NDArray[np.bool_], w: F64, n_iter: int) -> F64:
+        return _refine_e(E, q1[sel], q2[sel], Ka, Kb, p1[sel], p2[sel], n_iter, np.sqrt(w[sel]))
+
+    def loss(e: F64) -> F64:
+        return _robust_core.magsac(e, thr)[0]
+
     def local_opt(E: F64, inl: NDArray[np.bool_]) -> F64:
-        for m in (2.0, 1.0):
-            sel = sq(E) < (m * thr) ** 2
+        # MAGSAC++'s IRLS: one LM step per round on the current weights, to convergence
+        for _ in range(_E_LO_ROUNDS):
+            w = _robust_core.magsac(sq(E), thr)[1]
+            sel = w > 0
             if sel.sum() < 6:
                 break
-            E = _refine_e(E, q1[sel], q2[sel], Ka, Kb, p1[sel], p2[sel], 10)
+            En = weighted_step(E, sel, w, 1)
+            moved = float(np.sum((En - E) ** 2))
+            E = En
+            if moved < _E_LO_TOL:
+                break
         return E
 
-    E, inl, drawn = ransac(n, 5, solve, sq, thr, p, trials, gen, local_opt)
+    E, inl, drawn = ransac(n, 5, solve, sq, thr, p, trials, gen, local_opt, pool=_E_POOL, loss=loss)
     if E is None or inl.sum() < 5:
         raise DegenerateConfigurationError(
             f"no essential matrix with at least 5 inliers within {thr:g} px after {drawn} samples"
         )
     E = project_e(E)
-
-    def refit(m: F64, sel: NDArray[np.bool_]) -> F64:
-        return _refine_e(m, q1[sel], q2[sel], Ka, Kb, p1[sel], p2[sel], n_iter)
-
-    E = _robust_core.refit_on_support(E, sq, refit, thr, 1, 5)
-    # then on the support of the current E less the correspondences behind a camera
-    prev: NDArray[np.bool_] | None = None
-    for _ in range(_E_FRONT_ROUNDS):
-        e = sq(E)
-        wide = _robust_core.refine_support(e[e < thr * thr], thr, 1)
-        sel = (e < wide * wide) & _in_front(E, q1, q2, e < wide * wide)
-        if sel.sum() < 5 or (prev is not None and np.array_equal(sel, prev)):
+    # the final IRLS, without the weighted correspondences behind a camera
+    for _ in range(_E_IRLS_ROUNDS):
+        w = _robust_core.magsac(sq(E), thr)[1]
+        sel = w > 0
+        sel &= _in_front(E, q1, q2, sel)
+        if sel.sum() < 5:
             break
-        E, prev = refit(E, sel), sel
+        En = weighted_step(E, sel, w, min(n_iter, _E_IRLS_ITER))
+        moved = float(np.sum((En - E) ** 2))
+        E = En
+        if moved < 1e-14:
+            break
     return _essential_result(project_e(E), p1, p2, Kai, Kbi, thr, drawn, points1, points2)
 
 
