@@ -18,7 +18,9 @@ in ``imageform.geometry``):
   Gauss-Jordan elimination, the action matrix of multiplication by ``x`` as in Stewenius,
   Engels & Nister 2006), its real eigenvalues the real roots of its characteristic
   polynomial (Hessenberg form, then the roots isolated between those of the polynomial's
-  derivatives), the eigenvectors by Gauss-Jordan elimination; Sampson distance in pixels.
+  derivatives), the eigenvectors by Gauss-Jordan elimination; Sampson distance in pixels,
+  scored by MAGSAC++'s marginalised loss (:func:`_magsac`), its IRLS as the local
+  optimisation and as the final fit (Barath et al. 2020), and a runner-up pool.
 
 Speed comes from more than compiled loops: no allocation per hypothesis; the
 partial-evaluation bail-out of the score (``Σ min(e², τ²)`` grows monotonically, so the

@@ -696,7 +696,7 @@ def _irls_front(E, p1, p2, q1, q2, K1i, K2i, c, max_iter, rounds):  # type: igno
     weighted ones that the factorisation of ``E`` chosen by the cheirality vote puts behind
     a camera (an outlier near its epipolar line by chance is behind one about half the
     time), and fits ``E`` by weighted LM over ``(R, t)``; it stops when a round moves ``E``
-    by less than ``1e-9`` (Frobenius) or after ``rounds`` rounds.
+    by less than ``1e-7`` (Frobenius) or after ``rounds`` rounds.
     """
     n = p1.shape[0]
     sel = np.empty(n, dtype=np.int64)
@@ -833,17 +833,20 @@ def _pool_insert(E, sc, pool_E, pool_sc, n_pool):  # type: ignore[no-untyped-def
 def essential_estimate(  # type: ignore[no-untyped-def]  # pragma: no cover
     p1, p2, q1, q2, K1i, K2i, thr, conf, max_trials, seed, max_iter, term, reach, E_out
 ):
-    """Robust ``E`` from pixels ``p1, p2`` (normalised ``q1, q2``): 5-point RANSAC + LO, LM.
+    """Robust ``E`` from pixels ``p1, p2`` (normalised ``q1, q2``): 5-point RANSAC, MAGSAC++.
 
-    As ``twoview.find_essential_matrix``'s NumPy path: scored by the pixel Sampson distance
-    of ``F = K2⁻ᵀ E K1⁻¹`` (MSAC), every new best locally optimised (:func:`_local_opt`),
-    the best projected to an essential matrix and refitted (:func:`_refit_front`). Each
-    hypothesis is verified from a random correspondence on and rejected early by Wald's
-    SPRT (:func:`_score_sprt`; ``ε`` the best model's inlier ratio, ``δ`` that of the
-    rejected ones); the adaptive count ``log(1 - p) / log(1 - ε_s⁵ (1 - 1/A))`` (``ε_s``
-    the best model's support, ``term`` τ wide) allows for the good models the SPRT rejects
-    (Matas & Chum 2008, sec. 4). Writes ``E_out`` and returns the samples drawn, negated
-    when no hypothesis had 5 inliers.
+    As ``twoview.find_essential_matrix``'s NumPy path: each hypothesis scored by MAGSAC++'s
+    loss of the pixel Sampson distance of ``F = K2⁻ᵀ E K1⁻¹`` (:func:`_score_sprt`,
+    ``k σ_max = reach τ``); every new best, and before sampling stops the :data:`_POOL`
+    best of the others, locally optimised (:func:`_local_opt`, MAGSAC++'s IRLS); sampling
+    goes on when the pool improves the best and the count asks for more; the best projected
+    to an essential matrix and refitted by the IRLS in front of the cameras
+    (:func:`_irls_front`). Each hypothesis is verified from a random correspondence on and
+    rejected early by Wald's SPRT (``ε`` the best model's inlier ratio within ``τ``, ``δ``
+    that of the rejected ones); the adaptive count ``log(1 - p) / log(1 - ε_s⁵ (1 - 1/A))``
+    (``ε_s`` the best model's support, ``term`` τ wide) allows for the good models the SPRT
+    rejects (Matas & Chum 2008, sec. 4). Writes ``E_out`` and returns the samples drawn,
+    negated when no hypothesis had 5 inliers.
     """
     n = p1.shape[0]
     thr2 = thr * thr

@@ -6,9 +6,10 @@ Convention: ``x2ᵀ F x1 = 0`` for pixel ``x1`` in the first image and ``x2`` in
 
 - :func:`fundamental_8point`, :func:`fundamental_7point`, :func:`essential_5point`: the
   minimal / linear solvers on exact data.
-- :func:`find_fundamental_matrix`, :func:`find_essential_matrix`: RANSAC (MSAC scoring on
-  the Sampson error in pixels, LO-RANSAC, adaptive trials), then Levenberg-Marquardt on the
-  Sampson error of the inliers over a minimal parametrisation.
+- :func:`find_fundamental_matrix`, :func:`find_essential_matrix`: RANSAC (MSAC scoring for
+  F, MAGSAC++ for E, on the Sampson error in pixels; LO-RANSAC, adaptive trials), then
+  Levenberg-Marquardt on the Sampson error (F: of the refinement support; E: MAGSAC++'s
+  weighted least squares) over a minimal parametrisation.
 """
 
 from __future__ import annotations
@@ -511,20 +512,23 @@ def find_essential_matrix(
     """Essential matrix of two calibrated views from pixels with outliers (5-point RANSAC).
 
     The pixels are mapped to normalised coordinates ``K⁻¹ x``; minimal 5-point samples
-    (:func:`essential_5point`, up to ten solutions each) are scored by the truncated squared
-    Sampson distance *in pixels* of ``F = K2⁻ᵀ E K1⁻¹`` (MSAC, adaptive trial count
-    ``log(1 - p) / log(1 - ε⁵)``); each new best hypothesis is locally optimised (LO-RANSAC:
-    a few Levenberg-Marquardt steps over ``(R, t/‖t‖)`` on the correspondences within
-    ``2τ``, then within ``τ``). The final ``E = [t]ₓ R`` minimises the Sampson distances of
-    the correspondences within the refinement support (``3σ̂``, between ``τ`` and ``2τ``,
-    see docs/two-view.md) by Levenberg-Marquardt over ``(R, t/‖t‖)`` (5 degrees of
-    freedom), then again on the support of the refined ``E`` less the correspondences that
-    its factorisation (chosen as in :func:`recover_pose`) puts behind a camera, until that
-    set is stable: an outlier near its epipolar line by chance lies behind a camera about
-    half the time. The inliers are those within ``τ`` of the result. The compiled path
-    (numba) solves the 5-point problem by Nister's hidden variable and Sturm sequences and
-    rejects bad hypotheses early by Wald's SPRT (Matas & Chum 2008), its sample count
-    corrected for the SPRT's rejections of good ones.
+    (:func:`essential_5point`, up to ten solutions each) are scored by MAGSAC++'s
+    marginalised loss (Barath et al. 2020) of the Sampson distance *in pixels* of
+    ``F = K2⁻ᵀ E K1⁻¹``: the noise ``σ`` of an inlier uniform on ``[0, σ_max]``, ``3.64
+    σ_max = 3τ``, beyond which a correspondence costs as an outlier (adaptive trial count
+    ``log(1 - p) / log(1 - ε⁵)``). Each new best hypothesis, and before sampling stops the
+    8 best of the others, is locally optimised by MAGSAC++'s iteratively re-weighted least
+    squares (weights ``ρ'(r)/r`` of that loss, one Levenberg-Marquardt step over ``(R,
+    t/‖t‖)`` per round, up to 10 rounds: to its basin's minimum, so that the score compares
+    basins, not how far each hypothesis got). The final ``E = [t]ₓ R`` is that IRLS run on,
+    each round without the weighted correspondences that its factorisation (chosen as in
+    :func:`recover_pose`) puts behind a camera: an outlier near its epipolar line by chance
+    lies behind a camera about half the time. The result depends far less on ``rng`` than a
+    model chosen by its inlier count (docs/two-view.md, "The seed"). The inliers are those
+    within ``τ`` of the result. The compiled path (numba) solves the 5-point problem by
+    Nister's hidden variable and Sturm sequences and rejects bad hypotheses early by Wald's
+    SPRT (Matas & Chum 2008), its sample count corrected for the SPRT's rejections of good
+    ones.
 
     Parameters
     ----------
@@ -556,7 +560,8 @@ def find_essential_matrix(
     ----------
     Nister (2004), PAMI 26(6); Stewenius, Engels & Nister (2006), ISPRS J. 60; Chum, Matas &
     Kittler (2003), LO-RANSAC; Matas & Chum (2008), "Optimal randomized RANSAC", PAMI
-    30(8).
+    30(8); Barath, Noskova, Ivashechkin & Matas (2020), "MAGSAC++, a fast, reliable and
+    accurate robust estimator", CVPR.
 
     Examples
     --------
