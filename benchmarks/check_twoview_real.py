@@ -314,6 +314,8 @@ def seed_pose_table(folder: Path, seeds: int) -> str:
                 for s in range(seeds):
                     t0 = time.perf_counter()
                     out = fn(s)
+                    Re: Any
+                    te: Any
                     if name == "imageform":
                         pose = recover_pose(out.E, p1, p2, K, inliers=out.inliers)
                         Re, te, n_in = pose.R, pose.t, int(out.inliers.sum())
