@@ -70,9 +70,6 @@ _E_POOL = 8
 _E_IRLS_ROUNDS = 10
 _E_IRLS_ITER = 2
 
-#: At most this many rounds of the essential matrix's final refit in front of the cameras.
-_E_FRONT_ROUNDS = 6
-
 
 class FundamentalResult(NamedTuple):
     """A robustly estimated fundamental matrix, its inlier mask, Sampson RMS and sample count.
@@ -523,15 +520,10 @@ def find_essential_matrix(
     8 best of the others, is locally optimised by MAGSAC++'s iteratively re-weighted least
     squares (weights ``ρ'(r)/r`` of that loss, one Levenberg-Marquardt step over ``(R,
     t/‖t‖)`` per round, up to 10 rounds: to its basin's minimum, so that the score compares
-    basins, not how far each hypothesis got). The best is refitted by that IRLS, each round
-    without the weighted correspondences that its factorisation (chosen as in
-    :func:`recover_pose`) puts behind a camera (an outlier near its epipolar line by chance
-    lies behind a camera about half the time); the final ``E = [t]ₓ R`` then minimises the
-    plain Sampson distances of the correspondences within the refinement support of that
-    ``E`` (``3σ̂``, between ``τ`` and ``2τ``, see docs/two-view.md), by Levenberg-Marquardt
-    over ``(R, t/‖t‖)``, again on the support of the refined ``E`` less the points behind a
-    camera until that set is stable: the weights choose the basin, the unweighted fit is
-    the efficient estimate under Gaussian noise within it. The result depends far less on
+    basins, not how far each hypothesis got). The final ``E = [t]ₓ R`` is that IRLS run from
+    the best, each round without the weighted correspondences that its factorisation
+    (chosen as in :func:`recover_pose`) puts behind a camera: an outlier near its epipolar
+    line by chance lies behind a camera about half the time. The result depends far less on
     ``rng`` than a model chosen by its inlier count (docs/two-view.md, "The seed"). The
     inliers are those within ``τ`` of the result. The compiled path (numba) solves the
     5-point problem by Nister's hidden variable and Sturm sequences and rejects bad
@@ -675,19 +667,6 @@ def find_essential_matrix(
         if moved < 1e-14:
             break
 
-    # then least squares on the refinement support of that E, less the points behind a camera
-    def refit(m: F64, sel: NDArray[np.bool_]) -> F64:
-        return _refine_e(m, q1[sel], q2[sel], Ka, Kb, p1[sel], p2[sel], n_iter)
-
-    E = _robust_core.refit_on_support(E, sq, refit, thr, 1, 5)
-    prev: NDArray[np.bool_] | None = None
-    for _ in range(_E_FRONT_ROUNDS):
-        e = sq(E)
-        wide = _robust_core.refine_support(e[e < thr * thr], thr, 1)
-        sel = (e < wide * wide) & _in_front(E, q1, q2, e < wide * wide)
-        if sel.sum() < 5 or (prev is not None and np.array_equal(sel, prev)):
-            break
-        E, prev = refit(E, sel), sel
     return _essential_result(project_e(E), p1, p2, Kai, Kbi, thr, drawn, points1, points2)
 
 
