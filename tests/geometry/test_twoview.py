@@ -353,7 +353,7 @@ def test_essential_hardly_depends_on_the_seed_on_a_wide_baseline_pair() -> None:
 
     Before MAGSAC++'s IRLS (main at 68c1e6f) the seeds of scenes 1, 2 and 5 spread over
     0.15, 0.29 and 0.11 degrees and the median of worst / gold over the six scenes was
-    1.25; with it every scene's ten seeds give the same model, the median is 1.14.
+    1.25; with it the largest spread is 0.023 degrees and the median 0.89.
     """
     worst_over_gold = []
     for sc in range(6):
