@@ -305,7 +305,9 @@ def test_essential_and_pose_no_worse_than_opencv() -> None:
     assert np.median(ours) <= np.median(theirs)
 
 
-def _wide_scene(seed: int, n: int = 200, inlier_ratio: float = 0.4, sigma: float = 1.0):
+def _wide_scene(
+    seed: int, n: int = 200, inlier_ratio: float = 0.4, sigma: float = 1.0
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """A wide-baseline pair: the second camera orbits the cloud by 25-35 degrees.
 
     Pixels by the library's ``project_points``; ``inlier_ratio`` of the correspondences
@@ -330,7 +332,9 @@ def _wide_scene(seed: int, n: int = 200, inlier_ratio: float = 0.4, sigma: float
     return R, t / np.linalg.norm(t), n1, n2, out
 
 
-def _gold_rotation_error(R: np.ndarray, t: np.ndarray, n1, n2, out) -> float:
+def _gold_rotation_error(
+    R: np.ndarray, t: np.ndarray, n1: np.ndarray, n2: np.ndarray, out: np.ndarray
+) -> float:
     """Rotation error of the gold standard: E refined (LM, Sampson) on the true inliers."""
     from imageform.geometry.twoview import _essential_from_rt, _normalised, _refine_e
 
