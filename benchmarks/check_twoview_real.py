@@ -31,10 +31,18 @@ pycolmap (RADIAL camera fixed to the reference's, exhaustive matching), at the p
 size and upscaled by ``--upscale`` (24.5 Mpx): registered views, points, reprojection RMS,
 largest relative-rotation error against the reference, wall time. (4) ``detect_features``
 alone on one upscaled photograph with ``max_size`` 3200 (the default) and ``None``, each in
-a fresh process: seconds and the process's peak resident memory. Run::
+a fresh process: seconds and the process's peak resident memory. With ``--seeds N``
+only the dependence on the random seed is measured instead: (5) the relative poses and (6)
+the graf homography over the seeds ``0 .. N-1`` (``rng=`` for imageform, ``UsacParams``'
+``randomGeneratorState`` for OpenCV's USAC with MAGSAC++ scoring, σ-consensus local
+optimisation and the MAGSAC final polisher), median and worst of each error, besides
+``findEssentialMat(..., USAC_MAGSAC)`` / ``findHomography(..., USAC_MAGSAC)`` as called
+above (its one fixed seed). Run::
 
     OPENBLAS_NUM_THREADS=1 PYTHONPATH=src python benchmarks/check_twoview_real.py \\
         --graf /tmp/sfm-eval/graf --opensfm /tmp/sfm-eval/berlin [--repeat 3] [--upscale 1.75]
+    OPENBLAS_NUM_THREADS=1 PYTHONPATH=src python benchmarks/check_twoview_real.py \\
+        --graf /tmp/sfm-eval/graf --opensfm /tmp/sfm-eval/berlin --seeds 10
 """
 
 from __future__ import annotations
@@ -233,6 +241,143 @@ def pose_table(folder: Path, repeat: int) -> str:
     return f"## Relative poses, {folder.name} ({w} x {h})\n\n" + markdown_table(cols, rows)
 
 
+def _usac_params(thr: float, seed: int) -> Any:
+    import cv2
+
+    prm = cv2.UsacParams()
+    prm.confidence = 0.999
+    prm.threshold = thr
+    prm.maxIterations = 10000
+    prm.sampler = cv2.SAMPLING_UNIFORM
+    prm.score = cv2.SCORE_METHOD_MAGSAC
+    prm.loMethod = cv2.LOCAL_OPTIM_SIGMA
+    prm.loIterations = 10
+    prm.final_polisher = cv2.MAGSAC
+    prm.final_polisher_iterations = 20
+    prm.isParallel = False
+    prm.randomGeneratorState = seed
+    return prm
+
+
+def _spread(values: list[float]) -> str:
+    return f"{statistics.median(values):.2f} / {max(values):.2f}"
+
+
+def seed_pose_table(folder: Path, seeds: int) -> str:
+    import cv2
+
+    from imageform.geometry import (
+        BrownConrady,
+        detect_features,
+        find_essential_matrix,
+        match_features,
+        recover_pose,
+    )
+
+    names, poses, cam = _opensfm(folder)
+    imgs = {n: _read_rgb(_images_dir(folder) / n) for n in names}
+    h, w = next(iter(imgs.values())).shape[:2]
+    K, k1, k2 = _camera(cam, w, h)
+    dist = BrownConrady(k1=k1, k2=k2)
+    Kinv = np.linalg.inv(K)
+    no_dist = np.zeros((1, 5))
+
+    def undistort(p: np.ndarray) -> np.ndarray:
+        x = (np.c_[p, np.ones(len(p))] @ Kinv.T)[:, :2]
+        return np.asarray(dist.undistort(x).xy) @ K[:2, :2].T + K[:2, 2]
+
+    feats = {n: detect_features(im) for n, im in imgs.items()}
+    rows = []
+    for a, b in itertools.combinations(names, 2):
+        (Ra, ta), (Rb, tb) = poses[a], poses[b]
+        R, t = Rb @ Ra.T, tb - Rb @ Ra.T @ ta
+        m = match_features(feats[a].descriptors, feats[b].descriptors)
+        p1, p2 = undistort(feats[a].xy[m[:, 0]]), undistort(feats[b].xy[m[:, 1]])
+        for thr in (1.0, 2.0):
+            runs: dict[str, Any] = {
+                "imageform": lambda s, thr=thr, p1=p1, p2=p2: find_essential_matrix(
+                    p1, p2, K, threshold=thr, rng=s
+                ),
+                "OpenCV USAC (MAGSAC++), seeded": lambda s, thr=thr, p1=p1, p2=p2: (
+                    cv2.findEssentialMat(
+                        p1.reshape(-1, 1, 2), p2.reshape(-1, 1, 2), K, K, no_dist, no_dist,
+                        _usac_params(thr, s),
+                    )
+                ),
+                "OpenCV USAC_MAGSAC (fixed seed)": lambda s, thr=thr, p1=p1, p2=p2: (
+                    cv2.findEssentialMat(p1, p2, K, cv2.USAC_MAGSAC, 0.999, thr)
+                ),
+            }  # fmt: skip
+            for name, fn in runs.items():
+                fn(0)  # warm-up (numba)
+                rot, tra, inl, ms = [], [], [], []
+                for s in range(seeds):
+                    t0 = time.perf_counter()
+                    out = fn(s)
+                    Re: Any
+                    te: Any
+                    if name == "imageform":
+                        pose = recover_pose(out.E, p1, p2, K, inliers=out.inliers)
+                        Re, te, n_in = pose.R, pose.t, int(out.inliers.sum())
+                    else:
+                        E, mask = out
+                        _, Re, te, _ = cv2.recoverPose(E[:3], p1, p2, K, mask=mask.copy())
+                        n_in = int(mask.sum())
+                    ms.append((time.perf_counter() - t0) * 1e3)
+                    rot.append(_rot_err(Re, R))
+                    tra.append(_dir_err(np.ravel(te), t))
+                    inl.append(n_in)
+                rows.append(
+                    [f"{a}-{b}", len(m), thr, name, f"{statistics.median(inl):.0f}", _spread(rot),
+                     f"{max(rot) - min(rot):.2f}", _spread(tra), f"{statistics.median(ms):.1f}"]
+                )  # fmt: skip
+    cols = ["pair", "matches", "threshold px", "method", "inliers (median)",
+            "rotation error median / worst deg", "rotation spread deg",
+            "translation error median / worst deg", "ms (median)"]  # fmt: skip
+    return f"## Relative poses over {seeds} seeds, {folder.name} ({w} x {h})\n\n" + markdown_table(
+        cols, rows
+    )
+
+
+def seed_homography_table(folder: Path, seeds: int) -> str:
+    import cv2
+
+    from imageform.geometry import detect_features, find_homography, match_features
+
+    im1 = _read_rgb(folder / "graf1.png")
+    h, w = im1.shape[:2]
+    S = np.diag([w / 800.0, w / 800.0, 1.0])
+    Ht = S @ _read_h(folder / "H1to2p") @ np.linalg.inv(S)
+    f1, f2 = detect_features(im1), detect_features(_read_rgb(folder / "graf2.png"))
+    m = match_features(f1.descriptors, f2.descriptors)
+    a, b = f1.xy[m[:, 0]], f2.xy[m[:, 1]]
+    ys, xs = np.mgrid[0:h:8, 0:w:8]
+    grid = np.c_[xs.ravel(), ys.ravel()].astype(float)
+    runs: dict[str, Any] = {
+        "imageform find_homography": lambda s: find_homography(a, b, threshold=3.0, rng=s).H,
+        "OpenCV USAC (MAGSAC++), seeded": lambda s: cv2.findHomography(a, b, _usac_params(3.0, s))[
+            0
+        ],
+        "OpenCV USAC_MAGSAC (fixed seed)": lambda s: cv2.findHomography(a, b, cv2.USAC_MAGSAC, 3.0)[
+            0
+        ],
+    }
+    rows = []
+    for name, fn in runs.items():
+        means, maxes = [], []
+        for s in range(seeds):
+            e = np.linalg.norm(_transfer(np.asarray(fn(s)), grid) - _transfer(Ht, grid), axis=1)
+            means.append(float(e.mean()))
+            maxes.append(float(e.max()))
+        rows.append(["1-2", len(m), name, f"{statistics.median(means):.3f} / {max(means):.3f}",
+                     f"{statistics.median(maxes):.2f} / {max(maxes):.2f}"])  # fmt: skip
+    cols = ["pair", "matches", "method", "grid error mean px, median / worst over seeds",
+            "grid error max px, median / worst over seeds"]  # fmt: skip
+    return f"## Homography over {seeds} seeds, Oxford graf ({w} x {h})\n\n" + markdown_table(
+        cols, rows
+    )
+
+
 def _rel_rot_max(R: np.ndarray, R_ref: list[np.ndarray]) -> float:
     reg = [i for i in range(len(R_ref)) if np.all(np.isfinite(R[i]))]
     errs = [
@@ -340,9 +485,17 @@ def main() -> None:
     ap.add_argument("--opensfm", type=Path)
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--upscale", type=float, default=1.75)
+    ap.add_argument("--seeds", type=int, default=0)
     args = ap.parse_args()
     print(header("Two-view geometry and SfM on real photographs"))
     print(f"load average: {Path('/proc/loadavg').read_text().split()[:3]}\n")
+    if args.seeds > 0:
+        if args.opensfm is not None:
+            print(seed_pose_table(args.opensfm, args.seeds))
+        if args.graf is not None:
+            print(seed_homography_table(args.graf, args.seeds))
+        print(f"load average at the end: {Path('/proc/loadavg').read_text().split()[:3]}")
+        return
     if args.graf is not None:
         print(homography_table(args.graf, args.repeat))
     if args.opensfm is not None:

@@ -102,6 +102,7 @@ BENCH_SCRIPTS: dict[str, str] = {
     "twoview-f": "benchmarks/bench_twoview.py",
     "twoview-h": "benchmarks/bench_twoview.py",
     "twoview-real": "benchmarks/check_twoview_real.py",
+    "twoview-seeds": "benchmarks/check_twoview_real.py",
     "vision": "benchmarks/bench_vision.py",
     "vp-lsd": "benchmarks/check_vp_lsd.py",
     "vp-manhattan": "benchmarks/check_vp_manhattan.py",

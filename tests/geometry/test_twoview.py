@@ -22,6 +22,7 @@ from imageform.geometry import (
     find_homography,
     fundamental_7point,
     fundamental_8point,
+    project_points,
     recover_pose,
     rvec_to_matrix,
     solve_pnp,
@@ -302,6 +303,92 @@ def test_essential_and_pose_no_worse_than_opencv() -> None:
         res = find_essential_matrix(n1, n2, K, threshold=1.0, rng=s)
         ours.append(angle_deg(recover_pose(res.E, n1, n2, K, inliers=res.inliers).R, R))
     assert np.median(ours) <= np.median(theirs)
+
+
+def _wide_scene(
+    seed: int, n: int = 200, inlier_ratio: float = 0.4, sigma: float = 1.0
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """A wide-baseline pair: the second camera orbits the cloud by 25-35 degrees.
+
+    Pixels by the library's ``project_points``; ``inlier_ratio`` of the correspondences
+    true (Gaussian noise ``sigma`` px in both images), the rest uniform in the second image.
+    """
+    rng = np.random.default_rng(seed)
+    axis = np.array([rng.normal(0, 0.2), 1.0, rng.normal(0, 0.2)])
+    R = np.asarray(rvec_to_matrix(np.radians(rng.uniform(25, 35)) * axis / np.linalg.norm(axis)))
+    c = np.array([0.0, 0.0, 6.0])
+    t = c - R @ c  # the second camera looks at the cloud's centre
+    X = np.empty((0, 3))
+    while len(X) < n:
+        Y = c + rng.uniform([-2.5, -2, -1.5], [2.5, 2, 1.5], (4 * n, 3))
+        u1, u2 = project_points(Y, K).uv, project_points(Y, K, R, t).uv
+        ok = np.all((u1 >= 0) & (u1 < [W, H]) & (u2 >= 0) & (u2 < [W, H]), axis=1)
+        X = np.concatenate([X, Y[ok]])[:n]
+    n1 = project_points(X, K).uv + rng.normal(0, sigma, (n, 2))
+    n2 = project_points(X, K, R, t).uv + rng.normal(0, sigma, (n, 2))
+    out = np.ones(n, dtype=bool)
+    out[: round(inlier_ratio * n)] = False
+    n2[out] = rng.uniform([0, 0], [W, H], (int(out.sum()), 2))
+    return R, t / np.linalg.norm(t), n1, n2, out
+
+
+def _gold_rotation_error(
+    R: np.ndarray, t: np.ndarray, n1: np.ndarray, n2: np.ndarray, out: np.ndarray
+) -> float:
+    """Rotation error of the gold standard: E refined (LM, Sampson) on the true inliers."""
+    from imageform.geometry.twoview import _essential_from_rt, _normalised, _refine_e
+
+    a, b = n1[~out], n2[~out]
+    E = _refine_e(_essential_from_rt(R, t), _normalised(a, K), _normalised(b, K), K, K, a, b, 100)
+    return angle_deg(recover_pose(E, n1, n2, K, inliers=~out).R, R)
+
+
+def _seed_errors(scene_seed: int, seeds: range) -> tuple[np.ndarray, float]:
+    R, t, n1, n2, out = _wide_scene(scene_seed)
+    errs = []
+    for s in seeds:
+        res = find_essential_matrix(n1, n2, K, rng=s)
+        errs.append(angle_deg(recover_pose(res.E, n1, n2, K, inliers=res.inliers).R, R))
+    return np.array(errs), _gold_rotation_error(R, t, n1, n2, out)
+
+
+def test_essential_hardly_depends_on_the_seed_on_a_wide_baseline_pair() -> None:
+    """40 % inliers, 1 px noise, 10 seeds: one model, near the gold standard's accuracy.
+
+    Before MAGSAC++'s IRLS (main at 68c1e6f) the seeds of scenes 1, 2 and 5 spread over
+    0.15, 0.29 and 0.11 degrees and the median of worst / gold over the six scenes was
+    1.25; with it the largest spread is 0.023 degrees and the median 0.89.
+    """
+    worst_over_gold = []
+    for sc in range(6):
+        errs, gold = _seed_errors(sc, range(10))
+        assert errs.max() - errs.min() < 0.05, (sc, errs)
+        assert errs.max() < gold + 0.3, (sc, errs, gold)
+        worst_over_gold.append(errs.max() / gold)
+    assert np.median(worst_over_gold) < 1.2, worst_over_gold
+
+
+def test_essential_numpy_twin_as_robust_to_the_seed(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setenv("IMAGEFORM_DISABLE_NUMBA", "1")
+    errs, gold = _seed_errors(3, range(5))
+    assert errs.max() - errs.min() < 0.05 and errs.max() < gold + 0.3, (errs, gold)
+
+
+def test_magsac_weight_is_the_loss_derivative_over_the_residual() -> None:
+    """MAGSAC++'s IRLS weight is ``ρ'(r) / r`` of its loss (Barath et al. 2020, eq. 12)."""
+    from imageform.geometry._robust_core import magsac
+
+    r = np.linspace(0.05, 2.95, 59)  # residuals within the reach 3 τ (τ = 1)
+    h = 1e-6
+    loss, w = magsac(r**2, 1.0)
+    dloss = (magsac((r + h) ** 2, 1.0)[0] - magsac((r - h) ** 2, 1.0)[0]) / (2 * h)
+    ratio = dloss / r / w
+    np.testing.assert_allclose(ratio, ratio[0], rtol=1e-5)
+    assert np.all(np.diff(loss) > 0) and np.all(np.diff(w) < 0)
+    l_out, w_out = magsac(np.array([9.0, 100.0]), 1.0)
+    np.testing.assert_array_equal(l_out, [1.0, 1.0])
+    np.testing.assert_array_equal(w_out, [0.0, 0.0])
+    np.testing.assert_allclose(magsac(np.array([0.0]), 1.0)[1], [1.0])
 
 
 def test_recover_pose_matches_opencv_on_same_E() -> None:

@@ -173,9 +173,14 @@ PLANS: dict[str, Plan] = {
             Entry(
                 "ransac_e",
                 "_score_sprt",
-                f"({_A2}, {_A2}, {_A2}, float64, float64, int64, float64, float64, float64)",
+                f"({_A2}, {_A2}, {_A2}, float64, float64, float64, int64, float64, float64,"
+                " float64)",
             ),
-            Entry("ransac_e", "_lm_e", f"({_A2}, {_A2}, {_A2}, {_A2}, {_A2}, {_I1}, int64, int64)"),
+            Entry(
+                "ransac_e",
+                "_lm_e",
+                f"({_A2}, {_A2}, {_A2}, {_A2}, {_A2}, {_I1}, {_A1}, int64, int64)",
+            ),
             Entry(
                 "relative_pose",
                 "pose_from_essential",

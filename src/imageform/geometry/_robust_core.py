@@ -25,6 +25,7 @@ from imageform.errors import InvalidInputError
 __all__ = [
     "F_REFINE_FACTOR",
     "H_SUPPORT_WIDTH",
+    "MAGSAC_REACH",
     "REFINE_FACTOR",
     "TERMINATION_FACTOR",
     "check_confidence",
@@ -32,6 +33,7 @@ __all__ = [
     "hartley",
     "kernel_seed",
     "levenberg_marquardt",
+    "magsac",
     "ransac",
     "refine_support",
     "result_dtype",
@@ -65,6 +67,11 @@ F_REFINE_FACTOR = 3.0
 #: inliers of benchmarks/bench_twoview.py's 30 planar scenes beyond ``3σ̂`` cost 5 % of the
 #: median accuracy (0.361 against 0.343 px with all of them).
 H_SUPPORT_WIDTH = math.sqrt(-2.0 * math.log(1e-4))
+
+#: Reach of MAGSAC++'s marginalised loss (Barath et al. 2020) as a multiple of the inlier
+#: threshold: ``k σ_max = MAGSAC_REACH τ``, residuals beyond it count as outliers (loss 1,
+#: weight 0). See ``imageform._kernels.ransac._magsac`` and docs/two-view.md.
+MAGSAC_REACH = 3.0
 
 #: Upper bound of the support whose inlier ratio sets the adaptive sample count of the
 #: compiled estimators (``imageform._kernels.ransac``), as a multiple of the threshold: the
@@ -212,6 +219,7 @@ def ransac(
     rng: np.random.Generator,
     local_opt: Callable[[F64, NDArray[np.bool_]], F64] | None = None,
     pool: int = 0,
+    loss: Callable[[F64], F64] | None = None,
 ) -> tuple[F64 | None, NDArray[np.bool_], int]:
     """MSAC with adaptive trial count and LO-RANSAC local optimisation.
 
@@ -229,6 +237,9 @@ def ransac(
     be optimised itself. When that improves the best model, the adaptive count is
     recomputed from its inlier ratio and sampling goes on if it asks for more. Returns
     ``(best model or None, inliers, trials)``.
+
+    With ``loss`` (squared residuals to per-correspondence losses, e.g. :func:`magsac`'s),
+    a model's score is the sum of its losses instead of the truncated quadratic.
     """
     thr2 = threshold * threshold
     best_model: F64 | None = None
@@ -240,7 +251,9 @@ def ransac(
 
     def score(models: F64) -> tuple[F64, NDArray[np.bool_]]:
         e = sq_errors(models)
-        e = np.where(np.isfinite(e), e, thr2)
+        e = np.where(np.isfinite(e), e, np.inf if loss is not None else thr2)
+        if loss is not None:
+            return loss(e).sum(axis=-1), e < thr2
         return np.minimum(e, thr2).sum(axis=-1), e < thr2
 
     def optimise(model: F64, inl: NDArray[np.bool_], sc: float) -> None:
@@ -288,6 +301,47 @@ def ransac(
         if best_score >= before or drawn >= min(needed, max_trials):
             break
     return best_model, best_inl, drawn
+
+
+#: MAGSAC++'s constants (as ``imageform._kernels.ransac``): ``k`` (the 0.99 quantile of
+#: the χ distribution with 4 degrees of freedom), ``k²/2``, ``Γ(3/2, k²/2)``, and the scales
+#: that make the weight 1 at 0 and the loss 1 at ``k σ_max``.
+_MS_K = 3.64
+_MS_XK = _MS_K * _MS_K / 2.0
+_MS_GK = 0.5 * math.sqrt(math.pi) * math.erfc(math.sqrt(_MS_XK)) + math.sqrt(_MS_XK) * math.exp(
+    -_MS_XK
+)
+_MS_G0 = 0.5 * math.sqrt(math.pi) - _MS_GK
+_MS_LK = 0.75 * math.sqrt(math.pi) - 1.5 * _MS_GK - _MS_XK**1.5 * math.exp(-_MS_XK)
+
+
+def magsac(sq_err: F64, threshold: float, reach: float = MAGSAC_REACH) -> tuple[F64, F64]:
+    r"""MAGSAC++'s loss and IRLS weight of squared residuals, each scaled to 1.
+
+    The noise ``σ`` of an inlier is taken uniform on ``[0, σ_max]`` and the residual's
+    likelihood marginalised over it (Barath, Noskova, Ivashechkin & Matas 2020, "MAGSAC++,
+    a fast, reliable and accurate robust estimator", CVPR, eqs. 11-12, ``ρ = 4`` degrees
+    of freedom); with ``k σ_max = reach τ``, ``k = 3.64`` and ``x = e² / (2 σ_max²)``:
+
+    .. math:: \text{loss} \propto \gamma(5/2, x) + x\,(\Gamma(3/2, x) - \Gamma(3/2, k^2/2)),
+              \qquad w \propto \Gamma(3/2, x) - \Gamma(3/2, k^2/2)
+
+    for ``x < k²/2``; beyond, loss 1 and weight 0. The loss is 1 at ``k σ_max`` (an
+    outlier's, as a truncated quadratic's at its threshold), the weight 1 at 0.
+    """
+    from scipy.special import erfc
+
+    sigma_max = reach * threshold / _MS_K
+    x = np.asarray(sq_err, dtype=np.float64) / (2.0 * sigma_max * sigma_max)
+    inside = x < _MS_XK
+    xs = np.where(inside, x, 0.0)
+    sx = np.sqrt(xs)
+    ex = np.exp(-xs)
+    g = 0.5 * math.sqrt(math.pi) * erfc(sx) + sx * ex
+    low = 0.75 * math.sqrt(math.pi) - 1.5 * g - xs * sx * ex
+    loss = np.where(inside, (low + xs * (g - _MS_GK)) / _MS_LK, 1.0)
+    weight = np.where(inside, np.maximum(g - _MS_GK, 0.0) / _MS_G0, 0.0)
+    return loss, weight
 
 
 def levenberg_marquardt(

@@ -6,9 +6,10 @@ Convention: ``x2ᵀ F x1 = 0`` for pixel ``x1`` in the first image and ``x2`` in
 
 - :func:`fundamental_8point`, :func:`fundamental_7point`, :func:`essential_5point`: the
   minimal / linear solvers on exact data.
-- :func:`find_fundamental_matrix`, :func:`find_essential_matrix`: RANSAC (MSAC scoring on
-  the Sampson error in pixels, LO-RANSAC, adaptive trials), then Levenberg-Marquardt on the
-  Sampson error of the inliers over a minimal parametrisation.
+- :func:`find_fundamental_matrix`, :func:`find_essential_matrix`: RANSAC (MSAC scoring for
+  F, MAGSAC++ for E, on the Sampson error in pixels; LO-RANSAC, adaptive trials), then
+  Levenberg-Marquardt on the Sampson error (F: of the refinement support; E: MAGSAC++'s
+  weighted least squares) over a minimal parametrisation.
 """
 
 from __future__ import annotations
@@ -60,8 +61,14 @@ _LO_STEPS = (3.0, 2.0, 2.0, 2.0)
 #: samples (issue 28).
 _E_TERMINATION_FACTOR = 2.0
 
-#: At most this many rounds of the essential matrix's final refit in front of the cameras.
-_E_FRONT_ROUNDS = 6
+#: The essential matrix's MAGSAC++ IRLS (as ``imageform._kernels.ransac_e``): rounds and
+#: tolerance of the local optimisation, the runner-up pool, the final IRLS's rounds and LM
+#: steps per round.
+_E_LO_ROUNDS = 10
+_E_LO_TOL = 1e-12
+_E_POOL = 8
+_E_IRLS_ROUNDS = 10
+_E_IRLS_ITER = 2
 
 
 class FundamentalResult(NamedTuple):
@@ -448,8 +455,21 @@ def _some_rt(E: F64) -> tuple[F64, F64]:
     return U @ W @ Vt, U[:, 2].copy()
 
 
-def _refine_e(E: F64, q1: F64, q2: F64, K1: F64, K2: F64, p1: F64, p2: F64, max_iter: int) -> F64:
-    """LM over ``(R, t̂)`` (3 + 2 parameters) on the pixel Sampson distances."""
+def _refine_e(
+    E: F64,
+    q1: F64,
+    q2: F64,
+    K1: F64,
+    K2: F64,
+    p1: F64,
+    p2: F64,
+    max_iter: int,
+    sw: F64 | None = None,
+) -> F64:
+    """LM over ``(R, t̂)`` (3 + 2 parameters) on the pixel Sampson distances.
+
+    Each distance multiplied by ``sw`` (square roots of weights) when given.
+    """
     R0, t0 = _some_rt(E)
     # tangent basis of the unit sphere at t0
     a = np.eye(3)[int(np.argmin(np.abs(t0)))]
@@ -469,7 +489,7 @@ def _refine_e(E: F64, q1: F64, q2: F64, K1: F64, K2: F64, p1: F64, p2: F64, max_
         Ftx2 = p2 @ F[:2, :] + F[2, :]
         num = np.sum(p2 * Fx1[:, :2], -1) + Fx1[:, 2]
         den = np.sqrt(Fx1[:, 0] ** 2 + Fx1[:, 1] ** 2 + Ftx2[:, 0] ** 2 + Ftx2[:, 1] ** 2)
-        return num / den
+        return num / den if sw is None else sw * num / den
 
     with np.errstate(all="ignore"):
         q, _ = levenberg_marquardt(residual, np.zeros(5), max_iter=max_iter)
@@ -492,20 +512,23 @@ def find_essential_matrix(
     """Essential matrix of two calibrated views from pixels with outliers (5-point RANSAC).
 
     The pixels are mapped to normalised coordinates ``K⁻¹ x``; minimal 5-point samples
-    (:func:`essential_5point`, up to ten solutions each) are scored by the truncated squared
-    Sampson distance *in pixels* of ``F = K2⁻ᵀ E K1⁻¹`` (MSAC, adaptive trial count
-    ``log(1 - p) / log(1 - ε⁵)``); each new best hypothesis is locally optimised (LO-RANSAC:
-    a few Levenberg-Marquardt steps over ``(R, t/‖t‖)`` on the correspondences within
-    ``2τ``, then within ``τ``). The final ``E = [t]ₓ R`` minimises the Sampson distances of
-    the correspondences within the refinement support (``3σ̂``, between ``τ`` and ``2τ``,
-    see docs/two-view.md) by Levenberg-Marquardt over ``(R, t/‖t‖)`` (5 degrees of
-    freedom), then again on the support of the refined ``E`` less the correspondences that
-    its factorisation (chosen as in :func:`recover_pose`) puts behind a camera, until that
-    set is stable: an outlier near its epipolar line by chance lies behind a camera about
-    half the time. The inliers are those within ``τ`` of the result. The compiled path
-    (numba) solves the 5-point problem by Nister's hidden variable and Sturm sequences and
-    rejects bad hypotheses early by Wald's SPRT (Matas & Chum 2008), its sample count
-    corrected for the SPRT's rejections of good ones.
+    (:func:`essential_5point`, up to ten solutions each) are scored by MAGSAC++'s
+    marginalised loss (Barath et al. 2020) of the Sampson distance *in pixels* of
+    ``F = K2⁻ᵀ E K1⁻¹``: the noise ``σ`` of an inlier uniform on ``[0, σ_max]``, ``3.64
+    σ_max = 3τ``, beyond which a correspondence costs as an outlier (adaptive trial count
+    ``log(1 - p) / log(1 - ε⁵)``). Each new best hypothesis, and before sampling stops the
+    8 best of the others, is locally optimised by MAGSAC++'s iteratively re-weighted least
+    squares (weights ``ρ'(r)/r`` of that loss, one Levenberg-Marquardt step over ``(R,
+    t/‖t‖)`` per round, up to 10 rounds: to its basin's minimum, so that the score compares
+    basins, not how far each hypothesis got). The final ``E = [t]ₓ R`` is that IRLS run from
+    the best, each round without the weighted correspondences that its factorisation
+    (chosen as in :func:`recover_pose`) puts behind a camera: an outlier near its epipolar
+    line by chance lies behind a camera about half the time. The result depends far less on
+    ``rng`` than a model chosen by its inlier count (docs/two-view.md, "The seed"). The
+    inliers are those within ``τ`` of the result. The compiled path (numba) solves the
+    5-point problem by Nister's hidden variable and Sturm sequences and rejects bad
+    hypotheses early by Wald's SPRT (Matas & Chum 2008), its sample count corrected for the
+    SPRT's rejections of good ones.
 
     Parameters
     ----------
@@ -537,7 +560,8 @@ def find_essential_matrix(
     ----------
     Nister (2004), PAMI 26(6); Stewenius, Engels & Nister (2006), ISPRS J. 60; Chum, Matas &
     Kittler (2003), LO-RANSAC; Matas & Chum (2008), "Optimal randomized RANSAC", PAMI
-    30(8).
+    30(8); Barath, Noskova, Ivashechkin & Matas (2020), "MAGSAC++, a fast, reliable and
+    accurate robust estimator", CVPR.
 
     Examples
     --------
@@ -579,6 +603,7 @@ def find_essential_matrix(
                 min(n_iter, 2**62),
                 _robust_core.REFINE_FACTOR,
                 _E_TERMINATION_FACTOR,
+                _robust_core.MAGSAC_REACH,
                 Em,
             )
         )
@@ -603,34 +628,45 @@ def find_essential_matrix(
         E = (U * np.array([1.0, 1.0, 0.0])) @ Vt
         return E / np.linalg.norm(E)
 
+    def weighted_step(E: F64, sel: NDArray[np.bool_], w: F64, n_iter: int) -> F64:
+        return _refine_e(E, q1[sel], q2[sel], Ka, Kb, p1[sel], p2[sel], n_iter, np.sqrt(w[sel]))
+
+    def loss(e: F64) -> F64:
+        return _robust_core.magsac(e, thr)[0]
+
     def local_opt(E: F64, inl: NDArray[np.bool_]) -> F64:
-        for m in (2.0, 1.0):
-            sel = sq(E) < (m * thr) ** 2
+        # MAGSAC++'s IRLS: one LM step per round on the current weights, to convergence
+        for _ in range(_E_LO_ROUNDS):
+            w = _robust_core.magsac(sq(E), thr)[1]
+            sel = w > 0
             if sel.sum() < 6:
                 break
-            E = _refine_e(E, q1[sel], q2[sel], Ka, Kb, p1[sel], p2[sel], 10)
+            En = weighted_step(E, sel, w, 1)
+            moved = float(np.sum((En - E) ** 2))
+            E = En
+            if moved < _E_LO_TOL:
+                break
         return E
 
-    E, inl, drawn = ransac(n, 5, solve, sq, thr, p, trials, gen, local_opt)
+    E, inl, drawn = ransac(n, 5, solve, sq, thr, p, trials, gen, local_opt, pool=_E_POOL, loss=loss)
     if E is None or inl.sum() < 5:
         raise DegenerateConfigurationError(
             f"no essential matrix with at least 5 inliers within {thr:g} px after {drawn} samples"
         )
     E = project_e(E)
-
-    def refit(m: F64, sel: NDArray[np.bool_]) -> F64:
-        return _refine_e(m, q1[sel], q2[sel], Ka, Kb, p1[sel], p2[sel], n_iter)
-
-    E = _robust_core.refit_on_support(E, sq, refit, thr, 1, 5)
-    # then on the support of the current E less the correspondences behind a camera
-    prev: NDArray[np.bool_] | None = None
-    for _ in range(_E_FRONT_ROUNDS):
-        e = sq(E)
-        wide = _robust_core.refine_support(e[e < thr * thr], thr, 1)
-        sel = (e < wide * wide) & _in_front(E, q1, q2, e < wide * wide)
-        if sel.sum() < 5 or (prev is not None and np.array_equal(sel, prev)):
+    # the final IRLS, without the weighted correspondences behind a camera
+    for _ in range(_E_IRLS_ROUNDS):
+        w = _robust_core.magsac(sq(E), thr)[1]
+        sel = w > 0
+        sel &= _in_front(E, q1, q2, sel)
+        if sel.sum() < 5:
             break
-        E, prev = refit(E, sel), sel
+        En = weighted_step(E, sel, w, min(n_iter, _E_IRLS_ITER))
+        moved = float(np.sum((En - E) ** 2))
+        E = En
+        if moved < 1e-14:
+            break
+
     return _essential_result(project_e(E), p1, p2, Kai, Kbi, thr, drawn, points1, points2)
 
 
