@@ -241,7 +241,7 @@ def compare(folder: Path, camera: Path) -> list[tuple[object, ...]]:
         if img.shape[1] != w or img.shape[0] != h:
             continue
         for centre in ("image centre", "estimated"):
-            res, dt = _estimate(img, estimate_centre=centre == "estimated")
+            res, dt = _estimate(img, estimate_center=centre == "estimated")
             if isinstance(res, str):
                 rows.append((path.name, centre, "-", "-", "-", "-", "error: " + res[:60], "-"))
                 continue
@@ -253,7 +253,7 @@ def compare(folder: Path, camera: Path) -> list[tuple[object, ...]]:
             rows.append(
                 (
                     path.name,
-                    f"{centre} ({res.centre[0]:.0f}, {res.centre[1]:.0f})",
+                    f"{centre} ({res.center[0]:.0f}, {res.center[1]:.0f})",
                     f"{res.k1:.4f} ± {res.k1_std:.4f}",
                     len(res.lines),
                     f"{res.max_displacement_px:.1f}",

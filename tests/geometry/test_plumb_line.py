@@ -73,7 +73,7 @@ def test_board_coefficient_recovered(corner: float) -> None:
 def test_straight_board_is_no_distortion() -> None:
     res = estimate_distortion_from_lines(_board())
     assert not res.found and abs(res.k1) < 1e-3
-    assert res.centre.tolist() == [159.5, 119.5]
+    assert res.center.tolist() == [159.5, 119.5]
     assert res.K[0, 0] == pytest.approx(math.hypot(159.5, 119.5))
 
 
@@ -104,12 +104,12 @@ def test_photograph_without_distortion() -> None:
     assert not res.found
 
 
-def test_centre_given_and_estimated() -> None:
+def test_center_given_and_estimated() -> None:
     img = _board(k=_k(0.15))
-    res = estimate_distortion_from_lines(img, centre=(159.5, 119.5))
+    res = estimate_distortion_from_lines(img, center=(159.5, 119.5))
     assert res.k1 == pytest.approx(_k(0.15), rel=0.05)
-    free = estimate_distortion_from_lines(img, estimate_centre=True)
-    assert np.hypot(*(free.centre - [159.5, 119.5])) < 5.0
+    free = estimate_distortion_from_lines(img, estimate_center=True)
+    assert np.hypot(*(free.center - [159.5, 119.5])) < 5.0
     assert free.k1 == pytest.approx(_k(0.15), rel=0.05)
 
 
@@ -152,12 +152,12 @@ def test_two_edges_are_too_few_lines() -> None:
         ({"k_range": (0.1, 0.5)}, "low < 0 < high"),
         ({"k_range": (-0.5, 2.0)}, "k_range <= 1"),
         ({"k_range": 3}, "two numbers"),
-        ({"centre": (1.0, 2.0, 3.0)}, r"centre as \(cx, cy\)"),
-        ({"centre": (np.nan, 2.0)}, "centre"),
+        ({"center": (1.0, 2.0, 3.0)}, r"center as \(cx, cy\)"),
+        ({"center": (np.nan, 2.0)}, "center"),
         ({"min_lines": 0}, "min_lines"),
         ({"tolerance": -1.0}, "tolerance"),
         ({"edge_threshold": 0.0}, "edge_threshold"),
-        ({"estimate_centre": "yes"}, "estimate_centre"),
+        ({"estimate_center": "yes"}, "estimate_center"),
     ],
 )
 def test_bad_input(kwargs: dict[str, object], match: str) -> None:

@@ -23,7 +23,7 @@ Pipeline of :func:`estimate_distortion_from_lines`:
    and 6° of each, cut into chains at gaps) join the contours (pieces of one line across
    gaps); the consensus is taken again within ±0.05 of ``k``, and the chains within τ there
    are the inliers.
-5. Refinement: ``k`` (and with ``estimate_centre=True`` the distortion centre) by
+5. Refinement: ``k`` (and with ``estimate_center=True`` the distortion centre) by
    bounded trust-region least squares (a soft-L1 loss of 1 px) on the distances of the
    inlier chains' points to their lines, measured in the distorted image to first order
    (Sampson: the corrected distance over ``|Jᵀ n|``, so squeezing the image does not pay);
@@ -121,7 +121,7 @@ class PlumbLineResult:
         return float(self.distortion.k1)
 
     @property
-    def centre(self) -> FloatArray:
+    def center(self) -> FloatArray:
         """The distortion centre ``(cx, cy)`` in pixels."""
         return np.asarray(self.K[:2, 2], dtype=np.float64)
 
@@ -179,11 +179,11 @@ def _accumulate(
 class _Setup:
     """The edge points in normalised coordinates and the image's geometry."""
 
-    def __init__(self, pts: FloatArray, normals: FloatArray, centre: FloatArray, s: float):
+    def __init__(self, pts: FloatArray, normals: FloatArray, center: FloatArray, s: float):
         self.pts = pts
-        self.centre = centre
+        self.center = center
         self.s = s
-        self.x = (pts - centre) / s
+        self.x = (pts - center) / s
         self.tangent = np.stack((-normals[:, 1], normals[:, 0]), axis=-1)
 
     def corrected(self, k: float) -> tuple[FloatArray, FloatArray, FloatArray]:
@@ -311,7 +311,7 @@ def _refine(
     chains: list[np.ndarray],
     k0: float,
     bounds: tuple[float, float],
-    estimate_centre: bool,
+    estimate_center: bool,
     max_iter: int,
 ) -> tuple[float, FloatArray, float, int]:
     """Least squares on the inlier chains: ``(k, centre, k_std, nfev)``."""
@@ -324,12 +324,12 @@ def _refine(
     s = setup.s
 
     def residuals(p: FloatArray) -> FloatArray:
-        c = p[1:3] * s + setup.centre if estimate_centre else setup.centre
+        c = p[1:3] * s + setup.center if estimate_center else setup.center
         return _distances((pts - c) / s, float(p[0]), lab, cnt) * s
 
-    p0 = np.array([k0, 0.0, 0.0]) if estimate_centre else np.array([k0])
-    lo = [bounds[0], -0.25, -0.25] if estimate_centre else [bounds[0]]
-    hi = [bounds[1], 0.25, 0.25] if estimate_centre else [bounds[1]]
+    p0 = np.array([k0, 0.0, 0.0]) if estimate_center else np.array([k0])
+    lo = [bounds[0], -0.25, -0.25] if estimate_center else [bounds[0]]
+    hi = [bounds[1], 0.25, 0.25] if estimate_center else [bounds[1]]
     sol = least_squares(
         residuals,
         np.clip(p0, lo, hi),
@@ -349,15 +349,15 @@ def _refine(
         k_std = float(math.sqrt(max(cov[0, 0], 0.0)))
     except np.linalg.LinAlgError:
         k_std = math.inf
-    centre = sol.x[1:3] * s + setup.centre if estimate_centre else setup.centre
-    return float(sol.x[0]), np.asarray(centre, dtype=np.float64), k_std, int(sol.nfev)
+    center = sol.x[1:3] * s + setup.center if estimate_center else setup.center
+    return float(sol.x[0]), np.asarray(center, dtype=np.float64), k_std, int(sol.nfev)
 
 
 def estimate_distortion_from_lines(
     image: ArrayLike,
     *,
-    centre: ArrayLike | None = None,
-    estimate_centre: bool = False,
+    center: ArrayLike | None = None,
+    estimate_center: bool = False,
     k_range: tuple[float, float] = (-0.9, 0.6),
     min_lines: int = 3,
     n_lines: int = 40,
@@ -386,9 +386,9 @@ def estimate_distortion_from_lines(
     ----------
     image : array_like, shape (H, W) or (H, W, 3)
         Grey or RGB; uint8/uint16 or floats in [0, 1].
-    centre : (cx, cy), optional
+    center : (cx, cy), optional
         Distortion centre in pixels (default the image centre, ``((W-1)/2, (H-1)/2)``).
-    estimate_centre : bool
+    estimate_center : bool
         Refine the centre too (from one image it is weakly determined: keep the default
         unless the lines cover the image).
     k_range : (float, float)
@@ -450,7 +450,7 @@ def estimate_distortion_from_lines(
     h, w = img.shape
     if min(h, w) < 16:
         raise InvalidInputError(f"expected an image of at least 16 x 16 pixels, got {w} x {h}")
-    estimate_centre = as_bool(estimate_centre, "estimate_centre")
+    estimate_center = as_bool(estimate_center, "estimate_center")
     pair = np.asarray(k_range, dtype=object)
     if pair.shape != (2,):
         raise InvalidInputError(
@@ -469,8 +469,8 @@ def estimate_distortion_from_lines(
     edge_threshold = as_real(edge_threshold, "edge_threshold", positive=True, maximum=10.0)
     max_iter = as_int(max_iter, "max_iter", minimum=1, maximum=100000)
     c0 = np.array([(w - 1) / 2.0, (h - 1) / 2.0])
-    if centre is not None:
-        c_arr = np.asarray(_centre_pair(centre), dtype=np.float64)
+    if center is not None:
+        c_arr = np.asarray(_center_pair(center), dtype=np.float64)
         c0 = c_arr
     s = float(math.hypot((w - 1) / 2.0, (h - 1) / 2.0))
 
@@ -502,8 +502,8 @@ def estimate_distortion_from_lines(
         chains = _distinct([c for c, e in zip(cand, e_at, strict=True) if e <= tolerance])
         if len(chains) < min_lines:
             break
-        k, c_new, k_std, _ = _refine(setup, chains, k, (lo, hi), estimate_centre, max_iter)
-        if estimate_centre:
+        k, c_new, k_std, _ = _refine(setup, chains, k, (lo, hi), estimate_center, max_iter)
+        if estimate_center:
             setup = _Setup(pts, normals, c_new, s)
     if len(chains) < min_lines:
         raise DegenerateConfigurationError(
@@ -513,7 +513,7 @@ def estimate_distortion_from_lines(
     e_after = _chain_errors(setup, chains, np.array([k]))[0]
     e_before = _chain_errors(setup, chains, np.array([0.0]))[0]
     n = np.array([len(c) for c in chains], dtype=np.float64)
-    K = np.array([[s, 0.0, setup.centre[0]], [0.0, s, setup.centre[1]], [0.0, 0.0, 1.0]])
+    K = np.array([[s, 0.0, setup.center[0]], [0.0, s, setup.center[1]], [0.0, 0.0, 1.0]])
     res = PlumbLineResult(
         distortion=DivisionModel(k1=k),
         K=K,
@@ -527,7 +527,7 @@ def estimate_distortion_from_lines(
     )
     ratio = _corner_ratio(res)
     corners = np.array([[0, 0], [w - 1, 0], [0, h - 1], [w - 1, h - 1]], dtype=np.float64)
-    r_px = float(np.hypot(*(corners - setup.centre).T).max())
+    r_px = float(np.hypot(*(corners - setup.center).T).max())
     disp = abs(ratio - 1.0) * r_px
     found = (
         disp >= _NONE_PX
@@ -539,12 +539,12 @@ def estimate_distortion_from_lines(
     return res
 
 
-def _centre_pair(value: object) -> tuple[float, float]:
+def _center_pair(value: object) -> tuple[float, float]:
     """Return ``(cx, cy)`` as floats; raise for anything but two finite numbers."""
     arr = np.asarray(value, dtype=object)
     if arr.shape != (2,):
-        raise InvalidInputError(f"expected centre as (cx, cy), got {describe(value)}")
+        raise InvalidInputError(f"expected center as (cx, cy), got {describe(value)}")
     return (
-        as_real(arr[0], "centre[0]", minimum=-1e6, maximum=1e6),
-        as_real(arr[1], "centre[1]", minimum=-1e6, maximum=1e6),
+        as_real(arr[0], "center[0]", minimum=-1e6, maximum=1e6),
+        as_real(arr[1], "center[1]", minimum=-1e6, maximum=1e6),
     )

@@ -691,7 +691,7 @@ def _from_lines(run: Run, img: Any, image: Path, opts: UndistortOptions) -> tupl
         "k1": res.k1,
         "k1_std": res.k1_std,
         "found": res.found,
-        "centre": res.centre,
+        "center": res.center,
         "scale_px": float(res.K[0, 0]),
         "lines": len(res.lines),
         "straightness_rms_px": res.residual_px,
