@@ -18,6 +18,10 @@ __all__ = ["contours", "edge_points", "grey"]
 
 
 def grey(image: ArrayLike) -> FloatArray:
+    """Grey float64 of a grey or RGB image (Rec. 601 luma of RGB), as :func:`as_image` scales.
+
+    The one reading of an image for the line detectors (``lsd_segments`` and the plumb line).
+    """
     arr = np.asarray(image)
     if arr.ndim == 2:
         img = as_image(arr[..., None], "image", channels=1)[..., 0]

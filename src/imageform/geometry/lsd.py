@@ -40,8 +40,9 @@ import math
 import numpy as np
 
 from imageform._typing import ArrayLike, FloatArray
-from imageform._validate import as_bool, as_image, as_int, as_real, check_positive
+from imageform._validate import as_bool, as_int, as_real, check_positive
 from imageform.errors import InvalidInputError
+from imageform.geometry._plumb_edges import grey
 
 __all__ = ["lsd_segments"]
 
@@ -53,18 +54,7 @@ def _grey255(image: ArrayLike) -> FloatArray:
         return arr.astype(np.float64)
     if arr.dtype == np.uint8 and arr.ndim == 3 and arr.shape[-1] == 1:
         return arr[..., 0].astype(np.float64)
-    if arr.ndim == 2:
-        img = as_image(arr[..., None], "image", channels=1)[..., 0]
-    elif arr.ndim == 3 and arr.shape[-1] == 3:
-        rgb = as_image(arr, "image")
-        img = rgb[..., 0] * 0.299 + rgb[..., 1] * 0.587 + rgb[..., 2] * 0.114  # Rec. 601 luma
-    elif arr.ndim == 3 and arr.shape[-1] == 1:
-        img = as_image(arr, "image", channels=1)[..., 0]
-    else:
-        raise InvalidInputError(
-            f"expected a grey (H, W) or RGB (H, W, 3) image, got shape {arr.shape}"
-        )
-    return np.asarray(img, dtype=np.float64) * 255.0
+    return grey(arr) * 255.0
 
 
 def lsd_segments(
