@@ -228,3 +228,20 @@ def test_vanishing_distortion_option(tmp_path: Path, capsys: pytest.CaptureFixtu
     cam = tmp_path / "cam.toml"
     cam.write_text("")  # never read: the two options are refused together first
     assert main(["vanishing", str(src), "--distortion", "--camera", str(cam)]) == 1
+
+
+def test_a_fisheye_beyond_the_model_is_not_found_and_says_so() -> None:
+    """A real circular fisheye frame (tests/data/calibration-fisheye): one division
+    coefficient cannot straighten it; the fit stops at k_range's end, which is a warning and
+    ``found`` False, not a distortion of 900 %."""
+    import warnings
+
+    from imageform.errors import IllConditionedWarning
+    from imageform.io import read_image
+
+    img = read_image(Path(__file__).parents[1] / "data/calibration-fisheye/sweetiepie-left0015.jpg")
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        res = estimate_distortion_from_lines(img)
+    assert abs(res.k1 + 0.9) < 0.0025 and not res.found
+    assert any(issubclass(w.category, IllConditionedWarning) for w in caught)

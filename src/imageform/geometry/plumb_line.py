@@ -48,13 +48,18 @@ the centre.
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
 
 from imageform._typing import ArrayLike, FloatArray
 from imageform._validate import as_bool, as_int, as_real, describe
-from imageform.errors import DegenerateConfigurationError, InvalidInputError
+from imageform.errors import (
+    DegenerateConfigurationError,
+    IllConditionedWarning,
+    InvalidInputError,
+)
 from imageform.geometry._plumb_edges import contours as _contours
 from imageform.geometry._plumb_edges import edge_points as _edge_points
 from imageform.geometry._plumb_edges import grey as _grey
@@ -100,7 +105,8 @@ class PlumbLineResult:
     found : bool
         False when the distortion is indistinguishable from none: a displacement under
         1 px, ``|k1| < 3 k1_std``, or a correction that straightens the lines by less than
-        a factor 1.25 in RMS (``residual_before_px < 1.25 residual_px``).
+        a factor 1.25 in RMS (``residual_before_px < 1.25 residual_px``); also False when
+        ``k1`` stopped at an end of ``k_range`` (the lens bends more than the model says).
     image_size : (int, int)
         ``(width, height)``.
     """
@@ -422,6 +428,12 @@ def estimate_distortion_from_lines(
     DegenerateConfigurationError
         If fewer than ``min_lines`` straight-line chains are found.
 
+    Warns
+    -----
+    IllConditionedWarning
+        ``k1`` stopped at an end of ``k_range``: a fisheye bends more than one division
+        coefficient describes (calibrate it with a board and the Kannala-Brandt model).
+
     References
     ----------
     .. [1] A. W. Fitzgibbon, "Simultaneous linear estimation of multiple view geometry and
@@ -529,8 +541,18 @@ def estimate_distortion_from_lines(
     corners = np.array([[0, 0], [w - 1, 0], [0, h - 1], [w - 1, h - 1]], dtype=np.float64)
     r_px = float(np.hypot(*(corners - setup.center).T).max())
     disp = abs(ratio - 1.0) * r_px
+    at_bound = min(k - lo, hi - k) < 0.0025  # the fit stopped at k_range's end
+    if at_bound:
+        warnings.warn(
+            f"estimate_distortion_from_lines: k1 = {k:.4f} is at the end of k_range ({lo:g}, "
+            f"{hi:g}): the lens bends more than one division coefficient describes (a "
+            "fisheye); calibrate it with a board (calibrate_camera(model='kannala_brandt'))",
+            IllConditionedWarning,
+            stacklevel=2,
+        )
     found = (
-        disp >= _NONE_PX
+        not at_bound
+        and disp >= _NONE_PX
         and abs(k) >= 3.0 * k_std
         and res.residual_before_px >= _GAIN * res.residual_px
     )

@@ -776,11 +776,12 @@ def undistort(run: Run, opts: UndistortOptions, *, out: Path, image: Path) -> Re
             "px before)"
             if lines["found"]
             else f"no distortion found from {lines['lines']} straight lines (k1 = "
-            f"{lines['k1']:.4f} +- {lines['k1_std']:.4f} straightens them from "
+            f"{lines['k1']:.4f} +- {lines['k1_std']:.4f}: lines from "
             f"{lines['straightness_rms_before_px']:.2f} to {lines['straightness_rms_px']:.2f} "
-            "px RMS only)"
+            "px RMS)"
         )
-    text.append(f"wrote {out} ({w} x {h}, {model} distortion removed)")
+    removed = "copied, no distortion" if cam.distortion is None else f"{model} distortion removed"
+    text.append(f"wrote {out} ({w} x {h}, {removed})")
     if opts.camera_out is not None:
         text.append(f"wrote {opts.camera_out} (the same camera, distortion none)")
     if opts.estimate is not None:
