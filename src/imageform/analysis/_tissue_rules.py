@@ -52,11 +52,13 @@ _WEAK_RATIO = 1.0
 _WEAK_BLUE = 0.3
 
 
-def _artefacts(
-    rgb: np.ndarray, log_i0: np.ndarray, p: dict[str, Any]
-) -> tuple[np.ndarray, np.ndarray]:
-    """Per-pixel flags of one block: (artefact, ink over tissue), before the morphology."""
-    od = log_i0 - np.log(np.maximum(rgb, _FLOOR))
+def _od(rgb: np.ndarray, log_i0: np.ndarray) -> np.ndarray:
+    """Optical density ``ln(I0) - ln(max(I, floor))`` of a block (macenko's rule)."""
+    return log_i0 - np.log(np.maximum(rgb, _FLOOR))
+
+
+def _artefacts(rgb: np.ndarray, od: np.ndarray, p: dict[str, Any]) -> tuple[np.ndarray, np.ndarray]:
+    """Per-pixel flags of one block (``od``: its :func:`_od`): (artefact, ink over tissue)."""
     r, g, b = od[..., 0], od[..., 1], od[..., 2]
     bad = np.zeros(rgb.shape[:-1], dtype=bool)
     weak = np.zeros(rgb.shape[:-1], dtype=bool)
@@ -83,9 +85,10 @@ def pixel_artefacts(rgb: Any, i0v: np.ndarray, he: bool = False) -> Any:
     p = {**DEFAULTS, "he": he}
     if is_dask(rgb):
         return rgb.map_blocks(
-            lambda b: _artefacts(b, np.log(i0v), p)[0], drop_axis=rgb.ndim - 1, dtype=bool
+            lambda b: _artefacts(b, _od(b, np.log(i0v)), p)[0], drop_axis=rgb.ndim - 1, dtype=bool
         )
-    return _artefacts(np.asarray(rgb), np.log(i0v), p)[0]
+    a = np.asarray(rgb)
+    return _artefacts(a, _od(a, np.log(i0v)), p)[0]
 
 
 def _cross(ndim: int) -> np.ndarray:
@@ -128,9 +131,9 @@ def _grow(bad: np.ndarray, weak: np.ndarray, margin: int) -> np.ndarray:
 def _block(
     rgb: np.ndarray, log_i0: np.ndarray, p: dict[str, Any], glass: bool, beta: float
 ) -> np.ndarray:
-    keep = ~_grow(*_artefacts(rgb, log_i0, p), p["margin"])
+    od = _od(rgb, log_i0)
+    keep = ~_grow(*_artefacts(rgb, od, p), p["margin"])
     if glass:
-        od = log_i0 - np.log(np.maximum(rgb, _FLOOR))
         keep &= (od * od).sum(axis=-1) >= beta * beta
     return keep
 
