@@ -7,6 +7,7 @@
 # Python packages the machine's image lacks travel as wheels in .whl/ (imageform's
 # array-api-compat and imagecodecs, kornia and kornia_rs for the peer rows, dask and
 # distributed for `batch`); they are installed into /tmp/site, never over the image's own.
+# `bash benchmarks/gpu_wheels.sh` builds .whl/ here first (a fresh checkout has none).
 # Steps, each under its own time limit so that a stuck one costs its step, not the lease:
 #   1. env.txt: the device, driver, library versions, whether imageform's CUDA kernels run;
 #   2. the timing table, benchmarks/bench_gpu.py (gpu-<device>-<date>.md; progress rows in
