@@ -29,13 +29,18 @@ Pipeline of :func:`estimate_distortion_from_lines`:
    (Sampson: the corrected distance over ``|Jᵀ n|``, so squeezing the image does not pay);
    each line is the total least-squares fit at the current parameters (variable
    projection). Steps 4-5 are repeated twice more at the new ``k``.
+6. Trust: ``k`` again on 200 bootstrap resamples of the chains (each chain's summed squared
+   straightness error tabulated on a grid around ``k``); ``found`` needs their 90 % interval
+   to exclude 0, be at most half as wide as ``|k|`` and stay inside the grid and ``k_range``.
+   The chains, not their points, are the independent evidence: a scene edge that is not
+   quite straight moves all its points together.
 
 What it can measure: the bend of a line grows with its length squared; on 640 x 480
 photographs whose straight edges are 100-250 px long, a 5-10 % corner displacement bends
 them by a few tenths of a pixel, near the straightness of the edges themselves, and the
-estimate is unreliable (``benchmarks/results/plumb-line-2026-11-29.md``); long lines (a
-board, architecture across the frame, a wide-angle lens's strong bend) give ``k`` to a few
-per cent.
+estimate is unreliable (``benchmarks/results/plumb-line-2026-11-29.md``) and ``found`` is
+mostly False (``plumb-line-2026-11-29c.md``); long lines (a board, architecture across the
+frame, a wide-angle lens's strong bend) give ``k`` to a few per cent.
 
 Coordinates are normalised by the distance ``s`` from the image centre to a corner pixel's
 centre, ``x = (u - c) / s``, so ``k`` has one meaning whatever the image size: a pixel at the
