@@ -29,6 +29,11 @@ Run::
    largest and the RMS difference: over the pixels where both models are defined, and,
    aligned there, within half the image height of the centre (where a board calibration
    has its points).
+4. ``--reliability`` (with ``--photos DIR`` and ``--calibrated DIR``): how often ``found`` is
+   True on a wrong estimate, before (the rule of main at 0b10ef8, recomputed from the same
+   result: displacement >= 1 px, ``|k1| >= 3 k1_std``, straightness gain >= 1.25, not at the
+   range's end) and after (the branch's ``found``), on a tune and a held-out half; the data
+   set and the meaning of "right" are in ``benchmarks/_plumb_reliability.py``.
 """
 
 from __future__ import annotations
@@ -265,6 +270,55 @@ def compare(folder: Path, camera: Path) -> list[tuple[object, ...]]:
     return rows
 
 
+def reliability(photos: Path | None, calibrated: Path | None, jobs: int) -> None:
+    """Print the tables of ``--reliability``."""
+    from concurrent.futures import ProcessPoolExecutor
+
+    from benchmarks import _plumb_reliability as rel
+
+    todo = rel.cases(photos, calibrated)
+    with ProcessPoolExecutor(max_workers=jobs) as pool:
+        results = list(pool.map(rel.run_case, todo))
+    print("## found: before and after, on the tune and the held-out halves\n")
+    print(
+        "Each cell 'found / wrong (rate)': the cases reported as distorted and, of them, those "
+        "whose k is wrong (the false-positive rate of found); 'right found': the distorted "
+        "cases reported with a right k, of all distorted cases.\n"
+    )
+    print(
+        markdown_table(
+            (
+                "half",
+                "set",
+                "cases",
+                "estimated",
+                "before: found / wrong",
+                "before: right found",
+                "after: found / wrong",
+                "after: right found",
+            ),
+            rel.summary(results),
+        )
+    )
+    print("## Every case\n")
+    print(
+        markdown_table(
+            (
+                "image",
+                "half",
+                "distortion",
+                "k true",
+                "k found",
+                "chain bootstrap 90 %",
+                "right",
+                "found before / after",
+                "s",
+            ),
+            rel.detail(results),
+        )
+    )
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--photos", type=Path, help="a folder of photographs (and truth.csv)")
@@ -272,8 +326,13 @@ def main() -> None:
     parser.add_argument("--camera", type=Path, help="the camera file of --calibrated")
     parser.add_argument("--skip-synthetic", action="store_true")
     parser.add_argument("--skip-vanishing", action="store_true", help="with --photos")
+    parser.add_argument("--reliability", action="store_true", help="only the found/wrong tables")
+    parser.add_argument("--jobs", type=int, default=1, help="processes for --reliability")
     args = parser.parse_args()
     print(header("Lens distortion from straight lines (plumb lines)"))
+    if args.reliability:
+        reliability(args.photos, args.calibrated, args.jobs)
+        return
     cols = (
         "image",
         "distortion",

@@ -29,13 +29,18 @@ Pipeline of :func:`estimate_distortion_from_lines`:
    (Sampson: the corrected distance over ``|Jᵀ n|``, so squeezing the image does not pay);
    each line is the total least-squares fit at the current parameters (variable
    projection). Steps 4-5 are repeated twice more at the new ``k``.
+6. Trust: ``k`` again on 200 bootstrap resamples of the chains (each chain's summed squared
+   straightness error tabulated on a grid around ``k``); ``found`` needs their 90 % interval
+   to exclude 0, be at most half as wide as ``|k|`` and stay inside the grid and ``k_range``.
+   The chains, not their points, are the independent evidence: a scene edge that is not
+   quite straight moves all its points together.
 
 What it can measure: the bend of a line grows with its length squared; on 640 x 480
 photographs whose straight edges are 100-250 px long, a 5-10 % corner displacement bends
 them by a few tenths of a pixel, near the straightness of the edges themselves, and the
-estimate is unreliable (``benchmarks/results/plumb-line-2026-11-29.md``); long lines (a
-board, architecture across the frame, a wide-angle lens's strong bend) give ``k`` to a few
-per cent.
+estimate is unreliable (``benchmarks/results/plumb-line-2026-11-29.md``) and ``found`` is
+mostly False (``plumb-line-2026-11-29c.md``); long lines (a board, architecture across the
+frame, a wide-angle lens's strong bend) give ``k`` to a few per cent.
 
 Coordinates are normalised by the distance ``s`` from the image centre to a corner pixel's
 centre, ``x = (u - c) / s``, so ``k`` has one meaning whatever the image size: a pixel at the
@@ -75,9 +80,13 @@ _ANGLE_TOL = math.radians(6.0)
 #: a corner displacement below this many pixels, or a coefficient within 3 standard
 #: deviations of 0, is reported as no distortion found
 _NONE_PX = 1.0
-#: ... or a correction that leaves the lines' RMS straightness error above 1 / 1.25 of theirs
-#: uncorrected (measured: undistorted photographs 1.0-1.13, 5 % barrel 2.6 and more)
-_GAIN = 1.25
+#: the chain bootstrap: resamples of the chains, the grid of k searched (k +- _BOOT_SPAN), and
+#: the widest 90 % interval, over |k1|, that is reported as found (chosen on the tune half of
+#: benchmarks/check_plumb_reliability.py; benchmarks/results/plumb-line-2026-11-29c.md)
+_BOOT = 200
+_BOOT_STEP = 0.0025
+_BOOT_SPAN = 0.2
+_WIDTH = 0.5
 
 
 @dataclass(frozen=True)
@@ -103,12 +112,20 @@ class PlumbLineResult:
     max_displacement_px : float
         The largest distance a pixel of the image moves when undistorted (at a corner).
     found : bool
-        False when the distortion is indistinguishable from none: a displacement under
-        1 px, ``|k1| < 3 k1_std``, or a correction that straightens the lines by less than
-        a factor 1.25 in RMS (``residual_before_px < 1.25 residual_px``); also False when
+        True when the estimate is trustworthy: the chain bootstrap's 90 % interval
+        ``k1_interval`` excludes 0, is at most half as wide as ``|k1|`` (the lines
+        agree with each other, not only the points of one line) and lies within
+        ``k1 +- 0.2`` and ``k_range``, and a pixel moves by 1 px or more. False when the
+        distortion is indistinguishable from none or not measured well enough; also when
         ``k1`` stopped at an end of ``k_range`` (the lens bends more than the model says).
     image_size : (int, int)
         ``(width, height)``.
+    k1_interval : (float, float)
+        The 5th and 95th percentiles of ``k1`` over 200 bootstrap resamples of the chains
+        (each resample's ``k1`` minimises the resampled chains' summed squared straightness
+        error on a 0.0025 grid within ``k1 +- 0.2``; a fixed seed, so repeatable). The
+        chains are the independent units: the spread of scene edges that are not quite
+        straight, which ``k1_std`` does not see.
     """
 
     distortion: DivisionModel
@@ -120,6 +137,7 @@ class PlumbLineResult:
     max_displacement_px: float
     found: bool
     image_size: tuple[int, int]
+    k1_interval: tuple[float, float] = (math.nan, math.nan)
 
     @property
     def k1(self) -> float:
@@ -310,6 +328,30 @@ def _distances(x: FloatArray, k: float, lab: np.ndarray, cnt: FloatArray) -> Flo
     g = 2.0 * k * xn / (d * d)
     jx, jy = nx / d - g * x[:, 0], ny / d - g * x[:, 1]
     return (dx * nx + dy * ny) / np.hypot(jx, jy)
+
+
+def _chain_bootstrap(
+    setup: _Setup, chains: list[np.ndarray], k: float, bounds: tuple[float, float]
+) -> tuple[float, float, bool]:
+    """Return the 5th and 95th percentiles of ``k`` over bootstrap resamples of the chains.
+
+    Each chain's sum of squared straightness errors is tabulated on a grid around ``k``; a
+    resample (the chains drawn with replacement, a fixed seed) takes the grid's ``k`` that
+    minimises its summed error. A resample's minimum at the grid's end stands for a ``k``
+    beyond it: the third value says whether the interval lies inside the grid.
+    """
+    lo = max(bounds[0], k - _BOOT_SPAN)
+    hi = min(bounds[1], k + _BOOT_SPAN)
+    grid = np.arange(lo, hi + 1e-12, _BOOT_STEP)
+    n = np.array([len(c) for c in chains], dtype=np.float64)
+    sse = _chain_errors(setup, chains, grid) ** 2 * n  # (len(grid), chains)
+    m = len(chains)
+    rng = np.random.default_rng(0)
+    counts = rng.multinomial(m, np.full(m, 1.0 / m), size=_BOOT).astype(np.float64)
+    kb = grid[np.argmin(counts @ sse.T, axis=1)]
+    q5, q95 = np.percentile(kb, [5.0, 95.0])
+    inside = bool(grid[0] < q5 and q95 < grid[-1])
+    return float(q5), float(q95), inside
 
 
 def _refine(
@@ -550,12 +592,15 @@ def estimate_distortion_from_lines(
             IllConditionedWarning,
             stacklevel=2,
         )
+    k_lo, k_hi, inside = _chain_bootstrap(setup, chains, k, (lo, hi))
     found = (
         not at_bound
         and disp >= _NONE_PX
-        and abs(k) >= 3.0 * k_std
-        and res.residual_before_px >= _GAIN * res.residual_px
+        and inside  # no resampled fit ran off the searched range
+        and k_lo * k_hi > 0.0  # the lines agree on the sign of the distortion
+        and k_hi - k_lo <= _WIDTH * abs(k)  # ... and on its size
     )
+    object.__setattr__(res, "k1_interval", (k_lo, k_hi))
     object.__setattr__(res, "max_displacement_px", float(disp))
     object.__setattr__(res, "found", bool(found))
     return res

@@ -690,6 +690,7 @@ def _from_lines(run: Run, img: Any, image: Path, opts: UndistortOptions) -> tupl
     summary = {
         "k1": res.k1,
         "k1_std": res.k1_std,
+        "k1_interval": list(res.k1_interval),
         "found": res.found,
         "center": res.center,
         "scale_px": float(res.K[0, 0]),
@@ -769,14 +770,16 @@ def undistort(run: Run, opts: UndistortOptions, *, out: Path, image: Path) -> Re
     if lines:
         text.append(
             f"distortion from {lines['lines']} straight lines: division k1 = {lines['k1']:.4f} "
-            f"+- {lines['k1_std']:.4f} (coordinates over {lines['scale_px']:.1f} px from the "
+            f"(90 % over the lines {lines['k1_interval'][0]:.4f} to "
+            f"{lines['k1_interval'][1]:.4f}; coordinates over {lines['scale_px']:.1f} px from the "
             f"centre), corner {100 * lines['corner_distortion']:+.1f} %, "
             f"{lines['max_displacement_px']:.1f} px; lines straight to "
             f"{lines['straightness_rms_px']:.2f} px RMS ({lines['straightness_rms_before_px']:.2f} "
             "px before)"
             if lines["found"]
             else f"no distortion found from {lines['lines']} straight lines (k1 = "
-            f"{lines['k1']:.4f} +- {lines['k1_std']:.4f}: lines from "
+            f"{lines['k1']:.4f}, the lines' bootstrap 90 % interval "
+            f"{lines['k1_interval'][0]:.4f} to {lines['k1_interval'][1]:.4f}: lines from "
             f"{lines['straightness_rms_before_px']:.2f} to {lines['straightness_rms_px']:.2f} "
             "px RMS)"
         )

@@ -126,6 +126,7 @@ def _remove_distortion(run: Run, arr: Any, image: Path) -> tuple[Any, dict[str, 
     info = {
         "k1": est.k1,
         "k1_std": est.k1_std,
+        "k1_interval": list(est.k1_interval),
         "found": est.found,
         "scale_px": float(est.K[0, 0]),
         "lines": len(est.lines),
