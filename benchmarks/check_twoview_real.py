@@ -517,14 +517,15 @@ def main() -> None:
     ap.add_argument("--tasks", default="E,F,H", help="with --seeds: of E, F, H")
     args = ap.parse_args()
     print(header("Two-view geometry and SfM on real photographs"))
-    print(f"load average: {Path('/proc/loadavg').read_text().split()[:3]}\n")
+    print(f"load average: {' / '.join(Path('/proc/loadavg').read_text().split()[:3])}\n")
     if args.seeds > 0:
         tasks = tuple(args.tasks.split(","))
         if args.opensfm is not None and ("E" in tasks or "F" in tasks):
             print(seed_pose_table(args.opensfm, args.seeds, tasks))
         if args.graf is not None and "H" in tasks:
             print(seed_homography_table(args.graf, args.seeds))
-        print(f"load average at the end: {Path('/proc/loadavg').read_text().split()[:3]}")
+        load = " / ".join(Path("/proc/loadavg").read_text().split()[:3])
+        print(f"load average at the end: {load}")
         return
     if args.graf is not None:
         print(homography_table(args.graf, args.repeat))
