@@ -263,13 +263,14 @@ def _spread(values: list[float]) -> str:
     return f"{statistics.median(values):.2f} / {max(values):.2f}"
 
 
-def seed_pose_table(folder: Path, seeds: int) -> str:
+def seed_pose_table(folder: Path, seeds: int, tasks: tuple[str, ...] | None = None) -> str:
     import cv2
 
     from imageform.geometry import (
         BrownConrady,
         detect_features,
         find_essential_matrix,
+        find_fundamental_matrix,
         match_features,
         recover_pose,
     )
@@ -281,6 +282,7 @@ def seed_pose_table(folder: Path, seeds: int) -> str:
     dist = BrownConrady(k1=k1, k2=k2)
     Kinv = np.linalg.inv(K)
     no_dist = np.zeros((1, 5))
+    which = ("E", "F") if tasks is None else tasks
 
     def undistort(p: np.ndarray) -> np.ndarray:
         x = (np.c_[p, np.ones(len(p))] @ Kinv.T)[:, :2]
@@ -294,20 +296,11 @@ def seed_pose_table(folder: Path, seeds: int) -> str:
         m = match_features(feats[a].descriptors, feats[b].descriptors)
         p1, p2 = undistort(feats[a].xy[m[:, 0]]), undistort(feats[b].xy[m[:, 1]])
         for thr in (1.0, 2.0):
-            runs: dict[str, Any] = {
-                "imageform": lambda s, thr=thr, p1=p1, p2=p2: find_essential_matrix(
-                    p1, p2, K, threshold=thr, rng=s
-                ),
-                "OpenCV USAC (MAGSAC++), seeded": lambda s, thr=thr, p1=p1, p2=p2: (
-                    cv2.findEssentialMat(
-                        p1.reshape(-1, 1, 2), p2.reshape(-1, 1, 2), K, K, no_dist, no_dist,
-                        _usac_params(thr, s),
-                    )
-                ),
-                "OpenCV USAC_MAGSAC (fixed seed)": lambda s, thr=thr, p1=p1, p2=p2: (
-                    cv2.findEssentialMat(p1, p2, K, cv2.USAC_MAGSAC, 0.999, thr)
-                ),
-            }  # fmt: skip
+            runs: dict[str, Any] = {}
+            if "E" in which:
+                runs.update(_essential_runs(find_essential_matrix, p1, p2, K, thr, no_dist))
+            if "F" in which:
+                runs.update(_fundamental_runs(find_fundamental_matrix, p1, p2, thr))
             for name, fn in runs.items():
                 fn(0)  # warm-up (numba)
                 rot, tra, inl, ms = [], [], [], []
@@ -316,11 +309,14 @@ def seed_pose_table(folder: Path, seeds: int) -> str:
                     out = fn(s)
                     Re: Any
                     te: Any
-                    if name == "imageform":
-                        pose = recover_pose(out.E, p1, p2, K, inliers=out.inliers)
+                    if name.startswith("imageform"):
+                        Ee = out.E if hasattr(out, "E") else K.T @ out.F @ K
+                        pose = recover_pose(Ee, p1, p2, K, inliers=out.inliers)
                         Re, te, n_in = pose.R, pose.t, int(out.inliers.sum())
                     else:
                         E, mask = out
+                        if name.startswith("F:"):
+                            E = K.T @ E[:3] @ K
                         _, Re, te, _ = cv2.recoverPose(E[:3], p1, p2, K, mask=mask.copy())
                         n_in = int(mask.sum())
                     ms.append((time.perf_counter() - t0) * 1e3)
@@ -337,6 +333,38 @@ def seed_pose_table(folder: Path, seeds: int) -> str:
     return f"## Relative poses over {seeds} seeds, {folder.name} ({w} x {h})\n\n" + markdown_table(
         cols, rows
     )
+
+
+def _essential_runs(
+    find_essential_matrix: Any, p1: Any, p2: Any, K: Any, thr: float, no_dist: Any
+) -> dict[str, Any]:
+    import cv2
+
+    return {
+        "imageform": lambda s: find_essential_matrix(p1, p2, K, threshold=thr, rng=s),
+        "OpenCV USAC (MAGSAC++), seeded": lambda s: cv2.findEssentialMat(
+            p1.reshape(-1, 1, 2), p2.reshape(-1, 1, 2), K, K, no_dist, no_dist,
+            _usac_params(thr, s),
+        ),
+        "OpenCV USAC_MAGSAC (fixed seed)": lambda s: cv2.findEssentialMat(
+            p1, p2, K, cv2.USAC_MAGSAC, 0.999, thr
+        ),
+    }  # fmt: skip
+
+
+def _fundamental_runs(find_fundamental_matrix: Any, p1: Any, p2: Any, thr: float) -> dict[str, Any]:
+    """F's runs: the pose is ``recover_pose`` of ``K^T F K`` (its two singular values unequal)."""
+    import cv2
+
+    return {
+        "imageform F": lambda s: find_fundamental_matrix(p1, p2, threshold=thr, rng=s),
+        "F: OpenCV USAC (MAGSAC++), seeded": lambda s: cv2.findFundamentalMat(
+            p1, p2, _usac_params(thr, s)
+        ),
+        "F: OpenCV USAC_MAGSAC (fixed seed)": lambda s: cv2.findFundamentalMat(
+            p1, p2, cv2.USAC_MAGSAC, thr, 0.999, 10000
+        ),
+    }
 
 
 def seed_homography_table(folder: Path, seeds: int) -> str:
@@ -486,15 +514,18 @@ def main() -> None:
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--upscale", type=float, default=1.75)
     ap.add_argument("--seeds", type=int, default=0)
+    ap.add_argument("--tasks", default="E,F,H", help="with --seeds: of E, F, H")
     args = ap.parse_args()
     print(header("Two-view geometry and SfM on real photographs"))
-    print(f"load average: {Path('/proc/loadavg').read_text().split()[:3]}\n")
+    print(f"load average: {' / '.join(Path('/proc/loadavg').read_text().split()[:3])}\n")
     if args.seeds > 0:
-        if args.opensfm is not None:
-            print(seed_pose_table(args.opensfm, args.seeds))
-        if args.graf is not None:
+        tasks = tuple(args.tasks.split(","))
+        if args.opensfm is not None and ("E" in tasks or "F" in tasks):
+            print(seed_pose_table(args.opensfm, args.seeds, tasks))
+        if args.graf is not None and "H" in tasks:
             print(seed_homography_table(args.graf, args.seeds))
-        print(f"load average at the end: {Path('/proc/loadavg').read_text().split()[:3]}")
+        load = " / ".join(Path("/proc/loadavg").read_text().split()[:3])
+        print(f"load average at the end: {load}")
         return
     if args.graf is not None:
         print(homography_table(args.graf, args.repeat))

@@ -98,6 +98,7 @@ BENCH_SCRIPTS: dict[str, str] = {
     "stain-real": "benchmarks/check_stain_real.py",
     "track": "benchmarks/bench_track.py",
     "twoview": "benchmarks/bench_twoview.py",
+    "twoview-cap": "benchmarks/check_twoview_cap.py",
     "twoview-e": "benchmarks/bench_twoview.py",
     "twoview-f": "benchmarks/bench_twoview.py",
     "twoview-h": "benchmarks/bench_twoview.py",
