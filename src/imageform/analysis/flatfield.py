@@ -111,7 +111,10 @@ class FlatfieldEstimate:
 
 def _field(value: ArrayLike, name: str, *, positive: bool) -> np.ndarray:
     """A flat or dark field as float64 (H, W) or (H, W, C), checked finite (and > 0)."""
+    raw_dtype = getattr(value, "dtype", None)
     arr = as_real_array(value, name, ndim=(2, 3), check=False)
+    if not positive and raw_dtype in (np.uint8, np.uint16):  # a dark frame read as an image
+        arr = arr / np.iinfo(raw_dtype).max
     if not arr.size:
         raise InvalidInputError(f"expected {name} with pixels, got shape {format_shape(arr.shape)}")
     if positive:
@@ -159,8 +162,9 @@ def correct_flatfield(
     flatfield : array_like (H, W) or (H, W, C)
         The relative gain, > 0 everywhere; (H, W) applies to every channel.
     darkfield : array_like, optional
-        The offset, in the image's units after reading (an integer image's dark field as a
-        fraction of full range: counts / 65535 for uint16); (H, W) or (H, W, C).
+        The offset, in the image's units after reading: a uint8 / uint16 dark frame is read
+        as the image is (a fraction of full range, counts / 65535 for uint16), floats as
+        given; (H, W) or (H, W, C).
 
     Returns
     -------
