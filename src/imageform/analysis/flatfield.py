@@ -648,7 +648,7 @@ def _robust_fit(
 def estimate_vignetting(
     image: ArrayLike,
     *,
-    degree: int = 3,
+    degree: int = 2,
     center: tuple[float, float] | None = None,
     fit_center: bool = False,
     smoothing: float = 0.05,
@@ -657,7 +657,8 @@ def estimate_vignetting(
     r"""Estimate a radial flat field (vignetting) from one frame by a robust polynomial fit.
 
     The frame, as luminance (the channels' mean), is shrunk to at most 128 pixels a side and
-    smoothed by a Gaussian of ``smoothing`` times its diagonal; then
+    smoothed by a Gaussian of ``smoothing`` times its diagonal (the model is smoothed alike, so
+    the blur biases nothing); then
 
     .. math::
 
@@ -725,10 +726,14 @@ def estimate_vignetting(
     s = min(1.0, WORKING_SIZE / max(h, w))
     work = (max(2, round(h * s)), max(2, round(w * s)))
     small = _resize(lum, work, order=1)
-    if sm > 0:
+    sigma = sm * math.hypot(*work)
+
+    def smooth(a: np.ndarray) -> np.ndarray:
         from scipy import ndimage
 
-        small = ndimage.gaussian_filter(small, sm * math.hypot(*work), mode="nearest")
+        return np.asarray(ndimage.gaussian_filter(a, sigma, mode="reflect")) if sigma else a
+
+    small = smooth(small)
     half_diag = math.hypot(w / 2, h / 2)
     # the working grid's pixel centres in full-frame pixels (u + 0.5) / s - 0.5
     vw, uw = np.mgrid[0 : work[0], 0 : work[1]].astype(np.float64)
@@ -736,7 +741,10 @@ def estimate_vignetting(
     vw = (vw + 0.5) * (h / work[0]) - 0.5
 
     def fit(c: tuple[float, float]) -> tuple[np.ndarray, float, int, bool]:
-        return _robust_fit(_radial_basis(uw, vw, c, half_diag, deg), small.ravel(), its)
+        # the model smoothed as the frame was (smoothing is linear): no bias from the blur
+        basis = _radial_basis(uw, vw, c, half_diag, deg)
+        cols = [smooth(b.reshape(work)).ravel() for b in basis.T]
+        return _robust_fit(np.stack(cols, axis=1), small.ravel(), its)
 
     best = (cu, cv)
     coef, scale, n_it, ok = fit(best)
