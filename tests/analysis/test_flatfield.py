@@ -195,7 +195,7 @@ def test_basic_darkfield_runs_and_keeps_the_flat() -> None:
         ([np.ones((8, 8))], "at least 2 images"),
         ([np.ones((8, 8)), np.ones((8, 9))], "expected images of one shape"),
         (np.full((3, 8, 8), np.nan), "contains NaN"),
-        (-np.ones((3, 8, 8)), "expected image 0 >= 0"),
+        (-np.ones((3, 8, 8)), "expected images\\[0\\] >= 0"),
         (np.zeros((3, 8, 8)), "all zeros"),
         (np.ones((3, 8)), "expected images (H, W) or (H, W, C)"),
         (None, "expected images as a stack"),

@@ -110,7 +110,7 @@ class FlatfieldEstimate:
 
 
 def _field(value: ArrayLike, name: str, *, positive: bool) -> np.ndarray:
-    """A flat or dark field as float64 (H, W) or (H, W, C), checked finite (and > 0)."""
+    """Return a flat or dark field as float64 (H, W) or (H, W, C), checked finite (and > 0)."""
     raw_dtype = getattr(value, "dtype", None)
     arr = as_real_array(value, name, ndim=(2, 3), check=False)
     if not positive and raw_dtype in (np.uint8, np.uint16):  # a dark frame read as an image
@@ -224,7 +224,12 @@ def _image_dims(shape: tuple[int, ...]) -> None:
 
 
 def _stack(images: object) -> np.ndarray:
-    """The images as float64 (N, H, W, C), checked: at least 2, one shape, finite, >= 0."""
+    """Return the images as float64 (N, H, W, C): at least 2, one shape, finite, >= 0."""
+    if getattr(images, "ndim", None) == 0:
+        raise InvalidInputError(
+            f"expected images as a stack (N, H, W[, C]) or a sequence of images, got "
+            f"{describe(images)}"
+        )
     if isinstance(images, np.ndarray | Sequence) and not isinstance(images, str | bytes):
         items: list[Any] = list(images)
     elif hasattr(images, "shape") and hasattr(images, "__len__"):  # a tensor, a Dask array
@@ -243,16 +248,16 @@ def _stack(images: object) -> np.ndarray:
     for i, s in enumerate(shapes):
         if len(s) not in (2, 3) or 0 in s:
             raise InvalidInputError(
-                f"expected images (H, W) or (H, W, C), got image {i} of shape {format_shape(s)}"
+                f"expected images (H, W) or (H, W, C), got images[{i}] of shape {format_shape(s)}"
             )
         if s != shapes[0]:
             raise InvalidInputError(
-                f"expected images of one shape, got {format_shape(shapes[0])} (image 0) and "
-                f"{format_shape(s)} (image {i})"
+                f"expected images of one shape, got {format_shape(shapes[0])} (images[0]) and "
+                f"{format_shape(s)} (images[{i}])"
             )
     out = []
     for i, im in enumerate(items):
-        name = f"image {i}"
+        name = f"images[{i}]"
         a = np.asarray(to_numpy(as_image(im, name, channels=None, range_check=False)))
         a = a.astype(np.float64, copy=False)
         lo = float(a.min())
@@ -298,7 +303,9 @@ def _resize(a: np.ndarray, shape: tuple[int, int], order: int) -> np.ndarray:
     if any(s > 0 for s in sig):  # anti-aliasing as skimage.transform.resize
         a = ndimage.gaussian_filter(a, sig, mode="mirror")
     return np.asarray(
-        ndimage.zoom(a, (*(1.0,) * (a.ndim - 2), zh, zw), order=order, mode="nearest", grid_mode=True)
+        ndimage.zoom(
+            a, (*(1.0,) * (a.ndim - 2), zh, zw), order=order, mode="nearest", grid_mode=True
+        )
     )
 
 
@@ -362,9 +369,7 @@ def _inexact_alm(
         total = float(r1.mean())
         coeff = np.maximum(r1.mean(axis=1) / total if total != 0 else np.ones(n), 0.0)
         if darkfield:
-            offset, b1_offset = _dark_update(
-                r1, flat, coeff, shape, lam_dark / (ent2 * mu), b1_up
-            )
+            offset, b1_offset = _dark_update(r1, flat, coeff, shape, lam_dark / (ent2 * mu), b1_up)
         z = d - a - e
         y = y + mu * z
         mu = min(mu * rho, mu_bar)
@@ -383,7 +388,7 @@ def _dark_update(
     thresh: float,
     b1_up: float,
 ) -> tuple[np.ndarray, float]:
-    """The dark-field step of the reference implementation (Peng et al. 2017, Methods).
+    """Run the dark-field step of the reference implementation (Peng et al. 2017, Methods).
 
     The offset ``B1`` is the least-squares fit of the images' bright-minus-dark contrast
     against their coefficients (bounded to [0, min(D) / mean F]); the rest of the offset is
@@ -399,8 +404,11 @@ def _dark_update(
     b1_coeff = (rv[:, hi].mean(axis=1) - rv[:, lo].mean(axis=1)) / float(r1.mean())
     k = valid.size
     cv = coeff[valid]
-    t1, t2, t3, t4 = float((cv**2).sum()), float(cv.sum()), float(b1_coeff.sum()), float(
-        (cv * b1_coeff).sum()
+    t1, t2, t3, t4 = (
+        float((cv**2).sum()),
+        float(cv.sum()),
+        float(b1_coeff.sum()),
+        float((cv * b1_coeff).sum()),
     )
     t5 = t2 * t3 - k * t4
     b1 = 0.0 if t5 == 0 else (t1 * t3 - t2 * t4) / t5
@@ -430,7 +438,7 @@ def _basic_channel(
     reweight_tol: float,
     epsilon: float,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, int, bool]:
-    """BaSiC on one channel at working size: (flat (p, q) mean 1, dark (p, q), coeff, its, ok)."""
+    """Run BaSiC on one channel at working size: (shading, dark, coefficients, its, ok)."""
     p, q = shape
     n = d.shape[0]
     mean_img = d.mean(axis=0)
@@ -561,7 +569,7 @@ def estimate_flatfield(
     rw = as_int(max_reweightings, "max_reweightings", minimum=1, maximum=1000)
     rw_tol = as_real(reweight_tol, "reweight_tol", minimum=0)
     stack = _stack(images)
-    n, h, w, c = stack.shape
+    _, h, w, c = stack.shape
     work = (min(size, h), min(size, w))
     flats, darks, base = [], [], []
     total_its = 0
@@ -605,11 +613,11 @@ def estimate_flatfield(
 
 
 def _input_is_grey(images: object) -> bool:
-    """The images are (H, W) each: the results drop the channel axis."""
+    """Say whether the images are (H, W) each (the results then drop the channel axis)."""
     shape = getattr(images, "shape", None)
     if shape is not None:
         return len(shape) == 3
-    first = list(images)[0]  # type: ignore[call-overload]
+    first = next(iter(images))  # type: ignore[call-overload]
     return len(getattr(first, "shape", np.shape(first))) == 2
 
 

@@ -107,7 +107,7 @@ class FlatfieldOptions(ImageIn):
 
 
 def _image_files(sources: Any) -> list[Path]:
-    """The image files of the inputs: files as given, folders' images in name order."""
+    """Return the image files of the inputs: files as given, folders' images by name."""
     if isinstance(sources, str | Path):
         sources = [sources]
     files: list[Path] = []
@@ -118,9 +118,7 @@ def _image_files(sources: Any) -> list[Path]:
                 q for q in p.iterdir() if q.is_file() and q.suffix.lower() in IMAGE_SUFFIXES
             )
             if not inside:
-                raise InvalidInputError(
-                    f"folder {p} holds no images ({', '.join(IMAGE_SUFFIXES)})"
-                )
+                raise InvalidInputError(f"folder {p} holds no images ({', '.join(IMAGE_SUFFIXES)})")
             files += inside
         elif p.is_file():
             files.append(p)
@@ -139,7 +137,7 @@ def _image_files(sources: Any) -> list[Path]:
 
 
 def _read(path: Path, opts: FlatfieldOptions) -> Any:
-    """An image as read (uint8/uint16/floats), grey as (H, W)."""
+    """Read an image as stored (uint8/uint16/floats), grey as (H, W)."""
     from imageform.workflows._images import read
 
     img = read(path, opts)
@@ -147,7 +145,7 @@ def _read(path: Path, opts: FlatfieldOptions) -> Any:
 
 
 def _as_field(path: Path, opts: FlatfieldOptions, what: str, scale_integers: bool) -> Any:
-    """A measured flat or dark field as floats; integer dark frames as fractions of full range."""
+    """Read a measured flat or dark field as floats (integer dark frames: fractions of range)."""
     import numpy as np
 
     a = _read(path, opts)
@@ -161,9 +159,7 @@ def _check_out(out: Path, files: list[Path], force: bool) -> None:
     res = out.resolve()
     for f in files:
         if res == f.resolve().parent or res in f.resolve().parents:
-            raise InvalidInputError(
-                f"output folder {out} holds the input {f}; choose a new folder"
-            )
+            raise InvalidInputError(f"output folder {out} holds the input {f}; choose a new folder")
     if out.is_dir() and force and not (out / _MARKER).exists() and any(out.iterdir()):
         raise InvalidInputError(
             f"output folder {out} exists and is not an imageform flatfield output; choose a new "
