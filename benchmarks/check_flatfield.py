@@ -18,7 +18,7 @@ Run::
 2. Known shadings: cos4 (``cos4_falloff``, f = 0.7 x the long side), cos4 times a mechanical
    vignette (``mechanical_vignetting``: pupil 1, barrel 1.1 at 0.8), and an off-centre
    LED-like lobe (0.3 + 0.7 exp(-d^2 / 2 (0.6 W)^2) around (0.7 W, 0.35 H)), multiplied in
-   linear light into (a) the 20 landscape Kodak photographs (shared/data/kodak, 512 x 768,
+   linear light into (a) the 18 landscape Kodak photographs (shared/data/kodak, 512 x 768,
    sRGB decoded, grey) and (b) 32 real H&E tiles of 64 x 64 cut from the two 256-pixel crops
    of tests/data/stain (torchstain MIT, tiatoolbox BSD-3; luminance). Error: RMS relative
    error of the recovered flat field after normalising means. "background CV": for the H&E
