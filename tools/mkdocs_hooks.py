@@ -72,6 +72,7 @@ BENCH_SCRIPTS: dict[str, str] = {
     "distortion": "benchmarks/bench_distortion.py",
     "emva": "benchmarks/bench_emva.py",
     "first-run": "benchmarks/bench_first_run.py",
+    "flatfield": "benchmarks/check_flatfield.py",
     "fuzz": "tests/fuzz/__main__.py",
     "geometry": "benchmarks/bench_geometry.py",
     "gpu-cpu": "benchmarks/bench_gpu.py",

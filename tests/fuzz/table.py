@@ -32,6 +32,9 @@ VALID: dict[str, C | Skip] = {
     "imageform.analysis.BackgroundEstimate": Skip(
         "a result dataclass built by estimate_background"
     ),
+    "imageform.analysis.FlatfieldEstimate": Skip(
+        "a result dataclass built by estimate_flatfield and estimate_vignetting"
+    ),
     "imageform.analysis.HsvSegmentation": Skip("a result dataclass built by segment_hsv"),
     "imageform.analysis.LabeledImage": call(image=V("rgb"), mask=np.ones((6, 8), dtype=bool)),
     "imageform.analysis.MacenkoStains": call(
@@ -43,10 +46,15 @@ VALID: dict[str, C | Skip] = {
     ),
     "imageform.analysis.StainMixture": Skip("a result NamedTuple (no validation of its own)"),
     "imageform.analysis.chart_patches": call(V("chart")),
+    "imageform.analysis.correct_flatfield": call(V("rgb"), np.full((6, 8), 0.8)),
     "imageform.analysis.correction_report": call(V("rgb_chart"), V("rgb_chart"), V("correction")),
     "imageform.analysis.estimate_camera_sensitivities": call(
         np.linspace(0.1, 1.0, 72).reshape(24, 3), light="D65", smoothness=0.1
     ),
+    "imageform.analysis.estimate_flatfield": call(
+        np.linspace(0.1, 1.0, 3 * 16 * 16).reshape(3, 16, 16), max_reweightings=1
+    ),
+    "imageform.analysis.estimate_vignetting": call(V("rgb")),
     "imageform.analysis.fit_color_correction": call(V("rgb_chart"), V("rgb_chart")),
     "imageform.analysis.macenko_normalize": call(V("stain"), V("stain")),
     "imageform.analysis.macenko_stains": call(image=V("rgb_big"), mask=None),  # noise: no tissue
@@ -1698,6 +1706,29 @@ VALID.update(
         ),
         "imageform.workflows.reconstruct.ReconstructOptions.paths": method(
             VALID["imageform.workflows.reconstruct.ReconstructOptions"], "output"
+        ),
+    }
+)
+VALID.update(
+    {
+        "imageform.analysis.FlatfieldEstimate.correct": Skip(
+            "a method of a result record built by the estimators; correct_flatfield is fuzzed"
+        ),
+        "imageform.workflows.flatfield.FlatfieldOptions": call(method="basic"),
+        "imageform.workflows.flatfield.FlatfieldOptions.fields": call(),
+        "imageform.workflows.flatfield.FlatfieldOptions.types": call(),
+    }
+)
+VALID.update(
+    {
+        "imageform.workflows.flatfield.FlatfieldOptions.check": method(
+            VALID["imageform.workflows.flatfield.FlatfieldOptions"]
+        ),
+        "imageform.workflows.flatfield.FlatfieldOptions.check_output": method(
+            VALID["imageform.workflows.flatfield.FlatfieldOptions"], V("tmpfile_png")
+        ),
+        "imageform.workflows.flatfield.FlatfieldOptions.paths": method(
+            VALID["imageform.workflows.flatfield.FlatfieldOptions"], "output"
         ),
     }
 )

@@ -13,6 +13,9 @@
 - Sharpness as imaging labs measure it: the ISO 12233 slanted-edge e-SFR
   (:func:`slanted_edge_sfr`: MTF per channel, MTF50, MTF10) and the edges of a slanted-edge
   chart found by themselves (:func:`find_slanted_edges`), in :mod:`imageform.analysis.sfr`.
+- Shading (flat-field, vignetting) correction: :func:`correct_flatfield` with a measured
+  flat field, :func:`estimate_flatfield` (BaSiC, from a stack of tiles or frames),
+  :func:`estimate_vignetting` (a robust radial fit to one frame).
 - A camera's spectral sensitivities from its raw responses to a chart
   (:func:`estimate_camera_sensitivities`, in :mod:`imageform.analysis.sensitivity`).
 - Labelled synthetic images to test them (:mod:`imageform.analysis.synthetic`).
@@ -36,6 +39,12 @@ from imageform.analysis.chart_input import (
     ChartSample,
     chart_white_balance,
     sample_chart,
+)
+from imageform.analysis.flatfield import (
+    FlatfieldEstimate,
+    correct_flatfield,
+    estimate_flatfield,
+    estimate_vignetting,
 )
 from imageform.analysis.harmonize import (
     CORRECTION_METHODS,
@@ -116,6 +125,7 @@ __all__ = [
     "ColorCorrection",
     "CorrectionReport",
     "EmptyMaskWarning",
+    "FlatfieldEstimate",
     "HsvSegmentation",
     "LabeledImage",
     "MacenkoStains",
@@ -127,10 +137,13 @@ __all__ = [
     "background_intensity",
     "chart_patches",
     "chart_white_balance",
+    "correct_flatfield",
     "correction_report",
     "detect_colorchecker",
     "estimate_background",
     "estimate_camera_sensitivities",
+    "estimate_flatfield",
+    "estimate_vignetting",
     "find_slanted_edges",
     "fit_color_correction",
     "fit_gaussian_sigma",

@@ -15,6 +15,7 @@ from imageform.workflows import (
     chart,
     color,
     emva,
+    flatfield,
     geometry,
     lecture,
     optics,
@@ -51,6 +52,7 @@ WORKFLOWS = MappingProxyType(
             *sensor.WORKFLOWS,
             *emva.WORKFLOWS,
             *analysis.WORKFLOWS,
+            *flatfield.WORKFLOWS,
             *chart.WORKFLOWS,
             *sharpness.WORKFLOWS,
         )

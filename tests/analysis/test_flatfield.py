@@ -1,0 +1,271 @@
+"""Shading correction: correct_flatfield, estimate_flatfield (BaSiC), estimate_vignetting."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from imageform.analysis import (
+    FlatfieldEstimate,
+    correct_flatfield,
+    estimate_flatfield,
+    estimate_vignetting,
+)
+from imageform.errors import InvalidInputError
+from imageform.optics import cos4_falloff, mechanical_vignetting
+
+DATA = Path(__file__).resolve().parents[1] / "data" / "flatfield"
+
+
+def _cells(rng: np.random.Generator, n: int, size: int, cover: float = 0.1) -> np.ndarray:
+    """``n`` scenes of Gaussian 'cells' on a background whose level varies per image."""
+    y, x = np.mgrid[0:size, 0:size].astype(np.float64)
+    out = np.empty((n, size, size))
+    k = int(cover * size * size / (np.pi * (0.04 * size) ** 2))
+    for i in range(n):
+        img = np.full((size, size), rng.uniform(0.3, 0.6))
+        cy, cx = rng.uniform(0, size, k), rng.uniform(0, size, k)
+        r = rng.uniform(0.02, 0.06, k) * size
+        a = rng.uniform(0.2, 0.5, k)
+        for j in range(k):
+            img += a[j] * np.exp(-((y - cy[j]) ** 2 + (x - cx[j]) ** 2) / (2 * r[j] ** 2))
+        out[i] = img
+    return out
+
+
+def _known_flat(size: int) -> np.ndarray:
+    y, x = np.mgrid[0:size, 0:size] / (size - 1)
+    return 1.2 - 0.8 * ((x - 0.4) ** 2 + (y - 0.55) ** 2)  # off-centre, 0.6..1.2
+
+
+def _rms_rel(est: np.ndarray, true: np.ndarray) -> float:
+    a, b = est / est.mean(), true / true.mean()
+    return float(np.sqrt(np.mean((a / b - 1) ** 2)))
+
+
+# ------------------------------------------------------------------ correct_flatfield
+
+
+def test_correct_divides_by_normalised_flat() -> None:
+    flat = np.array([[0.5, 1.0, 1.5]])
+    out = correct_flatfield(np.array([[0.2, 0.4, 0.6]]), flat)
+    assert out.dtype == np.float64
+    np.testing.assert_allclose(out, [[0.4, 0.4, 0.4]])
+    # the flat field's scale does not matter (normalised to its mean)
+    np.testing.assert_allclose(correct_flatfield(np.array([[0.2, 0.4, 0.6]]), 1000 * flat), out)
+
+
+def test_correct_dark_then_flat_and_dtypes() -> None:
+    rng = np.random.default_rng(3)
+    scene = rng.uniform(0.2, 0.6, (8, 10, 3))
+    flat = _known_flat(10)[:8]
+    dark = np.full((8, 10), 0.05)
+    raw = scene * (flat / flat.mean())[..., None] + dark[..., None]
+    np.testing.assert_allclose(correct_flatfield(raw, flat, dark), scene, atol=1e-12)
+    u16 = np.round(raw * 65535).astype(np.uint16)
+    out = correct_flatfield(u16, flat, np.round(dark * 65535).astype(np.uint16))
+    assert out.dtype == np.float32  # integers are read as fractions of full range
+    np.testing.assert_allclose(out, scene, atol=1e-4)
+    out32 = correct_flatfield(raw.astype(np.float32), np.dstack([flat] * 3))
+    assert out32.dtype == np.float32 and out32.shape == raw.shape
+
+
+@settings(max_examples=25, deadline=None)
+@given(
+    st.integers(2, 12),
+    st.integers(2, 12),
+    st.sampled_from([None, 3]),
+    st.floats(1e-3, 1e3),
+)
+def test_flat_of_ones_changes_nothing(h: int, w: int, c: int | None, level: float) -> None:
+    rng = np.random.default_rng(h * 100 + w)
+    img = rng.uniform(0, 5, (h, w) if c is None else (h, w, c))
+    np.testing.assert_allclose(correct_flatfield(img, np.full((h, w), level)), img, rtol=1e-12)
+    np.testing.assert_array_equal(correct_flatfield(img, np.ones((h, w))), img)
+
+
+def test_correct_nan_propagates() -> None:
+    img = np.array([[0.5, np.nan, np.inf]])
+    out = correct_flatfield(img, np.array([[1.0, 2.0, 3.0]]))
+    assert out[0, 0] == pytest.approx(1.0) and np.isnan(out[0, 1]) and np.isinf(out[0, 2])
+
+
+@pytest.mark.parametrize(
+    ("image", "flat", "dark", "message"),
+    [
+        (np.ones((4, 5)), np.ones((4, 6)), None, "expected flatfield of the image's size"),
+        (np.ones((4, 5, 3)), np.ones((4, 5, 2)), None, "expected flatfield of the image's size"),
+        (np.ones((4, 5)), np.ones((4, 5)), np.ones((5, 4)), "expected darkfield of the image's"),
+        (np.ones((4, 5)), np.zeros((4, 5)), None, "expected flatfield > 0 everywhere"),
+        (np.ones((4, 5)), -np.ones((4, 5)), None, "expected flatfield > 0 everywhere"),
+        (np.ones((4, 5)), np.full((4, 5), np.nan), None, "flatfield contains NaN"),
+        (np.ones((4, 5)), np.ones((4, 5)), np.full((4, 5), np.inf), "darkfield contains NaN"),
+        (np.ones((2, 4, 5)), np.ones((4, 5)), None, "expected flatfield of the image's size"),
+        (np.ones((1, 2, 4, 5)), np.ones((4, 5)), None, "expected image (H, W) or (H, W, C)"),
+        (np.ones((4, 5)), np.ones(5), None, "expected flatfield as a 2-d or 3-d array"),
+        (np.ones((4, 5)), "flat.tif", None, "expected flatfield as real numbers"),
+    ],
+)
+def test_correct_bad_input(image: object, flat: object, dark: object, message: str) -> None:
+    with pytest.raises(InvalidInputError, match=message.replace("(", r"\(").replace(")", r"\)")):
+        correct_flatfield(image, flat, dark)  # type: ignore[arg-type]
+
+
+# ------------------------------------------------------------------ BaSiC
+
+
+def test_basic_recovers_a_known_flat_field_within_1_percent() -> None:
+    """A stack of 40 'cell' scenes under an off-centre shading: BaSiC within 1 % (rms)."""
+    rng = np.random.default_rng(0)
+    flat = _known_flat(64)
+    stack = _cells(rng, 40, 64) * flat + rng.normal(0, 0.005, (40, 64, 64))
+    est = estimate_flatfield(stack)
+    assert isinstance(est, FlatfieldEstimate) and est.method == "basic"
+    assert est.converged and est.iterations > 0
+    assert est.flatfield.shape == (64, 64) and est.flatfield.mean() == pytest.approx(1.0)
+    assert _rms_rel(est.flatfield, flat) < 0.01
+    assert float(np.abs(est.flatfield / (flat / flat.mean()) - 1).max()) < 0.03
+    # the plain mean image is far worse: the scene's structure is in it
+    mean = stack.mean(axis=0)
+    assert _rms_rel(mean, flat) > 3 * _rms_rel(est.flatfield, flat)
+    # the baseline follows each image's background level
+    assert est.baseline.shape == (40,)
+    assert np.corrcoef(est.baseline, stack.mean(axis=(1, 2)))[0, 1] > 0.99
+    assert not est.darkfield.any()
+
+
+def test_basic_matches_the_reference_matlab_flat_field() -> None:
+    """BaSiC's own brain-slide tiles: within 0.2 % rms of the reference MATLAB implementation.
+
+    The reference sorts each pixel's values over the stack (``sort_intensity``); data and
+    reference: BaSiCPy's test data (tests/data/flatfield/README.md).
+    """
+    data = np.load(DATA / "wsi_brain_64.npz")
+    ref = data["reference_flatfield"].astype(np.float64)
+    est = estimate_flatfield(data["images"], sort_intensity=True)
+    assert est.converged
+    assert _rms_rel(est.flatfield, ref) < 0.002
+    assert float(np.abs(est.flatfield / ref - 1).max()) < 0.01
+    assert ref.min() < 0.7 and ref.max() > 1.3  # a strong shading, not a trivial agreement
+
+
+def _small_stack(seed: int) -> np.ndarray:
+    rng = np.random.default_rng(seed)
+    return _cells(rng, 10, 32) * _known_flat(32)
+
+
+@settings(max_examples=4, deadline=None)
+@given(st.floats(1e-3, 1e3), st.integers(0, 3))
+def test_basic_scaling_the_stack_keeps_the_flat_field(scale: float, seed: int) -> None:
+    stack = _small_stack(seed)
+    a = estimate_flatfield(stack, max_reweightings=2)
+    b = estimate_flatfield(stack * scale, max_reweightings=2)
+    np.testing.assert_allclose(b.flatfield, a.flatfield, rtol=1e-4)
+    np.testing.assert_allclose(b.baseline, a.baseline * scale, rtol=1e-4)
+
+
+def test_basic_colour_and_sequence_input() -> None:
+    stack = _small_stack(5)
+    rgb = np.stack([stack, 0.5 * stack, 0.8 * stack], axis=-1)
+    est = estimate_flatfield(list(rgb), max_reweightings=2)
+    assert est.flatfield.shape == (32, 32, 3) and est.baseline.shape == (10, 3)
+    np.testing.assert_allclose(est.flatfield.mean(axis=(0, 1)), 1.0)
+    np.testing.assert_allclose(est.flatfield[..., 0], est.flatfield[..., 1], atol=1e-3)
+    u8 = estimate_flatfield(np.clip(stack * 200, 0, 255).astype(np.uint8), max_reweightings=2)
+    assert u8.flatfield.shape == (32, 32)
+
+
+def test_basic_darkfield_runs_and_keeps_the_flat() -> None:
+    rng = np.random.default_rng(2)
+    flat = _known_flat(48)
+    stack = _cells(rng, 30, 48) * flat + 0.05
+    est = estimate_flatfield(stack, darkfield=True)
+    assert est.darkfield.shape == (48, 48) and np.isfinite(est.darkfield).all()
+    assert _rms_rel(est.flatfield, flat) < 0.05
+
+
+@pytest.mark.parametrize(
+    ("images", "message"),
+    [
+        (np.ones((1, 8, 8)), "at least 2 images"),
+        ([np.ones((8, 8))], "at least 2 images"),
+        ([np.ones((8, 8)), np.ones((8, 9))], "expected images of one shape"),
+        (np.full((3, 8, 8), np.nan), "contains NaN"),
+        (-np.ones((3, 8, 8)), "expected images\\[0\\] >= 0"),
+        (np.zeros((3, 8, 8)), "all zeros"),
+        (np.ones((3, 8)), "expected images (H, W) or (H, W, C)"),
+        (None, "expected images as a stack"),
+        ("tiles/", "expected images as a stack"),
+    ],
+)
+def test_basic_bad_input(images: object, message: str) -> None:
+    with pytest.raises(InvalidInputError, match=message.replace("(", r"\(").replace(")", r"\)")):
+        estimate_flatfield(images)  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize(
+    ("kw", "message"),
+    [
+        ({"working_size": 2}, "working_size"),
+        ({"max_iter": 0}, "max_iter"),
+        ({"tol": -1.0}, "tol"),
+        ({"smoothness": -1.0}, "smoothness"),
+        ({"max_reweightings": 0}, "max_reweightings"),
+    ],
+)
+def test_basic_bad_parameters(kw: dict[str, float], message: str) -> None:
+    with pytest.raises(InvalidInputError, match=message):
+        estimate_flatfield(np.ones((3, 8, 8)), **kw)  # type: ignore[arg-type]
+
+
+# ------------------------------------------------------------------ one frame
+
+
+def test_vignetting_recovers_cos4_and_corrects() -> None:
+    rng = np.random.default_rng(1)
+    fall = cos4_falloff((96, 128), focal_length_px=150.0)
+    frame = 0.6 * fall + rng.normal(0, 0.01, fall.shape)
+    est = estimate_vignetting(frame)
+    assert est.method == "radial" and est.converged and est.baseline.shape == (1,)
+    assert _rms_rel(est.flatfield, fall) < 0.005
+    flat_again = est.correct(frame)
+    assert flat_again.std() < 0.2 * frame.std()
+
+
+def test_vignetting_off_centre_needs_fit_center() -> None:
+    rng = np.random.default_rng(4)
+    shape = (90, 120)
+    v = mechanical_vignetting(
+        shape,
+        focal_length_px=90.0,
+        pupil_radius=1.0,
+        barrel_radius=1.2,
+        barrel_distance=0.6,
+        center=(70.0, 40.0),
+    )
+    true = v * cos4_falloff(shape, focal_length_px=200.0, center=(70.0, 40.0))
+    frame = 0.5 * true + rng.normal(0, 0.005, shape)
+    fixed = estimate_vignetting(frame, fit_center=True)
+    centred = estimate_vignetting(frame)
+    assert _rms_rel(fixed.flatfield, true) < _rms_rel(centred.flatfield, true)
+    assert _rms_rel(fixed.flatfield, true) < 0.03
+
+
+@pytest.mark.parametrize(
+    ("image", "kw", "message"),
+    [
+        (-np.ones((8, 8)), {}, "expected image >= 0"),
+        (np.zeros((8, 8)), {}, "all zeros"),
+        (np.ones((8, 8)), {"degree": 0}, "degree"),
+        (np.ones((8, 8)), {"smoothing": 2.0}, "smoothing"),
+        (np.ones((2, 8, 8, 3)), {}, "expected image (H, W) or (H, W, C)"),
+        (np.full((8, 8), np.nan), {}, "NaN"),
+    ],
+)
+def test_vignetting_bad_input(image: np.ndarray, kw: dict[str, float], message: str) -> None:
+    with pytest.raises(InvalidInputError, match=message.replace("(", r"\(").replace(")", r"\)")):
+        estimate_vignetting(image, **kw)  # type: ignore[arg-type]
