@@ -20,13 +20,15 @@ pytest.importorskip("cv2")
 pytest.importorskip("matplotlib")
 
 ENDO = Path(__file__).resolve().parents[1] / "data" / "endo"
+#: the ten frames 0, 4, ..., 36 (the folder also has 40, 48 and 56, for every 8th frame)
+FIRST_TEN = [ENDO / f"c3vdv3_f{i:03d}.jpg" for i in range(0, 40, 4)]
 
 
 @pytest.fixture(scope="module")
 def frames(tmp_path_factory: pytest.TempPathFactory) -> Path:
     folder = tmp_path_factory.mktemp("endo") / "frames"
     folder.mkdir()
-    for p in sorted(ENDO.glob("c3vdv3_f*.jpg")):
+    for p in FIRST_TEN:
         shutil.copy(p, folder / p.name)
     return folder
 
