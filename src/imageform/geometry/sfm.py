@@ -32,7 +32,15 @@ pipeline, each step a public function:
    (:func:`~imageform.geometry.solve_pnp_ransac`; the ones it rejects are no views of
    those points), then every track of that frame seen by two registered frames
    triangulated (linear, then Gauss-Newton) when its rays meet at 1.5 degrees or more
-   and it reprojects within 4 pixels in front of every camera;
+   and it reprojects within 4 pixels in front of every camera. A frame with fewer than 12
+   PnP inliers waits and is tried again once more frames are registered (as COLMAP
+   does); when every frame left has failed since the last registration, the fallbacks
+   (a frame whose tracks are short: its pairs below the 30 inliers a verified pair needs,
+   a track cut by a frame between): its keypoints in no track matched to the points its
+   2 x ``window`` nearest registered frames see (Lowe's ratio, mutual; PnP on both sets,
+   12 inliers), else the pose of a verified pair with a registered frame (its rotation
+   and translation direction) with the scale that most points reproject from (6 at
+   least, a one-point RANSAC);
 7. bundle adjustment (:func:`bundle_adjust`: Levenberg-Marquardt on the reprojection
    error, the points eliminated by the Schur complement) over everything each time the
    registered frames grew by 40 %, observations beyond 4 pixels dropped, the tracks
@@ -287,7 +295,8 @@ class Reconstruction:
     rms_px : ndarray (n,)
         Each frame's reprojection RMS (NaN when not registered).
     notes : list of str
-        What failed and why (frames that could not be registered, ...).
+        What failed and why (frames that could not be registered, ...), and the frames
+        the fallbacks registered and how.
     residuals_px : ndarray (M,)
         The reprojection error of every observation the final bundle adjustment kept
         (pixels; the distance between the observed keypoint and its point's projection).
