@@ -27,10 +27,16 @@ reprojection error (px), median SIFT keypoints a frame (imageform's ``detect_fea
 with the row's mask and threshold), wall seconds of the whole call (one run: the machine
 is shared, ``--repeat`` for medians); agreement with the reference: over consecutive
 frames registered in both, the median angle between the relative rotations and between
-the relative translation directions, degrees. Run::
+the relative translation directions, degrees, and the largest of the rotation angles;
+the note says how many frames ``reconstruct_sequence``'s fallbacks registered (a frame
+whose tracks give PnP fewer than 12 inliers). A second table a stride: the keypoints on
+the specular highlights (``highlight_mask``'s core and its default 4 px growth), how many
+matches touch them and how often those fit the pair's essential matrix, against the
+others. ``--reference-cache DIR`` keeps pycolmap's results: the first run writes them, a
+second (a before/after comparison, another checkout on ``PYTHONPATH``) reads them. Run::
 
     OPENBLAS_NUM_THREADS=1 PYTHONPATH=src python benchmarks/check_endo_real.py \\
-        --video /tmp/endo/c3vdv3_prev.mp4 [--every 8 4] [--repeat 1]
+        --video /tmp/endo/c3vdv3_prev.mp4 [--every 8 4] [--repeat 1] [--reference-cache DIR]
 """
 
 from __future__ import annotations
@@ -307,7 +313,7 @@ def table(
         else:
             res = _median_run(lambda: run_pycolmap(sel, cam, fov, factor), repeat)  # noqa: B023
             if cached is not None:
-                cache.mkdir(parents=True, exist_ok=True)
+                cached.parent.mkdir(parents=True, exist_ok=True)
                 np.savez(cached, **res)
         theirs.append((f"pycolmap {pycolmap.__version__} {label}", res))
         print(f"  every {every}: pycolmap {label}: {res['reg']}/{n}", file=sys.stderr)
