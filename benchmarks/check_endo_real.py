@@ -379,7 +379,8 @@ def main() -> None:
     cam = read_camera(args.camera).camera
     frames = read_clip(args.video, args.panel_width)
     print(header("Structure from motion on a real colonoscopy video"))
-    print(f"load average: {Path('/proc/loadavg').read_text().split()[:3]} (a shared machine)\n")
+    load = " / ".join(Path("/proc/loadavg").read_text().split()[:3])
+    print(f"load average: {load} (a shared machine)\n")
     print(f"{args.video.name}: {len(frames)} frames; camera {args.camera.name}\n")
     for every in args.every:
         print(table(frames, every, cam, args.repeat, args.reference_cache))
