@@ -195,5 +195,9 @@ def test_blurred_frames_bad_input() -> None:
         blurred_frames(frames, window=0)
     with pytest.raises(InvalidInputError, match="mask of the frame's size"):
         frame_sharpness(frames[0], np.ones((4, 4)))
+    with pytest.raises(InvalidInputError, match="sequence of frames"):
+        blurred_frames(None)  # type: ignore[arg-type]
+    with pytest.raises(InvalidInputError, match=r"images\[1\]"):
+        blurred_frames([frames[0], "a"])
     assert blurred_frames(frames[:2]).tolist() == [False, False]
     assert frame_sharpness(frames[0], np.zeros((8, 8))) == 0.0

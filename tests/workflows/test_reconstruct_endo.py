@@ -86,6 +86,7 @@ def test_skip_blurred_leaves_out_the_frames_with_motion_blur(
     k[4] = 1.0 / 9.0
     for i, p in enumerate(FIRST_TEN):
         im = cv2.imread(str(p))
+        assert im is not None
         cv2.imwrite(str(folder / f"{p.stem}.png"), cv2.filter2D(im, -1, k) if i in (3, 7) else im)
     out = tmp_path / "out"
     args = ["reconstruct", str(folder), "--camera", str(ENDO / "camera.toml"), "-o", str(out)]

@@ -284,10 +284,15 @@ def frame_sharpness(image: ArrayLike, mask: ArrayLike | None = None) -> float:
     >>> frame_sharpness(frame) > 10 * frame_sharpness(np.full((64, 64), 0.5) + 0.0)
     True
     """
+    return _sharpness(image, mask, "image")
+
+
+def _sharpness(image: ArrayLike, mask: ArrayLike | None, name: str) -> float:
+    """Return :func:`frame_sharpness` of ``image``, its errors naming it ``name``."""
     from imageform._optional import require
 
     cv2 = require("cv2", what="frame_sharpness")
-    a = _unit(image, "image")
+    a = _unit(image, name)
     g = a if a.ndim == 2 else a @ np.array([0.299, 0.587, 0.114], np.float32)
     lap = cv2.Laplacian(np.ascontiguousarray(g, np.float32), cv2.CV_32F, ksize=1)
     if mask is None:
@@ -341,8 +346,12 @@ def blurred_frames(
     r = as_real(ratio, "ratio", positive=True, maximum=1.0)
     if r >= 1.0:
         raise InvalidInputError(f"expected ratio in (0, 1), got {r:g}")
+    if isinstance(images, (str, bytes)) or not (
+        isinstance(images, Sequence) or (isinstance(images, np.ndarray) and images.ndim >= 3)
+    ):
+        raise InvalidInputError(f"expected images as a sequence of frames, got {describe(images)}")
     frames = list(images)
-    s = np.array([frame_sharpness(f, mask) for f in frames], np.float64)
+    s = np.array([_sharpness(f, mask, f"images[{i}]") for i, f in enumerate(frames)], np.float64)
     n = s.size
     out = np.zeros(n, bool)
     if n < 3:
