@@ -27,10 +27,16 @@ reprojection error (px), median SIFT keypoints a frame (imageform's ``detect_fea
 with the row's mask and threshold), wall seconds of the whole call (one run: the machine
 is shared, ``--repeat`` for medians); agreement with the reference: over consecutive
 frames registered in both, the median angle between the relative rotations and between
-the relative translation directions, degrees. Run::
+the relative translation directions, degrees, and the largest of the rotation angles;
+the note says how many frames ``reconstruct_sequence``'s fallbacks registered (a frame
+whose tracks give PnP fewer than 12 inliers). A second table a stride: the keypoints on
+the specular highlights (``highlight_mask``'s core and its default 4 px growth), how many
+matches touch them and how often those fit the pair's essential matrix, against the
+others. ``--reference-cache DIR`` keeps pycolmap's results: the first run writes them, a
+second (a before/after comparison, another checkout on ``PYTHONPATH``) reads them. Run::
 
     OPENBLAS_NUM_THREADS=1 PYTHONPATH=src python benchmarks/check_endo_real.py \\
-        --video /tmp/endo/c3vdv3_prev.mp4 [--every 8 4] [--repeat 1]
+        --video /tmp/endo/c3vdv3_prev.mp4 [--every 8 4] [--repeat 1] [--reference-cache DIR]
 """
 
 from __future__ import annotations
@@ -99,6 +105,98 @@ def agreement(R: np.ndarray, t: np.ndarray, Rr: np.ndarray, tr: np.ndarray) -> t
     return med(rot), med(tra)
 
 
+def worst_rotation(R: np.ndarray, Rr: np.ndarray) -> float:
+    """The largest angle (deg) between consecutive relative rotations of two runs."""
+    both = np.flatnonzero(np.isfinite(R[:, 0, 0]) & np.isfinite(Rr[:, 0, 0]))
+    out = [
+        np.degrees(
+            np.arccos(np.clip((np.trace((R[j] @ R[i].T) @ (Rr[j] @ Rr[i].T).T) - 1) / 2, -1, 1))
+        )
+        for i, j in itertools.pairwise(both)
+    ]
+    return float(max(out)) if out else float("nan")
+
+
+def highlight_table(frames: list[np.ndarray], every: int, cam: Any) -> str:
+    """Keypoints on the highlights: how many, and how often their matches fit the geometry.
+
+    Keypoints of ``detect_features`` (field of view mask, contrast 0.01); the pairs of
+    frames up to 3 apart; a match touches the highlights when either keypoint is on
+    ``highlight_mask`` (its core, ``grow=0``, and the default ``grow=4``); its inlier rate
+    is the share of the pair's essential matrix inliers (threshold 2 px, undistorted),
+    against the other matches'.
+    """
+    from imageform.geometry import (
+        detect_features,
+        field_of_view_mask,
+        find_essential_matrix,
+        highlight_mask,
+        match_features,
+    )
+
+    sel = frames[::every]
+    K = cam.K
+    fov = field_of_view_mask(sel)
+    feats = [detect_features(f, mask=fov, contrast_threshold=0.01) for f in sel]
+
+    def ideal(xy: np.ndarray) -> np.ndarray:
+        x = (xy - K[:2, 2]) / np.diag(K)[:2]
+        u, ok = cam.distortion.undistort(x)
+        u = np.asarray(u, np.float64)
+        u[~np.asarray(ok, bool)] = np.nan
+        return u * np.diag(K)[:2] + K[:2, 2]
+
+    pairs = []
+    for i in range(len(sel)):
+        for j in range(i + 1, min(len(sel), i + 4)):
+            m = match_features(feats[i].descriptors, feats[j].descriptors)
+            p1, p2 = ideal(feats[i].xy[m[:, 0]]), ideal(feats[j].xy[m[:, 1]])
+            g = np.isfinite(p1).all(1) & np.isfinite(p2).all(1)
+            if g.sum() < 30:
+                continue
+            try:
+                er = find_essential_matrix(p1[g], p2[g], K, threshold=2.0, rng=0)
+            except Exception:  # a pair without a model: no inliers to count
+                continue
+            pairs.append((i, j, m[g], np.asarray(er.inliers, bool)))
+    rows = []
+    h, w = sel[0].shape[:2]
+    for grow in (0, 4):
+        spec = [highlight_mask(f, grow=grow) for f in sel]
+        on = []
+        for sm, ft in zip(spec, feats, strict=True):
+            x = np.clip(np.round(ft.xy[:, 0]).astype(int), 0, w - 1)
+            y = np.clip(np.round(ft.xy[:, 1]).astype(int), 0, h - 1)
+            on.append(sm[y, x])
+        n_in = i_in = n_out = i_out = 0
+        for i, j, m, inl in pairs:
+            hit = on[i][m[:, 0]] | on[j][m[:, 1]]
+            n_in += int(hit.sum())
+            i_in += int((hit & inl).sum())
+            n_out += int((~hit).sum())
+            i_out += int((~hit & inl).sum())
+        rows.append(
+            [
+                grow,
+                f"{100 * np.mean([sm[fov].mean() for sm in spec]):.2f}",
+                f"{100 * np.mean(np.concatenate(on)):.2f}",
+                f"{n_in} ({100 * n_in / max(n_in + n_out, 1):.2f} %)",
+                f"{i_in / max(n_in, 1):.3f}",
+                f"{i_out / max(n_out, 1):.3f}",
+            ]
+        )
+    cols = [
+        "grow px",
+        "highlights: % of the field of view",
+        "% of the keypoints",
+        "matches touching them",
+        "their inlier rate",
+        "the others' inlier rate",
+    ]
+    title = f"### Keypoints on the specular highlights, every {every}th frame\n\n"
+    return title + markdown_table(cols, rows)
+
+
 def run_imageform(
     frames: list[np.ndarray], cam: Any, fov: bool, highlights: bool, ct: float
 ) -> dict[str, Any]:
@@ -127,6 +225,10 @@ def run_imageform(
         out = {"reg": int(rec.registered.sum()), "time": time.perf_counter() - t0}
         out |= {"points": rec.points.shape[0], "track": float(np.mean(rec.track_length))}
         out |= {"reproj": float(np.median(r)), "R": rec.R, "t": rec.t, "note": ""}
+        fallback = sum("registered by" in note for note in rec.notes)
+        if fallback:
+            out["note"] = f"{fallback} by the fallbacks"
+        out["rot_max"] = float("nan")
     per = masks if isinstance(masks, list) else [masks] * n
     kps = [
         len(detect_features(f, mask=m, contrast_threshold=ct))
@@ -194,14 +296,25 @@ def _median_run(fn: Any, repeat: int) -> dict[str, Any]:
     return best
 
 
-def table(frames: list[np.ndarray], every: int, cam: Any, repeat: int) -> str:
+def table(
+    frames: list[np.ndarray], every: int, cam: Any, repeat: int, cache: Path | None = None
+) -> str:
     import pycolmap
 
     sel = frames[::every]
     n = len(sel)
     theirs: list[tuple[str, dict[str, Any]]] = []
-    for label, fov, factor in PYCOLMAP:
-        res = _median_run(lambda: run_pycolmap(sel, cam, fov, factor), repeat)  # noqa: B023
+    for k, (label, fov, factor) in enumerate(PYCOLMAP):
+        cached = None if cache is None else cache / f"pycolmap-every{every}-{k}.npz"
+        if cached is not None and cached.exists():
+            with np.load(cached, allow_pickle=False) as z:
+                res = {key: z[key][()] if z[key].ndim == 0 else z[key] for key in z.files}
+            res["note"] = str(res.get("note", ""))
+        else:
+            res = _median_run(lambda: run_pycolmap(sel, cam, fov, factor), repeat)  # noqa: B023
+            if cached is not None:
+                cached.parent.mkdir(parents=True, exist_ok=True)
+                np.savez(cached, **res)
         theirs.append((f"pycolmap {pycolmap.__version__} {label}", res))
         print(f"  every {every}: pycolmap {label}: {res['reg']}/{n}", file=sys.stderr)
     ref = theirs[-1][1]
@@ -215,6 +328,7 @@ def table(frames: list[np.ndarray], every: int, cam: Any, repeat: int) -> str:
     for label, r in results:
         ok = r["reg"] > 0 and "points" in r
         rot, tra = agreement(r["R"], r["t"], ref["R"], ref["t"]) if r is not ref else (0, 0)
+        worst = worst_rotation(r["R"], ref["R"]) if r is not ref else 0.0
         rows.append(
             [
                 label,
@@ -224,6 +338,7 @@ def table(frames: list[np.ndarray], every: int, cam: Any, repeat: int) -> str:
                 f"{r['reproj']:.2f}" if ok else "-",
                 r.get("kps", "-"),
                 f"{rot:.2f} / {tra:.2f}" if ok and r is not ref else ("reference" if ok else "-"),
+                f"{worst:.2f}" if ok and r is not ref else "-",
                 f"{r['time']:.1f}",
                 r.get("note", ""),
             ]
@@ -236,6 +351,7 @@ def table(frames: list[np.ndarray], every: int, cam: Any, repeat: int) -> str:
         "reprojection px (median)",
         "keypoints a frame (median)",
         "vs reference: rotation / translation deg",
+        "worst rotation deg",
         "s",
         "note",
     ]
@@ -250,16 +366,25 @@ def main() -> None:
     ap.add_argument("--camera", type=Path, default=CAMERA)
     ap.add_argument("--every", type=int, nargs="+", default=[8, 4])
     ap.add_argument("--repeat", type=int, default=1)
+    ap.add_argument(
+        "--reference-cache",
+        type=Path,
+        default=None,
+        help="folder for pycolmap's results: written on the first run, read after (a before/"
+        "after comparison runs pycolmap once)",
+    )
     args = ap.parse_args()
     from imageform.io import read_camera
 
     cam = read_camera(args.camera).camera
     frames = read_clip(args.video, args.panel_width)
     print(header("Structure from motion on a real colonoscopy video"))
-    print(f"load average: {Path('/proc/loadavg').read_text().split()[:3]} (a shared machine)\n")
+    load = " / ".join(Path("/proc/loadavg").read_text().split()[:3])
+    print(f"load average: {load} (a shared machine)\n")
     print(f"{args.video.name}: {len(frames)} frames; camera {args.camera.name}\n")
     for every in args.every:
-        print(table(frames, every, cam, args.repeat))
+        print(table(frames, every, cam, args.repeat, args.reference_cache))
+        print(highlight_table(frames, every, cam))
 
 
 if __name__ == "__main__":

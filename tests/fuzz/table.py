@@ -1646,6 +1646,8 @@ VALID.update(
             [np.pad(np.full((12, 12), 120, np.uint8), 4)] * 3, margin=1
         ),
         "imageform.geometry.highlight_mask": call(np.full((8, 8, 3), 250, np.uint8)),
+        "imageform.geometry.frame_sharpness": call(np.full((8, 8, 3), 120, np.uint8)),
+        "imageform.geometry.blurred_frames": call([np.full((8, 8), 0.5)] * 4),
         "imageform.geometry.match_features": call(
             np.linspace(0.0, 1.0, 40, dtype=np.float32).reshape(5, 8),
             np.linspace(0.0, 1.0, 40, dtype=np.float32).reshape(5, 8),

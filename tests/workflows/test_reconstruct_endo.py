@@ -20,13 +20,15 @@ pytest.importorskip("cv2")
 pytest.importorskip("matplotlib")
 
 ENDO = Path(__file__).resolve().parents[1] / "data" / "endo"
+#: the ten frames 0, 4, ..., 36 (the folder also has 40, 48 and 56, for every 8th frame)
+FIRST_TEN = [ENDO / f"c3vdv3_f{i:03d}.jpg" for i in range(0, 40, 4)]
 
 
 @pytest.fixture(scope="module")
 def frames(tmp_path_factory: pytest.TempPathFactory) -> Path:
     folder = tmp_path_factory.mktemp("endo") / "frames"
     folder.mkdir()
-    for p in sorted(ENDO.glob("c3vdv3_f*.jpg")):
+    for p in FIRST_TEN:
         shutil.copy(p, folder / p.name)
     return folder
 
@@ -69,3 +71,28 @@ def test_mask_and_auto_mask_exclude_each_other(
         args = ["reconstruct", str(frames), *cam, "--contrast-threshold", bad]
         assert main([*args, "-o", str(tmp_path / "o")]) == 2
         assert "--contrast-threshold" in capsys.readouterr().err
+
+
+def test_skip_blurred_leaves_out_the_frames_with_motion_blur(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    import cv2
+    import numpy as np
+
+    # frames 3 and 7 of the ten smeared by a horizontal motion of 9 px (a line kernel)
+    folder = tmp_path / "frames"
+    folder.mkdir()
+    k = np.zeros((9, 9), np.float32)
+    k[4] = 1.0 / 9.0
+    for i, p in enumerate(FIRST_TEN):
+        im = cv2.imread(str(p))
+        assert im is not None
+        cv2.imwrite(str(folder / f"{p.stem}.png"), cv2.filter2D(im, -1, k) if i in (3, 7) else im)
+    out = tmp_path / "out"
+    args = ["reconstruct", str(folder), "--camera", str(ENDO / "camera.toml"), "-o", str(out)]
+    endo = ["--auto-mask", "--contrast-threshold", "0.01", "--skip-blurred"]
+    assert main([*args, *endo]) == 0, capsys.readouterr().err
+    m = json.loads((out / "metrics.json").read_text())
+    assert m["skipped_blurred"] == ["c3vdv3_f012.png", "c3vdv3_f028.png"]
+    assert m["frames"] == 8 and m["registered"] == 8
+    assert "left out 2 blurred frames" in capsys.readouterr().err

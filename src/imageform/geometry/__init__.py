@@ -48,7 +48,12 @@ from imageform.geometry.distortion import (
     project_points_distorted,
 )
 from imageform.geometry.dlt import estimate_projection_matrix
-from imageform.geometry.frame_masks import field_of_view_mask, highlight_mask
+from imageform.geometry.frame_masks import (
+    blurred_frames,
+    field_of_view_mask,
+    frame_sharpness,
+    highlight_mask,
+)
 from imageform.geometry.homogeneous import (
     Dehomogenized,
     are_collinear,
@@ -177,6 +182,7 @@ __all__ = [
     "aruco_marker_image",
     "axis_rotation",
     "backproject",
+    "blurred_frames",
     "bundle_adjust",
     "calibrate_camera",
     "camera_rotation",
@@ -200,6 +206,7 @@ __all__ = [
     "find_fundamental_matrix",
     "find_homography",
     "focal_from_vanishing_points",
+    "frame_sharpness",
     "from_homogeneous",
     "from_homogeneous_masked",
     "fundamental_7point",

@@ -32,7 +32,15 @@ pipeline, each step a public function:
    (:func:`~imageform.geometry.solve_pnp_ransac`; the ones it rejects are no views of
    those points), then every track of that frame seen by two registered frames
    triangulated (linear, then Gauss-Newton) when its rays meet at 1.5 degrees or more
-   and it reprojects within 4 pixels in front of every camera;
+   and it reprojects within 4 pixels in front of every camera. A frame with fewer than 12
+   PnP inliers waits and is tried again once more frames are registered (as COLMAP
+   does); when every frame left has failed since the last registration, the fallbacks
+   (a frame whose tracks are short: its pairs below the 30 inliers a verified pair needs,
+   a track cut by a frame between): its keypoints in no track matched to the points its
+   2 x ``window`` nearest registered frames see (Lowe's ratio, mutual; PnP on both sets,
+   12 inliers), else the pose of a verified pair with a registered frame (its rotation
+   and translation direction) with the scale that most points reproject from (6 at
+   least, a one-point RANSAC);
 7. bundle adjustment (:func:`bundle_adjust`: Levenberg-Marquardt on the reprojection
    error, the points eliminated by the Schur complement) over everything each time the
    registered frames grew by 40 %, observations beyond 4 pixels dropped, the tracks
@@ -287,7 +295,8 @@ class Reconstruction:
     rms_px : ndarray (n,)
         Each frame's reprojection RMS (NaN when not registered).
     notes : list of str
-        What failed and why (frames that could not be registered, ...).
+        What failed and why (frames that could not be registered, ...), and the frames
+        the fallbacks registered and how.
     residuals_px : ndarray (M,)
         The reprojection error of every observation the final bundle adjustment kept
         (pixels; the distance between the observed keypoint and its point's projection).
@@ -1001,6 +1010,7 @@ def reconstruct_sequence(
     offset = np.concatenate([[0], np.cumsum(textured)]).astype(np.int64)
     pair_info: dict[tuple[int, int], tuple[int, float, NDArray[np.int64]]] = {}
     pair_rot: dict[tuple[int, int], F64] = {}  # each verified pair's relative rotation
+    pair_dir: dict[tuple[int, int], F64] = {}  # and its translation's direction
     # rays closer than this (radians) meet on either side of the cameras within the noise
     min_parallax = float(np.arctan(3.0 * threshold_px / min(abs(k[0, 0]), abs(k[1, 1]))))
 
@@ -1057,6 +1067,8 @@ def reconstruct_sequence(
         if inl.sum() < 30 or behind.sum() >= 0.5 * inl.sum():
             return
         pair_rot[(i, j)] = np.asarray(rp.R, np.float64)
+        tu = np.asarray(rp.t, np.float64).ravel()
+        pair_dir[(i, j)] = tu / max(float(np.linalg.norm(tu)), 1e-300)
         if j - i > win:  # a loop closure: never the initial pair, its parallax unused
             pair_info[(i, j)] = (int(inl.sum()), 0.0, m[inl])
             return
@@ -1364,34 +1376,179 @@ def reconstruct_sequence(
             "no pair of frames triangulates 30 points to start from: " + why
         )
     last_ba = 2
-    # register the others: the frame that sees the most points first
+    # register the others: the frame that sees the most points first. A frame that fails
+    # waits until more frames are registered (their points may be the ones it sees) and is
+    # tried again then, as COLMAP does; it is given up when nothing changed since its try
     pending = [fi for fi in range(n) if not registered[fi]]
-    while pending:
+    failed_at: dict[int, int] = {}  # frame -> frames registered when it last failed
+    why_not: dict[int, str] = {}
+
+    def add_views(fi: int, kp: NDArray[np.int64], tracks: NDArray[np.int64]) -> None:
+        """Make keypoints ``kp`` of frame ``fi`` (in no track yet) views of ``tracks``."""
+        nonlocal o_frame, o_kp, o_track, o_uv, o_ok, o_A
+        if kp.size == 0:
+            return
+        o_frame = np.concatenate([o_frame, np.full(kp.size, fi, np.int64)])
+        o_kp = np.concatenate([o_kp, kp])
+        o_track = np.concatenate([o_track, tracks])
+        o_uv = np.concatenate([o_uv, all_uv[offset[fi] + kp]])
+        o_A = np.concatenate([o_A, all_A[offset[fi] + kp]])
+        o_ok = np.concatenate([o_ok, np.ones(kp.size, bool)])
+        kp_track[fi][kp] = tracks
+
+    def match_points(fi: int, known: NDArray[np.int64]) -> tuple[NDArray[np.int64], ...]:
+        """Match frame ``fi``'s untracked keypoints to the points its neighbours see.
+
+        The points seen by the registered frames nearest ``fi`` in the sequence (2 x
+        ``window`` of them at most), each by its view in the frame nearest ``fi``, against
+        ``fi``'s keypoints that are no view of a point yet (Lowe's ratio, mutual): the
+        correspondences a pair's matching missed (a pair below its inlier minimum, a track
+        cut by a frame between). Returns the keypoints and their tracks.
+        """
+        reg = np.flatnonzero(registered)
+        near = reg[np.argsort(np.abs(reg - fi), kind="stable")[: 2 * win]]
+        hp_ = has_point()
+        sel = np.flatnonzero(np.isin(o_frame, near) & o_ok & hp_[o_track])
+        sel = sel[~np.isin(o_track[sel], known)]
+        empty = np.zeros(0, np.int64)
+        if sel.size < 2:
+            return empty, empty
+        # one view a track: the nearest frame's (a track's own views would fail the ratio)
+        order_ = np.lexsort((np.abs(o_frame[sel] - fi), o_track[sel]))
+        sel = sel[order_]
+        first = np.ones(sel.size, bool)
+        first[1:] = o_track[sel][1:] != o_track[sel][:-1]
+        sel = sel[first]
+        pool = np.stack([desc[f][q] for f, q in zip(o_frame[sel], o_kp[sel], strict=True)])
+        free = np.flatnonzero((kp_track[fi] < 0) & np.all(np.isfinite(ideal[fi]), axis=1))
+        if free.size < 2:
+            return empty, empty
+        mm = match_features(desc[fi][free], pool, ratio=ratio)
+        return free[mm[:, 0]], o_track[sel[mm[:, 1]]]
+
+    @dataclass
+    class _Pose:
+        R: F64
+        tvec: F64
+        inliers: NDArray[np.bool_]
+        valid: bool = True
+
+    def pose_from_pair(
+        fi: int, kp: NDArray[np.int64], tracks: NDArray[np.int64]
+    ) -> tuple[_Pose, int] | None:
+        r"""Pose of frame ``fi`` from a verified pair with a registered frame, scaled by points.
+
+        The pair's essential matrix (30 inliers or more, its rotation in the loops of three
+        frames) gives the rotation and the translation's direction :math:`u` relative to
+        the registered frame ``g``: :math:`R = R_{g\to f} R_g`,
+        :math:`t = R_{g\to f} t_g + s u`; the scale :math:`s > 0` is one number, each
+        2-D/3-D correspondence a hypothesis (the point's depth along its ray), the one most
+        points reproject within PnP's threshold from wins (a one-point RANSAC, exhaustive),
+        6 points at least and half of those the tracks give. None when no pair gives that.
+        """
+        if kp.size == 0:
+            return None
+        thr = 3.0 * stretch(fi, kp)
+        X = P[tracks]
+        xh = np.column_stack([ideal[fi][kp], np.ones(kp.size)]) @ np.linalg.inv(k).T
+        best: _Pose | None = None
+        best_g, score = -1, 0
+        for g in np.flatnonzero(registered).tolist():
+            key = (min(g, fi), max(g, fi))
+            if key not in pair_info or key not in pair_dir:
+                continue
+            Rp, up = pair_rot[key], pair_dir[key]
+            Rr, u = (Rp, up) if g < fi else (Rp.T, -(Rp.T @ up))
+            A = (X @ Rs[g].T + ts[g]) @ Rr.T
+            du = np.cross(xh, u)
+            da = np.cross(xh, A)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                sc = -np.sum(du * da, axis=1) / np.sum(du * du, axis=1)
+            sc = sc[np.isfinite(sc) & (sc > 0)]
+            for s_ in np.unique(sc):
+                Xc = A + s_ * u
+                with np.errstate(divide="ignore", invalid="ignore"):
+                    uv = (Xc @ k[:2].T) / Xc[:, 2:3]
+                    inl = (Xc[:, 2] > 0) & (np.linalg.norm(uv - ideal[fi][kp], axis=1) < thr)
+                if int(inl.sum()) > score:
+                    best = _Pose(Rr @ Rs[g], Rr @ ts[g] + s_ * u, inl)
+                    best_g = g
+                    score = int(inl.sum())
+        if best is None or score < max(6, 0.5 * min(kp.size, 12)):
+            return None
+        return best, best_g
+
+    def register(fi: int, fallback: bool) -> bool:
+        """Register frame ``fi`` by PnP on its tracks' points; ``fallback``: by the others.
+
+        The fallbacks, when the tracks give fewer than 12 PnP inliers: the points matched
+        directly (:func:`match_points`) join the tracks' in PnP, then the pose from a
+        verified pair scaled by the points (:func:`pose_from_pair`).
+        """
+        nonlocal last_ba
         hp = has_point()
-        counts = [int(np.sum(hp[kp_track[fi][kp_track[fi] >= 0]])) for fi in pending]
-        fi = pending.pop(int(np.argmax(counts)))
         tr = kp_track[fi]
         kps = np.flatnonzero(tr >= 0)
         kps = kps[hp[tr[kps]] & np.all(np.isfinite(ideal[fi][kps]), axis=1)]
-        if kps.size < 12:
-            notes.append(f"frame {fi}: {kps.size} 2-D/3-D correspondences (12 needed)")
-            continue
-        try:
-            thr = 3.0 * stretch(fi, kps)
-            res = solve_pnp_ransac(P[tr[kps]], ideal[fi][kps], k, threshold=thr, rng=rng)
-        except (DegenerateConfigurationError, InvalidInputError):
-            notes.append(f"frame {fi}: PnP failed")
-            continue
-        if not bool(res.valid) or int(np.sum(res.inliers)) < 12:
-            notes.append(f"frame {fi}: PnP found {int(np.sum(res.inliers))} inliers (12 needed)")
-            continue
+        res: Any = None
+        found = 0
+        if kps.size >= 12:
+            try:
+                thr = 3.0 * stretch(fi, kps)
+                res = solve_pnp_ransac(P[tr[kps]], ideal[fi][kps], k, threshold=thr, rng=rng)
+                found = int(np.sum(res.inliers)) if bool(res.valid) else 0
+            except (DegenerateConfigurationError, InvalidInputError):
+                res = None
+        extra_kp = extra_tr = np.zeros(0, np.int64)
+        how = ""
+        if found < 12:
+            if not fallback:
+                why_not[fi] = (
+                    f"frame {fi}: {kps.size} 2-D/3-D correspondences, PnP found {found} "
+                    "inliers (12 needed)"
+                )
+                return False
+            # too few views of points through the tracks: the points matched directly
+            extra_kp, extra_tr = match_points(fi, tr[kps])
+            allk = np.concatenate([kps, extra_kp])
+            if allk.size >= 12 and extra_kp.size:
+                try:
+                    thr = 3.0 * stretch(fi, allk)
+                    X3 = np.concatenate([P[tr[kps]], P[extra_tr]])
+                    res = solve_pnp_ransac(X3, ideal[fi][allk], k, threshold=thr, rng=rng)
+                    found = int(np.sum(res.inliers)) if bool(res.valid) else 0
+                except (DegenerateConfigurationError, InvalidInputError):
+                    res = None
+            how = f"{extra_kp.size} of its points matched directly, PnP {found} inliers"
+            if found < 12:
+                pose = pose_from_pair(fi, allk, np.concatenate([tr[kps], extra_tr]))
+                if pose is None:
+                    why_not[fi] = (
+                        f"frame {fi}: {kps.size} 2-D/3-D correspondences by the tracks and "
+                        f"{extra_kp.size} by matching the points, PnP found {found} inliers "
+                        "(12 needed), no verified pair's pose that 6 of them scale"
+                    )
+                    return False
+                res, g = pose
+                how = (
+                    f"the pose of its pair with frame {g}, scaled by "
+                    f"{int(np.sum(res.inliers))} points"
+                )
+            notes.append(f"frame {fi}: registered by {how}")
         Rs[fi], ts[fi] = np.asarray(res.R, np.float64), np.asarray(res.tvec, np.float64)
         registered[fi] = True
-        # the correspondences PnP rejected are not this frame's views of those points
+        inl = np.asarray(res.inliers, bool)
+        # the correspondences PnP rejected are not this frame's views of those points; the
+        # points matched directly that fit become views
         rejected = np.zeros(tr.size, bool)
-        rejected[kps[~np.asarray(res.inliers, bool)]] = True
+        rejected[kps[~inl[: kps.size]]] = True
         mine = np.flatnonzero(o_frame == fi)
         o_ok[mine[rejected[o_kp[mine]]]] = False
+        if extra_kp.size:
+            keep = inl[kps.size :]
+            ek, et = extra_kp[keep], extra_tr[keep]
+            _, once = np.unique(et, return_index=True)
+            add_views(fi, ek[once], et[once])
         triangulate(tr[tr >= 0])
         nreg = int(registered.sum())
         if nreg >= 1.4 * last_ba:
@@ -1400,6 +1557,29 @@ def reconstruct_sequence(
             complete(2.0)
             triangulate(np.arange(n_tracks))
             last_ba = nreg
+        return True
+
+    while pending:
+        nreg = int(registered.sum())
+        ready = [fi for fi in pending if failed_at.get(fi, -1) < nreg]
+        if ready:
+            hp = has_point()
+            counts = [int(np.sum(hp[kp_track[fi][kp_track[fi] >= 0]])) for fi in ready]
+            fi = ready[int(np.argmax(counts))]
+            if register(fi, fallback=False):
+                pending.remove(fi)
+            else:
+                failed_at[fi] = nreg
+            continue
+        # every frame left failed since the last registration: the fallbacks, the frame
+        # that sees the most points first
+        hp = has_point()
+        order = sorted(pending, key=lambda f: -int(np.sum(hp[kp_track[f][kp_track[f] >= 0]])))
+        done = next((f for f in order if register(f, fallback=True)), None)
+        if done is None:
+            break
+        pending.remove(done)
+    notes += [why_not[fi] for fi in sorted(pending)]
     # the final adjustment: robust, outliers out, the tracks completed, merged and
     # re-triangulated, robust again, then plain least squares on what is left
     adjust(2.0, 30)

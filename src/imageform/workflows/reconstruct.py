@@ -80,6 +80,11 @@ class ReconstructOptions(Options):
         help="Keep keypoints off the specular highlights (bright, nearly white pixels) of "
         "every frame: they move with the light, not with the tissue.",
     )
+    skip_blurred: bool = option(
+        False,
+        help="Leave out the blurred frames: sharpness (the variance of the Laplacian in the "
+        "field of view) below half the median of the 3 frames on either side.",
+    )
     contrast_threshold: float = option(
         0.04,
         help="SIFT's contrast threshold, in (0, 1): 0.01 finds ten times as many keypoints "
@@ -174,8 +179,10 @@ def _read_mask(path: Path, info: Any) -> Any:
     return m > 0
 
 
-def _masks(images: list[Any], opts: ReconstructOptions, info: Any) -> tuple[Any, dict[str, Any]]:
-    """Return the keypoint masks of the frames (one, one a frame, or None), their shares."""
+def _masks(
+    images: list[Any], opts: ReconstructOptions, info: Any
+) -> tuple[Any, dict[str, Any], Any]:
+    """Return the keypoint masks (one, one a frame, or None), their shares, the field of view."""
     import numpy as np
 
     from imageform.geometry import field_of_view_mask, highlight_mask
@@ -190,11 +197,11 @@ def _masks(images: list[Any], opts: ReconstructOptions, info: Any) -> tuple[Any,
     if fov is not None:
         shares["field_of_view_share"] = round(float(np.mean(fov)), 4)
     if not opts.highlights:
-        return fov, shares
+        return fov, shares, fov
     spec = [highlight_mask(im) for im in images]
     shares["highlight_share_mean"] = round(float(np.mean([s.mean() for s in spec])), 4)
     keep = [~s if fov is None else fov & ~s for s in spec]
-    return keep, shares
+    return keep, shares, fov
 
 
 def _metrics(rec: Any, names: list[str], seconds: dict[str, float]) -> dict[str, Any]:
@@ -250,7 +257,23 @@ def reconstruct(run: Run, opts: ReconstructOptions, *, out: Path, frames: str) -
             + (f" (one in {opts.every})" if opts.every > 1 else "")
             + "; reconstruct needs at least 2"
         )
-    mask, mask_shares = _masks(images, opts, info)
+    mask, mask_shares, fov = _masks(images, opts, info)
+    skipped: list[str] = []
+    if opts.skip_blurred:
+        from imageform.geometry import blurred_frames
+
+        blur = blurred_frames(images, fov)
+        skipped = [nm for nm, b in zip(names, blur.tolist(), strict=True) if b]
+        keep_i = np.flatnonzero(~blur).tolist()
+        images = [images[i] for i in keep_i]
+        names = [names[i] for i in keep_i]
+        if isinstance(mask, list):
+            mask = [mask[i] for i in keep_i]
+        if len(images) < 2:
+            raise InvalidInputError(
+                f"{frames}: {len(images)} sharp frame (--skip-blurred left out "
+                f"{len(skipped)}); reconstruct needs at least 2"
+            )
     seconds["read"] = time.perf_counter() - t0
     ahead.start("reconstruct")  # a first run: its kernels compiled on two cores
     if run.progress is not None:
@@ -304,6 +327,7 @@ def reconstruct(run: Run, opts: ReconstructOptions, *, out: Path, frames: str) -
         "camera": str(opts.camera),
         **_metrics(rec, names, seconds),
         "masks": mask_shares,
+        "skipped_blurred": skipped,
         "options": {k: (str(v) if isinstance(v, Path) else v) for k, v in asdict(opts).items()},
     }
     if run.progress is not None:
@@ -313,6 +337,8 @@ def reconstruct(run: Run, opts: ReconstructOptions, *, out: Path, frames: str) -
     seconds["report"] = time.perf_counter() - t3
     metrics["seconds"] = {k: round(v, 3) for k, v in seconds.items()}
     write_json(folder / "metrics.json", metrics)
+    if skipped:
+        run.note(f"note: left out {len(skipped)} blurred frames: {', '.join(skipped)}")
     for note in rec.notes:
         run.note(f"note: {note}")
     n, nreg = metrics["frames"], metrics["registered"]
