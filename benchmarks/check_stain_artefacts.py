@@ -3,14 +3,15 @@
 Run::
 
     OPENBLAS_NUM_THREADS=1 PYTHONPATH=src:. python benchmarks/check_stain_artefacts.py \\
-        TILE_DIR PEN_DIR
+        TILE_DIR PEN_DIR [--methods macenko,vahadane]
 
 ``TILE_DIR`` holds the clean real tiles of ``benchmarks/check_stain_real.py`` (not in the
 repository; its docstring names their sources). ``PEN_DIR`` holds HistoQC's pen-marked slide
 thumbnails with their hand-drawn ink masks (choosehappy/HistoQC, Clear BSD licence,
 ``histoqc/data/pen/1k_version/pen_green.png``, ``pen_black.png``, ``pen_red.png`` and their
-``*_mask.png``, ``histoqc/data/models/pen_markings_he/pen_green.png`` and mask saved as
-``small_pen_green.png``, ``small_pen_green_mask.png``; commit b795612).
+``*_mask.png``, ``histoqc/data/models/pen_markings_he/pen_green.png`` and ``pen_red.png``
+with their masks saved as ``small_pen_green.png``, ``small_pen_green_mask.png``,
+``small_pen_red.png``, ``small_pen_red_mask.png``; commit b795612).
 
 1. Detection on HistoQC's thumbnails: the share of the hand-masked ink that
    ``tissue_mask`` drops, and of the rest that the glass rule keeps that it keeps.
@@ -19,14 +20,17 @@ thumbnails with their hand-drawn ink masks (choosehappy/HistoQC, Clear BSD licen
    annotator left out, and the brown margin dye and grey label strip by the H&E rules) and
    with every pixel (``mask=None``), ``mask="auto"`` or ``mask="he"``.
 3. Real ink on clean tiles: ink transmittance sampled from HistoQC's hand-masked ink
-   (green, blue - the blue dot of ``pen_green.png`` - and black, each pixel divided by the
-   slide's glass) multiplies a band across each clean tile (Beer-Lambert: ink over
+   (green, blue - the blue dot of ``pen_green.png`` -, black and red, each pixel divided by
+   the slide's glass), split at the median column of each stroke into a tune half (left)
+   and a held-out half (right), multiplies a band across each clean tile (Beer-Lambert: ink over
    tissue), covering 0.5, 2 or 5 % of it; and a fold: a band where the tissue's OD is
    tripled. The stroke is at least 8 pixels wide, cut short to its coverage. The angle
    between the marked tile's stains (no mask, ``mask="auto"``) and the clean tile's, and
    with the mask also to the clean tile's without the band (the tissue under the ink is
    lost to any mask: the best a mask can do); the share of the band's pixels the mask
-   drops. Tiles are cut to at most 512 x 512 (the centre) to keep Vahadane's run time down.
+   drops (the ideal column for the first method only). Tiles are cut to at most 512 x 512
+   (the centre) to keep Vahadane's run time down. The summary: median / worst / cases over
+   3 deg per ink and half.
 4. Clean tiles: the share of what the glass rule keeps that ``tissue_mask`` keeps, and the
    angle between the stains with ``mask="auto"`` and ``mask=None``.
 """
@@ -215,8 +219,8 @@ def main() -> None:
     summary = []
     for case in dict.fromkeys(r[1] for r in rows):
         line = [case]
-        for m, k, r in kinds:
-            v = np.array(angles.get((case, f"{m} {k} {r}"), [np.nan]))
+        for m, use, ref_name in kinds:
+            v = np.array(angles.get((case, f"{m} {use} {ref_name}"), [np.nan]))
             line.append(f"{np.median(v):.2f} / {v.max():.2f} / {int((v > 3).sum())} of {v.size}")
         summary.append(line)
     heads = {
