@@ -23,9 +23,15 @@ This is not the York Urban DB (the benchmark issue 17's targets refer to, not av
 
 ``--photos DIR`` adds a table for the photographs in a folder (``*.jpg``, ``*.png``; read
 with their EXIF orientation) and an optional ``DIR/truth.csv`` (columns ``file``, ``f_px``,
-``note``: the focal length in pixels where the camera is known, e.g. from EXIF), with the
-default settings: the time, the segments, the points found (``inf``: beyond 20 diagonals),
-the focal length and its error, the horizon (its tilt and its row at the image centre) and,
+``horizon_left``, ``horizon_right``, ``note``: the focal length in pixels where the camera is
+known, e.g. from EXIF or a calibration, and the annotated horizon's rows at the image's
+first and last columns), with the default settings: a summary (K found, the median focal
+length error, within 5 %, off by more than 20 %; the horizon error as York Urban scores it,
+the larger distance at the left and right edges over the height, an image without a horizon
+counting as infinite; how many versions give the original's answer), then for each
+photograph the time, the segments, the points found (``inf``: beyond 20 diagonals),
+the focal length and its error, the horizon (its tilt, its row at the image centre, its
+error) and why no K was given (``K_reason``, where the library has it), and,
 for each photograph, the same on four versions of it: half size (f and the row scaled back),
 JPEG quality 30, Gaussian noise (sigma 8 of 255), rolled 10 degrees about the centre (the
 horizon's tilt should change by 10 degrees, f not at all) and with barrel distortion (the
@@ -34,7 +40,8 @@ f at the centre unchanged; lines bent)::
 
     OPENBLAS_NUM_THREADS=1 PYTHONPATH=src python -m benchmarks.check_vp_real --photos DIR
 
-No photograph is in the repository: the results file names where they came from.
+``--photos-only`` leaves the checkerboard views out. No photograph is in the repository:
+the results file names where they came from.
 """
 
 from __future__ import annotations

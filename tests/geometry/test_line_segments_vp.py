@@ -565,3 +565,22 @@ def test_kodak_photographs_with_man_made_directions_keep_their_focal_length(
         pytest.skip("../shared/data/kodak is not available")
     res = detect_vanishing_points(np.asarray(read_image(path)))
     assert res.K is not None and res.focal_spread is not None and res.focal_spread <= 0.021
+
+
+def test_horizon_without_K_from_a_finite_vertical_point() -> None:
+    """A pitched camera (the vertical point finite) seeing verticals and one horizontal
+    direction, K left open (the orthocentre needs three finite points): the horizon's
+    normal is ``v - p`` whatever the focal length (square pixels, zero skew), and the
+    horizontal point fixes its offset. It comes back within 1 px of the truth across the
+    frame; None before ("a finite vertical point: the horizon needs the focal length")."""
+    R = camera_rotation(0.3, 0.5, 0.05)
+    up, across = (vanishing_point(K, d, R) for d in (np.array([0, 1.0, 0]), np.array([1.0, 0, 0])))
+    rng = np.random.default_rng(10)
+    seg = _segments(_toward([up / up[2], across / across[2]], 40, rng))
+    res = detect_vanishing_points(
+        segments=seg, image_size=(768, 512), principal_point="orthocenter"
+    )
+    assert res.K is None and res.vertical is not None and res.horizon is not None
+    truth = horizon_line(K, R)
+    for u in (0.0, 383.5, 767.0):
+        assert _row_at(res.horizon, u) == pytest.approx(_row_at(truth, u), abs=1.0)
