@@ -787,16 +787,16 @@ def detect_vanishing_points(
             K = None
     elif not combo:
         reason = "not determined: no vanishing points"
+    elif sum(_is_finite(v, pp, far) for v in vps) < 2:
+        reason = (
+            "not determined: fewer than two of the points are finite (one-point perspective, "
+            "or verticals parallel with one horizontal direction): the focal length is open"
+        )
     elif skipped_weak:
         reason = (
             f"not determined: the points that would fix it are weakly supported (fewer than "
             f"{_K_MIN_SEGMENTS} segments or less than {_K_MIN_SUPPORT:g} image diagonal of "
             f"them): chance convergences in texture fix some f whatever the scene"
-        )
-    elif sum(_is_finite(v, pp, far) for v in vps) < 2:
-        reason = (
-            "not determined: fewer than two of the points are finite (one-point perspective, "
-            "or verticals parallel with one horizontal direction): the focal length is open"
         )
     else:
         reason = (
