@@ -404,9 +404,7 @@ def _orthogonal_for_some_f(
     return bool(worst.min() <= math.sin(tol))
 
 
-def _level_horizon(
-    vps: FloatArray, vertical: int, pp: FloatArray, far: float, strong: list[bool]
-) -> FloatArray | None:
+def _level_horizon(vps: FloatArray, vertical: int, pp: FloatArray, far: float) -> FloatArray | None:
     """Return the horizon without K, from the vertical point and the horizontal ones.
 
     The horizon is the polar of the vertical point under the image of the absolute conic,
@@ -417,15 +415,14 @@ def _level_horizon(
     the horizontal points lie on the horizon: the wall seen by a level camera (verticals
     and one horizontal direction), a building whose K was left open. With two horizontal
     points, their join when its normal is within 5 degrees of ``v - p`` (None when not: the
-    points do not belong together). Only points whose ``strong`` flag is set are used.
+    points do not belong together). A point too weak to fix a focal length still fixes the
+    horizon's offset (a railway's two rails, a render's few edges).
     """
     v = vps[vertical]
     d = v[:2] - pp * v[2]
     nd = math.hypot(d[0], d[1])
-    finite = [
-        p for i, p in enumerate(vps) if i != vertical and strong[i] and _is_finite(p, pp, far)
-    ]
-    if nd == 0 or not finite or not strong[vertical]:
+    finite = [p for i, p in enumerate(vps) if i != vertical and _is_finite(p, pp, far)]
+    if nd == 0 or not finite:
         return None
     a, b = d / nd
     if b < 0:
@@ -727,13 +724,7 @@ def detect_vanishing_points(
                 # horizontal ones orthogonal by chance are common in clutter (sand ripples)
                 continue
             trial = [cands[i][0] for i in combo]
-            if any(weak[i] and _is_finite(cands[i][0], pp, far) for i in combo):
-                # a point too weakly supported to fix a focal length: the set is taken
-                # without K or not at all (a triplet's third point that a few segments
-                # meet by chance moved f by 50-80 % between sizes of one photograph)
-                skipped_weak = True
-                K = None
-            elif pp_mode == "orthocenter":
+            if pp_mode == "orthocenter":
                 K = _triplet_K(trial, centre, diag, far) if r == 3 else None
             else:
                 K = _manhattan_K(trial, [cands[i][2] for i in combo], pp, diag, far, tol)
@@ -763,12 +754,24 @@ def detect_vanishing_points(
     labels = np.full(len(segments), -1, dtype=np.int64)
     for j, i in enumerate(combo):
         labels[cands[i][1] & (labels < 0)] = j
+    fixing = list(combo)
+    if K is not None and any(weak[i] and _is_finite(cands[i][0], pp, far) for i in combo):
+        # a point too weakly supported to fix a focal length is kept in the set but left
+        # out of the fit (a corridor's third point, met by nine segments at half size,
+        # moved f by +78 %): f from the well-supported points, if they fix one
+        fixing = [i for i in combo if not weak[i]]
+        K = None
+        if pp_mode != "orthocenter" and sum(_is_finite(cands[i][0], pp, far) for i in fixing) >= 2:
+            K = _manhattan_K(
+                [cands[i][0] for i in fixing], [cands[i][2] for i in fixing], pp, diag, far, tol
+            )
+        skipped_weak = K is None
     reason: str | None = None
     spread: float | None = None
     if K is not None:
-        members = [cands[i][1] for i in combo]
+        members = [cands[i][1] for i in fixing]
         spread, fail = _focal_spread(
-            segments, members, [cands[i][2] for i in combo], K[:2, 2], diag, far, gen
+            segments, members, [cands[i][2] for i in fixing], K[:2, 2], diag, far, gen
         )
         ratio = float(K[0, 0]) / diag
         if fail > _K_MAX_FAIL or spread > _K_MAX_SPREAD:
@@ -838,8 +841,7 @@ def detect_vanishing_points(
         if tilt[vertical] < _UPRIGHT:
             vertical = None  # no point's segments run nearer the columns than the rows
         else:
-            strong = [not weak[i] for i in combo]
-            horizon = _level_horizon(vps, vertical, pp, far, strong)
+            horizon = _level_horizon(vps, vertical, pp, far)
     if horizon is None and len(vps):
         # no vanishing point gives the horizon: a level camera over open water sees it
         sea = _visible_horizon(segments, np.ones(len(segments), dtype=bool), w, h)
