@@ -416,13 +416,19 @@ def _level_horizon(vps: FloatArray, vertical: int, pp: FloatArray, far: float) -
     and one horizontal direction), a building whose K was left open. With two horizontal
     points, their join when its normal is within 5 degrees of ``v - p`` (None when not: the
     points do not belong together). A point too weak to fix a focal length still fixes the
-    horizon's offset (a railway's two rails, a render's few edges).
+    horizon's offset. A finite vertical point must lie above or below the frame, nearer the
+    column through ``p`` than the row (a railway's rails run steeply towards a point on the
+    horizon, inside the frame).
     """
     v = vps[vertical]
     d = v[:2] - pp * v[2]
     nd = math.hypot(d[0], d[1])
     finite = [p for i, p in enumerate(vps) if i != vertical and _is_finite(p, pp, far)]
     if nd == 0 or not finite:
+        return None
+    if v[2] != 0 and (abs(d[1]) < abs(d[0]) or abs(d[1]) < pp[1] + 1.0):
+        # a finite "vertical" point beside the principal point or inside the frame's rows
+        # is a horizontal direction whose segments run steeply (a railway's two rails)
         return None
     a, b = d / nd
     if b < 0:
