@@ -19,6 +19,13 @@ moves far with a weakly supported third point: on OpenCV's 13 checkerboard photo
 (undistorted, known f = 536 px; ``benchmarks/check_vp_real.py``) the median focal-length
 error is 41 % with the orthocentre, 6.5 % with the centre and 3.6 % with the calibrated
 principal point (23 px from the centre).
+
+K is given only where the evidence holds it (two finite points fix a focal length whatever
+the scene, and nothing in the pair says whether their directions are orthogonal): a finite
+point that fixes ``f`` needs ``_K_MIN_SEGMENTS`` segments and ``_K_MIN_SUPPORT`` image
+diagonals of them (weaker points stay in the set, out of the fit), resampling the points'
+segments may move ``f`` by ``_K_MAX_SPREAD`` at most, and ``f`` lies within
+``_F_PLAUSIBLE`` image diagonals; otherwise ``K`` is None with ``K_reason``.
 """
 
 from __future__ import annotations
@@ -308,9 +315,9 @@ _K_MIN_SEGMENTS = 12
 _K_MIN_SUPPORT = 0.6
 #: K is left undetermined when resampling the points' segments moves ``f`` by more than this
 #: (the half-width of the central 68 % of ``log f``), or finds no ``f`` in this share of
-#: the resamples. On real photographs with a known camera, sets resampling moved by less
-#: than 1 % had a median focal-length error of 3.5 %, those moved by 3 % or more about 20 %
-#: (``benchmarks/check_vp_real.py``).
+#: the resamples: on the York Urban photographs the sets resampling moved by a few per cent
+#: were the ones whose focal length was off by tens of per cent
+#: (``benchmarks/results/vp-real-2026-11-29c.md``).
 _K_MAX_SPREAD = 0.025
 _K_MAX_FAIL = 0.2
 #: The focal lengths (image diagonals) taken as a camera's: a 13 to 260 mm-equivalent lens.
