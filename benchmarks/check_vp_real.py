@@ -23,9 +23,15 @@ This is not the York Urban DB (the benchmark issue 17's targets refer to, not av
 
 ``--photos DIR`` adds a table for the photographs in a folder (``*.jpg``, ``*.png``; read
 with their EXIF orientation) and an optional ``DIR/truth.csv`` (columns ``file``, ``f_px``,
-``note``: the focal length in pixels where the camera is known, e.g. from EXIF), with the
-default settings: the time, the segments, the points found (``inf``: beyond 20 diagonals),
-the focal length and its error, the horizon (its tilt and its row at the image centre) and,
+``horizon_left``, ``horizon_right``, ``note``: the focal length in pixels where the camera is
+known, e.g. from EXIF or a calibration, and the annotated horizon's rows at the image's
+first and last columns), with the default settings: a summary (K found, the median focal
+length error, within 5 %, off by more than 20 %; the horizon error as York Urban scores it,
+the larger distance at the left and right edges over the height, an image without a horizon
+counting as infinite; how many versions give the original's answer), then for each
+photograph the time, the segments, the points found (``inf``: beyond 20 diagonals),
+the focal length and its error, the horizon (its tilt, its row at the image centre, its
+error) and why no K was given (``K_reason``, where the library has it), and,
 for each photograph, the same on four versions of it: half size (f and the row scaled back),
 JPEG quality 30, Gaussian noise (sigma 8 of 255), rolled 10 degrees about the centre (the
 horizon's tilt should change by 10 degrees, f not at all) and with barrel distortion (the
@@ -34,7 +40,8 @@ f at the centre unchanged; lines bent)::
 
     OPENBLAS_NUM_THREADS=1 PYTHONPATH=src python -m benchmarks.check_vp_real --photos DIR
 
-No photograph is in the repository: the results file names where they came from.
+``--photos-only`` leaves the checkerboard views out. No photograph is in the repository:
+the results file names where they came from.
 """
 
 from __future__ import annotations
@@ -45,6 +52,7 @@ import io
 import math
 import time
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -158,19 +166,25 @@ def _describe(res: object, w: int, h: int, scale: float) -> tuple[str, str, floa
     return ", ".join(pts) or "-", f, tilt, row
 
 
-def photos(folder: Path) -> tuple[list[tuple[object, ...]], list[tuple[object, ...]]]:
+def photos(
+    folder: Path,
+) -> tuple[list[tuple[object, ...]], list[tuple[object, ...]], list[tuple[object, ...]]]:
     """The per-photograph table and the versions table for the photographs in ``folder``."""
     from imageform.geometry import detect_vanishing_points
     from imageform.io import read_image
 
     truth: dict[str, float] = {}
+    horizons: dict[str, tuple[float, float]] = {}
     if (folder / "truth.csv").is_file():
         with open(folder / "truth.csv", newline="") as fh:
             for r in csv.DictReader(fh):
                 if r.get("f_px"):
                     truth[r["file"]] = float(r["f_px"])
+                if r.get("horizon_left") and r.get("horizon_right"):
+                    horizons[r["file"]] = (float(r["horizon_left"]), float(r["horizon_right"]))
     rows: list[tuple[object, ...]] = []
     versions: list[tuple[object, ...]] = []
+    stats: list[dict[str, Any]] = []
     paths = sorted(p for p in folder.iterdir() if p.suffix.lower() in (".jpg", ".jpeg", ".png"))
     for path in paths:
         img = np.asarray(read_image(path))
@@ -189,6 +203,18 @@ def photos(folder: Path) -> tuple[list[tuple[object, ...]], list[tuple[object, .
                 base = (f, tilt, row)
                 ft = truth.get(path.name)
                 err = f"{100 * (float(f) / ft - 1):+.1f} %" if ft and f != "-" else "-"
+                herr = _horizon_error(res.horizon, horizons.get(path.name), w, h)
+                stats.append(
+                    {
+                        "f_truth": ft,
+                        "f_err": abs(float(f) / ft - 1) * 100 if ft and f != "-" else None,
+                        "K": f != "-",
+                        "h_truth": path.name in horizons,
+                        "h_err": herr,
+                        "same": 0,
+                    }
+                )
+                reason = getattr(res, "K_reason", None)
                 rows.append(
                     (
                         path.name,
@@ -201,6 +227,8 @@ def photos(folder: Path) -> tuple[list[tuple[object, ...]], list[tuple[object, .
                         err,
                         "-" if math.isnan(tilt) else f"{tilt:+.1f}",
                         "-" if math.isnan(row) else f"{row:.0f}",
+                        "-" if herr is None else f"{herr:.2f} %",
+                        reason or "-",
                     )
                 )
                 continue
@@ -211,6 +239,10 @@ def photos(folder: Path) -> tuple[list[tuple[object, ...]], list[tuple[object, .
                 else ("both -" if f == base[0] else f"{base[0]} -> {f}")
             )
             dtilt = tilt - base[1] + roll  # a counter-clockwise roll turns it clockwise
+            stats[-1]["same"] += int(
+                (f == "-" and base[0] == "-")
+                or (f != "-" and base[0] != "-" and abs(float(f) / float(base[0]) - 1) <= 0.05)
+            )
             versions.append(
                 (
                     path.name,
@@ -221,16 +253,96 @@ def photos(folder: Path) -> tuple[list[tuple[object, ...]], list[tuple[object, .
                     "-" if math.isnan(row - base[2]) or roll else f"{row - base[2]:+.0f}",
                 )
             )
-    return rows, versions
+    return rows, versions, _photo_summary(stats)
+
+
+def _horizon_error(
+    line: np.ndarray | None, truth: tuple[float, float] | None, w: int, h: int
+) -> float | None:
+    """The horizon's error as York Urban scores it: the larger distance from the true one
+    at the image's left and right edges, over the height (per cent); inf if none found."""
+    if truth is None:
+        return None
+    if line is None or abs(float(line[1])) < 1e-9:
+        return math.inf
+    a, b, c = (float(x) for x in line)
+    rows = (-c / b, -(a * (w - 1) + c) / b)
+    return 100.0 * max(abs(rows[0] - truth[0]), abs(rows[1] - truth[1])) / h
+
+
+def _photo_summary(stats: list[dict[str, Any]]) -> list[tuple[object, ...]]:
+    """One row per kind of truth: how many got K, its error, the horizon's, the versions."""
+    out: list[tuple[object, ...]] = []
+    with_f = [s for s in stats if s["f_truth"]]
+    if with_f:
+        e = np.array([s["f_err"] if s["f_err"] is not None else math.inf for s in with_f])
+        found = np.isfinite(e)
+        out.append(
+            (
+                "focal length (EXIF or calibration)",
+                len(with_f),
+                f"{int(found.sum())}",
+                f"{np.median(e[found]):.1f} %" if found.any() else "-",
+                f"{int((e <= 5).sum())}",
+                f"{int((found & (e > 20)).sum())}",
+            )
+        )
+    no_f = [s for s in stats if not s["f_truth"]]
+    if no_f:
+        out.append(
+            (
+                "photographs without a known focal length",
+                len(no_f),
+                str(sum(bool(s["K"]) for s in no_f)),
+                "-",
+                "-",
+                "-",
+            )
+        )
+    with_h = [s for s in stats if s["h_truth"]]
+    if with_h:
+        e = np.array([float(s["h_err"]) for s in with_h])
+        found = np.isfinite(e)
+        out.append(
+            (
+                "horizon (annotated)",
+                len(with_h),
+                f"{int(found.sum())}",
+                f"{np.median(e):.2f} % of H (none: inf)",
+                f"{int((e <= 2).sum())} within 2 % of H",
+                f"{int((found & (e > 10)).sum())} off by > 10 % of H",
+            )
+        )
+    out.append(
+        (
+            "versions giving the original's answer (f within 5 % or both without K)",
+            5 * len(stats),
+            str(sum(int(s["same"]) for s in stats)),
+            "-",
+            "-",
+            "-",
+        )
+    )
+    return out
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--photos", type=Path, help="a folder of photographs to add")
+    parser.add_argument(
+        "--photos-only", action="store_true", help="leave out OpenCV's checkerboard views"
+    )
     args = parser.parse_args()
     if args.photos is not None:
-        rows, versions = photos(args.photos)
+        rows, versions, summ = photos(args.photos)
         print(header("Vanishing points, focal length and horizon: photographs"))
+        print(f"Folder: `{args.photos.name}`\n")
+        print(
+            markdown_table(
+                ("truth", "photographs", "K (or horizon) found", "median error", "good", "wrong"),
+                summ,
+            )
+        )
         print(
             markdown_table(
                 (
@@ -244,6 +356,8 @@ def main() -> None:
                     "f error",
                     "horizon tilt deg",
                     "horizon row at centre",
+                    "horizon error",
+                    "why no K",
                 ),
                 rows,
             )
@@ -266,6 +380,8 @@ def main() -> None:
             "Command: `OPENBLAS_NUM_THREADS=1 PYTHONPATH=src python -m benchmarks.check_vp_real "
             "--photos DIR`\n"
         )
+    if args.photos_only:
+        return
     rows, errors = measure()
     print(header("Focal length from vanishing points: OpenCV's checkerboard photographs"))
     print("## Per view (f in px; truth 536.07 px)\n")

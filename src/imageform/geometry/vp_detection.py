@@ -19,6 +19,13 @@ moves far with a weakly supported third point: on OpenCV's 13 checkerboard photo
 (undistorted, known f = 536 px; ``benchmarks/check_vp_real.py``) the median focal-length
 error is 41 % with the orthocentre, 6.5 % with the centre and 3.6 % with the calibrated
 principal point (23 px from the centre).
+
+K is given only where the evidence holds it (two finite points fix a focal length whatever
+the scene, and nothing in the pair says whether their directions are orthogonal): a finite
+point that fixes ``f`` needs ``_K_MIN_SEGMENTS`` segments and ``_K_MIN_SUPPORT`` image
+diagonals of them (weaker points stay in the set, out of the fit), resampling the points'
+segments may move ``f`` by ``_K_MAX_SPREAD`` at most, and ``f`` lies within
+``_F_PLAUSIBLE`` image diagonals; otherwise ``K`` is None with ``K_reason``.
 """
 
 from __future__ import annotations
@@ -83,6 +90,16 @@ class VanishingPointResult:
         "finite" meaning within ``infinity_factor`` image diagonals of the image centre.
     scores : (M,)
         Total length of the segments supporting each vanishing point (pixels).
+    K_reason : str or None
+        Why ``K`` is None (one line, beginning "not determined: "): no points, fewer than two
+        finite ones, no orthogonal set, points too weakly supported, a focal length that
+        resampling the segments moves too far, or one no camera lens has. None when ``K``
+        is determined.
+    focal_spread : float or None
+        How far resampling the vanishing points' segments moves the focal length (the
+        half-width of the central 68 % of ``log f`` over 64 resamples, about its relative
+        standard deviation; 0.01 is ±1 %), for the set a focal length was fitted to; None
+        when none was.
     """
 
     vanishing_points: FloatArray
@@ -93,6 +110,8 @@ class VanishingPointResult:
     horizon: FloatArray | None
     perspective: int
     scores: FloatArray
+    K_reason: str | None = None
+    focal_spread: float | None = None
 
 
 def _angles_to(v: FloatArray, mids: FloatArray, dirs: FloatArray) -> FloatArray:
@@ -239,6 +258,116 @@ def _manhattan_K(
     return np.array([[f, 0.0, pp[0]], [0.0, f, pp[1]], [0.0, 0.0, 1.0]])
 
 
+def _refit_batch(
+    lines: FloatArray, weights: FloatArray, counts: FloatArray, far: float
+) -> FloatArray:
+    """Return the least-squares vanishing points of resampled line sets, ``(B, 3)``.
+
+    ``counts`` ``(B, n)`` says how often each of the ``n`` lines is drawn in each of ``B``
+    resamples; each point minimises ``Σ countᵢ wᵢ (lᵢ · v)²`` over unit ``v`` in Hartley-
+    normalised coordinates (as :func:`~imageform.geometry.vanishing_point_from_lines`,
+    the normalisation that of the full set), then finite points are scaled to ``w = 1``.
+    """
+    L = lines / np.hypot(lines[:, 0], lines[:, 1])[:, None]
+    foot = -L[:, 2:3] * L[:, :2]
+    c = foot.mean(axis=0)
+    spread = float(np.mean(np.hypot(*(foot - c).T)))
+    s = spread / math.sqrt(2.0) if spread > 0 else 1.0
+    Ln = np.stack([L[:, 0], L[:, 1], (L[:, 2] + L[:, 0] * c[0] + L[:, 1] * c[1]) / s], axis=1)
+    M = np.einsum("bi,ij,ik->bjk", counts * weights[None, :], Ln, Ln)
+    vn = np.linalg.eigh(M)[1][:, :, 0]
+    v = np.stack([vn[:, 0] * s + c[0] * vn[:, 2], vn[:, 1] * s + c[1] * vn[:, 2], vn[:, 2]], 1)
+    return np.array([_normalise(x, far) for x in v])
+
+
+def _focal_grid(vps: FloatArray, support: list[float], pp: FloatArray, diag: float) -> FloatArray:
+    """Return the focal length fitted to each of ``B`` sets of points ``(B, M, 3)``.
+
+    The cost of :func:`_manhattan_K` on its log-spaced grid, refined by a parabola through
+    the grid's three lowest values; NaN where the minimum lies at the grid's ends.
+    """
+    lo, hi = math.log(0.15 * diag), math.log(10 * diag)
+    grid = np.linspace(lo, hi, 241)
+    f = np.exp(grid)
+    a = vps[:, :, :2] - pp[None, None, :] * vps[:, :, 2:3]  # (B, M, 2)
+    d = np.empty((vps.shape[0], len(f), vps.shape[1], 3))
+    d[..., :2] = a[:, None, :, :]
+    d[..., 2] = f[None, :, None] * vps[:, None, :, 2]
+    d /= np.linalg.norm(d, axis=-1, keepdims=True)
+    cost = np.zeros(d.shape[:2])
+    for i, j in itertools.combinations(range(vps.shape[1]), 2):
+        cost += support[i] * support[j] * np.einsum("bfk,bfk->bf", d[:, :, i], d[:, :, j]) ** 2
+    k = np.argmin(cost, axis=1)
+    out = np.full(len(k), np.nan)
+    ok = (k > 0) & (k < len(grid) - 1)
+    rows = np.flatnonzero(ok)
+    c0, c1, c2 = cost[rows, k[ok] - 1], cost[rows, k[ok]], cost[rows, k[ok] + 1]
+    den = c0 - 2 * c1 + c2
+    step = np.where(den > 0, 0.5 * (c0 - c2) / np.where(den > 0, den, 1.0), 0.0)
+    out[rows] = np.exp(grid[k[ok]] + np.clip(step, -1.0, 1.0) * (grid[1] - grid[0]))
+    return out
+
+
+#: A finite vanishing point fixes a focal length only when at least this many segments, of
+#: at least this total length (image diagonals), support it: a landscape's rocks or dunes
+#: have pairs of points a few short segments meet by chance (f -75 % on a real photograph).
+_K_MIN_SEGMENTS = 12
+_K_MIN_SUPPORT = 0.6
+#: K is left undetermined when resampling the points' segments moves ``f`` by more than this
+#: (the half-width of the central 68 % of ``log f``), or finds no ``f`` in this share of
+#: the resamples: on the York Urban photographs the sets resampling moved by a few per cent
+#: were the ones whose focal length was off by tens of per cent
+#: (``benchmarks/results/vp-real-2026-11-29c.md``).
+_K_MAX_SPREAD = 0.025
+_K_MAX_FAIL = 0.2
+#: The focal lengths (image diagonals) taken as a camera's: a 13 to 260 mm-equivalent lens.
+_F_PLAUSIBLE = (0.3, 6.0)
+
+
+def _spread_text(spread: float, fail: float) -> str:
+    """``"±4.1 %"``, or how often no focal length was found at all."""
+    if fail > _K_MAX_FAIL or not math.isfinite(spread):
+        return f"so far that {100 * fail:.0f} % of the resamples have none"
+    return f"±{100 * spread:.1f} %"
+
+
+#: Resamples of each point's segments for the focal length's spread (:func:`_focal_spread`).
+_N_RESAMPLES = 64
+
+
+def _focal_spread(
+    seg: LineSegments,
+    members: list[np.ndarray],
+    support: list[float],
+    pp: FloatArray,
+    diag: float,
+    far: float,
+    rng: np.random.Generator,
+) -> tuple[float, float]:
+    """Return how far resampling the points' segments moves the focal length.
+
+    Each point's supporting segments are drawn with replacement (``_N_RESAMPLES`` times),
+    each point refitted, the focal length refitted to the set; returns the half-width of
+    the central 68 % of ``log f`` (about the relative standard deviation of ``f``) and the
+    share of resamples with no focal length at all (the fit's minimum at the search's end).
+    A point that two or three segments converge on by chance moves far with a resample
+    that leaves one out; one that a building's hundred edges converge on does not.
+    """
+    lengths = np.hypot(*(seg.endpoints[:, 1] - seg.endpoints[:, 0]).T)
+    pts = []
+    for m in members:
+        idx = np.flatnonzero(m)
+        n = len(idx)
+        counts = rng.multinomial(n, np.full(n, 1.0 / n), size=_N_RESAMPLES).astype(np.float64)
+        pts.append(_refit_batch(seg.lines[idx], lengths[idx], counts, far))
+    f = _focal_grid(np.stack(pts, axis=1), support, pp, diag)
+    ok = np.isfinite(f)
+    if ok.sum() < 3:
+        return math.inf, 1.0 - ok.mean()
+    q16, q84 = np.percentile(np.log(f[ok]), [16.0, 84.0])
+    return float((q84 - q16) / 2), float(1.0 - ok.mean())
+
+
 #: The longest focal length (image diagonals; a 35 mm-equivalent 86 mm lens) that
 #: :func:`_orthogonal_for_some_f` tries for a set with fewer than two finite points: their
 #: orthogonality does not fix ``f``, and at a long enough ``f`` any finite point would pass.
@@ -282,28 +411,42 @@ def _orthogonal_for_some_f(
     return bool(worst.min() <= math.sin(tol))
 
 
-def _level_horizon(
-    vps: FloatArray, vertical: int, centre: FloatArray, far: float
-) -> FloatArray | None:
-    """Return the horizon without K, when the vertical point is at infinity (a level camera).
+def _level_horizon(vps: FloatArray, vertical: int, pp: FloatArray, far: float) -> FloatArray | None:
+    """Return the horizon without K, from the vertical point and the horizontal ones.
 
-    The horizon is the polar of the vertical point under the image of the absolute conic;
-    for a vertical point at infinity in image direction ``d`` it is perpendicular to ``d``
-    whatever the focal length (square pixels, zero skew). Through a finite horizontal point
-    that fixes it: the wall seen by a level camera, with verticals and one horizontal
-    direction only. None otherwise.
+    The horizon is the polar of the vertical point under the image of the absolute conic,
+    ``l ~ K⁻ᵀ d`` for the vertical direction ``d``; with square pixels and zero skew its
+    normal is parallel to ``v - p`` (the vertical point seen from the principal point ``p``)
+    whatever the focal length, and for a vertical point at infinity in image direction
+    ``d``, to ``d``. Only its offset needs f, and a finite horizontal point fixes that, as
+    the horizontal points lie on the horizon: the wall seen by a level camera (verticals
+    and one horizontal direction), a building whose K was left open. With two horizontal
+    points, their join when its normal is within 5 degrees of ``v - p`` (None when not: the
+    points do not belong together). A point too weak to fix a focal length still fixes the
+    horizon's offset. A finite vertical point must lie above or below the frame, nearer the
+    column through ``p`` than the row (a railway's rails run steeply towards a point on the
+    horizon, inside the frame).
     """
     v = vps[vertical]
-    if _is_finite(v, centre, far):
-        return None  # a finite vertical point: the horizon needs the focal length
-    d = v[:2] - centre * v[2]
+    d = v[:2] - pp * v[2]
     nd = math.hypot(d[0], d[1])
-    finite = [p for i, p in enumerate(vps) if i != vertical and _is_finite(p, centre, far)]
-    if nd == 0 or len(finite) != 1:
+    finite = [p for i, p in enumerate(vps) if i != vertical and _is_finite(p, pp, far)]
+    if nd == 0 or not finite:
+        return None
+    if v[2] != 0 and (abs(d[1]) < abs(d[0]) or abs(d[1]) < pp[1] + 1.0):
+        # a finite "vertical" point beside the principal point or inside the frame's rows
+        # is a horizontal direction whose segments run steeply (a railway's two rails)
         return None
     a, b = d / nd
     if b < 0:
         a, b = -a, -b
+    if len(finite) == 2:
+        join = np.cross(finite[0], finite[1])
+        n = math.hypot(join[0], join[1])
+        if n == 0 or abs(join[0] * a + join[1] * b) / n < math.cos(math.radians(5.0)):
+            return None
+        join = join / n
+        return np.asarray(join if join[1] > 0 else -join, dtype=np.float64)
     u, w = finite[0][0] / finite[0][2], finite[0][1] / finite[0][2]
     return np.array([a, b, -(a * u + b * w)])
 
@@ -569,9 +712,8 @@ def detect_vanishing_points(
     pp = centre if pp_given is None else pp_given
     diag = math.hypot(w, h)
     far = infinity_factor * diag
-    cands = _ransac_candidates(
-        segments, as_rng(check_rng(rng)), n_candidates, angle_threshold, max_trials
-    )
+    gen = as_rng(check_rng(rng))
+    cands = _ransac_candidates(segments, gen, n_candidates, angle_threshold, max_trials)
     cands = [(_normalise(v, far), inl, sc) for v, inl, sc in cands]
     best: tuple[float, tuple[int, ...], FloatArray | None] = (-1.0, (), None)
     # the set holds the best-supported point (a scene's dominant direction is one of its
@@ -584,6 +726,8 @@ def detect_vanishing_points(
     span = segments.endpoints[:, 1] - segments.endpoints[:, 0]
     size = np.hypot(span[:, 0], span[:, 1])
     upright = [float(np.abs(span[c[1], 1]).sum() / max(size[c[1]].sum(), 1e-300)) for c in cands]
+    weak = [c[2] < _K_MIN_SUPPORT * diag or int(c[1].sum()) < _K_MIN_SEGMENTS for c in cands]
+    skipped_weak = False
     for r in (3, 2):
         for combo in itertools.combinations(range(len(cands)), r):
             if top not in combo:
@@ -623,6 +767,58 @@ def detect_vanishing_points(
     labels = np.full(len(segments), -1, dtype=np.int64)
     for j, i in enumerate(combo):
         labels[cands[i][1] & (labels < 0)] = j
+    fixing = list(combo)
+    if K is not None and any(weak[i] and _is_finite(cands[i][0], pp, far) for i in combo):
+        # a point too weakly supported to fix a focal length is kept in the set but left
+        # out of the fit (a corridor's third point, met by nine segments at half size,
+        # moved f by +78 %): f from the well-supported points, if they fix one
+        fixing = [i for i in combo if not weak[i]]
+        K = None
+        if pp_mode != "orthocenter" and sum(_is_finite(cands[i][0], pp, far) for i in fixing) >= 2:
+            K = _manhattan_K(
+                [cands[i][0] for i in fixing], [cands[i][2] for i in fixing], pp, diag, far, tol
+            )
+        skipped_weak = K is None
+    reason: str | None = None
+    spread: float | None = None
+    if K is not None:
+        members = [cands[i][1] for i in fixing]
+        spread, fail = _focal_spread(
+            segments, members, [cands[i][2] for i in fixing], K[:2, 2], diag, far, gen
+        )
+        ratio = float(K[0, 0]) / diag
+        if fail > _K_MAX_FAIL or spread > _K_MAX_SPREAD:
+            reason = (
+                f"not determined: resampling the vanishing points' segments moves the focal "
+                f"length by {_spread_text(spread, fail)} (more than "
+                f"{100 * _K_MAX_SPREAD:.1f} %): the points converge too loosely to fix it "
+                f"(f would be {K[0, 0]:.0f} px)"
+            )
+        elif not _F_PLAUSIBLE[0] <= ratio <= _F_PLAUSIBLE[1]:
+            reason = (
+                f"not determined: f = {K[0, 0]:.0f} px is {ratio:.2f} image diagonals, outside "
+                f"{_F_PLAUSIBLE[0]}-{_F_PLAUSIBLE[1]} (a 13-260 mm-equivalent lens)"
+            )
+        if reason is not None:
+            K = None
+    elif not combo:
+        reason = "not determined: no vanishing points"
+    elif sum(_is_finite(v, pp, far) for v in vps) < 2:
+        reason = (
+            "not determined: fewer than two of the points are finite (one-point perspective, "
+            "or verticals parallel with one horizontal direction): the focal length is open"
+        )
+    elif skipped_weak:
+        reason = (
+            f"not determined: the points that would fix it are weakly supported (fewer than "
+            f"{_K_MIN_SEGMENTS} segments or less than {_K_MIN_SUPPORT:g} image diagonal of "
+            f"them): chance convergences in texture fix some f whatever the scene"
+        )
+    else:
+        reason = (
+            "not determined: no focal length makes the points found orthogonal (not a "
+            "Manhattan scene?)"
+        )
     vertical: int | None = None
     horizon: FloatArray | None = None
     tilt: list[float] = []
@@ -658,7 +854,7 @@ def detect_vanishing_points(
         if tilt[vertical] < _UPRIGHT:
             vertical = None  # no point's segments run nearer the columns than the rows
         else:
-            horizon = _level_horizon(vps, vertical, centre, far)
+            horizon = _level_horizon(vps, vertical, pp, far)
     if horizon is None and len(vps):
         # no vanishing point gives the horizon: a level camera over open water sees it
         sea = _visible_horizon(segments, np.ones(len(segments), dtype=bool), w, h)
@@ -676,4 +872,6 @@ def detect_vanishing_points(
         horizon=horizon,
         perspective=int(finite),
         scores=scores,
+        K_reason=reason,
+        focal_spread=spread,
     )

@@ -227,6 +227,8 @@ def vanishing(run: Run, opts: VanishingOptions, *, out: Path | None, image: Path
             "vertical_index": res.vertical,
             "perspective": res.perspective,
             "K": res.K,
+            "K_reason": res.K_reason,
+            "focal_spread": res.focal_spread,
             "horizon": res.horizon,
             **extra,
             "overlay": out,
@@ -250,14 +252,13 @@ def vanishing(run: Run, opts: VanishingOptions, *, out: Path | None, image: Path
         k = res.K
         src = f" (from {opts.camera})" if cf is not None else " (from the vanishing points)"
         text.append(f"K: f = {k[0, 0]:.1f} px, principal point ({k[0, 2]:.1f}, {k[1, 2]:.1f}){src}")
-    elif len(res.vanishing_points) >= 2:
-        text.append(
-            "K: not determined: fewer than two of the points are finite (one-point perspective, "
-            "or verticals parallel with one horizontal direction): the focal length is open"
-            if res.perspective < 2
-            else "K: not determined: no focal length makes the points found orthogonal (not a "
-            "Manhattan scene?)"
-        )
+        if cf is None and res.focal_spread is not None:
+            text.append(
+                f"  f moves by ±{100 * res.focal_spread:.1f} % when the points' segments are "
+                "resampled (it rests on the scene's directions being orthogonal)"
+            )
+    elif res.K_reason is not None:
+        text.append(f"K: {res.K_reason}")
     if "focal_error_px" in extra:
         text.append(
             f"K from the vanishing points: f = {K_est[0, 0]:.1f} px ("  # type: ignore[index]
