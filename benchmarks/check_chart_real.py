@@ -2,7 +2,13 @@
 
 Run::
 
-    OPENBLAS_NUM_THREADS=1 PYTHONPATH=src:. python benchmarks/check_chart_real.py FOLDER
+    OPENBLAS_NUM_THREADS=1 PYTHONPATH=src:. python benchmarks/check_chart_real.py FOLDER \
+        [--no-variants | --no-peer-variants] [--peer-cache FILE.json]
+
+``--no-variants`` leaves out the harder copies, ``--no-peer-variants`` runs only imageform on
+them (its "mcc found" column is then "-"); ``--peer-cache`` keeps the peers' answers
+(OpenCV's mcc, colour-checker-detection) in a JSON file and reuses them on the next run (they
+do not change between a before and an after run of imageform, and they are the slow part).
 
 ``FOLDER`` holds photographs (JPEG/PNG) of X-Rite ColorChecker Classic charts, or of other
 scenes (a photograph without a Classic is counted as found or not). The photographs of the
@@ -16,21 +22,28 @@ a ColorChecker Passport and a Digital SG, which is not a Classic) and 2vin/color
 
 Per photograph: found or not and the time of :func:`detect_colorchecker`, and where OpenCV's
 ``mcc`` detector (``cv2.mcc``, MCC24) finds the chart too, the median and largest difference
-of the patch means (8-bit units). Then the photographs that both detectors find are made
-harder, with the geometry known (the chart's centres of the original photograph carried
-through the change): turned 90, 180 and 270 degrees; shrunk to a patch pitch of 12 and 8
-pixels, and to 24 and 12 pixels at the photograph's own size (pasted into the middle of a blurred
-copy of itself); JPEG quality 15; low light (linear light x 0.06, shot noise, JPEG 85); glare (a
-white blob, 90 % at its centre, sigma 0.8 pitch, over patches 7, 8, 13, 14); a shadow's edge
-(encoded values x 0.35 on one side of the line through patches 2 and 21); a strong
-perspective (the top edge of the frame squeezed to 40 %); cropped through the last
-column of patches. A variant counts as found when the median centre error is under a
-quarter pitch.
+of the patch means (8-bit units); whether colour-checker-detection's segmentation detector
+(``detect_colour_checkers_segmentation``) finds one; the mean CIEDE2000 of the measured
+patches (those not flagged missing or saturated) to the ColorChecker's published sRGB as
+they are and after :func:`fit_color_correction` (3 x 3 in linear light, fitted on them:
+how well a correction from this chart can do, and never worse than none).
+
+Then the photographs that both detectors find are made harder, with the geometry known (the
+chart's centres of the original photograph carried through the change): turned 90, 180 and
+270 degrees; shrunk to a patch pitch of 12 and 8 pixels, and to 24 and 12 pixels at the
+photograph's own size (pasted into the middle of a blurred copy of itself); JPEG quality 15;
+low light (linear light x 0.06, shot noise, JPEG 85); glare (a white blob, 90 % at its
+centre, sigma 0.8 pitch, over patches 7, 8, 13, 14); a shadow's edge (encoded values x 0.35
+on one side of the line through patches 2 and 21); a strong perspective (the top edge of the
+frame squeezed to 40 %); cropped through the last column of patches. A variant counts as
+found when the median centre error is under a quarter pitch.
 """
 
 from __future__ import annotations
 
+import hashlib
 import io
+import json
 import sys
 import time
 import warnings
@@ -39,7 +52,13 @@ from pathlib import Path
 import numpy as np
 
 from benchmarks._common import header, markdown_table
-from imageform.analysis import ChartWarning, detect_colorchecker, measure_chart_patches
+from imageform.analysis import (
+    ChartWarning,
+    detect_colorchecker,
+    fit_color_correction,
+    measure_chart_patches,
+)
+from imageform.analysis.synthetic import COLORCHECKER_SRGB8
 
 
 def _read(path: Path) -> np.ndarray:
@@ -73,6 +92,80 @@ def _mcc(im: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
     means = np.asarray(ch.getChartsRGB(False)).reshape(-1, 3) / 255.0
     centres = np.asarray(ch.getColorCharts()).reshape(-1, 4, 2).mean(axis=1)
     return means, centres
+
+
+def _ccd(im: np.ndarray) -> bool:
+    """Whether colour-checker-detection's segmentation detector finds a chart."""
+    try:
+        import colour_checker_detection as ccd
+    except ImportError:
+        return False
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        found = ccd.detect_colour_checkers_segmentation(im.astype(np.float32) / 255.0)
+    return len(found) > 0
+
+
+class _Peers:
+    """The peers' answers, kept in a JSON file between runs (keyed by the image's bytes)."""
+
+    def __init__(self, path: str | None) -> None:
+        self.path = Path(path) if path else None
+        self.data: dict[str, object] = {}
+        if self.path is not None and self.path.exists():
+            self.data = json.loads(self.path.read_text())
+
+    def _key(self, what: str, im: np.ndarray) -> str:
+        return what + ":" + hashlib.sha1(np.ascontiguousarray(im).tobytes()).hexdigest()
+
+    def mcc(self, im: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+        key = self._key("mcc", im)
+        if key not in self.data:
+            res = _mcc(im)
+            self.data[key] = None if res is None else [res[0].tolist(), res[1].tolist()]
+            self._save()
+        got = self.data[key]
+        if got is None:
+            return None
+        assert isinstance(got, list)
+        return np.asarray(got[0]), np.asarray(got[1])
+
+    def ccd(self, im: np.ndarray) -> bool:
+        key = self._key("ccd", im)
+        if key not in self.data:
+            self.data[key] = _ccd(im)
+            self._save()
+        return bool(self.data[key])
+
+    def _save(self) -> None:
+        if self.path is not None:
+            self.path.write_text(json.dumps(self.data))
+
+
+def _delta_e00(im: np.ndarray, det: object) -> tuple[str, str, str]:
+    """The patches flagged missing or saturated, and the mean CIEDE2000 of the usable
+    patches to the published sRGB: as measured, and corrected."""
+    from imageform.color.convert import convert
+    from imageform.color.delta_e import delta_e
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", ChartWarning)
+        try:
+            p = measure_chart_patches(im, det)  # type: ignore[arg-type]
+        except ValueError:
+            return "all 24", "-", "-"
+        flagged = " ".join(str(i) for i in np.flatnonzero(~p.valid)) or "none"
+        ref = np.asarray(COLORCHECKER_SRGB8, dtype=np.float64) / 255.0
+        use = p.valid & (p.means < 1.0).all(axis=1)
+        lab_ref = np.asarray(convert(ref[use], "srgb", "lab"))
+        raw = float(np.mean(delta_e(lab_ref, np.asarray(convert(p.means[use], "srgb", "lab")))))
+        try:
+            corr = fit_color_correction(p, ref)
+        except ValueError:
+            return flagged, f"{raw:.1f}", "-"
+        fixed = corr.apply(p.means[use][:, None, :])[:, 0, :]
+        after = float(np.mean(delta_e(lab_ref, np.asarray(convert(fixed, "srgb", "lab")))))
+    return flagged, f"{raw:.1f}", f"{after:.1f}"
 
 
 def _variants(
@@ -154,10 +247,13 @@ def _found_at(im: np.ndarray, truth: np.ndarray) -> tuple[bool, float]:
     return bool(np.median(err) < 0.25), dt
 
 
-def main(folder: str) -> str:
+def main(
+    folder: str, variants: bool = True, peer_cache: str | None = None, peer_variants: bool = True
+) -> str:
     paths = sorted(
         p for p in Path(folder).iterdir() if p.suffix.lower() in {".jpg", ".jpeg", ".png"}
     )
+    peers = _Peers(peer_cache)
     rows, both = [], []
     for path in paths:
         im = _read(path)
@@ -166,8 +262,12 @@ def main(folder: str) -> str:
             warnings.simplefilter("ignore", ChartWarning)
             det = detect_colorchecker(im)
             dt = time.perf_counter() - t0
-            ours = measure_chart_patches(im, det).means if det.found else None
-        peer = _mcc(im)
+            try:
+                ours = measure_chart_patches(im, det).means if det.found else None
+            except ValueError:  # every patch flagged: no means to compare
+                ours = None
+        peer = peers.mcc(im)
+        de = _delta_e00(im, det) if det.found else ("-", "-", "-")
         diff = "-"
         if ours is not None and peer is not None:
             d = np.abs(ours - peer[0]).max(axis=1) * 255
@@ -182,6 +282,8 @@ def main(folder: str) -> str:
                 f"{dt:.2f}",
                 "yes" if peer is not None else "no",
                 diff,
+                "yes" if peers.ccd(im) else "no",
+                *de,
             )
         )
     text = markdown_table(
@@ -193,15 +295,21 @@ def main(folder: str) -> str:
             "s",
             "mcc found",
             "patch means vs mcc, median / max (8-bit)",
+            "colour-checker-detection found",
+            "patches flagged (missing, saturated)",
+            "ΔE00 to published, as measured",
+            "ΔE00 after fit",
         ),
         rows,
     )
+    if not variants:
+        return text
     tally: dict[str, list[int]] = {}
     worst: dict[str, float] = {}
     for i, (_, im, c0) in enumerate(both):
         for name, (vim, truth) in _variants(im, c0, i).items():
             ok, dt = _found_at(vim, truth)
-            peer = _mcc(vim)
+            peer = peers.mcc(vim) if peer_variants else None
             pok = peer is not None and len(peer[1]) == 24
             if pok:
                 assert peer is not None
@@ -212,7 +320,10 @@ def main(folder: str) -> str:
             t[1] += pok
             t[2] += 1
             worst[name] = max(worst.get(name, 0.0), dt)
-    vrows = [(n, f"{a} / {c}", f"{b} / {c}", f"{worst[n]:.2f}") for n, (a, b, c) in tally.items()]
+    vrows = [
+        (n, f"{a} / {c}", f"{b} / {c}" if peer_variants else "-", f"{worst[n]:.2f}")
+        for n, (a, b, c) in tally.items()
+    ]
     text += "\nHarder copies of the photographs both detectors find:\n\n" + markdown_table(
         ("variant", "imageform found", "mcc found", "imageform slowest s"), vrows
     )
@@ -220,7 +331,19 @@ def main(folder: str) -> str:
 
 
 if __name__ == "__main__":
-    if len(sys.argv) != 2:
-        raise SystemExit("usage: check_chart_real.py FOLDER_OF_PHOTOGRAPHS")
+    args = sys.argv[1:]
+    cache = None
+    if "--peer-cache" in args:
+        i = args.index("--peer-cache")
+        cache = args[i + 1]
+        del args[i : i + 2]
+    with_variants = "--no-variants" not in args
+    with_peers = "--no-peer-variants" not in args
+    args = [a for a in args if a not in ("--no-variants", "--no-peer-variants")]
+    if len(args) != 1:
+        raise SystemExit(
+            "usage: check_chart_real.py FOLDER_OF_PHOTOGRAPHS [--no-variants | "
+            "--no-peer-variants] [--peer-cache FILE.json]"
+        )
     print(header("ColorChecker detection on real photographs"))
-    print(main(sys.argv[1]))
+    print(main(args[0], with_variants, cache, with_peers))
