@@ -106,7 +106,15 @@ def test_convert_from_and_to_srgb(space: str, dtype: str) -> None:
 def test_convert_longer_routes(src: str, dst: str, params: dict[str, Any]) -> None:
     x = c.convert(RGB, "srgb", src)
     got = host(one_launch(c.convert, FakeDeviceArray(x), src, dst, **params))
-    np.testing.assert_allclose(got, c.convert(x, src, dst, **params), atol=1e-9, rtol=1e-10)
+    ref = c.convert(x, src, dst, **params)
+    if dst == "lch":
+        # the hue of a grey is undefined: white's a*, b* are 0 on one path and 1e-14 on the
+        # other (the order of the sums), and atan2 turns that into 0 or 180 degrees; the hue
+        # is compared where the chroma is above rounding, L* and C* everywhere
+        grey = ref[..., 1] < 1e-9
+        assert np.all(got[..., 1][grey] < 1e-9)
+        got[..., 2][grey] = ref[..., 2][grey]
+    np.testing.assert_allclose(got, ref, atol=1e-9, rtol=1e-10)
 
 
 def test_nan_propagates_without_a_check() -> None:
