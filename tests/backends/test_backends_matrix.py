@@ -301,6 +301,8 @@ EXCLUDED: dict[str, str] = {
     "detect_features": "image detector (OpenCV's SIFT), NumPy-only by design",
     "field_of_view_mask": "a mask from a video's frames (OpenCV components), NumPy-only",
     "highlight_mask": "a keypoint mask of one frame (OpenCV dilation), NumPy-only",
+    "frame_sharpness": "a scalar per video frame (OpenCV Laplacian on the host), NumPy-only",
+    "blurred_frames": "a frame selection from frame_sharpness's scalars, NumPy-only",
     "match_features": "descriptor matching on host, NumPy-only by design",
     "bundle_adjust": "estimation (scipy's sparse least squares), NumPy-only by design",
     "reconstruct_sequence": "structure from motion over image files, NumPy-only by design",
