@@ -584,3 +584,55 @@ def test_horizon_without_K_from_a_finite_vertical_point() -> None:
     truth = horizon_line(K, R)
     for u in (0.0, 383.5, 767.0):
         assert _row_at(res.horizon, u) == pytest.approx(_row_at(truth, u), abs=1.0)
+
+
+def test_horizon_without_K_joins_a_finite_and_a_far_horizontal_point() -> None:
+    """A pitched camera looking along a railway (yaw and roll 0): the across direction
+    vanishes at infinity, the rails' point, inside the frame, is met by 8 segments (too few
+    to fix a focal length: K None), and the posts' vertical point, 2263 px above the
+    principal point and met by 15 segments (the across direction's by 40), is moved 40 px
+    sideways (1 degree seen from the principal point, as a lens's distortion bends
+    off-centre posts). The horizon is the join of the two horizontal points, level within
+    0.05 px across the frame; through the rails' point with the normal ``v - p`` it tilted
+    by the vertical point's 1 degree (13 px across the frame, the path taken before the far
+    point was joined)."""
+    R = camera_rotation(0.3, 0.0, 0.0)
+    up, across, ahead = (vanishing_point(K, d, R) for d in np.eye(3)[[1, 0, 2]])
+    assert abs(across[2]) < 1e-12 and abs(ahead[1] / ahead[2] - K[1, 2]) > 100
+    bent = up / up[2] + np.array([40.0, 0.0, 0.0])
+    rng = np.random.default_rng(3)
+    seg = _segments(
+        _toward([bent], 15, rng) + _toward([across], 40, rng) + _toward([ahead / ahead[2]], 8, rng)
+    )
+    res = detect_vanishing_points(segments=seg, image_size=(768, 512), rng=0)
+    assert res.K is None and res.K_reason is not None and "weakly" in res.K_reason
+    assert res.vertical is not None and res.horizon is not None
+    truth = horizon_line(K, R)
+    for u in (0.0, 383.5, 767.0):
+        assert _row_at(res.horizon, u) == pytest.approx(_row_at(truth, u), abs=0.05)
+
+
+def test_level_horizon_joins_the_far_point_only_when_it_agrees_and_outweighs_the_vertical() -> None:
+    """A far horizontal point whose join with the finite one is 10 degrees off the normal
+    ``v - p`` does not belong with it: the horizon keeps ``v - p``'s normal through the
+    finite point (as :func:`_anchor_horizon` does with K); one within 5 degrees is joined
+    when its segments outweigh the vertical point's, not when the vertical's outweigh it."""
+    from imageform.geometry.vp_detection import _level_horizon
+
+    pp = np.array([383.5, 255.5])
+    vertical = np.array([383.5, 2519.0, 1.0])
+    finite = np.array([383.5, 30.0, 1.0])
+    tilted = np.array([math.cos(math.radians(10.0)), math.sin(math.radians(10.0)), 0.0])
+    strong_far = np.array([400.0, 300.0, 5000.0])
+    line = _level_horizon(np.array([vertical, finite, tilted]), 0, pp, 18460.0, strong_far)
+    assert line is not None
+    assert np.allclose(line, [0.0, 1.0, -30.0])
+    slight = np.array([math.cos(math.radians(2.0)), math.sin(math.radians(2.0)), 0.0])
+    line = _level_horizon(np.array([vertical, finite, slight]), 0, pp, 18460.0, strong_far)
+    assert line is not None
+    assert line[:2] @ slight[:2] == pytest.approx(0.0, abs=1e-12)  # along the far point
+    assert line @ finite == pytest.approx(0.0, abs=1e-9)
+    strong_vertical = np.array([5000.0, 300.0, 400.0])
+    line = _level_horizon(np.array([vertical, finite, slight]), 0, pp, 18460.0, strong_vertical)
+    assert line is not None
+    assert np.allclose(line, [0.0, 1.0, -30.0])

@@ -411,7 +411,9 @@ def _orthogonal_for_some_f(
     return bool(worst.min() <= math.sin(tol))
 
 
-def _level_horizon(vps: FloatArray, vertical: int, pp: FloatArray, far: float) -> FloatArray | None:
+def _level_horizon(
+    vps: FloatArray, vertical: int, pp: FloatArray, far: float, scores: FloatArray
+) -> FloatArray | None:
     """Return the horizon without K, from the vertical point and the horizontal ones.
 
     The horizon is the polar of the vertical point under the image of the absolute conic,
@@ -422,15 +424,23 @@ def _level_horizon(vps: FloatArray, vertical: int, pp: FloatArray, far: float) -
     the horizontal points lie on the horizon: the wall seen by a level camera (verticals
     and one horizontal direction), a building whose K was left open. With two horizontal
     points, their join when its normal is within 5 degrees of ``v - p`` (None when not: the
-    points do not belong together). A point too weak to fix a focal length still fixes the
-    horizon's offset. A finite vertical point must lie above or below the frame, nearer the
-    column through ``p`` than the row (a railway's rails run steeply towards a point on the
-    horizon, inside the frame).
+    points do not belong together). The second may lie at infinity or beyond ``far``: the
+    join is then the line through the finite one along the other's direction (as with K,
+    :func:`_anchor_horizon`), taken when that point's segments (``scores``, their total
+    length) outweigh the vertical point's and the join is within 5 degrees of ``v - p``:
+    the horizon's direction then rests on the better-supported of the two directions (the
+    simulator's railway: posts 0.3 image diagonal long put the vertical point 0.51 degree
+    off the column through ``p``; the sleepers' far point, 3.2 diagonals, 0.16). Otherwise
+    the finite point alone fixes the offset.
+    A point too weak to fix a focal length still fixes the horizon's offset. A finite
+    vertical point must lie above or below the frame, nearer the column through ``p`` than
+    the row (a railway's rails run steeply towards a point on the horizon, inside the frame).
     """
     v = vps[vertical]
     d = v[:2] - pp * v[2]
     nd = math.hypot(d[0], d[1])
     finite = [p for i, p in enumerate(vps) if i != vertical and _is_finite(p, pp, far)]
+    others = [i for i in range(len(vps)) if i != vertical and not _is_finite(vps[i], pp, far)]
     if nd == 0 or not finite:
         return None
     if v[2] != 0 and (abs(d[1]) < abs(d[0]) or abs(d[1]) < pp[1] + 1.0):
@@ -447,6 +457,12 @@ def _level_horizon(vps: FloatArray, vertical: int, pp: FloatArray, far: float) -
             return None
         join = join / n
         return np.asarray(join if join[1] > 0 else -join, dtype=np.float64)
+    if len(others) == 1 and scores[others[0]] > scores[vertical]:
+        join = np.cross(finite[0], vps[others[0]])
+        n = math.hypot(join[0], join[1])
+        if n > 0 and abs(join[0] * a + join[1] * b) / n >= math.cos(math.radians(5.0)):
+            join = join / n
+            return np.asarray(join if join[1] > 0 else -join, dtype=np.float64)
     u, w = finite[0][0] / finite[0][2], finite[0][1] / finite[0][2]
     return np.array([a, b, -(a * u + b * w)])
 
@@ -854,7 +870,7 @@ def detect_vanishing_points(
         if tilt[vertical] < _UPRIGHT:
             vertical = None  # no point's segments run nearer the columns than the rows
         else:
-            horizon = _level_horizon(vps, vertical, pp, far)
+            horizon = _level_horizon(vps, vertical, pp, far, scores)
     if horizon is None and len(vps):
         # no vanishing point gives the horizon: a level camera over open water sees it
         sea = _visible_horizon(segments, np.ones(len(segments), dtype=bool), w, h)
