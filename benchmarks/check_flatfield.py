@@ -23,7 +23,8 @@ Run::
    c79b67c ``data/wsi_brain.npz``, darkest pixel 10 counts; the shipped tiles' is 655, and
    BaSiC bounds the dark field's offset by the darkest pixel): when
    ``--basic-data/wsi_brain_c79b67c.npz`` exists (``git show c79b67c:data/wsi_brain.npz``)
-   those tiles are run too. "background CV" is the
+   those tiles are run too. "dark field max abs diff vs ref" is in the stack's counts (uint8
+   for the time-lapses, uint16 for the brain tiles). "background CV" is the
    coefficient of variation over the field of the stack's per-pixel median (mostly
    background), before and after correction with our flat field. basicpy (below) is run
    alike (``fitting_mode="approximate"``, ``sort_intensity=True``, ``get_darkfield`` as the
