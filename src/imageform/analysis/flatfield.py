@@ -509,9 +509,12 @@ def estimate_flatfield(
     the scene, weighted by ``w = 1 / (|E| / \overline{I_i} + 0.1)`` and reweighted until the
     flat field changes by less than ``reweight_tol`` (mean absolute change), each fit the
     inexact augmented Lagrange multiplier method (Lin, Chen & Ma 2010) stopped at
-    ``||I - A - E||_F / ||I||_F < tol``. The regularisation weights default to the paper's
-    rule: ``smoothness = 0.5 s``, ``smoothness_darkfield = 0.2 s``, ``s = ||DCT(mean image /
-    its mean)||_1 / 400``. Colour stacks are corrected channel by channel.
+    ``||I - A - E||_F / ||I||_F < tol``. The regularisation weights default to the reference
+    MATLAB code's rule (``BaSiC.m``): ``smoothness = 0.5 s``, ``smoothness_darkfield = 0.2 s``,
+    ``s = ||DCT(mean image / its mean)||_1 / 400``; its Python port PyBaSiC (whose results
+    BaSiCPy ships as reference) uses ``smoothness_darkfield = 0.1 s``, basicpy 2.0
+    ``0.05 s``, and the flat field depends on it by a few percent. Colour stacks are
+    corrected channel by channel.
 
     Parameters
     ----------
@@ -521,7 +524,8 @@ def estimate_flatfield(
     darkfield : bool
         Also estimate the dark field (dim fluorescence); else it is zero.
     smoothness, smoothness_darkfield : float, optional
-        The paper's ``lambda_F`` and ``lambda_D`` (larger: smoother); default its rule above.
+        The paper's ``lambda_F`` and ``lambda_D`` (larger: smoother); default the MATLAB
+        code's rule above.
     sort_intensity : bool
         Sort every pixel's values over the stack before the fit, as the reference MATLAB
         implementation does (better for tiles; turn off for a time-lapse whose baseline
