@@ -554,8 +554,8 @@ def estimate_flatfield(
     >>> rng = np.random.default_rng(0)
     >>> y, x = np.mgrid[0:64, 0:64] / 63.0
     >>> flat = 1.2 - 0.4 * ((x - 0.5) ** 2 + (y - 0.5) ** 2)
-    >>> stack = rng.uniform(0.2, 1.0, (40, 64, 64)) * flat
-    >>> est = estimate_flatfield(stack)
+    >>> scenes = 0.3 + 0.5 * (rng.random((40, 64, 64)) > 0.97)  # sparse bright objects
+    >>> est = estimate_flatfield(scenes * flat)
     >>> bool(np.abs(est.flatfield - flat / flat.mean()).max() < 0.02)
     True
     """
