@@ -146,6 +146,22 @@ def degrade(
     return out
 
 
+#: a burned-in overlay (timestamp, camera and patient lines), the same in every frame
+OVERLAY = [f"LINE {j} CAM 01 2026/11/29 11:45:{j:02d} ID 48{j}1-A7" for j in range(6)]
+
+
+def burn_in(image: np.ndarray) -> np.ndarray:
+    """``image`` with :data:`OVERLAY` written on it (white on a black outline, top left)."""
+    import cv2
+
+    out = np.ascontiguousarray(image.copy())
+    for j, text in enumerate(OVERLAY):
+        for color, thick in (((0, 0, 0), 4), ((255, 255, 255), 1)):
+            org = (10, 20 + 22 * j)
+            cv2.putText(out, text, org, cv2.FONT_HERSHEY_SIMPLEX, 0.5, color, thick, cv2.LINE_AA)
+    return out
+
+
 def sequence(
     K: np.ndarray,
     n: int,

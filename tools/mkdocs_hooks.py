@@ -88,6 +88,7 @@ BENCH_SCRIPTS: dict[str, str] = {
     "raw-variants": "benchmarks/check_raw_variants.py",
     "reconstruct": "benchmarks/bench_reconstruct.py",
     "endo-real": "benchmarks/check_endo_real.py",
+    "sfm-intruders": "benchmarks/check_sfm_intruders.py",
     "reconstruct-real": "benchmarks/bench_reconstruct_real.py",
     "remap": "benchmarks/bench_remap.py",
     "report": "benchmarks/bench_report.py",

@@ -61,8 +61,9 @@ def test_frames_with_short_tracks_are_registered_by_their_points() -> None:
     mask = field_of_view_mask(frames)
     rec = reconstruct_sequence(frames, cam.K, cam.distortion, masks=mask, contrast_threshold=0.01)
     assert rec.registered.all(), rec.notes
-    by_fallback = [n for n in rec.notes if "registered by" in n]
-    assert by_fallback, rec.notes
+    # with the essential matrix's least-squares refit (564ba7d) these frames register by PnP
+    # on their tracks, without the fallbacks (which registered 6 and 7 before it); the
+    # fallbacks are exercised by tests/geometry/test_sfm_intruders.py
     assert np.nanmax(rec.rms_px) < 1.5
     for i, j in itertools.pairwise(range(len(frames))):
         ours = rec.R[j] @ rec.R[i].T

@@ -40,7 +40,8 @@ pipeline, each step a public function:
    2 x ``window`` nearest registered frames see (Lowe's ratio, mutual; PnP on both sets,
    12 inliers), else the pose of a verified pair with a registered frame (its rotation
    and translation direction) with the scale that most points reproject from (6 at
-   least, a one-point RANSAC);
+   least, a one-point RANSAC) among those that keep the camera within 3 steps of the
+   path a frame from the registered frames nearest it in the sequence;
 7. bundle adjustment (:func:`bundle_adjust`: Levenberg-Marquardt on the reprojection
    error, the points eliminated by the Schur complement) over everything each time the
    registered frames grew by 40 %, observations beyond 4 pixels dropped, the tracks
@@ -1444,10 +1445,21 @@ def reconstruct_sequence(
         :math:`t = R_{g\to f} t_g + s u`; the scale :math:`s > 0` is one number, each
         2-D/3-D correspondence a hypothesis (the point's depth along its ray), the one most
         points reproject within PnP's threshold from wins (a one-point RANSAC, exhaustive),
-        6 points at least and half of those the tracks give. None when no pair gives that.
+        6 points at least and half of those the tracks give. Only a scale that puts the
+        camera near the registered frames nearest ``fi`` in the sequence counts: within
+        3 of their steps (the median distance between registered frames, a frame apart) a
+        frame of the gap between them and it (a frame that does not belong may match a
+        repeated texture and scale to a pose far off the path). None when no pair gives that.
         """
         if kp.size == 0:
             return None
+        reg_ = np.flatnonzero(registered)
+        cen = -np.einsum("nji,nj->ni", Rs[reg_], ts[reg_])
+        steps = np.linalg.norm(np.diff(cen, axis=0), axis=1) / np.diff(reg_)
+        step = float(np.median(steps)) if steps.size else np.inf
+        near_ = reg_[np.argsort(np.abs(reg_ - fi), kind="stable")[:2]]
+        near_c = cen[np.searchsorted(reg_, near_)]
+        reach = 3.0 * step * np.abs(near_ - fi)
         thr = 3.0 * stretch(fi, kp)
         X = P[tracks]
         xh = np.column_stack([ideal[fi][kp], np.ones(kp.size)]) @ np.linalg.inv(k).T
@@ -1465,7 +1477,12 @@ def reconstruct_sequence(
             with np.errstate(divide="ignore", invalid="ignore"):
                 sc = -np.sum(du * da, axis=1) / np.sum(du * du, axis=1)
             sc = sc[np.isfinite(sc) & (sc > 0)]
+            # the camera's center for scale s: C_g - s R_g^T R_r^T u
+            cg, dirc = -Rs[g].T @ ts[g], Rs[g].T @ (Rr.T @ u)
             for s_ in np.unique(sc):
+                cf = cg - s_ * dirc
+                if not np.any(np.linalg.norm(near_c - cf, axis=1) <= reach):
+                    continue
                 Xc = A + s_ * u
                 with np.errstate(divide="ignore", invalid="ignore"):
                     uv = (Xc @ k[:2].T) / Xc[:, 2:3]
@@ -1526,7 +1543,8 @@ def reconstruct_sequence(
                     why_not[fi] = (
                         f"frame {fi}: {kps.size} 2-D/3-D correspondences by the tracks and "
                         f"{extra_kp.size} by matching the points, PnP found {found} inliers "
-                        "(12 needed), no verified pair's pose that 6 of them scale"
+                        "(12 needed), no verified pair's pose that 6 of them scale near its "
+                        "neighbours"
                     )
                     return False
                 res, g = pose
