@@ -34,6 +34,7 @@ __all__ = [
     "normalize_choice",
     "option",
     "option_label",
+    "refuse_foreign_folder",
     "resolve",
 ]
 
@@ -401,6 +402,23 @@ class Run:
         """Add a one-line note for the user (stderr); a note already given is not repeated."""
         if text not in self.notes:
             self.notes.append(text)
+
+
+def refuse_foreign_folder(
+    out: Path, force: bool, markers: Sequence[str], command: str, previous: str
+) -> None:
+    """With ``--force``, replace only an output folder that ``imageform COMMAND`` wrote.
+
+    A folder that exists, is not empty and holds none of the command's ``markers`` (the
+    files only it writes there) is refused: never a folder of the user's files.
+    ``previous`` names what it would have replaced ("a previous simulation").
+    """
+    marked = any((out / m).exists() for m in markers)
+    if out.is_dir() and force and not marked and any(out.iterdir()):
+        raise InvalidInputError(
+            f"output folder {out} exists and is not an imageform {command} output; "
+            f"choose a new folder (--force replaces only {previous})"
+        )
 
 
 @dataclass(frozen=True)

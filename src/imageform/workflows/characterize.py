@@ -94,7 +94,16 @@ from imageform.workflows._characterize_results import (
     Progress,
     SharpnessMeasurement,
 )
-from imageform.workflows._spec import Input, Options, Output, Result, Run, Workflow, option
+from imageform.workflows._spec import (
+    Input,
+    Options,
+    Output,
+    Result,
+    Run,
+    Workflow,
+    option,
+    refuse_foreign_folder,
+)
 
 if TYPE_CHECKING:  # at run time through __getattr__ (no NumPy for --help)
     from imageform.analysis.sensitivity import relative_qe
@@ -378,15 +387,6 @@ class CharacterizeOptions(Options):
     )
 
 
-def _check_folder(out: Path, force: bool) -> None:
-    marked = any((out / m).exists() for m in _MARKERS)
-    if out.is_dir() and force and not marked and any(out.iterdir()):
-        raise InvalidInputError(
-            f"output folder {out} exists and is not an imageform characterize output; "
-            "choose a new folder (--force replaces only a previous characterisation)"
-        )
-
-
 def characterize(run: Run, opts: CharacterizeOptions, *, out: Path, folder: str) -> Result:
     """``imageform characterize``: measure, then write camera.toml, report.html, metrics.json.
 
@@ -405,7 +405,9 @@ def characterize(run: Run, opts: CharacterizeOptions, *, out: Path, folder: str)
     src = Path(folder)
     if out.resolve() == src.resolve() or src.resolve() in out.resolve().parents:
         raise InvalidInputError(f"the output folder {out} must not be inside FOLDER {src}")
-    _check_folder(out, run.outputs.force)
+    refuse_foreign_folder(
+        out, run.outputs.force, _MARKERS, "characterize", "a previous characterisation"
+    )
     ahead.start("characterize")  # a first run: its kernels compiled on two cores
     res = characterize_camera(src, progress=run.progress, max_pixels=opts.max_pixels)
     tmp = run.folder(out)

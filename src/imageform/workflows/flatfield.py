@@ -23,6 +23,7 @@ from imageform.workflows._spec import (
     Run,
     Workflow,
     option,
+    refuse_foreign_folder,
 )
 
 __all__ = ["WORKFLOWS", "FlatfieldOptions"]
@@ -160,11 +161,7 @@ def _check_out(out: Path, files: list[Path], force: bool) -> None:
     for f in files:
         if res == f.resolve().parent or res in f.resolve().parents:
             raise InvalidInputError(f"output folder {out} holds the input {f}; choose a new folder")
-    if out.is_dir() and force and not (out / _MARKER).exists() and any(out.iterdir()):
-        raise InvalidInputError(
-            f"output folder {out} exists and is not an imageform flatfield output; choose a new "
-            "folder (--force replaces only a previous flatfield output)"
-        )
+    refuse_foreign_folder(out, force, (_MARKER,), "flatfield", "a previous flatfield output")
 
 
 def _write_array(path: Path, a: Any) -> None:

@@ -18,7 +18,16 @@ from pathlib import Path
 from typing import Any
 
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
-from imageform.workflows._spec import Input, Options, Output, Result, Run, Workflow, option
+from imageform.workflows._spec import (
+    Input,
+    Options,
+    Output,
+    Result,
+    Run,
+    Workflow,
+    option,
+    refuse_foreign_folder,
+)
 
 __all__ = ["CAMERA_COLUMNS", "WORKFLOWS", "ReconstructOptions"]
 
@@ -103,16 +112,6 @@ class ReconstructOptions(Options):
             )
         if self.mask is not None and self.auto_mask:
             raise InvalidInputError("expected --mask FILE or --auto-mask, got both")
-
-
-def _check_folder(out: Path, force: bool) -> None:
-    """With --force, replace only a folder that imageform reconstruct wrote."""
-    marked = any((out / m).exists() for m in _MARKERS)
-    if out.is_dir() and force and not marked and any(out.iterdir()):
-        raise InvalidInputError(
-            f"output folder {out} exists and is not an imageform reconstruct output; "
-            "choose a new folder (--force replaces only a previous reconstruction)"
-        )
 
 
 def _hint(opts: ReconstructOptions) -> str:
@@ -243,7 +242,9 @@ def reconstruct(run: Run, opts: ReconstructOptions, *, out: Path, frames: str) -
     from imageform.workflows._ply import write_points_ply
     from imageform.workflows._reconstruct_report import write_report
 
-    _check_folder(out, run.outputs.force)
+    refuse_foreign_folder(
+        out, run.outputs.force, _MARKERS, "reconstruct", "a previous reconstruction"
+    )
     cam = read_camera(opts.camera).camera
     size = None if cam.image_size is None else (int(cam.image_size[0]), int(cam.image_size[1]))
     seconds: dict[str, float] = {}

@@ -12,7 +12,15 @@ from pathlib import Path
 from typing import Any
 
 from imageform.errors import InvalidInputError
-from imageform.workflows._spec import Options, Output, Result, Run, Workflow, option
+from imageform.workflows._spec import (
+    Options,
+    Output,
+    Result,
+    Run,
+    Workflow,
+    option,
+    refuse_foreign_folder,
+)
 
 __all__ = ["WORKFLOWS", "SimulateOptions"]
 
@@ -94,16 +102,6 @@ class SimulateOptions(Options):
             )
 
 
-def _check_folder(out: Path, force: bool) -> None:
-    """With --force, replace only a folder that a simulation wrote."""
-    marked = any((out / m).exists() for m in _MARKERS)
-    if out.is_dir() and force and not marked and any(out.iterdir()):
-        raise InvalidInputError(
-            f"output folder {out} exists and is not an imageform simulate output; "
-            "choose a new folder (--force replaces only a previous simulation)"
-        )
-
-
 def _camera_tables(scene: Any, measured: Any) -> tuple[Any, Any]:
     """Return the truth camera file's ``[sensor]`` and ``[color]``: the scene's own camera.
 
@@ -165,7 +163,7 @@ def simulate(run: Run, opts: SimulateOptions, *, out: Path) -> Result:
     from imageform.simulate import default_scene, load_scene
     from imageform.simulate import simulate as simulate_scene
 
-    _check_folder(out, run.outputs.force)
+    refuse_foreign_folder(out, run.outputs.force, _MARKERS, "simulate", "a previous simulation")
     folder = run.folder(out)
     t0 = time.perf_counter()
     scene = load_scene(opts.scene) if opts.scene is not None else default_scene()
