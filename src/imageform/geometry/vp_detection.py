@@ -411,6 +411,22 @@ def _orthogonal_for_some_f(
     return bool(worst.min() <= math.sin(tol))
 
 
+def _join(p: FloatArray, q: FloatArray, normal: FloatArray) -> tuple[FloatArray, float] | None:
+    """Return the line through points ``p`` and ``q`` and its cosine to ``normal``.
+
+    The line ``p x q`` scaled to a unit normal and turned so that its normal points along
+    ``normal`` (a unit vector), with that normal's dot product with ``normal``; None when
+    the points coincide (no line).
+    """
+    join = np.cross(p, q)
+    n = math.hypot(join[0], join[1])
+    if n == 0:
+        return None
+    join = np.asarray(join / n, dtype=np.float64)
+    c = float(join[:2] @ normal)
+    return (join, c) if c >= 0 else (-join, -c)
+
+
 def _level_horizon(
     vps: FloatArray, vertical: int, pp: FloatArray, far: float, scores: FloatArray
 ) -> FloatArray | None:
@@ -450,19 +466,16 @@ def _level_horizon(
     a, b = d / nd
     if b < 0:
         a, b = -a, -b
+    level = math.cos(math.radians(5.0))
     if len(finite) == 2:
-        join = np.cross(finite[0], finite[1])
-        n = math.hypot(join[0], join[1])
-        if n == 0 or abs(join[0] * a + join[1] * b) / n < math.cos(math.radians(5.0)):
+        j = _join(finite[0], finite[1], np.array([a, b]))
+        if j is None or j[1] < level:
             return None
-        join = join / n
-        return np.asarray(join if join[1] > 0 else -join, dtype=np.float64)
+        return j[0] if j[0][1] > 0 else -j[0]
     if len(others) == 1 and scores[others[0]] > scores[vertical]:
-        join = np.cross(finite[0], vps[others[0]])
-        n = math.hypot(join[0], join[1])
-        if n > 0 and abs(join[0] * a + join[1] * b) / n >= math.cos(math.radians(5.0)):
-            join = join / n
-            return np.asarray(join if join[1] > 0 else -join, dtype=np.float64)
+        j = _join(finite[0], vps[others[0]], np.array([a, b]))
+        if j is not None and j[1] >= level:
+            return j[0] if j[0][1] > 0 else -j[0]
     u, w = finite[0][0] / finite[0][2], finite[0][1] / finite[0][2]
     return np.array([a, b, -(a * u + b * w)])
 
@@ -559,14 +572,9 @@ def _anchor_horizon(line: FloatArray, horizontal: list[FloatArray]) -> FloatArra
     than 10 degrees from ``line`` (points that do not belong together) is not used.
     """
     if len(horizontal) >= 2:
-        join = np.cross(horizontal[0], horizontal[1])
-        n = math.hypot(join[0], join[1])
-        if n > 0:
-            join = join / n
-            if join[:2] @ line[:2] < 0:
-                join = -join
-            if join[:2] @ line[:2] > math.cos(math.radians(10.0)):
-                return np.asarray(join, dtype=np.float64)
+        j = _join(horizontal[0], horizontal[1], line[:2])
+        if j is not None and j[1] > math.cos(math.radians(10.0)):
+            return j[0]
     finite = [v for v in horizontal if v[2] != 0]
     if len(finite) == 1:
         u, v = finite[0][0] / finite[0][2], finite[0][1] / finite[0][2]
