@@ -1465,7 +1465,7 @@ def reconstruct_sequence(
         xh = np.column_stack([ideal[fi][kp], np.ones(kp.size)]) @ np.linalg.inv(k).T
         best: _Pose | None = None
         best_g, score = -1, 0
-        for g in np.flatnonzero(registered).tolist():
+        for g in reg_.tolist():
             key = (min(g, fi), max(g, fi))
             if key not in pair_info or key not in pair_dir:
                 continue
@@ -1503,6 +1503,16 @@ def reconstruct_sequence(
         verified pair scaled by the points (:func:`pose_from_pair`).
         """
         nonlocal last_ba
+
+        def pnp(X3: F64, kp: NDArray[np.int64]) -> tuple[Any, int]:
+            """PnP RANSAC of ``fi``'s keypoints ``kp`` on points ``X3``: (result, inliers)."""
+            try:
+                thr = 3.0 * stretch(fi, kp)
+                r = solve_pnp_ransac(X3, ideal[fi][kp], k, threshold=thr, rng=rng)
+            except (DegenerateConfigurationError, InvalidInputError):
+                return None, 0
+            return r, int(np.sum(r.inliers)) if bool(r.valid) else 0
+
         hp = has_point()
         tr = kp_track[fi]
         kps = np.flatnonzero(tr >= 0)
@@ -1510,12 +1520,7 @@ def reconstruct_sequence(
         res: Any = None
         found = 0
         if kps.size >= 12:
-            try:
-                thr = 3.0 * stretch(fi, kps)
-                res = solve_pnp_ransac(P[tr[kps]], ideal[fi][kps], k, threshold=thr, rng=rng)
-                found = int(np.sum(res.inliers)) if bool(res.valid) else 0
-            except (DegenerateConfigurationError, InvalidInputError):
-                res = None
+            res, found = pnp(P[tr[kps]], kps)
         extra_kp = extra_tr = np.zeros(0, np.int64)
         how = ""
         if found < 12:
@@ -1529,13 +1534,7 @@ def reconstruct_sequence(
             extra_kp, extra_tr = match_points(fi, tr[kps])
             allk = np.concatenate([kps, extra_kp])
             if allk.size >= 12 and extra_kp.size:
-                try:
-                    thr = 3.0 * stretch(fi, allk)
-                    X3 = np.concatenate([P[tr[kps]], P[extra_tr]])
-                    res = solve_pnp_ransac(X3, ideal[fi][allk], k, threshold=thr, rng=rng)
-                    found = int(np.sum(res.inliers)) if bool(res.valid) else 0
-                except (DegenerateConfigurationError, InvalidInputError):
-                    res = None
+                res, found = pnp(np.concatenate([P[tr[kps]], P[extra_tr]]), allk)
             how = f"{extra_kp.size} of its points matched directly, PnP {found} inliers"
             if found < 12:
                 pose = pose_from_pair(fi, allk, np.concatenate([tr[kps], extra_tr]))
@@ -1577,13 +1576,16 @@ def reconstruct_sequence(
             last_ba = nreg
         return True
 
+    def sees(f: int, hp: NDArray[np.bool_]) -> int:
+        """How many triangulated points frame ``f``'s tracks hold (``hp``: has_point())."""
+        return int(np.sum(hp[kp_track[f][kp_track[f] >= 0]]))
+
     while pending:
         nreg = int(registered.sum())
         ready = [fi for fi in pending if failed_at.get(fi, -1) < nreg]
         if ready:
             hp = has_point()
-            counts = [int(np.sum(hp[kp_track[fi][kp_track[fi] >= 0]])) for fi in ready]
-            fi = ready[int(np.argmax(counts))]
+            fi = ready[int(np.argmax([sees(f, hp) for f in ready]))]
             if register(fi, fallback=False):
                 pending.remove(fi)
             else:
@@ -1592,7 +1594,7 @@ def reconstruct_sequence(
         # every frame left failed since the last registration: the fallbacks, the frame
         # that sees the most points first
         hp = has_point()
-        order = sorted(pending, key=lambda f: -int(np.sum(hp[kp_track[f][kp_track[f] >= 0]])))
+        order = sorted(pending, key=lambda f: -sees(f, hp))
         done = next((f for f in order if register(f, fallback=True)), None)
         if done is None:
             break
