@@ -164,9 +164,7 @@ def _stroke(ink: np.ndarray, weak: np.ndarray) -> np.ndarray:
     if not seed.any():
         return seed
     j = 2 * _STROKE_REACH + 1
-    square = np.zeros((1,) * (ink.ndim - 2) + (j, j), dtype=bool)
-    square[...] = True
-    return ndimage.binary_dilation(seed, structure=square)
+    return ndimage.binary_dilation(seed, structure=np.ones((1,) * (ink.ndim - 2) + (j, j), bool))
 
 
 def _block(

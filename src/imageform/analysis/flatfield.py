@@ -117,16 +117,12 @@ def _field(value: ArrayLike, name: str, *, positive: bool) -> np.ndarray:
         arr = arr / np.iinfo(raw_dtype).max
     if not arr.size:
         raise InvalidInputError(f"expected {name} with pixels, got shape {format_shape(arr.shape)}")
-    if positive:
-        check_real_values(arr, name)
-        lo = float(arr.min())
-        if lo <= 0:
-            raise InvalidInputError(
-                f"expected {name} > 0 everywhere (a relative gain), got min {lo:g}: a flat field "
-                "with zeros has no inverse; crop or mask those pixels"
-            )
-    else:
-        check_real_values(arr, name)
+    check_real_values(arr, name)
+    if positive and (lo := float(arr.min())) <= 0:
+        raise InvalidInputError(
+            f"expected {name} > 0 everywhere (a relative gain), got min {lo:g}: a flat field "
+            "with zeros has no inverse; crop or mask those pixels"
+        )
     return arr
 
 

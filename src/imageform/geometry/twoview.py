@@ -693,13 +693,19 @@ def find_essential_matrix(
     for _ in range(_E_FRONT_ROUNDS):
         e = sq(Er)
         wide = _robust_core.refine_support(e[e < thr * thr], thr, 1)
-        sel = (e < wide * wide) & _in_front(Er, q1, q2, e < wide * wide)
+        near = e < wide * wide
+        sel = near & _in_front(Er, q1, q2, near)
         if sel.sum() < 5 or (prev is not None and np.array_equal(sel, prev)):
             break
         Er, prev = refit(Er, sel), sel
+
+    def kept(m: F64, e: F64) -> int:
+        """Count ``m``'s inliers that ``recover_pose`` keeps (in front, within 50 baselines)."""
+        inl = e < thr * thr
+        return int(_in_front(m, q1, q2, inl, _MAX_DEPTH)[inl].sum())
+
     e0, e1 = sq(E), sq(Er)
-    f0 = int(_in_front(E, q1, q2, e0 < thr * thr, _MAX_DEPTH)[e0 < thr * thr].sum())
-    f1 = int(_in_front(Er, q1, q2, e1 < thr * thr, _MAX_DEPTH)[e1 < thr * thr].sum())
+    f0, f1 = kept(E, e0), kept(Er, e1)
     if loss(e1).sum() <= (1.0 + _E_REFIT_TOL) * loss(e0).sum() and f1 >= (1.0 - _E_FRONT_TOL) * f0:
         E = Er
     return _essential_result(project_e(E), p1, p2, Kai, Kbi, thr, drawn, points1, points2)

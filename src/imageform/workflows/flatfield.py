@@ -145,7 +145,7 @@ def _read(path: Path, opts: FlatfieldOptions) -> Any:
     return img[..., 0] if img.ndim == 3 and img.shape[2] == 1 else img
 
 
-def _as_field(path: Path, opts: FlatfieldOptions, what: str, scale_integers: bool) -> Any:
+def _as_field(path: Path, opts: FlatfieldOptions, scale_integers: bool) -> Any:
     """Read a measured flat or dark field as floats (integer dark frames: fractions of range)."""
     import numpy as np
 
@@ -201,8 +201,8 @@ def flatfield(run: Run, opts: FlatfieldOptions, *, out: Path, images: Any) -> Re
     summary: dict[str, Any] = {"images": len(files), "shape": list(stack[0].shape), "out": out}
     text: list[str] = []
     if opts.flat is not None:
-        flat = _as_field(opts.flat, opts, "--flat", scale_integers=False)
-        dark = None if opts.dark is None else _as_field(opts.dark, opts, "--dark", True)
+        flat = _as_field(opts.flat, opts, scale_integers=False)
+        dark = None if opts.dark is None else _as_field(opts.dark, opts, scale_integers=True)
         method = "measured"
         converged, iterations, baseline = True, 0, None
         dark_out = dark
