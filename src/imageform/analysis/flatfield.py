@@ -23,8 +23,9 @@ structure. The correction divides it out (Peng et al. 2017, eq. 1; Model & Burkh
   slide, the frames of a time-lapse): the stack is a low-rank smooth part ``B_i F + D`` plus a
   sparse residual, the flat field smooth through an L1 penalty on its DCT coefficients, solved
   by the inexact augmented Lagrange multiplier method, reweighted.
-- :func:`estimate_vignetting`: a quick estimate from one frame (a photograph, an endoscope
-  frame) by a robust fit of the radial polynomial ``1 + a_1 r^2 + a_2 r^4 + a_3 r^6``
+- :func:`estimate_vignetting`: a quick estimate from one frame (a photograph; not a frame
+  with a dark surround, such as an endoscope's aperture, which breaks the fit) by a robust
+  fit of the radial polynomial ``1 + a_1 r^2 + a_2 r^4 + a_3 r^6``
   (Goldman, *IEEE TPAMI* 32(12), 2010) to the heavily smoothed frame: it cannot tell a
   scene that darkens towards the corners from vignetting.
 """

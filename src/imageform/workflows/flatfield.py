@@ -47,7 +47,8 @@ class FlatfieldOptions(ImageIn):
         "basic",
         help="basic: BaSiC (Peng et al. 2017) from 2 or more images of varied content (tiles, "
         "frames); radial: a robust radial polynomial fitted to the images' mean (one frame "
-        "will do: a photograph, an endoscope).",
+        "will do: a photograph; not a frame with a dark surround, such as an endoscope's "
+        "aperture).",
         choices=get_args(Method),
     )
     darkfield: bool = option(
