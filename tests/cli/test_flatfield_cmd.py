@@ -119,3 +119,61 @@ def test_flatfield_in_help(capsys: pytest.CaptureFixture[str]) -> None:
     main(["--help"])
     out = capsys.readouterr().out
     assert "flatfield" in out.split("Biomedical colour analysis")[1]
+
+
+ENDO = Path(__file__).resolve().parents[1] / "data" / "endo"
+
+
+def test_flatfield_radial_mask_on_colonoscope_frames(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    frames = [str(ENDO / f"c3vdv3_f{i:03d}.jpg") for i in (0, 4, 8)]
+    # without a mask the black surround breaks the radial fit: refused, nothing written
+    assert main(["flatfield", *frames, "-o", str(tmp_path / "no"), "--method", "radial"]) == 1
+    err = capsys.readouterr().err
+    assert "--mask auto" in err and len(err.strip().splitlines()) == 1
+    assert not (tmp_path / "no").exists()
+    out = tmp_path / "out"
+    argv = ["flatfield", *frames, "-o", str(out), "--method", "radial", "--mask", "auto"]
+    assert main([*argv, "--apply", "--center", "mask", "--json"]) == 0
+    summary = json.loads(capsys.readouterr().out)
+    assert summary["method"] == "radial" and summary["mask"] == "auto"
+    assert summary["mask_file"] == "mask.png" and 0.8 < summary["mask_share"] < 0.95
+    assert summary["center"] == "mask" and len(summary["corrected"]) == 3
+    names = sorted(p.name for p in out.iterdir())
+    assert names == ["corrected", "flatfield.json", "flatfield.tif", "mask.png"]
+    mask = read_image(out / "mask.png")[..., 0] > 0
+    flat = read_image(out / "flatfield.tif")[..., 0]
+    assert flat.shape == mask.shape == (448, 445) and float(flat.min()) > 0
+    assert float(flat[mask].mean()) == pytest.approx(1.0, abs=1e-4)
+    # the pixels outside the field of view are kept as they were
+    src = read_image(ENDO / "c3vdv3_f004.jpg").astype(np.float32) / 255
+    fixed = read_image(out / "corrected" / "c3vdv3_f004.tif")
+    np.testing.assert_array_equal(fixed[~mask], src[~mask])
+    # the written mask, given as a file, gives the same flat field
+    again = tmp_path / "again"
+    assert main(["flatfield", *frames, "-o", str(again), "--method", "radial", "--mask",
+                 str(out / "mask.png")]) == 0  # fmt: skip
+    np.testing.assert_allclose(read_image(again / "flatfield.tif")[..., 0], flat, rtol=1e-6)
+    assert not (again / "mask.png").exists()
+
+
+def test_flatfield_mask_refusals(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    frame, frame4 = str(ENDO / "c3vdv3_f000.jpg"), str(ENDO / "c3vdv3_f004.jpg")
+    write_image(tmp_path / "small.png", np.full((8, 8), 255, np.uint8))
+    write_image(tmp_path / "black.png", np.zeros((448, 445), np.uint8))
+    cases = [
+        (["--method", "radial", "--mask", str(tmp_path / "small.png")], 1, "8 x 8 px"),
+        (["--method", "radial", "--mask", str(tmp_path / "black.png")], 1, "zero everywhere"),
+        (["--method", "radial", "--mask", str(tmp_path / "none.png")], 1, "does not exist"),
+        (["--mask", "auto"], 2, "BaSiC takes no mask"),
+        (["--method", "radial", "--center", "mask"], 2, "give --mask"),
+        (["--center", "fit"], 2, "--center is an option of --method radial"),
+    ]
+    for i, (extra, rc, message) in enumerate(cases):
+        out = tmp_path / f"o{i}"
+        assert main(["flatfield", frame, frame4, "-o", str(out), *extra]) == rc, extra
+        err = capsys.readouterr().err
+        assert message in err.strip().splitlines()[-1], err
+        assert rc == 2 or len(err.strip().splitlines()) == 1, err  # usage errors: click's
+        assert not out.exists()

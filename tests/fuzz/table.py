@@ -46,7 +46,9 @@ VALID: dict[str, C | Skip] = {
     ),
     "imageform.analysis.StainMixture": Skip("a result NamedTuple (no validation of its own)"),
     "imageform.analysis.chart_patches": call(V("chart")),
-    "imageform.analysis.correct_flatfield": call(V("rgb"), np.full((6, 8), 0.8)),
+    "imageform.analysis.correct_flatfield": call(
+        V("rgb"), np.full((6, 8), 0.8), mask=np.ones((6, 8), dtype=bool)
+    ),
     "imageform.analysis.correction_report": call(V("rgb_chart"), V("rgb_chart"), V("correction")),
     "imageform.analysis.estimate_camera_sensitivities": call(
         np.linspace(0.1, 1.0, 72).reshape(24, 3), light="D65", smoothness=0.1
@@ -54,7 +56,9 @@ VALID: dict[str, C | Skip] = {
     "imageform.analysis.estimate_flatfield": call(
         np.linspace(0.1, 1.0, 3 * 16 * 16).reshape(3, 16, 16), max_reweightings=1
     ),
-    "imageform.analysis.estimate_vignetting": call(V("rgb")),
+    "imageform.analysis.estimate_vignetting": call(
+        V("rgb"), mask=np.ones((6, 8), dtype=bool), center="mask"
+    ),
     "imageform.analysis.fit_color_correction": call(V("rgb_chart"), V("rgb_chart")),
     "imageform.analysis.macenko_normalize": call(V("stain"), V("stain")),
     "imageform.analysis.macenko_stains": call(image=V("rgb_big"), mask=None),  # noise: no tissue

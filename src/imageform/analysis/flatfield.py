@@ -23,11 +23,12 @@ structure. The correction divides it out (Peng et al. 2017, eq. 1; Model & Burkh
   slide, the frames of a time-lapse): the stack is a low-rank smooth part ``B_i F + D`` plus a
   sparse residual, the flat field smooth through an L1 penalty on its DCT coefficients, solved
   by the inexact augmented Lagrange multiplier method, reweighted.
-- :func:`estimate_vignetting`: a quick estimate from one frame (a photograph; not a frame
-  with a dark surround, such as an endoscope's aperture, which breaks the fit) by a robust
-  fit of the radial polynomial ``1 + a_1 r^2 + a_2 r^4 + a_3 r^6``
+- :func:`estimate_vignetting`: a quick estimate from one frame (a photograph; an
+  endoscope's frame with ``mask="auto"``, its field of view: the black surround would break
+  the fit) by a robust fit of the radial polynomial ``1 + a_1 r^2 + a_2 r^4 + a_3 r^6``
   (Goldman, *IEEE TPAMI* 32(12), 2010) to the heavily smoothed frame: it cannot tell a
-  scene that darkens towards the corners from vignetting.
+  scene that darkens towards the corners (or, in a colonoscope, brightens towards its
+  rim) from vignetting.
 """
 
 from __future__ import annotations
@@ -35,7 +36,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 
@@ -86,6 +87,10 @@ class FlatfieldEstimate:
         radial fit).
     method : str
         ``"basic"`` or ``"radial"``.
+    mask : ndarray (H, W) of bool or None
+        The pixels the field was fitted to (``estimate_vignetting(mask=...)``: an
+        endoscope's field of view); the flat field is mean 1 over them, and :meth:`correct`
+        leaves the pixels outside as they are. None: every pixel.
     """
 
     flatfield: np.ndarray
@@ -94,6 +99,7 @@ class FlatfieldEstimate:
     converged: bool
     iterations: int
     method: str
+    mask: np.ndarray | None = None
 
     def correct(self, image: ArrayLike) -> np.ndarray:
         """Return ``image`` corrected with this flat field and dark field.
@@ -104,7 +110,7 @@ class FlatfieldEstimate:
         >>> est.correct(np.full((32, 48), 0.5)).shape
         (32, 48)
         """
-        return correct_flatfield(image, self.flatfield, self.darkfield)
+        return correct_flatfield(image, self.flatfield, self.darkfield, mask=self.mask)
 
 
 # ------------------------------------------------------------------ the correction
@@ -139,7 +145,11 @@ def _check_field_shape(image_shape: tuple[int, ...], field: np.ndarray, name: st
 
 
 def correct_flatfield(
-    image: ArrayLike, flatfield: ArrayLike, darkfield: ArrayLike | None = None
+    image: ArrayLike,
+    flatfield: ArrayLike,
+    darkfield: ArrayLike | None = None,
+    *,
+    mask: ArrayLike | None = None,
 ) -> np.ndarray:
     r"""Divide an image by its flat field after subtracting its dark field.
 
@@ -162,6 +172,11 @@ def correct_flatfield(
         The offset, in the image's units after reading: a uint8 / uint16 dark frame is read
         as the image is (a fraction of full range, counts / 65535 for uint16), floats as
         given; (H, W) or (H, W, C).
+    mask : array_like (H, W) of bool, optional
+        The pixels to correct (an endoscope's field of view): the flat field is normalised
+        to its mean over them, and the pixels outside are returned as they are (read as the
+        image is), neither divided nor zeroed: the flat field means nothing there (a black
+        surround, burned-in text), and dividing would only amplify its noise.
 
     Returns
     -------
@@ -178,7 +193,8 @@ def correct_flatfield(
     ------
     InvalidInputError
         Shapes that differ, a flat field with a value <= 0, NaN or inf in the flat or dark
-        field, an image that is not (H, W) or (H, W, C).
+        field, an image that is not (H, W) or (H, W, C), a mask that is not booleans of the
+        image's size or that is False everywhere.
 
     Examples
     --------
@@ -201,7 +217,11 @@ def correct_flatfield(
     _check_field_shape(img.shape, flat, "flatfield")
     if dark is not None:
         _check_field_shape(img.shape, dark, "darkfield")
-    gain = flat / flat.mean(axis=(0, 1))
+    if mask is None:
+        gain = flat / flat.mean(axis=(0, 1))
+    else:
+        keep = _as_mask(mask, img.shape)
+        gain = flat / flat[keep].mean(axis=0)
     if img.ndim == 3 and gain.ndim == 2:
         gain = gain[..., None]
     out = img.astype(np.float64)
@@ -209,7 +229,30 @@ def correct_flatfield(
         out = out - (dark[..., None] if img.ndim == 3 and dark.ndim == 2 else dark)
     with np.errstate(invalid="ignore"):  # inf - inf in a masked pixel: NaN, as documented
         out = out / gain
+    if mask is not None:
+        out[~keep] = img[~keep]
     return out.astype(img.dtype, copy=False)
+
+
+def _as_mask(mask: object, shape: tuple[int, ...]) -> np.ndarray:
+    """Return ``mask`` as a bool (H, W) array of the image's size with a True pixel."""
+    try:
+        m = to_numpy(mask)
+    except (TypeError, ValueError):  # a ragged list, an object that is no array
+        raise InvalidInputError(f"expected mask as booleans (H, W), got {describe(mask)}") from None
+    if m.dtype != np.bool_:
+        raise InvalidInputError(
+            f"expected mask as booleans (True where the pixels count), got {describe(mask)}; "
+            "give mask > 0 for an image of 0 and 255"
+        )
+    if m.shape != tuple(shape[:2]):
+        raise InvalidInputError(
+            f"expected mask of the image's size {format_shape(tuple(shape[:2]))}, got "
+            f"{format_shape(m.shape)}"
+        )
+    if not m.any():
+        raise InvalidInputError("expected mask with a True pixel, got False everywhere")
+    return m
 
 
 def _image_dims(shape: tuple[int, ...]) -> None:
@@ -658,10 +701,11 @@ def estimate_vignetting(
     image: ArrayLike,
     *,
     degree: int = 2,
-    center: tuple[float, float] | None = None,
+    center: tuple[float, float] | Literal["mask"] | None = None,
     fit_center: bool = False,
     smoothing: float = 0.05,
     max_iter: int = 50,
+    mask: ArrayLike | Literal["auto"] | None = None,
 ) -> FlatfieldEstimate:
     r"""Estimate a radial flat field (vignetting) from one frame by a robust polynomial fit.
 
@@ -679,14 +723,24 @@ def estimate_vignetting(
     that is radial and smooth is found; a scene that darkens towards the corners is taken
     for vignetting. For tiles or frames of varied content prefer :func:`estimate_flatfield`.
 
+    With a ``mask`` (an endoscope's field of view: its aperture without the black surround),
+    only the pixels inside count: the shrinking and the smoothing are normalised by the
+    mask's own (normalised convolution, Knutsson & Westin 1993: ``G * (m I) / G * m``, the
+    model alike, so the black surround darkens nothing), and the fit runs on the working
+    pixels wholly inside the mask. The flat field is then defined over the whole frame: the
+    polynomial inside the mask's largest radius, held at its value there beyond it (the
+    black corners, where a polynomial extrapolated would go to zero or below).
+
     Parameters
     ----------
     image : array_like (H, W) or (H, W, C)
         One frame (uint8 / uint16 / floats), non-negative.
     degree : int
         Number of even powers (1 to 6).
-    center : (c_u, c_v), optional
-        The optical center (column, row) in pixels; default the image center.
+    center : (c_u, c_v) or "mask", optional
+        The optical center (column, row) in pixels; ``"mask"``: the center of the mask's
+        bounding box (an endoscope's aperture, centred on its optical axis); default the
+        image center.
     fit_center : bool
         Search the center too (a 9 x 9 grid over the middle 40 % of the frame, the smallest
         robust residual), for an off-axis lamp or a decentred lens.
@@ -694,12 +748,33 @@ def estimate_vignetting(
         Gaussian sigma as a fraction of the diagonal (0 to 0.5).
     max_iter : int
         IRLS iterations at most.
+    mask : array_like (H, W) of bool or "auto", optional
+        The pixels to fit, True inside (boolean: give ``m > 0`` for an image of 0 and 255);
+        ``"auto"``: an endoscope's field of view found in the frame by
+        :func:`imageform.geometry.field_of_view_mask` (its largest bright region, holes
+        filled, 8 pixels off its edge). None: every pixel (the results are those without
+        a mask).
 
     Returns
     -------
     FlatfieldEstimate
-        ``flatfield`` (H, W) mean 1 (one field for every channel), ``darkfield`` zeros,
-        ``baseline`` (1,) the frame's brightness, ``method="radial"``.
+        ``flatfield`` (H, W) mean 1 (over the mask; one field for every channel),
+        ``darkfield`` zeros, ``baseline`` (1,) the frame's brightness, ``method="radial"``,
+        ``mask`` the mask used (its :meth:`~FlatfieldEstimate.correct` leaves the pixels
+        outside as they are).
+
+    Raises
+    ------
+    InvalidInputError
+        A frame that is not (H, W) or (H, W, C), negative or all zeros; parameters out of
+        range; a mask that is not booleans of the frame's size, or too small to fit (fewer
+        than 16 of the working grid's pixels wholly inside); a fit whose flat field is <= 0
+        somewhere (inside the mask).
+
+    References
+    ----------
+    D. B. Goldman, "Vignette and exposure calibration and compensation", IEEE TPAMI 32(12),
+    2010. H. Knutsson and C.-F. Westin, "Normalized and differential convolution", CVPR 1993.
 
     Examples
     --------
@@ -709,6 +784,16 @@ def estimate_vignetting(
     >>> est = estimate_vignetting(0.6 * fall + rng.normal(0, 0.01, fall.shape))
     >>> bool(np.abs(est.flatfield - fall / fall.mean()).max() < 0.02)
     True
+
+    An endoscope's frame: the scene inside a round aperture, black around it.
+
+    >>> yy, xx = np.mgrid[:96, :128]
+    >>> inside = (xx - 63.5) ** 2 + (yy - 47.5) ** 2 < 45**2
+    >>> frame = np.where(inside, 0.6 * fall, 0.0)
+    >>> est = estimate_vignetting(frame, mask=inside)
+    >>> true = fall[inside] / fall[inside].mean()
+    >>> bool(np.abs(est.flatfield[inside] - true).max() < 0.01)
+    True
     """
     deg = as_int(degree, "degree", minimum=1, maximum=6)
     its = as_int(max_iter, "max_iter", minimum=1, maximum=10_000)
@@ -717,6 +802,18 @@ def estimate_vignetting(
     shape = getattr(image, "shape", None)
     if isinstance(shape, tuple):
         _image_dims(shape)
+    if isinstance(center, str) and center != "mask":
+        raise InvalidInputError(
+            f"expected center as (c_u, c_v), 'mask' or None, got {describe(center)}"
+        )
+    if isinstance(mask, str) and mask != "auto":
+        raise InvalidInputError(
+            f"expected mask as booleans (H, W), 'auto' or None, got {describe(mask)}"
+        )
+    if isinstance(center, str) and mask is None:
+        raise InvalidInputError("center='mask' takes the mask's center: give a mask too")
+    if isinstance(shape, tuple) and mask is not None and not isinstance(mask, str):
+        _as_mask_shape(mask, shape)
     img = np.asarray(to_numpy(as_image(image, "image", channels=None, range_check=False)))
     _image_dims(img.shape)
     lum = img.astype(np.float64)
@@ -728,13 +825,23 @@ def estimate_vignetting(
     if not np.any(lum > 0):
         raise InvalidInputError("expected an image with light, got all zeros")
     h, w = lum.shape
+    keep: np.ndarray | None = None
+    if isinstance(mask, str):
+        from imageform.geometry import field_of_view_mask
+
+        keep = field_of_view_mask(img)
+    elif mask is not None:
+        keep = _as_mask(mask, lum.shape)
     if center is None:
         cu, cv = (w - 1) / 2, (h - 1) / 2
+    elif isinstance(center, str):
+        assert keep is not None
+        rows, cols = np.flatnonzero(keep.any(axis=1)), np.flatnonzero(keep.any(axis=0))
+        cu, cv = (cols[0] + cols[-1]) / 2, (rows[0] + rows[-1]) / 2
     else:
         cu, cv = as_reals(center, "center", 2)
     s = min(1.0, WORKING_SIZE / max(h, w))
     work = (max(2, round(h * s)), max(2, round(w * s)))
-    small = _resize(lum, work, order=1)
     sigma = sm * math.hypot(*work)
 
     def smooth(a: np.ndarray) -> np.ndarray:
@@ -742,7 +849,23 @@ def estimate_vignetting(
 
         return np.asarray(ndimage.gaussian_filter(a, sigma, mode="reflect")) if sigma else a
 
-    small = smooth(small)
+    if keep is None:
+        small = smooth(_resize(lum, work, order=1))
+        cover: np.ndarray | None = None
+        norm = np.ones(work)
+        use = np.ones(work[0] * work[1], dtype=bool)
+    else:
+        # normalised convolution: shrink and smooth m I and m, divide (the model alike)
+        cover = np.clip(_resize(keep.astype(np.float64), work, order=1), 0.0, 1.0)
+        norm = smooth(cover)
+        use = ((cover > 0.999) & (norm > 1e-6)).ravel()
+        if int(use.sum()) < 16:
+            raise InvalidInputError(
+                f"expected a mask that covers more of the frame: {int(keep.sum())} pixels "
+                f"leave {int(use.sum())} of the {work[1]} x {work[0]} working grid's pixels "
+                "wholly inside (16 needed)"
+            )
+        small = smooth(_resize(np.where(keep, lum, 0.0), work, order=1)) / np.maximum(norm, 1e-12)
     half_diag = math.hypot(w / 2, h / 2)
     # the working grid's pixel centres in full-frame pixels (u + 0.5) / s - 0.5
     vw, uw = np.mgrid[0 : work[0], 0 : work[1]].astype(np.float64)
@@ -752,8 +875,14 @@ def estimate_vignetting(
     def fit(c: tuple[float, float]) -> tuple[np.ndarray, float, int, bool]:
         # the model smoothed as the frame was (smoothing is linear): no bias from the blur
         basis = _radial_basis(uw, vw, c, half_diag, deg)
-        cols = [smooth(b.reshape(work)).ravel() for b in basis.T]
-        return _robust_fit(np.stack(cols, axis=1), small.ravel(), its)
+        if cover is None:
+            cols = [smooth(b.reshape(work)).ravel() for b in basis.T]
+            return _robust_fit(np.stack(cols, axis=1), small.ravel(), its)
+        cols = [
+            (smooth(b.reshape(work) * cover) / np.maximum(norm, 1e-12)).ravel()[use]
+            for b in basis.T
+        ]
+        return _robust_fit(np.stack(cols, axis=1), small.ravel()[use], its)
 
     best = (cu, cv)
     coef, scale, n_it, ok = fit(best)
@@ -766,13 +895,30 @@ def estimate_vignetting(
                 if s2 < scale:
                     best, coef, scale, ok = cand, c2, s2, ok2
     vf, uf = np.mgrid[0:h, 0:w].astype(np.float64)
-    field = (_radial_basis(uf, vf, best, half_diag, deg) @ coef).reshape(h, w)
-    if float(coef[0]) <= 0 or float(field.min()) <= 0:
-        raise InvalidInputError(
-            "the radial fit gave a flat field <= 0 somewhere (a frame dark at its center or "
-            "corners?); give a lower degree or a measured flat field"
-        )
-    brightness = float(field.mean())
+    if keep is None:
+        field = (_radial_basis(uf, vf, best, half_diag, deg) @ coef).reshape(h, w)
+        if float(coef[0]) <= 0 or float(field.min()) <= 0:
+            raise InvalidInputError(
+                "the radial fit gave a flat field <= 0 somewhere (a frame dark at its center "
+                "or corners: an endoscope's black surround?); give a lower degree, a mask (an "
+                "endoscope's field of view: mask='auto', --mask auto) or a measured flat field"
+            )
+        brightness = float(field.mean())
+    else:
+        # the polynomial up to the mask's largest radius, held there beyond it
+        r = np.hypot(uf - best[0], vf - best[1])
+        r_max = float(r[keep].max())
+        scale_r = np.minimum(r, r_max) / r
+        scale_r[r == 0] = 1.0
+        uc = best[0] + (uf - best[0]) * scale_r
+        vc = best[1] + (vf - best[1]) * scale_r
+        field = (_radial_basis(uc, vc, best, half_diag, deg) @ coef).reshape(h, w)
+        if float(coef[0]) <= 0 or float(field[keep].min()) <= 0 or float(field.min()) <= 0:
+            raise InvalidInputError(
+                "the radial fit gave a flat field <= 0 inside the mask (a frame dark at its "
+                "center?); give a lower degree or a measured flat field"
+            )
+        brightness = float(field[keep].mean())
     return FlatfieldEstimate(
         field / brightness,
         np.zeros((h, w)),
@@ -780,4 +926,15 @@ def estimate_vignetting(
         ok,
         n_it,
         "radial",
+        keep,
     )
+
+
+def _as_mask_shape(mask: object, shape: tuple[int, ...]) -> None:
+    """Refuse a mask whose shape (read before its values) is not the image's (H, W)."""
+    mshape = getattr(mask, "shape", None)
+    if isinstance(mshape, tuple) and tuple(mshape) != tuple(shape[:2]):
+        raise InvalidInputError(
+            f"expected mask of the image's size {format_shape(tuple(shape[:2]))}, got "
+            f"{format_shape(tuple(mshape))}"
+        )

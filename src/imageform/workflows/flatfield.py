@@ -2,9 +2,9 @@
 
 The maths lives in :mod:`imageform.analysis.flatfield`; this module reads the images (files,
 folders or globs), writes ``flatfield.tif`` (or ``.npy``), ``darkfield.tif`` with
-``--darkfield``, ``flatfield.json`` (what was estimated from what) and, with ``--apply`` or
-``--flat``, every image corrected under ``corrected/``, all into the output folder, all or
-nothing.
+``--darkfield``, ``flatfield.json`` (what was estimated from what), ``mask.png`` with
+``--mask auto`` (the field of view found) and, with ``--apply`` or ``--flat``, every image
+corrected under ``corrected/``, all into the output folder, all or nothing.
 """
 
 from __future__ import annotations
@@ -37,6 +37,7 @@ _MARKER = "flatfield.json"
 
 Method = Literal["basic", "radial"]
 FileFormat = Literal["tif", "npy"]
+Center = Literal["image", "mask", "fit"]
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -47,8 +48,7 @@ class FlatfieldOptions(ImageIn):
         "basic",
         help="basic: BaSiC (Peng et al. 2017) from 2 or more images of varied content (tiles, "
         "frames); radial: a robust radial polynomial fitted to the images' mean (one frame "
-        "will do: a photograph; not a frame with a dark surround, such as an endoscope's "
-        "aperture).",
+        "will do: a photograph; an endoscope's frame with --mask auto).",
         choices=get_args(Method),
     )
     darkfield: bool = option(
@@ -83,6 +83,22 @@ class FlatfieldOptions(ImageIn):
     working_size: int = option(
         128, help="Side of the square BaSiC fits at.", minimum=8, maximum=4096
     )
+    mask: str | None = option(
+        None,
+        help="The pixels that count (radial and --flat): auto (an endoscope's field of view, "
+        "found in the images: its aperture without the black surround and burned-in text) "
+        "or a mask image of the images' size (non-zero: count). The flat field is fitted "
+        "there and defined over the whole frame; the corrected images keep the pixels "
+        "outside as they were.",
+        metavar="auto|FILE",
+    )
+    center: Center = option(
+        "image",
+        help="The radial fit's center: image (its center), mask (the center of --mask's "
+        "bounding box: an endoscope's aperture) or fit (searched over the middle 40 % of "
+        "the frame: an off-axis lamp; on an endoscope's frame the scene misleads it).",
+        choices=get_args(Center),
+    )
     format: FileFormat = option(
         "tif",
         help="File format of the fields and the corrected images: tif (float32 TIFF) or npy.",
@@ -106,6 +122,17 @@ class FlatfieldOptions(ImageIn):
             raise InvalidInputError(
                 "--darkfield and --sort-intensity are options of --method basic"
             )
+        if self.mask is not None:
+            key = str(self.mask).strip()
+            object.__setattr__(self, "mask", "auto" if key.lower() == "auto" else key)
+            if self.method != "radial" and self.flat is None:
+                raise InvalidInputError(
+                    "--mask is an option of --method radial and of --flat (BaSiC takes no mask)"
+                )
+        if self.center != "image" and (self.method != "radial" or self.flat is not None):
+            raise InvalidInputError("--center is an option of --method radial")
+        if self.center == "mask" and self.mask is None:
+            raise InvalidInputError("--center mask takes the center of --mask: give --mask")
 
 
 def _image_files(sources: Any) -> list[Path]:
@@ -156,6 +183,25 @@ def _as_field(path: Path, opts: FlatfieldOptions, scale_integers: bool) -> Any:
     return a.astype(np.float64)
 
 
+def _read_mask(path: Path, opts: FlatfieldOptions, shape: tuple[int, ...]) -> Any:
+    """Read ``--mask FILE`` as booleans (non-zero: the pixel counts) of the images' size."""
+    import numpy as np
+
+    if not path.is_file():
+        raise InvalidInputError(f"--mask {path} does not exist (give auto or a mask image)")
+    m = np.asarray(_read(path, opts))
+    if m.ndim == 3:
+        m = m.max(axis=2)
+    if m.shape != tuple(shape[:2]):
+        raise InvalidInputError(
+            f"--mask {path} is {m.shape[1]} x {m.shape[0]} px, the images {shape[1]} x "
+            f"{shape[0]} px"
+        )
+    if not np.any(m > 0):
+        raise InvalidInputError(f"--mask {path} is zero everywhere: no pixel would count")
+    return m > 0
+
+
 def _check_out(out: Path, files: list[Path], force: bool) -> None:
     """Refuse an output folder that holds an input, or (with --force) one we did not write."""
     res = out.resolve()
@@ -184,6 +230,7 @@ def flatfield(run: Run, opts: FlatfieldOptions, *, out: Path, images: Any) -> Re
 
     from imageform._jsonio import write_json
     from imageform.analysis import correct_flatfield, estimate_flatfield, estimate_vignetting
+    from imageform.geometry import field_of_view_mask
 
     files = _image_files(images)
     _check_out(out, files, run.outputs.force)
@@ -199,6 +246,11 @@ def flatfield(run: Run, opts: FlatfieldOptions, *, out: Path, images: Any) -> Re
             f"{files[other].name} {tuple(stack[other].shape)}"
         )
     ext = "." + opts.format
+    mask = None
+    if opts.mask == "auto":
+        mask = field_of_view_mask(stack)
+    elif opts.mask is not None:
+        mask = _read_mask(Path(opts.mask), opts, tuple(stack[0].shape))
     summary: dict[str, Any] = {"images": len(files), "shape": list(stack[0].shape), "out": out}
     text: list[str] = []
     if opts.flat is not None:
@@ -214,7 +266,12 @@ def flatfield(run: Run, opts: FlatfieldOptions, *, out: Path, images: Any) -> Re
             mean = np.mean([np.asarray(a, dtype=np.float64) for a in stack], axis=0)
             if stack[0].dtype in (np.uint8, np.uint16):
                 mean = mean / np.iinfo(stack[0].dtype).max
-            est = estimate_vignetting(mean)
+            est = estimate_vignetting(
+                mean,
+                mask=mask,
+                center="mask" if opts.center == "mask" else None,
+                fit_center=opts.center == "fit",
+            )
         else:
             if len(stack) < 2:
                 raise InvalidInputError(
@@ -246,6 +303,10 @@ def flatfield(run: Run, opts: FlatfieldOptions, *, out: Path, images: Any) -> Re
         if dark_out is not None:
             _write_array(folder / ("darkfield" + ext), dark_out)
             written.append("darkfield" + ext)
+    if opts.mask == "auto" and mask is not None:
+        from imageform.io import write_image
+
+        write_image(folder / "mask.png", np.where(mask, 255, 0).astype(np.uint8))
     corrected: list[str] = []
     if opts.apply or opts.flat is not None:
         sub = folder / "corrected"
@@ -254,14 +315,14 @@ def flatfield(run: Run, opts: FlatfieldOptions, *, out: Path, images: Any) -> Re
             if run.progress is not None:
                 run.progress("correcting", 0.5 + 0.5 * i / len(files))
             try:
-                fixed = correct_flatfield(img, flat, dark)
+                fixed = correct_flatfield(img, flat, dark, mask=mask)
             except InvalidInputError as exc:
                 where = "--flat " + str(opts.flat) if opts.flat is not None else "the flat field"
                 raise InvalidInputError(f"{f.name} with {where}: {exc}") from None
             _write_array(sub / (f.stem + ext), fixed)
             corrected.append(f"corrected/{f.stem}{ext}")
     fl = np.asarray(flat, dtype=np.float64)
-    fl = fl / fl.mean(axis=(0, 1))
+    fl = fl / fl.mean(axis=(0, 1)) if mask is None else fl[mask] / fl[mask].mean(axis=0)
     record: dict[str, Any] = {
         "format": FLATFIELD_FORMAT,
         "version": 1,
@@ -276,6 +337,10 @@ def flatfield(run: Run, opts: FlatfieldOptions, *, out: Path, images: Any) -> Re
         "iterations": int(iterations),
         "baseline": None if baseline is None else baseline.tolist(),
         "corrected": corrected,
+        "mask": None if opts.mask is None else str(opts.mask),
+        "mask_file": "mask.png" if opts.mask == "auto" else None,
+        "mask_share": None if mask is None else round(float(np.mean(mask)), 4),
+        "center": opts.center if method == "radial" else None,
     }
     write_json(folder / _MARKER, record)
     summary.update({k: v for k, v in record.items() if k not in ("format", "version")})
@@ -284,14 +349,20 @@ def flatfield(run: Run, opts: FlatfieldOptions, *, out: Path, images: Any) -> Re
             f"{method} flat field from {len(files)} image(s) "
             f"({stack[0].shape[1]}x{stack[0].shape[0]}): min {fl.min():.3f}, max "
             f"{fl.max():.3f} of its mean"
+            + ("" if mask is None else f" in the mask ({np.mean(mask):.0%} of the frame)")
             + ("" if method == "radial" else f", {iterations} iterations")
             + ("" if converged else " (not converged)")
         )
     else:
         text.append(
             f"measured flat field {opts.flat}: min {fl.min():.3f}, max {fl.max():.3f} of its mean"
+            + ("" if mask is None else f" in the mask ({np.mean(mask):.0%} of the frame)")
         )
-    names = [*written, _MARKER] + ([f"corrected/ ({len(corrected)} images)"] if corrected else [])
+    names = (
+        [*written, _MARKER]
+        + (["mask.png"] if opts.mask == "auto" else [])
+        + ([f"corrected/ ({len(corrected)} images)"] if corrected else [])
+    )
     text.append(", ".join(names) + f" -> {out}")
     return Result(summary, tuple(text))
 
@@ -313,14 +384,15 @@ WORKFLOWS = (
         ),
         Output(
             "Output folder: flatfield.tif, darkfield.tif (--darkfield), flatfield.json, "
-            "corrected/ (--apply, --flat); replaced whole.",
+            "mask.png (--mask auto), corrected/ (--apply, --flat); replaced whole.",
             folder=True,
         ),
         group="analysis",
         description="Estimated (BaSiC from tiles or frames of varied content; --method radial "
-        "from one frame) or measured (--flat, --dark) flat field; corrected = (I - D) / (F / "
-        "mean F). Integer images are read as fractions of full range (uint16: counts / 65535), "
-        "so the fields and the corrected images (float32 TIFF or .npy) are in those units. "
+        "from one frame, --mask auto for an endoscope's) or measured (--flat, --dark) flat "
+        "field; corrected = (I - D) / (F / mean F). Integer images are read as fractions of "
+        "full range (uint16: counts / 65535), so the fields and the corrected images "
+        "(float32 TIFF or .npy) are in those units. "
         "docs/optics.md#shading-correction.",
     ),
 )
