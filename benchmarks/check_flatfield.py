@@ -524,7 +524,10 @@ def main() -> None:
     ap.add_argument("--endo-only", action="store_true", help="only the endoscope's tables")
     args = ap.parse_args()
     python = args.basicpy if args.basicpy and Path(args.basicpy).exists() else None
-    print(header("Shading correction: BaSiC on real stacks, known shadings, basicpy"))
+    if args.endo_only:
+        print(header("Shading correction: an endoscope's frames, with a field-of-view mask"))
+    else:
+        print(header("Shading correction: BaSiC on real stacks, known shadings, basicpy"))
     print(f"load average at start: {os.getloadavg()[0]:.1f}\n")
     if args.endo_only:
         endo_tables(args)
@@ -611,7 +614,7 @@ def endo_tables(args: argparse.Namespace) -> None:
     )
     same = kodak_unchanged(args.main_src)
     if same:
-        print(f"## Kodak photographs, mask=None: this tree against {args.main_src}\n")
+        print(f"## Kodak photographs, mask=None: this tree against --main-src {args.main_src}\n")
         print(
             markdown_table(
                 ("shading", "photographs", "flat fields bit-identical", "refused here"), same

@@ -430,4 +430,4 @@ def test_vignetting_bad_mask(mask: object, kw: dict[str, object], message: str) 
     array = mask is not None and not isinstance(mask, str)
     if array and "center" not in kw and "16 needed" not in message:
         with pytest.raises(InvalidInputError, match=esc):
-            correct_flatfield(frame, np.ones((8, 8)), mask=mask)  # type: ignore[arg-type]
+            correct_flatfield(frame, np.ones((8, 8)), mask=mask)

@@ -106,7 +106,7 @@ class FlatfieldOptions(ImageIn):
     )
 
     def check(self) -> None:
-        """Refuse --dark without --flat, and --darkfield or --sort-intensity with radial."""
+        """Refuse --dark without --flat, radial-only options with basic, --mask with basic."""
         super().check()
         if self.dark is not None and self.flat is None:
             raise InvalidInputError(
@@ -129,10 +129,6 @@ class FlatfieldOptions(ImageIn):
                 raise InvalidInputError(
                     "--mask is an option of --method radial and of --flat (BaSiC takes no mask)"
                 )
-        if self.center != "image" and (self.method != "radial" or self.flat is not None):
-            raise InvalidInputError("--center is an option of --method radial")
-        if self.center == "mask" and self.mask is None:
-            raise InvalidInputError("--center mask takes the center of --mask: give --mask")
 
 
 def _image_files(sources: Any) -> list[Path]:
@@ -232,6 +228,10 @@ def flatfield(run: Run, opts: FlatfieldOptions, *, out: Path, images: Any) -> Re
     from imageform.analysis import correct_flatfield, estimate_flatfield, estimate_vignetting
     from imageform.geometry import field_of_view_mask
 
+    if opts.center != "image" and (opts.method != "radial" or opts.flat is not None):
+        raise InvalidInputError("--center is an option of --method radial")
+    if opts.center == "mask" and opts.mask is None:
+        raise InvalidInputError("--center mask takes the center of --mask: give --mask")
     files = _image_files(images)
     _check_out(out, files, run.outputs.force)
     if run.progress is not None:
