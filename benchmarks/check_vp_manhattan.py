@@ -96,7 +96,9 @@ def scene(seed: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, str]:
             a, b = (uv + 0.5) * s - 0.5
             draw.line([tuple(a), tuple(b)], fill=shade, width=int(rng.integers(1, 4)) * s)
             break
-    img = img.resize((W, H), Image.BOX).filter(ImageFilter.GaussianBlur(rng.uniform(0.3, 1.2)))
+    img = img.resize((W, H), Image.Resampling.BOX).filter(
+        ImageFilter.GaussianBlur(rng.uniform(0.3, 1.2))
+    )
     arr = np.asarray(img, dtype=np.float64) + rng.normal(0, rng.uniform(1, 6), (H, W))
     buf = io.BytesIO()
     Image.fromarray(np.clip(arr, 0, 255).astype(np.uint8)).save(

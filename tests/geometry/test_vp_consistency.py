@@ -134,3 +134,37 @@ def test_consistent_triplet_keeps_its_joint_fit() -> None:
 def test_estimate_bad_spelling() -> None:
     with pytest.raises(InvalidInputError, match="estimate"):
         detect_vanishing_points(np.zeros((20, 20)), principal_point="estimated")
+
+
+def test_an_offset_that_resampling_explains_is_not_an_inconsistency(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """The triplet of ``_non_orthogonal`` (the third point 40 px off, 45 segments) with the
+    vertical point's 60 segments turned by 2 degrees (standard deviation) each: their
+    orthocentre is 222 px right of the centre (29 % of the width), but resampling the
+    segments moves it by more than a third of that, so the points are not refused and the
+    three-point fit stands (f within 1 % of 700 px). With the box alone (no significance
+    test) the same segments give no K."""
+    import imageform.geometry.vp_detection as vp
+
+    R = camera_rotation(0.06, 0.5, 0.0)
+    A, B, C = (vanishing_point(K, d, R) for d in np.eye(3)[[1, 0, 2]])
+    A, B, C = A / A[2], B / B[2], C / C[2] + np.array([0.0, 40.0, 0.0])
+    rng = np.random.default_rng(5)
+    turned = []
+    for s in _toward([A], 60, rng):
+        m, d = s.mean(axis=0), s[1] - s.mean(axis=0)
+        t = np.radians(rng.normal(0.0, 2.0))
+        e = np.array([np.cos(t) * d[0] - np.sin(t) * d[1], np.sin(t) * d[0] + np.cos(t) * d[1]])
+        turned.append(np.stack([m - e, m + e]))
+    seg = _segments(turned + _toward([B], 50, rng) + _toward([C], 45, rng))
+    res = detect_vanishing_points(segments=seg, image_size=(768, 512))
+    assert res.K is not None and res.K_note is None and res.K_reason is None
+    assert res.K[0, 0] == pytest.approx(700.0, rel=0.01)
+    assert len(res.vanishing_points) == 3
+    o = _orthocenter(*res.vanishing_points)
+    assert o is not None and o[0] - K[0, 2] > 0.2 * 768
+    monkeypatch.setattr(vp, "_PP_SIGNIFICANT", 0.0)
+    box_only = detect_vanishing_points(segments=seg, image_size=(768, 512))
+    assert box_only.K is None and box_only.K_reason is not None
+    assert "orthocentre" in box_only.K_reason
