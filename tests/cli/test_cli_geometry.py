@@ -124,3 +124,31 @@ def test_vanishing_command(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -
     assert main(["vanishing", str(blank)]) == 1
     err = capsys.readouterr().err.strip()
     assert err == "imageform: error: found 0 line segment(s); vanishing points need at least two"
+
+
+def test_vanishing_principal_point_estimate(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``--principal-point estimate`` on a render whose principal point is 34 px off the
+    centre: K's principal point is the three points' orthocentre, near the truth; on a level
+    camera (two finite points) it stays at the centre and the text says why."""
+    import numpy as np
+    from PIL import Image
+
+    from imageform.geometry import camera_rotation
+    from tests.geometry.scene_render import render_manhattan
+
+    Ko = np.array([[700.0, 0.0, 359.5], [0.0, 700.0, 279.5], [0.0, 0.0, 1.0]])
+    img = render_manhattan(Ko, camera_rotation(0.25, 0.5, 0.03), np.zeros(3), seed=3)
+    src = tmp_path / "scene.png"
+    Image.fromarray((img * 255).round().astype(np.uint8)).save(src)
+    assert main(["vanishing", str(src), "--principal-point", "estimate", "--json"]) == 0
+    payload = json.loads(capsys.readouterr().out)
+    assert math.hypot(payload["K"][0][2] - 359.5, payload["K"][1][2] - 279.5) < 4.0
+    assert abs(payload["K"][0][0] - 700.0) < 7.0 and payload["K_note"] is None
+    level = render_manhattan(Ko, camera_rotation(0.0, 0.6, 0.0), np.zeros(3), seed=4)
+    Image.fromarray((level * 255).round().astype(np.uint8)).save(src)
+    assert main(["vanishing", str(src), "--principal-point", "estimate"]) == 0
+    text = capsys.readouterr().out
+    assert "principal point (383.5, 255.5)" in text
+    assert "note: the principal point is the image centre" in text

@@ -22,7 +22,7 @@ __all__ = ["WORKFLOWS", "VanishingOptions"]
 
 
 #: ``--principal-point`` ("centre" and "orthocentre": the spellings before issue 30).
-_PrincipalPoint = Literal["center", "orthocenter", "camera", "centre", "orthocentre"]
+_PrincipalPoint = Literal["center", "estimate", "orthocenter", "camera", "centre", "orthocentre"]
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -49,9 +49,12 @@ class VanishingOptions(ImageIn):
         "center",
         # "centre" and "orthocentre": the spellings before issue 30, still accepted
         choices=get_args(_PrincipalPoint),
-        help="Where the estimated K's principal point is: the image centre, the orthocentre "
-        "of three finite vanishing points, or the camera file's (needs --camera; the focal "
-        "length is then estimated alone).",
+        help="Where the estimated K's principal point is: the image centre; 'estimate': the "
+        "orthocentre of three finite, well-supported, consistent vanishing points where it "
+        "lies within 20 % of the image's size of the centre and is tightly fixed (the centre "
+        "otherwise, with a note why); 'orthocenter': that of any three finite points "
+        "(unguarded); or the camera file's (needs --camera; the focal length is then "
+        "estimated alone).",
     )
 
 
@@ -228,6 +231,7 @@ def vanishing(run: Run, opts: VanishingOptions, *, out: Path | None, image: Path
             "perspective": res.perspective,
             "K": res.K,
             "K_reason": res.K_reason,
+            "K_note": res.K_note,
             "focal_spread": res.focal_spread,
             "horizon": res.horizon,
             **extra,
@@ -257,6 +261,8 @@ def vanishing(run: Run, opts: VanishingOptions, *, out: Path | None, image: Path
                 f"  f moves by ±{100 * res.focal_spread:.1f} % when the points' segments are "
                 "resampled (it rests on the scene's directions being orthogonal)"
             )
+        if cf is None and res.K_note is not None:
+            text.append(f"  note: {res.K_note}")
     elif res.K_reason is not None:
         text.append(f"K: {res.K_reason}")
     if "focal_error_px" in extra:
