@@ -4,6 +4,7 @@ corrupt, truncated and oversized files refused from their header in one line."""
 from __future__ import annotations
 
 import os
+import re
 from pathlib import Path
 
 import numpy as np
@@ -249,3 +250,96 @@ def test_quantising_by_bands_is_the_whole_image_rule(
     nan[20, 3, 1] = np.nan
     with pytest.raises(InvalidInputError, match="contains NaN or inf"):
         write_image(tmp_path / "n.png", nan, out_of_range="clip")
+
+
+# ---------------------------------------------------------------- TIFF samples as they mean
+# (the odd-files sweep, benchmarks/check_odd_files.py: palette TIFFs came back as their
+# indices, 10/12-bit TIFFs as 1/64 and 1/16 of their brightness, bilevel TIFFs were refused)
+
+
+def test_tiff_palette_is_read_through_its_colour_map(tmp_path: Path) -> None:
+    import tifffile
+    from PIL import Image
+
+    index = RNG.integers(0, 256, (6, 9)).astype(np.uint8)
+    colours8 = RNG.integers(0, 256, (3, 256)).astype(np.uint16)
+    tifffile.imwrite(tmp_path / "p8.tif", index, photometric="palette", colormap=colours8 * 257)
+    got = read_image(tmp_path / "p8.tif")
+    assert got.dtype == np.uint8 and got.shape == (6, 9, 3)
+    with Image.open(tmp_path / "p8.tif") as im:  # the peer: Pillow's palette TIFF
+        assert np.array_equal(got, np.asarray(im.convert("RGB")))
+    assert image_info(tmp_path / "p8.tif")[2:4] == (3, "uint8")
+    colours16 = RNG.integers(0, 65536, (3, 256)).astype(np.uint16)  # 16-bit colours stay 16
+    tifffile.imwrite(tmp_path / "p16.tif", index, photometric="palette", colormap=colours16)
+    assert np.array_equal(read_image(tmp_path / "p16.tif"), colours16.T[index])
+    assert image_info(tmp_path / "p16.tif")[2:4] == (3, "uint16")
+
+
+def test_tiff_bilevel_and_white_is_zero_match_pillow(tmp_path: Path) -> None:
+    import tifffile
+    from PIL import Image
+
+    bits = RNG.random((5, 12)) > 0.5
+    tifffile.imwrite(tmp_path / "bilevel.tif", bits)  # 1 bit per sample
+    grey = (RNG.random((5, 12)) * 255).astype(np.uint8)
+    tifffile.imwrite(tmp_path / "white0.tif", grey, photometric="miniswhite")
+    for name in ("bilevel.tif", "white0.tif"):
+        got = read_image(tmp_path / name)
+        with Image.open(tmp_path / name) as im:
+            assert np.array_equal(got[..., 0], np.asarray(im.convert("L"))), name
+        assert got.dtype == np.uint8
+    assert np.array_equal(read_image(tmp_path / "white0.tif")[..., 0], 255 - grey)
+    assert image_info(tmp_path / "bilevel.tif").dtype == "uint8"
+
+
+def test_tiff_of_fewer_bits_is_scaled_to_full_range(tmp_path: Path) -> None:
+    import tifffile
+
+    rgb8 = (RNG.random((4, 7, 3)) * 255).astype(np.uint8)
+    codes12 = np.round(rgb8 / 255 * 4095).astype(np.uint16)
+    tifffile.imwrite(tmp_path / "12.tif", codes12, bitspersample=12, photometric="rgb")
+    got = read_image(tmp_path / "12.tif")
+    assert got.dtype == np.uint16
+    assert got.max() <= 65535 and np.array_equal(got, np.round(codes12 * (65535 / 4095)))
+    # the same colours as the 8-bit image, to 12 bits
+    assert np.abs(got / 65535 - rgb8 / 255).max() < 0.5 / 4095 + 1e-9
+    white = np.full((2, 2), 4095, np.uint16)
+    tifffile.imwrite(tmp_path / "white12.tif", white, bitspersample=12)
+    assert (read_image(tmp_path / "white12.tif") == 65535).all()
+    tifffile.imwrite(tmp_path / "16.tif", codes12)  # 16 bits declared: read as stored
+    assert np.array_equal(read_image(tmp_path / "16.tif")[..., 0], codes12[..., 0])
+
+
+@pytest.mark.parametrize(
+    ("photometric", "what"),
+    [("separated", "CMYK"), ("cielab", "CIELab"), ("ycbcr", "YCbCr (not JPEG-compressed)")],
+)
+def test_tiff_that_is_not_rgb_is_refused(tmp_path: Path, photometric: str, what: str) -> None:
+    import tifffile
+
+    channels = 4 if photometric == "separated" else 3
+    a = (RNG.random((4, 6, channels)) * 255).astype(np.uint8)
+    extra = {"subsampling": (1, 1)} if photometric == "ycbcr" else {}
+    tifffile.imwrite(tmp_path / "c.tif", a, photometric=photometric, **extra)
+    with pytest.raises(InvalidInputError, match=rf"c\.tif: a {re.escape(what)}.*TIFF") as err:
+        read_image(tmp_path / "c.tif")
+    assert "\n" not in str(err.value)
+
+
+def test_jpeg_tiff_in_ycbcr_is_read_as_rgb(tmp_path: Path) -> None:
+    import tifffile
+    from PIL import Image
+
+    rgb = np.zeros((16, 16, 3), np.uint8)
+    rgb[..., 0] = 200  # a saturated red: Y, Cb, Cr read as RGB would not be red
+    tifffile.imwrite(tmp_path / "j.tif", rgb, photometric="rgb", compression="jpeg")
+    got = read_image(tmp_path / "j.tif")
+    with Image.open(tmp_path / "j.tif") as im:
+        assert np.abs(got.astype(int) - np.asarray(im.convert("RGB"))).max() <= 2
+
+
+def test_cmyk_jpeg_info_counts_the_channels_read(tmp_path: Path) -> None:
+    from PIL import Image
+
+    Image.new("CMYK", (5, 4), (10, 20, 30, 40)).save(tmp_path / "cmyk.jpg")
+    assert image_info(tmp_path / "cmyk.jpg").channels == read_image(tmp_path / "cmyk.jpg").shape[2]

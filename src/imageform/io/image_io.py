@@ -5,7 +5,10 @@ One rule for every format:
 - **Shape**: an image is ``(H, W, C)``, channels last; a grey image has ``C = 1`` (a 2-D
   TIFF or ``.npy`` comes back as ``(H, W, 1)``).
 - **Values**: integers as stored (uint8 / uint16, full-range encoded values), floats as stored
-  (float16 is widened to float32). Other sample types are refused.
+  (float16 is widened to float32). Other sample types are refused. A TIFF's samples are read
+  as the values they mean: a palette through its colour map (RGB), a bilevel image as 0/255,
+  samples of fewer bits than their container (10, 12, 14 bits in uint16) scaled to its full
+  range, WhiteIsZero inverted; a CMYK, Lab or raw-YCbCr TIFF is refused.
 - **Alpha** (grey+alpha, RGBA, a palette with transparency in PNG; extra samples in TIFF):
   dropped when every pixel is opaque; otherwise refused unless ``alpha="drop"`` (ignore it)
   or ``alpha="keep"``. A ``.npy`` array has no alpha: its channels come back as stored (four
@@ -223,7 +226,13 @@ def _tiff_series(tif: Any, path: Path) -> tuple[Any, ImageInfo]:
             f"of shape {shape}"
         )
     width, height = shape[axes.index("X")], shape[axes.index("Y")]
-    info = ImageInfo(width, height, channels, str(series.dtype), "tiff")
+    dtype = "uint8" if series.dtype == np.bool_ else str(series.dtype)  # bilevel: 0/255
+    page = tif.pages[0]
+    if int(page.photometric) == 3 and page.colormap is not None:  # palette: RGB, as read
+        cmap = np.asarray(page.colormap)
+        eight = int(cmap.max(initial=0)) < 256 or not np.any(cmap % 257)
+        channels, dtype = 3, "uint8" if eight else "uint16"
+    info = ImageInfo(width, height, channels, dtype, "tiff")
     return series, info
 
 
@@ -258,7 +267,8 @@ def image_info(path: str | Path) -> ImageInfo:
     try:
         with Image.open(p) as im:
             w, h = im.size
-            return ImageInfo(w, h, len(im.getbands()), "uint8", "jpeg")
+            channels = 3 if im.mode in ("CMYK", "YCbCr") else len(im.getbands())  # as read
+            return ImageInfo(w, h, channels, "uint8", "jpeg")
     except (UnidentifiedImageError, OSError) as exc:
         raise InvalidInputError(f"cannot read {p}: {_one_line(exc)}") from None
 
@@ -412,12 +422,16 @@ def _read_tiff(p: Path, limit: int) -> tuple[np.ndarray, bool]:
         with tifffile.TiffFile(p) as tif:
             series, info = _tiff_series(tif, p)
             _check_pixels(p, info, limit)
-            arr = np.asarray(series.asarray())
             page = tif.pages[0]
             tag = page.tags.get(274)
             orientation = int(tag.value) if tag is not None else 1
             axes = series.axes
             extra = len(getattr(page, "extrasamples", ()) or ())
+            photometric = int(page.photometric)
+            bits = int(page.bitspersample)
+            colormap = page.colormap if photometric == 3 else None
+            _refuse_tiff_color(p, photometric, int(page.compression))
+            arr = np.asarray(series.asarray())
     except InvalidInputError:
         raise
     except MemoryError:
@@ -426,7 +440,73 @@ def _read_tiff(p: Path, limit: int) -> tuple[np.ndarray, bool]:
         raise InvalidInputError(f"cannot read {p}: {_one_line(exc)}") from None
     if arr.ndim == 3 and "S" in axes and axes.index("S") < axes.index("Y"):
         arr = np.moveaxis(arr, 0, -1)
+    arr = _tiff_samples(p, arr, photometric, bits, colormap)
     return _orient(arr, orientation), extra > 0
+
+
+#: TIFF photometric interpretations whose samples are not RGB or grey values (TIFF 6.0,
+#: TIFF-F/FX, libtiff): read as they are stored, they would pass for RGB.
+_TIFF_NOT_RGB = {5: "CMYK (separated)", 8: "CIELab", 9: "ICCLab", 10: "ITULab", 32844: "LogL",
+                 32845: "LogLuv"}  # fmt: skip
+
+
+def _refuse_tiff_color(p: Path, photometric: int, compression: int) -> None:
+    """Refuse a TIFF whose samples are not RGB or grey: CMYK, Lab, LogLuv, raw YCbCr.
+
+    YCbCr is read only JPEG-compressed (compression 7), where the JPEG decoder turns it
+    into RGB; stored as it is, tifffile returns the Y, Cb, Cr samples themselves.
+    """
+    what = _TIFF_NOT_RGB.get(photometric)
+    if what is None and photometric == 6 and compression != 7:
+        what = "YCbCr (not JPEG-compressed)"
+    if what is not None:
+        raise InvalidInputError(
+            f"cannot read {p}: a {what} TIFF; imageform reads RGB, grey and palette TIFFs "
+            "(convert it to RGB first)"
+        )
+
+
+def _tiff_samples(
+    p: Path, arr: np.ndarray, photometric: int, bits: int, colormap: Any
+) -> np.ndarray:
+    """Return the stored samples of a TIFF as the values they mean.
+
+    A palette image (photometric 3) becomes RGB through its colour map (uint8 where the map
+    holds 8-bit values, as Pillow reads it; else uint16); a bilevel image (1 bit) becomes
+    uint8 0/255; integer samples of fewer bits than their container (10, 12, 14 bits in
+    uint16; 2, 4 bits in uint8) are scaled to the container's full range, as a 16-bit PNG
+    holds them; WhiteIsZero (photometric 0) is inverted so that 0 is black.
+    """
+    if photometric == 3 and colormap is not None:
+        cmap = np.asarray(colormap)
+        if arr.ndim != 2 or cmap.ndim != 2 or cmap.shape[0] != 3:
+            raise InvalidInputError(f"cannot read {p}: a palette TIFF of shape {arr.shape}")
+        index = arr.astype(np.intp)
+        if index.size and int(index.max()) >= cmap.shape[1]:
+            raise InvalidInputError(
+                f"cannot read {p}: palette index {int(index.max())} beyond its "
+                f"{cmap.shape[1]} colours"
+            )
+        if int(cmap.max(initial=0)) < 256:  # a map of 8-bit values (some writers)
+            cmap = cmap.astype(np.uint8)
+        elif not np.any(cmap % 257):  # 8-bit colours stored as v * 257
+            cmap = (cmap // 257).astype(np.uint8)
+        else:
+            cmap = cmap.astype(np.uint16)
+        return np.ascontiguousarray(cmap.T[index])
+    if arr.dtype == np.bool_:
+        arr = arr.astype(np.uint8) * np.uint8(255)
+    elif arr.dtype in (np.uint8, np.uint16) and 0 < bits < 8 * arr.dtype.itemsize:
+        top = np.iinfo(arr.dtype).max
+        scale = top / (2**bits - 1)
+        arr = np.minimum(np.round(arr * scale), top).astype(arr.dtype)
+    if photometric == 0:  # WhiteIsZero
+        if arr.dtype.kind != "u":
+            raise InvalidInputError(
+                f"cannot read {p}: WhiteIsZero {arr.dtype} samples (only integers are inverted)"
+            )
+        arr = np.iinfo(arr.dtype).max - arr
+    return arr
 
 
 def _read_npy(p: Path, limit: int) -> np.ndarray:
