@@ -343,3 +343,54 @@ def test_cmyk_jpeg_info_counts_the_channels_read(tmp_path: Path) -> None:
 
     Image.new("CMYK", (5, 4), (10, 20, 30, 40)).save(tmp_path / "cmyk.jpg")
     assert image_info(tmp_path / "cmyk.jpg").channels == read_image(tmp_path / "cmyk.jpg").shape[2]
+
+
+# ---------------------------------------------------------------- the bytes choose the decoder
+
+
+def test_a_file_is_read_as_what_it_holds_not_its_suffix(tmp_path: Path) -> None:
+    """A PNG or TIFF named .jpg went through Pillow as a JPEG: 16-bit RGB came back as 8 bits,
+    transparency slipped past the alpha rule, a TIFF's orientation was applied twice."""
+    import tifffile
+    from PIL import Image
+
+    rgb16 = RNG.integers(0, 65536, (5, 7, 3)).astype(np.uint16)
+    write_image(tmp_path / "deep.png", rgb16)
+    (tmp_path / "deep.jpg").write_bytes((tmp_path / "deep.png").read_bytes())
+    got = read_image(tmp_path / "deep.jpg")
+    assert got.dtype == np.uint16 and np.array_equal(got, rgb16)
+    assert image_info(tmp_path / "deep.jpg") == (7, 5, 3, "uint16", "png")
+
+    rgba = np.dstack([rgb16[..., :3] // 257, np.full((5, 7), 255)]).astype(np.uint8)
+    rgba[0, 0, 3] = 0
+    Image.fromarray(rgba).save(tmp_path / "alpha.jpg", format="PNG")
+    with pytest.raises(InvalidInputError, match="transparent pixels"):
+        read_image(tmp_path / "alpha.jpg")
+
+    stored = RNG.integers(0, 256, (6, 10, 3)).astype(np.uint8)
+    exif = Image.Exif()
+    exif[0x0112] = 6
+    Image.fromarray(stored).save(tmp_path / "turned.tif", exif=exif)
+    (tmp_path / "turned.jpg").write_bytes((tmp_path / "turned.tif").read_bytes())
+    upright = read_image(tmp_path / "turned.tif")
+    assert upright.shape == (10, 6, 3)
+    assert np.array_equal(read_image(tmp_path / "turned.jpg"), upright)
+    tifffile.imwrite(tmp_path / "t.tif", stored)  # and a JPEG named .png reads as the JPEG
+    Image.fromarray(stored).save(tmp_path / "photo.png", format="JPEG", quality=90)
+    Image.fromarray(stored).save(tmp_path / "photo.jpg", format="JPEG", quality=90)
+    assert np.array_equal(read_image(tmp_path / "photo.png"), read_image(tmp_path / "photo.jpg"))
+
+
+@pytest.mark.parametrize(("fmt", "what"), [("GIF", "a GIF"), ("WEBP", "a WebP"), ("BMP", "a BMP")])
+@pytest.mark.parametrize("suffix", [".png", ".jpg", ".tif"])
+def test_a_format_imageform_does_not_read_is_named_under_any_suffix(
+    tmp_path: Path, fmt: str, what: str, suffix: str
+) -> None:
+    from PIL import Image
+
+    path = tmp_path / f"image{suffix}"
+    Image.new("RGB", (4, 3), (200, 10, 10)).save(path, format=fmt)
+    for read in (read_image, image_info):
+        with pytest.raises(InvalidInputError, match=f"holds {what} image") as err:
+            read(path)
+        assert "\n" not in str(err.value) and str(path) in str(err.value)

@@ -2,6 +2,9 @@
 
 One rule for every format:
 
+- **Format**: a file is read as what its first bytes show (a PNG named ``.jpg`` as a PNG); the
+  suffix must still be one of :data:`IMAGE_FORMATS`, and a GIF, WebP, BMP, AVIF or JPEG XL under
+  such a suffix is refused naming what it holds. Writing follows the suffix.
 - **Shape**: an image is ``(H, W, C)``, channels last; a grey image has ``C = 1`` (a 2-D
   TIFF or ``.npy`` comes back as ``(H, W, 1)``).
 - **Values**: integers as stored (uint8 / uint16, full-range encoded values), floats as stored
@@ -246,6 +249,7 @@ def image_info(path: str | Path) -> ImageInfo:
     """
     fmt = image_format(path) if isinstance(path, (str, os.PathLike)) else ""
     p = _existing(path)
+    fmt = _content_format(p, fmt)
     if fmt == "png":
         with p.open("rb") as fh:
             return _png_header(p, fh.read(33))
@@ -290,6 +294,57 @@ def _existing(path: str | Path) -> Path:
     if not p.is_file():
         raise InvalidInputError(f"input {p} {not_a_regular_file(p) or 'is not a regular file'}")
     return p
+
+
+#: ISO base-media brands of HEIF still images (ISO/IEC 23008-12) that libheif decodes.
+_HEIF_BRANDS = (b"heic", b"heix", b"heim", b"heis", b"hevc", b"hevx", b"mif1", b"msf1")
+
+
+def _content_format(p: Path, fmt: str) -> str:
+    """Return the format ``p``'s first bytes show, else ``fmt`` (the suffix's).
+
+    The bytes decide which decoder reads a file: a PNG named ``.jpg`` (common among
+    downloaded images) is read as the PNG it is (16 bits, alpha, eXIf orientation), not
+    through Pillow as if it were a JPEG. A format imageform does not read (GIF, WebP, BMP,
+    AVIF, JPEG XL) under a readable suffix is refused naming what it is.
+    """
+    try:
+        with p.open("rb") as fh:
+            head = fh.read(32)
+    except OSError:
+        return fmt  # the format's own reader says why
+    found = None
+    if head.startswith(_PNG_SIGNATURE):
+        found = "png"
+    elif head.startswith(b"\xff\xd8\xff"):
+        found = "jpeg"
+    elif head[:4] in (b"II*\0", b"MM\0*", b"II+\0", b"MM\0+"):
+        found = "tiff"
+    elif head.startswith(b"\x93NUMPY"):
+        found = "npy"
+    elif head[4:8] == b"ftyp":
+        brands = [head[i : i + 4] for i in range(8, len(head) - 3, 4) if i != 12]
+        if any(b in (b"avif", b"avis") for b in brands):  # AVIF lists mif1 too
+            found = "AVIF"
+        elif any(b in _HEIF_BRANDS for b in brands):
+            found = "heif"
+    elif head.startswith((b"GIF87a", b"GIF89a")):
+        found = "GIF"
+    elif head[:4] == b"RIFF" and head[8:12] == b"WEBP":
+        found = "WebP"
+    elif head.startswith(b"BM") and len(head) >= 18 and head[14] in (12, 40, 52, 56, 108, 124):
+        found = "BMP"  # its DIB header's size, so that text starting "BM" is not one
+    elif head.startswith((b"\xff\x0a", b"\0\0\0\x0cJXL ")):
+        found = "JPEG XL"
+    if found is None or found == fmt:
+        return fmt
+    if found not in IMAGE_FORMATS.values():
+        raise InvalidInputError(
+            f"cannot read {p}: it holds {'an' if found[0] in 'AEIOU' else 'a'} {found} image, "
+            f"not {fmt.upper()}; imageform reads "
+            "PNG, JPEG, TIFF, .npy and HEIF (convert it to one of them)"
+        )
+    return found
 
 
 def _pixels(n: int) -> str:
@@ -587,6 +642,7 @@ def read_image(
     limit = _pixel_limit(max_pixels)
     fmt = image_format(path) if isinstance(path, (str, os.PathLike)) else ""
     p = _existing(path)
+    fmt = _content_format(p, fmt)
     has_alpha = False
     if fmt == "png":
         arr = _read_png(p, limit)
@@ -890,6 +946,7 @@ def image_color_space(path: str | Path) -> DeclaredColorSpace:
     p = Path(path)
     if not p.is_file():
         raise InvalidInputError(f"cannot read {p}: no such file")
+    fmt = _content_format(p, fmt)
     if fmt == "npy":
         return DeclaredColorSpace(None, "none", "")
     if fmt == "heif":
