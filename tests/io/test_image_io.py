@@ -394,3 +394,74 @@ def test_a_format_imageform_does_not_read_is_named_under_any_suffix(
         with pytest.raises(InvalidInputError, match=f"holds {what} image") as err:
             read(path)
         assert "\n" not in str(err.value) and str(path) in str(err.value)
+
+
+# ---------------------------------------------------------------- libpng's own words, and tRNS
+
+
+def _png_with_ihdr(path: Path, byte: int, value: int) -> None:
+    """Rewrite one byte of a PNG's IHDR (the offset in the file) and its CRC."""
+    import struct
+    import zlib
+
+    data = bytearray(path.read_bytes())
+    data[byte] = value
+    crc = zlib.crc32(bytes(data[12:29])) & 0xFFFFFFFF  # "IHDR" and its 13 bytes
+    data[29:33] = struct.pack(">I", crc)
+    path.write_bytes(bytes(data))
+
+
+def test_interlaced_png_is_read_without_libpng_on_stderr(tmp_path: Path) -> None:
+    """libpng printed 'PNG warning: Interlace handling should be turned on ...' onto stderr
+    for every interlaced PNG (PngSuite s01i3p01), a second line beside a command's one. Run
+    as a program: what imagecodecs prints is not what pytest's capture sees."""
+    import subprocess
+    import sys
+
+    path = tmp_path / "adam7.png"
+    write_image(path, np.array([[[200, 30, 90]]], np.uint8))  # 1 x 1: Adam7's pass 1 only
+    _png_with_ihdr(path, 28, 1)  # the interlace method
+    assert read_image(path).tolist() == [[[200, 30, 90]]]
+    root = Path(__file__).resolve().parents[2]
+    env = {**os.environ, "PYTHONPATH": str(root / "src")}
+    done = subprocess.run(
+        [sys.executable, "-m", "imageform", "vanishing", str(path)],
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert done.returncode == 1
+    assert done.stderr.strip().splitlines() == [
+        "imageform: error: expected an image of at least 3x3 pixels, got (1, 1)"
+    ]
+
+
+def test_png_header_that_libpng_refuses_is_refused_first(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """RGB at 4 bits (PngSuite xd3n2c08): libpng printed two warnings before its error."""
+    path = tmp_path / "rgb4.png"
+    write_image(path, np.zeros((2, 2, 3), np.uint8))
+    _png_with_ihdr(path, 24, 4)  # the bit depth
+    for read in (read_image, image_info):
+        with pytest.raises(InvalidInputError, match="rgb4.png: corrupt PNG header"):
+            read(path)
+    assert capsys.readouterr().err == ""
+
+
+@pytest.mark.parametrize(
+    ("mode", "transparency", "channels"),
+    [("P", 0, 4), ("RGB", (0, 0, 0), 4), ("L", 0, 2)],
+)
+def test_png_info_counts_trns_as_the_alpha_it_reads_as(
+    tmp_path: Path, mode: str, transparency: object, channels: int
+) -> None:
+    from PIL import Image
+
+    a = RNG.integers(0, 256, (4, 5, 3)).astype(np.uint8)
+    a[0, 0] = 0
+    img = Image.fromarray(a).convert(mode)
+    img.save(tmp_path / "t.png", transparency=transparency)
+    assert read_image(tmp_path / "t.png", alpha="keep").shape[2] == channels
+    assert image_info(tmp_path / "t.png").channels == channels

@@ -98,6 +98,8 @@ DEFAULT_MAX_PIXELS = 100_000_000
 _ALPHA = ("reject", "drop", "keep")
 _OUT_OF_RANGE = ("error", "clip")
 _PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
+#: The bit depths each PNG colour type allows (PNG 3rd ed., table 11.1).
+_PNG_DEPTHS = {0: (1, 2, 4, 8, 16), 2: (8, 16), 3: (1, 2, 4, 8), 4: (8, 16), 6: (8, 16)}
 _pillow_lock = threading.Lock()
 
 
@@ -174,11 +176,36 @@ def image_format(path: str | Path) -> str:
 def _png_header(path: Path, data: bytes) -> ImageInfo:
     if len(data) < 33 or not data.startswith(_PNG_SIGNATURE) or data[12:16] != b"IHDR":
         raise InvalidInputError(f"cannot read {path}: not a PNG file")
-    width, height, depth, ctype = struct.unpack(">IIBB", data[16:26])
+    width, height, depth, ctype, comp, filt, lace = struct.unpack(">IIBBBBB", data[16:29])
     channels = {0: 1, 2: 3, 3: 3, 4: 2, 6: 4}.get(ctype)
-    if channels is None or width == 0 or height == 0:
+    if (
+        channels is None
+        or width == 0
+        or height == 0
+        or depth not in _PNG_DEPTHS[ctype]
+        or (comp, filt) != (0, 0)
+        or lace not in (0, 1)
+    ):  # refused here, before libpng prints its warnings about it onto stderr
         raise InvalidInputError(f"cannot read {path}: corrupt PNG header")
     return ImageInfo(width, height, channels, "uint16" if depth == 16 else "uint8", "png")
+
+
+def _png_has_trns(fh: Any) -> bool:
+    """Whether a PNG (``fh`` just past its IHDR) has a ``tRNS`` chunk before its image data.
+
+    libpng turns ``tRNS`` into an alpha channel, so that grey, RGB and palette images with one
+    come back with alpha (2 or 4 channels). Only chunk headers are read, up to ``IDAT``.
+    """
+    while True:
+        head = fh.read(8)
+        if len(head) < 8:
+            return False
+        length, kind = struct.unpack(">I4s", head)
+        if kind == b"tRNS":
+            return True
+        if kind in (b"IDAT", b"IEND"):
+            return False
+        fh.seek(length + 4, os.SEEK_CUR)
 
 
 def _npy_header(
@@ -252,7 +279,10 @@ def image_info(path: str | Path) -> ImageInfo:
     fmt = _content_format(p, fmt)
     if fmt == "png":
         with p.open("rb") as fh:
-            return _png_header(p, fh.read(33))
+            head = _png_header(p, fh.read(33))
+            if head.channels in (1, 3) and _png_has_trns(fh):  # read as alpha
+                return head._replace(channels=head.channels + 1)
+            return head
     if fmt == "npy":
         return _npy_header(p)[0]
     if fmt == "tiff":
@@ -423,10 +453,38 @@ def _read_png(p: Path, limit: int) -> np.ndarray:
     info = _png_header(p, data)
     _check_pixels(p, info, limit)
     try:
-        arr = imagecodecs.png_decode(data)
+        if data[28] == 1:  # Adam7-interlaced: libpng warns of imagecodecs' call
+            arr = _png_decode_interlaced(data)
+        else:
+            arr = imagecodecs.png_decode(data)
     except Exception as exc:
         raise InvalidInputError(f"cannot read {p}: {_one_line(exc)}") from None
     return _orient(np.asarray(arr), _png_orientation(data))
+
+
+_stderr_lock = threading.Lock()
+
+
+def _png_decode_interlaced(data: bytes) -> Any:
+    """Decode an interlaced PNG without libpng's note on ``sys.stderr``.
+
+    imagecodecs reads every PNG with ``png_read_image`` and libpng then writes "PNG warning:
+    Interlace handling should be turned on when using png_read_image" onto ``sys.stderr``
+    (the pixels are right: PngSuite's interlaced images equal OpenCV's decoding), a second
+    line beside a command's one. That line is dropped; any other libpng message becomes a
+    warning. ``sys.stderr`` is swapped for the decode (interlaced PNGs only), under a lock.
+    """
+    import contextlib
+    import io
+
+    import imagecodecs
+
+    with _stderr_lock, contextlib.redirect_stderr(io.StringIO()) as said:
+        arr = imagecodecs.png_decode(data)
+    for line in said.getvalue().splitlines():
+        if line.strip() and "Interlace handling should be turned on" not in line:
+            warnings.warn(line.strip(), stacklevel=4)
+    return arr
 
 
 def _read_pillow(p: Path, limit: int) -> np.ndarray:
