@@ -445,7 +445,7 @@ def test_png_header_that_libpng_refuses_is_refused_first(
     write_image(path, np.zeros((2, 2, 3), np.uint8))
     _png_with_ihdr(path, 24, 4)  # the bit depth
     for read in (read_image, image_info):
-        with pytest.raises(InvalidInputError, match="rgb4.png: corrupt PNG header"):
+        with pytest.raises(InvalidInputError, match=r"rgb4\.png: corrupt PNG header"):
             read(path)
     assert capsys.readouterr().err == ""
 

@@ -453,10 +453,9 @@ def _read_png(p: Path, limit: int) -> np.ndarray:
     info = _png_header(p, data)
     _check_pixels(p, info, limit)
     try:
-        if data[28] == 1:  # Adam7-interlaced: libpng warns of imagecodecs' call
-            arr = _png_decode_interlaced(data)
-        else:
-            arr = imagecodecs.png_decode(data)
+        # Adam7-interlaced (IHDR's last byte): libpng warns of imagecodecs' call
+        decode = _png_decode_interlaced if data[28] == 1 else imagecodecs.png_decode
+        arr = decode(data)
     except Exception as exc:
         raise InvalidInputError(f"cannot read {p}: {_one_line(exc)}") from None
     return _orient(np.asarray(arr), _png_orientation(data))
