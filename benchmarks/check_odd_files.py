@@ -330,11 +330,9 @@ def _tiff_reference(path: Path) -> np.ndarray:
             a = (cmap // 257).astype(np.uint8)[a] if not np.any(cmap % 257) else cmap[a]
         elif a.dtype == bool:
             a = a.astype(np.uint8) * 255
-        elif a.dtype.kind == "u" and page.bitspersample < 8 * a.dtype.itemsize:
-            top = np.iinfo(a.dtype).max
-            a = np.round(a * (top / (2**page.bitspersample - 1))).astype(a.dtype)
-        if page.photometric == 0:
-            a = np.iinfo(a.dtype).max - a
+        bits = 8 if a.dtype == np.uint8 else page.bitspersample
+        if page.photometric == 0:  # 10/12/14-bit samples stay as stored (DN)
+            a = ((1 << bits) - 1 if bits < 8 * a.dtype.itemsize else np.iinfo(a.dtype).max) - a
     return _turn(a, orientation)
 
 

@@ -10,8 +10,10 @@ One rule for every format:
 - **Values**: integers as stored (uint8 / uint16, full-range encoded values), floats as stored
   (float16 is widened to float32). Other sample types are refused. A TIFF's samples are read
   as the values they mean: a palette through its colour map (RGB), a bilevel image as 0/255,
-  samples of fewer bits than their container (10, 12, 14 bits in uint16) scaled to its full
-  range, WhiteIsZero inverted; a CMYK, Lab or raw-YCbCr TIFF is refused.
+  WhiteIsZero inverted; a CMYK, Lab or raw-YCbCr TIFF is refused. Samples of fewer bits than
+  their container (10, 12, 14 bits in uint16) come as stored, the sensor's numbers (DN), as
+  tifffile and scikit-image read them: measurements (``emva``, ``characterize``) need them so;
+  such an image looks dark until scaled by ``65535 / (2**bits - 1)``.
 - **Alpha** (grey+alpha, RGBA, a palette with transparency in PNG; extra samples in TIFF):
   dropped when every pixel is opaque; otherwise refused unless ``alpha="drop"`` (ignore it)
   or ``alpha="keep"``. A ``.npy`` array has no alpha: its channels come back as stored (four
@@ -585,9 +587,9 @@ def _tiff_samples(
 
     A palette image (photometric 3) becomes RGB through its colour map (uint8 where the map
     holds 8-bit values, as Pillow reads it; else uint16); a bilevel image (1 bit) becomes
-    uint8 0/255; integer samples of fewer bits than their container (10, 12, 14 bits in
-    uint16; 2, 4 bits in uint8) are scaled to the container's full range, as a 16-bit PNG
-    holds them; WhiteIsZero (photometric 0) is inverted so that 0 is black.
+    uint8 0/255; WhiteIsZero (photometric 0) is inverted so that 0 is black. Integer samples
+    of fewer bits than their container (10, 12, 14 bits in uint16) stay as stored: they are
+    a sensor's numbers (DN), which the measuring commands read as such.
     """
     if photometric == 3 and colormap is not None:
         cmap = np.asarray(colormap)
@@ -607,17 +609,15 @@ def _tiff_samples(
             cmap = cmap.astype(np.uint16)
         return np.ascontiguousarray(cmap.T[index])
     if arr.dtype == np.bool_:
-        arr = arr.astype(np.uint8) * np.uint8(255)
-    elif arr.dtype in (np.uint8, np.uint16) and 0 < bits < 8 * arr.dtype.itemsize:
-        top = np.iinfo(arr.dtype).max
-        scale = top / (2**bits - 1)
-        arr = np.minimum(np.round(arr * scale), top).astype(arr.dtype)
+        arr, bits = arr.astype(np.uint8) * np.uint8(255), 8
     if photometric == 0:  # WhiteIsZero
         if arr.dtype.kind != "u":
             raise InvalidInputError(
                 f"cannot read {p}: WhiteIsZero {arr.dtype} samples (only integers are inverted)"
             )
-        arr = np.iinfo(arr.dtype).max - arr
+        full = 8 * arr.dtype.itemsize
+        top = (1 << bits) - 1 if 0 < bits < full else np.iinfo(arr.dtype).max
+        arr = np.asarray(top - np.minimum(arr, top), dtype=arr.dtype)  # white at 2**bits - 1
     return arr
 
 
