@@ -82,6 +82,7 @@ BENCH_SCRIPTS: dict[str, str] = {
     "sass-colour": "benchmarks/sass_colour.py",
     "sass-demosaic": "benchmarks/sass_demosaic.py",
     "lsd": "benchmarks/bench_lsd.py",
+    "odd-files": "benchmarks/check_odd_files.py",
     "plumb-line": "benchmarks/check_plumb_line.py",
     "psf": "benchmarks/bench_psf.py",
     "raw": "benchmarks/bench_raw.py",

@@ -268,3 +268,43 @@ def test_command_glob_through_looping_links_ends(tmp_path: Path) -> None:
     )
     assert proc.returncode == 1
     assert proc.stderr.strip() == f"imageform: error: no files match {pattern!r}"
+
+
+def test_tiff_with_a_malformed_tag_fails_in_one_line(tmp_path: Path) -> None:
+    """tifffile logs what it makes of a malformed tag; the command still says one line.
+
+    A grey + alpha TIFF whose ExtraSamples says 999 (as tlnagy/exampletiffs' house.tif does)
+    made tifffile log ``<tifffile.TiffTag 338 ...> raised ValueError(...)`` onto stderr
+    through logging's last resort, beside the command's own line (the odd-files sweep). Run
+    as a program: pytest's own log handler would hide the last resort.
+    """
+    import os
+    import subprocess
+    import sys
+
+    import tifffile
+
+    src = tmp_path / "house.tif"
+    a = np.dstack([np.full((8, 8), 90, np.uint8), np.full((8, 8), 255, np.uint8)])
+    tifffile.imwrite(src, a, photometric="minisblack", extrasamples=["unassalpha"])
+    with tifffile.TiffFile(src) as tif:
+        at = tif.pages[0].tags[338].valueoffset
+    data = bytearray(src.read_bytes())
+    assert struct.unpack_from("<H", data, at)[0] == 2
+    struct.pack_into("<H", data, at, 999)
+    src.write_bytes(bytes(data))
+    root = Path(__file__).resolve().parents[2]
+    env = {**os.environ, "PYTHONPATH": str(root / "src")}
+    out = tmp_path / "out.png"
+    done = subprocess.run(
+        [sys.executable, "-m", "imageform", "cvd", "--type", "deutan", str(src), "-o", str(out)],
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert done.returncode == 1
+    assert done.stderr.strip().splitlines() == [
+        f"imageform: error: {src}: expected an RGB image, got 1 channel(s)"
+    ]
+    assert not out.exists()

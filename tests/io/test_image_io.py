@@ -4,6 +4,7 @@ corrupt, truncated and oversized files refused from their header in one line."""
 from __future__ import annotations
 
 import os
+import re
 from pathlib import Path
 
 import numpy as np
@@ -249,3 +250,216 @@ def test_quantising_by_bands_is_the_whole_image_rule(
     nan[20, 3, 1] = np.nan
     with pytest.raises(InvalidInputError, match="contains NaN or inf"):
         write_image(tmp_path / "n.png", nan, out_of_range="clip")
+
+
+# ---------------------------------------------------------------- TIFF samples as they mean
+# (the odd-files sweep, benchmarks/check_odd_files.py: palette TIFFs came back as their
+# indices, bilevel TIFFs were refused, WhiteIsZero came back inverted)
+
+
+def test_tiff_palette_is_read_through_its_colour_map(tmp_path: Path) -> None:
+    import tifffile
+    from PIL import Image
+
+    index = RNG.integers(0, 256, (6, 9)).astype(np.uint8)
+    colours8 = RNG.integers(0, 256, (3, 256)).astype(np.uint16)
+    tifffile.imwrite(tmp_path / "p8.tif", index, photometric="palette", colormap=colours8 * 257)
+    got = read_image(tmp_path / "p8.tif")
+    assert got.dtype == np.uint8 and got.shape == (6, 9, 3)
+    with Image.open(tmp_path / "p8.tif") as im:  # the peer: Pillow's palette TIFF
+        assert np.array_equal(got, np.asarray(im.convert("RGB")))
+    assert image_info(tmp_path / "p8.tif")[2:4] == (3, "uint8")
+    colours16 = RNG.integers(0, 65536, (3, 256)).astype(np.uint16)  # 16-bit colours stay 16
+    tifffile.imwrite(tmp_path / "p16.tif", index, photometric="palette", colormap=colours16)
+    assert np.array_equal(read_image(tmp_path / "p16.tif"), colours16.T[index])
+    assert image_info(tmp_path / "p16.tif")[2:4] == (3, "uint16")
+
+
+def test_tiff_bilevel_and_white_is_zero_match_pillow(tmp_path: Path) -> None:
+    import tifffile
+    from PIL import Image
+
+    bits = RNG.random((5, 12)) > 0.5
+    tifffile.imwrite(tmp_path / "bilevel.tif", bits)  # 1 bit per sample
+    grey = (RNG.random((5, 12)) * 255).astype(np.uint8)
+    tifffile.imwrite(tmp_path / "white0.tif", grey, photometric="miniswhite")
+    for name in ("bilevel.tif", "white0.tif"):
+        got = read_image(tmp_path / name)
+        with Image.open(tmp_path / name) as im:
+            assert np.array_equal(got[..., 0], np.asarray(im.convert("L"))), name
+        assert got.dtype == np.uint8
+    assert np.array_equal(read_image(tmp_path / "white0.tif")[..., 0], 255 - grey)
+    assert image_info(tmp_path / "bilevel.tif").dtype == "uint8"
+
+
+def test_tiff_of_fewer_bits_reads_as_stored(tmp_path: Path) -> None:
+    # 10/12/14-bit samples are a sensor's numbers (DN): emva and characterize measure them as
+    # such, so they are not rescaled (tifffile and scikit-image read them so too)
+    import tifffile
+
+    codes12 = RNG.integers(0, 4096, (4, 7, 3)).astype(np.uint16)
+    tifffile.imwrite(tmp_path / "12.tif", codes12, bitspersample=12, photometric="rgb")
+    got = read_image(tmp_path / "12.tif")
+    assert got.dtype == np.uint16 and np.array_equal(got, codes12)
+    assert np.array_equal(got, tifffile.imread(tmp_path / "12.tif"))
+    # WhiteIsZero of 12 bits inverts within 12 bits: 4095 is black
+    grey = codes12[..., 0]
+    tifffile.imwrite(tmp_path / "w12.tif", grey, bitspersample=12, photometric="miniswhite")
+    assert np.array_equal(read_image(tmp_path / "w12.tif")[..., 0], 4095 - grey)
+
+
+@pytest.mark.parametrize(
+    ("photometric", "what"),
+    [("separated", "CMYK"), ("cielab", "CIELab"), ("ycbcr", "YCbCr (not JPEG-compressed)")],
+)
+def test_tiff_that_is_not_rgb_is_refused(tmp_path: Path, photometric: str, what: str) -> None:
+    import tifffile
+
+    channels = 4 if photometric == "separated" else 3
+    a = (RNG.random((4, 6, channels)) * 255).astype(np.uint8)
+    extra = {"subsampling": (1, 1)} if photometric == "ycbcr" else {}
+    tifffile.imwrite(tmp_path / "c.tif", a, photometric=photometric, **extra)
+    with pytest.raises(InvalidInputError, match=rf"c\.tif: a {re.escape(what)}.*TIFF") as err:
+        read_image(tmp_path / "c.tif")
+    assert "\n" not in str(err.value)
+
+
+def test_jpeg_tiff_in_ycbcr_is_read_as_rgb(tmp_path: Path) -> None:
+    import tifffile
+    from PIL import Image
+
+    rgb = np.zeros((16, 16, 3), np.uint8)
+    rgb[..., 0] = 200  # a saturated red: Y, Cb, Cr read as RGB would not be red
+    tifffile.imwrite(tmp_path / "j.tif", rgb, photometric="rgb", compression="jpeg")
+    got = read_image(tmp_path / "j.tif")
+    with Image.open(tmp_path / "j.tif") as im:
+        assert np.abs(got.astype(int) - np.asarray(im.convert("RGB"))).max() <= 2
+
+
+def test_cmyk_jpeg_info_counts_the_channels_read(tmp_path: Path) -> None:
+    from PIL import Image
+
+    Image.new("CMYK", (5, 4), (10, 20, 30, 40)).save(tmp_path / "cmyk.jpg")
+    assert image_info(tmp_path / "cmyk.jpg").channels == read_image(tmp_path / "cmyk.jpg").shape[2]
+
+
+# ---------------------------------------------------------------- the bytes choose the decoder
+
+
+def test_a_file_is_read_as_what_it_holds_not_its_suffix(tmp_path: Path) -> None:
+    """A PNG or TIFF named .jpg went through Pillow as a JPEG: 16-bit RGB came back as 8 bits,
+    transparency slipped past the alpha rule, a TIFF's orientation was applied twice."""
+    import tifffile
+    from PIL import Image
+
+    rgb16 = RNG.integers(0, 65536, (5, 7, 3)).astype(np.uint16)
+    write_image(tmp_path / "deep.png", rgb16)
+    (tmp_path / "deep.jpg").write_bytes((tmp_path / "deep.png").read_bytes())
+    got = read_image(tmp_path / "deep.jpg")
+    assert got.dtype == np.uint16 and np.array_equal(got, rgb16)
+    assert image_info(tmp_path / "deep.jpg") == (7, 5, 3, "uint16", "png")
+
+    rgba = np.dstack([rgb16[..., :3] // 257, np.full((5, 7), 255)]).astype(np.uint8)
+    rgba[0, 0, 3] = 0
+    Image.fromarray(rgba).save(tmp_path / "alpha.jpg", format="PNG")
+    with pytest.raises(InvalidInputError, match="transparent pixels"):
+        read_image(tmp_path / "alpha.jpg")
+
+    stored = RNG.integers(0, 256, (6, 10, 3)).astype(np.uint8)
+    exif = Image.Exif()
+    exif[0x0112] = 6
+    Image.fromarray(stored).save(tmp_path / "turned.tif", exif=exif)
+    (tmp_path / "turned.jpg").write_bytes((tmp_path / "turned.tif").read_bytes())
+    upright = read_image(tmp_path / "turned.tif")
+    assert upright.shape == (10, 6, 3)
+    assert np.array_equal(read_image(tmp_path / "turned.jpg"), upright)
+    tifffile.imwrite(tmp_path / "t.tif", stored)  # and a JPEG named .png reads as the JPEG
+    Image.fromarray(stored).save(tmp_path / "photo.png", format="JPEG", quality=90)
+    Image.fromarray(stored).save(tmp_path / "photo.jpg", format="JPEG", quality=90)
+    assert np.array_equal(read_image(tmp_path / "photo.png"), read_image(tmp_path / "photo.jpg"))
+
+
+@pytest.mark.parametrize(("fmt", "what"), [("GIF", "a GIF"), ("WEBP", "a WebP"), ("BMP", "a BMP")])
+@pytest.mark.parametrize("suffix", [".png", ".jpg", ".tif"])
+def test_a_format_imageform_does_not_read_is_named_under_any_suffix(
+    tmp_path: Path, fmt: str, what: str, suffix: str
+) -> None:
+    from PIL import Image
+
+    path = tmp_path / f"image{suffix}"
+    Image.new("RGB", (4, 3), (200, 10, 10)).save(path, format=fmt)
+    for read in (read_image, image_info):
+        with pytest.raises(InvalidInputError, match=f"holds {what} image") as err:
+            read(path)
+        assert "\n" not in str(err.value) and str(path) in str(err.value)
+
+
+# ---------------------------------------------------------------- libpng's own words, and tRNS
+
+
+def _png_with_ihdr(path: Path, byte: int, value: int) -> None:
+    """Rewrite one byte of a PNG's IHDR (the offset in the file) and its CRC."""
+    import struct
+    import zlib
+
+    data = bytearray(path.read_bytes())
+    data[byte] = value
+    crc = zlib.crc32(bytes(data[12:29])) & 0xFFFFFFFF  # "IHDR" and its 13 bytes
+    data[29:33] = struct.pack(">I", crc)
+    path.write_bytes(bytes(data))
+
+
+def test_interlaced_png_is_read_without_libpng_on_stderr(tmp_path: Path) -> None:
+    """libpng printed 'PNG warning: Interlace handling should be turned on ...' onto stderr
+    for every interlaced PNG (PngSuite s01i3p01), a second line beside a command's one. Run
+    as a program: what imagecodecs prints is not what pytest's capture sees."""
+    import subprocess
+    import sys
+
+    path = tmp_path / "adam7.png"
+    write_image(path, np.array([[[200, 30, 90]]], np.uint8))  # 1 x 1: Adam7's pass 1 only
+    _png_with_ihdr(path, 28, 1)  # the interlace method
+    assert read_image(path).tolist() == [[[200, 30, 90]]]
+    root = Path(__file__).resolve().parents[2]
+    env = {**os.environ, "PYTHONPATH": str(root / "src")}
+    done = subprocess.run(
+        [sys.executable, "-m", "imageform", "vanishing", str(path)],
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert done.returncode == 1
+    assert done.stderr.strip().splitlines() == [
+        "imageform: error: expected an image of at least 3x3 pixels, got (1, 1)"
+    ]
+
+
+def test_png_header_that_libpng_refuses_is_refused_first(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """RGB at 4 bits (PngSuite xd3n2c08): libpng printed two warnings before its error."""
+    path = tmp_path / "rgb4.png"
+    write_image(path, np.zeros((2, 2, 3), np.uint8))
+    _png_with_ihdr(path, 24, 4)  # the bit depth
+    for read in (read_image, image_info):
+        with pytest.raises(InvalidInputError, match=r"rgb4\.png: corrupt PNG header"):
+            read(path)
+    assert capsys.readouterr().err == ""
+
+
+@pytest.mark.parametrize(
+    ("mode", "transparency", "channels"),
+    [("P", 0, 4), ("RGB", (0, 0, 0), 4), ("L", 0, 2)],
+)
+def test_png_info_counts_trns_as_the_alpha_it_reads_as(
+    tmp_path: Path, mode: str, transparency: object, channels: int
+) -> None:
+    from PIL import Image
+
+    a = RNG.integers(0, 256, (4, 5, 3)).astype(np.uint8)
+    a[0, 0] = 0
+    img = Image.fromarray(a).convert(mode)
+    img.save(tmp_path / "t.png", transparency=transparency)
+    assert read_image(tmp_path / "t.png", alpha="keep").shape[2] == channels
+    assert image_info(tmp_path / "t.png").channels == channels

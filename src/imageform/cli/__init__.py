@@ -10,6 +10,7 @@ main output is ``-o/--out``, ``--force`` overwrites, ``--json`` prints the resul
 from __future__ import annotations
 
 import contextlib
+import logging
 import os
 import signal
 import sys
@@ -126,6 +127,11 @@ def _main(argv: Sequence[str] | None) -> int:
 
     args = list(sys.argv[1:] if argv is None else argv)
     traceback = "--traceback" in args or os.environ.get("IMAGEFORM_TRACEBACK", "") not in ("", "0")
+    if not traceback:
+        # tifffile logs what it makes of a malformed tag ("<tifffile.TiffTag 338 @524910>
+        # raised ValueError(...)") through logging's last resort onto stderr, beside the one
+        # line a command says; the file is read or refused either way
+        logging.getLogger("tifffile").setLevel(logging.CRITICAL)
     in_main = threading.current_thread() is threading.main_thread()
     old = signal.signal(signal.SIGTERM, _on_sigterm) if in_main else None
     try:

@@ -2,10 +2,18 @@
 
 One rule for every format:
 
+- **Format**: a file is read as what its first bytes show (a PNG named ``.jpg`` as a PNG); the
+  suffix must still be one of :data:`IMAGE_FORMATS`, and a GIF, WebP, BMP, AVIF or JPEG XL under
+  such a suffix is refused naming what it holds. Writing follows the suffix.
 - **Shape**: an image is ``(H, W, C)``, channels last; a grey image has ``C = 1`` (a 2-D
   TIFF or ``.npy`` comes back as ``(H, W, 1)``).
 - **Values**: integers as stored (uint8 / uint16, full-range encoded values), floats as stored
-  (float16 is widened to float32). Other sample types are refused.
+  (float16 is widened to float32). Other sample types are refused. A TIFF's samples are read
+  as the values they mean: a palette through its colour map (RGB), a bilevel image as 0/255,
+  WhiteIsZero inverted; a CMYK, Lab or raw-YCbCr TIFF is refused. Samples of fewer bits than
+  their container (10, 12, 14 bits in uint16) come as stored, the sensor's numbers (DN), as
+  tifffile and scikit-image read them: measurements (``emva``, ``characterize``) need them so;
+  such an image looks dark until scaled by ``65535 / (2**bits - 1)``.
 - **Alpha** (grey+alpha, RGBA, a palette with transparency in PNG; extra samples in TIFF):
   dropped when every pixel is opaque; otherwise refused unless ``alpha="drop"`` (ignore it)
   or ``alpha="keep"``. A ``.npy`` array has no alpha: its channels come back as stored (four
@@ -92,6 +100,8 @@ DEFAULT_MAX_PIXELS = 100_000_000
 _ALPHA = ("reject", "drop", "keep")
 _OUT_OF_RANGE = ("error", "clip")
 _PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
+#: The bit depths each PNG colour type allows (PNG 3rd ed., table 11.1).
+_PNG_DEPTHS = {0: (1, 2, 4, 8, 16), 2: (8, 16), 3: (1, 2, 4, 8), 4: (8, 16), 6: (8, 16)}
 _pillow_lock = threading.Lock()
 
 
@@ -168,11 +178,36 @@ def image_format(path: str | Path) -> str:
 def _png_header(path: Path, data: bytes) -> ImageInfo:
     if len(data) < 33 or not data.startswith(_PNG_SIGNATURE) or data[12:16] != b"IHDR":
         raise InvalidInputError(f"cannot read {path}: not a PNG file")
-    width, height, depth, ctype = struct.unpack(">IIBB", data[16:26])
+    width, height, depth, ctype, comp, filt, lace = struct.unpack(">IIBBBBB", data[16:29])
     channels = {0: 1, 2: 3, 3: 3, 4: 2, 6: 4}.get(ctype)
-    if channels is None or width == 0 or height == 0:
+    if (
+        channels is None
+        or width == 0
+        or height == 0
+        or depth not in _PNG_DEPTHS[ctype]
+        or (comp, filt) != (0, 0)
+        or lace not in (0, 1)
+    ):  # refused here, before libpng prints its warnings about it onto stderr
         raise InvalidInputError(f"cannot read {path}: corrupt PNG header")
     return ImageInfo(width, height, channels, "uint16" if depth == 16 else "uint8", "png")
+
+
+def _png_has_trns(fh: Any) -> bool:
+    """Whether a PNG (``fh`` just past its IHDR) has a ``tRNS`` chunk before its image data.
+
+    libpng turns ``tRNS`` into an alpha channel, so that grey, RGB and palette images with one
+    come back with alpha (2 or 4 channels). Only chunk headers are read, up to ``IDAT``.
+    """
+    while True:
+        head = fh.read(8)
+        if len(head) < 8:
+            return False
+        length, kind = struct.unpack(">I4s", head)
+        if kind == b"tRNS":
+            return True
+        if kind in (b"IDAT", b"IEND"):
+            return False
+        fh.seek(length + 4, os.SEEK_CUR)
 
 
 def _npy_header(
@@ -223,7 +258,13 @@ def _tiff_series(tif: Any, path: Path) -> tuple[Any, ImageInfo]:
             f"of shape {shape}"
         )
     width, height = shape[axes.index("X")], shape[axes.index("Y")]
-    info = ImageInfo(width, height, channels, str(series.dtype), "tiff")
+    dtype = "uint8" if series.dtype == np.bool_ else str(series.dtype)  # bilevel: 0/255
+    page = tif.pages[0]
+    if int(page.photometric) == 3 and page.colormap is not None:  # palette: RGB, as read
+        cmap = np.asarray(page.colormap)
+        eight = int(cmap.max(initial=0)) < 256 or not np.any(cmap % 257)
+        channels, dtype = 3, "uint8" if eight else "uint16"
+    info = ImageInfo(width, height, channels, dtype, "tiff")
     return series, info
 
 
@@ -237,9 +278,13 @@ def image_info(path: str | Path) -> ImageInfo:
     """
     fmt = image_format(path) if isinstance(path, (str, os.PathLike)) else ""
     p = _existing(path)
+    fmt = _content_format(p, fmt)
     if fmt == "png":
         with p.open("rb") as fh:
-            return _png_header(p, fh.read(33))
+            head = _png_header(p, fh.read(33))
+            if head.channels in (1, 3) and _png_has_trns(fh):  # read as alpha
+                return head._replace(channels=head.channels + 1)
+            return head
     if fmt == "npy":
         return _npy_header(p)[0]
     if fmt == "tiff":
@@ -258,7 +303,8 @@ def image_info(path: str | Path) -> ImageInfo:
     try:
         with Image.open(p) as im:
             w, h = im.size
-            return ImageInfo(w, h, len(im.getbands()), "uint8", "jpeg")
+            channels = 3 if im.mode in ("CMYK", "YCbCr") else len(im.getbands())  # as read
+            return ImageInfo(w, h, channels, "uint8", "jpeg")
     except (UnidentifiedImageError, OSError) as exc:
         raise InvalidInputError(f"cannot read {p}: {_one_line(exc)}") from None
 
@@ -280,6 +326,57 @@ def _existing(path: str | Path) -> Path:
     if not p.is_file():
         raise InvalidInputError(f"input {p} {not_a_regular_file(p) or 'is not a regular file'}")
     return p
+
+
+#: ISO base-media brands of HEIF still images (ISO/IEC 23008-12) that libheif decodes.
+_HEIF_BRANDS = (b"heic", b"heix", b"heim", b"heis", b"hevc", b"hevx", b"mif1", b"msf1")
+
+
+def _content_format(p: Path, fmt: str) -> str:
+    """Return the format ``p``'s first bytes show, else ``fmt`` (the suffix's).
+
+    The bytes decide which decoder reads a file: a PNG named ``.jpg`` (common among
+    downloaded images) is read as the PNG it is (16 bits, alpha, eXIf orientation), not
+    through Pillow as if it were a JPEG. A format imageform does not read (GIF, WebP, BMP,
+    AVIF, JPEG XL) under a readable suffix is refused naming what it is.
+    """
+    try:
+        with p.open("rb") as fh:
+            head = fh.read(32)
+    except OSError:
+        return fmt  # the format's own reader says why
+    found = None
+    if head.startswith(_PNG_SIGNATURE):
+        found = "png"
+    elif head.startswith(b"\xff\xd8\xff"):
+        found = "jpeg"
+    elif head[:4] in (b"II*\0", b"MM\0*", b"II+\0", b"MM\0+"):
+        found = "tiff"
+    elif head.startswith(b"\x93NUMPY"):
+        found = "npy"
+    elif head[4:8] == b"ftyp":
+        brands = [head[i : i + 4] for i in range(8, len(head) - 3, 4) if i != 12]
+        if any(b in (b"avif", b"avis") for b in brands):  # AVIF lists mif1 too
+            found = "AVIF"
+        elif any(b in _HEIF_BRANDS for b in brands):
+            found = "heif"
+    elif head.startswith((b"GIF87a", b"GIF89a")):
+        found = "GIF"
+    elif head[:4] == b"RIFF" and head[8:12] == b"WEBP":
+        found = "WebP"
+    elif head.startswith(b"BM") and len(head) >= 18 and head[14] in (12, 40, 52, 56, 108, 124):
+        found = "BMP"  # its DIB header's size, so that text starting "BM" is not one
+    elif head.startswith((b"\xff\x0a", b"\0\0\0\x0cJXL ")):
+        found = "JPEG XL"
+    if found is None or found == fmt:
+        return fmt
+    if found not in IMAGE_FORMATS.values():
+        raise InvalidInputError(
+            f"cannot read {p}: it holds {'an' if found[0] in 'AEIOU' else 'a'} {found} image, "
+            f"not {fmt.upper()}; imageform reads "
+            "PNG, JPEG, TIFF, .npy and HEIF (convert it to one of them)"
+        )
+    return found
 
 
 def _pixels(n: int) -> str:
@@ -358,10 +455,37 @@ def _read_png(p: Path, limit: int) -> np.ndarray:
     info = _png_header(p, data)
     _check_pixels(p, info, limit)
     try:
-        arr = imagecodecs.png_decode(data)
+        # Adam7-interlaced (IHDR's last byte): libpng warns of imagecodecs' call
+        decode = _png_decode_interlaced if data[28] == 1 else imagecodecs.png_decode
+        arr = decode(data)
     except Exception as exc:
         raise InvalidInputError(f"cannot read {p}: {_one_line(exc)}") from None
     return _orient(np.asarray(arr), _png_orientation(data))
+
+
+_stderr_lock = threading.Lock()
+
+
+def _png_decode_interlaced(data: bytes) -> Any:
+    """Decode an interlaced PNG without libpng's note on ``sys.stderr``.
+
+    imagecodecs reads every PNG with ``png_read_image`` and libpng then writes "PNG warning:
+    Interlace handling should be turned on when using png_read_image" onto ``sys.stderr``
+    (the pixels are right: PngSuite's interlaced images equal OpenCV's decoding), a second
+    line beside a command's one. That line is dropped; any other libpng message becomes a
+    warning. ``sys.stderr`` is swapped for the decode (interlaced PNGs only), under a lock.
+    """
+    import contextlib
+    import io
+
+    import imagecodecs
+
+    with _stderr_lock, contextlib.redirect_stderr(io.StringIO()) as said:
+        arr = imagecodecs.png_decode(data)
+    for line in said.getvalue().splitlines():
+        if line.strip() and "Interlace handling should be turned on" not in line:
+            warnings.warn(line.strip(), stacklevel=4)
+    return arr
 
 
 def _read_pillow(p: Path, limit: int) -> np.ndarray:
@@ -412,12 +536,16 @@ def _read_tiff(p: Path, limit: int) -> tuple[np.ndarray, bool]:
         with tifffile.TiffFile(p) as tif:
             series, info = _tiff_series(tif, p)
             _check_pixels(p, info, limit)
-            arr = np.asarray(series.asarray())
             page = tif.pages[0]
             tag = page.tags.get(274)
             orientation = int(tag.value) if tag is not None else 1
             axes = series.axes
             extra = len(getattr(page, "extrasamples", ()) or ())
+            photometric = int(page.photometric)
+            bits = int(page.bitspersample)
+            colormap = page.colormap if photometric == 3 else None
+            _refuse_tiff_color(p, photometric, int(page.compression))
+            arr = np.asarray(series.asarray())
     except InvalidInputError:
         raise
     except MemoryError:
@@ -426,7 +554,71 @@ def _read_tiff(p: Path, limit: int) -> tuple[np.ndarray, bool]:
         raise InvalidInputError(f"cannot read {p}: {_one_line(exc)}") from None
     if arr.ndim == 3 and "S" in axes and axes.index("S") < axes.index("Y"):
         arr = np.moveaxis(arr, 0, -1)
+    arr = _tiff_samples(p, arr, photometric, bits, colormap)
     return _orient(arr, orientation), extra > 0
+
+
+#: TIFF photometric interpretations whose samples are not RGB or grey values (TIFF 6.0,
+#: TIFF-F/FX, libtiff): read as they are stored, they would pass for RGB.
+_TIFF_NOT_RGB = {5: "CMYK (separated)", 8: "CIELab", 9: "ICCLab", 10: "ITULab", 32844: "LogL",
+                 32845: "LogLuv"}  # fmt: skip
+
+
+def _refuse_tiff_color(p: Path, photometric: int, compression: int) -> None:
+    """Refuse a TIFF whose samples are not RGB or grey: CMYK, Lab, LogLuv, raw YCbCr.
+
+    YCbCr is read only JPEG-compressed (compression 7), where the JPEG decoder turns it
+    into RGB; stored as it is, tifffile returns the Y, Cb, Cr samples themselves.
+    """
+    what = _TIFF_NOT_RGB.get(photometric)
+    if what is None and photometric == 6 and compression != 7:
+        what = "YCbCr (not JPEG-compressed)"
+    if what is not None:
+        raise InvalidInputError(
+            f"cannot read {p}: a {what} TIFF; imageform reads RGB, grey and palette TIFFs "
+            "(convert it to RGB first)"
+        )
+
+
+def _tiff_samples(
+    p: Path, arr: np.ndarray, photometric: int, bits: int, colormap: Any
+) -> np.ndarray:
+    """Return the stored samples of a TIFF as the values they mean.
+
+    A palette image (photometric 3) becomes RGB through its colour map (uint8 where the map
+    holds 8-bit values, as Pillow reads it; else uint16); a bilevel image (1 bit) becomes
+    uint8 0/255; WhiteIsZero (photometric 0) is inverted so that 0 is black. Integer samples
+    of fewer bits than their container (10, 12, 14 bits in uint16) stay as stored: they are
+    a sensor's numbers (DN), which the measuring commands read as such.
+    """
+    if photometric == 3 and colormap is not None:
+        cmap = np.asarray(colormap)
+        if arr.ndim != 2 or cmap.ndim != 2 or cmap.shape[0] != 3:
+            raise InvalidInputError(f"cannot read {p}: a palette TIFF of shape {arr.shape}")
+        index = arr.astype(np.intp)
+        if index.size and int(index.max()) >= cmap.shape[1]:
+            raise InvalidInputError(
+                f"cannot read {p}: palette index {int(index.max())} beyond its "
+                f"{cmap.shape[1]} colours"
+            )
+        if int(cmap.max(initial=0)) < 256:  # a map of 8-bit values (some writers)
+            cmap = cmap.astype(np.uint8)
+        elif not np.any(cmap % 257):  # 8-bit colours stored as v * 257
+            cmap = (cmap // 257).astype(np.uint8)
+        else:
+            cmap = cmap.astype(np.uint16)
+        return np.ascontiguousarray(cmap.T[index])
+    if arr.dtype == np.bool_:
+        arr, bits = arr.astype(np.uint8) * np.uint8(255), 8
+    if photometric == 0:  # WhiteIsZero
+        if arr.dtype.kind != "u":
+            raise InvalidInputError(
+                f"cannot read {p}: WhiteIsZero {arr.dtype} samples (only integers are inverted)"
+            )
+        full = 8 * arr.dtype.itemsize
+        top = (1 << bits) - 1 if 0 < bits < full else np.iinfo(arr.dtype).max
+        arr = np.asarray(top - np.minimum(arr, top), dtype=arr.dtype)  # white at 2**bits - 1
+    return arr
 
 
 def _read_npy(p: Path, limit: int) -> np.ndarray:
@@ -507,6 +699,7 @@ def read_image(
     limit = _pixel_limit(max_pixels)
     fmt = image_format(path) if isinstance(path, (str, os.PathLike)) else ""
     p = _existing(path)
+    fmt = _content_format(p, fmt)
     has_alpha = False
     if fmt == "png":
         arr = _read_png(p, limit)
@@ -810,6 +1003,7 @@ def image_color_space(path: str | Path) -> DeclaredColorSpace:
     p = Path(path)
     if not p.is_file():
         raise InvalidInputError(f"cannot read {p}: no such file")
+    fmt = _content_format(p, fmt)
     if fmt == "npy":
         return DeclaredColorSpace(None, "none", "")
     if fmt == "heif":
