@@ -1,25 +1,29 @@
-"""The one image reader and writer: PNG, JPEG, TIFF and NumPy ``.npy``; HEIF read.
+"""The one image reader and writer: PNG, JPEG, TIFF, ``.npy``; HEIF, WebP, BMP, GIF read.
 
 One rule for every format:
 
 - **Format**: a file is read as what its first bytes show (a PNG named ``.jpg`` as a PNG); the
-  suffix must still be one of :data:`IMAGE_FORMATS`, and a GIF, WebP, BMP, AVIF or JPEG XL under
-  such a suffix is refused naming what it holds. Writing follows the suffix.
+  suffix must still be one of :data:`IMAGE_FORMATS`, and an AVIF or JPEG XL under such a
+  suffix is refused naming what it holds. Writing follows the suffix.
 - **Shape**: an image is ``(H, W, C)``, channels last; a grey image has ``C = 1`` (a 2-D
   TIFF or ``.npy`` comes back as ``(H, W, 1)``).
 - **Values**: integers as stored (uint8 / uint16, full-range encoded values), floats as stored
   (float16 is widened to float32). Other sample types are refused. A TIFF's samples are read
   as the values they mean: a palette through its colour map (RGB), a bilevel image as 0/255,
-  WhiteIsZero inverted; a CMYK, Lab or raw-YCbCr TIFF is refused. Samples of fewer bits than
+  WhiteIsZero inverted; a CMYK, Lab or raw-YCbCr TIFF is refused; a palette BMP or GIF as RGB,
+  a 1-bit BMP as 0/255. Samples of fewer bits than
   their container (10, 12, 14 bits in uint16) come as stored, the sensor's numbers (DN), as
   tifffile and scikit-image read them: measurements (``emva``, ``characterize``) need them so;
   such an image looks dark until scaled by ``65535 / (2**bits - 1)``.
-- **Alpha** (grey+alpha, RGBA, a palette with transparency in PNG; extra samples in TIFF):
+- **One image**: a TIFF holding a stack (pages, time points, z-planes) and an animated GIF or
+  WebP are refused in one line saying what they hold, rather than read as their first image.
+- **Alpha** (grey+alpha, RGBA, a palette with transparency in PNG, GIF or BMP, WebP's alpha;
+  extra samples in TIFF):
   dropped when every pixel is opaque; otherwise refused unless ``alpha="drop"`` (ignore it)
   or ``alpha="keep"``. A ``.npy`` array has no alpha: its channels come back as stored (four
   channels may be CMYK).
-- **Orientation**: the EXIF orientation of JPEG, PNG and TIFF files is applied, so the array
-  is upright as viewers show it.
+- **Orientation**: the EXIF orientation of JPEG, PNG, TIFF and WebP files is applied, so the
+  array is upright as viewers show it; :func:`image_info` gives that upright size.
 - **Bounded memory**: the pixel count is read from the file's header and checked against a
   limit (:func:`max_pixels`, 100 Mpx by default, ``IMAGEFORM_MAX_PIXELS`` or ``max_pixels=``)
   before anything is decoded; a header that promises more bytes than the file holds is refused.
@@ -34,10 +38,13 @@ tifffile. HEIF/HEIC (phones' photographs: ``.heic``, ``.heif``, ``.hif``) is rea
 libheif (the ``heif`` extra, pillow-heif): 8 bits as uint8, 10 and 12 bits as uint16 scaled to
 the full range as a 16-bit PNG; the container's rotation and mirroring are applied by libheif
 (HEIF's own orientation, which the EXIF tag in such files only repeats). It is not written.
+WebP (still, lossy or lossless), BMP (1 to 32 bits, palette, RLE, bottom-up or top-down) and a
+single-frame GIF are read through Pillow, as uint8; they are not written either (write PNG).
 """
 
 from __future__ import annotations
 
+import contextlib
 import math
 import os
 import struct
@@ -63,6 +70,8 @@ from imageform._validate import (
 from imageform.errors import InvalidInputError
 
 if TYPE_CHECKING:
+    from collections.abc import Iterator
+
     from imageform.io.icc import DeclaredColorSpace
 
 __all__ = [
@@ -90,6 +99,9 @@ IMAGE_FORMATS = MappingProxyType(
         ".heic": "heif",
         ".heif": "heif",
         ".hif": "heif",
+        ".webp": "webp",
+        ".bmp": "bmp",
+        ".gif": "gif",
     }
 )
 
@@ -102,14 +114,14 @@ _OUT_OF_RANGE = ("error", "clip")
 _PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 #: The bit depths each PNG colour type allows (PNG 3rd ed., table 11.1).
 _PNG_DEPTHS = {0: (1, 2, 4, 8, 16), 2: (8, 16), 3: (1, 2, 4, 8), 4: (8, 16), 6: (8, 16)}
-_pillow_lock = threading.Lock()
+_pillow_lock = threading.RLock()
 
 
 class ImageInfo(NamedTuple):
     """What a file's header says: size, channels, sample type and format.
 
-    ``width``, ``height``, ``channels``, sample ``dtype`` and ``format`` (png, jpeg, tiff,
-    npy).
+    ``width``, ``height`` (upright, as :func:`read_image` returns it), ``channels``, sample
+    ``dtype`` and ``format`` (png, jpeg, tiff, npy, heif, webp, bmp, gif).
     """
 
     width: int
@@ -154,7 +166,7 @@ def max_pixels() -> int:
 
 
 def image_format(path: str | Path) -> str:
-    """Return the format of ``path`` from its suffix (png, jpeg, tiff, npy, heif); others raise.
+    """Return the format of ``path`` from its suffix (png, jpeg, tiff, npy, heif...); else raise.
 
     Examples
     --------
@@ -245,6 +257,32 @@ def _npy_header(
     return info, shape, dtype
 
 
+#: tifffile's axis letters, in words (tifffile's ``TIFF.AXES_NAMES``).
+_AXES_WORDS = {"T": "time points", "Z": "z-planes", "C": "channels", "Q": "pages",
+               "I": "pages", "P": "positions", "R": "tiles", "E": "lambda", "H": "lifetimes",
+               "A": "angles", "L": "exposures", "V": "phases", "S": "samples"}  # fmt: skip
+
+
+def _tiff_stack(axes: str, shape: tuple[int, ...]) -> str:
+    """Say in words what a TIFF of more than one image holds, and what to do with it.
+
+    ``axes`` ``"TZYX"`` of shape ``(7, 5, 167, 439)``: "a stack of 35 images of 439 x 167 px
+    (7 time points x 5 z-planes) ...".
+    """
+    if "Y" not in axes or "X" not in axes:
+        return f"a TIFF of shape {shape} with no image plane in it (axes {axes})"
+    w, h = shape[axes.index("X")], shape[axes.index("Y")]
+    stack = [(n, _AXES_WORDS.get(a, f"{a} axis")) for a, n in zip(axes, shape, strict=True)
+             if a not in "YXS"]  # fmt: skip
+    count = math.prod(n for n, _ in stack)
+    parts = " x ".join(f"{n} {what}" for n, what in stack)
+    return (
+        f"a stack of {count} images of {w} x {h} px ({parts}); imageform reads one image per "
+        "file: save the one you need as its own TIFF (tifffile.imread(path, key=0), or Fiji's "
+        "Stack to Images)"
+    )
+
+
 def _tiff_series(tif: Any, path: Path) -> tuple[Any, ImageInfo]:
     if not tif.series:
         raise InvalidInputError(f"cannot read {path}: the TIFF holds no image")
@@ -253,10 +291,7 @@ def _tiff_series(tif: Any, path: Path) -> tuple[Any, ImageInfo]:
     shape = series.shape
     channels = shape[axes.index("S")] if "S" in axes else 1
     if "Y" not in axes or "X" not in axes or len(shape) > 3:
-        raise InvalidInputError(
-            f"cannot read {path}: expected one image (H, W) or (H, W, C), got axes {axes} "
-            f"of shape {shape}"
-        )
+        raise InvalidInputError(f"cannot read {path}: {_tiff_stack(axes, shape)}")
     width, height = shape[axes.index("X")], shape[axes.index("Y")]
     dtype = "uint8" if series.dtype == np.bool_ else str(series.dtype)  # bilevel: 0/255
     page = tif.pages[0]
@@ -271,6 +306,9 @@ def _tiff_series(tif: Any, path: Path) -> tuple[Any, ImageInfo]:
 def image_info(path: str | Path) -> ImageInfo:
     """Width, height, channels and sample type from the file's header, without decoding.
 
+    Width and height are those of the image :func:`read_image` returns: an EXIF orientation
+    of 5 to 8 (a photograph taken upright, stored on its side) swaps the stored ones.
+
     Raises
     ------
     InvalidInputError
@@ -283,30 +321,145 @@ def image_info(path: str | Path) -> ImageInfo:
         with p.open("rb") as fh:
             head = _png_header(p, fh.read(33))
             if head.channels in (1, 3) and _png_has_trns(fh):  # read as alpha
-                return head._replace(channels=head.channels + 1)
-            return head
+                head = head._replace(channels=head.channels + 1)
+            fh.seek(33)
+            return _upright(head, _png_file_orientation(fh))
     if fmt == "npy":
         return _npy_header(p)[0]
     if fmt == "tiff":
         tifffile = _tifffile()
         try:
             with tifffile.TiffFile(p) as tif:
-                return _tiff_series(tif, p)[1]
+                head = _tiff_series(tif, p)[1]
+                tag = tif.pages[0].tags.get(274)
+                return _upright(head, int(tag.value) if tag is not None else 1)
         except InvalidInputError:
             raise
         except Exception as exc:
             raise InvalidInputError(f"cannot read {p}: {_one_line(exc)}") from None
     if fmt == "heif":
-        return _heif_info(_open_heif(p))
-    from PIL import Image, UnidentifiedImageError
-
+        return _heif_info(_open_heif(p))  # libheif's size: its rotation applied
     try:
-        with Image.open(p) as im:
+        with _pillow_open(p) as im:
+            _refuse_animation(p, im, fmt)
             w, h = im.size
-            channels = 3 if im.mode in ("CMYK", "YCbCr") else len(im.getbands())  # as read
-            return ImageInfo(w, h, channels, "uint8", "jpeg")
-    except (UnidentifiedImageError, OSError) as exc:
+            head = ImageInfo(w, h, _pillow_channels(im, fmt), "uint8", fmt or "jpeg")
+            return _upright(head, _pillow_orientation(im))
+    except InvalidInputError:
+        raise
+    except (OSError, SyntaxError, ValueError) as exc:  # UnidentifiedImageError is an OSError
         raise InvalidInputError(f"cannot read {p}: {_one_line(exc)}") from None
+
+
+def _stored_orientation(path: str | Path) -> int | None:
+    """Return the EXIF orientation tag of a JPEG, PNG, TIFF or WebP file; None where it has none.
+
+    Read as :func:`read_image` reads it (PNG's ``eXIf``, TIFF's tag 274 through tifffile,
+    Pillow for JPEG and WebP); an unreadable file gives None (its reader says why).
+    """
+    p = Path(path)
+    try:
+        fmt = _content_format(p, image_format(p))
+        if fmt == "png":
+            with p.open("rb") as fh:
+                fh.seek(33)
+                value = _png_file_orientation(fh, missing=0)
+        elif fmt == "tiff":
+            with _tifffile().TiffFile(p) as tif:
+                tag = tif.pages[0].tags.get(274)
+                value = int(tag.value) if tag is not None else 0
+        elif fmt in ("jpeg", "webp"):
+            with _pillow_open(p) as im:
+                value = int(im.getexif().get(0x0112, 0) or 0)
+        else:
+            return None
+    except Exception:  # what the file holds is its reader's to say
+        return None
+    return value or None
+
+
+def _upright(info: ImageInfo, orientation: int) -> ImageInfo:
+    """``info`` with the width and height of the upright image (EXIF orientation 5-8 turn it)."""
+    if orientation in (5, 6, 7, 8):
+        return info._replace(width=info.height, height=info.width)
+    return info
+
+
+def _png_file_orientation(fh: Any, missing: int = 1) -> int:
+    """Return the EXIF orientation of a PNG's ``eXIf`` chunk (``fh`` past IHDR), else 1.
+
+    Only chunk headers are read, up to ``eXIf`` or ``IEND``.
+    """
+    while True:
+        head = fh.read(8)
+        if len(head) < 8:
+            return missing
+        length, kind = struct.unpack(">I4s", head)
+        if kind == b"eXIf":
+            return _png_orientation(_PNG_SIGNATURE + head + fh.read(length))
+        if kind == b"IEND":
+            return missing
+        fh.seek(length + 4, os.SEEK_CUR)
+
+
+# ---------------------------------------------------------------- Pillow: JPEG, WebP, BMP, GIF
+
+
+@contextlib.contextmanager
+def _pillow_open(p: Path) -> Iterator[Any]:
+    """Open ``p`` with Pillow (its header only) with Pillow's own pixel cap off.
+
+    imageform's limit (:func:`max_pixels`) is checked instead, before decoding; Pillow's
+    (``Image.MAX_IMAGE_PIXELS``, a process-wide setting, hence the lock) would refuse at open
+    a 180 Mpx image that ``max_pixels=`` allows and warn on stderr from 90 Mpx.
+    """
+    from PIL import Image
+
+    with _pillow_lock, warnings.catch_warnings():
+        warnings.simplefilter("ignore", Image.DecompressionBombWarning)
+        saved, Image.MAX_IMAGE_PIXELS = Image.MAX_IMAGE_PIXELS, None
+        try:
+            with Image.open(p) as im:
+                yield im
+        finally:
+            Image.MAX_IMAGE_PIXELS = saved
+
+
+def _refuse_animation(p: Path, im: Any, fmt: str) -> None:
+    """Refuse an animated GIF or WebP (several frames) in one line, as a stack TIFF is."""
+    if not getattr(im, "is_animated", False):
+        return
+    name = {"gif": "GIF", "webp": "WebP"}.get(fmt, fmt.upper())
+    raise InvalidInputError(
+        f"cannot read {p}: an animated {name} of {int(im.n_frames)} frames; imageform reads "
+        "one image (save the frame you need as PNG)"
+    )
+
+
+def _pillow_orientation(im: Any) -> int:
+    """Return the EXIF orientation in a JPEG's APP1 or a WebP's EXIF chunk, else 1."""
+    try:
+        value = int(im.getexif().get(0x0112, 1) or 1)
+    except (OSError, SyntaxError, ValueError, TypeError):
+        return 1
+    return value if 1 <= value <= 8 else 1
+
+
+def _transparent(im: Any, fmt: str) -> bool:
+    """Whether a Pillow image has a transparent colour or index (GIF, palette BMP)."""
+    return fmt != "jpeg" and im.info.get("transparency") is not None
+
+
+def _pillow_channels(im: Any, fmt: str) -> int:
+    """Return the channels :func:`_read_pillow` gives for ``im`` (before the alpha rule)."""
+    mode = im.mode
+    if mode in ("P", "PA"):
+        return 4 if mode == "PA" or _transparent(im, fmt) else 3
+    if mode in ("CMYK", "YCbCr"):
+        return 3
+    if mode in ("1", "L", "RGB") and _transparent(im, fmt):
+        return 2 if mode in ("1", "L") else 4
+    return 1 if mode.startswith("I;16") else len(im.getbands())
 
 
 # ---------------------------------------------------------------- reading
@@ -337,8 +490,8 @@ def _content_format(p: Path, fmt: str) -> str:
 
     The bytes decide which decoder reads a file: a PNG named ``.jpg`` (common among
     downloaded images) is read as the PNG it is (16 bits, alpha, eXIf orientation), not
-    through Pillow as if it were a JPEG. A format imageform does not read (GIF, WebP, BMP,
-    AVIF, JPEG XL) under a readable suffix is refused naming what it is.
+    through Pillow as if it were a JPEG. A format imageform does not read (AVIF, JPEG XL)
+    under a readable suffix is refused naming what it is.
     """
     try:
         with p.open("rb") as fh:
@@ -361,11 +514,11 @@ def _content_format(p: Path, fmt: str) -> str:
         elif any(b in _HEIF_BRANDS for b in brands):
             found = "heif"
     elif head.startswith((b"GIF87a", b"GIF89a")):
-        found = "GIF"
+        found = "gif"
     elif head[:4] == b"RIFF" and head[8:12] == b"WEBP":
-        found = "WebP"
+        found = "webp"
     elif head.startswith(b"BM") and len(head) >= 18 and head[14] in (12, 40, 52, 56, 108, 124):
-        found = "BMP"  # its DIB header's size, so that text starting "BM" is not one
+        found = "bmp"  # its DIB header's size, so that text starting "BM" is not one
     elif head.startswith((b"\xff\x0a", b"\0\0\0\x0cJXL ")):
         found = "JPEG XL"
     if found is None or found == fmt:
@@ -374,7 +527,7 @@ def _content_format(p: Path, fmt: str) -> str:
         raise InvalidInputError(
             f"cannot read {p}: it holds {'an' if found[0] in 'AEIOU' else 'a'} {found} image, "
             f"not {fmt.upper()}; imageform reads "
-            "PNG, JPEG, TIFF, .npy and HEIF (convert it to one of them)"
+            "PNG, JPEG, TIFF, WebP, BMP, GIF, .npy and HEIF (convert it to one of them)"
         )
     return found
 
@@ -488,38 +641,40 @@ def _png_decode_interlaced(data: bytes) -> Any:
     return arr
 
 
-def _read_pillow(p: Path, limit: int) -> np.ndarray:
-    from PIL import Image, UnidentifiedImageError
+def _read_pillow(p: Path, limit: int, fmt: str = "jpeg") -> np.ndarray:
+    """Decode a JPEG, WebP, BMP or GIF with Pillow, upright (EXIF orientation of JPEG, WebP).
 
+    A palette (BMP, GIF) comes as RGB, or RGBA where an index is transparent; a grey GIF with
+    a transparent value as grey + alpha; bilevel as 0/255. The pixel limit is checked from the
+    header before anything is decoded; an animated GIF or WebP is refused.
+    """
     try:
-        with Image.open(p) as im:
+        with _pillow_open(p) as im:
+            _refuse_animation(p, im, fmt)
             w, h = im.size
-            _check_pixels(p, ImageInfo(w, h, len(im.getbands()), "uint8", "jpeg"), limit)
-            orientation = int(im.getexif().get(0x0112, 1) or 1)
-            with _pillow_lock, warnings.catch_warnings():
-                warnings.simplefilter("ignore", Image.DecompressionBombWarning)
-                saved, Image.MAX_IMAGE_PIXELS = Image.MAX_IMAGE_PIXELS, None
-                try:
-                    im.load()
-                finally:
-                    Image.MAX_IMAGE_PIXELS = saved
-            if im.mode in ("I;16", "I;16L", "I;16B"):
+            _check_pixels(p, ImageInfo(w, h, len(im.getbands()), "uint8", fmt), limit)
+            orientation = _pillow_orientation(im)
+            im.load()
+            mode = im.mode
+            if mode in ("I;16", "I;16L", "I;16B"):
                 arr = np.asarray(im, dtype=np.uint16)
-            elif im.mode in ("L", "RGB", "LA", "RGBA"):
+            elif mode in ("L", "RGB") and _transparent(im, fmt):
+                arr = np.asarray(im.convert("LA" if mode == "L" else "RGBA"))
+            elif mode in ("L", "RGB", "LA", "RGBA"):
                 arr = np.asarray(im)
-            elif im.mode == "P":
-                arr = np.asarray(im.convert("RGBA" if "transparency" in im.info else "RGB"))
-            elif im.mode == "PA":
+            elif mode == "P":
+                arr = np.asarray(im.convert("RGBA" if _transparent(im, fmt) else "RGB"))
+            elif mode == "PA":
                 arr = np.asarray(im.convert("RGBA"))
-            elif im.mode == "1":
+            elif mode == "1":
                 arr = np.asarray(im.convert("L"))
-            elif im.mode in ("CMYK", "YCbCr"):
+            elif mode in ("CMYK", "YCbCr"):
                 arr = np.asarray(im.convert("RGB"))
             else:
-                raise InvalidInputError(f"cannot read {p}: unsupported image mode {im.mode}")
-    except (UnidentifiedImageError, OSError, SyntaxError, ValueError) as exc:
-        if isinstance(exc, InvalidInputError):
-            raise
+                raise InvalidInputError(f"cannot read {p}: unsupported image mode {mode}")
+    except InvalidInputError:
+        raise
+    except (OSError, SyntaxError, ValueError) as exc:  # UnidentifiedImageError is an OSError
         raise InvalidInputError(f"cannot read {p}: {_one_line(exc)}") from None
     return _orient(arr, orientation)
 
@@ -665,7 +820,8 @@ def read_image(
     Parameters
     ----------
     path : str or Path
-        A ``.png``, ``.jpg``/``.jpeg``, ``.tif``/``.tiff`` or ``.npy`` file.
+        A ``.png``, ``.jpg``/``.jpeg``, ``.tif``/``.tiff``, ``.npy``, ``.webp``, ``.bmp``,
+        ``.gif`` or HEIF file (:data:`IMAGE_FORMATS`).
     alpha : {"reject", "drop", "keep"}
         An alpha channel with any transparent pixel: an error (``reject``), ignored
         (``drop``), or returned as the last channel (``keep``). A fully opaque alpha channel
@@ -683,7 +839,8 @@ def read_image(
     ------
     InvalidInputError
         Missing, unreadable, truncated or corrupt file; too many pixels; transparent pixels
-        with ``alpha="reject"``; an unsupported sample type or shape.
+        with ``alpha="reject"``; an unsupported sample type or shape; a TIFF stack or an
+        animated GIF or WebP (more than one image).
     UnknownOptionError
         An unknown ``alpha``.
 
@@ -706,6 +863,9 @@ def read_image(
         has_alpha = arr.ndim == 3 and arr.shape[-1] in (2, 4)
     elif fmt == "jpeg":
         arr = _read_pillow(p, limit)
+    elif fmt in ("webp", "bmp", "gif"):
+        arr = _read_pillow(p, limit, fmt)
+        has_alpha = arr.ndim == 3 and arr.shape[-1] in (2, 4)
     elif fmt == "tiff":
         arr, has_alpha = _read_tiff(p, limit)
     elif fmt == "heif":
@@ -905,9 +1065,10 @@ def write_image(
         )
     if a.dtype.kind not in "fu" or a.dtype.itemsize > 8:
         raise InvalidInputError(f"expected floats, uint8 or uint16 to write {p}, got {a.dtype}")
-    if fmt == "heif":
+    if fmt in ("heif", "webp", "bmp", "gif"):
+        name = {"heif": "HEIF", "webp": "WebP"}.get(fmt, fmt.upper())
         raise InvalidInputError(
-            f"imageform reads HEIF but does not write it; write {p.stem}.png, .jpg or .tif"
+            f"imageform reads {name} but does not write it; write {p.stem}.png, .jpg or .tif"
         )
     if fmt == "npy":
         atomic_write(p, lambda t: np.save(t, a, allow_pickle=False))
@@ -966,8 +1127,9 @@ def image_color_space(path: str | Path) -> DeclaredColorSpace:
     """Return the colour space an image file declares.
 
     In this order: an embedded ICC profile (JPEG APP2, PNG ``iCCP``, TIFF tag 34675, HEIF's
-    ``colr`` box) named by :func:`identify_icc`; HEIF's ``nclx`` colour description (H.273
-    code points: BT.709/sRGB, Display P3 or BT.2020 primaries with the sRGB, BT.709 or a
+    ``colr`` box, WebP's ``ICCP`` chunk, a GIF's ICC extension) named by
+    :func:`identify_icc`; HEIF's ``nclx`` colour description (H.273 code points:
+    BT.709/sRGB, Display P3 or BT.2020 primaries with the sRGB, BT.709 or a
     linear transfer); PNG's ``sRGB`` chunk; EXIF ``ColorSpace`` 1 (sRGB), or
     uncalibrated with the interoperability index ``R03`` (Adobe RGB, the DCF option camera
     JPEGs use). A profile imageform does not recognise gives ``name`` None with its
@@ -976,7 +1138,7 @@ def image_color_space(path: str | Path) -> DeclaredColorSpace:
     Parameters
     ----------
     path : str or Path
-        A ``.png``, ``.jpg``/``.jpeg``, ``.tif``/``.tiff`` or ``.npy`` file.
+        An image file of :data:`IMAGE_FORMATS`.
 
     Returns
     -------
@@ -1019,17 +1181,15 @@ def image_color_space(path: str | Path) -> DeclaredColorSpace:
         except Exception as exc:
             raise InvalidInputError(f"cannot read {p}: {_one_line(exc)}") from None
         return declared_by_profile(icc_tiff) if icc_tiff else DeclaredColorSpace(None, "none", "")
-    from PIL import Image, UnidentifiedImageError
-
     try:
-        with Image.open(p) as im:
+        with _pillow_open(p) as im:
             icc = im.info.get("icc_profile")
             srgb_chunk = fmt == "png" and "srgb" in im.info
             exif = im.getexif()
             cs = exif.get_ifd(0x8769).get(0xA001)
             interop = exif.get_ifd(0xA005).get(0x0001)
-    except (OSError, UnidentifiedImageError, ValueError, SyntaxError) as err:
-        raise InvalidInputError(f"cannot read {p}: {err}") from None
+    except (OSError, ValueError, SyntaxError) as err:  # UnidentifiedImageError is an OSError
+        raise InvalidInputError(f"cannot read {p}: {_one_line(err)}") from None
     if icc:
         return declared_by_profile(icc)
     if srgb_chunk:

@@ -814,7 +814,7 @@ WORKFLOWS = (
         "estimated from its straight lines (--from-lines).",
         "imageform.workflows.calibration:undistort",
         UndistortOptions,
-        (Input("image", "Distorted image (PNG, JPEG, TIFF or .npy)."),),
+        (Input("image", "Distorted image (PNG, JPEG, TIFF, .npy, WebP, BMP, GIF)."),),
         Output("Undistorted image to write (same size and K)."),
         batch=True,
         suffixes=IMAGE_SUFFIXES,

@@ -575,7 +575,9 @@ def palette_check(run: Run, opts: PaletteCheckOptions, *, out: None, colors: str
     return Result(r.as_dict(), tuple(text), check_failed=not ok)
 
 
-_IMG = Input("image", "Input image (PNG, JPEG, TIFF, .npy; HEIF with the heif extra).")
+_IMG = Input(
+    "image", "Input image (PNG, JPEG, TIFF, .npy, WebP, BMP, GIF; HEIF with the heif extra)."
+)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -586,20 +588,25 @@ class InfoOptions(Options):
 def info(run: Run, opts: InfoOptions, *, out: None, image: Path) -> Result:
     """``imageform info``: what an image file holds, from its header, and its colour space."""
     from imageform.io import image_color_space, image_info
+    from imageform.io.image_io import _stored_orientation
     from imageform.workflows._characterize_inputs import _RAW_SUFFIXES
 
     if Path(image).suffix.lower() in _RAW_SUFFIXES:
         from imageform.workflows.raw import raw_info
 
         return raw_info(image)
-    head = image_info(image)
+    head = image_info(image)  # the upright size, as read_image returns the image
     declared = image_color_space(image)
-    orientation = _exif_orientation(image, head.format)
+    orientation = _stored_orientation(image)
+    turned = orientation in (5, 6, 7, 8)  # stored on its side
+    stored = (head.height, head.width) if turned else (head.width, head.height)
     summary = {
         "image": image,
         "format": head.format,
         "width": head.width,
         "height": head.height,
+        "stored_width": stored[0],
+        "stored_height": stored[1],
         "channels": head.channels,
         "dtype": head.dtype,
         "megapixels": round(head.width * head.height / 1e6, 3),
@@ -618,22 +625,9 @@ def info(run: Run, opts: InfoOptions, *, out: None, image: Path) -> Result:
         f"colour space: {space}{how}",
     ]
     if orientation not in (None, 1):
-        text.append(f"EXIF orientation {orientation}: read_image turns it upright")
+        how_stored = f"stored {stored[0]} x {stored[1]} px; " if turned else ""
+        text.append(f"EXIF orientation {orientation}: {how_stored}read_image turns it upright")
     return Result(summary, tuple(text))
-
-
-def _exif_orientation(path: Path, fmt: str) -> int | None:
-    """Read the EXIF orientation tag of a JPEG, PNG or TIFF (None when absent or unreadable)."""
-    if fmt not in ("jpeg", "png", "tiff"):
-        return None
-    from PIL import Image, UnidentifiedImageError
-
-    try:
-        with Image.open(path) as im:
-            value = im.getexif().get(0x0112)
-    except (OSError, UnidentifiedImageError, ValueError, SyntaxError):
-        return None
-    return int(value) if value else None
 
 
 WORKFLOWS = (
@@ -642,7 +636,12 @@ WORKFLOWS = (
         "What an image file holds: size, channels, sample type, its colour space, orientation.",
         "imageform.workflows.color:info",
         InfoOptions,
-        (Input("image", "Image (PNG, JPEG, TIFF, .npy, HEIF) or raw file (DNG, CR2, NEF ...)."),),
+        (
+            Input(
+                "image",
+                "Image (PNG, JPEG, TIFF, .npy, WebP, BMP, GIF, HEIF) or raw file (DNG, CR2 ...).",
+            ),
+        ),
         None,
         group="colour",
     ),

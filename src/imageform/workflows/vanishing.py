@@ -297,7 +297,7 @@ WORKFLOWS = (
         "Vanishing points, K and the horizon of a photograph; -o draws them on it.",
         "imageform.workflows.vanishing:vanishing",
         VanishingOptions,
-        (Input("image", "A photograph (PNG, JPEG, TIFF or .npy)."),),
+        (Input("image", "A photograph (PNG, JPEG, TIFF, .npy, WebP, BMP, GIF)."),),
         Output(
             "Overlay image to write (segments by vanishing point, the horizon).", required=False
         ),
