@@ -351,33 +351,6 @@ def image_info(path: str | Path) -> ImageInfo:
         raise InvalidInputError(f"cannot read {p}: {_one_line(exc)}") from None
 
 
-def _stored_orientation(path: str | Path) -> int | None:
-    """Return the EXIF orientation tag of a JPEG, PNG, TIFF or WebP file; None where it has none.
-
-    Read as :func:`read_image` reads it (PNG's ``eXIf``, TIFF's tag 274 through tifffile,
-    Pillow for JPEG and WebP); an unreadable file gives None (its reader says why).
-    """
-    p = Path(path)
-    try:
-        fmt = _content_format(p, image_format(p))
-        if fmt == "png":
-            with p.open("rb") as fh:
-                fh.seek(33)
-                value = _png_file_orientation(fh, missing=0)
-        elif fmt == "tiff":
-            with _tifffile().TiffFile(p) as tif:
-                tag = tif.pages[0].tags.get(274)
-                value = int(tag.value) if tag is not None else 0
-        elif fmt in ("jpeg", "webp"):
-            with _pillow_open(p) as im:
-                value = int(im.getexif().get(0x0112, 0) or 0)
-        else:
-            return None
-    except Exception:  # what the file holds is its reader's to say
-        return None
-    return value or None
-
-
 def _upright(info: ImageInfo, orientation: int) -> ImageInfo:
     """``info`` with the width and height of the upright image (EXIF orientation 5-8 turn it)."""
     if orientation in (5, 6, 7, 8):
@@ -385,7 +358,7 @@ def _upright(info: ImageInfo, orientation: int) -> ImageInfo:
     return info
 
 
-def _png_file_orientation(fh: Any, missing: int = 1) -> int:
+def _png_file_orientation(fh: Any) -> int:
     """Return the EXIF orientation of a PNG's ``eXIf`` chunk (``fh`` past IHDR), else 1.
 
     Only chunk headers are read, up to ``eXIf`` or ``IEND``.
@@ -393,12 +366,12 @@ def _png_file_orientation(fh: Any, missing: int = 1) -> int:
     while True:
         head = fh.read(8)
         if len(head) < 8:
-            return missing
+            return 1
         length, kind = struct.unpack(">I4s", head)
         if kind == b"eXIf":
             return _png_orientation(_PNG_SIGNATURE + head + fh.read(length))
         if kind == b"IEND":
-            return missing
+            return 1
         fh.seek(length + 4, os.SEEK_CUR)
 
 

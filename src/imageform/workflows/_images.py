@@ -29,6 +29,7 @@ __all__ = [
     "patches_in_srgb",
     "read",
     "refuse_absent_device",
+    "refuse_unscaled_floats",
     "write",
     "write_mapped",
 ]
@@ -172,6 +173,36 @@ def read(path: Path, opts: Any, *, alpha: str | None = None) -> Any:
         alpha=str(alpha or getattr(opts, "alpha", "reject")),
         max_pixels=getattr(opts, "max_pixels", None),
     )
+
+
+#: The largest float sample an image of encoded values may hold. Such values are in [0, 1]
+#: (1 is white); processing or a wide gamut carry some a little above 1, but twice white is
+#: no display value: a float image beyond it holds unscaled numbers (a microscope's or a
+#: sensor's 0-4000 counts, say), which read as colours clip to white or overflow.
+ENCODED_FLOAT_MAX = 2.0
+
+
+def refuse_unscaled_floats(path: Path, image: Any) -> None:
+    """Refuse, in one line, a float image whose values are not encoded colours in [0, 1].
+
+    Commands that read pixels as colours (segment, white-balance, cvd, delta-e, stain
+    normalisation) would otherwise clip such an image to white, or fail inside a conversion
+    with a message about "linear values"; the line says what the file holds and what to do.
+    """
+    import numpy as np
+
+    a = np.asarray(image)
+    if a.dtype.kind != "f" or a.size == 0:
+        return
+    ok = np.isfinite(a)  # NaN and inf are the commands' own to refuse
+    hi = float(np.max(a, where=ok, initial=-np.inf))
+    if hi > ENCODED_FLOAT_MAX:
+        lo = float(np.min(a, where=ok, initial=np.inf))
+        raise InvalidInputError(
+            f"{path} holds floats from {lo:.4g} to {hi:.4g}; a float image is read as colours "
+            f"in [0, 1] (1 is white): scale it to [0, 1] first (e.g. divide it by {hi:.4g}, or "
+            "by its sensor's full scale)"
+        )
 
 
 def write(

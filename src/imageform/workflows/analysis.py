@@ -27,6 +27,7 @@ from imageform.workflows._images import (
     in_srgb,
     input_space,
     read,
+    refuse_unscaled_floats,
     write,
 )
 from imageform.workflows._spec import Input, Output, Result, Run, Workflow, option
@@ -61,6 +62,7 @@ def _rgb(path: Path, opts: Any) -> Any:
     img = read(path, opts)
     if img.shape[-1] != 3:
         raise InvalidInputError(f"{path}: expected an RGB image, got {img.shape[-1]} channel(s)")
+    refuse_unscaled_floats(path, img)
     return img
 
 

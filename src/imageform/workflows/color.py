@@ -20,6 +20,7 @@ from imageform.workflows._images import (
     on_gpu,
     read,
     refuse_absent_device,
+    refuse_unscaled_floats,
     rgb_space_or_auto,
     write,
     write_mapped,
@@ -275,6 +276,7 @@ def white_balance(run: Run, opts: WhiteBalanceOptions, *, out: Path, image: Path
     img = read(image, opts)
     if img.shape[-1] != 3:
         raise InvalidInputError(f"{image}: expected an RGB image, got {img.shape[-1]} channel(s)")
+    refuse_unscaled_floats(image, img)
     from imageform.io import RGB_PROFILED, image_color_space
 
     declared = image_color_space(image).name  # the output keeps the input's profile
@@ -378,6 +380,7 @@ def delta_e(run: Run, opts: DeltaEOptions, *, out: None, reference: Path, test: 
             raise InvalidInputError(
                 f"{path}: expected an RGB image, got {arr.shape[-1]} channel(s)"
             )
+        refuse_unscaled_floats(path, arr)
     if a.shape != b.shape:
         raise InvalidInputError(
             f"images differ in size: {reference} is {a.shape[1]} x {a.shape[0]} px, "
@@ -466,6 +469,7 @@ def cvd(run: Run, opts: CvdOptions, *, out: Path, image: Path) -> Result:
     arr = read(image, opts)
     if arr.shape[-1] != 3:
         raise InvalidInputError(f"{image}: expected an RGB image, got {arr.shape[-1]} channel(s)")
+    refuse_unscaled_floats(image, arr)
     space = input_space(run, image, opts)
 
     def band(b: Any) -> Any:  # the models are defined on sRGB: there and back (floats)
@@ -588,7 +592,6 @@ class InfoOptions(Options):
 def info(run: Run, opts: InfoOptions, *, out: None, image: Path) -> Result:
     """``imageform info``: what an image file holds, from its header, and its colour space."""
     from imageform.io import image_color_space, image_info
-    from imageform.io.image_io import _stored_orientation
     from imageform.workflows._characterize_inputs import _RAW_SUFFIXES
 
     if Path(image).suffix.lower() in _RAW_SUFFIXES:
@@ -597,7 +600,7 @@ def info(run: Run, opts: InfoOptions, *, out: None, image: Path) -> Result:
         return raw_info(image)
     head = image_info(image)  # the upright size, as read_image returns the image
     declared = image_color_space(image)
-    orientation = _stored_orientation(image)
+    orientation = _exif_orientation(image, head.format)
     turned = orientation in (5, 6, 7, 8)  # stored on its side
     stored = (head.height, head.width) if turned else (head.width, head.height)
     summary = {
@@ -628,6 +631,34 @@ def info(run: Run, opts: InfoOptions, *, out: None, image: Path) -> Result:
         how_stored = f"stored {stored[0]} x {stored[1]} px; " if turned else ""
         text.append(f"EXIF orientation {orientation}: {how_stored}read_image turns it upright")
     return Result(summary, tuple(text))
+
+
+def _exif_orientation(path: Path, fmt: str) -> int | None:
+    """Read the EXIF orientation tag of a JPEG, PNG, TIFF or WebP (None when absent or unreadable).
+
+    A TIFF's through tifffile, as ``read_image`` reads it (Pillow prints onto stderr about
+    TIFFs it cannot decode).
+    """
+    if fmt == "tiff":
+        import tifffile
+
+        try:
+            with tifffile.TiffFile(path) as tif:
+                tag = tif.pages.first.tags.get(274)
+                value = tag.value if tag is not None else None
+        except Exception:  # the file's reader has said why, or will
+            return None
+        return int(value) if value else None
+    if fmt not in ("jpeg", "png", "webp"):
+        return None
+    from PIL import Image, UnidentifiedImageError
+
+    try:
+        with Image.open(path) as im:
+            value = im.getexif().get(0x0112)
+    except (OSError, UnidentifiedImageError, ValueError, SyntaxError):
+        return None
+    return int(value) if value else None
 
 
 WORKFLOWS = (
