@@ -9,14 +9,16 @@ Run::
 git mirrors of their public repositories (``MIRRORS/<owner>+<name>/repo``, the commit named in
 the table; nothing is downloaded), and the edge cases of :func:`make_edge_cases` written here
 (1x1, 1xN, 65535x1, 16-bit grey, RGBA, truncated, zero bytes, text named .png, animated GIF,
-TIFF with 4 and 5 channels, spaces and non-ASCII letters in names). The files stay outside
-the repository.
+TIFF with 4 and 5 channels, floats of 0-4000, WebP lossy/lossless/alpha/EXIF-turned/animated,
+BMP of 1, 8 and 24 bits, RLE8, RLE4, top-down, GIF with a palette and a transparent index,
+spaces and non-ASCII letters in names). The files stay outside the repository. ``--only TEXT``
+sweeps the files whose names contain TEXT (a re-run on the files a change touches).
 
 Then every file goes through each command class, in one worker process per file (the CLI's
 ``main`` called in-process, stdout and stderr captured; a class slower than 120 s counts as a
 hang): ``read`` (``read_image`` against another decoder chosen by the file's bytes: OpenCV for
 PNG, tifffile and the TIFF 6.0 rules for TIFF, Pillow with ``exif_transpose`` otherwise; shape
-after orientation, sample type and values), ``info`` (its channels against those read),
+after orientation, sample type and values), ``info`` (its size and channels against those read),
 ``convert`` (to Lab, TIFF), ``white-balance``, ``delta-e`` (the file against itself: ΔE must be
 0), ``cvd``, ``segment``, ``stain-normalize`` (Reinhard, the file its own target),
 ``flatfield`` (radial), ``chart``, ``vanishing``, ``undistort --from-lines``, ``sfr``,
@@ -133,13 +135,28 @@ SOURCES: tuple[tuple[str, str, str, str, str], ...] = tuple(
             ),
         ),
         (
+            "lunapaint/pngsuite",
+            "8cd768dd0d0063195174d0d01cacbd5a7d1e5605",
+            "PngSuite licence (free use, Willem van Schaik)",
+            tuple(  # PngSuite as 32-bit BMPs (BITFIELDS, V5 header, alpha; Paint.NET)
+                (f"pngsuite {n}.bmp", f"bmp/{n}.bmp") for n in ("basn2c08", "basn6a08", "tbrn2c08")
+            ),
+        ),
+        (
             "mapillary/OpenSfM",
             "238744cdf3b5d50149c50d136a87f7fea25ad5cd",
             "BSD-2-Clause",
             (
                 ("opensfm berlin 01.jpg", "data/berlin/images/01.jpg"),
                 ("opensfm lund 01.jpg", "data/lund/images/01.jpg"),
+                ("opensfm preloader.gif", "viewer/legacy/images/preloader.gif"),
             ),
+        ),
+        (
+            "DurrLab/C3VDv3",
+            "ad9391d84fc18fc22fc70d4e4beadfde4e757fa4",
+            "CC BY 4.0 (README)",
+            (("c3vd aligned_prev_final.gif", "assets/aligned_prev_final.gif"),),
         ),
         (
             "EIDOSLAB/torchstain",
@@ -151,7 +168,10 @@ SOURCES: tuple[tuple[str, str, str, str, str], ...] = tuple(
             "choosehappy/HistoQC",
             "b79561292e49d153e2e4c1401c9c48d3d5f925e1",
             "BSD-3-Clause-Clear",
-            (("histoqc pen_green.png", "histoqc/data/models/pen_markings_he/pen_green.png"),),
+            (
+                ("histoqc pen_green.png", "histoqc/data/models/pen_markings_he/pen_green.png"),
+                ("histoqc sort-asc.gif", "histoqc/ui/static/libs/slickgrid/images/sort-asc.gif"),
+            ),
         ),
     )
     for name, path in files
@@ -248,6 +268,57 @@ def make_edge_cases(folder: Path) -> None:
     Image.fromarray(photo[..., 0] > 128).save(folder / "made bilevel.png")
     np.save(folder / "made image.npy", photo)
     np.save(folder / "made int32.npy", photo.astype(np.int32))
+    _make_pillow_formats(folder, photo)
+    counts = (rng.random((48, 64, 3)) * 4000).astype(np.float32)  # a microscope's 0-4000
+    tifffile.imwrite(folder / "made float 0-4000.tif", counts, photometric="rgb")
+    tifffile.imwrite(folder / "made float grey 0-4000.tif", counts[..., 0])
+
+
+def _make_pillow_formats(folder: Path, photo: np.ndarray) -> None:
+    """WebP, BMP and GIF edge cases: what Pillow writes, and BMPs it does not (RLE, top-down)."""
+    import struct
+
+    from PIL import Image
+
+    im = Image.fromarray(photo)
+    im.save(folder / "made lossless.webp", lossless=True)
+    im.save(folder / "made lossy.webp", quality=75)
+    rgba = np.dstack([photo, np.full(photo.shape[:2], 255, np.uint8)])
+    rgba[:8, :8, 3] = 0
+    Image.fromarray(rgba).save(folder / "made alpha.webp", lossless=True)
+    exif = Image.Exif()
+    exif[0x0112] = 6
+    im.save(folder / "made orient6.webp", quality=90, exif=exif)
+    frames = [Image.fromarray(np.roll(photo, 5 * k, axis=1)) for k in range(3)]
+    frames[0].save(folder / "made animated.webp", save_all=True, append_images=frames[1:])
+    im.save(folder / "made 24-bit.bmp")
+    Image.fromarray(photo[..., 0] > 128).save(folder / "made 1-bit.bmp")
+    pal = im.convert("P", palette=Image.Palette.ADAPTIVE, colors=16)
+    pal.save(folder / "made 8-bit palette.bmp")
+    pal.save(folder / "made palette.gif")
+    pal.save(folder / "made transparent.gif", transparency=int(np.asarray(pal)[0, 0]))
+    index = np.asarray(pal)
+    colours = np.array(pal.getpalette()[:48], np.uint8).reshape(16, 3)
+    table = b"".join(bytes([b, g, r, 0]) for r, g, b in colours)
+    for name, compression, top_down in (
+        ("rle8", 1, False),
+        ("rle4", 2, False),
+        ("top-down", 0, True),
+    ):
+        h, w = index.shape
+        rows = index if top_down else index[::-1]
+        if compression:  # encoded runs of one pixel, end of line, end of bitmap
+            cell = (lambda v: v) if compression == 1 else (lambda v: v << 4 | v)
+            body = b"".join(b"".join(bytes([1, cell(int(v))]) for v in r) + b"\0\0" for r in rows)
+            body += b"\0\1"
+        else:
+            body = b"".join(bytes(r.astype(np.uint8)) for r in rows)  # 64: a multiple of 4
+        bits = 4 if compression == 2 else 8
+        info = struct.pack("<IiiHHIIiiII", 40, w, -h if top_down else h, 1, bits, compression,
+                           len(body), 2835, 2835, 16, 0)  # fmt: skip
+        offset = 14 + 40 + len(table)
+        head = b"BM" + struct.pack("<IHHI", offset + len(body), 0, 0, offset)
+        (folder / f"made {name}.bmp").write_bytes(head + info + table + body)
 
 
 # ---------------------------------------------------------------- the sweep
@@ -259,7 +330,8 @@ def _reference(path: Path) -> np.ndarray | None:
     """The upright pixels by another decoder, chosen by the file's bytes (not its suffix).
 
     PNG: OpenCV (libpng, every bit depth) turned by the eXIf orientation; TIFF: tifffile and
-    the TIFF 6.0 rules; .npy: NumPy; anything else: Pillow with ``exif_transpose``.
+    the TIFF 6.0 rules; .npy: NumPy; BMP, GIF, WebP: OpenCV; anything else: Pillow with
+    ``exif_transpose``.
     """
     head = path.read_bytes()[:8]
     if head.startswith(b"\x93NUMPY"):
@@ -268,6 +340,8 @@ def _reference(path: Path) -> np.ndarray | None:
         return _tiff_reference(path)
     if head.startswith(b"\x89PNG"):
         return _png_reference(path)
+    if head.startswith((b"BM", b"GIF8")) or head[:4] == b"RIFF":
+        return _opencv_reference(path)
     from PIL import Image, ImageOps
 
     with Image.open(path) as im:
@@ -277,6 +351,22 @@ def _reference(path: Path) -> np.ndarray | None:
         elif up.mode in ("CMYK", "YCbCr", "1"):
             up = up.convert("RGB" if up.mode != "1" else "L")
         return np.asarray(up)
+
+
+def _opencv_reference(path: Path) -> np.ndarray:
+    """A BMP, GIF or WebP by OpenCV (its own BMP and GIF decoders; libwebp), turned upright
+    by the EXIF orientation Pillow reads (OpenCV's ``IMREAD_UNCHANGED`` does not turn it)."""
+    import cv2
+    from PIL import Image
+
+    a = cv2.imread(str(path), cv2.IMREAD_UNCHANGED)
+    if a is None:
+        raise ValueError("OpenCV cannot decode it")
+    if a.ndim == 3:
+        a = a[..., [2, 1, 0, 3]] if a.shape[2] == 4 else a[..., ::-1]
+    with Image.open(path) as im:
+        orientation = int(im.getexif().get(0x0112, 1) or 1)
+    return _turn(a, orientation)
 
 
 def _png_reference(path: Path) -> np.ndarray:
@@ -369,7 +459,12 @@ def _check_read(path: Path) -> tuple[str, str]:
     if ref.dtype != got.dtype:
         return "wrong", f"read as {got.dtype}, the reference decoder gives {ref.dtype}"
     colour = 3 if min(ref.shape[2], got.shape[2]) >= 3 else 1  # alpha aside (tRNS)
-    diff = np.abs(ref[..., :colour].astype(np.float64) - got[..., :colour]).max()
+    delta = np.abs(ref[..., :colour].astype(np.float64) - got[..., :colour]).max(axis=-1)
+    if ref.shape[2] in (2, 4) and got.shape[2] == ref.shape[2]:
+        if not np.array_equal(ref[..., -1], got[..., -1]):
+            return "wrong", "alpha differs from the reference decoder"
+        delta = delta[ref[..., -1] > 0]  # a fully transparent pixel's colour is undefined
+    diff = float(delta.max(initial=0.0))
     if diff > (2 if got.dtype == np.uint8 else 0):
         return "wrong", f"values differ from the reference decoder by up to {diff:g}"
     return "fine", f"{got.shape} {got.dtype}"
@@ -474,15 +569,21 @@ def sweep_file(path: Path) -> list[dict[str, Any]]:
 def _check_outputs(
     cls: str, out: Path, stdout: str, hw: tuple[int, int] | None, path: Path
 ) -> tuple[str, str]:
-    if cls == "info":  # the header's channels are what every command reads
+    if cls == "info":  # the header's size and channels are what every command reads
         from imageform.io import read_image
 
         try:
-            said = json.loads(stdout)["channels"]
-            got = read_image(path, alpha="keep", max_pixels=10**9).shape[2]
+            head = json.loads(stdout)
+            said = head["channels"]
+            shape = read_image(path, alpha="keep", max_pixels=10**9).shape
         except Exception:
             return "fine", ""
-        return ("fine", "") if said == got else ("wrong", f"says {said} channels, reads {got}")
+        if said != shape[2]:
+            return "wrong", f"says {said} channels, reads {shape[2]}"
+        if "height" in head and (head["height"], head["width"]) != shape[:2]:
+            size = f"{head['width']} x {head['height']}"
+            return "wrong", f"says {size} px, reads {shape[1]} x {shape[0]} (upright)"
+        return "fine", ""
     if cls == "delta-e":
         try:
             mean = json.loads(stdout)["mean"]
@@ -505,9 +606,14 @@ def _worker(path: Path) -> None:
         print("ROW " + json.dumps(row, ensure_ascii=False), flush=True)
 
 
-def run(folder: Path, jobs: int = 2) -> list[dict[str, Any]]:
-    """Sweep every file of ``folder`` (one worker process each, ``jobs`` at a time)."""
+def run(folder: Path, jobs: int = 2, only: list[str] | None = None) -> list[dict[str, Any]]:
+    """Sweep every file of ``folder`` (one worker process each, ``jobs`` at a time).
+
+    ``only``: the files whose name contains one of these texts.
+    """
     files = sorted(p for p in folder.iterdir() if p.is_file() and p.name != "SOURCES.tsv")
+    if only:
+        files = [p for p in files if any(t in p.name for t in only)]
     rows: list[dict[str, Any]] = []
     procs: list[tuple[Path, subprocess.Popen[str], float]] = []
     env = dict(os.environ, PYTHONWARNINGS="ignore")
@@ -553,8 +659,8 @@ def run(folder: Path, jobs: int = 2) -> list[dict[str, Any]]:
     return rows
 
 
-def _sources_note(folder: Path) -> list[str]:
-    names = {p.name for p in folder.iterdir()}
+def _sources_note(folder: Path, only: list[str] | None = None) -> list[str]:
+    names = {p.name for p in folder.iterdir() if not only or any(t in p.name for t in only)}
     lines = ["| file | repository @ commit | path | licence |", "|---|---|---|---|"]
     for name, repo, commit, path, lic in SOURCES:
         if name in names:
@@ -575,6 +681,10 @@ def main() -> None:
     ap.add_argument("--gather", type=Path, metavar="MIRRORS")
     ap.add_argument("--worker", action="store_true")
     ap.add_argument("--jobs", type=int, default=2)
+    ap.add_argument(
+        "--only", action="append", default=[], metavar="TEXT",
+        help="sweep only the files whose name contains TEXT (repeatable)",
+    )  # fmt: skip
     args = ap.parse_args()
     if args.worker:
         _worker(args.folder)
@@ -583,7 +693,7 @@ def main() -> None:
         if args.folder.exists():
             shutil.rmtree(args.folder)
         gather(args.gather, args.folder)
-    rows = run(args.folder, args.jobs)
+    rows = run(args.folder, args.jobs, args.only)
     order = {c: i for i, c in enumerate(["read", *_commands(Path("x"), Path("y")), "worker"])}
     rows.sort(key=lambda r: (r["file"], order.get(r["cls"], 99)))
     counts: dict[str, int] = {}
@@ -591,9 +701,11 @@ def main() -> None:
         counts[r["verdict"]] = counts.get(r["verdict"], 0) + 1
     files = len({r["file"] for r in rows})
     print(header(f"Odd real-world image files through the command line ({files} files)"))
+    only = "".join(f" --only {t!r}" for t in args.only)
+    gathered = " --gather /work/.mirror" if args.gather else ""
     print(
-        "`PYTHONPATH=src:. python benchmarks/check_odd_files.py --gather /work/.mirror "
-        f"/tmp/oddfiles/set` (timeout {TIMEOUT:.0f} s a command class; the files are not "
+        f"`PYTHONPATH=src:. python benchmarks/check_odd_files.py{gathered} {args.folder}{only}` "
+        f"(timeout {TIMEOUT:.0f} s a command class; the files are not "
         "committed: their sources are listed at the end).\n"
     )
     print(
@@ -618,7 +730,7 @@ def main() -> None:
         )
     )
     print("\n## Sources\n")
-    print("\n".join(_sources_note(args.folder)))
+    print("\n".join(_sources_note(args.folder, args.only)))
 
 
 if __name__ == "__main__":
