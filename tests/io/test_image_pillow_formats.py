@@ -285,3 +285,18 @@ def test_info_gives_the_upright_size_and_the_stored_one(
     assert main(["info", str(path)]) == 0
     text = capsys.readouterr().out
     assert "5 x 7 px" in text and "stored 7 x 5 px" in text
+
+
+@pytest.mark.parametrize("suffix", [".webp", ".heic"])
+def test_a_command_writing_a_read_only_format_names_no_temporary_file(
+    tmp_path: Path, suffix: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """It said "write .out.heic.21644-f323a388.part.png, .jpg or .tif" (the atomic write's
+    temporary name)."""
+    src = tmp_path / "in.png"
+    write_image(src, RGB)
+    out = tmp_path / f"out{suffix}"
+    assert main(["cvd", str(src), "--type", "deutan", "-o", str(out)]) == 1
+    err = capsys.readouterr().err
+    assert "does not write it; write a .png, .jpg or .tif file" in err and ".part" not in err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["in.png"]

@@ -1041,7 +1041,7 @@ def write_image(
     if fmt in ("heif", "webp", "bmp", "gif"):
         name = {"heif": "HEIF", "webp": "WebP"}.get(fmt, fmt.upper())
         raise InvalidInputError(
-            f"imageform reads {name} but does not write it; write {p.stem}.png, .jpg or .tif"
+            f"imageform reads {name} but does not write it; write a .png, .jpg or .tif file"
         )
     if fmt == "npy":
         atomic_write(p, lambda t: np.save(t, a, allow_pickle=False))
