@@ -298,7 +298,7 @@ def _make_pillow_formats(folder: Path, photo: np.ndarray) -> None:
     pal.save(folder / "made palette.gif")
     pal.save(folder / "made transparent.gif", transparency=int(np.asarray(pal)[0, 0]))
     index = np.asarray(pal)
-    colours = np.array(pal.getpalette()[:48], np.uint8).reshape(16, 3)
+    colours = np.array((pal.getpalette() or [])[:48], np.uint8).reshape(16, 3)
     table = b"".join(bytes([b, g, r, 0]) for r, g, b in colours)
     for name, compression, top_down in (
         ("rle8", 1, False),

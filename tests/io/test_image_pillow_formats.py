@@ -146,7 +146,7 @@ def test_single_frame_gif_through_its_palette_and_transparency_by_the_alpha_rule
 ) -> None:
     pal = Image.fromarray(RGB).convert("P", palette=Image.Palette.ADAPTIVE, colors=32)
     index = np.asarray(pal)
-    colours = np.array(pal.getpalette()[: 3 * 32], np.uint8).reshape(-1, 3)
+    colours = np.array((pal.getpalette() or [])[: 3 * 32], np.uint8).reshape(-1, 3)
     path = tmp_path / "opaque.gif"
     pal.save(path)
     assert np.array_equal(read_image(path), colours[index])
@@ -234,8 +234,8 @@ def test_webp_bmp_gif_are_read_not_written(tmp_path: Path) -> None:
 
 
 def test_commands_read_webp_bmp_gif(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    for name, kw in (("in.webp", {"lossless": True}), ("in.bmp", {}), ("in.gif", {})):
-        Image.fromarray(RGB).save(tmp_path / name, **kw)
+    for name in ("in.webp", "in.bmp", "in.gif"):
+        Image.fromarray(RGB).save(tmp_path / name, lossless=True)  # (WebP's; BMP, GIF ignore it)
         out = tmp_path / f"{name}.tif"
         assert main(["convert", str(tmp_path / name), "--to", "lab", "-o", str(out)]) == 0
         assert read_image(out).shape == (5, 7, 3)
@@ -274,7 +274,7 @@ def test_info_gives_the_upright_size_and_the_stored_one(
     exif = Image.Exif()
     exif[0x0112] = 6
     path = tmp_path / f"portrait{suffix}"
-    Image.fromarray(RGB).save(path, exif=exif, **({"lossless": True} if suffix == ".webp" else {}))
+    Image.fromarray(RGB).save(path, exif=exif, lossless=True)  # lossless: WebP's, others ignore it
     h, w = read_image(path).shape[:2]
     assert (h, w) == (7, 5)
     assert image_info(path)[:2] == (w, h)

@@ -259,7 +259,7 @@ def _npy_header(
 
 #: tifffile's axis letters, in words (tifffile's ``TIFF.AXES_NAMES``).
 _AXES_WORDS = {"T": "time points", "Z": "z-planes", "C": "channels", "Q": "pages",
-               "I": "pages", "P": "positions", "R": "tiles", "E": "lambda", "H": "lifetimes",
+               "I": "pages", "P": "positions", "R": "tiles", "E": "wavelengths", "H": "lifetimes",
                "A": "angles", "L": "exposures", "V": "phases", "S": "samples"}  # fmt: skip
 
 
