@@ -300,3 +300,14 @@ def test_a_command_writing_a_read_only_format_names_no_temporary_file(
     err = capsys.readouterr().err
     assert "does not write it; write a .png, .jpg or .tif file" in err and ".part" not in err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["in.png"]
+
+
+def test_bmp_header_promising_more_rows_than_the_file_holds_is_refused_before_decoding(
+    tmp_path: Path,
+) -> None:
+    """8000 x 8000 within the pixel limit, over 40 bytes of rows: refused from the sizes,
+    without allocating the 64 MB image (one line)."""
+    path = tmp_path / "short.bmp"
+    path.write_bytes(_bmp(INDEX, PALETTE, bits=8, size=(8000, 8000)))
+    with pytest.raises(InvalidInputError, match=r"the file is truncated \(\d+ bytes, its header"):
+        read_image(path)

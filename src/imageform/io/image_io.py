@@ -409,6 +409,27 @@ def _refuse_animation(p: Path, im: Any, fmt: str) -> None:
     )
 
 
+def _refuse_short_raw(p: Path, im: Any) -> None:
+    """Refuse an uncompressed image (a BMP) whose rows the file does not hold, before decoding.
+
+    Pillow's tile of raw rows gives their offset and stride: a header promising more bytes
+    than the file has is refused before the image's memory is allocated.
+    """
+    tiles = getattr(im, "tile", None) or []
+    if len(tiles) != 1 or tiles[0][0] != "raw":
+        return
+    _, extents, offset, args = tiles[0]
+    stride = args[1] if isinstance(args, tuple) and len(args) > 1 else 0
+    if not isinstance(stride, int) or stride <= 0:
+        return
+    need = int(offset) + stride * (int(extents[3]) - int(extents[1]))
+    have = p.stat().st_size
+    if have < need:
+        raise InvalidInputError(
+            f"cannot read {p}: the file is truncated ({have} bytes, its header promises {need})"
+        )
+
+
 def _pillow_orientation(im: Any) -> int:
     """Return the EXIF orientation in a JPEG's APP1 or a WebP's EXIF chunk, else 1."""
     try:
@@ -626,6 +647,7 @@ def _read_pillow(p: Path, limit: int, fmt: str = "jpeg") -> np.ndarray:
             _refuse_animation(p, im, fmt)
             w, h = im.size
             _check_pixels(p, ImageInfo(w, h, len(im.getbands()), "uint8", fmt), limit)
+            _refuse_short_raw(p, im)
             orientation = _pillow_orientation(im)
             im.load()
             mode = im.mode
