@@ -345,7 +345,9 @@ def _behind(K: F64, R: F64, t: F64, p1: F64, p2: F64, min_parallax: float) -> ND
 
 
 def _inconsistent_pairs(
-    rot: dict[tuple[int, int], F64], tol_deg: float = 30.0
+    rot: dict[tuple[int, int], F64],
+    tol_deg: float = 30.0,
+    support: dict[tuple[int, int], int] | None = None,
 ) -> list[tuple[int, int]]:
     r"""Find the verified pairs whose relative rotations the loops of three frames contradict.
 
@@ -357,13 +359,21 @@ def _inconsistent_pairs(
     is in. Greedily, the pair in the most loops off by ``tol_deg`` or more, when those
     are more than the loops it closes, goes; then the loops are counted again (Zach,
     Klopschitz & Pollefeys 2010, loop constraints on relative rotations).
+
+    With ``support`` (each pair's verified matches) a loop counts as much as its weakest
+    pair's support, not 1: the copies of a repeated texture can form more loops among
+    themselves than the true pairs that bridge them (frames 2-6 and 9-11 of a walk that
+    see one photograph on two walls: 10 copy pairs of 67-184 matches against 5 true
+    bridges of 267-796), and counted alike the true bridges went and the walk came out in
+    two pieces half a turn apart. Weighted, the loops through the well-matched neighbours
+    decide (Enqvist, Kahl & Olsson 2011 weight a cycle by its matches likewise).
     """
     keys = set(rot)
     dropped: list[tuple[int, int]] = []
     cos_tol = np.cos(np.radians(tol_deg))
     while True:
-        bad: dict[tuple[int, int], int] = dict.fromkeys(keys, 0)
-        good: dict[tuple[int, int], int] = dict.fromkeys(keys, 0)
+        bad: dict[tuple[int, int], float] = dict.fromkeys(keys, 0.0)
+        good: dict[tuple[int, int], float] = dict.fromkeys(keys, 0.0)
         frames = sorted({f for key in keys for f in key})
         for i, j in keys:
             for l_ in frames:
@@ -371,11 +381,13 @@ def _inconsistent_pairs(
                     continue
                 d = rot[(j, l_)] @ rot[(i, j)] @ rot[(i, l_)].T
                 closed = (np.trace(d) - 1.0) / 2.0 > cos_tol
-                for key in ((i, j), (j, l_), (i, l_)):
+                loop = ((i, j), (j, l_), (i, l_))
+                w = 1.0 if support is None else float(min(support.get(q, 0) for q in loop))
+                for key in loop:
                     if closed:
-                        good[key] += 1
+                        good[key] += w
                     else:
-                        bad[key] += 1
+                        bad[key] += w
         worst = max(keys, key=lambda q: (bad[q] - good[q], q), default=None)
         if worst is None or bad[worst] <= good[worst]:
             return dropped
@@ -1087,7 +1099,7 @@ def reconstruct_sequence(
         verify(i, j)
     # a pair whose whole support is a mirrored texture's copies (its pose half a turn off,
     # no match behind a camera) breaks the loops of three frames it is in: it goes
-    for key in _inconsistent_pairs(pair_rot):
+    for key in _inconsistent_pairs(pair_rot, support={q: v[0] for q, v in pair_info.items()}):
         del pair_info[key]
     if not pair_info:
         raise DegenerateConfigurationError(
@@ -1505,14 +1517,45 @@ def reconstruct_sequence(
         nonlocal last_ba
 
         def pnp(X3: F64, kp: NDArray[np.int64]) -> tuple[Any, int]:
-            """PnP RANSAC of ``fi``'s keypoints ``kp`` on points ``X3``: (result, inliers)."""
+            """PnP RANSAC of ``fi``'s keypoints ``kp`` on points ``X3``: (result, inliers).
+
+            No inliers when the pose turns against the verified pair with a registered
+            frame that has the most matches (see :func:`turned`).
+            """
             try:
                 thr = 3.0 * stretch(fi, kp)
                 r = solve_pnp_ransac(X3, ideal[fi][kp], k, threshold=thr, rng=rng)
             except (DegenerateConfigurationError, InvalidInputError):
                 return None, 0
-            return r, int(np.sum(r.inliers)) if bool(r.valid) else 0
+            if not bool(r.valid):
+                return r, 0
+            if turned(np.asarray(r.R, np.float64)):
+                flipped.append(int(np.sum(r.inliers)))
+                return r, 0
+            return r, int(np.sum(r.inliers))
 
+        def turned(R: F64) -> bool:
+            """Whether ``R`` is 30 degrees or more from the best verified pair's rotation.
+
+            Tracks through a repeated texture's copies can hand PnP the copy's points: a pose
+            that reprojects them well, half a turn off (a walk of 8 frames, frame 4 next to
+            the initial pair 6-7, 135 inliers). The pair of ``fi`` with a registered frame
+            that has the most verified matches, usually its neighbour in the sequence,
+            says which way the frame faces.
+            """
+            best = None
+            for g in np.flatnonzero(registered).tolist():
+                key = (min(fi, g), max(fi, g))
+                if key in pair_info and (best is None or pair_info[key][0] > best[0]):
+                    best = (pair_info[key][0], key, g)
+            if best is None:
+                return False
+            _, (a, b), g = best
+            rel = Rs[g] @ R.T if a == fi else R @ Rs[g].T  # frame a's camera to frame b's
+            c = (np.trace(rel @ pair_rot[(a, b)].T) - 1.0) / 2.0
+            return bool(c < np.cos(np.radians(30.0)))
+
+        flipped: list[int] = []  # inliers of the PnP poses turned() refused
         hp = has_point()
         tr = kp_track[fi]
         kps = np.flatnonzero(tr >= 0)
@@ -1528,6 +1571,12 @@ def reconstruct_sequence(
                 why_not[fi] = (
                     f"frame {fi}: {kps.size} 2-D/3-D correspondences, PnP found {found} "
                     "inliers (12 needed)"
+                    + (
+                        f" (a pose with {flipped[0]} turned 30 degrees or more from its best "
+                        "verified pair: points of a repeated texture's copy?)"
+                        if flipped
+                        else ""
+                    )
                 )
                 return False
             # too few views of points through the tracks: the points matched directly
