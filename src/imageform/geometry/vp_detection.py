@@ -368,6 +368,24 @@ _PAIR_CLEAR = 0.5
 _PP_SPREAD = 0.05
 
 
+def _resampled_points(
+    seg: LineSegments, members: list[np.ndarray], far: float, rng: np.random.Generator
+) -> list[FloatArray]:
+    """Refit each point on ``_N_RESAMPLES`` resamples of its segments: ``(B, 3)`` each.
+
+    A point's supporting segments (``members``, one mask a point) are drawn with
+    replacement, each weighted by its length, as the fit weighs them.
+    """
+    lengths = np.hypot(*(seg.endpoints[:, 1] - seg.endpoints[:, 0]).T)
+    pts = []
+    for m in members:
+        idx = np.flatnonzero(m)
+        n = len(idx)
+        counts = rng.multinomial(n, np.full(n, 1.0 / n), size=_N_RESAMPLES).astype(np.float64)
+        pts.append(_refit_batch(seg.lines[idx], lengths[idx], counts, far))
+    return pts
+
+
 def _orthocenter_resamples(
     seg: LineSegments, members: list[np.ndarray], far: float, rng: np.random.Generator
 ) -> tuple[FloatArray, FloatArray]:
@@ -378,13 +396,7 @@ def _orthocenter_resamples(
     ``(B, 2)`` (NaN where a point went to infinity or the three became collinear) and
     ``log f`` at each (NaN where the triangle is not acute: no focal length there).
     """
-    lengths = np.hypot(*(seg.endpoints[:, 1] - seg.endpoints[:, 0]).T)
-    pts = []
-    for m in members:
-        idx = np.flatnonzero(m)
-        n = len(idx)
-        counts = rng.multinomial(n, np.full(n, 1.0 / n), size=_N_RESAMPLES).astype(np.float64)
-        pts.append(_refit_batch(seg.lines[idx], lengths[idx], counts, far))
+    pts = _resampled_points(seg, members, far, rng)
     found = np.full((_N_RESAMPLES, 2), np.nan)
     focal = np.full(_N_RESAMPLES, np.nan)
     for b in range(_N_RESAMPLES):
@@ -476,13 +488,7 @@ def _focal_spread(
     A point that two or three segments converge on by chance moves far with a resample
     that leaves one out; one that a building's hundred edges converge on does not.
     """
-    lengths = np.hypot(*(seg.endpoints[:, 1] - seg.endpoints[:, 0]).T)
-    pts = []
-    for m in members:
-        idx = np.flatnonzero(m)
-        n = len(idx)
-        counts = rng.multinomial(n, np.full(n, 1.0 / n), size=_N_RESAMPLES).astype(np.float64)
-        pts.append(_refit_batch(seg.lines[idx], lengths[idx], counts, far))
+    pts = _resampled_points(seg, members, far, rng)
     f = _focal_grid(np.stack(pts, axis=1), support, pp, diag)
     ok = np.isfinite(f)
     if ok.sum() < 3:

@@ -25,6 +25,7 @@ __all__ = [
     "image_out_renames",
     "in_srgb",
     "input_space",
+    "mask_of",
     "on_gpu",
     "patches_in_srgb",
     "read",
@@ -180,6 +181,26 @@ def read(path: Path, opts: Any, *, alpha: str | None = None) -> Any:
 #: no display value: a float image beyond it holds unscaled numbers (a microscope's or a
 #: sensor's 0-4000 counts, say), which read as colours clip to white or overflow.
 ENCODED_FLOAT_MAX = 2.0
+
+
+def mask_of(image: Any, path: Path, height: int, width: int, of: str, counts: str) -> Any:
+    """Return a ``--mask`` image as booleans (non-zero: the pixel counts), checked.
+
+    A colour mask counts where any channel is non-zero. One-line errors name ``path`` and
+    what the mask must match (``of``: "the images", "the frames") or allow (``counts``).
+    """
+    import numpy as np
+
+    m = np.asarray(image)
+    if m.ndim == 3:
+        m = m.max(axis=2)
+    if m.shape != (height, width):
+        raise InvalidInputError(
+            f"--mask {path} is {m.shape[1]} x {m.shape[0]} px, {of} {width} x {height} px"
+        )
+    if not np.any(m > 0):
+        raise InvalidInputError(f"--mask {path} is zero everywhere: {counts}")
+    return m > 0
 
 
 def refuse_unscaled_floats(path: Path, image: Any) -> None:

@@ -14,7 +14,7 @@ from pathlib import Path
 from typing import Any, Literal, get_args
 
 from imageform.errors import InvalidInputError
-from imageform.workflows._images import ImageIn
+from imageform.workflows._images import ImageIn, mask_of
 from imageform.workflows._spec import (
     IMAGE_SUFFIXES,
     Input,
@@ -181,21 +181,11 @@ def _as_field(path: Path, opts: FlatfieldOptions, scale_integers: bool) -> Any:
 
 def _read_mask(path: Path, opts: FlatfieldOptions, shape: tuple[int, ...]) -> Any:
     """Read ``--mask FILE`` as booleans (non-zero: the pixel counts) of the images' size."""
-    import numpy as np
-
     if not path.is_file():
         raise InvalidInputError(f"--mask {path} does not exist (give auto or a mask image)")
-    m = np.asarray(_read(path, opts))
-    if m.ndim == 3:
-        m = m.max(axis=2)
-    if m.shape != tuple(shape[:2]):
-        raise InvalidInputError(
-            f"--mask {path} is {m.shape[1]} x {m.shape[0]} px, the images {shape[1]} x "
-            f"{shape[0]} px"
-        )
-    if not np.any(m > 0):
-        raise InvalidInputError(f"--mask {path} is zero everywhere: no pixel would count")
-    return m > 0
+    return mask_of(
+        _read(path, opts), path, shape[0], shape[1], "the images", "no pixel would count"
+    )
 
 
 def _check_out(out: Path, files: list[Path], force: bool) -> None:

@@ -161,21 +161,17 @@ def _read_frames(
 
 def _read_mask(path: Path, info: Any) -> Any:
     """Read the ``--mask`` image as booleans (nonzero: keypoints allowed), the frames' size."""
-    import numpy as np
-
     from imageform.io import read_image
+    from imageform.workflows._images import mask_of
 
-    m = np.asarray(read_image(path, alpha="drop"))
-    if m.ndim == 3:
-        m = m.max(axis=2)
-    if m.shape != (info.height, info.width):
-        raise InvalidInputError(
-            f"--mask {path} is {m.shape[1]} x {m.shape[0]} px, the frames {info.width} x "
-            f"{info.height} px"
-        )
-    if not np.any(m > 0):
-        raise InvalidInputError(f"--mask {path} is zero everywhere: no keypoint could be kept")
-    return m > 0
+    return mask_of(
+        read_image(path, alpha="drop"),
+        path,
+        info.height,
+        info.width,
+        "the frames",
+        "no keypoint could be kept",
+    )
 
 
 def _masks(
