@@ -67,6 +67,21 @@ def test_image_sequence_folder_and_glob(tmp_path: Path) -> None:
         assert [g.index for g in reader] == [0, 1]
 
 
+def test_image_sequence_of_bmp_frames(tmp_path: Path) -> None:
+    # capture cards (endoscopy towers, old microscopes) save BMP frames: read as a sequence
+    from PIL import Image
+
+    frames = _frames(n=3)
+    for i, f in enumerate(frames):
+        Image.fromarray(f).save(tmp_path / f"cap{i}.bmp")
+    Image.fromarray(frames[0]).save(tmp_path / "cap3.webp", lossless=True)
+    with open_video(tmp_path) as reader:
+        got = [g.image for g in reader]
+    assert len(got) == 4
+    for g, f in zip(got, [*frames, frames[0]], strict=True):
+        np.testing.assert_array_equal(g, f)
+
+
 def test_sequence_grey_and_16_bit(tmp_path: Path) -> None:
     write_image(tmp_path / "a.png", np.full((4, 6, 1), 128, np.uint8))
     write_image(tmp_path / "b.png", np.full((4, 6, 3), 65535, np.uint16))

@@ -56,7 +56,7 @@ _X264_PRESETS = (
 )  # fmt: skip
 
 #: Image suffixes of an image sequence.
-_IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".tif", ".tiff", ".npy")
+_IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".tif", ".tiff", ".npy", ".bmp", ".webp", ".gif")
 
 #: Encoder by container, first available wins.
 _CODECS = {
@@ -133,7 +133,9 @@ def _sequence_files(source: str) -> list[Path] | None:
     if p.is_dir():
         files = [f for f in p.iterdir() if f.suffix.lower() in _IMAGE_SUFFIXES and f.is_file()]
         if not files:
-            raise InvalidInputError(f"folder {p} holds no images (PNG, JPEG, TIFF, .npy)")
+            raise InvalidInputError(
+                f"folder {p} holds no images (PNG, JPEG, TIFF, BMP, WebP, GIF, .npy)"
+            )
         return sorted(files, key=_natural_key)
     if _glob.has_magic(source):
         files = [Path(f) for f in _glob.glob(source) if Path(f).is_file()]
