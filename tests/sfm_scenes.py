@@ -199,6 +199,18 @@ def align_rms(est_centres: np.ndarray, true_centres: np.ndarray) -> float:
     return float(np.sqrt(np.mean(np.sum((fitted - true_centres) ** 2, 1))) / path)
 
 
+def rotation_errors_deg(est_R: Any, truth: list[tuple[np.ndarray, np.ndarray]]) -> np.ndarray:
+    """Each frame's rotation error (degrees) in the first true frame's camera frame.
+
+    ``est_R`` ``(n, 3, 3)`` as :func:`~imageform.geometry.reconstruct_sequence` gives them
+    (the world is its first registered frame's camera); ``truth`` as :func:`poses`.
+    """
+    R0 = truth[0][0]
+    d = np.asarray(est_R) @ np.transpose(np.stack([R @ R0.T for R, _ in truth]), (0, 2, 1))
+    cos = (np.trace(d, axis1=1, axis2=2) - 1.0) / 2.0
+    return np.degrees(np.arccos(np.clip(cos, -1.0, 1.0)))
+
+
 #: OpenCV's chessboard views (``../shared/data/opencv-left``; left10 is not in the set).
 CHESSBOARD_VIEWS = [f"left{i:02d}.jpg" for i in (1, 2, 3, 4, 5, 6, 7, 8, 9, 11, 12, 13, 14)]
 
