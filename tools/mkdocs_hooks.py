@@ -61,6 +61,7 @@ BENCH_SCRIPTS: dict[str, str] = {
     "checkerboard": "benchmarks/bench_checkerboard.py",
     "checkerboard-large": "benchmarks/check_checkerboard_large.py",
     "checkerboard-real": "benchmarks/check_checkerboard_real.py",
+    "checkerboard-auto": "benchmarks/check_checkerboard_auto.py",
     "chunked": "benchmarks/bench_chunked.py",
     "chunked-strips": "benchmarks/bench_chunked.py",
     "color": "benchmarks/bench_color.py",

@@ -129,6 +129,59 @@ def test_calibrate_literal_bracket_names(
     assert read_camera(out).provenance.images == ("view[1].jpg", "view[2].jpg", "view[3].jpg")
 
 
+def test_calibrate_board_auto(
+    shared_data: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """--board auto: the size most views show, every view found as with --board 9x6, the same
+    camera; the camera file's command names the size; a view showing another board is searched
+    again for the set's size."""
+    views = sorted((shared_data / "opencv-left").glob("left*.jpg"))[:6]
+    a, b = tmp_path / "auto.toml", tmp_path / "given.toml"
+    assert main(["calibrate", *map(str, views), "--board", "auto", "-o", str(a), "--json"]) == 0
+    summary = json.loads(capsys.readouterr().out)
+    assert summary["board"]["inner_corners"] == [9, 6] and summary["board"]["read_as"] == "auto"
+    assert summary["views_used"] == 6
+    assert main(["calibrate", *map(str, views), "--board", "9x6", "-o", str(b)]) == 0
+    capsys.readouterr()
+    ca, cb = read_camera(a), read_camera(b)
+    np.testing.assert_allclose(np.asarray(ca.camera.K), np.asarray(cb.camera.K), rtol=1e-6)
+    assert "--board 9x6 " in (ca.provenance.command or "")
+    # the plain output's first line says how the size was found
+    assert main(["calibrate", *map(str, views), "--board", "auto", "-o", str(a), "--force"]) == 0
+    out = capsys.readouterr().out
+    assert out.startswith("board: checkerboard, 9x6 inner corners = 10x7 squares (--board auto: ")
+    # a view that shows a smaller complete board (its right part blanked): searched again, named
+    from PIL import Image
+
+    img = np.asarray(Image.open(views[0]).convert("L")).copy()
+    img[:, 400:] = 160
+    odd = tmp_path / "cut.png"
+    Image.fromarray(img).save(odd)
+    argv = ["calibrate", str(odd), *map(str, views[1:]), "--board", "auto", "-o", str(a)]
+    assert main([*argv, "--force"]) == 0
+    err = capsys.readouterr().err
+    assert "cut.png: no 9x6 board found" in err
+
+
+def test_calibrate_board_auto_refusals(
+    shared_data: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """No board in any view: one line naming the first view's reason, exit 1, nothing
+    written; stereo-calibrate takes no --board auto (exit 2)."""
+    out = tmp_path / "cam.toml"
+    kodak = [str(shared_data / "kodak" / f"kodim0{k}.png") for k in (1, 2, 3)]
+    assert main(["calibrate", *kodak, "--board", "auto", "-o", str(out)]) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "no checkerboard found in any of the 3 images (kodim01.png: " in err[0]
+    assert "give the board's size with --board COLSxROWS" in err[0]
+    assert not out.exists()
+    left = str(shared_data / "opencv-left" / "left01.jpg")
+    argv = ["stereo-calibrate", left, left, "--board", "auto", "-o", str(out)]
+    assert main(argv) == 2
+    assert "--board auto is read by imageform calibrate" in capsys.readouterr().err
+    assert not out.exists()
+
+
 def test_parse_board() -> None:
     assert parse_board("9x6") == (9, 6) and parse_board(" 8 X 5 ") == (8, 5)
     for bad in ("1x6", "0x0", "9", "x6", f"{MAX_BOARD_CORNERS + 1}x2"):

@@ -381,6 +381,7 @@ VALID: dict[str, C | Skip] = {
     ),
     "imageform.geometry.find_checkerboard": call(image=V("rgb_big"), pattern_size=(4, 3)),
     "imageform.geometry.find_checkerboards": call(images=[V("rgb_big")], pattern_size=(4, 3)),
+    "imageform.geometry.checkerboard.set_pattern_size": call(sizes=[(9, 6), None, (9, 6)]),
     "imageform.geometry.focal_from_vanishing_points": call(
         np.array([600.0, 3.0]), np.array([-400.0, 3.0]), np.array([4.0, 3.0])
     ),

@@ -32,15 +32,23 @@ geometrically (a rectangular grid has a 180° symmetry), so the rule is:
 
 When several complete boards of the asked size are visible, the largest (image area) is
 returned.
+
+``pattern_size="auto"`` (MATLAB's ``detectCheckerboardPoints`` gives the board's size too):
+any complete lattice of at least 3 x 3 corners that passes the same checks is a board, the
+board continuing past the lattice's edge included (so a lattice short of a board by a
+missed corner is not taken for a smaller board), and its size is reported as ``(cols,
+rows)`` with ``cols >= rows``. A board cut by the image's border shows a smaller complete
+lattice: :func:`find_checkerboards` takes the size most views show.
 """
 
 from __future__ import annotations
 
 import math
 import warnings
+from collections import Counter
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 import numpy.typing as npt
@@ -82,6 +90,7 @@ __all__ = [
     "find_checkerboard",
     "find_checkerboards",
     "refine_corners",
+    "set_pattern_size",
 ]
 
 #: Smoothing scales (pixels) tried in turn until the board is found.
@@ -92,6 +101,16 @@ MAX_SEEDS = 40
 #: (:func:`find_checkerboard`): above 2000 px always, up to 2000 px (a video frame) when the
 #: board is not found at full resolution or some corner did not converge.
 COARSE_SIZE = 1000
+#: ``pattern_size="auto"``: corner candidates kept per scale (boards up to about a thousand
+#: inner corners), the lattice walk's reach in grid steps, the fewest corners a side of the
+#: board and the whole board may have (a 2 x N lattice is too easily a pair of tiles' rows,
+#: a 3 x 3 one a patch of a checked pattern or of a board shown on a monitor), and the
+#: shortest mean grid step in pixels (squares too small to tell the board's edge by).
+AUTO_MAX_CANDIDATES = 1200
+AUTO_MAX_HOPS = 120
+AUTO_MIN_SIDE = 3
+AUTO_MIN_CORNERS = 12
+AUTO_MIN_STEP = 8.0
 
 
 class CheckerboardNotFoundWarning(ImageformWarning):
@@ -112,7 +131,7 @@ class CheckerboardResult:
     reason : str
         Why the board was not found ("" when found).
     pattern_size : tuple of int
-        ``(cols, rows)`` as asked.
+        ``(cols, rows)`` as asked; with ``"auto"`` the size found, ``(0, 0)`` when none.
     status : ndarray (cols*rows,) int64 or None
         Sub-pixel status per corner (0 converged, 1 ``max_iter`` reached, 2 flat window,
         3 left the image, 4 moved farther than the window — kept unrefined); None when not
@@ -175,6 +194,13 @@ def _check_pattern(pattern_size: object) -> tuple[int, int]:
             f"expected pattern_size (cols, rows) of at most 10000 each, got ({cols}, {rows})"
         )
     return cols, rows
+
+
+def _check_pattern_or_auto(pattern_size: object) -> tuple[int, int]:
+    """``(cols, rows)`` of a ``pattern_size``, or ``(0, 0)`` for ``"auto"``."""
+    if isinstance(pattern_size, str) and pattern_size.strip().lower() == "auto":
+        return 0, 0
+    return _check_pattern(pattern_size)
 
 
 def _orient(
@@ -243,27 +269,49 @@ def _detect(
     When several complete boards pass the checks (a board on a monitor behind the target),
     the one covering the largest image area is returned.
     """
-    cand = find_candidates(
-        image.codes, sigma, max_candidates=max(300, 4 * cols * rows), scale=image.scale
-    )
+    auto = cols == 0
+    cap = AUTO_MAX_CANDIDATES if auto else max(300, 4 * cols * rows)
+    cand = find_candidates(image.codes, sigma, max_candidates=cap, scale=image.scale)
     n = cand.xy.shape[0]
-    if n < cols * rows:
-        return None, f"{n} corner candidates, fewer than the {cols * rows} inner corners", n
+    need = AUTO_MIN_CORNERS if auto else cols * rows
+    if n < need:
+        what = "a board's" if auto else f"the {cols * rows}"
+        return None, f"{n} corner candidates, fewer than {what} inner corners", n
     nbr = neighbors(cand, min_dist=2.0 * sigma)
     tried = np.zeros(n, dtype=bool)
     best_reason, best_size = "no grid of corners found", 0
     want = sorted((cols, rows))
+    hops = AUTO_MAX_HOPS if auto else cols + rows
     boards: list[tuple[NDArray[np.float64], NDArray[np.float64]]] = []
     for seed in range(min(n, MAX_SEEDS)):
         if tried[seed] or np.any(nbr[seed] < 0):
             continue
-        rect = lattice_rectangle(seed, cand, nbr, max_hops=cols + rows)
+        rect = lattice_rectangle(seed, cand, nbr, max_hops=hops)
         if rect.size == 0:
             continue
         tried[rect.ravel()] = True
         shape = sorted(rect.shape)
         grid = cand.xy[rect]
-        if shape != want:
+        if auto:
+            cols, rows = shape[1], shape[0]
+        if auto and (shape[0] < AUTO_MIN_SIDE or rect.size < AUTO_MIN_CORNERS):
+            if rect.size > best_size:
+                best_size = rect.size
+                best_reason = (
+                    f"largest grid found has {rect.shape[1]} x {rect.shape[0]} corners, too "
+                    f"few to tell a board by (at least {AUTO_MIN_CORNERS}, {AUTO_MIN_SIDE} a "
+                    "side)"
+                )
+            continue
+        if auto and _mean_step(grid) < AUTO_MIN_STEP:
+            if best_size == 0:  # not counted as a larger grid beside a board found
+                best_reason = (
+                    f"a {rect.shape[1]} x {rect.shape[0]} grid of squares of "
+                    f"{_mean_step(grid):.1f} px, too small to tell the board's edge by "
+                    f"(at least {AUTO_MIN_STEP:g} px)"
+                )
+            continue
+        if not auto and shape != want:
             if rect.size > best_size:
                 best_size = rect.size
                 if shape[0] >= want[0] and shape[1] >= want[1]:
@@ -290,11 +338,18 @@ def _detect(
         if means is not None and not cell_parity_ok(means):
             problem = "the cells of the grid do not alternate dark and bright"
         if problem is None:
-            side = board_continues(image.float, grid, means)
+            side = board_continues(image.float, grid, means, saddles=not auto)
             if side is not None:
                 problem = (
                     f"the checkerboard continues {side} of the {cols} x {rows} grid (a "
                     "larger board cut by the image border? check pattern_size)"
+                )
+        if problem is None and auto:
+            side = _edge_outside(grid, image.codes.shape[:2])
+            if side is not None:
+                problem = (
+                    f"the {cols} x {rows} grid's outer squares reach past the image's "
+                    f"{side} border: the board may continue there (give pattern_size)"
                 )
         if problem is not None:
             if rect.size >= best_size:
@@ -303,8 +358,81 @@ def _detect(
         boards.append((grid, means))  # type: ignore[arg-type]  # means is set here
     if boards:
         grid, means = max(boards, key=lambda b: _area(b[0]))
+        if auto:  # (cols, rows) with cols >= rows: the longer side along the rows
+            rows, cols = sorted(grid.shape[:2])
+            if best_size > cols * rows:  # a larger grid was seen (and refused)
+                grid = _orient(grid, image.float, cols, rows, means)
+                return grid, best_reason, best_size
         return _orient(grid, image.float, cols, rows, means), "", cols * rows
     return None, best_reason, best_size
+
+
+def _auto_grid(
+    image: _Gray, sigmas: Sequence[float]
+) -> tuple[NDArray[np.float64] | None, float, str]:
+    """``pattern_size="auto"``: the largest board found at any scale, or None with the reason.
+
+    Every scale is searched; a board is refused when a larger grid of corners was seen at
+    any scale (refused by a check: a board cut by the image's border, a corner missed), as
+    a smaller board found beside it is likely a part of it.
+    """
+    found: tuple[NDArray[np.float64], float] | None = None
+    largest, largest_why = 0, "no checkerboard found"
+    for s in sigmas:
+        grid, why, n = _detect(image, 0, 0, s)
+        if grid is not None and (found is None or grid.size > found[0].size):
+            found = (grid, s)
+        if n > largest:
+            largest, largest_why = n, why
+    if found is None:
+        return None, 0.0, largest_why
+    grid, s = found
+    if largest > grid.shape[0] * grid.shape[1]:
+        return (
+            None,
+            0.0,
+            (
+                f"a {grid.shape[1]} x {grid.shape[0]} board found, but a larger grid of {largest} "
+                f"corners was seen too ({largest_why}): the board's size is uncertain (give "
+                "pattern_size)"
+            ),
+        )
+    return grid, s, ""
+
+
+def _mean_step(grid: NDArray[np.float64]) -> float:
+    """Mean distance (px) between neighbouring corners of a ``(R, C, 2)`` grid."""
+    rows = np.linalg.norm(np.diff(grid, axis=1), axis=-1)
+    cols = np.linalg.norm(np.diff(grid, axis=0), axis=-1)
+    return float((rows.sum() + cols.sum()) / (rows.size + cols.size))
+
+
+def _edge_outside(grid: NDArray[np.float64], shape: tuple[int, ...]) -> str | None:
+    """Say which image border a grid's outer squares reach past, None when they are inside.
+
+    A board's outer squares end one grid step beyond its outer inner corners; a quarter to
+    nearly half a step further on ``board_continues`` reads whether a larger board goes on.
+    Those points, up to 1.45 steps beyond each outer corner along its row or column
+    (extrapolated linearly), must be inside the image: otherwise the board may continue past
+    the image's border and its size cannot be told.
+    """
+    h, w = shape
+    edges = (
+        2.45 * grid[0] - 1.45 * grid[1],
+        2.45 * grid[-1] - 1.45 * grid[-2],
+        2.45 * grid[:, 0] - 1.45 * grid[:, 1],
+        2.45 * grid[:, -1] - 1.45 * grid[:, -2],
+    )
+    pts = np.concatenate(edges)
+    for name, bad in (
+        ("left", pts[:, 0] < -0.5),
+        ("right", pts[:, 0] > w - 0.5),
+        ("top", pts[:, 1] < -0.5),
+        ("bottom", pts[:, 1] > h - 0.5),
+    ):
+        if np.any(bad):
+            return name
+    return None
 
 
 def _area(grid: NDArray[np.float64]) -> float:
@@ -317,7 +445,7 @@ def _area(grid: NDArray[np.float64]) -> float:
 @_deprecate.parameters(renamed={"eps": "tol"})
 def find_checkerboard(
     image: npt.ArrayLike,
-    pattern_size: tuple[int, int],
+    pattern_size: tuple[int, int] | Literal["auto"],
     *,
     refine: bool = True,
     sigma: float | None = None,
@@ -342,9 +470,12 @@ def find_checkerboard(
         Grey or RGB image (RGB is turned grey with BT.601 luma weights); uint8, uint16 or
         floats of any scale (detection does not depend on the scale); finite. Arrays of
         other libraries are converted to NumPy: detection runs on NumPy.
-    pattern_size : (int, int)
+    pattern_size : (int, int) or "auto"
         ``(cols, rows)``: inner corners per row and per column, each >= 2 (OpenCV's
-        ``patternSize``; the OpenCV sample board is ``(9, 6)``).
+        ``patternSize``; the OpenCV sample board is ``(9, 6)``). ``"auto"``: the largest
+        board of at least 3 x 3 inner corners, whatever its size; the result's
+        ``pattern_size`` says which, ``(cols, rows)`` with ``cols >= rows`` (``(0, 0)`` when
+        none is found).
     refine : bool
         Run the sub-pixel refinement (otherwise positions are the response peaks, ~0.5 px).
     sigma : float, optional
@@ -390,9 +521,14 @@ def find_checkerboard(
     array([[39.5, 39.5],
            [59.5, 39.5],
            [39.5, 59.5]])
+
+    Without the board's size:
+
+    >>> find_checkerboard(np.where(dark, 0.1, 0.9), "auto").pattern_size
+    (5, 4)
     """
     codes, scale, span = gray_codes(image)
-    cols, rows = _check_pattern(pattern_size)
+    cols, rows = _check_pattern_or_auto(pattern_size)
     if sigma is not None:
         # a Gaussian wider than 1000 px blurs any board away (and its kernel is 8 sigma)
         sigma = as_real(sigma, "sigma", positive=True, maximum=1000.0)
@@ -408,6 +544,16 @@ def find_checkerboard(
     gray = _Gray(codes, scale)
     factor = math.ceil(max(codes.shape[:2]) / COARSE_SIZE) if sigma is None else 1
     full: CheckerboardResult | None = None
+    if cols == 0:  # "auto": the board found at every scale, and no larger grid seen
+        grid, s, why = _auto_grid(gray, sigmas)
+        if grid is None:
+            reason = why
+        else:
+            size = (grid.shape[1], grid.shape[0])
+            full = _finish(gray.float, grid, size, s, refine, half_window, max_iter, tol)
+            if factor == 1 or not full.found:
+                return full
+        sigmas = ()
     for s in sigmas:
         grid, why, n = _detect(gray, cols, rows, s)
         if grid is not None:
@@ -428,7 +574,7 @@ def find_checkerboard(
         found = [r for r in (full, _coarse(gray, factor, size, refine, half_window, max_iter, tol))
                  if r is not None and r.found]  # fmt: skip
         if found:
-            return min(found, key=lambda r: _plane_rms(r.corners, size))
+            return min(found, key=lambda r: _plane_rms(r.corners, r.pattern_size))
     if full is not None:
         return full
     return CheckerboardResult(False, None, reason, size)
@@ -454,8 +600,13 @@ def _coarse(
     coarse = block_mean_numpy(np.asarray(gray.float)[..., None], factor, 1.0)[..., 0]
     codes, scale, _ = gray_codes(coarse)
     small = _Gray(codes, scale)
-    for s in DEFAULT_SIGMAS:
-        grid, _, _ = _detect(small, *size, s)
+    for s in DEFAULT_SIGMAS if size[0] else (None,):
+        if s is None:  # "auto": the board found at every scale, its size
+            grid, s, _ = _auto_grid(small, DEFAULT_SIGMAS)
+            if grid is not None:
+                size = (grid.shape[1], grid.shape[0])
+        else:
+            grid, _, _ = _detect(small, *size, s)
         if grid is None:
             continue
         found = _finish(small.float, grid, size, s, refine, None, max_iter, tol)
@@ -554,9 +705,39 @@ def _found(
     return res
 
 
+def set_pattern_size(sizes: Sequence[tuple[int, int] | None]) -> tuple[int, int] | None:
+    """Return the board size of a set of views from each view's ``pattern_size="auto"`` size.
+
+    The size found in the most views (None for a view without a board); a tie goes to the
+    larger board (a view of a board cut by the image's border can show a smaller complete
+    lattice, never a larger one). None when no view shows a board.
+
+    Raises
+    ------
+    InvalidInputError
+        ``sizes`` not a list of ``(cols, rows)`` pairs (each >= 2) and None.
+
+    Examples
+    --------
+    >>> set_pattern_size([(9, 6), None, (9, 6), (7, 4)])
+    (9, 6)
+    >>> set_pattern_size([(7, 4), (9, 6)]), set_pattern_size([None])
+    ((9, 6), None)
+    """
+    if isinstance(sizes, str | bytes) or not isinstance(sizes, Sequence):
+        raise InvalidInputError(
+            f"expected sizes as a list of (cols, rows) or None, one per view, got {describe(sizes)}"
+        )
+    checked = [None if s is None else size_pair(s, "sizes (cols, rows)", minimum=2) for s in sizes]
+    counts = Counter(s for s in checked if s is not None)
+    if not counts:
+        return None
+    return max(counts, key=lambda s: (counts[s], s[0] * s[1], s))
+
+
 def find_checkerboards(
     images: Sequence[npt.ArrayLike],
-    pattern_size: tuple[int, int],
+    pattern_size: tuple[int, int] | Literal["auto"],
     *,
     names: Sequence[str] | None = None,
     **options: Any,
@@ -574,8 +755,11 @@ def find_checkerboards(
     ----------
     images : sequence of array_like (H, W) or (H, W, 3)
         The views (a list or tuple; a single array is refused as ambiguous).
-    pattern_size : (int, int)
-        ``(cols, rows)`` inner corners, the same for every view.
+    pattern_size : (int, int) or "auto"
+        ``(cols, rows)`` inner corners, the same for every view; ``"auto"``: every view is
+        searched with :func:`find_checkerboard`'s ``"auto"``, the set's size is the one most
+        views show (:func:`set_pattern_size`), and the views that showed another size or none
+        are searched again for that size.
     names : sequence of str, optional
         Names of the views (file names) used in messages; default ``view 0``, ``view 1`` ...
     **options
@@ -631,7 +815,7 @@ def find_checkerboards(
             raise InvalidInputError(
                 f"expected {len(images)} names (one per image of images), got {len(labels)}"
             )
-    size = _check_pattern(pattern_size)
+    size = _check_pattern_or_auto(pattern_size)
     grays = []
     for label, image in zip(labels, images, strict=True):
         try:
@@ -646,7 +830,25 @@ def find_checkerboards(
             f"{labels[0]} of {shapes[0][1]} x {shapes[0][0]} px and {labels[odd]} of "
             f"{shapes[odd][1]} x {shapes[odd][0]} px"
         )
-    results = [find_checkerboard(g, size, **options) for g in grays]
+    if size == (0, 0):
+        first = [find_checkerboard(g, "auto", **options) for g in grays]
+        common = set_pattern_size([r.pattern_size if r.found else None for r in first])
+        if common is None:
+            missing = [f"{lab} ({r.reason})" for lab, r in zip(labels, first, strict=True)]
+            warnings.warn(
+                f"no complete checkerboard (pattern_size 'auto') in any of the {len(first)} "
+                "views: " + "; ".join(missing),
+                CheckerboardNotFoundWarning,
+                stacklevel=2,
+            )
+            return first
+        size = common
+        results = [
+            r if r.found and r.pattern_size == size else find_checkerboard(g, size, **options)
+            for r, g in zip(first, grays, strict=True)
+        ]
+    else:
+        results = [find_checkerboard(g, size, **options) for g in grays]
     missing = [f"{lab} ({r.reason})" for lab, r in zip(labels, results, strict=True) if not r.found]
     if missing:
         warnings.warn(

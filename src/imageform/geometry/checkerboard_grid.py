@@ -293,6 +293,8 @@ def board_continues(
     gray: NDArray[np.floating],
     grid: NDArray[np.float64],
     own: NDArray[np.float64] | None = None,
+    *,
+    saddles: bool = True,
 ) -> str | None:
     """Which side of ``grid`` (R, C, 2) the checkerboard visibly continues past, or None.
 
@@ -307,7 +309,11 @@ def board_continues(
     clutter past a board's edge can alternate by chance, the edge has no X-corners), the
     board goes on.
     A board cut within a quarter cell of row ``k + 1`` cannot be told from a smaller one.
-    ``own``: the grid's :func:`cell_means`, when the caller has them.
+    ``own``: the grid's :func:`cell_means`, when the caller has them. ``saddles=False``
+    drops the X-corner condition and asks for two alternating cells instead of three (a
+    board of unknown size: near the image's border the corners of row ``k + 1`` can escape
+    the saddle test, a grid of three rows has two cells a side, and a clutter that
+    alternates only costs a refusal there).
     """
     h, w = gray.shape
     if own is None:
@@ -333,13 +339,16 @@ def board_continues(
         step = 0.5 * ((p1 - g[-1])[:-1] + (p1 - g[-1])[1:])
         pts = base[None] + fractions[:, None, None] * step[None]  # (3, C - 1, 2)
         inside = np.all((pts >= 0) & (pts <= [w - 1, h - 1]), axis=(0, 2))
-        if inside.sum() < 3:
+        least = 3 if saddles else 2  # cells in a run
+        if inside.sum() < least:
             continue
         m = _sample(gray, pts).mean(axis=0)
         agree = ((m - mid) * parity * sense > contrast / 3.0) & inside
-        runs = _runs(agree, 3)  # cells start..stop-1, their corners start..stop
+        runs = _runs(agree, least)  # cells start..stop-1, their corners start..stop
         if not runs:
             continue
+        if not saddles:
+            return name
         saddle = _saddles(gray, p1, p1 - g[-1], contrast)
         for start, stop in runs:
             if np.count_nonzero(saddle[start : stop + 1]) >= 2:

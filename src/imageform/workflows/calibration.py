@@ -131,6 +131,17 @@ def parse_charuco(text: str) -> tuple[int, int] | None:
     return cols, rows
 
 
+def is_auto_board(text: object) -> bool:
+    """Return whether a ``--board`` text asks for the checkerboard's size to be found (auto).
+
+    Examples
+    --------
+    >>> is_auto_board("auto"), is_auto_board(" AUTO "), is_auto_board("9x6")
+    (True, True, False)
+    """
+    return isinstance(text, str) and text.strip().lower() == "auto"
+
+
 def board_hint(text: str) -> str:
     """Return the hint for a board not found: what ``text`` counts, and the other spelling.
 
@@ -213,7 +224,13 @@ class _BoardChecks:
 
     def check(self) -> None:
         super().check()  # type: ignore[misc]
-        if parse_charuco(self.board) is None:
+        if is_auto_board(self.board):
+            if not hasattr(self, "marker"):
+                raise InvalidInputError(
+                    "--board auto is read by imageform calibrate; this command takes a "
+                    "checkerboard --board COLSxROWS of inner corners"
+                )
+        elif parse_charuco(self.board) is None:
             parse_board(self.board)
         elif not hasattr(self, "marker"):
             raise InvalidInputError(
@@ -261,8 +278,9 @@ class CalibrateOptions(_BoardChecks, ImageIn):
 
     board: str = option(
         help="Checkerboard COLSxROWS of inner corners (9x6), or say which with 9x6corners or "
-        "10x7squares; a ChArUco board charuco:COLSxROWS of squares (charuco:7x5, or "
-        "charuco:6x4corners; with --marker). The output says how it was read.",
+        "10x7squares; auto: a checkerboard of the size most views show; a ChArUco board "
+        "charuco:COLSxROWS of squares (charuco:7x5, or charuco:6x4corners; with --marker). "
+        "The output says how it was read.",
         metavar="CxR",
     )
     square: str = option(
@@ -409,35 +427,44 @@ def calibrate(run: Run, opts: CalibrateOptions, *, out: Path, images: list[Path]
     charuco = parse_charuco(opts.board)
     if charuco is not None:
         return _calibrate_charuco(run, opts, out=out, images=images, squares=charuco)
-    cols, rows = parse_board(opts.board)
+    auto = is_auto_board(opts.board)
+    cols, rows = (0, 0) if auto else parse_board(opts.board)
     ahead.start("calibrate")  # a first run: its kernels compiled on two cores
     square = opts.square_mm()
     shape0: tuple[int, int] | None = None
-    corners, names = [], []
-    missed: list[str] = []
+    found: dict[Path, Any] = {}  # the corners of each view with the board, by file
+    missed: dict[Path, str] = {}  # why not, for the others
     for f, grey in _read_views(run, opts, images):
         if shape0 is None:
             shape0 = (int(grey.shape[0]), int(grey.shape[1]))
             h, w = shape0
-            if (cols + 1) * _MIN_SQUARE_PX > w or (rows + 1) * _MIN_SQUARE_PX > h:
+            if not auto and ((cols + 1) * _MIN_SQUARE_PX > w or (rows + 1) * _MIN_SQUARE_PX > h):
                 raise InvalidInputError(
                     f"a {cols}x{rows} board cannot be seen in {w} x {h} px images "
                     f"({f}): each of its {cols + 1} x {rows + 1} squares needs at least "
                     f"{_MIN_SQUARE_PX} px; {board_hint(opts.board)}"
                 )
-        det = find_checkerboard(grey, (cols, rows), half_window=opts.half_window)
+        det = find_checkerboard(
+            grey, "auto" if auto else (cols, rows), half_window=opts.half_window
+        )
         if det.found:
-            assert det.corners is not None
-            corners.append(det.corners)
-            names.append(f.name)
+            found[f] = det
         else:
-            run.note(f"warning: {f}: no {cols}x{rows} board found ({det.reason})")
-            missed.append(f"{f.name}: {det.reason}")
-    if not corners:
+            missed[f] = det.reason
+    line = None
+    if auto:
+        cols, rows, line = _settle_auto_board(run, opts, images, found, missed)
+    for f, why in missed.items():
+        run.note(f"warning: {f}: no {cols}x{rows} board found ({why})")
+    if not found:
+        first = next(iter(missed.items()))
         raise DegenerateConfigurationError(
             f"no {cols}x{rows} checkerboard found in any of the {len(images)} images "
-            f"({missed[0]}{'; ...' if len(missed) > 1 else ''}; {board_hint(opts.board)})"
+            f"({first[0].name}: {first[1]}{'; ...' if len(missed) > 1 else ''}; "
+            f"{board_hint(opts.board)})"
         )
+    names = [f.name for f in images if f in found]
+    corners = [found[f].corners for f in images if f in found]
     if len(corners) < MIN_VIEWS:
         raise DegenerateConfigurationError(
             f"found the {cols}x{rows} board in {len(corners)} view(s) ({', '.join(names)}) of "
@@ -449,8 +476,64 @@ def calibrate(run: Run, opts: CalibrateOptions, *, out: Path, images: list[Path]
     obj = checkerboard_points((cols, rows), square)
     command = f"imageform calibrate --board {cols}x{rows} --square {opts.square}"
     return _calibrate_views(
-        run, opts, out, len(images), names, [obj] * len(corners), corners, shape0, command
+        run,
+        opts,
+        out,
+        len(images),
+        names,
+        [obj] * len(corners),
+        corners,
+        shape0,
+        command,
+        board_as=None if line is None else (f"{cols}x{rows}", line),
     )
+
+
+def _settle_auto_board(
+    run: Run,
+    opts: CalibrateOptions,
+    images: list[Path],
+    found: dict[Path, Any],
+    missed: dict[Path, str],
+) -> tuple[int, int, str]:
+    """``--board auto``: the set's board size, and each view searched again for it if need be.
+
+    The size is the one most views show (``set_pattern_size``); the views that showed another
+    or none are searched again for that size (``found`` and ``missed`` are updated). Returns
+    ``(cols, rows, line)``, ``line`` saying how the size was found.
+    """
+    from imageform.geometry.checkerboard import find_checkerboard, set_pattern_size
+
+    size = set_pattern_size([det.pattern_size for det in found.values()])
+    if size is None:
+        first = next(iter(missed.items()))
+        raise DegenerateConfigurationError(
+            f"no checkerboard found in any of the {len(images)} images ({first[0].name}: "
+            f"{first[1]}{'; ...' if len(missed) > 1 else ''}); --board auto looks for boards "
+            "of at least 3x3 inner corners: give the board's size with --board COLSxROWS"
+        )
+    cols, rows = size
+    agree = sum(det.pattern_size == size for det in found.values())
+    again = [f for f in images if f in missed or found[f].pattern_size != size]
+    for f in again:
+        if f in found:
+            other = found.pop(f).pattern_size
+            run.note(
+                f"note: {f}: a {other[0]}x{other[1]} board, not the {cols}x{rows} of most views: "
+                f"searched again for {cols}x{rows}"
+            )
+    for f, grey in _read_views(run, opts, again):
+        det = find_checkerboard(grey, size, half_window=opts.half_window)
+        if det.found:
+            found[f] = det
+            missed.pop(f, None)
+        else:
+            missed[f] = det.reason
+    line = (
+        f"board: checkerboard, {cols}x{rows} inner corners = {cols + 1}x{rows + 1} squares "
+        f"(--board auto: the size {agree} of the {len(images)} views show)"
+    )
+    return cols, rows, line
 
 
 def _calibrate_views(
@@ -463,10 +546,14 @@ def _calibrate_views(
     corners: list[Any],
     shape: tuple[int, int],
     command: str,
+    *,
+    board_as: tuple[str, str | None] | None = None,
 ) -> Result:
     """Calibrate from the views' board points and corners and write the camera file.
 
     The plot and corners table asked for are written too, and the result says what was found.
+    ``board_as``: the board's ``--board`` text and the line saying how it was read, where they
+    are not ``opts.board``'s (``--board auto``: the size found).
     """
     import numpy as np
 
@@ -510,7 +597,9 @@ def _calibrate_views(
     ]
     K, d = res.K, res.distortion
     coef_names = MODEL_COEFFICIENTS[res.model]
-    board = board_reading(opts.board)
+    board = board_reading(opts.board if board_as is None else board_as[0])
+    if board_as is not None and board_as[1] is not None:
+        board["line"], board["read_as"] = board_as[1], "auto"
     summary = {
         "output": out,
         "views_used": len(names),
