@@ -353,7 +353,8 @@ def test_grayness_index_on_real_photographs(name: str, gi_max: float, gw_min: fl
     """Two real photographs (tests/data/chart-real, MIT): the truth is the mean linear RGB of
     the chart's grey patches, and the chart is blacked out before estimating (as
     benchmarks/check_illuminant_real.py does). Measured: grayness index 1.99 and 1.19
-    degrees, grey world 14.26 and 9.49 (a red cloth; a dark wooden floor). On the other
+    degrees, grey world 14.26 and 9.49 (grey objects on a red cloth; the passport's other
+    page, not masked, holds more grey patches). On the other
     photographs of that benchmark it is not better on average (see its table)."""
     from pathlib import Path
 
