@@ -294,11 +294,18 @@ def main(argv: list[str]) -> None:
         + ", ".join(f"{s} {counts[s]}" for s in sets)
         + f"); working size: long side <= {WORK_SIZE} px, chart masked.\n"
     )
-    cols = ["method", "mean", "median", "trimean", "best 25 %", "worst 25 %"]
+    cols = ["method", "mean", "median", "trimean", "best 25 %", "worst 25 %", "closer than none"]
     out.append("## All photographs (recovery angular error, degrees)\n")
-    all_rows = [
-        [label, *_stats([a for s in sets for a in errs[label][s]])] for label, _, _ in methods
-    ]
+    out.append(
+        '"closer than none": on how many photographs the estimate is closer to the truth '
+        "than leaving the photograph as it came.\n"
+    )
+    none = np.array([a for s in sets for a in errs["none"][s]])
+    all_rows = []
+    for label, _, _ in methods:
+        e = np.array([a for s in sets for a in errs[label][s]])
+        closer = "-" if label == "none" else f"{int((e < none).sum())} of {e.size}"
+        all_rows.append([label, *_stats(list(e)), closer])
     out.append(markdown_table(cols, all_rows))
     out.append("## Per set (mean / median, degrees)\n")
     set_cols = ["method", *[f"{s} ({counts[s]})" for s in sets]]

@@ -581,8 +581,9 @@ def _est_manual(
 
 #: The methods of :func:`white_balance` and :func:`estimate_illuminant`, each name mapped to
 #: its illuminant estimator ``f(xp, linear_image, *, percentile, p, sigma, illuminant, cct,
-#: space) -> (..., 3)`` (read-only). ``"grey_world"``, ``"max_rgb"``, ``"shades_of_grey"``
-#: and ``"grey_edge"`` are accepted as aliases (:data:`WHITE_BALANCE_ALIASES`).
+#: space) -> (..., 3)`` (read-only). ``"grey_world"``, ``"max_rgb"``, ``"shades_of_grey"``,
+#: ``"grey_edge"`` and ``"greyness_index"`` are accepted as aliases
+#: (:data:`WHITE_BALANCE_ALIASES`).
 WHITE_BALANCE_METHODS: MappingProxyType[str, Callable[..., Any]] = MappingProxyType(
     {
         "gray_world": _est_gray_world,
