@@ -384,3 +384,13 @@ def test_grayness_index_on_real_photographs(name: str, gi_max: float, gw_min: fl
     gw = estimate_illuminant(lin, "gray_world", transfer="linear")
     assert _angle_deg(gi, truth) < gi_max
     assert _angle_deg(gw, truth) > gw_min
+
+
+@pytest.mark.parametrize("method", ["grayness_index", "pca"])
+def test_grayness_index_and_pca_backends_on_a_coloured_scene(xp_name: str, method: str) -> None:
+    """Every backend ranks the same pixels as NumPy on a scene that is not grey (on a grey
+    scene any selection gives the light)."""
+    img = _foliage_scene(3, (20, 28)) * [1.0, 0.8, 1.1]
+    ref = estimate_illuminant(img, method, transfer="linear", percentile=5.0)
+    got = estimate_illuminant(to_backend(img, xp_name), method, transfer="linear", percentile=5.0)
+    np.testing.assert_allclose(to_np(got), ref, rtol=1e-9)
