@@ -49,12 +49,13 @@ Estimators (van de Weijer, Gevers & Gijsenij 2007 unify them as
 Which to use (``benchmarks/results/illuminant-real-2026-11-29g.md``, 37 photographs with a
 ColorChecker, the truth from its grey patches): no method is best on every set; max-RGB had
 the smallest mean and median error, every method took the 34 degree cast of the
-machine-vision photographs to 2-7 degrees, and on phone JPEGs (balanced by the phone) the
+machine-vision photographs to 2.3-6.3 degrees, and on phone JPEGs (balanced by the phone) the
 photograph as it came was often as close as any estimate. ``gray_world`` stays the default.
 
 Dask images are balanced lazily: the estimate is a Dask reduction over the whole image (a
 mean, a Minkowski mean, or for ``"white_patch"`` an exact percentile from
-:func:`dask.array.topk` of the ``n - floor((n - 1) q / 100)`` largest values per channel),
+:func:`dask.array.topk` of the ``n - floor((n - 1) q / 100)`` largest values per channel;
+``"grayness_index"`` and ``"pca"`` rank their pixels with :func:`dask.array.topk` too),
 the image is decoded, scaled and re-encoded chunk-wise, and nothing is computed until
 ``.compute()``; a zero channel estimate then raises at compute time.
 """
