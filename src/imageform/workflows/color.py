@@ -202,6 +202,8 @@ _WbMethod = Literal[
     "max_rgb",
     "shades_of_gray",
     "gray_edge",
+    "grayness_index",
+    "pca",
     "manual",
     "chart",
 ]
@@ -216,10 +218,13 @@ class WhiteBalanceOptions(ImageIn, ImageOut, OnDevice):
 
     method: _WbMethod = option("gray_world", help="Illuminant estimate.", choices=_WB_METHODS)
     percentile: float | None = option(
-        None, help="white-patch: percentile of each channel (0-100; default 99, max-rgb 100)."
+        None,
+        help="white-patch: percentile of each channel (0-100; default 99, max-rgb 100); "
+        "grayness-index: percent of the pixels taken as grey (default 0.1); pca: percent "
+        "of darkest and of brightest pixels (default 3.5).",
     )
     p: float = option(6.0, help="shades-of-gray / gray-edge: Minkowski norm p >= 1.")
-    sigma: float = option(1.0, help="gray-edge: Gaussian scale in pixels.")
+    sigma: float = option(1.0, help="gray-edge, grayness-index: Gaussian scale in pixels.")
     illuminant: str | None = option(None, help="manual: illuminant name, e.g. A, D50, F2.")
     cct: float | None = option(None, help="manual: correlated colour temperature in kelvin.")
     normalize: _WbNormalize = option(
