@@ -32,9 +32,7 @@ from tests.geometry.checkerboard_support import (
 
 
 @pytest.mark.parametrize("name", VIEWS)
-def test_opencv_views_sized_or_refused_never_wrong(
-    views: dict[str, np.ndarray], name: str
-) -> None:
+def test_opencv_views_sized_or_refused_never_wrong(views: dict[str, np.ndarray], name: str) -> None:
     """Each view alone: 9 x 6 with the same corners as the size given, or not sized at all
     (a board whose outer squares reach the border); 7 of the 13 are sized."""
     auto = find_checkerboard(views[name], "auto")
@@ -99,10 +97,12 @@ def test_synthetic_size_property(cols: int, rows: int, angle: float, square: flo
         assert res.pattern_size == (max(cols, rows), min(cols, rows))
 
 
+_ALL = slice(None)
+
+
 @pytest.mark.parametrize(
-    "window",
-    [(slice(None), slice(None, 400)), (slice(None), slice(300, None)), (slice(None, 300), slice(None))],
-)  # fmt: skip
+    "window", [(_ALL, slice(None, 400)), (_ALL, slice(300, None)), (slice(None, 300), _ALL)]
+)
 def test_board_cut_by_the_border_is_not_sized(
     views: dict[str, np.ndarray], window: tuple[slice, slice]
 ) -> None:
@@ -167,7 +167,9 @@ def test_set_takes_the_size_most_views_show(views: dict[str, np.ndarray]) -> Non
         np.testing.assert_allclose(a.corners, b.corners, atol=1e-3)
     cut = views["left01.jpg"].copy()
     cut[:, 400:] = cut[:, 400:].mean()
-    with pytest.warns(CheckerboardNotFoundWarning, match=r"9 x 6 checkerboard in 1 of 5 views: cut"):
+    with pytest.warns(
+        CheckerboardNotFoundWarning, match=r"9 x 6 checkerboard in 1 of 5 views: cut"
+    ):
         res = find_checkerboards([*imgs[1:5], cut], "auto", names=[*VIEWS[1:5], "cut"])
     assert [r.found for r in res] == [True] * 4 + [False]
 

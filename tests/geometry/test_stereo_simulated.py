@@ -155,6 +155,37 @@ def test_stereo_calibrate_command(rendered: tuple, tmp_path: Path) -> None:
     assert main([*bad, "--board", "9x6", "-o", str(tmp_path / "c.toml")]) == 1
 
 
+def test_stereo_calibrate_command_board_auto(
+    rendered: tuple, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``--board auto``: the size most images of both cameras show (9x6), the same rig as
+    ``--board 9x6``, the size named in the stereo file's command and the first line."""
+    import json
+
+    from imageform.cli import main
+    from imageform.io import read_stereo_camera, write_image
+
+    images = rendered[4]
+    for k in range(len(images) // 2):
+        for side, img in (("left", images[2 * k]), ("right", images[2 * k + 1])):
+            (tmp_path / side).mkdir(exist_ok=True)
+            write_image(tmp_path / side / f"{side}-{k:02d}.png", img)
+    base = ["stereo-calibrate", str(tmp_path / "left" / "*.png"), str(tmp_path / "right" / "*.png")]
+    base += ["--square", "20mm", "--fix", "k3"]
+    a, b = tmp_path / "auto.toml", tmp_path / "given.toml"
+    assert main([*base, "--board", "auto", "-o", str(a), "--json"]) == 0
+    summary = json.loads(capsys.readouterr().out)
+    assert summary["board"]["inner_corners"] == [9, 6] and summary["board"]["read_as"] == "auto"
+    assert main([*base, "--board", "9x6", "-o", str(b)]) == 0
+    capsys.readouterr()
+    sa, sb = read_stereo_camera(a), read_stereo_camera(b)
+    np.testing.assert_allclose(sa.T, sb.T, rtol=1e-6)
+    assert sa.provenance.command.startswith("imageform stereo-calibrate --board 9x6 ")
+    assert main([*base, "--board", "auto", "-o", str(a), "--force"]) == 0
+    first = capsys.readouterr().out.splitlines()[0]
+    assert first.startswith("board: checkerboard, 9x6 inner corners = 10x7 squares (--board auto")
+
+
 def test_stereo_calibrate_command_fisheye_model(
     rendered: tuple, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:

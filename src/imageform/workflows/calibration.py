@@ -30,6 +30,7 @@ __all__ = [
     "UndistortOptions",
     "board_hint",
     "board_reading",
+    "is_auto_board",
     "parse_board",
 ]
 
@@ -225,11 +226,7 @@ class _BoardChecks:
     def check(self) -> None:
         super().check()  # type: ignore[misc]
         if is_auto_board(self.board):
-            if not hasattr(self, "marker"):
-                raise InvalidInputError(
-                    "--board auto is read by imageform calibrate; this command takes a "
-                    "checkerboard --board COLSxROWS of inner corners"
-                )
+            pass  # the checkerboard's size is found from the views
         elif parse_charuco(self.board) is None:
             parse_board(self.board)
         elif not hasattr(self, "marker"):

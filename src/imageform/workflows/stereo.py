@@ -5,7 +5,7 @@ from __future__ import annotations
 import os
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, get_args
+from typing import Any, Literal, get_args
 
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
 from imageform.workflows._images import ImageIn, read
@@ -24,6 +24,7 @@ from imageform.workflows.calibration import (
     _converging,
     board_hint,
     board_reading,
+    is_auto_board,
     parse_board,
 )
 
@@ -36,7 +37,7 @@ class StereoCalibrateOptions(_BoardChecks, ImageIn):
 
     board: str = option(
         help="Checkerboard COLSxROWS of inner corners (9x6), or say which with 9x6corners or "
-        "10x7squares. The output says how it was read.",
+        "10x7squares; auto: the size most images show. The output says how it was read.",
         metavar="CxR",
     )
     square: str = option(
@@ -119,8 +120,12 @@ def _check_distinct(left: str, right: str, lefts: list[Path], rights: list[Path]
 
 
 def _detect(
-    run: Run, opts: StereoCalibrateOptions, files: list[Path], board: tuple[int, int]
+    opts: StereoCalibrateOptions, files: list[Path], board: tuple[int, int] | Literal["auto"]
 ) -> tuple[tuple[int, int], list[Any]]:
+    """Each image's checkerboard (``board``: its inner corners, or ``"auto"``), all of one size.
+
+    Returns the images' size ``(W, H)`` and each image's ``CheckerboardResult``.
+    """
     from imageform.geometry.checkerboard import find_checkerboard
 
     size: tuple[int, int] | None = None
@@ -135,12 +140,34 @@ def _detect(
                 f"{size[1]} px and {f} of {img.shape[1]} x {img.shape[0]} px"
             )
         grey = img[..., 0] if img.shape[-1] == 1 else img
-        det = find_checkerboard(grey, board, half_window=opts.half_window)
-        found.append(det.corners if det.found else None)
-        if not det.found:
-            run.note(f"warning: {f}: no {board[0]}x{board[1]} board found ({det.reason})")
+        found.append(find_checkerboard(grey, board, half_window=opts.half_window))
     assert size is not None
     return size, found
+
+
+def _settle_auto_board(
+    opts: StereoCalibrateOptions, files: list[Path], found: list[Any]
+) -> tuple[int, int]:
+    """Return the checkerboard's size for ``--board auto``: the one most images show.
+
+    Over the images of both cameras; the images that showed another size or none are searched
+    again for it (``found`` is updated in place).
+    """
+    from imageform.geometry.checkerboard import set_pattern_size
+
+    size = set_pattern_size([d.pattern_size if d.found else None for d in found])
+    if size is None:
+        raise DegenerateConfigurationError(
+            f"no checkerboard found in any of the {len(files)} images ({files[0].name}: "
+            f"{found[0].reason}{'; ...' if len(files) > 1 else ''}); --board auto looks for "
+            "boards of at least 3x3 inner corners: give the board's size with --board COLSxROWS"
+        )
+    again = [i for i, d in enumerate(found) if not d.found or d.pattern_size != size]
+    if again:
+        _, redo = _detect(opts, [files[i] for i in again], size)
+        for i, d in zip(again, redo, strict=True):
+            found[i] = d
+    return size
 
 
 def stereo_calibrate_cmd(
@@ -162,24 +189,39 @@ def stereo_calibrate_cmd(
             f"expected as many right images as left ones (paired in sorted order), got "
             f"{len(lefts)} left and {len(rights)} right"
         )
-    board = parse_board(opts.board)
+    auto = is_auto_board(opts.board)
+    board = (0, 0) if auto else parse_board(opts.board)
     ahead.start("stereo-calibrate")  # a first run: its kernels compiled on two cores
     if run.progress is not None:
         run.progress("detecting", 0.0)
-    size_l, found_l = _detect(run, opts, lefts, board)
+    size_l, det_l = _detect(opts, lefts, "auto" if auto else board)
     if run.progress is not None:
         run.progress("detecting", 0.5)
-    size_r, found_r = _detect(run, opts, rights, board)
+    size_r, det_r = _detect(opts, rights, "auto" if auto else board)
+    line = None
+    if auto:
+        both = det_l + det_r
+        board = _settle_auto_board(opts, lefts + rights, both)
+        agree = sum(d.found and d.pattern_size == board for d in det_l + det_r)
+        det_l, det_r = both[: len(lefts)], both[len(lefts) :]
+        line = (
+            f"board: checkerboard, {board[0]}x{board[1]} inner corners = "
+            f"{board[0] + 1}x{board[1] + 1} squares (--board auto: the size {agree} of the "
+            f"{len(both)} images show)"
+        )
+    for f, d in zip(lefts + rights, det_l + det_r, strict=True):
+        if not d.found:
+            run.note(f"warning: {f}: no {board[0]}x{board[1]} board found ({d.reason})")
     pairs = [
-        (fl, fr, cl, cr)
-        for fl, fr, cl, cr in zip(lefts, rights, found_l, found_r, strict=True)
-        if cl is not None and cr is not None
+        (fl, fr, dl.corners, dr.corners)
+        for fl, fr, dl, dr in zip(lefts, rights, det_l, det_r, strict=True)
+        if dl.found and dr.found
     ]
     if len(pairs) < MIN_VIEWS:
         raise DegenerateConfigurationError(
             f"found the {board[0]}x{board[1]} board in both images of {len(pairs)} of the "
             f"{len(lefts)} pairs; stereo-calibrate needs at least {MIN_VIEWS} "
-            f"({board_hint(opts.board)})"
+            f"({board_hint(f'{board[0]}x{board[1]}' if auto else opts.board)})"
         )
     if run.progress is not None:
         run.progress("calibrating", 1.0)
@@ -223,7 +265,9 @@ def stereo_calibrate_cmd(
         }
         for p, e in zip(pairs, rig.per_view_rms, strict=True)
     ]
-    reading = board_reading(opts.board)
+    reading = board_reading(f"{board[0]}x{board[1]}" if auto else opts.board)
+    if line is not None:
+        reading["line"], reading["read_as"] = line, "auto"
     n = len(rig.left.std) - 5  # the model's coefficients
     summary = {
         "output": out,
