@@ -9,7 +9,8 @@ set the table gives:
   border, or a larger grid seen beside it, cannot be sized);
 - *the set* (``find_checkerboards(views, "auto")``, what ``imageform calibrate --board auto``
   does): the size it settles on and the views found with it, against
-  ``find_checkerboard(view, (cols, rows))`` given the true size;
+  ``find_checkerboard(view, (cols, rows))`` given the true size, and OpenCV 5.0's
+  ``findChessboardCornersSB`` (exhaustive and accuracy flags) given it;
 - *crops*: random windows of each view with a board (``--crops`` per view, 50-100 % of the
   width and height, seed ``--seed``), most of them cutting the board: a window whose board
   comes out at any size but the true one is *wrong*; a cut board must come out as none;
@@ -85,6 +86,7 @@ def _set_row(name: str, files: list[str], size: tuple[int, int], crops: int, see
             right += 1
         else:
             wrong += 1
+    sb = sum(_opencv_sb(v, size) for v in views)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         res = find_checkerboards(views, "auto")
@@ -116,10 +118,21 @@ def _set_row(name: str, files: list[str], size: tuple[int, int], crops: int, see
         wrong,
         none,
         settled,
-        f"{set_found} / {sum(q.found for q in fixed)}",
+        f"{set_found} / {sum(q.found for q in fixed)} / {sb}",
         f"{c_n}: {c_found} found ({c_cut_found} of them cut), {c_wrong} wrong",
         f"{t_auto:.2f} / {t_fixed:.2f}",
     ]
+
+
+def _opencv_sb(view: np.ndarray, size: tuple[int, int]) -> bool:
+    """OpenCV 5.0's ``findChessboardCornersSB`` (exhaustive, accuracy flags) finds the board."""
+    import cv2
+
+    g = view if view.ndim == 2 else view[..., 0] if view.shape[-1] == 1 else None
+    if g is None:
+        g = cv2.cvtColor(np.ascontiguousarray(view[..., :3]), cv2.COLOR_RGB2GRAY)
+    flags = cv2.CALIB_CB_EXHAUSTIVE + cv2.CALIB_CB_ACCURACY
+    return bool(cv2.findChessboardCornersSB(np.ascontiguousarray(g), size, flags=flags)[0])
 
 
 def _negative_row(name: str, files: list[str]) -> list:
@@ -163,7 +176,7 @@ def main() -> None:
         "wrong size",
         "none",
         "the set's size (auto)",
-        "views found: auto set / size given",
+        "views found: auto set / size given / OpenCV SB, size given",
         "crops",
         "CPU s: auto / size given",
     ]

@@ -192,11 +192,20 @@ def lattice_rectangle(
     return grow_rectangle(label_lattice(seed, cand, nbr, max_hops=max_hops), xy)
 
 
-def lattice_problem(grid: NDArray[np.float64], max_bend: float = 0.3) -> str | None:
+#: Largest second difference along a row or column of a board's corners, as a share of the
+#: local spacing (:func:`lattice_problem`). A wide-angle lens bends a board's rows near the
+#: image's edge and perspective shortens its squares: a GoPro's views (Udacity's
+#: calibration_wide set) reach 0.30-0.33, a fisheye webcam's 0.41; one corner off by ``d``
+#: gives ``2 d / spacing``, so 0.45 still refuses a corner a quarter of a square off (which
+#: the sub-pixel step would not pull back).
+MAX_BEND = 0.45
+
+
+def lattice_problem(grid: NDArray[np.float64], max_bend: float = MAX_BEND) -> str | None:
     """Why ``grid`` (R, C, 2) is not a consistent lattice, or None when it is.
 
     Second differences along rows and columns must stay below ``max_bend`` times the local
-    spacing; all cells must be convex with one orientation. (One numba kernel,
+    spacing (:data:`MAX_BEND`); all cells must be convex with one orientation. (One numba kernel,
     ``lattice_problem_numba``, where numba runs; :func:`lattice_problem_numpy` otherwise.)
     """
     g = np.ascontiguousarray(grid, dtype=np.float64)
@@ -215,7 +224,7 @@ def lattice_problem(grid: NDArray[np.float64], max_bend: float = 0.3) -> str | N
     return "the grid's cells are not convex quadrilaterals of one orientation"
 
 
-def lattice_problem_numpy(grid: NDArray[np.float64], max_bend: float = 0.3) -> str | None:
+def lattice_problem_numpy(grid: NDArray[np.float64], max_bend: float = MAX_BEND) -> str | None:
     """Plain NumPy twin of :func:`lattice_problem`."""
     for axis, name in ((1, "row"), (0, "column")):
         g = np.moveaxis(grid, axis, 0)
