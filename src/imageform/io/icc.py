@@ -1,4 +1,4 @@
-"""Colour spaces that image files declare: ICC profiles, PNG's sRGB chunk, EXIF.
+"""Colour spaces that image files declare: ICC profiles, PNG's sRGB, gAMA and cHRM, EXIF.
 
 A phone writes its photographs in Display P3, a camera set to Adobe RGB writes Adobe RGB,
 a raw converter often ProPhoto; the pixel values mean different colours in each. The file
@@ -82,7 +82,8 @@ class DeclaredColorSpace(NamedTuple):
     ``name``: a space of :data:`imageform.color.SPACES` (``srgb``, ``display_p3``,
     ``adobe_rgb``, ``prophoto``, ``rec2020``, ``rec709`` or a ``linear_`` twin), or None
     when the file declares nothing or a profile imageform does not recognise. ``source``:
-    ``icc``, ``png-srgb``, ``nclx`` (HEIF's H.273 code points), ``exif`` or ``none``.
+    ``icc``, ``png-srgb``, ``png-gama`` / ``png-chrm`` (a PNG's ``gAMA`` and ``cHRM`` chunks),
+    ``nclx`` (HEIF's H.273 code points), ``exif`` or ``none``.
     ``description``: the profile's own description (``""`` without one).
     """
 

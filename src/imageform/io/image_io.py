@@ -11,12 +11,15 @@ One rule for every format:
   (float16 is widened to float32). Other sample types are refused. A TIFF's samples are read
   as the values they mean: a palette through its colour map (RGB), a bilevel image as 0/255,
   WhiteIsZero inverted; a CMYK, Lab or raw-YCbCr TIFF is refused; a palette BMP or GIF as RGB,
-  a 1-bit BMP as 0/255. Samples of fewer bits than
+  a 1-bit BMP as 0/255; a CMYK JPEG as sRGB, through its embedded CMYK ICC profile (LittleCMS)
+  where it has one, else ``(1 - C)(1 - K)``. Samples of fewer bits than
   their container (10, 12, 14 bits in uint16) come as stored, the sensor's numbers (DN), as
   tifffile and scikit-image read them: measurements (``emva``, ``characterize``) need them so;
   such an image looks dark until scaled by ``65535 / (2**bits - 1)``.
 - **One image**: a TIFF holding a stack (pages, time points, z-planes) and an animated GIF or
-  WebP are refused in one line saying what they hold, rather than read as their first image.
+  WebP are refused in one line saying what they hold, rather than read as their first image;
+  so is a TIFF of more than 4 samples per pixel (multispectral bands), by :func:`image_info`
+  as by :func:`read_image`.
 - **Alpha** (grey+alpha, RGBA, a palette with transparency in PNG, GIF or BMP, WebP's alpha;
   extra samples in TIFF):
   dropped when every pixel is opaque; otherwise refused unless ``alpha="drop"`` (ignore it)
@@ -1189,9 +1192,13 @@ def image_color_space(path: str | Path) -> DeclaredColorSpace:
 
     In this order: an embedded ICC profile (JPEG APP2, PNG ``iCCP``, TIFF tag 34675, HEIF's
     ``colr`` box, WebP's ``ICCP`` chunk, a GIF's ICC extension) named by
-    :func:`identify_icc`; HEIF's ``nclx`` colour description (H.273 code points:
+    :func:`identify_icc` (a CMYK JPEG's CMYK profile: ``srgb``, what :func:`read_image`
+    converts it to); HEIF's ``nclx`` colour description (H.273 code points:
     BT.709/sRGB, Display P3 or BT.2020 primaries with the sRGB, BT.709 or a
-    linear transfer); PNG's ``sRGB`` chunk; EXIF ``ColorSpace`` 1 (sRGB), or
+    linear transfer); PNG's ``sRGB`` chunk; PNG's ``gAMA`` and ``cHRM`` chunks (gAMA
+    1/2.2 within 5 % is sRGB's curve, 1.0 a ``linear_`` space; source ``png-gama`` or
+    ``png-chrm``; a gamma or primaries of no space give ``name`` None with the chunks
+    described); EXIF ``ColorSpace`` 1 (sRGB), or
     uncalibrated with the interoperability index ``R03`` (Adobe RGB, the DCF option camera
     JPEGs use). A profile imageform does not recognise gives ``name`` None with its
     description; ``.npy`` files and files that declare nothing give ``(None, "none", "")``.
