@@ -19,9 +19,10 @@ Then every file goes through each command class, in one worker process per file 
 ``main`` called in-process, stdout and stderr captured; a class slower than 120 s counts as a
 hang): ``read`` (``read_image`` against another decoder chosen by the file's bytes: OpenCV for
 PNG, tifffile and the TIFF 6.0 rules for TIFF, Pillow with ``exif_transpose`` otherwise; shape
-after orientation, sample type and values), ``info`` (its size and channels against those read),
-``convert`` (to Lab, TIFF), ``white-balance``, ``delta-e`` (the file against itself: ΔE must be
-0), ``cvd``, ``segment``, ``stain-normalize`` (Reinhard, the file its own target),
+after orientation, sample type and values), ``info`` (its size and channels against those
+read; the note: the colour space the file declares), ``convert`` (to Lab, TIFF; the note: the
+space it read the file in), ``white-balance``, ``delta-e`` (the file against itself: ΔE must
+be 0), ``cvd``, ``segment``, ``stain-normalize`` (Reinhard, the file its own target),
 ``flatfield`` (radial), ``chart``, ``vanishing``, ``undistort --from-lines``, ``sfr``,
 ``mosaic`` then ``demosaic`` of its mosaic, ``develop``. Each gets one verdict: **fine** (exit
 0, outputs of the upright input's size), **error** (exit 1 or 2 with one line on stderr, no
@@ -252,9 +253,12 @@ def make_edge_cases(folder: Path) -> None:
         photometric="rgb",
         extrasamples=["unspecified", "unspecified"],
     )
-    tifffile.imwrite(
-        folder / "made 7ch.tif", np.dstack([photo, photo, photo[..., :1]]), photometric="minisblack"
-    )  # a multispectral camera's 7 bands
+    tifffile.imwrite(  # a multispectral camera's 7 bands, one page of 7 samples per pixel
+        folder / "made 7ch.tif",
+        np.dstack([photo, photo, photo[..., :1]]),
+        photometric="minisblack",
+        planarconfig="contig",
+    )
     tifffile.imwrite(folder / "made 2-page narrow.tif", photo[:2, :, :], photometric="minisblack")
     tifffile.imwrite(
         folder / "made cmyk.tif", np.dstack([photo, photo[..., :1]]), photometric="separated"
@@ -608,7 +612,11 @@ def _check_outputs(
         if "height" in head and (head["height"], head["width"]) != shape[:2]:
             size = f"{head['width']} x {head['height']}"
             return "wrong", f"says {size} px, reads {shape[1]} x {shape[0]} (upright)"
-        return "fine", ""
+        source = head.get("color_space_source", "none")
+        return "fine", "" if source == "none" else f"declares {head.get('color_space')} ({source})"
+    if cls == "convert":  # the space it read the file in (--from auto): "IMAGE (SPACE) -> ..."
+        _, _, rest = stdout.partition(f"{path} (")
+        return "fine", f"read as {rest.partition(')')[0]}" if rest else ""
     if cls == "delta-e":
         try:
             mean = json.loads(stdout)["mean"]
