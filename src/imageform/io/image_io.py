@@ -398,8 +398,8 @@ def _pillow_open(p: Path) -> Iterator[Any]:
     allows and warn on stderr from 90 Mpx. That cap and the warnings filter are process-wide
     settings, hence the lock; it is held only while Pillow reads the header and counts the
     frames (``is_animated``, ``n_frames``: GIF frames are checked against the cap as they are
-    seeked), the steps that consult them. The decoding (``load``, ``convert``) runs after, outside
-    it, so that images decoded in threads of one process decode at the same time.
+    seeked), the steps that consult them. The decoding (``load``, ``convert``) runs after,
+    outside it, so that images decoded in threads of one process decode at the same time.
     """
     from PIL import Image
 
@@ -709,8 +709,8 @@ def _cmyk_to_rgb(p: Path, im: Any) -> np.ndarray:
 
     With a profile (a printer's or press's: what Photoshop embeds), LittleCMS (Pillow's
     ``ImageCms``) converts from it to sRGB with ImageCms's defaults (perceptual intent), as
-    a colour-managed viewer shows the file; without one, Pillow's ``R = 255 - C`` with the
-    ink's black, ``(1 - C)(1 - K)``. Adobe's inverted CMYK (an APP14 ``Adobe`` segment, what
+    a colour-managed viewer shows the file; without one, Pillow's naive ``R = (1 - C)(1 - K)``
+    (G from M, B from Y). Adobe's inverted CMYK (an APP14 ``Adobe`` segment, what
     Photoshop and libjpeg write) is undone by Pillow before either: the profile sees the
     inks as they mean.
     """
