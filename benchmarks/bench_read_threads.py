@@ -81,10 +81,9 @@ def make_files(folder: Path, count: int = 16) -> dict[str, list[str]]:
     for png in sorted(KODAK.glob("kodim*.png"))[:count]:
         with Image.open(png) as im:
             rgb = im.convert("RGB").resize((im.width * 4, im.height * 4), Image.Resampling.BICUBIC)
-            for fmt, suffix, kw in (("jpeg", ".jpg", {"quality": 90}),
-                                    ("webp", ".webp", {"quality": 80})):  # fmt: skip
+            for fmt, suffix, quality in (("jpeg", ".jpg", 90), ("webp", ".webp", 80)):
                 path = folder / f"{png.stem}{suffix}"
-                rgb.save(path, **kw)
+                rgb.save(path, quality=quality)
                 out[fmt].append(str(path))
     return out
 

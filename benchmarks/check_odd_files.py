@@ -372,9 +372,10 @@ def _reference(path: Path) -> np.ndarray | None:
             from PIL import ImageCms
 
             src = ImageCms.ImageCmsProfile(io.BytesIO(icc))
-            up = ImageCms.profileToProfile(
-                up, src, ImageCms.createProfile("sRGB"), outputMode="RGB"
-            )
+            srgb = ImageCms.createProfile("sRGB")
+            converted = ImageCms.profileToProfile(up, src, srgb, outputMode="RGB")
+            assert converted is not None  # None only with inPlace=True
+            up = converted
         if up.mode in ("P", "PA"):
             up = up.convert("RGBA" if "transparency" in up.info or up.mode == "PA" else "RGB")
         elif up.mode in ("CMYK", "YCbCr", "1"):
