@@ -172,6 +172,12 @@ def test_commands_read_a_gamma_png_as_it_declares(
     assert main(["convert", str(SUITE / "g10n2c08.png"), "-o", str(out), "--to", "lab",
                  "--json"]) == 0  # fmt: skip
     assert json.loads(capsys.readouterr().out)["from"] == "linear_srgb"
+    g10 = str(SUITE / "g10n2c08.png")  # its uint8 codes are linear light / 255 (they were refused)
+    assert main(["delta-e", g10, g10, "--json"]) == 0
+    said = json.loads(capsys.readouterr().out)
+    assert (said["spaces"], said["mean"]) == (["linear_srgb", "linear_srgb"], 0.0)
+    assert main(["segment", g10, "-o", str(tmp_path / "mask.png")]) == 0
+    assert main(["cvd", g10, "--type", "deutan", "-o", str(tmp_path / "cvd.png")]) == 0
     assert main(["convert", str(SUITE / "g03n2c08.png"), "-o", str(out), "--to", "lab",
                  "--force"]) == 0  # fmt: skip
     err = capsys.readouterr().err

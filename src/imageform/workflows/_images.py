@@ -462,14 +462,16 @@ def as_values(image: Any, space: str) -> Any:
 
     A file that declares a linear space (a PNG's gAMA 1.0, an scRGB profile) stores its
     light as full-range integers, ``code / (2**bits - 1)``; :func:`imageform.color.convert`
-    takes a linear space's values as floats only. Anything else is returned as it is.
+    takes a linear space's values as floats only. Anything else, a device array included
+    (whose conversion then runs on the CPU, :func:`gpu_bands`), is returned as it is.
     """
-    dtype = getattr(image, "dtype", None)
-    if not str(space).startswith("linear_") or dtype is None or dtype.kind != "u":
-        return image
     import numpy as np
 
-    return np.asarray(image, dtype=np.float32) / np.float32(np.iinfo(dtype).max)
+    if not isinstance(image, np.ndarray) or image.dtype.kind != "u":
+        return image
+    if not str(space).startswith("linear_"):
+        return image
+    return np.asarray(image, dtype=np.float32) / np.float32(np.iinfo(image.dtype).max)
 
 
 def in_srgb(run: Run, path: Path, image: Any, space: str, *, clip: bool) -> Any:
