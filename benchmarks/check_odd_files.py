@@ -9,7 +9,8 @@ Run::
 git mirrors of their public repositories (``MIRRORS/<owner>+<name>/repo``, the commit named in
 the table; nothing is downloaded), and the edge cases of :func:`make_edge_cases` written here
 (1x1, 1xN, 65535x1, 16-bit grey, RGBA, truncated, zero bytes, text named .png, animated GIF,
-TIFF with 4 and 5 channels, floats of 0-4000, WebP lossy/lossless/alpha/EXIF-turned/animated,
+TIFF with 4, 5 and 7 channels, a stack of two narrow grey pages, a CMYK JPEG with and without
+a CMYK ICC profile, floats of 0-4000, WebP lossy/lossless/alpha/EXIF-turned/animated,
 BMP of 1, 8 and 24 bits, RLE8, RLE4, top-down, GIF with a palette and a transparent index,
 spaces and non-ASCII letters in names). The files stay outside the repository. ``--only TEXT``
 sweeps the files whose names contain TEXT (a re-run on the files a change touches).
@@ -18,9 +19,10 @@ Then every file goes through each command class, in one worker process per file 
 ``main`` called in-process, stdout and stderr captured; a class slower than 120 s counts as a
 hang): ``read`` (``read_image`` against another decoder chosen by the file's bytes: OpenCV for
 PNG, tifffile and the TIFF 6.0 rules for TIFF, Pillow with ``exif_transpose`` otherwise; shape
-after orientation, sample type and values), ``info`` (its size and channels against those read),
-``convert`` (to Lab, TIFF), ``white-balance``, ``delta-e`` (the file against itself: ΔE must be
-0), ``cvd``, ``segment``, ``stain-normalize`` (Reinhard, the file its own target),
+after orientation, sample type and values), ``info`` (its size and channels against those
+read; the note: the colour space the file declares), ``convert`` (to Lab, TIFF; the note: the
+space it read the file in), ``white-balance``, ``delta-e`` (the file against itself: ΔE must
+be 0), ``cvd``, ``segment``, ``stain-normalize`` (Reinhard, the file its own target),
 ``flatfield`` (radial), ``chart``, ``vanishing``, ``undistort --from-lines``, ``sfr``,
 ``mosaic`` then ``demosaic`` of its mosaic, ``develop``. Each gets one verdict: **fine** (exit
 0, outputs of the upright input's size), **error** (exit 1 or 2 with one line on stderr, no
@@ -131,6 +133,13 @@ SOURCES: tuple[tuple[str, str, str, str, str], ...] = tuple(
                     "s01i3p01",
                     "xc1n0g08",
                     "xd3n2c08",
+                    # file gammas 0.35 to 2.5 in gAMA (no iCCP, no sRGB), sRGB's cHRM
+                    "g03n2c08",
+                    "g04n2c08",
+                    "g05n0g16",
+                    "g10n2c08",
+                    "g25n2c08",
+                    "ccwn2c08",
                 )
             ),
         ),
@@ -244,6 +253,13 @@ def make_edge_cases(folder: Path) -> None:
         photometric="rgb",
         extrasamples=["unspecified", "unspecified"],
     )
+    tifffile.imwrite(  # a multispectral camera's 7 bands, one page of 7 samples per pixel
+        folder / "made 7ch.tif",
+        np.dstack([photo, photo, photo[..., :1]]),
+        photometric="minisblack",
+        planarconfig="contig",
+    )
+    tifffile.imwrite(folder / "made 2-page narrow.tif", photo[:2, :, :], photometric="minisblack")
     tifffile.imwrite(
         folder / "made cmyk.tif", np.dstack([photo, photo[..., :1]]), photometric="separated"
     )
@@ -259,6 +275,11 @@ def make_edge_cases(folder: Path) -> None:
     tifffile.imwrite(folder / "made multipage.tif", np.stack([photo, photo[::-1]]))
     Image.fromarray(photo).save(folder / "made ünïcødé 写真.jpg")
     Image.fromarray(photo).convert("CMYK").save(folder / "made cmyk.jpg")
+    from benchmarks._cmyk_icc import cmyk_profile
+
+    Image.fromarray(photo).convert("CMYK").save(
+        folder / "made cmyk icc.jpg", icc_profile=cmyk_profile()
+    )
     Image.fromarray(photo).save(folder / "made progressive.jpg", progressive=True)
     Image.fromarray(photo[..., 0]).save(folder / "made grey.jpg")
     exif = Image.Exif()
@@ -331,7 +352,7 @@ def _reference(path: Path) -> np.ndarray | None:
 
     PNG: OpenCV (libpng, every bit depth) turned by the eXIf orientation; TIFF: tifffile and
     the TIFF 6.0 rules; .npy: NumPy; BMP, GIF, WebP: OpenCV; anything else: Pillow with
-    ``exif_transpose``.
+    ``exif_transpose`` (a CMYK JPEG with a CMYK ICC profile converted by ImageCms to sRGB).
     """
     head = path.read_bytes()[:8]
     if head.startswith(b"\x93NUMPY"):
@@ -346,6 +367,15 @@ def _reference(path: Path) -> np.ndarray | None:
 
     with Image.open(path) as im:
         up = ImageOps.exif_transpose(im)
+        icc = up.info.get("icc_profile") or b""
+        if up.mode == "CMYK" and icc[16:20] == b"CMYK":  # LittleCMS: the profile to sRGB
+            from PIL import ImageCms
+
+            src = ImageCms.ImageCmsProfile(io.BytesIO(icc))
+            srgb = ImageCms.createProfile("sRGB")
+            converted = ImageCms.profileToProfile(up, src, srgb, outputMode="RGB")
+            assert converted is not None  # None only with inPlace=True
+            up = converted
         if up.mode in ("P", "PA"):
             up = up.convert("RGBA" if "transparency" in up.info or up.mode == "PA" else "RGB")
         elif up.mode in ("CMYK", "YCbCr", "1"):
@@ -583,7 +613,11 @@ def _check_outputs(
         if "height" in head and (head["height"], head["width"]) != shape[:2]:
             size = f"{head['width']} x {head['height']}"
             return "wrong", f"says {size} px, reads {shape[1]} x {shape[0]} (upright)"
-        return "fine", ""
+        source = head.get("color_space_source", "none")
+        return "fine", "" if source == "none" else f"declares {head.get('color_space')} ({source})"
+    if cls == "convert":  # the space it read the file in (--from auto): "IMAGE (SPACE) -> ..."
+        _, _, rest = stdout.partition(f"{path} (")
+        return "fine", f"read as {rest.partition(')')[0]}" if rest else ""
     if cls == "delta-e":
         try:
             mean = json.loads(stdout)["mean"]

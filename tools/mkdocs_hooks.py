@@ -89,6 +89,7 @@ BENCH_SCRIPTS: dict[str, str] = {
     "psf": "benchmarks/bench_psf.py",
     "raw": "benchmarks/bench_raw.py",
     "raw-variants": "benchmarks/check_raw_variants.py",
+    "read-threads": "benchmarks/bench_read_threads.py",
     "reconstruct": "benchmarks/bench_reconstruct.py",
     "endo-real": "benchmarks/check_endo_real.py",
     "sfm-intruders": "benchmarks/check_sfm_intruders.py",

@@ -396,3 +396,16 @@ def test_each_tile_or_strip_is_decoded_once(
     ref = np.asarray(convert(img, "srgb", "display_p3"))
     got = _read(r.output)
     np.testing.assert_allclose(got / np.iinfo(got.dtype).max, np.clip(ref, 0, 1), atol=0.51 / 255)
+
+
+def test_convert_of_a_linear_tagged_integer_tiff(tmp_path: Path) -> None:
+    """A uint8 TIFF tagged linear (scRGB profile): its codes are linear light / 255."""
+    from imageform.io import icc_profile
+
+    img = _image(256, 512)
+    src = tmp_path / "linear.tif"
+    tifffile.imwrite(src, img, tile=(TILE, TILE), photometric="rgb",
+                     iccprofile=icc_profile("linear_srgb"))  # fmt: skip
+    r = process_chunked(src, tmp_path / "s.zarr", "convert", {"to": "srgb"}, dtype="float32")
+    ref = np.asarray(convert(img.astype(np.float32) / 255, "linear_srgb", "srgb"))
+    np.testing.assert_allclose(_read(r.output), ref, atol=1e-6)

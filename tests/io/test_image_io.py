@@ -478,3 +478,92 @@ def test_png_info_counts_trns_as_the_alpha_it_reads_as(
     img.save(tmp_path / "t.png", transparency=transparency)
     assert read_image(tmp_path / "t.png", alpha="keep").shape[2] == channels
     assert image_info(tmp_path / "t.png").channels == channels
+
+
+@pytest.mark.parametrize(
+    ("layout", "words"),
+    [
+        ("contig", "a TIFF of 7 samples per pixel"),  # YXS
+        ("separate", "a TIFF of 7 samples per pixel"),  # SYX (planar)
+        ("pages", "a stack of 7 images of 10 x 8 px (7 pages)"),  # QYX
+        ("ome", "a stack of 7 images of 10 x 8 px (7 channels)"),  # CYX
+    ],
+)
+def test_tiff_of_more_than_four_channels_is_refused_alike_by_info_and_read(
+    tmp_path: Path, layout: str, words: str
+) -> None:
+    """7 bands of a multispectral camera: images are grey or RGB (+ alpha), 1 to 4 channels
+    (docs/conventions.md); image_info says what read_image does, in the same line."""
+    import tifffile
+
+    a = RNG.integers(0, 65535, (8, 10, 7)).astype(np.uint16)
+    p = tmp_path / ("b.ome.tif" if layout == "ome" else "b.tif")
+    if layout == "contig":
+        tifffile.imwrite(p, a, photometric="minisblack", planarconfig="contig")
+    elif layout == "separate":
+        tifffile.imwrite(p, np.moveaxis(a, -1, 0), photometric="minisblack",
+                         planarconfig="separate")  # fmt: skip
+    elif layout == "pages":
+        tifffile.imwrite(p, np.moveaxis(a, -1, 0), photometric="minisblack")
+    else:
+        tifffile.imwrite(p, np.moveaxis(a, -1, 0), metadata={"axes": "CYX"})
+    with pytest.raises(InvalidInputError) as info_err:
+        image_info(p)
+    with pytest.raises(InvalidInputError) as read_err:
+        read_image(p)
+    assert str(info_err.value) == str(read_err.value)
+    assert words in str(read_err.value)
+    assert "\n" not in str(read_err.value)
+
+
+def test_a_stack_of_narrow_grey_pages_is_not_read_as_colour(tmp_path: Path) -> None:
+    """Two 3-px-wide grey pages (QYX) once came back as one 2 x 8 image of 3 channels."""
+    import tifffile
+
+    p = tmp_path / "narrow.tif"
+    tifffile.imwrite(p, RNG.integers(0, 255, (2, 8, 3)).astype(np.uint8),
+                     photometric="minisblack")  # fmt: skip
+    with pytest.raises(InvalidInputError, match="a stack of 2 images of 3 x 8 px"):
+        read_image(p)
+    with pytest.raises(InvalidInputError, match="a stack of 2 images of 3 x 8 px"):
+        image_info(p)
+
+
+def test_pillow_decodes_in_threads_at_once_and_alike(tmp_path: Path) -> None:
+    """Reads in threads give the serial arrays, and two decodes run at the same time.
+
+    Both threads must reach Pillow's decoding (``ImageFile.load``) together: a barrier there
+    waits for the two. Under a lock held through the decoding it would time out.
+    """
+    import threading
+    from concurrent.futures import ThreadPoolExecutor
+
+    from PIL import Image, ImageFile
+
+    paths = []
+    for k in range(8):
+        a = (RNG.random((40, 60, 3)) * 255).astype(np.uint8)
+        path = tmp_path / (f"{k}.jpg" if k % 2 else f"{k}.webp")
+        Image.fromarray(a).save(path, quality=90)
+        paths.append(path)
+    serial = [read_image(p) for p in paths]
+    with ThreadPoolExecutor(4) as pool:
+        threaded = list(pool.map(read_image, paths))
+    for s, t in zip(serial, threaded, strict=True):
+        np.testing.assert_array_equal(s, t)
+
+    barrier = threading.Barrier(2, timeout=10)
+    original = ImageFile.ImageFile.load
+
+    def load(self: ImageFile.ImageFile) -> object:
+        barrier.wait()  # BrokenBarrierError if the other thread cannot get here
+        return original(self)
+
+    ImageFile.ImageFile.load = load  # type: ignore[method-assign]
+    try:
+        with ThreadPoolExecutor(2) as pool:
+            both = list(pool.map(read_image, paths[1:4:2]))
+    finally:
+        ImageFile.ImageFile.load = original  # type: ignore[method-assign]
+    for got, want in zip(both, serial[1:4:2], strict=True):
+        np.testing.assert_array_equal(got, want)

@@ -26,6 +26,8 @@ _WB_METHODS = ("gray_world", "shades_of_gray", "manual")
 def _convert_block(block: np.ndarray, src: str, dst: str, params: dict[str, Any]) -> np.ndarray:
     from imageform.color import convert
 
+    if src.startswith("linear_") and block.dtype.kind == "u":  # a linear file's full-range codes
+        block = block.astype(np.float32) / np.float32(np.iinfo(block.dtype).max)
     return np.asarray(convert(block, src, dst, **params), dtype=np.float32)
 
 

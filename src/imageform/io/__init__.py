@@ -2,7 +2,8 @@
 
 Images (PNG 8/16-bit, JPEG, TIFF, ``.npy``) with one rule for shape, alpha, orientation and
 memory bounds (:func:`read_image`, :func:`write_image`), and the colour space a file
-declares in its ICC profile or tags (:func:`image_color_space`); raw files (:func:`write_dng`,
+declares in its ICC profile or tags, PNG's ``gAMA``/``cHRM`` included
+(:func:`image_color_space`); raw files (:func:`write_dng`,
 :func:`read_raw`, :func:`develop`, docs/raw.md); the one camera file, versioned TOML
 (:func:`read_camera`, :func:`write_camera`, docs/camera-file.md); video files, image
 sequences and capture devices (:func:`open_video`, :class:`VideoWriter`, PyAV).

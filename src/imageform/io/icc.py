@@ -1,4 +1,4 @@
-"""Colour spaces that image files declare: ICC profiles, PNG's sRGB chunk, EXIF.
+"""Colour spaces that image files declare: ICC profiles, PNG's sRGB, gAMA and cHRM, EXIF.
 
 A phone writes its photographs in Display P3, a camera set to Adobe RGB writes Adobe RGB,
 a raw converter often ProPhoto; the pixel values mean different colours in each. The file
@@ -82,7 +82,8 @@ class DeclaredColorSpace(NamedTuple):
     ``name``: a space of :data:`imageform.color.SPACES` (``srgb``, ``display_p3``,
     ``adobe_rgb``, ``prophoto``, ``rec2020``, ``rec709`` or a ``linear_`` twin), or None
     when the file declares nothing or a profile imageform does not recognise. ``source``:
-    ``icc``, ``png-srgb``, ``nclx`` (HEIF's H.273 code points), ``exif`` or ``none``.
+    ``icc``, ``png-srgb``, ``png-gama`` / ``png-chrm`` (a PNG's ``gAMA`` and ``cHRM`` chunks),
+    ``nclx`` (HEIF's H.273 code points), ``exif`` or ``none``.
     ``description``: the profile's own description (``""`` without one).
     """
 
@@ -284,16 +285,88 @@ def identify_icc(profile: IccProfile) -> str | None:
     if profile.primaries_xy is None or profile.curves is None or profile.white_xy is None:
         return None
     levels = np.stack([np.asarray(c(_LEVELS)) for c in profile.curves])  # type: ignore[operator]
+    return _identify(profile.primaries_xy, profile.white_xy, (levels,))
+
+
+def _identify(
+    primaries_xy: NDArray[np.float64],
+    white_xy: NDArray[np.float64],
+    decodings: tuple[NDArray[np.float64], ...],
+) -> str | None:
+    """Name the space of these primaries and white whose decoding one of ``decodings`` is.
+
+    ``decodings``: the linear values of :data:`_LEVELS` through each candidate tone curve.
+    """
     for name, prim, white, decoded in _references():
-        if np.max(np.abs(profile.primaries_xy - prim)) > _XY_TOL:
+        if np.max(np.abs(primaries_xy - prim)) > _XY_TOL:
             continue
-        if np.max(np.abs(profile.white_xy - white)) > _XY_TOL:
+        if np.max(np.abs(white_xy - white)) > _XY_TOL:
             continue
-        if np.max(np.abs(levels - decoded)) <= _TRC_TOL:
-            return name
-        if np.max(np.abs(levels - _LEVELS)) <= _TRC_TOL:
-            return f"linear_{name}"
+        for levels in decodings:
+            if np.max(np.abs(levels - decoded)) <= _TRC_TOL:
+                return name
+        for levels in decodings:
+            if np.max(np.abs(levels - _LEVELS)) <= _TRC_TOL:
+                return f"linear_{name}"
     return None
+
+
+#: libpng's ``PNG_GAMMA_THRESHOLD`` (0.05): a file gamma within 5 % of sRGB's 1/2.2 (the
+#: product of the two within 0.05 of 1) needs no correction; such a ``gAMA`` reads as sRGB's.
+_PNG_GAMMA_THRESHOLD = 0.05
+#: sRGB's chromaticities, as PNG writers store them in ``cHRM`` (PNG 3rd ed. sec. 11.3.3.2).
+_SRGB_CHRM = (0.3127, 0.329, 0.64, 0.33, 0.3, 0.6, 0.15, 0.06)
+
+
+def declared_by_png_chunks(
+    gamma: float | None, chromaticity: tuple[float, ...] | None
+) -> DeclaredColorSpace | None:
+    """Name what a PNG's ``gAMA`` and ``cHRM`` chunks declare (no ``iCCP``, no ``sRGB``).
+
+    PNG 3rd ed. sec. 12.2 and 13.13: ``gAMA`` holds the file gamma ``g`` (value / 100000) with
+    which the samples were encoded, so that the light they mean is ``V**(1 / g)`` (``V`` the
+    sample over its largest value); ``cHRM`` holds the white and the red, green and blue
+    chromaticities. The pair names a space of :data:`imageform.color.RGB_SPACES` as an ICC
+    profile does (:func:`identify_icc`: primaries and white within 0.003, the curve within
+    0.004 of the space's decoding, or straight for the ``linear_`` twin). As colour-managed
+    readers do: without ``cHRM`` the primaries are sRGB's (Skia's ``SkPngCodec``); without
+    ``gAMA`` the curve is sRGB's; a file gamma within 5 % of 1/2.2 is sRGB's curve (libpng's
+    ``PNG_GAMMA_THRESHOLD``: the gAMA 45455 that PNG writers add beside ``sRGB``). A gAMA
+    of 0 or less, or a cHRM with a zero ``y``, is ignored, as libpng ignores it.
+
+    Returns
+    -------
+    DeclaredColorSpace or None
+        Source ``png-gama`` (``png-chrm`` with ``cHRM`` alone); ``name`` None when no space
+        matches, the chunks in ``description``. None when neither chunk is usable.
+    """
+    if gamma is not None and not (np.isfinite(gamma) and gamma > 0):
+        gamma = None
+    chrm = None
+    if chromaticity is not None and len(chromaticity) == 8:
+        c = np.asarray(chromaticity, dtype=np.float64)
+        if np.all(np.isfinite(c)) and np.all(c[1::2] > 0) and np.all(c >= 0):
+            chrm = c
+    if gamma is None and chrm is None:
+        return None
+    c = chrm if chrm is not None else np.asarray(_SRGB_CHRM)
+    white, primaries = c[:2], c[2:].reshape(3, 2)
+    srgb_curve = _references()[0][3]  # RGB_SPACES starts with srgb
+    if gamma is None:
+        decodings: tuple[NDArray[np.float64], ...] = (srgb_curve,)
+    else:
+        power = np.power(_LEVELS, 1.0 / gamma)
+        srgb_like = abs(gamma * 2.2 - 1.0) <= _PNG_GAMMA_THRESHOLD
+        decodings = (power, srgb_curve) if srgb_like else (power,)
+    name = _identify(primaries, white, tuple(np.repeat(d[None], 3, axis=0) for d in decodings))
+    parts = [] if gamma is None else [f"gAMA {gamma:.5g}"]
+    if chrm is not None:
+        xy = [f"({x:.4f}, {y:.4f})" for x, y in c.reshape(4, 2)]
+        parts.append(f"cHRM white {xy[0]}, red {xy[1]}, green {xy[2]}, blue {xy[3]}")
+    else:
+        parts.append("no cHRM (sRGB primaries)")
+    source = "png-gama" if gamma is not None else "png-chrm"
+    return DeclaredColorSpace(name, source, ", ".join(parts))
 
 
 def icc_profile(space: str) -> bytes:

@@ -11,12 +11,15 @@ One rule for every format:
   (float16 is widened to float32). Other sample types are refused. A TIFF's samples are read
   as the values they mean: a palette through its colour map (RGB), a bilevel image as 0/255,
   WhiteIsZero inverted; a CMYK, Lab or raw-YCbCr TIFF is refused; a palette BMP or GIF as RGB,
-  a 1-bit BMP as 0/255. Samples of fewer bits than
+  a 1-bit BMP as 0/255; a CMYK JPEG as sRGB, through its embedded CMYK ICC profile (LittleCMS)
+  where it has one, else ``(1 - C)(1 - K)``. Samples of fewer bits than
   their container (10, 12, 14 bits in uint16) come as stored, the sensor's numbers (DN), as
   tifffile and scikit-image read them: measurements (``emva``, ``characterize``) need them so;
   such an image looks dark until scaled by ``65535 / (2**bits - 1)``.
 - **One image**: a TIFF holding a stack (pages, time points, z-planes) and an animated GIF or
-  WebP are refused in one line saying what they hold, rather than read as their first image.
+  WebP are refused in one line saying what they hold, rather than read as their first image;
+  so is a TIFF of more than 4 samples per pixel (multispectral bands), by :func:`image_info`
+  as by :func:`read_image`.
 - **Alpha** (grey+alpha, RGBA, a palette with transparency in PNG, GIF or BMP, WebP's alpha;
   extra samples in TIFF):
   dropped when every pixel is opaque; otherwise refused unless ``alpha="drop"`` (ignore it)
@@ -290,8 +293,16 @@ def _tiff_series(tif: Any, path: Path) -> tuple[Any, ImageInfo]:
     axes = series.axes
     shape = series.shape
     channels = shape[axes.index("S")] if "S" in axes else 1
-    if "Y" not in axes or "X" not in axes or len(shape) > 3:
+    if "Y" not in axes or "X" not in axes or any(a not in "YXS" for a in axes):
+        # pages, time points, z-planes or channels of their own (axes QYX, CYX...): a stack
         raise InvalidInputError(f"cannot read {path}: {_tiff_stack(axes, shape)}")
+    if channels > 4:  # refused here, so that image_info says what read_image does
+        raise InvalidInputError(
+            f"cannot read {path}: a TIFF of {channels} samples per pixel (a multispectral "
+            "image, or extra channels); imageform reads images of 1 to 4 channels (grey or "
+            "RGB, with alpha): save the channels you need as their own TIFF (tifffile.imread, "
+            "then imwrite of those channels)"
+        )
     width, height = shape[axes.index("X")], shape[axes.index("Y")]
     dtype = "uint8" if series.dtype == np.bool_ else str(series.dtype)  # bilevel: 0/255
     page = tif.pages[0]
@@ -383,8 +394,12 @@ def _pillow_open(p: Path) -> Iterator[Any]:
     """Open ``p`` with Pillow (its header only) with Pillow's own pixel cap off.
 
     imageform's limit (:func:`max_pixels`) is checked instead, before decoding; Pillow's
-    (``Image.MAX_IMAGE_PIXELS``, a process-wide setting, hence the lock) would refuse at open
-    a 180 Mpx image that ``max_pixels=`` allows and warn on stderr from 90 Mpx.
+    (``Image.MAX_IMAGE_PIXELS``) would refuse at open a 180 Mpx image that ``max_pixels=``
+    allows and warn on stderr from 90 Mpx. That cap and the warnings filter are process-wide
+    settings, hence the lock; it is held only while Pillow reads the header and counts the
+    frames (``is_animated``, ``n_frames``: GIF frames are checked against the cap as they are
+    seeked), the steps that consult them. The decoding (``load``, ``convert``) runs after,
+    outside it, so that images decoded in threads of one process decode at the same time.
     """
     from PIL import Image
 
@@ -392,10 +407,17 @@ def _pillow_open(p: Path) -> Iterator[Any]:
         warnings.simplefilter("ignore", Image.DecompressionBombWarning)
         saved, Image.MAX_IMAGE_PIXELS = Image.MAX_IMAGE_PIXELS, None
         try:
-            with Image.open(p) as im:
-                yield im
+            im = Image.open(p)
+            try:
+                if getattr(im, "is_animated", False):  # seeks frames; both are cached
+                    _ = im.n_frames  # type: ignore[attr-defined]
+            except BaseException:
+                im.close()
+                raise
         finally:
             Image.MAX_IMAGE_PIXELS = saved
+    with im:
+        yield im
 
 
 def _refuse_animation(p: Path, im: Any, fmt: str) -> None:
@@ -663,7 +685,9 @@ def _read_pillow(p: Path, limit: int, fmt: str = "jpeg") -> np.ndarray:
                 arr = np.asarray(im.convert("RGBA"))
             elif mode == "1":
                 arr = np.asarray(im.convert("L"))
-            elif mode in ("CMYK", "YCbCr"):
+            elif mode == "CMYK":
+                arr = _cmyk_to_rgb(p, im)
+            elif mode == "YCbCr":
                 arr = np.asarray(im.convert("RGB"))
             else:
                 raise InvalidInputError(f"cannot read {p}: unsupported image mode {mode}")
@@ -672,6 +696,51 @@ def _read_pillow(p: Path, limit: int, fmt: str = "jpeg") -> np.ndarray:
     except (OSError, SyntaxError, ValueError) as exc:  # UnidentifiedImageError is an OSError
         raise InvalidInputError(f"cannot read {p}: {_one_line(exc)}") from None
     return _orient(arr, orientation)
+
+
+def _cmyk_profile(im: Any) -> bytes | None:
+    """Return the CMYK ICC profile embedded in a CMYK JPEG (APP2), else None."""
+    icc = im.info.get("icc_profile")
+    return bytes(icc) if icc and len(icc) >= 20 and icc[16:20] == b"CMYK" else None
+
+
+def _cmyk_to_rgb(p: Path, im: Any) -> np.ndarray:
+    """Return a CMYK JPEG as sRGB: through its embedded CMYK ICC profile, else naively.
+
+    With a profile (a printer's or press's: what Photoshop embeds), LittleCMS (Pillow's
+    ``ImageCms``) converts from it to sRGB with ImageCms's defaults (perceptual intent), as
+    a colour-managed viewer shows the file; without one, Pillow's naive ``R = (1 - C)(1 - K)``
+    (G from M, B from Y). Adobe's inverted CMYK (an APP14 ``Adobe`` segment, what
+    Photoshop and libjpeg write) is undone by Pillow before either: the profile sees the
+    inks as they mean.
+    """
+    profile = _cmyk_profile(im)
+    if profile is None:
+        return np.asarray(im.convert("RGB"))
+    import io
+
+    try:
+        from PIL import ImageCms
+    except ImportError:  # a Pillow built without LittleCMS: the naive path would be wrong
+        raise InvalidInputError(
+            f"cannot read {p}: a CMYK JPEG with an ICC profile needs Pillow's ImageCms "
+            "(LittleCMS), which this Pillow lacks"
+        ) from None
+    try:
+        src = ImageCms.ImageCmsProfile(io.BytesIO(profile))
+        out = ImageCms.profileToProfile(im, src, _srgb_cms_profile(), outputMode="RGB")
+    except (ImageCms.PyCMSError, OSError, ValueError) as exc:
+        raise InvalidInputError(
+            f"cannot read {p}: its CMYK ICC profile cannot be applied ({_one_line(exc)})"
+        ) from None
+    return np.asarray(out)
+
+
+def _srgb_cms_profile() -> Any:
+    """Return LittleCMS's built-in sRGB profile (ImageCms), the target of CMYK conversions."""
+    from PIL import ImageCms
+
+    return ImageCms.createProfile("sRGB")
 
 
 def _tifffile() -> Any:
@@ -1123,9 +1192,13 @@ def image_color_space(path: str | Path) -> DeclaredColorSpace:
 
     In this order: an embedded ICC profile (JPEG APP2, PNG ``iCCP``, TIFF tag 34675, HEIF's
     ``colr`` box, WebP's ``ICCP`` chunk, a GIF's ICC extension) named by
-    :func:`identify_icc`; HEIF's ``nclx`` colour description (H.273 code points:
+    :func:`identify_icc` (a CMYK JPEG's CMYK profile: ``srgb``, what :func:`read_image`
+    converts it to); HEIF's ``nclx`` colour description (H.273 code points:
     BT.709/sRGB, Display P3 or BT.2020 primaries with the sRGB, BT.709 or a
-    linear transfer); PNG's ``sRGB`` chunk; EXIF ``ColorSpace`` 1 (sRGB), or
+    linear transfer); PNG's ``sRGB`` chunk; PNG's ``gAMA`` and ``cHRM`` chunks (gAMA
+    1/2.2 within 5 % is sRGB's curve, 1.0 a ``linear_`` space; source ``png-gama`` or
+    ``png-chrm``; a gamma or primaries of no space give ``name`` None with the chunks
+    described); EXIF ``ColorSpace`` 1 (sRGB), or
     uncalibrated with the interoperability index ``R03`` (Adobe RGB, the DCF option camera
     JPEGs use). A profile imageform does not recognise gives ``name`` None with its
     description; ``.npy`` files and files that declare nothing give ``(None, "none", "")``.
@@ -1154,7 +1227,12 @@ def image_color_space(path: str | Path) -> DeclaredColorSpace:
     >>> image_color_space(p)
     DeclaredColorSpace(name='display_p3', source='icc', description='sP3')
     """
-    from imageform.io.icc import DeclaredColorSpace, declared_by_profile
+    from imageform.io.icc import (
+        DeclaredColorSpace,
+        declared_by_png_chunks,
+        declared_by_profile,
+        parse_icc,
+    )
 
     fmt = image_format(path)
     p = Path(path)
@@ -1179,16 +1257,25 @@ def image_color_space(path: str | Path) -> DeclaredColorSpace:
     try:
         with _pillow_open(p) as im:
             icc = im.info.get("icc_profile")
+            cmyk = fmt == "jpeg" and im.mode == "CMYK" and _cmyk_profile(im) is not None
             srgb_chunk = fmt == "png" and "srgb" in im.info
+            gamma = im.info.get("gamma") if fmt == "png" else None
+            chrm = im.info.get("chromaticity") if fmt == "png" else None
             exif = im.getexif()
             cs = exif.get_ifd(0x8769).get(0xA001)
             interop = exif.get_ifd(0xA005).get(0x0001)
     except (OSError, ValueError, SyntaxError) as err:  # UnidentifiedImageError is an OSError
         raise InvalidInputError(f"cannot read {p}: {_one_line(err)}") from None
+    if cmyk:  # read_image converts it through its profile to sRGB
+        prof = parse_icc(icc)
+        return DeclaredColorSpace("srgb", "icc", f"{prof.description} (CMYK, read as sRGB)")
     if icc:
         return declared_by_profile(icc)
     if srgb_chunk:
         return DeclaredColorSpace("srgb", "png-srgb", "")
+    chunks = declared_by_png_chunks(gamma, chrm) if fmt == "png" else None
+    if chunks is not None:  # PNG 3rd ed.: iCCP and sRGB take precedence over gAMA and cHRM
+        return chunks
     if cs == 1:
         return DeclaredColorSpace("srgb", "exif", "")
     if cs == 0xFFFF and isinstance(interop, str) and interop.strip("\0") == "R03":

@@ -402,6 +402,8 @@ def declared_space(run: Run, image: Path, declared: Any, *, grey: bool) -> str:
                 "icc": "its ICC profile",
                 "nclx": "its HEIF colour box (nclx)",
                 "png-srgb": "its sRGB chunk",
+                "png-gama": f"its PNG gAMA/cHRM chunks ({declared.description})",
+                "png-chrm": f"its PNG cHRM chunk ({declared.description})",
             }.get(declared.source, "its EXIF tags")
             run.note(f"note: {image} declares {declared.name} in {how}; read as {declared.name}"
                      " (--from overrides)")  # fmt: skip
@@ -410,6 +412,11 @@ def declared_space(run: Run, image: Path, declared: Any, *, grey: bool) -> str:
         run.note(
             f"note: {image} carries an ICC profile imageform does not recognise "
             f"({declared.description or 'no description'}); read as srgb (--from overrides)"
+        )
+    elif declared.source in ("png-gama", "png-chrm"):
+        run.note(
+            f"note: {image} declares {declared.description} in its PNG chunks, which no space "
+            "imageform knows matches; read as srgb (--from overrides)"
         )
     return "srgb"
 
@@ -450,6 +457,23 @@ def input_space(run: Run, path: Path, opts: Any) -> str:
     return declared_space(run, path, image_color_space(path), grey=False)
 
 
+def as_values(image: Any, space: str) -> Any:
+    """``image`` as values of ``space``: integer samples of a linear space as floats.
+
+    A file that declares a linear space (a PNG's gAMA 1.0, an scRGB profile) stores its
+    light as full-range integers, ``code / (2**bits - 1)``; :func:`imageform.color.convert`
+    takes a linear space's values as floats only. Anything else, a device array included
+    (whose conversion then runs on the CPU, :func:`gpu_bands`), is returned as it is.
+    """
+    import numpy as np
+
+    if not isinstance(image, np.ndarray) or image.dtype.kind != "u":
+        return image
+    if not str(space).startswith("linear_"):
+        return image
+    return np.asarray(image, dtype=np.float32) / np.float32(np.iinfo(image.dtype).max)
+
+
 def in_srgb(run: Run, path: Path, image: Any, space: str, *, clip: bool) -> Any:
     """``image`` (encoded in ``space``) as encoded sRGB; unchanged when ``space`` is srgb.
 
@@ -462,7 +486,7 @@ def in_srgb(run: Run, path: Path, image: Any, space: str, *, clip: bool) -> Any:
 
     from imageform.color import convert
 
-    out = np.asarray(convert(image, space, "srgb"))
+    out = np.asarray(convert(as_values(image, space), space, "srgb"))
     if clip:
         outside = int(np.count_nonzero(((out < 0.0) | (out > 1.0)).any(axis=-1)))
         if outside:

@@ -13,6 +13,7 @@ from imageform.workflows._images import (
     ImageOut,
     OnDevice,
     RgbFrom,
+    as_values,
     declared_space,
     gpu_bands,
     image_out_renames,
@@ -166,7 +167,7 @@ def convert(run: Run, opts: ConvertOptions, *, out: Path, image: Path) -> Result
     if src != "gray" and img.shape[-1] == 1:
         raise InvalidInputError(f"{image} is a grey image; convert it with --from gray")
     params = opts.params()
-    fn: Any = lambda band: convert(band, src, dst, **params)  # noqa: E731
+    fn: Any = lambda band: convert(as_values(band, src), src, dst, **params)  # noqa: E731
     if opts.device == "cuda":
         fn = gpu_bands(run, f"{src} -> {dst} on a {img.dtype} image", fn)
     tag = dst if dst in RGB_PROFILED else None
@@ -401,7 +402,8 @@ def delta_e(run: Run, opts: DeltaEOptions, *, out: None, reference: Path, test: 
     sa, sb = spaces
 
     def lab_delta_e(x: Any, y: Any) -> Any:
-        return de_fn(convert(x, sa, "lab"), convert(y, sb, "lab"), opts.method)
+        lab_a, lab_b = convert(as_values(x, sa), sa, "lab"), convert(as_values(y, sb), sb, "lab")
+        return de_fn(lab_a, lab_b, opts.method)
 
     de = None
     if opts.device == "cuda":  # three kernels: two conversions and the difference
@@ -478,7 +480,7 @@ def cvd(run: Run, opts: CvdOptions, *, out: Path, image: Path) -> Result:
     space = input_space(run, image, opts)
 
     def band(b: Any) -> Any:  # the models are defined on sRGB: there and back (floats)
-        srgb = b if space == "srgb" else convert(b, space, "srgb")
+        srgb = b if space == "srgb" else convert(as_values(b, space), space, "srgb")
         seen = simulate_cvd(srgb, opts.deficiency, opts.severity, opts.method)
         return seen if space == "srgb" else convert(seen, "srgb", space)
 
@@ -626,6 +628,10 @@ def info(run: Run, opts: InfoOptions, *, out: None, image: Path) -> Result:
     space = declared.name or "not declared (read as sRGB)"
     if declared.name is None and declared.source == "icc":
         space = f"an ICC profile imageform does not recognise ({declared.description})"
+    elif declared.name is None and declared.source in ("png-gama", "png-chrm"):
+        space = f"PNG chunks no space of imageform matches ({declared.description}); read as sRGB"
+    elif declared.source in ("png-gama", "png-chrm"):
+        space = f"{declared.name} ({declared.description})"
     how = {"none": ""}.get(declared.source, f" ({declared.source})")
     text = [
         f"{image}: {head.format}, {head.width} x {head.height} px, {head.channels} channel(s), "
