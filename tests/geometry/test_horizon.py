@@ -62,14 +62,14 @@ def _seascape(
 def test_synthetic_seascape_horizon_and_roll(roll_deg: float) -> None:
     img, rows = _seascape(roll_deg)
     res = detect_horizon(img)
-    assert isinstance(res, HorizonResult) and res.found, res.note
+    assert isinstance(res, HorizonResult) and res.found, res.reason
     np.testing.assert_allclose(res.rows, rows, atol=1.5)
     assert math.degrees(res.roll) == pytest.approx(roll_deg, abs=0.3)
     a, b, c = res.line  # type: ignore[misc]
     assert b > 0 and a * a + b * b == pytest.approx(1.0)
     # the line is the one the rows say: a u + b v + c = 0 at both edges
     assert a * 0 + b * res.rows[0] + c == pytest.approx(0.0, abs=1e-9)
-    assert 0.5 < res.confidence <= 1.0
+    assert 0.5 < res.confidence <= 1.0 and res.reason == ""
 
 
 def test_roll_follows_the_camera() -> None:
@@ -146,7 +146,7 @@ def test_scenes_without_a_horizon_are_not_found(make: object) -> None:
     res = detect_horizon(make())  # type: ignore[operator]
     assert not res.found
     assert res.line is None and np.isnan(res.roll) and np.isnan(res.rows).all()
-    assert res.confidence == 0.0 and res.note.startswith("not found")
+    assert res.confidence == 0.0 and res.reason and "\n" not in res.reason
 
 
 def _kodak(i: int) -> np.ndarray:
@@ -164,7 +164,7 @@ def test_kodak_sea_horizon_against_its_annotation() -> None:
     # u = 570 the coast hides it, so the rows at the edges are that line extended:
     # 128.8 at u = 0, 138.3 at u = 767
     res = detect_horizon(_kodak(6))
-    assert res.found, res.note
+    assert res.found, res.reason
     np.testing.assert_allclose(res.rows, [128.8, 138.3], atol=0.025 * 512)
     assert abs(math.degrees(res.roll)) < 1.5
 

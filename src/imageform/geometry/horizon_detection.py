@@ -107,10 +107,11 @@ class HorizonResult:
         The horizon's row at the first and the last column (``u = 0`` and ``u = W - 1``);
         NaN when not found.
     confidence : float
-        In [0, 1]: the share of the horizon's length across the frame on which an edge was
-        found (its coverage); 0 when nothing was found.
-    note : str
-        One line: what was found, or why nothing was.
+        In [0, 1]: the share of the horizon's length across the frame along which an edge
+        was found within 2 px of it (of the working image, at most 320 px on its long side);
+        0 when nothing was found.
+    reason : str
+        Why nothing was found (one line, docs/conventions.md "Not found"); "" when found.
     """
 
     found: bool
@@ -118,7 +119,7 @@ class HorizonResult:
     roll: float
     rows: FloatArray
     confidence: float
-    note: str
+    reason: str = ""
 
 
 def _prepare(image: ArrayLike) -> tuple[np.ndarray, float]:
@@ -490,7 +491,7 @@ def detect_horizon(image: ArrayLike, *, max_roll: float = math.radians(30.0)) ->
     HorizonResult
         ``found`` and, when found, the horizon line (``a u + b v + c = 0``, the
         representation of :func:`detect_vanishing_points`' horizon), its roll and its rows
-        at the frame's left and right edges; when not, ``found=False`` with a note why.
+        at the frame's left and right edges; when not, ``found=False`` with the ``reason``.
 
     Raises
     ------
@@ -519,11 +520,7 @@ def detect_horizon(image: ArrayLike, *, max_roll: float = math.radians(30.0)) ->
         else:
             why = "no long straight edge across the frame with sky above it (lines seen: "
             why += "; ".join(sorted(set(reasons))) + ")"
-        return HorizonResult(False, None, math.nan, np.full(2, np.nan), 0.0, f"not found: {why}")
+        return HorizonResult(False, None, math.nan, np.full(2, np.nan), 0.0, why)
     rows = np.array([_row(line, 0.0), _row(line, w - 1.0)])
     roll = math.atan2(float(line[0]), float(line[1]))
-    note = (
-        f"found: a straight edge along {100 * best.cover:.0f} % of the line across the "
-        f"frame, {best.resid / scale:.1f} px RMS from it"
-    )
-    return HorizonResult(True, line, roll, rows, best.cover, note)
+    return HorizonResult(True, line, roll, rows, best.cover)

@@ -327,25 +327,22 @@ def horizon(run: Run, opts: HorizonOptions, *, out: Path | None, image: Path) ->
         "roll_deg": math.degrees(res.roll) if res.found else None,
         "rows": res.rows if res.found else None,
         "confidence": res.confidence,
-        "note": res.note,
+        "reason": res.reason or None,
         "overlay": out,
     }
     if res.found:
         text = [
             f"horizon: v = {res.rows[0]:.1f} at u = 0, {res.rows[1]:.1f} at u = {w - 1}; "
             f"roll {math.degrees(res.roll):+.2f} deg (right end higher: +)",
-            f"  {res.note}",
+            f"  an edge along {100 * res.confidence:.0f} % of it across the frame",
         ]
     else:
-        text = [f"horizon: {res.note}"]
+        text = [f"horizon: not found: {res.reason}"]
     if out is not None:
-        from PIL import Image, ImageDraw
+        from imageform.report.overlays import draw_vanishing_truth_overlay
 
-        from imageform.report.overlays import DETECTED_COLOUR, _draw_line, _to_rgb8
-
-        canvas = Image.fromarray(_to_rgb8(arr))
-        if res.line is not None:
-            _draw_line(ImageDraw.Draw(canvas), res.line, w, h, DETECTED_COLOUR)
+        # no vanishing point to draw (one at infinity is not drawn): the horizon alone
+        canvas = draw_vanishing_truth_overlay(arr, [1.0, 0.0, 0.0], detected_horizon=res.line)
         write(run, out, np.asarray(canvas), opts)
         text.append(f"overlay -> {out}")
     return Result(summary, tuple(text))
