@@ -81,6 +81,7 @@ BENCH_SCRIPTS: dict[str, str] = {
     "gpu-host-h200": "benchmarks/profile_gpu_host.py",
     "sass-colour": "benchmarks/sass_colour.py",
     "sass-demosaic": "benchmarks/sass_demosaic.py",
+    "horizon-natural": "benchmarks/check_horizon_natural.py",
     "lsd": "benchmarks/bench_lsd.py",
     "odd-files": "benchmarks/check_odd_files.py",
     "plumb-line": "benchmarks/check_plumb_line.py",

@@ -503,12 +503,15 @@ def detect_horizon(image: ArrayLike, *, max_roll: float = math.radians(30.0)) ->
     --------
     >>> import numpy as np
     >>> v = np.arange(120.0)[:, None] * np.ones((1, 160))
-    >>> sea = np.where(v < 50 + 0.1 * np.arange(160.0), 0.8, 0.3)  # sky over sea, tilted
-    >>> res = detect_horizon(sea)
-    >>> res.found, np.round(res.rows, 1)
-    (True, array([49.5, 65.4]))
-    >>> detect_horizon(np.full((120, 160), 0.5)).found
-    False
+    >>> res = detect_horizon(np.where(v < 50, 0.8, 0.3))  # sky over sea: rows 0-49 sky
+    >>> res.found, res.rows.tolist(), round(res.roll, 6)
+    (True, [49.5, 49.5], 0.0)
+    >>> below = np.clip(v - (50 - 0.1 * np.arange(160.0)) + 0.5, 0, 1)  # right end higher
+    >>> res = detect_horizon(0.8 - 0.5 * below)  # antialiased edge v = 50 - 0.1 u
+    >>> np.round(res.rows, 2).tolist(), round(float(np.degrees(res.roll)), 2)
+    ([50.0, 34.1], 5.71)
+    >>> detect_horizon(np.full((120, 160), 0.5)).reason
+    'no edges'
     """
     max_roll = as_real(max_roll, "max_roll", positive=True, maximum=math.radians(80.0))
     cands, n_long, scale = _candidates(image, max_roll)

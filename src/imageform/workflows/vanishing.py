@@ -318,7 +318,7 @@ def horizon(run: Run, opts: HorizonOptions, *, out: Path | None, image: Path) ->
     arr = img[..., 0] if img.shape[-1] == 1 else img[..., :3]
     if arr.dtype == np.uint16:
         arr = arr.astype(np.float64) / 65535.0
-    h, w = int(arr.shape[0]), int(arr.shape[1])
+    w = int(arr.shape[1])
     res = detect_horizon(arr, max_roll=math.radians(opts.max_roll_deg))
     summary: dict[str, Any] = {
         "image": image,
