@@ -178,3 +178,27 @@ def test_horizon_command(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> 
     assert "not found" in capsys.readouterr().out
     assert main(["horizon", str(src), "--max-roll-deg", "0"]) == 1
     assert "max" in capsys.readouterr().err
+
+
+def test_vanishing_command_falls_back_to_the_visible_horizon(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # a seascape rolled 20 degrees: no vanishing point gives its horizon (the library's
+    # answer stays None), the command reports the visible one and says so
+    import numpy as np
+    from PIL import Image
+
+    from imageform.geometry import detect_vanishing_points
+    from tests.geometry.test_horizon import _seascape
+
+    img, rows = _seascape(20.0)
+    assert detect_vanishing_points(img).horizon is None
+    src = tmp_path / "sea.png"
+    Image.fromarray((img * 255).round().astype(np.uint8)).save(src)
+    assert main(["vanishing", str(src), "--json"]) == 0
+    payload = json.loads(capsys.readouterr().out)
+    assert payload["horizon_source"] == "visible (detect_horizon)"
+    a, b, c = payload["horizon"]
+    assert abs(-c / b - rows[0]) < 2.0 and abs(-(a * 399 + c) / b - rows[1]) < 2.0
+    assert main(["vanishing", str(src)]) == 0
+    assert "the visible horizon (detect_horizon)" in capsys.readouterr().out

@@ -1,5 +1,9 @@
 """``imageform vanishing``: vanishing points, K and the horizon of a photograph.
 
+Where no vanishing point gives the horizon, it is the visible one when the photograph shows
+open water or flat land (:func:`~imageform.geometry.detect_horizon`; ``horizon_source`` says
+which). ``imageform horizon`` gives that one alone.
+
 Without a camera file, K is estimated from the orthogonal triplet of vanishing points
 (principal point at the image centre by default, ``--principal-point``). With ``--camera``
 the file's camera is the truth: the image is undistorted with its model first (lines are
@@ -236,6 +240,19 @@ def vanishing(run: Run, opts: VanishingOptions, *, out: Path | None, image: Path
             extra["world_axes"] = _world_axes(res, K_file, cf.camera.R)
     else:
         extra["K_source"] = "vanishing points" if K_est is not None else None
+    visible = False
+    if res.horizon is None:
+        # no vanishing point gives the horizon: the visible one of open water or flat land
+        from imageform.geometry import detect_horizon
+
+        seen = detect_horizon(arr)
+        if seen.found:
+            res, visible = replace(res, horizon=seen.line), True
+    extra["horizon_source"] = (
+        "visible (detect_horizon)"
+        if visible
+        else ("vanishing points" if res.horizon is not None else None)
+    )
     summary.update(
         {
             "vanishing_points": res.vanishing_points,
@@ -299,6 +316,8 @@ def vanishing(run: Run, opts: VanishingOptions, *, out: Path | None, image: Path
             )
         else:
             text.append(f"horizon: vertical line u = {-c / a:.1f}")
+        if visible:
+            text.append("  the visible horizon (detect_horizon): no vanishing point gives one")
     if out is not None:
         text.append(f"overlay -> {out}")
     return Result(summary, tuple(text))
