@@ -45,6 +45,7 @@ def _empty(res: Any) -> None:
 
 # name -> (call on a flat image, check of the answer)
 ONE: dict[str, Callable[[], Any]] = {
+    "geometry.detect_horizon": lambda: geometry.detect_horizon(GREY),
     "geometry.find_checkerboard": lambda: geometry.find_checkerboard(GREY, (9, 6)),
     "analysis.detect_colorchecker": lambda: analysis.detect_colorchecker(GREY),
     "analysis.estimate_background": lambda: analysis.estimate_background(GREY),

@@ -83,6 +83,7 @@ BENCH_SCRIPTS: dict[str, str] = {
     "sass-colour": "benchmarks/sass_colour.py",
     "sass-demosaic": "benchmarks/sass_demosaic.py",
     "illuminant-real": "benchmarks/check_illuminant_real.py",
+    "horizon-natural": "benchmarks/check_horizon_natural.py",
     "lsd": "benchmarks/bench_lsd.py",
     "odd-files": "benchmarks/check_odd_files.py",
     "plumb-line": "benchmarks/check_plumb_line.py",

@@ -152,3 +152,53 @@ def test_vanishing_principal_point_estimate(
     text = capsys.readouterr().out
     assert "principal point (383.5, 255.5)" in text
     assert "note: the principal point is the image centre" in text
+
+
+def test_horizon_command(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    import numpy as np
+    from PIL import Image
+
+    from tests.geometry.test_horizon import _seascape
+
+    img, rows = _seascape(6.0)
+    src = tmp_path / "sea.png"
+    Image.fromarray((img * 255).round().astype(np.uint8)).save(src)
+    out = tmp_path / "overlay.png"
+    assert main(["horizon", str(src), "--out", str(out), "--json"]) == 0
+    payload = json.loads(capsys.readouterr().out)
+    assert payload["found"] is True
+    assert abs(payload["roll_deg"] - 6.0) < 0.3
+    assert max(abs(payload["rows"][0] - rows[0]), abs(payload["rows"][1] - rows[1])) < 1.5
+    with Image.open(out) as ov:
+        assert ov.size == (400, 300) and ov.mode == "RGB"
+    # no horizon: exit 0 with "not found" (the library's answer, not an error)
+    blank = tmp_path / "blank.png"
+    Image.fromarray(np.full((64, 96, 3), 128, np.uint8)).save(blank)
+    assert main(["horizon", str(blank)]) == 0
+    assert "not found" in capsys.readouterr().out
+    assert main(["horizon", str(src), "--max-roll-deg", "0"]) == 1
+    assert "max" in capsys.readouterr().err
+
+
+def test_vanishing_command_falls_back_to_the_visible_horizon(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # a seascape rolled 20 degrees: no vanishing point gives its horizon (the library's
+    # answer stays None), the command reports the visible one and says so
+    import numpy as np
+    from PIL import Image
+
+    from imageform.geometry import detect_vanishing_points
+    from tests.geometry.test_horizon import _seascape
+
+    img, rows = _seascape(20.0)
+    assert detect_vanishing_points(img).horizon is None
+    src = tmp_path / "sea.png"
+    Image.fromarray((img * 255).round().astype(np.uint8)).save(src)
+    assert main(["vanishing", str(src), "--json"]) == 0
+    payload = json.loads(capsys.readouterr().out)
+    assert payload["horizon_source"] == "visible (detect_horizon)"
+    a, b, c = payload["horizon"]
+    assert abs(-c / b - rows[0]) < 2.0 and abs(-(a * 399 + c) / b - rows[1]) < 2.0
+    assert main(["vanishing", str(src)]) == 0
+    assert "the visible horizon (detect_horizon)" in capsys.readouterr().out

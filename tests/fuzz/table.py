@@ -1739,3 +1739,26 @@ VALID.update(
         ),
     }
 )
+# the visible horizon of natural scenes (detect_horizon, imageform horizon)
+VALID.update(
+    {
+        "imageform.geometry.detect_horizon": call(image=V("rgb_big")),
+        "imageform.geometry.HorizonResult": Skip("a result dataclass built by detect_horizon"),
+        "imageform.workflows.vanishing.HorizonOptions": call(),
+        "imageform.workflows.vanishing.HorizonOptions.fields": call(),
+        "imageform.workflows.vanishing.HorizonOptions.types": call(),
+    }
+)
+VALID.update(
+    {
+        "imageform.workflows.vanishing.HorizonOptions.check": method(
+            VALID["imageform.workflows.vanishing.HorizonOptions"]
+        ),
+        "imageform.workflows.vanishing.HorizonOptions.check_output": method(
+            VALID["imageform.workflows.vanishing.HorizonOptions"], V("tmpfile_png")
+        ),
+        "imageform.workflows.vanishing.HorizonOptions.paths": method(
+            VALID["imageform.workflows.vanishing.HorizonOptions"], kind="linear"
+        ),
+    }
+)

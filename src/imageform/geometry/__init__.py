@@ -65,6 +65,7 @@ from imageform.geometry.homogeneous import (
     to_homogeneous,
 )
 from imageform.geometry.homography import apply_homography, estimate_homography
+from imageform.geometry.horizon_detection import HorizonResult, detect_horizon
 from imageform.geometry.intrinsics import Intrinsics, intrinsic_matrix, projected_size
 from imageform.geometry.line_segments import LineSegments, detect_line_segments
 from imageform.geometry.lsd import lsd_segments
@@ -159,6 +160,7 @@ __all__ = [
     "Features",
     "FundamentalResult",
     "HomographyResult",
+    "HorizonResult",
     "ImagePlane",
     "Intrinsics",
     "KannalaBrandt",
@@ -192,6 +194,7 @@ __all__ = [
     "detect_aruco_markers",
     "detect_charuco",
     "detect_features",
+    "detect_horizon",
     "detect_line_segments",
     "detect_vanishing_points",
     "essential_5point",

@@ -1,5 +1,9 @@
 """``imageform vanishing``: vanishing points, K and the horizon of a photograph.
 
+Where no vanishing point gives the horizon, it is the visible one when the photograph shows
+open water or flat land (:func:`~imageform.geometry.detect_horizon`; ``horizon_source`` says
+which). ``imageform horizon`` gives that one alone.
+
 Without a camera file, K is estimated from the orthogonal triplet of vanishing points
 (principal point at the image centre by default, ``--principal-point``). With ``--camera``
 the file's camera is the truth: the image is undistorted with its model first (lines are
@@ -18,7 +22,7 @@ from imageform.errors import DegenerateConfigurationError, InvalidInputError
 from imageform.workflows._images import ImageIn, read, write
 from imageform.workflows._spec import Input, Output, Result, Run, Workflow, option
 
-__all__ = ["WORKFLOWS", "VanishingOptions"]
+__all__ = ["WORKFLOWS", "HorizonOptions", "VanishingOptions"]
 
 
 #: ``--principal-point`` ("centre" and "orthocentre": the spellings before issue 30).
@@ -55,6 +59,19 @@ class VanishingOptions(ImageIn):
         "otherwise, with a note why); 'orthocenter': that of any three finite points "
         "(unguarded); or the camera file's (needs --camera; the focal length is then "
         "estimated alone).",
+    )
+
+
+@dataclass(frozen=True, kw_only=True)
+class HorizonOptions(ImageIn):
+    """Options of ``imageform horizon``."""
+
+    max_roll_deg: float = option(
+        30.0,
+        help="The largest angle of the horizon to the image rows looked for (degrees, up to "
+        "80; an aircraft's camera rolls beyond the default).",
+        minimum=0.0,
+        maximum=80.0,
     )
 
 
@@ -223,6 +240,19 @@ def vanishing(run: Run, opts: VanishingOptions, *, out: Path | None, image: Path
             extra["world_axes"] = _world_axes(res, K_file, cf.camera.R)
     else:
         extra["K_source"] = "vanishing points" if K_est is not None else None
+    visible = False
+    if res.horizon is None:
+        # no vanishing point gives the horizon: the visible one of open water or flat land
+        from imageform.geometry import detect_horizon
+
+        seen = detect_horizon(arr)
+        if seen.found:
+            res, visible = replace(res, horizon=seen.line), True
+    extra["horizon_source"] = (
+        "visible (detect_horizon)"
+        if visible
+        else ("vanishing points" if res.horizon is not None else None)
+    )
     summary.update(
         {
             "vanishing_points": res.vanishing_points,
@@ -286,7 +316,53 @@ def vanishing(run: Run, opts: VanishingOptions, *, out: Path | None, image: Path
             )
         else:
             text.append(f"horizon: vertical line u = {-c / a:.1f}")
+        if visible:
+            text.append("  the visible horizon (detect_horizon): no vanishing point gives one")
     if out is not None:
+        text.append(f"overlay -> {out}")
+    return Result(summary, tuple(text))
+
+
+def horizon(run: Run, opts: HorizonOptions, *, out: Path | None, image: Path) -> Result:
+    """``imageform horizon``: the visible horizon of a sea, lake or plain."""
+    import math
+
+    import numpy as np
+
+    from imageform.geometry import detect_horizon
+
+    if not opts.max_roll_deg > 0:
+        raise InvalidInputError(f"--max-roll-deg must be above 0, got {opts.max_roll_deg:g}")
+    img = read(image, opts)
+    arr = img[..., 0] if img.shape[-1] == 1 else img[..., :3]
+    if arr.dtype == np.uint16:
+        arr = arr.astype(np.float64) / 65535.0
+    w = int(arr.shape[1])
+    res = detect_horizon(arr, max_roll=math.radians(opts.max_roll_deg))
+    summary: dict[str, Any] = {
+        "image": image,
+        "found": res.found,
+        "horizon": res.line,
+        "roll_deg": math.degrees(res.roll) if res.found else None,
+        "rows": res.rows if res.found else None,
+        "confidence": res.confidence,
+        "reason": res.reason or None,
+        "overlay": out,
+    }
+    if res.found:
+        text = [
+            f"horizon: v = {res.rows[0]:.1f} at u = 0, {res.rows[1]:.1f} at u = {w - 1}; "
+            f"roll {math.degrees(res.roll):+.2f} deg (right end higher: +)",
+            f"  an edge along {100 * res.confidence:.0f} % of it across the frame",
+        ]
+    else:
+        text = [f"horizon: not found: {res.reason}"]
+    if out is not None:
+        from imageform.report.overlays import draw_vanishing_truth_overlay
+
+        # no vanishing point to draw (one at infinity is not drawn): the horizon alone
+        canvas = draw_vanishing_truth_overlay(arr, [1.0, 0.0, 0.0], detected_horizon=res.line)
+        write(run, out, np.asarray(canvas), opts)
         text.append(f"overlay -> {out}")
     return Result(summary, tuple(text))
 
@@ -306,5 +382,18 @@ WORKFLOWS = (
         description="Without --camera, K is estimated from three orthogonal vanishing points "
         "(square pixels, no skew). With --camera, the file's K and distortion are used and "
         "the estimated K is reported against them.",
+    ),
+    Workflow(
+        "horizon",
+        "The visible horizon of a sea, lake or plain photograph; -o draws it on it.",
+        "imageform.workflows.vanishing:horizon",
+        HorizonOptions,
+        (Input("image", "A photograph (PNG, JPEG, TIFF, .npy, WebP, BMP, GIF)."),),
+        Output("Overlay image to write (the horizon found).", required=False),
+        suffixes=(".png", ".jpg", ".jpeg", ".tif", ".tiff"),
+        group="geometry",
+        description="The long straight edge between sky and open water or flat land "
+        "(detect_horizon); 'not found' for streets, rooms, close-ups and mountains, where "
+        "'imageform vanishing' gives the horizon from vanishing points instead.",
     ),
 )
