@@ -878,6 +878,7 @@ VALID: dict[str, C | Skip] = {
     "imageform.workflows.calibration.UndistortOptions.types": call(),
     "imageform.workflows.calibration.board_hint": call("9x6"),
     "imageform.workflows.calibration.board_reading": call("charuco:7x5"),
+    "imageform.workflows.calibration.is_auto_board": call("auto"),
     "imageform.workflows.calibration.parse_board": call("9x6"),
     "imageform.workflows.choice_names": call(choices=("a", "b")),
     "imageform.workflows.color.ConvertOptions": call(),

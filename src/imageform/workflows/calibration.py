@@ -132,7 +132,7 @@ def parse_charuco(text: str) -> tuple[int, int] | None:
     return cols, rows
 
 
-def is_auto_board(text: object) -> bool:
+def is_auto_board(text: str) -> bool:
     """Return whether a ``--board`` text asks for the checkerboard's size to be found (auto).
 
     Examples
