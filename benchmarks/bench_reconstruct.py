@@ -6,7 +6,12 @@ with defocus blur, sensor noise and JPEG compression (``tests/sfm_scenes.py``), 
 registered (95 % at least), the camera path after a similarity alignment within 0.1 % of
 its length of the truth and no worse than pycolmap's, in no more time. Run::
 
-    OPENBLAS_NUM_THREADS=1 python benchmarks/bench_reconstruct.py [--frames 40] [--repeat 3]
+    OPENBLAS_NUM_THREADS=1 python benchmarks/bench_reconstruct.py [--frames 40] [--repeat 3] \
+        [--window W] [--contrast-threshold C] [--seed S]
+
+``--window``, ``--contrast-threshold`` and ``--seed`` (``rng``) go to imageform's
+``reconstruct_sequence`` (its defaults otherwise); imageform's row adds the largest rotation
+error over the frames (degrees, ``sfm_scenes.rotation_errors_deg``) and the mean track length.
 
 Both get the same frames (pycolmap reads them as lossless PNGs of the degraded frames) and
 the same pinhole camera, fixed (pycolmap: a ``PINHOLE`` camera with the true intrinsics,
@@ -37,6 +42,10 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from benchmarks._common import header, markdown_table
 from tests import sfm_scenes
 
+#: ``reconstruct_sequence``'s keyword arguments (``--window``, ``--contrast-threshold``);
+#: empty: its defaults.
+IMAGEFORM_KWARGS: dict[str, Any] = {}
+
 
 def run_imageform(frames: list[np.ndarray], K: np.ndarray, threads: int) -> dict[str, object]:
     import cv2
@@ -45,10 +54,12 @@ def run_imageform(frames: list[np.ndarray], K: np.ndarray, threads: int) -> dict
 
     cv2.setNumThreads(threads)
     t0, c0 = time.perf_counter(), time.process_time()
-    rec = reconstruct_sequence(frames, K)
+    rec = reconstruct_sequence(frames, K, **IMAGEFORM_KWARGS)
     dt, dc = time.perf_counter() - t0, time.process_time() - c0
     C = np.array([-R.T @ t for R, t in zip(rec.R, rec.t, strict=True)])
-    return {"C": C, "reg": rec.registered, "points": rec.points.shape[0], "time": dt, "cpu": dc}
+    out = {"C": C, "reg": rec.registered, "points": rec.points.shape[0], "time": dt, "cpu": dc}
+    out |= {"R": rec.R, "track": float(np.mean(rec.track_length)) if len(rec.points) else 0.0}
+    return out
 
 
 def pycolmap_options(threads: int, model: str, params: Sequence[float]) -> tuple[Any, ...]:
@@ -156,7 +167,18 @@ def main() -> None:
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--threads", type=int, default=1)
     ap.add_argument("--only", choices=["imageform", "pycolmap"], default=None)
+    ap.add_argument("--window", type=int, default=None, help="imageform's window (default: its)")
+    ap.add_argument(
+        "--contrast-threshold", type=float, default=None, help="imageform's SIFT contrast"
+    )
+    ap.add_argument("--seed", type=int, default=None, help="imageform's RANSAC seed (rng)")
     args = ap.parse_args()
+    if args.seed is not None:
+        IMAGEFORM_KWARGS["rng"] = args.seed
+    if args.window is not None:
+        IMAGEFORM_KWARGS["window"] = args.window
+    if args.contrast_threshold is not None:
+        IMAGEFORM_KWARGS["contrast_threshold"] = args.contrast_threshold
     w, h = args.width, args.height
     K = np.array([[args.focal, 0, (w - 1) / 2], [0, args.focal, (h - 1) / 2], [0, 0, 1.0]])
     frames, truth = sfm_scenes.sequence(
@@ -173,6 +195,11 @@ def main() -> None:
         reg = np.asarray(r["reg"], bool)
         C = np.asarray(r["C"])
         rms = sfm_scenes.align_rms(C[reg], C_true[reg]) if reg.sum() >= 3 else float("nan")
+        rot = "-"
+        if "R" in r and reg[0]:
+            sub = [truth[i] for i in np.flatnonzero(reg)]
+            err = sfm_scenes.rotation_errors_deg(np.asarray(r["R"])[reg], sub)
+            rot = f"{float(np.max(err)):.3f}"
         t = statistics.median(float(x["time"]) for x in runs)  # type: ignore[arg-type]
         c = statistics.median(float(x["cpu"]) for x in runs)  # type: ignore[arg-type]
         rows.append(
@@ -180,7 +207,9 @@ def main() -> None:
                 name,
                 f"{reg.sum()}/{reg.size}",
                 f"{100 * rms:.4f} %",
+                rot,
                 r["points"],
+                f"{r['track']:.2f}" if "track" in r else "-",
                 f"{c:.1f}",
                 f"{t:.1f}",
             ]
@@ -200,7 +229,9 @@ def main() -> None:
                 "library",
                 "registered",
                 "trajectory RMS (of path)",
+                "rotation error deg (largest)",
                 "points",
+                "track length",
                 "CPU time s",
                 "wall time s",
             ],

@@ -25,15 +25,20 @@ the same field-of-view mask (``ImageReaderOptions.mask_path``) and SIFT's peak t
 Columns: registered frames, points, mean track length (observations a point), median
 reprojection error (px), median SIFT keypoints a frame (imageform's ``detect_features``
 with the row's mask and threshold), wall seconds of the whole call (one run: the machine
-is shared, ``--repeat`` for medians); agreement with the reference: over consecutive
-frames registered in both, the median angle between the relative rotations and between
-the relative translation directions, degrees, and the largest of the rotation angles;
+is shared, ``--repeat`` for medians) and imageform's CPU seconds; agreement with the
+reference: over consecutive frames registered in both, the median angle between the
+relative rotations and between the relative translation directions, degrees, and the
+largest of the rotation angles;
 the note says how many frames ``reconstruct_sequence``'s fallbacks registered (a frame
 whose tracks give PnP fewer than 12 inliers). A second table a stride: the keypoints on
 the specular highlights (``highlight_mask``'s core and its default 4 px growth), how many
 matches touch them and how often those fit the pair's essential matrix, against the
 others. ``--reference-cache DIR`` keeps pycolmap's results: the first run writes them, a
-second (a before/after comparison, another checkout on ``PYTHONPATH``) reads them. Run::
+second (a before/after comparison, another checkout on ``PYTHONPATH``) reads them.
+``--window``, ``--seed`` (``rng``) and ``--contrast-threshold`` (in place of the rows' 0.01)
+go to every imageform row; ``--rows`` keeps the rows named; ``--pycolmap-pairs`` adds which
+pairs pycolmap's sequential matching matches and verifies, by the distance between frames
+(its features and matching again, without the mapping). Run::
 
     OPENBLAS_NUM_THREADS=1 PYTHONPATH=src python benchmarks/check_endo_real.py \\
         --video /tmp/endo/c3vdv3_prev.mp4 [--every 8 4] [--repeat 1] [--reference-cache DIR]
@@ -68,6 +73,9 @@ IMAGEFORM = (
     ("--auto-mask --contrast-threshold 0.01", True, False, 0.01),
     ("--auto-mask --highlights --contrast-threshold 0.01", True, True, 0.01),
 )
+#: ``reconstruct_sequence``'s keyword arguments for every imageform row (``--window``,
+#: ``--contrast-threshold``, which replaces the rows' 0.01); empty: as the rows say.
+SETTINGS: dict[str, Any] = {}
 #: pycolmap's: (label, field of view mask, peak threshold factor).
 PYCOLMAP = (("defaults", False, 1.0), ("aperture mask, peak threshold / 4", True, 0.25))
 
@@ -208,13 +216,16 @@ def run_imageform(
     )
 
     n = len(frames)
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     masks: Any = field_of_view_mask(frames) if fov else None
     if highlights:
         masks = [(~highlight_mask(f)) & (True if masks is None else masks) for f in frames]
+    if ct == 0.01 and "contrast_threshold" in SETTINGS:
+        ct = SETTINGS["contrast_threshold"]
+    kw = {key: SETTINGS[key] for key in ("window", "rng") if key in SETTINGS}
     try:
         rec = reconstruct_sequence(
-            frames, cam.K, cam.distortion, masks=masks, contrast_threshold=ct
+            frames, cam.K, cam.distortion, masks=masks, contrast_threshold=ct, **kw
         )
     except Exception as exc:  # a sequence that cannot start is a result too
         out: dict[str, Any] = {"reg": 0, "time": time.perf_counter() - t0}
@@ -223,6 +234,7 @@ def run_imageform(
     else:
         r = np.asarray(rec.residuals_px)
         out = {"reg": int(rec.registered.sum()), "time": time.perf_counter() - t0}
+        out["cpu"] = time.process_time() - c0
         out |= {"points": rec.points.shape[0], "track": float(np.mean(rec.track_length))}
         out |= {"reproj": float(np.median(r)), "R": rec.R, "t": rec.t, "note": ""}
         fallback = sum("registered by" in note for note in rec.notes)
@@ -289,15 +301,89 @@ def run_pycolmap(frames: list[np.ndarray], cam: Any, fov: bool, factor: float) -
     return out
 
 
+def pycolmap_pairs(frames: list[np.ndarray], every: int, cam: Any) -> str:
+    """Which frame pairs pycolmap's sequential matching verifies: a table by frame distance.
+
+    The reference row's features and matching (aperture mask, peak threshold / 4, sequential
+    pairing with its defaults), without the mapping; from its database: the pairs matched,
+    the pairs with verified inliers and their median count, at each distance between frames.
+    """
+    import sqlite3
+
+    import cv2
+    import pycolmap
+
+    from imageform.geometry import field_of_view_mask
+
+    sel = frames[::every]
+    K, d = cam.K, cam.distortion
+    with tempfile.TemporaryDirectory() as tmp:
+        root = Path(tmp)
+        (root / "images").mkdir()
+        (root / "masks").mkdir()
+        names = [f"{i:04d}.png" for i in range(len(sel))]
+        m = (field_of_view_mask(sel) * 255).astype(np.uint8)
+        for name, f in zip(names, sel, strict=True):
+            cv2.imwrite(str(root / "images" / name), f[..., ::-1])
+            cv2.imwrite(str(root / "masks" / f"{name}.png"), m)
+        options = pycolmap_options(1, "OPENCV_FISHEYE", (*np.diag(K)[:2], *K[:2, 2], *d.coeffs))
+        options[0].mask_path = str(root / "masks")
+        options[1].sift.peak_threshold *= 0.25
+        db = root / "database.db"
+        pycolmap.extract_features(
+            db,
+            root / "images",
+            camera_mode=pycolmap.CameraMode.SINGLE,
+            reader_options=options[0],
+            extraction_options=options[1],
+            device=pycolmap.Device.cpu,
+        )
+        pairing = pycolmap.SequentialPairingOptions()
+        pairing.num_threads = 1
+        pycolmap.match_sequential(
+            db, matching_options=options[2], pairing_options=pairing, device=pycolmap.Device.cpu
+        )
+        con = sqlite3.connect(db)
+        big = 2147483647  # COLMAP's pair id: image_id1 * big + image_id2
+        matched: dict[int, int] = {}
+        inliers: dict[int, list[int]] = {}
+        for pid, _ in con.execute("SELECT pair_id, rows FROM matches"):
+            gap = abs(pid % big - pid // big)
+            matched[gap] = matched.get(gap, 0) + 1
+        for pid, rows in con.execute("SELECT pair_id, rows FROM two_view_geometries"):
+            if rows > 0:
+                inliers.setdefault(abs(pid % big - pid // big), []).append(rows)
+        kps = [r[0] for r in con.execute("SELECT rows FROM keypoints")]
+        con.close()
+    rows = [
+        [gap, matched[gap], len(inliers.get(gap, [])), int(np.median(inliers.get(gap, [0])))]
+        for gap in sorted(matched)
+    ]
+    title = (
+        f"### pycolmap's pairs, every {every}th frame (overlap {pairing.overlap}, quadratic "
+        f"overlap {pairing.quadratic_overlap}; keypoints a frame: median {int(np.median(kps))})"
+        "\n\n"
+    )
+    cols = ["frames apart", "pairs matched", "pairs verified", "inliers a pair (median)"]
+    return title + markdown_table(cols, rows)
+
+
 def _median_run(fn: Any, repeat: int) -> dict[str, Any]:
     runs = [fn() for _ in range(repeat)]
     best = runs[0]
     best["time"] = statistics.median(r["time"] for r in runs)
+    if all("cpu" in r for r in runs):
+        best["cpu"] = statistics.median(r["cpu"] for r in runs)
     return best
 
 
 def table(
-    frames: list[np.ndarray], every: int, cam: Any, repeat: int, cache: Path | None = None
+    frames: list[np.ndarray],
+    every: int,
+    cam: Any,
+    repeat: int,
+    cache: Path | None = None,
+    rows_wanted: list[str] | None = None,
 ) -> str:
     import pycolmap
 
@@ -320,6 +406,8 @@ def table(
     ref = theirs[-1][1]
     ours: list[tuple[str, dict[str, Any]]] = []
     for label, fov, hl, ct in IMAGEFORM:
+        if rows_wanted is not None and f"imageform {label}" not in rows_wanted:
+            continue
         res = _median_run(lambda: run_imageform(sel, cam, fov, hl, ct), repeat)  # noqa: B023
         ours.append((f"imageform {label}", res))
         print(f"  every {every}: imageform {label}: {res['reg']}/{n}", file=sys.stderr)
@@ -340,6 +428,7 @@ def table(
                 f"{rot:.2f} / {tra:.2f}" if ok and r is not ref else ("reference" if ok else "-"),
                 f"{worst:.2f}" if ok and r is not ref else "-",
                 f"{r['time']:.1f}",
+                f"{r['cpu']:.1f}" if "cpu" in r else "-",
                 r.get("note", ""),
             ]
         )
@@ -353,6 +442,7 @@ def table(
         "vs reference: rotation / translation deg",
         "worst rotation deg",
         "s",
+        "CPU s",
         "note",
     ]
     title = f"## Every {every}th frame: {n} frames of {len(frames)}, {sel[0].shape[1]} x "
@@ -373,7 +463,30 @@ def main() -> None:
         help="folder for pycolmap's results: written on the first run, read after (a before/"
         "after comparison runs pycolmap once)",
     )
+    ap.add_argument("--window", type=int, default=None, help="imageform's window (default: its)")
+    ap.add_argument(
+        "--contrast-threshold",
+        type=float,
+        default=None,
+        help="imageform's SIFT contrast threshold in the rows of 0.01 (their labels keep 0.01)",
+    )
+    ap.add_argument(
+        "--rows", nargs="+", default=None, help="only these imageform rows (labels, as printed)"
+    )
+    ap.add_argument("--seed", type=int, default=None, help="imageform's RANSAC seed (rng)")
+    ap.add_argument("--no-highlight-table", action="store_true")
+    ap.add_argument(
+        "--pycolmap-pairs",
+        action="store_true",
+        help="also pycolmap's matched and verified pairs by the distance between frames",
+    )
     args = ap.parse_args()
+    if args.window is not None:
+        SETTINGS["window"] = args.window
+    if args.contrast_threshold is not None:
+        SETTINGS["contrast_threshold"] = args.contrast_threshold
+    if args.seed is not None:
+        SETTINGS["rng"] = args.seed
     from imageform.io import read_camera
 
     cam = read_camera(args.camera).camera
@@ -383,8 +496,11 @@ def main() -> None:
     print(f"load average: {load} (a shared machine)\n")
     print(f"{args.video.name}: {len(frames)} frames; camera {args.camera.name}\n")
     for every in args.every:
-        print(table(frames, every, cam, args.repeat, args.reference_cache))
-        print(highlight_table(frames, every, cam))
+        print(table(frames, every, cam, args.repeat, args.reference_cache, args.rows))
+        if not args.no_highlight_table:
+            print(highlight_table(frames, every, cam))
+        if args.pycolmap_pairs:
+            print(pycolmap_pairs(frames, every, cam))
 
 
 if __name__ == "__main__":
