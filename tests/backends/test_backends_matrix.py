@@ -290,6 +290,7 @@ EXCLUDED: dict[str, str] = {
     "stereo_rectify": "small matrices from a calibration, NumPy-only by design",
     "rectification_map": "builds NumPy maps for remap_bilinear, NumPy-only by design",
     "find_checkerboard": "image detector, NumPy-only by design",
+    "detect_horizon": "image detector (Hough, LSD, region statistics), NumPy-only by design",
     "find_checkerboards": "image detector, NumPy-only by design",
     "detect_aruco_markers": "image detector, NumPy-only by design",
     "identify_aruco_dictionary": "image detector, NumPy-only by design",
