@@ -171,11 +171,14 @@ def test_horizon_command(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> 
     assert max(abs(payload["rows"][0] - rows[0]), abs(payload["rows"][1] - rows[1])) < 1.5
     with Image.open(out) as ov:
         assert ov.size == (400, 300) and ov.mode == "RGB"
-    # no horizon: exit 0 with "not found" (the library's answer, not an error)
+    # no horizon: exit 1 in one line, as `imageform chart` without a chart; nothing written
     blank = tmp_path / "blank.png"
     Image.fromarray(np.full((64, 96, 3), 128, np.uint8)).save(blank)
-    assert main(["horizon", str(blank)]) == 0
-    assert "not found" in capsys.readouterr().out
+    none = tmp_path / "none.png"
+    assert main(["horizon", str(blank), "-o", str(none)]) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "no horizon found in the image: " in err[0]
+    assert not none.exists()
     assert main(["horizon", str(src), "--max-roll-deg", "0"]) == 1
     assert "max" in capsys.readouterr().err
 

@@ -339,6 +339,8 @@ def horizon(run: Run, opts: HorizonOptions, *, out: Path | None, image: Path) ->
         arr = arr.astype(np.float64) / 65535.0
     w = int(arr.shape[1])
     res = detect_horizon(arr, max_roll=math.radians(opts.max_roll_deg))
+    if not res.found:  # as imageform chart: the one object looked for is not there
+        raise DegenerateConfigurationError(f"no horizon found in the image: {res.reason}")
     summary: dict[str, Any] = {
         "image": image,
         "found": res.found,
@@ -349,14 +351,11 @@ def horizon(run: Run, opts: HorizonOptions, *, out: Path | None, image: Path) ->
         "reason": res.reason or None,
         "overlay": out,
     }
-    if res.found:
-        text = [
-            f"horizon: v = {res.rows[0]:.1f} at u = 0, {res.rows[1]:.1f} at u = {w - 1}; "
-            f"roll {math.degrees(res.roll):+.2f} deg (right end higher: +)",
-            f"  an edge along {100 * res.confidence:.0f} % of it across the frame",
-        ]
-    else:
-        text = [f"horizon: not found: {res.reason}"]
+    text = [
+        f"horizon: v = {res.rows[0]:.1f} at u = 0, {res.rows[1]:.1f} at u = {w - 1}; "
+        f"roll {math.degrees(res.roll):+.2f} deg (right end higher: +)",
+        f"  an edge along {100 * res.confidence:.0f} % of it across the frame",
+    ]
     if out is not None:
         from imageform.report.overlays import draw_vanishing_truth_overlay
 
