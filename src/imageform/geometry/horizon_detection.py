@@ -47,7 +47,6 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import ndimage
 
 from imageform._typing import ArrayLike, FloatArray
 from imageform._validate import as_image, as_real
@@ -124,6 +123,8 @@ class HorizonResult:
 
 def _prepare(image: ArrayLike) -> tuple[np.ndarray, float]:
     """Return the working image ``(h, w, c)`` float64 and its scale from the input."""
+    from scipy import ndimage
+
     arr = np.asarray(as_image(image, channels=None))
     if arr.ndim == 3 and arr.shape[-1] in (1, 3):
         pass
@@ -151,6 +152,8 @@ def _gradients(a: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.nd
     The Di Zenzo structure tensor (summed over the channels) gives the direction across
     which the colour changes most and the strength of that change.
     """
+    from scipy import ndimage
+
     gx = np.stack(
         [ndimage.gaussian_filter(a[..., k], 1.0, order=(0, 1)) for k in range(a.shape[2])], -1
     )
@@ -177,6 +180,8 @@ def _hough(
     A line at angle ``alpha`` to the rows has normal ``(-sin alpha, cos alpha)`` and offset
     ``rho = -sin(alpha) u + cos(alpha) v`` (pixel coordinates of the working image).
     """
+    from scipy import ndimage
+
     h, w = mag.shape
     vs, us = np.nonzero(mag > thr)
     if len(us) == 0:
@@ -230,6 +235,8 @@ def _follow(
     thr: float,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Return, at each point, the offset across the line of the strongest aligned edge."""
+    from scipy import ndimage
+
     h, w = mag.shape
     offs = np.arange(-_SEARCH, _SEARCH + 1, 1.0)
     q = pts[:, None, :] + offs[None, :, None] * n[None, None, :]
