@@ -251,6 +251,11 @@ def test_a_turned_board_near_an_endoscope_lens_edge(name: str) -> None:
     truth = np.asarray(project_points_distorted(obj, _ENDO_K, R, np.asarray(t), D)[0])
     err = np.linalg.norm(res.corners - truth, axis=1)
     assert np.median(err) < 0.3 and err.max() < 1.0, (np.median(err), err.max())
+    # without the size: the short grid was refused ("the checkerboard continues after the
+    # last row of the 16 x 10 grid"); the rectangle grown again is the whole board
+    auto = find_checkerboard(np.round(np.clip(img, 0, 1) * 255).astype(np.uint8), "auto")
+    assert auto.found and auto.pattern_size == (16, 12), auto.reason
+    np.testing.assert_allclose(auto.corners, res.corners, atol=1e-9)
 
 
 # --------------------------------------------------------------------------- large photographs

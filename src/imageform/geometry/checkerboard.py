@@ -290,7 +290,10 @@ def _detect(
         if rect.size == 0:
             continue
         tried[rect.ravel()] = True
-        if not auto and rect.size < cols * rows:
+        if auto:  # the largest of it and its regrowths (a board of any size)
+            rect = _regrown(rect, cand, nbr, hops, None)
+            tried[rect.ravel()] = True
+        elif rect.size < cols * rows:
             rect = _regrown(rect, cand, nbr, hops, want)
         shape = sorted(rect.shape)
         grid = cand.xy[rect]
@@ -374,16 +377,19 @@ def _regrown(
     cand: Candidates,
     nbr: NDArray[np.int64],
     hops: int,
-    want: list[int],
+    want: list[int] | None,
 ) -> NDArray[np.int64]:
-    """Grow the rectangle again from next to each of its corners; the one of ``want``'s shape.
+    """Grow the rectangle again from next to each of its corners.
 
-    The rectangle grows from its seed a row or column at a time, each new one whole and
-    within a third of a step of its straight continuation. Seeded on one side of a board
-    whose squares shrink toward the other (turned steeply, or near a wide-angle or endoscope
-    lens's edge) it meets the far, bent columns at full height, and one corner too far off
-    stops it; seeded on that side it takes those columns while they are short.
+    Returns the first of ``want``'s shape (the size given), or with ``want=None`` (``"auto"``)
+    the largest, the rectangle itself when none is larger. The rectangle grows from its seed
+    a row or column at a time, each new one whole and within a third of a step of its
+    straight continuation. Seeded on one side of a board whose squares shrink toward the
+    other (turned steeply, or near a wide-angle or endoscope lens's edge) it meets the far,
+    bent columns at full height, and one corner too far off stops it; seeded on that side it
+    takes those columns while they are short.
     """
+    best = rect
     for a, b in ((1, 1), (1, -2), (-2, 1), (-2, -2)):
         if min(rect.shape) < 3:
             break
@@ -391,9 +397,11 @@ def _regrown(
         if np.any(nbr[seed] < 0):
             continue
         other = lattice_rectangle(seed, cand, nbr, max_hops=hops)
-        if sorted(other.shape) == want:
+        if want is not None and sorted(other.shape) == want:
             return other
-    return rect
+        if want is None and other.size > best.size:
+            best = other
+    return best
 
 
 def _auto_grid(
