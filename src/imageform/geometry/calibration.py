@@ -476,7 +476,7 @@ def calibrate_camera(
     if best is not None and both:
         # a fisheye fit is refined once more with each view's pose taken afresh through the
         # fitted lens (pixels unwarped by it, as the equidistant start does): a narrow
-        # endoscope's views (rays to about 20 deg) left the refinement from Zhang's start in
+        # endoscope's views (rays to about 22 deg) left the refinement from Zhang's start in
         # a minimum of poses and large k3, k4 with the principal point 16 px off the one
         # OpenCV finds, at a higher cost (benchmarks/check_calibration_endoscope.py)
         g = best.globals_
