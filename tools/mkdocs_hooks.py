@@ -51,6 +51,7 @@ BENCH_MARKER = "<!-- benchmark-results -->"
 BENCH_SCRIPTS: dict[str, str] = {
     "8bit": "benchmarks/bench_8bit.py",
     "calibration": "benchmarks/bench_calibration.py",
+    "calibration-endoscope": "benchmarks/check_calibration_endoscope.py",
     "calibration-fisheye": "benchmarks/check_calibration_fisheye.py",
     "chart-detect": "benchmarks/bench_chart_detect.py",
     "chart-input": "benchmarks/check_chart_input.py",

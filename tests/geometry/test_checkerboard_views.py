@@ -218,6 +218,46 @@ def test_steep_views_through_a_wide_angle_lens(name: str) -> None:
     assert np.median(err) < 0.3 and err.max() < 1.0, (np.median(err), err.max())
 
 
+# --------------------------------------------------------------------------- endoscope views
+
+_ENDO_K = np.array([[407.19, 0, 389.65], [0, 417.36, 276.31], [0, 0, 1]])  # a PAL endoscope
+_ENDO = {  # rvec, t (squares), blur (px), noise seed: a 16 x 12 board turned 26-40 deg
+    "turned 26 deg, near the left edge": ([0.056, 0.45, 0.009], [-13.13, -2.7, 19.06], 1.6, 1),
+    "turned 40 deg, to the right": ([0.0, -0.7, -0.06], [-5.0, -3.0, 16.0], 2.2, 2),
+}
+
+
+@pytest.mark.parametrize("name", list(_ENDO))
+def test_a_turned_board_near_an_endoscope_lens_edge(name: str) -> None:
+    """A board of 17 x 13 squares turned in front of a PAL endoscope (768 x 576, a
+    Kannala-Brandt lens with the K and coefficients imageform fitted to a real endoscope's
+    calibration frames, github.com/cirauqui21/CameraCalibration_OpenCV): its squares shrink
+    from 30 to 10 px across the board and its rows bend. The grid grew from the strongest
+    seed, on the near side, and stopped a column or a row short of the far, bent edge (16 x
+    10 and 16 x 11 corners); it is grown again from next to each corner of the refused
+    rectangle, and the whole board is found, its corners within a pixel of the truth (the
+    bound of the steep wide-angle views above: squares of 10 px, edges blurred 2 px)."""
+    from imageform.geometry import Camera, KannalaBrandt, project_points_distorted, rvec_to_matrix
+    from tests.geometry.checkerboard_support import render_board_through
+
+    rv, t, blur, seed = _ENDO[name]
+    D = KannalaBrandt(-0.091, -0.0161, 0.0198, -0.022)
+    R = np.asarray(rvec_to_matrix(rv))
+    cam = Camera(_ENDO_K, R, np.asarray(t), (768, 576), distortion=D)
+    img = render_board_through(cam, 16, 12, 1.0, blur=blur, noise=0.02, seed=seed)
+    res = find_checkerboard(np.round(np.clip(img, 0, 1) * 255).astype(np.uint8), (16, 12))
+    assert res.found, res.reason
+    obj = np.c_[np.mgrid[0:16, 0:12].T.reshape(-1, 2), np.zeros(16 * 12)]
+    truth = np.asarray(project_points_distorted(obj, _ENDO_K, R, np.asarray(t), D)[0])
+    err = np.linalg.norm(res.corners - truth, axis=1)
+    assert np.median(err) < 0.3 and err.max() < 1.0, (np.median(err), err.max())
+    # without the size: the short grid was refused ("the checkerboard continues after the
+    # last row of the 16 x 10 grid"); the rectangle grown again is the whole board
+    auto = find_checkerboard(np.round(np.clip(img, 0, 1) * 255).astype(np.uint8), "auto")
+    assert auto.found and auto.pattern_size == (16, 12), auto.reason
+    np.testing.assert_allclose(auto.corners, res.corners, atol=1e-9)
+
+
 # --------------------------------------------------------------------------- large photographs
 
 

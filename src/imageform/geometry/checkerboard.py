@@ -66,7 +66,7 @@ from imageform._validate import (
     size_pair,
 )
 from imageform.errors import ImageformWarning, InvalidInputError
-from imageform.geometry.checkerboard_candidates import find_candidates
+from imageform.geometry.checkerboard_candidates import Candidates, find_candidates
 from imageform.geometry.checkerboard_grid import (
     board_continues,
     cell_means,
@@ -290,6 +290,11 @@ def _detect(
         if rect.size == 0:
             continue
         tried[rect.ravel()] = True
+        if auto:  # the largest of it and its regrowths (a board of any size)
+            rect = _regrown(rect, cand, nbr, hops, None)
+            tried[rect.ravel()] = True
+        elif rect.size < cols * rows:
+            rect = _regrown(rect, cand, nbr, hops, want)
         shape = sorted(rect.shape)
         grid = cand.xy[rect]
         if auto:
@@ -365,6 +370,38 @@ def _detect(
                 return grid, best_reason, best_size
         return _orient(grid, image.float, cols, rows, means), "", cols * rows
     return None, best_reason, best_size
+
+
+def _regrown(
+    rect: NDArray[np.int64],
+    cand: Candidates,
+    nbr: NDArray[np.int64],
+    hops: int,
+    want: list[int] | None,
+) -> NDArray[np.int64]:
+    """Grow the rectangle again from next to each of its corners.
+
+    Returns the first of ``want``'s shape (the size given), or with ``want=None`` (``"auto"``)
+    the largest, the rectangle itself when none is larger. The rectangle grows from its seed
+    a row or column at a time, each new one whole and within a third of a step of its
+    straight continuation. Seeded on one side of a board whose squares shrink toward the
+    other (turned steeply, or near a wide-angle or endoscope lens's edge) it meets the far,
+    bent columns at full height, and one corner too far off stops it; seeded on that side it
+    takes those columns while they are short.
+    """
+    best = rect
+    for a, b in ((1, 1), (1, -2), (-2, 1), (-2, -2)):
+        if min(rect.shape) < 3:
+            break
+        seed = int(rect[a, b])
+        if np.any(nbr[seed] < 0):
+            continue
+        other = lattice_rectangle(seed, cand, nbr, max_hops=hops)
+        if want is not None and sorted(other.shape) == want:
+            return other
+        if want is None and other.size > best.size:
+            best = other
+    return best
 
 
 def _auto_grid(
