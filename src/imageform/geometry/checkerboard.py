@@ -350,7 +350,7 @@ def _detect(
                     "larger board cut by the image border? check pattern_size)"
                 )
         if problem is None and auto:
-            side = _edge_outside(grid, image.codes.shape[:2])
+            side = _edge_outside(grid, image.codes.shape[:2], 3.0 * sigma)
             if side is not None:
                 problem = (
                     f"the {cols} x {rows} grid's outer squares reach past the image's "
@@ -444,16 +444,20 @@ def _mean_step(grid: NDArray[np.float64]) -> float:
     return float((rows.sum() + cols.sum()) / (rows.size + cols.size))
 
 
-def _edge_outside(grid: NDArray[np.float64], shape: tuple[int, ...]) -> str | None:
+def _edge_outside(
+    grid: NDArray[np.float64], shape: tuple[int, ...], margin: float = 0.0
+) -> str | None:
     """Say which image border a grid's outer squares reach past, None when they are inside.
 
     A board's outer squares end one grid step beyond its outer inner corners; a quarter to
     nearly half a step further on ``board_continues`` reads whether a larger board goes on.
     Those points, up to 1.45 steps beyond each outer corner along its row or column
-    (extrapolated linearly), must be inside the image: otherwise the board may continue past
-    the image's border and its size cannot be told.
+    (extrapolated linearly), must lie ``margin`` pixels inside the image (the caller's three
+    smoothing scales: a row of corners closer to the border than the detector's ring escapes
+    it, and the lattice stops a row short of a board that goes on): otherwise the board may
+    continue past the image's border and its size cannot be told.
     """
-    h, w = shape
+    h, w = shape[0] - margin, shape[1] - margin
     edges = (
         2.45 * grid[0] - 1.45 * grid[1],
         2.45 * grid[-1] - 1.45 * grid[-2],
@@ -462,9 +466,9 @@ def _edge_outside(grid: NDArray[np.float64], shape: tuple[int, ...]) -> str | No
     )
     pts = np.concatenate(edges)
     for name, bad in (
-        ("left", pts[:, 0] < -0.5),
+        ("left", pts[:, 0] < margin - 0.5),
         ("right", pts[:, 0] > w - 0.5),
-        ("top", pts[:, 1] < -0.5),
+        ("top", pts[:, 1] < margin - 0.5),
         ("bottom", pts[:, 1] > h - 0.5),
     ):
         if np.any(bad):
