@@ -333,6 +333,14 @@ def _sky_onset(
     return best
 
 
+def _median_inside(col: np.ndarray, count: np.ndarray) -> np.ndarray:
+    """Return the median over axis 0 of ``col`` (NaN outside the frame; ``count`` inside)."""
+    srt = np.sort(col, axis=0)  # NaN sorts last
+    lo = np.take_along_axis(srt, ((count - 1) // 2)[None, :, None], axis=0)[0]
+    hi = np.take_along_axis(srt, (count // 2)[None, :, None], axis=0)[0]
+    return 0.5 * (lo + hi)
+
+
 def _sides(
     a: np.ndarray, mag: np.ndarray, pts: np.ndarray, n: np.ndarray, h: int
 ) -> tuple[float, float]:
@@ -364,8 +372,8 @@ def _sides(
     valid = (in_up.sum(0) >= half) & (in_dn.sum(0) >= half)
     if not valid.any():
         return 0.0, 0.0
-    med_up = np.nanmedian(col_up[:, valid], axis=0)
-    med_dn = np.nanmedian(col_dn[:, valid], axis=0)
+    med_up = _median_inside(col_up[:, valid], in_up[:, valid].sum(0))
+    med_dn = _median_inside(col_dn[:, valid], in_dn[:, valid].sum(0))
     same = np.linalg.norm(med_up - med_dn, axis=-1) <= _SAME
     smooth = mag_up[:, valid].sum(0) / in_up[:, valid].sum(0) <= _SMOOTH
     # a point without the band above in the frame has no sky above it
@@ -468,8 +476,12 @@ def _evaluate(
     c.steep_above = float(slen[steep & (side < -1.0)].sum()) / diag
     upright = np.abs(seg_d[:, 1]) / np.maximum(slen, 1e-9) > math.cos(math.radians(10.0))
     c.vert_below = float(slen[upright & (slen > 0.03 * diag) & (side > 1.0)].sum()) / diag
-    c.sky_below, c.sky_along = _sides(a, mag, pts, c.normal, h)
-    c.area_above = float(_band((h, w), c.normal, c.point, -math.inf, 0.0).mean())
+    if c.cover >= _COVER and c.resid <= _RESIDUAL and not c.at_edge:
+        # only where it matters (:func:`_reject` rejects the others first): it is the costly part
+        c.sky_below, c.sky_along = _sides(a, mag, pts, c.normal, h)
+    # pixels above the line: in column u, the rows v < the line's row there (b > 0)
+    line_v = c.point[1] - (np.arange(w) - c.point[0]) * c.normal[0] / c.normal[1]
+    c.area_above = float(np.clip(np.ceil(line_v), 0, h).sum()) / (h * w)
     return c
 
 
