@@ -574,7 +574,7 @@ def detect_horizon(image: ArrayLike, *, max_roll: float = math.radians(30.0)) ->
         The largest angle of the horizon to the image rows looked for (radians, at most
         80 degrees). The default, 30 degrees, covers hand-held and mounted cameras; an
         aircraft's camera rolls further (60 degrees finds more of its horizons and more
-        false ones, ``benchmarks/results/horizon-natural-2026-11-29g.md``).
+        false ones, ``benchmarks/results/horizon-natural-2026-11-29h.md``).
 
     Returns
     -------
