@@ -350,8 +350,9 @@ def _sides(
     above it (from 2 px) and of the band just below it are compared: within ``_SAME`` is
     the sky continuing past the line (a roof line beside which the sky comes down; a sea
     horizon has the sea below it all along). The band above is sky where its mean edge
-    strength is at most ``_SMOOTH``. Points with fewer than two pixels of either band in
-    the frame are left out; none left: (0, 0).
+    strength is at most ``_SMOOTH``. Points with less than half of either band in the frame
+    are left out of the first share and count as without sky in the second; none left:
+    (0, 0).
     """
     hh, ww = mag.shape
     band = max(4.0, _BAND * h)
