@@ -82,7 +82,7 @@ from imageform._validate import (
     real_array,
 )
 from imageform.analysis._arrays import image_in, is_dask
-from imageform.analysis.chart_grid import ChartPatches, ChartWarning
+from imageform.analysis.chart_grid import ChartPatches, ChartWarning, _clean_pixels
 from imageform.errors import InvalidInputError
 
 __all__ = [
@@ -534,6 +534,39 @@ def _sample(work: np.ndarray, h: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return vals.mean(axis=1), vals.std(axis=1).max(axis=1)
 
 
+_OFFS_FINE = np.stack(
+    np.meshgrid(np.linspace(-0.25, 0.25, 9), np.linspace(-0.25, 0.25, 9)), -1
+).reshape(-1, 2)
+
+
+def _sample_clean(work: np.ndarray, h: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Mean, spread and share of the samples near each cell's dominant colour.
+
+    A finer grid than :func:`_sample` (9 x 9 over the inner half of the cell), each cell's
+    samples trimmed as :func:`measure_chart_patches` trims pixels (a mark over part of a patch
+    is left out). Used only for the chart already accepted, so that a marked patch is not
+    judged an outlier for its mark; the search itself scores the plain means.
+    """
+    from scipy import ndimage
+
+    pts = _apply_h(h, (_GRID[:, None, :] + _OFFS_FINE[None, :, :]).reshape(-1, 2))
+    vals = np.stack(
+        [
+            ndimage.map_coordinates(work[..., ch], [pts[:, 1], pts[:, 0]], order=1, mode="nearest")
+            for ch in range(3)
+        ],
+        axis=-1,
+    ).reshape(len(_GRID), len(_OFFS_FINE), 3)
+    mean = np.empty((len(_GRID), 3))
+    spread = np.empty(len(_GRID))
+    share = np.empty(len(_GRID))
+    for k in range(len(_GRID)):
+        keep = _clean_pixels(vals[k])
+        v = vals[k][keep] if keep.any() else vals[k]
+        mean[k], spread[k], share[k] = v.mean(axis=0), v.std(axis=0).max(), keep.mean()
+    return mean, spread, share
+
+
 #: A patch is a colour outlier when the colour the fit of the other patches predicts for it
 #: is more than ``max(_OUTLIER_FACTOR * median, _OUTLIER_DELTA_E)`` CIELAB ΔE*ab (CIE 1976)
 #: from its reference, the median taken over the other patches' residuals of that fit.
@@ -872,6 +905,15 @@ def _search(
     r2_final, out_final = _window_fit(mean, ref_lin, usable, shading)
     if r2_final >= r2 or r2_final >= min_score:
         r2, out = r2_final, out_final
+    # the outliers once more on the samples of each patch's dominant colour: a label, a pen
+    # mark or a finger over part of a patch spoils its mean above, not its colour (only the
+    # accepted chart: the search's scores, and so the margin against false charts, are the
+    # plain means')
+    c_mean, c_spread, c_share = _sample_clean(work, hc)
+    c_usable = (c_spread < 0.08) & (c_mean.max(axis=1) < 0.98) & (c_share >= 0.5)
+    r2_clean, out_clean = _window_fit(c_mean, ref_lin, c_usable, shading)
+    if r2_clean >= r2:
+        r2, out, mean, usable = r2_clean, out_clean, c_mean, c_usable
     light = _shading_fit(mean, ref_lin, usable & ~out)[2] if shading else None
     return r2, hc, out, chart_xy, light
 
@@ -1045,17 +1087,26 @@ def measure_chart_patches(
     max_std: float = 0.04,
     saturation: float = 1.0,
     max_saturated_fraction: float = 0.01,
+    min_clean: float = 0.5,
 ) -> ChartPatches:
     """Mean encoded sRGB of each patch of a chart found by :func:`detect_colorchecker`.
 
     The pixels whose centres lie in each of ``chart.quads`` (the inner part of the patch) are
-    averaged in the full-resolution image. As :func:`~imageform.analysis.chart_patches`
-    does, a patch is **missing** when its sampled region is not flat (any channel's
-    standard deviation above ``max_std``), when it holds no pixel (outside the image), or
-    when the detection flagged it as a colour outlier (``chart.outliers``: occluded);
-    **saturated** when more than ``max_saturated_fraction`` of its pixels reach
+    averaged in the full-resolution image, **leaving out the pixels of marks** over part of
+    a patch (a printed number or label, a pen stroke, a sticker, a reflection, a finger or a
+    cable): the patch's dominant colour is the per-channel median of its pixels, pixels more
+    than 4 robust sigmas (1.4826 x the median absolute deviation, at least 0.02) from it in
+    some channel are left out, and the median and spread are taken again over the rest. The
+    share of the pixels kept is ``used`` in the result. A patch is **missing** when fewer
+    than ``min_clean`` of its pixels are kept (too little of it is left clean, or it is not
+    one flat colour: the sample runs over an edge), when the kept pixels are not flat (any
+    channel's standard deviation above ``max_std``), when it holds no pixel (outside the
+    image), or when the detection flagged it as a colour outlier (``chart.outliers``);
+    **saturated** when more than ``max_saturated_fraction`` of its kept pixels reach
     ``saturation`` in some channel. Both raise a :class:`ChartWarning`;
-    :func:`~imageform.analysis.fit_color_correction` leaves them out.
+    :func:`~imageform.analysis.fit_color_correction` leaves them out. A mark over more than
+    half of the sampled square is taken for the patch (the median is then the mark's
+    colour) unless the detection flags the patch as an outlier.
 
     Parameters
     ----------
@@ -1069,11 +1120,15 @@ def measure_chart_patches(
         The clipping level (encoded, [0, 1] scale).
     max_saturated_fraction : float, keyword-only
         Fraction of a patch's pixels at ``saturation`` above which it is saturated.
+    min_clean : float, keyword-only
+        Least share of a patch's sampled pixels, in (0, 1], that must agree with its dominant
+        colour (1: any mark makes the patch missing).
 
     Returns
     -------
     ChartPatches
-        Row by row in the reference chart's order (upright), whatever the photo's rotation.
+        Row by row in the reference chart's order (upright), whatever the photo's rotation;
+        ``used`` is the share of each patch's pixels averaged (0 where none was sampled).
 
     Raises
     ------
@@ -1100,28 +1155,39 @@ def measure_chart_patches(
     max_saturated_fraction = as_real(
         max_saturated_fraction, "max_saturated_fraction", minimum=0.0, maximum=1.0
     )
+    min_clean = as_real(min_clean, "min_clean", minimum=0.0, maximum=1.0)
+    if min_clean <= 0.0:
+        raise InvalidInputError(f"expected min_clean in (0, 1], got {min_clean!r}")
     hgt, wid = rgb.shape[:2]
     n = len(chart.quads)
     means = np.full((n, 3), np.nan)
     stds = np.full((n, 3), np.nan)
     sat = np.zeros(n)
+    used = np.full(n, np.nan)
     for k in range(n):
         sv, su, mask = _quad_mask_bounds(chart.quads[k], hgt, wid)
         if not mask.any():
             continue
         px = rgb[sv, su][mask].astype(np.float64) / full
+        keep = _clean_pixels(px)
+        used[k] = keep.mean()
+        px = px[keep] if keep.any() else px
         means[k] = px.mean(axis=0)
         stds[k] = px.std(axis=0)
         sat[k] = (px >= saturation).any(axis=1).mean()
     empty = ~np.isfinite(means).all(axis=1)
     saturated = (sat > max_saturated_fraction) & ~empty
     missing = (
-        empty | np.asarray(chart.outliers) | (np.nan_to_num(stds, nan=0.0) > max_std).any(axis=1)
+        empty
+        | np.asarray(chart.outliers)
+        | (np.nan_to_num(stds, nan=0.0) > max_std).any(axis=1)
+        | (np.nan_to_num(used, nan=0.0) < min_clean)
     )
     if not (~saturated & ~missing).any():
         raise InvalidInputError(
-            f"no usable chart patch (max_std={max_std:g}, saturation={saturation:g}): saturated "
-            f"{np.flatnonzero(saturated).tolist()}, missing {np.flatnonzero(missing).tolist()}"
+            f"no usable chart patch (max_std={max_std:g}, saturation={saturation:g}, "
+            f"min_clean={min_clean:g}): saturated {np.flatnonzero(saturated).tolist()}, "
+            f"missing {np.flatnonzero(missing).tolist()}"
         )
     for what, idx in (
         ("saturated", np.flatnonzero(saturated)),
@@ -1136,7 +1202,9 @@ def measure_chart_patches(
                 ChartWarning,
                 stacklevel=2,
             )
-    return ChartPatches(means, np.nan_to_num(stds, nan=0.0), saturated, missing)
+    return ChartPatches(
+        means, np.nan_to_num(stds, nan=0.0), saturated, missing, np.nan_to_num(used, nan=0.0)
+    )
 
 
 # ---------------------------------------------------------------- synthetic chart photographs
