@@ -534,39 +534,6 @@ def _sample(work: np.ndarray, h: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return vals.mean(axis=1), vals.std(axis=1).max(axis=1)
 
 
-_OFFS_FINE = np.stack(
-    np.meshgrid(np.linspace(-0.25, 0.25, 9), np.linspace(-0.25, 0.25, 9)), -1
-).reshape(-1, 2)
-
-
-def _sample_clean(work: np.ndarray, h: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Mean, spread and share of the samples near each cell's dominant colour.
-
-    A finer grid than :func:`_sample` (9 x 9 over the inner half of the cell), each cell's
-    samples trimmed as :func:`measure_chart_patches` trims pixels (a mark over part of a patch
-    is left out). Used only for the chart already accepted, so that a marked patch is not
-    judged an outlier for its mark; the search itself scores the plain means.
-    """
-    from scipy import ndimage
-
-    pts = _apply_h(h, (_GRID[:, None, :] + _OFFS_FINE[None, :, :]).reshape(-1, 2))
-    vals = np.stack(
-        [
-            ndimage.map_coordinates(work[..., ch], [pts[:, 1], pts[:, 0]], order=1, mode="nearest")
-            for ch in range(3)
-        ],
-        axis=-1,
-    ).reshape(len(_GRID), len(_OFFS_FINE), 3)
-    mean = np.empty((len(_GRID), 3))
-    spread = np.empty(len(_GRID))
-    share = np.empty(len(_GRID))
-    for k in range(len(_GRID)):
-        keep = _clean_pixels(vals[k])
-        v = vals[k][keep] if keep.any() else vals[k]
-        mean[k], spread[k], share[k] = v.mean(axis=0), v.std(axis=0).max(), keep.mean()
-    return mean, spread, share
-
-
 #: A patch is a colour outlier when the colour the fit of the other patches predicts for it
 #: is more than ``max(_OUTLIER_FACTOR * median, _OUTLIER_DELTA_E)`` CIELAB ΔE*ab (CIE 1976)
 #: from its reference, the median taken over the other patches' residuals of that fit.
@@ -905,15 +872,6 @@ def _search(
     r2_final, out_final = _window_fit(mean, ref_lin, usable, shading)
     if r2_final >= r2 or r2_final >= min_score:
         r2, out = r2_final, out_final
-    # the outliers once more on the samples of each patch's dominant colour: a label, a pen
-    # mark or a finger over part of a patch spoils its mean above, not its colour (only the
-    # accepted chart: the search's scores, and so the margin against false charts, are the
-    # plain means')
-    c_mean, c_spread, c_share = _sample_clean(work, hc)
-    c_usable = (c_spread < 0.08) & (c_mean.max(axis=1) < 0.98) & (c_share >= 0.5)
-    r2_clean, out_clean = _window_fit(c_mean, ref_lin, c_usable, shading)
-    if r2_clean >= r2:
-        r2, out, mean, usable = r2_clean, out_clean, c_mean, c_usable
     light = _shading_fit(mean, ref_lin, usable & ~out)[2] if shading else None
     return r2, hc, out, chart_xy, light
 
@@ -1080,6 +1038,11 @@ def _quad_mask_bounds(quad: np.ndarray, hgt: int, wid: int) -> tuple[slice, slic
     return slice(v0, v1 + 1), slice(u0, u1 + 1), inside
 
 
+#: A patch whose left-out pixels hold a flat colour of more than this fraction of its kept
+#: pixels' count is missing: a mark over about half the sampled square could be the patch.
+_AMBIGUOUS = 0.8
+
+
 def measure_chart_patches(
     image: ArrayLike,
     chart: ChartDetection,
@@ -1104,9 +1067,12 @@ def measure_chart_patches(
     image), or when the detection flagged it as a colour outlier (``chart.outliers``);
     **saturated** when more than ``max_saturated_fraction`` of its kept pixels reach
     ``saturation`` in some channel. Both raise a :class:`ChartWarning`;
-    :func:`~imageform.analysis.fit_color_correction` leaves them out. A mark over more than
-    half of the sampled square is taken for the patch (the median is then the mark's
-    colour) unless the detection flags the patch as an outlier.
+    :func:`~imageform.analysis.fit_color_correction` leaves them out. A patch is missing,
+    too, when the pixels left out hold a flat colour of their own of more than 0.8 times
+    the kept pixels' count (a mark over about half the square: which colour is the patch's
+    is unknown). A flat mark over clearly more than half of the sampled square is taken for
+    the patch (the median is then the mark's colour) unless the detection flags the patch
+    as an outlier.
 
     Parameters
     ----------
@@ -1164,6 +1130,7 @@ def measure_chart_patches(
     stds = np.full((n, 3), np.nan)
     sat = np.zeros(n)
     used = np.full(n, np.nan)
+    ambiguous = np.zeros(n, dtype=bool)
     for k in range(n):
         sv, su, mask = _quad_mask_bounds(chart.quads[k], hgt, wid)
         if not mask.any():
@@ -1171,6 +1138,11 @@ def measure_chart_patches(
         px = rgb[sv, su][mask].astype(np.float64) / full
         keep = _clean_pixels(px)
         used[k] = keep.mean()
+        rest = px[~keep]
+        if len(rest) and _clean_pixels(rest).sum() > _AMBIGUOUS * keep.sum():
+            # the pixels left out hold a second flat colour nearly as large as the kept one
+            # (a mark over about half the square): which of the two is the patch is unknown
+            ambiguous[k] = True
         px = px[keep] if keep.any() else px
         means[k] = px.mean(axis=0)
         stds[k] = px.std(axis=0)
@@ -1182,6 +1154,7 @@ def measure_chart_patches(
         | np.asarray(chart.outliers)
         | (np.nan_to_num(stds, nan=0.0) > max_std).any(axis=1)
         | (np.nan_to_num(used, nan=0.0) < min_clean)
+        | ambiguous
     )
     if not (~saturated & ~missing).any():
         raise InvalidInputError(

@@ -11,7 +11,7 @@ chart images without a module cycle; :mod:`imageform.analysis.harmonize` re-expo
 from __future__ import annotations
 
 import warnings
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -33,7 +33,7 @@ class ChartPatches:
 
     Encoded sRGB ``means`` (N, 3), the per-patch ``std`` (N, 3), which patches are ``saturated``
     or ``missing``, and ``used`` (N,): the share of each patch's sampled pixels that went into
-    its mean (1 where every pixel did, the default; under 1 where
+    its mean (all 1 by default: every pixel did; under 1 where
     :func:`~imageform.analysis.measure_chart_patches` left out pixels of a mark over the patch).
     """
 
@@ -41,7 +41,7 @@ class ChartPatches:
     std: np.ndarray
     saturated: np.ndarray
     missing: np.ndarray
-    used: np.ndarray | None = None
+    used: np.ndarray = field(default_factory=lambda: np.ones(0))
 
     def __post_init__(self) -> None:
         """``means`` and ``std`` of shape (N, 3), the flags booleans of shape (N,)."""
@@ -72,7 +72,11 @@ class ChartPatches:
                 )
         if np.any(std < 0):
             raise InvalidInputError(f"expected std >= 0, got min {float(np.nanmin(std)):g}")
-        used = np.ones(n) if self.used is None else real_array(self.used, "used", (n,))
+        used = real_array(self.used, "used", (None,))
+        if used.size == 0 and n:  # the default: every pixel of every patch
+            used = np.ones(n)
+        if used.shape != (n,):
+            raise InvalidInputError(f"expected used of shape ({n},), got {describe(self.used)}")
         if np.any(used < 0) or np.any(used > 1):
             raise InvalidInputError(f"expected used in [0, 1], got {describe(self.used)}")
         object.__setattr__(self, "used", used)
