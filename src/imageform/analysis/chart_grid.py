@@ -94,24 +94,31 @@ _CLEAN_SIGMAS, _CLEAN_FLOOR = 4.0, 0.02
 
 
 def _clean_pixels(px: np.ndarray) -> np.ndarray:
-    """Mask of the pixels (N, 3) that agree with the patch's dominant colour.
+    """Mask of the pixels (..., N, 3) that agree with their patch's dominant colour.
 
     The per-channel median of the pixels and their spread (1.4826 x the median absolute
     deviation, at least ``_CLEAN_FLOOR / _CLEAN_SIGMAS``) give the dominant colour; pixels more
     than ``_CLEAN_SIGMAS`` spreads from it in any channel (a label, a pen stroke, a sticker, a
     reflection, a finger over part of the patch) are left out, and the median and spread are
     taken again over the rest (twice). The median belongs to the clean part as long as the
-    marks cover under half the pixels.
+    marks cover under half the pixels. Leading axes are separate patches.
     """
-    keep = np.ones(len(px), dtype=bool)
+    import warnings
+
+    keep = np.ones(px.shape[:-1], dtype=bool)
     for _ in range(2):
-        ref = px[keep]
-        if not len(ref):
-            break
-        med = np.median(ref, axis=0)
-        mad = 1.4826 * np.median(np.abs(ref - med), axis=0)
-        keep = (np.abs(px - med) <= np.maximum(_CLEAN_SIGMAS * mad, _CLEAN_FLOOR)).all(axis=1)
-    return keep
+        if keep.all():
+            med = np.median(px, axis=-2, keepdims=True)
+            mad = 1.4826 * np.median(np.abs(px - med), axis=-2, keepdims=True)
+        else:
+            ref = np.where(keep[..., None], px, np.nan)
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", RuntimeWarning)  # a patch with none kept
+                med = np.nanmedian(ref, axis=-2, keepdims=True)
+                mad = 1.4826 * np.nanmedian(np.abs(ref - med), axis=-2, keepdims=True)
+        tol = np.maximum(_CLEAN_SIGMAS * mad, _CLEAN_FLOOR)
+        keep = (np.abs(px - med) <= tol).all(axis=-1)
+    return np.asarray(keep)
 
 
 def chart_patches(
