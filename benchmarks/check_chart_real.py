@@ -24,7 +24,9 @@ Per photograph: found or not and the time of :func:`detect_colorchecker`, and wh
 ``mcc`` detector (``cv2.mcc``, MCC24) finds the chart too, the median and largest difference
 of the patch means (8-bit units); whether colour-checker-detection's segmentation detector
 (``detect_colour_checkers_segmentation``) finds one; the mean CIEDE2000 of the measured
-patches (those not flagged missing or saturated) to the ColorChecker's published sRGB as
+patches (those not flagged missing or saturated; in brackets the least share of a usable
+patch's pixels that :func:`measure_chart_patches` averaged, leaving out marks) to the
+ColorChecker's published sRGB as
 they are and after :func:`fit_color_correction` (3 x 3 in linear light, fitted on them:
 how well a correction from this chart can do, and never worse than none).
 
@@ -155,6 +157,9 @@ def _delta_e00(im: np.ndarray, det: object) -> tuple[str, str, str]:
         except ValueError:
             return "all 24", "-", "-"
         flagged = " ".join(str(i) for i in np.flatnonzero(~p.valid)) or "none"
+        used = getattr(p, "used", None)  # the share of each patch's pixels averaged
+        if used is not None:
+            flagged += f" ({np.min(used[p.valid]):.2f})"
         ref = np.asarray(COLORCHECKER_SRGB8, dtype=np.float64) / 255.0
         use = p.valid & (p.means < 1.0).all(axis=1)
         lab_ref = np.asarray(convert(ref[use], "srgb", "lab"))
@@ -296,7 +301,7 @@ def main(
             "mcc found",
             "patch means vs mcc, median / max (8-bit)",
             "colour-checker-detection found",
-            "patches flagged (missing, saturated)",
+            "patches flagged (missing, saturated) (least share of pixels used)",
             "ΔE00 to published, as measured",
             "ΔE00 after fit",
         ),

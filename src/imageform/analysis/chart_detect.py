@@ -50,8 +50,16 @@ segmentation detector of colour-checker-detection and OpenCV's ``mcc`` module):
    41(1), 2019, by their alternating least squares), by its adjusted :math:`R^2` (one
    parameter per patch more: a lattice of unrelated colours does not pass), and a chart
    found so comes with a :class:`~imageform.analysis.ChartWarning` naming the range of the
-   lights. Otherwise the detection comes back with ``found`` False and the reason (a
-   photograph without a chart is an answer, not an error).
+   lights.
+7. **Marks on the patches.** When neither passes, a label or a number printed or drawn on
+   every patch may be why (each patch's mean is the patch's colour mixed with the mark's):
+   the lattices are scored once more on each patch's dominant colour (7 x 7 samples per
+   cell, those more than 4 robust sigmas from their median left out, as
+   :func:`measure_chart_patches` does), and a chart found so must reach an :math:`R^2` of at
+   least 0.9 (trimmed samples let more lattices of unrelated colours fit: the best of the
+   photographs without a chart in benchmarks/results/chart-real-2026-11-29h.md scores 0.70
+   so, 0.66 plain). Otherwise the detection comes back with ``found`` False and the reason
+   (a photograph without a chart is an answer, not an error).
 
 Coordinates are imageform's pixel convention (docs/conventions.md): ``(u, v)`` = (column,
 row), integer values at pixel centres. Chart coordinates are ``(column, row)`` of the
@@ -82,7 +90,7 @@ from imageform._validate import (
     real_array,
 )
 from imageform.analysis._arrays import image_in, is_dask
-from imageform.analysis.chart_grid import ChartPatches, ChartWarning
+from imageform.analysis.chart_grid import ChartPatches, ChartWarning, _clean_pixels
 from imageform.errors import InvalidInputError
 
 __all__ = [
@@ -519,19 +527,41 @@ _OFFS = np.stack(np.meshgrid(np.linspace(-0.2, 0.2, 5), np.linspace(-0.2, 0.2, 5
 )
 
 
-def _sample(work: np.ndarray, h: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Mean and spread of the work image over the inner part of every cell of chart->work h."""
+_OFFS_FINE = np.stack(
+    np.meshgrid(np.linspace(-0.25, 0.25, 7), np.linspace(-0.25, 0.25, 7)), -1
+).reshape(-1, 2)
+
+
+def _sample(work: np.ndarray, h: np.ndarray, trim: bool = False) -> tuple[np.ndarray, np.ndarray]:
+    """Mean and spread of the work image over the inner part of every cell of chart->work h.
+
+    With ``trim``, 7 x 7 samples per cell trimmed to the cell's dominant colour as
+    :func:`measure_chart_patches` trims pixels (a label over part of a patch is left out); a
+    cell with under half its samples kept gets an infinite spread (unusable).
+    """
     from scipy import ndimage
 
-    pts = _apply_h(h, (_GRID[:, None, :] + _OFFS[None, :, :]).reshape(-1, 2))
+    offs = _OFFS_FINE if trim else _OFFS
+    pts = _apply_h(h, (_GRID[:, None, :] + offs[None, :, :]).reshape(-1, 2))
     vals = np.stack(
         [
             ndimage.map_coordinates(work[..., ch], [pts[:, 1], pts[:, 0]], order=1, mode="nearest")
             for ch in range(3)
         ],
         axis=-1,
-    ).reshape(len(_GRID), len(_OFFS), 3)
-    return vals.mean(axis=1), vals.std(axis=1).max(axis=1)
+    ).reshape(len(_GRID), len(offs), 3)
+    if not trim:
+        return vals.mean(axis=1), vals.std(axis=1).max(axis=1)
+    keep = _clean_pixels(vals)
+    kept = np.where(keep[..., None], vals, np.nan)
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # a cell with no sample kept
+        mean = np.nanmean(kept, axis=1)
+        spread = np.nanstd(kept, axis=1).max(axis=1)
+    few = 2 * keep.sum(axis=1) < keep.shape[1]
+    return np.where(few[:, None], vals.mean(axis=1), mean), np.where(few, np.inf, spread)
 
 
 #: A patch is a colour outlier when the colour the fit of the other patches predicts for it
@@ -659,6 +689,10 @@ def _r2(x: np.ndarray, ref_lin: np.ndarray, use: np.ndarray) -> float:
     return 1.0 - float(np.sum(res * res)) / ss_tot
 
 
+#: The least R² of a chart found only on trimmed samples (marks over part of the patches);
+#: above ``min_score``, as such samples let more false lattices fit (the best of the
+#: negatives of chart-real-2026-11-29h: 0.70 trimmed, 0.66 plain).
+_TRIMMED_MIN_SCORE = 0.9
 #: Below this R² of the plain fit, :func:`_colour_fit` also tries the least-median fit.
 _ROBUST_BELOW = 0.95
 #: Random 6-patch subsets the least-median fit tries (a fixed seed: the same answer each run).
@@ -769,7 +803,12 @@ def _window_fit(
 
 
 def _best_window(
-    work: np.ndarray, h: np.ndarray, keys: np.ndarray, ref_lin: np.ndarray, shading: bool = False
+    work: np.ndarray,
+    h: np.ndarray,
+    keys: np.ndarray,
+    ref_lin: np.ndarray,
+    shading: bool = False,
+    trim: bool = False,
 ) -> tuple[float, np.ndarray, np.ndarray] | None:
     """Best (score, chart->lattice map, outliers) over windows and quarter turns."""
     umin, vmin = keys.min(axis=0).astype(int)
@@ -798,7 +837,7 @@ def _best_window(
                 continue
             a = _turn(quarter, u0, v0)
             hc = h @ a
-            mean, spread = _sample(work, hc)
+            mean, spread = _sample(work, hc, trim)
             usable = (spread < 0.08) & (mean.max(axis=1) < 0.98)
             r2, out = _window_fit(mean, ref_lin, usable, shading)
             if best is None or r2 > best[0]:
@@ -848,7 +887,7 @@ def _search(
             break
     if best is None:
         return "no 4x6 lattice of flat patches"
-    shading = False
+    shading = trim = False
     if best[0] < min_score:
         # a shadow across the chart or light falling off along it: the lattices again, each
         # patch under its own light (the colours have to match up to brightness)
@@ -857,9 +896,24 @@ def _search(
             win = _best_window(work, h, keys, ref_lin, shading=True)
             if win is not None and (shaded is None or win[0] > shaded[0]):
                 shaded = (win[0], h, win[1], idx, keys, win[2])
-        if shaded is None or shaded[0] < min_score:
-            return f"best candidate's colour fit R2 = {best[0]:.2f} < min_score = {min_score:g}"
-        best, shading = shaded, True
+        if shaded is not None and shaded[0] >= min_score:
+            best, shading = shaded, True
+        else:
+            # marks over part of every patch (printed labels, drawn numbers): the lattices
+            # again on each patch's dominant colour, accepted only at the stricter
+            # _TRIMMED_MIN_SCORE (trimmed samples make more false lattices usable)
+            trimmed = None
+            for h, idx, keys in lattices:
+                win = _best_window(work, h, keys, ref_lin, trim=True)
+                if win is not None and (trimmed is None or win[0] > trimmed[0]):
+                    trimmed = (win[0], h, win[1], idx, keys, win[2])
+            need = max(min_score, _TRIMMED_MIN_SCORE)
+            if trimmed is None or trimmed[0] < need:
+                why = f"best candidate's colour fit R2 = {best[0]:.2f} < min_score = {min_score:g}"
+                if trimmed is not None:
+                    why += f" (on the patches' dominant colours {trimmed[0]:.2f} < {need:g})"
+                return why
+            best, trim = trimmed, True
     r2, h, a, idx, keys, out = best
     # chart coordinates of the matched candidates, refit chart -> work directly
     chart_xy = _apply_h(np.linalg.inv(a), keys)
@@ -867,7 +921,7 @@ def _search(
     chart_xy, pts = np.round(chart_xy[inside]), cand["c"][idx[inside]]
     hc = _fit_h(chart_xy, pts) if len(pts) >= 4 else h @ a
     # the score and the outliers again, sampled through the refitted homography
-    mean, spread = _sample(work, hc)
+    mean, spread = _sample(work, hc, trim)
     usable = (spread < 0.08) & (mean.max(axis=1) < 0.98)
     r2_final, out_final = _window_fit(mean, ref_lin, usable, shading)
     if r2_final >= r2 or r2_final >= min_score:
@@ -1038,6 +1092,11 @@ def _quad_mask_bounds(quad: np.ndarray, hgt: int, wid: int) -> tuple[slice, slic
     return slice(v0, v1 + 1), slice(u0, u1 + 1), inside
 
 
+#: A patch whose left-out pixels hold a flat colour of more than this fraction of its kept
+#: pixels' count is missing: a mark over about half the sampled square could be the patch.
+_AMBIGUOUS = 0.8
+
+
 def measure_chart_patches(
     image: ArrayLike,
     chart: ChartDetection,
@@ -1045,17 +1104,29 @@ def measure_chart_patches(
     max_std: float = 0.04,
     saturation: float = 1.0,
     max_saturated_fraction: float = 0.01,
+    min_clean: float = 0.6,
 ) -> ChartPatches:
     """Mean encoded sRGB of each patch of a chart found by :func:`detect_colorchecker`.
 
     The pixels whose centres lie in each of ``chart.quads`` (the inner part of the patch) are
-    averaged in the full-resolution image. As :func:`~imageform.analysis.chart_patches`
-    does, a patch is **missing** when its sampled region is not flat (any channel's
-    standard deviation above ``max_std``), when it holds no pixel (outside the image), or
-    when the detection flagged it as a colour outlier (``chart.outliers``: occluded);
-    **saturated** when more than ``max_saturated_fraction`` of its pixels reach
+    averaged in the full-resolution image, **leaving out the pixels of marks** over part of
+    a patch (a printed number or label, a pen stroke, a sticker, a reflection, a finger or a
+    cable): the patch's dominant colour is the per-channel median of its pixels, pixels more
+    than 4 robust sigmas (1.4826 x the median absolute deviation, at least 0.02) from it in
+    some channel are left out, and the median and spread are taken again over the rest. The
+    share of the pixels kept is ``used`` in the result. A patch is **missing** when fewer
+    than ``min_clean`` of its pixels are kept (too little of it is left clean, or it is not
+    one flat colour: the sample runs over an edge), when the kept pixels are not flat (any
+    channel's standard deviation above ``max_std``), when it holds no pixel (outside the
+    image), or when the detection flagged it as a colour outlier (``chart.outliers``);
+    **saturated** when more than ``max_saturated_fraction`` of its kept pixels reach
     ``saturation`` in some channel. Both raise a :class:`ChartWarning`;
-    :func:`~imageform.analysis.fit_color_correction` leaves them out.
+    :func:`~imageform.analysis.fit_color_correction` leaves them out. A patch is missing,
+    too, when the pixels left out hold a flat colour of their own of more than 0.8 times
+    the kept pixels' count (a mark over about half the square: which colour is the patch's
+    is unknown). A flat mark over clearly more than half of the sampled square is taken for
+    the patch (the median is then the mark's colour) unless the detection flags the patch
+    as an outlier.
 
     Parameters
     ----------
@@ -1069,11 +1140,15 @@ def measure_chart_patches(
         The clipping level (encoded, [0, 1] scale).
     max_saturated_fraction : float, keyword-only
         Fraction of a patch's pixels at ``saturation`` above which it is saturated.
+    min_clean : float, keyword-only
+        Least share of a patch's sampled pixels, in (0, 1], that must agree with its dominant
+        colour (1: any mark makes the patch missing).
 
     Returns
     -------
     ChartPatches
-        Row by row in the reference chart's order (upright), whatever the photo's rotation.
+        Row by row in the reference chart's order (upright), whatever the photo's rotation;
+        ``used`` is the share of each patch's pixels averaged (0 where none was sampled).
 
     Raises
     ------
@@ -1100,28 +1175,46 @@ def measure_chart_patches(
     max_saturated_fraction = as_real(
         max_saturated_fraction, "max_saturated_fraction", minimum=0.0, maximum=1.0
     )
+    min_clean = as_real(min_clean, "min_clean", minimum=0.0, maximum=1.0)
+    if min_clean <= 0.0:
+        raise InvalidInputError(f"expected min_clean in (0, 1], got {min_clean!r}")
     hgt, wid = rgb.shape[:2]
     n = len(chart.quads)
     means = np.full((n, 3), np.nan)
     stds = np.full((n, 3), np.nan)
     sat = np.zeros(n)
+    used = np.full(n, np.nan)
+    ambiguous = np.zeros(n, dtype=bool)
     for k in range(n):
         sv, su, mask = _quad_mask_bounds(chart.quads[k], hgt, wid)
         if not mask.any():
             continue
         px = rgb[sv, su][mask].astype(np.float64) / full
+        keep = _clean_pixels(px)
+        used[k] = keep.mean()
+        rest = px[~keep]
+        if len(rest) and _clean_pixels(rest).sum() > _AMBIGUOUS * keep.sum():
+            # the pixels left out hold a second flat colour nearly as large as the kept one
+            # (a mark over about half the square): which of the two is the patch is unknown
+            ambiguous[k] = True
+        px = px[keep] if keep.any() else px
         means[k] = px.mean(axis=0)
         stds[k] = px.std(axis=0)
         sat[k] = (px >= saturation).any(axis=1).mean()
     empty = ~np.isfinite(means).all(axis=1)
     saturated = (sat > max_saturated_fraction) & ~empty
     missing = (
-        empty | np.asarray(chart.outliers) | (np.nan_to_num(stds, nan=0.0) > max_std).any(axis=1)
+        empty
+        | np.asarray(chart.outliers)
+        | (np.nan_to_num(stds, nan=0.0) > max_std).any(axis=1)
+        | (np.nan_to_num(used, nan=0.0) < min_clean)
+        | ambiguous
     )
     if not (~saturated & ~missing).any():
         raise InvalidInputError(
-            f"no usable chart patch (max_std={max_std:g}, saturation={saturation:g}): saturated "
-            f"{np.flatnonzero(saturated).tolist()}, missing {np.flatnonzero(missing).tolist()}"
+            f"no usable chart patch (max_std={max_std:g}, saturation={saturation:g}, "
+            f"min_clean={min_clean:g}): saturated {np.flatnonzero(saturated).tolist()}, "
+            f"missing {np.flatnonzero(missing).tolist()}"
         )
     for what, idx in (
         ("saturated", np.flatnonzero(saturated)),
@@ -1136,7 +1229,9 @@ def measure_chart_patches(
                 ChartWarning,
                 stacklevel=2,
             )
-    return ChartPatches(means, np.nan_to_num(stds, nan=0.0), saturated, missing)
+    return ChartPatches(
+        means, np.nan_to_num(stds, nan=0.0), saturated, missing, np.nan_to_num(used, nan=0.0)
+    )
 
 
 # ---------------------------------------------------------------- synthetic chart photographs

@@ -11,7 +11,7 @@ chart images without a module cycle; :mod:`imageform.analysis.harmonize` re-expo
 from __future__ import annotations
 
 import warnings
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -31,14 +31,17 @@ class ChartWarning(ImageformWarning):
 class ChartPatches:
     """Patch statistics of a chart image (row by row).
 
-    Encoded sRGB ``means`` (N, 3), the per-patch ``std`` (N, 3), and which patches are ``saturated``
-    or ``missing``.
+    Encoded sRGB ``means`` (N, 3), the per-patch ``std`` (N, 3), which patches are ``saturated``
+    or ``missing``, and ``used`` (N,): the share of each patch's sampled pixels that went into
+    its mean (all 1 by default: every pixel did; under 1 where
+    :func:`~imageform.analysis.measure_chart_patches` left out pixels of a mark over the patch).
     """
 
     means: np.ndarray
     std: np.ndarray
     saturated: np.ndarray
     missing: np.ndarray
+    used: np.ndarray = field(default_factory=lambda: np.ones(0))
 
     def __post_init__(self) -> None:
         """``means`` and ``std`` of shape (N, 3), the flags booleans of shape (N,)."""
@@ -69,11 +72,53 @@ class ChartPatches:
                 )
         if np.any(std < 0):
             raise InvalidInputError(f"expected std >= 0, got min {float(np.nanmin(std)):g}")
+        used = real_array(self.used, "used", (None,))
+        if used.size == 0 and n:  # the default: every pixel of every patch
+            used = np.ones(n)
+        if used.shape != (n,):
+            raise InvalidInputError(f"expected used of shape ({n},), got {describe(self.used)}")
+        if np.any(used < 0) or np.any(used > 1):
+            raise InvalidInputError(f"expected used in [0, 1], got {describe(self.used)}")
+        object.__setattr__(self, "used", used)
 
     @property
     def valid(self) -> np.ndarray:
         """Patches usable for a fit: neither saturated nor missing."""
         return np.asarray(~self.saturated & ~self.missing)
+
+
+#: Robust sigmas (1.4826 x the median absolute deviation, per channel) within which a pixel
+#: agrees with its patch's dominant colour, and the least such tolerance (encoded [0, 1]
+#: units, about 5 / 255: a flat rendered patch has no spread at all).
+_CLEAN_SIGMAS, _CLEAN_FLOOR = 4.0, 0.02
+
+
+def _clean_pixels(px: np.ndarray) -> np.ndarray:
+    """Mask of the pixels (..., N, 3) that agree with their patch's dominant colour.
+
+    The per-channel median of the pixels and their spread (1.4826 x the median absolute
+    deviation, at least ``_CLEAN_FLOOR / _CLEAN_SIGMAS``) give the dominant colour; pixels more
+    than ``_CLEAN_SIGMAS`` spreads from it in any channel (a label, a pen stroke, a sticker, a
+    reflection, a finger over part of the patch) are left out, and the median and spread are
+    taken again over the rest (twice). The median belongs to the clean part as long as the
+    marks cover under half the pixels. Leading axes are separate patches.
+    """
+    import warnings
+
+    keep = np.ones(px.shape[:-1], dtype=bool)
+    for _ in range(2):
+        if keep.all():
+            med = np.median(px, axis=-2, keepdims=True)
+            mad = 1.4826 * np.median(np.abs(px - med), axis=-2, keepdims=True)
+        else:
+            ref = np.where(keep[..., None], px, np.nan)
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", RuntimeWarning)  # a patch with none kept
+                med = np.nanmedian(ref, axis=-2, keepdims=True)
+                mad = 1.4826 * np.nanmedian(np.abs(ref - med), axis=-2, keepdims=True)
+        tol = np.maximum(_CLEAN_SIGMAS * mad, _CLEAN_FLOOR)
+        keep = (np.abs(px - med) <= tol).all(axis=-1)
+    return np.asarray(keep)
 
 
 def chart_patches(

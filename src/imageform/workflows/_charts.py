@@ -177,7 +177,7 @@ def _filled(pat: Any) -> Any:
     from imageform.analysis import ChartPatches
 
     means = np.where(np.isfinite(pat.means), pat.means, 0.0)
-    return ChartPatches(means, pat.std, pat.saturated, pat.missing)
+    return ChartPatches(means, pat.std, pat.saturated, pat.missing, pat.used)
 
 
 def notes(run: Any, chart: ChartInput, flag: str) -> None:

@@ -507,4 +507,4 @@ def patches_in_srgb(patches: Any, space: str) -> Any:
     ok = np.isfinite(patches.means)
     means = np.asarray(convert(np.where(ok, patches.means, 0.0), space, "srgb"))
     return ChartPatches(np.where(ok, means, np.nan), patches.std, patches.saturated,
-                        patches.missing)  # fmt: skip
+                        patches.missing, patches.used)  # fmt: skip

@@ -177,7 +177,7 @@ def chart(run: Run, opts: ChartOptions, *, out: Path, image: Path) -> Result:
         pat = patches_in_srgb(pat, space)  # the means as sRGB values (floats: none clipped)
         ref = np.asarray(COLORCHECKER_SRGB8, dtype=np.float64) / 255.0
         means = np.where(np.isfinite(pat.means), pat.means, 0.0)
-        filled = ChartPatches(means, pat.std, pat.saturated, pat.missing)
+        filled = ChartPatches(means, pat.std, pat.saturated, pat.missing, pat.used)
         corr = fit_color_correction(filled, ref, opts.method, opts.degree)
         rep = correction_report(filled, ref, corr)
     left_out = _left_out(det, pat)
