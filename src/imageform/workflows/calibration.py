@@ -528,7 +528,7 @@ def _settle_auto_board(
             missed[f] = det.reason
     line = (
         f"board: checkerboard, {cols}x{rows} inner corners = {cols + 1}x{rows + 1} squares "
-        f"(--board auto: the size {agree} of the {len(images)} views show)"
+        f"(--board auto: {agree} of the {len(images)} views sized alone show it)"
     )
     return cols, rows, line
 

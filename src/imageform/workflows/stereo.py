@@ -202,12 +202,12 @@ def stereo_calibrate_cmd(
     if auto:
         both = det_l + det_r
         board = _settle_auto_board(opts, lefts + rights, both)
-        agree = sum(d.found and d.pattern_size == board for d in det_l + det_r)
+        agree = sum(d.found and d.pattern_size == board for d in det_l + det_r)  # alone
         det_l, det_r = both[: len(lefts)], both[len(lefts) :]
         line = (
             f"board: checkerboard, {board[0]}x{board[1]} inner corners = "
-            f"{board[0] + 1}x{board[1] + 1} squares (--board auto: the size {agree} of the "
-            f"{len(both)} images show)"
+            f"{board[0] + 1}x{board[1] + 1} squares (--board auto: {agree} of the "
+            f"{len(both)} images sized alone show it)"
         )
     for f, d in zip(lefts + rights, det_l + det_r, strict=True):
         if not d.found:
