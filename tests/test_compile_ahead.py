@@ -385,6 +385,30 @@ def test_a_ctrl_c_inside_a_finalizer_is_raised_again_not_printed(
     assert "ValueError: boom" in capsys.readouterr().err
 
 
+def test_an_error_after_a_ctrl_c_is_the_interrupt(
+    capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A Ctrl-C that lands inside a library can come out as that library's own error (CI:
+    numba, interrupted while compiling, then raised "no compiled object yet for <Library
+    '_bc_undistort'>"): once the command has been interrupted, any error is reported as the
+    interrupt (one line, exit 130); without an interrupt the same error is "unexpected"."""
+    import imageform.cli as cli
+
+    def interrupted_then_broken(**_: object) -> int:
+        cli._interrupted.set()  # what the SIGINT handler does before raising
+        raise RuntimeError("no compiled object yet for <Library '_bc_undistort'>")
+
+    def broken(**_: object) -> int:
+        raise RuntimeError("no compiled object yet for <Library '_bc_undistort'>")
+
+    monkeypatch.setattr(cli.root, "main", interrupted_then_broken)
+    assert cli.main(["simulate"]) == 130
+    assert capsys.readouterr().err.strip() == "imageform: interrupted; nothing new was written"
+    monkeypatch.setattr(cli.root, "main", broken)  # a new command: the flag is cleared
+    assert cli.main(["simulate"]) == 1
+    assert "unexpected RuntimeError: no compiled object yet" in capsys.readouterr().err
+
+
 def test_a_half_built_llvmlite_object_says_nothing_when_collected(
     capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
 ) -> None:

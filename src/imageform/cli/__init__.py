@@ -35,7 +35,18 @@ def _os_error(exc: OSError) -> str:
     return f"{name}: {reason}" if name else reason
 
 
+#: Set when a Ctrl-C or SIGTERM reached the running command (cleared as each command starts).
+_interrupted = threading.Event()
+
+
 def _on_sigterm(signum: int, frame: FrameType | None) -> None:
+    _interrupted.set()
+    raise KeyboardInterrupt
+
+
+def _on_sigint(signum: int, frame: FrameType | None) -> None:
+    """Raise KeyboardInterrupt as Python's own handler does, and remember that it came."""
+    _interrupted.set()
     raise KeyboardInterrupt
 
 
@@ -51,6 +62,8 @@ def _interrupt_in_finalizer(unraisable: sys.UnraisableHookArgs) -> None:
     """
     if isinstance(unraisable.exc_value, KeyboardInterrupt):
         import _thread
+
+        _interrupted.set()
 
         # from another thread, a moment later: called here, it would raise in this hook
         timer = threading.Timer(0.05, _thread.interrupt_main)
@@ -133,7 +146,11 @@ def _main(argv: Sequence[str] | None) -> int:
         # line a command says; the file is read or refused either way
         logging.getLogger("tifffile").setLevel(logging.CRITICAL)
     in_main = threading.current_thread() is threading.main_thread()
+    _interrupted.clear()
     old = signal.signal(signal.SIGTERM, _on_sigterm) if in_main else None
+    old_int = None
+    if in_main and signal.getsignal(signal.SIGINT) is signal.default_int_handler:
+        old_int = signal.signal(signal.SIGINT, _on_sigint)
     try:
         rv = root.main(args=args, prog_name="imageform", standalone_mode=False)
         return rv if isinstance(rv, int) else 0
@@ -150,6 +167,11 @@ def _main(argv: Sequence[str] | None) -> int:
     except BaseException as exc:
         if isinstance(exc, SystemExit):
             return exc.code if isinstance(exc.code, int) else (0 if exc.code is None else 1)
+        if _interrupted.is_set() and not traceback:
+            # a Ctrl-C that landed inside a library (numba compiling, say) can surface as that
+            # library's own error ("no compiled object yet"): the command was interrupted
+            print(_INTERRUPTED, file=sys.stderr)
+            return 130
         if traceback:
             import traceback as tb
 
@@ -169,3 +191,5 @@ def _main(argv: Sequence[str] | None) -> int:
     finally:
         if old is not None:
             signal.signal(signal.SIGTERM, old)
+        if old_int is not None:
+            signal.signal(signal.SIGINT, old_int)
