@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import re
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
@@ -207,6 +207,50 @@ def board_reading(text: str) -> dict[str, Any]:
         "read_as": read_as,
         "line": f"board: {name}, {sizes} ({how})",
     }
+
+
+def _settle_auto_board(
+    files: list[Path],
+    dets: list[Any],
+    search: Callable[[list[Path], tuple[int, int]], list[Any]],
+    noun: str,
+) -> tuple[tuple[int, int], str, list[tuple[Path, tuple[int, int]]]]:
+    """``--board auto``: the size most of ``files`` show, each searched again for it if need be.
+
+    ``dets`` holds each file's ``find_checkerboard(..., "auto")``; where it showed another size
+    or none, it is replaced (in place) by ``search(those files, size)``. Returns the size, the
+    output's first line saying how it was found (``noun``: "views", "images") and the files
+    that showed another size, with theirs. No board in any file: one-line error.
+    """
+    from imageform.geometry.checkerboard import set_pattern_size
+
+    size = set_pattern_size([d.pattern_size if d.found else None for d in dets])
+    if size is None:
+        raise DegenerateConfigurationError(
+            f"no checkerboard found in any of the {len(files)} images ({files[0].name}: "
+            f"{dets[0].reason}{'; ...' if len(files) > 1 else ''}); --board auto looks for "
+            "boards of at least 3x3 inner corners: give the board's size with --board COLSxROWS"
+        )
+    agree = sum(d.found and d.pattern_size == size for d in dets)
+    other = [(f, d.pattern_size) for f, d in zip(files, dets, strict=True)
+             if d.found and d.pattern_size != size]  # fmt: skip
+    again = [i for i, d in enumerate(dets) if not d.found or d.pattern_size != size]
+    if again:
+        for i, d in zip(again, search([files[i] for i in again], size), strict=True):
+            dets[i] = d
+    cols, rows = size
+    line = (
+        f"board: checkerboard, {cols}x{rows} inner corners = {cols + 1}x{rows + 1} squares "
+        f"(--board auto: {agree} of the {len(files)} {noun} sized alone show it)"
+    )
+    return size, line, other
+
+
+def _auto_board_reading(size: tuple[int, int], line: str) -> dict[str, Any]:
+    """:func:`board_reading` of the size ``--board auto`` found, with the line saying how."""
+    reading = board_reading(f"{size[0]}x{size[1]}")
+    reading["line"], reading["read_as"] = line, "auto"
+    return reading
 
 
 class _BoardChecks:
@@ -429,8 +473,7 @@ def calibrate(run: Run, opts: CalibrateOptions, *, out: Path, images: list[Path]
     ahead.start("calibrate")  # a first run: its kernels compiled on two cores
     square = opts.square_mm()
     shape0: tuple[int, int] | None = None
-    found: dict[Path, Any] = {}  # the corners of each view with the board, by file
-    missed: dict[Path, str] = {}  # why not, for the others
+    dets: list[Any] = []  # each view's detection, in the images' order
     for f, grey in _read_views(run, opts, images):
         if shape0 is None:
             shape0 = (int(grey.shape[0]), int(grey.shape[1]))
@@ -441,27 +484,34 @@ def calibrate(run: Run, opts: CalibrateOptions, *, out: Path, images: list[Path]
                     f"({f}): each of its {cols + 1} x {rows + 1} squares needs at least "
                     f"{_MIN_SQUARE_PX} px; {board_hint(opts.board)}"
                 )
-        det = find_checkerboard(
-            grey, "auto" if auto else (cols, rows), half_window=opts.half_window
+        dets.append(
+            find_checkerboard(grey, "auto" if auto else (cols, rows), half_window=opts.half_window)
         )
-        if det.found:
-            found[f] = det
-        else:
-            missed[f] = det.reason
-    line = None
+    reading = None
     if auto:
-        cols, rows, line = _settle_auto_board(run, opts, images, found, missed)
-    for f, why in missed.items():
+
+        def search(files: list[Path], size: tuple[int, int]) -> list[Any]:
+            return [find_checkerboard(g, size, half_window=opts.half_window)
+                    for _, g in _read_views(run, opts, files)]  # fmt: skip
+
+        (cols, rows), line, other = _settle_auto_board(images, dets, search, "views")
+        for f, (c, r) in other:
+            run.note(
+                f"note: {f}: a {c}x{r} board, not the {cols}x{rows} of most views: "
+                f"searched again for {cols}x{rows}"
+            )
+        reading = _auto_board_reading((cols, rows), line)
+    missed = [(f, d.reason) for f, d in zip(images, dets, strict=True) if not d.found]
+    for f, why in missed:
         run.note(f"warning: {f}: no {cols}x{rows} board found ({why})")
-    if not found:
-        first = next(iter(missed.items()))
+    names = [f.name for f, d in zip(images, dets, strict=True) if d.found]
+    corners = [d.corners for d in dets if d.found]
+    if not corners:
         raise DegenerateConfigurationError(
             f"no {cols}x{rows} checkerboard found in any of the {len(images)} images "
-            f"({first[0].name}: {first[1]}{'; ...' if len(missed) > 1 else ''}; "
+            f"({missed[0][0].name}: {missed[0][1]}{'; ...' if len(missed) > 1 else ''}; "
             f"{board_hint(opts.board)})"
         )
-    names = [f.name for f in images if f in found]
-    corners = [found[f].corners for f in images if f in found]
     if len(corners) < MIN_VIEWS:
         raise DegenerateConfigurationError(
             f"found the {cols}x{rows} board in {len(corners)} view(s) ({', '.join(names)}) of "
@@ -482,55 +532,8 @@ def calibrate(run: Run, opts: CalibrateOptions, *, out: Path, images: list[Path]
         corners,
         shape0,
         command,
-        board_as=None if line is None else (f"{cols}x{rows}", line),
+        reading=reading,
     )
-
-
-def _settle_auto_board(
-    run: Run,
-    opts: CalibrateOptions,
-    images: list[Path],
-    found: dict[Path, Any],
-    missed: dict[Path, str],
-) -> tuple[int, int, str]:
-    """``--board auto``: the set's board size, and each view searched again for it if need be.
-
-    The size is the one most views show (``set_pattern_size``); the views that showed another
-    or none are searched again for that size (``found`` and ``missed`` are updated). Returns
-    ``(cols, rows, line)``, ``line`` saying how the size was found.
-    """
-    from imageform.geometry.checkerboard import find_checkerboard, set_pattern_size
-
-    size = set_pattern_size([det.pattern_size for det in found.values()])
-    if size is None:
-        first = next(iter(missed.items()))
-        raise DegenerateConfigurationError(
-            f"no checkerboard found in any of the {len(images)} images ({first[0].name}: "
-            f"{first[1]}{'; ...' if len(missed) > 1 else ''}); --board auto looks for boards "
-            "of at least 3x3 inner corners: give the board's size with --board COLSxROWS"
-        )
-    cols, rows = size
-    agree = sum(det.pattern_size == size for det in found.values())
-    again = [f for f in images if f in missed or found[f].pattern_size != size]
-    for f in again:
-        if f in found:
-            other = found.pop(f).pattern_size
-            run.note(
-                f"note: {f}: a {other[0]}x{other[1]} board, not the {cols}x{rows} of most views: "
-                f"searched again for {cols}x{rows}"
-            )
-    for f, grey in _read_views(run, opts, again):
-        det = find_checkerboard(grey, size, half_window=opts.half_window)
-        if det.found:
-            found[f] = det
-            missed.pop(f, None)
-        else:
-            missed[f] = det.reason
-    line = (
-        f"board: checkerboard, {cols}x{rows} inner corners = {cols + 1}x{rows + 1} squares "
-        f"(--board auto: {agree} of the {len(images)} views sized alone show it)"
-    )
-    return cols, rows, line
 
 
 def _calibrate_views(
@@ -544,13 +547,13 @@ def _calibrate_views(
     shape: tuple[int, int],
     command: str,
     *,
-    board_as: tuple[str, str | None] | None = None,
+    reading: dict[str, Any] | None = None,
 ) -> Result:
     """Calibrate from the views' board points and corners and write the camera file.
 
     The plot and corners table asked for are written too, and the result says what was found.
-    ``board_as``: the board's ``--board`` text and the line saying how it was read, where they
-    are not ``opts.board``'s (``--board auto``: the size found).
+    ``reading``: how the board was read where it is not ``board_reading(opts.board)``
+    (``--board auto``: the size found, :func:`_auto_board_reading`).
     """
     import numpy as np
 
@@ -594,9 +597,7 @@ def _calibrate_views(
     ]
     K, d = res.K, res.distortion
     coef_names = MODEL_COEFFICIENTS[res.model]
-    board = board_reading(opts.board if board_as is None else board_as[0])
-    if board_as is not None and board_as[1] is not None:
-        board["line"], board["read_as"] = board_as[1], "auto"
+    board = board_reading(opts.board) if reading is None else reading
     summary = {
         "output": out,
         "views_used": len(names),

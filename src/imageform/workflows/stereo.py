@@ -20,8 +20,10 @@ from imageform.workflows._spec import (
 from imageform.workflows.calibration import (
     MIN_VIEWS,
     Model,
+    _auto_board_reading,
     _BoardChecks,
     _converging,
+    _settle_auto_board,
     board_hint,
     board_reading,
     is_auto_board,
@@ -145,31 +147,6 @@ def _detect(
     return size, found
 
 
-def _settle_auto_board(
-    opts: StereoCalibrateOptions, files: list[Path], found: list[Any]
-) -> tuple[int, int]:
-    """Return the checkerboard's size for ``--board auto``: the one most images show.
-
-    Over the images of both cameras; the images that showed another size or none are searched
-    again for it (``found`` is updated in place).
-    """
-    from imageform.geometry.checkerboard import set_pattern_size
-
-    size = set_pattern_size([d.pattern_size if d.found else None for d in found])
-    if size is None:
-        raise DegenerateConfigurationError(
-            f"no checkerboard found in any of the {len(files)} images ({files[0].name}: "
-            f"{found[0].reason}{'; ...' if len(files) > 1 else ''}); --board auto looks for "
-            "boards of at least 3x3 inner corners: give the board's size with --board COLSxROWS"
-        )
-    again = [i for i, d in enumerate(found) if not d.found or d.pattern_size != size]
-    if again:
-        _, redo = _detect(opts, [files[i] for i in again], size)
-        for i, d in zip(again, redo, strict=True):
-            found[i] = d
-    return size
-
-
 def stereo_calibrate_cmd(
     run: Run, opts: StereoCalibrateOptions, *, out: Path, left: str, right: str
 ) -> Result:
@@ -198,17 +175,16 @@ def stereo_calibrate_cmd(
     if run.progress is not None:
         run.progress("detecting", 0.5)
     size_r, det_r = _detect(opts, rights, "auto" if auto else board)
-    line = None
+    reading = None
     if auto:
         both = det_l + det_r
-        board = _settle_auto_board(opts, lefts + rights, both)
-        agree = sum(d.found and d.pattern_size == board for d in det_l + det_r)  # alone
+
+        def search(files: list[Path], size: tuple[int, int]) -> list[Any]:
+            return _detect(opts, files, size)[1]
+
+        board, line, _ = _settle_auto_board(lefts + rights, both, search, "images")
         det_l, det_r = both[: len(lefts)], both[len(lefts) :]
-        line = (
-            f"board: checkerboard, {board[0]}x{board[1]} inner corners = "
-            f"{board[0] + 1}x{board[1] + 1} squares (--board auto: {agree} of the "
-            f"{len(both)} images sized alone show it)"
-        )
+        reading = _auto_board_reading(board, line)
     for f, d in zip(lefts + rights, det_l + det_r, strict=True):
         if not d.found:
             run.note(f"warning: {f}: no {board[0]}x{board[1]} board found ({d.reason})")
@@ -265,9 +241,8 @@ def stereo_calibrate_cmd(
         }
         for p, e in zip(pairs, rig.per_view_rms, strict=True)
     ]
-    reading = board_reading(f"{board[0]}x{board[1]}" if auto else opts.board)
-    if line is not None:
-        reading["line"], reading["read_as"] = line, "auto"
+    if reading is None:
+        reading = board_reading(opts.board)
     n = len(rig.left.std) - 5  # the model's coefficients
     summary = {
         "output": out,
