@@ -39,13 +39,8 @@ def _os_error(exc: OSError) -> str:
 _interrupted = threading.Event()
 
 
-def _on_sigterm(signum: int, frame: FrameType | None) -> None:
-    _interrupted.set()
-    raise KeyboardInterrupt
-
-
-def _on_sigint(signum: int, frame: FrameType | None) -> None:
-    """Raise KeyboardInterrupt as Python's own handler does, and remember that it came."""
+def _on_signal(signum: int, frame: FrameType | None) -> None:
+    """Raise KeyboardInterrupt (SIGINT, SIGTERM), as Python's own handler does, and remember it."""
     _interrupted.set()
     raise KeyboardInterrupt
 
@@ -147,10 +142,10 @@ def _main(argv: Sequence[str] | None) -> int:
         logging.getLogger("tifffile").setLevel(logging.CRITICAL)
     in_main = threading.current_thread() is threading.main_thread()
     _interrupted.clear()
-    old = signal.signal(signal.SIGTERM, _on_sigterm) if in_main else None
+    old = signal.signal(signal.SIGTERM, _on_signal) if in_main else None
     old_int = None
     if in_main and signal.getsignal(signal.SIGINT) is signal.default_int_handler:
-        old_int = signal.signal(signal.SIGINT, _on_sigint)
+        old_int = signal.signal(signal.SIGINT, _on_signal)
     try:
         rv = root.main(args=args, prog_name="imageform", standalone_mode=False)
         return rv if isinstance(rv, int) else 0
