@@ -75,6 +75,17 @@ class HorizonOptions(ImageIn):
     )
 
 
+def _read_photo(image: Path, opts: ImageIn) -> Any:
+    """Read ``image`` as the detectors take it: grey or RGB (alpha dropped), 16 bits as [0, 1]."""
+    import numpy as np
+
+    img = read(image, opts)
+    arr = img[..., 0] if img.shape[-1] == 1 else img[..., :3]
+    if arr.dtype == np.uint16:
+        arr = arr.astype(np.float64) / 65535.0
+    return arr
+
+
 def _directions(K: Any, vps: Any) -> Any:
     import numpy as np
 
@@ -178,10 +189,7 @@ def vanishing(run: Run, opts: VanishingOptions, *, out: Path | None, image: Path
         raise InvalidInputError(
             "--distortion estimates what --camera's file gives: use one of them"
         )
-    img = read(image, opts)
-    arr = img[..., 0] if img.shape[-1] == 1 else img[..., :3]
-    if arr.dtype == np.uint16:
-        arr = arr.astype(np.float64) / 65535.0
+    arr = _read_photo(image, opts)
     h, w = int(arr.shape[0]), int(arr.shape[1])
     cf = None
     if opts.camera is not None:
@@ -333,10 +341,7 @@ def horizon(run: Run, opts: HorizonOptions, *, out: Path | None, image: Path) ->
 
     if not opts.max_roll_deg > 0:
         raise InvalidInputError(f"--max-roll-deg must be above 0, got {opts.max_roll_deg:g}")
-    img = read(image, opts)
-    arr = img[..., 0] if img.shape[-1] == 1 else img[..., :3]
-    if arr.dtype == np.uint16:
-        arr = arr.astype(np.float64) / 65535.0
+    arr = _read_photo(image, opts)
     w = int(arr.shape[1])
     res = detect_horizon(arr, max_roll=math.radians(opts.max_roll_deg))
     if not res.found:  # as imageform chart: the one object looked for is not there
