@@ -308,12 +308,12 @@ def _detect(
                     "side)"
                 )
             continue
-        if auto and _mean_step(grid) < AUTO_MIN_STEP:
+        step = _mean_step(grid) if auto else math.inf
+        if step < AUTO_MIN_STEP:
             if best_size == 0:  # not counted as a larger grid beside a board found
                 best_reason = (
-                    f"a {rect.shape[1]} x {rect.shape[0]} grid of squares of "
-                    f"{_mean_step(grid):.1f} px, too small to tell the board's edge by "
-                    f"(at least {AUTO_MIN_STEP:g} px)"
+                    f"a {rect.shape[1]} x {rect.shape[0]} grid of squares of {step:.1f} px, "
+                    f"too small to tell the board's edge by (at least {AUTO_MIN_STEP:g} px)"
                 )
             continue
         if not auto and shape != want:
@@ -365,10 +365,10 @@ def _detect(
         grid, means = max(boards, key=lambda b: _area(b[0]))
         if auto:  # (cols, rows) with cols >= rows: the longer side along the rows
             rows, cols = sorted(grid.shape[:2])
-            if best_size > cols * rows:  # a larger grid was seen (and refused)
-                grid = _orient(grid, image.float, cols, rows, means)
-                return grid, best_reason, best_size
-        return _orient(grid, image.float, cols, rows, means), "", cols * rows
+        grid = _orient(grid, image.float, cols, rows, means)
+        if auto and best_size > cols * rows:  # a larger grid was seen (and refused)
+            return grid, best_reason, best_size
+        return grid, "", cols * rows
     return None, best_reason, best_size
 
 
