@@ -25,10 +25,9 @@ _WB_METHODS = ("gray_world", "shades_of_gray", "manual")
 
 def _convert_block(block: np.ndarray, src: str, dst: str, params: dict[str, Any]) -> np.ndarray:
     from imageform.color import convert
+    from imageform.workflows.color import as_values  # a linear file's codes as floats
 
-    if src.startswith("linear_") and block.dtype.kind == "u":  # a linear file's full-range codes
-        block = block.astype(np.float32) / np.float32(np.iinfo(block.dtype).max)
-    return np.asarray(convert(block, src, dst, **params), dtype=np.float32)
+    return np.asarray(convert(as_values(block, src), src, dst, **params), dtype=np.float32)
 
 
 def _balance_block(block: np.ndarray, gains: np.ndarray) -> np.ndarray:
