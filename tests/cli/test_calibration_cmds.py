@@ -129,6 +129,39 @@ def test_calibrate_literal_bracket_names(
     assert read_camera(out).provenance.images == ("view[1].jpg", "view[2].jpg", "view[3].jpg")
 
 
+def test_calibrate_a_folder_of_views(
+    shared_data: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A folder stands for its image files, sorted by name: as the same files given one by one.
+
+    Files of other kinds in it (notes, hidden files, subfolders) are left out; a folder
+    without images is one line naming the suffixes read.
+    """
+    views = tmp_path / "views"
+    views.mkdir()
+    for i in (3, 1, 2):
+        shutil.copy(shared_data / "opencv-left" / f"left0{i}.jpg", views / f"left0{i}.JPG")
+    (views / "notes.txt").write_text("board 9x6")
+    (views / ".left00.jpg").write_bytes(b"not an image")
+    (views / "sub").mkdir()
+    out = tmp_path / "cam.toml"
+    assert main(["calibrate", str(views), "--board", "9x6", "-o", str(out), "--json"]) == 0
+    folder = json.loads(capsys.readouterr().out)
+    names = [str(views / f"left0{i}.JPG") for i in (1, 2, 3)]
+    one_by_one = tmp_path / "one.toml"
+    assert main(["calibrate", *names, "--board", "9x6", "-o", str(one_by_one), "--json"]) == 0
+    files = json.loads(capsys.readouterr().out)
+    assert read_camera(out).provenance.images == ("left01.JPG", "left02.JPG", "left03.JPG")
+    assert folder["rms_px"] == files["rms_px"] and folder["views_used"] == 3
+    empty = tmp_path / "empty"
+    empty.mkdir()
+    (empty / "notes.txt").write_text("")
+    assert main(["calibrate", str(empty), "--board", "9x6", "-o", str(tmp_path / "e.toml")]) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith(f"imageform: error: folder {empty} holds no images")
+    assert not (tmp_path / "e.toml").exists()
+
+
 def test_calibrate_board_auto(
     shared_data: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:

@@ -148,6 +148,12 @@ def test_stereo_calibrate_command(rendered: tuple, tmp_path: Path) -> None:
     assert sf.provenance.views_used == 8
     assert sf.provenance.command.startswith("imageform stereo-calibrate --board 9x6")
     assert sf.left.provenance.images[0] == "left-00.png"
+    # the two folders stand for their images: the same rig
+    folders = ["stereo-calibrate", str(tmp_path / "left"), str(tmp_path / "right"), *args[3:-3]]
+    assert main([*folders, "-o", str(tmp_path / "f.toml"), "--json"]) == 0
+    sf2 = read_stereo_camera(tmp_path / "f.toml")
+    np.testing.assert_array_equal(sf2.T, sf.T)
+    assert sf2.left.provenance.images == sf.left.provenance.images
     # mismatched pairs and missing files are errors (exit 1)
     (tmp_path / "right" / "right-00.png").unlink()
     assert main([*args[:-3], "-o", str(tmp_path / "b.toml")]) == 1

@@ -13,7 +13,15 @@ from typing import Any
 
 from imageform._files import Outputs, not_a_regular_file
 from imageform.errors import InvalidInputError
-from imageform.workflows._spec import Options, Result, Run, Workflow, flag_of, resolve
+from imageform.workflows._spec import (
+    Options,
+    Result,
+    Run,
+    Workflow,
+    flag_of,
+    folder_images,
+    resolve,
+)
 
 __all__ = ["execute", "run_file"]
 
@@ -26,6 +34,14 @@ def _as_paths(value: Any, name: str, *, required: bool = False) -> list[Path]:
     if isinstance(value, (list, tuple)):
         return [as_path(v, f"{name}[{i}]") for i, v in enumerate(value)]
     return [as_path(value, name)]
+
+
+def _expand_folders(paths: list[Path]) -> list[Path]:
+    """``paths`` with each folder replaced by the image files in it (:func:`folder_images`)."""
+    out: list[Path] = []
+    for p in paths:
+        out += folder_images(p) if p.is_dir() else [p]
+    return out
 
 
 def _note_of(w: warnings.WarningMessage) -> str:
@@ -97,6 +113,9 @@ def execute(
             f"{wf.name} takes the input(s) {', '.join(sorted(names)) or 'none'}, "
             f"got {', '.join(sorted(inputs)) or 'none'}"
         )
+    for i in wf.inputs:  # a folder stands for its images where the input says so
+        if i.kind == "file" and i.folders and inputs.get(i.name) is not None:
+            inputs[i.name] = _expand_folders(_as_paths(inputs[i.name], i.name))
     files = [i.name for i in wf.inputs if i.kind == "file"]
     named = [("input", p) for n in files for p in _as_paths(inputs[n], n, required=True)]
     for f in opts.fields():

@@ -885,7 +885,14 @@ WORKFLOWS = (
         "Calibrate a camera from checkerboard views: writes the camera file.",
         "imageform.workflows.calibration:calibrate",
         CalibrateOptions,
-        (Input("images", "Image files or quoted glob patterns ('views/*.jpg').", many=True),),
+        (
+            Input(
+                "images",
+                "Image files, folders of them or quoted glob patterns ('views/*.jpg').",
+                many=True,
+                folders=True,
+            ),
+        ),
         Output("Camera file to write (TOML, docs/camera-file.md)."),
         suffixes=(".toml",),
         group="geometry",

@@ -16,12 +16,12 @@ from typing import Any, Literal, get_args
 from imageform.errors import InvalidInputError
 from imageform.workflows._images import ImageIn, mask_of
 from imageform.workflows._spec import (
-    IMAGE_SUFFIXES,
     Input,
     Output,
     Result,
     Run,
     Workflow,
+    folder_images,
     option,
     refuse_foreign_folder,
 )
@@ -139,12 +139,7 @@ def _image_files(sources: Any) -> list[Path]:
     for s in sources:
         p = Path(s)
         if p.is_dir():
-            inside = sorted(
-                q for q in p.iterdir() if q.is_file() and q.suffix.lower() in IMAGE_SUFFIXES
-            )
-            if not inside:
-                raise InvalidInputError(f"folder {p} holds no images ({', '.join(IMAGE_SUFFIXES)})")
-            files += inside
+            files += folder_images(p)
         elif p.is_file():
             files.append(p)
         else:

@@ -15,6 +15,7 @@ from imageform.workflows._spec import (
     Result,
     Run,
     Workflow,
+    folder_images,
     option,
 )
 from imageform.workflows.calibration import (
@@ -79,7 +80,7 @@ class StereoCalibrateOptions(_BoardChecks, ImageIn):
 
 
 def _expand(pattern: str, what: str) -> list[Path]:
-    """Return the files a name or a glob pattern names, sorted; none is an error."""
+    """Return the files a name, a folder or a glob pattern names, sorted; none is an error."""
     from imageform._files import glob_paths, not_a_regular_file
 
     p = str(pattern)
@@ -87,10 +88,7 @@ def _expand(pattern: str, what: str) -> list[Path]:
         path = Path(p)
         kind = not_a_regular_file(path)
         if kind == "is a folder":
-            raise InvalidInputError(
-                f"{what} {path} is a folder; give its images as a quoted glob pattern "
-                f"('{path / '*.png'}')"
-            )
+            return folder_images(path)
         if kind is not None:
             raise InvalidInputError(f"{what} {path} {kind}")
         if not path.is_file():
@@ -288,7 +286,7 @@ WORKFLOWS = (
         (
             Input(
                 "left",
-                "The left camera's images: a file or a quoted glob pattern ('left/*.png').",
+                "The left camera's images: a folder, a file or a quoted glob ('left/*.png').",
                 kind="text",
             ),
             Input(
