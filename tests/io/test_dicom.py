@@ -195,6 +195,38 @@ def test_modality_lut_sequence(tmp_path: Path) -> None:
     np.testing.assert_array_equal(got[..., 0], _ref(p))
 
 
+def test_enhanced_image_functional_groups(tmp_path: Path) -> None:
+    stack = _RNG.integers(0, 4096, (2, 4, 5)).astype(np.uint16)
+    ds = _dataset(stack, frames=2, bits_stored=12)
+    transform, measures = Dataset(), Dataset()
+    transform.RescaleSlope, transform.RescaleIntercept, transform.RescaleType = 2, -100, "US"
+    measures.PixelSpacing = [0.25, 0.5]
+    shared = Dataset()
+    shared.PixelValueTransformationSequence = [transform]
+    shared.PixelMeasuresSequence = [measures]
+    ds.SharedFunctionalGroupsSequence = [shared]
+    frames = []
+    for c, w in ((1000, 2000), (3000, 500)):  # a window per frame (Frame VOI LUT)
+        voi, item = Dataset(), Dataset()
+        voi.WindowCenter, voi.WindowWidth = c, w
+        item.FrameVOILUTSequence = [voi]
+        frames.append(item)
+    ds.PerFrameFunctionalGroupsSequence = frames
+    p = _save(ds, tmp_path / "enhanced.dcm")
+    info = dicom_info(p)
+    assert (info.rescale_slope, info.rescale_intercept, info.pixel_spacing_mm) == (
+        2.0, -100.0, (0.25, 0.5))  # fmt: skip
+    assert info.window_center == (1000.0,) and info.window_width == (2000.0,)
+    for i, (c, w) in enumerate(((1000, 2000), (3000, 500))):
+        values = read_dicom(p, frame=i)[..., 0]
+        assert values.dtype == np.float32
+        np.testing.assert_array_equal(values, stack[i] * 2.0 - 100)
+        np.testing.assert_allclose(
+            read_dicom(p, frame=i, window="auto")[..., 0],
+            dicom_window(stack[i] * 2.0 - 100, c, w), rtol=0, atol=1e-6,
+        )  # fmt: skip
+
+
 # ---------------------------------------------------------------- colour
 
 

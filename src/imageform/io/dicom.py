@@ -70,7 +70,8 @@ class DicomInfo(NamedTuple):
     units, empty when none) and ``window_function`` (the VOI LUT Function, lower case);
     ``pixel_spacing_mm`` and ``imager_pixel_spacing_mm`` ((row, column) spacing in mm: between
     rows first, as DICOM lists it; None when absent); ``transfer_syntax`` (its name); ``icc``
-    (an ICC profile is embedded).
+    (an ICC profile is embedded). An enhanced image's rescale, window and spacing come from its
+    functional groups (those of the first frame).
     """
 
     width: int
@@ -124,8 +125,33 @@ def open_dicom(p: Path, *, pixels: bool) -> Any:
         raise InvalidInputError(f"cannot read {p}: corrupt DICOM file ({_one_line(exc)})") from None
 
 
-def _number(ds: Any, keyword: str, default: float) -> float:
+def _value(ds: Any, keyword: str, frame: int = 0) -> Any:
+    """Return an attribute of ``ds``, or of its frame's functional groups (enhanced images).
+
+    Enhanced CT, MR and X-ray images and whole-slide images keep the rescale, the window and
+    the pixel spacing in items of the Per-frame or Shared Functional Groups Sequences (PS3.3
+    C.7.6.16: Pixel Value Transformation, Frame VOI LUT, Pixel Measures) rather than at the
+    top level; the frame's own item comes before the shared one.
+    """
     value = ds.get(keyword, None)
+    if value is not None and value != "":
+        return value.value if hasattr(value, "VR") else value
+    groups = []
+    per_frame = ds.get("PerFrameFunctionalGroupsSequence", None)
+    if per_frame is not None and 0 <= frame < len(per_frame):
+        groups.append(per_frame[frame])
+    shared = ds.get("SharedFunctionalGroupsSequence", None)
+    if shared:
+        groups.append(shared[0])
+    for group in groups:
+        for elem in group:
+            if elem.VR == "SQ" and len(elem.value) and keyword in elem.value[0]:
+                return elem.value[0][keyword].value
+    return None
+
+
+def _number(ds: Any, keyword: str, default: float, frame: int = 0) -> float:
+    value = _value(ds, keyword, frame)
     if value is None or value == "":
         return default
     try:
@@ -139,8 +165,8 @@ def _multi(value: Any) -> bool:
     return not isinstance(value, (str, bytes)) and hasattr(value, "__len__")
 
 
-def _numbers(ds: Any, keyword: str) -> tuple[float, ...]:
-    value = ds.get(keyword, None)
+def _numbers(ds: Any, keyword: str, frame: int = 0) -> tuple[float, ...]:
+    value = _value(ds, keyword, frame)
     if value is None or value == "":
         return ()
     items = list(value) if _multi(value) else [value]
@@ -151,8 +177,8 @@ def _numbers(ds: Any, keyword: str) -> tuple[float, ...]:
     return out if all(math.isfinite(v) for v in out) else ()
 
 
-def _spacing(ds: Any, keyword: str) -> tuple[float, float] | None:
-    values = _numbers(ds, keyword)
+def _spacing(ds: Any, keyword: str, frame: int = 0) -> tuple[float, float] | None:
+    values = _numbers(ds, keyword, frame)
     return (values[0], values[1]) if len(values) == 2 and min(values) > 0 else None
 
 
@@ -163,8 +189,11 @@ def _lut_bits(ds: Any, keyword: str) -> int:
     return int(ds[keyword][0].LUTDescriptor[2])
 
 
-def header(p: Path, ds: Any) -> DicomInfo:
-    """Return :class:`DicomInfo` of a dataset ``ds`` read from ``p``; refuse what is no image."""
+def header(p: Path, ds: Any, frame: int = 0) -> DicomInfo:
+    """Return :class:`DicomInfo` of a dataset ``ds`` read from ``p``; refuse what is no image.
+
+    The rescale, window and spacing are those of ``frame`` (they may differ per frame).
+    """
     for keyword in ("Rows", "Columns", "BitsAllocated", "PhotometricInterpretation"):
         if ds.get(keyword, None) in (None, ""):
             sop = ds.get("SOPClassUID", None)
@@ -179,8 +208,8 @@ def header(p: Path, ds: Any) -> DicomInfo:
     signed = int(ds.get("PixelRepresentation", 0) or 0) == 1
     spp = int(ds.get("SamplesPerPixel", 1) or 1)
     frames = int(_number(ds, "NumberOfFrames", 1))
-    slope = _number(ds, "RescaleSlope", 1.0)
-    intercept = _number(ds, "RescaleIntercept", 0.0)
+    slope = _number(ds, "RescaleSlope", 1.0, frame)
+    intercept = _number(ds, "RescaleIntercept", 0.0, frame)
     modality_lut = photometric in _GREY and "ModalityLUTSequence" in ds
     if rows <= 0 or cols <= 0 or frames <= 0 or allocated not in (1, 8, 16, 32, 64):
         raise InvalidInputError(
@@ -214,8 +243,9 @@ def header(p: Path, ds: Any) -> DicomInfo:
         )
     meta = getattr(ds, "file_meta", None)
     syntax = meta.get("TransferSyntaxUID", None) if meta is not None else None
-    function = str(ds.get("VOILUTFunction", "") or "LINEAR").strip().lower()
-    centers, widths = _numbers(ds, "WindowCenter"), _numbers(ds, "WindowWidth")
+    function = str(_value(ds, "VOILUTFunction", frame) or "LINEAR").strip().lower()
+    centers = _numbers(ds, "WindowCenter", frame)
+    widths = _numbers(ds, "WindowWidth", frame)
     n = min(len(centers), len(widths))
     return DicomInfo(
         width=cols,
@@ -230,13 +260,13 @@ def header(p: Path, ds: Any) -> DicomInfo:
         signed=signed,
         rescale_slope=slope,
         rescale_intercept=intercept,
-        rescale_type=str(ds.get("RescaleType", "") or ""),
+        rescale_type=str(_value(ds, "RescaleType", frame) or ""),
         modality_lut=modality_lut,
         window_center=centers[:n],
         window_width=widths[:n],
         window_function=function,
-        pixel_spacing_mm=_spacing(ds, "PixelSpacing"),
-        imager_pixel_spacing_mm=_spacing(ds, "ImagerPixelSpacing"),
+        pixel_spacing_mm=_spacing(ds, "PixelSpacing", frame),
+        imager_pixel_spacing_mm=_spacing(ds, "ImagerPixelSpacing", frame),
         transfer_syntax=str(getattr(syntax, "name", syntax) or "implicit VR little endian"),
         icc=icc_profile_of(ds) is not None,
     )
@@ -519,6 +549,8 @@ def read(
     if frame is None and info.frames > 1:
         raise multi_frame(p, info)
     index = 0 if frame is None else check_frame(p, info, frame)
+    if index:
+        info = header(p, ds, index)  # that frame's rescale and window
     check(info)
     if "PixelData" not in ds and "FloatPixelData" not in ds and "DoubleFloatPixelData" not in ds:
         raise InvalidInputError(f"cannot read {p}: the DICOM file has no pixel data")
