@@ -38,6 +38,9 @@ from pydicom.pixels import (  # noqa: E402
 )
 from pydicom.uid import ExplicitVRLittleEndian, RLELossless, generate_uid  # noqa: E402
 
+# pydicom's own notes on its test files' quirks (an implicit VR where explicit was declared)
+pytestmark = pytest.mark.filterwarnings("ignore:Expected explicit VR:UserWarning")
+
 SECONDARY_CAPTURE = "1.2.840.10008.5.1.4.1.1.7"
 
 
@@ -285,11 +288,28 @@ def test_palette_color_from_pydicom_data() -> None:
     np.testing.assert_array_equal(read_image(p), apply_color_lut(ds.pixel_array, ds))
 
 
-def test_jpeg_baseline_decoded_through_pillow() -> None:
-    p = _testfile("SC_rgb_jpeg.dcm")
+@pytest.mark.parametrize(
+    "name",
+    [
+        "SC_rgb_jpeg.dcm",  # JPEG baseline, RGB: through Pillow
+        "SC_rgb_jpeg_dcmtk.dcm",  # JPEG baseline, YBR_FULL
+        "SC_rgb_dcmtk_+eb+cy+s2.dcm",  # JPEG baseline, YBR_FULL_422
+        "SC_rgb_rle.dcm",
+        "SC_rgb_small_odd_big_endian.dcm",
+        "MR_small_bigendian.dcm",  # signed, big endian
+        "image_dfl.dcm",  # deflated
+        "CT_small.dcm",
+    ],
+)
+def test_pydicom_data_files_as_pydicom_reads_them(name: str) -> None:
+    p = _testfile(name)
+    ds = pydicom.dcmread(p)
+    want = np.asarray(ds.pixel_array)
     got = read_image(p)
-    assert got.shape == (256, 256, 3) and got.dtype == np.uint8
-    np.testing.assert_array_equal(got, pydicom.dcmread(p).pixel_array)
+    if ds.SamplesPerPixel == 1:
+        want = apply_modality_lut(want, ds)[..., None]
+    assert got.dtype == np.dtype(image_info(p).dtype)
+    np.testing.assert_array_equal(got, want)
 
 
 def test_a_compression_without_its_plugin_is_one_line() -> None:
@@ -355,6 +375,22 @@ def test_truncated_file_is_one_line_and_the_cli_writes_nothing(tmp_path: Path) -
         out = tmp_path / f"cut{cut}.png"
         assert main(["convert", str(p), "-o", str(out)]) == 1
         assert not out.exists() and not list(tmp_path.glob(f".cut{cut}*"))
+
+
+def test_corrupt_compressed_data_is_one_line_naming_no_plugin(tmp_path: Path) -> None:
+    a = _RNG.integers(0, 4096, (16, 12)).astype(np.uint16)
+    ds = _dataset(a)
+    ds.compress(RLELossless, a)
+    data = bytearray(_save(ds, tmp_path / "rle.dcm").read_bytes())
+    pixel = data.index(b"\xe0\x7f\x10\x00")  # (7FE0,0010) Pixel Data
+    items = [k for k in range(pixel, len(data) - 3) if data[k : k + 4] == b"\xfe\xff\x00\xe0"]
+    frame = items[1] + 8  # after the offset table: the frame's RLE header
+    data[frame : frame + 4] = (15).to_bytes(4, "little")  # 15 segments, not 2
+    p = tmp_path / "bad.dcm"
+    p.write_bytes(bytes(data))
+    with pytest.raises(InvalidInputError, match="RLE Lossless pixel data cannot be decoded") as e:
+        read_image(p)
+    assert "\n" not in str(e.value) and "plugin" not in str(e.value).split("(")[0]
 
 
 def test_not_a_dicom_file_named_dcm(tmp_path: Path) -> None:

@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import math
 import os
+import threading
 import warnings
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, NamedTuple
@@ -97,6 +98,11 @@ class DicomInfo(NamedTuple):
     icc: bool
 
 
+#: pydicom's notes on what it reads leniently (``warnings`` and its logger): silenced while it
+#: reads, under this lock, since ``warnings.catch_warnings`` changes a process-wide filter.
+_quiet_lock = threading.RLock()
+
+
 def _one_line(exc: BaseException) -> str:
     text = str(exc).strip().splitlines()
     return text[0].strip() if text else type(exc).__name__
@@ -112,7 +118,7 @@ def open_dicom(p: Path, *, pixels: bool) -> Any:
     """Read ``p`` with pydicom (``pixels=False``: up to the pixel data); one line if it cannot."""
     pydicom = _pydicom(p)
     try:
-        with warnings.catch_warnings():  # pydicom's notes on lenient reading: not our line
+        with _quiet_lock, warnings.catch_warnings():  # pydicom's notes: not our line
             warnings.simplefilter("ignore")
             return pydicom.dcmread(p, stop_before_pixels=not pixels)
     except pydicom.errors.InvalidDicomError:
@@ -311,19 +317,24 @@ def dicom_info(path: str | Path) -> DicomInfo:
 
 
 def _plugin_error(p: Path, ds: Any, exc: BaseException) -> InvalidInputError:
-    """One line for compressed pixel data that pydicom cannot decode here, naming the remedy."""
+    """One line for compressed pixel data that pydicom cannot decode here, naming the remedy.
+
+    A plugin is named where pydicom lacks one (its "missing dependencies"), or where the one it
+    has does not take the data (Pillow and 12-bit or lossless JPEG); otherwise the data is
+    corrupt, and pydicom's reason is given, its lines joined.
+    """
     syntax = ds.file_meta.get("TransferSyntaxUID", None) if hasattr(ds, "file_meta") else None
     uid = str(syntax or "")
     name = str(getattr(syntax, "name", uid) or "its transfer syntax")
+    why = " ".join(line.strip() for line in str(exc).splitlines() if line.strip())
     hint = next((h for prefix, h in _PLUGINS if uid.startswith(prefix)), None)
-    if hint is None:
+    if hint is not None and ("missing dependencies" in why or "does not support" in why):
         return InvalidInputError(
-            f"cannot read {p}: pydicom cannot decode its {name} pixel data ({_one_line(exc)})"
+            f"cannot read {p}: its pixel data is {name}, which pydicom decodes here only with "
+            f"a plugin: {hint}"
         )
-    return InvalidInputError(
-        f"cannot read {p}: its pixel data is {name}, which pydicom decodes here only with a "
-        f"plugin: {hint}"
-    )
+    why = why[:300] or type(exc).__name__
+    return InvalidInputError(f"cannot read {p}: its {name} pixel data cannot be decoded ({why})")
 
 
 def decode(
@@ -333,16 +344,17 @@ def decode(
     frame: int,
     window: Any = None,
 ) -> np.ndarray:
-    """Decode ``frame`` of ``ds`` as :func:`read_image` returns it, or windowed to [0, 1].
+    """Decode ``frame`` of ``ds`` (read from ``p``) as :func:`read_image` returns it, or windowed.
 
-    ``window``: None (the modality values), ``"auto"`` or ``(center, width)``.
+    ``window``: None (the modality values), ``"auto"`` or ``(center, width)`` (display values
+    in [0, 1]).
     """
     _pydicom(p)  # the missing extra in one line, before pydicom.pixels is imported
     from pydicom.pixels import apply_color_lut, apply_modality_lut, pixel_array
 
     index = frame if info.frames > 1 else None
     try:
-        with warnings.catch_warnings():
+        with _quiet_lock, warnings.catch_warnings():
             warnings.simplefilter("ignore")
             arr = np.asarray(pixel_array(ds, index=index))
             if info.photometric == "PALETTE COLOR":
@@ -424,7 +436,7 @@ def _apply_window(p: Path, ds: Any, info: DicomInfo, values: np.ndarray, window:
             from pydicom.pixels import apply_voi_lut
 
             top = float(2 ** _lut_bits(ds, "VOILUTSequence") - 1)
-            with warnings.catch_warnings():
+            with _quiet_lock, warnings.catch_warnings():
                 warnings.simplefilter("ignore")
                 out = np.asarray(apply_voi_lut(values, ds), dtype=np.float64)
             return np.clip(out / top, 0.0, 1.0)
@@ -544,14 +556,14 @@ def read(
 
     ``frame=None``: a single-frame file's image; a multi-frame file is refused.
     """
-    ds = open_dicom(p, pixels=True)
-    info = header(p, ds)
+    info = header(p, open_dicom(p, pixels=False))  # the header alone, for the pixel limit
     if frame is None and info.frames > 1:
         raise multi_frame(p, info)
     index = 0 if frame is None else check_frame(p, info, frame)
-    if index:
-        info = header(p, ds, index)  # that frame's rescale and window
-    check(info)
+    check(info)  # before any pixel data is read
+    ds = open_dicom(p, pixels=True)
     if "PixelData" not in ds and "FloatPixelData" not in ds and "DoubleFloatPixelData" not in ds:
         raise InvalidInputError(f"cannot read {p}: the DICOM file has no pixel data")
+    if index:
+        info = header(p, ds, index)  # that frame's rescale and window
     return decode(p, ds, info, index, window)
