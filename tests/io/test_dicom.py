@@ -415,6 +415,15 @@ def test_any_suffix_or_none(tmp_path: Path) -> None:
         write_image(tmp_path / "out.dcm", np.zeros((2, 2)))
 
 
+def test_a_tiff_header_in_the_preamble_is_dicom_under_dcm(tmp_path: Path) -> None:
+    a = _RNG.integers(0, 256, (3, 4)).astype(np.uint8)
+    ds = _dataset(a)
+    ds.preamble = b"II*\x00" + bytes(124)  # a dual-personality DICOM-TIFF's first bytes
+    p = _save(ds, tmp_path / "slide.dcm")
+    assert p.read_bytes()[:4] == b"II*\x00"
+    np.testing.assert_array_equal(read_image(p)[..., 0], a)
+
+
 def test_no_image_and_pixel_limit(tmp_path: Path) -> None:
     ds = _dataset(np.zeros((2, 2), np.uint8))
     for key in ("Rows", "Columns", "PixelData"):

@@ -205,11 +205,13 @@ def _suffix_format(path: str | Path) -> str:
     try:
         return image_format(path)
     except InvalidInputError:
+        if not isinstance(path, (str, os.PathLike)):
+            raise
         try:
             with Path(path).open("rb") as fh:
                 if _dicom_head(fh.read(132)):
                     return "dicom"
-        except OSError:
+        except (OSError, ValueError):  # a missing file, a name with NUL ...
             pass
         raise
 
@@ -545,12 +547,13 @@ def _content_format(p: Path, fmt: str) -> str:
     """
     try:
         with p.open("rb") as fh:
-            head = fh.read(132)
+            first = fh.read(132)  # DICOM's "DICM" is at byte 128
     except OSError:
         return fmt  # the format's own reader says why
     found = None
-    if fmt == "dicom" and _dicom_head(head):  # a DICOM-TIFF's preamble is a TIFF header
+    if fmt == "dicom" and _dicom_head(first):  # a DICOM-TIFF's preamble is a TIFF header
         return fmt
+    head = first[:32]
     if head.startswith(_PNG_SIGNATURE):
         found = "png"
     elif head.startswith(b"\xff\xd8\xff"):
@@ -573,7 +576,7 @@ def _content_format(p: Path, fmt: str) -> str:
         found = "bmp"  # its DIB header's size, so that text starting "BM" is not one
     elif head.startswith((b"\xff\x0a", b"\0\0\0\x0cJXL ")):
         found = "JPEG XL"
-    elif _dicom_head(head):
+    elif _dicom_head(first):
         found = "dicom"
     if found is None or found == fmt:
         return fmt
