@@ -424,6 +424,16 @@ def test_a_tiff_header_in_the_preamble_is_dicom_under_dcm(tmp_path: Path) -> Non
     np.testing.assert_array_equal(read_image(p)[..., 0], a)
 
 
+def test_a_header_of_bad_values_is_one_line(tmp_path: Path) -> None:
+    ds = _dataset(np.zeros((2, 2), np.uint8))
+    ds.ModalityLUTSequence = [Dataset()]  # an item without its LUT Descriptor
+    p = _save(ds, tmp_path / "bad.dcm")
+    for fn in (read_image, image_info, dicom_info):
+        with pytest.raises(InvalidInputError, match="corrupt DICOM header") as e:
+            fn(p)
+        assert "\n" not in str(e.value)
+
+
 def test_no_image_and_pixel_limit(tmp_path: Path) -> None:
     ds = _dataset(np.zeros((2, 2), np.uint8))
     for key in ("Rows", "Columns", "PixelData"):

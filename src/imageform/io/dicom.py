@@ -198,8 +198,21 @@ def _lut_bits(ds: Any, keyword: str) -> int:
 def header(p: Path, ds: Any, frame: int = 0) -> DicomInfo:
     """Return :class:`DicomInfo` of a dataset ``ds`` read from ``p``; refuse what is no image.
 
-    The rescale, window and spacing are those of ``frame`` (they may differ per frame).
+    The rescale, window and spacing are those of ``frame`` (they may differ per frame). A
+    header whose values cannot be read (a text where a number belongs, a LUT without its
+    descriptor) is one line.
     """
+    try:
+        return _header(p, ds, frame)
+    except InvalidInputError:
+        raise
+    except (ValueError, TypeError, AttributeError, KeyError, IndexError, OverflowError) as exc:
+        raise InvalidInputError(
+            f"cannot read {p}: corrupt DICOM header ({_one_line(exc)})"
+        ) from None
+
+
+def _header(p: Path, ds: Any, frame: int) -> DicomInfo:
     for keyword in ("Rows", "Columns", "BitsAllocated", "PhotometricInterpretation"):
         if ds.get(keyword, None) in (None, ""):
             sop = ds.get("SOPClassUID", None)
