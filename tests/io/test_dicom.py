@@ -438,12 +438,17 @@ def test_no_image_and_pixel_limit(tmp_path: Path) -> None:
     ds = _dataset(np.zeros((2, 2), np.uint8))
     for key in ("Rows", "Columns", "PixelData"):
         delattr(ds, key)
+    ds.SOPClassUID = ds.file_meta.MediaStorageSOPClassUID = "1.2.840.10008.5.1.4.1.1.88.11"
     p = _save(ds, tmp_path / "report.dcm")
-    with pytest.raises(InvalidInputError, match="no image"):
+    with pytest.raises(InvalidInputError, match=r"no image \(Basic Text SR Storage\)"):
         read_image(p)
-    q = _save(_dataset(np.zeros((40, 30), np.uint8)), tmp_path / "big.dcm")
+    ds.SOPClassUID = ds.file_meta.MediaStorageSOPClassUID = SECONDARY_CAPTURE
+    q = _save(ds, tmp_path / "cut.dcm")  # an image's class without its rows: cut short
+    with pytest.raises(InvalidInputError, match=r"without its Rows \(truncated or corrupt\)"):
+        read_image(q)
+    big = _save(_dataset(np.zeros((40, 30), np.uint8)), tmp_path / "big.dcm")
     with pytest.raises(InvalidInputError, match="above the limit"):
-        read_image(q, max_pixels=1000)
+        read_image(big, max_pixels=1000)
 
 
 def test_missing_pydicom_names_the_extra(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:

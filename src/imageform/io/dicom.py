@@ -215,8 +215,16 @@ def header(p: Path, ds: Any, frame: int = 0) -> DicomInfo:
 def _header(p: Path, ds: Any, frame: int) -> DicomInfo:
     for keyword in ("Rows", "Columns", "BitsAllocated", "PhotometricInterpretation"):
         if ds.get(keyword, None) in (None, ""):
-            sop = ds.get("SOPClassUID", None)
-            what = f" ({sop.name})" if sop is not None and hasattr(sop, "name") else ""
+            meta = getattr(ds, "file_meta", None) or {}
+            sop = ds.get("SOPClassUID", None) or meta.get("MediaStorageSOPClassUID", None)
+            name = str(getattr(sop, "name", "") or "")
+            if len(ds) == 0:  # nothing after the file meta information
+                raise InvalidInputError(f"cannot read {p}: the DICOM file ends in its header")
+            if "Image" in name:  # an image's class, its image attributes missing: cut short
+                raise InvalidInputError(
+                    f"cannot read {p}: a {name} file without its {keyword} (truncated or corrupt)"
+                )
+            what = f" ({name})" if name else ""
             raise InvalidInputError(
                 f"cannot read {p}: a DICOM file with no image{what}: {keyword} is missing"
             )

@@ -931,7 +931,8 @@ def read_image(
     ----------
     path : str or Path
         A ``.png``, ``.jpg``/``.jpeg``, ``.tif``/``.tiff``, ``.npy``, ``.webp``, ``.bmp``,
-        ``.gif`` or HEIF file (:data:`IMAGE_FORMATS`).
+        ``.gif`` or HEIF file (:data:`IMAGE_FORMATS`), or a DICOM file under any name (the
+        ``dicom`` extra; its values through the Modality LUT, see :func:`read_dicom`).
     alpha : {"reject", "drop", "keep"}
         An alpha channel with any transparent pixel: an error (``reject``), ignored
         (``drop``), or returned as the last channel (``keep``). A fully opaque alpha channel
@@ -949,8 +950,8 @@ def read_image(
     ------
     InvalidInputError
         Missing, unreadable, truncated or corrupt file; too many pixels; transparent pixels
-        with ``alpha="reject"``; an unsupported sample type or shape; a TIFF stack or an
-        animated GIF or WebP (more than one image).
+        with ``alpha="reject"``; an unsupported sample type or shape; a TIFF stack, an
+        animated GIF or WebP or a multi-frame DICOM (more than one image).
     UnknownOptionError
         An unknown ``alpha``.
 
