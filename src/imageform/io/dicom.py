@@ -220,9 +220,10 @@ def _header(p: Path, ds: Any, frame: int) -> DicomInfo:
             name = str(getattr(sop, "name", "") or "")
             if len(ds) == 0:  # nothing after the file meta information
                 raise InvalidInputError(f"cannot read {p}: the DICOM file ends in its header")
-            if "Image" in name:  # an image's class, its image attributes missing: cut short
+            if "Image" in name:  # an image's class without its image attributes
                 raise InvalidInputError(
-                    f"cannot read {p}: a {name} file without its {keyword} (truncated or corrupt)"
+                    f"cannot read {p}: a {name} file without its {keyword} (no image in it, or "
+                    "the file is cut short)"
                 )
             what = f" ({name})" if name else ""
             raise InvalidInputError(
@@ -257,7 +258,7 @@ def _header(p: Path, ds: Any, frame: int) -> DicomInfo:
         if spp != 3 or allocated not in (8, 16) or signed:
             raise InvalidInputError(
                 f"cannot read {p}: {photometric} with {spp} samples/pixel of {allocated} bits"
-                f"{' (signed)' if signed else ''}"
+                f"{' (signed)' if signed else ''}; imageform reads colour of 8 or 16 bits"
             )
         channels, dtype = 3, "uint16" if allocated == 16 else "uint8"
     elif photometric == "PALETTE COLOR":
@@ -386,8 +387,10 @@ def decode(
         raise InvalidInputError(f"cannot read {p}: not enough memory to decode it") from None
     except (RuntimeError, NotImplementedError) as exc:  # no plugin for its compression
         raise _plugin_error(p, ds, exc) from None
-    except Exception as exc:  # truncated pixel data, a bad LUT ...
-        raise InvalidInputError(f"cannot read {p}: {_one_line(exc)}") from None
+    except Exception as exc:  # truncated pixel data, a bad LUT, a bad value ...
+        raise InvalidInputError(
+            f"cannot read {p}: its pixel data cannot be decoded ({_one_line(exc)})"
+        ) from None
     if info.channels == 3 or info.photometric == "PALETTE COLOR":
         if window is not None:
             raise InvalidInputError(
