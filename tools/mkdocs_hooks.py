@@ -72,6 +72,7 @@ BENCH_SCRIPTS: dict[str, str] = {
     "compile-simulate": "benchmarks/bench_first_run.py",
     "delta-e": "benchmarks/bench_delta_e.py",
     "demosaic": "benchmarks/bench_demosaic.py",
+    "dicom": "benchmarks/check_dicom.py",
     "distortion": "benchmarks/bench_distortion.py",
     "emva": "benchmarks/bench_emva.py",
     "first-run": "benchmarks/bench_first_run.py",

@@ -27,6 +27,7 @@ EXTRAS = {
     "trimesh": "video",
     "cv2": "reconstruct",
     "pillow_heif": "heif",
+    "pydicom": "dicom",
 }
 
 

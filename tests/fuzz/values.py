@@ -176,6 +176,26 @@ def _png_file() -> Path:
     return path
 
 
+def _dicom_file() -> Path:
+    """A 12-bit CT slice (signed, rescaled to HU, with a window), written with pydicom."""
+    from pydicom.dataset import Dataset, FileMetaDataset
+    from pydicom.uid import ExplicitVRLittleEndian, generate_uid
+
+    ds = Dataset()
+    ds.file_meta = FileMetaDataset()
+    ds.file_meta.TransferSyntaxUID = ExplicitVRLittleEndian
+    ds.file_meta.MediaStorageSOPClassUID = ds.SOPClassUID = "1.2.840.10008.5.1.4.1.1.2"
+    ds.file_meta.MediaStorageSOPInstanceUID = ds.SOPInstanceUID = generate_uid()
+    ds.Modality, ds.Rows, ds.Columns, ds.SamplesPerPixel = "CT", 6, 8, 1
+    ds.PhotometricInterpretation = "MONOCHROME2"
+    ds.BitsAllocated, ds.BitsStored, ds.HighBit, ds.PixelRepresentation = 16, 12, 11, 1
+    ds.RescaleSlope, ds.RescaleIntercept, ds.WindowCenter, ds.WindowWidth = 1, -1024, 40, 400
+    ds.PixelData = _rng().integers(0, 2048, (6, 8)).astype(np.int16).tobytes()
+    path = _tmpdir() / "in.dcm"
+    ds.save_as(path, enforce_file_format=True)
+    return path
+
+
 def _tiff_file() -> Path:
     import tifffile
 
@@ -411,6 +431,7 @@ FIXTURES: dict[str, Callable[[], Any]] = {
     "correction": _correction,
     "stain": _stain,
     "png_file": _png_file,
+    "dicom_file": _dicom_file,
     "camera_file": _camera_file,
     "tmpfile_png": lambda: _tmpdir() / "out.png",
     "tmpfile_json": lambda: _tmpdir() / "out.json",
@@ -477,6 +498,7 @@ FIXTURES: dict[str, Callable[[], Any]] = {
 _CACHE: dict[str, Any] = {}
 _FRESH = {
     "tmpdir",
+    "dicom_file",
     "tmpfile_png",
     "tmpfile_json",
     "tmpfile_toml",

@@ -151,7 +151,8 @@ def _chunked_command(wf: Workflow) -> click.Command:
         *[
             p
             for p in option_params(wf)
-            if p.name not in ("bit_depth", "bits", "out_of_range", "clip", "device")
+            # --window: a DICOM's VOI window; chunked reads tiled TIFF and Zarr only
+            if p.name not in ("bit_depth", "bits", "out_of_range", "clip", "device", "window")
         ],
         click.Option(
             ["--chunk"],

@@ -6,7 +6,9 @@ declares in its ICC profile or tags, PNG's ``gAMA``/``cHRM`` included
 (:func:`image_color_space`); raw files (:func:`write_dng`,
 :func:`read_raw`, :func:`develop`, docs/raw.md); the one camera file, versioned TOML
 (:func:`read_camera`, :func:`write_camera`, docs/camera-file.md); video files, image
-sequences and capture devices (:func:`open_video`, :class:`VideoWriter`, PyAV).
+sequences and capture devices (:func:`open_video`, :class:`VideoWriter`, PyAV); DICOM images
+through pydicom (:func:`read_dicom`, :func:`dicom_info`, :func:`dicom_window`, the ``dicom``
+extra).
 """
 
 from imageform.io.camera_file import (
@@ -24,6 +26,7 @@ from imageform.io.camera_file import (
     read_camera,
     write_camera,
 )
+from imageform.io.dicom import DICOM_WINDOW_FUNCTIONS, DicomInfo, dicom_info, dicom_window
 from imageform.io.icc import (
     RGB_PROFILED,
     DeclaredColorSpace,
@@ -41,6 +44,7 @@ from imageform.io.image_io import (
     image_format,
     image_info,
     max_pixels,
+    read_dicom,
     read_image,
     write_image,
 )
@@ -77,6 +81,7 @@ __all__ = [
     "CAMERA_FILE_VERSION",
     "CCM_TARGETS",
     "DEFAULT_MAX_PIXELS",
+    "DICOM_WINDOW_FUNCTIONS",
     "DISTORTION_MODELS",
     "IMAGE_FORMATS",
     "OPTICS_MODELS",
@@ -93,6 +98,7 @@ __all__ = [
     "CameraSensor",
     "DeclaredColorSpace",
     "Development",
+    "DicomInfo",
     "Frame",
     "IccProfile",
     "ImageInfo",
@@ -105,6 +111,8 @@ __all__ = [
     "VideoWriter",
     "WrittenImage",
     "develop",
+    "dicom_info",
+    "dicom_window",
     "icc_profile",
     "identify_icc",
     "image_color_space",
@@ -114,6 +122,7 @@ __all__ = [
     "open_video",
     "parse_icc",
     "read_camera",
+    "read_dicom",
     "read_image",
     "read_plan",
     "read_png",

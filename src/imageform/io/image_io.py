@@ -1,10 +1,11 @@
-"""The one image reader and writer: PNG, JPEG, TIFF, ``.npy``; HEIF, WebP, BMP, GIF read.
+"""The one image reader and writer: PNG, JPEG, TIFF, ``.npy``; HEIF, WebP, BMP, GIF, DICOM read.
 
 One rule for every format:
 
 - **Format**: a file is read as what its first bytes show (a PNG named ``.jpg`` as a PNG); the
-  suffix must still be one of :data:`IMAGE_FORMATS`, and an AVIF or JPEG XL under such a
-  suffix is refused naming what it holds. Writing follows the suffix.
+  suffix must still be one of :data:`IMAGE_FORMATS` (a DICOM file, ``DICM`` at byte 128, under
+  any suffix or none), and an AVIF or JPEG XL under such a suffix is refused naming what it
+  holds. Writing follows the suffix.
 - **Shape**: an image is ``(H, W, C)``, channels last; a grey image has ``C = 1`` (a 2-D
   TIFF or ``.npy`` comes back as ``(H, W, 1)``).
 - **Values**: integers as stored (uint8 / uint16, full-range encoded values), floats as stored
@@ -43,6 +44,11 @@ the full range as a 16-bit PNG; the container's rotation and mirroring are appli
 (HEIF's own orientation, which the EXIF tag in such files only repeats). It is not written.
 WebP (still, lossy or lossless), BMP (1 to 32 bits, palette, RLE, bottom-up or top-down) and a
 single-frame GIF are read through Pillow, as uint8; they are not written either (write PNG).
+DICOM (``.dcm``, ``.dicom``, or any file with ``DICM`` at byte 128) is read through pydicom
+(the ``dicom`` extra; :mod:`imageform.io.dicom` states its rules): the stored values through
+the Modality LUT (integers where the rescale is the identity, else float32), MONOCHROME1
+inverted to MONOCHROME2's sense, YBR as RGB; a multi-frame file is refused as a TIFF stack is
+(:func:`read_dicom` reads one frame, or windows it for display). It is not written.
 """
 
 from __future__ import annotations
@@ -86,6 +92,7 @@ __all__ = [
     "image_format",
     "image_info",
     "max_pixels",
+    "read_dicom",
     "read_image",
     "write_image",
 ]
@@ -105,6 +112,8 @@ IMAGE_FORMATS = MappingProxyType(
         ".webp": "webp",
         ".bmp": "bmp",
         ".gif": "gif",
+        ".dcm": "dicom",
+        ".dicom": "dicom",
     }
 )
 
@@ -124,7 +133,7 @@ class ImageInfo(NamedTuple):
     """What a file's header says: size, channels, sample type and format.
 
     ``width``, ``height`` (upright, as :func:`read_image` returns it), ``channels``, sample
-    ``dtype`` and ``format`` (png, jpeg, tiff, npy, heif, webp, bmp, gif).
+    ``dtype`` and ``format`` (png, jpeg, tiff, npy, heif, webp, bmp, gif, dicom).
     """
 
     width: int
@@ -185,6 +194,26 @@ def image_format(path: str | Path) -> str:
             f"unknown image file type {suffix[:20]!r} of {shown}; valid: {valid}"
         )
     return IMAGE_FORMATS[suffix]
+
+
+def _suffix_format(path: str | Path) -> str:
+    """Return the format of ``path``'s suffix; a DICOM file (``DICM`` at byte 128) under any.
+
+    DICOM files come from scanners and archives with no suffix (``IM000001``) or another one
+    (``.IMA``); their first bytes say what they are.
+    """
+    try:
+        return image_format(path)
+    except InvalidInputError:
+        if not isinstance(path, (str, os.PathLike)):
+            raise
+        try:
+            with Path(path).open("rb") as fh:
+                if _dicom_head(fh.read(132)):
+                    return "dicom"
+        except (OSError, ValueError):  # a missing file, a name with NUL ...
+            pass
+        raise
 
 
 # ---------------------------------------------------------------- headers
@@ -325,7 +354,7 @@ def image_info(path: str | Path) -> ImageInfo:
     InvalidInputError
         The file is missing or not an image of a known format.
     """
-    fmt = image_format(path) if isinstance(path, (str, os.PathLike)) else ""
+    fmt = _suffix_format(path) if isinstance(path, (str, os.PathLike)) else ""
     p = _existing(path)
     fmt = _content_format(p, fmt)
     if fmt == "png":
@@ -350,6 +379,13 @@ def image_info(path: str | Path) -> ImageInfo:
             raise InvalidInputError(f"cannot read {p}: {_one_line(exc)}") from None
     if fmt == "heif":
         return _heif_info(_open_heif(p))  # libheif's size: its rotation applied
+    if fmt == "dicom":
+        from imageform.io import dicom
+
+        d = dicom.header(p, dicom.open_dicom(p, pixels=False))
+        if d.frames > 1:  # refused, as read_image refuses it
+            raise dicom.multi_frame(p, d)
+        return ImageInfo(d.width, d.height, d.channels, d.dtype, "dicom")
     try:
         with _pillow_open(p) as im:
             _refuse_animation(p, im, fmt)
@@ -511,10 +547,13 @@ def _content_format(p: Path, fmt: str) -> str:
     """
     try:
         with p.open("rb") as fh:
-            head = fh.read(32)
+            first = fh.read(132)  # DICOM's "DICM" is at byte 128
     except OSError:
         return fmt  # the format's own reader says why
     found = None
+    if fmt == "dicom" and _dicom_head(first):  # a DICOM-TIFF's preamble is a TIFF header
+        return fmt
+    head = first[:32]
     if head.startswith(_PNG_SIGNATURE):
         found = "png"
     elif head.startswith(b"\xff\xd8\xff"):
@@ -537,15 +576,22 @@ def _content_format(p: Path, fmt: str) -> str:
         found = "bmp"  # its DIB header's size, so that text starting "BM" is not one
     elif head.startswith((b"\xff\x0a", b"\0\0\0\x0cJXL ")):
         found = "JPEG XL"
+    elif _dicom_head(first):
+        found = "dicom"
     if found is None or found == fmt:
         return fmt
     if found not in IMAGE_FORMATS.values():
         raise InvalidInputError(
             f"cannot read {p}: it holds {'an' if found[0] in 'AEIOU' else 'a'} {found} image, "
             f"not {fmt.upper()}; imageform reads "
-            "PNG, JPEG, TIFF, WebP, BMP, GIF, .npy and HEIF (convert it to one of them)"
+            "PNG, JPEG, TIFF, WebP, BMP, GIF, .npy, HEIF and DICOM (convert it to one of them)"
         )
     return found
+
+
+def _dicom_head(head: bytes) -> bool:
+    """Whether a file's first 132 bytes are a DICOM file's: ``DICM`` at byte 128 (PS3.10 7.1)."""
+    return len(head) >= 132 and head[128:132] == b"DICM"
 
 
 def _pixels(n: int) -> str:
@@ -885,7 +931,8 @@ def read_image(
     ----------
     path : str or Path
         A ``.png``, ``.jpg``/``.jpeg``, ``.tif``/``.tiff``, ``.npy``, ``.webp``, ``.bmp``,
-        ``.gif`` or HEIF file (:data:`IMAGE_FORMATS`).
+        ``.gif`` or HEIF file (:data:`IMAGE_FORMATS`), or a DICOM file under any name (the
+        ``dicom`` extra; its values through the Modality LUT, see :func:`read_dicom`).
     alpha : {"reject", "drop", "keep"}
         An alpha channel with any transparent pixel: an error (``reject``), ignored
         (``drop``), or returned as the last channel (``keep``). A fully opaque alpha channel
@@ -903,8 +950,8 @@ def read_image(
     ------
     InvalidInputError
         Missing, unreadable, truncated or corrupt file; too many pixels; transparent pixels
-        with ``alpha="reject"``; an unsupported sample type or shape; a TIFF stack or an
-        animated GIF or WebP (more than one image).
+        with ``alpha="reject"``; an unsupported sample type or shape; a TIFF stack, an
+        animated GIF or WebP or a multi-frame DICOM (more than one image).
     UnknownOptionError
         An unknown ``alpha``.
 
@@ -918,7 +965,7 @@ def read_image(
     """
     alpha = check_option(alpha, _ALPHA, "alpha handling")
     limit = _pixel_limit(max_pixels)
-    fmt = image_format(path) if isinstance(path, (str, os.PathLike)) else ""
+    fmt = _suffix_format(path) if isinstance(path, (str, os.PathLike)) else ""
     p = _existing(path)
     fmt = _content_format(p, fmt)
     has_alpha = False
@@ -935,9 +982,68 @@ def read_image(
     elif fmt == "heif":
         arr = _read_heif(p, limit)
         has_alpha = arr.ndim == 3 and arr.shape[-1] in (2, 4)
+    elif fmt == "dicom":
+        arr = _read_dicom(p, limit)
     else:
         arr = _read_npy(p, limit)
     return _normalise(p, arr, alpha, has_alpha)
+
+
+def _read_dicom(p: Path, limit: int, frame: object = None, window: Any = None) -> np.ndarray:
+    from imageform.io import dicom
+
+    def check(info: Any) -> None:
+        _check_pixels(p, ImageInfo(info.width, info.height, info.channels, info.dtype, ""), limit)
+
+    return dicom.read(p, check, frame=frame, window=window)
+
+
+def read_dicom(
+    path: str | Path,
+    *,
+    frame: int | None = None,
+    window: str | tuple[float, float] | None = None,
+    max_pixels: int | None = None,
+) -> np.ndarray:
+    """Read one frame of a DICOM file, as modality values or windowed for display.
+
+    Needs pydicom (the ``dicom`` extra). Without ``frame`` and ``window`` it returns what
+    :func:`read_image` does: the stored values through the Modality LUT (integers where the
+    rescale is the identity, else float32), MONOCHROME1 inverted to MONOCHROME2's sense,
+    colour as RGB (docs/design.md, "Images").
+
+    Parameters
+    ----------
+    path : str or Path
+        A DICOM file (``DICM`` at byte 128; any suffix).
+    frame : int, optional
+        The frame of a multi-frame file, from 0. None: the file must hold one frame.
+    window : "auto" or (center, width), optional
+        Apply a VOI window (:func:`dicom_window`) and return float32 display values in
+        [0, 1], 0 black (a MONOCHROME1 image is inverted after the window): ``"auto"`` the
+        file's first Window Center/Width with its VOI LUT Function (else its VOI LUT
+        Sequence, else the image's own range, min to max); ``(center, width)`` in modality
+        units with the linear function. Grey images only.
+    max_pixels : int, optional
+        Refuse frames with more pixels (default :func:`max_pixels`).
+
+    Returns
+    -------
+    ndarray (H, W, C)
+        ``C`` is 1 (grey) or 3 (RGB).
+
+    Raises
+    ------
+    InvalidInputError
+        A missing, corrupt, truncated or non-DICOM file; a frame out of range; no frame given
+        for a multi-frame file; a window for a colour image; compressed pixel data that
+        pydicom cannot decode without a plugin (the line names it).
+    MissingExtraError
+        pydicom is not installed.
+    """
+    limit = _pixel_limit(max_pixels)
+    p = _existing(path)
+    return _normalise(p, _read_dicom(p, limit, frame, window), "reject", False)
 
 
 def _open_heif(p: Path) -> Any:
@@ -1129,7 +1235,7 @@ def write_image(
         )
     if a.dtype.kind not in "fu" or a.dtype.itemsize > 8:
         raise InvalidInputError(f"expected floats, uint8 or uint16 to write {p}, got {a.dtype}")
-    if fmt in ("heif", "webp", "bmp", "gif"):
+    if fmt in ("heif", "webp", "bmp", "gif", "dicom"):
         name = {"heif": "HEIF", "webp": "WebP"}.get(fmt, fmt.upper())
         raise InvalidInputError(
             f"imageform reads {name} but does not write it; write a .png, .jpg or .tif file"
@@ -1234,13 +1340,18 @@ def image_color_space(path: str | Path) -> DeclaredColorSpace:
         parse_icc,
     )
 
-    fmt = image_format(path)
+    fmt = _suffix_format(path)
     p = Path(path)
     if not p.is_file():
         raise InvalidInputError(f"cannot read {p}: no such file")
     fmt = _content_format(p, fmt)
     if fmt == "npy":
         return DeclaredColorSpace(None, "none", "")
+    if fmt == "dicom":
+        from imageform.io import dicom
+
+        icc_dicom = dicom.icc_profile_of(dicom.open_dicom(p, pixels=False))
+        return declared_by_profile(icc_dicom) if icc_dicom else DeclaredColorSpace(None, "none", "")
     if fmt == "heif":
         info = _open_heif(p).info
         if info.get("icc_profile"):

@@ -113,11 +113,20 @@ class ConvertOptions(ImageIn, ImageOut, OnDevice):
     gray_method: _GrayMethod | None = option(
         None, flag="--gray-method", help="Grey conversion.", choices=get_args(_GrayMethod)
     )
+    window: str | None = option(
+        None,
+        help="DICOM input: map its values to [0, 1] through a VOI window first: auto (the "
+        "file's window, else its VOI LUT, else its min to max) or CENTER,WIDTH (e.g. 40,400).",
+        metavar="auto|C,W",
+    )
 
     def check(self) -> None:
         """Check the options and normalise the ``--from`` and ``--to`` space names."""
         super().check()
         from imageform.color import space_name
+
+        if self.window is not None:
+            object.__setattr__(self, "window", _window_option(self.window))
 
         if str(self.src).strip().lower() == "auto":
             object.__setattr__(self, "src", "auto")
@@ -150,6 +159,36 @@ class ConvertOptions(ImageIn, ImageOut, OnDevice):
         return p
 
 
+def _window_option(value: object) -> str | tuple[float, float]:
+    """``--window``: ``auto`` or ``CENTER,WIDTH`` (two numbers), else one line."""
+    import math
+
+    if isinstance(value, (tuple, list)) and len(value) == 2:
+        value = f"{value[0]},{value[1]}"
+    text = str(value).strip().lower()
+    if text == "auto":
+        return "auto"
+    parts = text.replace(" ", "").split(",")
+    try:
+        c, w = (float(v) for v in parts)
+    except ValueError:
+        raise InvalidInputError(
+            f"expected --window auto or CENTER,WIDTH (e.g. 40,400), got {str(value)[:40]!r}"
+        ) from None
+    if not (math.isfinite(c) and math.isfinite(w)) or w < 1:
+        raise InvalidInputError(f"expected --window CENTER,WIDTH with a width >= 1, got {text!r}")
+    return (c, w)
+
+
+def _read_windowed(image: Path, opts: ConvertOptions) -> Any:
+    """Read a DICOM input through ``--window`` (display values in [0, 1]); refuse another file."""
+    from imageform.io import image_info, read_dicom
+
+    if image_info(image).format != "dicom":
+        raise InvalidInputError(f"--window applies to DICOM input; {image} is not a DICOM file")
+    return read_dicom(image, window=opts.window, max_pixels=opts.max_pixels)
+
+
 def convert(run: Run, opts: ConvertOptions, *, out: Path, image: Path) -> Result:
     """``imageform convert``: one image file from one colour space to another."""
     refuse_absent_device(opts)  # before any file is read
@@ -158,7 +197,9 @@ def convert(run: Run, opts: ConvertOptions, *, out: Path, image: Path) -> Result
 
     dst = opts.dst
     opts.check_output(out)
-    img = read(image, opts)
+    img = read(image, opts) if opts.window is None else _read_windowed(image, opts)
+    if opts.window is None and img.dtype.kind == "f" and img.shape[-1] == 1:
+        _refuse_unwindowed(image, img)
     src, declared = opts.src, None
     if src == "auto":
         declared = image_color_space(image)
@@ -190,6 +231,20 @@ def convert(run: Run, opts: ConvertOptions, *, out: Path, image: Path) -> Result
     }
     how = " -> ".join(summary["path"]) or "copy"
     return Result(summary, (f"{image} ({src}) -> {out} ({dst}): {how}",))
+
+
+def _refuse_unwindowed(image: Path, img: Any) -> None:
+    """Refuse a DICOM's float values outside [0, 1] (Hounsfield units ...) without ``--window``."""
+    import numpy as np
+
+    from imageform.io import image_info
+
+    lo, hi = float(np.min(img)), float(np.max(img))
+    if (lo < 0 or hi > 1) and image_info(image).format == "dicom":
+        raise InvalidInputError(
+            f"{image} holds DICOM values from {lo:.6g} to {hi:.6g} (its Modality LUT's output, "
+            "not colours); pass --window auto (its VOI window) or --window CENTER,WIDTH"
+        )
 
 
 # ---------------------------------------------------------------- white balance
@@ -587,7 +642,9 @@ def palette_check(run: Run, opts: PaletteCheckOptions, *, out: None, colors: str
 
 
 _IMG = Input(
-    "image", "Input image (PNG, JPEG, TIFF, .npy, WebP, BMP, GIF; HEIF with the heif extra)."
+    "image",
+    "Input image (PNG, JPEG, TIFF, .npy, WebP, BMP, GIF; HEIF with the heif extra, DICOM with "
+    "the dicom extra).",
 )
 
 
@@ -605,7 +662,9 @@ def info(run: Run, opts: InfoOptions, *, out: None, image: Path) -> Result:
         from imageform.workflows.raw import raw_info
 
         return raw_info(image)
-    head = image_info(image)  # the upright size, as read_image returns the image
+    head = image_info(image) if not _is_dicom(image) else None
+    if head is None:
+        return _dicom_info(image)
     declared = image_color_space(image)
     orientation = _exif_orientation(image, head.format)
     turned = orientation in (5, 6, 7, 8)  # stored on its side
@@ -641,6 +700,77 @@ def info(run: Run, opts: InfoOptions, *, out: None, image: Path) -> Result:
     if orientation not in (None, 1):
         how_stored = f"stored {stored[0]} x {stored[1]} px; " if turned else ""
         text.append(f"EXIF orientation {orientation}: {how_stored}read_image turns it upright")
+    return Result(summary, tuple(text))
+
+
+def _is_dicom(image: Path) -> bool:
+    """Whether ``image`` shows DICOM's ``DICM`` at byte 128 (any suffix).
+
+    A ``.dcm`` file without it goes through :func:`image_info`, which reads what it holds.
+    """
+    try:
+        with Path(image).open("rb") as fh:
+            return fh.read(132)[128:132] == b"DICM"
+    except OSError:
+        return False
+
+
+def _dicom_info(image: Path) -> Result:
+    """``imageform info`` of a DICOM file: the image, its modality values, window, spacing."""
+    from imageform.io import dicom_info, image_color_space
+
+    d = dicom_info(image)
+    declared = image_color_space(image)
+    summary: dict[str, Any] = {
+        "image": image,
+        "format": "dicom",
+        "width": d.width,
+        "height": d.height,
+        "channels": d.channels,
+        "dtype": d.dtype,
+        "megapixels": round(d.width * d.height / 1e6, 3),
+        "color_space": declared.name,
+        "color_space_source": declared.source,
+        "description": declared.description or None,
+        "frames": d.frames,
+        "dicom": d._asdict(),
+    }
+    frames = f", {d.frames} frames (read one: read_dicom(path, frame=i))" if d.frames > 1 else ""
+    signed = "signed" if d.signed else "unsigned"
+    text = [
+        f"{image}: dicom, {d.width} x {d.height} px, {d.channels} channel(s), {d.dtype}{frames}",
+        f"modality {d.modality or 'not given'}, {d.photometric}, {d.bits_stored} of "
+        f"{d.bits_allocated} bits stored ({signed}), {d.transfer_syntax}",
+    ]
+    if d.channels == 1:
+        if d.modality_lut:
+            how = "through its Modality LUT Sequence"
+        else:
+            unit = f" ({d.rescale_type})" if d.rescale_type else ""
+            how = f"rescale slope {d.rescale_slope:g}, intercept {d.rescale_intercept:g}{unit}"
+        flip = "; MONOCHROME1 read inverted (0 is black)" if d.photometric == "MONOCHROME1" else ""
+        text.append(f"values: {how}{flip}")
+        if d.window_center:
+            pairs = ", ".join(
+                f"{c:g}/{w:g}" for c, w in zip(d.window_center, d.window_width, strict=True)
+            )
+            text.append(
+                f"window center/width: {pairs} ({d.window_function}); imageform convert "
+                "--window auto applies the first"
+            )
+        else:
+            text.append("window: none in the file (--window auto uses the image's range)")
+    for name, sp in (("pixel spacing", d.pixel_spacing_mm),
+                     ("imager pixel spacing", d.imager_pixel_spacing_mm)):  # fmt: skip
+        if sp is not None:
+            text.append(f"{name}: {sp[0]:g} x {sp[1]:g} mm (between rows x between columns)")
+    if d.channels == 3:
+        space = declared.name or (
+            f"an ICC profile imageform does not recognise ({declared.description})"
+            if declared.source == "icc"
+            else "not declared (read as sRGB)"
+        )
+        text.append(f"colour space: {space}")
     return Result(summary, tuple(text))
 
 
@@ -681,7 +811,8 @@ WORKFLOWS = (
         (
             Input(
                 "image",
-                "Image (PNG, JPEG, TIFF, .npy, WebP, BMP, GIF, HEIF) or raw file (DNG, CR2 ...).",
+                "Image (PNG, JPEG, TIFF, .npy, WebP, BMP, GIF, HEIF, DICOM) or raw file "
+                "(DNG, CR2 ...).",
             ),
         ),
         None,
