@@ -2,14 +2,17 @@
 
 :func:`find_checkerboard` finds the ``cols x rows`` inner corners of a checkerboard in one
 image and returns them in OpenCV's order; :func:`refine_corners` is the sub-pixel step on
-its own (the gradient-orthogonality least squares of OpenCV's ``cornerSubPix``).
+its own (the gradient-orthogonality least squares of OpenCV's ``cornerSubPix``), and
+:func:`refine_corners_symmetric` the second, default one (each corner the centre of the
+board's point symmetry; ``find_checkerboard(..., method="gradient")`` leaves it out).
 
 Pipeline (helpers in ``checkerboard_candidates`` and ``checkerboard_grid``): saddle
 response ``I_uv² - I_uu I_vv`` of the Gaussian-smoothed image → local maxima → ring test
 (four alternating sectors, two edge directions) → neighbour graph along the edge directions
 → lattice labels → the largest complete rectangle → lattice and colour checks → order →
-sub-pixel refinement. A grid that is not exactly ``cols x rows`` or fails a check is reported
-as not found, with the reason; a wrong grid is never returned.
+sub-pixel refinement (gradients, then point symmetry). A grid that is not exactly
+``cols x rows`` or fails a check is reported as not found, with the reason; a wrong grid is
+never returned.
 
 Order convention (OpenCV's, verified on its 13 ``left*.jpg`` views)
 -------------------------------------------------------------------
@@ -548,10 +551,12 @@ def find_checkerboard(
         :func:`refine_corners_symmetric` in a round window of radius 0.8 of the shortest grid
         step (at least 2 px; ``half_window`` is the first step's); a corner that step cannot
         refine (status 2-4) keeps the first step's position and status. ``"gradient"``:
-        :func:`refine_corners` only (OpenCV's ``cornerSubPix``; imageform before 0.x). On
-        eleven sets of real calibration photographs the symmetric corners fit the camera
-        better (calibration and held-out RMS; benchmarks/results/
-        corner-refinement-2026-11-29i.md).
+        :func:`refine_corners` only (OpenCV's ``cornerSubPix``, the only refinement until
+        0.1.0; use it to reproduce OpenCV's corners). On eleven sets of real calibration
+        photographs the symmetric corners fit a camera model better than the gradient ones
+        and than OpenCV's ``findChessboardCornersSB`` (calibration and held-out RMS), and on
+        rendered views they lie 2-3 times closer to the truth
+        (benchmarks/results/corner-refinement-2026-11-29i.md).
 
     Returns
     -------
@@ -565,8 +570,11 @@ def find_checkerboard(
     measurement system based on structured light projection" (eq. 3); the ring test and
     grid growing follow Geiger et al. (2012), "Automatic camera and range sensor calibration
     using a single shot", ICRA, sec. III; refinement: Förstner & Gülch (1987) as in OpenCV's
-    ``cornerSubPix``. On OpenCV's ``left*.jpg`` views the corners agree with OpenCV 5.0's
-    ``findChessboardCorners`` + ``cornerSubPix`` to about 1e-5 px (median; tested).
+    ``cornerSubPix``, then point symmetry (Schöps, Larsson, Pollefeys & Sattler 2020, "Why
+    having 10,000 parameters in your camera model is better than twelve", CVPR). With
+    ``method="gradient"`` and ``half_window=11``, on OpenCV's ``left*.jpg`` views the corners
+    agree with OpenCV 5.0's ``findChessboardCorners`` + ``cornerSubPix`` to about 1e-5 px
+    (median; tested).
 
     Examples
     --------
@@ -602,7 +610,7 @@ def find_checkerboard(
         raise InvalidInputError(
             f"expected method 'symmetric' or 'gradient', got {describe(method)}"
         )
-    how = method if refine else None
+    how = method if as_bool(refine, "refine") else None
     size = (cols, rows)
     if span == 0.0:
         return CheckerboardResult(False, None, "the image is constant (no contrast)", size)
