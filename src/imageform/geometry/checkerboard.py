@@ -850,7 +850,8 @@ def find_checkerboards(
     names : sequence of str, optional
         Names of the views (file names) used in messages; default ``view 0``, ``view 1`` ...
     **options
-        Passed to :func:`find_checkerboard` (``refine``, ``sigma``, ``half_window``, ...).
+        Passed to :func:`find_checkerboard` (``refine``, ``sigma``, ``half_window``, ``method``,
+        ...).
 
     Returns
     -------
