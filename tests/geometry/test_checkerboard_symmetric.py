@@ -164,3 +164,18 @@ def test_opencv_views_near_findchessboardcornerssb(views: dict[str, np.ndarray])
         assert ours.corners is not None and ok
         d = np.sqrt(((ours.corners[:, None] - sb.reshape(1, -1, 2)) ** 2).sum(-1)).min(1)
         assert np.median(d) < 0.2, name
+
+
+def test_corners_whose_window_leaves_the_image_keep_the_gradient_position() -> None:
+    """A board near the image's left edge: its first column's windows would read replicated
+    edge pixels, so those corners stay where the gradient method put them."""
+    H = homography(20.0, (95.0, 120.0), 0.0, 0.0, 9, 6)  # first column at u = 15
+    img = render_board(9, 6, H, (240, 320), blur=1.2, noise=0.01, seed=4)
+    sym = find_checkerboard(img, (9, 6))
+    grad = find_checkerboard(img, (9, 6), method="gradient")
+    assert sym.corners is not None and grad.corners is not None
+    h = int(0.8 * 20.0)
+    near = sym.corners[:, 0] < h + 1
+    assert near.any() and not near.all()
+    assert np.array_equal(sym.corners[near], grad.corners[near])
+    assert not np.array_equal(sym.corners[~near], grad.corners[~near])

@@ -550,7 +550,8 @@ def find_checkerboard(
         ``"symmetric"``: the corners refined by :func:`refine_corners` are refined again by
         :func:`refine_corners_symmetric` in a round window of radius 0.8 of the shortest grid
         step (at least 2 px; ``half_window`` is the first step's); a corner that step cannot
-        refine (status 2-4) keeps the first step's position and status. ``"gradient"``:
+        refine (status 2-4), or whose window would reach past the image's border, keeps the
+        first step's position and status. ``"gradient"``:
         :func:`refine_corners` only (OpenCV's ``cornerSubPix``, the only refinement until
         0.1.0; use it to reproduce OpenCV's corners). On eleven sets of real calibration
         photographs the symmetric corners fit a camera model better than the gradient ones
@@ -757,10 +758,21 @@ def _finish(
     refined, status = refine_clean(gray, pts, half_window, half_window, max_iter, tol)
     if refine == "symmetric" and lattice_problem(refined.reshape(grid.shape)) is None:
         h = max(2, math.floor(SYMMETRIC_WINDOW * _shortest_step(refined.reshape(grid.shape))))
-        sym, sym_status = refine_symmetric(gray, refined, h, max_iter, tol)
+        # a window past the image's border reads replicated edge pixels, not the board's
+        # symmetry: those corners keep the first step's position (lane-lines' boards cut by
+        # the frame: held-out RMS 1.048 -> 1.029 px)
+        height, width = gray.shape
+        room = np.minimum(
+            np.minimum(refined[:, 0], width - 1 - refined[:, 0]),
+            np.minimum(refined[:, 1], height - 1 - refined[:, 1]),
+        )
+        idx = np.flatnonzero(room >= h + 1)
+        sym, sym_status = refine_symmetric(gray, refined[idx], h, max_iter, tol)
         kept = sym_status <= 1  # converged or max_iter: a singular, lost or far one keeps the first
-        refined = np.where(kept[:, None], sym, refined)
-        status = np.where(kept, sym_status, status)
+        refined = refined.copy()
+        refined[idx[kept]] = sym[kept]
+        status = status.copy()
+        status[idx[kept]] = sym_status[kept]
     problem = lattice_problem(refined.reshape(grid.shape))
     if problem is not None:
         return CheckerboardResult(False, None, f"refined grid rejected: {problem}", size)
