@@ -551,9 +551,9 @@ def find_checkerboard(
         :func:`refine_corners_symmetric` in a round window of radius 0.8 of the shortest grid
         step (at least 2 px; ``half_window`` is the first step's); a corner that step cannot
         refine (status 2-4), or whose window would reach past the image's border, keeps the
-        first step's position and status. ``"gradient"``:
-        :func:`refine_corners` only (OpenCV's ``cornerSubPix``, the only refinement until
-        0.1.0; use it to reproduce OpenCV's corners). On eleven sets of real calibration
+        first step's position and status. ``"gradient"``: :func:`refine_corners` only
+        (OpenCV's ``cornerSubPix``, imageform's only refinement before ``method`` existed;
+        use it to reproduce OpenCV's corners). On eleven sets of real calibration
         photographs the symmetric corners fit a camera model better than the gradient ones
         and than OpenCV's ``findChessboardCornersSB`` (calibration and held-out RMS), and on
         rendered views they lie 2-3 times closer to the truth
