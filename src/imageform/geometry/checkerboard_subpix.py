@@ -246,8 +246,11 @@ def refine_corners_symmetric(
     :func:`refine_corners` the window may take in the neighbouring corners (the whole board is
     point-symmetric about each of its corners under an affine map): larger windows average
     more pixels; lens distortion and strong perspective bound them (``find_checkerboard``
-    uses 0.8 of the grid step). A corner of another pattern (an ``L``, a ``T``) is not
-    point-symmetric: use :func:`refine_corners` there.
+    uses 0.8 of the grid step). A window past the image's border reads replicated edge
+    pixels, which are not point-symmetric (``find_checkerboard`` keeps such corners at
+    :func:`refine_corners`' position). A corner of another pattern (an ``L``, a ``T``, a
+    ChArUco corner beside its markers' bits) is not point-symmetric: use
+    :func:`refine_corners` there.
 
     Parameters
     ----------
