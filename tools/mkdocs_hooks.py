@@ -70,6 +70,7 @@ BENCH_SCRIPTS: dict[str, str] = {
     "compile-ahead": "benchmarks/bench_compile_ahead.py",
     "compile-literals": "benchmarks/compile_literals.py",
     "compile-simulate": "benchmarks/bench_first_run.py",
+    "corner-refinement": "benchmarks/check_corner_refinement.py",
     "delta-e": "benchmarks/bench_delta_e.py",
     "demosaic": "benchmarks/bench_demosaic.py",
     "dicom": "benchmarks/check_dicom.py",

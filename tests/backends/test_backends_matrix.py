@@ -299,6 +299,7 @@ EXCLUDED: dict[str, str] = {
     "aruco_dictionary": "a lookup by name: returns NumPy tables",
     "aruco_marker_image": "prints a uint8 marker image (NumPy)",
     "refine_corners": "checkerboard corner refinement, NumPy-only by design",
+    "refine_corners_symmetric": "checkerboard corner refinement, NumPy-only by design",
     "detect_features": "image detector (OpenCV's SIFT), NumPy-only by design",
     "field_of_view_mask": "a mask from a video's frames (OpenCV components), NumPy-only",
     "highlight_mask": "a keypoint mask of one frame (OpenCV dilation), NumPy-only",

@@ -357,6 +357,9 @@ VALID: dict[str, C | Skip] = {
     "imageform.geometry.checkerboard_subpix.refine": Skip(
         "an internal numba step of refine_corners (fuzzed through refine_corners)"
     ),
+    "imageform.geometry.checkerboard_subpix.refine_symmetric": Skip(
+        "an internal numba step of refine_corners_symmetric (fuzzed through it)"
+    ),
     "imageform.geometry.cross_ratio": call(
         a=np.array([1.0, 2.0]),
         b=np.array([2.0, 3.0]),
@@ -415,6 +418,7 @@ VALID: dict[str, C | Skip] = {
     "imageform.geometry.projection_matrix": call(K=V("K")),
     "imageform.geometry.quaternion_to_matrix": call(q=np.array([1.0, 0.0, 0.0, 0.0])),
     "imageform.geometry.refine_corners": call(image=V("rgb_big"), corners=V("uv")),
+    "imageform.geometry.refine_corners_symmetric": call(image=V("rgb_big"), corners=V("uv")),
     "imageform.geometry.remap_bilinear": call(image=V("rgb"), map_uv=np.zeros((6, 8, 2))),
     "imageform.geometry.rvec_to_matrix": call(rvec=V("rvec")),
     "imageform.geometry.solve_pnp": call(V("points3"), V("points3_uv"), V("K")),

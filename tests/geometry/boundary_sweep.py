@@ -300,6 +300,7 @@ def _cases() -> list[Case]:
                 "half_window": 3,
                 "max_iter": 30,
                 "tol": 1e-3,
+                "method": "symmetric",
             },
             slow=True,
         ),
@@ -416,6 +417,17 @@ def _cases() -> list[Case]:
         c(
             "refine_corners",
             _g("refine_corners"),
+            lambda f: {
+                "image": f["board_img"],
+                "corners": f["corners"],
+                "half_window": 3,
+                "max_iter": 30,
+                "tol": 1e-3,
+            },
+        ),
+        c(
+            "refine_corners_symmetric",
+            _g("refine_corners_symmetric"),
             lambda f: {
                 "image": f["board_img"],
                 "corners": f["corners"],

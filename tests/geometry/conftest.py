@@ -38,5 +38,8 @@ def opencv_corners(views: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
 
 @pytest.fixture(scope="session")
 def ours(views: dict[str, np.ndarray]) -> dict[str, CheckerboardResult]:
-    """imageform's detections on the views, with OpenCV's refinement window (11)."""
-    return {name: find_checkerboard(img, PATTERN, half_window=11) for name, img in views.items()}
+    """imageform's detections on the views, with OpenCV's refinement (gradients, window 11)."""
+    return {
+        name: find_checkerboard(img, PATTERN, half_window=11, method="gradient")
+        for name, img in views.items()
+    }

@@ -166,8 +166,9 @@ def _left_corners(shared_data: Path) -> list[np.ndarray]:
 
     files = sorted((shared_data / "opencv-left").glob("left*.jpg"))
     images = [np.asarray(Image.open(f)) for f in files]
-    # OpenCV's tutorial refines with winSize (11, 11): half window 11, as here
-    res = find_checkerboards(images, (9, 6), half_window=11)
+    # OpenCV's tutorial refines with cornerSubPix, winSize (11, 11): the gradient method, half
+    # window 11, as here
+    res = find_checkerboards(images, (9, 6), half_window=11, method="gradient")
     return [r.corners for r in res]
 
 

@@ -84,11 +84,18 @@ def test_real_fisheye_matches_opencv_now(views: tuple, fisheye: Any) -> None:
 
 
 def test_real_curved_view_detected(views: tuple, fisheye: Any) -> None:
-    """The committed view: found, its corners as committed, each within 1 px of the fit."""
+    """The committed view: found, its corners as committed, each within 1 px of the fit.
+
+    The committed corners are the gradient refinement's (``method="gradient"``); the default
+    point-symmetry refinement moves them by under 0.5 px.
+    """
     _, corners, names, _ = views
     grey = np.asarray(Image.open(DATA / "sweetiepie-left0015.jpg").convert("L"))
-    det = find_checkerboard(grey, BOARD)
+    det = find_checkerboard(grey, BOARD, method="gradient")
     assert det.found
     k = names.index("left0015.jpg")
     np.testing.assert_allclose(np.asarray(det.corners), corners[k], atol=0.01)
     assert float(np.hypot(*fisheye.residuals[k].T).max()) < 1.0
+    sym = find_checkerboard(grey, BOARD)
+    assert sym.found
+    assert float(np.hypot(*(np.asarray(sym.corners) - corners[k]).T).max()) < 0.5

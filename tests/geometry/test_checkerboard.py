@@ -339,6 +339,7 @@ def test_public_surface() -> None:
         "find_checkerboard",
         "find_checkerboards",
         "refine_corners",
+        "refine_corners_symmetric",
         "set_pattern_size",
     ]
     res = find_checkerboard(np.full((40, 40), 0.5), (3, 3))

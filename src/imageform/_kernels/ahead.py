@@ -98,6 +98,11 @@ _BOARD_CHILD = (
         f"(int64, {_A3}, int64[:, :, ::1], {_A2}, int64, float64)",
     ),
     Entry("checkerboard", "lattice_problem_numba", f"({_A3}, float64)"),
+    Entry(
+        "checkerboard_symmetric",
+        "_refine_symmetric",
+        f"(float32[:, ::1], {_A2}, boolean, {_A2}, int64, {_A2}, {_A2}, int64, float64)",
+    ),
 )
 
 #: The plans, from ``benchmarks/compile_plan.py`` (its figures: benchmarks/results).

@@ -38,7 +38,11 @@ from imageform.geometry.checkerboard import (
     find_checkerboard,
     find_checkerboards,
 )
-from imageform.geometry.checkerboard_subpix import RefinedCorners, refine_corners
+from imageform.geometry.checkerboard_subpix import (
+    RefinedCorners,
+    refine_corners,
+    refine_corners_symmetric,
+)
 from imageform.geometry.distortion import (
     BrownConrady,
     DistortionModel,
@@ -241,6 +245,7 @@ __all__ = [
     "recover_pose",
     "rectification_map",
     "refine_corners",
+    "refine_corners_symmetric",
     "remap_bilinear",
     "rvec_to_matrix",
     "solve_pnp",

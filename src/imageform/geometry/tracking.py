@@ -205,7 +205,8 @@ class BoardTracker:
         from imageform.geometry.checkerboard import find_checkerboard
 
         assert self._pattern is not None
-        res = find_checkerboard(image, self._pattern)
+        # the gradient refinement, as the tracked frames' (refine_corners): one method in a video
+        res = find_checkerboard(image, self._pattern, method="gradient")
         if not res.found or res.corners is None:
             return np.zeros((0, 2)), np.zeros(0, np.int64)
         uv = np.asarray(res.corners, np.float64)

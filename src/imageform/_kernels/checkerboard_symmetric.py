@@ -1,0 +1,316 @@
+r"""numba kernel of the point-symmetry corner refinement, with its plain NumPy twin.
+
+A checkerboard corner is the centre of a point symmetry of the board: ``I(q + d) = I(q - d)``
+for every offset ``d``, and that stays true through any affine map of the board (a view's
+local perspective) and any point-symmetric blur (defocus, a Gaussian lens blur, the
+sensor's pixel area). The refinement (Schöps, Larsson, Pollefeys & Sattler 2020, "Why having
+10,000 parameters in your camera model is better than twelve", CVPR, sec. 4 on feature
+refinement) moves ``q`` to the least-squares centre of symmetry of a round window, with an
+additive linear shading term ``s · d`` (a brightness gradient across the window):
+
+.. math::
+
+    \min_{q, s} \sum_d w(d)\, \big(I(q + d) - I(q - d) - 2\, s \cdot d\big)^2,
+    \qquad w(d) = e^{-|d|^2 / (2 (h/2)^2)}, \quad |d| \le h + 1/2,
+
+over the integer offsets ``d`` of the ``(2 h + 1)²`` square. The image is resampled bilinearly
+(edge pixels replicated) on the integer grid ``q + d``, so that ``q + d`` and ``q - d`` are
+samples of one ``(2 h + 3)²`` patch; the derivatives are central differences of that patch
+(the bilinear interpolation of the image's central-difference gradient). Each Gauss-Newton step
+solves the 4 x 4 normal equations by eliminating ``s`` (the shading block ``4 Σ w d dᵀ`` is
+constant) and is limited to one pixel. It stops after ``max_iter`` steps or when a step is
+``<= eps``; ``status`` as ``refine_corners``' (0 converged, 1 ``max_iter`` reached, 2 singular:
+a flat window or a straight edge, 3 left the image, 4 moved farther than ``h`` — start kept).
+
+Agreement of kernel and twin is tested (tests/geometry/test_checkerboard_symmetric.py).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+
+from imageform._kernels.jit import njit
+
+__all__ = ["refine_symmetric_numba", "refine_symmetric_numpy", "symmetric_window_weights"]
+
+#: a step's normal matrix is singular when ``det < SINGULAR * trace²`` (an edge, a flat window)
+SINGULAR = 1e-8
+
+
+def symmetric_window_weights(h: int) -> NDArray[np.float64]:
+    """Return the ``(2 h + 1)²`` window: ``exp(-|d|²/(2 (h/2)²))`` inside ``|d| <= h + 1/2``."""
+    d = np.arange(-h, h + 1, dtype=np.float64)
+    r2 = d[:, None] ** 2 + d[None, :] ** 2
+    s2 = (0.5 * h) ** 2
+    return np.where(r2 <= (h + 0.5) ** 2, np.exp(-r2 / (2.0 * s2)), 0.0).astype(np.float64)
+
+
+def _shading_inverse(h: int, w: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Inverse of the shading block ``4 Σ w d dᵀ`` of the normal equations (2 x 2)."""
+    dy, dx = np.mgrid[-h : h + 1, -h : h + 1].astype(np.float64)
+    m = 4.0 * np.array(
+        [[np.sum(w * dx * dx), np.sum(w * dx * dy)], [np.sum(w * dx * dy), np.sum(w * dy * dy)]]
+    )
+    return np.asarray(np.linalg.inv(m), dtype=np.float64)
+
+
+def refine_symmetric_numba(
+    image: NDArray[np.floating],
+    corners: NDArray[np.float64],
+    h: int,
+    max_iter: int,
+    eps: float,
+) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
+    """Refine ``corners`` (N, 2) in ``(u, v)``; returns the refined corners and a status.
+
+    A float32 ``image`` goes to the kernel beside an empty float64 one and the other way round
+    (one compilation serves both); other dtypes are read as float64.
+    """
+    w = symmetric_window_weights(h)
+    inv = _shading_inverse(h, w)
+    if image.dtype == np.float32:
+        return _refine_symmetric(image, _EMPTY64, True, corners, h, w, inv, max_iter, eps)
+    img64 = np.ascontiguousarray(image, dtype=np.float64)
+    return _refine_symmetric(_EMPTY32, img64, False, corners, h, w, inv, max_iter, eps)
+
+
+_EMPTY32 = np.empty((0, 0), dtype=np.float32)
+_EMPTY64 = np.empty((0, 0), dtype=np.float64)
+
+
+@njit(fastmath=False)
+def _refine_symmetric(
+    image32: NDArray[np.float32],
+    image64: NDArray[np.float64],
+    is32: bool,
+    corners: NDArray[np.float64],
+    h: int,
+    w: NDArray[np.float64],
+    inv: NDArray[np.float64],
+    max_iter: int,
+    eps: float,
+) -> tuple[NDArray[np.float64], NDArray[np.int64]]:  # pragma: no cover - numba-compiled
+    """:func:`refine_symmetric_numba`'s kernel: ``image32`` if ``is32``, else ``image64``."""
+    n = corners.shape[0]
+    height, width = image32.shape if is32 else image64.shape
+    out = corners.copy()
+    status = np.ones(n, dtype=np.int64)
+    m = 2 * h + 3
+    patch = np.empty((m, m))
+    ys = np.empty(m + 1, dtype=np.int64)
+    xs = np.empty(m + 1, dtype=np.int64)
+    eps2 = eps * eps
+    for k in range(n):
+        sx = corners[k, 0]
+        sy = corners[k, 1]
+        if not (np.isfinite(sx) and np.isfinite(sy)):
+            status[k] = 2
+            continue
+        cx = sx
+        cy = sy
+        for _ in range(max_iter):
+            fx = np.floor(min(max(cx, -h - 2.0), width + h + 1.0))
+            fy = np.floor(min(max(cy, -h - 2.0), height + h + 1.0))
+            ax = cx - fx
+            ay = cy - fy
+            x0 = int(fx) - h - 1
+            y0 = int(fy) - h - 1
+            for i in range(m + 1):
+                ys[i] = min(max(y0 + i, 0), height - 1)
+                xs[i] = min(max(x0 + i, 0), width - 1)
+            for i in range(m):
+                for j in range(m):
+                    if is32:
+                        a00 = np.float64(image32[ys[i], xs[j]])
+                        a01 = np.float64(image32[ys[i], xs[j + 1]])
+                        a10 = np.float64(image32[ys[i + 1], xs[j]])
+                        a11 = np.float64(image32[ys[i + 1], xs[j + 1]])
+                    else:
+                        a00 = image64[ys[i], xs[j]]
+                        a01 = image64[ys[i], xs[j + 1]]
+                        a10 = image64[ys[i + 1], xs[j]]
+                        a11 = image64[ys[i + 1], xs[j + 1]]
+                    patch[i, j] = (1.0 - ay) * ((1.0 - ax) * a00 + ax * a01) + ay * (
+                        (1.0 - ax) * a10 + ax * a11
+                    )
+            # normal equations of (q, s): [[A, B], [B^T, D]] (D constant), rhs (g, e)
+            a11_ = 0.0
+            a12_ = 0.0
+            a22_ = 0.0
+            b11 = 0.0
+            b12 = 0.0
+            b21 = 0.0
+            b22 = 0.0
+            g1 = 0.0
+            g2 = 0.0
+            e1 = 0.0
+            e2 = 0.0
+            for i in range(2 * h + 1):
+                for j in range(2 * h + 1):
+                    wt = w[i, j]
+                    if wt == 0.0:
+                        continue
+                    pi = i + 1
+                    pj = j + 1
+                    qi = m - 1 - pi
+                    qj = m - 1 - pj
+                    r = patch[pi, pj] - patch[qi, qj]
+                    jx = 0.5 * (patch[pi, pj + 1] - patch[pi, pj - 1]) - 0.5 * (
+                        patch[qi, qj + 1] - patch[qi, qj - 1]
+                    )
+                    jy = 0.5 * (patch[pi + 1, pj] - patch[pi - 1, pj]) - 0.5 * (
+                        patch[qi + 1, qj] - patch[qi - 1, qj]
+                    )
+                    dx = -2.0 * (j - h)
+                    dy = -2.0 * (i - h)
+                    a11_ += wt * jx * jx
+                    a12_ += wt * jx * jy
+                    a22_ += wt * jy * jy
+                    b11 += wt * jx * dx
+                    b12 += wt * jx * dy
+                    b21 += wt * jy * dx
+                    b22 += wt * jy * dy
+                    g1 += wt * jx * r
+                    g2 += wt * jy * r
+                    e1 += wt * dx * r
+                    e2 += wt * dy * r
+            # Schur complement S = A - B D^-1 B^T, rhs g - B D^-1 e
+            c11 = b11 * inv[0, 0] + b12 * inv[1, 0]
+            c12 = b11 * inv[0, 1] + b12 * inv[1, 1]
+            c21 = b21 * inv[0, 0] + b22 * inv[1, 0]
+            c22 = b21 * inv[0, 1] + b22 * inv[1, 1]
+            s11 = a11_ - (c11 * b11 + c12 * b12)
+            s12 = a12_ - (c11 * b21 + c12 * b22)
+            s22 = a22_ - (c21 * b21 + c22 * b22)
+            r1 = g1 - (c11 * e1 + c12 * e2)
+            r2 = g2 - (c21 * e1 + c22 * e2)
+            det = s11 * s22 - s12 * s12
+            tr = s11 + s22
+            if not (det > SINGULAR * tr * tr) or not np.isfinite(det):
+                status[k] = 2
+                break
+            stx = -(s22 * r1 - s12 * r2) / det
+            sty = -(-s12 * r1 + s11 * r2) / det
+            nrm2 = stx * stx + sty * sty
+            if nrm2 > 1.0:
+                f = 1.0 / np.sqrt(nrm2)
+                stx *= f
+                sty *= f
+                nrm2 = 1.0
+            cx += stx
+            cy += sty
+            if cx < 0 or cx >= width or cy < 0 or cy >= height:
+                status[k] = 3
+                break
+            if nrm2 <= eps2:
+                status[k] = 0
+                break
+        if status[k] == 2:
+            cx = sx
+            cy = sy
+        if abs(cx - sx) > h or abs(cy - sy) > h:
+            cx = sx
+            cy = sy
+            status[k] = 4
+        out[k, 0] = cx
+        out[k, 1] = cy
+    return out, status
+
+
+def refine_symmetric_numpy(
+    image: NDArray[np.floating],
+    corners: NDArray[np.float64],
+    h: int,
+    max_iter: int,
+    eps: float,
+) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
+    """Plain NumPy twin of :func:`refine_symmetric_numba` (all corners at once)."""
+    height, width = image.shape
+    n = corners.shape[0]
+    w = symmetric_window_weights(h)
+    inv = _shading_inverse(h, w)
+    dyy, dxx = np.mgrid[-h : h + 1, -h : h + 1].astype(np.float64)
+    dx = -2.0 * dxx
+    dy = -2.0 * dyy
+    o = np.arange(-h - 1, h + 2)
+    cur = corners.astype(np.float64).copy()
+    start = cur.copy()
+    status = np.ones(n, dtype=np.int64)
+    active: NDArray[np.bool_] = np.all(np.isfinite(cur), axis=1)
+    status[~active] = 2
+    eps2 = eps * eps
+    img = np.asarray(image)
+    for _ in range(max_iter):
+        idx = np.flatnonzero(active)
+        if idx.size == 0:
+            break
+        c = cur[idx]
+        lo = np.array([-h - 2.0, -h - 2.0])
+        hi = np.array([width + h + 1.0, height + h + 1.0])
+        f = np.floor(np.clip(c, lo, hi))
+        ax = (c[:, 0] - f[:, 0])[:, None, None]
+        ay = (c[:, 1] - f[:, 1])[:, None, None]
+        ys = f[:, 1].astype(np.int64)[:, None] + o[None, :]
+        xs = f[:, 0].astype(np.int64)[:, None] + o[None, :]
+        ya = np.clip(ys, 0, height - 1)[:, :, None]
+        yb = np.clip(ys + 1, 0, height - 1)[:, :, None]
+        xa = np.clip(xs, 0, width - 1)[:, None, :]
+        xb = np.clip(xs + 1, 0, width - 1)[:, None, :]
+        p = (1.0 - ay) * ((1.0 - ax) * img[ya, xa].astype(np.float64) + ax * img[ya, xb]) + ay * (
+            (1.0 - ax) * img[yb, xa].astype(np.float64) + ax * img[yb, xb]
+        )
+        mid = p[:, 1:-1, 1:-1]
+        gx = 0.5 * (p[:, 1:-1, 2:] - p[:, 1:-1, :-2])
+        gy = 0.5 * (p[:, 2:, 1:-1] - p[:, :-2, 1:-1])
+        r = (mid - mid[:, ::-1, ::-1]) * w
+        jx = gx - gx[:, ::-1, ::-1]
+        jy = gy - gy[:, ::-1, ::-1]
+        wjx = w * jx
+        wjy = w * jy
+        a11 = np.sum(wjx * jx, axis=(1, 2))
+        a12 = np.sum(wjx * jy, axis=(1, 2))
+        a22 = np.sum(wjy * jy, axis=(1, 2))
+        b = np.stack(
+            [
+                np.stack([np.sum(wjx * dx, axis=(1, 2)), np.sum(wjx * dy, axis=(1, 2))], -1),
+                np.stack([np.sum(wjy * dx, axis=(1, 2)), np.sum(wjy * dy, axis=(1, 2))], -1),
+            ],
+            1,
+        )  # (k, 2, 2)
+        g = np.stack([np.sum(jx * r, axis=(1, 2)), np.sum(jy * r, axis=(1, 2))], -1)
+        e = np.stack([np.sum(dx * r, axis=(1, 2)), np.sum(dy * r, axis=(1, 2))], -1)
+        cm = b @ inv
+        s = np.stack([np.stack([a11, a12], -1), np.stack([a12, a22], -1)], 1)
+        s = s - cm @ np.swapaxes(b, 1, 2)
+        rhs = g - np.einsum("kij,kj->ki", cm, e)
+        s11, s12, s22 = s[:, 0, 0], 0.5 * (s[:, 0, 1] + s[:, 1, 0]), s[:, 1, 1]
+        det = s11 * s22 - s12 * s12
+        tr = s11 + s22
+        singular = ~(det > SINGULAR * tr * tr) | ~np.isfinite(det)
+        safe = np.where(singular, 1.0, det)
+        stx = -(s22 * rhs[:, 0] - s12 * rhs[:, 1]) / safe
+        sty = -(-s12 * rhs[:, 0] + s11 * rhs[:, 1]) / safe
+        nrm2 = stx * stx + sty * sty
+        big = nrm2 > 1.0
+        fac = np.where(big, 1.0 / np.sqrt(np.where(big, nrm2, 1.0)), 1.0)
+        stx, sty = stx * fac, sty * fac
+        nrm2 = np.where(big, 1.0, nrm2)
+        moved = ~singular
+        nx = c[:, 0] + stx
+        ny = c[:, 1] + sty
+        cur[idx[moved], 0] = nx[moved]
+        cur[idx[moved], 1] = ny[moved]
+        outside = moved & ((nx < 0) | (nx >= width) | (ny < 0) | (ny >= height))
+        done = moved & ~outside & (nrm2 <= eps2)
+        status[idx[singular]] = 2
+        status[idx[outside]] = 3
+        status[idx[done]] = 0
+        active[idx[singular | outside | done]] = False
+    back = status == 2
+    cur[back] = start[back]
+    with np.errstate(invalid="ignore"):
+        far = (np.abs(cur[:, 0] - start[:, 0]) > h) | (np.abs(cur[:, 1] - start[:, 1]) > h)
+    cur[far] = start[far]
+    status[far] = 4
+    return cur, status

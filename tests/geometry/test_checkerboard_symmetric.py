@@ -1,0 +1,181 @@
+"""Point-symmetry corner refinement (refine_corners_symmetric, find_checkerboard's default).
+
+Truth: rendered corners at known positions (a blurred corner ``0.5 + a erf(x) erf(y)`` in the
+board's affine axes, exact and point-symmetric; boards of checkerboard_support rendered under
+a homography, and supersampled through a lens below), kernel against its NumPy twin, and
+OpenCV's findChessboardCornersSB on its own left*.jpg views (a cross-check, not the truth).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from scipy.special import erf
+
+from imageform.errors import InvalidInputError
+from imageform.geometry import find_checkerboard, refine_corners, refine_corners_symmetric
+
+from .checkerboard_support import board_corners, homography, render_board
+
+
+def _corner(q: tuple[float, float], A: np.ndarray, size: int = 48, blur: float = 1.5,
+            ramp: tuple[float, float] = (0.0, 0.0)) -> np.ndarray:  # fmt: skip
+    """A blurred checker corner at ``q`` whose axes are the columns of ``A`` (image px)."""
+    v, u = np.mgrid[0:size, 0:size].astype(np.float64)
+    xy = np.stack([u - q[0], v - q[1]], -1) @ np.linalg.inv(A).T
+    s = blur * np.sqrt(2.0)
+    return 0.5 + 0.4 * erf(xy[..., 0] / s) * erf(xy[..., 1] / s) + ramp[0] * u + ramp[1] * v
+
+
+def test_exact_on_a_rendered_corner() -> None:
+    img = _corner((23.37, 24.81), np.eye(2))
+    res = refine_corners_symmetric(img, [[22.0, 26.0]], half_window=8)
+    assert res.status.tolist() == [0]
+    # bilinear resampling is not itself point-symmetric off the pixel grid: a bias of < 0.01 px
+    assert np.abs(res.corners[0] - [23.37, 24.81]).max() < 1e-2
+
+
+@settings(max_examples=25, deadline=None)
+@given(
+    qx=st.floats(20.0, 28.0),
+    qy=st.floats(20.0, 28.0),
+    angle=st.floats(0.0, np.pi),
+    shear=st.floats(-0.5, 0.5),
+    aspect=st.floats(0.6, 1.6),
+    ramp=st.tuples(st.floats(-0.01, 0.01), st.floats(-0.01, 0.01)),
+)
+def test_affine_warped_corner_refines_to_its_warped_position(
+    qx: float, qy: float, angle: float, shear: float, aspect: float, ramp: tuple[float, float]
+) -> None:
+    """Point symmetry survives any affine map and a linear shading: the warped corner is found."""
+    c, s = np.cos(angle), np.sin(angle)
+    A = np.array([[c, -s], [s, c]]) @ np.array([[1.0, shear], [0.0, aspect]])
+    img = _corner((qx, qy), A, ramp=ramp)
+    res = refine_corners_symmetric(img, [[qx + 0.8, qy - 0.6]], half_window=7)
+    assert res.status.tolist() == [0]
+    # the bilinear bias grows as the edges sharpen (here to about 1 px wide): 0.02 px at most
+    assert np.hypot(*(res.corners[0] - [qx, qy])) < 2e-2
+
+
+def test_shading_does_not_move_the_corner() -> None:
+    a = refine_corners_symmetric(_corner((24.3, 23.6), np.eye(2)), [[25.0, 23.0]], half_window=6)
+    img = _corner((24.3, 23.6), np.eye(2), ramp=(0.02, -0.015))
+    b = refine_corners_symmetric(img, [[25.0, 23.0]], half_window=6)
+    assert np.abs(a.corners - b.corners).max() < 1e-4
+
+
+def test_accuracy_on_a_rendered_board_beats_the_gradient_method() -> None:
+    """A board under perspective, blurred, with noise: corners within 0.03 px (median)."""
+    H = homography(20.0, (160.0, 120.0), 0.3, 0.03, 9, 6)
+    img = render_board(9, 6, H, (240, 320), blur=1.2, noise=0.01, seed=2)
+    truth = board_corners(9, 6, H)
+    start = truth + np.random.default_rng(0).uniform(-0.7, 0.7, truth.shape)
+    sym = refine_corners_symmetric(img, start, half_window=14)
+    grad = refine_corners(img, start, half_window=8)
+    e_sym = np.hypot(*(sym.corners - truth).T)
+    e_grad = np.hypot(*(grad.corners - truth).T)
+    assert (sym.status == 0).all()
+    assert np.median(e_sym) < 0.03 and e_sym.max() < 0.1
+    assert np.median(e_sym) < np.median(e_grad)
+
+
+def test_flat_and_edge_windows_are_singular_and_keep_their_start() -> None:
+    flat = np.full((40, 40), 0.5)
+    u = np.mgrid[0:40, 0:40][1]
+    edge = 0.5 + 0.4 * erf((u - 20.3) / 2.0)
+    res = refine_corners_symmetric(np.stack([flat, edge]).reshape(80, 40), [[20, 20], [20, 60]])
+    assert res.status.tolist() == [2, 2]
+    assert res.corners.tolist() == [[20.0, 20.0], [20.0, 60.0]]
+
+
+def test_non_finite_start_and_empty_input() -> None:
+    img = _corner((24.0, 24.0), np.eye(2))
+    res = refine_corners_symmetric(img, np.zeros((0, 2)))
+    assert res.corners.shape == (0, 2) and res.status.shape == (0,)
+
+
+@pytest.mark.parametrize(
+    "kwargs",
+    [
+        {"half_window": 1},
+        {"half_window": 0},
+        {"half_window": 2.5},
+        {"half_window": 10**6},
+        {"max_iter": 0},
+        {"tol": -1.0},
+        {"corners": [[1.0, 2.0, 3.0]]},
+        {"corners": [[np.nan, 2.0]]},
+        {"image": np.zeros((8, 8))},
+    ],
+)
+def test_bad_input(kwargs: dict) -> None:
+    args = {"image": _corner((24.0, 24.0), np.eye(2)), "corners": [[24.0, 24.0]], **kwargs}
+    with pytest.raises(InvalidInputError):
+        refine_corners_symmetric(**args)
+
+
+@pytest.mark.parametrize("image", ["float32", "float64"])
+def test_kernel_and_twin_agree(image: str) -> None:
+    pytest.importorskip("numba")
+    from imageform._kernels.checkerboard_symmetric import (
+        refine_symmetric_numba,
+        refine_symmetric_numpy,
+    )
+
+    H = homography(18.0, (160.0, 120.0), 0.5, 0.04, 9, 6)
+    img = render_board(9, 6, H, (240, 320), blur=1.0, noise=0.02, seed=5).astype(image)
+    rng = np.random.default_rng(1)
+    pts = np.concatenate([board_corners(9, 6, H) + rng.uniform(-1, 1, (54, 2)),
+                          rng.uniform(0, 320, (20, 2)), [[-2.0, 30.0], [5.0, 200.0]]])  # fmt: skip
+    a, sa = refine_symmetric_numba(img, pts, 6, 30, 1e-3)
+    b, sb = refine_symmetric_numpy(img, pts, 6, 30, 1e-3)
+    assert sa.tolist() == sb.tolist()
+    assert np.abs(a - b).max() < 1e-9
+    assert (sa[:54] == 0).all() and set(sa[54:].tolist()) > {0}
+
+
+def test_find_checkerboard_methods() -> None:
+    H = homography(22.0, (160.0, 120.0), 0.2, 0.03, 9, 6)
+    img = render_board(9, 6, H, (240, 320), blur=1.5, noise=0.01, seed=3)
+    truth = board_corners(9, 6, H)
+    sym = find_checkerboard(img, (9, 6))
+    grad = find_checkerboard(img, (9, 6), method="gradient", half_window=8)
+    assert sym.corners is not None and grad.corners is not None
+    # the gradient method is refine_corners alone, as before
+    raw = find_checkerboard(img, (9, 6), refine=False).corners
+    assert raw is not None
+    again = refine_corners(img, raw, half_window=8)
+    assert np.abs(grad.corners - again.corners).max() < 1e-9
+    e_sym = np.median(np.hypot(*(sym.corners - truth).T))
+    e_grad = np.median(np.hypot(*(grad.corners - truth).T))
+    assert e_sym < 0.02 and e_sym < e_grad
+    with pytest.raises(InvalidInputError, match="method"):
+        find_checkerboard(img, (9, 6), method="sb")  # type: ignore[arg-type]
+
+
+def test_opencv_views_near_findchessboardcornerssb(views: dict[str, np.ndarray]) -> None:
+    """OpenCV's left*.jpg: the symmetric corners within 0.2 px (median) of SB's (a cross-check)."""
+    cv2 = pytest.importorskip("cv2")
+    for name in ("left01.jpg", "left12.jpg"):
+        ours = find_checkerboard(views[name], (9, 6))
+        ok, sb = cv2.findChessboardCornersSB(views[name], (9, 6), 0)
+        assert ours.corners is not None and ok
+        d = np.sqrt(((ours.corners[:, None] - sb.reshape(1, -1, 2)) ** 2).sum(-1)).min(1)
+        assert np.median(d) < 0.2, name
+
+
+def test_corners_whose_window_leaves_the_image_keep_the_gradient_position() -> None:
+    """A board near the image's left edge: its first column's windows would read replicated
+    edge pixels, so those corners stay where the gradient method put them."""
+    H = homography(20.0, (95.0, 120.0), 0.0, 0.0, 9, 6)  # first column at u = 15
+    img = render_board(9, 6, H, (240, 320), blur=1.2, noise=0.01, seed=4)
+    sym = find_checkerboard(img, (9, 6))
+    grad = find_checkerboard(img, (9, 6), method="gradient")
+    assert sym.corners is not None and grad.corners is not None
+    h = int(0.8 * 20.0)
+    near = sym.corners[:, 0] < h + 1
+    assert near.any() and not near.all()
+    assert np.array_equal(sym.corners[near], grad.corners[near])
+    assert not np.array_equal(sym.corners[~near], grad.corners[~near])
