@@ -85,9 +85,15 @@ def test_calibrate_undistort_vanishing(calibrated: Path, shared_data: Path) -> N
     assert flat.camera.distortion is None and flat.provenance.based_on == "cam.toml"
     np.testing.assert_array_equal(np.asarray(flat.camera.K), np.asarray(cal.camera.K))
     # vanishing on the undistorted image with its camera, and on the original image with the
-    # calibrated camera (undistorted inside): the file's K is used, the same directions found
-    a = _cli("vanishing", str(und), "--camera", str(und_cam))
-    b = _cli("vanishing", str(src), "--camera", str(calibrated / "cam.toml"))
+    # calibrated camera (undistorted inside): the file's K is used, the same directions found.
+    # On left13, whose board fills the view: in left01 the board's vertical edges compete
+    # with the room's verticals and the monitor's lines (three real directions), and which
+    # of them RANSAC's candidates take depends on the seed in both paths alike
+    src13, und13, cam13 = src.with_name("left13.jpg"), calibrated / "und13.png", und_cam
+    _cli("undistort", str(src13), "-o", str(und13), "--camera", str(calibrated / "cam.toml"),
+         "--camera-out", str(cam13), "--force")  # fmt: skip
+    a = _cli("vanishing", str(und13), "--camera", str(cam13))
+    b = _cli("vanishing", str(src13), "--camera", str(calibrated / "cam.toml"))
     K = np.asarray(cal.camera.K)
     for p in (a, b):
         np.testing.assert_array_equal(np.asarray(p["K"]), K)
