@@ -1152,10 +1152,6 @@ def reconstruct_sequence(
     h, w = np.asarray(images[0]).shape[:2]
     max_err = 4.0
 
-    # the views PnP set aside when their frame registered (their points then from fewer
-    # views, the poses before adjustment), given back by completion once they fit
-    aside: list[int] = []
-
     def has_point() -> NDArray[np.bool_]:
         return np.all(np.isfinite(P), axis=1)
 
@@ -1246,33 +1242,19 @@ def reconstruct_sequence(
     def complete(radius: float) -> int:
         """Add the views a track's matching missed; merge tracks that are one point.
 
-        First, the views PnP set aside when their frame registered that reproject within
-        ``radius`` pixels now are views again: the point was triangulated from fewer views
-        then, the poses not yet adjusted (COLMAP's track completion goes back to the matches
-        the same way after each adjustment; Schönberger & Frahm 2016, sec. 4.4). Then every
-        point is projected into each registered frame that has no view of it and
+        Every point is projected into each registered frame that has no view of it and
         sees some of what one of its views sees (2 of a sample of 32 of that view's
         points land in the frame: the work grows with what each frame sees, not with
         the number of points times the number of frames); the keypoint nearest the
         projection (within ``radius`` pixels, its descriptor near the track's) becomes a
         view of it, or, when it is another point's view and the two points are one (each
         reprojects within ``radius`` in all of the other's views, no frame in common), the
-        two tracks are merged. Returns how many views were added or given back and tracks
-        merged.
+        two tracks are merged. Returns how many views were added.
         """
         nonlocal o_frame, o_kp, o_track, o_uv, o_ok, o_A
         from scipy.spatial import cKDTree
 
         hp = has_point()
-        given = 0
-        if aside:
-            out = np.array(aside, np.int64)
-            out = out[~o_ok[out] & hp[o_track[out]]]
-            proj, z = _project_obs(k, Rs[o_frame[out]], ts[o_frame[out]], P[o_track[out]])
-            back = out[(z > 0) & (image_error(out, proj) < radius)]
-            o_ok[back] = True
-            aside[:] = np.setdiff1d(out, back).tolist()
-            given = int(back.size)
         ok_obs = o_ok & registered[o_frame]
         # each track's reference descriptor: its first usable view's
         ref = -np.ones(n_tracks, np.int64)
@@ -1390,7 +1372,7 @@ def reconstruct_sequence(
                 kp_track[fb][kb] = ta
             P[tb] = np.nan
             gone[tb] = touched[ta] = touched[tb] = True
-        return added + int(gone.sum()) + given
+        return added + int(gone.sum())
 
     # the start: the candidates in order of inliers, the first whose two views triangulate
     # 30 points that pass the checks (a pair of repetitive texture, e.g. a chessboard, can
@@ -1648,7 +1630,6 @@ def reconstruct_sequence(
         rejected[kps[~inl[: kps.size]]] = True
         mine = np.flatnonzero(o_frame == fi)
         o_ok[mine[rejected[o_kp[mine]]]] = False
-        aside.extend(mine[rejected[o_kp[mine]]].tolist())
         if _TRACE is not None:
             _TRACE["dropped"] += [
                 (fi, q, "PnP outlier") for q in o_kp[mine[rejected[o_kp[mine]]]].tolist()
