@@ -1551,17 +1551,6 @@ def reconstruct_sequence(
             if turned(np.asarray(r.R, np.float64)):
                 flipped.append(int(np.sum(r.inliers)))
                 return r, 0
-            if distortion is not None:
-                # the threshold in undistorted pixels is one for the frame (its keypoints'
-                # median stretch): a keypoint near a fisheye's rim, stretched more, is an
-                # inlier too when it reprojects within 3 pixels in the image
-                Rr, tr_ = np.asarray(r.R, np.float64), np.asarray(r.tvec, np.float64).ravel()
-                Xc = X3 @ Rr.T + tr_
-                with np.errstate(divide="ignore", invalid="ignore"):
-                    d = (Xc @ k[:2].T) / Xc[:, 2:3] - ideal[fi][kp]
-                e = np.linalg.norm(np.einsum("mij,mj->mi", all_A[offset[fi] + kp], d), axis=1)
-                inl = np.asarray(r.inliers, bool) | ((Xc[:, 2] > 0) & (e < 3.0))
-                return _Pose(Rr, tr_, inl), int(inl.sum())
             return r, int(np.sum(r.inliers))
 
         def turned(R: F64) -> bool:
