@@ -99,6 +99,8 @@ BENCH_SCRIPTS: dict[str, str] = {
     "endo-real": "benchmarks/check_endo_real.py",
     "sfm-intruders": "benchmarks/check_sfm_intruders.py",
     "reconstruct-real": "benchmarks/bench_reconstruct_real.py",
+    "reconstruct-fisheye": "benchmarks/bench_reconstruct_fisheye.py",
+    "track-breaks": "benchmarks/check_track_breaks.py",
     "remap": "benchmarks/bench_remap.py",
     "report": "benchmarks/bench_report.py",
     "sfr": "benchmarks/bench_sfr.py",

@@ -84,6 +84,11 @@ __all__ = [
 
 F64 = NDArray[np.float64]
 
+#: A diagnostic's window into :func:`reconstruct_sequence` (benchmarks/check_track_breaks.py):
+#: when a dict, each call fills it with its keypoints, the pairs matched and verified, the
+#: tracks built and the observations kept and set aside (by what). None: nothing is kept.
+_TRACE: dict[str, Any] | None = None
+
 
 @dataclass(frozen=True)
 class Features:
@@ -1048,6 +1053,8 @@ def reconstruct_sequence(
         """Match frames i and j, keep the essential matrix's inliers and the parallax."""
         m = match_features(feats[i].descriptors, feats[j].descriptors, ratio=ratio)
         seen["matches"] = max(seen["matches"], int(m.shape[0]))
+        if _TRACE is not None:
+            _TRACE.setdefault("putative", {})[(i, j)] = m.copy()
         if m.shape[0] < 30:
             return
         p1, p2 = ideal[i][m[:, 0]], ideal[j][m[:, 1]]
@@ -1115,6 +1122,11 @@ def reconstruct_sequence(
     )
     node_track, track_size = _build_tracks(offset, edges)
     n_tracks = track_size.size
+    if _TRACE is not None:
+        _TRACE["xy"] = [f.xy.copy() for f in feats]
+        _TRACE["verified"] = {key: v[2].copy() for key, v in pair_info.items()}
+        _TRACE["offset"], _TRACE["node_track"] = offset.copy(), node_track.copy()
+        _TRACE["dropped"] = []  # (frame, keypoint, why) of each observation set aside
     # the observations (frame, keypoint, track, undistorted pixel, usable), in no order:
     # completion and merging append to them and move them between tracks
     nodes = np.flatnonzero(node_track >= 0)
@@ -1216,7 +1228,13 @@ def reconstruct_sequence(
         fr = o_frame[ids]
         proj, z = _project_obs(k, Rs[fr], ts[fr], P[o_track[ids]])
         err = image_error(ids, proj)
-        o_ok[ids[~((z > 0) & (err < limit))]] = False
+        out = ids[~((z > 0) & (err < limit))]
+        o_ok[out] = False
+        if _TRACE is not None:
+            _TRACE["dropped"] += [
+                (f, q, f"filter {limit:g} px")
+                for f, q in zip(o_frame[out].tolist(), o_kp[out].tolist(), strict=True)
+            ]
         use = registered[o_frame] & o_ok
         views = np.bincount(o_track[use], minlength=n_tracks)
         P[views < 2] = np.nan
@@ -1393,6 +1411,7 @@ def reconstruct_sequence(
     # waits until more frames are registered (their points may be the ones it sees) and is
     # tried again then, as COLMAP does; it is given up when nothing changed since its try
     pending = [fi for fi in range(n) if not registered[fi]]
+    reg_order = [i0, j0]
     failed_at: dict[int, int] = {}  # frame -> frames registered when it last failed
     why_not: dict[int, str] = {}
 
@@ -1603,6 +1622,7 @@ def reconstruct_sequence(
             notes.append(f"frame {fi}: registered by {how}")
         Rs[fi], ts[fi] = np.asarray(res.R, np.float64), np.asarray(res.tvec, np.float64)
         registered[fi] = True
+        reg_order.append(fi)
         inl = np.asarray(res.inliers, bool)
         # the correspondences PnP rejected are not this frame's views of those points; the
         # points matched directly that fit become views
@@ -1610,6 +1630,10 @@ def reconstruct_sequence(
         rejected[kps[~inl[: kps.size]]] = True
         mine = np.flatnonzero(o_frame == fi)
         o_ok[mine[rejected[o_kp[mine]]]] = False
+        if _TRACE is not None:
+            _TRACE["dropped"] += [
+                (fi, q, "PnP outlier") for q in o_kp[mine[rejected[o_kp[mine]]]].tolist()
+            ]
         if extra_kp.size:
             keep = inl[kps.size :]
             ek, et = extra_kp[keep], extra_tr[keep]
@@ -1679,6 +1703,12 @@ def reconstruct_sequence(
     proj, _ = _project_obs(k, Rs[fr], ts[fr], P[o_track[ids]])
     e2 = image_error(ids, proj) ** 2
     residuals = np.sqrt(e2)  # every kept observation's reprojection error, after the final BA
+    if _TRACE is not None:
+        _TRACE.update({"o_frame": o_frame.copy(), "o_kp": o_kp.copy(), "o_track": o_track.copy()})
+        _TRACE.update(
+            {"o_ok": o_ok.copy(), "has_point": hp.copy(), "registered": registered.copy()}
+        )
+        _TRACE["order"] = list(reg_order)
     cnt = np.bincount(fr, minlength=n)
     with np.errstate(invalid="ignore", divide="ignore"):
         rms = np.sqrt(np.bincount(fr, weights=e2, minlength=n) / cnt)
