@@ -1,7 +1,8 @@
 """Calibration and PnP: imageform vs OpenCV, timed in the same run, interleaved.
 
 1. Detection + calibration of OpenCV's 13 ``left*.jpg`` views (9 x 6, square 1):
-   imageform ``find_checkerboard(half_window=11)`` + ``calibrate_camera`` vs OpenCV
+   imageform ``find_checkerboard(half_window=11, method="gradient")`` + ``calibrate_camera``
+   vs OpenCV
    ``findChessboardCorners`` + ``cornerSubPix((11, 11))`` + ``calibrateCamera`` (default
    flags, as the tutorial). Also the calibration alone on the same (imageform) corners.
 2. PnP, 1000 problems of 50 points (non-planar, 0.5 px noise): imageform ``solve_pnp``
@@ -40,7 +41,8 @@ CRITERIA = (cv2.TERM_CRITERIA_EPS + cv2.TERM_CRITERIA_MAX_ITER, 30, 0.001)
 
 
 def ours_detect(images: list[np.ndarray]) -> list[np.ndarray]:
-    return [find_checkerboard(im, PATTERN, half_window=11).corners for im in images]  # type: ignore[misc]
+    found = [find_checkerboard(im, PATTERN, half_window=11, method="gradient") for im in images]
+    return [r.corners for r in found]  # type: ignore[misc]
 
 
 def ours_calibrate(corners: list[np.ndarray]) -> object:

@@ -2,7 +2,8 @@
 
 Times, in the same run and interleaved, the detection of the 9 x 6 board in all 13 views:
 
-- imageform ``find_checkerboard(img, (9, 6), half_window=11)`` (detection + sub-pixel);
+- imageform ``find_checkerboard(img, (9, 6), half_window=11, method="gradient")``
+  (detection + sub-pixel);
 - OpenCV ``findChessboardCorners(img, (9, 6))`` (default flags, as in the calibration
   tutorial) + ``cornerSubPix(winSize (11, 11), zeroZone (-1, -1), EPS + COUNT 30, 0.001)``,
   with OpenCV's default thread count and with ``cv2.setNumThreads(1)``.
@@ -42,7 +43,7 @@ CRITERIA = (cv2.TERM_CRITERIA_EPS + cv2.TERM_CRITERIA_MAX_ITER, 30, 0.001)
 def run_imageform(images: list[np.ndarray]) -> list[np.ndarray | None]:
     out = []
     for img in images:
-        r = find_checkerboard(img, PATTERN, half_window=11)
+        r = find_checkerboard(img, PATTERN, half_window=11, method="gradient")
         out.append(r.corners)
     return out
 

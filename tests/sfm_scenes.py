@@ -219,7 +219,8 @@ def chessboard_views(folder: Path, dilate: int = 25) -> dict[str, Any]:
     """A real multi-view set with known cameras: OpenCV's 13 views of a 9 x 6 chessboard.
 
     The truth is imageform's own calibration of the views (``calibrate_camera`` on the
-    corners ``find_checkerboard`` finds, OpenCV's refinement window): ``K``, the lens
+    corners ``find_checkerboard`` finds with OpenCV's refinement, ``cornerSubPix`` with its
+    tutorial's window, as OpenCV's published figures): ``K``, the lens
     distortion and each view's board pose, the board's frame being the world (unit: one
     square). The camera stood still and the board moved, so only the board moves with
     that world: each view's mask is the convex hull of its corners dilated by ``dilate``
@@ -240,7 +241,7 @@ def chessboard_views(folder: Path, dilate: int = 25) -> dict[str, Any]:
     images = [np.asarray(read_image(folder / v))[..., 0] for v in CHESSBOARD_VIEWS]
     corners = []
     for name, im in zip(CHESSBOARD_VIEWS, images, strict=True):
-        found = find_checkerboard(im, (9, 6), half_window=11).corners
+        found = find_checkerboard(im, (9, 6), half_window=11, method="gradient").corners
         assert found is not None, f"no board found in {name}"
         corners.append(np.asarray(found, np.float64).reshape(-1, 2))
     h, w = images[0].shape

@@ -179,3 +179,28 @@ def test_corners_whose_window_leaves_the_image_keep_the_gradient_position() -> N
     assert near.any() and not near.all()
     assert np.array_equal(sym.corners[near], grad.corners[near])
     assert not np.array_equal(sym.corners[~near], grad.corners[~near])
+
+
+def test_a_start_pulled_off_by_a_wide_window_does_not_slide_to_a_square_center(
+    views: dict[str, np.ndarray],
+) -> None:
+    """OpenCV's tutorial window (``half_window=11``) on left02.jpg's ~20 px squares pulls some
+    gradient corners px off; from there the symmetric step slid to a square's centre (also a
+    centre of symmetry) and the grid was rejected. A symmetric corner farther than
+    SYMMETRIC_REACH of a step from the detected saddle keeps the first step's position."""
+    from imageform.geometry.checkerboard import SYMMETRIC_REACH
+
+    img = views["left02.jpg"]
+    wide = find_checkerboard(img, (9, 6), half_window=11)
+    assert wide.found, wide.reason
+    grad = find_checkerboard(img, (9, 6), method="gradient", half_window=11)
+    default = find_checkerboard(img, (9, 6))
+    raw = find_checkerboard(img, (9, 6), refine=False)
+    assert grad.corners is not None and default.corners is not None and raw.corners is not None
+    assert wide.corners is not None
+    step = np.median(np.hypot(*np.diff(raw.corners.reshape(6, 9, 2), axis=1).reshape(-1, 2).T))
+    moved = np.hypot(*(wide.corners - grad.corners).T) > 0
+    assert np.all(np.hypot(*(wide.corners - raw.corners)[moved].T) <= SYMMETRIC_REACH * step)
+    # where the wide window did no harm the symmetric corners are the default ones
+    fine = np.hypot(*(grad.corners - default.corners).T) < 0.5
+    assert np.median(np.hypot(*(wide.corners - default.corners)[fine].T)) < 0.01

@@ -105,6 +105,10 @@ METHODS = ("symmetric", "gradient")
 #: The point-symmetry window's radius, as a fraction of the shortest grid step (0.6-1.0 tried
 #: on eleven real sets: benchmarks/results/corner-refinement-2026-11-29i.md).
 SYMMETRIC_WINDOW = 0.8
+#: A point-symmetric corner farther than this fraction of the shortest grid step from the
+#: detected saddle is not taken (a square's centre is a centre of symmetry too: a start pulled
+#: off by a wide gradient window, ``half_window=11`` on 20 px squares, can slide to it).
+SYMMETRIC_REACH = 0.25
 
 #: Smoothing scales (pixels) tried in turn until the board is found.
 DEFAULT_SIGMAS = (2.0, 1.2, 3.5)
@@ -757,7 +761,8 @@ def _finish(
         half_window = _half_window(grid)
     refined, status = refine_clean(gray, pts, half_window, half_window, max_iter, tol)
     if refine == "symmetric" and lattice_problem(refined.reshape(grid.shape)) is None:
-        h = max(2, math.floor(SYMMETRIC_WINDOW * _shortest_step(refined.reshape(grid.shape))))
+        step = _shortest_step(refined.reshape(grid.shape))
+        h = max(2, math.floor(SYMMETRIC_WINDOW * step))
         # a window past the image's border reads replicated edge pixels, not the board's
         # symmetry: those corners keep the first step's position (lane-lines' boards cut by
         # the frame: held-out RMS 1.048 -> 1.029 px)
@@ -768,7 +773,9 @@ def _finish(
         )
         idx = np.flatnonzero(room >= h + 1)
         sym, sym_status = refine_symmetric(gray, refined[idx], h, max_iter, tol)
-        kept = sym_status <= 1  # converged or max_iter: a singular, lost or far one keeps the first
+        # converged or max_iter, near the saddle found: a singular, lost or far one keeps the first
+        near = np.hypot(*(sym - pts[idx]).T) <= SYMMETRIC_REACH * step
+        kept = (sym_status <= 1) & near
         refined = refined.copy()
         refined[idx[kept]] = sym[kept]
         status = status.copy()
