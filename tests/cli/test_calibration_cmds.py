@@ -162,6 +162,34 @@ def test_calibrate_a_folder_of_views(
     assert not (tmp_path / "e.toml").exists()
 
 
+def test_calibrate_refinement_option(
+    shared_data: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``--refinement``: the corners written are find_checkerboard's with that method
+    (symmetric by default, gradient: OpenCV's cornerSubPix alone); a bad name is one line."""
+    from imageform.geometry import find_checkerboard
+    from imageform.io import read_image
+
+    views = [shared_data / "opencv-left" / f"left0{i}.jpg" for i in (1, 2, 3)]
+    for method in ("symmetric", "gradient"):
+        out, corners = tmp_path / f"{method}.toml", tmp_path / f"{method}.csv"
+        args = ["calibrate", *map(str, views), "--board", "9x6", "-o", str(out)]
+        args += ["--corners", str(corners)] + (["--refinement", method] * (method != "symmetric"))
+        assert main(args) == 0, capsys.readouterr().err
+        capsys.readouterr()
+        rows = np.genfromtxt(corners, delimiter=",", names=True, dtype=None, encoding="utf-8")
+        for view in views:
+            mine = rows[rows["image"] == view.name]
+            want = find_checkerboard(read_image(view), (9, 6), method=method).corners
+            assert want is not None
+            np.testing.assert_allclose(np.c_[mine["u"], mine["v"]], want, atol=1e-6)
+    bad = ["calibrate", *map(str, views), "--board", "9x6", "-o", str(tmp_path / "b.toml")]
+    assert main([*bad, "--refinement", "sb"]) == 2  # a usage error, as every bad choice
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err[-1] == "Error: unknown --refinement 'sb'; valid: symmetric, gradient"
+    assert not (tmp_path / "b.toml").exists()
+
+
 def test_calibrate_board_auto(
     shared_data: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:

@@ -20,7 +20,9 @@ from imageform.workflows._spec import (
 )
 from imageform.workflows.calibration import (
     MIN_VIEWS,
+    REFINEMENT_HELP,
     Model,
+    Refinement,
     _auto_board_reading,
     _BoardChecks,
     _converging,
@@ -64,6 +66,7 @@ class StereoCalibrateOptions(_BoardChecks, ImageIn):
     half_window: int | None = option(
         None, help="Sub-pixel window half size (OpenCV's tutorial: 11); default adaptive."
     )
+    refinement: Refinement = option("symmetric", help=REFINEMENT_HELP, choices=get_args(Refinement))
     model: Model = option(
         "brown_conrady",
         help="Lens model of both cameras: brown-conrady (k1, k2, p1, p2, k3), rational (also "
@@ -140,7 +143,9 @@ def _detect(
                 f"{size[1]} px and {f} of {img.shape[1]} x {img.shape[0]} px"
             )
         grey = img[..., 0] if img.shape[-1] == 1 else img
-        found.append(find_checkerboard(grey, board, half_window=opts.half_window))
+        found.append(
+            find_checkerboard(grey, board, half_window=opts.half_window, method=opts.refinement)
+        )
     assert size is not None
     return size, found
 
