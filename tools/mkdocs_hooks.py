@@ -121,6 +121,7 @@ BENCH_SCRIPTS: dict[str, str] = {
     "vp-lsd": "benchmarks/check_vp_lsd.py",
     "vp-manhattan": "benchmarks/check_vp_manhattan.py",
     "vp-real": "benchmarks/check_vp_real.py",
+    "vp-seed": "benchmarks/check_vp_seed.py",
     "wsi": "benchmarks/bench_wsi.py",
 }
 

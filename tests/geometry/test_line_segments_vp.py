@@ -12,6 +12,7 @@ import pytest
 from imageform._kernels import lsd
 from imageform.errors import InvalidInputError
 from imageform.geometry import (
+    VanishingPointResult,
     camera_rotation,
     detect_line_segments,
     detect_vanishing_points,
@@ -248,6 +249,44 @@ def test_focal_length_on_real_checkerboard_photographs(shared_data: Path) -> Non
         assert centre.K is not None and calib.K is not None
         assert abs(centre.K[0, 0] / 536.07 - 1) < 0.08, (name, centre.K[0, 0])
         assert abs(calib.K[0, 0] / 536.07 - 1) < 0.03, (name, calib.K[0, 0])
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="the candidates depend on RANSAC's seed: on left01 seeds 1-6 give the board's two "
+    "families, seeds 0 and 7 the board's horizontal family, the monitor's lines and the room's "
+    "vertical (benchmarks/results/vp-seed-2026-11-29i.md)",
+)
+def test_checkerboard_view_does_not_depend_on_the_seed(shared_data: Path) -> None:
+    """OpenCV's left01.jpg, undistorted with its published calibration: the same vanishing
+    points (directions within 1 degree at the calibrated f) and the same K (within 1 %) for
+    every seed 0-7 as for seed 0. The board's two families (about 3700 and 3400 px of
+    segments) compete there with the monitor's lines (about 2000 px) and the room's vertical
+    (about 500 px)."""
+    from PIL import Image
+
+    from imageform.geometry import undistort_image
+    from imageform.geometry.distortion import BrownConrady
+
+    Kc = np.array([[536.07345314, 0, 342.37046827], [0, 536.01636274, 235.53687064], [0, 0, 1]])
+    D = np.array([-0.26509039, -0.0467422, 0.00183302, -0.00031469, 0.25231221])
+    img = np.asarray(Image.open(shared_data / "opencv-left" / "left01.jpg").convert("L"))
+    und = undistort_image(img, Kc, BrownConrady.from_opencv(D), keep_dtype=True)
+    seg = detect_line_segments(und)
+    size = (und.shape[1], und.shape[0])
+
+    def directions(res: VanishingPointResult) -> np.ndarray:
+        d = np.linalg.solve(Kc, res.vanishing_points.T).T
+        return d / np.linalg.norm(d, axis=1, keepdims=True)
+
+    first = detect_vanishing_points(segments=seg, image_size=size, rng=0)
+    assert first.K is not None and len(first.vanishing_points) >= 2
+    for seed in range(1, 8):
+        res = detect_vanishing_points(segments=seg, image_size=size, rng=seed)
+        assert len(res.vanishing_points) == len(first.vanishing_points), seed
+        cos = np.abs(directions(res) @ directions(first).T).max(axis=1)
+        assert np.all(cos > np.cos(np.radians(1.0))), (seed, cos)
+        assert res.K is not None and res.K[0, 0] == pytest.approx(first.K[0, 0], rel=0.01)
 
 
 def test_horizon_through_the_horizontal_points_when_the_principal_point_is_off() -> None:
