@@ -115,6 +115,21 @@ def gray_from_codes(codes: NDArray[np.number], scale: float) -> NDArray[np.float
     return gray
 
 
+def _gray_and_corners(
+    image: npt.ArrayLike, corners: npt.ArrayLike
+) -> tuple[NDArray[np.floating], NDArray[np.float64]]:
+    """Return the grey image and the (N, 2) float64 starts of a refinement, checked."""
+    gray = as_gray(image)
+    pts = np.asarray(
+        to_numpy(as_points_bounded(corners, "corners", 2, dtype=None)), dtype=np.float64
+    )
+    if pts.ndim != 2:
+        raise InvalidInputError(
+            f"expected corners of shape (N, 2), got {format_shape(tuple(pts.shape))}"
+        )
+    return gray, pts
+
+
 @_deprecate.parameters(renamed={"eps": "tol"})
 def refine_corners(
     image: npt.ArrayLike,
@@ -182,14 +197,7 @@ def refine_corners(
     >>> np.round(xy, 1), status
     (array([[20.3, 19.6]]), array([0]))
     """
-    gray = as_gray(image)
-    pts = np.asarray(
-        to_numpy(as_points_bounded(corners, "corners", 2, dtype=None)), dtype=np.float64
-    )
-    if pts.ndim != 2:
-        raise InvalidInputError(
-            f"expected corners of shape (N, 2), got {format_shape(tuple(pts.shape))}"
-        )
+    gray, pts = _gray_and_corners(image, corners)
     if isinstance(half_window, int | np.integer) and not isinstance(half_window, bool):
         hx = hy = as_int(half_window, "half_window", minimum=1, maximum=MAX_HALF_WINDOW)
     else:
@@ -294,14 +302,7 @@ def refine_corners_symmetric(
     >>> np.round(xy, 1), status
     (array([[20.3, 19.6]]), array([0]))
     """
-    gray = as_gray(image)
-    pts = np.asarray(
-        to_numpy(as_points_bounded(corners, "corners", 2, dtype=None)), dtype=np.float64
-    )
-    if pts.ndim != 2:
-        raise InvalidInputError(
-            f"expected corners of shape (N, 2), got {format_shape(tuple(pts.shape))}"
-        )
+    gray, pts = _gray_and_corners(image, corners)
     h = as_int(half_window, "half_window", minimum=2, maximum=MAX_HALF_WINDOW)
     max_iter = as_int(max_iter, "max_iter", minimum=1, maximum=10**6)
     tol = as_real(tol, "tol", nonnegative=True)
