@@ -602,3 +602,20 @@ def test_cli_info_and_convert(tmp_path: Path, capsys: pytest.CaptureFixture[str]
     write_image(png, np.zeros((2, 2)))
     assert main(["convert", str(png), "-o", str(tmp_path / "b.png"), "--window", "auto"]) == 1
     assert "applies to DICOM input" in capsys.readouterr().err
+
+
+def test_a_folder_of_dicom_frames_is_an_image_sequence(tmp_path: Path) -> None:
+    """An endoscopy series exported as one DICOM file a frame: open_video reads the folder in
+    natural order (frame2 before frame10), as a folder of PNGs."""
+    from imageform.io import open_video
+
+    rng = np.random.default_rng(0)
+    frames = [rng.integers(0, 256, (6, 8, 3), dtype=np.uint8) for _ in range(11)]
+    for i, f in enumerate(frames):
+        _save(_dataset(f, photometric="RGB"), tmp_path / f"frame{i}.dcm")
+    (tmp_path / "notes.txt").write_text("series 1")
+    with open_video(tmp_path, fps=25) as video:
+        got = [frame.image for frame in video]
+    assert len(got) == 11
+    for want, have in zip(frames, got, strict=True):
+        np.testing.assert_array_equal(have, want)

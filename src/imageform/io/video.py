@@ -36,6 +36,7 @@ import numpy as np
 from imageform._typing import ArrayLike
 from imageform._validate import describe
 from imageform.errors import InvalidInputError
+from imageform.io.image_io import IMAGE_FORMATS
 
 __all__ = [
     "VIDEO_SUFFIXES",
@@ -56,7 +57,8 @@ _X264_PRESETS = (
 )  # fmt: skip
 
 #: Image suffixes of an image sequence.
-_IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".tif", ".tiff", ".npy", ".bmp", ".webp", ".gif")
+#: The frames of a folder or glob: every suffix read_image reads (HEIF and DICOM frames too).
+_IMAGE_SUFFIXES = tuple(IMAGE_FORMATS)
 
 #: Encoder by container, first available wins.
 _CODECS = {
@@ -134,7 +136,7 @@ def _sequence_files(source: str) -> list[Path] | None:
         files = [f for f in p.iterdir() if f.suffix.lower() in _IMAGE_SUFFIXES and f.is_file()]
         if not files:
             raise InvalidInputError(
-                f"folder {p} holds no images (PNG, JPEG, TIFF, BMP, WebP, GIF, .npy)"
+                f"folder {p} holds no images ({', '.join(sorted(set(_IMAGE_SUFFIXES)))})"
             )
         return sorted(files, key=_natural_key)
     if _glob.has_magic(source):
