@@ -56,8 +56,8 @@ _X264_PRESETS = (
     "veryslow",
 )  # fmt: skip
 
-#: Image suffixes of an image sequence.
-#: The frames of a folder or glob: every suffix read_image reads (HEIF and DICOM frames too).
+#: Image suffixes of an image sequence (a folder or glob of frames): every suffix read_image
+#: reads, HEIF and DICOM frames too.
 _IMAGE_SUFFIXES = tuple(IMAGE_FORMATS)
 
 #: Encoder by container, first available wins.
