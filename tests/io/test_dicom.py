@@ -619,3 +619,29 @@ def test_a_folder_of_dicom_frames_is_an_image_sequence(tmp_path: Path) -> None:
     assert len(got) == 11
     for want, have in zip(frames, got, strict=True):
         np.testing.assert_array_equal(have, want)
+
+
+def test_a_multi_frame_dicom_file_is_a_video(tmp_path: Path) -> None:
+    """A cine (multi-frame) DICOM file opens as a video: its Frame Time gives the rate, every
+    frame as stored (8-bit RGB), grey frames of 12 bits scaled by their stored range."""
+    from imageform.io import open_video
+
+    rng = np.random.default_rng(1)
+    rgb = rng.integers(0, 256, (5, 6, 8, 3), dtype=np.uint8)
+    cine = _save(_dataset(rgb, photometric="RGB", frames=5, FrameTime=40.0), tmp_path / "c.dcm")
+    with open_video(cine) as video:
+        assert (video.info.fps, video.info.frames, video.info.codec) == (25.0, 5, "dicom")
+        got = [frame for frame in video]
+    assert [f.index for f in got] == list(range(5))
+    assert [f.time_s for f in got] == [0.0, 0.04, 0.08, 0.12, 0.16]
+    for want, have in zip(rgb, got, strict=True):
+        np.testing.assert_array_equal(have.image, want)
+    grey = rng.integers(0, 4096, (3, 6, 8), dtype=np.uint16)
+    run = _save(_dataset(grey, bits_stored=12, frames=3, CineRate=15), tmp_path / "x.dcm")
+    with open_video(run, fps=99) as video:
+        assert video.info.fps == 15.0
+        frames = [f.image for f in video]
+    want = np.round(grey.astype(np.float64) / 4095 * 255).astype(np.uint8)
+    for w, have in zip(want, frames, strict=True):
+        assert have.shape == (6, 8, 3)
+        np.testing.assert_array_equal(have[..., 0], w)

@@ -148,6 +148,26 @@ def _sequence_files(source: str) -> list[Path] | None:
     return None
 
 
+def _is_dicom(path: Path) -> bool:
+    """Whether ``path`` is a regular file with ``DICM`` at byte 128 (a DICOM file)."""
+    from imageform.io.image_io import _dicom_head
+
+    try:
+        with open(path, "rb") as fh:
+            return path.is_file() and _dicom_head(fh.read(132))
+    except OSError:
+        return False
+
+
+def _positive(value: Any) -> list[float]:
+    """``[value]`` as a float when it is a positive finite number (a DICOM DS/IS), else ``[]``."""
+    try:
+        x = float(value)
+    except (TypeError, ValueError):
+        return []
+    return [x] if math.isfinite(x) and x > 0 else []
+
+
 def _is_device(source: str) -> bool:
     return source.startswith(("/dev/video", "v4l2:"))
 
@@ -210,6 +230,10 @@ class VideoReader:
                 "image",
             )  # fmt: skip
             return
+        self._dicom: Path | None = None
+        if not _is_device(self._source) and _is_dicom(Path(self._source)):
+            self._open_dicom(Path(self._source), fps)
+            return
         av = _av()
         device = _is_device(self._source)
         path = self._source.removeprefix("v4l2:")
@@ -252,6 +276,45 @@ class VideoReader:
             str(ctx.name),
         )
 
+    def _open_dicom(self, path: Path, fps: float | None) -> None:
+        """Open a multi-frame DICOM file (an endoscopy or ultrasound cine, a fluoroscopy run).
+
+        The rate is the file's Frame Time (ms a frame), else its Cine Rate or Recommended
+        Display Frame Rate, else ``fps`` (default 30).
+        """
+        from imageform.io.dicom import header, open_dicom
+
+        head = open_dicom(path, pixels=False)
+        info = header(path, head)
+        self._check_size(info.width, info.height)
+        rates = [1000.0 / v for v in _positive(head.get("FrameTime", None))]
+        rates += _positive(head.get("CineRate", None))
+        rates += _positive(head.get("RecommendedDisplayFrameRate", None))
+        rate = next((r for r in rates if 0 < r < 1e4), float(fps or 30.0))
+        self._dicom = path
+        self.info = VideoInfo(info.width, info.height, rate, info.frames, "file", "dicom")
+
+    def _dicom_frames(self) -> Iterator[Frame]:
+        """Decode a DICOM file's frames, the file read once.
+
+        8 bits as stored, more bits by their stored range, rescaled (float) values through the
+        file's VOI window (``"auto"``: its window, else the frame's range).
+        """
+        from imageform.io.dicom import decode, header, open_dicom
+
+        assert self._dicom is not None
+        ds = open_dicom(self._dicom, pixels=True)
+        if "PixelData" not in ds:
+            raise InvalidInputError(f"cannot read {self._dicom}: the DICOM file has no pixel data")
+        for i in range(int(self.info.frames or 0)):
+            info = header(self._dicom, ds, i)
+            floats = info.dtype.startswith("float")
+            values = decode(self._dicom, ds, info, i, "auto" if floats else None)
+            if values.dtype == np.uint16 and info.bits_stored < 16:
+                top = float(2**info.bits_stored - 1)
+                values = np.clip(values.astype(np.float32) / np.float32(top), 0.0, 1.0)
+            yield Frame(i, i / self.info.fps, _rgb8(values, f"{self._dicom} frame {i}"))
+
     def _check_size(self, width: int, height: int) -> None:
         from imageform.io.image_io import ImageInfo, _check_pixels
 
@@ -287,6 +350,8 @@ class VideoReader:
         self._iterated = True
         if self._files is not None:
             yield from self._sequence()
+        elif self._dicom is not None:
+            yield from self._dicom_frames()
         else:
             yield from self._decode()
 
@@ -341,9 +406,11 @@ def open_video(
     Parameters
     ----------
     source : str or Path
-        ``clip.mp4``, ``frames/`` (a folder of images), ``"frames/*.png"``, ``/dev/video0``.
+        ``clip.mp4``, ``frames/`` (a folder of images), ``"frames/*.png"``, ``/dev/video0``,
+        or a multi-frame DICOM file (a cine: ``DICM`` at byte 128, the ``dicom`` extra).
     fps : float, optional
-        The frame rate of an image sequence (default 30) or the one to ask a device for.
+        The frame rate of an image sequence (default 30) or the one to ask a device for; a
+        DICOM cine's own Frame Time, Cine Rate or Recommended Display Frame Rate comes first.
     max_pixels : int, optional
         Refuse frames with more pixels (default :func:`imageform.io.max_pixels`).
 
