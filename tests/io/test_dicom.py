@@ -631,7 +631,7 @@ def test_a_multi_frame_dicom_file_is_a_video(tmp_path: Path) -> None:
     cine = _save(_dataset(rgb, photometric="RGB", frames=5, FrameTime=40.0), tmp_path / "c.dcm")
     with open_video(cine) as video:
         assert (video.info.fps, video.info.frames, video.info.codec) == (25.0, 5, "dicom")
-        got = [frame for frame in video]
+        got = list(video)
     assert [f.index for f in got] == list(range(5))
     assert [f.time_s for f in got] == [0.0, 0.04, 0.08, 0.12, 0.16]
     for want, have in zip(rgb, got, strict=True):
