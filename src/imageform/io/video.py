@@ -159,15 +159,6 @@ def _is_dicom(path: Path) -> bool:
         return False
 
 
-def _positive(value: Any) -> list[float]:
-    """``[value]`` as a float when it is a positive finite number (a DICOM DS/IS), else ``[]``."""
-    try:
-        x = float(value)
-    except (TypeError, ValueError):
-        return []
-    return [x] if math.isfinite(x) and x > 0 else []
-
-
 def _is_device(source: str) -> bool:
     return source.startswith(("/dev/video", "v4l2:"))
 
@@ -282,14 +273,14 @@ class VideoReader:
         The rate is the file's Frame Time (ms a frame), else its Cine Rate or Recommended
         Display Frame Rate, else ``fps`` (default 30).
         """
-        from imageform.io.dicom import header, open_dicom
+        from imageform.io.dicom import _number, header, open_dicom
 
         head = open_dicom(path, pixels=False)
         info = header(path, head)
         self._check_size(info.width, info.height)
-        rates = [1000.0 / v for v in _positive(head.get("FrameTime", None))]
-        rates += _positive(head.get("CineRate", None))
-        rates += _positive(head.get("RecommendedDisplayFrameRate", None))
+        frame_ms = _number(head, "FrameTime", 0.0)
+        rates = [1000.0 / frame_ms if frame_ms > 0 else 0.0]
+        rates += [_number(head, k, 0.0) for k in ("CineRate", "RecommendedDisplayFrameRate")]
         rate = next((r for r in rates if 0 < r < 1e4), float(fps or 30.0))
         self._dicom = path
         self.info = VideoInfo(info.width, info.height, rate, info.frames, "file", "dicom")
