@@ -473,6 +473,7 @@ VALID: dict[str, C | Skip] = {
     "imageform.io.icc_profile": call(space="display_p3"),
     "imageform.io.identify_icc": call(parse_icc(icc_profile("display_p3"))),
     "imageform.io.image_color_space": call(V("png_file")),
+    "imageform.io.image_files": call(V("png_dir")),
     "imageform.io.image_format": call(path=V("tmpfile_png")),
     "imageform.io.image_info": call(V("png_file")),
     "imageform.io.max_pixels": call(),

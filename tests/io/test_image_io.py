@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from imageform.errors import InvalidInputError, UnknownOptionError
-from imageform.io import image_info, read_image, read_png, write_image, write_png
+from imageform.io import image_files, image_info, read_image, read_png, write_image, write_png
 
 RNG = np.random.default_rng(40)
 
@@ -567,3 +567,23 @@ def test_pillow_decodes_in_threads_at_once_and_alike(tmp_path: Path) -> None:
         ImageFile.ImageFile.load = original  # type: ignore[method-assign]
     for got, want in zip(both, serial[1:4:2], strict=True):
         np.testing.assert_array_equal(got, want)
+
+
+def test_image_files_natural_order_hidden_and_other_files_left_out(tmp_path: Path) -> None:
+    # a camera or a video export numbers its files Cam1 ... Cam10: 2 comes before 10
+    for name in ("Cam10.PNG", "Cam2.jpg", "cam1.tif", "x.dcm", "notes.txt", ".Cam3.png"):
+        (tmp_path / name).write_bytes(b"")
+    (tmp_path / "sub.png").mkdir()  # a folder named like an image is not one
+    assert [p.name for p in image_files(tmp_path)] == ["cam1.tif", "Cam2.jpg", "Cam10.PNG", "x.dcm"]
+    assert [p.name for p in image_files(str(tmp_path))] == [p.name for p in image_files(tmp_path)]
+
+
+def test_image_files_refuses_a_file_or_a_folder_without_images(tmp_path: Path) -> None:
+    (tmp_path / "notes.txt").write_text("x")
+    with pytest.raises(InvalidInputError, match=r"holds no images \(.*\.png") as info:
+        image_files(tmp_path)
+    assert "\n" not in str(info.value)
+    with pytest.raises(InvalidInputError, match="expected a folder of images"):
+        image_files(tmp_path / "notes.txt")
+    with pytest.raises(InvalidInputError, match="expected a folder of images"):
+        image_files(tmp_path / "missing")

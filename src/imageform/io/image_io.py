@@ -56,6 +56,7 @@ from __future__ import annotations
 import contextlib
 import math
 import os
+import re
 import struct
 import threading
 import warnings
@@ -89,6 +90,7 @@ __all__ = [
     "ImageInfo",
     "WrittenImage",
     "image_color_space",
+    "image_files",
     "image_format",
     "image_info",
     "max_pixels",
@@ -194,6 +196,50 @@ def image_format(path: str | Path) -> str:
             f"unknown image file type {suffix[:20]!r} of {shown}; valid: {valid}"
         )
     return IMAGE_FORMATS[suffix]
+
+
+def _natural_key(name: str) -> list[Any]:
+    """Sort key of a file name with its digit runs compared as numbers (``cam2`` < ``cam10``)."""
+    return [(0, int(t), "") if t.isdigit() else (1, 0, t.lower()) for t in re.split(r"(\d+)", name)]
+
+
+def image_files(folder: str | Path) -> list[Path]:
+    """Return the image files in ``folder`` (not its subfolders), in natural order.
+
+    An image file is one whose suffix :data:`IMAGE_FORMATS` names (any case); hidden files
+    (a leading ``.``) and everything else are left out. Natural order compares runs of digits
+    as numbers, so ``frame2.png`` comes before ``frame10.png`` as a camera or a video export
+    numbers them (names alike but for case keep their order by case). This is how every
+    command that takes a folder of images (``calibrate``, ``stereo-calibrate``,
+    ``flatfield``, the frames of ``reconstruct`` and ``track``) lists it.
+
+    Raises
+    ------
+    InvalidInputError
+        ``folder`` is not a folder, or holds no image file (the message names the suffixes).
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> with tempfile.TemporaryDirectory() as d:
+    ...     for name in ("cam10.PNG", "cam2.jpg", "notes.txt", ".hidden.png"):
+    ...         _ = (Path(d) / name).write_bytes(b"")
+    ...     [p.name for p in image_files(d)]
+    ['cam2.jpg', 'cam10.PNG']
+    """
+    path = as_path(folder, "folder")
+    if not path.is_dir():
+        raise InvalidInputError(f"expected a folder of images, got {shorten(path)}")
+    inside = [
+        q
+        for q in path.iterdir()
+        if q.suffix.lower() in IMAGE_FORMATS and not q.name.startswith(".") and q.is_file()
+    ]
+    if not inside:
+        raise InvalidInputError(
+            f"folder {shorten(path)} holds no images ({', '.join(sorted(set(IMAGE_FORMATS)))})"
+        )
+    return sorted(inside, key=lambda q: (_natural_key(q.name), q.name))
 
 
 def _suffix_format(path: str | Path) -> str:

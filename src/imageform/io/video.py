@@ -23,7 +23,6 @@ from __future__ import annotations
 import glob as _glob
 import math
 import os
-import re
 from collections.abc import Iterator
 from dataclasses import dataclass
 from fractions import Fraction
@@ -36,7 +35,7 @@ import numpy as np
 from imageform._typing import ArrayLike
 from imageform._validate import describe
 from imageform.errors import InvalidInputError
-from imageform.io.image_io import IMAGE_FORMATS
+from imageform.io.image_io import IMAGE_FORMATS, _natural_key, image_files
 
 __all__ = [
     "VIDEO_SUFFIXES",
@@ -125,26 +124,16 @@ class VideoInfo:
     codec: str
 
 
-def _natural_key(path: Path) -> list[Any]:
-    return [int(t) if t.isdigit() else t.lower() for t in re.split(r"(\d+)", path.name)]
-
-
 def _sequence_files(source: str) -> list[Path] | None:
     """Return the images of a folder or glob pattern in natural order (None: not one)."""
-    p = Path(source)
-    if p.is_dir():
-        files = [f for f in p.iterdir() if f.suffix.lower() in _IMAGE_SUFFIXES and f.is_file()]
-        if not files:
-            raise InvalidInputError(
-                f"folder {p} holds no images ({', '.join(sorted(set(_IMAGE_SUFFIXES)))})"
-            )
-        return sorted(files, key=_natural_key)
+    if Path(source).is_dir():
+        return image_files(source)
     if _glob.has_magic(source):
         files = [Path(f) for f in _glob.glob(source) if Path(f).is_file()]
         files = [f for f in files if f.suffix.lower() in _IMAGE_SUFFIXES]
         if not files:
             raise InvalidInputError(f"no image matches {describe(source)}")
-        return sorted(files, key=_natural_key)
+        return sorted(files, key=lambda f: (_natural_key(f.name), str(f)))
     return None
 
 

@@ -31,7 +31,6 @@ __all__ = [
     "Workflow",
     "choice_names",
     "flag_of",
-    "folder_images",
     "normalize_choice",
     "option",
     "option_label",
@@ -41,39 +40,6 @@ __all__ = [
 
 #: Image file suffixes that workflows read and write.
 IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".tif", ".tiff", ".npy")
-
-
-def folder_images(folder: str | Path) -> list[Path]:
-    """Return the image files in ``folder`` (not its subfolders), sorted by name.
-
-    An image file is one whose suffix :data:`imageform.io.IMAGE_FORMATS` names (any case);
-    hidden files are left out. A folder without one is an error naming the suffixes.
-
-    Examples
-    --------
-    >>> import tempfile
-    >>> with tempfile.TemporaryDirectory() as d:
-    ...     for name in ("b.PNG", "a.jpg", "notes.txt", ".hidden.png"):
-    ...         _ = (Path(d) / name).write_bytes(b"")
-    ...     [p.name for p in folder_images(d)]
-    ['a.jpg', 'b.PNG']
-    """
-    from imageform.io import IMAGE_FORMATS
-
-    path = Path(folder)
-    inside = sorted(
-        (
-            q
-            for q in path.iterdir()
-            if q.suffix.lower() in IMAGE_FORMATS and not q.name.startswith(".") and q.is_file()
-        ),
-        key=lambda q: q.name,
-    )
-    if not inside:
-        raise InvalidInputError(
-            f"folder {path} holds no images ({', '.join(sorted(set(IMAGE_FORMATS)))})"
-        )
-    return inside
 
 
 def option(
@@ -358,7 +324,7 @@ class Input:
     many: bool = False
     metavar: str | None = None
     kind: str = "file"
-    #: A folder given stands for the image files in it (:func:`folder_images`).
+    #: A folder given stands for the image files in it (:func:`imageform.io.image_files`).
     folders: bool = False
 
     def __post_init__(self) -> None:

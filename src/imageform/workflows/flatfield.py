@@ -14,6 +14,7 @@ from pathlib import Path
 from typing import Any, Literal, get_args
 
 from imageform.errors import InvalidInputError
+from imageform.io import image_files
 from imageform.workflows._images import ImageIn, mask_of
 from imageform.workflows._spec import (
     Input,
@@ -21,7 +22,6 @@ from imageform.workflows._spec import (
     Result,
     Run,
     Workflow,
-    folder_images,
     option,
     refuse_foreign_folder,
 )
@@ -132,14 +132,14 @@ class FlatfieldOptions(ImageIn):
 
 
 def _image_files(sources: Any) -> list[Path]:
-    """Return the image files of the inputs: files as given, folders' images by name."""
+    """Return the image files of the inputs: files as given, folders' images in natural order."""
     if isinstance(sources, str | Path):
         sources = [sources]
     files: list[Path] = []
     for s in sources:
         p = Path(s)
         if p.is_dir():
-            files += folder_images(p)
+            files += image_files(p)
         elif p.is_file():
             files.append(p)
         else:

@@ -8,6 +8,7 @@ from pathlib import Path
 from typing import Any, Literal, get_args
 
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
+from imageform.io import image_files
 from imageform.workflows._images import ImageIn, read
 from imageform.workflows._spec import (
     Input,
@@ -15,7 +16,6 @@ from imageform.workflows._spec import (
     Result,
     Run,
     Workflow,
-    folder_images,
     option,
 )
 from imageform.workflows.calibration import (
@@ -91,7 +91,7 @@ def _expand(pattern: str, what: str) -> list[Path]:
         path = Path(p)
         kind = not_a_regular_file(path)
         if kind == "is a folder":
-            return folder_images(path)
+            return image_files(path)
         if kind is not None:
             raise InvalidInputError(f"{what} {path} {kind}")
         if not path.is_file():
