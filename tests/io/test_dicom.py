@@ -604,6 +604,51 @@ def test_cli_info_and_convert(tmp_path: Path, capsys: pytest.CaptureFixture[str]
     assert "applies to DICOM input" in capsys.readouterr().err
 
 
+def test_cli_convert_a_frame_of_a_multi_frame_file(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``convert --frame N`` writes frame N of a cine; without it the refusal names the option."""
+    from imageform.cli import main
+
+    rgb = _RNG.integers(0, 256, (3, 6, 8, 3)).astype(np.uint8)
+    p = _save(_dataset(rgb, photometric="RGB", frames=3), tmp_path / "cine.dcm")
+    assert main(["info", str(p)]) == 0
+    assert "3 frames (convert one: --frame N)" in capsys.readouterr().out
+    out = tmp_path / "f.png"
+    assert main(["convert", str(p), "-o", str(out)]) == 1
+    err = capsys.readouterr().err
+    assert "multi-frame DICOM of 3 frames; convert one with --frame N (0 to 2)" in err
+    assert not out.exists()
+    for i in (0, 2):
+        assert main(["convert", str(p), "-o", str(out), "--frame", str(i), "--force"]) == 0
+        np.testing.assert_array_equal(read_image(out), rgb[i])
+    before = out.read_bytes()
+    assert main(["convert", str(p), "-o", str(out), "--frame", "3", "--force"]) == 1
+    assert "has 3 frame(s) (0 to 2), no frame 3" in capsys.readouterr().err
+    assert main(["convert", str(p), "-o", str(out), "--frame", "-1", "--force"]) == 2
+    assert "expected --frame >= 0" in capsys.readouterr().err
+    assert main(["convert", str(p), "-o", str(out), "--frame", "x", "--force"]) == 2
+    assert out.read_bytes() == before  # nothing half-written by the refusals
+    png = tmp_path / "a.png"
+    write_image(png, np.zeros((2, 2)))
+    assert main(["convert", str(png), "-o", str(tmp_path / "b.png"), "--frame", "0"]) == 1
+    assert "--frame applies to DICOM input" in capsys.readouterr().err
+    # a CT run's frame holds Hounsfield units: --window still needed, and it applies per frame
+    hu = _RNG.integers(0, 2000, (2, 5, 4)).astype(np.int16)
+    ct = _save(
+        _dataset(hu, signed=True, frames=2, RescaleSlope="1", RescaleIntercept="-1024",
+                 WindowCenter="40", WindowWidth="400"),
+        tmp_path / "run.dcm",
+    )  # fmt: skip
+    gray = tmp_path / "g.png"
+    assert main(["convert", str(ct), "-o", str(gray), "--frame", "1", "--to", "gray"]) == 1
+    assert "--window auto" in capsys.readouterr().err
+    assert main(["convert", str(ct), "-o", str(gray), "--frame", "1", "--to", "gray",
+                 "--window", "auto"]) == 0  # fmt: skip
+    want = read_dicom(ct, frame=1, window="auto")
+    np.testing.assert_array_equal(read_image(gray)[..., 0], np.round(want[..., 0] * 255))
+
+
 def test_a_folder_of_dicom_frames_is_an_image_sequence(tmp_path: Path) -> None:
     """An endoscopy series exported as one DICOM file a frame: open_video reads the folder in
     natural order (frame2 before frame10), as a folder of PNGs."""

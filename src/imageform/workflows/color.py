@@ -119,11 +119,20 @@ class ConvertOptions(ImageIn, ImageOut, OnDevice):
         "file's window, else its VOI LUT, else its min to max) or CENTER,WIDTH (e.g. 40,400).",
         metavar="auto|C,W",
     )
+    frame: int | None = option(
+        None,
+        help="DICOM input: the frame of a multi-frame file (a cine, a CT or fluoroscopy run) to "
+        "convert, 0 the first (imageform info says how many).",
+        metavar="N",
+    )
 
     def check(self) -> None:
         """Check the options and normalise the ``--from`` and ``--to`` space names."""
         super().check()
         from imageform.color import space_name
+
+        if self.frame is not None and (isinstance(self.frame, bool) or self.frame < 0):
+            raise InvalidInputError(f"expected --frame >= 0, got {self.frame!r}")
 
         if self.window is not None:
             object.__setattr__(self, "window", _window_option(self.window))
@@ -180,13 +189,25 @@ def _window_option(value: object) -> str | tuple[float, float]:
     return (c, w)
 
 
-def _read_windowed(image: Path, opts: ConvertOptions) -> Any:
-    """Read a DICOM input through ``--window`` (display values in [0, 1]); refuse another file."""
-    from imageform.io import image_info, read_dicom
+def _read_dicom(image: Path, opts: ConvertOptions) -> Any:
+    """Read a DICOM input's ``--frame`` through ``--window``; refuse another file in one line.
 
-    if image_info(image).format != "dicom":
-        raise InvalidInputError(f"--window applies to DICOM input; {image} is not a DICOM file")
-    return read_dicom(image, window=opts.window, max_pixels=opts.max_pixels)
+    A multi-frame file without ``--frame`` is refused naming the option (``read_image``'s
+    refusal names the Python call).
+    """
+    from imageform.io import dicom_info, image_info, read_dicom
+
+    given = "--window" if opts.window is not None else "--frame"
+    if opts.window is None and opts.frame is None:
+        if not _is_dicom(image) or (frames := dicom_info(image).frames) <= 1:
+            return read(image, opts)
+        raise InvalidInputError(
+            f"{image} is a multi-frame DICOM of {frames} frames; convert one with --frame N "
+            f"(0 to {frames - 1})"
+        )
+    if not _is_dicom(image) and image_info(image).format != "dicom":
+        raise InvalidInputError(f"{given} applies to DICOM input; {image} is not a DICOM file")
+    return read_dicom(image, frame=opts.frame, window=opts.window, max_pixels=opts.max_pixels)
 
 
 def convert(run: Run, opts: ConvertOptions, *, out: Path, image: Path) -> Result:
@@ -197,7 +218,7 @@ def convert(run: Run, opts: ConvertOptions, *, out: Path, image: Path) -> Result
 
     dst = opts.dst
     opts.check_output(out)
-    img = read(image, opts) if opts.window is None else _read_windowed(image, opts)
+    img = _read_dicom(image, opts)
     if opts.window is None and img.dtype.kind == "f" and img.shape[-1] == 1:
         _refuse_unwindowed(image, img)
     src, declared = opts.src, None
@@ -240,7 +261,7 @@ def _refuse_unwindowed(image: Path, img: Any) -> None:
     from imageform.io import image_info
 
     lo, hi = float(np.min(img)), float(np.max(img))
-    if (lo < 0 or hi > 1) and image_info(image).format == "dicom":
+    if (lo < 0 or hi > 1) and (_is_dicom(image) or image_info(image).format == "dicom"):
         raise InvalidInputError(
             f"{image} holds DICOM values from {lo:.6g} to {hi:.6g} (its Modality LUT's output, "
             "not colours); pass --window auto (its VOI window) or --window CENTER,WIDTH"
@@ -735,7 +756,7 @@ def _dicom_info(image: Path) -> Result:
         "frames": d.frames,
         "dicom": d._asdict(),
     }
-    frames = f", {d.frames} frames (read one: read_dicom(path, frame=i))" if d.frames > 1 else ""
+    frames = f", {d.frames} frames (convert one: --frame N)" if d.frames > 1 else ""
     signed = "signed" if d.signed else "unsigned"
     text = [
         f"{image}: dicom, {d.width} x {d.height} px, {d.channels} channel(s), {d.dtype}{frames}",
