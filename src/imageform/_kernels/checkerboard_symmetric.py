@@ -22,6 +22,11 @@ constant) and is limited to one pixel. It stops after ``max_iter`` steps or when
 ``<= eps``; ``status`` as ``refine_corners``' (0 converged, 1 ``max_iter`` reached, 2 singular:
 a flat window or a straight edge, 3 left the image, 4 moved farther than ``h`` — start kept).
 
+An optional ``mask`` (N, 2 h + 1, 2 h + 1) of 0/1 per corner multiplies the window: the pairs
+``(q + d, q - d)`` with ``mask[d] = 0`` (or ``mask[-d] = 0``: the product of the two is used) are
+left out of the sums, and the shading block is then each corner's own (a ChArUco corner's
+markers, whose bits are not point-symmetric, are left out so).
+
 Agreement of kernel and twin is tested (tests/geometry/test_checkerboard_symmetric.py).
 """
 
@@ -55,24 +60,43 @@ def _shading_inverse(h: int, w: NDArray[np.float64]) -> NDArray[np.float64]:
     return np.asarray(np.linalg.inv(m), dtype=np.float64)
 
 
+def symmetric_pair_mask(
+    mask: NDArray[np.floating] | NDArray[np.bool_] | None, n: int, h: int
+) -> NDArray[np.float64]:
+    """Return ``mask`` (n, 2h+1, 2h+1) as 0/1 float64 kept only where ``d`` and ``-d`` both are.
+
+    ``(0, 2h+1, 2h+1)`` (no mask) for ``None``.
+    """
+    m = 2 * h + 1
+    if mask is None:
+        return np.empty((0, m, m), dtype=np.float64)
+    k = np.asarray(mask) != 0
+    if k.shape != (n, m, m):
+        raise ValueError(f"expected a mask of shape {(n, m, m)}, got {k.shape}")
+    return np.ascontiguousarray(k & k[:, ::-1, ::-1], dtype=np.float64)
+
+
 def refine_symmetric_numba(
     image: NDArray[np.floating],
     corners: NDArray[np.float64],
     h: int,
     max_iter: int,
     eps: float,
+    mask: NDArray[np.floating] | NDArray[np.bool_] | None = None,
 ) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
     """Refine ``corners`` (N, 2) in ``(u, v)``; returns the refined corners and a status.
 
     A float32 ``image`` goes to the kernel beside an empty float64 one and the other way round
-    (one compilation serves both); other dtypes are read as float64.
+    (one compilation serves both); other dtypes are read as float64. ``mask``: see the module.
     """
     w = symmetric_window_weights(h)
     inv = _shading_inverse(h, w)
+    pm = symmetric_pair_mask(mask, corners.shape[0], h)
+    has = mask is not None
     if image.dtype == np.float32:
-        return _refine_symmetric(image, _EMPTY64, True, corners, h, w, inv, max_iter, eps)
+        return _refine_symmetric(image, _EMPTY64, True, corners, h, w, inv, pm, has, max_iter, eps)
     img64 = np.ascontiguousarray(image, dtype=np.float64)
-    return _refine_symmetric(_EMPTY32, img64, False, corners, h, w, inv, max_iter, eps)
+    return _refine_symmetric(_EMPTY32, img64, False, corners, h, w, inv, pm, has, max_iter, eps)
 
 
 _EMPTY32 = np.empty((0, 0), dtype=np.float32)
@@ -87,11 +111,17 @@ def _refine_symmetric(
     corners: NDArray[np.float64],
     h: int,
     w: NDArray[np.float64],
-    inv: NDArray[np.float64],
+    inv_all: NDArray[np.float64],
+    masks: NDArray[np.float64],
+    has_mask: bool,
     max_iter: int,
     eps: float,
 ) -> tuple[NDArray[np.float64], NDArray[np.int64]]:  # pragma: no cover - numba-compiled
-    """:func:`refine_symmetric_numba`'s kernel: ``image32`` if ``is32``, else ``image64``."""
+    """:func:`refine_symmetric_numba`'s kernel: ``image32`` if ``is32``, else ``image64``.
+
+    ``masks[k]`` (when ``has_mask``) multiplies ``w`` for corner ``k``, whose shading block is
+    then inverted here.
+    """
     n = corners.shape[0]
     height, width = image32.shape if is32 else image64.shape
     out = corners.copy()
@@ -101,12 +131,35 @@ def _refine_symmetric(
     ys = np.empty(m + 1, dtype=np.int64)
     xs = np.empty(m + 1, dtype=np.int64)
     eps2 = eps * eps
+    wk = w.copy()
+    inv = inv_all.copy()
     for k in range(n):
         sx = corners[k, 0]
         sy = corners[k, 1]
         if not (np.isfinite(sx) and np.isfinite(sy)):
             status[k] = 2
             continue
+        if has_mask:
+            d11 = 0.0
+            d12 = 0.0
+            d22 = 0.0
+            for i in range(2 * h + 1):
+                for j in range(2 * h + 1):
+                    wt = w[i, j] * masks[k, i, j]
+                    wk[i, j] = wt
+                    d11 += wt * (j - h) * (j - h)
+                    d12 += wt * (j - h) * (i - h)
+                    d22 += wt * (i - h) * (i - h)
+            dd = d11 * d22 - d12 * d12
+            if not (dd > SINGULAR * (d11 + d22) * (d11 + d22)):
+                out[k, 0] = sx
+                out[k, 1] = sy
+                status[k] = 2
+                continue
+            inv[0, 0] = d22 / (4.0 * dd)
+            inv[0, 1] = -d12 / (4.0 * dd)
+            inv[1, 0] = -d12 / (4.0 * dd)
+            inv[1, 1] = d11 / (4.0 * dd)
         cx = sx
         cy = sy
         for _ in range(max_iter):
@@ -148,7 +201,7 @@ def _refine_symmetric(
             e2 = 0.0
             for i in range(2 * h + 1):
                 for j in range(2 * h + 1):
-                    wt = w[i, j]
+                    wt = wk[i, j]
                     if wt == 0.0:
                         continue
                     pi = i + 1
@@ -224,13 +277,27 @@ def refine_symmetric_numpy(
     h: int,
     max_iter: int,
     eps: float,
+    mask: NDArray[np.floating] | NDArray[np.bool_] | None = None,
 ) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
     """Plain NumPy twin of :func:`refine_symmetric_numba` (all corners at once)."""
     height, width = image.shape
     n = corners.shape[0]
-    w = symmetric_window_weights(h)
-    inv = _shading_inverse(h, w)
+    w0 = symmetric_window_weights(h)
     dyy, dxx = np.mgrid[-h : h + 1, -h : h + 1].astype(np.float64)
+    if mask is None:
+        w_all = np.broadcast_to(w0, (n, 2 * h + 1, 2 * h + 1))
+        inv_all = np.broadcast_to(_shading_inverse(h, w0), (n, 2, 2))
+        flat = np.zeros(n, dtype=bool)
+    else:
+        w_all = w0 * symmetric_pair_mask(mask, n, h)
+        d11 = np.sum(w_all * dxx * dxx, axis=(1, 2))
+        d12 = np.sum(w_all * dxx * dyy, axis=(1, 2))
+        d22 = np.sum(w_all * dyy * dyy, axis=(1, 2))
+        dd = d11 * d22 - d12 * d12
+        flat = ~(dd > SINGULAR * (d11 + d22) * (d11 + d22))
+        safe = np.where(flat, 1.0, 4.0 * dd)
+        inv_all = np.stack([np.stack([d22, -d12], -1), np.stack([-d12, d11], -1)], 1)
+        inv_all = inv_all / safe[:, None, None]
     dx = -2.0 * dxx
     dy = -2.0 * dyy
     o = np.arange(-h - 1, h + 2)
@@ -239,6 +306,8 @@ def refine_symmetric_numpy(
     status = np.ones(n, dtype=np.int64)
     active: NDArray[np.bool_] = np.all(np.isfinite(cur), axis=1)
     status[~active] = 2
+    status[active & flat] = 2
+    active &= ~flat
     eps2 = eps * eps
     img = np.asarray(image)
     for _ in range(max_iter):
@@ -246,6 +315,8 @@ def refine_symmetric_numpy(
         if idx.size == 0:
             break
         c = cur[idx]
+        w = w_all[idx]
+        inv = inv_all[idx]
         lo = np.array([-h - 2.0, -h - 2.0])
         hi = np.array([width + h + 1.0, height + h + 1.0])
         f = np.floor(np.clip(c, lo, hi))
@@ -314,3 +385,120 @@ def refine_symmetric_numpy(
     cur[far] = start[far]
     status[far] = 4
     return cur, status
+
+
+def marker_mask_numpy(
+    hinv: NDArray[np.float64],
+    pred: NDArray[np.float64],
+    start: NDArray[np.float64],
+    lo: NDArray[np.float64],
+    guard: NDArray[np.float64],
+    h: int,
+    cols: int,
+    rows: int,
+    parity: int,
+    shape: tuple[int, int],
+) -> NDArray[np.bool_]:
+    """Which offsets ``d`` of each ChArUco corner's ``(2h+1)²`` window are usable (m, 2h+1, 2h+1).
+
+    ``pred + d`` is taken to the board by ``hinv`` (pixels to square units); it is off when on a
+    white square's marker grown by ``guard`` (the box ``[lo, 1 - lo]²`` of its square, ``lo``
+    the marker's inset less the guard), off the board (by ``guard``), or when ``start + d`` is
+    not a pixel inside the image (``shape``). ``d`` is kept only when ``-d`` is too.
+    """
+    d = np.arange(-h, h + 1, dtype=np.float64)
+    du, dv = np.meshgrid(d, d)
+    pu = pred[:, 0, None, None] + du[None]
+    pv = pred[:, 1, None, None] + dv[None]
+    x = hinv[:, 0, 0, None, None] * pu + hinv[:, 0, 1, None, None] * pv + hinv[:, 0, 2, None, None]
+    y = hinv[:, 1, 0, None, None] * pu + hinv[:, 1, 1, None, None] * pv + hinv[:, 1, 2, None, None]
+    z = hinv[:, 2, 0, None, None] * pu + hinv[:, 2, 1, None, None] * pv + hinv[:, 2, 2, None, None]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        bx, by = x / z, y / z
+    g = guard[:, None, None]
+    lo3 = lo[:, None, None]
+    ok = np.isfinite(bx) & np.isfinite(by) & (z != 0)
+    ok &= (bx >= g) & (bx <= cols - g) & (by >= g) & (by <= rows - g)
+    bx, by = np.where(ok, bx, 0.0), np.where(ok, by, 0.0)
+    fx, fy = np.floor(bx), np.floor(by)
+    reach = 1.0 if bool(np.any(lo < 0)) else 0.0  # a guard past the margin: the neighbours too
+    for oy in np.arange(-reach, reach + 1):
+        for ox in np.arange(-reach, reach + 1):
+            sc, sr = fx + ox, fy + oy
+            white = (sr + sc) % 2 == parity
+            on = (
+                (bx >= sc + lo3)
+                & (bx <= sc + 1.0 - lo3)
+                & (by >= sr + lo3)
+                & (by <= sr + 1.0 - lo3)
+            )
+            ok &= ~(white & on)
+    height, width = shape
+    u = start[:, 0, None] + d[None]
+    v = start[:, 1, None] + d[None]
+    in_u = (u >= 1.0) & (u <= width - 2.0)
+    in_v = (v >= 1.0) & (v <= height - 2.0)
+    ok &= in_v[:, :, None] & in_u[:, None, :]
+    return np.asarray(ok & ok[:, ::-1, ::-1])
+
+
+@njit(fastmath=False)
+def marker_mask_numba(
+    hinv: NDArray[np.float64],
+    pred: NDArray[np.float64],
+    start: NDArray[np.float64],
+    lo: NDArray[np.float64],
+    guard: NDArray[np.float64],
+    h: int,
+    cols: int,
+    rows: int,
+    parity: int,
+    shape: tuple[int, int],
+) -> NDArray[np.bool_]:  # pragma: no cover - numba-compiled
+    """:func:`marker_mask_numpy`'s kernel (the same arithmetic, one sample at a time)."""
+    m = hinv.shape[0]
+    n = 2 * h + 1
+    height, width = shape
+    out = np.zeros((m, n, n), dtype=np.bool_)
+    for k in range(m):
+        g = guard[k]
+        lk = lo[k]
+        reach = 1 if lk < 0 else 0
+        for i in range(n):
+            pv = pred[k, 1] + (i - h)
+            v = start[k, 1] + (i - h)
+            if not (v >= 1.0 and v <= height - 2.0):
+                continue
+            for j in range(n):
+                u = start[k, 0] + (j - h)
+                if not (u >= 1.0 and u <= width - 2.0):
+                    continue
+                pu = pred[k, 0] + (j - h)
+                x = hinv[k, 0, 0] * pu + hinv[k, 0, 1] * pv + hinv[k, 0, 2]
+                y = hinv[k, 1, 0] * pu + hinv[k, 1, 1] * pv + hinv[k, 1, 2]
+                z = hinv[k, 2, 0] * pu + hinv[k, 2, 1] * pv + hinv[k, 2, 2]
+                if z == 0:
+                    continue
+                bx = x / z
+                by = y / z
+                if not (np.isfinite(bx) and np.isfinite(by)):
+                    continue
+                if not (bx >= g and bx <= cols - g and by >= g and by <= rows - g):
+                    continue
+                fx = np.floor(bx)
+                fy = np.floor(by)
+                free = True
+                for oy in range(-reach, reach + 1):
+                    for ox in range(-reach, reach + 1):
+                        sc = fx + ox
+                        sr = fy + oy
+                        if (sr + sc) % 2 != parity:
+                            continue
+                        if sc + lk <= bx <= sc + 1.0 - lk and sr + lk <= by <= sr + 1.0 - lk:
+                            free = False
+                out[k, i, j] = free
+        for i in range(n):
+            for j in range(n):
+                if out[k, i, j] and not out[k, n - 1 - i, n - 1 - j]:
+                    out[k, i, j] = False
+    return out

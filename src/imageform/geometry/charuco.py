@@ -22,13 +22,20 @@ Corner detection (:func:`detect_charuco`): the markers are found and decoded
 ``min_markers`` decoded markers in the squares around it is predicted through the
 homography fitted to those markers' corners, then refined by gradient orthogonality
 (:func:`imageform.geometry.refine_corners`, OpenCV's ``cornerSubPix``) in a window that
-stays clear of the markers, and kept when it converged near the prediction.
+stays clear of the markers, and kept when it converged near the prediction. With
+``method="symmetric"`` each kept corner is then moved to the centre of the board's point
+symmetry around it (:func:`imageform.geometry.refine_corners_symmetric`, Schöps et al. 2020)
+in a round window of up to 0.8 of a square, every sample pair ``(q + d, q - d)`` with a point
+on a marker (its whole square of cells, through the corner's homography, plus a 1 px guard
+band) left out: what is left (the black squares, the white margins) is point-symmetric about
+the corner. A corner whose symmetric refinement fails keeps its gradient position.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
 from functools import lru_cache
+from typing import Literal
 
 import numpy as np
 from numpy.typing import NDArray
@@ -66,6 +73,19 @@ _WHITE_AGREE = 0.35
 _SHARP, _MAX_WINDOW_SHIFT = 0.9, 0.25
 #: Smallest contrast (image in [0, 1]) between the black squares and the white margins.
 _MIN_CONTRAST = 0.04
+#: The symmetric refinement (``method="symmetric"``): its round window's radius as a share of
+#: the local square size in pixels (at most ``_SYM_MAX_WINDOW`` px), the guard band around
+#: each marker (px) and the marker cells left in (0: the whole marker masked; 1: its black
+#: border kept, only the bits masked), and the farthest it may move a corner from the
+#: gradient refinement's position (px) before that position is kept.
+_SYM_WINDOW, _SYM_MAX_WINDOW, _SYM_GUARD_PX, _SYM_INSET = 0.8, 40, 1.0, 0
+_SYM_MAX_MOVE = 1.0
+#: The guard band is at least this share of the white margin between a marker and its square's
+#: edge: blur spreads a marker's border into the margin, and a marker printed a fraction of a
+#: pixel off its square's centre makes that spread differ between the two white squares.
+_SYM_GUARD_MARGIN = 0.5
+#: ``detect_charuco``'s refinements.
+CharucoMethod = Literal["symmetric", "gradient"]
 
 
 @dataclass(frozen=True)
@@ -260,6 +280,7 @@ def detect_charuco(
     markers: ArucoMarkers | None = None,
     min_markers: int = 2,
     max_shift: float = 0.15,
+    method: CharucoMethod = "symmetric",
 ) -> CharucoCorners:
     """Find the inner corners of ``board`` in ``image``, each with its id.
 
@@ -277,6 +298,11 @@ def detect_charuco(
     max_shift : float, keyword-only
         Largest distance, as a fraction of the local square size in pixels, between the
         predicted corner and the refined one; farther corners are dropped.
+    method : {"gradient", "symmetric"}, keyword-only
+        The sub-pixel refinement (:func:`find_checkerboard`'s words): ``"gradient"``, gradient
+        orthogonality in a window clear of the markers (OpenCV's ``cornerSubPix``), or
+        ``"symmetric"``, then the centre of the board's point symmetry with the markers left
+        out of it (see the module). Both find the same corners; only their positions differ.
 
     Returns
     -------
@@ -288,7 +314,8 @@ def detect_charuco(
     Raises
     ------
     InvalidInputError
-        ``board`` is not a :class:`CharucoBoard`, or ``image`` is not an image.
+        ``board`` is not a :class:`CharucoBoard`, ``image`` is not an image, or ``method`` is
+        not one of the two.
 
     Examples
     --------
@@ -302,24 +329,37 @@ def detect_charuco(
     g = _gray01(image, scratch=True)
     need = as_int(min_markers, "min_markers", minimum=1, maximum=16)
     shift = as_real(max_shift, "max_shift", positive=True, maximum=1.0)
+    if method not in ("symmetric", "gradient"):
+        raise InvalidInputError(
+            f"expected method 'symmetric' or 'gradient', got {describe(method)}"
+        )
+    sym = method == "symmetric"
     if markers is None:
         markers = _detect(g, board.dictionary, source=image)
     elif not isinstance(markers, ArucoMarkers):
         raise InvalidInputError(f"expected markers as ArucoMarkers, got {describe(markers)}")
-    found = _corners(g, board, markers, need, shift)
+    found = _corners(g, board, markers, need, shift, sym)
     if board.squares[1] % 2 == 0 and len(markers) >= need:
         # OpenCV before 4.6 put the markers of such a board in the other squares: markers
         # read in the wrong layout give few corners (their squares' colours are swapped)
-        other = _corners(g, replace(board, legacy=not board.legacy), markers, need, shift)
+        other = _corners(g, replace(board, legacy=not board.legacy), markers, need, shift, sym)
         if len(other) > len(found):
             return other
     return found
 
 
 def _corners(
-    g: NDArray[np.float64], board: CharucoBoard, markers: ArucoMarkers, need: int, shift: float
+    g: NDArray[np.float64],
+    board: CharucoBoard,
+    markers: ArucoMarkers,
+    need: int,
+    shift: float,
+    sym: bool = False,
 ) -> CharucoCorners:
-    """Find the corners of ``board`` (in its layout) from the ``markers`` found in ``g``."""
+    """Find the corners of ``board`` (in its layout) from the ``markers`` found in ``g``.
+
+    ``sym``: move the corners found to their centres of symmetry (:func:`_symmetric`).
+    """
     from imageform.geometry.checkerboard_subpix import RefinedCorners, refine
 
     ids_m = markers.ids - board.first_marker  # the board's own marker numbers
@@ -357,8 +397,78 @@ def _corners(
         whole[sel] &= np.hypot(*(alt.corners - found[sel]).T) <= _MAX_WINDOW_SHIFT
     if not whole.any():
         return empty
+    kept = ks[whole]
+    xy_out = found[whole]
+    if sym:
+        xy_out = _symmetric(g, board, cand[kept], homs[kept], xy[kept], scales[kept], xy_out)
     # the candidates are in id order already
-    return CharucoCorners(cand[ks[whole]], found[whole], markers, board)
+    return CharucoCorners(cand[kept], xy_out, markers, board)
+
+
+def _symmetric(
+    g: NDArray[np.float64],
+    board: CharucoBoard,
+    ids: NDArray[np.int64],
+    homs: NDArray[np.float64],
+    pred: NDArray[np.float64],
+    scales: NDArray[np.float64],
+    start: NDArray[np.float64],
+) -> NDArray[np.float64]:
+    """Move corners ``start`` to their centres of point symmetry, the markers left out.
+
+    Each corner's window (radius ``_SYM_WINDOW`` of its square size ``scales``) is masked by
+    :func:`_marker_mask` through its homography ``homs`` (board square units to pixels, the
+    corner at ``pred``), and the offsets that reach past the image's border (a pixel inside it,
+    from ``start``) are left out too; a corner whose refinement does not converge, or moves
+    more than ``_SYM_MAX_MOVE`` px from ``start``, keeps ``start``.
+    """
+    from imageform.geometry.checkerboard_subpix import refine_symmetric
+
+    out = start.copy()
+    hs = np.clip(np.floor(_SYM_WINDOW * scales), 3, _SYM_MAX_WINDOW).astype(np.int64)
+    for h in np.unique(hs):
+        sel = np.nonzero(hs == h)[0]
+        pts = np.ascontiguousarray(start[sel])
+        mask = _marker_mask(board, homs[sel], pred[sel], scales[sel], pts, int(h), g.shape)
+        ref, status = refine_symmetric(g, pts, int(h), 30, 1e-3, mask)
+        moved = np.hypot(*(ref - pts).T)
+        good = ((status == 0) | (status == 1)) & (moved <= _SYM_MAX_MOVE)
+        out[sel[good]] = ref[good]
+    return out
+
+
+def _marker_mask(
+    board: CharucoBoard,
+    homs: NDArray[np.float64],
+    pred: NDArray[np.float64],
+    scales: NDArray[np.float64],
+    start: NDArray[np.float64],
+    h: int,
+    shape: tuple[int, int],
+) -> NDArray[np.bool_]:
+    """Return which offsets ``d`` of each corner's ``(2h+1)²`` window are off every marker.
+
+    ``pred + d`` is taken back to the board through the corner's homography (square units);
+    it is masked off when on a marker (inset ``_SYM_INSET`` cells) grown by the guard band
+    (``_SYM_GUARD_PX`` pixels, ``_SYM_GUARD_PX / scales`` squares, and at least
+    ``_SYM_GUARD_MARGIN`` of the white margin), or off the board; and when ``start + d`` is
+    not inside the image. The markers' part is a function of ``d`` alone (the homography
+    moved to the corner), so the refinement's cost is smooth.
+    """
+    from imageform._backend import use_numba
+    from imageform._kernels.checkerboard_symmetric import marker_mask_numba, marker_mask_numpy
+
+    cols, rows = board.squares
+    frac = board.marker_length / board.square_length
+    cell = frac / (aruco_dictionary(board.dictionary).marker_size + 2)
+    guard = np.maximum(
+        _SYM_GUARD_PX / np.maximum(scales, 1e-9), _SYM_GUARD_MARGIN * (1.0 - frac) / 2.0
+    )
+    lo = (1.0 - frac) / 2.0 + _SYM_INSET * cell - guard  # the grown marker's box in its square
+    hinv = np.ascontiguousarray(np.linalg.inv(homs))  # pixels to board squares
+    kernel = marker_mask_numba if use_numba(start) else marker_mask_numpy
+    args = (np.ascontiguousarray(pred), np.ascontiguousarray(start), lo, guard)
+    return np.asarray(kernel(hinv, *args, h, cols, rows, board.white_parity, shape))
 
 
 def _predicted(

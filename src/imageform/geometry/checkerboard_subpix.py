@@ -315,8 +315,13 @@ def refine_symmetric(
     h: int,
     max_iter: int,
     tol: float,
+    mask: NDArray[np.bool_] | None = None,
 ) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
-    """:func:`refine_corners_symmetric` on clean input (kernel or twin by :func:`use_numba`)."""
+    """:func:`refine_corners_symmetric` on clean input (kernel or twin by :func:`use_numba`).
+
+    ``mask`` (N, 2h+1, 2h+1), optional: per corner, the window's offsets ``d`` to use (a pair
+    ``(q + d, q - d)`` is left out when either offset is masked off).
+    """
     if pts.shape[0] == 0:
         return pts.copy(), np.zeros(0, dtype=np.int64)
     from imageform._kernels.checkerboard_symmetric import (
@@ -325,4 +330,5 @@ def refine_symmetric(
     )
 
     kernel = refine_symmetric_numba if use_numba(gray) else refine_symmetric_numpy
-    return kernel(np.ascontiguousarray(gray), np.ascontiguousarray(pts), h, max_iter, tol)
+    g, p = np.ascontiguousarray(gray), np.ascontiguousarray(pts)
+    return kernel(g, p, h, max_iter, tol, mask)

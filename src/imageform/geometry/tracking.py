@@ -34,7 +34,7 @@ found (NaN pose), never invented from earlier frames.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 from numpy.typing import NDArray
@@ -186,6 +186,9 @@ class BoardTracker:
         self._last_ids: NDArray[np.int64] | None = None
         self._prev_uv: dict[int, NDArray[np.float64]] = {}
         self._since_detection = 0
+        #: the checkerboard's sub-pixel refinement (find_checkerboard's ``method``), detected
+        #: and tracked frames alike
+        self._refinement: Literal["symmetric", "gradient"] = "gradient"
 
     def reset(self) -> None:
         """Forget the previous frames (a cut in the video)."""
@@ -200,13 +203,14 @@ class BoardTracker:
         if self._charuco is not None:
             from imageform.geometry.charuco import detect_charuco
 
-            found = detect_charuco(image, self._charuco)
+            # the gradient refinement, as the tracked frames': one method in a video
+            found = detect_charuco(image, self._charuco, method="gradient")
             return np.asarray(found.corners, np.float64), np.asarray(found.ids, np.int64)
         from imageform.geometry.checkerboard import find_checkerboard
 
         assert self._pattern is not None
-        # the gradient refinement, as the tracked frames' (refine_corners): one method in a video
-        res = find_checkerboard(image, self._pattern, method="gradient")
+        # the tracked frames' refinement: one method in a video
+        res = find_checkerboard(image, self._pattern, method=self._refinement)
         if not res.found or res.corners is None:
             return np.zeros((0, 2)), np.zeros(0, np.int64)
         uv = np.asarray(res.corners, np.float64)
@@ -266,9 +270,12 @@ class BoardTracker:
         if not square > 8:  # too small to refine reliably (a detection decides)
             return None
         hw = int(np.clip(round(square / 3), 2, 15))
+        sym = self._pattern is not None and self._refinement == "symmetric"
+        hs = int(np.clip(np.floor(0.8 * square), 2, 30)) if sym else 0
         h, w = image.shape[:2]
-        lo = np.floor(pred.min(axis=0) - 2 * hw - 2).astype(int)
-        hi = np.ceil(pred.max(axis=0) + 2 * hw + 3).astype(int)
+        reach = max(2 * hw + 2, hs + 3)
+        lo = np.floor(pred.min(axis=0) - reach).astype(int)
+        hi = np.ceil(pred.max(axis=0) + reach + 1).astype(int)
         x0, y0 = max(lo[0], 0), max(lo[1], 0)
         x1, y1 = min(hi[0], w), min(hi[1], h)
         if x1 - x0 < 8 or y1 - y0 < 8:
@@ -289,13 +296,41 @@ class BoardTracker:
         res2 = refine_corners(
             crop, np.asarray(res.corners), half_window=max(2, fine), max_iter=40, tol=1e-4
         )
-        got = np.asarray(res2.corners, np.float64) + offset
+        got = np.asarray(res2.corners, np.float64)
+        if sym:
+            got = self._symmetric(crop, got, hs, square)
+        got = got + offset
         ok = np.isin(np.asarray(res.status), (0, 1)) & np.isin(np.asarray(res2.status), (0, 1))
         ok &= np.linalg.norm(got - pred[inside], axis=1) < 0.5 * square
         keep = np.flatnonzero(inside)[ok]
         if keep.size < max(self.min_corners, int(np.ceil(0.8 * ids.size))):
             return None
         return got[ok], ids[keep]
+
+    def _symmetric(
+        self, crop: np.ndarray, uv: NDArray[np.float64], h: int, square: float
+    ) -> NDArray[np.float64]:
+        """Move a checkerboard's corners ``uv`` in ``crop`` to their centres of symmetry.
+
+        As :func:`find_checkerboard`'s ``method="symmetric"``: a round window of radius
+        ``h`` (0.8 of a square); a corner whose window leaves ``crop``, or that does not
+        converge or moves more than a quarter of a square, keeps ``uv``.
+        """
+        from imageform.geometry.checkerboard_subpix import _gray_and_corners, refine_symmetric
+
+        gray, pts = _gray_and_corners(crop, uv)
+        height, width = gray.shape
+        room = np.minimum(
+            np.minimum(pts[:, 0], width - 1 - pts[:, 0]),
+            np.minimum(pts[:, 1], height - 1 - pts[:, 1]),
+        )
+        idx = np.flatnonzero(room >= h + 1)
+        out = uv.copy()
+        if idx.size:
+            sym, status = refine_symmetric(gray, np.ascontiguousarray(pts[idx]), h, 30, 1e-3)
+            kept = (status <= 1) & (np.hypot(*(sym - pts[idx]).T) <= 0.25 * square)
+            out[idx[kept]] = sym[kept]
+        return out
 
     def _fits(self, uv: NDArray[np.float64], X: NDArray[np.float64], res: object) -> bool:
         """Whether every corner lies within 1.5 px of the pose's reprojection."""

@@ -50,7 +50,8 @@ Refinement = Literal["symmetric", "gradient"]
 REFINEMENT_HELP = (
     "Sub-pixel refinement of a checkerboard's corners: symmetric (each corner at the centre of "
     "the board's point symmetry, Schöps et al. 2020; the most accurate on real views) or "
-    "gradient (OpenCV's cornerSubPix alone, to reproduce its figures). ChArUco corners: gradient."
+    "gradient (OpenCV's cornerSubPix alone, to reproduce its figures). ChArUco boards the same "
+    "(symmetric: the markers left out of the symmetry)."
 )
 
 
@@ -680,7 +681,7 @@ def _calibrate_charuco(
     legacy_noted = False
     for f, grey in _read_views(run, opts, images):
         shape0 = (int(grey.shape[0]), int(grey.shape[1]))
-        found = detect_charuco(grey, board)
+        found = detect_charuco(grey, board, method=opts.refinement)
         if found.board.legacy and len(found) and not legacy_noted:
             run.note(
                 f"{f}: the markers are in OpenCV's legacy layout (boards of even rows drawn "
