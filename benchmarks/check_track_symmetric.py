@@ -9,8 +9,7 @@ through ``find_checkerboard(method="symmetric")``, the tracked ones refined agai
 the truth: the corners' error (the true corners projected, px), the pose's translation error
 (share of the distance) and rotation error, the jitter (median frame-to-frame change of the
 translation error), and the CPU time per frame (median and 95th percentile, tracked and
-detected frames together; each frame's median of ``--repeat`` runs of a fresh copy of the
-tracker's state is not taken: one pass, the two trackers interleaved frame by frame).
+detected frames together; one pass, the two trackers interleaved frame by frame).
 
     OPENBLAS_NUM_THREADS=1 NUMBA_NUM_THREADS=1 PYTHONPATH=src:. \\
         python benchmarks/check_track_symmetric.py --frames 120

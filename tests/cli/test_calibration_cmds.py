@@ -382,6 +382,51 @@ def test_calibrate_charuco_views(tmp_path: Path, capsys: pytest.CaptureFixture[s
     )
 
 
+@pytest.mark.parametrize("refinement", ["symmetric", "gradient"])
+def test_calibrate_charuco_refinement(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], refinement: str
+) -> None:
+    """`--refinement` picks detect_charuco's method for a ChArUco board too (symmetric by
+    default): the corners table holds that method's corners, and the other method's differ."""
+    import csv
+
+    import cv2
+    from PIL import Image
+
+    from imageform.geometry import CharucoBoard, detect_charuco
+    from tests.geometry.test_charuco import _render_view
+
+    board = CharucoBoard((9, 7), 20.0, 15.0, "6x6_250")
+    px = 64
+    art = board.image(px, margin_px=px)
+    K_true = np.array([[700.0, 0, 322.0], [0, 705.0, 238.0], [0, 0, 1]])
+    dist = np.array([-0.12, 0.05, 0.0, 0.0, 0.0])
+    rng = np.random.default_rng(5)
+    views = []
+    for k in range(4):
+        rvec = np.array([rng.uniform(-0.6, 0.6), rng.uniform(-0.6, 0.6), rng.uniform(-0.3, 0.3)])
+        tvec = np.array([-90.0 + rng.uniform(-40, 40), -70.0 + rng.uniform(-30, 30), 330])
+        img = _render_view(board, art, px, K_true, dist, rvec, tvec, (640, 480))
+        img = np.clip(cv2.GaussianBlur(img.astype(np.float64), (0, 0), 1.0) + 0.5, 0, 255)
+        views.append(img.astype(np.uint8))
+        Image.fromarray(views[-1]).save(tmp_path / f"view{k:02d}.png")
+    out, table = tmp_path / "cam.toml", tmp_path / "corners.csv"
+    argv = ["calibrate", str(tmp_path / "view*.png"), "--board", "charuco:9x7"]
+    argv += ["--square", "20mm", "--marker", "15mm", "--corners", str(table), "-o", str(out)]
+    if refinement != "symmetric":
+        argv += ["--refinement", refinement]
+    assert main(argv) == 0, capsys.readouterr().err
+    with table.open() as f:
+        rows = [r for r in csv.DictReader(f) if r["image"] == "view00.png"]
+    got = np.array([[float(r["u"]), float(r["v"])] for r in rows])
+    mine = detect_charuco(views[0], board, method=refinement)  # type: ignore[arg-type]
+    other = detect_charuco(
+        views[0], board, method="gradient" if refinement == "symmetric" else "symmetric"
+    )
+    np.testing.assert_allclose(got, mine.corners, atol=1e-6)
+    assert np.abs(got - other.corners).max() > 1e-2
+
+
 def test_calibrate_charuco_legacy_board(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     """A board of even rows printed by OpenCV before 4.6 (markers in the other squares) is
     calibrated from with the plain --board charuco:8x6, and the output says how it was read

@@ -84,8 +84,6 @@ _SYM_MAX_MOVE = 1.0
 #: edge: blur spreads a marker's border into the margin, and a marker printed a fraction of a
 #: pixel off its square's centre makes that spread differ between the two white squares.
 _SYM_GUARD_MARGIN = 0.5
-#: ``detect_charuco``'s refinements.
-CharucoMethod = Literal["symmetric", "gradient"]
 
 
 @dataclass(frozen=True)
@@ -280,7 +278,7 @@ def detect_charuco(
     markers: ArucoMarkers | None = None,
     min_markers: int = 2,
     max_shift: float = 0.15,
-    method: CharucoMethod = "symmetric",
+    method: Literal["symmetric", "gradient"] = "symmetric",
 ) -> CharucoCorners:
     """Find the inner corners of ``board`` in ``image``, each with its id.
 
