@@ -258,7 +258,8 @@ def refine_corners_symmetric(
     pixels, which are not point-symmetric (``find_checkerboard`` keeps such corners at
     :func:`refine_corners`' position). A corner of another pattern (an ``L``, a ``T``, a
     ChArUco corner beside its markers' bits) is not point-symmetric: use
-    :func:`refine_corners` there.
+    :func:`refine_corners` there (:func:`~imageform.geometry.detect_charuco` masks the
+    markers out of the window).
 
     Parameters
     ----------

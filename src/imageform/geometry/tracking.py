@@ -19,7 +19,11 @@ drawn in board coordinates on the live image.
   the corners refine, none moves more than half a square from its prediction, and the PnP
   fit of all of them leaves every corner within 1.5 pixels (RMS within 0.75). Anything
   else, and every ``redetect``-th frame (to pick up corners that came into view), falls
-  back to detection. A refinement costs a few milliseconds where a detection costs tens;
+  back to detection. A refinement costs a few milliseconds where a detection costs tens.
+  The detected frames use the same gradient refinement (``find_checkerboard`` and
+  ``detect_charuco`` with ``method="gradient"``): the point-symmetry one was no nearer the
+  truth on a rendered checkerboard video and cost half as much again a frame
+  (benchmarks/results/track-symmetric-2026-11-29j.md);
 - **one orientation**: a checkerboard looks the same turned half a turn; its corners are
   ordered as the previous frame's were (the order nearer to them), so the pose never jumps;
 - **smoothing** (off by default): an exponential filter of the pose,
