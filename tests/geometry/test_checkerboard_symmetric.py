@@ -134,6 +134,20 @@ def test_kernel_and_twin_agree(image: str) -> None:
     assert sa.tolist() == sb.tolist()
     assert np.abs(a - b).max() < 1e-9
     assert (sa[:54] == 0).all() and set(sa[54:].tolist()) > {0}
+    # a per-corner mask of the window's offsets (ChArUco's markers): the pairs (d, -d) left
+    # out, the shading block each corner's own; an empty mask is singular (start kept)
+    mask = rng.uniform(size=(len(pts), 13, 13)) > 0.4
+    mask[0] = False
+    a, sa = refine_symmetric_numba(img, pts, 6, 30, 1e-3, mask)
+    b, sb = refine_symmetric_numpy(img, pts, 6, 30, 1e-3, mask)
+    assert sa.tolist() == sb.tolist() and sa[0] == 2 and a[0].tolist() == pts[0].tolist()
+    assert np.abs(a - b).max() < 1e-9
+    assert (sa[1:54] <= 1).all()
+    # a mask of all offsets is no mask
+    full = np.ones((len(pts), 13, 13), dtype=bool)
+    c, sc = refine_symmetric_numba(img, pts, 6, 30, 1e-3, full)
+    d, sd = refine_symmetric_numba(img, pts, 6, 30, 1e-3)
+    assert sc.tolist() == sd.tolist() and np.abs(c - d).max() < 1e-9
 
 
 def test_find_checkerboard_methods() -> None:
