@@ -101,7 +101,8 @@ _BOARD_CHILD = (
     Entry(
         "checkerboard_symmetric",
         "_refine_symmetric",
-        f"(float32[:, ::1], {_A2}, boolean, {_A2}, int64, {_A2}, {_A2}, int64, float64)",
+        f"(float32[:, ::1], {_A2}, boolean, {_A2}, int64, {_A2}, {_A2}, {_A3}, boolean, int64, "
+        "float64)",
     ),
 )
 
