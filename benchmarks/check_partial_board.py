@@ -24,7 +24,8 @@ fit. Among the fitting views every other one is cropped so that the board is cut
 keeps 55 % of the board's extent, cut from the left, top, right or bottom in turn); the
 part found in the crop, its corners moved back by the crop's offset, is checked against
 the whole detection (labels consistent, corner distance). Calibrations (imageform's
-``calibrate_camera``, Kannala-Brandt for fisheye sets, else Brown-Conrady): the fitting
+``calibrate_camera``, Kannala-Brandt for fisheye sets, else Brown-Conrady, at most 1000
+iterations): the fitting
 views uncut (the reference, all whole), the uncut ones only (what a whole-only calibration
 keeps when those views are cut), the uncut ones and the cropped views' parts, and all the
 fitting views plus the views lost today that give a part. Per calibration: views (partial),
@@ -100,7 +101,7 @@ def calibrate(objs: list[np.ndarray], pts: list[np.ndarray], image_size: tuple[i
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        return calibrate_camera(objs, pts, image_size, model=model)
+        return calibrate_camera(objs, pts, image_size, model=model, max_iter=1000)
 
 
 def held_out(res: Any, objs: list[np.ndarray], pts: list[np.ndarray], model: str) -> float:
@@ -288,7 +289,10 @@ def real_set(name: str, pattern: str, board: tuple[int, int],
     files = sorted(glob.glob(pattern))
     greys, whole, lost = [], [], []
     for f in files:
-        grey = np.asarray(Image.open(f).convert("L"))
+        try:
+            grey = np.asarray(Image.open(f).convert("L"))
+        except OSError:  # an unreadable file is left out
+            continue
         greys.append(grey)
         res = find_checkerboard(grey, board)
         if res.found:
@@ -320,10 +324,13 @@ def real_set(name: str, pattern: str, board: tuple[int, int],
         crops_o.append(_points(res.pattern_size))
         crops_p.append(pts)
     genuine = [(k, r) for k, r in lost if r.found]
-    ref = calibrate([obj] * len(whole), [c for _, c in whole], size, model)
+    try:  # every whole view: what the changes are measured against
+        ref = calibrate([obj] * len(whole), [c for _, c in whole], size, model)
+    except (DegenerateConfigurationError, ConvergenceError):
+        ref = None
     dist_all = np.concatenate(dists) if dists else np.full(1, np.nan)
     summary: list[object] = [
-        name, f"{board[0]} x {board[1]}", model.replace("_", "-"), len(files), len(whole),
+        name, f"{board[0]} x {board[1]}", model.replace("_", "-"), len(greys), len(whole),
         f"{len(lost)} ({len(genuine)})", f"{len(crops_p)} of {len(cut_views)}",
         f"{n_ok}/{n_c}", f"{np.median(dist_all):.3f} / {np.max(dist_all):.3f}",
     ]  # fmt: skip
@@ -355,13 +362,15 @@ def real_set(name: str, pattern: str, board: tuple[int, int],
             rows.append([name, label, f"{len(objs)} ({n_part})", sum(len(p) for p in pts),
                          f"fails: {why}", "—", "—"])  # fmt: skip
             continue
-        dK = fit.K - ref.K
-        rows.append([
-            name, label, f"{len(objs)} ({n_part})", sum(len(p) for p in pts),
-            f"{fit.rms:.4f} / {hrms:.4f}",
-            f"{dK[0, 0]:+.2f} / {dK[1, 1]:+.2f} / {dK[0, 2]:+.2f} / {dK[1, 2]:+.2f}",
-            f"{fit.distortion.coeffs[0] - ref.distortion.coeffs[0]:+.4f}",
-        ])  # fmt: skip
+        change = ["every whole view: fails", "—"]
+        if ref is not None:
+            dK = fit.K - ref.K
+            change = [
+                f"{dK[0, 0]:+.2f} / {dK[1, 1]:+.2f} / {dK[0, 2]:+.2f} / {dK[1, 2]:+.2f}",
+                f"{fit.distortion.coeffs[0] - ref.distortion.coeffs[0]:+.4f}",
+            ]
+        rows.append([name, label, f"{len(objs)} ({n_part})", sum(len(p) for p in pts),
+                     f"{fit.rms:.4f} / {hrms:.4f}", *change])  # fmt: skip
         print(rows[-1], file=sys.stderr, flush=True)
     return summary, rows
 
