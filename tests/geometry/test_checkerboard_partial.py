@@ -152,3 +152,63 @@ def test_bad_input() -> None:
         CheckerboardResult(False, None, "none", (9, 6), partial=True)
     with pytest.raises(InvalidInputError, match="partial"):
         CheckerboardResult(True, np.zeros((12, 2)), "", (4, 3), partial=1.5)  # type: ignore[arg-type]
+
+
+def test_parts_labelled_in_their_own_lattice_calibrate_exactly() -> None:
+    """Zhang's start and the refinement take views of different numbers of points, and a
+    part's own labels (a shift, a quarter turn, a mirroring of the board's) are absorbed by
+    its pose: exact projections of three whole views and four parts so labelled give back K
+    and the distortion to 1e-6."""
+    from imageform.geometry import (
+        BrownConrady,
+        calibrate_camera,
+        checkerboard_points,
+        project_points_distorted,
+        rvec_to_matrix,
+    )
+
+    K = np.array([[800.0, 0, 320], [0, 800, 240], [0, 0, 1]])
+    D = BrownConrady(k1=-0.2, k2=0.05)
+    board = checkerboard_points((9, 6), 25.0)
+    poses = [([0.3, 0.1, 0.0], [-100, -60, 400]), ([-0.2, 0.3, 0.1], [-90, -70, 400]),
+             ([0.1, -0.35, -0.1], [-110, -50, 390]), ([0.4, 0.3, 0.3], [-80, -90, 450]),
+             ([-0.3, -0.2, 0.2], [-60, -80, 420]), ([0.2, -0.4, -0.3], [-120, -40, 410]),
+             ([0.35, 0.25, -0.2], [-70, -75, 380])]  # fmt: skip
+    grid = board.reshape(6, 9, 3)
+    parts = [slice(None), slice(None), slice(None),
+             (slice(0, 4), slice(2, 9)), (slice(1, 6), slice(0, 5)),
+             (slice(2, 6), slice(3, 7)), (slice(0, 3), slice(0, 9))]  # fmt: skip
+    relabel = [None, None, None, "shift", "turn", "mirror", "turn+mirror"]
+    objs, pts = [], []
+    for (r, t), part, how in zip(poses, parts, relabel, strict=True):
+        R = np.asarray(rvec_to_matrix(r))
+        sub = grid if part == slice(None) else grid[part]
+        uv = np.asarray(project_points_distorted(sub.reshape(-1, 3), K, R, t, D)[0])
+        rows, cols = sub.shape[:2]
+        own = checkerboard_points((cols, rows), 25.0).reshape(rows, cols, 3)
+        if how is not None and "turn" in how:  # the part's rows are the board's columns
+            own = checkerboard_points((rows, cols), 25.0).reshape(cols, rows, 3)
+            own = np.rot90(own, 1, axes=(0, 1))
+        if how is not None and "mirror" in how:
+            own = own[:, ::-1]
+        objs.append(own.reshape(-1, 3) if how is not None else sub.reshape(-1, 3))
+        pts.append(uv)
+    assert len({len(p) for p in pts}) > 1  # views of different sizes
+    res = calibrate_camera(objs, pts, (640, 480))
+    np.testing.assert_allclose(res.K, K, atol=1e-6)
+    np.testing.assert_allclose(res.distortion.coeffs[:2], [-0.2, 0.05], atol=1e-6)
+    assert res.rms < 1e-6
+
+
+def test_a_set_with_partial_views(views: dict[str, np.ndarray]) -> None:
+    """find_checkerboards passes partial on: a cut view gives its part and no warning."""
+    import warnings
+
+    from imageform.geometry import find_checkerboards
+
+    H = homography(32.0, (60, 240), 0.2, 0.0, *PATTERN)
+    cut = np.round(render_board(*PATTERN, H, (480, 640), blur=1.0) * 255).astype(np.uint8)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        res = find_checkerboards([views[VIEWS[0]], cut], PATTERN, partial=True)
+    assert [r.found for r in res] == [True, True] and [r.partial for r in res] == [False, True]

@@ -42,6 +42,15 @@ board continuing past the lattice's edge included (so a lattice short of a board
 missed corner is not taken for a smaller board), and its size is reported as ``(cols,
 rows)`` with ``cols >= rows``. A board cut by the image's border shows a smaller complete
 lattice: :func:`find_checkerboards` takes the size most views show.
+
+``partial=True`` (MATLAB's ``PartialDetections``): when the whole board is not found, the
+largest complete lattice of it (at least 3 x 3 and 12 corners, at most the board in either
+orientation) that passes the same checks but the board's edge, less the rows and columns
+with a corner near the image's border, refined off its saddle or in a window that is not
+point-symmetric (an endoscope's dark surround), is returned with ``partial=True``, its own
+``pattern_size`` (``cols >= rows``) and the order above for that size. Its labels are the
+part's own: valid for intrinsic calibration (a shift, quarter turn or mirroring of the
+labels is absorbed by the view's pose), not for stereo.
 """
 
 from __future__ import annotations
