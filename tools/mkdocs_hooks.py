@@ -91,6 +91,7 @@ BENCH_SCRIPTS: dict[str, str] = {
     "horizon-natural": "benchmarks/check_horizon_natural.py",
     "lsd": "benchmarks/bench_lsd.py",
     "odd-files": "benchmarks/check_odd_files.py",
+    "partial-board": "benchmarks/check_partial_board.py",
     "plumb-line": "benchmarks/check_plumb_line.py",
     "psf": "benchmarks/bench_psf.py",
     "raw": "benchmarks/bench_raw.py",

@@ -351,6 +351,13 @@ class CalibrateOptions(_BoardChecks, ImageIn):
         None, help="Sub-pixel window half size (OpenCV's tutorial: 11); default adaptive."
     )
     refinement: Refinement = option("symmetric", help=REFINEMENT_HELP, choices=get_args(Refinement))
+    partial: bool = option(
+        False,
+        help="Also use views where the checkerboard is cut by the image's border or partly "
+        "hidden: the largest part found (at least 3x3 and 12 inner corners), labelled in its "
+        "own lattice (valid for the intrinsics; the corners near the border are where the "
+        "distortion is strongest). The table says which views are partial.",
+    )
     fix: tuple[str, ...] = option(
         (),
         help="Hold a parameter at its initial value (repeatable): fx, fy, cx, cy, skew and the "
@@ -397,6 +404,10 @@ class CalibrateOptions(_BoardChecks, ImageIn):
         """Check the board; a ChArUco board needs a ``--marker`` smaller than ``--square``."""
         super().check()
         charuco = parse_charuco(self.board)
+        if charuco is not None and self.partial:
+            raise InvalidInputError(
+                "--partial is for a checkerboard --board; ChArUco views are used in part already"
+            )
         if charuco is None:
             if self.marker is not None:
                 raise InvalidInputError("--marker is for a ChArUco --board charuco:COLSxROWS")
@@ -500,6 +511,7 @@ def calibrate(run: Run, opts: CalibrateOptions, *, out: Path, images: list[Path]
                 "auto" if auto else (cols, rows),
                 half_window=opts.half_window,
                 method=opts.refinement,
+                partial=opts.partial and not auto,
             )
         )
     reading = None
@@ -507,7 +519,7 @@ def calibrate(run: Run, opts: CalibrateOptions, *, out: Path, images: list[Path]
 
         def search(files: list[Path], size: tuple[int, int]) -> list[Any]:
             return [find_checkerboard(g, size, half_window=opts.half_window,
-                                      method=opts.refinement)
+                                      method=opts.refinement, partial=opts.partial)
                     for _, g in _read_views(run, opts, files)]  # fmt: skip
 
         (cols, rows), line, other = _settle_auto_board(images, dets, search, "views")
@@ -522,6 +534,7 @@ def calibrate(run: Run, opts: CalibrateOptions, *, out: Path, images: list[Path]
         run.note(f"warning: {f}: no {cols}x{rows} board found ({why})")
     names = [f.name for f, d in zip(images, dets, strict=True) if d.found]
     corners = [d.corners for d in dets if d.found]
+    parts = [d.pattern_size if d.partial else None for d in dets if d.found]
     if not corners:
         raise DegenerateConfigurationError(
             f"no {cols}x{rows} checkerboard found in any of the {len(images)} images "
@@ -537,18 +550,22 @@ def calibrate(run: Run, opts: CalibrateOptions, *, out: Path, images: list[Path]
         )
     assert shape0 is not None
     obj = checkerboard_points((cols, rows), square)
+    objs = [obj if p is None else checkerboard_points(p, square) for p in parts]
     command = f"imageform calibrate --board {cols}x{rows} --square {opts.square}"
+    if opts.partial:
+        command += " --partial"
     return _calibrate_views(
         run,
         opts,
         out,
         len(images),
         names,
-        [obj] * len(corners),
+        objs,
         corners,
         shape0,
         command,
         reading=reading,
+        parts=parts if opts.partial else None,
     )
 
 
@@ -564,12 +581,15 @@ def _calibrate_views(
     command: str,
     *,
     reading: dict[str, Any] | None = None,
+    parts: list[tuple[int, int] | None] | None = None,
 ) -> Result:
     """Calibrate from the views' board points and corners and write the camera file.
 
     The plot and corners table asked for are written too, and the result says what was found.
     ``reading``: how the board was read where it is not ``board_reading(opts.board)``
-    (``--board auto``: the size found, :func:`_auto_board_reading`).
+    (``--board auto``: the size found, :func:`_auto_board_reading`). ``parts`` (``--partial``):
+    per view the ``(cols, rows)`` of the part of the board found, None for a whole one; the
+    table then counts each view's corners and says which are partial.
     """
     import numpy as np
 
@@ -611,6 +631,9 @@ def _calibrate_views(
         {"view": n, "rms_px": float(e), "max_px": float(np.max(p)), "points": len(c)}
         for n, e, p, c in zip(names, res.per_view_rms, res.per_point_errors, corners, strict=True)
     ]
+    if parts is not None:
+        for row, part in zip(per_view, parts, strict=True):
+            row["partial"] = None if part is None else list(part)
     K, d = res.K, res.distortion
     coef_names = MODEL_COEFFICIENTS[res.model]
     board = board_reading(opts.board) if reading is None else reading
@@ -618,6 +641,7 @@ def _calibrate_views(
         "output": out,
         "views_used": len(names),
         "views_total": n_images,
+        "views_partial": None if parts is None else sum(p is not None for p in parts),
         "image_size": list(res.image_size),
         "rms_px": res.rms,
         "fx": K[0, 0],
@@ -639,8 +663,16 @@ def _calibrate_views(
     }
     text = [board["line"], f"{'view':<24} {'RMS px':>8} {'max px':>8}"]
     text += [f"{r['view']:<24} {r['rms_px']:8.4f} {r['max_px']:8.4f}" for r in per_view]
+    over = f"{len(names)} views"
+    if parts is not None:
+        text[1] += f" {'corners':>8}  part"
+        for k, (r, part) in enumerate(zip(per_view, parts, strict=True), start=2):
+            what = "whole" if part is None else f"partial {part[0]}x{part[1]}"
+            text[k] += f" {r['points']:8d}  {what}"
+        n_part = sum(p is not None for p in parts)
+        over += f" ({n_part} partial, {sum(len(c) for c in corners)} corners)"
     text.append(
-        f"RMS {res.rms:.4f} px over {len(names)} views; fx {K[0, 0]:.3f} ± {res.std['fx']:.3f}, "
+        f"RMS {res.rms:.4f} px over {over}; fx {K[0, 0]:.3f} ± {res.std['fx']:.3f}, "
         f"fy {K[1, 1]:.3f} ± {res.std['fy']:.3f}, cx {K[0, 2]:.3f}, cy {K[1, 2]:.3f}"
     )
     coefs = ", ".join(f"{c:.6g}" for c in d.coeffs[: len(coef_names)])
