@@ -13,7 +13,6 @@ from typing import Any
 
 from imageform._files import Outputs, not_a_regular_file
 from imageform.errors import InvalidInputError
-from imageform.io import image_files
 from imageform.workflows._spec import (
     Options,
     Result,
@@ -38,6 +37,8 @@ def _as_paths(value: Any, name: str, *, required: bool = False) -> list[Path]:
 
 def _expand_folders(paths: list[Path]) -> list[Path]:
     """``paths`` with each folder replaced by its images (:func:`imageform.io.image_files`)."""
+    from imageform.io import image_files
+
     out: list[Path] = []
     for p in paths:
         out += image_files(p) if p.is_dir() else [p]

@@ -14,7 +14,6 @@ from pathlib import Path
 from typing import Any, Literal, get_args
 
 from imageform.errors import InvalidInputError
-from imageform.io import image_files
 from imageform.workflows._images import ImageIn, mask_of
 from imageform.workflows._spec import (
     Input,
@@ -133,6 +132,8 @@ class FlatfieldOptions(ImageIn):
 
 def _image_files(sources: Any) -> list[Path]:
     """Return the image files of the inputs: files as given, folders' images in natural order."""
+    from imageform.io import image_files
+
     if isinstance(sources, str | Path):
         sources = [sources]
     files: list[Path] = []

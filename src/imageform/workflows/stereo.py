@@ -8,7 +8,6 @@ from pathlib import Path
 from typing import Any, Literal, get_args
 
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
-from imageform.io import image_files
 from imageform.workflows._images import ImageIn, read
 from imageform.workflows._spec import (
     Input,
@@ -85,6 +84,7 @@ class StereoCalibrateOptions(_BoardChecks, ImageIn):
 def _expand(pattern: str, what: str) -> list[Path]:
     """Return the files a name, a folder or a glob pattern names, sorted; none is an error."""
     from imageform._files import glob_paths, not_a_regular_file
+    from imageform.io import image_files
 
     p = str(pattern)
     if os.path.exists(p) or not any(c in p for c in "*?["):
