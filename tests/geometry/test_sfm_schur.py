@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import functools
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -62,7 +63,7 @@ def test_reduced_camera_system_is_the_dense_product(kernel: bool) -> None:
     assert none(np.zeros((0, 6, 3)), np.zeros((0, 6, 3))).shape == (0, 0)
 
 
-def _problem(lens: bool) -> tuple[tuple[object, ...], np.ndarray]:
+def _problem(lens: bool) -> tuple[tuple[Any, ...], Any]:
     """A bundle adjustment of 5 cameras and 80 points, perturbed, camera 0 fixed."""
     rng = np.random.default_rng(2)
     K = np.array([[500.0, 0, 320], [0, 500, 240], [0, 0, 1]])
@@ -86,10 +87,10 @@ def _problem(lens: bool) -> tuple[tuple[object, ...], np.ndarray]:
 @pytest.mark.skipif(not numba_enabled(), reason="numba")
 @pytest.mark.parametrize("lens", [False, True])
 def test_normal_equations_kernel_matches_the_array_path(lens: bool) -> None:
-    args, A = _problem(lens)
+    (K, R, t, X, ci, pi, uv, fixed, delta), A = _problem(lens)
     for iters, tol in ((1, 1e-12), (20, 1e-9)):
-        a = sfm_mod._schur_lm(*args, iters, A=A, kernel=False)  # type: ignore[arg-type]
-        k = sfm_mod._schur_lm(*args, iters, A=A, kernel=True)  # type: ignore[arg-type]
+        a = sfm_mod._schur_lm(K, R, t, X, ci, pi, uv, fixed, delta, iters, A=A, kernel=False)
+        k = sfm_mod._schur_lm(K, R, t, X, ci, pi, uv, fixed, delta, iters, A=A, kernel=True)
         for x, y in zip(a, k, strict=True):
             np.testing.assert_allclose(y, x, rtol=0, atol=tol * max(1.0, np.abs(x).max()))
 
