@@ -85,6 +85,33 @@ def _rays(u: np.ndarray, v: np.ndarray, f: float, cx: float, cy: float) -> np.nd
     return np.stack([(u - cx) / f, (v - cy) / f, np.ones_like(u)], axis=-1)
 
 
+def render_view(
+    K: np.ndarray, distortion: object, R: np.ndarray, t: np.ndarray, size: tuple[int, int],
+    *, ss: int = 3, seed: int = 0,
+) -> np.ndarray:  # fmt: skip
+    """Render the scene by a camera ``X_cam = R X + t`` (K, a distortion model or None)."""
+    w, h = size
+    off = (np.arange(ss) + 0.5) / ss - 0.5
+    o = -R.T @ t
+    acc = np.zeros((h, w))
+    v0, u0 = np.mgrid[0:h, 0:w].astype(np.float64)
+    for sy in off:
+        for sx in off:
+            y = (v0 + sy - K[1, 2]) / K[1, 1]
+            x = (u0 + sx - K[0, 2] - K[0, 1] * y) / K[0, 0]
+            xy = np.stack([x, y], axis=-1)
+            if distortion is not None:
+                xy = np.asarray(distortion.undistort(xy).xy)  # type: ignore[attr-defined]
+            d = np.concatenate([xy, np.ones((h, w, 1))], axis=-1) @ R  # R.T @ d per pixel
+            acc += _texture(_hit(o, d), seed)
+    return acc / ss**2
+
+
+def hit_points(o: np.ndarray, rays: np.ndarray) -> np.ndarray:
+    """The scene's points hit by rays from ``o`` along ``rays`` (..., 3) (left camera frame)."""
+    return _hit(np.asarray(o, dtype=np.float64), rays)
+
+
 def render_pair(
     width: int = 320, height: int = 240, *, f: float = 400.0, baseline: float = 60.0,
     ss: int = 3, seed: int = 0,

@@ -141,7 +141,8 @@ def select(
     if lr_check >= 0:
         # the right image's winner at x_r: least S[y, x_r + min_d + k, k] over k
         xl = np.arange(w)[:, None] + min_d + k  # (W, D): left column of right pixel x_r
-        rin = (xl >= 0) & (xl < w)
+        # left pixels of the whole range only (the kernel skips the others, as OpenCV)
+        rin = (xl >= 0) & (xl < w) & np.take(inside.all(axis=1), np.clip(xl, 0, w - 1))
         SR = np.where(rin[None], S[:, np.clip(xl, 0, w - 1), k], big)
         rk = np.argmin(SR, axis=2)  # (H, W)
         xr_b = np.clip(np.arange(w)[None, :] - (min_d + b), 0, w - 1)
