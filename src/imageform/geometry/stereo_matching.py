@@ -194,7 +194,7 @@ def stereo_disparity(
     if not u < 1.0:
         raise InvalidInputError(f"expected uniqueness in [0, 1), got {u}")
     lr = -1.0 if lr_check is None else as_real(lr_check, "lr_check", minimum=0.0)
-    sp = as_int(speckle_size, "speckle_size", minimum=0)
+    sp = as_int(speckle_size, "speckle_size", minimum=0, maximum=2**40)
     sr = as_real(speckle_range, "speckle_range", minimum=0.0)
     check_memory(3.0 * h * w * n_d, "num_disparities", f"the costs of {h} x {w} px x {n_d}")
     if use_numba(gl):
@@ -234,13 +234,19 @@ def _match(
 
 def _q_matrix(rectification: Any) -> NDArray[np.float64]:
     Q = getattr(rectification, "Q", rectification)
-    Qm = as_real_array(to_numpy(Q) if not isinstance(Q, list | tuple) else Q, "Q", check=False)
+    Q = to_numpy(Q) if not isinstance(Q, list | tuple) else Q
+    Qm = as_real_array(Q, "rectification", check=False)
     if Qm.shape != (4, 4):
         raise InvalidInputError(
-            f"expected a StereoRectification or its Q matrix (4, 4), got shape {Qm.shape}"
+            f"expected rectification as a StereoRectification or its Q matrix (4, 4), got shape "
+            f"{Qm.shape}"
         )
     if not np.isfinite(Qm).all():
-        raise InvalidInputError("expected Q of finite numbers")
+        raise InvalidInputError("expected rectification's Q of finite numbers")
+    if not np.any(Qm[3]):
+        raise InvalidInputError(
+            "expected rectification's Q with a non-zero last row (it maps no disparity to a depth)"
+        )
     return Qm
 
 

@@ -406,6 +406,9 @@ def depth_cmd(run: Run, opts: DepthOptions, *, out: Path, left: Path, right: Pat
     cl, cr = rig.left.camera, rig.right.camera
     img_l = _pair_image(Path(left), opts, cl.image_size, "left")
     img_r = _pair_image(Path(right), opts, cr.image_size, "right")
+    from imageform._kernels import ahead
+
+    ahead.start("depth")  # a first run: the matching kernels compiled on two cores
     size = (int(img_l.shape[1]), int(img_l.shape[0]))
     rect = stereo_rectify(
         np.asarray(cl.K), cl.distortion, np.asarray(cr.K), cr.distortion, size, rig.R, rig.T
