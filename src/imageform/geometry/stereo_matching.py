@@ -123,8 +123,9 @@ def stereo_disparity(
         Side of the census window (8, 24 or 48 bits a pixel).
     p1, p2 : int, optional
         Penalties of a disparity step of 1 and of a larger one along a path, in bits of
-        Hamming distance (``0 < p1 < p2 <= 8000``). Defaults ``p1 = (block_size² - 1) / 8``
-        and ``p2 = 32 p1`` (3 and 96 for 5 x 5).
+        Hamming distance (``0 < p1 < p2 <= 8000``). Defaults ``p1 = (block_size² - 1) / 4``
+        and ``p2 = 16 p1`` (6 and 96 for 5 x 5; the best of 7 pairs tried on the pairs of
+        ``benchmarks/check_stereo_depth.py``).
     adaptive_p2 : bool
         Divide ``p2`` by the intensity step along the path, ``p2 / |I_p - I_{p-r}|`` on a
         0-255 scale (Hirschmüller's eq. 12), never below ``p1``: disparity steps come cheaper
@@ -181,8 +182,8 @@ def stereo_disparity(
     if bs not in BLOCK_SIZES:
         raise InvalidInputError(f"expected block_size 3, 5 or 7 (the census window), got {bs}")
     nbits = bs * bs - 1
-    P1 = max(1, nbits // 8) if p1 is None else as_int(p1, "p1", minimum=1, maximum=MAX_P2 - 1)
-    P2 = 32 * P1 if p2 is None else as_int(p2, "p2", minimum=1, maximum=MAX_P2)
+    P1 = max(1, nbits // 4) if p1 is None else as_int(p1, "p1", minimum=1, maximum=MAX_P2 - 1)
+    P2 = 16 * P1 if p2 is None else as_int(p2, "p2", minimum=1, maximum=MAX_P2)
     P2 = min(P2, MAX_P2)
     if not P2 > P1:
         raise InvalidInputError(

@@ -323,13 +323,13 @@ class DepthOptions(ImageIn):
     block_size: int = option(5, help="Census window side: 3, 5 or 7 px.", minimum=3, maximum=7)
     p1: int | None = option(
         None,
-        help="Penalty of a disparity step of 1 px along a path (bits; default block_size^2 / 8).",
+        help="Penalty of a disparity step of 1 px along a path (bits; default (block_size^2 - 1) / 4).",
         minimum=1,
         maximum=7999,
     )
     p2: int | None = option(
         None,
-        help="Penalty of a larger disparity step (bits, > --p1; default 32 x --p1).",
+        help="Penalty of a larger disparity step (bits, > --p1; default 16 x --p1).",
         minimum=2,
         maximum=8000,
     )
