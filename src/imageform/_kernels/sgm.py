@@ -189,8 +189,9 @@ def select(total, min_d, uniqueness, lr_check):  # type: ignore[no-untyped-def] 
     columns), when another disparity more than 1 away costs less than
     ``best / (1 - uniqueness)`` (OpenCV's ``uniquenessRatio``), or, with ``lr_check >= 0``,
     when the right image's winner at ``x - d`` (the least ``total[y, x_r + d', d']`` over
-    ``d'``) differs from ``d`` by more than ``lr_check``. Sub-pixel: the vertex of the parabola
-    through the best cost and its neighbours (none at the range's ends).
+    the ``d'`` whose left pixel ``x_r + d'`` is outside that band) differs from ``d`` by more
+    than ``lr_check``. Sub-pixel: the vertex of the parabola through the best cost and its
+    neighbours (none at the range's ends).
     """
     h, w, n = total.shape
     out = np.full((h, w), np.nan, dtype=np.float32)
