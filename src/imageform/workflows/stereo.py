@@ -323,7 +323,8 @@ class DepthOptions(ImageIn):
     block_size: int = option(5, help="Census window side: 3, 5 or 7 px.", minimum=3, maximum=7)
     p1: int | None = option(
         None,
-        help="Penalty of a disparity step of 1 px along a path (bits; default (block_size^2 - 1) / 4).",
+        help="Penalty of a disparity step of 1 px along a path (bits; default "
+        "(block_size^2 - 1) / 4).",
         minimum=1,
         maximum=7999,
     )
