@@ -30,8 +30,8 @@ disparity, ``> 1 px`` and ``> 3 px`` the fraction of those more than 1 (3) px of
 mean absolute error, ``median d - truth`` their median signed error (Adirondack's truth here
 sits about half a pixel below both matchers' disparities: a floored truth). Time: the
 matching alone (imageform's kernels, compiled before; OpenCV's ``compute``), one thread each
-(``OPENBLAS_NUM_THREADS=1``, ``cv2.setNumThreads(1)``), the median of interleaved runs, as a
-ratio (the machine is shared: its load is printed).
+(``OPENBLAS_NUM_THREADS=1``, ``cv2.setNumThreads(1)``): the process's CPU time, the median of
+interleaved runs, as a ratio (the machine is shared: its load is printed).
 
     OPENBLAS_NUM_THREADS=1 PYTHONPATH=src:. python benchmarks/check_stereo_depth.py \\
         --middlebury /tmp/middlebury --out benchmarks/results/stereo-depth-2026-11-29j.md
@@ -139,12 +139,12 @@ def _time(pair: dict[str, Any], runs: int) -> tuple[float, float]:
 
     ours, cv = [], []
     for _ in range(runs):
-        t = time.perf_counter()
+        t = time.process_time()
         _ours(pair)
-        ours.append(time.perf_counter() - t)
-        t = time.perf_counter()
+        ours.append(time.process_time() - t)
+        t = time.process_time()
         _opencv(pair, cv2.STEREO_SGBM_MODE_HH)
-        cv.append(time.perf_counter() - t)
+        cv.append(time.process_time() - t)
     return float(np.median(ours)), float(np.median(cv))
 
 
@@ -195,7 +195,7 @@ def main() -> None:
             )
     lines += [
         "",
-        "Time of the matching alone, one thread each, median of "
+        "CPU time of the matching alone, one thread each, median of "
         f"{args.runs} interleaved runs (load before: {_load()}):",
         "",
         "| pair | imageform s | OpenCV MODE_HH s | imageform / OpenCV |",
