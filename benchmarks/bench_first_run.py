@@ -95,6 +95,15 @@ img = (rng.uniform(0, 1, (48, 64, 3)) * 255).astype(np.uint8)
 for k in range(3):
     write_image(work / "many" / f"im{k}.png", img)
 write_image(work / "tiles.tif", np.repeat(img, 4, axis=0).astype(np.float32) / 255.0)
+# a rectified stereo pair (a textured plane 10 px of disparity away) and its rig, for depth
+from imageform.io import CameraFile, StereoCameraFile, write_stereo_camera
+Kd = np.array([[200.0, 0.0, 79.5], [0.0, 200.0, 59.5], [0.0, 0.0, 1.0]])
+write_stereo_camera(work / "rig.toml", StereoCameraFile(
+    CameraFile(Camera(Kd, image_size=(160, 120))),
+    CameraFile(Camera(Kd, np.eye(3), [-50.0, 0.0, 0.0], (160, 120)), has_pose=True)))
+tex = (np.random.default_rng(7).uniform(0, 1, (120, 160)) * 255).astype(np.uint8)
+write_image(work / "pair_r.png", tex[..., None])
+write_image(work / "pair_l.png", np.roll(tex, 10, axis=1)[..., None])
 """
 
 # imageform reconstruct's input: 8 frames (320 x 240) of the room walk of bench_reconstruct.py
@@ -284,6 +293,20 @@ def _commands(w: Path) -> dict[str, list[str]]:
             "30mm",
             "-o",
             f"{o}/st.toml",
+            "--force",
+        ],
+        "depth": [
+            "depth",
+            str(w / "pair_l.png"),
+            str(w / "pair_r.png"),
+            "--camera",
+            str(w / "rig.toml"),
+            "--num-disparities",
+            "16",
+            "--speckle-size",
+            "10",
+            "-o",
+            f"{o}/z.tif",
             "--force",
         ],
         "vanishing": ["vanishing", str(stage), "--json"],

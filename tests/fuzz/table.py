@@ -943,6 +943,30 @@ VALID: dict[str, C | Skip] = {
 #: Non-finite results that are the documented answer, not garbage: ``(callable, parameter,
 #: kind) -> why``. The runner reports them as ok with the reason.
 DOCUMENTED_NONFINITE: dict[tuple[str, str, str], str] = {
+    ("imageform.geometry.disparity_to_depth", "disparity", "nan"): (
+        "NaN marks the invalid pixels of a disparity map (stereo_disparity's), as documented"
+    ),
+    ("imageform.geometry.disparity_to_depth", "disparity", "zero"): (
+        "a zero disparity puts the point at infinity on a zero-disparity rig: NaN, as documented"
+    ),
+    ("imageform.geometry.disparity_to_depth", "disparity", "negative"): (
+        "a negative disparity puts the point behind the cameras: NaN, as documented"
+    ),
+    ("imageform.geometry.disparity_to_depth", "rectification", "negative"): (
+        "a Q that puts positive disparities behind the cameras: NaN for all, as documented"
+    ),
+    ("imageform.geometry.disparity_to_points", "disparity", "nan"): (
+        "NaN marks the invalid pixels of a disparity map (stereo_disparity's), as documented"
+    ),
+    ("imageform.geometry.disparity_to_points", "disparity", "zero"): (
+        "a zero disparity puts the point at infinity on a zero-disparity rig: NaN, as documented"
+    ),
+    ("imageform.geometry.disparity_to_points", "disparity", "negative"): (
+        "a negative disparity puts the point behind the cameras: NaN, as documented"
+    ),
+    ("imageform.geometry.disparity_to_points", "rectification", "negative"): (
+        "a Q that puts positive disparities behind the cameras: NaN for all, as documented"
+    ),
     ("imageform.analysis.mtf_crossing", "mtf", "huge"): (
         "a curve that never falls to the level has no crossing: NaN (SFRResult.mtf10 relies on it)"
     ),
@@ -1155,6 +1179,9 @@ VALID.update(
         "imageform.workflows.sensor.MosaicOptions": call(),
         "imageform.workflows.emva.EmvaOptions": call(fit_fraction=0.6, spatial_index=2),
         "imageform.workflows.stereo.StereoCalibrateOptions": call(board="9x6"),
+        "imageform.workflows.stereo.DepthOptions": call(camera=V("stereo_file")),
+        "imageform.workflows.stereo.DepthOptions.fields": call(),
+        "imageform.workflows.stereo.DepthOptions.types": call(),
         "imageform.workflows.analysis.FitCorrectionOptions.fields": call(),
         "imageform.workflows.analysis.FitCorrectionOptions.types": call(),
         "imageform.workflows.analysis.HarmonizeOptions.fields": call(),
@@ -1219,6 +1246,17 @@ VALID.update(
         ),
         "imageform.geometry.stereo_rectify": call(
             V("K"), V("brown"), V("K"), V("brown"), (8, 6), V("R"), np.array([-0.1, 0.0, 0.0])
+        ),
+        "imageform.geometry.stereo_disparity": call(
+            V("gray"), V("gray"), num_disparities=4, block_size=3
+        ),
+        "imageform.geometry.disparity_to_depth": call(
+            np.array([[8.0, 4.0, 2.0], [1.0, 16.0, 8.0]]),
+            np.array([[1, 0, 0, -1.0], [0, 1, 0, -0.5], [0, 0, 0, 400.0], [0, 0, 0.01, 0]]),
+        ),
+        "imageform.geometry.disparity_to_points": call(
+            np.array([[8.0, 4.0, 2.0], [1.0, 16.0, 8.0]]),
+            np.array([[1, 0, 0, -1.0], [0, 1, 0, -0.5], [0, 0, 0, 400.0], [0, 0, 0.01, 0]]),
         ),
         "imageform.geometry.triangulate_two_view": call(V("P"), V("P2"), V("pts1"), V("pts2")),
         "imageform.io.StereoCameraFile": Skip(
@@ -1343,6 +1381,15 @@ VALID.update(
         ),
         "imageform.workflows.emva.EmvaOptions.paths": method(
             VALID["imageform.workflows.emva.EmvaOptions"], "output"
+        ),
+        "imageform.workflows.stereo.DepthOptions.check": method(
+            VALID["imageform.workflows.stereo.DepthOptions"]
+        ),
+        "imageform.workflows.stereo.DepthOptions.check_output": method(
+            VALID["imageform.workflows.stereo.DepthOptions"], V("tmpfile_png")
+        ),
+        "imageform.workflows.stereo.DepthOptions.paths": method(
+            VALID["imageform.workflows.stereo.DepthOptions"], "output"
         ),
         "imageform.workflows.stereo.StereoCalibrateOptions.check": method(
             VALID["imageform.workflows.stereo.StereoCalibrateOptions"]

@@ -274,3 +274,44 @@ def test_rectified_renders_have_aligned_rows(rendered: tuple) -> None:
     dv_all = np.abs(np.concatenate(dv))
     assert max(abs(o) for o in offsets) < 0.1, offsets
     assert float(np.median(dv_all)) < 0.15 and float(np.max(dv_all)) < 1.0, dv_all
+
+
+def test_depth_command_on_the_calibrated_rig(rendered: tuple, tmp_path: Path) -> None:
+    """``imageform depth`` with the rig calibrated from the rendered boards (the file
+    ``stereo-calibrate`` writes, T in mm) on a textured scene ray-cast by the true cameras
+    (distortion, 8.6 deg toe-in; ``tests/stereo_scenes.py``): the depth of the rectified
+    left pixels against the true depth. Measured: 86 % of the pixels valid, median error
+    0.48 %, 98.6 % within 2 %, 99.3 % within 5 %."""
+    import sys
+
+    from imageform.cli import main
+    from imageform.io import StereoCameraFile, read_image, write_image, write_stereo_camera
+
+    sys.path.insert(0, str(ROOT / "tests"))
+    from stereo_scenes import hit_points, render_view
+
+    left, right, _, _, _ = rendered
+    rig = stereo_calibrate([BOARD * 1000] * len(left), left, right, SIZE, fix=("k3",))
+    write_stereo_camera(tmp_path / "rig.toml", StereoCameraFile.from_calibration(rig))
+    T_mm = 1000 * T_TRUE
+    for name, K, d, R, t in (
+        ("l", K1, D1, np.eye(3), np.zeros(3)),
+        ("r", K2, D2, R_TRUE, T_mm),
+    ):
+        img = render_view(K, d, R, t, SIZE, ss=2)
+        write_image(tmp_path / f"{name}.png", (img * 255).round().astype(np.uint8))
+    out = tmp_path / "z.tiff"
+    args = ["depth", str(tmp_path / "l.png"), str(tmp_path / "r.png"), "--camera"]
+    args += [str(tmp_path / "rig.toml"), "--num-disparities", "64", "-o", str(out)]
+    assert main(args) == 0
+    z = np.asarray(read_image(out))[..., 0]
+    # the truth: the true rig's rectified left pixels' rays, in the rectified frame
+    rect = stereo_rectify(K1, D1, K2, D2, SIZE, R_TRUE, T_mm)
+    v, u = np.mgrid[0 : SIZE[1], 0 : SIZE[0]].astype(np.float64)
+    uv1 = np.stack([u, v, np.ones_like(u)], -1)
+    rays = uv1 @ np.linalg.inv(rect.P1[:, :3]).T @ rect.R1  # R1ᵀ (P1⁻¹ (u, v, 1)) per pixel
+    z_true = (hit_points(np.zeros(3), rays) @ rect.R1.T)[..., 2]
+    ok = np.isfinite(z) & np.isfinite(z_true)
+    rel = np.abs(z[ok] - z_true[ok]) / z_true[ok]
+    assert ok.mean() > 0.75, ok.mean()
+    assert np.median(rel) < 0.01 and np.mean(rel < 0.05) > 0.97, (np.median(rel), ok.mean())

@@ -26,6 +26,7 @@ _REQUIRED = {  # valid values of the options without a default
     "cvd": {"deficiency": "protan"},
     "calibrate": {"board": "9x6"},
     "stereo-calibrate": {"board": "9x6"},
+    "depth": {"camera": "stereo.toml"},
     "track": {"camera": "camera.toml", "board": "9x6", "square": "30mm"},
     "reconstruct": {"camera": "camera.toml"},
 }

@@ -60,6 +60,15 @@ for k, (ax, ay) in enumerate(((0.3, 0.0), (0.0, 0.35), (-0.25, 0.2))):
     board = np.where(inside, board, 128).reshape(480, 640).astype(np.uint8)
     write_image(work / f"board{k}.png", board[..., None])
 write_image(work / "board_rgb.png", np.repeat(board[..., None], 3, axis=2))
+# a rectified stereo pair (a textured plane 10 px of disparity away) and its rig, for depth
+from imageform.io import CameraFile, StereoCameraFile, write_stereo_camera
+Kd = np.array([[200.0, 0.0, 79.5], [0.0, 200.0, 59.5], [0.0, 0.0, 1.0]])
+write_stereo_camera(work / "rig.toml", StereoCameraFile(
+    CameraFile(Camera(Kd, image_size=(160, 120))),
+    CameraFile(Camera(Kd, np.eye(3), [-50.0, 0.0, 0.0], (160, 120)), has_pose=True)))
+tex = (np.random.default_rng(7).uniform(0, 1, (120, 160)) * 255).astype(np.uint8)
+write_image(work / "pair_r.png", tex[..., None])
+write_image(work / "pair_l.png", np.roll(tex, 10, axis=1)[..., None])
 """
 
 
@@ -71,6 +80,19 @@ def _jobs(work: Path) -> list[list[str]]:
         ["convert", f"{w}/rgb8.png", "--from", "srgb", "--to", "lab", "-o", f"{w}/lab.tif"],
         ["calibrate", f"{w}/board*.png", "--board", "9x6", "--square", "30mm", "-o", f"{w}/c.toml"],
         ["undistort", f"{w}/board_rgb.png", "--camera", f"{w}/cam.toml", "-o", f"{w}/u.png"],
+        [
+            "depth",
+            f"{w}/pair_l.png",
+            f"{w}/pair_r.png",
+            "--camera",
+            f"{w}/rig.toml",
+            "--num-disparities",
+            "16",
+            "--speckle-size",
+            "10",
+            "-o",
+            f"{w}/z.tif",
+        ],
     ]
     # 8-bit mosaics only: 16-bit ones run the same float32 kernels
     for method in ("menon", "bilinear", "malvar", "hamilton-adams"):

@@ -119,6 +119,11 @@ from imageform.geometry.stereo import (
     stereo_calibrate,
     stereo_rectify,
 )
+from imageform.geometry.stereo_matching import (
+    disparity_to_depth,
+    disparity_to_points,
+    stereo_disparity,
+)
 from imageform.geometry.tracking import BoardPose, BoardTracker
 from imageform.geometry.triangulation import TriangulationResult, triangulate_points
 from imageform.geometry.twoview import (
@@ -201,6 +206,8 @@ __all__ = [
     "detect_horizon",
     "detect_line_segments",
     "detect_vanishing_points",
+    "disparity_to_depth",
+    "disparity_to_points",
     "essential_5point",
     "estimate_distortion_from_lines",
     "estimate_homography",
@@ -252,6 +259,7 @@ __all__ = [
     "solve_pnp_batch",
     "solve_pnp_ransac",
     "stereo_calibrate",
+    "stereo_disparity",
     "stereo_rectify",
     "to_homogeneous",
     "triangulate_points",

@@ -38,30 +38,33 @@ def write_points_ply(
 ) -> Path:
     """Write points ``(P, 3)``, their colours ``(P, 3)`` uint8 and track lengths ``(P,)``.
 
-    Binary little-endian; the coordinates as 32-bit floats.
+    Binary little-endian; the coordinates as 32-bit floats. ``track_length`` None leaves the
+    property out (a depth map's points: ``imageform depth --points``).
     """
     p = np.asarray(points, np.float64).reshape(-1, 3)
     c = np.asarray(colors)
-    n = np.asarray(track_length)
+    n = np.ones(p.shape[0], np.int32) if track_length is None else np.asarray(track_length)
     if c.shape != p.shape or c.dtype != np.uint8 or n.shape != (p.shape[0],):
         raise InvalidInputError(
             f"expected colors (P, 3) uint8 and track_length (P,) for {p.shape[0]} points, got "
             f"{describe(c)} and {describe(n)}"
         )
-    rec = np.zeros(
-        p.shape[0],
-        dtype=[("x", "<f4"), ("y", "<f4"), ("z", "<f4"), ("red", "u1"), ("green", "u1"),
-               ("blue", "u1"), ("track_length", "<i4")],
-    )  # fmt: skip
+    fields = [("x", "<f4"), ("y", "<f4"), ("z", "<f4"), ("red", "u1"), ("green", "u1"),
+              ("blue", "u1")]  # fmt: skip
+    if track_length is not None:
+        fields.append(("track_length", "<i4"))
+    rec = np.zeros(p.shape[0], dtype=fields)
     rec["x"], rec["y"], rec["z"] = p[:, 0], p[:, 1], p[:, 2]
     rec["red"], rec["green"], rec["blue"] = c[:, 0], c[:, 1], c[:, 2]
-    rec["track_length"] = n
+    if track_length is not None:
+        rec["track_length"] = n
     lines = ["ply", "format binary_little_endian 1.0"]
     lines += [f"comment {line}" for line in comment.splitlines() if line.strip()]
     lines += [f"element vertex {p.shape[0]}"]
     lines += [f"property float {a}" for a in "xyz"]
     lines += [f"property uchar {a}" for a in ("red", "green", "blue")]
-    lines += ["property int track_length", "end_header"]
+    lines += ["property int track_length"] if track_length is not None else []
+    lines += ["end_header"]
     out = Path(path)
     with out.open("wb") as fh:
         fh.write(("\n".join(lines) + "\n").encode("ascii", "replace"))

@@ -1,4 +1,8 @@
-"""Stereo workflow: ``imageform stereo-calibrate`` (checkerboard pairs to a stereo camera file)."""
+"""Stereo workflows: ``imageform stereo-calibrate`` and ``imageform depth``.
+
+``stereo-calibrate``: checkerboard pairs to a stereo camera file; ``depth``: a stereo pair and
+that file to a depth or disparity map and a coloured point cloud.
+"""
 
 from __future__ import annotations
 
@@ -32,7 +36,7 @@ from imageform.workflows.calibration import (
     parse_board,
 )
 
-__all__ = ["WORKFLOWS", "StereoCalibrateOptions"]
+__all__ = ["WORKFLOWS", "DepthOptions", "StereoCalibrateOptions"]
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -282,6 +286,231 @@ def stereo_calibrate_cmd(
     return Result(summary, tuple(text))
 
 
+@dataclass(frozen=True, kw_only=True)
+class DepthOptions(ImageIn):
+    """Options of ``imageform depth``."""
+
+    camera: Path = option(
+        help="Stereo camera file of the pair (imageform stereo-calibrate's; docs/camera-file.md, "
+        "'Stereo rigs').",
+        metavar="FILE",
+        input=True,
+    )
+    disparity: bool = option(
+        False,
+        help="Write the disparity (px, x_left - x_right in the rectified pair) instead of depth.",
+    )
+    points: Path | None = option(
+        None,
+        help="Also write the 3-D points of the valid pixels, coloured by the left image (PLY).",
+        metavar="FILE",
+        output=True,
+    )
+    min_disparity: int = option(
+        0,
+        help="Smallest disparity searched (px; negative when the rectified principal points "
+        "are apart).",
+        minimum=-100_000,
+        maximum=100_000,
+    )
+    num_disparities: int = option(
+        64,
+        help="How many disparities are searched (px); the nearest depth seen is f B / "
+        "(min + num - 1).",
+        minimum=1,
+        maximum=4096,
+    )
+    block_size: int = option(5, help="Census window side: 3, 5 or 7 px.", minimum=3, maximum=7)
+    p1: int | None = option(
+        None,
+        help="Penalty of a disparity step of 1 px along a path (bits; default "
+        "(block_size^2 - 1) / 4).",
+        minimum=1,
+        maximum=7999,
+    )
+    p2: int | None = option(
+        None,
+        help="Penalty of a larger disparity step (bits, > --p1; default 16 x --p1).",
+        minimum=2,
+        maximum=8000,
+    )
+    adaptive_p2: bool = option(
+        False, help="Divide --p2 by the intensity step along a path (cheaper jumps at edges)."
+    )
+    uniqueness: float = option(
+        0.1,
+        help="Margin by which the best disparity must beat any other more than 1 px away "
+        "(OpenCV's uniquenessRatio / 100).",
+        minimum=0.0,
+        maximum=0.99,
+    )
+    lr_check: float = option(
+        1.0,
+        help="Largest difference of the left and right images' disparities (px; OpenCV's "
+        "disp12MaxDiff); larger ones are invalid.",
+        minimum=0.0,
+        maximum=100_000.0,
+    )
+    speckle_size: int = option(
+        0,
+        help="Make invalid the regions of at most this many pixels (0: keep all; OpenCV's "
+        "speckleWindowSize).",
+        minimum=0,
+        maximum=1_000_000_000,
+    )
+    speckle_range: float = option(
+        1.0,
+        help="Largest disparity difference of neighbours within one region (px).",
+        minimum=0.0,
+        maximum=100_000.0,
+    )
+
+
+def _pair_image(path: Path, opts: DepthOptions, size: tuple[int, int] | None, side: str) -> Any:
+    import numpy as np
+
+    img = np.asarray(read(path, opts))
+    h, w = int(img.shape[0]), int(img.shape[1])
+    if size is not None and (w, h) != tuple(size):
+        raise InvalidInputError(
+            f"{path} is {w} x {h} px; the {side} camera of {opts.camera} is for {size[0]} x "
+            f"{size[1]} px images"
+        )
+    if img.dtype.kind == "f" and not np.isfinite(img).all():
+        raise InvalidInputError(f"{path} holds NaN or inf; give an image of finite values")
+    return img
+
+
+def depth_cmd(run: Run, opts: DepthOptions, *, out: Path, left: Path, right: Path) -> Result:
+    """``imageform depth``: rectify a stereo pair, match it, write depth or disparity."""
+    import numpy as np
+
+    from imageform.geometry import (
+        disparity_to_depth,
+        disparity_to_points,
+        rectification_map,
+        remap_bilinear,
+        stereo_disparity,
+    )
+    from imageform.geometry.stereo import stereo_rectify
+    from imageform.io import read_stereo_camera, write_image
+    from imageform.workflows._ply import write_points_ply
+
+    if opts.points is not None and opts.points.suffix.lower() != ".ply":
+        raise InvalidInputError(f"--points writes a PLY file: give a .ply name, not {opts.points}")
+    if opts.block_size not in (3, 5, 7):
+        raise InvalidInputError(f"--block-size must be 3, 5 or 7, got {opts.block_size}")
+    if opts.p1 is not None and opts.p2 is not None and not opts.p2 > opts.p1:
+        raise InvalidInputError(f"--p2 ({opts.p2}) must exceed --p1 ({opts.p1})")
+    _check_distinct(str(left), str(right), [Path(left)], [Path(right)])
+    rig = read_stereo_camera(opts.camera)
+    cl, cr = rig.left.camera, rig.right.camera
+    img_l = _pair_image(Path(left), opts, cl.image_size, "left")
+    img_r = _pair_image(Path(right), opts, cr.image_size, "right")
+    from imageform._kernels import ahead
+
+    ahead.start("depth")  # a first run: the matching kernels compiled on two cores
+    size = (int(img_l.shape[1]), int(img_l.shape[0]))
+    rect = stereo_rectify(
+        np.asarray(cl.K), cl.distortion, np.asarray(cr.K), cr.distortion, size, rig.R, rig.T
+    )
+    if rect.vertical:
+        raise InvalidInputError(
+            f"the cameras of {opts.camera} are stacked vertically; depth matches along rows: "
+            "give a side-by-side rig"
+        )
+    if run.progress is not None:
+        run.progress("rectifying", 0.0)
+    map_l = rectification_map(np.asarray(cl.K), cl.distortion, rect.R1, rect.P1, rect.image_size)
+    map_r = rectification_map(np.asarray(cr.K), cr.distortion, rect.R2, rect.P2, rect.image_size)
+    rl = np.asarray(remap_bilinear(img_l, map_l))
+    rr = np.asarray(remap_bilinear(img_r, map_r))
+    if run.progress is not None:
+        run.progress("matching", 0.2)
+    disp = stereo_disparity(
+        rl,
+        rr,
+        min_disparity=opts.min_disparity,
+        num_disparities=opts.num_disparities,
+        block_size=opts.block_size,
+        p1=opts.p1,
+        p2=opts.p2,
+        adaptive_p2=opts.adaptive_p2,
+        uniqueness=opts.uniqueness,
+        lr_check=opts.lr_check,
+        speckle_size=opts.speckle_size,
+        speckle_range=opts.speckle_range,
+    )
+    # left pixels whose source lies outside the left image hold no measurement
+    W0, H0 = size
+    outside = ~(
+        (map_l[..., 0] >= 0) & (map_l[..., 0] <= W0 - 1) & (map_l[..., 1] >= 0)
+        & (map_l[..., 1] <= H0 - 1)
+    )  # fmt: skip
+    disp[outside] = np.nan
+    depth = disparity_to_depth(disp, rect)
+    valid = np.isfinite(depth)
+    result = disp if opts.disparity else depth
+    write_image(run.file(out), np.ascontiguousarray(result, dtype=np.float32))
+    n_points = 0
+    if opts.points is not None:
+        pts = disparity_to_points(disp, rect)
+        keep = np.isfinite(pts).all(axis=-1)
+        col = np.asarray(rl)
+        if col.ndim == 2:
+            col = col[..., None]
+        col = col[..., :3] if col.shape[-1] >= 3 else np.repeat(col[..., :1], 3, axis=-1)
+        if col.dtype == np.uint16:
+            col8 = (col.astype(np.float64) / 257.0).round()
+        elif col.dtype.kind == "f":
+            col8 = np.clip(col, 0.0, 1.0) * 255.0
+        else:
+            col8 = col.astype(np.float64)
+        n_points = int(keep.sum())
+        write_points_ply(
+            run.file(opts.points),
+            pts[keep],
+            np.clip(np.round(col8[keep]), 0, 255).astype(np.uint8),
+            None,
+            comment=f"imageform depth {Path(left).name} {Path(right).name} --camera "
+            f"{Path(opts.camera).name}: rectified left camera frame, units of T",
+        )
+    f = float(rect.P1[0, 0])
+    baseline = float(np.linalg.norm(rig.T))
+    d_ok = disp[valid]
+    z_ok = depth[valid]
+    summary = {
+        "output": out,
+        "written": "disparity" if opts.disparity else "depth",
+        "points": opts.points,
+        "n_points": n_points,
+        "size": list(rect.image_size),
+        "focal_px": f,
+        "baseline": baseline,
+        "valid_fraction": float(valid.mean()),
+        "disparity_range_px": [float(d_ok.min()), float(d_ok.max())] if d_ok.size else None,
+        "depth_range": [float(z_ok.min()), float(z_ok.max())] if z_ok.size else None,
+        "depth_median": float(np.median(z_ok)) if z_ok.size else None,
+    }
+    text = [f"rectified {size[0]} x {size[1]} px: f {f:.1f} px, baseline {baseline:.3f}"]
+    if d_ok.size:
+        text.append(
+            f"valid {100 * valid.mean():.1f} % of the pixels; disparity {d_ok.min():.2f} to "
+            f"{d_ok.max():.2f} px, depth {z_ok.min():.4g} to {z_ok.max():.4g} (median "
+            f"{np.median(z_ok):.4g}) in the units of T"
+        )
+    else:
+        run.note(
+            "warning: no pixel has a valid disparity; check --min-disparity and "
+            "--num-disparities against the scene's depth"
+        )
+    what = "disparity (px)" if opts.disparity else "depth (units of T)"
+    text.append(f"wrote {out} ({what}, float32, NaN where invalid)")
+    if opts.points is not None:
+        text.append(f"wrote {opts.points} ({n_points} points)")
+    return Result(summary, tuple(text))
+
+
 WORKFLOWS = (
     Workflow(
         "stereo-calibrate",
@@ -306,5 +535,24 @@ WORKFLOWS = (
         description=f"Needs the board in both images of at least {MIN_VIEWS} pairs. Each camera "
         "is calibrated alone, then one Levenberg-Marquardt refines both cameras, R and T "
         "(X_right = R X_left + T) on all reprojection errors.",
+    ),
+    Workflow(
+        "depth",
+        "Depth (or disparity) of a stereo pair by semi-global matching, with a stereo camera file.",
+        "imageform.workflows.stereo:depth_cmd",
+        DepthOptions,
+        (
+            Input("left", "The left camera's image."),
+            Input("right", "The right camera's image, taken at the same time."),
+        ),
+        Output("Depth map to write (float32 TIFF or .npy; NaN where invalid)."),
+        suffixes=(".tif", ".tiff", ".npy"),
+        group="geometry",
+        description="Both images are rectified (Bouguet, as OpenCV's stereoRectify), matched by "
+        "semi-global matching on census costs (8 paths, sub-pixel, uniqueness and left-right "
+        "checks; imageform.geometry.stereo_disparity) and the disparity d turned into depth "
+        "Z = f B / d in the units of the rig's T (mm from stereo-calibrate). The map is in "
+        "the rectified left camera's pixels; --points writes x, y, z in its frame. "
+        "docs/calibration.md, 'Depth from a stereo pair'.",
     ),
 )

@@ -1,0 +1,176 @@
+"""NumPy twins of the semi-global matching kernels (:mod:`imageform._kernels.sgm`).
+
+The same integers as the kernels, step for step (``tests/geometry/test_stereo_matching.py``
+holds them equal): each twin loops over one image axis in Python and computes a whole row
+or column of pixels and disparities at once. They run where numba does not
+(``IMAGEFORM_DISABLE_NUMBA=1``), some 10 to 50 times slower.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+__all__ = ["aggregate", "census", "cost_volume", "select", "speckles"]
+
+#: bits set in each byte value
+_POP8 = np.array([bin(i).count("1") for i in range(256)], dtype=np.uint8)
+
+
+def _popcount(v: NDArray[np.uint64]) -> NDArray[np.uint8]:
+    b = np.ascontiguousarray(v).view(np.uint8).reshape(*v.shape, 8)
+    return _POP8[b].sum(axis=-1, dtype=np.uint8)
+
+
+def census(img: NDArray[np.float32], r: int) -> NDArray[np.uint64]:
+    """Census codes of ``img``, ``2r+1`` window (the kernel's bit order, border replicated)."""
+    h, w = img.shape
+    pad = np.pad(img, r, mode="edge")
+    code = np.zeros((h, w), dtype=np.uint64)
+    one = np.uint64(1)
+    for dy in range(-r, r + 1):
+        for dx in range(-r, r + 1):
+            if dy == 0 and dx == 0:
+                continue
+            nb = pad[r + dy : r + dy + h, r + dx : r + dx + w]
+            code = (code << one) | (nb < img).astype(np.uint64)
+    return code
+
+
+def cost_volume(
+    cl: NDArray[np.uint64], cr: NDArray[np.uint64], min_d: int, n_d: int, nbits: int
+) -> NDArray[np.uint8]:
+    """Hamming costs ``(H, W, n_d)``; ``nbits`` where ``x - d`` leaves the right image."""
+    h, w = cl.shape
+    out = np.full((h, w, n_d), nbits, dtype=np.uint8)
+    for k in range(n_d):
+        d = min_d + k
+        x0, x1 = max(0, d), min(w, w + d)  # x with 0 <= x - d < w
+        if x0 < x1:
+            out[:, x0:x1, k] = _popcount(cl[:, x0:x1] ^ cr[:, x0 - d : x1 - d])
+    return out
+
+
+def _step(
+    c: NDArray[np.int32], lp: NDArray[np.int32], p1: int, p2: NDArray[np.int32]
+) -> NDArray[np.int32]:
+    """``L_r(p)`` for a line of pixels: costs ``c`` (N, D), ``lp = L_r(p - r)``, ``P2`` (N,)."""
+    lpmin = lp.min(axis=1, keepdims=True)
+    v = lp.copy()
+    v[:, 1:] = np.minimum(v[:, 1:], lp[:, :-1] + p1)
+    v[:, :-1] = np.minimum(v[:, :-1], lp[:, 1:] + p1)
+    v = np.minimum(v, lpmin + p2[:, None])
+    return np.asarray(c + v - lpmin, dtype=np.int32)
+
+
+def _p2(a: NDArray[np.float32], b: NDArray[np.float32], p1: int, p2: int, adaptive: bool) -> Any:
+    n = a.shape[0]
+    if not adaptive:
+        return np.full(n, p2, dtype=np.int32)
+    diff = np.maximum(np.abs(a.astype(np.float64) - b.astype(np.float64)), 1.0)
+    return np.maximum(p1, (np.float64(p2) / diff).astype(np.int32))
+
+
+def aggregate(
+    cost: NDArray[np.uint8], grey: NDArray[np.float32], p1: int, p2: int, adaptive: bool
+) -> NDArray[np.uint16]:
+    """Sum of the 8 paths' ``L_r`` (the kernel's), as ``uint16 (H, W, D)``."""
+    h, w, _n = cost.shape
+    c32 = cost.astype(np.int32)
+    total = np.zeros(cost.shape, dtype=np.int32)
+    for s in (1, -1):
+        # horizontal: from x - s, column after column
+        xs = range(w) if s == 1 else range(w - 1, -1, -1)
+        lp = None
+        for x in xs:
+            if lp is None:
+                L = c32[:, x]
+            else:
+                L = _step(c32[:, x], lp, p1, _p2(grey[:, x], grey[:, x - s], p1, p2, adaptive))
+            total[:, x] += L
+            lp = L
+        # from the row before: x - s, x, x + s
+        ys = range(h) if s == 1 else range(h - 1, -1, -1)
+        cols = np.arange(w)
+        for j in range(3):
+            xp = cols + (j - 1) * s
+            inside = (xp >= 0) & (xp < w)
+            xq = np.clip(xp, 0, w - 1)
+            lp = None
+            for y in ys:
+                if lp is None:
+                    L = c32[y]
+                else:
+                    q = _p2(grey[y], grey[y - s, xq], p1, p2, adaptive)
+                    L = np.where(inside[:, None], _step(c32[y], lp[xq], p1, q), c32[y])
+                total[y] += L
+                lp = L
+    return total.astype(np.uint16)
+
+
+def select(
+    total: NDArray[np.uint16], min_d: int, uniqueness: float, lr_check: float
+) -> NDArray[np.float32]:
+    """Disparities from the summed costs (the kernel's rules; NaN where invalid)."""
+    _h, w, n = total.shape
+    S = total.astype(np.int64)
+    x = np.arange(w)[:, None]
+    k = np.arange(n)[None, :]
+    xr = x - (min_d + k)
+    inside = (xr >= 0) & (xr < w)  # (W, D)
+    big = np.int64(2**62)
+    Sm = np.where(inside[None], S, big)
+    b = np.argmin(Sm, axis=2)  # (H, W)
+    bc = np.take_along_axis(Sm, b[..., None], axis=2)[..., 0]
+    any_in = inside.all(axis=1)[None, :]
+    far = np.abs(k[None] - b[..., None]) > 1
+    beaten = inside[None] & far & (S.astype(np.float64) * (1.0 - uniqueness) < bc[..., None])
+    ok = any_in & ~beaten.any(axis=2)
+    lo = np.maximum(0, np.arange(w) - w + 1 - min_d)[None, :]
+    hi = np.minimum(n - 1, np.arange(w) - min_d)[None, :]
+    d = (min_d + b).astype(np.float64)
+    mid = (b > lo) & (b < hi)
+    bm = np.clip(b, 1, n - 2)
+    a0 = np.take_along_axis(S, (bm - 1)[..., None], axis=2)[..., 0]
+    a2 = np.take_along_axis(S, (bm + 1)[..., None], axis=2)[..., 0]
+    den = np.maximum(a0 + a2 - 2 * bc, 1)
+    d = np.where(mid, d + (a0 - a2).astype(np.float64) / (2 * den).astype(np.float64), d)
+    out = np.where(ok, d.astype(np.float32), np.float32(np.nan)).astype(np.float32)
+    if lr_check >= 0:
+        # the right image's winner at x_r: least S[y, x_r + min_d + k, k] over k
+        xl = np.arange(w)[:, None] + min_d + k  # (W, D): left column of right pixel x_r
+        # left pixels of the whole range only (the kernel skips the others, as OpenCV)
+        rin = (xl >= 0) & (xl < w) & np.take(inside.all(axis=1), np.clip(xl, 0, w - 1))
+        SR = np.where(rin[None], S[:, np.clip(xl, 0, w - 1), k], big)
+        rk = np.argmin(SR, axis=2)  # (H, W)
+        xr_b = np.clip(np.arange(w)[None, :] - (min_d + b), 0, w - 1)
+        mismatch = np.abs(np.take_along_axis(rk, xr_b, axis=1) - b) > lr_check
+        out[ok & mismatch] = np.nan
+    return out
+
+
+def speckles(disp: NDArray[np.float32], max_size: int, max_diff: float) -> int:
+    """Set to NaN (in place) the regions of at most ``max_size`` pixels; return the count."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    h, w = disp.shape
+    v = disp.astype(np.float64)
+    idx = np.arange(h * w).reshape(h, w)
+    rows, cols = [], []
+    for a, b, va, vb in (
+        (idx[:, :-1], idx[:, 1:], v[:, :-1], v[:, 1:]),
+        (idx[:-1], idx[1:], v[:-1], v[1:]),
+    ):
+        e = np.isfinite(va) & np.isfinite(vb) & (np.abs(va - vb) <= max_diff)
+        rows.append(a[e])
+        cols.append(b[e])
+    r, c = np.concatenate(rows), np.concatenate(cols)
+    graph = coo_matrix((np.ones(r.size, dtype=np.int8), (r, c)), shape=(h * w, h * w))
+    _n, labels = connected_components(graph, directed=False)
+    size = np.bincount(labels)
+    small = (size[labels] <= max_size) & np.isfinite(v).ravel()
+    disp.reshape(-1)[small] = np.nan
+    return int(small.sum())

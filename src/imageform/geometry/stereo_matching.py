@@ -1,0 +1,345 @@
+r"""Dense depth from a rectified stereo pair: semi-global matching, disparity to depth.
+
+:func:`stereo_disparity` matches a rectified pair (:func:`~imageform.geometry.stereo_rectify`,
+:func:`~imageform.geometry.rectification_map`) by semi-global matching (Hirschmüller 2008)
+on census costs; :func:`disparity_to_depth` and :func:`disparity_to_points` turn its
+disparities into depth and 3-D points with the rectification's ``Q`` matrix
+(``cv2.reprojectImageTo3D``'s definition).
+
+References
+----------
+H. Hirschmüller, "Stereo processing by semiglobal matching and mutual information", IEEE
+Trans. PAMI 30(2), 328-341, 2008.
+H. Hirschmüller, D. Scharstein, "Evaluation of stereo matching costs on images with
+radiometric differences", IEEE Trans. PAMI 31(9), 1582-1599, 2009.
+R. Zabih, J. Woodfill, "Non-parametric local transforms for computing visual
+correspondence", ECCV 1994.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+from numpy.typing import NDArray
+
+from imageform._backend import to_numpy, use_numba
+from imageform._validate import as_int, as_real, as_real_array, check_memory, describe
+from imageform.errors import InvalidInputError
+
+__all__ = ["disparity_to_depth", "disparity_to_points", "stereo_disparity"]
+
+#: the largest P2 whose 8 path costs still sum within 16 bits (each at most 48 + P2)
+MAX_P2 = 8000
+#: block sizes of the census window (its code holds block_size² - 1 <= 48 bits)
+BLOCK_SIZES = (3, 5, 7)
+
+
+def _grey(image: Any, name: str) -> NDArray[np.float32]:
+    """``image`` (H, W) or (H, W, C) as a float32 grey image on a 0-255 scale."""
+    dtype = getattr(image, "dtype", None)
+    a = as_real_array(image, name, ndim=(2, 3))
+    if a.ndim == 3:
+        if a.shape[2] == 1:
+            a = a[..., 0]
+        elif a.shape[2] in (3, 4):
+            a = a[..., 0] * 0.299 + a[..., 1] * 0.587 + a[..., 2] * 0.114  # Rec. 601 luma
+        else:
+            raise InvalidInputError(
+                f"expected {name} as a grey (H, W) or colour (H, W, 3) image, got shape {a.shape}"
+            )
+    kind = np.dtype(dtype).kind if dtype is not None else "f"
+    if dtype is not None and np.dtype(dtype) == np.uint16:
+        a = a * (255.0 / 65535.0)
+    elif kind == "f":
+        a = a * 255.0
+    return np.ascontiguousarray(a, dtype=np.float32)
+
+
+def stereo_disparity(
+    left: npt.ArrayLike,
+    right: npt.ArrayLike,
+    *,
+    min_disparity: int = 0,
+    num_disparities: int = 64,
+    block_size: int = 5,
+    p1: int | None = None,
+    p2: int | None = None,
+    adaptive_p2: bool = False,
+    uniqueness: float = 0.1,
+    lr_check: float | None = 1.0,
+    speckle_size: int = 0,
+    speckle_range: float = 1.0,
+) -> NDArray[np.float32]:
+    r"""Disparity of a rectified stereo pair by semi-global matching on census costs.
+
+    For every left pixel ``(x, y)`` the disparity ``d = x_left - x_right`` (OpenCV's
+    definition and sign: the right image sees the point at ``x - d``) among
+    ``min_disparity ... min_disparity + num_disparities - 1``, in pixels, sub-pixel:
+
+    1. **Cost**: the Hamming distance of the census codes (R. Zabih & J. Woodfill 1994) of
+       the ``block_size`` x ``block_size`` windows about ``(x, y)`` and ``(x - d, y)``:
+       one bit per neighbour, set where it is darker than the centre. Census, not
+       OpenCV's Birchfield-Tomasi: it depends only on the order of intensities, so a gain
+       or offset between the two cameras (an endoscope's two sensors, auto-exposure)
+       changes nothing, and it was the most robust cost of Hirschmüller & Scharstein's
+       evaluation (PAMI 31(9), 2009) under radiometric differences.
+    2. **Aggregation** along 8 paths (both ways horizontally, vertically and along both
+       diagonals; OpenCV's ``MODE_HH``, not its 5-path default) by Hirschmüller's
+       recursion (PAMI 30(2), 2008, eq. 13):
+
+       .. math::
+
+           L_r(p, d) = C(p, d) + \min\bigl(L_r(p-r, d),\ L_r(p-r, d \pm 1) + P_1,\
+           \min_k L_r(p-r, k) + P_2\bigr) - \min_k L_r(p-r, k)
+
+       summed, ``S(p, d) = Σ_r L_r(p, d)``.
+    3. **Winner-take-all** ``d = argmin S(p, ·)``, refined by the vertex of the parabola
+       through ``S`` at ``d - 1, d, d + 1`` (as OpenCV).
+    4. **Checks**, each making the pixel invalid (NaN): some disparity of the range takes
+       ``x - d`` out of the right image (OpenCV's rule: the first ``min_disparity +
+       num_disparities - 1`` columns, and the last ``-min_disparity`` ones, are invalid);
+       another disparity more than 1 away costs less than ``S_min / (1 - uniqueness)``;
+       the right image's own winner at ``x - d`` (least ``S(x_r + d', d')`` over ``d'``, as
+       OpenCV computes it) differs from ``d`` by more than ``lr_check`` pixels (occlusions,
+       mismatches); with ``speckle_size``, the pixel lies in a 4-connected region of at
+       most that many pixels whose neighbours differ by at most ``speckle_range``
+       (OpenCV's ``filterSpeckles``).
+
+    Parameters
+    ----------
+    left, right : array_like (H, W) or (H, W, C)
+        The rectified images (rows are epipolar lines), the same shape; colour is matched
+        as its Rec. 601 luma. Floats are read on a 0-1 scale, ``uint16`` on 0-65535, other
+        integers on 0-255 (the scale matters only to ``adaptive_p2``). NaN and inf are
+        refused.
+    min_disparity : int
+        The smallest disparity searched (negative when the principal points are apart).
+    num_disparities : int
+        How many disparities are searched (any positive number; OpenCV needs a multiple of
+        16, which this accepts as well).
+    block_size : {3, 5, 7}
+        Side of the census window (8, 24 or 48 bits a pixel).
+    p1, p2 : int, optional
+        Penalties of a disparity step of 1 and of a larger one along a path, in bits of
+        Hamming distance (``0 < p1 < p2 <= 8000``). Defaults ``p1 = (block_size² - 1) / 4``
+        and ``p2 = 16 p1`` (6 and 96 for 5 x 5; the best of 7 pairs tried on the pairs of
+        ``benchmarks/check_stereo_depth.py``).
+    adaptive_p2 : bool
+        Divide ``p2`` by the intensity step along the path, ``p2 / |I_p - I_{p-r}|`` on a
+        0-255 scale (Hirschmüller's eq. 12), never below ``p1``: disparity steps come cheaper
+        at edges.
+    uniqueness : float
+        In ``[0, 1)``: the margin by which the winner must beat every disparity more than 1
+        away (OpenCV's ``uniquenessRatio`` / 100; 0 turns the test off).
+    lr_check : float or None
+        Largest difference of the left and the right winners (OpenCV's ``disp12MaxDiff``);
+        None turns the check off.
+    speckle_size : int
+        Invalidate regions of at most this many pixels (0, the default, keeps all; OpenCV's
+        ``speckleWindowSize``).
+    speckle_range : float
+        Largest difference of neighbours within one region (OpenCV's ``speckleRange``, here in
+        pixels, not in 16ths).
+
+    Returns
+    -------
+    ndarray (H, W) float32
+        The disparity in pixels; NaN where invalid (``np.isnan`` is the invalid mask).
+
+    Raises
+    ------
+    InvalidInputError
+        Images of other shapes, NaN or inf in them, a parameter out of its range.
+
+    Notes
+    -----
+    The work is ``O(H W D)`` with ``D = num_disparities`` (about 20 ns a pixel and disparity
+    on one core with numba); memory 3 bytes a pixel and disparity. The numba kernels
+    (:mod:`imageform._kernels.sgm`) and their NumPy twins give the same numbers.
+
+    Examples
+    --------
+    >>> rng = np.random.default_rng(0)
+    >>> right = rng.uniform(0, 1, (40, 80))
+    >>> left = np.roll(right, 7, axis=1)  # everything 7 px to the right in the left image
+    >>> d = stereo_disparity(left, right, num_disparities=16)
+    >>> float(np.nanmedian(d)), bool(np.isnan(d[:, :7]).all())
+    (7.0, True)
+    """
+    gl = _grey(left, "left")
+    gr = _grey(right, "right")
+    if gl.shape != gr.shape:
+        raise InvalidInputError(
+            f"expected left and right images of one size, got {gl.shape[1]} x {gl.shape[0]} "
+            f"and {gr.shape[1]} x {gr.shape[0]} px"
+        )
+    h, w = gl.shape
+    min_d = as_int(min_disparity, "min_disparity", minimum=-(2**20), maximum=2**20)
+    n_d = as_int(num_disparities, "num_disparities", minimum=1, maximum=4096)
+    bs = as_int(block_size, "block_size")
+    if bs not in BLOCK_SIZES:
+        raise InvalidInputError(f"expected block_size 3, 5 or 7 (the census window), got {bs}")
+    nbits = bs * bs - 1
+    P1 = max(1, nbits // 4) if p1 is None else as_int(p1, "p1", minimum=1, maximum=MAX_P2 - 1)
+    P2 = 16 * P1 if p2 is None else as_int(p2, "p2", minimum=1, maximum=MAX_P2)
+    P2 = min(P2, MAX_P2)
+    if not P2 > P1:
+        raise InvalidInputError(
+            f"expected p2 > p1 (a larger jump costs more), got p1 {P1}, p2 {P2}"
+        )
+    if not isinstance(adaptive_p2, bool | np.bool_):
+        raise TypeError(f"expected adaptive_p2 as a bool, got {describe(adaptive_p2)}")
+    u = as_real(uniqueness, "uniqueness", minimum=0.0)
+    if not u < 1.0:
+        raise InvalidInputError(f"expected uniqueness in [0, 1), got {u}")
+    lr = -1.0 if lr_check is None else as_real(lr_check, "lr_check", minimum=0.0)
+    sp = as_int(speckle_size, "speckle_size", minimum=0, maximum=2**40)
+    sr = as_real(speckle_range, "speckle_range", minimum=0.0)
+    check_memory(3.0 * h * w * n_d, "num_disparities", f"the costs of {h} x {w} px x {n_d}")
+    if use_numba(gl):
+        from imageform._kernels import sgm as kern
+    else:
+        from imageform.geometry import _sgm_numpy as kern  # type: ignore[no-redef]
+    return _match(kern, gl, gr, min_d, n_d, bs, P1, P2, bool(adaptive_p2), u, lr, sp, sr)
+
+
+def _match(
+    kern: Any,
+    gl: NDArray[np.float32],
+    gr: NDArray[np.float32],
+    min_d: int,
+    n_d: int,
+    bs: int,
+    p1: int,
+    p2: int,
+    adaptive: bool,
+    uniqueness: float,
+    lr: float,
+    speckle_size: int,
+    speckle_range: float,
+) -> NDArray[np.float32]:
+    """Run the pipeline on checked grey images with the kernels (or twins) of module ``kern``."""
+    r = bs // 2
+    cl = kern.census(gl, r)
+    cr = kern.census(gr, r)
+    cost = kern.cost_volume(cl, cr, min_d, n_d, bs * bs - 1)
+    total = kern.aggregate(cost, gl, p1, p2, adaptive)
+    del cost
+    disp = kern.select(total, min_d, float(uniqueness), float(lr))
+    if speckle_size > 0:
+        kern.speckles(disp, speckle_size, float(speckle_range))
+    return np.asarray(disp, dtype=np.float32)
+
+
+def _q_matrix(rectification: Any) -> NDArray[np.float64]:
+    Q = getattr(rectification, "Q", rectification)
+    Q = to_numpy(Q) if not isinstance(Q, list | tuple) else Q
+    Qm = as_real_array(Q, "rectification", check=False)
+    if Qm.shape != (4, 4):
+        raise InvalidInputError(
+            f"expected rectification as a StereoRectification or its Q matrix (4, 4), got shape "
+            f"{Qm.shape}"
+        )
+    if not np.isfinite(Qm).all():
+        raise InvalidInputError("expected rectification's Q of finite numbers")
+    if not np.any(Qm[3]):
+        raise InvalidInputError(
+            "expected rectification's Q with a non-zero last row (it maps no disparity to a depth)"
+        )
+    return Qm
+
+
+def _disparity(disparity: Any) -> NDArray[np.floating[Any]]:
+    d = np.asarray(to_numpy(disparity))
+    if d.dtype.kind not in "fiu" or d.ndim != 2:
+        raise InvalidInputError(
+            f"expected disparity as real numbers (H, W) (NaN where invalid), got {describe(d)}"
+        )
+    if np.isinf(d).any():
+        raise InvalidInputError("expected disparity finite or NaN (invalid), got inf")
+    return d if d.dtype == np.float32 else d.astype(np.float64)
+
+
+def disparity_to_points(disparity: npt.ArrayLike, rectification: Any) -> NDArray[np.floating[Any]]:
+    r"""3-D points of a disparity map in the rectified left camera's frame (``reprojectImageTo3D``).
+
+    ``(X, Y, Z, W)ᵀ = Q (u, v, d, 1)ᵀ`` and the point ``(X, Y, Z) / W`` for every pixel
+    ``(u, v)`` with disparity ``d`` (``d = x_left - x_right``, :func:`stereo_disparity`'s);
+    for a horizontal rig ``Z = f B / (d - (c_{x,1} - c_{x,2}))`` with the baseline ``B``.
+    Units: those of the calibration's ``T`` (millimetres from ``imageform stereo-calibrate``).
+
+    Parameters
+    ----------
+    disparity : array_like (H, W)
+        Disparities in pixels, NaN where invalid.
+    rectification : StereoRectification or array_like (4, 4)
+        :func:`~imageform.geometry.stereo_rectify`'s result, or its ``Q`` matrix.
+
+    Returns
+    -------
+    ndarray (H, W, 3)
+        ``(X, Y, Z)``, float32 for float32 disparities, else float64; NaN where the
+        disparity is NaN or puts the point at or beyond infinity (``W <= 0``: zero or
+        negative disparity on a zero-disparity rectification).
+
+    Examples
+    --------
+    >>> Q = np.array([[1.0, 0, 0, -320], [0, 1, 0, -240], [0, 0, 0, 800], [0, 0, 0.01, 0]])
+    >>> disparity_to_points(np.full((1, 1), 16.0), Q)[0, 0].tolist()  # B = 100, f = 800
+    [-2000.0, -1500.0, 5000.0]
+    """
+    d = _disparity(disparity)
+    Q = _q_matrix(rectification)
+    h, w = d.shape
+    check_memory(8.0 * h * w * 6, "disparity", f"the points of {h} x {w} px")
+    v, u = np.mgrid[0:h, 0:w].astype(np.float64)
+    dd = d.astype(np.float64)
+    uvd1 = np.stack([u, v, dd, np.ones_like(u)], axis=-1)
+    X = uvd1 @ Q.T
+    W = X[..., 3]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        pts = X[..., :3] / W[..., None]
+    bad = ~(W > 0) | ~np.isfinite(pts).all(axis=-1)
+    pts[bad] = np.nan
+    return pts.astype(d.dtype if d.dtype == np.float32 else np.float64)
+
+
+def disparity_to_depth(disparity: npt.ArrayLike, rectification: Any) -> NDArray[np.floating[Any]]:
+    r"""Depth ``Z`` of every pixel of a disparity map: ``Z = f B / (d - Δc)``.
+
+    The third coordinate of :func:`disparity_to_points` (``Q[2, 3] / (Q[3, 2] d + Q[3, 3])``):
+    ``f`` the rectified focal length, ``B`` the baseline, ``Δc = c_{x,1} - c_{x,2}`` (0 on a
+    zero-disparity rectification). Distance along the rectified left camera's optical axis,
+    in the units of the calibration's ``T``.
+
+    Parameters
+    ----------
+    disparity : array_like (H, W)
+        Disparities in pixels (:func:`stereo_disparity`), NaN where invalid.
+    rectification : StereoRectification or array_like (4, 4)
+        :func:`~imageform.geometry.stereo_rectify`'s result, or its ``Q`` matrix.
+
+    Returns
+    -------
+    ndarray (H, W)
+        Depth; float32 for float32 disparities, else float64; NaN where the disparity is
+        NaN or gives no point in front of the camera.
+
+    Examples
+    --------
+    >>> Q = np.array([[1.0, 0, 0, -320], [0, 1, 0, -240], [0, 0, 0, 800], [0, 0, 0.01, 0]])
+    >>> disparity_to_depth(np.array([[16.0, 0.0, np.nan]]), Q).tolist()  # f B = 80 000
+    [[5000.0, nan, nan]]
+    """
+    d = _disparity(disparity)
+    Q = _q_matrix(rectification)
+    h, w = d.shape
+    v, u = np.mgrid[0:h, 0:w].astype(np.float64)
+    dd = d.astype(np.float64)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        W = Q[3, 0] * u + Q[3, 1] * v + Q[3, 2] * dd + Q[3, 3]
+        z = (Q[2, 0] * u + Q[2, 1] * v + Q[2, 2] * dd + Q[2, 3]) / W
+    z[~(W > 0) | ~np.isfinite(z)] = np.nan
+    return z.astype(d.dtype if d.dtype == np.float32 else np.float64)
