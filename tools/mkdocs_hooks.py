@@ -100,6 +100,7 @@ BENCH_SCRIPTS: dict[str, str] = {
     "reconstruct": "benchmarks/bench_reconstruct.py",
     "endo-real": "benchmarks/check_endo_real.py",
     "sfm-intruders": "benchmarks/check_sfm_intruders.py",
+    "sfm-dense": "benchmarks/check_sfm_dense.py",
     "reconstruct-real": "benchmarks/bench_reconstruct_real.py",
     "reconstruct-fisheye": "benchmarks/bench_reconstruct_fisheye.py",
     "track-breaks": "benchmarks/check_track_breaks.py",

@@ -210,6 +210,14 @@ PLANS: dict[str, Plan] = {
                 "_refine_tasks",
                 f"(int64, int64, {_A3}, {_A2}, {_A3}, {_A3}, {_A2}, {_A2}, int64, float64, {_A1})",
             ),
+            # bundle adjustment's sums (1.2 s of CPU cold), reached after the pairs are verified
+            Entry(
+                "bundle",
+                "normal_equations",
+                f"({_A2}, {_A3}, {_A2}, {_A2}, {_I1}, {_I1}, {_I1}, {_I1}, {_A2}, {_A1}, {_A3},"
+                f" {_A3}, {_A3}, {_A2}, {_A2}, {_A3})",
+            ),
+            Entry("bundle", "reduce_cameras", f"({_A3}, {_A3}, {_I1}, {_I1}, {_I1}, int64, {_A2})"),
         ),
         here=(
             Entry("ransac_e", "_e5", f"({_A2}, {_A2}, {_I1}, {_A3})"),

@@ -59,7 +59,8 @@ the initial pair's baseline has length 1.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+import itertools
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
@@ -244,7 +245,9 @@ def match_features(
 
     A pair ``(i, j)`` is kept when ``b[j]`` is ``a[i]``'s nearest neighbour with
     :math:`d_1 < \rho\, d_2` (the second nearest clearly farther; Lowe 2004, IJCV 60(2),
-    sec. 7.1) and, with ``mutual``, ``a[i]`` is ``b[j]``'s nearest as well.
+    sec. 7.1) and, with ``mutual``, ``a[i]`` is ``b[j]``'s nearest as well. One matrix
+    product gives all three (float32): SIFT's descriptors are integers of norm about 512,
+    so every squared distance is an exact integer whatever the order of the additions.
 
     Returns
     -------
@@ -260,24 +263,24 @@ def match_features(
         )
     if a.shape[0] < 2 or b.shape[0] < 2:
         return np.zeros((0, 2), np.int64)
-    # squared distances |a|^2 + |b|^2 - 2 a.b by a matrix product; a row's |a|^2 is added
-    # to its two nearest only, and the mutual check is the product the other way round
-    # (a row-wise search: faster than a column-wise one)
+    # squared distances |a|^2 + |b|^2 - 2 a.b from one matrix product: the nearest of each
+    # row, its second nearest (the nearest of the rest), and the mutual check's nearest of
+    # each column. SIFT's descriptors are integers of norm 512 at most: every sum is an
+    # integer below 2^24, exact in float32 whatever the order of the additions
     na, nb = (a * a).sum(1), (b * b).sum(1)
     d2 = a @ b.T
     d2 *= -2.0
+    d2 += na[:, None]
     d2 += nb[None, :]
     rows = np.arange(a.shape[0])
     best = np.argmin(d2, axis=1)
-    d1 = np.maximum(d2[rows, best] + na, 0.0)
-    d2[rows, best] = np.inf  # the second nearest is the nearest of the rest
-    d2nd = np.maximum(d2.min(axis=1) + na, 0.0)
+    back = np.argmin(d2, axis=0) if mutual else None
+    d1 = np.maximum(d2[rows, best], 0.0)
+    d2[rows, best] = np.inf
+    d2nd = np.maximum(d2.min(axis=1), 0.0)
     keep = d1 < (r * r) * d2nd
-    if mutual:
-        back = b @ a.T
-        back *= -2.0
-        back += na[None, :]
-        keep &= np.argmin(back, axis=1)[best] == rows
+    if back is not None:
+        keep &= back[best] == rows
     idx = np.flatnonzero(keep)
     return np.column_stack([idx, best[idx]]).astype(np.int64)
 
@@ -451,6 +454,86 @@ def _huber(r2: F64, delta: float) -> tuple[float, F64]:
     return cost, np.where(inside, 1.0, delta / np.maximum(r, 1e-300))
 
 
+def _camera_pairs(
+    cam: NDArray[np.int64],
+    pt: NDArray[np.int64],
+    nc: int,
+    npt: int,
+    chunk: int = 65536,
+    kernel: bool | None = None,
+) -> Callable[[F64, F64], F64]:
+    r"""Return a function of the views' blocks ``Y``, ``W`` (M, 6, 3) giving :math:`\sum Y W^T`.
+
+    The reduced camera system's :math:`W V^{-1} W^T` (6 ``nc``, 6 ``nc``), with
+    :math:`Y_o = W_o V_p^{-1}` for view ``o`` of point ``p``: its block of cameras
+    :math:`(c, d)` is :math:`\sum Y_a W_b^T` over the views ``a`` in ``c`` and ``b`` in ``d``
+    of one point. The pairs of views are listed once, here for every call (the structure
+    does not change between Levenberg-Marquardt's steps): a point's views in camera order,
+    :math:`k (k + 1) / 2` pairs for a point of ``k`` views, one half of the symmetric
+    matrix, the other half the transposes. ``cam`` and ``pt`` (M,): each view's camera and
+    point. The numba kernel (``imageform._kernels.bundle``) sums them where numba runs
+    (``kernel`` None: :func:`imageform._backend.use_numba`), else array products, ``chunk``
+    pairs at a time.
+    """
+    from imageform._backend import use_numba
+
+    M = cam.size
+    order = np.lexsort((cam, pt))  # by point, then camera
+    cnt = np.bincount(pt, minlength=npt)
+    st = np.concatenate([[0], np.cumsum(cnt)]).astype(np.int64)
+    if use_numba(cam) if kernel is None else kernel:
+        from imageform._kernels.bundle import reduce_cameras
+
+        views, cam64 = order.astype(np.int64), np.ascontiguousarray(cam, np.int64)
+
+        def compiled(Y: F64, W: F64) -> F64:
+            S = np.zeros((6 * nc, 6 * nc))
+            reduce_cameras(
+                np.ascontiguousarray(Y, np.float64),
+                np.ascontiguousarray(W, np.float64),
+                st,
+                views,
+                cam64,
+                nc,
+                S,
+            )
+            return S
+
+        return compiled
+    ps = pt[order]
+    rank = np.arange(M) - st[ps]
+    # the view at rank r of a point of k views pairs with the ranks r .. k - 1 of its point
+    reps = cnt[ps] - rank
+    total = int(reps.sum())
+    a_pos = np.repeat(np.arange(M), reps)
+    b_pos = a_pos + np.arange(total) - np.repeat(np.cumsum(reps) - reps, reps)
+    pa, pb = order[a_pos], order[b_pos]
+    key = cam[pa] * nc + cam[pb]
+    by = np.argsort(key, kind="stable")
+    pa, pb, key = pa[by], pb[by], key[by]
+    # two views of one point in one camera (a track that holds a frame twice): the pair's
+    # block and its transpose both fall on the diagonal block
+    twin = (pa != pb) & (cam[pa] == cam[pb])
+    bounds = [*range(0, total, chunk), total]
+    lower = np.tril(np.ones((nc, nc), bool), -1)
+
+    def reduced(Y: F64, W: F64) -> F64:
+        S = np.zeros((nc * nc, 6, 6))
+        for lo, hi in itertools.pairwise(bounds):
+            blocks = np.matmul(Y[pa[lo:hi]], W[pb[lo:hi]].transpose(0, 2, 1))
+            tw = twin[lo:hi]
+            if tw.any():
+                blocks[tw] += blocks[tw].transpose(0, 2, 1)
+            k = key[lo:hi]
+            first = np.flatnonzero(np.concatenate([[True], k[1:] != k[:-1]]))
+            S[k[first]] += np.add.reduceat(blocks, first, axis=0)
+        S4 = S.reshape(nc, nc, 6, 6)
+        S4[lower] = S4.transpose(1, 0, 3, 2)[lower]
+        return np.ascontiguousarray(S4.transpose(0, 2, 1, 3)).reshape(6 * nc, 6 * nc)
+
+    return reduced
+
+
 def _schur_lm(
     K: F64,
     R: F64,
@@ -464,6 +547,7 @@ def _schur_lm(
     max_iter: int,
     ftol: float = 1e-10,
     A: F64 | None = None,
+    kernel: bool | None = None,
 ) -> tuple[F64, F64, F64]:
     r"""Levenberg-Marquardt on the reprojection error, the points eliminated (Schur complement).
 
@@ -482,9 +566,15 @@ def _schur_lm(
     ``A`` (M, 2, 2), optional: each observation's residual and Jacobian are mapped by it
     (the lens's local linear map from undistorted to image pixels: the error is measured in
     the image, where the keypoint's noise is, not where a fisheye stretches it).
+
+    The normal equations and the reduced camera system are summed view by view by numba
+    kernels (``imageform._kernels.bundle``) where numba runs (``kernel`` None:
+    :func:`imageform._backend.use_numba`), else by array operations: the same sums in
+    another order.
     """
     from scipy.linalg import cho_factor, cho_solve
 
+    from imageform._backend import use_numba
     from imageform.geometry.rotations import rvec_to_matrix
 
     n, m, M = R.shape[0], X.shape[0], ci.size
@@ -497,48 +587,19 @@ def _schur_lm(
     csh, pih = cs[has], pi[has]
     fx, fy, sk = K[0, 0], K[1, 1], K[0, 1]
     eye3, eye6 = np.eye(3), np.eye(6)
-    # W V^-1 W^T by a sparse product, W's rows (6 a free camera) and W^T's rows (3 a point)
-    # laid out once: the observations sorted by camera then point, and by point then camera
+    # W V^-1 W^T, the blocks summed over the points two free cameras share: laid out once
+    if kernel is None:
+        kernel = use_numba(X)
+    reduced = _camera_pairs(csh, pih, nf, m, kernel=kernel)
     Mh = csh.size
-    ab = np.arange(18)
-    a_, b_ = ab // 3, ab % 3
+    if kernel:
+        from imageform._kernels.bundle import normal_equations
 
-    def layout(
-        major: NDArray[np.int64], minor_cols: NDArray[np.int64], nmaj: int, width: int, k: int
-    ) -> tuple[NDArray[np.int64], NDArray[np.int64], NDArray[np.int64], NDArray[np.int64]]:
-        """CSR of per-observation blocks: the rows ``width * major + r``, ``k`` columns each."""
-        perm = np.lexsort((minor_cols, major))
-        cnt = np.bincount(major, minlength=nmaj)
-        st = np.concatenate([[0], np.cumsum(cnt)])
-        maj = major[perm]
-        rank = np.arange(Mh) - st[maj]
-        # element (a, b) of block o; its row is the a-th (width 6) or b-th (width 3)
-        r_in = a_ if width == 6 else b_
-        c_in = b_ if width == 6 else a_
-        dest = (18 * st[maj])[:, None] + r_in * k * cnt[maj][:, None] + k * rank[:, None] + c_in
-        cols = (k * minor_cols[perm])[:, None] + c_in
-        indices = np.empty(18 * Mh, np.int64)
-        indices[dest.ravel()] = cols.ravel()
-        rows = np.arange(width * nmaj)
-        indptr = np.concatenate(
-            [18 * st[rows // width] + (rows % width) * k * cnt[rows // width], [18 * Mh]]
-        )
-        return perm, dest.ravel(), indices, indptr
-
-    w_perm, w_dest, w_ind, w_ptr = layout(csh, pih, nf, 6, 3)
-    t_perm, t_dest, t_ind, t_ptr = layout(pih, csh, m, 3, 6)
-
-    def reduced(Y: F64, Wo: F64) -> F64:
-        """Return :math:`W V^{-1} W^T` (6 nf, 6 nf) from the per-view blocks ``Y``, ``W``."""
-        from scipy.sparse import csr_matrix
-
-        dy = np.empty(18 * Mh)
-        dy[w_dest] = Y[w_perm].ravel()
-        dw = np.empty(18 * Mh)
-        dw[t_dest] = Wo[t_perm].ravel()
-        Ys = csr_matrix((dy, w_ind, w_ptr), shape=(6 * nf, 3 * m))
-        Wt = csr_matrix((dw, t_ind, t_ptr), shape=(3 * m, 6 * nf))
-        return np.asarray((Ys @ Wt).toarray())
+        K = np.ascontiguousarray(K, np.float64)
+        ci, pi = np.ascontiguousarray(ci, np.int64), np.ascontiguousarray(pi, np.int64)
+        cs = np.ascontiguousarray(cs, np.int64)
+        hpos = np.where(has, np.cumsum(has) - 1, -1).astype(np.int64)
+        A_k = np.zeros((0, 2, 2)) if A is None else np.ascontiguousarray(A, np.float64)
 
     def gram(A: F64, B: F64) -> F64:
         """Return the blocks :math:`A_m^T B_m` of two (M, 2, k) stacks."""
@@ -562,27 +623,32 @@ def _schur_lm(
     lam = 1e-3
     gain = 0.0
     for _ in range(max_iter):
-        RX = np.einsum("mij,mj->mi", R[ci], X[pi])
-        Xc = RX + t[ci]
-        z = np.where(np.abs(Xc[:, 2]) > 1e-9, Xc[:, 2], 1e-9)
-        Jp = np.zeros((M, 2, 3))  # d(u, v) / d Xc
-        Jp[:, 0, 0] = fx / z
-        Jp[:, 0, 1] = sk / z
-        Jp[:, 0, 2] = -(fx * Xc[:, 0] + sk * Xc[:, 1]) / z**2
-        Jp[:, 1, 1] = fy / z
-        Jp[:, 1, 2] = -fy * Xc[:, 1] / z**2
-        if A is not None:
-            Jp = A @ Jp
-        Jx = Jp @ R[ci]  # d/dX
-        Jc = np.concatenate([-Jp @ _skew_batch(RX), Jp], axis=2)[has]  # d/d(omega, t)
-        wJx = Jx * w[:, None, None]
-        V = _sum_blocks(pi, gram(wJx, Jx), m)
-        gp = _sum_blocks(pi, -(wJx[:, 0] * res[:, :1] + wJx[:, 1] * res[:, 1:]), m)
-        wJc = Jc * w[has, None, None]
-        U = _sum_blocks(csh, gram(wJc, Jc), nf)
-        rh = res[has]
-        gc = _sum_blocks(csh, -(wJc[:, 0] * rh[:, :1] + wJc[:, 1] * rh[:, 1:]), nf)
-        Wo = gram(wJc, Jx[has])  # (Mh, 6, 3)
+        if kernel:
+            U, V = np.zeros((nf, 6, 6)), np.zeros((m, 3, 3))
+            gc, gp, Wo = np.zeros((nf, 6)), np.zeros((m, 3)), np.empty((Mh, 6, 3))
+            normal_equations(K, R, t, X, ci, pi, cs, hpos, res, w, A_k, U, V, gc, gp, Wo)
+        else:
+            RX = np.einsum("mij,mj->mi", R[ci], X[pi])
+            Xc = RX + t[ci]
+            z = np.where(np.abs(Xc[:, 2]) > 1e-9, Xc[:, 2], 1e-9)
+            Jp = np.zeros((M, 2, 3))  # d(u, v) / d Xc
+            Jp[:, 0, 0] = fx / z
+            Jp[:, 0, 1] = sk / z
+            Jp[:, 0, 2] = -(fx * Xc[:, 0] + sk * Xc[:, 1]) / z**2
+            Jp[:, 1, 1] = fy / z
+            Jp[:, 1, 2] = -fy * Xc[:, 1] / z**2
+            if A is not None:
+                Jp = A @ Jp
+            Jx = Jp @ R[ci]  # d/dX
+            Jc = np.concatenate([-Jp @ _skew_batch(RX), Jp], axis=2)[has]  # d/d(omega, t)
+            wJx = Jx * w[:, None, None]
+            V = _sum_blocks(pi, gram(wJx, Jx), m)
+            gp = _sum_blocks(pi, -(wJx[:, 0] * res[:, :1] + wJx[:, 1] * res[:, 1:]), m)
+            wJc = Jc * w[has, None, None]
+            U = _sum_blocks(csh, gram(wJc, Jc), nf)
+            rh = res[has]
+            gc = _sum_blocks(csh, -(wJc[:, 0] * rh[:, :1] + wJc[:, 1] * rh[:, 1:]), nf)
+            Wo = gram(wJc, Jx[has])  # (Mh, 6, 3)
         dV = np.diagonal(V, axis1=1, axis2=2)
         dU = np.diagonal(U, axis1=1, axis2=2)
         improved = False
@@ -668,23 +734,39 @@ def bundle_adjust(
     R, t, points
         Refined.
     """
+    k = as_real_array(K, "K", ndim=2)
     R = as_real_array(R, "R", ndim=3).astype(np.float64)
     t = as_real_array(t, "t", ndim=2).astype(np.float64)
     points = as_real_array(points, "points", ndim=2).astype(np.float64)
-    ci = np.asarray(cam_idx, np.int64)
-    pi = np.asarray(pt_idx, np.int64)
-    n = R.shape[0]
+    obs = as_real_array(uv, "uv", ndim=2)
+    n, m = R.shape[0], points.shape[0]
+    if k.shape != (3, 3) or R.shape[1:] != (3, 3) or t.shape != (n, 3) or points.shape[1] != 3:
+        raise InvalidInputError(
+            f"expected K (3, 3), R (n, 3, 3), t (n, 3), points (P, 3), got K {k.shape}, "
+            f"R {R.shape}, t {t.shape}, points {points.shape}"
+        )
+    ci, pi = np.asarray(cam_idx), np.asarray(pt_idx)
+    if obs.shape[1:] != (2,) or ci.shape != obs.shape[:1] or pi.shape != obs.shape[:1]:
+        raise InvalidInputError(
+            f"expected cam_idx (M,), pt_idx (M,) and uv (M, 2), got {describe(cam_idx)}, "
+            f"{describe(pt_idx)} and {describe(uv)}"
+        )
+    for name, idx, size in (("cam_idx", ci, n), ("pt_idx", pi, m)):
+        if idx.size and (idx.dtype.kind not in "iu" or idx.min() < 0 or idx.max() >= size):
+            raise InvalidInputError(
+                f"expected {name} as integers in [0, {size}), got {describe(idx)}"
+            )
     f = as_int(fixed, "fixed", minimum=0, maximum=max(n - 1, 0))
     keep = np.zeros(n, bool)
     keep[f] = True
     return _schur_lm(
-        np.asarray(K, np.float64),
+        k,
         R,
         t,
         points,
-        ci,
-        pi,
-        np.asarray(uv, np.float64),
+        ci.astype(np.int64),
+        pi.astype(np.int64),
+        obs,
         keep,
         float(loss_px),
         as_int(max_nfev, "max_nfev", minimum=1, maximum=100_000),

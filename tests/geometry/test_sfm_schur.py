@@ -1,0 +1,188 @@
+"""Structure from motion's faster paths: bundle adjustment's numba kernels against their
+array twins and the dense reduced camera system, descriptor matching from one matrix product
+against the two-product path it replaced and OpenCV's brute-force matcher, on real C3VD SIFT
+descriptors (tests/data/endo, CC BY 4.0)."""
+
+from __future__ import annotations
+
+import functools
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+from imageform._backend import numba_enabled
+from imageform.errors import InvalidInputError
+from imageform.geometry import bundle_adjust, detect_features, match_features
+from imageform.geometry import sfm as sfm_mod
+from imageform.geometry.rotations import rvec_to_matrix
+
+ENDO = Path(__file__).resolve().parents[1] / "data" / "endo"
+PATHS = [False, pytest.param(True, marks=pytest.mark.skipif(not numba_enabled(), reason="numba"))]
+
+
+def _views(seed: int) -> tuple[np.ndarray, np.ndarray, int, int]:
+    """Views (camera, point) of 40 points in 6 cameras, one point seen twice in camera 2."""
+    rng = np.random.default_rng(seed)
+    nc, npt = 6, 40
+    cam: list[int] = []
+    pt: list[int] = []
+    for p in range(npt):
+        k = int(rng.integers(1, nc + 1))
+        cam += rng.choice(nc, k, replace=False).tolist()
+        pt += [p] * k
+    p2 = pt[cam.index(2)]
+    cam.append(2)  # a track that holds a frame twice
+    pt.append(p2)
+    order = rng.permutation(len(cam))
+    return np.array(cam)[order], np.array(pt)[order], nc, npt
+
+
+@pytest.mark.parametrize("kernel", PATHS)
+def test_reduced_camera_system_is_the_dense_product(kernel: bool) -> None:
+    cam, pt, nc, npt = _views(0)
+    rng = np.random.default_rng(1)
+    W = rng.normal(size=(cam.size, 6, 3))
+    Vinv = rng.normal(size=(npt, 3, 3))
+    Vinv = Vinv @ Vinv.transpose(0, 2, 1) + np.eye(3)
+    Y = W @ Vinv[pt]
+    # the definition: W V^-1 W^T with W (6 nc, 3 npt) dense, V^-1 block diagonal
+    Wd = np.zeros((6 * nc, 3 * npt))
+    for o in range(cam.size):
+        Wd[6 * cam[o] : 6 * cam[o] + 6, 3 * pt[o] : 3 * pt[o] + 3] += W[o]
+    Vd = np.zeros((3 * npt, 3 * npt))
+    for p in range(npt):
+        Vd[3 * p : 3 * p + 3, 3 * p : 3 * p + 3] = Vinv[p]
+    want = Wd @ Vd @ Wd.T
+    got = sfm_mod._camera_pairs(cam, pt, nc, npt, chunk=7, kernel=kernel)(Y, W)
+    np.testing.assert_allclose(got, want, rtol=0, atol=1e-12 * np.abs(want).max())
+    np.testing.assert_allclose(got, got.T, rtol=0, atol=1e-12 * np.abs(want).max())
+    # no free camera, no view: an empty system
+    none = sfm_mod._camera_pairs(np.zeros(0, np.int64), np.zeros(0, np.int64), 0, 3, kernel=kernel)
+    assert none(np.zeros((0, 6, 3)), np.zeros((0, 6, 3))).shape == (0, 0)
+
+
+def _problem(lens: bool) -> tuple[tuple[Any, ...], Any]:
+    """A bundle adjustment of 5 cameras and 80 points, perturbed, camera 0 fixed."""
+    rng = np.random.default_rng(2)
+    K = np.array([[500.0, 0, 320], [0, 500, 240], [0, 0, 1]])
+    n, m = 5, 80
+    R = np.stack([np.asarray(rvec_to_matrix([0.02 * i, 0.05 * i, 0])) for i in range(n)])
+    t = np.array([[-0.2 * i, 0.01 * i, 0] for i in range(n)], float)
+    X = rng.uniform([-1, -1, 4], [1, 1, 6], (m, 3))
+    keep = rng.random((n, m)) < 0.8
+    ci, pi = np.nonzero(keep)
+    Xc = np.einsum("mij,mj->mi", R[ci], X[pi]) + t[ci]
+    uv = (Xc @ K.T)[:, :2] / Xc[:, 2:] + rng.normal(0, 0.3, (ci.size, 2))
+    R0 = np.stack([np.asarray(rvec_to_matrix([0.01, 0.01, -0.01])) @ r for r in R])
+    R0[0] = R[0]
+    t0 = t + rng.normal(0, 0.01, t.shape) * (np.arange(n) > 0)[:, None]
+    X0 = X + rng.normal(0, 0.02, X.shape)
+    fixed = np.arange(n) == 0
+    A = np.eye(2) + rng.normal(0, 0.3, (ci.size, 2, 2)) if lens else None
+    return (K, R0, t0, X0, ci, pi, uv, fixed, 2.0), A
+
+
+@pytest.mark.skipif(not numba_enabled(), reason="numba")
+@pytest.mark.parametrize("lens", [False, True])
+def test_normal_equations_kernel_matches_the_array_path(lens: bool) -> None:
+    (K, R, t, X, ci, pi, uv, fixed, delta), A = _problem(lens)
+    for iters, tol in ((1, 1e-12), (20, 1e-9)):
+        a = sfm_mod._schur_lm(K, R, t, X, ci, pi, uv, fixed, delta, iters, A=A, kernel=False)
+        k = sfm_mod._schur_lm(K, R, t, X, ci, pi, uv, fixed, delta, iters, A=A, kernel=True)
+        for x, y in zip(a, k, strict=True):
+            np.testing.assert_allclose(y, x, rtol=0, atol=tol * max(1.0, np.abs(x).max()))
+
+
+def _old_match(a: np.ndarray, b: np.ndarray, ratio: float = 0.8) -> np.ndarray:
+    """``match_features`` before: the mutual check from a second product ``b a^T``."""
+    a, b = a.astype(np.float32), b.astype(np.float32)
+    na, nb = (a * a).sum(1), (b * b).sum(1)
+    d2 = a @ b.T
+    d2 *= -2.0
+    d2 += nb[None, :]
+    rows = np.arange(a.shape[0])
+    best = np.argmin(d2, axis=1)
+    d1 = np.maximum(d2[rows, best] + na, 0.0)
+    d2[rows, best] = np.inf
+    d2nd = np.maximum(d2.min(axis=1) + na, 0.0)
+    keep = d1 < (ratio * ratio) * d2nd
+    back = b @ a.T
+    back *= -2.0
+    back += na[None, :]
+    keep &= np.argmin(back, axis=1)[best] == rows
+    idx = np.flatnonzero(keep)
+    return np.column_stack([idx, best[idx]]).astype(np.int64)
+
+
+@functools.cache
+def _endo_descriptors(contrast: float) -> list[np.ndarray]:
+    pytest.importorskip("cv2")
+    from imageform.geometry import field_of_view_mask
+    from imageform.io import read_image
+
+    frames = [np.asarray(read_image(ENDO / f"c3vdv3_f{i:03d}.jpg")) for i in (0, 8, 16, 24)]
+    mask = field_of_view_mask(frames)
+    return [detect_features(f, mask=mask, contrast_threshold=contrast).descriptors for f in frames]
+
+
+@pytest.mark.parametrize("contrast", [0.01, 0.005])
+def test_one_product_matches_as_the_two_did_on_real_sift(contrast: float) -> None:
+    """SIFT's descriptors are integers of norm about 512: every distance is exact in float32
+    and the column-wise nearest of one product is the row-wise nearest of the other."""
+    desc = _endo_descriptors(contrast)
+    assert all(np.array_equal(d, np.round(d)) for d in desc)
+    assert max(float(np.max((d * d).sum(1))) for d in desc) < 2.0**24
+    for i, j in ((0, 1), (0, 2), (1, 3), (2, 3)):
+        got = match_features(desc[i], desc[j])
+        assert got.shape[0] > 30
+        assert np.array_equal(got, _old_match(desc[i], desc[j]))
+        assert np.array_equal(
+            match_features(desc[j], desc[i], ratio=0.6), _old_match(desc[j], desc[i], 0.6)
+        )
+
+
+def test_matches_are_opencv_brute_force_ratio_and_cross_check() -> None:
+    """A peer: ``cv2.BFMatcher`` (L2), Lowe's ratio on its two nearest, and the mutual check
+    as the nearest of ``b`` in ``a``."""
+    cv2 = pytest.importorskip("cv2")
+    a, b = _endo_descriptors(0.01)[:2]
+    bf = cv2.BFMatcher(cv2.NORM_L2)
+    back = {m.queryIdx: m.trainIdx for m in bf.match(b, a)}
+    want = {
+        (m.queryIdx, m.trainIdx)
+        for m, n in bf.knnMatch(a, b, k=2)
+        if m.distance < 0.8 * n.distance and back[m.trainIdx] == m.queryIdx
+    }
+    got = {(int(i), int(j)) for i, j in match_features(a, b)}
+    assert len(got) > 50
+    # the same set but for a match on the ratio's edge (OpenCV's distances in float32 roots)
+    assert len(got ^ want) <= 0.005 * len(got)
+
+
+def test_match_features_bad_inputs() -> None:
+    a = np.zeros((5, 8), np.float32)
+    with pytest.raises(InvalidInputError):
+        match_features(a[0], a)
+    with pytest.raises(InvalidInputError):
+        match_features(a, np.full((5, 8), np.nan))
+    with pytest.raises(InvalidInputError):
+        match_features(a, a, ratio=0.0)
+    assert match_features(a[:1], a).shape == (0, 2)
+
+
+def test_bundle_adjust_bad_inputs() -> None:
+    (K, R, t, X, ci, pi, uv, _, _), _ = _problem(False)
+    with pytest.raises(InvalidInputError, match="pt_idx"):
+        bundle_adjust(K, R, t, X, ci, np.where(pi == 0, X.shape[0], pi), uv)
+    with pytest.raises(InvalidInputError, match="cam_idx"):
+        bundle_adjust(K, R, t, X, ci - 1, pi, uv)
+    with pytest.raises(InvalidInputError, match="cam_idx"):
+        bundle_adjust(K, R, t, X, ci.astype(float), pi, uv)
+    with pytest.raises(InvalidInputError, match=r"uv \(M, 2\)"):
+        bundle_adjust(K, R, t, X, ci, pi, uv[:-1])
+    with pytest.raises(InvalidInputError, match=r"K \(3, 3\)"):
+        bundle_adjust(K[:2], R, t, X, ci, pi, uv)
+    with pytest.raises(InvalidInputError, match=r"t \(n, 3\)"):
+        bundle_adjust(K, R, t[:-1], X, ci, pi, uv)
