@@ -118,6 +118,7 @@ def child(spec: dict[str, Any]) -> dict[str, Any]:
         "rot": rot,
         "tra": tra,
         "worst": worst,
+        "by_pair": sum("registered by the pose of its pair" in m for m in rec.notes),
         "cpu": cpu,
         "stages": spent,
     }
@@ -153,6 +154,7 @@ def _figures(r: dict[str, Any]) -> list[str]:
         str(r["long"]),
         f"{r['rot']:.2f} / {r['tra']:.2f}",
         f"{r['worst']:.2f}",
+        str(r["by_pair"]),
     ]
 
 
@@ -199,6 +201,7 @@ def profile_table(
         "points seen in 8 frames or more",
         "vs pycolmap: rotation / translation deg (median)",
         "worst rotation deg",
+        "registered by a pair's pose",
     ]
     text += f"\n\n### Every {every}th frame: the reconstructions before and after (seed 0)\n\n"
     text += markdown_table(cols2, same)
@@ -240,6 +243,7 @@ def quality_table(
         "points seen in 8 frames or more",
         "vs pycolmap: rotation / translation deg (median)",
         "worst rotation deg",
+        "registered by a pair's pose",
         "CPU s",
     ]
     cols_s = [
