@@ -21,7 +21,8 @@ Three tables:
    Medians over the repeats.
 2. **Before and after, the same inputs**: the reconstructions' figures side by side (registered
    frames, points, mean track length, points seen in 8 frames or more, agreement with
-   pycolmap).
+   pycolmap, the frames registered by a verified pair's pose: the last fallback, from the
+   notes).
 3. **Is a lower contrast worth it now** (the checkout under test alone): every contrast of
    ``--contrast`` with RANSAC seeds ``--seeds``; against contrast 0.01 the registered frames,
    points, mean track length, long tracks, the agreement with pycolmap (median rotation and

@@ -87,7 +87,8 @@ F64 = NDArray[np.float64]
 
 #: A diagnostic's window into :func:`reconstruct_sequence` (benchmarks/check_track_breaks.py):
 #: when a dict, each call fills it with its keypoints, the pairs matched and verified, the
-#: tracks built and the observations kept and set aside (by what). None: nothing is kept.
+#: tracks built and the observations kept and set aside (by what), and each pose the pair-pose
+#: fallback weighed (benchmarks/check_pair_pose.py). None: nothing is kept.
 _TRACE: dict[str, Any] | None = None
 
 #: The most degrees a verified pair's rotation may differ from the rotation its points give
@@ -368,8 +369,8 @@ def _pair_pose_disagreement(R: F64, t: F64, X: F64, uv: F64, K: F64) -> float:
     repeated texture can be turned a few degrees and still, with the scale free, reproject
     a handful of points within the threshold (OpenCV's chessboard views: the pair of frames
     7 and 10, 34 matches, 12.4 degrees off; 11 correspondences, 7 distinct points in two
-    bands of the image, within 3.1 px; refined, 13.3 degrees from the pair's rotation and
-    within one degree of the truth). ``R``, ``t`` are not changed.
+    bands of the image, within 3.1 px; refined, 13.35 degrees from the pair's rotation
+    and 1.18 from the truth: ``benchmarks/check_pair_pose.py``). ``R``, ``t`` are not changed.
     """
     from imageform.geometry.pnp import refine_pose
 
@@ -1585,7 +1586,7 @@ def reconstruct_sequence(
 
     def pose_from_pair(
         fi: int, kp: NDArray[np.int64], tracks: NDArray[np.int64]
-    ) -> tuple[_Pose, int] | None:
+    ) -> tuple[_Pose, int, float] | None:
         r"""Pose of frame ``fi`` from a verified pair with a registered frame, scaled by points.
 
         The pair's essential matrix (30 inliers or more, its rotation in the loops of three
@@ -1602,7 +1603,8 @@ def reconstruct_sequence(
         rotation the inliers confirm: refined on them in six degrees of freedom, the pose
         turns less than ``_PAIR_POSE_TOL_DEG`` (5) degrees from the pair's
         (:func:`_pair_pose_disagreement`; a pair turned by a repeated texture otherwise
-        registers the frame that far off). None when no pair gives that.
+        registers the frame that far off). Returns the pose, the pair's registered frame and
+        that angle; None when no pair gives that.
         """
         if kp.size == 0:
             return None
@@ -1617,7 +1619,7 @@ def reconstruct_sequence(
         X = P[tracks]
         xh = np.column_stack([ideal[fi][kp], np.ones(kp.size)]) @ np.linalg.inv(k).T
         best: _Pose | None = None
-        best_g, score = -1, 0
+        best_g, score, best_off = -1, 0, 0.0
         refused.clear()
         for g in reg_.tolist():
             key = (min(g, fi), max(g, fi))
@@ -1651,14 +1653,21 @@ def reconstruct_sequence(
             sel = cand.inliers
             off = _pair_pose_disagreement(cand.R, cand.tvec, X[sel], ideal[fi][kp][sel], k)
             if _TRACE is not None:
-                _TRACE.setdefault("pair_pose", []).append((fi, g, got, off))
+                _TRACE.setdefault("pair_pose", []).append(
+                    {"frame": fi, "pair": g, "R": cand.R.copy(), "t": cand.tvec.copy()}
+                    | {"R_other": Rs[g].copy(), "X": X[sel].copy(), "uv": ideal[fi][kp][sel]}
+                    | {"angle": off}
+                )
             if off >= _PAIR_POSE_TOL_DEG:
-                refused.append(f"{g} ({got} points, {off:.1f} degrees)")
+                refused.append(
+                    f"its pair with frame {g}, whose {got} points turn the pair's rotation "
+                    f"{off:.1f} degrees"
+                )
                 continue
-            best, best_g, score = cand, g, got
+            best, best_g, score, best_off = cand, g, got, off
         if best is None or score < max(6, 0.5 * min(kp.size, 12)):
             return None
-        return best, best_g
+        return best, best_g, best_off
 
     def register(fi: int, fallback: bool) -> bool:
         """Register frame ``fi`` by PnP on its tracks' points; ``fallback``: by the others.
@@ -1747,17 +1756,17 @@ def reconstruct_sequence(
                         "(12 needed), no verified pair's pose that 6 of them scale near its "
                         "neighbours"
                         + (
-                            f" (refused: the pair with frame {', '.join(refused)} from the "
-                            "rotation its points give)"
+                            f" (refused: {'; '.join(refused)}, {_PAIR_POSE_TOL_DEG:g} allowed)"
                             if refused
                             else ""
                         )
                     )
                     return False
-                res, g = pose
+                res, g, off = pose
                 how = (
                     f"the pose of its pair with frame {g}, scaled by "
-                    f"{int(np.sum(res.inliers))} points"
+                    f"{int(np.sum(res.inliers))} points (refined on them, it turns "
+                    f"{off:.1f} degrees)"
                 )
             notes.append(f"frame {fi}: registered by {how}")
         Rs[fi], ts[fi] = np.asarray(res.R, np.float64), np.asarray(res.tvec, np.float64)
