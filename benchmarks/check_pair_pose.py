@@ -103,7 +103,7 @@ def main() -> None:
     rec = reconstruct_sequence(
         scene["images"], K, scene["distortion"], window=12, masks=scene["masks"]
     )
-    table += rows("chessboard views", rec, sfm._TRACE, K, R_true)
+    table += rows("chessboard views", rec, sfm._TRACE or {}, K, R_true)
     errs = ", ".join(f"{e:.2f}" for e in rotation_errors(rec.R, R_true))
     regs.append(["chessboard views", " ".join(map(str, np.flatnonzero(rec.registered))), errs])
     frames, _ = sfm_scenes.sequence(K_walk, 8, (400, 300))
@@ -111,7 +111,8 @@ def main() -> None:
     seq = [sfm_scenes.burn_in(f) for f in [*frames, *photos]]
     sfm._TRACE = {}
     rec = reconstruct_sequence(seq, K_walk, max_features=2000)
-    sfm._TRACE, trace = None, sfm._TRACE
+    trace = sfm._TRACE or {}
+    sfm._TRACE = None
     table += rows("walk, overlay", rec, trace, K_walk, None)
     regs.append(["walk, overlay", " ".join(map(str, np.flatnonzero(rec.registered))), "-"])
     print(header("The pair-pose fallback: a pair's rotation against its points"))
