@@ -101,6 +101,7 @@ BENCH_SCRIPTS: dict[str, str] = {
     "endo-real": "benchmarks/check_endo_real.py",
     "sfm-intruders": "benchmarks/check_sfm_intruders.py",
     "sfm-dense": "benchmarks/check_sfm_dense.py",
+    "pair-pose": "benchmarks/check_pair_pose.py",
     "reconstruct-real": "benchmarks/bench_reconstruct_real.py",
     "reconstruct-fisheye": "benchmarks/bench_reconstruct_fisheye.py",
     "track-breaks": "benchmarks/check_track_breaks.py",

@@ -302,6 +302,58 @@ def test_real_chessboard_views(shared_data: Path) -> None:
     np.testing.assert_allclose(rec.R[first], np.eye(3), atol=1e-12)
 
 
+def test_pair_pose_fallback_refuses_a_pair_its_points_turn() -> None:
+    """The pair-pose fallback's rule (``_pair_pose_disagreement``): a verified pair's rotation
+    must agree, within ``_PAIR_POSE_TOL_DEG``, with the rotation its inliers give in six
+    degrees of freedom.
+
+    Built like the case that made the rule (OpenCV's chessboard views, frame 7 by its pair
+    with frame 10): 7 distinct points in two bands of a 640 x 480 image, 4 of them seen twice
+    (SIFT's keypoints of two orientations at one place), 5 to 6.4 units deep. A pose turned
+    12.4 degrees (the pair's error there) must be refused, one turned 1 degree (an ordinary
+    pair's error) accepted; OpenCV's iterative PnP from the same start finds the same rotation.
+    """
+    import cv2
+
+    from imageform.geometry.sfm import _PAIR_POSE_TOL_DEG, _pair_pose_disagreement
+
+    rng = np.random.default_rng(7)
+    K = np.array([[536.07, 0.0, 342.37], [0.0, 536.02, 235.54], [0.0, 0.0, 1.0]])
+    uv0 = np.array(
+        [[275, 61], [288, 66], [299, 46], [293, 380], [338, 392], [387, 403], [317, 288]], float
+    )
+    z = np.array([6.38, 6.36, 6.41, 4.99, 4.99, 4.96, 5.35])
+    R0 = np.asarray(rvec_to_matrix([0.1, -0.2, 0.05]))
+    t0 = np.array([0.3, -0.2, 0.5])
+    cam = np.column_stack([uv0, np.ones(7)]) @ np.linalg.inv(K).T * z[:, None]
+    X = (cam - t0) @ R0  # the points in the world: R0 X + t0 = cam
+    X, uv = X[[0, 1, 2, 3, 3, 4, 5, 5, 5, 5, 6]], uv0[[0, 1, 2, 3, 3, 4, 5, 5, 5, 5, 6]]
+    uv = uv + rng.normal(0.0, 0.3, uv.shape)
+    axis = np.array([0.3, 1.0, 0.2]) / np.linalg.norm([0.3, 1.0, 0.2])
+    for deg, refused in ((12.4, True), (1.0, False)):
+        R = np.asarray(rvec_to_matrix(np.radians(deg) * axis)) @ R0
+        t = t0 + (R0 - R) @ X.mean(axis=0)  # the points' centroid where it was
+        R_in, t_in = R.copy(), t.copy()
+        off = _pair_pose_disagreement(R, t, X, uv, K)
+        assert np.array_equal(R, R_in) and np.array_equal(t, t_in)
+        assert (off >= _PAIR_POSE_TOL_DEG) is refused, off
+        # back near the truth (7 points in two bands hold the rotation to about a degree)
+        assert abs(off - deg) < 1.5, off
+        ok, rv, _ = cv2.solvePnP(
+            X,
+            uv,
+            K,
+            None,
+            cv2.Rodrigues(R)[0],
+            t.reshape(3, 1).copy(),
+            True,
+            cv2.SOLVEPNP_ITERATIVE,
+        )
+        Rcv = cv2.Rodrigues(rv)[0]
+        cv_off = np.degrees(np.arccos(np.clip((np.trace(Rcv @ R.T) - 1.0) / 2.0, -1, 1)))
+        assert ok and abs(off - cv_off) < 0.01, (off, cv_off)
+
+
 def test_large_image_features_are_found_reduced_and_mapped_back() -> None:
     # SIFT doubles its input first: a 24 Mpx photograph would cost it ~5 GB and a minute.
     # An image larger than max_size is reduced; its keypoints come back in full-image

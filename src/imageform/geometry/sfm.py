@@ -87,8 +87,14 @@ F64 = NDArray[np.float64]
 
 #: A diagnostic's window into :func:`reconstruct_sequence` (benchmarks/check_track_breaks.py):
 #: when a dict, each call fills it with its keypoints, the pairs matched and verified, the
-#: tracks built and the observations kept and set aside (by what). None: nothing is kept.
+#: tracks built and the observations kept and set aside (by what), and each pose the pair-pose
+#: fallback weighed (benchmarks/check_pair_pose.py). None: nothing is kept.
 _TRACE: dict[str, Any] | None = None
+
+#: The most degrees a verified pair's rotation may differ from the rotation its points give
+#: (refined in six degrees of freedom) for the pair's pose to register a frame
+#: (``pose_from_pair`` in :func:`reconstruct_sequence`).
+_PAIR_POSE_TOL_DEG = 5.0
 
 
 @dataclass(frozen=True)
@@ -350,6 +356,35 @@ def _behind(K: F64, R: F64, t: F64, p1: F64, p2: F64, min_parallax: float) -> ND
         z2 = (aa * bt - ab * at) / det
         parallax = np.arccos(np.clip(ab / np.sqrt(aa * bb), -1.0, 1.0))
     return ~((z1 > 0) & (z2 > 0)) & (parallax >= min_parallax)
+
+
+def _pair_pose_disagreement(R: F64, t: F64, X: F64, uv: F64, K: F64) -> float:
+    """Return the angle (degrees) between a pose's rotation and the one its points give.
+
+    The fallback pose of :func:`reconstruct_sequence` (``pose_from_pair``) takes its
+    rotation from a verified pair's essential matrix and one number, the scale, from the
+    points; refined on its inliers ``X`` (3-D, n x 3) / ``uv`` (ideal pixels, n x 2) in all
+    six degrees of freedom (Levenberg-Marquardt from ``R``, ``t``: :func:`refine_pose`), the
+    points say where the frame faces by themselves. A pair's essential matrix fitted to a
+    repeated texture can be turned a few degrees and still, with the scale free, reproject
+    a handful of points within the threshold (OpenCV's chessboard views: the pair of frames
+    7 and 10, 34 matches, 12.4 degrees off; 11 correspondences, 7 distinct points in two
+    bands of the image, within 3.1 px; refined, 13.35 degrees from the pair's rotation
+    and 1.18 from the truth: ``benchmarks/check_pair_pose.py``). ``R``, ``t`` are not changed.
+    """
+    from imageform.geometry.pnp import refine_pose
+
+    Rr, _, _ = refine_pose(  # it refines its input arrays in place: copies
+        np.array(R, np.float64)[None],
+        np.array(t, np.float64)[None],
+        np.ascontiguousarray(X, np.float64)[None],
+        np.ascontiguousarray(uv, np.float64)[None],
+        np.asarray(K, np.float64),
+        np.ones((1, X.shape[0])),
+        30,
+    )
+    c = (np.trace(Rr[0] @ np.asarray(R).T) - 1.0) / 2.0
+    return float(np.degrees(np.arccos(np.clip(c, -1.0, 1.0))))
 
 
 def _inconsistent_pairs(
@@ -1547,9 +1582,11 @@ def reconstruct_sequence(
         inliers: NDArray[np.bool_]
         valid: bool = True
 
+    refused: list[str] = []  # pairs pose_from_pair's last call refused, and why
+
     def pose_from_pair(
         fi: int, kp: NDArray[np.int64], tracks: NDArray[np.int64]
-    ) -> tuple[_Pose, int] | None:
+    ) -> tuple[_Pose, int, float] | None:
         r"""Pose of frame ``fi`` from a verified pair with a registered frame, scaled by points.
 
         The pair's essential matrix (30 inliers or more, its rotation in the loops of three
@@ -1562,7 +1599,12 @@ def reconstruct_sequence(
         camera near the registered frames nearest ``fi`` in the sequence counts: within
         3 of their steps (the median distance between registered frames, a frame apart) a
         frame of the gap between them and it (a frame that does not belong may match a
-        repeated texture and scale to a pose far off the path). None when no pair gives that.
+        repeated texture and scale to a pose far off the path). And only a pair whose
+        rotation the inliers confirm: refined on them in six degrees of freedom, the pose
+        turns less than ``_PAIR_POSE_TOL_DEG`` (5) degrees from the pair's
+        (:func:`_pair_pose_disagreement`; a pair turned by a repeated texture otherwise
+        registers the frame that far off). Returns the pose, the pair's registered frame and
+        that angle; None when no pair gives that.
         """
         if kp.size == 0:
             return None
@@ -1577,7 +1619,8 @@ def reconstruct_sequence(
         X = P[tracks]
         xh = np.column_stack([ideal[fi][kp], np.ones(kp.size)]) @ np.linalg.inv(k).T
         best: _Pose | None = None
-        best_g, score = -1, 0
+        best_g, score, best_off = -1, 0, 0.0
+        refused.clear()
         for g in reg_.tolist():
             key = (min(g, fi), max(g, fi))
             if key not in pair_info or key not in pair_dir:
@@ -1592,6 +1635,8 @@ def reconstruct_sequence(
             sc = sc[np.isfinite(sc) & (sc > 0)]
             # the camera's center for scale s: C_g - s R_g^T R_r^T u
             cg, dirc = -Rs[g].T @ ts[g], Rs[g].T @ (Rr.T @ u)
+            cand: _Pose | None = None
+            got = score
             for s_ in np.unique(sc):
                 cf = cg - s_ * dirc
                 if not np.any(np.linalg.norm(near_c - cf, axis=1) <= reach):
@@ -1600,13 +1645,29 @@ def reconstruct_sequence(
                 with np.errstate(divide="ignore", invalid="ignore"):
                     uv = (Xc @ k[:2].T) / Xc[:, 2:3]
                     inl = (Xc[:, 2] > 0) & (np.linalg.norm(uv - ideal[fi][kp], axis=1) < thr)
-                if int(inl.sum()) > score:
-                    best = _Pose(Rr @ Rs[g], Rr @ ts[g] + s_ * u, inl)
-                    best_g = g
-                    score = int(inl.sum())
+                if int(inl.sum()) > got:
+                    cand = _Pose(Rr @ Rs[g], Rr @ ts[g] + s_ * u, inl)
+                    got = int(inl.sum())
+            if cand is None:
+                continue
+            sel = cand.inliers
+            off = _pair_pose_disagreement(cand.R, cand.tvec, X[sel], ideal[fi][kp][sel], k)
+            if _TRACE is not None:
+                _TRACE.setdefault("pair_pose", []).append(
+                    {"frame": fi, "pair": g, "R": cand.R.copy(), "t": cand.tvec.copy()}
+                    | {"R_other": Rs[g].copy(), "X": X[sel].copy(), "uv": ideal[fi][kp][sel]}
+                    | {"angle": off}
+                )
+            if off >= _PAIR_POSE_TOL_DEG:
+                refused.append(
+                    f"its pair with frame {g}, whose {got} points turn the pair's rotation "
+                    f"{off:.1f} degrees"
+                )
+                continue
+            best, best_g, score, best_off = cand, g, got, off
         if best is None or score < max(6, 0.5 * min(kp.size, 12)):
             return None
-        return best, best_g
+        return best, best_g, best_off
 
     def register(fi: int, fallback: bool) -> bool:
         """Register frame ``fi`` by PnP on its tracks' points; ``fallback``: by the others.
@@ -1694,12 +1755,18 @@ def reconstruct_sequence(
                         f"{extra_kp.size} by matching the points, PnP found {found} inliers "
                         "(12 needed), no verified pair's pose that 6 of them scale near its "
                         "neighbours"
+                        + (
+                            f" (refused: {'; '.join(refused)}, {_PAIR_POSE_TOL_DEG:g} allowed)"
+                            if refused
+                            else ""
+                        )
                     )
                     return False
-                res, g = pose
+                res, g, off = pose
                 how = (
                     f"the pose of its pair with frame {g}, scaled by "
-                    f"{int(np.sum(res.inliers))} points"
+                    f"{int(np.sum(res.inliers))} points (refined on them, it turns "
+                    f"{off:.1f} degrees)"
                 )
             notes.append(f"frame {fi}: registered by {how}")
         Rs[fi], ts[fi] = np.asarray(res.R, np.float64), np.asarray(res.tvec, np.float64)
