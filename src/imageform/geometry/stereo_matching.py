@@ -27,6 +27,7 @@ from numpy.typing import NDArray
 from imageform._backend import to_numpy, use_numba
 from imageform._validate import as_int, as_real, as_real_array, check_memory, describe
 from imageform.errors import InvalidInputError
+from imageform.geometry.stereo import StereoRectification
 
 __all__ = ["disparity_to_depth", "disparity_to_points", "stereo_disparity"]
 
@@ -233,7 +234,7 @@ def _match(
     return np.asarray(disp, dtype=np.float32)
 
 
-def _q_matrix(rectification: Any) -> NDArray[np.float64]:
+def _q_matrix(rectification: StereoRectification | npt.ArrayLike) -> NDArray[np.float64]:
     Q = getattr(rectification, "Q", rectification)
     Q = to_numpy(Q) if not isinstance(Q, list | tuple) else Q
     Qm = as_real_array(Q, "rectification", check=False)
@@ -262,7 +263,9 @@ def _disparity(disparity: Any) -> NDArray[np.floating[Any]]:
     return d if d.dtype == np.float32 else d.astype(np.float64)
 
 
-def disparity_to_points(disparity: npt.ArrayLike, rectification: Any) -> NDArray[np.floating[Any]]:
+def disparity_to_points(
+    disparity: npt.ArrayLike, rectification: StereoRectification | npt.ArrayLike
+) -> NDArray[np.floating[Any]]:
     r"""3-D points of a disparity map in the rectified left camera's frame (``reprojectImageTo3D``).
 
     ``(X, Y, Z, W)ᵀ = Q (u, v, d, 1)ᵀ`` and the point ``(X, Y, Z) / W`` for every pixel
@@ -306,7 +309,9 @@ def disparity_to_points(disparity: npt.ArrayLike, rectification: Any) -> NDArray
     return pts.astype(d.dtype if d.dtype == np.float32 else np.float64)
 
 
-def disparity_to_depth(disparity: npt.ArrayLike, rectification: Any) -> NDArray[np.floating[Any]]:
+def disparity_to_depth(
+    disparity: npt.ArrayLike, rectification: StereoRectification | npt.ArrayLike
+) -> NDArray[np.floating[Any]]:
     r"""Depth ``Z`` of every pixel of a disparity map: ``Z = f B / (d - Δc)``.
 
     The third coordinate of :func:`disparity_to_points` (``Q[2, 3] / (Q[3, 2] d + Q[3, 3])``):
