@@ -180,6 +180,46 @@ def test_rectify_matches_opencv(alpha: float, zero_disparity: bool) -> None:
     assert not ours.vertical
 
 
+@pytest.mark.parametrize("alpha", [-1.0, 0.0, 1.0])
+def test_rectify_a_lens_model_folding_before_the_corners(alpha: float) -> None:
+    """A fitted distortion that folds back before the image's corners (its Newton inverse is
+    NaN there) still rectifies: the image's middle stands for the corners' mean.
+
+    The rig is OpenCV's 320 x 240 stereo sample (imgdata/data2 of github.com/dreameer/
+    stereocalibrate) as imageform's stereo-calibrate fits it: the right camera's k3 = -0.42
+    makes r (1 + k1 r^2 + k2 r^4 + k3 r^6) fall beyond r of about 0.9, so none of its four
+    corners has an undistorted position; the rectification was NaN and ``imageform depth``
+    failed with "P contains NaN or inf". OpenCV's five fixed-point steps return numbers there
+    anyway: the principal points agree within 5 px.
+    """
+    Kl = np.array([[177.0612, 0.0, 160.0935], [0.0, 227.9343, 109.3003], [0.0, 0.0, 1.0]])
+    Kr = np.array([[178.0914, 0.0, 155.0410], [0.0, 229.2347, 106.6747], [0.0, 0.0, 1.0]])
+    Dl = BrownConrady(k1=-0.046305, k2=0.147670, p1=0.0024532, p2=-0.0053017, k3=-0.124595)
+    Dr = BrownConrady(k1=-0.069118, k2=0.326607, p1=-0.0009321, p2=-0.0068832, k3=-0.423859)
+    R = np.array(
+        [
+            [0.99975701, -0.00658542, 0.02103705],
+            [0.00612258, 0.99973944, 0.02199033],
+            [-0.02117638, -0.02185619, 0.99953683],
+        ]
+    )
+    T = np.array([-1.38358437, -0.01609417, 0.08163698])
+    corners = np.array([[0.0, 0.0], [319.0, 0.0], [0.0, 239.0], [319.0, 239.0]])
+    xy = (corners - Kr[:2, 2]) / np.diag(Kr)[:2]
+    assert not Dr.undistort(xy).valid.any()  # the premise: no corner can be undistorted
+    ours = stereo_rectify(Kl, Dl, Kr, Dr, (320, 240), R, T, alpha=alpha)
+    for m in (ours.P1, ours.P2, ours.Q):
+        assert np.all(np.isfinite(m))
+    P1 = cv2.stereoRectify(Kl, _dist(Dl), Kr, _dist(Dr), (320, 240), R, T.reshape(3, 1), alpha=-1)[
+        2
+    ]
+    if alpha == -1.0:
+        np.testing.assert_allclose(ours.P1[:2, 2], P1[:2, 2], atol=5.0)
+        np.testing.assert_allclose(ours.P1[0, 0], P1[0, 0], rtol=1e-9)  # f comes before
+    m = rectification_map(Kr, Dr, ours.R2, ours.P2, ours.image_size)
+    assert np.isfinite(m).all(axis=-1).mean() > 0.5  # most rectified pixels have a source
+
+
 def test_rectify_vertical_pair_matches_opencv() -> None:
     T = np.array([1.5, -100.0, 2.0])
     ours = stereo_rectify(K1, D1, K2, D2, SIZE, R_TRUE, T)

@@ -578,23 +578,56 @@ def _rectangles(
     ``getUndistortRectangles``).
     """
     n = 9
+    p = _rectified_pixels(_grid(size, n), K, dist, Rr, P).reshape(n, n, 2)
+    ok = np.all(np.isfinite(p), axis=-1)
+    if ok.all():
+        inner = (
+            float(p[:, 0, 0].max()),
+            float(p[0, :, 1].max()),
+            float(p[:, -1, 0].min()),
+            float(p[-1, :, 1].min()),
+        )
+    else:  # a lens model not invertible out to the image's edge: its outermost valid points
+        rows, cols = np.flatnonzero(ok.any(axis=1)), np.flatnonzero(ok.any(axis=0))
+        first_c, last_c = ok.argmax(axis=1), n - 1 - ok[:, ::-1].argmax(axis=1)
+        first_r, last_r = ok.argmax(axis=0), n - 1 - ok[::-1, :].argmax(axis=0)
+        inner = (
+            float(p[rows, first_c[rows], 0].max()),
+            float(p[first_r[cols], cols, 1].max()),
+            float(p[rows, last_c[rows], 0].min()),
+            float(p[last_r[cols], cols, 1].min()),
+        )
+    q = p[ok]
+    outer = (float(q[:, 0].min()), float(q[:, 1].min()), float(q[:, 0].max()), float(q[:, 1].max()))
+    return inner, outer
+
+
+def _grid(size: tuple[int, int], n: int) -> F64:
+    """Return an ``n`` x ``n`` grid over the pixel centres ``[0, W-1] x [0, H-1]``, row by row."""
     w, h = size
     gy, gx = np.mgrid[0:n, 0:n].astype(np.float64)
-    uv = np.stack([gx.ravel() * (w - 1) / (n - 1), gy.ravel() * (h - 1) / (n - 1)], -1)
-    p = _rectified_pixels(uv, K, dist, Rr, P).reshape(n, n, 2)
-    inner = (
-        float(p[:, 0, 0].max()),
-        float(p[0, :, 1].max()),
-        float(p[:, -1, 0].min()),
-        float(p[-1, :, 1].min()),
-    )
-    outer = (
-        float(p[..., 0].min()),
-        float(p[..., 1].min()),
-        float(p[..., 0].max()),
-        float(p[..., 1].max()),
-    )
-    return inner, outer
+    return np.stack([gx.ravel() * (w - 1) / (n - 1), gy.ravel() * (h - 1) / (n - 1)], -1)
+
+
+def _rectified_center(K: F64, dist: Any, Rr: F64, P0: F64, size: tuple[int, int]) -> F64:
+    """Mean rectified position of the image's four corners (``cvStereoRectify``'s rule).
+
+    Where the lens model cannot be inverted at a corner (a fitted polynomial that folds back
+    before the image's edge: Newton's inverse is NaN there), the rectified position of the
+    image's middle pixel stands for the mean (the two agree without distortion and rotation).
+    """
+    nx, ny = size
+    corners = np.array([[0.0, 0.0], [nx - 1.0, 0.0], [0.0, ny - 1.0], [nx - 1.0, ny - 1.0]])
+    pts = _rectified_pixels(corners, K, dist, Rr, P0)
+    if np.all(np.isfinite(pts)):
+        return np.asarray(pts.mean(axis=0), dtype=np.float64)
+    mid = _rectified_pixels(np.array([[(nx - 1) / 2.0, (ny - 1) / 2.0]]), K, dist, Rr, P0)[0]
+    if not np.all(np.isfinite(mid)):
+        raise InvalidInputError(
+            "the lens distortion cannot be inverted at the image's middle: the calibration's "
+            "distortion is not usable for rectification"
+        )
+    return np.asarray(mid, dtype=np.float64)
 
 
 def _matrix(value: Any, name: str, shape: tuple[int, ...]) -> F64:
@@ -704,12 +737,11 @@ def stereo_rectify(
     ratio = (new_size[0] / nx if idx == 1 else new_size[1] / ny) / 2.0
     j = idx ^ 1
     fc = (K1m[j, j] + K2m[j, j]) * ratio
-    corners = np.array([[0.0, 0.0], [nx - 1.0, 0.0], [0.0, ny - 1.0], [nx - 1.0, ny - 1.0]])
     cc = np.zeros((2, 2))
     for k, (K, d, Rk) in enumerate(((K1m, distortion1, R1), (K2m, distortion2, R2))):
         P0 = np.array([[fc, 0.0, 0.0], [0.0, fc, 0.0], [0.0, 0.0, 1.0]])
-        pts = _rectified_pixels(corners, K, d, Rk, P0)
-        cc[k] = [(nx - 1) / 2.0 - pts[:, 0].mean(), (ny - 1) / 2.0 - pts[:, 1].mean()]
+        mid = _rectified_center(K, d, Rk, P0, (nx, ny))
+        cc[k] = [(nx - 1) / 2.0 - mid[0], (ny - 1) / 2.0 - mid[1]]
     if zero_disparity:
         cc[:] = cc.mean(axis=0)
     else:
