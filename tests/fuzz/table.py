@@ -360,6 +360,10 @@ VALID: dict[str, C | Skip] = {
     "imageform.geometry.checkerboard_subpix.refine_symmetric": Skip(
         "an internal numba step of refine_corners_symmetric (fuzzed through it)"
     ),
+    "imageform.geometry.checkerboard_subpix.refine_symmetric_inside": Skip(
+        "an internal step of find_checkerboard's symmetric method on clean input (fuzzed "
+        "through find_checkerboard)"
+    ),
     "imageform.geometry.cross_ratio": call(
         a=np.array([1.0, 2.0]),
         b=np.array([2.0, 3.0]),

@@ -34,6 +34,7 @@ __all__ = [
     "refine_corners",
     "refine_corners_symmetric",
     "refine_symmetric",
+    "refine_symmetric_inside",
 ]
 
 # ITU-R BT.601 luma weights (the grey conversion OpenCV's cvtColor uses)
@@ -308,6 +309,38 @@ def refine_corners_symmetric(
     max_iter = as_int(max_iter, "max_iter", minimum=1, maximum=10**6)
     tol = as_real(tol, "tol", nonnegative=True)
     return RefinedCorners(*refine_symmetric(gray, pts, int(h), max_iter, float(tol)))
+
+
+def refine_symmetric_inside(
+    gray: NDArray[np.floating],
+    start: NDArray[np.float64],
+    anchor: NDArray[np.float64],
+    h: int,
+    max_iter: int,
+    tol: float,
+    reach: float,
+) -> tuple[NDArray[np.float64], NDArray[np.int64], NDArray[np.intp]]:
+    """:func:`refine_symmetric` of ``start`` where it can be trusted; elsewhere ``start`` kept.
+
+    A corner whose window (radius ``h``) would reach past the image's border (replicated edge
+    pixels are not the board's symmetry), whose step is singular or lost (status 2 or more),
+    or that lands more than ``reach`` pixels from its ``anchor`` (a square's centre is a
+    centre of symmetry too) keeps ``start``. Returns the corners, the symmetric step's status
+    of each corner (0 where it was not run) and the indices of the corners it moved.
+    """
+    height, width = gray.shape
+    room = np.minimum(
+        np.minimum(start[:, 0], width - 1 - start[:, 0]),
+        np.minimum(start[:, 1], height - 1 - start[:, 1]),
+    )
+    idx = np.flatnonzero(room >= h + 1)
+    sym, sym_status = refine_symmetric(gray, np.ascontiguousarray(start[idx]), h, max_iter, tol)
+    kept = (sym_status <= 1) & (np.hypot(*(sym - anchor[idx]).T) <= reach)
+    out = start.copy()
+    out[idx[kept]] = sym[kept]
+    status = np.zeros(start.shape[0], dtype=np.int64)
+    status[idx] = sym_status
+    return out, status, idx[kept]
 
 
 def refine_symmetric(

@@ -320,21 +320,13 @@ class BoardTracker:
         ``h`` (0.8 of a square); a corner whose window leaves ``crop``, or that does not
         converge or moves more than a quarter of a square, keeps ``uv``.
         """
-        from imageform.geometry.checkerboard_subpix import _gray_and_corners, refine_symmetric
+        from imageform.geometry.checkerboard_subpix import (
+            _gray_and_corners,
+            refine_symmetric_inside,
+        )
 
         gray, pts = _gray_and_corners(crop, uv)
-        height, width = gray.shape
-        room = np.minimum(
-            np.minimum(pts[:, 0], width - 1 - pts[:, 0]),
-            np.minimum(pts[:, 1], height - 1 - pts[:, 1]),
-        )
-        idx = np.flatnonzero(room >= h + 1)
-        out = uv.copy()
-        if idx.size:
-            sym, status = refine_symmetric(gray, np.ascontiguousarray(pts[idx]), h, 30, 1e-3)
-            kept = (status <= 1) & (np.hypot(*(sym - pts[idx]).T) <= 0.25 * square)
-            out[idx[kept]] = sym[kept]
-        return out
+        return refine_symmetric_inside(gray, pts, pts, h, 30, 1e-3, 0.25 * square)[0]
 
     def _fits(self, uv: NDArray[np.float64], X: NDArray[np.float64], res: object) -> bool:
         """Whether every corner lies within 1.5 px of the pose's reprojection."""
