@@ -95,6 +95,7 @@ from imageform.geometry.checkerboard_subpix import (
     refine_corners,
     refine_corners_symmetric,
     refine_symmetric_inside,
+    room_to_border,
 )
 from imageform.geometry.checkerboard_subpix import refine as refine_clean
 
@@ -789,7 +790,7 @@ def _partial(
         return CheckerboardResult(False, None, f"{whole_reason}; no part of it: {why}", size)
     grid, s = found
     h, w = gray.codes.shape[:2]
-    grid = _trimmed(grid, lambda g: _room(g, h, w) < _window(g, half_window) + 1)
+    grid = _trimmed(grid, lambda g: room_to_border(g, h, w) < _window(g, half_window) + 1)
     while True:
         if min(grid.shape[:2]) < AUTO_MIN_SIDE or grid.size // 2 < AUTO_MIN_CORNERS:
             return CheckerboardResult(
@@ -861,14 +862,6 @@ def _fixed(
 def _window(grid: NDArray[np.float64], half_window: int | None) -> int:
     """Return the refinement's half window for ``grid`` (given, else :func:`_half_window`)."""
     return _half_window(grid) if half_window is None else half_window
-
-
-def _room(grid: NDArray[np.float64], h: int, w: int) -> NDArray[np.float64]:
-    """Return each corner's distance (px) to the nearest border of an ``h x w`` image."""
-    return np.minimum(
-        np.minimum(grid[..., 0], w - 1 - grid[..., 0]),
-        np.minimum(grid[..., 1], h - 1 - grid[..., 1]),
-    )
 
 
 def _local_step(grid: NDArray[np.float64]) -> NDArray[np.float64]:

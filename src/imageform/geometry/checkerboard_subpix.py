@@ -35,6 +35,7 @@ __all__ = [
     "refine_corners_symmetric",
     "refine_symmetric",
     "refine_symmetric_inside",
+    "room_to_border",
 ]
 
 # ITU-R BT.601 luma weights (the grey conversion OpenCV's cvtColor uses)
@@ -311,6 +312,18 @@ def refine_corners_symmetric(
     return RefinedCorners(*refine_symmetric(gray, pts, int(h), max_iter, float(tol)))
 
 
+def room_to_border(points: NDArray[np.float64], h: int, w: int) -> NDArray[np.float64]:
+    """Return each point's distance (px) to the nearest border of an ``h x w`` image.
+
+    Pixel centres run from 0 to ``w - 1`` and ``h - 1``; ``points`` is ``(..., 2)`` as
+    ``(u, v)``.
+    """
+    return np.minimum(
+        np.minimum(points[..., 0], w - 1 - points[..., 0]),
+        np.minimum(points[..., 1], h - 1 - points[..., 1]),
+    )
+
+
 def refine_symmetric_inside(
     gray: NDArray[np.floating],
     start: NDArray[np.float64],
@@ -328,12 +341,7 @@ def refine_symmetric_inside(
     centre of symmetry too) keeps ``start``. Returns the corners, the symmetric step's status
     of each corner (0 where it was not run) and the indices of the corners it moved.
     """
-    height, width = gray.shape
-    room = np.minimum(
-        np.minimum(start[:, 0], width - 1 - start[:, 0]),
-        np.minimum(start[:, 1], height - 1 - start[:, 1]),
-    )
-    idx = np.flatnonzero(room >= h + 1)
+    idx = np.flatnonzero(room_to_border(start, *gray.shape) >= h + 1)
     sym, sym_status = refine_symmetric(gray, np.ascontiguousarray(start[idx]), h, max_iter, tol)
     kept = (sym_status <= 1) & (np.hypot(*(sym - anchor[idx]).T) <= reach)
     out = start.copy()
