@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import shutil
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pytest
@@ -15,6 +16,9 @@ from imageform.geometry import Camera, KannalaBrandt
 from imageform.geometry.calibration_refine import rodrigues
 from imageform.io import read_camera, write_camera
 from imageform.workflows.calibration import MAX_BOARD_CORNERS, MIN_VIEWS, parse_board
+
+if TYPE_CHECKING:
+    from imageform.geometry import CharucoBoard
 
 K = np.array([[800.0, 0.0, 320.0], [0.0, 800.0, 240.0], [0.0, 0.0, 1.0]])
 
@@ -332,6 +336,18 @@ def test_pose_triangulate_bad_input(tmp_path: Path, capsys: pytest.CaptureFixtur
     assert not Path(out).exists()
 
 
+def _charuco_scene() -> tuple[CharucoBoard, int, np.ndarray, np.ndarray, np.ndarray]:
+    """A 9 x 7 ChArUco board (20 mm squares, 15 mm markers), its printed image at 64 px a
+    square, and the camera the ChArUco tests render it through: K and Brown-Conrady k1, k2."""
+    from imageform.geometry import CharucoBoard
+
+    board = CharucoBoard((9, 7), 20.0, 15.0, "6x6_250")
+    px = 64
+    K_true = np.array([[700.0, 0, 322.0], [0, 705.0, 238.0], [0, 0, 1]])
+    dist = np.array([-0.12, 0.05, 0.0, 0.0, 0.0])
+    return board, px, board.image(px, margin_px=px), K_true, dist
+
+
 def test_calibrate_charuco_views(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     """`imageform calibrate --board charuco:9x7`: ten views of a ChArUco board rendered
     through a camera with distortion (three cut by the image border, so a checkerboard
@@ -340,14 +356,9 @@ def test_calibrate_charuco_views(tmp_path: Path, capsys: pytest.CaptureFixture[s
     `imageform undistort` reads."""
     from PIL import Image
 
-    from imageform.geometry import CharucoBoard
     from tests.geometry.test_charuco import _render_view
 
-    board = CharucoBoard((9, 7), 20.0, 15.0, "6x6_250")
-    px = 64
-    art = board.image(px, margin_px=px)
-    K_true = np.array([[700.0, 0, 322.0], [0, 705.0, 238.0], [0, 0, 1]])
-    dist = np.array([-0.12, 0.05, 0.0, 0.0, 0.0])
+    board, px, art, K_true, dist = _charuco_scene()
     rng = np.random.default_rng(5)
     for k in range(10):
         rvec = np.array([rng.uniform(-0.6, 0.6), rng.uniform(-0.6, 0.6), rng.uniform(-0.3, 0.3)])
@@ -393,14 +404,10 @@ def test_calibrate_charuco_refinement(
     import cv2
     from PIL import Image
 
-    from imageform.geometry import CharucoBoard, detect_charuco
+    from imageform.geometry import detect_charuco
     from tests.geometry.test_charuco import _render_view
 
-    board = CharucoBoard((9, 7), 20.0, 15.0, "6x6_250")
-    px = 64
-    art = board.image(px, margin_px=px)
-    K_true = np.array([[700.0, 0, 322.0], [0, 705.0, 238.0], [0, 0, 1]])
-    dist = np.array([-0.12, 0.05, 0.0, 0.0, 0.0])
+    board, px, art, K_true, dist = _charuco_scene()
     rng = np.random.default_rng(5)
     views = []
     for k in range(4):
