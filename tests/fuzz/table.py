@@ -1607,6 +1607,9 @@ VALID.update(
         "imageform.workflows.sharpness.SfrOptions.region": method(
             VALID["imageform.workflows.sharpness.SfrOptions"]
         ),
+        "imageform.workflows.sharpness.SfrOptions.pitch_mm": method(
+            VALID["imageform.workflows.sharpness.SfrOptions"]
+        ),
     }
 )
 

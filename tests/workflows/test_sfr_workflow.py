@@ -119,3 +119,121 @@ def test_sfr_of_monochrome_and_linear_raws(tmp_path: Path) -> None:
             assert list(e["channels"]) == channels
             m50 = [c["mtf50"] for c in e["channels"].values()]
             assert np.allclose(m50, 0.2201, rtol=0.03), (path.name, m50)
+
+
+def _dx_dicom(path: Path, values: np.ndarray, **attrs: object) -> Path:
+    """A 12-bit DX (digital X-ray) image of ``values`` written with pydicom."""
+    pytest.importorskip("pydicom")
+    from pydicom.dataset import Dataset, FileMetaDataset
+    from pydicom.uid import ExplicitVRLittleEndian, generate_uid
+
+    ds = Dataset()
+    ds.file_meta = FileMetaDataset()
+    ds.file_meta.TransferSyntaxUID = ExplicitVRLittleEndian
+    ds.file_meta.MediaStorageSOPClassUID = ds.SOPClassUID = "1.2.840.10008.5.1.4.1.1.1.1"
+    ds.file_meta.MediaStorageSOPInstanceUID = ds.SOPInstanceUID = generate_uid()
+    ds.Modality, ds.SamplesPerPixel, ds.PhotometricInterpretation = "DX", 1, "MONOCHROME2"
+    ds.Rows, ds.Columns = values.shape
+    ds.BitsAllocated, ds.BitsStored, ds.HighBit, ds.PixelRepresentation = 16, 12, 11, 0
+    for key, value in attrs.items():
+        setattr(ds, key, value)
+    ds.PixelData = np.round(values * 4000).astype(np.uint16).tobytes()
+    ds.save_as(path, enforce_file_format=True)
+    return path
+
+
+def _chart_lp(res_edges: list[dict[str, object]], channel: str = "Y") -> list[float]:
+    return [e["channels"][channel]["mtf50_lp_per_mm"] for e in res_edges]  # type: ignore[index]
+
+
+def test_sfr_of_an_x_ray_dicom_in_line_pairs_per_mm(tmp_path: Path) -> None:
+    """A DX image of the chart (Gaussian blur sigma 0.8 px: MTF50 0.2201 cycles/pixel, as
+    test_sfr_chart_npy_to_csv) is measured on its values as linear (decoding them as sRGB
+    would bend the edge), and the detector's Imager Pixel Spacing (0.139 mm; the Pixel
+    Spacing at the patient, 0.12 mm, is not the detector's) scales it: 0.2201 / 0.139 =
+    1.583 lp/mm."""
+    lin = render_sfr_chart((160, 200), grid=(1, 1), angle_deg=5.0, sigma=0.8, supersampling=4)
+    src = _dx_dicom(tmp_path / "dx.dcm", lin, ImagerPixelSpacing=[0.139, 0.139],
+                    PixelSpacing=[0.12, 0.12])  # fmt: skip
+    before = src.read_bytes()
+    out = tmp_path / "sfr.csv"
+    res = execute("sfr", image=src, out=out)
+    s = res.summary
+    assert s["transfer"] == "linear"
+    assert s["pixel_pitch_mm"] == {"rows": 0.139, "columns": 0.139,
+                                   "source": "the DICOM's imager pixel spacing"}  # fmt: skip
+    m50 = [e["channels"]["Y"]["mtf50"] for e in s["edges"]]
+    assert len(m50) == 4 and np.allclose(m50, 0.2201, rtol=0.02)
+    assert np.allclose(_chart_lp(s["edges"]), np.array(m50) / 0.139, rtol=1e-12)
+    assert np.allclose(_chart_lp(s["edges"]), 1.583, rtol=0.02)
+    assert "pixel pitch 139 um" in res.text[0]
+    with out.open() as fh:
+        rows = list(csv.reader(fh))
+    assert rows[0] == ["edge", "channel", "frequency_cy_per_px", "sfr", "frequency_lp_per_mm"]
+    f_px, f_mm = np.array([[float(r[2]), float(r[4])] for r in rows[1:]]).T
+    assert np.allclose(f_mm, f_px / 0.139)
+    assert src.read_bytes() == before
+    # decoded as sRGB (asked for), the same values give another MTF50
+    srgb = get_workflow("sfr").make_options(transfer="srgb")
+    bent = execute("sfr", image=src, out=None, options=srgb).summary
+    assert bent["transfer"] == "srgb"
+    assert not np.allclose([e["channels"]["Y"]["mtf50"] for e in bent["edges"]], m50,
+                           rtol=0.01)  # fmt: skip
+
+
+def test_sfr_pixel_pitch_sources_and_units(tmp_path: Path) -> None:
+    """Pixel Spacing where the Imager Pixel Spacing is absent; --pixel-pitch over either, in
+    um by default; a pitch that differs between rows and columns is taken across each edge
+    (between columns for a vertical edge); no pitch, no lp/mm."""
+    lin = render_slanted_edge((96, 64), angle_deg=4.0, sigma=0.8)
+    ref = float(slanted_edge_sfr(lin).mtf50[0])
+    wf = get_workflow("sfr")
+    ps = _dx_dicom(tmp_path / "ps.dcm", lin, PixelSpacing=[0.1, 0.1])
+    (e,) = execute("sfr", image=ps, out=None).summary["edges"]
+    assert e["channels"]["Y"]["mtf50_lp_per_mm"] == pytest.approx(ref / 0.1, rel=0.01)
+    for pitch in ("3.76um", "3.76", "0.00376mm", "3.76 µm"):
+        s = execute("sfr", image=ps, out=None, options=wf.make_options(pixel_pitch=pitch)).summary
+        assert s["pixel_pitch_mm"]["source"] == "--pixel-pitch"
+        lp = s["edges"][0]["channels"]["Y"]["mtf50_lp_per_mm"]
+        assert lp == pytest.approx(ref / 0.00376, rel=0.01), pitch
+    aniso = _dx_dicom(tmp_path / "aniso.dcm", lin, ImagerPixelSpacing=[0.2, 0.1])
+    (e,) = execute("sfr", image=aniso, out=None).summary["edges"]
+    assert e["orientation"] == "vertical"
+    assert e["channels"]["Y"]["mtf50_lp_per_mm"] == pytest.approx(ref / 0.1, rel=0.01)
+    (e,) = execute("sfr", image=_dx_dicom(tmp_path / "h.dcm", lin.T.copy(),
+                   ImagerPixelSpacing=[0.2, 0.1]), out=None).summary["edges"]  # fmt: skip
+    assert e["orientation"] == "horizontal"
+    assert e["channels"]["Y"]["mtf50_lp_per_mm"] == pytest.approx(ref / 0.2, rel=0.01)
+    plain = tmp_path / "edge.npy"
+    np.save(plain, lin.astype(np.float32))
+    s = execute("sfr", image=plain, out=None).summary
+    assert "pixel_pitch_mm" not in s and "mtf50_lp_per_mm" not in s["edges"][0]["channels"]
+
+
+@pytest.mark.parametrize("bad", ["-3um", "0", "abc", "5parsec", "nan"])
+def test_sfr_bad_pixel_pitch_is_one_line(bad: str) -> None:
+    with pytest.raises(InvalidInputError, match="--pixel-pitch") as err:
+        get_workflow("sfr").make_options(pixel_pitch=bad).check()
+    assert "\n" not in str(err.value)
+
+
+def test_sfr_pixel_pitch_on_the_command_line(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``imageform sfr EDGE --pixel-pitch 5.5um --json``: lp/mm in the JSON; a bad pitch is
+    bad usage (exit 2, click's usage lines, then one line saying why), nothing written."""
+    import json
+
+    from imageform.cli import main
+
+    lin = render_slanted_edge((96, 64), angle_deg=4.0, sigma=0.8)
+    src = tmp_path / "edge.npy"
+    np.save(src, lin.astype(np.float32))
+    assert main(["sfr", str(src), "--pixel-pitch", "5.5um", "--json"]) == 0
+    m50 = json.loads(capsys.readouterr().out)["edges"][0]["channels"]["Y"]
+    assert m50["mtf50_lp_per_mm"] == pytest.approx(m50["mtf50"] / 0.0055)
+    out = tmp_path / "sfr.csv"
+    assert main(["sfr", str(src), "--pixel-pitch", "-1", "-o", str(out)]) == 2  # bad usage
+    err = capsys.readouterr().err
+    assert err.strip().splitlines()[-1] == "Error: expected --pixel-pitch > 0, got '-1'"
+    assert not out.exists()

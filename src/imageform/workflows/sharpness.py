@@ -7,7 +7,11 @@ from sRGB to linear values first unless ``--transfer linear`` (raw or linear fil
 file (``.dng``, ``.nef``, ...; what ``imageform simulate --lab`` writes for its edge) is
 measured on its mosaic, black level removed and the four photosites of the CFA balanced onto
 the greens' levels (:func:`imageform.sensor.equalize_cfa`, as ``imageform characterize``
-does): one channel, ``raw``, at the sensor's full sampling, without demosaicing.
+does): one channel, ``raw``, at the sensor's full sampling, without demosaicing. A DICOM
+image (an X-ray detector's, a CT slice) is measured on its values after the Modality LUT,
+taken as linear; its Imager Pixel Spacing (the detector's pitch, what IEC 62220-1-1's MTF is
+given in), else its Pixel Spacing, turns cycles per pixel into line pairs per millimetre, as
+``--pixel-pitch`` does for any image.
 """
 
 from __future__ import annotations
@@ -24,7 +28,7 @@ __all__ = ["WORKFLOWS", "SfrOptions"]
 
 
 #: ``sfr --transfer``: the encoding of integer images.
-_Transfer = Literal["srgb", "linear"]
+_Transfer = Literal["auto", "srgb", "linear"]
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -38,10 +42,17 @@ class SfrOptions(ImageIn):
         metavar="X,Y,W,H",
     )
     transfer: _Transfer = option(
-        "srgb",
-        help="Encoding of integer images: srgb (decoded to linear first) or linear. Float "
-        "images are taken as linear.",
+        "auto",
+        help="Encoding of integer images: srgb (decoded to linear first) or linear; auto: "
+        "srgb for photographs, linear for DICOM and raw files. Float images are taken as "
+        "linear.",
         choices=get_args(_Transfer),
+    )
+    pixel_pitch: str | None = option(
+        None,
+        help="Pixel pitch (3.76um, 0.139mm; a bare number is in um): MTF50 and MTF10 also in "
+        "line pairs per mm. Default: a DICOM's Imager Pixel Spacing (else Pixel Spacing).",
+        metavar="LENGTH",
     )
     min_angle: float = option(2.0, help="Smallest edge angle (deg) kept by the edge finder.")
     max_angle: float = option(10.0, help="Largest edge angle (deg) kept by the edge finder.")
@@ -61,10 +72,44 @@ class SfrOptions(ImageIn):
             )
         return (vals[0], vals[1], vals[2], vals[3])
 
+    def pitch_mm(self) -> float | None:
+        """Return ``--pixel-pitch`` in millimetres, or None."""
+        if self.pixel_pitch is None:
+            return None
+        from imageform._units import parse_length
+
+        return parse_length(self.pixel_pitch, "--pixel-pitch", default_unit="um", unit="mm")
+
     def check(self) -> None:
-        """Check the options and the ``--roi``."""
+        """Check the options, the ``--roi`` and the ``--pixel-pitch``."""
         super().check()
         self.region()
+        self.pitch_mm()
+
+
+@dataclass(frozen=True)
+class _Pitch:
+    """The pixel pitch frequencies are scaled by: (between rows, between columns) in mm."""
+
+    rows_mm: float
+    cols_mm: float
+    source: str
+
+    def along(self, orientation: str) -> float:
+        """Return the pitch across an edge: between columns for a vertical edge."""
+        return self.cols_mm if orientation == "vertical" else self.rows_mm
+
+
+def _dicom_pitch(image: Path) -> _Pitch | None:
+    """Return a DICOM image's Imager Pixel Spacing, else its Pixel Spacing, else None."""
+    from imageform.io import dicom_info
+
+    d = dicom_info(image)
+    for name, sp in (("imager pixel spacing", d.imager_pixel_spacing_mm),
+                     ("pixel spacing", d.pixel_spacing_mm)):  # fmt: skip
+        if sp is not None and sp[0] > 0 and sp[1] > 0:
+            return _Pitch(float(sp[0]), float(sp[1]), f"the DICOM's {name}")
+    return None
 
 
 def _linear(img: Any, transfer: str) -> Any:
@@ -80,17 +125,32 @@ def _linear(img: Any, transfer: str) -> Any:
     return np.asarray(srgb_to_linear(vals)) if transfer == "srgb" else vals
 
 
-def _edge_image(image: Path, opts: SfrOptions) -> tuple[Any, tuple[str, ...] | None]:
-    """Return the linear image to measure and its channel names (None: the SFR's own).
+def _edge_image(
+    image: Path, opts: SfrOptions
+) -> tuple[Any, tuple[str, ...] | None, str, _Pitch | None]:
+    """Return the linear image, its channels, the transfer applied and the pixel pitch.
+
+    The channel names are None where the SFR's own apply; the pitch None where unknown.
 
     A raw file: its mosaic less the black level, over the white level's span, with the CFA's
     photosites balanced (one channel, ``raw``); a monochrome raw its one channel (``raw``), a
-    linear raw its three; ``--transfer`` does not apply to them.
+    linear raw its three; ``--transfer`` does not apply to them. A DICOM image: its values
+    after the Modality LUT, linear unless ``--transfer srgb``, its spacing the pitch.
     """
+    from imageform.io import image_info
     from imageform.workflows._characterize_inputs import _RAW_SUFFIXES, _read_photo
 
+    given = opts.pitch_mm()
+    pitch = None if given is None else _Pitch(given, given, "--pixel-pitch")
     if image.suffix.lower() not in _RAW_SUFFIXES:
-        return _linear(read(image, opts), opts.transfer), None
+        img = read(image, opts)  # reads (and refuses) first: a missing file, a bad DICOM
+        dicom = image_info(image).format == "dicom"
+        if dicom and pitch is None:
+            pitch = _dicom_pitch(image)
+        transfer = opts.transfer
+        if transfer == "auto":
+            transfer = "linear" if dicom else "srgb"
+        return _linear(img, transfer), None, transfer, pitch
     from imageform.sensor import equalize_cfa
 
     # the raw branch of characterize's reader: black level removed, scaled to 1 at white
@@ -99,9 +159,9 @@ def _edge_image(image: Path, opts: SfrOptions) -> tuple[Any, tuple[str, ...] | N
         import numpy as np
 
         lin = np.asarray(im.linear)
-        return (lin[..., 0], ("raw",)) if im.grey else (lin, None)
+        return (lin[..., 0], ("raw",), "linear", pitch) if im.grey else (lin, None, "linear", pitch)
     assert im.cfa is not None
-    return equalize_cfa(im.mosaic, im.cfa), ("raw",)
+    return equalize_cfa(im.mosaic, im.cfa), ("raw",), "linear", pitch
 
 
 def sfr(run: Run, opts: SfrOptions, *, out: Path | None, image: Path) -> Result:
@@ -112,7 +172,7 @@ def sfr(run: Run, opts: SfrOptions, *, out: Path | None, image: Path) -> Result:
     from imageform.workflows._tables import write_table
 
     image = Path(image)
-    arr, names = _edge_image(image, opts)
+    arr, names, transfer, pitch = _edge_image(image, opts)
     roi = opts.region()
     if roi is not None:
         regions = [(roi, "roi")]
@@ -128,15 +188,28 @@ def sfr(run: Run, opts: SfrOptions, *, out: Path | None, image: Path) -> Result:
     edges: list[dict[str, Any]] = []
     rows: list[list[Any]] = []
     t = Table(title=f"Slanted-edge SFR of {image.name} (cycles/pixel)")
-    for col in ("edge", "x,y,w,h", "angle", "channel", "MTF50", "MTF10"):
+    cols = ["edge", "x,y,w,h", "angle", "channel", "MTF50", "MTF10"]
+    if pitch is not None:
+        cols += ["MTF50 lp/mm", "MTF10 lp/mm"]
+    for col in cols:
         t.add_column(col, justify="right")
     for k, (reg, side) in enumerate(regions):
         res = slanted_edge_sfr(arr, reg)
         channels = names or res.channels
-        chans = {
-            c: {"mtf50": float(res.mtf50[i]), "mtf10": float(res.mtf10[i])}
-            for i, c in enumerate(channels)
-        }
+        # one cycle per pixel is one line pair over the pitch across the edge
+        per_mm = None if pitch is None else pitch.along(res.orientation)
+        chans: dict[str, dict[str, float]] = {}
+        for i, c in enumerate(channels):
+            m50, m10 = float(res.mtf50[i]), float(res.mtf10[i])
+            chans[c] = {"mtf50": m50, "mtf10": m10}
+            cells = [str(k), ",".join(str(v) for v in reg), f"{res.angle:.2f}", c]
+            cells += [f"{m50:.4f}", f"{m10:.4f}"]
+            if per_mm is not None:
+                chans[c] |= {"mtf50_lp_per_mm": m50 / per_mm, "mtf10_lp_per_mm": m10 / per_mm}
+                cells += [f"{m50 / per_mm:.3f}", f"{m10 / per_mm:.3f}"]
+            t.add_row(*cells)
+            for f, v in zip(res.frequency, res.sfr[:, i], strict=True):
+                rows.append([k, c, f, v] + ([f / per_mm] if per_mm is not None else []))
         edges.append(
             {
                 "edge": k,
@@ -147,21 +220,26 @@ def sfr(run: Run, opts: SfrOptions, *, out: Path | None, image: Path) -> Result:
                 "channels": chans,
             }
         )
-        for i, c in enumerate(channels):
-            t.add_row(
-                str(k),
-                ",".join(str(v) for v in reg),
-                f"{res.angle:.2f}",
-                c,
-                f"{res.mtf50[i]:.4f}",
-                f"{res.mtf10[i]:.4f}",
-            )
-            rows += [[k, c, f, s] for f, s in zip(res.frequency, res.sfr[:, i], strict=True)]
     if out is not None:
-        write_table(run.file(out), ("edge", "channel", "frequency_cy_per_px", "sfr"), rows)
-    transfer = opts.transfer if names is None else "linear"  # a raw mosaic is linear
-    summary = {"image": str(image), "transfer": transfer, "edges": edges}
+        head_cols: tuple[str, ...] = ("edge", "channel", "frequency_cy_per_px", "sfr")
+        if pitch is not None:
+            head_cols += ("frequency_lp_per_mm",)
+        write_table(run.file(out), head_cols, rows)
+    summary: dict[str, Any] = {"image": str(image), "transfer": transfer, "edges": edges}
     head = f"{len(edges)} edge(s) measured" + (f" -> {out}" if out is not None else "")
+    if pitch is not None:
+        summary["pixel_pitch_mm"] = {
+            "rows": pitch.rows_mm,
+            "columns": pitch.cols_mm,
+            "source": pitch.source,
+        }
+        size = (
+            f"{pitch.rows_mm * 1000:g} um"
+            if pitch.rows_mm == pitch.cols_mm
+            else f"{pitch.rows_mm * 1000:g} um between rows, {pitch.cols_mm * 1000:g} um "
+            "between columns"
+        )
+        head += f"; pixel pitch {size} ({pitch.source})"
     return Result(summary, (head, t))
 
 
@@ -174,11 +252,15 @@ WORKFLOWS = (
         (
             Input(
                 "image",
-                "A photograph of a slanted edge or an SFR chart (PNG, TIFF, .npy, or a raw "
-                "file such as .dng: measured on its mosaic).",
+                "A photograph of a slanted edge or an SFR chart (PNG, TIFF, .npy, a DICOM "
+                "image, or a raw file such as .dng: measured on its mosaic).",
             ),
         ),
-        Output("CSV to write: edge, channel, frequency (cycles/pixel), SFR.", required=False),
+        Output(
+            "CSV to write: edge, channel, frequency (cycles/pixel), SFR (and the frequency in "
+            "lp/mm where the pixel pitch is known).",
+            required=False,
+        ),
         suffixes=(".csv",),
         group="optics",
         description="Without --roi the edges of a chart of dark squares turned a few degrees "
@@ -186,6 +268,8 @@ WORKFLOWS = (
         "Frequencies are in cycles/pixel along the edge normal (Nyquist 0.5). Integer "
         "images are decoded from sRGB to linear first unless --transfer linear. A raw file "
         "is measured on its mosaic (black level removed, the CFA's photosites balanced on a "
-        "neutral edge): one channel, raw.",
+        "neutral edge): one channel, raw. A DICOM image is measured on its values (after the "
+        "Modality LUT) as linear, and its Imager Pixel Spacing (else Pixel Spacing) gives "
+        "MTF50 and MTF10 in line pairs per mm, as --pixel-pitch does for any image.",
     ),
 )
