@@ -410,7 +410,7 @@ def _dng_colour(tags: dict[str, Any]) -> tuple[np.ndarray | None, int]:
     return m, ills[pick]
 
 
-def read_raw(path: str | Path, *, max_pixels: int | None = None) -> RawImage:
+def read_raw(path: str | Path, *, max_pixels: int | None = None, opcodes: bool = True) -> RawImage:
     """Read a raw file with LibRaw (rawpy): DNG, CR2, CR3, NEF, ARW, RAF, ORF, RW2, ...
 
     Needs the optional extra ``imageform[raw]`` (rawpy), except for DNGs, which are read with
@@ -429,6 +429,12 @@ def read_raw(path: str | Path, *, max_pixels: int | None = None) -> RawImage:
         decoded); default ``IMAGEFORM_MAX_PIXELS`` when set, else :data:`RAW_MAX_PIXELS`
         (200 Mpx: medium-format sensors reach 151 Mpx, and a raw header counts the masked
         margins too; images have 100 Mpx, :func:`imageform.io.max_pixels`).
+    opcodes : bool
+        Apply a DNG's GainMap opcodes (its OpcodeList2: the lens-shading correction phones
+        write, one map per photosite of the tile) to the mosaic, as the DNG specification
+        asks and Adobe's readers do (LibRaw does not: False gives LibRaw's values). Other
+        opcodes are not applied; ``metadata["opcodes_skipped"]`` names them and
+        ``metadata["opcodes_applied"]`` counts the GainMaps.
 
     Returns
     -------
@@ -444,6 +450,35 @@ def read_raw(path: str | Path, *, max_pixels: int | None = None) -> RawImage:
     imageform.errors.ImageformError
         rawpy is not installed (the message names ``pip install "imageform[raw]"``).
     """
+    raw = _read_raw(path, max_pixels)
+    return _with_opcodes(raw, Path(path)) if opcodes else raw
+
+
+def _with_opcodes(raw: RawImage, p: Path) -> RawImage:
+    """Return ``raw`` with its DNG's GainMaps applied (:mod:`imageform.io._dng_opcodes`)."""
+    import dataclasses
+
+    from imageform.io._dng_opcodes import apply_gain_maps, raw_page_opcodes
+
+    maps, skipped, offset, area = raw_page_opcodes(p)
+    if not maps and not skipped:
+        return raw
+    meta = dict(raw.metadata)
+    meta["opcodes_skipped"] = skipped
+    mosaic = raw.mosaic
+    expected = None if area is None else (area[0] - offset[0], area[1] - offset[1])
+    fits = expected is None or tuple(mosaic.shape[:2]) == expected
+    if maps and fits and raw.metadata.get("xtrans") is None:
+        mosaic = apply_gain_maps(mosaic, _black_plane(raw), raw.white_level, maps,
+                                 offset=offset, shape=area)  # fmt: skip
+        meta["opcodes_applied"] = len(maps)
+    elif maps:
+        meta["opcodes_skipped"] = [*skipped, *(["OpcodeList2:GainMap"] * len(maps))]
+    return dataclasses.replace(raw, mosaic=mosaic, metadata=meta)
+
+
+def _read_raw(path: str | Path, max_pixels: int | None) -> RawImage:
+    """:func:`read_raw` without the opcodes."""
     from imageform.io.image_io import ImageInfo, _check_pixels, _pixel_limit
 
     limit = (

@@ -49,6 +49,11 @@ class DevelopOptions(ImageOut, Options):
         False,
         help="Brighten as LibRaw does by default: 1 % of the brightest channel's pixels at white.",
     )
+    opcodes: bool = option(
+        True,
+        help="Apply a DNG's GainMap opcodes (the lens-shading correction phones write); "
+        "--no-opcodes leaves them, as LibRaw does.",
+    )
     device: Device = option(
         "cpu",
         help="Where the development runs: cuda develops bilinear and Malvar Bayer mosaics in "
@@ -64,6 +69,19 @@ def raw_layout(img: Any) -> str:
     if img.metadata.get("xtrans"):
         return "X-Trans mosaic (demosaiced by LibRaw's linear interpolation)"
     return "monochrome raw" if img.monochrome else "linear (demosaiced) raw"
+
+
+def opcode_notes(meta: dict[str, Any]) -> list[str]:
+    """Say which DNG opcodes a read applied (GainMaps) and which it did not."""
+    notes = []
+    if meta.get("opcodes_applied"):
+        n = int(meta["opcodes_applied"])
+        notes.append(f"applied the DNG's {n} GainMap opcode{'s' if n > 1 else ''} (lens shading)")
+    skipped = meta.get("opcodes_skipped") or []
+    if skipped:
+        names = ", ".join(dict.fromkeys(skipped))
+        notes.append(f"DNG opcodes not applied: {names}")
+    return notes
 
 
 def raw_info(path: Path) -> Result:
@@ -90,12 +108,15 @@ def raw_info(path: Path) -> Result:
         if raw.white_balance is None
         else np.asarray(raw.white_balance).tolist(),
         "orientation": raw.orientation,
+        "opcodes_applied": int(raw.metadata.get("opcodes_applied", 0)),
+        "opcodes_skipped": list(raw.metadata.get("opcodes_skipped", [])),
     }
     model = summary["camera_model"] or "camera not named"
     text = [
         f"{path}: raw ({model}), {w} x {h} photosites, {kind}",
         f"black level {np.round(np.asarray(raw.black_level), 1).tolist()}, white level "
         f"{raw.white_level:g}; develop with imageform develop",
+        *opcode_notes(raw.metadata),
     ]
     return Result(summary, tuple(text))
 
@@ -112,7 +133,9 @@ def develop(run: Run, opts: DevelopOptions, *, raw: Path, out: Path) -> Result:
     from imageform.io import develop as develop_raw
     from imageform.io import image_format, read_raw
 
-    img = read_raw(raw)
+    img = read_raw(raw, opcodes=opts.opcodes)
+    for note in opcode_notes(img.metadata):
+        run.note(note)
     dev = develop_raw(
         img,
         demosaic=opts.demosaic,
