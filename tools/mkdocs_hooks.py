@@ -52,6 +52,7 @@ BENCH_SCRIPTS: dict[str, str] = {
     "8bit": "benchmarks/bench_8bit.py",
     "calibration": "benchmarks/bench_calibration.py",
     "calibration-endoscope": "benchmarks/check_calibration_endoscope.py",
+    "exif-focal": "benchmarks/check_exif_focal.py",
     "calibration-fisheye": "benchmarks/check_calibration_fisheye.py",
     "chart-detect": "benchmarks/bench_chart_detect.py",
     "chart-input": "benchmarks/check_chart_input.py",

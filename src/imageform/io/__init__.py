@@ -27,6 +27,7 @@ from imageform.io.camera_file import (
     write_camera,
 )
 from imageform.io.dicom import DICOM_WINDOW_FUNCTIONS, DicomInfo, dicom_info, dicom_window
+from imageform.io.exif import ExifCamera, exif_camera
 from imageform.io.icc import (
     RGB_PROFILED,
     DeclaredColorSpace,
@@ -100,6 +101,7 @@ __all__ = [
     "DeclaredColorSpace",
     "Development",
     "DicomInfo",
+    "ExifCamera",
     "Frame",
     "IccProfile",
     "ImageInfo",
@@ -114,6 +116,7 @@ __all__ = [
     "develop",
     "dicom_info",
     "dicom_window",
+    "exif_camera",
     "icc_profile",
     "identify_icc",
     "image_color_space",

@@ -23,7 +23,6 @@ from __future__ import annotations
 
 import struct
 from dataclasses import dataclass
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -34,7 +33,6 @@ __all__ = [
     "apply_gain_maps",
     "gain_map_gains",
     "parse_opcode_list",
-    "raw_page_opcodes",
     "read_opcodes",
 ]
 
@@ -218,35 +216,3 @@ def apply_gain_maps(
                 sub, b = out[..., plane][ix], blk[..., plane][ix]
                 out[..., plane][ix] = b + np.minimum((sub - b) * gains, white - b)
     return np.round(np.clip(out, 0.0, 65535.0)).astype(np.uint16)
-
-
-def raw_page_opcodes(
-    path: Path,
-) -> tuple[list[GainMap], list[str], tuple[int, int], tuple[int, int] | None]:
-    """Return a DNG raw IFD's GainMaps, the opcodes not applied, offset and area size.
-
-    The offset is where the mosaic's first pixel sits in the ActiveArea (LibRaw starts a
-    CFA image's crop at an even row and column), the size the area's (H, W) (None: the raw
-    image's). ``([], [], (0, 0), None)`` for any other file.
-    """
-    import tifffile
-
-    from imageform.io.raw import _ACTIVE_AREA, _DNG_VERSION, _dng_raw_page
-
-    try:
-        with tifffile.TiffFile(path) as tf:
-            if _DNG_VERSION not in tf.pages[0].tags:  # type: ignore[union-attr]
-                return [], [], (0, 0), None
-            page = _dng_raw_page(tf)
-            if page is None:
-                return [], [], (0, 0), None
-            maps, skipped = read_opcodes(page)
-            area = [int(v) for v in np.ravel(page.tags.valueof(_ACTIVE_AREA, ()))]
-            cfa = int(page.tags.valueof(262, 0)) == 32803
-    except Exception:  # not a TIFF: no opcodes
-        return [], [], (0, 0), None
-    if len(area) == 4 and area[2] > area[0] and area[3] > area[1]:
-        top, left, bottom, right = area
-        offset = (top & 1, left & 1) if cfa else (0, 0)  # LibRaw's crop starts even
-        return maps, skipped, offset, (bottom - top, right - left)
-    return maps, skipped, (0, 0), None

@@ -458,9 +458,9 @@ def _with_opcodes(raw: RawImage, p: Path) -> RawImage:
     """Return ``raw`` with its DNG's GainMaps applied (:mod:`imageform.io._dng_opcodes`)."""
     import dataclasses
 
-    from imageform.io._dng_opcodes import apply_gain_maps, raw_page_opcodes
+    from imageform.io._dng_opcodes import apply_gain_maps
 
-    maps, skipped, offset, area = raw_page_opcodes(p)
+    maps, skipped, offset, area = _raw_page_opcodes(p)
     if not maps and not skipped:
         return raw
     meta = dict(raw.metadata)
@@ -475,6 +475,38 @@ def _with_opcodes(raw: RawImage, p: Path) -> RawImage:
     elif maps:
         meta["opcodes_skipped"] = [*skipped, *(["OpcodeList2:GainMap"] * len(maps))]
     return dataclasses.replace(raw, mosaic=mosaic, metadata=meta)
+
+
+def _raw_page_opcodes(
+    path: Path,
+) -> tuple[list[Any], list[str], tuple[int, int], tuple[int, int] | None]:
+    """Return a DNG raw IFD's GainMaps, the opcodes not applied, offset and area size.
+
+    The offset is where the mosaic's first pixel sits in the ActiveArea (LibRaw starts a
+    CFA image's crop at an even row and column), the size the area's (H, W) (None: the raw
+    image's). ``([], [], (0, 0), None)`` for any other file.
+    """
+    import tifffile
+
+    from imageform.io._dng_opcodes import read_opcodes
+
+    try:
+        with tifffile.TiffFile(path) as tf:
+            if _DNG_VERSION not in tf.pages[0].tags:  # type: ignore[union-attr]
+                return [], [], (0, 0), None
+            page = _dng_raw_page(tf)
+            if page is None:
+                return [], [], (0, 0), None
+            maps, skipped = read_opcodes(page)
+            area = [int(v) for v in np.ravel(page.tags.valueof(_ACTIVE_AREA, ()))]
+            cfa = int(page.tags.valueof(262, 0)) == 32803
+    except Exception:  # not a TIFF: no opcodes
+        return [], [], (0, 0), None
+    if len(area) == 4 and area[2] > area[0] and area[3] > area[1]:
+        top, left, bottom, right = area
+        offset = (top & 1, left & 1) if cfa else (0, 0)  # LibRaw's crop starts even
+        return maps, skipped, offset, (bottom - top, right - left)
+    return maps, skipped, (0, 0), None
 
 
 def _read_raw(path: str | Path, max_pixels: int | None) -> RawImage:

@@ -676,7 +676,7 @@ class InfoOptions(Options):
 
 def info(run: Run, opts: InfoOptions, *, out: None, image: Path) -> Result:
     """``imageform info``: what an image file holds, from its header, and its colour space."""
-    from imageform.io import image_color_space, image_info
+    from imageform.io import exif_camera, image_color_space, image_info
     from imageform.workflows._characterize_inputs import _RAW_SUFFIXES
 
     if Path(image).suffix.lower() in _RAW_SUFFIXES:
@@ -721,7 +721,25 @@ def info(run: Run, opts: InfoOptions, *, out: None, image: Path) -> Result:
     if orientation not in (None, 1):
         how_stored = f"stored {stored[0]} x {stored[1]} px; " if turned else ""
         text.append(f"EXIF orientation {orientation}: {how_stored}read_image turns it upright")
+    cam = exif_camera(image)
+    summary["exif_camera"] = _exif_summary(cam)
+    if cam.found:
+        text.append(f"camera (EXIF): {cam.describe()}")
+    if cam.focal_length_px is not None:
+        text.append(
+            f"focal length ~ {cam.focal_length_px:.0f} px (from the EXIF's "
+            f"{cam.focal_length_px_source}; an estimate, no calibration)"
+        )
     return Result(summary, tuple(text))
+
+
+def _exif_summary(cam: Any) -> dict[str, Any] | None:
+    """Return an :class:`~imageform.io.ExifCamera` for JSON (None: no EXIF)."""
+    if not cam.found:
+        return None
+    import dataclasses
+
+    return {k: v for k, v in dataclasses.asdict(cam).items() if k != "found"}
 
 
 def _is_dicom(image: Path) -> bool:

@@ -248,6 +248,12 @@ def vanishing(run: Run, opts: VanishingOptions, *, out: Path | None, image: Path
             extra["world_axes"] = _world_axes(res, K_file, cf.camera.R)
     else:
         extra["K_source"] = "vanishing points" if K_est is not None else None
+        from imageform.io import exif_camera
+
+        exif = exif_camera(image)
+        if exif.focal_length_px is not None:
+            extra["exif_focal_length_px"] = exif.focal_length_px
+            extra["exif_focal_length_source"] = exif.focal_length_px_source
     visible = False
     if res.horizon is None:
         # no vanishing point gives the horizon: the visible one of open water or flat land
@@ -303,6 +309,13 @@ def vanishing(run: Run, opts: VanishingOptions, *, out: Path | None, image: Path
             text.append(f"  note: {res.K_note}")
     elif res.K_reason is not None:
         text.append(f"K: {res.K_reason}")
+    if "exif_focal_length_px" in extra:
+        f_exif = extra["exif_focal_length_px"]
+        line = f"EXIF: f ~ {f_exif:.0f} px (from its {extra['exif_focal_length_source']})"
+        if res.K is not None:
+            off = 100 * (res.K[0, 0] / f_exif - 1)
+            line += f"; the vanishing points' f is {off:+.1f} % from it"
+        text.append(line)
     if "focal_error_px" in extra:
         text.append(
             f"K from the vanishing points: f = {K_est[0, 0]:.1f} px ("  # type: ignore[index]
