@@ -62,6 +62,9 @@ def test_kernels_and_twins_give_the_same_numbers(small, args) -> None:  # type: 
     np.testing.assert_array_equal(*costs)
     totals = [m.aggregate(costs[0], gl, args[3], args[4], args[5]) for m in (sgm, twin)]
     np.testing.assert_array_equal(*totals)
+    # the fused kernel (rows selected as the second pass completes them) is select(aggregate)
+    fused = sgm.match(costs[0], gl, args[3], args[4], args[5], args[0], args[6], args[7])
+    np.testing.assert_array_equal(fused, sgm.select(totals[0], args[0], args[6], args[7]))
     a = _match(sgm, gl, gr, *args[:2], args[2], *args[3:])
     b = _match(twin, gl, gr, *args[:2], args[2], *args[3:])
     np.testing.assert_array_equal(a, b)  # NaN where NaN, the same floats elsewhere
@@ -77,6 +80,34 @@ def test_the_public_call_without_numba_is_the_twin(
     monkeypatch.setenv("IMAGEFORM_DISABLE_NUMBA", "1")
     b = stereo_disparity(small.left, small.right, **kw)
     np.testing.assert_array_equal(a, b)
+
+
+def test_left_right_check_is_opencvs() -> None:
+    """Right pixels are claimed by unique winners (the lower sum wins; from the right end)."""
+    n = 3
+    rows = {5: [0, 50, 50], 4: [50, 50, 10], 3: [50, 50, 5], 2: [20, 50, 50]}
+
+    def volume(rows):  # type: ignore[no-untyped-def]
+        total = np.full((1, 6, n), 60, dtype=np.uint16)
+        for x, r in rows.items():
+            total[0, x] = r
+        return total
+
+    for m in (sgm, twin):
+        # x = 4 (d = 2, sum 10) claims x_r = 2 first; x = 2 (d = 0, sum 20) lands there too
+        d = m.select(volume(rows), 0, 0.1, 1.0)
+        np.testing.assert_array_equal(d[0, 2:], [np.nan, 2, 2, 0])
+        np.testing.assert_array_equal(m.select(volume(rows), 0, 0.1, 2.0)[0, 2:], [0, 2, 2, 0])
+        np.testing.assert_array_equal(m.select(volume(rows), 0, 0.1, -1.0)[0, 2:], [0, 2, 2, 0])
+        # with the lower sum, x = 2 takes x_r = 2 over: x = 4 is the one left out
+        d = m.select(volume(rows | {2: [5, 50, 50]}), 0, 0.1, 1.0)
+        np.testing.assert_array_equal(d[0, 2:], [0, 2, np.nan, 0])
+        # sub-pixel 0.548 (the parabola through 11, 10, 30): floor 0 lands on x_r = 3, claimed
+        # by x = 5 with d = 2 (2 away), ceil 1 on x_r = 2, claimed by x = 4 with d = 2 (1
+        # away): one of the two is enough
+        d = m.select(volume(rows | {3: [11, 10, 30], 5: [50, 50, 0]}), 0, 0.1, 1.0)
+        np.testing.assert_allclose(d[0, 2:], [np.nan, 1 - 19 / 42, 2, 2], rtol=1e-6)
+        assert np.isnan(d[0, :2]).all()  # the band where d = 2 leaves the right image
 
 
 def test_speckle_filter_is_opencvs_filter_speckles() -> None:
