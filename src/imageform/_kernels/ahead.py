@@ -153,13 +153,17 @@ PLANS: dict[str, Plan] = {
                 "sgm",
                 "match",
                 "(uint8[:, :, ::1], float32[:, ::1], int64, int64, boolean, int64, float64,"
-                " float64)",
+                " float64, uint16[:, :, ::1])",
             ),
             Entry("sgm", "speckles", "(float32[:, ::1], int64, float64)"),
         ),
         here=(
             Entry("sgm", "census", "(float32[:, ::1], int64)"),
-            Entry("sgm", "cost_volume", "(uint64[:, ::1], uint64[:, ::1], int64, int64, int64)"),
+            Entry(
+                "sgm",
+                "cost_volume",
+                "(uint64[:, ::1], uint64[:, ::1], int64, int64, int64, uint8[:, :, ::1])",
+            ),
         ),
     ),
     # rendering and optics (3 s of NumPy) overlap the demosaicing and line-segment kernels

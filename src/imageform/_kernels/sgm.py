@@ -76,10 +76,16 @@ def census(img, r):  # type: ignore[no-untyped-def]  # pragma: no cover - numba
 
 
 @njit
-def cost_volume(cl, cr, min_d, n_d, nbits):  # type: ignore[no-untyped-def]  # pragma: no cover
-    """Hamming costs ``uint8 (H, W, n_d)`` of left codes against right codes at ``x - d``."""
+def cost_volume(cl, cr, min_d, n_d, nbits, out=None):  # type: ignore[no-untyped-def]  # pragma: no cover
+    """Hamming costs ``uint8 (H, W, n_d)`` of left codes against right codes at ``x - d``.
+
+    Written into ``out`` where given: an array NumPy allocated (on Linux it asks for huge
+    pages for large arrays, numba's allocator does not: a volume of tens of MB then costs
+    several ms of page faults more when allocated here).
+    """
     h, w = cl.shape
-    out = np.empty((h, w, n_d), dtype=np.uint8)
+    if out is None:
+        out = np.empty((h, w, n_d), dtype=np.uint8)
     for y in range(h):
         for x in range(w):
             a = cl[y, x]
@@ -109,18 +115,17 @@ _BIG = 16384
 
 
 @njit
-def _sweeps(cost, grey, p1, p2, adaptive, fused, min_d, keep, lr_check):  # type: ignore[no-untyped-def]  # pragma: no cover
+def _sweeps(cost, grey, p1, p2, adaptive, fused, min_d, keep, lr_check, total):  # type: ignore[no-untyped-def]  # pragma: no cover
     """Run the two raster passes of :func:`aggregate`; with ``fused``, :func:`select` too.
 
-    Returns the sums ``uint16 (H, W, D)`` and, with ``fused``, the disparities ``float32
-    (H, W)``: the second pass then adds its four paths of a row into a row buffer, not into
-    the sums, and selects that row's disparities as soon as it is complete (the volume of sums
-    is not written a second time nor read again).
+    Returns the sums ``uint16 (H, W, D)`` (in ``total``) and, with ``fused``, the
+    disparities ``float32 (H, W)``: the second pass then adds its four paths of a row into a
+    row buffer, not into the sums, and selects that row's disparities as soon as it is
+    complete (the volume of sums is not written a second time nor read again).
     """
     h, w, n = cost.shape
     big_end = np.int16(_BIG)
     q1 = np.int16(p1)
-    total = np.empty((h, w, n), dtype=np.uint16)
     disp = np.full((h if fused else 0, w), np.nan, dtype=np.float32)
     srow = np.empty((w, n), dtype=np.uint16)
     claim = np.empty(w, dtype=np.int64)
@@ -211,16 +216,22 @@ def aggregate(cost, grey, p1, p2, adaptive):  # type: ignore[no-untyped-def]  # 
     columns beyond the image are held as zeros. Each path's vector of disparities is padded
     with ``_BIG`` at both ends (no test for the neighbours ``d ± 1``).
     """
-    return _sweeps(cost, grey, p1, p2, adaptive, False, 0, 1.0, -1.0)[0]
+    total = np.empty(cost.shape, dtype=np.uint16)
+    return _sweeps(cost, grey, p1, p2, adaptive, False, 0, 1.0, -1.0, total)[0]
 
 
 @njit
-def match(cost, grey, p1, p2, adaptive, min_d, uniqueness, lr_check):  # type: ignore[no-untyped-def]  # pragma: no cover
+def match(cost, grey, p1, p2, adaptive, min_d, uniqueness, lr_check, total=None):  # type: ignore[no-untyped-def]  # pragma: no cover
     """``select(aggregate(cost, grey, p1, p2, adaptive), min_d, uniqueness, lr_check)``.
 
-    The same numbers, with each row selected as the second pass completes it.
+    The same numbers, with each row selected as the second pass completes it. ``total``: an
+    array ``uint16`` of the shape of ``cost`` for the sums of the first pass (its content is
+    overwritten), best allocated by NumPy (:func:`cost_volume`'s ``out``).
     """
-    return _sweeps(cost, grey, p1, p2, adaptive, True, min_d, 1.0 - uniqueness, lr_check)[1]
+    if total is None:
+        total = np.empty(cost.shape, dtype=np.uint16)
+    keep = 1.0 - uniqueness
+    return _sweeps(cost, grey, p1, p2, adaptive, True, min_d, keep, lr_check, total)[1]
 
 
 @njit

@@ -40,11 +40,18 @@ def census(img: NDArray[np.float32], r: int) -> NDArray[np.uint64]:
 
 
 def cost_volume(
-    cl: NDArray[np.uint64], cr: NDArray[np.uint64], min_d: int, n_d: int, nbits: int
+    cl: NDArray[np.uint64],
+    cr: NDArray[np.uint64],
+    min_d: int,
+    n_d: int,
+    nbits: int,
+    out: NDArray[np.uint8] | None = None,
 ) -> NDArray[np.uint8]:
     """Hamming costs ``(H, W, n_d)``; ``nbits`` where ``x - d`` leaves the right image."""
     h, w = cl.shape
-    out = np.full((h, w, n_d), nbits, dtype=np.uint8)
+    if out is None:
+        out = np.empty((h, w, n_d), dtype=np.uint8)
+    out[...] = nbits
     for k in range(n_d):
         d = min_d + k
         x0, x1 = max(0, d), min(w, w + d)  # x with 0 <= x - d < w
@@ -178,8 +185,9 @@ def match(
     min_d: int,
     uniqueness: float,
     lr_check: float,
+    total: NDArray[np.uint16] | None = None,
 ) -> NDArray[np.float32]:
-    """:func:`select` of :func:`aggregate` (the kernel fuses the two)."""
+    """:func:`select` of :func:`aggregate` (the kernel fuses the two; ``total`` unused)."""
     return select(aggregate(cost, grey, p1, p2, adaptive), min_d, uniqueness, lr_check)
 
 
