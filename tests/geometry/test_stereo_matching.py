@@ -208,11 +208,12 @@ def test_default_penalties(small) -> None:  # type: ignore[no-untyped-def]
     """p1 = (block_size² - 1) // 3, p2 = 4 p1, or 32 p1 with the adaptive P2."""
     L, R = small.left, small.right
     for bs, p1 in ((3, 2), (5, 8), (7, 16)):
-        kw = {"num_disparities": 16, "block_size": bs}
-        ref = stereo_disparity(L, R, **kw, p1=p1, p2=4 * p1)
-        np.testing.assert_array_equal(stereo_disparity(L, R, **kw), ref)
-        ref = stereo_disparity(L, R, **kw, p1=p1, p2=32 * p1, adaptive_p2=True)
-        np.testing.assert_array_equal(stereo_disparity(L, R, **kw, adaptive_p2=True), ref)
+        for adaptive, p2 in ((False, 4 * p1), (True, 32 * p1)):
+            ref = stereo_disparity(
+                L, R, num_disparities=16, block_size=bs, p1=p1, p2=p2, adaptive_p2=adaptive
+            )
+            got = stereo_disparity(L, R, num_disparities=16, block_size=bs, adaptive_p2=adaptive)
+            np.testing.assert_array_equal(got, ref)
 
 
 def test_uniqueness_and_lr_check_remove_pixels(scene) -> None:  # type: ignore[no-untyped-def]
