@@ -145,17 +145,25 @@ PLANS: dict[str, Plan] = {
             Entry("lsd_full", "_rect_improve", f"({_A1}, {_A2}, float64, float64)"),
         ),
     ),
-    # semi-global matching: the 8-path aggregation (the largest kernel) and the selection
-    # compile in the second process while the command reads, rectifies and takes the census
+    # semi-global matching: the 8-path aggregation fused with the selection (the largest kernel)
+    # compiles in the second process while the command reads, rectifies and takes the census
     "depth": Plan(
         child=(
-            Entry("sgm", "aggregate", "(uint8[:, :, ::1], float32[:, ::1], int64, int64, boolean)"),
-            Entry("sgm", "select", "(uint16[:, :, ::1], int64, float64, float64)"),
+            Entry(
+                "sgm",
+                "match",
+                "(uint8[:, :, ::1], float32[:, ::1], int64, int64, boolean, int64, float64,"
+                " float64, uint16[:, :, ::1])",
+            ),
             Entry("sgm", "speckles", "(float32[:, ::1], int64, float64)"),
         ),
         here=(
             Entry("sgm", "census", "(float32[:, ::1], int64)"),
-            Entry("sgm", "cost_volume", "(uint64[:, ::1], uint64[:, ::1], int64, int64, int64)"),
+            Entry(
+                "sgm",
+                "cost_volume",
+                "(uint64[:, ::1], uint64[:, ::1], int64, int64, int64, uint8[:, :, ::1])",
+            ),
         ),
     ),
     # rendering and optics (3 s of NumPy) overlap the demosaicing and line-segment kernels

@@ -18,7 +18,14 @@ PAMI 30(2), 2008. The steps, each a kernel here with its NumPy twin in
   ``P2 = P2' / |I_p - I_{p-r}|``, never below ``P1``).
 * :func:`select`: winner-take-all where every disparity stays inside the right image,
   the uniqueness test, the parabola through the best cost and its two neighbours (sub-pixel),
-  the right image's disparities from the same costs, and the left-right check.
+  the right pixels claimed by the unique winners, and OpenCV's left-right check on them.
+* :func:`match`: :func:`select` of :func:`aggregate`, each row selected as soon as the
+  second pass completes it (what :func:`~imageform.geometry.stereo_disparity` runs).
+
+Speed (``benchmarks/check_stereo_depth.py``): the paths are ``int16`` vectors padded at both
+ends of the disparities (no branch in the inner loops, 16-bit vector lanes), the sums of the
+first pass are the only volume written besides the costs, and the second pass never writes
+its sums back.
 * :func:`speckles`: OpenCV's ``filterSpeckles`` (4-connected regions of disparities within
   ``max_diff`` of each other, at most ``max_size`` pixels, made invalid).
 """
@@ -29,7 +36,7 @@ import numpy as np
 
 from imageform._kernels.jit import njit
 
-__all__ = ["aggregate", "census", "cost_volume", "popcount64", "select", "speckles"]
+__all__ = ["aggregate", "census", "cost_volume", "match", "popcount64", "select", "speckles"]
 
 
 @njit
@@ -45,29 +52,40 @@ def popcount64(v):  # type: ignore[no-untyped-def]  # pragma: no cover - numba
 def census(img, r):  # type: ignore[no-untyped-def]  # pragma: no cover - numba
     """Census codes ``uint64 (H, W)`` of ``img`` (float32, H x W) over a ``2r+1`` window."""
     h, w = img.shape
+    pad = np.empty((h + 2 * r, w + 2 * r), dtype=np.float32)  # the border replicated
+    for yy in range(h + 2 * r):
+        src = img[min(max(yy - r, 0), h - 1)]
+        row = pad[yy]
+        for xx in range(w + 2 * r):
+            row[xx] = src[min(max(xx - r, 0), w - 1)]
     out = np.zeros((h, w), dtype=np.uint64)
+    one = np.uint64(1)
     for y in range(h):
-        for x in range(w):
-            c = img[y, x]
-            code = np.uint64(0)
-            for dy in range(-r, r + 1):
-                yy = min(max(y + dy, 0), h - 1)
-                for dx in range(-r, r + 1):
-                    if dy == 0 and dx == 0:
-                        continue
-                    xx = min(max(x + dx, 0), w - 1)
-                    code = code << np.uint64(1)
-                    if img[yy, xx] < c:
-                        code = code | np.uint64(1)
-            out[y, x] = code
+        code = out[y]
+        c = img[y]
+        for dy in range(-r, r + 1):
+            nb = pad[y + r + dy]
+            for dx in range(-r, r + 1):
+                if dy == 0 and dx == 0:
+                    continue
+                o = r + dx
+                for x in range(w):  # one neighbour for the whole row: vectorised
+                    bit = one if nb[x + o] < c[x] else np.uint64(0)
+                    code[x] = (code[x] << one) | bit
     return out
 
 
 @njit
-def cost_volume(cl, cr, min_d, n_d, nbits):  # type: ignore[no-untyped-def]  # pragma: no cover
-    """Hamming costs ``uint8 (H, W, n_d)`` of left codes against right codes at ``x - d``."""
+def cost_volume(cl, cr, min_d, n_d, nbits, out=None):  # type: ignore[no-untyped-def]  # pragma: no cover
+    """Hamming costs ``uint8 (H, W, n_d)`` of left codes against right codes at ``x - d``.
+
+    Written into ``out`` where given: an array NumPy allocated (on Linux it asks for huge
+    pages for large arrays, numba's allocator does not: a volume of tens of MB then costs
+    several ms of page faults more when allocated here).
+    """
     h, w = cl.shape
-    out = np.empty((h, w, n_d), dtype=np.uint8)
+    if out is None:
+        out = np.empty((h, w, n_d), dtype=np.uint8)
     for y in range(h):
         for x in range(w):
             a = cl[y, x]
@@ -78,42 +96,6 @@ def cost_volume(cl, cr, min_d, n_d, nbits):  # type: ignore[no-untyped-def]  # p
                 else:
                     out[y, x, k] = popcount64(a ^ cr[y, xr])
     return out
-
-
-@njit
-def _path(c, lp, lpmin, p1, p2, out):  # type: ignore[no-untyped-def]  # pragma: no cover
-    """One step of the recursion: ``out = L_r(p)`` from costs ``c`` and ``lp = L_r(p - r)``.
-
-    Returns ``min_k out[k]``.
-    """
-    n = c.shape[0]
-    big = lpmin + p2
-    best = np.int32(2**30)
-    for k in range(n):
-        v = lp[k]
-        if k > 0 and lp[k - 1] + p1 < v:
-            v = lp[k - 1] + p1
-        if k < n - 1 and lp[k + 1] + p1 < v:
-            v = lp[k + 1] + p1
-        if big < v:
-            v = big
-        v = np.int32(c[k]) + v - lpmin
-        out[k] = v
-        if v < best:
-            best = v
-    return best
-
-
-@njit
-def _start(c, out):  # type: ignore[no-untyped-def]  # pragma: no cover - numba
-    """Start a path: ``L_r(p) = C(p)``; return its minimum."""
-    best = np.int32(2**30)
-    for k in range(c.shape[0]):
-        v = np.int32(c[k])
-        out[k] = v
-        if v < best:
-            best = v
-    return best
 
 
 @njit
@@ -128,124 +110,202 @@ def _p2(grey, y0, x0, y1, x1, p1, p2, adaptive):  # type: ignore[no-untyped-def]
     return max(p1, q)
 
 
+#: the value beyond both ends of a path's disparities (int16; ``BIG + P1`` still fits)
+_BIG = 16384
+
+
+@njit
+def _sweeps(cost, grey, p1, p2, adaptive, fused, min_d, keep, lr_check, total):  # type: ignore[no-untyped-def]  # pragma: no cover
+    """Run the two raster passes of :func:`aggregate`; with ``fused``, :func:`select` too.
+
+    Returns the sums ``uint16 (H, W, D)`` (in ``total``) and, with ``fused``, the
+    disparities ``float32 (H, W)``: the second pass then adds its four paths of a row into a
+    row buffer, not into the sums, and selects that row's disparities as soon as it is
+    complete (the volume of sums is not written a second time nor read again).
+    """
+    h, w, n = cost.shape
+    big_end = np.int16(_BIG)
+    q1 = np.int16(p1)
+    disp = np.full((h if fused else 0, w), np.nan, dtype=np.float32)
+    srow = np.empty((w, n), dtype=np.uint16)
+    claim = np.empty(w, dtype=np.int64)
+    claim_cost = np.empty(w, dtype=np.int64)
+    # rows before and this row of the three paths that come from the row before (j = 0: from
+    # x - s, 1: from x, 2: from x + s), columns shifted by one (0 and w + 1: outside)
+    prev = np.zeros((3, w + 2, n + 2), dtype=np.int16)
+    cur = np.zeros((3, w + 2, n + 2), dtype=np.int16)
+    prev_min = np.zeros((3, w + 2), dtype=np.int16)
+    cur_min = np.zeros((3, w + 2), dtype=np.int16)
+    hor = np.zeros(n + 2, dtype=np.int16)  # the horizontal path (from x - s)
+    acc = np.empty(n, dtype=np.int16)
+    for sweep in range(2):
+        s = 1 if sweep == 0 else -1
+        into_row = fused and sweep == 1
+        prev[:] = 0
+        cur[:] = 0
+        prev_min[:] = 0
+        cur_min[:] = 0
+        prev[:, :, 0] = big_end
+        prev[:, :, n + 1] = big_end
+        cur[:, :, 0] = big_end
+        cur[:, :, n + 1] = big_end
+        hor[0] = big_end
+        hor[n + 1] = big_end
+        for yi in range(h):
+            y = yi if s == 1 else h - 1 - yi
+            yp = y - s
+            for k in range(n):
+                hor[k + 1] = 0
+            hmin = np.int16(0)
+            for xi in range(w):
+                x = xi if s == 1 else w - 1 - xi
+                c = cost[y, x]
+                q = p2 if xi == 0 else _p2(grey, y, x, y, x - s, p1, p2, adaptive)
+                big = np.int16(hmin + q)
+                m = np.int16(32767)
+                for k in range(n):
+                    a = np.int16(min(hor[k], hor[k + 2]) + q1)
+                    v = np.int16(np.int16(c[k]) + min(min(hor[k + 1], big), a) - hmin)
+                    acc[k] = v
+                    m = min(m, v)
+                for k in range(n):  # (a slice assignment would test for overlap)
+                    hor[k + 1] = acc[k]
+                hmin = m
+                tt = srow[x] if into_row else total[y, x]
+                if sweep == 0:
+                    for k in range(n):
+                        tt[k] = np.uint16(acc[k])
+                else:
+                    t0 = total[y, x]
+                    for k in range(n):
+                        tt[k] = np.uint16(t0[k] + np.uint16(acc[k]))
+                for j in range(3):
+                    xp = x + (j - 1) * s
+                    if yi == 0 or xp < 0 or xp >= w:
+                        q = p2
+                    else:
+                        q = _p2(grey, y, x, yp, xp, p1, p2, adaptive)
+                    lp = prev[j, xp + 1]
+                    lm = prev_min[j, xp + 1]
+                    out = cur[j, x + 1]
+                    big = np.int16(lm + q)
+                    m = np.int16(32767)
+                    for k in range(n):
+                        a = np.int16(min(lp[k], lp[k + 2]) + q1)
+                        v = np.int16(np.int16(c[k]) + min(min(lp[k + 1], big), a) - lm)
+                        out[k + 1] = v
+                        tt[k] = np.uint16(tt[k] + v)
+                        m = min(m, v)
+                    cur_min[j, x + 1] = m
+            if into_row:
+                _select_row(srow, disp[y], min_d, keep, lr_check, claim, claim_cost)
+            prev, cur = cur, prev
+            prev_min, cur_min = cur_min, prev_min
+    return total, disp
+
+
 @njit
 def aggregate(cost, grey, p1, p2, adaptive):  # type: ignore[no-untyped-def]  # pragma: no cover
     """Sum ``uint16 (H, W, D)`` of the 8 paths' costs ``L_r`` (two raster passes).
 
     ``grey`` (H, W) float32 on a 0-255 scale: the intensities of the adaptive ``P2``.
-    Each ``L_r`` is at most ``max C + P2``: the sum fits 16 bits for ``P2 <= 8000``.
+    Each ``L_r`` is at most ``max C + P2 <= 8048``: the paths are kept as ``int16`` (every
+    step's sum and difference fits, the casts are exact and let the compiler use 16-bit
+    vector lanes) and their sum fits 16 bits for ``P2 <= 8000``. A path starts as
+    ``L_r = C``: the recursion from ``L_r(p - r) = 0``, so the rows before the first and the
+    columns beyond the image are held as zeros. Each path's vector of disparities is padded
+    with ``_BIG`` at both ends (no test for the neighbours ``d ± 1``).
     """
-    h, w, n = cost.shape
-    total = np.zeros((h, w, n), dtype=np.uint16)
-    p1 = np.int32(p1)
-    p2 = np.int32(p2)
-    for sweep in range(2):
-        s = 1 if sweep == 0 else -1
-        # previous and current rows of L for the three paths that come from the row before
-        # (from x - s, x and x + s); the horizontal path from x - s in this row
-        prev = np.zeros((3, w, n), dtype=np.int32)
-        cur = np.zeros((3, w, n), dtype=np.int32)
-        prev_min = np.zeros((3, w), dtype=np.int32)
-        cur_min = np.zeros((3, w), dtype=np.int32)
-        hor = np.zeros(n, dtype=np.int32)
-        hor_new = np.zeros(n, dtype=np.int32)
-        hor_min = np.int32(0)
-        for yi in range(h):
-            y = yi if s == 1 else h - 1 - yi
-            yp = y - s
-            for xi in range(w):
-                x = xi if s == 1 else w - 1 - xi
-                c = cost[y, x]
-                if xi == 0:
-                    m = _start(c, hor_new)
-                else:
-                    q = _p2(grey, y, x, y, x - s, p1, p2, adaptive)
-                    m = _path(c, hor, hor_min, p1, q, hor_new)
-                hor_min = m
-                for k in range(n):
-                    hor[k] = hor_new[k]
-                    total[y, x, k] += np.uint16(hor_new[k])
-                for j in range(3):
-                    xp = x + (j - 1) * s  # j = 0: from x - s; 1: from x; 2: from x + s
-                    if yi == 0 or xp < 0 or xp >= w:
-                        m = _start(c, cur[j, x])
-                    else:
-                        q = _p2(grey, y, x, yp, xp, p1, p2, adaptive)
-                        m = _path(c, prev[j, xp], prev_min[j, xp], p1, q, cur[j, x])
-                    cur_min[j, x] = m
-                    for k in range(n):
-                        total[y, x, k] += np.uint16(cur[j, x, k])
-            prev, cur = cur, prev
-            prev_min, cur_min = cur_min, prev_min
-    return total
+    total = np.empty(cost.shape, dtype=np.uint16)
+    return _sweeps(cost, grey, p1, p2, adaptive, False, 0, 1.0, -1.0, total)[0]
+
+
+@njit
+def match(cost, grey, p1, p2, adaptive, min_d, uniqueness, lr_check, total=None):  # type: ignore[no-untyped-def]  # pragma: no cover
+    """``select(aggregate(cost, grey, p1, p2, adaptive), min_d, uniqueness, lr_check)``.
+
+    The same numbers, with each row selected as the second pass completes it. ``total``: an
+    array ``uint16`` of the shape of ``cost`` for the sums of the first pass (its content is
+    overwritten), best allocated by NumPy (:func:`cost_volume`'s ``out``).
+    """
+    if total is None:
+        total = np.empty(cost.shape, dtype=np.uint16)
+    keep = 1.0 - uniqueness
+    return _sweeps(cost, grey, p1, p2, adaptive, True, min_d, keep, lr_check, total)[1]
+
+
+@njit
+def _select_row(S, out, min_d, keep, lr_check, claim, claim_cost):  # type: ignore[no-untyped-def]  # pragma: no cover
+    """:func:`select` on one row: sums ``S`` (W, D) into disparities ``out`` (W,)."""
+    w, n = S.shape
+    x0 = min(max(min_d + n - 1, 0), w)
+    x1 = max(min(w, w + min_d), x0)
+    none = np.int64(2**40)
+    for x in range(w):
+        claim[x] = -none
+        claim_cost[x] = none
+    for x in range(x1 - 1, x0 - 1, -1):
+        row = S[x]
+        # the least (sum, k): the least sum and its first k, in one vectorised pass
+        key = np.uint32(0xFFFFFFFF)
+        for k in range(n):
+            key = min(key, np.uint32((np.uint32(row[k]) << np.uint32(12)) | np.uint32(k)))
+        b = np.int64(key & np.uint32(0xFFF))
+        bc = row[b]
+        sec = np.uint16(65535)  # the least sum more than 1 away from b
+        for k in range(n):
+            v = row[k] if abs(k - b) > 1 else np.uint16(65535)
+            sec = min(sec, v)
+        if (b > 1 or b + 2 < n) and np.float64(sec) * keep < np.float64(bc):
+            continue
+        xr = x - min_d - b
+        if np.int64(bc) < claim_cost[xr]:
+            claim_cost[xr] = bc
+            claim[xr] = min_d + b
+        d = np.float64(min_d + b)
+        if 0 < b < n - 1:
+            a0 = np.int64(row[b - 1])
+            a2 = np.int64(row[b + 1])
+            den = max(a0 + a2 - 2 * np.int64(bc), np.int64(1))
+            d += np.float64(a0 - a2) / np.float64(2 * den)
+        out[x] = np.float32(d)
+    if lr_check >= 0:
+        for x in range(x0, x1):
+            d = np.float64(out[x])
+            if np.isnan(d):
+                continue
+            fails = 0
+            for di in (np.floor(d), np.ceil(d)):
+                xr = x - np.int64(di)
+                claimed = 0 <= xr < w and claim_cost[xr] < none
+                if claimed and abs(np.float64(claim[xr]) - di) > lr_check:
+                    fails += 1
+            if fails == 2:
+                out[x] = np.nan
 
 
 @njit
 def select(total, min_d, uniqueness, lr_check):  # type: ignore[no-untyped-def]  # pragma: no cover
     """Disparities ``float32 (H, W)`` from the summed costs; NaN where invalid.
 
-    Winner-take-all over the disparities; invalid where some disparity of the range takes
-    ``x - d`` out of the right image (OpenCV's rule: the left band of ``min_d + n - 1``
-    columns), when another disparity more than 1 away costs less than
-    ``best / (1 - uniqueness)`` (OpenCV's ``uniquenessRatio``), or, with ``lr_check >= 0``,
-    when the right image's winner at ``x - d`` (the least ``total[y, x_r + d', d']`` over
-    the ``d'`` whose left pixel ``x_r + d'`` is outside that band) differs from ``d`` by more
-    than ``lr_check``. Sub-pixel: the vertex of the parabola through the best cost and its
-    neighbours (none at the range's ends).
+    OpenCV's ``StereoSGBM`` rules on the sums ``S``, pixel after pixel from the right end of
+    the row to the left: invalid where some disparity of the range takes ``x - d`` out of the
+    right image (the left band of ``min_d + n - 1`` columns, the right band of ``-min_d``);
+    the winner ``b = argmin S`` (the first on ties) is not unique when another disparity more
+    than 1 away costs less than ``S_b / (1 - uniqueness)``. A unique winner claims its right
+    pixel ``x_r = x - d`` unless a pixel before it (further right) claimed it at a lower or
+    equal sum. Sub-pixel: the vertex of the parabola through ``S_b`` and its neighbours
+    (none at the range's ends). With ``lr_check >= 0``, a pixel is made invalid when both
+    ``floor(d)`` and ``ceil(d)`` of its sub-pixel ``d`` land on right pixels claimed by a
+    disparity more than ``lr_check`` away from them (a right pixel no one claimed, or one
+    outside the image, passes).
     """
-    h, w, n = total.shape
+    h, w, _n = total.shape
     out = np.full((h, w), np.nan, dtype=np.float32)
-    best_k = np.empty(w, dtype=np.int64)
-    right_k = np.empty(w, dtype=np.int64)
-    right_cost = np.empty(w, dtype=np.int64)
-    keep = 1.0 - uniqueness
+    claim = np.empty(w, dtype=np.int64)
+    claim_cost = np.empty(w, dtype=np.int64)
     for y in range(h):
-        for x in range(w):
-            right_k[x] = -1
-            right_cost[x] = 2**62
-        for x in range(w):
-            lo = max(0, x - w + 1 - min_d)
-            hi = min(n - 1, x - min_d)
-            best_k[x] = -1
-            if lo != 0 or hi != n - 1:  # part of the range leaves the right image
-                continue
-            row = total[y, x]
-            b = lo
-            bc = np.int64(row[lo])
-            for k in range(lo, hi + 1):
-                v = np.int64(row[k])
-                if v < bc:
-                    bc = v
-                    b = k
-                xr = x - (min_d + k)
-                if v < right_cost[xr]:
-                    right_cost[xr] = v
-                    right_k[xr] = k
-            unique = True
-            for k in range(lo, hi + 1):
-                if abs(k - b) > 1 and np.float64(row[k]) * keep < np.float64(bc):
-                    unique = False
-                    break
-            if not unique:
-                continue
-            best_k[x] = b
-            d = np.float64(min_d + b)
-            if lo < b < hi:
-                a0 = np.int64(row[b - 1])
-                a2 = np.int64(row[b + 1])
-                den = a0 + a2 - 2 * bc
-                if den < 1:
-                    den = np.int64(1)
-                d += np.float64(a0 - a2) / np.float64(2 * den)
-            out[y, x] = np.float32(d)
-        if lr_check >= 0:
-            for x in range(w):
-                b = best_k[x]
-                if b < 0:
-                    continue
-                xr = x - (min_d + b)
-                if abs(right_k[xr] - b) > lr_check:
-                    out[y, x] = np.nan
+        _select_row(total[y], out[y], min_d, 1.0 - uniqueness, lr_check, claim, claim_cost)
     return out
 
 

@@ -13,7 +13,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["aggregate", "census", "cost_volume", "select", "speckles"]
+__all__ = ["aggregate", "census", "cost_volume", "match", "select", "speckles"]
 
 #: bits set in each byte value
 _POP8 = np.array([bin(i).count("1") for i in range(256)], dtype=np.uint8)
@@ -40,11 +40,18 @@ def census(img: NDArray[np.float32], r: int) -> NDArray[np.uint64]:
 
 
 def cost_volume(
-    cl: NDArray[np.uint64], cr: NDArray[np.uint64], min_d: int, n_d: int, nbits: int
+    cl: NDArray[np.uint64],
+    cr: NDArray[np.uint64],
+    min_d: int,
+    n_d: int,
+    nbits: int,
+    out: NDArray[np.uint8] | None = None,
 ) -> NDArray[np.uint8]:
     """Hamming costs ``(H, W, n_d)``; ``nbits`` where ``x - d`` leaves the right image."""
     h, w = cl.shape
-    out = np.full((h, w, n_d), nbits, dtype=np.uint8)
+    if out is None:
+        out = np.empty((h, w, n_d), dtype=np.uint8)
+    out[...] = nbits
     for k in range(n_d):
         d = min_d + k
         x0, x1 = max(0, d), min(w, w + d)  # x with 0 <= x - d < w
@@ -114,41 +121,74 @@ def select(
     total: NDArray[np.uint16], min_d: int, uniqueness: float, lr_check: float
 ) -> NDArray[np.float32]:
     """Disparities from the summed costs (the kernel's rules; NaN where invalid)."""
-    _h, w, n = total.shape
-    S = total.astype(np.int64)
-    x = np.arange(w)[:, None]
-    k = np.arange(n)[None, :]
-    xr = x - (min_d + k)
-    inside = (xr >= 0) & (xr < w)  # (W, D)
-    big = np.int64(2**62)
-    Sm = np.where(inside[None], S, big)
-    b = np.argmin(Sm, axis=2)  # (H, W)
-    bc = np.take_along_axis(Sm, b[..., None], axis=2)[..., 0]
-    any_in = inside.all(axis=1)[None, :]
-    far = np.abs(k[None] - b[..., None]) > 1
-    beaten = inside[None] & far & (S.astype(np.float64) * (1.0 - uniqueness) < bc[..., None])
-    ok = any_in & ~beaten.any(axis=2)
-    lo = np.maximum(0, np.arange(w) - w + 1 - min_d)[None, :]
-    hi = np.minimum(n - 1, np.arange(w) - min_d)[None, :]
+    h, w, n = total.shape
+    out = np.full((h, w), np.nan, dtype=np.float32)
+    x0 = min(max(min_d + n - 1, 0), w)
+    x1 = max(min(w, w + min_d), x0)
+    if x1 == x0:
+        return out
+    S = total[:, x0:x1].astype(np.int64)  # the columns whose whole range stays inside
+    b = np.argmin(S, axis=2)  # the first on ties, as the kernel
+    bc = np.take_along_axis(S, b[..., None], axis=2)[..., 0]
+    k = np.arange(n)
+    far = np.abs(k - b[..., None]) > 1
+    sec = np.where(far, S, 65535).min(axis=2)
+    has_far = (b > 1) | (b + 2 < n)
+    unique = ~(has_far & (sec.astype(np.float64) * (1.0 - uniqueness) < bc.astype(np.float64)))
     d = (min_d + b).astype(np.float64)
-    mid = (b > lo) & (b < hi)
-    bm = np.clip(b, 1, n - 2)
-    a0 = np.take_along_axis(S, (bm - 1)[..., None], axis=2)[..., 0]
-    a2 = np.take_along_axis(S, (bm + 1)[..., None], axis=2)[..., 0]
+    mid = (b > 0) & (b < n - 1)
+    bm = np.clip(b, 1, max(n - 2, 1))
+    a0 = np.take_along_axis(S, np.minimum(bm - 1, n - 1)[..., None], axis=2)[..., 0]
+    a2 = np.take_along_axis(S, np.minimum(bm + 1, n - 1)[..., None], axis=2)[..., 0]
     den = np.maximum(a0 + a2 - 2 * bc, 1)
     d = np.where(mid, d + (a0 - a2).astype(np.float64) / (2 * den).astype(np.float64), d)
-    out = np.where(ok, d.astype(np.float32), np.float32(np.nan)).astype(np.float32)
-    if lr_check >= 0:
-        # the right image's winner at x_r: least S[y, x_r + min_d + k, k] over k
-        xl = np.arange(w)[:, None] + min_d + k  # (W, D): left column of right pixel x_r
-        # left pixels of the whole range only (the kernel skips the others, as OpenCV)
-        rin = (xl >= 0) & (xl < w) & np.take(inside.all(axis=1), np.clip(xl, 0, w - 1))
-        SR = np.where(rin[None], S[:, np.clip(xl, 0, w - 1), k], big)
-        rk = np.argmin(SR, axis=2)  # (H, W)
-        xr_b = np.clip(np.arange(w)[None, :] - (min_d + b), 0, w - 1)
-        mismatch = np.abs(np.take_along_axis(rk, xr_b, axis=1) - b) > lr_check
-        out[ok & mismatch] = np.nan
+    out[:, x0:x1] = np.where(unique, d.astype(np.float32), np.float32(np.nan))
+    if lr_check < 0:
+        return out
+    # the claims of the unique winners on their right pixels, from the row's right end: a
+    # lower cost takes a pixel over, an equal one does not
+    none = np.int64(2**40)
+    claim = np.full((h, w), -none, dtype=np.int64)
+    claim_cost = np.full((h, w), none, dtype=np.int64)
+    rows = np.arange(h)
+    for x in range(x1 - 1, x0 - 1, -1):
+        i = x - x0
+        u = unique[:, i]
+        r = rows[u]
+        xr = x - min_d - b[u, i]
+        c = bc[u, i]
+        take = c < claim_cost[r, xr]
+        claim_cost[r[take], xr[take]] = c[take]
+        claim[r[take], xr[take]] = min_d + b[u, i][take]
+    dd = out.astype(np.float64)
+    valid = np.isfinite(dd)
+    dd0 = np.where(valid, dd, 0.0)
+    X = np.arange(w)[None, :]
+    fails = np.zeros((h, w), dtype=np.int64)
+    for di in (np.floor(dd0), np.ceil(dd0)):
+        xr = X - di.astype(np.int64)
+        inside = (xr >= 0) & (xr < w)
+        xc = np.clip(xr, 0, w - 1)
+        cc = np.take_along_axis(claim_cost, xc, axis=1)
+        cd = np.take_along_axis(claim, xc, axis=1).astype(np.float64)
+        fails += valid & inside & (cc < none) & (np.abs(cd - di) > lr_check)
+    out[fails == 2] = np.nan
     return out
+
+
+def match(
+    cost: NDArray[np.uint8],
+    grey: NDArray[np.float32],
+    p1: int,
+    p2: int,
+    adaptive: bool,
+    min_d: int,
+    uniqueness: float,
+    lr_check: float,
+    total: NDArray[np.uint16] | None = None,
+) -> NDArray[np.float32]:
+    """:func:`select` of :func:`aggregate` (the kernel fuses the two; ``total`` unused)."""
+    return select(aggregate(cost, grey, p1, p2, adaptive), min_d, uniqueness, lr_check)
 
 
 def speckles(disp: NDArray[np.float32], max_size: int, max_diff: float) -> int:

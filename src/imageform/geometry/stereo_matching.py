@@ -102,11 +102,14 @@ def stereo_disparity(
        ``x - d`` out of the right image (OpenCV's rule: the first ``min_disparity +
        num_disparities - 1`` columns, and the last ``-min_disparity`` ones, are invalid);
        another disparity more than 1 away costs less than ``S_min / (1 - uniqueness)``;
-       the right image's own winner at ``x - d`` (least ``S(x_r + d', d')`` over ``d'``, as
-       OpenCV computes it) differs from ``d`` by more than ``lr_check`` pixels (occlusions,
-       mismatches); with ``speckle_size``, the pixel lies in a 4-connected region of at
-       most that many pixels whose neighbours differ by at most ``speckle_range``
-       (OpenCV's ``filterSpeckles``).
+       the left-right check, OpenCV's ``StereoSGBM`` rule (``disp12MaxDiff``): along each
+       row from its right end, every unique winner claims its right pixel ``x - d`` unless
+       a pixel before it claimed that one at a lower or equal ``S``; a pixel fails when
+       both ``floor(d)`` and ``ceil(d)`` of its sub-pixel ``d`` land on right pixels claimed
+       by disparities more than ``lr_check`` away (occlusions, mismatches: a pixel a
+       closer surface hides loses its right pixel to it; an unclaimed one passes); with
+       ``speckle_size``, the pixel lies in a 4-connected region of at most that many pixels
+       whose neighbours differ by at most ``speckle_range`` (OpenCV's ``filterSpeckles``).
 
     Parameters
     ----------
@@ -124,9 +127,12 @@ def stereo_disparity(
         Side of the census window (8, 24 or 48 bits a pixel).
     p1, p2 : int, optional
         Penalties of a disparity step of 1 and of a larger one along a path, in bits of
-        Hamming distance (``0 < p1 < p2 <= 8000``). Defaults ``p1 = (block_size² - 1) / 4``
-        and ``p2 = 16 p1`` (6 and 96 for 5 x 5; the best of 7 pairs tried on the pairs of
-        ``benchmarks/check_stereo_depth.py``).
+        Hamming distance (``0 < p1 < p2 <= 8000``). Defaults ``p1 = (block_size² - 1) / 3``
+        and ``p2 = 4 p1`` (8 and 32 for 5 x 5: of 26 pairs tried on Middlebury's cones, one
+        of the five at its best density with its share of errors over 3 px kept, taken for
+        its figures on the other pairs of ``benchmarks/check_stereo_depth.py`` and its
+        plain rule); with ``adaptive_p2``, ``p2 = 32 p1`` (the ``P2'`` that the intensity
+        step divides: 256 for 5 x 5, where the gross errors of those pairs stop falling).
     adaptive_p2 : bool
         Divide ``p2`` by the intensity step along the path, ``p2 / |I_p - I_{p-r}|`` on a
         0-255 scale (Hirschmüller's eq. 12), never below ``p1``: disparity steps come cheaper
@@ -135,8 +141,8 @@ def stereo_disparity(
         In ``[0, 1)``: the margin by which the winner must beat every disparity more than 1
         away (OpenCV's ``uniquenessRatio`` / 100; 0 turns the test off).
     lr_check : float or None
-        Largest difference of the left and the right winners (OpenCV's ``disp12MaxDiff``);
-        None turns the check off.
+        Largest difference of a disparity and the claims on its right pixels (OpenCV's
+        ``disp12MaxDiff`` and rule, step 4); None turns the check off.
     speckle_size : int
         Invalidate regions of at most this many pixels (0, the default, keeps all; OpenCV's
         ``speckleWindowSize``).
@@ -156,8 +162,9 @@ def stereo_disparity(
 
     Notes
     -----
-    The work is ``O(H W D)`` with ``D = num_disparities`` (about 20 ns a pixel and disparity
-    on one core with numba); memory 3 bytes a pixel and disparity. The numba kernels
+    The work is ``O(H W D)`` with ``D = num_disparities`` (about 3 ns a pixel and disparity
+    on one core with numba, some 0.8 times OpenCV's ``MODE_HH``); memory 3 bytes a pixel and
+    disparity. The numba kernels
     (:mod:`imageform._kernels.sgm`) and their NumPy twins give the same numbers.
 
     Examples
@@ -183,15 +190,18 @@ def stereo_disparity(
     if bs not in BLOCK_SIZES:
         raise InvalidInputError(f"expected block_size 3, 5 or 7 (the census window), got {bs}")
     nbits = bs * bs - 1
-    P1 = max(1, nbits // 4) if p1 is None else as_int(p1, "p1", minimum=1, maximum=MAX_P2 - 1)
-    P2 = 16 * P1 if p2 is None else as_int(p2, "p2", minimum=1, maximum=MAX_P2)
+    P1 = max(1, nbits // 3) if p1 is None else as_int(p1, "p1", minimum=1, maximum=MAX_P2 - 1)
+    if not isinstance(adaptive_p2, bool | np.bool_):
+        raise TypeError(f"expected adaptive_p2 as a bool, got {describe(adaptive_p2)}")
+    if p2 is None:
+        P2 = (32 if adaptive_p2 else 4) * P1
+    else:
+        P2 = as_int(p2, "p2", minimum=1, maximum=MAX_P2)
     P2 = min(P2, MAX_P2)
     if not P2 > P1:
         raise InvalidInputError(
             f"expected p2 > p1 (a larger jump costs more), got p1 {P1}, p2 {P2}"
         )
-    if not isinstance(adaptive_p2, bool | np.bool_):
-        raise TypeError(f"expected adaptive_p2 as a bool, got {describe(adaptive_p2)}")
     u = as_real(uniqueness, "uniqueness", minimum=0.0)
     if not u < 1.0:
         raise InvalidInputError(f"expected uniqueness in [0, 1), got {u}")
@@ -225,10 +235,13 @@ def _match(
     r = bs // 2
     cl = kern.census(gl, r)
     cr = kern.census(gr, r)
-    cost = kern.cost_volume(cl, cr, min_d, n_d, bs * bs - 1)
-    total = kern.aggregate(cost, gl, p1, p2, adaptive)
-    del cost
-    disp = kern.select(total, min_d, float(uniqueness), float(lr))
+    # the volumes allocated by NumPy, not in the kernels: NumPy asks Linux for huge pages
+    # (madvise), numba does not, and 4 kB pages cost a fifth of the matching's time in faults
+    h, w = gl.shape
+    cost = kern.cost_volume(cl, cr, min_d, n_d, bs * bs - 1, np.empty((h, w, n_d), np.uint8))
+    total = np.empty((h, w, n_d), dtype=np.uint16)
+    disp = kern.match(cost, gl, p1, p2, adaptive, min_d, float(uniqueness), float(lr), total)
+    del cost, total
     if speckle_size > 0:
         kern.speckles(disp, speckle_size, float(speckle_range))
     return np.asarray(disp, dtype=np.float32)

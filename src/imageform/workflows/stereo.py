@@ -324,13 +324,14 @@ class DepthOptions(ImageIn):
     p1: int | None = option(
         None,
         help="Penalty of a disparity step of 1 px along a path (bits; default "
-        "(block_size^2 - 1) / 4).",
+        "(block_size^2 - 1) / 3).",
         minimum=1,
         maximum=7999,
     )
     p2: int | None = option(
         None,
-        help="Penalty of a larger disparity step (bits, > --p1; default 16 x --p1).",
+        help="Penalty of a larger disparity step (bits, > --p1; default 4 x --p1, 32 x --p1 "
+        "with --adaptive-p2).",
         minimum=2,
         maximum=8000,
     )
@@ -346,8 +347,8 @@ class DepthOptions(ImageIn):
     )
     lr_check: float = option(
         1.0,
-        help="Largest difference of the left and right images' disparities (px; OpenCV's "
-        "disp12MaxDiff); larger ones are invalid.",
+        help="Largest difference of a disparity and those claiming its right pixel (px; "
+        "OpenCV's disp12MaxDiff and rule); larger ones are invalid.",
         minimum=0.0,
         maximum=100_000.0,
     )
