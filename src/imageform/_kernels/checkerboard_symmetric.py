@@ -747,9 +747,10 @@ def _charuco_symmetric(
     mw = nw + 2
     ok = np.zeros((nw, nw), dtype=np.bool_)
     # the kept half of the window: weights (0 where not kept), each row's run of them
-    wk = np.zeros(nw * nw)
-    run0 = np.empty(nw, dtype=np.int64)
-    run1 = np.empty(nw, dtype=np.int64)
+    # laid out as the patch (q + d at (i + 1) m + j + 1), over its rows 1 .. h + 1
+    wk = np.zeros(mw * mw)
+    dxs = np.zeros(mw * mw)
+    dys = np.zeros(mw * mw)
     rowi = np.empty((mw + 1) * mw)
     patch = np.empty(mw * mw)
     mirror = np.empty(mw * mw)
@@ -773,20 +774,20 @@ def _charuco_symmetric(
         d12 = 0.0
         d22 = 0.0
         # the offsets d before 0 in row order (one of each pair d, -d), kept when -d is too
+        for t in range(m * (h + 3)):
+            wk[t] = 0.0
         for i in range(h + 1):
-            run0[i] = nn
-            run1[i] = 0
-            for j in range(nn if i < h else h):
-                wk[i * nn + j] = 0.0
-                if not (ok[i, j] and ok[nn - 1 - i, nn - 1 - j]):
+            for j in range(nn):
+                t = (i + 1) * m + j + 1
+                dxs[t] = -2.0 * (j - h)
+                dys[t] = -2.0 * (i - h)
+                if (i == h and j >= h) or not (ok[i, j] and ok[nn - 1 - i, nn - 1 - j]):
                     continue
                 wt = w[i * nn + j]
-                wk[i * nn + j] = wt
+                wk[t] = wt
                 d11 += wt * (j - h) * (j - h)
                 d12 += wt * (j - h) * (i - h)
                 d22 += wt * (i - h) * (i - h)
-                run0[i] = min(run0[i], j)
-                run1[i] = j + 1
         d11 *= 2.0
         d12 *= 2.0
         d22 *= 2.0
@@ -824,10 +825,10 @@ def _charuco_symmetric(
                         rowi[i * m + j] = bx_ * image[ys[i], xs[j]] + ax * image[ys[i], xs[j + 1]]
             for t in range(m * m):
                 patch[t] = by_ * rowi[t] + ay * rowi[t + m]
-            for t in range(m * m):  # patch(-d) at d's place: the step's sums read forwards
+            for t in range((h + 3) * m):  # patch(-d) at d's place, the rows the sums read
                 mirror[t] = patch[m * m - 1 - t]
             a11_, a12_, a22_, b11, b12, b21, b22, g1, g2, e1, e2 = _pair_sums(
-                patch, mirror, wk, run0, run1, h, m
+                patch, mirror, wk, dxs, dys, m + 1, (h + 1) * m + h + 1
             )
             c11 = b11 * i00 + b12 * i10
             c12 = b11 * i01 + b12 * i11
@@ -876,22 +877,38 @@ def _pair_sums(
     patch: NDArray[np.float64],
     mirror: NDArray[np.float64],
     wk: NDArray[np.float64],
-    run0: NDArray[np.int64],
-    run1: NDArray[np.int64],
-    h: int,
-    m: int,
+    dxs: NDArray[np.float64],
+    dys: NDArray[np.float64],
+    t0: int,
+    t1: int,
 ) -> tuple[
     float, float, float, float, float, float, float, float, float, float, float
 ]:  # pragma: no cover - numba-compiled
     """Return the normal equations' sums of a step over the window's pairs ``(d, -d)``.
 
-    ``patch`` (``m = 2h + 3`` square, flat) is the image resampled at ``q + d``; ``wk`` the
-    weights of the offsets ``d`` before 0 (row order; 0 for a pair left out), ``run0[i]`` to
-    ``run1[i]`` the columns of row ``i`` that hold them. The terms of ``d`` and ``-d`` are
-    equal (the residual and the Jacobian change sign together): half the window is summed and
-    doubled. Sums in any order (``reassoc``: vectorised); the pairs left out add ``0``.
+    ``patch`` (``m`` square, flat) is the image resampled at ``q + d``, ``mirror`` the same
+    reversed (at ``q - d``); ``wk``, ``dxs``, ``dys`` (laid out as ``patch``) the weights of
+    the offsets ``d`` before 0 (0 for the others and for a pair left out) and the shading's
+    Jacobian, ``-2 d``; ``t0`` to ``t1`` the patch's positions that hold them. The terms of
+    ``d`` and ``-d`` are equal (the residual and the Jacobian change sign together): half the
+    window is summed and doubled. Sums in any order (``reassoc``: vectorised over one run);
+    the offsets of weight 0 add ``0`` (the image is finite).
     """
-    nn = 2 * h + 1
+    n = t1 - t0
+    m = t0 - 1  # the row stride
+    pc = patch[t0:t1]
+    pl = patch[t0 - 1 : t1 - 1]
+    pg = patch[t0 + 1 : t1 + 1]
+    pu = patch[t0 - m : t1 - m]
+    pd = patch[t0 + m : t1 + m]
+    qc = mirror[t0:t1]
+    ql = mirror[t0 + 1 : t1 + 1]  # mirror's next is the patch's previous
+    qg = mirror[t0 - 1 : t1 - 1]
+    qu = mirror[t0 + m : t1 + m]
+    qd = mirror[t0 - m : t1 - m]
+    wr = wk[t0:t1]
+    xr = dxs[t0:t1]
+    yr = dys[t0:t1]
     a11 = 0.0
     a12 = 0.0
     a22 = 0.0
@@ -903,41 +920,24 @@ def _pair_sums(
     g2 = 0.0
     e1 = 0.0
     e2 = 0.0
-    for i in range(h + 1):
-        j0 = run0[i]
-        c = run1[i] - j0
-        if c <= 0:
-            continue
-        dy = -2.0 * (i - h)
-        p0 = (i + 1) * m + 1 + j0  # patch index of q + d at j0 (of q - d in mirror)
-        wr = wk[i * nn + j0 : i * nn + j0 + c]
-        pc = patch[p0 : p0 + c]
-        pl = patch[p0 - 1 : p0 - 1 + c]
-        pg = patch[p0 + 1 : p0 + 1 + c]
-        pu = patch[p0 - m : p0 - m + c]
-        pd = patch[p0 + m : p0 + m + c]
-        qc = mirror[p0 : p0 + c]
-        ql = mirror[p0 + 1 : p0 + 1 + c]  # mirror's next is the patch's previous
-        qg = mirror[p0 - 1 : p0 - 1 + c]
-        qu = mirror[p0 + m : p0 + m + c]
-        qd = mirror[p0 - m : p0 - m + c]
-        for t in range(c):
-            wt = wr[t]
-            r = pc[t] - qc[t]
-            jx = 0.5 * (pg[t] - pl[t]) - 0.5 * (qg[t] - ql[t])
-            jy = 0.5 * (pd[t] - pu[t]) - 0.5 * (qd[t] - qu[t])
-            dx = -2.0 * (j0 + t - h)
-            a11 += wt * jx * jx
-            a12 += wt * jx * jy
-            a22 += wt * jy * jy
-            b11 += wt * jx * dx
-            b12 += wt * jx * dy
-            b21 += wt * jy * dx
-            b22 += wt * jy * dy
-            g1 += wt * jx * r
-            g2 += wt * jy * r
-            e1 += wt * dx * r
-            e2 += wt * dy * r
+    for t in range(n):
+        wt = wr[t]
+        r = pc[t] - qc[t]
+        jx = 0.5 * (pg[t] - pl[t]) - 0.5 * (qg[t] - ql[t])
+        jy = 0.5 * (pd[t] - pu[t]) - 0.5 * (qd[t] - qu[t])
+        dx = xr[t]
+        dy = yr[t]
+        a11 += wt * jx * jx
+        a12 += wt * jx * jy
+        a22 += wt * jy * jy
+        b11 += wt * jx * dx
+        b12 += wt * jx * dy
+        b21 += wt * jy * dx
+        b22 += wt * jy * dy
+        g1 += wt * jx * r
+        g2 += wt * jy * r
+        e1 += wt * dx * r
+        e2 += wt * dy * r
     return (
         2.0 * a11,
         2.0 * a12,
