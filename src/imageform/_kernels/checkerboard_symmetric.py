@@ -25,7 +25,10 @@ a flat window or a straight edge, 3 left the image, 4 moved farther than ``h`` â
 An optional ``mask`` (N, 2 h + 1, 2 h + 1) of 0/1 per corner multiplies the window: the pairs
 ``(q + d, q - d)`` with ``mask[d] = 0`` (or ``mask[-d] = 0``: the product of the two is used) are
 left out of the sums, and the shading block is then each corner's own (a ChArUco corner's
-markers, whose bits are not point-symmetric, are left out so).
+markers, whose bits are not point-symmetric, are left out so). ChArUco's own kernel
+(:func:`charuco_symmetric_numba`) makes each corner's mask (:func:`marker_mask_numpy`) inside
+it, from the corner's homography, and refines every corner, whatever its window, in one call;
+its twin is the mask and :func:`refine_symmetric_numpy` per window size.
 
 Agreement of kernel and twin is tested (tests/geometry/test_checkerboard_symmetric.py).
 """
