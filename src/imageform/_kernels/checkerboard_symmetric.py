@@ -734,10 +734,12 @@ def _charuco_symmetric(
 ) -> tuple[NDArray[np.float64], NDArray[np.int64]]:  # pragma: no cover - numba-compiled
     """:func:`charuco_symmetric_numba`'s kernel.
 
-    The arithmetic of :func:`marker_mask_numba` and :func:`_refine_symmetric` (``has_mask``),
-    but for the sums of a step: the terms of ``d`` and ``-d`` are equal (the residual and the
-    Jacobian change sign together), so the kept half of the window is summed and doubled;
-    and the patch is interpolated along its rows first (the same values).
+    The arithmetic of :func:`marker_mask_numba` (the same mask, its weight-0 offsets not
+    computed) and of :func:`_refine_symmetric` (``has_mask``; the patch interpolated along its
+    rows first: the same values), but for the sums: the terms of ``d`` and ``-d`` are equal
+    (the residual and the Jacobian change sign together), so half the window is summed and
+    doubled, in any order (:func:`_pair_sums`). The corners agree with the twin's to rounding
+    (1e-13 px on real views).
     """
     n = start.shape[0]
     height, width = image.shape
@@ -749,7 +751,7 @@ def _charuco_symmetric(
     nw = 2 * hmax + 1
     mw = nw + 2
     ok = np.zeros((nw, nw), dtype=np.bool_)
-    # the kept half of the window: weights (0 where not kept), each row's run of them
+    # the kept half of the window's weights (0 elsewhere) and the shading's Jacobian -2 d,
     # laid out as the patch (q + d at (i + 1) m + j + 1), over its rows 1 .. h + 1
     wk = np.zeros(mw * mw)
     dxs = np.zeros(mw * mw)
