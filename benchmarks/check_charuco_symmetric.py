@@ -58,17 +58,17 @@ def variant(name: str) -> Iterator[None]:
     """Run ``detect_charuco(method="symmetric")`` with another mask (private settings)."""
     import imageform.geometry.charuco as ch
 
-    inset, mask = ch._SYM_INSET, ch._marker_mask
+    inset, masked = ch._SYM_INSET, ch._SYM_MASKED
     try:
         if name == "unmasked":
-            ch._marker_mask = lambda *a: np.ones_like(mask(*a))  # type: ignore[assignment]
+            ch._SYM_MASKED = False
         elif name == "whole markers masked":
             ch._SYM_INSET = 0
         elif name == "bits masked":
             ch._SYM_INSET = 1
         yield
     finally:
-        ch._SYM_INSET, ch._marker_mask = inset, mask
+        ch._SYM_INSET, ch._SYM_MASKED = inset, masked
 
 
 def _timed(fn: Callable[[], Any], repeat: int) -> tuple[Any, float]:

@@ -419,6 +419,22 @@ def test_kernel_tests_pass_with_numba_boundscheck(tmp_path: Path) -> None:
 
 @pytest.mark.slow
 @BOUNDSCHECKED
+def test_symmetric_kernel_tests_pass_with_numba_boundscheck(tmp_path: Path) -> None:
+    """The point-symmetry kernels' twin tests under NUMBA_BOUNDSCHECK=1: the plain and masked
+    refinement and ChArUco's (the mask made inside it, every window size in one call; about
+    20 s of compilation with the checks): CI runs it with ``-m slow``."""
+    _run_bounds_checked(
+        tmp_path,
+        [
+            "tests/geometry/test_checkerboard_symmetric.py",
+            "tests/geometry/test_charuco_symmetric.py",
+        ],
+        "agree or twin",
+    )
+
+
+@pytest.mark.slow
+@BOUNDSCHECKED
 def test_remap_kernel_tests_pass_with_numba_boundscheck(tmp_path: Path) -> None:
     """The remap and fused-undistort kernels' tests under NUMBA_BOUNDSCHECK=1 (issue 16):
     every dtype and channel count, NaN and edge map entries, non-contiguous and batched

@@ -67,9 +67,7 @@ def test_the_marker_mask_matters(monkeypatch: pytest.MonkeyPatch) -> None:
     several times farther off the truth than the gradient refinement."""
     views = _views(2)
     masked = _errors(views, "symmetric")
-    monkeypatch.setattr(
-        charuco, "_marker_mask", lambda *a: np.ones((len(a[1]), 2 * a[5] + 1, 2 * a[5] + 1), bool)
-    )
+    monkeypatch.setattr(charuco, "_SYM_MASKED", False)
     plain = _errors(views, "symmetric")
     assert np.median(plain) > 4 * np.median(masked)
 
@@ -131,6 +129,44 @@ def test_kernel_and_twin_agree_on_masked_windows() -> None:
         y, sy = refine_symmetric_numpy(g, pts, h, 30, 1e-3, mask)
         assert sx.tolist() == sy.tolist() and sx[3] == 2 and x[3].tolist() == pts[3].tolist()
         assert np.abs(x - y).max() < 1e-9
+
+
+def test_fused_kernel_and_twin_agree() -> None:
+    """The ChArUco kernel (the mask made inside it, every window size in one call) against
+    its twin (marker_mask_numpy, then refine_symmetric_numpy per window size), float64."""
+    pytest.importorskip("numba")
+    from imageform._kernels.checkerboard_symmetric import (
+        charuco_symmetric_numba,
+        charuco_symmetric_numpy,
+    )
+
+    rng = np.random.default_rng(1)
+    (img, truth), *_ = _views(1)
+    g = img.astype(np.float64) / 255
+    m = 40
+    pred = truth[:m] + rng.uniform(-0.3, 0.3, (m, 2))
+    start = pred + rng.uniform(-0.6, 0.6, (m, 2))
+    start[5] = [2.0, 3.0]  # window past the image's corner: mostly masked
+    start[6] = np.nan  # not finite: status 2, kept
+    homs = np.tile(np.eye(3), (m, 1, 1))  # squares to pixels, the corner at pred
+    homs[:, 0, 0] = homs[:, 1, 1] = rng.uniform(20, 40, m)
+    homs[:, 0, 1] = rng.uniform(-4, 4, m)
+    homs[:, 2, :2] = rng.uniform(-2e-3, 2e-3, (m, 2))
+    homs[:, :2, 2] = pred - homs[:, :2, 0] * 3 - homs[:, :2, 1] * 2
+    homs[:, :2, 2] += rng.uniform(-1, 1, (m, 2))
+    hinv = np.linalg.inv(homs)
+    lo, guard = rng.uniform(-0.05, 0.15, m), rng.uniform(0.01, 0.1, m)
+    hs = rng.integers(3, 25, m)
+    hs[7] = 1  # a 3 x 3 window
+    args = (g, start, pred, hinv, lo, guard, hs, 9, 7, 1, 30, 1e-3)
+    x, sx = charuco_symmetric_numba(*args)
+    y, sy = charuco_symmetric_numpy(*args)
+    assert sx.tolist() == sy.tolist() and sx[6] == 2 and np.isnan(x[6]).all()
+    assert {0, 2}.issubset(set(sx.tolist()))
+    ok = np.isfinite(x).all(axis=1)
+    assert np.abs(x[ok] - y[ok]).max() < 1e-12
+    none = charuco_symmetric_numba(g, start[:0], *args[2:])
+    assert none[0].shape == (0, 2) and none[1].shape == (0,)
 
 
 def test_gradient_and_symmetric_find_the_same_corners_in_a_real_view() -> None:

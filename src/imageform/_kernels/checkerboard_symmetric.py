@@ -25,12 +25,17 @@ a flat window or a straight edge, 3 left the image, 4 moved farther than ``h`` â
 An optional ``mask`` (N, 2 h + 1, 2 h + 1) of 0/1 per corner multiplies the window: the pairs
 ``(q + d, q - d)`` with ``mask[d] = 0`` (or ``mask[-d] = 0``: the product of the two is used) are
 left out of the sums, and the shading block is then each corner's own (a ChArUco corner's
-markers, whose bits are not point-symmetric, are left out so).
+markers, whose bits are not point-symmetric, are left out so). ChArUco's own kernel
+(:func:`charuco_symmetric_numba`) makes each corner's mask (:func:`marker_mask_numpy`) inside
+it, from the corner's homography, and refines every corner, whatever its window, in one call;
+its twin is the mask and :func:`refine_symmetric_numpy` per window size.
 
 Agreement of kernel and twin is tested (tests/geometry/test_checkerboard_symmetric.py).
 """
 
 from __future__ import annotations
+
+import functools
 
 import numpy as np
 from numpy.typing import NDArray
@@ -461,44 +466,493 @@ def marker_mask_numba(
     height, width = shape
     out = np.zeros((m, n, n), dtype=np.bool_)
     for k in range(m):
-        g = guard[k]
-        lk = lo[k]
-        reach = 1 if lk < 0 else 0
-        for i in range(n):
-            pv = pred[k, 1] + (i - h)
-            v = start[k, 1] + (i - h)
-            if not (v >= 1.0 and v <= height - 2.0):
-                continue
-            for j in range(n):
-                u = start[k, 0] + (j - h)
-                if not (u >= 1.0 and u <= width - 2.0):
-                    continue
-                pu = pred[k, 0] + (j - h)
-                x = hinv[k, 0, 0] * pu + hinv[k, 0, 1] * pv + hinv[k, 0, 2]
-                y = hinv[k, 1, 0] * pu + hinv[k, 1, 1] * pv + hinv[k, 1, 2]
-                z = hinv[k, 2, 0] * pu + hinv[k, 2, 1] * pv + hinv[k, 2, 2]
-                if z == 0:
-                    continue
-                bx = x / z
-                by = y / z
-                if not (np.isfinite(bx) and np.isfinite(by)):
-                    continue
-                if not (bx >= g and bx <= cols - g and by >= g and by <= rows - g):
-                    continue
+        _marker_mask_one(
+            out[k],
+            hinv,
+            pred,
+            start,
+            lo,
+            guard,
+            k,
+            h,
+            cols,
+            rows,
+            parity,
+            height,
+            width,
+            _NO_WEIGHTS,
+            True,
+        )
+    return out
+
+
+_NO_WEIGHTS = np.empty(0, dtype=np.float64)
+
+
+@njit(fastmath=False, error_model="numpy")
+def _marker_mask_one(
+    out: NDArray[np.bool_],
+    hinv: NDArray[np.float64],
+    pred: NDArray[np.float64],
+    start: NDArray[np.float64],
+    lo: NDArray[np.float64],
+    guard: NDArray[np.float64],
+    k: int,
+    h: int,
+    cols: int,
+    rows: int,
+    parity: int,
+    height: int,
+    width: int,
+    w: NDArray[np.float64],
+    pairs: bool,
+) -> None:  # pragma: no cover - numba-compiled
+    """Corner ``k``'s mask (:func:`marker_mask_numpy`) into ``out`` (at least 2h+1 square).
+
+    ``w`` (the window's ``(2h+1)Â²`` weights, flat) when not empty: the offsets of weight 0 are
+    left off without being computed (they count for nothing). ``pairs``: keep ``d`` only where
+    ``-d`` is kept too (else the caller pairs them).
+    """
+    n = 2 * h + 1
+    g = guard[k]
+    lk = lo[k]
+    reach = 1 if lk < 0 else 0
+    has_w = w.shape[0] > 0
+    h00, h01, h02 = hinv[k, 0, 0], hinv[k, 0, 1], hinv[k, 0, 2]
+    h10, h11, h12 = hinv[k, 1, 0], hinv[k, 1, 1], hinv[k, 1, 2]
+    h20, h21, h22 = hinv[k, 2, 0], hinv[k, 2, 1], hinv[k, 2, 2]
+    par = float(parity)
+    right = cols - g
+    bottom = rows - g
+    pus = np.empty(n)
+    bxs = np.empty(n)
+    bys = np.empty(n)
+    zs = np.empty(n)
+    # the columns inside the image (start + d a pixel in), a run
+    j0 = n
+    j1 = 0
+    for j in range(n):
+        pus[j] = pred[k, 0] + (j - h)
+        u = start[k, 0] + (j - h)
+        if u >= 1.0 and u <= width - 2.0:
+            j0 = min(j0, j)
+            j1 = max(j1, j + 1)
+    for i in range(n):
+        for j in range(n):
+            out[i, j] = False
+        pv = pred[k, 1] + (i - h)
+        v = start[k, 1] + (i - h)
+        if not (v >= 1.0 and v <= height - 2.0):
+            continue
+        lo_j = j0
+        hi_j = j1
+        if has_w:  # the round window's run in this row
+            while lo_j < hi_j and w[i * n + lo_j] == 0.0:
+                lo_j += 1
+            while hi_j > lo_j and w[i * n + hi_j - 1] == 0.0:
+                hi_j -= 1
+        c0 = h01 * pv
+        c1 = h11 * pv
+        c2 = h21 * pv
+        if reach == 0:  # only the square's own marker: branch-free, vectorised
+            for j in range(lo_j, hi_j):
+                pu = pus[j]
+                z = h20 * pu + c2 + h22
+                bx = (h00 * pu + c0 + h02) / z
+                by = (h10 * pu + c1 + h12) / z
                 fx = np.floor(bx)
                 fy = np.floor(by)
-                free = True
-                for oy in range(-reach, reach + 1):
-                    for ox in range(-reach, reach + 1):
-                        sc = fx + ox
-                        sr = fy + oy
-                        if (sr + sc) % 2 != parity:
-                            continue
-                        if sc + lk <= bx <= sc + 1.0 - lk and sr + lk <= by <= sr + 1.0 - lk:
-                            free = False
-                out[k, i, j] = free
-        for i in range(n):
-            for j in range(n):
-                if out[k, i, j] and not out[k, n - 1 - i, n - 1 - j]:
-                    out[k, i, j] = False
-    return out
+                sq = fx + fy
+                white = sq - 2.0 * np.floor(0.5 * sq) == par  # (row + col) % 2, NaN: False
+                on = (fx + lk <= bx) & (bx <= fx + 1.0 - lk) & (fy + lk <= by)
+                on &= by <= fy + 1.0 - lk
+                inside = (z != 0) & (bx >= g) & (bx <= right) & (by >= g) & (by <= bottom)
+                inside &= (abs(bx) < np.inf) & (abs(by) < np.inf)
+                out[i, j] = inside & (not (white & on))
+            continue
+        for j in range(lo_j, hi_j):  # vectorised: the same products and quotients
+            pu = pus[j]
+            z = h20 * pu + c2 + h22
+            bxs[j] = (h00 * pu + c0 + h02) / z
+            bys[j] = (h10 * pu + c1 + h12) / z
+            zs[j] = z
+        for j in range(lo_j, hi_j):
+            if zs[j] == 0:
+                continue
+            bx = bxs[j]
+            by = bys[j]
+            if not (np.isfinite(bx) and np.isfinite(by)):
+                continue
+            if not (bx >= g and bx <= cols - g and by >= g and by <= rows - g):
+                continue
+            fx = np.floor(bx)
+            fy = np.floor(by)
+            ixy = int(fx) + int(fy)
+            free = True
+            for oy in range(-reach, reach + 1):
+                for ox in range(-reach, reach + 1):
+                    if (ixy + ox + oy) & 1 != parity:  # (row + col) % 2: not a white square
+                        continue
+                    sc = fx + ox
+                    sr = fy + oy
+                    if sc + lk <= bx <= sc + 1.0 - lk and sr + lk <= by <= sr + 1.0 - lk:
+                        free = False
+            out[i, j] = free
+    if not pairs:
+        return
+    for i in range(n):
+        for j in range(n):
+            if out[i, j] and not out[n - 1 - i, n - 1 - j]:
+                out[i, j] = False
+
+
+#: the window sizes the weight table holds at least (ChArUco's windows are at most 40 px)
+_TABLE_H = 40
+
+
+@functools.lru_cache(maxsize=4)
+def _weight_table(hmax: int) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
+    """Every window's weights for ``h = 0 .. hmax``, flat, and where each starts (hmax + 2)."""
+    tables = [np.ones(1)] + [symmetric_window_weights(h).ravel() for h in range(1, hmax + 1)]
+    offsets = np.zeros(hmax + 2, dtype=np.int64)
+    offsets[1:] = np.cumsum([t.size for t in tables])
+    return np.concatenate(tables), offsets
+
+
+def _check_charuco_args(
+    start: NDArray[np.float64],
+    pred: NDArray[np.float64],
+    hinv: NDArray[np.float64],
+    lo: NDArray[np.float64],
+    guard: NDArray[np.float64],
+    hs: NDArray[np.int64],
+) -> None:
+    """Raise ValueError unless the per-corner arrays agree in shape and the windows are >= 1."""
+    n = start.shape[0]
+    shapes = [(start.shape, (n, 2)), (pred.shape, (n, 2)), (hinv.shape, (n, 3, 3))]
+    shapes += [(lo.shape, (n,)), (guard.shape, (n,)), (hs.shape, (n,))]
+    for got, want in shapes:
+        if got != want:
+            raise ValueError(f"expected per-corner arrays of shape {want}, got {got}")
+    if int(np.min(hs)) < 1:
+        raise ValueError(f"expected windows of at least 1 px, got {int(np.min(hs))}")
+
+
+def charuco_symmetric_numba(
+    image: NDArray[np.float64],
+    start: NDArray[np.float64],
+    pred: NDArray[np.float64],
+    hinv: NDArray[np.float64],
+    lo: NDArray[np.float64],
+    guard: NDArray[np.float64],
+    hs: NDArray[np.int64],
+    cols: int,
+    rows: int,
+    parity: int,
+    max_iter: int,
+    eps: float,
+) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
+    """Refine ChArUco corners ``start`` (N, 2) by point symmetry, the markers masked.
+
+    Corner ``k`` gets :func:`refine_symmetric_numba` with the window ``hs[k]`` and the mask
+    :func:`marker_mask_numpy` gives for its row of ``hinv``, ``pred``, ``start``, ``lo`` and
+    ``guard``: the mask is made inside the kernel, corner by corner, and all the corners are
+    refined in one call, whatever their windows. Returns the corners and their status.
+    """
+    if start.shape[0] == 0:
+        return np.array(start, dtype=np.float64), np.zeros(0, dtype=np.int64)
+    _check_charuco_args(start, pred, hinv, lo, guard, hs)
+    hs = np.ascontiguousarray(hs, dtype=np.int64)
+    wtab, woff = _weight_table(max(int(hs.max()), _TABLE_H))
+    img = np.ascontiguousarray(image, dtype=np.float64)
+    return _charuco_symmetric(
+        img,
+        np.ascontiguousarray(start, dtype=np.float64),
+        np.ascontiguousarray(pred, dtype=np.float64),
+        np.ascontiguousarray(hinv, dtype=np.float64),
+        np.ascontiguousarray(lo, dtype=np.float64),
+        np.ascontiguousarray(guard, dtype=np.float64),
+        hs,
+        wtab,
+        woff,
+        cols,
+        rows,
+        parity,
+        max_iter,
+        eps,
+    )
+
+
+def charuco_symmetric_numpy(
+    image: NDArray[np.float64],
+    start: NDArray[np.float64],
+    pred: NDArray[np.float64],
+    hinv: NDArray[np.float64],
+    lo: NDArray[np.float64],
+    guard: NDArray[np.float64],
+    hs: NDArray[np.int64],
+    cols: int,
+    rows: int,
+    parity: int,
+    max_iter: int,
+    eps: float,
+) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
+    """Plain NumPy twin of :func:`charuco_symmetric_numba`.
+
+    The corners of each window size masked by :func:`marker_mask_numpy` and refined by
+    :func:`refine_symmetric_numpy`.
+    """
+    out = np.array(start, dtype=np.float64, copy=True)
+    status = np.zeros(out.shape[0], dtype=np.int64)
+    if out.shape[0]:
+        _check_charuco_args(start, pred, hinv, lo, guard, hs)
+    for h in np.unique(hs):
+        sel = np.nonzero(hs == h)[0]
+        pts = np.ascontiguousarray(out[sel])
+        args = (pred[sel], pts, lo[sel], guard[sel], int(h), cols, rows, parity, image.shape)
+        mask = marker_mask_numpy(hinv[sel], *args)
+        out[sel], status[sel] = refine_symmetric_numpy(image, pts, int(h), max_iter, eps, mask)
+    return out, status
+
+
+@njit(fastmath=False, error_model="numpy")
+def _charuco_symmetric(
+    image: NDArray[np.float64],
+    start: NDArray[np.float64],
+    pred: NDArray[np.float64],
+    hinv: NDArray[np.float64],
+    lo: NDArray[np.float64],
+    guard: NDArray[np.float64],
+    hs: NDArray[np.int64],
+    wtab: NDArray[np.float64],
+    woff: NDArray[np.int64],
+    cols: int,
+    rows: int,
+    parity: int,
+    max_iter: int,
+    eps: float,
+) -> tuple[NDArray[np.float64], NDArray[np.int64]]:  # pragma: no cover - numba-compiled
+    """:func:`charuco_symmetric_numba`'s kernel.
+
+    The arithmetic of :func:`marker_mask_numba` (the same mask, its weight-0 offsets not
+    computed) and of :func:`_refine_symmetric` (``has_mask``; the patch interpolated along its
+    rows first: the same values), but for the sums: the terms of ``d`` and ``-d`` are equal
+    (the residual and the Jacobian change sign together), so half the window is summed and
+    doubled, in any order (:func:`_pair_sums`). The corners agree with the twin's to rounding
+    (1e-13 px on real views).
+    """
+    n = start.shape[0]
+    height, width = image.shape
+    out = start.copy()
+    status = np.ones(n, dtype=np.int64)
+    hmax = 0
+    for k in range(n):
+        hmax = max(hmax, hs[k])
+    nw = 2 * hmax + 1
+    mw = nw + 2
+    ok = np.zeros((nw, nw), dtype=np.bool_)
+    # the kept half of the window's weights (0 elsewhere) and the shading's Jacobian -2 d,
+    # laid out as the patch (q + d at (i + 1) m + j + 1), over its rows 1 .. h + 1
+    wk = np.zeros(mw * mw)
+    dxs = np.zeros(mw * mw)
+    dys = np.zeros(mw * mw)
+    rowi = np.empty((mw + 1) * mw)
+    patch = np.empty(mw * mw)
+    mirror = np.empty(mw * mw)
+    ys = np.empty(mw + 1, dtype=np.int64)
+    xs = np.empty(mw + 1, dtype=np.int64)
+    eps2 = eps * eps
+    for k in range(n):
+        sx = start[k, 0]
+        sy = start[k, 1]
+        if not (np.isfinite(sx) and np.isfinite(sy)):
+            status[k] = 2
+            continue
+        h = hs[k]
+        nn = 2 * h + 1
+        m = nn + 2
+        w = wtab[woff[h] : woff[h + 1]]
+        _marker_mask_one(
+            ok, hinv, pred, start, lo, guard, k, h, cols, rows, parity, height, width, w, False
+        )
+        d11 = 0.0
+        d12 = 0.0
+        d22 = 0.0
+        # the offsets d before 0 in row order (one of each pair d, -d), kept when -d is too
+        for t in range(m * (h + 3)):
+            wk[t] = 0.0
+        for i in range(h + 1):
+            for j in range(nn):
+                t = (i + 1) * m + j + 1
+                dxs[t] = -2.0 * (j - h)
+                dys[t] = -2.0 * (i - h)
+                if (i == h and j >= h) or not (ok[i, j] and ok[nn - 1 - i, nn - 1 - j]):
+                    continue
+                wt = w[i * nn + j]
+                wk[t] = wt
+                d11 += wt * (j - h) * (j - h)
+                d12 += wt * (j - h) * (i - h)
+                d22 += wt * (i - h) * (i - h)
+        d11 *= 2.0
+        d12 *= 2.0
+        d22 *= 2.0
+        dd = d11 * d22 - d12 * d12
+        if not (dd > SINGULAR * (d11 + d22) * (d11 + d22)):
+            status[k] = 2
+            continue
+        i00 = d22 / (4.0 * dd)
+        i01 = -d12 / (4.0 * dd)
+        i10 = -d12 / (4.0 * dd)
+        i11 = d11 / (4.0 * dd)
+        cx = sx
+        cy = sy
+        for _ in range(max_iter):
+            fx = np.floor(min(max(cx, -h - 2.0), width + h + 1.0))
+            fy = np.floor(min(max(cy, -h - 2.0), height + h + 1.0))
+            ax = cx - fx
+            ay = cy - fy
+            x0 = int(fx) - h - 1
+            y0 = int(fy) - h - 1
+            bx_ = 1.0 - ax
+            by_ = 1.0 - ay
+            if x0 >= 0 and y0 >= 0 and x0 + m < width and y0 + m < height:
+                for i in range(m + 1):
+                    src = image[y0 + i, x0 : x0 + m + 1]
+                    dst = rowi[i * m : i * m + m]
+                    for j in range(m):
+                        dst[j] = bx_ * src[j] + ax * src[j + 1]
+            else:
+                for i in range(m + 1):
+                    ys[i] = min(max(y0 + i, 0), height - 1)
+                    xs[i] = min(max(x0 + i, 0), width - 1)
+                for i in range(m + 1):
+                    for j in range(m):
+                        rowi[i * m + j] = bx_ * image[ys[i], xs[j]] + ax * image[ys[i], xs[j + 1]]
+            for t in range(m * m):
+                patch[t] = by_ * rowi[t] + ay * rowi[t + m]
+            for t in range((h + 3) * m):  # patch(-d) at d's place, the rows the sums read
+                mirror[t] = patch[m * m - 1 - t]
+            a11_, a12_, a22_, b11, b12, b21, b22, g1, g2, e1, e2 = _pair_sums(
+                patch, mirror, wk, dxs, dys, m + 1, (h + 1) * m + h + 1
+            )
+            c11 = b11 * i00 + b12 * i10
+            c12 = b11 * i01 + b12 * i11
+            c21 = b21 * i00 + b22 * i10
+            c22 = b21 * i01 + b22 * i11
+            s11 = a11_ - (c11 * b11 + c12 * b12)
+            s12 = a12_ - (c11 * b21 + c12 * b22)
+            s22 = a22_ - (c21 * b21 + c22 * b22)
+            r1 = g1 - (c11 * e1 + c12 * e2)
+            r2 = g2 - (c21 * e1 + c22 * e2)
+            det = s11 * s22 - s12 * s12
+            tr = s11 + s22
+            if not (det > SINGULAR * tr * tr) or not np.isfinite(det):
+                status[k] = 2
+                break
+            stx = -(s22 * r1 - s12 * r2) / det
+            sty = -(-s12 * r1 + s11 * r2) / det
+            nrm2 = stx * stx + sty * sty
+            if nrm2 > 1.0:
+                f = 1.0 / np.sqrt(nrm2)
+                stx *= f
+                sty *= f
+                nrm2 = 1.0
+            cx += stx
+            cy += sty
+            if cx < 0 or cx >= width or cy < 0 or cy >= height:
+                status[k] = 3
+                break
+            if nrm2 <= eps2:
+                status[k] = 0
+                break
+        if status[k] == 2:
+            cx = sx
+            cy = sy
+        if abs(cx - sx) > h or abs(cy - sy) > h:
+            cx = sx
+            cy = sy
+            status[k] = 4
+        out[k, 0] = cx
+        out[k, 1] = cy
+    return out, status
+
+
+@njit(fastmath={"reassoc"}, error_model="numpy")
+def _pair_sums(
+    patch: NDArray[np.float64],
+    mirror: NDArray[np.float64],
+    wk: NDArray[np.float64],
+    dxs: NDArray[np.float64],
+    dys: NDArray[np.float64],
+    t0: int,
+    t1: int,
+) -> tuple[
+    float, float, float, float, float, float, float, float, float, float, float
+]:  # pragma: no cover - numba-compiled
+    """Return the normal equations' sums of a step over the window's pairs ``(d, -d)``.
+
+    ``patch`` (``m`` square, flat) is the image resampled at ``q + d``, ``mirror`` the same
+    reversed (at ``q - d``); ``wk``, ``dxs``, ``dys`` (laid out as ``patch``) the weights of
+    the offsets ``d`` before 0 (0 for the others and for a pair left out) and the shading's
+    Jacobian, ``-2 d``; ``t0`` to ``t1`` the patch's positions that hold them. The terms of
+    ``d`` and ``-d`` are equal (the residual and the Jacobian change sign together): half the
+    window is summed and doubled. Sums in any order (``reassoc``: vectorised over one run);
+    the offsets of weight 0 add ``0`` (the image is finite).
+    """
+    n = t1 - t0
+    m = t0 - 1  # the row stride
+    pc = patch[t0:t1]
+    pl = patch[t0 - 1 : t1 - 1]
+    pg = patch[t0 + 1 : t1 + 1]
+    pu = patch[t0 - m : t1 - m]
+    pd = patch[t0 + m : t1 + m]
+    qc = mirror[t0:t1]
+    ql = mirror[t0 + 1 : t1 + 1]  # mirror's next is the patch's previous
+    qg = mirror[t0 - 1 : t1 - 1]
+    qu = mirror[t0 + m : t1 + m]
+    qd = mirror[t0 - m : t1 - m]
+    wr = wk[t0:t1]
+    xr = dxs[t0:t1]
+    yr = dys[t0:t1]
+    a11 = 0.0
+    a12 = 0.0
+    a22 = 0.0
+    b11 = 0.0
+    b12 = 0.0
+    b21 = 0.0
+    b22 = 0.0
+    g1 = 0.0
+    g2 = 0.0
+    e1 = 0.0
+    e2 = 0.0
+    for t in range(n):
+        wt = wr[t]
+        r = pc[t] - qc[t]
+        jx = 0.5 * (pg[t] - pl[t]) - 0.5 * (qg[t] - ql[t])
+        jy = 0.5 * (pd[t] - pu[t]) - 0.5 * (qd[t] - qu[t])
+        dx = xr[t]
+        dy = yr[t]
+        a11 += wt * jx * jx
+        a12 += wt * jx * jy
+        a22 += wt * jy * jy
+        b11 += wt * jx * dx
+        b12 += wt * jx * dy
+        b21 += wt * jy * dx
+        b22 += wt * jy * dy
+        g1 += wt * jx * r
+        g2 += wt * jy * r
+        e1 += wt * dx * r
+        e2 += wt * dy * r
+    return (
+        2.0 * a11,
+        2.0 * a12,
+        2.0 * a22,
+        2.0 * b11,
+        2.0 * b12,
+        2.0 * b21,
+        2.0 * b22,
+        2.0 * g1,
+        2.0 * g2,
+        2.0 * e1,
+        2.0 * e2,
+    )

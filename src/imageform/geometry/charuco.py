@@ -80,6 +80,8 @@ _MIN_CONTRAST = 0.04
 #: gradient refinement's position (px) before that position is kept.
 _SYM_WINDOW, _SYM_MAX_WINDOW, _SYM_GUARD_PX, _SYM_INSET = 0.8, 40, 1.0, 0
 _SYM_MAX_MOVE = 1.0
+#: Whether the symmetric refinement masks the markers (False: a check's variant only).
+_SYM_MASKED = True
 #: The guard band is at least this share of the white margin between a marker and its square's
 #: edge: blur spreads a marker's border into the margin, and a marker printed a fraction of a
 #: pixel off its square's centre makes that spread differ between the two white squares.
@@ -414,25 +416,54 @@ def _symmetric(
 ) -> NDArray[np.float64]:
     """Move corners ``start`` to their centres of point symmetry, the markers left out.
 
-    Each corner's window (radius ``_SYM_WINDOW`` of its square size ``scales``) is masked by
-    :func:`_marker_mask` through its homography ``homs`` (board square units to pixels, the
-    corner at ``pred``), and the offsets that reach past the image's border (a pixel inside it,
-    from ``start``) are left out too; a corner whose refinement does not converge, or moves
-    more than ``_SYM_MAX_MOVE`` px from ``start``, keeps ``start``.
+    Each corner's window (radius ``_SYM_WINDOW`` of its square size ``scales``) is masked as
+    :func:`_marker_mask` says through its homography ``homs`` (board square units to pixels,
+    the corner at ``pred``), the offsets that reach past the image's border (a pixel inside
+    it, from ``start``) left out too; a corner whose refinement does not converge, or moves
+    more than ``_SYM_MAX_MOVE`` px from ``start``, keeps ``start``. One kernel call refines
+    every corner, making each one's mask as it goes (``charuco_symmetric_numba``).
     """
-    from imageform.geometry.checkerboard_subpix import refine_symmetric
+    from imageform._backend import use_numba
+    from imageform._kernels.checkerboard_symmetric import (
+        charuco_symmetric_numba,
+        charuco_symmetric_numpy,
+    )
 
-    out = start.copy()
     hs = np.clip(np.floor(_SYM_WINDOW * scales), 3, _SYM_MAX_WINDOW).astype(np.int64)
-    for h in np.unique(hs):
-        sel = np.nonzero(hs == h)[0]
-        pts = np.ascontiguousarray(start[sel])
-        mask = _marker_mask(board, homs[sel], pred[sel], scales[sel], pts, int(h), g.shape)
-        ref, status = refine_symmetric(g, pts, int(h), 30, 1e-3, mask)
-        moved = np.hypot(*(ref - pts).T)
-        good = ((status == 0) | (status == 1)) & (moved <= _SYM_MAX_MOVE)
-        out[sel[good]] = ref[good]
-    return out
+    pts = np.ascontiguousarray(start)
+    if _SYM_MASKED:
+        lo, guard = _marker_box(board, scales)
+        hinv = np.asarray(np.linalg.inv(homs), dtype=np.float64)  # pixels to board squares
+        kernel = charuco_symmetric_numba if use_numba(g) else charuco_symmetric_numpy
+        cols, rows = board.squares
+        args = (pred, hinv, lo, guard, hs, cols, rows, board.white_parity, 30, 1e-3)
+        ref, status = kernel(g, pts, *args)
+    else:  # the markers left in (a check's variant): the plain symmetric refinement
+        from imageform.geometry.checkerboard_subpix import refine_symmetric
+
+        ref, status = np.empty_like(pts), np.empty(len(pts), dtype=np.int64)
+        for h in np.unique(hs):
+            sel = np.nonzero(hs == h)[0]
+            ref[sel], status[sel] = refine_symmetric(g, pts[sel], int(h), 30, 1e-3)
+    good = (status <= 1) & (np.hypot(*(ref - pts).T) <= _SYM_MAX_MOVE)
+    return np.where(good[:, None], ref, start)
+
+
+def _marker_box(
+    board: CharucoBoard, scales: NDArray[np.float64]
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Return the grown marker's box ``[lo, 1 - lo]²`` in its square and the guard band.
+
+    Both in square units, per corner of local square size ``scales`` (px): the marker's inset
+    (``_SYM_INSET`` cells in) less the guard band, ``_SYM_GUARD_PX`` pixels and at least
+    ``_SYM_GUARD_MARGIN`` of the white margin.
+    """
+    frac = board.marker_length / board.square_length
+    cell = frac / (aruco_dictionary(board.dictionary).marker_size + 2)
+    guard = np.maximum(
+        _SYM_GUARD_PX / np.maximum(scales, 1e-9), _SYM_GUARD_MARGIN * (1.0 - frac) / 2.0
+    )
+    return (1.0 - frac) / 2.0 + _SYM_INSET * cell - guard, guard
 
 
 def _marker_mask(
@@ -451,18 +482,14 @@ def _marker_mask(
     (``_SYM_GUARD_PX`` pixels, ``_SYM_GUARD_PX / scales`` squares, and at least
     ``_SYM_GUARD_MARGIN`` of the white margin), or off the board; and when ``start + d`` is
     not inside the image. The markers' part is a function of ``d`` alone (the homography
-    moved to the corner), so the refinement's cost is smooth.
+    moved to the corner), so the refinement's cost is smooth. (:func:`_symmetric` makes the
+    same mask inside its kernel.)
     """
     from imageform._backend import use_numba
     from imageform._kernels.checkerboard_symmetric import marker_mask_numba, marker_mask_numpy
 
     cols, rows = board.squares
-    frac = board.marker_length / board.square_length
-    cell = frac / (aruco_dictionary(board.dictionary).marker_size + 2)
-    guard = np.maximum(
-        _SYM_GUARD_PX / np.maximum(scales, 1e-9), _SYM_GUARD_MARGIN * (1.0 - frac) / 2.0
-    )
-    lo = (1.0 - frac) / 2.0 + _SYM_INSET * cell - guard  # the grown marker's box in its square
+    lo, guard = _marker_box(board, scales)
     hinv = np.ascontiguousarray(np.linalg.inv(homs))  # pixels to board squares
     kernel = marker_mask_numba if use_numba(start) else marker_mask_numpy
     args = (np.ascontiguousarray(pred), np.ascontiguousarray(start), lo, guard)
