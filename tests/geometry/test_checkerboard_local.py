@@ -176,3 +176,23 @@ def test_windows_through_the_map_past_the_border_keep_the_start() -> None:
     assert near.any() and not near.all()
     assert np.array_equal(out[near], pts[near]) and not status[near].any()
     assert set(moved.tolist()) == set(np.flatnonzero(~near).tolist())
+
+
+def test_extreme_maps_and_starts_are_bounds_safe() -> None:
+    """Maps whose offsets overflow (inf - inf: NaN samples) and a start far off the image read
+    only clamped pixels: kernel and twin agree, the singular ones keep their start."""
+    pytest.importorskip("numba")
+    from imageform._kernels.checkerboard_local import refine_local_numba, refine_local_numpy
+
+    img = np.random.default_rng(0).uniform(size=(40, 50)).astype(np.float32)
+    pts = np.array([[20.0, 20.0], [25.0, 18.0], [1e308, 5.0]])
+    linv = np.tile(np.eye(2) * 0.1, (3, 1, 1))
+    coef = np.zeros((3, 3, 3, 2))
+    coef[:, 1, 0, 0] = coef[:, 0, 1, 1] = 10.0
+    coef[0, 2, 0], coef[0, 0, 2], coef[0, 2, 2] = 1e300, -1e300, 1e308
+    coef[1, 1, 1] = 1e308
+    with np.errstate(all="ignore"):
+        a, sa = refine_local_numba(img, pts, linv, coef, 6, 30, 1e-3)
+        b, sb = refine_local_numpy(img, pts, linv, coef, 6, 30, 1e-3)
+    assert sa.tolist() == sb.tolist() and np.array_equal(a, b)
+    assert sa[0] == 2 and sa[2] == 2 and np.array_equal(a[[0, 2]], pts[[0, 2]])
