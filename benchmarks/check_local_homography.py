@@ -11,8 +11,13 @@ board instead and map them through a per-corner homography. Measured here, side 
 - ``homography, fitted``: the same, its perspective fitted too by Gauss-Newton (the
   symmetry cost does not depend on the homography's linear part: the corner and the two
   perspective parameters are all of its eight that the cost fixes);
-- ``grid map``: the samples through the biquadratic through the 3 x 3 grid neighbours (what
-  ``find_checkerboard`` now does: perspective and lens bending to second order).
+- ``grid map of the gradient corners, all corners``: the samples through the biquadratic
+  through the corner's 3 x 3 grid neighbours (perspective and lens bending to second
+  order), the maps read from the gradient corners, every corner, no affine step first;
+- ``grid map, ...``: ``find_checkerboard`` with ``SYMMETRIC_MIN_BEND`` set: the affine step,
+  then the grid map's step (maps read from the affine step's corners) on the corners whose
+  map bends by more than that many pixels on the window's rim, its non-linear part less
+  that many pixels (``bend less 1 px`` is the default; ``all corners`` is 0).
 
 The two homography variants are NumPy prototypes in this script (same window, weights,
 shading term, stopping rule, border and reach rules as the others).
@@ -22,18 +27,19 @@ Rendered views (truth known): a 9 x 6 board rendered analytically through a lens
 board plane, edges blurred 1 px, noise 0.01, 8-bit), wholly inside the image, in random
 poses: an endoscope-like fisheye (768 x 576, Kannala-Brandt with the coefficients imageform
 fitted to a real PAL endoscope, f = 300 px, corners within 330 px of the centre), a
-wide-angle lens (640 x 480, Brown-Conrady k1 = -0.32, k2 = 0.11, f = 420 px), both with
-tilts up to 45 deg, and steep perspective (640 x 480, no distortion, f = 700 px, tilts
-35-70 deg). Per scene: views found, then the median, 95th percentile and largest corner error
-(px) and the count over 0.3 px; and the CPU time of ``find_checkerboard`` (affine against grid
-map, interleaved, median per view).
+wide-angle lens (640 x 480, Brown-Conrady k1 = -0.32, k2 = 0.11, f = 420 px; once more
+with Gaussian noise of 4 codes and JPEG quality 80), both with tilts up to 45 deg, and
+steep perspective (640 x 480, no distortion, f = 700 px, tilts 35-70 deg). Per scene: views
+found, then the median, 95th percentile and largest corner error (px) and the count over
+0.3 px; and the CPU time of ``find_checkerboard`` per mode (one after the other on each
+view, median per view).
 
 Real photographs (no truth): per set (``NAME=GLOB:COLSxROWS[:fisheye]``) the views found
-with both, the RMS and two-fold held-out RMS of a calibration on each one's corners
-(``check_corner_refinement._evaluate``: OpenCV's calibration, halves by parity, poses of the
-held-out half fitted with the intrinsics held, both ways pooled), the largest and median
-distance between the two's corners and the CPU ms per view of ``find_checkerboard``
-(interleaved, median). Run::
+in each mode, the RMS and two-fold held-out RMS of a calibration on each mode's corners of
+the views every mode finds (``check_corner_refinement._evaluate``: OpenCV's calibration,
+halves by parity, poses of the held-out half fitted with the intrinsics held, both ways
+pooled), the median and largest distance between the affine corners and the default's, and
+the CPU ms per view of ``find_checkerboard`` per mode (median). Run::
 
     OPENBLAS_NUM_THREADS=1 NUMBA_NUM_THREADS=1 PYTHONPATH=src:. python \\
         benchmarks/check_local_homography.py "opencv-left=DATA/opencv-left/left*.jpg:9x6" \\
