@@ -90,6 +90,7 @@ BENCH_SCRIPTS: dict[str, str] = {
     "sass-demosaic": "benchmarks/sass_demosaic.py",
     "illuminant-real": "benchmarks/check_illuminant_real.py",
     "horizon-natural": "benchmarks/check_horizon_natural.py",
+    "local-homography": "benchmarks/check_local_homography.py",
     "lsd": "benchmarks/bench_lsd.py",
     "odd-files": "benchmarks/check_odd_files.py",
     "partial-board": "benchmarks/check_partial_board.py",

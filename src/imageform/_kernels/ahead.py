@@ -104,6 +104,12 @@ _BOARD_CHILD = (
         f"(float32[:, ::1], {_A2}, boolean, {_A2}, int64, {_A2}, {_A2}, {_A3}, boolean, int64, "
         "float64)",
     ),
+    Entry(
+        "checkerboard_local",
+        "_refine_local",
+        f"(float32[:, ::1], {_A2}, boolean, {_A2}, {_A2}, {_A2}, int64, {_A2}, float64, int64, "
+        "float64)",
+    ),
 )
 
 #: The plans, from ``benchmarks/compile_plan.py`` (its figures: benchmarks/results).

@@ -94,6 +94,7 @@ from imageform.geometry.checkerboard_subpix import (
     gray_from_codes,
     refine_corners,
     refine_corners_symmetric,
+    refine_local_inside,
     refine_symmetric_inside,
     room_to_border,
 )
@@ -119,6 +120,15 @@ SYMMETRIC_WINDOW = 0.8
 #: detected saddle is not taken (a square's centre is a centre of symmetry too: a start pulled
 #: off by a wide gradient window, ``half_window=11`` on 20 px squares, can slide to it).
 SYMMETRIC_REACH = 0.25
+#: A corner is refined again through its grid map (``refine_local_inside``) where the map's
+#: non-linear part reaches this many pixels on the window's rim, less this many pixels (a soft
+#: threshold). 0 (every corner through its map) was nearest the truth on rendered wide-angle
+#: views but fitted real sets' calibrations worse (held-out RMS up to 3.5 % higher); 1 px
+#: kept them within 0.5 % (benchmarks/results/local-homography-2026-11-30a.md).
+SYMMETRIC_MIN_BEND = 1.0
+#: The window through a grid map keeps the offsets within this many squares of the corner on
+#: the board (the affine window's radius, 0.8 of the shortest step, in squares).
+SYMMETRIC_EXTENT = 0.8
 
 #: Smoothing scales (pixels) tried in turn until the board is found.
 DEFAULT_SIGMAS = (2.0, 1.2, 3.5)
@@ -621,12 +631,16 @@ def find_checkerboard(
         :func:`refine_corners_symmetric` in a round window of radius 0.8 of the shortest grid
         step (at least 2 px; ``half_window`` is the first step's); a corner that step cannot
         refine (status 2-4), or whose window would reach past the image's border, keeps the
-        first step's position and status. ``"gradient"``: :func:`refine_corners` only
-        (OpenCV's ``cornerSubPix``, imageform's only refinement before ``method`` existed;
-        use it to reproduce OpenCV's corners). On eleven sets of real calibration
-        photographs the symmetric corners fit a camera model better than the gradient ones
-        and than OpenCV's ``findChessboardCornersSB`` (calibration and held-out RMS), and on
-        rendered views they lie 2-3 times closer to the truth
+        first step's position and status. Where the board bends or foreshortens within a
+        corner's window (a wide-angle lens, a fisheye, a steep view: the grid's map around
+        the corner departs from an affine one by more than 1 px on the window's rim), the
+        corner is refined once more with the window's pairs taken through that map
+        (benchmarks/results/local-homography-2026-11-30a.md). ``"gradient"``:
+        :func:`refine_corners` only (OpenCV's ``cornerSubPix``, imageform's only refinement
+        before ``method`` existed; use it to reproduce OpenCV's corners). On eleven sets of
+        real calibration photographs the symmetric corners fit a camera model better than the
+        gradient ones and than OpenCV's ``findChessboardCornersSB`` (calibration and held-out
+        RMS), and on rendered views they lie 2-3 times closer to the truth
         (benchmarks/results/corner-refinement-2026-11-29i.md).
     partial : bool
         When the whole board is not found, return the largest part of it that is: a complete
@@ -1012,9 +1026,6 @@ def _finish(
         step = _shortest_step(refined.reshape(grid.shape))
         h = max(2, math.floor(SYMMETRIC_WINDOW * step))
         # a window past the image's border reads replicated edge pixels, not the board's
-        # symmetry: those corners keep the first step's position (lane-lines' boards cut by
-        # the frame: held-out RMS 1.048 -> 1.029 px)
-        # a window past the image's border reads replicated edge pixels, not the board's
         # symmetry (lane-lines' boards cut by the frame: held-out RMS 1.048 -> 1.029 px when
         # those corners keep the first step's position); converged or max_iter, near the
         # saddle found: a singular, lost or far one keeps the first step's position too
@@ -1022,6 +1033,21 @@ def _finish(
             gray, refined, pts, h, max_iter, tol, SYMMETRIC_REACH * step
         )
         status = status.copy()
+        status[moved] = sym_status[moved]
+        # where the board bends or foreshortens within the window, the window again through
+        # each corner's map from its symmetric neighbours
+        refined, sym_status, moved = refine_local_inside(
+            gray,
+            refined,
+            pts,
+            refined.reshape(grid.shape),
+            h,
+            max_iter,
+            tol,
+            SYMMETRIC_REACH * step,
+            SYMMETRIC_MIN_BEND,
+            SYMMETRIC_EXTENT,
+        )
         status[moved] = sym_status[moved]
     problem = lattice_problem(refined.reshape(grid.shape))
     if problem is not None:

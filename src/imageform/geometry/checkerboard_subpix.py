@@ -30,9 +30,11 @@ __all__ = [
     "as_gray",
     "gray_codes",
     "gray_from_codes",
+    "grid_maps",
     "refine",
     "refine_corners",
     "refine_corners_symmetric",
+    "refine_local_inside",
     "refine_symmetric",
     "refine_symmetric_inside",
     "room_to_border",
@@ -374,3 +376,131 @@ def refine_symmetric(
     kernel = refine_symmetric_numba if use_numba(gray) else refine_symmetric_numpy
     g, p = np.ascontiguousarray(gray), np.ascontiguousarray(pts)
     return kernel(g, p, h, max_iter, tol, mask)
+
+
+def _lagrange_powers(nodes: int, at: int) -> NDArray[np.float64]:
+    """Return the power coefficients (nodes, 3) of the Lagrange basis on unit-spaced nodes.
+
+    ``B[k, a]`` is the coefficient of ``s^a`` in the basis polynomial of node ``k`` of
+    ``nodes`` (2 or 3) nodes, the origin at node ``at``.
+    """
+    z = np.arange(nodes, dtype=np.float64) - at
+    out = np.zeros((nodes, 3))
+    for k in range(nodes):
+        poly = np.array([1.0])
+        for j in range(nodes):
+            if j != k:
+                poly = np.convolve(poly, np.array([1.0, -z[j]]) / (z[k] - z[j]))
+        out[k, : poly.size] = poly[::-1]
+    return out
+
+
+def grid_maps(grid: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Return each corner's local map of the board from its grid neighbours.
+
+    ``grid`` (R, C, 2): the corners, row by row. Per corner, the polynomial of degree at most
+    2 in each board coordinate (``s`` along a row, ``t`` along a column, in squares, the corner
+    at 0) through the 3 x 3 corners around it (the nearest 3 x 3 block at the board's edge, 2
+    nodes along a side of 2 corners), less the corner: ``coef`` (R*C, 3, 3, 2) with
+    ``coef[k, a, b]`` the pixel offset's coefficient of ``s^a t^b``, and the inverse of its
+    linear part ``linv`` (R*C, 2, 2) (NaN where singular).
+    """
+    rows, cols, _ = grid.shape
+    nr, nc = min(3, rows), min(3, cols)
+    r0 = np.clip(np.arange(rows) - 1, 0, rows - nr)
+    c0 = np.clip(np.arange(cols) - 1, 0, cols - nc)
+    br = np.stack([_lagrange_powers(nr, int(at)) for at in np.arange(rows) - r0])  # (R, nr, 3)
+    bc = np.stack([_lagrange_powers(nc, int(at)) for at in np.arange(cols) - c0])  # (C, nc, 3)
+    ri = r0[:, None] + np.arange(nr)[None]  # (R, nr)
+    ci = c0[:, None] + np.arange(nc)[None]  # (C, nc)
+    sten = grid[ri[:, None, :, None], ci[None, :, None, :]]  # (R, C, nr, nc, 2)
+    sten = sten - grid[:, :, None, None, :]
+    # coef[r, c, a, b] = sum_{l, k} bc[c, k, a] br[r, l, b] sten[r, c, l, k]
+    coef = np.einsum("cka,rlb,rclkx->rcabx", bc, br, sten).reshape(-1, 3, 3, 2)
+    coef[:, 0, 0] = 0.0
+    lin = np.stack([coef[:, 1, 0], coef[:, 0, 1]], -1)  # (N, 2, 2): columns dF/ds, dF/dt
+    det = lin[:, 0, 0] * lin[:, 1, 1] - lin[:, 0, 1] * lin[:, 1, 0]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        linv = (
+            np.stack(
+                [
+                    np.stack([lin[:, 1, 1], -lin[:, 0, 1]], -1),
+                    np.stack([-lin[:, 1, 0], lin[:, 0, 0]], -1),
+                ],
+                1,
+            )
+            / np.where(det != 0, det, np.nan)[:, None, None]
+        )
+    return linv, coef
+
+
+def refine_local_inside(
+    gray: NDArray[np.floating],
+    start: NDArray[np.float64],
+    anchor: NDArray[np.float64],
+    grid: NDArray[np.float64],
+    h: int,
+    max_iter: int,
+    tol: float,
+    reach: float,
+    min_bend: float = 0.0,
+    extent: float = np.inf,
+) -> tuple[NDArray[np.float64], NDArray[np.int64], NDArray[np.intp]]:
+    """:func:`refine_symmetric_inside` with each window taken through its corner's grid map.
+
+    ``grid`` (R, C, 2) gives the maps (:func:`grid_maps`; ``start`` is its corners, row by
+    row). A map's bend ``b`` is the largest offset of its non-linear part on the window's rim
+    (radius ``h + 1/2``); that part is scaled by ``1 - min_bend / b`` (a soft threshold: a map
+    bent by less than ``min_bend`` pixels is not used, one bent by more is used less its
+    first ``min_bend`` pixels, so that a corner's refinement changes continuously with the
+    bend). Only the corners bent by more than ``min_bend`` are refined; they and the others
+    keep ``start`` where the map is singular, where the window through the map would reach
+    past the image's border, where the step is singular or lost or lands farther than
+    ``reach`` from ``anchor``. Offsets whose board coordinates pass ``extent`` squares are
+    left out of the window. Returns the corners, the step's status of each corner (0 where
+    it was not run) and the indices of the corners it moved.
+    """
+    from imageform._kernels.checkerboard_local import refine_local_numba, refine_local_numpy
+
+    linv, coef = grid_maps(grid)
+    ok = np.all(np.isfinite(linv.reshape(-1, 4)), axis=1)
+    linv = np.where(ok[:, None, None], linv, 0.0)
+    ang = np.linspace(0.0, 2.0 * np.pi, 32, endpoint=False)
+    d = (h + 0.5) * np.stack([np.cos(ang), np.sin(ang)], -1)  # (32, 2): both signs of d
+    x = np.einsum("kij,aj->kai", linv, d)  # (N, 32, 2) on the board
+    bend = np.zeros(x.shape)
+    for a in range(3):
+        for b in range(3):
+            if a + b >= 2:
+                bend += coef[:, None, a, b, :] * (x[..., 0:1] ** a * x[..., 1:2] ** b)
+    size = np.linalg.norm(bend, axis=-1).max(axis=1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        scale = np.where(ok & (size > min_bend), 1.0 - min_bend / size, 0.0)
+    coef = coef.copy()
+    for a in range(3):
+        for b in range(3):
+            if a + b >= 2:
+                coef[:, a, b] *= scale[:, None]
+    # the window's reach through the map: its radius and the bend left (the polynomial
+    # bulges little inside a window of less than a square)
+    room = room_to_border(start, *gray.shape)
+    idx = np.flatnonzero((scale > 0) & (room >= h + 1.0 + size * scale))
+    out = start.copy()
+    status = np.zeros(start.shape[0], dtype=np.int64)
+    if idx.size == 0:
+        return out, status, idx
+    kernel = refine_local_numba if use_numba(gray) else refine_local_numpy
+    sym, sym_status = kernel(
+        np.ascontiguousarray(gray),
+        np.ascontiguousarray(start[idx]),
+        np.ascontiguousarray(linv[idx]),
+        np.ascontiguousarray(coef[idx]),
+        h,
+        max_iter,
+        tol,
+        extent,
+    )
+    kept = (sym_status <= 1) & (np.hypot(*(sym - anchor[idx]).T) <= reach)
+    out[idx[kept]] = sym[kept]
+    status[idx] = sym_status
+    return out, status, idx[kept]
