@@ -39,7 +39,11 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from imageform._kernels.checkerboard_symmetric import SINGULAR, symmetric_window_weights
+from imageform._kernels.checkerboard_symmetric import (
+    SINGULAR,
+    symmetric_step,
+    symmetric_window_weights,
+)
 from imageform._kernels.jit import njit
 
 __all__ = ["refine_local_numba", "refine_local_numpy"]
@@ -263,36 +267,12 @@ def _refine_local(
                     g2 += wt * jy * r
                     e1 += wt * dx * r
                     e2 += wt * dy * r
-            # Schur complement S = A - B D^-1 B^T, rhs g - B D^-1 e
-            c11 = b11 * i11 + b12 * i12
-            c12 = b11 * i12 + b12 * i22
-            c21 = b21 * i11 + b22 * i12
-            c22 = b21 * i12 + b22 * i22
-            s11 = a11_ - (c11 * b11 + c12 * b12)
-            s12 = a12_ - (c11 * b21 + c12 * b22)
-            s22 = a22_ - (c21 * b21 + c22 * b22)
-            r1 = g1 - (c11 * e1 + c12 * e2)
-            r2 = g2 - (c21 * e1 + c22 * e2)
-            det = s11 * s22 - s12 * s12
-            tr = s11 + s22
-            if not (det > SINGULAR * tr * tr) or not np.isfinite(det):
-                status[k] = 2
-                break
-            stx = -(s22 * r1 - s12 * r2) / det
-            sty = -(-s12 * r1 + s11 * r2) / det
-            nrm2 = stx * stx + sty * sty
-            if nrm2 > 1.0:
-                f = 1.0 / np.sqrt(nrm2)
-                stx *= f
-                sty *= f
-                nrm2 = 1.0
-            cx += stx
-            cy += sty
-            if cx < 0 or cx >= width or cy < 0 or cy >= height:
-                status[k] = 3
-                break
-            if nrm2 <= eps2:
-                status[k] = 0
+            cx, cy, st = symmetric_step(
+                a11_, a12_, a22_, b11, b12, b21, b22, g1, g2, e1, e2,
+                i11, i12, i12, i22, cx, cy, width, height, eps2,
+            )  # fmt: skip
+            if st >= 0:
+                status[k] = st
                 break
         if status[k] == 2:
             cx = sx

@@ -104,6 +104,68 @@ def refine_symmetric_numba(
     return _refine_symmetric(_EMPTY32, img64, False, corners, h, w, inv, pm, has, max_iter, eps)
 
 
+@njit(fastmath=False)
+def symmetric_step(
+    a11_: float,
+    a12_: float,
+    a22_: float,
+    b11: float,
+    b12: float,
+    b21: float,
+    b22: float,
+    g1: float,
+    g2: float,
+    e1: float,
+    e2: float,
+    i00: float,
+    i01: float,
+    i10: float,
+    i11: float,
+    cx: float,
+    cy: float,
+    width: int,
+    height: int,
+    eps2: float,
+) -> tuple[float, float, int]:  # pragma: no cover - numba-compiled
+    """One Gauss-Newton step of a symmetric refinement: the corner moved, and a status.
+
+    The normal equations of (q, s) are [[A, B], [B^T, D]] with rhs (g, e) and D's inverse
+    ``[[i00, i01], [i10, i11]]`` (the shading block); the step solves the Schur complement
+    S = A - B D^-1 B^T against g - B D^-1 e, its length clamped to 1 px. Status -1: go on;
+    0: converged (the step's square at most ``eps2``); 2: singular (the corner not moved);
+    3: moved off the image. Shared by every symmetric kernel (the checkerboard's, ChArUco's
+    and the local map's), the same arithmetic in each.
+    """
+    c11 = b11 * i00 + b12 * i10
+    c12 = b11 * i01 + b12 * i11
+    c21 = b21 * i00 + b22 * i10
+    c22 = b21 * i01 + b22 * i11
+    s11 = a11_ - (c11 * b11 + c12 * b12)
+    s12 = a12_ - (c11 * b21 + c12 * b22)
+    s22 = a22_ - (c21 * b21 + c22 * b22)
+    r1 = g1 - (c11 * e1 + c12 * e2)
+    r2 = g2 - (c21 * e1 + c22 * e2)
+    det = s11 * s22 - s12 * s12
+    tr = s11 + s22
+    if not (det > SINGULAR * tr * tr) or not np.isfinite(det):
+        return cx, cy, 2
+    stx = -(s22 * r1 - s12 * r2) / det
+    sty = -(-s12 * r1 + s11 * r2) / det
+    nrm2 = stx * stx + sty * sty
+    if nrm2 > 1.0:
+        f = 1.0 / np.sqrt(nrm2)
+        stx *= f
+        sty *= f
+        nrm2 = 1.0
+    cx += stx
+    cy += sty
+    if cx < 0 or cx >= width or cy < 0 or cy >= height:
+        return cx, cy, 3
+    if nrm2 <= eps2:
+        return cx, cy, 0
+    return cx, cy, -1
+
+
 _EMPTY32 = np.empty((0, 0), dtype=np.float32)
 _EMPTY64 = np.empty((0, 0), dtype=np.float64)
 
@@ -233,36 +295,12 @@ def _refine_symmetric(
                     g2 += wt * jy * r
                     e1 += wt * dx * r
                     e2 += wt * dy * r
-            # Schur complement S = A - B D^-1 B^T, rhs g - B D^-1 e
-            c11 = b11 * inv[0, 0] + b12 * inv[1, 0]
-            c12 = b11 * inv[0, 1] + b12 * inv[1, 1]
-            c21 = b21 * inv[0, 0] + b22 * inv[1, 0]
-            c22 = b21 * inv[0, 1] + b22 * inv[1, 1]
-            s11 = a11_ - (c11 * b11 + c12 * b12)
-            s12 = a12_ - (c11 * b21 + c12 * b22)
-            s22 = a22_ - (c21 * b21 + c22 * b22)
-            r1 = g1 - (c11 * e1 + c12 * e2)
-            r2 = g2 - (c21 * e1 + c22 * e2)
-            det = s11 * s22 - s12 * s12
-            tr = s11 + s22
-            if not (det > SINGULAR * tr * tr) or not np.isfinite(det):
-                status[k] = 2
-                break
-            stx = -(s22 * r1 - s12 * r2) / det
-            sty = -(-s12 * r1 + s11 * r2) / det
-            nrm2 = stx * stx + sty * sty
-            if nrm2 > 1.0:
-                f = 1.0 / np.sqrt(nrm2)
-                stx *= f
-                sty *= f
-                nrm2 = 1.0
-            cx += stx
-            cy += sty
-            if cx < 0 or cx >= width or cy < 0 or cy >= height:
-                status[k] = 3
-                break
-            if nrm2 <= eps2:
-                status[k] = 0
+            cx, cy, st = symmetric_step(
+                a11_, a12_, a22_, b11, b12, b21, b22, g1, g2, e1, e2,
+                inv[0, 0], inv[0, 1], inv[1, 0], inv[1, 1], cx, cy, width, height, eps2,
+            )  # fmt: skip
+            if st >= 0:
+                status[k] = st
                 break
         if status[k] == 2:
             cx = sx
@@ -835,35 +873,12 @@ def _charuco_symmetric(
             a11_, a12_, a22_, b11, b12, b21, b22, g1, g2, e1, e2 = _pair_sums(
                 patch, mirror, wk, dxs, dys, m + 1, (h + 1) * m + h + 1
             )
-            c11 = b11 * i00 + b12 * i10
-            c12 = b11 * i01 + b12 * i11
-            c21 = b21 * i00 + b22 * i10
-            c22 = b21 * i01 + b22 * i11
-            s11 = a11_ - (c11 * b11 + c12 * b12)
-            s12 = a12_ - (c11 * b21 + c12 * b22)
-            s22 = a22_ - (c21 * b21 + c22 * b22)
-            r1 = g1 - (c11 * e1 + c12 * e2)
-            r2 = g2 - (c21 * e1 + c22 * e2)
-            det = s11 * s22 - s12 * s12
-            tr = s11 + s22
-            if not (det > SINGULAR * tr * tr) or not np.isfinite(det):
-                status[k] = 2
-                break
-            stx = -(s22 * r1 - s12 * r2) / det
-            sty = -(-s12 * r1 + s11 * r2) / det
-            nrm2 = stx * stx + sty * sty
-            if nrm2 > 1.0:
-                f = 1.0 / np.sqrt(nrm2)
-                stx *= f
-                sty *= f
-                nrm2 = 1.0
-            cx += stx
-            cy += sty
-            if cx < 0 or cx >= width or cy < 0 or cy >= height:
-                status[k] = 3
-                break
-            if nrm2 <= eps2:
-                status[k] = 0
+            cx, cy, st = symmetric_step(
+                a11_, a12_, a22_, b11, b12, b21, b22, g1, g2, e1, e2,
+                i00, i01, i10, i11, cx, cy, width, height, eps2,
+            )  # fmt: skip
+            if st >= 0:
+                status[k] = st
                 break
         if status[k] == 2:
             cx = sx
