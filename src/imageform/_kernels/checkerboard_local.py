@@ -41,7 +41,9 @@ from numpy.typing import NDArray
 
 from imageform._kernels.checkerboard_symmetric import (
     SINGULAR,
+    finish_numpy,
     symmetric_step,
+    symmetric_step_numpy,
     symmetric_window_weights,
 )
 from imageform._kernels.jit import njit
@@ -443,37 +445,10 @@ def _refine_local_chunk(
         )
         g = np.stack([np.sum(jx * r, axis=1), np.sum(jy * r, axis=1)], -1)
         e = np.stack([np.sum(dx * r, axis=1), np.sum(dy * r, axis=1)], -1)
-        cm = b @ inv
-        sm = np.stack([np.stack([a11, a12], -1), np.stack([a12, a22], -1)], 1)
-        sm = sm - cm @ np.swapaxes(b, 1, 2)
-        rhs = g - np.einsum("kij,kj->ki", cm, e)
-        s11, s12, s22 = sm[:, 0, 0], 0.5 * (sm[:, 0, 1] + sm[:, 1, 0]), sm[:, 1, 1]
-        det = s11 * s22 - s12 * s12
-        tr = s11 + s22
-        singular = ~(det > SINGULAR * tr * tr) | ~np.isfinite(det)
-        safe = np.where(singular, 1.0, det)
-        stx = -(s22 * rhs[:, 0] - s12 * rhs[:, 1]) / safe
-        sty = -(-s12 * rhs[:, 0] + s11 * rhs[:, 1]) / safe
-        nrm2 = stx * stx + sty * sty
-        big = nrm2 > 1.0
-        fac = np.where(big, 1.0 / np.sqrt(np.where(big, nrm2, 1.0)), 1.0)
-        stx, sty = stx * fac, sty * fac
-        nrm2 = np.where(big, 1.0, nrm2)
-        moved = ~singular
-        nx = c[:, 0] + stx
-        ny = c[:, 1] + sty
-        cur[idx[moved], 0] = nx[moved]
-        cur[idx[moved], 1] = ny[moved]
-        outside = moved & ((nx < 0) | (nx >= width) | (ny < 0) | (ny >= height))
-        done = moved & ~outside & (nrm2 <= eps2)
-        status[idx[singular]] = 2
-        status[idx[outside]] = 3
-        status[idx[done]] = 0
-        active[idx[singular | outside | done]] = False
-    back = status == 2
-    cur[back] = start[back]
-    with np.errstate(invalid="ignore"):
-        far = (np.abs(cur[:, 0] - start[:, 0]) > h) | (np.abs(cur[:, 1] - start[:, 1]) > h)
-    cur[far] = start[far]
-    status[far] = 4
-    return cur, status
+        nxy, st = symmetric_step_numpy(a11, a12, a22, b, g, e, inv, c, width, height, eps2)
+        moved = st != 2
+        cur[idx[moved]] = nxy[moved]
+        stop = st >= 0
+        status[idx[stop]] = st[stop]
+        active[idx[stop]] = False
+    return finish_numpy(cur, start, status, h)

@@ -314,6 +314,66 @@ def _refine_symmetric(
     return out, status
 
 
+def symmetric_step_numpy(
+    a11: NDArray[np.float64],
+    a12: NDArray[np.float64],
+    a22: NDArray[np.float64],
+    b: NDArray[np.float64],
+    g: NDArray[np.float64],
+    e: NDArray[np.float64],
+    inv: NDArray[np.float64],
+    c: NDArray[np.float64],
+    width: int,
+    height: int,
+    eps2: float,
+) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
+    """:func:`symmetric_step` for k corners at once: the moved corners (k, 2) and a status.
+
+    ``b`` (k, 2, 2), ``g`` and ``e`` (k, 2), ``inv`` the shading blocks' inverses (k, 2, 2),
+    ``c`` the corners. Status -1: go on; 0: converged; 2: singular (not moved); 3: off the
+    image.
+    """
+    cm = b @ inv
+    s = np.stack([np.stack([a11, a12], -1), np.stack([a12, a22], -1)], 1)
+    s = s - cm @ np.swapaxes(b, 1, 2)
+    rhs = g - np.einsum("kij,kj->ki", cm, e)
+    s11, s12, s22 = s[:, 0, 0], 0.5 * (s[:, 0, 1] + s[:, 1, 0]), s[:, 1, 1]
+    det = s11 * s22 - s12 * s12
+    tr = s11 + s22
+    singular = ~(det > SINGULAR * tr * tr) | ~np.isfinite(det)
+    safe = np.where(singular, 1.0, det)
+    stx = -(s22 * rhs[:, 0] - s12 * rhs[:, 1]) / safe
+    sty = -(-s12 * rhs[:, 0] + s11 * rhs[:, 1]) / safe
+    nrm2 = stx * stx + sty * sty
+    big = nrm2 > 1.0
+    fac = np.where(big, 1.0 / np.sqrt(np.where(big, nrm2, 1.0)), 1.0)
+    stx, sty = stx * fac, sty * fac
+    nrm2 = np.where(big, 1.0, nrm2)
+    moved = ~singular
+    nx = c[:, 0] + stx
+    ny = c[:, 1] + sty
+    outside = moved & ((nx < 0) | (nx >= width) | (ny < 0) | (ny >= height))
+    done = moved & ~outside & (nrm2 <= eps2)
+    st = np.full(c.shape[0], -1, dtype=np.int64)
+    st[singular] = 2
+    st[outside] = 3
+    st[done] = 0
+    return np.stack([nx, ny], -1), st
+
+
+def finish_numpy(
+    cur: NDArray[np.float64], start: NDArray[np.float64], status: NDArray[np.int64], h: int
+) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
+    """Put back the corners that went singular (status 2) or moved more than ``h`` (status 4)."""
+    back = status == 2
+    cur[back] = start[back]
+    with np.errstate(invalid="ignore"):
+        far = (np.abs(cur[:, 0] - start[:, 0]) > h) | (np.abs(cur[:, 1] - start[:, 1]) > h)
+    cur[far] = start[far]
+    status[far] = 4
+    return cur, status
+
+
 def refine_symmetric_numpy(
     image: NDArray[np.floating],
     corners: NDArray[np.float64],
@@ -394,40 +454,13 @@ def refine_symmetric_numpy(
         )  # (k, 2, 2)
         g = np.stack([np.sum(jx * r, axis=(1, 2)), np.sum(jy * r, axis=(1, 2))], -1)
         e = np.stack([np.sum(dx * r, axis=(1, 2)), np.sum(dy * r, axis=(1, 2))], -1)
-        cm = b @ inv
-        s = np.stack([np.stack([a11, a12], -1), np.stack([a12, a22], -1)], 1)
-        s = s - cm @ np.swapaxes(b, 1, 2)
-        rhs = g - np.einsum("kij,kj->ki", cm, e)
-        s11, s12, s22 = s[:, 0, 0], 0.5 * (s[:, 0, 1] + s[:, 1, 0]), s[:, 1, 1]
-        det = s11 * s22 - s12 * s12
-        tr = s11 + s22
-        singular = ~(det > SINGULAR * tr * tr) | ~np.isfinite(det)
-        safe = np.where(singular, 1.0, det)
-        stx = -(s22 * rhs[:, 0] - s12 * rhs[:, 1]) / safe
-        sty = -(-s12 * rhs[:, 0] + s11 * rhs[:, 1]) / safe
-        nrm2 = stx * stx + sty * sty
-        big = nrm2 > 1.0
-        fac = np.where(big, 1.0 / np.sqrt(np.where(big, nrm2, 1.0)), 1.0)
-        stx, sty = stx * fac, sty * fac
-        nrm2 = np.where(big, 1.0, nrm2)
-        moved = ~singular
-        nx = c[:, 0] + stx
-        ny = c[:, 1] + sty
-        cur[idx[moved], 0] = nx[moved]
-        cur[idx[moved], 1] = ny[moved]
-        outside = moved & ((nx < 0) | (nx >= width) | (ny < 0) | (ny >= height))
-        done = moved & ~outside & (nrm2 <= eps2)
-        status[idx[singular]] = 2
-        status[idx[outside]] = 3
-        status[idx[done]] = 0
-        active[idx[singular | outside | done]] = False
-    back = status == 2
-    cur[back] = start[back]
-    with np.errstate(invalid="ignore"):
-        far = (np.abs(cur[:, 0] - start[:, 0]) > h) | (np.abs(cur[:, 1] - start[:, 1]) > h)
-    cur[far] = start[far]
-    status[far] = 4
-    return cur, status
+        nxy, st = symmetric_step_numpy(a11, a12, a22, b, g, e, inv, c, width, height, eps2)
+        moved = st != 2
+        cur[idx[moved]] = nxy[moved]
+        stop = st >= 0
+        status[idx[stop]] = st[stop]
+        active[idx[stop]] = False
+    return finish_numpy(cur, start, status, h)
 
 
 def marker_mask_numpy(
