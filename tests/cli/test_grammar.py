@@ -36,7 +36,12 @@ EXAMPLES = {
 
 
 def _flags(cmd: click.Command) -> set[str]:
-    return {o for p in cmd.params if isinstance(p, click.Option) for o in p.opts}
+    return {
+        o
+        for p in cmd.params
+        if isinstance(p, click.Option)
+        for o in (*p.opts, *p.secondary_opts)  # --x/--no-x flags: both spellings
+    }
 
 
 @pytest.mark.parametrize("name", list(WORKFLOWS))

@@ -354,8 +354,16 @@ VALID: dict[str, C | Skip] = {
         "an internal step of the checkerboard detector on gray_codes' output (fuzzed through "
         "find_checkerboard)"
     ),
+    "imageform.geometry.checkerboard_subpix.grid_maps": Skip(
+        "an internal step of find_checkerboard's symmetric method on its clean corner grid "
+        "(fuzzed through find_checkerboard)"
+    ),
     "imageform.geometry.checkerboard_subpix.refine": Skip(
         "an internal numba step of refine_corners (fuzzed through refine_corners)"
+    ),
+    "imageform.geometry.checkerboard_subpix.refine_local_inside": Skip(
+        "an internal step of find_checkerboard's symmetric method on clean input (fuzzed "
+        "through find_checkerboard)"
     ),
     "imageform.geometry.checkerboard_subpix.refine_symmetric": Skip(
         "an internal numba step of refine_corners_symmetric (fuzzed through it)"
