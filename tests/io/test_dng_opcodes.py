@@ -19,14 +19,19 @@ import pytest
 
 from imageform.io import develop, read_raw, write_dng
 from imageform.io._dng_opcodes import (
+    FixVignetteRadial,
     GainMap,
+    WarpRectilinear,
     apply_gain_maps,
+    bicubic_sample,
     gain_map_gains,
     parse_opcode_list,
+    vignette_gains,
+    warp_source_positions,
 )
 
 CM = np.eye(3)
-GAIN_MAP, WARP_RECTILINEAR = 9, 1
+GAIN_MAP, WARP_RECTILINEAR, WARP_FISHEYE, FIX_VIGNETTE_RADIAL = 9, 1, 2, 3
 
 
 def _gain_map_op(
@@ -182,13 +187,13 @@ def test_active_area_at_an_odd_row_shifts_the_map(tmp_path: Path) -> None:
 
 def test_other_opcodes_are_named_not_applied(tmp_path: Path) -> None:
     mosaic = np.full((16, 16), 1000, np.uint16)
-    lists = {51022: _op_list(_other_op(WARP_RECTILINEAR)),
+    lists = {51022: _op_list(_other_op(WARP_FISHEYE)),
              51008: _op_list(_other_op(4)), 51009: b"\x00\x00\x00\x02\x00"}  # fmt: skip
     raw = read_raw(_dng(tmp_path / "o.dng", mosaic, lists=lists))
     assert sorted(raw.metadata["opcodes_skipped"]) == [
         "OpcodeList1:FixBadPixelsConstant",
         "OpcodeList2:unreadable",
-        "OpcodeList3:WarpRectilinear",
+        "OpcodeList3:WarpFisheye",
     ]
     np.testing.assert_array_equal(raw.mosaic, mosaic)
 
@@ -210,12 +215,12 @@ def test_develop_command_applies_and_names_opcodes(
     g = _radial_map(3, 3, 1.0)
     gm = GainMap(0, 0, *shape, 0, 1, 1, 1, (0.5, 0.5), (0.0, 0.0), g)
     lists = {51009: _op_list(_gain_map_op(g, area=(0, 0, *shape))),
-             51022: _op_list(_other_op(WARP_RECTILINEAR))}  # fmt: skip
+             51022: _op_list(_other_op(WARP_FISHEYE))}  # fmt: skip
     path = _dng(tmp_path / "c.dng", _vignetted(gm, shape, 2000.0, 64.0), lists=lists)
     assert main(["develop", str(path), "-o", str(tmp_path / "on.tif"), "--linear"]) == 0
     err = capsys.readouterr().err
     assert "applied the DNG's 1 GainMap opcode (lens shading)" in err
-    assert "DNG opcodes not applied: OpcodeList3:WarpRectilinear" in err
+    assert "DNG opcodes not applied: OpcodeList3:WarpFisheye" in err
     assert main(["develop", str(path), "-o", str(tmp_path / "off.tif"), "--linear",
                  "--no-opcodes"]) == 0  # fmt: skip
     assert "GainMap opcode" not in capsys.readouterr().err
@@ -224,3 +229,195 @@ def test_develop_command_applies_and_names_opcodes(
     assert np.ptp(on) < 2e-3 < 0.1 < np.ptp(off)
     assert main(["info", str(path)]) == 0
     assert "applied the DNG's 1 GainMap opcode" in capsys.readouterr().out
+
+
+# -- OpcodeList3: WarpRectilinear and FixVignetteRadial, applied by develop ----------------
+
+
+def _warp_op(coefficients: list[list[float]], center: tuple[float, float]) -> bytes:
+    """One WarpRectilinear opcode: planes, per plane kr0..kr3 kt0 kt1, then cx, cy."""
+    params = struct.pack(">I", len(coefficients))
+    for row in coefficients:
+        params += struct.pack(">6d", *row)
+    params += struct.pack(">2d", *center)
+    return struct.pack(">4I", WARP_RECTILINEAR, 0x01030000, 1, len(params)) + params
+
+
+def _vignette_op(k: tuple[float, ...], center: tuple[float, float]) -> bytes:
+    params = struct.pack(f">{len(k) + 2}d", *k, *center)
+    return struct.pack(">4I", FIX_VIGNETTE_RADIAL, 0x01030000, 1, len(params)) + params
+
+
+def test_warp_source_position_worked_by_hand() -> None:
+    """The SDK's rule on a 40 x 60 image, centre (cx, cy) = (0.25, 0.5): the centre is at
+    column 15, row 20; the farthest corner (40, 60) lies hypot(20, 45) = sqrt(2425) away.
+    Pixel (row 10, column 40) is at (y, x) = (-10, 25) / sqrt(2425), r2 = 725 / 2425."""
+    kr, kt0, kt1 = (1.0, 0.1, -0.05, 0.02), 0.01, -0.02
+    warp = WarpRectilinear(np.array([[*kr, kt0, kt1]]), (0.25, 0.5))
+    radius = 2425**0.5
+    y, x, r2 = -10 / radius, 25 / radius, 725 / 2425
+    f = 1 + 0.1 * r2 - 0.05 * r2**2 + 0.02 * r2**3
+    row = 20 + radius * (y * f + kt0 * (r2 + 2 * y * y) + 2 * kt1 * x * y)
+    col = 15 + radius * (x * f + kt1 * (r2 + 2 * x * x) + 2 * kt0 * x * y)
+    sr, sc = warp_source_positions(warp, np.array([10]), np.array([40]), (40, 60))
+    assert (sr[0], sc[0]) == (pytest.approx(row, abs=1e-12), pytest.approx(col, abs=1e-12))
+    assert (row, col) == (pytest.approx(10.131286, abs=1e-6), pytest.approx(39.745398, abs=1e-6))
+    # a corner is at r = 1 (centre (0, 0): the normalisation is the far corner (40, 60))
+    corner = WarpRectilinear(np.array([[1.0, 0.1, 0, 0, 0, 0]]), (0.0, 0.0))
+    sr, sc = warp_source_positions(corner, np.array([40]), np.array([60]), (40, 60))
+    assert (sr[0], sc[0]) == (pytest.approx(44.0), pytest.approx(66.0))
+    # r2 is clamped to 1 beyond it, as the SDK does
+    sr, sc = warp_source_positions(corner, np.array([80]), np.array([120]), (40, 60))
+    assert (sr[0], sc[0]) == (pytest.approx(88.0), pytest.approx(132.0))
+
+
+def test_bicubic_sample_matches_opencv_cubic_remap() -> None:
+    """The SDK's resampler: Keys' kernel (a = -0.75) at 1/32 pixel, edges repeated;
+    OpenCV's INTER_CUBIC is the same kernel at 1/32 (rounded, not floored)."""
+    cv2 = pytest.importorskip("cv2")
+    rng = np.random.default_rng(3)
+    img = rng.uniform(0.2, 0.8, (20, 30, 1)).astype(np.float32)
+    sr = rng.integers(-64, 21 * 32, 500) / 32.0  # multiples of 1/32, some outside
+    sc = rng.integers(-64, 31 * 32, 500) / 32.0
+    ours = bicubic_sample(img, sr, sc)[:, 0]
+    ref = cv2.remap(img[..., 0], np.clip(sc, 0, 29).astype(np.float32)[None],
+                    np.clip(sr, 0, 19).astype(np.float32)[None], cv2.INTER_CUBIC,
+                    borderMode=cv2.BORDER_REPLICATE)[0]  # fmt: skip
+    np.testing.assert_allclose(ours, np.clip(ref, 0, 1), atol=2e-6)
+    # the fraction is floored to 1/32: a ramp sampled at 10.51 reads 10.5
+    ramp = (np.arange(30, dtype=np.float32) / 100)[None, :, None].repeat(4, 0)
+    assert bicubic_sample(ramp, np.array([1.0]), np.array([10.51]))[0, 0] == pytest.approx(0.105)
+
+
+def test_warp_straightens_a_grid_rendered_through_opencv_distortion(tmp_path: Path) -> None:
+    """Dots on a grid u_k rendered where OpenCV's Brown-Conrady model puts them
+    (cv2.projectPoints, fx = fy = R, k1 k2 k3 = kr1 kr2 kr3, p1 = kt0, p2 = kt1: the
+    same model as WarpRectilinear's with kr0 = 1) come back to u_k in the development."""
+    cv2 = pytest.importorskip("cv2")
+    h, w = 96, 128
+    kr, kt = (1.0, 0.15, -0.04, 0.01), (0.004, -0.003)
+    center = (0.45, 0.55)
+    cy, cx = center[1] * h, center[0] * w
+    radius = float(np.hypot(max(cy, h - cy), max(cx, w - cx)))
+    gy, gx = np.meshgrid(np.arange(12, h - 11, 12.0), np.arange(12, w - 11, 14.0), indexing="ij")
+    grid = np.stack([gx.ravel(), gy.ravel()], axis=1)  # (x, y) pixels, output positions
+    norm = (grid - [cx, cy]) / radius
+    pts = np.concatenate([norm, np.ones((len(norm), 1))], axis=1)[:, None, :]
+    k_mat = np.array([[radius, 0, cx], [0, radius, cy], [0, 0, 1]])
+    dist = np.array([kr[1], kr[2], kt[0], kt[1], kr[3]])
+    seen, _ = cv2.projectPoints(pts, np.zeros(3), np.zeros(3), k_mat, dist)
+    seen = seen[:, 0, :]  # where the input shows each dot
+    warp = WarpRectilinear(np.array([[*kr, *kt]]), center)
+    sr, sc = warp_source_positions(warp, grid[:, 1], grid[:, 0], (h, w))
+    np.testing.assert_allclose(np.stack([sc, sr], axis=1), seen, atol=1e-9)
+    assert np.abs(seen - grid).max() > 1.5  # the distortion moves dots by pixels
+    yy, xx = np.mgrid[0:h, 0:w]
+    scene = np.zeros((h, w))
+    for x0, y0 in seen:
+        scene += np.exp(-((xx - x0) ** 2 + (yy - y0) ** 2) / (2 * 1.6**2))
+    mosaic = np.round(64 + 3000 * np.clip(scene, 0, 1)).astype(np.uint16)
+    path = _dng(tmp_path / "w.dng", mosaic, lists={51022: _op_list(_warp_op([[*kr, *kt]],
+                                                                           center))})  # fmt: skip
+
+    def centroids(img: np.ndarray) -> np.ndarray:
+        v = img.mean(axis=2)
+        out = []
+        for x0, y0 in grid:
+            r0, c0 = int(np.rint(y0)), int(np.rint(x0))
+            win = v[r0 - 5 : r0 + 6, c0 - 5 : c0 + 6]
+            wy, wx = np.mgrid[r0 - 5 : r0 + 6, c0 - 5 : c0 + 6]
+            out.append([(win * wx).sum() / win.sum(), (win * wy).sum() / win.sum()])
+        return np.array(out)
+
+    raw = read_raw(path)
+    assert raw.metadata["opcodes_skipped"] == []
+    dev = develop(raw, linear=True, white_balance="none")
+    assert any("OpcodeList3:WarpRectilinear" in n for n in dev.notes)
+    assert np.abs(centroids(dev.camera_rgb) - grid).max() < 0.08
+    plain = develop(read_raw(path, opcodes=False), linear=True, white_balance="none")
+    assert np.abs(centroids(plain.camera_rgb) - grid).max() > 1.0
+    assert not any("OpcodeList3" in n for n in plain.notes)
+    # the same with the tifffile reader and another demosaicing method (not the fused pass)
+    mal = develop(raw, linear=True, white_balance="none", demosaic="malvar")
+    assert np.abs(centroids(mal.camera_rgb) - grid).max() < 0.08
+
+
+@pytest.mark.parametrize("reader", ["libraw", "tifffile"])
+def test_fix_vignette_radial_flattens_a_flat_field(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, reader: str
+) -> None:
+    """A flat field darkened by 1 / g, g = 1 + k0 r2 + ... + k4 r2^5 at each pixel's centre
+    (r2 its squared distance to the centre over the farthest corner's), comes back flat."""
+    if reader == "libraw" and importlib.util.find_spec("rawpy") is None:
+        pytest.skip("rawpy not installed")
+    h, w = 64, 96
+    k, center = (0.5, -0.1, 0.05, 0.0, 0.01), (0.6, 0.4)
+    cy, cx = center[1] * h, center[0] * w
+    r2 = (((np.arange(h)[:, None] + 0.5 - cy) ** 2 + (np.arange(w) + 0.5 - cx) ** 2)
+          / (max(cy, h - cy) ** 2 + max(cx, w - cx) ** 2))  # fmt: skip
+    g = 1 + sum(kk * r2 ** (i + 1) for i, kk in enumerate(k))
+    np.testing.assert_allclose(vignette_gains(FixVignetteRadial(k, center), np.arange(h),
+                                              np.arange(w), (h, w)), g)  # fmt: skip
+    mosaic = np.round(64 + 2000 / g).astype(np.uint16)
+    path = _dng(tmp_path / "fv.dng", mosaic, lists={51022: _op_list(_vignette_op(k, center))})
+    if reader == "tifffile":
+        monkeypatch.setitem(sys.modules, "rawpy", None)
+    raw = read_raw(path)
+    assert [type(op).__name__ for op in raw.metadata["opcodes_stage3"]] == ["FixVignetteRadial"]
+    img = develop(raw, linear=True, white_balance="none").camera_rgb
+    level = 2000 / (4095 - 64)
+    assert np.abs(img[2:-2, 2:-2] - level).max() < 1e-3
+    plain = read_raw(path, opcodes=False)
+    np.testing.assert_array_equal(plain.mosaic, raw.mosaic)  # LibRaw's values
+    assert "opcodes_stage3" not in plain.metadata
+    shaded = develop(plain, linear=True, white_balance="none").camera_rgb
+    assert np.ptp(shaded[2:-2, 2:-2]) > 0.1
+
+
+def test_bad_stage3_parameters_are_named_unreadable(tmp_path: Path) -> None:
+    good = _warp_op([[1.0, 0.01, 0, 0, 0, 0]], (0.5, 0.5))
+    lists = {51022: _op_list(
+        _other_op(WARP_RECTILINEAR),  # 8 zero bytes: no planes
+        good[:16] + struct.pack(">I", 2) + good[20:],  # two planes, one plane's bytes
+        _warp_op([[1.0, 0.01, 0, 0, 0, 0]], (1.5, 0.5)),  # centre outside [0, 1]
+        _warp_op([[float("nan"), 0, 0, 0, 0, 0]], (0.5, 0.5)),
+        _vignette_op((0.1, 0, 0, 0), (0.5, 0.5)),  # four coefficients
+        good,
+    )}  # fmt: skip
+    mosaic = np.full((16, 16), 1000, np.uint16)
+    raw = read_raw(_dng(tmp_path / "b.dng", mosaic, lists=lists))
+    assert raw.metadata["opcodes_skipped"] == [
+        *["OpcodeList3:WarpRectilinear:unreadable"] * 4,
+        "OpcodeList3:FixVignetteRadial:unreadable",
+    ]
+    assert len(raw.metadata["opcodes_stage3"]) == 1
+    develop(raw)  # the good one applies
+    # a list cut inside an opcode is unreadable as a whole
+    cut = _dng(tmp_path / "t.dng", mosaic, lists={51022: _op_list(good)[:-5]})
+    meta = read_raw(cut).metadata
+    assert meta["opcodes_skipped"] == ["OpcodeList3:unreadable"]
+    assert "opcodes_stage3" not in meta
+
+
+def test_develop_command_notes_stage3_opcodes(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from imageform.cli import main
+
+    mosaic = np.full((32, 48), 1000, np.uint16)
+    lists = {51022: _op_list(_vignette_op((0.2, 0, 0, 0, 0), (0.5, 0.5)),
+                             _warp_op([[1.0, 0.02, 0, 0, 0, 0]], (0.5, 0.5)))}  # fmt: skip
+    path = _dng(tmp_path / "n.dng", mosaic, lists=lists)
+    assert main(["develop", str(path), "-o", str(tmp_path / "on.tif")]) == 0
+    err = capsys.readouterr().err
+    assert (
+        "applied the DNG's OpcodeList3:FixVignetteRadial, OpcodeList3:WarpRectilinear after "
+        "demosaicing" in err
+    )
+    assert "not applied" not in err
+    assert main(["develop", str(path), "-o", str(tmp_path / "off.tif"), "--no-opcodes"]) == 0
+    assert "OpcodeList3" not in capsys.readouterr().err
+    assert main(["info", str(path)]) == 0
+    assert "applied when developed (after demosaicing): OpcodeList3:FixVignetteRadial" in (
+        capsys.readouterr().out
+    )

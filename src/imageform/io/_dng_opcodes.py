@@ -17,6 +17,30 @@ point by point (rows, columns, planes). A pixel at row ``r`` of an image of heig
 sits at ``v = (r + 0.5) / H``; its map row is ``(v - origin) / spacing``, clamped to the
 map, and the gain is bilinear between the four nearest points (the DNG SDK's
 ``dng_gain_map_interpolator``). The linear value ``x`` becomes ``min(x * gain, 1)``.
+
+OpcodeList3 applies to the demosaiced linear camera RGB, before the colour matrix; two of
+its opcodes are parsed here and applied by :func:`imageform.io.develop`
+(:func:`apply_stage3`), as Adobe's DNG SDK does (``dng_filter_warp``,
+``dng_opcode_FixVignetteRadial``), for an image of ``H`` rows and ``W`` columns (the raw
+image after its ActiveArea crop; pixel ``(r, c)`` is at ``(r, c)``, its centre, for the warp,
+at ``(r + 0.5, c + 0.5)`` for the vignette, as the SDK counts):
+
+- WarpRectilinear (id 1): per plane ``kr0..kr3, kt0, kt1`` and the optical centre
+  ``(cx, cy)`` in fractions of the width and height. The centre sits at ``(cy H, cx W)``;
+  distances are normalised by ``R``, the largest distance from it to the image's corners
+  ``(0, 0), (0, W), (H, 0), (H, W)``. An output pixel at ``(dy, dx)`` from the centre
+  (normalised: ``(y, x) = (dy, dx) / R``, ``r2 = min(x^2 + y^2, 1)``) samples the input at
+  ``centre + R ((y, x) f + (ty, tx))`` with ``f = kr0 + kr1 r2 + kr2 r2^2 + kr3 r2^3``,
+  ``ty = kt0 (r2 + 2 y^2) + 2 kt1 x y`` and ``tx = kt1 (r2 + 2 x^2) + 2 kt0 x y``. The
+  position is clamped to the image; the value is the SDK's resampling: Keys' bicubic
+  kernel (a = -0.75), 4 x 4 taps, the fraction floored to 1/32 of a pixel, edge pixels
+  repeated, the result clamped to [0, 1]. One plane of coefficients serves every plane.
+- FixVignetteRadial (id 3): ``k0..k4`` and the centre ``(cx, cy)``; with ``R`` the
+  distance from the centre to the farthest corner of the image's bounding box and
+  ``r2 = min(d^2 / R^2, 1)`` (``d`` the distance of the pixel's centre), the value ``x``
+  becomes ``min(x g, 1)``, ``g = 1 + k0 r2 + k1 r2^2 + k2 r2^3 + k3 r2^4 + k4 r2^5``
+  (computed exactly here; the SDK reads ``g`` from a 16-bit table of ``r2``, within about
+  1e-4 of it).
 """
 
 from __future__ import annotations
@@ -29,11 +53,18 @@ import numpy as np
 
 __all__ = [
     "OPCODE_NAMES",
+    "FixVignetteRadial",
     "GainMap",
+    "WarpRectilinear",
     "apply_gain_maps",
+    "apply_stage3",
+    "bicubic_sample",
     "gain_map_gains",
     "parse_opcode_list",
     "read_opcodes",
+    "stage3_name",
+    "vignette_gains",
+    "warp_source_positions",
 ]
 
 #: The opcodes of the DNG specification 1.7.1, by id.
@@ -56,6 +87,8 @@ OPCODE_NAMES = {
 
 _OPCODE_LISTS = {51008: "OpcodeList1", 51009: "OpcodeList2", 51022: "OpcodeList3"}
 _GAIN_MAP = 9
+_WARP_RECTILINEAR = 1
+_FIX_VIGNETTE_RADIAL = 3
 
 
 @dataclass(frozen=True)
@@ -123,13 +156,71 @@ def parse_opcode_list(data: bytes) -> list[tuple[int, int, bytes]]:
     return out
 
 
-def read_opcodes(page: Any) -> tuple[list[GainMap], list[str]]:
-    """Return the GainMaps of a raw IFD's OpcodeList2 and the names of the opcodes not applied.
+@dataclass(frozen=True)
+class WarpRectilinear:
+    """One WarpRectilinear opcode: ``coefficients`` (planes, 6) ``kr0..kr3, kt0, kt1``.
 
-    ``page`` is the tifffile page of the raw image. Names are ``"OpcodeList3:WarpRectilinear"``
-    (an unknown id by its number; a list that does not parse as ``"OpcodeList2:unreadable"``).
+    ``center`` is the optical centre ``(cx, cy)``, fractions of the width and height.
+    """
+
+    coefficients: np.ndarray
+    center: tuple[float, float]
+
+
+@dataclass(frozen=True)
+class FixVignetteRadial:
+    """One FixVignetteRadial opcode: ``k`` the five coefficients ``k0..k4``, ``center`` (cx, cy)."""
+
+    k: tuple[float, float, float, float, float]
+    center: tuple[float, float]
+
+
+#: An opcode of OpcodeList3 that :func:`apply_stage3` applies.
+Stage3Opcode = WarpRectilinear | FixVignetteRadial
+
+
+def _parse_warp(data: bytes) -> WarpRectilinear | None:
+    """Return the WarpRectilinear of an opcode's parameters, or None where they do not parse.
+
+    As the SDK checks: the byte count exactly ``4 + 48 planes + 16``, a centre inside
+    [0, 1], finite coefficients; the planes 1 or 3 (one set for every colour, or one each
+    of camera RGB: the SDK's rule that they are 1 or the image's colour count).
+    """
+    if len(data) < 4:
+        return None
+    (planes,) = struct.unpack(">I", data[:4])
+    if planes not in (1, 3) or len(data) != 4 + 48 * planes + 16:
+        return None
+    values = np.array(struct.unpack(f">{6 * planes + 2}d", data[4:]), np.float64)
+    cx, cy = (float(v) for v in values[-2:])
+    if not np.all(np.isfinite(values)) or not (0 <= cx <= 1 and 0 <= cy <= 1):
+        return None
+    return WarpRectilinear(values[:-2].reshape(planes, 6), (cx, cy))
+
+
+def _parse_vignette(data: bytes) -> FixVignetteRadial | None:
+    """Return the FixVignetteRadial of an opcode's parameters, or None where they do not parse."""
+    if len(data) != 56:
+        return None
+    values = struct.unpack(">7d", data)
+    cx, cy = values[5:]
+    if not all(np.isfinite(values)) or not (0 <= cx <= 1 and 0 <= cy <= 1):
+        return None
+    k0, k1, k2, k3, k4 = values[:5]
+    return FixVignetteRadial((k0, k1, k2, k3, k4), (cx, cy))
+
+
+def read_opcodes(page: Any) -> tuple[list[GainMap], list[Stage3Opcode], list[str]]:
+    """Return the GainMaps of OpcodeList2, the opcodes of OpcodeList3 to apply, and the rest.
+
+    ``page`` is the tifffile page of the raw image. The stage-3 opcodes (WarpRectilinear,
+    FixVignetteRadial) are in the list's order. The names of the opcodes not applied are
+    ``"OpcodeList1:FixBadPixelsList"`` (an unknown id by its number; an opcode this module
+    applies whose parameters do not parse as ``"OpcodeList3:WarpRectilinear:unreadable"``;
+    a list that does not parse as ``"OpcodeList2:unreadable"``).
     """
     maps: list[GainMap] = []
+    stage3: list[Stage3Opcode] = []
     skipped: list[str] = []
     tags = page.tags
     for code, name in _OPCODE_LISTS.items():
@@ -142,12 +233,160 @@ def read_opcodes(page: Any) -> tuple[list[GainMap], list[str]]:
             skipped.append(f"{name}:unreadable")
             continue
         for op, _flags, params in ops:
-            gm = _parse_gain_map(params) if (op == _GAIN_MAP and code == 51009) else None
-            if gm is not None:
-                maps.append(gm)
-            else:
-                skipped.append(f"{name}:{OPCODE_NAMES.get(op, str(op))}")
-    return maps, skipped
+            label = f"{name}:{OPCODE_NAMES.get(op, str(op))}"
+            if op == _GAIN_MAP and code == 51009:
+                gm = _parse_gain_map(params)
+                if gm is not None:
+                    maps.append(gm)
+                    continue
+                label += ":unreadable"
+            elif op in (_WARP_RECTILINEAR, _FIX_VIGNETTE_RADIAL) and code == 51022:
+                parsed = (_parse_warp if op == _WARP_RECTILINEAR else _parse_vignette)(params)
+                if parsed is not None:
+                    stage3.append(parsed)
+                    continue
+                label += ":unreadable"
+            skipped.append(label)
+    return maps, stage3, skipped
+
+
+def stage3_name(op: Stage3Opcode) -> str:
+    """Return an OpcodeList3 opcode's name, ``"OpcodeList3:WarpRectilinear"``."""
+    return "OpcodeList3:" + type(op).__name__
+
+
+def _center_and_radius(
+    center: tuple[float, float], shape: tuple[int, int]
+) -> tuple[float, float, float]:
+    """Return the centre (row, column) in pixels and the distance to the farthest corner."""
+    h, w = shape
+    cy, cx = center[1] * h, center[0] * w
+    radius = float(np.hypot(max(cy, h - cy), max(cx, w - cx)))
+    return cy, cx, radius
+
+
+def warp_source_positions(
+    warp: WarpRectilinear,
+    rows: np.ndarray,
+    cols: np.ndarray,
+    shape: tuple[int, int],
+    plane: int = 0,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Return where the output pixels ``(rows, cols)`` sample the input (row, column).
+
+    ``rows`` and ``cols`` broadcast together; ``shape`` is the image's (H, W). The SDK's
+    ``dng_filter_warp::GetSrcPixelPosition`` (square pixels), not clamped to the image.
+    """
+    cy, cx, radius = _center_and_radius(warp.center, shape)
+    kr0, kr1, kr2, kr3, kt0, kt1 = (
+        float(v) for v in warp.coefficients[min(plane, len(warp.coefficients) - 1)]
+    )
+    y = (np.asarray(rows, np.float64) - cy) / radius
+    x = (np.asarray(cols, np.float64) - cx) / radius
+    r2 = np.minimum(x * x + y * y, 1.0)
+    f = kr0 + r2 * (kr1 + r2 * (kr2 + r2 * kr3))
+    ty = kt0 * (r2 + 2 * y * y) + 2 * kt1 * x * y
+    tx = kt1 * (r2 + 2 * x * x) + 2 * kt0 * x * y
+    return cy + radius * (y * f + ty), cx + radius * (x * f + tx)
+
+
+def _keys(t: np.ndarray) -> np.ndarray:
+    """Keys' cubic convolution kernel with a = -0.75 (the SDK's ``dng_resample_bicubic``)."""
+    a = -0.75
+    t = np.abs(t)
+    near = ((a + 2) * t - (a + 3)) * t * t + 1
+    far = ((a * t - 5 * a) * t + 8 * a) * t - 4 * a
+    return np.where(t < 1, near, np.where(t < 2, far, 0.0))
+
+
+def bicubic_sample(image: np.ndarray, src_rows: np.ndarray, src_cols: np.ndarray) -> np.ndarray:
+    """Return ``image`` (H, W, C) at the positions, resampled as the DNG SDK's warp does.
+
+    Positions are clamped to the image; 4 x 4 taps of Keys' kernel (a = -0.75) at the
+    fraction floored to 1/32 pixel (``kResampleSubsampleCount2D``), edge pixels repeated,
+    the weights normalised to sum 1; the result clamped to [0, 1]. Shape (..., C).
+    """
+    h, w = image.shape[:2]
+    sr = np.clip(src_rows, 0.0, h - 1.0)
+    sc = np.clip(src_cols, 0.0, w - 1.0)
+    r0 = np.floor(sr)
+    c0 = np.floor(sc)
+    fr = np.floor((sr - r0) * 32.0) / 32.0
+    fc = np.floor((sc - c0) * 32.0) / 32.0
+    r0i = r0.astype(np.int64)
+    c0i = c0.astype(np.int64)
+    taps = np.arange(-1, 3)
+    wr = _keys(taps - fr[..., None]).astype(np.float32)  # (..., 4)
+    wc = _keys(taps - fc[..., None]).astype(np.float32)
+    wr /= wr.sum(axis=-1, keepdims=True)
+    wc /= wc.sum(axis=-1, keepdims=True)
+    out = np.zeros((*sr.shape, image.shape[2]), np.float32)
+    for i in range(4):
+        ri = np.clip(r0i + taps[i], 0, h - 1)
+        row = np.zeros_like(out)
+        for j in range(4):
+            cj = np.clip(c0i + taps[j], 0, w - 1)
+            row += wc[..., j, None] * image[ri, cj]
+        out += wr[..., i, None] * row
+    return np.clip(out, 0.0, 1.0, out=out)
+
+
+def vignette_gains(
+    vig: FixVignetteRadial, rows: np.ndarray, cols: np.ndarray, shape: tuple[int, int]
+) -> np.ndarray:
+    """Return the FixVignetteRadial gains at ``rows`` x ``cols`` (an outer grid) of (H, W)."""
+    cy, cx, radius = _center_and_radius(vig.center, shape)
+    y = (np.asarray(rows, np.float64) + 0.5 - cy) / radius
+    x = (np.asarray(cols, np.float64) + 0.5 - cx) / radius
+    r2 = np.minimum(y[:, None] ** 2 + x[None, :] ** 2, 1.0)
+    g = np.zeros_like(r2)
+    for k in vig.k[::-1]:
+        g = r2 * (k + g)
+    return g + 1.0
+
+
+def apply_stage3(
+    image: np.ndarray,
+    ops: list[Stage3Opcode] | tuple[Stage3Opcode, ...],
+    *,
+    offset: tuple[int, int] = (0, 0),
+    shape: tuple[int, int] | None = None,
+    rows_per_chunk: int = 256,
+) -> np.ndarray:
+    """Return ``image`` (H, W, C) float in [0, 1] with the OpcodeList3 opcodes applied in order.
+
+    ``offset`` is where the image's first pixel sits in the image the opcodes describe (the
+    raw image after its ActiveArea crop), ``shape`` that image's (H, W) (default: the
+    image's plus offset). A warp samples within the image given (its edge pixels repeated
+    where the warp reaches beyond it). float32 out.
+    """
+    out = np.ascontiguousarray(image, dtype=np.float32)
+    h, w = out.shape[:2]
+    dt, dl = offset
+    full = shape if shape is not None else (h + dt, w + dl)
+    rows = np.arange(h) + dt
+    cols = np.arange(w) + dl
+    for op in ops:
+        if isinstance(op, FixVignetteRadial):
+            g = vignette_gains(op, rows, cols, full).astype(np.float32)
+            out = np.minimum(out * g[..., None], np.float32(1.0))
+            continue
+        warped = np.empty_like(out)
+        same = bool(np.all(op.coefficients == op.coefficients[0]))
+        planes = [None] if same else list(range(out.shape[2]))
+        for start in range(0, h, rows_per_chunk):
+            rr = rows[start : start + rows_per_chunk, None]
+            for plane in planes:
+                sr, sc = warp_source_positions(op, rr, cols[None, :], full, plane or 0)
+                sr = np.clip(sr, 0.0, full[0] - 1.0) - dt
+                sc = np.clip(sc, 0.0, full[1] - 1.0) - dl
+                if plane is None:
+                    warped[start : start + rows_per_chunk] = bicubic_sample(out, sr, sc)
+                else:
+                    sub = bicubic_sample(out[..., plane : plane + 1], sr, sc)
+                    warped[start : start + rows_per_chunk, :, plane] = sub[..., 0]
+        out = warped
+    return out
 
 
 def _axis_weights(

@@ -432,9 +432,12 @@ def read_raw(path: str | Path, *, max_pixels: int | None = None, opcodes: bool =
     opcodes : bool
         Apply a DNG's GainMap opcodes (its OpcodeList2: the lens-shading correction phones
         write, one map per photosite of the tile) to the mosaic, as the DNG specification
-        asks and Adobe's readers do (LibRaw does not: False gives LibRaw's values). Other
-        opcodes are not applied; ``metadata["opcodes_skipped"]`` names them and
-        ``metadata["opcodes_applied"]`` counts the GainMaps.
+        asks and Adobe's readers do (LibRaw does not: False gives LibRaw's values). The
+        WarpRectilinear (lens distortion) and FixVignetteRadial opcodes of its OpcodeList3
+        are kept in ``metadata["opcodes_stage3"]`` for :func:`develop`, which applies them
+        to the demosaiced camera RGB. Other opcodes are not applied;
+        ``metadata["opcodes_skipped"]`` names them and ``metadata["opcodes_applied"]``
+        counts the GainMaps.
 
     Returns
     -------
@@ -455,13 +458,17 @@ def read_raw(path: str | Path, *, max_pixels: int | None = None, opcodes: bool =
 
 
 def _with_opcodes(raw: RawImage, p: Path) -> RawImage:
-    """Return ``raw`` with its DNG's GainMaps applied (:mod:`imageform.io._dng_opcodes`)."""
+    """Return ``raw`` with its DNG's GainMaps applied (:mod:`imageform.io._dng_opcodes`).
+
+    The OpcodeList3 opcodes it can apply (after demosaicing) are kept for :func:`develop` in
+    ``metadata["opcodes_stage3"]`` with ``metadata["opcodes_area"]`` (offset, (H, W)).
+    """
     import dataclasses
 
-    from imageform.io._dng_opcodes import apply_gain_maps
+    from imageform.io._dng_opcodes import apply_gain_maps, stage3_name
 
-    maps, skipped, offset, area = _raw_page_opcodes(p)
-    if not maps and not skipped:
+    maps, stage3, skipped, offset, area = _raw_page_opcodes(p)
+    if not maps and not stage3 and not skipped:
         return raw
     meta = dict(raw.metadata)
     meta["opcodes_skipped"] = skipped
@@ -473,40 +480,46 @@ def _with_opcodes(raw: RawImage, p: Path) -> RawImage:
                                  offset=offset, shape=area)  # fmt: skip
         meta["opcodes_applied"] = len(maps)
     elif maps:
-        meta["opcodes_skipped"] = [*skipped, *(["OpcodeList2:GainMap"] * len(maps))]
+        meta["opcodes_skipped"] = [*meta["opcodes_skipped"], *(["OpcodeList2:GainMap"] * len(maps))]
+    if stage3 and fits:
+        meta["opcodes_stage3"] = tuple(stage3)
+        meta["opcodes_area"] = (offset, area)
+    elif stage3:
+        meta["opcodes_skipped"] = [*meta["opcodes_skipped"], *map(stage3_name, stage3)]
     return dataclasses.replace(raw, mosaic=mosaic, metadata=meta)
 
 
 def _raw_page_opcodes(
     path: Path,
-) -> tuple[list[Any], list[str], tuple[int, int], tuple[int, int] | None]:
-    """Return a DNG raw IFD's GainMaps, the opcodes not applied, offset and area size.
+) -> tuple[list[Any], list[Any], list[str], tuple[int, int], tuple[int, int] | None]:
+    """Return a DNG raw IFD's GainMaps, stage-3 opcodes, the ones not applied, offset, size.
 
     The offset is where the mosaic's first pixel sits in the ActiveArea (LibRaw starts a
     CFA image's crop at an even row and column), the size the area's (H, W) (None: the raw
-    image's). ``([], [], (0, 0), None)`` for any other file.
+    image's). ``([], [], [], (0, 0), None)`` for any other file.
     """
     import tifffile
 
     from imageform.io._dng_opcodes import read_opcodes
 
+    none: tuple[list[Any], list[Any], list[str], tuple[int, int], None] = ([], [], [], (0, 0), None)
     try:
         with tifffile.TiffFile(path) as tf:
             if _DNG_VERSION not in tf.pages[0].tags:  # type: ignore[union-attr]
-                return [], [], (0, 0), None
+                return none
             page = _dng_raw_page(tf)
             if page is None:
-                return [], [], (0, 0), None
-            maps, skipped = read_opcodes(page)
+                return none
+            maps, stage3, skipped = read_opcodes(page)
             area = [int(v) for v in np.ravel(page.tags.valueof(_ACTIVE_AREA, ()))]
             cfa = int(page.tags.valueof(262, 0)) == 32803
     except Exception:  # not a TIFF: no opcodes
-        return [], [], (0, 0), None
+        return none
     if len(area) == 4 and area[2] > area[0] and area[3] > area[1]:
         top, left, bottom, right = area
         offset = (top & 1, left & 1) if cfa else (0, 0)  # LibRaw's crop starts even
-        return maps, skipped, offset, (bottom - top, right - left)
-    return maps, skipped, (0, 0), None
+        return maps, stage3, skipped, offset, (bottom - top, right - left)
+    return maps, stage3, skipped, (0, 0), None
 
 
 def _read_raw(path: str | Path, max_pixels: int | None) -> RawImage:
@@ -1427,6 +1440,16 @@ def develop(
         notes=tuple(notes),
         device="cuda" if on_gpu else "cpu",
     )
+    stage3 = raw.metadata.get("opcodes_stage3") or ()
+    if stage3:  # OpcodeList3: on the demosaiced camera RGB, before the matrix (on the CPU)
+        from imageform.io._dng_opcodes import apply_stage3, stage3_name
+
+        offset, area = raw.metadata.get("opcodes_area") or ((0, 0), None)
+        dev._camera_rgb = apply_stage3(dev._sensor_camera_rgb(), stage3, offset=offset,
+                                       shape=area)  # fmt: skip
+        names = ", ".join(dict.fromkeys(stage3_name(op) for op in stage3))
+        where_run = " (on the CPU, after the GPU's demosaicing)" if on_gpu else ""
+        dev.notes = (*dev.notes, f"applied the DNG's {names} after demosaicing{where_run}")
     if auto_bright:
         dev.brightness = _auto_bright(dev._sensor_camera_rgb(), m)
         dev._render = (m * np.float32(dev.brightness)).astype(np.float32)
