@@ -19,10 +19,12 @@ import pytest
 
 from imageform.io import develop, read_raw, write_dng
 from imageform.io._dng_opcodes import (
+    AreaOpcode,
     FixVignetteRadial,
     GainMap,
     WarpRectilinear,
     apply_gain_maps,
+    apply_stage2,
     bicubic_sample,
     gain_map_gains,
     parse_opcode_list,
@@ -421,3 +423,81 @@ def test_develop_command_notes_stage3_opcodes(
     assert "applied when developed (after demosaicing): OpcodeList3:FixVignetteRadial" in (
         capsys.readouterr().out
     )
+
+
+# -- OpcodeList2: MapPolynomial, Delta/ScalePerRow/Column, FixVignetteRadial on the mosaic --
+
+
+def _area_op(opcode: int, area: tuple[int, ...], values: list[float], *, poly: bool = False,
+             count: int | None = None) -> bytes:  # fmt: skip
+    """An area opcode: the area spec (8 uint32), the count (degree), float32 (float64) values."""
+    n = (len(values) - 1 if poly else len(values)) if count is None else count
+    params = struct.pack(">8I", *area) + struct.pack(">I", n)
+    params += struct.pack(f">{len(values)}{'d' if poly else 'f'}", *values)
+    return struct.pack(">4I", opcode, 0x01030000, 1, len(params)) + params
+
+
+def test_area_opcodes_worked_by_hand() -> None:
+    """Black 64, white 4095: a code m is x = (m - 64) / 4031 and back 64 + 4031 x."""
+    m = np.full((4, 6), 1064, np.uint16)
+    black = np.full((4, 6), 64.0)
+    x = 1000 / 4031
+    # MapPolynomial 0.01 + 1.2 x - 0.3 x^2 over rows 1..3, every column
+    poly = AreaOpcode("MapPolynomial", (1, 0, 4, 6, 0, 1, 1, 1), np.array([0.01, 1.2, -0.3]))
+    out = apply_stage2(m, black, 4095.0, [poly])
+    assert out[0, 0] == 1064
+    assert out[1, 0] == round(64 + 4031 * (0.01 + 1.2 * x - 0.3 * x * x)) == 1230
+    # ScalePerRow with row pitch 2 from row 1: rows 1 and 3 scaled by 2 and 5 (5 clips at white)
+    scale = AreaOpcode("ScalePerRow", (1, 0, 4, 6, 0, 1, 2, 1), np.array([2.0, 5.0]))
+    out = apply_stage2(m, black, 4095.0, [scale])
+    np.testing.assert_array_equal(out[:, 0], [1064, 2064, 1064, 4095])
+    # DeltaPerColumn over columns 2..5, column pitch 3: columns 2 and 5, then a scale of 2:
+    # the order of the list counts ((x + d) 2, not x 2 + d)
+    delta = AreaOpcode("DeltaPerColumn", (0, 2, 4, 6, 0, 1, 1, 3), np.array([0.1, -0.1]))
+    whole = AreaOpcode("ScalePerRow", (0, 0, 0, 0, 0, 1, 1, 1), np.full(4, 2.0))  # empty: all
+    out = apply_stage2(m, black, 4095.0, [delta, whole])
+    assert out[0, 2] == round(64 + 4031 * (x + 0.1) * 2) == 2870
+    assert out[0, 5] == round(64 + 4031 * (x - 0.1) * 2) == 1258
+    assert out[0, 0] == 2064
+
+
+def test_stage2_opcodes_flatten_a_shaded_mosaic(tmp_path: Path) -> None:
+    """Rows darkened by 1 / s_row, columns lifted by d_col and a radial vignette: the file's
+    ScalePerRow, DeltaPerColumn (negative deltas) and FixVignetteRadial of OpcodeList2 undo
+    them (applied in the list's order to x = (m - black) / (white - black))."""
+    h, w, black, white = 32, 40, 64.0, 4095.0
+    rows = np.linspace(1.0, 1.5, h)
+    cols = np.linspace(0.0, 0.05, w)
+    k, center = (0.3, 0.0, 0.0, 0.0, 0.0), (0.5, 0.5)
+    g = vignette_gains(FixVignetteRadial(k, center), np.arange(h), np.arange(w), (h, w))
+    x = 0.4 / g  # the vignette, undone last
+    x = x + cols[None, :]  # the delta, undone second
+    x = x / rows[:, None]  # the scale, undone first
+    mosaic = np.round(black + (white - black) * x).astype(np.uint16)
+    ops = _op_list(_area_op(12, (0, 0, h, w, 0, 1, 1, 1), list(rows)),
+                   _area_op(11, (0, 0, h, w, 0, 1, 1, 1), list(-cols)),
+                   _vignette_op(k, center))  # fmt: skip
+    raw = read_raw(_dng(tmp_path / "s.dng", mosaic, lists={51009: ops}, black=black))
+    assert raw.metadata["opcodes_skipped"] == []
+    assert raw.metadata["opcodes_applied_other"] == [
+        "OpcodeList2:ScalePerRow", "OpcodeList2:DeltaPerColumn", "OpcodeList2:FixVignetteRadial"
+    ]  # fmt: skip
+    level = black + 0.4 * (white - black)
+    assert np.abs(raw.mosaic.astype(float) - level).max() <= 1.0
+    np.testing.assert_array_equal(read_raw(tmp_path / "s.dng", opcodes=False).mosaic, mosaic)
+
+
+def test_bad_area_opcodes_are_named_unreadable(tmp_path: Path) -> None:
+    mosaic = np.full((16, 16), 1000, np.uint16)
+    ops = _op_list(_area_op(12, (0, 0, 16, 16, 0, 1, 1, 1), [1.0] * 15),  # 16 rows, 15 scales
+                   _area_op(8, (0, 0, 16, 16, 0, 1, 1, 1), [0.0] * 10, poly=True),  # degree 9
+                   _area_op(10, (0, 0, 16, 16, 0, 1, 0, 1), [0.0] * 16),  # row pitch 0
+                   _area_op(13, (0, 0, 16, 16, 0, 1, 1, 1), [float("inf")] * 16),
+                   _area_op(11, (0, 0, 16, 16, 0, 1, 1, 1), [0.0] * 15, count=16))  # fmt: skip
+    raw = read_raw(_dng(tmp_path / "u.dng", mosaic, lists={51009: ops}))
+    assert raw.metadata["opcodes_skipped"] == [
+        "OpcodeList2:ScalePerRow:unreadable", "OpcodeList2:MapPolynomial:unreadable",
+        "OpcodeList2:DeltaPerRow:unreadable", "OpcodeList2:ScalePerColumn:unreadable",
+        "OpcodeList2:DeltaPerColumn:unreadable",
+    ]  # fmt: skip
+    np.testing.assert_array_equal(raw.mosaic, mosaic)

@@ -53,15 +53,18 @@ import numpy as np
 
 __all__ = [
     "OPCODE_NAMES",
+    "AreaOpcode",
     "FixVignetteRadial",
     "GainMap",
     "WarpRectilinear",
     "apply_gain_maps",
+    "apply_stage2",
     "apply_stage3",
     "bicubic_sample",
     "gain_map_gains",
     "parse_opcode_list",
     "read_opcodes",
+    "stage2_name",
     "stage3_name",
     "vignette_gains",
     "warp_source_positions",
@@ -137,6 +140,55 @@ def _parse_gain_map(data: bytes) -> GainMap | None:
     )  # fmt: skip
 
 
+@dataclass(frozen=True)
+class AreaOpcode:
+    """A per-row, per-column or per-value opcode of OpcodeList2 over an area of the image.
+
+    ``name`` is ``"MapPolynomial"``, ``"DeltaPerRow"``, ``"DeltaPerColumn"``,
+    ``"ScalePerRow"`` or ``"ScalePerColumn"``; ``area`` (top, left, bottom, right, plane,
+    planes, row pitch, column pitch) as a GainMap's (an empty rectangle: the whole image);
+    ``values`` the polynomial's coefficients (constant first) or the table, one value per
+    row (column) of the area's lattice.
+    """
+
+    name: str
+    area: tuple[int, int, int, int, int, int, int, int]
+    values: np.ndarray
+
+
+_AREA_OPCODES = {8: "MapPolynomial", 10: "DeltaPerRow", 11: "DeltaPerColumn",
+                 12: "ScalePerRow", 13: "ScalePerColumn"}  # fmt: skip
+
+
+def _parse_area_opcode(op: int, data: bytes) -> AreaOpcode | None:
+    """Return an area opcode's parameters, or None where they do not parse (the SDK's checks).
+
+    MapPolynomial: the area, the degree (at most 8), its coefficients (float64). The
+    others: the area, the count (``ceil(rows / row pitch)`` or ``ceil(columns / column
+    pitch)`` of the area), the table (float32).
+    """
+    if len(data) < 36:
+        return None
+    area = struct.unpack(">8I", data[:32])
+    (n,) = struct.unpack(">I", data[32:36])
+    top, left, bottom, right, _plane, _planes, rp, cp = area
+    if rp < 1 or cp < 1 or bottom < top or right < left:
+        return None
+    name = _AREA_OPCODES[op]
+    if name == "MapPolynomial":
+        if n > 8 or len(data) != 36 + 8 * (n + 1):
+            return None
+        values = np.frombuffer(data, ">f8", n + 1, 36).astype(np.float64)
+    else:
+        span, pitch = (bottom - top, rp) if name.endswith("Row") else (right - left, cp)
+        if n != -(-span // pitch) or len(data) != 36 + 4 * n:
+            return None
+        values = np.frombuffer(data, ">f4", n, 36).astype(np.float64)
+    if not np.all(np.isfinite(values)):
+        return None
+    return AreaOpcode(name, area, values)
+
+
 def parse_opcode_list(data: bytes) -> list[tuple[int, int, bytes]]:
     """Return ``(id, flags, parameters)`` of each opcode of a list; [] where it is broken."""
     if len(data) < 4:
@@ -178,6 +230,9 @@ class FixVignetteRadial:
 #: An opcode of OpcodeList3 that :func:`apply_stage3` applies.
 Stage3Opcode = WarpRectilinear | FixVignetteRadial
 
+#: An opcode of OpcodeList2 that :func:`apply_stage2` applies.
+Stage2Opcode = GainMap | FixVignetteRadial | AreaOpcode
+
 
 def _parse_warp(data: bytes) -> WarpRectilinear | None:
     """Return the WarpRectilinear of an opcode's parameters, or None where they do not parse.
@@ -210,16 +265,18 @@ def _parse_vignette(data: bytes) -> FixVignetteRadial | None:
     return FixVignetteRadial((k0, k1, k2, k3, k4), (cx, cy))
 
 
-def read_opcodes(page: Any) -> tuple[list[GainMap], list[Stage3Opcode], list[str]]:
-    """Return the GainMaps of OpcodeList2, the opcodes of OpcodeList3 to apply, and the rest.
+def read_opcodes(page: Any) -> tuple[list[Stage2Opcode], list[Stage3Opcode], list[str]]:
+    """Return the opcodes of OpcodeList2 and OpcodeList3 to apply, and the names of the rest.
 
-    ``page`` is the tifffile page of the raw image. The stage-3 opcodes (WarpRectilinear,
-    FixVignetteRadial) are in the list's order. The names of the opcodes not applied are
-    ``"OpcodeList1:FixBadPixelsList"`` (an unknown id by its number; an opcode this module
-    applies whose parameters do not parse as ``"OpcodeList3:WarpRectilinear:unreadable"``;
-    a list that does not parse as ``"OpcodeList2:unreadable"``).
+    ``page`` is the tifffile page of the raw image. OpcodeList2's (GainMap,
+    FixVignetteRadial, MapPolynomial, Delta/ScalePerRow/Column) and OpcodeList3's
+    (WarpRectilinear, FixVignetteRadial) are in their list's order. The names of the
+    opcodes not applied are ``"OpcodeList1:FixBadPixelsList"`` (an unknown id by its
+    number; an opcode this module applies whose parameters do not parse as
+    ``"OpcodeList3:WarpRectilinear:unreadable"``; a list that does not parse as
+    ``"OpcodeList2:unreadable"``).
     """
-    maps: list[GainMap] = []
+    maps: list[Stage2Opcode] = []
     stage3: list[Stage3Opcode] = []
     skipped: list[str] = []
     tags = page.tags
@@ -234,10 +291,16 @@ def read_opcodes(page: Any) -> tuple[list[GainMap], list[Stage3Opcode], list[str
             continue
         for op, _flags, params in ops:
             label = f"{name}:{OPCODE_NAMES.get(op, str(op))}"
-            if op == _GAIN_MAP and code == 51009:
-                gm = _parse_gain_map(params)
-                if gm is not None:
-                    maps.append(gm)
+            if code == 51009 and op in (_GAIN_MAP, _FIX_VIGNETTE_RADIAL, *_AREA_OPCODES):
+                stage2: Stage2Opcode | None
+                if op == _GAIN_MAP:
+                    stage2 = _parse_gain_map(params)
+                elif op == _FIX_VIGNETTE_RADIAL:
+                    stage2 = _parse_vignette(params)
+                else:
+                    stage2 = _parse_area_opcode(op, params)
+                if stage2 is not None:
+                    maps.append(stage2)
                     continue
                 label += ":unreadable"
             elif op in (_WARP_RECTILINEAR, _FIX_VIGNETTE_RADIAL) and code == 51022:
@@ -253,6 +316,11 @@ def read_opcodes(page: Any) -> tuple[list[GainMap], list[Stage3Opcode], list[str
 def stage3_name(op: Stage3Opcode) -> str:
     """Return an OpcodeList3 opcode's name, ``"OpcodeList3:WarpRectilinear"``."""
     return "OpcodeList3:" + type(op).__name__
+
+
+def stage2_name(op: Stage2Opcode) -> str:
+    """Return an OpcodeList2 opcode's name, ``"OpcodeList2:GainMap"``."""
+    return "OpcodeList2:" + (op.name if isinstance(op, AreaOpcode) else type(op).__name__)
 
 
 def _center_and_radius(
@@ -454,4 +522,91 @@ def apply_gain_maps(
             else:
                 sub, b = out[..., plane][ix], blk[..., plane][ix]
                 out[..., plane][ix] = b + np.minimum((sub - b) * gains, white - b)
+    return np.round(np.clip(out, 0.0, 65535.0)).astype(np.uint16)
+
+
+def _lattice(
+    area: tuple[int, int, int, int], pitch: tuple[int, int], offset: tuple[int, int],
+    full: tuple[int, int], size: tuple[int, int],
+) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+    """Return the rows and columns (of the full image) of an area's lattice inside the mosaic.
+
+    An empty area is the whole image (the SDK's ``dng_area_spec``).
+    """
+    top, left, bottom, right = area
+    if bottom <= top or right <= left:
+        top, left, bottom, right = 0, 0, full[0], full[1]
+    (dt, dl), (h, w), (rp, cp) = offset, size, pitch
+    r_start = top + max(0, -(-(dt - top) // rp)) * rp
+    c_start = left + max(0, -(-(dl - left) // cp)) * cp
+    rows = np.arange(r_start, min(bottom, full[0], h + dt), rp)
+    cols = np.arange(c_start, min(right, full[1], w + dl), cp)
+    return rows, cols
+
+
+def _map_polynomial(x: np.ndarray, c: np.ndarray) -> np.ndarray:
+    """Return ``c0 + c1 x + c2 x^2 + ...``; below 0 mirrored about ``c0`` (the SDK's sign rule)."""
+    a = np.abs(x)
+    y = np.zeros_like(a)
+    for coefficient in c[:0:-1]:
+        y = (y + coefficient) * a
+    return c[0] + np.sign(x) * y
+
+
+def apply_stage2(
+    mosaic: np.ndarray,
+    black: np.ndarray,
+    white: float,
+    ops: list[Stage2Opcode],
+    *,
+    offset: tuple[int, int] = (0, 0),
+    shape: tuple[int, int] | None = None,
+) -> np.ndarray:
+    """Return ``mosaic`` (uint16 codes) with OpcodeList2's opcodes applied in order.
+
+    On the linear values ``x = (m - black) / (white - black)``, as the SDK's stage 2 (the
+    linearised image in [0, 1]): a GainMap or FixVignetteRadial multiplies by its gain,
+    ScalePerRow/Column by the row's (column's) scale, DeltaPerRow/Column adds the delta,
+    MapPolynomial maps ``x`` to ``c0 + c1 x + ... + cn x^n``; each result is clipped at 1
+    (white). ``offset`` and ``shape`` as for :func:`apply_gain_maps`.
+    """
+    h, w = mosaic.shape[:2]
+    dt, dl = offset
+    full = shape if shape is not None else (h + dt, w + dl)
+    blk = np.broadcast_to(np.asarray(black, np.float64), mosaic.shape)
+    span = white - blk
+    x = (np.asarray(mosaic, np.float64) - blk) / span
+    n_planes = 1 if x.ndim == 2 else x.shape[2]
+    for op in ops:
+        if isinstance(op, FixVignetteRadial):
+            g = vignette_gains(op, np.arange(h) + dt, np.arange(w) + dl, full)
+            x = np.minimum(x * (g if x.ndim == 2 else g[..., None]), 1.0)
+            continue
+        if isinstance(op, GainMap):
+            box, pitch = (op.top, op.left, op.bottom, op.right), (op.row_pitch, op.col_pitch)
+            first, count = op.plane, op.planes
+        else:
+            box, (first, count), pitch = op.area[:4], op.area[4:6], op.area[6:]
+        rows, cols = _lattice(box, pitch, offset, full, (h, w))
+        if rows.size == 0 or cols.size == 0:
+            continue
+        ix = np.ix_(rows - dt, cols - dl)
+        for plane in range(first, min(first + max(count, 1), n_planes)):
+            sub = x[ix] if x.ndim == 2 else x[..., plane][ix]
+            if isinstance(op, GainMap):
+                new = sub * gain_map_gains(op, rows, cols, full, plane)
+            elif op.name == "MapPolynomial":
+                new = _map_polynomial(sub, op.values)
+            else:
+                along_rows = op.name.endswith("Row")
+                k = (rows - box[0]) // pitch[0] if along_rows else (cols - box[1]) // pitch[1]
+                table = op.values[np.minimum(k, op.values.size - 1)]
+                table = table[:, None] if along_rows else table[None, :]
+                new = sub * table if op.name.startswith("Scale") else sub + table
+            new = np.minimum(new, 1.0)
+            if x.ndim == 2:
+                x[ix] = new
+            else:
+                x[..., plane][ix] = new
+    out = blk + x * span
     return np.round(np.clip(out, 0.0, 65535.0)).astype(np.uint16)

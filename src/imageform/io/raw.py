@@ -458,14 +458,16 @@ def read_raw(path: str | Path, *, max_pixels: int | None = None, opcodes: bool =
 
 
 def _with_opcodes(raw: RawImage, p: Path) -> RawImage:
-    """Return ``raw`` with its DNG's GainMaps applied (:mod:`imageform.io._dng_opcodes`).
+    """Return ``raw`` with its DNG's OpcodeList2 applied (:mod:`imageform.io._dng_opcodes`).
 
-    The OpcodeList3 opcodes it can apply (after demosaicing) are kept for :func:`develop` in
+    ``metadata["opcodes_applied"]`` counts the GainMaps, ``["opcodes_applied_other"]``
+    names the other opcodes applied (``"OpcodeList2:ScalePerRow"``). The OpcodeList3
+    opcodes it can apply (after demosaicing) are kept for :func:`develop` in
     ``metadata["opcodes_stage3"]`` with ``metadata["opcodes_area"]`` (offset, (H, W)).
     """
     import dataclasses
 
-    from imageform.io._dng_opcodes import apply_gain_maps, stage3_name
+    from imageform.io._dng_opcodes import apply_stage2, stage2_name, stage3_name
 
     maps, stage3, skipped, offset, area = _raw_page_opcodes(p)
     if not maps and not stage3 and not skipped:
@@ -475,12 +477,14 @@ def _with_opcodes(raw: RawImage, p: Path) -> RawImage:
     mosaic = raw.mosaic
     expected = None if area is None else (area[0] - offset[0], area[1] - offset[1])
     fits = expected is None or tuple(mosaic.shape[:2]) == expected
+    names = [stage2_name(op) for op in maps]
     if maps and fits and raw.metadata.get("xtrans") is None:
-        mosaic = apply_gain_maps(mosaic, _black_plane(raw), raw.white_level, maps,
-                                 offset=offset, shape=area)  # fmt: skip
-        meta["opcodes_applied"] = len(maps)
+        mosaic = apply_stage2(mosaic, _black_plane(raw), raw.white_level, maps,
+                              offset=offset, shape=area)  # fmt: skip
+        meta["opcodes_applied"] = names.count("OpcodeList2:GainMap")
+        meta["opcodes_applied_other"] = [n for n in names if n != "OpcodeList2:GainMap"]
     elif maps:
-        meta["opcodes_skipped"] = [*meta["opcodes_skipped"], *(["OpcodeList2:GainMap"] * len(maps))]
+        meta["opcodes_skipped"] = [*meta["opcodes_skipped"], *names]
     if stage3 and fits:
         meta["opcodes_stage3"] = tuple(stage3)
         meta["opcodes_area"] = (offset, area)
@@ -492,7 +496,7 @@ def _with_opcodes(raw: RawImage, p: Path) -> RawImage:
 def _raw_page_opcodes(
     path: Path,
 ) -> tuple[list[Any], list[Any], list[str], tuple[int, int], tuple[int, int] | None]:
-    """Return a DNG raw IFD's GainMaps, stage-3 opcodes, the ones not applied, offset, size.
+    """Return a DNG raw IFD's stage-2 and stage-3 opcodes, the ones not applied, offset, size.
 
     The offset is where the mosaic's first pixel sits in the ActiveArea (LibRaw starts a
     CFA image's crop at an even row and column), the size the area's (H, W) (None: the raw

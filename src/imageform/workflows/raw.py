@@ -86,6 +86,9 @@ def opcode_notes(meta: dict[str, Any], *, developed: bool = False) -> list[str]:
     if meta.get("opcodes_applied"):
         n = int(meta["opcodes_applied"])
         notes.append(f"applied the DNG's {n} GainMap opcode{'s' if n > 1 else ''} (lens shading)")
+    other = meta.get("opcodes_applied_other") or []
+    if other:
+        notes.append(f"applied the DNG's {', '.join(dict.fromkeys(other))}")
     later = stage3_names(meta)
     if later and not developed:
         names = ", ".join(dict.fromkeys(later))
