@@ -190,10 +190,10 @@ def test_active_area_at_an_odd_row_shifts_the_map(tmp_path: Path) -> None:
 def test_other_opcodes_are_named_not_applied(tmp_path: Path) -> None:
     mosaic = np.full((16, 16), 1000, np.uint16)
     lists = {51022: _op_list(_other_op(WARP_FISHEYE)),
-             51008: _op_list(_other_op(4)), 51009: b"\x00\x00\x00\x02\x00"}  # fmt: skip
+             51008: _op_list(_other_op(5)), 51009: b"\x00\x00\x00\x02\x00"}  # fmt: skip
     raw = read_raw(_dng(tmp_path / "o.dng", mosaic, lists=lists))
     assert sorted(raw.metadata["opcodes_skipped"]) == [
-        "OpcodeList1:FixBadPixelsConstant",
+        "OpcodeList1:FixBadPixelsList",
         "OpcodeList2:unreadable",
         "OpcodeList3:WarpFisheye",
     ]
@@ -501,3 +501,54 @@ def test_bad_area_opcodes_are_named_unreadable(tmp_path: Path) -> None:
         "OpcodeList2:DeltaPerColumn:unreadable",
     ]  # fmt: skip
     np.testing.assert_array_equal(raw.mosaic, mosaic)
+
+
+def _bad_pixels_op(constant: int, phase: int) -> bytes:
+    return struct.pack(">4I2I", 4, 0x01030000, 1, 8, constant, phase)
+
+
+def _fixed_by_hand(stored: np.ndarray, bad: list[tuple[int, int]], constant: int,
+                   phase: int) -> dict[tuple[int, int], int]:  # fmt: skip
+    """The SDK's rule pixel by pixel on the stored image: green where row + col + phase +
+    phase // 2 is even, its four diagonal neighbours, else the four two pixels away; the
+    good ones averaged, rounded half up."""
+    out = {}
+    for r, c in bad:
+        green = (r + c + phase + phase // 2) % 2 == 0
+        steps = (
+            ((-1, -1), (-1, 1), (1, -1), (1, 1)) if green else ((-2, 0), (2, 0), (0, -2), (0, 2))
+        )
+        vals = [int(stored[r + a, c + b]) for a, b in steps
+                if 0 <= r + a < stored.shape[0] and 0 <= c + b < stored.shape[1]
+                and stored[r + a, c + b] != constant]  # fmt: skip
+        out[(r, c)] = (sum(vals) + len(vals) // 2) // len(vals)
+    return out
+
+
+@pytest.mark.parametrize("phase", [0, 1, 2, 3])
+def test_fix_bad_pixels_constant(tmp_path: Path, phase: int) -> None:
+    """Pixels at the constant (0) are replaced from their same-colour neighbours as the
+    SDK does, in the stored image's coordinates (the ActiveArea starts at row 1, column 3:
+    LibRaw's mosaic at stored row 2, column 4); two bad neighbours are not counted."""
+    rng = np.random.default_rng(phase)
+    stored = rng.integers(500, 3000, (24, 30)).astype(np.uint16)
+    bad = [(6, 9), (7, 10), (8, 9), (10, 12), (12, 15), (9, 20)]  # (6, 9) and (8, 9): same colour
+    for rc in bad:
+        stored[rc] = 0
+    want = _fixed_by_hand(stored, bad, 0, phase)
+    if phase == 1:  # one pixel by hand: (10, 12) with phase 1 is not green (10 + 12 + 1 odd)
+        s = stored
+        hand = (int(s[8, 12]) + int(s[12, 12]) + int(s[10, 10]) + int(s[10, 14]) + 2) // 4
+        assert want[(10, 12)] == hand
+    path = _dng(tmp_path / "bp.dng", stored, active_area=(1, 3, 23, 29),
+                lists={51008: _op_list(_bad_pixels_op(0, phase))})  # fmt: skip
+    raw = read_raw(path)
+    assert raw.metadata["opcodes_applied_other"] == ["OpcodeList1:FixBadPixelsConstant"]
+    assert raw.mosaic.shape == (21, 25)  # stored rows 2..22, columns 4..28
+    for (r, c), value in want.items():
+        assert raw.mosaic[r - 2, c - 4] == value
+    untouched = np.ones(raw.mosaic.shape, bool)
+    for r, c in bad:
+        untouched[r - 2, c - 4] = False
+    np.testing.assert_array_equal(raw.mosaic[untouched], stored[2:23, 4:29][untouched])
+    assert (read_raw(path, opcodes=False).mosaic == 0).sum() == len(bad)

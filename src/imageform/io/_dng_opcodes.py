@@ -54,6 +54,7 @@ import numpy as np
 __all__ = [
     "OPCODE_NAMES",
     "AreaOpcode",
+    "FixBadPixelsConstant",
     "FixVignetteRadial",
     "GainMap",
     "WarpRectilinear",
@@ -61,6 +62,7 @@ __all__ = [
     "apply_stage2",
     "apply_stage3",
     "bicubic_sample",
+    "fix_bad_pixels_constant",
     "gain_map_gains",
     "parse_opcode_list",
     "read_opcodes",
@@ -92,6 +94,7 @@ _OPCODE_LISTS = {51008: "OpcodeList1", 51009: "OpcodeList2", 51022: "OpcodeList3
 _GAIN_MAP = 9
 _WARP_RECTILINEAR = 1
 _FIX_VIGNETTE_RADIAL = 3
+_FIX_BAD_PIXELS_CONSTANT = 4
 
 
 @dataclass(frozen=True)
@@ -209,6 +212,63 @@ def parse_opcode_list(data: bytes) -> list[tuple[int, int, bytes]]:
 
 
 @dataclass(frozen=True)
+class FixBadPixelsConstant:
+    """One FixBadPixelsConstant opcode (OpcodeList1): the bad pixels' code and Bayer phase.
+
+    ``bayer_phase`` (0 to 3) says which pixels are green, by the SDK's rule: those where
+    ``row + col + phase + phase // 2`` is even (``dng_opcode_FixBadPixelsConstant::IsGreen``).
+    """
+
+    constant: int
+    bayer_phase: int
+
+
+def _parse_bad_pixels_constant(data: bytes) -> FixBadPixelsConstant | None:
+    """Return the opcode's parameters (8 bytes: constant, phase), or None."""
+    if len(data) != 8:
+        return None
+    constant, phase = struct.unpack(">2I", data)
+    return FixBadPixelsConstant(constant, phase) if phase <= 3 else None
+
+
+def fix_bad_pixels_constant(
+    mosaic: np.ndarray, op: FixBadPixelsConstant, origin: tuple[int, int] = (0, 0)
+) -> np.ndarray:
+    """Return ``mosaic`` (a 2-D uint16 CFA) with the pixels equal to the constant replaced.
+
+    As the SDK's ``dng_opcode_FixBadPixelsConstant``: a green pixel (``(row + col + phase +
+    phase // 2)`` even, in the coordinates of the stored image: ``origin`` is where the
+    mosaic's first pixel sits there) takes the mean of its four diagonal neighbours, a red
+    or blue one of the four two pixels away in its row and column, each counted only where
+    it is not bad itself, rounded half up; a pixel with no good neighbour stays. Neighbours
+    outside the mosaic are not counted (the SDK reads them from the stored image's margin).
+    """
+    m = np.asarray(mosaic)
+    bad = m == op.constant
+    if m.ndim != 2 or not bad.any():
+        return m
+    h, w = m.shape
+    r, c = np.nonzero(bad)
+    green = ((r + origin[0] + c + origin[1] + op.bayer_phase + (op.bayer_phase >> 1)) & 1) == 0
+    steps_green = ((-1, -1), (-1, 1), (1, -1), (1, 1))
+    steps_other = ((-2, 0), (2, 0), (0, -2), (0, 2))
+    total = np.zeros(r.size, np.int64)
+    count = np.zeros(r.size, np.int64)
+    for (gy, gx), (oy, ox) in zip(steps_green, steps_other, strict=True):
+        rr = np.where(green, r + gy, r + oy)
+        cc = np.where(green, c + gx, c + ox)
+        inside = (rr >= 0) & (rr < h) & (cc >= 0) & (cc < w)
+        value = m[np.clip(rr, 0, h - 1), np.clip(cc, 0, w - 1)].astype(np.int64)
+        good = inside & (value != op.constant)
+        total += np.where(good, value, 0)
+        count += good
+    out = m.copy()
+    fixed = count > 0
+    out[r[fixed], c[fixed]] = (total[fixed] + (count[fixed] >> 1)) // count[fixed]
+    return out
+
+
+@dataclass(frozen=True)
 class WarpRectilinear:
     """One WarpRectilinear opcode: ``coefficients`` (planes, 6) ``kr0..kr3, kt0, kt1``.
 
@@ -265,10 +325,13 @@ def _parse_vignette(data: bytes) -> FixVignetteRadial | None:
     return FixVignetteRadial((k0, k1, k2, k3, k4), (cx, cy))
 
 
-def read_opcodes(page: Any) -> tuple[list[Stage2Opcode], list[Stage3Opcode], list[str]]:
-    """Return the opcodes of OpcodeList2 and OpcodeList3 to apply, and the names of the rest.
+def read_opcodes(
+    page: Any,
+) -> tuple[list[FixBadPixelsConstant], list[Stage2Opcode], list[Stage3Opcode], list[str]]:
+    """Return the opcodes of OpcodeList1, 2 and 3 to apply, and the names of the rest.
 
-    ``page`` is the tifffile page of the raw image. OpcodeList2's (GainMap,
+    ``page`` is the tifffile page of the raw image. OpcodeList1's (FixBadPixelsConstant),
+    OpcodeList2's (GainMap,
     FixVignetteRadial, MapPolynomial, Delta/ScalePerRow/Column) and OpcodeList3's
     (WarpRectilinear, FixVignetteRadial) are in their list's order. The names of the
     opcodes not applied are ``"OpcodeList1:FixBadPixelsList"`` (an unknown id by its
@@ -276,6 +339,7 @@ def read_opcodes(page: Any) -> tuple[list[Stage2Opcode], list[Stage3Opcode], lis
     ``"OpcodeList3:WarpRectilinear:unreadable"``; a list that does not parse as
     ``"OpcodeList2:unreadable"``).
     """
+    stage1: list[FixBadPixelsConstant] = []
     maps: list[Stage2Opcode] = []
     stage3: list[Stage3Opcode] = []
     skipped: list[str] = []
@@ -291,7 +355,13 @@ def read_opcodes(page: Any) -> tuple[list[Stage2Opcode], list[Stage3Opcode], lis
             continue
         for op, _flags, params in ops:
             label = f"{name}:{OPCODE_NAMES.get(op, str(op))}"
-            if code == 51009 and op in (_GAIN_MAP, _FIX_VIGNETTE_RADIAL, *_AREA_OPCODES):
+            if code == 51008 and op == _FIX_BAD_PIXELS_CONSTANT:
+                fix = _parse_bad_pixels_constant(params)
+                if fix is not None:
+                    stage1.append(fix)
+                    continue
+                label += ":unreadable"
+            elif code == 51009 and op in (_GAIN_MAP, _FIX_VIGNETTE_RADIAL, *_AREA_OPCODES):
                 stage2: Stage2Opcode | None
                 if op == _GAIN_MAP:
                     stage2 = _parse_gain_map(params)
@@ -310,7 +380,7 @@ def read_opcodes(page: Any) -> tuple[list[Stage2Opcode], list[Stage3Opcode], lis
                     continue
                 label += ":unreadable"
             skipped.append(label)
-    return maps, stage3, skipped
+    return stage1, maps, stage3, skipped
 
 
 def stage3_name(op: Stage3Opcode) -> str:

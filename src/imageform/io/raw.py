@@ -467,22 +467,37 @@ def _with_opcodes(raw: RawImage, p: Path) -> RawImage:
     """
     import dataclasses
 
-    from imageform.io._dng_opcodes import apply_stage2, stage2_name, stage3_name
+    from imageform.io._dng_opcodes import (
+        apply_stage2,
+        fix_bad_pixels_constant,
+        stage2_name,
+        stage3_name,
+    )
 
-    maps, stage3, skipped, offset, area = _raw_page_opcodes(p)
-    if not maps and not stage3 and not skipped:
+    stage1, maps, stage3, skipped, offset, area, origin = _raw_page_opcodes(p)
+    if not stage1 and not maps and not stage3 and not skipped:
         return raw
     meta = dict(raw.metadata)
     meta["opcodes_skipped"] = skipped
     mosaic = raw.mosaic
     expected = None if area is None else (area[0] - offset[0], area[1] - offset[1])
     fits = expected is None or tuple(mosaic.shape[:2]) == expected
+    names1 = ["OpcodeList1:FixBadPixelsConstant"] * len(stage1)
+    if stage1 and fits and origin is not None and raw.cfa_pattern is not None:
+        for fix in stage1:  # on the codes as stored (no LinearizationTable: origin is None)
+            mosaic = fix_bad_pixels_constant(mosaic, fix, origin)
+        meta["opcodes_applied_other"] = names1
+    elif stage1:
+        meta["opcodes_skipped"] = [*meta["opcodes_skipped"], *names1]
     names = [stage2_name(op) for op in maps]
     if maps and fits and raw.metadata.get("xtrans") is None:
         mosaic = apply_stage2(mosaic, _black_plane(raw), raw.white_level, maps,
                               offset=offset, shape=area)  # fmt: skip
         meta["opcodes_applied"] = names.count("OpcodeList2:GainMap")
-        meta["opcodes_applied_other"] = [n for n in names if n != "OpcodeList2:GainMap"]
+        meta["opcodes_applied_other"] = [
+            *meta.get("opcodes_applied_other", []),
+            *(n for n in names if n != "OpcodeList2:GainMap"),
+        ]
     elif maps:
         meta["opcodes_skipped"] = [*meta["opcodes_skipped"], *names]
     if stage3 and fits:
@@ -495,18 +510,24 @@ def _with_opcodes(raw: RawImage, p: Path) -> RawImage:
 
 def _raw_page_opcodes(
     path: Path,
-) -> tuple[list[Any], list[Any], list[str], tuple[int, int], tuple[int, int] | None]:
-    """Return a DNG raw IFD's stage-2 and stage-3 opcodes, the ones not applied, offset, size.
+) -> tuple[
+    list[Any], list[Any], list[Any], list[str], tuple[int, int], tuple[int, int] | None,
+    tuple[int, int] | None,
+]:  # fmt: skip
+    """Return a DNG raw IFD's opcodes to apply, the ones not, offset, size and origin.
 
+    The opcodes of OpcodeList1, 2 and 3 (:func:`imageform.io._dng_opcodes.read_opcodes`).
     The offset is where the mosaic's first pixel sits in the ActiveArea (LibRaw starts a
     CFA image's crop at an even row and column), the size the area's (H, W) (None: the raw
-    image's). ``([], [], [], (0, 0), None)`` for any other file.
+    image's), the origin where it sits in the stored image (None where a LinearizationTable
+    changes the stored codes: OpcodeList1 applies to them). ``([], [], [], [], (0, 0), None,
+    None)`` for any other file.
     """
     import tifffile
 
     from imageform.io._dng_opcodes import read_opcodes
 
-    none: tuple[list[Any], list[Any], list[str], tuple[int, int], None] = ([], [], [], (0, 0), None)
+    none: Any = ([], [], [], [], (0, 0), None, None)
     try:
         with tifffile.TiffFile(path) as tf:
             if _DNG_VERSION not in tf.pages[0].tags:  # type: ignore[union-attr]
@@ -514,16 +535,18 @@ def _raw_page_opcodes(
             page = _dng_raw_page(tf)
             if page is None:
                 return none
-            maps, stage3, skipped = read_opcodes(page)
+            stage1, maps, stage3, skipped = read_opcodes(page)
             area = [int(v) for v in np.ravel(page.tags.valueof(_ACTIVE_AREA, ()))]
             cfa = int(page.tags.valueof(262, 0)) == 32803
+            linearized = _LINEARIZATION_TABLE in page.tags
     except Exception:  # not a TIFF: no opcodes
         return none
     if len(area) == 4 and area[2] > area[0] and area[3] > area[1]:
         top, left, bottom, right = area
         offset = (top & 1, left & 1) if cfa else (0, 0)  # LibRaw's crop starts even
-        return maps, stage3, skipped, offset, (bottom - top, right - left)
-    return maps, stage3, skipped, (0, 0), None
+        origin = None if linearized else (top + offset[0], left + offset[1])
+        return stage1, maps, stage3, skipped, offset, (bottom - top, right - left), origin
+    return stage1, maps, stage3, skipped, (0, 0), None, None if linearized else (0, 0)
 
 
 def _read_raw(path: str | Path, max_pixels: int | None) -> RawImage:
