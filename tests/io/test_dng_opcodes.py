@@ -25,6 +25,7 @@ from imageform.io._dng_opcodes import (
     WarpRectilinear,
     apply_gain_maps,
     apply_stage2,
+    apply_stage3,
     bicubic_sample,
     gain_map_gains,
     parse_opcode_list,
@@ -552,3 +553,18 @@ def test_fix_bad_pixels_constant(tmp_path: Path, phase: int) -> None:
         untouched[r - 2, c - 4] = False
     np.testing.assert_array_equal(raw.mosaic[untouched], stored[2:23, 4:29][untouched])
     assert (read_raw(path, opcodes=False).mosaic == 0).sum() == len(bad)
+
+
+@pytest.mark.parametrize("planes", [1, 3])
+def test_warp_kernel_matches_the_numpy_reference(planes: int) -> None:
+    """The numba kernel (develop's path) is the NumPy functions the tests above check,
+    one pixel at a time: offset image, a centre off the middle, per-plane coefficients."""
+    rng = np.random.default_rng(planes)
+    img = rng.uniform(0.0, 1.0, (37, 52, 3)).astype(np.float32)
+    coef = [[1.0, 0.12 + 0.02 * p, -0.03, 0.01, 0.003, -0.002] for p in range(planes)]
+    ops = [WarpRectilinear(np.array(coef), (0.4, 0.6)),
+           FixVignetteRadial((0.2, 0.1, 0, 0, 0), (0.5, 0.5))]  # fmt: skip
+    fast = apply_stage3(img, ops, offset=(1, 1), shape=(39, 54))
+    slow = apply_stage3(img, ops, offset=(1, 1), shape=(39, 54), kernel=False, rows_per_chunk=7)
+    np.testing.assert_allclose(fast, slow, atol=2e-6)
+    assert np.abs(fast - img).max() > 0.1

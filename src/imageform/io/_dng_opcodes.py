@@ -489,6 +489,7 @@ def apply_stage3(
     *,
     offset: tuple[int, int] = (0, 0),
     shape: tuple[int, int] | None = None,
+    kernel: bool = True,
     rows_per_chunk: int = 256,
 ) -> np.ndarray:
     """Return ``image`` (H, W, C) float in [0, 1] with the OpcodeList3 opcodes applied in order.
@@ -496,7 +497,9 @@ def apply_stage3(
     ``offset`` is where the image's first pixel sits in the image the opcodes describe (the
     raw image after its ActiveArea crop), ``shape`` that image's (H, W) (default: the
     image's plus offset). A warp samples within the image given (its edge pixels repeated
-    where the warp reaches beyond it). float32 out.
+    where the warp reaches beyond it). float32 out. ``kernel``: the warp as the numba kernel
+    :func:`imageform._kernels.dng_warp.warp_rows` (False: with NumPy, ``rows_per_chunk``
+    rows at a time; the same values within float32 rounding).
     """
     out = np.ascontiguousarray(image, dtype=np.float32)
     h, w = out.shape[:2]
@@ -510,6 +513,19 @@ def apply_stage3(
             out = np.minimum(out * g[..., None], np.float32(1.0))
             continue
         warped = np.empty_like(out)
+        if kernel:
+            from imageform._kernels.dng_warp import warp_rows
+            from imageform._kernels.jit import run_tasks
+
+            cy, cx, radius = _center_and_radius(op.center, full)
+            geometry = np.array([dt, dl, full[0], full[1], cy, cx, radius], np.float64)
+            coef = np.ascontiguousarray(op.coefficients, np.float64)
+            if np.all(coef == coef[0]):
+                coef = coef[:1]
+            run_tasks(warp_rows, h, out, warped, coef, geometry,
+                      threads=None if h * w >= 1 << 16 else 1)  # fmt: skip
+            out = warped
+            continue
         same = bool(np.all(op.coefficients == op.coefficients[0]))
         planes = [None] if same else list(range(out.shape[2]))
         for start in range(0, h, rows_per_chunk):
