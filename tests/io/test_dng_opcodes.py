@@ -568,3 +568,29 @@ def test_warp_kernel_matches_the_numpy_reference(planes: int) -> None:
     slow = apply_stage3(img, ops, offset=(1, 1), shape=(39, 54), kernel=False, rows_per_chunk=7)
     np.testing.assert_allclose(fast, slow, atol=2e-6)
     assert np.abs(fast - img).max() > 0.1
+
+
+def test_gpu_development_applies_stage3_on_the_cpu(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """device="cuda": the GPU demosaics (here a stand-in giving the CPU pass's values, CI has
+    no GPU), then the OpcodeList3 warp runs on the CPU, with a note saying so."""
+    cuda_demosaic = pytest.importorskip("imageform._cuda.demosaic")
+    import imageform._cuda.geometry as cuda_geometry
+
+    mosaic = np.random.default_rng(5).integers(200, 3000, (24, 32)).astype(np.uint16)
+    warp = _warp_op([[1.0, 0.1, 0, 0, 0.002, 0]], (0.5, 0.5))
+    raw = read_raw(_dng(tmp_path / "g.dng", mosaic, lists={51022: _op_list(warp)}))
+    cpu = develop(raw, linear=True)
+    plain = develop(read_raw(tmp_path / "g.dng", opcodes=False), linear=True)
+    monkeypatch.setattr(cuda_geometry, "require_cuda", lambda what: None)
+    monkeypatch.setattr(cuda_demosaic, "develop_bayer", lambda *a: plain._fused(a[-1]))
+    gpu = develop(raw, linear=True, device="cuda")
+    assert gpu._device == "cuda"
+    assert gpu.notes[-1] == (
+        "applied the DNG's OpcodeList3:WarpRectilinear after demosaicing (on the CPU, after "
+        "the GPU's demosaicing)"
+    )
+    np.testing.assert_array_equal(gpu.camera_rgb, cpu.camera_rgb)
+    np.testing.assert_allclose(gpu.image, cpu.image, atol=1e-6)
+    assert np.abs(gpu.camera_rgb - plain.camera_rgb).max() > 0.05
