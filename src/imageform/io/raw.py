@@ -432,12 +432,14 @@ def read_raw(path: str | Path, *, max_pixels: int | None = None, opcodes: bool =
     opcodes : bool
         Apply a DNG's GainMap opcodes (its OpcodeList2: the lens-shading correction phones
         write, one map per photosite of the tile) to the mosaic, as the DNG specification
-        asks and Adobe's readers do (LibRaw does not: False gives LibRaw's values). The
-        WarpRectilinear (lens distortion) and FixVignetteRadial opcodes of its OpcodeList3
-        are kept in ``metadata["opcodes_stage3"]`` for :func:`develop`, which applies them
-        to the demosaiced camera RGB. Other opcodes are not applied;
-        ``metadata["opcodes_skipped"]`` names them and ``metadata["opcodes_applied"]``
-        counts the GainMaps.
+        asks and Adobe's readers do (LibRaw does not: False gives LibRaw's values), with
+        the list's FixVignetteRadial, Scale/DeltaPerRow/Column and MapPolynomial, and
+        OpcodeList1's FixBadPixelsConstant. The WarpRectilinear (lens distortion) and
+        FixVignetteRadial opcodes of its OpcodeList3 are kept in
+        ``metadata["opcodes_stage3"]`` for :func:`develop`, which applies them to the
+        demosaiced camera RGB. Other opcodes are not applied: ``metadata["opcodes_skipped"]``
+        names them; ``metadata["opcodes_applied"]`` counts the GainMaps and
+        ``metadata["opcodes_applied_other"]`` names the other opcodes applied.
 
     Returns
     -------

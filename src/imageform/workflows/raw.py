@@ -51,9 +51,10 @@ class DevelopOptions(ImageOut, Options):
     )
     opcodes: bool = option(
         True,
-        help="Apply a DNG's opcodes: GainMaps (the lens-shading correction phones write), "
-        "then after demosaicing WarpRectilinear (lens distortion) and FixVignetteRadial; "
-        "--no-opcodes leaves them, as LibRaw does.",
+        help="Apply a DNG's opcodes as Adobe's DNG SDK does: GainMaps (the lens-shading "
+        "correction phones write) and the other per-pixel ones to the mosaic, then after "
+        "demosaicing WarpRectilinear (lens distortion) and FixVignetteRadial; --no-opcodes "
+        "leaves them, as LibRaw does.",
     )
     device: Device = option(
         "cpu",
@@ -126,6 +127,7 @@ def raw_info(path: Path) -> Result:
         "orientation": raw.orientation,
         "opcodes_applied": int(raw.metadata.get("opcodes_applied", 0)),
         "opcodes_skipped": list(raw.metadata.get("opcodes_skipped", [])),
+        "opcodes_applied_other": list(raw.metadata.get("opcodes_applied_other", [])),
         "opcodes_at_development": stage3_names(raw.metadata),
     }
     model = summary["camera_model"] or "camera not named"
