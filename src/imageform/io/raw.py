@@ -1260,7 +1260,10 @@ def develop(
        scaled so the smallest gain is 1, clipped to [0, 1] (LibRaw's default highlight
        clipping).
     3. Demosaic with :func:`imageform.sensor.demosaic` (``demosaic`` names the method); a
-       linear raw has every colour already and is not demosaiced.
+       linear raw has every colour already and is not demosaiced. A DNG's OpcodeList3
+       opcodes that :func:`read_raw` kept (WarpRectilinear, FixVignetteRadial:
+       ``metadata["opcodes_stage3"]``) are applied to this camera RGB, on the CPU, with a
+       note (:mod:`imageform.io._dng_opcodes`).
     4. Camera RGB to XYZ: :math:`M = C^{-1}\,\mathrm{diag}(C\,\mathbf w)`, with C the
        colour matrix (XYZ to camera) and :math:`\mathbf w` the XYZ of D65's white (Y = 1),
        so that white-balanced white (1, 1, 1) maps to :math:`\mathbf w` (the normalisation
