@@ -19,14 +19,22 @@ import pytest
 
 from imageform.io import develop, read_raw, write_dng
 from imageform.io._dng_opcodes import (
+    AreaOpcode,
+    FixVignetteRadial,
     GainMap,
+    WarpRectilinear,
     apply_gain_maps,
+    apply_stage2,
+    apply_stage3,
+    bicubic_sample,
     gain_map_gains,
     parse_opcode_list,
+    vignette_gains,
+    warp_source_positions,
 )
 
 CM = np.eye(3)
-GAIN_MAP, WARP_RECTILINEAR = 9, 1
+GAIN_MAP, WARP_RECTILINEAR, WARP_FISHEYE, FIX_VIGNETTE_RADIAL = 9, 1, 2, 3
 
 
 def _gain_map_op(
@@ -182,13 +190,13 @@ def test_active_area_at_an_odd_row_shifts_the_map(tmp_path: Path) -> None:
 
 def test_other_opcodes_are_named_not_applied(tmp_path: Path) -> None:
     mosaic = np.full((16, 16), 1000, np.uint16)
-    lists = {51022: _op_list(_other_op(WARP_RECTILINEAR)),
-             51008: _op_list(_other_op(4)), 51009: b"\x00\x00\x00\x02\x00"}  # fmt: skip
+    lists = {51022: _op_list(_other_op(WARP_FISHEYE)),
+             51008: _op_list(_other_op(5)), 51009: b"\x00\x00\x00\x02\x00"}  # fmt: skip
     raw = read_raw(_dng(tmp_path / "o.dng", mosaic, lists=lists))
     assert sorted(raw.metadata["opcodes_skipped"]) == [
-        "OpcodeList1:FixBadPixelsConstant",
+        "OpcodeList1:FixBadPixelsList",
         "OpcodeList2:unreadable",
-        "OpcodeList3:WarpRectilinear",
+        "OpcodeList3:WarpFisheye",
     ]
     np.testing.assert_array_equal(raw.mosaic, mosaic)
 
@@ -210,12 +218,12 @@ def test_develop_command_applies_and_names_opcodes(
     g = _radial_map(3, 3, 1.0)
     gm = GainMap(0, 0, *shape, 0, 1, 1, 1, (0.5, 0.5), (0.0, 0.0), g)
     lists = {51009: _op_list(_gain_map_op(g, area=(0, 0, *shape))),
-             51022: _op_list(_other_op(WARP_RECTILINEAR))}  # fmt: skip
+             51022: _op_list(_other_op(WARP_FISHEYE))}  # fmt: skip
     path = _dng(tmp_path / "c.dng", _vignetted(gm, shape, 2000.0, 64.0), lists=lists)
     assert main(["develop", str(path), "-o", str(tmp_path / "on.tif"), "--linear"]) == 0
     err = capsys.readouterr().err
     assert "applied the DNG's 1 GainMap opcode (lens shading)" in err
-    assert "DNG opcodes not applied: OpcodeList3:WarpRectilinear" in err
+    assert "DNG opcodes not applied: OpcodeList3:WarpFisheye" in err
     assert main(["develop", str(path), "-o", str(tmp_path / "off.tif"), "--linear",
                  "--no-opcodes"]) == 0  # fmt: skip
     assert "GainMap opcode" not in capsys.readouterr().err
@@ -224,3 +232,365 @@ def test_develop_command_applies_and_names_opcodes(
     assert np.ptp(on) < 2e-3 < 0.1 < np.ptp(off)
     assert main(["info", str(path)]) == 0
     assert "applied the DNG's 1 GainMap opcode" in capsys.readouterr().out
+
+
+# -- OpcodeList3: WarpRectilinear and FixVignetteRadial, applied by develop ----------------
+
+
+def _warp_op(coefficients: list[list[float]], center: tuple[float, float]) -> bytes:
+    """One WarpRectilinear opcode: planes, per plane kr0..kr3 kt0 kt1, then cx, cy."""
+    params = struct.pack(">I", len(coefficients))
+    for row in coefficients:
+        params += struct.pack(">6d", *row)
+    params += struct.pack(">2d", *center)
+    return struct.pack(">4I", WARP_RECTILINEAR, 0x01030000, 1, len(params)) + params
+
+
+def _vignette_op(k: tuple[float, ...], center: tuple[float, float]) -> bytes:
+    params = struct.pack(f">{len(k) + 2}d", *k, *center)
+    return struct.pack(">4I", FIX_VIGNETTE_RADIAL, 0x01030000, 1, len(params)) + params
+
+
+def test_warp_source_position_worked_by_hand() -> None:
+    """The SDK's rule on a 40 x 60 image, centre (cx, cy) = (0.25, 0.5): the centre is at
+    column 15, row 20; the farthest corner (40, 60) lies hypot(20, 45) = sqrt(2425) away.
+    Pixel (row 10, column 40) is at (y, x) = (-10, 25) / sqrt(2425), r2 = 725 / 2425."""
+    kr, kt0, kt1 = (1.0, 0.1, -0.05, 0.02), 0.01, -0.02
+    warp = WarpRectilinear(np.array([[*kr, kt0, kt1]]), (0.25, 0.5))
+    radius = 2425**0.5
+    y, x, r2 = -10 / radius, 25 / radius, 725 / 2425
+    f = 1 + 0.1 * r2 - 0.05 * r2**2 + 0.02 * r2**3
+    row = 20 + radius * (y * f + kt0 * (r2 + 2 * y * y) + 2 * kt1 * x * y)
+    col = 15 + radius * (x * f + kt1 * (r2 + 2 * x * x) + 2 * kt0 * x * y)
+    sr, sc = warp_source_positions(warp, np.array([10]), np.array([40]), (40, 60))
+    assert (sr[0], sc[0]) == (pytest.approx(row, abs=1e-12), pytest.approx(col, abs=1e-12))
+    assert (row, col) == (pytest.approx(10.131286, abs=1e-6), pytest.approx(39.745398, abs=1e-6))
+    # a corner is at r = 1 (centre (0, 0): the normalisation is the far corner (40, 60))
+    corner = WarpRectilinear(np.array([[1.0, 0.1, 0, 0, 0, 0]]), (0.0, 0.0))
+    sr, sc = warp_source_positions(corner, np.array([40]), np.array([60]), (40, 60))
+    assert (sr[0], sc[0]) == (pytest.approx(44.0), pytest.approx(66.0))
+    # r2 is clamped to 1 beyond it, as the SDK does
+    sr, sc = warp_source_positions(corner, np.array([80]), np.array([120]), (40, 60))
+    assert (sr[0], sc[0]) == (pytest.approx(88.0), pytest.approx(132.0))
+
+
+def test_bicubic_sample_matches_opencv_cubic_remap() -> None:
+    """The SDK's resampler: Keys' kernel (a = -0.75) at 1/32 pixel, edges repeated;
+    OpenCV's INTER_CUBIC is the same kernel at 1/32 (rounded, not floored)."""
+    cv2 = pytest.importorskip("cv2")
+    rng = np.random.default_rng(3)
+    img = rng.uniform(0.2, 0.8, (20, 30, 1)).astype(np.float32)
+    sr = rng.integers(-64, 21 * 32, 500) / 32.0  # multiples of 1/32, some outside
+    sc = rng.integers(-64, 31 * 32, 500) / 32.0
+    ours = bicubic_sample(img, sr, sc)[:, 0]
+    ref = cv2.remap(img[..., 0], np.clip(sc, 0, 29).astype(np.float32)[None],
+                    np.clip(sr, 0, 19).astype(np.float32)[None], cv2.INTER_CUBIC,
+                    borderMode=cv2.BORDER_REPLICATE)[0]  # fmt: skip
+    np.testing.assert_allclose(ours, np.clip(ref, 0, 1), atol=2e-6)
+    # the fraction is floored to 1/32: a ramp sampled at 10.51 reads 10.5
+    ramp = (np.arange(30, dtype=np.float32) / 100)[None, :, None].repeat(4, 0)
+    assert bicubic_sample(ramp, np.array([1.0]), np.array([10.51]))[0, 0] == pytest.approx(0.105)
+
+
+def test_warp_straightens_a_grid_rendered_through_opencv_distortion(tmp_path: Path) -> None:
+    """Dots on a grid u_k rendered where OpenCV's Brown-Conrady model puts them
+    (cv2.projectPoints, fx = fy = R, k1 k2 k3 = kr1 kr2 kr3, p1 = kt0, p2 = kt1: the
+    same model as WarpRectilinear's with kr0 = 1) come back to u_k in the development."""
+    cv2 = pytest.importorskip("cv2")
+    h, w = 96, 128
+    kr, kt = (1.0, 0.15, -0.04, 0.01), (0.004, -0.003)
+    center = (0.45, 0.55)
+    cy, cx = center[1] * h, center[0] * w
+    radius = float(np.hypot(max(cy, h - cy), max(cx, w - cx)))
+    gy, gx = np.meshgrid(np.arange(12, h - 11, 12.0), np.arange(12, w - 11, 14.0), indexing="ij")
+    grid = np.stack([gx.ravel(), gy.ravel()], axis=1)  # (x, y) pixels, output positions
+    norm = (grid - [cx, cy]) / radius
+    pts = np.concatenate([norm, np.ones((len(norm), 1))], axis=1)[:, None, :]
+    k_mat = np.array([[radius, 0, cx], [0, radius, cy], [0, 0, 1]])
+    dist = np.array([kr[1], kr[2], kt[0], kt[1], kr[3]])
+    seen, _ = cv2.projectPoints(pts, np.zeros(3), np.zeros(3), k_mat, dist)
+    seen = seen[:, 0, :]  # where the input shows each dot
+    warp = WarpRectilinear(np.array([[*kr, *kt]]), center)
+    sr, sc = warp_source_positions(warp, grid[:, 1], grid[:, 0], (h, w))
+    np.testing.assert_allclose(np.stack([sc, sr], axis=1), seen, atol=1e-9)
+    assert np.abs(seen - grid).max() > 1.5  # the distortion moves dots by pixels
+    yy, xx = np.mgrid[0:h, 0:w]
+    scene = np.zeros((h, w))
+    for x0, y0 in seen:
+        scene += np.exp(-((xx - x0) ** 2 + (yy - y0) ** 2) / (2 * 1.6**2))
+    mosaic = np.round(64 + 3000 * np.clip(scene, 0, 1)).astype(np.uint16)
+    path = _dng(tmp_path / "w.dng", mosaic, lists={51022: _op_list(_warp_op([[*kr, *kt]],
+                                                                           center))})  # fmt: skip
+
+    def centroids(img: np.ndarray) -> np.ndarray:
+        v = img.mean(axis=2)
+        out = []
+        for x0, y0 in grid:
+            r0, c0 = int(np.rint(y0)), int(np.rint(x0))
+            win = v[r0 - 5 : r0 + 6, c0 - 5 : c0 + 6]
+            wy, wx = np.mgrid[r0 - 5 : r0 + 6, c0 - 5 : c0 + 6]
+            out.append([(win * wx).sum() / win.sum(), (win * wy).sum() / win.sum()])
+        return np.array(out)
+
+    raw = read_raw(path)
+    assert raw.metadata["opcodes_skipped"] == []
+    dev = develop(raw, linear=True, white_balance="none")
+    assert any("OpcodeList3:WarpRectilinear" in n for n in dev.notes)
+    assert np.abs(centroids(dev.camera_rgb) - grid).max() < 0.08
+    plain = develop(read_raw(path, opcodes=False), linear=True, white_balance="none")
+    assert np.abs(centroids(plain.camera_rgb) - grid).max() > 1.0
+    assert not any("OpcodeList3" in n for n in plain.notes)
+    # the same with the tifffile reader and another demosaicing method (not the fused pass)
+    mal = develop(raw, linear=True, white_balance="none", demosaic="malvar")
+    assert np.abs(centroids(mal.camera_rgb) - grid).max() < 0.08
+
+
+@pytest.mark.parametrize("reader", ["libraw", "tifffile"])
+def test_fix_vignette_radial_flattens_a_flat_field(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, reader: str
+) -> None:
+    """A flat field darkened by 1 / g, g = 1 + k0 r2 + ... + k4 r2^5 at each pixel's centre
+    (r2 its squared distance to the centre over the farthest corner's), comes back flat."""
+    if reader == "libraw" and importlib.util.find_spec("rawpy") is None:
+        pytest.skip("rawpy not installed")
+    h, w = 64, 96
+    k, center = (0.5, -0.1, 0.05, 0.0, 0.01), (0.6, 0.4)
+    cy, cx = center[1] * h, center[0] * w
+    r2 = (((np.arange(h)[:, None] + 0.5 - cy) ** 2 + (np.arange(w) + 0.5 - cx) ** 2)
+          / (max(cy, h - cy) ** 2 + max(cx, w - cx) ** 2))  # fmt: skip
+    g = 1 + sum(kk * r2 ** (i + 1) for i, kk in enumerate(k))
+    np.testing.assert_allclose(vignette_gains(FixVignetteRadial(k, center), np.arange(h),
+                                              np.arange(w), (h, w)), g)  # fmt: skip
+    mosaic = np.round(64 + 2000 / g).astype(np.uint16)
+    path = _dng(tmp_path / "fv.dng", mosaic, lists={51022: _op_list(_vignette_op(k, center))})
+    if reader == "tifffile":
+        monkeypatch.setitem(sys.modules, "rawpy", None)
+    raw = read_raw(path)
+    assert [type(op).__name__ for op in raw.metadata["opcodes_stage3"]] == ["FixVignetteRadial"]
+    img = develop(raw, linear=True, white_balance="none").camera_rgb
+    level = 2000 / (4095 - 64)
+    assert np.abs(img[2:-2, 2:-2] - level).max() < 1e-3
+    plain = read_raw(path, opcodes=False)
+    np.testing.assert_array_equal(plain.mosaic, raw.mosaic)  # LibRaw's values
+    assert "opcodes_stage3" not in plain.metadata
+    shaded = develop(plain, linear=True, white_balance="none").camera_rgb
+    assert np.ptp(shaded[2:-2, 2:-2]) > 0.1
+
+
+def test_bad_stage3_parameters_are_named_unreadable(tmp_path: Path) -> None:
+    good = _warp_op([[1.0, 0.01, 0, 0, 0, 0]], (0.5, 0.5))
+    lists = {51022: _op_list(
+        _other_op(WARP_RECTILINEAR),  # 8 zero bytes: no planes
+        good[:16] + struct.pack(">I", 2) + good[20:],  # two planes, one plane's bytes
+        _warp_op([[1.0, 0.01, 0, 0, 0, 0]], (1.5, 0.5)),  # centre outside [0, 1]
+        _warp_op([[float("nan"), 0, 0, 0, 0, 0]], (0.5, 0.5)),
+        _vignette_op((0.1, 0, 0, 0), (0.5, 0.5)),  # four coefficients
+        good,
+    )}  # fmt: skip
+    mosaic = np.full((16, 16), 1000, np.uint16)
+    raw = read_raw(_dng(tmp_path / "b.dng", mosaic, lists=lists))
+    assert raw.metadata["opcodes_skipped"] == [
+        *["OpcodeList3:WarpRectilinear:unreadable"] * 4,
+        "OpcodeList3:FixVignetteRadial:unreadable",
+    ]
+    assert len(raw.metadata["opcodes_stage3"]) == 1
+    develop(raw)  # the good one applies
+    # a list cut inside an opcode is unreadable as a whole
+    cut = _dng(tmp_path / "t.dng", mosaic, lists={51022: _op_list(good)[:-5]})
+    meta = read_raw(cut).metadata
+    assert meta["opcodes_skipped"] == ["OpcodeList3:unreadable"]
+    assert "opcodes_stage3" not in meta
+
+
+def test_develop_command_notes_stage3_opcodes(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from imageform.cli import main
+
+    mosaic = np.full((32, 48), 1000, np.uint16)
+    lists = {51022: _op_list(_vignette_op((0.2, 0, 0, 0, 0), (0.5, 0.5)),
+                             _warp_op([[1.0, 0.02, 0, 0, 0, 0]], (0.5, 0.5)))}  # fmt: skip
+    path = _dng(tmp_path / "n.dng", mosaic, lists=lists)
+    assert main(["develop", str(path), "-o", str(tmp_path / "on.tif")]) == 0
+    err = capsys.readouterr().err
+    assert (
+        "applied the DNG's OpcodeList3:FixVignetteRadial, OpcodeList3:WarpRectilinear after "
+        "demosaicing" in err
+    )
+    assert "not applied" not in err
+    assert main(["develop", str(path), "-o", str(tmp_path / "off.tif"), "--no-opcodes"]) == 0
+    assert "OpcodeList3" not in capsys.readouterr().err
+    assert main(["info", str(path)]) == 0
+    assert "applied when developed (after demosaicing): OpcodeList3:FixVignetteRadial" in (
+        capsys.readouterr().out
+    )
+
+
+# -- OpcodeList2: MapPolynomial, Delta/ScalePerRow/Column, FixVignetteRadial on the mosaic --
+
+
+def _area_op(opcode: int, area: tuple[int, ...], values: list[float], *, poly: bool = False,
+             count: int | None = None) -> bytes:  # fmt: skip
+    """An area opcode: the area spec (8 uint32), the count (degree), float32 (float64) values."""
+    n = (len(values) - 1 if poly else len(values)) if count is None else count
+    params = struct.pack(">8I", *area) + struct.pack(">I", n)
+    params += struct.pack(f">{len(values)}{'d' if poly else 'f'}", *values)
+    return struct.pack(">4I", opcode, 0x01030000, 1, len(params)) + params
+
+
+def test_area_opcodes_worked_by_hand() -> None:
+    """Black 64, white 4095: a code m is x = (m - 64) / 4031 and back 64 + 4031 x."""
+    m = np.full((4, 6), 1064, np.uint16)
+    black = np.full((4, 6), 64.0)
+    x = 1000 / 4031
+    # MapPolynomial 0.01 + 1.2 x - 0.3 x^2 over rows 1..3, every column
+    poly = AreaOpcode("MapPolynomial", (1, 0, 4, 6, 0, 1, 1, 1), np.array([0.01, 1.2, -0.3]))
+    out = apply_stage2(m, black, 4095.0, [poly])
+    assert out[0, 0] == 1064
+    assert out[1, 0] == round(64 + 4031 * (0.01 + 1.2 * x - 0.3 * x * x)) == 1230
+    # ScalePerRow with row pitch 2 from row 1: rows 1 and 3 scaled by 2 and 5 (5 clips at white)
+    scale = AreaOpcode("ScalePerRow", (1, 0, 4, 6, 0, 1, 2, 1), np.array([2.0, 5.0]))
+    out = apply_stage2(m, black, 4095.0, [scale])
+    np.testing.assert_array_equal(out[:, 0], [1064, 2064, 1064, 4095])
+    # DeltaPerColumn over columns 2..5, column pitch 3: columns 2 and 5, then a scale of 2:
+    # the order of the list counts ((x + d) 2, not x 2 + d)
+    delta = AreaOpcode("DeltaPerColumn", (0, 2, 4, 6, 0, 1, 1, 3), np.array([0.1, -0.1]))
+    whole = AreaOpcode("ScalePerRow", (0, 0, 0, 0, 0, 1, 1, 1), np.full(4, 2.0))  # empty: all
+    out = apply_stage2(m, black, 4095.0, [delta, whole])
+    assert out[0, 2] == round(64 + 4031 * (x + 0.1) * 2) == 2870
+    assert out[0, 5] == round(64 + 4031 * (x - 0.1) * 2) == 1258
+    assert out[0, 0] == 2064
+
+
+def test_stage2_opcodes_flatten_a_shaded_mosaic(tmp_path: Path) -> None:
+    """Rows darkened by 1 / s_row, columns lifted by d_col and a radial vignette: the file's
+    ScalePerRow, DeltaPerColumn (negative deltas) and FixVignetteRadial of OpcodeList2 undo
+    them (applied in the list's order to x = (m - black) / (white - black))."""
+    h, w, black, white = 32, 40, 64.0, 4095.0
+    rows = np.linspace(1.0, 1.5, h)
+    cols = np.linspace(0.0, 0.05, w)
+    k, center = (0.3, 0.0, 0.0, 0.0, 0.0), (0.5, 0.5)
+    g = vignette_gains(FixVignetteRadial(k, center), np.arange(h), np.arange(w), (h, w))
+    x = 0.4 / g  # the vignette, undone last
+    x = x + cols[None, :]  # the delta, undone second
+    x = x / rows[:, None]  # the scale, undone first
+    mosaic = np.round(black + (white - black) * x).astype(np.uint16)
+    ops = _op_list(_area_op(12, (0, 0, h, w, 0, 1, 1, 1), list(rows)),
+                   _area_op(11, (0, 0, h, w, 0, 1, 1, 1), list(-cols)),
+                   _vignette_op(k, center))  # fmt: skip
+    raw = read_raw(_dng(tmp_path / "s.dng", mosaic, lists={51009: ops}, black=black))
+    assert raw.metadata["opcodes_skipped"] == []
+    assert raw.metadata["opcodes_applied_other"] == [
+        "OpcodeList2:ScalePerRow", "OpcodeList2:DeltaPerColumn", "OpcodeList2:FixVignetteRadial"
+    ]  # fmt: skip
+    level = black + 0.4 * (white - black)
+    assert np.abs(raw.mosaic.astype(float) - level).max() <= 1.0
+    np.testing.assert_array_equal(read_raw(tmp_path / "s.dng", opcodes=False).mosaic, mosaic)
+
+
+def test_bad_area_opcodes_are_named_unreadable(tmp_path: Path) -> None:
+    mosaic = np.full((16, 16), 1000, np.uint16)
+    ops = _op_list(_area_op(12, (0, 0, 16, 16, 0, 1, 1, 1), [1.0] * 15),  # 16 rows, 15 scales
+                   _area_op(8, (0, 0, 16, 16, 0, 1, 1, 1), [0.0] * 10, poly=True),  # degree 9
+                   _area_op(10, (0, 0, 16, 16, 0, 1, 0, 1), [0.0] * 16),  # row pitch 0
+                   _area_op(13, (0, 0, 16, 16, 0, 1, 1, 1), [float("inf")] * 16),
+                   _area_op(11, (0, 0, 16, 16, 0, 1, 1, 1), [0.0] * 15, count=16))  # fmt: skip
+    raw = read_raw(_dng(tmp_path / "u.dng", mosaic, lists={51009: ops}))
+    assert raw.metadata["opcodes_skipped"] == [
+        "OpcodeList2:ScalePerRow:unreadable", "OpcodeList2:MapPolynomial:unreadable",
+        "OpcodeList2:DeltaPerRow:unreadable", "OpcodeList2:ScalePerColumn:unreadable",
+        "OpcodeList2:DeltaPerColumn:unreadable",
+    ]  # fmt: skip
+    np.testing.assert_array_equal(raw.mosaic, mosaic)
+
+
+def _bad_pixels_op(constant: int, phase: int) -> bytes:
+    return struct.pack(">4I2I", 4, 0x01030000, 1, 8, constant, phase)
+
+
+def _fixed_by_hand(stored: np.ndarray, bad: list[tuple[int, int]], constant: int,
+                   phase: int) -> dict[tuple[int, int], int]:  # fmt: skip
+    """The SDK's rule pixel by pixel on the stored image: green where row + col + phase +
+    phase // 2 is even, its four diagonal neighbours, else the four two pixels away; the
+    good ones averaged, rounded half up."""
+    out = {}
+    for r, c in bad:
+        green = (r + c + phase + phase // 2) % 2 == 0
+        steps = (
+            ((-1, -1), (-1, 1), (1, -1), (1, 1)) if green else ((-2, 0), (2, 0), (0, -2), (0, 2))
+        )
+        vals = [int(stored[r + a, c + b]) for a, b in steps
+                if 0 <= r + a < stored.shape[0] and 0 <= c + b < stored.shape[1]
+                and stored[r + a, c + b] != constant]  # fmt: skip
+        out[(r, c)] = (sum(vals) + len(vals) // 2) // len(vals)
+    return out
+
+
+@pytest.mark.parametrize("phase", [0, 1, 2, 3])
+def test_fix_bad_pixels_constant(tmp_path: Path, phase: int) -> None:
+    """Pixels at the constant (0) are replaced from their same-colour neighbours as the
+    SDK does, in the stored image's coordinates (the ActiveArea starts at row 1, column 3:
+    LibRaw's mosaic at stored row 2, column 4); two bad neighbours are not counted."""
+    rng = np.random.default_rng(phase)
+    stored = rng.integers(500, 3000, (24, 30)).astype(np.uint16)
+    bad = [(6, 9), (7, 10), (8, 9), (10, 12), (12, 15), (9, 20)]  # (6, 9) and (8, 9): same colour
+    for rc in bad:
+        stored[rc] = 0
+    want = _fixed_by_hand(stored, bad, 0, phase)
+    if phase == 1:  # one pixel by hand: (10, 12) with phase 1 is not green (10 + 12 + 1 odd)
+        s = stored
+        hand = (int(s[8, 12]) + int(s[12, 12]) + int(s[10, 10]) + int(s[10, 14]) + 2) // 4
+        assert want[(10, 12)] == hand
+    path = _dng(tmp_path / "bp.dng", stored, active_area=(1, 3, 23, 29),
+                lists={51008: _op_list(_bad_pixels_op(0, phase))})  # fmt: skip
+    raw = read_raw(path)
+    assert raw.metadata["opcodes_applied_other"] == ["OpcodeList1:FixBadPixelsConstant"]
+    assert raw.mosaic.shape == (21, 25)  # stored rows 2..22, columns 4..28
+    for (r, c), value in want.items():
+        assert raw.mosaic[r - 2, c - 4] == value
+    untouched = np.ones(raw.mosaic.shape, bool)
+    for r, c in bad:
+        untouched[r - 2, c - 4] = False
+    np.testing.assert_array_equal(raw.mosaic[untouched], stored[2:23, 4:29][untouched])
+    assert (read_raw(path, opcodes=False).mosaic == 0).sum() == len(bad)
+
+
+@pytest.mark.parametrize("planes", [1, 3])
+def test_warp_kernel_matches_the_numpy_reference(planes: int) -> None:
+    """The numba kernel (develop's path) is the NumPy functions the tests above check,
+    one pixel at a time: offset image, a centre off the middle, per-plane coefficients."""
+    rng = np.random.default_rng(planes)
+    img = rng.uniform(0.0, 1.0, (37, 52, 3)).astype(np.float32)
+    coef = [[1.0, 0.12 + 0.02 * p, -0.03, 0.01, 0.003, -0.002] for p in range(planes)]
+    ops = [WarpRectilinear(np.array(coef), (0.4, 0.6)),
+           FixVignetteRadial((0.2, 0.1, 0, 0, 0), (0.5, 0.5))]  # fmt: skip
+    fast = apply_stage3(img, ops, offset=(1, 1), shape=(39, 54))
+    slow = apply_stage3(img, ops, offset=(1, 1), shape=(39, 54), kernel=False, rows_per_chunk=7)
+    np.testing.assert_allclose(fast, slow, atol=2e-6)
+    assert np.abs(fast - img).max() > 0.1
+
+
+def test_gpu_development_applies_stage3_on_the_cpu(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """device="cuda": the GPU demosaics (here a stand-in giving the CPU pass's values, CI has
+    no GPU), then the OpcodeList3 warp runs on the CPU, with a note saying so."""
+    cuda_demosaic = pytest.importorskip("imageform._cuda.demosaic")
+    import imageform._cuda.geometry as cuda_geometry
+
+    mosaic = np.random.default_rng(5).integers(200, 3000, (24, 32)).astype(np.uint16)
+    warp = _warp_op([[1.0, 0.1, 0, 0, 0.002, 0]], (0.5, 0.5))
+    raw = read_raw(_dng(tmp_path / "g.dng", mosaic, lists={51022: _op_list(warp)}))
+    cpu = develop(raw, linear=True)
+    plain = develop(read_raw(tmp_path / "g.dng", opcodes=False), linear=True)
+    monkeypatch.setattr(cuda_geometry, "require_cuda", lambda what: None)
+    monkeypatch.setattr(cuda_demosaic, "develop_bayer", lambda *a: plain._fused(a[-1]))
+    gpu = develop(raw, linear=True, device="cuda")
+    assert gpu._device == "cuda"
+    assert gpu.notes[-1] == (
+        "applied the DNG's OpcodeList3:WarpRectilinear after demosaicing (on the CPU, after "
+        "the GPU's demosaicing)"
+    )
+    np.testing.assert_array_equal(gpu.camera_rgb, cpu.camera_rgb)
+    np.testing.assert_allclose(gpu.image, cpu.image, atol=1e-6)
+    assert np.abs(gpu.camera_rgb - plain.camera_rgb).max() > 0.05

@@ -432,9 +432,14 @@ def read_raw(path: str | Path, *, max_pixels: int | None = None, opcodes: bool =
     opcodes : bool
         Apply a DNG's GainMap opcodes (its OpcodeList2: the lens-shading correction phones
         write, one map per photosite of the tile) to the mosaic, as the DNG specification
-        asks and Adobe's readers do (LibRaw does not: False gives LibRaw's values). Other
-        opcodes are not applied; ``metadata["opcodes_skipped"]`` names them and
-        ``metadata["opcodes_applied"]`` counts the GainMaps.
+        asks and Adobe's readers do (LibRaw does not: False gives LibRaw's values), with
+        the list's FixVignetteRadial, Scale/DeltaPerRow/Column and MapPolynomial, and
+        OpcodeList1's FixBadPixelsConstant. The WarpRectilinear (lens distortion) and
+        FixVignetteRadial opcodes of its OpcodeList3 are kept in
+        ``metadata["opcodes_stage3"]`` for :func:`develop`, which applies them to the
+        demosaiced camera RGB. Other opcodes are not applied: ``metadata["opcodes_skipped"]``
+        names them; ``metadata["opcodes_applied"]`` counts the GainMaps and
+        ``metadata["opcodes_applied_other"]`` names the other opcodes applied.
 
     Returns
     -------
@@ -455,58 +460,95 @@ def read_raw(path: str | Path, *, max_pixels: int | None = None, opcodes: bool =
 
 
 def _with_opcodes(raw: RawImage, p: Path) -> RawImage:
-    """Return ``raw`` with its DNG's GainMaps applied (:mod:`imageform.io._dng_opcodes`)."""
+    """Return ``raw`` with its DNG's OpcodeList2 applied (:mod:`imageform.io._dng_opcodes`).
+
+    ``metadata["opcodes_applied"]`` counts the GainMaps, ``["opcodes_applied_other"]``
+    names the other opcodes applied (``"OpcodeList2:ScalePerRow"``). The OpcodeList3
+    opcodes it can apply (after demosaicing) are kept for :func:`develop` in
+    ``metadata["opcodes_stage3"]`` with ``metadata["opcodes_area"]`` (offset, (H, W)).
+    """
     import dataclasses
 
-    from imageform.io._dng_opcodes import apply_gain_maps
+    from imageform.io._dng_opcodes import (
+        apply_stage2,
+        fix_bad_pixels_constant,
+        stage2_name,
+        stage3_name,
+    )
 
-    maps, skipped, offset, area = _raw_page_opcodes(p)
-    if not maps and not skipped:
+    stage1, maps, stage3, skipped, offset, area, origin = _raw_page_opcodes(p)
+    if not stage1 and not maps and not stage3 and not skipped:
         return raw
     meta = dict(raw.metadata)
     meta["opcodes_skipped"] = skipped
     mosaic = raw.mosaic
     expected = None if area is None else (area[0] - offset[0], area[1] - offset[1])
     fits = expected is None or tuple(mosaic.shape[:2]) == expected
+    names1 = ["OpcodeList1:FixBadPixelsConstant"] * len(stage1)
+    if stage1 and fits and origin is not None and raw.cfa_pattern is not None:
+        for fix in stage1:  # on the codes as stored (no LinearizationTable: origin is None)
+            mosaic = fix_bad_pixels_constant(mosaic, fix, origin)
+        meta["opcodes_applied_other"] = names1
+    elif stage1:
+        meta["opcodes_skipped"] = [*meta["opcodes_skipped"], *names1]
+    names = [stage2_name(op) for op in maps]
     if maps and fits and raw.metadata.get("xtrans") is None:
-        mosaic = apply_gain_maps(mosaic, _black_plane(raw), raw.white_level, maps,
-                                 offset=offset, shape=area)  # fmt: skip
-        meta["opcodes_applied"] = len(maps)
+        mosaic = apply_stage2(mosaic, _black_plane(raw), raw.white_level, maps,
+                              offset=offset, shape=area)  # fmt: skip
+        meta["opcodes_applied"] = names.count("OpcodeList2:GainMap")
+        meta["opcodes_applied_other"] = [
+            *meta.get("opcodes_applied_other", []),
+            *(n for n in names if n != "OpcodeList2:GainMap"),
+        ]
     elif maps:
-        meta["opcodes_skipped"] = [*skipped, *(["OpcodeList2:GainMap"] * len(maps))]
+        meta["opcodes_skipped"] = [*meta["opcodes_skipped"], *names]
+    if stage3 and fits:
+        meta["opcodes_stage3"] = tuple(stage3)
+        meta["opcodes_area"] = (offset, area)
+    elif stage3:
+        meta["opcodes_skipped"] = [*meta["opcodes_skipped"], *map(stage3_name, stage3)]
     return dataclasses.replace(raw, mosaic=mosaic, metadata=meta)
 
 
 def _raw_page_opcodes(
     path: Path,
-) -> tuple[list[Any], list[str], tuple[int, int], tuple[int, int] | None]:
-    """Return a DNG raw IFD's GainMaps, the opcodes not applied, offset and area size.
+) -> tuple[
+    list[Any], list[Any], list[Any], list[str], tuple[int, int], tuple[int, int] | None,
+    tuple[int, int] | None,
+]:  # fmt: skip
+    """Return a DNG raw IFD's opcodes to apply, the ones not, offset, size and origin.
 
+    The opcodes of OpcodeList1, 2 and 3 (:func:`imageform.io._dng_opcodes.read_opcodes`).
     The offset is where the mosaic's first pixel sits in the ActiveArea (LibRaw starts a
     CFA image's crop at an even row and column), the size the area's (H, W) (None: the raw
-    image's). ``([], [], (0, 0), None)`` for any other file.
+    image's), the origin where it sits in the stored image (None where a LinearizationTable
+    changes the stored codes: OpcodeList1 applies to them). ``([], [], [], [], (0, 0), None,
+    None)`` for any other file.
     """
     import tifffile
 
     from imageform.io._dng_opcodes import read_opcodes
 
+    none: Any = ([], [], [], [], (0, 0), None, None)
     try:
         with tifffile.TiffFile(path) as tf:
             if _DNG_VERSION not in tf.pages[0].tags:  # type: ignore[union-attr]
-                return [], [], (0, 0), None
+                return none
             page = _dng_raw_page(tf)
             if page is None:
-                return [], [], (0, 0), None
-            maps, skipped = read_opcodes(page)
+                return none
+            stage1, maps, stage3, skipped = read_opcodes(page)
             area = [int(v) for v in np.ravel(page.tags.valueof(_ACTIVE_AREA, ()))]
             cfa = int(page.tags.valueof(262, 0)) == 32803
+            linearized = _LINEARIZATION_TABLE in page.tags
     except Exception:  # not a TIFF: no opcodes
-        return [], [], (0, 0), None
+        return none
     if len(area) == 4 and area[2] > area[0] and area[3] > area[1]:
         top, left, bottom, right = area
         offset = (top & 1, left & 1) if cfa else (0, 0)  # LibRaw's crop starts even
-        return maps, skipped, offset, (bottom - top, right - left)
-    return maps, skipped, (0, 0), None
+        origin = None if linearized else (top + offset[0], left + offset[1])
+        return stage1, maps, stage3, skipped, offset, (bottom - top, right - left), origin
+    return stage1, maps, stage3, skipped, (0, 0), None, None if linearized else (0, 0)
 
 
 def _read_raw(path: str | Path, max_pixels: int | None) -> RawImage:
@@ -1218,7 +1260,10 @@ def develop(
        scaled so the smallest gain is 1, clipped to [0, 1] (LibRaw's default highlight
        clipping).
     3. Demosaic with :func:`imageform.sensor.demosaic` (``demosaic`` names the method); a
-       linear raw has every colour already and is not demosaiced.
+       linear raw has every colour already and is not demosaiced. A DNG's OpcodeList3
+       opcodes that :func:`read_raw` kept (WarpRectilinear, FixVignetteRadial:
+       ``metadata["opcodes_stage3"]``) are applied to this camera RGB, on the CPU, with a
+       note (:mod:`imageform.io._dng_opcodes`).
     4. Camera RGB to XYZ: :math:`M = C^{-1}\,\mathrm{diag}(C\,\mathbf w)`, with C the
        colour matrix (XYZ to camera) and :math:`\mathbf w` the XYZ of D65's white (Y = 1),
        so that white-balanced white (1, 1, 1) maps to :math:`\mathbf w` (the normalisation
@@ -1427,6 +1472,16 @@ def develop(
         notes=tuple(notes),
         device="cuda" if on_gpu else "cpu",
     )
+    stage3 = raw.metadata.get("opcodes_stage3") or ()
+    if stage3:  # OpcodeList3: on the demosaiced camera RGB, before the matrix (on the CPU)
+        from imageform.io._dng_opcodes import apply_stage3, stage3_name
+
+        offset, area = raw.metadata.get("opcodes_area") or ((0, 0), None)
+        dev._camera_rgb = apply_stage3(dev._sensor_camera_rgb(), stage3, offset=offset,
+                                       shape=area)  # fmt: skip
+        names = ", ".join(dict.fromkeys(stage3_name(op) for op in stage3))
+        where_run = " (on the CPU, after the GPU's demosaicing)" if on_gpu else ""
+        dev.notes = (*dev.notes, f"applied the DNG's {names} after demosaicing{where_run}")
     if auto_bright:
         dev.brightness = _auto_bright(dev._sensor_camera_rgb(), m)
         dev._render = (m * np.float32(dev.brightness)).astype(np.float32)

@@ -51,8 +51,10 @@ class DevelopOptions(ImageOut, Options):
     )
     opcodes: bool = option(
         True,
-        help="Apply a DNG's GainMap opcodes (the lens-shading correction phones write); "
-        "--no-opcodes leaves them, as LibRaw does.",
+        help="Apply a DNG's opcodes as Adobe's DNG SDK does: GainMaps (the lens-shading "
+        "correction phones write) and the other per-pixel ones to the mosaic, then after "
+        "demosaicing WarpRectilinear (lens distortion) and FixVignetteRadial; --no-opcodes "
+        "leaves them, as LibRaw does.",
     )
     device: Device = option(
         "cpu",
@@ -71,12 +73,27 @@ def raw_layout(img: Any) -> str:
     return "monochrome raw" if img.monochrome else "linear (demosaiced) raw"
 
 
-def opcode_notes(meta: dict[str, Any]) -> list[str]:
-    """Say which DNG opcodes a read applied (GainMaps) and which it did not."""
+def stage3_names(meta: dict[str, Any]) -> list[str]:
+    """Name the OpcodeList3 opcodes a read kept for development (``"OpcodeList3:..."``)."""
+    return [f"OpcodeList3:{type(op).__name__}" for op in meta.get("opcodes_stage3") or ()]
+
+
+def opcode_notes(meta: dict[str, Any], *, developed: bool = False) -> list[str]:
+    """Say which DNG opcodes a read applied (GainMaps), which develop applies, which neither.
+
+    ``developed``: the development says itself that it applied the OpcodeList3 opcodes.
+    """
     notes = []
     if meta.get("opcodes_applied"):
         n = int(meta["opcodes_applied"])
         notes.append(f"applied the DNG's {n} GainMap opcode{'s' if n > 1 else ''} (lens shading)")
+    other = meta.get("opcodes_applied_other") or []
+    if other:
+        notes.append(f"applied the DNG's {', '.join(dict.fromkeys(other))}")
+    later = stage3_names(meta)
+    if later and not developed:
+        names = ", ".join(dict.fromkeys(later))
+        notes.append(f"DNG opcodes applied when developed (after demosaicing): {names}")
     skipped = meta.get("opcodes_skipped") or []
     if skipped:
         names = ", ".join(dict.fromkeys(skipped))
@@ -110,6 +127,8 @@ def raw_info(path: Path) -> Result:
         "orientation": raw.orientation,
         "opcodes_applied": int(raw.metadata.get("opcodes_applied", 0)),
         "opcodes_skipped": list(raw.metadata.get("opcodes_skipped", [])),
+        "opcodes_applied_other": list(raw.metadata.get("opcodes_applied_other", [])),
+        "opcodes_at_development": stage3_names(raw.metadata),
     }
     model = summary["camera_model"] or "camera not named"
     text = [
@@ -134,7 +153,7 @@ def develop(run: Run, opts: DevelopOptions, *, raw: Path, out: Path) -> Result:
     from imageform.io import image_format, read_raw
 
     img = read_raw(raw, opcodes=opts.opcodes)
-    for note in opcode_notes(img.metadata):
+    for note in opcode_notes(img.metadata, developed=True):
         run.note(note)
     dev = develop_raw(
         img,
