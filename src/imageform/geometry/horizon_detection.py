@@ -109,6 +109,21 @@ _AREA_ABOVE = 0.1
 #: to this share of the working height above it.
 _ONSET = 0.3
 _ONSET_REACH = 0.06
+#: ... and at least this many times the sky's own change per px further up (a sky that
+#: brightens steadily towards the horizon, as a thermal camera sees it, has no onset).
+_ONSET_SKY = 2.0
+#: A wave field (surf, wave crests, furrows) below a horizon: long straight segments within
+#: ``_WAVE_ANGLE`` of the line and not above it are not counted as a built scene's; where
+#: they are what made the scene look built, the line must have at most ``_VERT_WAVES``
+#: diagonals of upright segments below it (stacked boxes and storeys have them).
+_WAVE_ANGLE = math.radians(5.0)
+_VERT_WAVES = 0.25
+#: Where the best-covered line has at least ``_WAVE_LINES`` long straight segments parallel
+#: to it (within ``_WAVE_ANGLE``), the horizon is, of the lines covered within ``_WAVE_COVER``
+#: as well, the one with the largest contrast of texture (mean edge strength below it less
+#: that above it): the sky's edge, not a surf line.
+_WAVE_LINES = 8
+_WAVE_COVER = 0.15
 
 
 @dataclass(frozen=True)
@@ -333,10 +348,13 @@ def _sky_onset(
     main = float(diff[z - 1 : z + 2].max())
     if main <= 0:
         return 0.0
+    # the sky's own change per px further up (beyond the reach): a step must stand out of it
+    sky = float(np.median(diff[1 : z - reach]))
     best = 0.0
     for k in range(z - 3, z - reach - 1, -1):
         if diff[k] >= _ONSET * main and diff[k] >= diff[k - 1] and diff[k] >= diff[k + 1]:
-            best = float(d[k]) - 0.5  # diff[k] is the step between d[k-1] and d[k]
+            if diff[k] >= _ONSET_SKY * sky:
+                best = float(d[k]) - 0.5  # diff[k] is the step between d[k-1] and d[k]
     return best
 
 
@@ -425,6 +443,9 @@ class _Candidate:
     sky_below: float = 0.0  # share of it with the sky's color on both sides
     sky_along: float = 1.0  # share of it with smooth sky just above
     area_above: float = 1.0  # share of the frame above it
+    waves: int = 0  # long straight segments along it and not above it (a wave field)
+    parallel: int = 0  # long straight segments along it, anywhere
+    contrast: float = -math.inf  # mean edge strength below it less that above it
     why: str = ""
 
 
@@ -484,6 +505,14 @@ def _evaluate(
     c.steep_above = float(slen[steep & (side < -1.0)].sum()) / diag
     upright = np.abs(seg_d[:, 1]) / np.maximum(slen, 1e-9) > math.cos(math.radians(10.0))
     c.vert_below = float(slen[upright & (slen > 0.03 * diag) & (side > 1.0)].sum()) / diag
+    along = (across < math.sin(_WAVE_ANGLE)) & (slen > 0.1 * diag)
+    c.parallel = int(along.sum())
+    c.waves = int((along & (side > -1.0)).sum())
+    up, down = _band((h, w), c.normal, c.point, -math.inf, -2.0), _band(
+        (h, w), c.normal, c.point, 2.0, math.inf
+    )
+    if up.sum() > 10 and down.sum() > 10:
+        c.contrast = float(mag[down].mean() - mag[up].mean())
     if c.cover >= _COVER and c.resid <= _RESIDUAL and not c.at_edge:
         # only where it matters (:func:`_reject` rejects the others first): it is the costly part
         c.sky_below, c.sky_along = _sides(a, mag, pts, c.normal, h)
@@ -499,8 +528,10 @@ def _reject(c: _Candidate, n_long: int) -> str:
         return c.why
     if c.at_edge:
         return "the frame's edge"
-    if n_long > _LONG_SEGMENTS or c.steep > _STEEP:
+    if n_long - c.waves > _LONG_SEGMENTS or c.steep > _STEEP:
         return "a built scene (long straight segments)"
+    if n_long > _LONG_SEGMENTS and c.vert_below > _VERT_WAVES:
+        return "a built scene (long straight segments with upright ones below)"
     if c.cover < _COVER:
         return "an edge along too little of it"
     if c.resid > _RESIDUAL:
@@ -547,6 +578,11 @@ def _choose(
 
     # the best-covered line; of equally covered ones, the highest at the centre column
     best = min(distinct, key=lambda c: (-c.cover, _row(line_of(c), (w - 1) / 2)))
+    if best.parallel >= _WAVE_LINES:
+        # a wave field: the surf lines below the horizon are as straight and better covered;
+        # the horizon parts smooth sky from textured sea (Ettinger et al. 2003's criterion)
+        near = [c for c in distinct if c.cover >= best.cover - _WAVE_COVER]
+        best = max(near, key=lambda c: c.contrast)
     return line_of(best), best, reasons
 
 
