@@ -28,7 +28,11 @@ acceptance tests below are what make "not found" the answer elsewhere:
    image diagonals, and the scene is not a built one: at most ``_LONG_SEGMENTS`` straight
    segments longer than a tenth of the diagonal and ``_STEEP`` diagonals of segments across
    the line (facades, rooms and streets have long straight edges everywhere; their long
-   horizontal lines, roofs and ceilings, are not horizons). A building's roof line against
+   horizontal lines, roofs and ceilings, are not horizons). Long segments along the line
+   (within ``_WAVE_ANGLE``) and not above it are a wave field's (surf lines, wave crests,
+   furrows) and are not counted; where they are what made the scene look built, the line
+   may have at most ``_VERT_WAVES`` diagonals of upright segments below it (stacked boxes,
+   shelves and storeys have them, surf has none). A building's roof line against
    a clear sky passes all that; it is told from a horizon by what lies beside and below it
    (:func:`_sides`): upright straight segments below it (walls, pillars, window edges,
    within 10 degrees of the image's columns) add up to at most ``_VERT_BELOW`` diagonals,
@@ -38,12 +42,20 @@ acceptance tests below are what make "not found" the answer elsewhere:
    ``_AREA_ABOVE`` of the frame lies above it.
 5. Of the lines taken, the best-covered is the horizon, put at the sky's end: a distant
    plain under haze meets the sky through a band of paler land whose foot is the strongest
-   edge (:func:`_sky_onset`).
+   edge (:func:`_sky_onset`; a sky that brightens steadily down to the horizon, as a thermal
+   camera sees it, has no such end). Where that line has ``_WAVE_LINES`` or more long
+   straight segments parallel to it (a sea with surf: the surf lines below the horizon are
+   straighter and better covered than a hazy horizon), the horizon is, of the lines covered
+   nearly as well, the one that parts smooth sky from textured sea: the largest mean edge
+   strength below it less that above it (the region contrast of Ettinger et al. 2003,
+   with texture for colour).
 
 The thresholds were set on the tuning half of ``benchmarks/check_horizon_natural.py``
 (drone frames over farmland, infrared sea frames, five sea photographs, photographs without
 a horizon); the roof-line rules after seeing the false horizons of the held-out half
-(``benchmarks/results/horizon-natural-2026-11-29h.md``).
+(``benchmarks/results/horizon-natural-2026-11-29h.md``); the wave-field rules and the sky
+onset's steady-gradient test on the tuning half only
+(``benchmarks/results/horizon-natural-2026-11-30a.md``).
 Not found (``found=False``) is the answer for a scene without such a line: a street, a
 room, a close-up, mountains. A horizon hidden behind land (a bay closed by hills) is not
 the true horizon but the foot of the far shore, which is what is found where it is
@@ -319,8 +331,11 @@ def _sky_onset(
     strongest edge is the band's foot, the horizon its top. Across the line, the median
     colour over the columns where the line has an edge gives a profile; the highest step of
     it (a local maximum of the colour change) within ``_ONSET_REACH`` of the height above
-    the line that is at least ``_ONSET`` of the line's own step is the sky's end. A sharp
-    sea horizon has none (a sky that pales towards the horizon changes smoothly): 0.
+    the line that is at least ``_ONSET`` of the line's own step, and ``_ONSET_SKY`` times
+    the sky's own change further up (the median over the next ``_ONSET_REACH`` of the
+    height), is the sky's end. A sharp sea horizon has none (a sky that pales towards the
+    horizon changes smoothly, and one that brightens steadily down to it, as a thermal
+    camera sees it, has no step that stands out of its own gradient): 0.
     """
     reach = max(4, round(_ONSET_REACH * h))
     cols = pts[hit] + off[hit, None] * n[None, :]
@@ -352,9 +367,9 @@ def _sky_onset(
     sky = float(np.median(diff[1 : z - reach]))
     best = 0.0
     for k in range(z - 3, z - reach - 1, -1):
-        if diff[k] >= _ONSET * main and diff[k] >= diff[k - 1] and diff[k] >= diff[k + 1]:
-            if diff[k] >= _ONSET_SKY * sky:
-                best = float(d[k]) - 0.5  # diff[k] is the step between d[k-1] and d[k]
+        peak = diff[k] >= diff[k - 1] and diff[k] >= diff[k + 1]
+        if peak and diff[k] >= _ONSET * main and diff[k] >= _ONSET_SKY * sky:
+            best = float(d[k]) - 0.5  # diff[k] is the step between d[k-1] and d[k]
     return best
 
 
@@ -508,8 +523,9 @@ def _evaluate(
     along = (across < math.sin(_WAVE_ANGLE)) & (slen > 0.1 * diag)
     c.parallel = int(along.sum())
     c.waves = int((along & (side > -1.0)).sum())
-    up, down = _band((h, w), c.normal, c.point, -math.inf, -2.0), _band(
-        (h, w), c.normal, c.point, 2.0, math.inf
+    up, down = (
+        _band((h, w), c.normal, c.point, -math.inf, -2.0),
+        _band((h, w), c.normal, c.point, 2.0, math.inf),
     )
     if up.sum() > 10 and down.sum() > 10:
         c.contrast = float(mag[down].mean() - mag[up].mean())
@@ -618,7 +634,7 @@ def detect_horizon(image: ArrayLike, *, max_roll: float = math.radians(30.0)) ->
         The largest angle of the horizon to the image rows looked for (radians, at most
         80 degrees). The default, 30 degrees, covers hand-held and mounted cameras; an
         aircraft's camera rolls further (60 degrees finds more of its horizons and more
-        false ones, ``benchmarks/results/horizon-natural-2026-11-29h.md``).
+        false ones, ``benchmarks/results/horizon-natural-2026-11-30a.md``).
 
     Returns
     -------
