@@ -523,15 +523,14 @@ def _evaluate(
     along = (across < math.sin(_WAVE_ANGLE)) & (slen > 0.1 * diag)
     c.parallel = int(along.sum())
     c.waves = int((along & (side > -1.0)).sum())
-    up, down = (
-        _band((h, w), c.normal, c.point, -math.inf, -2.0),
-        _band((h, w), c.normal, c.point, 2.0, math.inf),
-    )
-    if up.sum() > 10 and down.sum() > 10:
-        c.contrast = float(mag[down].mean() - mag[up].mean())
     if c.cover >= _COVER and c.resid <= _RESIDUAL and not c.at_edge:
         # only where it matters (:func:`_reject` rejects the others first): it is the costly part
         c.sky_below, c.sky_along = _sides(a, mag, pts, c.normal, h)
+        vv, uu = np.mgrid[0:h, 0:w]
+        dist = (uu - c.point[0]) * c.normal[0] + (vv - c.point[1]) * c.normal[1]
+        up, down = dist < -2.0, dist >= 2.0
+        if up.sum() > 10 and down.sum() > 10:
+            c.contrast = float(mag[down].mean() - mag[up].mean())
     # pixels above the line: in column u, the rows v < the line's row there (b > 0)
     line_v = c.point[1] - (np.arange(w) - c.point[0]) * c.normal[0] / c.normal[1]
     c.area_above = float(np.clip(np.ceil(line_v), 0, h).sum()) / (h * w)
