@@ -64,6 +64,10 @@ before the thresholds of ``2026-11-29g`` were set):
   the first two groups are named in those scripts.
 - The six Kodak images with a partly hidden horizon are run and reported, not scored.
 
+The wave-field rules and the sky onset's steady-gradient test (``horizon-natural-2026-11-30a.md``)
+were set on the tuning halves only (infrared frames up to 20:56 among them); the held-out
+halves were run once, after.
+
 Versions (``--versions``, on the hand-annotated photographs and every fifth UAV frame):
 half size, JPEG quality 30, Gaussian noise (σ 8 of 255), and rolled by 7 degrees about the
 centre (cropped to the largest centred rectangle of the same shape without the corners the

@@ -107,6 +107,47 @@ def test_grey_and_rgb_agree() -> None:
     np.testing.assert_allclose(grey.rows, rgb.rows, atol=1.0)
 
 
+def _infrared_sea(
+    roll_deg: float, row: float = 110.0, *, seed: int = 0
+) -> tuple[np.ndarray, tuple[float, float]]:
+    """A thermal camera's frame of a coast with surf (384 x 288, one channel, low contrast).
+
+    As in InfML-HDD's frames: the sky brightens steadily towards the horizon (0.0025 per
+    row), the sea is brighter still and brightens towards the camera, and long bright surf
+    lines, parallel to the horizon and sharper than it, run across the frame below it.
+    Returns the image and the horizon's rows at the first and last columns.
+    """
+    from scipy import ndimage
+
+    w, h = 384, 288
+    rng = np.random.default_rng(seed)
+    vv, uu = np.mgrid[0:h, 0:w].astype(np.float64)
+    cx = (w - 1) / 2
+    t = math.tan(math.radians(roll_deg))
+    d = vv - (row - t * (uu - cx))  # distance below the horizon (rows)
+    img = np.where(d < 0, 0.52 + 0.0025 * d, 0.535 + 0.002 * d)
+    for k, off in enumerate((12, 26, 44, 68, 96, 128, 165)):
+        along = 0.75 + 0.25 * np.tanh(8 * ndimage.gaussian_filter1d(rng.normal(0, 1, w), 15))
+        img += 0.07 * np.clip(2.0 + 0.6 * k - np.abs(d - off), 0, 1) * along[None, :]
+    waves = ndimage.gaussian_filter(rng.normal(0, 1, (h, w)), (1.0, 4.0))
+    img += np.where(d > 0, 0.006 * waves / waves.std(), 0.0)
+    img = ndimage.gaussian_filter(img, 0.8) + rng.normal(0, 0.002, (h, w))
+    return np.clip(img, 0.0, 1.0), (row + t * cx, row - t * (w - 1 - cx))
+
+
+@pytest.mark.parametrize(("roll_deg", "seed"), [(0.0, 0), (0.0, 2), (2.0, 0), (-3.0, 1)])
+def test_infrared_sea_frame_horizon(roll_deg: float, seed: int) -> None:
+    # the detector of 2026-11-29 put the horizon on the first surf line, 10 px below it
+    # (seed 0: better covered than the hazier horizon), or 17 px above it (seed 2: the sky's
+    # steady brightening taken for a band of haze); the horizon is now the line that parts
+    # smooth sky from textured sea, and a steady gradient above it is no sky onset
+    img, rows = _infrared_sea(roll_deg, seed=seed)
+    res = detect_horizon(img)
+    assert res.found, res.reason
+    np.testing.assert_allclose(res.rows, rows, atol=1.5)
+    assert math.degrees(res.roll) == pytest.approx(roll_deg, abs=0.3)
+
+
 def _facade(seed: int = 0) -> np.ndarray:
     """A building seen square on: storeys, windows and pillars, over a pavement."""
     rng = np.random.default_rng(seed)

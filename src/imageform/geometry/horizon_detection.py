@@ -28,7 +28,11 @@ acceptance tests below are what make "not found" the answer elsewhere:
    image diagonals, and the scene is not a built one: at most ``_LONG_SEGMENTS`` straight
    segments longer than a tenth of the diagonal and ``_STEEP`` diagonals of segments across
    the line (facades, rooms and streets have long straight edges everywhere; their long
-   horizontal lines, roofs and ceilings, are not horizons). A building's roof line against
+   horizontal lines, roofs and ceilings, are not horizons). Long segments along the line
+   (within ``_WAVE_ANGLE``) and not above it are a wave field's (surf lines, wave crests,
+   furrows) and are not counted; where they are what made the scene look built, the line
+   may have at most ``_VERT_WAVES`` diagonals of upright segments below it (stacked boxes,
+   shelves and storeys have them, surf has none). A building's roof line against
    a clear sky passes all that; it is told from a horizon by what lies beside and below it
    (:func:`_sides`): upright straight segments below it (walls, pillars, window edges,
    within 10 degrees of the image's columns) add up to at most ``_VERT_BELOW`` diagonals,
@@ -38,12 +42,20 @@ acceptance tests below are what make "not found" the answer elsewhere:
    ``_AREA_ABOVE`` of the frame lies above it.
 5. Of the lines taken, the best-covered is the horizon, put at the sky's end: a distant
    plain under haze meets the sky through a band of paler land whose foot is the strongest
-   edge (:func:`_sky_onset`).
+   edge (:func:`_sky_onset`; a sky that brightens steadily down to the horizon, as a thermal
+   camera sees it, has no such end). Where that line has ``_WAVE_LINES`` or more long
+   straight segments parallel to it (a sea with surf: the surf lines below the horizon are
+   straighter and better covered than a hazy horizon), the horizon is, of the lines covered
+   nearly as well, the one that parts smooth sky from textured sea: the largest mean edge
+   strength below it less that above it (the region contrast of Ettinger et al. 2003,
+   with texture for colour).
 
 The thresholds were set on the tuning half of ``benchmarks/check_horizon_natural.py``
 (drone frames over farmland, infrared sea frames, five sea photographs, photographs without
 a horizon); the roof-line rules after seeing the false horizons of the held-out half
-(``benchmarks/results/horizon-natural-2026-11-29h.md``).
+(``benchmarks/results/horizon-natural-2026-11-29h.md``); the wave-field rules and the sky
+onset's steady-gradient test on the tuning half only
+(``benchmarks/results/horizon-natural-2026-11-30a.md``).
 Not found (``found=False``) is the answer for a scene without such a line: a street, a
 room, a close-up, mountains. A horizon hidden behind land (a bay closed by hills) is not
 the true horizon but the foot of the far shore, which is what is found where it is
@@ -109,6 +121,21 @@ _AREA_ABOVE = 0.1
 #: to this share of the working height above it.
 _ONSET = 0.3
 _ONSET_REACH = 0.06
+#: ... and at least this many times the sky's own change per px further up (a sky that
+#: brightens steadily towards the horizon, as a thermal camera sees it, has no onset).
+_ONSET_SKY = 2.0
+#: A wave field (surf, wave crests, furrows) below a horizon: long straight segments within
+#: ``_WAVE_ANGLE`` of the line and not above it are not counted as a built scene's; where
+#: they are what made the scene look built, the line must have at most ``_VERT_WAVES``
+#: diagonals of upright segments below it (stacked boxes and storeys have them).
+_WAVE_ANGLE = math.radians(5.0)
+_VERT_WAVES = 0.25
+#: Where the best-covered line has at least ``_WAVE_LINES`` long straight segments parallel
+#: to it (within ``_WAVE_ANGLE``), the horizon is, of the lines covered within ``_WAVE_COVER``
+#: as well, the one with the largest contrast of texture (mean edge strength below it less
+#: that above it): the sky's edge, not a surf line.
+_WAVE_LINES = 8
+_WAVE_COVER = 0.15
 
 
 @dataclass(frozen=True)
@@ -304,8 +331,11 @@ def _sky_onset(
     strongest edge is the band's foot, the horizon its top. Across the line, the median
     colour over the columns where the line has an edge gives a profile; the highest step of
     it (a local maximum of the colour change) within ``_ONSET_REACH`` of the height above
-    the line that is at least ``_ONSET`` of the line's own step is the sky's end. A sharp
-    sea horizon has none (a sky that pales towards the horizon changes smoothly): 0.
+    the line that is at least ``_ONSET`` of the line's own step, and ``_ONSET_SKY`` times
+    the sky's own change further up (the median over the next ``_ONSET_REACH`` of the
+    height), is the sky's end. A sharp sea horizon has none (a sky that pales towards the
+    horizon changes smoothly, and one that brightens steadily down to it, as a thermal
+    camera sees it, has no step that stands out of its own gradient): 0.
     """
     reach = max(4, round(_ONSET_REACH * h))
     cols = pts[hit] + off[hit, None] * n[None, :]
@@ -333,9 +363,12 @@ def _sky_onset(
     main = float(diff[z - 1 : z + 2].max())
     if main <= 0:
         return 0.0
+    # the sky's own change per px further up (beyond the reach): a step must stand out of it
+    sky = float(np.median(diff[1 : z - reach]))
     best = 0.0
     for k in range(z - 3, z - reach - 1, -1):
-        if diff[k] >= _ONSET * main and diff[k] >= diff[k - 1] and diff[k] >= diff[k + 1]:
+        peak = diff[k] >= diff[k - 1] and diff[k] >= diff[k + 1]
+        if peak and diff[k] >= _ONSET * main and diff[k] >= _ONSET_SKY * sky:
             best = float(d[k]) - 0.5  # diff[k] is the step between d[k-1] and d[k]
     return best
 
@@ -425,6 +458,9 @@ class _Candidate:
     sky_below: float = 0.0  # share of it with the sky's color on both sides
     sky_along: float = 1.0  # share of it with smooth sky just above
     area_above: float = 1.0  # share of the frame above it
+    waves: int = 0  # long straight segments along it and not above it (a wave field)
+    parallel: int = 0  # long straight segments along it, anywhere
+    contrast: float = -math.inf  # mean edge strength below it less that above it
     why: str = ""
 
 
@@ -484,9 +520,17 @@ def _evaluate(
     c.steep_above = float(slen[steep & (side < -1.0)].sum()) / diag
     upright = np.abs(seg_d[:, 1]) / np.maximum(slen, 1e-9) > math.cos(math.radians(10.0))
     c.vert_below = float(slen[upright & (slen > 0.03 * diag) & (side > 1.0)].sum()) / diag
+    along = (across < math.sin(_WAVE_ANGLE)) & (slen > 0.1 * diag)
+    c.parallel = int(along.sum())
+    c.waves = int((along & (side > -1.0)).sum())
     if c.cover >= _COVER and c.resid <= _RESIDUAL and not c.at_edge:
         # only where it matters (:func:`_reject` rejects the others first): it is the costly part
         c.sky_below, c.sky_along = _sides(a, mag, pts, c.normal, h)
+        vv, uu = np.mgrid[0:h, 0:w]
+        dist = (uu - c.point[0]) * c.normal[0] + (vv - c.point[1]) * c.normal[1]
+        up, down = dist < -2.0, dist >= 2.0
+        if up.sum() > 10 and down.sum() > 10:
+            c.contrast = float(mag[down].mean() - mag[up].mean())
     # pixels above the line: in column u, the rows v < the line's row there (b > 0)
     line_v = c.point[1] - (np.arange(w) - c.point[0]) * c.normal[0] / c.normal[1]
     c.area_above = float(np.clip(np.ceil(line_v), 0, h).sum()) / (h * w)
@@ -499,8 +543,10 @@ def _reject(c: _Candidate, n_long: int) -> str:
         return c.why
     if c.at_edge:
         return "the frame's edge"
-    if n_long > _LONG_SEGMENTS or c.steep > _STEEP:
+    if n_long - c.waves > _LONG_SEGMENTS or c.steep > _STEEP:
         return "a built scene (long straight segments)"
+    if n_long > _LONG_SEGMENTS and c.vert_below > _VERT_WAVES:
+        return "a built scene (long straight segments with upright ones below)"
     if c.cover < _COVER:
         return "an edge along too little of it"
     if c.resid > _RESIDUAL:
@@ -547,6 +593,11 @@ def _choose(
 
     # the best-covered line; of equally covered ones, the highest at the centre column
     best = min(distinct, key=lambda c: (-c.cover, _row(line_of(c), (w - 1) / 2)))
+    if best.parallel >= _WAVE_LINES:
+        # a wave field: the surf lines below the horizon are as straight and better covered;
+        # the horizon parts smooth sky from textured sea (Ettinger et al. 2003's criterion)
+        near = [c for c in distinct if c.cover >= best.cover - _WAVE_COVER]
+        best = max(near, key=lambda c: c.contrast)
     return line_of(best), best, reasons
 
 
@@ -582,7 +633,7 @@ def detect_horizon(image: ArrayLike, *, max_roll: float = math.radians(30.0)) ->
         The largest angle of the horizon to the image rows looked for (radians, at most
         80 degrees). The default, 30 degrees, covers hand-held and mounted cameras; an
         aircraft's camera rolls further (60 degrees finds more of its horizons and more
-        false ones, ``benchmarks/results/horizon-natural-2026-11-29h.md``).
+        false ones, ``benchmarks/results/horizon-natural-2026-11-30a.md``).
 
     Returns
     -------
