@@ -42,6 +42,7 @@ from numpy.typing import NDArray
 from imageform._kernels.checkerboard_symmetric import (
     SINGULAR,
     finish_numpy,
+    put_back,
     symmetric_step,
     symmetric_step_numpy,
     symmetric_window_weights,
@@ -276,13 +277,7 @@ def _refine_local(
             if st >= 0:
                 status[k] = st
                 break
-        if status[k] == 2:
-            cx = sx
-            cy = sy
-        if abs(cx - sx) > h or abs(cy - sy) > h:
-            cx = sx
-            cy = sy
-            status[k] = 4
+        cx, cy, status[k] = put_back(cx, cy, sx, sy, h, status[k])
         out[k, 0] = cx
         out[k, 1] = cy
     return out, status

@@ -166,6 +166,24 @@ def symmetric_step(
     return cx, cy, -1
 
 
+@njit(fastmath=False)
+def put_back(
+    cx: float, cy: float, sx: float, sy: float, h: int, status: int
+) -> tuple[float, float, int]:  # pragma: no cover - numba-compiled
+    """Return a refined corner put back at its start ``(sx, sy)`` where it failed.
+
+    A singular step (status 2) keeps the start; a corner that moved more than ``h`` (the
+    window's half size) either way is put back with status 4 (:func:`finish_numpy`'s rule,
+    one corner).
+    """
+    if status == 2:
+        cx = sx
+        cy = sy
+    if abs(cx - sx) > h or abs(cy - sy) > h:
+        return sx, sy, 4
+    return cx, cy, status
+
+
 _EMPTY32 = np.empty((0, 0), dtype=np.float32)
 _EMPTY64 = np.empty((0, 0), dtype=np.float64)
 
@@ -302,13 +320,7 @@ def _refine_symmetric(
             if st >= 0:
                 status[k] = st
                 break
-        if status[k] == 2:
-            cx = sx
-            cy = sy
-        if abs(cx - sx) > h or abs(cy - sy) > h:
-            cx = sx
-            cy = sy
-            status[k] = 4
+        cx, cy, status[k] = put_back(cx, cy, sx, sy, h, status[k])
         out[k, 0] = cx
         out[k, 1] = cy
     return out, status
@@ -913,13 +925,7 @@ def _charuco_symmetric(
             if st >= 0:
                 status[k] = st
                 break
-        if status[k] == 2:
-            cx = sx
-            cy = sy
-        if abs(cx - sx) > h or abs(cy - sy) > h:
-            cx = sx
-            cy = sy
-            status[k] = 4
+        cx, cy, status[k] = put_back(cx, cy, sx, sy, h, status[k])
         out[k, 0] = cx
         out[k, 1] = cy
     return out, status
