@@ -38,10 +38,13 @@ from stereo_scenes import StereoScene, render_pair
 W, H = 320, 240
 
 
-def _rig(scene: StereoScene) -> StereoCameraFile:
+def _rig(
+    scene: StereoScene, R: np.ndarray | None = None, T: np.ndarray | None = None
+) -> StereoCameraFile:
     """The pair's rig calibrated from exact board projections (stereo-calibrate's file)."""
     K = np.array([[scene.f, 0, (W - 1) / 2], [0, scene.f, (H - 1) / 2], [0, 0, 1]])
-    T = np.array([-scene.baseline, 0.0, 0.0])
+    R = np.eye(3) if R is None else R
+    T = np.array([-scene.baseline, 0.0, 0.0]) if T is None else T
     obj = checkerboard_points((9, 6), 60.0)
     views = [
         ([0.3, 0.1, 0], [-240, -150, 700]),
@@ -53,7 +56,7 @@ def _rig(scene: StereoScene) -> StereoCameraFile:
     for r, t in views:
         Rk = np.asarray(rvec_to_matrix(r))
         uvl.append(project_points_distorted(obj, K, Rk, t, None)[0])
-        uvr.append(project_points_distorted(obj, K, Rk, np.asarray(t) + T, None)[0])
+        uvr.append(project_points_distorted(obj, K, R @ Rk, R @ np.asarray(t) + T, None)[0])
     res = stereo_calibrate([obj] * 4, uvl, uvr, (W, H), fix=("k1", "k2", "p1", "p2", "k3"))
     return StereoCameraFile.from_calibration(res, command="imageform stereo-calibrate")
 
@@ -106,6 +109,80 @@ def test_depth_disparity_and_points(
     np.testing.assert_allclose(disp[fin] * z[fin], scene.f * scene.baseline, rtol=1e-3)
 
 
+def _vertical_pair(
+    d: Path, scene: StereoScene, below: bool
+) -> tuple[list[str], np.ndarray, np.ndarray]:
+    """A vertical rig (the right camera 60 mm below or above the left, turned 2 deg) rendered
+    by the ray-cast scene, its file as stereo-calibrate writes it, and the true depth of the
+    rectified left pixels: (the command's arguments, the true depth, the true disparity)."""
+    from stereo_scenes import hit_points, render_view
+
+    from imageform.geometry import stereo_rectify
+
+    K = np.array([[scene.f, 0, (W - 1) / 2], [0, scene.f, (H - 1) / 2], [0, 0, 1]])
+    R = np.asarray(rvec_to_matrix([0.02, 0.01, -0.03]))
+    T = np.array([1.5, -60.0 if below else 60.0, 2.0])
+    write_stereo_camera(d / "rig.toml", _rig(scene, R, T))
+    for name, Rc, tc in (("top", np.eye(3), np.zeros(3)), ("bottom", R, T)):
+        img = render_view(K, None, Rc, tc, (W, H), ss=2)
+        write_image(d / f"{name}.png", (img * 255).round().astype(np.uint8))
+    rect = stereo_rectify(K, None, K, None, (W, H), R, T)
+    assert rect.vertical
+    v, u = np.mgrid[0:H, 0:W].astype(np.float64)
+    rays = np.stack([u, v, np.ones_like(u)], -1) @ np.linalg.inv(rect.P1[:, :3]).T @ rect.R1
+    z = (hit_points(np.zeros(3), rays) @ rect.R1.T)[..., 2]
+    args = [str(d / "top.png"), str(d / "bottom.png"), "--camera", str(d / "rig.toml")]
+    return args, z, rect.P1[0, 0] * np.linalg.norm(T) / z
+
+
+def test_depth_of_a_vertical_rig(
+    files: tuple[Path, StereoScene], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Cameras stacked vertically (a stereo endoscope held sideways, a phone in portrait):
+    rectified to shared columns and matched along them; the depth map, in the rectified
+    left camera's pixels (not transposed), against the true depth as the side-by-side pair
+    above. Measured: 75 % of the pixels valid (the band of 47 rows the range leaves out of
+    240), median error 0.47 %, 99.1 % within 5 %; the disparity y_left - y_right."""
+    _, scene = files
+    args, z_true, d_true = _vertical_pair(tmp_path, scene, below=True)
+    out = tmp_path / "z.tiff"
+    assert main(["depth", *args, "--num-disparities", "48", "-o", str(out), "--json"]) == 0
+    summary = json.loads(capsys.readouterr().out)
+    z = np.asarray(read_image(out))[..., 0]
+    assert z.shape == (H, W)
+    assert np.isnan(z[:47]).all() and np.isfinite(z[47:]).mean() > 0.85  # the top band
+    ok = np.isfinite(z) & np.isfinite(z_true)
+    assert ok.mean() > 0.7 and summary["valid_fraction"] == pytest.approx(np.isfinite(z).mean())
+    rel = np.abs(z - z_true)[ok] / z_true[ok]
+    assert np.median(rel) < 0.01 and np.mean(rel < 0.05) > 0.98, (np.median(rel), ok.mean())
+    dout = tmp_path / "d.npy"
+    assert main(["depth", *args, "--num-disparities", "48", "--disparity", "-o", str(dout)]) == 0
+    disp = np.load(dout)
+    assert np.median(np.abs(disp - d_true)[ok]) < 0.25  # px, along the columns
+
+
+def test_depth_of_a_vertical_rig_whose_right_camera_is_above(
+    files: tuple[Path, StereoScene], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The right camera above the left: negative disparities (Q's sign, as OpenCV's). The
+    default range (0 to 63 px) would put every point behind the cameras: refused in one line
+    naming the range to search; with it, the depth as with the camera below."""
+    _, scene = files
+    args, z_true, _ = _vertical_pair(tmp_path, scene, below=False)
+    out = tmp_path / "z.tiff"
+    assert main(["depth", *args, "-o", str(out)]) == 1
+    line = _line(capsys)
+    assert "0 to 63 px" in line and "above the left one" in line and "--min-disparity -63" in line
+    assert not out.exists()
+    assert main(["depth", *args, "--min-disparity", "-47", "--num-disparities", "48",
+                 "-o", str(out)]) == 0  # fmt: skip
+    z = np.asarray(read_image(out))[..., 0]
+    assert np.isnan(z[-47:]).all()  # the invalid band is at the bottom now
+    ok = np.isfinite(z) & np.isfinite(z_true)
+    rel = np.abs(z - z_true)[ok] / z_true[ok]
+    assert ok.mean() > 0.7 and np.median(rel) < 0.01 and np.mean(rel < 0.05) > 0.98
+
+
 def test_depth_refusals_write_nothing(
     files: tuple[Path, StereoScene], tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
@@ -117,15 +194,18 @@ def test_depth_refusals_write_nothing(
     nan = np.asarray(scene.right, dtype=np.float32).copy()
     nan[5, 5] = np.nan
     np.save(tmp_path / "nan.npy", nan[..., None])
-    vertical = read_stereo_camera(rig)
+    sf = read_stereo_camera(rig)
     from dataclasses import replace
 
     from imageform.geometry import Camera
 
-    c = vertical.right.camera
-    v_cam = Camera(c.K, c.R, [0.0, -60.0, 0.0], c.image_size, distortion=c.distortion)
-    write_stereo_camera(tmp_path / "vertical.toml", replace(vertical, right=replace(
-        vertical.right, camera=v_cam)))  # fmt: skip
+    c = sf.right.camera
+    for name, t, std in (("zero", [0.0, 0.0, 0.0], None), ("near", [-0.01, 0.0, 0.0], 0.02)):
+        cam = Camera(c.K, c.R, t, c.image_size, distortion=c.distortion)
+        second = replace(sf.right, camera=cam)
+        if std is not None:  # a baseline within its own uncertainty of zero
+            second = replace(second, std={**second.std, "t": (std, std, std)})
+        write_stereo_camera(tmp_path / f"{name}.toml", replace(sf, right=second))
     single = tmp_path / "single.toml"
     single.write_text("[intrinsics]\nfx = 400.0\nfy = 400.0\ncx = 160.0\ncy = 120.0\n")
     cases = [
@@ -135,7 +215,8 @@ def test_depth_refusals_write_nothing(
         ([left, right, *ok, "--block-size", "4"], "--block-size must be 3, 5 or 7"),
         ([left, right, *ok, "--p1", "20", "--p2", "10"], "--p2 (10) must exceed --p1 (20)"),
         ([left, right, *ok, "--points", str(tmp_path / "c.txt")], "give a .ply name"),
-        ([left, right, "--camera", str(tmp_path / "vertical.toml"), "-o", str(out)], "vertically"),
+        ([left, right, "--camera", str(tmp_path / "zero.toml"), "-o", str(out)], "baseline of"),
+        ([left, right, "--camera", str(tmp_path / "near.toml"), "-o", str(out)], "within 3 st"),
         ([left, right, "--camera", str(single), "-o", str(out)], "single.toml"),
         ([left, right, "--camera", str(tmp_path / "none.toml"), "-o", str(out)], "none.toml"),
         ([left, right, "--camera", rig, "-o", str(tmp_path / "z.png")], "z.png"),
