@@ -26,6 +26,7 @@ __all__ = [
     "in_srgb",
     "input_space",
     "mask_of",
+    "not_read",
     "on_gpu",
     "patches_in_srgb",
     "read",
@@ -198,6 +199,12 @@ def unreadable(exc: InvalidInputError, path: Path) -> str | None:
     if why == text:
         why = why.split(": ", 1)[-1]
     return why.replace(f" '{path}'", "").replace(f" {path}", "")
+
+
+def not_read(given: int, n_read: int) -> str:
+    """``" read (2 others cannot be)"`` after a count of files read, when some were skipped."""
+    k = given - n_read
+    return f" read ({k} other{'s' if k > 1 else ''} cannot be)" if k > 0 else ""
 
 
 #: The largest float sample an image of encoded values may hold. Such values are in [0, 1]

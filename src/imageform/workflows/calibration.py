@@ -15,6 +15,7 @@ from imageform.workflows._images import (
     ImageOut,
     image_out_renames,
     read,
+    not_read,
     unreadable,
     write,
 )
@@ -540,7 +541,7 @@ def calibrate(run: Run, opts: CalibrateOptions, *, out: Path, images: list[Path]
                 f"none of the {n_given} images can be read ({exc})"
             ) from None
     images = read_ok
-    unread = f" read ({n_given - len(images)} others cannot be)" if n_given > len(images) else ""
+    unread = not_read(n_given, len(images))
     reading = None
     if auto:
 

@@ -12,7 +12,7 @@ from pathlib import Path
 from typing import Any, Literal, get_args
 
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
-from imageform.workflows._images import ImageIn, read, unreadable
+from imageform.workflows._images import ImageIn, not_read, read, unreadable
 from imageform.workflows._spec import (
     Input,
     Output,
@@ -225,7 +225,7 @@ def stereo_calibrate_cmd(
     n_given = len(lefts)
     bad = [(f, d) for f, d in zip(lefts + rights, det_l + det_r, strict=True) if isinstance(d, str)]
     lefts, rights, det_l, det_r = _drop_unreadable(run, (lefts, rights), (det_l, det_r))
-    unread = f" read ({n_given - len(lefts)} others cannot be)" if bad else ""
+    unread = not_read(n_given, len(lefts))
     if len(lefts) < MIN_VIEWS:
         raise DegenerateConfigurationError(
             f"{len(lefts)} of the {n_given} pairs can be read ({bad[0][0]}: {bad[0][1]}"
