@@ -14,8 +14,8 @@ from imageform.workflows._images import (
     ImageIn,
     ImageOut,
     image_out_renames,
-    read,
     not_read,
+    read,
     unreadable,
     write,
 )

@@ -226,7 +226,7 @@ def stereo_calibrate_cmd(
     bad = [(f, d) for f, d in zip(lefts + rights, det_l + det_r, strict=True) if isinstance(d, str)]
     lefts, rights, det_l, det_r = _drop_unreadable(run, (lefts, rights), (det_l, det_r))
     unread = not_read(n_given, len(lefts))
-    if len(lefts) < MIN_VIEWS:
+    if bad and len(lefts) < MIN_VIEWS:
         raise DegenerateConfigurationError(
             f"{len(lefts)} of the {n_given} pairs can be read ({bad[0][0]}: {bad[0][1]}"
             f"{'; ...' if len(bad) > 1 else ''}); stereo-calibrate needs at least {MIN_VIEWS}"
