@@ -247,7 +247,7 @@ def _data3_rows(data3: Path, tmp: Path) -> list[str]:
     err = io.StringIO()
     with contextlib.redirect_stdout(io.StringIO()) as so, contextlib.redirect_stderr(err):
         code = main([*argv, "-o", str(out), "--force", "--json"])
-    notes = [n for n in err.getvalue().splitlines() if "cannot be read" in n]
+    notes = [n for n in err.getvalue().splitlines() if " be read (" in n]
     if code != 0:
         return [f"| data3 | exit {code} | | | |"]
     s = json.loads(so.getvalue())
@@ -308,7 +308,7 @@ def main() -> None:
                 "stereo-calibrate --board auto on the folders of OpenCV's stereo sample data3 "
                 "(three empty .jpg on each side):",
                 "",
-                "| folders | pairs used | notes (cannot be read) | RMS px | baseline (squares) |",
+                "| folders | pairs used | notes of pairs skipped | RMS px | baseline (squares) |",
                 "|---|---:|---:|---:|---:|",
                 *_data3_rows(args.data3, Path(d)),
             ]

@@ -95,6 +95,7 @@ def test_depth_disparity_and_points(
     rel = np.abs(z - scene.depth)[ok] / scene.depth[ok]
     assert np.median(rel) < 0.01 and np.mean(rel < 0.05) > 0.98  # measured 0.55 % median, 99.8 %
     assert summary["valid_fraction"] == pytest.approx(np.isfinite(z).mean())
+    assert summary["vertical"] is False
     assert summary["n_points"] == int(np.isfinite(z).sum())
     cloud = read_points_ply(ply)
     assert set(cloud) == {"x", "y", "z", "red", "green", "blue"}
@@ -190,16 +191,18 @@ def test_stereo_calibrate_skips_unreadable_files_then_depth(
         write_image(bottom / f"view{k}.png", _board_view(K, R_VERT @ Rk, R_VERT @ tk + T_VERT))
     (top / "view3.png").write_bytes(b"")  # its pair partner bottom/view3.png is fine
     (bottom / "view6.png").write_bytes(b"not an image")
+    for side in (top, bottom):  # a pair of two empty files, as data3's
+        (side / "view7.png").write_bytes(b"")
     rig = tmp_path / "rig.toml"
     argv = ["stereo-calibrate", str(top), str(bottom), "--board", "9x6", "--square", "25mm"]
     argv += [a for c in ("k1", "k2", "p1", "p2", "k3") for a in ("--fix", c)]  # a pinhole
     assert main([*argv, "-o", str(rig), "--json"]) == 0
     captured = capsys.readouterr()
     summary = json.loads(captured.out)
-    assert summary["pairs_used"] == 6 and summary["pairs_total"] == 8
+    assert summary["pairs_used"] == 5 and summary["pairs_total"] == 8
     # (the other notes: the views span little of the frame, true of these synthetic ones)
-    err = [e for e in captured.err.strip().splitlines() if "cannot be read" in e]
-    assert len(err) == 2, captured.err
+    err = [e for e in captured.err.strip().splitlines() if " be read (" in e]
+    assert len(err) == 3, captured.err
     assert err[0] == (
         f"imageform: warning: {top / 'view3.png'}: skipped with its pair "
         f"{bottom / 'view3.png'}, cannot be read (an empty file)"
@@ -207,13 +210,17 @@ def test_stereo_calibrate_skips_unreadable_files_then_depth(
     assert err[1].startswith(
         f"imageform: warning: {bottom / 'view6.png'}: skipped with its pair {top / 'view6.png'}"
     )
+    assert err[2] == (
+        f"imageform: warning: {top / 'view7.png'} and its pair {bottom / 'view7.png'}: skipped, "
+        "neither can be read (an empty file)"
+    )
     sf = read_stereo_camera(rig)
-    assert "view3.png" not in sf.left.provenance.images and len(sf.left.provenance.images) == 6
+    assert "view3.png" not in sf.left.provenance.images and len(sf.left.provenance.images) == 5
     assert np.linalg.norm(sf.T - T_VERT) < 0.02 * 60  # measured 0.50 mm (0.8 %)
     # the same files by quoted glob patterns: the same notes, the same rig
     globs = ["stereo-calibrate", str(top / "*.png"), str(bottom / "view*.png"), *argv[3:]]
     assert main([*globs, "-o", str(tmp_path / "g.toml")]) == 0
-    assert capsys.readouterr().err.count("cannot be read") == 2
+    assert capsys.readouterr().err.count(" be read (") == 3
     np.testing.assert_array_equal(read_stereo_camera(tmp_path / "g.toml").T, sf.T)
     # depth with the file written: the vertical rig matched along columns
     args, z_true, _ = _vertical_pair(tmp_path, scene, below=True, rig=rig)
@@ -262,6 +269,7 @@ def test_depth_of_a_vertical_rig(
     assert np.isnan(z[:47]).all() and np.isfinite(z[47:]).mean() > 0.85  # the top band
     ok = np.isfinite(z) & np.isfinite(z_true)
     assert ok.mean() > 0.7 and summary["valid_fraction"] == pytest.approx(np.isfinite(z).mean())
+    assert summary["vertical"] is True
     rel = np.abs(z - z_true)[ok] / z_true[ok]
     assert np.median(rel) < 0.01 and np.mean(rel < 0.05) > 0.98, (np.median(rel), ok.mean())
     dout = tmp_path / "d.npy"

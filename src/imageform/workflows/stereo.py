@@ -183,6 +183,10 @@ def _drop_unreadable(
     kd_l: list[Any] = []
     kd_r: list[Any] = []
     for fl, fr, dl, dr in zip(*files, *dets, strict=True):
+        if isinstance(dl, str) and isinstance(dr, str):
+            why = dl if dl == dr else f"{dl}; {dr}"
+            run.note(f"warning: {fl} and its pair {fr}: skipped, neither can be read ({why})")
+            continue
         if isinstance(dl, str) or isinstance(dr, str):
             bad, why, other = (fl, dl, fr) if isinstance(dl, str) else (fr, dr, fl)
             run.note(f"warning: {bad}: skipped with its pair {other}, cannot be read ({why})")
@@ -570,6 +574,7 @@ def depth_cmd(run: Run, opts: DepthOptions, *, out: Path, left: Path, right: Pat
         "points": opts.points,
         "n_points": n_points,
         "size": list(rect.image_size),
+        "vertical": bool(rect.vertical),
         "focal_px": f,
         "baseline": baseline,
         "valid_fraction": float(valid.mean()),
@@ -578,6 +583,8 @@ def depth_cmd(run: Run, opts: DepthOptions, *, out: Path, left: Path, right: Pat
         "depth_median": float(np.median(z_ok)) if z_ok.size else None,
     }
     text = [f"rectified {size[0]} x {size[1]} px: f {f:.1f} px, baseline {baseline:.3f}"]
+    if rect.vertical:
+        text[0] += " (cameras stacked: matched along columns)"
     if d_ok.size:
         text.append(
             f"valid {100 * valid.mean():.1f} % of the pixels; disparity {d_ok.min():.2f} to "
