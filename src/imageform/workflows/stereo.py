@@ -364,7 +364,7 @@ class DepthOptions(ImageIn):
     min_disparity: int = option(
         0,
         help="Smallest disparity searched (px; negative when the rectified principal points "
-        "are apart).",
+        "are apart, or when the right camera is to the left of or above the left one).",
         minimum=-100_000,
         maximum=100_000,
     )
