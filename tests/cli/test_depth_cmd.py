@@ -261,8 +261,9 @@ def test_depth_of_a_vertical_rig(
     240), median error 0.47 %, 99.1 % within 5 %; the disparity y_left - y_right."""
     _, scene = files
     args, z_true, d_true = _vertical_pair(tmp_path, scene, below=True)
-    out = tmp_path / "z.tiff"
-    assert main(["depth", *args, "--num-disparities", "48", "-o", str(out), "--json"]) == 0
+    out, ply = tmp_path / "z.tiff", tmp_path / "cloud.ply"
+    argv = ["depth", *args, "--num-disparities", "48", "-o", str(out), "--points", str(ply)]
+    assert main([*argv, "--json"]) == 0
     summary = json.loads(capsys.readouterr().out)
     z = np.asarray(read_image(out))[..., 0]
     assert z.shape == (H, W)
@@ -270,6 +271,8 @@ def test_depth_of_a_vertical_rig(
     ok = np.isfinite(z) & np.isfinite(z_true)
     assert ok.mean() > 0.7 and summary["valid_fraction"] == pytest.approx(np.isfinite(z).mean())
     assert summary["vertical"] is True
+    cloud = read_points_ply(ply)  # the points' z is the depth map's
+    np.testing.assert_allclose(np.sort(cloud["z"]), np.sort(z[np.isfinite(z)]), rtol=1e-5)
     rel = np.abs(z - z_true)[ok] / z_true[ok]
     assert np.median(rel) < 0.01 and np.mean(rel < 0.05) > 0.98, (np.median(rel), ok.mean())
     dout = tmp_path / "d.npy"
