@@ -166,6 +166,59 @@ def test_calibrate_a_folder_of_views(
     assert not (tmp_path / "e.toml").exists()
 
 
+def test_calibrate_skips_unreadable_files_of_a_folder(
+    shared_data: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A file of a folder (or of a glob pattern) that cannot be read (an empty .jpg, as in
+    OpenCV's stereo sample data3 of github.com/dreameer/stereocalibrate; one that is no
+    image) is skipped with one note naming it, the camera as from the other files; a file
+    named that cannot be read is still an error; too few readable views, one line."""
+    views = tmp_path / "views"
+    views.mkdir()
+    for i in (1, 2, 3, 4):
+        shutil.copy(shared_data / "opencv-left" / f"left0{i}.jpg", views / f"left0{i}.jpg")
+    (views / "left05.jpg").write_bytes(b"")
+    (views / "left06.png").write_bytes(b"not an image")
+    out = tmp_path / "cam.toml"
+    assert main(["calibrate", str(views), "--board", "9x6", "-o", str(out), "--json"]) == 0
+    captured = capsys.readouterr()
+    summary = json.loads(captured.out)
+    assert summary["views_used"] == 4 and summary["views_total"] == 6
+    assert captured.err.strip().splitlines() == [
+        f"imageform: warning: {views / 'left05.jpg'}: skipped, cannot be read (an empty file)",
+        f"imageform: warning: {views / 'left06.png'}: skipped, cannot be read (not a PNG file)",
+    ]
+    names = [str(views / f"left0{i}.jpg") for i in (1, 2, 3, 4)]
+    assert main(["calibrate", *names, "--board", "9x6", "-o", str(tmp_path / "4.toml")]) == 0
+    capsys.readouterr()
+    np.testing.assert_array_equal(
+        np.asarray(read_camera(out).camera.K), np.asarray(read_camera(tmp_path / "4.toml").camera.K)
+    )
+    # a quoted glob pattern stands for its files as a folder does
+    pattern = str(views / "left0*")
+    assert main(["calibrate", pattern, "--board", "9x6", "-o", str(tmp_path / "g.toml")]) == 0
+    assert capsys.readouterr().err.count("cannot be read") == 2
+    # named, the empty file is an error (one line, nothing written)
+    bad = tmp_path / "bad.toml"
+    assert main(["calibrate", *names, str(views / "left05.jpg"), "--board", "9x6",
+                 "-o", str(bad)]) == 1  # fmt: skip
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith(f"imageform: error: cannot read {views}/left05")
+    # too few readable views
+    (views / "left03.jpg").unlink()
+    (views / "left04.jpg").unlink()
+    assert main(["calibrate", str(views), "--board", "9x6", "-o", str(bad)]) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1, err
+    assert "in 2 view(s) (left01.jpg, left02.jpg) of 2 read (2 others cannot be)" in err[0]
+    for f in views.glob("left0[12].jpg"):
+        f.write_bytes(b"")
+    assert main(["calibrate", str(views), "--board", "9x6", "-o", str(bad)]) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "none of the 4 images can be read" in err[0], err
+    assert not bad.exists()
+
+
 def test_calibrate_refinement_option(
     shared_data: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:

@@ -233,6 +233,43 @@ def test_rectify_vertical_pair_matches_opencv() -> None:
 
 
 @pytest.mark.parametrize("alpha", [-1.0, 0.0, 1.0])
+@pytest.mark.parametrize("below", [True, False], ids=["below", "above"])
+def test_rectify_vertical_rig_maps_match_opencv(alpha: float, below: bool) -> None:
+    """A vertical rig (the second camera 100 mm below or above the first, turned 4.8 deg):
+    ``R1, R2, P1, P2, Q`` as ``cv2.stereoRectify``'s and both maps as
+    ``cv2.initUndistortRectifyMap``'s on them; the true projections of points seen by both
+    land on the same columns, and ``Q`` of their row difference gives the points back."""
+    T = np.array([1.5, -100.0 if below else 100.0, 2.0])
+    ours = stereo_rectify(K1, D1, K2, D2, SIZE, R_TRUE, T, alpha=alpha)
+    R1, R2, P1, P2, Q, _, _ = cv2.stereoRectify(
+        K1, _dist(D1), K2, _dist(D2), SIZE, R_TRUE, T.reshape(3, 1), alpha=alpha
+    )
+    assert ours.vertical
+    np.testing.assert_allclose(ours.R1, R1, atol=1e-12)
+    np.testing.assert_allclose(ours.R2, R2, atol=1e-12)
+    np.testing.assert_allclose(ours.P1, P1, rtol=1e-5, atol=1e-3)
+    np.testing.assert_allclose(ours.P2, P2, rtol=1e-5, atol=1e-3)
+    np.testing.assert_allclose(ours.Q, Q, rtol=1e-5, atol=1e-6)
+    assert ours.P2[0, 3] == 0.0 and (ours.P2[1, 3] < 0) == below  # f T'_y: the baseline in y
+    for K, D, Rr, P in ((K1, D1, ours.R1, ours.P1), (K2, D2, ours.R2, ours.P2)):
+        m = rectification_map(K, D, Rr, P, SIZE)
+        mx, my = cv2.initUndistortRectifyMap(K, _dist(D), Rr, P, SIZE, cv2.CV_32FC1)
+        fin = np.isfinite(m).all(axis=-1)
+        assert fin.all()
+        assert float(np.abs(m[..., 0] - mx).max()) < 1e-3  # OpenCV's float32 maps
+        assert float(np.abs(m[..., 1] - my).max()) < 1e-3
+    X = np.array([[10.0, 20.0, 600.0], [-80.0, 30.0, 900.0], [60.0, -40.0, 1500.0]])
+    uv1 = np.asarray(project_points_distorted(X, K1, np.eye(3), np.zeros(3), D1)[0])
+    uv2 = np.asarray(project_points_distorted(X, K2, R_TRUE, T, D2)[0])
+    a = _rectified(uv1, K1, D1, ours.R1, ours.P1)
+    b = _rectified(uv2, K2, D2, ours.R2, ours.P2)
+    assert float(np.abs(a[:, 0] - b[:, 0]).max()) < 1e-6  # shared columns
+    assert ((a[:, 1] - b[:, 1] > 0) == below).all()  # d = y_first - y_second
+    h = np.stack([a[:, 0], a[:, 1], a[:, 1] - b[:, 1], np.ones(3)], -1) @ ours.Q.T
+    np.testing.assert_allclose((h[:, :3] / h[:, 3:]) @ ours.R1, X, rtol=1e-8)
+
+
+@pytest.mark.parametrize("alpha", [-1.0, 0.0, 1.0])
 @pytest.mark.parametrize("T", [T_TRUE, np.array([1.5, -100.0, 2.0])], ids=["horiz", "vert"])
 def test_rectify_new_image_size_matches_opencv(alpha: float, T: np.ndarray) -> None:
     """``new_image_size`` (OpenCV's ``newImageSize``): measured within 1e-5 px of OpenCV."""

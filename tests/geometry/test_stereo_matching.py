@@ -225,6 +225,69 @@ def test_uniqueness_and_lr_check_remove_pixels(scene) -> None:  # type: ignore[n
     np.testing.assert_array_equal(strict[both], loose[both])  # the checks only remove
 
 
+# ------------------------------------------------------------------- vertical rigs
+
+
+@pytest.mark.parametrize(
+    "kw",
+    [
+        {"num_disparities": 48},
+        {"min_disparity": -3, "num_disparities": 45, "block_size": 3, "adaptive_p2": True,
+         "speckle_size": 20, "uniqueness": 0.05},
+    ],
+)  # fmt: skip
+def test_vertical_pair_gives_the_transposed_disparity(scene, kw) -> None:  # type: ignore[no-untyped-def]
+    """The rendered pair transposed is a vertical rig (the second camera below the first):
+    its disparity along columns is the horizontal run's, transposed, bit for bit (NaN where
+    NaN), within a pixel of the transposed truth."""
+    d = stereo_disparity(scene.left, scene.right, **kw)
+    dv = stereo_disparity(scene.left.T, scene.right.T, vertical=True, **kw)
+    assert dv.shape == (320, 240) and dv.dtype == np.float32 and dv.flags.c_contiguous
+    np.testing.assert_array_equal(dv, d.T)
+    lo = kw.get("min_disparity", 0) + kw["num_disparities"] - 1
+    assert np.isnan(dv[:lo]).all()  # the invalid band: the first rows, not columns
+    ok = scene.visible.T & np.isfinite(dv)
+    assert ok.mean() > 0.6
+    assert np.mean(np.abs(dv - scene.disparity.T)[ok] < 1.0) > 0.97
+
+
+def test_vertical_without_numba_is_the_twin(
+    small,  # type: ignore[no-untyped-def]
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    kw = {"num_disparities": 16, "speckle_size": 10, "vertical": True}
+    a = stereo_disparity(small.left.T, small.right.T, **kw)
+    monkeypatch.setenv("IMAGEFORM_DISABLE_NUMBA", "1")
+    b = stereo_disparity(small.left.T, small.right.T, **kw)
+    np.testing.assert_array_equal(a, b)
+    np.testing.assert_array_equal(a, stereo_disparity(small.left, small.right, num_disparities=16,
+                                                      speckle_size=10).T)  # fmt: skip
+
+
+def test_vertical_depth_is_opencvs_reprojection() -> None:
+    """A vertical rig's ``Q`` (``stereo_rectify``, as OpenCV's) takes ``d = y_top - y_bottom``:
+    a point projected into both rectified cameras comes back from its row difference, and
+    the depth map agrees with ``cv2.reprojectImageTo3D``."""
+    cv2 = pytest.importorskip("cv2")
+    K1 = np.array([[560.0, 0, 322], [0, 555, 236], [0, 0, 1]])
+    K2 = np.array([[575.0, 0, 316], [0, 572, 241], [0, 0, 1]])
+    R = cv2.Rodrigues(np.array([0.01, 0.05, 0.005]))[0]
+    T = np.array([1.0, -50.0, 4.0])  # the second camera 50 mm below the first
+    rect = stereo_rectify(K1, None, K2, None, (640, 480), R, T)
+    assert rect.vertical
+    X = np.array([30.0, -20.0, 900.0])  # in the first camera's frame
+    p1 = rect.P1 @ np.append(rect.R1 @ X, 1.0)
+    p2 = rect.P2 @ np.append(rect.R1 @ X, 1.0)
+    (u1, v1), (u2, v2) = p1[:2] / p1[2], p2[:2] / p2[2]
+    assert abs(u1 - u2) < 1e-9 and v1 - v2 > 0  # the same column; lower in the first image
+    h = rect.Q @ np.array([u1, v1, v1 - v2, 1.0])
+    np.testing.assert_allclose(rect.R1.T @ (h[:3] / h[3]), X, rtol=1e-9)
+    d = np.random.default_rng(4).uniform(5, 60, (40, 30)).astype(np.float32)
+    ref = cv2.reprojectImageTo3D(d, rect.Q.astype(np.float32))
+    np.testing.assert_allclose(disparity_to_points(d, rect), ref, rtol=1e-4)
+    np.testing.assert_allclose(disparity_to_depth(d, rect), ref[..., 2], rtol=1e-4)
+
+
 # ------------------------------------------------------------------- depth and points
 
 
@@ -297,6 +360,8 @@ def test_bad_input_is_refused_in_one_line(small) -> None:  # type: ignore[no-unt
         assert needle in msg and "\n" not in msg, (kw, msg)
     with pytest.raises(TypeError):
         stereo_disparity(L, R, adaptive_p2="yes")  # type: ignore[arg-type]
+    with pytest.raises(TypeError, match="vertical"):
+        stereo_disparity(L, R, vertical="yes")  # type: ignore[arg-type]
     for d, Q, needle in (
         (np.ones((2, 2)), np.eye(3), "(4, 4)"),
         (np.ones(4), np.eye(4), "(H, W)"),

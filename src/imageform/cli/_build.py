@@ -361,7 +361,11 @@ def build_command(wf: Workflow) -> click.Command:
         inputs: dict[str, Any] = {}
         for inp in wf.inputs:
             value = kw.pop(inp.name)
-            inputs[inp.name] = expand_inputs(value) if inp.many else value
+            # an input that takes folders gets its glob patterns expanded by execute, which
+            # knows then which files were named and which a folder or pattern stood for
+            if inp.many:
+                value = list(value) if inp.folders else expand_inputs(value)
+            inputs[inp.name] = value
         try:
             opts = wf.make_options(**take_old_flags(wf, kw))
         except ImageformError as exc:

@@ -72,6 +72,7 @@ def stereo_disparity(
     lr_check: float | None = 1.0,
     speckle_size: int = 0,
     speckle_range: float = 1.0,
+    vertical: bool = False,
 ) -> NDArray[np.float32]:
     r"""Disparity of a rectified stereo pair by semi-global matching on census costs.
 
@@ -149,6 +150,14 @@ def stereo_disparity(
     speckle_range : float
         Largest difference of neighbours within one region (OpenCV's ``speckleRange``, here in
         pixels, not in 16ths).
+    vertical : bool
+        Match along columns: the rectified pair of a vertical rig (cameras stacked,
+        :class:`~imageform.geometry.StereoRectification`'s ``vertical``), whose epipolar lines
+        are columns. The disparity is then ``d = y_left - y_right`` (the first image's row
+        minus the second's, the ``d`` of the rectification's ``Q``, as OpenCV's), "rows" and
+        "columns" trade places in the steps above (the invalid band is the first ``min_disparity
+        + num_disparities - 1`` rows), and the result is exactly that of the transposed pair,
+        transposed: the census window and the 8 paths are symmetric.
 
     Returns
     -------
@@ -175,6 +184,10 @@ def stereo_disparity(
     >>> d = stereo_disparity(left, right, num_disparities=16)
     >>> float(np.nanmedian(d)), bool(np.isnan(d[:, :7]).all())
     (7.0, True)
+    >>> top = np.roll(right.T, 7, axis=0)  # a vertical pair: the first image's rows 7 lower
+    >>> dv = stereo_disparity(top, right.T, num_disparities=16, vertical=True)
+    >>> bool(np.array_equal(dv, d.T, equal_nan=True))
+    True
     """
     gl = _grey(left, "left")
     gr = _grey(right, "right")
@@ -208,12 +221,17 @@ def stereo_disparity(
     lr = -1.0 if lr_check is None else as_real(lr_check, "lr_check", minimum=0.0)
     sp = as_int(speckle_size, "speckle_size", minimum=0, maximum=2**40)
     sr = as_real(speckle_range, "speckle_range", minimum=0.0)
+    if not isinstance(vertical, bool | np.bool_):
+        raise TypeError(f"expected vertical as a bool, got {describe(vertical)}")
     check_memory(3.0 * h * w * n_d, "num_disparities", f"the costs of {h} x {w} px x {n_d}")
     if use_numba(gl):
         from imageform._kernels import sgm as kern
     else:
         from imageform.geometry import _sgm_numpy as kern  # type: ignore[no-redef]
-    return _match(kern, gl, gr, min_d, n_d, bs, P1, P2, bool(adaptive_p2), u, lr, sp, sr)
+    if vertical:  # columns as rows: the kernels walk rows
+        gl, gr = np.ascontiguousarray(gl.T), np.ascontiguousarray(gr.T)
+    d = _match(kern, gl, gr, min_d, n_d, bs, P1, P2, bool(adaptive_p2), u, lr, sp, sr)
+    return np.ascontiguousarray(d.T) if vertical else d
 
 
 def _match(
@@ -282,7 +300,8 @@ def disparity_to_points(
     r"""3-D points of a disparity map in the rectified left camera's frame (``reprojectImageTo3D``).
 
     ``(X, Y, Z, W)ᵀ = Q (u, v, d, 1)ᵀ`` and the point ``(X, Y, Z) / W`` for every pixel
-    ``(u, v)`` with disparity ``d`` (``d = x_left - x_right``, :func:`stereo_disparity`'s);
+    ``(u, v)`` with disparity ``d`` (``d = x_left - x_right``, :func:`stereo_disparity`'s;
+    ``y_left - y_right`` for a vertical rig, ``stereo_disparity(..., vertical=True)``);
     for a horizontal rig ``Z = f B / (d - (c_{x,1} - c_{x,2}))`` with the baseline ``B``.
     Units: those of the calibration's ``T`` (millimetres from ``imageform stereo-calibrate``).
 
@@ -329,7 +348,8 @@ def disparity_to_depth(
 
     The third coordinate of :func:`disparity_to_points` (``Q[2, 3] / (Q[3, 2] d + Q[3, 3])``):
     ``f`` the rectified focal length, ``B`` the baseline, ``Δc = c_{x,1} - c_{x,2}`` (0 on a
-    zero-disparity rectification). Distance along the rectified left camera's optical axis,
+    zero-disparity rectification; ``c_{y,1} - c_{y,2}`` and ``d = y_left - y_right`` for a
+    vertical rig). Distance along the rectified left camera's optical axis,
     in the units of the calibration's ``T``.
 
     Parameters

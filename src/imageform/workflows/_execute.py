@@ -35,14 +35,31 @@ def _as_paths(value: Any, name: str, *, required: bool = False) -> list[Path]:
     return [as_path(value, name)]
 
 
-def _expand_folders(paths: list[Path]) -> list[Path]:
-    """``paths`` with each folder replaced by its images (:func:`imageform.io.image_files`)."""
+def _expand_folders(paths: list[Path]) -> tuple[list[Path], set[Path]]:
+    """``paths`` with each folder replaced by its images and each glob pattern by its matches.
+
+    Returns the files and those of them a folder or a pattern stood for (not named one by
+    one). A name that exists is taken literally (a file called ``scan[1].png``); a pattern
+    that matches nothing is an error naming it.
+    """
+    from imageform._files import glob_paths
     from imageform.io import image_files
 
     out: list[Path] = []
+    gathered: set[Path] = set()
     for p in paths:
-        out += image_files(p) if p.is_dir() else [p]
-    return out
+        if p.is_dir():
+            found = image_files(p)
+        elif not p.exists() and any(c in str(p) for c in "*?["):
+            found = [Path(h) for h in sorted(glob_paths(str(p)))]
+            if not found:
+                raise InvalidInputError(f"no files match {str(p)!r}")
+        else:
+            out.append(p)
+            continue
+        out += found
+        gathered.update(found)
+    return out, gathered
 
 
 def _note_of(w: warnings.WarningMessage) -> str:
@@ -114,9 +131,11 @@ def execute(
             f"{wf.name} takes the input(s) {', '.join(sorted(names)) or 'none'}, "
             f"got {', '.join(sorted(inputs)) or 'none'}"
         )
+    gathered: set[Path] = set()
     for i in wf.inputs:  # a folder stands for its images where the input says so
         if i.kind == "file" and i.folders and inputs.get(i.name) is not None:
-            inputs[i.name] = _expand_folders(_as_paths(inputs[i.name], i.name))
+            inputs[i.name], found = _expand_folders(_as_paths(inputs[i.name], i.name))
+            gathered |= found
     files = [i.name for i in wf.inputs if i.kind == "file"]
     named = [("input", p) for n in files for p in _as_paths(inputs[n], n, required=True)]
     for f in opts.fields():
@@ -137,7 +156,7 @@ def execute(
     outputs = Outputs(inputs=in_paths, force=force)
     try:
         with outputs:
-            run = Run(outputs, progress=progress)
+            run = Run(outputs, progress=progress, gathered=frozenset(gathered))
             if out is not None:  # checked before any work starts
                 (run.folder if wf.output is not None and wf.output.folder else run.file)(out)
             for extra in opts.paths("output"):

@@ -26,11 +26,13 @@ __all__ = [
     "in_srgb",
     "input_space",
     "mask_of",
+    "not_read",
     "on_gpu",
     "patches_in_srgb",
     "read",
     "refuse_absent_device",
     "refuse_unscaled_floats",
+    "unreadable",
     "write",
     "write_mapped",
 ]
@@ -174,6 +176,35 @@ def read(path: Path, opts: Any, *, alpha: str | None = None) -> Any:
         alpha=str(alpha or getattr(opts, "alpha", "reject")),
         max_pixels=getattr(opts, "max_pixels", None),
     )
+
+
+def unreadable(exc: InvalidInputError, path: Path) -> str | None:
+    """Why ``path`` cannot be read as an image, where ``exc`` (from :func:`read`) says so.
+
+    The image readers refuse a file they cannot decode (empty, truncated, not an image, a
+    kind not read) as ``cannot read PATH: why``; returns ``why``, or None for any other
+    refusal (transparent pixels, the pixel limit: the file was read).
+    """
+    import os
+
+    text = str(exc)
+    if not text.startswith("cannot read "):
+        return None
+    try:
+        if os.stat(path).st_size == 0:
+            return "an empty file"
+    except OSError:
+        pass
+    why = text.removeprefix(f"cannot read {path}: ")
+    if why == text:
+        why = why.split(": ", 1)[-1]
+    return why.replace(f" '{path}'", "").replace(f" {path}", "")
+
+
+def not_read(given: int, n_read: int) -> str:
+    """``" read (2 others cannot be)"`` after a count of files read, when some were skipped."""
+    k = given - n_read
+    return f" read ({k} other{'s' if k > 1 else ''} cannot be)" if k > 0 else ""
 
 
 #: The largest float sample an image of encoded values may hold. Such values are in [0, 1]

@@ -382,6 +382,9 @@ class Run:
     outputs: Any  # imageform._files.Outputs (imported lazily: it is cheap, but keep --help lean)
     notes: list[str] = field(default_factory=list)
     progress: Callable[[str, float], None] | None = None
+    #: The input files a folder or a glob pattern stood for, not named one by one: a workflow
+    #: may skip one it cannot read (with a note); a file named is read or refused.
+    gathered: frozenset[Path] = frozenset()
 
     def __post_init__(self) -> None:
         if self.progress is not None and not callable(self.progress):

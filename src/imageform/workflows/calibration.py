@@ -10,7 +10,15 @@ from pathlib import Path
 from typing import Any, Literal, get_args
 
 from imageform.errors import ConvergenceError, DegenerateConfigurationError, InvalidInputError
-from imageform.workflows._images import ImageIn, ImageOut, image_out_renames, read, write
+from imageform.workflows._images import (
+    ImageIn,
+    ImageOut,
+    image_out_renames,
+    not_read,
+    read,
+    unreadable,
+    write,
+)
 from imageform.workflows._spec import (
     IMAGE_SUFFIXES,
     Input,
@@ -458,13 +466,21 @@ def _read_views(run: Run, opts: CalibrateOptions, images: list[Path]) -> Iterato
     """Read each image as ``(path, grey or RGB array)``, with progress, all of one size.
 
     Images of different sizes are refused in one line naming both files; progress "calibrating" once
-    they are read.
+    they are read. A file a folder or a glob pattern stood for (``run.gathered``) that cannot be
+    read is skipped with a note naming it; a file named is refused.
     """
     shape0: tuple[int, ...] | None = None
     for i, f in enumerate(images):
         if run.progress is not None:
             run.progress("detecting", i / max(len(images), 1))
-        img = read(f, opts)
+        try:
+            img = read(f, opts)
+        except InvalidInputError as exc:
+            why = unreadable(exc, f) if f in run.gathered else None
+            if why is None:
+                raise
+            run.note(f"warning: {f}: skipped, cannot be read ({why})")
+            continue
         if shape0 is None:
             shape0 = tuple(img.shape[:2])
         elif img.shape[:2] != shape0:
@@ -495,7 +511,10 @@ def calibrate(run: Run, opts: CalibrateOptions, *, out: Path, images: list[Path]
     square = opts.square_mm()
     shape0: tuple[int, int] | None = None
     dets: list[Any] = []  # each view's detection, in the images' order
+    n_given = len(images)
+    read_ok: list[Path] = []  # the images read (those that cannot be are skipped with a note)
     for f, grey in _read_views(run, opts, images):
+        read_ok.append(f)
         if shape0 is None:
             shape0 = (int(grey.shape[0]), int(grey.shape[1]))
             h, w = shape0
@@ -514,6 +533,15 @@ def calibrate(run: Run, opts: CalibrateOptions, *, out: Path, images: list[Path]
                 partial=opts.partial and not auto,
             )
         )
+    if not read_ok:  # every file was skipped: the first one's own reason
+        try:
+            read(images[0], opts)
+        except InvalidInputError as exc:
+            raise DegenerateConfigurationError(
+                f"none of the {n_given} images can be read ({exc})"
+            ) from None
+    images = read_ok
+    unread = not_read(n_given, len(images))
     reading = None
     if auto:
 
@@ -537,14 +565,14 @@ def calibrate(run: Run, opts: CalibrateOptions, *, out: Path, images: list[Path]
     parts = [d.pattern_size if d.partial else None for d in dets if d.found]
     if not corners:
         raise DegenerateConfigurationError(
-            f"no {cols}x{rows} checkerboard found in any of the {len(images)} images "
+            f"no {cols}x{rows} checkerboard found in any of the {len(images)} images{unread} "
             f"({missed[0][0].name}: {missed[0][1]}{'; ...' if len(missed) > 1 else ''}; "
             f"{board_hint(opts.board)})"
         )
     if len(corners) < MIN_VIEWS:
         raise DegenerateConfigurationError(
             f"found the {cols}x{rows} board in {len(corners)} view(s) ({', '.join(names)}) of "
-            f"{len(images)}; "
+            f"{len(images)}{unread}; "
             f"calibrate needs at least {MIN_VIEWS} (one view of a plane gives two constraints "
             "on K: fewer views leave the focal length and the principal point undetermined)"
         )
@@ -558,7 +586,7 @@ def calibrate(run: Run, opts: CalibrateOptions, *, out: Path, images: list[Path]
         run,
         opts,
         out,
-        len(images),
+        n_given,
         names,
         objs,
         corners,

@@ -12,7 +12,7 @@ from pathlib import Path
 from typing import Any, Literal, get_args
 
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
-from imageform.workflows._images import ImageIn, read
+from imageform.workflows._images import ImageIn, not_read, read, unreadable
 from imageform.workflows._spec import (
     Input,
     Output,
@@ -86,7 +86,10 @@ class StereoCalibrateOptions(_BoardChecks, ImageIn):
 
 
 def _expand(pattern: str, what: str) -> list[Path]:
-    """Return the files a name, a folder or a glob pattern names, sorted; none is an error."""
+    """Return the files a name, a folder or a glob pattern names, sorted; none is an error.
+
+    A folder or a pattern's files may be skipped when they cannot be read; a file named not.
+    """
     from imageform._files import glob_paths, not_a_regular_file
     from imageform.io import image_files
 
@@ -127,18 +130,30 @@ def _check_distinct(left: str, right: str, lefts: list[Path], rights: list[Path]
 
 
 def _detect(
-    opts: StereoCalibrateOptions, files: list[Path], board: tuple[int, int] | Literal["auto"]
-) -> tuple[tuple[int, int], list[Any]]:
+    opts: StereoCalibrateOptions,
+    files: list[Path],
+    board: tuple[int, int] | Literal["auto"],
+    skip: bool = False,
+) -> tuple[tuple[int, int] | None, list[Any]]:
     """Each image's checkerboard (``board``: its inner corners, or ``"auto"``), all of one size.
 
-    Returns the images' size ``(W, H)`` and each image's ``CheckerboardResult``.
+    Returns the images' size ``(W, H)`` (None when none was read) and each image's
+    ``CheckerboardResult``; with ``skip`` (the files of a folder or a glob pattern), a file
+    that cannot be read gets instead the reason, a str (:func:`~._images.unreadable`).
     """
     from imageform.geometry.checkerboard import find_checkerboard
 
     size: tuple[int, int] | None = None
     found: list[Any] = []
     for f in files:
-        img = read(f, opts)
+        try:
+            img = read(f, opts)
+        except InvalidInputError as exc:
+            why = unreadable(exc, f) if skip else None
+            if why is None:
+                raise
+            found.append(why)
+            continue
         if size is None:
             size = (int(img.shape[1]), int(img.shape[0]))
         elif (int(img.shape[1]), int(img.shape[0])) != size:
@@ -150,8 +165,37 @@ def _detect(
         found.append(
             find_checkerboard(grey, board, half_window=opts.half_window, method=opts.refinement)
         )
-    assert size is not None
     return size, found
+
+
+def _gathered(pattern: str) -> bool:
+    """Whether ``pattern`` is a folder or a glob pattern (its files are not named one by one)."""
+    p = str(pattern)
+    return os.path.isdir(p) or (not os.path.exists(p) and any(c in p for c in "*?["))
+
+
+def _drop_unreadable(
+    run: Run, files: tuple[list[Path], list[Path]], dets: tuple[list[Any], list[Any]]
+) -> tuple[list[Path], list[Path], list[Any], list[Any]]:
+    """Leave out the pairs with an image that cannot be read, a note naming both images each."""
+    keep_l: list[Path] = []
+    keep_r: list[Path] = []
+    kd_l: list[Any] = []
+    kd_r: list[Any] = []
+    for fl, fr, dl, dr in zip(*files, *dets, strict=True):
+        if isinstance(dl, str) and isinstance(dr, str):
+            why = dl if dl == dr else f"{dl}; {dr}"
+            run.note(f"warning: {fl} and its pair {fr}: skipped, neither can be read ({why})")
+            continue
+        if isinstance(dl, str) or isinstance(dr, str):
+            bad, why, other = (fl, dl, fr) if isinstance(dl, str) else (fr, dr, fl)
+            run.note(f"warning: {bad}: skipped with its pair {other}, cannot be read ({why})")
+            continue
+        keep_l.append(fl)
+        keep_r.append(fr)
+        kd_l.append(dl)
+        kd_r.append(dr)
+    return keep_l, keep_r, kd_l, kd_r
 
 
 def stereo_calibrate_cmd(
@@ -178,16 +222,26 @@ def stereo_calibrate_cmd(
     ahead.start("stereo-calibrate")  # a first run: its kernels compiled on two cores
     if run.progress is not None:
         run.progress("detecting", 0.0)
-    size_l, det_l = _detect(opts, lefts, "auto" if auto else board)
+    size_l, det_l = _detect(opts, lefts, "auto" if auto else board, _gathered(left))
     if run.progress is not None:
         run.progress("detecting", 0.5)
-    size_r, det_r = _detect(opts, rights, "auto" if auto else board)
+    size_r, det_r = _detect(opts, rights, "auto" if auto else board, _gathered(right))
+    n_given = len(lefts)
+    bad = [(f, d) for f, d in zip(lefts + rights, det_l + det_r, strict=True) if isinstance(d, str)]
+    lefts, rights, det_l, det_r = _drop_unreadable(run, (lefts, rights), (det_l, det_r))
+    unread = not_read(n_given, len(lefts))
+    if bad and len(lefts) < MIN_VIEWS:
+        raise DegenerateConfigurationError(
+            f"{len(lefts)} of the {n_given} pairs can be read ({bad[0][0]}: {bad[0][1]}"
+            f"{'; ...' if len(bad) > 1 else ''}); stereo-calibrate needs at least {MIN_VIEWS}"
+        )
+    assert size_l is not None and size_r is not None
     reading = None
     if auto:
         both = det_l + det_r
 
         def search(files: list[Path], size: tuple[int, int]) -> list[Any]:
-            return _detect(opts, files, size)[1]
+            return _detect(opts, files, size)[1]  # read before: each can be read
 
         board, line, _ = _settle_auto_board(lefts + rights, both, search, "images")
         det_l, det_r = both[: len(lefts)], both[len(lefts) :]
@@ -203,7 +257,7 @@ def stereo_calibrate_cmd(
     if len(pairs) < MIN_VIEWS:
         raise DegenerateConfigurationError(
             f"found the {board[0]}x{board[1]} board in both images of {len(pairs)} of the "
-            f"{len(lefts)} pairs; stereo-calibrate needs at least {MIN_VIEWS} "
+            f"{len(lefts)} pairs{unread}; stereo-calibrate needs at least {MIN_VIEWS} "
             f"({board_hint(f'{board[0]}x{board[1]}' if auto else opts.board)})"
         )
     if run.progress is not None:
@@ -255,7 +309,7 @@ def stereo_calibrate_cmd(
         "output": out,
         "board": {k: v for k, v in reading.items() if k != "line"},
         "pairs_used": len(pairs),
-        "pairs_total": len(lefts),
+        "pairs_total": n_given,
         "rms_px": rig.rms,
         "R": rig.R.tolist(),
         "rvec_deg": rvec_deg.tolist(),
@@ -298,7 +352,8 @@ class DepthOptions(ImageIn):
     )
     disparity: bool = option(
         False,
-        help="Write the disparity (px, x_left - x_right in the rectified pair) instead of depth.",
+        help="Write the disparity (px, x_left - x_right in the rectified pair; y_left - y_right "
+        "for cameras stacked vertically) instead of depth.",
     )
     points: Path | None = option(
         None,
@@ -309,7 +364,7 @@ class DepthOptions(ImageIn):
     min_disparity: int = option(
         0,
         help="Smallest disparity searched (px; negative when the rectified principal points "
-        "are apart).",
+        "are apart, or when the right camera is to the left of or above the left one).",
         minimum=-100_000,
         maximum=100_000,
     )
@@ -382,6 +437,41 @@ def _pair_image(path: Path, opts: DepthOptions, size: tuple[int, int] | None, si
     return img
 
 
+def _check_baseline(rig: Any, camera: Path) -> None:
+    """Refuse a rig whose baseline is zero, or zero within its standard deviation (one line)."""
+    import numpy as np
+
+    b = float(np.linalg.norm(rig.T))
+    std = rig.std_T
+    s = float(np.linalg.norm(std)) if std is not None and np.all(np.isfinite(std)) else 0.0
+    if not b > 3.0 * s or not b > 0:
+        within = f", within 3 standard deviations ({s:.3g}) of zero" if b > 0 else ""
+        raise DegenerateConfigurationError(
+            f"the baseline of {camera} is {b:.3g}{within}: its two cameras are at one place, "
+            "and depth needs them apart (side by side or stacked)"
+        )
+
+
+def _check_disparity_sign(rect: Any, opts: DepthOptions) -> None:
+    """Refuse a disparity range that puts every point behind the cameras (one line).
+
+    ``Q`` gives a point in front for ``Q[3, 2] d + Q[3, 3] > 0``: positive disparities when
+    the right (second) camera is to the right of (below) the left one, negative when it is
+    to the left (above).
+    """
+    lo = opts.min_disparity
+    hi = lo + opts.num_disparities - 1
+    Q = rect.Q
+    if max(Q[3, 2] * lo + Q[3, 3], Q[3, 2] * hi + Q[3, 3]) > 0:
+        return
+    where = "above" if rect.vertical else "to the left of"
+    raise InvalidInputError(
+        f"the disparities searched, {lo} to {hi} px, all put the points behind the cameras: "
+        f"the right camera of {opts.camera} is {where} the left one, so the disparities are "
+        f"negative: search them with --min-disparity {-hi}"
+    )
+
+
 def depth_cmd(run: Run, opts: DepthOptions, *, out: Path, left: Path, right: Path) -> Result:
     """``imageform depth``: rectify a stereo pair, match it, write depth or disparity."""
     import numpy as np
@@ -412,14 +502,11 @@ def depth_cmd(run: Run, opts: DepthOptions, *, out: Path, left: Path, right: Pat
 
     ahead.start("depth")  # a first run: the matching kernels compiled on two cores
     size = (int(img_l.shape[1]), int(img_l.shape[0]))
+    _check_baseline(rig, opts.camera)
     rect = stereo_rectify(
         np.asarray(cl.K), cl.distortion, np.asarray(cr.K), cr.distortion, size, rig.R, rig.T
     )
-    if rect.vertical:
-        raise InvalidInputError(
-            f"the cameras of {opts.camera} are stacked vertically; depth matches along rows: "
-            "give a side-by-side rig"
-        )
+    _check_disparity_sign(rect, opts)
     if run.progress is not None:
         run.progress("rectifying", 0.0)
     map_l = rectification_map(np.asarray(cl.K), cl.distortion, rect.R1, rect.P1, rect.image_size)
@@ -441,6 +528,7 @@ def depth_cmd(run: Run, opts: DepthOptions, *, out: Path, left: Path, right: Pat
         lr_check=opts.lr_check,
         speckle_size=opts.speckle_size,
         speckle_range=opts.speckle_range,
+        vertical=rect.vertical,
     )
     # left pixels whose source lies outside the left image hold no measurement
     W0, H0 = size
@@ -486,6 +574,7 @@ def depth_cmd(run: Run, opts: DepthOptions, *, out: Path, left: Path, right: Pat
         "points": opts.points,
         "n_points": n_points,
         "size": list(rect.image_size),
+        "vertical": bool(rect.vertical),
         "focal_px": f,
         "baseline": baseline,
         "valid_fraction": float(valid.mean()),
@@ -494,6 +583,8 @@ def depth_cmd(run: Run, opts: DepthOptions, *, out: Path, left: Path, right: Pat
         "depth_median": float(np.median(z_ok)) if z_ok.size else None,
     }
     text = [f"rectified {size[0]} x {size[1]} px: f {f:.1f} px, baseline {baseline:.3f}"]
+    if rect.vertical:
+        text[0] += " (cameras stacked: matched along columns)"
     if d_ok.size:
         text.append(
             f"valid {100 * valid.mean():.1f} % of the pixels; disparity {d_ok.min():.2f} to "
@@ -553,7 +644,8 @@ WORKFLOWS = (
         "semi-global matching on census costs (8 paths, sub-pixel, uniqueness and left-right "
         "checks; imageform.geometry.stereo_disparity) and the disparity d turned into depth "
         "Z = f B / d in the units of the rig's T (mm from stereo-calibrate). The map is in "
-        "the rectified left camera's pixels; --points writes x, y, z in its frame. "
+        "the rectified left camera's pixels; --points writes x, y, z in its frame. Cameras "
+        "stacked vertically are rectified to shared columns and matched along them. "
         "docs/calibration.md, 'Depth from a stereo pair'.",
     ),
 )
