@@ -23,9 +23,15 @@ also as H.264 (x264 CRF 18, 4:2:0, coded progressive as a grabber's re-encode wo
    github.com/DurrLab/C3VDv3 at ``ad9391d``, CC BY 4.0; 289 frames at 60 fps, the colour
    panel the first 445 columns), interlaced at 30 frames a second (144 frames), every 4th
    frame reconstructed (the top field's instants are the source's every 8th frame, 0 to
-   280). No ground truth: the reference is imageform on the progressive frames of those
-   instants; the agreement columns (median angles between consecutive relative rotations and
-   translation directions, degrees; the worst rotation) are as in check_endo_real.py.
+   280). Rows: the progressive frames of those instants, and the interlaced ones with each
+   ``--deinterlace`` (``auto`` is ``linear`` for reconstruct; ``fields`` the first field at
+   half height). No ground truth: the references are imageform on the progressive frames
+   and, with ``--reference`` (check_endo_real.py's cached pycolmap 4.2.1 poses of every 8th
+   source frame, aperture mask, peak threshold / 4), pycolmap. The agreement columns
+   (median angles between consecutive relative rotations and translation directions,
+   degrees; the worst rotation) are as in check_endo_real.py; the trajectory column is the
+   RMS distance of the camera centres to the reference's after a similarity fit, a share of
+   the reference's extent (the RMS distance of its centres to their mean).
 
 Run::
 
@@ -254,6 +260,7 @@ def reconstruction(
         ("interlaced, --deinterlace off", i_dir, "off"),
         ("interlaced, --deinterlace linear", i_dir, "linear"),
         ("interlaced, --deinterlace blend", i_dir, "blend"),
+        ("interlaced, --deinterlace fields", i_dir, "fields"),
         ("interlaced, --deinterlace auto", i_dir, "auto"),
     ]
     results = []
