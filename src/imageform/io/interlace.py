@@ -84,8 +84,9 @@ class Interlacing:
         idet's decisions on the measured frames.
     combing : float
         The median over the frames of the mean squared difference of adjacent rows (opposite
-        fields) over that of rows two apart (the same field): below 1 for a progressive
-        picture, above 1 where moving edges comb.
+        fields) over that of rows two apart (the same field): below 1 for a smooth
+        progressive picture, above 1 where strong moving edges comb. Informative only (small
+        motion over a whole frame barely moves it): idet's rule decides.
     stream : str or None
         The stream's field-order flag (``"progressive"``, ``"tt"``, ``"bb"``, ``"tb"``,
         ``"bt"``) when the container says one.
