@@ -300,6 +300,45 @@ def test_reader_reads_the_streams_field_order(tmp_path: Path) -> None:
         assert reader.interlacing.interlaced and n == 12  # x264 4:2:0 keeps the combing
 
 
+def _mpeg2(path: Path, frames: list[np.ndarray], field_order: int) -> Path:
+    """An MPEG-2 file coded interlaced (ilme, ildct), its container flagged ``field_order``
+    (FFmpeg's AVFieldOrder: 2 tt, 3 bb)."""
+    av = pytest.importorskip("av")
+    with av.open(str(path), "w") as out:
+        stream = out.add_stream("mpeg2video", rate=25)
+        stream.width, stream.height, stream.pix_fmt = 200, 96, "yuv420p"
+        stream.codec_context.field_order = field_order
+        stream.options = {"flags": "+ilme+ildct", "qscale": "2"}
+        for f in frames:
+            vf = av.VideoFrame.from_ndarray(np.repeat(f[..., None], 3, axis=-1), format="rgb24")
+            for packet in stream.encode(vf):
+                out.mux(packet)
+        for packet in stream.encode(None):
+            out.mux(packet)
+    return path
+
+
+def test_reader_reads_an_interlaced_mpeg2_files_flag(tmp_path: Path) -> None:
+    """The container's field order (``bb``) beside the frames' verdict; a still clip so
+    flagged is left alone, the flag giving only the order a forced split would use."""
+    woven = _mpeg2(tmp_path / "bff.mkv", _clip("bottom", 10), 3)
+    with open_video(woven, deinterlace="auto") as reader:
+        got = list(reader)
+        found = reader.interlacing
+    assert found is not None and found.stream == "bb"
+    assert found.interlaced and found.field_order == "bottom" and len(got) == 20
+    assert got[0].field == "bottom" and got[0].image.shape == (48, 200, 3)
+    still = _mpeg2(tmp_path / "still.mkv", [_clip("bottom")[0]] * 8, 3)
+    with open_video(still, deinterlace="auto") as reader:
+        got = list(reader)
+        found = reader.interlacing
+        assert reader.deinterlaced == "off" and len(got) == 8
+    assert found is not None and not found.interlaced and found.field_order == "bottom"
+    with open_video(still, deinterlace="fields") as reader:
+        assert next(iter(reader)).field == "bottom"  # the stream's order when frames cannot tell
+        reader.close()
+
+
 def test_reader_bad_options(tmp_path: Path) -> None:
     folder = _folder(tmp_path, _clip(None, 3))
     with pytest.raises(UnknownOptionError, match="deinterlace method"):
