@@ -92,6 +92,32 @@ def test_track_off_tracks_the_combed_frames(
     assert len(rows) == 8
 
 
+def test_track_auto_leaves_a_progressive_clip_alone(
+    interlaced: tuple[Path, Path, list], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A progressive clip: auto tracks the frames as decoded, poses.csv as with off."""
+    _, camera, truth = interlaced
+    tex, origin = video_scenes.board_texture()
+    rng = np.random.default_rng(4)
+    frames = tmp_path / "progressive"
+    frames.mkdir()
+    for k in range(6):
+        image = video_scenes.render(tex, origin, K, truth[2 * k], SIZE, rng=rng)
+        write_image(frames / f"f{k:02d}.png", image)
+    outs = {}
+    for how in ("auto", "off"):
+        out = tmp_path / f"{how}.csv"
+        args = ["track", str(frames), "--camera", str(camera), *BOARD, "-o", str(out)]
+        assert main([*args, "--deinterlace", how, "--json"]) == 0
+        summary = json.loads(capsys.readouterr().out)
+        assert summary["deinterlace"]["method"] == "off"
+        outs[how] = out.read_text()
+        if how == "auto":
+            assert summary["deinterlace"]["found"]["interlaced"] is False
+    assert outs["auto"] == outs["off"]
+    assert len(outs["off"].splitlines()) == 7
+
+
 def test_track_overlay_of_fields_has_the_frames_size(
     interlaced: tuple[Path, Path, list], tmp_path: Path
 ) -> None:
