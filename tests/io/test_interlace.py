@@ -268,6 +268,22 @@ def test_reader_auto_leaves_progressive_and_still_clips_alone(tmp_path: Path) ->
             np.testing.assert_array_equal(f.image[..., 0], want)
 
 
+def test_reader_reads_ahead_within_its_memory_bound(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    import imageform.io.video as video
+
+    folder = _folder(tmp_path, _clip("top", 30))
+    monkeypatch.setattr(video, "_PROBE_BYTES", 3 * 200 * 96 * 12)  # twelve frames' worth
+    with open_video(folder, deinterlace="auto") as reader:
+        assert sum(1 for _ in reader) == 60
+        assert reader.interlacing is not None and reader.interlacing.frames == 10
+    monkeypatch.setattr(video, "_PROBE_BYTES", 1)  # never fewer than 8
+    with open_video(folder, deinterlace="auto") as reader:
+        assert sum(1 for _ in reader) == 60
+        assert reader.interlacing is not None and reader.interlacing.frames == 6
+
+
 def test_reader_forced_methods_and_off(tmp_path: Path) -> None:
     frames = _clip("top", 5)
     folder = _folder(tmp_path, frames)

@@ -50,8 +50,10 @@ __all__ = [
 #: File suffixes read as video files (any other existing file is offered to FFmpeg too).
 VIDEO_SUFFIXES = (".mp4", ".m4v", ".mkv", ".avi", ".mov", ".webm", ".mpg", ".mpeg", ".ts")
 
-#: Frames read ahead to decide whether a clip is interlaced (``deinterlace="auto"``).
+#: Frames read ahead to decide whether a clip is interlaced (``deinterlace="auto"``), and
+#: the most memory they may take (8 frames at least: 120 of PAL, 43 of 1080p, 10 of 4K).
 _PROBE_FRAMES = 120
+_PROBE_BYTES = 256 * 2**20
 
 #: x264's speed presets, fastest first (:class:`VideoWriter`'s ``preset``).
 _X264_PRESETS = (
@@ -201,7 +203,8 @@ class VideoReader:
         first, half a frame period apart (:attr:`Frame.field` says which); ``"linear"`` and
         ``"blend"`` full frames (:func:`imageform.io.deinterlace`); ``"auto"``:
         ``"fields"`` when :func:`imageform.io.detect_interlacing` finds combing in the first
-        frames (up to 120 read ahead, 30 from a device), else as decoded.
+        frames (up to 120 read ahead, at most 256 MB of them and 8 at least; a quarter of
+        that from a device), else as decoded.
     field_order : {"top", "bottom"}, optional
         The field first in time; default: the one the frames show, else the stream's flag,
         else top.
@@ -397,7 +400,10 @@ class VideoReader:
         from imageform.io.interlace import deinterlace, detect_interlacing, split_fields
 
         head: list[Frame] = []
-        probe = _PROBE_FRAMES if self.info.kind != "device" else _PROBE_FRAMES // 4
+        frame_bytes = 3 * self.info.width * self.info.height
+        probe = max(8, min(_PROBE_FRAMES, _PROBE_BYTES // frame_bytes))
+        if self.info.kind == "device":  # live: a quarter of it, not to hold the first pose
+            probe = max(8, probe // 4)
         for f in raw:
             head.append(f)
             if len(head) >= probe:
