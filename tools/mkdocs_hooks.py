@@ -101,6 +101,7 @@ BENCH_SCRIPTS: dict[str, str] = {
     "read-threads": "benchmarks/bench_read_threads.py",
     "reconstruct": "benchmarks/bench_reconstruct.py",
     "endo-real": "benchmarks/check_endo_real.py",
+    "interlace": "benchmarks/check_interlace.py",
     "sfm-intruders": "benchmarks/check_sfm_intruders.py",
     "sfm-dense": "benchmarks/check_sfm_dense.py",
     "pair-pose": "benchmarks/check_pair_pose.py",

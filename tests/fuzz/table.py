@@ -1739,6 +1739,12 @@ VALID.update(
             "structure from motion over many frames, minutes a call (tests/geometry/test_sfm.py)"
         ),
         "imageform.io.Frame": Skip("a record yielded by VideoReader"),
+        "imageform.io.Interlacing": Skip("a record built by detect_interlacing"),
+        "imageform.io.Interlacing.describe": Skip("a method of a record"),
+        "imageform.io.detect_interlacing": call([np.full((8, 6), 90, np.uint8)] * 4),
+        "imageform.io.split_fields": call(np.zeros((6, 4, 3), np.uint8), "bottom"),
+        "imageform.io.field_camera_matrix": call(_K_TRACK, "bottom"),
+        "imageform.io.deinterlace": call(np.zeros((6, 4, 3), np.uint8), "linear"),
         "imageform.io.VideoInfo": Skip("a record built by VideoReader"),
         "imageform.io.Plan": Skip("a record built by read_plan"),
         "imageform.io.VideoReader": Skip("reads a video or a device (tests/io/test_video.py)"),

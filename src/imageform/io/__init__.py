@@ -6,7 +6,8 @@ declares in its ICC profile or tags, PNG's ``gAMA``/``cHRM`` included
 (:func:`image_color_space`); raw files (:func:`write_dng`,
 :func:`read_raw`, :func:`develop`, docs/raw.md); the one camera file, versioned TOML
 (:func:`read_camera`, :func:`write_camera`, docs/camera-file.md); video files, image
-sequences and capture devices (:func:`open_video`, :class:`VideoWriter`, PyAV); DICOM images
+sequences and capture devices (:func:`open_video`, :class:`VideoWriter`, PyAV), interlaced
+video (:func:`detect_interlacing`, :func:`split_fields`, :func:`field_camera_matrix`); DICOM images
 through pydicom (:func:`read_dicom`, :func:`dicom_info`, :func:`dicom_window`, the ``dicom``
 extra).
 """
@@ -50,6 +51,15 @@ from imageform.io.image_io import (
     read_image,
     write_image,
 )
+from imageform.io.interlace import (
+    DEINTERLACE_METHODS,
+    FIELD_ORDERS,
+    Interlacing,
+    deinterlace,
+    detect_interlacing,
+    field_camera_matrix,
+    split_fields,
+)
 from imageform.io.plan import PLAN_MESH_SUFFIXES, Plan, read_plan
 from imageform.io.png import read_png, write_png
 from imageform.io.raw import (
@@ -83,8 +93,10 @@ __all__ = [
     "CAMERA_FILE_VERSION",
     "CCM_TARGETS",
     "DEFAULT_MAX_PIXELS",
+    "DEINTERLACE_METHODS",
     "DICOM_WINDOW_FUNCTIONS",
     "DISTORTION_MODELS",
+    "FIELD_ORDERS",
     "IMAGE_FORMATS",
     "OPTICS_MODELS",
     "PLAN_MESH_SUFFIXES",
@@ -105,6 +117,7 @@ __all__ = [
     "Frame",
     "IccProfile",
     "ImageInfo",
+    "Interlacing",
     "Plan",
     "Provenance",
     "RawImage",
@@ -113,10 +126,13 @@ __all__ = [
     "VideoReader",
     "VideoWriter",
     "WrittenImage",
+    "deinterlace",
+    "detect_interlacing",
     "develop",
     "dicom_info",
     "dicom_window",
     "exif_camera",
+    "field_camera_matrix",
     "icc_profile",
     "identify_icc",
     "image_color_space",
@@ -133,6 +149,7 @@ __all__ = [
     "read_png",
     "read_raw",
     "read_stereo_camera",
+    "split_fields",
     "write_camera",
     "write_dng",
     "write_image",

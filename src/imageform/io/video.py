@@ -36,6 +36,7 @@ from imageform._typing import ArrayLike
 from imageform._validate import describe
 from imageform.errors import InvalidInputError
 from imageform.io.image_io import IMAGE_FORMATS, _natural_key, image_files
+from imageform.io.interlace import Interlacing
 
 __all__ = [
     "VIDEO_SUFFIXES",
@@ -48,6 +49,11 @@ __all__ = [
 
 #: File suffixes read as video files (any other existing file is offered to FFmpeg too).
 VIDEO_SUFFIXES = (".mp4", ".m4v", ".mkv", ".avi", ".mov", ".webm", ".mpg", ".mpeg", ".ts")
+
+#: Frames read ahead to decide whether a clip is interlaced (``deinterlace="auto"``), and
+#: the most memory they may take (8 frames at least: 120 of PAL, 43 of 1080p, 10 of 4K).
+_PROBE_FRAMES = 120
+_PROBE_BYTES = 256 * 2**20
 
 #: x264's speed presets, fastest first (:class:`VideoWriter`'s ``preset``).
 _X264_PRESETS = (
@@ -90,12 +96,17 @@ class Frame:
         RGB.
     path : Path or None
         The image file of an image sequence's frame (None for a video file or a device).
+    field : {"top", "bottom"} or None
+        The field this image is when the reader splits interlaced frames into their fields
+        (``deinterlace="fields"``): half the frame's height, the camera matrix
+        :func:`imageform.io.field_camera_matrix`; None for a whole frame.
     """
 
     index: int
     time_s: float
     image: np.ndarray
     path: Path | None = None
+    field: str | None = None
 
 
 @dataclass(frozen=True)
@@ -186,17 +197,61 @@ class VideoReader:
         Ignored for a file, whose stream says.
     max_pixels : int, optional
         Refuse frames with more pixels (default :func:`imageform.io.max_pixels`).
+    deinterlace : {"off", "auto", "fields", "linear", "blend"}
+        Interlaced frames (:mod:`imageform.io.interlace`): ``"off"`` (the default) as
+        decoded; ``"fields"`` each frame as its two fields at half height, first in time
+        first, half a frame period apart (:attr:`Frame.field` says which); ``"linear"`` and
+        ``"blend"`` full frames (:func:`imageform.io.deinterlace`); ``"auto"``:
+        ``"fields"`` when :func:`imageform.io.detect_interlacing` finds combing in the first
+        frames (up to 120 read ahead, at most 256 MB of them and 8 at least; a quarter of
+        that from a device), else as decoded.
+    field_order : {"top", "bottom"}, optional
+        The field first in time; default: the one the frames show, else the stream's flag,
+        else top.
+    auto_method : {"fields", "linear", "blend"}
+        What ``deinterlace="auto"`` applies to a clip found interlaced (default
+        ``"fields"``: a pose a field for tracking; ``"linear"`` keeps the frame's size and
+        camera matrix, for structure from motion).
+
+    Attributes
+    ----------
+    interlacing : Interlacing or None
+        What the first frames showed (set when iteration starts; None with
+        ``deinterlace="off"``).
+    deinterlaced : str
+        The method applied (``"auto"`` resolved to ``"fields"`` or ``"off"`` when iteration
+        starts).
+    field_order : str or None
+        The field order applied (None when ``deinterlaced`` is ``"off"``).
     """
 
     def __init__(
-        self, source: str | Path, *, fps: float | None = None, max_pixels: int | None = None
+        self,
+        source: str | Path,
+        *,
+        fps: float | None = None,
+        max_pixels: int | None = None,
+        deinterlace: str = "off",
+        field_order: str | None = None,
+        auto_method: str = "fields",
     ) -> None:
+        from imageform._validate import check_option
         from imageform.io.image_io import _pixel_limit, image_info
+        from imageform.io.interlace import DEINTERLACE_METHODS, FIELD_ORDERS
 
         if not isinstance(source, str | os.PathLike):
             raise TypeError(f"expected source as a path, got {describe(source)}")
         if fps is not None and not (isinstance(fps, int | float) and 0 < fps < 1e4):
             raise InvalidInputError(f"expected fps in (0, 10000), got {describe(fps)}")
+        self._deinterlace = check_option(deinterlace, DEINTERLACE_METHODS, "deinterlace method")
+        self._order = (
+            None if field_order is None else check_option(field_order, FIELD_ORDERS, "field order")
+        )
+        self._auto = check_option(auto_method, DEINTERLACE_METHODS[2:], "auto_method")
+        self.interlacing: Interlacing | None = None
+        self.deinterlaced = self._deinterlace
+        self.field_order: str | None = None
+        self._stream_order: str | None = None
         self._limit = _pixel_limit(max_pixels)
         self._source = str(source)
         self._container: Any = None
@@ -244,6 +299,7 @@ class VideoReader:
         self._stream = streams[0]
         self._stream.thread_type = "AUTO"
         ctx = self._stream.codec_context
+        self._stream_order = _field_order_flag(ctx)
         rate = self._stream.average_rate or self._stream.guessed_rate or (fps or 30)
         frames = int(self._stream.frames) or None
         self._check_size(int(ctx.width), int(ctx.height))
@@ -329,11 +385,52 @@ class VideoReader:
             raise InvalidInputError(f"{self._source}: a VideoReader is iterated once")
         self._iterated = True
         if self._files is not None:
-            yield from self._sequence()
+            raw = self._sequence()
         elif self._dicom is not None:
-            yield from self._dicom_frames()
+            raw = self._dicom_frames()
         else:
-            yield from self._decode()
+            raw = self._decode()
+        if self._deinterlace == "off":
+            yield from raw
+        else:
+            yield from self._deinterlaced(raw)
+
+    def _deinterlaced(self, raw: Iterator[Frame]) -> Iterator[Frame]:
+        """Read ahead, decide (``"auto"``), then deinterlace every frame."""
+        from imageform.io.interlace import deinterlace, detect_interlacing, split_fields
+
+        head: list[Frame] = []
+        frame_bytes = 3 * self.info.width * self.info.height
+        probe = max(8, min(_PROBE_FRAMES, _PROBE_BYTES // frame_bytes))
+        if self.info.kind == "device":  # live: a quarter of it, not to hold the first pose
+            probe = max(8, probe // 4)
+        for f in raw:
+            head.append(f)
+            if len(head) >= probe:
+                break
+        found = detect_interlacing((f.image for f in head), stream=self._stream_order)
+        self.interlacing = found
+        method = self._deinterlace
+        if method == "auto":
+            method = self._auto if found.interlaced else "off"
+        self.deinterlaced = method
+        if method == "off":
+            yield from head
+            yield from raw
+            return
+        order = self._order or found.field_order or "top"
+        self.field_order = order
+        second = "bottom" if order == "top" else "top"
+        half = 0.5 / self.info.fps
+        index = 0
+        for f in _chain(head, raw):
+            if method != "fields":
+                yield Frame(f.index, f.time_s, deinterlace(f.image, method, order), f.path)
+                continue
+            a, b = split_fields(f.image, order)
+            yield Frame(index, f.time_s, a, f.path, order)
+            yield Frame(index + 1, f.time_s + half, b, f.path, second)
+            index += 2
 
     def _sequence(self) -> Iterator[Frame]:
         from imageform.io.image_io import read_image
@@ -378,8 +475,33 @@ class VideoReader:
             raise InvalidInputError(f"{self._source} has no video frames")
 
 
+def _chain(head: list[Frame], rest: Iterator[Frame]) -> Iterator[Frame]:
+    yield from head
+    yield from rest
+
+
+def _field_order_flag(ctx: Any) -> str | None:
+    """Return the stream's field order as FFmpeg names it (None: not said)."""
+    from imageform.io.interlace import _AV_FIELD_ORDERS
+
+    try:
+        value = ctx.field_order
+    except Exception:  # an older PyAV without it
+        return None
+    if isinstance(value, int) and 0 <= value < len(_AV_FIELD_ORDERS):
+        value = _AV_FIELD_ORDERS[value]
+    text = str(getattr(value, "name", value)).lower()
+    return text if text in _AV_FIELD_ORDERS[1:] else None
+
+
 def open_video(
-    source: str | Path, *, fps: float | None = None, max_pixels: int | None = None
+    source: str | Path,
+    *,
+    fps: float | None = None,
+    max_pixels: int | None = None,
+    deinterlace: str = "off",
+    field_order: str | None = None,
+    auto_method: str = "fields",
 ) -> VideoReader:
     """Open a video file, an image sequence (a folder or a glob) or a capture device.
 
@@ -393,6 +515,13 @@ def open_video(
         DICOM cine's own Frame Time, Cine Rate or Recommended Display Frame Rate comes first.
     max_pixels : int, optional
         Refuse frames with more pixels (default :func:`imageform.io.max_pixels`).
+    deinterlace : {"off", "auto", "fields", "linear", "blend"}
+        Interlaced frames: as decoded (the default), split into fields, deinterlaced at full
+        size, or ``"auto"`` (fields when the first frames comb): :class:`VideoReader`.
+    field_order : {"top", "bottom"}, optional
+        The field first in time (default: the frames', else the stream's, else top).
+    auto_method : {"fields", "linear", "blend"}
+        What ``"auto"`` applies to an interlaced clip (default ``"fields"``).
 
     Returns
     -------
@@ -417,7 +546,14 @@ def open_video(
     ...     print(video.info.frames, [(f.index, f.time_s, f.image.shape) for f in video])
     3 [(0, 0.0, (4, 6, 3)), (1, 0.1, (4, 6, 3)), (2, 0.2, (4, 6, 3))]
     """
-    return VideoReader(source, fps=fps, max_pixels=max_pixels)
+    return VideoReader(
+        source,
+        fps=fps,
+        max_pixels=max_pixels,
+        deinterlace=deinterlace,
+        field_order=field_order,
+        auto_method=auto_method,
+    )
 
 
 class VideoWriter:

@@ -94,6 +94,20 @@ class ReconstructOptions(Options):
         help="Leave out the blurred frames: sharpness (the variance of the Laplacian in the "
         "field of view) below half the median of the 3 frames on either side.",
     )
+    deinterlace: str = option(
+        "auto",
+        help="Interlaced video: auto (linear when the first frames comb, else off), off, "
+        "linear (the first field kept, the other field's rows interpolated: the frame's "
+        "size and camera matrix), fields (the first field at half height, fy and cy halved) "
+        "or blend.",
+        choices=("auto", "off", "fields", "linear", "blend"),
+    )
+    field_order: str | None = option(
+        None,
+        help="The field first in time, top or bottom (default: the frames', else the "
+        "stream's, else top).",
+        choices=("top", "bottom"),
+    )
     contrast_threshold: float = option(
         0.04,
         help="SIFT's contrast threshold, in (0, 1): 0.01 finds ten times as many keypoints "
@@ -135,10 +149,15 @@ def _fmt(x: float) -> str:
 def _read_frames(
     source: str, opts: ReconstructOptions, size: tuple[int, int] | None
 ) -> tuple[list[Any], list[str], Any]:
-    """Read the frames (every ``--every``-th, at most ``--max-frames``), their names, the info."""
+    """Read the frames (every ``--every``-th, at most ``--max-frames``), their names, the reader.
+
+    An interlaced video read as fields (``--deinterlace``) gives the first field of each frame.
+    """
     from imageform.io import open_video
 
-    reader = open_video(source)
+    reader = open_video(
+        source, deinterlace=opts.deinterlace, field_order=opts.field_order, auto_method="linear"
+    )
     info = reader.info
     if size is not None and tuple(size) != (info.width, info.height):
         reader.close()
@@ -150,21 +169,26 @@ def _read_frames(
     names: list[str] = []
     with reader:
         for frame in reader:
-            if frame.index % opts.every:
+            index = frame.index
+            if frame.field is not None:  # the first field of each frame: one camera matrix
+                if frame.field != reader.field_order:
+                    continue
+                index //= 2
+            if index % opts.every:
                 continue
             images.append(frame.image)
-            names.append(frame.path.name if frame.path is not None else f"frame_{frame.index:06d}")
+            names.append(frame.path.name if frame.path is not None else f"frame_{index:06d}")
             if opts.max_frames is not None and len(images) >= opts.max_frames:
                 break
-    return images, names, info
+    return images, names, reader
 
 
-def _read_mask(path: Path, info: Any) -> Any:
+def _read_mask(path: Path, info: Any, field: str | None = None) -> Any:
     """Read the ``--mask`` image as booleans (nonzero: keypoints allowed), the frames' size."""
     from imageform.io import read_image
     from imageform.workflows._images import mask_of
 
-    return mask_of(
+    mask = mask_of(
         read_image(path, alpha="drop"),
         path,
         info.height,
@@ -172,10 +196,13 @@ def _read_mask(path: Path, info: Any) -> Any:
         "the frames",
         "no keypoint could be kept",
     )
+    if field is None:
+        return mask
+    return mask[0::2] if field == "top" else mask[1::2]  # the field's rows
 
 
 def _masks(
-    images: list[Any], opts: ReconstructOptions, info: Any
+    images: list[Any], opts: ReconstructOptions, info: Any, field: str | None = None
 ) -> tuple[Any, dict[str, Any], Any]:
     """Return the keypoint masks (one, one a frame, or None), their shares, the field of view."""
     import numpy as np
@@ -183,7 +210,7 @@ def _masks(
     from imageform.geometry import field_of_view_mask, highlight_mask
 
     if opts.mask is not None:
-        fov = _read_mask(opts.mask, info)
+        fov = _read_mask(opts.mask, info, field)
     elif opts.auto_mask:
         fov = field_of_view_mask(images)
     else:
@@ -234,9 +261,10 @@ def reconstruct(run: Run, opts: ReconstructOptions, *, out: Path, frames: str) -
     from imageform._jsonio import write_json
     from imageform._kernels import ahead
     from imageform.geometry import matrix_to_rvec, reconstruct_sequence
-    from imageform.io import read_camera
+    from imageform.io import field_camera_matrix, read_camera
     from imageform.workflows._ply import write_points_ply
     from imageform.workflows._reconstruct_report import write_report
+    from imageform.workflows._video import deinterlace_note, deinterlace_summary
 
     refuse_foreign_folder(
         out, run.outputs.force, _MARKERS, "reconstruct", "a previous reconstruction"
@@ -247,14 +275,17 @@ def reconstruct(run: Run, opts: ReconstructOptions, *, out: Path, frames: str) -
     t0 = time.perf_counter()
     if run.progress is not None:
         run.progress("reading the frames", 0.0)
-    images, names, info = _read_frames(frames, opts, size)
+    images, names, reader = _read_frames(frames, opts, size)
+    info = reader.info
+    field = reader.field_order if getattr(reader, "deinterlaced", "off") == "fields" else None
+    K = cam.K if field is None else field_camera_matrix(cam.K, field)
     if len(images) < 2:
         raise InvalidInputError(
             f"{frames}: {len(images)} frame"
             + (f" (one in {opts.every})" if opts.every > 1 else "")
             + "; reconstruct needs at least 2"
         )
-    mask, mask_shares, fov = _masks(images, opts, info)
+    mask, mask_shares, fov = _masks(images, opts, info, field)
     skipped: list[str] = []
     if opts.skip_blurred:
         from imageform.geometry import blurred_frames
@@ -279,7 +310,7 @@ def reconstruct(run: Run, opts: ReconstructOptions, *, out: Path, frames: str) -
     try:
         rec = reconstruct_sequence(
             images,
-            cam.K,
+            K,
             cam.distortion,
             window=opts.window,
             max_features=opts.max_features,
@@ -324,6 +355,7 @@ def reconstruct(run: Run, opts: ReconstructOptions, *, out: Path, frames: str) -
         "camera": str(opts.camera),
         **_metrics(rec, names, seconds),
         "masks": mask_shares,
+        "deinterlace": deinterlace_summary(reader),
         "skipped_blurred": skipped,
         "options": {k: (str(v) if isinstance(v, Path) else v) for k, v in asdict(opts).items()},
     }
@@ -334,6 +366,9 @@ def reconstruct(run: Run, opts: ReconstructOptions, *, out: Path, frames: str) -
     seconds["report"] = time.perf_counter() - t3
     metrics["seconds"] = {k: round(v, 3) for k, v in seconds.items()}
     write_json(folder / "metrics.json", metrics)
+    deint = deinterlace_note(reader, info.fps, "reconstructing from")
+    if deint:
+        run.note(f"note: {deint}")
     if skipped:
         run.note(f"note: left out {len(skipped)} blurred frames: {', '.join(skipped)}")
     for note in rec.notes:

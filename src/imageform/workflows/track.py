@@ -112,6 +112,19 @@ class TrackOptions(Options):
     no_predict: bool = option(
         False, help="Search every frame whole (default: the previous frame's box first)."
     )
+    deinterlace: str = option(
+        "auto",
+        help="Interlaced video: auto (track the fields when the first frames comb), off, "
+        "fields (each field at half height with its own camera matrix: a pose per field), "
+        "linear or blend (full frames).",
+        choices=("auto", "off", "fields", "linear", "blend"),
+    )
+    field_order: str | None = option(
+        None,
+        help="The field first in time, top or bottom (default: the frames', else the "
+        "stream's, else top).",
+        choices=("top", "bottom"),
+    )
 
     def check(self) -> None:
         """Check the board, the lengths and the smoothing weight."""
@@ -153,8 +166,15 @@ def track(run: Run, opts: TrackOptions, *, out: Path, video: str) -> Result:
 
     from imageform._units import length_unit, parse_length
     from imageform.geometry import BoardTracker, CharucoBoard
-    from imageform.io import VideoWriter, open_video, read_camera, read_plan
+    from imageform.io import (
+        VideoWriter,
+        field_camera_matrix,
+        open_video,
+        read_camera,
+        read_plan,
+    )
     from imageform.report.overlays import draw_pose_overlay
+    from imageform.workflows._video import deinterlace_note, deinterlace_summary
 
     cf = read_camera(opts.camera)
     cam = cf.camera
@@ -176,8 +196,12 @@ def track(run: Run, opts: TrackOptions, *, out: Path, video: str) -> Result:
         smooth=opts.smooth if opts.smooth is not None else 1.0,
         predict=not opts.no_predict,
     )
-    reader = open_video(video, fps=opts.fps)
+    reader = open_video(
+        video, fps=opts.fps, deinterlace=opts.deinterlace, field_order=opts.field_order
+    )
     info = reader.info
+    K_of: dict[str | None, Any] = {None: cam.K}
+    K_of.update({f: field_camera_matrix(cam.K, f) for f in ("top", "bottom")})
     if cam.image_size is not None and tuple(cam.image_size) != (info.width, info.height):
         reader.close()
         raise InvalidInputError(
@@ -186,8 +210,6 @@ def track(run: Run, opts: TrackOptions, *, out: Path, video: str) -> Result:
         )
     live = info.kind == "device"
     writer = None
-    if opts.overlay:  # x264's fastest preset: encoding keeps up with tracking (bench_track.py)
-        writer = VideoWriter(run.file(opts.overlay), fps=info.fps, preset="ultrafast")
     rows: list[list[str]] = []
     rms: list[float] = []
     steps: list[float] = []
@@ -200,6 +222,12 @@ def track(run: Run, opts: TrackOptions, *, out: Path, video: str) -> Result:
     try:
         with reader:
             for frame in reader:
+                if writer is None and opts.overlay:
+                    # x264's fastest preset: encoding keeps up with tracking (bench_track.py)
+                    rate = info.fps * (2 if frame.field is not None else 1)
+                    writer = VideoWriter(run.file(opts.overlay), fps=rate, preset="ultrafast")
+                K = K_of[frame.field]
+                tracker.K = K  # a field's own rows: fy / 2, cy of its parity
                 got = time.perf_counter()
                 pose = tracker.update(frame.image)
                 latency.append(time.perf_counter() - got)
@@ -229,11 +257,12 @@ def track(run: Run, opts: TrackOptions, *, out: Path, video: str) -> Result:
                         if pose.found
                         else "  board not found"
                     )
-                    writer.write(
-                        draw_pose_overlay(
-                            frame.image, pose, cam.K, cam.distortion, plan=plan, label=label
-                        )
+                    drawn = draw_pose_overlay(
+                        frame.image, pose, K, cam.distortion, plan=plan, label=label
                     )
+                    if frame.field is not None:  # a field's rows doubled: the frame's size
+                        drawn = np.repeat(drawn, 2, axis=0)[: 2 * (info.height // 2)]
+                    writer.write(drawn)
                 if live and frame.index % 30 == 29:
                     dt = time.perf_counter() - t0
                     print(
@@ -264,6 +293,9 @@ def track(run: Run, opts: TrackOptions, *, out: Path, video: str) -> Result:
         run.note(f"note: stopped by Ctrl-C after {n} frames; {out} is complete")
     if found == 0:
         run.note(f"note: the board was found in none of the {n} frames (check --board)")
+    deint = deinterlace_note(reader, info.fps)
+    if deint:
+        run.note(f"note: {deint}")
     summary: dict[str, Any] = {
         "video": video,
         "out": out,
@@ -279,9 +311,11 @@ def track(run: Run, opts: TrackOptions, *, out: Path, video: str) -> Result:
         "jitter_rotation_deg_median": _median(angles),
         "source": {"kind": info.kind, "width": info.width, "height": info.height, "fps": info.fps},
         "interrupted": interrupted,
+        "deinterlace": deinterlace_summary(reader),
     }
     text = (
-        f"{video}: {n} frames ({info.width}x{info.height}, {info.fps:g} fps), board found in "
+        f"{video}: {n} {'fields' if summary['deinterlace']['method'] == 'fields' else 'frames'} "
+        f"({info.width}x{info.height}, {info.fps:g} fps), board found in "
         f"{found} ({100 * found / n:.0f} %)",
         f"{summary['fps']:.1f} frames per second, median latency "
         f"{summary['latency_ms_median']:.1f} ms, median reprojection RMS "

@@ -1,0 +1,46 @@
+"""What ``imageform track`` and ``imageform reconstruct`` say about an interlaced video."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from imageform.io import VideoReader
+
+__all__ = ["deinterlace_note", "deinterlace_summary"]
+
+
+def deinterlace_summary(reader: VideoReader) -> dict[str, Any]:
+    """Return what the reader found and did about interlacing, for a summary (JSON-safe)."""
+    interlacing = getattr(reader, "interlacing", None)  # a stand-in reader may not say
+    found = None
+    if interlacing is not None:
+        found = {
+            k: (None if isinstance(v, float) and not math.isfinite(v) else v)
+            for k, v in asdict(interlacing).items()
+        }
+    return {
+        "method": getattr(reader, "deinterlaced", "off"),
+        "field_order": getattr(reader, "field_order", None),
+        "found": found,
+    }
+
+
+def deinterlace_note(reader: VideoReader, fps: float, what_is_done: str = "tracking") -> str:
+    """Say what the reader found and did about interlacing ("" when it did not look)."""
+    found = getattr(reader, "interlacing", None)
+    if found is None:
+        return ""
+    what = found.describe()
+    method = reader.deinterlaced
+    if method == "fields":
+        if what_is_done == "tracking":
+            return f"{what}: tracking fields at {2 * fps:g} per second"
+        return f"{what}: {what_is_done} the {reader.field_order} field of each frame"
+    if method == "linear":
+        return f"{what}: frames deinterlaced (linear, the {reader.field_order} field kept)"
+    if method == "blend":
+        return f"{what}: frames deinterlaced (blend of the two fields)"
+    return f"{what}: frames as decoded"
