@@ -64,6 +64,7 @@ __all__ = [
     "bicubic_sample",
     "fix_bad_pixels_constant",
     "gain_map_gains",
+    "lossy_dng_curves",
     "parse_opcode_list",
     "read_opcodes",
     "stage2_name",
@@ -325,10 +326,69 @@ def _parse_vignette(data: bytes) -> FixVignetteRadial | None:
     return FixVignetteRadial((k0, k1, k2, k3, k4), (cx, cy))
 
 
+def _srgb_decoding_curve() -> np.ndarray:
+    """Return LibRaw's curve of a lossy DNG without MapPolynomial: 256 codes to 0..65535.
+
+    dcraw's ``gamma_curve(1/2.4, 12.92, 1, 255)``: the inverse of a power 1/2.4 with a linear
+    segment of slope 12.92 near black, the junction ``t`` and offset ``a = t (2.4 - 1)``
+    solved so that both the curve and its slope are continuous (48 bisections, as dcraw),
+    ``x = v / 12.92`` below ``t``, ``((v + a) / (1 + a))^2.4`` above; times 65536,
+    65535 at v = 255.
+    """
+    g, slope = 1 / 2.4, 12.92
+    lo, hi = 0.0, 1.0
+    t = 0.5
+    for _ in range(48):
+        t = (lo + hi) / 2
+        if ((t / slope) ** -g - 1) / g - 1 / t > -1:
+            hi = t
+        else:
+            lo = t
+    a = t * (1 / g - 1)
+    v = np.arange(256) / 255.0
+    x = np.where(v < t, v / slope, ((v + a) / (1 + a)) ** (1 / g))
+    return np.minimum(np.floor(x * 65536.0), 65535).astype(np.uint16)
+
+
+def lossy_dng_curves(data: bytes | None) -> tuple[np.ndarray, int]:
+    """Return the curves LibRaw maps a lossy DNG's 8-bit samples with, and the opcodes used.
+
+    A lossy DNG (Compression 34892, 8-bit JPEG; Adobe's converters write them) stores its
+    samples encoded; LibRaw's ``lossy_dng_load_raw`` decodes them through a 256-entry
+    curve per sample plane, taken from the MapPolynomial opcodes of OpcodeList2 (``data``):
+    each, in the list's order, sets its plane's curve to ``floor(65535 p(v / 255))`` (its
+    area and pitch not read), until one's plane is over 3 or its degree over 8. Without an
+    OpcodeList2 every plane gets :func:`_srgb_decoding_curve`, as it does here for a plane
+    no polynomial sets (LibRaw leaves that one undefined). Returns the (4, 256) uint16
+    curves and how many of the list's first MapPolynomials they used: those are applied
+    when decoding, and not again.
+    """
+    curves = np.tile(_srgb_decoding_curve(), (4, 1))
+    used = 0
+    v = np.arange(256) / 255.0
+    for op, _flags, params in parse_opcode_list(data or b""):
+        if op != 8:
+            continue
+        if len(params) < 36:
+            break
+        plane = struct.unpack(">I", params[16:20])[0]
+        degree = struct.unpack(">I", params[32:36])[0]
+        if plane > 3 or degree > 8 or len(params) < 36 + 8 * (degree + 1):
+            break
+        c = np.frombuffer(params, ">f8", degree + 1, 36).astype(np.float64)
+        total = sum(c[j] * v**j for j in range(degree + 1))
+        curves[plane] = np.clip(np.floor(total * 65535.0), 0, 65535).astype(np.uint16)
+        used += 1
+    return curves, used
+
+
 def read_opcodes(
-    page: Any,
+    page: Any, *, decoded: int = 0
 ) -> tuple[list[FixBadPixelsConstant], list[Stage2Opcode], list[Stage3Opcode], list[str]]:
     """Return the opcodes of OpcodeList1, 2 and 3 to apply, and the names of the rest.
+
+    ``decoded``: how many of OpcodeList2's first MapPolynomials the decoder applied (a
+    lossy DNG's, :func:`lossy_dng_curves`); they are left out (neither applied nor named).
 
     ``page`` is the tifffile page of the raw image. OpcodeList1's (FixBadPixelsConstant),
     OpcodeList2's (GainMap,
@@ -344,6 +404,7 @@ def read_opcodes(
     stage3: list[Stage3Opcode] = []
     skipped: list[str] = []
     tags = page.tags
+    left_out = decoded
     for code, name in _OPCODE_LISTS.items():
         if code not in tags:
             continue
@@ -355,6 +416,9 @@ def read_opcodes(
             continue
         for op, _flags, params in ops:
             label = f"{name}:{OPCODE_NAMES.get(op, str(op))}"
+            if code == 51009 and op == 8 and left_out > 0:
+                left_out -= 1
+                continue
             if code == 51008 and op == _FIX_BAD_PIXELS_CONSTANT:
                 fix = _parse_bad_pixels_constant(params)
                 if fix is not None:
