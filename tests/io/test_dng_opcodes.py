@@ -377,6 +377,49 @@ def test_fix_vignette_radial_flattens_a_flat_field(
     assert np.ptp(shaded[2:-2, 2:-2]) > 0.1
 
 
+def test_stage3_gain_map_worked_by_hand() -> None:
+    """OpcodeList3's GainMap on demosaiced planes (the SDK's dng_opcode_GainMap): planes 1
+    and 2 of a three-plane image, a two-plane map (plane 2 takes map plane min(2, 1) = 1),
+    every second row from row 1, clipped at 1; plane 0 and the other rows left."""
+    image = np.full((4, 6, 3), 0.25, np.float32)
+    gains = np.stack([np.full((2, 2), 9.0), np.array([[2.0, 6.0], [2.0, 6.0]])], -1)
+    gm = GainMap(1, 0, 4, 6, 1, 2, 2, 1, (1.0, 1.0), (0.0, 0.0), gains.astype(np.float32))
+    out = apply_stage3(image, [gm])
+    assert out is not image and np.all(image == 0.25)  # the input untouched
+    np.testing.assert_array_equal(out[..., 0], 0.25)
+    np.testing.assert_array_equal(out[[0, 2], :, 1:], 0.25)
+    # columns at (c + 0.5) / 6 of the map's span 0..1: gains 2 + 4 (c + 0.5) / 6
+    expected = np.minimum(0.25 * (2 + 4 * (np.arange(6) + 0.5) / 6), 1.0)
+    for plane in (1, 2):  # plane 1: map plane 1; plane 2: map plane 1 too
+        np.testing.assert_allclose(out[[1, 3], :, plane], np.tile(expected, (2, 1)), rtol=1e-6)
+    assert out[1, 5, 1] == 1.0  # 0.25 x 5.67 clipped at white
+
+
+def test_stage3_gain_map_flattens_colour_shading(tmp_path: Path) -> None:
+    """A flat grey field shaded differently in each colour after demosaicing (a DJI drone's
+    OpcodeList3 GainMap, one map plane per colour): develop undoes it; --no-opcodes not."""
+    h, w, black, level = 64, 96, 64.0, 2000.0
+    v, u = np.meshgrid(np.linspace(0, 1, 5), np.linspace(0, 1, 7), indexing="ij")
+    bowl = (v - 0.5) ** 2 + (u - 0.5) ** 2
+    gains = np.stack([1 + 1.6 * bowl, 1 + 0.8 * bowl, 1 + 2.4 * bowl], -1).astype(np.float32)
+    gm = GainMap(0, 0, h, w, 0, 3, 1, 1, (0.25, 1 / 6), (0.0, 0.0), gains)
+    site = np.array([[0, 1], [1, 2]])  # RGGB: the colour of each photosite
+    colour = np.tile(site, (h // 2, w // 2))
+    g = np.stack([gain_map_gains(gm, np.arange(h), np.arange(w), (h, w), p) for p in range(3)])
+    shading = np.take_along_axis(g, colour[None], 0)[0]
+    mosaic = np.round(black + (level - black) / shading).astype(np.uint16)
+    lists = {51022: _op_list(_gain_map_op(gains, area=(0, 0, h, w), planes=3,
+                                          spacing=(0.25, 1 / 6)))}  # fmt: skip
+    raw = read_raw(_dng(tmp_path / "g3.dng", mosaic, lists=lists, black=black))
+    assert [type(op).__name__ for op in raw.metadata["opcodes_stage3"]] == ["GainMap"]
+    img = develop(raw, linear=True, white_balance="none").camera_rgb[3:-3, 3:-3]
+    flat = (level - black) / (4095 - black)
+    assert np.abs(img - flat).max() < 0.01
+    shaded = develop(read_raw(tmp_path / "g3.dng", opcodes=False), linear=True,
+                     white_balance="none").camera_rgb[3:-3, 3:-3]  # fmt: skip
+    assert np.abs(shaded - flat).max() > 0.1
+
+
 def test_bad_stage3_parameters_are_named_unreadable(tmp_path: Path) -> None:
     good = _warp_op([[1.0, 0.01, 0, 0, 0, 0]], (0.5, 0.5))
     lists = {51022: _op_list(

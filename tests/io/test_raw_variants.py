@@ -836,3 +836,19 @@ def test_truncated_dng_is_refused_not_read_black(tmp_path: Path) -> None:
     message = rf"cut\.dng is truncated: its raw image's data ends at byte {end}, the file has"
     with pytest.raises(InvalidInputError, match=rf"{message} {start} bytes"):
         read_raw(cut)
+
+
+def test_raw_read_as_zeros_from_under_a_bit_a_photosite_is_refused(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Any raw (not only a DNG, whose strips say where its data ends): a file of fewer bits
+    than photosites that LibRaw decodes to (nearly) all zeros has lost its data, as
+    ExifTool's pruned Panasonic.rw2 (12 kB for 10 Mpx) is read; refused in one line."""
+    import imageform.io.raw as raw_module
+
+    test_truncated_dng_is_refused_not_read_black(tmp_path)
+    monkeypatch.setattr(raw_module, "_raw_data_end", lambda p: 0)  # as for a non-DNG file
+    cut = tmp_path / "cut.dng"
+    message = rf"is truncated: {cut.stat().st_size} bytes for 6144 photosites \(under one bit"
+    with pytest.raises(InvalidInputError, match=message):
+        read_raw(cut)

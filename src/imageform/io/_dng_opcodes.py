@@ -18,7 +18,7 @@ sits at ``v = (r + 0.5) / H``; its map row is ``(v - origin) / spacing``, clampe
 map, and the gain is bilinear between the four nearest points (the DNG SDK's
 ``dng_gain_map_interpolator``). The linear value ``x`` becomes ``min(x * gain, 1)``.
 
-OpcodeList3 applies to the demosaiced linear camera RGB, before the colour matrix; two of
+OpcodeList3 applies to the demosaiced linear camera RGB, before the colour matrix; three of
 its opcodes are parsed here and applied by :func:`imageform.io.develop`
 (:func:`apply_stage3`), as Adobe's DNG SDK does (``dng_filter_warp``,
 ``dng_opcode_FixVignetteRadial``), for an image of ``H`` rows and ``W`` columns (the raw
@@ -41,6 +41,10 @@ at ``(r + 0.5, c + 0.5)`` for the vignette, as the SDK counts):
   becomes ``min(x g, 1)``, ``g = 1 + k0 r2 + k1 r2^2 + k2 r2^3 + k3 r2^4 + k4 r2^5``
   (computed exactly here; the SDK reads ``g`` from a 16-bit table of ``r2``, within about
   1e-4 of it).
+- GainMap (id 9), as in OpcodeList2 but on the demosaiced planes (DJI's drones write their
+  lens and colour shading there, one map plane per colour): each plane ``p`` of the
+  opcode's range takes map plane ``min(p, map planes - 1)`` (the SDK's
+  ``dng_opcode_GainMap``), over the area's lattice, ``x`` becoming ``min(x g, 1)``.
 """
 
 from __future__ import annotations
@@ -289,7 +293,7 @@ class FixVignetteRadial:
 
 
 #: An opcode of OpcodeList3 that :func:`apply_stage3` applies.
-Stage3Opcode = WarpRectilinear | FixVignetteRadial
+Stage3Opcode = WarpRectilinear | FixVignetteRadial | GainMap
 
 #: An opcode of OpcodeList2 that :func:`apply_stage2` applies.
 Stage2Opcode = GainMap | FixVignetteRadial | AreaOpcode
@@ -437,8 +441,10 @@ def read_opcodes(
                     maps.append(stage2)
                     continue
                 label += ":unreadable"
-            elif op in (_WARP_RECTILINEAR, _FIX_VIGNETTE_RADIAL) and code == 51022:
-                parsed = (_parse_warp if op == _WARP_RECTILINEAR else _parse_vignette)(params)
+            elif op in (_WARP_RECTILINEAR, _FIX_VIGNETTE_RADIAL, _GAIN_MAP) and code == 51022:
+                parse3 = {_WARP_RECTILINEAR: _parse_warp, _FIX_VIGNETTE_RADIAL: _parse_vignette,
+                          _GAIN_MAP: _parse_gain_map}[op]  # fmt: skip
+                parsed = parse3(params)
                 if parsed is not None:
                     stage3.append(parsed)
                     continue
@@ -575,6 +581,16 @@ def apply_stage3(
         if isinstance(op, FixVignetteRadial):
             g = vignette_gains(op, rows, cols, full).astype(np.float32)
             out = np.minimum(out * g[..., None], np.float32(1.0))
+            continue
+        if isinstance(op, GainMap):  # per plane: map plane min(plane, map planes - 1)
+            box, pitch = (op.top, op.left, op.bottom, op.right), (op.row_pitch, op.col_pitch)
+            rr, cc = _lattice(box, pitch, offset, full, (h, w))
+            if rr.size and cc.size:
+                out = out.copy()
+                ix = np.ix_(rr - dt, cc - dl)
+                for k in range(op.plane, min(op.plane + op.planes, out.shape[2])):
+                    g = gain_map_gains(op, rr, cc, full, k).astype(np.float32)
+                    out[..., k][ix] = np.minimum(out[..., k][ix] * g, np.float32(1.0))
             continue
         warped = np.empty_like(out)
         if kernel:

@@ -454,11 +454,13 @@ def read_raw(path: str | Path, *, max_pixels: int | None = None, opcodes: bool =
         write, one map per photosite of the tile) to the mosaic, as the DNG specification
         asks and Adobe's readers do (LibRaw does not: False gives LibRaw's values), with
         the list's FixVignetteRadial, Scale/DeltaPerRow/Column and MapPolynomial, and
-        OpcodeList1's FixBadPixelsConstant. The WarpRectilinear (lens distortion) and
-        FixVignetteRadial opcodes of its OpcodeList3 are kept in
+        OpcodeList1's FixBadPixelsConstant. The WarpRectilinear (lens distortion),
+        FixVignetteRadial and GainMap opcodes of its OpcodeList3 are kept in
         ``metadata["opcodes_stage3"]`` for :func:`develop`, which applies them to the
-        demosaiced camera RGB. Other opcodes are not applied: ``metadata["opcodes_skipped"]``
-        names them; ``metadata["opcodes_applied"]`` counts the GainMaps and
+        demosaiced camera RGB. A lossy DNG's MapPolynomials are its samples' decoding,
+        applied when decoded (by LibRaw too), not again: ``metadata["opcodes_decoded"]``
+        names them. Other opcodes are not applied: ``metadata["opcodes_skipped"]`` names
+        them; ``metadata["opcodes_applied"]`` counts the GainMaps and
         ``metadata["opcodes_applied_other"]`` names the other opcodes applied.
 
     Returns
@@ -701,6 +703,13 @@ def _read_raw(
                 f"{p} is truncated: its raw image's data ends at byte {end}, the file has "
                 f"{size} bytes"
             )
+    photosites = mosaic.shape[0] * mosaic.shape[1]
+    if (size := p.stat().st_size) * 8 < photosites and np.count_nonzero(mosaic) < mosaic.size / 100:
+        # under one bit a photosite and (nearly) all zero: the data is missing, LibRaw read zeros
+        raise InvalidInputError(
+            f"{p} is truncated: {size} bytes for {photosites} photosites (under one bit "
+            "each), and LibRaw decodes zeros"
+        )
     meta: dict[str, Any] = {
         "path": str(p),
         "raw_type": raw_type,
@@ -1324,7 +1333,7 @@ def develop(
        clipping).
     3. Demosaic with :func:`imageform.sensor.demosaic` (``demosaic`` names the method); a
        linear raw has every colour already and is not demosaiced. A DNG's OpcodeList3
-       opcodes that :func:`read_raw` kept (WarpRectilinear, FixVignetteRadial:
+       opcodes that :func:`read_raw` kept (WarpRectilinear, FixVignetteRadial, GainMap:
        ``metadata["opcodes_stage3"]``) are applied to this camera RGB, on the CPU, with a
        note (:mod:`imageform.io._dng_opcodes`).
     4. Camera RGB to XYZ: :math:`M = C^{-1}\,\mathrm{diag}(C\,\mathbf w)`, with C the

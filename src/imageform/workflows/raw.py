@@ -53,8 +53,8 @@ class DevelopOptions(ImageOut, Options):
         True,
         help="Apply a DNG's opcodes as Adobe's DNG SDK does: GainMaps (the lens-shading "
         "correction phones write) and the other per-pixel ones to the mosaic, then after "
-        "demosaicing WarpRectilinear (lens distortion) and FixVignetteRadial; --no-opcodes "
-        "leaves them, as LibRaw does.",
+        "demosaicing WarpRectilinear (lens distortion), FixVignetteRadial and GainMap; "
+        "--no-opcodes leaves them, as LibRaw does.",
     )
     device: Device = option(
         "cpu",
