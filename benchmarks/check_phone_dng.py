@@ -21,6 +21,8 @@ files checked on 2026-11-30 came from public repositories (read from /tmp, not c
 - ``exiftool_*``: exiftool/exiftool 38bdbac, t/images/ (Perl Artistic licence or GPL):
   CanonRaw.cr2/.cr3/.crw, DNG.dng, FujiFilm.raf, Minolta.mrw, Nikon.nef, Panasonic.rw2,
   PhaseOne.iiq, Sigma.x3f, SigmaDP2.x3f, metadata test files with the image data cut.
+- ``minhtcai_test.dng``: minhtcai/camera e1f1c38, images/test.dng (no licence named): a
+  640 x 480 10-bit GBRG DNG of a small camera module, no opcode, no preview.
 - ``mde_Issue_247-1..4.nef``: drewnoakes/metadata-extractor-images 4beba64, nef/ (no licence
   named): Nikon files of a metadata-extractor issue, 380 to 470 kB.
 
@@ -43,7 +45,9 @@ of corner tiles against the preview (phase correlation of 128 px tiles at the fo
 mean length in preview pixels: lens distortion shows as a displacement that a warp
 removes). Time: read_raw + develop (bilinear, camera white balance, sRGB) against rawpy's
 ``postprocess`` at matched settings (LINEAR demosaicing, camera white balance, no auto
-brightness, 16 bits), medians of 5 interleaved runs, and their ratio.
+brightness, 16 bits), medians of 5 interleaved runs, and their ratio. Last, for a DNG,
+imageform's own reader (tifffile, used without LibRaw or where LibRaw cannot decode)
+against LibRaw's mosaic.
 """
 
 from __future__ import annotations
@@ -243,6 +247,24 @@ def _applied_twice(path: Path, raw: Any, preview: np.ndarray | None, crop: Any) 
 NOTES: list[str] = []
 
 
+def _own_reader(path: Path, raw: Any) -> str:
+    """imageform's tifffile DNG reader (no LibRaw) against LibRaw's mosaic."""
+    from imageform.io.raw import _read_dng
+
+    if path.suffix.lower() != ".dng":
+        return "not a DNG"
+    try:
+        own = _read_dng(path, 1 << 40)
+    except Exception as exc:
+        return _text(f"{type(exc).__name__}", 40)
+    if own is None:
+        return "not read"
+    if own.mosaic.shape != raw.mosaic.shape:
+        return f"shape {own.mosaic.shape} against {raw.mosaic.shape}"
+    diff = int(np.abs(own.mosaic.astype(np.int64) - raw.mosaic.astype(np.int64)).max())
+    return "equal" if diff == 0 else f"max difference {diff}"
+
+
 def _check(path: Path) -> list[str]:
     from imageform.workflows.raw import stage3_names
 
@@ -255,7 +277,7 @@ def _check(path: Path) -> list[str]:
         if tf is not None:
             tf.close()
         line = str(exc).replace(str(path), path.name)
-        return [path.name, "", in_file, "", _text(f"{type(exc).__name__}: {line}", 110)] + [""] * 4
+        return [path.name, "", in_file, "", _text(f"{type(exc).__name__}: {line}", 110)] + [""] * 5
     meta = raw.metadata
     did = []
     if meta.get("opcodes_applied"):
@@ -297,8 +319,11 @@ def _check(path: Path) -> list[str]:
     except Exception as exc:
         timing = _text(f"LibRaw: {type(exc).__name__}", 40)
     model = meta.get("camera_model") or "camera not named"
+    from imageform.io import read_raw
+
+    own = _own_reader(path, read_raw(path, opcodes=False))
     return [path.name, _text(model, 30), in_file, "; ".join(did) or "none", state, bright,
-            corners, shift, timing]  # fmt: skip
+            corners, shift, timing, own]  # fmt: skip
 
 
 def main(argv: list[str] | None = None) -> None:
@@ -312,7 +337,7 @@ def main(argv: list[str] | None = None) -> None:
         rows.append(_check(path))
     columns = ["file", "camera", "opcodes in the file", "read_raw did", "develop",
                "brightness / preview", "corner / centre luminance", "corner shift px",
-               "ours / LibRaw time"]  # fmt: skip
+               "ours / LibRaw time", "tifffile reader vs LibRaw"]  # fmt: skip
     text = header("Real DNG and raw files: opcodes, previews, speed")
     text += f"\n{len(files)} files from {args.folder.name}/ (sources in the script).\n\n"
     text += markdown_table(columns, rows)
