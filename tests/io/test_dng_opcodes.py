@@ -503,6 +503,7 @@ def test_area_opcodes_worked_by_hand() -> None:
     assert out[0, 2] == round(64 + 4031 * (x + 0.1) * 2) == 2870
     assert out[0, 5] == round(64 + 4031 * (x - 0.1) * 2) == 1258
     assert out[0, 0] == 2064
+    assert np.all(m == 1064)  # worked on views of a copy: the input is left as it was
 
 
 def test_stage2_opcodes_flatten_a_shaded_mosaic(tmp_path: Path) -> None:
