@@ -1188,12 +1188,15 @@ class Development:
 
                 self._image = self._fused(MODE_FLOAT)
             else:
-                from imageform._kernels.raw_develop import render_rgb
+                from imageform._kernels.jit import run_tasks
+                from imageform._kernels.raw_develop import render_rows
 
                 cam = self._camera_rgb
                 table = self._table if self._table is not None else np.zeros(2, np.float32)
                 image = np.empty(cam.shape, np.float32)
-                render_rgb(cam, self._render, table, self._table is not None, image)
+                h, w = cam.shape[:2]
+                run_tasks(render_rows, h, cam, self._render, table, self._table is not None,
+                          image, threads=None if h * w >= _THREADS_MIN_PIXELS else 1)  # fmt: skip
                 self._image = image
         return self._image
 
