@@ -506,6 +506,36 @@ def test_area_opcodes_worked_by_hand() -> None:
     assert np.all(m == 1064)  # worked on views of a copy: the input is left as it was
 
 
+@pytest.mark.parametrize("offset", [(0, 0), (1, 1)])
+def test_stage2_in_strips_is_the_whole(monkeypatch: pytest.MonkeyPatch, offset: tuple) -> None:
+    """apply_stage2 works a tall image in strips of rows: every opcode, pitched lattices
+    (row pitch 2 and 3), an offset into the image and a per-photosite black plane give the
+    same codes as the image done at once."""
+    import imageform.io._dng_opcodes as module
+
+    rng = np.random.default_rng(2)
+    h, w = 301, 203
+    m = rng.integers(0, 4096, (h, w)).astype(np.uint16)
+    black = np.tile([[60.0, 64.0], [66.0, 62.0]], (h // 2 + 1, w // 2 + 1))[:h, :w]
+    g = rng.uniform(0.8, 2.5, (5, 7, 1)).astype(np.float32)
+    ops = [GainMap(r, c, h + 3, w + 1, 0, 1, 2, 2, (0.25, 1 / 6), (0.0, 0.0), g)
+           for r in (0, 1) for c in (0, 1)]  # fmt: skip
+    ops += [GainMap(3, 5, 240, 170, 0, 1, 3, 1, (0.3, 0.2), (0.1, -0.05), g),
+            AreaOpcode("MapPolynomial", (2, 0, 250, 203, 0, 1, 1, 2), np.array([0.01, 1.1, -0.2])),
+            AreaOpcode("ScalePerRow", (1, 0, 301, 203, 0, 1, 2, 1), rng.uniform(0.9, 1.3, 150)),
+            AreaOpcode("DeltaPerColumn", (0, 2, 301, 200, 0, 1, 1, 3),
+                       rng.uniform(-0.05, 0.05, 66)),
+            FixVignetteRadial((0.3, 0.1, 0, 0, 0), (0.4, 0.6))]  # fmt: skip
+    full = (h + 3, w + 2) if offset != (0, 0) else None
+    monkeypatch.setattr(module, "_STRIP_ROWS", 10**9)
+    whole = apply_stage2(m, black, 4095.0, ops, offset=offset, shape=full)
+    for rows in (64, 6):
+        monkeypatch.setattr(module, "_STRIP_ROWS", rows)
+        np.testing.assert_array_equal(apply_stage2(m, black, 4095.0, ops, offset=offset,
+                                                   shape=full), whole)  # fmt: skip
+    assert not np.array_equal(whole, m)
+
+
 def test_stage2_opcodes_flatten_a_shaded_mosaic(tmp_path: Path) -> None:
     """Rows darkened by 1 / s_row, columns lifted by d_col and a radial vignette: the file's
     ScalePerRow, DeltaPerColumn (negative deltas) and FixVignetteRadial of OpcodeList2 undo

@@ -725,6 +725,10 @@ def _map_polynomial(x: np.ndarray, c: np.ndarray) -> np.ndarray:
     return c[0] + np.sign(x) * y
 
 
+#: Rows of the strips :func:`apply_stage2` works in (even: a strip keeps the CFA's phase).
+_STRIP_ROWS = 64
+
+
 def apply_stage2(
     mosaic: np.ndarray,
     black: np.ndarray,
@@ -740,11 +744,22 @@ def apply_stage2(
     linearised image in [0, 1]): a GainMap or FixVignetteRadial multiplies by its gain,
     ScalePerRow/Column by the row's (column's) scale, DeltaPerRow/Column adds the delta,
     MapPolynomial maps ``x`` to ``c0 + c1 x + ... + cn x^n``; each result is clipped at 1
-    (white). ``offset`` and ``shape`` as for :func:`apply_gain_maps`.
+    (white). ``offset`` and ``shape`` as for :func:`apply_gain_maps`. Every opcode here
+    works pixel by pixel: the image is done in strips of ``_STRIP_ROWS`` rows (each the
+    same as the whole would give), whose float64 values stay in the cache.
     """
     h, w = mosaic.shape[:2]
     dt, dl = offset
     full = shape if shape is not None else (h + dt, w + dl)
+    if h > 2 * _STRIP_ROWS:
+        out = np.empty(mosaic.shape, np.uint16)
+        levels = np.asarray(black, np.float64)
+        per_row = levels.ndim >= 2 and levels.shape[0] == h
+        for r0 in range(0, h, _STRIP_ROWS):
+            r1 = min(r0 + _STRIP_ROWS, h)
+            out[r0:r1] = apply_stage2(mosaic[r0:r1], levels[r0:r1] if per_row else levels,
+                                      white, ops, offset=(dt + r0, dl), shape=full)  # fmt: skip
+        return out
     blk = np.broadcast_to(np.asarray(black, np.float64), mosaic.shape)
     span = white - blk
     x = np.asarray(mosaic, np.float64) - blk
