@@ -691,7 +691,7 @@ def _lossy_dng(path: Path, list2: bytes | None, h: int = 32, w: int = 256) -> Pa
     ramp = np.repeat(np.repeat(np.arange(w, dtype=np.uint8)[None, :, None], h, 0), 3, 2)
     tifffile.imwrite(path, ramp, photometric="rgb", compression="jpeg",
                      compressionargs={"level": 100}, tile=(16, 16), extratags=tags)  # fmt: skip
-    with tifffile.TiffFile(path, mode="r+b") as tf:  # the lossy DNG's codes
+    with tifffile.TiffFile(path, mode="r+") as tf:  # the lossy DNG's codes
         tf.pages[0].tags[259].overwrite(34892)
         tf.pages[0].tags[262].overwrite(34892)
     return path

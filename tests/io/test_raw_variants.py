@@ -826,7 +826,7 @@ def test_truncated_dng_is_refused_not_read_black(tmp_path: Path) -> None:
     path = tmp_path / "linear.dng"
     tifffile.imwrite(path, iter(tiles), shape=rgb.shape, dtype=np.uint16, photometric="rgb",
                      compression=7, tile=(t, t), extratags=tags)  # fmt: skip
-    with tifffile.TiffFile(path, mode="r+b") as tf:
+    with tifffile.TiffFile(path, mode="r+") as tf:
         tf.pages[0].tags[262].overwrite(34892)  # LinearRaw, as a ProRAW file
         start = min(tf.pages[0].dataoffsets)
     assert np.any(read_raw(path).mosaic)  # whole, it reads
