@@ -74,7 +74,7 @@ def main() -> None:
 
         def render() -> np.ndarray:
             out = np.empty(cam.shape, np.float32)
-            kern.render_rgb(cam, eye, lut, True, out)
+            kern.render_rows(0, cam.shape[0], cam, eye, lut, True, out)
             return out
 
         image = render()

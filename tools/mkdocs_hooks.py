@@ -96,6 +96,7 @@ BENCH_SCRIPTS: dict[str, str] = {
     "partial-board": "benchmarks/check_partial_board.py",
     "plumb-line": "benchmarks/check_plumb_line.py",
     "psf": "benchmarks/bench_psf.py",
+    "phone-dng": "benchmarks/check_phone_dng.py",
     "raw": "benchmarks/bench_raw.py",
     "raw-variants": "benchmarks/check_raw_variants.py",
     "read-threads": "benchmarks/bench_read_threads.py",

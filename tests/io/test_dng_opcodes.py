@@ -377,6 +377,49 @@ def test_fix_vignette_radial_flattens_a_flat_field(
     assert np.ptp(shaded[2:-2, 2:-2]) > 0.1
 
 
+def test_stage3_gain_map_worked_by_hand() -> None:
+    """OpcodeList3's GainMap on demosaiced planes (the SDK's dng_opcode_GainMap): planes 1
+    and 2 of a three-plane image, a two-plane map (plane 2 takes map plane min(2, 1) = 1),
+    every second row from row 1, clipped at 1; plane 0 and the other rows left."""
+    image = np.full((4, 6, 3), 0.25, np.float32)
+    gains = np.stack([np.full((2, 2), 9.0), np.array([[2.0, 6.0], [2.0, 6.0]])], -1)
+    gm = GainMap(1, 0, 4, 6, 1, 2, 2, 1, (1.0, 1.0), (0.0, 0.0), gains.astype(np.float32))
+    out = apply_stage3(image, [gm])
+    assert out is not image and np.all(image == 0.25)  # the input untouched
+    np.testing.assert_array_equal(out[..., 0], 0.25)
+    np.testing.assert_array_equal(out[[0, 2], :, 1:], 0.25)
+    # columns at (c + 0.5) / 6 of the map's span 0..1: gains 2 + 4 (c + 0.5) / 6
+    expected = np.minimum(0.25 * (2 + 4 * (np.arange(6) + 0.5) / 6), 1.0)
+    for plane in (1, 2):  # plane 1: map plane 1; plane 2: map plane 1 too
+        np.testing.assert_allclose(out[[1, 3], :, plane], np.tile(expected, (2, 1)), rtol=1e-6)
+    assert out[1, 5, 1] == 1.0  # 0.25 x 5.67 clipped at white
+
+
+def test_stage3_gain_map_flattens_colour_shading(tmp_path: Path) -> None:
+    """A flat grey field shaded differently in each colour after demosaicing (a DJI drone's
+    OpcodeList3 GainMap, one map plane per colour): develop undoes it; --no-opcodes not."""
+    h, w, black, level = 64, 96, 64.0, 2000.0
+    v, u = np.meshgrid(np.linspace(0, 1, 5), np.linspace(0, 1, 7), indexing="ij")
+    bowl = (v - 0.5) ** 2 + (u - 0.5) ** 2
+    gains = np.stack([1 + 1.6 * bowl, 1 + 0.8 * bowl, 1 + 2.4 * bowl], -1).astype(np.float32)
+    gm = GainMap(0, 0, h, w, 0, 3, 1, 1, (0.25, 1 / 6), (0.0, 0.0), gains)
+    site = np.array([[0, 1], [1, 2]])  # RGGB: the colour of each photosite
+    colour = np.tile(site, (h // 2, w // 2))
+    g = np.stack([gain_map_gains(gm, np.arange(h), np.arange(w), (h, w), p) for p in range(3)])
+    shading = np.take_along_axis(g, colour[None], 0)[0]
+    mosaic = np.round(black + (level - black) / shading).astype(np.uint16)
+    lists = {51022: _op_list(_gain_map_op(gains, area=(0, 0, h, w), planes=3,
+                                          spacing=(0.25, 1 / 6)))}  # fmt: skip
+    raw = read_raw(_dng(tmp_path / "g3.dng", mosaic, lists=lists, black=black))
+    assert [type(op).__name__ for op in raw.metadata["opcodes_stage3"]] == ["GainMap"]
+    img = develop(raw, linear=True, white_balance="none").camera_rgb[3:-3, 3:-3]
+    flat = (level - black) / (4095 - black)
+    assert np.abs(img - flat).max() < 0.01
+    shaded = develop(read_raw(tmp_path / "g3.dng", opcodes=False), linear=True,
+                     white_balance="none").camera_rgb[3:-3, 3:-3]  # fmt: skip
+    assert np.abs(shaded - flat).max() > 0.1
+
+
 def test_bad_stage3_parameters_are_named_unreadable(tmp_path: Path) -> None:
     good = _warp_op([[1.0, 0.01, 0, 0, 0, 0]], (0.5, 0.5))
     lists = {51022: _op_list(
@@ -460,6 +503,37 @@ def test_area_opcodes_worked_by_hand() -> None:
     assert out[0, 2] == round(64 + 4031 * (x + 0.1) * 2) == 2870
     assert out[0, 5] == round(64 + 4031 * (x - 0.1) * 2) == 1258
     assert out[0, 0] == 2064
+    assert np.all(m == 1064)  # worked on views of a copy: the input is left as it was
+
+
+@pytest.mark.parametrize("offset", [(0, 0), (1, 1)])
+def test_stage2_in_strips_is_the_whole(monkeypatch: pytest.MonkeyPatch, offset: tuple) -> None:
+    """apply_stage2 works a tall image in strips of rows: every opcode, pitched lattices
+    (row pitch 2 and 3), an offset into the image and a per-photosite black plane give the
+    same codes as the image done at once."""
+    import imageform.io._dng_opcodes as module
+
+    rng = np.random.default_rng(2)
+    h, w = 301, 203
+    m = rng.integers(0, 4096, (h, w)).astype(np.uint16)
+    black = np.tile([[60.0, 64.0], [66.0, 62.0]], (h // 2 + 1, w // 2 + 1))[:h, :w]
+    g = rng.uniform(0.8, 2.5, (5, 7, 1)).astype(np.float32)
+    ops = [GainMap(r, c, h + 3, w + 1, 0, 1, 2, 2, (0.25, 1 / 6), (0.0, 0.0), g)
+           for r in (0, 1) for c in (0, 1)]  # fmt: skip
+    ops += [GainMap(3, 5, 240, 170, 0, 1, 3, 1, (0.3, 0.2), (0.1, -0.05), g),
+            AreaOpcode("MapPolynomial", (2, 0, 250, 203, 0, 1, 1, 2), np.array([0.01, 1.1, -0.2])),
+            AreaOpcode("ScalePerRow", (1, 0, 301, 203, 0, 1, 2, 1), rng.uniform(0.9, 1.3, 150)),
+            AreaOpcode("DeltaPerColumn", (0, 2, 301, 200, 0, 1, 1, 3),
+                       rng.uniform(-0.05, 0.05, 66)),
+            FixVignetteRadial((0.3, 0.1, 0, 0, 0), (0.4, 0.6))]  # fmt: skip
+    full = (h + 3, w + 2) if offset != (0, 0) else None
+    monkeypatch.setattr(module, "_STRIP_ROWS", 10**9)
+    whole = apply_stage2(m, black, 4095.0, ops, offset=offset, shape=full)
+    for rows in (64, 6):
+        monkeypatch.setattr(module, "_STRIP_ROWS", rows)
+        np.testing.assert_array_equal(apply_stage2(m, black, 4095.0, ops, offset=offset,
+                                                   shape=full), whole)  # fmt: skip
+    assert not np.array_equal(whole, m)
 
 
 def test_stage2_opcodes_flatten_a_shaded_mosaic(tmp_path: Path) -> None:
@@ -594,3 +668,136 @@ def test_gpu_development_applies_stage3_on_the_cpu(
     np.testing.assert_array_equal(gpu.camera_rgb, cpu.camera_rgb)
     np.testing.assert_allclose(gpu.image, cpu.image, atol=1e-6)
     assert np.abs(gpu.camera_rgb - plain.camera_rgb).max() > 0.05
+
+
+#: Tags of write_dng's file not copied to a linear (LinearRaw) one: the CFA's and the levels.
+_NOT_COPIED = (33421, 33422, 50713, 50714, 50717)
+
+
+def _lossy_dng(path: Path, list2: bytes | None, h: int = 32, w: int = 256) -> Path:
+    """A lossy DNG (Compression 34892, DNG 1.4): a LinearRaw ramp 0..255 in 8-bit JPEG tiles.
+
+    The ramp runs along the rows, equal in the three samples; ``list2`` its OpcodeList2.
+    """
+    import tifffile
+
+    base = write_dng(path.with_suffix(".base.dng"), np.full((h, w), 100, np.uint16),
+                     black_level=0, white_level=4095, color_matrix=CM)  # fmt: skip
+    with tifffile.TiffFile(base) as tf:
+        tags = [(t.code, t.dtype, t.count, t.value, True) for t in tf.pages[0].tags
+                if t.code >= 33421 and t.code not in _NOT_COPIED]  # fmt: skip
+    if list2 is not None:
+        tags.append((51009, 7, len(list2), list2, True))
+    ramp = np.repeat(np.repeat(np.arange(w, dtype=np.uint8)[None, :, None], h, 0), 3, 2)
+    tifffile.imwrite(path, ramp, photometric="rgb", compression="jpeg",
+                     compressionargs={"level": 100}, tile=(16, 16), extratags=tags)  # fmt: skip
+    with tifffile.TiffFile(path, mode="r+") as tf:  # the lossy DNG's codes
+        tf.pages[0].tags[259].overwrite(34892)
+        tf.pages[0].tags[262].overwrite(34892)
+    return path
+
+
+#: The MapPolynomial Adobe Camera Raw writes in a lossy DNG's OpcodeList2 (one per plane;
+#: here from a Canon EOS 6D file Camera Raw 11.3.1 wrote): 1/128 x + 127/128 x^3.
+ACR_CUBIC = [0.0, 1 / 128, 0.0, 127 / 128]
+
+
+def test_lossy_dng_curves_worked_by_hand() -> None:
+    """LibRaw's curves of a lossy DNG's 8-bit codes, values LibRaw gave for these codes.
+
+    The polynomial: floor(65535 p(v / 255)), v = 128: 65535 (128/255/128 + 127/128
+    (128/255)^3) = 8480.3. Without an OpcodeList2, dcraw's sRGB-like decoding
+    (((v / 255 + a) / (1 + a))^2.4, times 65536): v = 51 -> 2169 (sRGB's own 0.03310 x 65536
+    = 2169.3), 102 -> 8707, 153 -> 20876, 204 -> 39572, 255 -> 65535.
+    """
+    from imageform.io._dng_opcodes import lossy_dng_curves
+
+    ops = _op_list(*(_area_op(8, (0, 0, 32, 256, p, 1, 1, 1), ACR_CUBIC, poly=True)
+                     for p in range(3)))  # fmt: skip
+    curves, used = lossy_dng_curves(ops)
+    assert used == 3 and curves.shape == (4, 256) and curves.dtype == np.uint16
+    assert curves[0, 128] == curves[2, 128] == 8480
+    assert curves[0, 0] == 0 and curves[1, 255] == 65535
+    srgb, none = lossy_dng_curves(None)
+    assert none == 0
+    np.testing.assert_array_equal(srgb[:, [0, 51, 102, 153, 204, 255]],
+                                  [[0, 2169, 8707, 20876, 39572, 65535]] * 4)  # fmt: skip
+    # LibRaw stops at a polynomial over plane 3 (or of degree over 8): the later ones are not
+    # decoding curves, and are applied by read_raw as any MapPolynomial
+    ops = _op_list(_area_op(8, (0, 0, 32, 256, 0, 1, 1, 1), ACR_CUBIC, poly=True),
+                   _area_op(8, (0, 0, 32, 256, 5, 1, 1, 1), ACR_CUBIC, poly=True),
+                   _area_op(8, (0, 0, 32, 256, 1, 1, 1, 1), ACR_CUBIC, poly=True))  # fmt: skip
+    curves, used = lossy_dng_curves(ops)
+    assert used == 1 and curves[0, 128] == 8480 and curves[1, 128] == srgb[1, 128]
+
+
+@pytest.mark.parametrize("with_list", [True, False])
+def test_lossy_dng_polynomial_is_applied_once(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, with_list: bool
+) -> None:
+    """A lossy DNG's MapPolynomials are its samples' decoding (LibRaw applies them when it
+    decodes): read_raw does not apply them a second time (that made a real Camera Raw file
+    nearly black), and the tifffile reader decodes the samples as LibRaw does."""
+    import tifffile
+
+    from imageform.io._dng_opcodes import lossy_dng_curves
+
+    ops = _op_list(*(_area_op(8, (0, 0, 32, 256, p, 1, 1, 1), ACR_CUBIC, poly=True)
+                     for p in range(3)))  # fmt: skip
+    path = _lossy_dng(tmp_path / "lossy.dng", ops if with_list else None)
+    with tifffile.TiffFile(path) as tf:
+        codes = tf.pages[0].asarray()  # the JPEG's 8-bit samples
+    expected = lossy_dng_curves(ops if with_list else None)[0][0][codes]
+    raw = read_raw(path)
+    assert raw.white_level == 65535
+    np.testing.assert_array_equal(raw.mosaic, expected)
+    np.testing.assert_array_equal(read_raw(path, opcodes=False).mosaic, expected)
+    decoded = ["OpcodeList2:MapPolynomial"] * 3 if with_list else None
+    assert raw.metadata.get("opcodes_decoded") == decoded
+    assert not raw.metadata.get("opcodes_applied_other")
+    if importlib.util.find_spec("rawpy") is not None:
+        import rawpy
+
+        with rawpy.imread(str(path)) as r:
+            np.testing.assert_array_equal(np.asarray(r.raw_image_visible)[..., :3], expected)
+    monkeypatch.setitem(sys.modules, "rawpy", None)
+    monkeypatch.setattr(importlib.util, "find_spec", lambda name, *a: None)
+    own = read_raw(path)
+    assert own.metadata["reader"] == "tifffile" and own.white_level == 65535
+    np.testing.assert_array_equal(own.mosaic, expected)
+
+
+def test_info_names_the_decoding_polynomials(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from imageform.cli import main
+
+    ops = _op_list(*(_area_op(8, (0, 0, 32, 256, p, 1, 1, 1), ACR_CUBIC, poly=True)
+                     for p in range(3)))  # fmt: skip
+    path = _lossy_dng(tmp_path / "lossy.dng", ops)
+    assert main(["info", str(path)]) == 0
+    out = capsys.readouterr().out
+    assert "decoded with its OpcodeList2:MapPolynomial" in out
+    assert "applied the DNG's" not in out
+
+
+def test_the_dng_header_is_opened_once(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """After LibRaw, one tifffile opening serves the colour tags and the opcodes."""
+    pytest.importorskip("rawpy")
+    import tifffile
+
+    g = _radial_map(5, 5)
+    gm = GainMap(0, 0, 32, 40, 0, 1, 1, 1, (0.25, 0.25), (0.0, 0.0), g)
+    path = _dng(tmp_path / "g.dng", _vignetted(gm, (32, 40), 2000.0, 64.0),
+                lists={51009: _op_list(_gain_map_op(g, area=(0, 0, 32, 40)))})  # fmt: skip
+    opened = []
+    real = tifffile.TiffFile
+
+    def counting(*args: object, **kwargs: object) -> tifffile.TiffFile:
+        opened.append(args[0])
+        return real(*args, **kwargs)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(tifffile, "TiffFile", counting)
+    raw = read_raw(path)
+    assert raw.metadata["opcodes_applied"] == 1 and raw.xyz_to_camera is not None
+    assert len(opened) == 1

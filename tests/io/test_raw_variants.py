@@ -802,3 +802,53 @@ def test_develop_transfer_choices_are_the_transfer_functions() -> None:
     from imageform.workflows.raw import _RawTransfer
 
     assert set(get_args(_RawTransfer)) == set(TRANSFER_FUNCTIONS) - {"gamma"}
+
+
+def test_truncated_dng_is_refused_not_read_black(tmp_path: Path) -> None:
+    """A DNG cut short inside its raw data (as metadata test suites prune them, e.g. Exiv2's
+    iPhone 12 Pro ProRAW ``IMG_1361.dng``: 64 kB of a 29 MB file): LibRaw decodes its
+    lossless-JPEG tiles as zeros without an error; read_raw says the file is truncated
+    instead of giving a black image."""
+    import tifffile
+
+    imagecodecs = pytest.importorskip("imagecodecs")
+    not_copied = (33421, 33422, 50713, 50714, 50717)  # the CFA's tags and the levels
+    h, w, t = 64, 96, 32
+    base = write_dng(tmp_path / "base.dng", np.full((h, w), 100, np.uint16), black_level=0,
+                     white_level=65535, color_matrix=CM)  # fmt: skip
+    with tifffile.TiffFile(base) as tf:
+        tags = [(g.code, g.dtype, g.count, g.value, True) for g in tf.pages[0].tags
+                if g.code >= 33421 and g.code not in not_copied]  # fmt: skip
+    rgb = np.random.default_rng(0).integers(1000, 60000, (h, w, 3)).astype(np.uint16)
+    tiles = [imagecodecs.ljpeg_encode(np.ascontiguousarray(rgb[r : r + t, c : c + t])
+                                      .reshape(t, 3 * t), bitspersample=16)
+             for r in range(0, h, t) for c in range(0, w, t)]  # fmt: skip
+    path = tmp_path / "linear.dng"
+    tifffile.imwrite(path, iter(tiles), shape=rgb.shape, dtype=np.uint16, photometric="rgb",
+                     compression=7, tile=(t, t), extratags=tags)  # fmt: skip
+    with tifffile.TiffFile(path, mode="r+") as tf:
+        tf.pages[0].tags[262].overwrite(34892)  # LinearRaw, as a ProRAW file
+        start = min(tf.pages[0].dataoffsets)
+    assert np.any(read_raw(path).mosaic)  # whole, it reads
+    cut = tmp_path / "cut.dng"
+    cut.write_bytes(path.read_bytes()[:start])
+    end = path.stat().st_size
+    message = rf"cut\.dng is truncated: its raw image's data ends at byte {end}, the file has"
+    with pytest.raises(InvalidInputError, match=rf"{message} {start} bytes"):
+        read_raw(cut)
+
+
+def test_raw_read_as_zeros_from_under_a_bit_a_photosite_is_refused(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Any raw (not only a DNG, whose strips say where its data ends): a file of fewer bits
+    than photosites that LibRaw decodes to (nearly) all zeros has lost its data, as
+    ExifTool's pruned Panasonic.rw2 (12 kB for 10 Mpx) is read; refused in one line."""
+    import imageform.io.raw as raw_module
+
+    test_truncated_dng_is_refused_not_read_black(tmp_path)
+    monkeypatch.setattr(raw_module, "_raw_data_end", lambda p: 0)  # as for a non-DNG file
+    cut = tmp_path / "cut.dng"
+    message = rf"is truncated: {cut.stat().st_size} bytes for 6144 photosites \(under one bit"
+    with pytest.raises(InvalidInputError, match=message):
+        read_raw(cut)

@@ -10,7 +10,7 @@ r"""Numba kernels of raw development (:func:`imageform.io.develop`), float32.
   up, or, before the matrix, as the demosaiced camera RGB. The working set is three
   white-balanced rows, one demosaiced row, one output row (about 220 kB at 6000 columns) and
   the 256 kB table: in the core's L2 cache; no full-size temporary is made.
-- :func:`render_rgb`: demosaiced camera RGB to the encoded output in one pass (a linear raw,
+- :func:`render_rows`: demosaiced camera RGB to the encoded output in one pass (a linear raw,
   which has no mosaic, and the other demosaicing methods).
 - :func:`quantize`: a float image in [0, 1] to integers, rounded half up.
 
@@ -37,7 +37,7 @@ __all__ = [
     "MODE_UINT16",
     "develop_rows",
     "quantize",
-    "render_rgb",
+    "render_rows",
 ]
 
 #: Intervals of the transfer table (in sqrt(x)).
@@ -168,13 +168,16 @@ def develop_rows(r0, r1, mosaic, black, scale, ry, rx, m, lut, encode, mode, out
                 ou[j] = np.int32(lin[j] * top + half)
 
 
-@njit(error_model="numpy")
-def render_rgb(cam, m, lut, encode, out):  # type: ignore[no-untyped-def]
-    """``out = T(clip(cam @ m.T, 0, 1))`` per pixel; T from ``lut`` when ``encode``."""
-    h, w, _ = cam.shape
+@njit(nogil=True, error_model="numpy")
+def render_rows(r0, r1, cam, m, lut, encode, out):  # type: ignore[no-untyped-def]
+    """``out = T(clip(cam @ m.T, 0, 1))`` per pixel of rows ``r0 .. r1 - 1``.
+
+    T from ``lut`` when ``encode``; run on threads by :func:`imageform._kernels.jit.run_tasks`.
+    """
+    _, w, _ = cam.shape
     n = lut.shape[0] - 1
     fn = np.float32(n)
-    for i in range(h):
+    for i in range(r0, r1):
         for j in range(w):
             r = cam[i, j, 0]
             g = cam[i, j, 1]

@@ -18,7 +18,7 @@ sits at ``v = (r + 0.5) / H``; its map row is ``(v - origin) / spacing``, clampe
 map, and the gain is bilinear between the four nearest points (the DNG SDK's
 ``dng_gain_map_interpolator``). The linear value ``x`` becomes ``min(x * gain, 1)``.
 
-OpcodeList3 applies to the demosaiced linear camera RGB, before the colour matrix; two of
+OpcodeList3 applies to the demosaiced linear camera RGB, before the colour matrix; three of
 its opcodes are parsed here and applied by :func:`imageform.io.develop`
 (:func:`apply_stage3`), as Adobe's DNG SDK does (``dng_filter_warp``,
 ``dng_opcode_FixVignetteRadial``), for an image of ``H`` rows and ``W`` columns (the raw
@@ -41,6 +41,10 @@ at ``(r + 0.5, c + 0.5)`` for the vignette, as the SDK counts):
   becomes ``min(x g, 1)``, ``g = 1 + k0 r2 + k1 r2^2 + k2 r2^3 + k3 r2^4 + k4 r2^5``
   (computed exactly here; the SDK reads ``g`` from a 16-bit table of ``r2``, within about
   1e-4 of it).
+- GainMap (id 9), as in OpcodeList2 but on the demosaiced planes (DJI's drones write their
+  lens and colour shading there, one map plane per colour): each plane ``p`` of the
+  opcode's range takes map plane ``min(p, map planes - 1)`` (the SDK's
+  ``dng_opcode_GainMap``), over the area's lattice, ``x`` becoming ``min(x g, 1)``.
 """
 
 from __future__ import annotations
@@ -64,6 +68,7 @@ __all__ = [
     "bicubic_sample",
     "fix_bad_pixels_constant",
     "gain_map_gains",
+    "lossy_dng_curves",
     "parse_opcode_list",
     "read_opcodes",
     "stage2_name",
@@ -288,7 +293,7 @@ class FixVignetteRadial:
 
 
 #: An opcode of OpcodeList3 that :func:`apply_stage3` applies.
-Stage3Opcode = WarpRectilinear | FixVignetteRadial
+Stage3Opcode = WarpRectilinear | FixVignetteRadial | GainMap
 
 #: An opcode of OpcodeList2 that :func:`apply_stage2` applies.
 Stage2Opcode = GainMap | FixVignetteRadial | AreaOpcode
@@ -325,10 +330,69 @@ def _parse_vignette(data: bytes) -> FixVignetteRadial | None:
     return FixVignetteRadial((k0, k1, k2, k3, k4), (cx, cy))
 
 
+def _srgb_decoding_curve() -> np.ndarray:
+    """Return LibRaw's curve of a lossy DNG without MapPolynomial: 256 codes to 0..65535.
+
+    dcraw's ``gamma_curve(1/2.4, 12.92, 1, 255)``: the inverse of a power 1/2.4 with a linear
+    segment of slope 12.92 near black, the junction ``t`` and offset ``a = t (2.4 - 1)``
+    solved so that both the curve and its slope are continuous (48 bisections, as dcraw),
+    ``x = v / 12.92`` below ``t``, ``((v + a) / (1 + a))^2.4`` above; times 65536,
+    65535 at v = 255.
+    """
+    g, slope = 1 / 2.4, 12.92
+    lo, hi = 0.0, 1.0
+    t = 0.5
+    for _ in range(48):
+        t = (lo + hi) / 2
+        if ((t / slope) ** -g - 1) / g - 1 / t > -1:
+            hi = t
+        else:
+            lo = t
+    a = t * (1 / g - 1)
+    v = np.arange(256) / 255.0
+    x = np.where(v < t, v / slope, ((v + a) / (1 + a)) ** (1 / g))
+    return np.minimum(np.floor(x * 65536.0), 65535).astype(np.uint16)
+
+
+def lossy_dng_curves(data: bytes | None) -> tuple[np.ndarray, int]:
+    """Return the curves LibRaw maps a lossy DNG's 8-bit samples with, and the opcodes used.
+
+    A lossy DNG (Compression 34892, 8-bit JPEG; Adobe's converters write them) stores its
+    samples encoded; LibRaw's ``lossy_dng_load_raw`` decodes them through a 256-entry
+    curve per sample plane, taken from the MapPolynomial opcodes of OpcodeList2 (``data``):
+    each, in the list's order, sets its plane's curve to ``floor(65535 p(v / 255))`` (its
+    area and pitch not read), until one's plane is over 3 or its degree over 8. Without an
+    OpcodeList2 every plane gets :func:`_srgb_decoding_curve`, as it does here for a plane
+    no polynomial sets (LibRaw leaves that one undefined). Returns the (4, 256) uint16
+    curves and how many of the list's first MapPolynomials they used: those are applied
+    when decoding, and not again.
+    """
+    curves = np.tile(_srgb_decoding_curve(), (4, 1))
+    used = 0
+    v = np.arange(256) / 255.0
+    for op, _flags, params in parse_opcode_list(data or b""):
+        if op != 8:
+            continue
+        if len(params) < 36:
+            break
+        plane = struct.unpack(">I", params[16:20])[0]
+        degree = struct.unpack(">I", params[32:36])[0]
+        if plane > 3 or degree > 8 or len(params) < 36 + 8 * (degree + 1):
+            break
+        c = np.frombuffer(params, ">f8", degree + 1, 36).astype(np.float64)
+        total = sum(c[j] * v**j for j in range(degree + 1))
+        curves[plane] = np.clip(np.floor(total * 65535.0), 0, 65535).astype(np.uint16)
+        used += 1
+    return curves, used
+
+
 def read_opcodes(
-    page: Any,
+    page: Any, *, decoded: int = 0
 ) -> tuple[list[FixBadPixelsConstant], list[Stage2Opcode], list[Stage3Opcode], list[str]]:
     """Return the opcodes of OpcodeList1, 2 and 3 to apply, and the names of the rest.
+
+    ``decoded``: how many of OpcodeList2's first MapPolynomials the decoder applied (a
+    lossy DNG's, :func:`lossy_dng_curves`); they are left out (neither applied nor named).
 
     ``page`` is the tifffile page of the raw image. OpcodeList1's (FixBadPixelsConstant),
     OpcodeList2's (GainMap,
@@ -344,6 +408,7 @@ def read_opcodes(
     stage3: list[Stage3Opcode] = []
     skipped: list[str] = []
     tags = page.tags
+    left_out = decoded
     for code, name in _OPCODE_LISTS.items():
         if code not in tags:
             continue
@@ -355,6 +420,9 @@ def read_opcodes(
             continue
         for op, _flags, params in ops:
             label = f"{name}:{OPCODE_NAMES.get(op, str(op))}"
+            if code == 51009 and op == 8 and left_out > 0:
+                left_out -= 1
+                continue
             if code == 51008 and op == _FIX_BAD_PIXELS_CONSTANT:
                 fix = _parse_bad_pixels_constant(params)
                 if fix is not None:
@@ -373,8 +441,10 @@ def read_opcodes(
                     maps.append(stage2)
                     continue
                 label += ":unreadable"
-            elif op in (_WARP_RECTILINEAR, _FIX_VIGNETTE_RADIAL) and code == 51022:
-                parsed = (_parse_warp if op == _WARP_RECTILINEAR else _parse_vignette)(params)
+            elif op in (_WARP_RECTILINEAR, _FIX_VIGNETTE_RADIAL, _GAIN_MAP) and code == 51022:
+                parse3 = {_WARP_RECTILINEAR: _parse_warp, _FIX_VIGNETTE_RADIAL: _parse_vignette,
+                          _GAIN_MAP: _parse_gain_map}[op]  # fmt: skip
+                parsed = parse3(params)
                 if parsed is not None:
                     stage3.append(parsed)
                     continue
@@ -512,6 +582,17 @@ def apply_stage3(
             g = vignette_gains(op, rows, cols, full).astype(np.float32)
             out = np.minimum(out * g[..., None], np.float32(1.0))
             continue
+        if isinstance(op, GainMap):  # per plane: map plane min(plane, map planes - 1)
+            box, pitch = (op.top, op.left, op.bottom, op.right), (op.row_pitch, op.col_pitch)
+            rr, cc = _lattice(box, pitch, offset, full, (h, w))
+            if rr.size and cc.size:
+                out = out.copy()
+                ix = _lattice_slices(rr, cc, pitch, offset)
+                for k in range(op.plane, min(op.plane + op.planes, out.shape[2])):
+                    sub = out[..., k][ix]  # a view: changed in place
+                    sub *= gain_map_gains(op, rr, cc, full, k).astype(np.float32)
+                    np.minimum(sub, np.float32(1.0), out=sub)
+            continue
         warped = np.empty_like(out)
         if kernel:
             from imageform._kernels.dng_warp import warp_rows
@@ -566,7 +647,12 @@ def gain_map_gains(gm: GainMap, rows: np.ndarray, cols: np.ndarray, shape: tuple
     c0, c1, wc = _axis_weights(cols.astype(np.float64), shape[1], gm.origin[1], gm.spacing[1],
                                g.shape[1])  # fmt: skip
     along = g[r0] * (1 - wr)[:, None] + g[r1] * wr[:, None]  # (rows, map columns)
-    return along[:, c0] * (1 - wc)[None, :] + along[:, c1] * wc[None, :]
+    out = along[:, c0]  # then along the columns, in place (the same sums, fewer temporaries)
+    out *= (1 - wc)[None, :]
+    right = along[:, c1]
+    right *= wc[None, :]
+    out += right
+    return out
 
 
 def apply_gain_maps(
@@ -639,6 +725,10 @@ def _map_polynomial(x: np.ndarray, c: np.ndarray) -> np.ndarray:
     return c[0] + np.sign(x) * y
 
 
+#: Rows of the strips :func:`apply_stage2` works in (even: a strip keeps the CFA's phase).
+_STRIP_ROWS = 64
+
+
 def apply_stage2(
     mosaic: np.ndarray,
     black: np.ndarray,
@@ -654,19 +744,32 @@ def apply_stage2(
     linearised image in [0, 1]): a GainMap or FixVignetteRadial multiplies by its gain,
     ScalePerRow/Column by the row's (column's) scale, DeltaPerRow/Column adds the delta,
     MapPolynomial maps ``x`` to ``c0 + c1 x + ... + cn x^n``; each result is clipped at 1
-    (white). ``offset`` and ``shape`` as for :func:`apply_gain_maps`.
+    (white). ``offset`` and ``shape`` as for :func:`apply_gain_maps`. Every opcode here
+    works pixel by pixel: the image is done in strips of ``_STRIP_ROWS`` rows (each the
+    same as the whole would give), whose float64 values stay in the cache.
     """
     h, w = mosaic.shape[:2]
     dt, dl = offset
     full = shape if shape is not None else (h + dt, w + dl)
+    if h > 2 * _STRIP_ROWS:
+        out = np.empty(mosaic.shape, np.uint16)
+        levels = np.asarray(black, np.float64)
+        per_row = levels.ndim >= 2 and levels.shape[0] == h
+        for r0 in range(0, h, _STRIP_ROWS):
+            r1 = min(r0 + _STRIP_ROWS, h)
+            out[r0:r1] = apply_stage2(mosaic[r0:r1], levels[r0:r1] if per_row else levels,
+                                      white, ops, offset=(dt + r0, dl), shape=full)  # fmt: skip
+        return out
     blk = np.broadcast_to(np.asarray(black, np.float64), mosaic.shape)
     span = white - blk
-    x = (np.asarray(mosaic, np.float64) - blk) / span
+    x = np.asarray(mosaic, np.float64) - blk
+    x /= span
     n_planes = 1 if x.ndim == 2 else x.shape[2]
     for op in ops:
         if isinstance(op, FixVignetteRadial):
             g = vignette_gains(op, np.arange(h) + dt, np.arange(w) + dl, full)
-            x = np.minimum(x * (g if x.ndim == 2 else g[..., None]), 1.0)
+            x *= g if x.ndim == 2 else g[..., None]
+            np.minimum(x, 1.0, out=x)
             continue
         if isinstance(op, GainMap):
             box, pitch = (op.top, op.left, op.bottom, op.right), (op.row_pitch, op.col_pitch)
@@ -676,23 +779,33 @@ def apply_stage2(
         rows, cols = _lattice(box, pitch, offset, full, (h, w))
         if rows.size == 0 or cols.size == 0:
             continue
-        ix = np.ix_(rows - dt, cols - dl)
+        ix = _lattice_slices(rows, cols, pitch, offset)  # a view: changed in place
         for plane in range(first, min(first + max(count, 1), n_planes)):
             sub = x[ix] if x.ndim == 2 else x[..., plane][ix]
             if isinstance(op, GainMap):
-                new = sub * gain_map_gains(op, rows, cols, full, plane)
+                sub *= gain_map_gains(op, rows, cols, full, plane)
             elif op.name == "MapPolynomial":
-                new = _map_polynomial(sub, op.values)
+                sub[...] = _map_polynomial(sub, op.values)
             else:
                 along_rows = op.name.endswith("Row")
                 k = (rows - box[0]) // pitch[0] if along_rows else (cols - box[1]) // pitch[1]
                 table = op.values[np.minimum(k, op.values.size - 1)]
                 table = table[:, None] if along_rows else table[None, :]
-                new = sub * table if op.name.startswith("Scale") else sub + table
-            new = np.minimum(new, 1.0)
-            if x.ndim == 2:
-                x[ix] = new
-            else:
-                x[..., plane][ix] = new
-    out = blk + x * span
-    return np.round(np.clip(out, 0.0, 65535.0)).astype(np.uint16)
+                if op.name.startswith("Scale"):
+                    sub *= table
+                else:
+                    sub += table
+            np.minimum(sub, 1.0, out=sub)
+    x *= span
+    x += blk
+    np.clip(x, 0.0, 65535.0, out=x)
+    return np.rint(x, out=x).astype(np.uint16)
+
+
+def _lattice_slices(
+    rows: np.ndarray, cols: np.ndarray, pitch: tuple[int, int], offset: tuple[int, int]
+) -> tuple[slice, slice]:
+    """Return the slices of an image (its first pixel at ``offset``) that give a lattice."""
+    (dt, dl), (rp, cp) = offset, pitch
+    return (slice(int(rows[0]) - dt, int(rows[-1]) - dt + 1, rp),
+            slice(int(cols[0]) - dl, int(cols[-1]) - dl + 1, cp))  # fmt: skip

@@ -313,15 +313,35 @@ class RawImage:
         return self.cfa_pattern is None and np.ndim(self.mosaic) == 2
 
 
-def _dng_tags(path: Path) -> dict[str, Any]:
-    """Return :func:`_colour_tags` of a DNG's first IFD (tifffile); {} for no TIFF."""
+#: The first four bytes of a TIFF (and BigTIFF) file, little- and big-endian.
+_TIFF_MAGIC = (b"II*\x00", b"MM\x00*", b"II+\x00", b"MM\x00+")
+#: ``_raw_page_opcodes`` of a file with no opcode to apply.
+_NO_OPCODES: Any = ([], [], [], [], (0, 0), None, None, 0)
+
+
+def _dng_header(path: Path, *, opcodes: bool = True) -> tuple[dict[str, Any], Any]:
+    """Return a DNG's :func:`_colour_tags` (IFD 0) and :func:`_raw_page_opcodes`, in one read.
+
+    ``({}, _NO_OPCODES)`` for a file that is not TIFF-based; ``opcodes=False`` reads the
+    colour tags only.
+    """
     import tifffile
 
     try:
+        with path.open("rb") as f:  # a DNG is a TIFF: RW2, ORF, ... are left alone (tifffile
+            if f.read(4) not in _TIFF_MAGIC:  # would warn on their own magic numbers)
+                return {}, _NO_OPCODES
         with tifffile.TiffFile(path) as tf:
-            return _colour_tags(tf.pages[0].tags)  # type: ignore[union-attr]
+            tags = tf.pages[0].tags  # type: ignore[union-attr]
+            colour = _colour_tags(tags)
+            if not opcodes or _DNG_VERSION not in tags:
+                return colour, _NO_OPCODES
+            try:
+                return colour, _raw_page_opcodes(tf)
+            except Exception:  # an IFD tifffile cannot read: no opcodes
+                return colour, _NO_OPCODES
     except Exception:  # not a TIFF-based raw: nothing more to read
-        return {}
+        return {}, _NO_OPCODES
 
 
 def _colour_tags(tags: Any) -> dict[str, Any]:
@@ -434,11 +454,13 @@ def read_raw(path: str | Path, *, max_pixels: int | None = None, opcodes: bool =
         write, one map per photosite of the tile) to the mosaic, as the DNG specification
         asks and Adobe's readers do (LibRaw does not: False gives LibRaw's values), with
         the list's FixVignetteRadial, Scale/DeltaPerRow/Column and MapPolynomial, and
-        OpcodeList1's FixBadPixelsConstant. The WarpRectilinear (lens distortion) and
-        FixVignetteRadial opcodes of its OpcodeList3 are kept in
+        OpcodeList1's FixBadPixelsConstant. The WarpRectilinear (lens distortion),
+        FixVignetteRadial and GainMap opcodes of its OpcodeList3 are kept in
         ``metadata["opcodes_stage3"]`` for :func:`develop`, which applies them to the
-        demosaiced camera RGB. Other opcodes are not applied: ``metadata["opcodes_skipped"]``
-        names them; ``metadata["opcodes_applied"]`` counts the GainMaps and
+        demosaiced camera RGB. A lossy DNG's MapPolynomials are its samples' decoding,
+        applied when decoded (by LibRaw too), not again: ``metadata["opcodes_decoded"]``
+        names them. Other opcodes are not applied: ``metadata["opcodes_skipped"]`` names
+        them; ``metadata["opcodes_applied"]`` counts the GainMaps and
         ``metadata["opcodes_applied_other"]`` names the other opcodes applied.
 
     Returns
@@ -455,17 +477,19 @@ def read_raw(path: str | Path, *, max_pixels: int | None = None, opcodes: bool =
     imageform.errors.ImageformError
         rawpy is not installed (the message names ``pip install "imageform[raw]"``).
     """
-    raw = _read_raw(path, max_pixels)
-    return _with_opcodes(raw, Path(path)) if opcodes else raw
+    raw, found = _read_raw(path, max_pixels, opcodes=opcodes)
+    return _with_opcodes(raw, found) if opcodes else raw
 
 
-def _with_opcodes(raw: RawImage, p: Path) -> RawImage:
+def _with_opcodes(raw: RawImage, found: Any) -> RawImage:
     """Return ``raw`` with its DNG's OpcodeList2 applied (:mod:`imageform.io._dng_opcodes`).
 
-    ``metadata["opcodes_applied"]`` counts the GainMaps, ``["opcodes_applied_other"]``
-    names the other opcodes applied (``"OpcodeList2:ScalePerRow"``). The OpcodeList3
-    opcodes it can apply (after demosaicing) are kept for :func:`develop` in
-    ``metadata["opcodes_stage3"]`` with ``metadata["opcodes_area"]`` (offset, (H, W)).
+    ``found`` is :func:`_raw_page_opcodes` of the file. ``metadata["opcodes_applied"]``
+    counts the GainMaps, ``["opcodes_applied_other"]`` names the other opcodes applied
+    (``"OpcodeList2:ScalePerRow"``), ``["opcodes_decoded"]`` the MapPolynomials a lossy
+    DNG's samples were decoded with (:func:`imageform.io._dng_opcodes.lossy_dng_curves`).
+    The OpcodeList3 opcodes it can apply (after demosaicing) are kept for :func:`develop`
+    in ``metadata["opcodes_stage3"]`` with ``metadata["opcodes_area"]`` (offset, (H, W)).
     """
     import dataclasses
 
@@ -476,11 +500,13 @@ def _with_opcodes(raw: RawImage, p: Path) -> RawImage:
         stage3_name,
     )
 
-    stage1, maps, stage3, skipped, offset, area, origin = _raw_page_opcodes(p)
-    if not stage1 and not maps and not stage3 and not skipped:
+    stage1, maps, stage3, skipped, offset, area, origin, decoded = found
+    if not stage1 and not maps and not stage3 and not skipped and not decoded:
         return raw
     meta = dict(raw.metadata)
     meta["opcodes_skipped"] = skipped
+    if decoded:
+        meta["opcodes_decoded"] = ["OpcodeList2:MapPolynomial"] * decoded
     mosaic = raw.mosaic
     expected = None if area is None else (area[0] - offset[0], area[1] - offset[1])
     fits = expected is None or tuple(mosaic.shape[:2]) == expected
@@ -510,49 +536,67 @@ def _with_opcodes(raw: RawImage, p: Path) -> RawImage:
     return dataclasses.replace(raw, mosaic=mosaic, metadata=meta)
 
 
-def _raw_page_opcodes(
-    path: Path,
-) -> tuple[
-    list[Any], list[Any], list[Any], list[str], tuple[int, int], tuple[int, int] | None,
-    tuple[int, int] | None,
-]:  # fmt: skip
-    """Return a DNG raw IFD's opcodes to apply, the ones not, offset, size and origin.
+def _raw_page_opcodes(tf: Any) -> Any:
+    """Return a DNG raw IFD's opcodes to apply, the ones not, offset, size, origin, decoded.
 
-    The opcodes of OpcodeList1, 2 and 3 (:func:`imageform.io._dng_opcodes.read_opcodes`).
-    The offset is where the mosaic's first pixel sits in the ActiveArea (LibRaw starts a
-    CFA image's crop at an even row and column), the size the area's (H, W) (None: the raw
-    image's), the origin where it sits in the stored image (None where a LinearizationTable
-    changes the stored codes: OpcodeList1 applies to them). ``([], [], [], [], (0, 0), None,
-    None)`` for any other file.
+    ``tf`` is the open tifffile of a DNG. The opcodes of OpcodeList1, 2 and 3
+    (:func:`imageform.io._dng_opcodes.read_opcodes`). The offset is where the mosaic's
+    first pixel sits in the ActiveArea (LibRaw starts a CFA image's crop at an even row and
+    column), the size the area's (H, W) (None: the raw image's), the origin where it sits in
+    the stored image (None where a LinearizationTable changes the stored codes: OpcodeList1
+    applies to them); decoded, how many MapPolynomials of a lossy DNG (Compression 34892)
+    its samples were decoded with (LibRaw's reading and :func:`_read_dng`'s apply them:
+    :func:`imageform.io._dng_opcodes.lossy_dng_curves`). :data:`_NO_OPCODES` for a file
+    with no raw IFD.
     """
-    import tifffile
+    from imageform.io._dng_opcodes import lossy_dng_curves, read_opcodes
 
-    from imageform.io._dng_opcodes import read_opcodes
-
-    none: Any = ([], [], [], [], (0, 0), None, None)
-    try:
-        with tifffile.TiffFile(path) as tf:
-            if _DNG_VERSION not in tf.pages[0].tags:  # type: ignore[union-attr]
-                return none
-            page = _dng_raw_page(tf)
-            if page is None:
-                return none
-            stage1, maps, stage3, skipped = read_opcodes(page)
-            area = [int(v) for v in np.ravel(page.tags.valueof(_ACTIVE_AREA, ()))]
-            cfa = int(page.tags.valueof(262, 0)) == 32803
-            linearized = _LINEARIZATION_TABLE in page.tags
-    except Exception:  # not a TIFF: no opcodes
-        return none
+    page = _dng_raw_page(tf)
+    if page is None:
+        return _NO_OPCODES
+    decoded = 0
+    if int(page.tags.valueof(259, 1)) == _COMPRESSION_LOSSY_JPEG and _OPCODE_LIST_2 in page.tags:
+        decoded = lossy_dng_curves(_tag_bytes(page.tags[_OPCODE_LIST_2].value))[1]
+    stage1, maps, stage3, skipped = read_opcodes(page, decoded=decoded)
+    area = [int(v) for v in np.ravel(page.tags.valueof(_ACTIVE_AREA, ()))]
+    cfa = int(page.tags.valueof(262, 0)) == _PHOTOMETRIC_CFA
+    linearized = _LINEARIZATION_TABLE in page.tags
     if len(area) == 4 and area[2] > area[0] and area[3] > area[1]:
         top, left, bottom, right = area
         offset = (top & 1, left & 1) if cfa else (0, 0)  # LibRaw's crop starts even
         origin = None if linearized else (top + offset[0], left + offset[1])
-        return stage1, maps, stage3, skipped, offset, (bottom - top, right - left), origin
-    return stage1, maps, stage3, skipped, (0, 0), None, None if linearized else (0, 0)
+        size = (bottom - top, right - left)
+        return stage1, maps, stage3, skipped, offset, size, origin, decoded
+    return stage1, maps, stage3, skipped, (0, 0), None, None if linearized else (0, 0), decoded
 
 
-def _read_raw(path: str | Path, max_pixels: int | None) -> RawImage:
-    """:func:`read_raw` without the opcodes."""
+def _raw_data_end(p: Path) -> int:
+    """Return the byte where a DNG's raw image's last strip or tile ends; 0 for no DNG."""
+    import tifffile
+
+    try:
+        with tifffile.TiffFile(p) as tf:
+            page = _dng_raw_page(tf)
+            if page is None:
+                return 0
+            ends = np.asarray(page.dataoffsets, np.int64) + np.asarray(page.databytecounts)
+            return int(ends.max()) if ends.size else 0
+    except Exception:  # not a TIFF-based raw
+        return 0
+
+
+def _tag_bytes(value: Any) -> bytes:
+    """Return an UNDEFINED tag's value as bytes (tifffile gives bytes or a tuple of ints)."""
+    return value if isinstance(value, bytes) else bytes(np.asarray(value, np.uint8).ravel())
+
+
+def _read_raw(
+    path: str | Path, max_pixels: int | None, *, opcodes: bool = False
+) -> tuple[RawImage, Any]:
+    """:func:`read_raw` without the opcodes, and :func:`_raw_page_opcodes` of the file.
+
+    The DNG header is read once for the colour tags and, with ``opcodes``, the opcodes.
+    """
     from imageform.io.image_io import ImageInfo, _check_pixels, _pixel_limit
 
     limit = (
@@ -570,7 +614,7 @@ def _read_raw(path: str | Path, max_pixels: int | None) -> RawImage:
         # with tifffile; any other raw file needs the extra (the message says so)
         own = _read_dng(p, limit)
         if own is not None:
-            return own
+            return own, _dng_header(p, opcodes=opcodes)[1]
     rawpy = _rawpy()
     r = rawpy.RawPy()
     try:
@@ -587,7 +631,7 @@ def _read_raw(path: str | Path, max_pixels: int | None) -> RawImage:
         own = _read_dng(p, limit)
         if own is not None:
             own.metadata["libraw"] = type(exc).__name__
-            return own
+            return own, _dng_header(p, opcodes=opcodes)[1]
         raise InvalidInputError(
             f"{p} is not a raw file LibRaw can read ({type(exc).__name__})"
         ) from None
@@ -654,6 +698,18 @@ def _read_raw(path: str | Path, max_pixels: int | None) -> RawImage:
         if own is not None and floats and own.mosaic.shape == mosaic.shape:
             mosaic, black, white = own.mosaic, own.black_level, own.white_level
             raw_type = "float"
+        elif (end := _raw_data_end(p)) > (size := p.stat().st_size):  # LibRaw reads zeros
+            raise InvalidInputError(
+                f"{p} is truncated: its raw image's data ends at byte {end}, the file has "
+                f"{size} bytes"
+            )
+    photosites = mosaic.shape[0] * mosaic.shape[1]
+    if (size := p.stat().st_size) * 8 < photosites and np.count_nonzero(mosaic) < mosaic.size / 100:
+        # under one bit a photosite and (nearly) all zero: the data is missing, LibRaw read zeros
+        raise InvalidInputError(
+            f"{p} is truncated: {size} bytes for {photosites} photosites (under one bit "
+            "each), and LibRaw decodes zeros"
+        )
     meta: dict[str, Any] = {
         "path": str(p),
         "raw_type": raw_type,
@@ -663,7 +719,7 @@ def _read_raw(path: str | Path, max_pixels: int | None) -> RawImage:
     }
     illum: str | None = None
     xyz_to_camera: np.ndarray | None = cam_xyz if np.any(cam_xyz) else None
-    tags = _dng_tags(p)
+    tags, found = _dng_header(p, opcodes=opcodes)
     if tags:
         names = {v: k for k, v in CALIBRATION_ILLUMINANTS.items()}
         if "model" in tags:
@@ -683,7 +739,7 @@ def _read_raw(path: str | Path, max_pixels: int | None) -> RawImage:
         gains, xyz_to_camera, illum = None, None, None
         rgb_cam = np.zeros((3, 3))
         meta["monochrome"] = True
-    return RawImage(
+    raw = RawImage(
         mosaic=mosaic,
         black_level=black,
         white_level=white,
@@ -695,6 +751,7 @@ def _read_raw(path: str | Path, max_pixels: int | None) -> RawImage:
         metadata=meta,
         orientation=flip if flip in _FLIPS else 0,
     )
+    return raw, found
 
 
 #: LibRaw's flip codes (``sizes.flip``) of the eight TIFF/EXIF orientations, by EXIF code.
@@ -790,6 +847,9 @@ def _libraw_rgb_cam(xyz_to_camera: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 #: PhotometricInterpretation of a DNG's raw image: a colour filter array, or LinearRaw.
 _PHOTOMETRIC_LINEAR_RAW = 34892
+#: Compression of a lossy DNG's samples (8-bit JPEG, DNG 1.4), and the OpcodeList2 tag.
+_COMPRESSION_LOSSY_JPEG = 34892
+_OPCODE_LIST_2 = 51009
 
 
 def _ints(value: Any) -> list[int]:
@@ -858,6 +918,8 @@ def _read_dng(p: Path, limit: int) -> RawImage | None:
             _check_pixels(p, info, limit)
             data = np.asarray(page.asarray())
             flip = _EXIF_TO_FLIP.get(int(ifd0.valueof(274, 1)), 0)
+            lossy = int(tags.get(259, 1)) == _COMPRESSION_LOSSY_JPEG and data.dtype == np.uint8
+            list2 = _tag_bytes(objects[_OPCODE_LIST_2].value) if _OPCODE_LIST_2 in objects else None
     except InvalidInputError:
         raise
     except Exception:  # not a TIFF, or one tifffile cannot decode: LibRaw's business
@@ -883,6 +945,14 @@ def _read_dng(p: Path, limit: int) -> RawImage | None:
         pattern = letters
         if data.ndim != 2:
             return None
+    if lossy:  # 8-bit JPEG samples, decoded through LibRaw's curves to 0..65535
+        from imageform.io._dng_opcodes import lossy_dng_curves
+
+        curves = lossy_dng_curves(list2)[0]
+        if data.ndim == 2:
+            data = curves[0][data]
+        else:
+            data = np.stack([curves[min(c, 3)][data[..., c]] for c in range(data.shape[2])], -1)
     floats = data.dtype.kind == "f"
     values = data  # integers stay integers unless a table, deltas or scaling need floats
     if _LINEARIZATION_TABLE in tags and not floats:
@@ -910,7 +980,9 @@ def _read_dng(p: Path, limit: int) -> RawImage | None:
     channels = 1 if values.ndim == 2 else values.shape[2]
     bits = int(np.ravel(tags.get(258, 16))[0])
     white = (
-        float(np.min(levels_of[_WHITE_LEVEL]))
+        65535.0  # a lossy DNG's curves end at 65535, as LibRaw's maximum
+        if lossy
+        else float(np.min(levels_of[_WHITE_LEVEL]))
         if _WHITE_LEVEL in levels_of
         else (1.0 if floats else float(2**bits - 1))
     )
@@ -1116,12 +1188,15 @@ class Development:
 
                 self._image = self._fused(MODE_FLOAT)
             else:
-                from imageform._kernels.raw_develop import render_rgb
+                from imageform._kernels.jit import run_tasks
+                from imageform._kernels.raw_develop import render_rows
 
                 cam = self._camera_rgb
                 table = self._table if self._table is not None else np.zeros(2, np.float32)
                 image = np.empty(cam.shape, np.float32)
-                render_rgb(cam, self._render, table, self._table is not None, image)
+                h, w = cam.shape[:2]
+                run_tasks(render_rows, h, cam, self._render, table, self._table is not None,
+                          image, threads=None if h * w >= _THREADS_MIN_PIXELS else 1)  # fmt: skip
                 self._image = image
         return self._image
 
@@ -1261,7 +1336,7 @@ def develop(
        clipping).
     3. Demosaic with :func:`imageform.sensor.demosaic` (``demosaic`` names the method); a
        linear raw has every colour already and is not demosaiced. A DNG's OpcodeList3
-       opcodes that :func:`read_raw` kept (WarpRectilinear, FixVignetteRadial:
+       opcodes that :func:`read_raw` kept (WarpRectilinear, FixVignetteRadial, GainMap:
        ``metadata["opcodes_stage3"]``) are applied to this camera RGB, on the CPU, with a
        note (:mod:`imageform.io._dng_opcodes`).
     4. Camera RGB to XYZ: :math:`M = C^{-1}\,\mathrm{diag}(C\,\mathbf w)`, with C the

@@ -53,8 +53,8 @@ class DevelopOptions(ImageOut, Options):
         True,
         help="Apply a DNG's opcodes as Adobe's DNG SDK does: GainMaps (the lens-shading "
         "correction phones write) and the other per-pixel ones to the mosaic, then after "
-        "demosaicing WarpRectilinear (lens distortion) and FixVignetteRadial; --no-opcodes "
-        "leaves them, as LibRaw does.",
+        "demosaicing WarpRectilinear (lens distortion), FixVignetteRadial and GainMap; "
+        "--no-opcodes leaves them, as LibRaw does.",
     )
     device: Device = option(
         "cpu",
@@ -87,6 +87,12 @@ def opcode_notes(meta: dict[str, Any], *, developed: bool = False) -> list[str]:
     if meta.get("opcodes_applied"):
         n = int(meta["opcodes_applied"])
         notes.append(f"applied the DNG's {n} GainMap opcode{'s' if n > 1 else ''} (lens shading)")
+    decoded = meta.get("opcodes_decoded") or []
+    if decoded:
+        notes.append(
+            f"the lossy DNG's samples decoded with its {', '.join(dict.fromkeys(decoded))} "
+            "(as LibRaw decodes them; not applied again)"
+        )
     other = meta.get("opcodes_applied_other") or []
     if other:
         notes.append(f"applied the DNG's {', '.join(dict.fromkeys(other))}")
@@ -128,6 +134,7 @@ def raw_info(path: Path) -> Result:
         "opcodes_applied": int(raw.metadata.get("opcodes_applied", 0)),
         "opcodes_skipped": list(raw.metadata.get("opcodes_skipped", [])),
         "opcodes_applied_other": list(raw.metadata.get("opcodes_applied_other", [])),
+        "opcodes_decoded": list(raw.metadata.get("opcodes_decoded", [])),
         "opcodes_at_development": stage3_names(raw.metadata),
     }
     model = summary["camera_model"] or "camera not named"
