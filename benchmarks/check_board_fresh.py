@@ -52,8 +52,7 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
-sys.path.insert(0, str(ROOT / "src"))
+sys.path.insert(0, str(ROOT))  # benchmarks._common; imageform from PYTHONPATH (a "before" tree)
 
 from benchmarks._common import header, markdown_table  # noqa: E402
 
