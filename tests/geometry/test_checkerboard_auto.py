@@ -223,8 +223,10 @@ def test_a_thin_margin_is_not_another_row(
     H = homography(square, (135, 90), angle, 0.0, 9, 6)
     img = render_board(9, 6, H, (180, 270), blur=0.8, margin=margin, background=0.35)
     auto = find_checkerboard(img, "auto")
+    given_ = find_checkerboard(img, (9, 6))
     assert auto.pattern_size == (9, 6), auto.reason
-    np.testing.assert_allclose(auto.corners, find_checkerboard(img, (9, 6)).corners, atol=1e-3)
+    assert auto.corners is not None and given_.corners is not None
+    np.testing.assert_allclose(auto.corners, given_.corners, atol=1e-3)
     monkeypatch.setattr(cb, "_x_edged", lambda gray, grid: grid)
     assert find_checkerboard(img, "auto").pattern_size == wrong
 

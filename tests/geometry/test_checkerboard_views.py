@@ -346,7 +346,7 @@ def test_a_motion_blurred_board_is_found_on_a_coarser_copy(
 
     img, truth = _smeared(shape, square, 0.35, length)
     res = find_checkerboard(img, (8, 6))
-    assert res.found, res.reason
+    assert res.found and res.corners is not None, res.reason
     err = np.linalg.norm(res.corners[:, None] - truth[None], axis=2).min(axis=1)
     assert np.median(err) < 0.05 and err.max() < 0.1
     assert find_checkerboard(img, "auto").pattern_size == (8, 6)
@@ -389,11 +389,11 @@ def test_a_board_smeared_over_most_of_a_square_is_not_returned_off_its_corners(
 
     img, truth = _smeared((720, 1280), 64.0, 0.6, 61)
     res = find_checkerboard(img, (8, 6))
-    assert res.found and not np.any(res.status)
+    assert res.found and res.corners is not None and not np.any(res.status)
     err = np.linalg.norm(res.corners[:, None] - truth[None], axis=2).min(axis=1)
     assert err.max() < 0.1
     monkeypatch.setattr(cb, "_unsettled", lambda result: False)
     off = find_checkerboard(img, (8, 6))
-    assert off.found and np.all(off.status == 4)
+    assert off.found and off.corners is not None and np.all(off.status == 4)
     err = np.linalg.norm(off.corners[:, None] - truth[None], axis=2).min(axis=1)
     assert np.median(err) > 10.0
