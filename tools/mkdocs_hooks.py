@@ -59,6 +59,7 @@ BENCH_SCRIPTS: dict[str, str] = {
     "chart-marks": "benchmarks/check_chart_marks.py",
     "chart-photos": "benchmarks/check_chart_photos.py",
     "chart-real": "benchmarks/check_chart_real.py",
+    "board-fresh": "benchmarks/check_board_fresh.py",
     "charuco": "benchmarks/bench_charuco.py",
     "charuco-real": "benchmarks/check_charuco_real.py",
     "charuco-symmetric": "benchmarks/check_charuco_symmetric.py",

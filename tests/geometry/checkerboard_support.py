@@ -38,6 +38,8 @@ def render_board(
     blur: float = 1.0,
     noise: float = 0.0,
     seed: int = 0,
+    margin: float = 0.6,
+    background: float = 0.35,
 ) -> np.ndarray:
     """A board of (cols+1) x (rows+1) squares seen through homography ``H``, blurred.
 
@@ -51,7 +53,8 @@ def render_board(
     the nearest grid line (first order in the homography). A checker corner is then
     ``0.5 + 0.5 erf(d_x) erf(d_y)``, exact for a blurred corner and point-symmetric about it,
     so the true corner is where an unbiased detector must land. (Supersampling quantises
-    edge positions to 1/S px: too coarse for a 0.05 px test.)
+    edge positions to 1/S px: too coarse for a 0.05 px test.) The paper (0.85) reaches
+    ``margin`` squares past the board, on a ``background`` of that level.
     """
     h, w = shape
     vv, uu = np.mgrid[0:h, 0:w].astype(np.float64)
@@ -59,11 +62,21 @@ def render_board(
     W = Hinv[2, 0] * uu + Hinv[2, 1] * vv + Hinv[2, 2]
     X = (Hinv[0, 0] * uu + Hinv[0, 1] * vv + Hinv[0, 2]) / W
     Y = (Hinv[1, 0] * uu + Hinv[1, 1] * vv + Hinv[1, 2]) / W
-    return _shade(X, Y, cols, rows, blur=blur, noise=noise, seed=seed)
+    return _shade(X, Y, cols, rows, blur=blur, noise=noise, seed=seed, margin=margin,
+                  background=background)  # fmt: skip
 
 
 def _shade(
-    X: np.ndarray, Y: np.ndarray, cols: int, rows: int, *, blur: float, noise: float, seed: int
+    X: np.ndarray,
+    Y: np.ndarray,
+    cols: int,
+    rows: int,
+    *,
+    blur: float,
+    noise: float,
+    seed: int,
+    margin: float = 0.6,
+    background: float = 0.35,
 ) -> np.ndarray:
     """The board seen at board coordinates (X, Y) (in squares) per pixel; NaN is paper."""
     from scipy.special import erf
@@ -84,10 +97,10 @@ def _shade(
         return 0.25 * (1 + soft(V - lo, g)) * (1 + soft(hi - V, g))
 
     on_board = inside(0, cols + 1, X, gX) * inside(0, rows + 1, Y, gY)
-    on_paper = inside(-0.6, cols + 1.6, X, gX) * inside(-0.6, rows + 1.6, Y, gY)
-    img = 0.35 + on_paper * (0.85 - 0.35)
+    on_paper = inside(-margin, cols + 1 + margin, X, gX) * inside(-margin, rows + 1 + margin, Y, gY)
+    img = background + on_paper * (0.85 - background)
     img = on_board * checker + (1 - on_board) * img
-    img = np.where(np.isfinite(img), img, 0.35)
+    img = np.where(np.isfinite(img), img, background)
     if noise > 0:
         img = img + np.random.default_rng(seed).normal(0, noise, img.shape)
     return img

@@ -202,3 +202,48 @@ def test_auto_spelling() -> None:
     H = homography(30.0, (320.0, 240.0), 0.2, 0.0, 7, 5)
     img = render_board(7, 5, H, (480, 640))
     assert find_checkerboard(img, " AUTO ").pattern_size == (7, 5)  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize(
+    ("square", "margin", "angle", "wrong"),
+    [(10.0, 0.3, 0.2, (10, 6)), (15.0, 0.2, 0.05, (9, 7))],
+)
+def test_a_thin_margin_is_not_another_row(
+    square: float, margin: float, angle: float, wrong: tuple[int, int],
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:  # fmt: skip
+    """A 9 x 6 board whose paper ends 0.2-0.3 squares past it, on a darker background, in a
+    270 x 180 view (as a webcam's small stereo frames of a printed board on a table): the
+    corners of the outer squares with that margin pass as one more row or column of the
+    lattice (``wrong`` without the X-corner test of the outer rows); the outer row whose
+    corners are not X-corners is dropped and the board is sized 9 x 6, its corners those of
+    the size given."""
+    import imageform.geometry.checkerboard as cb
+
+    H = homography(square, (135, 90), angle, 0.0, 9, 6)
+    img = render_board(9, 6, H, (180, 270), blur=0.8, margin=margin, background=0.35)
+    auto = find_checkerboard(img, "auto")
+    given_ = find_checkerboard(img, (9, 6))
+    assert auto.pattern_size == (9, 6), auto.reason
+    assert auto.corners is not None and given_.corners is not None
+    np.testing.assert_allclose(auto.corners, given_.corners, atol=1e-3)
+    monkeypatch.setattr(cb, "_x_edged", lambda gray, grid: grid)
+    assert find_checkerboard(img, "auto").pattern_size == wrong
+
+
+def test_outer_x_share_reads_each_side() -> None:
+    """The share of X-corners on each outer side: 1 on a board's own outer rows; a row added
+    past the board (the grid shifted one step out) reads 0 on that side; a side whose
+    quadrants leave the image reads None."""
+    from imageform.geometry.checkerboard_grid import _outer_x_share, cell_means
+
+    H = homography(20.0, (160, 120), 0.1, 0.0, 9, 6)
+    img = render_board(9, 6, H, (240, 320), blur=0.8)
+    grid = board_corners(9, 6, H).reshape(6, 9, 2)
+    assert _outer_x_share(img, grid, cell_means(img, grid)) == [1.0, 1.0, 1.0, 1.0]
+    step = grid[:, 1:2] - grid[:, 0:1]
+    wider = np.concatenate([grid[:, :1] - 2 * step, grid[:, :1] - step, grid], axis=1)
+    share = _outer_x_share(img, wider[:, 1:], cell_means(img, wider[:, 1:]))
+    assert share[2] == 0.0 and share[3] == 1.0
+    cut = grid + np.array([0.0, 240 - grid[-1, :, 1].min()])  # last row past the bottom edge
+    assert _outer_x_share(img, cut, cell_means(img, cut))[1] is None

@@ -80,6 +80,7 @@ from imageform._validate import (
 from imageform.errors import ImageformWarning, InvalidInputError
 from imageform.geometry.checkerboard_candidates import Candidates, find_candidates
 from imageform.geometry.checkerboard_grid import (
+    _outer_x_share,
     board_continues,
     cell_means,
     cell_parity_ok,
@@ -138,6 +139,13 @@ MAX_SEEDS = 40
 #: (:func:`find_checkerboard`): above 2000 px always, up to 2000 px (a video frame) when the
 #: board is not found at full resolution or some corner did not converge.
 COARSE_SIZE = 1000
+#: A board found neither at full resolution nor on that copy is sought again on copies
+#: averaged over twice as many pixels a side at each step, while the copy's longest side keeps
+#: at least this many pixels: blur wider than the largest smoothing scale (a hand-held board
+#: moved while the frame was exposed: a smear of 20-40 px along the motion) merges the two
+#: squares of one colour at each corner into a bar, and the ring test sees no four sectors
+#: until the scale reaches past the smear (benchmarks/results/board-fresh-2026-11-30b.md).
+BLUR_MIN_SIDE = 320
 #: ``partial=True``: a corner of a part of a board refined farther than this fraction of its
 #: nearest neighbour's distance from the saddle found drops its row or column.
 PARTIAL_REACH = 0.25
@@ -377,9 +385,12 @@ def _detect(
             rect = _regrown(rect, cand, nbr, hops, want)
         shape = sorted(rect.shape)
         grid = cand.xy[rect]
+        if auto:  # a row the lattice took past the board's edge (a thin margin) is dropped
+            grid = _x_edged(image.float, grid)
+            shape = sorted(grid.shape[:2])
         if grown:
             cols, rows = shape[1], shape[0]
-        if grown and (shape[0] < AUTO_MIN_SIDE or rect.size < AUTO_MIN_CORNERS):
+        if grown and (shape[0] < AUTO_MIN_SIDE or shape[0] * shape[1] < AUTO_MIN_CORNERS):
             if rect.size > best_size:
                 best_size = rect.size
                 best_reason = (
@@ -462,6 +473,26 @@ def _detect(
             return grid, best_reason, best_size
         return grid, "", cols * rows
     return None, best_reason, best_size
+
+
+def _x_edged(gray: NDArray[np.floating], grid: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``grid`` (R, C, 2) less the outer rows and columns that are not X-corners.
+
+    ``pattern_size="auto"`` takes the largest lattice of corner candidates; where a board's
+    margin is thin (a few pixels) against a darker background, the corners of the outer
+    squares with the margin can pass the ring test and the lattice checks as one more row
+    (a 9 x 6 board read as 10 x 6 in a 270 x 180 view). Such a row is not of X-corners: its
+    outer quadrants are both background (:func:`_outer_x_share`). The side with the fewest
+    X-corners, when under half of those read, is dropped, and again, while the grid keeps
+    :data:`AUTO_MIN_SIDE` a side.
+    """
+    while min(grid.shape[:2]) > AUTO_MIN_SIDE:
+        share = _outer_x_share(gray, grid, cell_means(gray, grid))
+        read = [(v, k) for k, v in enumerate(share) if v is not None]
+        if not read or min(read)[0] >= 0.5:
+            break
+        grid = (grid[1:], grid[:-1], grid[:, 1:], grid[:, :-1])[min(read)[1]]
+    return grid
 
 
 def _regrown(
@@ -611,11 +642,16 @@ def find_checkerboard(
         ``patternSize``; the OpenCV sample board is ``(9, 6)``). ``"auto"``: the largest
         board of at least 3 x 3 inner corners, whatever its size; the result's
         ``pattern_size`` says which, ``(cols, rows)`` with ``cols >= rows`` (``(0, 0)`` when
-        none is found).
+        none is found). An outer row or column of the lattice whose corners are not
+        X-corners (a thin margin against a darker background read as one more row) is
+        dropped before the board is sized.
     refine : bool
         Run the sub-pixel refinement (otherwise positions are the response peaks, ~0.5 px).
     sigma : float, optional
-        Smoothing scale in pixels; by default 2.0, then 1.2, then 3.5 are tried until found.
+        Smoothing scale in pixels; by default 2.0, then 1.2, then 3.5 are tried until found,
+        then (a board blurred wider than that: a hand-held board moved during the exposure)
+        the same scales on copies averaged over 2, 4, ... times as many pixels a side while
+        the copy keeps 320 px on its longest side. Given, only that scale is tried.
         Squares must be at least about ``5 sigma`` pixels wide.
     half_window : int, optional
         Half size of the refinement window (OpenCV's ``winSize``); by default
@@ -722,6 +758,10 @@ def find_checkerboard(
     gray = _Gray(codes, scale)
     factor = math.ceil(max(codes.shape[:2]) / COARSE_SIZE) if sigma is None else 1
     whole = _whole(gray, size, sigmas, factor, how, half_window, max_iter, tol)
+    if sigma is None and (not whole.found or _unsettled(whole)):
+        blurred = _blurred(gray, size, factor, how, half_window, max_iter, tol)
+        if blurred is not None and (not whole.found or _failed(blurred) < _failed(whole)):
+            whole = blurred
     if not partial or whole.found:
         return whole
     return _partial(gray, size, sigmas, how, half_window, max_iter, tol, whole.reason)
@@ -775,6 +815,54 @@ def _whole(
     if full is not None:
         return full
     return CheckerboardResult(False, None, reason, size)
+
+
+def _blurred(
+    gray: _Gray,
+    size: tuple[int, int],
+    factor: int,
+    how: str | None,
+    half_window: int | None,
+    max_iter: int,
+    tol: float,
+) -> CheckerboardResult | None:
+    """Seek a board :func:`_whole` did not find on ever coarser averaged copies, or None.
+
+    The copies average ``2 f``, ``4 f``, ... pixels a side (``f`` the factor of
+    :func:`_whole`'s own averaged copy, 1 where it made none) while their longest side keeps
+    :data:`BLUR_MIN_SIDE` pixels; each is searched and refined as :func:`_coarse` does (its
+    corners refined again at full resolution, the set closer to a plane's projection kept).
+    Each step doubles the smoothing scales in full pixels, so that the ring test reaches
+    past a blur wider than the largest of them. A board found with most of its corners
+    unrefined (:func:`_unsettled`) is kept only when no coarser copy does better.
+    """
+    level, first = 2 * factor, None
+    while max(gray.codes.shape[:2]) / level >= BLUR_MIN_SIDE:
+        found = _coarse(gray, level, size, how, half_window, max_iter, tol)
+        if found is not None and found.found:
+            if not _unsettled(found):
+                return found
+            first = first or found
+        level *= 2
+    return first
+
+
+def _failed(result: CheckerboardResult) -> int:
+    """Count the corners of a found board whose sub-pixel refinement failed (status > 0)."""
+    return 0 if result.status is None else int(np.count_nonzero(result.status))
+
+
+def _unsettled(result: CheckerboardResult) -> bool:
+    """Whether most corners of a found board failed their refinement (:func:`_failed`).
+
+    Smeared over most of a square (a smear of 61 px on squares of 64), the saddle response
+    of every corner peaks at one end of the bar the smear draws through it, 25 px off the
+    corner, and every refinement step from there leaves its window (status 4): the lattice
+    is regular and passes the checks, but none of its corners is where the board's is. On
+    a copy averaged over blocks wide enough the same board's corners converge, 0.01 px
+    from the truth.
+    """
+    return result.found and 2 * _failed(result) > result.pattern_size[0] * result.pattern_size[1]
 
 
 def _partial(

@@ -405,3 +405,30 @@ def _saddles(
     across = np.min(np.abs(np.stack([pp - pm, pp - mp, mm - pm, mm - mp])), axis=0)
     diagonal = np.maximum(np.abs(pp - mm), np.abs(pm - mp))
     return (across - diagonal > contrast / 4.0) & inside
+
+
+def _outer_x_share(
+    gray: NDArray[np.floating], grid: NDArray[np.float64], own: NDArray[np.float64]
+) -> list[float | None]:
+    """Share of each outer row and column of ``grid`` (R, C, 2) that are X-corners.
+
+    In the order first row, last row, first column, last column: the share of that side's
+    corners that :func:`_saddles` reads as X-corners (quadrants toward the next row inward
+    and the next one out), among those whose quadrants lie inside the image; None where
+    fewer than two do. Every inner corner of a board is an X-corner, its outer ones too
+    (their outer quadrants are the board's outer squares); a corner of an outer square
+    with the margin, or a thin margin against a darker background, that a lattice took
+    for another row has two equal adjacent quadrants. ``own``: the grid's
+    :func:`cell_means` (the board's contrast).
+    """
+    contrast = float(np.mean(np.abs(np.diff(own, axis=1))))
+    h, w = gray.shape
+    out: list[float | None] = []
+    for g in (grid[::-1], grid, grid.transpose(1, 0, 2)[::-1], grid.transpose(1, 0, 2)):
+        row, outward = g[-1], g[-1] - g[-2]
+        ok = _saddles(gray, row, outward, contrast)
+        reach = np.abs(np.gradient(row, axis=0)) * 0.4 + np.abs(outward) * 0.4
+        inside = np.all((row - reach >= 0) & (row + reach <= [w - 1, h - 1]), axis=1)
+        n = int(np.count_nonzero(inside))
+        out.append(None if n < 2 else float(np.count_nonzero(ok & inside)) / n)
+    return out
