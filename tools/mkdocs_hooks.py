@@ -55,6 +55,7 @@ BENCH_SCRIPTS: dict[str, str] = {
     "exif-focal": "benchmarks/check_exif_focal.py",
     "calibration-fisheye": "benchmarks/check_calibration_fisheye.py",
     "chart-detect": "benchmarks/bench_chart_detect.py",
+    "chart-fresh": "benchmarks/check_chart_real.py",
     "chart-input": "benchmarks/check_chart_input.py",
     "chart-marks": "benchmarks/check_chart_marks.py",
     "chart-photos": "benchmarks/check_chart_photos.py",

@@ -19,7 +19,13 @@ segmentation detector of colour-checker-detection and OpenCV's ``mcc`` module):
    or shear) of area :math:`A` and covariance :math:`\Sigma` has
    :math:`A / (12 \sqrt{\det \Sigma}) = 1` (a uniform square of side *s* has variance
    :math:`s^2/12` along each side); regions with this ratio in [0.85, 1.12] and an
-   elongation of at most 3 are kept, duplicates across thresholds removed.
+   elongation of at most 3 are kept, duplicates across thresholds removed. A patch with a
+   mark inside it (a dot, a number, a label: chart software draws them on the chart it
+   found) is a flat ring, whose ratio is :math:`(1 - q) / (1 + q)` for a hole of share
+   *q*: ring-like regions (ratio over 0.3, elongation under 2) have their holes filled, and
+   the filled region is a candidate when it passes the same test, its holes take at most
+   half of it (not the chart's frame around its patches) and it holds at most one other
+   flat region (its mark; not the background around a small chart).
 3. **Lattice hypotheses.** A candidate and two of its neighbours give a lattice origin and
    basis :math:`B = [d_1\ d_2]`; it is kept when the candidate's own shape agrees, i.e.
    :math:`12\, B^{-1} \Sigma B^{-T} \approx (s/p)^2 I` (the patch sides run along the
@@ -29,7 +35,9 @@ segmentation detector of colour-checker-detection and OpenCV's ``mcc`` module):
    lattice coordinates to the candidates' centroids, re-collecting candidates, three times.
 5. **Chart, orientation and validity by colour.** Every 4 × 6 window of the lattice in
    either of its two chart orientations (the two quarter turns the window's shape allows;
-   never mirrored: the basis is right-handed like the image) is sampled, and the reference
+   never mirrored: the basis is right-handed like the image) whose homography can be a
+   camera's view of a flat chart (the whole chart on one side of the vanishing line, no
+   patch over 40 times the image area of another) is sampled, and the reference
    colours are regressed on the measured ones with an affine map in linear light
    (a 3 × 3 matrix and an offset per channel). A patch is an outlier (an occluder, a
    reflection) when the fit of the *other* patches predicts its colour more than
@@ -48,18 +56,23 @@ segmentation detector of colour-checker-detection and OpenCV's ``mcc`` module):
    :math:`r_k \approx s_k A m_k` (a 3 × 3 :math:`A`, a light :math:`s_k` per patch;
    Finlayson, Gong and Fisher, "Color Homography: Theory and Applications", IEEE TPAMI
    41(1), 2019, by their alternating least squares), by its adjusted :math:`R^2` (one
-   parameter per patch more: a lattice of unrelated colours does not pass), and a chart
-   found so comes with a :class:`~imageform.analysis.ChartWarning` naming the range of the
-   lights.
-7. **Marks on the patches.** When neither passes, a label or a number printed or drawn on
+   parameter per patch more: a lattice of unrelated colours does not pass) and only in
+   windows where at least 12 of the 24 patches were segmented (the weaker colour test needs
+   more geometry: a lattice of window frames in a street scene scored 0.82 so with 6), and a
+   chart found so comes with a :class:`~imageform.analysis.ChartWarning` naming the range of
+   the lights.
+7. **Marks on the patches.** When the affine fit fails, a label or a number printed or drawn on
    every patch may be why (each patch's mean is the patch's colour mixed with the mark's):
    the lattices are scored once more on each patch's dominant colour (7 x 7 samples per
    cell, those more than 4 robust sigmas from their median left out, as
    :func:`measure_chart_patches` does), and a chart found so must reach an :math:`R^2` of at
    least 0.9 (trimmed samples let more lattices of unrelated colours fit: the best of the
    photographs without a chart in benchmarks/results/chart-real-2026-11-29h.md scores 0.70
-   so, 0.66 plain). Otherwise the detection comes back with ``found`` False and the reason
-   (a photograph without a chart is an answer, not an error).
+   so, 0.66 plain). Steps 6 and 7 are both tried and the higher score that passes wins (a
+   chart with a mark on every patch has no plain fit at all: the colour homography of a
+   lattice of clutter beside it must not win by default). Otherwise the detection comes
+   back with ``found`` False and the reason (a photograph without a chart is an answer, not
+   an error).
 
 Coordinates are imageform's pixel convention (docs/conventions.md): ``(u, v)`` = (column,
 row), integer values at pixel centres. Chart coordinates are ``(column, row)`` of the
@@ -327,6 +340,7 @@ def _candidates(work: np.ndarray) -> dict[str, np.ndarray]:
     hgt, wid = grad.shape
     max_area = hgt * wid / 12.0
     out: list[np.ndarray] = []
+    rings: list[np.ndarray] = []
     for level in _LEVELS:
         lab, n = ndimage.label(grad < level)
         if n == 0:
@@ -348,6 +362,17 @@ def _candidates(work: np.ndarray) -> dict[str, np.ndarray]:
         elong = np.sqrt((tr / 2 + disc) / np.maximum(tr / 2 - disc, 1e-12))
         ok = (fill > 0.85) & (fill < 1.12) & (elong < 3.0)
         out.append(np.c_[cx, cy, a, sxx, syy, sxy, fill][ok])
+        # a patch with a mark inside it (a dot, a number, a label) is a flat ring: fill
+        # ring-like regions' holes and keep those that are square then
+        ring = (fill > _RING_FILL) & (fill <= 0.85) & (elong < 2.0) & (m0[keep] >= 24)
+        if ring.any():
+            boxes = np.c_[cx, cy, sxx, syy, a][ring]
+            rings.append(_filled_holes(lab, np.flatnonzero(keep)[ring] + 1, boxes, max_area))
+    if rings:
+        # a marked patch holds its mark (at most one square-ish flat region, a dot); a
+        # region around a whole group of them (the background around a small chart) is
+        # no patch
+        out.append(_hold_at_most_one(np.concatenate(rings), np.concatenate(out)))
     if not out:
         return {"c": np.zeros((0, 2)), "area": np.zeros(0), "cov": np.zeros((0, 2, 2))}
     cand = np.concatenate(out)
@@ -366,6 +391,85 @@ def _candidates(work: np.ndarray) -> dict[str, np.ndarray]:
     cand = cand[alive]
     cov = np.stack([np.c_[cand[:, 3], cand[:, 5]], np.c_[cand[:, 5], cand[:, 4]]], axis=1)
     return {"c": cand[:, :2].copy(), "area": cand[:, 2].copy(), "cov": cov}
+
+
+#: The least fill ratio of a region whose holes :func:`_filled_holes` fills: a square ring
+#: of inner area share q has :math:`(1 - q) / (1 + q)`, 0.33 at q = 1/2.
+_RING_FILL = 0.3
+#: The largest share of a filled region its holes may take: a mark inside a patch, not the
+#: patches inside the chart's frame (their share is about 2/3 of the frame's outline).
+_MAX_HOLE_SHARE = 0.5
+
+
+def _hold_at_most_one(filled: np.ndarray, plain: np.ndarray) -> np.ndarray:
+    r"""Rows of ``filled`` whose square (by moments) holds at most one region of ``plain``.
+
+    A square of side *s* has variance :math:`s^2 / 12` along its sides, so its points are
+    within Mahalanobis distance :math:`\sqrt{3}` per side of its centroid: a smaller row of
+    ``plain`` is inside when its centroid's squared Mahalanobis distance is under 3. The
+    rows inside count as one region when their centroids are within a quarter of the filled
+    square's side of one another (the same mark found at several thresholds).
+    """
+    if not len(filled) or not len(plain):
+        return filled
+    cov = np.stack([np.c_[filled[:, 3], filled[:, 5]], np.c_[filled[:, 5], filled[:, 4]]], 1)
+    inv = np.linalg.inv(cov)
+    d = plain[None, :, :2] - filled[:, None, :2]
+    m2 = np.einsum("fni,fij,fnj->fn", d, inv, d)
+    inside = (m2 < 3.0) & (plain[None, :, 2] < filled[:, None, 2])
+    keep = np.ones(len(filled), dtype=bool)
+    for i in np.flatnonzero(inside.sum(axis=1) > 1):
+        pts = plain[inside[i], :2]
+        gap = np.linalg.norm(pts[:, None] - pts[None], axis=-1).max()
+        keep[i] = gap <= 0.25 * np.sqrt(filled[i, 2])
+    return filled[keep]
+
+
+def _filled_holes(
+    lab: np.ndarray, labels: np.ndarray, moments: np.ndarray, max_area: float
+) -> np.ndarray:
+    r"""Moments rows (as in :func:`_candidates`) of ``labels``' regions with holes filled.
+
+    ``moments``: each region's centroid, variances and area (cx, cy, sxx, syy, count). A
+    region is looked for within two standard deviations and two pixels of its centroid (a
+    square ring's extent is :math:`\sqrt{3}` of them) and skipped when not all its pixels
+    are there. It is kept when it has holes, they take at most ``_MAX_HOLE_SHARE`` of the
+    filled region, and the filled region is square-ish (fill ratio in [0.85, 1.12],
+    elongation under 3).
+    """
+    from scipy import ndimage
+
+    rows = []
+    hgt, wid = lab.shape
+    for k, (cx, cy, sxx, syy, count) in zip(labels, moments, strict=True):
+        ru, rv = 2.0 * np.sqrt(sxx) + 2.0, 2.0 * np.sqrt(syy) + 2.0
+        box = (
+            slice(max(int(cy - rv), 0), min(int(cy + rv) + 2, hgt)),
+            slice(max(int(cx - ru), 0), min(int(cx + ru) + 2, wid)),
+        )
+        own = lab[box] == k
+        if own.sum() != count:
+            continue
+        full = ndimage.binary_fill_holes(own)
+        a = float(full.sum())
+        holes = a - float(own.sum())
+        if holes <= 0 or holes > _MAX_HOLE_SHARE * a or a > max_area:
+            continue
+        yy, xx = np.nonzero(full)
+        fu = xx + float(box[1].start)
+        fv = yy + float(box[0].start)
+        mu, mv = float(fu.mean()), float(fv.mean())
+        suu = float(((fu - mu) ** 2).mean()) + 1 / 12
+        svv = float(((fv - mv) ** 2).mean()) + 1 / 12
+        suv = float(((fu - mu) * (fv - mv)).mean())
+        det = max(suu * svv - suv * suv, 1e-12)
+        fill = a / (12.0 * np.sqrt(det))
+        tr = suu + svv
+        disc = np.sqrt(max(tr * tr / 4 - det, 0.0))
+        elong = np.sqrt((tr / 2 + disc) / max(tr / 2 - disc, 1e-12))
+        if 0.85 < fill < 1.12 and elong < 3.0:
+            rows.append([mu, mv, a, suu, svv, suv, fill])
+    return np.asarray(rows, dtype=np.float64).reshape(-1, 7)
 
 
 # ---------------------------------------------------------------- lattice hypotheses
@@ -424,16 +528,19 @@ def _collect(
     Returns indices, integer coords and residuals; one candidate per cell (the closest).
     """
     hinv = np.linalg.inv(h)
-    uv = _apply_h(hinv, cand["c"])
-    ruv = np.round(uv)
-    res = np.abs(uv - ruv).max(axis=1)
-    # local area of one lattice cell, from the Jacobian of h at the candidate
-    eps = 0.5
-    px = _apply_h(h, ruv + [eps, 0]) - _apply_h(h, ruv - [eps, 0])
-    py = _apply_h(h, ruv + [0, eps]) - _apply_h(h, ruv - [0, eps])
-    cell = np.abs(px[:, 0] * py[:, 1] - px[:, 1] * py[:, 0])
-    ar = cand["area"] / np.maximum(cell * area_scale, 1e-9)
-    ok = (res < tol) & (ar > 0.45) & (ar < 2.2) & (np.abs(ruv).max(axis=1) <= 12)
+    # a candidate on the lattice's vanishing line (a steep fit to a few candidates) maps to
+    # infinity: NaN, never on the lattice
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        uv = _apply_h(hinv, cand["c"])
+        ruv = np.round(uv)
+        res = np.abs(uv - ruv).max(axis=1)
+        # local area of one lattice cell, from the Jacobian of h at the candidate
+        eps = 0.5
+        px = _apply_h(h, ruv + [eps, 0]) - _apply_h(h, ruv - [eps, 0])
+        py = _apply_h(h, ruv + [0, eps]) - _apply_h(h, ruv - [0, eps])
+        cell = np.abs(px[:, 0] * py[:, 1] - px[:, 1] * py[:, 0])
+        ar = cand["area"] / np.maximum(cell * area_scale, 1e-9)
+        ok = (res < tol) & (ar > 0.45) & (ar < 2.2) & (np.abs(ruv).max(axis=1) <= 12)
     idx = np.flatnonzero(ok)
     if not len(idx):
         return idx, np.zeros((0, 2)), np.zeros(0)
@@ -802,6 +909,37 @@ def _window_fit(
     return _colour_fit(mean, ref_lin, usable)
 
 
+#: The largest ratio of two patches' image areas on one chart: a chart tilted by 60 degrees
+#: across a wide field of view; a real one in chart-real-2026-11-29 is at most 3.2, a
+#: homography fitted to a stray lattice can be anything.
+_MAX_AREA_RATIO = 40.0
+
+
+#: The least number of segmented patches of a window scored by the colour homography (a
+#: light per patch makes the colour test weaker: half the chart's patches must be seen as
+#: flat squares on the lattice). A real chart found so in chart-real-2026-11-29 shows 24; a
+#: lattice of window frames in a street scene, 6.
+_SHADING_MIN_SEGMENTED = 12
+
+
+def _plausible_view(hc: np.ndarray) -> bool:
+    """Whether chart -> work ``hc`` can be a camera's view of a flat chart.
+
+    The whole chart (its outline, half a pitch around the patch centres) must be on one side
+    of the image's vanishing line (the homography's third coordinate keeps its sign: a
+    plane's points behind the camera have none), and no patch may image over
+    ``_MAX_AREA_RATIO`` times larger than another.
+    """
+    g = np.array(
+        [[-0.5, -0.5], [_COLS - 0.5, -0.5], [_COLS - 0.5, _ROWS - 0.5], [-0.5, _ROWS - 0.5]]
+    )
+    w = np.c_[g, np.ones(4)] @ hc[2]
+    if not (np.all(w > 0) or np.all(w < 0)):
+        return False
+    area = _cell_area(hc, _GRID.astype(np.float64))
+    return bool(area.min() > 0 and area.max() <= _MAX_AREA_RATIO * area.min())
+
+
 def _best_window(
     work: np.ndarray,
     h: np.ndarray,
@@ -833,10 +971,12 @@ def _best_window(
             continue
         top = max(counts)
         for (u0, v0), cnt in zip(placements, counts, strict=True):
-            if cnt < max(top - 2, 6):
+            if cnt < max(top - 2, 6) or (shading and cnt < _SHADING_MIN_SEGMENTED):
                 continue
             a = _turn(quarter, u0, v0)
             hc = h @ a
+            if not _plausible_view(hc):
+                continue
             mean, spread = _sample(work, hc, trim)
             usable = (spread < 0.08) & (mean.max(axis=1) < 0.98)
             r2, out = _window_fit(mean, ref_lin, usable, shading)
@@ -890,36 +1030,40 @@ def _search(
     shading = trim = False
     if best[0] < min_score:
         # a shadow across the chart or light falling off along it: the lattices again, each
-        # patch under its own light (the colours have to match up to brightness)
-        shaded = None
+        # patch under its own light (the colours have to match up to brightness); and marks
+        # over part of every patch (printed labels, drawn numbers, dots): the lattices again
+        # on each patch's dominant colour, accepted only at the stricter _TRIMMED_MIN_SCORE
+        # (trimmed samples make more false lattices usable). Both are tried and the better
+        # wins: a chart whose every patch carries a mark has no plain fit at all, and the
+        # colour homography of a lattice of clutter beside it must not win by default
+        shaded = trimmed = None
         for h, idx, keys in lattices:
             win = _best_window(work, h, keys, ref_lin, shading=True)
             if win is not None and (shaded is None or win[0] > shaded[0]):
                 shaded = (win[0], h, win[1], idx, keys, win[2])
-        if shaded is not None and shaded[0] >= min_score:
+            win = _best_window(work, h, keys, ref_lin, trim=True)
+            if win is not None and (trimmed is None or win[0] > trimmed[0]):
+                trimmed = (win[0], h, win[1], idx, keys, win[2])
+        need = max(min_score, _TRIMMED_MIN_SCORE)
+        s_shaded = shaded[0] if shaded is not None and shaded[0] >= min_score else -np.inf
+        s_trimmed = trimmed[0] if trimmed is not None and trimmed[0] >= need else -np.inf
+        if trimmed is not None and s_trimmed > s_shaded:
+            best, trim = trimmed, True
+        elif shaded is not None and s_shaded > -np.inf:
             best, shading = shaded, True
         else:
-            # marks over part of every patch (printed labels, drawn numbers): the lattices
-            # again on each patch's dominant colour, accepted only at the stricter
-            # _TRIMMED_MIN_SCORE (trimmed samples make more false lattices usable)
-            trimmed = None
-            for h, idx, keys in lattices:
-                win = _best_window(work, h, keys, ref_lin, trim=True)
-                if win is not None and (trimmed is None or win[0] > trimmed[0]):
-                    trimmed = (win[0], h, win[1], idx, keys, win[2])
-            need = max(min_score, _TRIMMED_MIN_SCORE)
-            if trimmed is None or trimmed[0] < need:
-                why = f"best candidate's colour fit R2 = {best[0]:.2f} < min_score = {min_score:g}"
-                if trimmed is not None:
-                    why += f" (on the patches' dominant colours {trimmed[0]:.2f} < {need:g})"
-                return why
-            best, trim = trimmed, True
+            why = f"best candidate's colour fit R2 = {best[0]:.2f} < min_score = {min_score:g}"
+            if trimmed is not None:
+                why += f" (on the patches' dominant colours {trimmed[0]:.2f} < {need:g})"
+            return why
     r2, h, a, idx, keys, out = best
     # chart coordinates of the matched candidates, refit chart -> work directly
     chart_xy = _apply_h(np.linalg.inv(a), keys)
     inside = np.all((chart_xy > -0.5) & (chart_xy < [_COLS - 0.5, _ROWS - 0.5]), axis=1)
     chart_xy, pts = np.round(chart_xy[inside]), cand["c"][idx[inside]]
     hc = _fit_h(chart_xy, pts) if len(pts) >= 4 else h @ a
+    if not np.all(np.isfinite(hc)) or not _plausible_view(hc):
+        hc = h @ a
     # the score and the outliers again, sampled through the refitted homography
     mean, spread = _sample(work, hc, trim)
     usable = (spread < 0.08) & (mean.max(axis=1) < 0.98)
