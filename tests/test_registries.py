@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-from imageform import analysis, color, sensor, spectral
+from imageform import analysis, color, io, sensor, spectral
 from tests.regen_api_snapshot import public_modules
 
 _RGB = np.random.default_rng(0).uniform(0.05, 0.95, (12, 14, 3))
@@ -33,6 +33,24 @@ def _stain_image() -> np.ndarray:
 def _white_balance(name: str) -> Any:
     kw: dict[str, Any] = {"cct": 5000.0} if name == "manual" else {}
     return color.white_balance(_RGB, name, transfer="linear", **kw).gains
+
+
+def _read_video(name: str) -> Any:
+    """The frames of a small interlaced image sequence read with ``deinterlace=name``."""
+    import tempfile
+    from pathlib import Path
+
+    from imageform.io import open_video, write_image
+
+    folder = Path(tempfile.mkdtemp(prefix="imageform-registry-"))
+    rows = np.arange(24.0)[:, None]
+    for k in range(10):  # a bright bar moving down 3 rows a field: the fields comb
+        frame = np.zeros((24, 32))
+        frame[0::2] = (np.abs(rows[0::2] - 3.0 * (2 * k) % 24) < 3) * 0.9
+        frame[1::2] = (np.abs(rows[1::2] - 3.0 * (2 * k + 1) % 24) < 3) * 0.9
+        write_image(folder / f"f{k:02d}.png", np.repeat(frame[..., None], 3, axis=-1))
+    with open_video(folder, fps=25, deinterlace=name) as reader:
+        return [f.image.shape for f in reader]
 
 
 def _stain_normalize(name: str) -> Any:
@@ -69,6 +87,7 @@ CALLS: dict[str, tuple[Any, Callable[[str], Any]]] = {
         analysis.CORRECTION_METHODS,
         lambda m: analysis.fit_color_correction(_RGB[0], _RGB[0] ** 1.1, method=m).matrix,
     ),
+    "DEINTERLACE_METHODS": (io.DEINTERLACE_METHODS, _read_video),
     "DEMOSAIC_METHODS": (
         sensor.DEMOSAIC_METHODS,
         lambda m: sensor.demosaic(np.full((8, 8), 0.25), "RGGB", m),
@@ -185,3 +204,11 @@ def test_cli_choices_are_the_registry(
     from imageform.workflows._spec import choice_names, resolve
 
     assert choice_names(resolve(ref)) == tuple(registry)
+
+
+def test_cli_deinterlace_choices_are_the_readers() -> None:
+    """``--deinterlace`` / ``--field-order`` spell out the reader's names (no NumPy at --help)."""
+    from imageform.workflows._video import DEINTERLACE_CHOICES, FIELD_ORDER_CHOICES
+
+    assert DEINTERLACE_CHOICES == io.DEINTERLACE_METHODS
+    assert FIELD_ORDER_CHOICES == io.FIELD_ORDERS

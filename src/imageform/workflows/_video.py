@@ -4,12 +4,27 @@ from __future__ import annotations
 
 import math
 from dataclasses import asdict
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Literal, get_args
 
 if TYPE_CHECKING:
     from imageform.io import VideoReader
 
-__all__ = ["deinterlace_note", "deinterlace_summary"]
+__all__ = [
+    "DEINTERLACE_CHOICES",
+    "FIELD_ORDER_CHOICES",
+    "DeinterlaceChoice",
+    "FieldOrderChoice",
+    "deinterlace_note",
+    "deinterlace_summary",
+]
+
+#: ``--deinterlace``: the reader's methods (:data:`imageform.io.DEINTERLACE_METHODS`, a test
+#: keeps the two equal; spelt out here so that ``--help`` imports no NumPy).
+DeinterlaceChoice = Literal["auto", "off", "fields", "linear", "blend"]
+DEINTERLACE_CHOICES: tuple[str, ...] = get_args(DeinterlaceChoice)
+#: ``--field-order``: the field first in time (:data:`imageform.io.FIELD_ORDERS`).
+FieldOrderChoice = Literal["top", "bottom"]
+FIELD_ORDER_CHOICES: tuple[str, ...] = get_args(FieldOrderChoice)
 
 
 def deinterlace_summary(reader: VideoReader) -> dict[str, Any]:

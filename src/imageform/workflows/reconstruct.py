@@ -28,6 +28,12 @@ from imageform.workflows._spec import (
     option,
     refuse_foreign_folder,
 )
+from imageform.workflows._video import (
+    DEINTERLACE_CHOICES,
+    FIELD_ORDER_CHOICES,
+    DeinterlaceChoice,
+    FieldOrderChoice,
+)
 
 __all__ = ["CAMERA_COLUMNS", "WORKFLOWS", "ReconstructOptions"]
 
@@ -94,19 +100,19 @@ class ReconstructOptions(Options):
         help="Leave out the blurred frames: sharpness (the variance of the Laplacian in the "
         "field of view) below half the median of the 3 frames on either side.",
     )
-    deinterlace: str = option(
+    deinterlace: DeinterlaceChoice = option(
         "auto",
         help="Interlaced video: auto (linear when the first frames comb, else off), off, "
         "linear (the first field kept, the other field's rows interpolated: the frame's "
         "size and camera matrix), fields (the first field at half height, fy and cy halved) "
         "or blend.",
-        choices=("auto", "off", "fields", "linear", "blend"),
+        choices=DEINTERLACE_CHOICES,
     )
-    field_order: str | None = option(
+    field_order: FieldOrderChoice | None = option(
         None,
         help="The field first in time, top or bottom (default: the frames', else the "
         "stream's, else top).",
-        choices=("top", "bottom"),
+        choices=FIELD_ORDER_CHOICES,
     )
     contrast_threshold: float = option(
         0.04,

@@ -21,6 +21,12 @@ from typing import Any
 
 from imageform.errors import InvalidInputError
 from imageform.workflows._spec import Input, Options, Output, Result, Run, Workflow, option
+from imageform.workflows._video import (
+    DEINTERLACE_CHOICES,
+    FIELD_ORDER_CHOICES,
+    DeinterlaceChoice,
+    FieldOrderChoice,
+)
 
 __all__ = ["POSE_COLUMNS", "WORKFLOWS", "TrackOptions", "parse_track_board"]
 
@@ -112,18 +118,18 @@ class TrackOptions(Options):
     no_predict: bool = option(
         False, help="Search every frame whole (default: the previous frame's box first)."
     )
-    deinterlace: str = option(
+    deinterlace: DeinterlaceChoice = option(
         "auto",
         help="Interlaced video: auto (track the fields when the first frames comb), off, "
         "fields (each field at half height with its own camera matrix: a pose per field), "
         "linear or blend (full frames).",
-        choices=("auto", "off", "fields", "linear", "blend"),
+        choices=DEINTERLACE_CHOICES,
     )
-    field_order: str | None = option(
+    field_order: FieldOrderChoice | None = option(
         None,
         help="The field first in time, top or bottom (default: the frames', else the "
         "stream's, else top).",
-        choices=("top", "bottom"),
+        choices=FIELD_ORDER_CHOICES,
     )
 
     def check(self) -> None:
