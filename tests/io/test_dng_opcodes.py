@@ -801,3 +801,23 @@ def test_the_dng_header_is_opened_once(tmp_path: Path, monkeypatch: pytest.Monke
     raw = read_raw(path)
     assert raw.metadata["opcodes_applied"] == 1 and raw.xyz_to_camera is not None
     assert len(opened) == 1
+
+
+def test_warp_kernel_three_planes_in_one_pass_are_the_per_plane_values() -> None:
+    """One row of coefficients and three planes (the fused pass, every plane's taps read
+    together) gives, bit for bit, the plane-by-plane loop's values (the same coefficients
+    given once per plane), the edges included."""
+    from imageform._kernels.dng_warp import warp_rows
+    from imageform.io._dng_opcodes import _center_and_radius
+
+    rng = np.random.default_rng(7)
+    img = rng.uniform(0.0, 1.0, (41, 57, 3)).astype(np.float32)
+    cy, cx, radius = _center_and_radius((0.45, 0.55), (43, 60))
+    geometry = np.array([2.0, 1.0, 43.0, 60.0, cy, cx, radius])
+    coef = np.array([[1.0, 0.15, -0.04, 0.01, 0.004, -0.003]])
+    fused = np.empty_like(img)
+    warp_rows(0, 41, img, fused, coef, geometry)
+    per_plane = np.empty_like(img)
+    warp_rows(0, 41, img, per_plane, np.repeat(coef, 3, axis=0), geometry)
+    np.testing.assert_array_equal(fused, per_plane)
+    assert np.abs(fused - img).max() > 0.1
