@@ -172,3 +172,50 @@ def _warp_rows3(r0, r1, src, out, k, geometry, table):  # type: ignore[no-untype
             out[i, j, 0] = min(max(t0, 0.0), 1.0)
             out[i, j, 1] = min(max(t1, 0.0), 1.0)
             out[i, j, 2] = min(max(t2, 0.0), 1.0)
+
+
+@njit(nogil=True, error_model="numpy")
+def gain_map_rows(r0, r1, mosaic, black, white, maps, grid, rows, cols, out):  # type: ignore[no-untyped-def]
+    """Apply GainMaps to rows ``r0 .. r1 - 1`` of ``mosaic`` (H, W uint16) into ``out``.
+
+    :func:`imageform.io._dng_opcodes.apply_stage2`'s arithmetic for a list of GainMaps alone,
+    one row at a time: ``x = (m - black) / (white - black)`` (float64), each map in order
+    ``x = min(x g, 1)`` on its lattice, ``g`` as :func:`imageform.io._dng_opcodes.
+    gain_map_gains` interpolates it, then ``rint(clip(x (white - black) + black, 0, 65535))``.
+    ``black`` (H, W) float64 (a broadcast view will do). Per map ``k``, ``maps[k]``: the
+    offset of its grid in ``grid`` (flat float64) and its number of columns; the offset of its
+    lattice rows in ``rows`` and their first row, step and count in the mosaic; the same of
+    its lattice columns in ``cols``. ``rows`` and ``cols`` (3, n) float64: the lower grid
+    index, the upper one, the weight of the upper (``_axis_weights``).
+    """
+    w = mosaic.shape[1]
+    x = np.empty(w)
+    along = np.empty(max(1, int(maps[:, 1].max())) if maps.shape[0] else 1)
+    for i in range(r0, r1):
+        for j in range(w):
+            b = black[i, j]
+            x[j] = (mosaic[i, j] - b) / (white - b)
+        for k in range(maps.shape[0]):
+            g_off, g_cols, r_off, r_first, r_step, r_count, c_off, c_first, c_step, c_count = (
+                maps[k, 0], maps[k, 1], maps[k, 2], maps[k, 3], maps[k, 4], maps[k, 5],
+                maps[k, 6], maps[k, 7], maps[k, 8], maps[k, 9],
+            )  # fmt: skip
+            d = i - r_first
+            if d < 0 or d % r_step != 0 or d // r_step >= r_count:
+                continue
+            q = r_off + d // r_step
+            lo = g_off + int(rows[0, q]) * g_cols
+            hi = g_off + int(rows[1, q]) * g_cols
+            wr = rows[2, q]
+            for t in range(g_cols):  # the map's row at this row: between its two rows
+                along[t] = grid[lo + t] * (1 - wr) + grid[hi + t] * wr
+            for n in range(c_count):
+                p = c_off + n
+                wc = cols[2, p]
+                g = along[int(cols[0, p])] * (1 - wc) + along[int(cols[1, p])] * wc
+                j = c_first + n * c_step
+                x[j] = min(x[j] * g, 1.0)
+        for j in range(w):
+            b = black[i, j]
+            v = x[j] * (white - b) + b
+            out[i, j] = np.uint16(np.rint(min(max(v, 0.0), 65535.0)))
