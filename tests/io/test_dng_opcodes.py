@@ -801,3 +801,56 @@ def test_the_dng_header_is_opened_once(tmp_path: Path, monkeypatch: pytest.Monke
     raw = read_raw(path)
     assert raw.metadata["opcodes_applied"] == 1 and raw.xyz_to_camera is not None
     assert len(opened) == 1
+
+
+def test_warp_kernel_three_planes_in_one_pass_are_the_per_plane_values() -> None:
+    """One row of coefficients and three planes (the fused pass, every plane's taps read
+    together) gives, bit for bit, the plane-by-plane loop's values (the same coefficients
+    given once per plane), the edges included."""
+    from imageform._kernels.dng_warp import warp_rows
+    from imageform.io._dng_opcodes import _center_and_radius
+
+    rng = np.random.default_rng(7)
+    img = rng.uniform(0.0, 1.0, (41, 57, 3)).astype(np.float32)
+    cy, cx, radius = _center_and_radius((0.45, 0.55), (43, 60))
+    geometry = np.array([2.0, 1.0, 43.0, 60.0, cy, cx, radius])
+    coef = np.array([[1.0, 0.15, -0.04, 0.01, 0.004, -0.003]])
+    fused = np.empty_like(img)
+    warp_rows(0, 41, img, fused, coef, geometry)
+    per_plane = np.empty_like(img)
+    warp_rows(0, 41, img, per_plane, np.repeat(coef, 3, axis=0), geometry)
+    np.testing.assert_array_equal(fused, per_plane)
+    assert np.abs(fused - img).max() > 0.1
+
+
+@pytest.mark.parametrize(("shape", "offset", "full"),
+                         [((37, 53), (0, 0), None), ((301, 410), (3, 5), (306, 418))])  # fmt: skip
+def test_gain_map_kernel_matches_the_numpy_path(
+    shape: tuple[int, int], offset: tuple[int, int], full: tuple[int, int] | None
+) -> None:
+    """GainMaps alone on a mosaic (read_raw's path: the numba kernel) give, bit for bit, the
+    NumPy path's codes (in strips of 64 rows for the larger mosaic): four per-photosite maps,
+    one on every third row of a box with its grid off the image's origin, an empty area (the
+    whole image), a map of three planes (plane 0's used), one for plane 1 (not applied);
+    black per photosite and one black level; gains up to 2.5, so that values clip at white."""
+    rng = np.random.default_rng(3)
+
+    def gm(box: tuple[int, int, int, int], pitch: tuple[int, int], points: tuple[int, int],
+           origin: tuple[float, float] = (0.0, 0.0), plane: int = 0,
+           map_planes: int = 1) -> GainMap:  # fmt: skip
+        g = rng.uniform(0.6, 2.5, (*points, map_planes)).astype(np.float32)
+        spacing = (1 / (points[0] - 1), 1 / (points[1] - 1))
+        return GainMap(*box, plane, 1, *pitch, spacing, origin, g)
+
+    h, w = shape
+    mosaic = rng.integers(0, 4096, shape).astype(np.uint16)
+    ops = [gm((r, c, 10**6, 10**6), (2, 2), (13, 17)) for r in (0, 1) for c in (0, 1)]
+    ops += [gm((5, 7, 90, 200), (3, 1), (5, 4), origin=(0.1, -0.2)),
+            gm((0, 0, 0, 0), (1, 1), (2, 2), map_planes=3),
+            gm((0, 0, 50, 50), (1, 1), (3, 3), plane=1)]  # fmt: skip
+    tile = np.array([[60.0, 64.0], [62.0, 66.0]])
+    for black in (np.tile(tile, (h // 2 + 1, w // 2 + 1))[:h, :w], np.float64(64.0)):
+        fast = apply_stage2(mosaic, black, 4000, ops, offset=offset, shape=full)
+        slow = apply_stage2(mosaic, black, 4000, ops, offset=offset, shape=full, kernel=False)
+        np.testing.assert_array_equal(fast, slow)
+        assert (fast != mosaic).mean() > 0.99 and (fast == 4000).any()

@@ -737,6 +737,7 @@ def apply_stage2(
     *,
     offset: tuple[int, int] = (0, 0),
     shape: tuple[int, int] | None = None,
+    kernel: bool = True,
 ) -> np.ndarray:
     """Return ``mosaic`` (uint16 codes) with OpcodeList2's opcodes applied in order.
 
@@ -746,11 +747,16 @@ def apply_stage2(
     MapPolynomial maps ``x`` to ``c0 + c1 x + ... + cn x^n``; each result is clipped at 1
     (white). ``offset`` and ``shape`` as for :func:`apply_gain_maps`. Every opcode here
     works pixel by pixel: the image is done in strips of ``_STRIP_ROWS`` rows (each the
-    same as the whole would give), whose float64 values stay in the cache.
+    same as the whole would give), whose float64 values stay in the cache. ``kernel``: a
+    list of GainMaps alone on a 2-D mosaic (a phone's lens shading) as the numba kernel
+    :func:`imageform._kernels.dng_warp.gain_map_rows`, the same values bit for bit (False:
+    with NumPy).
     """
     h, w = mosaic.shape[:2]
     dt, dl = offset
     full = shape if shape is not None else (h + dt, w + dl)
+    if kernel and mosaic.ndim == 2 and ops and all(isinstance(op, GainMap) for op in ops):
+        return _gain_maps_kernel(mosaic, black, white, ops, offset, full)  # type: ignore[arg-type]
     if h > 2 * _STRIP_ROWS:
         out = np.empty(mosaic.shape, np.uint16)
         levels = np.asarray(black, np.float64)
@@ -758,7 +764,8 @@ def apply_stage2(
         for r0 in range(0, h, _STRIP_ROWS):
             r1 = min(r0 + _STRIP_ROWS, h)
             out[r0:r1] = apply_stage2(mosaic[r0:r1], levels[r0:r1] if per_row else levels,
-                                      white, ops, offset=(dt + r0, dl), shape=full)  # fmt: skip
+                                      white, ops, offset=(dt + r0, dl), shape=full,
+                                      kernel=kernel)  # fmt: skip
         return out
     blk = np.broadcast_to(np.asarray(black, np.float64), mosaic.shape)
     span = white - blk
@@ -800,6 +807,49 @@ def apply_stage2(
     x += blk
     np.clip(x, 0.0, 65535.0, out=x)
     return np.rint(x, out=x).astype(np.uint16)
+
+
+def _gain_maps_kernel(
+    mosaic: np.ndarray, black: np.ndarray, white: float, ops: list[GainMap],
+    offset: tuple[int, int], full: tuple[int, int],
+) -> np.ndarray:  # fmt: skip
+    """Return :func:`apply_stage2` of GainMaps alone on a 2-D mosaic, by the numba kernel."""
+    from imageform._kernels.dng_warp import gain_map_rows
+    from imageform._kernels.jit import run_tasks
+
+    h, w = mosaic.shape
+    dt, dl = offset
+    grids: list[np.ndarray] = []
+    row_w: list[np.ndarray] = []
+    col_w: list[np.ndarray] = []
+    maps: list[list[int]] = []
+    sizes = [0, 0, 0]  # the offsets in the grids, the rows' and the columns' weights
+    for op in ops:
+        box, pitch = (op.top, op.left, op.bottom, op.right), (op.row_pitch, op.col_pitch)
+        rr, cc = _lattice(box, pitch, offset, full, (h, w))
+        if rr.size == 0 or cc.size == 0:
+            continue
+        for plane in range(op.plane, min(op.plane + max(op.planes, 1), 1)):
+            g = op.gains[..., min(plane, op.gains.shape[2] - 1)].astype(np.float64)
+            rw = _axis_weights(rr.astype(np.float64), full[0], op.origin[0], op.spacing[0],
+                               g.shape[0])  # fmt: skip
+            cw = _axis_weights(cc.astype(np.float64), full[1], op.origin[1], op.spacing[1],
+                               g.shape[1])  # fmt: skip
+            maps.append([sizes[0], g.shape[1], sizes[1], int(rr[0]) - dt, pitch[0], rr.size,
+                         sizes[2], int(cc[0]) - dl, pitch[1], cc.size])  # fmt: skip
+            grids.append(g.ravel())
+            row_w.append(np.array(rw, np.float64))
+            col_w.append(np.array(cw, np.float64))
+            sizes = [sizes[0] + g.size, sizes[1] + rr.size, sizes[2] + cc.size]
+    out = np.empty((h, w), np.uint16)
+    table = np.array(maps, np.int64).reshape(-1, 10)
+    grid = np.concatenate(grids) if grids else np.zeros(1)
+    rows = np.concatenate(row_w, axis=1) if row_w else np.zeros((3, 1))
+    cols = np.concatenate(col_w, axis=1) if col_w else np.zeros((3, 1))
+    blk = np.broadcast_to(np.asarray(black, np.float64), (h, w))
+    run_tasks(gain_map_rows, h, np.ascontiguousarray(mosaic, np.uint16), blk, float(white),
+              table, grid, rows, cols, out, threads=None if h * w >= 1 << 16 else 1)  # fmt: skip
+    return out
 
 
 def _lattice_slices(
