@@ -174,9 +174,12 @@ def test_npy_header_is_not_trusted(tmp_path: Path) -> None:
         read_image(p)
     with pytest.raises(InvalidInputError, match="truncated"):
         read_image(p, max_pixels=10**9)
-    (tmp_path / "empty.npy").write_bytes(b"")
-    with pytest.raises(InvalidInputError, match=r"empty\.npy: not a \.npy file"):
-        read_image(tmp_path / "empty.npy")
+    for name in ("empty.npy", "empty.jpg", "empty.png", "empty.tif"):
+        (tmp_path / name).write_bytes(b"")
+        with pytest.raises(InvalidInputError, match=rf"cannot read .*{name}: an empty file \(0"):
+            read_image(tmp_path / name)
+        with pytest.raises(InvalidInputError, match=rf"{name}: an empty file"):
+            image_info(tmp_path / name)
     np.save(tmp_path / "obj.npy", np.array([[1, None]], dtype=object), allow_pickle=True)
     with pytest.raises(InvalidInputError, match="object arrays"):
         read_image(tmp_path / "obj.npy")

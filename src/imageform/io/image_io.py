@@ -576,6 +576,8 @@ def _existing(path: str | Path) -> Path:
         raise InvalidInputError(f"input file {p} does not exist")
     if not p.is_file():
         raise InvalidInputError(f"input {p} {not_a_regular_file(p) or 'is not a regular file'}")
+    if p.stat().st_size == 0:  # before any decoder says "cannot identify" or "not a PNG file"
+        raise InvalidInputError(f"cannot read {p}: an empty file (0 bytes)")
     return p
 
 
