@@ -852,3 +852,21 @@ def test_raw_read_as_zeros_from_under_a_bit_a_photosite_is_refused(
     message = rf"is truncated: {cut.stat().st_size} bytes for 6144 photosites \(under one bit"
     with pytest.raises(InvalidInputError, match=message):
         read_raw(cut)
+
+
+def test_uncompressed_dng_cut_in_transfer_is_refused_as_truncated(tmp_path: Path) -> None:
+    """An uncompressed DNG cut inside its strips (an interrupted copy): LibRaw stops with an
+    I/O error, and the one-line refusal says the file is truncated (where its data should
+    end), not that it is no raw file."""
+    h, w = 64, 96
+    mosaic = np.random.default_rng(0).integers(0, 4096, (h, w)).astype(np.uint16)
+    whole = write_dng(tmp_path / "whole.dng", mosaic, black_level=64, white_level=4095,
+                      color_matrix=CM)  # fmt: skip
+    assert read_raw(whole).mosaic.shape == (h, w)
+    data = whole.read_bytes()
+    cut = tmp_path / "cut.dng"
+    cut.write_bytes(data[: len(data) // 2])
+    before = cut.read_bytes()
+    with pytest.raises(InvalidInputError, match=r"cut\.dng is truncated: its raw image.s data"):
+        read_raw(cut)
+    assert cut.read_bytes() == before  # the input is untouched

@@ -632,6 +632,11 @@ def _read_raw(
         if own is not None:
             own.metadata["libraw"] = type(exc).__name__
             return own, _dng_header(p, opcodes=opcodes)[1]
+        if (end := _raw_data_end(p)) > (n_bytes := p.stat().st_size):  # cut off in transfer
+            raise InvalidInputError(
+                f"{p} is truncated: its raw image's data ends at byte {end}, the file has "
+                f"{n_bytes} bytes"
+            ) from None
         raise InvalidInputError(
             f"{p} is not a raw file LibRaw can read ({type(exc).__name__})"
         ) from None
