@@ -148,11 +148,11 @@ COARSE_SIZE = 1000
 BLUR_MIN_SIDE = 320
 #: The coarser copies are searched only where the image is soft or shows a part of a board:
 #: the mean absolute second difference of the grey image (every second pixel each way) under
-#: this many times its mean absolute first difference (1.44-1.71 on Kodak's 24 photographs,
-#: 0.76-1.21 on a webcam's 100 frames of a hand-held board, 0.20-0.40 on rendered smeared
-#: boards; white noise 1.73), or a lattice of at least :data:`AUTO_MIN_CORNERS` corners seen
-#: at full resolution: a sharp photograph without a board skips their search
-#: (benchmarks/results/board-fresh-2026-11-30c.md).
+#: this many times its mean absolute first difference (measured when the rule was set: 1.44-1.71
+#: on Kodak's 24 photographs, 0.76-1.21 on rex-blur's 100 webcam frames of a hand-held board,
+#: 0.20-0.40 on the rendered smeared boards of the tests; white noise 1.73), or a lattice of at
+#: least :data:`AUTO_MIN_CORNERS` corners seen at full resolution: a sharp photograph without
+#: a board skips their search (benchmarks/results/board-fresh-2026-11-30c.md).
 BLUR_SOFT = 1.3
 #: ``partial=True``: a corner of a part of a board refined farther than this fraction of its
 #: nearest neighbour's distance from the saddle found drops its row or column.
